@@ -1,0 +1,224 @@
+"""Canonical tables: pose logs, signal logs and matched link datasets (DESIGN.md).
+
+All three are :class:`pandas.DataFrame` objects with fixed column names, so that every reader,
+the simulator and the synchroniser speak the same language:
+
+- pose log: ``t, node, x, y, z, qw, qx, qy, qz`` (ENU metres, FLU -> ENU quaternion);
+- signal log: ``t, tx, rx, rssi_dbm, tx_power_dbm, frequency_hz`` and optional ``unit``;
+- matched dataset: every signal-log column plus ``tx_x .. tx_qz`` and ``rx_x .. rx_qz``.
+
+Node ids are strings. Times are float seconds since an epoch the log states.
+:func:`link_samples` turns a matched dataset into the arrays the learning code needs
+(directions of both ends, node indices, observed joint gain, paper eqs. 3 and 5).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+import pandas as pd
+
+from rplearn.errors import InputError
+from rplearn.geometry import Directions, distance_m, link_directions
+from rplearn.link import observed_joint_gain_db
+
+POSE_COLUMNS: tuple[str, ...] = ("t", "node", "x", "y", "z", "qw", "qx", "qy", "qz")
+SIGNAL_COLUMNS: tuple[str, ...] = ("t", "tx", "rx", "rssi_dbm", "tx_power_dbm", "frequency_hz")
+OPTIONAL_SIGNAL_COLUMNS: tuple[str, ...] = ("unit",)
+POSE_FIELDS: tuple[str, ...] = ("x", "y", "z", "qw", "qx", "qy", "qz")
+MATCHED_COLUMNS: tuple[str, ...] = SIGNAL_COLUMNS + tuple(
+    f"{end}_{f}" for end in ("tx", "rx") for f in POSE_FIELDS
+)
+
+
+def _require_columns(df: pd.DataFrame, columns: Sequence[str], source: str) -> None:
+    missing = [c for c in columns if c not in df.columns]
+    if missing:
+        raise InputError(
+            f"{source}: missing column(s) {', '.join(missing)}; expected {', '.join(columns)}"
+        )
+
+
+def _require_finite(df: pd.DataFrame, columns: Sequence[str], source: str) -> None:
+    for c in columns:
+        values = pd.to_numeric(df[c], errors="coerce").to_numpy(np.float64)
+        bad = ~np.isfinite(values)
+        if np.any(bad):
+            row = int(np.flatnonzero(bad)[0])
+            raise InputError(
+                f"{source}: column {c} has {int(bad.sum())} non-numeric, NaN or infinite value(s) "
+                f"(first at row {row})"
+            )
+
+
+def validate_pose_log(df: pd.DataFrame, source: str = "pose log") -> pd.DataFrame:
+    """Check a canonical pose log and return it typed, sorted by (node, t), quaternions normalised.
+
+    Raises
+    ------
+    InputError
+        On a missing column, a NaN or infinite value, a zero quaternion, or a duplicate
+        timestamp within one node (with the file/source name and the first offending row).
+    """
+    _require_columns(df, POSE_COLUMNS, source)
+    _require_finite(df, [c for c in POSE_COLUMNS if c != "node"], source)
+    out = df.loc[:, list(POSE_COLUMNS)].copy()
+    out["node"] = out["node"].astype(str)
+    for c in POSE_COLUMNS:
+        if c != "node":
+            out[c] = out[c].astype(np.float64)
+    q = out[["qw", "qx", "qy", "qz"]].to_numpy()
+    norm = np.linalg.norm(q, axis=1)
+    if np.any(norm < 1e-6):
+        row = int(np.flatnonzero(norm < 1e-6)[0])
+        raise InputError(f"{source}: quaternion (qw, qx, qy, qz) has zero norm at row {row}")
+    out[["qw", "qx", "qy", "qz"]] = q / norm[:, None]
+    out = out.sort_values(["node", "t"], kind="stable").reset_index(drop=True)
+    dup = out.duplicated(["node", "t"])
+    if dup.any():
+        row = out[dup].iloc[0]
+        raise InputError(
+            f"{source}: field t: {int(dup.sum())} duplicate timestamp(s) within a node "
+            f"(first: node {row['node']}, t = {row['t']!r})"
+        )
+    return out
+
+
+def validate_signal_log(df: pd.DataFrame, source: str = "signal log") -> pd.DataFrame:
+    """Check a canonical signal log and return it typed and sorted by time (stable).
+
+    Raises
+    ------
+    InputError
+        On a missing column, a NaN or infinite value, a non-positive frequency, or a
+        transmitter equal to its receiver.
+    """
+    _require_columns(df, SIGNAL_COLUMNS, source)
+    _require_finite(df, ["t", "rssi_dbm", "tx_power_dbm", "frequency_hz"], source)
+    cols = list(SIGNAL_COLUMNS) + [c for c in OPTIONAL_SIGNAL_COLUMNS if c in df.columns]
+    out = df.loc[:, cols].copy()
+    out["tx"] = out["tx"].astype(str)
+    out["rx"] = out["rx"].astype(str)
+    for c in ("t", "rssi_dbm", "tx_power_dbm", "frequency_hz"):
+        out[c] = out[c].astype(np.float64)
+    if "unit" in out.columns:
+        out["unit"] = out["unit"].astype(str)
+    if np.any(out["frequency_hz"].to_numpy() <= 0):
+        raise InputError(f"{source}: column frequency_hz must be positive (Hz)")
+    same = out["tx"].to_numpy() == out["rx"].to_numpy()
+    if np.any(same):
+        row = int(np.flatnonzero(same)[0])
+        raise InputError(f"{source}: tx equals rx ({out['tx'].iloc[row]}) at row {row}")
+    return out.sort_values("t", kind="stable").reset_index(drop=True)
+
+
+def validate_matched(df: pd.DataFrame, source: str = "dataset") -> pd.DataFrame:
+    """Check a matched link dataset (columns of :data:`MATCHED_COLUMNS`)."""
+    _require_columns(df, MATCHED_COLUMNS, source)
+    numeric = [c for c in MATCHED_COLUMNS if c not in ("tx", "rx")]
+    _require_finite(df, numeric, source)
+    out = df.copy()
+    out["tx"] = out["tx"].astype(str)
+    out["rx"] = out["rx"].astype(str)
+    if "unit" in out.columns:
+        out["unit"] = out["unit"].astype(str)
+    return out
+
+
+def read_table(path: str, source: str | None = None) -> pd.DataFrame:
+    """Read a CSV or Parquet table chosen by extension, with a one-line error on failure."""
+    import os
+
+    name = source or str(path)
+    if not os.path.exists(path):
+        raise InputError(f"{name}: no such file")
+    try:
+        if str(path).lower().endswith((".parquet", ".pq")):
+            return pd.read_parquet(path)
+        return pd.read_csv(path)
+    except (ValueError, OSError, pd.errors.ParserError, UnicodeDecodeError) as exc:
+        raise InputError(f"{name}: cannot read table ({type(exc).__name__}: {exc})") from None
+    except Exception as exc:  # pyarrow raises its own error classes
+        raise InputError(f"{name}: cannot read table ({type(exc).__name__}: {exc})") from None
+
+
+def write_table(df: pd.DataFrame, path: str) -> None:
+    """Write a table as Parquet (``.parquet``) or CSV (anything else)."""
+    if str(path).lower().endswith((".parquet", ".pq")):
+        df.to_parquet(path, index=False)
+    else:
+        df.to_csv(path, index=False)
+
+
+@dataclass(frozen=True)
+class LinkSamples:
+    """Learning-ready samples of a matched dataset.
+
+    Attributes
+    ----------
+    directions : Directions
+        Direction of the other end in each end's body frame [rad] (paper eq. 3).
+    tx_index, rx_index : ndarray of int
+        Index into ``nodes`` of the transmitter and the receiver of every sample.
+    nodes : tuple of str
+        Node ids, sorted.
+    joint_gain_db : ndarray
+        Observed joint gain ``G_tx + G_rx`` [dB] (paper eq. 5).
+    distance_m : ndarray
+        Distance between the ends [m].
+    """
+
+    directions: Directions
+    tx_index: np.ndarray
+    rx_index: np.ndarray
+    nodes: tuple[str, ...]
+    joint_gain_db: np.ndarray
+    distance_m: np.ndarray
+
+    def __len__(self) -> int:
+        return int(self.joint_gain_db.shape[0])
+
+
+def link_samples(df: pd.DataFrame, source: str = "dataset", nodes: Sequence[str] | None = None) -> LinkSamples:
+    """Directions of both ends, node indices and observed joint gain of a matched dataset.
+
+    Parameters
+    ----------
+    df : DataFrame
+        Matched dataset (:data:`MATCHED_COLUMNS`).
+    source : str
+        Name used in error messages.
+    nodes : sequence of str, optional
+        Node ids in model order; by default the sorted ids found in ``tx`` and ``rx``.
+        A sample naming a node outside this list raises :class:`InputError`.
+    """
+    df = validate_matched(df, source)
+    tx = df["tx"].to_numpy(str)
+    rx = df["rx"].to_numpy(str)
+    if nodes is None:
+        nodes_t = tuple(sorted(set(tx) | set(rx)))
+    else:
+        nodes_t = tuple(str(n) for n in nodes)
+        unknown = sorted((set(tx) | set(rx)) - set(nodes_t))
+        if unknown:
+            raise InputError(
+                f"{source}: unknown node id(s) {', '.join(unknown)}; the model knows {', '.join(nodes_t)}"
+            )
+    lookup = {n: i for i, n in enumerate(nodes_t)}
+    tx_index = np.fromiter((lookup[v] for v in tx), dtype=np.intp, count=len(tx))
+    rx_index = np.fromiter((lookup[v] for v in rx), dtype=np.intp, count=len(rx))
+    tx_pos = df[["tx_x", "tx_y", "tx_z"]].to_numpy(np.float64)
+    rx_pos = df[["rx_x", "rx_y", "rx_z"]].to_numpy(np.float64)
+    tx_q = df[["tx_qw", "tx_qx", "tx_qy", "tx_qz"]].to_numpy(np.float64)
+    rx_q = df[["rx_qw", "rx_qx", "rx_qy", "rx_qz"]].to_numpy(np.float64)
+    dirs = link_directions(tx_pos, tx_q, rx_pos, rx_q)
+    dist = distance_m(tx_pos, rx_pos)
+    gain = observed_joint_gain_db(
+        df["rssi_dbm"].to_numpy(np.float64),
+        df["tx_power_dbm"].to_numpy(np.float64),
+        dist,
+        df["frequency_hz"].to_numpy(np.float64),
+    )
+    return LinkSamples(dirs, tx_index, rx_index, nodes_t, gain, dist)

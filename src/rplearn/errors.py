@@ -1,0 +1,35 @@
+"""Exception hierarchy of rplearn.
+
+Every error a user can cause derives from :class:`RplearnError`; its message is one line
+naming the file, row or field at fault and what was expected.
+"""
+
+from __future__ import annotations
+
+
+class RplearnError(Exception):
+    """Base class of every error rplearn raises on purpose."""
+
+
+class InputError(RplearnError, ValueError):
+    """Bad user input: a wrong shape, a NaN, an out-of-range value, an unknown name."""
+
+
+class FarFieldError(InputError):
+    """A sample is closer than the far-field limit d > 2 lambda (paper Sec. III)."""
+
+
+class IdentifiabilityError(RplearnError):
+    """The samples cannot identify the requested model (too few, or poorly spread)."""
+
+
+class ModelFileError(RplearnError):
+    """A model file is missing, malformed, truncated, tampered with or of an unknown version."""
+
+
+class LogFormatError(RplearnError):
+    """A flight or signal log cannot be read: missing column, corrupt bytes, bad timestamps."""
+
+
+class PlanError(RplearnError):
+    """A trajectory plan violates a limit the user gave (speed, acceleration, flight time)."""
