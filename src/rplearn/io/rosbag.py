@@ -1,0 +1,284 @@
+"""ROS 2 bags (sqlite3, MCAP) and ROS 1 bags -> pose and signal logs, through ``rosbags``.
+
+No ROS installation is needed: :class:`rosbags.highlevel.AnyReader` reads both generations
+and the message definitions embedded in the bag. Types a bag does not describe (custom RSSI
+messages of an older ROS 2 bag, say) are registered from their ``.msg`` definitions with
+``msg_definitions={"pkg/msg/Type": "path/to/Type.msg" or definition text}``, the way rosbags
+documents (``get_types_from_msg`` + ``Typestore.register``); bags without any embedded
+definition are read with the ROS 2 Jazzy typestore (the paper's drones ran Jazzy), or ROS 1
+Noetic for ``.bag`` files.
+
+Poses come from ``nav_msgs/Odometry``, ``geometry_msgs/PoseStamped`` or
+``geometry_msgs/PoseWithCovarianceStamped``, one topic per node (``pose_topics={topic: node}``).
+ROS uses REP-103 frames already (world ENU, body FLU): values are taken as they are.
+
+RSSI comes from topics the user names (``rssi_topics={topic: (tx, rx)}``) and a field path
+in the message (``rssi_field="rssi"``, dots for nested fields, e.g. ``"link.rssi_dbm"``).
+
+Times are the message header stamps (``time_source="header"``; the bag's receive time for
+messages without a header or with a zero stamp) or the bag's receive times
+(``time_source="bag"``), in seconds of ROS time (UNIX epoch on a real robot).
+"""
+
+from __future__ import annotations
+
+import os
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any, Iterator, Mapping
+
+import numpy as np
+import pandas as pd
+
+from rplearn.datasets import validate_pose_log
+from rplearn.errors import InputError, LogFormatError
+from rplearn.io._common import Logs
+
+POSE_MSGTYPES: tuple[str, ...] = (
+    "nav_msgs/msg/Odometry",
+    "geometry_msgs/msg/PoseStamped",
+    "geometry_msgs/msg/PoseWithCovarianceStamped",
+)
+
+
+def _rosbags():
+    try:
+        from rosbags.highlevel import AnyReader
+        from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+    except ImportError:  # pragma: no cover - rosbags is a dependency
+        raise InputError("reading ROS bags needs the 'rosbags' package (pip install rosbags)") from None
+    return AnyReader, Stores, get_types_from_msg, get_typestore
+
+
+def _bag_paths(path: str | os.PathLike) -> list[Path]:
+    p = Path(path)
+    if not p.exists():
+        raise InputError(f"{p}: no such file or directory")
+    if p.is_dir():
+        return [p]
+    if p.suffix == ".bag":
+        return [p]
+    if p.suffix in (".db3", ".mcap"):
+        # a ROS 2 bag is a directory with metadata.yaml; rosbags also opens a lone storage file
+        return [p.parent] if (p.parent / "metadata.yaml").exists() else [p]
+    raise InputError(f"{p}: not a ROS bag (expected a .bag file or a ROS 2 bag directory)")
+
+
+def _load_definitions(msg_definitions: Mapping[str, str] | None) -> dict[str, Any]:
+    _, _, get_types_from_msg, _ = _rosbags()
+    types: dict[str, Any] = {}
+    for name, text_or_path in (msg_definitions or {}).items():
+        text = str(text_or_path)
+        if os.path.exists(text):
+            with open(text, encoding="utf-8") as fh:
+                text = fh.read()
+        try:
+            types.update(get_types_from_msg(text, name))
+        except Exception as exc:
+            raise InputError(f"msg_definitions[{name!r}]: cannot parse definition ({exc})") from None
+    return types
+
+
+def _field(msg: Any, dotted: str, where: str) -> Any:
+    value = msg
+    for part in dotted.split("."):
+        try:
+            value = getattr(value, part)
+        except AttributeError:
+            raise InputError(
+                f"{where}: field {dotted!r} not found (no {part!r} in {type(value).__name__})"
+            ) from None
+    return value
+
+
+def _stamp_s(msg: Any, bag_ns: int, time_source: str) -> float:
+    if time_source == "header":
+        header = getattr(msg, "header", None)
+        stamp = getattr(header, "stamp", None)
+        if stamp is not None:
+            sec = getattr(stamp, "sec", None)
+            nsec = getattr(stamp, "nanosec", None)
+            if sec is not None and nsec is not None and (sec or nsec):
+                return float(sec) + float(nsec) * 1e-9
+    return bag_ns * 1e-9
+
+
+def _pose_of(msg: Any, msgtype: str) -> Any:
+    if msgtype.endswith("Odometry") or msgtype.endswith("PoseWithCovarianceStamped"):
+        return msg.pose.pose
+    return msg.pose
+
+
+@contextmanager
+def open_rosbag(
+    path: str | os.PathLike, msg_definitions: Mapping[str, str] | None = None
+) -> Iterator[Any]:
+    """Open a ROS 1 or ROS 2 bag as a :class:`rosbags.highlevel.AnyReader`, custom types registered.
+
+    Errors of rosbags (missing metadata, corrupt or truncated files, unknown types) become
+    :class:`LogFormatError` naming the bag.
+    """
+    AnyReader, Stores, _, get_typestore = _rosbags()
+    paths = _bag_paths(path)
+    is_ros1 = paths[0].suffix == ".bag"
+    default = get_typestore(Stores.ROS1_NOETIC if is_ros1 else Stores.ROS2_JAZZY)
+    extra = _load_definitions(msg_definitions)
+    if extra:
+        default.register(extra)
+    try:
+        reader = AnyReader(paths, default_typestore=default)
+        reader.open()
+    except (InputError, LogFormatError):
+        raise
+    except Exception as exc:
+        msg = str(exc).splitlines()[0] if str(exc) else ""
+        raise LogFormatError(f"{path}: cannot open bag ({type(exc).__name__}: {msg})") from None
+    try:
+        if extra:
+            missing = {k: v for k, v in extra.items() if k not in reader.typestore.fielddefs}
+            if missing:
+                reader.typestore.register(missing)
+        yield reader
+    finally:
+        reader.close()
+
+
+def _messages(reader: Any, connections: list, path: str) -> Iterator[tuple[Any, int, Any]]:
+    it = reader.messages(connections=connections)
+    while True:
+        try:
+            conn, ts, raw = next(it)
+        except StopIteration:
+            return
+        except Exception as exc:
+            raise LogFormatError(
+                f"{path}: truncated or corrupt bag while reading messages ({type(exc).__name__})"
+            ) from None
+        try:
+            msg = reader.deserialize(raw, conn.msgtype)
+        except Exception as exc:
+            raise LogFormatError(
+                f"{path}: topic {conn.topic}: cannot deserialise {conn.msgtype} "
+                f"({type(exc).__name__}); register its definition with msg_definitions"
+            ) from None
+        yield conn, ts, msg
+
+
+def read_rosbag(
+    path: str | os.PathLike,
+    pose_topics: Mapping[str, str],
+    rssi_topics: Mapping[str, tuple[str, str]] | None = None,
+    rssi_field: str = "rssi",
+    tx_power_dbm: float | None = None,
+    frequency_hz: float | None = None,
+    tx_power_field: str | None = None,
+    frequency_field: str | None = None,
+    msg_definitions: Mapping[str, str] | None = None,
+    time_source: str = "header",
+) -> tuple[Logs, dict[str, Any]]:
+    """Read poses and RSSI from a ROS 1 bag or a ROS 2 bag (sqlite3 or MCAP).
+
+    Parameters
+    ----------
+    path : str or PathLike
+        ``.bag`` file (ROS 1) or ROS 2 bag directory (or its ``.db3`` / ``.mcap`` file).
+    pose_topics : mapping of topic to node id
+        Topics of nav_msgs/Odometry, geometry_msgs/PoseStamped or PoseWithCovarianceStamped.
+    rssi_topics : mapping of topic to (tx, rx), optional
+        Topics carrying the RSSI of packets from ``tx`` received by ``rx``.
+    rssi_field : str
+        Field of the RSSI [dBm] in those messages; dots for nested fields.
+    tx_power_dbm, frequency_hz : float, optional
+        Constants for the signal log (required unless the matching ``*_field`` is given).
+    tx_power_field, frequency_field : str, optional
+        Message fields carrying the tx power [dBm] and frequency [Hz] instead.
+    msg_definitions : mapping of type name to .msg path or text, optional
+        Custom message types to register (``"pkg/msg/Type"``).
+    time_source : {"header", "bag"}
+        Header stamps (falling back to receive time) or the bag's receive times.
+
+    Returns
+    -------
+    logs : Logs
+        ``pose`` (canonical pose log, sorted by node and time) and ``signal`` (canonical
+        signal log, or None without ``rssi_topics``).
+    metadata : dict
+        ``source``, ``format`` ("ros1" or "ros2"), ``topics`` (message counts),
+        ``frame_ids`` per pose topic, ``time_reference``.
+    """
+    if time_source not in ("header", "bag"):
+        raise InputError(f"time_source must be 'header' or 'bag', got {time_source!r}")
+    source = str(path)
+    rssi_topics = dict(rssi_topics or {})
+    if rssi_topics:
+        if tx_power_dbm is None and tx_power_field is None:
+            raise InputError(f"{source}: give tx_power_dbm or tx_power_field for the RSSI topics")
+        if frequency_hz is None and frequency_field is None:
+            raise InputError(f"{source}: give frequency_hz or frequency_field for the RSSI topics")
+    if not pose_topics and not rssi_topics:
+        raise InputError(f"{source}: name at least one pose topic (pose_topics={{topic: node}})")
+    pose_rows: dict[str, list] = {k: [] for k in ("t", "node", "x", "y", "z", "qw", "qx", "qy", "qz")}
+    sig_rows: dict[str, list] = {k: [] for k in ("t", "tx", "rx", "rssi_dbm", "tx_power_dbm", "frequency_hz")}
+    frame_ids: dict[str, str] = {}
+    with open_rosbag(path, msg_definitions) as reader:
+        by_topic = {c.topic: c for c in reader.connections}
+        wanted = list(pose_topics) + list(rssi_topics)
+        missing = [t for t in wanted if t not in by_topic]
+        if missing:
+            raise InputError(
+                f"{source}: topic(s) {', '.join(missing)} not in the bag; it has "
+                f"{', '.join(sorted(by_topic))}"
+            )
+        for topic in pose_topics:
+            mt = by_topic[topic].msgtype
+            if mt not in POSE_MSGTYPES:
+                raise InputError(
+                    f"{source}: topic {topic} is {mt}; expected one of {', '.join(POSE_MSGTYPES)}"
+                )
+        conns = [c for c in reader.connections if c.topic in wanted]
+        counts = {t: 0 for t in wanted}
+        for conn, ts, msg in _messages(reader, conns, source):
+            topic = conn.topic
+            counts[topic] += 1
+            t = _stamp_s(msg, ts, time_source)
+            if topic in pose_topics:
+                pose = _pose_of(msg, conn.msgtype)
+                p, q = pose.position, pose.orientation
+                for k, v in (("t", t), ("node", str(pose_topics[topic])), ("x", p.x), ("y", p.y),
+                             ("z", p.z), ("qw", q.w), ("qx", q.x), ("qy", q.y), ("qz", q.z)):
+                    pose_rows[k].append(v)
+                if topic not in frame_ids:
+                    frame_ids[topic] = str(getattr(getattr(msg, "header", None), "frame_id", ""))
+            else:
+                tx, rx = rssi_topics[topic]
+                where = f"{source}: topic {topic}"
+                sig_rows["t"].append(t)
+                sig_rows["tx"].append(str(tx))
+                sig_rows["rx"].append(str(rx))
+                sig_rows["rssi_dbm"].append(float(_field(msg, rssi_field, where)))
+                sig_rows["tx_power_dbm"].append(
+                    float(_field(msg, tx_power_field, where)) if tx_power_field else float(tx_power_dbm))
+                sig_rows["frequency_hz"].append(
+                    float(_field(msg, frequency_field, where)) if frequency_field else float(frequency_hz))
+        fmt = "ros1" if not getattr(reader, "is2", True) else "ros2"
+    pose = None
+    if pose_topics:
+        empty = [t for t in pose_topics if counts[t] == 0]
+        if empty:
+            raise InputError(f"{source}: pose topic(s) {', '.join(empty)} have no messages")
+        df = pd.DataFrame(pose_rows)
+        for c in ("t", "x", "y", "z", "qw", "qx", "qy", "qz"):
+            df[c] = df[c].astype(np.float64)
+        pose = validate_pose_log(df, source)
+    signal = pd.DataFrame(sig_rows).sort_values("t", kind="stable").reset_index(drop=True) if rssi_topics else None
+    meta = {
+        "source": source,
+        "format": fmt,
+        "topics": counts,
+        "frame_ids": frame_ids,
+        "time_reference": f"ROS time [s] ({'header stamps' if time_source == 'header' else 'bag receive time'})",
+    }
+    return Logs(pose=pose, signal=signal), meta
+
+
+__all__ = ["POSE_MSGTYPES", "open_rosbag", "read_rosbag"]

@@ -1,0 +1,397 @@
+"""CSV and Parquet logs in the canonical schemas (DESIGN.md), with their common variants.
+
+Pose tables: ``t, node, x, y, z, qw, qx, qy, qz``. Instead of ``x, y, z`` a table may carry
+``lat, lon, alt`` (degrees, metres above the ellipsoid), converted to a local ENU frame with
+:mod:`pymap3d` around a stated origin or the log's first fix. Instead of the quaternion it may
+carry Euler angles whose names carry their frame: ``roll_deg, pitch_deg, yaw_deg`` (ENU/FLU,
+REP-103) or ``roll_ned_deg, pitch_ned_deg, yaw_ned_deg`` (NED/FRD, as autopilots log them).
+
+Signal tables: ``t, tx, rx, rssi_dbm, tx_power_dbm, frequency_hz`` and optional ``unit``;
+``tx_power_dbm``, ``frequency_hz`` and ``rx`` may instead be given as constants.
+
+Other column names are renamed through one mapping: :data:`COLUMN_ALIASES` (common vendor
+names) updated by the caller's ``columns={"their name": "canonical name"}``.
+"""
+
+from __future__ import annotations
+
+import os
+from typing import Any, Iterator, Mapping
+
+import numpy as np
+import pandas as pd
+
+from rplearn.datasets import POSE_COLUMNS, SIGNAL_COLUMNS, validate_pose_log
+from rplearn.errors import InputError, LogFormatError
+from rplearn.geometry import quat_wxyz_from_euler_enu_flu_deg, quat_wxyz_from_euler_ned_frd_deg
+
+#: Vendor column names -> canonical names (the one renaming mapping of rplearn.io).
+COLUMN_ALIASES: dict[str, str] = {
+    "time": "t",
+    "time_s": "t",
+    "timestamp_s": "t",
+    "node_id": "node",
+    "drone": "node",
+    "latitude": "lat",
+    "latitude_deg": "lat",
+    "longitude": "lon",
+    "longitude_deg": "lon",
+    "altitude": "alt",
+    "altitude_m": "alt",
+    "rssi": "rssi_dbm",
+    "signal_dbm": "rssi_dbm",
+    "txpower_dbm": "tx_power_dbm",
+    "freq_hz": "frequency_hz",
+    "transmitter": "tx",
+    "receiver": "rx",
+}
+
+GEODETIC_COLUMNS: tuple[str, ...] = ("lat", "lon", "alt")
+EULER_ENU_FLU_COLUMNS: tuple[str, ...] = ("roll_deg", "pitch_deg", "yaw_deg")
+EULER_NED_FRD_COLUMNS: tuple[str, ...] = ("roll_ned_deg", "pitch_ned_deg", "yaw_ned_deg")
+_PARQUET_EXT = (".parquet", ".pq")
+
+
+def rename_columns(df: pd.DataFrame, columns: Mapping[str, str] | None = None) -> pd.DataFrame:
+    """Rename vendor columns to canonical names: :data:`COLUMN_ALIASES`, then ``columns``.
+
+    A canonical name already present is never overwritten by an alias.
+    """
+    mapping = {k: v for k, v in COLUMN_ALIASES.items() if v not in df.columns}
+    mapping.update(dict(columns or {}))
+    df = df.rename(columns={c: mapping.get(str(c), str(c)) for c in df.columns})
+    if df.columns.duplicated().any():
+        dup = sorted({str(c) for c in df.columns[df.columns.duplicated()]})
+        raise InputError(f"column(s) {', '.join(dup)} appear twice after renaming")
+    return df
+
+
+def _read(path: str, source: str) -> pd.DataFrame:
+    if not os.path.exists(path):
+        raise InputError(f"{source}: no such file")
+    try:
+        if str(path).lower().endswith(_PARQUET_EXT):
+            return pd.read_parquet(path)
+        return pd.read_csv(path, skipinitialspace=True)
+    except pd.errors.EmptyDataError:
+        raise LogFormatError(f"{source}: empty file, expected a header line and rows") from None
+    except Exception as exc:  # parsers raise many classes on corrupt bytes
+        msg = str(exc).splitlines()[0] if str(exc) else ""
+        raise LogFormatError(f"{source}: cannot read table ({type(exc).__name__}: {msg})") from None
+
+
+def _float_column(df: pd.DataFrame, name: str) -> np.ndarray:
+    return pd.to_numeric(df[name], errors="coerce").to_numpy(np.float64, na_value=np.nan)
+
+
+def _has(df: pd.DataFrame, names: tuple[str, ...]) -> bool:
+    return all(n in df.columns for n in names)
+
+
+def geodetic_to_enu(
+    lat_deg: np.ndarray,
+    lon_deg: np.ndarray,
+    alt_m: np.ndarray,
+    origin_geodetic: tuple[float, float, float],
+) -> np.ndarray:
+    """Geodetic positions (WGS-84, degrees, metres) -> local ENU [m] around ``origin_geodetic``."""
+    import pymap3d
+
+    lat0, lon0, alt0 = (float(v) for v in origin_geodetic)
+    e, n, u = pymap3d.geodetic2enu(
+        np.asarray(lat_deg, np.float64), np.asarray(lon_deg, np.float64),
+        np.asarray(alt_m, np.float64), lat0, lon0, alt0,
+    )
+    return np.stack([np.asarray(e), np.asarray(n), np.asarray(u)], axis=-1)
+
+
+def _check_geodetic(lat: np.ndarray, lon: np.ndarray, source: str) -> None:
+    bad = np.flatnonzero((np.abs(lat) > 90) | (np.abs(lon) > 180))
+    if bad.size:
+        raise InputError(
+            f"{source}: field lat/lon out of range at row {int(bad[0])} "
+            f"(lat {lat[bad[0]]!r}, lon {lon[bad[0]]!r}); expected degrees"
+        )
+
+
+def canonical_pose(
+    df: pd.DataFrame,
+    source: str = "pose log",
+    columns: Mapping[str, str] | None = None,
+    node: str | None = None,
+    origin_geodetic: tuple[float, float, float] | None = None,
+    nan_policy: str = "error",
+    allow_unsorted: bool = False,
+) -> tuple[pd.DataFrame, dict[str, Any]]:
+    """Turn a table in any of the pose variants into a canonical pose log.
+
+    Parameters
+    ----------
+    df : DataFrame
+        Table with ``t``, a node (column ``node`` or the ``node`` argument), a position
+        (``x, y, z`` ENU [m] or ``lat, lon, alt`` [deg, deg, m]) and an attitude (quaternion
+        ``qw, qx, qy, qz`` body FLU -> world ENU, or Euler angles, see the module docstring).
+    source : str
+        File or log name for messages.
+    columns : mapping, optional
+        Extra renaming ``{"their name": "canonical name"}``.
+    node : str, optional
+        Node id of every row when the table has no ``node`` column.
+    origin_geodetic : (lat_deg, lon_deg, alt_m), optional
+        ENU origin for geodetic tables; by default the log's first fix (earliest row).
+    nan_policy : {"error", "drop"}
+        Rows with a NaN or non-numeric pose value raise :class:`InputError` or are dropped
+        and counted in ``metadata["dropped"]["nan_pose"]``.
+    allow_unsorted : bool
+        Accept times that go backwards within a node (the rows are sorted); by default
+        they raise :class:`LogFormatError`.
+
+    Returns
+    -------
+    pose : DataFrame
+        Canonical pose log sorted by (node, t).
+    metadata : dict
+        ``source``, ``position`` ("enu" or "geodetic"), ``attitude`` ("quaternion",
+        "euler_enu_flu" or "euler_ned_frd"), ``origin_geodetic`` (or None), ``dropped``.
+    """
+    if nan_policy not in ("error", "drop"):
+        raise InputError(f"nan_policy must be 'error' or 'drop', got {nan_policy!r}")
+    try:
+        df = rename_columns(df, columns)
+    except InputError as exc:
+        raise InputError(f"{source}: {exc}") from None
+    meta: dict[str, Any] = {"source": source, "dropped": {"nan_pose": 0}, "origin_geodetic": None}
+    if "node" not in df.columns:
+        if node is None:
+            raise InputError(f"{source}: missing column node (or pass node=... for a one-node log)")
+        df = df.assign(node=str(node))
+    if "t" not in df.columns:
+        raise InputError(f"{source}: missing column t; expected {', '.join(POSE_COLUMNS)}")
+
+    if _has(df, ("x", "y", "z")):
+        pos_cols: tuple[str, ...] = ("x", "y", "z")
+        meta["position"] = "enu"
+    elif _has(df, GEODETIC_COLUMNS):
+        pos_cols = GEODETIC_COLUMNS
+        meta["position"] = "geodetic"
+    else:
+        raise InputError(f"{source}: missing position columns: expected x, y, z (ENU m) or lat, lon, alt")
+    if _has(df, ("qw", "qx", "qy", "qz")):
+        att_cols: tuple[str, ...] = ("qw", "qx", "qy", "qz")
+        meta["attitude"] = "quaternion"
+    elif _has(df, EULER_ENU_FLU_COLUMNS):
+        att_cols = EULER_ENU_FLU_COLUMNS
+        meta["attitude"] = "euler_enu_flu"
+    elif _has(df, EULER_NED_FRD_COLUMNS):
+        att_cols = EULER_NED_FRD_COLUMNS
+        meta["attitude"] = "euler_ned_frd"
+    else:
+        raise InputError(
+            f"{source}: missing attitude columns: expected qw, qx, qy, qz or "
+            "roll_deg, pitch_deg, yaw_deg (ENU/FLU) or roll_ned_deg, pitch_ned_deg, yaw_ned_deg"
+        )
+
+    numeric = ("t",) + pos_cols + att_cols
+    values = {c: _float_column(df, c) for c in numeric}
+    bad = np.zeros(len(df), bool)
+    first_bad: tuple[int, str] | None = None
+    for c in numeric:
+        b = ~np.isfinite(values[c])
+        if b.any():
+            r = int(np.flatnonzero(b)[0])
+            if first_bad is None or r < first_bad[0]:
+                first_bad = (r, c)
+        bad |= b
+    if first_bad is not None:
+        if nan_policy == "error":
+            raise InputError(
+                f"{source}: field {first_bad[1]} has {int(bad.sum())} row(s) with NaN, infinite or "
+                f"non-numeric values (first at row {first_bad[0]}); expected numbers, or pass "
+                "nan_policy='drop'"
+            )
+        meta["dropped"]["nan_pose"] = int(bad.sum())
+        values = {c: v[~bad] for c, v in values.items()}
+        df = df.loc[~bad]
+    nodes = df["node"].astype(str).to_numpy()
+    if len(nodes) == 0:
+        raise InputError(f"{source}: no pose rows")
+
+    t = values["t"]
+    if not allow_unsorted:
+        # first row per node where time goes backwards
+        order_ok = np.ones(len(t), bool)
+        same_node = nodes[1:] == nodes[:-1]
+        order_ok[1:] = ~(same_node & (t[1:] < t[:-1]))
+        if not order_ok.all():
+            r = int(np.flatnonzero(~order_ok)[0])
+            raise LogFormatError(
+                f"{source}: field t goes backwards at row {r} (node {nodes[r]}: {t[r - 1]!r} -> "
+                f"{t[r]!r}); expected increasing times, or pass allow_unsorted=True"
+            )
+
+    if meta["position"] == "geodetic":
+        lat, lon, alt = values["lat"], values["lon"], values["alt"]
+        _check_geodetic(lat, lon, source)
+        if origin_geodetic is None:
+            i0 = int(np.argmin(t))
+            origin_geodetic = (float(lat[i0]), float(lon[i0]), float(alt[i0]))
+        meta["origin_geodetic"] = tuple(float(v) for v in origin_geodetic)
+        xyz = geodetic_to_enu(lat, lon, alt, origin_geodetic)
+    else:
+        xyz = np.stack([values["x"], values["y"], values["z"]], axis=-1)
+    if meta["attitude"] == "quaternion":
+        q = np.stack([values[c] for c in att_cols], axis=-1)
+    elif meta["attitude"] == "euler_enu_flu":
+        q = quat_wxyz_from_euler_enu_flu_deg(*(values[c] for c in att_cols))
+    else:
+        q = quat_wxyz_from_euler_ned_frd_deg(*(values[c] for c in att_cols))
+    out = pd.DataFrame(
+        {
+            "t": t, "node": nodes, "x": xyz[:, 0], "y": xyz[:, 1], "z": xyz[:, 2],
+            "qw": q[:, 0], "qx": q[:, 1], "qy": q[:, 2], "qz": q[:, 3],
+        }
+    )
+    return validate_pose_log(out, source), meta
+
+
+def canonical_signal(
+    df: pd.DataFrame,
+    source: str = "signal log",
+    columns: Mapping[str, str] | None = None,
+    rx: str | None = None,
+    tx_power_dbm: float | None = None,
+    frequency_hz: float | None = None,
+) -> pd.DataFrame:
+    """Turn a signal table into the canonical signal schema without dropping any row.
+
+    ``rx``, ``tx_power_dbm`` and ``frequency_hz`` fill a column the table lacks. NaN or
+    sentinel values are kept: :func:`rplearn.sync.synchronise` drops and counts them.
+    Extra columns are kept after the canonical ones.
+
+    Raises
+    ------
+    InputError
+        On a missing column that no argument supplies.
+    """
+    try:
+        df = rename_columns(df, columns)
+    except InputError as exc:
+        raise InputError(f"{source}: {exc}") from None
+    fill = {"rx": rx, "tx_power_dbm": tx_power_dbm, "frequency_hz": frequency_hz}
+    for c, v in fill.items():
+        if c not in df.columns and v is not None:
+            df = df.assign(**{c: v})
+    missing = [c for c in SIGNAL_COLUMNS if c not in df.columns]
+    if missing:
+        raise InputError(
+            f"{source}: missing column(s) {', '.join(missing)}; expected {', '.join(SIGNAL_COLUMNS)}"
+            " (rx, tx_power_dbm and frequency_hz may be given as options)"
+        )
+    out = pd.DataFrame(index=range(len(df)))
+    for c in SIGNAL_COLUMNS:
+        col = df[c].to_numpy()
+        if c in ("tx", "rx"):
+            out[c] = pd.Series(col).astype(str).to_numpy(dtype=object)
+        else:
+            out[c] = pd.to_numeric(pd.Series(col), errors="coerce").to_numpy(np.float64, na_value=np.nan)
+    for c in df.columns:
+        if c not in SIGNAL_COLUMNS:
+            out[c] = df[c].to_numpy()
+    return out
+
+
+def read_pose_table(path: str, **options: Any) -> tuple[pd.DataFrame, dict[str, Any]]:
+    """Read a pose log from CSV or Parquet (by extension); options of :func:`canonical_pose`.
+
+    Returns ``(pose, metadata)``.
+    """
+    source = str(path)
+    df = _read(str(path), source)
+    pose, meta = canonical_pose(df, source=source, **options)
+    meta["format"] = "parquet" if source.lower().endswith(_PARQUET_EXT) else "csv"
+    return pose, meta
+
+
+def read_signal_table(path: str, **options: Any) -> tuple[pd.DataFrame, dict[str, Any]]:
+    """Read a signal log from CSV or Parquet; options of :func:`canonical_signal`.
+
+    Returns ``(signal, metadata)``.
+    """
+    source = str(path)
+    df = _read(str(path), source)
+    signal = canonical_signal(df, source=source, **options)
+    fmt = "parquet" if source.lower().endswith(_PARQUET_EXT) else "csv"
+    return signal, {"source": source, "format": fmt, "rows": int(len(signal))}
+
+
+def iter_signal_table(
+    path: str, chunk_rows: int = 200_000, **options: Any
+) -> Iterator[pd.DataFrame]:
+    """Read a big CSV or Parquet signal log in chunks of at most ``chunk_rows`` rows.
+
+    Each chunk goes through :func:`canonical_signal` (options as there). Memory stays bounded
+    by the chunk size: CSV through pandas' chunked reader, Parquet by record batches.
+    """
+    source = str(path)
+    if not os.path.exists(path):
+        raise InputError(f"{source}: no such file")
+    if chunk_rows < 1:
+        raise InputError(f"chunk_rows must be positive, got {chunk_rows}")
+    try:
+        if source.lower().endswith(_PARQUET_EXT):
+            import pyarrow.parquet as pq
+
+            pf = pq.ParquetFile(path)
+            batches: Iterator[pd.DataFrame] = (
+                b.to_pandas() for b in pf.iter_batches(batch_size=chunk_rows)
+            )
+        else:
+            batches = iter(pd.read_csv(path, chunksize=chunk_rows, skipinitialspace=True))
+        for chunk in batches:
+            yield canonical_signal(chunk, source=source, **options)
+    except (InputError, LogFormatError):
+        raise
+    except Exception as exc:
+        msg = str(exc).splitlines()[0] if str(exc) else ""
+        raise LogFormatError(f"{source}: cannot read table ({type(exc).__name__}: {msg})") from None
+
+
+def table_kind(path: str, columns: Mapping[str, str] | None = None) -> str:
+    """``"pose"`` or ``"signal"``: which canonical log a table holds, judged by its header."""
+    source = str(path)
+    if source.lower().endswith(_PARQUET_EXT):
+        try:
+            import pyarrow.parquet as pq
+
+            names = list(pq.read_schema(path).names)
+        except Exception as exc:
+            raise LogFormatError(f"{source}: cannot read Parquet schema ({type(exc).__name__})") from None
+    else:
+        if not os.path.exists(path):
+            raise InputError(f"{source}: no such file")
+        try:
+            names = list(pd.read_csv(path, nrows=0, skipinitialspace=True).columns)
+        except Exception as exc:
+            raise LogFormatError(f"{source}: cannot read CSV header ({type(exc).__name__})") from None
+    renamed = set(rename_columns(pd.DataFrame(columns=names), columns).columns)
+    if {"rssi_dbm", "tx"} <= renamed:
+        return "signal"
+    if "t" in renamed and ({"x", "y", "z"} <= renamed or set(GEODETIC_COLUMNS) <= renamed):
+        return "pose"
+    raise InputError(
+        f"{source}: header is neither a pose log (t, node, x|lat, ...) nor a signal log "
+        f"(t, tx, rx, rssi_dbm, ...): {', '.join(map(str, names[:12]))}"
+    )
+
+
+__all__ = [
+    "COLUMN_ALIASES",
+    "canonical_pose",
+    "canonical_signal",
+    "geodetic_to_enu",
+    "iter_signal_table",
+    "read_pose_table",
+    "read_signal_table",
+    "rename_columns",
+    "table_kind",
+]
