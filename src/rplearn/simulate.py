@@ -1,0 +1,641 @@
+"""Flight simulator: calibration flights with known ground-truth patterns (paper Secs. IV-V).
+
+Drones track the references of a :class:`~rplearn.trajectory.Campaign` with a tracking error,
+tilting into their acceleration and into the wind (the paper's day had about 10 m/s); their
+autopilots log pose estimates (RTK-GNSS-level position noise, a few degrees of yaw noise, about
+100 Hz); their radios exchange packets (about 80 per second per direction, with jitter, loss and
+short dropouts) whose received power follows paper eq. 1 from the *true* poses and patterns,
+plus log-normal fading, a per-direction electronics offset (non-reciprocity, Sec. V-B3),
+integer-dBm RSSI, a sensitivity floor (no packet below it) and a saturation plateau.
+
+Every effect is sized by a field of a config dataclass and switched off by setting it to zero
+(or ``None`` / ``False``). The outputs are the raw pose and signal logs in the canonical
+schemas of :mod:`rplearn.datasets`, so that they go through the same synchronisation as real
+logs, plus the ground truth (:class:`~rplearn.antennas.GroundTruth`) and, for scoring, the
+matched dataset built from the true poses at every packet time (``matched_truth``).
+
+Noise level (what "the RMSE of the true patterns equals the noise level" means): the residual
+``rssi - (P_tx + G_tx + G_rx + offset - FSPL)`` evaluated with the true poses and patterns is
+the fading plus the rounding to integer dBm (plus clipping at the plateau, rare by design).
+Its nominal standard deviation is :attr:`SimulationResult.noise_std_db`
+``= sqrt(fading_std_db^2 + 1/12)`` (uniform rounding error of variance 1/12 dB^2).
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import time
+from dataclasses import dataclass, field, replace
+import numpy as np
+import pandas as pd
+from numpy.typing import NDArray
+from scipy.signal import lfilter
+
+from rplearn.antennas import GroundTruth, NodeAntenna, load_ground_truth
+from rplearn.datasets import MATCHED_COLUMNS, POSE_COLUMNS, SIGNAL_COLUMNS, write_table
+from rplearn.errors import InputError
+from rplearn.geometry import (
+    distance_m,
+    link_directions,
+    matrix_to_quat_wxyz,
+    quat_wxyz_from_euler,
+    quat_wxyz_from_yaw,
+    quat_wxyz_multiply,
+)
+from rplearn.link import free_space_path_loss_db
+from rplearn.trajectory import G_M_S2, Campaign, TrajectoryUnit, write_references
+
+FloatArray = NDArray[np.float64]
+logger = logging.getLogger(__name__)
+
+__all__ = [
+    "EstimatorConfig",
+    "FlightConfig",
+    "RadioConfig",
+    "SimulationConfig",
+    "SimulationResult",
+    "load_ground_truth",
+    "simulate",
+]
+
+
+@dataclass(frozen=True)
+class FlightConfig:
+    """How the drones really fly (truth), around the references.
+
+    Attributes
+    ----------
+    truth_rate_hz : float
+        Rate of the simulated true state; finer times are linearly interpolated [Hz].
+    tracking_std_m : float
+        Standard deviation of the position tracking error, per axis (Ornstein-Uhlenbeck) [m].
+    tracking_tau_s : float
+        Correlation time of the tracking error [s].
+    yaw_tracking_std_deg : float
+        Standard deviation of the heading tracking error [deg].
+    yaw_tracking_tau_s : float
+        Its correlation time [s].
+    wind_speed_m_s : float
+        Steady horizontal wind [m/s]; 0 switches wind off.
+    wind_toward_deg : float
+        Azimuth the wind blows toward, ENU ccw from east [deg].
+    gust_std_m_s : float
+        Standard deviation of gusts per horizontal axis [m/s].
+    gust_tau_s : float
+        Correlation time of gusts [s].
+    drag_per_m : float
+        Quadratic drag coefficient ``c`` of ``a_drag = c |v_air| v_air`` [1/m]; the drone tilts
+        so that its thrust cancels drag and gives the reference acceleration. 0.021 tilts an
+        X500-class drone by about 12 deg in a 10 m/s wind.
+    tilt_jitter_deg : float
+        Standard deviation of fast roll/pitch jitter of the controller [deg].
+    tilt_jitter_tau_s : float
+        Its correlation time [s].
+    tilt_into_motion : bool
+        Whether the attitude follows the thrust vector (False: always level).
+    """
+
+    truth_rate_hz: float = 200.0
+    tracking_std_m: float = 0.0
+    tracking_tau_s: float = 1.5
+    yaw_tracking_std_deg: float = 0.0
+    yaw_tracking_tau_s: float = 1.0
+    wind_speed_m_s: float = 0.0
+    wind_toward_deg: float = 90.0
+    gust_std_m_s: float = 0.0
+    gust_tau_s: float = 3.0
+    drag_per_m: float = 0.021
+    tilt_jitter_deg: float = 0.0
+    tilt_jitter_tau_s: float = 0.3
+    tilt_into_motion: bool = True
+
+
+@dataclass(frozen=True)
+class EstimatorConfig:
+    """The autopilot's pose estimates written to the pose log.
+
+    Attributes
+    ----------
+    pose_rate_hz : float
+        Pose log rate per drone [Hz].
+    pose_time_jitter_s : float
+        Standard deviation of the logging time around the nominal grid [s].
+    horizontal_noise_std_m, vertical_noise_std_m : float
+        Position estimate error (RTK-GNSS level: about 0.01-0.03 m), correlated over
+        ``position_noise_tau_s`` [m].
+    position_noise_tau_s : float
+        Correlation time of the position error [s].
+    yaw_noise_std_deg : float
+        Heading estimate error (magnetometer: a few degrees), correlated over ``yaw_noise_tau_s``.
+    yaw_noise_tau_s : float
+        Its correlation time [s].
+    tilt_noise_std_deg : float
+        White roll/pitch estimate error [deg].
+    """
+
+    pose_rate_hz: float = 100.0
+    pose_time_jitter_s: float = 0.0
+    horizontal_noise_std_m: float = 0.0
+    vertical_noise_std_m: float = 0.0
+    position_noise_tau_s: float = 1.0
+    yaw_noise_std_deg: float = 0.0
+    yaw_noise_tau_s: float = 5.0
+    tilt_noise_std_deg: float = 0.0
+
+
+@dataclass(frozen=True)
+class RadioConfig:
+    """The radios: packets, received power (paper eq. 1) and its defects.
+
+    Attributes
+    ----------
+    tx_power_dbm : float
+        Transmitted power [dBm] (the paper: 20 dBm).
+    frequency_hz : float
+        Carrier frequency [Hz].
+    packet_rate_hz : float
+        Packets per second per direction [Hz] (the paper: about 80).
+    packet_jitter : float
+        Standard deviation of the inter-packet time as a fraction of the nominal interval.
+    loss_probability : float
+        Probability that a packet is lost regardless of its power.
+    fading_std_db : float
+        Standard deviation of the log-normal fading added to every packet [dB].
+    quantize : bool
+        Report RSSI as integer dBm.
+    sensitivity_dbm : float or None
+        Receiver sensitivity: packets received below it are lost [dBm].
+    saturation_dbm : float or None
+        RSSI plateau: reports never exceed it [dBm].
+    link_offsets_db : tuple of ((tx, rx), offset)
+        Per-direction electronics offset [dB] (non-reciprocity, Sec. V-B3).
+    dropouts : int
+        Number of short link dropouts in the whole campaign (both directions silent).
+    dropout_duration_s : float
+        Duration of each dropout [s].
+    """
+
+    tx_power_dbm: float = 20.0
+    frequency_hz: float = 2.412e9
+    packet_rate_hz: float = 80.0
+    packet_jitter: float = 0.0
+    loss_probability: float = 0.0
+    fading_std_db: float = 0.0
+    quantize: bool = True
+    sensitivity_dbm: float | None = None
+    saturation_dbm: float | None = None
+    link_offsets_db: tuple[tuple[tuple[str, str], float], ...] = ()
+    dropouts: int = 0
+    dropout_duration_s: float = 2.0
+
+    def offsets_dict(self) -> dict[str, float]:
+        """Offsets keyed ``"tx->rx"`` [dB]."""
+        return {f"{tx}->{rx}": float(v) for (tx, rx), v in self.link_offsets_db}
+
+
+@dataclass(frozen=True)
+class SimulationConfig:
+    """Everything that defines a simulated campaign.
+
+    Attributes
+    ----------
+    name : str
+        Preset or user label.
+    campaign : Campaign
+        Trajectory units to fly.
+    node_antennas : dict of str -> NodeAntenna
+        True pattern of every node (antenna, mounting, airframe lobes).
+    flight, estimator, radio : FlightConfig, EstimatorConfig, RadioConfig
+        Effects and their sizes.
+    reference_rate_hz : float
+        Rate of the reference CSV files written with the logs [Hz].
+    """
+
+    name: str
+    campaign: Campaign
+    node_antennas: dict[str, NodeAntenna]
+    flight: FlightConfig = field(default_factory=FlightConfig)
+    estimator: EstimatorConfig = field(default_factory=EstimatorConfig)
+    radio: RadioConfig = field(default_factory=RadioConfig)
+    reference_rate_hz: float = 10.0
+
+    def __post_init__(self) -> None:
+        missing = sorted(set(self.campaign.nodes) - set(self.node_antennas))
+        if missing:
+            raise InputError(f"node_antennas: no antenna given for node(s) {', '.join(missing)}")
+        if not (self.radio.packet_rate_hz > 0):
+            raise InputError(f"radio packet_rate_hz: expected > 0 Hz, got {self.radio.packet_rate_hz}")
+        if not (0.0 <= self.radio.loss_probability < 1.0):
+            raise InputError(
+                f"radio loss_probability: expected 0 <= p < 1, got {self.radio.loss_probability}"
+            )
+        if self.radio.fading_std_db < 0:
+            raise InputError(f"radio fading_std_db: expected >= 0 dB, got {self.radio.fading_std_db}")
+
+    def ground_truth(self, seed: int | None = None) -> GroundTruth:
+        """The :class:`GroundTruth` of this configuration."""
+        return GroundTruth(
+            node_antennas=dict(self.node_antennas),
+            link_offsets_db=self.radio.offsets_dict(),
+            frequency_hz=self.radio.frequency_hz,
+            metadata={"simulation": self.name, "seed": seed},
+        )
+
+
+@dataclass
+class SimulationResult:
+    """Logs, truth and files of one simulated campaign.
+
+    Attributes
+    ----------
+    config : SimulationConfig
+    seed : int
+    pose_log : DataFrame
+        Canonical pose log (estimates) ``t, node, x, y, z, qw, qx, qy, qz``.
+    signal_log : DataFrame
+        Canonical signal log ``t, tx, rx, rssi_dbm, tx_power_dbm, frequency_hz, unit``.
+    ground_truth : GroundTruth
+    matched_truth : DataFrame
+        Every signal-log row with the *true* poses of both ends at the packet time
+        (:data:`rplearn.datasets.MATCHED_COLUMNS` plus ``unit``).
+    noise_std_db : float
+        Nominal std of the residual noise in dB: ``sqrt(fading^2 + 1/12 if quantized)``.
+    realised_noise_std_db : float
+        Std of ``rssi - clean power`` over the delivered packets [dB].
+    paths : dict of str -> str
+        Files written (``pose_log``, ``signal_log``, ``ground_truth``, ``matched_truth``,
+        ``references`` directory); empty without ``out_dir``.
+    elapsed_s : float
+        Wall time of the simulation (files excluded) [s].
+    """
+
+    config: SimulationConfig
+    seed: int
+    pose_log: pd.DataFrame
+    signal_log: pd.DataFrame
+    ground_truth: GroundTruth
+    matched_truth: pd.DataFrame
+    noise_std_db: float
+    realised_noise_std_db: float
+    paths: dict[str, str] = field(default_factory=dict)
+    elapsed_s: float = 0.0
+
+    def units(self, role: str) -> list[str]:
+        """Labels of the units with the given role (``"learning"``/``"testing"``)."""
+        return [u.label for u in self.config.campaign.units if u.role == role]
+
+    def matched(self, role: str | None = None, tx: str | None = None, rx: str | None = None) -> pd.DataFrame:
+        """Rows of :attr:`matched_truth` of a role and direction."""
+        df = self.matched_truth
+        mask = np.ones(len(df), bool)
+        if role is not None:
+            mask &= df["unit"].isin(self.units(role)).to_numpy()
+        if tx is not None:
+            mask &= (df["tx"] == tx).to_numpy()
+        if rx is not None:
+            mask &= (df["rx"] == rx).to_numpy()
+        return df.loc[mask].reset_index(drop=True)
+
+
+# ---------------------------------------------------------------------------------------------
+# Random processes
+
+
+def ou_process(rng: np.random.Generator, n: int, dt_s: float, std: float, tau_s: float, dims: int = 1) -> FloatArray:
+    """Stationary Ornstein-Uhlenbeck samples (AR(1)), shape (n, dims).
+
+    Parameters
+    ----------
+    std : float
+        Stationary standard deviation; 0 gives zeros.
+    tau_s : float
+        Correlation time [s]; 0 gives white noise.
+    """
+    if std <= 0 or n == 0:
+        return np.zeros((n, dims))
+    eps = rng.standard_normal((n, dims))
+    if tau_s <= 0:
+        return std * eps
+    a = float(np.exp(-dt_s / tau_s))
+    b = std * np.sqrt(1.0 - a * a)
+    x0 = std * eps[0]
+    out = lfilter([b], [1.0, -a], eps[1:], axis=0, zi=(a * x0)[None, :])[0] if n > 1 else np.empty((0, dims))
+    return np.vstack([x0[None, :], out])
+
+
+def _rotation_z_quat(angle_rad: FloatArray) -> FloatArray:
+    return quat_wxyz_from_yaw(angle_rad)
+
+
+def attitude_from_thrust(thrust_dir_enu: FloatArray, yaw_rad: FloatArray) -> FloatArray:
+    """Quaternions (FLU -> ENU) of drones whose body z axis is the thrust direction.
+
+    The body x axis is the heading direction projected on the plane perpendicular to the
+    thrust (the geometric controller's convention, Lee et al. 2010).
+    """
+    zb = thrust_dir_enu / np.linalg.norm(thrust_dir_enu, axis=-1, keepdims=True)
+    xc = np.stack([np.cos(yaw_rad), np.sin(yaw_rad), np.zeros_like(yaw_rad)], axis=-1)
+    yb = np.cross(zb, xc)
+    yb /= np.linalg.norm(yb, axis=-1, keepdims=True)
+    xb = np.cross(yb, zb)
+    m = np.stack([xb, yb, zb], axis=-1)  # columns are the body axes in the world
+    return matrix_to_quat_wxyz(m)
+
+
+# ---------------------------------------------------------------------------------------------
+# Truth of one unit
+
+
+@dataclass
+class _UnitTruth:
+    unit: TrajectoryUnit
+    t_s: FloatArray  # (n,)
+    position_enu_m: FloatArray  # (n, 2, 3)
+    quat_wxyz: FloatArray  # (n, 2, 4)
+
+    def interpolate(self, t_s: FloatArray, which: int) -> tuple[FloatArray, FloatArray]:
+        """True position and attitude of drone ``which`` at times ``t_s`` (linear / nlerp)."""
+        t = np.clip(t_s, self.t_s[0], self.t_s[-1])
+        i = np.clip(np.searchsorted(self.t_s, t, side="right") - 1, 0, self.t_s.size - 2)
+        w = ((t - self.t_s[i]) / (self.t_s[i + 1] - self.t_s[i]))[:, None]
+        p = self.position_enu_m[:, which, :]
+        q = self.quat_wxyz[:, which, :]
+        pos = p[i] * (1.0 - w) + p[i + 1] * w
+        q0, q1 = q[i], q[i + 1]
+        sign = np.where(np.sum(q0 * q1, axis=1, keepdims=True) < 0, -1.0, 1.0)
+        qi = q0 * (1.0 - w) + sign * q1 * w
+        qi /= np.linalg.norm(qi, axis=1, keepdims=True)
+        return pos, qi
+
+
+def _simulate_unit_truth(
+    unit: TrajectoryUnit, t0_s: float, flight: FlightConfig, rng: np.random.Generator
+) -> _UnitTruth:
+    ref = unit.sample(flight.truth_rate_hz, t_offset_s=t0_s)
+    n = ref.t_s.size
+    dt = 1.0 / flight.truth_rate_hz
+    pos = ref.position_enu_m.copy()
+    quats = np.empty((n, 2, 4))
+    wind_dir = np.radians(flight.wind_toward_deg)
+    steady = flight.wind_speed_m_s * np.array([np.cos(wind_dir), np.sin(wind_dir), 0.0])
+    gust = ou_process(rng, n, dt, flight.gust_std_m_s, flight.gust_tau_s, dims=2)
+    wind = steady[None, :] + np.column_stack([gust, np.zeros(n)])
+    for j in range(2):
+        err = ou_process(rng, n, dt, flight.tracking_std_m, flight.tracking_tau_s, dims=3)
+        pos[:, j, :] += err
+        yaw = ref.yaw_rad[:, j] + np.radians(
+            ou_process(rng, n, dt, flight.yaw_tracking_std_deg, flight.yaw_tracking_tau_s)[:, 0]
+        )
+        if flight.tilt_into_motion:
+            v_air = wind - ref.velocity_enu_m_s[:, j, :]
+            a_drag = flight.drag_per_m * np.linalg.norm(v_air, axis=1, keepdims=True) * v_air
+            thrust = ref.accel_enu_m_s2[:, j, :] - a_drag + np.array([0.0, 0.0, G_M_S2])
+        else:
+            thrust = np.tile([0.0, 0.0, 1.0], (n, 1))
+        q = attitude_from_thrust(thrust, yaw)
+        if flight.tilt_jitter_deg > 0:
+            jit = np.radians(ou_process(rng, n, dt, flight.tilt_jitter_deg, flight.tilt_jitter_tau_s, dims=2))
+            q_j = quat_wxyz_from_euler(jit[:, 0], jit[:, 1], np.zeros(n))
+            q = quat_wxyz_multiply(q, q_j)
+        quats[:, j, :] = q
+    return _UnitTruth(unit, ref.t_s, pos, quats)
+
+
+def _pose_estimates(
+    truth: _UnitTruth, which: int, est: EstimatorConfig, rng: np.random.Generator
+) -> pd.DataFrame:
+    t0, t1 = truth.t_s[0], truth.t_s[-1]
+    dt = 1.0 / est.pose_rate_hz
+    t = np.arange(t0, t1, dt)
+    if est.pose_time_jitter_s > 0:
+        t = t + rng.normal(0.0, est.pose_time_jitter_s, t.size)
+        t = np.unique(np.clip(t, t0, t1))
+    n = t.size
+    pos, q = truth.interpolate(t, which)
+    pos = pos + np.column_stack(
+        [
+            ou_process(rng, n, dt, est.horizontal_noise_std_m, est.position_noise_tau_s, dims=2),
+            ou_process(rng, n, dt, est.vertical_noise_std_m, est.position_noise_tau_s, dims=1),
+        ]
+    )
+    if est.yaw_noise_std_deg > 0:
+        dyaw = np.radians(ou_process(rng, n, dt, est.yaw_noise_std_deg, est.yaw_noise_tau_s)[:, 0])
+        q = quat_wxyz_multiply(_rotation_z_quat(dyaw), q)
+    if est.tilt_noise_std_deg > 0:
+        tilt = np.radians(rng.normal(0.0, est.tilt_noise_std_deg, (n, 2)))
+        q = quat_wxyz_multiply(q, quat_wxyz_from_euler(tilt[:, 0], tilt[:, 1], np.zeros(n)))
+    q = np.where(q[:, :1] < 0, -q, q)
+    return pd.DataFrame(
+        {
+            "t": t,
+            "node": truth.unit.nodes[which],
+            "x": pos[:, 0],
+            "y": pos[:, 1],
+            "z": pos[:, 2],
+            "qw": q[:, 0],
+            "qx": q[:, 1],
+            "qy": q[:, 2],
+            "qz": q[:, 3],
+        }
+    )
+
+
+def _packet_times(t0: float, t1: float, radio: RadioConfig, rng: np.random.Generator) -> FloatArray:
+    interval = 1.0 / radio.packet_rate_hz
+    n = int(np.floor((t1 - t0) / interval))
+    gaps = np.full(n, interval)
+    if radio.packet_jitter > 0:
+        gaps = np.maximum(gaps * (1.0 + radio.packet_jitter * rng.standard_normal(n)), 0.05 * interval)
+    t = t0 + rng.uniform(0.0, interval) + np.cumsum(gaps) - gaps[0]
+    return t[t <= t1]
+
+
+# ---------------------------------------------------------------------------------------------
+# Public entry point
+
+
+def simulate(
+    preset_or_config: str | SimulationConfig,
+    seed: int = 0,
+    out_dir: str | None = None,
+    log_format: str = "parquet",
+) -> SimulationResult:
+    """Simulate a calibration campaign and (optionally) write its logs and ground truth.
+
+    Parameters
+    ----------
+    preset_or_config : str or SimulationConfig
+        A preset name (``"paper"``, ``"trio"``, ``"smoke"``; see :mod:`rplearn.presets`) or a
+        full configuration.
+    seed : int
+        Seed of every random effect; the same seed gives the same logs.
+    out_dir : str, optional
+        Directory to write ``pose_log.<fmt>``, ``signal_log.<fmt>``, ``matched_truth.<fmt>``,
+        ``ground_truth.json`` and ``references/<unit>_<node>.csv`` into.
+    log_format : str
+        ``"parquet"`` or ``"csv"``.
+
+    Returns
+    -------
+    SimulationResult
+    """
+    if isinstance(preset_or_config, str):
+        from rplearn.presets import make_preset
+
+        config = make_preset(preset_or_config)
+    elif isinstance(preset_or_config, SimulationConfig):
+        config = preset_or_config
+    else:
+        raise InputError(
+            f"preset_or_config: expected a preset name or a SimulationConfig, got {type(preset_or_config).__name__}"
+        )
+    if log_format not in ("parquet", "csv"):
+        raise InputError(f"log_format: expected 'parquet' or 'csv', got {log_format!r}")
+    started = time.perf_counter()
+    truth_model = config.ground_truth(seed)
+    radio = config.radio
+    root = np.random.SeedSequence(int(seed))
+    unit_seeds = root.spawn(len(config.campaign.units) + 1)
+    starts = config.campaign.start_times_s()
+
+    # short dropouts: uniformly placed within the flown time of the campaign
+    drop_rng = np.random.default_rng(unit_seeds[-1])
+    flown = np.array([(s, s + u.duration_s) for s, u in zip(starts, config.campaign.units)])
+    dropouts = np.zeros((0, 2))
+    if radio.dropouts > 0 and radio.dropout_duration_s > 0:
+        lengths = flown[:, 1] - flown[:, 0]
+        pick = drop_rng.choice(len(lengths), size=radio.dropouts, p=lengths / lengths.sum())
+        begin = flown[pick, 0] + drop_rng.uniform(0.0, 1.0, radio.dropouts) * (
+            lengths[pick] - radio.dropout_duration_s
+        ).clip(min=0.0)
+        dropouts = np.column_stack([begin, begin + radio.dropout_duration_s])
+
+    pose_frames: list[pd.DataFrame] = []
+    signal_frames: list[pd.DataFrame] = []
+    matched_frames: list[pd.DataFrame] = []
+    noise_parts: list[FloatArray] = []
+    offsets = radio.offsets_dict()
+    for k, (unit, t0) in enumerate(zip(config.campaign.units, starts)):
+        rng = np.random.default_rng(unit_seeds[k])
+        truth = _simulate_unit_truth(unit, float(t0), config.flight, rng)
+        for j in range(2):
+            pose_frames.append(_pose_estimates(truth, j, config.estimator, rng))
+        for j_tx in range(2):
+            j_rx = 1 - j_tx
+            tx, rx = unit.nodes[j_tx], unit.nodes[j_rx]
+            t = _packet_times(truth.t_s[0], truth.t_s[-1], radio, rng)
+            keep = rng.uniform(size=t.size) >= radio.loss_probability
+            for b, e in dropouts:
+                keep &= ~((t >= b) & (t < e))
+            t = t[keep]
+            tx_pos, tx_q = truth.interpolate(t, j_tx)
+            rx_pos, rx_q = truth.interpolate(t, j_rx)
+            dirs = link_directions(tx_pos, tx_q, rx_pos, rx_q)
+            dist = distance_m(tx_pos, rx_pos)
+            gain = truth_model.predict_joint_gain_db(tx, rx, *dirs)
+            clean = (
+                radio.tx_power_dbm
+                + gain
+                + offsets.get(f"{tx}->{rx}", 0.0)
+                - free_space_path_loss_db(dist, radio.frequency_hz)
+            )
+            power = clean + radio.fading_std_db * rng.standard_normal(t.size)
+            delivered = np.ones(t.size, bool)
+            if radio.sensitivity_dbm is not None:
+                delivered &= power >= radio.sensitivity_dbm
+            rssi = np.round(power) if radio.quantize else power
+            if radio.saturation_dbm is not None:
+                rssi = np.minimum(rssi, radio.saturation_dbm)
+            t, rssi, clean = t[delivered], rssi[delivered], clean[delivered]
+            tx_pos, tx_q, rx_pos, rx_q = tx_pos[delivered], tx_q[delivered], rx_pos[delivered], rx_q[delivered]
+            noise_parts.append(rssi - clean)
+            sig = pd.DataFrame(
+                {
+                    "t": t,
+                    "tx": tx,
+                    "rx": rx,
+                    "rssi_dbm": rssi,
+                    "tx_power_dbm": float(radio.tx_power_dbm),
+                    "frequency_hz": float(radio.frequency_hz),
+                    "unit": unit.label,
+                }
+            )
+            signal_frames.append(sig)
+            m = sig.copy()
+            for end, p, q in (("tx", tx_pos, tx_q), ("rx", rx_pos, rx_q)):
+                m[f"{end}_x"], m[f"{end}_y"], m[f"{end}_z"] = p[:, 0], p[:, 1], p[:, 2]
+                for c, name in enumerate(("qw", "qx", "qy", "qz")):
+                    m[f"{end}_{name}"] = q[:, c]
+            matched_frames.append(m)
+
+    pose_log = pd.concat(pose_frames, ignore_index=True).sort_values(["node", "t"], kind="stable")
+    pose_log = pose_log.reset_index(drop=True)[list(POSE_COLUMNS)]
+    signal_log = pd.concat(signal_frames, ignore_index=True)
+    order = np.argsort(signal_log["t"].to_numpy(), kind="stable")
+    signal_log = signal_log.iloc[order].reset_index(drop=True)[list(SIGNAL_COLUMNS) + ["unit"]]
+    matched = pd.concat(matched_frames, ignore_index=True).iloc[order].reset_index(drop=True)
+    matched = matched[list(MATCHED_COLUMNS) + ["unit"]]
+    noise = np.concatenate(noise_parts) if noise_parts else np.zeros(0)
+    nominal = float(np.sqrt(radio.fading_std_db**2 + (1.0 / 12.0 if radio.quantize else 0.0)))
+    result = SimulationResult(
+        config=config,
+        seed=int(seed),
+        pose_log=pose_log,
+        signal_log=signal_log,
+        ground_truth=truth_model,
+        matched_truth=matched,
+        noise_std_db=nominal,
+        realised_noise_std_db=float(np.std(noise)) if noise.size else float("nan"),
+        elapsed_s=time.perf_counter() - started,
+    )
+    if out_dir is not None:
+        result.paths = write_simulation(result, out_dir, log_format)
+    logger.info(
+        "simulated %s: %d poses, %d packets in %.2f s", config.name, len(pose_log), len(signal_log), result.elapsed_s
+    )
+    return result
+
+
+def write_simulation(result: SimulationResult, out_dir: str, log_format: str = "parquet") -> dict[str, str]:
+    """Write the logs, matched truth, ground truth and references of a simulation.
+
+    Returns
+    -------
+    dict of str -> str
+        Paths by role.
+    """
+    os.makedirs(out_dir, exist_ok=True)
+    paths = {
+        "pose_log": os.path.join(out_dir, f"pose_log.{log_format}"),
+        "signal_log": os.path.join(out_dir, f"signal_log.{log_format}"),
+        "matched_truth": os.path.join(out_dir, f"matched_truth.{log_format}"),
+        "ground_truth": os.path.join(out_dir, "ground_truth.json"),
+        "references": os.path.join(out_dir, "references"),
+    }
+    write_table(result.pose_log, paths["pose_log"])
+    write_table(result.signal_log, paths["signal_log"])
+    write_table(result.matched_truth, paths["matched_truth"])
+    result.ground_truth.save(paths["ground_truth"])
+    write_references(result.config.campaign, paths["references"], result.config.reference_rate_hz)
+    return paths
+
+
+def with_effects_off(config: SimulationConfig) -> SimulationConfig:
+    """The same campaign with every random or non-ideal effect switched off.
+
+    Perfect tracking, no wind or gusts (the drones still tilt into the reference
+    acceleration), exact pose estimates, no packet jitter, loss, fading, quantisation,
+    sensitivity floor, plateau, electronics offsets or dropouts.
+    """
+    return replace(
+        config,
+        flight=FlightConfig(truth_rate_hz=config.flight.truth_rate_hz, drag_per_m=0.0),
+        estimator=EstimatorConfig(pose_rate_hz=config.estimator.pose_rate_hz),
+        radio=RadioConfig(
+            tx_power_dbm=config.radio.tx_power_dbm,
+            frequency_hz=config.radio.frequency_hz,
+            packet_rate_hz=config.radio.packet_rate_hz,
+            quantize=False,
+        ),
+    )
