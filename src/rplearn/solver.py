@@ -414,10 +414,14 @@ def solve(
     scale = 1.0 / np.sqrt(np.maximum(np.abs(np.diag(kkt))[:pcols], 1e-300))
     full_scale = np.concatenate([scale, np.ones(k)])
     kkt_s = kkt * full_scale[:, None] * full_scale[None, :]
-    try:
-        import scipy.linalg
+    import warnings
 
-        lu = scipy.linalg.lu_factor(kkt_s, check_finite=False)
+    import scipy.linalg
+
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", scipy.linalg.LinAlgWarning)
+            lu = scipy.linalg.lu_factor(kkt_s, check_finite=False)
         sol = scipy.linalg.lu_solve(lu, rhs * full_scale, check_finite=False) * full_scale
         inv_cond = 1.0 / np.linalg.cond(kkt_s, 1) if pcols <= 4000 else 1.0
     except (np.linalg.LinAlgError, ValueError):

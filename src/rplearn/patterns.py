@@ -1,0 +1,260 @@
+"""Learned radiation patterns of a group of nodes: evaluate, predict, save and load.
+
+A :class:`PatternSet` holds one pattern per node in a common basis. It evaluates
+``G_n(az, el)`` [dBi] at any body-frame directions, predicts the joint gain of any link and the
+received power for any pair of poses (paper eq. 1), and round-trips through the JSON model file
+of DESIGN.md (versioned schema, SHA-256 checksum of the payload; no pickle).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import os
+from dataclasses import dataclass, field
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from rplearn import __version__
+from rplearn.bases import Basis, basis_from_dict
+from rplearn.errors import InputError, ModelFileError
+from rplearn.geometry import distance_m, link_directions
+from rplearn.link import received_power_dbm
+
+FloatArray = NDArray[np.float64]
+
+MODEL_SCHEMA = "rplearn.model"
+MODEL_SCHEMA_VERSION = 1
+
+
+@dataclass
+class PatternSet:
+    """One radiation pattern per node, each ``G_n = basis(az, el) . coef[n]`` [dBi].
+
+    Attributes
+    ----------
+    basis : Basis
+    nodes : tuple of str
+    coef : ndarray, shape (n_nodes, n_coef)
+    covariance : ndarray or None
+        Covariance of all coefficients (``n_nodes * n_coef`` square), for standard errors.
+    gauge : list of dict
+        How unidentifiable constants were fixed (see :mod:`rplearn.solver`).
+    training : dict
+        Training summary (samples, RMSE, rank, condition number, ridge, ...).
+    provenance : dict
+        Library version, command and parameters that made the model.
+    """
+
+    basis: Basis
+    nodes: tuple[str, ...]
+    coef: FloatArray
+    covariance: FloatArray | None = None
+    gauge: list[dict[str, Any]] = field(default_factory=list)
+    training: dict[str, Any] = field(default_factory=dict)
+    provenance: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        self.nodes = tuple(str(n) for n in self.nodes)
+        self.coef = np.asarray(self.coef, np.float64)
+        if self.coef.shape != (len(self.nodes), self.basis.n_coef):
+            raise InputError(
+                f"coef has shape {self.coef.shape}, expected ({len(self.nodes)}, {self.basis.n_coef})"
+            )
+
+    # -- evaluation ----------------------------------------------------------------------
+    def node_index(self, node: str) -> int:
+        """Index of a node id; raises :class:`InputError` naming the known nodes."""
+        try:
+            return self.nodes.index(str(node))
+        except ValueError:
+            raise InputError(f"unknown node {node!r}; the model knows {', '.join(self.nodes)}") from None
+
+    def evaluate(self, node: str, az_rad: ArrayLike, el_rad: ArrayLike) -> FloatArray:
+        """Gain of ``node`` toward body-frame directions [dBi]."""
+        az = np.asarray(az_rad, np.float64)
+        el = np.asarray(el_rad, np.float64)
+        k = self.node_index(node)
+        return (self.basis.design_t(az, el).T @ self.coef[k]).reshape(np.broadcast(az, el).shape)
+
+    def standard_error(self, node: str, az_rad: ArrayLike, el_rad: ArrayLike) -> FloatArray:
+        """Standard error of :meth:`evaluate` from the fit's coefficient covariance [dB].
+
+        Within the gauge: for a two-node fit the shared constant is fixed, not estimated.
+        """
+        if self.covariance is None:
+            raise InputError("this model carries no covariance")
+        k = self.node_index(node)
+        p = self.basis.n_coef
+        cov = self.covariance[k * p : (k + 1) * p, k * p : (k + 1) * p]
+        f = self.basis.design_t(az_rad, el_rad)
+        return np.sqrt(np.maximum(np.einsum("in,ij,jn->n", f, cov, f), 0.0))
+
+    def predict_joint_gain_db(
+        self,
+        tx_node: str | Sequence[str],
+        rx_node: str | Sequence[str],
+        az_tx: ArrayLike,
+        el_tx: ArrayLike,
+        az_rx: ArrayLike,
+        el_rx: ArrayLike,
+    ) -> FloatArray:
+        """Joint gain ``G_tx(az_tx, el_tx) + G_rx(az_rx, el_rx)`` [dB] (paper eq. 1)."""
+        az_tx = np.atleast_1d(np.asarray(az_tx, np.float64))
+        n = az_tx.size
+        tx = np.broadcast_to(np.asarray(tx_node, dtype=object), (n,)) if not isinstance(tx_node, str) else None
+        rx = np.broadcast_to(np.asarray(rx_node, dtype=object), (n,)) if not isinstance(rx_node, str) else None
+        if tx is None and rx is None:
+            return self.evaluate(tx_node, az_tx, el_tx) + self.evaluate(rx_node, az_rx, el_rx)
+        tx_idx = np.full(n, self.node_index(tx_node)) if tx is None else np.array([self.node_index(v) for v in tx])
+        rx_idx = np.full(n, self.node_index(rx_node)) if rx is None else np.array([self.node_index(v) for v in rx])
+        ft = self.basis.design_t(az_tx, el_tx)
+        fr = self.basis.design_t(az_rx, el_rx)
+        return np.einsum("pn,np->n", ft, self.coef[tx_idx]) + np.einsum("pn,np->n", fr, self.coef[rx_idx])
+
+    def predict_for_poses(
+        self,
+        tx_node: str,
+        rx_node: str,
+        tx_position_xyz: ArrayLike,
+        tx_quat_wxyz: ArrayLike,
+        rx_position_xyz: ArrayLike,
+        rx_quat_wxyz: ArrayLike,
+        tx_power_dbm: ArrayLike | None = None,
+        frequency_hz: ArrayLike | None = None,
+    ) -> dict[str, FloatArray]:
+        """Joint gain [dB] and, given power and frequency, received power [dBm] for poses.
+
+        Positions ENU [m], attitudes FLU -> ENU quaternions ``(qw, qx, qy, qz)``.
+        """
+        d = link_directions(tx_position_xyz, tx_quat_wxyz, rx_position_xyz, rx_quat_wxyz)
+        gain = self.predict_joint_gain_db(tx_node, rx_node, *d)
+        out = {"gain_db": gain}
+        if tx_power_dbm is not None and frequency_hz is not None:
+            dist = distance_m(tx_position_xyz, rx_position_xyz)
+            out["rssi_dbm"] = received_power_dbm(tx_power_dbm, gain, dist, frequency_hz)
+        return out
+
+    # -- files ---------------------------------------------------------------------------
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready payload of the model file (without the checksum envelope)."""
+        payload: dict[str, Any] = {
+            "basis": self.basis.to_dict(),
+            "label": self.basis.label,
+            "nodes": list(self.nodes),
+            "coefficients": {n: self.coef[i].tolist() for i, n in enumerate(self.nodes)},
+            "gauge": self.gauge,
+            "training": _jsonable(self.training),
+            "provenance": {"rplearn_version": __version__, **_jsonable(self.provenance)},
+        }
+        if self.covariance is not None:
+            payload["covariance"] = self.covariance.tolist()
+        return payload
+
+    def save(self, path: str | os.PathLike[str]) -> None:
+        """Write the JSON model file (schema :data:`MODEL_SCHEMA` v1, SHA-256 checksummed)."""
+        payload = self.to_dict()
+        doc = {
+            "schema": MODEL_SCHEMA,
+            "schema_version": MODEL_SCHEMA_VERSION,
+            "sha256": _digest(payload),
+            "model": payload,
+        }
+        tmp = f"{os.fspath(path)}.tmp"
+        with open(tmp, "w", encoding="utf-8") as fh:
+            json.dump(doc, fh, indent=1, allow_nan=False)
+        os.replace(tmp, path)
+
+    @classmethod
+    def from_dict(cls, payload: Mapping[str, Any], source: str = "model") -> "PatternSet":
+        """Rebuild from :meth:`to_dict` output, checking every field."""
+        try:
+            basis = basis_from_dict(payload["basis"])
+            nodes = [str(n) for n in payload["nodes"]]
+            coefs = payload["coefficients"]
+            if set(coefs) != set(nodes):
+                raise ModelFileError(f"{source}: coefficients name nodes {sorted(coefs)}, expected {nodes}")
+            rows = [np.asarray(coefs[n], dtype=np.float64) for n in nodes]
+            for n, row in zip(nodes, rows):
+                if row.shape != (basis.n_coef,):
+                    raise ModelFileError(
+                        f"{source}: coefficients must be {len(nodes)} finite vectors of {basis.n_coef} values "
+                        f"(node {n} has shape {row.shape})"
+                    )
+            coef = np.array(rows)
+            cov = payload.get("covariance")
+            cov_arr = None if cov is None else np.asarray(cov, dtype=np.float64)
+        except ModelFileError:
+            raise
+        except (KeyError, TypeError, ValueError) as exc:
+            raise ModelFileError(f"{source}: malformed model ({type(exc).__name__}: {exc})") from None
+        if coef.shape != (len(nodes), basis.n_coef) or not np.all(np.isfinite(coef)):
+            raise ModelFileError(
+                f"{source}: coefficients must be {len(nodes)} finite vectors of {basis.n_coef} values"
+            )
+        p = len(nodes) * basis.n_coef
+        if cov_arr is not None and cov_arr.shape != (p, p):
+            raise ModelFileError(f"{source}: covariance must be {p} x {p}")
+        return cls(
+            basis=basis,
+            nodes=tuple(nodes),
+            coef=coef,
+            covariance=cov_arr,
+            gauge=list(payload.get("gauge", [])),
+            training=dict(payload.get("training", {})),
+            provenance=dict(payload.get("provenance", {})),
+        )
+
+    @classmethod
+    def load(cls, path: str | os.PathLike[str]) -> "PatternSet":
+        """Read a JSON model file; refuse a missing, malformed, truncated or tampered one.
+
+        Raises
+        ------
+        ModelFileError
+            One line naming the file and what is wrong.
+        """
+        name = os.fspath(path)
+        if not os.path.exists(name):
+            raise ModelFileError(f"{name}: no such model file")
+        try:
+            with open(name, encoding="utf-8") as fh:
+                doc = json.load(fh)
+        except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+            raise ModelFileError(f"{name}: not a valid JSON model file (truncated or corrupt: {exc})") from None
+        if not isinstance(doc, dict) or doc.get("schema") != MODEL_SCHEMA:
+            raise ModelFileError(f"{name}: not an rplearn model file (field 'schema' must be {MODEL_SCHEMA!r})")
+        if doc.get("schema_version") != MODEL_SCHEMA_VERSION:
+            raise ModelFileError(
+                f"{name}: schema_version {doc.get('schema_version')!r} is not supported (expected {MODEL_SCHEMA_VERSION})"
+            )
+        payload = doc.get("model")
+        if not isinstance(payload, dict):
+            raise ModelFileError(f"{name}: field 'model' is missing")
+        if doc.get("sha256") != _digest(payload):
+            raise ModelFileError(f"{name}: checksum mismatch: the file was modified after it was written")
+        return cls.from_dict(payload, source=name)
+
+
+def _digest(payload: Mapping[str, Any]) -> str:
+    text = json.dumps(payload, sort_keys=True, separators=(",", ":"), allow_nan=False)
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+def _jsonable(obj: Any) -> Any:
+    """Convert numpy scalars/arrays and tuples into plain JSON values (NaN/inf become None)."""
+    if isinstance(obj, Mapping):
+        return {str(k): _jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return _jsonable(obj.tolist())
+    if isinstance(obj, (np.integer,)):
+        return int(obj)
+    if isinstance(obj, (float, np.floating)):
+        v = float(obj)
+        return v if math.isfinite(v) else None
+    return obj

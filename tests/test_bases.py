@@ -1,0 +1,115 @@
+"""Basis families: sizes, scipy agreement, orthonormality, grids."""
+
+import numpy as np
+import pytest
+from scipy.special import sph_harm_y
+
+from rplearn.bases import (
+    BasisGrid,
+    Polynomial,
+    SphericalHarmonics,
+    basis_from_dict,
+    make_basis,
+    sh_index,
+    total_degree_exponents,
+)
+from rplearn.errors import InputError, ModelFileError
+from rplearn.geometry import great_circle_angle
+
+
+def _random_directions(n, seed=0):
+    rng = np.random.default_rng(seed)
+    return rng.uniform(-np.pi, np.pi, n), np.arcsin(rng.uniform(-1, 1, n))
+
+
+def test_model_sizes_match_the_paper():
+    assert make_basis("sh", 10).n_coef == 100
+    assert make_basis("poly", 12).n_coef == 91
+    assert make_basis("bg", 7).n_coef == 98
+
+
+@pytest.mark.parametrize("order", [1, 2, 5, 12])
+def test_real_sh_match_scipy_sph_harm_y(order):
+    az, el = _random_directions(500)
+    az = np.concatenate([az, [0.0, np.pi, 1.0, -2.0]])
+    el = np.concatenate([el, [np.pi / 2, -np.pi / 2, 0.0, 1e-9]])
+    got = SphericalHarmonics(order).design(az, el)
+    theta = np.pi / 2 - el
+    for l in range(order):
+        for m in range(-l, l + 1):
+            if m == 0:
+                ref = sph_harm_y(l, 0, theta, az).real
+            elif m > 0:
+                ref = np.sqrt(2) * (-1) ** m * sph_harm_y(l, m, theta, az).real
+            else:
+                ref = np.sqrt(2) * (-1) ** m * sph_harm_y(l, -m, theta, az).imag
+            np.testing.assert_allclose(got[:, sh_index(l, m)], ref, atol=1e-12, err_msg=f"l={l} m={m}")
+
+
+def test_sh_are_orthonormal_over_the_sphere():
+    b = SphericalHarmonics(8)
+    x, w = np.polynomial.legendre.leggauss(40)
+    az = -np.pi + (np.arange(80) + 0.5) * 2 * np.pi / 80
+    A, X = np.meshgrid(az, x)
+    W = np.repeat(w, 80) * (2 * np.pi / 80)
+    F = b.design(A.ravel(), np.arcsin(X.ravel()))
+    np.testing.assert_allclose(F.T @ (F * W[:, None]), np.eye(64), atol=1e-12)
+
+
+def test_sphere_means():
+    from rplearn.bases import Basis
+
+    sh = SphericalHarmonics(5)
+    quadrature = Basis.sphere_mean.func(sh)  # the generic rule the other bases use
+    np.testing.assert_allclose(quadrature, sh.sphere_mean, atol=1e-13)
+    np.testing.assert_allclose(sh.sphere_mean[0], 1 / np.sqrt(4 * np.pi))
+    # the polynomial constant has mean 1; el^1 has mean 0 over the sphere (odd)
+    p = Polynomial(2)
+    np.testing.assert_allclose(p.sphere_mean[0], 1.0, atol=1e-12)
+    np.testing.assert_allclose(p.sphere_mean[2], 0.0, atol=1e-12)
+
+
+def test_bg_kernel_is_the_papers_form():
+    b = BasisGrid(4, sigma_rad2=0.3)
+    az, el = _random_directions(50, 2)
+    naz, nel = b.nodes_rad
+    theta = great_circle_angle(az[:, None], el[:, None], naz[None, :], nel[None, :])
+    np.testing.assert_allclose(b.design(az, el), np.exp(-theta**2 / (2 * 0.3)), atol=1e-7)
+
+
+def test_bg_grids():
+    paper = BasisGrid(7)
+    naz, nel = paper.nodes_rad
+    assert naz.size == 98 and len(np.unique(np.round(nel, 9))) == 7 and len(np.unique(np.round(naz, 9))) == 14
+    fib = BasisGrid(7, grid="fibonacci")
+    faz, fel = fib.nodes_rad
+    assert faz.size == 98
+    # equal area: about the same number of nodes in the polar caps and in equal-area bands
+    cap = np.sum(np.sin(fel) > 0.5)
+    assert abs(cap - 98 / 4) <= 2
+    # the paper's grid over-represents the poles: above 60 deg (6.7 % of the sphere's area)
+    polar_share = (1 - np.sin(np.radians(60))) / 2
+    assert abs(np.sum(fel > np.radians(60)) - 98 * polar_share) <= 2
+    assert np.sum(nel > np.radians(60)) >= 2 * 98 * polar_share
+
+
+def test_polynomial_spans_the_monomials():
+    az, el = _random_directions(400, 3)
+    leg = Polynomial(6).design(az, el)
+    mono = Polynomial(6, polynomial="monomial").design(az, el)
+    lit = np.column_stack([az**i * el**j for i, j in total_degree_exponents(6)])
+    for basis in (leg, mono):
+        coef, *_ = np.linalg.lstsq(basis, lit, rcond=None)
+        np.testing.assert_allclose(basis @ coef, lit, atol=1e-8 * np.abs(lit).max())
+    assert np.linalg.cond(leg) < np.linalg.cond(mono)
+
+
+def test_specs_round_trip_and_bad_specs():
+    for b in (SphericalHarmonics(4), BasisGrid(3, 0.2, "fibonacci"), Polynomial(5, "monomial")):
+        assert basis_from_dict(b.to_dict()) == b
+    with pytest.raises(InputError, match="unknown basis"):
+        make_basis("zernike", 3)
+    with pytest.raises(InputError):
+        make_basis("sh", 0)
+    with pytest.raises(ModelFileError):
+        basis_from_dict({"kind": "bg", "order": 3, "sigma_rad2": -1})

@@ -1,0 +1,108 @@
+"""PatternSet: evaluation, prediction for poses, model files."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from rplearn.bases import SphericalHarmonics
+from rplearn.errors import InputError, ModelFileError
+from rplearn.geometry import link_directions, quat_wxyz_from_yaw
+from rplearn.link import free_space_path_loss_db
+from rplearn.patterns import PatternSet
+
+
+@pytest.fixture
+def pattern_set():
+    rng = np.random.default_rng(0)
+    b = SphericalHarmonics(4)
+    return PatternSet(
+        basis=b,
+        nodes=("A", "B"),
+        coef=rng.normal(0, 2, (2, 16)),
+        covariance=np.eye(32) * 0.01,
+        gauge=[{"rule": "equal-mean"}],
+        training={"n_samples": 10, "condition_number": 3.5},
+        provenance={"command": "test"},
+    )
+
+
+def test_evaluate_and_joint_gain(pattern_set):
+    az = np.array([0.1, 1.0, -2.0])
+    el = np.array([0.0, 0.5, -1.2])
+    ga = pattern_set.evaluate("A", az, el)
+    np.testing.assert_allclose(ga, pattern_set.basis.design(az, el) @ pattern_set.coef[0])
+    joint = pattern_set.predict_joint_gain_db("A", "B", az, el, el, az)
+    np.testing.assert_allclose(joint, ga + pattern_set.evaluate("B", el, az))
+    mixed = pattern_set.predict_joint_gain_db(["A", "B", "A"], ["B", "A", "B"], az, el, el, az)
+    assert mixed[1] == pytest.approx(pattern_set.evaluate("B", az[1], el[1]) + pattern_set.evaluate("A", el[1], az[1]))
+    se = pattern_set.standard_error("A", az, el)
+    np.testing.assert_allclose(se, 0.1 * np.linalg.norm(pattern_set.basis.design(az, el), axis=1))
+
+
+def test_predict_for_poses_is_friis(pattern_set):
+    tx_p, rx_p = np.array([[0, 0, 20.0]]), np.array([[10.0, 0, 20.0]])
+    tx_q, rx_q = quat_wxyz_from_yaw([0.0]), quat_wxyz_from_yaw([np.pi])
+    out = pattern_set.predict_for_poses("A", "B", tx_p, tx_q, rx_p, rx_q, tx_power_dbm=20.0, frequency_hz=2.4e9)
+    d = link_directions(tx_p, tx_q, rx_p, rx_q)
+    g = pattern_set.evaluate("A", d.az_tx, d.el_tx) + pattern_set.evaluate("B", d.az_rx, d.el_rx)
+    np.testing.assert_allclose(out["gain_db"], g)
+    np.testing.assert_allclose(out["rssi_dbm"], 20.0 + g - free_space_path_loss_db(10.0, 2.4e9))
+
+
+def test_unknown_node(pattern_set):
+    with pytest.raises(InputError, match="unknown node 'Z'; the model knows A, B"):
+        pattern_set.evaluate("Z", 0.0, 0.0)
+
+
+def test_model_file_round_trip(pattern_set, tmp_path):
+    path = tmp_path / "m.json"
+    pattern_set.save(path)
+    back = PatternSet.load(path)
+    assert back.nodes == pattern_set.nodes and back.basis == pattern_set.basis
+    np.testing.assert_array_equal(back.coef, pattern_set.coef)
+    np.testing.assert_array_equal(back.covariance, pattern_set.covariance)
+    assert back.training["condition_number"] == 3.5
+    assert back.provenance["rplearn_version"]
+
+
+def test_bad_model_files_are_refused(pattern_set, tmp_path):
+    path = tmp_path / "m.json"
+    pattern_set.save(path)
+    text = path.read_text()
+    cases = {
+        "truncated": text[: len(text) // 2],
+        "not json": "\x00\x01garbage",
+        "other schema": json.dumps({"schema": "something", "schema_version": 1}),
+        "future version": text.replace('"schema_version": 1', '"schema_version": 99'),
+    }
+    doc = json.loads(text)
+    doc["model"]["coefficients"]["A"][0] += 1.0
+    cases["tampered"] = json.dumps(doc)
+    messages = {
+        "truncated": "truncated or corrupt",
+        "not json": "truncated or corrupt",
+        "other schema": "not an rplearn model file",
+        "future version": "schema_version 99",
+        "tampered": "checksum mismatch",
+    }
+    for name, content in cases.items():
+        bad = tmp_path / f"{name.replace(' ', '_')}.json"
+        bad.write_text(content)
+        with pytest.raises(ModelFileError, match=messages[name]) as info:
+            PatternSet.load(bad)
+        assert str(bad) in str(info.value) and "\n" not in str(info.value)
+    with pytest.raises(ModelFileError, match="no such model file"):
+        PatternSet.load(tmp_path / "missing.json")
+    # a wrong-shaped but correctly checksummed file is refused on its content
+    doc = json.loads(text)
+    doc["model"]["coefficients"]["A"] = [1.0, 2.0]
+    from rplearn.patterns import _digest
+
+    doc["sha256"] = _digest(doc["model"])
+    bad = tmp_path / "shape.json"
+    bad.write_text(json.dumps(doc))
+    with pytest.raises(ModelFileError, match="coefficients must be"):
+        PatternSet.load(bad)
