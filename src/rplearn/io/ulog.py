@@ -1,0 +1,323 @@
+"""PX4 ULog flight-controller logs -> canonical pose logs, through ``pyulog``.
+
+Topics used:
+
+- ``vehicle_local_position``: ``x, y, z`` in the EKF's local NED frame [m], converted to ENU
+  (``(n, e, d) -> (e, n, -d)``, :func:`rplearn.geometry.ned_to_enu`);
+- ``vehicle_attitude``: ``q[0..3]`` = (w, x, y, z), FRD body -> NED world, converted to
+  FLU body -> ENU world (:func:`rplearn.geometry.quat_ned_frd_to_enu_flu`);
+- the geodetic anchor of the local frame: the EKF reference (``ref_lat, ref_lon, ref_alt``
+  when ``xy_global`` and ``z_global`` are set), else the first fix of
+  ``vehicle_global_position``, else of ``vehicle_gps_position`` / ``sensor_gps``, with the
+  local position at that instant subtracted;
+- the clock: PX4 stamps every message in microseconds since boot. The offset to UTC is the
+  median of ``time_utc_usec - timestamp`` over GPS messages with a UTC time, so that two
+  drones' logs share one clock (GPS time is what the autopilots agree on).
+
+Position and attitude are logged at different instants. With ``timebase="attitude"`` (the
+default; attitude is the faster topic and matters most for radiation patterns) the pose rows
+are the attitude samples, their position interpolated linearly; with ``timebase="position"``
+the rows are the position samples, their attitude interpolated by slerp. Rows outside the
+other topic's span, or inside a gap longer than ``max_gap_s`` of it, are dropped and counted.
+
+With ``origin_geodetic`` (lat [deg], lon [deg], alt [m]) the positions are expressed in ENU
+around that origin (pymap3d), which puts several drones in one frame; without it they stay
+in the log's own local frame (its origin reported as ``metadata["anchor_geodetic"]``).
+"""
+
+from __future__ import annotations
+
+import os
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from rplearn.datasets import validate_pose_log
+from rplearn.errors import InputError, LogFormatError
+from rplearn.geometry import ned_to_enu, quat_ned_frd_to_enu_flu
+
+
+def _pyulog():
+    try:
+        from pyulog import ULog
+    except ImportError:  # pragma: no cover - pyulog is a dependency
+        raise InputError("reading PX4 logs needs the 'pyulog' package (pip install pyulog)") from None
+    return ULog
+
+
+def _topic(ulog: Any, name: str, multi_id: int = 0) -> dict[str, np.ndarray] | None:
+    for d in ulog.data_list:
+        if d.name == name and d.multi_id == multi_id:
+            return d.data
+    return None
+
+
+def utc_offset_us(ulog: Any) -> tuple[int | None, str | None]:
+    """Offset [us] to add to a ULog's boot-relative timestamps to get UTC, and its source topic.
+
+    Median of ``time_utc_usec - timestamp`` over GPS messages that carry a UTC time.
+    """
+    for name in ("vehicle_gps_position", "sensor_gps"):
+        g = _topic(ulog, name)
+        if g is None or "time_utc_usec" not in g:
+            continue
+        utc = g["time_utc_usec"].astype(np.int64)
+        ts = g["timestamp"].astype(np.int64)
+        ok = utc > 0
+        if ok.any():
+            return int(np.median(utc[ok] - ts[ok])), name
+    return None, None
+
+
+def _first_fix(ulog: Any) -> tuple[int, float, float, float, str] | None:
+    g = _topic(ulog, "vehicle_global_position")
+    if g is not None and all(k in g for k in ("lat", "lon", "alt")):
+        ok = np.isfinite(g["lat"]) & np.isfinite(g["lon"]) & (g["lat"] != 0) & np.isfinite(g["alt"])
+        if ok.any():
+            i = int(np.flatnonzero(ok)[0])
+            return (int(g["timestamp"][i]), float(g["lat"][i]), float(g["lon"][i]), float(g["alt"][i]),
+                    "vehicle_global_position")
+    for name in ("vehicle_gps_position", "sensor_gps"):
+        g = _topic(ulog, name)
+        if g is None:
+            continue
+        if "latitude_deg" in g:
+            lat, lon, alt = g["latitude_deg"], g["longitude_deg"], g["altitude_msl_m"]
+        elif "lat" in g:  # older PX4: 1e-7 degrees and millimetres
+            lat, lon, alt = g["lat"] * 1e-7, g["lon"] * 1e-7, g["alt"] * 1e-3
+        else:
+            continue
+        lat, lon, alt = (np.asarray(v, np.float64) for v in (lat, lon, alt))
+        ok = np.isfinite(lat) & np.isfinite(lon) & (lat != 0) & np.isfinite(alt)
+        if ok.any():
+            i = int(np.flatnonzero(ok)[0])
+            return int(g["timestamp"][i]), float(lat[i]), float(lon[i]), float(alt[i]), name
+    return None
+
+
+def _interp_linear(t_key: np.ndarray, v_key: np.ndarray, t: np.ndarray) -> np.ndarray:
+    return np.stack([np.interp(t, t_key, v_key[:, j]) for j in range(v_key.shape[1])], axis=-1)
+
+
+def _interp_slerp(t_key: np.ndarray, q_key: np.ndarray, t: np.ndarray) -> np.ndarray:
+    from rplearn.sync import slerp_wxyz
+
+    i = np.clip(np.searchsorted(t_key, t, side="right") - 1, 0, len(t_key) - 2)
+    frac = np.clip((t - t_key[i]) / (t_key[i + 1] - t_key[i]), 0.0, 1.0)
+    return slerp_wxyz(q_key[i], q_key[i + 1], frac)
+
+
+def _span_and_gaps(t_key: np.ndarray, t: np.ndarray, max_gap: float) -> tuple[np.ndarray, np.ndarray]:
+    out = (t < t_key[0]) | (t > t_key[-1])
+    i = np.clip(np.searchsorted(t_key, t, side="right") - 1, 0, max(len(t_key) - 2, 0))
+    gap = np.zeros(len(t), bool) if len(t_key) < 2 else (t_key[i + 1] - t_key[i]) > max_gap
+    return out, gap & ~out
+
+
+def read_ulog(
+    path: str | os.PathLike,
+    node: str,
+    origin_geodetic: tuple[float, float, float] | None = None,
+    time_reference: str = "auto",
+    timebase: str = "attitude",
+    max_gap_s: float = 0.5,
+    require_valid: bool = False,
+) -> tuple[pd.DataFrame, dict[str, Any]]:
+    """Read a PX4 ULog into a canonical pose log (ENU / FLU).
+
+    Parameters
+    ----------
+    path : str or PathLike
+        ``.ulg`` file.
+    node : str
+        Node id of the vehicle.
+    origin_geodetic : (lat_deg, lon_deg, alt_m), optional
+        Common ENU origin; positions are converted through the log's geodetic anchor.
+    time_reference : {"auto", "utc", "boot"}
+        ``"utc"``: seconds since the UNIX epoch through the GPS UTC offset (error without
+        one); ``"boot"``: seconds since boot; ``"auto"``: UTC when the log has it, else boot.
+    timebase : {"attitude", "position"}
+        Which topic's instants become the pose rows (see the module docstring).
+    max_gap_s : float
+        Longest gap of the interpolated topic bridged [s].
+    require_valid : bool
+        Drop local-position rows whose ``xy_valid`` or ``z_valid`` flag is 0 (counted).
+
+    Returns
+    -------
+    pose : DataFrame
+        Canonical pose log of ``node``.
+    metadata : dict
+        ``source``, ``format`` ("ulog"), ``time_reference`` ("utc" or "boot"),
+        ``utc_offset_us`` and its source topic, ``anchor_geodetic`` (or None) and
+        ``anchor_source``, ``origin_geodetic`` (or None), ``dropped`` per reason,
+        ``invalid_flag_rows`` (rows with xy_valid or z_valid = 0), ``rows``.
+    """
+    source = str(path)
+    if time_reference not in ("auto", "utc", "boot"):
+        raise InputError(f"time_reference must be 'auto', 'utc' or 'boot', got {time_reference!r}")
+    if timebase not in ("attitude", "position"):
+        raise InputError(f"timebase must be 'attitude' or 'position', got {timebase!r}")
+    if not os.path.exists(source):
+        raise InputError(f"{source}: no such file")
+    ULog = _pyulog()
+    try:
+        ulog = ULog(source, ["vehicle_local_position", "vehicle_attitude", "vehicle_global_position",
+                             "vehicle_gps_position", "sensor_gps"])
+    except Exception as exc:
+        msg = str(exc).splitlines()[0] if str(exc) else ""
+        raise LogFormatError(f"{source}: cannot read ULog ({type(exc).__name__}: {msg})") from None
+    lp = _topic(ulog, "vehicle_local_position")
+    att = _topic(ulog, "vehicle_attitude")
+    if lp is None or len(lp.get("timestamp", ())) < 1:
+        raise LogFormatError(f"{source}: topic vehicle_local_position missing or empty")
+    if att is None or len(att.get("timestamp", ())) < 1:
+        raise LogFormatError(f"{source}: topic vehicle_attitude missing or empty")
+    for k in ("x", "y", "z"):
+        if k not in lp:
+            raise LogFormatError(f"{source}: vehicle_local_position has no field {k}")
+    for k in ("q[0]", "q[1]", "q[2]", "q[3]"):
+        if k not in att:
+            raise LogFormatError(f"{source}: vehicle_attitude has no field {k}")
+    dropped = {"nan_position": 0, "nan_attitude": 0, "invalid_flag": 0, "out_of_span": 0, "gap": 0}
+
+    tp = lp["timestamp"].astype(np.int64)
+    ned = np.stack([lp["x"], lp["y"], lp["z"]], axis=-1).astype(np.float64)
+    keep = np.all(np.isfinite(ned), axis=1)
+    dropped["nan_position"] = int((~keep).sum())
+    flags_bad = np.zeros(len(tp), bool)
+    for f in ("xy_valid", "z_valid"):
+        if f in lp:
+            flags_bad |= lp[f] == 0
+    invalid_flag_rows = int(flags_bad.sum())
+    if require_valid:
+        dropped["invalid_flag"] = int((flags_bad & keep).sum())
+        keep &= ~flags_bad
+    tp, ned = tp[keep], ned[keep]
+
+    ta = att["timestamp"].astype(np.int64)
+    q_ned = np.stack([att[f"q[{i}]"] for i in range(4)], axis=-1).astype(np.float64)
+    ok = np.all(np.isfinite(q_ned), axis=1) & (np.linalg.norm(q_ned, axis=1) > 1e-6)
+    dropped["nan_attitude"] = int((~ok).sum())
+    ta, q_ned = ta[ok], q_ned[ok]
+    if len(tp) < 1 or len(ta) < 1:
+        raise InputError(f"{source}: no valid position or attitude samples left")
+    q_enu = quat_ned_frd_to_enu_flu(q_ned)
+    # strictly increasing keys (PX4 can log one instant twice)
+    tp, ip = np.unique(tp, return_index=True)
+    ned = ned[ip]
+    ta, ia = np.unique(ta, return_index=True)
+    q_enu = q_enu[ia]
+
+    # geodetic anchor of the local NED frame
+    anchor = None
+    anchor_source = None
+    if all(k in lp for k in ("ref_lat", "ref_lon", "ref_alt", "xy_global", "z_global")):
+        good = (lp["xy_global"] != 0) & (lp["z_global"] != 0) & np.isfinite(lp["ref_lat"]) & np.isfinite(lp["ref_lon"])
+        if good.any():
+            i = int(np.flatnonzero(good)[0])
+            anchor = (float(lp["ref_lat"][i]), float(lp["ref_lon"][i]), float(lp["ref_alt"][i]))
+            anchor_source = "vehicle_local_position.ref_lat/ref_lon/ref_alt"
+    if anchor is None:
+        fix = _first_fix(ulog)
+        if fix is not None and len(tp) >= 1:
+            t_fix, lat, lon, alt, name = fix
+            import pymap3d
+
+            here = _interp_linear(tp.astype(np.float64), ned, np.array([float(t_fix)]))[0]
+            a_lat, a_lon, a_alt = pymap3d.ned2geodetic(-here[0], -here[1], -here[2], lat, lon, alt)
+            anchor = (float(a_lat), float(a_lon), float(a_alt))
+            anchor_source = f"first fix of {name} minus the local position at that time"
+
+    # rows on the chosen timebase
+    tp_f, ta_f = tp.astype(np.float64), ta.astype(np.float64)
+    gap_us = max_gap_s * 1e6
+    if timebase == "attitude":
+        t_us, quat = ta_f, q_enu
+        if len(tp) < 2:
+            raise InputError(f"{source}: vehicle_local_position has fewer than 2 valid samples")
+        out, gap = _span_and_gaps(tp_f, t_us, gap_us)
+        pos_ned = _interp_linear(tp_f, ned, t_us)
+    else:
+        t_us, pos_ned = tp_f, ned
+        if len(ta) < 2:
+            raise InputError(f"{source}: vehicle_attitude has fewer than 2 valid samples")
+        out, gap = _span_and_gaps(ta_f, t_us, gap_us)
+        quat = _interp_slerp(ta_f, q_enu, t_us)
+    dropped["out_of_span"] = int(out.sum())
+    dropped["gap"] = int(gap.sum())
+    sel = ~(out | gap)
+    t_us, pos_ned, quat = t_us[sel], pos_ned[sel], quat[sel]
+
+    if origin_geodetic is not None:
+        if anchor is None:
+            raise InputError(
+                f"{source}: origin_geodetic given but the log has no geodetic anchor "
+                "(no EKF reference, no global position, no GPS fix)"
+            )
+        import pymap3d
+
+        lat, lon, alt = pymap3d.ned2geodetic(pos_ned[:, 0], pos_ned[:, 1], pos_ned[:, 2], *anchor)
+        e, n, u = pymap3d.geodetic2enu(lat, lon, alt, *(float(v) for v in origin_geodetic))
+        xyz = np.stack([np.asarray(e), np.asarray(n), np.asarray(u)], axis=-1)
+    else:
+        xyz = ned_to_enu(pos_ned)
+
+    offset, offset_src = utc_offset_us(ulog)
+    if time_reference == "utc" and offset is None:
+        raise InputError(f"{source}: time_reference='utc' but no GPS message carries time_utc_usec")
+    use_utc = offset is not None and time_reference in ("auto", "utc")
+    t_s = (t_us + (offset if use_utc else 0)) * 1e-6
+    pose = pd.DataFrame({
+        "t": t_s, "node": str(node), "x": xyz[:, 0], "y": xyz[:, 1], "z": xyz[:, 2],
+        "qw": quat[:, 0], "qx": quat[:, 1], "qy": quat[:, 2], "qz": quat[:, 3],
+    })
+    pose = validate_pose_log(pose, source)
+    meta = {
+        "source": source,
+        "format": "ulog",
+        "node": str(node),
+        "time_reference": "utc" if use_utc else "boot",
+        "utc_offset_us": offset,
+        "utc_offset_source": offset_src,
+        "anchor_geodetic": anchor,
+        "anchor_source": anchor_source,
+        "origin_geodetic": None if origin_geodetic is None else tuple(float(v) for v in origin_geodetic),
+        "timebase": timebase,
+        "dropped": dropped,
+        "invalid_flag_rows": invalid_flag_rows,
+        "rows": int(len(pose)),
+    }
+    return pose, meta
+
+
+def read_ulogs(
+    paths_to_nodes: dict[str, str],
+    origin_geodetic: tuple[float, float, float] | None = None,
+    **options: Any,
+) -> tuple[pd.DataFrame, dict[str, Any]]:
+    """Read several drones' ULogs into one pose log on a common origin and clock.
+
+    The origin is ``origin_geodetic`` or the first log's geodetic anchor; every log must
+    resolve to UTC time (``time_reference="utc"``) so that they share a clock.
+
+    Returns ``(pose, {"origin_geodetic": ..., "logs": [metadata per file]})``.
+    """
+    metas = []
+    poses = []
+    origin = origin_geodetic
+    for path, node in paths_to_nodes.items():
+        if origin is None:
+            _, m0 = read_ulog(path, node, None, time_reference="utc", **options)
+            origin = m0["anchor_geodetic"]
+            if origin is None:
+                raise InputError(f"{path}: no geodetic anchor to serve as the common origin")
+        pose, meta = read_ulog(path, node, origin, time_reference="utc", **options)
+        poses.append(pose)
+        metas.append(meta)
+    pose = validate_pose_log(pd.concat(poses, ignore_index=True), "ULogs")
+    return pose, {"origin_geodetic": origin, "logs": metas}
+
+
+__all__ = ["read_ulog", "read_ulogs", "utc_offset_us"]
