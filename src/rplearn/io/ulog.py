@@ -66,7 +66,7 @@ def utc_offset_us(ulog: Any) -> tuple[int | None, str | None]:
         ts = g["timestamp"].astype(np.int64)
         ok = utc > 0
         if ok.any():
-            return int(np.median(utc[ok] - ts[ok])), name
+            return int(np.round(np.median(utc[ok] - ts[ok]))), name
     return None, None
 
 
