@@ -1,0 +1,184 @@
+"""Pose-signal matching (rplearn.sync): interpolation, drops by reason, streaming."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from rplearn.datasets import MATCHED_COLUMNS
+from rplearn.errors import InputError
+from rplearn.geometry import quat_wxyz_from_yaw
+from rplearn.sync import (
+    DROP_REASONS, SyncSummary, slerp_wxyz, synchronise, synchronise_stream, synchronise_to_parquet,
+)
+
+
+def pose_log(node: str, t, xyz, yaw_rad) -> pd.DataFrame:
+    q = quat_wxyz_from_yaw(np.asarray(yaw_rad, float))
+    xyz = np.asarray(xyz, float)
+    return pd.DataFrame({"t": np.asarray(t, float), "node": node, "x": xyz[:, 0], "y": xyz[:, 1],
+                         "z": xyz[:, 2], "qw": q[:, 0], "qx": q[:, 1], "qy": q[:, 2], "qz": q[:, 3]})
+
+
+def signal_log(t, tx, rx, rssi=-50.0) -> pd.DataFrame:
+    n = len(t)
+    return pd.DataFrame({"t": np.asarray(t, float), "tx": tx if isinstance(tx, list) else [tx] * n,
+                         "rx": rx if isinstance(rx, list) else [rx] * n,
+                         "rssi_dbm": np.broadcast_to(np.asarray(rssi, float), (n,)).copy(),
+                         "tx_power_dbm": 20.0, "frequency_hz": 2.4e9})
+
+
+@pytest.fixture
+def two_nodes() -> pd.DataFrame:
+    a = pose_log("A", [0.0, 0.1, 0.2, 1.0, 1.1], [[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0], [4, 0, 0]],
+                 [0.0, np.pi / 2, np.pi, np.pi, np.pi])
+    b = pose_log("B", [0.0], [[10, 10, 5]], [np.pi / 3])  # static ground station
+    return pd.concat([a, b], ignore_index=True)
+
+
+def test_hand_computed_interpolation(two_nodes):
+    res = synchronise(two_nodes, signal_log([0.05, 0.125], "A", "B"))
+    d = res.dataset
+    assert list(d.columns[: len(MATCHED_COLUMNS)]) == list(MATCHED_COLUMNS)
+    np.testing.assert_allclose(d[["tx_x", "tx_y", "tx_z"]].to_numpy(), [[0.5, 0, 0], [1.25, 0, 0]])
+    # halfway between yaw 0 and 90 deg is 45 deg; a quarter of the way from 90 to 180 is 112.5
+    np.testing.assert_allclose(d[["tx_qw", "tx_qx", "tx_qy", "tx_qz"]].to_numpy(),
+                               quat_wxyz_from_yaw(np.radians([45.0, 112.5])), atol=1e-12)
+    # the static node holds its pose at every time
+    np.testing.assert_allclose(d[["rx_x", "rx_y", "rx_z"]].to_numpy(), [[10, 10, 5]] * 2)
+    np.testing.assert_allclose(d[["rx_qw", "rx_qz"]].to_numpy(),
+                               [[np.cos(np.pi / 6), np.sin(np.pi / 6)]] * 2, atol=1e-12)
+
+
+def test_drops_are_counted_by_reason(two_nodes):
+    sig = pd.concat([
+        signal_log([0.05], "A", "B"),                       # kept
+        signal_log([0.06, 0.07, 0.08, 0.09, 0.11, 0.12], "A", "B",
+                   [0.0, -127.0, -128.0, 127.0, np.nan, np.inf]),  # sentinels
+        signal_log([0.5], "A", "B"),                        # inside the 0.2 -> 1.0 gap
+        signal_log([-0.1, 1.5], "A", "B"),                  # outside A's span
+        signal_log([0.05], "A", "C"),                       # C has no pose log
+        signal_log([0.05], "A", "A"),                       # tx equals rx
+        signal_log([np.nan], "A", "B"),                     # no time
+        signal_log([0.15], "B", "A"),                       # kept (other direction)
+    ], ignore_index=True)
+    res = synchronise(two_nodes, sig)
+    s = res.summary
+    assert s.n_in == len(sig) and s.n_out == 2 == len(res.dataset)
+    assert s.dropped == {"invalid_value": 1, "sentinel_rssi": 6, "tx_equals_rx": 1, "other_link": 0,
+                         "unknown_node": 1, "out_of_span": 2, "pose_gap": 1}
+    assert s.n_in == s.n_out + s.n_dropped
+    assert s.unknown_nodes == ["C"]
+    text = s.to_text()
+    assert "sentinel_rssi): 6" in text and "nodes without a pose log: C" in text
+    # one direction only, as the paper does for non-reciprocal links
+    one = synchronise(two_nodes, sig, link=("B", "A"))
+    assert one.summary.n_out == 1 and one.summary.dropped["other_link"] == 5  # A->B (4), A->C
+    assert set(one.dataset["tx"]) == {"B"}
+    # a larger gap threshold bridges the gap
+    assert synchronise(two_nodes, sig, max_gap_s=1.0).summary.dropped["pose_gap"] == 0
+
+
+def test_unknown_node_can_be_an_error(two_nodes):
+    with pytest.raises(InputError, match=r"signal log: field tx/rx: unknown node id\(s\) C at row 0"):
+        synchronise(two_nodes, signal_log([0.05], "A", "C"), on_unknown_node="error")
+
+
+def test_too_few_samples_and_bad_options(two_nodes):
+    with pytest.raises(InputError, match="only 0 signal sample"):
+        synchronise(two_nodes, signal_log([5.0], "A", "B"))
+    with pytest.raises(InputError, match="missing column"):
+        synchronise(two_nodes, signal_log([0.05], "A", "B").drop(columns="rssi_dbm"))
+    with pytest.raises(InputError, match="max_gap_s"):
+        synchronise(two_nodes, signal_log([0.05], "A", "B"), max_gap_s=-1)
+    with pytest.raises(InputError, match="clock_offsets_s names node"):
+        synchronise(two_nodes, signal_log([0.05], "A", "B"), clock_offsets_s={"Z": 1.0})
+
+
+def test_clock_offsets_shift_the_logs(two_nodes):
+    want = synchronise(two_nodes, signal_log([0.05, 0.15], "A", "B")).dataset
+    shifted = two_nodes.copy()
+    shifted.loc[shifted["node"] == "A", "t"] += 100.0  # A's clock runs 100 s ahead
+    got = synchronise(shifted, signal_log([1000.05, 1000.15], "A", "B"),
+                      clock_offsets_s={"A": -100.0}, signal_clock_offset_s=-1000.0).dataset
+    np.testing.assert_allclose(got[list(MATCHED_COLUMNS[3:])].to_numpy(),
+                               want[list(MATCHED_COLUMNS[3:])].to_numpy(), atol=1e-9)
+    np.testing.assert_allclose(got["t"], want["t"], atol=1e-9)
+
+
+def test_duplicate_pose_times_are_an_error(two_nodes):
+    dup = pd.concat([two_nodes, two_nodes.iloc[[1]]], ignore_index=True)
+    with pytest.raises(InputError, match="field t: 1 duplicate timestamp"):
+        synchronise(dup, signal_log([0.05], "A", "B"))
+
+
+def test_nan_pose_is_an_error(two_nodes):
+    bad = two_nodes.copy()
+    bad.loc[2, "y"] = np.nan
+    with pytest.raises(InputError, match="column y has 1 .*NaN"):
+        synchronise(bad, signal_log([0.05], "A", "B"))
+
+
+@settings(max_examples=50, deadline=None)
+@given(st.integers(0, 2**31 - 1))
+def test_slerp_equals_scipy(seed):
+    from scipy.spatial.transform import Rotation, Slerp
+
+    rng = np.random.default_rng(seed)
+    r = Rotation.random(2, random_state=seed)
+    f = rng.uniform(0, 1, 16)
+    want = Slerp([0.0, 1.0], r)(f).as_quat()  # x, y, z, w
+    want = np.concatenate([want[:, 3:], want[:, :3]], axis=1)
+    q = np.concatenate([r.as_quat()[:, 3:], r.as_quat()[:, :3]], axis=1)
+    got = slerp_wxyz(np.repeat(q[:1], 16, 0), np.repeat(q[1:], 16, 0), f)
+    # same rotation: q or -q
+    np.testing.assert_allclose(np.abs(np.einsum("ij,ij->i", got, want)), 1.0, atol=1e-9)
+
+
+def _flight(n_signal=5000, seed=1):
+    rng = np.random.default_rng(seed)
+    t = np.arange(0.0, 60.0, 0.01)
+    a = pose_log("A", t, np.c_[np.cos(t), np.sin(t), 0 * t + 2], t)
+    b = pose_log("B", t + 0.003, np.c_[5 + np.cos(t), np.sin(2 * t), 0 * t + 3], -t)
+    ts = np.sort(rng.uniform(-1, 61, n_signal))
+    tx = rng.choice(["A", "B"], n_signal).tolist()
+    rx = ["B" if x == "A" else "A" for x in tx]
+    rssi = np.round(rng.uniform(-90, -20, n_signal))
+    rssi[::97] = -127.0
+    return pd.concat([a, b], ignore_index=True), signal_log(ts, tx, rx, rssi).assign(unit="u1")
+
+
+def test_stream_equals_one_shot(tmp_path):
+    pose, sig = _flight()
+    one = synchronise(pose, sig)
+    chunks = [sig.iloc[i:i + 777] for i in range(0, len(sig), 777)]
+    parts = list(synchronise_stream(pose, chunks))
+    total = SyncSummary()
+    for p in parts:
+        total.merge(p.summary)
+    got = pd.concat([p.dataset for p in parts], ignore_index=True)
+    pd.testing.assert_frame_equal(got, one.dataset)
+    assert total.n_in == one.summary.n_in and total.dropped == one.summary.dropped
+    assert "unit" in got.columns  # extra columns are kept
+    summary = synchronise_to_parquet(pose, iter(chunks), str(tmp_path / "m.parquet"))
+    back = pd.read_parquet(tmp_path / "m.parquet")
+    pd.testing.assert_frame_equal(back, one.dataset, check_dtype=False)
+    assert summary.n_out == len(back) and set(summary.dropped) == set(DROP_REASONS)
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.lists(st.floats(-5, 65) | st.sampled_from([np.nan, np.inf, -np.inf, 20.2, 20.0]),
+                min_size=1, max_size=40),
+       st.floats(0.001, 2.0))
+def test_every_sample_is_kept_or_counted(times, max_gap):
+    pose, _ = _flight(10)
+    pose = pose[(pose["t"] < 20) | (pose["t"] > 20.5)]  # a 0.5 s gap
+    sig = signal_log(times, "A", "B")
+    res = synchronise(pose, sig, max_gap_s=max_gap, min_samples=0)
+    s = res.summary
+    assert s.n_in == s.n_out + s.n_dropped == len(times)
+    d = res.dataset
+    assert np.all(np.isfinite(d[list(MATCHED_COLUMNS[3:])].to_numpy()))
