@@ -1,0 +1,249 @@
+"""Acceptance 3: bad input gives a one-line error naming file and field, or a counted drop."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from rplearn.errors import InputError, LogFormatError, RplearnError
+from rplearn.io import read_logs
+from rplearn.io.pcap import read_pcap, write_radiotap_pcap
+from rplearn.io.rosbag import read_rosbag
+from rplearn.io.tables import read_pose_table, read_signal_table
+from rplearn.io.ulog import read_ulog
+
+DATA = Path(__file__).resolve().parents[1] / "data"
+
+POSE_CSV = (
+    "t,node,x,y,z,qw,qx,qy,qz\n"
+    "0.0,A,0,0,1,1,0,0,0\n"
+    "0.1,A,1,0,1,1,0,0,0\n"
+    "0.2,A,2,0,1,1,0,0,0\n"
+    "0.0,B,5,5,0,1,0,0,0\n"
+)
+
+
+def one_line(exc: BaseException) -> str:
+    msg = str(exc)
+    assert "\n" not in msg
+    return msg
+
+
+def write(tmp_path: Path, text: str, name: str = "pose.csv") -> str:
+    p = tmp_path / name
+    p.write_text(text)
+    return str(p)
+
+
+def test_good_pose_csv_with_static_node(tmp_path):
+    pose, meta = read_pose_table(write(tmp_path, POSE_CSV))
+    assert len(pose) == 4 and (pose["node"] == "B").sum() == 1
+    assert meta["dropped"]["nan_pose"] == 0
+
+
+def test_missing_column(tmp_path):
+    p = write(tmp_path, POSE_CSV.replace(",qz", ",q_z"))
+    with pytest.raises(InputError) as e:
+        read_pose_table(p)
+    assert p in one_line(e.value) and "attitude columns" in str(e.value)
+    p = write(tmp_path, "t,tx,rx,rssi_dbm\n0,A,B,-50\n", "sig.csv")
+    with pytest.raises(InputError, match=r"sig.csv: missing column\(s\) tx_power_dbm, frequency_hz"):
+        read_signal_table(p)
+    sig, _ = read_signal_table(p, tx_power_dbm=20.0, frequency_hz=2.4e9)
+    assert sig["tx_power_dbm"].tolist() == [20.0]
+
+
+def test_nan_pose_error_or_counted_drop(tmp_path):
+    p = write(tmp_path, POSE_CSV.replace("0.1,A,1,0,1", "0.1,A,nan,0,1"))
+    with pytest.raises(InputError) as e:
+        read_pose_table(p)
+    assert p in one_line(e.value) and "field x" in str(e.value) and "row 1" in str(e.value)
+    pose, meta = read_pose_table(p, nan_policy="drop")
+    assert len(pose) == 3 and meta["dropped"]["nan_pose"] == 1
+
+
+def test_unsorted_and_duplicate_timestamps(tmp_path):
+    lines = POSE_CSV.splitlines()
+    unsorted = "\n".join([lines[0], lines[2], lines[1], lines[3], lines[4]]) + "\n"
+    p = write(tmp_path, unsorted)
+    with pytest.raises(LogFormatError) as e:
+        read_pose_table(p)
+    assert p in one_line(e.value) and "field t goes backwards at row 1" in str(e.value)
+    assert len(read_pose_table(p, allow_unsorted=True)[0]) == 4
+    dup = write(tmp_path, POSE_CSV + "0.2,A,2,0,1,1,0,0,0\n", "dup.csv")
+    with pytest.raises(InputError) as e:
+        read_pose_table(dup)
+    assert "dup.csv" in one_line(e.value) and "field t: 1 duplicate timestamp" in str(e.value)
+
+
+def test_geodetic_and_euler_variants(tmp_path):
+    text = (
+        "time,drone,lat,lon,alt,roll_ned_deg,pitch_ned_deg,yaw_ned_deg\n"
+        "0.0,A,47.0,8.0,500,0,0,0\n"
+        "1.0,A,47.0001,8.0,510,0,0,90\n"
+    )
+    pose, meta = read_pose_table(write(tmp_path, text))
+    assert meta["position"] == "geodetic" and meta["attitude"] == "euler_ned_frd"
+    assert meta["origin_geodetic"] == (47.0, 8.0, 500.0)
+    np.testing.assert_allclose(pose[["x", "y", "z"]].iloc[0], [0, 0, 0], atol=1e-9)
+    # 0.0001 deg of latitude north is ~11.1 m north (ENU y), 10 m up
+    np.testing.assert_allclose(pose[["x", "y", "z"]].iloc[1], [0, 11.12, 10.0], atol=0.02)
+    # heading north (NED yaw 0) is ENU yaw +90 deg; heading east (NED yaw 90) is ENU yaw 0
+    np.testing.assert_allclose(pose[["qw", "qz"]].iloc[0], [np.sqrt(0.5), np.sqrt(0.5)], atol=1e-12)
+    np.testing.assert_allclose(pose[["qw", "qz"]].iloc[1], [1.0, 0.0], atol=1e-12)
+    enu = "t,node,x,y,z,roll_deg,pitch_deg,yaw_deg\n0,A,0,0,0,0,0,90\n"
+    pose, meta = read_pose_table(write(tmp_path, enu, "enu.csv"))
+    np.testing.assert_allclose(pose[["qw", "qz"]].iloc[0], [np.sqrt(0.5), np.sqrt(0.5)], atol=1e-12)
+    bad = write(tmp_path, text.replace("47.0001", "147.0"), "bad.csv")
+    with pytest.raises(InputError, match=r"bad.csv: field lat/lon out of range at row 1"):
+        read_pose_table(bad)
+
+
+def test_column_mapping(tmp_path):
+    text = "stamp,who,E,N,U,qw,qx,qy,qz\n0,A,1,2,3,1,0,0,0\n"
+    pose, _ = read_pose_table(write(tmp_path, text),
+                              columns={"stamp": "t", "who": "node", "E": "x", "N": "y", "U": "z"})
+    assert pose[["x", "y", "z"]].iloc[0].tolist() == [1.0, 2.0, 3.0]
+
+
+def test_empty_and_missing_files(tmp_path):
+    with pytest.raises(LogFormatError, match="empty file"):
+        read_pose_table(write(tmp_path, ""))
+    with pytest.raises(InputError, match="no such file"):
+        read_pose_table(str(tmp_path / "nope.csv"))
+    with pytest.raises(InputError, match="unknown log format"):
+        read_logs(write(tmp_path, "hello", "x.txt"))
+
+
+def _small_pcap(path: Path) -> Path:
+    write_radiotap_pcap(str(path), np.array([1.0, 1.1, 1.2]), np.array([-40, -127, -60]),
+                        ["02:00:00:00:00:0a"] * 3, 2.412e9, noise_dbm=-95)
+    return path
+
+
+def test_truncated_pcap(tmp_path):
+    good = _small_pcap(tmp_path / "c.pcap")
+    data = good.read_bytes()
+    cut = tmp_path / "cut.pcap"
+    cut.write_bytes(data[: len(data) - 20])
+    try:
+        sig, meta = read_pcap(str(cut), "rx", 20.0)
+        assert len(sig) < 3  # a truncated last record is either reported or not returned
+    except LogFormatError as e:
+        assert "cut.pcap" in one_line(e)
+    head = tmp_path / "head.pcap"
+    head.write_bytes(data[:10])
+    with pytest.raises(LogFormatError, match="head.pcap"):
+        read_pcap(str(head), "rx", 20.0)
+    eth = tmp_path / "eth.pcap"
+    eth.write_bytes(data[:20] + (1).to_bytes(4, "little") + data[24:])
+    with pytest.raises(LogFormatError, match=r"eth.pcap: link type 1, expected 127"):
+        read_pcap(str(eth), "rx", 20.0)
+
+
+def test_pcap_sentinel_rssi_is_counted_by_sync(tmp_path):
+    from rplearn.sync import synchronise
+
+    sig, _ = read_pcap(str(_small_pcap(tmp_path / "c.pcap")), "B", 20.0,
+                       address_map={"02:00:00:00:00:0A": "A"})
+    pose = pd.DataFrame({"t": [0.0, 0.0], "node": ["A", "B"], "x": [0, 5.0], "y": 0.0, "z": 0.0,
+                         "qw": 1.0, "qx": 0.0, "qy": 0.0, "qz": 0.0})
+    res = synchronise(pose, sig)
+    assert res.summary.dropped["sentinel_rssi"] == 1 and res.summary.n_out == 2
+
+
+def test_corrupt_ulog_and_bag(tmp_path):
+    src = (DATA / "px4-ulog" / "sample_log_small.ulg").read_bytes()
+    bad = tmp_path / "bad.ulg"
+    bad.write_bytes(src[:200])
+    with pytest.raises(RplearnError) as e:
+        read_ulog(bad, "a")
+    assert "bad.ulg" in one_line(e.value)
+    junk = tmp_path / "junk.ulg"
+    junk.write_bytes(b"ULog\x01\x12\x35" + bytes(range(256)) * 4)
+    with pytest.raises(RplearnError, match="junk.ulg"):
+        read_ulog(junk, "a")
+    bag = tmp_path / "cut.bag"
+    bag.write_bytes((DATA / "ros1-bag" / "test2.bag").read_bytes()[:5000])
+    with pytest.raises(LogFormatError) as e:
+        read_rosbag(bag, {"/jackal_velocity_controller/odom": "j"})
+    assert "cut.bag" in one_line(e.value)
+    good = tmp_path / "good.bag"
+    shutil.copy(DATA / "ros1-bag" / "test2.bag", good)
+    with pytest.raises(InputError, match=r"good.bag: topic\(s\) /nope not in the bag"):
+        read_rosbag(good, {"/nope": "j"})
+    with pytest.raises(InputError, match=r"topic /imu/data is sensor_msgs/msg/Imu; expected one of"):
+        read_rosbag(good, {"/imu/data": "j"})
+
+
+# ---------------------------------------------------------------------------- fuzzing
+
+FUZZ = settings(max_examples=120, deadline=None, suppress_health_check=list(HealthCheck))
+
+
+def _only_own_errors(fn, *args, **kwargs):
+    try:
+        fn(*args, **kwargs)
+    except RplearnError as e:
+        one_line(e)
+
+
+@FUZZ
+@given(st.binary(max_size=600))
+def test_fuzz_csv_random_bytes(tmp_path_factory, data):
+    p = tmp_path_factory.mktemp("f") / "x.csv"
+    p.write_bytes(data)
+    _only_own_errors(read_pose_table, str(p))
+    _only_own_errors(read_signal_table, str(p), tx_power_dbm=1.0, frequency_hz=1e9, rx="r")
+    _only_own_errors(read_logs, str(p))
+
+
+@FUZZ
+@given(st.lists(st.tuples(st.integers(0, 10_000), st.integers(0, 255)), min_size=1, max_size=8),
+       st.integers(0, 400))
+def test_fuzz_csv_mutated(tmp_path_factory, edits, cut):
+    raw = bytearray((POSE_CSV * 3).encode())
+    for pos, val in edits:
+        raw[pos % len(raw)] = val
+    data = bytes(raw[: max(1, len(raw) - cut)])
+    p = tmp_path_factory.mktemp("f") / "x.csv"
+    p.write_bytes(data)
+    _only_own_errors(read_pose_table, str(p))
+    _only_own_errors(read_pose_table, str(p), nan_policy="drop", allow_unsorted=True)
+    sig = tmp_path_factory.mktemp("s") / "s.csv"
+    sig.write_bytes(bytes(raw).replace(b"node", b"tx"))
+    _only_own_errors(read_signal_table, str(sig), tx_power_dbm=1.0, frequency_hz=1e9, rx="r")
+
+
+@FUZZ
+@given(st.binary(max_size=400))
+def test_fuzz_pcap_random_bytes(tmp_path_factory, data):
+    d = tmp_path_factory.mktemp("p")
+    for head in (b"", b"\xd4\xc3\xb2\xa1", b"\x0a\x0d\x0d\x0a"):
+        p = d / "x.pcap"
+        p.write_bytes(head + data)
+        _only_own_errors(read_pcap, str(p), "rx", 20.0)
+
+
+_PCAP_SEEDS = [(DATA / "radiotap-pcap" / n).read_bytes()
+               for n in ("ieee802.11_exthdr.pcap", "ieee802.11_meshid.pcap", "ieee802.11_rx-stbc.pcap")]
+
+
+@FUZZ
+@given(st.sampled_from(range(len(_PCAP_SEEDS))),
+       st.lists(st.tuples(st.integers(0, 10_000), st.integers(0, 255)), min_size=1, max_size=12),
+       st.integers(0, 300))
+def test_fuzz_pcap_mutated(tmp_path_factory, which, edits, cut):
+    raw = bytearray(_PCAP_SEEDS[which])
+    for pos, val in edits:
+        raw[pos % len(raw)] = val
+    p = tmp_path_factory.mktemp("p") / "x.pcap"
+    p.write_bytes(bytes(raw[: max(1, len(raw) - cut)]))
+    _only_own_errors(read_pcap, str(p), "rx", 20.0)
+    _only_own_errors(read_logs, str(p), receivers={str(p): "rx"}, tx_power_dbm=20.0)
