@@ -1,0 +1,259 @@
+"""Flight simulator: schemas, determinism, every effect switched on/off, and the paper preset."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from rplearn.antennas import load_ground_truth
+from rplearn.datasets import (
+    MATCHED_COLUMNS,
+    POSE_COLUMNS,
+    SIGNAL_COLUMNS,
+    link_samples,
+    read_table,
+    validate_pose_log,
+    validate_signal_log,
+)
+from rplearn.errors import InputError
+from rplearn.geometry import euler_from_quat_wxyz
+from rplearn.presets import PRESET_NAMES, make_preset
+from rplearn.simulate import (
+    EstimatorConfig,
+    FlightConfig,
+    RadioConfig,
+    SimulationConfig,
+    ou_process,
+    simulate,
+    with_effects_off,
+)
+
+
+@pytest.fixture(scope="module")
+def smoke():
+    return simulate("smoke", seed=7)
+
+
+def _residual_db(result, df: pd.DataFrame | None = None, include_offset: bool = True) -> np.ndarray:
+    """Observed joint gain (eq. 5, true poses) minus the true joint gain [dB]."""
+    df = result.matched_truth if df is None else df
+    out = np.empty(len(df))
+    for (tx, rx), idx in df.groupby(["tx", "rx"]).indices.items():
+        s = link_samples(df.iloc[idx])
+        d = s.directions
+        pred = result.ground_truth.predict_joint_gain_db(
+            tx, rx, d.az_tx, d.el_tx, d.az_rx, d.el_rx, include_link_offset=include_offset
+        )
+        out[idx] = s.joint_gain_db - pred
+    return out
+
+
+def test_smoke_logs_are_canonical(smoke) -> None:
+    assert list(smoke.pose_log.columns) == list(POSE_COLUMNS)
+    assert list(smoke.signal_log.columns) == list(SIGNAL_COLUMNS) + ["unit"]
+    assert list(smoke.matched_truth.columns) == list(MATCHED_COLUMNS) + ["unit"]
+    validate_pose_log(smoke.pose_log)
+    validate_signal_log(smoke.signal_log)
+    assert set(smoke.signal_log["unit"]) == {"learn_0", "test_90"}
+    assert 1000 < len(smoke.signal_log) < 5000  # seconds long: a few thousand packets at most
+    assert set(smoke.ground_truth.nodes) == {"A", "B"}
+    rssi = smoke.signal_log["rssi_dbm"].to_numpy()
+    assert np.all(rssi == np.round(rssi))
+    np.testing.assert_array_equal(smoke.signal_log["t"], smoke.matched_truth["t"])
+    assert np.all(np.diff(smoke.signal_log["t"].to_numpy()) >= 0)
+
+
+def test_smoke_rates(smoke) -> None:
+    cfg = smoke.config
+    flown = sum(u.duration_s for u in cfg.campaign.units)
+    for node, g in smoke.pose_log.groupby("node"):
+        assert len(g) / flown == pytest.approx(cfg.estimator.pose_rate_hz, rel=0.02)
+    for (tx, rx), g in smoke.signal_log.groupby(["tx", "rx"]):
+        expected = cfg.radio.packet_rate_hz * (1 - cfg.radio.loss_probability)
+        assert len(g) / flown == pytest.approx(expected, rel=0.1)
+
+
+def test_deterministic_for_a_seed() -> None:
+    a, b, c = simulate("smoke", seed=3), simulate("smoke", seed=3), simulate("smoke", seed=4)
+    pd.testing.assert_frame_equal(a.signal_log, b.signal_log)
+    pd.testing.assert_frame_equal(a.pose_log, b.pose_log)
+    assert not a.signal_log["rssi_dbm"].equals(c.signal_log["rssi_dbm"]) or len(a.signal_log) != len(c.signal_log)
+
+
+def test_written_files_load_back(tmp_path, smoke) -> None:
+    res = simulate(smoke.config, seed=7, out_dir=str(tmp_path), log_format="csv")
+    poses = read_table(res.paths["pose_log"])
+    signals = read_table(res.paths["signal_log"])
+    assert len(poses) == len(res.pose_log) and len(signals) == len(res.signal_log)
+    assert "unit" in signals.columns
+    gt = load_ground_truth(res.paths["ground_truth"])
+    rng = np.random.default_rng(0)
+    az, el = rng.uniform(-np.pi, np.pi, 300), rng.uniform(-1.5, 1.5, 300)
+    for node in gt.nodes:
+        np.testing.assert_array_equal(gt.evaluate(node, az, el), res.ground_truth.evaluate(node, az, el))
+    refs = sorted(p.name for p in (tmp_path / "references").iterdir())
+    assert refs == sorted(f"{u.label}_{n}.csv" for u in res.config.campaign.units for n in u.nodes)
+    assert set(res.paths) == {"pose_log", "signal_log", "matched_truth", "ground_truth", "references"}
+
+
+def test_everything_off_gives_the_exact_link_budget(smoke) -> None:
+    ideal = simulate(with_effects_off(smoke.config), seed=1)
+    assert ideal.noise_std_db == 0.0
+    np.testing.assert_allclose(_residual_db(ideal), 0.0, atol=1e-9)
+    # exact estimates: logged poses equal the truth (no noise, no tracking error)
+    assert ideal.realised_noise_std_db == pytest.approx(0.0, abs=1e-12)
+
+
+def test_fading_and_quantisation_set_the_noise_level(smoke) -> None:
+    cfg = with_effects_off(smoke.config)
+    for fading, quantize in ((2.0, False), (3.0, True), (0.0, True)):
+        res = simulate(replace(cfg, radio=replace(cfg.radio, fading_std_db=fading, quantize=quantize)), seed=2)
+        r = _residual_db(res)
+        expected = np.sqrt(fading**2 + (1 / 12 if quantize else 0))
+        assert res.noise_std_db == pytest.approx(expected)
+        assert np.sqrt(np.mean(r**2)) == pytest.approx(expected, rel=0.06)
+        assert res.realised_noise_std_db == pytest.approx(np.std(r), rel=1e-6, abs=1e-9)
+
+
+def test_link_offsets_are_per_direction(smoke) -> None:
+    cfg = with_effects_off(smoke.config)
+    offsets = ((("A", "B"), 2.0), (("B", "A"), -3.0))
+    res = simulate(replace(cfg, radio=replace(cfg.radio, link_offsets_db=offsets)), seed=2)
+    r = _residual_db(res, include_offset=False)
+    for (tx, rx), v in offsets:
+        sel = ((res.matched_truth.tx == tx) & (res.matched_truth.rx == rx)).to_numpy()
+        np.testing.assert_allclose(r[sel], v, atol=1e-9)
+    assert res.ground_truth.link_offset_db("A", "B") == 2.0
+
+
+def test_sensitivity_floor_and_saturation_plateau(smoke) -> None:
+    cfg = with_effects_off(smoke.config)
+    base = simulate(cfg, seed=2).signal_log["rssi_dbm"]
+    lo, hi = np.percentile(base, [30, 70])
+    res = simulate(replace(cfg, radio=replace(cfg.radio, sensitivity_dbm=float(lo), saturation_dbm=float(hi))), seed=2)
+    rssi = res.signal_log["rssi_dbm"].to_numpy()
+    assert rssi.min() >= lo and rssi.max() <= hi
+    assert np.mean(rssi == hi) > 0.2  # a plateau, not a tail
+    assert len(res.signal_log) == pytest.approx(0.7 * len(base), rel=0.05)  # no packet below the floor
+
+
+def test_loss_and_dropouts(smoke) -> None:
+    cfg = with_effects_off(smoke.config)
+    n0 = len(simulate(cfg, seed=2).signal_log)
+    lossy = simulate(replace(cfg, radio=replace(cfg.radio, loss_probability=0.25)), seed=2)
+    assert len(lossy.signal_log) / n0 == pytest.approx(0.75, abs=0.04)
+    drop = simulate(replace(cfg, radio=replace(cfg.radio, dropouts=1, dropout_duration_s=3.0)), seed=2)
+    for _, g in drop.signal_log.groupby(["tx", "rx"]):
+        gaps = np.diff(g["t"].to_numpy())
+        within_unit = gaps < cfg.campaign.gap_s
+        assert gaps[within_unit].max() >= 3.0 - 2.0 / cfg.radio.packet_rate_hz
+
+
+def test_packet_jitter_spreads_intervals(smoke) -> None:
+    cfg = with_effects_off(smoke.config)
+    steady = simulate(cfg, seed=2).signal_log
+    jittery = simulate(replace(cfg, radio=replace(cfg.radio, packet_jitter=0.3)), seed=2).signal_log
+    for log, lo, hi in ((steady, 0.0, 1e-6), (jittery, 0.2, 0.4)):
+        g = log[(log.tx == "A") & (log.unit == "learn_0")]
+        dt = np.diff(g["t"].to_numpy())
+        assert lo <= np.std(dt) * cfg.radio.packet_rate_hz <= hi
+
+
+def _tilt_deg(df: pd.DataFrame, prefix: str = "") -> np.ndarray:
+    q = df[[f"{prefix}q{c}" for c in "wxyz"]].to_numpy()
+    roll, pitch, _ = euler_from_quat_wxyz(q)
+    return np.degrees(np.arccos(np.cos(roll) * np.cos(pitch)))
+
+
+def test_wind_tilts_the_drones_and_estimates_are_noisy(smoke) -> None:
+    cfg = with_effects_off(smoke.config)
+    calm = simulate(cfg, seed=2)
+    windy_cfg = replace(cfg, flight=replace(cfg.flight, wind_speed_m_s=10.0, drag_per_m=0.021))
+    windy = simulate(windy_cfg, seed=2)
+    # steady 10 m/s wind: tilt about atan(c v^2 / g) = atan(2.1 / 9.81) = 12 deg (plus the
+    # small tilt of the circle's own acceleration)
+    expected = np.degrees(np.arctan(0.021 * 100 / 9.80665))
+    unit = cfg.campaign.units[0]
+    for log, tilt in ((windy.pose_log, expected), (calm.pose_log, 0.0)):
+        a = log[(log.node == "A") & (log.t <= unit.duration_s)]
+        ref = unit.evaluate(a["t"].to_numpy())
+        hover = (np.linalg.norm(ref.velocity_enu_m_s[:, 0], axis=1) == 0) & (
+            np.linalg.norm(ref.accel_enu_m_s2[:, 0], axis=1) == 0
+        )
+        assert hover.sum() > 100
+        np.testing.assert_allclose(_tilt_deg(a[hover]), tilt, atol=0.05)
+    assert np.median(_tilt_deg(windy.pose_log)) > np.median(_tilt_deg(calm.pose_log)) + 5.0
+    noisy_cfg = replace(
+        cfg,
+        estimator=replace(cfg.estimator, horizontal_noise_std_m=0.02, vertical_noise_std_m=0.03, yaw_noise_std_deg=3.0),
+        flight=replace(cfg.flight, tracking_std_m=0.2),
+    )
+    noisy = simulate(noisy_cfg, seed=2)
+    # pose estimates differ from the truth at the same instants by the estimator's noise
+    a = calm.pose_log[calm.pose_log.node == "A"]
+    b = noisy.pose_log[noisy.pose_log.node == "A"]
+    np.testing.assert_array_equal(a["t"], b["t"])
+    err = np.hypot(a["x"].to_numpy() - b["x"].to_numpy(), a["y"].to_numpy() - b["y"].to_numpy())
+    assert 0.05 < np.sqrt(np.mean(err**2)) < 0.6  # tracking error dominates RTK noise
+
+
+def test_ou_process_statistics() -> None:
+    rng = np.random.default_rng(0)
+    x = ou_process(rng, 200_000, 0.01, 2.0, 0.5, dims=2)
+    assert np.std(x) == pytest.approx(2.0, rel=0.05)
+    lag = int(0.5 / 0.01)
+    corr = np.corrcoef(x[:-lag, 0], x[lag:, 0])[0, 1]
+    assert corr == pytest.approx(np.exp(-1), abs=0.05)
+    assert not np.any(ou_process(rng, 10, 0.01, 0.0, 1.0))
+
+
+def test_bad_inputs() -> None:
+    with pytest.raises(InputError, match="preset"):
+        simulate("moon")
+    with pytest.raises(InputError, match="preset_or_config"):
+        simulate(42)  # type: ignore[arg-type]
+    cfg = make_preset("smoke")
+    with pytest.raises(InputError, match="node_antennas"):
+        SimulationConfig("x", cfg.campaign, {"A": cfg.node_antennas["A"]})
+    with pytest.raises(InputError, match="loss_probability"):
+        replace(cfg, radio=RadioConfig(loss_probability=1.5))
+    with pytest.raises(InputError, match="log_format"):
+        simulate(cfg, out_dir="/tmp", log_format="xlsx")
+    assert set(PRESET_NAMES) == {"paper", "trio", "smoke"}
+    assert isinstance(cfg.flight, FlightConfig) and isinstance(cfg.estimator, EstimatorConfig)
+
+
+def test_simulated_logs_synchronise_like_real_ones(smoke) -> None:
+    sync = pytest.importorskip("rplearn.sync")
+    out = sync.synchronise(smoke.pose_log, smoke.signal_log)
+    ds = out.dataset
+    assert len(ds) >= 0.98 * len(smoke.signal_log)
+    merged = ds.merge(smoke.matched_truth, on=["t", "tx", "rx"], suffixes=("", "_true"))
+    err = np.hypot(merged.tx_x - merged.tx_x_true, merged.tx_z - merged.tx_z_true)
+    assert np.sqrt(np.mean(err**2)) < 0.1  # RTK-level position noise only
+
+
+@pytest.mark.slow
+def test_paper_preset_acceptance() -> None:
+    """Paper preset: counts, truth RMSE = noise level (2%), baselines near the paper's."""
+    from rplearn.estimators import JointKNNRegressor, MeanRegressor
+
+    res = simulate("paper", seed=0)
+    learn = res.matched("learning", "A", "B")
+    test = res.matched("testing", "A", "B")
+    assert len(learn) == pytest.approx(56_164, rel=0.03)
+    assert len(test) == pytest.approx(24_087, rel=0.03)
+    r = _residual_db(res, test)
+    truth_rmse = float(np.sqrt(np.mean(r**2)))
+    assert truth_rmse == pytest.approx(res.noise_std_db, rel=0.02)
+    sl, st = link_samples(learn), link_samples(test)
+    x_learn, x_test = np.column_stack(sl.directions), np.column_stack(st.directions)
+    mean_rmse = float(np.sqrt(np.mean((MeanRegressor().fit(x_learn, sl.joint_gain_db).predict(x_test) - st.joint_gain_db) ** 2)))
+    knn_pred = JointKNNRegressor(400).fit(x_learn, sl.joint_gain_db).predict(x_test)
+    knn_rmse = float(np.sqrt(np.mean((knn_pred - st.joint_gain_db) ** 2)))
+    assert 9.0 <= mean_rmse <= 13.0
+    assert 4.0 <= knn_rmse <= 6.0
+    assert knn_rmse > truth_rmse  # the truth is the best possible predictor
