@@ -257,3 +257,9 @@ def test_paper_preset_acceptance() -> None:
     assert 9.0 <= mean_rmse <= 13.0
     assert 4.0 <= knn_rmse <= 6.0
     assert knn_rmse > truth_rmse  # the truth is the best possible predictor
+    # the flown (tilted, jittery) learning data decouple the patterns up to the one constant
+    from rplearn.bases import make_basis
+    from rplearn.solver import identifiability
+
+    rep = identifiability(sl.directions, sl.tx_index, sl.rx_index, len(sl.nodes), make_basis("sh", 10))
+    assert rep.rank == rep.n_columns - 1 == 199
