@@ -99,7 +99,7 @@ def test_bad_model_files_are_refused(pattern_set, tmp_path):
     # a wrong-shaped but correctly checksummed file is refused on its content
     doc = json.loads(text)
     doc["model"]["coefficients"]["A"] = [1.0, 2.0]
-    from rplearn.patterns import _digest
+    from rplearn.modelfile import digest as _digest
 
     doc["sha256"] = _digest(doc["model"])
     bad = tmp_path / "shape.json"

@@ -8,12 +8,9 @@ of DESIGN.md (versioned schema, SHA-256 checksum of the payload; no pickle).
 
 from __future__ import annotations
 
-import hashlib
-import json
-import math
 import os
 from dataclasses import dataclass, field
-from typing import Any, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Mapping, Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -23,11 +20,13 @@ from rplearn.bases import Basis, basis_from_dict
 from rplearn.errors import InputError, ModelFileError
 from rplearn.geometry import distance_m, link_directions
 from rplearn.link import received_power_dbm
+from rplearn.modelfile import jsonable as _jsonable
+from rplearn.modelfile import read_model_file, write_model_file
 
 FloatArray = NDArray[np.float64]
 
-MODEL_SCHEMA = "rplearn.model"
-MODEL_SCHEMA_VERSION = 1
+if TYPE_CHECKING:
+    from rplearn.datasets import LinkSamples
 
 
 @dataclass
@@ -155,18 +154,8 @@ class PatternSet:
         return payload
 
     def save(self, path: str | os.PathLike[str]) -> None:
-        """Write the JSON model file (schema :data:`MODEL_SCHEMA` v1, SHA-256 checksummed)."""
-        payload = self.to_dict()
-        doc = {
-            "schema": MODEL_SCHEMA,
-            "schema_version": MODEL_SCHEMA_VERSION,
-            "sha256": _digest(payload),
-            "model": payload,
-        }
-        tmp = f"{os.fspath(path)}.tmp"
-        with open(tmp, "w", encoding="utf-8") as fh:
-            json.dump(doc, fh, indent=1, allow_nan=False)
-        os.replace(tmp, path)
+        """Write the JSON model file (schema ``rplearn.model`` v1, SHA-256 checksummed)."""
+        write_model_file(path, "patterns", self.to_dict())
 
     @classmethod
     def from_dict(cls, payload: Mapping[str, Any], source: str = "model") -> "PatternSet":
@@ -217,44 +206,36 @@ class PatternSet:
         ModelFileError
             One line naming the file and what is wrong.
         """
-        name = os.fspath(path)
-        if not os.path.exists(name):
-            raise ModelFileError(f"{name}: no such model file")
-        try:
-            with open(name, encoding="utf-8") as fh:
-                doc = json.load(fh)
-        except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-            raise ModelFileError(f"{name}: not a valid JSON model file (truncated or corrupt: {exc})") from None
-        if not isinstance(doc, dict) or doc.get("schema") != MODEL_SCHEMA:
-            raise ModelFileError(f"{name}: not an rplearn model file (field 'schema' must be {MODEL_SCHEMA!r})")
-        if doc.get("schema_version") != MODEL_SCHEMA_VERSION:
-            raise ModelFileError(
-                f"{name}: schema_version {doc.get('schema_version')!r} is not supported (expected {MODEL_SCHEMA_VERSION})"
-            )
-        payload = doc.get("model")
-        if not isinstance(payload, dict):
-            raise ModelFileError(f"{name}: field 'model' is missing")
-        if doc.get("sha256") != _digest(payload):
-            raise ModelFileError(f"{name}: checksum mismatch: the file was modified after it was written")
-        return cls.from_dict(payload, source=name)
+        model_type, payload = read_model_file(path)
+        if model_type != "patterns":
+            raise ModelFileError(f"{os.fspath(path)}: holds a {model_type} baseline, not radiation patterns")
+        return cls.from_dict(payload, source=os.fspath(path))
 
+    # -- use with datasets ----------------------------------------------------------------
+    @property
+    def kind(self) -> str:
+        return "patterns"
 
-def _digest(payload: Mapping[str, Any]) -> str:
-    text = json.dumps(payload, sort_keys=True, separators=(",", ":"), allow_nan=False)
-    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+    @property
+    def label(self) -> str:
+        return self.basis.label
 
+    @property
+    def n_params(self) -> int:
+        """Coefficients of all antennas (the paper's |phi| column)."""
+        return int(self.coef.size)
 
-def _jsonable(obj: Any) -> Any:
-    """Convert numpy scalars/arrays and tuples into plain JSON values (NaN/inf become None)."""
-    if isinstance(obj, Mapping):
-        return {str(k): _jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_jsonable(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return _jsonable(obj.tolist())
-    if isinstance(obj, (np.integer,)):
-        return int(obj)
-    if isinstance(obj, (float, np.floating)):
-        v = float(obj)
-        return v if math.isfinite(v) else None
-    return obj
+    def predict_samples(self, samples: "LinkSamples") -> FloatArray:
+        """Joint gain [dB] predicted for every sample of a :class:`~rplearn.datasets.LinkSamples`."""
+        idx = np.array([self.node_index(n) for n in samples.nodes], dtype=np.intp)
+        tx = idx[samples.tx_index]
+        rx = idx[samples.rx_index]
+        d = samples.directions
+        out = np.empty(len(samples))
+        step = 65536
+        for s in range(0, len(samples), step):
+            e = min(len(samples), s + step)
+            ft = self.basis.design_t(d.az_tx[s:e], d.el_tx[s:e])
+            fr = self.basis.design_t(d.az_rx[s:e], d.el_rx[s:e])
+            out[s:e] = np.einsum("pn,np->n", ft, self.coef[tx[s:e]]) + np.einsum("pn,np->n", fr, self.coef[rx[s:e]])
+        return out

@@ -115,7 +115,10 @@ class NormalEquations:
         if np.any(tx == rx):
             raise InputError("a sample has the same node as transmitter and receiver")
         pair_code = tx.astype(np.int64) * self.n_nodes + rx
-        codes = np.unique(pair_code)
+        if pair_code.min() == pair_code.max():  # one link direction: no grouping needed
+            codes = pair_code[:1]
+        else:
+            codes = np.unique(pair_code)
         for code in codes:
             t, r = divmod(int(code), self.n_nodes)
             sel = slice(None) if codes.size == 1 else (pair_code == code)
@@ -418,28 +421,29 @@ def solve(
 
     import scipy.linalg
 
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", scipy.linalg.LinAlgWarning)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", scipy.linalg.LinAlgWarning)
+        try:
             lu = scipy.linalg.lu_factor(kkt_s, check_finite=False)
-        sol = scipy.linalg.lu_solve(lu, rhs * full_scale, check_finite=False) * full_scale
-        inv_cond = 1.0 / np.linalg.cond(kkt_s, 1) if pcols <= 4000 else 1.0
-    except (np.linalg.LinAlgError, ValueError):
-        inv_cond = 0.0
-        sol = np.full(pcols + k, np.nan)
-    if not np.all(np.isfinite(sol)) or inv_cond < 1e3 * np.finfo(np.float64).eps:
+            kinv_s = scipy.linalg.lu_solve(lu, np.eye(pcols + k), check_finite=False)
+        except (np.linalg.LinAlgError, ValueError):
+            kinv_s = np.full((pcols + k, pcols + k), np.nan)
+    finite = bool(np.all(np.isfinite(kinv_s)))
+    cond_1 = float(np.abs(kkt_s).sum(axis=0).max() * np.abs(kinv_s).sum(axis=0).max()) if finite else np.inf
+    if not finite or cond_1 > 1.0 / (1e3 * np.finfo(np.float64).eps):
         raise IdentifiabilityError(
             f"the samples do not identify {normal.basis.label} for {n_nodes} nodes: design rank {rank} of "
             f"{pcols} columns, {pcols - rank} free direction(s) but only {k} gauge constant(s); "
             "add samples over the uncovered directions, choose a smaller model, or raise the ridge"
         )
+    kinv = kinv_s * full_scale[:, None] * full_scale[None, :]
+    sol = kinv @ rhs
     coef = sol[:pcols]
     sse = max(normal.yty - 2.0 * coef @ normal.rhs + coef @ normal.gram @ coef, 0.0)
     dof = max(normal.n_samples - min(rank, pcols), 1)
     resid_var = sse / dof
     # Covariance of the constrained estimate: top-left block of the inverse KKT matrix,
     # sandwiched with X^T X when a ridge is present.
-    kinv = scipy.linalg.lu_solve(lu, np.eye(pcols + k), check_finite=False) * full_scale[:, None] * full_scale[None, :]
     a = kinv[:pcols, :pcols]
     cov = resid_var * (a @ normal.gram @ a.T) if ridge > 0 else resid_var * a
     cov = 0.5 * (cov + cov.T)

@@ -1,0 +1,115 @@
+"""The JSON model-file envelope shared by every model type (DESIGN.md: versioned, no pickle).
+
+A model file is ``{"schema": "rplearn.model", "schema_version": 1, "type": T, "sha256": H,
+"model": PAYLOAD}`` where ``H`` is the SHA-256 of the canonical JSON of ``PAYLOAD`` (sorted keys,
+no spaces), so truncation and tampering are detected. ``T`` is ``"patterns"`` (a
+:class:`~rplearn.patterns.PatternSet`), ``"mean"`` or ``"knn"`` (baselines).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import os
+from typing import Any, Mapping
+
+import numpy as np
+
+from rplearn.errors import ModelFileError
+
+MODEL_SCHEMA = "rplearn.model"
+MODEL_SCHEMA_VERSION = 1
+MODEL_TYPES = ("patterns", "mean", "knn")
+
+
+def digest(payload: Mapping[str, Any]) -> str:
+    """SHA-256 of the canonical JSON text of a payload."""
+    text = json.dumps(payload, sort_keys=True, separators=(",", ":"), allow_nan=False)
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+def jsonable(obj: Any) -> Any:
+    """Plain JSON values from numpy scalars/arrays and tuples (NaN and inf become None)."""
+    if isinstance(obj, Mapping):
+        return {str(k): jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return jsonable(obj.tolist())
+    if isinstance(obj, (bool, np.bool_)):
+        return bool(obj)
+    if isinstance(obj, np.integer):
+        return int(obj)
+    if isinstance(obj, (float, np.floating)):
+        v = float(obj)
+        return v if math.isfinite(v) else None
+    return obj
+
+
+def write_model_file(path: str | os.PathLike[str], model_type: str, payload: Mapping[str, Any]) -> None:
+    """Write a checksummed model file atomically."""
+    if model_type not in MODEL_TYPES:
+        raise ValueError(f"unknown model type {model_type!r}")
+    payload = jsonable(payload)
+    doc = {
+        "schema": MODEL_SCHEMA,
+        "schema_version": MODEL_SCHEMA_VERSION,
+        "type": model_type,
+        "sha256": digest(payload),
+        "model": payload,
+    }
+    tmp = f"{os.fspath(path)}.tmp"
+    with open(tmp, "w", encoding="utf-8") as fh:
+        json.dump(doc, fh, indent=1, allow_nan=False)
+    os.replace(tmp, path)
+
+
+def read_model_file(path: str | os.PathLike[str]) -> tuple[str, dict[str, Any]]:
+    """Read and verify a model file; return ``(type, payload)``.
+
+    Raises
+    ------
+    ModelFileError
+        One line naming the file: missing, not JSON (truncated or corrupt), another schema,
+        an unsupported version or type, or a checksum mismatch (modified after writing).
+    """
+    name = os.fspath(path)
+    if not os.path.exists(name):
+        raise ModelFileError(f"{name}: no such model file")
+    try:
+        with open(name, encoding="utf-8") as fh:
+            doc = json.load(fh)
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise ModelFileError(f"{name}: not a valid JSON model file (truncated or corrupt: {exc})") from None
+    except OSError as exc:
+        raise ModelFileError(f"{name}: cannot read ({exc.strerror})") from None
+    if not isinstance(doc, dict) or doc.get("schema") != MODEL_SCHEMA:
+        raise ModelFileError(f"{name}: not an rplearn model file (field 'schema' must be {MODEL_SCHEMA!r})")
+    if doc.get("schema_version") != MODEL_SCHEMA_VERSION:
+        raise ModelFileError(
+            f"{name}: schema_version {doc.get('schema_version')!r} is not supported (expected {MODEL_SCHEMA_VERSION})"
+        )
+    model_type = doc.get("type", "patterns")
+    if model_type not in MODEL_TYPES:
+        raise ModelFileError(f"{name}: field 'type' is {model_type!r}; expected one of {', '.join(MODEL_TYPES)}")
+    payload = doc.get("model")
+    if not isinstance(payload, dict):
+        raise ModelFileError(f"{name}: field 'model' is missing")
+    if doc.get("sha256") != digest(payload):
+        raise ModelFileError(f"{name}: checksum mismatch: the file was modified after it was written")
+    return model_type, payload
+
+
+def load_model(path: str | os.PathLike[str]):
+    """Load any model file: a PatternSet or a baseline model."""
+    from rplearn.baselines import KNNModel, MeanModel
+    from rplearn.patterns import PatternSet
+
+    model_type, payload = read_model_file(path)
+    name = os.fspath(path)
+    if model_type == "patterns":
+        return PatternSet.from_dict(payload, source=name)
+    if model_type == "mean":
+        return MeanModel.from_dict(payload, source=name)
+    return KNNModel.from_dict(payload, source=name)
