@@ -1,0 +1,95 @@
+"""rplearn.inspect: summaries of logs and the suspicious things in them."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from rplearn.inspect import InspectReport, inspect_logs
+
+DATA = Path(__file__).resolve().parent / "data"
+
+
+def _pose(node, t, x0=0.0):
+    t = np.asarray(t, float)
+    return pd.DataFrame({"t": t, "node": node, "x": x0 + t, "y": 0.0, "z": 1.0,
+                         "qw": 1.0, "qx": 0.0, "qy": 0.0, "qz": 0.0})
+
+
+@pytest.fixture
+def logs(tmp_path):
+    t = np.round(np.arange(0, 10, 0.01), 6)
+    a = _pose("A", np.r_[t[t < 4], t[t > 5]])  # 1 s gap
+    b = _pose("B", t, 5.0)
+    b.loc[100, "x"] = np.nan
+    pose = pd.concat([a, b], ignore_index=True)
+    pose.to_csv(tmp_path / "pose.csv", index=False)
+    ts = np.arange(0, 10, 0.0125)
+    rssi = np.round(np.linspace(-80, -40, ts.size))
+    rssi[::50] = -127
+    sig = pd.DataFrame({"t": ts, "tx": "A", "rx": "B", "rssi_dbm": rssi, "tx_power_dbm": 20.0,
+                        "frequency_hz": 2.4e9})
+    extra = pd.DataFrame({"t": [1.0, 2.0], "tx": "C", "rx": "B", "rssi_dbm": [-50.0, -51.0],
+                          "tx_power_dbm": 20.0, "frequency_hz": 2.4e9})
+    pd.concat([sig, extra]).to_parquet(tmp_path / "signal.parquet", index=False)
+    return tmp_path, rssi
+
+
+def test_report_contents(logs):
+    tmp, rssi = logs
+    (tmp / "broken.pcap").write_bytes(b"\xd4\xc3\xb2\xa1" + b"\x00" * 7)
+    rep = inspect_logs([tmp / "pose.csv", tmp / "signal.parquet", tmp / "broken.pcap"])
+    assert isinstance(rep, InspectReport) and not rep.ok
+    nodes = {n.node: n for n in rep.nodes}
+    assert nodes["A"].gaps == 1 and nodes["A"].longest_gap_s == pytest.approx(1.02, abs=1e-6)
+    assert nodes["A"].clock_jumps == 0
+    assert nodes["A"].rate_hz == pytest.approx(100.0, rel=1e-6)
+    assert nodes["B"].nan_rows == 1 and nodes["B"].rows == 999
+    link = {(lk.tx, lk.rx): lk for lk in rep.links}[("A", "B")]
+    good = rssi[rssi != -127]
+    assert link.sentinel_rssi == int((rssi == -127).sum())
+    assert (link.rssi_min_dbm, link.rssi_max_dbm) == (good.min(), good.max())
+    assert link.rate_hz == pytest.approx(80.0, rel=1e-6)
+    text = rep.to_text()
+    joined = "\n".join(rep.problems)
+    assert "node A: 1 pose gap(s) longer than 0.2 s" in joined
+    assert "node B: 1 pose row(s) with NaN" in joined
+    assert f"link A -> B: {int((rssi == -127).sum())} sentinel" in joined
+    assert "node C: named by signals but has no pose log" in joined
+    assert "broken.pcap: unreadable" in joined
+    assert "problems:" in text and "A -> B" in text
+    md = rep.to_markdown()
+    assert md.count("| A | B |") == 1 and "## Problems" in md
+
+
+def test_clock_jump_backwards_and_offset(tmp_path):
+    t = np.arange(0, 5, 0.01)
+    a = _pose("A", np.r_[t, t[-1] + 60 + t])  # 60 s forward jump
+    b = _pose("B", np.r_[t[:100], t[50:60] - 0.001, t[100:]])  # goes backwards
+    pd.concat([a, b]).to_csv(tmp_path / "p.csv", index=False)
+    sig = pd.DataFrame({"t": [1000.0, 1001.0], "tx": "A", "rx": "B", "rssi_dbm": -50.0,
+                        "tx_power_dbm": 20.0, "frequency_hz": 2.4e9})
+    sig.to_csv(tmp_path / "s.csv", index=False)
+    rep = inspect_logs([tmp_path / "p.csv", tmp_path / "s.csv"])
+    joined = "\n".join(rep.problems)
+    assert "node A: 1 clock jump(s)" in joined
+    assert "node B: time goes backwards 1 time(s)" in joined
+    assert "do not overlap the poses" in joined and "clock offset" in joined
+
+
+def test_clean_real_bag_has_no_sentinels():
+    rep = inspect_logs(DATA / "ros1-bag" / "test2.bag",
+                       pose_topics={"/jackal_velocity_controller/odom": "jackal"})
+    assert [n.node for n in rep.nodes] == ["jackal"]
+    assert rep.nodes[0].rows == 3060 and rep.nodes[0].rate_hz == pytest.approx(50.0, rel=0.05)
+    assert rep.files[0]["format"] == "ros1"
+
+
+def test_real_pcap_links():
+    rep = inspect_logs(DATA / "radiotap-pcap" / "ieee802.11_rx-stbc.pcap")
+    assert sum(lk.samples for lk in rep.links) == 3
+    assert {lk.rx for lk in rep.links} == {"capture"}
+    assert min(lk.rssi_min_dbm for lk in rep.links) == -51.0  # tcpdump: -51dBm, -46dBm, -45dBm
