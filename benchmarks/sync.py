@@ -1,0 +1,160 @@
+"""Benchmark of pose-signal matching (rplearn.sync).
+
+1. ``synchronise`` of N signal samples (default 1,000,000, both directions of one link)
+   against two 100 Hz pose logs, timed, with a reference measured in the same run: plain
+   ``numpy.interp`` of the 14 pose fields (7 per end) at the same sample times, i.e. the
+   least work any linear interpolation must do. Printed as a ratio.
+2. Streaming: a signal log of M samples (default 10,000,000) is written as Parquet in
+   chunks, then matched chunk by chunk with ``iter_signal_table`` + ``synchronise_to_parquet``
+   in a child process; its peak resident memory (``resource.getrusage``) is printed beside
+   the size the matched dataset would take in memory at once.
+
+Usage: ``python benchmarks/sync.py [--samples 1000000] [--stream-samples 10000000]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+import pandas as pd
+
+POSE_RATE_HZ = 100.0
+PACKET_RATE_HZ = 160.0  # 80 Hz each way
+
+
+def pose_logs(duration_s: float) -> pd.DataFrame:
+    t = np.arange(0.0, duration_s + 1.0, 1.0 / POSE_RATE_HZ)
+    out = []
+    for node, r, z in (("A", 20.0, 10.0), ("B", 35.0, 12.0)):
+        ang = 0.05 * t * (1 if node == "A" else -1)
+        yaw = ang + np.pi / 2
+        out.append(pd.DataFrame({
+            "t": t + (0.0 if node == "A" else 0.0037), "node": node,
+            "x": r * np.cos(ang), "y": r * np.sin(ang), "z": z + np.sin(0.3 * t),
+            "qw": np.cos(yaw / 2), "qx": 0.02 * np.sin(t), "qy": 0.02 * np.cos(t), "qz": np.sin(yaw / 2),
+        }))
+    return pd.concat(out, ignore_index=True)
+
+
+def signal_chunk(start: int, n: int, rng: np.random.Generator) -> pd.DataFrame:
+    idx = np.arange(start, start + n)
+    t = idx / PACKET_RATE_HZ + rng.uniform(0, 0.002, n)
+    a_to_b = idx % 2 == 0
+    return pd.DataFrame({
+        "t": t,
+        "tx": np.where(a_to_b, "A", "B"),
+        "rx": np.where(a_to_b, "B", "A"),
+        "rssi_dbm": np.round(rng.uniform(-85, -35, n)),
+        "tx_power_dbm": 20.0,
+        "frequency_hz": 2.412e9,
+    })
+
+
+def bench_sync(n: int, repeats: int = 3) -> dict:
+    from rplearn.sync import synchronise
+
+    rng = np.random.default_rng(0)
+    sig = signal_chunk(0, n, rng)
+    pose = pose_logs(n / PACKET_RATE_HZ)
+    synchronise(pose, sig.iloc[:1000])  # warm up imports
+    best = np.inf
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        res = synchronise(pose, sig)
+        best = min(best, time.perf_counter() - t0)
+    # reference: numpy.interp of 7 fields per end at the same times
+    tracks = {k: g for k, g in pose.groupby("node")}
+    ref = np.inf
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        for end in ("tx", "rx"):
+            for node, g in tracks.items():
+                sel = sig[end].to_numpy() == node
+                ts = sig["t"].to_numpy()[sel]
+                tk = g["t"].to_numpy()
+                for c in ("x", "y", "z", "qw", "qx", "qy", "qz"):
+                    np.interp(ts, tk, g[c].to_numpy())
+        ref = min(ref, time.perf_counter() - t0)
+    return {"samples": n, "matched": res.summary.n_out, "sync_s": best, "numpy_interp_s": ref,
+            "pose_rows": len(pose)}
+
+
+def _stream_child(path_in: str, path_out: str, duration_s: float, chunk_rows: int) -> None:
+    import resource
+
+    from rplearn.io.tables import iter_signal_table
+    from rplearn.sync import synchronise_to_parquet
+
+    base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    pose = pose_logs(duration_s)
+    t0 = time.perf_counter()
+    summary = synchronise_to_parquet(pose, iter_signal_table(path_in, chunk_rows=chunk_rows), path_out)
+    dt = time.perf_counter() - t0
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    print(json.dumps({"n_in": summary.n_in, "n_out": summary.n_out, "seconds": dt,
+                      "peak_rss_mib": peak / 1024, "rss_before_mib": base / 1024}))
+
+
+def bench_stream(m: int, chunk_rows: int, workdir: str) -> dict:
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    path_in = os.path.join(workdir, "signal.parquet")
+    path_out = os.path.join(workdir, "matched.parquet")
+    rng = np.random.default_rng(1)
+    writer = None
+    t0 = time.perf_counter()
+    for start in range(0, m, chunk_rows):
+        tbl = pa.Table.from_pandas(signal_chunk(start, min(chunk_rows, m - start), rng), preserve_index=False)
+        if writer is None:
+            writer = pq.ParquetWriter(path_in, tbl.schema)
+        writer.write_table(tbl)
+    writer.close()
+    write_s = time.perf_counter() - t0
+    out = subprocess.run(
+        [sys.executable, __file__, "--child", path_in, path_out, str(m / PACKET_RATE_HZ), str(chunk_rows)],
+        check=True, capture_output=True, text=True,
+    )
+    info = json.loads(out.stdout.strip().splitlines()[-1])
+    info["write_input_s"] = write_s
+    info["matched_in_memory_mib"] = m * (19 * 8 + 2 * 8) / 2**20  # 19 float64 + 2 object refs per row
+    info["output_rows"] = pq.ParquetFile(path_out).metadata.num_rows
+    return info
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--samples", type=int, default=1_000_000)
+    ap.add_argument("--stream-samples", type=int, default=10_000_000)
+    ap.add_argument("--chunk-rows", type=int, default=500_000)
+    ap.add_argument("--child", nargs=4, help=argparse.SUPPRESS)
+    args = ap.parse_args()
+    if args.child:
+        _stream_child(args.child[0], args.child[1], float(args.child[2]), int(args.child[3]))
+        return
+    print(f"cpu count: {os.cpu_count()}, python {sys.version.split()[0]}")
+    r = bench_sync(args.samples)
+    print(f"synchronise: {r['samples']:,} samples vs two {POSE_RATE_HZ:.0f} Hz pose logs "
+          f"({r['pose_rows']:,} rows): {r['sync_s']:.3f} s (best of 3), matched {r['matched']:,}")
+    print(f"reference numpy.interp of 14 fields at the same times: {r['numpy_interp_s']:.3f} s; "
+          f"ratio synchronise / reference = {r['sync_s'] / r['numpy_interp_s']:.2f}")
+    print(f"budget 5 s: {'met' if r['sync_s'] < 5 else 'NOT met'}")
+    if args.stream_samples > 0:
+        with tempfile.TemporaryDirectory() as d:
+            s = bench_stream(args.stream_samples, args.chunk_rows, d)
+        print(f"streaming: {s['n_in']:,} samples in chunks of {args.chunk_rows:,}: matched {s['n_out']:,} "
+              f"({s['output_rows']:,} rows written) in {s['seconds']:.1f} s")
+        print(f"peak RSS of the streaming process: {s['peak_rss_mib']:.0f} MiB "
+              f"(after imports {s['rss_before_mib']:.0f} MiB); the matched dataset alone would take "
+              f"~{s['matched_in_memory_mib']:.0f} MiB in memory at once")
+
+
+if __name__ == "__main__":
+    main()
