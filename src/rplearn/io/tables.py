@@ -23,7 +23,11 @@ import pandas as pd
 
 from rplearn.datasets import POSE_COLUMNS, SIGNAL_COLUMNS, validate_pose_log
 from rplearn.errors import InputError, LogFormatError
-from rplearn.geometry import quat_wxyz_from_euler_enu_flu_deg, quat_wxyz_from_euler_ned_frd_deg
+from rplearn.geometry import (
+    geodetic_to_enu,
+    quat_wxyz_from_euler_enu_flu_deg,
+    quat_wxyz_from_euler_ned_frd_deg,
+)
 
 #: Vendor column names -> canonical names (the one renaming mapping of rplearn.io).
 COLUMN_ALIASES: dict[str, str] = {
@@ -86,23 +90,6 @@ def _float_column(df: pd.DataFrame, name: str) -> np.ndarray:
 
 def _has(df: pd.DataFrame, names: tuple[str, ...]) -> bool:
     return all(n in df.columns for n in names)
-
-
-def geodetic_to_enu(
-    lat_deg: np.ndarray,
-    lon_deg: np.ndarray,
-    alt_m: np.ndarray,
-    origin_geodetic: tuple[float, float, float],
-) -> np.ndarray:
-    """Geodetic positions (WGS-84, degrees, metres) -> local ENU [m] around ``origin_geodetic``."""
-    import pymap3d
-
-    lat0, lon0, alt0 = (float(v) for v in origin_geodetic)
-    e, n, u = pymap3d.geodetic2enu(
-        np.asarray(lat_deg, np.float64), np.asarray(lon_deg, np.float64),
-        np.asarray(alt_m, np.float64), lat0, lon0, alt0,
-    )
-    return np.stack([np.asarray(e), np.asarray(n), np.asarray(u)], axis=-1)
 
 
 def _check_geodetic(lat: np.ndarray, lon: np.ndarray, source: str) -> None:
@@ -388,7 +375,6 @@ __all__ = [
     "COLUMN_ALIASES",
     "canonical_pose",
     "canonical_signal",
-    "geodetic_to_enu",
     "iter_signal_table",
     "read_pose_table",
     "read_signal_table",

@@ -35,7 +35,7 @@ import pandas as pd
 
 from rplearn.datasets import validate_pose_log
 from rplearn.errors import InputError, LogFormatError
-from rplearn.geometry import ned_to_enu, quat_ned_frd_to_enu_flu
+from rplearn.geometry import local_ned_to_enu, local_ned_to_geodetic, quat_ned_frd_to_enu_flu
 
 
 def _pyulog():
@@ -223,10 +223,8 @@ def read_ulog(
         fix = _first_fix(ulog)
         if fix is not None and len(tp) >= 1:
             t_fix, lat, lon, alt, name = fix
-            import pymap3d
-
             here = _interp_linear(tp.astype(np.float64), ned, np.array([float(t_fix)]))[0]
-            a_lat, a_lon, a_alt = pymap3d.ned2geodetic(-here[0], -here[1], -here[2], lat, lon, alt)
+            a_lat, a_lon, a_alt = local_ned_to_geodetic(-here, (lat, lon, alt))
             anchor = (float(a_lat), float(a_lon), float(a_alt))
             anchor_source = f"first fix of {name} minus the local position at that time"
 
@@ -256,13 +254,9 @@ def read_ulog(
                 f"{source}: origin_geodetic given but the log has no geodetic anchor "
                 "(no EKF reference, no global position, no GPS fix)"
             )
-        import pymap3d
-
-        lat, lon, alt = pymap3d.ned2geodetic(pos_ned[:, 0], pos_ned[:, 1], pos_ned[:, 2], *anchor)
-        e, n, u = pymap3d.geodetic2enu(lat, lon, alt, *(float(v) for v in origin_geodetic))
-        xyz = np.stack([np.asarray(e), np.asarray(n), np.asarray(u)], axis=-1)
+        xyz = local_ned_to_enu(pos_ned, anchor, origin_geodetic)
     else:
-        xyz = ned_to_enu(pos_ned)
+        xyz = local_ned_to_enu(pos_ned, (0.0, 0.0, 0.0), None)
 
     offset, offset_src = utc_offset_us(ulog)
     if time_reference == "utc" and offset is None:
