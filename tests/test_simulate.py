@@ -263,3 +263,19 @@ def test_paper_preset_acceptance() -> None:
 
     rep = identifiability(sl.directions, sl.tx_index, sl.rx_index, len(sl.nodes), make_basis("sh", 10))
     assert rep.rank == rep.n_columns - 1 == 199
+
+
+def test_trio_preset_flies_a_triangle_of_different_antennas() -> None:
+    cfg = make_preset("trio")
+    kinds = {n: a.antenna.kind for n, a in cfg.node_antennas.items()}
+    assert kinds == {"A": "itu_omni_average", "B": "itu_sectoral_peak", "C": "cosine_beam"}
+    # a shortened triangle campaign (one short learning unit per pair) keeps the test fast
+    short = tuple(
+        replace(u, n_loops=2, speed_m_s=3.0, accel_m_s2=3.0) for u in cfg.campaign.units if u.psi0_deg == 0.0
+    )
+    res = simulate(replace(cfg, campaign=replace(cfg.campaign, units=short, gap_s=5.0)), seed=1)
+    assert set(map(tuple, res.signal_log[["tx", "rx"]].drop_duplicates().to_numpy())) == {
+        ("A", "B"), ("B", "A"), ("B", "C"), ("C", "B"), ("C", "A"), ("A", "C")
+    }
+    r = _residual_db(res)
+    assert np.sqrt(np.mean(r**2)) == pytest.approx(res.noise_std_db, rel=0.05)
