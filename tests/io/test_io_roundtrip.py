@@ -105,3 +105,21 @@ def test_pcap_round_trip(tmp_path, flight, reference):
                         receivers={str(p): rx for rx, p in caps.items()},
                         address_map=amap, tx_power_dbm=TX_POWER_DBM)
     assert_same_matched(synchronise(logs.pose, logs.signal).dataset, reference)
+
+
+def test_pcapng_round_trip(tmp_path, flight, reference):
+    from rplearn.io.pcap import write_radiotap_pcap
+
+    pose, sig = flight
+    amap = {mac: node for node, mac in MAC.items()}
+    parts = []
+    for rx in ("A", "B"):
+        sel = sig[sig["rx"] == rx]
+        p = tmp_path / f"cap_{rx}.pcapng"
+        write_radiotap_pcap(str(p), sel["t"].to_numpy(), sel["rssi_dbm"].to_numpy(),
+                            [MAC[tx] for tx in sel["tx"]], FREQUENCY_HZ, pcapng=True)
+        assert p.read_bytes()[:4] == b"\x0a\x0d\x0d\x0a" and detect_format(p) == "pcap"
+        s, meta = read_pcap(str(p), rx, TX_POWER_DBM, address_map=amap)
+        assert len(s) == len(sel) and meta["frames"] == len(sel)
+        parts.append(s)
+    assert_same_matched(synchronise(pose, pd.concat(parts, ignore_index=True)).dataset, reference)

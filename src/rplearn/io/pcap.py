@@ -406,8 +406,9 @@ def write_radiotap_pcap(
     frequency_hz: float,
     noise_dbm: int | None = None,
     antenna: int | None = None,
+    pcapng: bool = False,
 ) -> None:
-    """Write a radiotap pcap of 802.11 data frames, one per sample (test fixtures, demos).
+    """Write a radiotap pcap (or pcapng) of 802.11 data frames, one per sample (fixtures, demos).
 
     The header carries TSFT, flags, channel, dBm antenna signal, and optionally noise and
     antenna index; RSSI values are rounded to integers (radiotap stores an s8).
@@ -420,7 +421,10 @@ def write_radiotap_pcap(
     if antenna is not None:
         present |= 1 << _BIT_ANTENNA
     with open(path, "wb") as fh:
-        writer = dpkt.pcap.Writer(fh, linktype=LINKTYPE_IEEE802_11_RADIOTAP, nano=True)
+        if pcapng:
+            writer = dpkt.pcapng.Writer(fh, snaplen=65535, linktype=LINKTYPE_IEEE802_11_RADIOTAP)
+        else:
+            writer = dpkt.pcap.Writer(fh, linktype=LINKTYPE_IEEE802_11_RADIOTAP, nano=True)
         for i, (t, rssi, ta) in enumerate(zip(np.asarray(t_s, float), np.asarray(rssi_dbm), transmitter)):
             body = struct.pack("<Q", int(round(t * 1e6)) & 0xFFFFFFFFFFFFFFFF)  # TSFT at 8 (aligned)
             body += struct.pack("<B", 0)  # flags (no FCS)
