@@ -1,0 +1,505 @@
+"""Figures of the paper (Figs. 5a, 6, 8, 9, 10) and 3-D pattern images, written as PNG files.
+
+The only module of rplearn that imports matplotlib. Figures are built on
+:class:`matplotlib.figure.Figure` with the Agg canvas (no pyplot, no global state, no
+display needed). Every ``plot_*`` function takes plain data or objects, writes one PNG and
+returns its path; the matching ``*_figure`` function builds the figure without writing it, so
+that tests and notebooks can inspect its artists.
+
+Angles are radians in the API and degrees on every axis (DESIGN.md): azimuth ``az`` in
+(-180, 180] deg, 0 = forward, +90 = left; elevation ``el`` in [-90, 90] deg, positive up.
+"""
+
+from __future__ import annotations
+
+import os
+from typing import Any, Mapping, Protocol, Sequence
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import numpy as np  # noqa: E402
+from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402
+from matplotlib.figure import Figure  # noqa: E402
+from numpy.typing import ArrayLike, NDArray  # noqa: E402
+
+from rplearn.errors import InputError  # noqa: E402
+
+FloatArray = NDArray[np.float64]
+AzEl = tuple[ArrayLike, ArrayLike]
+
+DPI = 110
+CMAP = "viridis"
+LEARN_COLOR = "tab:green"
+TEST_COLOR = "tab:orange"
+
+
+class PatternLike(Protocol):
+    """Anything with ``nodes`` and ``evaluate(node, az_rad, el_rad) -> gain [dB]``."""
+
+    nodes: Sequence[str]
+
+    def evaluate(self, node: str, az_rad: ArrayLike, el_rad: ArrayLike) -> FloatArray: ...
+
+
+# -- helpers -------------------------------------------------------------------------------
+def _new_figure(width_in: float, height_in: float) -> Figure:
+    fig = Figure(figsize=(width_in, height_in), dpi=DPI, layout="constrained")
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def save_figure(fig: Figure, path: str | os.PathLike[str]) -> str:
+    """Write ``fig`` as a PNG at :data:`DPI` and return the path as a string."""
+    path = os.fspath(path)
+    parent = os.path.dirname(path)
+    if parent:
+        os.makedirs(parent, exist_ok=True)
+    fig.savefig(path, dpi=DPI, format="png")
+    return path
+
+
+def _check_pattern_like(obj: Any, name: str) -> None:
+    if not (hasattr(obj, "nodes") and callable(getattr(obj, "evaluate", None))):
+        raise InputError(f"{name}: expected a pattern (with .nodes and .evaluate(node, az, el)), got {type(obj).__name__}")
+
+
+def az_el_grid_deg(step_deg: float = 2.0) -> tuple[FloatArray, FloatArray]:
+    """Cell centres of a regular azimuth x elevation grid [deg] covering the sphere.
+
+    Returns ``(az_deg, el_deg)`` 1-D arrays: az in (-180, 180), el in (-90, 90).
+    """
+    if not np.isfinite(step_deg) or step_deg <= 0 or step_deg > 90:
+        raise InputError(f"step_deg: expected a step in (0, 90] deg, got {step_deg}")
+    n_az = max(int(round(360.0 / step_deg)), 4)
+    n_el = max(int(round(180.0 / step_deg)), 2)
+    az = -180.0 + (np.arange(n_az) + 0.5) * 360.0 / n_az
+    el = -90.0 + (np.arange(n_el) + 0.5) * 180.0 / n_el
+    return az, el
+
+
+def pattern_map_db(pattern: PatternLike, node: str, az_deg: FloatArray, el_deg: FloatArray) -> FloatArray:
+    """Gain of ``node`` on the grid ``el_deg x az_deg`` [dB], shape ``(n_el, n_az)``."""
+    az, el = np.meshgrid(np.radians(az_deg), np.radians(el_deg))
+    return np.asarray(pattern.evaluate(node, az, el), np.float64).reshape(az.shape)
+
+
+def sphere_mean_db(gain_db: FloatArray, el_deg: FloatArray) -> float:
+    """Area-weighted (cos el) mean of a gain map on an ``el x az`` grid [dB]."""
+    w = np.cos(np.radians(el_deg))[:, None] * np.ones_like(gain_db)
+    return float(np.sum(w * gain_db) / np.sum(w))
+
+
+def _subsample(n: int, max_n: int, seed: int = 0) -> NDArray[np.intp]:
+    if n <= max_n:
+        return np.arange(n)
+    return np.sort(np.random.default_rng(seed).choice(n, max_n, replace=False))
+
+
+def _az_el_deg(pair: AzEl, name: str) -> tuple[FloatArray, FloatArray]:
+    az = np.degrees(np.asarray(pair[0], np.float64).ravel())
+    el = np.degrees(np.asarray(pair[1], np.float64).ravel())
+    if az.shape != el.shape:
+        raise InputError(f"{name}: azimuth and elevation differ in length ({az.size} vs {el.size})")
+    return az, el
+
+
+def _style_az_el_axes(ax: Any, xlabel: bool = True, ylabel: bool = True) -> None:
+    ax.set_xlim(-180, 180)
+    ax.set_ylim(-90, 90)
+    ax.set_xticks(np.arange(-180, 181, 90))
+    ax.set_yticks(np.arange(-90, 91, 45))
+    if xlabel:
+        ax.set_xlabel("azimuth / deg (0 fwd, +90 left)")
+    if ylabel:
+        ax.set_ylabel("elevation / deg")
+
+
+# -- Fig. 9: pattern maps ------------------------------------------------------------------
+def colour_limits_db(maps_db: FloatArray, has_truth: bool) -> tuple[float, float]:
+    """Shared colour limits of one column of pattern maps [dB].
+
+    With a truth (first map) the limits are the truth's range widened by 25 %, so that learned
+    maps are read on the truth's scale (extrapolated lobes where no sample lies saturate
+    instead of flattening everything else); without, the 1st..99th percentile of all maps.
+    """
+    ref = maps_db[0] if has_truth else maps_db
+    finite = ref[np.isfinite(ref)]
+    if finite.size == 0:
+        return 0.0, 1.0
+    if has_truth:
+        lo, hi = float(finite.min()), float(finite.max())
+        pad = 0.125 * max(hi - lo, 1.0)
+        return lo - pad, hi + pad
+    lo, hi = (float(v) for v in np.percentile(finite, [1.0, 99.0]))
+    return (lo, hi) if hi > lo else (lo - 0.5, hi + 0.5)
+
+
+def pattern_maps_figure(
+    models: Mapping[str, PatternLike],
+    truth: PatternLike | None = None,
+    nodes: Sequence[str] | None = None,
+    samples_az_el: Mapping[str, AzEl] | None = None,
+    center: bool = False,
+    step_deg: float = 2.0,
+    max_dots: int = 3000,
+) -> Figure:
+    """Learned (and true) patterns as az-el colour maps: rows = models, columns = nodes.
+
+    Parameters
+    ----------
+    models : mapping of label -> pattern-like
+        Learned patterns (``PatternSet`` or anything with ``nodes`` and ``evaluate``).
+    truth : pattern-like, optional
+        True patterns (``GroundTruth``), drawn as the first row.
+    nodes : sequence of str, optional
+        Columns; default: the nodes of the truth, else of the first model.
+    samples_az_el : mapping of node -> (az [rad], el [rad]), optional
+        Directions at which the node was sampled, drawn as small black dots (at most
+        ``max_dots`` per node, a fixed random subset).
+    center : bool
+        Subtract each map's sphere mean (area-weighted): with two nodes only shapes are
+        identified (paper Sec. V-A), so centred maps are the ones to compare.
+    step_deg : float
+        Grid step [deg].
+    max_dots : int
+        Largest number of sample dots drawn per panel.
+
+    Returns
+    -------
+    Figure
+        With one shared colour scale per column.
+    """
+    if not models and truth is None:
+        raise InputError("models: nothing to draw (no model and no truth)")
+    rows: list[tuple[str, PatternLike]] = []
+    if truth is not None:
+        _check_pattern_like(truth, "truth")
+        rows.append(("truth", truth))
+    for label, m in models.items():
+        _check_pattern_like(m, f"model {label!r}")
+        rows.append((str(label), m))
+    if nodes is None:
+        nodes = tuple(rows[0][1].nodes)
+    nodes = [str(n) for n in nodes]
+    if not nodes:
+        raise InputError("nodes: no node to draw")
+    az, el = az_el_grid_deg(step_deg)
+    maps = np.empty((len(rows), len(nodes), el.size, az.size))
+    for i, (_, m) in enumerate(rows):
+        for j, n in enumerate(nodes):
+            g = pattern_map_db(m, n, az, el)
+            maps[i, j] = g - sphere_mean_db(g, el) if center else g
+    unit = "dB rel. sphere mean" if center else "dBi"
+    fig = _new_figure(3.6 * len(nodes) + 0.6, 2.2 * len(rows) + 1.2)
+    axes = fig.subplots(len(rows), len(nodes), squeeze=False, sharex=True, sharey=True)
+    for j, n in enumerate(nodes):
+        vmin, vmax = colour_limits_db(maps[:, j], has_truth=truth is not None)
+        im = None
+        for i, (label, _) in enumerate(rows):
+            ax = axes[i, j]
+            im = ax.pcolormesh(az, el, maps[i, j], cmap=CMAP, vmin=vmin, vmax=vmax, shading="nearest", rasterized=True)
+            if samples_az_el is not None and n in samples_az_el and label != "truth":
+                saz, sel = _az_el_deg(samples_az_el[n], f"samples of {n}")
+                keep = _subsample(saz.size, max_dots)
+                ax.scatter(saz[keep], sel[keep], s=0.6, c="k", marker=".", linewidths=0, alpha=0.6)
+            _style_az_el_axes(ax, xlabel=i == len(rows) - 1, ylabel=j == 0)
+            ax.set_title(f"{label}: node {n}", fontsize=9)
+        cb = fig.colorbar(im, ax=axes[:, j], orientation="horizontal", fraction=0.05, aspect=30, extend="both")
+        cb.set_label(f"G_{n} / {unit}")
+    kind = "centred patterns (shapes)" if center else "patterns"
+    fig.suptitle(f"Learned {kind} in the az-el domain" + (" vs truth" if truth is not None else ""))
+    return fig
+
+
+def plot_pattern_maps(
+    models: Mapping[str, PatternLike],
+    truth: PatternLike | None,
+    nodes: Sequence[str] | None,
+    samples_az_el: Mapping[str, AzEl] | None,
+    path: str | os.PathLike[str],
+    center: bool = False,
+    step_deg: float = 2.0,
+    max_dots: int = 3000,
+) -> str:
+    """Write the paper's Fig. 9 (see :func:`pattern_maps_figure`) as a PNG; return the path."""
+    return save_figure(pattern_maps_figure(models, truth, nodes, samples_az_el, center, step_deg, max_dots), path)
+
+
+# -- Fig. 8a: coverage ---------------------------------------------------------------------
+def coverage_figure(
+    learn_az_el: Mapping[str, AzEl],
+    test_az_el: Mapping[str, AzEl] | None = None,
+    max_points: int = 20000,
+) -> Figure:
+    """Directions sampled per node, learning in green and testing in orange (paper Fig. 8a).
+
+    Parameters
+    ----------
+    learn_az_el, test_az_el : mapping of node -> (az [rad], el [rad])
+    max_points : int
+        Largest number of points drawn per node and set (a fixed random subset).
+
+    Returns
+    -------
+    Figure
+        One panel per node; each panel holds the learning scatter, then the testing one.
+    """
+    test_az_el = test_az_el or {}
+    nodes = list(dict.fromkeys([*learn_az_el, *test_az_el]))
+    if not nodes:
+        raise InputError("coverage: no node given")
+    fig = _new_figure(4.0 * len(nodes) + 0.4, 3.3)
+    axes = fig.subplots(1, len(nodes), squeeze=False, sharey=True)[0]
+    for j, n in enumerate(nodes):
+        ax = axes[j]
+        for data, color, label in ((learn_az_el, LEARN_COLOR, "learning"), (test_az_el, TEST_COLOR, "testing")):
+            if n not in data:
+                continue
+            az, el = _az_el_deg(data[n], f"{label} samples of {n}")
+            keep = _subsample(az.size, max_points)
+            ax.scatter(az[keep], el[keep], s=2, c=color, marker=".", linewidths=0, label=f"{label} ({az.size:,})")
+        _style_az_el_axes(ax, ylabel=j == 0)
+        ax.set_title(f"node {n}: direction of the other end", fontsize=9)
+        ax.legend(loc="lower right", fontsize=7, markerscale=4)
+    fig.suptitle("Coverage of the az-el domain")
+    return fig
+
+
+def plot_coverage(
+    learn_az_el: Mapping[str, AzEl],
+    test_az_el: Mapping[str, AzEl] | None,
+    path: str | os.PathLike[str],
+    max_points: int = 20000,
+) -> str:
+    """Write the coverage figure (paper Fig. 8a, :func:`coverage_figure`); return the path."""
+    return save_figure(coverage_figure(learn_az_el, test_az_el, max_points), path)
+
+
+# -- Fig. 8b: RSSI over time ---------------------------------------------------------------
+def rssi_time_figure(t_s: ArrayLike, rssi_dbm: ArrayLike, unit_labels: ArrayLike | None = None, max_points: int = 50000) -> Figure:
+    """Received signal strength over time (paper Fig. 8b), coloured by trajectory unit.
+
+    Parameters
+    ----------
+    t_s : array
+        Packet times [s]; drawn relative to the first one.
+    rssi_dbm : array
+        Received power [dBm].
+    unit_labels : array of str, optional
+        Trajectory unit of each packet; one colour and legend entry per unit.
+    """
+    t = np.asarray(t_s, np.float64).ravel()
+    p = np.asarray(rssi_dbm, np.float64).ravel()
+    if t.shape != p.shape or t.size == 0:
+        raise InputError(f"rssi: expected equal, non-empty t_s and rssi_dbm, got {t.size} and {p.size} values")
+    labels = np.full(t.size, "", dtype=object) if unit_labels is None else np.asarray(unit_labels, dtype=object).ravel()
+    if labels.shape != t.shape:
+        raise InputError(f"rssi: unit_labels has {labels.size} values, expected {t.size}")
+    t0 = float(np.nanmin(t))
+    fig = _new_figure(9.0, 3.0)
+    ax = fig.add_subplot()
+    for k, u in enumerate(dict.fromkeys(labels.tolist())):
+        idx = np.flatnonzero(labels == u)
+        idx = idx[_subsample(idx.size, max_points)]
+        ax.scatter(t[idx] - t0, p[idx], s=1.5, marker=".", linewidths=0, color=f"C{k % 10}", label=str(u) if u != "" else None)
+    if unit_labels is not None:
+        ax.legend(fontsize=7, markerscale=5, loc="best", title="unit", title_fontsize=7)
+    ax.set_xlabel(f"time / s (since t = {t0:.3f} s)")
+    ax.set_ylabel("RSSI / dBm")
+    ax.grid(alpha=0.3)
+    ax.set_title("Received signal strength")
+    return fig
+
+
+def plot_rssi_time(
+    t_s: ArrayLike, rssi_dbm: ArrayLike, path: str | os.PathLike[str], unit_labels: ArrayLike | None = None
+) -> str:
+    """Write the RSSI-over-time figure (paper Fig. 8b, :func:`rssi_time_figure`); return the path."""
+    return save_figure(rssi_time_figure(t_s, rssi_dbm, unit_labels), path)
+
+
+# -- Fig. 10: model order sweep ------------------------------------------------------------
+def order_sweep_figure(orders: ArrayLike, test_rmse_db: ArrayLike, aic: ArrayLike, ltd_s: ArrayLike, family: str = "SH") -> Figure:
+    """Model order selection (paper Fig. 10): test RMSE and AIC (top), LTD (bottom).
+
+    The minima of the test RMSE and of the AIC are marked.
+
+    Parameters
+    ----------
+    orders : array of int
+        Model orders (e.g. SH-L for L in orders).
+    test_rmse_db : array
+        Prediction RMSE on the testing samples [dB].
+    aic : array
+        Akaike information criterion on the testing samples (``n ln MSE + 2k``).
+    ltd_s : array
+        Learning wall time [s].
+    """
+    x = np.asarray(orders, np.float64).ravel()
+    r = np.asarray(test_rmse_db, np.float64).ravel()
+    a = np.asarray(aic, np.float64).ravel()
+    t = np.asarray(ltd_s, np.float64).ravel()
+    if not (x.size == r.size == a.size == t.size) or x.size == 0:
+        raise InputError(f"order sweep: expected equal, non-empty arrays, got {x.size}, {r.size}, {a.size}, {t.size}")
+    fig = _new_figure(7.0, 5.0)
+    ax, ax_t = fig.subplots(2, 1, sharex=True, height_ratios=[2, 1])
+    ax.plot(x, r, "o-", color="tab:green", label="test RMSE")
+    ax.set_ylabel("test RMSE / dB", color="tab:green")
+    if np.isfinite(r).any():
+        k = int(np.nanargmin(r))
+        ax.plot(x[k], r[k], "*", ms=16, color="tab:green", mec="k", label=f"min RMSE: {family}-{x[k]:g} ({r[k]:.2f} dB)")
+    ax2 = ax.twinx()
+    ax2.plot(x, a / 1e3, "s--", color="tab:purple", label="AIC")
+    ax2.set_ylabel("AIC / 1e3", color="tab:purple")
+    if np.isfinite(a).any():
+        k = int(np.nanargmin(a))
+        ax2.plot(x[k], a[k] / 1e3, "*", ms=14, color="tab:purple", mec="k", label=f"min AIC: {family}-{x[k]:g}")
+    h1, l1 = ax.get_legend_handles_labels()
+    h2, l2 = ax2.get_legend_handles_labels()
+    ax.legend(h1 + h2, l1 + l2, fontsize=8, loc="upper center")
+    ax.grid(alpha=0.3)
+    ax.set_title(f"Model order selection ({family})")
+    ax_t.plot(x, t, "^-", color="tab:blue")
+    ax_t.set_ylabel("LTD / s")
+    if np.all(t[np.isfinite(t)] > 0) and np.isfinite(t).any():
+        ax_t.set_yscale("log")
+    ax_t.set_xlabel(f"{family} order")
+    ax_t.grid(alpha=0.3)
+    return fig
+
+
+def plot_order_sweep(
+    orders: ArrayLike, test_rmse_db: ArrayLike, aic: ArrayLike, ltd_s: ArrayLike, path: str | os.PathLike[str], family: str = "SH"
+) -> str:
+    """Write the order-sweep figure (paper Fig. 10, :func:`order_sweep_figure`); return the path."""
+    return save_figure(order_sweep_figure(orders, test_rmse_db, aic, ltd_s, family), path)
+
+
+# -- Fig. 5a: epsilon sweep ----------------------------------------------------------------
+def epsilon_sweep_figure(eps: ArrayLike, error_db: ArrayLike) -> Figure:
+    """Prediction RMSE vs a constant moved between two nodes' patterns (paper Fig. 5a).
+
+    ``eps`` is added to one node's Y00 coefficient and subtracted from the other's; with two
+    nodes the joint gain, hence the error, does not change (a flat line), whatever ``eps``.
+
+    Parameters
+    ----------
+    eps : array
+        The constant [dB-scale coefficient]; drawn on a log axis from 1e-3 to 1e6.
+    error_db : array
+        Prediction RMSE for each ``eps`` [dB].
+    """
+    e = np.asarray(eps, np.float64).ravel()
+    y = np.asarray(error_db, np.float64).ravel()
+    if e.shape != y.shape or e.size == 0:
+        raise InputError(f"epsilon sweep: expected equal, non-empty arrays, got {e.size} and {y.size}")
+    if np.any(e <= 0):
+        raise InputError("epsilon sweep: eps must be positive for a log axis")
+    fig = _new_figure(6.0, 3.3)
+    ax = fig.add_subplot()
+    ax.semilogx(e, y, "o-", color="tab:red", ms=3)
+    ax.set_xlim(1e-3, 1e6)
+    spread = float(np.nanmax(y) - np.nanmin(y)) if np.isfinite(y).any() else 0.0
+    mid = float(np.nanmean(y)) if np.isfinite(y).any() else 0.0
+    if spread < 1e-6 * max(1.0, abs(mid)):
+        ax.set_ylim(mid - max(0.5, 0.1 * abs(mid)), mid + max(0.5, 0.1 * abs(mid)))
+    ax.set_xlabel("epsilon (added to one node's Y00, subtracted from the other's)")
+    ax.set_ylabel("prediction RMSE / dB")
+    ax.set_title(f"Gauge freedom of two-node learning (RMSE spread {spread:.2e} dB)")
+    ax.grid(alpha=0.3, which="both")
+    return fig
+
+
+def plot_epsilon_sweep(eps: ArrayLike, error_db: ArrayLike, path: str | os.PathLike[str]) -> str:
+    """Write the epsilon-sweep figure (paper Fig. 5a, :func:`epsilon_sweep_figure`); return the path."""
+    return save_figure(epsilon_sweep_figure(eps, error_db), path)
+
+
+# -- Fig. 6: rank study --------------------------------------------------------------------
+def rank_study_figure(cases: Sequence[tuple[str, int, int]]) -> Figure:
+    """Columns vs rank of the design matrix for several problems (paper Figs. 5b, 6).
+
+    Parameters
+    ----------
+    cases : sequence of (label, n_columns, rank)
+        E.g. ``("2 antennas, SH-8", 128, 127)``; the deficiency ``n_columns - rank`` is
+        written over each pair of bars.
+    """
+    if not cases:
+        raise InputError("rank study: no case given")
+    labels = [str(c[0]) for c in cases]
+    cols = np.array([int(c[1]) for c in cases])
+    ranks = np.array([int(c[2]) for c in cases])
+    x = np.arange(len(cases))
+    fig = _new_figure(max(5.0, 1.6 * len(cases) + 1.5), 3.6)
+    ax = fig.add_subplot()
+    w = 0.38
+    ax.bar(x - w / 2, cols, w, label="columns", color="tab:gray")
+    ax.bar(x + w / 2, ranks, w, label="rank", color="tab:blue")
+    for xi, c, r in zip(x, cols, ranks):
+        ax.annotate(f"deficiency {c - r}", (xi, max(c, r)), textcoords="offset points", xytext=(0, 3), ha="center", fontsize=8)
+    ax.set_xticks(x, labels, fontsize=8)
+    ax.set_ylabel("count")
+    ax.set_ylim(0, 1.15 * max(int(cols.max()), 1))
+    ax.legend(fontsize=8, loc="lower right")
+    ax.set_title("Design matrix: columns vs rank")
+    return fig
+
+
+def plot_rank_study(cases: Sequence[tuple[str, int, int]], path: str | os.PathLike[str]) -> str:
+    """Write the rank-study bar chart (paper Fig. 6, :func:`rank_study_figure`); return the path."""
+    return save_figure(rank_study_figure(cases), path)
+
+
+# -- 3-D pattern image ---------------------------------------------------------------------
+def pattern_3d_figure(
+    pattern_like: PatternLike, node: str, step_deg: float = 3.0, dynamic_range_db: float = 40.0, unit: str = "dBi"
+) -> Figure:
+    """One node's pattern as a 3-D surface in its body frame (FLU: x forward, y left, z up).
+
+    The radius is the gain shifted to be positive, ``max(G - (G_max - dynamic_range_db), 0)``
+    plus 5 % of the range (so that nulls stay visible), the colour is the gain [dB].
+    """
+    _check_pattern_like(pattern_like, "pattern")
+    if dynamic_range_db <= 0:
+        raise InputError(f"dynamic_range_db: expected > 0, got {dynamic_range_db}")
+    az_deg = np.linspace(-180.0, 180.0, int(round(360 / step_deg)) + 1)
+    el_deg = np.linspace(-90.0, 90.0, int(round(180 / step_deg)) + 1)
+    az, el = np.meshgrid(np.radians(az_deg), np.radians(el_deg))
+    g = np.asarray(pattern_like.evaluate(str(node), az, el), np.float64).reshape(az.shape)
+    g_max = float(np.nanmax(g))
+    floor = max(float(np.nanmin(g)), g_max - dynamic_range_db)
+    span = max(g_max - floor, 1e-9)
+    r = np.clip(g - floor, 0.0, None) + 0.05 * span
+    x, y, z = r * np.cos(el) * np.cos(az), r * np.cos(el) * np.sin(az), r * np.sin(el)
+    import matplotlib.cm as cm
+    from matplotlib.colors import Normalize
+    from mpl_toolkits.mplot3d import Axes3D  # noqa: F401  (registers the projection)
+
+    norm = Normalize(vmin=floor, vmax=g_max)
+    fig = _new_figure(6.0, 5.2)
+    ax = fig.add_subplot(projection="3d")
+    colors = matplotlib.colormaps[CMAP](norm(g))
+    ax.plot_surface(x, y, z, facecolors=colors, rstride=1, cstride=1, linewidth=0, antialiased=False, shade=False)
+    lim = float(np.nanmax(r))
+    ax.set_xlim(-lim, lim)
+    ax.set_ylim(-lim, lim)
+    ax.set_zlim(-lim, lim)
+    ax.set_box_aspect((1, 1, 1))
+    ax.set_xlabel("x forward")
+    ax.set_ylabel("y left")
+    ax.set_zlabel("z up")
+    ax.tick_params(labelsize=6)
+    ax.view_init(elev=25, azim=-60)
+    sm = cm.ScalarMappable(norm=norm, cmap=CMAP)
+    cb = fig.colorbar(sm, ax=ax, shrink=0.7, pad=0.08)
+    cb.set_label(f"gain / {unit}")
+    ax.set_title(f"node {node}: radiation pattern\n(radius = gain - floor, floor {floor:.1f} {unit}, colour = gain)", fontsize=9)
+    return fig
+
+
+def plot_pattern_3d(pattern_like: PatternLike, node: str, path: str | os.PathLike[str], step_deg: float = 3.0) -> str:
+    """Write a 3-D image of one node's pattern (:func:`pattern_3d_figure`); return the path."""
+    return save_figure(pattern_3d_figure(pattern_like, node, step_deg), path)
