@@ -23,7 +23,7 @@ from rplearn.errors import InputError
 from rplearn.simulate import EstimatorConfig, FlightConfig, RadioConfig, SimulationConfig
 from rplearn.trajectory import Campaign, TrajectoryUnit, group_campaign
 
-__all__ = ["PRESET_NAMES", "make_preset", "x500_frame_lobes"]
+__all__ = ["PRESET_NAMES", "fine_structure_lobes", "make_preset", "x500_frame_lobes"]
 
 
 def x500_frame_lobes(battery_az_deg: float = 180.0, arm_depth_db: float = 3.0) -> tuple[AirframeLobe, ...]:
@@ -37,8 +37,27 @@ def x500_frame_lobes(battery_az_deg: float = 180.0, arm_depth_db: float = 3.0) -
         for a in (45.0, 135.0, -135.0, -45.0)
     )
     return arms + (
-        AirframeLobe(az_deg=battery_az_deg, el_deg=-65.0, width_deg=22.0, depth_db=8.0, label="battery"),
+        AirframeLobe(az_deg=battery_az_deg, el_deg=-65.0, width_deg=22.0, depth_db=10.0, label="battery"),
         AirframeLobe(az_deg=0.0, el_deg=80.0, width_deg=18.0, depth_db=4.0, label="GNSS mast"),
+    )
+
+
+def fine_structure_lobes(key: int, count: int = 40, width_deg: float = 6.0, depth_db: float = 4.0) -> tuple[AirframeLobe, ...]:
+    """Narrow scattering lobes (screws, cables, propeller guards): detail below a SH-10 scale.
+
+    Positions are uniform on the sphere and signs alternate (dips and bumps); ``key`` fixes
+    them, so they are part of a drone's identity, not of a flight's randomness.
+    """
+    import numpy as np
+
+    rng = np.random.default_rng(key)
+    v = rng.standard_normal((count, 3))
+    v /= np.linalg.norm(v, axis=1, keepdims=True)
+    az = np.degrees(np.arctan2(v[:, 1], v[:, 0]))
+    el = np.degrees(np.arcsin(v[:, 2]))
+    return tuple(
+        AirframeLobe(float(a), float(e), width_deg, depth_db * (1 if i % 2 == 0 else -1), label="scattering")
+        for i, (a, e) in enumerate(zip(az, el))
     )
 
 
@@ -47,18 +66,20 @@ def _paper_nodes() -> dict[str, NodeAntenna]:
     # omni peak side-lobe pattern (rec. 2.1), G0 = 2 dBi (theta3 = 68 deg), k = 0.7.
     whip = AntennaSpec(kind="itu_omni_peak", g0_dbi=2.0, k=0.7)
     camera = (
-        AirframeLobe(az_deg=0.0, el_deg=-40.0, width_deg=22.0, depth_db=12.0, label="camera gimbal"),
+        AirframeLobe(az_deg=0.0, el_deg=-40.0, width_deg=22.0, depth_db=14.0, label="camera gimbal"),
         AirframeLobe(az_deg=25.0, el_deg=5.0, width_deg=14.0, depth_db=5.0, label="camera cable mast"),
         AirframeLobe(az_deg=-100.0, el_deg=10.0, width_deg=30.0, depth_db=-2.5, label="reflection off payload plate"),
     )
     sensor = (
-        AirframeLobe(az_deg=100.0, el_deg=25.0, width_deg=25.0, depth_db=10.0, label="sensor box"),
+        AirframeLobe(az_deg=100.0, el_deg=25.0, width_deg=25.0, depth_db=12.0, label="sensor box"),
         AirframeLobe(az_deg=-150.0, el_deg=-20.0, width_deg=18.0, depth_db=6.0, label="sensor antenna"),
         AirframeLobe(az_deg=60.0, el_deg=-5.0, width_deg=35.0, depth_db=-2.0, label="reflection off sensor"),
     )
     return {
-        "A": NodeAntenna(whip, Mounting.named("vertical"), x500_frame_lobes(180.0) + camera, "X500, camera payload"),
-        "B": NodeAntenna(whip, Mounting.named("vertical"), x500_frame_lobes(0.0) + sensor, "X500, sensor payload"),
+        "A": NodeAntenna(whip, Mounting.named("vertical"), x500_frame_lobes(180.0) + camera + fine_structure_lobes(1),
+                          "X500, camera payload"),
+        "B": NodeAntenna(whip, Mounting.named("vertical"), x500_frame_lobes(0.0) + sensor + fine_structure_lobes(2),
+                          "X500, sensor payload"),
     }
 
 
