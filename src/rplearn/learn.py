@@ -30,6 +30,18 @@ _DEFAULT_ORDER = {"sh": 10, "bg": 7, "poly": 12, "knn": 400}
 _ALIASES = {"m": "mean", "p": "poly", "nn": "knn", "bucketized": "bg"}
 
 
+#: Default ridge per family. SH and P need none beyond numerical safety (the gauge fixes the
+#: two-node constant); BG kernels with the paper's sigma = 0.5 rad^2 overlap so much that the
+#: normal equations have condition numbers near 1e13 and a unit ridge (the paper used 50) is
+#: needed to keep the grid weights from cancelling each other.
+DEFAULT_RIDGE_BY_KIND = {"sh": DEFAULT_RIDGE, "poly": DEFAULT_RIDGE, "bg": 1.0, "mean": 0.0, "knn": 0.0}
+
+
+def default_ridge(kind: str) -> float:
+    """Default ridge weight of a model family (see :data:`DEFAULT_RIDGE_BY_KIND`)."""
+    return DEFAULT_RIDGE_BY_KIND.get(kind, DEFAULT_RIDGE)
+
+
 @dataclass(frozen=True)
 class ModelSpec:
     """A model family and its hyper-parameters.
@@ -39,8 +51,8 @@ class ModelSpec:
     kind : {"sh", "bg", "poly", "mean", "knn"}
     order : int or None
         SH-L, BG-k, P-k order, or k of NN-k.
-    ridge : float
-        Ridge weight of the pattern models.
+    ridge : float or None
+        Ridge weight of the pattern models; None picks :func:`default_ridge` of the kind.
     sigma_rad2 : float
         BG kernel variance [rad^2].
     grid : {"paper", "fibonacci"}
@@ -49,9 +61,15 @@ class ModelSpec:
 
     kind: str
     order: int | None = None
-    ridge: float = DEFAULT_RIDGE
+    ridge: float | None = None
     sigma_rad2: float = 0.5
     grid: str = "paper"
+
+    def __post_init__(self) -> None:
+        if self.ridge is None:
+            object.__setattr__(self, "ridge", default_ridge(self.kind))
+        if not (np.isfinite(self.ridge) and self.ridge >= 0):
+            raise InputError(f"ridge must be a non-negative number, got {self.ridge!r}")
 
     @classmethod
     def parse(cls, text: str, **options: Any) -> "ModelSpec":
