@@ -18,6 +18,7 @@ from rplearn.antennas import (
     itu_f1336_omni_average_dbi,
     itu_f1336_omni_peak_dbi,
     itu_f1336_omni_theta3_deg,
+    itu_f1336_sectoral_average_dbi,
     itu_f1336_sectoral_peak_dbi,
     itu_f1336_sectoral_theta3_deg,
     load_ground_truth,
@@ -80,7 +81,8 @@ def test_omni_clause_2_1_is_continuous_and_2_2_lies_below() -> None:
             assert float(itu_f1336_omni_peak_dbi(theta3 / 2, g0, k)) == pytest.approx(g0 - 3.0)
 
 
-# Hand computation, sectoral, G0 = 15 dBi, phi3 = 65 deg, k_p = 0.7, k_h = 0.7, k_v = 0.3:
+# Hand computation, sectoral, G0 = 15 dBi, phi3 = 65 deg, improved side-lobes (rec. 3.1.1.2:
+# k_p = 0.7, k_h = 0.7, k_v = 0.3):
 #   theta3 = 31000 * 10^-1.5 / 65 = 15.0816 deg
 #   G180 = -12 + 10 log10(6.6) - 15 log10(180/15.0816) = -12 + 8.1954 - 16.1523 = -19.9569
 #   lambda_kh = 3 (1 - 0.5^-0.7) = -1.8735
@@ -101,10 +103,39 @@ def test_omni_clause_2_1_is_continuous_and_2_2_lies_below() -> None:
     ],
 )
 def test_sectoral_peak_clause_3_1_1_hand_computed(az_deg: float, el_deg: float, expected_dbi: float) -> None:
-    """ITU-R F.1336-5 recommends 3.1.1 (sectoral peak side-lobe), typical k (3.1.1.1)."""
+    """ITU-R F.1336-5 recommends 3.1.1 (sectoral peak side-lobe), improved k (3.1.1.2)."""
     assert itu_f1336_sectoral_theta3_deg(15.0, 65.0) == pytest.approx(15.0816, abs=1e-4)
-    g = float(itu_f1336_sectoral_peak_dbi(az_deg, el_deg, 15.0, 65.0))
+    g = float(itu_f1336_sectoral_peak_dbi(az_deg, el_deg, 15.0, 65.0, k_p=0.7, k_h=0.7, k_v=0.3))
     assert g == pytest.approx(expected_dbi, abs=2e-3)
+
+
+# Typical side-lobes (rec. 3.1.1.1: k_h = 0.8, k_v = 0.7), same antenna:
+#   lambda_kh = 3 (1 - 2^0.8) = -2.22330; az 90: G_hr = -12 * 1.38462^1.2 + 2.22330
+#             = -12 * 1.477729 + 2.22330 = -15.50945
+#   el 20 (peak): x_k = sqrt(1 - 0.252) = 0.86487 <= 1.32612: G_vr = -12 + 10 log10(0.654826 + 0.7)
+#             = -12 + 1.31884 = -10.68116
+# Average (rec. 3.1.2, k_a = 0.7): G180 = -15 + 8.1954 - 16.1523 = -22.9569
+#   el 20: x_k = sqrt(1.33 - 0.231) = 1.04833 <= 1.32612: G_vr = -15 + 1.31884 = -13.68116
+#   el 10: x_v = 0.66306 < x_k: G_vr = -12 * 0.66306^2 = -5.27577
+
+
+@pytest.mark.parametrize(
+    "func, az_deg, el_deg, expected_dbi",
+    [
+        ("peak", 90.0, 0.0, -0.50945),  # 3.1.1.1: 15 + G_hr
+        ("peak", 0.0, 20.0, 4.31884),  # 3.1.1.1: 15 - 10.68116
+        ("average", 90.0, 0.0, -0.50945),  # 3.1.2: same G_hr (G180 not reached)
+        ("average", 0.0, 20.0, 1.31884),  # 3.1.2: 15 - 13.68116
+        ("average", 0.0, 10.0, 9.72423),  # 3.1.2: 15 - 5.27577
+        ("average", 180.0, 0.0, -7.9569),  # 3.1.2: 15 + G180 (back, R = 0)
+    ],
+)
+def test_sectoral_typical_and_average_clause_3_1_hand_computed(
+    func: str, az_deg: float, el_deg: float, expected_dbi: float
+) -> None:
+    """ITU-R F.1336-5 recommends 3.1.1.1 (typical peak) and 3.1.2 (average side-lobe)."""
+    f = itu_f1336_sectoral_peak_dbi if func == "peak" else itu_f1336_sectoral_average_dbi
+    assert float(f(az_deg, el_deg, 15.0, 65.0)) == pytest.approx(expected_dbi, abs=2e-3)
 
 
 def test_sectoral_clause_3_1_1_beamwidths_and_continuity() -> None:
@@ -116,11 +147,17 @@ def test_sectoral_clause_3_1_1_beamwidths_and_continuity() -> None:
     # C and lambda_kv make G_vr continuous at x_v = 4 and let it reach G180 at 90 deg
     # (the recommendation's quadratic joins its second piece at x_k with a small step, which
     # is not checked here)
-    g180 = -12 + 10 * np.log10(1 + 8 * 0.7) - 15 * np.log10(180 / theta3)
-    lo, hi = itu_f1336_sectoral_peak_dbi(0.0, [4 * theta3 - 1e-7, 4 * theta3 + 1e-7], g0, phi3)
-    assert lo == pytest.approx(hi, abs=1e-5)
-    near, at = itu_f1336_sectoral_peak_dbi(0.0, [90.0 - 1e-7, 90.0], g0, phi3)
-    assert near == pytest.approx(at, abs=1e-5) and at == pytest.approx(g0 + g180)
+    for func, base in ((itu_f1336_sectoral_peak_dbi, -12.0), (itu_f1336_sectoral_average_dbi, -15.0)):
+        g180 = base + 10 * np.log10(1 + 8 * 0.7) - 15 * np.log10(180 / theta3)
+        lo, hi = func(0.0, [4 * theta3 - 1e-7, 4 * theta3 + 1e-7], g0, phi3)
+        assert lo == pytest.approx(hi, abs=1e-5)
+        near, at = func(0.0, [90.0 - 1e-7, 90.0], g0, phi3)
+        assert near == pytest.approx(at, abs=1e-5) and at == pytest.approx(g0 + g180)
+    # the average envelope lies below the peak one except where the peak pattern's main lobe
+    # steps onto its shoulder at x_k (a step of a few tenths of a dB in the recommendation)
+    el = np.linspace(-90.0, 90.0, 721)
+    excess = itu_f1336_sectoral_average_dbi(0.0, el, g0, phi3) - itu_f1336_sectoral_peak_dbi(0.0, el, g0, phi3)
+    assert excess.max() < 0.25 and np.mean(excess <= 1e-12) > 0.9
     az = np.linspace(-180.0, 180.0, 3601)
     ga = itu_f1336_sectoral_peak_dbi(az, 0.0, g0, phi3)
     assert np.argmax(ga) == 1800 and np.allclose(ga, ga[::-1])
@@ -180,7 +217,11 @@ def test_airframe_lobes_shadow_locally() -> None:
         AirframeLobe(0.0, 0.0, 0.0, 1.0)
 
 
-@pytest.mark.parametrize("name", ["itu_omni", "itu_omni_improved", "itu_omni_peak", "itu_sectoral", "dipole", "isotropic", "high_gain"])
+@pytest.mark.parametrize(
+    "name",
+    ["itu_omni", "itu_omni_improved", "itu_omni_peak", "itu_sectoral", "itu_sectoral_improved",
+     "itu_sectoral_average", "dipole", "isotropic", "high_gain"],
+)
 def test_every_antenna_is_finite_on_the_sphere(name: str) -> None:
     spec = antenna_from_name(name)
     az, el = np.meshgrid(np.radians(np.linspace(-180, 180, 73)), np.radians(np.linspace(-90, 90, 37)))

@@ -8,9 +8,9 @@ Antenna models (gains in dBi, angles in degrees inside the formulas, radians in 
 
 - ITU-R F.1336-5 omnidirectional, recommends 2.1 (peak side-lobe) and 2.2 (average
   side-lobe), with k = 0.7 (recommends 2.3, typical) or k = 0 (recommends 2.4, improved);
-- ITU-R F.1336-5 sectoral, recommends 3.1.1 (peak side-lobe, 400 MHz - 6 GHz) with
-  ``k_p, k_h, k_v`` and the beamwidth relation of recommends 3.1 (``theta3 = 31000 * 10^(-0.1 G0)
-  / phi3``);
+- ITU-R F.1336-5 sectoral, recommends 3.1.1 (peak side-lobe) and 3.1.2 (average side-lobe),
+  400 MHz - 6 GHz, with ``k_p``/``k_a``, ``k_h``, ``k_v`` and the beamwidth relation
+  ``theta3 = 31000 * 10^(-0.1 G0) / phi3``; no tilt (recommends 3.4/3.5 are not implemented);
 - half-wave dipole (textbook, Balanis eq. 4-84), isotropic, and a circularly symmetric
   cosine-power beam (a generic high-gain antenna, not an ITU model).
 
@@ -138,13 +138,18 @@ def itu_f1336_sectoral_theta3_deg(g0_dbi: float, phi3_deg: float) -> float:
     return 31000.0 * 10.0 ** (-0.1 * float(g0_dbi)) / float(phi3_deg)
 
 
-def _sectoral_g180_db(k_p: float, theta3_deg: float) -> float:
-    """Relative minimum gain ``G180 = -12 + 10 log10(1 + 8 k_p) - 15 log10(180/theta3)`` [dB]."""
-    return -12.0 + 10.0 * np.log10(1.0 + 8.0 * k_p) - 15.0 * np.log10(180.0 / theta3_deg)
+def _sectoral_g180_db(k: float, theta3_deg: float, average: bool) -> float:
+    """Relative minimum gain ``G180`` [dB].
+
+    Peak (rec. 3.1.1): ``-12 + 10 log10(1 + 8 k_p) - 15 log10(180/theta3)``;
+    average (rec. 3.1.2): ``-15 + 10 log10(1 + 8 k_a) - 15 log10(180/theta3)``.
+    """
+    base = -15.0 if average else -12.0
+    return base + 10.0 * np.log10(1.0 + 8.0 * k) - 15.0 * np.log10(180.0 / theta3_deg)
 
 
 def _sectoral_g_hr_db(x_h: FloatArray, k_h: float, g180_db: float) -> FloatArray:
-    """Relative horizontal pattern ``G_hr(x_h)`` of recommends 3.1.1 [dB]."""
+    """Relative horizontal pattern ``G_hr(x_h)`` of recommends 3.1.1 and 3.1.2 [dB]."""
     lambda_kh = 3.0 * (1.0 - 0.5 ** (-k_h))
     inner = -12.0 * x_h**2
     outer = -12.0 * np.maximum(x_h, 1e-12) ** (2.0 - k_h) - lambda_kh
@@ -152,21 +157,59 @@ def _sectoral_g_hr_db(x_h: FloatArray, k_h: float, g180_db: float) -> FloatArray
 
 
 def _sectoral_g_vr_db(
-    x_v: FloatArray, k_v: float, k_p: float, theta3_deg: float, g180_db: float
+    x_v: FloatArray, k_v: float, k: float, theta3_deg: float, g180_db: float, average: bool
 ) -> FloatArray:
-    """Relative vertical pattern ``G_vr(x_v)`` of recommends 3.1.1 [dB]."""
-    x_k = np.sqrt(1.0 - 0.36 * k_v)
-    c = 10.0 * np.log10((180.0 / theta3_deg) ** 1.5 * (4.0**-1.5 + k_v) / (1.0 + 8.0 * k_p)) / np.log10(
+    """Relative vertical pattern ``G_vr(x_v)`` of recommends 3.1.1 (peak) / 3.1.2 (average) [dB]."""
+    c = 10.0 * np.log10((180.0 / theta3_deg) ** 1.5 * (4.0**-1.5 + k_v) / (1.0 + 8.0 * k)) / np.log10(
         22.5 / theta3_deg
     )
     lambda_kv = 12.0 - c * np.log10(4.0) - 10.0 * np.log10(4.0**-1.5 + k_v)
+    if average:
+        x_k, shoulder, drop = np.sqrt(1.33 - 0.33 * k_v), -15.0, 3.0
+    else:
+        x_k, shoulder, drop = np.sqrt(1.0 - 0.36 * k_v), -12.0, 0.0
     xs = np.maximum(x_v, 1e-12)
     g = np.where(
         x_v < x_k,
         -12.0 * x_v**2,
-        np.where(x_v < 4.0, -12.0 + 10.0 * np.log10(xs**-1.5 + k_v), -lambda_kv - c * np.log10(xs)),
+        np.where(
+            x_v < 4.0,
+            shoulder + 10.0 * np.log10(xs**-1.5 + k_v),
+            -lambda_kv - drop - c * np.log10(xs),
+        ),
     )
     return np.where(x_v >= 90.0 / theta3_deg, g180_db, g)
+
+
+def _sectoral_dbi(
+    az_deg: ArrayLike,
+    el_deg: ArrayLike,
+    g0_dbi: float,
+    phi3_deg: float,
+    theta3_deg: float | None,
+    k: float,
+    k_h: float,
+    k_v: float,
+    average: bool,
+) -> FloatArray:
+    if theta3_deg is None:
+        theta3_deg = itu_f1336_sectoral_theta3_deg(g0_dbi, phi3_deg)
+    az = np.abs(_deg(az_deg))
+    el = np.abs(_deg(el_deg))
+    g180 = _sectoral_g180_db(k, theta3_deg, average)
+    x_h = az / phi3_deg
+    x_v = el / theta3_deg
+    g_hr = _sectoral_g_hr_db(x_h, k_h, g180)
+    g_hr_0 = _sectoral_g_hr_db(np.zeros(1), k_h, g180)[0]
+    g_hr_180 = _sectoral_g_hr_db(np.array([180.0 / phi3_deg]), k_h, g180)[0]
+    r = (g_hr - g_hr_180) / (g_hr_0 - g_hr_180)
+    return g0_dbi + g_hr + r * _sectoral_g_vr_db(x_v, k_v, k, theta3_deg, g180, average)
+
+
+#: Sectoral side-lobe parameters (k_h, k_v) for typical (rec. 3.1.1.1) and improved (3.1.1.2)
+#: side-lobe performance; k_p = k_a = 0.7.
+SECTORAL_TYPICAL = {"k_h": 0.8, "k_v": 0.7}
+SECTORAL_IMPROVED = {"k_h": 0.7, "k_v": 0.3}
 
 
 def itu_f1336_sectoral_peak_dbi(
@@ -176,8 +219,8 @@ def itu_f1336_sectoral_peak_dbi(
     phi3_deg: float,
     theta3_deg: float | None = None,
     k_p: float = 0.7,
-    k_h: float = 0.7,
-    k_v: float = 0.3,
+    k_h: float = 0.8,
+    k_v: float = 0.7,
 ) -> FloatArray:
     """Sectoral peak side-lobe pattern, ITU-R F.1336-5 recommends 3.1.1 [dBi].
 
@@ -196,8 +239,9 @@ def itu_f1336_sectoral_peak_dbi(
         C = 10 log10((180/theta3)^1.5 (4^-1.5 + k_v) / (1 + 8 k_p)) / log10(22.5/theta3)
         R = (G_hr(x_h) - G_hr(180/phi3)) / (G_hr(0) - G_hr(180/phi3))
 
-    Typical side-lobe performance (recommends 3.1.1.1): ``k_p = 0.7, k_h = 0.7, k_v = 0.3``;
-    improved side-lobes (recommends 3.1.1.2): ``k_v = 0``. No tilt (boresight horizontal).
+    ``C`` and ``lambda_kv`` make ``G_vr`` continuous at ``x_v = 4`` and equal to ``G180`` at
+    90 deg. Typical side-lobe performance (rec. 3.1.1.1): ``k_p = 0.7, k_h = 0.8, k_v = 0.7``
+    (the defaults); improved (rec. 3.1.1.2): ``k_h = 0.7, k_v = 0.3``. No tilt.
 
     Parameters
     ----------
@@ -210,18 +254,31 @@ def itu_f1336_sectoral_peak_dbi(
     theta3_deg : float, optional
         Elevation 3 dB beamwidth [deg]; by default :func:`itu_f1336_sectoral_theta3_deg`.
     """
-    if theta3_deg is None:
-        theta3_deg = itu_f1336_sectoral_theta3_deg(g0_dbi, phi3_deg)
-    az = np.abs(_deg(az_deg))
-    el = np.abs(_deg(el_deg))
-    g180 = _sectoral_g180_db(k_p, theta3_deg)
-    x_h = az / phi3_deg
-    x_v = el / theta3_deg
-    g_hr = _sectoral_g_hr_db(x_h, k_h, g180)
-    g_hr_0 = _sectoral_g_hr_db(np.zeros(1), k_h, g180)[0]
-    g_hr_180 = _sectoral_g_hr_db(np.array([180.0 / phi3_deg]), k_h, g180)[0]
-    r = (g_hr - g_hr_180) / (g_hr_0 - g_hr_180)
-    return g0_dbi + g_hr + r * _sectoral_g_vr_db(x_v, k_v, k_p, theta3_deg, g180)
+    return _sectoral_dbi(az_deg, el_deg, g0_dbi, phi3_deg, theta3_deg, k_p, k_h, k_v, average=False)
+
+
+def itu_f1336_sectoral_average_dbi(
+    az_deg: ArrayLike,
+    el_deg: ArrayLike,
+    g0_dbi: float,
+    phi3_deg: float,
+    theta3_deg: float | None = None,
+    k_a: float = 0.7,
+    k_h: float = 0.8,
+    k_v: float = 0.7,
+) -> FloatArray:
+    """Sectoral average side-lobe pattern, ITU-R F.1336-5 recommends 3.1.2 [dBi].
+
+    As :func:`itu_f1336_sectoral_peak_dbi` with ``k_a`` for ``k_p`` and::
+
+        G180 = -15 + 10 log10(1 + 8 k_a) - 15 log10(180 / theta3)
+        G_vr = -12 x_v^2                           x_v < x_k = sqrt(1.33 - 0.33 k_v)
+        G_vr = -15 + 10 log10(x_v^-1.5 + k_v)      x_k <= x_v < 4
+        G_vr = -lambda_kv - 3 - C log10(x_v)       4 <= x_v < 90/theta3
+        G_vr = G180                                x_v = 90/theta3
+        C = 10 log10((180/theta3)^1.5 (4^-1.5 + k_v) / (1 + 8 k_a)) / log10(22.5/theta3)
+    """
+    return _sectoral_dbi(az_deg, el_deg, g0_dbi, phi3_deg, theta3_deg, k_a, k_h, k_v, average=True)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -268,15 +325,15 @@ class AntennaSpec:
     ----------
     kind : str
         ``"itu_omni_peak"`` (F.1336-5 rec. 2.1), ``"itu_omni_average"`` (rec. 2.2),
-        ``"itu_sectoral_peak"`` (rec. 3.1.1), ``"dipole"``, ``"isotropic"``, ``"cosine_beam"``.
+        ``"itu_sectoral_peak"`` (rec. 3.1.1), ``"itu_sectoral_average"`` (rec. 3.1.2), ``"dipole"``, ``"isotropic"``, ``"cosine_beam"``.
     g0_dbi : float
         Maximum gain [dBi] (ignored by ``dipole``).
     k : float
         Omni side-lobe parameter (0.7 typical, 0 improved).
     phi3_deg, theta3_deg : float or None
         Sectoral 3 dB beamwidths [deg]; ``theta3_deg`` None uses rec. 3.1's relation.
-    k_p, k_h, k_v : float
-        Sectoral parameters of rec. 3.1.1.
+    k_p, k_a, k_h, k_v : float
+        Sectoral parameters of rec. 3.1.1 / 3.1.2 (defaults: typical side-lobe performance).
     hpbw_deg, floor_db : float
         Cosine beam half-power beamwidth [deg] and depth of its floor below G0 [dB].
     """
@@ -287,12 +344,21 @@ class AntennaSpec:
     phi3_deg: float = 65.0
     theta3_deg: float | None = None
     k_p: float = 0.7
-    k_h: float = 0.7
-    k_v: float = 0.3
+    k_a: float = 0.7
+    k_h: float = 0.8
+    k_v: float = 0.7
     hpbw_deg: float = 40.0
     floor_db: float = 25.0
 
-    KINDS = ("itu_omni_peak", "itu_omni_average", "itu_sectoral_peak", "dipole", "isotropic", "cosine_beam")
+    KINDS = (
+        "itu_omni_peak",
+        "itu_omni_average",
+        "itu_sectoral_peak",
+        "itu_sectoral_average",
+        "dipole",
+        "isotropic",
+        "cosine_beam",
+    )
 
     def __post_init__(self) -> None:
         if self.kind not in self.KINDS:
@@ -300,7 +366,7 @@ class AntennaSpec:
         _check_finite("antenna g0_dbi", self.g0_dbi)
         if self.kind.startswith("itu_omni") and not (0.0 <= self.k <= 1.0):
             raise InputError(f"antenna k: expected 0 <= k <= 1, got {self.k}")
-        if self.kind == "itu_sectoral_peak" and not (0.0 < self.phi3_deg <= 120.0):
+        if self.kind.startswith("itu_sectoral") and not (0.0 < self.phi3_deg <= 120.0):
             raise InputError(f"antenna phi3_deg: expected 0 < phi3 <= 120 deg, got {self.phi3_deg}")
         if self.kind == "cosine_beam" and not (0.0 < self.hpbw_deg < 180.0):
             raise InputError(f"antenna hpbw_deg: expected 0 < hpbw < 180 deg, got {self.hpbw_deg}")
@@ -316,6 +382,10 @@ class AntennaSpec:
         if self.kind == "itu_sectoral_peak":
             return itu_f1336_sectoral_peak_dbi(
                 az_deg, el_deg, self.g0_dbi, self.phi3_deg, self.theta3_deg, self.k_p, self.k_h, self.k_v
+            )
+        if self.kind == "itu_sectoral_average":
+            return itu_f1336_sectoral_average_dbi(
+                az_deg, el_deg, self.g0_dbi, self.phi3_deg, self.theta3_deg, self.k_a, self.k_h, self.k_v
             )
         if self.kind == "dipole":
             return half_wave_dipole_dbi(el_deg) + 0.0 * az_deg
@@ -576,7 +646,8 @@ def antenna_from_name(name: str, **overrides: Any) -> AntennaSpec:
     """Ready-made antennas by name, with keyword overrides.
 
     ``itu_omni`` (F.1336-5 rec. 2.2, G0 = 2 dBi, k = 0.7), ``itu_omni_improved`` (k = 0),
-    ``itu_omni_peak`` (rec. 2.1), ``itu_sectoral`` (rec. 3.1.1, G0 = 15 dBi, phi3 = 65 deg),
+    ``itu_omni_peak`` (rec. 2.1), ``itu_sectoral`` (rec. 3.1.1, G0 = 15 dBi, phi3 = 65 deg, typical
+    side-lobes), ``itu_sectoral_improved`` (3.1.1.2), ``itu_sectoral_average`` (3.1.2),
     ``dipole``, ``isotropic``, ``high_gain`` (cosine beam, 12 dBi, 40 deg).
     """
     table: dict[str, dict[str, Any]] = {
@@ -584,6 +655,8 @@ def antenna_from_name(name: str, **overrides: Any) -> AntennaSpec:
         "itu_omni_improved": {"kind": "itu_omni_average", "g0_dbi": 2.0, "k": 0.0},
         "itu_omni_peak": {"kind": "itu_omni_peak", "g0_dbi": 2.0, "k": 0.7},
         "itu_sectoral": {"kind": "itu_sectoral_peak", "g0_dbi": 15.0, "phi3_deg": 65.0},
+        "itu_sectoral_improved": {"kind": "itu_sectoral_peak", "g0_dbi": 15.0, "phi3_deg": 65.0, **SECTORAL_IMPROVED},
+        "itu_sectoral_average": {"kind": "itu_sectoral_average", "g0_dbi": 15.0, "phi3_deg": 65.0},
         "dipole": {"kind": "dipole"},
         "isotropic": {"kind": "isotropic", "g0_dbi": 0.0},
         "high_gain": {"kind": "cosine_beam", "g0_dbi": 12.0, "hpbw_deg": 40.0, "floor_db": 25.0},
