@@ -224,3 +224,14 @@ def test_group_campaign_flies_every_scheduled_pair() -> None:
     assert pair_schedule(["A", "B"]) == [("A", "B")]
     with pytest.raises(InputError):
         pair_schedule(["A"])
+
+
+def test_yaw_rate_summary_matches_reference_and_limit() -> None:
+    unit = TrajectoryUnit(n_loops=5, yaw_rate_deg_s=40.0)
+    s = summarize_unit(unit)
+    ref = unit.sample(500.0)
+    rate = np.degrees(np.abs(np.angle(np.exp(1j * np.diff(ref.yaw_rad, axis=0))))) / np.diff(ref.t_s)[:, None]
+    assert rate.max() == pytest.approx(s.max_yaw_rate_deg_s, rel=1e-3)
+    assert s.max_yaw_rate_deg_s == pytest.approx(40.0 * np.pi / 2, rel=1e-9)
+    with pytest.raises(PlanError, match="max_yaw_rate_deg_s"):
+        summarize_unit(unit, PlanLimits(max_yaw_rate_deg_s=30.0))

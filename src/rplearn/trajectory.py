@@ -58,7 +58,8 @@ class TrajectoryUnit:
     accel_m_s2 : float
         Tangential acceleration used to start and stop each loop [m/s^2].
     yaw_rate_deg_s : float
-        Yaw rate of the heading changes between loops [deg/s].
+        Mean yaw rate of the heading changes between loops [deg/s]; the turns follow a cosine
+        profile whose peak rate is ``pi/2`` times this.
     center_enu_m : (float, float)
         Horizontal position (east, north) of the circle's centre [m].
     line_azimuth_deg : float
@@ -308,11 +309,14 @@ class PlanLimits:
         Largest acceleration (tangential and centripetal) [m/s^2].
     max_flight_time_s : float or None
         Flight time per battery; each unit must fit in one battery [s].
+    max_yaw_rate_deg_s : float or None
+        Largest yaw rate [deg/s].
     """
 
     max_speed_m_s: float | None = None
     max_accel_m_s2: float | None = None
     max_flight_time_s: float | None = None
+    max_yaw_rate_deg_s: float | None = None
 
 
 @dataclass(frozen=True)
@@ -342,6 +346,17 @@ class UnitSummary:
     max_yaw_rate_deg_s: float
 
 
+def _max_yaw_rate_deg_s(unit: TrajectoryUnit) -> float:
+    """Peak yaw rate of the cosine-profile turns: ``pi/2 * turn / duration`` [deg/s]."""
+    sched = unit.heading_schedule_deg()
+    rates = [
+        0.5 * np.pi * float(np.max(_turn_deg(sched[i], sched[i + 1]))) / duration
+        for kind, duration, i in unit._segments()
+        if kind == "turn"
+    ]
+    return max(rates, default=0.0)
+
+
 def summarize_unit(unit: TrajectoryUnit, limits: PlanLimits | None = None) -> UnitSummary:
     """Duration, path length and the largest speed and acceleration a unit asks for.
 
@@ -361,13 +376,14 @@ def summarize_unit(unit: TrajectoryUnit, limits: PlanLimits | None = None) -> Un
         path_length_m=unit.path_length_m,
         max_speed_m_s=float(v_peak),
         max_accel_m_s2=max_acc,
-        max_yaw_rate_deg_s=float(unit.yaw_rate_deg_s * np.pi / 2.0),  # cosine blend peak
+        max_yaw_rate_deg_s=_max_yaw_rate_deg_s(unit),
     )
     if limits is not None:
         checks = (
             ("max_speed_m_s", summary.max_speed_m_s, limits.max_speed_m_s, "m/s"),
             ("max_accel_m_s2", summary.max_accel_m_s2, limits.max_accel_m_s2, "m/s^2"),
             ("max_flight_time_s", summary.duration_s, limits.max_flight_time_s, "s"),
+            ("max_yaw_rate_deg_s", summary.max_yaw_rate_deg_s, limits.max_yaw_rate_deg_s, "deg/s"),
         )
         for name, value, limit, unit_name in checks:
             if limit is not None and value > limit:
