@@ -103,8 +103,14 @@ def test_everything_off_gives_the_exact_link_budget(smoke) -> None:
     ideal = simulate(with_effects_off(smoke.config), seed=1)
     assert ideal.noise_std_db == 0.0
     np.testing.assert_allclose(_residual_db(ideal), 0.0, atol=1e-9)
-    # exact estimates: logged poses equal the truth (no noise, no tracking error)
     assert ideal.realised_noise_std_db == pytest.approx(0.0, abs=1e-12)
+    # exact estimates and perfect tracking: logged poses follow the references
+    unit = ideal.config.campaign.units[0]
+    log = ideal.pose_log[(ideal.pose_log.node == unit.nodes[1]) & (ideal.pose_log.t <= unit.duration_s)]
+    ref = unit.evaluate(log["t"].to_numpy())
+    np.testing.assert_allclose(log[["x", "y", "z"]].to_numpy(), ref.position_enu_m[:, 1], atol=2e-3)
+    _, _, yaw = euler_from_quat_wxyz(log[["qw", "qx", "qy", "qz"]].to_numpy())
+    np.testing.assert_allclose(np.angle(np.exp(1j * (yaw - ref.yaw_rad[:, 1]))), 0.0, atol=2e-3)
 
 
 def test_fading_and_quantisation_set_the_noise_level(smoke) -> None:
