@@ -83,6 +83,9 @@ def test_rosbag_custom_type_from_definition_file(tmp_path, flight):
     with pytest.raises(InputError, match=r"/A/rssi: field 'link.rssi' not found"):
         read_rosbag(path, POSE_TOPICS, RSSI_TOPICS, rssi_field="link.rssi", tx_power_dbm=20.0,
                     frequency_hz=2.4e9)
+    with pytest.raises(InputError, match=r"/A/rssi: field 'peer' is str, expected a number"):
+        read_rosbag(path, POSE_TOPICS, RSSI_TOPICS, rssi_field="peer", tx_power_dbm=20.0,
+                    frequency_hz=2.4e9)
 
 
 def test_pcap_round_trip(tmp_path, flight, reference):

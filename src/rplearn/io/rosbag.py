@@ -91,6 +91,16 @@ def _field(msg: Any, dotted: str, where: str) -> Any:
     return value
 
 
+def _float_field(msg: Any, dotted: str, where: str) -> float:
+    value = _field(msg, dotted, where)
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        raise InputError(
+            f"{where}: field {dotted!r} is {type(value).__name__}, expected a number"
+        ) from None
+
+
 def _stamp_s(msg: Any, bag_ns: int, time_source: str) -> float:
     if time_source == "header":
         header = getattr(msg, "header", None)
@@ -124,7 +134,10 @@ def open_rosbag(
     default = get_typestore(Stores.ROS1_NOETIC if is_ros1 else Stores.ROS2_JAZZY)
     extra = _load_definitions(msg_definitions)
     if extra:
-        default.register(extra)
+        try:
+            default.register(extra)
+        except Exception as exc:
+            raise InputError(f"msg_definitions: cannot register types ({type(exc).__name__}: {exc})") from None
     try:
         reader = AnyReader(paths, default_typestore=default)
         reader.open()
@@ -255,11 +268,11 @@ def read_rosbag(
                 sig_rows["t"].append(t)
                 sig_rows["tx"].append(str(tx))
                 sig_rows["rx"].append(str(rx))
-                sig_rows["rssi_dbm"].append(float(_field(msg, rssi_field, where)))
+                sig_rows["rssi_dbm"].append(_float_field(msg, rssi_field, where))
                 sig_rows["tx_power_dbm"].append(
-                    float(_field(msg, tx_power_field, where)) if tx_power_field else float(tx_power_dbm))
+                    _float_field(msg, tx_power_field, where) if tx_power_field else float(tx_power_dbm))
                 sig_rows["frequency_hz"].append(
-                    float(_field(msg, frequency_field, where)) if frequency_field else float(frequency_hz))
+                    _float_field(msg, frequency_field, where) if frequency_field else float(frequency_hz))
         fmt = "ros1" if not getattr(reader, "is2", True) else "ros2"
     pose = None
     if pose_topics:
