@@ -37,7 +37,7 @@ app = typer.Typer(
     pretty_exceptions_enable=False,
 )
 console = Console(stderr=True)
-out = Console()
+out = Console(soft_wrap=True)
 
 
 def _fail(message: str) -> None:
@@ -63,7 +63,23 @@ def user_errors(fn: Callable) -> Callable:
 
 
 def _progress() -> Progress:
-    return Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=console, transient=False)
+    """Rich progress on a terminal; nothing when standard error is not one (see :func:`_step`)."""
+    return Progress(
+        SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=console, transient=True,
+        disable=not console.is_terminal,
+    )
+
+
+def _step(progress: Progress, task: Any) -> Callable[[str], None]:
+    """Progress callback: updates the bar on a terminal, prints a plain line otherwise."""
+
+    def report(message: str) -> None:
+        if console.is_terminal:
+            progress.update(task, description=message)
+        else:
+            console.print(f"... {message}", highlight=False, soft_wrap=True)
+
+    return report
 
 
 def _split_list(values: Optional[list[str]]) -> list[str] | None:
@@ -305,20 +321,15 @@ def evaluate(
     Example: rplearn evaluate sh10.json mean.json data.parquet --units test_36
     """
     from rplearn.experiment import provenance
-    from rplearn.learn import FittedModel, ModelSpec, evaluate_models, samples_of, scores_markdown
+    from rplearn.learn import FittedModel, evaluate_models, samples_of, scores_markdown
     from rplearn.modelfile import load_model
 
     if len(paths) < 2:
         raise InputError("evaluate: give at least one MODEL.json and a DATASET")
     *model_paths, dataset = paths
     models = [load_model(p) for p in model_paths]
-    nodes = None
-    samples = samples_of(_dataset(dataset), _split_list(units), dataset, nodes=nodes)
-    fitted = []
-    for m in models:
-        ltd = float(getattr(m, "training", {}).get("ltd_s") or float("nan"))
-        spec = ModelSpec.parse(m.label) if m.kind != "patterns" else ModelSpec.parse(m.label)
-        fitted.append(FittedModel(spec, m, ltd))
+    samples = samples_of(_dataset(dataset), _split_list(units), dataset)
+    fitted = [FittedModel.from_model(m) for m in models]
     rows = evaluate_models(fitted, samples)
     md = scores_markdown(rows)
     out.print(md, highlight=False)
@@ -589,7 +600,7 @@ def demo(
 
     with _progress() as p:
         task = p.add_task("starting", total=None)
-        result = run_demo(out_dir, seed=seed, preset=preset, progress=lambda m: p.update(task, description=m))
+        result = run_demo(out_dir, seed=seed, preset=preset, progress=_step(p, task))
     out.print(f"\nTable I on the testing unit ({result.n_test:,} samples; learned on {result.n_learn:,}); "
               f"simulated noise {result.noise_std_db:.2f} dB; 'pattern err' = RMS error of the learned pattern "
               "against the true one over the covered directions, constant removed:\n", highlight=False)

@@ -111,11 +111,18 @@ class FittedModel:
 
     @property
     def label(self) -> str:
-        return self.spec.label
+        return self.model.label
 
     @property
     def n_params(self) -> int:
         return self.model.n_params
+
+    @classmethod
+    def from_model(cls, model: Model) -> "FittedModel":
+        """Wrap a loaded model; its LTD comes from its training summary (NaN if absent)."""
+        ltd = model.training.get("ltd_s")
+        spec = ModelSpec.parse(model.label)
+        return cls(spec, model, float("nan") if ltd is None else float(ltd))
 
     @property
     def condition_number(self) -> float:
@@ -181,8 +188,7 @@ def fit_model(
         model = fit_patterns(samples, spec, gauge)
     ltd = time.perf_counter() - t0
     model.provenance = {**dict(provenance or {}), "model": spec.label}
-    if isinstance(model, PatternSet):
-        model.training["ltd_s"] = ltd
+    model.training["ltd_s"] = ltd
     return FittedModel(spec, model, ltd)
 
 

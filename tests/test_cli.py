@@ -1,0 +1,113 @@
+"""The command line, driven through real subprocesses as a user would (issue 5)."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from rplearn.datasets import MATCHED_COLUMNS
+
+RPLEARN = [sys.executable, "-m", "rplearn.cli"]
+
+
+def run(args, cwd, ok=True):
+    proc = subprocess.run(RPLEARN + list(args), cwd=cwd, capture_output=True, text=True, timeout=300)
+    if ok:
+        assert proc.returncode == 0, f"{args}: {proc.stderr}"
+    return proc
+
+
+@pytest.fixture(scope="module")
+def workdir(tmp_path_factory):
+    d = tmp_path_factory.mktemp("cli")
+    run(["simulate", "--preset", "smoke", "--seed", "3", "-o", "flight"], d)
+    run(
+        ["sync", "--poses", "flight/pose_log.parquet", "--signals", "flight/signal_log.parquet", "--link", "A:B", "-o", "data.parquet"],
+        d,
+    )
+    return d
+
+
+def test_simulate_sync_fit_evaluate_export_predict(workdir):
+    d = workdir
+    for name in ("pose_log.parquet", "signal_log.parquet", "ground_truth.json"):
+        assert (d / "flight" / name).stat().st_size > 0
+    data = pd.read_parquet(d / "data.parquet")
+    assert list(data.columns[: len(MATCHED_COLUMNS)]) == list(MATCHED_COLUMNS)
+    assert set(data["tx"]) == {"A"} and set(data["rx"]) == {"B"} and len(data) > 500
+    units = sorted(data["unit"].unique())
+    learn = [u for u in units if not u.startswith("test")]
+    test = [u for u in units if u.startswith("test")]
+
+    run(["fit", "data.parquet", "--model", "sh", "--degree", "3", "--units", ",".join(learn), "-o", "sh3.json"], d)
+    run(["fit", "data.parquet", "--model", "mean", "--units", ",".join(learn), "-o", "m.json"], d)
+    model = json.loads((d / "sh3.json").read_text())
+    assert model["schema"] == "rplearn.model" and model["type"] == "patterns"
+    assert len(model["model"]["coefficients"]["A"]) == 9
+    assert model["model"]["gauge"][0]["rule"] == "equal-mean"
+    assert model["model"]["provenance"]["rplearn_version"] and "fit" in model["model"]["provenance"]["command"]
+
+    ev = run(["evaluate", "sh3.json", "m.json", "data.parquet", "--units", ",".join(test), "--json", "t1.json", "--markdown", "t1.md"], d)
+    assert "| SH-3 |" in ev.stdout and "| M |" in ev.stdout
+    rows = {r["model"]: r for r in json.loads((d / "t1.json").read_text())["rows"]}
+    assert rows["SH-3"]["rmse_db"] < rows["M"]["rmse_db"]
+    assert rows["M"]["n_params"] == 1 and rows["SH-3"]["n_params"] == 18
+    assert (d / "t1.md").read_text().startswith("| Method")
+
+    run(["export", "sh3.json", "--format", "grid", "--step-deg", "10", "-o", "grid.csv"], d)
+    grid = pd.read_csv(d / "grid.csv")
+    assert list(grid.columns) == ["node", "az_deg", "el_deg", "gain_db"]
+    assert set(grid["node"]) == {"A", "B"} and np.isfinite(grid["gain_db"]).all()
+    run(["export", "sh3.json", "--format", "msi", "-o", "msi"], d)
+    assert (d / "msi" / "A.msi").read_text().count("\n") > 720
+
+    run(["predict", "sh3.json", "data.parquet", "-o", "pred.csv"], d)
+    pred = pd.read_csv(d / "pred.csv")
+    assert len(pred) == len(data)
+    assert {"gain_pred_db", "rssi_pred_dbm"} <= set(pred.columns)
+    resid = pred["rssi_pred_dbm"] - pred["rssi_dbm"]
+    assert np.sqrt(np.mean(resid**2)) < 12.0
+
+    inspect = run(["inspect", "flight/pose_log.parquet", "flight/signal_log.parquet"], d)
+    assert "A -> B" in inspect.stdout
+    orient = run(["orient", "sh3.json", "--tx", "A", "--rx", "B", "--tx-pos", "0,0,20", "--rx-pos", "10,0,20"], d)
+    assert "best yaw" in orient.stdout
+
+
+USER_ERRORS = {
+    "missing file": (["fit", "nope.parquet", "-o", "x.json"], "nope.parquet"),
+    "missing column": (["fit", "nocol.csv", "-o", "x.json"], "missing column"),
+    "bad column value": (["fit", "nanpose.csv", "-o", "x.json"], "tx_qw"),
+    "bad model file": (["predict", "bad.json", "data.parquet", "-o", "p.csv"], "bad.json"),
+    "unknown node": (["orient", "sh3.json", "--tx", "Z", "--rx", "B", "--tx-pos", "0,0,0", "--rx-pos", "9,0,0"], "unknown node 'Z'"),
+    "unknown model": (["fit", "data.parquet", "--model", "zernike", "-o", "x.json"], "unknown model"),
+    "unknown unit": (["fit", "data.parquet", "--units", "nope", "-o", "x.json"], "unknown unit"),
+    "bad link": (["sync", "--poses", "flight/pose_log.parquet", "--signals", "flight/signal_log.parquet", "--link", "AB", "-o", "x.parquet"], "--link"),
+    "bad preset": (["simulate", "--preset", "mars", "-o", "x"], "mars"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(USER_ERRORS))
+def test_user_errors_print_one_line_and_exit_1(workdir, case):
+    d = workdir
+    data = pd.read_parquet(d / "data.parquet")
+    data.drop(columns=["rssi_dbm"]).to_csv(d / "nocol.csv", index=False)
+    bad = data.copy()
+    bad.loc[5, "tx_qw"] = np.nan
+    bad.to_csv(d / "nanpose.csv", index=False)
+    (d / "bad.json").write_text('{"schema": "rplearn.model", "schema_version": 1, "sha')
+    if not (d / "sh3.json").exists():
+        run(["fit", "data.parquet", "--model", "sh", "--degree", "3", "-o", "sh3.json"], d)
+    args, needle = USER_ERRORS[case]
+    proc = run(args, d, ok=False)
+    assert proc.returncode == 1, proc.stderr
+    lines = [l for l in proc.stderr.strip().splitlines() if l.strip()]
+    assert len(lines) == 1, proc.stderr
+    assert "Traceback" not in proc.stderr and lines[0].startswith("error:")
+    assert needle in lines[0]
