@@ -51,6 +51,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from rplearn import __version__
 from rplearn.errors import InputError
+from rplearn.geometry import wrap_angle_rad
 
 FloatArray = NDArray[np.float64]
 
@@ -165,8 +166,7 @@ class MsiPattern:
 
 def msi_horizontal_directions_rad(angle_deg: ArrayLike) -> tuple[FloatArray, FloatArray]:
     """Body-frame (az, el) [rad] of MSI horizontal angles [deg] (clockwise from forward)."""
-    h = np.radians(np.asarray(angle_deg, np.float64))
-    az = np.arctan2(-np.sin(h), np.cos(h))
+    az = wrap_angle_rad(-np.radians(np.asarray(angle_deg, np.float64)))
     return az, np.zeros_like(az)
 
 
