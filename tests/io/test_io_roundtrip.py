@@ -126,3 +126,26 @@ def test_pcapng_round_trip(tmp_path, flight, reference):
         assert len(s) == len(sel) and meta["frames"] == len(sel)
         parts.append(s)
     assert_same_matched(synchronise(pose, pd.concat(parts, ignore_index=True)).dataset, reference)
+
+
+def test_ros2_bag_without_embedded_definitions(tmp_path, flight):
+    """Like a ROS 2 Humble bag: no definitions inside; the custom type comes from the user."""
+    import sqlite3
+
+    from rplearn.errors import LogFormatError
+
+    pose, sig = flight
+    path = write_bag(tmp_path / "old", pose.iloc[::20], sig.iloc[::20], "sqlite3")
+    db = next(path.glob("*.db3"))
+    con = sqlite3.connect(db)
+    con.execute("DELETE FROM message_definitions")
+    con.commit()
+    con.close()
+    with pytest.raises(LogFormatError) as e:
+        read_rosbag(path, POSE_TOPICS, RSSI_TOPICS, rssi_field="rssi_dbm", tx_power_dbm=20.0,
+                    frequency_hz=2.4e9)
+    assert "register its definition with msg_definitions" in str(e.value) and "\n" not in str(e.value)
+    logs, _ = read_rosbag(path, POSE_TOPICS, RSSI_TOPICS, rssi_field="rssi_dbm", tx_power_dbm=20.0,
+                          frequency_hz=2.4e9, msg_definitions={RSSI_MSG: RSSI_MSGDEF})
+    assert len(logs.signal) == len(sig.iloc[::20])
+    assert len(logs.pose) == len(pose.iloc[::20])
