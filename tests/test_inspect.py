@@ -93,3 +93,9 @@ def test_real_pcap_links():
     assert sum(lk.samples for lk in rep.links) == 3
     assert {lk.rx for lk in rep.links} == {"capture"}
     assert min(lk.rssi_min_dbm for lk in rep.links) == -51.0  # tcpdump: -51dBm, -46dBm, -45dBm
+
+
+def test_ulog_node_named_after_file():
+    rep = inspect_logs(DATA / "px4-ulog" / "sample_log_small.ulg")
+    assert [n.node for n in rep.nodes] == ["sample_log_small"]
+    assert rep.nodes[0].rate_hz == pytest.approx(200.0, rel=0.1)  # vehicle_attitude, ~5 ms steps

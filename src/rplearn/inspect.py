@@ -208,6 +208,10 @@ def _read_one(path: str, options: dict[str, Any]) -> tuple[pd.DataFrame | None, 
             tx_power_dbm=0.0, frequency_hz=1.0)
         return None, sig, {"format": meta["format"], "kind": "signal"}, nan_rows
     opts = dict(options)
+    if kind == "ulog":
+        import os
+
+        opts["nodes"] = {path: os.path.splitext(os.path.basename(path))[0], **(opts.get("nodes") or {})}
     if kind == "pcap":
         opts.setdefault("tx_power_dbm", 0.0)
         opts.setdefault("receivers", {path: "capture"})

@@ -247,3 +247,20 @@ def test_fuzz_pcap_mutated(tmp_path_factory, which, edits, cut):
     p.write_bytes(bytes(raw[: max(1, len(raw) - cut)]))
     _only_own_errors(read_pcap, str(p), "rx", 20.0)
     _only_own_errors(read_logs, str(p), receivers={str(p): "rx"}, tx_power_dbm=20.0)
+
+
+def test_pcap_unmapped_addresses_are_counted(tmp_path):
+    path = _small_pcap(tmp_path / "c.pcap")
+    sig, meta = read_pcap(str(path), "B", 20.0, address_map={"02:00:00:00:00:99": "Z"})
+    assert len(sig) == 0 and meta["dropped"]["unmapped_address"] == 3
+    assert meta["addresses"] == {"02:00:00:00:00:0a": 3}
+
+
+def test_geodetic_tables_share_the_first_origin(tmp_path):
+    a = write(tmp_path, "t,lat,lon,alt,qw,qx,qy,qz\n0,47.0,8.0,500,1,0,0,0\n1,47.0,8.0,501,1,0,0,0\n", "a.csv")
+    b = write(tmp_path, "t,lat,lon,alt,qw,qx,qy,qz\n0,47.0,8.001,500,1,0,0,0\n", "b.csv")
+    logs, meta = read_logs([a, b], nodes={a: "A", b: "B"})
+    assert meta["origin_geodetic"] == (47.0, 8.0, 500.0)
+    bx = logs.pose.loc[logs.pose["node"] == "B", ["x", "y"]].to_numpy()[0]
+    # 0.001 deg of longitude at 47 deg N is ~76 m east
+    assert bx[0] == pytest.approx(76.0, abs=0.5) and abs(bx[1]) < 0.01

@@ -149,3 +149,15 @@ def test_ros2_bag_without_embedded_definitions(tmp_path, flight):
                           frequency_hz=2.4e9, msg_definitions={RSSI_MSG: RSSI_MSGDEF})
     assert len(logs.signal) == len(sig.iloc[::20])
     assert len(logs.pose) == len(pose.iloc[::20])
+
+
+def test_synthetic_fallback_flight_round_trips(tmp_path):
+    """The fixture's own flight (used when rplearn.simulate is absent) is valid and round-trips."""
+    from flightfiles import _synthetic_flight
+
+    pose, sig = _synthetic_flight()
+    want = synchronise(pose, sig).dataset
+    caps = write_pcaps(tmp_path, sig)
+    amap = {mac: node for node, mac in MAC.items()}
+    got = pd.concat([read_pcap(str(p), rx, TX_POWER_DBM, address_map=amap)[0] for rx, p in caps.items()])
+    assert_same_matched(synchronise(pose, got).dataset, want)
