@@ -14,7 +14,6 @@ from rplearn.export import (
     export_pattern_images,
     grid_angles_deg,
     msi_horizontal_directions_rad,
-    msi_pattern,
     msi_vertical_directions_rad,
     read_msi,
     write_msi,
@@ -27,7 +26,9 @@ class Lobe:
     """Analytic pattern: ``peak_dbi + 10 (cos(angle to lobe) - 1)`` per node [dBi]."""
 
     def __init__(self, lobes_deg: dict[str, tuple[float, float]], peak_dbi: float = 6.0):
-        self.lobes = {n: unit_vector(np.radians(a), np.radians(e)) for n, (a, e) in lobes_deg.items()}
+        self.lobes = {
+            n: unit_vector(np.radians(a), np.radians(e)) for n, (a, e) in lobes_deg.items()
+        }
         self.nodes = tuple(lobes_deg)
         self.peak_dbi = peak_dbi
 
@@ -39,7 +40,9 @@ class Lobe:
 # -- grid ------------------------------------------------------------------------------------
 def test_grid_csv_shape_columns_and_values(tmp_path):
     rng = np.random.default_rng(0)
-    model = PatternSet(basis=SphericalHarmonics(3), nodes=("A", "B", "C"), coef=rng.normal(0, 2, (3, 9)))
+    model = PatternSet(
+        basis=SphericalHarmonics(3), nodes=("A", "B", "C"), coef=rng.normal(0, 2, (3, 9))
+    )
     path = tmp_path / "grid.csv"
     df = export_grid(model, 10, path)
     assert list(df.columns) == ["node", "az_deg", "el_deg", "gain_db"]
@@ -76,10 +79,14 @@ def test_grid_rejects_unknown_node():
 # -- MSI angle conventions -------------------------------------------------------------------
 def test_msi_direction_mapping():
     az, el = msi_horizontal_directions_rad([0, 90, 180, 270])
-    np.testing.assert_allclose(np.degrees(az), [0, -90, 180, 90], atol=1e-9)  # clockwise: 90 = right
+    np.testing.assert_allclose(
+        np.degrees(az), [0, -90, 180, 90], atol=1e-9
+    )  # clockwise: 90 = right
     np.testing.assert_allclose(el, 0)
     az, el = msi_vertical_directions_rad([0, 30, 90, 150, 180, 270, 340])
-    np.testing.assert_allclose(np.degrees(el), [0, -30, -90, -30, 0, 90, 20], atol=1e-9)  # 90 = nadir
+    np.testing.assert_allclose(
+        np.degrees(el), [0, -30, -90, -30, 0, 90, 20], atol=1e-9
+    )  # 90 = nadir
     np.testing.assert_allclose(np.degrees(az)[[0, 1, 4, 6]], [0, 0, 180, 0], atol=1e-9)
     assert np.degrees(az[3]) == pytest.approx(180)  # 150 deg is past nadir: backward, 30 deg down
 
@@ -125,20 +132,31 @@ def test_msi_round_trip(tmp_path):
     assert back.name == "drone B"
     assert back.frequency_mhz == pytest.approx(5800.0)
     assert back.gain_dbi == pytest.approx(4.32)
-    np.testing.assert_allclose(back.horizontal_loss_db, written.horizontal_loss_db, atol=0.005 + 1e-9)
+    np.testing.assert_allclose(
+        back.horizontal_loss_db, written.horizontal_loss_db, atol=0.005 + 1e-9
+    )
     np.testing.assert_allclose(back.vertical_loss_db, written.vertical_loss_db, atol=0.005 + 1e-9)
     assert "\n" not in back.header["COMMENT"] and back.header["COMMENT"].endswith("test run")
     # writing what was read gives the same file
     write_msi(back, tmp_path / "c.msi")
-    assert read_msi(tmp_path / "c.msi").horizontal_loss_db.tolist() == back.horizontal_loss_db.tolist()
+    assert (
+        read_msi(tmp_path / "c.msi").horizontal_loss_db.tolist() == back.horizontal_loss_db.tolist()
+    )
     # and the cuts read back reproduce the pattern along them
     az, el = msi_vertical_directions_rad(np.arange(360))
-    np.testing.assert_allclose(back.gain_dbi - back.vertical_loss_db, truth.evaluate("B", az, el), atol=0.011)
+    np.testing.assert_allclose(
+        back.gain_dbi - back.vertical_loss_db, truth.evaluate("B", az, el), atol=0.011
+    )
 
 
 def test_msi_of_learned_and_true_patterns(tmp_path):
     rng = np.random.default_rng(3)
-    model = PatternSet(basis=SphericalHarmonics(3), nodes=("A", "B"), coef=rng.normal(0, 2, (2, 9)), gauge=[{"rule": "equal-mean"}])
+    model = PatternSet(
+        basis=SphericalHarmonics(3),
+        nodes=("A", "B"),
+        coef=rng.normal(0, 2, (2, 9)),
+        gauge=[{"rule": "equal-mean"}],
+    )
     with pytest.raises(InputError, match="frequency"):
         export_msi(model, "A", tmp_path / "x.msi")
     msi = export_msi(model, "A", tmp_path / "x.msi", frequency_hz=2.4e9)
@@ -157,7 +175,9 @@ def _msi_text(h_lines=None, v_lines=None, head="NAME x\nFREQUENCY 2400\nGAIN 10 
 
 def test_msi_reader_accepts_vendor_variants(tmp_path):
     path = tmp_path / "vendor.msi"
-    text = _msi_text(head="Vendor Antenna 9dBd\r\nMAKE ACME\r\nfrequency 2.437 GHz\r\nGAIN 10\r\nTILT ELECTRICAL\r\n")
+    text = _msi_text(
+        head="Vendor Antenna 9dBd\r\nMAKE ACME\r\nfrequency 2.437 GHz\r\nGAIN 10\r\nTILT ELECTRICAL\r\n"
+    )
     path.write_text(text.replace("\n", "\r\n").replace("\r\r\n", "\r\n"))
     msi = read_msi(path)
     assert msi.name == "Vendor Antenna 9dBd"
@@ -183,7 +203,11 @@ _GOOD_H = [f"{a} {a / 100:.2f}" for a in range(360)]
         (_msi_text(h_lines=_GOOD_H[:5] + ["5 abc"] + _GOOD_H[6:]), 10, "expected '<angle> <loss>'"),
         (_msi_text(h_lines=_GOOD_H[:5] + ["6 0.10"] + _GOOD_H[6:]), 10, "expected angle 5"),
         (_msi_text(h_lines=_GOOD_H[:5] + ["5 -3.0"] + _GOOD_H[6:]), 10, "loss must be"),
-        (_msi_text(h_lines=_GOOD_H[:5] + ["5 1.0 2.0"] + _GOOD_H[6:]), 10, "expected '<angle> <loss>'"),
+        (
+            _msi_text(h_lines=_GOOD_H[:5] + ["5 1.0 2.0"] + _GOOD_H[6:]),
+            10,
+            "expected '<angle> <loss>'",
+        ),
         (_msi_text() + "360 1.0\n", 726, "unexpected data line"),
         ("NAME x\nGAIN 1 dBi\nHORIZONTAL 360\n0 0.0\n1 0.0\n", 5, "ends after 2 of 360"),
         (_msi_text() + "HORIZONTAL 360\n", 726, "second HORIZONTAL"),
@@ -210,7 +234,7 @@ def test_missing_msi_file(tmp_path):
 # -- images ----------------------------------------------------------------------------------
 def test_export_pattern_images(tmp_path):
     truth = Lobe({"A": (0, 0), "B/1": (90, 30)})
-    paths = export_pattern_images(truth, tmp_path / "img")
+    paths = export_pattern_images(truth, tmp_path / "img", step_deg=10)
     assert set(paths) == {"A", "B/1"}
     for p in paths.values():
         with open(p, "rb") as f:

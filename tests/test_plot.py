@@ -23,7 +23,9 @@ class Lobe:
     """Analytic pattern: a cosine lobe of 10 dB toward (az0, el0) per node, -10 dB floor."""
 
     def __init__(self, lobes_deg: dict[str, tuple[float, float]]):
-        self.lobes = {n: unit_vector(np.radians(a), np.radians(e)) for n, (a, e) in lobes_deg.items()}
+        self.lobes = {
+            n: unit_vector(np.radians(a), np.radians(e)) for n, (a, e) in lobes_deg.items()
+        }
         self.nodes = tuple(lobes_deg)
 
     def evaluate(self, node, az_rad, el_rad):
@@ -61,12 +63,27 @@ def assert_valid_png(path, min_w: int = 300, min_h: int = 200) -> np.ndarray:
 def test_every_plot_writes_a_valid_png(tmp_path, truth, learned):
     samples = {"A": _samples(500), "B": _samples(400, 1)}
     paths = [
-        plot.plot_pattern_maps({"SH-3": learned}, truth, None, samples, tmp_path / "maps.png", step_deg=6),
+        plot.plot_pattern_maps(
+            {"SH-3": learned}, truth, None, samples, tmp_path / "maps.png", step_deg=6
+        ),
         plot.plot_coverage(samples, {"A": _samples(50, 2)}, tmp_path / "cov.png"),
-        plot.plot_rssi_time(np.arange(300) * 0.1, -60 + np.sin(np.arange(300) / 9), tmp_path / "rssi.png", unit_labels=["u1"] * 150 + ["u2"] * 150),
-        plot.plot_order_sweep([2, 4, 6, 8], [4.0, 2.5, 2.2, 2.6], [9e3, 7e3, 6.9e3, 7.4e3], [0.01, 0.02, 0.05, 0.2], tmp_path / "order.png"),
+        plot.plot_rssi_time(
+            np.arange(300) * 0.1,
+            -60 + np.sin(np.arange(300) / 9),
+            tmp_path / "rssi.png",
+            unit_labels=["u1"] * 150 + ["u2"] * 150,
+        ),
+        plot.plot_order_sweep(
+            [2, 4, 6, 8],
+            [4.0, 2.5, 2.2, 2.6],
+            [9e3, 7e3, 6.9e3, 7.4e3],
+            [0.01, 0.02, 0.05, 0.2],
+            tmp_path / "order.png",
+        ),
         plot.plot_epsilon_sweep(np.logspace(-3, 6, 10), np.full(10, 2.3), tmp_path / "eps.png"),
-        plot.plot_rank_study([("2 antennas", 128, 127), ("3 antennas", 192, 192)], tmp_path / "rank.png"),
+        plot.plot_rank_study(
+            [("2 antennas", 128, 127), ("3 antennas", 192, 192)], tmp_path / "rank.png"
+        ),
         plot.plot_pattern_3d(truth, "A", tmp_path / "sub" / "p3d.png", step_deg=10),
     ]
     for p in paths:
@@ -78,7 +95,10 @@ def test_coverage_draws_every_given_point(truth):
     fig = plot.coverage_figure({"A": _samples(120), "B": _samples(30, 1)}, {"A": _samples(45, 2)})
     axes = fig.axes
     assert [ax.get_title().split(":")[0] for ax in axes] == ["node A", "node B"]
-    counts = [[len(c.get_offsets()) for c in ax.collections if isinstance(c, PathCollection)] for ax in axes]
+    counts = [
+        [len(c.get_offsets()) for c in ax.collections if isinstance(c, PathCollection)]
+        for ax in axes
+    ]
     assert counts == [[120, 45], [30]]
     colors = [c.get_facecolor()[0][:3] for c in axes[0].collections]
     assert colors[0][1] > colors[0][0]  # learning green
@@ -100,15 +120,23 @@ def test_coverage_subsamples_large_sets():
 
 def test_pattern_maps_rows_columns_shared_scale_and_dots(truth, learned):
     samples = {"A": _samples(5000), "B": _samples(100, 1)}
-    fig = plot.pattern_maps_figure({"SH-3": learned, "other": learned}, truth, ["A", "B"], samples, step_deg=6, max_dots=800)
+    fig = plot.pattern_maps_figure(
+        {"SH-3": learned, "other": learned}, truth, ["A", "B"], samples, step_deg=6, max_dots=800
+    )
     panels = [ax for ax in fig.axes if ": node " in ax.get_title()]
     assert len(panels) == 3 * 2
     titles = [ax.get_title() for ax in panels]
     assert titles[:2] == ["truth: node A", "truth: node B"] and titles[2] == "SH-3: node A"
     for col in range(2):
-        clims = {next(c for c in panels[r * 2 + col].collections if isinstance(c, QuadMesh)).get_clim() for r in range(3)}
+        clims = {
+            next(c for c in panels[r * 2 + col].collections if isinstance(c, QuadMesh)).get_clim()
+            for r in range(3)
+        }
         assert len(clims) == 1, "colour scale must be shared per column"
-    dots = [[len(c.get_offsets()) for c in ax.collections if isinstance(c, PathCollection)] for ax in panels]
+    dots = [
+        [len(c.get_offsets()) for c in ax.collections if isinstance(c, PathCollection)]
+        for ax in panels
+    ]
     assert dots[:2] == [[], []]  # no sample dots over the truth
     assert dots[2] == [800] and dots[3] == [100]
 
@@ -123,7 +151,9 @@ def test_pattern_maps_truth_values_and_centering(truth):
     i, j = np.unravel_index(np.argmax(expected), expected.shape)
     assert abs(az[j] - 30) <= 2 and abs(el[i] - 20) <= 2
     fig_c = plot.pattern_maps_figure({}, truth, ["A"], None, center=True, step_deg=4)
-    centred = np.asarray(next(c for c in fig_c.axes[0].collections if isinstance(c, QuadMesh)).get_array()).reshape(expected.shape)
+    centred = np.asarray(
+        next(c for c in fig_c.axes[0].collections if isinstance(c, QuadMesh)).get_array()
+    ).reshape(expected.shape)
     assert abs(plot.sphere_mean_db(centred, el)) < 1e-9
     np.testing.assert_allclose(centred, expected - plot.sphere_mean_db(expected, el))
 
@@ -135,17 +165,27 @@ def test_pattern_maps_of_a_fitted_two_node_model(tmp_path):
     sim = simulate("smoke", 0)
     s = samples_of(sim.matched_truth, sim.units("learning"))
     model = fit_model(s, ModelSpec.parse("sh-4")).model
+    samples = plot.directions_by_node(s)
     d = s.directions
-    samples = {
-        n: (np.r_[d.az_tx[s.tx_index == k], d.az_rx[s.rx_index == k]], np.r_[d.el_tx[s.tx_index == k], d.el_rx[s.rx_index == k]])
-        for k, n in enumerate(s.nodes)
-    }
-    p = plot.plot_pattern_maps({"SH-4": model}, sim.ground_truth, s.nodes, samples, tmp_path / "fig9.png", center=True, step_deg=5)
+    assert sum(v[0].size for v in samples.values()) == 2 * len(s)
+    k = s.tx_index[0]
+    assert samples[s.nodes[k]][0][0] == d.az_tx[0]
+    p = plot.plot_pattern_maps(
+        {"SH-4": model},
+        sim.ground_truth,
+        s.nodes,
+        samples,
+        tmp_path / "fig9.png",
+        center=True,
+        step_deg=5,
+    )
     assert_valid_png(p, min_w=600, min_h=400)
 
 
 def test_order_sweep_marks_the_minima():
-    fig = plot.order_sweep_figure([2, 4, 6, 8], [4.0, 2.5, 2.2, 2.6], [9e3, 6.5e3, 6.9e3, 7.4e3], [0.01, 0.02, 0.05, 0.2])
+    fig = plot.order_sweep_figure(
+        [2, 4, 6, 8], [4.0, 2.5, 2.2, 2.6], [9e3, 6.5e3, 6.9e3, 7.4e3], [0.01, 0.02, 0.05, 0.2]
+    )
     labels = [ln.get_label() for ax in fig.axes for ln in ax.get_lines()]
     assert "min RMSE: SH-6 (2.20 dB)" in labels
     assert "min AIC: SH-4" in labels

@@ -13,7 +13,13 @@ from matplotlib.image import imread
 
 from rplearn import __version__, plot, report
 from rplearn.errors import InputError
-from rplearn.report import ReportSection, markdown_table_to_html, rows_to_html, screenshot_report, write_report
+from rplearn.report import (
+    ReportSection,
+    markdown_table_to_html,
+    rows_to_html,
+    screenshot_report,
+    write_report,
+)
 
 TABLE_MD = """| Method | RMSE/dB | MAE/dB | abs(phi) |
 |---|---:|---:|:---:|
@@ -30,14 +36,21 @@ def figures(tmp_path_factory):
     samples = {"A": (rng.uniform(-3, 3, 300), rng.uniform(-1.5, 1.5, 300))}
     return [
         plot.plot_coverage(samples, None, d / "coverage.png"),
-        plot.plot_order_sweep([2, 4, 6], [3.0, 2.0, 2.4], [8e3, 6e3, 7e3], [0.01, 0.03, 0.1], d / "order_sweep.png"),
+        plot.plot_order_sweep(
+            [2, 4, 6], [3.0, 2.0, 2.4], [8e3, 6e3, 7e3], [0.01, 0.03, 0.1], d / "order_sweep.png"
+        ),
         plot.plot_rank_study([("2 antennas", 128, 127), ("3 antennas", 192, 192)], d / "rank.png"),
     ]
 
 
 def _report(tmp_path, figures):
     sections = [
-        ReportSection("Coverage", "Learning samples in **green**.\n\n- one\n- two `x < y`", figures[:1], ["Coverage (paper Fig. 8a)."]),
+        ReportSection(
+            "Coverage",
+            "Learning samples in **green**.\n\n- one\n- two `x < y`",
+            figures[:1],
+            ["Coverage (paper Fig. 8a)."],
+        ),
         ReportSection("Model order", "<p>Raw <b>HTML</b> section.</p>", figures[1:]),
     ]
     prov = {"command": "rplearn demo --seed 7", "seed": 7, "parameters": {"models": ["sh-10", "m"]}}
@@ -56,7 +69,10 @@ def test_markdown_table_to_html():
     t = markdown_table_to_html(TABLE_MD)
     assert t.count("<tr>") == 3 and t.count("<th ") == 4 and t.count("<td ") == 8
     assert '<td style="text-align:right">2.31</td>' in t
-    assert '<th style="text-align:left">Method</th>' in t and '<td style="text-align:center">200</td>' in t
+    assert (
+        '<th style="text-align:left">Method</th>' in t
+        and '<td style="text-align:center">200</td>' in t
+    )
     with pytest.raises(InputError, match="separator"):
         markdown_table_to_html("| a | b |\n| 1 | 2 |")
 
@@ -69,7 +85,8 @@ def test_rows_table_and_escaping():
 def test_report_is_one_self_contained_page(tmp_path, figures):
     path = _report(tmp_path, figures)
     assert os.listdir(tmp_path / "out") == ["report.html"]
-    page = open(path, encoding="utf-8").read()
+    with open(path, encoding="utf-8") as f:
+        page = f.read()
     assert "<script" not in page.lower()
     assert not re.search(r"(src|href)=\"(https?:|//|file:)", page)
     assert "@import" not in page and "url(" not in page
@@ -79,8 +96,14 @@ def test_report_is_one_self_contained_page(tmp_path, figures):
         img = imread(io.BytesIO(data), format="png")
         assert img.shape[0] > 100 and img.shape[1] > 100
     assert page.count("<figcaption>") == 3
-    assert "Figure 1.</strong> Coverage (paper Fig. 8a)." in page and "Figure 3.</strong> rank" in page
-    assert "<strong>green</strong>" in page and "<code>x &lt; y</code>" in page and "<b>HTML</b>" in page
+    assert (
+        "Figure 1.</strong> Coverage (paper Fig. 8a)." in page and "Figure 3.</strong> rank" in page
+    )
+    assert (
+        "<strong>green</strong>" in page
+        and "<code>x &lt; y</code>" in page
+        and "<b>HTML</b>" in page
+    )
     assert '<td style="text-align:right">2.31</td>' in page
     assert "rplearn demo --seed 7" in page and __version__ in page and "Provenance" in page
 
@@ -105,7 +128,9 @@ def _chromium_or_skip() -> None:
     """Skip without Chromium, except under CI=true, where a missing Chromium is a failure."""
     if report.find_chromium() is None:
         if os.environ.get("CI", "").strip().lower() == "true":
-            pytest.fail("CI=true but no chromium/chromium-browser on PATH: the report screenshot cannot be checked")
+            pytest.fail(
+                "CI=true but no chromium/chromium-browser on PATH: the report screenshot cannot be checked"
+            )
         pytest.skip("chromium not installed")
 
 

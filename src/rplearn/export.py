@@ -42,8 +42,9 @@ from __future__ import annotations
 import math
 import os
 import re
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any, Sequence
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -60,14 +61,29 @@ MSI_N_ANGLES = 360
 DBD_TO_DBI = 2.15
 _LOSS_DECIMALS = 2
 _KNOWN_KEYS = frozenset(
-    "NAME MAKE FREQUENCY H_WIDTH V_WIDTH FRONT_TO_BACK GAIN TILT POLARIZATION COMMENT HORIZONTAL VERTICAL".split()
+    [
+        "NAME",
+        "MAKE",
+        "FREQUENCY",
+        "H_WIDTH",
+        "V_WIDTH",
+        "FRONT_TO_BACK",
+        "GAIN",
+        "TILT",
+        "POLARIZATION",
+        "COMMENT",
+        "HORIZONTAL",
+        "VERTICAL",
+    ]
 )
 
 
 # -- regular grid CSV ----------------------------------------------------------------------
 def _check_pattern_like(obj: Any) -> None:
     if not (hasattr(obj, "nodes") and callable(getattr(obj, "evaluate", None))):
-        raise InputError(f"pattern: expected an object with .nodes and .evaluate(node, az, el), got {type(obj).__name__}")
+        raise InputError(
+            f"pattern: expected an object with .nodes and .evaluate(node, az, el), got {type(obj).__name__}"
+        )
 
 
 def _nodes_of(pattern_like: Any, nodes: Sequence[str] | None) -> list[str]:
@@ -77,7 +93,9 @@ def _nodes_of(pattern_like: Any, nodes: Sequence[str] | None) -> list[str]:
     wanted = [str(n) for n in nodes]
     unknown = [n for n in wanted if n not in known]
     if unknown:
-        raise InputError(f"nodes: unknown {', '.join(unknown)}; the pattern knows {', '.join(known)}")
+        raise InputError(
+            f"nodes: unknown {', '.join(unknown)}; the pattern knows {', '.join(known)}"
+        )
     return wanted
 
 
@@ -98,7 +116,10 @@ def grid_angles_deg(step_deg: float) -> tuple[FloatArray, FloatArray]:
 
 
 def export_grid(
-    model_or_truth: Any, step_deg: float, path: str | os.PathLike[str] | None, nodes: Sequence[str] | None = None
+    model_or_truth: Any,
+    step_deg: float,
+    path: str | os.PathLike[str] | None,
+    nodes: Sequence[str] | None = None,
 ) -> pd.DataFrame:
     """Gain of every node on a regular az-el grid, as a CSV file and a DataFrame.
 
@@ -126,7 +147,9 @@ def export_grid(
     az_flat, el_flat = az_g.ravel(), el_g.ravel()
     parts = []
     for n in _nodes_of(model_or_truth, nodes):
-        g = np.asarray(model_or_truth.evaluate(n, np.radians(az_flat), np.radians(el_flat)), np.float64).ravel()
+        g = np.asarray(
+            model_or_truth.evaluate(n, np.radians(az_flat), np.radians(el_flat)), np.float64
+        ).ravel()
         parts.append(pd.DataFrame({"node": n, "az_deg": az_flat, "el_deg": el_flat, "gain_db": g}))
     df = pd.concat(parts, ignore_index=True)
     if path is not None:
@@ -187,7 +210,13 @@ def peak_gain_dbi(pattern_like: Any, node: str, step_deg: float = 1.0) -> float:
     return float(np.nanmax(pattern_like.evaluate(node, az_g, el_g)))
 
 
-def msi_pattern(pattern_like: Any, node: str, frequency_hz: float, name: str | None = None, comment: str | None = None) -> MsiPattern:
+def msi_pattern(
+    pattern_like: Any,
+    node: str,
+    frequency_hz: float,
+    name: str | None = None,
+    comment: str | None = None,
+) -> MsiPattern:
     """Horizontal and vertical cuts of one node in MSI Planet terms (see module docstring).
 
     Parameters
@@ -206,8 +235,12 @@ def msi_pattern(pattern_like: Any, node: str, frequency_hz: float, name: str | N
     if frequency_hz is None or not math.isfinite(float(frequency_hz)) or float(frequency_hz) <= 0:
         raise InputError(f"frequency_hz: expected a positive frequency [Hz], got {frequency_hz}")
     angles = np.arange(MSI_N_ANGLES, dtype=np.float64)
-    g_h = np.asarray(pattern_like.evaluate(node, *msi_horizontal_directions_rad(angles)), np.float64).ravel()
-    g_v = np.asarray(pattern_like.evaluate(node, *msi_vertical_directions_rad(angles)), np.float64).ravel()
+    g_h = np.asarray(
+        pattern_like.evaluate(node, *msi_horizontal_directions_rad(angles)), np.float64
+    ).ravel()
+    g_v = np.asarray(
+        pattern_like.evaluate(node, *msi_vertical_directions_rad(angles)), np.float64
+    ).ravel()
     if not (np.isfinite(g_h).all() and np.isfinite(g_v).all()):
         raise InputError(f"node {node}: the pattern is not finite on the MSI cuts")
     gain = max(peak_gain_dbi(pattern_like, node), float(g_h.max()), float(g_v.max()))
@@ -231,7 +264,9 @@ def msi_pattern(pattern_like: Any, node: str, frequency_hz: float, name: str | N
         "GAIN": f"{gain:.2f} dBi",
         "COMMENT": "; ".join(notes),
     }
-    return MsiPattern(name, freq_mhz, round(gain, 2), round(gain, 2) - g_h, round(gain, 2) - g_v, header)
+    return MsiPattern(
+        name, freq_mhz, round(gain, 2), round(gain, 2) - g_h, round(gain, 2) - g_v, header
+    )
 
 
 def _fmt_loss(v: float) -> str:
@@ -246,7 +281,9 @@ def write_msi(msi: MsiPattern, path: str | os.PathLike[str]) -> str:
     """
     for key, cut in (("horizontal", msi.horizontal_loss_db), ("vertical", msi.vertical_loss_db)):
         if np.shape(cut) != (MSI_N_ANGLES,):
-            raise InputError(f"{key}_loss_db: expected {MSI_N_ANGLES} values, got shape {np.shape(cut)}")
+            raise InputError(
+                f"{key}_loss_db: expected {MSI_N_ANGLES} values, got shape {np.shape(cut)}"
+            )
     header = dict(msi.header)
     header["NAME"] = msi.name
     lines = [f"NAME {msi.name}"]
@@ -301,7 +338,9 @@ def _frequency_of(pattern_like: Any) -> float:
         if f is None:
             f = (getattr(pattern_like, attr, None) or {}).get("frequency_hz")
     if f is None:
-        raise InputError("frequency_hz: the pattern does not state its frequency; pass frequency_hz")
+        raise InputError(
+            "frequency_hz: the pattern does not state its frequency; pass frequency_hz"
+        )
     return float(f)
 
 
@@ -312,7 +351,9 @@ def _parse_frequency_mhz(text: str, where: str) -> float:
     m = re.fullmatch(rf"\s*({_NUMBER})\s*(hz|khz|mhz|ghz)?\s*", text, re.IGNORECASE)
     if not m:
         raise InputError(f"{where}: FREQUENCY: expected a number [MHz], got {text!r}")
-    scale = {None: 1.0, "hz": 1e-6, "khz": 1e-3, "mhz": 1.0, "ghz": 1e3}[m.group(2).lower() if m.group(2) else None]
+    scale = {None: 1.0, "hz": 1e-6, "khz": 1e-3, "mhz": 1.0, "ghz": 1e3}[
+        m.group(2).lower() if m.group(2) else None
+    ]
     return float(m.group(1)) * scale
 
 
@@ -374,16 +415,22 @@ def read_msi(path: str | os.PathLike[str]) -> MsiPattern:
                         raise ValueError
                     angle, loss = float(row[0]), float(row[1])
                 except ValueError:
-                    raise InputError(f"{where_row}: expected '<angle> <loss>' in {key_u}, got {raw[i - 1].strip()!r}") from None
+                    raise InputError(
+                        f"{where_row}: expected '<angle> <loss>' in {key_u}, got {raw[i - 1].strip()!r}"
+                    ) from None
                 if abs(angle - k) > 1e-6:
                     raise InputError(f"{where_row}: expected angle {k} in {key_u}, got {row[0]}")
                 if not math.isfinite(loss) or loss < -0.005:
-                    raise InputError(f"{where_row}: loss must be a finite attenuation >= 0 dB, got {row[1]}")
+                    raise InputError(
+                        f"{where_row}: loss must be a finite attenuation >= 0 dB, got {row[1]}"
+                    )
                 cut[k] = max(loss, 0.0)
             cuts[key_u] = cut
             continue
         if re.fullmatch(_NUMBER, key):
-            raise InputError(f"{where}: unexpected data line {line!r} outside a HORIZONTAL/VERTICAL section of {MSI_N_ANGLES} points")
+            raise InputError(
+                f"{where}: unexpected data line {line!r} outside a HORIZONTAL/VERTICAL section of {MSI_N_ANGLES} points"
+            )
         if not header and key_u not in _KNOWN_KEYS:
             header["NAME"] = line  # some vendors omit the NAME token on the first line
             continue
@@ -397,8 +444,14 @@ def read_msi(path: str | os.PathLike[str]) -> MsiPattern:
         raise InputError(f"{path}:1: no GAIN line")
     line_of = {k: _line_of(raw, k) for k in ("GAIN", "FREQUENCY")}
     gain = _parse_gain_dbi(header["GAIN"], f"{path}:{line_of['GAIN']}")
-    freq = _parse_frequency_mhz(header["FREQUENCY"], f"{path}:{line_of['FREQUENCY']}") if "FREQUENCY" in header else float("nan")
-    return MsiPattern(header.get("NAME", ""), freq, gain, cuts["HORIZONTAL"], cuts["VERTICAL"], header)
+    freq = (
+        _parse_frequency_mhz(header["FREQUENCY"], f"{path}:{line_of['FREQUENCY']}")
+        if "FREQUENCY" in header
+        else float("nan")
+    )
+    return MsiPattern(
+        header.get("NAME", ""), freq, gain, cuts["HORIZONTAL"], cuts["VERTICAL"], header
+    )
 
 
 def _line_of(raw: list[str], key: str) -> int:
@@ -409,8 +462,13 @@ def _line_of(raw: list[str], key: str) -> int:
 
 
 # -- images --------------------------------------------------------------------------------
-def export_pattern_images(pattern_like: Any, out_dir: str | os.PathLike[str], nodes: Sequence[str] | None = None) -> dict[str, str]:
-    """One 3-D pattern image per node (``pattern_<node>.png``); returns node -> path."""
+def export_pattern_images(
+    pattern_like: Any,
+    out_dir: str | os.PathLike[str],
+    nodes: Sequence[str] | None = None,
+    step_deg: float = 3.0,
+) -> dict[str, str]:
+    """One 3-D pattern image per node (``pattern_<node>.png``, grid step ``step_deg``); returns node -> path."""
     from rplearn import plot  # lazily: the core never imports matplotlib
 
     _check_pattern_like(pattern_like)
@@ -419,5 +477,7 @@ def export_pattern_images(pattern_like: Any, out_dir: str | os.PathLike[str], no
     paths = {}
     for n in _nodes_of(pattern_like, nodes):
         safe = re.sub(r"[^A-Za-z0-9_.-]+", "_", n) or "node"
-        paths[n] = plot.plot_pattern_3d(pattern_like, n, os.path.join(out_dir, f"pattern_{safe}.png"))
+        paths[n] = plot.plot_pattern_3d(
+            pattern_like, n, os.path.join(out_dir, f"pattern_{safe}.png"), step_deg
+        )
     return paths

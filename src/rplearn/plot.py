@@ -13,18 +13,19 @@ Angles are radians in the API and degrees on every axis (DESIGN.md): azimuth ``a
 from __future__ import annotations
 
 import os
-from typing import Any, Mapping, Protocol, Sequence
+from collections.abc import Mapping, Sequence
+from typing import Any, Protocol
 
 import matplotlib
 
 matplotlib.use("Agg")
 
-import numpy as np  # noqa: E402
-from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402
-from matplotlib.figure import Figure  # noqa: E402
-from numpy.typing import ArrayLike, NDArray  # noqa: E402
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+from numpy.typing import ArrayLike, NDArray
 
-from rplearn.errors import InputError  # noqa: E402
+from rplearn.errors import InputError
 
 FloatArray = NDArray[np.float64]
 AzEl = tuple[ArrayLike, ArrayLike]
@@ -62,7 +63,9 @@ def save_figure(fig: Figure, path: str | os.PathLike[str]) -> str:
 
 def _check_pattern_like(obj: Any, name: str) -> None:
     if not (hasattr(obj, "nodes") and callable(getattr(obj, "evaluate", None))):
-        raise InputError(f"{name}: expected a pattern (with .nodes and .evaluate(node, az, el)), got {type(obj).__name__}")
+        raise InputError(
+            f"{name}: expected a pattern (with .nodes and .evaluate(node, az, el)), got {type(obj).__name__}"
+        )
 
 
 def az_el_grid_deg(step_deg: float = 2.0) -> tuple[FloatArray, FloatArray]:
@@ -72,14 +75,16 @@ def az_el_grid_deg(step_deg: float = 2.0) -> tuple[FloatArray, FloatArray]:
     """
     if not np.isfinite(step_deg) or step_deg <= 0 or step_deg > 90:
         raise InputError(f"step_deg: expected a step in (0, 90] deg, got {step_deg}")
-    n_az = max(int(round(360.0 / step_deg)), 4)
-    n_el = max(int(round(180.0 / step_deg)), 2)
+    n_az = max(round(float(360.0 / step_deg)), 4)
+    n_el = max(round(float(180.0 / step_deg)), 2)
     az = -180.0 + (np.arange(n_az) + 0.5) * 360.0 / n_az
     el = -90.0 + (np.arange(n_el) + 0.5) * 180.0 / n_el
     return az, el
 
 
-def pattern_map_db(pattern: PatternLike, node: str, az_deg: FloatArray, el_deg: FloatArray) -> FloatArray:
+def pattern_map_db(
+    pattern: PatternLike, node: str, az_deg: FloatArray, el_deg: FloatArray
+) -> FloatArray:
     """Gain of ``node`` on the grid ``el_deg x az_deg`` [dB], shape ``(n_el, n_az)``."""
     az, el = np.meshgrid(np.radians(az_deg), np.radians(el_deg))
     return np.asarray(pattern.evaluate(node, az, el), np.float64).reshape(az.shape)
@@ -114,6 +119,23 @@ def _style_az_el_axes(ax: Any, xlabel: bool = True, ylabel: bool = True) -> None
         ax.set_xlabel("azimuth / deg (0 fwd, +90 left)")
     if ylabel:
         ax.set_ylabel("elevation / deg")
+
+
+def directions_by_node(samples: Any) -> dict[str, tuple[FloatArray, FloatArray]]:
+    """Directions [rad] at which each node saw the other end, from :class:`LinkSamples`.
+
+    Returns ``{node: (az_rad, el_rad)}`` gathering the node's transmit and receive samples,
+    the input of :func:`plot_coverage` and of the dots of :func:`plot_pattern_maps`.
+    """
+    d = samples.directions
+    out = {}
+    for k, n in enumerate(samples.nodes):
+        tx, rx = np.asarray(samples.tx_index) == k, np.asarray(samples.rx_index) == k
+        out[str(n)] = (
+            np.concatenate([np.asarray(d.az_tx)[tx], np.asarray(d.az_rx)[rx]]),
+            np.concatenate([np.asarray(d.el_tx)[tx], np.asarray(d.el_rx)[rx]]),
+        )
+    return out
 
 
 # -- Fig. 9: pattern maps ------------------------------------------------------------------
@@ -199,14 +221,25 @@ def pattern_maps_figure(
         im = None
         for i, (label, _) in enumerate(rows):
             ax = axes[i, j]
-            im = ax.pcolormesh(az, el, maps[i, j], cmap=CMAP, vmin=vmin, vmax=vmax, shading="nearest", rasterized=True)
+            im = ax.pcolormesh(
+                az,
+                el,
+                maps[i, j],
+                cmap=CMAP,
+                vmin=vmin,
+                vmax=vmax,
+                shading="nearest",
+                rasterized=True,
+            )
             if samples_az_el is not None and n in samples_az_el and label != "truth":
                 saz, sel = _az_el_deg(samples_az_el[n], f"samples of {n}")
                 keep = _subsample(saz.size, max_dots)
                 ax.scatter(saz[keep], sel[keep], s=0.6, c="k", marker=".", linewidths=0, alpha=0.6)
             _style_az_el_axes(ax, xlabel=i == len(rows) - 1, ylabel=j == 0)
             ax.set_title(f"{label}: node {n}", fontsize=9)
-        cb = fig.colorbar(im, ax=axes[:, j], orientation="horizontal", fraction=0.05, aspect=30, extend="both")
+        cb = fig.colorbar(
+            im, ax=axes[:, j], orientation="horizontal", fraction=0.05, aspect=30, extend="both"
+        )
         cb.set_label(f"G_{n} / {unit}")
     kind = "centred patterns (shapes)" if center else "patterns"
     fig.suptitle(f"Learned {kind} in the az-el domain" + (" vs truth" if truth is not None else ""))
@@ -224,7 +257,9 @@ def plot_pattern_maps(
     max_dots: int = 3000,
 ) -> str:
     """Write the paper's Fig. 9 (see :func:`pattern_maps_figure`) as a PNG; return the path."""
-    return save_figure(pattern_maps_figure(models, truth, nodes, samples_az_el, center, step_deg, max_dots), path)
+    return save_figure(
+        pattern_maps_figure(models, truth, nodes, samples_az_el, center, step_deg, max_dots), path
+    )
 
 
 # -- Fig. 8a: coverage ---------------------------------------------------------------------
@@ -254,12 +289,23 @@ def coverage_figure(
     axes = fig.subplots(1, len(nodes), squeeze=False, sharey=True)[0]
     for j, n in enumerate(nodes):
         ax = axes[j]
-        for data, color, label in ((learn_az_el, LEARN_COLOR, "learning"), (test_az_el, TEST_COLOR, "testing")):
+        for data, color, label in (
+            (learn_az_el, LEARN_COLOR, "learning"),
+            (test_az_el, TEST_COLOR, "testing"),
+        ):
             if n not in data:
                 continue
             az, el = _az_el_deg(data[n], f"{label} samples of {n}")
             keep = _subsample(az.size, max_points)
-            ax.scatter(az[keep], el[keep], s=2, c=color, marker=".", linewidths=0, label=f"{label} ({az.size:,})")
+            ax.scatter(
+                az[keep],
+                el[keep],
+                s=2,
+                c=color,
+                marker=".",
+                linewidths=0,
+                label=f"{label} ({az.size:,})",
+            )
         _style_az_el_axes(ax, ylabel=j == 0)
         ax.set_title(f"node {n}: direction of the other end", fontsize=9)
         ax.legend(loc="lower right", fontsize=7, markerscale=4)
@@ -278,7 +324,13 @@ def plot_coverage(
 
 
 # -- Fig. 8b: RSSI over time ---------------------------------------------------------------
-def rssi_time_figure(t_s: ArrayLike, rssi_dbm: ArrayLike, unit_labels: ArrayLike | None = None, max_points: int = 50000) -> Figure:
+def rssi_time_figure(
+    t_s: ArrayLike,
+    rssi_dbm: ArrayLike,
+    unit_labels: ArrayLike | None = None,
+    max_points: int = 50000,
+    legend_title: str = "unit",
+) -> Figure:
     """Received signal strength over time (paper Fig. 8b), coloured by trajectory unit.
 
     Parameters
@@ -288,13 +340,23 @@ def rssi_time_figure(t_s: ArrayLike, rssi_dbm: ArrayLike, unit_labels: ArrayLike
     rssi_dbm : array
         Received power [dBm].
     unit_labels : array of str, optional
-        Trajectory unit of each packet; one colour and legend entry per unit.
+        Trajectory unit (or link, ...) of each packet; one colour and legend entry per label.
+    max_points : int
+        Largest number of points drawn per label (a fixed random subset).
+    legend_title : str
+        Title of the legend (what the labels are).
     """
     t = np.asarray(t_s, np.float64).ravel()
     p = np.asarray(rssi_dbm, np.float64).ravel()
     if t.shape != p.shape or t.size == 0:
-        raise InputError(f"rssi: expected equal, non-empty t_s and rssi_dbm, got {t.size} and {p.size} values")
-    labels = np.full(t.size, "", dtype=object) if unit_labels is None else np.asarray(unit_labels, dtype=object).ravel()
+        raise InputError(
+            f"rssi: expected equal, non-empty t_s and rssi_dbm, got {t.size} and {p.size} values"
+        )
+    labels = (
+        np.full(t.size, "", dtype=object)
+        if unit_labels is None
+        else np.asarray(unit_labels, dtype=object).ravel()
+    )
     if labels.shape != t.shape:
         raise InputError(f"rssi: unit_labels has {labels.size} values, expected {t.size}")
     t0 = float(np.nanmin(t))
@@ -303,9 +365,17 @@ def rssi_time_figure(t_s: ArrayLike, rssi_dbm: ArrayLike, unit_labels: ArrayLike
     for k, u in enumerate(dict.fromkeys(labels.tolist())):
         idx = np.flatnonzero(labels == u)
         idx = idx[_subsample(idx.size, max_points)]
-        ax.scatter(t[idx] - t0, p[idx], s=1.5, marker=".", linewidths=0, color=f"C{k % 10}", label=str(u) if u != "" else None)
+        ax.scatter(
+            t[idx] - t0,
+            p[idx],
+            s=1.5,
+            marker=".",
+            linewidths=0,
+            color=f"C{k % 10}",
+            label=str(u) if u != "" else None,
+        )
     if unit_labels is not None:
-        ax.legend(fontsize=7, markerscale=5, loc="best", title="unit", title_fontsize=7)
+        ax.legend(fontsize=7, markerscale=5, loc="best", title=legend_title, title_fontsize=7)
     ax.set_xlabel(f"time / s (since t = {t0:.3f} s)")
     ax.set_ylabel("RSSI / dBm")
     ax.grid(alpha=0.3)
@@ -314,14 +384,22 @@ def rssi_time_figure(t_s: ArrayLike, rssi_dbm: ArrayLike, unit_labels: ArrayLike
 
 
 def plot_rssi_time(
-    t_s: ArrayLike, rssi_dbm: ArrayLike, path: str | os.PathLike[str], unit_labels: ArrayLike | None = None
+    t_s: ArrayLike,
+    rssi_dbm: ArrayLike,
+    path: str | os.PathLike[str],
+    unit_labels: ArrayLike | None = None,
+    legend_title: str = "unit",
 ) -> str:
     """Write the RSSI-over-time figure (paper Fig. 8b, :func:`rssi_time_figure`); return the path."""
-    return save_figure(rssi_time_figure(t_s, rssi_dbm, unit_labels), path)
+    return save_figure(
+        rssi_time_figure(t_s, rssi_dbm, unit_labels, legend_title=legend_title), path
+    )
 
 
 # -- Fig. 10: model order sweep ------------------------------------------------------------
-def order_sweep_figure(orders: ArrayLike, test_rmse_db: ArrayLike, aic: ArrayLike, ltd_s: ArrayLike, family: str = "SH") -> Figure:
+def order_sweep_figure(
+    orders: ArrayLike, test_rmse_db: ArrayLike, aic: ArrayLike, ltd_s: ArrayLike, family: str = "SH"
+) -> Figure:
     """Model order selection (paper Fig. 10): test RMSE and AIC (top), LTD (bottom).
 
     The minima of the test RMSE and of the AIC are marked.
@@ -342,20 +420,38 @@ def order_sweep_figure(orders: ArrayLike, test_rmse_db: ArrayLike, aic: ArrayLik
     a = np.asarray(aic, np.float64).ravel()
     t = np.asarray(ltd_s, np.float64).ravel()
     if not (x.size == r.size == a.size == t.size) or x.size == 0:
-        raise InputError(f"order sweep: expected equal, non-empty arrays, got {x.size}, {r.size}, {a.size}, {t.size}")
+        raise InputError(
+            f"order sweep: expected equal, non-empty arrays, got {x.size}, {r.size}, {a.size}, {t.size}"
+        )
     fig = _new_figure(7.0, 5.0)
     ax, ax_t = fig.subplots(2, 1, sharex=True, height_ratios=[2, 1])
     ax.plot(x, r, "o-", color="tab:green", label="test RMSE")
     ax.set_ylabel("test RMSE / dB", color="tab:green")
     if np.isfinite(r).any():
         k = int(np.nanargmin(r))
-        ax.plot(x[k], r[k], "*", ms=16, color="tab:green", mec="k", label=f"min RMSE: {family}-{x[k]:g} ({r[k]:.2f} dB)")
+        ax.plot(
+            x[k],
+            r[k],
+            "*",
+            ms=16,
+            color="tab:green",
+            mec="k",
+            label=f"min RMSE: {family}-{x[k]:g} ({r[k]:.2f} dB)",
+        )
     ax2 = ax.twinx()
     ax2.plot(x, a / 1e3, "s--", color="tab:purple", label="AIC")
     ax2.set_ylabel("AIC / 1e3", color="tab:purple")
     if np.isfinite(a).any():
         k = int(np.nanargmin(a))
-        ax2.plot(x[k], a[k] / 1e3, "*", ms=14, color="tab:purple", mec="k", label=f"min AIC: {family}-{x[k]:g}")
+        ax2.plot(
+            x[k],
+            a[k] / 1e3,
+            "*",
+            ms=14,
+            color="tab:purple",
+            mec="k",
+            label=f"min AIC: {family}-{x[k]:g}",
+        )
     h1, l1 = ax.get_legend_handles_labels()
     h2, l2 = ax2.get_legend_handles_labels()
     ax.legend(h1 + h2, l1 + l2, fontsize=8, loc="upper center")
@@ -371,7 +467,12 @@ def order_sweep_figure(orders: ArrayLike, test_rmse_db: ArrayLike, aic: ArrayLik
 
 
 def plot_order_sweep(
-    orders: ArrayLike, test_rmse_db: ArrayLike, aic: ArrayLike, ltd_s: ArrayLike, path: str | os.PathLike[str], family: str = "SH"
+    orders: ArrayLike,
+    test_rmse_db: ArrayLike,
+    aic: ArrayLike,
+    ltd_s: ArrayLike,
+    path: str | os.PathLike[str],
+    family: str = "SH",
 ) -> str:
     """Write the order-sweep figure (paper Fig. 10, :func:`order_sweep_figure`); return the path."""
     return save_figure(order_sweep_figure(orders, test_rmse_db, aic, ltd_s, family), path)
@@ -394,7 +495,9 @@ def epsilon_sweep_figure(eps: ArrayLike, error_db: ArrayLike) -> Figure:
     e = np.asarray(eps, np.float64).ravel()
     y = np.asarray(error_db, np.float64).ravel()
     if e.shape != y.shape or e.size == 0:
-        raise InputError(f"epsilon sweep: expected equal, non-empty arrays, got {e.size} and {y.size}")
+        raise InputError(
+            f"epsilon sweep: expected equal, non-empty arrays, got {e.size} and {y.size}"
+        )
     if np.any(e <= 0):
         raise InputError("epsilon sweep: eps must be positive for a log axis")
     fig = _new_figure(6.0, 3.3)
@@ -439,7 +542,14 @@ def rank_study_figure(cases: Sequence[tuple[str, int, int]]) -> Figure:
     ax.bar(x - w / 2, cols, w, label="columns", color="tab:gray")
     ax.bar(x + w / 2, ranks, w, label="rank", color="tab:blue")
     for xi, c, r in zip(x, cols, ranks):
-        ax.annotate(f"deficiency {c - r}", (xi, max(c, r)), textcoords="offset points", xytext=(0, 3), ha="center", fontsize=8)
+        ax.annotate(
+            f"deficiency {c - r}",
+            (xi, max(c, r)),
+            textcoords="offset points",
+            xytext=(0, 3),
+            ha="center",
+            fontsize=8,
+        )
     ax.set_xticks(x, labels, fontsize=8)
     ax.set_ylabel("count")
     ax.set_ylim(0, 1.15 * max(int(cols.max()), 1))
@@ -455,7 +565,11 @@ def plot_rank_study(cases: Sequence[tuple[str, int, int]], path: str | os.PathLi
 
 # -- 3-D pattern image ---------------------------------------------------------------------
 def pattern_3d_figure(
-    pattern_like: PatternLike, node: str, step_deg: float = 3.0, dynamic_range_db: float = 40.0, unit: str = "dBi"
+    pattern_like: PatternLike,
+    node: str,
+    step_deg: float = 3.0,
+    dynamic_range_db: float = 40.0,
+    unit: str = "dBi",
 ) -> Figure:
     """One node's pattern as a 3-D surface in its body frame (FLU: x forward, y left, z up).
 
@@ -465,8 +579,8 @@ def pattern_3d_figure(
     _check_pattern_like(pattern_like, "pattern")
     if dynamic_range_db <= 0:
         raise InputError(f"dynamic_range_db: expected > 0, got {dynamic_range_db}")
-    az_deg = np.linspace(-180.0, 180.0, int(round(360 / step_deg)) + 1)
-    el_deg = np.linspace(-90.0, 90.0, int(round(180 / step_deg)) + 1)
+    az_deg = np.linspace(-180.0, 180.0, round(float(360 / step_deg)) + 1)
+    el_deg = np.linspace(-90.0, 90.0, round(float(180 / step_deg)) + 1)
     az, el = np.meshgrid(np.radians(az_deg), np.radians(el_deg))
     g = np.asarray(pattern_like.evaluate(str(node), az, el), np.float64).reshape(az.shape)
     g_max = float(np.nanmax(g))
@@ -474,7 +588,7 @@ def pattern_3d_figure(
     span = max(g_max - floor, 1e-9)
     r = np.clip(g - floor, 0.0, None) + 0.05 * span
     x, y, z = r * np.cos(el) * np.cos(az), r * np.cos(el) * np.sin(az), r * np.sin(el)
-    import matplotlib.cm as cm
+    from matplotlib import cm
     from matplotlib.colors import Normalize
     from mpl_toolkits.mplot3d import Axes3D  # noqa: F401  (registers the projection)
 
@@ -482,7 +596,17 @@ def pattern_3d_figure(
     fig = _new_figure(6.0, 5.2)
     ax = fig.add_subplot(projection="3d")
     colors = matplotlib.colormaps[CMAP](norm(g))
-    ax.plot_surface(x, y, z, facecolors=colors, rstride=1, cstride=1, linewidth=0, antialiased=False, shade=False)
+    ax.plot_surface(
+        x,
+        y,
+        z,
+        facecolors=colors,
+        rstride=1,
+        cstride=1,
+        linewidth=0,
+        antialiased=False,
+        shade=False,
+    )
     lim = float(np.nanmax(r))
     ax.set_xlim(-lim, lim)
     ax.set_ylim(-lim, lim)
@@ -496,10 +620,15 @@ def pattern_3d_figure(
     sm = cm.ScalarMappable(norm=norm, cmap=CMAP)
     cb = fig.colorbar(sm, ax=ax, shrink=0.7, pad=0.08)
     cb.set_label(f"gain / {unit}")
-    ax.set_title(f"node {node}: radiation pattern\n(radius = gain - floor, floor {floor:.1f} {unit}, colour = gain)", fontsize=9)
+    ax.set_title(
+        f"node {node}: radiation pattern\n(radius = gain - floor, floor {floor:.1f} {unit}, colour = gain)",
+        fontsize=9,
+    )
     return fig
 
 
-def plot_pattern_3d(pattern_like: PatternLike, node: str, path: str | os.PathLike[str], step_deg: float = 3.0) -> str:
+def plot_pattern_3d(
+    pattern_like: PatternLike, node: str, path: str | os.PathLike[str], step_deg: float = 3.0
+) -> str:
     """Write a 3-D image of one node's pattern (:func:`pattern_3d_figure`); return the path."""
     return save_figure(pattern_3d_figure(pattern_like, node, step_deg), path)

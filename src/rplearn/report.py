@@ -27,9 +27,10 @@ import shutil
 import struct
 import subprocess
 import tempfile
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Mapping, Sequence
+from typing import Any
 
 from rplearn import __version__
 from rplearn.errors import InputError, RplearnError
@@ -76,10 +77,8 @@ def _inline_md(text: str) -> str:
 
 def _split_row(line: str) -> list[str]:
     s = line.strip()
-    if s.startswith("|"):
-        s = s[1:]
-    if s.endswith("|"):
-        s = s[:-1]
+    s = s.removeprefix("|")
+    s = s.removesuffix("|")
     return [c.strip() for c in s.split("|")]
 
 
@@ -93,22 +92,38 @@ def markdown_table_to_html(table_markdown: str) -> str:
     """
     lines = [ln for ln in str(table_markdown).strip().splitlines() if ln.strip()]
     if len(lines) < 2:
-        raise InputError("table: expected a Markdown table with a header and a '|---|' separator line")
+        raise InputError(
+            "table: expected a Markdown table with a header and a '|---|' separator line"
+        )
     head = _split_row(lines[0])
     seps = _split_row(lines[1])
     if not all(_SEP_CELL.fullmatch(c.replace(" ", "")) for c in seps):
-        raise InputError(f"table line 2: expected a '|---|---:|' separator row, got {lines[1].strip()!r}")
+        raise InputError(
+            f"table line 2: expected a '|---|---:|' separator row, got {lines[1].strip()!r}"
+        )
     align = []
     for c in seps + [""] * (len(head) - len(seps)):
         c = c.replace(" ", "")
-        align.append("center" if c.startswith(":") and c.endswith(":") else "right" if c.endswith(":") else "left")
+        align.append(
+            "center"
+            if c.startswith(":") and c.endswith(":")
+            else "right"
+            if c.endswith(":")
+            else "left"
+        )
     out = ["<table>", "<thead><tr>"]
     out += [f'<th style="text-align:{a}">{_inline_md(h)}</th>' for h, a in zip(head, align)]
     out += ["</tr></thead>", "<tbody>"]
     for ln in lines[2:]:
         cells = _split_row(ln)
         cells = (cells + [""] * len(head))[: len(head)]
-        out.append("<tr>" + "".join(f'<td style="text-align:{a}">{_inline_md(c)}</td>' for c, a in zip(cells, align)) + "</tr>")
+        out.append(
+            "<tr>"
+            + "".join(
+                f'<td style="text-align:{a}">{_inline_md(c)}</td>' for c, a in zip(cells, align)
+            )
+            + "</tr>"
+        )
     out += ["</tbody>", "</table>"]
     return "\n".join(out)
 
@@ -120,14 +135,22 @@ def rows_to_html(rows: Sequence[Mapping[str, Any]]) -> str:
     cols: list[str] = []
     for r in rows:
         cols += [str(k) for k in r if str(k) not in cols]
+
     def cell(v: Any) -> str:
         if isinstance(v, float):
             return f"{v:.4g}"
         return "" if v is None else str(v)
-    out = ["<table>", "<thead><tr>" + "".join(f"<th>{html.escape(c)}</th>" for c in cols) + "</tr></thead>", "<tbody>"]
+
+    out = [
+        "<table>",
+        "<thead><tr>" + "".join(f"<th>{html.escape(c)}</th>" for c in cols) + "</tr></thead>",
+        "<tbody>",
+    ]
     for r in rows:
         vals = {str(k): v for k, v in r.items()}
-        out.append("<tr>" + "".join(f"<td>{html.escape(cell(vals.get(c)))}</td>" for c in cols) + "</tr>")
+        out.append(
+            "<tr>" + "".join(f"<td>{html.escape(cell(vals.get(c)))}</td>" for c in cols) + "</tr>"
+        )
     out += ["</tbody>", "</table>"]
     return "\n".join(out)
 
@@ -144,7 +167,9 @@ def markdown_to_html(text: str) -> str:
         if all(ln.strip().startswith("|") for ln in lines) and len(lines) >= 2:
             out.append(markdown_table_to_html(b))
         elif all(ln.strip().startswith(("- ", "* ")) for ln in lines):
-            out.append("<ul>" + "".join(f"<li>{_inline_md(ln.strip()[2:])}</li>" for ln in lines) + "</ul>")
+            out.append(
+                "<ul>" + "".join(f"<li>{_inline_md(ln.strip()[2:])}</li>" for ln in lines) + "</ul>"
+            )
         else:
             out.append(f"<p>{_inline_md(' '.join(ln.strip() for ln in lines))}</p>")
     return "\n".join(out)
@@ -229,14 +254,18 @@ def render_report_html(
     ]
     if table is not None and (not isinstance(table, str) or table.strip()):
         parts.append(f"<h2>{html.escape(table_title)}</h2>")
-        parts.append(markdown_table_to_html(table) if isinstance(table, str) else rows_to_html(table))
+        parts.append(
+            markdown_table_to_html(table) if isinstance(table, str) else rows_to_html(table)
+        )
     n_fig = 0
     for s in sections:
         parts.append(f"<section><h2>{html.escape(s.title)}</h2>")
         parts.append(markdown_to_html(s.text))
         captions = list(s.captions or [])
         if captions and len(captions) != len(s.images):
-            raise InputError(f"section {s.title!r}: {len(captions)} captions for {len(s.images)} images")
+            raise InputError(
+                f"section {s.title!r}: {len(captions)} captions for {len(s.images)} images"
+            )
         for k, img in enumerate(s.images):
             n_fig += 1
             cap = captions[k] if captions else Path(os.fspath(img)).stem.replace("_", " ")
@@ -356,7 +385,9 @@ def screenshot_report(
     if png.exists():
         png.unlink()
     if height_px is None:
-        height_px = estimate_page_height_px(html_file.read_text(encoding="utf-8", errors="replace"), width_px)
+        height_px = estimate_page_height_px(
+            html_file.read_text(encoding="utf-8", errors="replace"), width_px
+        )
     with tempfile.TemporaryDirectory(prefix="rplearn-chromium-") as profile:
         cmd = [
             exe,
@@ -376,10 +407,16 @@ def screenshot_report(
             html_file.as_uri(),
         ]
         try:
-            proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout_s, check=False)
+            proc = subprocess.run(
+                cmd, capture_output=True, text=True, timeout=timeout_s, check=False
+            )
         except subprocess.TimeoutExpired:
-            raise ScreenshotError(f"{html_file}: chromium did not finish within {timeout_s:g} s") from None
+            raise ScreenshotError(
+                f"{html_file}: chromium did not finish within {timeout_s:g} s"
+            ) from None
     if not png.is_file() or png.stat().st_size == 0:
         tail = (proc.stderr or proc.stdout or "").strip().splitlines()[-1:] or ["no output"]
-        raise ScreenshotError(f"{html_file}: chromium (exit {proc.returncode}) wrote no screenshot: {tail[0]}")
+        raise ScreenshotError(
+            f"{html_file}: chromium (exit {proc.returncode}) wrote no screenshot: {tail[0]}"
+        )
     return True
