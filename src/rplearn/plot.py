@@ -2,7 +2,8 @@
 
 The only module of rplearn that imports matplotlib. Figures are built on
 :class:`matplotlib.figure.Figure` with the Agg canvas (no pyplot, no global state, no
-display needed). Every ``plot_*`` function takes plain data or objects, writes one PNG and
+display needed); importing this module selects the Agg backend unless pyplot is already in
+use (a notebook keeps its backend). Every ``plot_*`` function takes plain data or objects, writes one PNG and
 returns its path; the matching ``*_figure`` function builds the figure without writing it, so
 that tests and notebooks can inspect its artists.
 
@@ -16,9 +17,12 @@ import os
 from collections.abc import Mapping, Sequence
 from typing import Any, Protocol
 
+import sys
+
 import matplotlib
 
-matplotlib.use("Agg")
+if "matplotlib.pyplot" not in sys.modules:  # headless by default; never switch a live session
+    matplotlib.use("Agg")
 
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -573,8 +577,10 @@ def pattern_3d_figure(
 ) -> Figure:
     """One node's pattern as a 3-D surface in its body frame (FLU: x forward, y left, z up).
 
-    The radius is the gain shifted to be positive, ``max(G - (G_max - dynamic_range_db), 0)``
-    plus 5 % of the range (so that nulls stay visible), the colour is the gain [dB].
+    The radius is the gain shifted to be positive, ``max(G - floor, 0) + offset`` with
+    ``floor = max(G_min, G_max - dynamic_range_db)`` and ``offset`` 5 % of the range (at
+    least 1 dB, so that nulls and isotropic patterns stay visible) [dB]; the colour is the
+    gain [``unit``].
     """
     _check_pattern_like(pattern_like, "pattern")
     if dynamic_range_db <= 0:
@@ -585,15 +591,15 @@ def pattern_3d_figure(
     g = np.asarray(pattern_like.evaluate(str(node), az, el), np.float64).reshape(az.shape)
     g_max = float(np.nanmax(g))
     floor = max(float(np.nanmin(g)), g_max - dynamic_range_db)
-    span = max(g_max - floor, 1e-9)
-    r = np.clip(g - floor, 0.0, None) + 0.05 * span
+    offset_db = 0.05 * max(g_max - floor, 20.0)  # keeps nulls (and isotropic patterns) visible
+    r = np.clip(g - floor, 0.0, None) + offset_db
     x, y, z = r * np.cos(el) * np.cos(az), r * np.cos(el) * np.sin(az), r * np.sin(el)
     from matplotlib import cm
     from matplotlib.colors import Normalize
     from mpl_toolkits.mplot3d import Axes3D  # noqa: F401  (registers the projection)
 
-    norm = Normalize(vmin=floor, vmax=g_max)
-    fig = _new_figure(6.0, 5.2)
+    norm = Normalize(vmin=floor, vmax=g_max if g_max > floor else floor + 1.0)
+    fig = _new_figure(6.4, 5.8)
     ax = fig.add_subplot(projection="3d")
     colors = matplotlib.colormaps[CMAP](norm(g))
     ax.plot_surface(
@@ -612,16 +618,16 @@ def pattern_3d_figure(
     ax.set_ylim(-lim, lim)
     ax.set_zlim(-lim, lim)
     ax.set_box_aspect((1, 1, 1))
-    ax.set_xlabel("x forward")
-    ax.set_ylabel("y left")
-    ax.set_zlabel("z up")
+    ax.set_xlabel("x forward / dB")
+    ax.set_ylabel("y left / dB")
+    ax.set_zlabel("z up / dB")
     ax.tick_params(labelsize=6)
     ax.view_init(elev=25, azim=-60)
     sm = cm.ScalarMappable(norm=norm, cmap=CMAP)
     cb = fig.colorbar(sm, ax=ax, shrink=0.7, pad=0.08)
     cb.set_label(f"gain / {unit}")
     ax.set_title(
-        f"node {node}: radiation pattern\n(radius = gain - floor, floor {floor:.1f} {unit}, colour = gain)",
+        f"node {node}: radiation pattern\n(radius = gain - floor + {offset_db:.1f} dB, floor {floor:.1f} {unit})",
         fontsize=9,
     )
     return fig
