@@ -14,10 +14,9 @@ Angles are radians in the API and degrees on every axis (DESIGN.md): azimuth ``a
 from __future__ import annotations
 
 import os
+import sys
 from collections.abc import Mapping, Sequence
 from typing import Any, Protocol
-
-import sys
 
 import matplotlib
 
