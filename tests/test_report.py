@@ -77,6 +77,16 @@ def test_markdown_table_to_html():
         markdown_table_to_html("| a | b |\n| 1 | 2 |")
 
 
+def test_markdown_subset():
+    page = report.markdown_to_html(
+        "Intro *a* and **b**.\n\n```\nline 1\n\nx < 2\n```\n- item `c`\n- two"
+    )
+    assert page.startswith("<p>Intro <em>a</em> and <strong>b</strong>.</p>")
+    assert "<pre><code>line 1\n\nx &lt; 2</code></pre>" in page
+    assert "<ul><li>item <code>c</code></li><li>two</li></ul>" in page
+    assert report.markdown_to_html("<div>raw</div>") == "<div>raw</div>"
+
+
 def test_rows_table_and_escaping():
     t = rows_to_html([{"Method": "SH-10", "RMSE/dB": 2.3149}, {"Method": "<M>", "extra": None}])
     assert "<th>extra</th>" in t and "2.315" in t and "&lt;M&gt;" in t

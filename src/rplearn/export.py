@@ -467,17 +467,36 @@ def export_pattern_images(
     out_dir: str | os.PathLike[str],
     nodes: Sequence[str] | None = None,
     step_deg: float = 3.0,
-) -> dict[str, str]:
-    """One 3-D pattern image per node (``pattern_<node>.png``, grid step ``step_deg``); returns node -> path."""
+) -> list[str]:
+    """One 3-D pattern image per node, ``<out_dir>/pattern_<node>.png``.
+
+    Parameters
+    ----------
+    pattern_like : pattern-like
+    out_dir : path
+        Directory (created if needed).
+    nodes : sequence of str, optional
+        Default all nodes.
+    step_deg : float
+        Grid step of the surface [deg].
+
+    Returns
+    -------
+    list of str
+        The paths written, in node order (characters other than letters, digits, ``_.-``
+        in a node id become ``_`` in the file name).
+    """
     from rplearn import plot  # lazily: the core never imports matplotlib
 
     _check_pattern_like(pattern_like)
     out_dir = os.fspath(out_dir)
     os.makedirs(out_dir, exist_ok=True)
-    paths = {}
+    paths = []
     for n in _nodes_of(pattern_like, nodes):
         safe = re.sub(r"[^A-Za-z0-9_.-]+", "_", n) or "node"
-        paths[n] = plot.plot_pattern_3d(
-            pattern_like, n, os.path.join(out_dir, f"pattern_{safe}.png"), step_deg
+        paths.append(
+            plot.plot_pattern_3d(
+                pattern_like, n, os.path.join(out_dir, f"pattern_{safe}.png"), step_deg
+            )
         )
     return paths

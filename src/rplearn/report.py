@@ -13,7 +13,8 @@ Text accepted by the report
   the order of the first row).
 - A section's text is HTML when it starts with ``<`` (inserted as given: the caller vouches for
   it), else a Markdown subset: paragraphs separated by blank lines, ``- `` bullet lists, pipe
-  tables, ``**bold**``, ``*italic*`` and ```code```; everything else is escaped.
+  tables, fenced code blocks (lines between two ```` ``` ```` lines, shown preformatted),
+  ``**bold**``, ``*italic*`` and ```code```; everything else is escaped.
 """
 
 from __future__ import annotations
@@ -155,21 +156,50 @@ def rows_to_html(rows: Sequence[Mapping[str, Any]]) -> str:
     return "\n".join(out)
 
 
+def _blocks(text: str) -> list[tuple[str, list[str]]]:
+    """Split text into ("code", lines) fenced blocks and ("text", lines) blank-line blocks."""
+    blocks: list[tuple[str, list[str]]] = []
+    current: list[str] = []
+    code: list[str] | None = None
+    for ln in text.splitlines():
+        if code is not None:
+            if ln.strip().startswith("```"):
+                blocks.append(("code", code))
+                code = None
+            else:
+                code.append(ln)
+        elif ln.strip().startswith("```"):
+            if current:
+                blocks.append(("text", current))
+                current = []
+            code = []
+        elif not ln.strip():
+            if current:
+                blocks.append(("text", current))
+                current = []
+        else:
+            current.append(ln)
+    if code is not None:  # an unclosed fence runs to the end
+        blocks.append(("code", code))
+    if current:
+        blocks.append(("text", current))
+    return blocks
+
+
 def markdown_to_html(text: str) -> str:
     """The Markdown subset of the module docstring to HTML; text starting with ``<`` is HTML."""
     text = str(text or "")
     if text.lstrip().startswith("<"):
         return text
-    blocks = re.split(r"\n\s*\n", text.strip()) if text.strip() else []
     out = []
-    for b in blocks:
-        lines = b.splitlines()
-        if all(ln.strip().startswith("|") for ln in lines) and len(lines) >= 2:
-            out.append(markdown_table_to_html(b))
+    for kind, lines in _blocks(text):
+        if kind == "code":
+            out.append(f"<pre><code>{html.escape(chr(10).join(lines), quote=False)}</code></pre>")
+        elif all(ln.strip().startswith("|") for ln in lines) and len(lines) >= 2:
+            out.append(markdown_table_to_html("\n".join(lines)))
         elif all(ln.strip().startswith(("- ", "* ")) for ln in lines):
-            out.append(
-                "<ul>" + "".join(f"<li>{_inline_md(ln.strip()[2:])}</li>" for ln in lines) + "</ul>"
-            )
+            items = "".join(f"<li>{_inline_md(ln.strip()[2:])}</li>" for ln in lines)
+            out.append(f"<ul>{items}</ul>")
         else:
             out.append(f"<p>{_inline_md(' '.join(ln.strip() for ln in lines))}</p>")
     return "\n".join(out)
@@ -222,6 +252,8 @@ figure {{ margin: 18px 0; text-align: center; }}
 figure img {{ max-width: 100%; height: auto; border: 1px solid #ddd; }}
 figcaption {{ font-size: 14px; color: #444; margin-top: 4px; }}
 code {{ background: #f2f2f2; padding: 0 3px; }}
+pre {{ background: #f6f6f6; border: 1px solid #ddd; padding: 8px; overflow-x: auto; font-size: 13px; }}
+pre code {{ background: none; padding: 0; }}
 footer {{ margin-top: 40px; border-top: 1px solid #bbb; font-size: 12px; color: #555; }}
 footer table {{ font-size: 12px; }}
 """
