@@ -159,13 +159,14 @@ def test_pattern_maps_truth_values_and_centering(truth):
 
 
 def test_pattern_maps_of_a_fitted_two_node_model(tmp_path):
+    from rplearn.experiment import node_directions
     from rplearn.learn import ModelSpec, fit_model, samples_of
     from rplearn.simulate import simulate
 
     sim = simulate("smoke", 0)
     s = samples_of(sim.matched_truth, sim.units("learning"))
     model = fit_model(s, ModelSpec.parse("sh-4")).model
-    samples = plot.directions_by_node(s)
+    samples = node_directions(s)
     d = s.directions
     assert sum(v[0].size for v in samples.values()) == 2 * len(s)
     k = s.tx_index[0]

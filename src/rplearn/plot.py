@@ -124,23 +124,6 @@ def _style_az_el_axes(ax: Any, xlabel: bool = True, ylabel: bool = True) -> None
         ax.set_ylabel("elevation / deg")
 
 
-def directions_by_node(samples: Any) -> dict[str, tuple[FloatArray, FloatArray]]:
-    """Directions [rad] at which each node saw the other end, from :class:`LinkSamples`.
-
-    Returns ``{node: (az_rad, el_rad)}`` gathering the node's transmit and receive samples,
-    the input of :func:`plot_coverage` and of the dots of :func:`plot_pattern_maps`.
-    """
-    d = samples.directions
-    out = {}
-    for k, n in enumerate(samples.nodes):
-        tx, rx = np.asarray(samples.tx_index) == k, np.asarray(samples.rx_index) == k
-        out[str(n)] = (
-            np.concatenate([np.asarray(d.az_tx)[tx], np.asarray(d.az_rx)[rx]]),
-            np.concatenate([np.asarray(d.el_tx)[tx], np.asarray(d.el_rx)[rx]]),
-        )
-    return out
-
-
 # -- Fig. 9: pattern maps ------------------------------------------------------------------
 def colour_limits_db(maps_db: FloatArray, has_truth: bool) -> tuple[float, float]:
     """Shared colour limits of one column of pattern maps [dB].
