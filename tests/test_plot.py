@@ -89,6 +89,8 @@ def test_every_plot_writes_a_valid_png(tmp_path, truth, learned):
     for p in paths:
         assert isinstance(p, str)
         assert_valid_png(p)
+        with open(p, "rb") as f:
+            assert b"Description" in f.read(4096)  # a caption for the report
 
 
 def test_coverage_draws_every_given_point(truth):

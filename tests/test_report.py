@@ -106,9 +106,8 @@ def test_report_is_one_self_contained_page(tmp_path, figures):
         img = imread(io.BytesIO(data), format="png")
         assert img.shape[0] > 100 and img.shape[1] > 100
     assert page.count("<figcaption>") == 3
-    assert (
-        "Figure 1.</strong> Coverage (paper Fig. 8a)." in page and "Figure 3.</strong> rank" in page
-    )
+    assert "Figure 1.</strong> Coverage (paper Fig. 8a)." in page  # given caption
+    assert "Figure 3.</strong> Columns and rank of the design matrix" in page  # from the PNG
     assert (
         "<strong>green</strong>" in page
         and "<code>x &lt; y</code>" in page
@@ -116,6 +115,17 @@ def test_report_is_one_self_contained_page(tmp_path, figures):
     )
     assert '<td style="text-align:right">2.31</td>' in page
     assert "rplearn demo --seed 7" in page and __version__ in page and "Provenance" in page
+    assert "<th>version</th>" in page
+
+
+def test_default_caption_falls_back_to_the_file_name(tmp_path, figures):
+    from matplotlib.image import imsave
+
+    bare = tmp_path / "my_figure.png"
+    imsave(bare, np.random.default_rng(0).random((20, 30)))
+    assert report.default_caption(bare) == "my figure"
+    assert report.default_caption(figures[1]).startswith("Model order selection")
+    assert report.default_caption(figures[1]).endswith("(paper Fig. 10).")
 
 
 def test_report_rejects_missing_or_bad_images(tmp_path):

@@ -28,6 +28,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from numpy.typing import ArrayLike, NDArray
 
+from rplearn import __version__
 from rplearn.errors import InputError
 
 FloatArray = NDArray[np.float64]
@@ -54,14 +55,26 @@ def _new_figure(width_in: float, height_in: float) -> Figure:
     return fig
 
 
-def save_figure(fig: Figure, path: str | os.PathLike[str]) -> str:
-    """Write ``fig`` as a PNG at :data:`DPI` and return the path as a string."""
+def save_figure(fig: Figure, path: str | os.PathLike[str], caption: str | None = None) -> str:
+    """Write ``fig`` as a PNG at :data:`DPI` and return the path as a string.
+
+    ``caption`` is stored in the PNG's ``Description`` text chunk, where
+    :func:`rplearn.report.write_report` finds a default figure caption.
+    """
     path = os.fspath(path)
     parent = os.path.dirname(path)
     if parent:
         os.makedirs(parent, exist_ok=True)
-    fig.savefig(path, dpi=DPI, format="png")
+    metadata = {"Software": f"rplearn {__version__}"}
+    if caption:
+        metadata["Description"] = " ".join(str(caption).split())
+    fig.savefig(path, dpi=DPI, format="png", metadata=metadata)
     return path
+
+
+def _dot_size(n_points: int, lo: float = 1.5, hi: float = 8.0) -> float:
+    """Marker area [pt^2] for a scatter of ``n_points``: small for dense, larger for sparse."""
+    return float(np.clip(3.0e4 / max(n_points, 1), lo, hi))
 
 
 def _check_pattern_like(obj: Any, name: str) -> None:
@@ -243,9 +256,19 @@ def plot_pattern_maps(
     max_dots: int = 3000,
 ) -> str:
     """Write the paper's Fig. 9 (see :func:`pattern_maps_figure`) as a PNG; return the path."""
-    return save_figure(
-        pattern_maps_figure(models, truth, nodes, samples_az_el, center, step_deg, max_dots), path
+    fig = pattern_maps_figure(models, truth, nodes, samples_az_el, center, step_deg, max_dots)
+    what = (
+        "relative to its own sphere mean (two-node fits identify shapes only)"
+        if center
+        else "in dBi"
     )
+    caption = (
+        f"Learned radiation patterns of each node over azimuth and elevation, {what}"
+        + ("; first row: the true patterns" if truth is not None else "")
+        + ("; black dots: learning sample directions" if samples_az_el else "")
+        + " (paper Fig. 9)."
+    )
+    return save_figure(fig, path, caption)
 
 
 # -- Fig. 8a: coverage ---------------------------------------------------------------------
@@ -286,7 +309,7 @@ def coverage_figure(
             ax.scatter(
                 az[keep],
                 el[keep],
-                s=2,
+                s=_dot_size(keep.size),
                 c=color,
                 marker=".",
                 linewidths=0,
@@ -306,7 +329,11 @@ def plot_coverage(
     max_points: int = 20000,
 ) -> str:
     """Write the coverage figure (paper Fig. 8a, :func:`coverage_figure`); return the path."""
-    return save_figure(coverage_figure(learn_az_el, test_az_el, max_points), path)
+    caption = (
+        "Direction of the other end seen by each node, in its body frame: learning samples green,"
+        " testing samples orange (paper Fig. 8a)."
+    )
+    return save_figure(coverage_figure(learn_az_el, test_az_el, max_points), path, caption)
 
 
 # -- Fig. 8b: RSSI over time ---------------------------------------------------------------
@@ -354,7 +381,7 @@ def rssi_time_figure(
         ax.scatter(
             t[idx] - t0,
             p[idx],
-            s=1.5,
+            s=_dot_size(idx.size),
             marker=".",
             linewidths=0,
             color=f"C{k % 10}",
@@ -377,9 +404,8 @@ def plot_rssi_time(
     legend_title: str = "unit",
 ) -> str:
     """Write the RSSI-over-time figure (paper Fig. 8b, :func:`rssi_time_figure`); return the path."""
-    return save_figure(
-        rssi_time_figure(t_s, rssi_dbm, unit_labels, legend_title=legend_title), path
-    )
+    fig = rssi_time_figure(t_s, rssi_dbm, unit_labels, legend_title=legend_title)
+    return save_figure(fig, path, "Received signal strength over time (paper Fig. 8b).")
 
 
 # -- Fig. 10: model order sweep ------------------------------------------------------------
@@ -461,7 +487,11 @@ def plot_order_sweep(
     family: str = "SH",
 ) -> str:
     """Write the order-sweep figure (paper Fig. 10, :func:`order_sweep_figure`); return the path."""
-    return save_figure(order_sweep_figure(orders, test_rmse_db, aic, ltd_s, family), path)
+    caption = (
+        f"Model order selection: test RMSE and AIC against the {family} order (stars mark the minima),"
+        " and the learning time LTD (paper Fig. 10)."
+    )
+    return save_figure(order_sweep_figure(orders, test_rmse_db, aic, ltd_s, family), path, caption)
 
 
 # -- Fig. 5a: epsilon sweep ----------------------------------------------------------------
@@ -503,7 +533,11 @@ def epsilon_sweep_figure(eps: ArrayLike, error_db: ArrayLike) -> Figure:
 
 def plot_epsilon_sweep(eps: ArrayLike, error_db: ArrayLike, path: str | os.PathLike[str]) -> str:
     """Write the epsilon-sweep figure (paper Fig. 5a, :func:`epsilon_sweep_figure`); return the path."""
-    return save_figure(epsilon_sweep_figure(eps, error_db), path)
+    caption = (
+        "Prediction RMSE when epsilon is added to one antenna's Y00 coefficient and subtracted"
+        " from the other's: with two antennas the error does not change (paper Fig. 5a)."
+    )
+    return save_figure(epsilon_sweep_figure(eps, error_db), path, caption)
 
 
 # -- Fig. 6: rank study --------------------------------------------------------------------
@@ -546,7 +580,8 @@ def rank_study_figure(cases: Sequence[tuple[str, int, int]]) -> Figure:
 
 def plot_rank_study(cases: Sequence[tuple[str, int, int]], path: str | os.PathLike[str]) -> str:
     """Write the rank-study bar chart (paper Fig. 6, :func:`rank_study_figure`); return the path."""
-    return save_figure(rank_study_figure(cases), path)
+    caption = "Columns and rank of the design matrix of each problem (paper Figs. 5b and 6)."
+    return save_figure(rank_study_figure(cases), path, caption)
 
 
 # -- 3-D pattern image ---------------------------------------------------------------------
@@ -619,4 +654,5 @@ def plot_pattern_3d(
     pattern_like: PatternLike, node: str, path: str | os.PathLike[str], step_deg: float = 3.0
 ) -> str:
     """Write a 3-D image of one node's pattern (:func:`pattern_3d_figure`); return the path."""
-    return save_figure(pattern_3d_figure(pattern_like, node, step_deg), path)
+    caption = f"Radiation pattern of node {node} in its body frame (x forward, y left, z up)."
+    return save_figure(pattern_3d_figure(pattern_like, node, step_deg), path, caption)

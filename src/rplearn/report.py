@@ -58,7 +58,8 @@ class ReportSection:
     images : list of path
         PNG (or JPEG/SVG) files, embedded in order.
     captions : list of str, optional
-        One caption per image; default the file name without extension.
+        One caption per image; default the PNG's ``Description`` text (every figure of
+        :mod:`rplearn.plot` carries one), else the file name without extension.
     """
 
     title: str
@@ -225,6 +226,43 @@ def png_size_px(data: bytes) -> tuple[int, int]:
     return struct.unpack(">II", data[16:24])
 
 
+def png_text_chunks(data: bytes) -> dict[str, str]:
+    """Text chunks (``tEXt`` and uncompressed ``iTXt``) of PNG bytes; empty if not a PNG."""
+    out: dict[str, str] = {}
+    if not data.startswith(PNG_SIGNATURE):
+        return out
+    pos = len(PNG_SIGNATURE)
+    while pos + 8 <= len(data):
+        (length,) = struct.unpack(">I", data[pos : pos + 4])
+        kind = data[pos + 4 : pos + 8]
+        body = data[pos + 8 : pos + 8 + length]
+        pos += 12 + length
+        if kind == b"IDAT" or kind == b"IEND":
+            break  # matplotlib writes text chunks before the image data
+        if kind == b"tEXt" and b"\0" in body:
+            key, _, text = body.partition(b"\0")
+            out[key.decode("latin-1")] = text.decode("latin-1")
+        elif kind == b"iTXt" and b"\0" in body:
+            key, _, rest = body.partition(b"\0")
+            if len(rest) >= 2 and rest[0] == 0:  # not compressed
+                _lang, _, rest = rest[2:].partition(b"\0")
+                _tkey, _, text = rest.partition(b"\0")
+                out[key.decode("latin-1")] = text.decode("utf-8", errors="replace")
+    return out
+
+
+def default_caption(path: str | os.PathLike[str]) -> str:
+    """A figure's caption: its PNG ``Description`` (written by :mod:`rplearn.plot`), else its name."""
+    p = os.fspath(path)
+    try:
+        with open(p, "rb") as f:
+            head = f.read(65536)
+    except OSError:
+        head = b""
+    text = png_text_chunks(head)
+    return text.get("Description") or text.get("Title") or Path(p).stem.replace("_", " ")
+
+
 def image_data_uri(path: str | os.PathLike[str]) -> str:
     """A base64 ``data:`` URI of an image file; InputError if missing or of an unknown type."""
     p = os.fspath(path)
@@ -260,7 +298,9 @@ footer table {{ font-size: 12px; }}
 
 
 def _provenance_html(provenance: Mapping[str, Any]) -> str:
-    prov = {"version": __version__, **{str(k): v for k, v in provenance.items()}}
+    prov = {str(k): v for k, v in provenance.items()}
+    if "version" not in prov and "rplearn_version" not in prov:
+        prov = {"version": __version__, **prov}
     rows = []
     for k, v in prov.items():
         text = v if isinstance(v, str) else json.dumps(v, default=str, sort_keys=True)
@@ -300,7 +340,7 @@ def render_report_html(
             )
         for k, img in enumerate(s.images):
             n_fig += 1
-            cap = captions[k] if captions else Path(os.fspath(img)).stem.replace("_", " ")
+            cap = captions[k] if captions else default_caption(img)
             parts.append(
                 f'<figure><img src="{image_data_uri(img)}" alt="{html.escape(cap)}">'
                 f"<figcaption><strong>Figure {n_fig}.</strong> {_inline_md(cap)}</figcaption></figure>"
