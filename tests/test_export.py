@@ -187,7 +187,12 @@ def test_msi_reader_accepts_vendor_variants(tmp_path):
     assert msi.gain_dbi == pytest.approx(12.15)  # dBd without unit -> +2.15 dBi
     assert msi.header["MAKE"] == "ACME" and msi.header["TILT"] == "ELECTRICAL"
     assert msi.horizontal_loss_db[359] == pytest.approx(3.59)
-    path.write_text(_msi_text(h_lines=[f"{a:.1f}\t{a / 100:.2f}" for a in range(360)]))
+    path.write_text(
+        _msi_text(
+            h_lines=[f"{a:.1f}\t{a / 100:.2f}" for a in range(360)], head="NAME\tx y\nGAIN\t3 dBi\n"
+        )
+    )
+    assert read_msi(path).name == "x y" and read_msi(path).gain_dbi == 3.0
     assert read_msi(path).horizontal_loss_db[10] == pytest.approx(0.10)
 
 
@@ -204,6 +209,9 @@ _GOOD_H = [f"{a} {a / 100:.2f}" for a in range(360)]
         (_msi_text().replace("HORIZONTAL 360", "HORIZONTAL 359"), 4, "expected 360 points"),
         (_msi_text(h_lines=_GOOD_H[:5] + ["5 abc"] + _GOOD_H[6:]), 10, "expected '<angle> <loss>'"),
         (_msi_text(h_lines=_GOOD_H[:5] + ["6 0.10"] + _GOOD_H[6:]), 10, "expected angle 5"),
+        (_msi_text(h_lines=_GOOD_H[:5] + ["nan 0.10"] + _GOOD_H[6:]), 10, "expected angle 5"),
+        (_msi_text(h_lines=_GOOD_H[:5] + ["5 nan"] + _GOOD_H[6:]), 10, "loss must be"),
+        (_msi_text().replace("GAIN 10 dBi", "GAIN 10 dBi\ngain 11"), 4, "repeated header key GAIN"),
         (_msi_text(h_lines=_GOOD_H[:5] + ["5 -3.0"] + _GOOD_H[6:]), 10, "loss must be"),
         (
             _msi_text(h_lines=_GOOD_H[:5] + ["5 1.0 2.0"] + _GOOD_H[6:]),

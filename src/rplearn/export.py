@@ -385,6 +385,7 @@ def read_msi(path: str | os.PathLike[str]) -> MsiPattern:
     except OSError as exc:
         raise InputError(f"{path}: cannot read MSI file ({exc.strerror})") from None
     header: dict[str, str] = {}
+    header_line: dict[str, int] = {}
     cuts: dict[str, FloatArray] = {}
     i = 0
     while i < len(raw):
@@ -393,8 +394,9 @@ def read_msi(path: str | os.PathLike[str]) -> MsiPattern:
         i += 1
         if not line:
             continue
-        key, _, value = line.partition(" ") if " " in line else line.partition("\t")
-        key_u, value = key.upper(), value.strip()
+        parts = line.split(None, 1)
+        key, value = parts[0], (parts[1].strip() if len(parts) > 1 else "")
+        key_u = key.upper()
         if key_u in ("HORIZONTAL", "VERTICAL"):
             if key_u in cuts:
                 raise InputError(f"{where}: second {key_u} section")
@@ -418,7 +420,7 @@ def read_msi(path: str | os.PathLike[str]) -> MsiPattern:
                     raise InputError(
                         f"{where_row}: expected '<angle> <loss>' in {key_u}, got {raw[i - 1].strip()!r}"
                     ) from None
-                if abs(angle - k) > 1e-6:
+                if not abs(angle - k) <= 1e-6:
                     raise InputError(f"{where_row}: expected angle {k} in {key_u}, got {row[0]}")
                 if not math.isfinite(loss) or loss < -0.005:
                     raise InputError(
@@ -433,32 +435,26 @@ def read_msi(path: str | os.PathLike[str]) -> MsiPattern:
             )
         if not header and key_u not in _KNOWN_KEYS:
             header["NAME"] = line  # some vendors omit the NAME token on the first line
+            header_line["NAME"] = i
             continue
         if key_u in header:
             raise InputError(f"{where}: repeated header key {key_u}")
         header[key_u] = value
+        header_line[key_u] = i
     for needed in ("HORIZONTAL", "VERTICAL"):
         if needed not in cuts:
             raise InputError(f"{path}:{len(raw)}: no {needed} section")
     if "GAIN" not in header:
         raise InputError(f"{path}:1: no GAIN line")
-    line_of = {k: _line_of(raw, k) for k in ("GAIN", "FREQUENCY")}
-    gain = _parse_gain_dbi(header["GAIN"], f"{path}:{line_of['GAIN']}")
+    gain = _parse_gain_dbi(header["GAIN"], f"{path}:{header_line['GAIN']}")
     freq = (
-        _parse_frequency_mhz(header["FREQUENCY"], f"{path}:{line_of['FREQUENCY']}")
+        _parse_frequency_mhz(header["FREQUENCY"], f"{path}:{header_line['FREQUENCY']}")
         if "FREQUENCY" in header
         else float("nan")
     )
     return MsiPattern(
         header.get("NAME", ""), freq, gain, cuts["HORIZONTAL"], cuts["VERTICAL"], header
     )
-
-
-def _line_of(raw: list[str], key: str) -> int:
-    for k, line in enumerate(raw):
-        if line.strip().upper().startswith(key):
-            return k + 1
-    return 0
 
 
 # -- images --------------------------------------------------------------------------------
