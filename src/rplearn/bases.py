@@ -96,8 +96,20 @@ class Basis:
 
 
 def sh_index(degree: int, order: int) -> int:
-    """Column of the real SH of degree ``l`` and order ``m`` (``-l <= m <= l``): ``l**2 + l + m``."""
-    return degree * degree + degree + order
+    """Column of the real SH of degree ``l`` and order ``m`` (``-l <= m <= l``).
+
+    Within degree ``l`` (columns ``l**2 .. (l+1)**2 - 1``) the order is ``m = 0``, then the
+    cosine terms ``m = 1 .. l``, then the sine terms ``m = -1 .. -l``: ``l**2`` for ``m = 0``,
+    ``l**2 + m`` for ``m > 0`` and ``l**2 + l - m`` for ``m < 0``. Grouping the cosine and sine
+    rows lets the recurrence fill a whole degree with two array operations.
+    """
+    if abs(order) > degree:
+        raise InputError(f"SH order m = {order} outside -l..l for degree l = {degree}")
+    if order == 0:
+        return degree * degree
+    if order > 0:
+        return degree * degree + order
+    return degree * degree + degree - order
 
 
 @dataclass(frozen=True)
@@ -139,51 +151,53 @@ class SphericalHarmonics(Basis):
         return a, b, mm
 
     def design_into(self, az_rad: FloatArray, el_rad: FloatArray, out: FloatArray) -> None:
+        # Vectorised over the order m: for every degree l the fully normalised associated
+        # Legendre values of all m <= l come from those of l-1 and l-2 by the three-term
+        # recurrence (m <= l-2) and the two diagonal steps (m = l-1, m = l), all in a few
+        # array operations; the degree's cosine and sine rows are then written in one go each.
         L = self.order
         a, b, mm = self._coefs
+        n = az_rad.size
         x = np.sin(el_rad)  # cos(colatitude)
         s = np.cos(el_rad)  # sin(colatitude) >= 0
-        cos1 = np.cos(az_rad)
-        sin1 = np.sin(az_rad)
+        cos_m = np.empty((L, n))  # sqrt(2) cos(m az)
+        sin_m = np.empty((L, n))  # sqrt(2) sin(m az)
         sqrt2 = np.sqrt(2.0)
-        pmm = np.full_like(x, 1.0 / np.sqrt(4.0 * np.pi))
-        cm = np.ones_like(x)  # cos(m az)
-        sm = np.zeros_like(x)  # sin(m az)
-        two_cos1 = 2.0 * cos1
-        cm_prev = cos1.copy()  # cos(-az) for the Chebyshev step from m = 0
-        sm_prev = -sin1
-        tmp = np.empty_like(x)
-        for m in range(L):
-            if m > 0:
-                np.multiply(pmm, s, out=pmm)
-                pmm *= mm[m]
-                # Chebyshev: c_m = 2 cos(az) c_{m-1} - c_{m-2}
-                c_new = two_cos1 * cm - cm_prev
-                s_new = two_cos1 * sm - sm_prev
-                cm_prev, sm_prev, cm, sm = cm, sm, c_new, s_new
-            # l = m
-            p_lm2 = None
-            p_lm1 = pmm
-            self._emit(out, m, m, p_lm1, cm, sm, sqrt2, tmp)
-            if m + 1 < L:
-                p_l = np.sqrt(2.0 * m + 3.0) * x * pmm
-                self._emit(out, m + 1, m, p_l, cm, sm, sqrt2, tmp)
-                p_lm2, p_lm1 = pmm, p_l
-                for l in range(m + 2, L):
-                    p_l = a[l, m] * (x * p_lm1 - b[l, m] * p_lm2)
-                    self._emit(out, l, m, p_l, cm, sm, sqrt2, tmp)
-                    p_lm2, p_lm1 = p_lm1, p_l
-
-    @staticmethod
-    def _emit(
-        out: FloatArray, l: int, m: int, p: FloatArray, cm: FloatArray, sm: FloatArray, sqrt2: float, tmp: FloatArray
-    ) -> None:
-        if m == 0:
-            out[l * l + l] = p
-        else:
-            np.multiply(p, sqrt2, out=tmp)
-            np.multiply(tmp, cm, out=out[l * l + l + m])
-            np.multiply(tmp, sm, out=out[l * l + l - m])
+        cos_m[0] = sqrt2
+        sin_m[0] = 0.0
+        if L > 1:
+            np.cos(az_rad, out=cos_m[1])
+            np.sin(az_rad, out=sin_m[1])
+            two_cos = 2.0 * cos_m[1]
+            cos_m[1] *= sqrt2
+            sin_m[1] *= sqrt2
+            for m in range(2, L):  # Chebyshev: c_m = 2 cos(az) c_{m-1} - c_{m-2}
+                np.multiply(two_cos, cos_m[m - 1], out=cos_m[m])
+                cos_m[m] -= cos_m[m - 2]
+                np.multiply(two_cos, sin_m[m - 1], out=sin_m[m])
+                sin_m[m] -= sin_m[m - 2]
+        p_lm2 = np.empty((L, n))
+        p_lm1 = np.empty((L, n))
+        p_l = np.empty((L, n))
+        tmp = np.empty((L, n))
+        p_lm1[0] = 1.0 / np.sqrt(4.0 * np.pi)
+        out[0] = p_lm1[0]
+        for l in range(1, L):
+            k = l - 1
+            if k > 0:
+                np.multiply(p_lm1[:k], x, out=p_l[:k])
+                np.multiply(p_lm2[:k], b[l, :k, None], out=tmp[:k])
+                p_l[:k] -= tmp[:k]
+                p_l[:k] *= a[l, :k, None]
+            np.multiply(p_lm1[k], x, out=p_l[k])
+            p_l[k] *= np.sqrt(2.0 * l + 1.0)
+            np.multiply(p_lm1[k], s, out=p_l[l])
+            p_l[l] *= mm[l]
+            base = l * l
+            out[base] = p_l[0]
+            np.multiply(p_l[1 : l + 1], cos_m[1 : l + 1], out=out[base + 1 : base + l + 1])
+            np.multiply(p_l[1 : l + 1], sin_m[1 : l + 1], out=out[base + l + 1 : base + 2 * l + 1])
+            p_lm2, p_lm1, p_l = p_lm1, p_l, p_lm2
 
     def to_dict(self) -> dict[str, Any]:
         return {"kind": "sh", "order": int(self.order)}

@@ -42,7 +42,7 @@ FloatArray = NDArray[np.float64]
 DEFAULT_RIDGE = 1e-6
 
 #: Samples per feature sub-chunk (fits the CPU cache) and per accumulation block.
-FEATURE_CHUNK = 4096
+FEATURE_CHUNK = 2048
 BLOCK_SAMPLES = 32768
 
 
@@ -73,7 +73,9 @@ class NormalEquations:
         p = self.basis.n_coef * self.n_nodes
         self.gram = np.zeros((p, p))
         self.rhs = np.zeros(p)
-        self._buffer = np.empty((2 * self.basis.n_coef, BLOCK_SAMPLES))
+        # Features of both ends plus the observations as a last row: one symmetric rank-k
+        # update then yields X^T X, X^T y and y^T y in a single pass over the block.
+        self._buffer = np.empty((2 * self.basis.n_coef + 1, BLOCK_SAMPLES))
 
     @property
     def n_columns(self) -> int:
@@ -124,7 +126,6 @@ class NormalEquations:
             sel = slice(None) if codes.size == 1 else (pair_code == code)
             self._add_pair(t, r, az_tx[sel], el_tx[sel], az_rx[sel], el_rx[sel], y[sel])
         self.n_samples += n
-        self.yty += float(y @ y)
         self.y_sum += float(y.sum())
         return self
 
@@ -144,15 +145,16 @@ class NormalEquations:
                 e = min(stop, s + FEATURE_CHUNK)
                 view = buf[:, s - start : e - start]
                 self.basis.design_into(az_tx[s:e], el_tx[s:e], view[:p])
-                self.basis.design_into(az_rx[s:e], el_rx[s:e], view[p:])
-            block = buf @ buf.T  # one symmetric rank-k update of both nodes' blocks
+                self.basis.design_into(az_rx[s:e], el_rx[s:e], view[p : 2 * p])
+            buf[2 * p] = y[start:stop]
+            block = buf @ buf.T  # one symmetric rank-k update: both nodes' blocks, X^T y, y^T y
             self.gram[bt, bt] += block[:p, :p]
-            self.gram[br, br] += block[p:, p:]
-            self.gram[bt, br] += block[:p, p:]
-            self.gram[br, bt] += block[p:, :p]
-            fy = buf @ y[start:stop]
-            self.rhs[bt] += fy[:p]
-            self.rhs[br] += fy[p:]
+            self.gram[br, br] += block[p : 2 * p, p : 2 * p]
+            self.gram[bt, br] += block[:p, p : 2 * p]
+            self.gram[br, bt] += block[p : 2 * p, :p]
+            self.rhs[bt] += block[:p, 2 * p]
+            self.rhs[br] += block[p : 2 * p, 2 * p]
+            self.yty += float(block[2 * p, 2 * p])
 
     def merge(self, other: "NormalEquations") -> "NormalEquations":
         """Add another accumulator's statistics (same basis and node count) into this one."""
