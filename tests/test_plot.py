@@ -187,12 +187,14 @@ def test_pattern_maps_of_a_fitted_two_node_model(tmp_path):
 
 def test_order_sweep_marks_the_minima():
     fig = plot.order_sweep_figure(
-        [2, 4, 6, 8], [4.0, 2.5, 2.2, 2.6], [9e3, 6.5e3, 6.9e3, 7.4e3], [0.01, 0.02, 0.05, 0.2]
+        [2, 4, 6, 8], [4.0, 2.5, 2.2, 2.6], [9e3, 6.5e3, 6.9e3, 7.4e3], [0.01, 0.02, 0.05, 0.5]
     )
     labels = [ln.get_label() for ax in fig.axes for ln in ax.get_lines()]
     assert "min RMSE: SH-6 (2.20 dB)" in labels
     assert "min AIC: SH-4" in labels
-    assert fig.axes[1].get_yscale() == "log"  # LTD panel
+    assert fig.axes[1].get_yscale() == "log"  # LTD panel spanning decades
+    fig = plot.order_sweep_figure([2, 4], [3.0, 2.0], [8e3, 7e3], [0.05, 0.06])
+    assert fig.axes[1].get_yscale() == "linear"
 
 
 def test_epsilon_sweep_axis():
