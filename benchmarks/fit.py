@@ -106,7 +106,7 @@ def main() -> int:
 
     # Streaming: 10 million samples in chunks, never materialised at once.
     total = 2_000_000 if args.quick else 10_000_000
-    chunk = 500_000
+    chunk = 200_000
     tracemalloc.start()
     t0 = time.perf_counter()
     normal = NormalEquations(basis, 2)
@@ -115,8 +115,13 @@ def main() -> int:
     zeros = np.zeros(chunk, np.intp)
     for _ in range(total // chunk):
         dc = random_directions(stream_rng, chunk)
-        yc = basis.design_t(dc.az_tx, dc.el_tx).T @ true[0]
-        yc += basis.design_t(dc.az_rx, dc.el_rx).T @ true[1]
+        yc = np.concatenate(  # the benchmark's own data, made in small pieces
+            [
+                basis.design_t(dc.az_tx[s : s + 20_000], dc.el_tx[s : s + 20_000]).T @ true[0]
+                + basis.design_t(dc.az_rx[s : s + 20_000], dc.el_rx[s : s + 20_000]).T @ true[1]
+                for s in range(0, chunk, 20_000)
+            ]
+        )
         normal.add(dc, zeros, ones, yc)
         del dc, yc
     sol_stream = solve(normal, ridge=RIDGE)

@@ -48,6 +48,9 @@ class Basis:
     """A family of functions on the sphere of directions; subclasses define the functions."""
 
     kind: str = ""
+    #: True when :meth:`design_into` accepts samples of any shape, e.g. ``(2, n)`` for both ends
+    #: of a link, writing ``out[:, ...]`` of shape ``(n_coef, *shape)``.
+    stacked_samples: bool = False
 
     @property
     def n_coef(self) -> int:  # pragma: no cover - overridden
@@ -125,6 +128,7 @@ class SphericalHarmonics(Basis):
 
     order: int = 10
     kind: str = field(default="sh", init=False)
+    stacked_samples: bool = field(default=True, init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         if int(self.order) != self.order or self.order < 1:
@@ -157,11 +161,12 @@ class SphericalHarmonics(Basis):
         # array operations; the degree's cosine and sine rows are then written in one go each.
         L = self.order
         a, b, mm = self._coefs
-        n = az_rad.size
+        n = az_rad.shape  # any sample shape: (n,), or (2, n) for both ends of a link at once
+        col = (slice(None),) + (None,) * len(n)  # broadcast a per-order coefficient over samples
         x = np.sin(el_rad)  # cos(colatitude)
         s = np.cos(el_rad)  # sin(colatitude) >= 0
-        cos_m = np.empty((L, n))  # sqrt(2) cos(m az)
-        sin_m = np.empty((L, n))  # sqrt(2) sin(m az)
+        cos_m = np.empty((L, *n))  # sqrt(2) cos(m az)
+        sin_m = np.empty((L, *n))  # sqrt(2) sin(m az)
         sqrt2 = np.sqrt(2.0)
         cos_m[0] = sqrt2
         sin_m[0] = 0.0
@@ -176,19 +181,18 @@ class SphericalHarmonics(Basis):
                 cos_m[m] -= cos_m[m - 2]
                 np.multiply(two_cos, sin_m[m - 1], out=sin_m[m])
                 sin_m[m] -= sin_m[m - 2]
-        p_lm2 = np.empty((L, n))
-        p_lm1 = np.empty((L, n))
-        p_l = np.empty((L, n))
-        tmp = np.empty((L, n))
+        p_lm2 = np.empty((L, *n))
+        p_lm1 = np.empty((L, *n))
+        p_l = np.empty((L, *n))
         p_lm1[0] = 1.0 / np.sqrt(4.0 * np.pi)
         out[0] = p_lm1[0]
         for l in range(1, L):
             k = l - 1
             if k > 0:
                 np.multiply(p_lm1[:k], x, out=p_l[:k])
-                np.multiply(p_lm2[:k], b[l, :k, None], out=tmp[:k])
-                p_l[:k] -= tmp[:k]
-                p_l[:k] *= a[l, :k, None]
+                p_lm2[:k] *= b[l, :k][col]  # l-2 values are not needed after this step
+                p_l[:k] -= p_lm2[:k]
+                p_l[:k] *= a[l, :k][col]
             np.multiply(p_lm1[k], x, out=p_l[k])
             p_l[k] *= np.sqrt(2.0 * l + 1.0)
             np.multiply(p_lm1[k], s, out=p_l[l])

@@ -42,7 +42,7 @@ FloatArray = NDArray[np.float64]
 DEFAULT_RIDGE = 1e-6
 
 #: Samples per feature sub-chunk (fits the CPU cache) and per accumulation block.
-FEATURE_CHUNK = 2048
+FEATURE_CHUNK = 4096
 BLOCK_SAMPLES = 32768
 
 
@@ -75,7 +75,9 @@ class NormalEquations:
         self.rhs = np.zeros(p)
         # Features of both ends plus the observations as a last row: one symmetric rank-k
         # update then yields X^T X, X^T y and y^T y in a single pass over the block.
-        self._buffer = np.empty((2 * self.basis.n_coef + 1, BLOCK_SAMPLES))
+        # Kept flat so that a block of any length is a C-contiguous (rows, k) view, which
+        # BLAS takes without a copy.
+        self._buffer = np.empty((2 * self.basis.n_coef + 1) * BLOCK_SAMPLES)
 
     @property
     def n_columns(self) -> int:
@@ -140,12 +142,8 @@ class NormalEquations:
         self.link_counts[key] = self.link_counts.get(key, 0) + n
         for start in range(0, n, BLOCK_SAMPLES):
             stop = min(n, start + BLOCK_SAMPLES)
-            buf = self._buffer[:, : stop - start]
-            for s in range(start, stop, FEATURE_CHUNK):
-                e = min(stop, s + FEATURE_CHUNK)
-                view = buf[:, s - start : e - start]
-                self.basis.design_into(az_tx[s:e], el_tx[s:e], view[:p])
-                self.basis.design_into(az_rx[s:e], el_rx[s:e], view[p : 2 * p])
+            buf = self._buffer[: (2 * p + 1) * (stop - start)].reshape(2 * p + 1, stop - start)
+            self._fill_features(buf, az_tx[start:stop], el_tx[start:stop], az_rx[start:stop], el_rx[start:stop])
             buf[2 * p] = y[start:stop]
             block = buf @ buf.T  # one symmetric rank-k update: both nodes' blocks, X^T y, y^T y
             self.gram[bt, bt] += block[:p, :p]
@@ -155,6 +153,31 @@ class NormalEquations:
             self.rhs[bt] += block[:p, 2 * p]
             self.rhs[br] += block[p : 2 * p, 2 * p]
             self.yty += float(block[2 * p, 2 * p])
+
+    def _fill_features(
+        self, buf: FloatArray, az_tx: FloatArray, el_tx: FloatArray, az_rx: FloatArray, el_rx: FloatArray
+    ) -> None:
+        """Write tx features into rows 0..p-1 and rx features into rows p..2p-1 of ``buf``.
+
+        Works in cache-sized chunks; a basis that accepts stacked samples computes both ends of
+        a chunk in one pass, through a (p, 2, chunk) strided view of the two row groups.
+        """
+        p = self.basis.n_coef
+        n = az_tx.size
+        if self.basis.stacked_samples:
+            az_both = np.stack([az_tx, az_rx])
+            el_both = np.stack([el_tx, el_rx])
+        for s in range(0, n, FEATURE_CHUNK):
+            e = min(n, s + FEATURE_CHUNK)
+            view = buf[: 2 * p, s:e]
+            if self.basis.stacked_samples:
+                both = np.lib.stride_tricks.as_strided(
+                    view, shape=(p, 2, e - s), strides=(view.strides[0], p * view.strides[0], view.strides[1])
+                )
+                self.basis.design_into(az_both[:, s:e], el_both[:, s:e], both)
+            else:
+                self.basis.design_into(az_tx[s:e], el_tx[s:e], view[:p])
+                self.basis.design_into(az_rx[s:e], el_rx[s:e], view[p:])
 
     def merge(self, other: "NormalEquations") -> "NormalEquations":
         """Add another accumulator's statistics (same basis and node count) into this one."""
@@ -419,17 +442,12 @@ def solve(
     scale = 1.0 / np.sqrt(np.maximum(np.abs(np.diag(kkt))[:pcols], 1e-300))
     full_scale = np.concatenate([scale, np.ones(k)])
     kkt_s = kkt * full_scale[:, None] * full_scale[None, :]
-    import warnings
-
-    import scipy.linalg
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", scipy.linalg.LinAlgWarning)
-        try:
-            lu = scipy.linalg.lu_factor(kkt_s, check_finite=False)
-            kinv_s = scipy.linalg.lu_solve(lu, np.eye(pcols + k), check_finite=False)
-        except (np.linalg.LinAlgError, ValueError):
-            kinv_s = np.full((pcols + k, pcols + k), np.nan)
+    # numpy's LAPACK (not scipy's): a second OpenBLAS thread pool would wait for numpy's
+    # spinning threads after the big rank-k update and make this small inverse 40x slower.
+    try:
+        kinv_s = np.linalg.inv(kkt_s)
+    except np.linalg.LinAlgError:
+        kinv_s = np.full((pcols + k, pcols + k), np.nan)
     finite = bool(np.all(np.isfinite(kinv_s)))
     cond_1 = float(np.abs(kkt_s).sum(axis=0).max() * np.abs(kinv_s).sum(axis=0).max()) if finite else np.inf
     if not finite or cond_1 > 1.0 / (1e3 * np.finfo(np.float64).eps):
