@@ -17,8 +17,6 @@ from dataclasses import dataclass, field
 from typing import Any, Mapping
 
 import numpy as np
-from sklearn.neighbors import KNeighborsRegressor
-
 from rplearn.datasets import LinkSamples
 from rplearn.errors import IdentifiabilityError, InputError, ModelFileError
 from rplearn.modelfile import write_model_file
@@ -106,7 +104,7 @@ class KNNModel:
     kind: str = "knn"
 
     def __post_init__(self) -> None:
-        self._regressors: dict[tuple[str, str], KNeighborsRegressor] = {}
+        self._regressors: dict[tuple[str, str], Any] = {}
 
     @property
     def label(self) -> str:
@@ -129,7 +127,9 @@ class KNNModel:
             model._regressor(key)
         return model
 
-    def _regressor(self, key: tuple[str, str]) -> KNeighborsRegressor:
+    def _regressor(self, key: tuple[str, str]):
+        from sklearn.neighbors import KNeighborsRegressor  # imported on use: slow to import
+
         if key not in self._regressors:
             reg = KNeighborsRegressor(n_neighbors=self.n_neighbors, algorithm="kd_tree")
             self._regressors[key] = reg.fit(self.train_angles_rad[key], self.train_gain_db[key])

@@ -99,6 +99,22 @@ def _pairs(values: Optional[list[str]], what: str) -> dict[str, str]:
     return outp
 
 
+def _reader_options(
+    node: Optional[list[str]], receiver: Optional[list[str]], address: Optional[list[str]], pose_topic: Optional[list[str]]
+) -> dict[str, Any]:
+    """Options of :func:`rplearn.io.read_logs` from the repeated KEY=VALUE flags."""
+    opts: dict[str, Any] = {}
+    for flag, key, values in (
+        ("--node", "nodes", node),
+        ("--receiver", "receivers", receiver),
+        ("--address", "address_map", address),
+        ("--pose-topic", "pose_topics", pose_topic),
+    ):
+        if values:
+            opts[key] = _pairs(values, flag)
+    return opts
+
+
 def _link(text: Optional[str]) -> tuple[str, str] | None:
     if text is None or text.lower() == "all":
         return None
@@ -208,16 +224,7 @@ def inspect(
     """
     from rplearn.inspect import inspect_logs
 
-    opts: dict[str, Any] = {}
-    if node:
-        opts["nodes"] = _pairs(node, "--node")
-    if receiver:
-        opts["receivers"] = _pairs(receiver, "--receiver")
-    if address:
-        opts["address_map"] = _pairs(address, "--address")
-    if pose_topic:
-        opts["pose_topics"] = _pairs(pose_topic, "--pose-topic")
-    report = inspect_logs(logs, **opts)
+    report = inspect_logs(logs, **_reader_options(node, receiver, address, pose_topic))
     out.print(report.to_markdown() if markdown else report.to_text(), highlight=False)
 
 
@@ -245,15 +252,7 @@ def sync(
     from rplearn.io import read_logs
     from rplearn.sync import synchronise
 
-    opts: dict[str, Any] = {"tx_power_dbm": tx_power_dbm, "frequency_hz": frequency_hz}
-    if node:
-        opts["nodes"] = _pairs(node, "--node")
-    if receiver:
-        opts["receivers"] = _pairs(receiver, "--receiver")
-    if address:
-        opts["address_map"] = _pairs(address, "--address")
-    if pose_topic:
-        opts["pose_topics"] = _pairs(pose_topic, "--pose-topic")
+    opts = {"tx_power_dbm": tx_power_dbm, "frequency_hz": frequency_hz, **_reader_options(node, receiver, address, pose_topic)}
     pose_logs, _ = read_logs(poses, **opts)
     signal_logs, _ = read_logs(signals, **opts)
     if pose_logs.pose is None:
