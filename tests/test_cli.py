@@ -90,7 +90,21 @@ USER_ERRORS = {
     "unknown unit": (["fit", "data.parquet", "--units", "nope", "-o", "x.json"], "unknown unit"),
     "bad link": (["sync", "--poses", "flight/pose_log.parquet", "--signals", "flight/signal_log.parquet", "--link", "AB", "-o", "x.parquet"], "--link"),
     "bad preset": (["simulate", "--preset", "mars", "-o", "x"], "mars"),
+    "plan over a limit": (["trajectory", "-o", "plan", "--max-flight-time", "100", "--check-model", "none"], "above the limit 100 s"),
 }
+
+
+def test_trajectory_writes_references_and_checks_the_plan(tmp_path):
+    proc = run(["trajectory", "-o", "plan", "--psi0", "0,24,48", "--test-psi0", "36"], tmp_path)
+    files = sorted(os.listdir(tmp_path / "plan"))
+    assert len(files) == 8 and "learn_24_B.csv" in files and "test_36_A.csv" in files
+    ref = pd.read_csv(tmp_path / "plan" / "learn_0_A.csv")
+    assert list(ref.columns) == ["t", "x", "y", "z", "yaw_deg"] and ref["t"].is_monotonic_increasing
+    # the paper's plan decouples SH-10 up to the one constant two drones leave free
+    assert "rank 199 (null space 1, expected 1)" in proc.stdout
+    # one unit alone does not: the check says so before anyone flies
+    thin = run(["trajectory", "-o", "thin", "--psi0", "0", "--loops", "2"], tmp_path)
+    assert "rank 199" not in thin.stdout and "not" in thin.stdout.lower()
 
 
 @pytest.mark.parametrize("case", sorted(USER_ERRORS))

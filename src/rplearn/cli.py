@@ -157,11 +157,16 @@ def trajectory(
     max_accel: Optional[float] = typer.Option(None, help="Refuse plans with larger accelerations [m/s^2]."),
     max_flight_time: Optional[float] = typer.Option(None, help="Flight time per battery; each unit must fit [s]."),
     rate_hz: float = typer.Option(10.0, "--rate", help="Sample rate of the reference files [Hz]."),
+    check_model: Optional[str] = typer.Option("sh-10", "--check-model", help="Model whose rank and condition number the plan check reports (e.g. sh-10, bg-7; 'none' to skip)."),
+    wind_m_s: float = typer.Option(0.0, "--wind", help="Steady wind for the plan check [m/s] (tilts the drones)."),
 ) -> None:
-    """Plan the paper's calibration campaign (Sec. IV-A) and write references t,x,y,z,yaw_deg.
+    """Plan the paper's calibration campaign (Sec. IV-A), write references t,x,y,z,yaw_deg, and check
+    before flying whether the plan will decouple the patterns (coverage, rank, condition number).
 
     Example: rplearn trajectory --distance 10 --height 20 --loops 5 --max-flight-time 600 -o plan
     """
+    from rplearn.learn import ModelSpec
+    from rplearn.plan import check_plan
     from rplearn.trajectory import PlanLimits, paper_campaign, summarize_unit, write_references
 
     learn = [float(v) for v in (_split_list(psi0_deg) or ["0", "24", "48"])]
@@ -179,6 +184,12 @@ def trajectory(
     paths = write_references(campaign, out_dir, rate_hz)
     out.print(table)
     out.print(f"wrote {len(paths)} reference files to {out_dir}")
+    if check_model and check_model.lower() != "none":
+        spec = ModelSpec.parse(check_model)
+        if not spec.decouples:
+            raise InputError(f"--check-model: {spec.label} has no per-node pattern to check; use sh, bg or poly")
+        report = check_plan(campaign, spec.basis(), wind_speed_m_s=wind_m_s)
+        out.print("plan check (learning units):\n" + report.summary(), highlight=False)
 
 
 @app.command()
