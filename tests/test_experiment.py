@@ -103,3 +103,17 @@ def test_best_yaw_turns_the_beam_toward_the_other_drone():
     r = best_yaw(model, "A", "B", [0, 0, 10], [0, 20, 10], turn="tx")  # B is due north of A
     assert r.tx_yaw_deg == pytest.approx(90.0, abs=1.0)  # face north (ENU yaw 90 deg)
     assert r.gain_db > r.baseline_gain_db
+
+
+def test_pattern_error_removes_only_unidentifiable_constants():
+    from rplearn.experiment import pattern_errors_db
+
+    b = SphericalHarmonics(2)
+    truth = PatternSet(b, ("A", "B"), np.zeros((2, 4)))
+    shifted = np.zeros((2, 4))
+    shifted[:, 0] = [3.0 * np.sqrt(4 * np.pi), -3.0 * np.sqrt(4 * np.pi)]  # +3 dB on A, -3 dB on B
+    dirs = {"A": (np.array([0.0, 1.0]), np.array([0.0, 0.5])), "B": (np.array([2.0]), np.array([-0.3]))}
+    two_node = PatternSet(b, ("A", "B"), shifted, gauge=[{"nodes": ["A", "B"], "rule": "equal-mean"}])
+    assert pattern_errors_db(two_node, truth, dirs) == {"A": pytest.approx(0.0), "B": pytest.approx(0.0)}
+    triangle = PatternSet(b, ("A", "B"), shifted, gauge=[])
+    assert pattern_errors_db(triangle, truth, dirs) == {"A": pytest.approx(3.0), "B": pytest.approx(3.0)}

@@ -613,7 +613,7 @@ def demo(
         result = run_demo(out_dir, seed=seed, preset=preset, progress=_step(p, task))
     out.print(f"\nTable I on the testing unit ({result.n_test:,} samples; learned on {result.n_learn:,}); "
               f"simulated noise {result.noise_std_db:.2f} dB; 'pattern err' = RMS error of the learned pattern "
-              "against the true one over the covered directions, constant removed:\n", highlight=False)
+              "against the true one over the covered directions (constant removed where two drones cannot identify it):\n", highlight=False)
     out.print(result.table_markdown, highlight=False)
     sw = result.sweep
     out.print(f"\nSH order sweep: lowest test RMSE {min(sw.rmse_db):.3f} dB at SH-{sw.best_order} "

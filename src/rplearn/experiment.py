@@ -114,18 +114,26 @@ def node_directions(samples: LinkSamples) -> dict[str, tuple[np.ndarray, np.ndar
     return out
 
 
+def gauged_nodes(model: Any) -> set[str]:
+    """Nodes whose constant the fit could not identify (named in the model's gauge notes)."""
+    return {str(n) for g in getattr(model, "gauge", []) for n in g.get("nodes", [])}
+
+
 def pattern_errors_db(
-    model: Any, truth: Any, directions: Mapping[str, tuple[np.ndarray, np.ndarray]], remove_constant: bool = True
+    model: Any, truth: Any, directions: Mapping[str, tuple[np.ndarray, np.ndarray]], remove_constant: bool | None = None
 ) -> dict[str, float]:
     """RMS difference between a learned and a true pattern over the covered directions [dB].
 
-    With ``remove_constant`` each node's mean difference is removed first: a two-node fit
-    identifies shapes only (paper Sec. V-A), so its constant is a convention, not an error.
+    The mean difference is removed first for nodes whose constant the fit could not identify
+    (two nodes, or any bipartite link graph; paper Sec. V-A): there the constant is a
+    convention, not an error. Nodes in a triangle of links are compared absolutely.
+    ``remove_constant`` forces either behaviour for every node.
     """
+    gauged = gauged_nodes(model)
     out = {}
     for node, (az, el) in directions.items():
         diff = np.asarray(model.evaluate(node, az, el)) - np.asarray(truth.evaluate(node, az, el))
-        if remove_constant:
+        if remove_constant or (remove_constant is None and node in gauged):
             diff = diff - diff.mean()
         out[node] = float(np.sqrt(np.mean(diff**2)))
     return out
@@ -350,8 +358,11 @@ def run_demo(
     sim = simulate(preset, seed=seed, out_dir=os.path.join(out_dir, "flight"))
     files.update({f"flight_{k}": v for k, v in sim.paths.items()})
     nodes = list(sim.ground_truth.nodes)
-    link = (nodes[0], nodes[1])
-    progress(f"synchronising {len(sim.signal_log):,} packets with the pose logs (link {link[0]} -> {link[1]})")
+    # Two drones: one direction, as the paper does (non-reciprocal electronics). More drones:
+    # every link, so that a triangle of links identifies absolute gains.
+    link = (nodes[0], nodes[1]) if len(nodes) == 2 else None
+    link_text = f"link {link[0]} -> {link[1]}" if link else "all links"
+    progress(f"synchronising {len(sim.signal_log):,} packets with the pose logs ({link_text})")
     synced = synchronise(sim.pose_log, sim.signal_log, link=link)
     dataset = synced.dataset
     files["dataset"] = os.path.join(out_dir, "dataset.parquet")
@@ -452,7 +463,7 @@ def _demo_figures_and_report(result, sim, dataset, learn, test, fitted, prov) ->
     sections = [
         ReportSection(
             "Dataset",
-            f"{result.n_learn:,} learning and {result.n_test:,} testing samples (link A -> B). "
+            f"{result.n_learn:,} learning and {result.n_test:,} testing samples. "
             f"Simulated noise level {result.noise_std_db:.2f} dB.\n\n```\n{result.sync_text}\n```",
             [files["fig_coverage"], files["fig_rssi"]],
         ),
