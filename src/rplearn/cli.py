@@ -34,6 +34,7 @@ app = typer.Typer(
     ),
     no_args_is_help=True,
     add_completion=False,
+    rich_markup_mode=None,  # help texts carry units in brackets, e.g. [m/s], which markup would eat
     pretty_exceptions_enable=False,
 )
 console = Console(stderr=True)
@@ -55,9 +56,9 @@ def user_errors(fn: Callable) -> Callable:
         except RplearnError as exc:
             _fail(str(exc).splitlines()[0] if str(exc) else type(exc).__name__)
         except FileNotFoundError as exc:
-            _fail(f"{exc.filename}: no such file")
-        except (PermissionError, IsADirectoryError) as exc:
-            _fail(f"{exc.filename}: {exc.strerror}")
+            _fail(f"{exc.filename}: no such file or directory")
+        except OSError as exc:
+            _fail(f"{exc.filename}: {exc.strerror or exc}" if exc.filename else str(exc))
 
     return wrapper
 
@@ -237,6 +238,9 @@ def inspect(
 
     report = inspect_logs(logs, **_reader_options(node, receiver, address, pose_topic))
     out.print(report.to_markdown() if markdown else report.to_text(), highlight=False)
+    unreadable = [f for f in report.files if f.get("error") is not None]
+    if unreadable:
+        _fail(f"{len(unreadable)} of {len(report.files)} file(s) could not be read (see above)")
 
 
 @app.command()
@@ -270,7 +274,10 @@ def sync(
         raise InputError(f"{', '.join(poses)}: no pose log found")
     if signal_logs.signal is None:
         raise InputError(f"{', '.join(signals)}: no signal log found")
-    offsets = {k: float(v) for k, v in _pairs(offset, "--offset").items()}
+    try:
+        offsets = {k: float(v) for k, v in _pairs(offset, "--offset").items()}
+    except ValueError:
+        raise InputError(f"--offset: expected NODE=SECONDS with a number, got {', '.join(offset or [])}") from None
     result = synchronise(pose_logs.pose, signal_logs.signal, link=_link(link), max_gap_s=max_gap_s, clock_offsets_s=offsets or None)
     write_table(result.dataset, output)
     out.print(result.summary.to_text(), highlight=False)
@@ -289,7 +296,7 @@ def fit(
     dataset: str = typer.Argument(..., help="Matched dataset (.parquet or .csv)."),
     model: str = typer.Option("sh", "--model", help="sh, bg, poly, mean or knn (also sh-10, nn-400...)."),
     degree: Optional[int] = typer.Option(None, "--degree", help="SH-L / BG-k / P-k order, or k of knn (defaults 10, 7, 12, 400)."),
-    ridge: Optional[float] = typer.Option(None, "--ridge", help="Ridge weight (default 1e-6 for sh/poly, 1 for bg)."),
+    ridge: Optional[float] = typer.Option(None, "--ridge", help="Ridge weight on the diagonal of X^T X (default 1; the paper used 50)."),
     sigma: float = typer.Option(0.5, "--sigma", help="BG kernel variance sigma [rad^2] (paper: about 0.5)."),
     grid: str = typer.Option("paper", "--grid", help="BG nodes: paper or fibonacci."),
     units: Optional[list[str]] = typer.Option(None, "--units", help="Learning units (repeat or comma-separate)."),
@@ -316,6 +323,8 @@ def fit(
         for g in training.get("gauges", []):
             msg += f"\n  gauge: {g['text']}"
     out.print(msg, highlight=False)
+    for w in training.get("warnings", []):
+        console.print(f"warning: {w}", highlight=False, soft_wrap=True)
 
 
 @app.command()
@@ -355,13 +364,13 @@ def evaluate(
 def predict(
     model_path: str = typer.Argument(..., metavar="MODEL.json"),
     dataset: str = typer.Argument(..., metavar="DATASET"),
-    output: str = typer.Option(..., "-o", "--out", help="CSV with gain_pred_db and rssi_pred_dbm added."),
+    output: str = typer.Option(..., "-o", "--out", help="The dataset with gain_pred_db and rssi_pred_dbm added (.csv or .parquet)."),
 ) -> None:
     """Predict the joint gain and received power for every row of a dataset.
 
     Example: rplearn predict sh10.json data.parquet -o pred.csv
     """
-    from rplearn.datasets import link_samples
+    from rplearn.datasets import link_samples, write_table
     from rplearn.link import received_power_dbm
     from rplearn.modelfile import load_model
 
@@ -372,7 +381,7 @@ def predict(
     df = df.copy()
     df["gain_pred_db"] = gain
     df["rssi_pred_dbm"] = received_power_dbm(df["tx_power_dbm"].to_numpy(), gain, samples.distance_m, df["frequency_hz"].to_numpy())
-    df.to_csv(output, index=False)
+    write_table(df, output)
     out.print(f"wrote {len(df):,} predictions to {output}")
 
 
@@ -405,6 +414,8 @@ def sweep(
             order_list = [int(v) for v in orders.split(",")]
         except ValueError:
             raise InputError(f"--orders: expected A..B or a comma list, got {orders!r}") from None
+    if not order_list or min(order_list) < 1:
+        raise InputError(f"--orders: expected positive orders, A..B with A <= B, got {orders!r}")
     df = _dataset(dataset)
     if "unit" not in df.columns:
         raise InputError(f"{dataset}: a sweep needs a 'unit' column to split learning from testing samples")
@@ -436,7 +447,7 @@ def export(
     fmt: str = typer.Option("grid", "--format", help="grid (CSV), msi (one file per node) or images (3-D PNG per node)."),
     step_deg: float = typer.Option(5.0, "--step-deg", help="Grid step [deg]."),
     output: str = typer.Option(..., "-o", "--out", help="Output file (grid) or directory (msi, images)."),
-    frequency_hz: float = typer.Option(2.437e9, "--frequency", help="Frequency written into MSI files [Hz]."),
+    frequency_hz: Optional[float] = typer.Option(None, "--frequency", help="Frequency written into MSI files [Hz] (default: the frequency the model was learned at)."),
 ) -> None:
     """Export a learned model: grid CSV (node, az_deg, el_deg, gain_db), MSI Planet cuts, 3-D images.
 
@@ -455,7 +466,7 @@ def export(
         os.makedirs(output, exist_ok=True)
         for n in model.nodes:
             path = os.path.join(output, f"{n}.msi")
-            ex.export_msi(model, n, path, frequency_hz=frequency_hz, name=f"rplearn {model.label} node {n}")
+            ex.export_msi(model, n, path, frequency_hz=frequency_hz or model.training.get("frequency_hz"), name=f"rplearn {model.label} node {n}")
             out.print(f"wrote {path}")
     elif fmt == "images":
         paths = ex.export_pattern_images(model, output)
@@ -508,7 +519,7 @@ def orient(
     tx_yaw: float = typer.Option(0.0, "--tx-yaw", help="Current yaw of tx, ENU ccw from east [deg]."),
     rx_yaw: float = typer.Option(0.0, "--rx-yaw", help="Current yaw of rx [deg]."),
     tx_power_dbm: float = typer.Option(20.0, "--tx-power", help="[dBm]."),
-    frequency_hz: float = typer.Option(2.437e9, "--frequency", help="[Hz]."),
+    frequency_hz: Optional[float] = typer.Option(None, "--frequency", help="Carrier frequency [Hz] (default: the one the model was learned at)."),
 ) -> None:
     """Heading that maximises a link, and the received power before and after.
 
@@ -534,6 +545,9 @@ def orient(
     if getattr(model, "kind", "") != "patterns":
         raise InputError(f"{model_path}: a {model.kind} baseline cannot tell which heading is better")
     p_tx, p_rx = xyz(tx_pos, "--tx-pos"), xyz(rx_pos, "--rx-pos")
+    frequency_hz = frequency_hz or model.training.get("frequency_hz")
+    if not frequency_hz:
+        raise InputError(f"{model_path}: the model does not record its frequency; give --frequency")
     r = best_yaw(model, tx, rx, p_tx, p_rx, turn=turn, tx_yaw_deg=tx_yaw, rx_yaw_deg=rx_yaw)
     d = float(distance_m(np.array(p_tx), np.array(p_rx)))
     before = float(received_power_dbm(tx_power_dbm, r.baseline_gain_db, d, frequency_hz))

@@ -31,6 +31,25 @@ POSE_FIELDS: tuple[str, ...] = ("x", "y", "z", "qw", "qx", "qy", "qz")
 MATCHED_COLUMNS: tuple[str, ...] = SIGNAL_COLUMNS + tuple(
     f"{end}_{f}" for end in ("tx", "rx") for f in POSE_FIELDS
 )
+#: Columns holding labels: read from CSV as text, so that node "01" stays "01", not 1.
+STRING_COLUMNS: tuple[str, ...] = ("node", "tx", "rx", "unit")
+CSV_DTYPES: dict[str, type] = {c: str for c in STRING_COLUMNS}
+#: RSSI values that mean "no measurement" in drivers and capture tools [dBm].
+SENTINEL_RSSI_DBM: tuple[float, ...] = (0.0, -127.0, -128.0, 127.0)
+
+
+def normalise_times(df: pd.DataFrame, source: str = "table") -> pd.DataFrame:
+    """Turn a datetime ``t`` column into float seconds since the UNIX epoch (UTC).
+
+    Naive datetimes are taken as UTC. Other columns are left alone.
+    """
+    if "t" in df.columns and pd.api.types.is_datetime64_any_dtype(df["t"]):
+        t = df["t"]
+        if getattr(t.dt, "tz", None) is None:
+            t = t.dt.tz_localize("UTC")
+        df = df.copy()
+        df["t"] = (t - pd.Timestamp(0, tz="UTC")).dt.total_seconds()
+    return df
 
 
 def _require_columns(df: pd.DataFrame, columns: Sequence[str], source: str) -> None:
@@ -63,6 +82,7 @@ def validate_pose_log(df: pd.DataFrame, source: str = "pose log") -> pd.DataFram
         timestamp within one node (with the file/source name and the first offending row).
     """
     _require_columns(df, POSE_COLUMNS, source)
+    df = normalise_times(df, source)
     _require_finite(df, [c for c in POSE_COLUMNS if c != "node"], source)
     out = df.loc[:, list(POSE_COLUMNS)].copy()
     out["node"] = out["node"].astype(str)
@@ -96,6 +116,7 @@ def validate_signal_log(df: pd.DataFrame, source: str = "signal log") -> pd.Data
         transmitter equal to its receiver.
     """
     _require_columns(df, SIGNAL_COLUMNS, source)
+    df = normalise_times(df, source)
     _require_finite(df, ["t", "rssi_dbm", "tx_power_dbm", "frequency_hz"], source)
     cols = list(SIGNAL_COLUMNS) + [c for c in OPTIONAL_SIGNAL_COLUMNS if c in df.columns]
     out = df.loc[:, cols].copy()
@@ -117,8 +138,17 @@ def validate_signal_log(df: pd.DataFrame, source: str = "signal log") -> pd.Data
 def validate_matched(df: pd.DataFrame, source: str = "dataset") -> pd.DataFrame:
     """Check a matched link dataset (columns of :data:`MATCHED_COLUMNS`)."""
     _require_columns(df, MATCHED_COLUMNS, source)
+    df = normalise_times(df, source)
     numeric = [c for c in MATCHED_COLUMNS if c not in ("tx", "rx")]
     _require_finite(df, numeric, source)
+    rssi = df["rssi_dbm"].to_numpy(np.float64)
+    sentinel = np.isin(rssi, SENTINEL_RSSI_DBM)
+    if np.any(sentinel):
+        row = int(np.flatnonzero(sentinel)[0])
+        raise InputError(
+            f"{source}: column rssi_dbm holds {int(sentinel.sum())} sentinel value(s) meaning 'no measurement' "
+            f"(first {rssi[row]:g} dBm at row {row}); rplearn sync drops and counts them"
+        )
     out = df.copy()
     out["tx"] = out["tx"].astype(str)
     out["rx"] = out["rx"].astype(str)
@@ -136,8 +166,8 @@ def read_table(path: str, source: str | None = None) -> pd.DataFrame:
         raise InputError(f"{name}: no such file")
     try:
         if str(path).lower().endswith((".parquet", ".pq")):
-            return pd.read_parquet(path)
-        return pd.read_csv(path)
+            return normalise_times(pd.read_parquet(path), name)
+        return normalise_times(pd.read_csv(path, dtype=CSV_DTYPES), name)
     except (ValueError, OSError, pd.errors.ParserError, UnicodeDecodeError) as exc:
         raise InputError(f"{name}: cannot read table ({type(exc).__name__}: {exc})") from None
     except Exception as exc:  # pyarrow raises its own error classes
@@ -168,6 +198,8 @@ class LinkSamples:
         Observed joint gain ``G_tx + G_rx`` [dB] (paper eq. 5).
     distance_m : ndarray
         Distance between the ends [m].
+    frequency_hz : ndarray or None
+        Carrier frequency of every sample [Hz].
     """
 
     directions: Directions
@@ -176,6 +208,7 @@ class LinkSamples:
     nodes: tuple[str, ...]
     joint_gain_db: np.ndarray
     distance_m: np.ndarray
+    frequency_hz: np.ndarray | None = None
 
     def __len__(self) -> int:
         return int(self.joint_gain_db.shape[0])
@@ -221,4 +254,4 @@ def link_samples(df: pd.DataFrame, source: str = "dataset", nodes: Sequence[str]
         dist,
         df["frequency_hz"].to_numpy(np.float64),
     )
-    return LinkSamples(dirs, tx_index, rx_index, nodes_t, gain, dist)
+    return LinkSamples(dirs, tx_index, rx_index, nodes_t, gain, dist, df["frequency_hz"].to_numpy(np.float64))

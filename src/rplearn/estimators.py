@@ -59,7 +59,7 @@ class PatternRegressor(RegressorMixin, BaseEstimator):
     order : int
         SH-L (degrees 0..L-1), BG-k (k x 2k grid) or P-k (total degree <= k).
     ridge : float
-        Ridge weight on the diagonal of ``X^T X`` (default 1e-6; the paper used 50).
+        Ridge weight on the diagonal of ``X^T X`` (default 1; the paper used 50).
     sigma_rad2 : float
         BG kernel variance [rad^2] (paper's sigma).
     grid : {"paper", "fibonacci"}

@@ -30,11 +30,8 @@ _DEFAULT_ORDER = {"sh": 10, "bg": 7, "poly": 12, "knn": 400}
 _ALIASES = {"m": "mean", "p": "poly", "nn": "knn", "bucketized": "bg"}
 
 
-#: Default ridge per family. SH and P need none beyond numerical safety (the gauge fixes the
-#: two-node constant); BG kernels with the paper's sigma = 0.5 rad^2 overlap so much that the
-#: normal equations have condition numbers near 1e13 and a unit ridge (the paper used 50) is
-#: needed to keep the grid weights from cancelling each other.
-DEFAULT_RIDGE_BY_KIND = {"sh": DEFAULT_RIDGE, "poly": DEFAULT_RIDGE, "bg": 1.0, "mean": 0.0, "knn": 0.0}
+#: Default ridge per family (see :data:`rplearn.solver.DEFAULT_RIDGE`; the paper used 50).
+DEFAULT_RIDGE_BY_KIND = {"sh": DEFAULT_RIDGE, "poly": DEFAULT_RIDGE, "bg": DEFAULT_RIDGE, "mean": 0.0, "knn": 0.0}
 
 
 def default_ridge(kind: str) -> float:
@@ -70,6 +67,8 @@ class ModelSpec:
             object.__setattr__(self, "ridge", default_ridge(self.kind))
         if not (np.isfinite(self.ridge) and self.ridge >= 0):
             raise InputError(f"ridge must be a non-negative number, got {self.ridge!r}")
+        if self.kind != "mean" and (self.order is None or int(self.order) < 1):
+            raise InputError(f"model {self.kind}: order must be a positive integer, got {self.order!r}")
 
     @classmethod
     def parse(cls, text: str, **options: Any) -> "ModelSpec":
@@ -161,13 +160,16 @@ def fit_patterns(
         ridge=spec.ridge,
         gauge=gauge,
     )
+    training = sol.report.to_dict()
+    if samples.frequency_hz is not None:
+        training["frequency_hz"] = float(np.median(samples.frequency_hz))
     return PatternSet(
         basis=basis,
         nodes=samples.nodes,
         coef=sol.coef,
         covariance=sol.covariance,
         gauge=[g.to_dict() for g in sol.report.gauges],
-        training=sol.report.to_dict(),
+        training=training,
         provenance=dict(provenance or {}),
     )
 
@@ -183,7 +185,7 @@ def fit_model(
     if spec.kind == "mean":
         model: Model = MeanModel.fit(samples)
     elif spec.kind == "knn":
-        model = KNNModel.fit(samples, spec.order or 400)
+        model = KNNModel.fit(samples, int(spec.order))
     else:
         model = fit_patterns(samples, spec, gauge)
     ltd = time.perf_counter() - t0

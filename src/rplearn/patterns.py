@@ -70,7 +70,7 @@ class PatternSet:
         try:
             return self.nodes.index(str(node))
         except ValueError:
-            raise InputError(f"unknown node {node!r}; the model knows {', '.join(self.nodes)}") from None
+            raise InputError(f"unknown node {str(node)!r}; the model knows {', '.join(self.nodes)}") from None
 
     def evaluate(self, node: str, az_rad: ArrayLike, el_rad: ArrayLike) -> FloatArray:
         """Gain of ``node`` toward body-frame directions [dBi]."""

@@ -40,13 +40,13 @@ from typing import Iterable, Iterator, Mapping, Sequence
 import numpy as np
 import pandas as pd
 
-from rplearn.datasets import MATCHED_COLUMNS, SIGNAL_COLUMNS, validate_pose_log
+from rplearn.datasets import MATCHED_COLUMNS, SENTINEL_RSSI_DBM, SIGNAL_COLUMNS, normalise_times, validate_pose_log
 from rplearn.errors import InputError
 
 logger = logging.getLogger(__name__)
 
 #: RSSI values radios and drivers report when there is no measurement [dBm].
-DEFAULT_SENTINEL_RSSI_DBM: tuple[float, ...] = (0.0, -127.0, -128.0, 127.0)
+DEFAULT_SENTINEL_RSSI_DBM: tuple[float, ...] = SENTINEL_RSSI_DBM
 #: Drop reasons, in the order they are tested.
 DROP_REASONS: tuple[str, ...] = (
     "invalid_value",
@@ -239,6 +239,8 @@ def pose_tracks(
 
 def _numeric(df: pd.DataFrame, column: str) -> np.ndarray:
     col = df[column]
+    if pd.api.types.is_datetime64_any_dtype(col):  # datetimes: float seconds since the epoch
+        return normalise_times(pd.DataFrame({"t": col}))["t"].to_numpy(np.float64)
     if pd.api.types.is_numeric_dtype(col) and not pd.api.types.is_bool_dtype(col):
         return col.to_numpy(np.float64, na_value=np.nan)
     return pd.to_numeric(col, errors="coerce").to_numpy(np.float64, na_value=np.nan)

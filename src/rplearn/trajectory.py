@@ -534,7 +534,7 @@ def group_campaign(
                         nodes=(a, b),
                         psi0_deg=float(p),
                         role=role,
-                        label=f"{role[:5]}_{a}{b}_{p:g}",
+                        label=f"{'learn' if role == 'learning' else 'test'}_{a}{b}_{p:g}",
                         **unit_options,  # type: ignore[arg-type]
                     )
                 )

@@ -21,7 +21,7 @@ from typing import Any, Iterator, Mapping
 import numpy as np
 import pandas as pd
 
-from rplearn.datasets import POSE_COLUMNS, SIGNAL_COLUMNS, validate_pose_log
+from rplearn.datasets import CSV_DTYPES, POSE_COLUMNS, SIGNAL_COLUMNS, normalise_times, validate_pose_log
 from rplearn.errors import InputError, LogFormatError
 from rplearn.geometry import (
     geodetic_to_enu,
@@ -75,8 +75,8 @@ def _read(path: str, source: str) -> pd.DataFrame:
         raise InputError(f"{source}: no such file")
     try:
         if str(path).lower().endswith(_PARQUET_EXT):
-            return pd.read_parquet(path)
-        return pd.read_csv(path, skipinitialspace=True)
+            return normalise_times(pd.read_parquet(path), source)
+        return normalise_times(pd.read_csv(path, skipinitialspace=True, dtype=CSV_DTYPES), source)
     except pd.errors.EmptyDataError:
         raise LogFormatError(f"{source}: empty file, expected a header line and rows") from None
     except Exception as exc:  # parsers raise many classes on corrupt bytes
@@ -330,10 +330,13 @@ def iter_signal_table(
 
             pf = pq.ParquetFile(path)
             batches: Iterator[pd.DataFrame] = (
-                b.to_pandas() for b in pf.iter_batches(batch_size=chunk_rows)
+                normalise_times(b.to_pandas(), source) for b in pf.iter_batches(batch_size=chunk_rows)
             )
         else:
-            batches = iter(pd.read_csv(path, chunksize=chunk_rows, skipinitialspace=True))
+            batches = (
+                normalise_times(c, source)
+                for c in pd.read_csv(path, chunksize=chunk_rows, skipinitialspace=True, dtype=CSV_DTYPES)
+            )
         for chunk in batches:
             yield canonical_signal(chunk, source=source, **options)
     except (InputError, LogFormatError):
@@ -357,7 +360,7 @@ def table_kind(path: str, columns: Mapping[str, str] | None = None) -> str:
         if not os.path.exists(path):
             raise InputError(f"{source}: no such file")
         try:
-            names = list(pd.read_csv(path, nrows=0, skipinitialspace=True).columns)
+            names = list(pd.read_csv(path, nrows=0, skipinitialspace=True, dtype=CSV_DTYPES).columns)
         except Exception as exc:
             raise LogFormatError(f"{source}: cannot read CSV header ({type(exc).__name__})") from None
     renamed = set(rename_columns(pd.DataFrame(columns=names), columns).columns)
