@@ -184,3 +184,18 @@ def test_bg_and_poly_fit_smooth_patterns():
             d.az_rx, d.el_rx
         ) @ sol.coef[1]
         assert np.sqrt(np.mean((pred - y) ** 2)) < 1.5
+
+
+def test_gauge_on_an_identified_node_is_refused_and_poor_coverage_warns():
+    rng = np.random.default_rng(20)
+    b, true = _band_limited_patterns(rng, 3, 2)
+    pairs = np.array([[0, 1], [1, 2], [2, 0]])
+    d, tx, rx, y = _simulate(rng, b, true, pairs, 3000, 1.0)
+    with pytest.raises(InputError, match="already identified"):
+        fit_joint(d, tx, rx, y, 3, b, list("ABC"), gauge={"node": "A", "mean_gain_dbi": 10.0})
+    assert fit_joint(d, tx, rx, y, 3, b, list("ABC")).report.warnings == ()
+    # samples from a narrow cone only: the fit works (ridge) but says it extrapolates
+    n = 2000
+    narrow = Directions(rng.uniform(-0.2, 0.2, n), rng.uniform(-0.1, 0.1, n), rng.uniform(-0.2, 0.2, n), rng.uniform(-0.1, 0.1, n))
+    sol = fit_joint(narrow, np.zeros(n, int), np.ones(n, int), rng.normal(size=n), 2, SphericalHarmonics(4))
+    assert any("condition number" in w for w in sol.report.warnings)
