@@ -424,6 +424,8 @@ def sweep(
     learn = _split_list(learn_units) or [u for u in all_units if u not in test]
     if not test or not learn:
         raise InputError(f"{dataset}: cannot split units {', '.join(all_units)} into learning and testing; use --learn-units/--test-units")
+    if set(test) & set(learn):
+        raise InputError(f"--learn-units and --test-units share {', '.join(sorted(set(test) & set(learn)))}; a test must use unseen data")
     ls = samples_of(df, learn, dataset)
     ts = samples_of(df, test, dataset, nodes=ls.nodes)
     with _progress() as p:
