@@ -99,3 +99,13 @@ def test_ulog_node_named_after_file():
     rep = inspect_logs(DATA / "px4-ulog" / "sample_log_small.ulg")
     assert [n.node for n in rep.nodes] == ["sample_log_small"]
     assert rep.nodes[0].rate_hz == pytest.approx(200.0, rel=0.1)  # vehicle_attitude, ~5 ms steps
+
+
+def test_ulog_rows_flagged_invalid_are_reported():
+    import os
+
+    from rplearn.inspect import inspect_logs
+
+    path = os.path.join(os.path.dirname(__file__), "data", "px4-ulog", "sample_log_small.ulg")
+    report = inspect_logs([path])
+    assert any("636 pose row(s) flagged invalid" in p for p in report.problems)

@@ -220,7 +220,10 @@ def _read_one(path: str, options: dict[str, Any]) -> tuple[pd.DataFrame | None, 
         opts.setdefault("frequency_hz", 1.0)
     logs, meta = read_logs(path, **opts)
     f = meta["files"][0]
-    return logs.pose, logs.signal, {"format": f.get("format", kind), "kind": f.get("kind")}, nan_rows
+    info = {"format": f.get("format", kind), "kind": f.get("kind")}
+    if f.get("invalid_flag_rows"):
+        info["invalid_flag_rows"] = int(f["invalid_flag_rows"])
+    return logs.pose, logs.signal, info, nan_rows
 
 
 def inspect_logs(
@@ -265,6 +268,11 @@ def inspect_logs(
             report.problems.append(f"{path}: unreadable: {exc}")
             continue
         report.files.append({"path": path, **info, "error": None})
+        if info.get("invalid_flag_rows"):
+            report.problems.append(
+                f"{path}: {info['invalid_flag_rows']} pose row(s) flagged invalid by the autopilot "
+                "(xy_valid or z_valid = 0); they are kept unless read with require_valid=True"
+            )
         for k, v in nans.items():
             nan_rows[k] = nan_rows.get(k, 0) + int(v)
         if pose is not None:
