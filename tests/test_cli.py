@@ -167,3 +167,20 @@ def test_datetime_times_are_seconds(workdir, tmp_path):
     np.testing.assert_allclose(got["t"].to_numpy() - epoch, ref["t"].to_numpy(), atol=1e-5)
     # float64 seconds near 1.7e9 resolve 0.24 us: a few micrometres at flight speed
     np.testing.assert_allclose(got["tx_x"].to_numpy(), ref["tx_x"].to_numpy(), atol=1e-5)
+
+
+def test_sweep_plot_report_and_images(workdir):
+    d = workdir
+    sw = run(["sweep", "data.parquet", "--orders", "2..4", "-o", "sweep.csv", "--plot", "sweep.png"], d)
+    assert "lowest test RMSE at order" in sw.stdout
+    frame = pd.read_csv(d / "sweep.csv")
+    assert frame["order"].tolist() == [2, 3, 4] and np.isfinite(frame["test_rmse_db"]).all()
+    run(["fit", "data.parquet", "--model", "sh", "--degree", "3", "-o", "sh3p.json"], d)
+    run(["plot", "sh3p.json", "--truth", "flight/ground_truth.json", "--dataset", "data.parquet", "-o", "maps.png"], d)
+    run(["export", "sh3p.json", "--format", "images", "-o", "img"], d)
+    rep = run(["report", "data.parquet", "--models", "m,sh-3", "-o", "rep"], d)
+    assert "| SH-3 |" in rep.stdout
+    page = (d / "rep" / "report.html").read_text()
+    assert page.count("data:image/png;base64,") == 2
+    for png in ("sweep.png", "maps.png", "img/pattern_A.png", "img/pattern_B.png"):
+        assert (d / png).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", png
