@@ -107,6 +107,9 @@ def main() -> int:
     # Streaming: 10 million samples in chunks, never materialised at once.
     total = 2_000_000 if args.quick else 10_000_000
     chunk = 200_000
+    import rplearn.solver as solver_module
+
+    solver_module._BUFFERS.__dict__.clear()  # count the solver's reusable block buffer too
     tracemalloc.start()
     t0 = time.perf_counter()
     normal = NormalEquations(basis, 2)
