@@ -70,7 +70,8 @@ def test_simulate_sync_fit_evaluate_export_predict(workdir):
     run(["predict", "sh3.json", "data.parquet", "-o", "pred.csv"], d)
     pred = pd.read_csv(d / "pred.csv")
     assert len(pred) == len(data)
-    assert {"gain_pred_db", "rssi_pred_dbm"} <= set(pred.columns)
+    assert {"gain_pred_db", "rssi_pred_dbm", "gain_pred_std_db"} <= set(pred.columns)
+    assert (pred["gain_pred_std_db"] > 0).all()
     resid = pred["rssi_pred_dbm"] - pred["rssi_dbm"]
     assert np.sqrt(np.mean(resid**2)) < 12.0
 

@@ -106,3 +106,28 @@ def test_bad_model_files_are_refused(pattern_set, tmp_path):
     bad.write_text(json.dumps(doc))
     with pytest.raises(ModelFileError, match="coefficients must be"):
         PatternSet.load(bad)
+
+
+def test_prediction_standard_error_is_calibrated():
+    """Joint-gain errors divided by the reported standard error are ~N(0, 1), two-node gauge or not."""
+    from rplearn.datasets import LinkSamples
+    from rplearn.geometry import Directions
+    from rplearn.learn import ModelSpec, fit_patterns
+
+    rng = np.random.default_rng(9)
+    b = SphericalHarmonics(3)
+    true = rng.normal(0, 3, (2, b.n_coef))
+
+    def samples(n, noise):
+        az = rng.uniform(-np.pi, np.pi, (2, n))
+        el = np.arcsin(rng.uniform(-1, 1, (2, n)))
+        y = b.design(az[0], el[0]) @ true[0] + b.design(az[1], el[1]) @ true[1]
+        return LinkSamples(Directions(az[0], el[0], az[1], el[1]), np.zeros(n, int), np.ones(n, int), ("A", "B"), y + noise * rng.normal(size=n), np.full(n, 10.0))
+
+    z = []
+    probe = samples(300, 0.0)
+    for _ in range(40):
+        model = fit_patterns(samples(400, 2.0), ModelSpec("sh", 3, ridge=0.0))
+        z.append((model.predict_samples(probe) - probe.joint_gain_db) / model.predict_samples_std(probe))
+    z = np.concatenate(z)
+    assert 0.85 < np.std(z) < 1.15

@@ -364,7 +364,7 @@ def evaluate(
 def predict(
     model_path: str = typer.Argument(..., metavar="MODEL.json"),
     dataset: str = typer.Argument(..., metavar="DATASET"),
-    output: str = typer.Option(..., "-o", "--out", help="The dataset with gain_pred_db and rssi_pred_dbm added (.csv or .parquet)."),
+    output: str = typer.Option(..., "-o", "--out", help="The dataset with gain_pred_db, rssi_pred_dbm and (pattern models) gain_pred_std_db added (.csv or .parquet)."),
 ) -> None:
     """Predict the joint gain and received power for every row of a dataset.
 
@@ -381,6 +381,8 @@ def predict(
     df = df.copy()
     df["gain_pred_db"] = gain
     df["rssi_pred_dbm"] = received_power_dbm(df["tx_power_dbm"].to_numpy(), gain, samples.distance_m, df["frequency_hz"].to_numpy())
+    if getattr(model, "covariance", None) is not None:
+        df["gain_pred_std_db"] = model.predict_samples_std(samples)  # coefficient uncertainty only
     write_table(df, output)
     out.print(f"wrote {len(df):,} predictions to {output}")
 

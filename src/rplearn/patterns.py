@@ -92,6 +92,41 @@ class PatternSet:
         f = self.basis.design_t(az_rad, el_rad)
         return np.sqrt(np.maximum(np.einsum("in,ij,jn->n", f, cov, f), 0.0))
 
+    def predict_samples_std(self, samples: "LinkSamples") -> FloatArray:
+        """Standard error of :meth:`predict_samples` from the coefficient covariance [dB].
+
+        The joint gain ``G_tx + G_rx`` does not depend on the constant a two-node fit cannot
+        identify, so this error is meaningful for every fit. It covers the estimation error of
+        the coefficients only, not the measurement noise of a new packet (add the training
+        residual variance for that) nor model misfit.
+        """
+        if self.covariance is None:
+            raise InputError("this model carries no covariance")
+        p = self.basis.n_coef
+        idx = np.array([self.node_index(n) for n in samples.nodes], dtype=np.intp)
+        tx = idx[samples.tx_index]
+        rx = idx[samples.rx_index]
+        d = samples.directions
+        var = np.empty(len(samples))
+        code = tx.astype(np.int64) * len(self.nodes) + rx
+        for c in np.unique(code):
+            t, r = divmod(int(c), len(self.nodes))
+            sel = np.flatnonzero(code == c)
+            for s0 in range(0, sel.size, 65536):
+                part = sel[s0 : s0 + 65536]
+                ft = self.basis.design(d.az_tx[part], d.el_tx[part])
+                fr = self.basis.design(d.az_rx[part], d.el_rx[part])
+                cov = self.covariance
+                stt = cov[t * p : (t + 1) * p, t * p : (t + 1) * p]
+                srr = cov[r * p : (r + 1) * p, r * p : (r + 1) * p]
+                str_ = cov[t * p : (t + 1) * p, r * p : (r + 1) * p]
+                var[part] = (
+                    np.einsum("ni,ni->n", ft @ stt, ft)
+                    + 2.0 * np.einsum("ni,ni->n", ft @ str_, fr)
+                    + np.einsum("ni,ni->n", fr @ srr, fr)
+                )
+        return np.sqrt(np.maximum(var, 0.0))
+
     def predict_joint_gain_db(
         self,
         tx_node: str | Sequence[str],
