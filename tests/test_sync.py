@@ -58,6 +58,7 @@ def test_drops_are_counted_by_reason(two_nodes):
         signal_log([0.05], "A", "B"),                       # kept
         signal_log([0.06, 0.07, 0.08, 0.09, 0.11, 0.12], "A", "B",
                    [0.0, -127.0, -128.0, 127.0, np.nan, np.inf]),  # sentinels
+        signal_log([0.13, 0.14], "A", "B", [274.0, -300.0]),  # no radio reports these
         signal_log([0.5], "A", "B"),                        # inside the 0.2 -> 1.0 gap
         signal_log([-0.1, 1.5], "A", "B"),                  # outside A's span
         signal_log([0.05], "A", "C"),                       # C has no pose log
@@ -68,7 +69,7 @@ def test_drops_are_counted_by_reason(two_nodes):
     res = synchronise(two_nodes, sig)
     s = res.summary
     assert s.n_in == len(sig) and s.n_out == 2 == len(res.dataset)
-    assert s.dropped == {"invalid_value": 1, "sentinel_rssi": 6, "tx_equals_rx": 1, "other_link": 0,
+    assert s.dropped == {"invalid_value": 1, "sentinel_rssi": 6, "implausible_rssi": 2, "tx_equals_rx": 1, "other_link": 0,
                          "unknown_node": 1, "out_of_span": 2, "pose_gap": 1}
     assert s.n_in == s.n_out + s.n_dropped
     assert s.unknown_nodes == ["C"]

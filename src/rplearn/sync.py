@@ -9,6 +9,9 @@ after optional clock offsets. A sample is dropped, and counted by reason, when:
 ``sentinel_rssi``
     its RSSI is NaN, infinite or one of the sentinel values radios report for "no
     measurement" (default ``0, -127, -128, 127``);
+``implausible_rssi``
+    its RSSI lies outside the range any radio reports, :data:`PLAUSIBLE_RSSI_DBM`
+    (a corrupt field or a unit mistake, e.g. mW or a percentage);
 ``tx_equals_rx``
     its transmitter is its receiver;
 ``other_link``
@@ -47,10 +50,14 @@ logger = logging.getLogger(__name__)
 
 #: RSSI values radios and drivers report when there is no measurement [dBm].
 DEFAULT_SENTINEL_RSSI_DBM: tuple[float, ...] = SENTINEL_RSSI_DBM
+#: RSSI values outside this range are no received power any radio reports [dBm]: above
+#: +30 dBm a receiver front end would be destroyed, below -150 dBm lies under any noise floor.
+PLAUSIBLE_RSSI_DBM: tuple[float, float] = (-150.0, 30.0)
 #: Drop reasons, in the order they are tested.
 DROP_REASONS: tuple[str, ...] = (
     "invalid_value",
     "sentinel_rssi",
+    "implausible_rssi",
     "tx_equals_rx",
     "other_link",
     "unknown_node",
@@ -285,6 +292,7 @@ def _match_chunk(
 
     drop(~(np.isfinite(t) & np.isfinite(ptx) & np.isfinite(freq) & (freq > 0)), "invalid_value")
     drop(~np.isfinite(rssi) | np.isin(rssi, np.asarray(sentinel_rssi_dbm, np.float64)), "sentinel_rssi")
+    drop((rssi < PLAUSIBLE_RSSI_DBM[0]) | (rssi > PLAUSIBLE_RSSI_DBM[1]), "implausible_rssi")
     drop(tx == rx, "tx_equals_rx")
     if link is not None:
         drop(~((tx == str(link[0])) & (rx == str(link[1]))), "other_link")
