@@ -24,10 +24,9 @@ import time
 import tracemalloc
 
 import numpy as np
-from scipy.special import sph_harm_y
 from sklearn.linear_model import Ridge
 
-from rplearn.bases import SphericalHarmonics, sh_index
+from rplearn.bases import SphericalHarmonics, real_sh_reference
 from rplearn.geometry import Directions
 from rplearn.solver import NormalEquations, fit_joint, solve
 
@@ -49,22 +48,6 @@ def random_directions(rng: np.random.Generator, n: int) -> Directions:
     az = rng.uniform(-np.pi, np.pi, (2, n))
     el = np.arcsin(rng.uniform(-1.0, 1.0, (2, n)))
     return Directions(az[0], el[0], az[1], el[1])
-
-
-def scipy_real_sh(order: int, az: np.ndarray, el: np.ndarray) -> np.ndarray:
-    """Real SH design matrix the way a user would build it with scipy, one (l, m) at a time."""
-    theta = np.pi / 2 - el
-    out = np.empty((az.size, order * order))
-    for l in range(order):
-        for m in range(-l, l + 1):
-            if m == 0:
-                v = sph_harm_y(l, 0, theta, az).real
-            elif m > 0:
-                v = np.sqrt(2) * (-1) ** m * sph_harm_y(l, m, theta, az).real
-            else:
-                v = np.sqrt(2) * (-1) ** m * sph_harm_y(l, -m, theta, az).imag
-            out[:, sh_index(l, m)] = v
-    return out
 
 
 def main() -> int:
@@ -95,7 +78,7 @@ def main() -> int:
         t_floor = min(t_floor, t)
 
     def by_hand():
-        Xs = np.hstack([scipy_real_sh(ORDER, d.az_tx, d.el_tx), scipy_real_sh(ORDER, d.az_rx, d.el_rx)])
+        Xs = np.hstack([real_sh_reference(ORDER, d.az_tx, d.el_tx), real_sh_reference(ORDER, d.az_rx, d.el_rx)])
         return Ridge(alpha=RIDGE, fit_intercept=False).fit(Xs, y), Xs
 
     t_hand, (ridge_model, Xs) = best_of(by_hand, max(1, repeats // 3))

@@ -115,6 +115,29 @@ def sh_index(degree: int, order: int) -> int:
     return degree * degree + degree - order
 
 
+def real_sh_reference(order: int, az_rad: ArrayLike, el_rad: ArrayLike) -> FloatArray:
+    """Real SH design matrix built from ``scipy.special.sph_harm_y``, one (l, m) at a time.
+
+    Slow (about 40x :class:`SphericalHarmonics`); the independent reference that tests and
+    benchmarks compare the recurrence with. Same functions and column order (:func:`sh_index`).
+    """
+    from scipy.special import sph_harm_y
+
+    az, el = _angles(az_rad, el_rad)
+    theta = np.pi / 2 - el
+    out = np.empty((az.size, order * order))
+    for l in range(order):
+        for m in range(-l, l + 1):
+            if m == 0:
+                v = sph_harm_y(l, 0, theta, az).real
+            elif m > 0:
+                v = np.sqrt(2) * (-1) ** m * sph_harm_y(l, m, theta, az).real
+            else:
+                v = np.sqrt(2) * (-1) ** m * sph_harm_y(l, -m, theta, az).imag
+            out[:, sh_index(l, m)] = v
+    return out
+
+
 @dataclass(frozen=True)
 class SphericalHarmonics(Basis):
     """Real orthonormal spherical harmonics of degrees ``0 .. order-1`` (paper's SH-``order``).

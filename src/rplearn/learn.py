@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import re
 import time
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Any, Mapping, Sequence, Union
 
 import numpy as np
@@ -235,8 +235,3 @@ def samples_of(df: pd.DataFrame, units: Sequence[str] | None = None, source: str
     if len(part) == 0:
         raise InputError(f"{source}: no samples selected")
     return link_samples(part, source, nodes=nodes)
-
-
-def with_ridge(spec: ModelSpec, ridge: float) -> ModelSpec:
-    """Copy of a spec with another ridge weight."""
-    return replace(spec, ridge=float(ridge))

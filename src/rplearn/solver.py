@@ -85,7 +85,6 @@ class NormalEquations:
     gram: FloatArray = field(init=False)
     rhs: FloatArray = field(init=False)
     yty: float = field(init=False, default=0.0)
-    y_sum: float = field(init=False, default=0.0)
     n_samples: int = field(init=False, default=0)
     link_counts: dict[tuple[int, int], int] = field(init=False, default_factory=dict)
 
@@ -150,7 +149,6 @@ class NormalEquations:
             sel = slice(None) if codes.size == 1 else (pair_code == code)
             self._add_pair(t, r, az_tx[sel], el_tx[sel], az_rx[sel], el_rx[sel], y[sel])
         self.n_samples += n
-        self.y_sum += float(y.sum())
         return self
 
     def _add_pair(
@@ -208,7 +206,6 @@ class NormalEquations:
         self.gram += other.gram
         self.rhs += other.rhs
         self.yty += other.yty
-        self.y_sum += other.y_sum
         self.n_samples += other.n_samples
         for k, v in other.link_counts.items():
             self.link_counts[k] = self.link_counts.get(k, 0) + v
