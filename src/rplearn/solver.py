@@ -68,6 +68,73 @@ def _block_buffer(size: int) -> FloatArray:
     return buf[:size]
 
 
+def _fill_features(
+    basis: Basis,
+    buf: FloatArray,
+    az_tx: FloatArray,
+    el_tx: FloatArray,
+    az_rx: FloatArray,
+    el_rx: FloatArray,
+    moments: FloatArray | None,
+) -> None:
+    """Write tx features into rows ``0 .. p-1`` and rx features into rows ``p+1 .. 2p`` of ``buf``.
+
+    Rows are in the basis's :attr:`~rplearn.bases.Basis.row_order`; row ``p`` is left for the
+    observations. Works in cache-sized chunks; a basis that accepts stacked samples computes
+    both ends of a chunk in one pass, through a (p, 2, chunk) strided view of the two row
+    groups, and adds to ``moments[0]`` (tx) and ``moments[1]`` (rx) when given.
+    """
+    p = basis.n_coef
+    n = az_tx.size
+    if basis.stacked_samples:
+        az_both = np.stack([az_tx, az_rx])
+        el_both = np.stack([el_tx, el_rx])
+    for s in range(0, n, FEATURE_CHUNK):
+        e = min(n, s + FEATURE_CHUNK)
+        view = buf[:, s:e]
+        if basis.stacked_samples:
+            both = np.lib.stride_tricks.as_strided(
+                view, shape=(p, 2, e - s), strides=(view.strides[0], (p + 1) * view.strides[0], view.strides[1])
+            )
+            basis.design_rows_into(az_both[:, s:e], el_both[:, s:e], both, moments)
+        else:
+            basis.design_rows_into(az_tx[s:e], el_tx[s:e], view[:p])
+            basis.design_rows_into(az_rx[s:e], el_rx[s:e], view[p + 1 :])
+
+
+def link_statistics(
+    basis: Basis, az_tx: FloatArray, el_tx: FloatArray, az_rx: FloatArray, el_rx: FloatArray, y: FloatArray
+) -> FloatArray:
+    """``Z^T Z`` with ``Z = [f(tx directions), y, f(rx directions)]`` over samples of one link.
+
+    A ``(2p + 1, 2p + 1)`` matrix, features in the basis's row order: the tx and rx blocks of
+    ``X^T X``, ``X^T y`` and ``y^T y``. Per block of :data:`BLOCK_SAMPLES` samples, written
+    into this thread's reused buffer, either one symmetric rank-k update of all ``2p + 1``
+    rows, or, for a basis with Gram moments (SH), only the product ``[f_tx; y] [y; f_rx]^T``
+    (half the work): the two diagonal blocks then come from the moments.
+    """
+    p = basis.n_coef
+    n = az_tx.size
+    use_moments = basis.moment_shape is not None and basis.stacked_samples
+    moments = np.zeros((2, *basis.moment_shape)) if use_moments else None
+    total = np.zeros((2 * p + 1, 2 * p + 1))
+    for start in range(0, n, BLOCK_SAMPLES):
+        stop = min(n, start + BLOCK_SAMPLES)
+        buf = _block_buffer((2 * p + 1) * BLOCK_SAMPLES)[: (2 * p + 1) * (stop - start)].reshape(2 * p + 1, stop - start)
+        part = slice(start, stop)
+        _fill_features(basis, buf, az_tx[part], el_tx[part], az_rx[part], el_rx[part], moments)
+        buf[p] = y[part]
+        if moments is None:
+            total += buf @ buf.T
+        else:
+            total[: p + 1, p:] += buf[: p + 1] @ buf[p:].T
+    if moments is not None:
+        total[p:, : p + 1] = total[: p + 1, p:].T
+        total[:p, :p] = basis.gram_from_moments(moments[0])
+        total[p + 1 :, p + 1 :] = basis.gram_from_moments(moments[1])
+    return total
+
+
 @dataclass
 class NormalEquations:
     """Sufficient statistics of the joint least-squares problem, accumulated chunk by chunk.
@@ -91,14 +158,14 @@ class NormalEquations:
     def __post_init__(self) -> None:
         if self.n_nodes < 2:
             raise InputError(f"a link problem needs at least 2 nodes, got {self.n_nodes}")
-        p = self.basis.n_coef * self.n_nodes
-        self.gram = np.zeros((p, p))
-        self.rhs = np.zeros(p)
-        # Features of both ends plus the observations as a last row: one symmetric rank-k
-        # update then yields X^T X, X^T y and y^T y in a single pass over the block.
-        # Kept flat so that a block of any length is a C-contiguous (rows, k) view, which
-        # BLAS takes without a copy; reused across fits of this thread (see _block_buffer).
-        self._buffer = _block_buffer((2 * self.basis.n_coef + 1) * BLOCK_SAMPLES)
+        self.gram = np.zeros((self.n_columns, self.n_columns))
+        self.rhs = np.zeros(self.n_columns)
+        # link_statistics orders rows [tx features, y, rx features], features in the basis's
+        # row order; this index puts them back as [tx, rx, y] in the natural column order.
+        p = self.basis.n_coef
+        rows = self.basis.row_order
+        natural = np.arange(p) if rows is None else np.argsort(rows)
+        self._natural = np.concatenate([natural, natural + p + 1, [p]])
 
     @property
     def n_columns(self) -> int:
@@ -160,44 +227,17 @@ class NormalEquations:
         n = az_tx.size
         key = (min(t, r), max(t, r))
         self.link_counts[key] = self.link_counts.get(key, 0) + n
-        for start in range(0, n, BLOCK_SAMPLES):
-            stop = min(n, start + BLOCK_SAMPLES)
-            buf = self._buffer[: (2 * p + 1) * (stop - start)].reshape(2 * p + 1, stop - start)
-            self._fill_features(buf, az_tx[start:stop], el_tx[start:stop], az_rx[start:stop], el_rx[start:stop])
-            buf[2 * p] = y[start:stop]
-            block = buf @ buf.T  # one symmetric rank-k update: both nodes' blocks, X^T y, y^T y
-            self.gram[bt, bt] += block[:p, :p]
-            self.gram[br, br] += block[p : 2 * p, p : 2 * p]
-            self.gram[bt, br] += block[:p, p : 2 * p]
-            self.gram[br, bt] += block[p : 2 * p, :p]
-            self.rhs[bt] += block[:p, 2 * p]
-            self.rhs[br] += block[p : 2 * p, 2 * p]
-            self.yty += float(block[2 * p, 2 * p])
-
-    def _fill_features(
-        self, buf: FloatArray, az_tx: FloatArray, el_tx: FloatArray, az_rx: FloatArray, el_rx: FloatArray
-    ) -> None:
-        """Write tx features into rows 0..p-1 and rx features into rows p..2p-1 of ``buf``.
-
-        Works in cache-sized chunks; a basis that accepts stacked samples computes both ends of
-        a chunk in one pass, through a (p, 2, chunk) strided view of the two row groups.
-        """
-        p = self.basis.n_coef
-        n = az_tx.size
-        if self.basis.stacked_samples:
-            az_both = np.stack([az_tx, az_rx])
-            el_both = np.stack([el_tx, el_rx])
-        for s in range(0, n, FEATURE_CHUNK):
-            e = min(n, s + FEATURE_CHUNK)
-            view = buf[: 2 * p, s:e]
-            if self.basis.stacked_samples:
-                both = np.lib.stride_tricks.as_strided(
-                    view, shape=(p, 2, e - s), strides=(view.strides[0], p * view.strides[0], view.strides[1])
-                )
-                self.basis.design_into(az_both[:, s:e], el_both[:, s:e], both)
-            else:
-                self.basis.design_into(az_tx[s:e], el_tx[s:e], view[:p])
-                self.basis.design_into(az_rx[s:e], el_rx[s:e], view[p:])
+        # Features of both ends plus the observations as a last row: one symmetric rank-k
+        # update yields both nodes' blocks of X^T X, X^T y and y^T y in a single pass.
+        block = link_statistics(self.basis, az_tx, el_tx, az_rx, el_rx, y)
+        block = block[np.ix_(self._natural, self._natural)]
+        self.gram[bt, bt] += block[:p, :p]
+        self.gram[br, br] += block[p : 2 * p, p : 2 * p]
+        self.gram[bt, br] += block[:p, p : 2 * p]
+        self.gram[br, bt] += block[p : 2 * p, :p]
+        self.rhs[bt] += block[:p, 2 * p]
+        self.rhs[br] += block[p : 2 * p, 2 * p]
+        self.yty += float(block[2 * p, 2 * p])
 
     def merge(self, other: "NormalEquations") -> "NormalEquations":
         """Add another accumulator's statistics (same basis and node count) into this one."""
