@@ -109,3 +109,66 @@ def test_specs_round_trip_and_bad_specs():
         make_basis("sh", 0)
     with pytest.raises(ModelFileError):
         basis_from_dict({"kind": "bg", "order": 3, "sigma_rad2": -1})
+
+
+def test_half_angle_cos_sin_is_exact_to_rounding():
+    from rplearn.bases import _cos_sin_half_angle
+
+    rng = np.random.default_rng(3)
+    special = np.pi / 2 * np.arange(-8, 9)
+    a = np.concatenate([rng.uniform(-20, 20, 200_000), special, special + 1e-12, [0.0, -0.0, 1e-300]])
+    cos, sin = _cos_sin_half_angle(a)
+    np.testing.assert_allclose(cos, np.cos(a), rtol=0, atol=1e-15)
+    np.testing.assert_allclose(sin, np.sin(a), rtol=0, atol=1e-15)
+
+
+@pytest.mark.parametrize("order", [20, 40])
+def test_high_order_sh_stay_accurate(order):
+    az, el = _random_directions(300, seed=order)
+    got = SphericalHarmonics(order).design(az, el)
+    ref = real_sh_reference(order, az, el)
+    assert np.abs(got - ref).max() < 1e-12 * order
+
+
+def test_row_order_is_a_permutation_of_the_natural_columns():
+    b = SphericalHarmonics(7)
+    az, el = _random_directions(50)
+    rows = np.empty((b.n_coef, 50))
+    b.design_rows_into(az, el, rows)
+    assert sorted(b.row_order) == list(range(b.n_coef))
+    np.testing.assert_array_equal(rows, b.design_t(az, el)[b.row_order])
+    for other in (BasisGrid(3), Polynomial(4)):
+        assert other.row_order is None and other.moment_shape is None
+        with pytest.raises(TypeError, match="no Gram moments"):
+            other.gram_from_moments(np.zeros((3, 3)))
+
+
+@pytest.mark.parametrize("order", [1, 2, 3, 6, 10, 15])
+def test_gram_from_moments_equals_the_feature_gram(order):
+    """The moments give F F^T exactly (up to rounding), for 1-D and stacked (2, n) samples."""
+    b = SphericalHarmonics(order)
+    rng = np.random.default_rng(order)
+    az = rng.uniform(-np.pi, np.pi, (2, 1500))
+    el = np.arcsin(rng.uniform(-1, 1, (2, 1500)))
+    el[0, :5] = [np.pi / 2, -np.pi / 2, 0.0, 1e-9, np.pi / 2 - 1e-9]  # poles and the equator
+    rows = np.empty((b.n_coef, 2, 1500))
+    moments = np.zeros((2, *b.moment_shape))
+    b.design_rows_into(az[:, :700], el[:, :700], rows[:, :, :700], moments)  # accumulates
+    b.design_rows_into(az[:, 700:], el[:, 700:], rows[:, :, 700:], moments)
+    for end in range(2):
+        gram = rows[:, end] @ rows[:, end].T
+        np.testing.assert_allclose(b.gram_from_moments(moments[end]), gram, rtol=0, atol=1e-13 * np.abs(gram).max())
+    one = np.zeros(b.moment_shape)
+    flat = np.empty((b.n_coef, 1500))
+    b.design_rows_into(az[1], el[1], flat, one)
+    np.testing.assert_allclose(one, moments[1], rtol=1e-12, atol=1e-9)
+
+
+def test_very_high_sh_orders_fall_back_to_the_plain_gram():
+    from rplearn.bases import SH_MOMENTS_MAX_ORDER
+
+    assert SphericalHarmonics(SH_MOMENTS_MAX_ORDER).moment_shape is not None
+    high = SphericalHarmonics(SH_MOMENTS_MAX_ORDER + 1)
+    assert high.moment_shape is None
+    with pytest.raises(TypeError, match="no Gram moments"):
+        high.gram_from_moments(np.zeros((3, 3)))

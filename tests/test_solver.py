@@ -131,6 +131,39 @@ def test_streaming_equals_one_shot_and_merge():
     assert one.report.rmse_db == pytest.approx(2.0, rel=0.05)
 
 
+@pytest.mark.parametrize(
+    "basis",
+    [SphericalHarmonics(5), SphericalHarmonics(25), BasisGrid(3, 0.3, "fibonacci"), Polynomial(4)],
+    ids=["SH moments", "SH-25 rank-k", "BG", "P"],
+)
+def test_accumulated_statistics_equal_the_explicit_design(basis, monkeypatch):
+    """X^T X, X^T y and y^T y of three nodes with links both ways, over several blocks and chunks."""
+    import rplearn.solver as solver_module
+
+    monkeypatch.setattr(solver_module, "BLOCK_SAMPLES", 1000)
+    monkeypatch.setattr(solver_module, "FEATURE_CHUNK", 300)
+    rng = np.random.default_rng(21)
+    n = 2500
+    pairs = np.array([[0, 1], [1, 0], [2, 0], [1, 2]])
+    sel = pairs[rng.integers(0, len(pairs), n)]
+    az_t, el_t = _dirs(rng, n)
+    az_r, el_r = _dirs(rng, n)
+    y = rng.normal(0, 5, n)
+    p = basis.n_coef
+    X = np.zeros((n, 3 * p))
+    ft, fr = basis.design(az_t, el_t), basis.design(az_r, el_r)
+    for i, (t, r) in enumerate(sel):
+        X[i, t * p : (t + 1) * p] += ft[i]
+        X[i, r * p : (r + 1) * p] += fr[i]
+    normal = NormalEquations(basis, 3).add(Directions(az_t, el_t, az_r, el_r), sel[:, 0], sel[:, 1], y)
+    scale = np.abs(X.T @ X).max()
+    np.testing.assert_allclose(normal.gram, X.T @ X, rtol=0, atol=1e-12 * scale)
+    np.testing.assert_allclose(normal.rhs, X.T @ y, rtol=0, atol=1e-12 * np.abs(X.T @ y).max())
+    assert normal.yty == pytest.approx(float(y @ y), rel=1e-12)
+    links, counts = np.unique(np.sort(sel, axis=1), axis=0, return_counts=True)
+    assert normal.link_counts == {(int(a), int(b)): int(c) for (a, b), c in zip(links, counts)}
+
+
 def test_condition_number_matches_svd_of_design():
     rng = np.random.default_rng(16)
     b = Polynomial(3)

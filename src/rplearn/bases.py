@@ -273,6 +273,10 @@ def _sh_chebyshev_tables(order: int) -> tuple[FloatArray, NDArray[np.intp], NDAr
     return coef, row_order, np.argsort(row_order)
 
 
+#: Highest SH order whose Gram the solver builds from moments (see ``moment_shape``).
+SH_MOMENTS_MAX_ORDER = 24
+
+
 @dataclass(frozen=True)
 class _MomentTables:
     """See :func:`_sh_moment_tables`."""
@@ -449,13 +453,18 @@ class SphericalHarmonics(Basis):
             _add_moments(cheb, trig, moments)
 
     @property
-    def moment_shape(self) -> tuple[int, int]:
+    def moment_shape(self) -> tuple[int, int] | None:  # type: ignore[override]
         """Shape of the moments :meth:`gram_from_moments` needs (see :meth:`design_rows_into`).
+
+        ``None`` above order :data:`SH_MOMENTS_MAX_ORDER`, whose tables grow as ``8 order**4``
+        (32 MB at 24) while a plain rank-k update is then no worse a use of the time.
 
         ``mu[J, c] = sum_i T_J(sin el_i) cos(el_i)^(M mod 2) cos(M az_i)`` for column ``c = M``
         and the same with ``sin(M az_i)`` for ``c = (2 order - 1) + M``, ``J <= 2 order``,
         ``M <= 2 order - 2``: everything a product of two features can contain.
         """
+        if self.order > SH_MOMENTS_MAX_ORDER:
+            return None
         return (2 * self.order + 1, 2 * (2 * self.order - 1))
 
     def gram_from_moments(self, moments: FloatArray) -> FloatArray:
@@ -465,6 +474,8 @@ class SphericalHarmonics(Basis):
         its largest entry, measured for orders 1-13), at the cost of
         ``(2 order + 1) x (4 order - 2)`` sums per sample instead of ``order**4 / 2``.
         """
+        if self.moment_shape is None:
+            raise TypeError(f"{self.label} is above SH-{SH_MOMENTS_MAX_ORDER}: no Gram moments")
         tables = _sh_moment_tables(self.order)
         L = self.order
         mu = np.asarray(moments, np.float64)
