@@ -172,3 +172,28 @@ def test_very_high_sh_orders_fall_back_to_the_plain_gram():
     assert high.moment_shape is None
     with pytest.raises(TypeError, match="no Gram moments"):
         high.gram_from_moments(np.zeros((3, 3)))
+
+
+def test_shared_sh_tables_cannot_be_corrupted_by_a_caller():
+    order = SphericalHarmonics(3).row_order
+    with pytest.raises(ValueError):
+        order[0] = 5
+    np.testing.assert_array_equal(sorted(SphericalHarmonics(3).row_order), np.arange(9))
+
+
+def test_chunked_evaluation_equals_the_design_matrix(monkeypatch):
+    import rplearn.bases as bases_module
+
+    monkeypatch.setattr(bases_module, "EVAL_CHUNK", 300)  # several chunks and a partial one
+    az, el = _random_directions(2000, seed=5)
+    rng = np.random.default_rng(5)
+    for b in (SphericalHarmonics(6), BasisGrid(3, 0.3), Polynomial(4)):
+        F = b.design(az, el)
+        np.testing.assert_allclose(F, real_sh_reference(6, az, el) if b.kind == "sh" else F, atol=1e-13)
+        coef = rng.normal(size=(3, b.n_coef))
+        np.testing.assert_allclose(b.evaluate(coef, az, el), coef @ F.T, atol=1e-12)
+        np.testing.assert_allclose(b.evaluate(coef[0], az, el), F @ coef[0], atol=1e-12)
+        m = rng.normal(size=(b.n_coef, b.n_coef))
+        np.testing.assert_allclose(b.quadratic_form(m, az, el), np.einsum("ni,ij,nj->n", F, m, F), atol=1e-10)
+    with pytest.raises(InputError, match="coefficients"):
+        SphericalHarmonics(3).evaluate(np.zeros(8), az, el)

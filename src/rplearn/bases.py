@@ -65,6 +65,10 @@ def _cos_sin_half_angle(angle_rad: FloatArray) -> tuple[FloatArray, FloatArray]:
 
 
 _SCRATCH = threading.local()
+#: Directions per step of :meth:`Basis.evaluate` and :meth:`Basis.quadratic_form`.
+EVAL_CHUNK = 8192
+_SLOT_EVAL = 2  # scratch slot of the evaluation features (slots 0, 1: inside design_rows_into)
+_SLOT_DESIGN = 3  # scratch slot of SphericalHarmonics.design_into
 #: Largest scratch array kept for reuse between calls [float64 values] (8 MB).
 SCRATCH_KEEP_VALUES = 1 << 20
 
@@ -98,6 +102,12 @@ def _add_moments(cheb: FloatArray, trig: FloatArray, moments: FloatArray) -> Non
     else:
         for idx in np.ndindex(*cheb.shape[1:-1]):
             moments[idx] += cheb[(slice(None), *idx)] @ trig[(slice(None), *idx)].T
+
+
+def _eval_chunk(n_coef: int) -> int:
+    """Directions per evaluation step: :data:`EVAL_CHUNK`, fewer for large bases so that the
+    step's features stay in one reusable scratch array (at most ``SCRATCH_KEEP_VALUES``)."""
+    return max(256, min(EVAL_CHUNK, SCRATCH_KEEP_VALUES // max(n_coef, 1)))
 
 
 def _matmul_into(a: FloatArray, b: FloatArray, out: FloatArray) -> None:
@@ -163,6 +173,58 @@ class Basis:
         """Gram ``F F^T`` of the feature rows from their moments (bases with a :attr:`moment_shape`)."""
         raise TypeError(f"{type(self).__name__} has no Gram moments")
 
+    def evaluate(self, coef: ArrayLike, az_rad: ArrayLike, el_rad: ArrayLike) -> FloatArray:
+        """``sum_j coef[..., j] f_j(az, el)`` at every direction, without the whole design matrix.
+
+        Parameters
+        ----------
+        coef : array_like, shape (n_coef,) or (k, n_coef)
+            One or several coefficient vectors (natural column order).
+        az_rad, el_rad : array_like
+            Directions [rad], flattened.
+
+        Returns
+        -------
+        ndarray, shape (n,) or (k, n)
+            Works through :data:`EVAL_CHUNK` directions at a time in reused buffers, so memory
+            does not grow with the number of directions (a whole SH-10 design of a million
+            directions would be 0.8 GB).
+        """
+        az, el = _angles(az_rad, el_rad)
+        c = np.asarray(coef, np.float64)
+        if c.shape[-1] != self.n_coef:
+            raise InputError(f"{c.shape[-1]} coefficients given for {self.n_coef} basis functions")
+        rows = self.row_order
+        c_rows = np.ascontiguousarray(c if rows is None else c[..., rows])
+        out = np.empty((*c.shape[:-1], az.size))
+        step = _eval_chunk(self.n_coef)
+        for s in range(0, az.size, step):
+            e = min(az.size, s + step)
+            f = _scratch(_SLOT_EVAL, (self.n_coef, e - s))
+            self.design_rows_into(az[s:e], el[s:e], f)
+            np.matmul(c_rows, f, out=out[..., s:e])
+        return out
+
+    def quadratic_form(self, matrix: ArrayLike, az_rad: ArrayLike, el_rad: ArrayLike) -> FloatArray:
+        """``f(az, el)^T M f(az, el)`` at every direction (e.g. a pattern's variance), chunked.
+
+        ``matrix`` is ``(n_coef, n_coef)`` in the natural column order.
+        """
+        az, el = _angles(az_rad, el_rad)
+        m = np.asarray(matrix, np.float64)
+        if m.shape != (self.n_coef, self.n_coef):
+            raise InputError(f"matrix has shape {m.shape}, expected ({self.n_coef}, {self.n_coef})")
+        rows = self.row_order
+        m_rows = m if rows is None else m[np.ix_(rows, rows)]
+        out = np.empty(az.size)
+        step = _eval_chunk(self.n_coef)
+        for s in range(0, az.size, step):
+            e = min(az.size, s + step)
+            f = _scratch(_SLOT_EVAL, (self.n_coef, e - s))
+            self.design_rows_into(az[s:e], el[s:e], f)
+            out[s:e] = np.einsum("in,in->n", m_rows @ f, f)
+        return out
+
     def design_t(self, az_rad: ArrayLike, el_rad: ArrayLike) -> FloatArray:
         """Transposed design block, shape ``(n_coef, n)`` (rows are basis functions)."""
         az, el = _angles(az_rad, el_rad)
@@ -203,7 +265,8 @@ def sh_index(degree: int, order: int) -> int:
     Within degree ``l`` (columns ``l**2 .. (l+1)**2 - 1``) the order is ``m = 0``, then the
     cosine terms ``m = 1 .. l``, then the sine terms ``m = -1 .. -l``: ``l**2`` for ``m = 0``,
     ``l**2 + m`` for ``m > 0`` and ``l**2 + l - m`` for ``m < 0``. Grouping the cosine and sine
-    rows lets the recurrence fill a whole degree with two array operations.
+    rows keeps each degree's functions together; the fast computation uses its own
+    :attr:`SphericalHarmonics.row_order`.
     """
     if abs(order) > degree:
         raise InputError(f"SH order m = {order} outside -l..l for degree l = {degree}")
@@ -218,7 +281,7 @@ def real_sh_reference(order: int, az_rad: ArrayLike, el_rad: ArrayLike) -> Float
     """Real SH design matrix built from ``scipy.special.sph_harm_y``, one (l, m) at a time.
 
     Slow (about 40x :class:`SphericalHarmonics`); the independent reference that tests and
-    benchmarks compare the recurrence with. Same functions and column order (:func:`sh_index`).
+    benchmarks compare the fast computation with. Same functions and column order (:func:`sh_index`).
     """
     from scipy.special import sph_harm_y
 
@@ -241,7 +304,7 @@ def real_sh_reference(order: int, az_rad: ArrayLike, el_rad: ArrayLike) -> Float
 
 
 
-@lru_cache(maxsize=None)
+@lru_cache(maxsize=32)
 def _sh_chebyshev_tables(order: int) -> tuple[FloatArray, NDArray[np.intp], NDArray[np.intp]]:
     """Chebyshev coefficients of the Legendre factors, and the row order they produce.
 
@@ -250,9 +313,11 @@ def _sh_chebyshev_tables(order: int) -> tuple[FloatArray, NDArray[np.intp], NDAr
     ``cos(el)`` when ``m`` is odd; ``Q_lm`` is then a polynomial of degree < ``order`` (the
     normalised associated Legendre function, with ``sqrt(2)`` folded in for ``m > 0``).
     Its coefficients in Chebyshev polynomials ``T_j(x)`` are found once by interpolation at
-    ``order`` Chebyshev points of values from :func:`real_sh_reference` (scipy); being
-    coefficients of a function bounded on [-1, 1], they are bounded too, so summing them is
-    stable at any degree.
+    ``order`` Chebyshev points of values from :func:`real_sh_reference` (scipy). The sum of
+    their magnitudes equals ``max |Q_lm|`` (8.2 at SH-10, 32 at SH-24, against
+    ``max |Y_lm|`` of 1.2 and 2.4): features stay within 1e-14 (SH-10) to 3e-13 (SH-50) of
+    scipy's, but a Gram rebuilt from moments (:meth:`SphericalHarmonics.gram_from_moments`)
+    carries that factor squared in its rounding.
 
     Returns ``(coef, rows, natural)``: ``coef`` of shape (order (order + 1) / 2, order) for
     the ``m >= 0`` rows; ``rows[r]`` the column (:func:`sh_index`) held by row ``r`` of
@@ -270,7 +335,10 @@ def _sh_chebyshev_tables(order: int) -> tuple[FloatArray, NDArray[np.intp], NDAr
     coef = np.linalg.solve(vander, q).T
     rows += [sh_index(l, -m) for m in range(1, L) for l in range(m, L)]
     row_order = np.array(rows, np.intp)
-    return coef, row_order, np.argsort(row_order)
+    natural = np.argsort(row_order)
+    for shared in (coef, row_order, natural):  # cached and shared by every instance
+        shared.setflags(write=False)
+    return coef, row_order, natural
 
 
 #: Highest SH order whose Gram the solver builds from moments (see ``moment_shape``).
@@ -288,7 +356,7 @@ class _MomentTables:
     src: NDArray[np.intp]  # its flat index in the (pairs, L, L) blocks
 
 
-@lru_cache(maxsize=None)
+@lru_cache(maxsize=4)
 def _sh_moment_tables(order: int) -> _MomentTables:
     """Tables turning moments into the Gram of the SH features (:meth:`SphericalHarmonics.gram_from_moments`).
 
@@ -457,7 +525,7 @@ class SphericalHarmonics(Basis):
         """Shape of the moments :meth:`gram_from_moments` needs (see :meth:`design_rows_into`).
 
         ``None`` above order :data:`SH_MOMENTS_MAX_ORDER`, whose tables grow as ``8 order**4``
-        (32 MB at 24) while a plain rank-k update is then no worse a use of the time.
+        (45 MB at 24) while a plain rank-k update is then no worse a use of the time.
 
         ``mu[J, c] = sum_i T_J(sin el_i) cos(el_i)^(M mod 2) cos(M az_i)`` for column ``c = M``
         and the same with ``sin(M az_i)`` for ``c = (2 order - 1) + M``, ``J <= 2 order``,
@@ -473,6 +541,11 @@ class SphericalHarmonics(Basis):
         Exact (no quadrature): equal to the Gram of the feature rows up to rounding (4e-15 of
         its largest entry, measured for orders 1-13), at the cost of
         ``(2 order + 1) x (4 order - 2)`` sums per sample instead of ``order**4 / 2``.
+        The rounding is larger than a direct sum's: in a two-node SH-10 Gram the exact zero
+        eigenvalue (the unidentifiable constant) comes out at 2.6e-15 of the largest against
+        1e-16 directly, for 200 thousand or 2 million samples; the solver's rank tolerance
+        (``columns x eps`` of the largest eigenvalue, 4.4e-14) is 15 times above it, and 35 to
+        100 times at SH-15 to SH-24.
         """
         if self.moment_shape is None:
             raise TypeError(f"{self.label} is above SH-{SH_MOMENTS_MAX_ORDER}: no Gram moments")
@@ -492,9 +565,19 @@ class SphericalHarmonics(Basis):
         return upper + np.triu(gram, 1).T
 
     def design_into(self, az_rad: FloatArray, el_rad: FloatArray, out: FloatArray) -> None:
-        rows = np.empty_like(out)
-        self.design_rows_into(az_rad, el_rad, rows)
-        np.take(rows, self._tables[2], axis=0, out=out)
+        # Through a reused chunk-sized buffer in row_order, scattered into the natural rows:
+        # no temporary as large as ``out``.
+        if az_rad.ndim != 1:
+            rows = np.empty_like(out)
+            self.design_rows_into(az_rad, el_rad, rows)
+            out[self.row_order] = rows
+            return
+        step = _eval_chunk(self.n_coef)
+        for s in range(0, az_rad.size, step):
+            e = min(az_rad.size, s + step)
+            rows = _scratch(_SLOT_DESIGN, (self.n_coef, e - s))
+            self.design_rows_into(az_rad[s:e], el_rad[s:e], rows)
+            out[self.row_order, s:e] = rows
 
     def to_dict(self) -> dict[str, Any]:
         return {"kind": "sh", "order": int(self.order)}

@@ -77,7 +77,9 @@ class PatternSet:
         az = np.asarray(az_rad, np.float64)
         el = np.asarray(el_rad, np.float64)
         k = self.node_index(node)
-        return (self.basis.design_t(az, el).T @ self.coef[k]).reshape(np.broadcast(az, el).shape)
+        shape = np.broadcast(az, el).shape
+        az, el = np.broadcast_arrays(az, el)
+        return self.basis.evaluate(self.coef[k], az, el).reshape(shape)
 
     def standard_error(self, node: str, az_rad: ArrayLike, el_rad: ArrayLike) -> FloatArray:
         """Standard error of :meth:`evaluate` from the fit's coefficient covariance [dB].
@@ -89,8 +91,7 @@ class PatternSet:
         k = self.node_index(node)
         p = self.basis.n_coef
         cov = self.covariance[k * p : (k + 1) * p, k * p : (k + 1) * p]
-        f = self.basis.design_t(az_rad, el_rad)
-        return np.sqrt(np.maximum(np.einsum("in,ij,jn->n", f, cov, f), 0.0))
+        return np.sqrt(np.maximum(self.basis.quadratic_form(cov, az_rad, el_rad), 0.0))
 
     def predict_samples_std(self, samples: "LinkSamples") -> FloatArray:
         """Standard error of :meth:`predict_samples` from the coefficient covariance [dB].
@@ -145,9 +146,12 @@ class PatternSet:
             return self.evaluate(tx_node, az_tx, el_tx) + self.evaluate(rx_node, az_rx, el_rx)
         tx_idx = np.full(n, self.node_index(tx_node)) if tx is None else np.array([self.node_index(v) for v in tx])
         rx_idx = np.full(n, self.node_index(rx_node)) if rx is None else np.array([self.node_index(v) for v in rx])
-        ft = self.basis.design_t(az_tx, el_tx)
-        fr = self.basis.design_t(az_rx, el_rx)
-        return np.einsum("pn,np->n", ft, self.coef[tx_idx]) + np.einsum("pn,np->n", fr, self.coef[rx_idx])
+        angles = [np.asarray(a, np.float64).ravel() for a in (az_tx, el_tx, az_rx, el_rx)]
+        for name, a in zip(("az_tx", "el_tx", "az_rx", "el_rx"), angles):
+            if a.size not in (1, n):
+                raise InputError(f"{name} has {a.size} values, az_tx has {n}")
+        az_tx, el_tx, az_rx, el_rx = (np.broadcast_to(a, (n,)) for a in angles)
+        return self._sum_node_gains(tx_idx, az_tx, el_tx) + self._sum_node_gains(rx_idx, az_rx, el_rx)
 
     def predict_for_poses(
         self,
@@ -266,11 +270,12 @@ class PatternSet:
         tx = idx[samples.tx_index]
         rx = idx[samples.rx_index]
         d = samples.directions
-        out = np.empty(len(samples))
-        step = 65536
-        for s in range(0, len(samples), step):
-            e = min(len(samples), s + step)
-            ft = self.basis.design_t(d.az_tx[s:e], d.el_tx[s:e])
-            fr = self.basis.design_t(d.az_rx[s:e], d.el_rx[s:e])
-            out[s:e] = np.einsum("pn,np->n", ft, self.coef[tx[s:e]]) + np.einsum("pn,np->n", fr, self.coef[rx[s:e]])
+        return self._sum_node_gains(tx, d.az_tx, d.el_tx) + self._sum_node_gains(rx, d.az_rx, d.el_rx)
+
+    def _sum_node_gains(self, node_idx: np.ndarray, az_rad: FloatArray, el_rad: FloatArray) -> FloatArray:
+        """Gain of node ``node_idx[i]`` toward direction ``i`` [dBi], one chunked pass per node."""
+        out = np.zeros(node_idx.size)
+        for k in np.unique(node_idx):
+            sel = np.flatnonzero(node_idx == k)
+            out[sel] = self.basis.evaluate(self.coef[k], np.asarray(az_rad)[sel], np.asarray(el_rad)[sel])
         return out

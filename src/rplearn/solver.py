@@ -113,6 +113,7 @@ def link_statistics(
     rows, or, for a basis with Gram moments (SH), only the product ``[f_tx; y] [y; f_rx]^T``
     (half the work): the two diagonal blocks then come from the moments.
     """
+    az_tx, el_tx, az_rx, el_rx, y = (np.ascontiguousarray(a, np.float64).ravel() for a in (az_tx, el_tx, az_rx, el_rx, y))
     p = basis.n_coef
     n = az_tx.size
     use_moments = basis.moment_shape is not None and basis.stacked_samples
@@ -227,8 +228,7 @@ class NormalEquations:
         n = az_tx.size
         key = (min(t, r), max(t, r))
         self.link_counts[key] = self.link_counts.get(key, 0) + n
-        # Features of both ends plus the observations as a last row: one symmetric rank-k
-        # update yields both nodes' blocks of X^T X, X^T y and y^T y in a single pass.
+        # Both nodes' blocks of X^T X, X^T y and y^T y from one pass over the samples.
         block = link_statistics(self.basis, az_tx, el_tx, az_rx, el_rx, y)
         block = block[np.ix_(self._natural, self._natural)]
         self.gram[bt, bt] += block[:p, :p]
