@@ -341,6 +341,41 @@ def _sh_chebyshev_tables(order: int) -> tuple[FloatArray, NDArray[np.intp], NDAr
     return coef, row_order, natural
 
 
+def _sh_factors(az_rad: FloatArray, el_rad: FloatArray, n_cheb: int, n_trig: int) -> tuple[FloatArray, FloatArray]:
+    """The factors every real SH is made of, in this thread's scratch slots 0 and 1.
+
+    Returns ``cheb`` of shape ``(n_cheb, *shape)``, ``T_j(sin el)``, and ``trig`` of shape
+    ``(2 n_trig, *shape)``: ``cos(m az)`` for ``m < n_trig``, then ``sin(m az)``, each times
+    ``cos(el)`` when ``m`` is odd. The sines and cosines of the angles come from one tangent
+    each (:func:`_cos_sin_half_angle`), the rest from Chebyshev recurrences.
+    """
+    shape = az_rad.shape  # any sample shape: (n,), or (2, n) for both ends of a link at once
+    x, cos_el = _cos_sin_half_angle(el_rad)[::-1]  # x = sin(el), cos(el) >= 0
+    cheb = _scratch(0, (n_cheb, *shape))
+    cheb[0] = 1.0
+    if n_cheb > 1:
+        cheb[1] = x
+        two_x = 2.0 * x
+        for j in range(2, n_cheb):  # T_j = 2 x T_{j-1} - T_{j-2}
+            np.multiply(two_x, cheb[j - 1], out=cheb[j])
+            cheb[j] -= cheb[j - 2]
+    trig = _scratch(1, (2 * n_trig, *shape))
+    cos_m, sin_m = trig[:n_trig], trig[n_trig:]
+    cos_m[0] = 1.0
+    sin_m[0] = 0.0
+    if n_trig > 1:
+        cos_m[1], sin_m[1] = _cos_sin_half_angle(az_rad)
+        two_cos = 2.0 * cos_m[1]
+        for m in range(2, n_trig):  # Chebyshev: c_m = 2 cos(az) c_{m-1} - c_{m-2}
+            np.multiply(two_cos, cos_m[m - 1], out=cos_m[m])
+            np.multiply(two_cos, sin_m[m - 1], out=sin_m[m])
+            cos_m[m] -= cos_m[m - 2]
+            sin_m[m] -= sin_m[m - 2]
+        cos_m[1::2] *= cos_el
+        sin_m[1::2] *= cos_el
+    return cheb, trig
+
+
 #: Highest SH order whose Gram the solver builds from moments (see ``moment_shape``).
 SH_MOMENTS_MAX_ORDER = 24
 
@@ -431,6 +466,27 @@ def _sh_moment_tables(order: int) -> _MomentTables:
     )
 
 
+def _sh_series(order: int, coef_rows: FloatArray) -> FloatArray:
+    """Chebyshev series in ``sin(el)`` of patterns, one per azimuth factor of :func:`_sh_factors`.
+
+    ``coef_rows`` (k, order**2) in :attr:`SphericalHarmonics.row_order`; returns (k, 2 order,
+    order): rows ``m`` (cosine of ``m az``) and ``order + m`` (sine; row ``order`` is zero).
+    """
+    L = order
+    coef, _, _ = _sh_chebyshev_tables(order)
+    n_cos = coef.shape[0]
+    series = np.zeros((coef_rows.shape[0], 2 * L, L))
+    series[:, 0] = coef_rows[:, :L] @ coef[:L]
+    r, q = L, n_cos
+    for m in range(1, L):
+        n = L - m
+        series[:, m] = coef_rows[:, r : r + n] @ coef[r : r + n]
+        series[:, L + m] = coef_rows[:, q : q + n] @ coef[r : r + n]
+        r += n
+        q += n
+    return series
+
+
 @dataclass(frozen=True)
 class SphericalHarmonics(Basis):
     """Real orthonormal spherical harmonics of degrees ``0 .. order-1`` (paper's SH-``order``).
@@ -482,34 +538,11 @@ class SphericalHarmonics(Basis):
         # and each order's block of rows from one broadcast product with cos or sin(m az).
         L = self.order
         coef, _, _ = self._tables
-        shape = az_rad.shape  # any sample shape: (n,), or (2, n) for both ends of a link at once
         n_cheb, n_trig = (L, L) if moments is None else (2 * L + 1, 2 * L - 1)
-        x, cos_el = _cos_sin_half_angle(el_rad)[::-1]  # x = sin(el), cos(el) >= 0
-        cheb = _scratch(0, (n_cheb, *shape))
-        cheb[0] = 1.0
-        if n_cheb > 1:
-            cheb[1] = x
-            two_x = 2.0 * x
-            for j in range(2, n_cheb):  # T_j = 2 x T_{j-1} - T_{j-2}
-                np.multiply(two_x, cheb[j - 1], out=cheb[j])
-                cheb[j] -= cheb[j - 2]
+        cheb, trig = _sh_factors(az_rad, el_rad, n_cheb, n_trig)
         n_cos = coef.shape[0]
         _matmul_into(coef, cheb[:L], out[:n_cos])
-        # cos(m az) rows, then sin(m az) rows, each times cos(el) for odd m
-        trig = _scratch(1, (2 * n_trig, *shape))
         cos_m, sin_m = trig[:n_trig], trig[n_trig:]
-        cos_m[0] = 1.0
-        sin_m[0] = 0.0
-        if n_trig > 1:
-            cos_m[1], sin_m[1] = _cos_sin_half_angle(az_rad)
-            two_cos = 2.0 * cos_m[1]
-            for m in range(2, n_trig):  # Chebyshev: c_m = 2 cos(az) c_{m-1} - c_{m-2}
-                np.multiply(two_cos, cos_m[m - 1], out=cos_m[m])
-                np.multiply(two_cos, sin_m[m - 1], out=sin_m[m])
-                cos_m[m] -= cos_m[m - 2]
-                sin_m[m] -= sin_m[m - 2]
-            cos_m[1::2] *= cos_el
-            sin_m[1::2] *= cos_el
         r, q = L, n_cos
         for m in range(1, L):
             k = L - m
@@ -563,6 +596,29 @@ class SphericalHarmonics(Basis):
         gram = gram.reshape(self.n_coef, self.n_coef)
         upper = np.triu(gram)
         return upper + np.triu(gram, 1).T
+
+    def evaluate(self, coef: ArrayLike, az_rad: ArrayLike, el_rad: ArrayLike) -> FloatArray:
+        # A pattern is sum_m [sum_l c_lm Q_lm(x)] w_m: one Chebyshev series per azimuth factor,
+        # so 2 order rows per direction are computed instead of order**2 features.
+        az, el = _angles(az_rad, el_rad)
+        c = np.asarray(coef, np.float64)
+        if c.shape[-1] != self.n_coef:
+            raise InputError(f"{c.shape[-1]} coefficients given for {self.n_coef} basis functions")
+        L = self.order
+        lead = c.shape[:-1]
+        c_rows = c.reshape(-1, self.n_coef)[:, self.row_order]
+        series = _sh_series(self.order, c_rows)  # (k, 2 L, L)
+        k = series.shape[0]
+        flat = series.reshape(k * 2 * L, L)
+        out = np.empty((k, az.size))
+        step = _eval_chunk(2 * L * k)
+        for s in range(0, az.size, step):
+            e = min(az.size, s + step)
+            cheb, trig = _sh_factors(az[s:e], el[s:e], L, L)
+            per_factor = (flat @ cheb).reshape(k, 2 * L, e - s)
+            per_factor *= trig
+            per_factor.sum(axis=1, out=out[:, s:e])
+        return out.reshape(*lead, az.size)
 
     def design_into(self, az_rad: FloatArray, el_rad: FloatArray, out: FloatArray) -> None:
         # Through a reused chunk-sized buffer in row_order, scattered into the natural rows:
