@@ -98,6 +98,12 @@ USER_ERRORS = {
     "sentinel rssi in a dataset": (["fit", "sentinel.csv", "-o", "x.json"], "sentinel"),
     "unreadable log": (["inspect", "trunc.parquet"], "could not be read"),
     "plan over a limit": (["trajectory", "-o", "plan", "--max-flight-time", "100", "--check-model", "none"], "above the limit 100 s"),
+    "option of another model": (["fit", "data.parquet", "--model", "knn", "--ridge", "5", "-o", "k.json"], "--ridge do(es) not apply to NN-400"),
+    "degree of a mean": (["fit", "data.parquet", "--model", "mean", "--degree", "7", "-o", "m7.json"], "--degree"),
+    "BG option on SH": (["fit", "data.parquet", "--model", "sh", "--sigma", "3", "-o", "s.json"], "only apply to BG"),
+    "gauge level without node": (["fit", "data.parquet", "--gauge-dbi", "2", "-o", "g.json"], "--gauge-dbi needs --gauge-node"),
+    "contradicting degree": (["fit", "data.parquet", "--model", "sh-10", "--degree", "5", "-o", "c.json"], "contradicts"),
+    "bad model in a report": (["report", "data.parquet", "--models", "m,foo", "-o", "rep_bad"], "unknown model"),
 }
 
 
@@ -185,3 +191,64 @@ def test_sweep_plot_report_and_images(workdir):
     assert page.count("data:image/png;base64,") == 2
     for png in ("sweep.png", "maps.png", "img/pattern_A.png", "img/pattern_B.png"):
         assert (d / png).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", png
+
+
+def test_version_needs_no_command(tmp_path):
+    proc = run(["--version"], tmp_path)
+    assert proc.stdout.startswith("rplearn ")
+
+
+def test_bad_options_write_nothing(workdir):
+    run(["report", "data.parquet", "--models", "m,foo", "-o", "rep_nothing"], workdir, ok=False)
+    assert not (workdir / "rep_nothing").exists()
+    run(["trajectory", "-o", "plan_nothing", "--check-model", "foo"], workdir, ok=False)
+    assert not (workdir / "plan_nothing").exists()
+
+
+def test_predict_links_never_flown_and_honest_spreads(workdir):
+    """Poses without RSSI can be predicted; the predictive spread includes the training residual."""
+    d = workdir
+    data = pd.read_parquet(d / "data.parquet")
+    fit = run(["fit", "data.parquet", "--model", "sh", "--degree", "4", "-o", "sh4.json"], d)
+    assert "note: learning from units" in fit.stderr and "left out test" in fit.stderr
+    model = json.loads((d / "sh4.json").read_text())["model"]
+    learn_units = [u for u in sorted(data["unit"].unique()) if not u.startswith("test")]
+    assert model["training"]["n_samples"] == int(data["unit"].isin(learn_units).sum())
+    data.drop(columns=["rssi_dbm"]).to_csv(d / "poses_only.csv", index=False)
+    blind = run(["predict", "sh4.json", "poses_only.csv", "-o", "blind.csv"], d)
+    assert "RMSE" not in blind.stdout
+    seen = run(["predict", "sh4.json", "data.parquet", "-o", "seen.csv"], d)
+    assert "RMSE against the" in seen.stdout
+    a, b = pd.read_csv(d / "blind.csv"), pd.read_csv(d / "seen.csv")
+    assert "rssi_dbm" not in a.columns
+    np.testing.assert_allclose(a["rssi_pred_dbm"], b["rssi_pred_dbm"], atol=1e-9)
+    rmse = model["training"]["rmse_db"]
+    np.testing.assert_allclose(a["rssi_pred_std_db"] ** 2, a["gain_pred_std_db"] ** 2 + rmse**2, rtol=1e-9)
+    # about 68 % of measured values fall within one predictive standard deviation
+    inside = np.abs(b["rssi_dbm"] - b["rssi_pred_dbm"]) < b["rssi_pred_std_db"]
+    assert 0.55 < inside.mean() < 0.8
+    # sentinel RSSI in rows to predict is no obstacle either
+    sent = data.copy()
+    sent.loc[:10, "rssi_dbm"] = -128.0
+    sent.to_csv(d / "sentinel_rows.csv", index=False)
+    run(["predict", "sh4.json", "sentinel_rows.csv", "-o", "sent_pred.csv"], d)
+    # another carrier frequency: predicted, with a warning
+    other = data.drop(columns=["rssi_dbm"]).assign(frequency_hz=5.8e9)
+    other.to_csv(d / "other_band.csv", index=False)
+    warned = run(["predict", "sh4.json", "other_band.csv", "-o", "other_pred.csv"], d)
+    assert "warning:" in warned.stderr and "5.800 GHz" in warned.stderr
+
+
+def test_evaluate_scores_unseen_units_by_default(workdir):
+    d = workdir
+    data = pd.read_parquet(d / "data.parquet")
+    units = sorted(data["unit"].unique())
+    learn = [u for u in units if not u.startswith("test")]
+    run(["fit", "data.parquet", "--model", "sh", "--degree", "3", "--units", ",".join(learn), "-o", "sh3_units.json"], d)
+    ev = run(["evaluate", "sh3_units.json", "data.parquet", "--json", "ev_default.json"], d)
+    assert "which no model learned from" in ev.stderr
+    n_test = int((~data["unit"].isin(learn)).sum())
+    assert json.loads((d / "ev_default.json").read_text())["rows"][0]["n_samples"] == n_test
+    train = run(["evaluate", "sh3_units.json", "data.parquet", "--units", learn[0]], d)
+    assert "training scores" in train.stderr
+

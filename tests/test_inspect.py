@@ -109,3 +109,35 @@ def test_ulog_rows_flagged_invalid_are_reported():
     path = os.path.join(os.path.dirname(__file__), "data", "px4-ulog", "sample_log_small.ulg")
     report = inspect_logs([path])
     assert any("636 pose row(s) flagged invalid" in p for p in report.problems)
+
+
+def test_pauses_where_both_logs_stop_are_not_gaps_or_clock_jumps(tmp_path):
+    t = np.round(np.arange(0, 10, 0.01), 6)
+    tp = np.r_[t, t + 130.0]  # a 120 s pause between two units
+    a = _pose("A", np.r_[tp[tp < 133], tp[tp > 134]])  # a genuine 1 s gap in the second unit
+    b = _pose("B", tp, 5.0)
+    a.loc[7, "qw"] = 5.0  # a quaternion far from unit norm
+    pd.concat([a, b]).to_csv(tmp_path / "pose.csv", index=False)
+    ts = np.r_[np.arange(0.005, 9.99, 0.0125), 130.0 + np.arange(0.005, 9.99, 0.0125)]
+    sig = pd.DataFrame({"t": ts, "tx": "A", "rx": "B", "rssi_dbm": -50.0, "tx_power_dbm": 20.0,
+                        "frequency_hz": 2.4e9, "unit": np.where(ts < 100, "u1", "u2")})
+    pd.concat([sig, sig.iloc[:3]]).to_parquet(tmp_path / "signal.parquet", index=False)
+    rep = inspect_logs([tmp_path / "pose.csv", tmp_path / "signal.parquet"])
+    nodes = {n.node: n for n in rep.nodes}
+    assert (nodes["B"].pauses, nodes["B"].gaps, nodes["B"].clock_jumps) == (1, 0, 0)
+    assert nodes["B"].longest_pause_s == pytest.approx(120.01, abs=1e-6)
+    assert (nodes["A"].pauses, nodes["A"].gaps, nodes["A"].clock_jumps) == (1, 1, 0)
+    joined = "\n".join(rep.problems)
+    assert "clock jump" not in joined and "node B" not in joined
+    assert "node A: 1 pose gap(s) longer than 0.2 s (longest 1.0" in joined
+    assert "link A -> B: 3 exact duplicate row(s); sync drops them (duplicate)" in joined
+    assert "pose.csv: 1 pose row(s) with a quaternion norm off 1 by more than 0.001" in joined
+    assert "pauses (signals stop too): 1 (longest 120.0 s)" in rep.to_text()
+    assert {lk.duplicates for lk in rep.links} == {3}
+
+
+def test_pose_only_long_step_stays_flagged(tmp_path):
+    t = np.arange(0, 5, 0.01)
+    _pose("A", np.r_[t, t[-1] + 60 + t]).to_csv(tmp_path / "p.csv", index=False)
+    rep = inspect_logs([tmp_path / "p.csv"])
+    assert rep.nodes[0].pauses == 0 and rep.nodes[0].clock_jumps == 1 and rep.nodes[0].gaps == 1

@@ -69,7 +69,7 @@ def test_drops_are_counted_by_reason(two_nodes):
     res = synchronise(two_nodes, sig)
     s = res.summary
     assert s.n_in == len(sig) and s.n_out == 2 == len(res.dataset)
-    assert s.dropped == {"invalid_value": 1, "sentinel_rssi": 6, "implausible_rssi": 2, "tx_equals_rx": 1, "other_link": 0,
+    assert s.dropped == {"duplicate": 0, "invalid_value": 1, "sentinel_rssi": 6, "implausible_rssi": 2, "tx_equals_rx": 1, "other_link": 0,
                          "unknown_node": 1, "out_of_span": 2, "pose_gap": 1}
     assert s.n_in == s.n_out + s.n_dropped
     assert s.unknown_nodes == ["C"]
@@ -95,7 +95,7 @@ def test_too_few_samples_and_bad_options(two_nodes):
         synchronise(two_nodes, signal_log([0.05], "A", "B").drop(columns="rssi_dbm"))
     with pytest.raises(InputError, match="max_gap_s"):
         synchronise(two_nodes, signal_log([0.05], "A", "B"), max_gap_s=-1)
-    with pytest.raises(InputError, match="clock_offsets_s names node"):
+    with pytest.raises(InputError, match=r"clock offsets \(rplearn sync --offset, or clock_offsets_s=\) name node"):
         synchronise(two_nodes, signal_log([0.05], "A", "B"), clock_offsets_s={"Z": 1.0})
 
 
@@ -183,3 +183,54 @@ def test_every_sample_is_kept_or_counted(times, max_gap):
     assert s.n_in == s.n_out + s.n_dropped == len(times)
     d = res.dataset
     assert np.all(np.isfinite(d[list(MATCHED_COLUMNS[3:])].to_numpy()))
+
+
+def test_exact_duplicate_rows_are_dropped_and_counted(two_nodes):
+    sig = signal_log([0.05, 0.06, 0.07], "A", "B", [-50.0, -51.0, -52.0])
+    doubled = pd.concat([sig, sig.iloc[[1]], sig.iloc[[1]]], ignore_index=True)
+    near = sig.iloc[[2]].assign(rssi_dbm=-53.0)  # same time, other value: not a duplicate
+    res = synchronise(two_nodes, pd.concat([doubled, near], ignore_index=True))
+    assert res.summary.dropped["duplicate"] == 2
+    assert res.summary.n_out == 4
+    assert "dropped (duplicate): 2" in res.summary.to_text()
+
+
+def test_non_unit_quaternions_are_counted_and_normalised(two_nodes):
+    pose = two_nodes.copy()
+    pose.loc[1, ["qw", "qx", "qy", "qz"]] = [5.0, 0.0, 0.0, 0.0]
+    pose.loc[2, "qw"] = pose.loc[2, "qw"] * (1 + 5e-4)  # within the tolerance
+    res = synchronise(pose, signal_log([0.05, 0.125], "A", "B"))
+    assert res.summary.non_unit_quaternions == 1
+    assert "non-unit quaternion (|norm - 1| > 0.001, normalised): 1" in res.summary.to_text()
+    np.testing.assert_allclose(np.linalg.norm(res.dataset[["tx_qw", "tx_qx", "tx_qy", "tx_qz"]], axis=1), 1.0)
+    chunks = list(synchronise_stream(pose, [signal_log([0.05], "A", "B")] * 2))
+    assert [c.summary.non_unit_quaternions for c in chunks] == [1, 0]
+
+
+def test_link_naming_a_node_in_no_signal_log(two_nodes):
+    sig = signal_log([0.05], "A", "B")
+    with pytest.raises(InputError, match=r"--link A:Q: node Q is in no signal log; the signal logs name A, B$"):
+        synchronise(two_nodes, sig, link=("A", "Q"))
+    with pytest.raises(InputError, match=r"no signal from B to A; directions present: A:B$"):
+        synchronise(two_nodes, sig, link=("B", "A"))
+
+
+def test_duplicate_rows_equals_pandas_duplicated_on_unsorted_logs():
+    from rplearn.sync import duplicate_rows
+
+    rng = np.random.default_rng(4)
+    n = 3000
+    df = pd.DataFrame(
+        {
+            "t": rng.integers(0, 400, n).astype(float),  # many shared times, unsorted
+            "tx": rng.choice(["A", "B"], n),
+            "rx": "C",
+            "rssi_dbm": rng.integers(-62, -58, n).astype(float),
+            "tx_power_dbm": 20.0,
+            "frequency_hz": 2.4e9,
+        }
+    )
+    expected = df.duplicated(keep="first").to_numpy()
+    assert 0 < expected.sum() < n
+    np.testing.assert_array_equal(duplicate_rows(df), expected)
+    np.testing.assert_array_equal(duplicate_rows(df.drop_duplicates()), np.zeros(n - expected.sum(), bool))

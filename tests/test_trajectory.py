@@ -235,3 +235,29 @@ def test_yaw_rate_summary_matches_reference_and_limit() -> None:
     assert s.max_yaw_rate_deg_s == pytest.approx(40.0 * np.pi / 2, rel=1e-9)
     with pytest.raises(PlanError, match="max_yaw_rate_deg_s"):
         summarize_unit(unit, PlanLimits(max_yaw_rate_deg_s=30.0))
+
+
+def test_wording_names_cli_flags_and_real_remedies():
+    from rplearn.errors import InputError, PlanError
+    from rplearn.trajectory import PlanLimits, paper_campaign, summarize_unit
+
+    with pytest.raises(InputError, match=r"^--loops \(n_loops\): expected a positive integer, got 0$"):
+        paper_campaign(n_loops=0)
+    unit = paper_campaign(speed_m_s=5.0).units[0]
+    with pytest.raises(PlanError) as e:
+        summarize_unit(unit, PlanLimits(max_speed_m_s=1.0))
+    msg = str(e.value)
+    assert "(--max-speed)" in msg and "lower the cruise speed (--speed, speed_m_s)" in msg
+    assert "loop count" not in msg
+    with pytest.raises(PlanError, match=r"fly fewer headings \(--loops, n_loops\)"):
+        summarize_unit(unit, PlanLimits(max_flight_time_s=1.0))
+
+
+def test_help_summary_of_trajectory_is_complete():
+    from typer.testing import CliRunner
+
+    from rplearn.cli import app
+
+    res = CliRunner().invoke(app, ["--help"], env={"COLUMNS": "120"})
+    line = next(ln for ln in res.output.splitlines() if ln.strip().startswith("trajectory"))
+    assert line.split("trajectory", 1)[1].strip() == "Plan a calibration campaign and check it before flying."

@@ -101,18 +101,38 @@ def _pairs(values: Optional[list[str]], what: str) -> dict[str, str]:
 
 
 def _reader_options(
-    node: Optional[list[str]], receiver: Optional[list[str]], address: Optional[list[str]], pose_topic: Optional[list[str]]
+    node: Optional[list[str]], receiver: Optional[list[str]], address: Optional[list[str]], pose_topic: Optional[list[str]],
+    rssi_topic: Optional[list[str]] = None, rssi_field: Optional[str] = None, msg_definition: Optional[list[str]] = None,
+    **flags: Any,
 ) -> dict[str, Any]:
-    """Options of :func:`rplearn.io.read_logs` from the repeated KEY=VALUE flags."""
+    """Options of :func:`rplearn.io.read_logs` from the repeated KEY=VALUE flags.
+
+    ``rssi_topic`` holds TOPIC=TX:RX; ``flags`` (``nan_policy``, ``allow_unsorted``,
+    ``require_valid``) are passed on when not None.
+    """
     opts: dict[str, Any] = {}
     for flag, key, values in (
         ("--node", "nodes", node),
         ("--receiver", "receivers", receiver),
         ("--address", "address_map", address),
         ("--pose-topic", "pose_topics", pose_topic),
+        ("--msg-definition", "msg_definitions", msg_definition),
     ):
         if values:
             opts[key] = _pairs(values, flag)
+    if rssi_topic:
+        topics: dict[str, tuple[str, str]] = {}
+        for topic, ends in _pairs(rssi_topic, "--rssi-topic").items():
+            parts = ends.split(":")
+            if len(parts) != 2 or not all(p.strip() for p in parts):
+                raise InputError(f"--rssi-topic: expected TOPIC=TX:RX (e.g. /B/rssi=A:B), got {topic}={ends}")
+            topics[topic] = (parts[0].strip(), parts[1].strip())
+        opts["rssi_topics"] = topics
+    if rssi_field:
+        opts["rssi_field"] = rssi_field
+    if flags.get("nan_policy") is not None and flags["nan_policy"] not in ("drop", "error"):
+        raise InputError(f"--nan-policy: expected drop or error, got {flags['nan_policy']!r}")
+    opts.update({k: v for k, v in flags.items() if v is not None})
     return opts
 
 
@@ -133,15 +153,20 @@ def _write_json(path: str, payload: Any) -> None:
 # -------------------------------------------------------------------------------------------
 
 
+def _print_version(value: bool) -> None:
+    if value:
+        out.print(f"rplearn {__version__}")
+        raise typer.Exit(0)
+
+
 @app.callback()
 def main_callback(
     verbose: bool = typer.Option(False, "--verbose", "-v", help="Log progress details."),
-    version: bool = typer.Option(False, "--version", help="Print the version and exit."),
+    version: bool = typer.Option(
+        False, "--version", help="Print the version and exit.", callback=_print_version, is_eager=True
+    ),
 ) -> None:
     logging.basicConfig(level=logging.INFO if verbose else logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
-    if version:
-        out.print(f"rplearn {__version__}")
-        raise typer.Exit(0)
 
 
 @app.command()
@@ -161,8 +186,11 @@ def trajectory(
     check_model: Optional[str] = typer.Option("sh-10", "--check-model", help="Model whose rank and condition number the plan check reports (e.g. sh-10, bg-7; 'none' to skip)."),
     wind_m_s: float = typer.Option(0.0, "--wind", help="Steady wind for the plan check [m/s] (tilts the drones)."),
 ) -> None:
-    """Plan the paper's calibration campaign (Sec. IV-A), write references t,x,y,z,yaw_deg, and check
-    before flying whether the plan will decouple the patterns (coverage, rank, condition number).
+    """Plan a calibration campaign and check it before flying.
+
+    Plans the paper's campaign (Sec. IV-A), writes references t,x,y,z,yaw_deg per drone, and
+    checks before flying whether the plan will decouple the patterns (coverage, rank,
+    condition number).
 
     Example: rplearn trajectory --distance 10 --height 20 --loops 5 --max-flight-time 600 -o plan
     """
@@ -170,6 +198,11 @@ def trajectory(
     from rplearn.plan import check_plan
     from rplearn.trajectory import PlanLimits, paper_campaign, summarize_unit, write_references
 
+    spec = None
+    if check_model and check_model.lower() != "none":  # refuse a bad model before writing files
+        spec = ModelSpec.parse(check_model)
+        if not spec.decouples:
+            raise InputError(f"--check-model: {spec.label} has no per-node pattern to check; use sh, bg or poly")
     learn = [float(v) for v in (_split_list(psi0_deg) or ["0", "24", "48"])]
     test = [float(v) for v in (_split_list(test_psi0_deg) or ["36"])]
     campaign = paper_campaign(
@@ -185,10 +218,7 @@ def trajectory(
     paths = write_references(campaign, out_dir, rate_hz)
     out.print(table)
     out.print(f"wrote {len(paths)} reference files to {out_dir}")
-    if check_model and check_model.lower() != "none":
-        spec = ModelSpec.parse(check_model)
-        if not spec.decouples:
-            raise InputError(f"--check-model: {spec.label} has no per-node pattern to check; use sh, bg or poly")
+    if spec is not None:
         report = check_plan(campaign, spec.basis(), wind_speed_m_s=wind_m_s)
         out.print("plan check (learning units):\n" + report.summary(), highlight=False)
 
@@ -228,6 +258,10 @@ def inspect(
     receiver: Optional[list[str]] = typer.Option(None, "--receiver", help="FILE=NODE: capturing node of a pcap."),
     address: Optional[list[str]] = typer.Option(None, "--address", help="MAC=NODE: transmitter addresses of pcaps."),
     pose_topic: Optional[list[str]] = typer.Option(None, "--pose-topic", help="TOPIC=NODE for ROS bags."),
+    rssi_topic: Optional[list[str]] = typer.Option(None, "--rssi-topic", help="TOPIC=TX:RX: RSSI topic of ROS bags, packets from TX received by RX."),
+    rssi_field: Optional[str] = typer.Option(None, "--rssi-field", help="Field of the RSSI [dBm] in --rssi-topic messages, dots for nested fields (default rssi)."),
+    msg_definition: Optional[list[str]] = typer.Option(None, "--msg-definition", help="TYPE=FILE.msg: custom message type a bag does not describe (e.g. pkg/msg/LinkQuality=LinkQuality.msg)."),
+    require_valid: bool = typer.Option(False, "--require-valid/--accept-invalid", help="Drop ULog positions the autopilot flags invalid (xy_valid or z_valid = 0), or keep them (default)."),
     markdown: bool = typer.Option(False, "--markdown", help="Print Markdown instead of text."),
 ) -> None:
     """Summarise logs: nodes, time spans, rates, RSSI range, gaps, and anything suspicious.
@@ -236,7 +270,8 @@ def inspect(
     """
     from rplearn.inspect import inspect_logs
 
-    report = inspect_logs(logs, **_reader_options(node, receiver, address, pose_topic))
+    report = inspect_logs(logs, **_reader_options(
+        node, receiver, address, pose_topic, rssi_topic, rssi_field, msg_definition, require_valid=require_valid))
     out.print(report.to_markdown() if markdown else report.to_text(), highlight=False)
     unreadable = [f for f in report.files if f.get("error") is not None]
     if unreadable:
@@ -256,8 +291,15 @@ def sync(
     receiver: Optional[list[str]] = typer.Option(None, "--receiver", help="FILE=NODE: capturing node of a pcap."),
     address: Optional[list[str]] = typer.Option(None, "--address", help="MAC=NODE: transmitter addresses of pcaps."),
     pose_topic: Optional[list[str]] = typer.Option(None, "--pose-topic", help="TOPIC=NODE: pose topics of ROS bags."),
+    rssi_topic: Optional[list[str]] = typer.Option(None, "--rssi-topic", help="TOPIC=TX:RX: RSSI topic of ROS bags, packets from TX received by RX."),
+    rssi_field: Optional[str] = typer.Option(None, "--rssi-field", help="Field of the RSSI [dBm] in --rssi-topic messages, dots for nested fields (default rssi)."),
+    msg_definition: Optional[list[str]] = typer.Option(None, "--msg-definition", help="TYPE=FILE.msg: custom message type a bag does not describe (e.g. pkg/msg/LinkQuality=LinkQuality.msg)."),
     tx_power_dbm: Optional[float] = typer.Option(None, "--tx-power", help="Transmit power for logs without it [dBm]."),
     frequency_hz: Optional[float] = typer.Option(None, "--frequency", help="Carrier frequency for logs without it [Hz]."),
+    nan_policy: str = typer.Option("error", "--nan-policy", help="Pose-table rows with NaN or non-numeric values: error (default) or drop (counted)."),
+    allow_unsorted: bool = typer.Option(False, "--allow-unsorted", help="Accept pose tables whose times go backwards within a node (the rows are sorted)."),
+    require_valid: bool = typer.Option(False, "--require-valid/--accept-invalid", help="Drop ULog positions the autopilot flags invalid (xy_valid or z_valid = 0), or keep them (default)."),
+    on_unknown_node: str = typer.Option("drop", "--on-unknown-node", help="Signals naming a node without a pose log: drop (counted, default) or error."),
 ) -> None:
     """Match every signal sample with the interpolated poses of both ends (paper Sec. V-B4).
 
@@ -267,7 +309,9 @@ def sync(
     from rplearn.io import read_logs
     from rplearn.sync import synchronise
 
-    opts = {"tx_power_dbm": tx_power_dbm, "frequency_hz": frequency_hz, **_reader_options(node, receiver, address, pose_topic)}
+    opts = {"tx_power_dbm": tx_power_dbm, "frequency_hz": frequency_hz, **_reader_options(
+        node, receiver, address, pose_topic, rssi_topic, rssi_field, msg_definition,
+        nan_policy=nan_policy, allow_unsorted=allow_unsorted, require_valid=require_valid)}
     pose_logs, _ = read_logs(poses, **opts)
     signal_logs, _ = read_logs(signals, **opts)
     if pose_logs.pose is None:
@@ -278,16 +322,36 @@ def sync(
         offsets = {k: float(v) for k, v in _pairs(offset, "--offset").items()}
     except ValueError:
         raise InputError(f"--offset: expected NODE=SECONDS with a number, got {', '.join(offset or [])}") from None
-    result = synchronise(pose_logs.pose, signal_logs.signal, link=_link(link), max_gap_s=max_gap_s, clock_offsets_s=offsets or None)
+    result = synchronise(pose_logs.pose, signal_logs.signal, link=_link(link), max_gap_s=max_gap_s,
+                         clock_offsets_s=offsets or None, on_unknown_node=on_unknown_node, source=", ".join(signals))
     write_table(result.dataset, output)
     out.print(result.summary.to_text(), highlight=False)
     out.print(f"wrote {len(result.dataset):,} matched samples to {output}")
 
 
-def _dataset(path: str):
+def _dataset(path: str, require_rssi: bool = True):
     from rplearn.datasets import read_table, validate_matched
 
-    return validate_matched(read_table(path), path)
+    return validate_matched(read_table(path), path, require_rssi=require_rssi)
+
+
+def _dataset_units(df: Any) -> list[str]:
+    return sorted(df["unit"].astype(str).unique()) if "unit" in df.columns else []
+
+
+def _default_learning_units(df: Any, dataset: str) -> list[str] | None:
+    """All units but those labelled ``test...`` (None: every row), and say which were used."""
+    units = _dataset_units(df)
+    learn = [u for u in units if not u.startswith("test")]
+    if not units:
+        return None
+    if not learn:
+        console.print(f"note: {dataset}: every unit is labelled test...; learning from all of them", highlight=False)
+        return None
+    left_out = [u for u in units if u not in learn]
+    if left_out:
+        console.print(f"note: learning from units {', '.join(learn)}; left out {', '.join(left_out)} (pass --units to choose)", highlight=False)
+    return learn
 
 
 @app.command()
@@ -296,12 +360,12 @@ def fit(
     dataset: str = typer.Argument(..., help="Matched dataset (.parquet or .csv)."),
     model: str = typer.Option("sh", "--model", help="sh, bg, poly, mean or knn (also sh-10, nn-400...)."),
     degree: Optional[int] = typer.Option(None, "--degree", help="SH-L / BG-k / P-k order, or k of knn (defaults 10, 7, 12, 400)."),
-    ridge: Optional[float] = typer.Option(None, "--ridge", help="Ridge weight on the diagonal of X^T X (default 1; the paper used 50)."),
-    sigma: float = typer.Option(0.5, "--sigma", help="BG kernel variance sigma [rad^2] (paper: about 0.5)."),
-    grid: str = typer.Option("paper", "--grid", help="BG nodes: paper or fibonacci."),
-    units: Optional[list[str]] = typer.Option(None, "--units", help="Learning units (repeat or comma-separate)."),
-    gauge_node: Optional[str] = typer.Option(None, "--gauge-node", help="Fix this node's mean gain instead of splitting equally."),
-    gauge_dbi: float = typer.Option(0.0, "--gauge-dbi", help="Sphere-mean gain of --gauge-node [dBi]."),
+    ridge: Optional[float] = typer.Option(None, "--ridge", help="Pattern models: ridge weight on the diagonal of X^T X (default 1; the paper used 50)."),
+    sigma: Optional[float] = typer.Option(None, "--sigma", help="BG only: kernel variance sigma [rad^2] (default 0.5, about the paper's)."),
+    grid: Optional[str] = typer.Option(None, "--grid", help="BG only: nodes on the paper grid (default) or fibonacci."),
+    units: Optional[list[str]] = typer.Option(None, "--units", help="Learning units (repeat or comma-separate; default: all but units labelled test...)."),
+    gauge_node: Optional[str] = typer.Option(None, "--gauge-node", help="Pattern models: fix this node's mean gain instead of splitting equally."),
+    gauge_dbi: Optional[float] = typer.Option(None, "--gauge-dbi", help="Sphere-mean gain of --gauge-node [dBi] (default 0)."),
     output: str = typer.Option(..., "-o", "--out", help="Model file (.json)."),
 ) -> None:
     """Learn one radiation pattern per node (or a baseline) from a matched dataset.
@@ -312,9 +376,12 @@ def fit(
     from rplearn.learn import ModelSpec, fit_model, samples_of
 
     spec = ModelSpec.parse(model, order=degree, ridge=ridge, sigma_rad2=sigma, grid=grid)
-    samples = samples_of(_dataset(dataset), _split_list(units), dataset)
-    gauge: Any = {"node": gauge_node, "mean_gain_dbi": gauge_dbi} if gauge_node else "equal-mean"
-    fitted = fit_model(samples, spec, gauge=gauge, provenance=provenance(dataset=dataset, model=spec.label, ridge=spec.ridge, units=_split_list(units)))
+    _check_fit_options(model, spec, degree, ridge, sigma, grid, gauge_node, gauge_dbi)
+    df = _dataset(dataset)
+    chosen = _split_list(units) or _default_learning_units(df, dataset)
+    samples = samples_of(df, chosen, dataset)
+    gauge: Any = {"node": gauge_node, "mean_gain_dbi": gauge_dbi or 0.0} if gauge_node else "equal-mean"
+    fitted = fit_model(samples, spec, gauge=gauge, provenance=provenance(dataset=dataset, model=spec.label, ridge=spec.ridge, units=chosen))
     fitted.model.save(output)
     msg = f"{spec.label} learned from {len(samples):,} samples in {fitted.ltd_s:.3f} s -> {output}"
     training = getattr(fitted.model, "training", {})
@@ -325,6 +392,34 @@ def fit(
     out.print(msg, highlight=False)
     for w in training.get("warnings", []):
         console.print(f"warning: {w}", highlight=False, soft_wrap=True)
+
+
+def _check_fit_options(
+    model: str,
+    spec: Any,
+    degree: Optional[int],
+    ridge: Optional[float],
+    sigma: Optional[float],
+    grid: Optional[str],
+    gauge_node: Optional[str],
+    gauge_dbi: Optional[float],
+) -> None:
+    """Refuse options that the chosen model would silently ignore or that contradict it."""
+    given = {"--ridge": ridge, "--sigma": sigma, "--grid": grid, "--gauge-node": gauge_node, "--degree": degree}
+    if spec.kind in ("mean", "knn"):
+        unused = [k for k in ("--ridge", "--sigma", "--grid", "--gauge-node") if given[k] is not None]
+        if spec.kind == "mean" and degree is not None:
+            unused.append("--degree")
+        if unused:
+            raise InputError(f"{', '.join(unused)} do(es) not apply to {spec.label}, a baseline without patterns")
+    elif spec.kind != "bg":
+        unused = [k for k in ("--sigma", "--grid") if given[k] is not None]
+        if unused:
+            raise InputError(f"{', '.join(unused)} only apply to BG models, not {spec.label}")
+    if gauge_dbi is not None and gauge_node is None:
+        raise InputError("--gauge-dbi needs --gauge-node (which node's mean gain it fixes)")
+    if degree is not None and spec.order is not None and int(degree) != spec.order:
+        raise InputError(f"--model {model} already sets the order {spec.order}; --degree {degree} contradicts it")
 
 
 @app.command()
@@ -347,7 +442,8 @@ def evaluate(
         raise InputError("evaluate: give at least one MODEL.json and a DATASET")
     *model_paths, dataset = paths
     models = [load_model(p) for p in model_paths]
-    samples = samples_of(_dataset(dataset), _split_list(units), dataset)
+    df = _dataset(dataset)
+    samples = samples_of(df, _evaluation_units(df, _split_list(units), models, dataset), dataset)
     fitted = [FittedModel.from_model(m) for m in models]
     rows = evaluate_models(fitted, samples)
     md = scores_markdown(rows)
@@ -359,32 +455,85 @@ def evaluate(
         _write_json(json_out, {"provenance": provenance(dataset=dataset, models=model_paths), "rows": [r.to_dict() for r in rows]})
 
 
+def _evaluation_units(df: Any, units: list[str] | None, models: list[Any], dataset: str) -> list[str] | None:
+    """The units to score on: as given, else those no model learned from; say which, and warn
+    when a score would be a training score."""
+    trained = sorted({str(u) for m in models for u in (getattr(m, "provenance", {}).get("parameters", {}).get("units") or [])})
+    available = _dataset_units(df)
+    if units is None and trained and available:
+        unseen = [u for u in available if u not in trained]
+        if unseen:
+            console.print(f"note: scoring on units {', '.join(unseen)}, which no model learned from (pass --units to choose)", highlight=False)
+            return unseen
+    chosen = units if units is not None else (available or None)
+    overlap = sorted(set(chosen or available) & set(trained))
+    if overlap:
+        console.print(f"warning: scoring on unit(s) {', '.join(overlap)} that a model learned from: these are training scores", highlight=False)
+    elif units is None and available:
+        console.print(f"note: scoring on all units ({', '.join(available)}); pass --units to choose", highlight=False)
+    return chosen
+
+
 @app.command()
 @user_errors
 def predict(
     model_path: str = typer.Argument(..., metavar="MODEL.json"),
     dataset: str = typer.Argument(..., metavar="DATASET"),
-    output: str = typer.Option(..., "-o", "--out", help="The dataset with gain_pred_db, rssi_pred_dbm and (pattern models) gain_pred_std_db added (.csv or .parquet)."),
+    output: str = typer.Option(..., "-o", "--out", help="Where to write the dataset with the predictions added (.csv or .parquet)."),
 ) -> None:
-    """Predict the joint gain and received power for every row of a dataset.
+    """Predict the joint gain and received power for every row of a dataset of poses.
+
+    DATASET has the columns of a matched dataset (see rplearn sync) except rssi_dbm, which
+    may be absent: links that were never flown can be predicted. Added columns:
+    gain_pred_db, the joint gain G_tx + G_rx [dB]; rssi_pred_dbm, the received power
+    [dBm]; and for pattern models gain_pred_std_db, the standard error of gain_pred_db from
+    the learned coefficients alone [dB], and rssi_pred_std_db, the spread of one new packet's
+    RSSI around rssi_pred_dbm, adding the training residual (fading, noise, misfit) [dB].
 
     Example: rplearn predict sh10.json data.parquet -o pred.csv
     """
+    import numpy as np
+
     from rplearn.datasets import link_samples, write_table
     from rplearn.link import received_power_dbm
     from rplearn.modelfile import load_model
 
     model = load_model(model_path)
-    df = _dataset(dataset)
-    samples = link_samples(df, dataset)
+    df = _dataset(dataset, require_rssi=False)
+    samples = link_samples(df, dataset, require_rssi=False)
+    _warn_frequency_mismatch(model, df["frequency_hz"].to_numpy(np.float64), model_path, dataset)
     gain = model.predict_samples(samples)
     df = df.copy()
     df["gain_pred_db"] = gain
     df["rssi_pred_dbm"] = received_power_dbm(df["tx_power_dbm"].to_numpy(), gain, samples.distance_m, df["frequency_hz"].to_numpy())
     if getattr(model, "covariance", None) is not None:
-        df["gain_pred_std_db"] = model.predict_samples_std(samples)  # coefficient uncertainty only
+        std = model.predict_samples_std(samples)
+        df["gain_pred_std_db"] = std
+        residual_db = float(model.training.get("rmse_db", np.nan))
+        df["rssi_pred_std_db"] = np.sqrt(std**2 + residual_db**2)
     write_table(df, output)
-    out.print(f"wrote {len(df):,} predictions to {output}")
+    measured = np.isfinite(samples.joint_gain_db)
+    line = f"wrote {len(df):,} predictions to {output}"
+    if measured.any():
+        err = gain[measured] - samples.joint_gain_db[measured]
+        line += f" (RMSE against the {int(measured.sum()):,} measured RSSI values: {float(np.sqrt(np.mean(err**2))):.2f} dB)"
+    out.print(line, highlight=False)
+
+
+def _warn_frequency_mismatch(model: Any, frequency_hz: Any, model_path: str, dataset: str) -> None:
+    """Warn when rows are at a carrier frequency other than the one the model learned at."""
+    import numpy as np
+
+    learned = getattr(model, "training", {}).get("frequency_hz")
+    if learned is None or len(frequency_hz) == 0:
+        return
+    off = np.abs(np.asarray(frequency_hz) / float(learned) - 1.0) > 0.05
+    if np.any(off):
+        console.print(
+            f"warning: {dataset}: {int(off.sum()):,} row(s) at {float(np.median(np.asarray(frequency_hz)[off])) / 1e9:.3f} GHz, "
+            f"but {model_path} learned at {float(learned) / 1e9:.3f} GHz; antenna patterns change with frequency",
+            highlight=False, soft_wrap=True,
+        )
 
 
 @app.command()
@@ -581,6 +730,10 @@ def report(
     from rplearn.patterns import PatternSet
     from rplearn.report import ReportSection, write_report
 
+    names = _split_list([models]) or []
+    if not names:
+        raise InputError("--models: give at least one model, e.g. m,sh-10")
+    specs = [ModelSpec.parse(name) for name in names]  # refuse a bad name before writing anything
     df = _dataset(dataset)
     if "unit" not in df.columns:
         raise InputError(f"{dataset}: a report needs a 'unit' column to split learning from testing samples")
@@ -595,10 +748,8 @@ def report(
     os.makedirs(out_dir, exist_ok=True)
     fitted = []
     with _progress() as p:
-        names = _split_list([models]) or []
-        task = p.add_task("learning", total=len(names))
-        for name in names:
-            spec = ModelSpec.parse(name)
+        task = p.add_task("learning", total=len(specs))
+        for spec in specs:
             p.update(task, description=f"learning {spec.label}")
             fitted.append(fit_model(ls, spec, provenance=prov))
             p.advance(task)

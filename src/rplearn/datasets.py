@@ -36,6 +36,12 @@ STRING_COLUMNS: tuple[str, ...] = ("node", "tx", "rx", "unit")
 CSV_DTYPES: dict[str, type] = {c: str for c in STRING_COLUMNS}
 #: RSSI values that mean "no measurement" in drivers and capture tools [dBm].
 SENTINEL_RSSI_DBM: tuple[float, ...] = (0.0, -127.0, -128.0, 127.0)
+#: A pose quaternion whose norm differs from 1 by more than this is counted as non-unit
+#: (it is still normalised): a unit or scaling mistake rather than rounding.
+QUATERNION_NORM_TOLERANCE: float = 1e-3
+#: Key of ``DataFrame.attrs`` where :func:`validate_pose_log` records how many rows had a
+#: non-unit quaternion before normalisation (carried over from an input that has it).
+NON_UNIT_QUATERNION_ATTR: str = "non_unit_quaternion_rows"
 
 
 def normalise_times(df: pd.DataFrame, source: str = "table") -> pd.DataFrame:
@@ -75,6 +81,11 @@ def _require_finite(df: pd.DataFrame, columns: Sequence[str], source: str) -> No
 def validate_pose_log(df: pd.DataFrame, source: str = "pose log") -> pd.DataFrame:
     """Check a canonical pose log and return it typed, sorted by (node, t), quaternions normalised.
 
+    The number of rows whose quaternion norm was off 1 by more than
+    :data:`QUATERNION_NORM_TOLERANCE` (plus any count the input carries) is recorded in
+    ``attrs["non_unit_quaternion_rows"]`` of the result; read it with
+    :func:`non_unit_quaternion_rows`.
+
     Raises
     ------
     InputError
@@ -94,6 +105,7 @@ def validate_pose_log(df: pd.DataFrame, source: str = "pose log") -> pd.DataFram
     if np.any(norm < 1e-6):
         row = int(np.flatnonzero(norm < 1e-6)[0])
         raise InputError(f"{source}: quaternion (qw, qx, qy, qz) has zero norm at row {row}")
+    non_unit = count_non_unit_quaternions(norm) + int(df.attrs.get(NON_UNIT_QUATERNION_ATTR, 0))
     out[["qw", "qx", "qy", "qz"]] = q / norm[:, None]
     out = out.sort_values(["node", "t"], kind="stable").reset_index(drop=True)
     dup = out.duplicated(["node", "t"])
@@ -101,9 +113,34 @@ def validate_pose_log(df: pd.DataFrame, source: str = "pose log") -> pd.DataFram
         row = out[dup].iloc[0]
         raise InputError(
             f"{source}: field t: {int(dup.sum())} duplicate timestamp(s) within a node "
-            f"(first: node {row['node']}, t = {row['t']!r})"
+            f"(first: node {row['node']}, t = {float(row['t'])!r})"
         )
+    out.attrs[NON_UNIT_QUATERNION_ATTR] = non_unit
     return out
+
+
+def count_non_unit_quaternions(norm: np.ndarray, tolerance: float = QUATERNION_NORM_TOLERANCE) -> int:
+    """Number of quaternions whose norm differs from 1 by more than ``tolerance``.
+
+    Parameters
+    ----------
+    norm : ndarray
+        Quaternion norms (dimensionless).
+    tolerance : float
+        Allowed deviation |norm - 1| (default :data:`QUATERNION_NORM_TOLERANCE`).
+    """
+    return int(np.sum(np.abs(np.asarray(norm, np.float64) - 1.0) > tolerance))
+
+
+def non_unit_quaternion_rows(pose_log: pd.DataFrame) -> int:
+    """Rows of a pose log that had a non-unit quaternion before :func:`validate_pose_log`.
+
+    Reads the count :func:`validate_pose_log` records in ``pose_log.attrs`` and adds the rows
+    of ``pose_log`` itself that are still not unit (a log that was never validated).
+    """
+    q = pose_log[["qw", "qx", "qy", "qz"]].to_numpy(np.float64)
+    norm = np.linalg.norm(q, axis=1)
+    return int(pose_log.attrs.get(NON_UNIT_QUATERNION_ATTR, 0)) + count_non_unit_quaternions(norm[np.isfinite(norm)])
 
 
 def validate_signal_log(df: pd.DataFrame, source: str = "signal log") -> pd.DataFrame:
@@ -135,13 +172,18 @@ def validate_signal_log(df: pd.DataFrame, source: str = "signal log") -> pd.Data
     return out.sort_values("t", kind="stable").reset_index(drop=True)
 
 
-def validate_matched(df: pd.DataFrame, source: str = "dataset") -> pd.DataFrame:
-    """Check a matched link dataset (columns of :data:`MATCHED_COLUMNS`)."""
-    _require_columns(df, MATCHED_COLUMNS, source)
+def validate_matched(df: pd.DataFrame, source: str = "dataset", require_rssi: bool = True) -> pd.DataFrame:
+    """Check a matched link dataset (columns of :data:`MATCHED_COLUMNS`).
+
+    With ``require_rssi=False`` (poses of links to predict, not yet measured) the ``rssi_dbm``
+    column may be absent or hold NaN or sentinel values; it is neither checked nor used.
+    """
+    required = MATCHED_COLUMNS if require_rssi else tuple(c for c in MATCHED_COLUMNS if c != "rssi_dbm")
+    _require_columns(df, required, source)
     df = normalise_times(df, source)
-    numeric = [c for c in MATCHED_COLUMNS if c not in ("tx", "rx")]
+    numeric = [c for c in required if c not in ("tx", "rx")]
     _require_finite(df, numeric, source)
-    rssi = df["rssi_dbm"].to_numpy(np.float64)
+    rssi = df["rssi_dbm"].to_numpy(np.float64) if require_rssi else np.empty(0)
     sentinel = np.isin(rssi, SENTINEL_RSSI_DBM)
     if np.any(sentinel):
         row = int(np.flatnonzero(sentinel)[0])
@@ -214,7 +256,9 @@ class LinkSamples:
         return int(self.joint_gain_db.shape[0])
 
 
-def link_samples(df: pd.DataFrame, source: str = "dataset", nodes: Sequence[str] | None = None) -> LinkSamples:
+def link_samples(
+    df: pd.DataFrame, source: str = "dataset", nodes: Sequence[str] | None = None, require_rssi: bool = True
+) -> LinkSamples:
     """Directions of both ends, node indices and observed joint gain of a matched dataset.
 
     Parameters
@@ -226,8 +270,11 @@ def link_samples(df: pd.DataFrame, source: str = "dataset", nodes: Sequence[str]
     nodes : sequence of str, optional
         Node ids in model order; by default the sorted ids found in ``tx`` and ``rx``.
         A sample naming a node outside this list raises :class:`InputError`.
+    require_rssi : bool
+        False for poses of links to predict: the observed gain is then NaN where ``rssi_dbm``
+        is absent, NaN or a sentinel value.
     """
-    df = validate_matched(df, source)
+    df = validate_matched(df, source, require_rssi=require_rssi)
     tx = df["tx"].to_numpy(str)
     rx = df["rx"].to_numpy(str)
     if nodes is None:
@@ -248,8 +295,14 @@ def link_samples(df: pd.DataFrame, source: str = "dataset", nodes: Sequence[str]
     rx_q = df[["rx_qw", "rx_qx", "rx_qy", "rx_qz"]].to_numpy(np.float64)
     dirs = link_directions(tx_pos, tx_q, rx_pos, rx_q)
     dist = distance_m(tx_pos, rx_pos)
+    if "rssi_dbm" in df.columns:
+        rssi = pd.to_numeric(df["rssi_dbm"], errors="coerce").to_numpy(np.float64)
+    else:
+        rssi = np.full(len(df), np.nan)
+    if not require_rssi:
+        rssi = np.where(np.isin(rssi, SENTINEL_RSSI_DBM), np.nan, rssi)
     gain = observed_joint_gain_db(
-        df["rssi_dbm"].to_numpy(np.float64),
+        rssi,
         df["tx_power_dbm"].to_numpy(np.float64),
         dist,
         df["frequency_hz"].to_numpy(np.float64),

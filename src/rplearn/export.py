@@ -339,7 +339,7 @@ def _frequency_of(pattern_like: Any) -> float:
             f = (getattr(pattern_like, attr, None) or {}).get("frequency_hz")
     if f is None:
         raise InputError(
-            "frequency_hz: the pattern does not state its frequency; pass frequency_hz"
+            "frequency_hz: the pattern does not state its frequency (rplearn export --frequency HZ, or frequency_hz=)"
         )
     return float(f)
 

@@ -5,11 +5,20 @@ with the readers of :mod:`rplearn.io` in a forgiving mode (NaN pose rows dropped
 unsorted times accepted and reported) and returns an :class:`InspectReport` whose
 :meth:`~InspectReport.to_text` and :meth:`~InspectReport.to_markdown` the CLI prints.
 
-Flagged as suspicious: unreadable files, NaN pose rows, times going backwards, forward clock
-jumps (a forward step longer than ``clock_jump_s``),
-pose gaps longer than ``max_gap_s``, sentinel or non-finite RSSI values, signals naming a
-node without a pose log, signal samples outside every pose span, and rates far from the
-expected ones.
+Flagged as suspicious: unreadable files, NaN pose rows, quaternions whose norm is off 1 by
+more than :data:`~rplearn.datasets.QUATERNION_NORM_TOLERANCE`, times going backwards, forward
+clock jumps, pose gaps longer than ``max_gap_s``, sentinel or non-finite RSSI values, exact
+duplicate signal rows, signals naming a node without a pose log, signal samples outside every
+pose span, and rates far from the expected ones.
+
+Pauses, gaps and clock jumps. A forward pose step longer than ``max_gap_s`` is a **pause**
+when the signal log of that node stops too: it has samples before and after the step, none
+inside (ignoring ``max_gap_s`` at either end, clock jitter), and that inside lasts more than :data:`PAUSE_MIN_SIGNAL_STEPS` median signal intervals
+(so that a sparse signal log cannot fake one). Planned breaks between flight units (battery
+swaps) are pauses; they lose no sample and are reported, not flagged. Any other such step is
+a **gap** (poses missing while signals continue, or no signal log to tell): the samples inside
+are dropped by :mod:`rplearn.sync`. A gap longer than ``clock_jump_s`` is also reported as a
+possible **clock jump**: a logger's clock stepping forward looks exactly like that.
 """
 
 from __future__ import annotations
@@ -20,8 +29,12 @@ from typing import Any, Iterable, Sequence
 import numpy as np
 import pandas as pd
 
+from rplearn.datasets import QUATERNION_NORM_TOLERANCE, non_unit_quaternion_rows
 from rplearn.errors import RplearnError
-from rplearn.sync import DEFAULT_SENTINEL_RSSI_DBM
+from rplearn.sync import DEFAULT_SENTINEL_RSSI_DBM, duplicate_rows
+
+#: A pose step is a pause only if it spans more than this many median signal intervals.
+PAUSE_MIN_SIGNAL_STEPS: float = 3.0
 
 
 _POSE_VALUE_COLUMNS = ("t", "x", "y", "z", "lat", "lon", "alt", "qw", "qx", "qy", "qz", "roll_deg",
@@ -33,9 +46,11 @@ class NodeSummary:
     """One node's pose log.
 
     Attributes: ``rows``; ``t_start_s``, ``t_end_s`` [s]; ``rate_hz`` (1 / median step);
-    ``gaps`` (steps longer than ``max_gap_s``) and ``longest_gap_s``; ``backward_steps``
-    (times going backwards); ``clock_jumps`` (forward steps longer than ``clock_jump_s``);
-    ``nan_rows`` (dropped on reading); ``static`` (a single row).
+    ``gaps`` (steps longer than ``max_gap_s`` that are not pauses) and ``longest_gap_s`` (the
+    longest step that is not a pause); ``pauses`` (steps where the signal log stops too, see
+    the module docstring) and ``longest_pause_s``; ``backward_steps`` (times going backwards);
+    ``clock_jumps`` (gaps longer than ``clock_jump_s``); ``nan_rows`` (dropped on reading);
+    ``static`` (a single row).
     """
 
     node: str
@@ -49,6 +64,8 @@ class NodeSummary:
     clock_jumps: int = 0
     nan_rows: int = 0
     static: bool = False
+    pauses: int = 0
+    longest_pause_s: float = 0.0
 
 
 @dataclass
@@ -66,6 +83,7 @@ class LinkSummary:
     rssi_max_dbm: float
     sentinel_rssi: int
     backward_steps: int = 0
+    duplicates: int = 0
 
 
 @dataclass
@@ -84,20 +102,22 @@ class InspectReport:
     def to_text(self) -> str:
         out = ["files:"]
         for f in self.files:
-            out.append(f"  {f['path']}: {f['format']} ({f.get('kind', '?')})"
+            out.append(f"  {f['path']}: {f['format']}" + (f" ({f['kind']} log)" if f.get("kind") else "")
                        + ("" if f.get("error") is None else f"  UNREADABLE: {f['error']}"))
         out.append("pose logs:")
         for n in self.nodes:
             span = "static" if n.static else (
                 f"{n.t_start_s:.3f} .. {n.t_end_s:.3f} s ({n.t_end_s - n.t_start_s:.1f} s), "
-                f"{n.rate_hz:.1f} Hz, gaps > threshold: {n.gaps} (longest {n.longest_gap_s:.3f} s)")
+                f"{n.rate_hz:.1f} Hz, gaps > threshold: {n.gaps} (longest {n.longest_gap_s:.3f} s)"
+                + (f", pauses (signals stop too): {n.pauses} (longest {n.longest_pause_s:.1f} s)" if n.pauses else ""))
             out.append(f"  {n.node}: {n.rows} rows, {span}")
         out.append("signal links:")
         for lk in self.links:
             out.append(
                 f"  {lk.tx} -> {lk.rx}: {lk.samples} samples, {lk.t_start_s:.3f} .. {lk.t_end_s:.3f} s, "
                 f"{lk.rate_hz:.1f} Hz, RSSI {lk.rssi_min_dbm:.1f} / {lk.rssi_median_dbm:.1f} / "
-                f"{lk.rssi_max_dbm:.1f} dBm (min/median/max), sentinel values: {lk.sentinel_rssi}")
+                f"{lk.rssi_max_dbm:.1f} dBm (min/median/max), sentinel values: {lk.sentinel_rssi}"
+                + (f", exact duplicate rows: {lk.duplicates}" if lk.duplicates else ""))
         out.append("problems:" if self.problems else "problems: none found")
         out.extend(f"  - {p}" for p in self.problems)
         return "\n".join(out)
@@ -108,18 +128,20 @@ class InspectReport:
             out.append(f"| {f['path']} | {f['format']} | {f.get('kind', '?')} | "
                        f"{'ok' if f.get('error') is None else 'unreadable: ' + f['error']} |")
         out += ["", "## Pose logs", "",
-                "| node | rows | start [s] | end [s] | rate [Hz] | gaps | longest gap [s] | NaN rows |",
-                "| --- | --- | --- | --- | --- | --- | --- | --- |"]
+                "| node | rows | start [s] | end [s] | rate [Hz] | gaps | longest gap [s] | pauses | "
+                "longest pause [s] | NaN rows |",
+                "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
         for n in self.nodes:
             out.append(f"| {n.node} | {n.rows} | {n.t_start_s:.3f} | {n.t_end_s:.3f} | {n.rate_hz:.1f} | "
-                       f"{n.gaps} | {n.longest_gap_s:.3f} | {n.nan_rows} |")
+                       f"{n.gaps} | {n.longest_gap_s:.3f} | {n.pauses} | {n.longest_pause_s:.1f} | {n.nan_rows} |")
         out += ["", "## Signal links", "",
-                "| tx | rx | samples | start [s] | end [s] | rate [Hz] | RSSI min [dBm] | median | max | sentinels |",
-                "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+                "| tx | rx | samples | start [s] | end [s] | rate [Hz] | RSSI min [dBm] | median | max | sentinels "
+                "| duplicates |",
+                "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
         for lk in self.links:
             out.append(f"| {lk.tx} | {lk.rx} | {lk.samples} | {lk.t_start_s:.3f} | {lk.t_end_s:.3f} | "
                        f"{lk.rate_hz:.1f} | {lk.rssi_min_dbm:.1f} | {lk.rssi_median_dbm:.1f} | "
-                       f"{lk.rssi_max_dbm:.1f} | {lk.sentinel_rssi} |")
+                       f"{lk.rssi_max_dbm:.1f} | {lk.sentinel_rssi} | {lk.duplicates} |")
         out += ["", "## Problems", ""]
         out += [f"- {p}" for p in self.problems] or ["none found"]
         return "\n".join(out)
@@ -135,9 +157,51 @@ def _rate_hz(t: np.ndarray) -> float:
     return float(1.0 / np.median(d)) if d.size else float("nan")
 
 
+def _signal_times_by_node(signal: pd.DataFrame | None) -> dict[str, np.ndarray]:
+    """Sorted finite times [s] of the signal samples each node sends or receives."""
+    if signal is None or signal.empty:
+        return {}
+    t = pd.to_numeric(signal["t"], errors="coerce").to_numpy(np.float64)
+    tx = signal["tx"].astype(str).to_numpy()
+    rx = signal["rx"].astype(str).to_numpy()
+    out = {}
+    for node in set(tx) | set(rx):
+        tn = t[((tx == node) | (rx == node)) & np.isfinite(t)]
+        out[str(node)] = np.sort(tn)
+    return out
+
+
+def pause_mask(t0_s: np.ndarray, t1_s: np.ndarray, signal_t_s: np.ndarray | None,
+               edge_s: float = 0.0) -> np.ndarray:
+    """Which pose steps ``t0 -> t1`` are pauses: the node's signals stop over them too.
+
+    A step is a pause when the sorted signal times ``signal_t_s`` have samples before ``t0``
+    and after ``t1``, none inside ``(t0 + edge_s, t1 - edge_s)`` (a packet logged just after
+    the last pose is clock jitter, not a dropout), and that interval is longer than
+    :data:`PAUSE_MIN_SIGNAL_STEPS` median signal intervals. Without signals nothing is a pause.
+    """
+    if signal_t_s is None or signal_t_s.size < 2 or t0_s.size == 0:
+        return np.zeros(t0_s.size, bool)
+    a_s, b_s = t0_s + edge_s, t1_s - edge_s
+    lo = np.searchsorted(signal_t_s, a_s, side="right")
+    hi = np.searchsorted(signal_t_s, b_s, side="left")
+    before = np.searchsorted(signal_t_s, t0_s, side="right") > 0
+    after = np.searchsorted(signal_t_s, t1_s, side="left") < signal_t_s.size
+    step = _steps(signal_t_s)
+    step = step[step > 0]
+    min_len_s = PAUSE_MIN_SIGNAL_STEPS * float(np.median(step)) if step.size else np.inf
+    return before & after & (hi <= lo) & (b_s - a_s > min_len_s)
+
+
 def summarise_pose(pose: pd.DataFrame, max_gap_s: float = 0.2, clock_jump_s: float = 5.0,
-                   nan_rows: dict[str, int] | None = None) -> list[NodeSummary]:
-    """Per-node summaries of a pose log in file order (unsorted times are counted, not fixed)."""
+                   nan_rows: dict[str, int] | None = None,
+                   signal: pd.DataFrame | None = None) -> list[NodeSummary]:
+    """Per-node summaries of a pose log in file order (unsorted times are counted, not fixed).
+
+    With ``signal`` (a signal log), steps where the node's signals stop too are pauses, not
+    gaps or clock jumps (see the module docstring).
+    """
+    sig_t = _signal_times_by_node(signal)
     out = []
     for node, g in pose.groupby("node", sort=True):
         t = g["t"].to_numpy(np.float64)
@@ -145,13 +209,18 @@ def summarise_pose(pose: pd.DataFrame, max_gap_s: float = 0.2, clock_jump_s: flo
         back = int((d < 0).sum())
         ts = np.sort(t)
         ds = _steps(ts)
-        gaps = ds > max_gap_s
-        jumps = int((ds > clock_jump_s).sum())
+        long = ds > max_gap_s
+        pause = np.zeros(ds.size, bool)
+        pause[long] = pause_mask(ts[:-1][long], ts[1:][long], sig_t.get(str(node)), edge_s=max_gap_s)
+        gaps = long & ~pause
+        other = ds[~pause]
         out.append(NodeSummary(
             node=str(node), rows=int(t.size), t_start_s=float(ts[0]), t_end_s=float(ts[-1]),
             rate_hz=_rate_hz(t), gaps=int(gaps.sum()),
-            longest_gap_s=float(ds.max()) if ds.size else 0.0, backward_steps=back,
-            clock_jumps=jumps, nan_rows=int((nan_rows or {}).get(str(node), 0)), static=t.size == 1,
+            longest_gap_s=float(other.max()) if other.size else 0.0, backward_steps=back,
+            clock_jumps=int((gaps & (ds > clock_jump_s)).sum()),
+            nan_rows=int((nan_rows or {}).get(str(node), 0)), static=t.size == 1,
+            pauses=int(pause.sum()), longest_pause_s=float(ds[pause].max()) if pause.any() else 0.0,
         ))
     return out
 
@@ -160,6 +229,7 @@ def summarise_signal(signal: pd.DataFrame,
                      sentinel_rssi_dbm: Sequence[float] = DEFAULT_SENTINEL_RSSI_DBM) -> list[LinkSummary]:
     """Per-direction summaries of a signal log (sentinel and non-finite RSSI counted apart)."""
     out = []
+    dup = pd.Series(duplicate_rows(signal), index=signal.index)
     for (tx, rx), g in signal.groupby(["tx", "rx"], sort=True):
         t = pd.to_numeric(g["t"], errors="coerce").to_numpy(np.float64)
         r = pd.to_numeric(g["rssi_dbm"], errors="coerce").to_numpy(np.float64)
@@ -173,6 +243,7 @@ def summarise_signal(signal: pd.DataFrame,
             rssi_median_dbm=float(np.median(good)) if good.size else np.nan,
             rssi_max_dbm=float(good.max()) if good.size else np.nan,
             sentinel_rssi=int(bad.sum()), backward_steps=int((_steps(tf) < 0).sum()),
+            duplicates=int(dup.loc[g.index].sum()),
         ))
     return out
 
@@ -193,6 +264,8 @@ def _read_one(path: str, options: dict[str, Any]) -> tuple[pd.DataFrame | None, 
                 node=(options.get("nodes") or {}).get(path), nan_policy="drop", allow_unsorted=True,
                 origin_geodetic=options.get("origin_geodetic"),
             )
+            info = {"format": _tables.table_format(path), "kind": "pose",
+                    "non_unit_quaternion_rows": non_unit_quaternion_rows(pose)}
             del pose  # validated and sorted; inspection wants the file order
             df = _tables.rename_columns(raw, options.get("columns"))
             node = (df["node"].astype(str) if "node" in df.columns
@@ -202,7 +275,7 @@ def _read_one(path: str, options: dict[str, Any]) -> tuple[pd.DataFrame | None, 
             bad = ~np.isfinite(values).all(axis=1)
             nan_rows = {str(k): int(v) for k, v in node[bad].value_counts().items()}
             file_order = pd.DataFrame({"t": values[~bad, cols.index("t")], "node": node[~bad].to_numpy()})
-            return file_order, None, {"format": meta.get("format", "table"), "kind": "pose"}, nan_rows
+            return file_order, None, info, nan_rows
         sig, meta = _tables.read_signal_table(
             path, columns=options.get("columns"), rx=(options.get("receivers") or {}).get(path),
             tx_power_dbm=0.0, frequency_hz=1.0)
@@ -223,6 +296,8 @@ def _read_one(path: str, options: dict[str, Any]) -> tuple[pd.DataFrame | None, 
     info = {"format": f.get("format", kind), "kind": f.get("kind")}
     if f.get("invalid_flag_rows"):
         info["invalid_flag_rows"] = int(f["invalid_flag_rows"])
+    if logs.pose is not None:
+        info["non_unit_quaternion_rows"] = non_unit_quaternion_rows(logs.pose)
     return logs.pose, logs.signal, info, nan_rows
 
 
@@ -242,7 +317,7 @@ def inspect_logs(
     max_gap_s : float
         Pose steps longer than this are gaps [s] (the matching threshold of :mod:`rplearn.sync`).
     clock_jump_s : float
-        A forward step longer than this is reported as a clock jump [s], not a dropout.
+        A gap (not a pause) longer than this is reported as a possible clock jump [s].
     sentinel_rssi_dbm : sequence of float
         RSSI values meaning "no measurement".
     **read_options
@@ -271,7 +346,13 @@ def inspect_logs(
         if info.get("invalid_flag_rows"):
             report.problems.append(
                 f"{path}: {info['invalid_flag_rows']} pose row(s) flagged invalid by the autopilot "
-                "(xy_valid or z_valid = 0); they are kept unless read with require_valid=True"
+                "(xy_valid or z_valid = 0); they are kept unless dropped on reading "
+                "(rplearn sync --require-valid, or require_valid=True)"
+            )
+        if info.get("non_unit_quaternion_rows"):
+            report.problems.append(
+                f"{path}: {info['non_unit_quaternion_rows']} pose row(s) with a quaternion norm off 1 by "
+                f"more than {QUATERNION_NORM_TOLERANCE:g} (normalised on reading; a scaling or unit mistake?)"
             )
         for k, v in nans.items():
             nan_rows[k] = nan_rows.get(k, 0) + int(v)
@@ -279,10 +360,12 @@ def inspect_logs(
             poses.append(pose)
         if sig is not None:
             signals.append(sig)
+    signal = pd.concat(signals, ignore_index=True) if signals else None
     if poses:
-        report.nodes = summarise_pose(pd.concat(poses, ignore_index=True), max_gap_s, clock_jump_s, nan_rows)
-    if signals:
-        report.links = summarise_signal(pd.concat(signals, ignore_index=True), sentinel_rssi_dbm)
+        report.nodes = summarise_pose(pd.concat(poses, ignore_index=True), max_gap_s, clock_jump_s, nan_rows,
+                                      signal)
+    if signal is not None:
+        report.links = summarise_signal(signal, sentinel_rssi_dbm)
     _flag(report, max_gap_s)
     return report
 
@@ -295,7 +378,9 @@ def _flag(report: InspectReport, max_gap_s: float) -> None:
         if n.backward_steps:
             report.problems.append(f"node {n.node}: time goes backwards {n.backward_steps} time(s)")
         if n.clock_jumps:
-            report.problems.append(f"node {n.node}: {n.clock_jumps} clock jump(s) (forward step longer than the clock-jump threshold)")
+            report.problems.append(
+                f"node {n.node}: {n.clock_jumps} clock jump(s) or long dropout(s) (forward step longer than "
+                "the clock-jump threshold while signals continue, or no signal log to tell it from a pause)")
         if n.gaps:
             report.problems.append(
                 f"node {n.node}: {n.gaps} pose gap(s) longer than {max_gap_s} s "
@@ -307,6 +392,9 @@ def _flag(report: InspectReport, max_gap_s: float) -> None:
         if lk.sentinel_rssi:
             report.problems.append(
                 f"link {lk.tx} -> {lk.rx}: {lk.sentinel_rssi} sentinel or non-finite RSSI value(s)")
+        if lk.duplicates:
+            report.problems.append(
+                f"link {lk.tx} -> {lk.rx}: {lk.duplicates} exact duplicate row(s); sync drops them (duplicate)")
         if lk.backward_steps:
             report.problems.append(f"link {lk.tx} -> {lk.rx}: time goes backwards {lk.backward_steps} time(s)")
         for end in (lk.tx, lk.rx):
@@ -323,4 +411,7 @@ def _flag(report: InspectReport, max_gap_s: float) -> None:
                     f"do not overlap the poses ({lo:.3f} .. {hi:.3f} s): a clock offset?")
 
 
-__all__ = ["InspectReport", "LinkSummary", "NodeSummary", "inspect_logs", "summarise_pose", "summarise_signal"]
+__all__ = [
+    "InspectReport", "LinkSummary", "NodeSummary", "inspect_logs", "pause_mask", "summarise_pose",
+    "summarise_signal",
+]

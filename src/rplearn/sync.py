@@ -4,6 +4,10 @@ For every signal sample, the positions of its transmitter and receiver are inter
 linearly and their attitudes by spherical linear interpolation (slerp) at the sample's time,
 after optional clock offsets. A sample is dropped, and counted by reason, when:
 
+``duplicate``
+    it repeats an earlier row exactly, in every column (a logger or a merge writing the same
+    packet twice); the first copy is kept. :func:`synchronise_stream` finds duplicates
+    within a chunk only;
 ``invalid_value``
     its time, tx power or frequency is missing, NaN or not a number;
 ``sentinel_rssi``
@@ -18,8 +22,8 @@ after optional clock offsets. A sample is dropped, and counted by reason, when:
     it belongs to another direction than the one chosen with ``link=(tx, rx)``;
 ``unknown_node``
     one of its ends has no pose log. By default this is a counted drop (a capture often
-    hears nodes that are not part of the experiment); pass ``on_unknown_node="error"`` to
-    raise :class:`~rplearn.errors.InputError` instead;
+    hears nodes that are not part of the experiment); ``on_unknown_node="error"``
+    (``rplearn sync --on-unknown-node error``) raises :class:`~rplearn.errors.InputError` instead;
 ``out_of_span``
     its time lies before the first or after the last pose of one end;
 ``pose_gap``
@@ -43,7 +47,15 @@ from typing import Iterable, Iterator, Mapping, Sequence
 import numpy as np
 import pandas as pd
 
-from rplearn.datasets import MATCHED_COLUMNS, SENTINEL_RSSI_DBM, SIGNAL_COLUMNS, normalise_times, validate_pose_log
+from rplearn.datasets import (
+    MATCHED_COLUMNS,
+    QUATERNION_NORM_TOLERANCE,
+    SENTINEL_RSSI_DBM,
+    SIGNAL_COLUMNS,
+    non_unit_quaternion_rows,
+    normalise_times,
+    validate_pose_log,
+)
 from rplearn.errors import InputError
 
 logger = logging.getLogger(__name__)
@@ -55,6 +67,7 @@ DEFAULT_SENTINEL_RSSI_DBM: tuple[float, ...] = SENTINEL_RSSI_DBM
 PLAUSIBLE_RSSI_DBM: tuple[float, float] = (-150.0, 30.0)
 #: Drop reasons, in the order they are tested.
 DROP_REASONS: tuple[str, ...] = (
+    "duplicate",
     "invalid_value",
     "sentinel_rssi",
     "implausible_rssi",
@@ -82,12 +95,16 @@ class SyncSummary:
         Dropped samples per reason (see :data:`DROP_REASONS`); every reason is present.
     unknown_nodes : list of str
         Node ids named by signals but without a pose log.
+    non_unit_quaternions : int
+        Pose rows whose quaternion norm was off 1 by more than
+        :data:`~rplearn.datasets.QUATERNION_NORM_TOLERANCE` (normalised, not dropped).
     """
 
     n_in: int = 0
     n_out: int = 0
     dropped: dict[str, int] = field(default_factory=lambda: {r: 0 for r in DROP_REASONS})
     unknown_nodes: list[str] = field(default_factory=list)
+    non_unit_quaternions: int = 0
 
     @property
     def n_dropped(self) -> int:
@@ -100,6 +117,7 @@ class SyncSummary:
         for k, v in other.dropped.items():
             self.dropped[k] = self.dropped.get(k, 0) + int(v)
         self.unknown_nodes = sorted(set(self.unknown_nodes) | set(other.unknown_nodes))
+        self.non_unit_quaternions += other.non_unit_quaternions
         return self
 
     def to_text(self) -> str:
@@ -109,6 +127,11 @@ class SyncSummary:
                 lines.append(f"  dropped ({reason}): {self.dropped[reason]}")
         if self.unknown_nodes:
             lines.append(f"  nodes without a pose log: {', '.join(self.unknown_nodes)}")
+        if self.non_unit_quaternions:
+            lines.append(
+                f"  pose rows with a non-unit quaternion (|norm - 1| > {QUATERNION_NORM_TOLERANCE:g}, "
+                f"normalised): {self.non_unit_quaternions}"
+            )
         return "\n".join(lines)
 
 
@@ -213,7 +236,11 @@ def pose_tracks(
     Rows with NaN or infinite values are rejected by :func:`~rplearn.datasets.validate_pose_log`
     (use the readers' ``nan_policy="drop"`` to drop and count them on reading).
     """
-    df = validate_pose_log(pose_log, source)
+    return _tracks(validate_pose_log(pose_log, source), clock_offsets_s, source)
+
+
+def _tracks(df: pd.DataFrame, clock_offsets_s: Mapping[str, float] | None, source: str) -> dict[str, PoseTrack]:
+    """:func:`pose_tracks` of a pose log already checked by :func:`validate_pose_log`."""
     offsets = dict(clock_offsets_s or {})
     tracks: dict[str, PoseTrack] = {}
     nodes = df["node"].to_numpy()
@@ -234,8 +261,8 @@ def pose_tracks(
     unknown = sorted(set(offsets) - set(tracks))
     if unknown:
         raise InputError(
-            f"{source}: clock_offsets_s names node(s) {', '.join(unknown)} without a pose log; "
-            f"known: {', '.join(sorted(tracks))}"
+            f"{source}: clock offsets (rplearn sync --offset, or clock_offsets_s=) name node(s) "
+            f"{', '.join(unknown)} without a pose log; known: {', '.join(sorted(tracks))}"
         )
     return tracks
 
@@ -290,6 +317,7 @@ def _match_chunk(
         summary.dropped[reason] += int(hit.sum())
         keep[hit] = False
 
+    drop(duplicate_rows(signal), "duplicate")
     drop(~(np.isfinite(t) & np.isfinite(ptx) & np.isfinite(freq) & (freq > 0)), "invalid_value")
     drop(~np.isfinite(rssi) | np.isin(rssi, np.asarray(sentinel_rssi_dbm, np.float64)), "sentinel_rssi")
     drop((rssi < PLAUSIBLE_RSSI_DBM[0]) | (rssi > PLAUSIBLE_RSSI_DBM[1]), "implausible_rssi")
@@ -309,7 +337,8 @@ def _match_chunk(
             row = int(np.flatnonzero(unknown_mask & keep)[0])
             raise InputError(
                 f"{source}: field tx/rx: unknown node id(s) {', '.join(names)} at row {row} "
-                f"(first); pose logs exist for {', '.join(sorted(tracks))}"
+                f"(first); pose logs exist for {', '.join(sorted(tracks))} (to drop and count "
+                "such samples: rplearn sync --on-unknown-node drop, or on_unknown_node='drop')"
             )
         summary.unknown_nodes = names
         logger.warning("%s: signals name node(s) without a pose log: %s", source, ", ".join(names))
@@ -360,11 +389,79 @@ def _match_chunk(
 
 def _check_options(max_gap_s: float, on_unknown_node: str, link: tuple[str, str] | None) -> None:
     if not (np.isfinite(max_gap_s) and max_gap_s > 0):
-        raise InputError(f"max_gap_s must be a positive number of seconds, got {max_gap_s!r}")
+        raise InputError(
+            f"max gap (rplearn sync --max-gap, or max_gap_s=): expected a positive number of seconds, "
+            f"got {float(max_gap_s)!r}"
+        )
     if on_unknown_node not in ("drop", "error"):
-        raise InputError(f"on_unknown_node must be 'drop' or 'error', got {on_unknown_node!r}")
+        raise InputError(
+            "unknown-node policy (rplearn sync --on-unknown-node, or on_unknown_node=): "
+            f"expected 'drop' or 'error', got {on_unknown_node!r}"
+        )
     if link is not None and (len(link) != 2 or str(link[0]) == str(link[1])):
-        raise InputError(f"link must be a pair (tx, rx) of two different node ids, got {link!r}")
+        raise InputError(
+            "link (rplearn sync --link TX:RX, or link=(tx, rx)): expected two different node ids, "
+            f"got {':'.join(map(str, link))}"
+        )
+
+
+def duplicate_rows(signal: pd.DataFrame) -> np.ndarray:
+    """Mask of rows repeating an earlier row exactly, in every column (the first copy is False)."""
+    mask = np.zeros(len(signal), bool)
+    if signal.empty:
+        return mask
+    # Only rows sharing a time can repeat each other: compare whole rows within those (few)
+    # rows only, which is 10x faster than hashing every row of a long log.
+    t = signal["t"].to_numpy() if "t" in signal.columns else None
+    if t is not None:
+        try:
+            order = np.argsort(t, kind="stable")
+            same = np.flatnonzero(t[order][1:] == t[order][:-1])
+        except TypeError:  # times of mixed types: compare everything
+            candidates = np.arange(len(signal))
+        else:
+            if same.size == 0:
+                return mask
+            candidates = np.unique(np.concatenate([order[same], order[same + 1]]))
+    else:
+        candidates = np.arange(len(signal))
+    subset = signal.iloc[candidates]
+    try:
+        repeated = subset.duplicated(keep="first").to_numpy(bool)
+    except TypeError:  # unhashable cells (lists): compare their text
+        repeated = subset.astype(str).duplicated(keep="first").to_numpy(bool)
+    mask[candidates[repeated]] = True
+    return mask
+
+
+def check_link_nodes(signal: pd.DataFrame, link: tuple[str, str], source: str = "signal log") -> None:
+    """Raise :class:`InputError` when a node of ``link`` is in no signal row, or the direction is absent.
+
+    Parameters
+    ----------
+    signal : DataFrame
+        Signal log with ``tx`` and ``rx``.
+    link : (str, str)
+        The chosen direction ``(tx, rx)``.
+    source : str
+        Name of the signal log in messages.
+    """
+    tx = signal["tx"].astype(str)
+    rx = signal["rx"].astype(str)
+    present = sorted(set(tx) | set(rx))
+    flag = f"--link {link[0]}:{link[1]}"
+    absent = [str(n) for n in link if str(n) not in present]
+    if absent:
+        raise InputError(
+            f"{source}: {flag}: node {', '.join(absent)} is in no signal log; the signal logs name "
+            f"{', '.join(present) or 'no node'}"
+        )
+    if not ((tx == str(link[0])) & (rx == str(link[1]))).any():
+        pairs = sorted(set(zip(tx, rx)))
+        raise InputError(
+            f"{source}: {flag}: no signal from {link[0]} to {link[1]}; directions present: "
+            f"{', '.join(f'{a}:{b}' for a, b in pairs)}"
+        )
 
 
 def synchronise(
@@ -420,11 +517,15 @@ def synchronise(
         or fewer than ``min_samples`` matched samples.
     """
     _check_options(max_gap_s, on_unknown_node, link)
-    tracks = pose_tracks(pose_log, clock_offsets_s)
+    pose = validate_pose_log(pose_log, "pose log")
+    tracks = _tracks(pose, clock_offsets_s, "pose log")
+    if link is not None:
+        check_link_nodes(signal_log, link, source)
     result = _match_chunk(
         tracks, signal_log, link, max_gap_s, signal_clock_offset_s, sentinel_rssi_dbm,
         on_unknown_node, source,
     )
+    result.summary.non_unit_quaternions = non_unit_quaternion_rows(pose)
     if result.summary.n_out < min_samples:
         raise InputError(
             f"{source}: only {result.summary.n_out} signal sample(s) matched, at least "
@@ -451,12 +552,16 @@ def synchronise_stream(
     per-chunk summaries with :meth:`SyncSummary.merge`. Options as in :func:`synchronise`.
     """
     _check_options(max_gap_s, on_unknown_node, link)
-    tracks = pose_tracks(pose_log, clock_offsets_s)
+    pose = validate_pose_log(pose_log, "pose log")
+    tracks = _tracks(pose, clock_offsets_s, "pose log")
+    non_unit = non_unit_quaternion_rows(pose)
     for chunk in signal_chunks:
-        yield _match_chunk(
+        result = _match_chunk(
             tracks, chunk, link, max_gap_s, signal_clock_offset_s, sentinel_rssi_dbm,
             on_unknown_node, source,
         )
+        result.summary.non_unit_quaternions, non_unit = non_unit, 0  # counted once, in the first chunk
+        yield result
 
 
 def synchronise_to_parquet(
@@ -515,6 +620,8 @@ __all__ = [
     "DEFAULT_SENTINEL_RSSI_DBM",
     "DROP_REASONS",
     "PoseTrack",
+    "check_link_nodes",
+    "duplicate_rows",
     "SyncResult",
     "SyncSummary",
     "pose_tracks",

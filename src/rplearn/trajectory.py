@@ -37,6 +37,44 @@ FloatArray = NDArray[np.float64]
 G_M_S2 = 9.80665
 
 
+#: Flags of ``rplearn trajectory`` for the fields of :class:`TrajectoryUnit` it exposes.
+CLI_FLAGS: dict[str, str] = {
+    "distance_m": "--distance",
+    "height_m": "--height",
+    "n_loops": "--loops",
+    "speed_m_s": "--speed",
+}
+
+
+def _field(name: str) -> str:
+    """How a message names a unit field: the CLI flag (if any) and the Python argument."""
+    flag = CLI_FLAGS.get(name)
+    return f"{flag} ({name})" if flag else name
+
+
+_LIMIT_FLAGS: dict[str, str] = {
+    "max_speed_m_s": " (--max-speed)",
+    "max_accel_m_s2": " (--max-accel)",
+    "max_flight_time_s": " (--max-flight-time)",
+}
+
+#: What brings each limited quantity down (from :meth:`TrajectoryUnit._loop_profile`,
+#: :func:`summarize_unit` and :attr:`TrajectoryUnit.duration_s`).
+_REMEDIES: dict[str, str] = {
+    # peak speed = min(speed, sqrt(accel * pi * d))
+    "max_speed_m_s": "lower the cruise speed (--speed, speed_m_s)",
+    # |a| = hypot(accel, v^2 / (d / 2)): slower, or a wider circle
+    "max_accel_m_s2": "lower the cruise speed (--speed, speed_m_s) or widen the circle (--distance, distance_m)",
+    # 2 n loops of pi d / v each, plus the turns
+    "max_flight_time_s": (
+        "fly fewer headings (--loops, n_loops), a smaller circle (--distance, distance_m) "
+        "or faster (--speed, speed_m_s)"
+    ),
+    # peak yaw rate = pi/2 * yaw_rate_deg_s
+    "max_yaw_rate_deg_s": "lower the turn rate (yaw_rate_deg_s)",
+}
+
+
 @dataclass(frozen=True)
 class TrajectoryUnit:
     """One calibration trajectory unit for a pair of drones (paper Sec. IV-A).
@@ -91,14 +129,14 @@ class TrajectoryUnit:
         for name in ("distance_m", "height_m", "speed_m_s", "accel_m_s2", "yaw_rate_deg_s"):
             v = float(getattr(self, name))
             if not (np.isfinite(v) and v > 0):
-                raise InputError(f"unit {name}: expected a positive finite number, got {v!r}")
+                raise InputError(f"{_field(name)}: expected a positive finite number, got {v!r}")
         if self.height_m <= self.distance_m / 2.0:
             raise InputError(
-                f"unit height_m: expected more than half the distance ({self.distance_m / 2:g} m) "
-                f"so the circle stays above ground, got {self.height_m:g}"
+                f"{_field('height_m')}: expected more than half the distance ({self.distance_m / 2:g} m) "
+                f"so the circle stays above ground, got {float(self.height_m):g}"
             )
         if int(self.n_loops) != self.n_loops or self.n_loops < 1:
-            raise InputError(f"unit n_loops: expected a positive integer, got {self.n_loops!r}")
+            raise InputError(f"{_field('n_loops')}: expected a positive integer, got {self.n_loops!r}")
         if self.role not in ("learning", "testing"):
             raise InputError(f"unit role: expected 'learning' or 'testing', got {self.role!r}")
         if not self.label:
@@ -389,7 +427,7 @@ def summarize_unit(unit: TrajectoryUnit, limits: PlanLimits | None = None) -> Un
             if limit is not None and value > limit:
                 raise PlanError(
                     f"unit {unit.label}: {name} is {value:.3g} {unit_name}, above the limit "
-                    f"{limit:.3g} {unit_name}; lower the speed or the loop count"
+                    f"{limit:.3g} {unit_name}{_LIMIT_FLAGS.get(name, '')}; {_REMEDIES[name]}"
                 )
     return summary
 

@@ -144,7 +144,8 @@ def test_ros2_bag_without_embedded_definitions(tmp_path, flight):
     with pytest.raises(LogFormatError) as e:
         read_rosbag(path, POSE_TOPICS, RSSI_TOPICS, rssi_field="rssi_dbm", tx_power_dbm=20.0,
                     frequency_hz=2.4e9)
-    assert "register its definition with msg_definitions" in str(e.value) and "\n" not in str(e.value)
+    assert "register its definition (rplearn sync --msg-definition" in str(e.value)
+    assert "msg_definitions=" in str(e.value) and "\n" not in str(e.value)
     logs, _ = read_rosbag(path, POSE_TOPICS, RSSI_TOPICS, rssi_field="rssi_dbm", tx_power_dbm=20.0,
                           frequency_hz=2.4e9, msg_definitions={RSSI_MSG: RSSI_MSGDEF})
     assert len(logs.signal) == len(sig.iloc[::20])

@@ -22,8 +22,8 @@ from typing import Any, Iterable, Mapping
 
 import pandas as pd
 
-from rplearn.datasets import validate_pose_log
-from rplearn.errors import InputError, LogFormatError
+from rplearn.datasets import NON_UNIT_QUATERNION_ATTR, validate_pose_log
+from rplearn.errors import InputError, LogFormatError, RplearnError
 from rplearn.io._common import Logs
 
 _MAGIC: tuple[tuple[bytes, str], ...] = (
@@ -79,6 +79,22 @@ def detect_format(path: str | os.PathLike) -> str:
     )
 
 
+def _bag_needs_topics(path: str, msg_definitions: Mapping[str, str] | None) -> str:
+    """Message for a bag read without topics: how to name them, and the topics it has."""
+    from rplearn.io.rosbag import bag_topics, describe_topics
+
+    head = (
+        f"{path}: a ROS bag needs its pose topics and RSSI topics named (rplearn sync "
+        "--pose-topic TOPIC=NODE --rssi-topic TOPIC=TX:RX, or pose_topics={topic: node}, "
+        "rssi_topics={topic: (tx, rx)})"
+    )
+    try:
+        topics = bag_topics(path, msg_definitions)
+    except RplearnError as exc:
+        return f"{head}; its topics cannot be listed ({str(exc).splitlines()[0]})"
+    return f"{head}; it has {describe_topics(topics)}"
+
+
 def read_logs(
     paths: str | os.PathLike | Iterable[str | os.PathLike],
     *,
@@ -94,6 +110,8 @@ def read_logs(
     tx_power_dbm: float | Mapping[str, float] | None = None,
     frequency_hz: float | None = None,
     nan_policy: str = "error",
+    allow_unsorted: bool = False,
+    require_valid: bool = False,
 ) -> tuple[Logs, dict[str, Any]]:
     """Read logs of any supported format into one pose log and one signal log.
 
@@ -117,7 +135,13 @@ def read_logs(
     tx_power_dbm, frequency_hz
         Constants for formats that do not log them (pcap, bags, tables without the column).
     nan_policy : {"error", "drop"}
-        NaN pose rows in tables.
+        NaN pose rows in tables (``rplearn sync --nan-policy``).
+    allow_unsorted : bool
+        Accept pose tables whose times go backwards within a node; they are sorted
+        (``rplearn sync --allow-unsorted``).
+    require_valid : bool
+        Drop ULog local-position rows flagged invalid by the autopilot (``xy_valid`` or
+        ``z_valid`` = 0; ``rplearn sync --require-valid``).
 
     Returns
     -------
@@ -150,7 +174,7 @@ def read_logs(
             if what == "pose":
                 pose, meta = _tables.read_pose_table(
                     path, columns=columns, node=nodes.get(path), origin_geodetic=origin,
-                    nan_policy=nan_policy,
+                    nan_policy=nan_policy, allow_unsorted=allow_unsorted,
                 )
                 if meta.get("origin_geodetic") is not None and origin is None:
                     origin = meta["origin_geodetic"]
@@ -165,9 +189,9 @@ def read_logs(
             meta["kind"] = what
         elif kind in ("ros1", "ros2"):
             if not pose_topics and not rssi_topics:
-                raise InputError(f"{path}: a ROS bag needs pose_topics={{topic: node}} (and rssi_topics)")
+                raise InputError(_bag_needs_topics(path, msg_definitions))
             if isinstance(tx_power_dbm, Mapping):
-                raise InputError(f"{path}: tx_power_dbm for a bag must be one number [dBm]")
+                raise InputError(f"{path}: the transmit power for a bag must be one number [dBm] (--tx-power, tx_power_dbm=)")
             logs, meta = _rosbag.read_rosbag(
                 path, pose_topics or {}, rssi_topics, rssi_field=rssi_field,
                 tx_power_dbm=tx_power_dbm, frequency_hz=frequency_hz,
@@ -181,8 +205,11 @@ def read_logs(
         elif kind == "ulog":
             node = nodes.get(path)
             if node is None:
-                raise InputError(f"{path}: give the node id of this ULog with nodes={{path: node}}")
-            pose, meta = _ulog.read_ulog(path, node, origin, time_reference="auto")
+                raise InputError(
+                    f"{path}: give the node id of this ULog (rplearn sync --node {path}=NODE, "
+                    "or nodes={path: node})"
+                )
+            pose, meta = _ulog.read_ulog(path, node, origin, time_reference="auto", require_valid=require_valid)
             if origin is None and meta["anchor_geodetic"] is not None:
                 # re-express on the anchor so that later logs share it (no-op for this one)
                 origin = meta["anchor_geodetic"]
@@ -191,16 +218,26 @@ def read_logs(
         else:  # pcap
             rx = receivers.get(path)
             if rx is None:
-                raise InputError(f"{path}: give the capturing node with receivers={{path: node}}")
+                raise InputError(
+                    f"{path}: give the capturing node (rplearn sync --receiver {path}=NODE, "
+                    "or receivers={path: node})"
+                )
             if tx_power_dbm is None:
-                raise InputError(f"{path}: give tx_power_dbm (radiotap does not carry the sender's power)")
+                raise InputError(
+                    f"{path}: give the transmit power, radiotap does not carry the sender's power "
+                    "(rplearn sync --tx-power DBM, or tx_power_dbm=)"
+                )
             signal, meta = _pcap.read_pcap(
                 path, rx, tx_power_dbm, address_map=address_map, frequency_hz=frequency_hz
             )
             signals.append(signal)
             meta["kind"] = "signal"
         files.append(meta)
-    pose = validate_pose_log(pd.concat(poses, ignore_index=True), "pose logs") if poses else None
+    pose = None
+    if poses:
+        merged = pd.concat(poses, ignore_index=True)
+        merged.attrs[NON_UNIT_QUATERNION_ATTR] = sum(int(p.attrs.get(NON_UNIT_QUATERNION_ATTR, 0)) for p in poses)
+        pose = validate_pose_log(merged, "pose logs")
     signal = None
     if signals:
         signal = pd.concat(signals, ignore_index=True).sort_values("t", kind="stable").reset_index(drop=True)

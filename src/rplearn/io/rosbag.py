@@ -75,7 +75,10 @@ def _load_definitions(msg_definitions: Mapping[str, str] | None) -> dict[str, An
         try:
             types.update(get_types_from_msg(text, name))
         except Exception as exc:
-            raise InputError(f"msg_definitions[{name!r}]: cannot parse definition ({exc})") from None
+            raise InputError(
+                f"message definition of {name} (rplearn sync --msg-definition, or msg_definitions=): "
+                f"cannot parse it ({exc})"
+            ) from None
     return types
 
 
@@ -137,7 +140,10 @@ def open_rosbag(
         try:
             default.register(extra)
         except Exception as exc:
-            raise InputError(f"msg_definitions: cannot register types ({type(exc).__name__}: {exc})") from None
+            raise InputError(
+                "message definitions (rplearn sync --msg-definition, or msg_definitions=): "
+                f"cannot register types ({type(exc).__name__}: {exc})"
+            ) from None
     try:
         reader = AnyReader(paths, default_typestore=default)
         reader.open()
@@ -172,9 +178,31 @@ def _messages(reader: Any, connections: list, path: str) -> Iterator[tuple[Any, 
         except Exception as exc:
             raise LogFormatError(
                 f"{path}: topic {conn.topic}: cannot deserialise {conn.msgtype} "
-                f"({type(exc).__name__}); register its definition with msg_definitions"
+                f"({type(exc).__name__}); register its definition "
+                f"(rplearn sync --msg-definition {conn.msgtype}=FILE.msg, or msg_definitions=)"
             ) from None
         yield conn, ts, msg
+
+
+def bag_topics(
+    path: str | os.PathLike, msg_definitions: Mapping[str, str] | None = None
+) -> dict[str, str]:
+    """Topics of a bag and their message types, ``{topic: "pkg/msg/Type"}``, sorted by topic."""
+    with open_rosbag(path, msg_definitions) as reader:
+        return {c.topic: c.msgtype for c in sorted(reader.connections, key=lambda c: c.topic)}
+
+
+def describe_topics(topics: Mapping[str, str], limit: int = 10) -> str:
+    """One line listing topics with their types, pose topics first, at most ``limit`` of them.
+
+    Example: ``/A/odom (nav_msgs/msg/Odometry), /A/rssi (pkg/msg/LinkQuality) and 3 more``.
+    """
+    if not topics:
+        return "no topics"
+    order = sorted(topics, key=lambda t: (topics[t] not in POSE_MSGTYPES, t))
+    shown = ", ".join(f"{t} ({topics[t]})" for t in order[:limit])
+    rest = len(order) - limit
+    return shown + (f" and {rest} more" if rest > 0 else "")
 
 
 def read_rosbag(
@@ -220,16 +248,25 @@ def read_rosbag(
         ``frame_ids`` per pose topic, ``time_reference``.
     """
     if time_source not in ("header", "bag"):
-        raise InputError(f"time_source must be 'header' or 'bag', got {time_source!r}")
+        raise InputError(f"time_source: expected 'header' or 'bag', got {time_source!r}")
     source = str(path)
     rssi_topics = dict(rssi_topics or {})
     if rssi_topics:
         if tx_power_dbm is None and tx_power_field is None:
-            raise InputError(f"{source}: give tx_power_dbm or tx_power_field for the RSSI topics")
+            raise InputError(
+                f"{source}: the RSSI topics need the transmit power "
+                "(rplearn sync --tx-power DBM, or tx_power_dbm= / tx_power_field=)"
+            )
         if frequency_hz is None and frequency_field is None:
-            raise InputError(f"{source}: give frequency_hz or frequency_field for the RSSI topics")
+            raise InputError(
+                f"{source}: the RSSI topics need the carrier frequency "
+                "(rplearn sync --frequency HZ, or frequency_hz= / frequency_field=)"
+            )
     if not pose_topics and not rssi_topics:
-        raise InputError(f"{source}: name at least one pose topic (pose_topics={{topic: node}})")
+        raise InputError(
+            f"{source}: name at least one pose or RSSI topic (rplearn sync --pose-topic TOPIC=NODE, "
+            "--rssi-topic TOPIC=TX:RX; or pose_topics={topic: node}, rssi_topics={topic: (tx, rx)})"
+        )
     pose_rows: dict[str, list] = {k: [] for k in ("t", "node", "x", "y", "z", "qw", "qx", "qy", "qz")}
     sig_rows: dict[str, list] = {k: [] for k in ("t", "tx", "rx", "rssi_dbm", "tx_power_dbm", "frequency_hz")}
     frame_ids: dict[str, str] = {}
@@ -294,4 +331,4 @@ def read_rosbag(
     return Logs(pose=pose, signal=signal), meta
 
 
-__all__ = ["POSE_MSGTYPES", "open_rosbag", "read_rosbag"]
+__all__ = ["POSE_MSGTYPES", "bag_topics", "describe_topics", "open_rosbag", "read_rosbag"]

@@ -84,6 +84,11 @@ def _read(path: str, source: str) -> pd.DataFrame:
         raise LogFormatError(f"{source}: cannot read table ({type(exc).__name__}: {msg})") from None
 
 
+def table_format(path: str | os.PathLike) -> str:
+    """``"parquet"`` or ``"csv"``: how :func:`read_pose_table` and friends read a table file."""
+    return "parquet" if str(path).lower().endswith(_PARQUET_EXT) else "csv"
+
+
 def _float_column(df: pd.DataFrame, name: str) -> np.ndarray:
     return pd.to_numeric(df[name], errors="coerce").to_numpy(np.float64, na_value=np.nan)
 
@@ -97,7 +102,7 @@ def _check_geodetic(lat: np.ndarray, lon: np.ndarray, source: str) -> None:
     if bad.size:
         raise InputError(
             f"{source}: field lat/lon out of range at row {int(bad[0])} "
-            f"(lat {lat[bad[0]]!r}, lon {lon[bad[0]]!r}); expected degrees"
+            f"(lat {float(lat[bad[0]])!r}, lon {float(lon[bad[0]])!r}); expected degrees"
         )
 
 
@@ -142,7 +147,9 @@ def canonical_pose(
         "euler_enu_flu" or "euler_ned_frd"), ``origin_geodetic`` (or None), ``dropped``.
     """
     if nan_policy not in ("error", "drop"):
-        raise InputError(f"nan_policy must be 'error' or 'drop', got {nan_policy!r}")
+        raise InputError(
+            f"nan_policy: expected 'error' or 'drop' (rplearn sync --nan-policy), got {nan_policy!r}"
+        )
     try:
         df = rename_columns(df, columns)
     except InputError as exc:
@@ -150,7 +157,10 @@ def canonical_pose(
     meta: dict[str, Any] = {"source": source, "dropped": {"nan_pose": 0}, "origin_geodetic": None}
     if "node" not in df.columns:
         if node is None:
-            raise InputError(f"{source}: missing column node (or pass node=... for a one-node log)")
+            raise InputError(
+                f"{source}: missing column node; for a one-node log give its node id "
+                f"(rplearn sync --node {source}=NODE, or node=...)"
+            )
         df = df.assign(node=str(node))
     if "t" not in df.columns:
         raise InputError(f"{source}: missing column t; expected {', '.join(POSE_COLUMNS)}")
@@ -193,8 +203,8 @@ def canonical_pose(
         if nan_policy == "error":
             raise InputError(
                 f"{source}: field {first_bad[1]} has {int(bad.sum())} row(s) with NaN, infinite or "
-                f"non-numeric values (first at row {first_bad[0]}); expected numbers, or pass "
-                "nan_policy='drop'"
+                f"non-numeric values (first at row {first_bad[0]}); expected numbers, or drop those rows "
+                "(rplearn sync --nan-policy drop, or nan_policy='drop')"
             )
         meta["dropped"]["nan_pose"] = int(bad.sum())
         values = {c: v[~bad] for c, v in values.items()}
@@ -212,8 +222,9 @@ def canonical_pose(
         if not order_ok.all():
             r = int(np.flatnonzero(~order_ok)[0])
             raise LogFormatError(
-                f"{source}: field t goes backwards at row {r} (node {nodes[r]}: {t[r - 1]!r} -> "
-                f"{t[r]!r}); expected increasing times, or pass allow_unsorted=True"
+                f"{source}: field t goes backwards at row {r} (node {nodes[r]}: {float(t[r - 1])!r} -> "
+                f"{float(t[r])!r}); expected increasing times, or sort them on reading "
+                "(rplearn sync --allow-unsorted, or allow_unsorted=True)"
             )
 
     if meta["position"] == "geodetic":
@@ -272,7 +283,8 @@ def canonical_signal(
     if missing:
         raise InputError(
             f"{source}: missing column(s) {', '.join(missing)}; expected {', '.join(SIGNAL_COLUMNS)}"
-            " (rx, tx_power_dbm and frequency_hz may be given as options)"
+            " (rx, tx_power_dbm and frequency_hz may be given as constants: rplearn sync "
+            "--receiver FILE=NODE, --tx-power, --frequency; or rx=, tx_power_dbm=, frequency_hz=)"
         )
     out = pd.DataFrame(index=range(len(df)))
     for c in SIGNAL_COLUMNS:
@@ -295,7 +307,7 @@ def read_pose_table(path: str, **options: Any) -> tuple[pd.DataFrame, dict[str, 
     source = str(path)
     df = _read(str(path), source)
     pose, meta = canonical_pose(df, source=source, **options)
-    meta["format"] = "parquet" if source.lower().endswith(_PARQUET_EXT) else "csv"
+    meta["format"] = table_format(source)
     return pose, meta
 
 
@@ -307,8 +319,7 @@ def read_signal_table(path: str, **options: Any) -> tuple[pd.DataFrame, dict[str
     source = str(path)
     df = _read(str(path), source)
     signal = canonical_signal(df, source=source, **options)
-    fmt = "parquet" if source.lower().endswith(_PARQUET_EXT) else "csv"
-    return signal, {"source": source, "format": fmt, "rows": int(len(signal))}
+    return signal, {"source": source, "format": table_format(source), "rows": int(len(signal))}
 
 
 def iter_signal_table(
@@ -382,5 +393,6 @@ __all__ = [
     "read_pose_table",
     "read_signal_table",
     "rename_columns",
+    "table_format",
     "table_kind",
 ]
