@@ -174,15 +174,19 @@ def fit_patterns(
     )
 
 
-def _warm_up(spec: ModelSpec) -> None:
-    """Pay a model's one-off costs: imports and cached basis tables (see :func:`fit_model`)."""
+def _warm_up(spec: ModelSpec, n_samples: int = 1) -> None:
+    """Pay a model's one-off costs: imports, cached basis tables, the solver's block buffer
+    (see :func:`fit_model`)."""
     if spec.kind == "knn":
         import sklearn.neighbors  # noqa: F401
     elif spec.decouples:
+        from rplearn.solver import reserve_block_buffer
+
         basis = spec.basis()
         basis.evaluate(np.zeros(basis.n_coef), [0.0], [0.0])
         if basis.moment_shape is not None:
             basis.gram_from_moments(np.zeros(basis.moment_shape))
+        reserve_block_buffer(basis, n_samples)
 
 
 def fit_model(
@@ -196,7 +200,7 @@ def fit_model(
     One-off costs of the process (imports, the tables of a basis) are paid before the clock
     starts, so that the LTD of a model does not depend on whether it was the first one learned.
     """
-    _warm_up(spec)
+    _warm_up(spec, len(samples))
     t0 = time.perf_counter()
     if spec.kind == "mean":
         model: Model = MeanModel.fit(samples)
