@@ -252,3 +252,30 @@ def test_evaluate_scores_unseen_units_by_default(workdir):
     train = run(["evaluate", "sh3_units.json", "data.parquet", "--units", learn[0]], d)
     assert "training scores" in train.stderr
 
+
+def test_links_of_a_swarm_through_the_cli(workdir):
+    d = workdir
+    if not (d / "sh3.json").exists():
+        run(["fit", "data.parquet", "--model", "sh", "--degree", "3", "-o", "sh3.json"], d)
+    proc = run(
+        ["links", "sh3.json", "flight/pose_log.parquet", "--tx-power", "20", "--step", "0.5",
+         "--connectivity", "conn.csv", "--plot", "links.png", "-o", "links.parquet"],
+        d,
+    )
+    assert "connected at" in proc.stdout and "wrote" in proc.stdout
+    links = pd.read_parquet(d / "links.parquet")
+    assert set(zip(links["tx"], links["rx"])) == {("A", "B"), ("B", "A")}
+    assert {"rssi_pred_dbm", "rssi_pred_std_db", "up", "distance_m"} <= set(links.columns)
+    conn = pd.read_csv(d / "conn.csv")
+    assert len(conn) == links["t"].nunique() and set(conn["n_drones"]) == {2}
+    assert (d / "links.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    # a third drone that carries A's antenna
+    poses = pd.read_parquet(d / "flight" / "pose_log.parquet")
+    third = poses[poses["node"] == "A"].assign(node="C", x=lambda f: f["x"] + 15.0)
+    pd.concat([poses, third]).to_csv(d / "three.csv", index=False)
+    bad = run(["links", "sh3.json", "three.csv", "--tx-power", "20", "-o", "l3.csv"], d, ok=False)
+    assert bad.returncode == 1 and "--as C=NODE" in bad.stderr and "Traceback" not in bad.stderr
+    good = run(["links", "sh3.json", "three.csv", "--tx-power", "20", "--as", "C=A", "-o", "l3.csv"], d)
+    assert "C (A)" in good.stdout
+    assert len(pd.read_csv(d / "l3.csv").groupby(["tx", "rx"])) == 6
+

@@ -538,6 +538,64 @@ def _warn_frequency_mismatch(model: Any, frequency_hz: Any, model_path: str, dat
 
 @app.command()
 @user_errors
+def links(
+    model_path: str = typer.Argument(..., metavar="MODEL.json"),
+    poses: list[str] = typer.Argument(..., metavar="POSE_LOG...", help="Pose log(s) of the drones: a plan or a flight (CSV/Parquet, bag, ULog)."),
+    output: str = typer.Option(..., "-o", "--out", help="Predicted links, one row per time and ordered pair (.csv or .parquet)."),
+    tx_power_dbm: float = typer.Option(..., "--tx-power", help="Transmit power of every drone [dBm]."),
+    frequency_hz: Optional[float] = typer.Option(None, "--frequency", help="Carrier frequency [Hz] (default: the one the model was learned at)."),
+    pattern: Optional[list[str]] = typer.Option(None, "--as", help="DRONE=NODE: the drone carries the antenna learned as NODE (repeat)."),
+    step_s: float = typer.Option(1.0, "--step", help="Spacing of the prediction times over the span all logs cover [s]."),
+    at: Optional[list[str]] = typer.Option(None, "--at", help="Predict at these times instead [s] (repeat or comma-separate)."),
+    min_rssi_dbm: float = typer.Option(-85.0, "--min-rssi", help="RSSI a link needs in each direction to be up [dBm]."),
+    max_gap_s: float = typer.Option(2.0, "--max-gap", help="A drone is absent inside pose-log gaps longer than this [s]."),
+    connectivity_out: Optional[str] = typer.Option(None, "--connectivity", help="Also write the per-time connectivity table here (.csv or .parquet)."),
+    plot_out: Optional[str] = typer.Option(None, "--plot", help="Also plot RSSI, threshold and bottleneck over time here (.png)."),
+    node: Optional[list[str]] = typer.Option(None, "--node", help="FILE=NODE for ULogs and one-node tables."),
+    pose_topic: Optional[list[str]] = typer.Option(None, "--pose-topic", help="TOPIC=NODE: pose topics of ROS bags."),
+) -> None:
+    """Predict every link of a swarm over time and whether it stays connected.
+
+    For each time and ordered pair of drones: distance, predicted joint gain and RSSI with
+    its spread, and whether the link is up. Per time: the pairs up both ways, the number of
+    connected groups, and the bottleneck RSSI (the swarm is connected for any threshold
+    below it). Drones that were not in the calibration flight use the pattern of the
+    antenna they carry (--as).
+
+    Example: rplearn links sh10.json plan_poses.csv --tx-power 20 --as C=A --as D=B --plot links.png -o links.csv
+    """
+    from rplearn.datasets import write_table
+    from rplearn.io import read_logs
+    from rplearn.modelfile import load_model
+    from rplearn.swarm import predict_swarm
+
+    model = load_model(model_path)
+    logs, _ = read_logs(poses, **_reader_options(node, None, None, pose_topic))
+    if logs.pose is None:
+        raise InputError(f"{', '.join(poses)}: no pose log found")
+    times = None
+    if at:
+        try:
+            times = [float(v) for v in _split_list(at) or []]
+        except ValueError:
+            raise InputError(f"--at: expected times in seconds, got {', '.join(at)}") from None
+    result = predict_swarm(
+        model, logs.pose, tx_power_dbm, frequency_hz, pattern_of=_pairs(pattern, "--as"), step_s=step_s,
+        times_s=times, min_rssi_dbm=min_rssi_dbm, max_gap_s=max_gap_s, source=", ".join(poses),
+    )
+    write_table(result.links, output)
+    if connectivity_out:
+        write_table(result.connectivity, connectivity_out)
+    if plot_out:
+        from rplearn.plot import plot_swarm
+
+        plot_swarm(result, plot_out)
+    out.print(result.summary(), highlight=False)
+    out.print(f"wrote {len(result.links):,} predicted links to {output}")
+
+
+@app.command()
+@user_errors
 def sweep(
     dataset: str = typer.Argument(...),
     model: str = typer.Option("sh", "--model", help="sh, bg or poly."),

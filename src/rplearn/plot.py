@@ -657,3 +657,46 @@ def plot_pattern_3d(
     """Write a 3-D image of one node's pattern (:func:`pattern_3d_figure`); return the path."""
     caption = f"Radiation pattern of node {node} in its body frame (x forward, y left, z up)."
     return save_figure(pattern_3d_figure(pattern_like, node, step_deg), path, caption)
+
+
+# -- swarm links ---------------------------------------------------------------------------
+def _break_gaps(t: ArrayLike, y: ArrayLike) -> tuple[FloatArray, FloatArray]:
+    """Insert NaN where the time step exceeds 1.5 typical steps, so lines do not bridge gaps."""
+    t = np.asarray(t, np.float64)
+    y = np.asarray(y, np.float64)
+    if t.size < 3:
+        return t, y
+    dt = np.diff(t)
+    gap = np.flatnonzero(dt > 1.5 * np.median(dt))
+    return np.insert(t, gap + 1, np.nan), np.insert(y, gap + 1, np.nan)
+
+
+def plot_swarm(prediction: Any, path: str | os.PathLike[str]) -> str:
+    """RSSI of every pair (weaker direction) over time, the threshold and the bottleneck; return the path.
+
+    ``prediction`` is a :class:`rplearn.swarm.SwarmPrediction`.
+    """
+    links = prediction.links
+    fig = _new_figure(9.0, 4.2)
+    ax = fig.add_subplot()
+    pairs = links.assign(pair=[f"{min(a, b)}-{max(a, b)}" for a, b in zip(links["tx"], links["rx"])])
+    weaker = pairs.groupby(["pair", "t"])["rssi_pred_dbm"].min().reset_index()
+    for name, g in weaker.groupby("pair"):
+        ax.plot(*_break_gaps(g["t"], g["rssi_pred_dbm"]), lw=1.0, label=name)
+    c = prediction.connectivity
+    ax.plot(*_break_gaps(c["t"], c["bottleneck_rssi_dbm"]), color="black", lw=2.2, label="bottleneck (swarm connected above)")
+    ax.axhline(prediction.min_rssi_dbm, color="tab:red", ls="--", lw=1.2, label=f"threshold {prediction.min_rssi_dbm:g} dBm")
+    down = c.loc[~c["connected"], "t"]
+    if len(down):
+        ax.plot(down, np.full(len(down), ax.get_ylim()[0]), "|", color="tab:red", ms=10, label="disconnected")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("predicted RSSI, weaker direction [dBm]")
+    ax.set_title("Swarm links predicted from the learned patterns")
+    ax.legend(fontsize=7, ncol=2, loc="best")
+    ax.grid(alpha=0.3)
+    caption = (
+        "Predicted received power of every pair of drones (the weaker of its two directions), the RSSI"
+        " threshold a link needs, and the bottleneck: the swarm is connected whenever the black line is"
+        " above the red one."
+    )
+    return save_figure(fig, path, caption)

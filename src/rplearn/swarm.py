@@ -1,0 +1,265 @@
+"""Link budget of a whole swarm: every ordered pair of drones, over time, and its connectivity.
+
+For planners that must keep a swarm connected: given learned patterns and the poses of any
+number of drones (a planned trajectory or a flight log), predict the received power of every
+ordered pair at common times (paper eq. 1 with the learned joint gain), its spread, and per
+time whether the swarm is connected when a link needs a given RSSI in both directions.
+
+Drones need not be the ones the patterns were learned on: ``pattern_of`` maps a drone to the
+learned node whose antenna it carries (several drones may share one pattern).
+
+The *bottleneck* RSSI of a time is the largest threshold at which the swarm is still
+connected: the weakest link of the maximum spanning tree of the pair weights
+``min(RSSI a->b, RSSI b->a)``. A swarm is connected at threshold ``x`` exactly when
+``x <= bottleneck``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+import pandas as pd
+from numpy.typing import ArrayLike
+from scipy.sparse import csr_matrix
+from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
+
+from rplearn.datasets import LinkSamples
+from rplearn.errors import InputError
+from rplearn.geometry import distance_m, link_directions
+from rplearn.link import FAR_FIELD_WAVELENGTHS, free_space_path_loss_db, wavelength_m
+from rplearn.patterns import PatternSet
+from rplearn.sync import pose_tracks
+
+#: Default spacing of the prediction times [s].
+DEFAULT_STEP_S = 1.0
+#: Default RSSI a link needs in each direction to count as up [dBm] (a typical Wi-Fi floor
+#: for low-rate frames; set it to your radio's sensitivity plus a margin).
+DEFAULT_MIN_RSSI_DBM = -85.0
+#: Poses are interpolated only across log gaps shorter than this [s].
+DEFAULT_MAX_GAP_S = 2.0
+
+
+@dataclass(frozen=True)
+class SwarmPrediction:
+    """Predicted links of a swarm and its connectivity over time.
+
+    Attributes
+    ----------
+    links : DataFrame
+        One row per time and ordered pair with both poses known: ``t, tx, rx, tx_pattern,
+        rx_pattern, distance_m, gain_pred_db, rssi_pred_dbm`` and, for models with a
+        covariance, ``gain_pred_std_db, rssi_pred_std_db`` [dB]; ``up`` is
+        ``rssi_pred_dbm >= min_rssi_dbm``. Pairs closer than the far field have NaN RSSI.
+    connectivity : DataFrame
+        One row per time: ``t, n_drones, n_pairs_up`` (unordered pairs up both ways),
+        ``n_components``, ``connected``, ``bottleneck_rssi_dbm`` (see module docstring) and
+        ``bottleneck_pair``.
+    """
+
+    links: pd.DataFrame
+    connectivity: pd.DataFrame
+    pattern_of: dict[str, str]
+    min_rssi_dbm: float
+    tx_power_dbm: float
+    frequency_hz: float
+    notes: list[str] = field(default_factory=list)
+
+    def summary(self) -> str:
+        """A few lines for people: who, when, how often connected, the weakest moment."""
+        c = self.connectivity
+        drones = ", ".join(f"{d} ({p})" if d != p else d for d, p in self.pattern_of.items())
+        lines = [
+            f"drones (pattern): {drones}",
+            f"{len(c):,} time(s) from {c['t'].min():.1f} s to {c['t'].max():.1f} s; "
+            f"tx power {self.tx_power_dbm:g} dBm, {self.frequency_hz / 1e9:.3f} GHz; a link is up at "
+            f">= {self.min_rssi_dbm:g} dBm both ways",
+            f"connected at {int(c['connected'].sum()):,} of {len(c):,} time(s) ({100.0 * c['connected'].mean():.1f} %)",
+        ]
+        finite = c["bottleneck_rssi_dbm"].notna()
+        if finite.any():
+            worst = c.loc[c.loc[finite, "bottleneck_rssi_dbm"].idxmin()]
+            lines.append(
+                f"weakest moment: t = {worst['t']:.1f} s, bottleneck {worst['bottleneck_rssi_dbm']:.1f} dBm "
+                f"on {worst['bottleneck_pair']}"
+            )
+        if len(self.links):
+            per_pair = self.links.groupby(["tx", "rx"])["rssi_pred_dbm"].median()
+            weakest = per_pair.idxmin()
+            lines.append(f"weakest direction (median): {weakest[0]} -> {weakest[1]} at {per_pair.min():.1f} dBm")
+        lines.extend(self.notes)
+        return "\n".join(lines)
+
+
+def prediction_times(tracks: Mapping[str, Any], step_s: float, times_s: ArrayLike | None) -> np.ndarray:
+    """The given times, or a grid of ``step_s`` over the span all drones' logs cover [s]."""
+    if times_s is not None:
+        t = np.asarray(times_s, np.float64).ravel()
+        if t.size == 0 or not np.all(np.isfinite(t)):
+            raise InputError("times: expected finite times in seconds (rplearn links --at)")
+        return np.unique(t)
+    if not (np.isfinite(step_s) and step_s > 0):
+        raise InputError(f"step: expected a positive number of seconds (rplearn links --step), got {step_s!r}")
+    moving = [tr for tr in tracks.values() if not tr.static]
+    if not moving:
+        return np.array([0.0])
+    start = max(float(tr.t_s[0]) for tr in moving)
+    stop = min(float(tr.t_s[-1]) for tr in moving)
+    if stop < start:
+        spans = ", ".join(f"{tr.node} {tr.t_s[0]:.1f}..{tr.t_s[-1]:.1f} s" for tr in moving)
+        raise InputError(f"pose logs share no time span ({spans}); give times with --at")
+    return np.arange(start, stop + 1e-9 * max(1.0, abs(stop)), step_s)
+
+
+def resolve_patterns(drones: Sequence[str], model_nodes: Sequence[str], pattern_of: Mapping[str, str] | None) -> dict[str, str]:
+    """Which learned pattern every drone carries: ``pattern_of``, else its own node id."""
+    mapping = {str(k): str(v) for k, v in (pattern_of or {}).items()}
+    unknown_keys = sorted(set(mapping) - set(drones))
+    if unknown_keys:
+        raise InputError(f"--as names drone(s) {', '.join(unknown_keys)} that are in no pose log; drones: {', '.join(drones)}")
+    out = {}
+    for d in drones:
+        p = mapping.get(d, d)
+        if p not in model_nodes:
+            raise InputError(
+                f"drone {d} has no learned pattern (the model has {', '.join(model_nodes)}); "
+                f"say which antenna it carries with --as {d}=NODE"
+            )
+        out[d] = p
+    return out
+
+
+def predict_swarm(
+    model: PatternSet,
+    pose_log: pd.DataFrame,
+    tx_power_dbm: float,
+    frequency_hz: float | None = None,
+    pattern_of: Mapping[str, str] | None = None,
+    step_s: float = DEFAULT_STEP_S,
+    times_s: ArrayLike | None = None,
+    min_rssi_dbm: float = DEFAULT_MIN_RSSI_DBM,
+    max_gap_s: float = DEFAULT_MAX_GAP_S,
+    source: str = "pose log",
+) -> SwarmPrediction:
+    """Predict every ordered link of a swarm over time, and whether the swarm is connected.
+
+    Parameters
+    ----------
+    model : PatternSet
+        Learned patterns (SH, BG or P).
+    pose_log : DataFrame
+        Canonical pose log (``t, node, x, y, z, qw, qx, qy, qz``; ENU [m], FLU->ENU quaternions).
+    tx_power_dbm : float
+        Transmit power of every drone [dBm].
+    frequency_hz : float, optional
+        Carrier [Hz]; by default the one the model was learned at.
+    pattern_of : mapping, optional
+        Drone -> learned node whose pattern it carries; drones not named use their own id.
+    step_s, times_s
+        Prediction times: a grid of ``step_s`` [s] over the common span, or these times [s].
+    min_rssi_dbm : float
+        RSSI a link needs in each direction to be up [dBm].
+    max_gap_s : float
+        Longest log gap a pose is interpolated across [s]; a drone is absent inside longer ones.
+    """
+    if not isinstance(model, PatternSet):
+        raise InputError(f"swarm links need a pattern model (sh, bg or poly), not {getattr(model, 'label', model)!r}")
+    if not np.isfinite(tx_power_dbm):
+        raise InputError("tx power: expected a finite number of dBm (rplearn links --tx-power)")
+    if frequency_hz is None:
+        frequency_hz = model.training.get("frequency_hz")
+        if frequency_hz is None:
+            raise InputError("the model does not state its frequency; give it (rplearn links --frequency HZ, or frequency_hz=)")
+    frequency_hz = float(frequency_hz)
+    wavelength_m(frequency_hz)  # refuses a non-positive frequency
+    tracks = pose_tracks(pose_log, source=source)
+    drones = sorted(tracks)
+    if len(drones) < 2:
+        raise InputError(f"{source}: a swarm needs at least 2 drones, the pose log has {', '.join(drones) or 'none'}")
+    patterns = resolve_patterns(drones, model.nodes, pattern_of)
+    t = prediction_times(tracks, step_s, times_s)
+    poses = {d: tracks[d].interpolate(t, max_gap_s) for d in drones}
+    residual_db = float(model.training.get("rmse_db", np.nan))
+    limit_m = FAR_FIELD_WAVELENGTHS * float(wavelength_m(frequency_hz))
+    parts, too_close = [], 0
+    for a in drones:
+        for b in drones:
+            if a == b:
+                continue
+            pa, qa, sa = poses[a]
+            pb, qb, sb = poses[b]
+            ok = (sa == 0) & (sb == 0)
+            if not ok.any():
+                continue
+            d = distance_m(pa[ok], pb[ok])
+            dirs = link_directions(pa[ok], qa[ok], pb[ok], qb[ok])
+            gain = model.predict_joint_gain_db(patterns[a], patterns[b], *dirs)
+            far = d > limit_m
+            too_close += int((~far).sum())
+            rssi = np.full(d.size, np.nan)
+            rssi[far] = tx_power_dbm + gain[far] - free_space_path_loss_db(d[far], frequency_hz)
+            part = {
+                "t": t[ok], "tx": a, "rx": b, "tx_pattern": patterns[a], "rx_pattern": patterns[b],
+                "distance_m": d, "gain_pred_db": gain, "rssi_pred_dbm": rssi,
+            }
+            if model.covariance is not None:
+                k = np.full(d.size, model.node_index(patterns[a]), np.intp)
+                r = np.full(d.size, model.node_index(patterns[b]), np.intp)
+                samples = LinkSamples(dirs, k, r, model.nodes, np.full(d.size, np.nan), d, np.full(d.size, frequency_hz))
+                std = model.predict_samples_std(samples)
+                part["gain_pred_std_db"] = std
+                part["rssi_pred_std_db"] = np.sqrt(std**2 + residual_db**2)
+            parts.append(pd.DataFrame(part))
+    if not parts:
+        raise InputError(f"{source}: no time at which two drones both have a pose; check the logs' spans and gaps")
+    links = pd.concat(parts, ignore_index=True).sort_values(["t", "tx", "rx"], kind="stable", ignore_index=True)
+    links["up"] = links["rssi_pred_dbm"] >= min_rssi_dbm
+    notes = []
+    if too_close:
+        notes.append(f"note: {too_close:,} pair-time(s) closer than the far field ({limit_m:.3f} m) have no prediction")
+    absent = {d: int(np.sum(poses[d][2] != 0)) for d in drones}
+    if any(absent.values()):
+        notes.append("note: drone(s) without a pose at some times (outside their log or in a gap): "
+                     + ", ".join(f"{d} {n}" for d, n in absent.items() if n))
+    connectivity = connectivity_over_time(links, t, min_rssi_dbm)
+    return SwarmPrediction(links, connectivity, patterns, float(min_rssi_dbm), float(tx_power_dbm), frequency_hz, notes)
+
+
+def connectivity_over_time(links: pd.DataFrame, times_s: np.ndarray, min_rssi_dbm: float) -> pd.DataFrame:
+    """Per time: drones present, pairs up both ways, components, bottleneck (module docstring)."""
+    rows = []
+    for t_val, at in links.groupby("t", sort=True):
+        present = sorted(set(at["tx"]) | set(at["rx"]))
+        index = {d: i for i, d in enumerate(present)}
+        n = len(present)
+        rssi = np.full((n, n), np.nan)
+        rssi[at["tx"].map(index).to_numpy(), at["rx"].map(index).to_numpy()] = at["rssi_pred_dbm"].to_numpy()
+        both = np.fmin(rssi, rssi.T)  # weight of a pair: its weaker direction (NaN if either unknown)
+        both[np.isnan(rssi) | np.isnan(rssi.T)] = np.nan
+        iu, ju = np.triu_indices(n, 1)
+        w = both[iu, ju]
+        up = w >= min_rssi_dbm
+        n_up_components = connected_components(csr_matrix((np.ones(int(up.sum())), (iu[up], ju[up])), shape=(n, n)), directed=False)[0]
+        bottleneck, pair = _bottleneck(w, iu, ju, n, present)
+        rows.append({
+            "t": float(t_val), "n_drones": n, "n_pairs_up": int(up.sum()), "n_components": int(n_up_components),
+            "connected": bool(n_up_components == 1), "bottleneck_rssi_dbm": bottleneck, "bottleneck_pair": pair,
+        })
+    return pd.DataFrame(rows)
+
+
+def _bottleneck(w: np.ndarray, iu: np.ndarray, ju: np.ndarray, n: int, names: Sequence[str]) -> tuple[float, str]:
+    """Weakest link of the maximum spanning tree of pair weights ``w`` (NaN: not spannable)."""
+    known = np.isfinite(w)
+    if n < 2 or not known.any():
+        return float("nan"), ""
+    # scipy finds minimum trees of positive weights: map the largest RSSI to the smallest cost
+    cost = (np.nanmax(w[known]) + 1.0) - w[known]
+    graph = csr_matrix((cost, (iu[known], ju[known])), shape=(n, n))
+    if connected_components(graph, directed=False)[0] != 1:
+        return float("nan"), ""
+    tree = minimum_spanning_tree(graph).tocoo()
+    weights = (np.nanmax(w[known]) + 1.0) - tree.data
+    k = int(np.argmin(weights))
+    return float(weights[k]), f"{names[tree.row[k]]}-{names[tree.col[k]]}"

@@ -1,0 +1,100 @@
+"""Swarm links: every ordered pair over time, connectivity and its bottleneck."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from rplearn.bases import SphericalHarmonics
+from rplearn.errors import InputError
+from rplearn.geometry import quat_wxyz_from_yaw
+from rplearn.link import received_power_dbm
+from rplearn.patterns import PatternSet
+from rplearn.swarm import predict_swarm
+
+
+def _model(rng):
+    b = SphericalHarmonics(4)
+    coef = rng.normal(0, 1.5, (2, b.n_coef))
+    cov = np.diag(np.full(2 * b.n_coef, 0.01))
+    return PatternSet(basis=b, nodes=("A", "B"), coef=coef, covariance=cov, training={"frequency_hz": 2.4e9, "rmse_db": 4.0})
+
+
+def _formation(n_t=121):
+    """Four drones 20 m up: A, B, C hover in a line 30 m apart; D flies away from C along +x."""
+    t = np.arange(n_t, dtype=float)  # 1 Hz, 120 s
+    rows = []
+    fixed = {"A": (0.0, 0.0), "B": (30.0, 0.0), "C": (60.0, 0.0)}
+    for node, (x, y) in fixed.items():
+        for ti in t:
+            rows.append((ti, node, x, y, 20.0, *quat_wxyz_from_yaw(np.radians(90.0))))
+    for ti in t:  # D leaves C at 20 m/s: from 90 m to 2490 m
+        rows.append((ti, "D", 90.0 + 20.0 * ti, 0.0, 20.0, *quat_wxyz_from_yaw(np.radians(-90.0))))
+    return pd.DataFrame(rows, columns=["t", "node", "x", "y", "z", "qw", "qx", "qy", "qz"])
+
+
+def test_links_equal_single_link_predictions_and_connectivity_is_consistent():
+    rng = np.random.default_rng(0)
+    model = _model(rng)
+    poses = _formation()
+    res = predict_swarm(model, poses, tx_power_dbm=0.0, pattern_of={"C": "A", "D": "B"}, min_rssi_dbm=-90.0)
+    assert len(res.links) == 121 * 12 and len(res.connectivity) == 121
+    # every row equals the one-link prediction of the same poses
+    for tx, rx in [("A", "B"), ("D", "C"), ("C", "A")]:
+        sel = res.links[(res.links["tx"] == tx) & (res.links["rx"] == rx)]
+        p_tx = poses[poses["node"] == tx][["x", "y", "z"]].to_numpy()
+        q_tx = poses[poses["node"] == tx][["qw", "qx", "qy", "qz"]].to_numpy()
+        p_rx = poses[poses["node"] == rx][["x", "y", "z"]].to_numpy()
+        q_rx = poses[poses["node"] == rx][["qw", "qx", "qy", "qz"]].to_numpy()
+        one = model.predict_for_poses(res.pattern_of[tx], res.pattern_of[rx], p_tx, q_tx, p_rx, q_rx, 0.0, 2.4e9)
+        np.testing.assert_allclose(sel["rssi_pred_dbm"].to_numpy(), one["rssi_dbm"], atol=1e-9)
+        assert (sel["rssi_pred_std_db"] > 4.0).all()  # training residual included
+    c = res.connectivity
+    # D flies away: the swarm is connected at first, then D drops out for good
+    assert c["connected"].iloc[0] and not c["connected"].iloc[-1]
+    first_down = int(np.argmax(~c["connected"].to_numpy()))
+    assert not c["connected"].iloc[first_down:].any()
+    # the bottleneck decides connectivity at this threshold and at any other
+    np.testing.assert_array_equal(c["connected"], c["bottleneck_rssi_dbm"] >= -90.0)
+    assert set(c.loc[~c["connected"], "n_components"]) == {2}
+    for threshold in (-60.0, -75.0, -100.0):
+        other = predict_swarm(model, poses, 0.0, pattern_of={"C": "A", "D": "B"}, min_rssi_dbm=threshold)
+        np.testing.assert_array_equal(other.connectivity["connected"], c["bottleneck_rssi_dbm"] >= threshold)
+    # the bottleneck of the last time is D's best link, to C (the nearest drone) both ways
+    last = res.links[res.links["t"] == 120.0].set_index(["tx", "rx"])["rssi_pred_dbm"]
+    expected = max(min(last[("D", n)], last[(n, "D")]) for n in "ABC")
+    assert c["bottleneck_rssi_dbm"].iloc[-1] == pytest.approx(expected)
+    assert "weakest moment" in res.summary() and "D (B)" in res.summary()
+
+
+def test_times_gaps_and_errors():
+    rng = np.random.default_rng(1)
+    model = _model(rng)
+    poses = _formation(31)
+    at = predict_swarm(model, poses, 20.0, pattern_of={"C": "A", "D": "B"}, times_s=[2.5, 10.0])
+    assert sorted(at.links["t"].unique()) == [2.5, 10.0]
+    # a gap in D's log: D is absent there, the others are not
+    gappy = poses[~((poses["node"] == "D") & poses["t"].between(10, 20))]
+    res = predict_swarm(model, gappy, 20.0, pattern_of={"C": "A", "D": "B"}, max_gap_s=2.0)
+    c = res.connectivity.set_index("t")
+    assert c.loc[15.0, "n_drones"] == 3 and c.loc[5.0, "n_drones"] == 4
+    assert any("D 12" in n for n in res.notes)  # times 9..20 start inside the 9..21 s gap
+    with pytest.raises(InputError, match="drone C has no learned pattern.*--as C=NODE"):
+        predict_swarm(model, poses, 20.0)
+    with pytest.raises(InputError, match="--as names drone"):
+        predict_swarm(model, poses, 20.0, pattern_of={"C": "A", "D": "B", "E": "A"})
+    with pytest.raises(InputError, match="no learned pattern"):
+        predict_swarm(model, poses, 20.0, pattern_of={"C": "Z", "D": "B"})
+    with pytest.raises(InputError, match="at least 2 drones"):
+        predict_swarm(model, poses[poses["node"] == "A"], 20.0)
+    bare = PatternSet(basis=model.basis, nodes=model.nodes, coef=model.coef)
+    with pytest.raises(InputError, match="frequency"):
+        predict_swarm(bare, poses, 20.0, pattern_of={"C": "A", "D": "B"})
+    # too close for the far field: no prediction, counted
+    close = poses.copy()
+    close.loc[close["node"] == "B", "x"] = 0.1
+    res = predict_swarm(model, close, 20.0, pattern_of={"C": "A", "D": "B"}, frequency_hz=2.4e9)
+    ab = res.links[(res.links["tx"] == "A") & (res.links["rx"] == "B")]
+    assert ab["rssi_pred_dbm"].isna().all() and not ab["up"].any()
+    assert any("far field" in n for n in res.notes)
