@@ -279,3 +279,19 @@ def test_links_of_a_swarm_through_the_cli(workdir):
     assert "C (A)" in good.stdout
     assert len(pd.read_csv(d / "l3.csv").groupby(["tx", "rx"])) == 6
 
+
+def test_headings_through_the_cli(workdir):
+    d = workdir
+    if not (d / "sh3.json").exists():
+        run(["fit", "data.parquet", "--model", "sh", "--degree", "3", "-o", "sh3.json"], d)
+    proc = run(
+        ["headings", "sh3.json", "--pos", "A=0,0,20", "--pos", "B=40,0,20", "--pos", "C=20,30,25", "--as", "C=A",
+         "--tx-power", "20", "--yaw", "A=90", "-o", "yaws.csv"],
+        d,
+    )
+    assert "bottleneck RSSI" in proc.stdout
+    yaws = pd.read_csv(d / "yaws.csv")
+    assert sorted(yaws["drone"]) == ["A", "B", "C"] and yaws["yaw_deg"].between(-180, 180).all()
+    bad = run(["headings", "sh3.json", "--pos", "A=0,0", "--tx-power", "20"], d, ok=False)
+    assert bad.returncode == 1 and "x,y,z" in bad.stderr
+

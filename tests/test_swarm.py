@@ -98,3 +98,26 @@ def test_times_gaps_and_errors():
     ab = res.links[(res.links["tx"] == "A") & (res.links["rx"] == "B")]
     assert ab["rssi_pred_dbm"].isna().all() and not ab["up"].any()
     assert any("far field" in n for n in res.notes)
+
+
+def test_headings_improve_the_bottleneck_and_agree_with_the_links():
+    from rplearn.experiment import best_yaw
+    from rplearn.swarm import best_swarm_headings
+
+    rng = np.random.default_rng(2)
+    model = _model(rng)
+    pos = {"A": [0, 0, 20], "B": [40, 0, 20], "C": [20, 30, 25], "D": [60, 40, 20]}
+    res = best_swarm_headings(model, pos, 20.0, pattern_of={"C": "A", "D": "B"}, start_yaw_deg={"A": 30.0}, fixed=["B"], step_deg=5)
+    assert res.bottleneck_dbm >= res.start_bottleneck_dbm
+    assert res.yaw_deg["B"] == 0.0 and res.start_yaw_deg["A"] == 30.0
+    # the chosen yaws, flown as a (static) pose log, give the same bottleneck through predict_swarm
+    rows = [(0.0, d, *p, *quat_wxyz_from_yaw(np.radians(res.yaw_deg[d]))) for d, p in pos.items()]
+    poses = pd.DataFrame(rows, columns=["t", "node", "x", "y", "z", "qw", "qx", "qy", "qz"])
+    links = predict_swarm(model, poses, 20.0, pattern_of={"C": "A", "D": "B"}, times_s=[0.0])
+    assert links.connectivity["bottleneck_rssi_dbm"].iloc[0] == pytest.approx(res.bottleneck_dbm, abs=1e-9)
+    # two drones: the pair's optimum, the same as the single-link search on the same grid
+    two = best_swarm_headings(model, {"A": [0, 0, 20], "B": [30, 10, 25]}, 20.0, step_deg=1.0)
+    single = best_yaw(model, "A", "B", [0, 0, 20], [30, 10, 25], turn="both", step_deg=1.0)
+    assert two.yaw_deg == {"A": single.tx_yaw_deg, "B": single.rx_yaw_deg}
+    with pytest.raises(InputError, match="--fixed names unknown"):
+        best_swarm_headings(model, pos, 20.0, pattern_of={"C": "A", "D": "B"}, fixed=["Z"])

@@ -590,8 +590,63 @@ def links(
         from rplearn.plot import plot_swarm
 
         plot_swarm(result, plot_out)
-    out.print(result.summary(), highlight=False)
+    out.print(result.summary(), highlight=False, markup=False)
     out.print(f"wrote {len(result.links):,} predicted links to {output}")
+
+
+@app.command()
+@user_errors
+def headings(
+    model_path: str = typer.Argument(..., metavar="MODEL.json"),
+    pos: list[str] = typer.Option(..., "--pos", help="DRONE=x,y,z: hover position, ENU [m] (repeat for every drone)."),
+    tx_power_dbm: float = typer.Option(..., "--tx-power", help="Transmit power of every drone [dBm]."),
+    yaw: Optional[list[str]] = typer.Option(None, "--yaw", help="DRONE=DEG: current yaw, ENU ccw from east [deg] (default 0)."),
+    fixed: Optional[list[str]] = typer.Option(None, "--fixed", help="Drones that must keep their yaw (repeat or comma-separate)."),
+    pattern: Optional[list[str]] = typer.Option(None, "--as", help="DRONE=NODE: the drone carries the antenna learned as NODE."),
+    frequency_hz: Optional[float] = typer.Option(None, "--frequency", help="Carrier frequency [Hz] (default: the one the model was learned at)."),
+    step_deg: float = typer.Option(5.0, "--step", help="Yaw grid [deg]."),
+    output: Optional[str] = typer.Option(None, "-o", "--out", help="Also write the chosen yaws here (.csv or .json)."),
+) -> None:
+    """Yaws for a hovering swarm that keep it best connected (maximise the bottleneck RSSI).
+
+    Every drone in turn takes the yaw that maximises the weakest link the swarm needs to stay
+    connected, until nothing improves: a local optimum, never worse than the current yaws.
+
+    Example: rplearn headings sh10.json --pos A=0,0,20 --pos B=40,0,20 --pos C=20,30,25 --as C=A --tx-power 20
+    """
+    from rplearn.modelfile import load_model
+    from rplearn.swarm import best_swarm_headings
+
+    positions = {}
+    for drone, text in _pairs(pos, "--pos").items():
+        try:
+            xyz = [float(v) for v in text.split(",")]
+        except ValueError:
+            xyz = []
+        if len(xyz) != 3:
+            raise InputError(f"--pos {drone}: expected x,y,z in metres, got {text!r}")
+        positions[drone] = xyz
+    try:
+        start = {d: float(v) for d, v in _pairs(yaw, "--yaw").items()}
+    except ValueError:
+        raise InputError(f"--yaw: expected DRONE=DEG with a number, got {', '.join(yaw or [])}") from None
+    unknown = sorted(set(start) - set(positions))
+    if unknown:
+        raise InputError(f"--yaw names drone(s) {', '.join(unknown)} without a --pos")
+    result = best_swarm_headings(
+        load_model(model_path), positions, tx_power_dbm, frequency_hz, pattern_of=_pairs(pattern, "--as"),
+        start_yaw_deg=start, fixed=_split_list(fixed) or (), step_deg=step_deg,
+    )
+    out.print(result.summary(), highlight=False, markup=False)
+    if output:
+        table = {"yaw_deg": result.yaw_deg, "bottleneck_dbm": result.bottleneck_dbm, "start_bottleneck_dbm": result.start_bottleneck_dbm}
+        if output.endswith(".json"):
+            _write_json(output, table)
+        else:
+            import pandas as pd
+
+            pd.DataFrame({"drone": list(result.yaw_deg), "yaw_deg": list(result.yaw_deg.values())}).to_csv(output, index=False)
+        out.print(f"wrote {output}")
 
 
 @app.command()

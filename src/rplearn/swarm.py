@@ -263,3 +263,154 @@ def _bottleneck(w: np.ndarray, iu: np.ndarray, ju: np.ndarray, n: int, names: Se
     weights = (np.nanmax(w[known]) + 1.0) - tree.data
     k = int(np.argmin(weights))
     return float(weights[k]), f"{names[tree.row[k]]}-{names[tree.col[k]]}"
+
+
+# -------------------------------------------------------------------------------------------
+# Headings for a hovering swarm
+
+
+@dataclass(frozen=True)
+class SwarmHeadings:
+    """Yaws chosen for level, hovering drones, and the link budget before and after.
+
+    Attributes
+    ----------
+    yaw_deg, start_yaw_deg : dict
+        Chosen and starting yaw of every drone (ENU, counter-clockwise from east) [deg].
+    pair_rssi_dbm, start_pair_rssi_dbm : DataFrame
+        Predicted RSSI of every unordered pair (equal both ways for level drones of equal
+        power: the joint gain is the same sum of the two patterns) [dBm].
+    bottleneck_dbm, start_bottleneck_dbm : float
+        Weakest link of the maximum spanning tree: the swarm is connected at any threshold
+        below it [dBm].
+    """
+
+    yaw_deg: dict[str, float]
+    start_yaw_deg: dict[str, float]
+    pair_rssi_dbm: pd.DataFrame
+    start_pair_rssi_dbm: pd.DataFrame
+    bottleneck_dbm: float
+    start_bottleneck_dbm: float
+    sweeps: int
+
+    def summary(self) -> str:
+        lines = [
+            "drone  yaw now -> best [deg] (ENU, ccw from east)",
+            *(f"  {d}: {self.start_yaw_deg[d]:7.1f} -> {self.yaw_deg[d]:7.1f}" for d in self.yaw_deg),
+            f"bottleneck RSSI: {self.start_bottleneck_dbm:.1f} dBm now -> {self.bottleneck_dbm:.1f} dBm "
+            f"({self.bottleneck_dbm - self.start_bottleneck_dbm:+.1f} dB); the swarm stays connected for any "
+            "threshold below it",
+            "pair RSSI now -> best [dBm]:",
+        ]
+        before = self.start_pair_rssi_dbm.set_index("pair")["rssi_dbm"]
+        for _, row in self.pair_rssi_dbm.iterrows():
+            lines.append(f"  {row['pair']}: {before[row['pair']]:6.1f} -> {row['rssi_dbm']:6.1f}")
+        return "\n".join(lines)
+
+
+def heading_gain_tables(
+    model: PatternSet, positions: Mapping[str, ArrayLike], patterns: Mapping[str, str], yaw_grid_deg: np.ndarray
+) -> dict[tuple[str, str], np.ndarray]:
+    """Gain of drone ``a``'s pattern toward drone ``b`` for every yaw of ``a`` [dBi].
+
+    A level drone sees another at azimuth ``bearing - yaw`` and at a fixed elevation, so its
+    share of the link is a function of its own yaw only.
+    """
+    drones = list(positions)
+    table = {}
+    for a in drones:
+        pa = np.asarray(positions[a], np.float64)
+        for b in drones:
+            if a == b:
+                continue
+            v = np.asarray(positions[b], np.float64) - pa
+            bearing = np.arctan2(v[1], v[0])
+            el = np.arctan2(v[2], np.hypot(v[0], v[1]))
+            az = np.angle(np.exp(1j * (bearing - np.radians(yaw_grid_deg))))
+            table[(a, b)] = model.evaluate(patterns[a], az, np.full(az.size, el))
+    return table
+
+
+def best_swarm_headings(
+    model: PatternSet,
+    positions: Mapping[str, ArrayLike],
+    tx_power_dbm: float,
+    frequency_hz: float | None = None,
+    pattern_of: Mapping[str, str] | None = None,
+    start_yaw_deg: Mapping[str, float] | None = None,
+    fixed: Sequence[str] = (),
+    step_deg: float = 5.0,
+    max_sweeps: int = 20,
+) -> SwarmHeadings:
+    """Yaws of hovering, level drones that maximise the swarm's bottleneck RSSI.
+
+    Coordinate ascent on a yaw grid of ``step_deg``: each drone in turn takes the yaw that
+    maximises the bottleneck (ties broken by the mean pair RSSI) with the others held, until a
+    sweep changes nothing. It finds a local optimum that is never worse than the start; drones
+    in ``fixed`` keep their starting yaw.
+    """
+    if not isinstance(model, PatternSet):
+        raise InputError(f"headings need a pattern model (sh, bg or poly), not {getattr(model, 'label', model)!r}")
+    if not (0 < step_deg <= 90):
+        raise InputError(f"yaw step: expected 0 < step <= 90 deg (rplearn headings --step), got {step_deg}")
+    if frequency_hz is None:
+        frequency_hz = model.training.get("frequency_hz")
+        if frequency_hz is None:
+            raise InputError("the model does not state its frequency; give it (rplearn headings --frequency HZ, or frequency_hz=)")
+    drones = sorted(positions)
+    if len(drones) < 2:
+        raise InputError(f"a swarm needs at least 2 drones, got {', '.join(drones) or 'none'}")
+    patterns = resolve_patterns(drones, model.nodes, pattern_of)
+    unknown = sorted(set(fixed) - set(drones))
+    if unknown:
+        raise InputError(f"--fixed names unknown drone(s) {', '.join(unknown)}; drones: {', '.join(drones)}")
+    grid = np.arange(-180.0, 180.0, step_deg)
+    start = {d: float((start_yaw_deg or {}).get(d, 0.0)) for d in drones}
+    tables = heading_gain_tables(model, {d: positions[d] for d in drones}, patterns, np.concatenate([grid, list(start.values())]))
+    n_grid = grid.size
+    start_index = {d: n_grid + i for i, d in enumerate(drones)}  # the start yaws follow the grid
+    pairs = [(a, b) for i, a in enumerate(drones) for b in drones[i + 1 :]]
+    base = {}
+    for a, b in pairs:
+        dist = float(np.linalg.norm(np.asarray(positions[a], float) - np.asarray(positions[b], float)))
+        base[(a, b)] = tx_power_dbm - float(free_space_path_loss_db(dist, frequency_hz))
+
+    def pair_rssi(choice: Mapping[str, int]) -> np.ndarray:
+        return np.array([base[(a, b)] + tables[(a, b)][choice[a]] + tables[(b, a)][choice[b]] for a, b in pairs])
+
+    iu = np.array([drones.index(a) for a, _ in pairs])
+    ju = np.array([drones.index(b) for _, b in pairs])
+
+    def score(choice: Mapping[str, int]) -> tuple[float, float]:
+        w = pair_rssi(choice)
+        return _bottleneck(w, iu, ju, len(drones), drones)[0], float(np.mean(w))
+
+    choice = dict(start_index)
+    best = score(choice)
+    sweeps = 0
+    for sweeps in range(1, max_sweeps + 1):
+        changed = False
+        for d in drones:
+            if d in fixed:
+                continue
+            for k in range(n_grid):
+                trial = {**choice, d: k}
+                s = score(trial)
+                if s > best:
+                    best, choice, changed = s, trial, True
+        if not changed:
+            break
+
+    def table_of(ch: Mapping[str, int]) -> pd.DataFrame:
+        return pd.DataFrame({"pair": [f"{a}-{b}" for a, b in pairs], "rssi_dbm": pair_rssi(ch)})
+
+    yaw_of = lambda k: float(np.concatenate([grid, list(start.values())])[k])  # noqa: E731
+    return SwarmHeadings(
+        yaw_deg={d: yaw_of(choice[d]) for d in drones},
+        start_yaw_deg=start,
+        pair_rssi_dbm=table_of(choice),
+        start_pair_rssi_dbm=table_of(start_index),
+        bottleneck_dbm=best[0],
+        start_bottleneck_dbm=score(start_index)[0],
+        sweeps=sweeps,
+    )
