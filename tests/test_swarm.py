@@ -79,13 +79,25 @@ def test_times_gaps_and_errors():
     res = predict_swarm(model, gappy, 20.0, pattern_of={"C": "A", "D": "B"}, max_gap_s=2.0)
     c = res.connectivity.set_index("t")
     assert c.loc[15.0, "n_drones"] == 3 and c.loc[5.0, "n_drones"] == 4
-    assert any("D 12" in n for n in res.notes)  # times 9..20 start inside the 9..21 s gap
+    # while D has no pose the swarm's connectivity is unknown: not connected, no bottleneck
+    assert c.loc[15.0, "missing"] == "D" and not c.loc[15.0, "connected"] and np.isnan(c.loc[15.0, "bottleneck_rssi_dbm"])
+    assert c.loc[5.0, "connected"] and "connectivity unknown" in res.summary()
+    # requested times outside every log still get a row
+    outside = predict_swarm(model, poses, 20.0, pattern_of={"C": "A", "D": "B"}, times_s=[5.0, 500.0])
+    assert list(outside.connectivity["t"]) == [5.0, 500.0] and outside.connectivity["n_missing"].iloc[1] == 4
+    # a sparse waypoint plan (one pose every 5 s) is known at its waypoints
+    sparse = poses[poses["t"] % 5 == 0]
+    way = predict_swarm(model, sparse, 20.0, pattern_of={"C": "A", "D": "B"}, times_s=[0.0, 5.0, 10.0])
+    assert (way.connectivity["n_drones"] == 4).all()
+    assert any("D 11" in n for n in res.notes)  # times 10..20 lie inside the 9..21 s gap
     with pytest.raises(InputError, match="drone C has no learned pattern.*--as C=NODE"):
         predict_swarm(model, poses, 20.0)
     with pytest.raises(InputError, match="--as names drone"):
         predict_swarm(model, poses, 20.0, pattern_of={"C": "A", "D": "B", "E": "A"})
-    with pytest.raises(InputError, match="no learned pattern"):
+    with pytest.raises(InputError, match="--as C=Z: Z is not a learned node"):
         predict_swarm(model, poses, 20.0, pattern_of={"C": "Z", "D": "B"})
+    with pytest.raises(InputError, match="--max-gap"):
+        predict_swarm(model, poses, 20.0, pattern_of={"C": "A", "D": "B"}, max_gap_s=-1.0)
     with pytest.raises(InputError, match="at least 2 drones"):
         predict_swarm(model, poses[poses["node"] == "A"], 20.0)
     bare = PatternSet(basis=model.basis, nodes=model.nodes, coef=model.coef)
@@ -96,8 +108,13 @@ def test_times_gaps_and_errors():
     close.loc[close["node"] == "B", "x"] = 0.1
     res = predict_swarm(model, close, 20.0, pattern_of={"C": "A", "D": "B"}, frequency_hz=2.4e9)
     ab = res.links[(res.links["tx"] == "A") & (res.links["rx"] == "B")]
-    assert ab["rssi_pred_dbm"].isna().all() and not ab["up"].any()
+    assert ab["rssi_pred_dbm"].isna().all() and ab["near_field"].all() and ab["up"].all()
     assert any("far field" in n for n in res.notes)
+    # only near-field pairs: every link is up, the bottleneck is unbounded, the summary still works
+    two = close[close["node"].isin(["A", "B"])]
+    only = predict_swarm(model, two, 20.0, frequency_hz=2.4e9)
+    assert only.connectivity["connected"].all() and np.isinf(only.connectivity["bottleneck_rssi_dbm"]).all()
+    assert "connected at" in only.summary()
 
 
 def test_headings_improve_the_bottleneck_and_agree_with_the_links():
@@ -121,3 +138,34 @@ def test_headings_improve_the_bottleneck_and_agree_with_the_links():
     assert two.yaw_deg == {"A": single.tx_yaw_deg, "B": single.rx_yaw_deg}
     with pytest.raises(InputError, match="--fixed names unknown"):
         best_swarm_headings(model, pos, 20.0, pattern_of={"C": "A", "D": "B"}, fixed=["Z"])
+
+
+def test_three_drone_headings_are_the_grid_optimum():
+    """Brute force over every yaw combination on a 30 deg grid, gains from the one-link predictor."""
+    import itertools
+
+    from rplearn.link import received_power_dbm
+    from rplearn.swarm import best_swarm_headings
+
+    rng = np.random.default_rng(7)
+    model = _model(rng)
+    grid = np.arange(-180.0, 180.0, 30.0)
+    ya, yb = np.meshgrid(grid, grid, indexing="ij")
+    for trial in range(5):
+        pos = {d: np.array([*rng.uniform(-40, 40, 2), rng.uniform(15, 30)]) for d in "ABC"}
+        pattern = {"A": "A", "B": "B", "C": "A"}
+        res = best_swarm_headings(model, pos, 20.0, pattern_of={"C": "A"}, step_deg=30.0)
+        table = {}
+        for a, b in (("A", "B"), ("A", "C"), ("B", "C")):
+            qa = quat_wxyz_from_yaw(np.radians(ya.ravel()))
+            qb = quat_wxyz_from_yaw(np.radians(yb.ravel()))
+            n = qa.shape[0]
+            pa, pb = np.tile(pos[a], (n, 1)), np.tile(pos[b], (n, 1))
+            ab = model.predict_for_poses(pattern[a], pattern[b], pa, qa, pb, qb, 20.0, 2.4e9)["rssi_dbm"]
+            ba = model.predict_for_poses(pattern[b], pattern[a], pb, qb, pa, qa, 20.0, 2.4e9)["rssi_dbm"]
+            table[(a, b)] = np.minimum(ab, ba).reshape(grid.size, grid.size)
+        best = -np.inf
+        for i, j, k in itertools.product(range(grid.size), repeat=3):
+            w = sorted([table[("A", "B")][i, j], table[("A", "C")][i, k], table[("B", "C")][j, k]])
+            best = max(best, w[1])  # a triangle's spanning tree: its two strongest edges
+        assert res.bottleneck_dbm == pytest.approx(best, abs=1e-9), trial

@@ -681,14 +681,24 @@ def plot_swarm(prediction: Any, path: str | os.PathLike[str]) -> str:
     ax = fig.add_subplot()
     pairs = links.assign(pair=[f"{min(a, b)}-{max(a, b)}" for a, b in zip(links["tx"], links["rx"])])
     weaker = pairs.groupby(["pair", "t"])["rssi_pred_dbm"].min().reset_index()
-    for name, g in weaker.groupby("pair"):
-        ax.plot(*_break_gaps(g["t"], g["rssi_pred_dbm"]), lw=1.0, label=name)
+    groups = list(weaker.groupby("pair"))
+    many = len(groups) > 10  # beyond that a legend of pairs hides the plot
+    for i, (name, g) in enumerate(groups):
+        if many:
+            ax.plot(*_break_gaps(g["t"], g["rssi_pred_dbm"]), lw=0.6, color="tab:gray", alpha=0.5,
+                    label=f"{len(groups)} pairs" if i == 0 else None)
+        else:
+            ax.plot(*_break_gaps(g["t"], g["rssi_pred_dbm"]), lw=1.0, label=name)
     c = prediction.connectivity
-    ax.plot(*_break_gaps(c["t"], c["bottleneck_rssi_dbm"]), color="black", lw=2.2, label="bottleneck (swarm connected above)")
+    bottleneck = np.where(np.isinf(c["bottleneck_rssi_dbm"]), np.nan, c["bottleneck_rssi_dbm"])
+    ax.plot(*_break_gaps(c["t"], bottleneck), color="black", lw=2.2, label="bottleneck (connected for thresholds below it)")
     ax.axhline(prediction.min_rssi_dbm, color="tab:red", ls="--", lw=1.2, label=f"threshold {prediction.min_rssi_dbm:g} dBm")
-    down = c.loc[~c["connected"], "t"]
+    down = c.loc[~c["connected"] & (c["n_missing"] == 0), "t"]
     if len(down):
         ax.plot(down, np.full(len(down), ax.get_ylim()[0]), "|", color="tab:red", ms=10, label="disconnected")
+    unknown = c.loc[c["n_missing"] > 0, "t"]
+    if len(unknown):
+        ax.plot(unknown, np.full(len(unknown), ax.get_ylim()[0]), "|", color="tab:orange", ms=10, label="a drone without pose")
     ax.set_xlabel("time [s]")
     ax.set_ylabel("predicted RSSI, weaker direction [dBm]")
     ax.set_title("Swarm links predicted from the learned patterns")
@@ -697,6 +707,6 @@ def plot_swarm(prediction: Any, path: str | os.PathLike[str]) -> str:
     caption = (
         "Predicted received power of every pair of drones (the weaker of its two directions), the RSSI"
         " threshold a link needs, and the bottleneck: the swarm is connected whenever the black line is"
-        " above the red one."
+        " above the red one (marks at the bottom: disconnected, or a drone without a pose)."
     )
     return save_figure(fig, path, caption)

@@ -53,9 +53,10 @@ class SwarmPrediction:
         covariance, ``gain_pred_std_db, rssi_pred_std_db`` [dB]; ``up`` is
         ``rssi_pred_dbm >= min_rssi_dbm``. Pairs closer than the far field have NaN RSSI.
     connectivity : DataFrame
-        One row per time: ``t, n_drones, n_pairs_up`` (unordered pairs up both ways),
-        ``n_components``, ``connected``, ``bottleneck_rssi_dbm`` (see module docstring) and
-        ``bottleneck_pair``.
+        One row per time: ``t, n_drones`` (with a pose), ``n_missing, missing``,
+        ``n_pairs_up`` (unordered pairs up both ways), ``n_components``, ``connected``,
+        ``bottleneck_rssi_dbm`` (see module docstring) and ``bottleneck_pair``
+        (see :func:`connectivity_over_time`).
     """
 
     links: pd.DataFrame
@@ -77,17 +78,20 @@ class SwarmPrediction:
             f">= {self.min_rssi_dbm:g} dBm both ways",
             f"connected at {int(c['connected'].sum()):,} of {len(c):,} time(s) ({100.0 * c['connected'].mean():.1f} %)",
         ]
-        finite = c["bottleneck_rssi_dbm"].notna()
+        finite = np.isfinite(c["bottleneck_rssi_dbm"].to_numpy(np.float64))
         if finite.any():
             worst = c.loc[c.loc[finite, "bottleneck_rssi_dbm"].idxmin()]
             lines.append(
                 f"weakest moment: t = {worst['t']:.1f} s, bottleneck {worst['bottleneck_rssi_dbm']:.1f} dBm "
                 f"on {worst['bottleneck_pair']}"
             )
-        if len(self.links):
-            per_pair = self.links.groupby(["tx", "rx"])["rssi_pred_dbm"].median()
+        per_pair = self.links.groupby(["tx", "rx"])["rssi_pred_dbm"].median().dropna()
+        if len(per_pair):
             weakest = per_pair.idxmin()
             lines.append(f"weakest direction (median): {weakest[0]} -> {weakest[1]} at {per_pair.min():.1f} dBm")
+        incomplete = int((c["n_missing"] > 0).sum())
+        if incomplete:
+            lines.append(f"at {incomplete:,} time(s) a drone has no pose: connectivity unknown there (counted as not connected)")
         lines.extend(self.notes)
         return "\n".join(lines)
 
@@ -121,6 +125,8 @@ def resolve_patterns(drones: Sequence[str], model_nodes: Sequence[str], pattern_
     out = {}
     for d in drones:
         p = mapping.get(d, d)
+        if d in mapping and p not in model_nodes:
+            raise InputError(f"--as {d}={p}: {p} is not a learned node; the model has {', '.join(model_nodes)}")
         if p not in model_nodes:
             raise InputError(
                 f"drone {d} has no learned pattern (the model has {', '.join(model_nodes)}); "
@@ -167,6 +173,8 @@ def predict_swarm(
         raise InputError(f"swarm links need a pattern model (sh, bg or poly), not {getattr(model, 'label', model)!r}")
     if not np.isfinite(tx_power_dbm):
         raise InputError("tx power: expected a finite number of dBm (rplearn links --tx-power)")
+    if not (np.isfinite(max_gap_s) and max_gap_s > 0):
+        raise InputError(f"max gap: expected a positive number of seconds (rplearn links --max-gap), got {max_gap_s!r}")
     if frequency_hz is None:
         frequency_hz = model.training.get("frequency_hz")
         if frequency_hz is None:
@@ -212,57 +220,84 @@ def predict_swarm(
                 part["rssi_pred_std_db"] = np.sqrt(std**2 + residual_db**2)
             parts.append(pd.DataFrame(part))
     if not parts:
-        raise InputError(f"{source}: no time at which two drones both have a pose; check the logs' spans and gaps")
+        raise InputError(
+            f"{source}: no time at which two drones both have a pose; check the logs' spans, or allow longer "
+            f"gaps between pose rows (rplearn links --max-gap, now {max_gap_s:g} s)"
+        )
     links = pd.concat(parts, ignore_index=True).sort_values(["t", "tx", "rx"], kind="stable", ignore_index=True)
-    links["up"] = links["rssi_pred_dbm"] >= min_rssi_dbm
+    links["near_field"] = links["distance_m"] <= limit_m
+    links["up"] = (links["rssi_pred_dbm"] >= min_rssi_dbm) | links["near_field"]
     notes = []
     if too_close:
-        notes.append(f"note: {too_close:,} pair-time(s) closer than the far field ({limit_m:.3f} m) have no prediction")
+        notes.append(
+            f"note: {too_close:,} pair-time(s) closer than the far field ({limit_m:.3f} m): no RSSI predicted, "
+            "counted as up (near_field)"
+        )
     absent = {d: int(np.sum(poses[d][2] != 0)) for d in drones}
     if any(absent.values()):
         notes.append("note: drone(s) without a pose at some times (outside their log or in a gap): "
                      + ", ".join(f"{d} {n}" for d, n in absent.items() if n))
-    connectivity = connectivity_over_time(links, t, min_rssi_dbm)
+    connectivity = connectivity_over_time(links, t, drones, min_rssi_dbm)
     return SwarmPrediction(links, connectivity, patterns, float(min_rssi_dbm), float(tx_power_dbm), frequency_hz, notes)
 
 
-def connectivity_over_time(links: pd.DataFrame, times_s: np.ndarray, min_rssi_dbm: float) -> pd.DataFrame:
-    """Per time: drones present, pairs up both ways, components, bottleneck (module docstring)."""
+def connectivity_over_time(
+    links: pd.DataFrame, times_s: np.ndarray, drones: Sequence[str], min_rssi_dbm: float
+) -> pd.DataFrame:
+    """Per time: drones with a pose, pairs up both ways, groups, bottleneck (module docstring).
+
+    A row for every time. The swarm is ``connected`` only when every drone has a pose and the
+    pairs up both ways join them all; ``bottleneck_rssi_dbm`` is NaN when a drone is missing
+    (connectivity unknown) and +inf when every needed link is closer than the far field.
+    """
+    index = {d: i for i, d in enumerate(drones)}
+    n = len(drones)
+    iu, ju = np.triu_indices(n, 1)
+    t_links = links["t"].to_numpy()
+    tx = links["tx"].map(index).to_numpy()
+    rx = links["rx"].map(index).to_numpy()
+    rssi_all = links["rssi_pred_dbm"].to_numpy(np.float64)
+    near_all = links["near_field"].to_numpy(bool)
+    starts = np.searchsorted(t_links, times_s, side="left")
+    stops = np.searchsorted(t_links, times_s, side="right")
     rows = []
-    for t_val, at in links.groupby("t", sort=True):
-        present = sorted(set(at["tx"]) | set(at["rx"]))
-        index = {d: i for i, d in enumerate(present)}
-        n = len(present)
+    for t_val, lo, hi in zip(times_s, starts, stops):
         rssi = np.full((n, n), np.nan)
-        rssi[at["tx"].map(index).to_numpy(), at["rx"].map(index).to_numpy()] = at["rssi_pred_dbm"].to_numpy()
-        both = np.fmin(rssi, rssi.T)  # weight of a pair: its weaker direction (NaN if either unknown)
-        both[np.isnan(rssi) | np.isnan(rssi.T)] = np.nan
-        iu, ju = np.triu_indices(n, 1)
-        w = both[iu, ju]
+        rssi[tx[lo:hi], rx[lo:hi]] = np.where(near_all[lo:hi], np.inf, rssi_all[lo:hi])
+        present = np.zeros(n, bool)
+        present[tx[lo:hi]] = True
+        present[rx[lo:hi]] = True
+        w = np.fmin(rssi, rssi.T)[iu, ju]  # a pair's weight: its weaker direction
         up = w >= min_rssi_dbm
-        n_up_components = connected_components(csr_matrix((np.ones(int(up.sum())), (iu[up], ju[up])), shape=(n, n)), directed=False)[0]
-        bottleneck, pair = _bottleneck(w, iu, ju, n, present)
+        n_groups = connected_components(csr_matrix((np.ones(int(up.sum())), (iu[up], ju[up])), shape=(n, n)), directed=False)[0]
+        missing = [d for d, p in zip(drones, present) if not p]
+        bottleneck, pair = (float("nan"), "") if missing else _bottleneck(w, iu, ju, n, drones)
         rows.append({
-            "t": float(t_val), "n_drones": n, "n_pairs_up": int(up.sum()), "n_components": int(n_up_components),
-            "connected": bool(n_up_components == 1), "bottleneck_rssi_dbm": bottleneck, "bottleneck_pair": pair,
+            "t": float(t_val), "n_drones": int(present.sum()), "n_missing": len(missing), "missing": ",".join(missing),
+            "n_pairs_up": int(up.sum()), "n_components": int(n_groups - len(missing)),
+            "connected": bool(not missing and n_groups == 1), "bottleneck_rssi_dbm": bottleneck, "bottleneck_pair": pair,
         })
     return pd.DataFrame(rows)
 
 
 def _bottleneck(w: np.ndarray, iu: np.ndarray, ju: np.ndarray, n: int, names: Sequence[str]) -> tuple[float, str]:
     """Weakest link of the maximum spanning tree of pair weights ``w`` (NaN: not spannable)."""
-    known = np.isfinite(w)
+    known = ~np.isnan(w)
     if n < 2 or not known.any():
         return float("nan"), ""
+    finite = np.isfinite(w) & known
+    top = float(np.max(w[finite])) if finite.any() else 0.0
+    w_eff = np.where(np.isinf(w), top + 1e6, w)[known]  # near-field pairs: stronger than any
     # scipy finds minimum trees of positive weights: map the largest RSSI to the smallest cost
-    cost = (np.nanmax(w[known]) + 1.0) - w[known]
+    cost = (top + 1e6 + 1.0) - w_eff
     graph = csr_matrix((cost, (iu[known], ju[known])), shape=(n, n))
     if connected_components(graph, directed=False)[0] != 1:
         return float("nan"), ""
     tree = minimum_spanning_tree(graph).tocoo()
-    weights = (np.nanmax(w[known]) + 1.0) - tree.data
+    weights = (top + 1e6 + 1.0) - tree.data
     k = int(np.argmin(weights))
-    return float(weights[k]), f"{names[tree.row[k]]}-{names[tree.col[k]]}"
+    value = float("inf") if weights[k] >= top + 1e6 - 0.5 else float(weights[k])
+    return value, f"{names[tree.row[k]]}-{names[tree.col[k]]}"
 
 
 # -------------------------------------------------------------------------------------------
@@ -341,13 +376,16 @@ def best_swarm_headings(
     fixed: Sequence[str] = (),
     step_deg: float = 5.0,
     max_sweeps: int = 20,
+    restarts: int = 8,
 ) -> SwarmHeadings:
     """Yaws of hovering, level drones that maximise the swarm's bottleneck RSSI.
 
-    Coordinate ascent on a yaw grid of ``step_deg``: each drone in turn takes the yaw that
-    maximises the bottleneck (ties broken by the mean pair RSSI) with the others held, until a
-    sweep changes nothing. It finds a local optimum that is never worse than the start; drones
-    in ``fixed`` keep their starting yaw.
+    On a yaw grid of ``step_deg``, maximising the bottleneck and, among equal bottlenecks, the
+    mean pair RSSI. Up to three drones the search is exhaustive (the global optimum on the
+    grid). Beyond, coordinate ascent (each drone in turn takes its best yaw with the others
+    held, until a sweep changes nothing) from the current yaws and from ``restarts`` seeded
+    random ones: a local optimum, never worse than the current yaws. Drones in ``fixed``
+    keep their starting yaw.
     """
     if not isinstance(model, PatternSet):
         raise InputError(f"headings need a pattern model (sh, bg or poly), not {getattr(model, 'label', model)!r}")
@@ -360,6 +398,13 @@ def best_swarm_headings(
     drones = sorted(positions)
     if len(drones) < 2:
         raise InputError(f"a swarm needs at least 2 drones, got {', '.join(drones) or 'none'}")
+    if not np.isfinite(tx_power_dbm):
+        raise InputError("tx power: expected a finite number of dBm (rplearn headings --tx-power)")
+    for d in drones:
+        if np.asarray(positions[d], np.float64).shape != (3,) or not np.all(np.isfinite(np.asarray(positions[d], np.float64))):
+            raise InputError(f"position of {d}: expected three finite numbers x,y,z in metres (rplearn headings --pos)")
+        if not np.isfinite(float((start_yaw_deg or {}).get(d, 0.0))):
+            raise InputError(f"yaw of {d}: expected a finite number of degrees (rplearn headings --yaw)")
     patterns = resolve_patterns(drones, model.nodes, pattern_of)
     unknown = sorted(set(fixed) - set(drones))
     if unknown:
@@ -385,21 +430,23 @@ def best_swarm_headings(
         w = pair_rssi(choice)
         return _bottleneck(w, iu, ju, len(drones), drones)[0], float(np.mean(w))
 
-    choice = dict(start_index)
-    best = score(choice)
-    sweeps = 0
-    for sweeps in range(1, max_sweeps + 1):
-        changed = False
-        for d in drones:
-            if d in fixed:
-                continue
-            for k in range(n_grid):
-                trial = {**choice, d: k}
-                s = score(trial)
-                if s > best:
-                    best, choice, changed = s, trial, True
-        if not changed:
-            break
+    free = [d for d in drones if d not in fixed]
+    if len(drones) <= 3:  # exact: a triangle's spanning tree is its two strongest edges
+        choice, best = _exhaustive_three(drones, free, start_index, n_grid, pairs, base, tables)
+        sweeps = 0
+    else:  # coordinate ascent from the current yaws, then from seeded random yaws
+        rng = np.random.default_rng(0)
+        starts = [dict(start_index)] + [
+            {d: (int(rng.integers(n_grid)) if d in free else start_index[d]) for d in drones} for _ in range(restarts)
+        ]
+        best, choice, sweeps = (-np.inf, -np.inf), dict(start_index), 0
+        for first in starts:
+            found, s_found, n_sweeps = _coordinate_ascent(first, free, n_grid, score, max_sweeps)
+            sweeps += n_sweeps
+            if s_found > best:
+                best, choice = s_found, found
+        if score(start_index) > best:  # never worse than the current yaws
+            best, choice = score(start_index), dict(start_index)
 
     def table_of(ch: Mapping[str, int]) -> pd.DataFrame:
         return pd.DataFrame({"pair": [f"{a}-{b}" for a, b in pairs], "rssi_dbm": pair_rssi(ch)})
@@ -414,3 +461,49 @@ def best_swarm_headings(
         start_bottleneck_dbm=score(start_index)[0],
         sweeps=sweeps,
     )
+
+
+def _coordinate_ascent(
+    choice: dict[str, int], free: Sequence[str], n_grid: int, score: Any, max_sweeps: int
+) -> tuple[dict[str, int], tuple[float, float], int]:
+    """Each free drone in turn takes its best grid yaw, until a sweep changes nothing."""
+    best = score(choice)
+    sweeps = 0
+    for sweeps in range(1, max_sweeps + 1):
+        changed = False
+        for d in free:
+            for k in range(n_grid):
+                trial = {**choice, d: k}
+                s = score(trial)
+                if s > best:
+                    best, choice, changed = s, trial, True
+        if not changed:
+            break
+    return choice, best, sweeps
+
+
+def _exhaustive_three(
+    drones: Sequence[str],
+    free: Sequence[str],
+    start_index: Mapping[str, int],
+    n_grid: int,
+    pairs: Sequence[tuple[str, str]],
+    base: Mapping[tuple[str, str], float],
+    tables: Mapping[tuple[str, str], np.ndarray],
+) -> tuple[dict[str, int], tuple[float, float]]:
+    """Best grid yaws of two or three drones by trying every combination (vectorised).
+
+    The bottleneck of two drones is their one pair; of three, the second strongest pair.
+    """
+    axes = [np.arange(n_grid) if d in free else np.array([start_index[d]]) for d in drones]
+    grids = np.meshgrid(*axes, indexing="ij")
+    idx = {d: g for d, g in zip(drones, grids)}
+    w = np.stack([base[(a, b)] + tables[(a, b)][idx[a]] + tables[(b, a)][idx[b]] for a, b in pairs])
+    bottleneck = w[0] if len(pairs) == 1 else np.sort(w, axis=0)[-2]
+    mean = w.mean(axis=0)
+    top = bottleneck.max()
+    candidates = bottleneck >= top  # exact ties, then the best mean among them
+    flat = int(np.argmax(np.where(candidates, mean, -np.inf)))
+    pos = np.unravel_index(flat, bottleneck.shape)
+    choice = {d: int(idx[d][pos]) for d in drones}
+    return choice, (float(top), float(mean[pos]))

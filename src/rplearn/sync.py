@@ -217,7 +217,8 @@ class PoseTrack:
         t1 = tk[i + 1]
         dt = t1 - t0
         status = np.zeros(n, np.int8)
-        status[dt > max_gap_s] = _POSE_GAP
+        on_sample = (t_s == t0) | (t_s == t1)  # a logged pose is known even at a gap's edge
+        status[(dt > max_gap_s) & ~on_sample] = _POSE_GAP
         status[(t_s < tk[0]) | (t_s > tk[-1]) | ~np.isfinite(t_s)] = _OUT_OF_SPAN
         frac = np.clip((t_s - t0) / dt, 0.0, 1.0)
         p0 = self.position_xyz[i]
