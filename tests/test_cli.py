@@ -98,12 +98,13 @@ USER_ERRORS = {
     "sentinel rssi in a dataset": (["fit", "sentinel.csv", "-o", "x.json"], "sentinel"),
     "unreadable log": (["inspect", "trunc.parquet"], "could not be read"),
     "plan over a limit": (["trajectory", "-o", "plan", "--max-flight-time", "100", "--check-model", "none"], "above the limit 100 s"),
-    "option of another model": (["fit", "data.parquet", "--model", "knn", "--ridge", "5", "-o", "k.json"], "--ridge do(es) not apply to NN-400"),
+    "option of another model": (["fit", "data.parquet", "--model", "knn", "--ridge", "5", "-o", "k.json"], "--ridge: not used by NN-400"),
     "degree of a mean": (["fit", "data.parquet", "--model", "mean", "--degree", "7", "-o", "m7.json"], "--degree"),
-    "BG option on SH": (["fit", "data.parquet", "--model", "sh", "--sigma", "3", "-o", "s.json"], "only apply to BG"),
+    "BG option on SH": (["fit", "data.parquet", "--model", "sh", "--sigma", "3", "-o", "s.json"], "used by BG models only"),
     "gauge level without node": (["fit", "data.parquet", "--gauge-dbi", "2", "-o", "g.json"], "--gauge-dbi needs --gauge-node"),
     "contradicting degree": (["fit", "data.parquet", "--model", "sh-10", "--degree", "5", "-o", "c.json"], "contradicts"),
     "bad model in a report": (["report", "data.parquet", "--models", "m,foo", "-o", "rep_bad"], "unknown model"),
+    "conflicting repeated option": (["headings", "sh3.json", "--pos", "A=0,0,20", "--pos", "A=5,0,20", "--tx-power", "20"], "given twice"),
 }
 
 
@@ -295,4 +296,20 @@ def test_headings_through_the_cli(workdir):
     assert sorted(yaws["drone"]) == ["A", "B", "C"] and yaws["yaw_deg"].between(-180, 180).all()
     bad = run(["headings", "sh3.json", "--pos", "A=0,0", "--tx-power", "20"], d, ok=False)
     assert bad.returncode == 1 and "x,y,z" in bad.stderr
+
+
+def test_a_plan_is_a_pose_log_for_links_and_sync_reports_reader_drops(workdir):
+    d = workdir
+    run(["trajectory", "-o", "plan", "--check-model", "none"], d)
+    proc = run(
+        ["links", "sh3.json", "plan/test_36_A.csv", "plan/test_36_B.csv", "--node", "plan/test_36_A.csv=A",
+         "--node", "plan/test_36_B.csv=B", "--tx-power", "20", "-o", "plan_links.csv"],
+        d,
+    )
+    assert "level flight (roll = pitch = 0) is assumed" in proc.stdout and "connected at" in proc.stdout
+    poses = pd.read_parquet(d / "flight" / "pose_log.parquet")
+    poses.loc[[3, 10, 11], "x"] = np.nan
+    poses.to_csv(d / "pose_nan.csv", index=False)
+    sync = run(["sync", "--poses", "pose_nan.csv", "--signals", "flight/signal_log.parquet", "--nan-policy", "drop", "-o", "nan_sync.parquet"], d)
+    assert "dropped 3 pose row(s) (nan_pose)" in sync.stdout
 

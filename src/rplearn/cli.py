@@ -95,9 +95,16 @@ def _pairs(values: Optional[list[str]], what: str) -> dict[str, str]:
     for v in values or []:
         if "=" not in v:
             raise InputError(f"{what}: expected KEY=VALUE, got {v!r}")
-        k, val = v.split("=", 1)
-        outp[k.strip()] = val.strip()
+        k, val = (part.strip() for part in v.split("=", 1))
+        if k in outp and outp[k] != val:
+            raise InputError(f"{what}: {k} is given twice, as {outp[k]} and as {val}")
+        outp[k] = val
     return outp
+
+
+def _is_test_unit(unit: str) -> bool:
+    """Units labelled test... (any case) are held out for testing by default."""
+    return str(unit).lower().startswith("test")
 
 
 def _reader_options(
@@ -312,7 +319,8 @@ def sync(
     opts = {"tx_power_dbm": tx_power_dbm, "frequency_hz": frequency_hz, **_reader_options(
         node, receiver, address, pose_topic, rssi_topic, rssi_field, msg_definition,
         nan_policy=nan_policy, allow_unsorted=allow_unsorted, require_valid=require_valid)}
-    pose_logs, _ = read_logs(poses, **opts)
+    pose_logs, pose_meta = read_logs(poses, **opts)
+    _print_reader_drops(pose_meta)
     signal_logs, _ = read_logs(signals, **opts)
     if pose_logs.pose is None:
         raise InputError(f"{', '.join(poses)}: no pose log found")
@@ -329,6 +337,16 @@ def sync(
     out.print(f"wrote {len(result.dataset):,} matched samples to {output}")
 
 
+def _print_reader_drops(meta: dict[str, Any]) -> None:
+    """Say what the readers dropped or assumed, file by file."""
+    for f in meta.get("files", []):
+        for reason, count in (f.get("dropped") or {}).items():
+            if count:
+                out.print(f"{f.get('source', 'log')}: dropped {count:,} pose row(s) ({reason})", highlight=False, markup=False)
+        if f.get("level_assumed"):
+            out.print(f"{f.get('source', 'log')}: yaw only, so level flight (roll = pitch = 0) is assumed", highlight=False, markup=False)
+
+
 def _dataset(path: str, require_rssi: bool = True):
     from rplearn.datasets import read_table, validate_matched
 
@@ -342,7 +360,7 @@ def _dataset_units(df: Any) -> list[str]:
 def _default_learning_units(df: Any, dataset: str) -> list[str] | None:
     """All units but those labelled ``test...`` (None: every row), and say which were used."""
     units = _dataset_units(df)
-    learn = [u for u in units if not u.startswith("test")]
+    learn = [u for u in units if not _is_test_unit(u)]
     if not units:
         return None
     if not learn:
@@ -411,11 +429,11 @@ def _check_fit_options(
         if spec.kind == "mean" and degree is not None:
             unused.append("--degree")
         if unused:
-            raise InputError(f"{', '.join(unused)} do(es) not apply to {spec.label}, a baseline without patterns")
+            raise InputError(f"{', '.join(unused)}: not used by {spec.label}, a baseline without patterns")
     elif spec.kind != "bg":
         unused = [k for k in ("--sigma", "--grid") if given[k] is not None]
         if unused:
-            raise InputError(f"{', '.join(unused)} only apply to BG models, not {spec.label}")
+            raise InputError(f"{', '.join(unused)}: used by BG models only, not by {spec.label}")
     if gauge_dbi is not None and gauge_node is None:
         raise InputError("--gauge-dbi needs --gauge-node (which node's mean gain it fixes)")
     if degree is not None and spec.order is not None and int(degree) != spec.order:
@@ -460,6 +478,13 @@ def _evaluation_units(df: Any, units: list[str] | None, models: list[Any], datas
     when a score would be a training score."""
     trained = sorted({str(u) for m in models for u in (getattr(m, "provenance", {}).get("parameters", {}).get("units") or [])})
     available = _dataset_units(df)
+    if not available:
+        sources = {str(getattr(m, "provenance", {}).get("parameters", {}).get("dataset")) for m in models}
+        if os.path.basename(dataset) in {os.path.basename(p) for p in sources}:
+            console.print(
+                f"warning: {dataset} has no unit column and a model learned from a file of this name: "
+                "these are probably training scores", highlight=False,
+            )
     if units is None and trained and available:
         unseen = [u for u in available if u not in trained]
         if unseen:
@@ -553,6 +578,8 @@ def links(
     plot_out: Optional[str] = typer.Option(None, "--plot", help="Also plot RSSI, threshold and bottleneck over time here (.png)."),
     node: Optional[list[str]] = typer.Option(None, "--node", help="FILE=NODE for ULogs and one-node tables."),
     pose_topic: Optional[list[str]] = typer.Option(None, "--pose-topic", help="TOPIC=NODE: pose topics of ROS bags."),
+    nan_policy: str = typer.Option("error", "--nan-policy", help="Pose rows with NaN or non-numeric values: error (default) or drop (counted)."),
+    allow_unsorted: bool = typer.Option(False, "--allow-unsorted", help="Accept pose tables whose times go backwards within a node (the rows are sorted)."),
 ) -> None:
     """Predict every link of a swarm over time and whether it stays connected.
 
@@ -570,9 +597,12 @@ def links(
     from rplearn.swarm import predict_swarm
 
     model = load_model(model_path)
-    logs, _ = read_logs(poses, **_reader_options(node, None, None, pose_topic))
+    logs, meta = read_logs(poses, **_reader_options(node, None, None, pose_topic, nan_policy=nan_policy, allow_unsorted=allow_unsorted))
     if logs.pose is None:
         raise InputError(f"{', '.join(poses)}: no pose log found")
+    _print_reader_drops(meta)
+    if frequency_hz is not None:
+        _warn_frequency_mismatch(model, [frequency_hz], model_path, "--frequency")
     times = None
     if at:
         try:
@@ -684,7 +714,7 @@ def sweep(
     if "unit" not in df.columns:
         raise InputError(f"{dataset}: a sweep needs a 'unit' column to split learning from testing samples")
     all_units = sorted(df["unit"].astype(str).unique())
-    test = _split_list(test_units) or [u for u in all_units if u.startswith("test")]
+    test = _split_list(test_units) or [u for u in all_units if _is_test_unit(u)]
     learn = _split_list(learn_units) or [u for u in all_units if u not in test]
     if not test or not learn:
         raise InputError(f"{dataset}: cannot split units {', '.join(all_units)} into learning and testing; use --learn-units/--test-units")
@@ -851,7 +881,7 @@ def report(
     if "unit" not in df.columns:
         raise InputError(f"{dataset}: a report needs a 'unit' column to split learning from testing samples")
     all_units = sorted(df["unit"].astype(str).unique())
-    test = _split_list(test_units) or [u for u in all_units if u.startswith("test")]
+    test = _split_list(test_units) or [u for u in all_units if _is_test_unit(u)]
     learn = [u for u in all_units if u not in test]
     if not test or not learn:
         raise InputError(f"{dataset}: cannot split units {', '.join(all_units)}; use --test-units")

@@ -43,7 +43,7 @@ def test_sync_reads_rssi_topics_of_a_bag(tmp_path, flight):
     assert set(zip(got["tx"], got["rx"])) == {("A", "B")}
     assert 0.8 * ((want["tx"] == "A") & (want["rx"] == "B")).sum() < len(got)
     assert "matched" in proc.stdout
-    bad = run(args[:-2] + ["--rssi-topic", "/A/rssi=B"], tmp_path, ok=False)
+    bad = run(args[:-2] + ["--rssi-topic", "/Z/rssi=B"], tmp_path, ok=False)
     assert "--rssi-topic: expected TOPIC=TX:RX" in _error(bad)
 
 

@@ -93,6 +93,16 @@ def _float_column(df: pd.DataFrame, name: str) -> np.ndarray:
     return pd.to_numeric(df[name], errors="coerce").to_numpy(np.float64, na_value=np.nan)
 
 
+def _level_if_yaw_only(df: pd.DataFrame) -> pd.DataFrame | None:
+    """The table with zero roll and pitch added when it gives a yaw but no roll, pitch or quaternion."""
+    if _has(df, ("qw", "qx", "qy", "qz")):
+        return None
+    for yaw, roll, pitch in (("yaw_deg", "roll_deg", "pitch_deg"), ("yaw_ned_deg", "roll_ned_deg", "pitch_ned_deg")):
+        if yaw in df.columns and roll not in df.columns and pitch not in df.columns:
+            return df.assign(**{roll: 0.0, pitch: 0.0})
+    return None
+
+
 def _has(df: pd.DataFrame, names: tuple[str, ...]) -> bool:
     return all(n in df.columns for n in names)
 
@@ -173,6 +183,9 @@ def canonical_pose(
         meta["position"] = "geodetic"
     else:
         raise InputError(f"{source}: missing position columns: expected x, y, z (ENU m) or lat, lon, alt")
+    level = _level_if_yaw_only(df)
+    if level is not None:  # plans (rplearn trajectory) give yaw only: level flight is meant
+        df, meta["level_assumed"] = level, True
     if _has(df, ("qw", "qx", "qy", "qz")):
         att_cols: tuple[str, ...] = ("qw", "qx", "qy", "qz")
         meta["attitude"] = "quaternion"
