@@ -104,6 +104,7 @@ USER_ERRORS = {
     "gauge level without node": (["fit", "data.parquet", "--gauge-dbi", "2", "-o", "g.json"], "--gauge-dbi needs --gauge-node"),
     "contradicting degree": (["fit", "data.parquet", "--model", "sh-10", "--degree", "5", "-o", "c.json"], "contradicts"),
     "bad model in a report": (["report", "data.parquet", "--models", "m,foo", "-o", "rep_bad"], "unknown model"),
+    "unknown table format": (["predict", "sh3.json", "data.parquet", "-o", "pred.txt"], "unknown table format"),
     "conflicting repeated option": (["headings", "sh3.json", "--pos", "A=0,0,20", "--pos", "A=5,0,20", "--tx-power", "20"], "given twice"),
 }
 

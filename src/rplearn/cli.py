@@ -312,9 +312,11 @@ def sync(
 
     Example: rplearn sync --poses flight/pose_log.parquet --signals flight/signal_log.parquet --link A:B -o data.parquet
     """
-    from rplearn.datasets import write_table
+    from rplearn.datasets import check_table_path, write_table
     from rplearn.io import read_logs
     from rplearn.sync import synchronise
+
+    check_table_path(output)
 
     opts = {"tx_power_dbm": tx_power_dbm, "frequency_hz": frequency_hz, **_reader_options(
         node, receiver, address, pose_topic, rssi_topic, rssi_field, msg_definition,
@@ -519,10 +521,11 @@ def predict(
     """
     import numpy as np
 
-    from rplearn.datasets import link_samples, write_table
+    from rplearn.datasets import check_table_path, link_samples, write_table
     from rplearn.link import received_power_dbm
     from rplearn.modelfile import load_model
 
+    check_table_path(output)
     model = load_model(model_path)
     df = _dataset(dataset, require_rssi=False)
     samples = link_samples(df, dataset, require_rssi=False)
@@ -591,10 +594,14 @@ def links(
 
     Example: rplearn links sh10.json plan_poses.csv --tx-power 20 --as C=A --as D=B --plot links.png -o links.csv
     """
-    from rplearn.datasets import write_table
+    from rplearn.datasets import check_table_path, write_table
     from rplearn.io import read_logs
     from rplearn.modelfile import load_model
     from rplearn.swarm import predict_swarm
+
+    for path in (output, connectivity_out):
+        if path:
+            check_table_path(path)
 
     model = load_model(model_path)
     logs, meta = read_logs(poses, **_reader_options(node, None, None, pose_topic, nan_policy=nan_policy, allow_unsorted=allow_unsorted))

@@ -217,11 +217,24 @@ def read_table(path: str, source: str | None = None) -> pd.DataFrame:
 
 
 def write_table(df: pd.DataFrame, path: str) -> None:
-    """Write a table as Parquet (``.parquet``) or CSV (anything else)."""
-    if str(path).lower().endswith((".parquet", ".pq")):
+    """Write a table as Parquet (``.parquet``, ``.pq``) or CSV (``.csv``, ``.csv.gz``).
+
+    Any other extension is refused rather than guessed.
+    """
+    if check_table_path(path) == "parquet":
         df.to_parquet(path, index=False)
     else:
         df.to_csv(path, index=False)
+
+
+def check_table_path(path: str) -> str:
+    """``"parquet"`` or ``"csv"`` from a table's file name; any other extension is refused."""
+    name = str(path).lower()
+    if name.endswith((".parquet", ".pq")):
+        return "parquet"
+    if name.endswith((".csv", ".csv.gz")):
+        return "csv"
+    raise InputError(f"{path}: unknown table format; name it .csv, .csv.gz, .parquet or .pq")
 
 
 @dataclass(frozen=True)
