@@ -208,7 +208,8 @@ def predict_swarm(
             rssi = np.full(d.size, np.nan)
             rssi[far] = tx_power_dbm + gain[far] - free_space_path_loss_db(d[far], frequency_hz)
             part = {
-                "t": t[ok], "tx": a, "rx": b, "tx_pattern": patterns[a], "rx_pattern": patterns[b],
+                "t": t[ok], "tx": np.full(d.size, a, object), "rx": np.full(d.size, b, object),
+                "tx_pattern": np.full(d.size, patterns[a], object), "rx_pattern": np.full(d.size, patterns[b], object),
                 "distance_m": d, "gain_pred_db": gain, "rssi_pred_dbm": rssi,
             }
             if model.covariance is not None:
@@ -218,13 +219,14 @@ def predict_swarm(
                 std = model.predict_samples_std(samples)
                 part["gain_pred_std_db"] = std
                 part["rssi_pred_std_db"] = np.sqrt(std**2 + residual_db**2)
-            parts.append(pd.DataFrame(part))
+            parts.append(part)
     if not parts:
         raise InputError(
             f"{source}: no time at which two drones both have a pose; check the logs' spans, or allow longer "
             f"gaps between pose rows (rplearn links --max-gap, now {max_gap_s:g} s)"
         )
-    links = pd.concat(parts, ignore_index=True).sort_values(["t", "tx", "rx"], kind="stable", ignore_index=True)
+    columns = {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}  # one frame, not one per pair
+    links = pd.DataFrame(columns).sort_values(["t", "tx", "rx"], kind="stable", ignore_index=True)
     links["near_field"] = links["distance_m"] <= limit_m
     links["up"] = (links["rssi_pred_dbm"] >= min_rssi_dbm) | links["near_field"]
     notes = []
@@ -250,12 +252,11 @@ def connectivity_over_time(
     pairs up both ways join them all; ``bottleneck_rssi_dbm`` is NaN when a drone is missing
     (connectivity unknown) and +inf when every needed link is closer than the far field.
     """
-    index = {d: i for i, d in enumerate(drones)}
     n = len(drones)
     iu, ju = np.triu_indices(n, 1)
     t_links = links["t"].to_numpy()
-    tx = links["tx"].map(index).to_numpy()
-    rx = links["rx"].map(index).to_numpy()
+    tx = pd.Categorical(links["tx"], categories=list(drones)).codes.astype(np.intp)
+    rx = pd.Categorical(links["rx"], categories=list(drones)).codes.astype(np.intp)
     rssi_all = links["rssi_pred_dbm"].to_numpy(np.float64)
     near_all = links["near_field"].to_numpy(bool)
     starts = np.searchsorted(t_links, times_s, side="left")
