@@ -253,6 +253,9 @@ def test_evaluate_scores_unseen_units_by_default(workdir):
     assert json.loads((d / "ev_default.json").read_text())["rows"][0]["n_samples"] == n_test
     train = run(["evaluate", "sh3_units.json", "data.parquet", "--units", learn[0]], d)
     assert "training scores" in train.stderr
+    (d / "sh3_copy.json").write_bytes((d / "sh3_units.json").read_bytes())
+    both = run(["evaluate", "sh3_units.json", "sh3_copy.json", "data.parquet"], d)
+    assert "| SH-3 (sh3_units.json) |" in both.stdout and "| SH-3 (sh3_copy.json) |" in both.stdout
 
 
 def test_links_of_a_swarm_through_the_cli(workdir):

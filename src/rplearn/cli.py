@@ -465,7 +465,7 @@ def evaluate(
     df = _dataset(dataset)
     samples = samples_of(df, _evaluation_units(df, _split_list(units), models, dataset), dataset)
     fitted = [FittedModel.from_model(m) for m in models]
-    rows = evaluate_models(fitted, samples)
+    rows = _distinct_labels(evaluate_models(fitted, samples), model_paths)
     md = scores_markdown(rows)
     out.print(md, highlight=False)
     if markdown_out:
@@ -473,6 +473,18 @@ def evaluate(
             fh.write(md + "\n")
     if json_out:
         _write_json(json_out, {"provenance": provenance(dataset=dataset, models=model_paths), "rows": [r.to_dict() for r in rows]})
+
+
+def _distinct_labels(rows: list[Any], model_paths: list[str]) -> list[Any]:
+    """Table I rows, with the file name added where two models share a label (e.g. two SH-10)."""
+    import dataclasses
+    from collections import Counter
+
+    counts = Counter(r.model for r in rows)
+    return [
+        dataclasses.replace(r, model=f"{r.model} ({os.path.basename(p)})") if counts[r.model] > 1 else r
+        for r, p in zip(rows, model_paths)
+    ]
 
 
 def _evaluation_units(df: Any, units: list[str] | None, models: list[Any], dataset: str) -> list[str] | None:

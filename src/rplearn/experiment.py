@@ -450,9 +450,11 @@ def _demo_figures_and_report(result, sim, dataset, learn, test, fitted, prov) ->
         pattern_models, sim.ground_truth, list(learn.nodes), learn_dirs, os.path.join(fig_dir, "patterns.png"), center=True
     )
     files["fig_coverage"] = plot.plot_coverage(learn_dirs, test_dirs, os.path.join(fig_dir, "coverage.png"))
+    unit0 = str(dataset["unit"].iloc[0])
     first_unit = dataset[dataset["unit"] == dataset["unit"].iloc[0]]
     files["fig_rssi"] = plot.plot_rssi_time(
-        first_unit["t"].to_numpy() - first_unit["t"].iloc[0], first_unit["rssi_dbm"].to_numpy(), os.path.join(fig_dir, "rssi.png")
+        first_unit["t"].to_numpy() - first_unit["t"].iloc[0], first_unit["rssi_dbm"].to_numpy(), os.path.join(fig_dir, "rssi.png"),
+        caption=f"Received signal strength over time during the first flight unit, {unit0} (paper Fig. 8b).",
     )
     sw = result.sweep
     files["fig_sweep"] = plot.plot_order_sweep(sw.orders, sw.rmse_db, sw.aic, sw.ltd_s, os.path.join(fig_dir, "sweep.png"))

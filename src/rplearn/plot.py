@@ -402,10 +402,11 @@ def plot_rssi_time(
     path: str | os.PathLike[str],
     unit_labels: ArrayLike | None = None,
     legend_title: str = "unit",
+    caption: str = "Received signal strength over time (paper Fig. 8b).",
 ) -> str:
     """Write the RSSI-over-time figure (paper Fig. 8b, :func:`rssi_time_figure`); return the path."""
     fig = rssi_time_figure(t_s, rssi_dbm, unit_labels, legend_title=legend_title)
-    return save_figure(fig, path, "Received signal strength over time (paper Fig. 8b).")
+    return save_figure(fig, path, caption)
 
 
 # -- Fig. 10: model order sweep ------------------------------------------------------------

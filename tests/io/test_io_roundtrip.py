@@ -132,7 +132,7 @@ def test_ros2_bag_without_embedded_definitions(tmp_path, flight):
     """Like a ROS 2 Humble bag: no definitions inside; the custom type comes from the user."""
     import sqlite3
 
-    from rplearn.errors import LogFormatError
+    from rplearn.errors import InputError, LogFormatError
 
     pose, sig = flight
     path = write_bag(tmp_path / "old", pose.iloc[::20], sig.iloc[::20], "sqlite3")
@@ -146,6 +146,9 @@ def test_ros2_bag_without_embedded_definitions(tmp_path, flight):
                     frequency_hz=2.4e9)
     assert "register its definition (rplearn sync --msg-definition" in str(e.value)
     assert "msg_definitions=" in str(e.value) and "\n" not in str(e.value)
+    with pytest.raises(InputError, match="missing.msg: no such file"):
+        read_rosbag(path, POSE_TOPICS, RSSI_TOPICS, rssi_field="rssi_dbm", tx_power_dbm=20.0,
+                    frequency_hz=2.4e9, msg_definitions={RSSI_MSG: "missing.msg"})
     logs, _ = read_rosbag(path, POSE_TOPICS, RSSI_TOPICS, rssi_field="rssi_dbm", tx_power_dbm=20.0,
                           frequency_hz=2.4e9, msg_definitions={RSSI_MSG: RSSI_MSGDEF})
     assert len(logs.signal) == len(sig.iloc[::20])

@@ -72,6 +72,10 @@ def _load_definitions(msg_definitions: Mapping[str, str] | None) -> dict[str, An
         if os.path.exists(text):
             with open(text, encoding="utf-8") as fh:
                 text = fh.read()
+        elif text.endswith(".msg") and "\n" not in text:
+            raise InputError(
+                f"message definition of {name} (rplearn sync --msg-definition): {text}: no such file"
+            )
         try:
             types.update(get_types_from_msg(text, name))
         except Exception as exc:
