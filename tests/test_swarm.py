@@ -169,3 +169,16 @@ def test_three_drone_headings_are_the_grid_optimum():
             w = sorted([table[("A", "B")][i, j], table[("A", "C")][i, k], table[("B", "C")][j, k]])
             best = max(best, w[1])  # a triangle's spanning tree: its two strongest edges
         assert res.bottleneck_dbm == pytest.approx(best, abs=1e-9), trial
+
+
+def test_headings_never_worse_than_off_grid_current_yaws():
+    from rplearn.swarm import best_swarm_headings
+
+    rng = np.random.default_rng(3)
+    model = _model(rng)
+    pos = {"A": [0, 0, 20], "B": [30, 5, 22], "C": [10, 25, 18]}
+    # take the fine-grid optimum as the "current" yaws, then search a coarse grid that misses them
+    fine = best_swarm_headings(model, pos, 20.0, pattern_of={"C": "A"}, step_deg=5.0)
+    coarse = best_swarm_headings(model, pos, 20.0, pattern_of={"C": "A"}, step_deg=45.0, start_yaw_deg=fine.yaw_deg)
+    assert coarse.bottleneck_dbm >= fine.bottleneck_dbm - 1e-9
+    assert coarse.bottleneck_dbm >= coarse.start_bottleneck_dbm

@@ -37,6 +37,8 @@ DEFAULT_STEP_S = 1.0
 #: Default RSSI a link needs in each direction to count as up [dBm] (a typical Wi-Fi floor
 #: for low-rate frames; set it to your radio's sensitivity plus a margin).
 DEFAULT_MIN_RSSI_DBM = -85.0
+#: Most yaw combinations :func:`best_swarm_headings` tries exhaustively (about 30 MB of work).
+EXHAUSTIVE_MAX_COMBINATIONS = 400_000
 #: Poses are interpolated only across log gaps shorter than this [s].
 DEFAULT_MAX_GAP_S = 2.0
 
@@ -383,10 +385,31 @@ def best_swarm_headings(
 
     On a yaw grid of ``step_deg``, maximising the bottleneck and, among equal bottlenecks, the
     mean pair RSSI. Up to three drones the search is exhaustive (the global optimum on the
-    grid). Beyond, coordinate ascent (each drone in turn takes its best yaw with the others
+    grid) when the grid has at most :data:`EXHAUSTIVE_MAX_COMBINATIONS` combinations (72^3 at
+    the default 5 deg). Otherwise coordinate ascent (each drone in turn takes its best yaw with the others
     held, until a sweep changes nothing) from the current yaws and from ``restarts`` seeded
-    random ones: a local optimum, never worse than the current yaws. Drones in ``fixed``
-    keep their starting yaw.
+    random ones: a local optimum. Either way the result is never worse than the current yaws.
+
+    Parameters
+    ----------
+    model : PatternSet
+        Learned patterns.
+    positions : mapping
+        Drone -> hover position ``(x, y, z)``, ENU [m].
+    tx_power_dbm : float
+        Transmit power of every drone [dBm].
+    frequency_hz : float, optional
+        Carrier [Hz]; by default the one the model was learned at.
+    pattern_of : mapping, optional
+        Drone -> learned node whose antenna it carries (default: its own id).
+    start_yaw_deg : mapping, optional
+        Current yaws, ENU counter-clockwise from east [deg] (default 0).
+    fixed : sequence of str
+        Drones that keep their current yaw.
+    step_deg : float
+        Yaw grid [deg].
+    max_sweeps, restarts : int
+        Limits of the coordinate ascent (four drones or more).
     """
     if not isinstance(model, PatternSet):
         raise InputError(f"headings need a pattern model (sh, bg or poly), not {getattr(model, 'label', model)!r}")
@@ -432,7 +455,8 @@ def best_swarm_headings(
         return _bottleneck(w, iu, ju, len(drones), drones)[0], float(np.mean(w))
 
     free = [d for d in drones if d not in fixed]
-    if len(drones) <= 3:  # exact: a triangle's spanning tree is its two strongest edges
+    if len(drones) <= 3 and n_grid ** len(free) <= EXHAUSTIVE_MAX_COMBINATIONS:
+        # exact: a triangle's spanning tree is its two strongest edges
         choice, best = _exhaustive_three(drones, free, start_index, n_grid, pairs, base, tables)
         sweeps = 0
     else:  # coordinate ascent from the current yaws, then from seeded random yaws
@@ -446,15 +470,15 @@ def best_swarm_headings(
             sweeps += n_sweeps
             if s_found > best:
                 best, choice = s_found, found
-        if score(start_index) > best:  # never worse than the current yaws
-            best, choice = score(start_index), dict(start_index)
+    if score(start_index) > best:  # never worse than the current yaws (which may lie off the grid)
+        best, choice = score(start_index), dict(start_index)
 
     def table_of(ch: Mapping[str, int]) -> pd.DataFrame:
         return pd.DataFrame({"pair": [f"{a}-{b}" for a, b in pairs], "rssi_dbm": pair_rssi(ch)})
 
-    yaw_of = lambda k: float(np.concatenate([grid, list(start.values())])[k])  # noqa: E731
+    yaw_values = np.concatenate([grid, list(start.values())])  # index as in the gain tables
     return SwarmHeadings(
-        yaw_deg={d: yaw_of(choice[d]) for d in drones},
+        yaw_deg={d: float(yaw_values[choice[d]]) for d in drones},
         start_yaw_deg=start,
         pair_rssi_dbm=table_of(choice),
         start_pair_rssi_dbm=table_of(start_index),
