@@ -7,7 +7,7 @@ import json
 import numpy as np
 import pytest
 
-from rplearn.bases import SphericalHarmonics
+from rplearn.bases import BasisGrid, SphericalHarmonics
 from rplearn.errors import InputError, ModelFileError
 from rplearn.geometry import link_directions, quat_wxyz_from_yaw
 from rplearn.link import free_space_path_loss_db
@@ -131,3 +131,27 @@ def test_prediction_standard_error_is_calibrated():
         z.append((model.predict_samples(probe) - probe.joint_gain_db) / model.predict_samples_std(probe))
     z = np.concatenate(z)
     assert 0.85 < np.std(z) < 1.15
+
+
+@pytest.mark.parametrize("basis", [SphericalHarmonics(5), BasisGrid(3, 0.3)], ids=["SH", "BG"])
+def test_joint_gain_std_equals_the_explicit_quadratic_form(basis):
+    """sqrt(x^T C x) with x the sample's full design row, three nodes, both link directions."""
+    from rplearn.datasets import LinkSamples
+    from rplearn.geometry import Directions
+
+    rng = np.random.default_rng(0)
+    p = basis.n_coef
+    a = rng.normal(size=(3 * p, 3 * p))
+    model = PatternSet(basis=basis, nodes=("A", "B", "C"), coef=rng.normal(size=(3, p)), covariance=a @ a.T / 100)
+    n = 20000  # several steps and a partial one
+    az = rng.uniform(-3, 3, (2, n))
+    el = rng.uniform(-1.5, 1.5, (2, n))
+    tx = rng.integers(0, 3, n)
+    rx = (tx + rng.integers(1, 3, n)) % 3
+    samples = LinkSamples(Directions(az[0], el[0], az[1], el[1]), tx, rx, ("A", "B", "C"), np.zeros(n), np.ones(n), None)
+    x = np.zeros((n, 3 * p))
+    ft, fr = basis.design(az[0], el[0]), basis.design(az[1], el[1])
+    for k in range(3):
+        x[:, k * p : (k + 1) * p] += np.where((tx == k)[:, None], ft, 0.0) + np.where((rx == k)[:, None], fr, 0.0)
+    expected = np.sqrt(np.einsum("ni,ij,nj->n", x, model.covariance, x))
+    np.testing.assert_allclose(model.predict_samples_std(samples), expected, rtol=1e-12, atol=1e-12)

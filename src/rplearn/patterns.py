@@ -108,24 +108,24 @@ class PatternSet:
         tx = idx[samples.tx_index]
         rx = idx[samples.rx_index]
         d = samples.directions
+        az_tx, el_tx, az_rx, el_rx = (np.asarray(a, np.float64) for a in d)
         var = np.empty(len(samples))
         code = tx.astype(np.int64) * len(self.nodes) + rx
+        rows = np.arange(p) if self.basis.row_order is None else np.asarray(self.basis.row_order)
+        step = max(256, min(8192, (1 << 20) // (2 * p)))  # features of a step stay in the cache
         for c in np.unique(code):
             t, r = divmod(int(c), len(self.nodes))
             sel = np.flatnonzero(code == c)
-            for s0 in range(0, sel.size, 65536):
-                part = sel[s0 : s0 + 65536]
-                ft = self.basis.design(d.az_tx[part], d.el_tx[part])
-                fr = self.basis.design(d.az_rx[part], d.el_rx[part])
-                cov = self.covariance
-                stt = cov[t * p : (t + 1) * p, t * p : (t + 1) * p]
-                srr = cov[r * p : (r + 1) * p, r * p : (r + 1) * p]
-                str_ = cov[t * p : (t + 1) * p, r * p : (r + 1) * p]
-                var[part] = (
-                    np.einsum("ni,ni->n", ft @ stt, ft)
-                    + 2.0 * np.einsum("ni,ni->n", ft @ str_, fr)
-                    + np.einsum("ni,ni->n", fr @ srr, fr)
-                )
+            # joint covariance of the two ends' coefficients, in the basis's fastest row order
+            both = np.concatenate([t * p + rows, r * p + rows])
+            joint = self.covariance[np.ix_(both, both)]
+            feats = np.empty((2 * p, min(step, sel.size)))
+            for s0 in range(0, sel.size, step):
+                part = sel[s0 : s0 + step]
+                f = feats[:, : part.size]
+                self.basis.design_rows_into(az_tx[part], el_tx[part], f[:p])
+                self.basis.design_rows_into(az_rx[part], el_rx[part], f[p:])
+                var[part] = np.einsum("in,in->n", joint @ f, f)  # f^T C f of every sample
         return np.sqrt(np.maximum(var, 0.0))
 
     def predict_joint_gain_db(
