@@ -28,7 +28,7 @@ from __future__ import annotations
 import threading
 from dataclasses import dataclass, field
 from functools import cached_property, lru_cache
-from typing import Any
+from typing import Any, Iterator
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -104,10 +104,18 @@ def _add_moments(cheb: FloatArray, trig: FloatArray, moments: FloatArray) -> Non
             moments[idx] += cheb[(slice(None), *idx)] @ trig[(slice(None), *idx)].T
 
 
-def _eval_chunk(n_coef: int) -> int:
-    """Directions per evaluation step: :data:`EVAL_CHUNK`, fewer for large bases so that the
-    step's features stay in one reusable scratch array (at most ``SCRATCH_KEEP_VALUES``)."""
-    return max(256, min(EVAL_CHUNK, SCRATCH_KEEP_VALUES // max(n_coef, 1)))
+def chunk_directions(n_rows: int) -> int:
+    """Directions per evaluation step: :data:`EVAL_CHUNK`, fewer when each direction has many
+    rows, so that a step's ``(n_rows, step)`` features stay in one reusable scratch array
+    (at most ``SCRATCH_KEEP_VALUES``)."""
+    return max(256, min(EVAL_CHUNK, SCRATCH_KEEP_VALUES // max(n_rows, 1)))
+
+
+def _checked_coef(coef: ArrayLike, n_coef: int) -> FloatArray:
+    c = np.asarray(coef, np.float64)
+    if c.shape[-1] != n_coef:
+        raise InputError(f"{c.shape[-1]} coefficients given for {n_coef} basis functions")
+    return c
 
 
 def _matmul_into(a: FloatArray, b: FloatArray, out: FloatArray) -> None:
@@ -173,6 +181,17 @@ class Basis:
         """Gram ``F F^T`` of the feature rows from their moments (bases with a :attr:`moment_shape`)."""
         raise TypeError(f"{type(self).__name__} has no Gram moments")
 
+    def feature_chunks(self, az: FloatArray, el: FloatArray, slot: int = 2) -> Iterator[tuple[slice, FloatArray]]:
+        """``(part, features)``: the directions in cache-sized parts, and their features in
+        :attr:`row_order`, shape ``(n_coef, part size)``, in a scratch array reused by the next
+        part (``slot`` names the scratch array; callers nesting two loops need two slots)."""
+        step = chunk_directions(self.n_coef)
+        for s in range(0, az.size, step):
+            part = slice(s, min(az.size, s + step))
+            f = _scratch(slot, (self.n_coef, part.stop - s))
+            self.design_rows_into(az[part], el[part], f)
+            yield part, f
+
     def evaluate(self, coef: ArrayLike, az_rad: ArrayLike, el_rad: ArrayLike) -> FloatArray:
         """``sum_j coef[..., j] f_j(az, el)`` at every direction, without the whole design matrix.
 
@@ -191,18 +210,12 @@ class Basis:
             directions would be 0.8 GB).
         """
         az, el = _angles(az_rad, el_rad)
-        c = np.asarray(coef, np.float64)
-        if c.shape[-1] != self.n_coef:
-            raise InputError(f"{c.shape[-1]} coefficients given for {self.n_coef} basis functions")
+        c = _checked_coef(coef, self.n_coef)
         rows = self.row_order
         c_rows = np.ascontiguousarray(c if rows is None else c[..., rows])
         out = np.empty((*c.shape[:-1], az.size))
-        step = _eval_chunk(self.n_coef)
-        for s in range(0, az.size, step):
-            e = min(az.size, s + step)
-            f = _scratch(_SLOT_EVAL, (self.n_coef, e - s))
-            self.design_rows_into(az[s:e], el[s:e], f)
-            np.matmul(c_rows, f, out=out[..., s:e])
+        for part, f in self.feature_chunks(az, el, _SLOT_EVAL):
+            np.matmul(c_rows, f, out=out[..., part])
         return out
 
     def quadratic_form(self, matrix: ArrayLike, az_rad: ArrayLike, el_rad: ArrayLike) -> FloatArray:
@@ -217,12 +230,8 @@ class Basis:
         rows = self.row_order
         m_rows = m if rows is None else m[np.ix_(rows, rows)]
         out = np.empty(az.size)
-        step = _eval_chunk(self.n_coef)
-        for s in range(0, az.size, step):
-            e = min(az.size, s + step)
-            f = _scratch(_SLOT_EVAL, (self.n_coef, e - s))
-            self.design_rows_into(az[s:e], el[s:e], f)
-            out[s:e] = np.einsum("in,in->n", m_rows @ f, f)
+        for part, f in self.feature_chunks(az, el, _SLOT_EVAL):
+            out[part] = np.einsum("in,in->n", m_rows @ f, f)
         return out
 
     def design_t(self, az_rad: ArrayLike, el_rad: ArrayLike) -> FloatArray:
@@ -601,9 +610,7 @@ class SphericalHarmonics(Basis):
         # A pattern is sum_m [sum_l c_lm Q_lm(x)] w_m: one Chebyshev series per azimuth factor,
         # so 2 order rows per direction are computed instead of order**2 features.
         az, el = _angles(az_rad, el_rad)
-        c = np.asarray(coef, np.float64)
-        if c.shape[-1] != self.n_coef:
-            raise InputError(f"{c.shape[-1]} coefficients given for {self.n_coef} basis functions")
+        c = _checked_coef(coef, self.n_coef)
         L = self.order
         lead = c.shape[:-1]
         c_rows = c.reshape(-1, self.n_coef)[:, self.row_order]
@@ -611,7 +618,7 @@ class SphericalHarmonics(Basis):
         k = series.shape[0]
         flat = series.reshape(k * 2 * L, L)
         out = np.empty((k, az.size))
-        step = _eval_chunk(2 * L * k)
+        step = chunk_directions(2 * L * k)
         for s in range(0, az.size, step):
             e = min(az.size, s + step)
             cheb, trig = _sh_factors(az[s:e], el[s:e], L, L)
@@ -628,12 +635,8 @@ class SphericalHarmonics(Basis):
             self.design_rows_into(az_rad, el_rad, rows)
             out[self.row_order] = rows
             return
-        step = _eval_chunk(self.n_coef)
-        for s in range(0, az_rad.size, step):
-            e = min(az_rad.size, s + step)
-            rows = _scratch(_SLOT_DESIGN, (self.n_coef, e - s))
-            self.design_rows_into(az_rad[s:e], el_rad[s:e], rows)
-            out[self.row_order, s:e] = rows
+        for part, rows in self.feature_chunks(az_rad, el_rad, _SLOT_DESIGN):
+            out[self.row_order, part] = rows
 
     def to_dict(self) -> dict[str, Any]:
         return {"kind": "sh", "order": int(self.order)}

@@ -16,7 +16,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from rplearn import __version__
-from rplearn.bases import Basis, basis_from_dict
+from rplearn.bases import Basis, basis_from_dict, chunk_directions
 from rplearn.errors import InputError, ModelFileError
 from rplearn.geometry import distance_m, link_directions
 from rplearn.link import received_power_dbm
@@ -112,7 +112,7 @@ class PatternSet:
         var = np.empty(len(samples))
         code = tx.astype(np.int64) * len(self.nodes) + rx
         rows = np.arange(p) if self.basis.row_order is None else np.asarray(self.basis.row_order)
-        step = max(256, min(8192, (1 << 20) // (2 * p)))  # features of a step stay in the cache
+        step = chunk_directions(2 * p)  # a step's features of both ends stay in the cache
         for c in np.unique(code):
             t, r = divmod(int(c), len(self.nodes))
             sel = np.flatnonzero(code == c)

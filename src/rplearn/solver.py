@@ -131,14 +131,15 @@ def link_statistics(
     """
     az_tx, el_tx, az_rx, el_rx, y = (np.ascontiguousarray(a, np.float64).ravel() for a in (az_tx, el_tx, az_rx, el_rx, y))
     p = basis.n_coef
+    k = block_rows(basis)
     n = az_tx.size
     use_moments = basis.moment_shape is not None and basis.stacked_samples
     moments = np.zeros((2, *basis.moment_shape)) if use_moments else None
-    total = np.zeros((2 * p + 1, 2 * p + 1))
-    block = _block_buffer(block_rows(basis) * max(1, min(n, BLOCK_SAMPLES)))  # grows to the largest block seen
+    total = np.zeros((k, k))
+    block = _block_buffer(k * max(1, min(n, BLOCK_SAMPLES)))  # grows to the largest block seen
     for start in range(0, n, BLOCK_SAMPLES):
         stop = min(n, start + BLOCK_SAMPLES)
-        buf = block[: (2 * p + 1) * (stop - start)].reshape(2 * p + 1, stop - start)
+        buf = block[: k * (stop - start)].reshape(k, stop - start)
         part = slice(start, stop)
         _fill_features(basis, buf, az_tx[part], el_tx[part], az_rx[part], el_rx[part], moments)
         buf[p] = y[part]

@@ -98,6 +98,20 @@ class SwarmPrediction:
         return "\n".join(lines)
 
 
+def _model_frequency_hz(model: Any, frequency_hz: float | None, command: str) -> float:
+    """Refuse a model without patterns; the carrier frequency given, else the model's [Hz]."""
+    if not isinstance(model, PatternSet):
+        raise InputError(f"{command} needs a pattern model (sh, bg or poly), not {getattr(model, 'label', model)!r}")
+    if frequency_hz is None:
+        frequency_hz = model.training.get("frequency_hz")
+        if frequency_hz is None:
+            raise InputError(
+                f"the model does not state its frequency; give it (rplearn {command} --frequency HZ, or frequency_hz=)"
+            )
+    wavelength_m(float(frequency_hz))  # refuses a non-positive frequency
+    return float(frequency_hz)
+
+
 def prediction_times(tracks: Mapping[str, Any], step_s: float, times_s: ArrayLike | None) -> np.ndarray:
     """The given times, or a grid of ``step_s`` over the span all drones' logs cover [s]."""
     if times_s is not None:
@@ -171,18 +185,11 @@ def predict_swarm(
     max_gap_s : float
         Longest log gap a pose is interpolated across [s]; a drone is absent inside longer ones.
     """
-    if not isinstance(model, PatternSet):
-        raise InputError(f"swarm links need a pattern model (sh, bg or poly), not {getattr(model, 'label', model)!r}")
+    frequency_hz = _model_frequency_hz(model, frequency_hz, "links")
     if not np.isfinite(tx_power_dbm):
         raise InputError("tx power: expected a finite number of dBm (rplearn links --tx-power)")
     if not (np.isfinite(max_gap_s) and max_gap_s > 0):
         raise InputError(f"max gap: expected a positive number of seconds (rplearn links --max-gap), got {max_gap_s!r}")
-    if frequency_hz is None:
-        frequency_hz = model.training.get("frequency_hz")
-        if frequency_hz is None:
-            raise InputError("the model does not state its frequency; give it (rplearn links --frequency HZ, or frequency_hz=)")
-    frequency_hz = float(frequency_hz)
-    wavelength_m(frequency_hz)  # refuses a non-positive frequency
     tracks = pose_tracks(pose_log, source=source)
     drones = sorted(tracks)
     if len(drones) < 2:
@@ -413,14 +420,9 @@ def best_swarm_headings(
     max_sweeps, restarts : int
         Limits of the coordinate ascent (four drones or more).
     """
-    if not isinstance(model, PatternSet):
-        raise InputError(f"headings need a pattern model (sh, bg or poly), not {getattr(model, 'label', model)!r}")
+    frequency_hz = _model_frequency_hz(model, frequency_hz, "headings")
     if not (0 < step_deg <= 90):
         raise InputError(f"yaw step: expected 0 < step <= 90 deg (rplearn headings --step), got {step_deg}")
-    if frequency_hz is None:
-        frequency_hz = model.training.get("frequency_hz")
-        if frequency_hz is None:
-            raise InputError("the model does not state its frequency; give it (rplearn headings --frequency HZ, or frequency_hz=)")
     drones = sorted(positions)
     if len(drones) < 2:
         raise InputError(f"a swarm needs at least 2 drones, got {', '.join(drones) or 'none'}")
