@@ -13,7 +13,7 @@ Targets: at most 1.5x (a), at least 30x faster than (b), predictions equal withi
 The fit can come under twice the floor although it also builds the features and solves
 because, for SH, only the cross block ``X_tx^T X_rx`` (with ``X^T y``) goes through BLAS; the
 two diagonal blocks come from (2L+1) x (4L-2) moment sums per node
-(:meth:`rplearn.bases.SphericalHarmonics.gram_from_moments`), so the BLAS work is half the
+(:meth:`rplearn.core.bases.SphericalHarmonics.gram_from_moments`), so the BLAS work is half the
 floor's.
 Then the peak memory of a fit over 10 million samples streamed in chunks (target < 1 GiB).
 
@@ -31,9 +31,9 @@ import tracemalloc
 import numpy as np
 from sklearn.linear_model import Ridge
 
-from rplearn.bases import SphericalHarmonics, real_sh_reference
-from rplearn.geometry import Directions
-from rplearn.solver import NormalEquations, fit_joint, solve
+from rplearn.core.bases import SphericalHarmonics, real_sh_reference
+from rplearn.core.geometry import Directions
+from rplearn.core.solver import NormalEquations, fit_joint, solve
 
 N_SAMPLES = 56_164
 ORDER = 10
@@ -110,9 +110,9 @@ def main() -> int:
     # Streaming: 10 million samples in chunks, never materialised at once.
     total = 2_000_000 if args.quick else 10_000_000
     chunk = 200_000
-    import rplearn.solver as solver_module
+    import rplearn.core.solver as solver_module
 
-    import rplearn.bases as bases_module
+    import rplearn.core.bases as bases_module
 
     solver_module._BUFFERS.__dict__.clear()  # count the solver's reusable block buffer too
     bases_module._SCRATCH.__dict__.clear()  # and the feature scratch arrays

@@ -1,7 +1,7 @@
 """Benchmark of pattern evaluation for planners: gain of one node toward many directions.
 
 Prints, for SH-10 and one million body-frame directions, the time and peak memory of
-:meth:`rplearn.patterns.PatternSet.evaluate` (chunked, never forms the design matrix) as ratios
+:meth:`rplearn.models.patterns.PatternSet.evaluate` (chunked, never forms the design matrix) as ratios
 against a reference measured in the same run: numpy's matrix-vector product ``F @ c`` of the
 already-built float64 design matrix ``F`` (1,000,000 x 100, 0.8 GB), i.e. the cost of merely
 reading the features. Building ``F`` is not counted in the reference.
@@ -16,8 +16,8 @@ import tracemalloc
 
 import numpy as np
 
-from rplearn.bases import SphericalHarmonics
-from rplearn.patterns import PatternSet
+from rplearn.core.bases import SphericalHarmonics
+from rplearn.models.patterns import PatternSet
 
 N_DIRECTIONS = 1_000_000
 

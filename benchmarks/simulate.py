@@ -31,11 +31,11 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args()
 
-    from rplearn.datasets import link_samples
-    from rplearn.estimators import JointKNNRegressor, MeanRegressor, PatternRegressor
-    from rplearn.plan import check_plan
-    from rplearn.simulate import simulate
-    from rplearn.sync import synchronise
+    from rplearn.data.tables import link_samples
+    from rplearn.models.estimators import JointKNNRegressor, MeanRegressor, PatternRegressor
+    from rplearn.plan.check import check_plan
+    from rplearn.sim.simulate import simulate
+    from rplearn.data.sync import synchronise
 
     times = []
     res = None

@@ -1,4 +1,4 @@
-"""Benchmark of pose-signal matching (rplearn.sync).
+"""Benchmark of pose-signal matching (rplearn.data.sync).
 
 1. ``synchronise`` of N signal samples (default 1,000,000, both directions of one link)
    against two 100 Hz pose logs, timed, with a reference measured in the same run: plain
@@ -58,7 +58,7 @@ def signal_chunk(start: int, n: int, rng: np.random.Generator, rate_hz: float = 
 
 
 def bench_sync(n: int, repeats: int = 3) -> dict:
-    from rplearn.sync import synchronise
+    from rplearn.data.sync import synchronise
 
     rng = np.random.default_rng(0)
     sig = signal_chunk(0, n, rng)
@@ -102,7 +102,7 @@ def peak_rss_kib() -> int:
 
 def _stream_child(path_in: str, path_out: str, duration_s: float, chunk_rows: int) -> None:
     from rplearn.io.tables import iter_signal_table
-    from rplearn.sync import pose_tracks, synchronise_to_parquet
+    from rplearn.data.sync import pose_tracks, synchronise_to_parquet
 
     base = peak_rss_kib()
     pose = pose_logs(duration_s)

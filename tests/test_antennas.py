@@ -7,7 +7,7 @@ import json
 import numpy as np
 import pytest
 
-from rplearn.antennas import (
+from rplearn.sim.antennas import (
     AirframeLobe,
     AntennaSpec,
     GroundTruth,

@@ -11,7 +11,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from rplearn.datasets import MATCHED_COLUMNS
+from rplearn.data.tables import MATCHED_COLUMNS
 
 RPLEARN = [sys.executable, "-m", "rplearn.cli"]
 

@@ -7,9 +7,9 @@ import pytest
 from sklearn.model_selection import GridSearchCV, cross_val_score
 from sklearn.utils.estimator_checks import parametrize_with_checks
 
-from rplearn.bases import SphericalHarmonics
+from rplearn.core.bases import SphericalHarmonics
 from rplearn.errors import InputError
-from rplearn.estimators import JointKNNRegressor, MeanRegressor, PatternRegressor
+from rplearn.models.estimators import JointKNNRegressor, MeanRegressor, PatternRegressor
 
 # Checks that cannot apply, each with its reason. The pattern model and the joint k-NN take a
 # fixed input layout (4 angle columns az_tx, el_tx, az_rx, el_rx, or 6 with node numbers):

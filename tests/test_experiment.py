@@ -13,10 +13,10 @@ import numpy as np
 import pytest
 from matplotlib.image import imread
 
-from rplearn.bases import SphericalHarmonics, sh_index
-from rplearn.experiment import best_yaw, identifiability_study, order_sweep, run_demo
-from rplearn.patterns import PatternSet
-from rplearn.report import screenshot_report
+from rplearn.core.bases import SphericalHarmonics, sh_index
+from rplearn.analysis.experiment import best_yaw, identifiability_study, order_sweep, run_demo
+from rplearn.models.patterns import PatternSet
+from rplearn.viz.report import screenshot_report
 
 
 @pytest.fixture(scope="module")
@@ -72,8 +72,8 @@ def test_sweep_stops_after_rises():
     rng = np.random.default_rng(0)
     b = SphericalHarmonics(4)
     true = rng.normal(0, 3, (2, 16))
-    from rplearn.datasets import LinkSamples
-    from rplearn.geometry import Directions
+    from rplearn.data.tables import LinkSamples
+    from rplearn.core.geometry import Directions
 
     def samples(n):
         az = rng.uniform(-np.pi, np.pi, (2, n))
@@ -106,7 +106,7 @@ def test_best_yaw_turns_the_beam_toward_the_other_drone():
 
 
 def test_pattern_error_removes_only_unidentifiable_constants():
-    from rplearn.experiment import pattern_errors_db
+    from rplearn.analysis.experiment import pattern_errors_db
 
     b = SphericalHarmonics(2)
     truth = PatternSet(b, ("A", "B"), np.zeros((2, 4)))

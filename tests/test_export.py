@@ -8,9 +8,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from rplearn.bases import SphericalHarmonics
+from rplearn.core.bases import SphericalHarmonics
 from rplearn.errors import InputError
-from rplearn.export import (
+from rplearn.io.export import (
     export_grid,
     export_msi,
     export_pattern_images,
@@ -20,8 +20,8 @@ from rplearn.export import (
     read_msi,
     write_msi,
 )
-from rplearn.geometry import unit_vector
-from rplearn.patterns import PatternSet
+from rplearn.core.geometry import unit_vector
+from rplearn.models.patterns import PatternSet
 
 
 class Lobe:

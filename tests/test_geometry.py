@@ -8,7 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from rplearn import geometry as g
+from rplearn.core import geometry as g
 from rplearn.errors import InputError
 
 finite = st.floats(-100, 100, allow_nan=False)

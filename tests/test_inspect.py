@@ -1,4 +1,4 @@
-"""rplearn.inspect: summaries of logs and the suspicious things in them."""
+"""rplearn.io.inspect: summaries of logs and the suspicious things in them."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from rplearn.inspect import InspectReport, inspect_logs
+from rplearn.io.inspect import InspectReport, inspect_logs
 
 DATA = Path(__file__).resolve().parent / "data"
 
@@ -104,7 +104,7 @@ def test_ulog_node_named_after_file():
 def test_ulog_rows_flagged_invalid_are_reported():
     import os
 
-    from rplearn.inspect import inspect_logs
+    from rplearn.io.inspect import inspect_logs
 
     path = os.path.join(os.path.dirname(__file__), "data", "px4-ulog", "sample_log_small.ulg")
     report = inspect_logs([path])

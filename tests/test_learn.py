@@ -4,10 +4,10 @@ import time
 
 import numpy as np
 
-import rplearn.learn as learn
-from rplearn.datasets import LinkSamples
-from rplearn.geometry import Directions
-from rplearn.learn import ModelSpec, fit_model
+import rplearn.models.fit as learn
+from rplearn.data.tables import LinkSamples
+from rplearn.core.geometry import Directions
+from rplearn.models.fit import ModelSpec, fit_model
 
 
 def test_warm_up_is_not_timed(monkeypatch):

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from rplearn import link
+from rplearn.core import link
 from rplearn.errors import FarFieldError
 
 

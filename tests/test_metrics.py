@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from rplearn import metrics
+from rplearn.core import metrics
 
 
 def test_paper_table1_mean_row_aic():

@@ -7,11 +7,11 @@ import json
 import numpy as np
 import pytest
 
-from rplearn.bases import BasisGrid, SphericalHarmonics
+from rplearn.core.bases import BasisGrid, SphericalHarmonics
 from rplearn.errors import InputError, ModelFileError
-from rplearn.geometry import link_directions, quat_wxyz_from_yaw
-from rplearn.link import free_space_path_loss_db
-from rplearn.patterns import PatternSet
+from rplearn.core.geometry import link_directions, quat_wxyz_from_yaw
+from rplearn.core.link import free_space_path_loss_db
+from rplearn.models.patterns import PatternSet
 
 
 @pytest.fixture
@@ -99,7 +99,7 @@ def test_bad_model_files_are_refused(pattern_set, tmp_path):
     # a wrong-shaped but correctly checksummed file is refused on its content
     doc = json.loads(text)
     doc["model"]["coefficients"]["A"] = [1.0, 2.0]
-    from rplearn.modelfile import digest as _digest
+    from rplearn.io.modelfile import digest as _digest
 
     doc["sha256"] = _digest(doc["model"])
     bad = tmp_path / "shape.json"
@@ -110,9 +110,9 @@ def test_bad_model_files_are_refused(pattern_set, tmp_path):
 
 def test_prediction_standard_error_is_calibrated():
     """Joint-gain errors divided by the reported standard error are ~N(0, 1), two-node gauge or not."""
-    from rplearn.datasets import LinkSamples
-    from rplearn.geometry import Directions
-    from rplearn.learn import ModelSpec, fit_patterns
+    from rplearn.data.tables import LinkSamples
+    from rplearn.core.geometry import Directions
+    from rplearn.models.fit import ModelSpec, fit_patterns
 
     rng = np.random.default_rng(9)
     b = SphericalHarmonics(3)
@@ -136,8 +136,8 @@ def test_prediction_standard_error_is_calibrated():
 @pytest.mark.parametrize("basis", [SphericalHarmonics(5), BasisGrid(3, 0.3)], ids=["SH", "BG"])
 def test_joint_gain_std_equals_the_explicit_quadratic_form(basis):
     """sqrt(x^T C x) with x the sample's full design row, three nodes, both link directions."""
-    from rplearn.datasets import LinkSamples
-    from rplearn.geometry import Directions
+    from rplearn.data.tables import LinkSamples
+    from rplearn.core.geometry import Directions
 
     rng = np.random.default_rng(0)
     p = basis.n_coef

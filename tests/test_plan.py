@@ -5,11 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rplearn.bases import make_basis
+from rplearn.core.bases import make_basis
 from rplearn.errors import PlanError
-from rplearn.plan import check_plan, coverage_map, plan_directions
-from rplearn.presets import make_preset
-from rplearn.trajectory import PlanLimits, group_campaign, paper_campaign
+from rplearn.plan.check import check_plan, coverage_map, plan_directions
+from rplearn.sim.presets import make_preset
+from rplearn.plan.trajectory import PlanLimits, group_campaign, paper_campaign
 
 
 @pytest.fixture(scope="module")

@@ -10,11 +10,11 @@ import pytest
 from matplotlib.collections import PathCollection, QuadMesh
 from matplotlib.image import imread
 
-from rplearn import plot
-from rplearn.bases import SphericalHarmonics
+from rplearn.viz import plot
+from rplearn.core.bases import SphericalHarmonics
 from rplearn.errors import InputError
-from rplearn.geometry import unit_vector
-from rplearn.patterns import PatternSet
+from rplearn.core.geometry import unit_vector
+from rplearn.models.patterns import PatternSet
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
@@ -161,9 +161,9 @@ def test_pattern_maps_truth_values_and_centering(truth):
 
 
 def test_pattern_maps_of_a_fitted_two_node_model(tmp_path):
-    from rplearn.experiment import node_directions
-    from rplearn.learn import ModelSpec, fit_model, samples_of
-    from rplearn.simulate import simulate
+    from rplearn.analysis.experiment import node_directions
+    from rplearn.models.fit import ModelSpec, fit_model, samples_of
+    from rplearn.sim.simulate import simulate
 
     sim = simulate("smoke", 0)
     s = samples_of(sim.matched_truth, sim.units("learning"))
@@ -233,7 +233,7 @@ def test_bad_input_is_an_input_error(call):
 
 def test_core_modules_do_not_import_matplotlib():
     code = (
-        "import sys, rplearn.export, rplearn.report, rplearn.patterns, rplearn.learn, rplearn.antennas; "
+        "import sys, rplearn.io.export, rplearn.viz.report, rplearn.models.patterns, rplearn.models.fit, rplearn.sim.antennas; "
         "assert not any(m == 'matplotlib' or m.startswith('matplotlib.') for m in sys.modules), 'matplotlib imported'"
     )
     subprocess.run([sys.executable, "-c", code], check=True, timeout=60)

@@ -11,9 +11,10 @@ import numpy as np
 import pytest
 from matplotlib.image import imread
 
-from rplearn import __version__, plot, report
+from rplearn._version import __version__
+from rplearn.viz import plot, report
 from rplearn.errors import InputError
-from rplearn.report import (
+from rplearn.viz.report import (
     ReportSection,
     markdown_table_to_html,
     rows_to_html,

@@ -8,20 +8,13 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from rplearn.antennas import load_ground_truth
-from rplearn.datasets import (
-    MATCHED_COLUMNS,
-    POSE_COLUMNS,
-    SIGNAL_COLUMNS,
-    link_samples,
-    read_table,
-    validate_pose_log,
-    validate_signal_log,
-)
+from rplearn.sim.antennas import load_ground_truth
+from rplearn.data.tables import MATCHED_COLUMNS, POSE_COLUMNS, SIGNAL_COLUMNS, link_samples, validate_pose_log, validate_signal_log
+from rplearn.io.files import read_table
 from rplearn.errors import InputError
-from rplearn.geometry import euler_from_quat_wxyz
-from rplearn.presets import PRESET_NAMES, make_preset
-from rplearn.simulate import (
+from rplearn.core.geometry import euler_from_quat_wxyz
+from rplearn.sim.presets import PRESET_NAMES, make_preset
+from rplearn.sim.simulate import (
     EstimatorConfig,
     FlightConfig,
     RadioConfig,
@@ -233,7 +226,7 @@ def test_bad_inputs() -> None:
 
 
 def test_simulated_logs_synchronise_like_real_ones(smoke) -> None:
-    sync = pytest.importorskip("rplearn.sync")
+    sync = pytest.importorskip("rplearn.data.sync")
     out = sync.synchronise(smoke.pose_log, smoke.signal_log)
     ds = out.dataset
     assert len(ds) >= 0.98 * len(smoke.signal_log)
@@ -245,7 +238,7 @@ def test_simulated_logs_synchronise_like_real_ones(smoke) -> None:
 @pytest.mark.slow
 def test_paper_preset_acceptance() -> None:
     """Paper preset: counts, truth RMSE = noise level (2%), baselines near the paper's."""
-    from rplearn.estimators import JointKNNRegressor, MeanRegressor
+    from rplearn.models.estimators import JointKNNRegressor, MeanRegressor
 
     res = simulate("paper", seed=0)
     learn = res.matched("learning", "A", "B")
@@ -264,8 +257,8 @@ def test_paper_preset_acceptance() -> None:
     assert 4.0 <= knn_rmse <= 6.0
     assert knn_rmse > truth_rmse  # the truth is the best possible predictor
     # the flown (tilted, jittery) learning data decouple the patterns up to the one constant
-    from rplearn.bases import make_basis
-    from rplearn.solver import identifiability
+    from rplearn.core.bases import make_basis
+    from rplearn.core.solver import identifiability
 
     rep = identifiability(sl.directions, sl.tx_index, sl.rx_index, len(sl.nodes), make_basis("sh", 10))
     assert rep.rank == rep.n_columns - 1 == 199

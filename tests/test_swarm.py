@@ -6,12 +6,12 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from rplearn.bases import SphericalHarmonics
+from rplearn.core.bases import SphericalHarmonics
 from rplearn.errors import InputError
-from rplearn.geometry import quat_wxyz_from_yaw
-from rplearn.link import received_power_dbm
-from rplearn.patterns import PatternSet
-from rplearn.swarm import predict_swarm
+from rplearn.core.geometry import quat_wxyz_from_yaw
+from rplearn.core.link import received_power_dbm
+from rplearn.models.patterns import PatternSet
+from rplearn.analysis.swarm import predict_swarm
 
 
 def _model(rng):
@@ -118,8 +118,8 @@ def test_times_gaps_and_errors():
 
 
 def test_headings_improve_the_bottleneck_and_agree_with_the_links():
-    from rplearn.experiment import best_yaw
-    from rplearn.swarm import best_swarm_headings
+    from rplearn.analysis.experiment import best_yaw
+    from rplearn.analysis.swarm import best_swarm_headings
 
     rng = np.random.default_rng(2)
     model = _model(rng)
@@ -144,8 +144,8 @@ def test_three_drone_headings_are_the_grid_optimum():
     """Brute force over every yaw combination on a 30 deg grid, gains from the one-link predictor."""
     import itertools
 
-    from rplearn.link import received_power_dbm
-    from rplearn.swarm import best_swarm_headings
+    from rplearn.core.link import received_power_dbm
+    from rplearn.analysis.swarm import best_swarm_headings
 
     rng = np.random.default_rng(7)
     model = _model(rng)
@@ -172,7 +172,7 @@ def test_three_drone_headings_are_the_grid_optimum():
 
 
 def test_headings_never_worse_than_off_grid_current_yaws():
-    from rplearn.swarm import best_swarm_headings
+    from rplearn.analysis.swarm import best_swarm_headings
 
     rng = np.random.default_rng(3)
     model = _model(rng)

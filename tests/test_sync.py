@@ -1,4 +1,4 @@
-"""Pose-signal matching (rplearn.sync): interpolation, drops by reason, streaming."""
+"""Pose-signal matching (rplearn.data.sync): interpolation, drops by reason, streaming."""
 
 from __future__ import annotations
 
@@ -8,12 +8,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from rplearn.datasets import MATCHED_COLUMNS
+from rplearn.data.tables import MATCHED_COLUMNS
 from rplearn.errors import InputError
-from rplearn.geometry import quat_wxyz_from_yaw
-from rplearn.sync import (
-    DROP_REASONS, SyncSummary, slerp_wxyz, synchronise, synchronise_stream, synchronise_to_parquet,
-)
+from rplearn.core.geometry import quat_wxyz_from_yaw
+from rplearn.data.sync import DROP_REASONS, SyncSummary, synchronise, synchronise_stream, synchronise_to_parquet
+from rplearn.core.geometry import slerp_wxyz
 
 
 def pose_log(node: str, t, xyz, yaw_rad) -> pd.DataFrame:
@@ -216,7 +215,7 @@ def test_link_naming_a_node_in_no_signal_log(two_nodes):
 
 
 def test_duplicate_rows_equals_pandas_duplicated_on_unsorted_logs():
-    from rplearn.sync import duplicate_rows
+    from rplearn.data.sync import duplicate_rows
 
     rng = np.random.default_rng(4)
     n = 3000

@@ -11,7 +11,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from rplearn.errors import InputError, PlanError
-from rplearn.trajectory import (
+from rplearn.plan.trajectory import (
     Campaign,
     PlanLimits,
     TrajectoryUnit,
@@ -239,7 +239,7 @@ def test_yaw_rate_summary_matches_reference_and_limit() -> None:
 
 def test_wording_names_cli_flags_and_real_remedies():
     from rplearn.errors import InputError, PlanError
-    from rplearn.trajectory import PlanLimits, paper_campaign, summarize_unit
+    from rplearn.plan.trajectory import PlanLimits, paper_campaign, summarize_unit
 
     with pytest.raises(InputError, match=r"^--loops \(n_loops\): expected a positive integer, got 0$"):
         paper_campaign(n_loops=0)

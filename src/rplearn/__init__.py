@@ -8,8 +8,7 @@ frame, identified by linear least squares over signal samples of a calibration f
 
 from __future__ import annotations
 
-__version__ = "0.1.0"
-
-from rplearn.errors import RplearnError  # noqa: E402
+from rplearn._version import __version__
+from rplearn.errors import RplearnError
 
 __all__ = ["RplearnError", "__version__"]

@@ -28,7 +28,7 @@ def _synthetic_flight() -> tuple[pd.DataFrame, pd.DataFrame]:
         ang = 0.4 * t + phase
         yaw = ang + np.pi / 2
         roll = 0.1 * np.sin(2 * t)
-        from rplearn.geometry import quat_wxyz_from_euler
+        from rplearn.core.geometry import quat_wxyz_from_euler
 
         q = quat_wxyz_from_euler(roll, 0.05 * np.cos(t), yaw)
         rows.append(pd.DataFrame({"t": t, "node": node, "x": radius * np.cos(ang),
@@ -52,11 +52,11 @@ def _synthetic_flight() -> tuple[pd.DataFrame, pd.DataFrame]:
 def flight() -> tuple[pd.DataFrame, pd.DataFrame]:
     """Canonical (pose, signal) logs of one flight on UNIX time.
 
-    The colleague's simulator (``rplearn.simulate``, preset "smoke") when it is available,
+    The colleague's simulator (``rplearn.sim.simulate``, preset "smoke") when it is available,
     else a small synthetic flight of two drones circling.
     """
     try:
-        from rplearn.simulate import simulate
+        from rplearn.sim.simulate import simulate
 
         res = simulate("smoke", seed=0)
         pose, sig = res.pose_log.copy(), res.signal_log.copy()

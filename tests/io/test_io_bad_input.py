@@ -148,7 +148,7 @@ def test_truncated_pcap(tmp_path):
 
 
 def test_pcap_sentinel_rssi_is_counted_by_sync(tmp_path):
-    from rplearn.sync import synchronise
+    from rplearn.data.sync import synchronise
 
     sig, _ = read_pcap(str(_small_pcap(tmp_path / "c.pcap")), "B", 20.0,
                        address_map={"02:00:00:00:00:0A": "A"})

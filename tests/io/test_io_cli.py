@@ -11,7 +11,7 @@ import pandas as pd
 import pytest
 from flightfiles import DATA, FREQUENCY_HZ, POSE_TOPICS, RSSI_TOPICS, TX_POWER_DBM, write_bag, write_pcaps
 
-from rplearn.datasets import read_table
+from rplearn.io.files import read_table
 
 RPLEARN = [os.path.join(os.path.dirname(sys.executable), "rplearn")]
 

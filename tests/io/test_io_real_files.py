@@ -89,7 +89,7 @@ def test_ulog_attitudes_are_raw_frd_ned_converted_to_flu_enu(path):
 
 def test_ulog_identity_attitude_faces_north():
     """Hand-computed: level, heading north (q_ned = 1) is FLU -> ENU yaw +90 deg."""
-    from rplearn.geometry import quat_ned_frd_to_enu_flu
+    from rplearn.core.geometry import quat_ned_frd_to_enu_flu
 
     q = quat_ned_frd_to_enu_flu(np.array([1.0, 0, 0, 0]))
     np.testing.assert_allclose(q, [np.sqrt(0.5), 0, 0, np.sqrt(0.5)], atol=1e-12)

@@ -10,12 +10,13 @@ from flightfiles import (
     write_pcaps,
 )
 
-from rplearn.datasets import MATCHED_COLUMNS, write_table
+from rplearn.data.tables import MATCHED_COLUMNS
+from rplearn.io.files import write_table
 from rplearn.io import detect_format, read_logs
 from rplearn.io.pcap import read_pcap
 from rplearn.io.rosbag import read_rosbag
 from rplearn.io.tables import read_pose_table, read_signal_table
-from rplearn.sync import synchronise
+from rplearn.data.sync import synchronise
 
 
 def _canon(df: pd.DataFrame) -> pd.DataFrame:
@@ -156,7 +157,7 @@ def test_ros2_bag_without_embedded_definitions(tmp_path, flight):
 
 
 def test_synthetic_fallback_flight_round_trips(tmp_path):
-    """The fixture's own flight (used when rplearn.simulate is absent) is valid and round-trips."""
+    """The fixture's own flight (used when rplearn.sim.simulate is absent) is valid and round-trips."""
     from flightfiles import _synthetic_flight
 
     pose, sig = _synthetic_flight()

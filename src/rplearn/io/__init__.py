@@ -22,7 +22,7 @@ from typing import Any, Iterable, Mapping
 
 import pandas as pd
 
-from rplearn.datasets import NON_UNIT_QUATERNION_ATTR, validate_pose_log
+from rplearn.data.tables import NON_UNIT_QUATERNION_ATTR, validate_pose_log
 from rplearn.errors import InputError, LogFormatError, RplearnError
 from rplearn.io._common import Logs
 

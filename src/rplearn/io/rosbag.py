@@ -30,7 +30,7 @@ from typing import Any, Iterator, Mapping
 import numpy as np
 import pandas as pd
 
-from rplearn.datasets import validate_pose_log
+from rplearn.data.tables import validate_pose_log
 from rplearn.errors import InputError, LogFormatError
 from rplearn.io._common import Logs
 

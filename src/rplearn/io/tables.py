@@ -21,9 +21,9 @@ from typing import Any, Iterator, Mapping
 import numpy as np
 import pandas as pd
 
-from rplearn.datasets import CSV_DTYPES, POSE_COLUMNS, SIGNAL_COLUMNS, normalise_times, validate_pose_log
+from rplearn.data.tables import CSV_DTYPES, POSE_COLUMNS, SIGNAL_COLUMNS, normalise_times, validate_pose_log
 from rplearn.errors import InputError, LogFormatError
-from rplearn.geometry import (
+from rplearn.core.geometry import (
     geodetic_to_enu,
     quat_wxyz_from_euler_enu_flu_deg,
     quat_wxyz_from_euler_ned_frd_deg,
@@ -276,7 +276,7 @@ def canonical_signal(
     """Turn a signal table into the canonical signal schema without dropping any row.
 
     ``rx``, ``tx_power_dbm`` and ``frequency_hz`` fill a column the table lacks. NaN or
-    sentinel values are kept: :func:`rplearn.sync.synchronise` drops and counts them.
+    sentinel values are kept: :func:`rplearn.data.sync.synchronise` drops and counts them.
     Extra columns are kept after the canonical ones.
 
     Raises

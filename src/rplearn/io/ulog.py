@@ -3,9 +3,9 @@
 Topics used:
 
 - ``vehicle_local_position``: ``x, y, z`` in the EKF's local NED frame [m], converted to ENU
-  (``(n, e, d) -> (e, n, -d)``, :func:`rplearn.geometry.ned_to_enu`);
+  (``(n, e, d) -> (e, n, -d)``, :func:`rplearn.core.geometry.ned_to_enu`);
 - ``vehicle_attitude``: ``q[0..3]`` = (w, x, y, z), FRD body -> NED world, converted to
-  FLU body -> ENU world (:func:`rplearn.geometry.quat_ned_frd_to_enu_flu`);
+  FLU body -> ENU world (:func:`rplearn.core.geometry.quat_ned_frd_to_enu_flu`);
 - the geodetic anchor of the local frame: the EKF reference (``ref_lat, ref_lon, ref_alt``
   when ``xy_global`` and ``z_global`` are set), else the first fix of
   ``vehicle_global_position``, else of ``vehicle_gps_position`` / ``sensor_gps``, with the
@@ -33,9 +33,9 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from rplearn.datasets import validate_pose_log
+from rplearn.data.tables import validate_pose_log
 from rplearn.errors import InputError, LogFormatError
-from rplearn.geometry import local_ned_to_enu, local_ned_to_geodetic, quat_ned_frd_to_enu_flu
+from rplearn.core.geometry import local_ned_to_enu, local_ned_to_geodetic, quat_ned_frd_to_enu_flu
 
 
 def _pyulog():
@@ -101,7 +101,7 @@ def _interp_linear(t_key: np.ndarray, v_key: np.ndarray, t: np.ndarray) -> np.nd
 
 
 def _interp_slerp(t_key: np.ndarray, q_key: np.ndarray, t: np.ndarray) -> np.ndarray:
-    from rplearn.sync import slerp_wxyz
+    from rplearn.core.geometry import slerp_wxyz
 
     i = np.clip(np.searchsorted(t_key, t, side="right") - 1, 0, len(t_key) - 2)
     frac = np.clip((t - t_key[i]) / (t_key[i + 1] - t_key[i]), 0.0, 1.0)

@@ -16,15 +16,16 @@ from typing import Any, Callable, Mapping, Sequence
 import numpy as np
 import pandas as pd
 
-from rplearn import __version__
-from rplearn.bases import SphericalHarmonics
-from rplearn.datasets import LinkSamples, write_table
+from rplearn._version import __version__
+from rplearn.core.bases import SphericalHarmonics
+from rplearn.data.tables import LinkSamples
+from rplearn.io.files import write_table
 from rplearn.errors import InputError
-from rplearn.geometry import Directions, direction_in_body, quat_wxyz_from_yaw
-from rplearn.learn import FittedModel, ModelSpec, evaluate_models, fit_model, samples_of, scores_markdown
-from rplearn.metrics import Scores
-from rplearn.patterns import PatternSet
-from rplearn.solver import fit_joint, identifiability
+from rplearn.core.geometry import Directions, direction_in_body, quat_wxyz_from_yaw
+from rplearn.models.fit import FittedModel, ModelSpec, evaluate_models, fit_model, samples_of, scores_markdown
+from rplearn.core.metrics import Scores
+from rplearn.models.patterns import PatternSet
+from rplearn.core.solver import fit_joint, identifiability
 
 Progress = Callable[[str], None]
 
@@ -178,7 +179,7 @@ class _AntennaSet:
 
 def study_antennas() -> _AntennaSet:
     """The ITU-R F.1336-5 surrogates of the paper's Fig. 6: omni "O", sectoral "S", circular "C"."""
-    from rplearn.antennas import AntennaSpec, Mounting, NodeAntenna
+    from rplearn.sim.antennas import AntennaSpec, Mounting, NodeAntenna
 
     vertical = Mounting.named("vertical")
     return _AntennaSet(
@@ -346,8 +347,8 @@ def run_demo(
     directions, sweep the SH order, run the identifiability study, then write figures and
     ``report.html`` into ``out_dir``.
     """
-    from rplearn.simulate import simulate
-    from rplearn.sync import synchronise
+    from rplearn.sim.simulate import simulate
+    from rplearn.data.sync import synchronise
 
     t_start = time.perf_counter()
     os.makedirs(out_dir, exist_ok=True)
@@ -436,8 +437,8 @@ def run_demo(
 
 
 def _demo_figures_and_report(result, sim, dataset, learn, test, fitted, prov) -> dict[str, str]:
-    from rplearn import plot
-    from rplearn.report import ReportSection, write_report
+    from rplearn.viz import plot
+    from rplearn.viz.report import ReportSection, write_report
 
     out = result.out_dir
     fig_dir = os.path.join(out, "figures")

@@ -15,18 +15,18 @@ from typing import TYPE_CHECKING, Any, Mapping, Sequence
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from rplearn import __version__
-from rplearn.bases import Basis, basis_from_dict, chunk_directions
+from rplearn._version import __version__
+from rplearn.core.bases import Basis, basis_from_dict, chunk_directions
 from rplearn.errors import InputError, ModelFileError
-from rplearn.geometry import distance_m, link_directions
-from rplearn.link import received_power_dbm
-from rplearn.modelfile import jsonable as _jsonable
-from rplearn.modelfile import read_model_file, write_model_file
+from rplearn.core.geometry import distance_m, link_directions
+from rplearn.core.link import received_power_dbm
+from rplearn.io.modelfile import jsonable as _jsonable
+from rplearn.io.modelfile import read_model_file, write_model_file
 
 FloatArray = NDArray[np.float64]
 
 if TYPE_CHECKING:
-    from rplearn.datasets import LinkSamples
+    from rplearn.data.tables import LinkSamples
 
 
 @dataclass
@@ -41,7 +41,7 @@ class PatternSet:
     covariance : ndarray or None
         Covariance of all coefficients (``n_nodes * n_coef`` square), for standard errors.
     gauge : list of dict
-        How unidentifiable constants were fixed (see :mod:`rplearn.solver`).
+        How unidentifiable constants were fixed (see :mod:`rplearn.core.solver`).
     training : dict
         Training summary (samples, RMSE, rank, condition number, ridge, ...).
     provenance : dict
@@ -265,7 +265,7 @@ class PatternSet:
         return int(self.coef.size)
 
     def predict_samples(self, samples: "LinkSamples") -> FloatArray:
-        """Joint gain [dB] predicted for every sample of a :class:`~rplearn.datasets.LinkSamples`."""
+        """Joint gain [dB] predicted for every sample of a :class:`~rplearn.data.tables.LinkSamples`."""
         idx = np.array([self.node_index(n) for n in samples.nodes], dtype=np.intp)
         tx = idx[samples.tx_index]
         rx = idx[samples.rx_index]

@@ -1,7 +1,7 @@
 """Fitting and evaluating models on matched datasets: the library behind ``rplearn fit/evaluate``.
 
 A model is named by a :class:`ModelSpec` (``"sh-10"``, ``"bg-7"``, ``"p-12"``, ``"nn-400"``, ``"m"``).
-:func:`fit_model` learns it from :class:`~rplearn.datasets.LinkSamples` and times the learning
+:func:`fit_model` learns it from :class:`~rplearn.data.tables.LinkSamples` and times the learning
 (the paper's LTD); :func:`evaluate_models` scores models on held-out samples (Table I).
 """
 
@@ -15,13 +15,13 @@ from typing import Any, Mapping, Sequence, Union
 import numpy as np
 import pandas as pd
 
-from rplearn.bases import make_basis
-from rplearn.baselines import KNNModel, MeanModel
-from rplearn.datasets import LinkSamples, link_samples
+from rplearn.core.bases import make_basis
+from rplearn.models.baselines import KNNModel, MeanModel
+from rplearn.data.tables import LinkSamples, link_samples
 from rplearn.errors import InputError
-from rplearn.metrics import Scores, score
-from rplearn.patterns import PatternSet
-from rplearn.solver import DEFAULT_RIDGE, fit_joint
+from rplearn.core.metrics import Scores, score
+from rplearn.models.patterns import PatternSet
+from rplearn.core.solver import DEFAULT_RIDGE, fit_joint
 
 Model = Union[PatternSet, MeanModel, KNNModel]
 
@@ -30,7 +30,7 @@ _DEFAULT_ORDER = {"sh": 10, "bg": 7, "poly": 12, "knn": 400}
 _ALIASES = {"m": "mean", "p": "poly", "nn": "knn", "bucketized": "bg"}
 
 
-#: Default ridge per family (see :data:`rplearn.solver.DEFAULT_RIDGE`; the paper used 50).
+#: Default ridge per family (see :data:`rplearn.core.solver.DEFAULT_RIDGE`; the paper used 50).
 DEFAULT_RIDGE_BY_KIND = {"sh": DEFAULT_RIDGE, "poly": DEFAULT_RIDGE, "bg": DEFAULT_RIDGE, "mean": 0.0, "knn": 0.0}
 
 
@@ -180,7 +180,7 @@ def _warm_up(spec: ModelSpec, n_samples: int = 1) -> None:
     if spec.kind == "knn":
         import sklearn.neighbors  # noqa: F401
     elif spec.decouples:
-        from rplearn.solver import reserve_block_buffer
+        from rplearn.core.solver import reserve_block_buffer
 
         basis = spec.basis()
         basis.evaluate(np.zeros(basis.n_coef), [0.0], [0.0])

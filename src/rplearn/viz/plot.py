@@ -28,7 +28,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from numpy.typing import ArrayLike, NDArray
 
-from rplearn import __version__
+from rplearn._version import __version__
 from rplearn.errors import InputError
 
 FloatArray = NDArray[np.float64]
@@ -59,7 +59,7 @@ def save_figure(fig: Figure, path: str | os.PathLike[str], caption: str | None =
     """Write ``fig`` as a PNG at :data:`DPI` and return the path as a string.
 
     ``caption`` is stored in the PNG's ``Description`` text chunk, where
-    :func:`rplearn.report.write_report` finds a default figure caption.
+    :func:`rplearn.viz.report.write_report` finds a default figure caption.
     """
     path = os.fspath(path)
     parent = os.path.dirname(path)
@@ -675,7 +675,7 @@ def _break_gaps(t: ArrayLike, y: ArrayLike) -> tuple[FloatArray, FloatArray]:
 def plot_swarm(prediction: Any, path: str | os.PathLike[str]) -> str:
     """RSSI of every pair (weaker direction) over time, the threshold and the bottleneck; return the path.
 
-    ``prediction`` is a :class:`rplearn.swarm.SwarmPrediction`.
+    ``prediction`` is a :class:`rplearn.analysis.swarm.SwarmPrediction`.
     """
     links = prediction.links
     fig = _new_figure(9.0, 4.2)

@@ -21,8 +21,8 @@ import numpy as np
 import pandas as pd
 
 from rplearn.errors import InputError
-from rplearn.geometry import Directions, distance_m, link_directions
-from rplearn.link import observed_joint_gain_db
+from rplearn.core.geometry import Directions, distance_m, link_directions
+from rplearn.core.link import observed_joint_gain_db
 
 POSE_COLUMNS: tuple[str, ...] = ("t", "node", "x", "y", "z", "qw", "qx", "qy", "qz")
 SIGNAL_COLUMNS: tuple[str, ...] = ("t", "tx", "rx", "rssi_dbm", "tx_power_dbm", "frequency_hz")
@@ -197,44 +197,6 @@ def validate_matched(df: pd.DataFrame, source: str = "dataset", require_rssi: bo
     if "unit" in out.columns:
         out["unit"] = out["unit"].astype(str)
     return out
-
-
-def read_table(path: str, source: str | None = None) -> pd.DataFrame:
-    """Read a CSV or Parquet table chosen by extension, with a one-line error on failure."""
-    import os
-
-    name = source or str(path)
-    if not os.path.exists(path):
-        raise InputError(f"{name}: no such file")
-    try:
-        if str(path).lower().endswith((".parquet", ".pq")):
-            return normalise_times(pd.read_parquet(path), name)
-        return normalise_times(pd.read_csv(path, dtype=CSV_DTYPES), name)
-    except (ValueError, OSError, pd.errors.ParserError, UnicodeDecodeError) as exc:
-        raise InputError(f"{name}: cannot read table ({type(exc).__name__}: {exc})") from None
-    except Exception as exc:  # pyarrow raises its own error classes
-        raise InputError(f"{name}: cannot read table ({type(exc).__name__}: {exc})") from None
-
-
-def write_table(df: pd.DataFrame, path: str) -> None:
-    """Write a table as Parquet (``.parquet``, ``.pq``) or CSV (``.csv``, ``.csv.gz``).
-
-    Any other extension is refused rather than guessed.
-    """
-    if check_table_path(path) == "parquet":
-        df.to_parquet(path, index=False)
-    else:
-        df.to_csv(path, index=False)
-
-
-def check_table_path(path: str) -> str:
-    """``"parquet"`` or ``"csv"`` from a table's file name; any other extension is refused."""
-    name = str(path).lower()
-    if name.endswith((".parquet", ".pq")):
-        return "parquet"
-    if name.endswith((".csv", ".csv.gz")):
-        return "csv"
-    raise InputError(f"{path}: unknown table format; name it .csv, .csv.gz, .parquet or .pq")
 
 
 @dataclass(frozen=True)

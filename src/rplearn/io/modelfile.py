@@ -3,7 +3,7 @@
 A model file is ``{"schema": "rplearn.model", "schema_version": 1, "type": T, "sha256": H,
 "model": PAYLOAD}`` where ``H`` is the SHA-256 of the canonical JSON of ``PAYLOAD`` (sorted keys,
 no spaces), so truncation and tampering are detected. ``T`` is ``"patterns"`` (a
-:class:`~rplearn.patterns.PatternSet`), ``"mean"`` or ``"knn"`` (baselines).
+:class:`~rplearn.models.patterns.PatternSet`), ``"mean"`` or ``"knn"`` (baselines).
 """
 
 from __future__ import annotations
@@ -101,15 +101,3 @@ def read_model_file(path: str | os.PathLike[str]) -> tuple[str, dict[str, Any]]:
     return model_type, payload
 
 
-def load_model(path: str | os.PathLike[str]):
-    """Load any model file: a PatternSet or a baseline model."""
-    from rplearn.baselines import KNNModel, MeanModel
-    from rplearn.patterns import PatternSet
-
-    model_type, payload = read_model_file(path)
-    name = os.fspath(path)
-    if model_type == "patterns":
-        return PatternSet.from_dict(payload, source=name)
-    if model_type == "mean":
-        return MeanModel.from_dict(payload, source=name)
-    return KNNModel.from_dict(payload, source=name)

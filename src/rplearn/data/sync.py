@@ -47,7 +47,7 @@ from typing import Iterable, Iterator, Mapping, Sequence
 import numpy as np
 import pandas as pd
 
-from rplearn.datasets import (
+from rplearn.data.tables import (
     MATCHED_COLUMNS,
     QUATERNION_NORM_TOLERANCE,
     SENTINEL_RSSI_DBM,
@@ -57,6 +57,7 @@ from rplearn.datasets import (
     validate_pose_log,
 )
 from rplearn.errors import InputError
+from rplearn.core.geometry import slerp_wxyz
 
 logger = logging.getLogger(__name__)
 
@@ -97,7 +98,7 @@ class SyncSummary:
         Node ids named by signals but without a pose log.
     non_unit_quaternions : int
         Pose rows whose quaternion norm was off 1 by more than
-        :data:`~rplearn.datasets.QUATERNION_NORM_TOLERANCE` (normalised, not dropped).
+        :data:`~rplearn.data.tables.QUATERNION_NORM_TOLERANCE` (normalised, not dropped).
     """
 
     n_in: int = 0
@@ -137,7 +138,7 @@ class SyncSummary:
 
 @dataclass
 class SyncResult:
-    """Matched dataset (columns :data:`~rplearn.datasets.MATCHED_COLUMNS` first, then any
+    """Matched dataset (columns :data:`~rplearn.data.tables.MATCHED_COLUMNS` first, then any
     extra signal columns) and the :class:`SyncSummary` of the matching."""
 
     dataset: pd.DataFrame
@@ -146,35 +147,6 @@ class SyncResult:
 
 # ---------------------------------------------------------------------------------------------
 # Interpolation primitives
-
-
-def slerp_wxyz(q0: np.ndarray, q1: np.ndarray, fraction: np.ndarray) -> np.ndarray:
-    """Spherical linear interpolation between unit quaternions, row by row.
-
-    Takes the shorter arc (``q1`` is negated when ``q0 . q1 < 0``), equal to
-    :class:`scipy.spatial.transform.Slerp` between two keys; falls back to a normalised
-    linear interpolation for nearly equal quaternions. Output has ``qw >= 0``.
-
-    Parameters
-    ----------
-    q0, q1 : ndarray, shape (n, 4)
-        Unit quaternions, scalar first.
-    fraction : ndarray, shape (n,)
-        Interpolation fraction in [0, 1].
-    """
-    dot = np.einsum("ij,ij->i", q0, q1)
-    sign = np.where(dot < 0.0, -1.0, 1.0)
-    dot = np.abs(dot)
-    q1 = q1 * sign[:, None]
-    theta = np.arccos(np.clip(dot, -1.0, 1.0))
-    sin_theta = np.sin(theta)
-    near = sin_theta < 1e-6
-    safe = np.where(near, 1.0, sin_theta)
-    w0 = np.where(near, 1.0 - fraction, np.sin((1.0 - fraction) * theta) / safe)
-    w1 = np.where(near, fraction, np.sin(fraction * theta) / safe)
-    out = w0[:, None] * q0 + w1[:, None] * q1
-    out /= np.linalg.norm(out, axis=1, keepdims=True)
-    return np.where(out[:, :1] < 0.0, -out, out)
 
 
 @dataclass(frozen=True)
@@ -234,7 +206,7 @@ def pose_tracks(
 ) -> dict[str, PoseTrack]:
     """Split a canonical pose log into one :class:`PoseTrack` per node.
 
-    Rows with NaN or infinite values are rejected by :func:`~rplearn.datasets.validate_pose_log`
+    Rows with NaN or infinite values are rejected by :func:`~rplearn.data.tables.validate_pose_log`
     (use the readers' ``nan_policy="drop"`` to drop and count them on reading).
     """
     return _tracks(validate_pose_log(pose_log, source), clock_offsets_s, source)
@@ -508,7 +480,7 @@ def synchronise(
     Returns
     -------
     SyncResult
-        ``dataset`` in :data:`~rplearn.datasets.MATCHED_COLUMNS` order plus extra columns,
+        ``dataset`` in :data:`~rplearn.data.tables.MATCHED_COLUMNS` order plus extra columns,
         in the order of the input rows; ``summary`` with counts per drop reason.
 
     Raises

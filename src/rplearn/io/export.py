@@ -1,8 +1,8 @@
 """Export learned or true patterns: a regular az-el grid as CSV, MSI Planet cuts, 3-D images.
 
 "Pattern-like" means any object with ``nodes`` and ``evaluate(node, az_rad, el_rad)`` returning
-the gain [dBi]: a learned :class:`rplearn.patterns.PatternSet` or a
-:class:`rplearn.antennas.GroundTruth`.
+the gain [dBi]: a learned :class:`rplearn.models.patterns.PatternSet` or a
+:class:`rplearn.sim.antennas.GroundTruth`.
 
 MSI Planet format (``.msi``, also ``.pln``)
 -------------------------------------------
@@ -50,9 +50,9 @@ import numpy as np
 import pandas as pd
 from numpy.typing import ArrayLike, NDArray
 
-from rplearn import __version__
+from rplearn._version import __version__
 from rplearn.errors import InputError
-from rplearn.geometry import wrap_angle_rad
+from rplearn.core.geometry import wrap_angle_rad
 
 FloatArray = NDArray[np.float64]
 
@@ -482,7 +482,7 @@ def export_pattern_images(
         The paths written, in node order (characters other than letters, digits, ``_.-``
         in a node id become ``_`` in the file name).
     """
-    from rplearn import plot  # lazily: the core never imports matplotlib
+    from rplearn.viz import plot  # lazily: the core never imports matplotlib
 
     _check_pattern_like(pattern_like)
     out_dir = os.fspath(out_dir)

@@ -18,7 +18,7 @@ from rich.console import Console
 from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from rplearn import __version__
+from rplearn._version import __version__
 from rplearn.errors import InputError, RplearnError
 
 app = typer.Typer(
@@ -201,9 +201,9 @@ def trajectory(
 
     Example: rplearn trajectory --distance 10 --height 20 --loops 5 --max-flight-time 600 -o plan
     """
-    from rplearn.learn import ModelSpec
-    from rplearn.plan import check_plan
-    from rplearn.trajectory import PlanLimits, paper_campaign, summarize_unit, write_references
+    from rplearn.models.fit import ModelSpec
+    from rplearn.plan.check import check_plan
+    from rplearn.plan.trajectory import PlanLimits, paper_campaign, summarize_unit, write_references
 
     spec = None
     if check_model and check_model.lower() != "none":  # refuse a bad model before writing files
@@ -242,7 +242,7 @@ def simulate(
 
     Example: rplearn simulate --preset smoke --seed 1 -o flight
     """
-    from rplearn.simulate import simulate as run
+    from rplearn.sim.simulate import simulate as run
 
     if log_format not in ("parquet", "csv"):
         raise InputError(f"--format: expected parquet or csv, got {log_format!r}")
@@ -275,7 +275,7 @@ def inspect(
 
     Example: rplearn inspect flight/pose_log.parquet flight/signal_log.parquet
     """
-    from rplearn.inspect import inspect_logs
+    from rplearn.io.inspect import inspect_logs
 
     report = inspect_logs(logs, **_reader_options(
         node, receiver, address, pose_topic, rssi_topic, rssi_field, msg_definition, require_valid=require_valid))
@@ -312,9 +312,9 @@ def sync(
 
     Example: rplearn sync --poses flight/pose_log.parquet --signals flight/signal_log.parquet --link A:B -o data.parquet
     """
-    from rplearn.datasets import check_table_path, write_table
+    from rplearn.io.files import check_table_path, write_table
     from rplearn.io import read_logs
-    from rplearn.sync import synchronise
+    from rplearn.data.sync import synchronise
 
     check_table_path(output)
 
@@ -350,7 +350,8 @@ def _print_reader_drops(meta: dict[str, Any]) -> None:
 
 
 def _dataset(path: str, require_rssi: bool = True):
-    from rplearn.datasets import read_table, validate_matched
+    from rplearn.data.tables import validate_matched
+    from rplearn.io.files import read_table
 
     return validate_matched(read_table(path), path, require_rssi=require_rssi)
 
@@ -392,8 +393,8 @@ def fit(
 
     Example: rplearn fit data.parquet --model sh --degree 10 --units learn_0,learn_24,learn_48 -o sh10.json
     """
-    from rplearn.experiment import provenance
-    from rplearn.learn import ModelSpec, fit_model, samples_of
+    from rplearn.analysis.experiment import provenance
+    from rplearn.models.fit import ModelSpec, fit_model, samples_of
 
     spec = ModelSpec.parse(model, order=degree, ridge=ridge, sigma_rad2=sigma, grid=grid)
     _check_fit_options(model, spec, degree, ridge, sigma, grid, gauge_node, gauge_dbi)
@@ -454,9 +455,9 @@ def evaluate(
 
     Example: rplearn evaluate sh10.json mean.json data.parquet --units test_36
     """
-    from rplearn.experiment import provenance
-    from rplearn.learn import FittedModel, evaluate_models, samples_of, scores_markdown
-    from rplearn.modelfile import load_model
+    from rplearn.analysis.experiment import provenance
+    from rplearn.models.fit import FittedModel, evaluate_models, samples_of, scores_markdown
+    from rplearn.models.load import load_model
 
     if len(paths) < 2:
         raise InputError("evaluate: give at least one MODEL.json and a DATASET")
@@ -533,9 +534,10 @@ def predict(
     """
     import numpy as np
 
-    from rplearn.datasets import check_table_path, link_samples, write_table
-    from rplearn.link import received_power_dbm
-    from rplearn.modelfile import load_model
+    from rplearn.data.tables import link_samples
+    from rplearn.io.files import check_table_path, write_table
+    from rplearn.core.link import received_power_dbm
+    from rplearn.models.load import load_model
 
     check_table_path(output)
     model = load_model(model_path)
@@ -606,10 +608,10 @@ def links(
 
     Example: rplearn links sh10.json plan_poses.csv --tx-power 20 --as C=A --as D=B --plot links.png -o links.csv
     """
-    from rplearn.datasets import check_table_path, write_table
+    from rplearn.io.files import check_table_path, write_table
     from rplearn.io import read_logs
-    from rplearn.modelfile import load_model
-    from rplearn.swarm import predict_swarm
+    from rplearn.models.load import load_model
+    from rplearn.analysis.swarm import predict_swarm
 
     for path in (output, connectivity_out):
         if path:
@@ -636,7 +638,7 @@ def links(
     if connectivity_out:
         write_table(result.connectivity, connectivity_out)
     if plot_out:
-        from rplearn.plot import plot_swarm
+        from rplearn.viz.plot import plot_swarm
 
         plot_swarm(result, plot_out)
     out.print(result.summary(), highlight=False, markup=False)
@@ -663,8 +665,8 @@ def headings(
 
     Example: rplearn headings sh10.json --pos A=0,0,20 --pos B=40,0,20 --pos C=20,30,25 --as C=A --tx-power 20
     """
-    from rplearn.modelfile import load_model
-    from rplearn.swarm import best_swarm_headings
+    from rplearn.models.load import load_model
+    from rplearn.analysis.swarm import best_swarm_headings
 
     positions = {}
     for drone, text in _pairs(pos, "--pos").items():
@@ -713,8 +715,8 @@ def sweep(
 
     Example: rplearn sweep data.parquet --model sh --orders 3..15 -o sweep.csv --plot sweep.png
     """
-    from rplearn.experiment import order_sweep
-    from rplearn.learn import samples_of
+    from rplearn.analysis.experiment import order_sweep
+    from rplearn.models.fit import samples_of
 
     if ".." in orders:
         a, b = orders.split("..", 1)
@@ -750,7 +752,7 @@ def sweep(
     if output:
         frame.to_csv(output, index=False)
     if plot_path:
-        from rplearn import plot
+        from rplearn.viz import plot
 
         plot.plot_order_sweep(result.orders, result.rmse_db, result.aic, result.ltd_s, plot_path)
 
@@ -768,8 +770,8 @@ def export(
 
     Example: rplearn export sh10.json --format msi -o patterns/
     """
-    from rplearn import export as ex
-    from rplearn.modelfile import load_model
+    from rplearn.io import export as ex
+    from rplearn.models.load import load_model
 
     model = load_model(model_path)
     if getattr(model, "kind", "") != "patterns":
@@ -803,11 +805,11 @@ def plot(
 
     Example: rplearn plot sh10.json --truth flight/ground_truth.json --dataset data.parquet -o patterns.png
     """
-    from rplearn import plot as plt_
-    from rplearn.antennas import load_ground_truth
-    from rplearn.datasets import link_samples
-    from rplearn.experiment import node_directions
-    from rplearn.modelfile import load_model
+    from rplearn.viz import plot as plt_
+    from rplearn.sim.antennas import load_ground_truth
+    from rplearn.data.tables import link_samples
+    from rplearn.analysis.experiment import node_directions
+    from rplearn.models.load import load_model
 
     models = {}
     for p in model_paths:
@@ -842,10 +844,10 @@ def orient(
     """
     import numpy as np
 
-    from rplearn.experiment import best_yaw
-    from rplearn.geometry import distance_m
-    from rplearn.link import received_power_dbm
-    from rplearn.modelfile import load_model
+    from rplearn.analysis.experiment import best_yaw
+    from rplearn.core.geometry import distance_m
+    from rplearn.core.link import received_power_dbm
+    from rplearn.models.load import load_model
 
     def xyz(text: str, name: str) -> list[float]:
         try:
@@ -886,11 +888,11 @@ def report(
 
     Example: rplearn report data.parquet --models m,sh-10 -o report
     """
-    from rplearn import plot as plt_
-    from rplearn.experiment import node_directions, provenance
-    from rplearn.learn import ModelSpec, evaluate_models, fit_model, samples_of, scores_markdown
-    from rplearn.patterns import PatternSet
-    from rplearn.report import ReportSection, write_report
+    from rplearn.viz import plot as plt_
+    from rplearn.analysis.experiment import node_directions, provenance
+    from rplearn.models.fit import ModelSpec, evaluate_models, fit_model, samples_of, scores_markdown
+    from rplearn.models.patterns import PatternSet
+    from rplearn.viz.report import ReportSection, write_report
 
     names = _split_list([models]) or []
     if not names:
@@ -937,7 +939,7 @@ def demo(
 
     Example: rplearn demo -o rplearn-demo
     """
-    from rplearn.experiment import run_demo
+    from rplearn.analysis.experiment import run_demo
 
     with _progress() as p:
         task = p.add_task("starting", total=None)

@@ -10,7 +10,7 @@
   and a high-gain cosine beam, flying the three links of a triangle (absolute gains identifiable).
 - ``smoke``: a seconds-long two-drone case for tests (a few thousand packets).
 
-All presets are deterministic for a given seed of :func:`rplearn.simulate.simulate`.
+All presets are deterministic for a given seed of :func:`rplearn.sim.simulate.simulate`.
 """
 
 from __future__ import annotations
@@ -18,10 +18,10 @@ from __future__ import annotations
 from dataclasses import replace
 from typing import Any, Callable
 
-from rplearn.antennas import AirframeLobe, AntennaSpec, Mounting, NodeAntenna, antenna_from_name
+from rplearn.sim.antennas import AirframeLobe, AntennaSpec, Mounting, NodeAntenna, antenna_from_name
 from rplearn.errors import InputError
-from rplearn.simulate import EstimatorConfig, FlightConfig, RadioConfig, SimulationConfig
-from rplearn.trajectory import Campaign, TrajectoryUnit, group_campaign
+from rplearn.sim.simulate import EstimatorConfig, FlightConfig, RadioConfig, SimulationConfig
+from rplearn.plan.trajectory import Campaign, TrajectoryUnit, group_campaign
 
 __all__ = ["PRESET_NAMES", "fine_structure_lobes", "make_preset", "x500_frame_lobes"]
 
@@ -168,7 +168,7 @@ def _smoke() -> SimulationConfig:
 
 
 _PRESETS: dict[str, Callable[[], SimulationConfig]] = {"paper": _paper, "trio": _trio, "smoke": _smoke}
-#: Names accepted by :func:`make_preset` and :func:`rplearn.simulate.simulate`.
+#: Names accepted by :func:`make_preset` and :func:`rplearn.sim.simulate.simulate`.
 PRESET_NAMES: tuple[str, ...] = tuple(_PRESETS)
 
 

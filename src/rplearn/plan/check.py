@@ -7,7 +7,7 @@ acceleration and an expected wind), and reports
 - per node, the azimuth-elevation coverage of its body sphere (a 2-D histogram and the
   area-weighted fraction of cells sampled);
 - the rank, null-space dimension and condition number of the learning problem (the design
-  matrix of paper Sec. V-A, via :func:`rplearn.solver.identifiability`), and the null-space
+  matrix of paper Sec. V-A, via :func:`rplearn.core.solver.identifiability`), and the null-space
   dimension expected from the link graph (one per connected part without an odd cycle: with
   two drones, the constant that moves between the patterns);
 - whether the plan decouples the patterns (null space no larger than expected) and whether it
@@ -28,10 +28,10 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from rplearn.bases import Basis, make_basis
+from rplearn.core.bases import Basis, make_basis
 from rplearn.errors import InputError
-from rplearn.geometry import Directions, link_directions, quat_wxyz_from_yaw
-from rplearn.trajectory import (
+from rplearn.core.geometry import Directions, link_directions, quat_wxyz_from_yaw
+from rplearn.plan.trajectory import (
     Campaign,
     PlanLimits,
     UnitSummary,
@@ -137,7 +137,7 @@ def plan_directions(
     """Directions the drones will see, one sample per packet of the first -> second direction.
 
     With ``tilt_into_motion`` (default) attitudes follow the thrust a multirotor needs for the
-    reference acceleration and the given wind (as in :mod:`rplearn.simulate`, without noise);
+    reference acceleration and the given wind (as in :mod:`rplearn.sim.simulate`, without noise);
     otherwise they are level with the reference heading. Level attitudes are a degenerate
     idealisation: then ``el_second = -el_first`` at every sample, and any function of
     elevation alone can move from one pattern to the other (``h(el)`` on one, ``-h(-el)`` on
@@ -146,7 +146,7 @@ def plan_directions(
     Returns
     -------
     directions, tx_index, rx_index, nodes
-        As :class:`rplearn.datasets.LinkSamples` has them; ``nodes`` sorted.
+        As :class:`rplearn.data.tables.LinkSamples` has them; ``nodes`` sorted.
     """
     if not (packet_rate_hz > 0):
         raise InputError(f"packet_rate_hz: expected > 0 Hz, got {packet_rate_hz!r}")
@@ -160,8 +160,8 @@ def plan_directions(
         quats = []
         for j in range(2):
             if tilt_into_motion:
-                from rplearn.simulate import attitude_from_thrust
-                from rplearn.trajectory import G_M_S2
+                from rplearn.core.geometry import attitude_from_thrust
+                from rplearn.plan.trajectory import G_M_S2
 
                 w = np.radians(wind_toward_deg)
                 wind = wind_speed_m_s * np.array([np.cos(w), np.sin(w), 0.0])
@@ -210,7 +210,7 @@ def check_plan(
     ----------
     campaign : Campaign
     basis : Basis or (kind, order)
-        The model, or arguments of :func:`rplearn.bases.make_basis` (default SH-10).
+        The model, or arguments of :func:`rplearn.core.bases.make_basis` (default SH-10).
     role : str or None
         Use only the units of this role (default the learning units); None uses all.
     packet_rate_hz : float
@@ -222,7 +222,7 @@ def check_plan(
     wind_speed_m_s, wind_toward_deg, tilt_into_motion
         Nominal attitude model, see :func:`plan_directions`.
     """
-    from rplearn.solver import identifiability
+    from rplearn.core.solver import identifiability
 
     sub = campaign.with_role(role) if role is not None else campaign
     units = sub.summarize(limits)

@@ -24,11 +24,11 @@ from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.neighbors import KNeighborsRegressor
 from sklearn.utils.validation import check_is_fitted, validate_data
 
-from rplearn.bases import make_basis
+from rplearn.core.bases import make_basis
 from rplearn.errors import InputError
-from rplearn.geometry import Directions
-from rplearn.patterns import PatternSet
-from rplearn.solver import DEFAULT_RIDGE, fit_joint
+from rplearn.core.geometry import Directions
+from rplearn.models.patterns import PatternSet
+from rplearn.core.solver import DEFAULT_RIDGE, fit_joint
 
 ANGLE_COLUMNS = ("az_tx", "el_tx", "az_rx", "el_rx")
 

@@ -25,12 +25,12 @@ from numpy.typing import ArrayLike
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
 
-from rplearn.datasets import LinkSamples
+from rplearn.data.tables import LinkSamples
 from rplearn.errors import InputError
-from rplearn.geometry import distance_m, link_directions
-from rplearn.link import FAR_FIELD_WAVELENGTHS, free_space_path_loss_db, wavelength_m
-from rplearn.patterns import PatternSet
-from rplearn.sync import pose_tracks
+from rplearn.core.geometry import distance_m, link_directions
+from rplearn.core.link import FAR_FIELD_WAVELENGTHS, free_space_path_loss_db, wavelength_m
+from rplearn.models.patterns import PatternSet
+from rplearn.data.sync import pose_tracks
 
 #: Default spacing of the prediction times [s].
 DEFAULT_STEP_S = 1.0

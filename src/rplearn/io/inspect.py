@@ -6,7 +6,7 @@ unsorted times accepted and reported) and returns an :class:`InspectReport` whos
 :meth:`~InspectReport.to_text` and :meth:`~InspectReport.to_markdown` the CLI prints.
 
 Flagged as suspicious: unreadable files, NaN pose rows, quaternions whose norm is off 1 by
-more than :data:`~rplearn.datasets.QUATERNION_NORM_TOLERANCE`, times going backwards, forward
+more than :data:`~rplearn.data.tables.QUATERNION_NORM_TOLERANCE`, times going backwards, forward
 clock jumps, pose gaps longer than ``max_gap_s``, sentinel or non-finite RSSI values, exact
 duplicate signal rows, signals naming a node without a pose log, signal samples outside every
 pose span, and rates far from the expected ones.
@@ -17,7 +17,7 @@ inside (ignoring ``max_gap_s`` at either end, clock jitter), and that inside las
 (so that a sparse signal log cannot fake one). Planned breaks between flight units (battery
 swaps) are pauses; they lose no sample and are reported, not flagged. Any other such step is
 a **gap** (poses missing while signals continue, or no signal log to tell): the samples inside
-are dropped by :mod:`rplearn.sync`. A gap longer than ``clock_jump_s`` is also reported as a
+are dropped by :mod:`rplearn.data.sync`. A gap longer than ``clock_jump_s`` is also reported as a
 possible **clock jump**: a logger's clock stepping forward looks exactly like that.
 """
 
@@ -29,9 +29,9 @@ from typing import Any, Iterable, Sequence
 import numpy as np
 import pandas as pd
 
-from rplearn.datasets import QUATERNION_NORM_TOLERANCE, non_unit_quaternion_rows
+from rplearn.data.tables import QUATERNION_NORM_TOLERANCE, non_unit_quaternion_rows
 from rplearn.errors import RplearnError
-from rplearn.sync import DEFAULT_SENTINEL_RSSI_DBM, duplicate_rows
+from rplearn.data.sync import DEFAULT_SENTINEL_RSSI_DBM, duplicate_rows
 
 #: A pose step is a pause only if it spans more than this many median signal intervals.
 PAUSE_MIN_SIGNAL_STEPS: float = 3.0
@@ -315,7 +315,7 @@ def inspect_logs(
     paths : path or iterable of paths
         Logs of any format :func:`rplearn.io.read_logs` reads.
     max_gap_s : float
-        Pose steps longer than this are gaps [s] (the matching threshold of :mod:`rplearn.sync`).
+        Pose steps longer than this are gaps [s] (the matching threshold of :mod:`rplearn.data.sync`).
     clock_jump_s : float
         A gap (not a pause) longer than this is reported as a possible clock jump [s].
     sentinel_rssi_dbm : sequence of float

@@ -8,7 +8,7 @@ is installed.
 Text accepted by the report
 ---------------------------
 - The Table I argument is either a simple Markdown pipe table (the output of
-  :func:`rplearn.learn.scores_markdown`: a header row, a ``|---|---:|`` separator row whose
+  :func:`rplearn.models.fit.scores_markdown`: a header row, a ``|---|---:|`` separator row whose
   colons give the alignment, then body rows) or a sequence of dict rows (keys = columns, in
   the order of the first row).
 - A section's text is HTML when it starts with ``<`` (inserted as given: the caller vouches for
@@ -33,7 +33,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from rplearn import __version__
+from rplearn._version import __version__
 from rplearn.errors import InputError, RplearnError
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
@@ -59,7 +59,7 @@ class ReportSection:
         PNG (or JPEG/SVG) files, embedded in order.
     captions : list of str, optional
         One caption per image; default the PNG's ``Description`` text (every figure of
-        :mod:`rplearn.plot` carries one), else the file name without extension.
+        :mod:`rplearn.viz.plot` carries one), else the file name without extension.
     """
 
     title: str
@@ -252,7 +252,7 @@ def png_text_chunks(data: bytes) -> dict[str, str]:
 
 
 def default_caption(path: str | os.PathLike[str]) -> str:
-    """A figure's caption: its PNG ``Description`` (written by :mod:`rplearn.plot`), else its name."""
+    """A figure's caption: its PNG ``Description`` (written by :mod:`rplearn.viz.plot`), else its name."""
     p = os.fspath(path)
     try:
         with open(p, "rb") as f:
@@ -367,7 +367,7 @@ def write_report(
         Directory (created if needed).
     title : str
     table_markdown : str or sequence of dict, or None
-        Table I as a Markdown pipe table (e.g. :func:`rplearn.learn.scores_markdown`) or as
+        Table I as a Markdown pipe table (e.g. :func:`rplearn.models.fit.scores_markdown`) or as
         dict rows; None for no table.
     sections : sequence of ReportSection
         Text and figures, each figure captioned and numbered.

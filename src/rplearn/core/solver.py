@@ -31,9 +31,9 @@ from typing import Any, Iterable, Mapping, Sequence
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from rplearn.bases import Basis
+from rplearn.core.bases import Basis
 from rplearn.errors import IdentifiabilityError, InputError
-from rplearn.geometry import Directions
+from rplearn.core.geometry import Directions
 
 FloatArray = NDArray[np.float64]
 
@@ -95,7 +95,7 @@ def _fill_features(
 ) -> None:
     """Write tx features into rows ``0 .. p-1`` and rx features into rows ``p+1 .. 2p`` of ``buf``.
 
-    Rows are in the basis's :attr:`~rplearn.bases.Basis.row_order`; row ``p`` is left for the
+    Rows are in the basis's :attr:`~rplearn.core.bases.Basis.row_order`; row ``p`` is left for the
     observations. Works in cache-sized chunks; a basis that accepts stacked samples computes
     both ends of a chunk in one pass, through a (p, 2, chunk) strided view of the two row
     groups, and adds to ``moments[0]`` (tx) and ``moments[1]`` (rx) when given.

@@ -34,7 +34,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from rplearn.errors import InputError, ModelFileError
-from rplearn.geometry import (
+from rplearn.core.geometry import (
     azimuth_elevation,
     great_circle_angle,
     quat_wxyz_from_euler,
@@ -585,7 +585,7 @@ class GroundTruth:
         return g
 
     def to_dict(self) -> dict[str, Any]:
-        from rplearn import __version__
+        from rplearn._version import __version__
 
         return {
             "schema": GROUND_TRUTH_SCHEMA,

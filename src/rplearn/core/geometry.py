@@ -353,3 +353,47 @@ def local_ned_to_enu(
         return ned_to_enu(position_xyz_ned)
     lat, lon, alt = local_ned_to_geodetic(position_xyz_ned, anchor_geodetic)
     return geodetic_to_enu(lat, lon, alt, origin_geodetic)
+
+
+def slerp_wxyz(q0: np.ndarray, q1: np.ndarray, fraction: np.ndarray) -> np.ndarray:
+    """Spherical linear interpolation between unit quaternions, row by row.
+
+    Takes the shorter arc (``q1`` is negated when ``q0 . q1 < 0``), equal to
+    :class:`scipy.spatial.transform.Slerp` between two keys; falls back to a normalised
+    linear interpolation for nearly equal quaternions. Output has ``qw >= 0``.
+
+    Parameters
+    ----------
+    q0, q1 : ndarray, shape (n, 4)
+        Unit quaternions, scalar first.
+    fraction : ndarray, shape (n,)
+        Interpolation fraction in [0, 1].
+    """
+    dot = np.einsum("ij,ij->i", q0, q1)
+    sign = np.where(dot < 0.0, -1.0, 1.0)
+    dot = np.abs(dot)
+    q1 = q1 * sign[:, None]
+    theta = np.arccos(np.clip(dot, -1.0, 1.0))
+    sin_theta = np.sin(theta)
+    near = sin_theta < 1e-6
+    safe = np.where(near, 1.0, sin_theta)
+    w0 = np.where(near, 1.0 - fraction, np.sin((1.0 - fraction) * theta) / safe)
+    w1 = np.where(near, fraction, np.sin(fraction * theta) / safe)
+    out = w0[:, None] * q0 + w1[:, None] * q1
+    out /= np.linalg.norm(out, axis=1, keepdims=True)
+    return np.where(out[:, :1] < 0.0, -out, out)
+
+
+def attitude_from_thrust(thrust_dir_enu: FloatArray, yaw_rad: FloatArray) -> FloatArray:
+    """Quaternions (FLU -> ENU) of drones whose body z axis is the thrust direction.
+
+    The body x axis is the heading direction projected on the plane perpendicular to the
+    thrust (the geometric controller's convention, Lee et al. 2010).
+    """
+    zb = thrust_dir_enu / np.linalg.norm(thrust_dir_enu, axis=-1, keepdims=True)
+    xc = np.stack([np.cos(yaw_rad), np.sin(yaw_rad), np.zeros_like(yaw_rad)], axis=-1)
+    yb = np.cross(zb, xc)
+    yb /= np.linalg.norm(yb, axis=-1, keepdims=True)
+    xb = np.cross(yb, zb)
+    m = np.stack([xb, yb, zb], axis=-1)  # columns are the body axes in the world
+    return matrix_to_quat_wxyz(m)

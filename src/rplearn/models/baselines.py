@@ -17,9 +17,9 @@ from dataclasses import dataclass, field
 from typing import Any, Mapping
 
 import numpy as np
-from rplearn.datasets import LinkSamples
+from rplearn.data.tables import LinkSamples
 from rplearn.errors import IdentifiabilityError, InputError, ModelFileError
-from rplearn.modelfile import write_model_file
+from rplearn.io.modelfile import write_model_file
 
 
 def _links(samples: LinkSamples) -> dict[tuple[str, str], np.ndarray]:

@@ -1,6 +1,6 @@
 """Flight simulator: calibration flights with known ground-truth patterns (paper Secs. IV-V).
 
-Drones track the references of a :class:`~rplearn.trajectory.Campaign` with a tracking error,
+Drones track the references of a :class:`~rplearn.plan.trajectory.Campaign` with a tracking error,
 tilting into their acceleration and into the wind (the paper's day had about 10 m/s); their
 autopilots log pose estimates (RTK-GNSS-level position noise, a few degrees of yaw noise, about
 100 Hz); their radios exchange packets (about 80 per second per direction, with jitter, loss and
@@ -10,8 +10,8 @@ integer-dBm RSSI, a sensitivity floor (no packet below it) and a saturation plat
 
 Every effect is sized by a field of a config dataclass and switched off by setting it to zero
 (or ``None`` / ``False``). The outputs are the raw pose and signal logs in the canonical
-schemas of :mod:`rplearn.datasets`, so that they go through the same synchronisation as real
-logs, plus the ground truth (:class:`~rplearn.antennas.GroundTruth`) and, for scoring, the
+schemas of :mod:`rplearn.data.tables`, so that they go through the same synchronisation as real
+logs, plus the ground truth (:class:`~rplearn.sim.antennas.GroundTruth`) and, for scoring, the
 matched dataset built from the true poses at every packet time (``matched_truth``).
 
 Noise level (what "the RMSE of the true patterns equals the noise level" means): the residual
@@ -32,10 +32,12 @@ import pandas as pd
 from numpy.typing import NDArray
 from scipy.signal import lfilter
 
-from rplearn.antennas import GroundTruth, NodeAntenna, load_ground_truth
-from rplearn.datasets import MATCHED_COLUMNS, POSE_COLUMNS, SIGNAL_COLUMNS, write_table
+from rplearn.sim.antennas import GroundTruth, NodeAntenna, load_ground_truth
+from rplearn.data.tables import MATCHED_COLUMNS, POSE_COLUMNS, SIGNAL_COLUMNS
+from rplearn.io.files import write_table
 from rplearn.errors import InputError
-from rplearn.geometry import (
+from rplearn.core.geometry import (
+    attitude_from_thrust,
     distance_m,
     link_directions,
     matrix_to_quat_wxyz,
@@ -43,8 +45,8 @@ from rplearn.geometry import (
     quat_wxyz_from_yaw,
     quat_wxyz_multiply,
 )
-from rplearn.link import free_space_path_loss_db
-from rplearn.trajectory import G_M_S2, Campaign, TrajectoryUnit, write_references
+from rplearn.core.link import free_space_path_loss_db
+from rplearn.plan.trajectory import G_M_S2, Campaign, TrajectoryUnit, write_references
 
 FloatArray = NDArray[np.float64]
 logger = logging.getLogger(__name__)
@@ -258,7 +260,7 @@ class SimulationResult:
     ground_truth : GroundTruth
     matched_truth : DataFrame
         Every signal-log row with the *true* poses of both ends at the packet time
-        (:data:`rplearn.datasets.MATCHED_COLUMNS` plus ``unit``).
+        (:data:`rplearn.data.tables.MATCHED_COLUMNS` plus ``unit``).
     noise_std_db : float
         Nominal std of the residual noise in dB: ``sqrt(fading^2 + 1/12 if quantized)``.
     realised_noise_std_db : float
@@ -326,21 +328,6 @@ def ou_process(rng: np.random.Generator, n: int, dt_s: float, std: float, tau_s:
 
 def _rotation_z_quat(angle_rad: FloatArray) -> FloatArray:
     return quat_wxyz_from_yaw(angle_rad)
-
-
-def attitude_from_thrust(thrust_dir_enu: FloatArray, yaw_rad: FloatArray) -> FloatArray:
-    """Quaternions (FLU -> ENU) of drones whose body z axis is the thrust direction.
-
-    The body x axis is the heading direction projected on the plane perpendicular to the
-    thrust (the geometric controller's convention, Lee et al. 2010).
-    """
-    zb = thrust_dir_enu / np.linalg.norm(thrust_dir_enu, axis=-1, keepdims=True)
-    xc = np.stack([np.cos(yaw_rad), np.sin(yaw_rad), np.zeros_like(yaw_rad)], axis=-1)
-    yb = np.cross(zb, xc)
-    yb /= np.linalg.norm(yb, axis=-1, keepdims=True)
-    xb = np.cross(yb, zb)
-    m = np.stack([xb, yb, zb], axis=-1)  # columns are the body axes in the world
-    return matrix_to_quat_wxyz(m)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -466,7 +453,7 @@ def simulate(
     Parameters
     ----------
     preset_or_config : str or SimulationConfig
-        A preset name (``"paper"``, ``"trio"``, ``"smoke"``; see :mod:`rplearn.presets`) or a
+        A preset name (``"paper"``, ``"trio"``, ``"smoke"``; see :mod:`rplearn.sim.presets`) or a
         full configuration.
     seed : int
         Seed of every random effect; the same seed gives the same logs.
@@ -481,7 +468,7 @@ def simulate(
     SimulationResult
     """
     if isinstance(preset_or_config, str):
-        from rplearn.presets import make_preset
+        from rplearn.sim.presets import make_preset
 
         config = make_preset(preset_or_config)
     elif isinstance(preset_or_config, SimulationConfig):

@@ -1,0 +1,5 @@
+"""``python -m rplearn.cli``: the same as the ``rplearn`` script."""
+
+from rplearn.cli import main
+
+main()
