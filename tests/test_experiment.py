@@ -14,7 +14,10 @@ import pytest
 from matplotlib.image import imread
 
 from rplearn.core.bases import SphericalHarmonics, sh_index
-from rplearn.analysis.experiment import best_yaw, identifiability_study, order_sweep, run_demo
+from rplearn.workflows import run_demo
+from rplearn.analysis.headings import best_yaw
+from rplearn.analysis.identifiability import identifiability_study
+from rplearn.analysis.sweep import order_sweep
 from rplearn.models.patterns import PatternSet
 from rplearn.viz.report import screenshot_report
 
@@ -106,7 +109,7 @@ def test_best_yaw_turns_the_beam_toward_the_other_drone():
 
 
 def test_pattern_error_removes_only_unidentifiable_constants():
-    from rplearn.analysis.experiment import pattern_errors_db
+    from rplearn.analysis.pattern_error import pattern_errors_db
 
     b = SphericalHarmonics(2)
     truth = PatternSet(b, ("A", "B"), np.zeros((2, 4)))

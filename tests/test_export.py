@@ -10,16 +10,8 @@ import pytest
 
 from rplearn.core.bases import SphericalHarmonics
 from rplearn.errors import InputError
-from rplearn.io.export import (
-    export_grid,
-    export_msi,
-    export_pattern_images,
-    grid_angles_deg,
-    msi_horizontal_directions_rad,
-    msi_vertical_directions_rad,
-    read_msi,
-    write_msi,
-)
+from rplearn.io.export import export_grid, export_msi, grid_angles_deg, msi_horizontal_directions_rad, msi_vertical_directions_rad, read_msi, write_msi
+from rplearn.viz.images import export_pattern_images
 from rplearn.core.geometry import unit_vector
 from rplearn.models.patterns import PatternSet
 

@@ -7,7 +7,8 @@ import numpy as np
 import rplearn.models.fit as learn
 from rplearn.data.tables import LinkSamples
 from rplearn.core.geometry import Directions
-from rplearn.models.fit import ModelSpec, fit_model
+from rplearn.models.fit import fit_model
+from rplearn.models.spec import ModelSpec
 
 
 def test_warm_up_is_not_timed(monkeypatch):

@@ -112,7 +112,8 @@ def test_prediction_standard_error_is_calibrated():
     """Joint-gain errors divided by the reported standard error are ~N(0, 1), two-node gauge or not."""
     from rplearn.data.tables import LinkSamples
     from rplearn.core.geometry import Directions
-    from rplearn.models.fit import ModelSpec, fit_patterns
+    from rplearn.models.fit import fit_patterns
+    from rplearn.models.spec import ModelSpec
 
     rng = np.random.default_rng(9)
     b = SphericalHarmonics(3)

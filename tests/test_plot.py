@@ -161,8 +161,10 @@ def test_pattern_maps_truth_values_and_centering(truth):
 
 
 def test_pattern_maps_of_a_fitted_two_node_model(tmp_path):
-    from rplearn.analysis.experiment import node_directions
-    from rplearn.models.fit import ModelSpec, fit_model, samples_of
+    from rplearn.analysis.pattern_error import node_directions
+    from rplearn.models.fit import fit_model
+    from rplearn.data.units import samples_of
+    from rplearn.models.spec import ModelSpec
     from rplearn.sim.simulate import simulate
 
     sim = simulate("smoke", 0)

@@ -118,7 +118,7 @@ def test_times_gaps_and_errors():
 
 
 def test_headings_improve_the_bottleneck_and_agree_with_the_links():
-    from rplearn.analysis.experiment import best_yaw
+    from rplearn.analysis.headings import best_yaw
     from rplearn.analysis.swarm import best_swarm_headings
 
     rng = np.random.default_rng(2)

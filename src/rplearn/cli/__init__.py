@@ -10,7 +10,6 @@ import functools
 import json
 import logging
 import os
-import sys
 from typing import Any, Callable, Optional
 
 import typer
@@ -201,7 +200,7 @@ def trajectory(
 
     Example: rplearn trajectory --distance 10 --height 20 --loops 5 --max-flight-time 600 -o plan
     """
-    from rplearn.models.fit import ModelSpec
+    from rplearn.models.spec import ModelSpec
     from rplearn.plan.check import check_plan
     from rplearn.plan.trajectory import PlanLimits, paper_campaign, summarize_unit, write_references
 
@@ -393,8 +392,10 @@ def fit(
 
     Example: rplearn fit data.parquet --model sh --degree 10 --units learn_0,learn_24,learn_48 -o sh10.json
     """
-    from rplearn.analysis.experiment import provenance
-    from rplearn.models.fit import ModelSpec, fit_model, samples_of
+    from rplearn.io.files import provenance
+    from rplearn.models.fit import fit_model
+    from rplearn.data.units import samples_of
+    from rplearn.models.spec import ModelSpec
 
     spec = ModelSpec.parse(model, order=degree, ridge=ridge, sigma_rad2=sigma, grid=grid)
     _check_fit_options(model, spec, degree, ridge, sigma, grid, gauge_node, gauge_dbi)
@@ -455,8 +456,9 @@ def evaluate(
 
     Example: rplearn evaluate sh10.json mean.json data.parquet --units test_36
     """
-    from rplearn.analysis.experiment import provenance
-    from rplearn.models.fit import FittedModel, evaluate_models, samples_of, scores_markdown
+    from rplearn.io.files import provenance
+    from rplearn.models.fit import FittedModel, evaluate_models, scores_markdown
+    from rplearn.data.units import samples_of
     from rplearn.models.load import load_model
 
     if len(paths) < 2:
@@ -715,8 +717,8 @@ def sweep(
 
     Example: rplearn sweep data.parquet --model sh --orders 3..15 -o sweep.csv --plot sweep.png
     """
-    from rplearn.analysis.experiment import order_sweep
-    from rplearn.models.fit import samples_of
+    from rplearn.analysis.sweep import order_sweep
+    from rplearn.data.units import samples_of
 
     if ".." in orders:
         a, b = orders.split("..", 1)
@@ -786,7 +788,9 @@ def export(
             ex.export_msi(model, n, path, frequency_hz=frequency_hz or model.training.get("frequency_hz"), name=f"rplearn {model.label} node {n}")
             out.print(f"wrote {path}")
     elif fmt == "images":
-        paths = ex.export_pattern_images(model, output)
+        from rplearn.viz.images import export_pattern_images
+
+        paths = export_pattern_images(model, output)
         for p in paths:
             out.print(f"wrote {p}")
     else:
@@ -808,7 +812,7 @@ def plot(
     from rplearn.viz import plot as plt_
     from rplearn.sim.antennas import load_ground_truth
     from rplearn.data.tables import link_samples
-    from rplearn.analysis.experiment import node_directions
+    from rplearn.analysis.pattern_error import node_directions
     from rplearn.models.load import load_model
 
     models = {}
@@ -844,7 +848,7 @@ def orient(
     """
     import numpy as np
 
-    from rplearn.analysis.experiment import best_yaw
+    from rplearn.analysis.headings import best_yaw
     from rplearn.core.geometry import distance_m
     from rplearn.core.link import received_power_dbm
     from rplearn.models.load import load_model
@@ -889,8 +893,11 @@ def report(
     Example: rplearn report data.parquet --models m,sh-10 -o report
     """
     from rplearn.viz import plot as plt_
-    from rplearn.analysis.experiment import node_directions, provenance
-    from rplearn.models.fit import ModelSpec, evaluate_models, fit_model, samples_of, scores_markdown
+    from rplearn.io.files import provenance
+    from rplearn.analysis.pattern_error import node_directions
+    from rplearn.models.fit import evaluate_models, fit_model, scores_markdown
+    from rplearn.data.units import samples_of
+    from rplearn.models.spec import ModelSpec
     from rplearn.models.patterns import PatternSet
     from rplearn.viz.report import ReportSection, write_report
 
@@ -939,7 +946,7 @@ def demo(
 
     Example: rplearn demo -o rplearn-demo
     """
-    from rplearn.analysis.experiment import run_demo
+    from rplearn.workflows import run_demo
 
     with _progress() as p:
         task = p.add_task("starting", total=None)

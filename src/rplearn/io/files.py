@@ -6,8 +6,13 @@ The format is chosen by the file extension; anything else is refused rather than
 from __future__ import annotations
 
 import os
+import sys
+import time
+from typing import Any
 
 import pandas as pd
+
+from rplearn._version import __version__
 
 from rplearn.data.tables import CSV_DTYPES, normalise_times
 from rplearn.errors import InputError
@@ -47,3 +52,13 @@ def check_table_path(path: str) -> str:
     if name.endswith((".csv", ".csv.gz")):
         return "csv"
     raise InputError(f"{path}: unknown table format; name it .csv, .csv.gz, .parquet or .pq")
+
+
+def provenance(command: str | None = None, **parameters: Any) -> dict[str, Any]:
+    """What made an output: library version, command line, parameters, time."""
+    return {
+        "rplearn_version": __version__,
+        "command": command if command is not None else " ".join(["rplearn", *sys.argv[1:]]),
+        "parameters": parameters,
+        "created_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+    }

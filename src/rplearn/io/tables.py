@@ -23,11 +23,8 @@ import pandas as pd
 
 from rplearn.data.tables import CSV_DTYPES, POSE_COLUMNS, SIGNAL_COLUMNS, normalise_times, validate_pose_log
 from rplearn.errors import InputError, LogFormatError
-from rplearn.core.geometry import (
-    geodetic_to_enu,
-    quat_wxyz_from_euler_enu_flu_deg,
-    quat_wxyz_from_euler_ned_frd_deg,
-)
+from rplearn.core.geometry import quat_wxyz_from_euler_enu_flu_deg, quat_wxyz_from_euler_ned_frd_deg
+from rplearn.io.geodetic import geodetic_to_enu
 
 #: Vendor column names -> canonical names (the one renaming mapping of rplearn.io).
 COLUMN_ALIASES: dict[str, str] = {

@@ -35,7 +35,8 @@ import pandas as pd
 
 from rplearn.data.tables import validate_pose_log
 from rplearn.errors import InputError, LogFormatError
-from rplearn.core.geometry import local_ned_to_enu, local_ned_to_geodetic, quat_ned_frd_to_enu_flu
+from rplearn.core.geometry import quat_ned_frd_to_enu_flu
+from rplearn.io.geodetic import local_ned_to_enu, local_ned_to_geodetic
 
 
 def _pyulog():

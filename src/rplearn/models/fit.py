@@ -7,97 +7,20 @@ A model is named by a :class:`ModelSpec` (``"sh-10"``, ``"bg-7"``, ``"p-12"``, `
 
 from __future__ import annotations
 
-import re
 import time
 from dataclasses import dataclass
 from typing import Any, Mapping, Sequence, Union
 
 import numpy as np
-import pandas as pd
 
-from rplearn.core.bases import make_basis
 from rplearn.models.baselines import KNNModel, MeanModel
-from rplearn.data.tables import LinkSamples, link_samples
-from rplearn.errors import InputError
+from rplearn.data.tables import LinkSamples
 from rplearn.core.metrics import Scores, score
 from rplearn.models.patterns import PatternSet
-from rplearn.core.solver import DEFAULT_RIDGE, fit_joint
+from rplearn.core.solver import fit_joint
+from rplearn.models.spec import ModelSpec
 
 Model = Union[PatternSet, MeanModel, KNNModel]
-
-MODEL_KINDS = ("sh", "bg", "poly", "mean", "knn")
-_DEFAULT_ORDER = {"sh": 10, "bg": 7, "poly": 12, "knn": 400}
-_ALIASES = {"m": "mean", "p": "poly", "nn": "knn", "bucketized": "bg"}
-
-
-#: Default ridge per family (see :data:`rplearn.core.solver.DEFAULT_RIDGE`; the paper used 50).
-DEFAULT_RIDGE_BY_KIND = {"sh": DEFAULT_RIDGE, "poly": DEFAULT_RIDGE, "bg": DEFAULT_RIDGE, "mean": 0.0, "knn": 0.0}
-
-
-def default_ridge(kind: str) -> float:
-    """Default ridge weight of a model family (see :data:`DEFAULT_RIDGE_BY_KIND`)."""
-    return DEFAULT_RIDGE_BY_KIND.get(kind, DEFAULT_RIDGE)
-
-
-@dataclass(frozen=True)
-class ModelSpec:
-    """A model family and its hyper-parameters.
-
-    Attributes
-    ----------
-    kind : {"sh", "bg", "poly", "mean", "knn"}
-    order : int or None
-        SH-L, BG-k, P-k order, or k of NN-k.
-    ridge : float or None
-        Ridge weight of the pattern models; None picks :func:`default_ridge` of the kind.
-    sigma_rad2 : float
-        BG kernel variance [rad^2].
-    grid : {"paper", "fibonacci"}
-        BG node layout.
-    """
-
-    kind: str
-    order: int | None = None
-    ridge: float | None = None
-    sigma_rad2: float = 0.5
-    grid: str = "paper"
-
-    def __post_init__(self) -> None:
-        if self.ridge is None:
-            object.__setattr__(self, "ridge", default_ridge(self.kind))
-        if not (np.isfinite(self.ridge) and self.ridge >= 0):
-            raise InputError(f"ridge must be a non-negative number, got {self.ridge!r}")
-        if self.kind != "mean" and (self.order is None or int(self.order) < 1):
-            raise InputError(f"model {self.kind}: order must be a positive integer, got {self.order!r}")
-
-    @classmethod
-    def parse(cls, text: str, **options: Any) -> "ModelSpec":
-        """Parse ``"sh-10"``, ``"SH10"``, ``"bg-7"``, ``"p-12"``, ``"nn-400"``, ``"m"``, ``"knn"``..."""
-        m = re.fullmatch(r"\s*([a-zA-Z]+)[-_ ]?(\d+)?\s*", str(text))
-        if not m:
-            raise InputError(f"unknown model {text!r}; expected one of sh, bg, poly, mean, knn (e.g. sh-10, nn-400)")
-        kind = _ALIASES.get(m.group(1).lower(), m.group(1).lower())
-        if kind not in MODEL_KINDS:
-            raise InputError(f"unknown model {text!r}; expected one of {', '.join(MODEL_KINDS)} (e.g. sh-10, nn-400)")
-        order = int(m.group(2)) if m.group(2) else options.pop("order", None)
-        options.pop("order", None)
-        if kind != "mean" and order is None:
-            order = _DEFAULT_ORDER[kind]
-        return cls(kind, None if kind == "mean" else int(order), **{k: v for k, v in options.items() if v is not None})
-
-    @property
-    def label(self) -> str:
-        """The paper's label: M, NN-400, SH-10, P-12, BG-7."""
-        return {"mean": "M", "knn": f"NN-{self.order}", "sh": f"SH-{self.order}", "poly": f"P-{self.order}", "bg": f"BG-{self.order}"}[self.kind]
-
-    @property
-    def decouples(self) -> bool:
-        return self.kind in ("sh", "bg", "poly")
-
-    def basis(self):
-        if self.kind == "bg":
-            return make_basis("bg", self.order, sigma_rad2=self.sigma_rad2, grid=self.grid)
-        return make_basis(self.kind, self.order)
 
 
 @dataclass
@@ -128,20 +51,6 @@ class FittedModel:
         if isinstance(self.model, PatternSet):
             return float(self.model.training.get("condition_number") or np.nan)
         return float("nan")
-
-
-def select_units(df: pd.DataFrame, units: Sequence[str] | None, source: str = "dataset") -> pd.DataFrame:
-    """Rows whose ``unit`` label is among ``units`` (all rows when ``units`` is None)."""
-    if not units:
-        return df
-    if "unit" not in df.columns:
-        raise InputError(f"{source}: --units needs a 'unit' column, which this dataset lacks")
-    wanted = [str(u) for u in units]
-    known = sorted(df["unit"].astype(str).unique())
-    unknown = [u for u in wanted if u not in known]
-    if unknown:
-        raise InputError(f"{source}: unknown unit(s) {', '.join(unknown)}; the dataset has {', '.join(known)}")
-    return df[df["unit"].astype(str).isin(wanted)]
 
 
 def fit_patterns(
@@ -249,9 +158,3 @@ def scores_markdown(rows: Sequence[Scores], extra: Mapping[str, Mapping[str, flo
     return "\n".join(lines)
 
 
-def samples_of(df: pd.DataFrame, units: Sequence[str] | None = None, source: str = "dataset", nodes: Sequence[str] | None = None) -> LinkSamples:
-    """Learning-ready samples of the chosen units of a matched dataset."""
-    part = select_units(df, units, source)
-    if len(part) == 0:
-        raise InputError(f"{source}: no samples selected")
-    return link_samples(part, source, nodes=nodes)

@@ -20,7 +20,7 @@ from typing import Any, Callable
 
 from rplearn.sim.antennas import AirframeLobe, AntennaSpec, Mounting, NodeAntenna, antenna_from_name
 from rplearn.errors import InputError
-from rplearn.sim.simulate import EstimatorConfig, FlightConfig, RadioConfig, SimulationConfig
+from rplearn.sim.config import EstimatorConfig, FlightConfig, RadioConfig, SimulationConfig
 from rplearn.plan.trajectory import Campaign, TrajectoryUnit, group_campaign
 
 __all__ = ["PRESET_NAMES", "fine_structure_lobes", "make_preset", "x500_frame_lobes"]

@@ -1,0 +1,48 @@
+"""3-D pattern images for rplearn export --format images."""
+
+from __future__ import annotations
+
+import os
+import re
+from typing import Any, Sequence
+
+from rplearn.io.export import _check_pattern_like, _nodes_of
+from rplearn.viz import plot
+
+
+def export_pattern_images(
+    pattern_like: Any,
+    out_dir: str | os.PathLike[str],
+    nodes: Sequence[str] | None = None,
+    step_deg: float = 3.0,
+) -> list[str]:
+    """One 3-D pattern image per node, ``<out_dir>/pattern_<node>.png``.
+
+    Parameters
+    ----------
+    pattern_like : pattern-like
+    out_dir : path
+        Directory (created if needed).
+    nodes : sequence of str, optional
+        Default all nodes.
+    step_deg : float
+        Grid step of the surface [deg].
+
+    Returns
+    -------
+    list of str
+        The paths written, in node order (characters other than letters, digits, ``_.-``
+        in a node id become ``_`` in the file name).
+    """
+    _check_pattern_like(pattern_like)
+    out_dir = os.fspath(out_dir)
+    os.makedirs(out_dir, exist_ok=True)
+    paths = []
+    for n in _nodes_of(pattern_like, nodes):
+        safe = re.sub(r"[^A-Za-z0-9_.-]+", "_", n) or "node"
+        paths.append(
+            plot.plot_pattern_3d(
+                pattern_like, n, os.path.join(out_dir, f"pattern_{safe}.png"), step_deg
+            )
+        )
+    return paths

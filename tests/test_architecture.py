@@ -1,0 +1,224 @@
+"""The package's layers: imports point downwards only, and there is no import cycle.
+
+Parses every module of ``rplearn`` with :mod:`ast` (every import statement, including those
+inside functions and ``TYPE_CHECKING`` blocks) and checks the rules of ARCHITECTURE.md.
+"""
+
+from __future__ import annotations
+
+import ast
+import sys
+from pathlib import Path
+
+import pytest
+
+PACKAGE_DIR = Path(__file__).resolve().parents[1] / "src" / "rplearn"
+
+#: Layers from the bottom up; a module may import its own layer's package and any layer below.
+LAYERS: tuple[str, ...] = (
+    "rplearn._version",
+    "rplearn.errors",
+    "rplearn.core",
+    "rplearn.data",
+    "rplearn.io",
+    "rplearn.plan",
+    "rplearn.sim",
+    "rplearn.models",
+    "rplearn.analysis",
+    "rplearn.viz",
+    "rplearn.workflows",
+    "rplearn.cli",
+)
+
+#: Third-party packages a layer may not import (DESIGN.md: the core needs numpy and scipy only;
+#: nothing below viz draws; nothing below the CLI parses arguments or styles text).
+FORBIDDEN_THIRD_PARTY: dict[str, tuple[str, ...]] = {
+    "rplearn.core": ("pandas", "pyarrow", "sklearn", "matplotlib", "typer", "rich", "rosbags", "pyulog", "dpkt", "pymap3d"),
+    "rplearn.data": ("matplotlib", "typer", "rich"),
+    "rplearn.io": ("matplotlib", "typer", "rich"),
+    "rplearn.plan": ("matplotlib", "typer", "rich"),
+    "rplearn.sim": ("matplotlib", "typer", "rich"),
+    "rplearn.models": ("matplotlib", "typer", "rich"),
+    "rplearn.analysis": ("matplotlib", "typer", "rich"),
+    "rplearn.viz": ("typer", "rich"),
+    "rplearn.workflows": ("typer", "rich"),
+}
+
+#: Format libraries that io imports only inside the functions that need them.
+LAZY_FORMAT_LIBRARIES: tuple[str, ...] = ("rosbags", "pyulog", "dpkt")
+
+
+def module_name(path: Path, package_dir: Path = PACKAGE_DIR) -> str:
+    rel = path.relative_to(package_dir.parent).with_suffix("")
+    parts = list(rel.parts)
+    if parts[-1] == "__init__":
+        parts.pop()
+    return ".".join(parts)
+
+
+def package_modules(package_dir: Path = PACKAGE_DIR) -> dict[str, Path]:
+    return {module_name(p, package_dir): p for p in sorted(package_dir.rglob("*.py"))}
+
+
+def layer_of(module: str) -> int | None:
+    """Index of the layer a module belongs to; None for the package root."""
+    for i, layer in enumerate(LAYERS):
+        if module == layer or module.startswith(layer + "."):
+            return i
+    return None
+
+
+def imports_of(path: Path, module: str, known: set[str]) -> list[tuple[str, int, bool]]:
+    """``(imported module, line, at module level)`` for every rplearn import in a file.
+
+    ``from rplearn.x import y`` counts as an import of ``rplearn.x.y`` when that is a module.
+    """
+    tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+    is_package = path.name == "__init__.py"
+    top_level = {id(n) for n in tree.body}
+    found: list[tuple[str, int, bool]] = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            targets = [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                pkg_parts = module.split(".") if is_package else module.split(".")[:-1]
+                pkg_parts = pkg_parts[: len(pkg_parts) - (node.level - 1)]
+                base = ".".join(pkg_parts + ([node.module] if node.module else []))
+            targets = [f"{base}.{a.name}" if f"{base}.{a.name}" in known else base for a in node.names]
+        else:
+            continue
+        for target in targets:
+            if target == "rplearn" or target.startswith("rplearn."):
+                found.append((target, node.lineno, id(node) in top_level))
+    return found
+
+
+def third_party_imports(path: Path) -> list[tuple[str, int, bool]]:
+    tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+    top_level = {id(n) for n in tree.body}
+    # imports inside `if TYPE_CHECKING:` or `try:` at module level count as module level
+    for n in tree.body:
+        if isinstance(n, (ast.If, ast.Try)):
+            top_level |= {id(c) for c in ast.walk(n)}
+    out = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            names = [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom) and not node.level and node.module:
+            names = [node.module]
+        else:
+            continue
+        out += [(n.split(".")[0], node.lineno, id(node) in top_level) for n in names if not n.startswith("rplearn")]
+    return out
+
+
+def layering_violations(package_dir: Path = PACKAGE_DIR) -> list[str]:
+    """Every import that points up or sideways between layers, or into the package root."""
+    modules = package_modules(package_dir)
+    known = set(modules)
+    problems = []
+    for module, path in modules.items():
+        own = layer_of(module)
+        if own is None:
+            continue  # the package root re-exports public names from every layer
+        for target, line, _ in imports_of(path, module, known):
+            if target == "rplearn":
+                problems.append(f"{module}:{line} imports the package root (import from the layer instead)")
+                continue
+            theirs = layer_of(target)
+            if theirs is None:
+                problems.append(f"{module}:{line} imports {target}, which belongs to no layer")
+            elif theirs > own:
+                problems.append(f"{module}:{line} imports {target} from the higher layer {LAYERS[theirs]}")
+    return problems
+
+
+def import_cycles(package_dir: Path = PACKAGE_DIR) -> list[list[str]]:
+    """Cycles of the graph of module imports (function-local ones included)."""
+    modules = package_modules(package_dir)
+    known = set(modules)
+    graph: dict[str, set[str]] = {m: set() for m in modules}
+    for module, path in modules.items():
+        for target, _, _ in imports_of(path, module, known):
+            # importing rplearn.a.b also runs rplearn.a's __init__
+            parts = target.split(".")
+            for k in range(2, len(parts) + 1):
+                prefix = ".".join(parts[:k])
+                if prefix in known and prefix != module and not module.startswith(prefix + "."):
+                    graph[module].add(prefix)
+    cycles, state, stack = [], {}, []
+
+    def visit(m: str) -> None:
+        state[m] = 1
+        stack.append(m)
+        for n in sorted(graph[m]):
+            if state.get(n) == 1:
+                cycles.append(stack[stack.index(n):] + [n])
+            elif n not in state:
+                visit(n)
+        stack.pop()
+        state[m] = 2
+
+    sys.setrecursionlimit(max(sys.getrecursionlimit(), 10_000))
+    for m in sorted(graph):
+        if m not in state:
+            visit(m)
+    return cycles
+
+
+def third_party_violations(package_dir: Path = PACKAGE_DIR) -> list[str]:
+    problems = []
+    for module, path in package_modules(package_dir).items():
+        own = layer_of(module)
+        if own is None:
+            continue
+        forbidden = FORBIDDEN_THIRD_PARTY.get(LAYERS[own], ())
+        for name, line, top in third_party_imports(path):
+            if name in forbidden:
+                problems.append(f"{module}:{line} imports {name}, which {LAYERS[own]} may not use")
+            if LAYERS[own] == "rplearn.io" and name in LAZY_FORMAT_LIBRARIES and top:
+                problems.append(f"{module}:{line} imports {name} at module level (import it where it is used)")
+    return problems
+
+
+def test_every_module_belongs_to_a_layer() -> None:
+    strays = [m for m in package_modules() if m != "rplearn" and layer_of(m) is None]
+    assert strays == []
+
+
+def test_imports_point_down_only() -> None:
+    assert layering_violations() == []
+
+
+def test_no_import_cycles() -> None:
+    assert import_cycles() == []
+
+
+def test_third_party_imports_respect_the_layers() -> None:
+    assert third_party_violations() == []
+
+
+@pytest.mark.parametrize(
+    "where, source, kind",
+    [
+        ("core/geometry.py", "from rplearn.models.patterns import PatternSet\n", "layer"),
+        ("data/sync.py", "def f():\n    from rplearn.viz import plot\n", "layer"),
+        ("io/files.py", "import rplearn.cli\n", "layer"),
+        ("models/spec.py", "from rplearn import RplearnError\n", "layer"),
+        ("core/link.py", "import matplotlib\n", "third"),
+        ("core/bases.py", "def f():\n    from rplearn.core.solver import DEFAULT_RIDGE\n", "cycle"),
+    ],
+)
+def test_the_checks_catch_a_planted_violation(tmp_path: Path, where: str, source: str, kind: str) -> None:
+    """Each check fails on a copy of the package with one bad import added."""
+    import shutil
+
+    copy = tmp_path / "rplearn"
+    shutil.copytree(PACKAGE_DIR, copy, ignore=shutil.ignore_patterns("__pycache__"))
+    assert layering_violations(copy) == [] and import_cycles(copy) == [] and third_party_violations(copy) == []
+    target = copy / where
+    target.write_text(target.read_text(encoding="utf-8") + "\n" + source, encoding="utf-8")
+    found = {"layer": layering_violations, "third": third_party_violations, "cycle": import_cycles}[kind](copy)
+    assert found, f"planted {source.strip()!r} in {where} was not caught"
