@@ -8,7 +8,21 @@ from __future__ import annotations
 
 
 class RplearnError(Exception):
-    """Base class of every error rplearn raises on purpose."""
+    """Base class of every error rplearn raises on purpose.
+
+    Parameters
+    ----------
+    message : str
+        One line naming the file, row, field or parameter at fault and what was expected.
+        Library messages name parameters and fields, never command-line flags.
+    param : str, optional
+        Name of the library parameter (or option field) whose value is at fault, e.g.
+        ``"max_gap_s"``; the command line maps it to the flag that sets it.
+    """
+
+    def __init__(self, message: str = "", *, param: str | None = None) -> None:
+        super().__init__(message)
+        self.param = param
 
 
 class InputError(RplearnError, ValueError):
