@@ -31,7 +31,7 @@ import tracemalloc
 import numpy as np
 from sklearn.linear_model import Ridge
 
-from rplearn.core.bases import SphericalHarmonics, real_sh_reference
+from rplearn.core.sh import SphericalHarmonics, real_sh_reference
 from rplearn.core.geometry import Directions
 from rplearn.core.solver import NormalEquations, fit_joint, solve
 
@@ -110,9 +110,9 @@ def main() -> int:
     # Streaming: 10 million samples in chunks, never materialised at once.
     total = 2_000_000 if args.quick else 10_000_000
     chunk = 200_000
-    import rplearn.core.solver as solver_module
+    import rplearn.core.normal_equations as solver_module
 
-    import rplearn.core.bases as bases_module
+    import rplearn.core.basis_base as bases_module
 
     solver_module._BUFFERS.__dict__.clear()  # count the solver's reusable block buffer too
     bases_module._SCRATCH.__dict__.clear()  # and the feature scratch arrays

@@ -7,6 +7,7 @@ import json
 import numpy as np
 import pytest
 
+from rplearn.errors import InputError, ModelFileError
 from rplearn.sim.antennas import (
     AirframeLobe,
     AntennaSpec,
@@ -14,6 +15,9 @@ from rplearn.sim.antennas import (
     Mounting,
     NodeAntenna,
     antenna_from_name,
+    load_ground_truth,
+)
+from rplearn.sim.gain_formulas import (
     half_wave_dipole_dbi,
     itu_f1336_omni_average_dbi,
     itu_f1336_omni_peak_dbi,
@@ -21,9 +25,7 @@ from rplearn.sim.antennas import (
     itu_f1336_sectoral_average_dbi,
     itu_f1336_sectoral_peak_dbi,
     itu_f1336_sectoral_theta3_deg,
-    load_ground_truth,
 )
-from rplearn.errors import InputError, ModelFileError
 
 # Hand computation for G0 = 2 dBi, k = 0.7 (ITU-R F.1336-5 eqs. 1b-1d):
 #   theta3 = 107.6 * 10^-0.2 = 107.6 * 0.630957 = 67.8910 deg

@@ -9,12 +9,11 @@ from rplearn.core.bases import (
     SphericalHarmonics,
     basis_from_dict,
     make_basis,
-    real_sh_reference,
-    sh_index,
     total_degree_exponents,
 )
-from rplearn.errors import InputError, ModelFileError
 from rplearn.core.geometry import great_circle_angle
+from rplearn.core.sh import real_sh_reference, sh_index
+from rplearn.errors import InputError, ModelFileError
 
 
 def _random_directions(n, seed=0):
@@ -112,7 +111,7 @@ def test_specs_round_trip_and_bad_specs():
 
 
 def test_half_angle_cos_sin_is_exact_to_rounding():
-    from rplearn.core.bases import _cos_sin_half_angle
+    from rplearn.core.basis_base import _cos_sin_half_angle
 
     rng = np.random.default_rng(3)
     special = np.pi / 2 * np.arange(-8, 9)
@@ -165,7 +164,7 @@ def test_gram_from_moments_equals_the_feature_gram(order):
 
 
 def test_very_high_sh_orders_fall_back_to_the_plain_gram():
-    from rplearn.core.bases import SH_MOMENTS_MAX_ORDER
+    from rplearn.core.sh import SH_MOMENTS_MAX_ORDER
 
     assert SphericalHarmonics(SH_MOMENTS_MAX_ORDER).moment_shape is not None
     high = SphericalHarmonics(SH_MOMENTS_MAX_ORDER + 1)
@@ -182,7 +181,7 @@ def test_shared_sh_tables_cannot_be_corrupted_by_a_caller():
 
 
 def test_chunked_evaluation_equals_the_design_matrix(monkeypatch):
-    import rplearn.core.bases as bases_module
+    import rplearn.core.basis_base as bases_module
 
     monkeypatch.setattr(bases_module, "EVAL_CHUNK", 300)  # several chunks and a partial one
     az, el = _random_directions(2000, seed=5)

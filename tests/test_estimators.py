@@ -123,3 +123,46 @@ def test_six_columns_name_three_nodes():
 def test_wrong_layout_is_refused_with_clear_message():
     with pytest.raises(InputError, match="4 columns"):
         PatternRegressor(order=2).fit(np.zeros((50, 3)), np.zeros(50))
+
+
+def test_joint_knn_refuses_more_neighbours_than_samples_like_the_model():
+    from rplearn.data.tables import LinkSamples
+    from rplearn.errors import IdentifiabilityError
+    from rplearn.models.baselines import KNNModel
+    from rplearn.models.estimators import samples_from_features
+
+    rng = np.random.default_rng(6)
+    X, y = _two_node_data(30, rng)
+    with pytest.raises(IdentifiabilityError, match="n_neighbors = 31") as est_error:
+        JointKNNRegressor(n_neighbors=31).fit(X, y)
+    samples = samples_from_features(X, y, ("A", "B"))
+    assert isinstance(samples, LinkSamples)
+    with pytest.raises(IdentifiabilityError, match="n_neighbors = 31") as model_error:
+        KNNModel.fit(samples, 31)
+    assert est_error.value.param == model_error.value.param == "n_neighbors"
+    with pytest.raises(InputError, match="n_neighbors must be a positive integer"):
+        JointKNNRegressor(n_neighbors=0).fit(X, y)
+    # at k = n both agree, and equal the training mean
+    est = JointKNNRegressor(n_neighbors=30).fit(X, y)
+    np.testing.assert_allclose(est.predict(X[:5]), KNNModel.fit(samples, 30).predict_gain(samples)[:5])
+    np.testing.assert_allclose(est.predict(X[:5]), np.mean(y))
+
+
+def test_estimators_agree_with_the_model_classes():
+    from rplearn.models.baselines import MeanModel
+    from rplearn.models.estimators import samples_from_features
+    from rplearn.models.fit import fit_patterns
+    from rplearn.models.spec import ModelSpec
+
+    rng = np.random.default_rng(8)
+    X, y = _two_node_data(800, rng)
+    samples = samples_from_features(X, y, ("0", "1"))
+    # M: the estimator is the one-link case of the per-link model
+    assert MeanRegressor().fit(X, y).mean_ == MeanModel.fit(samples).means_db[("0", "1")]
+    # patterns: the same solve, the same predictions
+    est = PatternRegressor(order=3, ridge=0.5).fit(X, y)
+    model = fit_patterns(samples, ModelSpec("sh", 3, ridge=0.5))
+    np.testing.assert_array_equal(est.coef_, model.coef)
+    np.testing.assert_array_equal(est.predict(X), model.predict_gain(samples))
+    with pytest.raises(InputError, match="basis"):
+        PatternRegressor(basis="mean").fit(X, y)

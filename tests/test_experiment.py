@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from matplotlib.image import imread
 
-from rplearn.core.bases import SphericalHarmonics, sh_index
+from rplearn.core.sh import SphericalHarmonics, sh_index
 from rplearn.workflows import run_demo
 from rplearn.analysis.headings import best_yaw
 from rplearn.analysis.identifiability import identifiability_study
@@ -106,6 +106,29 @@ def test_best_yaw_turns_the_beam_toward_the_other_drone():
     r = best_yaw(model, "A", "B", [0, 0, 10], [0, 20, 10], turn="tx")  # B is due north of A
     assert r.tx_yaw_deg == pytest.approx(90.0, abs=1.0)  # face north (ENU yaw 90 deg)
     assert r.gain_db > r.baseline_gain_db
+    assert r.rssi_dbm is None and "joint gain" in r.summary()
+
+
+def test_best_yaw_reports_the_received_power_before_and_after():
+    from rplearn.core.link import received_power_dbm
+    from rplearn.errors import InputError
+
+    b = SphericalHarmonics(2)
+    coef = np.zeros((2, 4))
+    coef[0, sh_index(1, 1)] = 10.0
+    model = PatternSet(b, ("A", "B"), coef, training={"frequency_hz": 2.4e9})
+    r = best_yaw(model, "A", "B", [0, 0, 10], [0, 20, 10], turn="both", tx_yaw_deg=-90.0, tx_power_dbm=20.0)
+    assert r.distance_m == pytest.approx(20.0) and r.frequency_hz == 2.4e9
+    assert r.rssi_dbm == pytest.approx(float(received_power_dbm(20.0, r.gain_db, 20.0, 2.4e9)))
+    assert r.baseline_rssi_dbm == pytest.approx(float(received_power_dbm(20.0, r.baseline_gain_db, 20.0, 2.4e9)))
+    assert r.rssi_dbm - r.baseline_rssi_dbm == pytest.approx(r.gain_db - r.baseline_gain_db)
+    assert "dBm now ->" in r.summary()
+    # the given frequency wins; without one and without the model's, the parameter is named
+    assert best_yaw(model, "A", "B", [0, 0, 10], [0, 20, 10], tx_power_dbm=20.0, frequency_hz=5.8e9).frequency_hz == 5.8e9
+    bare = PatternSet(b, ("A", "B"), coef)
+    with pytest.raises(InputError, match=r"\(frequency_hz\)") as info:
+        best_yaw(bare, "A", "B", [0, 0, 10], [0, 20, 10], tx_power_dbm=20.0)
+    assert info.value.param == "frequency_hz"
 
 
 def test_pattern_error_removes_only_unidentifiable_constants():

@@ -9,6 +9,7 @@ import pandas as pd
 import pytest
 
 from rplearn.io.inspect import InspectReport, inspect_logs
+from rplearn.io.options import ReaderOptions
 
 DATA = Path(__file__).resolve().parent / "data"
 
@@ -82,7 +83,7 @@ def test_clock_jump_backwards_and_offset(tmp_path):
 
 def test_clean_real_bag_has_no_sentinels():
     rep = inspect_logs(DATA / "ros1-bag" / "test2.bag",
-                       pose_topics={"/jackal_velocity_controller/odom": "jackal"})
+                       ReaderOptions(pose_topics={"/jackal_velocity_controller/odom": "jackal"}))
     assert [n.node for n in rep.nodes] == ["jackal"]
     assert rep.nodes[0].rows == 3060 and rep.nodes[0].rate_hz == pytest.approx(50.0, rel=0.05)
     assert rep.files[0]["format"] == "ros1"

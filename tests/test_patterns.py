@@ -129,7 +129,7 @@ def test_prediction_standard_error_is_calibrated():
     probe = samples(300, 0.0)
     for _ in range(40):
         model = fit_patterns(samples(400, 2.0), ModelSpec("sh", 3, ridge=0.0))
-        z.append((model.predict_samples(probe) - probe.joint_gain_db) / model.predict_samples_std(probe))
+        z.append((model.predict_gain(probe) - probe.joint_gain_db) / model.predict_gain_std(probe))
     z = np.concatenate(z)
     assert 0.85 < np.std(z) < 1.15
 
@@ -155,4 +155,4 @@ def test_joint_gain_std_equals_the_explicit_quadratic_form(basis):
     for k in range(3):
         x[:, k * p : (k + 1) * p] += np.where((tx == k)[:, None], ft, 0.0) + np.where((rx == k)[:, None], fr, 0.0)
     expected = np.sqrt(np.einsum("ni,ij,nj->n", x, model.covariance, x))
-    np.testing.assert_allclose(model.predict_samples_std(samples), expected, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(model.predict_gain_std(samples), expected, rtol=1e-12, atol=1e-12)

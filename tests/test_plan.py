@@ -7,9 +7,10 @@ import pytest
 
 from rplearn.core.bases import make_basis
 from rplearn.errors import PlanError
+from rplearn.plan.campaign import group_campaign, paper_campaign
 from rplearn.plan.check import check_plan, coverage_map, plan_directions
+from rplearn.plan.trajectory import PlanLimits
 from rplearn.sim.presets import make_preset
-from rplearn.plan.trajectory import PlanLimits, group_campaign, paper_campaign
 
 
 @pytest.fixture(scope="module")

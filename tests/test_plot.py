@@ -10,11 +10,11 @@ import pytest
 from matplotlib.collections import PathCollection, QuadMesh
 from matplotlib.image import imread
 
-from rplearn.viz import plot
 from rplearn.core.bases import SphericalHarmonics
-from rplearn.errors import InputError
 from rplearn.core.geometry import unit_vector
+from rplearn.errors import InputError
 from rplearn.models.patterns import PatternSet
+from rplearn.viz import charts, plot
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
@@ -67,21 +67,21 @@ def test_every_plot_writes_a_valid_png(tmp_path, truth, learned):
             {"SH-3": learned}, truth, None, samples, tmp_path / "maps.png", step_deg=6
         ),
         plot.plot_coverage(samples, {"A": _samples(50, 2)}, tmp_path / "cov.png"),
-        plot.plot_rssi_time(
+        charts.plot_rssi_time(
             np.arange(300) * 0.1,
             -60 + np.sin(np.arange(300) / 9),
             tmp_path / "rssi.png",
             unit_labels=["u1"] * 150 + ["u2"] * 150,
         ),
-        plot.plot_order_sweep(
+        charts.plot_order_sweep(
             [2, 4, 6, 8],
             [4.0, 2.5, 2.2, 2.6],
             [9e3, 7e3, 6.9e3, 7.4e3],
             [0.01, 0.02, 0.05, 0.2],
             tmp_path / "order.png",
         ),
-        plot.plot_epsilon_sweep(np.logspace(-3, 6, 10), np.full(10, 2.3), tmp_path / "eps.png"),
-        plot.plot_rank_study(
+        charts.plot_epsilon_sweep(np.logspace(-3, 6, 10), np.full(10, 2.3), tmp_path / "eps.png"),
+        charts.plot_rank_study(
             [("2 antennas", 128, 127), ("3 antennas", 192, 192)], tmp_path / "rank.png"
         ),
         plot.plot_pattern_3d(truth, "A", tmp_path / "sub" / "p3d.png", step_deg=10),
@@ -162,8 +162,8 @@ def test_pattern_maps_truth_values_and_centering(truth):
 
 def test_pattern_maps_of_a_fitted_two_node_model(tmp_path):
     from rplearn.analysis.pattern_error import node_directions
-    from rplearn.models.fit import fit_model
     from rplearn.data.units import samples_of
+    from rplearn.models.fit import fit_model
     from rplearn.models.spec import ModelSpec
     from rplearn.sim.simulate import simulate
 
@@ -188,30 +188,30 @@ def test_pattern_maps_of_a_fitted_two_node_model(tmp_path):
 
 
 def test_order_sweep_marks_the_minima():
-    fig = plot.order_sweep_figure(
+    fig = charts.order_sweep_figure(
         [2, 4, 6, 8], [4.0, 2.5, 2.2, 2.6], [9e3, 6.5e3, 6.9e3, 7.4e3], [0.01, 0.02, 0.05, 0.5]
     )
     labels = [ln.get_label() for ax in fig.axes for ln in ax.get_lines()]
     assert "min RMSE: SH-6 (2.20 dB)" in labels
     assert "min AIC: SH-4" in labels
     assert fig.axes[1].get_yscale() == "log"  # LTD panel spanning decades
-    fig = plot.order_sweep_figure([2, 4], [3.0, 2.0], [8e3, 7e3], [0.05, 0.06])
+    fig = charts.order_sweep_figure([2, 4], [3.0, 2.0], [8e3, 7e3], [0.05, 0.06])
     assert fig.axes[1].get_yscale() == "linear"
 
 
 def test_epsilon_sweep_axis():
-    fig = plot.epsilon_sweep_figure(np.logspace(-3, 6, 19), np.full(19, 1.7))
+    fig = charts.epsilon_sweep_figure(np.logspace(-3, 6, 19), np.full(19, 1.7))
     ax = fig.axes[0]
     assert ax.get_xscale() == "log"
     np.testing.assert_allclose(ax.get_xlim(), (1e-3, 1e6))
     lo, hi = ax.get_ylim()
     assert lo < 1.7 < hi  # a flat line is drawn in a visible band
     with pytest.raises(InputError):
-        plot.epsilon_sweep_figure([0.0, 1.0], [1.0, 1.0])
+        charts.epsilon_sweep_figure([0.0, 1.0], [1.0, 1.0])
 
 
 def test_rank_study_bars():
-    fig = plot.rank_study_figure([("two", 128, 127), ("three", 192, 192)])
+    fig = charts.rank_study_figure([("two", 128, 127), ("three", 192, 192)])
     heights = [p.get_height() for p in fig.axes[0].patches]
     assert heights == [128, 192, 127, 192]
     texts = [t.get_text() for t in fig.axes[0].texts]
@@ -221,11 +221,11 @@ def test_rank_study_bars():
 @pytest.mark.parametrize(
     "call",
     [
-        lambda: plot.rssi_time_figure([0, 1, 2], [1, 2]),
-        lambda: plot.order_sweep_figure([1, 2], [1.0], [1.0, 2.0], [1.0, 2.0]),
+        lambda: charts.rssi_time_figure([0, 1, 2], [1, 2]),
+        lambda: charts.order_sweep_figure([1, 2], [1.0], [1.0, 2.0], [1.0, 2.0]),
         lambda: plot.coverage_figure({}),
         lambda: plot.pattern_maps_figure({"x": object()}, None),
-        lambda: plot.rank_study_figure([]),
+        lambda: charts.rank_study_figure([]),
     ],
 )
 def test_bad_input_is_an_input_error(call):

@@ -12,7 +12,7 @@ import pytest
 from matplotlib.image import imread
 
 from rplearn._version import __version__
-from rplearn.viz import plot, report
+from rplearn.viz import charts, plot, report
 from rplearn.errors import InputError
 from rplearn.viz.report import (
     ReportSection,
@@ -37,10 +37,10 @@ def figures(tmp_path_factory):
     samples = {"A": (rng.uniform(-3, 3, 300), rng.uniform(-1.5, 1.5, 300))}
     return [
         plot.plot_coverage(samples, None, d / "coverage.png"),
-        plot.plot_order_sweep(
+        charts.plot_order_sweep(
             [2, 4, 6], [3.0, 2.0, 2.4], [8e3, 6e3, 7e3], [0.01, 0.03, 0.1], d / "order_sweep.png"
         ),
-        plot.plot_rank_study([("2 antennas", 128, 127), ("3 antennas", 192, 192)], d / "rank.png"),
+        charts.plot_rank_study([("2 antennas", 128, 127), ("3 antennas", 192, 192)], d / "rank.png"),
     ]
 
 

@@ -9,7 +9,6 @@ import pytest
 from rplearn.core.bases import SphericalHarmonics
 from rplearn.errors import InputError
 from rplearn.core.geometry import quat_wxyz_from_yaw
-from rplearn.core.link import received_power_dbm
 from rplearn.models.patterns import PatternSet
 from rplearn.analysis.swarm import predict_swarm
 
@@ -90,14 +89,16 @@ def test_times_gaps_and_errors():
     way = predict_swarm(model, sparse, 20.0, pattern_of={"C": "A", "D": "B"}, times_s=[0.0, 5.0, 10.0])
     assert (way.connectivity["n_drones"] == 4).all()
     assert any("D 11" in n for n in res.notes)  # times 10..20 lie inside the 9..21 s gap
-    with pytest.raises(InputError, match="drone C has no learned pattern.*--as C=NODE"):
+    with pytest.raises(InputError, match=r"drone C has no learned pattern.*\(pattern_of C=NODE\)") as info:
         predict_swarm(model, poses, 20.0)
-    with pytest.raises(InputError, match="--as names drone"):
+    assert info.value.param == "pattern_of"  # the command line names its flag
+    with pytest.raises(InputError, match="pattern_of names drone"):
         predict_swarm(model, poses, 20.0, pattern_of={"C": "A", "D": "B", "E": "A"})
-    with pytest.raises(InputError, match="--as C=Z: Z is not a learned node"):
+    with pytest.raises(InputError, match="pattern_of C=Z: Z is not a learned node"):
         predict_swarm(model, poses, 20.0, pattern_of={"C": "Z", "D": "B"})
-    with pytest.raises(InputError, match="--max-gap"):
+    with pytest.raises(InputError, match="max_gap_s") as info:
         predict_swarm(model, poses, 20.0, pattern_of={"C": "A", "D": "B"}, max_gap_s=-1.0)
+    assert info.value.param == "max_gap_s"
     with pytest.raises(InputError, match="at least 2 drones"):
         predict_swarm(model, poses[poses["node"] == "A"], 20.0)
     bare = PatternSet(basis=model.basis, nodes=model.nodes, coef=model.coef)
@@ -118,8 +119,7 @@ def test_times_gaps_and_errors():
 
 
 def test_headings_improve_the_bottleneck_and_agree_with_the_links():
-    from rplearn.analysis.headings import best_yaw
-    from rplearn.analysis.swarm import best_swarm_headings
+    from rplearn.analysis.headings import best_swarm_headings, best_yaw
 
     rng = np.random.default_rng(2)
     model = _model(rng)
@@ -136,7 +136,7 @@ def test_headings_improve_the_bottleneck_and_agree_with_the_links():
     two = best_swarm_headings(model, {"A": [0, 0, 20], "B": [30, 10, 25]}, 20.0, step_deg=1.0)
     single = best_yaw(model, "A", "B", [0, 0, 20], [30, 10, 25], turn="both", step_deg=1.0)
     assert two.yaw_deg == {"A": single.tx_yaw_deg, "B": single.rx_yaw_deg}
-    with pytest.raises(InputError, match="--fixed names unknown"):
+    with pytest.raises(InputError, match="fixed names unknown"):
         best_swarm_headings(model, pos, 20.0, pattern_of={"C": "A", "D": "B"}, fixed=["Z"])
 
 
@@ -144,8 +144,7 @@ def test_three_drone_headings_are_the_grid_optimum():
     """Brute force over every yaw combination on a 30 deg grid, gains from the one-link predictor."""
     import itertools
 
-    from rplearn.core.link import received_power_dbm
-    from rplearn.analysis.swarm import best_swarm_headings
+    from rplearn.analysis.headings import best_swarm_headings
 
     rng = np.random.default_rng(7)
     model = _model(rng)
@@ -172,7 +171,7 @@ def test_three_drone_headings_are_the_grid_optimum():
 
 
 def test_headings_never_worse_than_off_grid_current_yaws():
-    from rplearn.analysis.swarm import best_swarm_headings
+    from rplearn.analysis.headings import best_swarm_headings
 
     rng = np.random.default_rng(3)
     model = _model(rng)

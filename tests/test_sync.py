@@ -11,7 +11,14 @@ from hypothesis import strategies as st
 from rplearn.data.tables import MATCHED_COLUMNS
 from rplearn.errors import InputError
 from rplearn.core.geometry import quat_wxyz_from_yaw
-from rplearn.data.sync import DROP_REASONS, SyncSummary, synchronise, synchronise_stream, synchronise_to_parquet
+from rplearn.data.sync import (
+    DROP_REASONS,
+    SyncOptions,
+    SyncSummary,
+    synchronise,
+    synchronise_stream,
+    synchronise_to_parquet,
+)
 from rplearn.core.geometry import slerp_wxyz
 
 
@@ -75,16 +82,16 @@ def test_drops_are_counted_by_reason(two_nodes):
     text = s.to_text()
     assert "sentinel_rssi): 6" in text and "nodes without a pose log: C" in text
     # one direction only, as the paper does for non-reciprocal links
-    one = synchronise(two_nodes, sig, link=("B", "A"))
+    one = synchronise(two_nodes, sig, SyncOptions(link=("B", "A")))
     assert one.summary.n_out == 1 and one.summary.dropped["other_link"] == 5  # A->B (4), A->C
     assert set(one.dataset["tx"]) == {"B"}
     # a larger gap threshold bridges the gap
-    assert synchronise(two_nodes, sig, max_gap_s=1.0).summary.dropped["pose_gap"] == 0
+    assert synchronise(two_nodes, sig, SyncOptions(max_gap_s=1.0)).summary.dropped["pose_gap"] == 0
 
 
 def test_unknown_node_can_be_an_error(two_nodes):
     with pytest.raises(InputError, match=r"signal log: field tx/rx: unknown node id\(s\) C at row 0"):
-        synchronise(two_nodes, signal_log([0.05], "A", "C"), on_unknown_node="error")
+        synchronise(two_nodes, signal_log([0.05], "A", "C"), SyncOptions(on_unknown_node="error"))
 
 
 def test_too_few_samples_and_bad_options(two_nodes):
@@ -92,10 +99,32 @@ def test_too_few_samples_and_bad_options(two_nodes):
         synchronise(two_nodes, signal_log([5.0], "A", "B"))
     with pytest.raises(InputError, match="missing column"):
         synchronise(two_nodes, signal_log([0.05], "A", "B").drop(columns="rssi_dbm"))
-    with pytest.raises(InputError, match="max_gap_s"):
-        synchronise(two_nodes, signal_log([0.05], "A", "B"), max_gap_s=-1)
-    with pytest.raises(InputError, match=r"clock offsets \(rplearn sync --offset, or clock_offsets_s=\) name node"):
-        synchronise(two_nodes, signal_log([0.05], "A", "B"), clock_offsets_s={"Z": 1.0})
+    with pytest.raises(InputError, match="max_gap_s") as e:
+        SyncOptions(max_gap_s=-1)
+    assert e.value.param == "max_gap_s"
+    with pytest.raises(InputError, match=r"clock offsets \(clock_offsets_s\) name node") as e:
+        synchronise(two_nodes, signal_log([0.05], "A", "B"), SyncOptions(clock_offsets_s={"Z": 1.0}))
+    assert e.value.param == "clock_offsets_s"
+
+
+@pytest.mark.parametrize("field, value", [
+    ("link", ("A", "A")), ("link", ("A",)), ("max_gap_s", 0.0), ("max_gap_s", np.nan),
+    ("clock_offsets_s", {"A": "x"}), ("signal_clock_offset_s", np.inf), ("sentinel_rssi_dbm", ["a"]),
+    ("on_unknown_node", "skip"), ("min_samples", -1),
+])
+def test_sync_options_name_the_field_at_fault(field, value):
+    with pytest.raises(InputError, match=f"^{field}: expected") as e:
+        SyncOptions(**{field: value})
+    assert e.value.param == field and "--" not in str(e.value)
+
+
+def test_sync_options_defaults_and_type(two_nodes):
+    opts = SyncOptions(link=["A", "B"], clock_offsets_s={"A": 0})
+    assert opts.link == ("A", "B") and opts.clock_offsets_s == {"A": 0.0}
+    assert (SyncOptions().max_gap_s, SyncOptions().on_unknown_node, SyncOptions().min_samples) == (0.2, "drop", 1)
+    with pytest.raises(InputError, match="expected a SyncOptions") as e:
+        synchronise(two_nodes, signal_log([0.05], "A", "B"), {"max_gap_s": 1.0})
+    assert e.value.param == "options"
 
 
 def test_clock_offsets_shift_the_logs(two_nodes):
@@ -103,7 +132,7 @@ def test_clock_offsets_shift_the_logs(two_nodes):
     shifted = two_nodes.copy()
     shifted.loc[shifted["node"] == "A", "t"] += 100.0  # A's clock runs 100 s ahead
     got = synchronise(shifted, signal_log([1000.05, 1000.15], "A", "B"),
-                      clock_offsets_s={"A": -100.0}, signal_clock_offset_s=-1000.0).dataset
+                      SyncOptions(clock_offsets_s={"A": -100.0}, signal_clock_offset_s=-1000.0)).dataset
     np.testing.assert_allclose(got[list(MATCHED_COLUMNS[3:])].to_numpy(),
                                want[list(MATCHED_COLUMNS[3:])].to_numpy(), atol=1e-9)
     np.testing.assert_allclose(got["t"], want["t"], atol=1e-9)
@@ -177,7 +206,7 @@ def test_every_sample_is_kept_or_counted(times, max_gap):
     pose, _ = _flight(10)
     pose = pose[(pose["t"] < 20) | (pose["t"] > 20.5)]  # a 0.5 s gap
     sig = signal_log(times, "A", "B")
-    res = synchronise(pose, sig, max_gap_s=max_gap, min_samples=0)
+    res = synchronise(pose, sig, SyncOptions(max_gap_s=max_gap, min_samples=0))
     s = res.summary
     assert s.n_in == s.n_out + s.n_dropped == len(times)
     d = res.dataset
@@ -208,10 +237,11 @@ def test_non_unit_quaternions_are_counted_and_normalised(two_nodes):
 
 def test_link_naming_a_node_in_no_signal_log(two_nodes):
     sig = signal_log([0.05], "A", "B")
-    with pytest.raises(InputError, match=r"--link A:Q: node Q is in no signal log; the signal logs name A, B$"):
-        synchronise(two_nodes, sig, link=("A", "Q"))
+    with pytest.raises(InputError, match=r"link A:Q: node Q is in no signal log; the signal logs name A, B$") as e:
+        synchronise(two_nodes, sig, SyncOptions(link=("A", "Q")))
+    assert e.value.param == "link"
     with pytest.raises(InputError, match=r"no signal from B to A; directions present: A:B$"):
-        synchronise(two_nodes, sig, link=("B", "A"))
+        synchronise(two_nodes, sig, SyncOptions(link=("B", "A")))
 
 
 def test_duplicate_rows_equals_pandas_duplicated_on_unsorted_logs():

@@ -11,17 +11,15 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from rplearn.errors import InputError, PlanError
-from rplearn.plan.trajectory import (
+from rplearn.plan.campaign import (
     Campaign,
-    PlanLimits,
-    TrajectoryUnit,
     group_campaign,
     link_graph_identifies_gains,
     pair_schedule,
     paper_campaign,
-    summarize_unit,
     write_references,
 )
+from rplearn.plan.trajectory import PlanLimits, TrajectoryUnit, summarize_unit
 
 
 def _elevation_second_from_first_deg(ref) -> np.ndarray:
@@ -148,7 +146,7 @@ def test_limits_refuse_a_plan_with_a_clear_message() -> None:
     unit = TrajectoryUnit(speed_m_s=3.0)
     ok = summarize_unit(unit, PlanLimits(max_speed_m_s=5.0, max_accel_m_s2=5.0, max_flight_time_s=600.0))
     assert ok.max_speed_m_s == pytest.approx(3.0)
-    with pytest.raises(PlanError, match="max_speed_m_s is 3 m/s, above the limit 2"):
+    with pytest.raises(PlanError, match=r"peak speed is 3 m/s, above the limit 2 m/s \(max_speed_m_s\)"):
         summarize_unit(unit, PlanLimits(max_speed_m_s=2.0))
     with pytest.raises(PlanError, match="max_accel_m_s2"):
         summarize_unit(unit, PlanLimits(max_accel_m_s2=0.5))
@@ -237,20 +235,51 @@ def test_yaw_rate_summary_matches_reference_and_limit() -> None:
         summarize_unit(unit, PlanLimits(max_yaw_rate_deg_s=30.0))
 
 
-def test_wording_names_cli_flags_and_real_remedies():
+def test_wording_names_parameters_and_real_remedies():
+    """Library messages name the parameters (never command-line flags) and carry them as ``param``."""
     from rplearn.errors import InputError, PlanError
-    from rplearn.plan.trajectory import PlanLimits, paper_campaign, summarize_unit
+    from rplearn.plan.campaign import paper_campaign
+    from rplearn.plan.trajectory import PlanLimits, summarize_unit
 
-    with pytest.raises(InputError, match=r"^--loops \(n_loops\): expected a positive integer, got 0$"):
+    with pytest.raises(InputError, match=r"^n_loops: expected a positive integer, got 0$") as e:
         paper_campaign(n_loops=0)
+    assert e.value.param == "n_loops"
+    with pytest.raises(InputError, match=r"^distance_m: expected a positive finite number") as e:
+        paper_campaign(distance_m=-1.0)
+    assert e.value.param == "distance_m"
+    with pytest.raises(InputError, match=r"^height_m: expected more than half the distance") as e:
+        paper_campaign(height_m=3.0)
+    assert e.value.param == "height_m"
     unit = paper_campaign(speed_m_s=5.0).units[0]
     with pytest.raises(PlanError) as e:
         summarize_unit(unit, PlanLimits(max_speed_m_s=1.0))
     msg = str(e.value)
-    assert "(--max-speed)" in msg and "lower the cruise speed (--speed, speed_m_s)" in msg
+    assert e.value.param == "max_speed_m_s"
+    assert "above the limit 1 m/s (max_speed_m_s)" in msg and "lower the cruise speed (speed_m_s)" in msg
     assert "loop count" not in msg
-    with pytest.raises(PlanError, match=r"fly fewer headings \(--loops, n_loops\)"):
+    with pytest.raises(PlanError, match=r"fly fewer headings \(n_loops\), a smaller circle \(distance_m\)") as e:
         summarize_unit(unit, PlanLimits(max_flight_time_s=1.0))
+    assert e.value.param == "max_flight_time_s"
+    for limits in (PlanLimits(max_speed_m_s=1.0), PlanLimits(max_accel_m_s2=0.1), PlanLimits(max_flight_time_s=1.0)):
+        with pytest.raises(PlanError) as e:
+            summarize_unit(unit, limits)
+        assert "--" not in str(e.value)
+
+
+def test_cli_trajectory_names_the_flags(tmp_path):
+    """The command line maps the parameters of library messages back to its flags."""
+    from typer.testing import CliRunner
+
+    from rplearn.cli import app
+
+    runner = CliRunner()
+    res = runner.invoke(app, ["trajectory", "--loops", "0", "--check-model", "none", "-o", str(tmp_path / "a")])
+    assert res.exit_code == 1
+    assert "--loops: expected a positive integer, got 0" in res.output
+    res = runner.invoke(app, ["trajectory", "--speed", "5", "--max-speed", "1", "--check-model", "none", "-o", str(tmp_path / "b")])
+    assert res.exit_code == 1
+    assert "above the limit 1 m/s (--max-speed)" in res.output and "lower the cruise speed (--speed)" in res.output
+    assert "max_speed_m_s" not in res.output and "speed_m_s" not in res.output
 
 
 def test_help_summary_of_trajectory_is_complete():

@@ -15,7 +15,6 @@ from rplearn.io.files import write_table
 from rplearn.models.fit import FittedModel, evaluate_models, fit_model, scores_markdown
 from rplearn.data.units import samples_of
 from rplearn.models.spec import ModelSpec
-from rplearn.models.patterns import PatternSet
 
 from rplearn.analysis.identifiability import IdentifiabilityStudy, identifiability_study
 from rplearn.analysis.pattern_error import node_directions, pattern_errors_db
@@ -63,7 +62,7 @@ def run_demo(
     ``report.html`` into ``out_dir``.
     """
     from rplearn.sim.simulate import simulate
-    from rplearn.data.sync import synchronise
+    from rplearn.data.sync import SyncOptions, synchronise
 
     t_start = time.perf_counter()
     os.makedirs(out_dir, exist_ok=True)
@@ -79,7 +78,7 @@ def run_demo(
     link = (nodes[0], nodes[1]) if len(nodes) == 2 else None
     link_text = f"link {link[0]} -> {link[1]}" if link else "all links"
     progress(f"synchronising {len(sim.signal_log):,} packets with the pose logs ({link_text})")
-    synced = synchronise(sim.pose_log, sim.signal_log, link=link)
+    synced = synchronise(sim.pose_log, sim.signal_log, SyncOptions(link=link))
     dataset = synced.dataset
     files["dataset"] = os.path.join(out_dir, "dataset.parquet")
     write_table(dataset, files["dataset"])
@@ -104,7 +103,7 @@ def run_demo(
     for node, (az, el) in node_directions(test).items():
         covered[node] = (np.concatenate([covered[node][0], az]), np.concatenate([covered[node][1], el]))
     perr = {
-        f.label: pattern_errors_db(f.model, sim.ground_truth, covered) for f in fitted if isinstance(f.model, PatternSet)
+        f.label: pattern_errors_db(f.model, sim.ground_truth, covered) for f in fitted if f.model.kind == "patterns"
     }
     extra = {label: {f"pattern err {n}/dB": v for n, v in errs.items()} for label, errs in perr.items()}
     md = scores_markdown(table, extra)
@@ -152,7 +151,7 @@ def run_demo(
 
 
 def _demo_figures_and_report(result, sim, dataset, learn, test, fitted, prov) -> dict[str, str]:
-    from rplearn.viz import plot
+    from rplearn.viz import charts, plot
     from rplearn.viz.report import ReportSection, write_report
 
     out = result.out_dir
@@ -161,22 +160,22 @@ def _demo_figures_and_report(result, sim, dataset, learn, test, fitted, prov) ->
     files: dict[str, str] = {}
     learn_dirs = node_directions(learn)
     test_dirs = node_directions(test)
-    pattern_models = {f.label: f.model for f in fitted if isinstance(f.model, PatternSet)}
+    pattern_models = {f.label: f.model for f in fitted if f.model.kind == "patterns"}
     files["fig_patterns"] = plot.plot_pattern_maps(
         pattern_models, sim.ground_truth, list(learn.nodes), learn_dirs, os.path.join(fig_dir, "patterns.png"), center=True
     )
     files["fig_coverage"] = plot.plot_coverage(learn_dirs, test_dirs, os.path.join(fig_dir, "coverage.png"))
     unit0 = str(dataset["unit"].iloc[0])
     first_unit = dataset[dataset["unit"] == dataset["unit"].iloc[0]]
-    files["fig_rssi"] = plot.plot_rssi_time(
+    files["fig_rssi"] = charts.plot_rssi_time(
         first_unit["t"].to_numpy() - first_unit["t"].iloc[0], first_unit["rssi_dbm"].to_numpy(), os.path.join(fig_dir, "rssi.png"),
         caption=f"Received signal strength over time during the first flight unit, {unit0} (paper Fig. 8b).",
     )
     sw = result.sweep
-    files["fig_sweep"] = plot.plot_order_sweep(sw.orders, sw.rmse_db, sw.aic, sw.ltd_s, os.path.join(fig_dir, "sweep.png"))
+    files["fig_sweep"] = charts.plot_order_sweep(sw.orders, sw.rmse_db, sw.aic, sw.ltd_s, os.path.join(fig_dir, "sweep.png"))
     st = result.study
-    files["fig_epsilon"] = plot.plot_epsilon_sweep(st.epsilons[1:], st.rmse_db[1:], os.path.join(fig_dir, "epsilon.png"))
-    files["fig_rank"] = plot.plot_rank_study(st.rank_cases, os.path.join(fig_dir, "rank.png"))
+    files["fig_epsilon"] = charts.plot_epsilon_sweep(st.epsilons[1:], st.rmse_db[1:], os.path.join(fig_dir, "epsilon.png"))
+    files["fig_rank"] = charts.plot_rank_study(st.rank_cases, os.path.join(fig_dir, "rank.png"))
     best = min((r for r in result.table if r.model in pattern_models), key=lambda r: r.rmse_db)
     sections = [
         ReportSection(

@@ -12,7 +12,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from rplearn.errors import InputError, LogFormatError, RplearnError
-from rplearn.io import read_logs
+from rplearn.io import ReaderOptions, read_logs
 from rplearn.io.pcap import read_pcap, write_radiotap_pcap
 from rplearn.io.rosbag import read_rosbag
 from rplearn.io.tables import read_pose_table, read_signal_table
@@ -246,7 +246,7 @@ def test_fuzz_pcap_mutated(tmp_path_factory, which, edits, cut):
     p = tmp_path_factory.mktemp("p") / "x.pcap"
     p.write_bytes(bytes(raw[: max(1, len(raw) - cut)]))
     _only_own_errors(read_pcap, str(p), "rx", 20.0)
-    _only_own_errors(read_logs, str(p), receivers={str(p): "rx"}, tx_power_dbm=20.0)
+    _only_own_errors(read_logs, str(p), ReaderOptions(receivers={str(p): "rx"}, tx_power_dbm=20.0))
 
 
 def test_pcap_unmapped_addresses_are_counted(tmp_path):
@@ -259,8 +259,71 @@ def test_pcap_unmapped_addresses_are_counted(tmp_path):
 def test_geodetic_tables_share_the_first_origin(tmp_path):
     a = write(tmp_path, "t,lat,lon,alt,qw,qx,qy,qz\n0,47.0,8.0,500,1,0,0,0\n1,47.0,8.0,501,1,0,0,0\n", "a.csv")
     b = write(tmp_path, "t,lat,lon,alt,qw,qx,qy,qz\n0,47.0,8.001,500,1,0,0,0\n", "b.csv")
-    logs, meta = read_logs([a, b], nodes={a: "A", b: "B"})
+    logs, meta = read_logs([a, b], ReaderOptions(nodes={a: "A", b: "B"}))
     assert meta["origin_geodetic"] == (47.0, 8.0, 500.0)
     bx = logs.pose.loc[logs.pose["node"] == "B", ["x", "y"]].to_numpy()[0]
     # 0.001 deg of longitude at 47 deg N is ~76 m east
     assert bx[0] == pytest.approx(76.0, abs=0.5) and abs(bx[1]) < 0.01
+
+
+@pytest.mark.parametrize("field, value", [
+    ("nan_policy", "skip"), ("allow_unsorted", "yes"), ("require_valid", None), ("rssi_field", ""),
+    ("origin_geodetic", (47.0, 8.0)), ("origin_geodetic", (95.0, 8.0, 0.0)), ("tx_power_dbm", float("nan")),
+    ("tx_power_dbm", {"A": "x"}), ("frequency_hz", -1.0), ("nodes", ["a.ulg"]), ("rssi_topics", {"/r": "A"}),
+])
+def test_reader_options_name_the_field_at_fault(field, value):
+    with pytest.raises(InputError, match=f"^{field}: ") as e:
+        ReaderOptions(**{field: value})
+    assert e.value.param == field and "--" not in one_line(e.value)
+
+
+def test_reader_options_defaults_and_normalisation(tmp_path):
+    opts = ReaderOptions(nodes={tmp_path / "a.ulg": "A"}, origin_geodetic=[47, 8, 500], rssi_topics={"/r": ["A", "B"]})
+    assert opts.nodes == {str(tmp_path / "a.ulg"): "A"} and opts.origin_geodetic == (47.0, 8.0, 500.0)
+    assert opts.rssi_topics == {"/r": ("A", "B")}
+    d = ReaderOptions()
+    assert (d.rssi_field, d.nan_policy, d.allow_unsorted, d.require_valid, d.tx_power_dbm) == ("rssi", "error", False, False, None)
+    with pytest.raises(InputError, match="expected a ReaderOptions") as e:
+        read_logs(write(tmp_path, POSE_CSV), {"nan_policy": "drop"})
+    assert e.value.param == "options"
+
+
+def test_reader_errors_carry_the_field_to_set(tmp_path):
+    nan = write(tmp_path, POSE_CSV.replace("0.1,A,1,0,1", "0.1,A,nan,0,1"), "nan.csv")
+    with pytest.raises(InputError) as e:
+        read_logs(nan)
+    assert e.value.param == "nan_policy" and "nan_policy='drop'" in one_line(e.value)
+    assert len(read_logs(nan, ReaderOptions(nan_policy="drop"))[0].pose) == 3
+    lines = POSE_CSV.splitlines()
+    unsorted = write(tmp_path, "\n".join([lines[0], lines[2], lines[1], lines[3]]) + "\n", "unsorted.csv")
+    with pytest.raises(LogFormatError) as e:
+        read_logs(unsorted)
+    assert e.value.param == "allow_unsorted"
+    one_node = write(tmp_path, "t,x,y,z,qw,qx,qy,qz\n0,0,0,0,1,0,0,0\n", "one.csv")
+    with pytest.raises(InputError) as e:
+        read_logs(one_node)
+    assert e.value.param == "nodes" and "ReaderOptions.nodes" in str(e.value)
+    assert set(read_logs(one_node, ReaderOptions(nodes={one_node: "A"}))[0].pose["node"]) == {"A"}
+    cap = str(_small_pcap(tmp_path / "c.pcap"))
+    with pytest.raises(InputError) as e:
+        read_logs(cap)
+    assert e.value.param == "receivers"
+    with pytest.raises(InputError) as e:
+        read_logs(cap, ReaderOptions(receivers={cap: "B"}))
+    assert e.value.param == "tx_power_dbm"
+
+
+def test_library_messages_name_no_cli_flags():
+    """Messages raised in rplearn.io and rplearn.data name parameters, never command-line flags."""
+    import ast
+    import re
+
+    flag = re.compile(r"(?<![\w-])--[a-z]")
+    root = Path(__file__).resolve().parents[2] / "src" / "rplearn"
+    found = []
+    for path in sorted([*(root / "io").glob("*.py"), *(root / "data").glob("*.py")]):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.Raise) and node.exc is not None:
+                texts = [c.value for c in ast.walk(node.exc) if isinstance(c, ast.Constant) and isinstance(c.value, str)]
+                found += [f"{path.name}:{node.lineno}" for t in texts if flag.search(t)]
+    assert not found, found

@@ -51,7 +51,8 @@ def test_bag_without_topics_lists_its_topics(tmp_path):
     proc = run(["sync", "--poses", DATA / "ros1-bag" / "test2.bag", "--signals", DATA / "ros1-bag" / "test2.bag",
                 "-o", tmp_path / "m.csv"], tmp_path, ok=False)
     msg = _error(proc)
-    assert "--pose-topic TOPIC=NODE --rssi-topic TOPIC=TX:RX" in msg
+    assert "(ReaderOptions.pose_topics={topic: node}, ReaderOptions.rssi_topics={topic: (tx, rx)})" in msg
+    assert msg.endswith("(set it with --pose-topic TOPIC=NODE)")
     assert "it has /jackal_velocity_controller/odom (nav_msgs/msg/Odometry), /imu/data (sensor_msgs/msg/Imu)" in msg
 
 
@@ -82,7 +83,7 @@ def test_shuffled_and_nan_poses_name_the_cli_flags(tables):
     shuffled.to_csv(tmp / "p.csv", index=False)
     base = ["sync", "--poses", tmp / "p.csv", "--signals", tmp / "s.csv", "-o", tmp / "m.csv"]
     msg = _error(run(base, tmp, ok=False))
-    assert "(rplearn sync --allow-unsorted, or allow_unsorted=True)" in msg
+    assert "(allow_unsorted=True) (set it with --allow-unsorted)" in msg
     assert "np.float64" not in msg and "0.1 -> 0.11" not in msg and "0.11 -> 0.1)" in msg
     run(base + ["--allow-unsorted"], tmp)
 
@@ -90,7 +91,7 @@ def test_shuffled_and_nan_poses_name_the_cli_flags(tables):
     nan.loc[5, "x"] = np.nan
     nan.to_csv(tmp / "p.csv", index=False)
     msg = _error(run(base, tmp, ok=False))
-    assert "(rplearn sync --nan-policy drop, or nan_policy='drop')" in msg
+    assert "(nan_policy='drop') (set it with --nan-policy)" in msg
     run(base + ["--nan-policy", "drop"], tmp)
     assert "--nan-policy: expected drop or error" in _error(run(base + ["--nan-policy", "skip"], tmp, ok=False))
 
@@ -98,14 +99,15 @@ def test_shuffled_and_nan_poses_name_the_cli_flags(tables):
 def test_ulog_and_pcap_messages_name_the_cli_flags(tmp_path, flight):
     ulog = DATA / "px4-ulog" / "sample_log_small.ulg"
     msg = _error(run(["sync", "--poses", ulog, "--signals", ulog, "-o", tmp_path / "m.csv"], tmp_path, ok=False))
-    assert f"rplearn sync --node {ulog}=NODE, or nodes={{path: node}}" in msg
+    assert msg.endswith("give the node id of this ULog (ReaderOptions.nodes={path: node}) (set it with --node FILE=NODE)")
     caps = write_pcaps(tmp_path, flight[1].iloc[:50])
     cap = caps["B"]
     args = ["sync", "--poses", ulog, "--signals", cap, "-o", tmp_path / "m.csv", "--node", f"{ulog}=A"]
     msg = _error(run(args, tmp_path, ok=False))
-    assert f"(rplearn sync --receiver {cap}=NODE, or receivers={{path: node}})" in msg
+    assert msg.endswith(f"{cap}: give the capturing node (ReaderOptions.receivers={{path: node}}) "
+                        "(set it with --receiver FILE=NODE)")
     msg = _error(run(args + ["--receiver", f"{cap}=B"], tmp_path, ok=False))
-    assert "(rplearn sync --tx-power DBM, or tx_power_dbm=)" in msg
+    assert msg.endswith("(ReaderOptions.tx_power_dbm) (set it with --tx-power DBM)")
 
 
 def test_sync_reports_duplicates_and_non_unit_quaternions(tables):
@@ -118,7 +120,7 @@ def test_sync_reports_duplicates_and_non_unit_quaternions(tables):
     assert "pose rows with a non-unit quaternion (|norm - 1| > 0.001, normalised): 1" in proc.stdout
     msg = _error(run(["sync", "--poses", tmp / "p.csv", "--signals", tmp / "s.csv", "-o", tmp / "m.csv",
                       "--link", "A:Q"], tmp, ok=False))
-    assert msg.endswith("--link A:Q: node Q is in no signal log; the signal logs name A, B")
+    assert msg.endswith("link A:Q: node Q is in no signal log; the signal logs name A, B (set it with --link TX:RX)")
 
 
 def test_inspect_names_table_formats_alike(tables):

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rplearn.io import detect_format, read_logs
+from rplearn.io import ReaderOptions, detect_format, read_logs
 from rplearn.io.pcap import read_pcap, read_radiotap_frames
 from rplearn.io.rosbag import read_rosbag
 from rplearn.io.ulog import read_ulog, read_ulogs
@@ -215,8 +215,8 @@ def test_ros1_odometry_matches_messages():
 
 def test_read_logs_dispatches_real_files():
     logs, meta = read_logs(
-        [BAG, ULOGS[0]], pose_topics={"/jackal_velocity_controller/odom": "jackal"},
-        nodes={str(ULOGS[0]): "px4"},
+        [BAG, ULOGS[0]], ReaderOptions(pose_topics={"/jackal_velocity_controller/odom": "jackal"},
+                                       nodes={str(ULOGS[0]): "px4"}),
     )
     assert set(logs.pose["node"]) == {"jackal", "px4"}
     assert [f["format"] for f in meta["files"]] == ["ros1", "ulog"]

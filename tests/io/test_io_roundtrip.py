@@ -12,7 +12,7 @@ from flightfiles import (
 
 from rplearn.data.tables import MATCHED_COLUMNS
 from rplearn.io.files import write_table
-from rplearn.io import detect_format, read_logs
+from rplearn.io import ReaderOptions, detect_format, read_logs
 from rplearn.io.pcap import read_pcap
 from rplearn.io.rosbag import read_rosbag
 from rplearn.io.tables import read_pose_table, read_signal_table
@@ -106,8 +106,8 @@ def test_pcap_round_trip(tmp_path, flight, reference):
     # and through the dispatcher, with the pose log as CSV
     write_table(pose, str(tmp_path / "pose.csv"))
     logs, _ = read_logs([tmp_path / "pose.csv", *caps.values()],
-                        receivers={str(p): rx for rx, p in caps.items()},
-                        address_map=amap, tx_power_dbm=TX_POWER_DBM)
+                        ReaderOptions(receivers={str(p): rx for rx, p in caps.items()},
+                                      address_map=amap, tx_power_dbm=TX_POWER_DBM))
     assert_same_matched(synchronise(logs.pose, logs.signal).dataset, reference)
 
 
@@ -145,7 +145,7 @@ def test_ros2_bag_without_embedded_definitions(tmp_path, flight):
     with pytest.raises(LogFormatError) as e:
         read_rosbag(path, POSE_TOPICS, RSSI_TOPICS, rssi_field="rssi_dbm", tx_power_dbm=20.0,
                     frequency_hz=2.4e9)
-    assert "register its definition (rplearn sync --msg-definition" in str(e.value)
+    assert "register its definition (msg_definitions=" in str(e.value) and e.value.param == "msg_definitions"
     assert "msg_definitions=" in str(e.value) and "\n" not in str(e.value)
     with pytest.raises(InputError, match="missing.msg: no such file"):
         read_rosbag(path, POSE_TOPICS, RSSI_TOPICS, rssi_field="rssi_dbm", tx_power_dbm=20.0,

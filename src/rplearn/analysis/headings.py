@@ -1,27 +1,138 @@
-"""Headings that maximise links: the yaw of one or both ends of a link (rplearn orient)."""
+"""Headings that maximise links: one yaw-grid search for a link and for a hovering swarm.
+
+A level drone sees another at azimuth ``bearing - yaw`` and at a fixed elevation, so its share
+of a link's joint gain is a function of its own yaw only. :func:`heading_gain_tables`
+tabulates, for every ordered pair of drones ``(a, b)``, the gain of ``a``'s pattern toward ``b``
+over a list of yaws of ``a`` (directions from :mod:`rplearn.core.geometry`). Both searches read
+these tables:
+
+- :func:`best_yaw` (``rplearn orient``): one link between two drones. Its joint gain is the sum
+  of the two ends' shares, so each end that may turn takes its best grid yaw.
+- :func:`best_swarm_headings` (``rplearn headings``): any number of drones, maximising the
+  bottleneck RSSI of the swarm (:func:`rplearn.analysis.swarm.spanning_bottleneck`). With two
+  drones the bottleneck is the one link, and the result is :func:`best_yaw`'s with both
+  drones turning.
+
+Yaws are ENU, counter-clockwise from east [deg].
+"""
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
-from typing import Callable, Sequence
+from typing import Callable, Mapping, Sequence
 
 import numpy as np
+import pandas as pd
+from numpy.typing import ArrayLike
 
-from rplearn.core.geometry import direction_in_body, quat_wxyz_from_yaw
+from rplearn.core.geometry import direction_in_body, distance_m, quat_wxyz_from_yaw
+from rplearn.core.link import free_space_path_loss_db, received_power_dbm
 from rplearn.errors import InputError
+from rplearn.models.base import model_frequency_hz, require_patterns
 from rplearn.models.patterns import PatternSet
+from rplearn.analysis.swarm import resolve_patterns, spanning_bottleneck
 
-Progress = Callable[[str], None]
+#: Most yaw combinations :func:`best_swarm_headings` tries exhaustively (about 30 MB of work).
+EXHAUSTIVE_MAX_COMBINATIONS = 400_000
+
+Pair = tuple[str, str]
+Score = tuple[float, float]
+
+
+# -------------------------------------------------------------------------------------------
+# The yaw grid and the gain tables both searches read
+
+
+def yaw_grid_deg(step_deg: float) -> np.ndarray:
+    """Yaws ``-180, -180 + step, ...`` below 180 [deg].
+
+    Raises
+    ------
+    InputError
+        (``param="step_deg"``) unless ``0 < step_deg <= 90``.
+    """
+    if not (0 < step_deg <= 90):
+        raise InputError(f"step_deg: expected a yaw step in (0, 90] deg, got {step_deg}", param="step_deg")
+    return np.arange(-180.0, 180.0, step_deg)
+
+
+def heading_gain_tables(
+    model: PatternSet, positions: Mapping[str, ArrayLike], patterns: Mapping[str, str], yaw_grid_deg: np.ndarray
+) -> dict[Pair, np.ndarray]:
+    """Gain of drone ``a``'s pattern toward drone ``b`` for every yaw of a level ``a`` [dBi].
+
+    Parameters
+    ----------
+    model : PatternSet
+        Learned patterns.
+    positions : mapping
+        Drone -> position ``(x, y, z)``, ENU [m].
+    patterns : mapping
+        Drone -> the model's node whose pattern it carries.
+    yaw_grid_deg : ndarray
+        Yaws of ``a`` to tabulate [deg].
+
+    Returns
+    -------
+    dict
+        ``(a, b)`` -> gains over ``yaw_grid_deg``, for every ordered pair of distinct drones.
+    """
+    yaws = np.asarray(yaw_grid_deg, np.float64)
+    q = quat_wxyz_from_yaw(np.radians(yaws))
+    table = {}
+    for a in positions:
+        pa = np.broadcast_to(np.asarray(positions[a], np.float64), (yaws.size, 3))
+        for b in positions:
+            if a != b:
+                pb = np.broadcast_to(np.asarray(positions[b], np.float64), (yaws.size, 3))
+                az, el = direction_in_body(pa, q, pb)
+                table[(a, b)] = model.evaluate(patterns[a], az, el)
+    return table
+
+
+# -------------------------------------------------------------------------------------------
+# One link
 
 
 @dataclass(frozen=True)
 class OrientationResult:
-    """Headings that maximise a link and the predicted joint gain there."""
+    """Headings that maximise a link, the predicted joint gain there and, given the transmit
+    power, the received power before and after.
+
+    Attributes
+    ----------
+    tx_yaw_deg, rx_yaw_deg : float
+        Best yaws (the given yaw for an end that may not turn) [deg].
+    gain_db, baseline_gain_db : float
+        Joint gain at the best and at the given yaws [dB].
+    distance_m : float or None
+        Distance between the drones [m].
+    rssi_dbm, baseline_rssi_dbm : float or None
+        Received power at the best and at the given yaws [dBm] (None without a transmit power).
+    frequency_hz : float or None
+        Carrier used for the received power [Hz].
+    """
 
     tx_yaw_deg: float
     rx_yaw_deg: float
     gain_db: float
     baseline_gain_db: float
+    distance_m: float | None = None
+    rssi_dbm: float | None = None
+    baseline_rssi_dbm: float | None = None
+    frequency_hz: float | None = None
+
+    def summary(self) -> str:
+        """The best yaws and the gain in received power (or joint gain) they bring, for people."""
+        lines = [f"best yaw: tx {self.tx_yaw_deg:.0f} deg, rx {self.rx_yaw_deg:.0f} deg (ENU, ccw from east)"]
+        if self.rssi_dbm is not None and self.baseline_rssi_dbm is not None:
+            before, after = self.baseline_rssi_dbm, self.rssi_dbm
+            lines.append(f"predicted received power: {before:.1f} dBm now -> {after:.1f} dBm ({after - before:+.1f} dB)")
+        else:
+            before, after = self.baseline_gain_db, self.gain_db
+            lines.append(f"predicted joint gain: {before:.1f} dB now -> {after:.1f} dB ({after - before:+.1f} dB)")
+        return "\n".join(lines)
 
 
 def best_yaw(
@@ -34,32 +145,303 @@ def best_yaw(
     tx_yaw_deg: float = 0.0,
     rx_yaw_deg: float = 0.0,
     step_deg: float = 1.0,
+    tx_power_dbm: float | None = None,
+    frequency_hz: float | None = None,
 ) -> OrientationResult:
     """Heading(s) of level drones at given ENU positions that maximise the predicted joint gain.
 
     Parameters
     ----------
+    model : PatternSet
+        Learned patterns; ``tx_node`` and ``rx_node`` are its nodes.
+    tx_position_xyz, rx_position_xyz : sequence of float
+        Positions, ENU [m].
     turn : {"tx", "rx", "both"}
         Which drone may turn; the other keeps its given yaw (ENU, ccw from east) [deg].
+    step_deg : float
+        Yaw grid [deg].
+    tx_power_dbm : float, optional
+        Transmit power [dBm]; given, the result carries the received power before and after.
+    frequency_hz : float, optional
+        Carrier for the received power [Hz]; by default the one the model was learned at.
     """
+    require_patterns(model, "choosing a heading")
     if turn not in ("tx", "rx", "both"):
-        raise InputError(f"turn must be 'tx', 'rx' or 'both', got {turn!r}")
-    if not (0 < step_deg <= 90):
-        raise InputError(f"step_deg must be in (0, 90], got {step_deg}")
-    grid = np.arange(-180.0, 180.0, step_deg)
-    tx_p = np.asarray(tx_position_xyz, float)
-    rx_p = np.asarray(rx_position_xyz, float)
+        raise InputError(f"turn: expected 'tx', 'rx' or 'both', got {turn!r}", param="turn")
+    grid = yaw_grid_deg(step_deg)
+    if tx_power_dbm is not None:
+        frequency_hz = model_frequency_hz(model, frequency_hz)
+    n = grid.size
+    yaws = np.concatenate([grid, [float(tx_yaw_deg), float(rx_yaw_deg)]])  # the given yaws follow the grid
+    positions = {"tx": tx_position_xyz, "rx": rx_position_xyz}
+    tables = heading_gain_tables(model, positions, {"tx": tx_node, "rx": rx_node}, yaws)
+    g_tx, g_rx = tables[("tx", "rx")], tables[("rx", "tx")]
+    i_tx = int(np.argmax(g_tx[:n])) if turn in ("tx", "both") else n
+    i_rx = int(np.argmax(g_rx[:n])) if turn in ("rx", "both") else n + 1
+    result = OrientationResult(
+        float(yaws[i_tx]), float(yaws[i_rx]), float(g_tx[i_tx] + g_rx[i_rx]), float(g_tx[n] + g_rx[n + 1])
+    )
+    if tx_power_dbm is None:
+        return result
+    return _with_received_power(result, positions, float(tx_power_dbm), float(frequency_hz))
 
-    def gains(yaw_deg: np.ndarray, own: np.ndarray, other: np.ndarray, node: str) -> np.ndarray:
-        q = quat_wxyz_from_yaw(np.radians(yaw_deg))
-        az, el = direction_in_body(np.broadcast_to(own, (yaw_deg.size, 3)), q, np.broadcast_to(other, (yaw_deg.size, 3)))
-        return model.evaluate(node, az, el)
 
-    g_tx = gains(grid, tx_p, rx_p, tx_node) if turn in ("tx", "both") else gains(np.array([tx_yaw_deg]), tx_p, rx_p, tx_node)
-    g_rx = gains(grid, rx_p, tx_p, rx_node) if turn in ("rx", "both") else gains(np.array([rx_yaw_deg]), rx_p, tx_p, rx_node)
-    base = float(gains(np.array([tx_yaw_deg]), tx_p, rx_p, tx_node)[0] + gains(np.array([rx_yaw_deg]), rx_p, tx_p, rx_node)[0])
-    i_tx = int(np.argmax(g_tx))
-    i_rx = int(np.argmax(g_rx))
-    best_tx = float(grid[i_tx]) if turn in ("tx", "both") else float(tx_yaw_deg)
-    best_rx = float(grid[i_rx]) if turn in ("rx", "both") else float(rx_yaw_deg)
-    return OrientationResult(best_tx, best_rx, float(g_tx[i_tx] + g_rx[i_rx]), base)
+def _with_received_power(
+    result: OrientationResult, positions: Mapping[str, Sequence[float]], tx_power_dbm: float, frequency_hz: float
+) -> OrientationResult:
+    """``result`` with the distance [m] and the received power before and after [dBm] (Friis)."""
+    d = float(distance_m(np.asarray(positions["tx"], np.float64), np.asarray(positions["rx"], np.float64)))
+    return dataclasses.replace(
+        result,
+        distance_m=d,
+        rssi_dbm=float(received_power_dbm(tx_power_dbm, result.gain_db, d, frequency_hz)),
+        baseline_rssi_dbm=float(received_power_dbm(tx_power_dbm, result.baseline_gain_db, d, frequency_hz)),
+        frequency_hz=frequency_hz,
+    )
+
+
+# -------------------------------------------------------------------------------------------
+# A hovering swarm
+
+
+@dataclass(frozen=True)
+class SwarmHeadings:
+    """Yaws chosen for level, hovering drones, and the link budget before and after.
+
+    Attributes
+    ----------
+    yaw_deg, start_yaw_deg : dict
+        Chosen and starting yaw of every drone (ENU, counter-clockwise from east) [deg].
+    pair_rssi_dbm, start_pair_rssi_dbm : DataFrame
+        Predicted RSSI of every unordered pair (equal both ways for level drones of equal
+        power: the joint gain is the same sum of the two patterns) [dBm].
+    bottleneck_dbm, start_bottleneck_dbm : float
+        Weakest link of the maximum spanning tree: the swarm is connected at any threshold
+        below it [dBm].
+    sweeps : int
+        Sweeps of the coordinate ascent (0 for an exhaustive search).
+    """
+
+    yaw_deg: dict[str, float]
+    start_yaw_deg: dict[str, float]
+    pair_rssi_dbm: pd.DataFrame
+    start_pair_rssi_dbm: pd.DataFrame
+    bottleneck_dbm: float
+    start_bottleneck_dbm: float
+    sweeps: int
+
+    def summary(self) -> str:
+        lines = [
+            "drone  yaw now -> best [deg] (ENU, ccw from east)",
+            *(f"  {d}: {self.start_yaw_deg[d]:7.1f} -> {self.yaw_deg[d]:7.1f}" for d in self.yaw_deg),
+            f"bottleneck RSSI: {self.start_bottleneck_dbm:.1f} dBm now -> {self.bottleneck_dbm:.1f} dBm "
+            f"({self.bottleneck_dbm - self.start_bottleneck_dbm:+.1f} dB); the swarm stays connected for any "
+            "threshold below it",
+            "pair RSSI now -> best [dBm]:",
+        ]
+        before = self.start_pair_rssi_dbm.set_index("pair")["rssi_dbm"]
+        for _, row in self.pair_rssi_dbm.iterrows():
+            lines.append(f"  {row['pair']}: {before[row['pair']]:6.1f} -> {row['rssi_dbm']:6.1f}")
+        return "\n".join(lines)
+
+
+@dataclass(frozen=True)
+class _HeadingProblem:
+    """Every pair's RSSI as a function of the drones' yaws, indexed into ``yaw_deg``.
+
+    ``yaw_deg`` is the yaw grid (its first ``n_grid`` values) followed by the drones' start
+    yaws; a *choice* maps every drone to an index into it.
+    """
+
+    drones: list[str]
+    pairs: list[Pair]
+    yaw_deg: np.ndarray
+    n_grid: int
+    tables: dict[Pair, np.ndarray]
+    base_dbm: dict[Pair, float]  # transmit power minus free-space path loss
+    iu: np.ndarray  # drone index of each pair's first and second drone
+    ju: np.ndarray
+
+    @property
+    def start_index(self) -> dict[str, int]:
+        return {d: self.n_grid + i for i, d in enumerate(self.drones)}
+
+    def pair_rssi(self, choice: Mapping[str, int]) -> np.ndarray:
+        """RSSI of every pair [dBm] at the chosen yaws."""
+        t = self.tables
+        return np.array([self.base_dbm[(a, b)] + t[(a, b)][choice[a]] + t[(b, a)][choice[b]] for a, b in self.pairs])
+
+    def score(self, choice: Mapping[str, int]) -> Score:
+        """Bottleneck RSSI, then mean pair RSSI [dBm]: larger is better."""
+        w = self.pair_rssi(choice)
+        return spanning_bottleneck(w, self.iu, self.ju, len(self.drones), self.drones)[0], float(np.mean(w))
+
+    def pair_table(self, choice: Mapping[str, int]) -> pd.DataFrame:
+        return pd.DataFrame({"pair": [f"{a}-{b}" for a, b in self.pairs], "rssi_dbm": self.pair_rssi(choice)})
+
+
+def best_swarm_headings(
+    model: PatternSet,
+    positions: Mapping[str, ArrayLike],
+    tx_power_dbm: float,
+    frequency_hz: float | None = None,
+    pattern_of: Mapping[str, str] | None = None,
+    start_yaw_deg: Mapping[str, float] | None = None,
+    fixed: Sequence[str] = (),
+    step_deg: float = 5.0,
+    max_sweeps: int = 20,
+    restarts: int = 8,
+) -> SwarmHeadings:
+    """Yaws of hovering, level drones that maximise the swarm's bottleneck RSSI.
+
+    On a yaw grid of ``step_deg``, maximising the bottleneck and, among equal bottlenecks, the
+    mean pair RSSI. Up to three drones the search is exhaustive (the global optimum on the
+    grid) when the grid has at most :data:`EXHAUSTIVE_MAX_COMBINATIONS` combinations (72^3 at
+    the default 5 deg). Otherwise coordinate ascent (each drone in turn takes its best yaw with the others
+    held, until a sweep changes nothing) from the current yaws and from ``restarts`` seeded
+    random ones: a local optimum. Either way the result is never worse than the current yaws.
+
+    Parameters
+    ----------
+    model : PatternSet
+        Learned patterns.
+    positions : mapping
+        Drone -> hover position ``(x, y, z)``, ENU [m].
+    tx_power_dbm : float
+        Transmit power of every drone [dBm].
+    frequency_hz : float, optional
+        Carrier [Hz]; by default the one the model was learned at.
+    pattern_of : mapping, optional
+        Drone -> learned node whose antenna it carries (default: its own id).
+    start_yaw_deg : mapping, optional
+        Current yaws, ENU counter-clockwise from east [deg] (default 0).
+    fixed : sequence of str
+        Drones that keep their current yaw.
+    step_deg : float
+        Yaw grid [deg].
+    max_sweeps, restarts : int
+        Limits of the coordinate ascent (four drones or more).
+    """
+    require_patterns(model, "choosing headings")
+    frequency_hz = model_frequency_hz(model, frequency_hz)
+    grid = yaw_grid_deg(step_deg)
+    drones = sorted(positions)
+    _check_swarm(drones, positions, tx_power_dbm, start_yaw_deg or {}, fixed)
+    patterns = resolve_patterns(drones, model.nodes, pattern_of)
+    start = {d: float((start_yaw_deg or {}).get(d, 0.0)) for d in drones}
+    problem = _heading_problem(model, {d: positions[d] for d in drones}, patterns, grid, start, tx_power_dbm, frequency_hz)
+    free = [d for d in drones if d not in fixed]
+    choice, best, sweeps = _search(problem, free, max_sweeps, restarts)
+    start_score = problem.score(problem.start_index)
+    if start_score > best:  # never worse than the current yaws (which may lie off the grid)
+        best, choice = start_score, problem.start_index
+    return SwarmHeadings(
+        yaw_deg={d: float(problem.yaw_deg[choice[d]]) for d in drones},
+        start_yaw_deg=start,
+        pair_rssi_dbm=problem.pair_table(choice),
+        start_pair_rssi_dbm=problem.pair_table(problem.start_index),
+        bottleneck_dbm=best[0],
+        start_bottleneck_dbm=start_score[0],
+        sweeps=sweeps,
+    )
+
+
+def _check_swarm(
+    drones: Sequence[str], positions: Mapping[str, ArrayLike], tx_power_dbm: float, start_yaw_deg: Mapping[str, float],
+    fixed: Sequence[str],
+) -> None:
+    """Refuse fewer than two drones, a non-finite power, position or yaw, an unknown fixed drone."""
+    if len(drones) < 2:
+        raise InputError(f"positions: a swarm needs at least 2 drones, got {', '.join(drones) or 'none'}", param="positions")
+    if not np.isfinite(tx_power_dbm):
+        raise InputError(f"tx_power_dbm: expected a finite number of dBm, got {tx_power_dbm!r}", param="tx_power_dbm")
+    for d in drones:
+        p = np.asarray(positions[d], np.float64)
+        if p.shape != (3,) or not np.all(np.isfinite(p)):
+            raise InputError(f"positions: drone {d}: expected three finite numbers x,y,z in metres", param="positions")
+        if not np.isfinite(float(start_yaw_deg.get(d, 0.0))):
+            raise InputError(f"start_yaw_deg: drone {d}: expected a finite number of degrees", param="start_yaw_deg")
+    unknown = sorted(set(fixed) - set(drones))
+    if unknown:
+        raise InputError(f"fixed names unknown drone(s) {', '.join(unknown)}; drones: {', '.join(drones)}", param="fixed")
+
+
+def _heading_problem(
+    model: PatternSet, positions: Mapping[str, ArrayLike], patterns: Mapping[str, str], grid: np.ndarray,
+    start: Mapping[str, float], tx_power_dbm: float, frequency_hz: float,
+) -> _HeadingProblem:
+    """Gain tables over the grid and the start yaws, and every pair's free-space budget."""
+    drones = list(positions)
+    yaws = np.concatenate([grid, [start[d] for d in drones]])  # the start yaws follow the grid
+    pairs = [(a, b) for i, a in enumerate(drones) for b in drones[i + 1 :]]
+    base = {}
+    for a, b in pairs:
+        dist = float(distance_m(np.asarray(positions[a], np.float64), np.asarray(positions[b], np.float64)))
+        base[(a, b)] = tx_power_dbm - float(free_space_path_loss_db(dist, frequency_hz))
+    tables = heading_gain_tables(model, positions, patterns, yaws)
+    iu = np.array([drones.index(a) for a, _ in pairs])
+    ju = np.array([drones.index(b) for _, b in pairs])
+    return _HeadingProblem(drones, pairs, yaws, grid.size, tables, base, iu, ju)
+
+
+def _search(problem: _HeadingProblem, free: Sequence[str], max_sweeps: int, restarts: int) -> tuple[dict[str, int], Score, int]:
+    """Best choice of grid yaws for the free drones: exhaustive when small, else coordinate ascent.
+
+    Returns the choice, its score and the number of sweeps of the ascent (0 when exhaustive).
+    """
+    n_grid = problem.n_grid
+    if len(problem.drones) <= 3 and n_grid ** len(free) <= EXHAUSTIVE_MAX_COMBINATIONS:
+        choice, best = _exhaustive_three(problem, free)
+        return choice, best, 0
+    # coordinate ascent from the current yaws, then from seeded random yaws
+    start_index = problem.start_index
+    rng = np.random.default_rng(0)
+    starts = [dict(start_index)] + [
+        {d: (int(rng.integers(n_grid)) if d in free else start_index[d]) for d in problem.drones} for _ in range(restarts)
+    ]
+    best, choice, sweeps = (-np.inf, -np.inf), dict(start_index), 0
+    for first in starts:
+        found, s_found, n_sweeps = _coordinate_ascent(first, free, n_grid, problem.score, max_sweeps)
+        sweeps += n_sweeps
+        if s_found > best:
+            best, choice = s_found, found
+    return choice, best, sweeps
+
+
+def _coordinate_ascent(
+    choice: dict[str, int], free: Sequence[str], n_grid: int, score: Callable[[Mapping[str, int]], Score], max_sweeps: int
+) -> tuple[dict[str, int], Score, int]:
+    """Each free drone in turn takes its best grid yaw, until a sweep changes nothing."""
+    best = score(choice)
+    sweeps = 0
+    for sweeps in range(1, max_sweeps + 1):
+        changed = False
+        for d in free:
+            for k in range(n_grid):
+                trial = {**choice, d: k}
+                s = score(trial)
+                if s > best:
+                    best, choice, changed = s, trial, True
+        if not changed:
+            break
+    return choice, best, sweeps
+
+
+def _exhaustive_three(problem: _HeadingProblem, free: Sequence[str]) -> tuple[dict[str, int], Score]:
+    """Best grid yaws of two or three drones by trying every combination (vectorised).
+
+    The bottleneck of two drones is their one pair; of three, the second strongest pair (a
+    triangle's spanning tree is its two strongest edges). Exact ties of the bottleneck go to
+    the best mean.
+    """
+    drones, start_index = problem.drones, problem.start_index
+    axes = [np.arange(problem.n_grid) if d in free else np.array([start_index[d]]) for d in drones]
+    idx = dict(zip(drones, np.meshgrid(*axes, indexing="ij")))
+    w = np.stack([problem.base_dbm[(a, b)] + problem.tables[(a, b)][idx[a]] + problem.tables[(b, a)][idx[b]] for a, b in problem.pairs])
+    bottleneck = w[0] if len(problem.pairs) == 1 else np.sort(w, axis=0)[-2]
+    mean = w.mean(axis=0)
+    top = bottleneck.max()
+    candidates = bottleneck >= top  # exact ties, then the best mean among them
+    flat = int(np.argmax(np.where(candidates, mean, -np.inf)))
+    pos = np.unravel_index(flat, bottleneck.shape)
+    return {d: int(idx[d][pos]) for d in drones}, (float(top), float(mean[pos]))

@@ -7,6 +7,7 @@ from typing import Any, Callable, Mapping
 import numpy as np
 
 from rplearn.data.tables import LinkSamples
+from rplearn.models.patterns import PatternSet
 
 Progress = Callable[[str], None]
 
@@ -22,13 +23,13 @@ def node_directions(samples: LinkSamples) -> dict[str, tuple[np.ndarray, np.ndar
     return out
 
 
-def gauged_nodes(model: Any) -> set[str]:
+def gauged_nodes(model: PatternSet) -> set[str]:
     """Nodes whose constant the fit could not identify (named in the model's gauge notes)."""
-    return {str(n) for g in getattr(model, "gauge", []) for n in g.get("nodes", [])}
+    return {str(n) for g in model.gauge for n in g.get("nodes", [])}
 
 
 def pattern_errors_db(
-    model: Any, truth: Any, directions: Mapping[str, tuple[np.ndarray, np.ndarray]], remove_constant: bool | None = None
+    model: PatternSet, truth: Any, directions: Mapping[str, tuple[np.ndarray, np.ndarray]], remove_constant: bool | None = None
 ) -> dict[str, float]:
     """RMS difference between a learned and a true pattern over the covered directions [dB].
 

@@ -7,9 +7,11 @@ line ``error: ...`` on standard error and exits with code 1, without a traceback
 from __future__ import annotations
 
 import functools
+import inspect as _inspect
 import json
 import logging
 import os
+import re
 from typing import Any, Callable, Optional
 
 import typer
@@ -45,6 +47,45 @@ def _fail(message: str) -> None:
     raise typer.Exit(1)
 
 
+#: Library parameters and option fields (``RplearnError.param``) -> the flag that sets them.
+_PARAM_FLAGS: dict[str, str] = {
+    "nodes": "--node FILE=NODE", "receivers": "--receiver FILE=NODE", "address_map": "--address MAC=NODE",
+    "pose_topics": "--pose-topic TOPIC=NODE", "rssi_topics": "--rssi-topic TOPIC=TX:RX", "rssi_field": "--rssi-field",
+    "msg_definitions": "--msg-definition TYPE=FILE.msg", "tx_power_dbm": "--tx-power DBM",
+    "frequency_hz": "--frequency HZ", "nan_policy": "--nan-policy", "allow_unsorted": "--allow-unsorted",
+    "require_valid": "--require-valid", "link": "--link TX:RX", "max_gap_s": "--max-gap",
+    "clock_offsets_s": "--offset NODE=SECONDS", "on_unknown_node": "--on-unknown-node",
+    "pattern_of": "--as DRONE=NODE", "times_s": "--at", "step_s": "--step", "positions": "--pos DRONE=X,Y,Z",
+    "start_yaw_deg": "--yaw DRONE=DEG", "fixed": "--fixed", "turn": "--turn",
+}
+
+
+def _command_flag(command: Callable | None, param: str) -> str | None:
+    """The flag of the command's option named ``param`` (for parameters whose flag differs
+    between commands, e.g. ``step_deg``: ``--step`` of headings, ``--step-deg`` of export)."""
+    option = _inspect.signature(command).parameters.get(param) if command is not None else None
+    if option is None or not isinstance(option.default, typer.models.OptionInfo):
+        return None
+    return next((d for d in option.default.param_decls or () if d.startswith("--")), None)
+
+
+def _with_flag(message: str, param: str | None, command: Callable | None = None) -> str:
+    """The message with the flag that sets ``param``.
+
+    Library messages name the parameter at fault as ``"param: ..."``, ``"param ..."`` at the
+    start, or ``"(param ...)"``; there the flag replaces the name. Otherwise the flag is
+    appended, unless the message names it already.
+    """
+    flag = _PARAM_FLAGS.get(param or "") or (_command_flag(command, param) if param else None)
+    if flag is None:
+        return message
+    name = flag.split()[0]
+    message = re.sub(rf"(^|\()({re.escape(param)})(?=[:) ]|$)", lambda m: m.group(1) + name, message)
+    if name in message:
+        return message
+    return f"{message} (set it with {flag})"
+
+
 def user_errors(fn: Callable) -> Callable:
     """Turn user mistakes into one line on stderr and exit code 1."""
 
@@ -53,7 +94,7 @@ def user_errors(fn: Callable) -> Callable:
         try:
             return fn(*args, **kwargs)
         except RplearnError as exc:
-            _fail(str(exc).splitlines()[0] if str(exc) else type(exc).__name__)
+            _fail(_with_flag(str(exc).splitlines()[0] if str(exc) else type(exc).__name__, exc.param, fn))
         except FileNotFoundError as exc:
             _fail(f"{exc.filename}: no such file or directory")
         except OSError as exc:
@@ -110,12 +151,15 @@ def _reader_options(
     node: Optional[list[str]], receiver: Optional[list[str]], address: Optional[list[str]], pose_topic: Optional[list[str]],
     rssi_topic: Optional[list[str]] = None, rssi_field: Optional[str] = None, msg_definition: Optional[list[str]] = None,
     **flags: Any,
-) -> dict[str, Any]:
-    """Options of :func:`rplearn.io.read_logs` from the repeated KEY=VALUE flags.
+) -> Any:
+    """:class:`~rplearn.io.options.ReaderOptions` of :func:`rplearn.io.read_logs` from the flags.
 
-    ``rssi_topic`` holds TOPIC=TX:RX; ``flags`` (``nan_policy``, ``allow_unsorted``,
-    ``require_valid``) are passed on when not None.
+    ``rssi_topic`` holds TOPIC=TX:RX; ``flags`` (other ReaderOptions fields: ``tx_power_dbm``,
+    ``frequency_hz``, ``nan_policy``, ``allow_unsorted``, ``require_valid``) are passed on
+    when not None.
     """
+    from rplearn.io.options import ReaderOptions
+
     opts: dict[str, Any] = {}
     for flag, key, values in (
         ("--node", "nodes", node),
@@ -139,7 +183,7 @@ def _reader_options(
     if flags.get("nan_policy") is not None and flags["nan_policy"] not in ("drop", "error"):
         raise InputError(f"--nan-policy: expected drop or error, got {flags['nan_policy']!r}")
     opts.update({k: v for k, v in flags.items() if v is not None})
-    return opts
+    return ReaderOptions(**opts)
 
 
 def _link(text: Optional[str]) -> tuple[str, str] | None:
@@ -201,8 +245,25 @@ def trajectory(
     Example: rplearn trajectory --distance 10 --height 20 --loops 5 --max-flight-time 600 -o plan
     """
     from rplearn.models.spec import ModelSpec
+    from rplearn.plan.campaign import paper_campaign, write_references
     from rplearn.plan.check import check_plan
-    from rplearn.plan.trajectory import PlanLimits, paper_campaign, summarize_unit, write_references
+    from rplearn.plan.trajectory import PlanLimits, summarize_unit
+
+    # Library messages name the parameter at fault (exc.param) and the parameters of their
+    # remedies, as "name: ..." or "(name)"; here they name the flags that set them.
+    flags = {
+        "distance_m": "--distance", "height_m": "--height", "n_loops": "--loops", "speed_m_s": "--speed",
+        "learning_psi0_deg": "--psi0", "testing_psi0_deg": "--test-psi0", "rate_hz": "--rate",
+        "max_speed_m_s": "--max-speed", "max_accel_m_s2": "--max-accel", "max_flight_time_s": "--max-flight-time",
+    }
+
+    def with_flags(exc: RplearnError) -> RplearnError:
+        message = str(exc)
+        if exc.param in flags and message.startswith(f"{exc.param}:"):
+            message = flags[exc.param] + message[len(exc.param):]
+        for name, flag in flags.items():
+            message = message.replace(f"({name})", f"({flag})")
+        return type(exc)(message)  # no param: the message names the flag already
 
     spec = None
     if check_model and check_model.lower() != "none":  # refuse a bad model before writing files
@@ -211,17 +272,20 @@ def trajectory(
             raise InputError(f"--check-model: {spec.label} has no per-node pattern to check; use sh, bg or poly")
     learn = [float(v) for v in (_split_list(psi0_deg) or ["0", "24", "48"])]
     test = [float(v) for v in (_split_list(test_psi0_deg) or ["36"])]
-    campaign = paper_campaign(
-        learning_psi0_deg=learn, testing_psi0_deg=test, distance_m=distance_m, height_m=height_m, n_loops=loops, speed_m_s=speed_m_s
-    )
-    limits = PlanLimits(max_speed, max_accel, max_flight_time)
     table = Table(title="calibration campaign")
     for col in ("unit", "duration/s", "path/m", "max speed/(m/s)", "max accel/(m/s^2)", "max yaw rate/(deg/s)"):
         table.add_column(col)
-    for unit in campaign.units:
-        s = summarize_unit(unit, limits)
-        table.add_row(s.label, f"{s.duration_s:.0f}", f"{s.path_length_m:.0f}", f"{s.max_speed_m_s:.2f}", f"{s.max_accel_m_s2:.2f}", f"{s.max_yaw_rate_deg_s:.1f}")
-    paths = write_references(campaign, out_dir, rate_hz)
+    try:
+        campaign = paper_campaign(
+            learning_psi0_deg=learn, testing_psi0_deg=test, distance_m=distance_m, height_m=height_m, n_loops=loops, speed_m_s=speed_m_s
+        )
+        limits = PlanLimits(max_speed, max_accel, max_flight_time)
+        for unit in campaign.units:
+            s = summarize_unit(unit, limits)
+            table.add_row(s.label, f"{s.duration_s:.0f}", f"{s.path_length_m:.0f}", f"{s.max_speed_m_s:.2f}", f"{s.max_accel_m_s2:.2f}", f"{s.max_yaw_rate_deg_s:.1f}")
+        paths = write_references(campaign, out_dir, rate_hz)
+    except RplearnError as exc:
+        raise with_flags(exc) from None
     out.print(table)
     out.print(f"wrote {len(paths)} reference files to {out_dir}")
     if spec is not None:
@@ -276,7 +340,7 @@ def inspect(
     """
     from rplearn.io.inspect import inspect_logs
 
-    report = inspect_logs(logs, **_reader_options(
+    report = inspect_logs(logs, _reader_options(
         node, receiver, address, pose_topic, rssi_topic, rssi_field, msg_definition, require_valid=require_valid))
     out.print(report.to_markdown() if markdown else report.to_text(), highlight=False)
     unreadable = [f for f in report.files if f.get("error") is not None]
@@ -313,16 +377,16 @@ def sync(
     """
     from rplearn.io.files import check_table_path, write_table
     from rplearn.io import read_logs
-    from rplearn.data.sync import synchronise
+    from rplearn.data.sync import SyncOptions, synchronise
 
     check_table_path(output)
 
-    opts = {"tx_power_dbm": tx_power_dbm, "frequency_hz": frequency_hz, **_reader_options(
-        node, receiver, address, pose_topic, rssi_topic, rssi_field, msg_definition,
-        nan_policy=nan_policy, allow_unsorted=allow_unsorted, require_valid=require_valid)}
-    pose_logs, pose_meta = read_logs(poses, **opts)
+    opts = _reader_options(
+        node, receiver, address, pose_topic, rssi_topic, rssi_field, msg_definition, tx_power_dbm=tx_power_dbm,
+        frequency_hz=frequency_hz, nan_policy=nan_policy, allow_unsorted=allow_unsorted, require_valid=require_valid)
+    pose_logs, pose_meta = read_logs(poses, opts)
     _print_reader_drops(pose_meta)
-    signal_logs, _ = read_logs(signals, **opts)
+    signal_logs, _ = read_logs(signals, opts)
     if pose_logs.pose is None:
         raise InputError(f"{', '.join(poses)}: no pose log found")
     if signal_logs.signal is None:
@@ -331,8 +395,9 @@ def sync(
         offsets = {k: float(v) for k, v in _pairs(offset, "--offset").items()}
     except ValueError:
         raise InputError(f"--offset: expected NODE=SECONDS with a number, got {', '.join(offset or [])}") from None
-    result = synchronise(pose_logs.pose, signal_logs.signal, link=_link(link), max_gap_s=max_gap_s,
-                         clock_offsets_s=offsets or None, on_unknown_node=on_unknown_node, source=", ".join(signals))
+    sync_options = SyncOptions(link=_link(link), max_gap_s=max_gap_s, clock_offsets_s=offsets or None,
+                               on_unknown_node=on_unknown_node)
+    result = synchronise(pose_logs.pose, signal_logs.signal, sync_options, source=", ".join(signals))
     write_table(result.dataset, output)
     out.print(result.summary.to_text(), highlight=False)
     out.print(f"wrote {len(result.dataset):,} matched samples to {output}")
@@ -406,7 +471,7 @@ def fit(
     fitted = fit_model(samples, spec, gauge=gauge, provenance=provenance(dataset=dataset, model=spec.label, ridge=spec.ridge, units=chosen))
     fitted.model.save(output)
     msg = f"{spec.label} learned from {len(samples):,} samples in {fitted.ltd_s:.3f} s -> {output}"
-    training = getattr(fitted.model, "training", {})
+    training = fitted.model.training
     if "rank" in training:
         msg += f"\n  rank {training['rank']} of {training['n_columns']}, condition number {training['condition_number']:.2f}, training RMSE {training['rmse_db']:.2f} dB"
         for g in training.get("gauges", []):
@@ -493,10 +558,10 @@ def _distinct_labels(rows: list[Any], model_paths: list[str]) -> list[Any]:
 def _evaluation_units(df: Any, units: list[str] | None, models: list[Any], dataset: str) -> list[str] | None:
     """The units to score on: as given, else those no model learned from; say which, and warn
     when a score would be a training score."""
-    trained = sorted({str(u) for m in models for u in (getattr(m, "provenance", {}).get("parameters", {}).get("units") or [])})
+    trained = sorted({str(u) for m in models for u in (m.provenance.get("parameters", {}).get("units") or [])})
     available = _dataset_units(df)
     if not available:
-        sources = {str(getattr(m, "provenance", {}).get("parameters", {}).get("dataset")) for m in models}
+        sources = {str(m.provenance.get("parameters", {}).get("dataset")) for m in models}
         if os.path.basename(dataset) in {os.path.basename(p) for p in sources}:
             console.print(
                 f"warning: {dataset} has no unit column and a model learned from a file of this name: "
@@ -546,12 +611,12 @@ def predict(
     df = _dataset(dataset, require_rssi=False)
     samples = link_samples(df, dataset, require_rssi=False)
     _warn_frequency_mismatch(model, df["frequency_hz"].to_numpy(np.float64), model_path, dataset)
-    gain = model.predict_samples(samples)
+    gain = model.predict_gain(samples)
     df = df.copy()
     df["gain_pred_db"] = gain
     df["rssi_pred_dbm"] = received_power_dbm(df["tx_power_dbm"].to_numpy(), gain, samples.distance_m, df["frequency_hz"].to_numpy())
-    if getattr(model, "covariance", None) is not None:
-        std = model.predict_samples_std(samples)
+    std = model.predict_gain_std(samples)
+    if std is not None:
         df["gain_pred_std_db"] = std
         residual_db = float(model.training.get("rmse_db", np.nan))
         df["rssi_pred_std_db"] = np.sqrt(std**2 + residual_db**2)
@@ -568,7 +633,7 @@ def _warn_frequency_mismatch(model: Any, frequency_hz: Any, model_path: str, dat
     """Warn when rows are at a carrier frequency other than the one the model learned at."""
     import numpy as np
 
-    learned = getattr(model, "training", {}).get("frequency_hz")
+    learned = model.frequency_hz
     if learned is None or len(frequency_hz) == 0:
         return
     off = np.abs(np.asarray(frequency_hz) / float(learned) - 1.0) > 0.05
@@ -620,7 +685,7 @@ def links(
             check_table_path(path)
 
     model = load_model(model_path)
-    logs, meta = read_logs(poses, **_reader_options(node, None, None, pose_topic, nan_policy=nan_policy, allow_unsorted=allow_unsorted))
+    logs, meta = read_logs(poses, _reader_options(node, None, None, pose_topic, nan_policy=nan_policy, allow_unsorted=allow_unsorted))
     if logs.pose is None:
         raise InputError(f"{', '.join(poses)}: no pose log found")
     _print_reader_drops(meta)
@@ -640,7 +705,7 @@ def links(
     if connectivity_out:
         write_table(result.connectivity, connectivity_out)
     if plot_out:
-        from rplearn.viz.plot import plot_swarm
+        from rplearn.viz.charts import plot_swarm
 
         plot_swarm(result, plot_out)
     out.print(result.summary(), highlight=False, markup=False)
@@ -668,7 +733,7 @@ def headings(
     Example: rplearn headings sh10.json --pos A=0,0,20 --pos B=40,0,20 --pos C=20,30,25 --as C=A --tx-power 20
     """
     from rplearn.models.load import load_model
-    from rplearn.analysis.swarm import best_swarm_headings
+    from rplearn.analysis.headings import best_swarm_headings
 
     positions = {}
     for drone, text in _pairs(pos, "--pos").items():
@@ -754,9 +819,9 @@ def sweep(
     if output:
         frame.to_csv(output, index=False)
     if plot_path:
-        from rplearn.viz import plot
+        from rplearn.viz import charts
 
-        plot.plot_order_sweep(result.orders, result.rmse_db, result.aic, result.ltd_s, plot_path)
+        charts.plot_order_sweep(result.orders, result.rmse_db, result.aic, result.ltd_s, plot_path)
 
 
 @app.command()
@@ -773,19 +838,21 @@ def export(
     Example: rplearn export sh10.json --format msi -o patterns/
     """
     from rplearn.io import export as ex
+    from rplearn.models.base import model_frequency_hz
     from rplearn.models.load import load_model
 
     model = load_model(model_path)
-    if getattr(model, "kind", "") != "patterns":
+    if model.kind != "patterns":
         raise InputError(f"{model_path}: a {model.kind} baseline has no per-node pattern to export")
     if fmt == "grid":
         frame = ex.export_grid(model, step_deg, output)
         out.print(f"wrote {len(frame):,} grid values to {output}")
     elif fmt == "msi":
+        frequency_hz = model_frequency_hz(model, frequency_hz)
         os.makedirs(output, exist_ok=True)
         for n in model.nodes:
             path = os.path.join(output, f"{n}.msi")
-            ex.export_msi(model, n, path, frequency_hz=frequency_hz or model.training.get("frequency_hz"), name=f"rplearn {model.label} node {n}")
+            ex.export_msi(model, n, path, frequency_hz=frequency_hz, name=f"rplearn {model.label} node {n}")
             out.print(f"wrote {path}")
     elif fmt == "images":
         from rplearn.viz.images import export_pattern_images
@@ -818,7 +885,7 @@ def plot(
     models = {}
     for p in model_paths:
         m = load_model(p)
-        if getattr(m, "kind", "") != "patterns":
+        if m.kind != "patterns":
             raise InputError(f"{p}: a {m.kind} baseline has no per-node pattern to draw")
         models[m.label] = m
     gt = load_ground_truth(truth) if truth else None
@@ -846,11 +913,7 @@ def orient(
 
     Example: rplearn orient sh10.json --tx A --rx B --tx-pos 0,0,20 --rx-pos 10,5,25 --turn both
     """
-    import numpy as np
-
     from rplearn.analysis.headings import best_yaw
-    from rplearn.core.geometry import distance_m
-    from rplearn.core.link import received_power_dbm
     from rplearn.models.load import load_model
 
     def xyz(text: str, name: str) -> list[float]:
@@ -863,21 +926,12 @@ def orient(
         return v
 
     model = load_model(model_path)
-    if getattr(model, "kind", "") != "patterns":
+    if model.kind != "patterns":
         raise InputError(f"{model_path}: a {model.kind} baseline cannot tell which heading is better")
     p_tx, p_rx = xyz(tx_pos, "--tx-pos"), xyz(rx_pos, "--rx-pos")
-    frequency_hz = frequency_hz or model.training.get("frequency_hz")
-    if not frequency_hz:
-        raise InputError(f"{model_path}: the model does not record its frequency; give --frequency")
-    r = best_yaw(model, tx, rx, p_tx, p_rx, turn=turn, tx_yaw_deg=tx_yaw, rx_yaw_deg=rx_yaw)
-    d = float(distance_m(np.array(p_tx), np.array(p_rx)))
-    before = float(received_power_dbm(tx_power_dbm, r.baseline_gain_db, d, frequency_hz))
-    after = float(received_power_dbm(tx_power_dbm, r.gain_db, d, frequency_hz))
-    out.print(
-        f"best yaw: tx {r.tx_yaw_deg:.0f} deg, rx {r.rx_yaw_deg:.0f} deg (ENU, ccw from east)\n"
-        f"predicted received power: {before:.1f} dBm now -> {after:.1f} dBm ({after - before:+.1f} dB)",
-        highlight=False,
-    )
+    r = best_yaw(model, tx, rx, p_tx, p_rx, turn=turn, tx_yaw_deg=tx_yaw, rx_yaw_deg=rx_yaw,
+                 tx_power_dbm=tx_power_dbm, frequency_hz=frequency_hz)
+    out.print(r.summary(), highlight=False)
 
 
 @app.command()
@@ -898,7 +952,6 @@ def report(
     from rplearn.models.fit import evaluate_models, fit_model, scores_markdown
     from rplearn.data.units import samples_of
     from rplearn.models.spec import ModelSpec
-    from rplearn.models.patterns import PatternSet
     from rplearn.viz.report import ReportSection, write_report
 
     names = _split_list([models]) or []
@@ -926,7 +979,7 @@ def report(
             p.advance(task)
     rows = evaluate_models(fitted, ts)
     md = scores_markdown(rows)
-    pattern_models = {f.label: f.model for f in fitted if isinstance(f.model, PatternSet)}
+    pattern_models = {f.label: f.model for f in fitted if f.model.kind == "patterns"}
     images = [plt_.plot_coverage(node_directions(ls), node_directions(ts), os.path.join(out_dir, "coverage.png"))]
     if pattern_models:
         images.append(plt_.plot_pattern_maps(pattern_models, None, list(ls.nodes), node_directions(ls), os.path.join(out_dir, "patterns.png")))

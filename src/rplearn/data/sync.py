@@ -19,11 +19,11 @@ after optional clock offsets. A sample is dropped, and counted by reason, when:
 ``tx_equals_rx``
     its transmitter is its receiver;
 ``other_link``
-    it belongs to another direction than the one chosen with ``link=(tx, rx)``;
+    it belongs to another direction than the one chosen with ``SyncOptions(link=(tx, rx))``;
 ``unknown_node``
     one of its ends has no pose log. By default this is a counted drop (a capture often
-    hears nodes that are not part of the experiment); ``on_unknown_node="error"``
-    (``rplearn sync --on-unknown-node error``) raises :class:`~rplearn.errors.InputError` instead;
+    hears nodes that are not part of the experiment); ``SyncOptions(on_unknown_node="error")``
+    raises :class:`~rplearn.errors.InputError` instead;
 ``out_of_span``
     its time lies before the first or after the last pose of one end;
 ``pose_gap``
@@ -35,18 +35,27 @@ holds at every time and it never causes ``out_of_span`` or ``pose_gap``.
 Time convention: the output column ``t`` is the signal time on the common clock,
 ``t_signal + signal_clock_offset_s``; a pose log's times are shifted by
 ``clock_offsets_s[node]`` before interpolation. An offset is what must be *added* to a log's
-time to put it on the common clock.
+time to put it on the common clock. All options are fields of :class:`SyncOptions`.
 """
 
 from __future__ import annotations
 
 import logging
+import math
 from dataclasses import dataclass, field
-from typing import Iterable, Iterator, Mapping, Sequence
+from numbers import Real
+from typing import Any, Iterable, Iterator, Mapping, Sequence
 
 import numpy as np
 import pandas as pd
 
+from rplearn.data.poses import (
+    STATUS_OUT_OF_SPAN,
+    STATUS_POSE_GAP,
+    PoseTrack,
+    interpolate_nodes,
+    tracks_of_checked_log,
+)
 from rplearn.data.tables import (
     MATCHED_COLUMNS,
     QUATERNION_NORM_TOLERANCE,
@@ -57,7 +66,6 @@ from rplearn.data.tables import (
     validate_pose_log,
 )
 from rplearn.errors import InputError
-from rplearn.core.geometry import slerp_wxyz
 
 logger = logging.getLogger(__name__)
 
@@ -78,8 +86,6 @@ DROP_REASONS: tuple[str, ...] = (
     "out_of_span",
     "pose_gap",
 )
-
-_OK, _OUT_OF_SPAN, _POSE_GAP = 0, 1, 2
 
 
 @dataclass
@@ -145,99 +151,93 @@ class SyncResult:
     summary: SyncSummary
 
 
-# ---------------------------------------------------------------------------------------------
-# Interpolation primitives
+def _finite(value: Any) -> bool:
+    return isinstance(value, Real) and not isinstance(value, bool) and math.isfinite(float(value))
+
+
+def _check(ok: bool, name: str, expected: str, value: Any) -> None:
+    """Raise :class:`InputError` naming option ``name`` (``param=name``) unless ``ok``."""
+    if not ok:
+        raise InputError(f"{name}: expected {expected}, got {value!r}", param=name)
+
+
+def _seconds_by_node(value: Any, name: str) -> dict[str, float]:
+    """A mapping of node id to a finite number of seconds, checked."""
+    ok = isinstance(value, Mapping) and all(_finite(v) for v in value.values())
+    _check(ok, name, "a mapping of node id to a finite number of seconds", value)
+    return {str(k): float(v) for k, v in value.items()}
+
+
+def _checked_link(link: Any) -> tuple[str, str] | None:
+    """The direction ``(tx, rx)`` as two different node ids, or None."""
+    if link is None:
+        return None
+    try:
+        pair = tuple(str(n) for n in link)
+    except TypeError:
+        pair = ()
+    _check(len(pair) == 2 and pair[0] != pair[1], "link", "(tx, rx), two different node ids", link)
+    return pair[0], pair[1]
 
 
 @dataclass(frozen=True)
-class PoseTrack:
-    """One node's pose log as arrays: times [s] (common clock), ENU positions [m], quaternions."""
+class SyncOptions:
+    """How :func:`synchronise` matches signal samples with poses.
 
-    node: str
-    t_s: np.ndarray
-    position_xyz: np.ndarray
-    quat_wxyz: np.ndarray
+    Parameters
+    ----------
+    link : (str, str), optional
+        Keep only the direction ``tx -> rx`` (the paper uses one direction because links are
+        not reciprocal); ``None`` keeps all directions.
+    max_gap_s : float
+        Longest gap between two poses of a node across which a pose is interpolated [s].
+    clock_offsets_s : mapping of node id to float, optional
+        Offset added to each node's pose times to put them on the common clock [s].
+    signal_clock_offset_s : float or mapping of receiver id to float
+        Offset added to signal times [s] (one for the log, or one per receiver).
+    sentinel_rssi_dbm : sequence of float
+        RSSI values meaning "no measurement" [dBm], dropped as ``sentinel_rssi`` along with
+        NaN and infinite values.
+    on_unknown_node : {"drop", "error"}
+        What to do with signals naming a node without a pose log.
+    min_samples : int
+        :func:`synchronise` raises :class:`InputError` when fewer samples are matched
+        (0 disables; not used when streaming).
 
-    @property
-    def static(self) -> bool:
-        return self.t_s.shape[0] == 1
-
-    def interpolate(self, t_s: np.ndarray, max_gap_s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Pose at times ``t_s``: positions linearly, attitudes by slerp.
-
-        Returns
-        -------
-        position_xyz : ndarray (n, 3)
-        quat_wxyz : ndarray (n, 4)
-        status : ndarray (n,) of int8
-            0 = interpolated, 1 = outside the log's span, 2 = inside a gap longer than
-            ``max_gap_s``. Poses of rows with a non-zero status are meaningless.
-        """
-        n = t_s.shape[0]
-        if self.static:
-            q = self.quat_wxyz[0]
-            q = -q if q[0] < 0 else q
-            return (
-                np.broadcast_to(self.position_xyz[0], (n, 3)).copy(),
-                np.broadcast_to(q, (n, 4)).copy(),
-                np.zeros(n, np.int8),
-            )
-        tk = self.t_s
-        i = np.searchsorted(tk, t_s, side="right") - 1
-        i = np.clip(i, 0, tk.shape[0] - 2)
-        t0 = tk[i]
-        t1 = tk[i + 1]
-        dt = t1 - t0
-        status = np.zeros(n, np.int8)
-        on_sample = (t_s == t0) | (t_s == t1)  # a logged pose is known even at a gap's edge
-        status[(dt > max_gap_s) & ~on_sample] = _POSE_GAP
-        status[(t_s < tk[0]) | (t_s > tk[-1]) | ~np.isfinite(t_s)] = _OUT_OF_SPAN
-        frac = np.clip((t_s - t0) / dt, 0.0, 1.0)
-        p0 = self.position_xyz[i]
-        pos = p0 + frac[:, None] * (self.position_xyz[i + 1] - p0)
-        quat = slerp_wxyz(self.quat_wxyz[i], self.quat_wxyz[i + 1], frac)
-        return pos, quat, status
-
-
-def pose_tracks(
-    pose_log: pd.DataFrame,
-    clock_offsets_s: Mapping[str, float] | None = None,
-    source: str = "pose log",
-) -> dict[str, PoseTrack]:
-    """Split a canonical pose log into one :class:`PoseTrack` per node.
-
-    Rows with NaN or infinite values are rejected by :func:`~rplearn.data.tables.validate_pose_log`
-    (use the readers' ``nan_policy="drop"`` to drop and count them on reading).
+    Raises
+    ------
+    InputError
+        On a value out of its domain; ``param`` names the field at fault.
     """
-    return _tracks(validate_pose_log(pose_log, source), clock_offsets_s, source)
 
+    link: tuple[str, str] | None = None
+    max_gap_s: float = 0.2
+    clock_offsets_s: Mapping[str, float] | None = None
+    signal_clock_offset_s: float | Mapping[str, float] = 0.0
+    sentinel_rssi_dbm: Sequence[float] = DEFAULT_SENTINEL_RSSI_DBM
+    on_unknown_node: str = "drop"
+    min_samples: int = 1
 
-def _tracks(df: pd.DataFrame, clock_offsets_s: Mapping[str, float] | None, source: str) -> dict[str, PoseTrack]:
-    """:func:`pose_tracks` of a pose log already checked by :func:`validate_pose_log`."""
-    offsets = dict(clock_offsets_s or {})
-    tracks: dict[str, PoseTrack] = {}
-    nodes = df["node"].to_numpy()
-    t = df["t"].to_numpy(np.float64)
-    pos = df[["x", "y", "z"]].to_numpy(np.float64)
-    quat = df[["qw", "qx", "qy", "qz"]].to_numpy(np.float64)
-    # df is sorted by (node, t): nodes are contiguous runs
-    starts = np.flatnonzero(np.r_[True, nodes[1:] != nodes[:-1]])
-    ends = np.r_[starts[1:], len(nodes)]
-    for s, e in zip(starts, ends):
-        node = str(nodes[s])
-        tracks[node] = PoseTrack(
-            node,
-            t[s:e] + float(offsets.get(node, 0.0)),
-            np.ascontiguousarray(pos[s:e]),
-            np.ascontiguousarray(quat[s:e]),
-        )
-    unknown = sorted(set(offsets) - set(tracks))
-    if unknown:
-        raise InputError(
-            f"{source}: clock offsets (rplearn sync --offset, or clock_offsets_s=) name node(s) "
-            f"{', '.join(unknown)} without a pose log; known: {', '.join(sorted(tracks))}"
-        )
-    return tracks
+    def __post_init__(self) -> None:
+        set_ = object.__setattr__
+        set_(self, "link", _checked_link(self.link))
+        _check(_finite(self.max_gap_s) and self.max_gap_s > 0, "max_gap_s", "a positive number of seconds",
+               self.max_gap_s)
+        if self.clock_offsets_s is not None:
+            set_(self, "clock_offsets_s", _seconds_by_node(self.clock_offsets_s, "clock_offsets_s"))
+        if isinstance(self.signal_clock_offset_s, Mapping):
+            set_(self, "signal_clock_offset_s", _seconds_by_node(self.signal_clock_offset_s, "signal_clock_offset_s"))
+        _check(isinstance(self.signal_clock_offset_s, Mapping) or _finite(self.signal_clock_offset_s),
+               "signal_clock_offset_s", "a finite number of seconds, or one per receiver id", self.signal_clock_offset_s)
+        try:
+            sentinel: tuple[float, ...] | None = tuple(float(v) for v in self.sentinel_rssi_dbm)
+        except (TypeError, ValueError):
+            sentinel = None
+        _check(sentinel is not None, "sentinel_rssi_dbm", "a sequence of numbers [dBm]", self.sentinel_rssi_dbm)
+        set_(self, "sentinel_rssi_dbm", sentinel)
+        _check(self.on_unknown_node in ("drop", "error"), "on_unknown_node", "'drop' or 'error'", self.on_unknown_node)
+        _check(isinstance(self.min_samples, (int, np.integer)) and not isinstance(self.min_samples, bool)
+               and self.min_samples >= 0, "min_samples", "a non-negative integer", self.min_samples)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -253,56 +253,29 @@ def _numeric(df: pd.DataFrame, column: str) -> np.ndarray:
     return pd.to_numeric(col, errors="coerce").to_numpy(np.float64, na_value=np.nan)
 
 
-def _match_chunk(
-    tracks: Mapping[str, PoseTrack],
-    signal: pd.DataFrame,
-    link: tuple[str, str] | None,
-    max_gap_s: float,
-    signal_clock_offset_s: float | Mapping[str, float],
-    sentinel_rssi_dbm: Sequence[float],
-    on_unknown_node: str,
-    source: str,
-) -> SyncResult:
-    missing = [c for c in SIGNAL_COLUMNS if c not in signal.columns]
-    if missing:
-        raise InputError(
-            f"{source}: missing column(s) {', '.join(missing)}; expected {', '.join(SIGNAL_COLUMNS)}"
-        )
-    summary = SyncSummary(n_in=int(len(signal)))
-    n = len(signal)
+def _signal_times(signal: pd.DataFrame, rx: np.ndarray, offset_s: float | Mapping[str, float]) -> np.ndarray:
+    """Signal times [s] on the common clock: plus one offset, or one per receiver."""
     t = _numeric(signal, "t")
-    rssi = _numeric(signal, "rssi_dbm")
-    ptx = _numeric(signal, "tx_power_dbm")
-    freq = _numeric(signal, "frequency_hz")
-    tx = signal["tx"].astype(str).to_numpy(dtype=object)
-    rx = signal["rx"].astype(str).to_numpy(dtype=object)
+    if isinstance(offset_s, Mapping):
+        off = pd.Series(rx).map(lambda r: float(offset_s.get(r, 0.0))).to_numpy(np.float64)
+        return t + off
+    return t + float(offset_s)
 
-    if isinstance(signal_clock_offset_s, Mapping):
-        off = pd.Series(rx).map(lambda r: float(signal_clock_offset_s.get(r, 0.0))).to_numpy(np.float64)
-        t = t + off
-    else:
-        t = t + float(signal_clock_offset_s)
 
-    keep = np.ones(n, bool)
+def _unknown_nodes(
+    tx: np.ndarray, rx: np.ndarray, tracks: Mapping[str, PoseTrack], keep: np.ndarray,
+    on_unknown_node: str, source: str,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, list[str]]:
+    """Node codes of both ends, which codes have a pose log, rows naming a node without one.
 
-    def drop(mask: np.ndarray, reason: str) -> None:
-        hit = mask & keep
-        summary.dropped[reason] += int(hit.sum())
-        keep[hit] = False
-
-    drop(duplicate_rows(signal), "duplicate")
-    drop(~(np.isfinite(t) & np.isfinite(ptx) & np.isfinite(freq) & (freq > 0)), "invalid_value")
-    drop(~np.isfinite(rssi) | np.isin(rssi, np.asarray(sentinel_rssi_dbm, np.float64)), "sentinel_rssi")
-    drop((rssi < PLAUSIBLE_RSSI_DBM[0]) | (rssi > PLAUSIBLE_RSSI_DBM[1]), "implausible_rssi")
-    drop(tx == rx, "tx_equals_rx")
-    if link is not None:
-        drop(~((tx == str(link[0])) & (rx == str(link[1]))), "other_link")
-
-    # node ids -> pose tracks; factorise once over both ends
-    codes, uniques = pd.factorize(np.concatenate([tx, rx]))
-    tx_code, rx_code = codes[:n], codes[n:]
+    Returns ``(tx_code, rx_code, uniques, known, unknown_mask, names)`` with the unknown
+    node ids named by the kept rows; raises with ``on_unknown_node="error"``.
+    """
+    n = len(tx)
+    codes, uniques = pd.factorize(np.concatenate([tx, rx]))  # factorise once over both ends
     known = np.array([u in tracks for u in uniques], bool)
-    unknown_mask = ~known[tx_code] | ~known[rx_code]
+    unknown_mask = ~known[codes[:n]] | ~known[codes[n:]]
+    names: list[str] = []
     if np.any(unknown_mask & keep):
         names = sorted({str(u) for u, k in zip(uniques, known) if not k} & (
             set(tx[unknown_mask & keep]) | set(rx[unknown_mask & keep])))
@@ -311,40 +284,25 @@ def _match_chunk(
             raise InputError(
                 f"{source}: field tx/rx: unknown node id(s) {', '.join(names)} at row {row} "
                 f"(first); pose logs exist for {', '.join(sorted(tracks))} (to drop and count "
-                "such samples: rplearn sync --on-unknown-node drop, or on_unknown_node='drop')"
+                "such samples: on_unknown_node='drop')",
+                param="on_unknown_node",
             )
-        summary.unknown_nodes = names
         logger.warning("%s: signals name node(s) without a pose log: %s", source, ", ".join(names))
-    drop(unknown_mask, "unknown_node")
+    return codes[:n], codes[n:], uniques, known, unknown_mask, names
 
-    poses = {}
-    for end, end_code in (("tx", tx_code), ("rx", rx_code)):
-        pos = np.full((n, 3), np.nan)
-        quat = np.full((n, 4), np.nan)
-        status = np.zeros(n, np.int8)
-        for code, node in enumerate(uniques):
-            if not known[code]:
-                continue
-            sel = np.flatnonzero((end_code == code) & keep)
-            if sel.size == 0:
-                continue
-            p, q, s = tracks[node].interpolate(t[sel], max_gap_s)
-            pos[sel] = p
-            quat[sel] = q
-            status[sel] = s
-        poses[end] = (pos, quat, status)
-    st_tx, st_rx = poses["tx"][2], poses["rx"][2]
-    drop((st_tx == _OUT_OF_SPAN) | (st_rx == _OUT_OF_SPAN), "out_of_span")
-    drop((st_tx == _POSE_GAP) | (st_rx == _POSE_GAP), "pose_gap")
 
-    idx = np.flatnonzero(keep)
+def _matched_frame(
+    signal: pd.DataFrame, idx: np.ndarray, values: dict[str, np.ndarray],
+    poses: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]],
+) -> pd.DataFrame:
+    """The kept rows ``idx`` in :data:`MATCHED_COLUMNS` order, then the extra signal columns."""
     cols: dict[str, np.ndarray] = {
-        "t": t[idx],
-        "tx": tx[idx].astype(str),
-        "rx": rx[idx].astype(str),
-        "rssi_dbm": rssi[idx],
-        "tx_power_dbm": ptx[idx],
-        "frequency_hz": freq[idx],
+        "t": values["t"][idx],
+        "tx": values["tx"][idx].astype(str),
+        "rx": values["rx"][idx].astype(str),
+        "rssi_dbm": values["rssi_dbm"][idx],
+        "tx_power_dbm": values["tx_power_dbm"][idx],
+        "frequency_hz": values["frequency_hz"][idx],
     }
     for end in ("tx", "rx"):
         pos, quat, _ = poses[end]
@@ -353,29 +311,53 @@ def _match_chunk(
         for j, f in enumerate(("qw", "qx", "qy", "qz")):
             cols[f"{end}_{f}"] = quat[idx, j]
     out = pd.DataFrame(cols, columns=list(MATCHED_COLUMNS))
-    extra = [c for c in signal.columns if c not in MATCHED_COLUMNS]
-    for c in extra:
+    for c in [c for c in signal.columns if c not in MATCHED_COLUMNS]:
         out[c] = signal[c].to_numpy()[idx]
+    return out
+
+
+def _match_chunk(
+    tracks: Mapping[str, PoseTrack], signal: pd.DataFrame, options: SyncOptions, source: str
+) -> SyncResult:
+    """Match one signal log (or chunk of one) with the pose tracks; drops counted by reason."""
+    missing = [c for c in SIGNAL_COLUMNS if c not in signal.columns]
+    if missing:
+        raise InputError(
+            f"{source}: missing column(s) {', '.join(missing)}; expected {', '.join(SIGNAL_COLUMNS)}"
+        )
+    summary = SyncSummary(n_in=int(len(signal)))
+    tx = signal["tx"].astype(str).to_numpy(dtype=object)
+    rx = signal["rx"].astype(str).to_numpy(dtype=object)
+    values = {"t": _signal_times(signal, rx, options.signal_clock_offset_s), "tx": tx, "rx": rx}
+    values.update({c: _numeric(signal, c) for c in ("rssi_dbm", "tx_power_dbm", "frequency_hz")})
+    t, rssi, ptx, freq = (values[c] for c in ("t", "rssi_dbm", "tx_power_dbm", "frequency_hz"))
+    keep = np.ones(len(signal), bool)
+
+    def drop(mask: np.ndarray, reason: str) -> None:
+        hit = mask & keep
+        summary.dropped[reason] += int(hit.sum())
+        keep[hit] = False
+
+    drop(duplicate_rows(signal), "duplicate")
+    drop(~(np.isfinite(t) & np.isfinite(ptx) & np.isfinite(freq) & (freq > 0)), "invalid_value")
+    drop(~np.isfinite(rssi) | np.isin(rssi, np.asarray(options.sentinel_rssi_dbm, np.float64)), "sentinel_rssi")
+    drop((rssi < PLAUSIBLE_RSSI_DBM[0]) | (rssi > PLAUSIBLE_RSSI_DBM[1]), "implausible_rssi")
+    drop(tx == rx, "tx_equals_rx")
+    if options.link is not None:
+        drop(~((tx == options.link[0]) & (rx == options.link[1])), "other_link")
+    tx_code, rx_code, uniques, known, unknown, names = _unknown_nodes(
+        tx, rx, tracks, keep, options.on_unknown_node, source)
+    if names:
+        summary.unknown_nodes = names
+    drop(unknown, "unknown_node")
+    poses = {end: interpolate_nodes(tracks, uniques, code, t, options.max_gap_s, keep & known[code])
+             for end, code in (("tx", tx_code), ("rx", rx_code))}
+    st_tx, st_rx = poses["tx"][2], poses["rx"][2]
+    drop((st_tx == STATUS_OUT_OF_SPAN) | (st_rx == STATUS_OUT_OF_SPAN), "out_of_span")
+    drop((st_tx == STATUS_POSE_GAP) | (st_rx == STATUS_POSE_GAP), "pose_gap")
+    idx = np.flatnonzero(keep)
     summary.n_out = int(idx.size)
-    return SyncResult(out, summary)
-
-
-def _check_options(max_gap_s: float, on_unknown_node: str, link: tuple[str, str] | None) -> None:
-    if not (np.isfinite(max_gap_s) and max_gap_s > 0):
-        raise InputError(
-            f"max gap (rplearn sync --max-gap, or max_gap_s=): expected a positive number of seconds, "
-            f"got {float(max_gap_s)!r}"
-        )
-    if on_unknown_node not in ("drop", "error"):
-        raise InputError(
-            "unknown-node policy (rplearn sync --on-unknown-node, or on_unknown_node=): "
-            f"expected 'drop' or 'error', got {on_unknown_node!r}"
-        )
-    if link is not None and (len(link) != 2 or str(link[0]) == str(link[1])):
-        raise InputError(
-            "link (rplearn sync --link TX:RX, or link=(tx, rx)): expected two different node ids, "
-            f"got {':'.join(map(str, link))}"
-        )
+    return SyncResult(_matched_frame(signal, idx, values, poses), summary)
 
 
 def duplicate_rows(signal: pd.DataFrame) -> np.ndarray:
@@ -422,31 +404,35 @@ def check_link_nodes(signal: pd.DataFrame, link: tuple[str, str], source: str = 
     tx = signal["tx"].astype(str)
     rx = signal["rx"].astype(str)
     present = sorted(set(tx) | set(rx))
-    flag = f"--link {link[0]}:{link[1]}"
+    name = f"link {link[0]}:{link[1]}"
     absent = [str(n) for n in link if str(n) not in present]
     if absent:
         raise InputError(
-            f"{source}: {flag}: node {', '.join(absent)} is in no signal log; the signal logs name "
-            f"{', '.join(present) or 'no node'}"
+            f"{source}: {name}: node {', '.join(absent)} is in no signal log; the signal logs name "
+            f"{', '.join(present) or 'no node'}",
+            param="link",
         )
     if not ((tx == str(link[0])) & (rx == str(link[1]))).any():
         pairs = sorted(set(zip(tx, rx)))
         raise InputError(
-            f"{source}: {flag}: no signal from {link[0]} to {link[1]}; directions present: "
-            f"{', '.join(f'{a}:{b}' for a, b in pairs)}"
+            f"{source}: {name}: no signal from {link[0]} to {link[1]}; directions present: "
+            f"{', '.join(f'{a}:{b}' for a, b in pairs)}",
+            param="link",
         )
+
+
+def _options(options: SyncOptions | None) -> SyncOptions:
+    if options is None:
+        return SyncOptions()
+    if not isinstance(options, SyncOptions):
+        raise InputError(f"options: expected a SyncOptions, got {type(options).__name__}", param="options")
+    return options
 
 
 def synchronise(
     pose_log: pd.DataFrame,
     signal_log: pd.DataFrame,
-    link: tuple[str, str] | None = None,
-    max_gap_s: float = 0.2,
-    clock_offsets_s: Mapping[str, float] | None = None,
-    signal_clock_offset_s: float | Mapping[str, float] = 0.0,
-    sentinel_rssi_dbm: Sequence[float] = DEFAULT_SENTINEL_RSSI_DBM,
-    on_unknown_node: str = "drop",
-    min_samples: int = 1,
+    options: SyncOptions | None = None,
     source: str = "signal log",
 ) -> SyncResult:
     """Match every signal sample with the poses of both its ends (paper Sec. V-B4).
@@ -458,22 +444,9 @@ def synchronise(
     signal_log : DataFrame
         Canonical signal log (``t, tx, rx, rssi_dbm, tx_power_dbm, frequency_hz`` and any
         extra columns, which are kept).
-    link : (str, str), optional
-        Keep only the direction ``tx -> rx`` (the paper uses one direction because links are
-        not reciprocal); ``None`` keeps all directions.
-    max_gap_s : float
-        Longest gap between two poses of a node across which a pose is interpolated [s].
-    clock_offsets_s : mapping of node id to float, optional
-        Offset added to each node's pose times to put them on the common clock [s].
-    signal_clock_offset_s : float or mapping of receiver id to float
-        Offset added to signal times [s] (one for the log, or one per receiver).
-    sentinel_rssi_dbm : sequence of float
-        RSSI values meaning "no measurement", dropped as ``sentinel_rssi`` along with
-        NaN and infinite values.
-    on_unknown_node : {"drop", "error"}
-        What to do with signals naming a node without a pose log.
-    min_samples : int
-        Raise :class:`InputError` when fewer samples are matched (0 disables).
+    options : SyncOptions, optional
+        Direction, gap threshold [s], clock offsets [s], sentinel RSSI values [dBm],
+        unknown-node policy and minimum sample count; ``SyncOptions()`` by default.
     source : str
         Name of the signal log in messages.
 
@@ -489,20 +462,17 @@ def synchronise(
         On a missing column, a bad pose log, an unknown node with ``on_unknown_node="error"``,
         or fewer than ``min_samples`` matched samples.
     """
-    _check_options(max_gap_s, on_unknown_node, link)
+    options = _options(options)
     pose = validate_pose_log(pose_log, "pose log")
-    tracks = _tracks(pose, clock_offsets_s, "pose log")
-    if link is not None:
-        check_link_nodes(signal_log, link, source)
-    result = _match_chunk(
-        tracks, signal_log, link, max_gap_s, signal_clock_offset_s, sentinel_rssi_dbm,
-        on_unknown_node, source,
-    )
+    tracks = tracks_of_checked_log(pose, options.clock_offsets_s, "pose log")
+    if options.link is not None:
+        check_link_nodes(signal_log, options.link, source)
+    result = _match_chunk(tracks, signal_log, options, source)
     result.summary.non_unit_quaternions = non_unit_quaternion_rows(pose)
-    if result.summary.n_out < min_samples:
+    if result.summary.n_out < options.min_samples:
         raise InputError(
             f"{source}: only {result.summary.n_out} signal sample(s) matched, at least "
-            f"{min_samples} needed ({result.summary.to_text().replace(chr(10), ';')})"
+            f"{options.min_samples} needed ({result.summary.to_text().replace(chr(10), ';')})"
         )
     return result
 
@@ -510,29 +480,22 @@ def synchronise(
 def synchronise_stream(
     pose_log: pd.DataFrame,
     signal_chunks: Iterable[pd.DataFrame],
-    link: tuple[str, str] | None = None,
-    max_gap_s: float = 0.2,
-    clock_offsets_s: Mapping[str, float] | None = None,
-    signal_clock_offset_s: float | Mapping[str, float] = 0.0,
-    sentinel_rssi_dbm: Sequence[float] = DEFAULT_SENTINEL_RSSI_DBM,
-    on_unknown_node: str = "drop",
+    options: SyncOptions | None = None,
     source: str = "signal log",
 ) -> Iterator[SyncResult]:
     """Match a signal log chunk by chunk; yields one :class:`SyncResult` per chunk.
 
     The pose log is held in memory (a 100 Hz log of an hour is 360,000 rows per node); the
     signal log is consumed lazily, so memory stays bounded by the chunk size. Merge the
-    per-chunk summaries with :meth:`SyncSummary.merge`. Options as in :func:`synchronise`.
+    per-chunk summaries with :meth:`SyncSummary.merge`. Options as in :func:`synchronise`
+    (``min_samples`` is not checked).
     """
-    _check_options(max_gap_s, on_unknown_node, link)
+    options = _options(options)
     pose = validate_pose_log(pose_log, "pose log")
-    tracks = _tracks(pose, clock_offsets_s, "pose log")
+    tracks = tracks_of_checked_log(pose, options.clock_offsets_s, "pose log")
     non_unit = non_unit_quaternion_rows(pose)
     for chunk in signal_chunks:
-        result = _match_chunk(
-            tracks, chunk, link, max_gap_s, signal_clock_offset_s, sentinel_rssi_dbm,
-            on_unknown_node, source,
-        )
+        result = _match_chunk(tracks, chunk, options, source)
         result.summary.non_unit_quaternions, non_unit = non_unit, 0  # counted once, in the first chunk
         yield result
 
@@ -541,7 +504,8 @@ def synchronise_to_parquet(
     pose_log: pd.DataFrame,
     signal_chunks: Iterable[pd.DataFrame],
     out_path: str,
-    **options,
+    options: SyncOptions | None = None,
+    source: str = "signal log",
 ) -> SyncSummary:
     """Stream a signal log through :func:`synchronise_stream` into one Parquet file.
 
@@ -553,8 +517,10 @@ def synchronise_to_parquet(
         Signal-log chunks, e.g. :func:`rplearn.io.tables.iter_signal_table`.
     out_path : str
         Parquet file to write (one row group per non-empty chunk).
-    **options
-        Passed to :func:`synchronise_stream`.
+    options : SyncOptions, optional
+        As for :func:`synchronise_stream`.
+    source : str
+        Name of the signal log in messages.
 
     Returns
     -------
@@ -568,7 +534,7 @@ def synchronise_to_parquet(
     writer = None
     schema = None
     try:
-        for res in synchronise_stream(pose_log, signal_chunks, **options):
+        for res in synchronise_stream(pose_log, signal_chunks, options, source):
             total.merge(res.summary)
             if res.dataset.empty:
                 continue
@@ -592,13 +558,12 @@ def synchronise_to_parquet(
 __all__ = [
     "DEFAULT_SENTINEL_RSSI_DBM",
     "DROP_REASONS",
-    "PoseTrack",
-    "check_link_nodes",
-    "duplicate_rows",
+    "PLAUSIBLE_RSSI_DBM",
+    "SyncOptions",
     "SyncResult",
     "SyncSummary",
-    "pose_tracks",
-    "slerp_wxyz",
+    "check_link_nodes",
+    "duplicate_rows",
     "synchronise",
     "synchronise_stream",
     "synchronise_to_parquet",

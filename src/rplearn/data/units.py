@@ -1,11 +1,16 @@
 """Unit selection: which trajectory units a model learns from and which it is tested on.
 
-The one place that decides it: units labelled ``test...`` (any case) are held out for testing
-by default, every other unit is for learning.
+The one place that decides it. A matched dataset may carry a ``unit`` column, the label of the
+trajectory unit (paper Sec. IV-A) every sample was flown in. Units labelled ``test...`` (any
+case) are held out for testing by default; every other unit is for learning. Functions return
+a :class:`UnitChoice`: the units, plus the notes and warnings a user should read about the
+choice (which units were left out, when a score would be a training score).
 """
 
 from __future__ import annotations
 
+import os
+from dataclasses import dataclass, field
 from typing import Sequence
 
 import pandas as pd
@@ -13,24 +18,162 @@ import pandas as pd
 from rplearn.data.tables import LinkSamples, link_samples
 from rplearn.errors import InputError
 
+#: Prefix (any case) of the unit labels held out for testing by default.
+TEST_UNIT_PREFIX = "test"
+
+
+@dataclass(frozen=True)
+class UnitChoice:
+    """Units chosen for learning or testing, and what the user should know about the choice.
+
+    Attributes
+    ----------
+    units : list of str or None
+        The units; None means every row (the dataset has no ``unit`` column, or all are used).
+    defaulted : bool
+        True when the units were chosen by the default rule rather than given.
+    notes : list of str
+        Plain remarks (which units were used and which left out).
+    warnings : list of str
+        Things that may make a result misleading (training scores reported as test scores).
+    """
+
+    units: list[str] | None
+    defaulted: bool = False
+    notes: list[str] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)
+
+
+def is_test_unit(unit: object) -> bool:
+    """Whether a unit label is held out for testing by default (``test...``, any case)."""
+    return str(unit).lower().startswith(TEST_UNIT_PREFIX)
+
+
+def dataset_units(df: pd.DataFrame) -> list[str]:
+    """Sorted unit labels of a dataset ([] without a ``unit`` column)."""
+    return sorted(df["unit"].astype(str).unique()) if "unit" in df.columns else []
+
+
+def learning_units(df: pd.DataFrame, units: Sequence[str] | None = None, source: str = "dataset") -> UnitChoice:
+    """Units to learn from: ``units`` as given, else every unit not labelled ``test...``.
+
+    Without a ``unit`` column, or when every unit is a test unit, every row is used (and a
+    note says so).
+    """
+    if units:
+        return UnitChoice([str(u) for u in units])
+    available = dataset_units(df)
+    if not available:
+        return UnitChoice(None, defaulted=True)
+    learn = [u for u in available if not is_test_unit(u)]
+    if not learn:
+        return UnitChoice(None, True, [f"{source}: every unit is labelled {TEST_UNIT_PREFIX}...; learning from all of them"])
+    left_out = [u for u in available if u not in learn]
+    notes = [f"learning from units {', '.join(learn)}; left out {', '.join(left_out)}"] if left_out else []
+    return UnitChoice(learn, True, notes)
+
+
+def trained_units(provenances: Sequence[dict]) -> list[str]:
+    """Units the models with these provenance records learned from (sorted, distinct)."""
+    return sorted({str(u) for p in provenances for u in (p.get("parameters", {}).get("units") or [])})
+
+
+def evaluation_units(
+    df: pd.DataFrame,
+    units: Sequence[str] | None,
+    provenances: Sequence[dict],
+    source: str = "dataset",
+) -> UnitChoice:
+    """Units to score models on: as given, else those no model learned from.
+
+    Parameters
+    ----------
+    df : DataFrame
+        Matched dataset.
+    units : sequence of str or None
+        Units the user chose; None applies the default rule.
+    provenances : sequence of dict
+        The models' provenance records (their ``parameters.units`` and ``parameters.dataset``).
+    source : str
+        Dataset file name, for messages and to recognise a model's own training file.
+
+    Returns
+    -------
+    UnitChoice
+        With a warning when a score would be a training score.
+    """
+    trained = trained_units(provenances)
+    available = dataset_units(df)
+    warnings: list[str] = []
+    if not available:
+        sources = {os.path.basename(str(p.get("parameters", {}).get("dataset"))) for p in provenances}
+        if os.path.basename(source) in sources:
+            warnings.append(
+                f"{source} has no unit column and a model learned from a file of this name: "
+                "these are probably training scores"
+            )
+    if units is None and trained and available:
+        unseen = [u for u in available if u not in trained]
+        if unseen:
+            return UnitChoice(unseen, True, [f"scoring on units {', '.join(unseen)}, which no model learned from"], warnings)
+    chosen = [str(u) for u in units] if units is not None else (available or None)
+    overlap = sorted(set(chosen or available) & set(trained))
+    notes: list[str] = []
+    if overlap:
+        warnings.append(f"scoring on unit(s) {', '.join(overlap)} that a model learned from: these are training scores")
+    elif units is None and available:
+        notes.append(f"scoring on all units ({', '.join(available)})")
+    return UnitChoice(chosen, units is None, notes, warnings)
+
+
+def split_units(
+    df: pd.DataFrame,
+    learn_units: Sequence[str] | None = None,
+    test_units: Sequence[str] | None = None,
+    source: str = "dataset",
+) -> tuple[list[str], list[str]]:
+    """Disjoint learning and testing units for a sweep or a report.
+
+    Testing units default to those labelled ``test...``, learning units to all others.
+
+    Raises
+    ------
+    InputError
+        Without a ``unit`` column, when either side is empty, or when they share a unit
+        (a test must use unseen data).
+    """
+    if "unit" not in df.columns:
+        raise InputError(f"{source}: needs a 'unit' column to split learning from testing samples", param="test_units")
+    available = dataset_units(df)
+    test = [str(u) for u in test_units] if test_units else [u for u in available if is_test_unit(u)]
+    learn = [str(u) for u in learn_units] if learn_units else [u for u in available if u not in test]
+    if not test or not learn:
+        raise InputError(f"{source}: cannot split units {', '.join(available)} into learning and testing", param="test_units")
+    shared = sorted(set(test) & set(learn))
+    if shared:
+        raise InputError(f"learning and testing units share {', '.join(shared)}; a test must use unseen data", param="test_units")
+    return learn, test
+
 
 def select_units(df: pd.DataFrame, units: Sequence[str] | None, source: str = "dataset") -> pd.DataFrame:
     """Rows whose ``unit`` label is among ``units`` (all rows when ``units`` is None)."""
     if not units:
         return df
     if "unit" not in df.columns:
-        raise InputError(f"{source}: --units needs a 'unit' column, which this dataset lacks")
+        raise InputError(f"{source}: choosing units needs a 'unit' column, which this dataset lacks", param="units")
     wanted = [str(u) for u in units]
-    known = sorted(df["unit"].astype(str).unique())
+    known = dataset_units(df)
     unknown = [u for u in wanted if u not in known]
     if unknown:
-        raise InputError(f"{source}: unknown unit(s) {', '.join(unknown)}; the dataset has {', '.join(known)}")
+        raise InputError(f"{source}: unknown unit(s) {', '.join(unknown)}; the dataset has {', '.join(known)}", param="units")
     return df[df["unit"].astype(str).isin(wanted)]
 
 
-def samples_of(df: pd.DataFrame, units: Sequence[str] | None = None, source: str = "dataset", nodes: Sequence[str] | None = None) -> LinkSamples:
+def samples_of(
+    df: pd.DataFrame, units: Sequence[str] | None = None, source: str = "dataset", nodes: Sequence[str] | None = None
+) -> LinkSamples:
     """Learning-ready samples of the chosen units of a matched dataset."""
     part = select_units(df, units, source)
     if len(part) == 0:
-        raise InputError(f"{source}: no samples selected")
+        raise InputError(f"{source}: no samples selected", param="units")
     return link_samples(part, source, nodes=nodes)

@@ -11,20 +11,23 @@ pcap / pcapng      :func:`rplearn.io.pcap.read_pcap`           signal log
 =================  =========================================  ==================================
 
 :func:`read_logs` chooses the reader of every path by its content (magic bytes) and, failing
-that, its extension, and concatenates the results. Each format library (rosbags, pyulog,
+that, its extension, and concatenates the results; :class:`~rplearn.io.options.ReaderOptions`
+carries what the readers need beyond the files. Each format library (rosbags, pyulog,
 dpkt, pymap3d) is imported only when a file of its format is read.
 """
 
 from __future__ import annotations
 
 import os
-from typing import Any, Iterable, Mapping
+from dataclasses import dataclass, field
+from typing import Any, Callable, Iterable, Mapping
 
 import pandas as pd
 
 from rplearn.data.tables import NON_UNIT_QUATERNION_ATTR, validate_pose_log
 from rplearn.errors import InputError, LogFormatError, RplearnError
 from rplearn.io._common import Logs
+from rplearn.io.options import ReaderOptions
 
 _MAGIC: tuple[tuple[bytes, str], ...] = (
     (b"ULog\x01\x12\x35", "ulog"),
@@ -84,9 +87,8 @@ def _bag_needs_topics(path: str, msg_definitions: Mapping[str, str] | None) -> s
     from rplearn.io.rosbag import bag_topics, describe_topics
 
     head = (
-        f"{path}: a ROS bag needs its pose topics and RSSI topics named (rplearn sync "
-        "--pose-topic TOPIC=NODE --rssi-topic TOPIC=TX:RX, or pose_topics={topic: node}, "
-        "rssi_topics={topic: (tx, rx)})"
+        f"{path}: a ROS bag needs its pose topics and RSSI topics named "
+        "(ReaderOptions.pose_topics={topic: node}, ReaderOptions.rssi_topics={topic: (tx, rx)})"
     )
     try:
         topics = bag_topics(path, msg_definitions)
@@ -95,53 +97,157 @@ def _bag_needs_topics(path: str, msg_definitions: Mapping[str, str] | None) -> s
     return f"{head}; it has {describe_topics(topics)}"
 
 
+@dataclass
+class _Gathered:
+    """What :func:`read_logs` has read so far: logs, per-file metadata, the common origin."""
+
+    origin: tuple[float, float, float] | None
+    poses: list[pd.DataFrame] = field(default_factory=list)
+    signals: list[pd.DataFrame] = field(default_factory=list)
+    files: list[dict[str, Any]] = field(default_factory=list)
+
+
+def _path_list(paths: str | os.PathLike | Iterable[str | os.PathLike]) -> list[str]:
+    """The paths as a non-empty list of strings."""
+    if isinstance(paths, (str, os.PathLike)):
+        paths = [paths]
+    out = [str(p) for p in paths]
+    if not out:
+        raise InputError("read_logs: no paths given", param="paths")
+    return out
+
+
+def _read_table(path: str, options: ReaderOptions, got: _Gathered) -> dict[str, Any]:
+    """Read a CSV/Parquet pose or signal table; a geodetic one may fix the common origin."""
+    from rplearn.io import tables as _tables
+
+    what = _tables.table_kind(path, options.columns)
+    if what == "pose":
+        pose, meta = _tables.read_pose_table(
+            path, columns=options.columns, node=(options.nodes or {}).get(path),
+            origin_geodetic=got.origin, nan_policy=options.nan_policy,
+            allow_unsorted=options.allow_unsorted,
+        )
+        if meta.get("origin_geodetic") is not None and got.origin is None:
+            got.origin = meta["origin_geodetic"]
+        got.poses.append(pose)
+    else:
+        ptx = options.tx_power_dbm if not isinstance(options.tx_power_dbm, Mapping) else None
+        signal, meta = _tables.read_signal_table(
+            path, columns=options.columns, tx_power_dbm=ptx, frequency_hz=options.frequency_hz,
+            rx=(options.receivers or {}).get(path),
+        )
+        got.signals.append(signal)
+    meta["kind"] = what
+    return meta
+
+
+def _read_bag(path: str, options: ReaderOptions, got: _Gathered) -> dict[str, Any]:
+    """Read the named pose and RSSI topics of a ROS 1 or ROS 2 bag."""
+    from rplearn.io import rosbag as _rosbag
+
+    if not options.pose_topics and not options.rssi_topics:
+        raise InputError(_bag_needs_topics(path, options.msg_definitions), param="pose_topics")
+    if isinstance(options.tx_power_dbm, Mapping):
+        raise InputError(
+            f"{path}: the transmit power for a bag must be one number [dBm] (ReaderOptions.tx_power_dbm)",
+            param="tx_power_dbm",
+        )
+    logs, meta = _rosbag.read_rosbag(
+        path, options.pose_topics or {}, options.rssi_topics, rssi_field=options.rssi_field,
+        tx_power_dbm=options.tx_power_dbm, frequency_hz=options.frequency_hz,
+        msg_definitions=options.msg_definitions,
+    )
+    if logs.pose is not None:
+        got.poses.append(logs.pose)
+    if logs.signal is not None:
+        got.signals.append(logs.signal)
+    meta["kind"] = "pose+signal"
+    return meta
+
+
+def _read_ulog(path: str, options: ReaderOptions, got: _Gathered) -> dict[str, Any]:
+    """Read a PX4 ULog of a named node; its geodetic anchor may fix the common origin."""
+    from rplearn.io import ulog as _ulog
+
+    node = (options.nodes or {}).get(path)
+    if node is None:
+        raise InputError(
+            f"{path}: give the node id of this ULog (ReaderOptions.nodes={{path: node}})", param="nodes"
+        )
+    pose, meta = _ulog.read_ulog(
+        path, node, got.origin, time_reference="auto", require_valid=options.require_valid
+    )
+    if got.origin is None and meta["anchor_geodetic"] is not None:
+        # re-express on the anchor so that later logs share it (no-op for this one)
+        got.origin = meta["anchor_geodetic"]
+    got.poses.append(pose)
+    meta["kind"] = "pose"
+    return meta
+
+
+def _read_pcap(path: str, options: ReaderOptions, got: _Gathered) -> dict[str, Any]:
+    """Read a radiotap capture of a named receiver with a known transmit power."""
+    from rplearn.io import pcap as _pcap
+
+    rx = (options.receivers or {}).get(path)
+    if rx is None:
+        raise InputError(
+            f"{path}: give the capturing node (ReaderOptions.receivers={{path: node}})", param="receivers"
+        )
+    if options.tx_power_dbm is None:
+        raise InputError(
+            f"{path}: give the transmit power [dBm], radiotap does not carry the sender's power "
+            "(ReaderOptions.tx_power_dbm)",
+            param="tx_power_dbm",
+        )
+    signal, meta = _pcap.read_pcap(
+        path, rx, options.tx_power_dbm, address_map=options.address_map, frequency_hz=options.frequency_hz
+    )
+    got.signals.append(signal)
+    meta["kind"] = "signal"
+    return meta
+
+
+_READERS: dict[str, Callable[[str, ReaderOptions, _Gathered], dict[str, Any]]] = {
+    "table": _read_table,
+    "ros1": _read_bag,
+    "ros2": _read_bag,
+    "ulog": _read_ulog,
+    "pcap": _read_pcap,
+}
+
+
+def _merge(got: _Gathered) -> tuple[Logs, dict[str, Any]]:
+    """One validated pose log and one time-sorted signal log from everything read."""
+    pose = None
+    if got.poses:
+        merged = pd.concat(got.poses, ignore_index=True)
+        merged.attrs[NON_UNIT_QUATERNION_ATTR] = sum(
+            int(p.attrs.get(NON_UNIT_QUATERNION_ATTR, 0)) for p in got.poses
+        )
+        pose = validate_pose_log(merged, "pose logs")
+    signal = None
+    if got.signals:
+        signal = pd.concat(got.signals, ignore_index=True).sort_values("t", kind="stable").reset_index(drop=True)
+    return Logs(pose=pose, signal=signal), {"files": got.files, "origin_geodetic": got.origin}
+
+
 def read_logs(
     paths: str | os.PathLike | Iterable[str | os.PathLike],
-    *,
-    columns: Mapping[str, str] | None = None,
-    origin_geodetic: tuple[float, float, float] | None = None,
-    nodes: Mapping[str, str] | None = None,
-    pose_topics: Mapping[str, str] | None = None,
-    rssi_topics: Mapping[str, tuple[str, str]] | None = None,
-    rssi_field: str = "rssi",
-    msg_definitions: Mapping[str, str] | None = None,
-    receivers: Mapping[str, str] | None = None,
-    address_map: Mapping[str, str] | None = None,
-    tx_power_dbm: float | Mapping[str, float] | None = None,
-    frequency_hz: float | None = None,
-    nan_policy: str = "error",
-    allow_unsorted: bool = False,
-    require_valid: bool = False,
+    options: ReaderOptions | None = None,
 ) -> tuple[Logs, dict[str, Any]]:
     """Read logs of any supported format into one pose log and one signal log.
 
     Parameters
     ----------
     paths : path or iterable of paths
-        Files (or ROS 2 bag directories).
-    columns : mapping, optional
-        Column renaming for CSV/Parquet tables (``{"their name": "canonical"}``).
-    origin_geodetic : (lat_deg, lon_deg, alt_m), optional
-        Common ENU origin for geodetic tables and ULogs. By default the first geodetic
-        file's origin (its first fix, or a ULog's anchor) is used for all the others.
-    nodes : mapping of path to node id, optional
-        Node id of a ULog or of a one-node table without a ``node`` column.
-    pose_topics, rssi_topics, rssi_field, msg_definitions
-        ROS bag options (:func:`rplearn.io.rosbag.read_rosbag`).
-    receivers : mapping of path to node id, optional
-        Capturing node of every pcap file.
-    address_map : mapping of MAC address to node id, optional
-        Transmitter addresses of pcap files.
-    tx_power_dbm, frequency_hz
-        Constants for formats that do not log them (pcap, bags, tables without the column).
-    nan_policy : {"error", "drop"}
-        NaN pose rows in tables (``rplearn sync --nan-policy``).
-    allow_unsorted : bool
-        Accept pose tables whose times go backwards within a node; they are sorted
-        (``rplearn sync --allow-unsorted``).
-    require_valid : bool
-        Drop ULog local-position rows flagged invalid by the autopilot (``xy_valid`` or
-        ``z_valid`` = 0; ``rplearn sync --require-valid``).
+        Files (or ROS 2 bag directories); each one's format is detected by
+        :func:`detect_format`.
+    options : ReaderOptions, optional
+        Column renaming, common geodetic origin, node ids, bag topics, pcap receivers and
+        addresses, constant tx power [dBm] and frequency [Hz], and the NaN / unsorted /
+        invalid-row policies; ``ReaderOptions()`` by default.
 
     Returns
     -------
@@ -150,98 +256,23 @@ def read_logs(
     metadata : dict
         ``files``: a list of the per-file metadata (with ``format`` and ``kind``),
         ``origin_geodetic``: the common origin used (or None).
+
+    Raises
+    ------
+    InputError
+        On a missing file, an unknown format, or an option a file needs but was not given
+        (``param`` names the :class:`ReaderOptions` field).
     """
-    from rplearn.io import pcap as _pcap
-    from rplearn.io import rosbag as _rosbag
-    from rplearn.io import tables as _tables
-    from rplearn.io import ulog as _ulog
-
-    if isinstance(paths, (str, os.PathLike)):
-        paths = [paths]
-    paths = [str(p) for p in paths]
-    if not paths:
-        raise InputError("read_logs: no paths given")
-    nodes = {str(k): v for k, v in (nodes or {}).items()}
-    receivers = {str(k): v for k, v in (receivers or {}).items()}
-    poses: list[pd.DataFrame] = []
-    signals: list[pd.DataFrame] = []
-    files: list[dict[str, Any]] = []
-    origin = origin_geodetic
-    for path in paths:
-        kind = detect_format(path)
-        if kind == "table":
-            what = _tables.table_kind(path, columns)
-            if what == "pose":
-                pose, meta = _tables.read_pose_table(
-                    path, columns=columns, node=nodes.get(path), origin_geodetic=origin,
-                    nan_policy=nan_policy, allow_unsorted=allow_unsorted,
-                )
-                if meta.get("origin_geodetic") is not None and origin is None:
-                    origin = meta["origin_geodetic"]
-                poses.append(pose)
-            else:
-                ptx = tx_power_dbm if not isinstance(tx_power_dbm, Mapping) else None
-                signal, meta = _tables.read_signal_table(
-                    path, columns=columns, tx_power_dbm=ptx, frequency_hz=frequency_hz,
-                    rx=receivers.get(path),
-                )
-                signals.append(signal)
-            meta["kind"] = what
-        elif kind in ("ros1", "ros2"):
-            if not pose_topics and not rssi_topics:
-                raise InputError(_bag_needs_topics(path, msg_definitions))
-            if isinstance(tx_power_dbm, Mapping):
-                raise InputError(f"{path}: the transmit power for a bag must be one number [dBm] (--tx-power, tx_power_dbm=)")
-            logs, meta = _rosbag.read_rosbag(
-                path, pose_topics or {}, rssi_topics, rssi_field=rssi_field,
-                tx_power_dbm=tx_power_dbm, frequency_hz=frequency_hz,
-                msg_definitions=msg_definitions,
-            )
-            if logs.pose is not None:
-                poses.append(logs.pose)
-            if logs.signal is not None:
-                signals.append(logs.signal)
-            meta["kind"] = "pose+signal"
-        elif kind == "ulog":
-            node = nodes.get(path)
-            if node is None:
-                raise InputError(
-                    f"{path}: give the node id of this ULog (rplearn sync --node {path}=NODE, "
-                    "or nodes={path: node})"
-                )
-            pose, meta = _ulog.read_ulog(path, node, origin, time_reference="auto", require_valid=require_valid)
-            if origin is None and meta["anchor_geodetic"] is not None:
-                # re-express on the anchor so that later logs share it (no-op for this one)
-                origin = meta["anchor_geodetic"]
-            poses.append(pose)
-            meta["kind"] = "pose"
-        else:  # pcap
-            rx = receivers.get(path)
-            if rx is None:
-                raise InputError(
-                    f"{path}: give the capturing node (rplearn sync --receiver {path}=NODE, "
-                    "or receivers={path: node})"
-                )
-            if tx_power_dbm is None:
-                raise InputError(
-                    f"{path}: give the transmit power, radiotap does not carry the sender's power "
-                    "(rplearn sync --tx-power DBM, or tx_power_dbm=)"
-                )
-            signal, meta = _pcap.read_pcap(
-                path, rx, tx_power_dbm, address_map=address_map, frequency_hz=frequency_hz
-            )
-            signals.append(signal)
-            meta["kind"] = "signal"
-        files.append(meta)
-    pose = None
-    if poses:
-        merged = pd.concat(poses, ignore_index=True)
-        merged.attrs[NON_UNIT_QUATERNION_ATTR] = sum(int(p.attrs.get(NON_UNIT_QUATERNION_ATTR, 0)) for p in poses)
-        pose = validate_pose_log(merged, "pose logs")
-    signal = None
-    if signals:
-        signal = pd.concat(signals, ignore_index=True).sort_values("t", kind="stable").reset_index(drop=True)
-    return Logs(pose=pose, signal=signal), {"files": files, "origin_geodetic": origin}
+    if options is None:
+        options = ReaderOptions()
+    elif not isinstance(options, ReaderOptions):
+        raise InputError(
+            f"options: expected a ReaderOptions, got {type(options).__name__}", param="options"
+        )
+    got = _Gathered(origin=options.origin_geodetic)
+    for path in _path_list(paths):
+        got.files.append(_READERS[detect_format(path)](path, options, got))
+    return _merge(got)
 
 
-__all__ = ["Logs", "LogFormatError", "detect_format", "read_logs"]
+__all__ = ["Logs", "LogFormatError", "ReaderOptions", "detect_format", "read_logs"]

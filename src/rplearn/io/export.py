@@ -1,8 +1,10 @@
 """Export learned or true patterns: a regular az-el grid as CSV, MSI Planet cuts, 3-D images.
 
-"Pattern-like" means any object with ``nodes`` and ``evaluate(node, az_rad, el_rad)`` returning
-the gain [dBi]: a learned :class:`rplearn.models.patterns.PatternSet` or a
-:class:`rplearn.sim.antennas.GroundTruth`.
+"Pattern-like" (:class:`PatternLike`) means any object with ``nodes`` and
+``evaluate(node, az_rad, el_rad)`` returning the gain [dBi]: a learned
+:class:`rplearn.models.patterns.PatternSet` or a :class:`rplearn.sim.antennas.GroundTruth`.
+Two attributes are optional: ``frequency_hz``, the carrier [Hz] written into MSI files when
+none is given, and ``gauge``, the notes of a fit that could not identify absolute gains.
 
 MSI Planet format (``.msi``, also ``.pln``)
 -------------------------------------------
@@ -44,7 +46,7 @@ import os
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 import pandas as pd
@@ -78,15 +80,47 @@ _KNOWN_KEYS = frozenset(
 )
 
 
-# -- regular grid CSV ----------------------------------------------------------------------
-def _check_pattern_like(obj: Any) -> None:
-    if not (hasattr(obj, "nodes") and callable(getattr(obj, "evaluate", None))):
+# -- pattern-likes ---------------------------------------------------------------------------
+@runtime_checkable
+class PatternLike(Protocol):
+    """Per-node patterns: node ids and the gain of a node toward body-frame directions.
+
+    Attributes
+    ----------
+    nodes : sequence of str
+        Node ids.
+    """
+
+    @property
+    def nodes(self) -> Sequence[str]: ...
+
+    def evaluate(self, node: str, az_rad: ArrayLike, el_rad: ArrayLike) -> FloatArray:
+        """Gain of ``node`` toward directions (az, el) [rad] of its body frame [dBi]."""
+        ...
+
+
+def check_pattern_like(obj: Any) -> None:
+    """Refuse an object that is not pattern-like (see :class:`PatternLike`).
+
+    Raises
+    ------
+    InputError
+        Naming the type received.
+    """
+    if not (isinstance(obj, PatternLike) and callable(obj.evaluate)):
         raise InputError(
             f"pattern: expected an object with .nodes and .evaluate(node, az, el), got {type(obj).__name__}"
         )
 
 
-def _nodes_of(pattern_like: Any, nodes: Sequence[str] | None) -> list[str]:
+def select_nodes(pattern_like: PatternLike, nodes: Sequence[str] | None) -> list[str]:
+    """The nodes to export: ``nodes`` (checked against the pattern's), or all of them.
+
+    Raises
+    ------
+    InputError
+        (``param="nodes"``) naming the unknown nodes and the known ones.
+    """
     known = [str(n) for n in pattern_like.nodes]
     if nodes is None:
         return known
@@ -94,9 +128,12 @@ def _nodes_of(pattern_like: Any, nodes: Sequence[str] | None) -> list[str]:
     unknown = [n for n in wanted if n not in known]
     if unknown:
         raise InputError(
-            f"nodes: unknown {', '.join(unknown)}; the pattern knows {', '.join(known)}"
+            f"nodes: unknown {', '.join(unknown)}; the pattern knows {', '.join(known)}", param="nodes"
         )
     return wanted
+
+
+# -- regular grid CSV ----------------------------------------------------------------------
 
 
 def grid_angles_deg(step_deg: float) -> tuple[FloatArray, FloatArray]:
@@ -106,10 +143,10 @@ def grid_angles_deg(step_deg: float) -> tuple[FloatArray, FloatArray]:
     """
     step = float(step_deg)
     if not math.isfinite(step) or step <= 0 or step > 180:
-        raise InputError(f"step_deg: expected a step in (0, 180] deg, got {step_deg}")
+        raise InputError(f"step_deg: expected a step in (0, 180] deg, got {step_deg}", param="step_deg")
     n_half = round(180.0 / step)
     if abs(n_half * step - 180.0) > 1e-9 * 180.0:
-        raise InputError(f"step_deg: {step_deg} does not divide 180 deg (try 1, 2, 2.5, 5, 10)")
+        raise InputError(f"step_deg: {step_deg} does not divide 180 deg (try 1, 2, 2.5, 5, 10)", param="step_deg")
     az = -180.0 + step * np.arange(2 * n_half)
     el = -90.0 + step * np.arange(n_half + 1)
     return az, el
@@ -141,12 +178,12 @@ def export_grid(
         Rows ordered by node, elevation, azimuth; ``gain_db`` [dBi] equals
         ``evaluate(node, radians(az_deg), radians(el_deg))``.
     """
-    _check_pattern_like(model_or_truth)
+    check_pattern_like(model_or_truth)
     az, el = grid_angles_deg(step_deg)
     el_g, az_g = np.meshgrid(el, az, indexing="ij")
     az_flat, el_flat = az_g.ravel(), el_g.ravel()
     parts = []
-    for n in _nodes_of(model_or_truth, nodes):
+    for n in select_nodes(model_or_truth, nodes):
         g = np.asarray(
             model_or_truth.evaluate(n, np.radians(az_flat), np.radians(el_flat)), np.float64
         ).ravel()
@@ -230,10 +267,10 @@ def msi_pattern(
     comment : str, optional
         Free text appended to the ``COMMENT`` line.
     """
-    _check_pattern_like(pattern_like)
-    node = _nodes_of(pattern_like, [node])[0]
+    check_pattern_like(pattern_like)
+    node = select_nodes(pattern_like, [node])[0]
     if frequency_hz is None or not math.isfinite(float(frequency_hz)) or float(frequency_hz) <= 0:
-        raise InputError(f"frequency_hz: expected a positive frequency [Hz], got {frequency_hz}")
+        raise InputError(f"frequency_hz: expected a positive frequency [Hz], got {frequency_hz}", param="frequency_hz")
     angles = np.arange(MSI_N_ANGLES, dtype=np.float64)
     g_h = np.asarray(
         pattern_like.evaluate(node, *msi_horizontal_directions_rad(angles)), np.float64
@@ -316,8 +353,8 @@ def export_msi(
     path : path
         File to write (``.msi`` by convention).
     frequency_hz : float, optional
-        Carrier [Hz]; default the pattern's ``frequency_hz`` attribute (``GroundTruth``) or
-        ``training["frequency_hz"]``/``provenance["frequency_hz"]``; an error if none is known.
+        Carrier [Hz]; default the pattern's ``frequency_hz`` (a ``GroundTruth``'s carrier, the
+        carrier a learned model was learned at); an error if none is known.
     name, comment : str, optional
 
     Returns
@@ -332,14 +369,12 @@ def export_msi(
     return msi
 
 
-def _frequency_of(pattern_like: Any) -> float:
+def _frequency_of(pattern_like: PatternLike) -> float:
+    """The pattern's optional ``frequency_hz`` [Hz] (see the module docstring)."""
     f = getattr(pattern_like, "frequency_hz", None)
-    for attr in ("training", "provenance"):
-        if f is None:
-            f = (getattr(pattern_like, attr, None) or {}).get("frequency_hz")
     if f is None:
         raise InputError(
-            "frequency_hz: the pattern does not state its frequency (rplearn export --frequency HZ, or frequency_hz=)"
+            "the pattern does not state its frequency; give it (frequency_hz)", param="frequency_hz"
         )
     return float(f)
 

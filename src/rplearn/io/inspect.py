@@ -23,7 +23,8 @@ possible **clock jump**: a logger's clock stepping forward looks exactly like th
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import os
+from dataclasses import dataclass, field, replace
 from typing import Any, Iterable, Sequence
 
 import numpy as np
@@ -32,6 +33,7 @@ import pandas as pd
 from rplearn.data.tables import QUATERNION_NORM_TOLERANCE, non_unit_quaternion_rows
 from rplearn.errors import RplearnError
 from rplearn.data.sync import DEFAULT_SENTINEL_RSSI_DBM, duplicate_rows
+from rplearn.io.options import ReaderOptions
 
 #: A pose step is a pause only if it spans more than this many median signal intervals.
 PAUSE_MIN_SIGNAL_STEPS: float = 3.0
@@ -248,65 +250,85 @@ def summarise_signal(signal: pd.DataFrame,
     return out
 
 
-def _read_one(path: str, options: dict[str, Any]) -> tuple[pd.DataFrame | None, pd.DataFrame | None,
-                                                          dict[str, Any], dict[str, int]]:
+def _read_pose_table(path: str, options: ReaderOptions) -> tuple[pd.DataFrame, dict[str, Any], dict[str, int]]:
+    """A pose table in file order (``t``, ``node``), its facts and its NaN rows per node.
+
+    The table is read forgivingly (NaN rows dropped, unsorted times accepted) to check it,
+    then its valid rows are returned unsorted: inspection wants the file order.
+    """
+    from rplearn.io import tables as _tables
+
+    node_of_file = (options.nodes or {}).get(path)
+    raw = _tables._read(path, path)
+    pose, _ = _tables.canonical_pose(
+        raw, source=path, columns=options.columns, node=node_of_file, nan_policy="drop",
+        allow_unsorted=True, origin_geodetic=options.origin_geodetic,
+    )
+    info = {"format": _tables.table_format(path), "kind": "pose",
+            "non_unit_quaternion_rows": non_unit_quaternion_rows(pose)}
+    del pose  # validated and sorted; inspection wants the file order
+    df = _tables.rename_columns(raw, options.columns)
+    node = (df["node"].astype(str) if "node" in df.columns
+            else pd.Series([node_of_file if node_of_file is not None else "?"] * len(df)))
+    cols = [c for c in _POSE_VALUE_COLUMNS if c in df.columns]
+    values = df[cols].apply(pd.to_numeric, errors="coerce").to_numpy(np.float64)
+    bad = ~np.isfinite(values).all(axis=1)
+    nan_rows = {str(k): int(v) for k, v in node[bad].value_counts().items()}
+    file_order = pd.DataFrame({"t": values[~bad, cols.index("t")], "node": node[~bad].to_numpy()})
+    return file_order, info, nan_rows
+
+
+def _forgiving_options(path: str, kind: str, options: ReaderOptions) -> ReaderOptions:
+    """Options with placeholders for what inspection does not need: node id of a ULog (its
+    file name), receiver of a pcap (``capture``), tx power [dBm] and frequency [Hz]."""
+    if kind == "ulog":
+        nodes = {path: os.path.splitext(os.path.basename(path))[0], **(options.nodes or {})}
+        return replace(options, nodes=nodes)
+    if kind == "pcap":
+        return replace(
+            options,
+            tx_power_dbm=0.0 if options.tx_power_dbm is None else options.tx_power_dbm,
+            receivers={path: "capture"} if options.receivers is None else options.receivers,
+        )
+    if kind in ("ros1", "ros2") and options.rssi_topics:
+        return replace(
+            options,
+            tx_power_dbm=0.0 if options.tx_power_dbm is None else options.tx_power_dbm,
+            frequency_hz=1.0 if options.frequency_hz is None else options.frequency_hz,
+        )
+    return options
+
+
+def _read_one(path: str, options: ReaderOptions) -> tuple[pd.DataFrame | None, pd.DataFrame | None,
+                                                         dict[str, Any], dict[str, int]]:
     from rplearn.io import detect_format, read_logs
     from rplearn.io import tables as _tables
 
     kind = detect_format(path)
-    nan_rows: dict[str, int] = {}
     if kind == "table":
-        what = _tables.table_kind(path, options.get("columns"))
-        if what == "pose":
-            raw = _tables._read(path, path)
-            pose, meta = _tables.canonical_pose(
-                raw, source=path, columns=options.get("columns"),
-                node=(options.get("nodes") or {}).get(path), nan_policy="drop", allow_unsorted=True,
-                origin_geodetic=options.get("origin_geodetic"),
-            )
-            info = {"format": _tables.table_format(path), "kind": "pose",
-                    "non_unit_quaternion_rows": non_unit_quaternion_rows(pose)}
-            del pose  # validated and sorted; inspection wants the file order
-            df = _tables.rename_columns(raw, options.get("columns"))
-            node = (df["node"].astype(str) if "node" in df.columns
-                    else pd.Series([(options.get("nodes") or {}).get(path, "?")] * len(df)))
-            cols = [c for c in _POSE_VALUE_COLUMNS if c in df.columns]
-            values = df[cols].apply(pd.to_numeric, errors="coerce").to_numpy(np.float64)
-            bad = ~np.isfinite(values).all(axis=1)
-            nan_rows = {str(k): int(v) for k, v in node[bad].value_counts().items()}
-            file_order = pd.DataFrame({"t": values[~bad, cols.index("t")], "node": node[~bad].to_numpy()})
-            return file_order, None, info, nan_rows
+        if _tables.table_kind(path, options.columns) == "pose":
+            pose, info, nan_rows = _read_pose_table(path, options)
+            return pose, None, info, nan_rows
         sig, meta = _tables.read_signal_table(
-            path, columns=options.get("columns"), rx=(options.get("receivers") or {}).get(path),
+            path, columns=options.columns, rx=(options.receivers or {}).get(path),
             tx_power_dbm=0.0, frequency_hz=1.0)
-        return None, sig, {"format": meta["format"], "kind": "signal"}, nan_rows
-    opts = dict(options)
-    if kind == "ulog":
-        import os
-
-        opts["nodes"] = {path: os.path.splitext(os.path.basename(path))[0], **(opts.get("nodes") or {})}
-    if kind == "pcap":
-        opts.setdefault("tx_power_dbm", 0.0)
-        opts.setdefault("receivers", {path: "capture"})
-    if kind in ("ros1", "ros2") and opts.get("rssi_topics"):
-        opts.setdefault("tx_power_dbm", 0.0)
-        opts.setdefault("frequency_hz", 1.0)
-    logs, meta = read_logs(path, **opts)
+        return None, sig, {"format": meta["format"], "kind": "signal"}, {}
+    logs, meta = read_logs(path, _forgiving_options(path, kind, options))
     f = meta["files"][0]
     info = {"format": f.get("format", kind), "kind": f.get("kind")}
     if f.get("invalid_flag_rows"):
         info["invalid_flag_rows"] = int(f["invalid_flag_rows"])
     if logs.pose is not None:
         info["non_unit_quaternion_rows"] = non_unit_quaternion_rows(logs.pose)
-    return logs.pose, logs.signal, info, nan_rows
+    return logs.pose, logs.signal, info, {}
 
 
 def inspect_logs(
-    paths: str | Iterable[str],
+    paths: str | os.PathLike | Iterable[str | os.PathLike],
+    options: ReaderOptions | None = None,
     max_gap_s: float = 0.2,
     clock_jump_s: float = 5.0,
     sentinel_rssi_dbm: Sequence[float] = DEFAULT_SENTINEL_RSSI_DBM,
-    **read_options: Any,
 ) -> InspectReport:
     """Summarise logs and flag anything suspicious; never raises on a bad file (it is reported).
 
@@ -314,21 +336,25 @@ def inspect_logs(
     ----------
     paths : path or iterable of paths
         Logs of any format :func:`rplearn.io.read_logs` reads.
+    options : ReaderOptions, optional
+        How to read them (pose topics, receivers, address map, ...), as for
+        :func:`rplearn.io.read_logs`. Inspection reads forgivingly whatever
+        ``nan_policy`` and ``allow_unsorted`` say, and puts placeholders where ``tx_power_dbm``
+        [dBm], ``frequency_hz`` [Hz], a ULog's node id (its file name) or a pcap's receiver
+        (``capture``) are missing: it does not need them.
     max_gap_s : float
         Pose steps longer than this are gaps [s] (the matching threshold of :mod:`rplearn.data.sync`).
     clock_jump_s : float
         A gap (not a pause) longer than this is reported as a possible clock jump [s].
     sentinel_rssi_dbm : sequence of float
-        RSSI values meaning "no measurement".
-    **read_options
-        Passed to :func:`rplearn.io.read_logs` (pose topics, receivers, address map, ...).
-        ``tx_power_dbm`` and ``frequency_hz`` default to placeholders here: inspection does
-        not need them.
+        RSSI values meaning "no measurement" [dBm].
 
     Returns
     -------
     InspectReport
     """
+    if options is None:
+        options = ReaderOptions()
     if isinstance(paths, str) or hasattr(paths, "__fspath__"):
         paths = [paths]  # type: ignore[list-item]
     report = InspectReport()
@@ -337,23 +363,13 @@ def inspect_logs(
     for p in paths:
         path = str(p)
         try:
-            pose, sig, info, nans = _read_one(path, dict(read_options))
+            pose, sig, info, nans = _read_one(path, options)
         except RplearnError as exc:
             report.files.append({"path": path, "format": "?", "kind": None, "error": str(exc)})
             report.problems.append(f"{path}: unreadable: {exc}")
             continue
         report.files.append({"path": path, **info, "error": None})
-        if info.get("invalid_flag_rows"):
-            report.problems.append(
-                f"{path}: {info['invalid_flag_rows']} pose row(s) flagged invalid by the autopilot "
-                "(xy_valid or z_valid = 0); they are kept unless dropped on reading "
-                "(rplearn sync --require-valid, or require_valid=True)"
-            )
-        if info.get("non_unit_quaternion_rows"):
-            report.problems.append(
-                f"{path}: {info['non_unit_quaternion_rows']} pose row(s) with a quaternion norm off 1 by "
-                f"more than {QUATERNION_NORM_TOLERANCE:g} (normalised on reading; a scaling or unit mistake?)"
-            )
+        _flag_file(report, path, info)
         for k, v in nans.items():
             nan_rows[k] = nan_rows.get(k, 0) + int(v)
         if pose is not None:
@@ -368,6 +384,21 @@ def inspect_logs(
         report.links = summarise_signal(signal, sentinel_rssi_dbm)
     _flag(report, max_gap_s)
     return report
+
+
+def _flag_file(report: InspectReport, path: str, info: dict[str, Any]) -> None:
+    """Problems of one file: rows flagged invalid by the autopilot, non-unit quaternions."""
+    if info.get("invalid_flag_rows"):
+        report.problems.append(
+            f"{path}: {info['invalid_flag_rows']} pose row(s) flagged invalid by the autopilot "
+            "(xy_valid or z_valid = 0); they are kept unless dropped on reading "
+            "(ReaderOptions.require_valid=True)"
+        )
+    if info.get("non_unit_quaternion_rows"):
+        report.problems.append(
+            f"{path}: {info['non_unit_quaternion_rows']} pose row(s) with a quaternion norm off 1 by "
+            f"more than {QUATERNION_NORM_TOLERANCE:g} (normalised on reading; a scaling or unit mistake?)"
+        )
 
 
 def _flag(report: InspectReport, max_gap_s: float) -> None:

@@ -74,14 +74,15 @@ def _load_definitions(msg_definitions: Mapping[str, str] | None) -> dict[str, An
                 text = fh.read()
         elif text.endswith(".msg") and "\n" not in text:
             raise InputError(
-                f"message definition of {name} (rplearn sync --msg-definition): {text}: no such file"
+                f"message definition of {name} (msg_definitions): {text}: no such file",
+                param="msg_definitions",
             )
         try:
             types.update(get_types_from_msg(text, name))
         except Exception as exc:
             raise InputError(
-                f"message definition of {name} (rplearn sync --msg-definition, or msg_definitions=): "
-                f"cannot parse it ({exc})"
+                f"message definition of {name} (msg_definitions): cannot parse it ({exc})",
+                param="msg_definitions",
             ) from None
     return types
 
@@ -145,8 +146,8 @@ def open_rosbag(
             default.register(extra)
         except Exception as exc:
             raise InputError(
-                "message definitions (rplearn sync --msg-definition, or msg_definitions=): "
-                f"cannot register types ({type(exc).__name__}: {exc})"
+                f"message definitions (msg_definitions): cannot register types ({type(exc).__name__}: {exc})",
+                param="msg_definitions",
             ) from None
     try:
         reader = AnyReader(paths, default_typestore=default)
@@ -183,7 +184,8 @@ def _messages(reader: Any, connections: list, path: str) -> Iterator[tuple[Any, 
             raise LogFormatError(
                 f"{path}: topic {conn.topic}: cannot deserialise {conn.msgtype} "
                 f"({type(exc).__name__}); register its definition "
-                f"(rplearn sync --msg-definition {conn.msgtype}=FILE.msg, or msg_definitions=)"
+                f"(msg_definitions={{{conn.msgtype!r}: 'FILE.msg'}})",
+                param="msg_definitions",
             ) from None
         yield conn, ts, msg
 
@@ -258,18 +260,21 @@ def read_rosbag(
     if rssi_topics:
         if tx_power_dbm is None and tx_power_field is None:
             raise InputError(
-                f"{source}: the RSSI topics need the transmit power "
-                "(rplearn sync --tx-power DBM, or tx_power_dbm= / tx_power_field=)"
+                f"{source}: the RSSI topics need the transmit power [dBm] "
+                "(tx_power_dbm= or tx_power_field=)",
+                param="tx_power_dbm",
             )
         if frequency_hz is None and frequency_field is None:
             raise InputError(
-                f"{source}: the RSSI topics need the carrier frequency "
-                "(rplearn sync --frequency HZ, or frequency_hz= / frequency_field=)"
+                f"{source}: the RSSI topics need the carrier frequency [Hz] "
+                "(frequency_hz= or frequency_field=)",
+                param="frequency_hz",
             )
     if not pose_topics and not rssi_topics:
         raise InputError(
-            f"{source}: name at least one pose or RSSI topic (rplearn sync --pose-topic TOPIC=NODE, "
-            "--rssi-topic TOPIC=TX:RX; or pose_topics={topic: node}, rssi_topics={topic: (tx, rx)})"
+            f"{source}: name at least one pose or RSSI topic "
+            "(pose_topics={topic: node}, rssi_topics={topic: (tx, rx)})",
+            param="pose_topics",
         )
     pose_rows: dict[str, list] = {k: [] for k in ("t", "node", "x", "y", "z", "qw", "qx", "qy", "qz")}
     sig_rows: dict[str, list] = {k: [] for k in ("t", "tx", "rx", "rssi_dbm", "tx_power_dbm", "frequency_hz")}

@@ -51,6 +51,8 @@ GEODETIC_COLUMNS: tuple[str, ...] = ("lat", "lon", "alt")
 EULER_ENU_FLU_COLUMNS: tuple[str, ...] = ("roll_deg", "pitch_deg", "yaw_deg")
 EULER_NED_FRD_COLUMNS: tuple[str, ...] = ("roll_ned_deg", "pitch_ned_deg", "yaw_ned_deg")
 _PARQUET_EXT = (".parquet", ".pq")
+#: Signal columns a constant may supply -> the ReaderOptions field that gives it.
+_CONSTANT_FIELDS: dict[str, str] = {"rx": "receivers", "tx_power_dbm": "tx_power_dbm", "frequency_hz": "frequency_hz"}
 
 
 def rename_columns(df: pd.DataFrame, columns: Mapping[str, str] | None = None) -> pd.DataFrame:
@@ -113,6 +115,127 @@ def _check_geodetic(lat: np.ndarray, lon: np.ndarray, source: str) -> None:
         )
 
 
+def _with_node(df: pd.DataFrame, node: str | None, source: str) -> pd.DataFrame:
+    """The table with a ``node`` column (``node`` for every row when it has none) and a ``t``."""
+    if "node" not in df.columns:
+        if node is None:
+            raise InputError(
+                f"{source}: missing column node; for a one-node log give its node id "
+                "(ReaderOptions.nodes={path: node}, or node= for one table)",
+                param="nodes",
+            )
+        df = df.assign(node=str(node))
+    if "t" not in df.columns:
+        raise InputError(f"{source}: missing column t; expected {', '.join(POSE_COLUMNS)}")
+    return df
+
+
+def _position_columns(df: pd.DataFrame, source: str) -> tuple[tuple[str, ...], str]:
+    """Position columns of a pose table and their kind, ``"enu"`` or ``"geodetic"``."""
+    if _has(df, ("x", "y", "z")):
+        return ("x", "y", "z"), "enu"
+    if _has(df, GEODETIC_COLUMNS):
+        return GEODETIC_COLUMNS, "geodetic"
+    raise InputError(f"{source}: missing position columns: expected x, y, z (ENU m) or lat, lon, alt")
+
+
+def _attitude_columns(df: pd.DataFrame, source: str) -> tuple[pd.DataFrame, tuple[str, ...], str, bool]:
+    """Attitude columns of a pose table and their kind; a yaw-only table gets zero roll and pitch.
+
+    Returns ``(table, columns, kind, level_assumed)`` with kind ``"quaternion"``,
+    ``"euler_enu_flu"`` or ``"euler_ned_frd"``.
+    """
+    level = _level_if_yaw_only(df)
+    if level is not None:  # plans (rplearn.plan) give yaw only: level flight is meant
+        df = level
+    if _has(df, ("qw", "qx", "qy", "qz")):
+        return df, ("qw", "qx", "qy", "qz"), "quaternion", level is not None
+    if _has(df, EULER_ENU_FLU_COLUMNS):
+        return df, EULER_ENU_FLU_COLUMNS, "euler_enu_flu", level is not None
+    if _has(df, EULER_NED_FRD_COLUMNS):
+        return df, EULER_NED_FRD_COLUMNS, "euler_ned_frd", level is not None
+    raise InputError(
+        f"{source}: missing attitude columns: expected qw, qx, qy, qz or "
+        "roll_deg, pitch_deg, yaw_deg (ENU/FLU) or roll_ned_deg, pitch_ned_deg, yaw_ned_deg"
+    )
+
+
+def _finite_values(
+    df: pd.DataFrame, numeric: tuple[str, ...], nan_policy: str, source: str
+) -> tuple[pd.DataFrame, dict[str, np.ndarray], int]:
+    """The numeric columns as float arrays, rows with a NaN or non-number dropped or refused.
+
+    Returns ``(table, values, dropped)``: the table and arrays without the bad rows and
+    their count (0 unless ``nan_policy="drop"``).
+    """
+    values = {c: _float_column(df, c) for c in numeric}
+    bad = np.zeros(len(df), bool)
+    first_bad: tuple[int, str] | None = None
+    for c in numeric:
+        b = ~np.isfinite(values[c])
+        if b.any():
+            r = int(np.flatnonzero(b)[0])
+            if first_bad is None or r < first_bad[0]:
+                first_bad = (r, c)
+        bad |= b
+    if first_bad is None:
+        return df, values, 0
+    if nan_policy == "error":
+        raise InputError(
+            f"{source}: field {first_bad[1]} has {int(bad.sum())} row(s) with NaN, infinite or "
+            f"non-numeric values (first at row {first_bad[0]}); expected numbers, or drop those rows "
+            "(nan_policy='drop')",
+            param="nan_policy",
+        )
+    return df.loc[~bad], {c: v[~bad] for c, v in values.items()}, int(bad.sum())
+
+
+def _check_time_order(t: np.ndarray, nodes: np.ndarray, source: str) -> None:
+    """Raise :class:`LogFormatError` at the first row whose time [s] goes back within its node."""
+    order_ok = np.ones(len(t), bool)
+    same_node = nodes[1:] == nodes[:-1]
+    order_ok[1:] = ~(same_node & (t[1:] < t[:-1]))
+    if not order_ok.all():
+        r = int(np.flatnonzero(~order_ok)[0])
+        raise LogFormatError(
+            f"{source}: field t goes backwards at row {r} (node {nodes[r]}: {float(t[r - 1])!r} -> "
+            f"{float(t[r])!r}); expected increasing times, or sort them on reading "
+            "(allow_unsorted=True)",
+            param="allow_unsorted",
+        )
+
+
+def _enu_positions(
+    values: dict[str, np.ndarray],
+    position: str,
+    origin_geodetic: tuple[float, float, float] | None,
+    source: str,
+) -> tuple[np.ndarray, tuple[float, float, float] | None]:
+    """ENU positions [m], shape (n, 3), and the geodetic origin used (None for ENU tables).
+
+    A geodetic table without ``origin_geodetic`` is expressed around its first fix
+    (earliest row).
+    """
+    if position != "geodetic":
+        return np.stack([values["x"], values["y"], values["z"]], axis=-1), None
+    lat, lon, alt = values["lat"], values["lon"], values["alt"]
+    _check_geodetic(lat, lon, source)
+    if origin_geodetic is None:
+        i0 = int(np.argmin(values["t"]))
+        origin_geodetic = (float(lat[i0]), float(lon[i0]), float(alt[i0]))
+    origin = tuple(float(v) for v in origin_geodetic)
+    return geodetic_to_enu(lat, lon, alt, origin_geodetic), origin  # type: ignore[return-value]
+
+
+def _quaternions(values: dict[str, np.ndarray], att_cols: tuple[str, ...], attitude: str) -> np.ndarray:
+    """Quaternions (w, x, y, z), body FLU -> world ENU, shape (n, 4), from any attitude variant."""
+    if attitude == "quaternion":
+        return np.stack([values[c] for c in att_cols], axis=-1)
+    if attitude == "euler_enu_flu":
+        return quat_wxyz_from_euler_enu_flu_deg(*(values[c] for c in att_cols))
+    return quat_wxyz_from_euler_ned_frd_deg(*(values[c] for c in att_cols))
+
+
 def canonical_pose(
     df: pd.DataFrame,
     source: str = "pose log",
@@ -127,9 +250,9 @@ def canonical_pose(
     Parameters
     ----------
     df : DataFrame
-        Table with ``t``, a node (column ``node`` or the ``node`` argument), a position
+        Table with ``t`` [s], a node (column ``node`` or the ``node`` argument), a position
         (``x, y, z`` ENU [m] or ``lat, lon, alt`` [deg, deg, m]) and an attitude (quaternion
-        ``qw, qx, qy, qz`` body FLU -> world ENU, or Euler angles, see the module docstring).
+        ``qw, qx, qy, qz`` body FLU -> world ENU, or Euler angles [deg], see the module docstring).
     source : str
         File or log name for messages.
     columns : mapping, optional
@@ -151,114 +274,32 @@ def canonical_pose(
         Canonical pose log sorted by (node, t).
     metadata : dict
         ``source``, ``position`` ("enu" or "geodetic"), ``attitude`` ("quaternion",
-        "euler_enu_flu" or "euler_ned_frd"), ``origin_geodetic`` (or None), ``dropped``.
+        "euler_enu_flu" or "euler_ned_frd"), ``origin_geodetic`` (or None), ``dropped``
+        and, for yaw-only tables, ``level_assumed``.
     """
     if nan_policy not in ("error", "drop"):
-        raise InputError(
-            f"nan_policy: expected 'error' or 'drop' (rplearn sync --nan-policy), got {nan_policy!r}"
-        )
+        raise InputError(f"nan_policy: expected 'error' or 'drop', got {nan_policy!r}", param="nan_policy")
     try:
         df = rename_columns(df, columns)
     except InputError as exc:
         raise InputError(f"{source}: {exc}") from None
     meta: dict[str, Any] = {"source": source, "dropped": {"nan_pose": 0}, "origin_geodetic": None}
-    if "node" not in df.columns:
-        if node is None:
-            raise InputError(
-                f"{source}: missing column node; for a one-node log give its node id "
-                f"(rplearn sync --node {source}=NODE, or node=...)"
-            )
-        df = df.assign(node=str(node))
-    if "t" not in df.columns:
-        raise InputError(f"{source}: missing column t; expected {', '.join(POSE_COLUMNS)}")
-
-    if _has(df, ("x", "y", "z")):
-        pos_cols: tuple[str, ...] = ("x", "y", "z")
-        meta["position"] = "enu"
-    elif _has(df, GEODETIC_COLUMNS):
-        pos_cols = GEODETIC_COLUMNS
-        meta["position"] = "geodetic"
-    else:
-        raise InputError(f"{source}: missing position columns: expected x, y, z (ENU m) or lat, lon, alt")
-    level = _level_if_yaw_only(df)
-    if level is not None:  # plans (rplearn trajectory) give yaw only: level flight is meant
-        df, meta["level_assumed"] = level, True
-    if _has(df, ("qw", "qx", "qy", "qz")):
-        att_cols: tuple[str, ...] = ("qw", "qx", "qy", "qz")
-        meta["attitude"] = "quaternion"
-    elif _has(df, EULER_ENU_FLU_COLUMNS):
-        att_cols = EULER_ENU_FLU_COLUMNS
-        meta["attitude"] = "euler_enu_flu"
-    elif _has(df, EULER_NED_FRD_COLUMNS):
-        att_cols = EULER_NED_FRD_COLUMNS
-        meta["attitude"] = "euler_ned_frd"
-    else:
-        raise InputError(
-            f"{source}: missing attitude columns: expected qw, qx, qy, qz or "
-            "roll_deg, pitch_deg, yaw_deg (ENU/FLU) or roll_ned_deg, pitch_ned_deg, yaw_ned_deg"
-        )
-
-    numeric = ("t",) + pos_cols + att_cols
-    values = {c: _float_column(df, c) for c in numeric}
-    bad = np.zeros(len(df), bool)
-    first_bad: tuple[int, str] | None = None
-    for c in numeric:
-        b = ~np.isfinite(values[c])
-        if b.any():
-            r = int(np.flatnonzero(b)[0])
-            if first_bad is None or r < first_bad[0]:
-                first_bad = (r, c)
-        bad |= b
-    if first_bad is not None:
-        if nan_policy == "error":
-            raise InputError(
-                f"{source}: field {first_bad[1]} has {int(bad.sum())} row(s) with NaN, infinite or "
-                f"non-numeric values (first at row {first_bad[0]}); expected numbers, or drop those rows "
-                "(rplearn sync --nan-policy drop, or nan_policy='drop')"
-            )
-        meta["dropped"]["nan_pose"] = int(bad.sum())
-        values = {c: v[~bad] for c, v in values.items()}
-        df = df.loc[~bad]
+    df = _with_node(df, node, source)
+    pos_cols, meta["position"] = _position_columns(df, source)
+    df, att_cols, meta["attitude"], level = _attitude_columns(df, source)
+    if level:
+        meta["level_assumed"] = True
+    df, values, meta["dropped"]["nan_pose"] = _finite_values(df, ("t",) + pos_cols + att_cols, nan_policy, source)
     nodes = df["node"].astype(str).to_numpy()
     if len(nodes) == 0:
         raise InputError(f"{source}: no pose rows")
-
     t = values["t"]
     if not allow_unsorted:
-        # first row per node where time goes backwards
-        order_ok = np.ones(len(t), bool)
-        same_node = nodes[1:] == nodes[:-1]
-        order_ok[1:] = ~(same_node & (t[1:] < t[:-1]))
-        if not order_ok.all():
-            r = int(np.flatnonzero(~order_ok)[0])
-            raise LogFormatError(
-                f"{source}: field t goes backwards at row {r} (node {nodes[r]}: {float(t[r - 1])!r} -> "
-                f"{float(t[r])!r}); expected increasing times, or sort them on reading "
-                "(rplearn sync --allow-unsorted, or allow_unsorted=True)"
-            )
-
-    if meta["position"] == "geodetic":
-        lat, lon, alt = values["lat"], values["lon"], values["alt"]
-        _check_geodetic(lat, lon, source)
-        if origin_geodetic is None:
-            i0 = int(np.argmin(t))
-            origin_geodetic = (float(lat[i0]), float(lon[i0]), float(alt[i0]))
-        meta["origin_geodetic"] = tuple(float(v) for v in origin_geodetic)
-        xyz = geodetic_to_enu(lat, lon, alt, origin_geodetic)
-    else:
-        xyz = np.stack([values["x"], values["y"], values["z"]], axis=-1)
-    if meta["attitude"] == "quaternion":
-        q = np.stack([values[c] for c in att_cols], axis=-1)
-    elif meta["attitude"] == "euler_enu_flu":
-        q = quat_wxyz_from_euler_enu_flu_deg(*(values[c] for c in att_cols))
-    else:
-        q = quat_wxyz_from_euler_ned_frd_deg(*(values[c] for c in att_cols))
-    out = pd.DataFrame(
-        {
-            "t": t, "node": nodes, "x": xyz[:, 0], "y": xyz[:, 1], "z": xyz[:, 2],
-            "qw": q[:, 0], "qx": q[:, 1], "qy": q[:, 2], "qz": q[:, 3],
-        }
-    )
+        _check_time_order(t, nodes, source)
+    xyz, meta["origin_geodetic"] = _enu_positions(values, meta["position"], origin_geodetic, source)
+    q = _quaternions(values, att_cols, meta["attitude"])
+    out = pd.DataFrame({"t": t, "node": nodes, **dict(zip(("x", "y", "z"), xyz.T)),
+                        **dict(zip(("qw", "qx", "qy", "qz"), q.T))})
     return validate_pose_log(out, source), meta
 
 
@@ -291,10 +332,12 @@ def canonical_signal(
             df = df.assign(**{c: v})
     missing = [c for c in SIGNAL_COLUMNS if c not in df.columns]
     if missing:
+        fillable = [f for c, f in _CONSTANT_FIELDS.items() if c in missing]
         raise InputError(
             f"{source}: missing column(s) {', '.join(missing)}; expected {', '.join(SIGNAL_COLUMNS)}"
-            " (rx, tx_power_dbm and frequency_hz may be given as constants: rplearn sync "
-            "--receiver FILE=NODE, --tx-power, --frequency; or rx=, tx_power_dbm=, frequency_hz=)"
+            " (rx, tx_power_dbm and frequency_hz may be given as constants: ReaderOptions.receivers, "
+            "ReaderOptions.tx_power_dbm, ReaderOptions.frequency_hz; or rx=, tx_power_dbm=, frequency_hz=)",
+            param=fillable[0] if fillable else None,
         )
     out = pd.DataFrame(index=range(len(df)))
     for c in SIGNAL_COLUMNS:

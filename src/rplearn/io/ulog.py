@@ -116,6 +116,160 @@ def _span_and_gaps(t_key: np.ndarray, t: np.ndarray, max_gap: float) -> tuple[np
     return out, gap & ~out
 
 
+_TOPICS: tuple[str, ...] = ("vehicle_local_position", "vehicle_attitude", "vehicle_global_position",
+                            "vehicle_gps_position", "sensor_gps")
+
+
+def _open_ulog(source: str) -> Any:
+    """The parsed ULog (the topics rplearn uses only); :class:`LogFormatError` when unreadable."""
+    if not os.path.exists(source):
+        raise InputError(f"{source}: no such file")
+    ULog = _pyulog()
+    try:
+        return ULog(source, list(_TOPICS))
+    except Exception as exc:
+        msg = str(exc).splitlines()[0] if str(exc) else ""
+        raise LogFormatError(f"{source}: cannot read ULog ({type(exc).__name__}: {msg})") from None
+
+
+def _pose_topics(ulog: Any, source: str) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
+    """``vehicle_local_position`` and ``vehicle_attitude``, checked for the fields used."""
+    lp = _topic(ulog, "vehicle_local_position")
+    att = _topic(ulog, "vehicle_attitude")
+    if lp is None or len(lp.get("timestamp", ())) < 1:
+        raise LogFormatError(f"{source}: topic vehicle_local_position missing or empty")
+    if att is None or len(att.get("timestamp", ())) < 1:
+        raise LogFormatError(f"{source}: topic vehicle_attitude missing or empty")
+    for k in ("x", "y", "z"):
+        if k not in lp:
+            raise LogFormatError(f"{source}: vehicle_local_position has no field {k}")
+    for k in ("q[0]", "q[1]", "q[2]", "q[3]"):
+        if k not in att:
+            raise LogFormatError(f"{source}: vehicle_attitude has no field {k}")
+    return lp, att
+
+
+def _local_positions(
+    lp: dict[str, np.ndarray], require_valid: bool, dropped: dict[str, int]
+) -> tuple[np.ndarray, np.ndarray, int]:
+    """Finite local positions: times [us], NED positions [m] (n, 3), rows flagged invalid.
+
+    Rows with a NaN are dropped (``nan_position``); with ``require_valid`` also rows whose
+    ``xy_valid`` or ``z_valid`` is 0 (``invalid_flag``). Counts go into ``dropped``.
+    """
+    tp = lp["timestamp"].astype(np.int64)
+    ned = np.stack([lp["x"], lp["y"], lp["z"]], axis=-1).astype(np.float64)
+    keep = np.all(np.isfinite(ned), axis=1)
+    dropped["nan_position"] = int((~keep).sum())
+    flags_bad = np.zeros(len(tp), bool)
+    for f in ("xy_valid", "z_valid"):
+        if f in lp:
+            flags_bad |= lp[f] == 0
+    if require_valid:
+        dropped["invalid_flag"] = int((flags_bad & keep).sum())
+        keep &= ~flags_bad
+    return tp[keep], ned[keep], int(flags_bad.sum())
+
+
+def _attitudes(att: dict[str, np.ndarray], dropped: dict[str, int]) -> tuple[np.ndarray, np.ndarray]:
+    """Times [us] and FLU -> ENU quaternions (w, x, y, z) of the finite, non-zero attitudes."""
+    ta = att["timestamp"].astype(np.int64)
+    q_ned = np.stack([att[f"q[{i}]"] for i in range(4)], axis=-1).astype(np.float64)
+    ok = np.all(np.isfinite(q_ned), axis=1) & (np.linalg.norm(q_ned, axis=1) > 1e-6)
+    dropped["nan_attitude"] = int((~ok).sum())
+    return ta[ok], q_ned[ok]
+
+
+def _increasing(t_us: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Strictly increasing times [us] with their values, the first of repeated instants kept.
+
+    PX4 can log one instant twice.
+    """
+    t_us, first = np.unique(t_us, return_index=True)
+    return t_us, values[first]
+
+
+def _anchor(
+    ulog: Any, lp: dict[str, np.ndarray], tp: np.ndarray, ned: np.ndarray
+) -> tuple[tuple[float, float, float] | None, str | None]:
+    """Geodetic anchor (lat [deg], lon [deg], alt [m]) of the local NED frame and its source.
+
+    The EKF reference when it is global, else the first fix minus the local position then.
+    """
+    if all(k in lp for k in ("ref_lat", "ref_lon", "ref_alt", "xy_global", "z_global")):
+        good = (lp["xy_global"] != 0) & (lp["z_global"] != 0) & np.isfinite(lp["ref_lat"]) & np.isfinite(lp["ref_lon"])
+        if good.any():
+            i = int(np.flatnonzero(good)[0])
+            return ((float(lp["ref_lat"][i]), float(lp["ref_lon"][i]), float(lp["ref_alt"][i])),
+                    "vehicle_local_position.ref_lat/ref_lon/ref_alt")
+    fix = _first_fix(ulog)
+    if fix is None or len(tp) < 1:
+        return None, None
+    t_fix, lat, lon, alt, name = fix
+    here = _interp_linear(tp.astype(np.float64), ned, np.array([float(t_fix)]))[0]
+    a_lat, a_lon, a_alt = local_ned_to_geodetic(-here, (lat, lon, alt))
+    return (float(a_lat), float(a_lon), float(a_alt)), f"first fix of {name} minus the local position at that time"
+
+
+def _on_timebase(
+    tp: np.ndarray, ned: np.ndarray, ta: np.ndarray, q_enu: np.ndarray, timebase: str,
+    max_gap_s: float, source: str, dropped: dict[str, int],
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Rows at the instants of one topic, the other interpolated: times [us], NED [m], quaternions.
+
+    Rows outside the interpolated topic's span or inside its gaps longer than ``max_gap_s``
+    [s] are dropped (``out_of_span``, ``gap``).
+    """
+    tp_f, ta_f = tp.astype(np.float64), ta.astype(np.float64)
+    gap_us = max_gap_s * 1e6
+    if timebase == "attitude":
+        t_us, quat = ta_f, q_enu
+        if len(tp) < 2:
+            raise InputError(f"{source}: vehicle_local_position has fewer than 2 valid samples")
+        out, gap = _span_and_gaps(tp_f, t_us, gap_us)
+        pos_ned = _interp_linear(tp_f, ned, t_us)
+    else:
+        t_us, pos_ned = tp_f, ned
+        if len(ta) < 2:
+            raise InputError(f"{source}: vehicle_attitude has fewer than 2 valid samples")
+        out, gap = _span_and_gaps(ta_f, t_us, gap_us)
+        quat = _interp_slerp(ta_f, q_enu, t_us)
+    dropped["out_of_span"] = int(out.sum())
+    dropped["gap"] = int(gap.sum())
+    sel = ~(out | gap)
+    return t_us[sel], pos_ned[sel], quat[sel]
+
+
+def _enu(
+    pos_ned: np.ndarray, anchor: tuple[float, float, float] | None,
+    origin_geodetic: tuple[float, float, float] | None, source: str,
+) -> np.ndarray:
+    """ENU positions [m]: around ``origin_geodetic`` through the anchor, else in the local frame."""
+    if origin_geodetic is None:
+        return local_ned_to_enu(pos_ned, (0.0, 0.0, 0.0), None)
+    if anchor is None:
+        raise InputError(
+            f"{source}: origin_geodetic given but the log has no geodetic anchor "
+            "(no EKF reference, no global position, no GPS fix)",
+            param="origin_geodetic",
+        )
+    return local_ned_to_enu(pos_ned, anchor, origin_geodetic)
+
+
+def _seconds(ulog: Any, t_us: np.ndarray, time_reference: str, source: str) -> tuple[np.ndarray, dict[str, Any]]:
+    """Times [s] on UTC (through the GPS offset) or since boot, and the clock metadata."""
+    offset, offset_src = utc_offset_us(ulog)
+    if time_reference == "utc" and offset is None:
+        raise InputError(
+            f"{source}: time_reference='utc' but no GPS message carries time_utc_usec", param="time_reference"
+        )
+    use_utc = offset is not None and time_reference in ("auto", "utc")
+    t_s = (t_us + (offset if use_utc else 0)) * 1e-6
+    clock = {"time_reference": "utc" if use_utc else "boot", "utc_offset_us": offset,
+             "utc_offset_source": offset_src}
+    return t_s, clock
+
+
 def read_ulog(
     path: str | os.PathLike,
     node: str,
@@ -157,131 +311,33 @@ def read_ulog(
     """
     source = str(path)
     if time_reference not in ("auto", "utc", "boot"):
-        raise InputError(f"time_reference must be 'auto', 'utc' or 'boot', got {time_reference!r}")
+        raise InputError(f"time_reference must be 'auto', 'utc' or 'boot', got {time_reference!r}",
+                         param="time_reference")
     if timebase not in ("attitude", "position"):
-        raise InputError(f"timebase must be 'attitude' or 'position', got {timebase!r}")
-    if not os.path.exists(source):
-        raise InputError(f"{source}: no such file")
-    ULog = _pyulog()
-    try:
-        ulog = ULog(source, ["vehicle_local_position", "vehicle_attitude", "vehicle_global_position",
-                             "vehicle_gps_position", "sensor_gps"])
-    except Exception as exc:
-        msg = str(exc).splitlines()[0] if str(exc) else ""
-        raise LogFormatError(f"{source}: cannot read ULog ({type(exc).__name__}: {msg})") from None
-    lp = _topic(ulog, "vehicle_local_position")
-    att = _topic(ulog, "vehicle_attitude")
-    if lp is None or len(lp.get("timestamp", ())) < 1:
-        raise LogFormatError(f"{source}: topic vehicle_local_position missing or empty")
-    if att is None or len(att.get("timestamp", ())) < 1:
-        raise LogFormatError(f"{source}: topic vehicle_attitude missing or empty")
-    for k in ("x", "y", "z"):
-        if k not in lp:
-            raise LogFormatError(f"{source}: vehicle_local_position has no field {k}")
-    for k in ("q[0]", "q[1]", "q[2]", "q[3]"):
-        if k not in att:
-            raise LogFormatError(f"{source}: vehicle_attitude has no field {k}")
+        raise InputError(f"timebase must be 'attitude' or 'position', got {timebase!r}", param="timebase")
+    ulog = _open_ulog(source)
+    lp, att = _pose_topics(ulog, source)
     dropped = {"nan_position": 0, "nan_attitude": 0, "invalid_flag": 0, "out_of_span": 0, "gap": 0}
-
-    tp = lp["timestamp"].astype(np.int64)
-    ned = np.stack([lp["x"], lp["y"], lp["z"]], axis=-1).astype(np.float64)
-    keep = np.all(np.isfinite(ned), axis=1)
-    dropped["nan_position"] = int((~keep).sum())
-    flags_bad = np.zeros(len(tp), bool)
-    for f in ("xy_valid", "z_valid"):
-        if f in lp:
-            flags_bad |= lp[f] == 0
-    invalid_flag_rows = int(flags_bad.sum())
-    if require_valid:
-        dropped["invalid_flag"] = int((flags_bad & keep).sum())
-        keep &= ~flags_bad
-    tp, ned = tp[keep], ned[keep]
-
-    ta = att["timestamp"].astype(np.int64)
-    q_ned = np.stack([att[f"q[{i}]"] for i in range(4)], axis=-1).astype(np.float64)
-    ok = np.all(np.isfinite(q_ned), axis=1) & (np.linalg.norm(q_ned, axis=1) > 1e-6)
-    dropped["nan_attitude"] = int((~ok).sum())
-    ta, q_ned = ta[ok], q_ned[ok]
+    tp, ned, invalid_flag_rows = _local_positions(lp, require_valid, dropped)
+    ta, q_ned = _attitudes(att, dropped)
     if len(tp) < 1 or len(ta) < 1:
         raise InputError(f"{source}: no valid position or attitude samples left")
-    q_enu = quat_ned_frd_to_enu_flu(q_ned)
-    # strictly increasing keys (PX4 can log one instant twice)
-    tp, ip = np.unique(tp, return_index=True)
-    ned = ned[ip]
-    ta, ia = np.unique(ta, return_index=True)
-    q_enu = q_enu[ia]
-
-    # geodetic anchor of the local NED frame
-    anchor = None
-    anchor_source = None
-    if all(k in lp for k in ("ref_lat", "ref_lon", "ref_alt", "xy_global", "z_global")):
-        good = (lp["xy_global"] != 0) & (lp["z_global"] != 0) & np.isfinite(lp["ref_lat"]) & np.isfinite(lp["ref_lon"])
-        if good.any():
-            i = int(np.flatnonzero(good)[0])
-            anchor = (float(lp["ref_lat"][i]), float(lp["ref_lon"][i]), float(lp["ref_alt"][i]))
-            anchor_source = "vehicle_local_position.ref_lat/ref_lon/ref_alt"
-    if anchor is None:
-        fix = _first_fix(ulog)
-        if fix is not None and len(tp) >= 1:
-            t_fix, lat, lon, alt, name = fix
-            here = _interp_linear(tp.astype(np.float64), ned, np.array([float(t_fix)]))[0]
-            a_lat, a_lon, a_alt = local_ned_to_geodetic(-here, (lat, lon, alt))
-            anchor = (float(a_lat), float(a_lon), float(a_alt))
-            anchor_source = f"first fix of {name} minus the local position at that time"
-
-    # rows on the chosen timebase
-    tp_f, ta_f = tp.astype(np.float64), ta.astype(np.float64)
-    gap_us = max_gap_s * 1e6
-    if timebase == "attitude":
-        t_us, quat = ta_f, q_enu
-        if len(tp) < 2:
-            raise InputError(f"{source}: vehicle_local_position has fewer than 2 valid samples")
-        out, gap = _span_and_gaps(tp_f, t_us, gap_us)
-        pos_ned = _interp_linear(tp_f, ned, t_us)
-    else:
-        t_us, pos_ned = tp_f, ned
-        if len(ta) < 2:
-            raise InputError(f"{source}: vehicle_attitude has fewer than 2 valid samples")
-        out, gap = _span_and_gaps(ta_f, t_us, gap_us)
-        quat = _interp_slerp(ta_f, q_enu, t_us)
-    dropped["out_of_span"] = int(out.sum())
-    dropped["gap"] = int(gap.sum())
-    sel = ~(out | gap)
-    t_us, pos_ned, quat = t_us[sel], pos_ned[sel], quat[sel]
-
-    if origin_geodetic is not None:
-        if anchor is None:
-            raise InputError(
-                f"{source}: origin_geodetic given but the log has no geodetic anchor "
-                "(no EKF reference, no global position, no GPS fix)"
-            )
-        xyz = local_ned_to_enu(pos_ned, anchor, origin_geodetic)
-    else:
-        xyz = local_ned_to_enu(pos_ned, (0.0, 0.0, 0.0), None)
-
-    offset, offset_src = utc_offset_us(ulog)
-    if time_reference == "utc" and offset is None:
-        raise InputError(f"{source}: time_reference='utc' but no GPS message carries time_utc_usec")
-    use_utc = offset is not None and time_reference in ("auto", "utc")
-    t_s = (t_us + (offset if use_utc else 0)) * 1e-6
+    tp, ned = _increasing(tp, ned)
+    ta, q_enu = _increasing(ta, quat_ned_frd_to_enu_flu(q_ned))
+    anchor, anchor_source = _anchor(ulog, lp, tp, ned)
+    t_us, pos_ned, quat = _on_timebase(tp, ned, ta, q_enu, timebase, max_gap_s, source, dropped)
+    xyz = _enu(pos_ned, anchor, origin_geodetic, source)
+    t_s, clock = _seconds(ulog, t_us, time_reference, source)
     pose = pd.DataFrame({
         "t": t_s, "node": str(node), "x": xyz[:, 0], "y": xyz[:, 1], "z": xyz[:, 2],
         "qw": quat[:, 0], "qx": quat[:, 1], "qy": quat[:, 2], "qz": quat[:, 3],
     })
     pose = validate_pose_log(pose, source)
     meta = {
-        "source": source,
-        "format": "ulog",
-        "node": str(node),
-        "time_reference": "utc" if use_utc else "boot",
-        "utc_offset_us": offset,
-        "utc_offset_source": offset_src,
-        "anchor_geodetic": anchor,
-        "anchor_source": anchor_source,
+        "source": source, "format": "ulog", "node": str(node), **clock,
+        "anchor_geodetic": anchor, "anchor_source": anchor_source,
         "origin_geodetic": None if origin_geodetic is None else tuple(float(v) for v in origin_geodetic),
-        "timebase": timebase,
-        "dropped": dropped,
-        "invalid_flag_rows": invalid_flag_rows,
+        "timebase": timebase, "dropped": dropped, "invalid_flag_rows": invalid_flag_rows,
         "rows": int(len(pose)),
     }
     return pose, meta

@@ -8,6 +8,10 @@ joint gain of one link says nothing about another.
 - :class:`KNNModel`: the average joint gain of the ``k`` (default 400) nearest training samples
   in the 4-D joint-angle space ``(az_tx, el_tx, az_rx, el_rx)`` [rad], Euclidean distance,
   uniform weights (paper: k = 400 was best; larger k tends to the mean).
+
+The maths of one link, :func:`mean_joint_gain_db` and :func:`knn_regressor`, is shared with the
+scikit-learn estimators of :mod:`rplearn.models.estimators`, which see one link at a time.
+Both classes implement the :class:`rplearn.models.base.Model` protocol.
 """
 
 from __future__ import annotations
@@ -17,12 +21,18 @@ from dataclasses import dataclass, field
 from typing import Any, Mapping
 
 import numpy as np
+from numpy.typing import ArrayLike
+
 from rplearn.data.tables import LinkSamples
 from rplearn.errors import IdentifiabilityError, InputError, ModelFileError
 from rplearn.io.modelfile import write_model_file
+from rplearn.models.base import frequency_from_training, learned_frequency_hz
+
+Link = tuple[str, str]
 
 
-def _links(samples: LinkSamples) -> dict[tuple[str, str], np.ndarray]:
+def _links(samples: LinkSamples) -> dict[Link, np.ndarray]:
+    """Sample indices of every directed link ``(tx, rx)`` of the samples."""
     code = samples.tx_index.astype(np.int64) * len(samples.nodes) + samples.rx_index
     out = {}
     for c in np.unique(code):
@@ -32,20 +42,94 @@ def _links(samples: LinkSamples) -> dict[tuple[str, str], np.ndarray]:
 
 
 def _angles(samples: LinkSamples, idx: np.ndarray | slice = slice(None)) -> np.ndarray:
+    """Joint angles ``(az_tx, el_tx, az_rx, el_rx)`` of the chosen samples [rad], one row each."""
     d = samples.directions
     return np.column_stack([d.az_tx[idx], d.el_tx[idx], d.az_rx[idx], d.el_rx[idx]])
 
 
-def _missing_link(key: tuple[str, str], known) -> InputError:
+def _missing_link(key: Link, known) -> InputError:
     names = ", ".join(f"{a}->{b}" for a, b in known)
     return InputError(f"link {key[0]}->{key[1]} was not in the training data (the model knows {names})")
 
 
+def _nodes_of_links(links) -> tuple[str, ...]:
+    """Node ids of directed links, in order of first appearance."""
+    return tuple(dict.fromkeys(n for key in links for n in key))
+
+
+def _baseline_training(samples: LinkSamples) -> dict[str, Any]:
+    """Training summary of a baseline: sample count and, when known, the carrier [Hz]."""
+    training: dict[str, Any] = {"n_samples": len(samples)}
+    frequency_hz = learned_frequency_hz(samples)
+    if frequency_hz is not None:
+        training["frequency_hz"] = frequency_hz
+    return training
+
+
+# -- the maths of one link, shared with the scikit-learn estimators -------------------------
+def mean_joint_gain_db(gain_db: ArrayLike) -> float:
+    """The paper's M for one link: the mean training joint gain [dB].
+
+    Raises
+    ------
+    IdentifiabilityError
+        Without any sample.
+    """
+    g = np.asarray(gain_db, np.float64)
+    if g.size == 0:
+        raise IdentifiabilityError("the mean baseline needs at least one sample")
+    return float(np.mean(g))
+
+
+def check_n_neighbors(n_neighbors: Any, n_samples: int | None = None, what: str = "the training data") -> int:
+    """``n_neighbors`` as an int: positive, and at most ``n_samples`` when that is given.
+
+    Raises
+    ------
+    InputError
+        (``param="n_neighbors"``) unless a positive integer.
+    IdentifiabilityError
+        (``param="n_neighbors"``) when ``what`` has fewer than ``n_neighbors`` samples.
+    """
+    try:
+        k = int(n_neighbors)
+    except (TypeError, ValueError):
+        k = 0
+    if k < 1 or k != n_neighbors:
+        raise InputError(f"n_neighbors must be a positive integer, got {n_neighbors!r}", param="n_neighbors")
+    if n_samples is not None and n_samples < k:
+        raise IdentifiabilityError(
+            f"{what} has {n_samples} samples, fewer than n_neighbors = {k} neighbours", param="n_neighbors"
+        )
+    return k
+
+
+def knn_regressor(angles_rad: np.ndarray, gain_db: np.ndarray, n_neighbors: int, what: str = "the training data"):
+    """The paper's NN-k for one link: a fitted k-d-tree ``KNeighborsRegressor``.
+
+    Parameters
+    ----------
+    angles_rad : ndarray, shape (n, 4)
+        Joint angles ``(az_tx, el_tx, az_rx, el_rx)`` [rad].
+    gain_db : ndarray, shape (n,)
+        Joint gain [dB].
+    n_neighbors : int
+        k; refused (see :func:`check_n_neighbors`) when larger than ``n``.
+    what : str
+        What the samples are, for the message.
+    """
+    from sklearn.neighbors import KNeighborsRegressor  # imported on use: slow to import
+
+    k = check_n_neighbors(n_neighbors, len(gain_db), what)
+    return KNeighborsRegressor(n_neighbors=k, algorithm="kd_tree").fit(angles_rad, gain_db)
+
+
+# -- the models -----------------------------------------------------------------------------
 @dataclass
 class MeanModel:
     """The paper's M: mean training joint gain per directed link [dB]."""
 
-    means_db: dict[tuple[str, str], float]
+    means_db: dict[Link, float]
     training: dict[str, Any] = field(default_factory=dict)
     provenance: dict[str, Any] = field(default_factory=dict)
     kind: str = "mean"
@@ -55,20 +139,36 @@ class MeanModel:
     def fit(cls, samples: LinkSamples) -> "MeanModel":
         if len(samples) == 0:
             raise IdentifiabilityError("the mean baseline needs at least one sample")
-        means = {k: float(np.mean(samples.joint_gain_db[i])) for k, i in _links(samples).items()}
-        return cls(means, training={"n_samples": len(samples)})
+        means = {k: mean_joint_gain_db(samples.joint_gain_db[i]) for k, i in _links(samples).items()}
+        return cls(means, training=_baseline_training(samples))
+
+    @property
+    def nodes(self) -> tuple[str, ...]:
+        """Node ids of the links the model knows."""
+        return _nodes_of_links(self.means_db)
+
+    @property
+    def frequency_hz(self) -> float | None:
+        """Carrier frequency of the training samples [Hz] (None: unknown)."""
+        return frequency_from_training(self.training)
 
     @property
     def n_params(self) -> int:
+        """One mean per directed link."""
         return len(self.means_db)
 
-    def predict_samples(self, samples: LinkSamples) -> np.ndarray:
+    def predict_gain(self, samples: LinkSamples) -> np.ndarray:
+        """The training mean of each sample's link [dB]."""
         out = np.empty(len(samples))
         for key, idx in _links(samples).items():
             if key not in self.means_db:
                 raise _missing_link(key, self.means_db)
             out[idx] = self.means_db[key]
         return out
+
+    def predict_gain_std(self, samples: LinkSamples) -> None:
+        """None: the baseline has no coefficient covariance."""
+        return None
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -97,14 +197,14 @@ class KNNModel:
     """The paper's NN-k: k nearest neighbours in the 4-D joint-angle space, per directed link."""
 
     n_neighbors: int
-    train_angles_rad: dict[tuple[str, str], np.ndarray]
-    train_gain_db: dict[tuple[str, str], np.ndarray]
+    train_angles_rad: dict[Link, np.ndarray]
+    train_gain_db: dict[Link, np.ndarray]
     training: dict[str, Any] = field(default_factory=dict)
     provenance: dict[str, Any] = field(default_factory=dict)
     kind: str = "knn"
 
     def __post_init__(self) -> None:
-        self._regressors: dict[tuple[str, str], Any] = {}
+        self._regressors: dict[Link, Any] = {}
 
     @property
     def label(self) -> str:
@@ -112,41 +212,49 @@ class KNNModel:
 
     @classmethod
     def fit(cls, samples: LinkSamples, n_neighbors: int = 400) -> "KNNModel":
-        if int(n_neighbors) < 1:
-            raise InputError(f"n_neighbors must be a positive integer, got {n_neighbors!r}")
+        k = check_n_neighbors(n_neighbors)
         angles, gains = {}, {}
         for key, idx in _links(samples).items():
-            if idx.size < n_neighbors:
-                raise IdentifiabilityError(
-                    f"link {key[0]}->{key[1]} has {idx.size} samples, fewer than k = {n_neighbors} neighbours"
-                )
             angles[key] = _angles(samples, idx)
             gains[key] = samples.joint_gain_db[idx].copy()
-        model = cls(int(n_neighbors), angles, gains, training={"n_samples": len(samples)})
+        model = cls(k, angles, gains, training=_baseline_training(samples))
         for key in angles:
             model._regressor(key)
         return model
 
-    def _regressor(self, key: tuple[str, str]):
-        from sklearn.neighbors import KNeighborsRegressor  # imported on use: slow to import
-
+    def _regressor(self, key: Link):
         if key not in self._regressors:
-            reg = KNeighborsRegressor(n_neighbors=self.n_neighbors, algorithm="kd_tree")
-            self._regressors[key] = reg.fit(self.train_angles_rad[key], self.train_gain_db[key])
+            what = f"link {key[0]}->{key[1]}"
+            self._regressors[key] = knn_regressor(self.train_angles_rad[key], self.train_gain_db[key], self.n_neighbors, what)
         return self._regressors[key]
+
+    @property
+    def nodes(self) -> tuple[str, ...]:
+        """Node ids of the links the model knows."""
+        return _nodes_of_links(self.train_gain_db)
+
+    @property
+    def frequency_hz(self) -> float | None:
+        """Carrier frequency of the training samples [Hz] (None: unknown)."""
+        return frequency_from_training(self.training)
 
     @property
     def n_params(self) -> int:
         """Every training sample is a parameter (paper Table I)."""
         return int(sum(v.size for v in self.train_gain_db.values()))
 
-    def predict_samples(self, samples: LinkSamples) -> np.ndarray:
+    def predict_gain(self, samples: LinkSamples) -> np.ndarray:
+        """Mean joint gain of the k nearest training samples of each sample's link [dB]."""
         out = np.empty(len(samples))
         for key, idx in _links(samples).items():
             if key not in self.train_gain_db:
                 raise _missing_link(key, self.train_gain_db)
             out[idx] = self._regressor(key).predict(_angles(samples, idx))
         return out
+
+    def predict_gain_std(self, samples: LinkSamples) -> None:
+        """None: the baseline has no coefficient covariance."""
+        return None
 
     def to_dict(self) -> dict[str, Any]:
         return {

@@ -8,11 +8,20 @@ direction between two nodes, or 6 columns with the transmitter's and receiver's 
 appended (integers ``0 .. n_nodes-1``) for any number of nodes; ``y`` is the observed joint
 gain [dB] (paper eq. 5).
 
+The estimators are thin wrappers: the maths is that of the model classes, on the same code
+path.
+
 - :class:`PatternRegressor` learns one pattern per node (SH, BG or P basis) and decouples
-  the joint gain (paper Sec. IV-B, V-A).
-- :class:`MeanRegressor` (the paper's M) predicts the training mean.
+  the joint gain (paper Sec. IV-B, V-A): :func:`rplearn.models.fit.solve_patterns`, the
+  solver behind :func:`~rplearn.models.fit.fit_patterns`; it predicts with
+  :meth:`rplearn.models.patterns.PatternSet.predict_gain`.
+- :class:`MeanRegressor` (the paper's M) predicts the training mean: the one-link case of
+  :class:`~rplearn.models.baselines.MeanModel` (:func:`~rplearn.models.baselines.mean_joint_gain_db`).
 - :class:`JointKNNRegressor` (the paper's NN-k, ``k = 400``) averages the ``k`` nearest
-  training samples in the 4-D joint-angle space; it cannot decouple the patterns.
+  training samples in the 4-D joint-angle space; it cannot decouple the patterns. It is the
+  one-link case of :class:`~rplearn.models.baselines.KNNModel`
+  (:func:`~rplearn.models.baselines.knn_regressor`), and like it refuses a ``k`` larger than
+  the number of training samples.
 """
 
 from __future__ import annotations
@@ -21,16 +30,18 @@ from typing import Any
 
 import numpy as np
 from sklearn.base import BaseEstimator, RegressorMixin
-from sklearn.neighbors import KNeighborsRegressor
 from sklearn.utils.validation import check_is_fitted, validate_data
 
-from rplearn.core.bases import make_basis
-from rplearn.errors import InputError
 from rplearn.core.geometry import Directions
-from rplearn.models.patterns import PatternSet
-from rplearn.core.solver import DEFAULT_RIDGE, fit_joint
+from rplearn.core.solver import DEFAULT_RIDGE
+from rplearn.data.tables import LinkSamples
+from rplearn.errors import InputError
+from rplearn.models.baselines import knn_regressor, mean_joint_gain_db
+from rplearn.models.fit import solve_patterns
+from rplearn.models.spec import ModelSpec
 
 ANGLE_COLUMNS = ("az_tx", "el_tx", "az_rx", "el_rx")
+_BASIS_KINDS = {"sh": "sh", "bg": "bg", "poly": "poly", "p": "poly"}
 
 
 def split_features(X: np.ndarray) -> tuple[Directions, np.ndarray, np.ndarray]:
@@ -47,6 +58,23 @@ def split_features(X: np.ndarray) -> tuple[Directions, np.ndarray, np.ndarray]:
     if np.any(tx != np.round(tx)) or np.any(rx != np.round(rx)) or np.any(tx < 0) or np.any(rx < 0):
         raise InputError("node number columns (5 and 6) must hold non-negative integers")
     return d, tx.astype(np.intp), rx.astype(np.intp)
+
+
+def samples_from_features(X: np.ndarray, y: np.ndarray | None, nodes: tuple[str, ...]) -> LinkSamples:
+    """The :class:`~rplearn.data.tables.LinkSamples` of a feature matrix (see module docstring).
+
+    Parameters
+    ----------
+    X : ndarray, shape (n, 4) or (n, 6)
+    y : ndarray or None
+        Joint gain [dB]; None (NaN) to predict.
+    nodes : tuple of str
+        Node names; node number ``i`` is ``nodes[i]``.
+    """
+    d, tx, rx = split_features(X)
+    n = X.shape[0]
+    gain = np.full(n, np.nan) if y is None else np.asarray(y, np.float64)
+    return LinkSamples(d, tx, rx, nodes, gain, np.full(n, np.nan))
 
 
 class PatternRegressor(RegressorMixin, BaseEstimator):
@@ -96,41 +124,29 @@ class PatternRegressor(RegressorMixin, BaseEstimator):
         self.gauge = gauge
         self.n_nodes = n_nodes
 
-    def _make_basis(self):
-        if str(self.basis).lower() == "bg":
-            return make_basis("bg", self.order, sigma_rad2=self.sigma_rad2, grid=self.grid)
-        return make_basis(self.basis, self.order)
+    def _spec(self) -> ModelSpec:
+        """The :class:`ModelSpec` of the hyper-parameters (the model classes' spec)."""
+        kind = _BASIS_KINDS.get(str(self.basis).lower())
+        if kind is None:
+            raise InputError(f"basis: expected one of sh, bg or poly, got {self.basis!r}", param="basis")
+        return ModelSpec(kind, self.order, self.ridge, self.sigma_rad2, self.grid)
 
     def fit(self, X, y):
         X, y = validate_data(self, X, y, y_numeric=True, dtype=np.float64)
-        d, tx, rx = split_features(X)
+        _, tx, rx = split_features(X)
         n_nodes = self.n_nodes if self.n_nodes is not None else int(max(tx.max(), rx.max())) + 1
-        n_nodes = max(n_nodes, 2)
-        basis = self._make_basis()
-        names = [str(i) for i in range(n_nodes)]
-        sol = fit_joint(d, tx, rx, y, n_nodes, basis, node_names=names, ridge=self.ridge, gauge=self.gauge)
-        self.report_ = sol.report
-        self.coef_ = sol.coef
-        self.patterns_ = PatternSet(
-            basis=basis,
-            nodes=tuple(names),
-            coef=sol.coef,
-            covariance=sol.covariance,
-            gauge=[g.to_dict() for g in sol.report.gauges],
-            training=sol.report.to_dict(),
-        )
+        names = tuple(str(i) for i in range(max(n_nodes, 2)))
+        self.patterns_, self.report_ = solve_patterns(samples_from_features(X, y, names), self._spec(), self.gauge)
+        self.coef_ = self.patterns_.coef
         return self
 
     def predict(self, X):
         check_is_fitted(self, "coef_")
         X = validate_data(self, X, reset=False, dtype=np.float64)
-        d, tx, rx = split_features(X)
+        _, tx, rx = split_features(X)
         if np.any(tx >= self.coef_.shape[0]) or np.any(rx >= self.coef_.shape[0]):
             raise InputError(f"node number beyond the {self.coef_.shape[0]} nodes the model was fitted on")
-        basis = self.patterns_.basis
-        ft = basis.design_t(d.az_tx, d.el_tx)
-        fr = basis.design_t(d.az_rx, d.el_rx)
-        return np.einsum("pn,np->n", ft, self.coef_[tx]) + np.einsum("pn,np->n", fr, self.coef_[rx])
+        return self.patterns_.predict_gain(samples_from_features(X, None, self.patterns_.nodes))
 
     @property
     def n_params_(self) -> int:
@@ -140,11 +156,17 @@ class PatternRegressor(RegressorMixin, BaseEstimator):
 
 
 class MeanRegressor(RegressorMixin, BaseEstimator):
-    """The paper's M baseline: the mean of the training joint gain, whatever the directions."""
+    """The paper's M baseline: the mean of the training joint gain, whatever the directions.
+
+    The one-link case of :class:`~rplearn.models.baselines.MeanModel`, which keeps one mean
+    per directed link: this estimator treats every sample as one link (node-number columns,
+    if present, are ignored, as are the angles), which with one link is the paper's global M.
+    Any number of feature columns is accepted.
+    """
 
     def fit(self, X, y):
         X, y = validate_data(self, X, y, y_numeric=True, dtype=np.float64)
-        self.mean_ = float(np.mean(y))
+        self.mean_ = mean_joint_gain_db(y)
         return self
 
     def predict(self, X):
@@ -162,7 +184,13 @@ class JointKNNRegressor(RegressorMixin, BaseEstimator):
 
     Uses the Euclidean distance of ``(az_tx, el_tx, az_rx, el_rx)`` [rad], uniform weights,
     as the paper does (its k = 400 was the best; larger k tends to the mean). Node-number
-    columns, if present, are ignored: the model learns the joint pattern only.
+    columns, if present, are ignored: the model learns the joint pattern of one link, the
+    one-link case of :class:`~rplearn.models.baselines.KNNModel`.
+
+    Raises
+    ------
+    IdentifiabilityError
+        From :meth:`fit`, naming ``n_neighbors``, when it exceeds the number of training samples.
     """
 
     def __init__(self, n_neighbors: int = 400) -> None:
@@ -171,8 +199,7 @@ class JointKNNRegressor(RegressorMixin, BaseEstimator):
     def fit(self, X, y):
         X, y = validate_data(self, X, y, y_numeric=True, dtype=np.float64)
         split_features(X)  # same fixed layout as PatternRegressor
-        k = min(int(self.n_neighbors), X.shape[0])
-        self.knn_ = KNeighborsRegressor(n_neighbors=k, algorithm="kd_tree").fit(X[:, :4], y)
+        self.knn_ = knn_regressor(X[:, :4], y, self.n_neighbors)
         self.n_train_ = X.shape[0]
         return self
 

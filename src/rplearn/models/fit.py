@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
-from typing import Any, Mapping, Sequence, Union
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 
@@ -17,10 +17,9 @@ from rplearn.models.baselines import KNNModel, MeanModel
 from rplearn.data.tables import LinkSamples
 from rplearn.core.metrics import Scores, score
 from rplearn.models.patterns import PatternSet
-from rplearn.core.solver import fit_joint
+from rplearn.core.solver import FitReport, fit_joint
+from rplearn.models.base import Model, learned_frequency_hz
 from rplearn.models.spec import ModelSpec
-
-Model = Union[PatternSet, MeanModel, KNNModel]
 
 
 @dataclass
@@ -48,15 +47,26 @@ class FittedModel:
 
     @property
     def condition_number(self) -> float:
-        if isinstance(self.model, PatternSet):
-            return float(self.model.training.get("condition_number") or np.nan)
-        return float("nan")
+        """Condition number of the fit's normal equations (NaN for the baselines, which have none)."""
+        return float(self.model.training.get("condition_number") or np.nan)
 
 
-def fit_patterns(
-    samples: LinkSamples, spec: ModelSpec, gauge: str | Mapping[str, Any] = "equal-mean", provenance: Mapping[str, Any] | None = None
-) -> PatternSet:
-    """Learn one pattern per node of the samples (paper Sec. IV-B, V-A)."""
+def solve_patterns(
+    samples: LinkSamples, spec: ModelSpec, gauge: str | Mapping[str, Any] = "equal-mean"
+) -> tuple[PatternSet, FitReport]:
+    """Learn one pattern per node of the samples (paper Sec. IV-B, V-A), with the solver's report.
+
+    The one code path from a :class:`ModelSpec` to patterns: the basis of the spec, the joint
+    least-squares solve, the training summary (with the samples' carrier frequency, when known).
+    :func:`fit_patterns` and :class:`rplearn.models.estimators.PatternRegressor` both use it.
+
+    Returns
+    -------
+    patterns : PatternSet
+        Without provenance.
+    report : FitReport
+        Rank, null-space dimension, condition number, gauge notes.
+    """
     basis = spec.basis()
     sol = fit_joint(
         samples.directions,
@@ -70,17 +80,27 @@ def fit_patterns(
         gauge=gauge,
     )
     training = sol.report.to_dict()
-    if samples.frequency_hz is not None:
-        training["frequency_hz"] = float(np.median(samples.frequency_hz))
-    return PatternSet(
+    frequency_hz = learned_frequency_hz(samples)
+    if frequency_hz is not None:
+        training["frequency_hz"] = frequency_hz
+    patterns = PatternSet(
         basis=basis,
         nodes=samples.nodes,
         coef=sol.coef,
         covariance=sol.covariance,
         gauge=[g.to_dict() for g in sol.report.gauges],
         training=training,
-        provenance=dict(provenance or {}),
     )
+    return patterns, sol.report
+
+
+def fit_patterns(
+    samples: LinkSamples, spec: ModelSpec, gauge: str | Mapping[str, Any] = "equal-mean", provenance: Mapping[str, Any] | None = None
+) -> PatternSet:
+    """Learn one pattern per node of the samples (paper Sec. IV-B, V-A); see :func:`solve_patterns`."""
+    patterns, _ = solve_patterns(samples, spec, gauge)
+    patterns.provenance = dict(provenance or {})
+    return patterns
 
 
 def _warm_up(spec: ModelSpec, n_samples: int = 1) -> None:
@@ -89,7 +109,7 @@ def _warm_up(spec: ModelSpec, n_samples: int = 1) -> None:
     if spec.kind == "knn":
         import sklearn.neighbors  # noqa: F401
     elif spec.decouples:
-        from rplearn.core.solver import reserve_block_buffer
+        from rplearn.core.normal_equations import reserve_block_buffer
 
         basis = spec.basis()
         basis.evaluate(np.zeros(basis.n_coef), [0.0], [0.0])
@@ -127,7 +147,7 @@ def evaluate_models(fitted: Sequence[FittedModel], samples: LinkSamples) -> list
     """Table I: RMSE, MAE, Q95, |phi|, AIC, LTD and condition number of every model."""
     rows = []
     for f in fitted:
-        pred = f.model.predict_samples(samples)
+        pred = f.model.predict_gain(samples)
         rows.append(score(f.label, samples.joint_gain_db, pred, f.n_params, f.ltd_s, f.condition_number))
     return rows
 

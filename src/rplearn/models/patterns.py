@@ -16,12 +16,14 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from rplearn._version import __version__
-from rplearn.core.bases import Basis, basis_from_dict, chunk_directions
+from rplearn.core.bases import Basis, basis_from_dict
+from rplearn.core.basis_base import chunk_directions
 from rplearn.errors import InputError, ModelFileError
 from rplearn.core.geometry import distance_m, link_directions
 from rplearn.core.link import received_power_dbm
 from rplearn.io.modelfile import jsonable as _jsonable
 from rplearn.io.modelfile import read_model_file, write_model_file
+from rplearn.models.base import frequency_from_training
 
 FloatArray = NDArray[np.float64]
 
@@ -93,16 +95,21 @@ class PatternSet:
         cov = self.covariance[k * p : (k + 1) * p, k * p : (k + 1) * p]
         return np.sqrt(np.maximum(self.basis.quadratic_form(cov, az_rad, el_rad), 0.0))
 
-    def predict_samples_std(self, samples: "LinkSamples") -> FloatArray:
-        """Standard error of :meth:`predict_samples` from the coefficient covariance [dB].
+    def predict_gain_std(self, samples: "LinkSamples") -> FloatArray | None:
+        """Standard error of :meth:`predict_gain` from the coefficient covariance [dB].
 
         The joint gain ``G_tx + G_rx`` does not depend on the constant a two-node fit cannot
         identify, so this error is meaningful for every fit. It covers the estimation error of
         the coefficients only, not the measurement noise of a new packet (add the training
         residual variance for that) nor model misfit.
+
+        Returns
+        -------
+        ndarray or None
+            One standard error per sample [dB]; None when the model carries no covariance.
         """
         if self.covariance is None:
-            raise InputError("this model carries no covariance")
+            return None
         p = self.basis.n_coef
         idx = np.array([self.node_index(n) for n in samples.nodes], dtype=np.intp)
         tx = idx[samples.tx_index]
@@ -250,13 +257,15 @@ class PatternSet:
             raise ModelFileError(f"{os.fspath(path)}: holds a {model_type} baseline, not radiation patterns")
         return cls.from_dict(payload, source=os.fspath(path))
 
-    # -- use with datasets ----------------------------------------------------------------
+    # -- the Model protocol (rplearn.models.base) -------------------------------------------
     @property
     def kind(self) -> str:
+        """``"patterns"``: one pattern per node (see :class:`rplearn.models.base.Model`)."""
         return "patterns"
 
     @property
     def label(self) -> str:
+        """The paper's label of the basis, e.g. ``SH-10``."""
         return self.basis.label
 
     @property
@@ -264,7 +273,12 @@ class PatternSet:
         """Coefficients of all antennas (the paper's |phi| column)."""
         return int(self.coef.size)
 
-    def predict_samples(self, samples: "LinkSamples") -> FloatArray:
+    @property
+    def frequency_hz(self) -> float | None:
+        """Carrier frequency the patterns were learned at [Hz] (training summary; None: unknown)."""
+        return frequency_from_training(self.training)
+
+    def predict_gain(self, samples: "LinkSamples") -> FloatArray:
         """Joint gain [dB] predicted for every sample of a :class:`~rplearn.data.tables.LinkSamples`."""
         idx = np.array([self.node_index(n) for n in samples.nodes], dtype=np.intp)
         tx = idx[samples.tx_index]

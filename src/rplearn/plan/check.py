@@ -31,12 +31,8 @@ from numpy.typing import NDArray
 from rplearn.core.bases import Basis, make_basis
 from rplearn.errors import InputError
 from rplearn.core.geometry import Directions, link_directions, quat_wxyz_from_yaw
-from rplearn.plan.trajectory import (
-    Campaign,
-    PlanLimits,
-    UnitSummary,
-    link_graph_identifies_gains,
-)
+from rplearn.plan.campaign import Campaign, link_graph_identifies_gains
+from rplearn.plan.trajectory import PlanLimits, UnitSummary
 
 FloatArray = NDArray[np.float64]
 

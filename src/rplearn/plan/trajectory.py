@@ -1,4 +1,4 @@
-"""Calibration trajectory units, campaigns and group schedules (paper Sec. IV-A, Fig. 3).
+"""Calibration trajectory units: references, summaries and limits (paper Sec. IV-A, Fig. 3).
 
 A trajectory *unit*: two drones start ``d`` apart at height ``z0`` with initial heading
 ``psi0``, and fly a vertical circle of diameter ``d`` centred between them, always at opposite
@@ -8,10 +8,9 @@ each of ``n`` loops the first drone turns by ``360/n`` deg; once it has swept al
 second drone does the same (``2 n`` loops in all). Between loops both drones hover at the start
 points while the turning drone yaws.
 
-Several units with different ``psi0`` make a *campaign* (the paper's default: learning units
-``psi0 = 0, 24, 48`` deg and a testing unit ``psi0 = 36`` deg, Sec. V-C). For more than two
-drones, :func:`pair_schedule` picks pairs whose link graph identifies absolute gains
-(DESIGN.md: every connected part needs an odd cycle).
+:func:`summarize_unit` tells what a unit asks of the drones (speed, acceleration, flight time,
+yaw rate) and refuses it when a :class:`PlanLimits` limit is exceeded. Several units make a
+campaign (:mod:`rplearn.plan.campaign`).
 
 World frame ENU [m]; the circle lies in the vertical plane through the unit's centre along the
 world azimuth ``line_azimuth_deg`` (0 = east). Yaw is ENU, counter-clockwise from east [deg in
@@ -21,9 +20,7 @@ faces along the line (the first drone then faces the second at the start).
 
 from __future__ import annotations
 
-import os
-from dataclasses import dataclass, replace
-from typing import Iterable, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
@@ -36,43 +33,22 @@ FloatArray = NDArray[np.float64]
 #: Standard gravity [m/s^2].
 G_M_S2 = 9.80665
 
-
-#: Flags of ``rplearn trajectory`` for the fields of :class:`TrajectoryUnit` it exposes.
-CLI_FLAGS: dict[str, str] = {
-    "distance_m": "--distance",
-    "height_m": "--height",
-    "n_loops": "--loops",
-    "speed_m_s": "--speed",
-}
-
-
-def _field(name: str) -> str:
-    """How a message names a unit field: the CLI flag (if any) and the Python argument."""
-    flag = CLI_FLAGS.get(name)
-    return f"{flag} ({name})" if flag else name
-
-
-_LIMIT_FLAGS: dict[str, str] = {
-    "max_speed_m_s": " (--max-speed)",
-    "max_accel_m_s2": " (--max-accel)",
-    "max_flight_time_s": " (--max-flight-time)",
-}
-
-#: What brings each limited quantity down (from :meth:`TrajectoryUnit._loop_profile`,
-#: :func:`summarize_unit` and :attr:`TrajectoryUnit.duration_s`).
+#: What brings each limited quantity down, naming the :class:`TrajectoryUnit` fields (the
+#: keyword arguments of :func:`~rplearn.plan.campaign.paper_campaign`) to change (from
+#: :meth:`TrajectoryUnit._loop_profile`, :func:`summarize_unit` and
+#: :attr:`TrajectoryUnit.duration_s`).
 _REMEDIES: dict[str, str] = {
     # peak speed = min(speed, sqrt(accel * pi * d))
-    "max_speed_m_s": "lower the cruise speed (--speed, speed_m_s)",
+    "max_speed_m_s": "lower the cruise speed (speed_m_s)",
     # |a| = hypot(accel, v^2 / (d / 2)): slower, or a wider circle
-    "max_accel_m_s2": "lower the cruise speed (--speed, speed_m_s) or widen the circle (--distance, distance_m)",
+    "max_accel_m_s2": "lower the cruise speed (speed_m_s) or widen the circle (distance_m)",
     # 2 n loops of pi d / v each, plus the turns
-    "max_flight_time_s": (
-        "fly fewer headings (--loops, n_loops), a smaller circle (--distance, distance_m) "
-        "or faster (--speed, speed_m_s)"
-    ),
+    "max_flight_time_s": "fly fewer headings (n_loops), a smaller circle (distance_m) or faster (speed_m_s)",
     # peak yaw rate = pi/2 * yaw_rate_deg_s
     "max_yaw_rate_deg_s": "lower the turn rate (yaw_rate_deg_s)",
 }
+
+
 
 
 @dataclass(frozen=True)
@@ -124,21 +100,22 @@ class TrajectoryUnit:
 
     def __post_init__(self) -> None:
         if len(self.nodes) != 2 or str(self.nodes[0]) == str(self.nodes[1]):
-            raise InputError(f"unit nodes: expected two different node ids, got {self.nodes!r}")
+            raise InputError(f"unit nodes: expected two different node ids, got {self.nodes!r}", param="nodes")
         object.__setattr__(self, "nodes", (str(self.nodes[0]), str(self.nodes[1])))
         for name in ("distance_m", "height_m", "speed_m_s", "accel_m_s2", "yaw_rate_deg_s"):
             v = float(getattr(self, name))
             if not (np.isfinite(v) and v > 0):
-                raise InputError(f"{_field(name)}: expected a positive finite number, got {v!r}")
+                raise InputError(f"{name}: expected a positive finite number, got {v!r}", param=name)
         if self.height_m <= self.distance_m / 2.0:
             raise InputError(
-                f"{_field('height_m')}: expected more than half the distance ({self.distance_m / 2:g} m) "
-                f"so the circle stays above ground, got {float(self.height_m):g}"
+                f"height_m: expected more than half the distance ({self.distance_m / 2:g} m) "
+                f"so the circle stays above ground, got {float(self.height_m):g}",
+                param="height_m",
             )
         if int(self.n_loops) != self.n_loops or self.n_loops < 1:
-            raise InputError(f"{_field('n_loops')}: expected a positive integer, got {self.n_loops!r}")
+            raise InputError(f"n_loops: expected a positive integer, got {self.n_loops!r}", param="n_loops")
         if self.role not in ("learning", "testing"):
-            raise InputError(f"unit role: expected 'learning' or 'testing', got {self.role!r}")
+            raise InputError(f"unit role: expected 'learning' or 'testing', got {self.role!r}", param="role")
         if not self.label:
             object.__setattr__(
                 self, "label", f"{self.role[:5]}_{self.nodes[0]}{self.nodes[1]}_{self.psi0_deg:g}"
@@ -200,7 +177,7 @@ class TrajectoryUnit:
         """Path length flown by each drone [m] (``2 n`` circumferences ``pi d``)."""
         return float(2 * self.n_loops * np.pi * self.distance_m)
 
-    def sample(self, rate_hz: float, t_offset_s: float = 0.0) -> "UnitReference":
+    def sample(self, rate_hz: float, t_offset_s: float = 0.0) -> UnitReference:
         """Time-parametrised references of both drones, sampled at ``rate_hz``.
 
         Parameters
@@ -211,12 +188,12 @@ class TrajectoryUnit:
             Time of the unit's start [s].
         """
         if not (rate_hz > 0):
-            raise InputError(f"rate_hz: expected a positive sample rate, got {rate_hz!r}")
+            raise InputError(f"rate_hz: expected a positive sample rate, got {rate_hz!r}", param="rate_hz")
         t = np.arange(0.0, self.duration_s + 0.5 / rate_hz, 1.0 / rate_hz)
         t = t[t <= self.duration_s + 1e-9]
         return self.evaluate(t, t_offset_s)
 
-    def evaluate(self, t_rel_s: NDArray[np.float64], t_offset_s: float = 0.0) -> "UnitReference":
+    def evaluate(self, t_rel_s: NDArray[np.float64], t_offset_s: float = 0.0) -> UnitReference:
         """References of both drones at times ``t_rel_s`` since the unit's start [s]."""
         t_rel = np.clip(np.asarray(t_rel_s, np.float64), 0.0, self.duration_s)
         length, t_ramp, t_cruise, v_peak = self._loop_profile()
@@ -401,7 +378,9 @@ def summarize_unit(unit: TrajectoryUnit, limits: PlanLimits | None = None) -> Un
     Raises
     ------
     PlanError
-        When a limit of ``limits`` is exceeded, naming the limit, the value and the unit.
+        When a limit of ``limits`` is exceeded, naming the limit, the value and the unit, and
+        the fields of :class:`TrajectoryUnit` that bring the value down; its ``param`` is the
+        name of the :class:`PlanLimits` field exceeded (e.g. ``"max_speed_m_s"``).
     """
     _, t_ramp, _, v_peak = unit._loop_profile()
     r = unit.distance_m / 2.0
@@ -418,202 +397,26 @@ def summarize_unit(unit: TrajectoryUnit, limits: PlanLimits | None = None) -> Un
     )
     if limits is not None:
         checks = (
-            ("max_speed_m_s", summary.max_speed_m_s, limits.max_speed_m_s, "m/s"),
-            ("max_accel_m_s2", summary.max_accel_m_s2, limits.max_accel_m_s2, "m/s^2"),
-            ("max_flight_time_s", summary.duration_s, limits.max_flight_time_s, "s"),
-            ("max_yaw_rate_deg_s", summary.max_yaw_rate_deg_s, limits.max_yaw_rate_deg_s, "deg/s"),
+            ("max_speed_m_s", "peak speed", summary.max_speed_m_s, limits.max_speed_m_s, "m/s"),
+            ("max_accel_m_s2", "peak acceleration", summary.max_accel_m_s2, limits.max_accel_m_s2, "m/s^2"),
+            ("max_flight_time_s", "flight time", summary.duration_s, limits.max_flight_time_s, "s"),
+            ("max_yaw_rate_deg_s", "peak yaw rate", summary.max_yaw_rate_deg_s, limits.max_yaw_rate_deg_s, "deg/s"),
         )
-        for name, value, limit, unit_name in checks:
+        for name, what, value, limit, unit_name in checks:
             if limit is not None and value > limit:
                 raise PlanError(
-                    f"unit {unit.label}: {name} is {value:.3g} {unit_name}, above the limit "
-                    f"{limit:.3g} {unit_name}{_LIMIT_FLAGS.get(name, '')}; {_REMEDIES[name]}"
+                    f"unit {unit.label}: {what} is {value:.3g} {unit_name}, above the limit "
+                    f"{limit:.3g} {unit_name} ({name}); {_REMEDIES[name]}",
+                    param=name,
                 )
     return summary
 
 
-@dataclass(frozen=True)
-class Campaign:
-    """Trajectory units flown one after the other, with a gap (battery swap) between them.
-
-    Attributes
-    ----------
-    units : tuple of TrajectoryUnit
-    gap_s : float
-        Time between the end of one unit and the start of the next [s].
-    """
-
-    units: tuple[TrajectoryUnit, ...]
-    gap_s: float = 60.0
-
-    def __post_init__(self) -> None:
-        if not self.units:
-            raise InputError("campaign units: expected at least one trajectory unit")
-        labels = [u.label for u in self.units]
-        if len(set(labels)) != len(labels):
-            raise InputError(f"campaign units: labels must be unique, got {labels}")
-
-    @property
-    def nodes(self) -> tuple[str, ...]:
-        """All node ids flying in the campaign, sorted."""
-        return tuple(sorted({n for u in self.units for n in u.nodes}))
-
-    def start_times_s(self) -> FloatArray:
-        """Start time of every unit [s]."""
-        d = np.array([u.duration_s for u in self.units])
-        return np.concatenate([[0.0], np.cumsum(d + self.gap_s)[:-1]])
-
-    @property
-    def duration_s(self) -> float:
-        """Time from the first unit's start to the last unit's end [s]."""
-        return float(self.start_times_s()[-1] + self.units[-1].duration_s)
-
-    def links(self) -> list[tuple[str, str]]:
-        """Distinct pairs of nodes that fly a unit together (undirected, sorted)."""
-        return sorted({tuple(sorted(u.nodes)) for u in self.units})  # type: ignore[misc]
-
-    def with_role(self, role: str) -> "Campaign":
-        """The sub-campaign of units with the given role."""
-        units = tuple(u for u in self.units if u.role == role)
-        if not units:
-            raise InputError(f"campaign: no unit has role {role!r}")
-        return replace(self, units=units)
-
-    def summarize(self, limits: PlanLimits | None = None) -> list[UnitSummary]:
-        """:func:`summarize_unit` of every unit (raises :class:`PlanError` on a violated limit)."""
-        return [summarize_unit(u, limits) for u in self.units]
-
-
-def paper_campaign(
-    nodes: tuple[str, str] = ("A", "B"),
-    learning_psi0_deg: Sequence[float] = (0.0, 24.0, 48.0),
-    testing_psi0_deg: Sequence[float] = (36.0,),
-    **unit_options: object,
-) -> Campaign:
-    """The paper's campaign (Sec. V-C): learning units psi0 = 0, 24, 48 deg, testing 36 deg."""
-    units = [
-        TrajectoryUnit(nodes=nodes, psi0_deg=float(p), role="learning", label=f"learn_{p:g}", **unit_options)  # type: ignore[arg-type]
-        for p in learning_psi0_deg
-    ] + [
-        TrajectoryUnit(nodes=nodes, psi0_deg=float(p), role="testing", label=f"test_{p:g}", **unit_options)  # type: ignore[arg-type]
-        for p in testing_psi0_deg
-    ]
-    return Campaign(tuple(units))
-
-
-# ---------------------------------------------------------------------------------------------
-# Groups of more than two drones
-
-
-def link_graph_identifies_gains(pairs: Iterable[tuple[str, str]]) -> bool:
-    """Whether a link graph identifies absolute gains: every component has an odd cycle.
-
-    A connected component without an odd cycle is bipartite, and an alternating ``+c/-c``
-    constant on its two sides leaves every joint gain unchanged (DESIGN.md).
-    """
-    adj: dict[str, set[str]] = {}
-    for a, b in pairs:
-        if a == b:
-            raise InputError(f"link graph: a node cannot link to itself ({a})")
-        adj.setdefault(a, set()).add(b)
-        adj.setdefault(b, set()).add(a)
-    if not adj:
-        return False
-    colour: dict[str, int] = {}
-    for start in adj:
-        if start in colour:
-            continue
-        colour[start] = 0
-        stack = [start]
-        odd = False
-        while stack:
-            v = stack.pop()
-            for w in adj[v]:
-                if w not in colour:
-                    colour[w] = 1 - colour[v]
-                    stack.append(w)
-                elif colour[w] == colour[v]:
-                    odd = True
-        if not odd:
-            return False
-    return True
-
-
-def pair_schedule(nodes: Sequence[str]) -> list[tuple[str, str]]:
-    """Pairs of drones to fly units with, so that the link graph identifies absolute gains.
-
-    Three or more drones: a triangle on the first three, each further drone paired with the
-    one before it (connected, one odd cycle, ``n`` pairs). Two drones: the single pair, which
-    identifies only the shapes (paper Sec. V-A).
-    """
-    ids = [str(n) for n in nodes]
-    if len(ids) < 2 or len(set(ids)) != len(ids):
-        raise InputError(f"nodes: expected at least two distinct node ids, got {ids}")
-    if len(ids) == 2:
-        return [(ids[0], ids[1])]
-    pairs = [(ids[0], ids[1]), (ids[1], ids[2]), (ids[2], ids[0])]
-    pairs += [(ids[i - 1], ids[i]) for i in range(3, len(ids))]
-    return pairs
-
-
-def group_campaign(
-    nodes: Sequence[str],
-    learning_psi0_deg: Sequence[float] = (0.0, 24.0, 48.0),
-    testing_psi0_deg: Sequence[float] = (36.0,),
-    **unit_options: object,
-) -> Campaign:
-    """A campaign for a group: for each pair of :func:`pair_schedule`, the paper's units."""
-    units: list[TrajectoryUnit] = []
-    for a, b in pair_schedule(nodes):
-        for role, psis in (("learning", learning_psi0_deg), ("testing", testing_psi0_deg)):
-            for p in psis:
-                units.append(
-                    TrajectoryUnit(
-                        nodes=(a, b),
-                        psi0_deg=float(p),
-                        role=role,
-                        label=f"{'learn' if role == 'learning' else 'test'}_{a}{b}_{p:g}",
-                        **unit_options,  # type: ignore[arg-type]
-                    )
-                )
-    return Campaign(tuple(units))
-
-
-def write_references(
-    campaign: Campaign | TrajectoryUnit, out_dir: str, rate_hz: float = 10.0
-) -> list[str]:
-    """Write per-unit, per-drone references ``t, x, y, z, yaw_deg`` as CSV files.
-
-    Files are named ``<unit label>_<node>.csv``; ``t`` starts at 0 for each unit [s].
-
-    Returns
-    -------
-    list of str
-        The paths written.
-    """
-    units = (campaign,) if isinstance(campaign, TrajectoryUnit) else campaign.units
-    os.makedirs(out_dir, exist_ok=True)
-    paths: list[str] = []
-    for unit in units:
-        ref = unit.sample(rate_hz)
-        for j, node in enumerate(unit.nodes):
-            path = os.path.join(out_dir, f"{unit.label}_{node}.csv")
-            ref.table(j).to_csv(path, index=False, float_format="%.4f")
-            paths.append(path)
-    return paths
-
-
 __all__ = [
-    "Campaign",
+    "G_M_S2",
     "PlanLimits",
     "TrajectoryUnit",
     "UnitReference",
     "UnitSummary",
-    "group_campaign",
-    "link_graph_identifies_gains",
-    "pair_schedule",
-    "paper_campaign",
     "summarize_unit",
-    "write_references",
 ]
-

@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 
 
 from rplearn.errors import InputError
-from rplearn.plan.trajectory import Campaign
+from rplearn.plan.campaign import Campaign
 from rplearn.sim.antennas import GroundTruth, NodeAntenna
 
 

@@ -21,7 +21,8 @@ from typing import Any, Callable
 from rplearn.sim.antennas import AirframeLobe, AntennaSpec, Mounting, NodeAntenna, antenna_from_name
 from rplearn.errors import InputError
 from rplearn.sim.config import EstimatorConfig, FlightConfig, RadioConfig, SimulationConfig
-from rplearn.plan.trajectory import Campaign, TrajectoryUnit, group_campaign
+from rplearn.plan.campaign import Campaign, group_campaign
+from rplearn.plan.trajectory import TrajectoryUnit
 
 __all__ = ["PRESET_NAMES", "fine_structure_lobes", "make_preset", "x500_frame_lobes"]
 

@@ -45,7 +45,8 @@ from rplearn.core.geometry import (
     quat_wxyz_multiply,
 )
 from rplearn.core.link import free_space_path_loss_db
-from rplearn.plan.trajectory import G_M_S2, TrajectoryUnit, write_references
+from rplearn.plan.campaign import write_references
+from rplearn.plan.trajectory import G_M_S2, TrajectoryUnit
 from rplearn.sim.config import EstimatorConfig, FlightConfig, RadioConfig, SimulationConfig
 from rplearn.sim.presets import make_preset
 
@@ -256,6 +257,146 @@ def _packet_times(t0: float, t1: float, radio: RadioConfig, rng: np.random.Gener
     return t[t <= t1]
 
 
+def _dropout_windows(
+    radio: RadioConfig, units: tuple[TrajectoryUnit, ...] | list[TrajectoryUnit], starts: FloatArray,
+    rng: np.random.Generator,
+) -> FloatArray:
+    """Short dropouts ``(begin, end)`` [s], shape (n, 2): placed uniformly within the flown time.
+
+    A unit is picked with probability proportional to its duration, then a start within it.
+    """
+    if not (radio.dropouts > 0 and radio.dropout_duration_s > 0):
+        return np.zeros((0, 2))
+    flown = np.array([(s, s + u.duration_s) for s, u in zip(starts, units)])
+    lengths = flown[:, 1] - flown[:, 0]
+    pick = rng.choice(len(lengths), size=radio.dropouts, p=lengths / lengths.sum())
+    begin = flown[pick, 0] + rng.uniform(0.0, 1.0, radio.dropouts) * (
+        lengths[pick] - radio.dropout_duration_s
+    ).clip(min=0.0)
+    return np.column_stack([begin, begin + radio.dropout_duration_s])
+
+
+def _arrivals(truth: _UnitTruth, radio: RadioConfig, dropouts: FloatArray, rng: np.random.Generator) -> FloatArray:
+    """Times [s] of the packets of one direction that are not lost at random or in a dropout."""
+    t = _packet_times(truth.t_s[0], truth.t_s[-1], radio, rng)
+    keep = rng.uniform(size=t.size) >= radio.loss_probability
+    for b, e in dropouts:
+        keep &= ~((t >= b) & (t < e))
+    return t[keep]
+
+
+@dataclass
+class _Link:
+    """The packets of one direction of one unit: signal-log rows, matched truth, residual noise [dB]."""
+
+    signal: pd.DataFrame
+    matched: pd.DataFrame
+    noise_db: FloatArray
+
+
+def _link_packets(
+    truth: _UnitTruth, j_tx: int, truth_model: GroundTruth, radio: RadioConfig, offsets: dict[str, float],
+    dropouts: FloatArray, rng: np.random.Generator,
+) -> _Link:
+    """Packets of drone ``j_tx`` to the other drone of a unit, received as paper eq. 1 says.
+
+    Clean power from the true poses and patterns, plus fading, a sensitivity floor (lost
+    below it), integer-dBm rounding and a saturation plateau.
+    """
+    j_rx = 1 - j_tx
+    tx, rx = truth.unit.nodes[j_tx], truth.unit.nodes[j_rx]
+    t = _arrivals(truth, radio, dropouts, rng)
+    tx_pos, tx_q = truth.interpolate(t, j_tx)
+    rx_pos, rx_q = truth.interpolate(t, j_rx)
+    dirs = link_directions(tx_pos, tx_q, rx_pos, rx_q)
+    dist = distance_m(tx_pos, rx_pos)
+    gain = truth_model.predict_joint_gain_db(tx, rx, *dirs)
+    clean = (
+        radio.tx_power_dbm
+        + gain
+        + offsets.get(f"{tx}->{rx}", 0.0)
+        - free_space_path_loss_db(dist, radio.frequency_hz)
+    )
+    power = clean + radio.fading_std_db * rng.standard_normal(t.size)
+    delivered = np.ones(t.size, bool)
+    if radio.sensitivity_dbm is not None:
+        delivered &= power >= radio.sensitivity_dbm
+    rssi = np.round(power) if radio.quantize else power
+    if radio.saturation_dbm is not None:
+        rssi = np.minimum(rssi, radio.saturation_dbm)
+    t, rssi, clean = t[delivered], rssi[delivered], clean[delivered]
+    sig = pd.DataFrame(
+        {
+            "t": t,
+            "tx": tx,
+            "rx": rx,
+            "rssi_dbm": rssi,
+            "tx_power_dbm": float(radio.tx_power_dbm),
+            "frequency_hz": float(radio.frequency_hz),
+            "unit": truth.unit.label,
+        }
+    )
+    ends = (("tx", tx_pos[delivered], tx_q[delivered]), ("rx", rx_pos[delivered], rx_q[delivered]))
+    return _Link(sig, _with_true_poses(sig, ends), rssi - clean)
+
+
+def _with_true_poses(sig: pd.DataFrame, ends: tuple[tuple[str, FloatArray, FloatArray], ...]) -> pd.DataFrame:
+    """Signal rows with the true positions [m] and quaternions of both ends (matched columns)."""
+    m = sig.copy()
+    for end, p, q in ends:
+        m[f"{end}_x"], m[f"{end}_y"], m[f"{end}_z"] = p[:, 0], p[:, 1], p[:, 2]
+        for c, name in enumerate(("qw", "qx", "qy", "qz")):
+            m[f"{end}_{name}"] = q[:, c]
+    return m
+
+
+def _simulate_unit(
+    unit: TrajectoryUnit, t0_s: float, config: SimulationConfig, truth_model: GroundTruth,
+    dropouts: FloatArray, rng: np.random.Generator,
+) -> tuple[list[pd.DataFrame], list[_Link]]:
+    """One unit's flight: the two drones' pose estimates and the packets of both directions.
+
+    Draws from ``rng`` in a fixed order (truth, estimates of drone 0 then 1, link 0 -> 1
+    then 1 -> 0) so that a seed gives the same logs.
+    """
+    truth = _simulate_unit_truth(unit, t0_s, config.flight, rng)
+    poses = [_pose_estimates(truth, j, config.estimator, rng) for j in range(2)]
+    offsets = config.radio.offsets_dict()
+    links = [_link_packets(truth, j_tx, truth_model, config.radio, offsets, dropouts, rng) for j_tx in range(2)]
+    return poses, links
+
+
+def _assemble(
+    pose_frames: list[pd.DataFrame], links: list[_Link]
+) -> tuple[pd.DataFrame, pd.DataFrame, pd.DataFrame, FloatArray]:
+    """Pose log sorted by (node, t), signal log and matched truth sorted by time, residual noise [dB]."""
+    pose_log = pd.concat(pose_frames, ignore_index=True).sort_values(["node", "t"], kind="stable")
+    pose_log = pose_log.reset_index(drop=True)[list(POSE_COLUMNS)]
+    signal_log = pd.concat([lk.signal for lk in links], ignore_index=True)
+    order = np.argsort(signal_log["t"].to_numpy(), kind="stable")
+    signal_log = signal_log.iloc[order].reset_index(drop=True)[list(SIGNAL_COLUMNS) + ["unit"]]
+    matched = pd.concat([lk.matched for lk in links], ignore_index=True).iloc[order].reset_index(drop=True)
+    matched = matched[list(MATCHED_COLUMNS) + ["unit"]]
+    noise = np.concatenate([lk.noise_db for lk in links]) if links else np.zeros(0)
+    return pose_log, signal_log, matched, noise
+
+
+def _config_of(preset_or_config: str | SimulationConfig, log_format: str) -> SimulationConfig:
+    """The configuration of a preset name, or the configuration given; checks ``log_format``."""
+    if isinstance(preset_or_config, str):
+        config = make_preset(preset_or_config)
+    elif isinstance(preset_or_config, SimulationConfig):
+        config = preset_or_config
+    else:
+        raise InputError(
+            f"preset_or_config: expected a preset name or a SimulationConfig, got {type(preset_or_config).__name__}",
+            param="preset_or_config",
+        )
+    if log_format not in ("parquet", "csv"):
+        raise InputError(f"log_format: expected 'parquet' or 'csv', got {log_format!r}", param="log_format")
+    return config
+
+
 # ---------------------------------------------------------------------------------------------
 # Public entry point
 
@@ -285,101 +426,23 @@ def simulate(
     -------
     SimulationResult
     """
-    if isinstance(preset_or_config, str):
-        config = make_preset(preset_or_config)
-    elif isinstance(preset_or_config, SimulationConfig):
-        config = preset_or_config
-    else:
-        raise InputError(
-            f"preset_or_config: expected a preset name or a SimulationConfig, got {type(preset_or_config).__name__}"
-        )
-    if log_format not in ("parquet", "csv"):
-        raise InputError(f"log_format: expected 'parquet' or 'csv', got {log_format!r}")
+    config = _config_of(preset_or_config, log_format)
     started = time.perf_counter()
     truth_model = config.ground_truth(seed)
     radio = config.radio
-    root = np.random.SeedSequence(int(seed))
-    unit_seeds = root.spawn(len(config.campaign.units) + 1)
+    units = config.campaign.units
+    unit_seeds = np.random.SeedSequence(int(seed)).spawn(len(units) + 1)
     starts = config.campaign.start_times_s()
-
-    # short dropouts: uniformly placed within the flown time of the campaign
-    drop_rng = np.random.default_rng(unit_seeds[-1])
-    flown = np.array([(s, s + u.duration_s) for s, u in zip(starts, config.campaign.units)])
-    dropouts = np.zeros((0, 2))
-    if radio.dropouts > 0 and radio.dropout_duration_s > 0:
-        lengths = flown[:, 1] - flown[:, 0]
-        pick = drop_rng.choice(len(lengths), size=radio.dropouts, p=lengths / lengths.sum())
-        begin = flown[pick, 0] + drop_rng.uniform(0.0, 1.0, radio.dropouts) * (
-            lengths[pick] - radio.dropout_duration_s
-        ).clip(min=0.0)
-        dropouts = np.column_stack([begin, begin + radio.dropout_duration_s])
-
+    dropouts = _dropout_windows(radio, units, starts, np.random.default_rng(unit_seeds[-1]))
     pose_frames: list[pd.DataFrame] = []
-    signal_frames: list[pd.DataFrame] = []
-    matched_frames: list[pd.DataFrame] = []
-    noise_parts: list[FloatArray] = []
-    offsets = radio.offsets_dict()
-    for k, (unit, t0) in enumerate(zip(config.campaign.units, starts)):
-        rng = np.random.default_rng(unit_seeds[k])
-        truth = _simulate_unit_truth(unit, float(t0), config.flight, rng)
-        for j in range(2):
-            pose_frames.append(_pose_estimates(truth, j, config.estimator, rng))
-        for j_tx in range(2):
-            j_rx = 1 - j_tx
-            tx, rx = unit.nodes[j_tx], unit.nodes[j_rx]
-            t = _packet_times(truth.t_s[0], truth.t_s[-1], radio, rng)
-            keep = rng.uniform(size=t.size) >= radio.loss_probability
-            for b, e in dropouts:
-                keep &= ~((t >= b) & (t < e))
-            t = t[keep]
-            tx_pos, tx_q = truth.interpolate(t, j_tx)
-            rx_pos, rx_q = truth.interpolate(t, j_rx)
-            dirs = link_directions(tx_pos, tx_q, rx_pos, rx_q)
-            dist = distance_m(tx_pos, rx_pos)
-            gain = truth_model.predict_joint_gain_db(tx, rx, *dirs)
-            clean = (
-                radio.tx_power_dbm
-                + gain
-                + offsets.get(f"{tx}->{rx}", 0.0)
-                - free_space_path_loss_db(dist, radio.frequency_hz)
-            )
-            power = clean + radio.fading_std_db * rng.standard_normal(t.size)
-            delivered = np.ones(t.size, bool)
-            if radio.sensitivity_dbm is not None:
-                delivered &= power >= radio.sensitivity_dbm
-            rssi = np.round(power) if radio.quantize else power
-            if radio.saturation_dbm is not None:
-                rssi = np.minimum(rssi, radio.saturation_dbm)
-            t, rssi, clean = t[delivered], rssi[delivered], clean[delivered]
-            tx_pos, tx_q, rx_pos, rx_q = tx_pos[delivered], tx_q[delivered], rx_pos[delivered], rx_q[delivered]
-            noise_parts.append(rssi - clean)
-            sig = pd.DataFrame(
-                {
-                    "t": t,
-                    "tx": tx,
-                    "rx": rx,
-                    "rssi_dbm": rssi,
-                    "tx_power_dbm": float(radio.tx_power_dbm),
-                    "frequency_hz": float(radio.frequency_hz),
-                    "unit": unit.label,
-                }
-            )
-            signal_frames.append(sig)
-            m = sig.copy()
-            for end, p, q in (("tx", tx_pos, tx_q), ("rx", rx_pos, rx_q)):
-                m[f"{end}_x"], m[f"{end}_y"], m[f"{end}_z"] = p[:, 0], p[:, 1], p[:, 2]
-                for c, name in enumerate(("qw", "qx", "qy", "qz")):
-                    m[f"{end}_{name}"] = q[:, c]
-            matched_frames.append(m)
-
-    pose_log = pd.concat(pose_frames, ignore_index=True).sort_values(["node", "t"], kind="stable")
-    pose_log = pose_log.reset_index(drop=True)[list(POSE_COLUMNS)]
-    signal_log = pd.concat(signal_frames, ignore_index=True)
-    order = np.argsort(signal_log["t"].to_numpy(), kind="stable")
-    signal_log = signal_log.iloc[order].reset_index(drop=True)[list(SIGNAL_COLUMNS) + ["unit"]]
-    matched = pd.concat(matched_frames, ignore_index=True).iloc[order].reset_index(drop=True)
-    matched = matched[list(MATCHED_COLUMNS) + ["unit"]]
-    noise = np.concatenate(noise_parts) if noise_parts else np.zeros(0)
+    links: list[_Link] = []
+    for k, (unit, t0) in enumerate(zip(units, starts)):
+        poses, unit_links = _simulate_unit(
+            unit, float(t0), config, truth_model, dropouts, np.random.default_rng(unit_seeds[k])
+        )
+        pose_frames += poses
+        links += unit_links
+    pose_log, signal_log, matched, noise = _assemble(pose_frames, links)
     nominal = float(np.sqrt(radio.fading_std_db**2 + (1.0 / 12.0 if radio.quantize else 0.0)))
     result = SimulationResult(
         config=config,

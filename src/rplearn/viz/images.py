@@ -1,4 +1,4 @@
-"""3-D pattern images for rplearn export --format images."""
+"""3-D pattern images of pattern-likes (:class:`rplearn.io.export.PatternLike`), one per node."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import os
 import re
 from typing import Any, Sequence
 
-from rplearn.io.export import _check_pattern_like, _nodes_of
+from rplearn.io.export import check_pattern_like, select_nodes
 from rplearn.viz import plot
 
 
@@ -34,11 +34,11 @@ def export_pattern_images(
         The paths written, in node order (characters other than letters, digits, ``_.-``
         in a node id become ``_`` in the file name).
     """
-    _check_pattern_like(pattern_like)
+    check_pattern_like(pattern_like)
     out_dir = os.fspath(out_dir)
     os.makedirs(out_dir, exist_ok=True)
     paths = []
-    for n in _nodes_of(pattern_like, nodes):
+    for n in select_nodes(pattern_like, nodes):
         safe = re.sub(r"[^A-Za-z0-9_.-]+", "_", n) or "node"
         paths.append(
             plot.plot_pattern_3d(

@@ -1,0 +1,249 @@
+"""Sufficient statistics of the joint least-squares problem, accumulated in chunks (paper Sec. V-A).
+
+Each signal sample ``i`` names its transmitter ``t_i`` and receiver ``r_i`` and observes the joint
+gain ``y_i = G_t(az_tx_i, el_tx_i) + G_r(az_rx_i, el_rx_i) + noise`` (paper eq. 5). With every
+pattern a linear combination of the same basis, ``G_n = f(az, el) . p_n``, the row of sample
+``i`` in the design matrix holds ``f(az_tx, el_tx)`` in the block of node ``t_i``,
+``f(az_rx, el_rx)`` in the block of ``r_i`` and zeros elsewhere (the paper's Sec. V-A matrix).
+
+The design matrix is never formed: :class:`NormalEquations` accumulates ``X^T X``, ``X^T y``,
+``y^T y`` and ``n`` chunk by chunk, one link direction at a time (:func:`link_statistics`),
+through a block buffer reused by later fits in the same thread, so memory does not grow with
+the number of samples. :mod:`rplearn.core.solver` solves the result.
+"""
+
+from __future__ import annotations
+
+import threading
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from rplearn.core.bases import Basis
+from rplearn.core.geometry import Directions
+from rplearn.errors import InputError
+
+FloatArray = NDArray[np.float64]
+
+#: Samples per feature sub-chunk (fits the CPU cache) and per accumulation block.
+FEATURE_CHUNK = 4096
+BLOCK_SAMPLES = 65536
+
+
+_BUFFERS = threading.local()
+
+
+def _block_buffer(size: int) -> FloatArray:
+    """A float64 scratch buffer of at least ``size`` values, reused by later fits in this thread.
+
+    Fresh memory is slow on first touch (one page fault per 4 KiB; measured 20-30 ms for the
+    52 MB block of an SH-10 fit on this kind of machine), so the block buffer is kept.
+    """
+    buf = getattr(_BUFFERS, "block", None)
+    if buf is None or buf.size < size:
+        _BUFFERS.block = None  # let the old one go first
+        buf = np.empty(size)
+        buf.fill(0.0)  # pay the page faults now, once, not inside the first rank-k update
+        _BUFFERS.block = buf
+    return buf[:size]
+
+
+def block_rows(basis: Basis) -> int:
+    """Rows of the accumulation block of :func:`link_statistics` for this basis."""
+    return 2 * basis.n_coef + 1
+
+
+def reserve_block_buffer(basis: Basis, n_samples: int) -> None:
+    """Allocate (and touch) this thread's block buffer for a fit of ``n_samples`` samples.
+
+    Called before a timed fit so that its learning time does not include the one-off page
+    faults of the buffer (measured 0.2 s for the first SH-10 fit of the paper's 56k samples).
+    """
+    _block_buffer(block_rows(basis) * max(1, min(int(n_samples), BLOCK_SAMPLES)))
+
+
+def _fill_features(
+    basis: Basis,
+    buf: FloatArray,
+    az_tx: FloatArray,
+    el_tx: FloatArray,
+    az_rx: FloatArray,
+    el_rx: FloatArray,
+    moments: FloatArray | None,
+) -> None:
+    """Write tx features into rows ``0 .. p-1`` and rx features into rows ``p+1 .. 2p`` of ``buf``.
+
+    Rows are in the basis's :attr:`~rplearn.core.bases.Basis.row_order`; row ``p`` is left for the
+    observations. Works in cache-sized chunks; a basis that accepts stacked samples computes
+    both ends of a chunk in one pass, through a (p, 2, chunk) strided view of the two row
+    groups, and adds to ``moments[0]`` (tx) and ``moments[1]`` (rx) when given.
+    """
+    p = basis.n_coef
+    n = az_tx.size
+    if basis.stacked_samples:
+        az_both = np.stack([az_tx, az_rx])
+        el_both = np.stack([el_tx, el_rx])
+    for s in range(0, n, FEATURE_CHUNK):
+        e = min(n, s + FEATURE_CHUNK)
+        view = buf[:, s:e]
+        if basis.stacked_samples:
+            both = np.lib.stride_tricks.as_strided(
+                view, shape=(p, 2, e - s), strides=(view.strides[0], (p + 1) * view.strides[0], view.strides[1])
+            )
+            basis.design_rows_into(az_both[:, s:e], el_both[:, s:e], both, moments)
+        else:
+            basis.design_rows_into(az_tx[s:e], el_tx[s:e], view[:p])
+            basis.design_rows_into(az_rx[s:e], el_rx[s:e], view[p + 1 :])
+
+
+def link_statistics(
+    basis: Basis, az_tx: FloatArray, el_tx: FloatArray, az_rx: FloatArray, el_rx: FloatArray, y: FloatArray
+) -> FloatArray:
+    """``Z^T Z`` with ``Z = [f(tx directions), y, f(rx directions)]`` over samples of one link.
+
+    A ``(2p + 1, 2p + 1)`` matrix, features in the basis's row order: the tx and rx blocks of
+    ``X^T X``, ``X^T y`` and ``y^T y``. Per block of :data:`BLOCK_SAMPLES` samples, written
+    into this thread's reused buffer, either one symmetric rank-k update of all ``2p + 1``
+    rows, or, for a basis with Gram moments (SH), only the product ``[f_tx; y] [y; f_rx]^T``
+    (half the work): the two diagonal blocks then come from the moments.
+    """
+    az_tx, el_tx, az_rx, el_rx, y = (np.ascontiguousarray(a, np.float64).ravel() for a in (az_tx, el_tx, az_rx, el_rx, y))
+    p = basis.n_coef
+    k = block_rows(basis)
+    n = az_tx.size
+    use_moments = basis.moment_shape is not None and basis.stacked_samples
+    moments = np.zeros((2, *basis.moment_shape)) if use_moments else None
+    total = np.zeros((k, k))
+    block = _block_buffer(k * max(1, min(n, BLOCK_SAMPLES)))  # grows to the largest block seen
+    for start in range(0, n, BLOCK_SAMPLES):
+        stop = min(n, start + BLOCK_SAMPLES)
+        buf = block[: k * (stop - start)].reshape(k, stop - start)
+        part = slice(start, stop)
+        _fill_features(basis, buf, az_tx[part], el_tx[part], az_rx[part], el_rx[part], moments)
+        buf[p] = y[part]
+        if moments is None:
+            total += buf @ buf.T
+        else:
+            total[: p + 1, p:] += buf[: p + 1] @ buf[p:].T
+    if moments is not None:
+        total[p:, : p + 1] = total[: p + 1, p:].T
+        total[:p, :p] = basis.gram_from_moments(moments[0])
+        total[p + 1 :, p + 1 :] = basis.gram_from_moments(moments[1])
+    return total
+
+
+@dataclass
+class NormalEquations:
+    """Sufficient statistics of the joint least-squares problem, accumulated chunk by chunk.
+
+    Parameters
+    ----------
+    basis : Basis
+        The basis shared by all nodes.
+    n_nodes : int
+        Number of nodes (patterns) in the problem.
+    """
+
+    basis: Basis
+    n_nodes: int
+    gram: FloatArray = field(init=False)
+    rhs: FloatArray = field(init=False)
+    yty: float = field(init=False, default=0.0)
+    n_samples: int = field(init=False, default=0)
+    link_counts: dict[tuple[int, int], int] = field(init=False, default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if self.n_nodes < 2:
+            raise InputError(f"a link problem needs at least 2 nodes, got {self.n_nodes}")
+        self.gram = np.zeros((self.n_columns, self.n_columns))
+        self.rhs = np.zeros(self.n_columns)
+        # link_statistics orders rows [tx features, y, rx features], features in the basis's
+        # row order; this index puts them back as [tx, rx, y] in the natural column order.
+        p = self.basis.n_coef
+        rows = self.basis.row_order
+        natural = np.arange(p) if rows is None else np.argsort(rows)
+        self._natural = np.concatenate([natural, natural + p + 1, [p]])
+
+    @property
+    def n_columns(self) -> int:
+        return self.basis.n_coef * self.n_nodes
+
+    def add(
+        self,
+        directions: Directions,
+        tx_index: ArrayLike,
+        rx_index: ArrayLike,
+        joint_gain_db: ArrayLike | None = None,
+    ) -> NormalEquations:
+        """Accumulate a chunk of samples.
+
+        Parameters
+        ----------
+        directions : Directions
+            ``az_tx, el_tx, az_rx, el_rx`` of every sample [rad].
+        tx_index, rx_index : array_like of int
+            Node index of the transmitter and receiver of every sample.
+        joint_gain_db : array_like, optional
+            Observed joint gain [dB] (paper eq. 5); omitted for an identifiability check only.
+        """
+        az_tx, el_tx, az_rx, el_rx = (np.ascontiguousarray(a, np.float64).ravel() for a in directions)
+        tx = np.asarray(tx_index).ravel()
+        rx = np.asarray(rx_index).ravel()
+        n = az_tx.size
+        y = np.zeros(n) if joint_gain_db is None else np.ascontiguousarray(joint_gain_db, np.float64).ravel()
+        for name, arr in (("el_tx", el_tx), ("az_rx", az_rx), ("el_rx", el_rx), ("tx_index", tx), ("rx_index", rx), ("joint_gain_db", y)):
+            if arr.size != n:
+                raise InputError(f"{name} has {arr.size} values, az_tx has {n}")
+        for name, arr in (("az_tx", az_tx), ("el_tx", el_tx), ("az_rx", az_rx), ("el_rx", el_rx), ("joint_gain_db", y)):
+            if not np.all(np.isfinite(arr)):
+                raise InputError(f"{name}: {int(np.sum(~np.isfinite(arr)))} NaN or infinite value(s)")
+        if n == 0:
+            return self
+        if np.any(tx < 0) or np.any(rx < 0) or np.any(tx >= self.n_nodes) or np.any(rx >= self.n_nodes):
+            raise InputError(f"node index out of range 0..{self.n_nodes - 1}")
+        if np.any(tx == rx):
+            raise InputError("a sample has the same node as transmitter and receiver")
+        pair_code = tx.astype(np.int64) * self.n_nodes + rx
+        if pair_code.min() == pair_code.max():  # one link direction: no grouping needed
+            codes = pair_code[:1]
+        else:
+            codes = np.unique(pair_code)
+        for code in codes:
+            t, r = divmod(int(code), self.n_nodes)
+            sel = slice(None) if codes.size == 1 else (pair_code == code)
+            self._add_pair(t, r, az_tx[sel], el_tx[sel], az_rx[sel], el_rx[sel], y[sel])
+        self.n_samples += n
+        return self
+
+    def _add_pair(
+        self, t: int, r: int, az_tx: FloatArray, el_tx: FloatArray, az_rx: FloatArray, el_rx: FloatArray, y: FloatArray
+    ) -> None:
+        p = self.basis.n_coef
+        bt = slice(t * p, (t + 1) * p)
+        br = slice(r * p, (r + 1) * p)
+        n = az_tx.size
+        key = (min(t, r), max(t, r))
+        self.link_counts[key] = self.link_counts.get(key, 0) + n
+        # Both nodes' blocks of X^T X, X^T y and y^T y from one pass over the samples.
+        block = link_statistics(self.basis, az_tx, el_tx, az_rx, el_rx, y)
+        block = block[np.ix_(self._natural, self._natural)]
+        self.gram[bt, bt] += block[:p, :p]
+        self.gram[br, br] += block[p : 2 * p, p : 2 * p]
+        self.gram[bt, br] += block[:p, p : 2 * p]
+        self.gram[br, bt] += block[p : 2 * p, :p]
+        self.rhs[bt] += block[:p, 2 * p]
+        self.rhs[br] += block[p : 2 * p, 2 * p]
+        self.yty += float(block[2 * p, 2 * p])
+
+    def merge(self, other: NormalEquations) -> NormalEquations:
+        """Add another accumulator's statistics (same basis and node count) into this one."""
+        if other.basis != self.basis or other.n_nodes != self.n_nodes:
+            raise InputError("cannot merge normal equations of different bases or node counts")
+        self.gram += other.gram
+        self.rhs += other.rhs
+        self.yty += other.yty
+        self.n_samples += other.n_samples
+        for k, v in other.link_counts.items():
+            self.link_counts[k] = self.link_counts.get(k, 0) + v
+        return self

@@ -1,0 +1,193 @@
+"""Pose logs as per-node tracks that can be interpolated at any time (paper Sec. V-B4).
+
+A :class:`PoseTrack` holds one node's pose log as arrays on the common clock; positions are
+interpolated linearly and attitudes by spherical linear interpolation (slerp). A node whose
+pose log has a single row is static: its pose holds at every time.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Mapping, Sequence
+
+import numpy as np
+import pandas as pd
+
+from rplearn.core.geometry import slerp_wxyz
+from rplearn.data.tables import validate_pose_log
+from rplearn.errors import InputError
+
+#: Status of an interpolated pose: known, outside the log's span, inside a gap of the log.
+STATUS_OK, STATUS_OUT_OF_SPAN, STATUS_POSE_GAP = 0, 1, 2
+
+
+@dataclass(frozen=True)
+class PoseTrack:
+    """One node's pose log as arrays: times [s] (common clock), ENU positions [m], quaternions.
+
+    Attributes
+    ----------
+    node : str
+        Node id.
+    t_s : ndarray (n,)
+        Strictly increasing times on the common clock [s].
+    position_xyz : ndarray (n, 3)
+        ENU positions [m].
+    quat_wxyz : ndarray (n, 4)
+        Unit quaternions (w, x, y, z), body FLU -> world ENU.
+    """
+
+    node: str
+    t_s: np.ndarray
+    position_xyz: np.ndarray
+    quat_wxyz: np.ndarray
+
+    @property
+    def static(self) -> bool:
+        """True for a one-row log (a ground station, a parked drone)."""
+        return self.t_s.shape[0] == 1
+
+    def interpolate(self, t_s: np.ndarray, max_gap_s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Pose at times ``t_s`` [s]: positions linearly, attitudes by slerp.
+
+        Parameters
+        ----------
+        t_s : ndarray (n,)
+            Times on the common clock [s].
+        max_gap_s : float
+            Longest step between two logged poses interpolated across [s].
+
+        Returns
+        -------
+        position_xyz : ndarray (n, 3)
+            ENU positions [m].
+        quat_wxyz : ndarray (n, 4)
+            Quaternions (w, x, y, z).
+        status : ndarray (n,) of int8
+            :data:`STATUS_OK` = interpolated, :data:`STATUS_OUT_OF_SPAN` = outside the log's
+            span, :data:`STATUS_POSE_GAP` = inside a gap longer than ``max_gap_s``. Poses of
+            rows with a non-zero status are meaningless.
+        """
+        n = t_s.shape[0]
+        if self.static:
+            q = self.quat_wxyz[0]
+            q = -q if q[0] < 0 else q
+            return (
+                np.broadcast_to(self.position_xyz[0], (n, 3)).copy(),
+                np.broadcast_to(q, (n, 4)).copy(),
+                np.zeros(n, np.int8),
+            )
+        tk = self.t_s
+        i = np.searchsorted(tk, t_s, side="right") - 1
+        i = np.clip(i, 0, tk.shape[0] - 2)
+        t0 = tk[i]
+        t1 = tk[i + 1]
+        dt = t1 - t0
+        status = np.zeros(n, np.int8)
+        on_sample = (t_s == t0) | (t_s == t1)  # a logged pose is known even at a gap's edge
+        status[(dt > max_gap_s) & ~on_sample] = STATUS_POSE_GAP
+        status[(t_s < tk[0]) | (t_s > tk[-1]) | ~np.isfinite(t_s)] = STATUS_OUT_OF_SPAN
+        frac = np.clip((t_s - t0) / dt, 0.0, 1.0)
+        p0 = self.position_xyz[i]
+        pos = p0 + frac[:, None] * (self.position_xyz[i + 1] - p0)
+        quat = slerp_wxyz(self.quat_wxyz[i], self.quat_wxyz[i + 1], frac)
+        return pos, quat, status
+
+
+def pose_tracks(
+    pose_log: pd.DataFrame,
+    clock_offsets_s: Mapping[str, float] | None = None,
+    source: str = "pose log",
+) -> dict[str, PoseTrack]:
+    """Split a canonical pose log into one :class:`PoseTrack` per node.
+
+    Rows with NaN or infinite values are rejected by :func:`~rplearn.data.tables.validate_pose_log`
+    (use the readers' ``nan_policy="drop"`` to drop and count them on reading).
+
+    Parameters
+    ----------
+    pose_log : DataFrame
+        Canonical pose log ``t, node, x, y, z, qw, qx, qy, qz``.
+    clock_offsets_s : mapping of node id to float, optional
+        Offset added to each node's times to put them on the common clock [s].
+    source : str
+        Name of the pose log in messages.
+    """
+    return tracks_of_checked_log(validate_pose_log(pose_log, source), clock_offsets_s, source)
+
+
+def tracks_of_checked_log(
+    df: pd.DataFrame, clock_offsets_s: Mapping[str, float] | None, source: str
+) -> dict[str, PoseTrack]:
+    """:func:`pose_tracks` of a pose log already checked (and sorted) by :func:`validate_pose_log`.
+
+    Raises
+    ------
+    InputError
+        When ``clock_offsets_s`` names a node without a pose log (``param="clock_offsets_s"``).
+    """
+    offsets = dict(clock_offsets_s or {})
+    tracks: dict[str, PoseTrack] = {}
+    nodes = df["node"].to_numpy()
+    t = df["t"].to_numpy(np.float64)
+    pos = df[["x", "y", "z"]].to_numpy(np.float64)
+    quat = df[["qw", "qx", "qy", "qz"]].to_numpy(np.float64)
+    # df is sorted by (node, t): nodes are contiguous runs
+    starts = np.flatnonzero(np.r_[True, nodes[1:] != nodes[:-1]])
+    ends = np.r_[starts[1:], len(nodes)]
+    for s, e in zip(starts, ends):
+        node = str(nodes[s])
+        tracks[node] = PoseTrack(
+            node,
+            t[s:e] + float(offsets.get(node, 0.0)),
+            np.ascontiguousarray(pos[s:e]),
+            np.ascontiguousarray(quat[s:e]),
+        )
+    unknown = sorted(set(offsets) - set(tracks))
+    if unknown:
+        raise InputError(
+            f"{source}: clock offsets (clock_offsets_s) name node(s) "
+            f"{', '.join(unknown)} without a pose log; known: {', '.join(sorted(tracks))}",
+            param="clock_offsets_s",
+        )
+    return tracks
+
+
+def interpolate_nodes(
+    tracks: Mapping[str, PoseTrack], node_ids: Sequence[str], node_code: np.ndarray, t_s: np.ndarray,
+    max_gap_s: float, rows: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Poses of many nodes, row ``i`` being node ``node_ids[node_code[i]]`` at time ``t_s[i]`` [s].
+
+    Only the rows where ``rows`` is True are interpolated (their nodes must have a track);
+    the others get NaN poses and status :data:`STATUS_OK`.
+
+    Returns
+    -------
+    position_xyz : ndarray (n, 3)
+        ENU positions [m].
+    quat_wxyz : ndarray (n, 4)
+        Quaternions (w, x, y, z).
+    status : ndarray (n,) of int8
+        As in :meth:`PoseTrack.interpolate`.
+    """
+    n = len(t_s)
+    pos = np.full((n, 3), np.nan)
+    quat = np.full((n, 4), np.nan)
+    status = np.zeros(n, np.int8)
+    for code, node in enumerate(node_ids):
+        sel = np.flatnonzero((node_code == code) & rows)
+        if sel.size:
+            pos[sel], quat[sel], status[sel] = tracks[node].interpolate(t_s[sel], max_gap_s)
+    return pos, quat, status
+
+
+__all__ = [
+    "STATUS_OK",
+    "STATUS_OUT_OF_SPAN",
+    "STATUS_POSE_GAP",
+    "PoseTrack",
+    "interpolate_nodes",
+    "pose_tracks",
+    "tracks_of_checked_log",
+]

@@ -1,0 +1,187 @@
+"""Options of the log readers (:func:`rplearn.io.read_logs`) as one validated value.
+
+:class:`ReaderOptions` gathers what the readers of every format may need: column renaming of
+tables, the common geodetic origin, node ids of files that do not name them, ROS bag topics,
+pcap receivers and addresses, constants that some formats do not log, and how strict to be
+with NaN, unsorted or flagged pose rows. Every field has a default, so
+``ReaderOptions()`` reads self-describing canonical tables.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass
+from numbers import Real
+from typing import Any, Mapping
+
+from rplearn.errors import InputError
+
+#: Values of :attr:`ReaderOptions.nan_policy`.
+NAN_POLICIES: tuple[str, ...] = ("error", "drop")
+
+
+def _mapping(value: Any, name: str, key_is_path: bool = False) -> dict[Any, Any] | None:
+    """A copy of an optional mapping option (keys as ``str`` when they are paths)."""
+    if value is None:
+        return None
+    if not isinstance(value, Mapping):
+        raise InputError(f"{name}: expected a mapping, got {type(value).__name__}", param=name)
+    if key_is_path:
+        return {os.fspath(k) if isinstance(k, os.PathLike) else str(k): v for k, v in value.items()}
+    return dict(value)
+
+
+def _finite(value: Any) -> bool:
+    return isinstance(value, Real) and not isinstance(value, bool) and math.isfinite(float(value))
+
+
+def _check_origin(origin: Any) -> tuple[float, float, float] | None:
+    """The origin as three floats (lat [deg], lon [deg], alt [m]), or None."""
+    if origin is None:
+        return None
+    try:
+        values = tuple(origin)
+    except TypeError:
+        values = ()
+    if len(values) != 3 or not all(_finite(v) for v in values):
+        raise InputError(
+            f"origin_geodetic: expected (lat_deg, lon_deg, alt_m), three finite numbers, got {origin!r}",
+            param="origin_geodetic",
+        )
+    lat, lon, alt = (float(v) for v in values)
+    if abs(lat) > 90.0 or abs(lon) > 180.0:
+        raise InputError(
+            f"origin_geodetic: latitude must lie in [-90, 90] and longitude in [-180, 180] degrees, "
+            f"got ({lat!r}, {lon!r})",
+            param="origin_geodetic",
+        )
+    return lat, lon, alt
+
+
+def _check_tx_power(value: Any) -> Any:
+    """A transmit power [dBm]: None, one finite number, or a mapping of node id to one."""
+    if value is None:
+        return None
+    if isinstance(value, Mapping):
+        bad = [str(k) for k, v in value.items() if not _finite(v)]
+        if bad:
+            raise InputError(
+                f"tx_power_dbm: expected finite numbers [dBm], node(s) {', '.join(bad)} have none",
+                param="tx_power_dbm",
+            )
+        return {str(k): float(v) for k, v in value.items()}
+    if not _finite(value):
+        raise InputError(
+            f"tx_power_dbm: expected a finite number [dBm] or a mapping of node id to one, got {value!r}",
+            param="tx_power_dbm",
+        )
+    return value
+
+
+def _check_rssi_topics(value: Any) -> dict[str, tuple[str, str]] | None:
+    """RSSI topics as ``{topic: (tx, rx)}`` with two non-empty node ids each."""
+    topics = _mapping(value, "rssi_topics")
+    if topics is None:
+        return None
+    out: dict[str, tuple[str, str]] = {}
+    for topic, ends in topics.items():
+        pair = tuple(ends) if isinstance(ends, (tuple, list)) else ()
+        if len(pair) != 2 or not all(str(e) for e in pair):
+            raise InputError(
+                f"rssi_topics: topic {topic} must map to (tx, rx), two node ids, got {ends!r}",
+                param="rssi_topics",
+            )
+        out[str(topic)] = (str(pair[0]), str(pair[1]))
+    return out
+
+
+@dataclass(frozen=True)
+class ReaderOptions:
+    """How :func:`rplearn.io.read_logs` reads logs of every format.
+
+    Parameters
+    ----------
+    columns : mapping of str to str, optional
+        Column renaming for CSV/Parquet tables, ``{"their name": "canonical name"}``, applied
+        after :data:`rplearn.io.tables.COLUMN_ALIASES`.
+    origin_geodetic : (float, float, float), optional
+        Common ENU origin (lat [deg], lon [deg], alt [m] above the ellipsoid) for geodetic
+        tables and ULogs. By default the first geodetic file's origin (its first fix, or a
+        ULog's anchor) is used for all the others.
+    nodes : mapping of path to node id, optional
+        Node id of a ULog, or of a one-node table without a ``node`` column.
+    pose_topics : mapping of topic to node id, optional
+        Pose topics of ROS bags (Odometry, PoseStamped or PoseWithCovarianceStamped).
+    rssi_topics : mapping of topic to (tx, rx), optional
+        RSSI topics of ROS bags: packets from ``tx`` received by ``rx``.
+    rssi_field : str
+        Field of the RSSI [dBm] in the RSSI topics' messages; dots for nested fields.
+    msg_definitions : mapping of type name to .msg path or text, optional
+        Custom message types a bag does not describe (``"pkg/msg/Type"``).
+    receivers : mapping of path to node id, optional
+        Capturing node of every pcap file (and ``rx`` of signal tables without the column).
+    address_map : mapping of MAC address to node id, optional
+        Transmitter addresses of pcap files; frames from other addresses are dropped.
+    tx_power_dbm : float or mapping of node id to float, optional
+        Transmit power [dBm] for logs that do not carry it (pcap, bags, tables without the
+        column). A mapping (per transmitter) is accepted by pcap files only.
+    frequency_hz : float, optional
+        Carrier frequency [Hz] for logs that do not carry it.
+    nan_policy : {"error", "drop"}
+        Pose-table rows with NaN or non-numeric values raise, or are dropped and counted.
+    allow_unsorted : bool
+        Accept pose tables whose times go backwards within a node (the rows are sorted).
+    require_valid : bool
+        Drop ULog local-position rows flagged invalid by the autopilot (``xy_valid`` or
+        ``z_valid`` = 0).
+
+    Raises
+    ------
+    InputError
+        On a value out of its domain; ``param`` names the field at fault.
+    """
+
+    columns: Mapping[str, str] | None = None
+    origin_geodetic: tuple[float, float, float] | None = None
+    nodes: Mapping[str, str] | None = None
+    pose_topics: Mapping[str, str] | None = None
+    rssi_topics: Mapping[str, tuple[str, str]] | None = None
+    rssi_field: str = "rssi"
+    msg_definitions: Mapping[str, str] | None = None
+    receivers: Mapping[str, str] | None = None
+    address_map: Mapping[str, str] | None = None
+    tx_power_dbm: float | Mapping[str, float] | None = None
+    frequency_hz: float | None = None
+    nan_policy: str = "error"
+    allow_unsorted: bool = False
+    require_valid: bool = False
+
+    def __post_init__(self) -> None:
+        set_ = object.__setattr__
+        for name in ("columns", "pose_topics", "msg_definitions", "address_map"):
+            set_(self, name, _mapping(getattr(self, name), name))
+        for name in ("nodes", "receivers"):
+            set_(self, name, _mapping(getattr(self, name), name, key_is_path=True))
+        set_(self, "rssi_topics", _check_rssi_topics(self.rssi_topics))
+        set_(self, "origin_geodetic", _check_origin(self.origin_geodetic))
+        set_(self, "tx_power_dbm", _check_tx_power(self.tx_power_dbm))
+        if self.frequency_hz is not None and not (_finite(self.frequency_hz) and self.frequency_hz > 0):
+            raise InputError(
+                f"frequency_hz: expected a positive number of hertz, got {self.frequency_hz!r}",
+                param="frequency_hz",
+            )
+        if not isinstance(self.rssi_field, str) or not self.rssi_field:
+            raise InputError(f"rssi_field: expected a field name, got {self.rssi_field!r}", param="rssi_field")
+        if self.nan_policy not in NAN_POLICIES:
+            raise InputError(
+                f"nan_policy: expected 'error' or 'drop', got {self.nan_policy!r}", param="nan_policy"
+            )
+        for name in ("allow_unsorted", "require_valid"):
+            value = getattr(self, name)
+            if not isinstance(value, (bool, int)) or value not in (True, False):
+                raise InputError(f"{name}: expected True or False, got {value!r}", param=name)
+            set_(self, name, bool(value))
+
+
+__all__ = ["NAN_POLICIES", "ReaderOptions"]

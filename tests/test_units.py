@@ -1,0 +1,65 @@
+"""rplearn.data.units: the one rule that decides which units learn and which test."""
+
+from __future__ import annotations
+
+import pandas as pd
+import pytest
+
+from rplearn.data.units import evaluation_units, is_test_unit, learning_units, select_units, split_units
+from rplearn.errors import InputError
+
+
+def frame(units):
+    return pd.DataFrame({"unit": list(units)})
+
+
+def test_test_units_are_recognised_in_any_case():
+    assert is_test_unit("test_36") and is_test_unit("TEST_1") and is_test_unit("Testing")
+    assert not is_test_unit("learn_0") and not is_test_unit("contest")
+
+
+def test_learning_units_default_to_every_non_test_unit_and_say_so():
+    choice = learning_units(frame(["learn_0", "learn_24", "test_36", "learn_0"]))
+    assert choice.units == ["learn_0", "learn_24"] and choice.defaulted
+    assert choice.notes == ["learning from units learn_0, learn_24; left out test_36"]
+    assert learning_units(frame(["a", "b"]), ["b"]).units == ["b"]
+    assert learning_units(pd.DataFrame({"t": [0.0]})).units is None
+    only_test = learning_units(frame(["test_1"]), source="d.parquet")
+    assert only_test.units is None and "every unit is labelled test" in only_test.notes[0]
+
+
+def test_evaluation_units_prefer_units_no_model_learned_from():
+    df = frame(["learn_0", "learn_24", "test_36"])
+    prov = [{"parameters": {"units": ["learn_0", "learn_24"], "dataset": "d.parquet"}}]
+    unseen = evaluation_units(df, None, prov, "d.parquet")
+    assert unseen.units == ["test_36"] and not unseen.warnings
+    chosen = evaluation_units(df, ["learn_0"], prov, "d.parquet")
+    assert chosen.units == ["learn_0"] and "training scores" in chosen.warnings[0]
+    everything = evaluation_units(df, None, [{}], "d.parquet")
+    assert everything.units == ["learn_0", "learn_24", "test_36"] and everything.notes
+
+
+def test_evaluation_without_units_warns_on_the_training_file_name():
+    prov = [{"parameters": {"dataset": "/somewhere/d.parquet"}}]
+    choice = evaluation_units(pd.DataFrame({"t": [0.0]}), None, prov, "d.parquet")
+    assert choice.units is None and "probably training scores" in choice.warnings[0]
+
+
+def test_split_units_is_disjoint_and_refuses_what_cannot_be_split():
+    df = frame(["learn_0", "learn_24", "test_36"])
+    assert split_units(df) == (["learn_0", "learn_24"], ["test_36"])
+    assert split_units(df, test_units=["learn_24"]) == (["learn_0", "test_36"], ["learn_24"])
+    with pytest.raises(InputError, match="share learn_0") as err:
+        split_units(df, ["learn_0"], ["learn_0"])
+    assert err.value.param == "test_units"
+    with pytest.raises(InputError, match="cannot split"):
+        split_units(frame(["a", "b"]))
+    with pytest.raises(InputError, match="'unit' column"):
+        split_units(pd.DataFrame({"t": [0.0]}))
+
+
+def test_select_units_names_unknown_units_and_the_parameter():
+    with pytest.raises(InputError, match="unknown unit") as err:
+        select_units(frame(["a"]), ["b"], "d.parquet")
+    assert err.value.param == "units"
+    assert len(select_units(frame(["a", "b", "a"]), ["a"])) == 2
