@@ -34,7 +34,7 @@ def main() -> None:
     from rplearn.data.tables import link_samples
     from rplearn.models.estimators import JointKNNRegressor, MeanRegressor, PatternRegressor
     from rplearn.plan.check import check_plan
-    from rplearn.sim.simulate import simulate
+    from rplearn.sim.flight import simulate
     from rplearn.data.sync import synchronise
 
     times = []

@@ -165,7 +165,7 @@ def test_pattern_maps_of_a_fitted_two_node_model(tmp_path):
     from rplearn.data.units import samples_of
     from rplearn.models.fit import fit_model
     from rplearn.models.spec import ModelSpec
-    from rplearn.sim.simulate import simulate
+    from rplearn.sim.flight import simulate
 
     sim = simulate("smoke", 0)
     s = samples_of(sim.matched_truth, sim.units("learning"))

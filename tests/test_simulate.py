@@ -14,7 +14,7 @@ from rplearn.io.files import read_table
 from rplearn.errors import InputError
 from rplearn.core.geometry import euler_from_quat_wxyz
 from rplearn.sim.presets import PRESET_NAMES, make_preset
-from rplearn.sim.simulate import ou_process, simulate, with_effects_off
+from rplearn.sim.flight import ou_process, simulate, with_effects_off
 from rplearn.sim.config import EstimatorConfig, FlightConfig, RadioConfig, SimulationConfig
 
 

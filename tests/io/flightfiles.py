@@ -52,11 +52,11 @@ def _synthetic_flight() -> tuple[pd.DataFrame, pd.DataFrame]:
 def flight() -> tuple[pd.DataFrame, pd.DataFrame]:
     """Canonical (pose, signal) logs of one flight on UNIX time.
 
-    The colleague's simulator (``rplearn.sim.simulate``, preset "smoke") when it is available,
+    The colleague's simulator (``rplearn.sim.flight``, preset "smoke") when it is available,
     else a small synthetic flight of two drones circling.
     """
     try:
-        from rplearn.sim.simulate import simulate
+        from rplearn.sim.flight import simulate
 
         res = simulate("smoke", seed=0)
         pose, sig = res.pose_log.copy(), res.signal_log.copy()

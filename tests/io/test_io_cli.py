@@ -93,7 +93,7 @@ def test_shuffled_and_nan_poses_name_the_cli_flags(tables):
     msg = _error(run(base, tmp, ok=False))
     assert "(nan_policy='drop') (set it with --nan-policy)" in msg
     run(base + ["--nan-policy", "drop"], tmp)
-    assert "--nan-policy: expected drop or error" in _error(run(base + ["--nan-policy", "skip"], tmp, ok=False))
+    assert "--nan-policy: expected 'error' or 'drop'" in _error(run(base + ["--nan-policy", "skip"], tmp, ok=False))
 
 
 def test_ulog_and_pcap_messages_name_the_cli_flags(tmp_path, flight):

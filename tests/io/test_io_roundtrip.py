@@ -157,7 +157,7 @@ def test_ros2_bag_without_embedded_definitions(tmp_path, flight):
 
 
 def test_synthetic_fallback_flight_round_trips(tmp_path):
-    """The fixture's own flight (used when rplearn.sim.simulate is absent) is valid and round-trips."""
+    """The fixture's own flight (used when rplearn.sim.flight is absent) is valid and round-trips."""
     from flightfiles import _synthetic_flight
 
     pose, sig = _synthetic_flight()

@@ -230,6 +230,24 @@ class SwarmHeadings:
     start_bottleneck_dbm: float
     sweeps: int
 
+    def to_frame(self) -> pd.DataFrame:
+        """One row per drone: ``drone, start_yaw_deg, yaw_deg``."""
+        return pd.DataFrame(
+            {
+                "drone": list(self.yaw_deg),
+                "start_yaw_deg": [self.start_yaw_deg[d] for d in self.yaw_deg],
+                "yaw_deg": list(self.yaw_deg.values()),
+            }
+        )
+
+    def to_dict(self) -> dict[str, object]:
+        """The chosen yaws and bottleneck RSSI before and after, as plain values for JSON."""
+        return {
+            "yaw_deg": dict(self.yaw_deg),
+            "bottleneck_dbm": self.bottleneck_dbm,
+            "start_bottleneck_dbm": self.start_bottleneck_dbm,
+        }
+
     def summary(self) -> str:
         lines = [
             "drone  yaw now -> best [deg] (ENU, ccw from east)",

@@ -15,7 +15,8 @@ from rplearn.models.spec import ModelSpec
 Progress = Callable[[str], None]
 
 
-def _noop(_: str) -> None:
+def no_progress(_: str) -> None:
+    """A progress callback that says nothing."""
     return None
 
 
@@ -55,7 +56,7 @@ def order_sweep(
     kind: str = "sh",
     orders: Sequence[int] = tuple(range(3, 21)),
     stop_after_rises: int | None = 3,
-    progress: Progress = _noop,
+    progress: Progress = no_progress,
 ) -> SweepResult:
     """Fit models of increasing order on ``learn`` and score each on ``test``.
 

@@ -1,1 +1,63 @@
-"""rplearn.data."""
+"""Canonical tables and matching: pose and signal logs, matched link datasets, unit selection.
+
+============  ==================================================================================
+module        public names
+============  ==================================================================================
+``tables``    the schemas (:data:`POSE_COLUMNS`, :data:`SIGNAL_COLUMNS`, :data:`MATCHED_COLUMNS`),
+              their checks (:func:`validate_pose_log`, :func:`validate_signal_log`,
+              :func:`validate_matched`) and :func:`link_samples` -> :class:`LinkSamples`
+``poses``     :func:`pose_tracks` -> :class:`PoseTrack`, :func:`interpolate_nodes`
+``sync``      :func:`synchronise` (paper Sec. V-B4) with :class:`SyncOptions` ->
+              :class:`SyncResult`; :func:`synchronise_stream`, :func:`synchronise_to_parquet`
+``units``     :func:`samples_of`, :func:`learning_units`, :func:`evaluation_units`,
+              :func:`split_units`, :func:`select_units` -> :class:`UnitChoice`
+============  ==================================================================================
+
+Every name of ``__all__`` can be imported from here (``from rplearn.data import samples_of``);
+its module, and pandas, are imported on first use (:mod:`rplearn._lazy`).
+"""
+
+from __future__ import annotations
+
+from rplearn._lazy import lazy_exports
+
+_NAMES: dict[str, str] = {
+    # canonical schemas and their checks
+    "MATCHED_COLUMNS": "tables",
+    "OPTIONAL_SIGNAL_COLUMNS": "tables",
+    "POSE_COLUMNS": "tables",
+    "SENTINEL_RSSI_DBM": "tables",
+    "SIGNAL_COLUMNS": "tables",
+    "LinkSamples": "tables",
+    "link_samples": "tables",
+    "normalise_times": "tables",
+    "validate_matched": "tables",
+    "validate_pose_log": "tables",
+    "validate_signal_log": "tables",
+    # pose tracks
+    "PoseTrack": "poses",
+    "interpolate_nodes": "poses",
+    "pose_tracks": "poses",
+    # pose-signal matching
+    "DROP_REASONS": "sync",
+    "SyncOptions": "sync",
+    "SyncResult": "sync",
+    "SyncSummary": "sync",
+    "synchronise": "sync",
+    "synchronise_stream": "sync",
+    "synchronise_to_parquet": "sync",
+    # learning and testing units
+    "TEST_UNIT_PREFIX": "units",
+    "UnitChoice": "units",
+    "dataset_units": "units",
+    "evaluation_units": "units",
+    "is_test_unit": "units",
+    "learning_units": "units",
+    "samples_of": "units",
+    "select_units": "units",
+    "split_units": "units",
+    "trained_units": "units",
+}
+
+__all__ = sorted(_NAMES)
+__getattr__, __dir__ = lazy_exports(__name__, _NAMES)

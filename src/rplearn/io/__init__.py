@@ -14,6 +14,14 @@ pcap / pcapng      :func:`rplearn.io.pcap.read_pcap`           signal log
 that, its extension, and concatenates the results; :class:`~rplearn.io.options.ReaderOptions`
 carries what the readers need beyond the files. Each format library (rosbags, pyulog,
 dpkt, pymap3d) is imported only when a file of its format is read.
+
+The other public names of the subpackage can be imported from here too, their modules being
+imported on first use (:mod:`rplearn._lazy`): tables (:func:`~rplearn.io.files.read_table`,
+:func:`~rplearn.io.files.write_table`, :func:`~rplearn.io.files.provenance`), per-format
+readers, :func:`~rplearn.io.inspect.inspect_logs`, pattern export
+(:func:`~rplearn.io.export.export_grid`, :func:`~rplearn.io.export.export_msi`,
+:func:`~rplearn.io.export.read_msi`) and model files
+(:func:`~rplearn.io.modelfile.read_model_file`, :func:`~rplearn.io.modelfile.write_model_file`).
 """
 
 from __future__ import annotations
@@ -24,8 +32,10 @@ from typing import Any, Callable, Iterable, Mapping
 
 import pandas as pd
 
+from rplearn._lazy import lazy_exports
 from rplearn.data.tables import NON_UNIT_QUATERNION_ATTR, validate_pose_log
-from rplearn.errors import InputError, LogFormatError, RplearnError
+from rplearn.errors import InputError, RplearnError
+from rplearn.errors import LogFormatError as LogFormatError  # re-exported
 from rplearn.io._common import Logs
 from rplearn.io.options import ReaderOptions
 
@@ -275,4 +285,52 @@ def read_logs(
     return _merge(got)
 
 
-__all__ = ["Logs", "LogFormatError", "ReaderOptions", "detect_format", "read_logs"]
+#: Public names of the subpackage defined in its modules, imported on first use.
+_NAMES: dict[str, str] = {
+    # canonical tables as files, and what made an output
+    "check_table_path": "files",
+    "provenance": "files",
+    "read_dataset": "files",
+    "read_table": "files",
+    "write_table": "files",
+    # per-format readers
+    "COLUMN_ALIASES": "tables",
+    "canonical_pose": "tables",
+    "canonical_signal": "tables",
+    "iter_signal_table": "tables",
+    "read_pose_table": "tables",
+    "read_signal_table": "tables",
+    "bag_topics": "rosbag",
+    "read_rosbag": "rosbag",
+    "read_ulog": "ulog",
+    "read_ulogs": "ulog",
+    "read_pcap": "pcap",
+    "write_radiotap_pcap": "pcap",
+    "NAN_POLICIES": "options",
+    "geodetic_to_enu": "geodetic",
+    # looking at logs before learning
+    "InspectReport": "inspect",
+    "LinkSummary": "inspect",
+    "NodeSummary": "inspect",
+    "inspect_logs": "inspect",
+    # pattern export
+    "GRID_COLUMNS": "export",
+    "MsiPattern": "export",
+    "PatternLike": "export",
+    "export_grid": "export",
+    "export_msi": "export",
+    "export_msi_files": "export",
+    "safe_file_name": "export",
+    "write_json": "files",
+    "msi_pattern": "export",
+    "read_msi": "export",
+    "write_msi": "export",
+    # model files
+    "MODEL_SCHEMA": "modelfile",
+    "MODEL_SCHEMA_VERSION": "modelfile",
+    "read_model_file": "modelfile",
+    "write_model_file": "modelfile",
+}
+
+__all__ = sorted(["Logs", "LogFormatError", "ReaderOptions", "detect_format", "read_logs", *_NAMES])
+__getattr__, __dir__ = lazy_exports(__name__, _NAMES)

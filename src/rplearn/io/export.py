@@ -369,6 +369,47 @@ def export_msi(
     return msi
 
 
+def safe_file_name(name: str, fallback: str = "node") -> str:
+    """A node id as a file name: characters other than letters, digits and ``_.-`` become ``_``
+    (so an id never names a path outside the output folder)."""
+    safe = re.sub(r"[^A-Za-z0-9_.-]+", "_", str(name)).strip(".")
+    return safe or fallback
+
+
+def export_msi_files(
+    pattern_like: Any, out_dir: str | os.PathLike[str], frequency_hz: float | None = None
+) -> list[str]:
+    """One MSI Planet file per node, ``<out_dir>/<node>.msi`` (``rplearn export --format msi``).
+
+    Parameters
+    ----------
+    pattern_like : pattern-like
+        A learned model or a ground truth.
+    out_dir : path
+        Directory (created if needed).
+    frequency_hz : float, optional
+        Carrier written into the files [Hz]; default the pattern's own.
+
+    Returns
+    -------
+    list of str
+        The paths written, in node order.
+    """
+    check_pattern_like(pattern_like)
+    if frequency_hz is None:
+        frequency_hz = _frequency_of(pattern_like)
+    if not (math.isfinite(float(frequency_hz)) and float(frequency_hz) > 0):
+        raise InputError(f"frequency_hz: expected a positive frequency in Hz, got {frequency_hz!r}", param="frequency_hz")
+    os.makedirs(out_dir, exist_ok=True)
+    label = getattr(pattern_like, "label", "pattern")
+    paths = []
+    for node in select_nodes(pattern_like, None):
+        path = os.path.join(os.fspath(out_dir), f"{safe_file_name(node)}.msi")
+        export_msi(pattern_like, node, path, frequency_hz=float(frequency_hz), name=f"rplearn {label} node {node}")
+        paths.append(path)
+    return paths
+
+
 def _frequency_of(pattern_like: PatternLike) -> float:
     """The pattern's optional ``frequency_hz`` [Hz] (see the module docstring)."""
     f = getattr(pattern_like, "frequency_hz", None)

@@ -1,10 +1,12 @@
-"""Reading and writing canonical tables (matched datasets, pose and signal logs) as CSV or Parquet.
+"""Reading and writing canonical tables (matched datasets, pose and signal logs) as CSV or
+Parquet, small JSON results, and the provenance record every output carries.
 
-The format is chosen by the file extension; anything else is refused rather than guessed.
+The table format is chosen by the file extension; anything else is refused rather than guessed.
 """
 
 from __future__ import annotations
 
+import json
 import os
 import sys
 import time
@@ -14,7 +16,7 @@ import pandas as pd
 
 from rplearn._version import __version__
 
-from rplearn.data.tables import CSV_DTYPES, normalise_times
+from rplearn.data.tables import CSV_DTYPES, normalise_times, validate_matched
 from rplearn.errors import InputError
 
 
@@ -62,3 +64,22 @@ def provenance(command: str | None = None, **parameters: Any) -> dict[str, Any]:
         "parameters": parameters,
         "created_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
     }
+
+
+def read_dataset(path: str, require_rssi: bool = True) -> pd.DataFrame:
+    """Read and check a matched dataset (DESIGN.md schema; see :func:`validate_matched`).
+
+    Parameters
+    ----------
+    path : str
+        CSV or Parquet file.
+    require_rssi : bool
+        False for datasets of poses to predict, whose ``rssi_dbm`` may be absent.
+    """
+    return validate_matched(read_table(path), path, require_rssi=require_rssi)
+
+
+def write_json(path: str, payload: Any) -> None:
+    """Write a small JSON result (Table I, chosen yaws, ...) with one-space indentation."""
+    with open(path, "w", encoding="utf-8") as fh:
+        json.dump(payload, fh, indent=1, default=str)

@@ -91,3 +91,58 @@ class ModelSpec:
         if self.kind == "bg":
             return make_basis("bg", self.order, sigma_rad2=self.sigma_rad2, grid=self.grid)
         return make_basis(self.kind, self.order)
+
+
+def check_fit_options(
+    spec: ModelSpec,
+    *,
+    order: int | None = None,
+    ridge: float | None = None,
+    sigma_rad2: float | None = None,
+    grid: str | None = None,
+    gauge_node: str | None = None,
+    gauge_dbi: float | None = None,
+    model: str | None = None,
+) -> None:
+    """Refuse options the chosen model would silently ignore, or that contradict it.
+
+    Parameters
+    ----------
+    spec : ModelSpec
+        The parsed model.
+    order, ridge, sigma_rad2, grid, gauge_node, gauge_dbi
+        The options as the user gave them (None: not given).
+    model : str, optional
+        The model text as given (e.g. ``"sh-10"``), for messages.
+
+    Raises
+    ------
+    InputError
+        Naming the first offending parameter (``param``); messages start with the names of
+        the offending parameters.
+    """
+    given = {"ridge": ridge, "sigma_rad2": sigma_rad2, "grid": grid, "gauge_node": gauge_node}
+    if spec.kind in ("mean", "knn"):
+        unused = [k for k, v in given.items() if v is not None]
+        if spec.kind == "mean" and order is not None:
+            unused.append("order")
+        if unused:
+            raise InputError(f"{', '.join(unused)}: not used by {spec.label}, a baseline without patterns", param=unused[0])
+    elif spec.kind != "bg":
+        unused = [k for k in ("sigma_rad2", "grid") if given[k] is not None]
+        if unused:
+            raise InputError(f"{', '.join(unused)}: used by BG models only, not by {spec.label}", param=unused[0])
+    if gauge_dbi is not None and gauge_node is None:
+        raise InputError("gauge_dbi needs gauge_node (which node's mean gain it fixes)", param="gauge_dbi")
+    if order is not None and spec.order is not None and int(order) != spec.order:
+        raise InputError(
+            f"order {order} contradicts the model {model or spec.label}, which sets the order {spec.order}", param="order"
+        )
+
+
+def gauge_of(gauge_node: str | None = None, gauge_dbi: float | None = None) -> str | dict[str, Any]:
+    """The gauge of a two-node fit: equal sphere-mean gains by default, or a known mean gain
+    ``gauge_dbi`` [dBi] (default 0) of ``gauge_node``."""
+    if gauge_node is None:
+        return "equal-mean"
+    return {"node": str(gauge_node), "mean_gain_dbi": 0.0 if gauge_dbi is None else float(gauge_dbi)}

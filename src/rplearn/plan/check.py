@@ -133,7 +133,7 @@ def plan_directions(
     """Directions the drones will see, one sample per packet of the first -> second direction.
 
     With ``tilt_into_motion`` (default) attitudes follow the thrust a multirotor needs for the
-    reference acceleration and the given wind (as in :mod:`rplearn.sim.simulate`, without noise);
+    reference acceleration and the given wind (as in :mod:`rplearn.sim.flight`, without noise);
     otherwise they are level with the reference heading. Level attitudes are a degenerate
     idealisation: then ``el_second = -el_first`` at every sample, and any function of
     elevation alone can move from one pattern to the other (``h(el)`` on one, ``-h(-el)`` on

@@ -10,7 +10,7 @@
   and a high-gain cosine beam, flying the three links of a triangle (absolute gains identifiable).
 - ``smoke``: a seconds-long two-drone case for tests (a few thousand packets).
 
-All presets are deterministic for a given seed of :func:`rplearn.sim.simulate.simulate`.
+All presets are deterministic for a given seed of :func:`rplearn.sim.flight.simulate`.
 """
 
 from __future__ import annotations
@@ -169,7 +169,7 @@ def _smoke() -> SimulationConfig:
 
 
 _PRESETS: dict[str, Callable[[], SimulationConfig]] = {"paper": _paper, "trio": _trio, "smoke": _smoke}
-#: Names accepted by :func:`make_preset` and :func:`rplearn.sim.simulate.simulate`.
+#: Names accepted by :func:`make_preset` and :func:`rplearn.sim.flight.simulate`.
 PRESET_NAMES: tuple[str, ...] = tuple(_PRESETS)
 
 

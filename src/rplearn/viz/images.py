@@ -3,10 +3,9 @@
 from __future__ import annotations
 
 import os
-import re
 from typing import Any, Sequence
 
-from rplearn.io.export import check_pattern_like, select_nodes
+from rplearn.io.export import check_pattern_like, safe_file_name, select_nodes
 from rplearn.viz import plot
 
 
@@ -39,7 +38,7 @@ def export_pattern_images(
     os.makedirs(out_dir, exist_ok=True)
     paths = []
     for n in select_nodes(pattern_like, nodes):
-        safe = re.sub(r"[^A-Za-z0-9_.-]+", "_", n) or "node"
+        safe = safe_file_name(n)
         paths.append(
             plot.plot_pattern_3d(
                 pattern_like, n, os.path.join(out_dir, f"pattern_{safe}.png"), step_deg

@@ -1,0 +1,295 @@
+"""The typer application, the terminal output, and the parsing shared by every command module.
+
+This is the only part of rplearn that knows flag names: library errors name the parameter at
+fault (:attr:`rplearn.errors.RplearnError.param`), and :func:`with_flag` turns that into the
+flag that sets it. Nothing printed here interprets user data as Rich markup.
+"""
+
+from __future__ import annotations
+
+import functools
+import inspect
+import logging
+import re
+from typing import Any, Callable, Mapping, Optional
+
+import typer
+from rich.console import Console
+from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
+from rich.text import Text
+
+from rplearn._version import __version__
+from rplearn.errors import InputError, RplearnError
+
+app = typer.Typer(
+    name="rplearn",
+    help=(
+        "Learn drone-with-antenna radiation patterns from calibration flights and predict links.\n\n"
+        "Typical session:\n\n"
+        "  rplearn simulate --preset smoke -o flight\n\n"
+        "  rplearn sync --poses flight/pose_log.parquet --signals flight/signal_log.parquet --link A:B -o data.parquet\n\n"
+        "  rplearn fit data.parquet --model sh --degree 10 -o sh10.json\n\n"
+        "  rplearn evaluate sh10.json data.parquet\n\n"
+        "  rplearn demo -o rplearn-demo"
+    ),
+    no_args_is_help=True,
+    add_completion=False,
+    rich_markup_mode=None,  # help texts carry units in brackets, e.g. [m/s], which markup would eat
+    pretty_exceptions_enable=False,
+)
+console = Console(stderr=True)
+out = Console(soft_wrap=True)
+
+#: Library parameters and option fields (``RplearnError.param``) -> the flag that sets them,
+#: where the command's own option of that name does not say it (see :func:`command_flag`).
+PARAM_FLAGS: dict[str, str] = {
+    "nodes": "--node FILE=NODE", "receivers": "--receiver FILE=NODE", "address_map": "--address MAC=NODE",
+    "pose_topics": "--pose-topic TOPIC=NODE", "rssi_topics": "--rssi-topic TOPIC=TX:RX", "rssi_field": "--rssi-field",
+    "msg_definitions": "--msg-definition TYPE=FILE.msg", "tx_power_dbm": "--tx-power DBM",
+    "frequency_hz": "--frequency HZ", "nan_policy": "--nan-policy", "allow_unsorted": "--allow-unsorted",
+    "require_valid": "--require-valid", "link": "--link TX:RX", "max_gap_s": "--max-gap",
+    "clock_offsets_s": "--offset NODE=SECONDS", "on_unknown_node": "--on-unknown-node",
+    "pattern_of": "--as DRONE=NODE", "times_s": "--at", "step_s": "--step", "positions": "--pos DRONE=X,Y,Z",
+    "start_yaw_deg": "--yaw DRONE=DEG", "fixed": "--fixed", "turn": "--turn", "units": "--units",
+    "test_units": "--test-units", "learn_units": "--learn-units", "order": "--degree", "ridge": "--ridge",
+    "sigma_rad2": "--sigma", "grid": "--grid", "gauge_node": "--gauge-node", "gauge_dbi": "--gauge-dbi",
+    "models": "--models", "orders": "--orders",
+}
+
+
+def say(text: str) -> None:
+    """Print a result line on standard output, verbatim (no markup, no highlighting)."""
+    out.print(Text(text), soft_wrap=True)
+
+
+def note(text: str, kind: str = "note") -> None:
+    """Print a note or warning on standard error, verbatim."""
+    console.print(Text(f"{kind}: {text}"), soft_wrap=True)
+
+
+def fail(message: str) -> None:
+    """Print ``error: message`` on standard error and exit with code 1."""
+    console.print(Text.assemble(("error:", "bold red"), " ", message), soft_wrap=True)
+    raise typer.Exit(1)
+
+
+def command_flag(command: Callable | None, param: str) -> str | None:
+    """The flag of the command's option named ``param`` (for parameters whose flag differs
+    between commands, e.g. ``step_deg``: ``--step`` of headings, ``--step-deg`` of export)."""
+    option = inspect.signature(command).parameters.get(param) if command is not None else None
+    if option is None or not isinstance(option.default, typer.models.OptionInfo):
+        return None
+    return next((d for d in option.default.param_decls or () if d.startswith("--")), None)
+
+
+def option_flags(command: Callable | None) -> dict[str, str]:
+    """The command's snake_case option names (``gauge_node``) -> their flags (``--gauge-node``),
+    less the names of table columns (a message naming column ``frequency_hz`` means the
+    column, not the flag)."""
+    from rplearn.data.tables import MATCHED_COLUMNS, POSE_COLUMNS
+
+    if command is None:
+        return {}
+    found = {name: command_flag(command, name) for name in inspect.signature(command).parameters if "_" in name}
+    columns = set(MATCHED_COLUMNS) | set(POSE_COLUMNS)
+    return {name: flag for name, flag in found.items() if flag and name not in columns}
+
+
+def with_flag(message: str, param: str | None, command: Callable | None = None, flags: Mapping[str, str] | None = None) -> str:
+    """The message with flags in place of the parameter names it mentions.
+
+    Library messages name parameters as ``"name: ..."`` or ``"name, other: ..."`` at the
+    start, ``"name ..."`` at the start, or ``"(name ...)"``; there the flag replaces the name.
+    ``flags`` are the command's own names (replaced wherever they appear so), and so are the
+    command's snake_case option names (:func:`option_flags`), wherever they stand as words;
+    the parameter at fault also uses :data:`PARAM_FLAGS`. When the message does not name the
+    flag, it is appended.
+    """
+    anywhere = option_flags(command)
+    message = re.sub(
+        r"(?<![\w./-])(" + "|".join(map(re.escape, sorted(anywhere, key=len, reverse=True))) + r")(?=[:),; ]|$)",
+        lambda m: anywhere[m.group(1)], message,
+    ) if anywhere else message
+    table = dict(flags or {})
+    if param and param not in table:
+        flag = PARAM_FLAGS.get(param) or command_flag(command, param)
+        if flag:
+            table[param] = flag
+    head, sep, rest = message.partition(":")
+    names = [n.strip() for n in head.split(",")] if sep else []
+    if names and all(n in table or n in PARAM_FLAGS for n in names):
+        message = ", ".join((table.get(n) or PARAM_FLAGS[n]).split()[0] for n in names) + sep + rest
+    for name, flag in table.items():
+        message = re.sub(rf"(^|\()({re.escape(name)})(?=[:) ]|$)", lambda m: m.group(1) + flag.split()[0], message)
+    flag = table.get(param or "")
+    if flag is None or flag.split()[0] in message:
+        return message
+    return f"{message} (set it with {flag})"
+
+
+def user_errors(fn: Callable | None = None, *, flags: Mapping[str, str] | None = None) -> Callable:
+    """Turn user mistakes into one line on stderr and exit code 1.
+
+    ``flags`` maps the library parameters of this command whose flag has another name
+    (e.g. ``{"n_loops": "--loops"}``).
+    """
+
+    def decorate(func: Callable) -> Callable:
+        @functools.wraps(func)
+        def wrapper(*args: Any, **kwargs: Any) -> Any:
+            try:
+                return func(*args, **kwargs)
+            except RplearnError as exc:
+                first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+                fail(with_flag(first, exc.param, func, flags))
+            except FileNotFoundError as exc:
+                fail(f"{exc.filename}: no such file or directory")
+            except OSError as exc:
+                fail(f"{exc.filename}: {exc.strerror or exc}" if exc.filename else str(exc))
+
+        return wrapper
+
+    return decorate(fn) if fn is not None else decorate
+
+
+def progress_bar() -> Progress:
+    """Rich progress on a terminal; nothing when standard error is not one (see :func:`step`)."""
+    return Progress(
+        SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=console, transient=True,
+        disable=not console.is_terminal,
+    )
+
+
+def step(progress: Progress, task: Any) -> Callable[[str], None]:
+    """Progress callback: updates the bar on a terminal, prints a plain line otherwise."""
+
+    def report(message: str) -> None:
+        if console.is_terminal:
+            progress.update(task, description=Text(message))
+        else:
+            console.print(Text(f"... {message}"), soft_wrap=True)
+
+    return report
+
+
+# -------------------------------------------------------------------------------------------
+# Parsing flag values
+
+
+def split_list(values: Optional[list[str]]) -> list[str] | None:
+    """Values of a repeatable, comma-separable flag (None when none given)."""
+    if not values:
+        return None
+    items = [v.strip() for value in values for v in value.split(",") if v.strip()]
+    return items or None
+
+
+def pairs(values: Optional[list[str]], flag: str) -> dict[str, str]:
+    """KEY=VALUE values of a repeatable flag; a key given twice with different values is refused."""
+    found: dict[str, str] = {}
+    for v in values or []:
+        if "=" not in v:
+            raise InputError(f"{flag}: expected KEY=VALUE, got {v!r}")
+        k, val = (part.strip() for part in v.split("=", 1))
+        if k in found and found[k] != val:
+            raise InputError(f"{flag}: {k} is given twice, as {found[k]} and as {val}")
+        found[k] = val
+    return found
+
+
+def numbers(values: Mapping[str, str], flag: str, what: str) -> dict[str, float]:
+    """KEY=NUMBER pairs as floats."""
+    try:
+        return {k: float(v) for k, v in values.items()}
+    except ValueError:
+        given = ", ".join(f"{k}={v}" for k, v in values.items())
+        raise InputError(f"{flag}: expected {what} with a number, got {given}") from None
+
+
+def xyz(text: str, flag: str) -> list[float]:
+    """``x,y,z`` in metres."""
+    try:
+        v = [float(t) for t in text.split(",")]
+    except ValueError:
+        v = []
+    if len(v) != 3:
+        raise InputError(f"{flag}: expected x,y,z in metres, got {text!r}")
+    return v
+
+
+def link(text: Optional[str]) -> tuple[str, str] | None:
+    """``TX:RX`` of ``--link`` (None for 'all' or when not given)."""
+    if text is None or text.lower() == "all":
+        return None
+    parts = text.split(":")
+    if len(parts) != 2 or not all(parts):
+        raise InputError(f"--link: expected TX:RX (e.g. A:B) or 'all', got {text!r}")
+    return parts[0], parts[1]
+
+
+def orders(text: str) -> list[int]:
+    """Model orders ``A..B`` or ``3,5,8`` of ``--orders``."""
+    try:
+        if ".." in text:
+            a, b = text.split("..", 1)
+            found = list(range(int(a), int(b) + 1))
+        else:
+            found = [int(v) for v in text.split(",")]
+    except ValueError:
+        raise InputError(f"--orders: expected A..B or a comma list, got {text!r}") from None
+    if not found or min(found) < 1:
+        raise InputError(f"--orders: expected positive orders, A..B with A <= B, got {text!r}")
+    return found
+
+
+def reader_options(
+    node: Optional[list[str]] = None, receiver: Optional[list[str]] = None, address: Optional[list[str]] = None,
+    pose_topic: Optional[list[str]] = None, rssi_topic: Optional[list[str]] = None, rssi_field: Optional[str] = None,
+    msg_definition: Optional[list[str]] = None, **fields: Any,
+) -> Any:
+    """:class:`rplearn.io.ReaderOptions` from the reader flags.
+
+    ``rssi_topic`` holds TOPIC=TX:RX; ``fields`` (other ReaderOptions fields:
+    ``tx_power_dbm``, ``frequency_hz``, ``nan_policy``, ``allow_unsorted``,
+    ``require_valid``) are passed on when not None.
+    """
+    from rplearn.io import ReaderOptions
+
+    opts: dict[str, Any] = {}
+    for flag, key, values in (
+        ("--node", "nodes", node),
+        ("--receiver", "receivers", receiver),
+        ("--address", "address_map", address),
+        ("--pose-topic", "pose_topics", pose_topic),
+        ("--msg-definition", "msg_definitions", msg_definition),
+    ):
+        if values:
+            opts[key] = pairs(values, flag)
+    if rssi_topic:
+        topics: dict[str, tuple[str, str]] = {}
+        for topic, ends in pairs(rssi_topic, "--rssi-topic").items():
+            parts = ends.split(":")
+            if len(parts) != 2 or not all(p.strip() for p in parts):
+                raise InputError(f"--rssi-topic: expected TOPIC=TX:RX (e.g. /B/rssi=A:B), got {topic}={ends}")
+            topics[topic] = (parts[0].strip(), parts[1].strip())
+        opts["rssi_topics"] = topics
+    if rssi_field:
+        opts["rssi_field"] = rssi_field
+    opts.update({k: v for k, v in fields.items() if v is not None})
+    return ReaderOptions(**opts)
+
+
+def print_version(value: bool) -> None:
+    if value:
+        say(f"rplearn {__version__}")
+        raise typer.Exit(0)
+
+
+@app.callback()
+def main_callback(
+    verbose: bool = typer.Option(False, "--verbose", "-v", help="Log progress details."),
+    version: bool = typer.Option(
+        False, "--version", help="Print the version and exit.", callback=print_version, is_eager=True
+    ),
+) -> None:
+    logging.basicConfig(level=logging.INFO if verbose else logging.WARNING, format="%(levelname)s %(name)s: %(message)s")

@@ -1,0 +1,101 @@
+"""Commands before and instead of a flight: ``trajectory`` (plan and check a campaign) and
+``simulate`` (a calibration flight with known patterns)."""
+
+from __future__ import annotations
+
+from typing import Optional
+
+import typer
+from rich.table import Table
+
+from rplearn.cli._app import app, out, progress_bar, say, split_list, user_errors
+from rplearn.errors import InputError
+
+#: The plan's library parameters whose flags have other names.
+TRAJECTORY_FLAGS = {
+    "distance_m": "--distance", "height_m": "--height", "n_loops": "--loops", "speed_m_s": "--speed",
+    "learning_psi0_deg": "--psi0", "testing_psi0_deg": "--test-psi0", "rate_hz": "--rate",
+    "max_speed_m_s": "--max-speed", "max_accel_m_s2": "--max-accel", "max_flight_time_s": "--max-flight-time",
+}
+
+
+@app.command()
+@user_errors(flags=TRAJECTORY_FLAGS)
+def trajectory(
+    out_dir: str = typer.Option("trajectory", "-o", "--out", help="Directory for the per-drone reference CSVs."),
+    distance_m: float = typer.Option(10.0, "--distance", help="Distance between the drones = circle diameter [m]."),
+    height_m: float = typer.Option(20.0, "--height", help="Height of the circle centre [m]."),
+    loops: int = typer.Option(5, "--loops", help="Headings per drone n; heading step 360/n deg."),
+    speed_m_s: float = typer.Option(2.0, "--speed", help="Cruise speed along the circle [m/s]."),
+    psi0_deg: Optional[list[str]] = typer.Option(None, "--psi0", help="Initial headings of learning units [deg] (default 0,24,48)."),
+    test_psi0_deg: Optional[list[str]] = typer.Option(None, "--test-psi0", help="Initial headings of testing units [deg] (default 36)."),
+    max_speed: Optional[float] = typer.Option(None, help="Refuse plans faster than this [m/s]."),
+    max_accel: Optional[float] = typer.Option(None, help="Refuse plans with larger accelerations [m/s^2]."),
+    max_flight_time: Optional[float] = typer.Option(None, help="Flight time per battery; each unit must fit [s]."),
+    rate_hz: float = typer.Option(10.0, "--rate", help="Sample rate of the reference files [Hz]."),
+    check_model: Optional[str] = typer.Option("sh-10", "--check-model", help="Model whose rank and condition number the plan check reports (e.g. sh-10, bg-7; 'none' to skip)."),
+    wind_m_s: float = typer.Option(0.0, "--wind", help="Steady wind for the plan check [m/s] (tilts the drones)."),
+) -> None:
+    """Plan a calibration campaign and check it before flying.
+
+    Plans the paper's campaign (Sec. IV-A), writes references t,x,y,z,yaw_deg per drone, and
+    checks before flying whether the plan will decouple the patterns (coverage, rank,
+    condition number).
+
+    Example: rplearn trajectory --distance 10 --height 20 --loops 5 --max-flight-time 600 -o plan
+    """
+    from rplearn.models.spec import ModelSpec
+    from rplearn.plan.campaign import paper_campaign, write_references
+    from rplearn.plan.check import check_plan
+    from rplearn.plan.trajectory import PlanLimits, summarize_unit
+
+    spec = None
+    if check_model and check_model.lower() != "none":  # refuse a bad model before writing files
+        spec = ModelSpec.parse(check_model)
+        if not spec.decouples:
+            raise InputError(f"--check-model: {spec.label} has no per-node pattern to check; use sh, bg or poly")
+    learn = [float(v) for v in (split_list(psi0_deg) or ["0", "24", "48"])]
+    test = [float(v) for v in (split_list(test_psi0_deg) or ["36"])]
+    campaign = paper_campaign(
+        learning_psi0_deg=learn, testing_psi0_deg=test, distance_m=distance_m, height_m=height_m, n_loops=loops, speed_m_s=speed_m_s
+    )
+    limits = PlanLimits(max_speed, max_accel, max_flight_time)
+    table = Table(title="calibration campaign")
+    for col in ("unit", "duration/s", "path/m", "max speed/(m/s)", "max accel/(m/s^2)", "max yaw rate/(deg/s)"):
+        table.add_column(col)
+    for unit in campaign.units:
+        s = summarize_unit(unit, limits)
+        table.add_row(s.label, f"{s.duration_s:.0f}", f"{s.path_length_m:.0f}", f"{s.max_speed_m_s:.2f}", f"{s.max_accel_m_s2:.2f}", f"{s.max_yaw_rate_deg_s:.1f}")
+    paths = write_references(campaign, out_dir, rate_hz)
+    out.print(table)
+    say(f"wrote {len(paths)} reference files to {out_dir}")
+    if spec is not None:
+        report = check_plan(campaign, spec.basis(), wind_speed_m_s=wind_m_s)
+        say("plan check (learning units):\n" + report.summary())
+
+
+@app.command()
+@user_errors
+def simulate(
+    preset: str = typer.Option("paper", "--preset", help="paper, trio or smoke."),
+    seed: int = typer.Option(0, "--seed", help="Seed of every random effect."),
+    out_dir: str = typer.Option("flight", "-o", "--out", help="Output directory."),
+    log_format: str = typer.Option("parquet", "--format", help="parquet or csv."),
+) -> None:
+    """Simulate a calibration flight: raw pose and signal logs plus the true patterns.
+
+    Example: rplearn simulate --preset smoke --seed 1 -o flight
+    """
+    from rplearn.sim.flight import simulate as run
+
+    if log_format not in ("parquet", "csv"):
+        raise InputError(f"--format: expected parquet or csv, got {log_format!r}")
+    with progress_bar() as p:
+        p.add_task(f"simulating preset '{preset}'", total=None)
+        result = run(preset, seed=seed, out_dir=out_dir, log_format=log_format)
+    say(
+        f"{len(result.pose_log):,} pose rows, {len(result.signal_log):,} packets, noise {result.noise_std_db:.2f} dB, "
+        f"{result.elapsed_s:.1f} s"
+    )
+    for k, v in result.paths.items():
+        say(f"  {k}: {v}")

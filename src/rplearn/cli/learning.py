@@ -1,0 +1,143 @@
+"""Commands that learn and test: ``fit``, ``evaluate``, ``predict``, ``sweep`` and ``report``."""
+
+from __future__ import annotations
+
+from typing import Optional
+
+import typer
+
+from rplearn.cli._app import app, note, orders as parse_orders, progress_bar, say, split_list, step, user_errors
+from rplearn.errors import InputError
+
+
+@app.command()
+@user_errors
+def fit(
+    dataset: str = typer.Argument(..., help="Matched dataset (.parquet or .csv)."),
+    model: str = typer.Option("sh", "--model", help="sh, bg, poly, mean or knn (also sh-10, nn-400...)."),
+    degree: Optional[int] = typer.Option(None, "--degree", help="SH-L / BG-k / P-k order, or k of knn (defaults 10, 7, 12, 400)."),
+    ridge: Optional[float] = typer.Option(None, "--ridge", help="Pattern models: ridge weight on the diagonal of X^T X (default 1; the paper used 50)."),
+    sigma: Optional[float] = typer.Option(None, "--sigma", help="BG only: kernel variance sigma [rad^2] (default 0.5, about the paper's)."),
+    grid: Optional[str] = typer.Option(None, "--grid", help="BG only: nodes on the paper grid (default) or fibonacci."),
+    units: Optional[list[str]] = typer.Option(None, "--units", help="Learning units (repeat or comma-separate; default: all but units labelled test...)."),
+    gauge_node: Optional[str] = typer.Option(None, "--gauge-node", help="Pattern models: fix this node's mean gain instead of splitting equally."),
+    gauge_dbi: Optional[float] = typer.Option(None, "--gauge-dbi", help="Sphere-mean gain of --gauge-node [dBi] (default 0)."),
+    output: str = typer.Option(..., "-o", "--out", help="Model file (.json)."),
+) -> None:
+    """Learn one radiation pattern per node (or a baseline) from a matched dataset.
+
+    Example: rplearn fit data.parquet --model sh --degree 10 --units learn_0,learn_24,learn_48 -o sh10.json
+    """
+    from rplearn.models.spec import ModelSpec, check_fit_options, gauge_of
+    from rplearn.workflows.learning import fit_dataset
+
+    spec = ModelSpec.parse(model, order=degree, ridge=ridge, sigma_rad2=sigma, grid=grid)
+    check_fit_options(spec, order=degree, ridge=ridge, sigma_rad2=sigma, grid=grid, gauge_node=gauge_node,
+                      gauge_dbi=gauge_dbi, model=model)
+    outcome = fit_dataset(dataset, spec, split_list(units), gauge_of(gauge_node, gauge_dbi), output)
+    for line in outcome.units.notes:
+        note(f"{line} (pass --units to choose)" if outcome.units.defaulted else line)
+    say(outcome.summary())
+    for line in outcome.warnings:
+        note(line, "warning")
+
+
+@app.command()
+@user_errors
+def evaluate(
+    paths: list[str] = typer.Argument(..., help="MODEL.json... DATASET (the last argument is the dataset)."),
+    units: Optional[list[str]] = typer.Option(None, "--units", help="Evaluation units (repeat or comma-separate)."),
+    json_out: Optional[str] = typer.Option(None, "--json", help="Also write Table I as JSON here."),
+    markdown_out: Optional[str] = typer.Option(None, "--markdown", help="Also write Table I as Markdown here."),
+) -> None:
+    """Table I (RMSE, MAE, |phi|, AIC, LTD, Q95) of models on a dataset.
+
+    Example: rplearn evaluate sh10.json mean.json data.parquet --units test_36
+    """
+    from rplearn.workflows.learning import evaluate_model_files
+
+    if len(paths) < 2:
+        raise InputError("evaluate: give at least one MODEL.json and a DATASET")
+    *model_paths, dataset = paths
+    outcome = evaluate_model_files(model_paths, dataset, split_list(units), json_out, markdown_out)
+    for line in outcome.units.warnings:
+        note(line, "warning")
+    for line in outcome.units.notes:
+        note(f"{line} (pass --units to choose)")
+    say(outcome.markdown)
+
+
+@app.command()
+@user_errors
+def predict(
+    model_path: str = typer.Argument(..., metavar="MODEL.json"),
+    dataset: str = typer.Argument(..., metavar="DATASET"),
+    output: str = typer.Option(..., "-o", "--out", help="Where to write the dataset with the predictions added (.csv or .parquet)."),
+) -> None:
+    """Predict the joint gain and received power for every row of a dataset of poses.
+
+    DATASET has the columns of a matched dataset (see rplearn sync) except rssi_dbm, which
+    may be absent: links that were never flown can be predicted. Added columns:
+    gain_pred_db, the joint gain G_tx + G_rx [dB]; rssi_pred_dbm, the received power
+    [dBm]; and for pattern models gain_pred_std_db, the standard error of gain_pred_db from
+    the learned coefficients alone [dB], and rssi_pred_std_db, the spread of one new packet's
+    RSSI around rssi_pred_dbm, adding the training residual (fading, noise, misfit) [dB].
+
+    Example: rplearn predict sh10.json data.parquet -o pred.csv
+    """
+    from rplearn.workflows.learning import predict_file
+
+    prediction = predict_file(model_path, dataset, output)
+    if prediction.mismatch is not None:
+        note(prediction.mismatch.describe(dataset, model_path), "warning")
+    say(prediction.summary(output))
+
+
+@app.command()
+@user_errors
+def sweep(
+    dataset: str = typer.Argument(...),
+    model: str = typer.Option("sh", "--model", help="sh, bg or poly."),
+    orders: str = typer.Option("3..15", "--orders", help="Range A..B or a list 3,5,8."),
+    learn_units: Optional[list[str]] = typer.Option(None, "--learn-units", help="Learning units (default: all but the test units)."),
+    test_units: Optional[list[str]] = typer.Option(None, "--test-units", help="Testing units (default: units whose label starts with 'test')."),
+    output: Optional[str] = typer.Option(None, "-o", "--out", help="CSV of the sweep."),
+    plot_path: Optional[str] = typer.Option(None, "--plot", help="PNG of the sweep (Fig. 10)."),
+) -> None:
+    """Model-order selection: test RMSE, AIC and LTD against the order (paper Fig. 10).
+
+    Example: rplearn sweep data.parquet --model sh --orders 3..15 -o sweep.csv --plot sweep.png
+    """
+    from rplearn.workflows.learning import sweep_dataset
+
+    order_list = parse_orders(orders)
+    with progress_bar() as p:
+        task = p.add_task("sweeping", total=len(order_list))
+        result = sweep_dataset(
+            dataset, model, order_list, split_list(learn_units), split_list(test_units),
+            progress=lambda m: p.update(task, advance=1, description=m), output=output, plot_path=plot_path,
+        )
+    say(result.to_frame().to_string(index=False))
+    say(f"lowest test RMSE at order {result.best_order}")
+
+
+@app.command()
+@user_errors
+def report(
+    dataset: str = typer.Argument(..., help="Matched dataset with a 'unit' column."),
+    models: str = typer.Option("m,nn-400,sh-10,p-12,bg-7", "--models", help="Models to learn and compare."),
+    test_units: Optional[list[str]] = typer.Option(None, "--test-units", help="Testing units (default: labels starting with 'test')."),
+    out_dir: str = typer.Option("rplearn-report", "-o", "--out", help="Output directory."),
+) -> None:
+    """Learn models on a dataset, test them, and write Table I, pattern maps and report.html.
+
+    Example: rplearn report data.parquet --models m,sh-10 -o report
+    """
+    from rplearn.workflows.learning import learn_and_report
+
+    names = split_list([models]) or []
+    with progress_bar() as p:
+        task = p.add_task("learning", total=None)
+        outcome = learn_and_report(dataset, names, out_dir, split_list(test_units), progress=step(p, task))
+    say(outcome.markdown)
+    say(f"wrote {outcome.report_path}")

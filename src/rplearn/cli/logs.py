@@ -1,0 +1,78 @@
+"""Commands on flight logs: ``inspect`` (what is in them) and ``sync`` (a matched dataset)."""
+
+from __future__ import annotations
+
+from typing import Optional
+
+import typer
+
+from rplearn.cli._app import app, fail, link, numbers, pairs, reader_options, say, user_errors
+
+
+@app.command()
+@user_errors
+def inspect(
+    logs: list[str] = typer.Argument(..., help="Log files: CSV/Parquet, ROS 1/2 bags, PX4 ULog, pcap."),
+    node: Optional[list[str]] = typer.Option(None, "--node", help="FILE=NODE for ULogs and one-node tables."),
+    receiver: Optional[list[str]] = typer.Option(None, "--receiver", help="FILE=NODE: capturing node of a pcap."),
+    address: Optional[list[str]] = typer.Option(None, "--address", help="MAC=NODE: transmitter addresses of pcaps."),
+    pose_topic: Optional[list[str]] = typer.Option(None, "--pose-topic", help="TOPIC=NODE for ROS bags."),
+    rssi_topic: Optional[list[str]] = typer.Option(None, "--rssi-topic", help="TOPIC=TX:RX: RSSI topic of ROS bags, packets from TX received by RX."),
+    rssi_field: Optional[str] = typer.Option(None, "--rssi-field", help="Field of the RSSI [dBm] in --rssi-topic messages, dots for nested fields (default rssi)."),
+    msg_definition: Optional[list[str]] = typer.Option(None, "--msg-definition", help="TYPE=FILE.msg: custom message type a bag does not describe (e.g. pkg/msg/LinkQuality=LinkQuality.msg)."),
+    require_valid: bool = typer.Option(False, "--require-valid/--accept-invalid", help="Drop ULog positions the autopilot flags invalid (xy_valid or z_valid = 0), or keep them (default)."),
+    markdown: bool = typer.Option(False, "--markdown", help="Print Markdown instead of text."),
+) -> None:
+    """Summarise logs: nodes, time spans, rates, RSSI range, gaps, and anything suspicious.
+
+    Example: rplearn inspect flight/pose_log.parquet flight/signal_log.parquet
+    """
+    from rplearn.io.inspect import inspect_logs
+
+    options = reader_options(node, receiver, address, pose_topic, rssi_topic, rssi_field, msg_definition, require_valid=require_valid)
+    report = inspect_logs(logs, options)
+    say(report.to_markdown() if markdown else report.to_text())
+    unreadable = [f for f in report.files if f.get("error") is not None]
+    if unreadable:
+        fail(f"{len(unreadable)} of {len(report.files)} file(s) could not be read (see above)")
+
+
+@app.command()
+@user_errors
+def sync(
+    poses: list[str] = typer.Option(..., "--poses", help="Pose log(s): CSV/Parquet, bag, ULog. Repeat for several."),
+    signals: list[str] = typer.Option(..., "--signals", help="Signal log(s): CSV/Parquet, bag, pcap. Repeat for several."),
+    output: str = typer.Option(..., "-o", "--out", help="Matched dataset (.parquet or .csv)."),
+    link_text: Optional[str] = typer.Option(None, "--link", help="Keep one direction TX:RX (the paper's choice), or 'all'."),
+    max_gap_s: float = typer.Option(0.2, "--max-gap", help="Drop samples inside pose gaps longer than this [s]."),
+    offset: Optional[list[str]] = typer.Option(None, "--offset", help="NODE=SECONDS clock offset added to a node's pose times."),
+    node: Optional[list[str]] = typer.Option(None, "--node", help="FILE=NODE for ULogs and one-node tables."),
+    receiver: Optional[list[str]] = typer.Option(None, "--receiver", help="FILE=NODE: capturing node of a pcap."),
+    address: Optional[list[str]] = typer.Option(None, "--address", help="MAC=NODE: transmitter addresses of pcaps."),
+    pose_topic: Optional[list[str]] = typer.Option(None, "--pose-topic", help="TOPIC=NODE: pose topics of ROS bags."),
+    rssi_topic: Optional[list[str]] = typer.Option(None, "--rssi-topic", help="TOPIC=TX:RX: RSSI topic of ROS bags, packets from TX received by RX."),
+    rssi_field: Optional[str] = typer.Option(None, "--rssi-field", help="Field of the RSSI [dBm] in --rssi-topic messages, dots for nested fields (default rssi)."),
+    msg_definition: Optional[list[str]] = typer.Option(None, "--msg-definition", help="TYPE=FILE.msg: custom message type a bag does not describe (e.g. pkg/msg/LinkQuality=LinkQuality.msg)."),
+    tx_power_dbm: Optional[float] = typer.Option(None, "--tx-power", help="Transmit power for logs without it [dBm]."),
+    frequency_hz: Optional[float] = typer.Option(None, "--frequency", help="Carrier frequency for logs without it [Hz]."),
+    nan_policy: str = typer.Option("error", "--nan-policy", help="Pose-table rows with NaN or non-numeric values: error (default) or drop (counted)."),
+    allow_unsorted: bool = typer.Option(False, "--allow-unsorted", help="Accept pose tables whose times go backwards within a node (the rows are sorted)."),
+    require_valid: bool = typer.Option(False, "--require-valid/--accept-invalid", help="Drop ULog positions the autopilot flags invalid (xy_valid or z_valid = 0), or keep them (default)."),
+    on_unknown_node: str = typer.Option("drop", "--on-unknown-node", help="Signals naming a node without a pose log: drop (counted, default) or error."),
+) -> None:
+    """Match every signal sample with the interpolated poses of both ends (paper Sec. V-B4).
+
+    Example: rplearn sync --poses flight/pose_log.parquet --signals flight/signal_log.parquet --link A:B -o data.parquet
+    """
+    from rplearn.data.sync import SyncOptions
+    from rplearn.workflows.logs import sync_logs
+
+    readers = reader_options(
+        node, receiver, address, pose_topic, rssi_topic, rssi_field, msg_definition, tx_power_dbm=tx_power_dbm,
+        frequency_hz=frequency_hz, nan_policy=nan_policy, allow_unsorted=allow_unsorted, require_valid=require_valid)
+    offsets = numbers(pairs(offset, "--offset"), "--offset", "NODE=SECONDS")
+    options = SyncOptions(link=link(link_text), max_gap_s=max_gap_s, clock_offsets_s=offsets or None, on_unknown_node=on_unknown_node)
+    outcome = sync_logs(poses, signals, output, readers, options)
+    for line in outcome.notes:  # part of the data's accounting: on standard output
+        say(line)
+    say(outcome.summary())

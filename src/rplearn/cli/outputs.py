@@ -1,0 +1,81 @@
+"""Commands that show or hand on what was learned: ``export``, ``plot`` and ``demo``."""
+
+from __future__ import annotations
+
+from typing import Optional
+
+import typer
+
+from rplearn.cli._app import app, progress_bar, say, step, user_errors
+from rplearn.errors import InputError
+
+
+@app.command()
+@user_errors
+def export(
+    model_path: str = typer.Argument(..., metavar="MODEL.json"),
+    fmt: str = typer.Option("grid", "--format", help="grid (CSV), msi (one file per node) or images (3-D PNG per node)."),
+    step_deg: float = typer.Option(5.0, "--step-deg", help="Grid step [deg]."),
+    output: str = typer.Option(..., "-o", "--out", help="Output file (grid) or directory (msi, images)."),
+    frequency_hz: Optional[float] = typer.Option(None, "--frequency", help="Frequency written into MSI files [Hz] (default: the frequency the model was learned at)."),
+) -> None:
+    """Export a learned model: grid CSV (node, az_deg, el_deg, gain_db), MSI Planet cuts, 3-D images.
+
+    Example: rplearn export sh10.json --format msi -o patterns/
+    """
+    from rplearn.io.export import export_grid, export_msi_files
+    from rplearn.models.load import load_model
+
+    if fmt not in ("grid", "msi", "images"):
+        raise InputError(f"--format: expected grid, msi or images, got {fmt!r}")
+    model = load_model(model_path)
+    if model.kind != "patterns":
+        raise InputError(f"{model_path}: a {model.kind} baseline has no per-node pattern to export")
+    if fmt == "grid":
+        frame = export_grid(model, step_deg, output)
+        say(f"wrote {len(frame):,} grid values to {output}")
+        return
+    if fmt == "msi":
+        paths = export_msi_files(model, output, frequency_hz)
+    else:
+        from rplearn.viz.images import export_pattern_images
+
+        paths = export_pattern_images(model, output)
+    for path in paths:
+        say(f"wrote {path}")
+
+
+@app.command()
+@user_errors
+def plot(
+    model_paths: list[str] = typer.Argument(..., metavar="MODEL.json..."),
+    truth: Optional[str] = typer.Option(None, "--truth", help="ground_truth.json of a simulation, drawn beside."),
+    dataset: Optional[str] = typer.Option(None, "--dataset", help="Draw the sample directions of this dataset."),
+    output: str = typer.Option("patterns.png", "-o", "--out", help="PNG file."),
+) -> None:
+    """Draw learned patterns in the azimuth-elevation domain (paper Fig. 9).
+
+    Example: rplearn plot sh10.json --truth flight/ground_truth.json --dataset data.parquet -o patterns.png
+    """
+    from rplearn.workflows.learning import draw_pattern_files
+
+    say(f"wrote {draw_pattern_files(model_paths, output, truth, dataset)}")
+
+
+@app.command()
+@user_errors
+def demo(
+    out_dir: str = typer.Option("rplearn-demo", "-o", "--out", help="Output directory."),
+    seed: int = typer.Option(0, "--seed", help="Seed of the simulated flight."),
+    preset: str = typer.Option("paper", "--preset", help="Simulated campaign: paper, trio or smoke."),
+) -> None:
+    """Reproduce the paper's evaluation on a simulated replica of its campaign (Table I, Figs. 5-10, report.html).
+
+    Example: rplearn demo -o rplearn-demo
+    """
+    from rplearn.workflows.demo import run_demo
+
+    with progress_bar() as p:
+        task = p.add_task("starting", total=None)
+        result = run_demo(out_dir, seed=seed, preset=preset, progress=step(p, task))
+    say(result.summary())

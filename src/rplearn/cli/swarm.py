@@ -1,0 +1,119 @@
+"""Commands that use learned patterns to plan: ``links`` (a swarm's link budget over time),
+``headings`` (yaws that keep a hovering swarm connected) and ``orient`` (one link)."""
+
+from __future__ import annotations
+
+from typing import Optional
+
+import typer
+
+from rplearn.cli._app import app, note, numbers, pairs, reader_options, say, split_list, user_errors, xyz
+from rplearn.errors import InputError
+
+
+@app.command()
+@user_errors
+def links(
+    model_path: str = typer.Argument(..., metavar="MODEL.json"),
+    poses: list[str] = typer.Argument(..., metavar="POSE_LOG...", help="Pose log(s) of the drones: a plan or a flight (CSV/Parquet, bag, ULog)."),
+    output: str = typer.Option(..., "-o", "--out", help="Predicted links, one row per time and ordered pair (.csv or .parquet)."),
+    tx_power_dbm: float = typer.Option(..., "--tx-power", help="Transmit power of every drone [dBm]."),
+    frequency_hz: Optional[float] = typer.Option(None, "--frequency", help="Carrier frequency [Hz] (default: the one the model was learned at)."),
+    pattern: Optional[list[str]] = typer.Option(None, "--as", help="DRONE=NODE: the drone carries the antenna learned as NODE (repeat)."),
+    step_s: float = typer.Option(1.0, "--step", help="Spacing of the prediction times over the span all logs cover [s]."),
+    at: Optional[list[str]] = typer.Option(None, "--at", help="Predict at these times instead [s] (repeat or comma-separate)."),
+    min_rssi_dbm: float = typer.Option(-85.0, "--min-rssi", help="RSSI a link needs in each direction to be up [dBm]."),
+    max_gap_s: float = typer.Option(2.0, "--max-gap", help="A drone is absent inside pose-log gaps longer than this [s]."),
+    connectivity_out: Optional[str] = typer.Option(None, "--connectivity", help="Also write the per-time connectivity table here (.csv or .parquet)."),
+    plot_out: Optional[str] = typer.Option(None, "--plot", help="Also plot RSSI, threshold and bottleneck over time here (.png)."),
+    node: Optional[list[str]] = typer.Option(None, "--node", help="FILE=NODE for ULogs and one-node tables."),
+    pose_topic: Optional[list[str]] = typer.Option(None, "--pose-topic", help="TOPIC=NODE: pose topics of ROS bags."),
+    nan_policy: str = typer.Option("error", "--nan-policy", help="Pose rows with NaN or non-numeric values: error (default) or drop (counted)."),
+    allow_unsorted: bool = typer.Option(False, "--allow-unsorted", help="Accept pose tables whose times go backwards within a node (the rows are sorted)."),
+) -> None:
+    """Predict every link of a swarm over time and whether it stays connected.
+
+    For each time and ordered pair of drones: distance, predicted joint gain and RSSI with
+    its spread, and whether the link is up. Per time: the pairs up both ways, the number of
+    connected groups, and the bottleneck RSSI (the swarm is connected for any threshold
+    below it). Drones that were not in the calibration flight use the pattern of the
+    antenna they carry (--as).
+
+    Example: rplearn links sh10.json plan_poses.csv --tx-power 20 --as C=A --as D=B --plot links.png -o links.csv
+    """
+    from rplearn.workflows.logs import swarm_links
+
+    readers = reader_options(node, pose_topic=pose_topic, nan_policy=nan_policy, allow_unsorted=allow_unsorted)
+    times = list(numbers(dict(enumerate(split_list(at) or [])), "--at", "times in seconds").values()) if at else None
+    outcome = swarm_links(
+        model_path, poses, output, tx_power_dbm, frequency_hz, readers, connectivity_out, plot_out,
+        pattern_of=pairs(pattern, "--as"), step_s=step_s, times_s=times, min_rssi_dbm=min_rssi_dbm, max_gap_s=max_gap_s,
+    )
+    for line in outcome.notes:
+        say(line)
+    if outcome.mismatch is not None:
+        note(outcome.mismatch.describe("--frequency", model_path), "warning")
+    say(outcome.prediction.summary())
+    say(f"wrote {len(outcome.prediction.links):,} predicted links to {output}")
+
+
+@app.command()
+@user_errors
+def headings(
+    model_path: str = typer.Argument(..., metavar="MODEL.json"),
+    pos: list[str] = typer.Option(..., "--pos", help="DRONE=x,y,z: hover position, ENU [m] (repeat for every drone)."),
+    tx_power_dbm: float = typer.Option(..., "--tx-power", help="Transmit power of every drone [dBm]."),
+    yaw: Optional[list[str]] = typer.Option(None, "--yaw", help="DRONE=DEG: current yaw, ENU ccw from east [deg] (default 0)."),
+    fixed: Optional[list[str]] = typer.Option(None, "--fixed", help="Drones that must keep their yaw (repeat or comma-separate)."),
+    pattern: Optional[list[str]] = typer.Option(None, "--as", help="DRONE=NODE: the drone carries the antenna learned as NODE."),
+    frequency_hz: Optional[float] = typer.Option(None, "--frequency", help="Carrier frequency [Hz] (default: the one the model was learned at)."),
+    step_deg: float = typer.Option(5.0, "--step", help="Yaw grid [deg]."),
+    output: Optional[str] = typer.Option(None, "-o", "--out", help="Also write the chosen yaws here (.csv or .json)."),
+) -> None:
+    """Yaws for a hovering swarm that keep it best connected (maximise the bottleneck RSSI).
+
+    Every drone in turn takes the yaw that maximises the weakest link the swarm needs to stay
+    connected, until nothing improves: a local optimum, never worse than the current yaws.
+
+    Example: rplearn headings sh10.json --pos A=0,0,20 --pos B=40,0,20 --pos C=20,30,25 --as C=A --tx-power 20
+    """
+    from rplearn.workflows.logs import swarm_headings
+
+    positions = {drone: xyz(text, f"--pos {drone}") for drone, text in pairs(pos, "--pos").items()}
+    start = numbers(pairs(yaw, "--yaw"), "--yaw", "DRONE=DEG")
+    result = swarm_headings(
+        model_path, positions, tx_power_dbm, output, frequency_hz=frequency_hz, pattern_of=pairs(pattern, "--as"),
+        start_yaw_deg=start, fixed=split_list(fixed) or (), step_deg=step_deg,
+    )
+    say(result.summary())
+    if output:
+        say(f"wrote {output}")
+
+
+@app.command()
+@user_errors
+def orient(
+    model_path: str = typer.Argument(..., metavar="MODEL.json"),
+    tx: str = typer.Option(..., "--tx", help="Transmitting node."),
+    rx: str = typer.Option(..., "--rx", help="Receiving node."),
+    tx_pos: str = typer.Option(..., "--tx-pos", help="x,y,z ENU [m]."),
+    rx_pos: str = typer.Option(..., "--rx-pos", help="x,y,z ENU [m]."),
+    turn: str = typer.Option("tx", "--turn", help="tx, rx or both."),
+    tx_yaw: float = typer.Option(0.0, "--tx-yaw", help="Current yaw of tx, ENU ccw from east [deg]."),
+    rx_yaw: float = typer.Option(0.0, "--rx-yaw", help="Current yaw of rx [deg]."),
+    tx_power_dbm: float = typer.Option(20.0, "--tx-power", help="[dBm]."),
+    frequency_hz: Optional[float] = typer.Option(None, "--frequency", help="Carrier frequency [Hz] (default: the one the model was learned at)."),
+) -> None:
+    """Heading that maximises a link, and the received power before and after.
+
+    Example: rplearn orient sh10.json --tx A --rx B --tx-pos 0,0,20 --rx-pos 10,5,25 --turn both
+    """
+    from rplearn.analysis.headings import best_yaw
+    from rplearn.models.load import load_model
+
+    model = load_model(model_path)
+    if model.kind != "patterns":
+        raise InputError(f"{model_path}: a {model.kind} baseline cannot tell which heading is better")
+    result = best_yaw(model, tx, rx, xyz(tx_pos, "--tx-pos"), xyz(rx_pos, "--rx-pos"), turn=turn, tx_yaw_deg=tx_yaw,
+                      rx_yaw_deg=rx_yaw, tx_power_dbm=tx_power_dbm, frequency_hz=frequency_hz)
+    say(result.summary())

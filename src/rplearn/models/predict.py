@@ -1,0 +1,131 @@
+"""Predictions for a dataset of poses: joint gain, received power and how wrong they may be.
+
+:func:`predict_dataset` adds to every row of a matched dataset (``rssi_dbm`` optional, so that
+links never flown can be predicted) the predicted joint gain ``G_tx + G_rx`` [dB] and received
+power (paper eq. 1) [dBm], and for pattern models two spreads: the standard error of the gain
+from the learned coefficients alone, and the spread of one new packet's RSSI, which adds the
+training residual (fading, noise and misfit). :func:`frequency_mismatch` says when rows are at
+a carrier other than the one the model learned at.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+import pandas as pd
+from numpy.typing import ArrayLike
+
+from rplearn.core.link import received_power_dbm
+from rplearn.data.tables import link_samples
+from rplearn.models.base import Model
+
+#: Relative difference of carrier frequencies above which a warning is given.
+FREQUENCY_TOLERANCE = 0.05
+
+#: Columns :func:`predict_dataset` adds (the two spreads only for models with a covariance).
+PREDICTION_COLUMNS: tuple[str, ...] = ("gain_pred_db", "rssi_pred_dbm", "gain_pred_std_db", "rssi_pred_std_db")
+
+
+@dataclass(frozen=True)
+class FrequencyMismatch:
+    """Rows at a carrier other than the model's.
+
+    Attributes
+    ----------
+    n_rows : int
+        Rows more than :data:`FREQUENCY_TOLERANCE` away from the model's frequency.
+    median_hz : float
+        Median frequency of those rows [Hz].
+    learned_hz : float
+        The frequency the model learned at [Hz].
+    """
+
+    n_rows: int
+    median_hz: float
+    learned_hz: float
+
+    def describe(self, where: str, model_name: str) -> str:
+        return (
+            f"{where}: {self.n_rows:,} row(s) at {self.median_hz / 1e9:.3f} GHz, but {model_name} learned at "
+            f"{self.learned_hz / 1e9:.3f} GHz; antenna patterns change with frequency"
+        )
+
+
+def frequency_mismatch(model: Model, frequency_hz: ArrayLike) -> FrequencyMismatch | None:
+    """Rows whose carrier differs from the model's by more than 5 % (None: all agree, or the
+    model does not state its frequency)."""
+    learned = model.frequency_hz
+    f = np.asarray(frequency_hz, np.float64).ravel()
+    if learned is None or f.size == 0:
+        return None
+    off = np.abs(f / float(learned) - 1.0) > FREQUENCY_TOLERANCE
+    if not np.any(off):
+        return None
+    return FrequencyMismatch(int(off.sum()), float(np.median(f[off])), float(learned))
+
+
+@dataclass
+class DatasetPrediction:
+    """A dataset with predictions added, and how well they match any measured RSSI.
+
+    Attributes
+    ----------
+    table : DataFrame
+        The input rows with :data:`PREDICTION_COLUMNS` added.
+    n_measured : int
+        Rows with a measured RSSI.
+    rmse_db : float
+        RMSE of the predicted joint gain against the measured one on those rows [dB]
+        (NaN without any).
+    mismatch : FrequencyMismatch or None
+        Rows at another carrier than the model's.
+    """
+
+    table: pd.DataFrame
+    n_measured: int
+    rmse_db: float
+    mismatch: FrequencyMismatch | None
+
+    def summary(self, output: str) -> str:
+        line = f"wrote {len(self.table):,} predictions to {output}"
+        if self.n_measured:
+            line += f" (RMSE against the {self.n_measured:,} measured RSSI values: {self.rmse_db:.2f} dB)"
+        return line
+
+
+def predict_dataset(model: Model, dataset: pd.DataFrame, source: str = "dataset") -> DatasetPrediction:
+    """Predict the joint gain, received power and their spreads for every row (paper eq. 1).
+
+    Parameters
+    ----------
+    model : Model
+        Any learned model.
+    dataset : DataFrame
+        Matched dataset (DESIGN.md); ``rssi_dbm`` may be absent or NaN.
+    source : str
+        File name for messages.
+    """
+    samples = link_samples(dataset, source, require_rssi=False)
+    gain = model.predict_gain(samples)
+    table = dataset.copy()
+    table["gain_pred_db"] = gain
+    table["rssi_pred_dbm"] = received_power_dbm(
+        table["tx_power_dbm"].to_numpy(np.float64), gain, samples.distance_m, table["frequency_hz"].to_numpy(np.float64)
+    )
+    std = model.predict_gain_std(samples)
+    if std is not None:
+        residual_db = float(model.training.get("rmse_db", np.nan))
+        table["gain_pred_std_db"] = std
+        table["rssi_pred_std_db"] = np.sqrt(std**2 + residual_db**2)
+    measured = np.isfinite(samples.joint_gain_db)
+    rmse = float(np.sqrt(np.mean((gain[measured] - samples.joint_gain_db[measured]) ** 2))) if measured.any() else float("nan")
+    mismatch = frequency_mismatch(model, table["frequency_hz"].to_numpy(np.float64))
+    return DatasetPrediction(table, int(measured.sum()), rmse, mismatch)
+
+
+def distinct_labels(labels: Sequence[str], names: Sequence[str]) -> list[str]:
+    """Labels made distinct by adding the name (e.g. file name) where two share a label."""
+    counts = pd.Series(list(labels)).value_counts()
+    return [f"{label} ({name})" if counts[label] > 1 else label for label, name in zip(labels, names)]

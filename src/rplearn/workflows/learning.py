@@ -1,0 +1,265 @@
+"""Learning pipelines on dataset files: fit, evaluate, predict, sweep and learn-and-report.
+
+Each reads its inputs, applies the one unit rule of :mod:`rplearn.data.units`, calls the
+library and returns a result object with the notes a user should read; the command line only
+prints it. Output paths are checked before any work.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field, replace
+from typing import Any, Callable, Mapping, Sequence
+
+from rplearn.analysis.pattern_error import node_directions
+from rplearn.analysis.sweep import SweepResult, no_progress, order_sweep
+from rplearn.core.metrics import Scores
+from rplearn.data.units import UnitChoice, evaluation_units, learning_units, samples_of, split_units
+from rplearn.errors import InputError
+from rplearn.io.files import check_table_path, provenance, read_dataset, write_json, write_table
+from rplearn.models.fit import FittedModel, evaluate_models, fit_model, scores_markdown
+from rplearn.models.load import load_model
+from rplearn.models.predict import DatasetPrediction, distinct_labels, predict_dataset
+from rplearn.models.spec import ModelSpec
+
+Progress = Callable[[str], None]
+
+
+@dataclass
+class FitOutcome:
+    """A model learned from a dataset file.
+
+    Attributes
+    ----------
+    fitted : FittedModel
+    units : UnitChoice
+        The learning units and the notes about them.
+    n_samples : int
+    output : str or None
+        Model file written.
+    """
+
+    fitted: FittedModel
+    units: UnitChoice
+    n_samples: int
+    output: str | None = None
+
+    def summary(self) -> str:
+        """What was learned, from how much, in how long; rank, conditioning and gauge."""
+        training = self.fitted.model.training
+        text = f"{self.fitted.label} learned from {self.n_samples:,} samples in {self.fitted.ltd_s:.3f} s"
+        if self.output:
+            text += f" -> {self.output}"
+        if "rank" in training:
+            text += (
+                f"\n  rank {training['rank']} of {training['n_columns']}, condition number "
+                f"{training['condition_number']:.2f}, training RMSE {training['rmse_db']:.2f} dB"
+            )
+            text += "".join(f"\n  gauge: {g['text']}" for g in training.get("gauges", []))
+        return text
+
+    @property
+    def warnings(self) -> list[str]:
+        return list(self.fitted.model.training.get("warnings", []))
+
+
+def fit_dataset(
+    dataset: str,
+    spec: ModelSpec,
+    units: Sequence[str] | None = None,
+    gauge: str | Mapping[str, Any] = "equal-mean",
+    output: str | None = None,
+) -> FitOutcome:
+    """Learn ``spec`` from a matched dataset file (``rplearn fit``).
+
+    Parameters
+    ----------
+    dataset : str
+        Matched dataset (CSV or Parquet).
+    spec : ModelSpec
+    units : sequence of str, optional
+        Learning units; default every unit not labelled ``test...`` (:func:`learning_units`).
+    gauge : str or mapping
+        Gauge of a two-node fit (:func:`rplearn.models.spec.gauge_of`).
+    output : str, optional
+        Model file to write (JSON).
+    """
+    df = read_dataset(dataset)
+    choice = learning_units(df, units, dataset)
+    samples = samples_of(df, choice.units, dataset)
+    prov = provenance(dataset=dataset, model=spec.label, ridge=spec.ridge, units=choice.units)
+    fitted = fit_model(samples, spec, gauge=gauge, provenance=prov)
+    if output:
+        fitted.model.save(output)
+    return FitOutcome(fitted, choice, len(samples), output)
+
+
+@dataclass
+class EvaluationOutcome:
+    """Table I of some models on a dataset.
+
+    Attributes
+    ----------
+    rows : list of Scores
+        One row per model; labels made distinct by file name where two models share one.
+    markdown : str
+    units : UnitChoice
+        The units scored on, with notes and warnings (training scores).
+    provenance : dict
+    """
+
+    rows: list[Scores]
+    markdown: str
+    units: UnitChoice
+    provenance: dict[str, Any] = field(default_factory=dict)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"provenance": self.provenance, "rows": [r.to_dict() for r in self.rows]}
+
+
+def evaluate_model_files(
+    model_paths: Sequence[str],
+    dataset: str,
+    units: Sequence[str] | None = None,
+    json_out: str | None = None,
+    markdown_out: str | None = None,
+) -> EvaluationOutcome:
+    """Score model files on a dataset file (``rplearn evaluate``): Table I.
+
+    Without ``units``, the models are scored on the units none of them learned from
+    (:func:`rplearn.data.units.evaluation_units`).
+    """
+    if not model_paths:
+        raise InputError("evaluate: give at least one model file and a dataset", param="model_paths")
+    models = [load_model(p) for p in model_paths]
+    df = read_dataset(dataset)
+    choice = evaluation_units(df, units, [m.provenance for m in models], dataset)
+    samples = samples_of(df, choice.units, dataset)
+    rows = evaluate_models([FittedModel.from_model(m) for m in models], samples)
+    labels = distinct_labels([r.model for r in rows], [os.path.basename(p) for p in model_paths])
+    rows = [replace(r, model=label) for r, label in zip(rows, labels)]
+    outcome = EvaluationOutcome(rows, scores_markdown(rows), choice, provenance(dataset=dataset, models=list(model_paths)))
+    if markdown_out:
+        with open(markdown_out, "w", encoding="utf-8") as fh:
+            fh.write(outcome.markdown + "\n")
+    if json_out:
+        write_json(json_out, outcome.to_dict())
+    return outcome
+
+
+def predict_file(model_path: str, dataset: str, output: str) -> DatasetPrediction:
+    """Predict every row of a dataset of poses and write it with the predictions (``rplearn predict``).
+
+    See :func:`rplearn.models.predict.predict_dataset` for the added columns.
+    """
+    check_table_path(output)
+    model = load_model(model_path)
+    prediction = predict_dataset(model, read_dataset(dataset, require_rssi=False), dataset)
+    write_table(prediction.table, output)
+    return prediction
+
+
+def sweep_dataset(
+    dataset: str,
+    kind: str,
+    orders: Sequence[int],
+    learn_units: Sequence[str] | None = None,
+    test_units: Sequence[str] | None = None,
+    progress: Progress = no_progress,
+    output: str | None = None,
+    plot_path: str | None = None,
+) -> SweepResult:
+    """Model-order sweep on a dataset file (``rplearn sweep``, paper Fig. 10).
+
+    Learning and testing units default to the unit rule (:func:`split_units`); every order
+    is learned and tested (no early stop).
+    """
+    if not orders or min(int(o) for o in orders) < 1:
+        raise InputError(f"orders: expected positive orders, got {list(orders)!r}", param="orders")
+    if output:
+        check_table_path(output)
+    df = read_dataset(dataset)
+    learn, test = split_units(df, learn_units, test_units, dataset)
+    ls = samples_of(df, learn, dataset)
+    ts = samples_of(df, test, dataset, nodes=ls.nodes)
+    result = order_sweep(ls, ts, kind, [int(o) for o in orders], stop_after_rises=None, progress=progress)
+    if output:
+        write_table(result.to_frame(), output)
+    if plot_path:
+        from rplearn.viz.charts import plot_order_sweep
+
+        plot_order_sweep(result.orders, result.rmse_db, result.aic, result.ltd_s, plot_path)
+    return result
+
+
+@dataclass
+class ReportOutcome:
+    """Models learned and tested on a dataset, and the report written."""
+
+    fitted: list[FittedModel]
+    rows: list[Scores]
+    markdown: str
+    learn_units: list[str]
+    test_units: list[str]
+    report_path: str
+
+
+def learn_and_report(
+    dataset: str,
+    models: Sequence[str],
+    out_dir: str,
+    test_units: Sequence[str] | None = None,
+    progress: Progress = no_progress,
+) -> ReportOutcome:
+    """Learn models on a dataset's learning units, test them, and write Table I, coverage and
+    pattern maps into ``out_dir/report.html`` (``rplearn report``).
+    """
+    from rplearn.viz import plot
+    from rplearn.viz.report import ReportSection, write_report
+
+    if not models:
+        raise InputError("models: give at least one model, e.g. m,sh-10", param="models")
+    specs = [ModelSpec.parse(name) for name in models]  # refuse a bad name before writing anything
+    df = read_dataset(dataset)
+    learn, test = split_units(df, None, test_units, dataset)
+    ls = samples_of(df, learn, dataset)
+    ts = samples_of(df, test, dataset, nodes=ls.nodes)
+    prov = provenance(dataset=dataset, models=",".join(models), test_units=test)
+    os.makedirs(out_dir, exist_ok=True)
+    fitted = []
+    for spec in specs:
+        progress(f"learning {spec.label}")
+        fitted.append(fit_model(ls, spec, provenance=prov))
+    rows = evaluate_models(fitted, ts)
+    md = scores_markdown(rows)
+    patterns = {f.label: f.model for f in fitted if f.model.kind == "patterns"}
+    images = [plot.plot_coverage(node_directions(ls), node_directions(ts), os.path.join(out_dir, "coverage.png"))]
+    if patterns:
+        images.append(
+            plot.plot_pattern_maps(patterns, None, list(ls.nodes), node_directions(ls), os.path.join(out_dir, "patterns.png"))
+        )
+    sections = [ReportSection("Patterns and coverage", "", images)]
+    path = write_report(out_dir, f"rplearn report: {os.path.basename(dataset)}", md, sections, prov)
+    return ReportOutcome(fitted, rows, md, learn, test, path)
+
+
+def draw_pattern_files(
+    model_paths: Sequence[str], output: str, truth: str | None = None, dataset: str | None = None
+) -> str:
+    """Draw learned patterns of model files in the azimuth-elevation domain (paper Fig. 9,
+    ``rplearn plot``), beside a simulation's true patterns and over a dataset's sample
+    directions when given. Returns the PNG path."""
+    from rplearn.data.tables import link_samples
+    from rplearn.sim.antennas import load_ground_truth
+    from rplearn.viz.plot import plot_pattern_maps
+
+    models = {}
+    for path in model_paths:
+        model = load_model(path)
+        if model.kind != "patterns":
+            raise InputError(f"{path}: a {model.kind} baseline has no per-node pattern to draw", param="model_paths")
+        models[model.label] = model
+    gt = load_ground_truth(truth) if truth else None
+    nodes = list(next(iter(models.values())).nodes)
+    dirs = node_directions(link_samples(read_dataset(dataset), dataset)) if dataset else None
+    return plot_pattern_maps(models, gt, nodes, dirs, output, center=gt is not None)

@@ -1,0 +1,136 @@
+"""Pipelines on flight logs: synchronise them into a matched dataset, and predict a swarm's
+links or best headings from the drones' poses (``rplearn sync``, ``links``, ``headings``).
+
+Output paths are checked before any work; what the readers dropped or assumed comes back as
+notes for the user.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Mapping, Sequence
+
+from numpy.typing import ArrayLike
+
+from rplearn.analysis.headings import SwarmHeadings, best_swarm_headings
+from rplearn.analysis.swarm import SwarmPrediction, predict_swarm
+from rplearn.data.sync import SyncOptions, SyncResult, synchronise
+from rplearn.errors import InputError
+from rplearn.io import ReaderOptions, read_logs
+from rplearn.io.files import check_table_path, write_json, write_table
+from rplearn.models.load import load_model
+from rplearn.models.predict import FrequencyMismatch, frequency_mismatch
+
+
+def reader_notes(metadata: Mapping[str, Any]) -> list[str]:
+    """What the log readers dropped or assumed, file by file (from :func:`read_logs` metadata)."""
+    notes = []
+    for f in metadata.get("files", []):
+        source = f.get("source", "log")
+        notes += [f"{source}: dropped {n:,} pose row(s) ({why})" for why, n in (f.get("dropped") or {}).items() if n]
+        if f.get("level_assumed"):
+            notes.append(f"{source}: yaw only, so level flight (roll = pitch = 0) is assumed")
+    return notes
+
+
+@dataclass
+class SyncOutcome:
+    """A matched dataset written from logs, and what the readers said."""
+
+    result: SyncResult
+    output: str
+    notes: list[str] = field(default_factory=list)
+
+    def summary(self) -> str:
+        return f"{self.result.summary.to_text()}\nwrote {len(self.result.dataset):,} matched samples to {self.output}"
+
+
+def sync_logs(
+    pose_paths: Sequence[str],
+    signal_paths: Sequence[str],
+    output: str,
+    reader_options: ReaderOptions | None = None,
+    sync_options: SyncOptions | None = None,
+) -> SyncOutcome:
+    """Read pose and signal logs of any format, match every packet with the poses of both
+    ends (paper Sec. V-B4) and write the matched dataset."""
+    check_table_path(output)
+    pose_logs, pose_meta = read_logs(pose_paths, reader_options)
+    signal_logs, _ = read_logs(signal_paths, reader_options)
+    if pose_logs.pose is None:
+        raise InputError(f"{', '.join(pose_paths)}: no pose log found", param="pose_paths")
+    if signal_logs.signal is None:
+        raise InputError(f"{', '.join(signal_paths)}: no signal log found", param="signal_paths")
+    result = synchronise(pose_logs.pose, signal_logs.signal, sync_options, source=", ".join(signal_paths))
+    write_table(result.dataset, output)
+    return SyncOutcome(result, output, reader_notes(pose_meta))
+
+
+@dataclass
+class LinksOutcome:
+    """A swarm's predicted links, and what the user should know about the inputs."""
+
+    prediction: SwarmPrediction
+    notes: list[str] = field(default_factory=list)
+    mismatch: FrequencyMismatch | None = None
+
+
+def swarm_links(
+    model_path: str,
+    pose_paths: Sequence[str],
+    output: str,
+    tx_power_dbm: float,
+    frequency_hz: float | None = None,
+    reader_options: ReaderOptions | None = None,
+    connectivity_out: str | None = None,
+    plot_path: str | None = None,
+    **swarm_options: Any,
+) -> LinksOutcome:
+    """Predict every link of a swarm over time from its pose logs and write the tables.
+
+    ``swarm_options`` go to :func:`rplearn.analysis.swarm.predict_swarm` (``pattern_of``,
+    ``step_s``, ``times_s``, ``min_rssi_dbm``, ``max_gap_s``).
+    """
+    for path in (output, connectivity_out):
+        if path:
+            check_table_path(path)
+    model = load_model(model_path)
+    logs, meta = read_logs(pose_paths, reader_options)
+    if logs.pose is None:
+        raise InputError(f"{', '.join(pose_paths)}: no pose log found", param="pose_paths")
+    mismatch = frequency_mismatch(model, [frequency_hz]) if frequency_hz is not None else None
+    prediction = predict_swarm(model, logs.pose, tx_power_dbm, frequency_hz, source=", ".join(pose_paths), **swarm_options)
+    write_table(prediction.links, output)
+    if connectivity_out:
+        write_table(prediction.connectivity, connectivity_out)
+    if plot_path:
+        from rplearn.viz.charts import plot_swarm
+
+        plot_swarm(prediction, plot_path)
+    return LinksOutcome(prediction, reader_notes(meta), mismatch)
+
+
+def swarm_headings(
+    model_path: str,
+    positions: Mapping[str, ArrayLike],
+    tx_power_dbm: float,
+    output: str | None = None,
+    **options: Any,
+) -> SwarmHeadings:
+    """Yaws of a hovering swarm that maximise its bottleneck RSSI; optionally written as
+    JSON (``.json``) or a table (``drone, start_yaw_deg, yaw_deg``).
+
+    ``options`` go to :func:`rplearn.analysis.headings.best_swarm_headings`.
+    """
+    if output and not output.lower().endswith(".json"):
+        check_table_path(output)
+    unknown = sorted(set((options.get("start_yaw_deg") or {})) - set(positions))
+    if unknown:
+        raise InputError(f"start_yaw_deg names drone(s) {', '.join(unknown)} without a position", param="start_yaw_deg")
+    result = best_swarm_headings(load_model(model_path), positions, tx_power_dbm, **options)
+    if output:
+        if output.lower().endswith(".json"):
+            write_json(output, result.to_dict())
+        else:
+            write_table(result.to_frame(), output)
+    return result
