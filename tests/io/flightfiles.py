@@ -8,7 +8,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-DATA = Path(__file__).resolve().parents[1] / "data"
+DATA = Path(__file__).resolve().parents[1] / "fixtures"
 EPOCH_S = 1_700_000_000.0  # put the flight on a realistic UNIX time, as real logs are
 MAC = {"A": "02:00:00:00:00:0a", "B": "02:00:00:00:00:0b"}
 RSSI_MSG = "rplearn_msgs/msg/LinkQuality"

@@ -18,7 +18,7 @@ from rplearn.io.rosbag import read_rosbag
 from rplearn.io.tables import read_pose_table, read_signal_table
 from rplearn.io.ulog import read_ulog
 
-DATA = Path(__file__).resolve().parents[1] / "data"
+DATA = Path(__file__).resolve().parents[1] / "fixtures"
 
 POSE_CSV = (
     "t,node,x,y,z,qw,qx,qy,qz\n"

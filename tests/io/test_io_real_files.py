@@ -1,4 +1,4 @@
-"""Acceptance 2: real third-party files (tests/data, copied with their licenses)."""
+"""Acceptance 2: real third-party files (tests/fixtures, copied with their licenses)."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ from rplearn.io.pcap import read_pcap, read_radiotap_frames
 from rplearn.io.rosbag import read_rosbag
 from rplearn.io.ulog import read_ulog, read_ulogs
 
-DATA = Path(__file__).resolve().parents[1] / "data"
+DATA = Path(__file__).resolve().parents[1] / "fixtures"
 ULOGS = sorted((DATA / "px4-ulog").glob("*.ulg"))
 PCAPS = sorted((DATA / "radiotap-pcap").glob("*.pcap"))
 BAG = DATA / "ros1-bag" / "test2.bag"

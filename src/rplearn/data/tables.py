@@ -189,7 +189,7 @@ def validate_matched(df: pd.DataFrame, source: str = "dataset", require_rssi: bo
         row = int(np.flatnonzero(sentinel)[0])
         raise InputError(
             f"{source}: column rssi_dbm holds {int(sentinel.sum())} sentinel value(s) meaning 'no measurement' "
-            f"(first {rssi[row]:g} dBm at row {row}); rplearn sync drops and counts them"
+            f"(first {rssi[row]:g} dBm at row {row}); synchronising the logs (synchronise) drops and counts them"
         )
     out = df.copy()
     out["tx"] = out["tx"].astype(str)

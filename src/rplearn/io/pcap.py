@@ -5,7 +5,7 @@ frequency where present) from the radiotap header, and the transmitter address (
 address 2) from the frame header. The capturing node is the receiver.
 
 The radiotap header is parsed here from the specification (https://www.radiotap.org).
-dpkt 1.9.8's ``Radiotap`` was checked against the real captures in tests/data: it skips
+dpkt 1.9.8's ``Radiotap`` was checked against the real captures in tests/fixtures: it skips
 extended presence words correctly and gives the same dBm signal and noise as tcpdump there
 (a test cross-checks it), but it decodes only the first namespace, does not know bits 15-17
 (TX flags, RTS/data retries) so it misplaces a following XChannel field, and it eagerly

@@ -11,7 +11,7 @@ import pytest
 from rplearn.io.inspect import InspectReport, inspect_logs
 from rplearn.io.options import ReaderOptions
 
-DATA = Path(__file__).resolve().parent / "data"
+DATA = Path(__file__).resolve().parents[1] / "fixtures"
 
 
 def _pose(node, t, x0=0.0):
@@ -107,7 +107,7 @@ def test_ulog_rows_flagged_invalid_are_reported():
 
     from rplearn.io.inspect import inspect_logs
 
-    path = os.path.join(os.path.dirname(__file__), "data", "px4-ulog", "sample_log_small.ulg")
+    path = os.path.join(os.path.dirname(os.path.dirname(__file__)), "fixtures", "px4-ulog", "sample_log_small.ulg")
     report = inspect_logs([path])
     assert any("636 pose row(s) flagged invalid" in p for p in report.problems)
 

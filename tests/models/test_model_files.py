@@ -1,6 +1,6 @@
 """Model files written before the restructuring still load and predict identically.
 
-``tests/data/models_v1`` holds an SH-5 and a mean model written by ``rplearn fit``, a dataset
+``tests/fixtures/models_v1`` holds an SH-5 and a mean model written by ``rplearn fit``, a dataset
 of poses, and the predictions ``rplearn predict`` wrote for it with each model then.
 """
 
@@ -17,7 +17,7 @@ from rplearn.io.files import read_table
 from rplearn.models.base import Model, model_frequency_hz
 from rplearn.models.load import load_model
 
-DATA = Path(__file__).resolve().parent / "data" / "models_v1"
+DATA = Path(__file__).resolve().parents[1] / "fixtures" / "models_v1"
 
 
 @pytest.fixture(scope="module")

@@ -14,7 +14,7 @@ from rplearn.models.predict import distinct_labels, frequency_mismatch, predict_
 from rplearn.models.spec import ModelSpec, check_fit_options, gauge_of
 from rplearn.errors import InputError
 
-FIXTURES = Path(__file__).parent / "data" / "models_v1"
+FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "models_v1"
 
 
 @pytest.fixture(scope="module")
