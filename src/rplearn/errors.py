@@ -6,6 +6,8 @@ naming the file, row or field at fault and what was expected.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 
 class RplearnError(Exception):
     """Base class of every error rplearn raises on purpose.
@@ -18,11 +20,15 @@ class RplearnError(Exception):
     param : str, optional
         Name of the library parameter (or option field) whose value is at fault, e.g.
         ``"max_gap_s"``; the command line maps it to the flag that sets it.
+    related : sequence of str
+        Other parameter names the message mentions (e.g. the one a remedy would set), so
+        that the command line can name their flags too.
     """
 
-    def __init__(self, message: str = "", *, param: str | None = None) -> None:
+    def __init__(self, message: str = "", *, param: str | None = None, related: Sequence[str] = ()) -> None:
         super().__init__(message)
         self.param = param
+        self.related = tuple(related)
 
 
 class InputError(RplearnError, ValueError):

@@ -241,3 +241,12 @@ def test_export_pattern_images(tmp_path):
     for p in paths:
         with open(p, "rb") as f:
             assert f.read(8) == b"\x89PNG\r\n\x1a\n"
+
+
+def test_node_ids_become_safe_distinct_file_names():
+    from rplearn.io.export import node_file_names, safe_file_name
+
+    assert safe_file_name("../etc/x") == "_etc_x" and safe_file_name("..") == "node"
+    assert node_file_names(["A", "B/1"]) == {"A": "A", "B/1": "B_1"}
+    with pytest.raises(InputError, match="'A B' and 'A_B' would both be written as 'A_B'"):
+        node_file_names(["A B", "A_B"])

@@ -51,8 +51,7 @@ def test_bag_without_topics_lists_its_topics(tmp_path):
     proc = run(["sync", "--poses", DATA / "ros1-bag" / "test2.bag", "--signals", DATA / "ros1-bag" / "test2.bag",
                 "-o", tmp_path / "m.csv"], tmp_path, ok=False)
     msg = _error(proc)
-    assert "(ReaderOptions.pose_topics={topic: node}, ReaderOptions.rssi_topics={topic: (tx, rx)})" in msg
-    assert msg.endswith("(set it with --pose-topic TOPIC=NODE)")
+    assert "(--pose-topic TOPIC=NODE, --rssi-topic TOPIC=TX:RX)" in msg
     assert "it has /jackal_velocity_controller/odom (nav_msgs/msg/Odometry), /imu/data (sensor_msgs/msg/Imu)" in msg
 
 
@@ -83,7 +82,7 @@ def test_shuffled_and_nan_poses_name_the_cli_flags(tables):
     shuffled.to_csv(tmp / "p.csv", index=False)
     base = ["sync", "--poses", tmp / "p.csv", "--signals", tmp / "s.csv", "-o", tmp / "m.csv"]
     msg = _error(run(base, tmp, ok=False))
-    assert "(allow_unsorted=True) (set it with --allow-unsorted)" in msg
+    assert "or sort them on reading (--allow-unsorted)" in msg
     assert "np.float64" not in msg and "0.1 -> 0.11" not in msg and "0.11 -> 0.1)" in msg
     run(base + ["--allow-unsorted"], tmp)
 
@@ -91,7 +90,7 @@ def test_shuffled_and_nan_poses_name_the_cli_flags(tables):
     nan.loc[5, "x"] = np.nan
     nan.to_csv(tmp / "p.csv", index=False)
     msg = _error(run(base, tmp, ok=False))
-    assert "(nan_policy='drop') (set it with --nan-policy)" in msg
+    assert "(--nan-policy drop)" in msg
     run(base + ["--nan-policy", "drop"], tmp)
     assert "--nan-policy: expected 'error' or 'drop'" in _error(run(base + ["--nan-policy", "skip"], tmp, ok=False))
 
@@ -99,15 +98,14 @@ def test_shuffled_and_nan_poses_name_the_cli_flags(tables):
 def test_ulog_and_pcap_messages_name_the_cli_flags(tmp_path, flight):
     ulog = DATA / "px4-ulog" / "sample_log_small.ulg"
     msg = _error(run(["sync", "--poses", ulog, "--signals", ulog, "-o", tmp_path / "m.csv"], tmp_path, ok=False))
-    assert msg.endswith("give the node id of this ULog (ReaderOptions.nodes={path: node}) (set it with --node FILE=NODE)")
+    assert msg.endswith("give the node id of this ULog (--node FILE=NODE)")
     caps = write_pcaps(tmp_path, flight[1].iloc[:50])
     cap = caps["B"]
     args = ["sync", "--poses", ulog, "--signals", cap, "-o", tmp_path / "m.csv", "--node", f"{ulog}=A"]
     msg = _error(run(args, tmp_path, ok=False))
-    assert msg.endswith(f"{cap}: give the capturing node (ReaderOptions.receivers={{path: node}}) "
-                        "(set it with --receiver FILE=NODE)")
+    assert msg.endswith(f"{cap}: give the capturing node (--receiver FILE=NODE)")
     msg = _error(run(args + ["--receiver", f"{cap}=B"], tmp_path, ok=False))
-    assert msg.endswith("(ReaderOptions.tx_power_dbm) (set it with --tx-power DBM)")
+    assert msg.endswith("radiotap does not carry the sender's power (--tx-power DBM)")
 
 
 def test_sync_reports_duplicates_and_non_unit_quaternions(tables):

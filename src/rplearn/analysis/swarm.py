@@ -187,7 +187,7 @@ def predict_swarm(
     """
     require_patterns(model, "predicting a swarm's links")
     frequency_hz = model_frequency_hz(model, frequency_hz)
-    _check_link_options(tx_power_dbm, max_gap_s)
+    _check_link_options(tx_power_dbm, max_gap_s, min_rssi_dbm)
     tracks = pose_tracks(pose_log, source=source)
     drones = sorted(tracks)
     if len(drones) < 2:
@@ -208,8 +208,11 @@ def predict_swarm(
     return SwarmPrediction(links, connectivity, patterns, float(min_rssi_dbm), float(tx_power_dbm), frequency_hz, notes)
 
 
-def _check_link_options(tx_power_dbm: float, max_gap_s: float) -> None:
-    """Refuse a non-finite transmit power [dBm] or a non-positive largest pose gap [s]."""
+def _check_link_options(tx_power_dbm: float, max_gap_s: float, min_rssi_dbm: float = DEFAULT_MIN_RSSI_DBM) -> None:
+    """Refuse a non-finite transmit power or threshold [dBm], or a non-positive largest pose
+    gap [s]."""
+    if not np.isfinite(min_rssi_dbm):
+        raise InputError(f"min_rssi_dbm: expected a finite number of dBm, got {min_rssi_dbm!r}", param="min_rssi_dbm")
     if not np.isfinite(tx_power_dbm):
         raise InputError(f"tx_power_dbm: expected a finite number of dBm, got {tx_power_dbm!r}", param="tx_power_dbm")
     if not (np.isfinite(max_gap_s) and max_gap_s > 0):

@@ -37,7 +37,12 @@ class SweepResult:
         """Order with the lowest test RMSE."""
         return int(self.orders[int(np.argmin(self.rmse_db))])
 
+    def summary(self) -> str:
+        """The sweep as a text table, and the order of the lowest test RMSE."""
+        return f"{self.to_frame().to_string(index=False)}\nlowest test RMSE at order {self.best_order}"
+
     def to_frame(self) -> pd.DataFrame:
+        """One row per order: parameters, test RMSE [dB], AIC, LTD [s], condition number."""
         return pd.DataFrame(
             {
                 "order": self.orders,

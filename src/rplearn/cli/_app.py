@@ -11,7 +11,7 @@ import functools
 import inspect
 import logging
 import re
-from typing import Any, Callable, Mapping, Optional
+from typing import Any, Callable, Iterable, Mapping, Optional
 
 import typer
 from rich.console import Console
@@ -53,7 +53,7 @@ PARAM_FLAGS: dict[str, str] = {
     "start_yaw_deg": "--yaw DRONE=DEG", "fixed": "--fixed", "turn": "--turn", "units": "--units",
     "test_units": "--test-units", "learn_units": "--learn-units", "order": "--degree", "ridge": "--ridge",
     "sigma_rad2": "--sigma", "grid": "--grid", "gauge_node": "--gauge-node", "gauge_dbi": "--gauge-dbi",
-    "models": "--models", "orders": "--orders",
+    "models": "--models", "orders": "--orders", "n_neighbors": "--degree",
 }
 
 
@@ -79,48 +79,77 @@ def command_flag(command: Callable | None, param: str) -> str | None:
     option = inspect.signature(command).parameters.get(param) if command is not None else None
     if option is None or not isinstance(option.default, typer.models.OptionInfo):
         return None
-    return next((d for d in option.default.param_decls or () if d.startswith("--")), None)
+    decls = option.default.param_decls or (f"--{param.replace('_', '-')}",)
+    return next((d.split("/")[0] for d in decls if d.startswith("--")), None)
 
 
-def option_flags(command: Callable | None) -> dict[str, str]:
-    """The command's snake_case option names (``gauge_node``) -> their flags (``--gauge-node``),
-    less the names of table columns (a message naming column ``frequency_hz`` means the
-    column, not the flag)."""
-    from rplearn.data.tables import MATCHED_COLUMNS, POSE_COLUMNS
-
+def declared_flags(command: Callable | None) -> set[str] | None:
+    """Every ``--flag`` the command declares (None: no command, any flag goes)."""
     if command is None:
-        return {}
-    found = {name: command_flag(command, name) for name in inspect.signature(command).parameters if "_" in name}
-    columns = set(MATCHED_COLUMNS) | set(POSE_COLUMNS)
-    return {name: flag for name, flag in found.items() if flag and name not in columns}
+        return None
+    found = set()
+    for option in inspect.signature(command).parameters.values():
+        if isinstance(option.default, typer.models.OptionInfo):
+            decls = option.default.param_decls or (f"--{option.name.replace('_', '-')}",)
+            for decl in decls:
+                found.update(d for d in decl.split("/") if d.startswith("--"))
+    return found
 
 
-def with_flag(message: str, param: str | None, command: Callable | None = None, flags: Mapping[str, str] | None = None) -> str:
-    """The message with flags in place of the parameter names it mentions.
+def flag_table(names: Iterable[str], command: Callable | None, flags: Mapping[str, str] | None) -> dict[str, str]:
+    """Parameter name -> flag (with its metavar, e.g. ``--node FILE=NODE``) for the names the
+    command can set: its own table, then :data:`PARAM_FLAGS`, then its option of that name."""
+    declared = declared_flags(command)
+    table = {}
+    for name in names:
+        flag = (flags or {}).get(name) or PARAM_FLAGS.get(name) or command_flag(command, name)
+        if flag and (declared is None or flag.split()[0] in declared):
+            table[name] = flag
+    return table
+
+
+def _rendered(flag: str, value: str | None) -> str:
+    """A flag as the user types it, for a field ``name`` (None), ``name=True``, ``name='x'``
+    or ``name={...}``: the flag with its metavar, alone, with the value, with its metavar."""
+    name = flag.split()[0]
+    if value == "True":
+        return name
+    if value and value[0] in "'\"" and value[-1] == value[0]:
+        return f"{name} {value[1:-1]}"
+    return flag
+
+
+def with_flag(
+    message: str,
+    param: str | None,
+    command: Callable | None = None,
+    flags: Mapping[str, str] | None = None,
+    related: Iterable[str] = (),
+) -> str:
+    """The message with the flags that set the parameters it names.
 
     Library messages name parameters as ``"name: ..."`` or ``"name, other: ..."`` at the
-    start, ``"name ..."`` at the start, or ``"(name ...)"``; there the flag replaces the name.
-    ``flags`` are the command's own names (replaced wherever they appear so), and so are the
-    command's snake_case option names (:func:`option_flags`), wherever they stand as words;
-    the parameter at fault also uses :data:`PARAM_FLAGS`. When the message does not name the
-    flag, it is appended.
+    start, ``"name ..."`` at the start, ``"(name ...)"``, or as option fields
+    ``ReaderOptions.name`` / ``name=value``; ``related`` are more parameter names the message
+    uses (:attr:`rplearn.errors.RplearnError.related`), replaced wherever they stand as words.
+    Only flags the command declares are used. When the message does not name the flag of
+    ``param``, it is appended.
     """
-    anywhere = option_flags(command)
-    message = re.sub(
-        r"(?<![\w./-])(" + "|".join(map(re.escape, sorted(anywhere, key=len, reverse=True))) + r")(?=[:),; ]|$)",
-        lambda m: anywhere[m.group(1)], message,
-    ) if anywhere else message
-    table = dict(flags or {})
-    if param and param not in table:
-        flag = PARAM_FLAGS.get(param) or command_flag(command, param)
-        if flag:
-            table[param] = flag
     head, sep, rest = message.partition(":")
-    names = [n.strip() for n in head.split(",")] if sep else []
-    if names and all(n in table or n in PARAM_FLAGS for n in names):
-        message = ", ".join((table.get(n) or PARAM_FLAGS[n]).split()[0] for n in names) + sep + rest
+    leading = [n.strip() for n in head.split(",")] if sep else []
+    candidates = {n for n in leading if n.isidentifier()} | set(related) | set(flags or {}) | ({param} if param else set())
+    fields = set(re.findall(r"(?:\b\w+Options\.)(\w+)|\b(\w+)=", message))
+    candidates |= {a or b for a, b in fields}
+    table = flag_table(sorted(candidates), command, flags)
+    if leading and all(n in table for n in leading):
+        message = ", ".join(table[n].split()[0] for n in leading) + sep + rest
     for name, flag in table.items():
-        message = re.sub(rf"(^|\()({re.escape(name)})(?=[:) ]|$)", lambda m: m.group(1) + flag.split()[0], message)
+        value = r"(?:=('[^']*'|\"[^\"]*\"|\{[^}]*\}|[^,)\s]+))?"
+        message = re.sub(rf"\b\w+Options\.{name}\b{value}", lambda m: _rendered(flag, m.group(1)), message)
+        message = re.sub(rf"(?<![\w.-]){name}=('[^']*'|\"[^\"]*\"|\{{[^}}]*\}}|[^,)\s]+)", lambda m: _rendered(flag, m.group(1)), message)
+        message = re.sub(rf"(^|\()({name})(?=[:) ]|$)", lambda m: m.group(1) + flag.split()[0], message)
+        if name in related:
+            message = re.sub(rf"(?<![\w.-]){name}(?![\w=])", flag.split()[0], message)
     flag = table.get(param or "")
     if flag is None or flag.split()[0] in message:
         return message
@@ -141,7 +170,7 @@ def user_errors(fn: Callable | None = None, *, flags: Mapping[str, str] | None =
                 return func(*args, **kwargs)
             except RplearnError as exc:
                 first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-                fail(with_flag(first, exc.param, func, flags))
+                fail(with_flag(first, exc.param, func, flags, exc.related))
             except FileNotFoundError as exc:
                 fail(f"{exc.filename}: no such file or directory")
             except OSError as exc:
@@ -204,6 +233,17 @@ def numbers(values: Mapping[str, str], flag: str, what: str) -> dict[str, float]
     except ValueError:
         given = ", ".join(f"{k}={v}" for k, v in values.items())
         raise InputError(f"{flag}: expected {what} with a number, got {given}") from None
+
+
+def floats(values: Optional[list[str]], flag: str, what: str) -> list[float] | None:
+    """Numbers of a repeatable, comma-separable flag (None when none given)."""
+    items = split_list(values)
+    if items is None:
+        return None
+    try:
+        return [float(v) for v in items]
+    except ValueError:
+        raise InputError(f"{flag}: expected {what}, got {', '.join(items)}") from None
 
 
 def xyz(text: str, flag: str) -> list[float]:

@@ -8,7 +8,7 @@ from typing import Optional
 import typer
 from rich.table import Table
 
-from rplearn.cli._app import app, out, progress_bar, say, split_list, user_errors
+from rplearn.cli._app import app, floats, out, progress_bar, say, user_errors
 from rplearn.errors import InputError
 
 #: The plan's library parameters whose flags have other names.
@@ -54,8 +54,8 @@ def trajectory(
         spec = ModelSpec.parse(check_model)
         if not spec.decouples:
             raise InputError(f"--check-model: {spec.label} has no per-node pattern to check; use sh, bg or poly")
-    learn = [float(v) for v in (split_list(psi0_deg) or ["0", "24", "48"])]
-    test = [float(v) for v in (split_list(test_psi0_deg) or ["36"])]
+    learn = floats(psi0_deg, "--psi0", "headings in degrees") or [0.0, 24.0, 48.0]
+    test = floats(test_psi0_deg, "--test-psi0", "headings in degrees") or [36.0]
     campaign = paper_campaign(
         learning_psi0_deg=learn, testing_psi0_deg=test, distance_m=distance_m, height_m=height_m, n_loops=loops, speed_m_s=speed_m_s
     )

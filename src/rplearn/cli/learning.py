@@ -101,7 +101,7 @@ def sweep(
     orders: str = typer.Option("3..15", "--orders", help="Range A..B or a list 3,5,8."),
     learn_units: Optional[list[str]] = typer.Option(None, "--learn-units", help="Learning units (default: all but the test units)."),
     test_units: Optional[list[str]] = typer.Option(None, "--test-units", help="Testing units (default: units whose label starts with 'test')."),
-    output: Optional[str] = typer.Option(None, "-o", "--out", help="CSV of the sweep."),
+    output: Optional[str] = typer.Option(None, "-o", "--out", help="The sweep as a table (.csv or .parquet)."),
     plot_path: Optional[str] = typer.Option(None, "--plot", help="PNG of the sweep (Fig. 10)."),
 ) -> None:
     """Model-order selection: test RMSE, AIC and LTD against the order (paper Fig. 10).
@@ -117,8 +117,7 @@ def sweep(
             dataset, model, order_list, split_list(learn_units), split_list(test_units),
             progress=lambda m: p.update(task, advance=1, description=m), output=output, plot_path=plot_path,
         )
-    say(result.to_frame().to_string(index=False))
-    say(f"lowest test RMSE at order {result.best_order}")
+    say(result.summary())
 
 
 @app.command()

@@ -7,7 +7,7 @@ from typing import Optional
 
 import typer
 
-from rplearn.cli._app import app, note, numbers, pairs, reader_options, say, split_list, user_errors, xyz
+from rplearn.cli._app import app, floats, note, numbers, pairs, reader_options, say, split_list, user_errors, xyz
 from rplearn.errors import InputError
 
 
@@ -44,7 +44,7 @@ def links(
     from rplearn.workflows.logs import swarm_links
 
     readers = reader_options(node, pose_topic=pose_topic, nan_policy=nan_policy, allow_unsorted=allow_unsorted)
-    times = list(numbers(dict(enumerate(split_list(at) or [])), "--at", "times in seconds").values()) if at else None
+    times = floats(at, "--at", "times in seconds")
     outcome = swarm_links(
         model_path, poses, output, tx_power_dbm, frequency_hz, readers, connectivity_out, plot_out,
         pattern_of=pairs(pattern, "--as"), step_s=step_s, times_s=times, min_rssi_dbm=min_rssi_dbm, max_gap_s=max_gap_s,

@@ -96,11 +96,11 @@ class BasisGrid(Basis):
 
     def __post_init__(self) -> None:
         if int(self.order) != self.order or self.order < 1:
-            raise InputError(f"BG order must be a positive integer, got {self.order!r}")
+            raise InputError(f"BG order must be a positive integer, got {self.order!r}", param="order")
         if not (np.isfinite(self.sigma_rad2) and self.sigma_rad2 > 0):
-            raise InputError(f"BG sigma_rad2 must be positive, got {self.sigma_rad2!r}")
+            raise InputError(f"BG sigma_rad2 must be positive, got {self.sigma_rad2!r}", param="sigma_rad2")
         if self.grid not in ("paper", "fibonacci"):
-            raise InputError(f"BG grid must be 'paper' or 'fibonacci', got {self.grid!r}")
+            raise InputError(f"BG grid must be 'paper' or 'fibonacci', got {self.grid!r}", param="grid")
 
     @property
     def n_coef(self) -> int:

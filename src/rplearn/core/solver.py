@@ -225,7 +225,7 @@ def _gauge_constraints(
         if "node" not in gauge:
             raise InputError("gauge: expected 'equal-mean' or {'node': ID, 'mean_gain_dbi': VALUE}")
         if str(gauge["node"]) not in node_names:
-            raise InputError(f"gauge: unknown node {gauge['node']!r}; nodes are {', '.join(node_names)}")
+            raise InputError(f"gauge: unknown node {gauge['node']!r}; nodes are {', '.join(node_names)}", param="gauge_node")
         fixed_node = node_names.index(str(gauge["node"]))
         fixed_value = float(gauge.get("mean_gain_dbi", 0.0))
     elif gauge != "equal-mean":

@@ -143,7 +143,7 @@ def split_units(
         (a test must use unseen data).
     """
     if "unit" not in df.columns:
-        raise InputError(f"{source}: needs a 'unit' column to split learning from testing samples", param="test_units")
+        raise InputError(f"{source}: needs a 'unit' column to split learning from testing samples")
     available = dataset_units(df)
     test = [str(u) for u in test_units] if test_units else [u for u in available if is_test_unit(u)]
     learn = [str(u) for u in learn_units] if learn_units else [u for u in available if u not in test]
@@ -160,7 +160,7 @@ def select_units(df: pd.DataFrame, units: Sequence[str] | None, source: str = "d
     if not units:
         return df
     if "unit" not in df.columns:
-        raise InputError(f"{source}: choosing units needs a 'unit' column, which this dataset lacks", param="units")
+        raise InputError(f"{source}: choosing units needs a 'unit' column, which this dataset lacks")
     wanted = [str(u) for u in units]
     known = dataset_units(df)
     unknown = [u for u in wanted if u not in known]

@@ -376,6 +376,19 @@ def safe_file_name(name: str, fallback: str = "node") -> str:
     return safe or fallback
 
 
+def node_file_names(nodes: Sequence[str]) -> dict[str, str]:
+    """Node id -> file name (:func:`safe_file_name`) for every node; two nodes whose ids give
+    the same name are refused rather than one file overwriting the other."""
+    names: dict[str, str] = {}
+    for node in nodes:
+        name = safe_file_name(node)
+        clash = next((other for other, taken in names.items() if taken == name), None)
+        if clash is not None:
+            raise InputError(f"nodes {clash!r} and {node!r} would both be written as {name!r}; rename one", param="nodes")
+        names[node] = name
+    return names
+
+
 def export_msi_files(
     pattern_like: Any, out_dir: str | os.PathLike[str], frequency_hz: float | None = None
 ) -> list[str]:
@@ -403,8 +416,8 @@ def export_msi_files(
     os.makedirs(out_dir, exist_ok=True)
     label = getattr(pattern_like, "label", "pattern")
     paths = []
-    for node in select_nodes(pattern_like, None):
-        path = os.path.join(os.fspath(out_dir), f"{safe_file_name(node)}.msi")
+    for node, name in node_file_names(select_nodes(pattern_like, None)).items():
+        path = os.path.join(os.fspath(out_dir), f"{name}.msi")
         export_msi(pattern_like, node, path, frequency_hz=float(frequency_hz), name=f"rplearn {label} node {node}")
         paths.append(path)
     return paths

@@ -56,6 +56,19 @@ def check_table_path(path: str) -> str:
     raise InputError(f"{path}: unknown table format; name it .csv, .csv.gz, .parquet or .pq")
 
 
+def check_output_path(path: str) -> str:
+    """Refuse an output path whose folder does not exist or that is a folder, before any work.
+
+    Returns the path unchanged.
+    """
+    folder = os.path.dirname(os.path.abspath(str(path)))
+    if not os.path.isdir(folder):
+        raise InputError(f"{path}: cannot write into a non-existent directory {folder}")
+    if os.path.isdir(str(path)):
+        raise InputError(f"{path}: is a directory, not a file to write")
+    return str(path)
+
+
 def provenance(command: str | None = None, **parameters: Any) -> dict[str, Any]:
     """What made an output: library version, command line, parameters, time."""
     return {

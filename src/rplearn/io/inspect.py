@@ -301,7 +301,7 @@ def _forgiving_options(path: str, kind: str, options: ReaderOptions) -> ReaderOp
 
 def _read_one(path: str, options: ReaderOptions) -> tuple[pd.DataFrame | None, pd.DataFrame | None,
                                                          dict[str, Any], dict[str, int]]:
-    from rplearn.io import detect_format, read_logs
+    from rplearn.io.read import detect_format, read_logs
     from rplearn.io import tables as _tables
 
     kind = detect_format(path)

@@ -59,19 +59,19 @@ class ModelSpec:
         if self.ridge is None:
             object.__setattr__(self, "ridge", default_ridge(self.kind))
         if not (np.isfinite(self.ridge) and self.ridge >= 0):
-            raise InputError(f"ridge must be a non-negative number, got {self.ridge!r}")
+            raise InputError(f"ridge must be a non-negative number, got {self.ridge!r}", param="ridge")
         if self.kind != "mean" and (self.order is None or int(self.order) < 1):
-            raise InputError(f"model {self.kind}: order must be a positive integer, got {self.order!r}")
+            raise InputError(f"model {self.kind}: order must be a positive integer, got {self.order!r}", param="order")
 
     @classmethod
     def parse(cls, text: str, **options: Any) -> "ModelSpec":
         """Parse ``"sh-10"``, ``"SH10"``, ``"bg-7"``, ``"p-12"``, ``"nn-400"``, ``"m"``, ``"knn"``..."""
         m = re.fullmatch(r"\s*([a-zA-Z]+)[-_ ]?(\d+)?\s*", str(text))
         if not m:
-            raise InputError(f"unknown model {text!r}; expected one of sh, bg, poly, mean, knn (e.g. sh-10, nn-400)")
+            raise InputError(f"unknown model {text!r}; expected one of sh, bg, poly, mean, knn (e.g. sh-10, nn-400)", param="model")
         kind = _ALIASES.get(m.group(1).lower(), m.group(1).lower())
         if kind not in MODEL_KINDS:
-            raise InputError(f"unknown model {text!r}; expected one of {', '.join(MODEL_KINDS)} (e.g. sh-10, nn-400)")
+            raise InputError(f"unknown model {text!r}; expected one of {', '.join(MODEL_KINDS)} (e.g. sh-10, nn-400)", param="model")
         order = int(m.group(2)) if m.group(2) else options.pop("order", None)
         options.pop("order", None)
         if kind != "mean" and order is None:
@@ -133,7 +133,9 @@ def check_fit_options(
         if unused:
             raise InputError(f"{', '.join(unused)}: used by BG models only, not by {spec.label}", param=unused[0])
     if gauge_dbi is not None and gauge_node is None:
-        raise InputError("gauge_dbi needs gauge_node (which node's mean gain it fixes)", param="gauge_dbi")
+        raise InputError(
+            "gauge_dbi needs gauge_node (which node's mean gain it fixes)", param="gauge_dbi", related=("gauge_node",)
+        )
     if order is not None and spec.order is not None and int(order) != spec.order:
         raise InputError(
             f"order {order} contradicts the model {model or spec.label}, which sets the order {spec.order}", param="order"

@@ -178,4 +178,4 @@ def make_preset(name: str) -> SimulationConfig:
     try:
         return _PRESETS[name]()
     except KeyError:
-        raise InputError(f"preset: expected one of {', '.join(PRESET_NAMES)}, got {name!r}") from None
+        raise InputError(f"preset: expected one of {', '.join(PRESET_NAMES)}, got {name!r}", param="preset") from None

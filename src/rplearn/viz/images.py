@@ -5,7 +5,7 @@ from __future__ import annotations
 import os
 from typing import Any, Sequence
 
-from rplearn.io.export import check_pattern_like, safe_file_name, select_nodes
+from rplearn.io.export import check_pattern_like, node_file_names, select_nodes
 from rplearn.viz import plot
 
 
@@ -34,11 +34,11 @@ def export_pattern_images(
         in a node id become ``_`` in the file name).
     """
     check_pattern_like(pattern_like)
+    names = node_file_names(select_nodes(pattern_like, nodes))
     out_dir = os.fspath(out_dir)
     os.makedirs(out_dir, exist_ok=True)
     paths = []
-    for n in select_nodes(pattern_like, nodes):
-        safe = safe_file_name(n)
+    for n, safe in names.items():
         paths.append(
             plot.plot_pattern_3d(
                 pattern_like, n, os.path.join(out_dir, f"pattern_{safe}.png"), step_deg

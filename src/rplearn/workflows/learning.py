@@ -16,7 +16,7 @@ from rplearn.analysis.sweep import SweepResult, no_progress, order_sweep
 from rplearn.core.metrics import Scores
 from rplearn.data.units import UnitChoice, evaluation_units, learning_units, samples_of, split_units
 from rplearn.errors import InputError
-from rplearn.io.files import check_table_path, provenance, read_dataset, write_json, write_table
+from rplearn.io.files import check_output_path, check_table_path, provenance, read_dataset, write_json, write_table
 from rplearn.models.fit import FittedModel, evaluate_models, fit_model, scores_markdown
 from rplearn.models.load import load_model
 from rplearn.models.predict import DatasetPrediction, distinct_labels, predict_dataset
@@ -84,6 +84,8 @@ def fit_dataset(
     output : str, optional
         Model file to write (JSON).
     """
+    if output:
+        check_output_path(output)
     df = read_dataset(dataset)
     choice = learning_units(df, units, dataset)
     samples = samples_of(df, choice.units, dataset)
@@ -131,6 +133,9 @@ def evaluate_model_files(
     """
     if not model_paths:
         raise InputError("evaluate: give at least one model file and a dataset", param="model_paths")
+    for path in (json_out, markdown_out):
+        if path:
+            check_output_path(path)
     models = [load_model(p) for p in model_paths]
     df = read_dataset(dataset)
     choice = evaluation_units(df, units, [m.provenance for m in models], dataset)
@@ -153,6 +158,7 @@ def predict_file(model_path: str, dataset: str, output: str) -> DatasetPredictio
     See :func:`rplearn.models.predict.predict_dataset` for the added columns.
     """
     check_table_path(output)
+    check_output_path(output)
     model = load_model(model_path)
     prediction = predict_dataset(model, read_dataset(dataset, require_rssi=False), dataset)
     write_table(prediction.table, output)
@@ -176,6 +182,9 @@ def sweep_dataset(
     """
     if not orders or min(int(o) for o in orders) < 1:
         raise InputError(f"orders: expected positive orders, got {list(orders)!r}", param="orders")
+    for path in (output, plot_path):
+        if path:
+            check_output_path(path)
     if output:
         check_table_path(output)
     df = read_dataset(dataset)

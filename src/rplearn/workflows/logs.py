@@ -17,7 +17,7 @@ from rplearn.analysis.swarm import SwarmPrediction, predict_swarm
 from rplearn.data.sync import SyncOptions, SyncResult, synchronise
 from rplearn.errors import InputError
 from rplearn.io import ReaderOptions, read_logs
-from rplearn.io.files import check_table_path, write_json, write_table
+from rplearn.io.files import check_output_path, check_table_path, write_json, write_table
 from rplearn.models.load import load_model
 from rplearn.models.predict import FrequencyMismatch, frequency_mismatch
 
@@ -54,6 +54,7 @@ def sync_logs(
 ) -> SyncOutcome:
     """Read pose and signal logs of any format, match every packet with the poses of both
     ends (paper Sec. V-B4) and write the matched dataset."""
+    check_output_path(output)
     check_table_path(output)
     pose_logs, pose_meta = read_logs(pose_paths, reader_options)
     signal_logs, _ = read_logs(signal_paths, reader_options)
@@ -93,7 +94,10 @@ def swarm_links(
     """
     for path in (output, connectivity_out):
         if path:
+            check_output_path(path)
             check_table_path(path)
+    if plot_path:
+        check_output_path(plot_path)
     model = load_model(model_path)
     logs, meta = read_logs(pose_paths, reader_options)
     if logs.pose is None:
@@ -122,8 +126,10 @@ def swarm_headings(
 
     ``options`` go to :func:`rplearn.analysis.headings.best_swarm_headings`.
     """
-    if output and not output.lower().endswith(".json"):
-        check_table_path(output)
+    if output:
+        check_output_path(output)
+        if not output.lower().endswith(".json"):
+            check_table_path(output)
     unknown = sorted(set((options.get("start_yaw_deg") or {})) - set(positions))
     if unknown:
         raise InputError(f"start_yaw_deg names drone(s) {', '.join(unknown)} without a position", param="start_yaw_deg")

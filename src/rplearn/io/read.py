@@ -1,0 +1,263 @@
+"""Reading logs of any supported format: detect each file's format and read it into one
+canonical pose log and one signal log (:func:`read_logs`)."""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from typing import Any, Callable, Iterable, Mapping
+
+import pandas as pd
+
+from rplearn.data.tables import NON_UNIT_QUATERNION_ATTR, validate_pose_log
+from rplearn.errors import InputError, RplearnError
+from rplearn.io._common import Logs
+from rplearn.io.options import ReaderOptions
+
+_MAGIC: tuple[tuple[bytes, str], ...] = (
+    (b"ULog\x01\x12\x35", "ulog"),
+    (b"#ROSBAG V2.0", "ros1"),
+    (b"\x89MCAP", "ros2"),
+    (b"SQLite format 3\x00", "ros2"),
+    (b"\x0a\x0d\x0d\x0a", "pcap"),
+    (b"\xd4\xc3\xb2\xa1", "pcap"),
+    (b"\xa1\xb2\xc3\xd4", "pcap"),
+    (b"\x4d\x3c\xb2\xa1", "pcap"),
+    (b"\xa1\xb2\x3c\x4d", "pcap"),
+    (b"PAR1", "table"),
+)
+_EXTENSIONS: dict[str, str] = {
+    ".ulg": "ulog",
+    ".bag": "ros1",
+    ".mcap": "ros2",
+    ".db3": "ros2",
+    ".pcap": "pcap",
+    ".pcapng": "pcap",
+    ".cap": "pcap",
+    ".csv": "table",
+    ".parquet": "table",
+    ".pq": "table",
+}
+
+
+def detect_format(path: str | os.PathLike) -> str:
+    """Format of a log: ``"ulog"``, ``"ros1"``, ``"ros2"``, ``"pcap"`` or ``"table"``.
+
+    A directory holding ``metadata.yaml`` is a ROS 2 bag. Files are judged by their first
+    bytes, then by extension.
+    """
+    p = str(path)
+    if not os.path.exists(p):
+        raise InputError(f"{p}: no such file or directory")
+    if os.path.isdir(p):
+        if os.path.exists(os.path.join(p, "metadata.yaml")):
+            return "ros2"
+        raise InputError(f"{p}: a directory but not a ROS 2 bag (no metadata.yaml)")
+    with open(p, "rb") as fh:
+        head = fh.read(16)
+    for magic, kind in _MAGIC:
+        if head.startswith(magic):
+            return kind
+    ext = os.path.splitext(p)[1].lower()
+    if ext in _EXTENSIONS:
+        return _EXTENSIONS[ext]
+    raise InputError(
+        f"{p}: unknown log format; expected one of {', '.join(sorted(set(_EXTENSIONS)))} "
+        "or a ROS 2 bag directory"
+    )
+
+
+def _bag_needs_topics(path: str, msg_definitions: Mapping[str, str] | None) -> str:
+    """Message for a bag read without topics: how to name them, and the topics it has."""
+    from rplearn.io.rosbag import bag_topics, describe_topics
+
+    head = (
+        f"{path}: a ROS bag needs its pose topics and RSSI topics named "
+        "(ReaderOptions.pose_topics={topic: node}, ReaderOptions.rssi_topics={topic: (tx, rx)})"
+    )
+    try:
+        topics = bag_topics(path, msg_definitions)
+    except RplearnError as exc:
+        return f"{head}; its topics cannot be listed ({str(exc).splitlines()[0]})"
+    return f"{head}; it has {describe_topics(topics)}"
+
+
+@dataclass
+class _Gathered:
+    """What :func:`read_logs` has read so far: logs, per-file metadata, the common origin."""
+
+    origin: tuple[float, float, float] | None
+    poses: list[pd.DataFrame] = field(default_factory=list)
+    signals: list[pd.DataFrame] = field(default_factory=list)
+    files: list[dict[str, Any]] = field(default_factory=list)
+
+
+def _path_list(paths: str | os.PathLike | Iterable[str | os.PathLike]) -> list[str]:
+    """The paths as a non-empty list of strings."""
+    if isinstance(paths, (str, os.PathLike)):
+        paths = [paths]
+    out = [str(p) for p in paths]
+    if not out:
+        raise InputError("read_logs: no paths given", param="paths")
+    return out
+
+
+def _read_table(path: str, options: ReaderOptions, got: _Gathered) -> dict[str, Any]:
+    """Read a CSV/Parquet pose or signal table; a geodetic one may fix the common origin."""
+    from rplearn.io import tables as _tables
+
+    what = _tables.table_kind(path, options.columns)
+    if what == "pose":
+        pose, meta = _tables.read_pose_table(
+            path, columns=options.columns, node=(options.nodes or {}).get(path),
+            origin_geodetic=got.origin, nan_policy=options.nan_policy,
+            allow_unsorted=options.allow_unsorted,
+        )
+        if meta.get("origin_geodetic") is not None and got.origin is None:
+            got.origin = meta["origin_geodetic"]
+        got.poses.append(pose)
+    else:
+        ptx = options.tx_power_dbm if not isinstance(options.tx_power_dbm, Mapping) else None
+        signal, meta = _tables.read_signal_table(
+            path, columns=options.columns, tx_power_dbm=ptx, frequency_hz=options.frequency_hz,
+            rx=(options.receivers or {}).get(path),
+        )
+        got.signals.append(signal)
+    meta["kind"] = what
+    return meta
+
+
+def _read_bag(path: str, options: ReaderOptions, got: _Gathered) -> dict[str, Any]:
+    """Read the named pose and RSSI topics of a ROS 1 or ROS 2 bag."""
+    from rplearn.io import rosbag as _rosbag
+
+    if not options.pose_topics and not options.rssi_topics:
+        raise InputError(_bag_needs_topics(path, options.msg_definitions), param="pose_topics")
+    if isinstance(options.tx_power_dbm, Mapping):
+        raise InputError(
+            f"{path}: the transmit power for a bag must be one number [dBm] (ReaderOptions.tx_power_dbm)",
+            param="tx_power_dbm",
+        )
+    logs, meta = _rosbag.read_rosbag(
+        path, options.pose_topics or {}, options.rssi_topics, rssi_field=options.rssi_field,
+        tx_power_dbm=options.tx_power_dbm, frequency_hz=options.frequency_hz,
+        msg_definitions=options.msg_definitions,
+    )
+    if logs.pose is not None:
+        got.poses.append(logs.pose)
+    if logs.signal is not None:
+        got.signals.append(logs.signal)
+    meta["kind"] = "pose+signal"
+    return meta
+
+
+def _read_ulog(path: str, options: ReaderOptions, got: _Gathered) -> dict[str, Any]:
+    """Read a PX4 ULog of a named node; its geodetic anchor may fix the common origin."""
+    from rplearn.io import ulog as _ulog
+
+    node = (options.nodes or {}).get(path)
+    if node is None:
+        raise InputError(
+            f"{path}: give the node id of this ULog (ReaderOptions.nodes={{path: node}})", param="nodes"
+        )
+    pose, meta = _ulog.read_ulog(
+        path, node, got.origin, time_reference="auto", require_valid=options.require_valid
+    )
+    if got.origin is None and meta["anchor_geodetic"] is not None:
+        # re-express on the anchor so that later logs share it (no-op for this one)
+        got.origin = meta["anchor_geodetic"]
+    got.poses.append(pose)
+    meta["kind"] = "pose"
+    return meta
+
+
+def _read_pcap(path: str, options: ReaderOptions, got: _Gathered) -> dict[str, Any]:
+    """Read a radiotap capture of a named receiver with a known transmit power."""
+    from rplearn.io import pcap as _pcap
+
+    rx = (options.receivers or {}).get(path)
+    if rx is None:
+        raise InputError(
+            f"{path}: give the capturing node (ReaderOptions.receivers={{path: node}})", param="receivers"
+        )
+    if options.tx_power_dbm is None:
+        raise InputError(
+            f"{path}: give the transmit power [dBm], radiotap does not carry the sender's power "
+            "(ReaderOptions.tx_power_dbm)",
+            param="tx_power_dbm",
+        )
+    signal, meta = _pcap.read_pcap(
+        path, rx, options.tx_power_dbm, address_map=options.address_map, frequency_hz=options.frequency_hz
+    )
+    got.signals.append(signal)
+    meta["kind"] = "signal"
+    return meta
+
+
+_READERS: dict[str, Callable[[str, ReaderOptions, _Gathered], dict[str, Any]]] = {
+    "table": _read_table,
+    "ros1": _read_bag,
+    "ros2": _read_bag,
+    "ulog": _read_ulog,
+    "pcap": _read_pcap,
+}
+
+
+def _merge(got: _Gathered) -> tuple[Logs, dict[str, Any]]:
+    """One validated pose log and one time-sorted signal log from everything read."""
+    pose = None
+    if got.poses:
+        merged = pd.concat(got.poses, ignore_index=True)
+        merged.attrs[NON_UNIT_QUATERNION_ATTR] = sum(
+            int(p.attrs.get(NON_UNIT_QUATERNION_ATTR, 0)) for p in got.poses
+        )
+        pose = validate_pose_log(merged, "pose logs")
+    signal = None
+    if got.signals:
+        signal = pd.concat(got.signals, ignore_index=True).sort_values("t", kind="stable").reset_index(drop=True)
+    return Logs(pose=pose, signal=signal), {"files": got.files, "origin_geodetic": got.origin}
+
+
+def read_logs(
+    paths: str | os.PathLike | Iterable[str | os.PathLike],
+    options: ReaderOptions | None = None,
+) -> tuple[Logs, dict[str, Any]]:
+    """Read logs of any supported format into one pose log and one signal log.
+
+    Parameters
+    ----------
+    paths : path or iterable of paths
+        Files (or ROS 2 bag directories); each one's format is detected by
+        :func:`detect_format`.
+    options : ReaderOptions, optional
+        Column renaming, common geodetic origin, node ids, bag topics, pcap receivers and
+        addresses, constant tx power [dBm] and frequency [Hz], and the NaN / unsorted /
+        invalid-row policies; ``ReaderOptions()`` by default.
+
+    Returns
+    -------
+    logs : Logs
+        ``pose`` and ``signal`` (None if no file gave one).
+    metadata : dict
+        ``files``: a list of the per-file metadata (with ``format`` and ``kind``),
+        ``origin_geodetic``: the common origin used (or None).
+
+    Raises
+    ------
+    InputError
+        On a missing file, an unknown format, or an option a file needs but was not given
+        (``param`` names the :class:`ReaderOptions` field).
+    """
+    if options is None:
+        options = ReaderOptions()
+    elif not isinstance(options, ReaderOptions):
+        raise InputError(
+            f"options: expected a ReaderOptions, got {type(options).__name__}", param="options"
+        )
+    got = _Gathered(origin=options.origin_geodetic)
+    for path in _path_list(paths):
+        got.files.append(_READERS[detect_format(path)](path, options, got))
+    return _merge(got)
+
+
+#: Public names of the subpackage defined in its modules, imported on first use.
