@@ -13,7 +13,7 @@ from rplearn.errors import InputError
 
 #: The plan's library parameters whose flags have other names.
 TRAJECTORY_FLAGS = {
-    "distance_m": "--distance", "height_m": "--height", "n_loops": "--loops", "speed_m_s": "--speed",
+    "check_model": "--check-model", "distance_m": "--distance", "height_m": "--height", "n_loops": "--loops", "speed_m_s": "--speed",
     "learning_psi0_deg": "--psi0", "testing_psi0_deg": "--test-psi0", "rate_hz": "--rate",
     "max_speed_m_s": "--max-speed", "max_accel_m_s2": "--max-accel", "max_flight_time_s": "--max-flight-time",
 }
@@ -44,34 +44,24 @@ def trajectory(
 
     Example: rplearn trajectory --distance 10 --height 20 --loops 5 --max-flight-time 600 -o plan
     """
-    from rplearn.models.spec import ModelSpec
-    from rplearn.plan.campaign import paper_campaign, write_references
-    from rplearn.plan.check import check_plan
-    from rplearn.plan.trajectory import PlanLimits, summarize_unit
+    from rplearn.plan.trajectory import PlanLimits
+    from rplearn.workflows.planning import PAPER_LEARNING_PSI0_DEG, PAPER_TESTING_PSI0_DEG, plan_campaign
 
-    spec = None
-    if check_model and check_model.lower() != "none":  # refuse a bad model before writing files
-        spec = ModelSpec.parse(check_model)
-        if not spec.decouples:
-            raise InputError(f"--check-model: {spec.label} has no per-node pattern to check; use sh, bg or poly")
-    learn = floats(psi0_deg, "--psi0", "headings in degrees") or [0.0, 24.0, 48.0]
-    test = floats(test_psi0_deg, "--test-psi0", "headings in degrees") or [36.0]
-    campaign = paper_campaign(
-        learning_psi0_deg=learn, testing_psi0_deg=test, distance_m=distance_m, height_m=height_m, n_loops=loops, speed_m_s=speed_m_s
+    plan = plan_campaign(
+        out_dir, floats(psi0_deg, "--psi0", "headings in degrees") or PAPER_LEARNING_PSI0_DEG,
+        floats(test_psi0_deg, "--test-psi0", "headings in degrees") or PAPER_TESTING_PSI0_DEG,
+        distance_m, height_m, loops, speed_m_s, PlanLimits(max_speed, max_accel, max_flight_time), rate_hz,
+        None if not check_model or check_model.lower() == "none" else check_model, wind_m_s,
     )
-    limits = PlanLimits(max_speed, max_accel, max_flight_time)
     table = Table(title="calibration campaign")
     for col in ("unit", "duration/s", "path/m", "max speed/(m/s)", "max accel/(m/s^2)", "max yaw rate/(deg/s)"):
         table.add_column(col)
-    for unit in campaign.units:
-        s = summarize_unit(unit, limits)
+    for s in plan.units:
         table.add_row(s.label, f"{s.duration_s:.0f}", f"{s.path_length_m:.0f}", f"{s.max_speed_m_s:.2f}", f"{s.max_accel_m_s2:.2f}", f"{s.max_yaw_rate_deg_s:.1f}")
-    paths = write_references(campaign, out_dir, rate_hz)
     out.print(table)
-    say(f"wrote {len(paths)} reference files to {out_dir}")
-    if spec is not None:
-        report = check_plan(campaign, spec.basis(), wind_speed_m_s=wind_m_s)
-        say("plan check (learning units):\n" + report.summary())
+    say(f"wrote {len(plan.paths)} reference files to {out_dir}")
+    if plan.check is not None:
+        say("plan check (learning units):\n" + plan.check.summary())
 
 
 @app.command()

@@ -6,7 +6,7 @@ from typing import Optional
 
 import typer
 
-from rplearn.cli._app import app, fail, link, numbers, pairs, reader_options, say, user_errors
+from rplearn.cli._app import app, fail, link, numbers, pairs, reader_options, say, user_errors, with_flag
 
 
 @app.command()
@@ -31,7 +31,9 @@ def inspect(
 
     options = reader_options(node, receiver, address, pose_topic, rssi_topic, rssi_field, msg_definition, require_valid=require_valid)
     report = inspect_logs(logs, options)
-    say(report.to_markdown() if markdown else report.to_text())
+    text = report.to_markdown() if markdown else report.to_text()
+    # the report names reader options as the library knows them; here they are flags
+    say("\n".join(with_flag(line, None, inspect) for line in text.splitlines()))
     unreadable = [f for f in report.files if f.get("error") is not None]
     if unreadable:
         fail(f"{len(unreadable)} of {len(report.files)} file(s) could not be read (see above)")

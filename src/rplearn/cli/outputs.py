@@ -7,7 +7,6 @@ from typing import Optional
 import typer
 
 from rplearn.cli._app import app, progress_bar, say, step, user_errors
-from rplearn.errors import InputError
 
 
 @app.command()
@@ -23,25 +22,9 @@ def export(
 
     Example: rplearn export sh10.json --format msi -o patterns/
     """
-    from rplearn.io.export import export_grid, export_msi_files
-    from rplearn.models.load import load_model
+    from rplearn.workflows.planning import export_model_file
 
-    if fmt not in ("grid", "msi", "images"):
-        raise InputError(f"--format: expected grid, msi or images, got {fmt!r}")
-    model = load_model(model_path)
-    if model.kind != "patterns":
-        raise InputError(f"{model_path}: a {model.kind} baseline has no per-node pattern to export")
-    if fmt == "grid":
-        frame = export_grid(model, step_deg, output)
-        say(f"wrote {len(frame):,} grid values to {output}")
-        return
-    if fmt == "msi":
-        paths = export_msi_files(model, output, frequency_hz)
-    else:
-        from rplearn.viz.images import export_pattern_images
-
-        paths = export_pattern_images(model, output)
-    for path in paths:
+    for path in export_model_file(model_path, fmt, output, step_deg, frequency_hz):
         say(f"wrote {path}")
 
 

@@ -8,7 +8,6 @@ from typing import Optional
 import typer
 
 from rplearn.cli._app import app, floats, note, numbers, pairs, reader_options, say, split_list, user_errors, xyz
-from rplearn.errors import InputError
 
 
 @app.command()
@@ -108,12 +107,10 @@ def orient(
 
     Example: rplearn orient sh10.json --tx A --rx B --tx-pos 0,0,20 --rx-pos 10,5,25 --turn both
     """
-    from rplearn.analysis.headings import best_yaw
-    from rplearn.models.load import load_model
+    from rplearn.workflows.planning import orient_link
 
-    model = load_model(model_path)
-    if model.kind != "patterns":
-        raise InputError(f"{model_path}: a {model.kind} baseline cannot tell which heading is better")
-    result = best_yaw(model, tx, rx, xyz(tx_pos, "--tx-pos"), xyz(rx_pos, "--rx-pos"), turn=turn, tx_yaw_deg=tx_yaw,
-                      rx_yaw_deg=rx_yaw, tx_power_dbm=tx_power_dbm, frequency_hz=frequency_hz)
+    result = orient_link(
+        model_path, tx, rx, tx_position_xyz=xyz(tx_pos, "--tx-pos"), rx_position_xyz=xyz(rx_pos, "--rx-pos"), turn=turn,
+        tx_yaw_deg=tx_yaw, rx_yaw_deg=rx_yaw, tx_power_dbm=tx_power_dbm, frequency_hz=frequency_hz,
+    )
     say(result.summary())

@@ -19,20 +19,25 @@ from rplearn.workflows.learning import (
     predict_file,
     sweep_dataset,
 )
+from rplearn.workflows.planning import CampaignPlan, export_model_file, orient_link, plan_campaign
 from rplearn.workflows.logs import LinksOutcome, SyncOutcome, reader_notes, swarm_headings, swarm_links, sync_logs
 
 __all__ = [
+    "CampaignPlan",
     "DEMO_MODELS",
     "DemoResult",
     "EvaluationOutcome",
     "FitOutcome",
     "LinksOutcome",
     "ReportOutcome",
-    "draw_pattern_files",
     "SyncOutcome",
+    "draw_pattern_files",
     "evaluate_model_files",
+    "export_model_file",
     "fit_dataset",
     "learn_and_report",
+    "orient_link",
+    "plan_campaign",
     "predict_file",
     "reader_notes",
     "run_demo",

@@ -1,0 +1,94 @@
+"""Pipelines before and after learning that write or answer one thing: plan a calibration
+campaign (``rplearn trajectory``), export a model file (``rplearn export``) and orient one link
+(``rplearn orient``)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Sequence
+
+from rplearn.analysis.headings import OrientationResult, best_yaw
+from rplearn.errors import InputError
+from rplearn.io.export import export_grid, export_msi_files
+from rplearn.models.base import require_patterns
+from rplearn.models.load import load_model
+from rplearn.models.spec import ModelSpec
+from rplearn.plan.campaign import Campaign, paper_campaign, write_references
+from rplearn.plan.check import PlanCheck, check_plan
+from rplearn.plan.trajectory import PlanLimits, UnitSummary, summarize_unit
+
+#: Headings [deg] of the paper's learning and testing units (Sec. V-C).
+PAPER_LEARNING_PSI0_DEG: tuple[float, ...] = (0.0, 24.0, 48.0)
+PAPER_TESTING_PSI0_DEG: tuple[float, ...] = (36.0,)
+
+
+@dataclass
+class CampaignPlan:
+    """A planned campaign, what each unit asks of the drones, the references written and the
+    plan check (None when not asked for)."""
+
+    campaign: Campaign
+    units: list[UnitSummary]
+    paths: list[str]
+    check: PlanCheck | None = None
+
+
+def plan_campaign(
+    out_dir: str,
+    learning_psi0_deg: Sequence[float] = PAPER_LEARNING_PSI0_DEG,
+    testing_psi0_deg: Sequence[float] = PAPER_TESTING_PSI0_DEG,
+    distance_m: float = 10.0,
+    height_m: float = 20.0,
+    n_loops: int = 5,
+    speed_m_s: float = 2.0,
+    limits: PlanLimits | None = None,
+    rate_hz: float = 10.0,
+    check_model: str | None = "sh-10",
+    wind_speed_m_s: float = 0.0,
+) -> CampaignPlan:
+    """Plan the paper's campaign (Sec. IV-A), refuse units beyond ``limits``, write one
+    reference file per unit and drone, and check whether the learning units will decouple the
+    patterns of ``check_model`` (rank, condition number, coverage) before anyone flies.
+    """
+    spec = None
+    if check_model:  # refuse a bad model before writing files
+        spec = ModelSpec.parse(check_model)
+        if not spec.decouples:
+            raise InputError(f"check_model: {spec.label} has no per-node pattern to check; use sh, bg or poly", param="check_model")
+    campaign = paper_campaign(
+        learning_psi0_deg=list(learning_psi0_deg), testing_psi0_deg=list(testing_psi0_deg), distance_m=distance_m,
+        height_m=height_m, n_loops=n_loops, speed_m_s=speed_m_s,
+    )
+    units = [summarize_unit(unit, limits) for unit in campaign.units]
+    paths = write_references(campaign, out_dir, rate_hz)
+    check = check_plan(campaign, spec.basis(), wind_speed_m_s=wind_speed_m_s) if spec is not None else None
+    return CampaignPlan(campaign, units, paths, check)
+
+
+def export_model_file(
+    model_path: str, fmt: str, output: str, step_deg: float = 5.0, frequency_hz: float | None = None
+) -> list[str]:
+    """Export a learned model: ``grid`` (one CSV: node, az_deg, el_deg, gain_db), ``msi`` (one
+    MSI Planet file per node) or ``images`` (one 3-D PNG per node). Returns the paths written.
+    """
+    if fmt not in ("grid", "msi", "images"):
+        raise InputError(f"fmt: expected grid, msi or images, got {fmt!r}", param="fmt")
+    model = load_model(model_path)
+    if model.kind != "patterns":
+        raise InputError(f"{model_path}: a {model.kind} baseline has no per-node pattern to export")
+    if fmt == "grid":
+        export_grid(model, step_deg, output)
+        return [output]
+    if fmt == "msi":
+        return export_msi_files(model, output, frequency_hz)
+    from rplearn.viz.images import export_pattern_images
+
+    return export_pattern_images(model, output)
+
+
+def orient_link(model_path: str, tx_node: str, rx_node: str, **options: object) -> OrientationResult:
+    """Heading(s) that maximise one link of a model file (``rplearn orient``); ``options`` go
+    to :func:`rplearn.analysis.headings.best_yaw`."""
+    model = load_model(model_path)
+    require_patterns(model, f"{model_path}: telling which heading is better")
+    return best_yaw(model, tx_node, rx_node, **options)  # type: ignore[arg-type]
