@@ -19,6 +19,7 @@ LAYERS: tuple[str, ...] = (
     "rplearn._version",
     "rplearn._lazy",
     "rplearn.errors",
+    "rplearn._atomic",
     "rplearn.core",
     "rplearn.data",
     "rplearn.io",

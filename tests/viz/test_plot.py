@@ -84,7 +84,7 @@ def test_every_plot_writes_a_valid_png(tmp_path, truth, learned):
         charts.plot_rank_study(
             [("2 antennas", 128, 127), ("3 antennas", 192, 192)], tmp_path / "rank.png"
         ),
-        plot.plot_pattern_3d(truth, "A", tmp_path / "sub" / "p3d.png", step_deg=10),
+        plot.plot_pattern_3d(truth, "A", tmp_path / "p3d.png", step_deg=10),
     ]
     for p in paths:
         assert isinstance(p, str)
@@ -239,3 +239,12 @@ def test_core_modules_do_not_import_matplotlib():
         "assert not any(m == 'matplotlib' or m.startswith('matplotlib.') for m in sys.modules), 'matplotlib imported'"
     )
     subprocess.run([sys.executable, "-c", code], check=True, timeout=60)
+
+
+def test_a_figure_is_never_written_into_a_missing_folder(truth, tmp_path):
+    """One rule for every output file: its folder must exist (no folder is made silently)."""
+    from rplearn.errors import InputError
+
+    with pytest.raises(InputError, match="non-existent directory"):
+        plot.plot_pattern_3d(truth, "A", tmp_path / "sub" / "p3d.png", step_deg=10)
+    assert not (tmp_path / "sub").exists()

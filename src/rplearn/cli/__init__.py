@@ -14,7 +14,7 @@ parameter at fault, and exits with code 1, without a traceback.
 
 from __future__ import annotations
 
-from rplearn.cli._app import app
+from rplearn.cli._app import app, exit_on_sigterm
 
 # Importing a command module registers its commands; --help lists them in this order, the
 # order of a calibration campaign.
@@ -29,4 +29,5 @@ __all__ = ["app", "main"]
 
 def main() -> None:
     """Entry point of the ``rplearn`` script."""
+    exit_on_sigterm()
     app()

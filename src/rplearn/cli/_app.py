@@ -11,6 +11,7 @@ import functools
 import inspect
 import logging
 import re
+import signal
 from typing import Any, Callable, Iterable, Mapping, Optional
 
 import typer
@@ -317,6 +318,16 @@ def reader_options(
         opts["rssi_field"] = rssi_field
     opts.update({k: v for k, v in fields.items() if v is not None})
     return ReaderOptions(**opts)
+
+
+def exit_on_sigterm() -> None:
+    """Turn SIGTERM (a job scheduler stopping the run) into a normal exit, so that a file being
+    written is removed and the previous one kept (:mod:`rplearn._atomic`)."""
+
+    def handler(signum: int, frame: Any) -> None:
+        raise SystemExit(128 + signum)
+
+    signal.signal(signal.SIGTERM, handler)
 
 
 def print_version(value: bool) -> None:

@@ -65,6 +65,7 @@ from rplearn.data.tables import (
     normalise_times,
     validate_pose_log,
 )
+from rplearn._atomic import atomic_path
 from rplearn.errors import InputError
 
 logger = logging.getLogger(__name__)
@@ -531,27 +532,28 @@ def synchronise_to_parquet(
     import pyarrow.parquet as pq
 
     total = SyncSummary()
-    writer = None
-    schema = None
-    try:
-        for res in synchronise_stream(pose_log, signal_chunks, options, source):
-            total.merge(res.summary)
-            if res.dataset.empty:
-                continue
-            table = pa.Table.from_pandas(res.dataset, preserve_index=False)
-            if writer is None:
-                schema = table.schema
-                writer = pq.ParquetWriter(out_path, schema)
-            else:
-                table = table.select(schema.names).cast(schema)
-            writer.write_table(table)
-        if writer is None:  # nothing matched: write an empty file with the canonical columns
-            empty = pd.DataFrame({c: pd.Series(dtype=str if c in ("tx", "rx") else float)
-                                  for c in MATCHED_COLUMNS})
-            empty.to_parquet(out_path, index=False)
-    finally:
-        if writer is not None:
-            writer.close()
+    with atomic_path(out_path) as tmp:
+        writer = None
+        schema = None
+        try:
+            for res in synchronise_stream(pose_log, signal_chunks, options, source):
+                total.merge(res.summary)
+                if res.dataset.empty:
+                    continue
+                table = pa.Table.from_pandas(res.dataset, preserve_index=False)
+                if writer is None:
+                    schema = table.schema
+                    writer = pq.ParquetWriter(tmp, schema)
+                else:
+                    table = table.select(schema.names).cast(schema)
+                writer.write_table(table)
+            if writer is None:  # nothing matched: write an empty file with the canonical columns
+                empty = pd.DataFrame({c: pd.Series(dtype=str if c in ("tx", "rx") else float)
+                                      for c in MATCHED_COLUMNS})
+                empty.to_parquet(tmp, index=False)
+        finally:
+            if writer is not None:
+                writer.close()
     return total
 
 

@@ -53,6 +53,7 @@ import pandas as pd
 from numpy.typing import ArrayLike, NDArray
 
 from rplearn._version import __version__
+from rplearn._atomic import atomic_open, atomic_path
 from rplearn.errors import InputError
 from rplearn.core.geometry import wrap_angle_rad
 
@@ -190,10 +191,8 @@ def export_grid(
         parts.append(pd.DataFrame({"node": n, "az_deg": az_flat, "el_deg": el_flat, "gain_db": g}))
     df = pd.concat(parts, ignore_index=True)
     if path is not None:
-        path = os.fspath(path)
-        if os.path.dirname(path):
-            os.makedirs(os.path.dirname(path), exist_ok=True)
-        df.to_csv(path, index=False, float_format="%.10g")
+        with atomic_path(path) as tmp:
+            df.to_csv(tmp, index=False, float_format="%.10g")
     return df
 
 
@@ -329,9 +328,7 @@ def write_msi(msi: MsiPattern, path: str | os.PathLike[str]) -> str:
         lines.append(f"{title} {MSI_N_ANGLES}")
         lines += [f"{a} {_fmt_loss(float(v))}" for a, v in enumerate(cut)]
     path = os.fspath(path)
-    if os.path.dirname(path):
-        os.makedirs(os.path.dirname(path), exist_ok=True)
-    with open(path, "w", encoding="ascii", errors="replace", newline="\r\n") as f:
+    with atomic_open(path, "w", encoding="ascii", errors="replace", newline="\r\n") as f:
         f.write("\n".join(lines) + "\n")
     return path
 

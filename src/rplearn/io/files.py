@@ -10,10 +10,11 @@ import json
 import os
 import sys
 import time
-from typing import Any
+from typing import Any, Iterable
 
 import pandas as pd
 
+from rplearn._atomic import atomic_open, atomic_path, check_output
 from rplearn._version import __version__
 
 from rplearn.data.tables import CSV_DTYPES, normalise_times, validate_matched
@@ -40,10 +41,12 @@ def write_table(df: pd.DataFrame, path: str) -> None:
 
     Any other extension is refused rather than guessed.
     """
-    if check_table_path(path) == "parquet":
-        df.to_parquet(path, index=False)
-    else:
-        df.to_csv(path, index=False)
+    kind = check_table_path(path)
+    with atomic_path(path) as tmp:
+        if kind == "parquet":
+            df.to_parquet(tmp, index=False)
+        else:
+            df.to_csv(tmp, index=False)
 
 
 def check_table_path(path: str) -> str:
@@ -56,17 +59,10 @@ def check_table_path(path: str) -> str:
     raise InputError(f"{path}: unknown table format; name it .csv, .csv.gz, .parquet or .pq")
 
 
-def check_output_path(path: str) -> str:
-    """Refuse an output path whose folder does not exist or that is a folder, before any work.
-
-    Returns the path unchanged.
-    """
-    folder = os.path.dirname(os.path.abspath(str(path)))
-    if not os.path.isdir(folder):
-        raise InputError(f"{path}: cannot write into a non-existent directory {folder}")
-    if os.path.isdir(str(path)):
-        raise InputError(f"{path}: is a directory, not a file to write")
-    return str(path)
+def check_output_path(path: str, inputs: Iterable[str | None] = ()) -> str:
+    """Refuse an output path before any work: one of the ``inputs``, not a regular file, or
+    in a folder that does not exist (see :func:`rplearn._atomic.check_output`)."""
+    return check_output(path, [i for i in inputs if i])
 
 
 def provenance(command: str | None = None, **parameters: Any) -> dict[str, Any]:
@@ -94,5 +90,5 @@ def read_dataset(path: str, require_rssi: bool = True) -> pd.DataFrame:
 
 def write_json(path: str, payload: Any) -> None:
     """Write a small JSON result (Table I, chosen yaws, ...) with one-space indentation."""
-    with open(path, "w", encoding="utf-8") as fh:
+    with atomic_open(path, "w", encoding="utf-8") as fh:
         json.dump(payload, fh, indent=1, default=str)

@@ -16,6 +16,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from rplearn._atomic import atomic_open
 from rplearn.errors import ModelFileError
 
 MODEL_SCHEMA = "rplearn.model"
@@ -59,10 +60,8 @@ def write_model_file(path: str | os.PathLike[str], model_type: str, payload: Map
         "sha256": digest(payload),
         "model": payload,
     }
-    tmp = f"{os.fspath(path)}.tmp"
-    with open(tmp, "w", encoding="utf-8") as fh:
+    with atomic_open(path, "w", encoding="utf-8") as fh:
         json.dump(doc, fh, indent=1, allow_nan=False)
-    os.replace(tmp, path)
 
 
 def read_model_file(path: str | os.PathLike[str]) -> tuple[str, dict[str, Any]]:

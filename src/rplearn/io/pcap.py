@@ -34,6 +34,7 @@ from typing import Any, Iterator, Mapping
 import numpy as np
 import pandas as pd
 
+from rplearn._atomic import atomic_open
 from rplearn.errors import InputError, LogFormatError
 
 LINKTYPE_IEEE802_11_RADIOTAP = 127
@@ -420,7 +421,7 @@ def write_radiotap_pcap(
         present |= 1 << _BIT_NOISE
     if antenna is not None:
         present |= 1 << _BIT_ANTENNA
-    with open(path, "wb") as fh:
+    with atomic_open(path, "wb") as fh:
         if pcapng:
             writer = dpkt.pcapng.Writer(fh, snaplen=65535, linktype=LINKTYPE_IEEE802_11_RADIOTAP)
         else:

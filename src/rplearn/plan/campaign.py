@@ -17,6 +17,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import NDArray
 
+from rplearn._atomic import atomic_path
 from rplearn.errors import InputError
 from rplearn.plan.trajectory import PlanLimits, TrajectoryUnit, UnitSummary, summarize_unit
 
@@ -201,7 +202,8 @@ def write_references(
         ref = unit.sample(rate_hz)
         for j, node in enumerate(unit.nodes):
             path = os.path.join(out_dir, f"{unit.label}_{node}.csv")
-            ref.table(j).to_csv(path, index=False, float_format="%.4f")
+            with atomic_path(path) as tmp:
+                ref.table(j).to_csv(tmp, index=False, float_format="%.4f")
             paths.append(path)
     return paths
 

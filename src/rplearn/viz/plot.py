@@ -30,6 +30,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from numpy.typing import ArrayLike, NDArray
 
+from rplearn._atomic import atomic_path
 from rplearn._version import __version__
 from rplearn.errors import InputError
 
@@ -64,13 +65,11 @@ def save_figure(fig: Figure, path: str | os.PathLike[str], caption: str | None =
     :func:`rplearn.viz.report.write_report` finds a default figure caption.
     """
     path = os.fspath(path)
-    parent = os.path.dirname(path)
-    if parent:
-        os.makedirs(parent, exist_ok=True)
     metadata = {"Software": f"rplearn {__version__}"}
     if caption:
         metadata["Description"] = " ".join(str(caption).split())
-    fig.savefig(path, dpi=DPI, format="png", metadata=metadata)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=DPI, format="png", metadata=metadata)
     return path
 
 

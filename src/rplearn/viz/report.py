@@ -33,6 +33,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from rplearn._atomic import atomic_open
 from rplearn._version import __version__
 from rplearn.errors import InputError, RplearnError
 
@@ -384,7 +385,8 @@ def write_report(
     out = Path(os.fspath(out_dir))
     out.mkdir(parents=True, exist_ok=True)
     path = out / filename
-    path.write_text(page, encoding="utf-8")
+    with atomic_open(path, "w", encoding="utf-8") as fh:
+        fh.write(page)
     return str(path)
 
 

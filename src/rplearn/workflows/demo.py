@@ -10,6 +10,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
+from rplearn._atomic import atomic_open
 from rplearn.core.metrics import Scores
 from rplearn.io.files import write_table
 from rplearn.models.fit import FittedModel, evaluate_models, fit_model, scores_markdown
@@ -130,10 +131,10 @@ def run_demo(
     study = identifiability_study(seed=seed)
 
     files["table_md"] = os.path.join(out_dir, "table1.md")
-    with open(files["table_md"], "w") as fh:
+    with atomic_open(files["table_md"], "w", encoding="utf-8") as fh:
         fh.write(md + "\n")
     files["table_json"] = os.path.join(out_dir, "table1.json")
-    with open(files["table_json"], "w") as fh:
+    with atomic_open(files["table_json"], "w", encoding="utf-8") as fh:
         json.dump(
             {"provenance": prov, "rows": [r.to_dict() for r in table], "pattern_error_db": perr, "noise_std_db": sim.noise_std_db},
             fh,
@@ -141,9 +142,9 @@ def run_demo(
             default=float,
         )
     files["sweep_csv"] = os.path.join(out_dir, "sweep.csv")
-    sweep.to_frame().to_csv(files["sweep_csv"], index=False)
+    write_table(sweep.to_frame(), files["sweep_csv"])
     files["identifiability_json"] = os.path.join(out_dir, "identifiability.json")
-    with open(files["identifiability_json"], "w") as fh:
+    with atomic_open(files["identifiability_json"], "w", encoding="utf-8") as fh:
         json.dump({"provenance": prov, **study.to_dict()}, fh, indent=1)
 
     result = DemoResult(

@@ -11,6 +11,7 @@ import os
 from dataclasses import dataclass, field, replace
 from typing import Any, Callable, Mapping, Sequence
 
+from rplearn._atomic import atomic_open
 from rplearn.analysis.pattern_error import node_directions
 from rplearn.analysis.sweep import SweepResult, no_progress, order_sweep
 from rplearn.core.metrics import Scores
@@ -85,7 +86,7 @@ def fit_dataset(
         Model file to write (JSON).
     """
     if output:
-        check_output_path(output)
+        check_output_path(output, [dataset])
     df = read_dataset(dataset)
     choice = learning_units(df, units, dataset)
     samples = samples_of(df, choice.units, dataset)
@@ -135,7 +136,9 @@ def evaluate_model_files(
         raise InputError("evaluate: give at least one model file and a dataset", param="model_paths")
     for path in (json_out, markdown_out):
         if path:
-            check_output_path(path)
+            check_output_path(path, [*model_paths, dataset])
+    if json_out and markdown_out:
+        check_output_path(markdown_out, [json_out])
     models = [load_model(p) for p in model_paths]
     df = read_dataset(dataset)
     choice = evaluation_units(df, units, [m.provenance for m in models], dataset)
@@ -145,7 +148,7 @@ def evaluate_model_files(
     rows = [replace(r, model=label) for r, label in zip(rows, labels)]
     outcome = EvaluationOutcome(rows, scores_markdown(rows), choice, provenance(dataset=dataset, models=list(model_paths)))
     if markdown_out:
-        with open(markdown_out, "w", encoding="utf-8") as fh:
+        with atomic_open(markdown_out, "w", encoding="utf-8") as fh:
             fh.write(outcome.markdown + "\n")
     if json_out:
         write_json(json_out, outcome.to_dict())
@@ -158,7 +161,7 @@ def predict_file(model_path: str, dataset: str, output: str) -> DatasetPredictio
     See :func:`rplearn.models.predict.predict_dataset` for the added columns.
     """
     check_table_path(output)
-    check_output_path(output)
+    check_output_path(output, [model_path, dataset])
     model = load_model(model_path)
     prediction = predict_dataset(model, read_dataset(dataset, require_rssi=False), dataset)
     write_table(prediction.table, output)
@@ -184,7 +187,9 @@ def sweep_dataset(
         raise InputError(f"orders: expected positive orders, got {list(orders)!r}", param="orders")
     for path in (output, plot_path):
         if path:
-            check_output_path(path)
+            check_output_path(path, [dataset])
+    if output and plot_path:
+        check_output_path(plot_path, [output])
     if output:
         check_table_path(output)
     df = read_dataset(dataset)
@@ -199,6 +204,10 @@ def sweep_dataset(
 
         plot_order_sweep(result.orders, result.rmse_db, result.aic, result.ltd_s, plot_path)
     return result
+
+
+#: Files :func:`learn_and_report` writes into its folder.
+REPORT_FILES: tuple[str, ...] = ("coverage.png", "patterns.png", "report.html")
 
 
 @dataclass
@@ -229,6 +238,9 @@ def learn_and_report(
     if not models:
         raise InputError("models: give at least one model, e.g. m,sh-10", param="models")
     specs = [ModelSpec.parse(name) for name in models]  # refuse a bad name before writing anything
+    for name in REPORT_FILES:  # the report's own files may not overwrite its dataset
+        if os.path.lexists(os.path.join(out_dir, name)):
+            check_output_path(os.path.join(out_dir, name), [dataset])
     df = read_dataset(dataset)
     learn, test = split_units(df, None, test_units, dataset)
     ls = samples_of(df, learn, dataset)
@@ -262,6 +274,7 @@ def draw_pattern_files(
     from rplearn.sim.antennas import load_ground_truth
     from rplearn.viz.plot import plot_pattern_maps
 
+    check_output_path(output, [*model_paths, truth, dataset])
     models = {}
     for path in model_paths:
         model = load_model(path)

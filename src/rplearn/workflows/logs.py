@@ -54,7 +54,7 @@ def sync_logs(
 ) -> SyncOutcome:
     """Read pose and signal logs of any format, match every packet with the poses of both
     ends (paper Sec. V-B4) and write the matched dataset."""
-    check_output_path(output)
+    check_output_path(output, [*pose_paths, *signal_paths])
     check_table_path(output)
     pose_logs, pose_meta = read_logs(pose_paths, reader_options)
     signal_logs, _ = read_logs(signal_paths, reader_options)
@@ -92,12 +92,11 @@ def swarm_links(
     ``swarm_options`` go to :func:`rplearn.analysis.swarm.predict_swarm` (``pattern_of``,
     ``step_s``, ``times_s``, ``min_rssi_dbm``, ``max_gap_s``).
     """
-    for path in (output, connectivity_out):
-        if path:
-            check_output_path(path)
+    outputs = [p for p in (output, connectivity_out, plot_path) if p]
+    for k, path in enumerate(outputs):
+        check_output_path(path, [model_path, *pose_paths, *outputs[:k]])
+        if path != plot_path:
             check_table_path(path)
-    if plot_path:
-        check_output_path(plot_path)
     model = load_model(model_path)
     logs, meta = read_logs(pose_paths, reader_options)
     if logs.pose is None:
@@ -127,7 +126,7 @@ def swarm_headings(
     ``options`` go to :func:`rplearn.analysis.headings.best_swarm_headings`.
     """
     if output:
-        check_output_path(output)
+        check_output_path(output, [model_path])
         if not output.lower().endswith(".json"):
             check_table_path(output)
     unknown = sorted(set((options.get("start_yaw_deg") or {})) - set(positions))

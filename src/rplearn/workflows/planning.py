@@ -4,12 +4,14 @@ campaign (``rplearn trajectory``), export a model file (``rplearn export``) and 
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
 from typing import Sequence
 
 from rplearn.analysis.headings import OrientationResult, best_yaw
 from rplearn.errors import InputError
 from rplearn.io.export import export_grid, export_msi_files
+from rplearn.io.files import check_output_path
 from rplearn.models.base import require_patterns
 from rplearn.models.load import load_model
 from rplearn.models.spec import ModelSpec
@@ -73,6 +75,10 @@ def export_model_file(
     """
     if fmt not in ("grid", "msi", "images"):
         raise InputError(f"fmt: expected grid, msi or images, got {fmt!r}", param="fmt")
+    if fmt == "grid":
+        check_output_path(output, [model_path])
+    elif os.path.exists(output) and not os.path.isdir(output):
+        raise InputError(f"{output}: is a file; give a folder for the {fmt} files", param="output")
     model = load_model(model_path)
     if model.kind != "patterns":
         raise InputError(f"{model_path}: a {model.kind} baseline has no per-node pattern to export")

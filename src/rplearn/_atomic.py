@@ -1,0 +1,128 @@
+"""The one write path of rplearn: every file is written whole or not at all.
+
+:func:`check_output` refuses, before any work, an output that is one of the command's inputs
+(the same file after resolving links), that exists but is not a regular file (a folder, a
+device such as ``/dev/full``), or whose folder does not exist (outputs never create their
+folder, except output *directories* the caller creates on purpose). :func:`atomic_path` then
+yields a unique temporary name beside the output; when the block succeeds the file is flushed to
+disk (``fsync``) and renamed over the output (``os.replace``, atomic on POSIX), and on any
+failure the temporary file is removed, so that the previous output stays intact and no partial
+file is ever seen, even with concurrent writers of the same output.
+
+This module is at the bottom of the layers (standard library only), so that every layer that
+writes (data, io, plan, sim, viz, workflows) writes through it.
+"""
+
+from __future__ import annotations
+
+import os
+import stat
+import tempfile
+from collections.abc import Iterable, Iterator
+from contextlib import contextmanager
+from typing import IO, Any
+
+from rplearn.errors import InputError
+
+__all__ = ["atomic_open", "atomic_path", "check_output"]
+
+PathLike = str | os.PathLike[str]
+
+
+def _same_file(a: str, b: str) -> bool:
+    """Whether two paths name one file (after links; also for files that do not exist yet)."""
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return os.path.realpath(a) == os.path.realpath(b)
+
+
+def check_output(path: PathLike, inputs: Iterable[PathLike] = (), param: str | None = None) -> str:
+    """Refuse an output path before any work is done; return it as a string.
+
+    Parameters
+    ----------
+    path : path
+        File to be written.
+    inputs : iterable of paths
+        The files the command reads; the output may be none of them.
+    param : str, optional
+        Name of the parameter that gave ``path``, for the error.
+
+    Raises
+    ------
+    InputError
+        When ``path`` is an input, exists but is not a regular file, or its folder is missing.
+    """
+    name = os.fspath(path)
+    for source in inputs:
+        if source is not None and _same_file(name, os.fspath(source)):
+            raise InputError(f"{name}: is also an input of this command; write the output elsewhere", param=param)
+    if os.path.lexists(name):
+        mode = os.stat(name).st_mode if os.path.exists(name) else 0
+        if not stat.S_ISREG(mode):
+            kind = "a directory" if stat.S_ISDIR(mode) else "not a regular file"
+            raise InputError(f"{name}: is {kind}; give a file name to write", param=param)
+    folder = os.path.dirname(os.path.abspath(name))
+    if not os.path.isdir(folder):
+        raise InputError(f"{name}: cannot write into a non-existent directory {folder}", param=param)
+    return name
+
+
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def _fsync_dir(folder: str) -> None:
+    try:
+        fd = os.open(folder, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
+
+
+@contextmanager
+def atomic_path(path: PathLike, inputs: Iterable[PathLike] = (), param: str | None = None) -> Iterator[str]:
+    """Yield a temporary path beside ``path`` to write; replace ``path`` with it on success.
+
+    The temporary name ends with the output's own name, so that writers that choose a format
+    by extension (``.csv.gz``, ``.parquet``, ``.png``) choose the same one. The file gets the
+    permissions a new file would (``0666 & ~umask``), or those of the file it replaces.
+    """
+    name = check_output(path, inputs, param)
+    folder, base = os.path.split(os.path.abspath(name))
+    fd, tmp = tempfile.mkstemp(dir=folder, prefix=".rplearn-", suffix=f"-{base}")
+    os.close(fd)
+    try:
+        yield tmp
+        with open(tmp, "rb+") as fh:
+            os.fsync(fh.fileno())
+        mode = stat.S_IMODE(os.stat(name).st_mode) if os.path.isfile(name) else 0o666 & ~_umask()
+        os.chmod(tmp, mode)
+        os.replace(tmp, name)
+        _fsync_dir(folder)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise
+
+
+@contextmanager
+def atomic_open(
+    path: PathLike, mode: str = "w", inputs: Iterable[PathLike] = (), param: str | None = None, **kwargs: Any
+) -> Iterator[IO[Any]]:
+    """:func:`open` for writing through :func:`atomic_path` (``mode`` ``"w"`` or ``"wb"``)."""
+    if mode not in ("w", "wb"):
+        raise ValueError(f"atomic_open: mode must be 'w' or 'wb', got {mode!r}")
+    with atomic_path(path, inputs, param) as tmp:
+        with open(tmp, mode, **kwargs) as fh:
+            yield fh

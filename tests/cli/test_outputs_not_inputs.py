@@ -1,0 +1,89 @@
+"""No command overwrites its own input: an output that is an input is refused before any work,
+with one line and exit code 1, and every input stays byte for byte as it was (issue 10)."""
+
+from __future__ import annotations
+
+import hashlib
+import subprocess
+import sys
+import time
+
+import pytest
+
+RPLEARN = [sys.executable, "-m", "rplearn.cli"]
+
+P, S, D, M, T = "flight/pose_log.parquet", "flight/signal_log.parquet", "data.parquet", "sh3.json", "flight/ground_truth.json"
+
+#: Every command that writes files, with each of its outputs set to each of its inputs.
+CASES = {
+    "sync -o poses": ["sync", "--poses", P, "--signals", S, "-o", P],
+    "sync -o signals": ["sync", "--poses", P, "--signals", S, "-o", S],
+    "fit -o dataset": ["fit", D, "-o", D],
+    "evaluate --json model": ["evaluate", M, D, "--json", M],
+    "evaluate --json dataset": ["evaluate", M, D, "--json", D],
+    "evaluate --markdown model": ["evaluate", M, D, "--markdown", M],
+    "evaluate --markdown dataset": ["evaluate", M, D, "--markdown", D],
+    "predict -o dataset": ["predict", M, D, "-o", D],
+    "links -o poses": ["links", M, P, "--tx-power", "20", "-o", P],
+    "links --connectivity poses": ["links", M, P, "--tx-power", "20", "-o", "l.csv", "--connectivity", P],
+    "links --plot poses": ["links", M, P, "--tx-power", "20", "-o", "l.csv", "--plot", P],
+    "links --connectivity = -o": ["links", M, P, "--tx-power", "20", "-o", "l.csv", "--connectivity", "l.csv"],
+    "headings -o model": ["headings", M, "--pos", "A=0,0,20", "--pos", "B=30,0,20", "--tx-power", "20", "-o", M],
+    "sweep -o dataset": ["sweep", D, "--orders", "2..3", "-o", D],
+    "sweep --plot dataset": ["sweep", D, "--orders", "2..3", "--plot", D],
+    "export -o model": ["export", M, "--format", "grid", "-o", M],
+    "plot -o model": ["plot", M, "-o", M],
+    "plot -o truth": ["plot", M, "--truth", T, "-o", T],
+    "plot -o dataset": ["plot", M, "--dataset", D, "-o", D],
+}
+
+
+def run(args, cwd):
+    return subprocess.run(RPLEARN + list(args), cwd=cwd, capture_output=True, text=True, timeout=300)
+
+
+@pytest.fixture(scope="module")
+def workdir(tmp_path_factory):
+    d = tmp_path_factory.mktemp("outputs")
+    for args in (
+        ["simulate", "--preset", "smoke", "--seed", "2", "-o", "flight"],
+        ["sync", "--poses", P, "--signals", S, "--link", "all", "-o", D],
+        ["fit", D, "--degree", "3", "-o", M],
+    ):
+        assert run(args, d).returncode == 0
+    return d
+
+
+def digests(folder) -> dict[str, str]:
+    return {str(p.relative_to(folder)): hashlib.sha256(p.read_bytes()).hexdigest() for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+@pytest.mark.parametrize("case", sorted(CASES))
+def test_an_output_that_is_an_input_is_refused_and_nothing_changes(workdir, case):
+    before = digests(workdir)
+    started = time.perf_counter()
+    proc = run(CASES[case], workdir)
+    lines = [line for line in proc.stderr.splitlines() if line.strip()]
+    assert proc.returncode == 1 and len(lines) == 1 and lines[0].startswith("error:"), proc.stderr
+    assert "is also an input" in lines[0] or "unknown table format" in lines[0], lines[0]
+    assert "Traceback" not in proc.stderr
+    assert digests(workdir) == before  # inputs byte-identical, no file added
+    assert time.perf_counter() - started < 60
+
+
+def test_concurrent_fits_to_one_file_leave_one_whole_model(workdir):
+    """8 `fit -o same.json` at once: every run succeeds and the file is one run's whole model."""
+    import numpy as np
+
+    from rplearn.models import load_model
+
+    procs = [subprocess.Popen(RPLEARN + ["fit", D, "--degree", "3", "-o", "same.json"], cwd=workdir,
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True) for _ in range(8)]
+    codes = [p.wait(timeout=300) for p in procs]
+    for p in procs:
+        p.stdout.close()
+        p.stderr.close()
+    assert codes == [0] * 8
+    final, reference = load_model(workdir / "same.json"), load_model(workdir / M)  # checksum verified
+    np.testing.assert_array_equal(final.coef, reference.coef)
+    assert [n for n in (p.name for p in workdir.iterdir()) if n.startswith(".rplearn-")] == []
