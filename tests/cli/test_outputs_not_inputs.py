@@ -87,3 +87,22 @@ def test_concurrent_fits_to_one_file_leave_one_whole_model(workdir):
     final, reference = load_model(workdir / "same.json"), load_model(workdir / M)  # checksum verified
     np.testing.assert_array_equal(final.coef, reference.coef)
     assert [n for n in (p.name for p in workdir.iterdir()) if n.startswith(".rplearn-")] == []
+
+
+@pytest.mark.parametrize(
+    "args, flag",
+    [
+        (["fit", D, "--degree", "1000", "-o", "big.json"], "--degree"),
+        (["fit", D, "--model", "bg", "--degree", "1000", "-o", "big.json"], "--degree"),
+        (["fit", D, "--model", "poly", "--degree", "1000", "-o", "big.json"], "--degree"),
+        (["export", M, "--step-deg", "0.001", "-o", "g.csv"], "--step-deg"),
+        (["links", M, P, "--tx-power", "20", "--step", "1e-9", "-o", "l.csv"], "--step"),
+        (["headings", M, "--pos", "A=0,0,20", "--pos", "B=30,0,20", "--tx-power", "20", "--step", "0.000001"], "--step"),
+    ],
+)
+def test_work_too_large_for_the_data_or_memory_is_refused_at_once(workdir, args, flag):
+    started = time.perf_counter()
+    proc = run(args, workdir)
+    assert proc.returncode == 1 and proc.stderr.startswith("error:") and flag in proc.stderr, proc.stderr
+    assert time.perf_counter() - started < 30  # interpreter start-up included; no work is done
+    assert not (workdir / "big.json").exists()

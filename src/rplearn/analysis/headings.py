@@ -44,6 +44,11 @@ Score = tuple[float, float]
 # The yaw grid and the gain tables both searches read
 
 
+#: Finest yaw step [deg] and the memory the swarm search's yaw-pair tables may take [bytes].
+MIN_YAW_STEP_DEG = 0.01
+MAX_HEADING_TABLE_BYTES = 1 << 30
+
+
 def yaw_grid_deg(step_deg: float) -> np.ndarray:
     """Yaws ``-180, -180 + step, ...`` below 180 [deg].
 
@@ -52,9 +57,24 @@ def yaw_grid_deg(step_deg: float) -> np.ndarray:
     InputError
         (``param="step_deg"``) unless ``0 < step_deg <= 90``.
     """
-    if not (0 < step_deg <= 90):
-        raise InputError(f"step_deg: expected a yaw step in (0, 90] deg, got {step_deg}", param="step_deg")
+    if not (MIN_YAW_STEP_DEG <= step_deg <= 90):
+        raise InputError(f"step_deg: expected a yaw step in [{MIN_YAW_STEP_DEG}, 90] deg, got {step_deg}", param="step_deg")
     return np.arange(-180.0, 180.0, step_deg)
+
+
+def check_heading_tables(n_drones: int, step_deg: float) -> None:
+    """Refuse a swarm heading search whose yaw-pair tables would not fit in
+    :data:`MAX_HEADING_TABLE_BYTES`, naming the finest yaw step that does."""
+    n_pairs = n_drones * (n_drones - 1) // 2
+    n_yaw = 360.0 / step_deg + n_drones
+    need = n_pairs * n_yaw**2 * 8
+    if need > MAX_HEADING_TABLE_BYTES:
+        finest = 360.0 / (np.sqrt(MAX_HEADING_TABLE_BYTES / (8 * max(n_pairs, 1))) - n_drones)
+        raise InputError(
+            f"step_deg: a {step_deg} deg yaw grid for {n_drones} drones needs {need / 2**30:.1f} GiB of tables "
+            f"(limit {MAX_HEADING_TABLE_BYTES / 2**30:.0f} GiB); use a step of at least {np.ceil(finest * 100) / 100:g} deg",
+            param="step_deg",
+        )
 
 
 def heading_gain_tables(
@@ -345,6 +365,7 @@ def best_swarm_headings(
     grid = yaw_grid_deg(step_deg)
     drones = sorted(positions)
     _check_swarm(drones, positions, tx_power_dbm, start_yaw_deg or {}, fixed)
+    check_heading_tables(len(drones), step_deg)
     patterns = resolve_patterns(drones, model.nodes, pattern_of)
     start = {d: float((start_yaw_deg or {}).get(d, 0.0)) for d in drones}
     problem = _heading_problem(model, {d: positions[d] for d in drones}, patterns, grid, start, tx_power_dbm, frequency_hz)

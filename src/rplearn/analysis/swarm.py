@@ -100,7 +100,8 @@ class SwarmPrediction:
 
 
 def prediction_times(tracks: Mapping[str, Any], step_s: float, times_s: ArrayLike | None) -> np.ndarray:
-    """The given times, or a grid of ``step_s`` over the span all drones' logs cover [s]."""
+    """The given times, or a grid of ``step_s`` over the span all drones' logs cover [s]
+    (refused before it is built when the links at those times would not fit in memory)."""
     if times_s is not None:
         t = np.asarray(times_s, np.float64).ravel()
         if t.size == 0 or not np.all(np.isfinite(t)):
@@ -116,7 +117,24 @@ def prediction_times(tracks: Mapping[str, Any], step_s: float, times_s: ArrayLik
     if stop < start:
         spans = ", ".join(f"{tr.node} {tr.t_s[0]:.1f}..{tr.t_s[-1]:.1f} s" for tr in moving)
         raise InputError(f"pose logs share no time span ({spans}); give the times (times_s)", param="times_s")
+    check_link_rows(int((stop - start) / step_s) + 1, len(tracks), step_s)
     return np.arange(start, stop + 1e-9 * max(1.0, abs(stop)), step_s)
+
+
+#: Most (time, ordered pair) rows one prediction may hold (each row is a few hundred bytes).
+MAX_LINK_ROWS = 20_000_000
+
+
+def check_link_rows(n_times: int, n_drones: int, step_s: float | None = None) -> None:
+    """Refuse a prediction of more than :data:`MAX_LINK_ROWS` links before any work."""
+    rows = n_times * n_drones * (n_drones - 1)
+    if rows > MAX_LINK_ROWS:
+        hint = f"; use a step of at least {step_s * rows / MAX_LINK_ROWS:.3g} s" if step_s else "; give fewer times"
+        raise InputError(
+            f"{n_times:,} times x {n_drones * (n_drones - 1):,} ordered pairs = {rows:,} links, more than "
+            f"{MAX_LINK_ROWS:,} fit in memory{hint}",
+            param="step_s" if step_s else "times_s",
+        )
 
 
 def resolve_patterns(drones: Sequence[str], model_nodes: Sequence[str], pattern_of: Mapping[str, str] | None) -> dict[str, str]:
@@ -194,6 +212,7 @@ def predict_swarm(
         raise InputError(f"{source}: a swarm needs at least 2 drones, the pose log has {', '.join(drones) or 'none'}")
     patterns = resolve_patterns(drones, model.nodes, pattern_of)
     t = prediction_times(tracks, step_s, times_s)
+    check_link_rows(t.size, len(drones), step_s if times_s is None else None)
     poses = {d: tracks[d].interpolate(t, max_gap_s) for d in drones}
     rows = _pair_time_rows(poses, drones)
     if rows[0].size == 0:

@@ -137,14 +137,21 @@ def select_nodes(pattern_like: PatternLike, nodes: Sequence[str] | None) -> list
 # -- regular grid CSV ----------------------------------------------------------------------
 
 
+#: Finest grid step [deg]: 3,600 x 1,801 directions per node.
+MIN_GRID_STEP_DEG = 0.1
+
+
 def grid_angles_deg(step_deg: float) -> tuple[FloatArray, FloatArray]:
     """Azimuths [-180, 180) and elevations [-90, 90] (both ends) of a regular grid [deg].
 
     Raises :class:`InputError` unless ``step_deg`` divides 180.
     """
     step = float(step_deg)
-    if not math.isfinite(step) or step <= 0 or step > 180:
-        raise InputError(f"step_deg: expected a step in (0, 180] deg, got {step_deg}", param="step_deg")
+    if not math.isfinite(step) or step < MIN_GRID_STEP_DEG or step > 180:
+        raise InputError(
+            f"step_deg: expected a step in [{MIN_GRID_STEP_DEG}, 180] deg (finer grids do not fit in memory), got {step_deg}",
+            param="step_deg",
+        )
     n_half = round(180.0 / step)
     if abs(n_half * step - 180.0) > 1e-9 * 180.0:
         raise InputError(f"step_deg: {step_deg} does not divide 180 deg (try 1, 2, 2.5, 5, 10)", param="step_deg")

@@ -19,7 +19,7 @@ from rplearn.core.metrics import Scores, score
 from rplearn.models.patterns import PatternSet
 from rplearn.core.solver import FitReport, fit_joint
 from rplearn.models.base import Model, learned_frequency_hz
-from rplearn.models.spec import ModelSpec
+from rplearn.models.spec import ModelSpec, check_model_size
 
 
 @dataclass
@@ -129,6 +129,7 @@ def fit_model(
     One-off costs of the process (imports, the tables of a basis) are paid before the clock
     starts, so that the LTD of a model does not depend on whether it was the first one learned.
     """
+    check_model_size(spec, len(samples), len(samples.nodes))
     _warm_up(spec, len(samples))
     t0 = time.perf_counter()
     if spec.kind == "mean":

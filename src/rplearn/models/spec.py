@@ -84,6 +84,12 @@ class ModelSpec:
         return {"mean": "M", "knn": f"NN-{self.order}", "sh": f"SH-{self.order}", "poly": f"P-{self.order}", "bg": f"BG-{self.order}"}[self.kind]
 
     @property
+    def n_coef(self) -> int:
+        """Coefficients per antenna (0 for the baselines): SH-L L^2, BG-k 2 k^2, P-k (k+1)(k+2)/2."""
+        k = int(self.order or 0)
+        return {"sh": k * k, "bg": 2 * k * k, "poly": (k + 1) * (k + 2) // 2}.get(self.kind, 0)
+
+    @property
     def decouples(self) -> bool:
         return self.kind in ("sh", "bg", "poly")
 
@@ -139,6 +145,46 @@ def check_fit_options(
     if order is not None and spec.order is not None and int(order) != spec.order:
         raise InputError(
             f"order {order} contradicts the model {model or spec.label}, which sets the order {spec.order}", param="order"
+        )
+
+
+#: Largest joint system a fit may build: its Gram matrix is n_columns^2 float64 values
+#: (16,384 columns: 2 GiB).
+MAX_COLUMNS = 16_384
+
+
+def _largest_order(kind: str, max_coef: int) -> int:
+    """The largest order of ``kind`` with at most ``max_coef`` coefficients per antenna."""
+    k = 0
+    while ModelSpec(kind, k + 1).n_coef <= max_coef:
+        k += 1
+    return k
+
+
+def check_model_size(spec: ModelSpec, n_samples: int, n_nodes: int, source: str = "the learning data") -> None:
+    """Refuse, before any work, a pattern model larger than its samples can identify or than
+    memory can hold.
+
+    A joint fit has ``n_nodes * spec.n_coef`` unknowns; it needs at least as many samples, and
+    its normal equations at most :data:`MAX_COLUMNS` columns.
+
+    Raises
+    ------
+    InputError
+        (``param="order"``) naming the largest order that fits.
+    """
+    if not spec.decouples:
+        return
+    columns = int(n_nodes) * spec.n_coef
+    limit = min(int(n_samples), MAX_COLUMNS)
+    if columns > limit:
+        why = f"the {n_samples:,} samples of {source} can identify" if limit == n_samples else (
+            f"the {MAX_COLUMNS:,} a fit can hold in memory")
+        best = _largest_order(spec.kind, limit // max(int(n_nodes), 1))
+        raise InputError(
+            f"order {spec.order}: {spec.label} for {n_nodes} antennas has {columns:,} coefficients, more than "
+            f"{why}; the largest {spec.kind} order that fits is {best}",
+            param="order",
         )
 
 
