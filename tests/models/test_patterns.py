@@ -30,7 +30,7 @@ def pattern_set():
 
 
 def test_evaluate_and_joint_gain(pattern_set):
-    az = np.array([0.1, 1.0, -2.0])
+    az = np.array([0.1, 1.0, -1.5])  # also used as elevations below: within [-pi/2, pi/2]
     el = np.array([0.0, 0.5, -1.2])
     ga = pattern_set.evaluate("A", az, el)
     np.testing.assert_allclose(ga, pattern_set.basis.design(az, el) @ pattern_set.coef[0])

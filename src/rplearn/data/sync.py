@@ -15,7 +15,8 @@ after optional clock offsets. A sample is dropped, and counted by reason, when:
     measurement" (default ``0, -127, -128, 127``);
 ``implausible_rssi``
     its RSSI lies outside the range any radio reports, :data:`PLAUSIBLE_RSSI_DBM`
-    (a corrupt field or a unit mistake, e.g. mW or a percentage);
+    (a corrupt field or a unit mistake, e.g. mW or a percentage), or above the transmit
+    power (no packet arrives stronger than it was sent);
 ``tx_equals_rx``
     its transmitter is its receiver;
 ``other_link``
@@ -342,7 +343,7 @@ def _match_chunk(
     drop(duplicate_rows(signal), "duplicate")
     drop(~(np.isfinite(t) & np.isfinite(ptx) & np.isfinite(freq) & (freq > 0)), "invalid_value")
     drop(~np.isfinite(rssi) | np.isin(rssi, np.asarray(options.sentinel_rssi_dbm, np.float64)), "sentinel_rssi")
-    drop((rssi < PLAUSIBLE_RSSI_DBM[0]) | (rssi > PLAUSIBLE_RSSI_DBM[1]), "implausible_rssi")
+    drop((rssi < PLAUSIBLE_RSSI_DBM[0]) | (rssi > PLAUSIBLE_RSSI_DBM[1]) | (rssi > ptx), "implausible_rssi")
     drop(tx == rx, "tx_equals_rx")
     if options.link is not None:
         drop(~((tx == options.link[0]) & (rx == options.link[1])), "other_link")

@@ -15,7 +15,7 @@ Node ids are strings. Times are float seconds since an epoch the log states.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Sequence
+from typing import Any, Sequence
 
 import numpy as np
 import pandas as pd
@@ -143,6 +143,57 @@ def non_unit_quaternion_rows(pose_log: pd.DataFrame) -> int:
     return int(pose_log.attrs.get(NON_UNIT_QUATERNION_ATTR, 0)) + count_non_unit_quaternions(norm[np.isfinite(norm)])
 
 
+#: Plausible carrier frequencies [Hz] (1 MHz to 300 GHz) and transmit powers [dBm].
+FREQUENCY_BAND_HZ: tuple[float, float] = (1e6, 3e11)
+TX_POWER_BAND_DBM: tuple[float, float] = (-40.0, 60.0)
+
+
+def check_frequency_hz(values: Any, where: str, param: str | None = "frequency_hz") -> None:
+    """Refuse carrier frequencies outside :data:`FREQUENCY_BAND_HZ`, saying when a value looks
+    like MHz (2412 for 2.412 GHz)."""
+    f = np.atleast_1d(np.asarray(values, np.float64))
+    lo, hi = FREQUENCY_BAND_HZ
+    bad = ~((f >= lo) & (f <= hi))
+    if np.any(bad):
+        row = int(np.flatnonzero(bad)[0])
+        v = float(f[row])
+        hint = f"; {v:g} looks like MHz ({v * 1e6:g} Hz)" if lo <= v * 1e6 <= hi else ""
+        at = f" at row {row}" if f.size > 1 else ""
+        raise InputError(f"{where}: frequency_hz {v:g}{at} is not a radio carrier in Hz (expected {lo:g} to {hi:g}){hint}", param=param)
+
+
+def check_tx_power_dbm(values: Any, where: str, param: str | None = "tx_power_dbm") -> None:
+    """Refuse transmit powers outside :data:`TX_POWER_BAND_DBM` (1e6 dBm is no radio)."""
+    p = np.atleast_1d(np.asarray(values, np.float64))
+    lo, hi = TX_POWER_BAND_DBM
+    bad = ~((p >= lo) & (p <= hi))
+    if np.any(bad):
+        row = int(np.flatnonzero(bad)[0])
+        at = f" at row {row}" if p.size > 1 else ""
+        raise InputError(f"{where}: tx_power_dbm {float(p[row]):g}{at} is outside {lo:g} to {hi:g} dBm", param=param)
+
+
+def _check_link_columns(df: pd.DataFrame, source: str, with_rssi: bool) -> None:
+    """Node ids present, plausible carriers and powers, and no packet received stronger than
+    it was sent."""
+    for col in ("tx", "rx"):
+        ids = df[col]
+        empty = ids.isna().to_numpy() | (ids.astype(str).str.strip() == "").to_numpy()
+        if np.any(empty):
+            row = int(np.flatnonzero(empty)[0])
+            raise InputError(f"{source}: column {col} is empty at row {row} (every packet needs its node ids)")
+    check_frequency_hz(df["frequency_hz"].to_numpy(np.float64), source, None)
+    check_tx_power_dbm(df["tx_power_dbm"].to_numpy(np.float64), source, None)
+    if with_rssi:
+        above = df["rssi_dbm"].to_numpy(np.float64) > df["tx_power_dbm"].to_numpy(np.float64)
+        if np.any(above):
+            row = int(np.flatnonzero(above)[0])
+            raise InputError(
+                f"{source}: rssi_dbm {df['rssi_dbm'].iloc[row]:g} dBm is above tx_power_dbm {df['tx_power_dbm'].iloc[row]:g} dBm "
+                f"at row {row} ({int(above.sum())} row(s)): no packet arrives stronger than it was sent"
+            )
+
+
 def validate_signal_log(df: pd.DataFrame, source: str = "signal log") -> pd.DataFrame:
     """Check a canonical signal log and return it typed and sorted by time (stable).
 
@@ -155,6 +206,7 @@ def validate_signal_log(df: pd.DataFrame, source: str = "signal log") -> pd.Data
     _require_columns(df, SIGNAL_COLUMNS, source)
     df = normalise_times(df, source)
     _require_finite(df, ["t", "rssi_dbm", "tx_power_dbm", "frequency_hz"], source)
+    _check_link_columns(df, source, with_rssi=False)
     cols = list(SIGNAL_COLUMNS) + [c for c in OPTIONAL_SIGNAL_COLUMNS if c in df.columns]
     out = df.loc[:, cols].copy()
     out["tx"] = out["tx"].astype(str)
@@ -191,6 +243,7 @@ def validate_matched(df: pd.DataFrame, source: str = "dataset", require_rssi: bo
             f"{source}: column rssi_dbm holds {int(sentinel.sum())} sentinel value(s) meaning 'no measurement' "
             f"(first {rssi[row]:g} dBm at row {row}); synchronising the logs (synchronise) drops and counts them"
         )
+    _check_link_columns(df, source, with_rssi=require_rssi)
     out = df.copy()
     out["tx"] = out["tx"].astype(str)
     out["rx"] = out["rx"].astype(str)

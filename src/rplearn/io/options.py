@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from numbers import Real
 from typing import Any, Mapping
 
+from rplearn.data.tables import check_frequency_hz, check_tx_power_dbm
 from rplearn.errors import InputError
 
 #: Values of :attr:`ReaderOptions.nan_policy`.
@@ -171,6 +172,11 @@ class ReaderOptions:
                 f"frequency_hz: expected a positive number of hertz, got {self.frequency_hz!r}",
                 param="frequency_hz",
             )
+        if self.frequency_hz is not None:
+            check_frequency_hz(self.frequency_hz, "frequency_hz")
+        if self.tx_power_dbm is not None:
+            powers = self.tx_power_dbm.values() if isinstance(self.tx_power_dbm, Mapping) else [self.tx_power_dbm]
+            check_tx_power_dbm(list(powers), "tx_power_dbm")
         if not isinstance(self.rssi_field, str) or not self.rssi_field:
             raise InputError(f"rssi_field: expected a field name, got {self.rssi_field!r}", param="rssi_field")
         if self.nan_policy not in NAN_POLICIES:

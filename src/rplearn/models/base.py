@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 import numpy as np
 from numpy.typing import NDArray
 
+from rplearn.data.tables import check_frequency_hz
 from rplearn.errors import InputError
 
 if TYPE_CHECKING:  # annotations only: the protocol needs no pandas at import time
@@ -115,6 +116,7 @@ def model_frequency_hz(model: Model, frequency_hz: float | None = None) -> float
         )
     if not (math.isfinite(float(f)) and float(f) > 0):
         raise InputError(f"frequency_hz: expected a positive frequency in Hz, got {f!r}", param="frequency_hz")
+    check_frequency_hz(float(f), "frequency_hz")
     return float(f)
 
 

@@ -79,6 +79,12 @@ class PatternSet:
         az = np.asarray(az_rad, np.float64)
         el = np.asarray(el_rad, np.float64)
         k = self.node_index(node)
+        outside = ~(np.abs(el) <= np.pi / 2 + 1e-9)
+        if np.any(outside):
+            raise InputError(
+                f"el_rad: elevation {float(el[outside].flat[0]):g} is outside [-pi/2, pi/2] rad (degrees by mistake?)",
+                param="el_rad",
+            )
         shape = np.broadcast(az, el).shape
         az, el = np.broadcast_arrays(az, el)
         return self.basis.evaluate(self.coef[k], az, el).reshape(shape)

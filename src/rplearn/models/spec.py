@@ -60,7 +60,7 @@ class ModelSpec:
             object.__setattr__(self, "ridge", default_ridge(self.kind))
         if not (np.isfinite(self.ridge) and self.ridge >= 0):
             raise InputError(f"ridge must be a non-negative number, got {self.ridge!r}", param="ridge")
-        if self.kind != "mean" and (self.order is None or int(self.order) < 1):
+        if self.kind != "mean" and (self.order is None or int(self.order) != self.order or int(self.order) < 1):
             raise InputError(f"model {self.kind}: order must be a positive integer, got {self.order!r}", param="order")
 
     @classmethod
@@ -138,6 +138,8 @@ def check_fit_options(
         unused = [k for k in ("sigma_rad2", "grid") if given[k] is not None]
         if unused:
             raise InputError(f"{', '.join(unused)}: used by BG models only, not by {spec.label}", param=unused[0])
+    if gauge_dbi is not None and not np.isfinite(gauge_dbi):
+        raise InputError(f"gauge_dbi: expected a finite mean gain in dBi, got {gauge_dbi!r}", param="gauge_dbi")
     if gauge_dbi is not None and gauge_node is None:
         raise InputError(
             "gauge_dbi needs gauge_node (which node's mean gain it fixes)", param="gauge_dbi", related=("gauge_node",)

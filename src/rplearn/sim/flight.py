@@ -431,6 +431,8 @@ def simulate(
     truth_model = config.ground_truth(seed)
     radio = config.radio
     units = config.campaign.units
+    if int(seed) != seed or seed < 0:
+        raise InputError(f"seed: expected a non-negative integer, got {seed!r}", param="seed")
     unit_seeds = np.random.SeedSequence(int(seed)).spawn(len(units) + 1)
     starts = config.campaign.start_times_s()
     dropouts = _dropout_windows(radio, units, starts, np.random.default_rng(unit_seeds[-1]))
