@@ -106,3 +106,21 @@ def test_work_too_large_for_the_data_or_memory_is_refused_at_once(workdir, args,
     assert proc.returncode == 1 and proc.stderr.startswith("error:") and flag in proc.stderr, proc.stderr
     assert time.perf_counter() - started < 30  # interpreter start-up included; no work is done
     assert not (workdir / "big.json").exists()
+
+
+def test_model_files_are_reproducible_with_source_date_epoch(workdir):
+    """Same inputs and options, SOURCE_DATE_EPOCH set: byte-identical model files (no wall time)."""
+    import json
+    import os
+
+    env = {**os.environ, "SOURCE_DATE_EPOCH": "1700000000"}
+    runs = []
+    for _ in range(2):
+        proc = subprocess.run(RPLEARN + ["fit", D, "--degree", "3", "-o", "r.json"], cwd=workdir, env=env,
+                              capture_output=True, text=True, timeout=300)
+        assert proc.returncode == 0, proc.stderr
+        runs.append((workdir / "r.json").read_bytes())
+    assert runs[0] == runs[1]
+    doc = json.loads(runs[0])
+    assert "ltd_s" not in doc["model"]["training"]
+    assert doc["model"]["provenance"]["created_utc"] == "2023-11-14T22:13:20Z"

@@ -65,13 +65,24 @@ def check_output_path(path: str, inputs: Iterable[str | None] = ()) -> str:
     return check_output(path, [i for i in inputs if i])
 
 
+def _epoch() -> float | None:
+    """``SOURCE_DATE_EPOCH`` [s] when set (reproducible outputs), else None (now)."""
+    value = os.environ.get("SOURCE_DATE_EPOCH")
+    if not value:
+        return None
+    try:
+        return float(int(value))
+    except ValueError:
+        raise InputError(f"SOURCE_DATE_EPOCH: expected whole seconds since 1970, got {value!r}") from None
+
+
 def provenance(command: str | None = None, **parameters: Any) -> dict[str, Any]:
     """What made an output: library version, command line, parameters, time."""
     return {
         "rplearn_version": __version__,
         "command": command if command is not None else " ".join(["rplearn", *sys.argv[1:]]),
         "parameters": parameters,
-        "created_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+        "created_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime(_epoch())),
     }
 
 

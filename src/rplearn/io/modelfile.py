@@ -48,11 +48,24 @@ def jsonable(obj: Any) -> Any:
     return obj
 
 
+def reproducible() -> bool:
+    """Whether outputs must be reproducible byte for byte (``SOURCE_DATE_EPOCH`` is set, as in
+    reproducible builds)."""
+    return bool(os.environ.get("SOURCE_DATE_EPOCH"))
+
+
 def write_model_file(path: str | os.PathLike[str], model_type: str, payload: Mapping[str, Any]) -> None:
-    """Write a checksummed model file atomically."""
+    """Write a checksummed model file atomically.
+
+    The learning wall time (``training.ltd_s``, the paper's LTD) is part of the checksummed
+    payload; when ``SOURCE_DATE_EPOCH`` is set it is left out, so that the same inputs and
+    options give a byte-identical file (its provenance time is then that epoch too).
+    """
     if model_type not in MODEL_TYPES:
         raise ValueError(f"unknown model type {model_type!r}")
     payload = jsonable(payload)
+    if reproducible() and isinstance(payload.get("training"), dict):
+        payload["training"].pop("ltd_s", None)
     doc = {
         "schema": MODEL_SCHEMA,
         "schema_version": MODEL_SCHEMA_VERSION,
