@@ -82,3 +82,24 @@ def test_a_negative_seed_is_refused():
 
     with pytest.raises(InputError, match="seed"):
         simulate("smoke", seed=-1)
+
+
+def test_euler_columns_of_two_frames_are_refused_not_half_read(tmp_path):
+    """roll_deg, pitch_deg with yaw_ned_deg would silently drop the tilt (level flight assumed)."""
+    from rplearn.io.tables import read_pose_table
+
+    path = tmp_path / "p.csv"
+    pd.DataFrame({"t": [0.0, 1.0], "node": "A", "x": 0.0, "y": 0.0, "z": 10.0, "roll_deg": 5.0, "pitch_deg": 3.0,
+                  "yaw_ned_deg": 90.0}).to_csv(path, index=False)
+    with pytest.raises(InputError, match="mix frames: roll_deg, pitch_deg .ENU/FLU. with yaw_ned_deg"):
+        read_pose_table(str(path))
+
+
+def test_a_model_file_with_nan_is_refused_in_one_line(tmp_path):
+    from rplearn.errors import ModelFileError
+
+    text = (FIXTURES / "mean.json").read_text().replace('"n_samples": 1341', '"n_samples": NaN', 1)
+    assert "NaN" in text
+    (tmp_path / "nan.json").write_text(text)
+    with pytest.raises(ModelFileError, match="NaN is not a JSON number"):
+        load_model(tmp_path / "nan.json")

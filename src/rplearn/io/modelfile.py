@@ -77,6 +77,11 @@ def write_model_file(path: str | os.PathLike[str], model_type: str, payload: Map
         json.dump(doc, fh, indent=1, allow_nan=False)
 
 
+def _no_constant(name: str) -> Any:
+    """JSON has no NaN or Infinity; a model file that holds one was not written by rplearn."""
+    raise ValueError(f"{name} is not a JSON number")
+
+
 def read_model_file(path: str | os.PathLike[str]) -> tuple[str, dict[str, Any]]:
     """Read and verify a model file; return ``(type, payload)``.
 
@@ -91,8 +96,8 @@ def read_model_file(path: str | os.PathLike[str]) -> tuple[str, dict[str, Any]]:
         raise ModelFileError(f"{name}: no such model file")
     try:
         with open(name, encoding="utf-8") as fh:
-            doc = json.load(fh)
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+            doc = json.load(fh, parse_constant=_no_constant)
+    except ValueError as exc:  # JSONDecodeError, UnicodeDecodeError, NaN/Infinity (see _no_constant)
         raise ModelFileError(f"{name}: not a valid JSON model file (truncated or corrupt: {exc})") from None
     except OSError as exc:
         raise ModelFileError(f"{name}: cannot read ({exc.strerror})") from None

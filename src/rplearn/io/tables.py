@@ -145,6 +145,13 @@ def _attitude_columns(df: pd.DataFrame, source: str) -> tuple[pd.DataFrame, tupl
     Returns ``(table, columns, kind, level_assumed)`` with kind ``"quaternion"``,
     ``"euler_enu_flu"`` or ``"euler_ned_frd"``.
     """
+    enu = [c for c in EULER_ENU_FLU_COLUMNS if c in df.columns]
+    ned = [c for c in EULER_NED_FRD_COLUMNS if c in df.columns]
+    if enu and ned and not _has(df, ("qw", "qx", "qy", "qz")):
+        raise InputError(
+            f"{source}: attitude columns mix frames: {', '.join(enu)} (ENU/FLU) with {', '.join(ned)} (NED/FRD); "
+            "give one complete set, roll_deg, pitch_deg, yaw_deg or roll_ned_deg, pitch_ned_deg, yaw_ned_deg"
+        )
     level = _level_if_yaw_only(df)
     if level is not None:  # plans (rplearn.plan) give yaw only: level flight is meant
         df = level

@@ -116,7 +116,8 @@ def predict_dataset(model: Model, dataset: pd.DataFrame, source: str = "dataset"
     )
     std = model.predict_gain_std(samples)
     if std is not None:
-        residual_db = float(model.training.get("rmse_db", np.nan))
+        rmse = model.training.get("rmse_db")  # unknown (None) in a hand-made file: the spread is then NaN
+        residual_db = float(rmse) if rmse is not None else float("nan")
         table["gain_pred_std_db"] = std
         table["rssi_pred_std_db"] = np.sqrt(std**2 + residual_db**2)
     measured = np.isfinite(samples.joint_gain_db)
