@@ -327,3 +327,19 @@ def test_library_messages_name_no_cli_flags():
                 texts = [c.value for c in ast.walk(node.exc) if isinstance(c, ast.Constant) and isinstance(c.value, str)]
                 found += [f"{path.name}:{node.lineno}" for t in texts if flag.search(t)]
     assert not found, found
+
+
+def test_a_capture_cut_off_mid_frame_is_refused_not_read_in_part(tmp_path):
+    """dpkt hands on the partial last frame as if whole; the reader says the file is truncated."""
+    from rplearn.io.inspect import inspect_logs
+
+    whole = DATA / "radiotap-pcap" / "ieee802.11_exthdr.pcap"
+    cut = tmp_path / "cut.pcap"
+    cut.write_bytes(whole.read_bytes()[:300])
+    options = ReaderOptions(receivers={str(cut): "B"}, tx_power_dbm=20.0)
+    with pytest.raises(LogFormatError, match="truncated capture: the file ends inside frame 2"):
+        read_logs([str(cut)], options)
+    report = inspect_logs([str(cut)], options)
+    assert "truncated capture" in report.to_text() and "none found" not in report.to_text()
+    logs, _ = read_logs([str(whole)], ReaderOptions(receivers={str(whole): "B"}, tx_power_dbm=20.0))
+    assert len(logs.signal) > 0

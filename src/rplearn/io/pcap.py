@@ -27,6 +27,7 @@ imported lazily.
 
 from __future__ import annotations
 
+import os
 import struct
 from dataclasses import dataclass
 from typing import Any, Iterator, Mapping
@@ -213,6 +214,27 @@ def transmitter_address(frame: bytes) -> str | None:
     return ":".join(f"{b:02x}" for b in frame[10:16])
 
 
+def _pcap_complete_frames(fh, magic: bytes) -> tuple[int, bool]:
+    """Walk a classic pcap's record headers: ``(complete frames, truncated)``, where
+    ``truncated`` means the last record runs past the end of the file (a capture cut off
+    while it was written). dpkt would hand on such a partial frame as if it were whole."""
+    order = "<" if magic in (b"\xd4\xc3\xb2\xa1", b"\x4d\x3c\xb2\xa1") else ">"
+    size = os.fstat(fh.fileno()).st_size
+    offset, frames = 24, 0
+    fh.seek(0)
+    while offset < size:
+        if offset + 16 > size:
+            return frames, True
+        fh.seek(offset + 8)
+        (incl_len,) = struct.unpack(order + "I", fh.read(4))
+        offset += 16 + incl_len
+        if offset > size:
+            return frames, True
+        frames += 1
+    fh.seek(0)
+    return frames, False
+
+
 def _open_capture(path: str, fh):
     import dpkt
 
@@ -223,6 +245,10 @@ def _open_capture(path: str, fh):
     if magic == b"\x0a\x0d\x0d\x0a":
         return dpkt.pcapng.Reader(fh), "pcapng"
     if magic in (b"\xd4\xc3\xb2\xa1", b"\xa1\xb2\xc3\xd4", b"\x4d\x3c\xb2\xa1", b"\xa1\xb2\x3c\x4d"):
+        frames, truncated = _pcap_complete_frames(fh, magic)
+        if truncated:
+            raise LogFormatError(f"{path}: truncated capture: the file ends inside frame {frames + 1}")
+        fh.seek(0)
         return dpkt.pcap.Reader(fh), "pcap"
     raise LogFormatError(f"{path}: not a pcap or pcapng file (magic {magic.hex()})")
 
