@@ -389,7 +389,8 @@ def _check_swarm(
     drones: Sequence[str], positions: Mapping[str, ArrayLike], tx_power_dbm: float, start_yaw_deg: Mapping[str, float],
     fixed: Sequence[str],
 ) -> None:
-    """Refuse fewer than two drones, a non-finite power, position or yaw, an unknown fixed drone."""
+    """Refuse fewer than two drones, a non-finite power, position or yaw, a start yaw or a fixed
+    drone that names no drone."""
     if len(drones) < 2:
         raise InputError(f"positions: a swarm needs at least 2 drones, got {', '.join(drones) or 'none'}", param="positions")
     if not np.isfinite(tx_power_dbm):
@@ -400,6 +401,9 @@ def _check_swarm(
             raise InputError(f"positions: drone {d}: expected three finite numbers x,y,z in metres", param="positions")
         if not np.isfinite(float(start_yaw_deg.get(d, 0.0))):
             raise InputError(f"start_yaw_deg: drone {d}: expected a finite number of degrees", param="start_yaw_deg")
+    strays = sorted(set(start_yaw_deg) - set(drones))
+    if strays:
+        raise InputError(f"start_yaw_deg names drone(s) {', '.join(strays)} without a position", param="start_yaw_deg")
     unknown = sorted(set(fixed) - set(drones))
     if unknown:
         raise InputError(f"fixed names unknown drone(s) {', '.join(unknown)}; drones: {', '.join(drones)}", param="fixed")

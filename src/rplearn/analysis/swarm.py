@@ -106,7 +106,9 @@ def prediction_times(tracks: Mapping[str, Any], step_s: float, times_s: ArrayLik
         t = np.asarray(times_s, np.float64).ravel()
         if t.size == 0 or not np.all(np.isfinite(t)):
             raise InputError("times_s: expected finite times in seconds", param="times_s")
-        return np.unique(t)
+        t = np.unique(t)
+        check_link_rows(t.size, len(tracks))
+        return t
     if not (np.isfinite(step_s) and step_s > 0):
         raise InputError(f"step_s: expected a positive number of seconds, got {step_s!r}", param="step_s")
     moving = [tr for tr in tracks.values() if not tr.static]
@@ -212,7 +214,6 @@ def predict_swarm(
         raise InputError(f"{source}: a swarm needs at least 2 drones, the pose log has {', '.join(drones) or 'none'}")
     patterns = resolve_patterns(drones, model.nodes, pattern_of)
     t = prediction_times(tracks, step_s, times_s)
-    check_link_rows(t.size, len(drones), step_s if times_s is None else None)
     poses = {d: tracks[d].interpolate(t, max_gap_s) for d in drones}
     rows = _pair_time_rows(poses, drones)
     if rows[0].size == 0:

@@ -125,8 +125,28 @@ def knn_regressor(angles_rad: np.ndarray, gain_db: np.ndarray, n_neighbors: int,
 
 
 # -- the models -----------------------------------------------------------------------------
+class _PerLinkBaseline:
+    """What both baselines share: they know the directed links they learned, and the carrier
+    their training samples were at."""
+
+    training: dict[str, Any]
+
+    def _known_links(self) -> Mapping[tuple[str, str], Any]:
+        raise NotImplementedError
+
+    @property
+    def nodes(self) -> tuple[str, ...]:
+        """Node ids of the links the model knows."""
+        return _nodes_of_links(self._known_links())
+
+    @property
+    def frequency_hz(self) -> float | None:
+        """Carrier frequency of the training samples [Hz] (None: unknown)."""
+        return frequency_from_training(self.training)
+
+
 @dataclass
-class MeanModel:
+class MeanModel(_PerLinkBaseline):
     """The paper's M: mean training joint gain per directed link [dB]."""
 
     means_db: dict[Link, float]
@@ -142,15 +162,8 @@ class MeanModel:
         means = {k: mean_joint_gain_db(samples.joint_gain_db[i]) for k, i in _links(samples).items()}
         return cls(means, training=_baseline_training(samples))
 
-    @property
-    def nodes(self) -> tuple[str, ...]:
-        """Node ids of the links the model knows."""
-        return _nodes_of_links(self.means_db)
-
-    @property
-    def frequency_hz(self) -> float | None:
-        """Carrier frequency of the training samples [Hz] (None: unknown)."""
-        return frequency_from_training(self.training)
+    def _known_links(self) -> Mapping[tuple[str, str], Any]:
+        return self.means_db
 
     @property
     def n_params(self) -> int:
@@ -193,7 +206,7 @@ class MeanModel:
 
 
 @dataclass
-class KNNModel:
+class KNNModel(_PerLinkBaseline):
     """The paper's NN-k: k nearest neighbours in the 4-D joint-angle space, per directed link."""
 
     n_neighbors: int
@@ -228,15 +241,8 @@ class KNNModel:
             self._regressors[key] = knn_regressor(self.train_angles_rad[key], self.train_gain_db[key], self.n_neighbors, what)
         return self._regressors[key]
 
-    @property
-    def nodes(self) -> tuple[str, ...]:
-        """Node ids of the links the model knows."""
-        return _nodes_of_links(self.train_gain_db)
-
-    @property
-    def frequency_hz(self) -> float | None:
-        """Carrier frequency of the training samples [Hz] (None: unknown)."""
-        return frequency_from_training(self.training)
+    def _known_links(self) -> Mapping[tuple[str, str], Any]:
+        return self.train_gain_db
 
     @property
     def n_params(self) -> int:

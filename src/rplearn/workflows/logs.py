@@ -129,9 +129,6 @@ def swarm_headings(
         check_output_path(output, [model_path])
         if not output.lower().endswith(".json"):
             check_table_path(output)
-    unknown = sorted(set((options.get("start_yaw_deg") or {})) - set(positions))
-    if unknown:
-        raise InputError(f"start_yaw_deg names drone(s) {', '.join(unknown)} without a position", param="start_yaw_deg")
     result = best_swarm_headings(load_model(model_path), positions, tx_power_dbm, **options)
     if output:
         if output.lower().endswith(".json"):
