@@ -17,8 +17,9 @@ PACKAGE_DIR = Path(__file__).resolve().parents[1] / "src" / "rplearn"
 #: Layers from the bottom up; a module may import its own layer's package and any layer below.
 LAYERS: tuple[str, ...] = (
     "rplearn._version",
-    "rplearn._lazy",
     "rplearn.errors",
+    "rplearn._argtypes",
+    "rplearn._lazy",
     "rplearn._atomic",
     "rplearn.core",
     "rplearn.data",

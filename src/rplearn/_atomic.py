@@ -93,15 +93,25 @@ def atomic_path(path: PathLike, inputs: Iterable[PathLike] = (), param: str | No
     """Yield a temporary path beside ``path`` to write; replace ``path`` with it on success.
 
     The temporary name ends with the output's own name, so that writers that choose a format
-    by extension (``.csv.gz``, ``.parquet``, ``.png``) choose the same one. The file gets the
+    by extension (``.csv.gz``, ``.parquet``, ``.png``) choose the same one. An ``OSError`` on
+    the temporary file (a full disk, a folder that takes no files) is raised naming ``path``. The file gets the
     permissions a new file would (``0666 & ~umask``), or those of the file it replaces.
     """
     name = check_output(path, inputs, param)
     folder, base = os.path.split(os.path.abspath(name))
-    fd, tmp = tempfile.mkstemp(dir=folder, prefix=".rplearn-", suffix=f"-{base}")
+    try:
+        fd, tmp = tempfile.mkstemp(dir=folder, prefix=".rplearn-", suffix=f"-{base}")
+    except OSError as exc:
+        raise InputError(f"{name}: cannot create a file in {folder} ({exc.strerror})", param=param) from None
     os.close(fd)
     try:
-        yield tmp
+        try:
+            yield tmp
+        except OSError as exc:
+            if exc.filename is not None and os.fspath(exc.filename) != tmp:
+                raise
+            # a write to the temporary file failed: name the output, not the temporary file
+            raise OSError(exc.errno, f"cannot write ({exc.strerror or exc})", name) from None
         with open(tmp, "rb+") as fh:
             os.fsync(fh.fileno())
         mode = stat.S_IMODE(os.stat(name).st_mode) if os.path.isfile(name) else 0o666 & ~_umask()

@@ -11,7 +11,8 @@ behind those names nor their third-party libraries (pandas, scikit-learn, matplo
     __getattr__, __dir__ = lazy_exports(__name__, _NAMES)
 
 ``from rplearn.models import fit_model`` then imports :mod:`rplearn.models.fit` and binds its
-``fit_model``; the value is cached in the package, so later look-ups cost nothing.
+``fit_model``; the value is cached in the package, so later look-ups cost nothing. Each
+public function and class comes with its argument types checked (:mod:`rplearn._argtypes`).
 
 A public name must not equal the name of a submodule of its package (importing the
 submodule would replace it); tests/test_public_api.py checks this.
@@ -26,6 +27,8 @@ import importlib
 import sys
 from collections.abc import Callable, Mapping
 from typing import Any
+
+from rplearn._argtypes import checked
 
 __all__ = ["lazy_exports"]
 
@@ -66,7 +69,7 @@ def lazy_exports(
         module = where.get(name)
         if module is None:
             raise AttributeError(f"module {package!r} has no attribute {name!r}")
-        value = getattr(importlib.import_module(module), name)
+        value = checked(getattr(importlib.import_module(module), name), f"{package}.{name}")
         setattr(sys.modules[package], name, value)
         return value
 

@@ -35,6 +35,10 @@ class InputError(RplearnError, ValueError):
     """Bad user input: a wrong shape, a NaN, an out-of-range value, an unknown name."""
 
 
+class ArgumentTypeError(InputError, TypeError):
+    """An argument of a public function is of the wrong type (see :mod:`rplearn._argtypes`)."""
+
+
 class FarFieldError(InputError):
     """A sample is closer than the far-field limit d > 2 lambda (paper Sec. III)."""
 

@@ -16,9 +16,8 @@ from rplearn.data.sync import (
     SyncOptions,
     SyncSummary,
     synchronise,
-    synchronise_stream,
-    synchronise_to_parquet,
 )
+from rplearn.data.streaming import synchronise_stream, synchronise_to_parquet
 from rplearn.core.geometry import slerp_wxyz
 
 

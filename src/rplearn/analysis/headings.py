@@ -26,6 +26,7 @@ import numpy as np
 import pandas as pd
 from numpy.typing import ArrayLike
 
+from rplearn.data.tables import check_tx_power_dbm
 from rplearn.core.geometry import direction_in_body, distance_m, quat_wxyz_from_yaw
 from rplearn.core.link import free_space_path_loss_db, received_power_dbm
 from rplearn.errors import InputError
@@ -190,6 +191,7 @@ def best_yaw(
         raise InputError(f"turn: expected 'tx', 'rx' or 'both', got {turn!r}", param="turn")
     grid = yaw_grid_deg(step_deg)
     if tx_power_dbm is not None:
+        check_tx_power_dbm(tx_power_dbm, "transmit power")
         frequency_hz = model_frequency_hz(model, frequency_hz)
     n = grid.size
     yaws = np.concatenate([grid, [float(tx_yaw_deg), float(rx_yaw_deg)]])  # the given yaws follow the grid
@@ -393,8 +395,7 @@ def _check_swarm(
     drone that names no drone."""
     if len(drones) < 2:
         raise InputError(f"positions: a swarm needs at least 2 drones, got {', '.join(drones) or 'none'}", param="positions")
-    if not np.isfinite(tx_power_dbm):
-        raise InputError(f"tx_power_dbm: expected a finite number of dBm, got {tx_power_dbm!r}", param="tx_power_dbm")
+    check_tx_power_dbm(tx_power_dbm, "transmit power")
     for d in drones:
         p = np.asarray(positions[d], np.float64)
         if p.shape != (3,) or not np.all(np.isfinite(p)):

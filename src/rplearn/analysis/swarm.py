@@ -27,6 +27,7 @@ from numpy.typing import ArrayLike
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
 
+from rplearn.data.tables import check_tx_power_dbm
 from rplearn.data.tables import LinkSamples
 from rplearn.errors import InputError
 from rplearn.core.geometry import distance_m, link_directions
@@ -233,8 +234,7 @@ def _check_link_options(tx_power_dbm: float, max_gap_s: float, min_rssi_dbm: flo
     gap [s]."""
     if not np.isfinite(min_rssi_dbm):
         raise InputError(f"min_rssi_dbm: expected a finite number of dBm, got {min_rssi_dbm!r}", param="min_rssi_dbm")
-    if not np.isfinite(tx_power_dbm):
-        raise InputError(f"tx_power_dbm: expected a finite number of dBm, got {tx_power_dbm!r}", param="tx_power_dbm")
+    check_tx_power_dbm(tx_power_dbm, "transmit power")
     if not (np.isfinite(max_gap_s) and max_gap_s > 0):
         raise InputError(f"max_gap_s: expected a positive number of seconds, got {max_gap_s!r}", param="max_gap_s")
 

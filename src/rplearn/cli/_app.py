@@ -173,7 +173,7 @@ def user_errors(fn: Callable | None = None, *, flags: Mapping[str, str] | None =
                 first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
                 fail(with_flag(first, exc.param, func, flags, exc.related))
             except FileNotFoundError as exc:
-                fail(f"{exc.filename}: no such file or directory")
+                fail(f"{exc.filename}: no such file or directory" if exc.filename else str(exc))
             except OSError as exc:
                 fail(f"{exc.filename}: {exc.strerror or exc}" if exc.filename else str(exc))
 

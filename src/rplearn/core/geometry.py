@@ -45,10 +45,11 @@ def _as_quat_wxyz(quat_wxyz: ArrayLike, name: str = "quaternion") -> FloatArray:
     if q.shape[-1] != 4:
         raise InputError(f"{name}: expected (..., 4) quaternions (qw, qx, qy, qz), got shape {q.shape}")
     norm = np.linalg.norm(q, axis=-1, keepdims=True)
-    if not np.all(np.isfinite(norm)):
-        raise InputError(f"{name}: {int(np.sum(~np.isfinite(norm)))} quaternion(s) contain NaN or inf")
-    if np.any(norm < 1e-9):
-        raise InputError(f"{name}: {int(np.sum(norm < 1e-9))} quaternion(s) have zero norm")
+    for bad, what in ((~np.isfinite(norm), "contain NaN or inf"), (norm < 1e-9, "have zero norm")):
+        if np.any(bad):
+            first = np.argwhere(bad[..., 0])[0]
+            at = f"index {int(first[0])}" if first.size == 1 else f"index {tuple(int(i) for i in first)}"
+            raise InputError(f"{name}: {int(np.sum(bad))} quaternion(s) {what}, the first at {at}")
     return q / norm
 
 

@@ -8,7 +8,9 @@ module        public names
               :func:`validate_matched`) and :func:`link_samples` -> :class:`LinkSamples`
 ``poses``     :func:`pose_tracks` -> :class:`PoseTrack`, :func:`interpolate_nodes`
 ``sync``      :func:`synchronise` (paper Sec. V-B4) with :class:`SyncOptions` ->
-              :class:`SyncResult`; :func:`synchronise_stream`, :func:`synchronise_to_parquet`
+              :class:`SyncResult`
+``streaming`` the same for logs too big for memory: :func:`synchronise_stream`,
+              :func:`synchronise_to_parquet`, :func:`row_hashes`
 ``units``     :func:`samples_of`, :func:`learning_units`, :func:`evaluation_units`,
               :func:`split_units`, :func:`select_units` -> :class:`UnitChoice`
 ============  ==================================================================================
@@ -44,8 +46,9 @@ _NAMES: dict[str, str] = {
     "SyncResult": "sync",
     "SyncSummary": "sync",
     "synchronise": "sync",
-    "synchronise_stream": "sync",
-    "synchronise_to_parquet": "sync",
+    "row_hashes": "streaming",
+    "synchronise_stream": "streaming",
+    "synchronise_to_parquet": "streaming",
     # learning and testing units
     "TEST_UNIT_PREFIX": "units",
     "UnitChoice": "units",

@@ -6,10 +6,14 @@ after optional clock offsets. A sample is dropped, and counted by reason, when:
 
 ``duplicate``
     it repeats an earlier row exactly, in every column (a logger or a merge writing the same
-    packet twice); the first copy is kept. :func:`synchronise_stream` finds duplicates
-    within a chunk only;
+    packet twice); the first copy is kept. :func:`rplearn.data.streaming.synchronise_stream`
+    finds them across chunks too;
 ``invalid_value``
-    its time, tx power or frequency is missing, NaN or not a number;
+    its time, tx power or frequency is missing, NaN or not a number, or its tx or rx id is
+    empty. A frequency or power outside the plausible bands
+    (:data:`~rplearn.data.tables.FREQUENCY_BAND_HZ`, :data:`~rplearn.data.tables.TX_POWER_BAND_DBM`)
+    is no drop but an :class:`~rplearn.errors.InputError` naming the row: a unit mistake
+    (MHz for Hz) that would otherwise drop every sample;
 ``sentinel_rssi``
     its RSSI is NaN, infinite or one of the sentinel values radios report for "no
     measurement" (default ``0, -127, -128, 127``);
@@ -45,7 +49,7 @@ import logging
 import math
 from dataclasses import dataclass, field
 from numbers import Real
-from typing import Any, Iterable, Iterator, Mapping, Sequence
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 import pandas as pd
@@ -62,11 +66,15 @@ from rplearn.data.tables import (
     QUATERNION_NORM_TOLERANCE,
     SENTINEL_RSSI_DBM,
     SIGNAL_COLUMNS,
+    FREQUENCY_BAND_HZ,
+    check_frequency_hz,
+    check_tx_power_dbm,
+    empty_ids,
+    node_ids,
     non_unit_quaternion_rows,
     normalise_times,
     validate_pose_log,
 )
-from rplearn._atomic import atomic_path
 from rplearn.errors import InputError
 
 logger = logging.getLogger(__name__)
@@ -274,7 +282,7 @@ def _unknown_nodes(
     node ids named by the kept rows; raises with ``on_unknown_node="error"``.
     """
     n = len(tx)
-    codes, uniques = pd.factorize(np.concatenate([tx, rx]))  # factorise once over both ends
+    codes, uniques = pd.factorize(np.concatenate([tx, rx]), use_na_sentinel=False)  # factorise once over both ends
     known = np.array([u in tracks for u in uniques], bool)
     unknown_mask = ~known[codes[:n]] | ~known[codes[n:]]
     names: list[str] = []
@@ -319,17 +327,22 @@ def _matched_frame(
 
 
 def _match_chunk(
-    tracks: Mapping[str, PoseTrack], signal: pd.DataFrame, options: SyncOptions, source: str
+    tracks: Mapping[str, PoseTrack], signal: pd.DataFrame, options: SyncOptions, source: str,
+    seen_before: np.ndarray | None = None, first_row: int = 0,
 ) -> SyncResult:
-    """Match one signal log (or chunk of one) with the pose tracks; drops counted by reason."""
+    """Match one signal log (or chunk of one) with the pose tracks; drops counted by reason.
+
+    ``seen_before`` marks rows that repeat a row of an earlier chunk (counted as duplicates);
+    ``first_row`` is the row number of the chunk's first row in the whole log (for messages).
+    """
     missing = [c for c in SIGNAL_COLUMNS if c not in signal.columns]
     if missing:
         raise InputError(
             f"{source}: missing column(s) {', '.join(missing)}; expected {', '.join(SIGNAL_COLUMNS)}"
         )
     summary = SyncSummary(n_in=int(len(signal)))
-    tx = signal["tx"].astype(str).to_numpy(dtype=object)
-    rx = signal["rx"].astype(str).to_numpy(dtype=object)
+    tx = node_ids(signal["tx"])
+    rx = node_ids(signal["rx"])
     values = {"t": _signal_times(signal, rx, options.signal_clock_offset_s), "tx": tx, "rx": rx}
     values.update({c: _numeric(signal, c) for c in ("rssi_dbm", "tx_power_dbm", "frequency_hz")})
     t, rssi, ptx, freq = (values[c] for c in ("t", "rssi_dbm", "tx_power_dbm", "frequency_hz"))
@@ -340,8 +353,12 @@ def _match_chunk(
         summary.dropped[reason] += int(hit.sum())
         keep[hit] = False
 
-    drop(duplicate_rows(signal), "duplicate")
-    drop(~(np.isfinite(t) & np.isfinite(ptx) & np.isfinite(freq) & (freq > 0)), "invalid_value")
+    drop(duplicate_rows(signal) | (False if seen_before is None else seen_before), "duplicate")
+    drop(~(np.isfinite(t) & np.isfinite(ptx) & np.isfinite(freq) & (freq > 0)) | empty_ids(tx) | empty_ids(rx),
+         "invalid_value")
+    # a unit mistake or a corrupt field: refused, naming the row (a NaN is a counted drop above)
+    check_frequency_hz(np.where(keep, freq, FREQUENCY_BAND_HZ[0]), source, None, first_row)
+    check_tx_power_dbm(np.where(keep, ptx, 0.0), source, None, first_row)
     drop(~np.isfinite(rssi) | np.isin(rssi, np.asarray(options.sentinel_rssi_dbm, np.float64)), "sentinel_rssi")
     drop((rssi < PLAUSIBLE_RSSI_DBM[0]) | (rssi > PLAUSIBLE_RSSI_DBM[1]) | (rssi > ptx), "implausible_rssi")
     drop(tx == rx, "tx_equals_rx")
@@ -479,85 +496,6 @@ def synchronise(
     return result
 
 
-def synchronise_stream(
-    pose_log: pd.DataFrame,
-    signal_chunks: Iterable[pd.DataFrame],
-    options: SyncOptions | None = None,
-    source: str = "signal log",
-) -> Iterator[SyncResult]:
-    """Match a signal log chunk by chunk; yields one :class:`SyncResult` per chunk.
-
-    The pose log is held in memory (a 100 Hz log of an hour is 360,000 rows per node); the
-    signal log is consumed lazily, so memory stays bounded by the chunk size. Merge the
-    per-chunk summaries with :meth:`SyncSummary.merge`. Options as in :func:`synchronise`
-    (``min_samples`` is not checked).
-    """
-    options = _options(options)
-    pose = validate_pose_log(pose_log, "pose log")
-    tracks = tracks_of_checked_log(pose, options.clock_offsets_s, "pose log")
-    non_unit = non_unit_quaternion_rows(pose)
-    for chunk in signal_chunks:
-        result = _match_chunk(tracks, chunk, options, source)
-        result.summary.non_unit_quaternions, non_unit = non_unit, 0  # counted once, in the first chunk
-        yield result
-
-
-def synchronise_to_parquet(
-    pose_log: pd.DataFrame,
-    signal_chunks: Iterable[pd.DataFrame],
-    out_path: str,
-    options: SyncOptions | None = None,
-    source: str = "signal log",
-) -> SyncSummary:
-    """Stream a signal log through :func:`synchronise_stream` into one Parquet file.
-
-    Parameters
-    ----------
-    pose_log : DataFrame
-        Canonical pose log.
-    signal_chunks : iterable of DataFrame
-        Signal-log chunks, e.g. :func:`rplearn.io.tables.iter_signal_table`.
-    out_path : str
-        Parquet file to write (one row group per non-empty chunk).
-    options : SyncOptions, optional
-        As for :func:`synchronise_stream`.
-    source : str
-        Name of the signal log in messages.
-
-    Returns
-    -------
-    SyncSummary
-        Counts over the whole log.
-    """
-    import pyarrow as pa
-    import pyarrow.parquet as pq
-
-    total = SyncSummary()
-    with atomic_path(out_path) as tmp:
-        writer = None
-        schema = None
-        try:
-            for res in synchronise_stream(pose_log, signal_chunks, options, source):
-                total.merge(res.summary)
-                if res.dataset.empty:
-                    continue
-                table = pa.Table.from_pandas(res.dataset, preserve_index=False)
-                if writer is None:
-                    schema = table.schema
-                    writer = pq.ParquetWriter(tmp, schema)
-                else:
-                    table = table.select(schema.names).cast(schema)
-                writer.write_table(table)
-            if writer is None:  # nothing matched: write an empty file with the canonical columns
-                empty = pd.DataFrame({c: pd.Series(dtype=str if c in ("tx", "rx") else float)
-                                      for c in MATCHED_COLUMNS})
-                empty.to_parquet(tmp, index=False)
-        finally:
-            if writer is not None:
-                writer.close()
-    return total
-
-
 __all__ = [
     "DEFAULT_SENTINEL_RSSI_DBM",
     "DROP_REASONS",
@@ -568,6 +506,4 @@ __all__ = [
     "check_link_nodes",
     "duplicate_rows",
     "synchronise",
-    "synchronise_stream",
-    "synchronise_to_parquet",
 ]

@@ -78,6 +78,24 @@ def _require_finite(df: pd.DataFrame, columns: Sequence[str], source: str) -> No
             )
 
 
+def node_ids(values: Any) -> np.ndarray:
+    """Node ids as an object array of ``str``; a missing cell (None, NaN, NA) becomes ``""``.
+
+    ``astype(str)`` alone would make a missing id the node ``"nan"`` (or keep a float NaN
+    with pandas' string dtype): a node that does not exist, learned from.
+    """
+    series = values if isinstance(values, pd.Series) else pd.Series(values)
+    missing = series.isna().to_numpy()
+    if missing.any():
+        series = series.astype(object).where(~missing, "")
+    return series.astype(str).to_numpy(dtype=object)
+
+
+def empty_ids(ids: np.ndarray) -> np.ndarray:
+    """Mask of node ids that are empty or only white space."""
+    return np.char.str_len(np.char.strip(ids.astype(str))) == 0 if ids.size else np.zeros(0, bool)
+
+
 def validate_pose_log(df: pd.DataFrame, source: str = "pose log") -> pd.DataFrame:
     """Check a canonical pose log and return it typed, sorted by (node, t), quaternions normalised.
 
@@ -95,26 +113,37 @@ def validate_pose_log(df: pd.DataFrame, source: str = "pose log") -> pd.DataFram
     _require_columns(df, POSE_COLUMNS, source)
     df = normalise_times(df, source)
     _require_finite(df, [c for c in POSE_COLUMNS if c != "node"], source)
-    out = df.loc[:, list(POSE_COLUMNS)].copy()
-    out["node"] = out["node"].astype(str)
-    for c in POSE_COLUMNS:
-        if c != "node":
-            out[c] = out[c].astype(np.float64)
-    q = out[["qw", "qx", "qy", "qz"]].to_numpy()
+    t = df["t"].to_numpy(np.float64)
+    ids = node_ids(df["node"])
+    empty = empty_ids(ids)
+    if np.any(empty):
+        row = int(np.flatnonzero(empty)[0])
+        raise InputError(f"{source}: column node is empty at row {row} (every pose row needs its node id)")
+    codes, _ = pd.factorize(ids, sort=True)  # codes in the order of sorted ids
+    order = np.lexsort((t, codes))  # stable: by node id, then time
+    in_order = bool(np.all(order[1:] > order[:-1])) if order.size > 1 else True
+    take = slice(None) if in_order else order
+    cols: dict[str, Any] = {"t": t[take], "node": ids[take]}
+    for c in ("x", "y", "z"):
+        cols[c] = df[c].to_numpy(np.float64)[take]
+    q = df[["qw", "qx", "qy", "qz"]].to_numpy(np.float64)[take]
     norm = np.linalg.norm(q, axis=1)
     if np.any(norm < 1e-6):
-        row = int(np.flatnonzero(norm < 1e-6)[0])
+        row = int(np.flatnonzero(norm < 1e-6)[0]) if in_order else int(order[np.flatnonzero(norm < 1e-6)[0]])
         raise InputError(f"{source}: quaternion (qw, qx, qy, qz) has zero norm at row {row}")
     non_unit = count_non_unit_quaternions(norm) + int(df.attrs.get(NON_UNIT_QUATERNION_ATTR, 0))
-    out[["qw", "qx", "qy", "qz"]] = q / norm[:, None]
-    out = out.sort_values(["node", "t"], kind="stable").reset_index(drop=True)
-    dup = out.duplicated(["node", "t"])
-    if dup.any():
-        row = out[dup].iloc[0]
+    q = q / norm[:, None]
+    for j, c in enumerate(("qw", "qx", "qy", "qz")):
+        cols[c] = q[:, j]
+    sorted_codes, ts = codes[take], cols["t"]
+    dup = (sorted_codes[1:] == sorted_codes[:-1]) & (ts[1:] == ts[:-1])
+    if np.any(dup):
+        i = int(np.flatnonzero(dup)[0]) + 1
         raise InputError(
             f"{source}: field t: {int(dup.sum())} duplicate timestamp(s) within a node "
-            f"(first: node {row['node']}, t = {float(row['t'])!r})"
+            f"(first: node {cols['node'][i]}, t = {float(ts[i])!r})"
         )
+    out = pd.DataFrame(cols, columns=list(POSE_COLUMNS))
     out.attrs[NON_UNIT_QUATERNION_ATTR] = non_unit
     return out
 
@@ -148,9 +177,9 @@ FREQUENCY_BAND_HZ: tuple[float, float] = (1e6, 3e11)
 TX_POWER_BAND_DBM: tuple[float, float] = (-40.0, 60.0)
 
 
-def check_frequency_hz(values: Any, where: str, param: str | None = "frequency_hz") -> None:
+def check_frequency_hz(values: Any, where: str, param: str | None = "frequency_hz", row_offset: int = 0) -> None:
     """Refuse carrier frequencies outside :data:`FREQUENCY_BAND_HZ`, saying when a value looks
-    like MHz (2412 for 2.412 GHz)."""
+    like MHz (2412 for 2.412 GHz); rows are numbered from ``row_offset``."""
     f = np.atleast_1d(np.asarray(values, np.float64))
     lo, hi = FREQUENCY_BAND_HZ
     bad = ~((f >= lo) & (f <= hi))
@@ -158,18 +187,19 @@ def check_frequency_hz(values: Any, where: str, param: str | None = "frequency_h
         row = int(np.flatnonzero(bad)[0])
         v = float(f[row])
         hint = f"; {v:g} looks like MHz ({v * 1e6:g} Hz)" if lo <= v * 1e6 <= hi else ""
-        at = f" at row {row}" if f.size > 1 else ""
+        at = f" at row {row + row_offset}" if f.size > 1 or row_offset else ""
         raise InputError(f"{where}: frequency_hz {v:g}{at} is not a radio carrier in Hz (expected {lo:g} to {hi:g}){hint}", param=param)
 
 
-def check_tx_power_dbm(values: Any, where: str, param: str | None = "tx_power_dbm") -> None:
-    """Refuse transmit powers outside :data:`TX_POWER_BAND_DBM` (1e6 dBm is no radio)."""
+def check_tx_power_dbm(values: Any, where: str, param: str | None = "tx_power_dbm", row_offset: int = 0) -> None:
+    """Refuse transmit powers outside :data:`TX_POWER_BAND_DBM` (1e6 dBm is no radio); rows are
+    numbered from ``row_offset``."""
     p = np.atleast_1d(np.asarray(values, np.float64))
     lo, hi = TX_POWER_BAND_DBM
     bad = ~((p >= lo) & (p <= hi))
     if np.any(bad):
         row = int(np.flatnonzero(bad)[0])
-        at = f" at row {row}" if p.size > 1 else ""
+        at = f" at row {row + row_offset}" if p.size > 1 or row_offset else ""
         raise InputError(f"{where}: tx_power_dbm {float(p[row]):g}{at} is outside {lo:g} to {hi:g} dBm", param=param)
 
 
@@ -270,6 +300,9 @@ class LinkSamples:
         Distance between the ends [m].
     frequency_hz : ndarray or None
         Carrier frequency of every sample [Hz].
+    non_unit_quaternions : int
+        Samples whose tx or rx quaternion norm was off 1 by more than
+        :data:`QUATERNION_NORM_TOLERANCE` (normalised, as in matching; reported by ``fit``).
     """
 
     directions: Directions
@@ -279,6 +312,7 @@ class LinkSamples:
     joint_gain_db: np.ndarray
     distance_m: np.ndarray
     frequency_hz: np.ndarray | None = None
+    non_unit_quaternions: int = 0
 
     def __len__(self) -> int:
         return int(self.joint_gain_db.shape[0])
@@ -321,6 +355,17 @@ def link_samples(
     rx_pos = df[["rx_x", "rx_y", "rx_z"]].to_numpy(np.float64)
     tx_q = df[["tx_qw", "tx_qx", "tx_qy", "tx_qz"]].to_numpy(np.float64)
     rx_q = df[["rx_qw", "rx_qx", "rx_qy", "rx_qz"]].to_numpy(np.float64)
+    off = np.zeros(len(df), bool)
+    for end, q in (("tx", tx_q), ("rx", rx_q)):
+        norm = np.linalg.norm(q, axis=1)
+        zero = norm < 1e-9
+        if np.any(zero):
+            row = int(np.flatnonzero(zero)[0])
+            raise InputError(
+                f"{source}: quaternion ({end}_qw, {end}_qx, {end}_qy, {end}_qz) has zero norm at row {row} "
+                f"({int(zero.sum())} row(s)); no attitude can be read from it"
+            )
+        off |= np.abs(norm - 1.0) > QUATERNION_NORM_TOLERANCE
     dirs = link_directions(tx_pos, tx_q, rx_pos, rx_q)
     dist = distance_m(tx_pos, rx_pos)
     if "rssi_dbm" in df.columns:
@@ -335,4 +380,5 @@ def link_samples(
         dist,
         df["frequency_hz"].to_numpy(np.float64),
     )
-    return LinkSamples(dirs, tx_index, rx_index, nodes_t, gain, dist, df["frequency_hz"].to_numpy(np.float64))
+    return LinkSamples(dirs, tx_index, rx_index, nodes_t, gain, dist, df["frequency_hz"].to_numpy(np.float64),
+                       non_unit_quaternions=int(off.sum()))

@@ -41,6 +41,7 @@ _NAMES: dict[str, str] = {
     "read_dataset": "files",
     "read_table": "files",
     "write_table": "files",
+    "write_table_chunks": "files",
     # per-format readers
     "COLUMN_ALIASES": "tables",
     "canonical_pose": "tables",

@@ -1,4 +1,4 @@
-"""Result container shared by the readers of :mod:`rplearn.io`."""
+"""What the readers of :mod:`rplearn.io` share: the result container, lean Parquet reading."""
 
 from __future__ import annotations
 
@@ -21,3 +21,15 @@ class Logs:
 
     pose: pd.DataFrame | None = None
     signal: pd.DataFrame | None = None
+
+
+def read_parquet_lean(path: str) -> pd.DataFrame:
+    """A Parquet file as a DataFrame, holding its data about once in memory.
+
+    ``pyarrow.parquet.read_table(...).to_pandas(self_destruct=True)`` frees each Arrow column
+    once converted, where ``pandas.read_parquet`` holds both copies at its peak.
+    """
+    import pyarrow.parquet as pq
+
+    table = pq.read_table(path)
+    return table.to_pandas(self_destruct=True, split_blocks=True)

@@ -19,6 +19,7 @@ from rplearn._version import __version__
 
 from rplearn.data.tables import CSV_DTYPES, normalise_times, validate_matched
 from rplearn.errors import InputError
+from rplearn.io._common import read_parquet_lean
 
 
 def read_table(path: str, source: str | None = None) -> pd.DataFrame:
@@ -28,7 +29,7 @@ def read_table(path: str, source: str | None = None) -> pd.DataFrame:
         raise InputError(f"{name}: no such file")
     try:
         if str(path).lower().endswith((".parquet", ".pq")):
-            return normalise_times(pd.read_parquet(path), name)
+            return normalise_times(read_parquet_lean(path), name)
         return normalise_times(pd.read_csv(path, dtype=CSV_DTYPES), name)
     except (ValueError, OSError, pd.errors.ParserError, UnicodeDecodeError) as exc:
         raise InputError(f"{name}: cannot read table ({type(exc).__name__}: {exc})") from None
@@ -47,6 +48,81 @@ def write_table(df: pd.DataFrame, path: str) -> None:
             df.to_parquet(tmp, index=False)
         else:
             df.to_csv(tmp, index=False)
+
+
+def _empty_like(columns: Iterable[str]) -> pd.DataFrame:
+    """An empty table with these columns (``tx``/``rx`` as text, the rest as numbers)."""
+    return pd.DataFrame({c: pd.Series(dtype=object if c in ("tx", "rx", "unit") else float) for c in columns})
+
+
+def write_table_chunks(
+    chunks: Iterable[pd.DataFrame], path: str, empty_columns: Iterable[str] = ()
+) -> int:
+    """Write a table arriving in chunks as Parquet (one row group a chunk) or CSV, atomically.
+
+    Memory holds one chunk. The chunks must share their columns; a later chunk's types are
+    cast to the first non-empty chunk's. When ``chunks`` raises, nothing is written (the
+    previous file, if any, stays). With no rows at all, an empty table with
+    ``empty_columns`` is written.
+
+    Returns
+    -------
+    int
+        Rows written.
+    """
+    kind = check_table_path(path)
+    rows = 0
+    with atomic_path(path) as tmp:
+        if kind == "parquet":
+            import pyarrow as pa
+            import pyarrow.parquet as pq
+
+            writer = None
+            try:
+                for chunk in chunks:
+                    if chunk.empty:
+                        continue
+                    table = pa.Table.from_pandas(chunk, preserve_index=False)
+                    if writer is None:
+                        writer = pq.ParquetWriter(tmp, table.schema)
+                    elif table.schema != writer.schema:
+                        table = _cast_like(table, writer.schema, path)
+                    writer.write_table(table)
+                    rows += len(chunk)
+            finally:
+                if writer is not None:
+                    writer.close()
+            if writer is None:
+                _empty_like(empty_columns).to_parquet(tmp, index=False)
+        else:
+            import gzip
+
+            opener = gzip.open if str(path).lower().endswith(".gz") else open
+            with opener(tmp, "wt", encoding="utf-8", newline="") as fh:
+                header: list[str] | None = None
+                for chunk in chunks:
+                    if header is None:
+                        header = list(chunk.columns)
+                        chunk.to_csv(fh, index=False)
+                    elif not chunk.empty:
+                        chunk[header].to_csv(fh, index=False, header=False)
+                    rows += len(chunk)
+                if header is None:
+                    _empty_like(empty_columns).to_csv(fh, index=False)
+    return rows
+
+
+def _cast_like(table: Any, schema: Any, path: str) -> Any:
+    """A chunk's Arrow table in the first chunk's schema, or a one-line error naming the column."""
+    try:
+        return table.select(schema.names).cast(schema)
+    except Exception as exc:  # pyarrow's own errors: name the column that differs
+        differing = [f.name for f in schema if f.name not in table.column_names
+                     or table.schema.field(f.name).type != f.type]
+        raise InputError(
+            f"{path}: column(s) {', '.join(differing) or '?'} change type between chunks "
+            f"({type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''})"
+        ) from None
 
 
 def check_table_path(path: str) -> str:

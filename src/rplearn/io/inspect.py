@@ -318,6 +318,9 @@ def _read_one(path: str, options: ReaderOptions) -> tuple[pd.DataFrame | None, p
     info = {"format": f.get("format", kind), "kind": f.get("kind")}
     if f.get("invalid_flag_rows"):
         info["invalid_flag_rows"] = int(f["invalid_flag_rows"])
+    for key in ("cut_off_at_byte", "corrupt"):
+        if f.get(key):
+            info[key] = f[key]
     if logs.pose is not None:
         info["non_unit_quaternion_rows"] = non_unit_quaternion_rows(logs.pose)
     return logs.pose, logs.signal, info, {}
@@ -386,8 +389,24 @@ def inspect_logs(
     return report
 
 
+def file_damage(path: str, info: dict[str, Any]) -> list[str]:
+    """Lines saying a log file is cut off or corrupt (from its reader's metadata)."""
+    lines = []
+    if info.get("cut_off_at_byte") is not None:
+        lines.append(
+            f"{path}: the file is cut off inside the message at byte {info['cut_off_at_byte']:,} "
+            "(a log that ends early: power loss or an interrupted copy); the complete messages before it were read"
+        )
+    if info.get("corrupt"):
+        lines.append(f"{path}: corrupt bytes were skipped by the ULog reader (pyulog); what follows them was read")
+    return lines
+
+
 def _flag_file(report: InspectReport, path: str, info: dict[str, Any]) -> None:
-    """Problems of one file: rows flagged invalid by the autopilot, non-unit quaternions."""
+    """Problems of one file: a cut-off or corrupt file, rows flagged invalid by the autopilot,
+    non-unit quaternions."""
+    for line in file_damage(path, info):
+        report.problems.append(line)
     if info.get("invalid_flag_rows"):
         report.problems.append(
             f"{path}: {info['invalid_flag_rows']} pose row(s) flagged invalid by the autopilot "

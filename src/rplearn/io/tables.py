@@ -21,9 +21,10 @@ from typing import Any, Iterator, Mapping
 import numpy as np
 import pandas as pd
 
-from rplearn.data.tables import CSV_DTYPES, POSE_COLUMNS, SIGNAL_COLUMNS, normalise_times, validate_pose_log
+from rplearn.data.tables import CSV_DTYPES, POSE_COLUMNS, SIGNAL_COLUMNS, node_ids, normalise_times, validate_pose_log
 from rplearn.errors import InputError, LogFormatError
 from rplearn.core.geometry import quat_wxyz_from_euler_enu_flu_deg, quat_wxyz_from_euler_ned_frd_deg
+from rplearn.io._common import read_parquet_lean
 from rplearn.io.geodetic import geodetic_to_enu
 
 #: Vendor column names -> canonical names (the one renaming mapping of rplearn.io).
@@ -74,7 +75,7 @@ def _read(path: str, source: str) -> pd.DataFrame:
         raise InputError(f"{source}: no such file")
     try:
         if str(path).lower().endswith(_PARQUET_EXT):
-            return normalise_times(pd.read_parquet(path), source)
+            return normalise_times(read_parquet_lean(path), source)
         return normalise_times(pd.read_csv(path, skipinitialspace=True, dtype=CSV_DTYPES), source)
     except pd.errors.EmptyDataError:
         raise LogFormatError(f"{source}: empty file, expected a header line and rows") from None
@@ -350,7 +351,7 @@ def canonical_signal(
     for c in SIGNAL_COLUMNS:
         col = df[c].to_numpy()
         if c in ("tx", "rx"):
-            out[c] = pd.Series(col).astype(str).to_numpy(dtype=object)
+            out[c] = node_ids(pd.Series(col))
         else:
             out[c] = pd.to_numeric(pd.Series(col), errors="coerce").to_numpy(np.float64, na_value=np.nan)
     for c in df.columns:

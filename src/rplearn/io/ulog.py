@@ -120,6 +120,35 @@ _TOPICS: tuple[str, ...] = ("vehicle_local_position", "vehicle_attitude", "vehic
                             "vehicle_gps_position", "sensor_gps")
 
 
+#: Bytes of the ULog file header (magic, version, timestamp) and of each message header.
+_ULOG_FILE_HEADER_BYTES = 16
+_ULOG_MSG_HEADER_BYTES = 3
+
+
+def ulog_cut_off_at(path: str) -> int | None:
+    """Byte offset of a ULog message that the file ends inside, or None if it ends whole.
+
+    A ULog after its 16-byte header is a sequence of messages, each a 3-byte header
+    (``uint16`` payload size, ``uint8`` type) and its payload (ULog file format, "Definitions"
+    and "Data" sections, docs.px4.io/main/en/dev_log/ulog_file_format). A log cut off by a
+    power loss or a failed copy ends inside a message; ``pyulog`` then stops without a word.
+    """
+    import mmap
+
+    with open(path, "rb") as fh:
+        size = os.fstat(fh.fileno()).st_size
+        if size <= _ULOG_FILE_HEADER_BYTES:
+            return _ULOG_FILE_HEADER_BYTES if size < _ULOG_FILE_HEADER_BYTES else None
+        with mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ) as data:
+            pos = _ULOG_FILE_HEADER_BYTES
+            while pos + _ULOG_MSG_HEADER_BYTES <= size:
+                nxt = pos + _ULOG_MSG_HEADER_BYTES + (data[pos] | (data[pos + 1] << 8))
+                if nxt > size:
+                    return pos
+                pos = nxt
+    return None if pos == size else pos
+
+
 def _open_ulog(source: str) -> Any:
     """The parsed ULog (the topics rplearn uses only); :class:`LogFormatError` when unreadable."""
     if not os.path.exists(source):
@@ -307,7 +336,10 @@ def read_ulog(
         ``source``, ``format`` ("ulog"), ``time_reference`` ("utc" or "boot"),
         ``utc_offset_us`` and its source topic, ``anchor_geodetic`` (or None) and
         ``anchor_source``, ``origin_geodetic`` (or None), ``dropped`` per reason,
-        ``invalid_flag_rows`` (rows with xy_valid or z_valid = 0), ``rows``.
+        ``invalid_flag_rows`` (rows with xy_valid or z_valid = 0), ``rows``,
+        ``cut_off_at_byte`` (the offset of the message a cut-off file ends inside, whose
+        data are lost, see :func:`ulog_cut_off_at`; None for a whole file) and ``corrupt``
+        (pyulog skipped corrupt bytes).
     """
     source = str(path)
     if time_reference not in ("auto", "utc", "boot"):
@@ -339,6 +371,8 @@ def read_ulog(
         "origin_geodetic": None if origin_geodetic is None else tuple(float(v) for v in origin_geodetic),
         "timebase": timebase, "dropped": dropped, "invalid_flag_rows": invalid_flag_rows,
         "rows": int(len(pose)),
+        "cut_off_at_byte": None if ulog.file_corruption else ulog_cut_off_at(source),
+        "corrupt": bool(ulog.file_corruption),
     }
     return pose, meta
 

@@ -7,42 +7,32 @@
 
 from __future__ import annotations
 
-from rplearn.workflows.demo import DEMO_MODELS, DemoResult, run_demo
-from rplearn.workflows.learning import (
-    EvaluationOutcome,
-    FitOutcome,
-    ReportOutcome,
-    draw_pattern_files,
-    evaluate_model_files,
-    fit_dataset,
-    learn_and_report,
-    predict_file,
-    sweep_dataset,
-)
-from rplearn.workflows.planning import CampaignPlan, export_model_file, orient_link, plan_campaign
-from rplearn.workflows.logs import LinksOutcome, SyncOutcome, reader_notes, swarm_headings, swarm_links, sync_logs
+from rplearn._lazy import lazy_exports
 
-__all__ = [
-    "CampaignPlan",
-    "DEMO_MODELS",
-    "DemoResult",
-    "EvaluationOutcome",
-    "FitOutcome",
-    "LinksOutcome",
-    "ReportOutcome",
-    "SyncOutcome",
-    "draw_pattern_files",
-    "evaluate_model_files",
-    "export_model_file",
-    "fit_dataset",
-    "learn_and_report",
-    "orient_link",
-    "plan_campaign",
-    "predict_file",
-    "reader_notes",
-    "run_demo",
-    "swarm_headings",
-    "swarm_links",
-    "sweep_dataset",
-    "sync_logs",
-]
+_NAMES: dict[str, str] = {
+    "DEMO_MODELS": "demo",
+    "DemoResult": "demo",
+    "run_demo": "demo",
+    "EvaluationOutcome": "learning",
+    "FitOutcome": "learning",
+    "ReportOutcome": "learning",
+    "draw_pattern_files": "learning",
+    "evaluate_model_files": "learning",
+    "fit_dataset": "learning",
+    "learn_and_report": "learning",
+    "predict_file": "learning",
+    "sweep_dataset": "learning",
+    "CampaignPlan": "planning",
+    "export_model_file": "planning",
+    "orient_link": "planning",
+    "plan_campaign": "planning",
+    "LinksOutcome": "logs",
+    "SyncOutcome": "logs",
+    "reader_notes": "logs",
+    "swarm_headings": "logs",
+    "swarm_links": "logs",
+    "sync_logs": "logs",
+}
+
+__all__ = sorted(_NAMES)
+__getattr__, __dir__ = lazy_exports(__name__, _NAMES)

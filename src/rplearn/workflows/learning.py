@@ -17,6 +17,7 @@ from rplearn.analysis.sweep import SweepResult, no_progress, order_sweep
 from rplearn.core.metrics import Scores
 from rplearn.data.units import UnitChoice, evaluation_units, learning_units, samples_of, split_units
 from rplearn.errors import InputError
+from rplearn.data.tables import QUATERNION_NORM_TOLERANCE
 from rplearn.io.files import check_output_path, check_table_path, provenance, read_dataset, write_json, write_table
 from rplearn.models.fit import FittedModel, evaluate_models, fit_model, scores_markdown
 from rplearn.models.load import load_model
@@ -38,12 +39,15 @@ class FitOutcome:
     n_samples : int
     output : str or None
         Model file written.
+    non_unit_quaternions : int
+        Learning samples whose tx or rx quaternion was not of unit norm (normalised).
     """
 
     fitted: FittedModel
     units: UnitChoice
     n_samples: int
     output: str | None = None
+    non_unit_quaternions: int = 0
 
     def summary(self) -> str:
         """What was learned, from how much, in how long; rank, conditioning and gauge."""
@@ -57,6 +61,9 @@ class FitOutcome:
                 f"{training['condition_number']:.2f}, training RMSE {training['rmse_db']:.2f} dB"
             )
             text += "".join(f"\n  gauge: {g['text']}" for g in training.get("gauges", []))
+        if self.non_unit_quaternions:
+            text += (f"\n  samples with a non-unit quaternion (|norm - 1| > {QUATERNION_NORM_TOLERANCE:g}, "
+                     f"normalised): {self.non_unit_quaternions:,}")
         return text
 
     @property
@@ -94,7 +101,7 @@ def fit_dataset(
     fitted = fit_model(samples, spec, gauge=gauge, provenance=prov)
     if output:
         fitted.model.save(output)
-    return FitOutcome(fitted, choice, len(samples), output)
+    return FitOutcome(fitted, choice, len(samples), output, samples.non_unit_quaternions)
 
 
 @dataclass

@@ -8,16 +8,20 @@ notes for the user.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, Mapping, Sequence
+from typing import Any, Iterator, Mapping, Sequence
 
+import pandas as pd
 from numpy.typing import ArrayLike
 
 from rplearn.analysis.headings import SwarmHeadings, best_swarm_headings
 from rplearn.analysis.swarm import SwarmPrediction, predict_swarm
-from rplearn.data.sync import SyncOptions, SyncResult, synchronise
+from rplearn.data.streaming import synchronise_stream
+from rplearn.data.sync import SyncOptions, SyncSummary, synchronise
+from rplearn.data.tables import MATCHED_COLUMNS
 from rplearn.errors import InputError
 from rplearn.io import ReaderOptions, read_logs
-from rplearn.io.files import check_output_path, check_table_path, write_json, write_table
+from rplearn.io.inspect import file_damage
+from rplearn.io.files import check_output_path, check_table_path, write_json, write_table, write_table_chunks
 from rplearn.models.load import load_model
 from rplearn.models.predict import FrequencyMismatch, frequency_mismatch
 
@@ -30,19 +34,58 @@ def reader_notes(metadata: Mapping[str, Any]) -> list[str]:
         notes += [f"{source}: dropped {n:,} pose row(s) ({why})" for why, n in (f.get("dropped") or {}).items() if n]
         if f.get("level_assumed"):
             notes.append(f"{source}: yaw only, so level flight (roll = pitch = 0) is assumed")
+        notes += file_damage(source, f)
     return notes
 
 
 @dataclass
 class SyncOutcome:
-    """A matched dataset written from logs, and what the readers said."""
+    """A matched dataset written from logs: its counts, where it went, what the readers said.
 
-    result: SyncResult
+    Attributes
+    ----------
+    counts : SyncSummary
+        Samples in, matched, and dropped by reason.
+    output : str
+        The matched dataset written.
+    notes : list of str
+        What the log readers dropped or assumed.
+    streamed : bool
+        True when the signal logs were read in chunks (CSV/Parquet signal tables).
+    """
+
+    counts: SyncSummary
     output: str
     notes: list[str] = field(default_factory=list)
+    streamed: bool = False
 
     def summary(self) -> str:
-        return f"{self.result.summary.to_text()}\nwrote {len(self.result.dataset):,} matched samples to {self.output}"
+        return f"{self.counts.to_text()}\nwrote {self.counts.n_out:,} matched samples to {self.output}"
+
+
+#: Rows of a signal table read at a time when a sync streams it.
+SYNC_CHUNK_ROWS = 200_000
+
+
+def _streamable(signal_paths: Sequence[str], reader_options: ReaderOptions) -> bool:
+    """True when every signal path is a CSV/Parquet signal table (read in chunks)."""
+    from rplearn.io import detect_format
+    from rplearn.io.tables import table_kind
+
+    return all(detect_format(p) == "table" and table_kind(p, reader_options.columns) == "signal"
+               for p in signal_paths)
+
+
+def _signal_chunks(signal_paths: Sequence[str], options: ReaderOptions) -> Iterator[pd.DataFrame]:
+    """Every signal table's rows, chunk by chunk, file after file."""
+    from rplearn.io.tables import iter_signal_table
+
+    ptx = options.tx_power_dbm if not isinstance(options.tx_power_dbm, Mapping) else None
+    for path in signal_paths:
+        yield from iter_signal_table(
+            path, SYNC_CHUNK_ROWS, columns=options.columns, tx_power_dbm=ptx,
+            frequency_hz=options.frequency_hz, rx=(options.receivers or {}).get(path),
+        )
 
 
 def sync_logs(
@@ -53,18 +96,36 @@ def sync_logs(
     sync_options: SyncOptions | None = None,
 ) -> SyncOutcome:
     """Read pose and signal logs of any format, match every packet with the poses of both
-    ends (paper Sec. V-B4) and write the matched dataset."""
+    ends (paper Sec. V-B4) and write the matched dataset.
+
+    CSV and Parquet signal tables are streamed (:data:`SYNC_CHUNK_ROWS` rows at a time), so a
+    signal log of any length fits in memory; their samples are written in file order (sorted
+    by time within a sorted file). Other formats are read whole and sorted by time.
+    """
     check_output_path(output, [*pose_paths, *signal_paths])
     check_table_path(output)
+    reader_options = reader_options or ReaderOptions()
     pose_logs, pose_meta = read_logs(pose_paths, reader_options)
-    signal_logs, _ = read_logs(signal_paths, reader_options)
     if pose_logs.pose is None:
         raise InputError(f"{', '.join(pose_paths)}: no pose log found", param="pose_paths")
+    source = ", ".join(signal_paths)
+    if _streamable(signal_paths, reader_options):
+        summary = SyncSummary()
+
+        def frames() -> Iterator[pd.DataFrame]:
+            for res in synchronise_stream(pose_logs.pose, _signal_chunks(signal_paths, reader_options),
+                                          sync_options, source=source):
+                summary.merge(res.summary)
+                yield res.dataset
+
+        write_table_chunks(frames(), output, MATCHED_COLUMNS)
+        return SyncOutcome(summary, output, reader_notes(pose_meta), streamed=True)
+    signal_logs, _ = read_logs(signal_paths, reader_options)
     if signal_logs.signal is None:
         raise InputError(f"{', '.join(signal_paths)}: no signal log found", param="signal_paths")
-    result = synchronise(pose_logs.pose, signal_logs.signal, sync_options, source=", ".join(signal_paths))
+    result = synchronise(pose_logs.pose, signal_logs.signal, sync_options, source=source)
     write_table(result.dataset, output)
-    return SyncOutcome(result, output, reader_notes(pose_meta))
+    return SyncOutcome(result.summary, output, reader_notes(pose_meta))
 
 
 @dataclass

@@ -1,0 +1,217 @@
+"""Argument types checked at the public API: a wrong type is one clear :class:`ArgumentTypeError`.
+
+Every public function of rplearn (each name a package exports, see :mod:`rplearn._lazy`) is
+wrapped by :func:`checked` when it is first looked up, and every public class gets its
+``__init__`` wrapped. The wrapper compares each argument with the parameter's annotation and
+raises :class:`~rplearn.errors.ArgumentTypeError` (an ``RplearnError`` and a ``TypeError``)
+naming the parameter, the expected and the given type and the function, before any work; instead
+of a ``TypeError`` or ``AttributeError`` from deep inside numpy or pandas.
+
+Only annotations that can be checked exactly are: classes (``int`` takes numpy integers and whole floats,
+``float`` any real number but ``bool``, ``str`` also an ``os.PathLike``), ``None``, unions of
+these, and the abstract containers ``Mapping``, ``Sequence`` and ``Iterable`` (the container
+only, not its items), ``Callable``; numpy's ``ArrayLike`` and ``NDArray`` take numbers,
+arrays and sequences (not text, not complex numbers). Anything else (``Any``, ``ArrayLike``, ``NDArray``,
+``Literal``, type variables, names that do not resolve) is left to the function's own checks.
+
+This module is at the bottom of the layers and uses only the standard library.
+"""
+
+from __future__ import annotations
+
+import collections.abc as cabc
+import functools
+import inspect
+import numbers
+import os
+import types
+import typing
+from typing import Any, Callable
+
+from rplearn.errors import ArgumentTypeError
+
+#: The check of one annotation: a predicate on the value and the name of what it expects.
+_Check = tuple[Callable[[Any], bool], str]
+
+_ABSTRACT: dict[Any, tuple[type, str]] = {
+    cabc.Mapping: (cabc.Mapping, "a mapping"),
+    cabc.MutableMapping: (cabc.Mapping, "a mapping"),
+    cabc.Sequence: (cabc.Iterable, "a sequence"),
+    cabc.Iterable: (cabc.Iterable, "an iterable"),
+    cabc.Collection: (cabc.Iterable, "a collection"),
+    cabc.Iterator: (cabc.Iterator, "an iterator"),
+    dict: (cabc.Mapping, "a dict"),
+    list: (cabc.Iterable, "a list"),
+    tuple: (cabc.Iterable, "a tuple"),
+}
+
+
+def _is_real(v: Any) -> bool:
+    return isinstance(v, numbers.Real) and not isinstance(v, bool)
+
+
+def _is_int(v: Any) -> bool:
+    """An integer, or a number that is one (3.0, not 3.7); not a bool."""
+    if isinstance(v, bool):
+        return False
+    return isinstance(v, numbers.Integral) or (isinstance(v, numbers.Real) and float(v).is_integer())
+
+
+def _class_check(cls: type) -> _Check | None:
+    """The check of a plain class annotation (None when it is not one that can be checked)."""
+    if cls is float:
+        return _is_real, "a number"
+    if cls is int:
+        return _is_int, "an integer"
+    if cls is bool:
+        return (lambda v: isinstance(v, bool) or type(v).__name__ == "bool_"), "True or False"
+    if cls is str:
+        return (lambda v: isinstance(v, (str, os.PathLike))), "a string"
+    if cls is complex or cls is object or cls is Any:
+        return None
+    try:
+        isinstance(None, cls)
+    except TypeError:  # a protocol that is not runtime-checkable, a special form
+        return None
+    if cls in _ABSTRACT:
+        base, what = _ABSTRACT[cls]
+        return (lambda v: isinstance(v, base)), what
+    if isinstance(cls, type):
+        return (lambda v: isinstance(v, cls)), f"a {cls.__name__}"
+    return None
+
+
+def _is_array_like(v: Any) -> bool:
+    """Numbers, arrays and sequences of numbers (not text): what numpy turns into a float array."""
+    if isinstance(v, (str, bytes, complex)):
+        return False
+    return _is_real(v) or hasattr(v, "__array__") or isinstance(v, (cabc.Sequence, numbers.Real))
+
+
+def _numpy_array_hint(hint: Any) -> bool:
+    """Whether ``hint`` is numpy's ``ArrayLike`` or an ``NDArray[...]`` (numpy already imported
+    when such a hint resolves)."""
+    import sys
+
+    npt = sys.modules.get("numpy.typing")
+    if npt is not None and hint is npt.ArrayLike:
+        return True
+    np = sys.modules.get("numpy")
+    return np is not None and (hint is np.ndarray or typing.get_origin(hint) is np.ndarray)
+
+
+def _check_of(hint: Any) -> _Check | None:
+    """The check of an annotation, or None when it is not checked (see the module docstring)."""
+    if hint is None or hint is type(None):
+        return (lambda v: v is None), "None"
+    if _numpy_array_hint(hint):
+        return _is_array_like, "numbers or an array of numbers"
+    origin = typing.get_origin(hint)
+    if origin in (typing.Union, types.UnionType):
+        parts = [_check_of(a) for a in typing.get_args(hint)]
+        if any(p is None for p in parts):
+            return None
+        preds = [p[0] for p in parts]  # type: ignore[index]
+        names = [p[1] for p in parts]  # type: ignore[index]
+        return (lambda v: any(f(v) for f in preds)), " or ".join(names)
+    if origin is not None:
+        if origin in _ABSTRACT:
+            return _class_check(origin)
+        if origin is cabc.Callable:
+            return callable, "a callable"
+        if isinstance(origin, type):  # os.PathLike[str], type[X]: the class only
+            return _class_check(origin)
+        return None
+    if hint is cabc.Callable:
+        return callable, "a callable"
+    if isinstance(hint, type):
+        return _class_check(hint)
+    return None
+
+
+def _hints(func: Callable[..., Any]) -> dict[str, Any]:
+    """Resolved annotations of ``func``; a name that does not resolve is left out."""
+    try:
+        return typing.get_type_hints(func)
+    except Exception:  # a TYPE_CHECKING-only name: resolve one annotation at a time
+        out = {}
+        globalns = getattr(func, "__globals__", {})
+        for name, text in getattr(func, "__annotations__", {}).items():
+            try:
+                out[name] = eval(text, globalns) if isinstance(text, str) else text  # noqa: S307 (own annotations)
+            except Exception:
+                continue
+        return out
+
+
+def _checks(func: Callable[..., Any], skip_first: bool) -> tuple[inspect.Signature, dict[str, _Check]] | None:
+    try:
+        sig = inspect.signature(func)
+    except (TypeError, ValueError):
+        return None
+    hints = _hints(func)
+    checks: dict[str, _Check] = {}
+    params = list(sig.parameters.values())[1 if skip_first else 0:]
+    for p in params:
+        if p.kind in (p.VAR_POSITIONAL, p.VAR_KEYWORD) or p.name not in hints:
+            continue
+        check = _check_of(hints[p.name])
+        if check is not None:
+            if p.default is None:  # a parameter defaulting to None takes None
+                pred, what = check
+                check = (lambda v, f=pred: v is None or f(v)), what
+            checks[p.name] = check
+    return (sig, checks) if checks else None
+
+
+def _wrap(func: Callable[..., Any], label: str, skip_first: bool) -> Callable[..., Any]:
+    found = _checks(func, skip_first)
+    if found is None:
+        return func
+    sig, checks = found
+
+    @functools.wraps(func)
+    def wrapper(*args: Any, **kwargs: Any) -> Any:
+        try:
+            bound = sig.bind(*args, **kwargs)
+        except TypeError as exc:
+            raise ArgumentTypeError(f"{label}: {exc}") from None
+        for name, value in bound.arguments.items():
+            check = checks.get(name)
+            if check is not None and not check[0](value):
+                raise ArgumentTypeError(
+                    f"{name}: expected {check[1]}, got {type(value).__name__} {_short(value)} ({label})", param=name
+                )
+        return func(*args, **kwargs)
+
+    wrapper.__rplearn_checked__ = True  # type: ignore[attr-defined]
+    return wrapper
+
+
+def _short(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def checked(value: Any, name: str) -> Any:
+    """The public object ``value`` with its arguments checked (see the module docstring).
+
+    Functions are wrapped (``functools.wraps`` keeps their name and docstring); a class gets
+    its own ``__init__`` wrapped in place and is returned itself, so ``isinstance`` and
+    subclassing are unaffected. scikit-learn estimators are left alone: by that library's
+    convention their ``__init__`` only stores its arguments, which ``fit`` checks. Anything else
+    is returned as it is.
+    """
+    if inspect.isclass(value):
+        init = value.__dict__.get("__init__")
+        if hasattr(value, "_get_param_names"):  # a scikit-learn estimator
+            return value
+        if init is not None and not getattr(init, "__rplearn_checked__", False) and not issubclass(value, BaseException):
+            value.__init__ = _wrap(init, name, skip_first=True)
+        return value
+    if inspect.isfunction(value) and not getattr(value, "__rplearn_checked__", False):
+        return _wrap(value, name, skip_first=False)
+    return value
+
+
+__all__ = ["checked"]

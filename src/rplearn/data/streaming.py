@@ -1,0 +1,181 @@
+"""Pose-signal matching of signal logs too big for memory, chunk by chunk.
+
+:func:`synchronise_stream` gives the same samples and the same counts as
+:func:`rplearn.data.sync.synchronise` on the whole log (for a time-sorted log, also in the
+same order), while holding one chunk of the signal log at a time:
+
+- a row that repeats a row of an *earlier chunk* is a ``duplicate`` as it would be in one
+  piece: every row's 64-bit hash is kept (8 bytes a row; 40 MB for 5 million rows), so a
+  duplicate is found whatever the distance between the copies (a false match needs a 64-bit
+  hash collision, about 1e-6 for 5 million rows);
+- the chosen link (``SyncOptions(link=...)``) and ``min_samples`` are checked when the last
+  chunk has been matched, with the messages of :func:`~rplearn.data.sync.synchronise`. A
+  writer that consumes the stream inside an atomic write (:func:`synchronise_to_parquet`,
+  :func:`rplearn.io.files.write_table_chunks`) therefore leaves no file when they fail.
+"""
+
+from __future__ import annotations
+
+from typing import Iterable, Iterator
+
+import numpy as np
+import pandas as pd
+
+from rplearn._atomic import atomic_path
+from rplearn.data.sync import (
+    SyncOptions,
+    SyncResult,
+    SyncSummary,
+    _match_chunk,
+    _options,
+    check_link_nodes,
+)
+from rplearn.data.tables import MATCHED_COLUMNS, non_unit_quaternion_rows, validate_pose_log
+from rplearn.data.poses import tracks_of_checked_log
+from rplearn.errors import InputError
+
+
+def row_hashes(signal: pd.DataFrame) -> np.ndarray:
+    """64-bit hash of every row of a signal log chunk, equal for equal rows of any chunk.
+
+    Numbers are hashed as float64 (a column read as integers in one chunk and as floats in
+    another hashes alike), everything else as text.
+    """
+    cols = {}
+    for c in signal.columns:
+        col = signal[c]
+        if pd.api.types.is_numeric_dtype(col) and not pd.api.types.is_bool_dtype(col):
+            cols[c] = col.to_numpy(np.float64, na_value=np.nan)
+        else:
+            cols[c] = col.astype(str).to_numpy(dtype=object)
+    frame = pd.DataFrame(cols, index=range(len(signal)))
+    return pd.util.hash_pandas_object(frame, index=False).to_numpy(np.uint64)
+
+
+class _SeenRows:
+    """Hashes of the rows of earlier chunks, sorted for look-up."""
+
+    def __init__(self) -> None:
+        self.sorted = np.empty(0, np.uint64)
+
+    def repeats(self, hashes: np.ndarray) -> np.ndarray:
+        """Mask of hashes seen in an earlier chunk; then remember these."""
+        if self.sorted.size:
+            pos = np.searchsorted(self.sorted, hashes).clip(max=self.sorted.size - 1)
+            seen = self.sorted[pos] == hashes
+        else:
+            seen = np.zeros(hashes.size, bool)
+        # two sorted runs: the stable sort (timsort) merges them in linear time
+        self.sorted = np.sort(np.concatenate([self.sorted, np.sort(hashes)]), kind="stable")
+        return seen
+
+
+def _pairs(signal: pd.DataFrame) -> set[tuple[str, str]]:
+    """The (tx, rx) directions of a chunk."""
+    both = pd.DataFrame({"tx": signal["tx"].astype(str), "rx": signal["rx"].astype(str)}).drop_duplicates()
+    return set(zip(both["tx"], both["rx"]))
+
+
+def synchronise_stream(
+    pose_log: pd.DataFrame,
+    signal_chunks: Iterable[pd.DataFrame],
+    options: SyncOptions | None = None,
+    source: str = "signal log",
+) -> Iterator[SyncResult]:
+    """Match a signal log chunk by chunk; yields one :class:`SyncResult` per chunk.
+
+    The pose log is held in memory (a 100 Hz log of an hour is 360,000 rows per node); the
+    signal log is consumed lazily, so memory stays bounded by the chunk size (plus 8 bytes a
+    row for duplicate detection across chunks). Merge the per-chunk summaries with
+    :meth:`SyncSummary.merge`. Options as in :func:`~rplearn.data.sync.synchronise`.
+
+    Raises
+    ------
+    InputError
+        As :func:`~rplearn.data.sync.synchronise`; the link and ``min_samples`` checks after
+        the last chunk.
+    """
+    options = _options(options)
+    pose = validate_pose_log(pose_log, "pose log")
+    tracks = tracks_of_checked_log(pose, options.clock_offsets_s, "pose log")
+    non_unit = non_unit_quaternion_rows(pose)
+    seen = _SeenRows()
+    pairs: set[tuple[str, str]] = set()
+    n_out = 0
+    total = SyncSummary()
+    for chunk in signal_chunks:
+        repeats = seen.repeats(row_hashes(chunk)) if len(chunk) else np.zeros(0, bool)
+        if options.link is not None and len(chunk) and {"tx", "rx"} <= set(chunk.columns):
+            pairs |= _pairs(chunk)
+        result = _match_chunk(tracks, chunk, options, source, seen_before=repeats, first_row=total.n_in)
+        result.summary.non_unit_quaternions, non_unit = non_unit, 0  # counted once, in the first chunk
+        n_out += result.summary.n_out
+        total.merge(result.summary)
+        yield result
+    if options.link is not None:
+        check_link_nodes(pd.DataFrame(sorted(pairs), columns=["tx", "rx"]), options.link, source)
+    if n_out < options.min_samples:
+        raise InputError(
+            f"{source}: only {n_out} signal sample(s) matched, at least "
+            f"{options.min_samples} needed ({total.to_text().replace(chr(10), ';')})"
+        )
+
+
+def synchronise_to_parquet(
+    pose_log: pd.DataFrame,
+    signal_chunks: Iterable[pd.DataFrame],
+    out_path: str,
+    options: SyncOptions | None = None,
+    source: str = "signal log",
+) -> SyncSummary:
+    """Stream a signal log through :func:`synchronise_stream` into one Parquet file.
+
+    Parameters
+    ----------
+    pose_log : DataFrame
+        Canonical pose log.
+    signal_chunks : iterable of DataFrame
+        Signal-log chunks, e.g. :func:`rplearn.io.tables.iter_signal_table`.
+    out_path : str
+        Parquet file to write (one row group per non-empty chunk); written atomically, so
+        nothing is left when matching fails.
+    options : SyncOptions, optional
+        As for :func:`synchronise_stream`.
+    source : str
+        Name of the signal log in messages.
+
+    Returns
+    -------
+    SyncSummary
+        Counts over the whole log.
+    """
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    total = SyncSummary()
+    with atomic_path(out_path) as tmp:
+        writer = None
+        schema = None
+        try:
+            for res in synchronise_stream(pose_log, signal_chunks, options, source):
+                total.merge(res.summary)
+                if res.dataset.empty:
+                    continue
+                table = pa.Table.from_pandas(res.dataset, preserve_index=False)
+                if writer is None:
+                    schema = table.schema
+                    writer = pq.ParquetWriter(tmp, schema)
+                else:
+                    table = table.select(schema.names).cast(schema)
+                writer.write_table(table)
+            if writer is None:  # nothing matched: write an empty file with the canonical columns
+                empty = pd.DataFrame({c: pd.Series(dtype=str if c in ("tx", "rx") else float)
+                                      for c in MATCHED_COLUMNS})
+                empty.to_parquet(tmp, index=False)
+        finally:
+            if writer is not None:
+                writer.close()
+    return total
+
+
+__all__ = ["row_hashes", "synchronise_stream", "synchronise_to_parquet"]

@@ -1,0 +1,70 @@
+"""`sync_logs` streams CSV/Parquet signal tables: the same samples and counts as matching the
+whole log at once, duplicates found across chunks, and no file when a check fails at the end."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from rplearn.data.sync import SyncOptions, synchronise
+from rplearn.errors import InputError
+from rplearn.io import read_logs
+from rplearn.sim import simulate
+from rplearn.workflows import logs as wlogs
+from rplearn.workflows.logs import sync_logs
+
+
+@pytest.fixture(scope="module")
+def flight(tmp_path_factory):
+    d = tmp_path_factory.mktemp("flight")
+    simulate("smoke", seed=3, out_dir=str(d / "f"))
+    pose = str(d / "f" / "pose_log.parquet")
+    sig = pd.read_parquet(d / "f" / "signal_log.parquet")
+    # plant trouble: repeats far apart (other chunks), a sentinel and an implausible RSSI
+    sig.loc[5, "rssi_dbm"] = -127.0
+    sig.loc[9, "rssi_dbm"] = 25.0
+    sig = pd.concat([sig, sig.iloc[[3, 100, 700]]], ignore_index=True).sort_values("t", kind="stable")
+    csv = str(d / "signal.csv")
+    sig.to_csv(csv, index=False)
+    return d, pose, csv
+
+
+@pytest.mark.parametrize("out_name", ["m.parquet", "m.csv", "m.csv.gz"])
+def test_streamed_sync_equals_whole_log(flight, monkeypatch, out_name):
+    d, pose, csv = flight
+    monkeypatch.setattr(wlogs, "SYNC_CHUNK_ROWS", 97)  # many chunks, copies in other chunks
+    out = str(d / out_name)
+    outcome = sync_logs([pose], [csv], out)
+    assert outcome.streamed
+    logs, _ = read_logs([pose, csv])
+    whole = synchronise(logs.pose, logs.signal)
+    assert outcome.counts.n_in == whole.summary.n_in
+    assert outcome.counts.dropped == whole.summary.dropped
+    assert outcome.counts.dropped["duplicate"] == 3
+    assert outcome.counts.dropped["sentinel_rssi"] >= 1 and outcome.counts.dropped["implausible_rssi"] >= 1
+    back = pd.read_parquet(out) if out.endswith("parquet") else pd.read_csv(out)
+    assert len(back) == outcome.counts.n_out == len(whole.dataset)
+    num = [c for c in whole.dataset.columns if c not in ("tx", "rx", "unit")]
+    np.testing.assert_allclose(back[num].to_numpy(float), whole.dataset[num].to_numpy(float), rtol=1e-12)
+    assert (back["tx"].astype(str).to_numpy() == whole.dataset["tx"].to_numpy()).all()
+
+
+def test_streamed_sync_checks_the_link_at_the_end_and_writes_nothing(flight, monkeypatch):
+    d, pose, csv = flight
+    monkeypatch.setattr(wlogs, "SYNC_CHUNK_ROWS", 97)
+    out = d / "none.parquet"
+    with pytest.raises(InputError, match=r"link A:Q: node Q is in no signal log"):
+        sync_logs([pose], [csv], str(out), sync_options=SyncOptions(link=("A", "Q")))
+    with pytest.raises(InputError, match=r"at least 1000000000 needed"):
+        sync_logs([pose], [csv], str(out), sync_options=SyncOptions(min_samples=10**9))
+    assert not out.exists() and not [p for p in d.iterdir() if p.name.startswith(".rplearn")]
+
+
+def test_a_previous_output_survives_a_failed_streamed_sync(flight):
+    d, pose, csv = flight
+    out = d / "keep.csv"
+    out.write_text("precious\n")
+    with pytest.raises(InputError):
+        sync_logs([pose], [csv], str(out), sync_options=SyncOptions(min_samples=10**9))
+    assert out.read_text() == "precious\n"
