@@ -42,6 +42,8 @@ _NAMES: dict[str, str] = {
     "read_table": "files",
     "write_table": "files",
     "write_table_chunks": "files",
+    "iter_table": "files",
+    "table_rows": "files",
     # per-format readers
     "COLUMN_ALIASES": "tables",
     "canonical_pose": "tables",

@@ -10,7 +10,7 @@ import json
 import os
 import sys
 import time
-from typing import Any, Iterable
+from typing import Any, Iterable, Iterator
 
 import pandas as pd
 
@@ -35,6 +35,46 @@ def read_table(path: str, source: str | None = None) -> pd.DataFrame:
         raise InputError(f"{name}: cannot read table ({type(exc).__name__}: {exc})") from None
     except Exception as exc:  # pyarrow raises its own error classes
         raise InputError(f"{name}: cannot read table ({type(exc).__name__}: {exc})") from None
+
+
+def table_rows(path: str) -> int | None:
+    """Rows of a Parquet table from its footer (no data read); None for CSV."""
+    if not str(path).lower().endswith((".parquet", ".pq")):
+        return None
+    import pyarrow.parquet as pq
+
+    try:
+        return int(pq.ParquetFile(path).metadata.num_rows)
+    except Exception as exc:  # pyarrow's own errors on a corrupt footer
+        raise InputError(f"{path}: cannot read table ({type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''})") from None
+
+
+def iter_table(path: str, chunk_rows: int = 500_000, columns: Iterable[str] | None = None) -> Iterator[pd.DataFrame]:
+    """A CSV or Parquet table chunk by chunk (at most ``chunk_rows`` rows each), times normalised.
+
+    ``columns`` reads only those columns (the ones a table lacks are left out). Errors name
+    the file, as :func:`read_table`.
+    """
+    name = str(path)
+    if not os.path.exists(path):
+        raise InputError(f"{name}: no such file")
+    wanted = None if columns is None else list(columns)
+    try:
+        if name.lower().endswith((".parquet", ".pq")):
+            import pyarrow.parquet as pq
+
+            pf = pq.ParquetFile(path)
+            cols = None if wanted is None else [c for c in wanted if c in pf.schema_arrow.names]
+            for batch in pf.iter_batches(batch_size=chunk_rows, columns=cols):
+                yield normalise_times(batch.to_pandas(), name)
+        else:
+            use = None if wanted is None else (lambda c: c in wanted)
+            for chunk in pd.read_csv(path, dtype=CSV_DTYPES, chunksize=chunk_rows, usecols=use):
+                yield normalise_times(chunk, name)
+    except InputError:
+        raise
+    except Exception as exc:  # parsers raise many classes on corrupt bytes
+        raise InputError(f"{name}: cannot read table ({type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''})") from None
 
 
 def write_table(df: pd.DataFrame, path: str) -> None:

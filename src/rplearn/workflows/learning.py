@@ -15,12 +15,16 @@ from rplearn._atomic import atomic_open
 from rplearn.analysis.pattern_error import node_directions
 from rplearn.analysis.sweep import SweepResult, no_progress, order_sweep
 from rplearn.core.metrics import Scores
-from rplearn.data.units import UnitChoice, evaluation_units, learning_units, samples_of, split_units
+from rplearn.data.units import UnitChoice, evaluation_units, learning_units, samples_of, select_units, split_units
 from rplearn.errors import InputError
 from rplearn.data.tables import QUATERNION_NORM_TOLERANCE
-from rplearn.io.files import check_output_path, check_table_path, provenance, read_dataset, write_json, write_table
+from rplearn.io.files import (
+    check_output_path, check_table_path, iter_table, provenance, read_dataset, table_rows, write_json, write_table,
+)
 from rplearn.models.fit import FittedModel, evaluate_models, fit_model, scores_markdown
 from rplearn.models.load import load_model
+from rplearn.models.spec import check_model_size
+from rplearn.models.streamed import fit_patterns_streamed, units_and_nodes
 from rplearn.models.predict import DatasetPrediction, distinct_labels, predict_dataset
 from rplearn.models.spec import ModelSpec
 
@@ -94,6 +98,8 @@ def fit_dataset(
     """
     if output:
         check_output_path(output, [dataset])
+    if spec.decouples and _is_big(dataset):
+        return _fit_streamed(dataset, spec, units, gauge, output)
     df = read_dataset(dataset)
     choice = learning_units(df, units, dataset)
     samples = samples_of(df, choice.units, dataset)
@@ -102,6 +108,46 @@ def fit_dataset(
     if output:
         fitted.model.save(output)
     return FitOutcome(fitted, choice, len(samples), output, samples.non_unit_quaternions)
+
+
+#: A pattern fit streams its dataset (:mod:`rplearn.models.streamed`) from this many rows of a
+#: Parquet file, or this many bytes of a CSV file, on: memory then holds one chunk.
+STREAM_FIT_ROWS = 2_000_000
+STREAM_FIT_BYTES = 256 * 2**20
+#: Rows read at a time by a streamed fit.
+STREAM_FIT_CHUNK_ROWS = 500_000
+
+
+def _is_big(dataset: str) -> bool:
+    """Whether a dataset file is big enough to be streamed (see :data:`STREAM_FIT_ROWS`)."""
+    if not os.path.isfile(dataset):
+        return False
+    rows = table_rows(dataset)
+    return rows > STREAM_FIT_ROWS if rows is not None else os.path.getsize(dataset) > STREAM_FIT_BYTES
+
+
+def _fit_streamed(
+    dataset: str, spec: ModelSpec, units: Sequence[str] | None, gauge: str | Mapping[str, Any], output: str | None
+) -> FitOutcome:
+    """:func:`fit_dataset` for a big file: units, nodes and the model size from the id columns,
+    then the patterns from the whole data a chunk at a time."""
+    index = units_and_nodes(iter_table(dataset, STREAM_FIT_CHUNK_ROWS, columns=("tx", "rx", "unit")))
+    choice = learning_units(index, units, dataset)
+    part = select_units(index, choice.units, dataset)
+    nodes = sorted(set(part["tx"]) | set(part["rx"]))
+    n = int(part["n"].sum())
+    if n == 0:
+        raise InputError(f"{dataset}: no samples selected", param="units")
+    check_model_size(spec, n, len(nodes))
+    fit = fit_patterns_streamed(iter_table(dataset, STREAM_FIT_CHUNK_ROWS), spec, nodes, choice.units, gauge, dataset)
+    model = fit.patterns
+    model.provenance = {**provenance(dataset=dataset, model=spec.label, ridge=spec.ridge, units=choice.units),
+                        "model": spec.label}
+    model.training["ltd_s"] = fit.learn_s
+    fitted = FittedModel(spec, model, fit.learn_s)
+    if output:
+        model.save(output)
+    return FitOutcome(fitted, choice, fit.n_samples, output, fit.non_unit_quaternions)
 
 
 @dataclass

@@ -1,0 +1,155 @@
+"""Learning patterns from a matched dataset too big for memory, chunk by chunk.
+
+The joint least-squares problem needs only its sufficient statistics (``X^T X``, ``X^T y``,
+``y^T y`` and the sample count per link, :class:`~rplearn.core.normal_equations.NormalEquations`),
+so a dataset can be read a chunk at a time: each chunk is checked, turned into link samples,
+accumulated and dropped. The solve, the training RMSE (from the statistics) and the model are
+the same as :func:`rplearn.models.fit.solve_patterns` gives on the whole dataset, to rounding.
+
+Only pattern models (SH, BG, P) stream; the baselines need every sample (the mean model could,
+k-NN stores them).
+"""
+
+from __future__ import annotations
+
+import time
+from collections import Counter
+from dataclasses import dataclass
+from typing import Any, Iterable, Mapping, Sequence
+
+import numpy as np
+import pandas as pd
+
+from rplearn.core.normal_equations import NormalEquations
+from rplearn.core.solver import FitReport, solve
+from rplearn.data.tables import link_samples, node_ids
+from rplearn.errors import InputError
+from rplearn.models.patterns import PatternSet
+from rplearn.models.spec import ModelSpec
+
+
+@dataclass
+class StreamedFit:
+    """Patterns learned chunk by chunk, and what the stream held.
+
+    Attributes
+    ----------
+    patterns : PatternSet
+    report : FitReport
+    n_samples : int
+        Learning samples accumulated.
+    non_unit_quaternions : int
+        Of those, samples with a tx or rx quaternion not of unit norm (normalised).
+    learn_s : float
+        Time spent accumulating and solving [s], without reading (the LTD).
+    """
+
+    patterns: PatternSet
+    report: FitReport
+    n_samples: int
+    non_unit_quaternions: int
+    learn_s: float
+
+
+def weighted_median(counts: Mapping[float, int]) -> float | None:
+    """Median of values given with their counts (the carrier frequencies of a dataset) [Hz]."""
+    if not counts:
+        return None
+    values = np.array(sorted(counts), np.float64)
+    weights = np.array([counts[v] for v in sorted(counts)], np.float64)
+    cum = np.cumsum(weights)
+    half = cum[-1] / 2.0
+    i = int(np.searchsorted(cum, half))
+    if cum[i] == half and i + 1 < values.size:  # an even count split between two values
+        return float((values[i] + values[i + 1]) / 2.0)
+    return float(values[i])
+
+
+def units_and_nodes(chunks: Iterable[pd.DataFrame]) -> pd.DataFrame:
+    """Rows per distinct ``(unit, tx, rx)`` of a dataset read in chunks of those columns only.
+
+    A small table (one row per unit and link direction, column ``n`` the rows) from which
+    units, nodes and the model size are checked before the data are read in full.
+    """
+    parts = []
+    for chunk in chunks:
+        cols = {c: node_ids(chunk[c]) for c in ("tx", "rx") if c in chunk.columns}
+        if "unit" in chunk.columns:
+            cols["unit"] = chunk["unit"].astype(str).to_numpy(dtype=object)
+        frame = pd.DataFrame(cols)
+        parts.append(frame.groupby(list(frame.columns), sort=False, dropna=False).size().rename("n").reset_index())
+    if not parts:
+        return pd.DataFrame(columns=["tx", "rx", "n"])
+    every = pd.concat(parts, ignore_index=True)
+    keys = [c for c in every.columns if c != "n"]
+    return every.groupby(keys, sort=True, dropna=False)["n"].sum().reset_index()
+
+
+def fit_patterns_streamed(
+    chunks: Iterable[pd.DataFrame],
+    spec: ModelSpec,
+    nodes: Sequence[str],
+    units: Sequence[str] | None = None,
+    gauge: str | Mapping[str, Any] = "equal-mean",
+    source: str = "dataset",
+) -> StreamedFit:
+    """Learn one pattern per node from a dataset given in chunks (see the module docstring).
+
+    Parameters
+    ----------
+    chunks : iterable of DataFrame
+        The matched dataset, a chunk at a time (e.g. :func:`rplearn.io.files.iter_table`).
+    spec : ModelSpec
+        A pattern model (SH, BG or P).
+    nodes : sequence of str
+        Node ids in model order: those of the learning samples (:func:`units_and_nodes`).
+        Check the model size first (:func:`~rplearn.models.spec.check_model_size`), with the
+        sample count :func:`units_and_nodes` gives.
+    units : sequence of str, optional
+        Learning units; every row when None.
+    gauge : str or mapping
+        As :func:`rplearn.models.fit.solve_patterns`.
+    source : str
+        Name of the dataset in messages (a chunk's rows are named by their place in the file).
+    """
+    if not spec.decouples:
+        raise InputError(f"{spec.label}: only pattern models (sh, bg, poly) learn from a stream", param="spec")
+    basis = spec.basis()
+    normal = NormalEquations(basis, len(nodes))
+    wanted = None if not units else {str(u) for u in units}
+    freq: Counter[float] = Counter()
+    non_unit = 0
+    learn_s = 0.0
+    first_row = 0
+    for chunk in chunks:
+        where = f"{source} (rows {first_row:,} to {first_row + len(chunk) - 1:,})"
+        first_row += len(chunk)
+        if wanted is not None:
+            chunk = chunk[chunk["unit"].astype(str).isin(wanted).to_numpy()]
+        if chunk.empty:
+            continue
+        samples = link_samples(chunk, where, nodes=nodes)
+        t0 = time.perf_counter()
+        normal.add(samples.directions, samples.tx_index, samples.rx_index, samples.joint_gain_db)
+        learn_s += time.perf_counter() - t0
+        non_unit += samples.non_unit_quaternions
+        if samples.frequency_hz is not None:
+            values, counts = np.unique(samples.frequency_hz, return_counts=True)
+            freq.update(dict(zip(values.tolist(), counts.tolist())))
+    if normal.n_samples == 0:
+        raise InputError(f"{source}: no samples selected", param="units")
+    t0 = time.perf_counter()
+    sol = solve(normal, list(nodes), ridge=spec.ridge, gauge=gauge)
+    learn_s += time.perf_counter() - t0
+    training = sol.report.to_dict()
+    f = weighted_median(freq)
+    if f is not None:
+        training["frequency_hz"] = f
+    patterns = PatternSet(
+        basis=basis, nodes=tuple(nodes), coef=sol.coef, covariance=sol.covariance,
+        gauge=[g.to_dict() for g in sol.report.gauges], training=training,
+    )
+    return StreamedFit(patterns, sol.report, normal.n_samples, non_unit, learn_s)
+
+
+__all__ = ["StreamedFit", "fit_patterns_streamed", "units_and_nodes", "weighted_median"]

@@ -1,0 +1,78 @@
+"""rplearn.models.streamed: a pattern fit that reads its dataset a chunk at a time gives the model
+the whole-dataset fit gives, checks the model size before reading the data, and names the rows of
+a bad chunk (issue 10: big CSV datasets were read whole)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from rplearn.errors import InputError, RplearnError
+from rplearn.models import ModelSpec
+from rplearn.models.streamed import weighted_median
+from rplearn.sim import simulate
+from rplearn.workflows import learning
+from rplearn.workflows.logs import sync_logs
+
+
+@pytest.fixture(scope="module")
+def dataset(tmp_path_factory):
+    d = tmp_path_factory.mktemp("streamfit")
+    simulate("smoke", seed=4, out_dir=str(d / "f"))
+    sync_logs([str(d / "f" / "pose_log.parquet")], [str(d / "f" / "signal_log.parquet")], str(d / "m.parquet"))
+    df = pd.read_parquet(d / "m.parquet")
+    df.loc[7, "tx_qw"] *= 1.5  # one non-unit quaternion, counted by both paths
+    df.loc[df.index % 3 == 0, "frequency_hz"] = 2.437e9  # two channels: the median is taken over both
+    df.to_parquet(d / "m.parquet", index=False)
+    df.to_csv(d / "m.csv", index=False)
+    return d
+
+
+def streamed(monkeypatch, chunk_rows=97):
+    monkeypatch.setattr(learning, "STREAM_FIT_ROWS", 0)
+    monkeypatch.setattr(learning, "STREAM_FIT_BYTES", 0)
+    monkeypatch.setattr(learning, "STREAM_FIT_CHUNK_ROWS", chunk_rows)
+
+
+@pytest.mark.parametrize("name", ["m.parquet", "m.csv"])
+@pytest.mark.parametrize("label", ["sh-4", "bg-3", "poly-3"])
+def test_streamed_fit_equals_the_whole_fit(dataset, monkeypatch, name, label):
+    path = str(dataset / name)
+    whole = learning.fit_dataset(path, ModelSpec.parse(label))
+    streamed(monkeypatch)
+    chunked = learning.fit_dataset(path, ModelSpec.parse(label))
+    a, b = whole.fitted.model, chunked.fitted.model
+    np.testing.assert_allclose(b.coef, a.coef, rtol=1e-8, atol=1e-8)
+    np.testing.assert_allclose(b.covariance, a.covariance, rtol=1e-6, atol=1e-10)
+    assert b.nodes == a.nodes and chunked.n_samples == whole.n_samples
+    assert b.training["rmse_db"] == pytest.approx(a.training["rmse_db"], rel=1e-9)
+    assert b.training["frequency_hz"] == a.training["frequency_hz"]
+    assert chunked.units.units == whole.units.units and chunked.units.notes == whole.units.notes
+    assert chunked.non_unit_quaternions == whole.non_unit_quaternions == 1
+
+
+def test_streamed_fit_checks_the_size_before_reading_the_data(dataset, monkeypatch):
+    streamed(monkeypatch)
+    read = []
+    real = learning.iter_table
+    monkeypatch.setattr(learning, "iter_table", lambda *a, **k: (read.append(k.get("columns")), real(*a, **k))[1])
+    with pytest.raises(RplearnError, match="the largest sh order that fits is"):
+        learning.fit_dataset(str(dataset / "m.csv"), ModelSpec("sh", 1000))
+    assert read == [("tx", "rx", "unit")]  # only the id columns were read
+
+
+def test_a_bad_row_is_named_by_its_place_in_the_file(dataset, monkeypatch, tmp_path):
+    df = pd.read_csv(dataset / "m.csv")
+    df.loc[250, "rx_x"] = np.nan
+    df.to_csv(tmp_path / "bad.csv", index=False)
+    streamed(monkeypatch, chunk_rows=100)
+    with pytest.raises(InputError, match=r"bad.csv \(rows 200 to 299\).*rx_x.*row 50"):
+        learning.fit_dataset(str(tmp_path / "bad.csv"), ModelSpec("sh", 3))
+
+
+def test_weighted_median():
+    assert weighted_median({}) is None
+    assert weighted_median({2.412e9: 3, 2.437e9: 1}) == 2.412e9
+    assert weighted_median({1.0: 1, 3.0: 1}) == 2.0
+    assert weighted_median({1.0: 1, 2.0: 1, 3.0: 1}) == np.median([1.0, 2.0, 3.0])
