@@ -15,7 +15,7 @@ from rplearn.errors import InputError
 def fit(
     dataset: str = typer.Argument(..., help="Matched dataset (.parquet or .csv)."),
     model: str = typer.Option("sh", "--model", help="sh, bg, poly, mean or knn (also sh-10, nn-400...)."),
-    degree: Optional[int] = typer.Option(None, "--degree", help="SH-L / BG-k / P-k order, or k of knn (defaults 10, 7, 12, 400)."),
+    degree: Optional[str] = typer.Option(None, "--degree", help="SH-L / BG-k / P-k order, k of knn, or 'auto': order (SH) and smoothing chosen by cross-validation over flight units (default for sh; bg, poly, knn default to 7, 12, 400)."),
     ridge: Optional[float] = typer.Option(None, "--ridge", help="Pattern models: ridge weight on the diagonal of X^T X (default 1; the paper used 50)."),
     sigma: Optional[float] = typer.Option(None, "--sigma", help="BG only: kernel variance sigma [rad^2] (default 0.5, about the paper's)."),
     grid: Optional[str] = typer.Option(None, "--grid", help="BG only: nodes on the paper grid (default) or fibonacci."),
@@ -31,15 +31,34 @@ def fit(
     from rplearn.models.spec import ModelSpec, check_fit_options, gauge_of
     from rplearn.workflows.learning import fit_dataset
 
-    spec = ModelSpec.parse(model, order=degree, ridge=ridge, sigma_rad2=sigma, grid=grid)
-    check_fit_options(spec, order=degree, ridge=ridge, sigma_rad2=sigma, grid=grid, gauge_node=gauge_node,
+    auto, order = degree_option(degree, model)
+    spec = ModelSpec.parse(model, order=order, ridge=ridge, sigma_rad2=sigma, grid=grid)
+    check_fit_options(spec, order=order, ridge=ridge, sigma_rad2=sigma, grid=grid, gauge_node=gauge_node,
                       gauge_dbi=gauge_dbi, model=model)
-    outcome = fit_dataset(dataset, spec, split_list(units), gauge_of(gauge_node, gauge_dbi), output)
+    outcome = fit_dataset(dataset, spec, split_list(units), gauge_of(gauge_node, gauge_dbi), output, auto=auto)
     for line in outcome.units.notes:
         note(f"{line} (pass --units to choose)" if outcome.units.defaulted else line)
     say(outcome.summary())
     for line in outcome.warnings:
         note(line, "warning")
+
+
+def degree_option(degree: Optional[str], model: str) -> tuple[bool, Optional[int]]:
+    """``(auto, order)`` from ``--degree`` and ``--model``: 'auto' (the default for a bare ``sh``)
+    or a whole number."""
+    text = (degree or "").strip().lower()
+    bare_sh = model.strip().lower() in ("sh", "spherical", "spherical-harmonics")
+    if text == "auto" or (not text and bare_sh):
+        return True, None
+    if not text:
+        return False, None
+    try:
+        value = float(text)
+    except ValueError:
+        raise InputError(f"--degree: expected a whole number or 'auto', got {degree!r}") from None
+    if not value.is_integer():
+        raise InputError(f"--degree: expected a whole number or 'auto', got {degree!r}")
+    return False, int(value)
 
 
 @app.command()

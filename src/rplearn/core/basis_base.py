@@ -156,6 +156,15 @@ class Basis:
         """Gram ``F F^T`` of the feature rows from their moments (bases with a :attr:`moment_shape`)."""
         raise TypeError(f"{type(self).__name__} has no Gram moments")
 
+    def roughness(self, power: float = 2.0) -> FloatArray:
+        """Weight of each coefficient in the smoothness penalty ``sum_j w_j c_j^2``.
+
+        Plain ridge (all ones) for a basis without a natural roughness (BG, P); spherical
+        harmonics weigh degree ``l`` by ``(l (l + 1))^power`` (see
+        :meth:`rplearn.core.sh.SphericalHarmonics.roughness`).
+        """
+        return np.ones(self.n_coef)
+
     def feature_chunks(self, az: FloatArray, el: FloatArray, slot: int = 2) -> Iterator[tuple[slice, FloatArray]]:
         """``(part, features)``: the directions in cache-sized parts, and their features in
         :attr:`row_order`, shape ``(n_coef, part size)``, in a scratch array reused by the next

@@ -302,6 +302,23 @@ class SphericalHarmonics(Basis):
         return _sh_chebyshev_tables(self.order)
 
     @property
+    def degrees(self) -> NDArray[np.intp]:
+        """Degree ``l`` of every coefficient (columns ``l**2 .. (l+1)**2 - 1``)."""
+        return np.repeat(np.arange(self.order), 2 * np.arange(self.order) + 1)
+
+    def roughness(self, power: float = 2.0) -> FloatArray:
+        """``(l (l + 1))^power`` for the coefficient of degree ``l``; 0 for the constant.
+
+        The harmonics are eigenfunctions of the Laplace-Beltrami operator with eigenvalue
+        ``-l (l + 1)`` and orthonormal, so ``sum_j w_j c_j^2`` is ``integral |grad f|^2`` over the
+        sphere for ``power = 1`` and ``integral (Laplacian f)^2`` for ``power = 2`` (the penalty of
+        spherical smoothing splines, Wahba 1981, and the degree-dependent regularisation of
+        geodesy's harmonic fits). The mean gain (degree 0) is not penalised.
+        """
+        l = self.degrees.astype(np.float64)
+        return (l * (l + 1.0)) ** float(power)
+
+    @property
     def row_order(self) -> NDArray[np.intp]:
         # Grouped by order m: all m = 0 rows, the cosine rows (m = 1, then 2, ...), the sine rows.
         return self._tables[1]

@@ -279,12 +279,15 @@ def solve(
     ridge: float = DEFAULT_RIDGE,
     gauge: str | Mapping[str, Any] = "equal-mean",
     min_samples_per_coef: float = 1.0,
+    penalty: FloatArray | None = None,
 ) -> JointSolution:
     """Solve accumulated normal equations with a ridge and explicit gauge constraints.
 
-    Minimises ``||X p - y||^2 + ridge ||p||^2`` subject to one gauge constraint per bipartite
-    component of the link graph (see module docstring), through the KKT system
-    ``[[X^T X + ridge I, C^T], [C, 0]] [p; mu] = [X^T y; d]``.
+    Minimises ``||X p - y||^2 + ridge ||p||^2 + sum_j penalty_j p_j^2`` subject to one gauge
+    constraint per bipartite component of the link graph (see module docstring), through the
+    KKT system ``[[X^T X + ridge I + diag(penalty), C^T], [C, 0]] [p; mu] = [X^T y; d]``.
+    ``penalty`` (one non-negative weight per column, absolute units of ``X^T X``) is the
+    smoothness penalty of :mod:`rplearn.core.selection`.
 
     Raises
     ------
@@ -317,6 +320,12 @@ def solve(
     kkt = np.zeros((pcols + k, pcols + k))
     kkt[:pcols, :pcols] = normal.gram
     kkt[np.arange(pcols), np.arange(pcols)] += ridge
+    if penalty is not None:
+        penalty = np.asarray(penalty, np.float64)
+        if penalty.shape != (pcols,) or not np.all(np.isfinite(penalty)) or np.any(penalty < 0):
+            raise InputError(f"penalty: expected {pcols} non-negative finite weights, got shape {penalty.shape}")
+        kkt[np.arange(pcols), np.arange(pcols)] += penalty
+    shrunk = ridge > 0 or (penalty is not None and bool(np.any(penalty > 0)))
     kkt[:pcols, pcols:] = cmat.T
     kkt[pcols:, :pcols] = cmat
     rhs = np.concatenate([normal.rhs, cval])
@@ -347,7 +356,7 @@ def solve(
     # Covariance of the constrained estimate: top-left block of the inverse KKT matrix,
     # sandwiched with X^T X when a ridge is present.
     a = kinv[:pcols, :pcols]
-    cov = resid_var * (a @ normal.gram @ a.T) if ridge > 0 else resid_var * a
+    cov = resid_var * (a @ normal.gram @ a.T) if shrunk else resid_var * a
     cov = 0.5 * (cov + cov.T)
     report = FitReport(
         n_samples=normal.n_samples,
@@ -376,6 +385,8 @@ def fit_joint(
     ridge: float = DEFAULT_RIDGE,
     gauge: str | Mapping[str, Any] = "equal-mean",
     chunk_size: int = 1_000_000,
+    smoothing: float = 0.0,
+    penalty_power: float = 2.0,
 ) -> JointSolution:
     """Fit one pattern per node from link samples (paper Sec. IV-B and V-A).
 
@@ -399,6 +410,10 @@ def fit_joint(
         How the free constant of a two-node (bipartite) problem is fixed.
     chunk_size : int
         Samples accumulated per step.
+    smoothing : float
+        Relative weight of the smoothness penalty (:mod:`rplearn.core.selection`).
+    penalty_power : float
+        Exponent of the SH roughness weights.
     """
     normal = NormalEquations(basis, n_nodes)
     tx = np.asarray(tx_index)
@@ -408,7 +423,12 @@ def fit_joint(
     for s in range(0, max(n, 1), chunk_size):
         e = min(n, s + chunk_size)
         normal.add(Directions(*(np.asarray(d)[s:e] for d in directions)), tx[s:e], rx[s:e], y[s:e])
-    return solve(normal, node_names, ridge=ridge, gauge=gauge)
+    penalty = None
+    if smoothing:
+        from rplearn.core.selection import penalty_scale, penalty_vector
+
+        penalty = penalty_vector(basis, n_nodes, smoothing, penalty_scale(normal.gram), penalty_power)
+    return solve(normal, node_names, ridge=ridge, gauge=gauge, penalty=penalty)
 
 
 def identifiability(

@@ -78,8 +78,11 @@ def solve_patterns(
         node_names=samples.nodes,
         ridge=spec.ridge,
         gauge=gauge,
+        smoothing=spec.smoothing,
     )
     training = sol.report.to_dict()
+    if spec.smoothing:
+        training["smoothing"] = spec.smoothing
     frequency_hz = learned_frequency_hz(samples)
     if frequency_hz is not None:
         training["frequency_hz"] = frequency_hz

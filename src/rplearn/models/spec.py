@@ -47,6 +47,8 @@ class ModelSpec:
         BG kernel variance [rad^2].
     grid : {"paper", "fibonacci"}
         BG node layout.
+    smoothing : float
+        Relative weight of the smoothness penalty (:mod:`rplearn.core.selection`); 0: none.
     """
 
     kind: str
@@ -54,6 +56,7 @@ class ModelSpec:
     ridge: float | None = None
     sigma_rad2: float = 0.5
     grid: str = "paper"
+    smoothing: float = 0.0
 
     def __post_init__(self) -> None:
         if self.ridge is None:
@@ -62,6 +65,8 @@ class ModelSpec:
             raise InputError(f"ridge must be a non-negative number, got {self.ridge!r}", param="ridge")
         if self.kind != "mean" and (self.order is None or int(self.order) != self.order or int(self.order) < 1):
             raise InputError(f"model {self.kind}: order must be a positive integer, got {self.order!r}", param="order")
+        if not (np.isfinite(self.smoothing) and self.smoothing >= 0):
+            raise InputError(f"smoothing must be a non-negative number, got {self.smoothing!r}", param="smoothing")
 
     @classmethod
     def parse(cls, text: str, **options: Any) -> "ModelSpec":

@@ -21,6 +21,7 @@ import numpy as np
 import pandas as pd
 
 from rplearn.core.normal_equations import NormalEquations
+from rplearn.core.selection import penalty_scale, penalty_vector
 from rplearn.core.solver import FitReport, solve
 from rplearn.data.tables import link_samples, node_ids
 from rplearn.errors import InputError
@@ -85,6 +86,56 @@ def units_and_nodes(chunks: Iterable[pd.DataFrame]) -> pd.DataFrame:
     return every.groupby(keys, sort=True, dropna=False)["n"].sum().reset_index()
 
 
+def _accumulate(
+    chunks: Iterable[pd.DataFrame], spec: ModelSpec, nodes: Sequence[str], units: Sequence[str] | None,
+    source: str, by_unit: bool,
+) -> tuple[dict[str, NormalEquations], float | None, int, float]:
+    """Statistics of the learning rows of every chunk: one accumulator per unit (``by_unit``)
+    or one for all; the median frequency, the non-unit quaternions and the time spent [s]."""
+    if not spec.decouples:
+        raise InputError(f"{spec.label}: only pattern models (sh, bg, poly) learn from a stream", param="spec")
+    basis = spec.basis()
+    stats: dict[str, NormalEquations] = {}
+    wanted = None if not units else {str(u) for u in units}
+    freq: Counter[float] = Counter()
+    non_unit, learn_s, first_row = 0, 0.0, 0
+    for chunk in chunks:
+        where = f"{source} (rows {first_row:,} to {first_row + len(chunk) - 1:,})"
+        first_row += len(chunk)
+        if wanted is not None:
+            chunk = chunk[chunk["unit"].astype(str).isin(wanted).to_numpy()]
+        if chunk.empty:
+            continue
+        labels = chunk["unit"].astype(str).to_numpy() if by_unit and "unit" in chunk.columns else np.full(len(chunk), "all")
+        for label in np.unique(labels):
+            part = chunk[labels == label] if by_unit else chunk
+            samples = link_samples(part, where, nodes=nodes)
+            t0 = time.perf_counter()
+            acc = stats.setdefault(str(label), NormalEquations(basis, len(nodes)))
+            acc.add(samples.directions, samples.tx_index, samples.rx_index, samples.joint_gain_db)
+            learn_s += time.perf_counter() - t0
+            non_unit += samples.non_unit_quaternions
+            if samples.frequency_hz is not None:
+                values, counts = np.unique(samples.frequency_hz, return_counts=True)
+                freq.update(dict(zip(values.tolist(), counts.tolist())))
+            if not by_unit:
+                break
+    if not stats or sum(a.n_samples for a in stats.values()) == 0:
+        raise InputError(f"{source}: no samples selected", param="units")
+    return stats, weighted_median(freq), non_unit, learn_s
+
+
+def unit_statistics_streamed(
+    chunks: Iterable[pd.DataFrame], spec: ModelSpec, nodes: Sequence[str], units: Sequence[str] | None = None,
+    source: str = "dataset",
+) -> tuple[dict[str, NormalEquations], float | None, int]:
+    """The statistics of every learning unit of a dataset given in chunks (for ``--degree auto``
+    on a big file): ``(statistics by unit, median frequency [Hz], non-unit quaternions)``. A
+    dataset without a ``unit`` column is one unit, ``"all"``."""
+    stats, f, non_unit, _ = _accumulate(chunks, spec, nodes, units, source, by_unit=True)
+    return stats, f, non_unit
+
+
 def fit_patterns_streamed(
     chunks: Iterable[pd.DataFrame],
     spec: ModelSpec,
@@ -112,37 +163,18 @@ def fit_patterns_streamed(
     source : str
         Name of the dataset in messages (a chunk's rows are named by their place in the file).
     """
-    if not spec.decouples:
-        raise InputError(f"{spec.label}: only pattern models (sh, bg, poly) learn from a stream", param="spec")
-    basis = spec.basis()
-    normal = NormalEquations(basis, len(nodes))
-    wanted = None if not units else {str(u) for u in units}
-    freq: Counter[float] = Counter()
-    non_unit = 0
-    learn_s = 0.0
-    first_row = 0
-    for chunk in chunks:
-        where = f"{source} (rows {first_row:,} to {first_row + len(chunk) - 1:,})"
-        first_row += len(chunk)
-        if wanted is not None:
-            chunk = chunk[chunk["unit"].astype(str).isin(wanted).to_numpy()]
-        if chunk.empty:
-            continue
-        samples = link_samples(chunk, where, nodes=nodes)
-        t0 = time.perf_counter()
-        normal.add(samples.directions, samples.tx_index, samples.rx_index, samples.joint_gain_db)
-        learn_s += time.perf_counter() - t0
-        non_unit += samples.non_unit_quaternions
-        if samples.frequency_hz is not None:
-            values, counts = np.unique(samples.frequency_hz, return_counts=True)
-            freq.update(dict(zip(values.tolist(), counts.tolist())))
-    if normal.n_samples == 0:
-        raise InputError(f"{source}: no samples selected", param="units")
+    stats, f, non_unit, learn_s = _accumulate(chunks, spec, nodes, units, source, by_unit=False)
+    normal = next(iter(stats.values()))
+    basis = normal.basis
     t0 = time.perf_counter()
-    sol = solve(normal, list(nodes), ridge=spec.ridge, gauge=gauge)
+    penalty = None
+    if spec.smoothing:
+        penalty = penalty_vector(basis, len(nodes), spec.smoothing, penalty_scale(normal.gram))
+    sol = solve(normal, list(nodes), ridge=spec.ridge, gauge=gauge, penalty=penalty)
     learn_s += time.perf_counter() - t0
     training = sol.report.to_dict()
-    f = weighted_median(freq)
+    if spec.smoothing:
+        training["smoothing"] = spec.smoothing
     if f is not None:
         training["frequency_hz"] = f
     patterns = PatternSet(
@@ -152,4 +184,4 @@ def fit_patterns_streamed(
     return StreamedFit(patterns, sol.report, normal.n_samples, non_unit, learn_s)
 
 
-__all__ = ["StreamedFit", "fit_patterns_streamed", "units_and_nodes", "weighted_median"]
+__all__ = ["StreamedFit", "fit_patterns_streamed", "unit_statistics_streamed", "units_and_nodes", "weighted_median"]

@@ -15,7 +15,7 @@ from rplearn._atomic import atomic_open
 from rplearn.analysis.pattern_error import node_directions
 from rplearn.analysis.sweep import SweepResult, no_progress, order_sweep
 from rplearn.core.metrics import Scores
-from rplearn.data.units import UnitChoice, evaluation_units, learning_units, samples_of, select_units, split_units
+from rplearn.data.units import UnitChoice, dataset_units, evaluation_units, learning_units, samples_of, select_units, split_units
 from rplearn.errors import InputError
 from rplearn.data.tables import QUATERNION_NORM_TOLERANCE
 from rplearn.io.files import (
@@ -24,7 +24,9 @@ from rplearn.io.files import (
 from rplearn.models.fit import FittedModel, evaluate_models, fit_model, scores_markdown
 from rplearn.models.load import load_model
 from rplearn.models.spec import check_model_size
-from rplearn.models.streamed import fit_patterns_streamed, units_and_nodes
+from rplearn.models.auto import auto_orders, fit_auto, fit_from_statistics
+from rplearn.core.selection import Selection
+from rplearn.models.streamed import fit_patterns_streamed, unit_statistics_streamed, units_and_nodes
 from rplearn.models.predict import DatasetPrediction, distinct_labels, predict_dataset
 from rplearn.models.spec import ModelSpec
 
@@ -45,6 +47,8 @@ class FitOutcome:
         Model file written.
     non_unit_quaternions : int
         Learning samples whose tx or rx quaternion was not of unit norm (normalised).
+    selection : Selection or None
+        The automatic choice of order and smoothing and its validation curve (``auto=True``).
     """
 
     fitted: FittedModel
@@ -52,6 +56,7 @@ class FitOutcome:
     n_samples: int
     output: str | None = None
     non_unit_quaternions: int = 0
+    selection: Selection | None = None
 
     def summary(self) -> str:
         """What was learned, from how much, in how long; rank, conditioning and gauge."""
@@ -65,6 +70,13 @@ class FitOutcome:
                 f"{training['condition_number']:.2f}, training RMSE {training['rmse_db']:.2f} dB"
             )
             text += "".join(f"\n  gauge: {g['text']}" for g in training.get("gauges", []))
+        if self.selection is not None:
+            sel = self.selection
+            how = (f"grouped cross-validation over units {', '.join(sel.units)}" if sel.method == "grouped-cv"
+                   else "generalised cross-validation (one unit)")
+            text += (f"\n  chosen by {how}: order {sel.order}, smoothing {sel.smoothing:.1e}, "
+                     f"validation RMSE {sel.rmse_db:.2f} dB; the curve:\n    "
+                     + sel.curve_text().replace("\n", "\n    "))
         if self.non_unit_quaternions:
             text += (f"\n  samples with a non-unit quaternion (|norm - 1| > {QUATERNION_NORM_TOLERANCE:g}, "
                      f"normalised): {self.non_unit_quaternions:,}")
@@ -81,6 +93,7 @@ def fit_dataset(
     units: Sequence[str] | None = None,
     gauge: str | Mapping[str, Any] = "equal-mean",
     output: str | None = None,
+    auto: bool = False,
 ) -> FitOutcome:
     """Learn ``spec`` from a matched dataset file (``rplearn fit``).
 
@@ -95,13 +108,20 @@ def fit_dataset(
         Gauge of a two-node fit (:func:`rplearn.models.spec.gauge_of`).
     output : str, optional
         Model file to write (JSON).
+    auto : bool
+        Pattern models: choose the order (SH) and the smoothing from the data
+        (:mod:`rplearn.models.auto`); ``spec`` gives the kind and ridge (and the order of BG, P).
     """
     if output:
         check_output_path(output, [dataset])
+    if auto and not spec.decouples:
+        raise InputError(f"order: 'auto' chooses the order of pattern models (sh, bg, poly), not of {spec.label}", param="order")
     if spec.decouples and _is_big(dataset):
-        return _fit_streamed(dataset, spec, units, gauge, output)
+        return _fit_streamed(dataset, spec, units, gauge, output, auto)
     df = read_dataset(dataset)
     choice = learning_units(df, units, dataset)
+    if auto:
+        return _fit_auto(df, dataset, spec, choice, gauge, output)
     samples = samples_of(df, choice.units, dataset)
     prov = provenance(dataset=dataset, model=spec.label, ridge=spec.ridge, units=choice.units)
     fitted = fit_model(samples, spec, gauge=gauge, provenance=prov)
@@ -118,6 +138,22 @@ STREAM_FIT_BYTES = 256 * 2**20
 STREAM_FIT_CHUNK_ROWS = 500_000
 
 
+def _fit_auto(
+    df: Any, dataset: str, spec: ModelSpec, choice: UnitChoice, gauge: str | Mapping[str, Any], output: str | None
+) -> FitOutcome:
+    """:func:`fit_dataset` with ``auto=True`` on a dataset in memory: samples per learning unit."""
+    learn = choice.units if choice.units is not None else (dataset_units(df) or [None])
+    part = select_units(df, choice.units, dataset)
+    nodes = sorted(set(part["tx"].astype(str)) | set(part["rx"].astype(str)))
+    per_unit = {str(u): samples_of(df, None if u is None else [u], dataset, nodes=nodes) for u in learn}
+    prov = provenance(dataset=dataset, model=f"{spec.kind}-auto", ridge=spec.ridge, units=choice.units)
+    fitted, selection = fit_auto(per_unit, spec.kind, spec.order if spec.kind != "sh" else None, spec.ridge, gauge, prov)
+    if output:
+        fitted.model.save(output)
+    n = sum(len(s) for s in per_unit.values())
+    return FitOutcome(fitted, choice, n, output, sum(s.non_unit_quaternions for s in per_unit.values()), selection)
+
+
 def _is_big(dataset: str) -> bool:
     """Whether a dataset file is big enough to be streamed (see :data:`STREAM_FIT_ROWS`)."""
     if not os.path.isfile(dataset):
@@ -127,7 +163,8 @@ def _is_big(dataset: str) -> bool:
 
 
 def _fit_streamed(
-    dataset: str, spec: ModelSpec, units: Sequence[str] | None, gauge: str | Mapping[str, Any], output: str | None
+    dataset: str, spec: ModelSpec, units: Sequence[str] | None, gauge: str | Mapping[str, Any], output: str | None,
+    auto: bool = False,
 ) -> FitOutcome:
     """:func:`fit_dataset` for a big file: units, nodes and the model size from the id columns,
     then the patterns from the whole data a chunk at a time."""
@@ -138,7 +175,19 @@ def _fit_streamed(
     n = int(part["n"].sum())
     if n == 0:
         raise InputError(f"{dataset}: no samples selected", param="units")
+    if auto:
+        orders = auto_orders(spec.kind, n, len(nodes), spec.order if spec.kind != "sh" else None)
+        spec = replace(spec, order=orders[-1])
     check_model_size(spec, n, len(nodes))
+    if auto:
+        stats, freq, non_unit = unit_statistics_streamed(
+            iter_table(dataset, STREAM_FIT_CHUNK_ROWS), spec, nodes, choice.units, dataset)
+        prov = provenance(dataset=dataset, model=f"{spec.kind}-auto", ridge=spec.ridge, units=choice.units)
+        fitted, selection = fit_from_statistics(stats, spec.kind, orders, nodes, spec.ridge, gauge,
+                                                frequency_hz=freq, provenance=prov)
+        if output:
+            fitted.model.save(output)
+        return FitOutcome(fitted, choice, sum(s.n_samples for s in stats.values()), output, non_unit, selection)
     fit = fit_patterns_streamed(iter_table(dataset, STREAM_FIT_CHUNK_ROWS), spec, nodes, choice.units, gauge, dataset)
     model = fit.patterns
     model.provenance = {**provenance(dataset=dataset, model=spec.label, ridge=spec.ridge, units=choice.units),

@@ -1,0 +1,308 @@
+"""Automatic choice of a pattern's order and smoothing from per-unit sufficient statistics.
+
+The learned coefficients are shrunk by a smoothness penalty ``lambda * sum_j w_j c_j^2`` with
+``w_j`` the basis's :meth:`~rplearn.core.basis_base.Basis.roughness` (``(l (l+1))^p`` for a
+spherical harmonic of degree ``l``, ``p`` = :data:`DEFAULT_PENALTY_POWER`; plain ridge for BG and
+P). ``lambda`` is given *relative* to the mean diagonal of the learning data's ``X^T X``, so one
+value means the same shrinkage for a short and a long flight: the absolute weight added to
+``X^T X`` is ``smoothing * mean(diag(X^T X)) * w_j``.
+
+Order and smoothing are chosen by **grouped cross-validation over flight units**: each unit in
+turn is held out, the pattern learned from the others, and its squared error on the held-out
+unit computed from that unit's statistics alone (``y^T y - 2 c^T X^T y + c^T X^T X c``); random
+samples are never held out, because neighbouring packets of one flight leak into each other.
+With a single unit the choice is by **generalised cross-validation** (Golub, Heath and Wahba
+1979) on the whole data. Everything comes from the :class:`NormalEquations` accumulated once per
+unit at the largest order: for spherical harmonics a lower order's statistics are a sub-block
+(degrees nest), so nothing is refitted from raw samples.
+
+The search, in three steps over the validation error (every point is kept as the curve):
+
+1. the smoothing grid :data:`SMOOTHING_GRID` at the largest order (every other value, then
+   the neighbours of the best);
+2. the candidate orders at the best smoothing of step 1 (every other order from the largest
+   down, then the neighbours of the best);
+3. step 1 again at the best order of step 2 (when it is not the largest).
+
+The validation error of an order and smoothing is computed once (a Cholesky solve per held-out
+unit) and kept in the curve.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Callable, Mapping, Sequence
+
+import numpy as np
+import scipy.linalg
+
+from rplearn.core.basis_base import Basis
+from rplearn.core.normal_equations import NormalEquations
+from rplearn.errors import IdentifiabilityError, InputError
+
+#: Exponent ``p`` of the SH roughness weights ``(l (l+1))^p``: 2 penalises the squared
+#: Laplacian of the pattern (spherical smoothing splines).
+DEFAULT_PENALTY_POWER: float = 2.0
+#: Smoothing values tried, relative to ``mean(diag(X^T X))`` (0: the plain fit with its ridge).
+SMOOTHING_GRID: tuple[float, ...] = (0.0, *np.logspace(-8.0, -1.0, 15).tolist())
+#: Weight of the (unpenalised) constant in the cross-validation solves, relative to the
+#: roughness of degree 1: keeps them positive definite; moves only the free gauge constant.
+_CONSTANT_FLOOR = 1e-6
+
+
+@dataclass(frozen=True)
+class CurvePoint:
+    """Validation error of one (order, smoothing) pair."""
+
+    order: int
+    smoothing: float
+    rmse_db: float
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"order": self.order, "smoothing": self.smoothing, "rmse_db": self.rmse_db}
+
+
+@dataclass
+class Selection:
+    """The chosen order and smoothing, and the validation curve behind the choice.
+
+    Attributes
+    ----------
+    method : str
+        ``"grouped-cv"`` (held-out flight units) or ``"gcv"`` (one unit).
+    order : int
+    smoothing : float
+        Relative smoothing (see the module docstring).
+    rmse_db : float
+        Validation RMSE at the choice [dB] (GCV: its RMSE-equivalent ``sqrt(GCV)``).
+    curve : list of CurvePoint
+        Every (order, smoothing) evaluated, in the order of the search.
+    units : list of str
+        The units held out in turn (empty for GCV).
+    power : float
+        Exponent of the SH roughness weights.
+    """
+
+    method: str
+    order: int
+    smoothing: float
+    rmse_db: float
+    curve: list[CurvePoint] = field(default_factory=list)
+    units: list[str] = field(default_factory=list)
+    power: float = DEFAULT_PENALTY_POWER
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"method": self.method, "order": self.order, "smoothing": self.smoothing, "rmse_db": self.rmse_db,
+                "power": self.power, "units": list(self.units), "curve": [p.to_dict() for p in self.curve]}
+
+    def curve_text(self) -> str:
+        """The validation curve as a small table (order, smoothing, RMSE), the choice marked."""
+        lines = [f"{'order':>5} {'smoothing':>10} {'rmse_db':>8}"]
+        for p in sorted(self.curve, key=lambda q: (q.order, q.smoothing)):
+            mark = "  <- chosen" if (p.order, p.smoothing) == (self.order, self.smoothing) else ""
+            lines.append(f"{p.order:>5} {p.smoothing:>10.1e} {p.rmse_db:>8.3f}{mark}")
+        return "\n".join(lines)
+
+
+def penalty_scale(gram: np.ndarray) -> float:
+    """``mean(diag(X^T X))``: the unit of the relative smoothing."""
+    d = np.diag(gram)
+    return float(np.mean(d)) if d.size and np.mean(d) > 0 else 1.0
+
+
+def penalty_vector(basis: Basis, n_nodes: int, smoothing: float, scale: float, power: float = DEFAULT_PENALTY_POWER) -> np.ndarray:
+    """Absolute penalty weight of every column (``n_nodes`` blocks of the basis's roughness)."""
+    if not (np.isfinite(smoothing) and smoothing >= 0):
+        raise InputError(f"smoothing: expected a non-negative number, got {smoothing!r}", param="smoothing")
+    return np.tile(basis.roughness(power), n_nodes) * (float(smoothing) * float(scale))
+
+
+def nested_columns(big: Basis, small: Basis, n_nodes: int) -> np.ndarray:
+    """Columns of ``small``'s joint problem inside ``big``'s (SH orders nest: first ``N^2`` of each block)."""
+    if big.kind != small.kind or (big.kind == "sh" and small.n_coef > big.n_coef):
+        raise InputError(f"{small.label} is not nested in {big.label}")
+    if big.kind != "sh" and small != big:
+        raise InputError(f"only spherical harmonics nest; {small.label} is not {big.label}")
+    return np.concatenate([k * big.n_coef + np.arange(small.n_coef) for k in range(n_nodes)])
+
+
+def sub_statistics(normal: NormalEquations, small: Basis) -> NormalEquations:
+    """The statistics of a nested smaller basis, taken from ``normal`` (no samples re-read)."""
+    if small == normal.basis:
+        return normal
+    idx = nested_columns(normal.basis, small, normal.n_nodes)
+    out = NormalEquations(small, normal.n_nodes)
+    out.gram = normal.gram[np.ix_(idx, idx)].copy()
+    out.rhs = normal.rhs[idx].copy()
+    out.yty = normal.yty
+    out.n_samples = normal.n_samples
+    out.link_counts = dict(normal.link_counts)
+    return out
+
+
+@dataclass
+class _Fold:
+    """Learning statistics (all units but one) and the held-out unit's."""
+
+    gram: np.ndarray
+    rhs: np.ndarray
+    held_gram: np.ndarray
+    held_rhs: np.ndarray
+    held_yty: float
+    held_n: int
+
+
+def _folds(units: Mapping[str, NormalEquations]) -> tuple[list[_Fold], np.ndarray, np.ndarray, float, int]:
+    gram = sum(u.gram for u in units.values())
+    rhs = sum(u.rhs for u in units.values())
+    yty = float(sum(u.yty for u in units.values()))
+    n = int(sum(u.n_samples for u in units.values()))
+    folds = [_Fold(gram - u.gram, rhs - u.rhs, u.gram, u.rhs, u.yty, u.n_samples) for u in units.values()]
+    return folds, gram, rhs, yty, n
+
+
+class _Evaluator:
+    """Validation RMSE of (order, smoothing) from the statistics at the largest order."""
+
+    def __init__(self, units: Mapping[str, NormalEquations], make_basis: Callable[[int], Basis],
+                 ridge: float, power: float) -> None:
+        first = next(iter(units.values()))
+        self.big, self.n_nodes = first.basis, first.n_nodes
+        self.make_basis, self.ridge, self.power = make_basis, float(ridge), float(power)
+        self.folds, self.gram, self.rhs, self.yty, self.n = _folds(units)
+        self.cv = len(units) >= 2
+        self.seen: dict[tuple[int, float], float] = {}
+        self.curve: list[CurvePoint] = []
+        self._cache: dict[int, Any] = {}
+
+    def _weights(self, basis: Basis) -> np.ndarray:
+        w = basis.roughness(self.power)
+        floor = _CONSTANT_FLOOR * (float(np.min(w[w > 0])) if np.any(w > 0) else 1.0)
+        return np.tile(np.maximum(w, floor), self.n_nodes)
+
+    def _blocks(self, order: int) -> tuple[np.ndarray, list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]]:
+        """Roughness weights and, per fold, the learning and held-out blocks of one order (cached)."""
+        if order not in self._cache:
+            basis = self.make_basis(order)
+            idx = nested_columns(self.big, basis, self.n_nodes)
+            sub = [(f.gram[np.ix_(idx, idx)], f.rhs[idx], f.held_gram[np.ix_(idx, idx)], f.held_rhs[idx]) for f in self.folds]
+            if not self.cv:
+                sub = [(self.gram[np.ix_(idx, idx)], self.rhs[idx], np.empty(0), np.empty(0))]
+            self._cache = {order: (self._weights(basis), sub)}  # one order at a time: bounded memory
+        return self._cache[order]
+
+    def rmse(self, order: int, smoothing: float) -> float:
+        key = (int(order), float(smoothing))
+        if key in self.seen:
+            return self.seen[key]
+        w, blocks = self._blocks(int(order))
+        if self.cv:
+            sse = 0.0
+            for (g, r, held_g, held_r), f in zip(blocks, self.folds):
+                c = self._solve(g, r, w, smoothing)
+                sse += max(f.held_yty - 2.0 * c @ held_r + c @ held_g @ c, 0.0)
+            value = float(np.sqrt(sse / self.n))
+        else:
+            g, r, _, _ = blocks[0]
+            value = self._gcv(g, r, w, smoothing)
+        self.seen[key] = value
+        self.curve.append(CurvePoint(int(order), float(smoothing), value))
+        return value
+
+    def _system(self, gram: np.ndarray, w: np.ndarray, smoothing: float) -> np.ndarray:
+        a = gram.copy()
+        a[np.diag_indices_from(a)] += self.ridge + smoothing * penalty_scale(gram) * w
+        return a
+
+    def _solve(self, gram: np.ndarray, rhs: np.ndarray, w: np.ndarray, smoothing: float) -> np.ndarray:
+        try:
+            factor = scipy.linalg.cho_factor(self._system(gram, w, smoothing), overwrite_a=True, check_finite=False)
+            return scipy.linalg.cho_solve(factor, rhs, check_finite=False)
+        except np.linalg.LinAlgError:
+            return scipy.linalg.lstsq(self._system(gram, w, smoothing), rhs)[0]
+
+    def _gcv(self, g: np.ndarray, r: np.ndarray, w: np.ndarray, smoothing: float) -> float:
+        a = self._system(g, w, smoothing)
+        try:
+            factor = scipy.linalg.cho_factor(a, overwrite_a=True, check_finite=False)
+            c = scipy.linalg.cho_solve(factor, r)
+            trace = float(np.trace(scipy.linalg.cho_solve(factor, g)))  # tr(H) = tr((G + P)^-1 G)
+        except np.linalg.LinAlgError:
+            return float("inf")
+        sse = max(self.yty - 2.0 * c @ r + c @ g @ c, 0.0)
+        dof = self.n - trace
+        return float(np.sqrt(self.n * sse) / dof) if dof > 0 else float("inf")
+
+
+def _best_smoothing(ev: _Evaluator, order: int, grid: Sequence[float]) -> float:
+    """Best smoothing of ``grid`` at one order: every other value, then the neighbours of the best."""
+    values = sorted(float(g) for g in grid)
+    coarse = values[::2] if values[-1] in values[::2] else [*values[::2], values[-1]]
+    best = min(coarse, key=lambda s: ev.rmse(order, s))
+    i = values.index(best)
+    return min(values[max(0, i - 1): i + 2], key=lambda s: ev.rmse(order, s))
+
+
+def select_order_and_smoothing(
+    units: Mapping[str, NormalEquations],
+    make_basis: Callable[[int], Basis],
+    orders: Sequence[int],
+    ridge: float = 1.0,
+    power: float = DEFAULT_PENALTY_POWER,
+    grid: Sequence[float] = SMOOTHING_GRID,
+) -> Selection:
+    """Choose order and smoothing by grouped cross-validation (or GCV for one unit).
+
+    Parameters
+    ----------
+    units : mapping of unit label to NormalEquations
+        Statistics of every learning unit, all accumulated with the basis of ``max(orders)``.
+    make_basis : callable
+        ``make_basis(order)`` -> the basis of that order (nested in the largest for SH).
+    orders : sequence of int
+        Candidate orders; for BG and P a single one.
+    ridge : float
+        The solver's ridge, kept in every solve.
+    power : float
+        Exponent of the SH roughness weights.
+    grid : sequence of float
+        Relative smoothing values tried.
+
+    Raises
+    ------
+    IdentifiabilityError
+        When no unit holds samples, or every candidate fails.
+    """
+    units = {str(k): v for k, v in units.items() if v.n_samples > 0}
+    if not units:
+        raise IdentifiabilityError("no learning samples to choose an order from")
+    orders = sorted({int(o) for o in orders})
+    if not orders:
+        raise InputError("orders: no candidate order", param="orders")
+    ev = _Evaluator(units, make_basis, ridge, power)
+    top = orders[-1]
+    best_s = _best_smoothing(ev, top, grid)
+    coarse = orders[::-1][::2]  # every other order from the largest down, then the neighbours of the best
+    best_o = min(coarse, key=lambda o: ev.rmse(o, best_s))
+    best_o = min([o for o in orders if abs(o - best_o) <= 1], key=lambda o: ev.rmse(o, best_s))
+    if best_o != top:
+        best_s = _best_smoothing(ev, best_o, grid)
+    finite = [p for p in ev.curve if np.isfinite(p.rmse_db)]
+    if not finite:
+        raise IdentifiabilityError("no candidate order and smoothing could be fitted")
+    choice = min(finite, key=lambda p: (p.rmse_db, p.order, -p.smoothing))
+    return Selection("grouped-cv" if ev.cv else "gcv", choice.order, choice.smoothing, choice.rmse_db,
+                     ev.curve, sorted(units) if ev.cv else [], float(power))
+
+
+__all__ = [
+    "DEFAULT_PENALTY_POWER",
+    "SMOOTHING_GRID",
+    "CurvePoint",
+    "Selection",
+    "nested_columns",
+    "penalty_scale",
+    "penalty_vector",
+    "select_order_and_smoothing",
+    "sub_statistics",
+]

@@ -1,0 +1,155 @@
+"""``fit --degree auto``: a regularised pattern whose order and smoothing the data choose.
+
+The statistics of every learning unit are accumulated once, at the largest candidate order;
+:func:`rplearn.core.selection.select_order_and_smoothing` chooses order and smoothing by grouped
+cross-validation over the units (GCV with one unit); the model is then solved from the sum of
+the same statistics (a sub-block for a smaller SH order), so no sample is read twice.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any, Mapping
+
+import numpy as np
+
+from rplearn.core.normal_equations import NormalEquations, reserve_block_buffer
+from rplearn.core.selection import (
+    DEFAULT_PENALTY_POWER,
+    Selection,
+    penalty_scale,
+    penalty_vector,
+    select_order_and_smoothing,
+    sub_statistics,
+)
+from rplearn.core.solver import solve
+from rplearn.data.tables import LinkSamples
+from rplearn.errors import InputError
+from rplearn.models.fit import FittedModel
+from rplearn.models.patterns import PatternSet
+from rplearn.models.spec import ModelSpec, check_model_size, default_ridge
+from rplearn.models.streamed import weighted_median
+
+#: Largest SH order ``--degree auto`` considers (the cost of the selection is that of one fit
+#: at this order: its statistics are accumulated once).
+MAX_AUTO_ORDER = 16
+#: An order is a candidate only with at least this many learning samples per coefficient.
+SAMPLES_PER_COEF = 10
+#: Orders of BG and P when chosen automatically (their smoothing is chosen; the order is the default).
+_FIXED_AUTO_ORDER = {"bg": 7, "poly": 12}
+
+
+def auto_orders(kind: str, n_samples: int, n_nodes: int, order: int | None = None) -> list[int]:
+    """Candidate orders: SH 2 .. the largest with :data:`SAMPLES_PER_COEF` samples per
+    coefficient (at most :data:`MAX_AUTO_ORDER`); BG and P only ``order`` (default 7, 12)."""
+    if kind != "sh":
+        return [int(order or _FIXED_AUTO_ORDER[kind])]
+    top = 1
+    while top < MAX_AUTO_ORDER and n_nodes * (top + 1) ** 2 * SAMPLES_PER_COEF <= n_samples:
+        top += 1
+    if top < 2:
+        raise InputError(
+            f"{n_samples:,} samples are too few to choose an SH order for {n_nodes} antennas "
+            f"(SH-2 needs {n_nodes * 4 * SAMPLES_PER_COEF:,}); give --degree", param="order")
+    return list(range(2, top + 1))
+
+
+def fit_auto(
+    unit_samples: Mapping[str, LinkSamples],
+    kind: str = "sh",
+    order: int | None = None,
+    ridge: float | None = None,
+    gauge: str | Mapping[str, Any] = "equal-mean",
+    provenance: Mapping[str, Any] | None = None,
+    power: float = DEFAULT_PENALTY_POWER,
+) -> tuple[FittedModel, Selection]:
+    """Learn a regularised pattern set with its order and smoothing chosen from the data.
+
+    Parameters
+    ----------
+    unit_samples : mapping of unit label to LinkSamples
+        The learning samples of every flight unit, all with the same node list.
+    kind : {"sh", "bg", "poly"}
+    order : int, optional
+        BG and P: the order (its smoothing is chosen); SH: ignored (chosen).
+    ridge : float, optional
+        The solver's ridge (default of the kind).
+    gauge : str or mapping
+        As :func:`rplearn.models.fit.solve_patterns`.
+    provenance : mapping, optional
+    power : float
+        Exponent of the SH roughness weights.
+
+    Returns
+    -------
+    fitted : FittedModel
+        LTD covers the accumulation, the selection and the final solve.
+    selection : Selection
+        The choice and its validation curve (also in ``model.training["selection"]``).
+    """
+    if kind not in ("sh", "bg", "poly"):
+        raise InputError(f"automatic selection is for pattern models (sh, bg, poly), not {kind}", param="model")
+    units = {str(u): s for u, s in unit_samples.items() if len(s)}
+    if not units:
+        raise InputError("no learning samples", param="units")
+    nodes = next(iter(units.values())).nodes
+    if any(s.nodes != nodes for s in units.values()):
+        raise InputError("the units' samples name different node lists; build them with one nodes=", param="unit_samples")
+    n = sum(len(s) for s in units.values())
+    ridge = default_ridge(kind) if ridge is None else float(ridge)
+    orders = auto_orders(kind, n, len(nodes), order)
+    big = ModelSpec(kind, orders[-1], ridge=ridge)
+    check_model_size(big, n, len(nodes))
+    basis = big.basis()
+    reserve_block_buffer(basis, max(len(s) for s in units.values()))
+    t0 = time.perf_counter()
+    stats = {u: NormalEquations(basis, len(nodes)).add(s.directions, s.tx_index, s.rx_index, s.joint_gain_db)
+             for u, s in units.items()}
+    freq: dict[float, int] = {}
+    for s in units.values():
+        if s.frequency_hz is not None:
+            values, counts = np.unique(s.frequency_hz, return_counts=True)
+            for v, c in zip(values.tolist(), counts.tolist()):
+                freq[v] = freq.get(v, 0) + c
+    fitted, choice = fit_from_statistics(stats, kind, orders, nodes, ridge, gauge, power, weighted_median(freq), provenance)
+    fitted.ltd_s = time.perf_counter() - t0
+    fitted.model.training["ltd_s"] = fitted.ltd_s
+    return fitted, choice
+
+
+def fit_from_statistics(
+    stats: Mapping[str, NormalEquations],
+    kind: str,
+    orders: list[int],
+    nodes: tuple[str, ...] | list[str],
+    ridge: float,
+    gauge: str | Mapping[str, Any] = "equal-mean",
+    power: float = DEFAULT_PENALTY_POWER,
+    frequency_hz: float | None = None,
+    provenance: Mapping[str, Any] | None = None,
+) -> tuple[FittedModel, Selection]:
+    """The selection and the final solve of :func:`fit_auto`, from per-unit statistics
+    accumulated at the largest of ``orders`` (in memory, or streamed from a big file)."""
+    t0 = time.perf_counter()
+    choice = select_order_and_smoothing(stats, lambda k: ModelSpec(kind, k, ridge=ridge).basis(), orders, ridge, power)
+    spec = ModelSpec(kind, choice.order, ridge=ridge, smoothing=choice.smoothing)
+    first = next(iter(stats.values()))
+    total = NormalEquations(first.basis, first.n_nodes)
+    for st in stats.values():
+        total.merge(st)
+    chosen = spec.basis()
+    normal = sub_statistics(total, chosen)
+    penalty = penalty_vector(chosen, len(nodes), choice.smoothing, penalty_scale(normal.gram), power)
+    sol = solve(normal, list(nodes), ridge=ridge, gauge=gauge, penalty=penalty)
+    ltd = time.perf_counter() - t0
+    training = sol.report.to_dict()
+    training.update(smoothing=choice.smoothing, penalty_power=power, selection=choice.to_dict(), ltd_s=ltd)
+    if frequency_hz is not None:
+        training["frequency_hz"] = frequency_hz
+    model = PatternSet(basis=chosen, nodes=tuple(nodes), coef=sol.coef, covariance=sol.covariance,
+                       gauge=[g.to_dict() for g in sol.report.gauges], training=training)
+    model.provenance = {**dict(provenance or {}), "model": spec.label}
+    return FittedModel(spec, model, ltd), choice
+
+
+__all__ = ["MAX_AUTO_ORDER", "SAMPLES_PER_COEF", "auto_orders", "fit_auto", "fit_from_statistics"]
