@@ -8,6 +8,8 @@ from typing import Callable, Sequence
 import numpy as np
 import pandas as pd
 
+from rplearn.core.normal_equations import NormalEquations
+from rplearn.core.selection import Selection, select_order_and_smoothing, validation_rmse
 from rplearn.data.tables import LinkSamples
 from rplearn.models.fit import evaluate_models, fit_model
 from rplearn.models.spec import ModelSpec
@@ -32,6 +34,11 @@ class SweepResult:
     condition_number: list[float]
     n_params: list[int]
 
+    #: Cross-validated RMSE [dB] of every order at the automatic choice's smoothing (SH sweeps
+    #: with per-unit learning samples, see :func:`validation_sweep`), else None.
+    validation_rmse_db: list[float] | None = None
+    selection: Selection | None = None
+
     @property
     def best_order(self) -> int:
         """Order with the lowest test RMSE."""
@@ -39,7 +46,12 @@ class SweepResult:
 
     def summary(self) -> str:
         """The sweep as a text table, and the order of the lowest test RMSE."""
-        return f"{self.to_frame().to_string(index=False)}\nlowest test RMSE at order {self.best_order}"
+        text = f"{self.to_frame().to_string(index=False)}\nlowest test RMSE at order {self.best_order}"
+        if self.selection is not None:
+            sel = self.selection
+            text += (f"\nautomatic choice (--degree auto, {sel.method} on the learning units): order {sel.order}, "
+                     f"smoothing {sel.smoothing:.1e}; cv_rmse_db is its validation curve at that smoothing")
+        return text
 
     def to_frame(self) -> pd.DataFrame:
         """One row per order: parameters, test RMSE [dB], AIC, LTD [s], condition number."""
@@ -51,8 +63,22 @@ class SweepResult:
                 "aic": self.aic,
                 "ltd_s": self.ltd_s,
                 "condition_number": self.condition_number,
+                **({"cv_rmse_db": self.validation_rmse_db} if self.validation_rmse_db is not None else {}),
             }
         )
+
+
+def validation_sweep(unit_samples: dict[str, LinkSamples], orders: Sequence[int]) -> tuple[Selection, list[float]]:
+    """The automatic choice (``fit --degree auto``) among SH ``orders`` and its validation curve
+    at the chosen smoothing, from per-unit statistics accumulated once at ``max(orders)``."""
+    top = max(int(o) for o in orders)
+    spec = ModelSpec("sh", top)
+    nodes = next(iter(unit_samples.values())).nodes
+    stats = {u: NormalEquations(spec.basis(), len(nodes)).add(s.directions, s.tx_index, s.rx_index, s.joint_gain_db)
+             for u, s in unit_samples.items() if len(s)}
+    make = lambda k: ModelSpec("sh", k).basis()  # noqa: E731
+    selection = select_order_and_smoothing(stats, make, orders, spec.ridge)
+    return selection, validation_rmse(stats, make, orders, selection.smoothing, spec.ridge)
 
 
 def order_sweep(

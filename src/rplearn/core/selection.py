@@ -295,7 +295,25 @@ def select_order_and_smoothing(
                      ev.curve, sorted(units) if ev.cv else [], float(power))
 
 
+def validation_rmse(
+    units: Mapping[str, NormalEquations],
+    make_basis: Callable[[int], Basis],
+    orders: Sequence[int],
+    smoothing: float,
+    ridge: float = 1.0,
+    power: float = DEFAULT_PENALTY_POWER,
+) -> list[float]:
+    """Validation RMSE [dB] of every order at one smoothing (the curve a sweep plots), by
+    grouped cross-validation (GCV with one unit), from statistics at ``max(orders)``."""
+    units = {str(k): v for k, v in units.items() if v.n_samples > 0}
+    if not units:
+        raise IdentifiabilityError("no learning samples to validate on")
+    ev = _Evaluator(units, make_basis, ridge, power)
+    return [ev.rmse(int(o), float(smoothing)) for o in orders]
+
+
 __all__ = [
+    "validation_rmse",
     "DEFAULT_PENALTY_POWER",
     "SMOOTHING_GRID",
     "CurvePoint",

@@ -97,11 +97,14 @@ def plot_rssi_time(
 
 # -- Fig. 10: model order sweep ------------------------------------------------------------
 def order_sweep_figure(
-    orders: ArrayLike, test_rmse_db: ArrayLike, aic: ArrayLike, ltd_s: ArrayLike, family: str = "SH"
+    orders: ArrayLike, test_rmse_db: ArrayLike, aic: ArrayLike, ltd_s: ArrayLike, family: str = "SH",
+    validation_rmse_db: ArrayLike | None = None, chosen: tuple[int, float] | None = None,
 ) -> Figure:
     """Model order selection (paper Fig. 10): test RMSE and AIC (top), LTD (bottom).
 
-    The minima of the test RMSE and of the AIC are marked.
+    The minima of the test RMSE and of the AIC are marked. With ``validation_rmse_db`` (the
+    cross-validated RMSE over the learning units at the automatic choice's smoothing) that
+    curve is drawn too, and ``chosen`` (order, smoothing) is marked on it.
 
     Parameters
     ----------
@@ -137,6 +140,13 @@ def order_sweep_figure(
             mec="k",
             label=f"min RMSE: {family}-{x[k]:g} ({r[k]:.2f} dB)",
         )
+    if validation_rmse_db is not None:
+        v = np.asarray(validation_rmse_db, np.float64).ravel()
+        ax.plot(x, v, "d:", color="tab:orange", label="cross-validated RMSE (learning units)")
+        if chosen is not None and chosen[0] in x:
+            k = int(np.flatnonzero(x == chosen[0])[0])
+            ax.plot(x[k], v[k], "P", ms=13, color="tab:orange", mec="k",
+                    label=f"auto: {family}-{chosen[0]}, smoothing {chosen[1]:.0e}")
     ax2 = ax.twinx()
     ax2.plot(x, a / 1e3, "s--", color="tab:purple", label="AIC")
     ax2.set_ylabel("AIC / 1e3", color="tab:purple")
@@ -173,13 +183,18 @@ def plot_order_sweep(
     ltd_s: ArrayLike,
     path: str | os.PathLike[str],
     family: str = "SH",
+    validation_rmse_db: ArrayLike | None = None,
+    chosen: tuple[int, float] | None = None,
 ) -> str:
     """Write the order-sweep figure (paper Fig. 10, :func:`order_sweep_figure`); return the path."""
     caption = (
         f"Model order selection: test RMSE and AIC against the {family} order (stars mark the minima),"
         " and the learning time LTD (paper Fig. 10)."
     )
-    return save_figure(order_sweep_figure(orders, test_rmse_db, aic, ltd_s, family), path, caption)
+    if validation_rmse_db is not None:
+        caption += " Dotted: the RMSE cross-validated over the learning units, from which --degree auto chooses."
+    return save_figure(order_sweep_figure(orders, test_rmse_db, aic, ltd_s, family, validation_rmse_db, chosen),
+                       path, caption)
 
 
 # -- Fig. 5a: epsilon sweep ----------------------------------------------------------------

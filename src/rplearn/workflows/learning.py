@@ -13,7 +13,7 @@ from typing import Any, Callable, Mapping, Sequence
 
 from rplearn._atomic import atomic_open
 from rplearn.analysis.pattern_error import node_directions
-from rplearn.analysis.sweep import SweepResult, no_progress, order_sweep
+from rplearn.analysis.sweep import SweepResult, no_progress, order_sweep, validation_sweep
 from rplearn.core.metrics import Scores
 from rplearn.data.units import UnitChoice, dataset_units, evaluation_units, learning_units, samples_of, select_units, split_units
 from rplearn.errors import InputError
@@ -299,12 +299,18 @@ def sweep_dataset(
     ls = samples_of(df, learn, dataset)
     ts = samples_of(df, test, dataset, nodes=ls.nodes)
     result = order_sweep(ls, ts, kind, [int(o) for o in orders], stop_after_rises=None, progress=progress)
+    if kind == "sh":
+        progress("cross-validating the orders over the learning units")
+        per_unit = {str(u): samples_of(df, [u], dataset, nodes=ls.nodes) for u in learn}
+        result.selection, result.validation_rmse_db = validation_sweep(per_unit, result.orders)
     if output:
         write_table(result.to_frame(), output)
     if plot_path:
         from rplearn.viz.charts import plot_order_sweep
 
-        plot_order_sweep(result.orders, result.rmse_db, result.aic, result.ltd_s, plot_path)
+        plot_order_sweep(result.orders, result.rmse_db, result.aic, result.ltd_s, plot_path,
+                         validation_rmse_db=result.validation_rmse_db,
+                         chosen=None if result.selection is None else (result.selection.order, result.selection.smoothing))
     return result
 
 

@@ -1,0 +1,120 @@
+"""rplearn.core.selection: smoothness penalty, nested statistics, and the choice of order and
+smoothing by grouped cross-validation from per-unit statistics (issue 11, item 1)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from rplearn.core.geometry import Directions
+from rplearn.core.normal_equations import NormalEquations
+from rplearn.core.selection import (
+    nested_columns,
+    penalty_scale,
+    penalty_vector,
+    select_order_and_smoothing,
+    sub_statistics,
+)
+from rplearn.core.bases import make_basis
+from rplearn.core.sh import SphericalHarmonics, sh_index
+from rplearn.errors import InputError
+
+RIDGE = 1.0
+
+
+def synthetic_units(n_units=4, n_per_unit=600, truth_order=3, noise_db=2.0, seed=0):
+    """Two nodes linked both ways; a smooth SH-``truth_order`` pattern each, Gaussian noise."""
+    rng = np.random.default_rng(seed)
+    truth = SphericalHarmonics(truth_order)
+    coef = rng.normal(0.0, 3.0, (2, truth.n_coef))
+    units = []
+    for _ in range(n_units):
+        az = rng.uniform(-np.pi, np.pi, (4, n_per_unit))
+        el = np.arcsin(rng.uniform(-1, 1, (4, n_per_unit)))
+        tx = rng.integers(0, 2, n_per_unit)
+        rx = 1 - tx
+        g_tx = np.einsum("nc,nc->n", coef[tx], truth.design(az[0], el[0]))
+        g_rx = np.einsum("nc,nc->n", coef[rx], truth.design(az[1], el[1]))
+        y = g_tx + g_rx + rng.normal(0.0, noise_db, n_per_unit)
+        units.append((Directions(az[0], el[0], az[1], el[1]), tx, rx, y))
+    return units
+
+
+def stats_of(units, basis):
+    return {f"u{i}": NormalEquations(basis, 2).add(d, tx, rx, y) for i, (d, tx, rx, y) in enumerate(units)}
+
+
+def test_sh_roughness_is_the_laplacian_eigenvalue_squared():
+    w = SphericalHarmonics(5).roughness(2.0)
+    assert w[sh_index(0, 0)] == 0.0
+    assert w[sh_index(1, -1)] == 4.0 and w[sh_index(3, 2)] == 144.0 and w[sh_index(4, 0)] == 400.0
+    assert np.all(make_basis("poly", 3).roughness() == 1.0)  # plain ridge for P and BG
+    p = penalty_vector(SphericalHarmonics(3), 2, smoothing=1e-3, scale=50.0)
+    assert p.shape == (18,) and p[sh_index(1, 0)] == pytest.approx(2.0**2 * 1e-3 * 50.0)
+    np.testing.assert_allclose(p, np.tile(SphericalHarmonics(3).roughness(2.0), 2) * 0.05)
+    with pytest.raises(InputError, match="smoothing"):
+        penalty_vector(SphericalHarmonics(3), 2, smoothing=-1.0, scale=1.0)
+
+
+def test_a_smaller_order_is_a_sub_block_of_the_larger_statistics():
+    units = synthetic_units(n_units=1)
+    big = stats_of(units, SphericalHarmonics(7))["u0"]
+    small = stats_of(units, SphericalHarmonics(4))["u0"]
+    sub = sub_statistics(big, SphericalHarmonics(4))
+    np.testing.assert_allclose(sub.gram, small.gram, rtol=1e-10, atol=1e-8)
+    np.testing.assert_allclose(sub.rhs, small.rhs, rtol=1e-10, atol=1e-8)
+    assert sub.yty == pytest.approx(small.yty) and sub.n_samples == small.n_samples
+    with pytest.raises(InputError):
+        nested_columns(SphericalHarmonics(4), SphericalHarmonics(7), 2)
+
+
+def test_grouped_cv_from_statistics_equals_refitting_from_raw_samples():
+    """The validation error of one (order, smoothing) from per-unit statistics is the error of
+    refitting without each unit from its raw samples and predicting it."""
+    units = synthetic_units(n_units=3, n_per_unit=400)
+    order, smoothing = 5, 1e-3
+    sel = select_order_and_smoothing(stats_of(units, SphericalHarmonics(order)),
+                                     SphericalHarmonics, [order], RIDGE, grid=[smoothing])
+    basis = SphericalHarmonics(order)
+    p = basis.n_coef
+
+    def design(d, tx, rx):
+        x = np.zeros((tx.size, 2 * p))
+        ft, fr = basis.design(d.az_tx, d.el_tx), basis.design(d.az_rx, d.el_rx)
+        for i in range(tx.size):
+            x[i, tx[i] * p:(tx[i] + 1) * p] += ft[i]
+            x[i, rx[i] * p:(rx[i] + 1) * p] += fr[i]
+        return x
+
+    sse, n = 0.0, 0
+    for k in range(3):
+        xs = np.vstack([design(*units[j][:3]) for j in range(3) if j != k])
+        ys = np.concatenate([units[j][3] for j in range(3) if j != k])
+        g = xs.T @ xs
+        a = g + np.diag(RIDGE + smoothing * penalty_scale(g) * np.maximum(np.tile(basis.roughness(2.0), 2), 4e-6))
+        c = np.linalg.solve(a, xs.T @ ys)
+        xk = design(*units[k][:3])
+        sse += np.sum((units[k][3] - xk @ c) ** 2)
+        n += xk.shape[0]
+    assert sel.method == "grouped-cv" and sel.rmse_db == pytest.approx(np.sqrt(sse / n), rel=1e-6)
+
+
+def test_cross_validation_does_not_overfit_a_smooth_pattern():
+    units = synthetic_units(n_units=4, n_per_unit=500, truth_order=3, noise_db=2.0, seed=1)
+    stats = stats_of(units, SphericalHarmonics(9))
+    sel = select_order_and_smoothing(stats, SphericalHarmonics, range(2, 10), RIDGE)
+    plain = {(p.order, p.smoothing): p.rmse_db for p in sel.curve}
+    top_plain = plain.get((9, 0.0))
+    assert top_plain is not None and sel.rmse_db < top_plain  # better than the unregularised SH-9
+    assert sel.rmse_db < 2.0 * 1.15  # near the noise floor (2 dB)
+    assert sel.order >= 3  # the truth needs degree 2, order 3
+    text = sel.curve_text()
+    assert "<- chosen" in text and len(text.splitlines()) == len(sel.curve) + 1
+
+
+def test_one_unit_is_chosen_by_generalised_cross_validation():
+    units = synthetic_units(n_units=1, n_per_unit=1500, truth_order=3, seed=2)
+    sel = select_order_and_smoothing(stats_of(units, SphericalHarmonics(8)), SphericalHarmonics, range(2, 9), RIDGE)
+    assert sel.method == "gcv" and sel.units == [] and np.isfinite(sel.rmse_db)
+    assert 1.5 < sel.rmse_db < 2.6
+    assert sel.to_dict()["curve"][0].keys() == {"order", "smoothing", "rmse_db"}

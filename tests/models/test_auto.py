@@ -1,0 +1,106 @@
+"""rplearn.models.auto and ``fit --degree auto`` (issue 11, item 1): the order and smoothing
+chosen from the data, on the smoke flight and on the paper's campaign."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from rplearn.analysis.pattern_error import node_directions, pattern_errors_db
+from rplearn.core.normal_equations import NormalEquations
+from rplearn.core.selection import sub_statistics
+from rplearn.core.sh import SphericalHarmonics
+from rplearn.core.solver import solve
+from rplearn.data.units import samples_of, split_units
+from rplearn.io.files import read_dataset
+from rplearn.models import ModelSpec, load_model
+from rplearn.models.auto import auto_orders, fit_auto
+from rplearn.models.fit import evaluate_models, fit_model
+from rplearn.sim import simulate
+from rplearn.workflows.logs import sync_logs
+
+RPLEARN = [sys.executable, "-m", "rplearn.cli"]
+
+
+def campaign(tmp_path_factory, preset, seed, link=None):
+    from rplearn.data.sync import SyncOptions
+
+    d = tmp_path_factory.mktemp(preset)
+    sim = simulate(preset, seed=seed, out_dir=str(d / "f"))
+    sync_logs([str(d / "f" / "pose_log.parquet")], [str(d / "f" / "signal_log.parquet")], str(d / "m.parquet"),
+              sync_options=SyncOptions(link=link))
+    df = read_dataset(str(d / "m.parquet"))
+    learn, test = split_units(df, None, None)
+    nodes = sorted(set(df["tx"]) | set(df["rx"]))
+    per_unit = {u: samples_of(df, [u], "d", nodes=nodes) for u in learn}
+    return d, sim, per_unit, samples_of(df, learn, "d", nodes=nodes), samples_of(df, test, "d", nodes=nodes)
+
+
+@pytest.fixture(scope="module")
+def smoke(tmp_path_factory):
+    return campaign(tmp_path_factory, "smoke", 5)
+
+
+def test_auto_orders_follow_the_sample_count():
+    assert auto_orders("sh", 56_000, 2) == list(range(2, 17))
+    assert auto_orders("sh", 1_300, 2) == list(range(2, 9))  # 10 samples per coefficient
+    assert auto_orders("bg", 10, 2) == [7] and auto_orders("poly", 10, 2, 5) == [5]
+    with pytest.raises(Exception, match="too few"):
+        auto_orders("sh", 50, 2)
+
+
+def test_auto_model_is_saved_with_its_choice_and_loads(smoke, tmp_path):
+    _, _, per_unit, _, test = smoke
+    fitted, sel = fit_auto(per_unit)
+    model = fitted.model
+    assert model.training["selection"]["order"] == sel.order == fitted.spec.order
+    assert model.training["smoothing"] == sel.smoothing and fitted.ltd_s > 0
+    model.save(str(tmp_path / "auto.json"))
+    back = load_model(str(tmp_path / "auto.json"))
+    np.testing.assert_allclose(back.predict_gain(test), model.predict_gain(test))
+    assert back.training["selection"]["curve"] == model.training["selection"]["curve"]
+
+
+def test_fit_cli_defaults_to_auto_and_refuses_auto_for_baselines(smoke):
+    d = smoke[0]
+    proc = subprocess.run(RPLEARN + ["fit", "m.parquet", "-o", "a.json"], cwd=d, capture_output=True, text=True)
+    assert proc.returncode == 0 and "chosen by generalised cross-validation (one unit)" in proc.stdout, proc.stderr
+    assert "<- chosen" in proc.stdout
+    for args, needle in ((["--model", "knn", "--degree", "auto"], "not of NN-400"), (["--degree", "3.5"], "whole number or 'auto'")):
+        proc = subprocess.run(RPLEARN + ["fit", "m.parquet", "-o", "x.json", *args], cwd=d, capture_output=True, text=True)
+        assert proc.returncode == 1 and needle in proc.stderr and len(proc.stderr.splitlines()) == 1, proc.stderr
+
+
+def plain_test_rmse(learn, test, orders, top):
+    """Test RMSE of plain fixed-order SH fits (the sweep), from statistics at the top order."""
+    basis = SphericalHarmonics(top)
+    ne = NormalEquations(basis, 2).add(learn.directions, learn.tx_index, learn.rx_index, learn.joint_gain_db)
+    te = NormalEquations(basis, 2).add(test.directions, test.tx_index, test.rx_index, test.joint_gain_db)
+    out = {}
+    for k in orders:
+        small = SphericalHarmonics(k)
+        c = solve(sub_statistics(ne, small), ["A", "B"], ridge=ModelSpec("sh", k).ridge).coef.ravel()
+        t = sub_statistics(te, small)
+        out[k] = float(np.sqrt((t.yty - 2 * c @ t.rhs + c @ t.gram @ c) / t.n_samples))
+    return out
+
+
+@pytest.mark.slow
+def test_paper_auto_fit_beats_the_best_fixed_order(tmp_path_factory):
+    """Acceptance 1 of issue 11 on the `paper` preset (the A->B link, as the paper learned it)."""
+    _, sim, per_unit, learn, test = campaign(tmp_path_factory, "paper", 0, link=("A", "B"))
+    fitted, sel = fit_auto(per_unit)
+    auto_rmse = evaluate_models([fitted], test)[0].rmse_db
+    sweep = plain_test_rmse(learn, test, range(3, 21), 20)
+    best = min(sweep.values())
+    flat = [k for k, v in sweep.items() if v <= best + 0.05]  # the flat minimum: within 0.05 dB of the best
+    assert sel.order in flat, (sel.order, flat)
+    assert auto_rmse <= best, (auto_rmse, best)
+    sh10 = fit_model(learn, ModelSpec("sh", 10)).model
+    covered = node_directions(learn)
+    err_auto = np.mean(list(pattern_errors_db(fitted.model, sim.ground_truth, covered).values()))
+    err_10 = np.mean(list(pattern_errors_db(sh10, sim.ground_truth, covered).values()))
+    assert err_auto <= 0.9 * err_10, (err_auto, err_10)
