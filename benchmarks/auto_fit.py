@@ -1,0 +1,76 @@
+"""Benchmark: ``fit --degree auto`` against one plain SH-10 fit on the paper's data (issue 11, acceptance 5).
+
+The `paper` preset (seed 0) is simulated and synchronised (the A->B link, three learning units,
+56,005 samples). Then, alternating, best of ``repeats`` each:
+
+- **SH-10**: ``fit_model`` of a plain SH-10 (the reference);
+- **auto**: ``fit_auto`` (per-unit statistics at the largest candidate order, grouped
+  cross-validation from them, the final solve from the same statistics);
+- **accumulation alone** at the largest candidate order (SH-16): the floor of any selection
+  that considers SH-16, since its statistics must be accumulated once.
+
+Printed: the times and the ratios auto / SH-10 (target 3) and floor / SH-10.
+
+Usage: ``python benchmarks/auto_fit.py [--repeats 5]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import tempfile
+import time
+
+from rplearn.core.normal_equations import NormalEquations
+from rplearn.data.sync import SyncOptions
+from rplearn.data.units import samples_of, split_units
+from rplearn.io.files import read_dataset
+from rplearn.models import ModelSpec, fit_model
+from rplearn.models.auto import auto_orders, fit_auto
+from rplearn.sim import simulate
+from rplearn.workflows.logs import sync_logs
+
+
+def timed(fn) -> float:
+    t0 = time.perf_counter()
+    fn()
+    return time.perf_counter() - t0
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeats", type=int, default=5)
+    args = ap.parse_args()
+    with tempfile.TemporaryDirectory() as d:
+        simulate("paper", seed=0, out_dir=f"{d}/f")
+        sync_logs([f"{d}/f/pose_log.parquet"], [f"{d}/f/signal_log.parquet"], f"{d}/m.parquet",
+                  sync_options=SyncOptions(link=("A", "B")))
+        df = read_dataset(f"{d}/m.parquet")
+    learn, _ = split_units(df, None, None)
+    nodes = sorted(set(df["tx"]) | set(df["rx"]))
+    per_unit = {u: samples_of(df, [u], "d", nodes=nodes) for u in learn}
+    everything = samples_of(df, learn, "d", nodes=nodes)
+    top = auto_orders("sh", len(everything), len(nodes))[-1]
+    basis = ModelSpec("sh", top).basis()
+
+    def accumulate():
+        for s in per_unit.values():
+            NormalEquations(basis, len(nodes)).add(s.directions, s.tx_index, s.rx_index, s.joint_gain_db)
+
+    spec10 = ModelSpec("sh", 10)
+    fit_model(everything, spec10), fit_auto(per_unit), accumulate()  # warm-up
+    best = {"SH-10": float("inf"), "auto": float("inf"), "floor": float("inf")}
+    for _ in range(args.repeats):
+        best["SH-10"] = min(best["SH-10"], timed(lambda: fit_model(everything, spec10)))
+        best["auto"] = min(best["auto"], timed(lambda: fit_auto(per_unit)))
+        best["floor"] = min(best["floor"], timed(accumulate))
+    _, sel = fit_auto(per_unit)
+    print(f"paper data: {len(everything):,} learning samples in {len(per_unit)} units; candidates SH-2..SH-{top}")
+    print(f"chosen: SH-{sel.order}, smoothing {sel.smoothing:.1e} ({len(sel.curve)} points of the validation curve)")
+    print(f"best of {args.repeats}: SH-10 fit {best['SH-10'] * 1e3:.0f} ms, auto {best['auto'] * 1e3:.0f} ms, "
+          f"accumulation at SH-{top} alone {best['floor'] * 1e3:.0f} ms")
+    print(f"ratio auto / SH-10 = {best['auto'] / best['SH-10']:.2f} (target 3); "
+          f"floor / SH-10 = {best['floor'] / best['SH-10']:.2f}")
+
+
+if __name__ == "__main__":
+    main()
