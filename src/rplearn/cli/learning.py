@@ -6,7 +6,7 @@ from typing import Optional
 
 import typer
 
-from rplearn.cli._app import app, note, orders as parse_orders, progress_bar, say, split_list, step, user_errors
+from rplearn.cli._app import app, note, orders as parse_orders, pairs, progress_bar, say, split_list, step, user_errors
 from rplearn.errors import InputError
 
 
@@ -41,6 +41,36 @@ def fit(
     say(outcome.summary())
     for line in outcome.warnings:
         note(line, "warning")
+
+
+@app.command()
+@user_errors
+def reference(
+    patterns: list[str] = typer.Argument(..., help="NODE=FILE: a reference pattern (CSV az_deg/el_deg or phi/theta + gain_dbi, or MSI Planet) per node."),
+    mount: Optional[list[str]] = typer.Option(None, "--mount", help="NODE=ROLL,PITCH,YAW: the antenna frame in the body frame [deg] (e.g. 180,0,0 hanging upside down)."),
+    output: str = typer.Option(..., "-o", "--out", help="Model file (.json)."),
+) -> None:
+    """Turn measured or vendor antenna patterns into a model (usable by predict, links, orient, plot, report).
+
+    Example: rplearn reference A=dipole.csv B=patch.msi --mount A=180,0,0 -o reference.json
+    """
+    from rplearn.workflows.planning import reference_model_file
+
+    files = pairs(patterns, "PATTERN")
+    mounts = {}
+    for node, text in pairs(mount, "--mount").items():
+        parts = text.split(",")
+        try:
+            mounts[node] = tuple(float(x) for x in parts)
+        except ValueError:
+            raise InputError(f"--mount: expected NODE=ROLL,PITCH,YAW in degrees, got {node}={text}") from None
+        if len(parts) != 3:
+            raise InputError(f"--mount: expected NODE=ROLL,PITCH,YAW in degrees, got {node}={text}")
+    model = reference_model_file(files, output, mounts)
+    say(f"reference model of {', '.join(model.nodes)} ({model.label}) -> {output}")
+    for node, info in model.training["reference"].items():
+        say(f"  {node}: {info['source']}, mount (roll, pitch, yaw) {tuple(info['mount_rpy_deg'])} deg, "
+            f"expansion residual {info['expansion_rmse_db']:.3f} dB RMS")
 
 
 def degree_option(degree: Optional[str], model: str) -> tuple[bool, Optional[int]]:

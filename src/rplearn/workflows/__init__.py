@@ -26,6 +26,7 @@ _NAMES: dict[str, str] = {
     "export_model_file": "planning",
     "orient_link": "planning",
     "plan_campaign": "planning",
+    "reference_model_file": "planning",
     "LinksOutcome": "logs",
     "SyncOutcome": "logs",
     "reader_notes": "logs",

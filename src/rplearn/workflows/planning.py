@@ -6,14 +6,15 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
-from typing import Sequence
+from typing import Mapping, Sequence
 
 from rplearn.analysis.headings import OrientationResult, best_yaw
 from rplearn.errors import InputError
 from rplearn.io.export import export_grid, export_msi_files
-from rplearn.io.files import check_output_path
+from rplearn.io.files import check_output_path, provenance
 from rplearn.models.base import require_patterns
 from rplearn.models.load import load_model
+from rplearn.models.patterns import PatternSet
 from rplearn.models.spec import ModelSpec
 from rplearn.plan.campaign import Campaign, paper_campaign, write_references
 from rplearn.plan.check import PlanCheck, check_plan
@@ -98,3 +99,26 @@ def orient_link(model_path: str, tx_node: str, rx_node: str, **options: object) 
     model = load_model(model_path)
     require_patterns(model, f"{model_path}: telling which heading is better")
     return best_yaw(model, tx_node, rx_node, **options)  # type: ignore[arg-type]
+
+
+def reference_model_file(
+    patterns: Mapping[str, str], output: str, mounts: Mapping[str, Sequence[float]] | None = None
+) -> PatternSet:
+    """``rplearn reference``: read each node's reference pattern (CSV or MSI, with its mount)
+    and write them as one model file (:func:`rplearn.models.reference.reference_model`)."""
+    from rplearn.io.reference import read_reference_pattern
+    from rplearn.models.reference import reference_model
+
+    if not patterns:
+        raise InputError("patterns: give NODE=FILE for at least one node", param="patterns")
+    mounts = {str(k): tuple(float(x) for x in v) for k, v in (mounts or {}).items()}
+    unknown = sorted(set(mounts) - {str(n) for n in patterns})
+    if unknown:
+        raise InputError(f"mounts: node(s) {', '.join(unknown)} have no pattern; patterns are given for "
+                         f"{', '.join(sorted(patterns))}", param="mounts")
+    check_output_path(output, list(patterns.values()))
+    samples = {str(n): read_reference_pattern(path, mounts.get(str(n), (0.0, 0.0, 0.0)), node=str(n))
+               for n, path in patterns.items()}
+    model = reference_model(samples, mounts, provenance=provenance(patterns=dict(patterns), mounts=mounts))
+    model.save(output)
+    return model
