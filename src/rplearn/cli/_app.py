@@ -53,7 +53,7 @@ PARAM_FLAGS: dict[str, str] = {
     "pattern_of": "--as DRONE=NODE", "times_s": "--at", "step_s": "--step", "positions": "--pos DRONE=X,Y,Z",
     "start_yaw_deg": "--yaw DRONE=DEG", "fixed": "--fixed", "turn": "--turn", "units": "--units",
     "test_units": "--test-units", "learn_units": "--learn-units", "order": "--degree", "ridge": "--ridge",
-    "sigma_rad2": "--sigma", "grid": "--grid", "gauge_node": "--gauge-node", "gauge_dbi": "--gauge-dbi",
+    "sigma_rad2": "--sigma", "grid": "--grid", "gauge_node": "--gauge-node", "gauge_dbi": "--gauge-dbi", "prior": "--prior NODE=MODEL.json",
     "models": "--models", "orders": "--orders", "n_neighbors": "--degree",
 }
 

@@ -22,6 +22,7 @@ def fit(
     units: Optional[list[str]] = typer.Option(None, "--units", help="Learning units (repeat or comma-separate; default: all but units labelled test...)."),
     gauge_node: Optional[str] = typer.Option(None, "--gauge-node", help="Pattern models: fix this node's mean gain instead of splitting equally."),
     gauge_dbi: Optional[float] = typer.Option(None, "--gauge-dbi", help="Sphere-mean gain of --gauge-node [dBi] (default 0)."),
+    prior: Optional[list[str]] = typer.Option(None, "--prior", help="NODE=MODEL.json: shrink NODE's pattern toward this (reference) model instead of toward zero; with --degree auto."),
     output: str = typer.Option(..., "-o", "--out", help="Model file (.json)."),
 ) -> None:
     """Learn one radiation pattern per node (or a baseline) from a matched dataset.
@@ -35,7 +36,8 @@ def fit(
     spec = ModelSpec.parse(model, order=order, ridge=ridge, sigma_rad2=sigma, grid=grid)
     check_fit_options(spec, order=order, ridge=ridge, sigma_rad2=sigma, grid=grid, gauge_node=gauge_node,
                       gauge_dbi=gauge_dbi, model=model)
-    outcome = fit_dataset(dataset, spec, split_list(units), gauge_of(gauge_node, gauge_dbi), output, auto=auto)
+    outcome = fit_dataset(dataset, spec, split_list(units), gauge_of(gauge_node, gauge_dbi), output, auto=auto,
+                          prior=pairs(prior, "--prior") or None)
     for line in outcome.units.notes:
         note(f"{line} (pass --units to choose)" if outcome.units.defaulted else line)
     say(outcome.summary())

@@ -44,7 +44,10 @@ from rplearn.errors import IdentifiabilityError, InputError
 #: Laplacian of the pattern (spherical smoothing splines).
 DEFAULT_PENALTY_POWER: float = 2.0
 #: Smoothing values tried, relative to ``mean(diag(X^T X))`` (0: the plain fit with its ridge).
-SMOOTHING_GRID: tuple[float, ...] = (0.0, *np.logspace(-8.0, -1.0, 15).tolist())
+#: When the best is the largest, larger values are tried (by decades, up to
+#: :data:`MAX_SMOOTHING`): with a prior, a flight that saw little may be best left at the prior.
+SMOOTHING_GRID: tuple[float, ...] = (0.0, *np.logspace(-8.0, 1.0, 19).tolist())
+MAX_SMOOTHING = 1e6
 #: Weight of the (unpenalised) constant in the cross-validation solves, relative to the
 #: roughness of degree 1: keeps them positive definite; moves only the free gauge constant.
 _CONSTANT_FLOOR = 1e-6
@@ -165,11 +168,12 @@ class _Evaluator:
     """Validation RMSE of (order, smoothing) from the statistics at the largest order."""
 
     def __init__(self, units: Mapping[str, NormalEquations], make_basis: Callable[[int], Basis],
-                 ridge: float, power: float) -> None:
+                 ridge: float, power: float, target: np.ndarray | None = None) -> None:
         first = next(iter(units.values()))
         self.big, self.n_nodes = first.basis, first.n_nodes
         self.make_basis, self.ridge, self.power = make_basis, float(ridge), float(power)
         self.folds, self.gram, self.rhs, self.yty, self.n = _folds(units)
+        self.target = target
         self.cv = len(units) >= 2
         self.seen: dict[tuple[int, float], float] = {}
         self.curve: list[CurvePoint] = []
@@ -188,26 +192,34 @@ class _Evaluator:
             sub = [(f.gram[np.ix_(idx, idx)], f.rhs[idx], f.held_gram[np.ix_(idx, idx)], f.held_rhs[idx]) for f in self.folds]
             if not self.cv:
                 sub = [(self.gram[np.ix_(idx, idx)], self.rhs[idx], np.empty(0), np.empty(0))]
-            self._cache = {order: (self._weights(basis), sub)}  # one order at a time: bounded memory
+            target = None if self.target is None else self.target[idx]
+            self._cache = {order: (self._weights(basis), sub, target)}  # one order at a time: bounded memory
         return self._cache[order]
 
     def rmse(self, order: int, smoothing: float) -> float:
         key = (int(order), float(smoothing))
         if key in self.seen:
             return self.seen[key]
-        w, blocks = self._blocks(int(order))
+        w, blocks, target = self._blocks(int(order))
         if self.cv:
             sse = 0.0
             for (g, r, held_g, held_r), f in zip(blocks, self.folds):
-                c = self._solve(g, r, w, smoothing)
+                c = self._solve(g, self._pulled(g, r, w, smoothing, target), w, smoothing)
                 sse += max(f.held_yty - 2.0 * c @ held_r + c @ held_g @ c, 0.0)
             value = float(np.sqrt(sse / self.n))
         else:
             g, r, _, _ = blocks[0]
-            value = self._gcv(g, r, w, smoothing)
+            value = self._gcv(g, self._pulled(g, r, w, smoothing, target), w, smoothing, r)
         self.seen[key] = value
         self.curve.append(CurvePoint(int(order), float(smoothing), value))
         return value
+
+    @staticmethod
+    def _pulled(gram: np.ndarray, rhs: np.ndarray, w: np.ndarray, smoothing: float, target: np.ndarray | None) -> np.ndarray:
+        """``X^T y`` plus the prior's pull ``P target`` (shrinking toward the prior, not zero)."""
+        if target is None or smoothing == 0:
+            return rhs
+        return rhs + smoothing * penalty_scale(gram) * w * target
 
     def _system(self, gram: np.ndarray, w: np.ndarray, smoothing: float) -> np.ndarray:
         a = gram.copy()
@@ -221,11 +233,11 @@ class _Evaluator:
         except np.linalg.LinAlgError:
             return scipy.linalg.lstsq(self._system(gram, w, smoothing), rhs)[0]
 
-    def _gcv(self, g: np.ndarray, r: np.ndarray, w: np.ndarray, smoothing: float) -> float:
+    def _gcv(self, g: np.ndarray, pulled: np.ndarray, w: np.ndarray, smoothing: float, r: np.ndarray) -> float:
         a = self._system(g, w, smoothing)
         try:
             factor = scipy.linalg.cho_factor(a, overwrite_a=True, check_finite=False)
-            c = scipy.linalg.cho_solve(factor, r)
+            c = scipy.linalg.cho_solve(factor, pulled)
             trace = float(np.trace(scipy.linalg.cho_solve(factor, g)))  # tr(H) = tr((G + P)^-1 G)
         except np.linalg.LinAlgError:
             return float("inf")
@@ -239,6 +251,9 @@ def _best_smoothing(ev: _Evaluator, order: int, grid: Sequence[float]) -> float:
     values = sorted(float(g) for g in grid)
     coarse = values[::2] if values[-1] in values[::2] else [*values[::2], values[-1]]
     best = min(coarse, key=lambda s: ev.rmse(order, s))
+    while best == values[-1] and best * 10.0 <= MAX_SMOOTHING:  # the best is at the edge: go on
+        values.append(best * 10.0)
+        best = min((best, values[-1]), key=lambda s: ev.rmse(order, s))
     i = values.index(best)
     return min(values[max(0, i - 1): i + 2], key=lambda s: ev.rmse(order, s))
 
@@ -250,6 +265,7 @@ def select_order_and_smoothing(
     ridge: float = 1.0,
     power: float = DEFAULT_PENALTY_POWER,
     grid: Sequence[float] = SMOOTHING_GRID,
+    target: np.ndarray | None = None,
 ) -> Selection:
     """Choose order and smoothing by grouped cross-validation (or GCV for one unit).
 
@@ -267,6 +283,9 @@ def select_order_and_smoothing(
         Exponent of the SH roughness weights.
     grid : sequence of float
         Relative smoothing values tried.
+    target : ndarray, optional
+        Prior coefficients at the largest order (one per column): the penalty shrinks toward
+        them instead of toward zero (``fit --prior``).
 
     Raises
     ------
@@ -279,7 +298,7 @@ def select_order_and_smoothing(
     orders = sorted({int(o) for o in orders})
     if not orders:
         raise InputError("orders: no candidate order", param="orders")
-    ev = _Evaluator(units, make_basis, ridge, power)
+    ev = _Evaluator(units, make_basis, ridge, power, target)
     top = orders[-1]
     best_s = _best_smoothing(ev, top, grid)
     coarse = orders[::-1][::2]  # every other order from the largest down, then the neighbours of the best
@@ -315,6 +334,7 @@ def validation_rmse(
 __all__ = [
     "validation_rmse",
     "DEFAULT_PENALTY_POWER",
+    "MAX_SMOOTHING",
     "SMOOTHING_GRID",
     "CurvePoint",
     "Selection",

@@ -280,6 +280,7 @@ def solve(
     gauge: str | Mapping[str, Any] = "equal-mean",
     min_samples_per_coef: float = 1.0,
     penalty: FloatArray | None = None,
+    penalty_target: FloatArray | None = None,
 ) -> JointSolution:
     """Solve accumulated normal equations with a ridge and explicit gauge constraints.
 
@@ -287,7 +288,9 @@ def solve(
     constraint per bipartite component of the link graph (see module docstring), through the
     KKT system ``[[X^T X + ridge I + diag(penalty), C^T], [C, 0]] [p; mu] = [X^T y; d]``.
     ``penalty`` (one non-negative weight per column, absolute units of ``X^T X``) is the
-    smoothness penalty of :mod:`rplearn.core.selection`.
+    smoothness penalty of :mod:`rplearn.core.selection`; with ``penalty_target`` (one value per
+    column: a prior pattern's coefficients) it penalises ``sum_j penalty_j (p_j - target_j)^2``
+    instead, shrinking toward the prior rather than toward zero.
 
     Raises
     ------
@@ -329,6 +332,11 @@ def solve(
     kkt[:pcols, pcols:] = cmat.T
     kkt[pcols:, :pcols] = cmat
     rhs = np.concatenate([normal.rhs, cval])
+    if penalty is not None and penalty_target is not None:
+        target = np.asarray(penalty_target, np.float64)
+        if target.shape != (pcols,) or not np.all(np.isfinite(target)):
+            raise InputError(f"penalty_target: expected {pcols} finite values, got shape {target.shape}")
+        rhs[:pcols] += penalty * target
     # Scale rows/columns for a better-conditioned factorisation.
     scale = 1.0 / np.sqrt(np.maximum(np.abs(np.diag(kkt))[:pcols], 1e-300))
     full_scale = np.concatenate([scale, np.ones(k)])

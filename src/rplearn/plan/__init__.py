@@ -28,6 +28,7 @@ _NAMES: dict[str, str] = {
     "summarize_unit": "trajectory",
     # campaigns
     "Campaign": "campaign",
+    "GroundPassUnit": "ground",
     "group_campaign": "campaign",
     "link_graph_identifies_gains": "campaign",
     "pair_schedule": "campaign",

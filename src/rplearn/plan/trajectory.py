@@ -21,6 +21,7 @@ faces along the line (the first drone then faces the second at the start).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -279,7 +280,7 @@ class UnitReference:
 
     Attributes
     ----------
-    unit : TrajectoryUnit
+    unit : TrajectoryUnit or GroundPassUnit
     t_s : ndarray, shape (n,)
         Times [s].
     position_enu_m, velocity_enu_m_s, accel_enu_m_s2 : ndarray, shape (n, 2, 3)
@@ -290,7 +291,7 @@ class UnitReference:
         Loop being flown, or -1 while turning between loops.
     """
 
-    unit: TrajectoryUnit
+    unit: Any  # TrajectoryUnit, or rplearn.plan.ground.GroundPassUnit
     t_s: FloatArray
     position_enu_m: FloatArray
     velocity_enu_m_s: FloatArray

@@ -26,6 +26,7 @@ _NAMES: dict[str, str] = {
     # the simulator
     "SimulationResult": "flight",
     "simulate": "flight",
+    "imperfect_reference": "reference",
     "with_effects_off": "flight",
     "write_simulation": "flight",
     # its configuration and presets

@@ -1,4 +1,4 @@
-"""Ready-made simulation configurations: ``paper``, ``trio`` and ``smoke``.
+"""Ready-made simulation configurations: ``paper``, ``trio``, ``smoke`` and ``ground``.
 
 - ``paper``: a replica of the paper's campaign (Sec. V): two X500-class drones, both antennas
   vertical, one carrying a camera and the other a wireless sensor, which shadow differently;
@@ -9,6 +9,10 @@
 - ``trio``: three drones with an ITU-R F.1336-5 omni (rec. 2.2), an ITU sectoral (rec. 3.1.1)
   and a high-gain cosine beam, flying the three links of a triangle (absolute gains identifiable).
 - ``smoke``: a seconds-long two-drone case for tests (a few thousand packets).
+- ``ground``: one static ground station (ITU sectoral) and one drone (the paper's camera drone)
+  flying passes along a 30-degree arc 40 m in front of it, its nose within 20 degrees of the
+  station, at 15 and 25 m (learning) and 35 m (testing): both antennas are seen in a few
+  percent of the sphere, as in most real link measurements (:mod:`rplearn.plan.ground`).
 
 All presets are deterministic for a given seed of :func:`rplearn.sim.flight.simulate`.
 """
@@ -168,7 +172,34 @@ def _smoke() -> SimulationConfig:
     )
 
 
-_PRESETS: dict[str, Callable[[], SimulationConfig]] = {"paper": _paper, "trio": _trio, "smoke": _smoke}
+#: Altitudes of the ``ground`` preset's passes [m]: learning at the first two, testing at the third.
+GROUND_HEIGHTS_M: tuple[float, float, float] = (15.0, 25.0, 35.0)
+
+
+def _ground() -> SimulationConfig:
+    from rplearn.plan.ground import GroundPassUnit
+
+    learn = [GroundPassUnit(height_m=h, label=f"learn_{h:g}m", role="learning", station_yaw_deg=10.0)
+             for h in GROUND_HEIGHTS_M[:2]]
+    test = [GroundPassUnit(height_m=GROUND_HEIGHTS_M[2], label=f"test_{GROUND_HEIGHTS_M[2]:g}m", role="testing",
+                           station_yaw_deg=10.0)]
+    drone = _paper_nodes()["A"]
+    nodes = {
+        "G": NodeAntenna(antenna_from_name("itu_sectoral"), Mounting.named("vertical"), (), "ground station, ITU sectoral"),
+        "D": replace(drone, description="X500, camera payload"),
+    }
+    paper = _paper()
+    return SimulationConfig(
+        name="ground",
+        campaign=Campaign(tuple(learn + test), gap_s=60.0),  # type: ignore[arg-type]
+        node_antennas=nodes,
+        flight=replace(paper.flight, wind_speed_m_s=0.0, gust_std_m_s=0.0),
+        estimator=paper.estimator,
+        radio=replace(paper.radio, link_offsets_db=(), dropouts=0),
+    )
+
+
+_PRESETS: dict[str, Callable[[], SimulationConfig]] = {"paper": _paper, "trio": _trio, "smoke": _smoke, "ground": _ground}
 #: Names accepted by :func:`make_preset` and :func:`rplearn.sim.flight.simulate`.
 PRESET_NAMES: tuple[str, ...] = tuple(_PRESETS)
 

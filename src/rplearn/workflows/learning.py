@@ -22,6 +22,7 @@ from rplearn.io.files import (
     check_output_path, check_table_path, iter_table, provenance, read_dataset, table_rows, write_json, write_table,
 )
 from rplearn.models.fit import FittedModel, evaluate_models, fit_model, scores_markdown
+from rplearn.models.base import require_patterns
 from rplearn.models.load import load_model
 from rplearn.models.spec import check_model_size
 from rplearn.models.auto import auto_orders, fit_auto, fit_from_statistics
@@ -94,6 +95,7 @@ def fit_dataset(
     gauge: str | Mapping[str, Any] = "equal-mean",
     output: str | None = None,
     auto: bool = False,
+    prior: Mapping[str, str] | None = None,
 ) -> FitOutcome:
     """Learn ``spec`` from a matched dataset file (``rplearn fit``).
 
@@ -111,17 +113,26 @@ def fit_dataset(
     auto : bool
         Pattern models: choose the order (SH) and the smoothing from the data
         (:mod:`rplearn.models.auto`); ``spec`` gives the kind and ridge (and the order of BG, P).
+    prior : mapping of node to model file, optional
+        With ``auto``: shrink each named node's pattern toward this model's pattern (a
+        reference from ``rplearn reference``, or any pattern model) instead of toward zero.
     """
     if output:
-        check_output_path(output, [dataset])
+        check_output_path(output, [dataset, *(prior or {}).values()])
+    if prior and not auto:
+        raise InputError("prior: a prior is weighed against the data by the automatic choice; use it with "
+                         "order 'auto' (--degree auto)", param="prior")
+    priors = {str(n): load_model(path) for n, path in (prior or {}).items()}
+    for model in priors.values():
+        require_patterns(model, "serving as a prior")
     if auto and not spec.decouples:
         raise InputError(f"order: 'auto' chooses the order of pattern models (sh, bg, poly), not of {spec.label}", param="order")
     if spec.decouples and _is_big(dataset):
-        return _fit_streamed(dataset, spec, units, gauge, output, auto)
+        return _fit_streamed(dataset, spec, units, gauge, output, auto, priors)
     df = read_dataset(dataset)
     choice = learning_units(df, units, dataset)
     if auto:
-        return _fit_auto(df, dataset, spec, choice, gauge, output)
+        return _fit_auto(df, dataset, spec, choice, gauge, output, priors)
     samples = samples_of(df, choice.units, dataset)
     prov = provenance(dataset=dataset, model=spec.label, ridge=spec.ridge, units=choice.units)
     fitted = fit_model(samples, spec, gauge=gauge, provenance=prov)
@@ -139,7 +150,8 @@ STREAM_FIT_CHUNK_ROWS = 500_000
 
 
 def _fit_auto(
-    df: Any, dataset: str, spec: ModelSpec, choice: UnitChoice, gauge: str | Mapping[str, Any], output: str | None
+    df: Any, dataset: str, spec: ModelSpec, choice: UnitChoice, gauge: str | Mapping[str, Any], output: str | None,
+    priors: Mapping[str, Any] | None = None,
 ) -> FitOutcome:
     """:func:`fit_dataset` with ``auto=True`` on a dataset in memory: samples per learning unit."""
     learn = choice.units if choice.units is not None else (dataset_units(df) or [None])
@@ -147,7 +159,8 @@ def _fit_auto(
     nodes = sorted(set(part["tx"].astype(str)) | set(part["rx"].astype(str)))
     per_unit = {str(u): samples_of(df, None if u is None else [u], dataset, nodes=nodes) for u in learn}
     prov = provenance(dataset=dataset, model=f"{spec.kind}-auto", ridge=spec.ridge, units=choice.units)
-    fitted, selection = fit_auto(per_unit, spec.kind, spec.order if spec.kind != "sh" else None, spec.ridge, gauge, prov)
+    fitted, selection = fit_auto(per_unit, spec.kind, spec.order if spec.kind != "sh" else None, spec.ridge, gauge, prov,
+                                 prior=priors or None)
     if output:
         fitted.model.save(output)
     n = sum(len(s) for s in per_unit.values())
@@ -164,7 +177,7 @@ def _is_big(dataset: str) -> bool:
 
 def _fit_streamed(
     dataset: str, spec: ModelSpec, units: Sequence[str] | None, gauge: str | Mapping[str, Any], output: str | None,
-    auto: bool = False,
+    auto: bool = False, priors: Mapping[str, Any] | None = None,
 ) -> FitOutcome:
     """:func:`fit_dataset` for a big file: units, nodes and the model size from the id columns,
     then the patterns from the whole data a chunk at a time."""
@@ -184,7 +197,7 @@ def _fit_streamed(
             iter_table(dataset, STREAM_FIT_CHUNK_ROWS), spec, nodes, choice.units, dataset)
         prov = provenance(dataset=dataset, model=f"{spec.kind}-auto", ridge=spec.ridge, units=choice.units)
         fitted, selection = fit_from_statistics(stats, spec.kind, orders, nodes, spec.ridge, gauge,
-                                                frequency_hz=freq, provenance=prov)
+                                                frequency_hz=freq, provenance=prov, prior=priors or None)
         if output:
             fitted.model.save(output)
         return FitOutcome(fitted, choice, sum(s.n_samples for s in stats.values()), output, non_unit, selection)

