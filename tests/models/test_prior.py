@@ -77,3 +77,28 @@ def test_fit_cli_takes_a_prior_per_node(tmp_path):
     proc = subprocess.run(rplearn + ["fit", "m.parquet", "--prior", "X=ref.json", "-o", "x.json"], cwd=tmp_path,
                           capture_output=True, text=True)
     assert proc.returncode == 1 and "prior: node X is not in the learning data" in proc.stderr, proc.stderr
+
+
+def test_predictions_say_where_the_flight_never_looked(tmp_path):
+    """Coverage columns and a warning from predict; the Bayesian spread grows away from the data."""
+    per_unit, learn, test, _ = ground_case(tmp_path, 3)
+    fitted, _ = fit_auto(per_unit)
+    from rplearn.models.predict import UNCOVERED_DEG, predict_dataset
+    import pandas as pd
+
+    df = read_dataset(str(tmp_path / "m.parquet"))
+    pred = predict_dataset(fitted.model, df[df["unit"].str.startswith("test")])
+    cov = pred.table[["tx_coverage_deg", "rx_coverage_deg"]].to_numpy().max(axis=1)
+    assert pred.n_uncovered == int((cov > UNCOVERED_DEG).sum()) > 0 and "fly those directions" in pred.warnings[0]
+    # far from every learning direction (the sky above the station, behind the drone) the spread is larger
+    import numpy as np
+    from rplearn.core.geometry import Directions
+    from rplearn.data.tables import LinkSamples
+
+    near = Directions(*(np.asarray(a)[:200] for a in learn.directions))
+    far = Directions(np.full(200, np.pi), np.full(200, 1.2), np.full(200, np.pi), np.full(200, 1.2))
+    std = {name: fitted.model.predict_gain_std(LinkSamples(d, learn.tx_index[:200], learn.rx_index[:200], learn.nodes,
+                                                           np.zeros(200), np.full(200, 40.0)))
+           for name, d in (("near", near), ("far", far))}
+    assert np.median(std["far"]) > 3 * np.median(std["near"]), {k: float(np.median(v)) for k, v in std.items()}
+    assert isinstance(pred.table, pd.DataFrame)

@@ -142,6 +142,8 @@ def predict(
     if prediction.mismatch is not None:
         note(prediction.mismatch.describe(dataset, model_path), "warning")
     say(prediction.summary(output))
+    for line in prediction.warnings:
+        note(line, "warning")
 
 
 @app.command()

@@ -42,3 +42,44 @@ def covered_fraction(learn_az_rad: ArrayLike, learn_el_rad: ArrayLike, within_de
 
 
 __all__ = ["COVERED_WITHIN_DEG", "covered_fraction", "nearest_angle_deg"]
+
+
+#: Points of the Fibonacci grid on which a model stores its coverage (about 1.6 degrees apart).
+COVERAGE_GRID_POINTS = 16384
+_GRID_TREE: dict[int, cKDTree] = {}
+
+
+def _grid_tree(n_points: int) -> cKDTree:
+    if n_points not in _GRID_TREE:
+        az, el = fibonacci_grid_nodes(n_points)
+        _GRID_TREE[n_points] = cKDTree(unit_vector(az, el))
+    return _GRID_TREE[n_points]
+
+
+def coverage_grid(az_rad: ArrayLike, el_rad: ArrayLike, previous: ArrayLike | None = None,
+                  n_points: int = COVERAGE_GRID_POINTS) -> np.ndarray:
+    """Angle [deg] from each point of a Fibonacci grid to the nearest of these directions.
+
+    ``previous`` (the grid of earlier chunks) is combined by the minimum, so a grid can be
+    accumulated chunk by chunk. With no directions the grid is 180 degrees everywhere.
+    """
+    az = np.asarray(az_rad, np.float64).ravel()
+    out = np.full(n_points, 180.0)
+    if az.size:
+        gaz, gel = fibonacci_grid_nodes(n_points)
+        out = nearest_angle_deg(gaz, gel, az, el_rad)
+    if previous is not None:
+        out = np.minimum(out, np.asarray(previous, np.float64))
+    return out
+
+
+def coverage_at(grid_deg: ArrayLike, az_rad: ArrayLike, el_rad: ArrayLike) -> np.ndarray:
+    """Coverage [deg] at directions, from a stored grid (:func:`coverage_grid`): the value of
+    the nearest grid point plus the distance to it (an upper bound of the true nearest angle)."""
+    grid = np.asarray(grid_deg, np.float64).ravel()
+    q = unit_vector(np.asarray(az_rad, np.float64).ravel(), np.asarray(el_rad, np.float64).ravel())
+    chord, idx = _grid_tree(grid.size).query(q, k=1)
+    return grid[idx] + np.degrees(2.0 * np.arcsin(np.clip(np.asarray(chord) / 2.0, 0.0, 1.0)))
+
+
+__all__ += ["COVERAGE_GRID_POINTS", "coverage_at", "coverage_grid"]

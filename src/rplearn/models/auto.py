@@ -26,7 +26,7 @@ from rplearn.core.selection import (
 from rplearn.core.solver import solve
 from rplearn.data.tables import LinkSamples
 from rplearn.errors import InputError
-from rplearn.models.fit import FittedModel
+from rplearn.models.fit import FittedModel, node_coverage_grids
 from rplearn.models.patterns import PatternSet
 from rplearn.models.spec import ModelSpec, check_model_size, default_ridge
 from rplearn.models.streamed import weighted_median
@@ -164,6 +164,10 @@ def fit_auto(
                                          provenance, prior)
     fitted.ltd_s = time.perf_counter() - t0
     fitted.model.training["ltd_s"] = fitted.ltd_s
+    grids: dict[str, Any] | None = None
+    for s in units.values():
+        grids = node_coverage_grids(s, grids)
+    fitted.model.training["coverage_deg"] = grids
     return fitted, choice
 
 

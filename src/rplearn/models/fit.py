@@ -97,6 +97,22 @@ def solve_patterns(
     return patterns, sol.report
 
 
+def node_coverage_grids(samples: LinkSamples, previous: Mapping[str, Any] | None = None) -> dict[str, list[float]]:
+    """Per node, the coverage grid of its learning directions (:func:`rplearn.core.coverage.coverage_grid`),
+    rounded to 0.1 degree for the model file; ``previous`` grids are combined (chunked data)."""
+    from rplearn.core.coverage import coverage_grid
+
+    out: dict[str, list[float]] = {}
+    d = samples.directions
+    for k, node in enumerate(samples.nodes):
+        t, r = samples.tx_index == k, samples.rx_index == k
+        az = np.concatenate([np.asarray(d.az_tx)[t], np.asarray(d.az_rx)[r]])
+        el = np.concatenate([np.asarray(d.el_tx)[t], np.asarray(d.el_rx)[r]])
+        prev = None if previous is None else previous.get(node)
+        out[node] = np.round(coverage_grid(az, el, prev), 1).tolist()
+    return out
+
+
 def fit_patterns(
     samples: LinkSamples, spec: ModelSpec, gauge: str | Mapping[str, Any] = "equal-mean", provenance: Mapping[str, Any] | None = None
 ) -> PatternSet:
@@ -142,6 +158,8 @@ def fit_model(
     else:
         model = fit_patterns(samples, spec, gauge)
     ltd = time.perf_counter() - t0
+    if isinstance(model, PatternSet):
+        model.training["coverage_deg"] = node_coverage_grids(samples)
     model.provenance = {**dict(provenance or {}), "model": spec.label}
     model.training["ltd_s"] = ltd
     return FittedModel(spec, model, ltd)

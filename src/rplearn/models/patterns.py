@@ -101,6 +101,17 @@ class PatternSet:
         cov = self.covariance[k * p : (k + 1) * p, k * p : (k + 1) * p]
         return np.sqrt(np.maximum(self.basis.quadratic_form(cov, az_rad, el_rad), 0.0))
 
+    def coverage_deg(self, node: str, az_rad: ArrayLike, el_rad: ArrayLike) -> FloatArray | None:
+        """Angle [deg] from each direction to the nearest direction ``node`` was learned from
+        (from the coverage grid stored at fitting, ``training["coverage_deg"]``; an upper bound
+        within about 1 degree); None for a model without one (older files, references)."""
+        grids = self.training.get("coverage_deg") or {}
+        if str(node) not in grids:
+            return None
+        from rplearn.core.coverage import coverage_at
+
+        return coverage_at(grids[str(node)], az_rad, el_rad)
+
     def predict_gain_std(self, samples: "LinkSamples") -> FloatArray | None:
         """Standard error of :meth:`predict_gain` from the coefficient covariance [dB].
 

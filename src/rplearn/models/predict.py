@@ -11,7 +11,7 @@ a carrier other than the one the model learned at.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Sequence
+from typing import Any, Sequence
 
 import numpy as np
 import pandas as pd
@@ -24,8 +24,13 @@ from rplearn.models.base import Model
 #: Relative difference of carrier frequencies above which a warning is given.
 FREQUENCY_TOLERANCE = 0.05
 
-#: Columns :func:`predict_dataset` adds (the two spreads only for models with a covariance).
-PREDICTION_COLUMNS: tuple[str, ...] = ("gain_pred_db", "rssi_pred_dbm", "gain_pred_std_db", "rssi_pred_std_db")
+#: Columns :func:`predict_dataset` adds (the two spreads only for models with a covariance,
+#: the coverage only for models that stored it).
+PREDICTION_COLUMNS: tuple[str, ...] = (
+    "gain_pred_db", "rssi_pred_dbm", "gain_pred_std_db", "rssi_pred_std_db", "tx_coverage_deg", "rx_coverage_deg",
+)
+#: A direction further than this from every learning direction of its node is uncovered [deg].
+UNCOVERED_DEG = 10.0
 
 
 @dataclass(frozen=True)
@@ -81,18 +86,33 @@ class DatasetPrediction:
         (NaN without any).
     mismatch : FrequencyMismatch or None
         Rows at another carrier than the model's.
+    n_uncovered : int
+        Rows where an end looks more than :data:`UNCOVERED_DEG` from every direction its node
+        was learned from (0 when the model stores no coverage).
     """
 
     table: pd.DataFrame
     n_measured: int
     rmse_db: float
     mismatch: FrequencyMismatch | None
+    n_uncovered: int = 0
 
     def summary(self, output: str) -> str:
         line = f"wrote {len(self.table):,} predictions to {output}"
         if self.n_measured:
             line += f" (RMSE against the {self.n_measured:,} measured RSSI values: {self.rmse_db:.2f} dB)"
         return line
+
+    @property
+    def warnings(self) -> list[str]:
+        """What a user should act on: predictions where the flight never looked."""
+        if not self.n_uncovered:
+            return []
+        share = self.n_uncovered / max(len(self.table), 1)
+        return [f"{self.n_uncovered:,} of {len(self.table):,} predictions ({share:.0%}) look at directions more than "
+                f"{UNCOVERED_DEG:g} deg from any direction their antenna was learned from (columns tx_coverage_deg, "
+                "rx_coverage_deg): there the pattern is an extrapolation (or the prior's); trust their spread, "
+                "not their value, or fly those directions"]
 
 
 def predict_dataset(model: Model, dataset: pd.DataFrame, source: str = "dataset") -> DatasetPrediction:
@@ -120,10 +140,33 @@ def predict_dataset(model: Model, dataset: pd.DataFrame, source: str = "dataset"
         residual_db = float(rmse) if rmse is not None else float("nan")
         table["gain_pred_std_db"] = std
         table["rssi_pred_std_db"] = np.sqrt(std**2 + residual_db**2)
+    n_uncovered = _add_coverage(model, samples, table)
     measured = np.isfinite(samples.joint_gain_db)
     rmse = float(np.sqrt(np.mean((gain[measured] - samples.joint_gain_db[measured]) ** 2))) if measured.any() else float("nan")
     mismatch = frequency_mismatch(model, table["frequency_hz"].to_numpy(np.float64))
-    return DatasetPrediction(table, int(measured.sum()), rmse, mismatch)
+    return DatasetPrediction(table, int(measured.sum()), rmse, mismatch, n_uncovered)
+
+
+def _add_coverage(model: Model, samples: Any, table: pd.DataFrame) -> int:
+    """Add ``tx_coverage_deg``, ``rx_coverage_deg`` when the model stores coverage; return the
+    rows with an end beyond :data:`UNCOVERED_DEG`."""
+    coverage = getattr(model, "coverage_deg", None)
+    if coverage is None or not model.training.get("coverage_deg"):
+        return 0
+    d = samples.directions
+    out = {}
+    for end, idx, az, el in (("tx", samples.tx_index, d.az_tx, d.el_tx), ("rx", samples.rx_index, d.az_rx, d.el_rx)):
+        col = np.full(len(samples), np.nan)
+        for k, node in enumerate(samples.nodes):
+            sel = np.asarray(idx) == k
+            if sel.any():
+                got = coverage(node, np.asarray(az)[sel], np.asarray(el)[sel])
+                if got is not None:
+                    col[sel] = got
+        table[f"{end}_coverage_deg"] = col
+        out[end] = col
+    worst = np.fmax(out["tx"], out["rx"])
+    return int(np.sum(worst > UNCOVERED_DEG))
 
 
 def distinct_labels(labels: Sequence[str], names: Sequence[str]) -> list[str]:

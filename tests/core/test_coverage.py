@@ -1,0 +1,42 @@
+"""rplearn.core.coverage: the angle to the nearest learning direction, the covered fraction of
+the sphere, and the coverage grid a model stores (issue 11, item 3)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from rplearn.core.bases import fibonacci_grid_nodes
+from rplearn.core.coverage import covered_fraction, coverage_at, coverage_grid, nearest_angle_deg
+from rplearn.core.geometry import great_circle_angle
+
+
+def random_directions(rng, n):
+    return rng.uniform(-np.pi, np.pi, n), np.arcsin(rng.uniform(-1, 1, n))
+
+
+def test_nearest_angle_equals_brute_force():
+    rng = np.random.default_rng(0)
+    la, le = random_directions(rng, 300)
+    qa, qe = random_directions(rng, 50)
+    brute = np.degrees([great_circle_angle(a, e, la, le).min() for a, e in zip(qa, qe)])
+    np.testing.assert_allclose(nearest_angle_deg(qa, qe, la, le), brute, atol=1e-6)
+
+
+def test_covered_fraction_of_a_cap():
+    az, el = fibonacci_grid_nodes(20_000)
+    cap = el > np.radians(60.0)  # a cap of 30 deg radius: (1 - cos 30) / 2 = 6.7% of the sphere
+    f = covered_fraction(az[cap], el[cap], within_deg=2.0)
+    assert f == pytest.approx((1 - np.cos(np.radians(32.0))) / 2, abs=0.005)
+
+
+def test_a_grid_accumulates_chunk_by_chunk_and_bounds_the_true_angle():
+    rng = np.random.default_rng(1)
+    la, le = random_directions(rng, 400)
+    whole = coverage_grid(la, le)
+    chunked = coverage_grid(la[200:], le[200:], coverage_grid(la[:200], le[:200]))
+    np.testing.assert_allclose(chunked, whole)
+    qa, qe = random_directions(rng, 500)
+    exact = nearest_angle_deg(qa, qe, la, le)
+    bound = coverage_at(whole, qa, qe)
+    assert np.all(bound >= exact - 1e-9) and np.all(bound <= exact + 2.0)  # within the grid spacing
