@@ -76,3 +76,15 @@ def test_weighted_median():
     assert weighted_median({2.412e9: 3, 2.437e9: 1}) == 2.412e9
     assert weighted_median({1.0: 1, 3.0: 1}) == 2.0
     assert weighted_median({1.0: 1, 2.0: 1, 3.0: 1}) == np.median([1.0, 2.0, 3.0])
+
+
+@pytest.mark.parametrize("name", ["m.parquet", "m.csv"])
+def test_streamed_auto_fit_equals_the_whole_auto_fit(dataset, monkeypatch, name):
+    path = str(dataset / name)
+    whole = learning.fit_dataset(path, ModelSpec("sh", 3), auto=True)
+    streamed(monkeypatch)
+    chunked = learning.fit_dataset(path, ModelSpec("sh", 3), auto=True)
+    a, b = whole.fitted.model, chunked.fitted.model
+    assert (chunked.selection.order, chunked.selection.smoothing) == (whole.selection.order, whole.selection.smoothing)
+    np.testing.assert_allclose(b.coef, a.coef, rtol=1e-7, atol=1e-7)
+    assert b.training["coverage_deg"] == a.training["coverage_deg"]

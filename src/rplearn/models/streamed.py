@@ -25,6 +25,7 @@ from rplearn.core.selection import penalty_scale, penalty_vector
 from rplearn.core.solver import FitReport, solve
 from rplearn.data.tables import link_samples, node_ids
 from rplearn.errors import InputError
+from rplearn.models.fit import node_coverage_grids
 from rplearn.models.patterns import PatternSet
 from rplearn.models.spec import ModelSpec
 
@@ -89,9 +90,10 @@ def units_and_nodes(chunks: Iterable[pd.DataFrame]) -> pd.DataFrame:
 def _accumulate(
     chunks: Iterable[pd.DataFrame], spec: ModelSpec, nodes: Sequence[str], units: Sequence[str] | None,
     source: str, by_unit: bool,
-) -> tuple[dict[str, NormalEquations], float | None, int, float]:
+) -> tuple[dict[str, NormalEquations], float | None, int, float, dict[str, list[float]]]:
     """Statistics of the learning rows of every chunk: one accumulator per unit (``by_unit``)
-    or one for all; the median frequency, the non-unit quaternions and the time spent [s]."""
+    or one for all; the median frequency, the non-unit quaternions, the time spent [s] and the
+    nodes' coverage grids (:func:`rplearn.models.fit.node_coverage_grids`)."""
     if not spec.decouples:
         raise InputError(f"{spec.label}: only pattern models (sh, bg, poly) learn from a stream", param="spec")
     basis = spec.basis()
@@ -99,6 +101,7 @@ def _accumulate(
     wanted = None if not units else {str(u) for u in units}
     freq: Counter[float] = Counter()
     non_unit, learn_s, first_row = 0, 0.0, 0
+    grids: dict[str, list[float]] | None = None
     for chunk in chunks:
         where = f"{source} (rows {first_row:,} to {first_row + len(chunk) - 1:,})"
         first_row += len(chunk)
@@ -115,6 +118,7 @@ def _accumulate(
             acc.add(samples.directions, samples.tx_index, samples.rx_index, samples.joint_gain_db)
             learn_s += time.perf_counter() - t0
             non_unit += samples.non_unit_quaternions
+            grids = node_coverage_grids(samples, grids)
             if samples.frequency_hz is not None:
                 values, counts = np.unique(samples.frequency_hz, return_counts=True)
                 freq.update(dict(zip(values.tolist(), counts.tolist())))
@@ -122,18 +126,18 @@ def _accumulate(
                 break
     if not stats or sum(a.n_samples for a in stats.values()) == 0:
         raise InputError(f"{source}: no samples selected", param="units")
-    return stats, weighted_median(freq), non_unit, learn_s
+    return stats, weighted_median(freq), non_unit, learn_s, grids or {}
 
 
 def unit_statistics_streamed(
     chunks: Iterable[pd.DataFrame], spec: ModelSpec, nodes: Sequence[str], units: Sequence[str] | None = None,
     source: str = "dataset",
-) -> tuple[dict[str, NormalEquations], float | None, int]:
+) -> tuple[dict[str, NormalEquations], float | None, int, dict[str, list[float]]]:
     """The statistics of every learning unit of a dataset given in chunks (for ``--degree auto``
-    on a big file): ``(statistics by unit, median frequency [Hz], non-unit quaternions)``. A
-    dataset without a ``unit`` column is one unit, ``"all"``."""
-    stats, f, non_unit, _ = _accumulate(chunks, spec, nodes, units, source, by_unit=True)
-    return stats, f, non_unit
+    on a big file): ``(statistics by unit, median frequency [Hz], non-unit quaternions,
+    coverage grids by node)``. A dataset without a ``unit`` column is one unit, ``"all"``."""
+    stats, f, non_unit, _, grids = _accumulate(chunks, spec, nodes, units, source, by_unit=True)
+    return stats, f, non_unit, grids
 
 
 def fit_patterns_streamed(
@@ -163,7 +167,7 @@ def fit_patterns_streamed(
     source : str
         Name of the dataset in messages (a chunk's rows are named by their place in the file).
     """
-    stats, f, non_unit, learn_s = _accumulate(chunks, spec, nodes, units, source, by_unit=False)
+    stats, f, non_unit, learn_s, grids = _accumulate(chunks, spec, nodes, units, source, by_unit=False)
     normal = next(iter(stats.values()))
     basis = normal.basis
     t0 = time.perf_counter()
@@ -175,6 +179,7 @@ def fit_patterns_streamed(
     training = sol.report.to_dict()
     if spec.smoothing:
         training["smoothing"] = spec.smoothing
+    training["coverage_deg"] = grids
     if f is not None:
         training["frequency_hz"] = f
     patterns = PatternSet(

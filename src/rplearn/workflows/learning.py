@@ -193,11 +193,12 @@ def _fit_streamed(
         spec = replace(spec, order=orders[-1])
     check_model_size(spec, n, len(nodes))
     if auto:
-        stats, freq, non_unit = unit_statistics_streamed(
+        stats, freq, non_unit, grids = unit_statistics_streamed(
             iter_table(dataset, STREAM_FIT_CHUNK_ROWS), spec, nodes, choice.units, dataset)
         prov = provenance(dataset=dataset, model=f"{spec.kind}-auto", ridge=spec.ridge, units=choice.units)
         fitted, selection = fit_from_statistics(stats, spec.kind, orders, nodes, spec.ridge, gauge,
                                                 frequency_hz=freq, provenance=prov, prior=priors or None)
+        fitted.model.training["coverage_deg"] = grids
         if output:
             fitted.model.save(output)
         return FitOutcome(fitted, choice, sum(s.n_samples for s in stats.values()), output, non_unit, selection)
