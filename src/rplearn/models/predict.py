@@ -147,15 +147,15 @@ def predict_dataset(model: Model, dataset: pd.DataFrame, source: str = "dataset"
     return DatasetPrediction(table, int(measured.sum()), rmse, mismatch, n_uncovered)
 
 
-def _add_coverage(model: Model, samples: Any, table: pd.DataFrame) -> int:
-    """Add ``tx_coverage_deg``, ``rx_coverage_deg`` when the model stores coverage; return the
-    rows with an end beyond :data:`UNCOVERED_DEG`."""
+def end_coverage_deg(model: Model, samples: Any) -> tuple[np.ndarray, np.ndarray] | None:
+    """Coverage [deg] of each sample's tx and rx end (see :meth:`PatternSet.coverage_deg`), or
+    None when the model stores no coverage."""
     coverage = getattr(model, "coverage_deg", None)
     if coverage is None or not model.training.get("coverage_deg"):
-        return 0
+        return None
     d = samples.directions
-    out = {}
-    for end, idx, az, el in (("tx", samples.tx_index, d.az_tx, d.el_tx), ("rx", samples.rx_index, d.az_rx, d.el_rx)):
+    cols = []
+    for idx, az, el in ((samples.tx_index, d.az_tx, d.el_tx), (samples.rx_index, d.az_rx, d.el_rx)):
         col = np.full(len(samples), np.nan)
         for k, node in enumerate(samples.nodes):
             sel = np.asarray(idx) == k
@@ -163,8 +163,27 @@ def _add_coverage(model: Model, samples: Any, table: pd.DataFrame) -> int:
                 got = coverage(node, np.asarray(az)[sel], np.asarray(el)[sel])
                 if got is not None:
                     col[sel] = got
-        table[f"{end}_coverage_deg"] = col
-        out[end] = col
+        cols.append(col)
+    return cols[0], cols[1]
+
+
+def uncovered_rows(model: Model, samples: Any, within_deg: float = UNCOVERED_DEG) -> int | None:
+    """Samples with an end more than ``within_deg`` from every learning direction of its node
+    (None when the model stores no coverage)."""
+    ends = end_coverage_deg(model, samples)
+    if ends is None:
+        return None
+    return int(np.sum(np.fmax(ends[0], ends[1]) > within_deg))
+
+
+def _add_coverage(model: Model, samples: Any, table: pd.DataFrame) -> int:
+    """Add ``tx_coverage_deg``, ``rx_coverage_deg`` when the model stores coverage; return the
+    rows with an end beyond :data:`UNCOVERED_DEG`."""
+    ends = end_coverage_deg(model, samples)
+    if ends is None:
+        return 0
+    out = {"tx": ends[0], "rx": ends[1]}
+    table["tx_coverage_deg"], table["rx_coverage_deg"] = ends
     worst = np.fmax(out["tx"], out["rx"])
     return int(np.sum(worst > UNCOVERED_DEG))
 

@@ -28,7 +28,7 @@ from rplearn.models.spec import check_model_size
 from rplearn.models.auto import auto_orders, fit_auto, fit_from_statistics
 from rplearn.core.selection import Selection
 from rplearn.models.streamed import fit_patterns_streamed, unit_statistics_streamed, units_and_nodes
-from rplearn.models.predict import DatasetPrediction, distinct_labels, predict_dataset
+from rplearn.models.predict import UNCOVERED_DEG, DatasetPrediction, distinct_labels, predict_dataset, uncovered_rows
 from rplearn.models.spec import ModelSpec
 
 Progress = Callable[[str], None]
@@ -262,6 +262,13 @@ def evaluate_model_files(
     rows = evaluate_models([FittedModel.from_model(m) for m in models], samples)
     labels = distinct_labels([r.model for r in rows], [os.path.basename(p) for p in model_paths])
     rows = [replace(r, model=label) for r, label in zip(rows, labels)]
+    for model, label in zip(models, labels):
+        n_out = uncovered_rows(model, samples)
+        if n_out:
+            choice.warnings.append(
+                f"{label}: {n_out:,} of {len(samples):,} evaluation samples ({n_out / len(samples):.0%}) look more than "
+                f"{UNCOVERED_DEG:g} deg from any direction the model's antennas were learned from; their errors "
+                "measure extrapolation (or the prior), not the fit: fly those directions to learn them")
     outcome = EvaluationOutcome(rows, scores_markdown(rows), choice, provenance(dataset=dataset, models=list(model_paths)))
     if markdown_out:
         with atomic_open(markdown_out, "w", encoding="utf-8") as fh:
