@@ -158,6 +158,24 @@ def colour_limits_db(maps_db: FloatArray, has_truth: bool) -> tuple[float, float
     return (lo, hi) if hi > lo else (lo - 0.5, hi + 0.5)
 
 
+def _hatch_uncovered(ax: Any, model: Any, node: str, az_deg: np.ndarray, el_deg: np.ndarray) -> None:
+    """Hatch (and fade) the directions further than ``UNCOVERED_DEG`` from every direction the
+    model learned ``node`` from (models that store their coverage)."""
+    coverage = getattr(model, "coverage_deg", None)
+    if coverage is None:
+        return
+    from rplearn.models.predict import UNCOVERED_DEG
+
+    el_g, az_g = np.meshgrid(el_deg, az_deg, indexing="ij")
+    cov = coverage(node, np.radians(az_g.ravel()), np.radians(el_g.ravel()))
+    if cov is None:
+        return
+    far = (np.asarray(cov).reshape(el_g.shape) > UNCOVERED_DEG).astype(float)
+    if far.any():
+        ax.contourf(az_deg, el_deg, far, levels=[0.5, 1.5], colors=["white"], alpha=0.35)
+        ax.contourf(az_deg, el_deg, far, levels=[0.5, 1.5], colors="none", hatches=["////"])
+
+
 def pattern_maps_figure(
     models: Mapping[str, PatternLike],
     truth: PatternLike | None = None,
@@ -231,6 +249,7 @@ def pattern_maps_figure(
                 shading="nearest",
                 rasterized=True,
             )
+            _hatch_uncovered(ax, rows[i][1], n, az, el)
             if samples_az_el is not None and n in samples_az_el and label != "truth":
                 saz, sel = _az_el_deg(samples_az_el[n], f"samples of {n}")
                 keep = _subsample(saz.size, max_dots)
@@ -242,7 +261,9 @@ def pattern_maps_figure(
         )
         cb.set_label(f"G_{n} / {unit}")
     kind = "centred patterns (shapes)" if center else "patterns"
-    fig.suptitle(f"Learned {kind} in the az-el domain" + (" vs truth" if truth is not None else ""))
+    hatched = any(getattr(m, "training", {}).get("coverage_deg") for _, m in rows)
+    fig.suptitle(f"Learned {kind} in the az-el domain" + (" vs truth" if truth is not None else "")
+                 + ("\nhatched: more than 10 deg from any learning direction (extrapolated, or the prior)" if hatched else ""))
     return fig
 
 
