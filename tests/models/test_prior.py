@@ -102,3 +102,16 @@ def test_predictions_say_where_the_flight_never_looked(tmp_path):
            for name, d in (("near", near), ("far", far))}
     assert np.median(std["far"]) > 3 * np.median(std["near"]), {k: float(np.median(v)) for k, v in std.items()}
     assert isinstance(pred.table, pd.DataFrame)
+
+
+def test_orient_cautions_when_the_best_heading_looks_where_the_flight_never_did(tmp_path):
+    from rplearn.analysis.headings import best_yaw
+
+    per_unit, _, _, _ = ground_case(tmp_path, 4)
+    model = fit_auto(per_unit)[0].model
+    # the station kept at its flown heading (10 deg), a drone on the flown arc: the station end is covered
+    seen = best_yaw(model, "G", "D", (0.0, 0.0, 1.5), (40.0, 7.0, 20.0), turn="rx", tx_yaw_deg=10.0)
+    assert seen.coverage_deg is not None and seen.coverage_deg[0] < 10
+    # a drone behind the station and high up: nothing like it was flown
+    unseen = best_yaw(model, "G", "D", (0.0, 0.0, 1.5), (-40.0, 0.0, 60.0), turn="tx")
+    assert max(unseen.coverage_deg) > 45 and "fly those directions" in unseen.summary()

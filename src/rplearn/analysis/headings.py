@@ -32,6 +32,7 @@ from rplearn.core.link import free_space_path_loss_db, received_power_dbm
 from rplearn.errors import InputError
 from rplearn.models.base import model_frequency_hz, require_patterns
 from rplearn.models.patterns import PatternSet
+from rplearn.models.predict import UNCOVERED_DEG
 from rplearn.analysis.swarm import resolve_patterns, spanning_bottleneck
 
 #: Most yaw combinations :func:`best_swarm_headings` tries exhaustively (about 30 MB of work).
@@ -133,6 +134,9 @@ class OrientationResult:
         Received power at the best and at the given yaws [dBm] (None without a transmit power).
     frequency_hz : float or None
         Carrier used for the received power [Hz].
+    coverage_deg : (float, float) or None
+        At the best yaws, the angle from the direction each end looks at the other to the
+        nearest direction its antenna was learned from [deg] (models that store coverage).
     """
 
     tx_yaw_deg: float
@@ -143,6 +147,7 @@ class OrientationResult:
     rssi_dbm: float | None = None
     baseline_rssi_dbm: float | None = None
     frequency_hz: float | None = None
+    coverage_deg: tuple[float, float] | None = None
 
     def summary(self) -> str:
         """The best yaws and the gain in received power (or joint gain) they bring, for people."""
@@ -153,6 +158,11 @@ class OrientationResult:
         else:
             before, after = self.baseline_gain_db, self.gain_db
             lines.append(f"predicted joint gain: {before:.1f} dB now -> {after:.1f} dB ({after - before:+.1f} dB)")
+        if self.coverage_deg is not None and max(self.coverage_deg) > UNCOVERED_DEG:
+            lines.append(
+                f"caution: at these headings the link looks {self.coverage_deg[0]:.0f} deg (tx) and "
+                f"{self.coverage_deg[1]:.0f} deg (rx) from any direction the antennas were learned from; beyond "
+                f"{UNCOVERED_DEG:g} deg the gain is an extrapolation (or the prior's): fly those directions before relying on it")
         return "\n".join(lines)
 
 
@@ -201,11 +211,28 @@ def best_yaw(
     i_tx = int(np.argmax(g_tx[:n])) if turn in ("tx", "both") else n
     i_rx = int(np.argmax(g_rx[:n])) if turn in ("rx", "both") else n + 1
     result = OrientationResult(
-        float(yaws[i_tx]), float(yaws[i_rx]), float(g_tx[i_tx] + g_rx[i_rx]), float(g_tx[n] + g_rx[n + 1])
+        float(yaws[i_tx]), float(yaws[i_rx]), float(g_tx[i_tx] + g_rx[i_rx]), float(g_tx[n] + g_rx[n + 1]),
+        coverage_deg=_link_coverage(model, tx_node, rx_node, positions, float(yaws[i_tx]), float(yaws[i_rx])),
     )
     if tx_power_dbm is None:
         return result
     return _with_received_power(result, positions, float(tx_power_dbm), float(frequency_hz))
+
+
+def _link_coverage(
+    model: PatternSet, tx_node: str, rx_node: str, positions: Mapping[str, Sequence[float]], tx_yaw_deg: float,
+    rx_yaw_deg: float,
+) -> tuple[float, float] | None:
+    """Coverage [deg] of the directions each end (level, at its yaw) looks at the other."""
+    d = np.asarray(positions["rx"], np.float64) - np.asarray(positions["tx"], np.float64)
+    el = float(np.arctan2(d[2], np.hypot(d[0], d[1])))
+    az_tx = float(np.arctan2(d[1], d[0])) - np.radians(tx_yaw_deg)
+    az_rx = float(np.arctan2(-d[1], -d[0])) - np.radians(rx_yaw_deg)
+    cov_tx = model.coverage_deg(tx_node, [az_tx], [el])
+    cov_rx = model.coverage_deg(rx_node, [az_rx], [-el])
+    if cov_tx is None or cov_rx is None:
+        return None
+    return float(cov_tx[0]), float(cov_rx[0])
 
 
 def _with_received_power(
