@@ -79,3 +79,16 @@ def test_public_functions_keep_their_names_and_docstrings():
 
     assert fit_model.__name__ == "fit_model" and fit_model.__doc__ == raw.__doc__
     assert fit_model.__wrapped__ is raw
+
+
+def test_paths_become_strings_whole_floats_integers_and_a_bare_string_is_no_sequence(tmp_path):
+    from rplearn._argtypes import checked
+
+    def f(path: str, n: int, names: "list[str] | None" = None) -> tuple:
+        return path, n, names
+
+    g = checked(f, "f")
+    assert g(tmp_path / "x.csv", 2.0) == (str(tmp_path / "x.csv"), 2, None)
+    assert type(g("a", 2.0)[1]) is int
+    with pytest.raises(ArgumentTypeError, match="^names: expected a list"):
+        g("a", 1, "AB")

@@ -8,9 +8,10 @@ naming the parameter, the expected and the given type and the function, before a
 of a ``TypeError`` or ``AttributeError`` from deep inside numpy or pandas.
 
 Only annotations that can be checked exactly are: classes (``int`` takes numpy integers and whole floats,
-``float`` any real number but ``bool``, ``str`` also an ``os.PathLike``), ``None``, unions of
+converted to ``int``; ``float`` any real number but ``bool``; ``str`` also an ``os.PathLike``, converted
+to ``str``), ``None``, unions of
 these, and the abstract containers ``Mapping``, ``Sequence`` and ``Iterable`` (the container
-only, not its items), ``Callable``; numpy's ``ArrayLike`` and ``NDArray`` take numbers,
+only, not its items; a bare string is not taken as a sequence), ``Callable``; numpy's ``ArrayLike`` and ``NDArray`` take numbers,
 arrays and sequences (not text, not complex numbers). Anything else (``Any``, ``ArrayLike``, ``NDArray``,
 ``Literal``, type variables, names that do not resolve) is left to the function's own checks.
 
@@ -66,7 +67,7 @@ def _class_check(cls: type) -> _Check | None:
     if cls is bool:
         return (lambda v: isinstance(v, bool) or type(v).__name__ == "bool_"), "True or False"
     if cls is str:
-        return (lambda v: isinstance(v, (str, os.PathLike))), "a string"
+        return (lambda v: isinstance(v, (str, os.PathLike))), "a string"  # a path is converted to str
     if cls is complex or cls is object or cls is Any:
         return None
     try:
@@ -75,6 +76,8 @@ def _class_check(cls: type) -> _Check | None:
         return None
     if cls in _ABSTRACT:
         base, what = _ABSTRACT[cls]
+        if base is cabc.Iterable and cls is not cabc.Iterator:  # a bare string is no sequence of names
+            return (lambda v: isinstance(v, base) and not isinstance(v, (str, bytes))), what
         return (lambda v: isinstance(v, base)), what
     if isinstance(cls, type):
         return (lambda v: isinstance(v, cls)), f"a {cls.__name__}"
@@ -169,6 +172,9 @@ def _wrap(func: Callable[..., Any], label: str, skip_first: bool) -> Callable[..
     if found is None:
         return func
     sig, checks = found
+    hints = _hints(func)
+    to_str = {n for n in checks if _plain(hints.get(n)) is str}
+    to_int = {n for n in checks if _plain(hints.get(n)) is int}
 
     @functools.wraps(func)
     def wrapper(*args: Any, **kwargs: Any) -> Any:
@@ -176,16 +182,33 @@ def _wrap(func: Callable[..., Any], label: str, skip_first: bool) -> Callable[..
             bound = sig.bind(*args, **kwargs)
         except TypeError as exc:
             raise ArgumentTypeError(f"{label}: {exc}") from None
-        for name, value in bound.arguments.items():
+        changed = False
+        for name, value in list(bound.arguments.items()):
             check = checks.get(name)
-            if check is not None and not check[0](value):
+            if check is None:
+                continue
+            if not check[0](value):
                 raise ArgumentTypeError(
                     f"{name}: expected {check[1]}, got {type(value).__name__} {_short(value)} ({label})", param=name
                 )
+            if name in to_str and isinstance(value, os.PathLike):
+                bound.arguments[name], changed = os.fspath(value), True
+            elif name in to_int and isinstance(value, float):
+                bound.arguments[name], changed = int(value), True
+        if changed:
+            return func(*bound.args, **bound.kwargs)
         return func(*args, **kwargs)
 
     wrapper.__rplearn_checked__ = True  # type: ignore[attr-defined]
     return wrapper
+
+
+def _plain(hint: Any) -> Any:
+    """The one class of ``hint`` or ``hint | None`` (None for anything else)."""
+    if typing.get_origin(hint) in (typing.Union, types.UnionType):
+        args = [a for a in typing.get_args(hint) if a is not type(None)]
+        return args[0] if len(args) == 1 else None
+    return hint
 
 
 def _short(value: Any) -> str:

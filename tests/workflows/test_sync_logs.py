@@ -68,3 +68,51 @@ def test_a_previous_output_survives_a_failed_streamed_sync(flight):
     with pytest.raises(InputError):
         sync_logs([pose], [csv], str(out), sync_options=SyncOptions(min_samples=10**9))
     assert out.read_text() == "precious\n"
+
+
+@pytest.mark.parametrize("out_name", ["o.csv", "o.parquet"])
+@pytest.mark.parametrize("order", ["AB", "BA", "CA"])
+def test_files_with_different_extra_columns_keep_every_column(flight, monkeypatch, out_name, order):
+    """Review finding: streamed files whose extra columns differ crashed, or lost a column."""
+    d, pose, _ = flight
+    monkeypatch.setattr(wlogs, "SYNC_CHUNK_ROWS", 300)
+    sig = pd.read_parquet(d / "f" / "signal_log.parquet")
+    files = {"A": sig.iloc[:1300].assign(snr_db=20.0), "B": sig.iloc[1300:].assign(noise_dbm=-95.0), "C": sig.iloc[1300:]}
+    paths = []
+    for key in order:
+        files[key].to_csv(d / f"rx{key}.csv", index=False)
+        paths.append(str(d / f"rx{key}.csv"))
+    out = d / out_name
+    outcome = sync_logs([pose], paths, str(out))
+    back = pd.read_parquet(out) if out_name.endswith("parquet") else pd.read_csv(out)
+    expected = {"A": {"snr_db"}, "B": {"noise_dbm"}, "C": set()}
+    wanted = set().union(*(expected[k] for k in order))
+    assert wanted <= set(back.columns) and len(back) == outcome.counts.n_out
+    if "snr_db" in wanted:  # the values are kept (as text for streamed extra columns)
+        assert set(pd.to_numeric(back["snr_db"], errors="coerce").dropna().unique()) == {20.0}
+
+
+def test_a_text_column_empty_at_first_and_duplicates_across_chunks(flight, monkeypatch):
+    """Review finding: a column empty in the first chunk broke Parquet; its duplicates were missed."""
+    d, pose, _ = flight
+    sig = pd.read_parquet(d / "f" / "signal_log.parquet").iloc[:1000].copy()
+    sig["note"] = np.where(np.arange(len(sig)) < 600, None, "x")
+    pd.concat([sig, sig.iloc[:100]], ignore_index=True).to_csv(d / "note.csv", index=False)
+    counts = []
+    for rows in (10_000, 250):
+        monkeypatch.setattr(wlogs, "SYNC_CHUNK_ROWS", rows)
+        counts.append(sync_logs([pose], [str(d / "note.csv")], str(d / "note.parquet")).counts.dropped["duplicate"])
+    assert counts == [100, 100]
+    assert pd.read_parquet(d / "note.parquet")["note"].notna().sum() > 0
+
+
+def test_rows_are_named_by_their_file(flight, monkeypatch):
+    d, pose, _ = flight
+    monkeypatch.setattr(wlogs, "SYNC_CHUNK_ROWS", 200)
+    sig = pd.read_parquet(d / "f" / "signal_log.parquet").iloc[:1000].copy()
+    sig.iloc[:10].to_csv(d / "first.csv", index=False)
+    sig.loc[750, "tx"] = "Z"
+    sig.to_csv(d / "unk.csv", index=False)
+    with pytest.raises(InputError, match=r"^.*unk\.csv: field tx/rx: unknown node id\(s\) Z at row 750"):
+        sync_logs([pose], [str(d / "first.csv"), str(d / "unk.csv")], str(d / "x.csv"),
+                  sync_options=SyncOptions(on_unknown_node="error"))

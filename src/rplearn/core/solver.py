@@ -364,10 +364,11 @@ def solve(
     # Covariance of the constrained estimate: top-left block of the inverse KKT matrix,
     # sandwiched with X^T X when a ridge is present.
     a = kinv[:pcols, :pcols]
-    if penalty is not None and bool(np.any(penalty > 0)):
-        # A smoothness penalty (or a prior) read as a Gaussian prior on the coefficients: the
-        # posterior covariance sigma^2 (X^T X + P)^-1, which returns to the prior's variance
-        # where the data are absent (the sandwich form would shrink it to zero there).
+    if penalty is not None:
+        # A smoothness penalty (or a prior), with the ridge, read as a Gaussian prior on the
+        # coefficients: the posterior covariance sigma^2 (X^T X + ridge I + P)^-1, which returns
+        # to the prior's variance where the data are absent (the sandwich form shrinks it to
+        # zero there). Given for every automatic fit, also one that chose no smoothing.
         cov = resid_var * a
     else:
         cov = resid_var * (a @ normal.gram @ a.T) if shrunk else resid_var * a

@@ -30,7 +30,7 @@ from rplearn.data.sync import (
     _options,
     check_link_nodes,
 )
-from rplearn.data.tables import MATCHED_COLUMNS, non_unit_quaternion_rows, validate_pose_log
+from rplearn.data.tables import MATCHED_COLUMNS, SIGNAL_COLUMNS, non_unit_quaternion_rows, validate_pose_log
 from rplearn.data.poses import tracks_of_checked_log
 from rplearn.errors import InputError
 
@@ -39,17 +39,38 @@ def row_hashes(signal: pd.DataFrame) -> np.ndarray:
     """64-bit hash of every row of a signal log chunk, equal for equal rows of any chunk.
 
     Numbers are hashed as float64 (a column read as integers in one chunk and as floats in
-    another hashes alike), everything else as text.
+    another hashes alike), everything else as text, a missing cell as one sentinel.
     """
     cols = {}
     for c in signal.columns:
         col = signal[c]
         if pd.api.types.is_numeric_dtype(col) and not pd.api.types.is_bool_dtype(col):
             cols[c] = col.to_numpy(np.float64, na_value=np.nan)
-        else:
-            cols[c] = col.astype(str).to_numpy(dtype=object)
+        else:  # text; a missing cell hashes as one sentinel whatever the column's dtype
+            missing = col.isna().to_numpy()
+            cols[c] = np.where(missing, "\x00missing", col.astype(object).astype(str).to_numpy(dtype=object))
     frame = pd.DataFrame(cols, index=range(len(signal)))
     return pd.util.hash_pandas_object(frame, index=False).to_numpy(np.uint64)
+
+
+def conform_chunk(chunk: pd.DataFrame, extra_columns: list[str]) -> pd.DataFrame:
+    """A signal chunk with the canonical columns, then exactly ``extra_columns`` as text.
+
+    Logs read in chunks (or several files) need not agree on their extra columns, nor on the
+    type a column seems to have in one chunk (all empty here, text there): every chunk gets
+    every extra column of the whole stream, as pandas' string dtype with missing cells kept
+    missing, so that one schema is written and equal rows hash alike.
+    """
+    out = chunk[[c for c in SIGNAL_COLUMNS if c in chunk.columns]].copy()
+    for c in extra_columns:
+        if c in chunk.columns:
+            col = chunk[c]
+            missing = col.isna().to_numpy()
+            text = col.astype(object).where(~missing, None)
+            out[c] = pd.array([None if v is None else str(v) for v in text], dtype=pd.StringDtype())
+        else:
+            out[c] = pd.array([None] * len(chunk), dtype=pd.StringDtype())
+    return out
 
 
 class _SeenRows:
@@ -89,6 +110,9 @@ def synchronise_stream(
     row for duplicate detection across chunks). Merge the per-chunk summaries with
     :meth:`SyncSummary.merge`. Options as in :func:`~rplearn.data.sync.synchronise`.
 
+    A chunk's ``attrs`` may name its file (``"source"``) and the file row of its first row
+    (``"first_row"``) for messages; by default rows are counted over the whole stream.
+
     Raises
     ------
     InputError
@@ -107,7 +131,9 @@ def synchronise_stream(
         repeats = seen.repeats(row_hashes(chunk)) if len(chunk) else np.zeros(0, bool)
         if options.link is not None and len(chunk) and {"tx", "rx"} <= set(chunk.columns):
             pairs |= _pairs(chunk)
-        result = _match_chunk(tracks, chunk, options, source, seen_before=repeats, first_row=total.n_in)
+        where = str(chunk.attrs.get("source", source))
+        first_row = int(chunk.attrs.get("first_row", total.n_in))
+        result = _match_chunk(tracks, chunk, options, where, seen_before=repeats, first_row=first_row)
         result.summary.non_unit_quaternions, non_unit = non_unit, 0  # counted once, in the first chunk
         n_out += result.summary.n_out
         total.merge(result.summary)
@@ -178,4 +204,4 @@ def synchronise_to_parquet(
     return total
 
 
-__all__ = ["row_hashes", "synchronise_stream", "synchronise_to_parquet"]
+__all__ = ["conform_chunk", "row_hashes", "synchronise_stream", "synchronise_to_parquet"]

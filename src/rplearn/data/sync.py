@@ -274,7 +274,7 @@ def _signal_times(signal: pd.DataFrame, rx: np.ndarray, offset_s: float | Mappin
 
 def _unknown_nodes(
     tx: np.ndarray, rx: np.ndarray, tracks: Mapping[str, PoseTrack], keep: np.ndarray,
-    on_unknown_node: str, source: str,
+    on_unknown_node: str, source: str, first_row: int = 0,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, list[str]]:
     """Node codes of both ends, which codes have a pose log, rows naming a node without one.
 
@@ -290,7 +290,7 @@ def _unknown_nodes(
         names = sorted({str(u) for u, k in zip(uniques, known) if not k} & (
             set(tx[unknown_mask & keep]) | set(rx[unknown_mask & keep])))
         if on_unknown_node == "error":
-            row = int(np.flatnonzero(unknown_mask & keep)[0])
+            row = int(np.flatnonzero(unknown_mask & keep)[0]) + first_row
             raise InputError(
                 f"{source}: field tx/rx: unknown node id(s) {', '.join(names)} at row {row} "
                 f"(first); pose logs exist for {', '.join(sorted(tracks))} (to drop and count "
@@ -322,7 +322,7 @@ def _matched_frame(
             cols[f"{end}_{f}"] = quat[idx, j]
     out = pd.DataFrame(cols, columns=list(MATCHED_COLUMNS))
     for c in [c for c in signal.columns if c not in MATCHED_COLUMNS]:
-        out[c] = signal[c].to_numpy()[idx]
+        out[c] = pd.Series(signal[c].array[idx], index=out.index)  # keeps the column's dtype (text stays text)
     return out
 
 
@@ -365,7 +365,7 @@ def _match_chunk(
     if options.link is not None:
         drop(~((tx == options.link[0]) & (rx == options.link[1])), "other_link")
     tx_code, rx_code, uniques, known, unknown, names = _unknown_nodes(
-        tx, rx, tracks, keep, options.on_unknown_node, source)
+        tx, rx, tracks, keep, options.on_unknown_node, source, first_row)
     if names:
         summary.unknown_nodes = names
     drop(unknown, "unknown_node")

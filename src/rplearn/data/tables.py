@@ -274,6 +274,12 @@ def validate_matched(df: pd.DataFrame, source: str = "dataset", require_rssi: bo
             f"(first {rssi[row]:g} dBm at row {row}); synchronising the logs (synchronise) drops and counts them"
         )
     _check_link_columns(df, source, with_rssi=require_rssi)
+    if "unit" in df.columns:
+        empty = empty_ids(node_ids(df["unit"]))
+        if np.any(empty):
+            row = int(np.flatnonzero(empty)[0])
+            raise InputError(f"{source}: column unit is empty at row {row} ({int(empty.sum())} row(s)); "
+                             "label every row's trajectory unit, or drop the column")
     out = df.copy()
     out["tx"] = out["tx"].astype(str)
     out["rx"] = out["rx"].astype(str)

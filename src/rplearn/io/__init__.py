@@ -49,6 +49,7 @@ _NAMES: dict[str, str] = {
     "canonical_pose": "tables",
     "canonical_signal": "tables",
     "iter_signal_table": "tables",
+    "table_columns": "tables",
     "read_pose_table": "tables",
     "read_signal_table": "tables",
     "bag_topics": "rosbag",

@@ -102,7 +102,7 @@ def _read_csv(path: str, node: str | None) -> tuple[np.ndarray, np.ndarray, np.n
         nodes = sorted(df["node"].astype(str).unique())
         if node is None and len(nodes) > 1:
             raise InputError(f"{path}: holds the patterns of {', '.join(nodes)}; say which node to read", param="node")
-        chosen = str(node) if node is not None else nodes[0]
+        chosen = str(node) if node is not None and len(nodes) > 1 else nodes[0]  # one pattern: whatever its name
         if chosen not in nodes:
             raise InputError(f"{path}: no pattern of node {chosen}; it holds {', '.join(nodes)}", param="node")
         df = df[df["node"].astype(str) == chosen]
@@ -148,7 +148,8 @@ def read_reference_pattern(
     mount_rpy_deg : (roll, pitch, yaw)
         Mounting rotation of the antenna frame in the body frame [deg].
     node : str, optional
-        The node to read from a grid export holding several.
+        The node to read from a grid export holding several (a file of one node is read
+        whatever its node is named).
     """
     source = os.fspath(path)
     if not os.path.isfile(source):

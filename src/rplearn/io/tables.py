@@ -418,6 +418,22 @@ def iter_signal_table(
         raise LogFormatError(f"{source}: cannot read table ({type(exc).__name__}: {msg})") from None
 
 
+def table_columns(path: str, columns: Mapping[str, str] | None = None) -> list[str]:
+    """Column names of a CSV or Parquet table after renaming (its header only is read)."""
+    source = str(path)
+    try:
+        if source.lower().endswith(_PARQUET_EXT):
+            import pyarrow.parquet as pq
+
+            names = list(pq.ParquetFile(path).schema_arrow.names)
+        else:
+            names = list(pd.read_csv(path, nrows=0, skipinitialspace=True).columns)
+    except Exception as exc:
+        msg = str(exc).splitlines()[0] if str(exc) else ""
+        raise LogFormatError(f"{source}: cannot read table ({type(exc).__name__}: {msg})") from None
+    return [str(c) for c in rename_columns(pd.DataFrame(columns=names), columns).columns]
+
+
 def table_kind(path: str, columns: Mapping[str, str] | None = None) -> str:
     """``"pose"`` or ``"signal"``: which canonical log a table holds, judged by its header."""
     source = str(path)
@@ -451,6 +467,7 @@ __all__ = [
     "canonical_pose",
     "canonical_signal",
     "iter_signal_table",
+    "table_columns",
     "read_pose_table",
     "read_signal_table",
     "rename_columns",

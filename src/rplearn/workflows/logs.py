@@ -15,9 +15,9 @@ from numpy.typing import ArrayLike
 
 from rplearn.analysis.headings import SwarmHeadings, best_swarm_headings
 from rplearn.analysis.swarm import SwarmPrediction, predict_swarm
-from rplearn.data.streaming import synchronise_stream
+from rplearn.data.streaming import conform_chunk, synchronise_stream
 from rplearn.data.sync import SyncOptions, SyncSummary, synchronise
-from rplearn.data.tables import MATCHED_COLUMNS
+from rplearn.data.tables import MATCHED_COLUMNS, SIGNAL_COLUMNS
 from rplearn.errors import InputError
 from rplearn.io import ReaderOptions, read_logs
 from rplearn.io.inspect import file_damage
@@ -76,16 +76,34 @@ def _streamable(signal_paths: Sequence[str], reader_options: ReaderOptions) -> b
                for p in signal_paths)
 
 
+def _extra_columns(signal_paths: Sequence[str], options: ReaderOptions) -> list[str]:
+    """Extra (non-canonical) columns of all signal tables, in order of first appearance."""
+    from rplearn.io.tables import table_columns
+
+    seen: list[str] = []
+    for path in signal_paths:
+        for c in table_columns(path, options.columns):
+            if c not in SIGNAL_COLUMNS and c not in seen:
+                seen.append(c)
+    return seen
+
+
 def _signal_chunks(signal_paths: Sequence[str], options: ReaderOptions) -> Iterator[pd.DataFrame]:
-    """Every signal table's rows, chunk by chunk, file after file."""
+    """Every signal table's rows, chunk by chunk, file after file, all with the same columns."""
     from rplearn.io.tables import iter_signal_table
 
+    extras = _extra_columns(signal_paths, options)
     ptx = options.tx_power_dbm if not isinstance(options.tx_power_dbm, Mapping) else None
     for path in signal_paths:
-        yield from iter_signal_table(
+        first_row = 0
+        for chunk in iter_signal_table(
             path, SYNC_CHUNK_ROWS, columns=options.columns, tx_power_dbm=ptx,
             frequency_hz=options.frequency_hz, rx=(options.receivers or {}).get(path),
-        )
+        ):
+            out = conform_chunk(chunk, extras)
+            out.attrs.update(source=str(path), first_row=first_row)  # messages name the file and its row
+            first_row += len(chunk)
+            yield out
 
 
 def sync_logs(
