@@ -114,4 +114,4 @@ def test_orient_cautions_when_the_best_heading_looks_where_the_flight_never_did(
     assert seen.coverage_deg is not None and seen.coverage_deg[0] < 10
     # a drone behind the station and high up: nothing like it was flown
     unseen = best_yaw(model, "G", "D", (0.0, 0.0, 1.5), (-40.0, 0.0, 60.0), turn="tx")
-    assert max(unseen.coverage_deg) > 45 and "fly those directions" in unseen.summary()
+    assert max(unseen.coverage_deg) > 30 and "fly those directions" in unseen.summary()

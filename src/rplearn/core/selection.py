@@ -12,7 +12,10 @@ turn is held out, the pattern learned from the others, and its squared error on 
 unit computed from that unit's statistics alone (``y^T y - 2 c^T X^T y + c^T X^T X c``); random
 samples are never held out, because neighbouring packets of one flight leak into each other.
 With a single unit the choice is by **generalised cross-validation** (Golub, Heath and Wahba
-1979) on the whole data. Everything comes from the :class:`NormalEquations` accumulated once per
+1979) on the whole data; ``rplearn fit`` avoids that case by cutting a single flight into
+contiguous stretches of time that play the units' part. Either way the validation error is that
+of the flown region: a test that looks where no unit looked (another altitude) is an
+extrapolation, which the coverage warnings of predict and evaluate flag. Everything comes from the :class:`NormalEquations` accumulated once per
 unit at the largest order: for spherical harmonics a lower order's statistics are a sub-block
 (degrees nest), so nothing is refitted from raw samples.
 

@@ -89,7 +89,7 @@ def units_and_nodes(chunks: Iterable[pd.DataFrame]) -> pd.DataFrame:
 
 def _accumulate(
     chunks: Iterable[pd.DataFrame], spec: ModelSpec, nodes: Sequence[str], units: Sequence[str] | None,
-    source: str, by_unit: bool,
+    source: str, by_unit: bool, block_rows: int | None = None,
 ) -> tuple[dict[str, NormalEquations], float | None, int, float, dict[str, list[float]]]:
     """Statistics of the learning rows of every chunk: one accumulator per unit (``by_unit``)
     or one for all; the median frequency, the non-unit quaternions, the time spent [s] and the
@@ -100,7 +100,7 @@ def _accumulate(
     stats: dict[str, NormalEquations] = {}
     wanted = None if not units else {str(u) for u in units}
     freq: Counter[float] = Counter()
-    non_unit, learn_s, first_row = 0, 0.0, 0
+    non_unit, learn_s, first_row, learn_row = 0, 0.0, 0, 0
     grids: dict[str, list[float]] | None = None
     for chunk in chunks:
         where = f"{source} (rows {first_row:,} to {first_row + len(chunk) - 1:,})"
@@ -109,7 +109,13 @@ def _accumulate(
             chunk = chunk[chunk["unit"].astype(str).isin(wanted).to_numpy()]
         if chunk.empty:
             continue
-        labels = chunk["unit"].astype(str).to_numpy() if by_unit and "unit" in chunk.columns else np.full(len(chunk), "all")
+        if block_rows:  # one unit: contiguous stretches of its rows (the file's time order)
+            labels = np.array([f"block {k + 1}" for k in (learn_row + np.arange(len(chunk))) // block_rows])
+        elif by_unit and "unit" in chunk.columns:
+            labels = chunk["unit"].astype(str).to_numpy()
+        else:
+            labels = np.full(len(chunk), "all")
+        learn_row += len(chunk)
         for label in np.unique(labels):
             part = chunk[labels == label] if by_unit else chunk
             samples = link_samples(part, where, nodes=nodes)
@@ -131,12 +137,14 @@ def _accumulate(
 
 def unit_statistics_streamed(
     chunks: Iterable[pd.DataFrame], spec: ModelSpec, nodes: Sequence[str], units: Sequence[str] | None = None,
-    source: str = "dataset",
+    source: str = "dataset", block_rows: int | None = None,
 ) -> tuple[dict[str, NormalEquations], float | None, int, dict[str, list[float]]]:
     """The statistics of every learning unit of a dataset given in chunks (for ``--degree auto``
     on a big file): ``(statistics by unit, median frequency [Hz], non-unit quaternions,
-    coverage grids by node)``. A dataset without a ``unit`` column is one unit, ``"all"``."""
-    stats, f, non_unit, _, grids = _accumulate(chunks, spec, nodes, units, source, by_unit=True)
+    coverage grids by node)``. A dataset without a ``unit`` column is one unit, ``"all"``; with
+    ``block_rows`` the learning rows are cut into contiguous blocks of that many rows instead
+    (cross-validation of a single flight)."""
+    stats, f, non_unit, _, grids = _accumulate(chunks, spec, nodes, units, source, by_unit=True, block_rows=block_rows)
     return stats, f, non_unit, grids
 
 

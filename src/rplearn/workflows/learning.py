@@ -11,6 +11,8 @@ import os
 from dataclasses import dataclass, field, replace
 from typing import Any, Callable, Mapping, Sequence
 
+import numpy as np
+
 from rplearn._atomic import atomic_open
 from rplearn.analysis.pattern_error import node_directions
 from rplearn.analysis.sweep import SweepResult, no_progress, order_sweep, validation_sweep
@@ -149,6 +151,11 @@ STREAM_FIT_BYTES = 256 * 2**20
 STREAM_FIT_CHUNK_ROWS = 500_000
 
 
+#: A single learning unit is cross-validated over this many contiguous stretches of time (one
+#: held out at a time), so that neighbouring packets never sit on both sides of a fold.
+TIME_BLOCKS = 5
+
+
 def _fit_auto(
     df: Any, dataset: str, spec: ModelSpec, choice: UnitChoice, gauge: str | Mapping[str, Any], output: str | None,
     priors: Mapping[str, Any] | None = None,
@@ -157,7 +164,14 @@ def _fit_auto(
     learn = choice.units if choice.units is not None else (dataset_units(df) or [None])
     part = select_units(df, choice.units, dataset)
     nodes = sorted(set(part["tx"].astype(str)) | set(part["rx"].astype(str)))
-    per_unit = {str(u): samples_of(df, None if u is None else [u], dataset, nodes=nodes) for u in learn}
+    if len(learn) == 1:  # one flight: cross-validate over contiguous stretches of it, not samples
+        ordered = part.iloc[np.argsort(part["t"].to_numpy(np.float64), kind="stable")]
+        blocks = np.array_split(np.arange(len(ordered)), TIME_BLOCKS)
+        name = "all" if learn[0] is None else str(learn[0])
+        per_unit = {f"{name}[{k + 1}/{TIME_BLOCKS}]": samples_of(ordered.iloc[b], None, dataset, nodes=nodes)
+                    for k, b in enumerate(blocks) if b.size}
+    else:
+        per_unit = {str(u): samples_of(df, None if u is None else [u], dataset, nodes=nodes) for u in learn}
     prov = provenance(dataset=dataset, model=f"{spec.kind}-auto", ridge=spec.ridge, units=choice.units)
     fitted, selection = fit_auto(per_unit, spec.kind, spec.order if spec.kind != "sh" else None, spec.ridge, gauge, prov,
                                  prior=priors or None)
@@ -193,8 +207,10 @@ def _fit_streamed(
         spec = replace(spec, order=orders[-1])
     check_model_size(spec, n, len(nodes))
     if auto:
+        n_units = len(choice.units) if choice.units else max(len(dataset_units(index)), 1)
         stats, freq, non_unit, grids = unit_statistics_streamed(
-            iter_table(dataset, STREAM_FIT_CHUNK_ROWS), spec, nodes, choice.units, dataset)
+            iter_table(dataset, STREAM_FIT_CHUNK_ROWS), spec, nodes, choice.units, dataset,
+            block_rows=-(-n // TIME_BLOCKS) if n_units == 1 else None)
         prov = provenance(dataset=dataset, model=f"{spec.kind}-auto", ridge=spec.ridge, units=choice.units)
         fitted, selection = fit_from_statistics(stats, spec.kind, orders, nodes, spec.ridge, gauge,
                                                 frequency_hz=freq, provenance=prov, prior=priors or None)
