@@ -3,7 +3,8 @@
 The `paper` preset (seed 0) is simulated and synchronised (the A->B link, three learning units,
 56,005 samples). Then, alternating, best of ``repeats`` each:
 
-- **SH-10**: ``fit_model`` of a plain SH-10 (the reference);
+- **SH-10**: ``fit_model`` of a plain SH-10 (the reference; like every pattern fit it also
+  stores its coverage grid, which auto fits store too);
 - **auto**: ``fit_auto`` (per-unit statistics at the largest candidate order, grouped
   cross-validation from them, the final solve from the same statistics);
 - **accumulation alone** at the largest candidate order (SH-16): the floor of any selection

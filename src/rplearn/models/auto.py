@@ -164,10 +164,7 @@ def fit_auto(
                                          provenance, prior)
     fitted.ltd_s = time.perf_counter() - t0
     fitted.model.training["ltd_s"] = fitted.ltd_s
-    grids: dict[str, Any] | None = None
-    for s in units.values():
-        grids = node_coverage_grids(s, grids)
-    fitted.model.training["coverage_deg"] = grids
+    fitted.model.training["coverage_deg"] = node_coverage_grids(list(units.values()))
     return fitted, choice
 
 

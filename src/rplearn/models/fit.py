@@ -97,19 +97,25 @@ def solve_patterns(
     return patterns, sol.report
 
 
-def node_coverage_grids(samples: LinkSamples, previous: Mapping[str, Any] | None = None) -> dict[str, list[float]]:
+def node_coverage_grids(
+    samples: LinkSamples | Sequence[LinkSamples], previous: Mapping[str, Any] | None = None
+) -> dict[str, list[float]]:
     """Per node, the coverage grid of its learning directions (:func:`rplearn.core.coverage.coverage_grid`),
-    rounded to 0.1 degree for the model file; ``previous`` grids are combined (chunked data)."""
+    rounded to 0.1 degree for the model file; several sample sets (the units of one fit, same
+    nodes) are pooled, and ``previous`` grids are combined (chunked data)."""
     from rplearn.core.coverage import coverage_grid
 
+    parts = [samples] if isinstance(samples, LinkSamples) else list(samples)
     out: dict[str, list[float]] = {}
-    d = samples.directions
-    for k, node in enumerate(samples.nodes):
-        t, r = samples.tx_index == k, samples.rx_index == k
-        az = np.concatenate([np.asarray(d.az_tx)[t], np.asarray(d.az_rx)[r]])
-        el = np.concatenate([np.asarray(d.el_tx)[t], np.asarray(d.el_rx)[r]])
+    for k, node in enumerate(parts[0].nodes):
+        az, el = [], []
+        for part in parts:
+            d = part.directions
+            t, r = part.tx_index == k, part.rx_index == k
+            az += [np.asarray(d.az_tx)[t], np.asarray(d.az_rx)[r]]
+            el += [np.asarray(d.el_tx)[t], np.asarray(d.el_rx)[r]]
         prev = None if previous is None else previous.get(node)
-        out[node] = np.round(coverage_grid(az, el, prev), 1).tolist()
+        out[node] = np.round(coverage_grid(np.concatenate(az), np.concatenate(el), prev), 1).tolist()
     return out
 
 
