@@ -115,3 +115,18 @@ def test_orient_cautions_when_the_best_heading_looks_where_the_flight_never_did(
     # a drone behind the station and high up: nothing like it was flown
     unseen = best_yaw(model, "G", "D", (0.0, 0.0, 1.5), (-40.0, 0.0, 60.0), turn="tx")
     assert max(unseen.coverage_deg) > 30 and "fly those directions" in unseen.summary()
+
+
+def test_swarm_links_carry_their_coverage(tmp_path):
+    import pandas as pd
+    from rplearn.analysis.swarm import predict_swarm
+
+    per_unit, _, _, _ = ground_case(tmp_path, 5)
+    model = fit_auto(per_unit)[0].model
+    poses = pd.read_parquet(tmp_path / "f" / "pose_log.parquet")
+    far = poses.assign(x=poses["x"] * -1.0)  # the drone flown behind the station: never learned
+    seen, unseen = (predict_swarm(model, p, 20.0, step_s=5.0) for p in (poses, far))
+    for pred in (seen, unseen):
+        assert {"tx_coverage_deg", "rx_coverage_deg"} <= set(pred.links.columns)
+    assert (seen.links[["tx_coverage_deg", "rx_coverage_deg"]].max(axis=1) <= 10).mean() > 0.8
+    assert any("more than 10 deg from any direction" in n for n in unseen.notes)

@@ -34,6 +34,7 @@ from rplearn.core.geometry import distance_m, link_directions
 from rplearn.core.link import FAR_FIELD_WAVELENGTHS, free_space_path_loss_db, wavelength_m
 from rplearn.models.base import model_frequency_hz, require_patterns
 from rplearn.models.patterns import PatternSet
+from rplearn.models.predict import UNCOVERED_DEG, end_coverage_deg
 from rplearn.data.poses import pose_tracks
 
 #: Default spacing of the prediction times [s].
@@ -295,6 +296,9 @@ def _predict_links(
         residual_db = float(model.training.get("rmse_db", np.nan))
         columns["gain_pred_std_db"] = std
         columns["rssi_pred_std_db"] = np.sqrt(std**2 + residual_db**2)
+    ends = end_coverage_deg(model, samples)
+    if ends is not None:  # how far each end looks from where its pattern was learned [deg]
+        columns["tx_coverage_deg"], columns["rx_coverage_deg"] = ends
     links = pd.DataFrame(columns).sort_values(["t", "tx", "rx"], kind="stable", ignore_index=True)
     links["near_field"] = links["distance_m"] <= limit_m
     links["up"] = (links["rssi_pred_dbm"] >= min_rssi_dbm) | links["near_field"]
@@ -310,6 +314,14 @@ def _swarm_notes(links: pd.DataFrame, poses: Poses, frequency_hz: float) -> list
             f"note: {too_close:,} pair-time(s) closer than the far field ({_far_field_limit_m(frequency_hz):.3f} m): "
             "no RSSI predicted, counted as up (near_field)"
         )
+    if "tx_coverage_deg" in links.columns:
+        far = int((np.fmax(links["tx_coverage_deg"], links["rx_coverage_deg"]) > UNCOVERED_DEG).sum())
+        if far:
+            notes.append(
+                f"note: {far:,} of {len(links):,} link predictions look more than {UNCOVERED_DEG:g} deg from any direction "
+                "the antennas were learned from (columns tx_coverage_deg, rx_coverage_deg): there the gain is an "
+                "extrapolation (or the prior's), with its spread"
+            )
     absent = {d: int(np.sum(p[2] != 0)) for d, p in poses.items()}
     if any(absent.values()):
         notes.append("note: drone(s) without a pose at some times (outside their log or in a gap): "
