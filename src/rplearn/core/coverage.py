@@ -61,13 +61,22 @@ def coverage_grid(az_rad: ArrayLike, el_rad: ArrayLike, previous: ArrayLike | No
     """Angle [deg] from each point of a Fibonacci grid to the nearest of these directions.
 
     ``previous`` (the grid of earlier chunks) is combined by the minimum, so a grid can be
-    accumulated chunk by chunk. With no directions the grid is 180 degrees everywhere.
+    accumulated chunk by chunk. With no directions the grid is 180 degrees everywhere. The
+    directions are replaced by the grid points of the cells they fall in (exact within a cell's
+    radius, about 1 degree), so the cost does not grow with the number of samples.
     """
     az = np.asarray(az_rad, np.float64).ravel()
     out = np.full(n_points, 180.0)
     if az.size:
         gaz, gel = fibonacci_grid_nodes(n_points)
-        out = nearest_angle_deg(gaz, gel, az, el_rad)
+        # The grid points of the cells the directions fall in stand for them: a tree of at most
+        # n_points points, so that grid points far from a narrow patch of data are not answered
+        # by scanning it all, and the same set whatever the chunking (the result moves by less
+        # than a cell's radius, about 1 degree).
+        v = unit_vector(az, np.asarray(el_rad, np.float64).ravel())
+        _, cell = _grid_tree(n_points).query(v, k=1)
+        occupied = np.unique(cell)
+        out = nearest_angle_deg(gaz, gel, gaz[occupied], gel[occupied])
     if previous is not None:
         out = np.minimum(out, np.asarray(previous, np.float64))
     return out

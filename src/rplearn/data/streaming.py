@@ -16,7 +16,7 @@ same order), while holding one chunk of the signal log at a time:
 
 from __future__ import annotations
 
-from typing import Iterable, Iterator
+from typing import Iterable, Iterator, Mapping
 
 import numpy as np
 import pandas as pd
@@ -53,17 +53,23 @@ def row_hashes(signal: pd.DataFrame) -> np.ndarray:
     return pd.util.hash_pandas_object(frame, index=False).to_numpy(np.uint64)
 
 
-def conform_chunk(chunk: pd.DataFrame, extra_columns: list[str]) -> pd.DataFrame:
-    """A signal chunk with the canonical columns, then exactly ``extra_columns`` as text.
+def conform_chunk(chunk: pd.DataFrame, extra_columns: Mapping[str, str] | list[str]) -> pd.DataFrame:
+    """A signal chunk with the canonical columns, then exactly ``extra_columns``.
 
     Logs read in chunks (or several files) need not agree on their extra columns, nor on the
     type a column seems to have in one chunk (all empty here, text there): every chunk gets
-    every extra column of the whole stream, as pandas' string dtype with missing cells kept
-    missing, so that one schema is written and equal rows hash alike.
+    every extra column of the whole stream, with one type for the whole stream, so that one
+    schema is written and equal rows hash alike. ``extra_columns`` maps each column to
+    ``"number"`` (float64, missing as NaN: a column whose every value in every file is a
+    number) or ``"text"`` (pandas' string dtype, missing kept missing); a list means all text.
     """
+    kinds = dict(extra_columns) if isinstance(extra_columns, Mapping) else {c: "text" for c in extra_columns}
     out = chunk[[c for c in SIGNAL_COLUMNS if c in chunk.columns]].copy()
-    for c in extra_columns:
-        if c in chunk.columns:
+    for c, kind in kinds.items():
+        if kind == "number":
+            out[c] = (pd.to_numeric(chunk[c], errors="coerce").to_numpy(np.float64, na_value=np.nan)
+                      if c in chunk.columns else np.full(len(chunk), np.nan))
+        elif c in chunk.columns:
             col = chunk[c]
             missing = col.isna().to_numpy()
             text = col.astype(object).where(~missing, None)

@@ -129,7 +129,7 @@ def predict_dataset(model: Model, dataset: pd.DataFrame, source: str = "dataset"
     """
     samples = link_samples(dataset, source, require_rssi=False)
     gain = model.predict_gain(samples)
-    table = dataset.copy()
+    table = dataset.drop(columns=[c for c in PREDICTION_COLUMNS if c in dataset.columns])  # no stale predictions
     table["gain_pred_db"] = gain
     table["rssi_pred_dbm"] = received_power_dbm(
         table["tx_power_dbm"].to_numpy(np.float64), gain, samples.distance_m, table["frequency_hz"].to_numpy(np.float64)

@@ -100,7 +100,7 @@ def _accumulate(
     stats: dict[str, NormalEquations] = {}
     wanted = None if not units else {str(u) for u in units}
     freq: Counter[float] = Counter()
-    non_unit, learn_s, first_row, learn_row = 0, 0.0, 0, 0
+    non_unit, learn_s, first_row, learn_row, last_t = 0, 0.0, 0, 0, -np.inf
     grids: dict[str, list[float]] | None = None
     for chunk in chunks:
         where = f"{source} (rows {first_row:,} to {first_row + len(chunk) - 1:,})"
@@ -109,8 +109,14 @@ def _accumulate(
             chunk = chunk[chunk["unit"].astype(str).isin(wanted).to_numpy()]
         if chunk.empty:
             continue
-        if block_rows:  # one unit: contiguous stretches of its rows (the file's time order)
-            labels = np.array([f"block {k + 1}" for k in (learn_row + np.arange(len(chunk))) // block_rows])
+        if block_rows:  # one unit: contiguous stretches of its rows, which must be in time order
+            t = chunk["t"].to_numpy(np.float64)
+            if t.size and (np.any(np.diff(t) < 0) or t[0] < last_t):
+                raise InputError(f"{where}: field t goes backwards; cutting a single flight into time blocks "
+                                 "for cross-validation needs rows sorted by time (sort the file, or label units)")
+            last_t = float(t[-1]) if t.size else last_t
+            block = (learn_row + np.arange(len(chunk))) // block_rows + 1
+            labels = np.char.add("block ", block.astype(str))
         elif by_unit and "unit" in chunk.columns:
             labels = chunk["unit"].astype(str).to_numpy()
         else:

@@ -76,16 +76,45 @@ def _streamable(signal_paths: Sequence[str], reader_options: ReaderOptions) -> b
                for p in signal_paths)
 
 
-def _extra_columns(signal_paths: Sequence[str], options: ReaderOptions) -> list[str]:
-    """Extra (non-canonical) columns of all signal tables, in order of first appearance."""
+def _extra_columns(signal_paths: Sequence[str], options: ReaderOptions) -> dict[str, str]:
+    """Extra (non-canonical) columns of all signal tables, in order of first appearance, each
+    ``"number"`` when every value in every file is a number, else ``"text"`` (a pass over
+    those columns only)."""
     from rplearn.io.tables import table_columns
 
-    seen: list[str] = []
+    kinds: dict[str, str] = {}
     for path in signal_paths:
-        for c in table_columns(path, options.columns):
-            if c not in SIGNAL_COLUMNS and c not in seen:
-                seen.append(c)
-    return seen
+        names = [c for c in table_columns(path, options.columns) if c not in SIGNAL_COLUMNS]
+        for c in names:
+            kinds.setdefault(c, "number")
+        for c, numeric in _numeric_columns(path, names, options).items():
+            if not numeric:
+                kinds[c] = "text"
+    return kinds
+
+
+def _numeric_columns(path: str, names: list[str], options: ReaderOptions) -> dict[str, bool]:
+    """Whether each of these columns of one table holds numbers only (missing cells allowed)."""
+    from rplearn.io.tables import table_columns
+
+    if not names:
+        return {}
+    if str(path).lower().endswith((".parquet", ".pq")):
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+
+        schema = pq.ParquetFile(path).schema_arrow
+        renamed = dict(zip(table_columns(path, options.columns), schema.names))
+        return {c: pa.types.is_integer(schema.field(renamed[c]).type) or pa.types.is_floating(schema.field(renamed[c]).type)
+                for c in names}
+    renamed = dict(zip(table_columns(path, options.columns), pd.read_csv(path, nrows=0, skipinitialspace=True).columns))
+    numeric = {c: True for c in names}
+    for chunk in pd.read_csv(path, usecols=[renamed[c] for c in names], dtype=str, chunksize=SYNC_CHUNK_ROWS,
+                             skipinitialspace=True):
+        for c in names:
+            col = chunk[renamed[c]]
+            numeric[c] = numeric[c] and bool(pd.to_numeric(col, errors="coerce").notna().sum() == col.notna().sum())
+    return numeric
 
 
 def _signal_chunks(signal_paths: Sequence[str], options: ReaderOptions) -> Iterator[pd.DataFrame]:
