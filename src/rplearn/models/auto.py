@@ -9,6 +9,7 @@ the same statistics (a sub-block for a smaller SH order), so no sample is read t
 from __future__ import annotations
 
 import time
+from collections import Counter
 from typing import Any, Mapping, Sequence
 
 import numpy as np
@@ -29,7 +30,7 @@ from rplearn.errors import InputError
 from rplearn.models.fit import FittedModel, node_coverage_grids
 from rplearn.models.patterns import PatternSet
 from rplearn.models.spec import ModelSpec, check_model_size, default_ridge
-from rplearn.models.streamed import weighted_median
+from rplearn.models.streamed import frequency_counts, weighted_median
 
 #: Largest SH order ``--degree auto`` considers (the cost of the selection is that of one fit
 #: at this order: its statistics are accumulated once).
@@ -154,12 +155,9 @@ def fit_auto(
     t0 = time.perf_counter()
     stats = {u: NormalEquations(basis, len(nodes)).add(s.directions, s.tx_index, s.rx_index, s.joint_gain_db)
              for u, s in units.items()}
-    freq: dict[float, int] = {}
+    freq = Counter()
     for s in units.values():
-        if s.frequency_hz is not None:
-            values, counts = np.unique(s.frequency_hz, return_counts=True)
-            for v, c in zip(values.tolist(), counts.tolist()):
-                freq[v] = freq.get(v, 0) + c
+        frequency_counts(s, freq)
     fitted, choice = fit_from_statistics(stats, kind, orders, nodes, ridge, gauge, power, weighted_median(freq),
                                          provenance, prior)
     fitted.ltd_s = time.perf_counter() - t0

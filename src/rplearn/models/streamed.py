@@ -23,7 +23,7 @@ import pandas as pd
 from rplearn.core.normal_equations import NormalEquations
 from rplearn.core.selection import penalty_scale, penalty_vector
 from rplearn.core.solver import FitReport, solve
-from rplearn.data.tables import link_samples, node_ids
+from rplearn.data.tables import LinkSamples, link_samples, node_ids
 from rplearn.errors import InputError
 from rplearn.models.fit import node_coverage_grids
 from rplearn.models.patterns import PatternSet
@@ -65,6 +65,15 @@ def weighted_median(counts: Mapping[float, int]) -> float | None:
     if cum[i] == half and i + 1 < values.size:  # an even count split between two values
         return float((values[i] + values[i + 1]) / 2.0)
     return float(values[i])
+
+
+def frequency_counts(samples: LinkSamples, counts: Counter[float] | None = None) -> Counter[float]:
+    """Samples per carrier frequency [Hz], added to ``counts`` (for :func:`weighted_median`)."""
+    counts = Counter() if counts is None else counts
+    if samples.frequency_hz is not None:
+        values, n = np.unique(samples.frequency_hz, return_counts=True)
+        counts.update(dict(zip(values.tolist(), n.tolist())))
+    return counts
 
 
 def units_and_nodes(chunks: Iterable[pd.DataFrame]) -> pd.DataFrame:
@@ -131,9 +140,7 @@ def _accumulate(
             learn_s += time.perf_counter() - t0
             non_unit += samples.non_unit_quaternions
             grids = node_coverage_grids(samples, grids)
-            if samples.frequency_hz is not None:
-                values, counts = np.unique(samples.frequency_hz, return_counts=True)
-                freq.update(dict(zip(values.tolist(), counts.tolist())))
+            frequency_counts(samples, freq)
             if not by_unit:
                 break
     if not stats or sum(a.n_samples for a in stats.values()) == 0:
@@ -203,4 +210,4 @@ def fit_patterns_streamed(
     return StreamedFit(patterns, sol.report, normal.n_samples, non_unit, learn_s)
 
 
-__all__ = ["StreamedFit", "fit_patterns_streamed", "unit_statistics_streamed", "units_and_nodes", "weighted_median"]
+__all__ = ["StreamedFit", "frequency_counts", "fit_patterns_streamed", "unit_statistics_streamed", "units_and_nodes", "weighted_median"]

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rplearn.errors import InputError
-from rplearn.plan.trajectory import UnitReference
+from rplearn.plan.trajectory import UnitReference, check_unit_fields
 
 
 @dataclass(frozen=True)
@@ -62,13 +62,7 @@ class GroundPassUnit:
     role: str = "learning"
 
     def __post_init__(self) -> None:
-        if len(self.nodes) != 2 or str(self.nodes[0]) == str(self.nodes[1]):
-            raise InputError(f"unit nodes: expected two different node ids, got {self.nodes!r}", param="nodes")
-        object.__setattr__(self, "nodes", (str(self.nodes[0]), str(self.nodes[1])))
-        for name in ("distance_m", "height_m", "station_height_m", "arc_deg", "speed_m_s"):
-            v = float(getattr(self, name))
-            if not (np.isfinite(v) and v > 0):
-                raise InputError(f"{name}: expected a positive finite number, got {v!r}", param=name)
+        check_unit_fields(self, ("distance_m", "height_m", "station_height_m", "arc_deg", "speed_m_s"))
         if not (0.0 <= self.heading_band_deg <= 360.0):
             raise InputError(f"heading_band_deg: expected 0..360, got {self.heading_band_deg!r}", param="heading_band_deg")
         if int(self.n_passes) != self.n_passes or self.n_passes < 1:

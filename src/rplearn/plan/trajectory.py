@@ -52,6 +52,19 @@ _REMEDIES: dict[str, str] = {
 
 
 
+def check_unit_fields(unit: Any, positive: tuple[str, ...]) -> None:
+    """Checks every kind of unit shares: two different node ids (stored as ``str``) and the
+    named fields positive and finite."""
+    nodes = unit.nodes
+    if len(nodes) != 2 or str(nodes[0]) == str(nodes[1]):
+        raise InputError(f"unit nodes: expected two different node ids, got {nodes!r}", param="nodes")
+    object.__setattr__(unit, "nodes", (str(nodes[0]), str(nodes[1])))
+    for name in positive:
+        v = float(getattr(unit, name))
+        if not (np.isfinite(v) and v > 0):
+            raise InputError(f"{name}: expected a positive finite number, got {v!r}", param=name)
+
+
 @dataclass(frozen=True)
 class TrajectoryUnit:
     """One calibration trajectory unit for a pair of drones (paper Sec. IV-A).
@@ -100,13 +113,7 @@ class TrajectoryUnit:
     role: str = "learning"
 
     def __post_init__(self) -> None:
-        if len(self.nodes) != 2 or str(self.nodes[0]) == str(self.nodes[1]):
-            raise InputError(f"unit nodes: expected two different node ids, got {self.nodes!r}", param="nodes")
-        object.__setattr__(self, "nodes", (str(self.nodes[0]), str(self.nodes[1])))
-        for name in ("distance_m", "height_m", "speed_m_s", "accel_m_s2", "yaw_rate_deg_s"):
-            v = float(getattr(self, name))
-            if not (np.isfinite(v) and v > 0):
-                raise InputError(f"{name}: expected a positive finite number, got {v!r}", param=name)
+        check_unit_fields(self, ("distance_m", "height_m", "speed_m_s", "accel_m_s2", "yaw_rate_deg_s"))
         if self.height_m <= self.distance_m / 2.0:
             raise InputError(
                 f"height_m: expected more than half the distance ({self.distance_m / 2:g} m) "

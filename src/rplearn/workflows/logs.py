@@ -84,19 +84,19 @@ def _extra_columns(signal_paths: Sequence[str], options: ReaderOptions) -> dict[
 
     kinds: dict[str, str] = {}
     for path in signal_paths:
-        names = [c for c in table_columns(path, options.columns) if c not in SIGNAL_COLUMNS]
+        columns = table_columns(path, options.columns)
+        names = [c for c in columns if c not in SIGNAL_COLUMNS]
         for c in names:
             kinds.setdefault(c, "number")
-        for c, numeric in _numeric_columns(path, names, options).items():
+        for c, numeric in _numeric_columns(path, names, columns).items():
             if not numeric:
                 kinds[c] = "text"
     return kinds
 
 
-def _numeric_columns(path: str, names: list[str], options: ReaderOptions) -> dict[str, bool]:
-    """Whether each of these columns of one table holds numbers only (missing cells allowed)."""
-    from rplearn.io.tables import table_columns
-
+def _numeric_columns(path: str, names: list[str], columns: list[str]) -> dict[str, bool]:
+    """Whether each of these columns of one table holds numbers only (missing cells allowed);
+    ``columns`` are the table's column names after renaming, in file order."""
     if not names:
         return {}
     if str(path).lower().endswith((".parquet", ".pq")):
@@ -104,10 +104,10 @@ def _numeric_columns(path: str, names: list[str], options: ReaderOptions) -> dic
         import pyarrow.parquet as pq
 
         schema = pq.ParquetFile(path).schema_arrow
-        renamed = dict(zip(table_columns(path, options.columns), schema.names))
+        renamed = dict(zip(columns, schema.names))
         return {c: pa.types.is_integer(schema.field(renamed[c]).type) or pa.types.is_floating(schema.field(renamed[c]).type)
                 for c in names}
-    renamed = dict(zip(table_columns(path, options.columns), pd.read_csv(path, nrows=0, skipinitialspace=True).columns))
+    renamed = dict(zip(columns, pd.read_csv(path, nrows=0, skipinitialspace=True).columns))
     numeric = {c: True for c in names}
     for chunk in pd.read_csv(path, usecols=[renamed[c] for c in names], dtype=str, chunksize=SYNC_CHUNK_ROWS,
                              skipinitialspace=True):
