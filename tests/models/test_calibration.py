@@ -33,8 +33,78 @@ def test_ground_with_a_prior_is_calibrated_inside_and_outside(tmp_path):
 
 
 @pytest.mark.slow
-def test_paper_is_calibrated_where_it_was_flown(tmp_path_factory):
-    _, _, per_unit, _, test = campaign(tmp_path_factory, "paper", 0, link=("A", "B"))
-    fitted, _ = fit_auto(per_unit)
-    hit, covered = interval_hits(fitted.model, test)
-    assert 0.85 <= hit.mean() <= 0.95 and 0.85 <= hit[covered].mean() <= 0.95, (hit.mean(), hit[covered].mean())
+def test_paper_is_calibrated_inside_and_outside_the_flown_directions(tmp_path_factory):
+    """On `paper` the test flight strays beyond 10 deg of the learning directions for under 1%
+    of its samples, in one stretch of flight (12 to 176 samples a seed): one stretch is one
+    draw of the pattern's error there, so the uncovered samples of six independent campaigns
+    are pooled; the covered ones are checked campaign by campaign."""
+    pooled = []
+    for seed in range(6):
+        _, _, per_unit, _, test = campaign(tmp_path_factory, "paper", seed, link=("A", "B"))
+        fitted, _ = fit_auto(per_unit)
+        hit, covered = interval_hits(fitted.model, test)
+        assert 0.85 <= hit.mean() <= 0.95 and 0.85 <= hit[covered].mean() <= 0.95, (seed, hit.mean(), hit[covered].mean())
+        pooled.append(hit[~covered])
+    outside = np.concatenate(pooled)
+    assert outside.size > 300 and 0.85 <= outside.mean() <= 0.95, (outside.size, outside.mean())
+
+
+def flights_with_their_own_errors(n_units, seed, unit_error_db=1.0, noise_db=1.0, n=1500):
+    """Units of one smooth SH-3 pair of patterns, each unit with its own smooth SH-2 error
+    (another day, another altitude) on top of independent noise."""
+    from rplearn.core.geometry import Directions
+    from rplearn.core.sh import SphericalHarmonics
+    from rplearn.data.tables import LinkSamples
+
+    rng = np.random.default_rng(seed)
+    truth, wobble = SphericalHarmonics(3), SphericalHarmonics(2)
+    coef = rng.normal(0.0, 3.0, (2, truth.n_coef))
+    units = {}
+    for u in range(n_units):
+        bias = rng.normal(0.0, unit_error_db / np.sqrt(wobble.n_coef / (4 * np.pi)), (2, wobble.n_coef))
+        az, el = rng.uniform(-np.pi, np.pi, (2, n)), np.arcsin(rng.uniform(-1, 1, (2, n)))
+        tx = rng.integers(0, 2, n)
+        rx = 1 - tx
+        g = sum(np.einsum("nc,nc->n", c[i], b.design(az[k], el[k]))
+                for c, b in ((coef, truth), (bias, wobble)) for k, i in ((0, tx), (1, rx)))
+        y = g + rng.normal(0.0, noise_db, n)
+        units[f"u{u}"] = LinkSamples(Directions(az[0], el[0], az[1], el[1]), tx, rx, ("A", "B"), y, np.full(n, 30.0))
+    return units
+
+
+def test_the_spread_is_inflated_to_what_held_out_flights_show():
+    """Each flight has its own smooth error, which no fit from other flights can know: with the
+    inflation learned from grouped cross-validation, 90% intervals of a new flight cover about
+    90% of it; with the bare posterior (inflation 1) far fewer."""
+    units = flights_with_their_own_errors(16, seed=3, unit_error_db=2.0)
+    new = [units.pop(f"u{k}") for k in range(6, 16)]
+    fitted, sel = fit_auto(units)
+    kappa = fitted.model.training["variance_inflation"]
+    assert kappa == sel.variance_inflation > 3, kappa
+    hit = np.concatenate([interval_hits(fitted.model, s)[0] for s in new])
+    fitted.model.covariance = fitted.model.covariance / kappa
+    bare = np.concatenate([interval_hits(fitted.model, s)[0] for s in new])
+    assert 0.85 <= hit.mean() <= 0.95 and bare.mean() < 0.85, (hit.mean(), bare.mean())
+
+
+def test_flights_that_agree_are_not_inflated_much():
+    units = flights_with_their_own_errors(5, seed=4, unit_error_db=0.0)
+    fitted, sel = fit_auto(units)
+    assert 1.0 <= sel.variance_inflation < 2.5, sel.variance_inflation
+
+
+def test_far_from_the_data_the_spread_is_the_reported_prior_spread(tmp_path):
+    """Where no learning direction comes near, the spread of a link's gain is that of the prior
+    (the reported ``prior_std_db`` of both ends), with and without a reference prior."""
+    from rplearn.core.geometry import Directions
+    from rplearn.data.tables import LinkSamples
+
+    per_unit, learn, _, prior = ground_case(tmp_path, 3)
+    far = Directions(np.full(50, np.pi), np.full(50, 1.2), np.full(50, np.pi), np.full(50, 1.2))
+    for with_prior in (None, {n: prior for n in prior.nodes}):
+        model = fit_auto(per_unit, prior=with_prior)[0].model
+        spread = model.training["prior_std_db"]
+        samples = LinkSamples(far, np.zeros(50, int), np.ones(50, int), learn.nodes, np.zeros(50), np.full(50, 40.0))
+        expected = np.hypot(spread[learn.nodes[0]], spread[learn.nodes[1]])
+        got = np.median(model.predict_gain_std(samples))
+        assert 0.8 * expected <= got <= 1.3 * expected, (got, expected, with_prior is not None)

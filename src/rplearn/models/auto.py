@@ -97,6 +97,45 @@ def prior_coefficients(prior: Mapping[str, Any], nodes: Sequence[str], basis: An
     return target
 
 
+def prior_std_db(basis: Any, nodes: Sequence[str], ridge: float, penalty: np.ndarray, noise_var: float) -> dict[str, float]:
+    """Prior standard deviation of each node's gain at a direction [dB], as the automatic fit
+    reads its penalty: coefficients ``N(target, noise_var (ridge + penalty_j)^-1)``, averaged
+    over the sphere (the unpenalised constant left out: the data and the gauge fix it).
+
+    Where the flight never looked, the predictive spread of a node's gain returns to this
+    value; close to the data it is far smaller. With a prior pattern it is how far the truth
+    may stray from the prior, as the cross-validation judged it; without one, how far from
+    zero the pattern may be.
+    """
+    from rplearn.core.bases import fibonacci_grid_nodes
+
+    p = basis.n_coef
+    az, el = fibonacci_grid_nodes(max(4 * p, 400))
+    squares = basis.design(az, el) ** 2  # (directions, p)
+    out = {}
+    for k, node in enumerate(nodes):
+        weight = ridge + np.asarray(penalty[k * p:(k + 1) * p], np.float64)
+        keep = np.asarray(penalty[k * p:(k + 1) * p]) > 0
+        var = noise_var * squares[:, keep] @ (1.0 / weight[keep])
+        out[str(node)] = float(np.sqrt(np.mean(var))) if keep.any() else float("inf")
+    return out
+
+
+def prior_misfit_var(normal: NormalEquations, target: np.ndarray, basis: Any) -> float:
+    """Mean squared difference [dB^2] between the joint gains of the samples and those of the
+    prior coefficients ``target``, after the best constant offset (a prior's absolute level is
+    a convention the gauge does not share), from the statistics alone."""
+    from rplearn.core.bases import fibonacci_grid_nodes
+
+    az, el = fibonacci_grid_nodes(max(4 * basis.n_coef, 400))
+    half = np.linalg.lstsq(basis.design(az, el), np.full(az.size, 0.5), rcond=None)[0]
+    ones = np.tile(half, normal.n_nodes)  # X @ ones = 1 for every sample (half a dB from each end)
+    g, r = normal.gram, normal.rhs
+    shift = (ones @ r - ones @ g @ target) / max(float(ones @ g @ ones), 1e-300)
+    c = target + shift * ones
+    return float(max(normal.yty - 2.0 * c @ r + c @ g @ c, 0.0) / max(normal.n_samples, 1))
+
+
 def fit_auto(
     unit_samples: Mapping[str, LinkSamples],
     kind: str = "sh",
@@ -106,6 +145,7 @@ def fit_auto(
     provenance: Mapping[str, Any] | None = None,
     power: float | None = None,
     prior: Mapping[str, Any] | None = None,
+    prior_spread_db: float | None = None,
 ) -> tuple[FittedModel, Selection]:
     """Learn a regularised pattern set with its order and smoothing chosen from the data.
 
@@ -127,6 +167,10 @@ def fit_auto(
     prior : mapping of node to model, optional
         Reference patterns to shrink toward instead of toward zero (``fit --prior``): where the
         flight looked, the data win; where it did not, the pattern falls back to the prior.
+    prior_spread_db : float, optional
+        How far [dB RMS] each prior may be from the truth, where known (a vendor's tolerance);
+        by default learned from the prior's misfit where the flight looked. Sets the predictive
+        spread where the flight did not look (see :func:`fit_from_statistics`).
 
     Returns
     -------
@@ -159,7 +203,7 @@ def fit_auto(
     for s in units.values():
         frequency_counts(s, freq)
     fitted, choice = fit_from_statistics(stats, kind, orders, nodes, ridge, gauge, power, weighted_median(freq),
-                                         provenance, prior)
+                                         provenance, prior, prior_spread_db)
     fitted.ltd_s = time.perf_counter() - t0
     fitted.model.training["ltd_s"] = fitted.ltd_s
     fitted.model.training["coverage_deg"] = node_coverage_grids(list(units.values()))
@@ -177,9 +221,19 @@ def fit_from_statistics(
     frequency_hz: float | None = None,
     provenance: Mapping[str, Any] | None = None,
     prior: Mapping[str, Any] | None = None,
+    prior_spread_db: float | None = None,
 ) -> tuple[FittedModel, Selection]:
     """The selection and the final solve of :func:`fit_auto`, from per-unit statistics
-    accumulated at the largest of ``orders`` (in memory, or streamed from a big file)."""
+    accumulated at the largest of ``orders`` (in memory, or streamed from a big file).
+
+    The model's covariance is the posterior's, times the selection's variance inflation. Its
+    spread where the data are absent is ``training["prior_std_db"]`` per node (and
+    ``training["prior_std_source"]`` says where that number comes from): without a prior, the
+    spread the cross-validated smoothing implies; with a prior for every node, how far the
+    flight found the prior off where it looked (its RMS misfit, less the noise, shared by the
+    two ends of a link), or ``prior_spread_db`` when given, whichever is larger than the
+    implied spread.
+    """
     t0 = time.perf_counter()
     if power is None:
         power = PRIOR_PENALTY_POWER if prior else DEFAULT_PENALTY_POWER
@@ -198,18 +252,42 @@ def fit_from_statistics(
     if target is not None:
         sub_target = target[nested_columns(first.basis, chosen, len(nodes))]
     sol = solve(normal, list(nodes), ridge=ridge, gauge=gauge, penalty=penalty, penalty_target=sub_target)
+    inflation = float(choice.variance_inflation)
+    noise_var = sol.residual_variance_db2 * inflation
+    spread = prior_std_db(chosen, list(nodes), ridge, penalty, noise_var)
+    spread_source = "implied by the cross-validated smoothing"
+    covariance = None if sol.covariance is None else sol.covariance * inflation
+    if sub_target is not None and covariance is not None and set(map(str, prior)) >= set(map(str, nodes)):
+        if prior_spread_db is None:
+            misfit = prior_misfit_var(normal, sub_target, chosen)
+            wanted = float(np.sqrt(max(misfit - sol.residual_variance_db2, 0.0) / 2.0))  # two ends a sample
+            spread_source = "learned from the prior's misfit to the flight"
+        else:
+            wanted = float(prior_spread_db)
+            spread_source = "stated"
+        factor = np.array([(spread[str(n)] / max(wanted, spread[str(n)])) ** 2 for n in nodes])
+        if np.any(factor < 1.0):
+            # the same posterior, read with a prior of the wanted spread: the penalty per node
+            # scaled so that its implied prior spread is the wanted one (the mean is the CV's)
+            weights = (ridge + penalty) * np.repeat(factor, chosen.n_coef)
+            wide = solve(normal, list(nodes), ridge=0.0, gauge=gauge, penalty=weights, penalty_target=sub_target)
+            covariance = wide.covariance * (sol.residual_variance_db2 / wide.residual_variance_db2) * inflation
+            spread = prior_std_db(chosen, list(nodes), 0.0, weights, noise_var)
+        else:
+            spread_source = "implied by the cross-validated smoothing (larger than " + spread_source + ")"
     ltd = time.perf_counter() - t0
     training = sol.report.to_dict()
-    training.update(smoothing=choice.smoothing, penalty_power=power, selection=choice.to_dict(), ltd_s=ltd)
+    training.update(smoothing=choice.smoothing, penalty_power=power, selection=choice.to_dict(), ltd_s=ltd,
+                    variance_inflation=inflation, prior_std_db=spread, prior_std_source=spread_source)
     if prior:
         training["prior"] = {str(n): str(getattr(m, "provenance", {}).get("model", getattr(m, "label", "?")))
                              for n, m in prior.items()}
     if frequency_hz is not None:
         training["frequency_hz"] = frequency_hz
-    model = PatternSet(basis=chosen, nodes=tuple(nodes), coef=sol.coef, covariance=sol.covariance,
+    model = PatternSet(basis=chosen, nodes=tuple(nodes), coef=sol.coef, covariance=covariance,
                        gauge=[g.to_dict() for g in sol.report.gauges], training=training)
     model.provenance = {**dict(provenance or {}), "model": spec.label}
     return FittedModel(spec, model, ltd), choice
 
 
-__all__ = ["MAX_AUTO_ORDER", "PRIOR_PENALTY_POWER", "SAMPLES_PER_COEF", "auto_orders", "fit_auto", "fit_from_statistics", "prior_coefficients"]
+__all__ = ["MAX_AUTO_ORDER", "PRIOR_PENALTY_POWER", "SAMPLES_PER_COEF", "auto_orders", "fit_auto", "fit_from_statistics", "prior_coefficients", "prior_misfit_var", "prior_std_db"]
