@@ -78,7 +78,10 @@ def test_simulate_sync_fit_evaluate_export_predict(workdir):
     inspect = run(["inspect", "flight/pose_log.parquet", "flight/signal_log.parquet"], d)
     assert "A -> B" in inspect.stdout
     orient = run(["orient", "sh3.json", "--tx", "A", "--rx", "B", "--tx-pos", "0,0,20", "--rx-pos", "10,0,20"], d)
-    assert "best yaw" in orient.stdout
+    assert "best yaw" in orient.stdout and "1 sigma" in orient.stdout
+    bold = run(["orient", "sh3.json", "--tx", "A", "--rx", "B", "--tx-pos", "0,0,20", "--rx-pos", "10,0,20",
+                "--caution", "0"], d)
+    assert "best yaw" in bold.stdout and "chosen by its lower bound" not in bold.stdout
 
 
 USER_ERRORS = {

@@ -41,9 +41,10 @@ def rmse(model, test, spec=ModelSpec("sh", 3)):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("seed", [0, 1, pytest.param(2, marks=pytest.mark.xfail(strict=True, reason=(
-    "known: at the 35 m test altitude, outside both learning altitudes, the fit (4.77 dB) loses to the "
-    "prior alone (4.71 dB): the SH correction learned on the 15/25 m bands extends globally; a coverage-"
-    "weighted fall-back to the prior is still to come (issue 11, item 3)")))])
+    "known: at the 35 m test altitude the fit (4.77 dB) loses to the prior alone (4.71 dB); not a matter of "
+    "coverage (98% of the test samples lie within 10 deg of learning directions): the correction that "
+    "cross-validation between 15 and 25 m favours (0.37 dB better there) does not carry to 35 m. Seeds 0, 1, "
+    "3, 4, 5 beat the prior by 0.08-0.48 dB")))])
 def test_a_reference_prior_wins_where_the_flight_saw_little(tmp_path, seed):
     per_unit, learn, test, prior = ground_case(tmp_path, seed)
     for node, (az, el) in node_directions(learn).items():
@@ -74,6 +75,15 @@ def test_fit_cli_takes_a_prior_per_node(tmp_path):
     from rplearn.models import load_model
 
     assert set(load_model(tmp_path / "p.json").training["prior"]) == {"G", "D"}
+    assert "where the flight never looked each pattern may be off by" in proc.stdout and "x" in proc.stdout
+    proc = subprocess.run(rplearn + ["fit", "m.parquet", "--prior", "G=ref.json", "--prior", "D=ref.json", "--prior-std", "4",
+                                     "-o", "s.json"], cwd=tmp_path, capture_output=True, text=True)
+    assert proc.returncode == 0 and "G 4.0 dB, D 4.0 dB" in proc.stdout.replace("D 4.0 dB, G 4.0 dB", "G 4.0 dB, D 4.0 dB"), proc.stdout
+    stated = load_model(tmp_path / "s.json").training
+    assert stated["prior_std_source"] == "stated" and stated["prior_std_db"]["G"] == pytest.approx(4.0)
+    proc = subprocess.run(rplearn + ["fit", "m.parquet", "--prior-std", "4", "-o", "y.json"], cwd=tmp_path,
+                          capture_output=True, text=True)
+    assert proc.returncode == 1 and "give --prior too" in proc.stderr, proc.stderr
     proc = subprocess.run(rplearn + ["fit", "m.parquet", "--prior", "X=ref.json", "-o", "x.json"], cwd=tmp_path,
                           capture_output=True, text=True)
     assert proc.returncode == 1 and "prior: node X is not in the learning data" in proc.stderr, proc.stderr
@@ -130,3 +140,27 @@ def test_swarm_links_carry_their_coverage(tmp_path):
         assert {"tx_coverage_deg", "rx_coverage_deg"} <= set(pred.links.columns)
     assert (seen.links[["tx_coverage_deg", "rx_coverage_deg"]].max(axis=1) <= 10).mean() > 0.8
     assert any("more than 10 deg from any direction" in n for n in unseen.notes)
+
+
+def test_orient_prefers_headings_the_flight_saw(tmp_path):
+    """Ranked by the 10% lower bound, the chosen headings face directions nearer the flown ones
+    and are surer than the headings the prediction alone picks, for little predicted gain."""
+    import numpy as np
+    from rplearn.analysis.headings import best_yaw
+
+    per_unit, _, _, _ = ground_case(tmp_path, 4)
+    model = fit_auto(per_unit)[0].model
+    rng = np.random.default_rng(0)
+    nearer = surer = 0
+    lost = []
+    for _ in range(20):
+        drone = (rng.uniform(-60, 60), rng.uniform(-60, 60), rng.uniform(10, 60))
+        bold = best_yaw(model, "G", "D", (0.0, 0.0, 1.5), drone, turn="tx", caution_z=0.0)
+        safe = best_yaw(model, "G", "D", (0.0, 0.0, 1.5), drone, turn="tx")
+        nearer += safe.coverage_deg[0] <= bold.coverage_deg[0]
+        surer += safe.gain_std_db <= bold.gain_std_db + 1e-9
+        lost.append(bold.gain_db - safe.gain_db)
+    assert nearer >= 18 and surer == 20, (nearer, surer)
+    assert 0 <= np.median(lost) < 1.0, lost
+    with pytest.raises(Exception, match="caution_z"):
+        best_yaw(model, "G", "D", (0.0, 0.0, 1.5), (30.0, 0.0, 20.0), caution_z=-1.0)

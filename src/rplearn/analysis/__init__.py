@@ -40,6 +40,7 @@ _NAMES: dict[str, str] = {
     "best_swarm_headings": "headings",
     "best_yaw": "headings",
     "heading_gain_tables": "headings",
+    "heading_std_tables": "headings",
     # swarm links over time
     "DEFAULT_MIN_RSSI_DBM": "swarm",
     "SwarmPrediction": "swarm",

@@ -113,6 +113,32 @@ def heading_gain_tables(
     return table
 
 
+def heading_std_tables(
+    model: PatternSet, positions: Mapping[str, ArrayLike], patterns: Mapping[str, str], yaw_grid_deg: np.ndarray
+) -> dict[Pair, np.ndarray] | None:
+    """Standard error [dB] of every entry of :func:`heading_gain_tables` (None for a model
+    without a covariance): larger where a drone would face the other in a direction the
+    flight never looked in."""
+    if getattr(model, "covariance", None) is None:
+        return None
+    yaws = np.asarray(yaw_grid_deg, np.float64)
+    q = quat_wxyz_from_yaw(np.radians(yaws))
+    table = {}
+    for a in positions:
+        pa = np.broadcast_to(np.asarray(positions[a], np.float64), (yaws.size, 3))
+        for b in positions:
+            if a != b:
+                pb = np.broadcast_to(np.asarray(positions[b], np.float64), (yaws.size, 3))
+                az, el = direction_in_body(pa, q, pb)
+                table[(a, b)] = model.standard_error(patterns[a], az, el)
+    return table
+
+
+#: Default of ``best_yaw(caution_z=...)``: headings are ranked by the 10% lower bound of their
+#: gain (prediction minus 1.28 standard errors of each end).
+CAUTION_Z = 1.28
+
+
 # -------------------------------------------------------------------------------------------
 # One link
 
@@ -137,6 +163,11 @@ class OrientationResult:
     coverage_deg : (float, float) or None
         At the best yaws, the angle from the direction each end looks at the other to the
         nearest direction its antenna was learned from [deg] (models that store coverage).
+    gain_std_db : float or None
+        Standard error of ``gain_db`` (both ends) [dB] (None for a model without covariance).
+    boldest : (float, float, float) or None
+        When ranking by the lower bound changed the choice: the tx yaw, rx yaw [deg] and joint
+        gain [dB] that the prediction alone would have chosen.
     """
 
     tx_yaw_deg: float
@@ -148,6 +179,8 @@ class OrientationResult:
     baseline_rssi_dbm: float | None = None
     frequency_hz: float | None = None
     coverage_deg: tuple[float, float] | None = None
+    gain_std_db: float | None = None
+    boldest: tuple[float, float, float] | None = None
 
     def summary(self) -> str:
         """The best yaws and the gain in received power (or joint gain) they bring, for people."""
@@ -158,6 +191,12 @@ class OrientationResult:
         else:
             before, after = self.baseline_gain_db, self.gain_db
             lines.append(f"predicted joint gain: {before:.1f} dB now -> {after:.1f} dB ({after - before:+.1f} dB)")
+        if self.gain_std_db is not None:
+            lines[-1] += f", +- {self.gain_std_db:.1f} dB (1 sigma, the pattern's error)"
+        if self.boldest is not None:
+            lines.append(
+                f"the prediction alone would turn to tx {self.boldest[0]:.0f} deg, rx {self.boldest[1]:.0f} deg "
+                f"({self.boldest[2] - self.gain_db:+.1f} dB more) where it is less sure; chosen by its lower bound")
         if self.coverage_deg is not None and max(self.coverage_deg) > UNCOVERED_DEG:
             lines.append(
                 f"caution: at these headings the link looks {self.coverage_deg[0]:.0f} deg (tx) and "
@@ -178,8 +217,14 @@ def best_yaw(
     step_deg: float = 1.0,
     tx_power_dbm: float | None = None,
     frequency_hz: float | None = None,
+    caution_z: float = CAUTION_Z,
 ) -> OrientationResult:
     """Heading(s) of level drones at given ENU positions that maximise the predicted joint gain.
+
+    Headings are ranked by a lower bound of the gain, the prediction minus ``caution_z``
+    standard errors of each end: where the flight never looked the pattern's spread is large,
+    so of two headings predicted alike the one the flight saw wins, and an extrapolated peak
+    must promise more than its uncertainty to be chosen.
 
     Parameters
     ----------
@@ -195,8 +240,13 @@ def best_yaw(
         Transmit power [dBm]; given, the result carries the received power before and after.
     frequency_hz : float, optional
         Carrier for the received power [Hz]; by default the one the model was learned at.
+    caution_z : float
+        Standard errors subtracted when ranking (:data:`CAUTION_Z`: the 10% lower bound); 0
+        ranks by the prediction alone. Ignored for a model without a covariance.
     """
     require_patterns(model, "choosing a heading")
+    if not (np.isfinite(caution_z) and caution_z >= 0):
+        raise InputError(f"caution_z: expected a non-negative number, got {caution_z!r}", param="caution_z")
     if turn not in ("tx", "rx", "both"):
         raise InputError(f"turn: expected 'tx', 'rx' or 'both', got {turn!r}", param="turn")
     grid = yaw_grid_deg(step_deg)
@@ -208,11 +258,23 @@ def best_yaw(
     positions = {"tx": tx_position_xyz, "rx": rx_position_xyz}
     tables = heading_gain_tables(model, positions, {"tx": tx_node, "rx": rx_node}, yaws)
     g_tx, g_rx = tables[("tx", "rx")], tables[("rx", "tx")]
-    i_tx = int(np.argmax(g_tx[:n])) if turn in ("tx", "both") else n
-    i_rx = int(np.argmax(g_rx[:n])) if turn in ("rx", "both") else n + 1
+    spread = heading_std_tables(model, positions, {"tx": tx_node, "rx": rx_node}, yaws)
+    s_tx, s_rx = (spread[("tx", "rx")], spread[("rx", "tx")]) if spread else (np.zeros_like(g_tx), np.zeros_like(g_rx))
+    z = float(caution_z) if spread else 0.0
+
+    def pick(gain_tx: np.ndarray, gain_rx: np.ndarray) -> tuple[int, int]:
+        return (int(np.argmax(gain_tx[:n])) if turn in ("tx", "both") else n,
+                int(np.argmax(gain_rx[:n])) if turn in ("rx", "both") else n + 1)
+
+    i_tx, i_rx = pick(g_tx - z * s_tx, g_rx - z * s_rx)
+    b_tx, b_rx = pick(g_tx, g_rx)
+    gain = float(g_tx[i_tx] + g_rx[i_rx])
+    bold = float(g_tx[b_tx] + g_rx[b_rx])
     result = OrientationResult(
-        float(yaws[i_tx]), float(yaws[i_rx]), float(g_tx[i_tx] + g_rx[i_rx]), float(g_tx[n] + g_rx[n + 1]),
+        float(yaws[i_tx]), float(yaws[i_rx]), gain, float(g_tx[n] + g_rx[n + 1]),
         coverage_deg=_link_coverage(model, tx_node, rx_node, positions, float(yaws[i_tx]), float(yaws[i_rx])),
+        gain_std_db=float(np.hypot(s_tx[i_tx], s_rx[i_rx])) if spread else None,
+        boldest=(float(yaws[b_tx]), float(yaws[b_rx]), bold) if bold > gain + 0.5 else None,
     )
     if tx_power_dbm is None:
         return result

@@ -102,8 +102,13 @@ def orient(
     rx_yaw: float = typer.Option(0.0, "--rx-yaw", help="Current yaw of rx [deg]."),
     tx_power_dbm: float = typer.Option(20.0, "--tx-power", help="[dBm]."),
     frequency_hz: Optional[float] = typer.Option(None, "--frequency", help="Carrier frequency [Hz] (default: the one the model was learned at)."),
+    caution: float = typer.Option(1.28, "--caution", min=0.0,
+                                  help="Rank headings by the gain minus this many standard errors (1.28: the 10% lower bound; 0: the prediction alone)."),
 ) -> None:
     """Heading that maximises a link, and the received power before and after.
+
+    Headings are ranked by a lower bound of the gain, so a heading the calibration flight saw
+    beats an extrapolated one predicted alike.
 
     Example: rplearn orient sh10.json --tx A --rx B --tx-pos 0,0,20 --rx-pos 10,5,25 --turn both
     """
@@ -111,6 +116,6 @@ def orient(
 
     result = orient_link(
         model_path, tx, rx, tx_position_xyz=xyz(tx_pos, "--tx-pos"), rx_position_xyz=xyz(rx_pos, "--rx-pos"), turn=turn,
-        tx_yaw_deg=tx_yaw, rx_yaw_deg=rx_yaw, tx_power_dbm=tx_power_dbm, frequency_hz=frequency_hz,
+        tx_yaw_deg=tx_yaw, rx_yaw_deg=rx_yaw, tx_power_dbm=tx_power_dbm, frequency_hz=frequency_hz, caution_z=caution,
     )
     say(result.summary())

@@ -313,7 +313,9 @@ class SphericalHarmonics(Basis):
         ``-l (l + 1)`` and orthonormal, so ``sum_j w_j c_j^2`` is ``integral |grad f|^2`` over the
         sphere for ``power = 1`` and ``integral (Laplacian f)^2`` for ``power = 2`` (the penalty of
         spherical smoothing splines, Wahba 1981, and the degree-dependent regularisation of
-        geodesy's harmonic fits). The mean gain (degree 0) is not penalised.
+        geodesy's harmonic fits). The mean gain (degree 0) is not penalised, except by plain
+        ridge (``power = 0``: every weight 1), which ``fit --prior`` uses to shrink toward a
+        reference pattern's absolute level too.
         """
         l = self.degrees.astype(np.float64)
         return (l * (l + 1.0)) ** float(power)

@@ -80,6 +80,14 @@ class FitOutcome:
             text += (f"\n  chosen by {how}: order {sel.order}, smoothing {sel.smoothing:.1e}, "
                      f"validation RMSE {sel.rmse_db:.2f} dB; the curve:\n    "
                      + sel.curve_text().replace("\n", "\n    "))
+            if "variance_inflation" in training:
+                text += (f"\n  spread: the held-out units' errors exceed the posterior's by x{training['variance_inflation']:.2f} "
+                         "in variance (correlated packets, misfit between flights); the covariance is inflated to match")
+            spread = training.get("prior_std_db") or {}
+            if spread:
+                values = ", ".join(f"{n} {v:.1f} dB" for n, v in spread.items())
+                text += (f"\n  where the flight never looked each pattern may be off by (1 sigma): {values} "
+                         f"({training.get('prior_std_source', '')})")
         if self.non_unit_quaternions:
             text += (f"\n  samples with a non-unit quaternion (|norm - 1| > {QUATERNION_NORM_TOLERANCE:g}, "
                      f"normalised): {self.non_unit_quaternions:,}")
@@ -98,6 +106,7 @@ def fit_dataset(
     output: str | None = None,
     auto: bool = False,
     prior: Mapping[str, str] | None = None,
+    prior_std_db: float | None = None,
 ) -> FitOutcome:
     """Learn ``spec`` from a matched dataset file (``rplearn fit``).
 
@@ -118,23 +127,31 @@ def fit_dataset(
     prior : mapping of node to model file, optional
         With ``auto``: shrink each named node's pattern toward this model's pattern (a
         reference from ``rplearn reference``, or any pattern model) instead of toward zero.
+    prior_std_db : float, optional
+        How far [dB RMS] the priors may be from the truth (a vendor's tolerance): the spread of
+        predictions where the flight never looked (default: learned from the priors' misfit
+        where it looked; see :func:`rplearn.models.auto.fit_from_statistics`).
     """
     if output:
         check_output_path(output, [dataset, *(prior or {}).values()])
     if prior and not auto:
         raise InputError("prior: a prior is weighed against the data by the automatic choice; use it with "
                          "order 'auto' (--degree auto)", param="prior")
+    if prior_std_db is not None and not prior:
+        raise InputError("prior-std: it states how far the priors may be off; give --prior too", param="prior_std_db")
+    if prior_std_db is not None and not (np.isfinite(prior_std_db) and prior_std_db > 0):
+        raise InputError(f"prior-std: expected a positive number of dB, got {prior_std_db!r}", param="prior_std_db")
     priors = {str(n): load_model(path) for n, path in (prior or {}).items()}
     for model in priors.values():
         require_patterns(model, "serving as a prior")
     if auto and not spec.decouples:
         raise InputError(f"order: 'auto' chooses the order of pattern models (sh, bg, poly), not of {spec.label}", param="order")
     if spec.decouples and _is_big(dataset):
-        return _fit_streamed(dataset, spec, units, gauge, output, auto, priors)
+        return _fit_streamed(dataset, spec, units, gauge, output, auto, priors, prior_std_db)
     df = read_dataset(dataset)
     choice = learning_units(df, units, dataset)
     if auto:
-        return _fit_auto(df, dataset, spec, choice, gauge, output, priors)
+        return _fit_auto(df, dataset, spec, choice, gauge, output, priors, prior_std_db)
     samples = samples_of(df, choice.units, dataset)
     prov = provenance(dataset=dataset, model=spec.label, ridge=spec.ridge, units=choice.units)
     fitted = fit_model(samples, spec, gauge=gauge, provenance=prov)
@@ -158,7 +175,7 @@ TIME_BLOCKS = 5
 
 def _fit_auto(
     df: Any, dataset: str, spec: ModelSpec, choice: UnitChoice, gauge: str | Mapping[str, Any], output: str | None,
-    priors: Mapping[str, Any] | None = None,
+    priors: Mapping[str, Any] | None = None, prior_std_db: float | None = None,
 ) -> FitOutcome:
     """:func:`fit_dataset` with ``auto=True`` on a dataset in memory: samples per learning unit."""
     learn = choice.units if choice.units is not None else (dataset_units(df) or [None])
@@ -174,7 +191,7 @@ def _fit_auto(
         per_unit = {str(u): samples_of(df, None if u is None else [u], dataset, nodes=nodes) for u in learn}
     prov = provenance(dataset=dataset, model=f"{spec.kind}-auto", ridge=spec.ridge, units=choice.units)
     fitted, selection = fit_auto(per_unit, spec.kind, spec.order if spec.kind != "sh" else None, spec.ridge, gauge, prov,
-                                 prior=priors or None)
+                                 prior=priors or None, prior_spread_db=prior_std_db)
     if output:
         fitted.model.save(output)
     n = sum(len(s) for s in per_unit.values())
@@ -191,7 +208,7 @@ def _is_big(dataset: str) -> bool:
 
 def _fit_streamed(
     dataset: str, spec: ModelSpec, units: Sequence[str] | None, gauge: str | Mapping[str, Any], output: str | None,
-    auto: bool = False, priors: Mapping[str, Any] | None = None,
+    auto: bool = False, priors: Mapping[str, Any] | None = None, prior_std_db: float | None = None,
 ) -> FitOutcome:
     """:func:`fit_dataset` for a big file: units, nodes and the model size from the id columns,
     then the patterns from the whole data a chunk at a time."""
@@ -213,7 +230,8 @@ def _fit_streamed(
             block_rows=-(-n // TIME_BLOCKS) if n_units == 1 else None)
         prov = provenance(dataset=dataset, model=f"{spec.kind}-auto", ridge=spec.ridge, units=choice.units)
         fitted, selection = fit_from_statistics(stats, spec.kind, orders, nodes, spec.ridge, gauge,
-                                                frequency_hz=freq, provenance=prov, prior=priors or None)
+                                                frequency_hz=freq, provenance=prov, prior=priors or None,
+                                                prior_spread_db=prior_std_db)
         fitted.model.training["coverage_deg"] = grids
         if output:
             fitted.model.save(output)
