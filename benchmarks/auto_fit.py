@@ -7,8 +7,8 @@ The `paper` preset (seed 0) is simulated and synchronised (the A->B link, three 
   stores its coverage grid, which auto fits store too);
 - **auto**: ``fit_auto`` (per-unit statistics at the largest candidate order, grouped
   cross-validation from them, the final solve from the same statistics);
-- **accumulation alone** at the largest candidate order (SH-16): the floor of any selection
-  that considers SH-16, since its statistics must be accumulated once.
+- **accumulation alone** at the largest candidate order (SH-15): the floor of any selection
+  that considers SH-15, since its statistics must be accumulated once.
 
 Printed: the times and the ratios auto / SH-10 (target 3) and floor / SH-10.
 

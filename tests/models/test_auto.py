@@ -17,7 +17,7 @@ from rplearn.core.solver import solve
 from rplearn.data.units import samples_of, split_units
 from rplearn.io.files import read_dataset
 from rplearn.models import ModelSpec, load_model
-from rplearn.models.auto import auto_orders, fit_auto
+from rplearn.models.auto import MAX_AUTO_ORDER, auto_orders, fit_auto
 from rplearn.models.fit import evaluate_models, fit_model
 from rplearn.sim import simulate
 from rplearn.workflows.logs import sync_logs
@@ -45,7 +45,7 @@ def smoke(tmp_path_factory):
 
 
 def test_auto_orders_follow_the_sample_count():
-    assert auto_orders("sh", 56_000, 2) == list(range(2, 17))
+    assert auto_orders("sh", 56_000, 2) == list(range(2, MAX_AUTO_ORDER + 1)) and MAX_AUTO_ORDER >= 15
     assert auto_orders("sh", 1_300, 2) == list(range(2, 9))  # 10 samples per coefficient
     assert auto_orders("bg", 10, 2) == [7] and auto_orders("poly", 10, 2, 5) == [5]
     with pytest.raises(Exception, match="too few"):

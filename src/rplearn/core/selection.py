@@ -24,8 +24,8 @@ The search, a coordinate descent over the validation error (every point is kept 
 1. the smoothing grid :data:`SMOOTHING_GRID` at a middle candidate order (every other value,
    then the neighbours of the best): the relative smoothing means nearly the same at every
    order, and a middle order costs a fraction of the largest;
-2. the candidate orders at that smoothing (every other order from the largest down, then the
-   neighbours of the best);
+2. the candidate orders at that smoothing (every other order from the largest down, until two
+   in a row are worse than the best so far, then the neighbours of the best);
 3. at the best order, the smoothing walks along the grid while it improves; then the
    neighbouring orders are tried at the new smoothing, and steps 3 repeat while either moves.
 
@@ -179,6 +179,13 @@ def _folds(units: Mapping[str, NormalEquations]) -> tuple[list[_Fold], np.ndarra
     return folds, gram, rhs, yty, n
 
 
+def _block(matrix: np.ndarray, idx: np.ndarray) -> np.ndarray:
+    """``matrix[idx][:, idx]``: the matrix itself (no copy) when ``idx`` is every column in order."""
+    if idx.size == matrix.shape[0] and np.array_equal(idx, np.arange(idx.size)):
+        return matrix
+    return matrix.take(idx, axis=0).take(idx, axis=1)
+
+
 def _cholesky_solve(a: np.ndarray, rhs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``a^-1 rhs`` for a symmetric positive definite ``a`` and one right-hand side, and the
     upper Cholesky factor ``U`` (``a = U^T U``, Fortran-ordered).
@@ -218,9 +225,9 @@ class _Evaluator:
         if order not in self._cache:
             basis = self.make_basis(order)
             idx = nested_columns(self.big, basis, self.n_nodes)
-            sub = [(f.gram[np.ix_(idx, idx)], f.rhs[idx], f.held_gram[np.ix_(idx, idx)], f.held_rhs[idx]) for f in self.folds]
+            sub = [(_block(f.gram, idx), f.rhs[idx], _block(f.held_gram, idx), f.held_rhs[idx]) for f in self.folds]
             if not self.cv:
-                sub = [(self.gram[np.ix_(idx, idx)], self.rhs[idx], np.empty(0), np.empty(0))]
+                sub = [(_block(self.gram, idx), self.rhs[idx], np.empty(0), np.empty(0))]
             target = None if self.target is None else self.target[idx]
             while len(self._cache) >= _CACHED_ORDERS:  # a few orders at a time: bounded memory
                 self._cache.pop(next(iter(self._cache)))
@@ -318,6 +325,20 @@ def _best_smoothing(ev: _Evaluator, order: int, grid: Sequence[float]) -> float:
     return min(values[max(0, i - 1): i + 2], key=lambda s: ev.rmse(order, s))
 
 
+def _best_order(ev: _Evaluator, orders: Sequence[int], smoothing: float) -> int:
+    """Best order at one smoothing: every other order from the largest down, until two in a row
+    are worse than the best so far (the curve has one minimum), then the neighbours of the best."""
+    best, worse = None, 0
+    for o in list(orders)[::-1][::2]:
+        if best is None or ev.rmse(o, smoothing) < ev.rmse(best, smoothing):
+            best, worse = o, 0
+        else:
+            worse += 1
+            if worse == 2:
+                break
+    return min([o for o in orders if abs(o - best) <= 1], key=lambda o: ev.rmse(o, smoothing))
+
+
 def _walk_smoothing(ev: _Evaluator, order: int, start: float, values: list[float]) -> tuple[float, list[float]]:
     """From ``start``, step along the sorted smoothing ``values`` at one order while the
     validation error falls (past the largest, by decades up to :data:`MAX_SMOOTHING`)."""
@@ -376,9 +397,7 @@ def select_order_and_smoothing(
         raise InputError("orders: no candidate order", param="orders")
     ev = _Evaluator(units, make_basis, ridge, power, target)
     best_s = _best_smoothing(ev, orders[(len(orders) - 1) // 2], grid)
-    coarse = orders[::-1][::2]  # every other order from the largest down, then the neighbours of the best
-    best_o = min(coarse, key=lambda o: ev.rmse(o, best_s))
-    best_o = min([o for o in orders if abs(o - best_o) <= 1], key=lambda o: ev.rmse(o, best_s))
+    best_o = _best_order(ev, orders, best_s)
     values = sorted({float(g) for g in grid} | {best_s})
     for _ in range(len(orders) + len(values)):  # coordinate descent; each pass moves or stops
         best_s, values = _walk_smoothing(ev, best_o, best_s, values)
