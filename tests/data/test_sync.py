@@ -262,3 +262,38 @@ def test_duplicate_rows_equals_pandas_duplicated_on_unsorted_logs():
     assert 0 < expected.sum() < n
     np.testing.assert_array_equal(duplicate_rows(df), expected)
     np.testing.assert_array_equal(duplicate_rows(df.drop_duplicates()), np.zeros(n - expected.sum(), bool))
+
+
+def _station_flight(station_rows: int, seed: int = 3):
+    """A drone at 10 Hz for 60 s and a ground station logged ``station_rows`` times (identical)."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(0.0, 60.0, 0.1)
+    drone = pose_log("D", t, np.c_[20 * np.cos(t / 10), 20 * np.sin(t / 10), 10 + t / 10], t / 7)
+    times = np.linspace(0.0, 60.0, station_rows) if station_rows > 1 else [0.0]
+    station = pose_log("G", times, [[1.0, 2.0, 1.5]] * len(times), [0.3] * len(times))
+    sig = signal_log(np.sort(rng.uniform(0.0, 59.9, 2000)), "D", "G", rng.normal(-60.0, 3.0, 2000))
+    return pd.concat([drone, station], ignore_index=True), sig
+
+
+@pytest.mark.parametrize("rows", [2, 600])
+def test_a_station_logged_many_times_is_static(rows):
+    """Issue 12, acceptance 3: 2 (start and end of the flight) or 600 identical rows give the
+    dataset of one row; before, all but the samples next to a logged pose were pose gaps."""
+    one = synchronise(*_station_flight(1)).dataset
+    many = synchronise(*_station_flight(rows)).dataset
+    assert len(one) == 2000
+    pd.testing.assert_frame_equal(one, many)
+
+
+def test_a_station_moved_between_flights_is_refused_with_both_positions():
+    poses, sig = _station_flight(1)
+    moved = pose_log("G", [0.0, 1.0, 59.0, 60.0], [[1, 2, 1.5], [1, 2, 1.5], [31, 2, 1.5], [31, 2, 1.5]], [0.3] * 4)
+    poses = pd.concat([poses[poses["node"] == "D"], moved], ignore_index=True)
+    with pytest.raises(InputError, match=r"node G holds still at \(1.00, 2.00, 1.50\) m until t=1.000 s and at "
+                                         r"\(31.00, 2.00, 1.50\) m from t=59.000 s"):
+        synchronise(poses, sig)
+    # a drone with a logging gap, moving before and after it, is a track, not a moved station
+    gap = poses[poses["node"] == "D"]
+    gap = gap[(gap["t"] < 20) | (gap["t"] > 25)]
+    res = synchronise(pd.concat([gap, pose_log("G", [0.0], [[1, 2, 1.5]], [0.3])], ignore_index=True), sig)
+    assert res.summary.dropped["pose_gap"] > 0 and len(res.dataset) > 1500

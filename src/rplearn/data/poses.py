@@ -2,7 +2,10 @@
 
 A :class:`PoseTrack` holds one node's pose log as arrays on the common clock; positions are
 interpolated linearly and attitudes by spherical linear interpolation (slerp). A node whose
-pose log has a single row is static: its pose holds at every time.
+pose log has a single row, or only identical rows (a ground station logged at 1 Hz, or at the
+start and the end of a flight), is static: its pose holds at every time. A node whose log holds
+still at one pose and later at another, with no pose logged in between, is a station moved
+between flights: refused, naming both positions (sync each flight with its own pose log).
 """
 
 from __future__ import annotations
@@ -19,6 +22,10 @@ from rplearn.errors import InputError
 
 #: Status of an interpolated pose: known, outside the log's span, inside a gap of the log.
 STATUS_OK, STATUS_OUT_OF_SPAN, STATUS_POSE_GAP = 0, 1, 2
+#: Two logged poses are the same pose within these: position [m] and quaternion components
+#: (sign-insensitive), enough for the rounding of a CSV writer, far below any real motion.
+SAME_POSITION_M = 1e-3
+SAME_QUATERNION = 1e-6
 
 
 @dataclass(frozen=True)
@@ -117,14 +124,21 @@ def pose_tracks(
 
 
 def tracks_of_checked_log(
-    df: pd.DataFrame, clock_offsets_s: Mapping[str, float] | None, source: str
+    df: pd.DataFrame, clock_offsets_s: Mapping[str, float] | None, source: str, max_gap_s: float | None = None,
 ) -> dict[str, PoseTrack]:
     """:func:`pose_tracks` of a pose log already checked (and sorted) by :func:`validate_pose_log`.
+
+    Parameters
+    ----------
+    max_gap_s : float, optional
+        The matching's longest interpolated gap [s]: a node whose poses change only across
+        longer gaps, holding still in between, is a station moved between flights (refused).
 
     Raises
     ------
     InputError
-        When ``clock_offsets_s`` names a node without a pose log (``param="clock_offsets_s"``).
+        When ``clock_offsets_s`` names a node without a pose log (``param="clock_offsets_s"``),
+        or for a station moved between flights.
     """
     offsets = dict(clock_offsets_s or {})
     tracks: dict[str, PoseTrack] = {}
@@ -137,6 +151,11 @@ def tracks_of_checked_log(
     ends = np.r_[starts[1:], len(nodes)]
     for s, e in zip(starts, ends):
         node = str(nodes[s])
+        changes = _pose_changes(pos[s:e], quat[s:e])
+        if not changes.any():
+            e = s + 1  # identical rows: a static node, its one pose holds at every time
+        elif max_gap_s is not None:
+            _refuse_moved_station(node, t[s:e], pos[s:e], changes, float(max_gap_s), source)
         tracks[node] = PoseTrack(
             node,
             t[s:e] + float(offsets.get(node, 0.0)),
@@ -151,6 +170,33 @@ def tracks_of_checked_log(
             param="clock_offsets_s",
         )
     return tracks
+
+
+def _pose_changes(position_xyz: np.ndarray, quat_wxyz: np.ndarray) -> np.ndarray:
+    """For each row after the first: whether its pose differs from the row before."""
+    moved = np.any(np.abs(np.diff(position_xyz, axis=0)) > SAME_POSITION_M, axis=1)
+    q0, q1 = quat_wxyz[:-1], quat_wxyz[1:]
+    turned = np.minimum(np.abs(q1 - q0).max(axis=1), np.abs(q1 + q0).max(axis=1)) > SAME_QUATERNION
+    return moved | turned
+
+
+def _refuse_moved_station(
+    node: str, t_s: np.ndarray, position_xyz: np.ndarray, changes: np.ndarray, max_gap_s: float, source: str
+) -> None:
+    """Refuse a log that holds still (the same pose logged twice or more) at one pose and later
+    at another, changing only across gaps longer than ``max_gap_s`` (its samples in between
+    would be lost as pose gaps, or, if the gap were bridged, placed on a line the station
+    never travelled)."""
+    gaps = np.diff(t_s) > max_gap_s
+    if not np.all(gaps[changes]) or np.all(changes):
+        return  # the node moves while logged, or never logs the same pose twice: a track
+    first = int(np.flatnonzero(changes)[0])
+    a, b = position_xyz[first], position_xyz[first + 1]
+    raise InputError(
+        f"{source}: node {node} holds still at ({a[0]:.2f}, {a[1]:.2f}, {a[2]:.2f}) m until t={t_s[first]:.3f} s "
+        f"and at ({b[0]:.2f}, {b[1]:.2f}, {b[2]:.2f}) m from t={t_s[first + 1]:.3f} s, with no pose in between: "
+        "a station moved between flights? Synchronise each flight with its own pose log"
+    )
 
 
 def interpolate_nodes(

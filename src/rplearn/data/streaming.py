@@ -127,7 +127,7 @@ def synchronise_stream(
     """
     options = _options(options)
     pose = validate_pose_log(pose_log, "pose log")
-    tracks = tracks_of_checked_log(pose, options.clock_offsets_s, "pose log")
+    tracks = tracks_of_checked_log(pose, options.clock_offsets_s, "pose log", options.max_gap_s)
     non_unit = non_unit_quaternion_rows(pose)
     seen = _SeenRows()
     pairs: set[tuple[str, str]] = set()

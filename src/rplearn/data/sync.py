@@ -483,7 +483,7 @@ def synchronise(
     """
     options = _options(options)
     pose = validate_pose_log(pose_log, "pose log")
-    tracks = tracks_of_checked_log(pose, options.clock_offsets_s, "pose log")
+    tracks = tracks_of_checked_log(pose, options.clock_offsets_s, "pose log", options.max_gap_s)
     if options.link is not None:
         check_link_nodes(signal_log, options.link, source)
     result = _match_chunk(tracks, signal_log, options, source)
