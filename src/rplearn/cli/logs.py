@@ -61,6 +61,7 @@ def sync(
     allow_unsorted: bool = typer.Option(False, "--allow-unsorted", help="Accept pose tables whose times go backwards within a node (the rows are sorted)."),
     require_valid: bool = typer.Option(False, "--require-valid/--accept-invalid", help="Drop ULog positions the autopilot flags invalid (xy_valid or z_valid = 0), or keep them (default)."),
     on_unknown_node: str = typer.Option("drop", "--on-unknown-node", help="Signals naming a node without a pose log: drop (counted, default) or error."),
+    rssi_scale: str = typer.Option("dbm", "--rssi-scale", help="dbm (default: calibrated, dropped outside -150..30 dBm or above the transmit power) or relative (uncalibrated dB on the radio's own scale: no plausibility window)."),
 ) -> None:
     """Match every signal sample with the interpolated poses of both ends (paper Sec. V-B4).
 
@@ -73,7 +74,8 @@ def sync(
         node, receiver, address, pose_topic, rssi_topic, rssi_field, msg_definition, tx_power_dbm=tx_power_dbm,
         frequency_hz=frequency_hz, nan_policy=nan_policy, allow_unsorted=allow_unsorted, require_valid=require_valid)
     offsets = numbers(pairs(offset, "--offset"), "--offset", "NODE=SECONDS")
-    options = SyncOptions(link=link(link_text), max_gap_s=max_gap_s, clock_offsets_s=offsets or None, on_unknown_node=on_unknown_node)
+    options = SyncOptions(link=link(link_text), max_gap_s=max_gap_s, clock_offsets_s=offsets or None, on_unknown_node=on_unknown_node,
+                          rssi_scale=rssi_scale)
     outcome = sync_logs(poses, signals, output, readers, options)
     for line in outcome.notes:  # part of the data's accounting: on standard output
         say(line)

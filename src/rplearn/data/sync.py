@@ -84,6 +84,8 @@ DEFAULT_SENTINEL_RSSI_DBM: tuple[float, ...] = SENTINEL_RSSI_DBM
 #: RSSI values outside this range are no received power any radio reports [dBm]: above
 #: +30 dBm a receiver front end would be destroyed, below -150 dBm lies under any noise floor.
 PLAUSIBLE_RSSI_DBM: tuple[float, float] = (-150.0, 30.0)
+#: Scales of the received power a sync accepts (``SyncOptions.rssi_scale``).
+RSSI_SCALES: tuple[str, ...] = ("dbm", "relative")
 #: Drop reasons, in the order they are tested.
 DROP_REASONS: tuple[str, ...] = (
     "duplicate",
@@ -213,6 +215,12 @@ class SyncOptions:
     min_samples : int
         :func:`synchronise` raises :class:`InputError` when fewer samples are matched
         (0 disables; not used when streaming).
+    rssi_scale : {"dbm", "relative"}
+        ``"dbm"``: received power in dBm, dropped as ``implausible_rssi`` outside
+        :data:`PLAUSIBLE_RSSI_DBM` or above the transmit power. ``"relative"``: uncalibrated
+        power in dB on the radio's own scale (no plausibility window; the unknown offset goes
+        into the patterns' shared constant); the matched dataset carries a column
+        ``rssi_scale`` = ``relative`` so that later checks know.
 
     Raises
     ------
@@ -227,6 +235,7 @@ class SyncOptions:
     sentinel_rssi_dbm: Sequence[float] = DEFAULT_SENTINEL_RSSI_DBM
     on_unknown_node: str = "drop"
     min_samples: int = 1
+    rssi_scale: str = "dbm"
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -246,6 +255,7 @@ class SyncOptions:
         _check(sentinel is not None, "sentinel_rssi_dbm", "a sequence of numbers [dBm]", self.sentinel_rssi_dbm)
         set_(self, "sentinel_rssi_dbm", sentinel)
         _check(self.on_unknown_node in ("drop", "error"), "on_unknown_node", "'drop' or 'error'", self.on_unknown_node)
+        _check(self.rssi_scale in RSSI_SCALES, "rssi_scale", "'dbm' or 'relative'", self.rssi_scale)
         _check(isinstance(self.min_samples, (int, np.integer)) and not isinstance(self.min_samples, bool)
                and self.min_samples >= 0, "min_samples", "a non-negative integer", self.min_samples)
 
@@ -360,7 +370,8 @@ def _match_chunk(
     check_frequency_hz(np.where(keep, freq, FREQUENCY_BAND_HZ[0]), source, None, first_row)
     check_tx_power_dbm(np.where(keep, ptx, 0.0), source, None, first_row)
     drop(~np.isfinite(rssi) | np.isin(rssi, np.asarray(options.sentinel_rssi_dbm, np.float64)), "sentinel_rssi")
-    drop((rssi < PLAUSIBLE_RSSI_DBM[0]) | (rssi > PLAUSIBLE_RSSI_DBM[1]) | (rssi > ptx), "implausible_rssi")
+    if options.rssi_scale == "dbm":
+        drop((rssi < PLAUSIBLE_RSSI_DBM[0]) | (rssi > PLAUSIBLE_RSSI_DBM[1]) | (rssi > ptx), "implausible_rssi")
     drop(tx == rx, "tx_equals_rx")
     if options.link is not None:
         drop(~((tx == options.link[0]) & (rx == options.link[1])), "other_link")
@@ -376,7 +387,10 @@ def _match_chunk(
     drop((st_tx == STATUS_POSE_GAP) | (st_rx == STATUS_POSE_GAP), "pose_gap")
     idx = np.flatnonzero(keep)
     summary.n_out = int(idx.size)
-    return SyncResult(_matched_frame(signal, idx, values, poses), summary)
+    matched = _matched_frame(signal, idx, values, poses)
+    if options.rssi_scale == "relative":
+        matched["rssi_scale"] = pd.Series(["relative"] * len(matched), index=matched.index, dtype=object)
+    return SyncResult(matched, summary)
 
 
 def duplicate_rows(signal: pd.DataFrame) -> np.ndarray:

@@ -5,7 +5,8 @@ the simulator and the synchroniser speak the same language:
 
 - pose log: ``t, node, x, y, z, qw, qx, qy, qz`` (ENU metres, FLU -> ENU quaternion);
 - signal log: ``t, tx, rx, rssi_dbm, tx_power_dbm, frequency_hz`` and optional ``unit``;
-- matched dataset: every signal-log column plus ``tx_x .. tx_qz`` and ``rx_x .. rx_qz``.
+- matched dataset: every signal-log column plus ``tx_x .. tx_qz`` and ``rx_x .. rx_qz`` (and
+  ``rssi_scale`` = ``relative`` for uncalibrated received power, from ``sync --rssi-scale``).
 
 Node ids are strings. Times are float seconds since an epoch the log states.
 :func:`link_samples` turns a matched dataset into the arrays the learning code needs
@@ -32,7 +33,7 @@ MATCHED_COLUMNS: tuple[str, ...] = SIGNAL_COLUMNS + tuple(
     f"{end}_{f}" for end in ("tx", "rx") for f in POSE_FIELDS
 )
 #: Columns holding labels: read from CSV as text, so that node "01" stays "01", not 1.
-STRING_COLUMNS: tuple[str, ...] = ("node", "tx", "rx", "unit")
+STRING_COLUMNS: tuple[str, ...] = ("node", "tx", "rx", "unit", "rssi_scale")
 CSV_DTYPES: dict[str, type] = {c: str for c in STRING_COLUMNS}
 #: RSSI values that mean "no measurement" in drivers and capture tools [dBm].
 SENTINEL_RSSI_DBM: tuple[float, ...] = (0.0, -127.0, -128.0, 127.0)
@@ -216,6 +217,8 @@ def _check_link_columns(df: pd.DataFrame, source: str, with_rssi: bool) -> None:
     check_tx_power_dbm(df["tx_power_dbm"].to_numpy(np.float64), source, None)
     if with_rssi:
         above = df["rssi_dbm"].to_numpy(np.float64) > df["tx_power_dbm"].to_numpy(np.float64)
+        if "rssi_scale" in df.columns:  # uncalibrated power (sync --rssi-scale relative): no such bound
+            above &= (df["rssi_scale"].astype(str).str.lower() != "relative").to_numpy()
         if np.any(above):
             row = int(np.flatnonzero(above)[0])
             raise InputError(
