@@ -82,6 +82,12 @@ def test_simulate_sync_fit_evaluate_export_predict(workdir):
     bold = run(["orient", "sh3.json", "--tx", "A", "--rx", "B", "--tx-pos", "0,0,20", "--rx-pos", "10,0,20",
                 "--caution", "0"], d)
     assert "best yaw" in bold.stdout and "chosen by its lower bound" not in bold.stdout
+    import inspect as _inspect
+
+    from rplearn.analysis.headings import CAUTION_Z
+    from rplearn.cli.swarm import orient as orient_command
+
+    assert _inspect.signature(orient_command).parameters["caution"].default.default == CAUTION_Z
 
 
 USER_ERRORS = {

@@ -90,7 +90,7 @@ def test_the_spread_is_inflated_to_what_held_out_flights_show():
 def test_flights_that_agree_are_not_inflated_much():
     units = flights_with_their_own_errors(5, seed=4, unit_error_db=0.0)
     fitted, sel = fit_auto(units)
-    assert 1.0 <= sel.variance_inflation < 2.5, sel.variance_inflation
+    assert 1.0 <= sel.variance_inflation < 1.6, sel.variance_inflation  # 1.0-1.58 over seeds 4-9
 
 
 def test_far_from_the_data_the_spread_is_the_reported_prior_spread(tmp_path):
@@ -108,3 +108,29 @@ def test_far_from_the_data_the_spread_is_the_reported_prior_spread(tmp_path):
         expected = np.hypot(spread[learn.nodes[0]], spread[learn.nodes[1]])
         got = np.median(model.predict_gain_std(samples))
         assert 0.8 * expected <= got <= 1.3 * expected, (got, expected, with_prior is not None)
+
+
+def test_the_prior_spread_is_finite_without_smoothing_and_stated_only_for_all_nodes():
+    from rplearn.core.sh import SphericalHarmonics
+    from rplearn.errors import InputError
+    from rplearn.models.auto import prior_std_db
+
+    basis = SphericalHarmonics(4)
+    plain = prior_std_db(basis, ["A", "B"], np.ones(2 * basis.n_coef), 4.0, power=2.0)  # smoothing 0: the ridge alone
+    # noise variance over the ridge (1), summed over the 24 non-constant harmonics, averaged on the sphere
+    from rplearn.core.bases import fibonacci_grid_nodes
+
+    az, el = fibonacci_grid_nodes(20_000)
+    squares = basis.design(az, el) ** 2
+    assert plain["A"] == pytest.approx(np.sqrt(4.0 * np.mean(squares[:, 1:].sum(axis=1))), rel=0.01)
+    assert np.isfinite(plain["B"])
+    units = flights_with_their_own_errors(3, seed=5)
+    from rplearn.models.reference import reference_model  # noqa: F401  (a prior of one node)
+
+    one_prior = fit_auto(units)[0].model
+    with pytest.raises(InputError, match="node.s. B have no prior"):
+        fit_auto(units, prior={"A": one_prior}, prior_spread_db=10.0)
+    with pytest.raises(InputError, match="positive number"):
+        fit_auto(units, prior={"A": one_prior, "B": one_prior}, prior_spread_db=float("nan"))
+    stated = fit_auto(units, prior={"A": one_prior, "B": one_prior}, prior_spread_db=6.0)[0].model.training
+    assert stated["prior_std_db"]["A"] == pytest.approx(6.0, rel=1e-6) and stated["prior_std_source"] == "stated"

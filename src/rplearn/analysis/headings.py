@@ -7,11 +7,12 @@ over a list of yaws of ``a`` (directions from :mod:`rplearn.core.geometry`). Bot
 these tables:
 
 - :func:`best_yaw` (``rplearn orient``): one link between two drones. Its joint gain is the sum
-  of the two ends' shares, so each end that may turn takes its best grid yaw.
+  of the two ends' shares, so each end that may turn takes its best grid yaw, ranked by a
+  lower bound (the share less ``caution_z`` standard errors, :data:`CAUTION_Z` by default).
 - :func:`best_swarm_headings` (``rplearn headings``): any number of drones, maximising the
-  bottleneck RSSI of the swarm (:func:`rplearn.analysis.swarm.spanning_bottleneck`). With two
-  drones the bottleneck is the one link, and the result is :func:`best_yaw`'s with both
-  drones turning.
+  bottleneck RSSI of the swarm (:func:`rplearn.analysis.swarm.spanning_bottleneck`) as
+  predicted. With two drones the bottleneck is the one link, and the result is
+  :func:`best_yaw`'s with both drones turning and ``caution_z=0``.
 
 Yaws are ENU, counter-clockwise from east [deg].
 """

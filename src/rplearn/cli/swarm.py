@@ -10,6 +10,7 @@ import typer
 from rplearn.cli._app import app, floats, note, numbers, pairs, reader_options, say, split_list, user_errors, xyz
 
 
+
 @app.command()
 @user_errors
 def links(
@@ -102,7 +103,7 @@ def orient(
     rx_yaw: float = typer.Option(0.0, "--rx-yaw", help="Current yaw of rx [deg]."),
     tx_power_dbm: float = typer.Option(20.0, "--tx-power", help="[dBm]."),
     frequency_hz: Optional[float] = typer.Option(None, "--frequency", help="Carrier frequency [Hz] (default: the one the model was learned at)."),
-    caution: float = typer.Option(1.28, "--caution", min=0.0,
+    caution: float = typer.Option(1.28, "--caution", min=0.0,  # = analysis.headings.CAUTION_Z (tested)
                                   help="Rank headings by the gain minus this many standard errors (1.28: the 10% lower bound; 0: the prediction alone)."),
 ) -> None:
     """Heading that maximises a link, and the received power before and after.

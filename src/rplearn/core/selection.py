@@ -24,10 +24,10 @@ The search, a coordinate descent over the validation error (every point is kept 
 1. the smoothing grid :data:`SMOOTHING_GRID` at a middle candidate order (every other value,
    then the neighbours of the best): the relative smoothing means nearly the same at every
    order, and a middle order costs a fraction of the largest;
-2. the candidate orders at that smoothing (every other order from the largest down, until two
-   in a row are worse than the best so far, then the neighbours of the best);
-3. at the best order, the smoothing walks along the grid while it improves; then the
-   neighbouring orders are tried at the new smoothing, and steps 3 repeat while either moves.
+2. the candidate orders at that smoothing (every other order from the largest down, then the
+   neighbours of the best);
+3. at the best order, the smoothing walks along the grid while it improves; then step 2 runs
+   again at the new smoothing, and step 3 repeats while the order moves.
 
 The validation error of an order and smoothing is computed once (a Cholesky solve per held-out
 unit) and kept in the curve. The cost is dominated by the few solves at the largest orders:
@@ -273,7 +273,8 @@ class _Evaluator:
             inverse = np.linalg.inv(self._system(g, w, smoothing))
             learn_n = self.n - f.held_n
             learn_sse = max((self.yty - f.held_yty) - 2.0 * c @ r + c @ g @ c, 0.0)
-            noise_var = learn_sse / max(learn_n, 1)
+            dof = learn_n - float(np.sum(inverse * g))  # less the fit's effective parameters tr(A^-1 G)
+            noise_var = learn_sse / max(dof, 1.0)
             held_sse = max(f.held_yty - 2.0 * c @ held_r + c @ held_g @ c, 0.0)
             excess += held_sse - f.held_n * noise_var
             # sum over the held-out samples of x^T (sigma^2 A^-1) x = sigma^2 tr(A^-1 X_u^T X_u)
@@ -326,16 +327,9 @@ def _best_smoothing(ev: _Evaluator, order: int, grid: Sequence[float]) -> float:
 
 
 def _best_order(ev: _Evaluator, orders: Sequence[int], smoothing: float) -> int:
-    """Best order at one smoothing: every other order from the largest down, until two in a row
-    are worse than the best so far (the curve has one minimum), then the neighbours of the best."""
-    best, worse = None, 0
-    for o in list(orders)[::-1][::2]:
-        if best is None or ev.rmse(o, smoothing) < ev.rmse(best, smoothing):
-            best, worse = o, 0
-        else:
-            worse += 1
-            if worse == 2:
-                break
+    """Best order at one smoothing: every other order from the largest down (the curve is flat
+    with small wiggles at high orders: no early stop), then the neighbours of the best."""
+    best = min(list(orders)[::-1][::2], key=lambda o: ev.rmse(o, smoothing))
     return min([o for o in orders if abs(o - best) <= 1], key=lambda o: ev.rmse(o, smoothing))
 
 
@@ -401,7 +395,7 @@ def select_order_and_smoothing(
     values = sorted({float(g) for g in grid} | {best_s})
     for _ in range(len(orders) + len(values)):  # coordinate descent; each pass moves or stops
         best_s, values = _walk_smoothing(ev, best_o, best_s, values)
-        moved = min([o for o in orders if abs(o - best_o) <= 1], key=lambda o: ev.rmse(o, best_s))
+        moved = _best_order(ev, orders, best_s)
         if moved == best_o:
             break
         best_o = moved
@@ -428,7 +422,8 @@ def variance_inflation(
     squared error whose expectation under the Bayesian reading of the penalised solve is
     ``n_u sigma^2 + sigma^2 tr(A^-1 X_u^T X_u)``: new noise plus the posterior variance of the
     fit at the held-out directions (``A`` the penalised normal matrix, ``sigma^2`` the fold's
-    learning residual variance). The factor returned is the observed excess over the noise
+    learning residual variance, its squared error over the samples less the fit's effective
+    number of parameters ``tr(A^-1 X^T X)``, so that a correct model gives 1). The factor returned is the observed excess over the noise
     divided by that predicted variance, summed over the folds, and at least 1. It is above 1
     when neighbouring packets share their errors (fading and shadowing correlated in time:
     fewer independent samples than packets) and when the pattern misfits between units

@@ -99,26 +99,28 @@ def prior_coefficients(prior: Mapping[str, Any], nodes: Sequence[str], basis: An
     return target
 
 
-def prior_std_db(basis: Any, nodes: Sequence[str], ridge: float, penalty: np.ndarray, noise_var: float) -> dict[str, float]:
+def prior_std_db(basis: Any, nodes: Sequence[str], weights: np.ndarray, noise_var: float,
+                 power: float = DEFAULT_PENALTY_POWER) -> dict[str, float]:
     """Prior standard deviation of each node's gain at a direction [dB], as the automatic fit
-    reads its penalty: coefficients ``N(target, noise_var (ridge + penalty_j)^-1)``, averaged
-    over the sphere (the unpenalised constant left out: the data and the gauge fix it).
+    reads its penalty: coefficients ``N(target, noise_var / weights_j)`` (``weights`` the ridge
+    plus the penalty of every column), averaged over the sphere. The columns the roughness of
+    ``power`` leaves unpenalised (the constant of a smoothness penalty) are left out: the data
+    and the gauge fix them.
 
     Where the flight never looked, the predictive spread of a node's gain returns to this
     value; close to the data it is far smaller. With a prior pattern it is how far the truth
-    may stray from the prior, as the cross-validation judged it; without one, how far from
-    zero the pattern may be.
+    may stray from the prior; without one, how far from zero the pattern may be.
     """
     from rplearn.core.bases import fibonacci_grid_nodes
 
     p = basis.n_coef
     az, el = fibonacci_grid_nodes(max(4 * p, 400))
     squares = basis.design(az, el) ** 2  # (directions, p)
+    keep = np.asarray(basis.roughness(power)) > 0
     out = {}
     for k, node in enumerate(nodes):
-        weight = ridge + np.asarray(penalty[k * p:(k + 1) * p], np.float64)
-        keep = np.asarray(penalty[k * p:(k + 1) * p]) > 0
-        var = noise_var * squares[:, keep] @ (1.0 / weight[keep])
+        weight = np.asarray(weights[k * p:(k + 1) * p], np.float64)[keep]
+        var = noise_var * squares[:, keep] @ (1.0 / np.maximum(weight, 1e-300))
         out[str(node)] = float(np.sqrt(np.mean(var))) if keep.any() else float("inf")
     return out
 
@@ -239,6 +241,13 @@ def fit_from_statistics(
     t0 = time.perf_counter()
     if power is None:
         power = PRIOR_PENALTY_POWER if prior else DEFAULT_PENALTY_POWER
+    if prior_spread_db is not None:
+        if not (isinstance(prior_spread_db, (int, float)) and np.isfinite(prior_spread_db) and prior_spread_db > 0):
+            raise InputError(f"prior spread: expected a positive number of dB, got {prior_spread_db!r}", param="prior_spread_db")
+        missing = sorted(set(map(str, nodes)) - set(map(str, prior or {})))
+        if missing:
+            raise InputError(f"prior spread: it states how far the priors may be off, but node(s) {', '.join(missing)} "
+                             "have no prior; give a prior for every node", param="prior_spread_db")
     first = next(iter(stats.values()))
     target = prior_coefficients(prior, list(nodes), first.basis) if prior else None
     choice = select_order_and_smoothing(stats, lambda k: ModelSpec(kind, k, ridge=ridge).basis(), orders, ridge, power,
@@ -256,7 +265,7 @@ def fit_from_statistics(
     sol = solve(normal, list(nodes), ridge=ridge, gauge=gauge, penalty=penalty, penalty_target=sub_target)
     inflation = float(choice.variance_inflation)
     noise_var = sol.residual_variance_db2 * inflation
-    spread = prior_std_db(chosen, list(nodes), ridge, penalty, noise_var)
+    spread = prior_std_db(chosen, list(nodes), ridge + penalty, noise_var, power)
     spread_source = "implied by the cross-validated smoothing"
     covariance = None if sol.covariance is None else sol.covariance * inflation
     if sub_target is not None and covariance is not None and set(map(str, prior)) >= set(map(str, nodes)):
@@ -274,7 +283,7 @@ def fit_from_statistics(
             weights = (ridge + penalty) * np.repeat(factor, chosen.n_coef)
             wide = solve(normal, list(nodes), ridge=0.0, gauge=gauge, penalty=weights, penalty_target=sub_target)
             covariance = wide.covariance * (sol.residual_variance_db2 / wide.residual_variance_db2) * inflation
-            spread = prior_std_db(chosen, list(nodes), 0.0, weights, noise_var)
+            spread = prior_std_db(chosen, list(nodes), weights, noise_var, power)
         else:
             spread_source = "implied by the cross-validated smoothing (larger than " + spread_source + ")"
     ltd = time.perf_counter() - t0

@@ -80,7 +80,7 @@ class FitOutcome:
             text += (f"\n  chosen by {how}: order {sel.order}, smoothing {sel.smoothing:.1e}, "
                      f"validation RMSE {sel.rmse_db:.2f} dB; the curve:\n    "
                      + sel.curve_text().replace("\n", "\n    "))
-            if "variance_inflation" in training:
+            if "variance_inflation" in training and sel.method == "grouped-cv":
                 text += (f"\n  spread: the held-out units' errors exceed the posterior's by x{training['variance_inflation']:.2f} "
                          "in variance (correlated packets, misfit between flights); the covariance is inflated to match")
             spread = training.get("prior_std_db") or {}
