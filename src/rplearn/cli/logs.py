@@ -6,7 +6,7 @@ from typing import Optional
 
 import typer
 
-from rplearn.cli._app import app, fail, link, numbers, pairs, reader_options, say, user_errors, with_flag
+from rplearn.cli._app import app, fail, link, numbers, pairs, reader_options, note, say, user_errors, with_flag
 
 
 @app.command()
@@ -62,6 +62,9 @@ def sync(
     require_valid: bool = typer.Option(False, "--require-valid/--accept-invalid", help="Drop ULog positions the autopilot flags invalid (xy_valid or z_valid = 0), or keep them (default)."),
     on_unknown_node: str = typer.Option("drop", "--on-unknown-node", help="Signals naming a node without a pose log: drop (counted, default) or error."),
     rssi_scale: str = typer.Option("dbm", "--rssi-scale", help="dbm (default: calibrated, dropped outside -150..30 dBm or above the transmit power) or relative (uncalibrated dB on the radio's own scale: no plausibility window)."),
+    estimate_offset: Optional[str] = typer.Option(None, "--estimate-offset", help="NODE: find the clock offset of NODE's poses that best explains the signal (a low-order pattern fit's residual over shifts of its pose times) and report it with its uncertainty."),
+    offset_window: float = typer.Option(1.0, "--offset-window", help="Shifts tried by --estimate-offset, +- this [s]."),
+    apply_offset: bool = typer.Option(False, "--apply-offset", help="Add the offset --estimate-offset found to NODE's pose times in the matched dataset (default: report only)."),
 ) -> None:
     """Match every signal sample with the interpolated poses of both ends (paper Sec. V-B4).
 
@@ -76,7 +79,14 @@ def sync(
     offsets = numbers(pairs(offset, "--offset"), "--offset", "NODE=SECONDS")
     options = SyncOptions(link=link(link_text), max_gap_s=max_gap_s, clock_offsets_s=offsets or None, on_unknown_node=on_unknown_node,
                           rssi_scale=rssi_scale)
-    outcome = sync_logs(poses, signals, output, readers, options)
+    outcome = sync_logs(poses, signals, output, readers, options, estimate_offset=estimate_offset,
+                        offset_window_s=offset_window, apply_offset=apply_offset)
+    if outcome.clock is not None:
+        c = outcome.clock
+        say("residual RMSE over clock shifts of " + c.node + ":\n" + "\n".join(
+            f"  {s:+7.3f} s  {r:6.3f} dB" for s, r in zip(c.offsets_s, c.rmse_db) if abs(round(s / 0.1) * 0.1 - s) < 1e-6))
+        if not apply_offset:
+            note(f"the offset was not applied; rerun with --apply-offset (or --offset {c.node}={c.offset_s:.3f}) to use it")
     for line in outcome.notes:  # part of the data's accounting: on standard output
         say(line)
     say(outcome.summary())

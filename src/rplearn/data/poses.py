@@ -2,8 +2,9 @@
 
 A :class:`PoseTrack` holds one node's pose log as arrays on the common clock; positions are
 interpolated linearly and attitudes by spherical linear interpolation (slerp). A node whose
-pose log has a single row, or only identical rows (a ground station logged at 1 Hz, or at the
-start and the end of a flight), is static: its pose holds at every time. A node whose log holds
+pose log has a single row is static: its pose holds at every time. A node logged with only
+identical rows (a ground station logged at 1 Hz, or at the start and the end of a flight) holds
+still over its log's span, however long the gaps between its rows. A node whose log holds
 still at one pose and later at another, with no pose logged in between, is a station moved
 between flights: refused, naming both positions (sync each flight with its own pose log).
 """
@@ -42,12 +43,15 @@ class PoseTrack:
         ENU positions [m].
     quat_wxyz : ndarray (n, 4)
         Unit quaternions (w, x, y, z), body FLU -> world ENU.
+    still : bool
+        True for a log of identical poses: no gap between its rows is a pose gap.
     """
 
     node: str
     t_s: np.ndarray
     position_xyz: np.ndarray
     quat_wxyz: np.ndarray
+    still: bool = False
 
     @property
     def static(self) -> bool:
@@ -92,7 +96,8 @@ class PoseTrack:
         dt = t1 - t0
         status = np.zeros(n, np.int8)
         on_sample = (t_s == t0) | (t_s == t1)  # a logged pose is known even at a gap's edge
-        status[(dt > max_gap_s) & ~on_sample] = STATUS_POSE_GAP
+        if not self.still:
+            status[(dt > max_gap_s) & ~on_sample] = STATUS_POSE_GAP
         status[(t_s < tk[0]) | (t_s > tk[-1]) | ~np.isfinite(t_s)] = STATUS_OUT_OF_SPAN
         frac = np.clip((t_s - t0) / dt, 0.0, 1.0)
         p0 = self.position_xyz[i]
@@ -152,15 +157,18 @@ def tracks_of_checked_log(
     for s, e in zip(starts, ends):
         node = str(nodes[s])
         changes = _pose_changes(pos[s:e], quat[s:e])
-        if not changes.any():
-            e = s + 1  # identical rows: a static node, its one pose holds at every time
-        elif max_gap_s is not None:
+        rows = np.arange(s, e)
+        still = bool(e - s > 1 and not changes.any())
+        if still:
+            rows = np.array([s, e - 1])  # identical rows: the pose holds over the log's span
+        elif changes.any() and max_gap_s is not None:
             _refuse_moved_station(node, t[s:e], pos[s:e], changes, float(max_gap_s), source)
         tracks[node] = PoseTrack(
             node,
-            t[s:e] + float(offsets.get(node, 0.0)),
-            np.ascontiguousarray(pos[s:e]),
-            np.ascontiguousarray(quat[s:e]),
+            t[rows] + float(offsets.get(node, 0.0)),
+            np.ascontiguousarray(pos[rows]),
+            np.ascontiguousarray(quat[rows]),
+            still,
         )
     unknown = sorted(set(offsets) - set(tracks))
     if unknown:

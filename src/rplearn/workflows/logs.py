@@ -7,6 +7,8 @@ notes for the user.
 
 from __future__ import annotations
 
+import dataclasses
+
 from dataclasses import dataclass, field
 from typing import Any, Iterator, Mapping, Sequence
 
@@ -52,15 +54,21 @@ class SyncOutcome:
         What the log readers dropped or assumed.
     streamed : bool
         True when the signal logs were read in chunks (CSV/Parquet signal tables).
+    clock : ClockOffsetEstimate or None
+        The estimated clock offset of a node (``estimate_offset``), applied or not.
     """
 
     counts: SyncSummary
     output: str
     notes: list[str] = field(default_factory=list)
     streamed: bool = False
+    clock: Any = None
 
     def summary(self) -> str:
-        return f"{self.counts.to_text()}\nwrote {self.counts.n_out:,} matched samples to {self.output}"
+        text = f"{self.counts.to_text()}\nwrote {self.counts.n_out:,} matched samples to {self.output}"
+        if self.clock is not None:
+            text = self.clock.summary() + "\n" + text
+        return text
 
 
 #: Rows of a signal table read at a time when a sync streams it.
@@ -141,6 +149,9 @@ def sync_logs(
     output: str,
     reader_options: ReaderOptions | None = None,
     sync_options: SyncOptions | None = None,
+    estimate_offset: str | None = None,
+    offset_window_s: float = 1.0,
+    apply_offset: bool = False,
 ) -> SyncOutcome:
     """Read pose and signal logs of any format, match every packet with the poses of both
     ends (paper Sec. V-B4) and write the matched dataset.
@@ -148,13 +159,32 @@ def sync_logs(
     CSV and Parquet signal tables are streamed (:data:`SYNC_CHUNK_ROWS` rows at a time), so a
     signal log of any length fits in memory; their samples are written in file order (sorted
     by time within a sorted file). Other formats are read whole and sorted by time.
+
+    With ``estimate_offset`` (a node id), the clock offset of that node's poses is first
+    estimated over ``+-offset_window_s`` (:func:`rplearn.analysis.clock.estimate_clock_offset`;
+    the signal logs are then read whole once) and reported in the outcome; it is added to the
+    node's offset only with ``apply_offset``.
     """
     check_output_path(output, [*pose_paths, *signal_paths])
     check_table_path(output)
     reader_options = reader_options or ReaderOptions()
+    sync_options = sync_options or SyncOptions()
     pose_logs, pose_meta = read_logs(pose_paths, reader_options)
     if pose_logs.pose is None:
         raise InputError(f"{', '.join(pose_paths)}: no pose log found", param="pose_paths")
+    clock = None
+    if apply_offset and estimate_offset is None:
+        raise InputError("apply-offset: nothing to apply; give --estimate-offset NODE", param="apply_offset")
+    if estimate_offset is not None:
+        from rplearn.analysis.clock import estimate_clock_offset
+
+        whole, _ = read_logs(signal_paths, reader_options)
+        if whole.signal is None:
+            raise InputError(f"{', '.join(signal_paths)}: no signal log found", param="signal_paths")
+        clock = estimate_clock_offset(pose_logs.pose, whole.signal, estimate_offset, offset_window_s, sync_options)
+        if apply_offset:
+            offsets = {**dict(sync_options.clock_offsets_s or {}), clock.node: clock.offset_s}
+            sync_options = dataclasses.replace(sync_options, clock_offsets_s=offsets)
     source = ", ".join(signal_paths)
     if _streamable(signal_paths, reader_options):
         summary = SyncSummary()
@@ -166,13 +196,13 @@ def sync_logs(
                 yield res.dataset
 
         write_table_chunks(frames(), output, MATCHED_COLUMNS)
-        return SyncOutcome(summary, output, reader_notes(pose_meta), streamed=True)
+        return SyncOutcome(summary, output, reader_notes(pose_meta), streamed=True, clock=clock)
     signal_logs, _ = read_logs(signal_paths, reader_options)
     if signal_logs.signal is None:
         raise InputError(f"{', '.join(signal_paths)}: no signal log found", param="signal_paths")
     result = synchronise(pose_logs.pose, signal_logs.signal, sync_options, source=source)
     write_table(result.dataset, output)
-    return SyncOutcome(result.summary, output, reader_notes(pose_meta))
+    return SyncOutcome(result.summary, output, reader_notes(pose_meta), clock=clock)
 
 
 @dataclass

@@ -1,0 +1,71 @@
+"""rplearn.analysis.clock and ``sync --estimate-offset`` (issue 12, item 5): a node's clock
+offset found from the signal."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import pandas as pd
+import pytest
+
+from rplearn.analysis.clock import estimate_clock_offset
+from rplearn.errors import InputError
+from rplearn.sim import simulate
+
+INJECTED_S = 0.35
+
+
+def late_logs(tmp_path, preset, seed, late_s=INJECTED_S):
+    """A campaign whose node B logs its poses ``late_s`` early on the common clock (its clock
+    runs behind): the offset to add to B's pose times is ``+late_s``."""
+    simulate(preset, seed=seed, out_dir=str(tmp_path / "f"))
+    pose = pd.read_parquet(tmp_path / "f" / "pose_log.parquet")
+    sig = pd.read_parquet(tmp_path / "f" / "signal_log.parquet")
+    pose.loc[pose["node"] == "B", "t"] -= late_s
+    return pose, sig
+
+
+@pytest.mark.slow
+def test_an_injected_offset_is_recovered_within_20_ms(tmp_path):
+    """Acceptance 5 on the paper's campaign (both directions of A-B, 40,000 packets used)."""
+    pose, sig = late_logs(tmp_path, "paper", 2)
+    est = estimate_clock_offset(pose, sig, "B")
+    assert abs(est.offset_s - INJECTED_S) < 0.02 and abs(est.offset_s - INJECTED_S) < 3 * est.std_s, est.summary()
+    assert not est.at_edge and est.rmse_db.min() < est.rmse_db[0]
+
+
+def test_a_short_flight_says_how_unsure_it_is_and_an_edge_is_flagged(tmp_path):
+    pose, sig = late_logs(tmp_path, "smoke", 2)
+    est = estimate_clock_offset(pose, sig, "B")
+    assert abs(est.offset_s - INJECTED_S) < 3 * est.std_s and est.std_s < 0.1, est.summary()
+    narrow = estimate_clock_offset(pose, sig, "B", window_s=0.2)
+    assert narrow.at_edge and "widen it" in narrow.summary()
+    with pytest.raises(InputError, match="node Z has no pose log"):
+        estimate_clock_offset(pose, sig, "Z")
+    with pytest.raises(InputError, match="offset window"):
+        estimate_clock_offset(pose, sig, "B", window_s=-1.0)
+
+
+def test_sync_reports_the_offset_and_applies_it_only_when_asked(tmp_path):
+    pose, sig = late_logs(tmp_path, "smoke", 1)
+    pose.to_parquet(tmp_path / "poses.parquet")
+    sig.to_parquet(tmp_path / "signals.parquet")
+    base = [sys.executable, "-m", "rplearn.cli", "sync", "--poses", "poses.parquet", "--signals", "signals.parquet",
+            "--estimate-offset", "B"]
+    kept = subprocess.run(base + ["-o", "kept.parquet"], cwd=tmp_path, capture_output=True, text=True)
+    assert kept.returncode == 0 and "clock offset of B: +0.3" in kept.stdout and "not applied" in kept.stderr, kept.stderr
+    used = subprocess.run(base + ["--apply-offset", "-o", "used.parquet"], cwd=tmp_path, capture_output=True, text=True)
+    assert used.returncode == 0, used.stderr
+    plain = subprocess.run(base[:-2] + ["--offset", "B=0.35", "-o", "plain.parquet"], cwd=tmp_path, capture_output=True, text=True)
+    assert plain.returncode == 0, plain.stderr
+    kept, used, plain = (pd.read_parquet(tmp_path / f) for f in ("kept.parquet", "used.parquet", "plain.parquet"))
+    key = ["t", "tx", "rx"]
+    vs_plain = used.merge(plain, on=key, suffixes=("", "_plain"))
+    vs_kept = used.merge(kept, on=key, suffixes=("", "_kept"))
+    b_rx = vs_plain["rx"] == "B"
+    # applied: B's poses are (nearly) those of the true offset, and not those of no offset
+    assert (vs_plain.loc[b_rx, "rx_x"] - vs_plain.loc[b_rx, "rx_x_plain"]).abs().max() < 0.3
+    assert (vs_kept["rx_qz"] != vs_kept["rx_qz_kept"]).mean() > 0.3
+    no = subprocess.run(base[:-2] + ["--apply-offset", "-o", "x.parquet"], cwd=tmp_path, capture_output=True, text=True)
+    assert no.returncode == 1 and "give --estimate-offset" in no.stderr
