@@ -24,6 +24,7 @@ def fit(
     gauge_dbi: Optional[float] = typer.Option(None, "--gauge-dbi", help="Sphere-mean gain of --gauge-node [dBi] (default 0)."),
     prior: Optional[list[str]] = typer.Option(None, "--prior", help="NODE=MODEL.json: shrink NODE's pattern toward this (reference) model instead of toward zero; with --degree auto."),
     prior_std: Optional[float] = typer.Option(None, "--prior-std", help="How far [dB RMS] the --prior patterns may be from the truth (a vendor's tolerance): the spread of predictions where the flight never looked (default: learned from their misfit where it looked)."),
+    loss: str = typer.Option("ls", "--loss", help="ls (least squares) or huber: for logs with plateaus and dropouts, samples far from the pattern pull only as hard as 1.345 robust standard deviations (a pattern model of fixed order)."),
     output: str = typer.Option(..., "-o", "--out", help="Model file (.json)."),
 ) -> None:
     """Learn one radiation pattern per node (or a baseline) from a matched dataset.
@@ -38,7 +39,7 @@ def fit(
     check_fit_options(spec, order=order, ridge=ridge, sigma_rad2=sigma, grid=grid, gauge_node=gauge_node,
                       gauge_dbi=gauge_dbi, model=model)
     outcome = fit_dataset(dataset, spec, split_list(units), gauge_of(gauge_node, gauge_dbi), output, auto=auto,
-                          prior=pairs(prior, "--prior") or None, prior_std_db=prior_std)
+                          prior=pairs(prior, "--prior") or None, prior_std_db=prior_std, loss=loss)
     for line in outcome.units.notes:
         note(f"{line} (pass --units to choose)" if outcome.units.defaulted else line)
     say(outcome.summary())

@@ -12,6 +12,7 @@ from dataclasses import dataclass, field, replace
 from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
+import pandas as pd
 
 from rplearn._atomic import atomic_open
 from rplearn.analysis.pattern_error import node_directions
@@ -27,6 +28,7 @@ from rplearn.models.fit import FittedModel, evaluate_models, fit_model, scores_m
 from rplearn.models.base import require_patterns
 from rplearn.models.load import load_model
 from rplearn.models.spec import check_model_size
+from rplearn.models.robust import LOSSES, fit_huber
 from rplearn.models.auto import auto_orders, fit_auto, fit_from_statistics
 from rplearn.core.selection import Selection
 from rplearn.models.streamed import fit_patterns_streamed, unit_statistics_streamed, units_and_nodes
@@ -60,6 +62,7 @@ class FitOutcome:
     output: str | None = None
     non_unit_quaternions: int = 0
     selection: Selection | None = None
+    robust_notes: list[str] = field(default_factory=list)
 
     def summary(self) -> str:
         """What was learned, from how much, in how long; rank, conditioning and gauge."""
@@ -88,6 +91,7 @@ class FitOutcome:
                 values = ", ".join(f"{n} {v:.1f} dB" for n, v in spread.items())
                 text += (f"\n  where the flight never looked each pattern may be off by (1 sigma): {values} "
                          f"({training.get('prior_std_source', '')})")
+        text += "".join(f"\n  {line}" for line in self.robust_notes)
         if self.non_unit_quaternions:
             text += (f"\n  samples with a non-unit quaternion (|norm - 1| > {QUATERNION_NORM_TOLERANCE:g}, "
                      f"normalised): {self.non_unit_quaternions:,}")
@@ -107,6 +111,7 @@ def fit_dataset(
     auto: bool = False,
     prior: Mapping[str, str] | None = None,
     prior_std_db: float | None = None,
+    loss: str = "ls",
 ) -> FitOutcome:
     """Learn ``spec`` from a matched dataset file (``rplearn fit``).
 
@@ -131,6 +136,10 @@ def fit_dataset(
         How far [dB RMS] the priors may be from the truth (a vendor's tolerance): the spread of
         predictions where the flight never looked (default: learned from the priors' misfit
         where it looked; see :func:`rplearn.models.auto.fit_from_statistics`).
+    loss : {"ls", "huber"}
+        Least squares, or the Huber loss (:mod:`rplearn.models.robust`) for logs with
+        plateaus and dropouts: a pattern model of fixed order, the dataset in memory; the
+        outcome says how many samples were down-weighted, in which units and stretches.
     """
     if output:
         check_output_path(output, [dataset, *(prior or {}).values()])
@@ -144,9 +153,17 @@ def fit_dataset(
     priors = {str(n): load_model(path) for n, path in (prior or {}).items()}
     for model in priors.values():
         require_patterns(model, "serving as a prior")
+    if loss not in LOSSES:
+        raise InputError(f"loss: expected {' or '.join(LOSSES)}, got {loss!r}", param="loss")
+    if loss == "huber" and (auto or not spec.decouples):
+        raise InputError("loss huber: for a pattern model of fixed order (--model sh --degree N, bg, poly), "
+                         "not an automatic choice or a baseline", param="loss")
     if auto and not spec.decouples:
         raise InputError(f"order: 'auto' chooses the order of pattern models (sh, bg, poly), not of {spec.label}", param="order")
     if spec.decouples and _is_big(dataset):
+        if loss == "huber":
+            raise InputError(f"{dataset}: loss huber keeps the samples in memory; this file is streamed "
+                             f"(over {STREAM_FIT_ROWS:,} rows): fit a selection of --units", param="loss")
         return _fit_streamed(dataset, spec, units, gauge, output, auto, priors, prior_std_db)
     df = read_dataset(dataset)
     choice = learning_units(df, units, dataset)
@@ -154,10 +171,43 @@ def fit_dataset(
         return _fit_auto(df, dataset, spec, choice, gauge, output, priors, prior_std_db)
     samples = samples_of(df, choice.units, dataset)
     prov = provenance(dataset=dataset, model=spec.label, ridge=spec.ridge, units=choice.units)
-    fitted = fit_model(samples, spec, gauge=gauge, provenance=prov)
+    notes: list[str] = []
+    if loss == "huber":
+        fitted, robust = fit_huber(samples, spec, gauge=gauge, provenance=prov)
+        notes = downweighted_notes(select_units(df, choice.units, dataset), robust)
+    else:
+        fitted = fit_model(samples, spec, gauge=gauge, provenance=prov)
     if output:
         fitted.model.save(output)
-    return FitOutcome(fitted, choice, len(samples), output, samples.non_unit_quaternions)
+    return FitOutcome(fitted, choice, len(samples), output, samples.non_unit_quaternions, robust_notes=notes)
+
+
+def downweighted_notes(part: Any, robust: Any, stretches: int = 3) -> list[str]:
+    """Where a Huber fit down-weighted samples: how many, by unit, and the longest stretches
+    of consecutive down-weighted packets (plateaus and dropouts look like that)."""
+    mask = np.asarray(robust.downweighted, bool)
+    n = mask.size
+    lines = [f"huber: {int(mask.sum()):,} of {n:,} samples ({100.0 * mask.mean():.1f}%) lie beyond "
+             f"{robust.k:g} x {robust.scale_db:.2f} dB and pull less than least squares would "
+             f"({robust.iterations} iterations{'' if robust.converged else ', not converged'})"]
+    if not mask.any():
+        return lines
+    units = part["unit"].astype(str).to_numpy() if "unit" in part.columns else np.full(n, "all")
+    t = part["t"].to_numpy(np.float64)
+    counts = pd.Series(units[mask]).value_counts()
+    lines.append("  by unit: " + ", ".join(f"{u} {c:,}" for u, c in counts.items()))
+    order = np.lexsort((t, units))
+    m, u, tt = mask[order], units[order], t[order]
+    starts = np.flatnonzero(m & ~np.r_[False, m[:-1] & (u[1:] == u[:-1])])
+    runs = []
+    for s in starts:
+        e = s
+        while e + 1 < n and m[e + 1] and u[e + 1] == u[s]:
+            e += 1
+        runs.append((e - s + 1, u[s], tt[s], tt[e]))
+    runs.sort(key=lambda r: -r[0])
+    lines.append("  longest stretches: " + ", ".join(f"{c:,} samples in {un} at {a:.1f}-{b:.1f} s" for c, un, a, b in runs[:stretches]))
+    return lines
 
 
 #: A pattern fit streams its dataset (:mod:`rplearn.models.streamed`) from this many rows of a
