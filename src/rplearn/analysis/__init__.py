@@ -12,6 +12,8 @@ module               public names
                      :func:`best_swarm_headings` -> :class:`SwarmHeadings` (hovering swarm)
 ``swarm``            :func:`predict_swarm` -> :class:`SwarmPrediction` (every link over time,
                      connectivity), :func:`connectivity_over_time`
+``clock``            :func:`estimate_clock_offset` -> :class:`ClockOffsetEstimate` (a node's
+                     pose clock offset, from the signal)
 ===================  ===========================================================================
 
 Every name of ``__all__`` can be imported from here (``from rplearn.analysis import
@@ -39,6 +41,9 @@ _NAMES: dict[str, str] = {
     "SwarmHeadings": "headings",
     "best_swarm_headings": "headings",
     "best_yaw": "headings",
+    # clock offsets
+    "ClockOffsetEstimate": "clock",
+    "estimate_clock_offset": "clock",
     "heading_gain_tables": "headings",
     "heading_std_tables": "headings",
     # swarm links over time

@@ -44,6 +44,8 @@ _NAMES: dict[str, str] = {
     "FittedModel": "fit",
     "evaluate_models": "fit",
     "fit_model": "fit",
+    "fit_huber": "robust",
+    "RobustReport": "robust",
     "fit_patterns": "fit",
     "scores_markdown": "fit",
     "solve_patterns": "fit",
