@@ -69,3 +69,16 @@ def test_sync_reports_the_offset_and_applies_it_only_when_asked(tmp_path):
     assert (vs_kept["rx_qz"] != vs_kept["rx_qz_kept"]).mean() > 0.3
     no = subprocess.run(base[:-2] + ["--apply-offset", "-o", "x.parquet"], cwd=tmp_path, capture_output=True, text=True)
     assert no.returncode == 1 and "give --estimate-offset" in no.stderr
+
+
+def test_a_still_node_or_a_wide_window_is_handled(tmp_path):
+    pose, sig = late_logs(tmp_path, "smoke", 1)
+    still = pose.copy()
+    b = still["node"] == "B"
+    still.loc[b, ["x", "y", "z", "qw", "qx", "qy", "qz"]] = still.loc[b, ["x", "y", "z", "qw", "qx", "qy", "qz"]].iloc[0].to_numpy()
+    with pytest.raises(InputError, match="holds still"):
+        estimate_clock_offset(still, sig, "B")
+    # shifts of +-5 s bring the drones within 2 wavelengths for some packets: those are left out
+    # (it used to stop with a far-field error); the smoke flight circles, so +-5 s is ambiguous
+    wide = estimate_clock_offset(pose, sig, "B", window_s=5.0)
+    assert wide.offsets_s.min() == pytest.approx(-5.0) and 0 < wide.n_samples < estimate_clock_offset(pose, sig, "B").n_samples

@@ -325,3 +325,17 @@ def test_relative_power_keeps_strong_samples_and_says_so(tmp_path):
     assert fit.returncode == 0, fit.stderr
     with pytest.raises(InputError, match="rssi_scale"):
         SyncOptions(rssi_scale="linear")
+
+
+def test_a_drone_resting_on_its_pad_before_a_sparse_log_is_not_a_moved_station():
+    """Review: identical rows on the pad, then a 1 Hz flight (all changes across 'gaps' longer
+    than max_gap): a track whose samples are pose gaps, not a refused station."""
+    t = np.arange(0.0, 60.0, 1.0)
+    xyz = np.c_[np.where(t < 10, 0.0, t), np.zeros_like(t), np.where(t < 10, 0.0, 10.0)]
+    drone = pose_log("A", t, xyz, np.zeros_like(t))
+    res = synchronise(pd.concat([drone, pose_log("B", [0.0], [[5, 5, 1]], [0.0])], ignore_index=True),
+                      signal_log(np.arange(0.5, 59.0, 0.5), "A", "B"), SyncOptions(min_samples=0))
+    assert res.summary.dropped["pose_gap"] > 0
+    turned = pose_log("G", [0.0, 1.0, 50.0, 51.0], [[0, 0, 1]] * 4, [0.0, 0.0, 1.0, 1.0])
+    with pytest.raises(InputError, match="turned: the same position, another attitude"):
+        synchronise(pd.concat([drone, turned], ignore_index=True), signal_log([20.0], "A", "G"))

@@ -90,3 +90,19 @@ def test_the_robust_scale_ignores_a_minority_of_outliers():
     r = rng.normal(0.0, 2.0, 20_000)
     r[:1000] = -80.0
     assert robust_scale_db(r) == pytest.approx(2.0 * 1.06, rel=0.05)  # 5% outliers widen the MAD a little
+
+
+def test_noise_free_data_is_not_reported_as_down_weighted():
+    from rplearn.core.geometry import Directions
+    from rplearn.core.sh import SphericalHarmonics
+    from rplearn.data.tables import LinkSamples
+
+    rng = np.random.default_rng(2)
+    n = 3000
+    az, el = rng.uniform(-np.pi, np.pi, (2, n)), np.arcsin(rng.uniform(-1, 1, (2, n)))
+    basis = SphericalHarmonics(3)
+    coef = rng.normal(0, 3, (2, basis.n_coef))
+    y = np.einsum("ij,j->i", basis.design(az[0], el[0]), coef[0]) + np.einsum("ij,j->i", basis.design(az[1], el[1]), coef[1])
+    samples = LinkSamples(Directions(az[0], el[0], az[1], el[1]), np.zeros(n, int), np.ones(n, int), ("A", "B"), y, np.full(n, 30.0))
+    _, robust = fit_huber(samples, ModelSpec("sh", 3, ridge=0.0))
+    assert robust.scale_db >= 1e-3 and robust.downweighted.sum() == 0

@@ -26,7 +26,7 @@ import numpy as np
 import pandas as pd
 
 from rplearn.core.geometry import distance_m, link_directions
-from rplearn.core.link import observed_joint_gain_db
+from rplearn.core.link import FAR_FIELD_WAVELENGTHS, observed_joint_gain_db, wavelength_m
 from rplearn.data.poses import PoseTrack, tracks_of_checked_log
 from rplearn.data.sync import SyncOptions, synchronise
 from rplearn.data.tables import link_samples, validate_pose_log, validate_signal_log
@@ -39,6 +39,8 @@ MAX_OFFSET_FIT_ORDER = 10
 #: Packets per coefficient of that model at least (its order is the largest allowed, up to
 #: :data:`MAX_OFFSET_FIT_ORDER`): a model too coarse for the patterns biases the offset.
 OFFSET_SAMPLES_PER_COEF = 40
+#: Largest default step of the coarse search [s].
+COARSE_STEP_S = 0.1
 #: Contiguous stretches of the flight whose own minima give the spread of the estimate.
 OFFSET_BLOCKS = 10
 
@@ -74,6 +76,17 @@ class ClockOffsetEstimate:
     n_samples: int
     at_edge: bool
     given_s: float = 0.0
+
+    def curve_text(self, max_points: int = 25) -> str:
+        """The curve as a small table (at most ``max_points`` shifts, evenly picked, and the
+        minimum, marked)."""
+        best = int(np.argmin(self.rmse_db))
+        picked = np.linspace(0, len(self.offsets_s) - 1, min(max_points, len(self.offsets_s))).round().astype(int)
+        lines = [f"residual RMSE over clock shifts of {self.node}:"]
+        for i in sorted(set(picked.tolist()) | {best}):
+            mark = "  <- minimum" if i == best else ""
+            lines.append(f"  {self.offsets_s[i]:+7.3f} s  {self.rmse_db[i]:6.3f} dB{mark}")
+        return "\n".join(lines)
 
     def summary(self) -> str:
         """The estimate, its uncertainty and the curve's depth, for people."""
@@ -127,7 +140,8 @@ def estimate_clock_offset(
     options : SyncOptions, optional
         How to match (its link filter, gaps and other offsets are kept).
     step_s : float, optional
-        Coarse step [s]; default ``window_s / 5``. The fine step is a tenth of it, over one
+        Coarse step [s]; default ``window_s / 5``, at most :data:`COARSE_STEP_S` (a wider
+        step can step over the minimum, a few tenths of a second wide). The fine step is a tenth of it, over one
         coarse step either side of the coarse minimum.
 
     Raises
@@ -139,8 +153,8 @@ def estimate_clock_offset(
     from rplearn.models.fit import solve_patterns
 
     if not (np.isfinite(window_s) and 0 < window_s <= 600):
-        raise InputError(f"offset window: expected 0 to 600 s, got {window_s!r}", param="window_s")
-    step = float(step_s) if step_s is not None else window_s / 5.0
+        raise InputError(f"offset window: expected more than 0 and at most 600 s, got {window_s!r}", param="offset_window")
+    step = float(step_s) if step_s is not None else min(window_s / 5.0, COARSE_STEP_S)
     if not (np.isfinite(step) and 0 < step <= window_s):
         raise InputError(f"offset step: expected a positive number up to the window, got {step_s!r}", param="step_s")
     options = options or SyncOptions()
@@ -150,7 +164,7 @@ def estimate_clock_offset(
     mine = pose[pose["node"].astype(str) == node]
     if mine.empty:
         known = ", ".join(sorted(set(pose["node"].astype(str))))
-        raise InputError(f"estimate-offset: node {node} has no pose log (nodes: {known})", param="node")
+        raise InputError(f"estimate-offset: node {node} has no pose log (nodes: {known})", param="estimate_offset")
     base = dict(options.clock_offsets_s or {})
     start = float(mine["t"].min()) + base.get(node, 0.0) + window_s
     stop = float(mine["t"].max()) + base.get(node, 0.0) - window_s
@@ -166,16 +180,25 @@ def estimate_clock_offset(
     t_sig = matched["t"].to_numpy(np.float64)
     ends = [end for end in ("tx", "rx") if np.any(matched[end].astype(str).to_numpy() == node)]
     grid = np.unique(np.concatenate([_shift_grid(0.0, window_s, step), _shift_grid(0.0, window_s, step / 10.0)]))
-    usable = np.ones(len(matched), bool)  # rows whose node pose is known at every shift tried
-    for shift in grid[:: max(1, grid.size // 50)]:
-        usable &= track_at(track, t_sig, shift, options.max_gap_s)[2] == 0
+    if track.static or track.still:
+        raise InputError(f"estimate-offset: node {node} holds still in its pose log; shifting its clock changes "
+                         "nothing, so its offset cannot be told from the data", param="estimate_offset")
+    usable = np.ones(len(matched), bool)  # rows whose node pose is known, in the far field, at every shift tried
+    other = {end: matched[[f"{end}_x", f"{end}_y", f"{end}_z"]].to_numpy(np.float64) for end in ("tx", "rx")}
+    node_end = {end: matched[end].astype(str).to_numpy() == node for end in ("tx", "rx")}
+    near_m = FAR_FIELD_WAVELENGTHS * wavelength_m(matched["frequency_hz"].to_numpy(np.float64))
+    for shift in grid:
+        pos, _, status = track_at(track, t_sig, shift, options.max_gap_s)
+        tx_pos = np.where(node_end["tx"][:, None], pos, other["tx"])
+        rx_pos = np.where(node_end["rx"][:, None], pos, other["rx"])
+        usable &= (status == 0) & (np.linalg.norm(tx_pos - rx_pos, axis=1) > near_m)
     matched = matched[usable].reset_index(drop=True)
     t_sig = t_sig[usable]
     n_nodes = len(set(matched["tx"].astype(str)) | set(matched["rx"].astype(str)))
     order = min(MAX_OFFSET_FIT_ORDER, int(np.sqrt(len(matched) / (n_nodes * OFFSET_SAMPLES_PER_COEF))) - 1)
     if order < 2:
         raise InputError(f"estimate-offset: {len(matched)} packets of node {node} match inside its pose span; "
-                         "too few to tell its clock offset", param="node")
+                         "too few to tell its clock offset", param="estimate_offset")
     spec = ModelSpec("sh", order)
     base_samples = link_samples(matched, "signal log")
     pose_of = {end: (matched[[f"{end}_x", f"{end}_y", f"{end}_z"]].to_numpy(np.float64),
@@ -220,7 +243,12 @@ def estimate_clock_offset(
     sse = {s: float(np.sum(residuals[round(float(s), 9)] ** 2)) for s in near}
     offset, curvature = _parabola_minimum(near, np.array([sse[s] for s in near]))
     noise_var = min(sse.values()) / n
-    std = float(np.sqrt(noise_var / curvature)) if curvature > 0 else float(step)
+    at_edge = bool(abs(shifts[np.argmin(curve)]) >= window_s - 1e-9)
+    if not curvature > 0 and not at_edge:
+        raise InputError(f"estimate-offset: the residual does not grow away from its minimum: node {node}'s clock "
+                         "offset cannot be told from the data (its poses barely change over the window)",
+                         param="estimate_offset")
+    std = float(np.sqrt(noise_var / curvature)) if curvature > 0 else float(window_s)
     # the spread of the minima of contiguous stretches (packets share errors within one)
     block_minima = []
     edges = np.quantile(times[round(float(near[0]), 9)], np.linspace(0, 1, OFFSET_BLOCKS + 1))
@@ -233,9 +261,8 @@ def estimate_clock_offset(
         spread = float(np.std(np.clip(block_minima, -window_s, window_s), ddof=1) / np.sqrt(len(block_minima)))
         std = max(std, spread)
     offset = float(np.clip(offset, shifts[0], shifts[-1]))
-    at_edge = bool(abs(shifts[np.argmin(curve)]) >= window_s - 1e-9)
     given = base.get(node, 0.0)
     return ClockOffsetEstimate(node, offset + given, std, shifts + given, curve, int(n), at_edge, given)
 
 
-__all__ = ["MAX_OFFSET_FIT_ORDER", "MAX_SAMPLES", "OFFSET_BLOCKS", "OFFSET_SAMPLES_PER_COEF", "ClockOffsetEstimate", "estimate_clock_offset"]
+__all__ = ["COARSE_STEP_S", "MAX_OFFSET_FIT_ORDER", "MAX_SAMPLES", "OFFSET_BLOCKS", "OFFSET_SAMPLES_PER_COEF", "ClockOffsetEstimate", "estimate_clock_offset"]

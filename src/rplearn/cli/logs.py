@@ -83,8 +83,7 @@ def sync(
                         offset_window_s=offset_window, apply_offset=apply_offset)
     if outcome.clock is not None:
         c = outcome.clock
-        say("residual RMSE over clock shifts of " + c.node + ":\n" + "\n".join(
-            f"  {s:+7.3f} s  {r:6.3f} dB" for s, r in zip(c.offsets_s, c.rmse_db) if abs(round(s / 0.1) * 0.1 - s) < 1e-6))
+        say(c.curve_text())
         if not apply_offset:
             note(f"the offset was not applied; rerun with --apply-offset (or --offset {c.node}={c.offset_s:.3f}) to use it")
     for line in outcome.notes:  # part of the data's accounting: on standard output

@@ -191,18 +191,21 @@ def _pose_changes(position_xyz: np.ndarray, quat_wxyz: np.ndarray) -> np.ndarray
 def _refuse_moved_station(
     node: str, t_s: np.ndarray, position_xyz: np.ndarray, changes: np.ndarray, max_gap_s: float, source: str
 ) -> None:
-    """Refuse a log that holds still (the same pose logged twice or more) at one pose and later
-    at another, changing only across gaps longer than ``max_gap_s`` (its samples in between
+    """Refuse a log made only of still stretches (each pose logged twice or more) that changes
+    only across gaps longer than ``max_gap_s`` (its samples in between
     would be lost as pose gaps, or, if the gap were bridged, placed on a line the station
     never travelled)."""
     gaps = np.diff(t_s) > max_gap_s
-    if not np.all(gaps[changes]) or np.all(changes):
-        return  # the node moves while logged, or never logs the same pose twice: a track
+    starts = np.r_[0, np.flatnonzero(changes) + 1]
+    lengths = np.diff(np.r_[starts, t_s.size])
+    if not np.all(gaps[changes]) or np.any(lengths < 2):
+        return  # the node moves while logged, or logs some pose once only: a track
     first = int(np.flatnonzero(changes)[0])
     a, b = position_xyz[first], position_xyz[first + 1]
+    how = "" if np.any(np.abs(a - b) > SAME_POSITION_M) else " (turned: the same position, another attitude)"
     raise InputError(
         f"{source}: node {node} holds still at ({a[0]:.2f}, {a[1]:.2f}, {a[2]:.2f}) m until t={t_s[first]:.3f} s "
-        f"and at ({b[0]:.2f}, {b[1]:.2f}, {b[2]:.2f}) m from t={t_s[first + 1]:.3f} s, with no pose in between: "
+        f"and at ({b[0]:.2f}, {b[1]:.2f}, {b[2]:.2f}) m from t={t_s[first + 1]:.3f} s{how}, with no pose in between: "
         "a station moved between flights? Synchronise each flight with its own pose log"
     )
 

@@ -36,6 +36,8 @@ HUBER_K = 1.345
 #: Iterations at most, and the change of every prediction [dB] below which they stop.
 MAX_ITERATIONS = 100
 TOLERANCE_DB = 0.01
+#: Smallest robust scale [dB]: far below any radio's resolution.
+MIN_SCALE_DB = 1e-3
 #: Losses ``fit --loss`` takes.
 LOSSES: tuple[str, ...] = ("ls", "huber")
 
@@ -102,9 +104,10 @@ class _Features:
 
 def robust_scale_db(residual_db: np.ndarray) -> float:
     """1.4826 times the median absolute deviation: the standard deviation for Gaussian noise,
-    unmoved by a minority of outliers [dB]."""
+    unmoved by a minority of outliers [dB]; at least :data:`MIN_SCALE_DB` (more than half the
+    residuals equal, or rounding errors of noise-free data, would make it 0)."""
     r = np.asarray(residual_db, np.float64)
-    return float(1.4826 * np.median(np.abs(r - np.median(r))))
+    return float(max(1.4826 * np.median(np.abs(r - np.median(r))), MIN_SCALE_DB))
 
 
 def fit_huber(
@@ -162,9 +165,6 @@ def fit_huber(
     for iterations in range(1, MAX_ITERATIONS + 1):
         residual = y - fitted
         scale = robust_scale_db(residual)
-        if scale <= 0:
-            converged = True
-            break
         pseudo = fitted + np.clip(residual, -k * scale, k * scale)
         new = refit(pseudo)
         change = float(np.max(np.abs(new - fitted)))
@@ -176,7 +176,7 @@ def fit_huber(
     fitted = model.predict_gain(samples)
     ltd = time.perf_counter() - t0
     residual = y - fitted
-    scale = robust_scale_db(residual) if scale > 0 else scale
+    scale = robust_scale_db(residual)
     robust = RobustReport(scale, float(k), np.abs(residual) > k * scale, iterations, converged)
     model.training.update(report.to_dict())
     model.training["robust"] = robust.to_dict()

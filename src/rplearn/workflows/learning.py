@@ -163,7 +163,8 @@ def fit_dataset(
     if spec.decouples and _is_big(dataset):
         if loss == "huber":
             raise InputError(f"{dataset}: loss huber keeps the samples in memory; this file is streamed "
-                             f"(over {STREAM_FIT_ROWS:,} rows): fit a selection of --units", param="loss")
+                             f"(over {STREAM_FIT_ROWS:,} rows or {STREAM_FIT_BYTES // 2**20} MiB): write the "
+                             "units to learn from into a smaller file", param="loss")
         return _fit_streamed(dataset, spec, units, gauge, output, auto, priors, prior_std_db)
     df = read_dataset(dataset)
     choice = learning_units(df, units, dataset)

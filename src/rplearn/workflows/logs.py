@@ -174,7 +174,7 @@ def sync_logs(
         raise InputError(f"{', '.join(pose_paths)}: no pose log found", param="pose_paths")
     clock = None
     if apply_offset and estimate_offset is None:
-        raise InputError("apply-offset: nothing to apply; give --estimate-offset NODE", param="apply_offset")
+        raise InputError("apply-offset: nothing to apply; give --estimate-offset NODE", param="estimate_offset")
     if estimate_offset is not None:
         from rplearn.analysis.clock import estimate_clock_offset
 
@@ -182,6 +182,9 @@ def sync_logs(
         if whole.signal is None:
             raise InputError(f"{', '.join(signal_paths)}: no signal log found", param="signal_paths")
         clock = estimate_clock_offset(pose_logs.pose, whole.signal, estimate_offset, offset_window_s, sync_options)
+        if apply_offset and clock.at_edge:
+            raise InputError(f"apply-offset: the minimum for {clock.node} is at the edge of the +-{offset_window_s:g} s "
+                             "window; widen --offset-window before applying it", param="offset_window")
         if apply_offset:
             offsets = {**dict(sync_options.clock_offsets_s or {}), clock.node: clock.offset_s}
             sync_options = dataclasses.replace(sync_options, clock_offsets_s=offsets)
