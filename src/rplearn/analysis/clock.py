@@ -178,7 +178,6 @@ def estimate_clock_offset(
     matched = synchronise(pose, sig, opts, source="signal log").dataset  # the other ends' poses, once
     track = tracks_of_checked_log(mine, {node: base.get(node, 0.0)}, "pose log")[node]
     t_sig = matched["t"].to_numpy(np.float64)
-    ends = [end for end in ("tx", "rx") if np.any(matched[end].astype(str).to_numpy() == node)]
     grid = np.unique(np.concatenate([_shift_grid(0.0, window_s, step), _shift_grid(0.0, window_s, step / 10.0)]))
     if track.static or track.still:
         raise InputError(f"estimate-offset: node {node} holds still in its pose log; shifting its clock changes "
@@ -204,10 +203,9 @@ def estimate_clock_offset(
     pose_of = {end: (matched[[f"{end}_x", f"{end}_y", f"{end}_z"]].to_numpy(np.float64),
                      matched[[f"{end}_qw", f"{end}_qx", f"{end}_qy", f"{end}_qz"]].to_numpy(np.float64))
                for end in ("tx", "rx")}
-    is_node = {end: matched[end].astype(str).to_numpy() == node for end in ("tx", "rx")}
+    is_node = {end: node_end[end][usable] for end in ("tx", "rx")}
     rssi, ptx, freq = (matched[c].to_numpy(np.float64) for c in ("rssi_dbm", "tx_power_dbm", "frequency_hz"))
     residuals: dict[float, np.ndarray] = {}
-    times: dict[float, np.ndarray] = {}
 
     def rmse(shift: float) -> float:
         key = round(float(shift), 9)
@@ -224,7 +222,6 @@ def estimate_clock_offset(
                 distance_m=dist, joint_gain_db=observed_joint_gain_db(rssi, ptx, dist, freq))
             model, _ = solve_patterns(samples, spec)
             residuals[key] = samples.joint_gain_db - model.predict_gain(samples)
-            times[key] = t_sig
         return float(np.sqrt(np.mean(residuals[key] ** 2)))
 
     coarse = _shift_grid(0.0, window_s, step)
@@ -238,7 +235,7 @@ def estimate_clock_offset(
         rmse(s)
     shifts = np.array(sorted(residuals))
     curve = np.array([rmse(s) for s in shifts])
-    n = min(r.size for r in residuals.values())
+    n = t_sig.size  # every shift sees the same packets
     near = shifts[np.argsort(np.abs(shifts - shifts[np.argmin(curve)]))[:7]]
     sse = {s: float(np.sum(residuals[round(float(s), 9)] ** 2)) for s in near}
     offset, curvature = _parabola_minimum(near, np.array([sse[s] for s in near]))
@@ -251,10 +248,10 @@ def estimate_clock_offset(
     std = float(np.sqrt(noise_var / curvature)) if curvature > 0 else float(window_s)
     # the spread of the minima of contiguous stretches (packets share errors within one)
     block_minima = []
-    edges = np.quantile(times[round(float(near[0]), 9)], np.linspace(0, 1, OFFSET_BLOCKS + 1))
+    edges = np.quantile(t_sig, np.linspace(0, 1, OFFSET_BLOCKS + 1))
     for k in range(OFFSET_BLOCKS):
-        part = {s: residuals[round(float(s), 9)][(times[round(float(s), 9)] >= edges[k]) & (times[round(float(s), 9)] <= edges[k + 1])]
-                for s in near}
+        stretch = (t_sig >= edges[k]) & (t_sig <= edges[k + 1])
+        part = {s: residuals[round(float(s), 9)][stretch] for s in near}
         if min(p.size for p in part.values()) > 10:
             block_minima.append(_parabola_minimum(near, np.array([np.sum(part[s] ** 2) for s in near]))[0])
     if len(block_minima) >= 3:

@@ -101,17 +101,22 @@ def heading_gain_tables(
     dict
         ``(a, b)`` -> gains over ``yaw_grid_deg``, for every ordered pair of distinct drones.
     """
+    return {(a, b): model.evaluate(patterns[a], az, el) for (a, b), (az, el) in _pair_directions(positions, yaw_grid_deg).items()}
+
+
+def _pair_directions(positions: Mapping[str, ArrayLike], yaw_grid_deg: np.ndarray) -> dict[Pair, tuple[np.ndarray, np.ndarray]]:
+    """``(a, b)`` -> body-frame azimuth and elevation [rad] of ``b`` seen from a level ``a`` at
+    every yaw of the grid, for every ordered pair of distinct drones."""
     yaws = np.asarray(yaw_grid_deg, np.float64)
     q = quat_wxyz_from_yaw(np.radians(yaws))
-    table = {}
+    out = {}
     for a in positions:
         pa = np.broadcast_to(np.asarray(positions[a], np.float64), (yaws.size, 3))
         for b in positions:
             if a != b:
                 pb = np.broadcast_to(np.asarray(positions[b], np.float64), (yaws.size, 3))
-                az, el = direction_in_body(pa, q, pb)
-                table[(a, b)] = model.evaluate(patterns[a], az, el)
-    return table
+                out[(a, b)] = direction_in_body(pa, q, pb)
+    return out
 
 
 def heading_std_tables(
@@ -122,17 +127,8 @@ def heading_std_tables(
     flight never looked in."""
     if getattr(model, "covariance", None) is None:
         return None
-    yaws = np.asarray(yaw_grid_deg, np.float64)
-    q = quat_wxyz_from_yaw(np.radians(yaws))
-    table = {}
-    for a in positions:
-        pa = np.broadcast_to(np.asarray(positions[a], np.float64), (yaws.size, 3))
-        for b in positions:
-            if a != b:
-                pb = np.broadcast_to(np.asarray(positions[b], np.float64), (yaws.size, 3))
-                az, el = direction_in_body(pa, q, pb)
-                table[(a, b)] = model.standard_error(patterns[a], az, el)
-    return table
+    return {(a, b): model.standard_error(patterns[a], az, el)
+            for (a, b), (az, el) in _pair_directions(positions, yaw_grid_deg).items()}
 
 
 #: Default of ``best_yaw(caution_z=...)``: headings are ranked by the 10% lower bound of their
