@@ -279,7 +279,8 @@ def _predict_links(
     d = distance_m(pa, pb)
     dirs = link_directions(pa, quat[ia, ti], pb, quat[ib, ti])
     pattern_index = np.array([model.node_index(patterns[x]) for x in drones], np.intp)
-    samples = LinkSamples(dirs, pattern_index[ia], pattern_index[ib], model.nodes, np.full(d.size, np.nan), d, np.full(d.size, frequency_hz))
+    samples = LinkSamples(dirs, pattern_index[ia], pattern_index[ib], model.nodes, np.full(d.size, np.nan), d,
+                          np.full(d.size, frequency_hz), tx_z_m=pa[:, 2], rx_z_m=pb[:, 2])
     gain = model.predict_gain(samples)
     limit_m = _far_field_limit_m(frequency_hz)
     far = d > limit_m

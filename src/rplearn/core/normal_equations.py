@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import threading
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -49,9 +50,10 @@ def _block_buffer(size: int) -> FloatArray:
     return buf[:size]
 
 
-def block_rows(basis: Basis) -> int:
-    """Rows of the accumulation block of :func:`link_statistics` for this basis."""
-    return 2 * basis.n_coef + 1
+def block_rows(basis: Basis, n_extra: int = 2) -> int:
+    """Rows of the accumulation block of :func:`link_statistics` for this basis (with the
+    ``n_extra`` rows :class:`NormalEquations` adds: a constant and the environment column)."""
+    return 2 * basis.n_coef + 1 + n_extra
 
 
 def reserve_block_buffer(basis: Basis, n_samples: int) -> None:
@@ -71,13 +73,15 @@ def _fill_features(
     az_rx: FloatArray,
     el_rx: FloatArray,
     moments: FloatArray | None,
+    gap: int = 1,
 ) -> None:
-    """Write tx features into rows ``0 .. p-1`` and rx features into rows ``p+1 .. 2p`` of ``buf``.
+    """Write tx features into rows ``0 .. p-1`` and rx features into rows ``p+gap .. 2p+gap-1`` of ``buf``.
 
-    Rows are in the basis's :attr:`~rplearn.core.bases.Basis.row_order`; row ``p`` is left for the
-    observations. Works in cache-sized chunks; a basis that accepts stacked samples computes
-    both ends of a chunk in one pass, through a (p, 2, chunk) strided view of the two row
-    groups, and adds to ``moments[0]`` (tx) and ``moments[1]`` (rx) when given.
+    Rows are in the basis's :attr:`~rplearn.core.bases.Basis.row_order`; rows ``p .. p+gap-1``
+    are left for the observations and extra columns. Works in cache-sized chunks; a basis that
+    accepts stacked samples computes both ends of a chunk in one pass, through a (p, 2, chunk)
+    strided view of the two row groups, and adds to ``moments[0]`` (tx) and ``moments[1]`` (rx)
+    when given.
     """
     p = basis.n_coef
     n = az_tx.size
@@ -89,29 +93,40 @@ def _fill_features(
         view = buf[:, s:e]
         if basis.stacked_samples:
             both = np.lib.stride_tricks.as_strided(
-                view, shape=(p, 2, e - s), strides=(view.strides[0], (p + 1) * view.strides[0], view.strides[1])
+                view, shape=(p, 2, e - s), strides=(view.strides[0], (p + gap) * view.strides[0], view.strides[1])
             )
             basis.design_rows_into(az_both[:, s:e], el_both[:, s:e], both, moments)
         else:
             basis.design_rows_into(az_tx[s:e], el_tx[s:e], view[:p])
-            basis.design_rows_into(az_rx[s:e], el_rx[s:e], view[p + 1 :])
+            basis.design_rows_into(az_rx[s:e], el_rx[s:e], view[p + gap : 2 * p + gap])
 
 
 def link_statistics(
-    basis: Basis, az_tx: FloatArray, el_tx: FloatArray, az_rx: FloatArray, el_rx: FloatArray, y: FloatArray
+    basis: Basis,
+    az_tx: FloatArray,
+    el_tx: FloatArray,
+    az_rx: FloatArray,
+    el_rx: FloatArray,
+    y: FloatArray,
+    extra: FloatArray | None = None,
 ) -> FloatArray:
-    """``Z^T Z`` with ``Z = [f(tx directions), y, f(rx directions)]`` over samples of one link.
+    """``Z^T Z`` with ``Z = [f(tx directions), y, extra..., f(rx directions)]`` over samples of one link.
 
-    A ``(2p + 1, 2p + 1)`` matrix, features in the basis's row order: the tx and rx blocks of
-    ``X^T X``, ``X^T y`` and ``y^T y``. Per block of :data:`BLOCK_SAMPLES` samples, written
-    into this thread's reused buffer, either one symmetric rank-k update of all ``2p + 1``
-    rows, or, for a basis with Gram moments (SH), only the product ``[f_tx; y] [y; f_rx]^T``
-    (half the work): the two diagonal blocks then come from the moments.
+    A ``(2p + 1 + m, 2p + 1 + m)`` matrix (``m`` rows of ``extra``, shape ``(m, n)``: shared
+    regressors such as a constant or the log-distance column), features in the basis's row
+    order: the tx and rx blocks of ``X^T X``, ``X^T y``, ``y^T y`` and the extra columns'
+    products. Per block of :data:`BLOCK_SAMPLES` samples, written into this thread's reused
+    buffer, either one symmetric rank-k update of all rows, or, for a basis with Gram moments
+    (SH), only the product ``[f_tx; y; extra] [y; extra; f_rx]^T`` (about half the work): the
+    two diagonal feature blocks then come from the moments.
     """
     az_tx, el_tx, az_rx, el_rx, y = (np.ascontiguousarray(a, np.float64).ravel() for a in (az_tx, el_tx, az_rx, el_rx, y))
     p = basis.n_coef
-    k = block_rows(basis)
     n = az_tx.size
+    extra = np.zeros((0, n)) if extra is None else np.asarray(extra, np.float64).reshape(-1, n)
+    m = extra.shape[0]
+    gap = 1 + m  # rows between the tx and rx feature groups: y and the extra rows
+    k = 2 * p + gap
     use_moments = basis.moment_shape is not None and basis.stacked_samples
     moments = np.zeros((2, *basis.moment_shape)) if use_moments else None
     total = np.zeros((k, k))
@@ -120,17 +135,24 @@ def link_statistics(
         stop = min(n, start + BLOCK_SAMPLES)
         buf = block[: k * (stop - start)].reshape(k, stop - start)
         part = slice(start, stop)
-        _fill_features(basis, buf, az_tx[part], el_tx[part], az_rx[part], el_rx[part], moments)
+        _fill_features(basis, buf, az_tx[part], el_tx[part], az_rx[part], el_rx[part], moments, gap)
         buf[p] = y[part]
+        if m:
+            buf[p + 1 : p + gap] = extra[:, part]
         if moments is None:
             total += buf @ buf.T
         else:
-            total[: p + 1, p:] += buf[: p + 1] @ buf[p:].T
+            total[: p + gap, p:] += buf[: p + gap] @ buf[p:].T
     if moments is not None:
-        total[p:, : p + 1] = total[: p + 1, p:].T
+        total[p:, : p + gap] = total[: p + gap, p:].T
         total[:p, :p] = basis.gram_from_moments(moments[0])
-        total[p + 1 :, p + 1 :] = basis.gram_from_moments(moments[1])
+        total[p + gap :, p + gap :] = basis.gram_from_moments(moments[1])
     return total
+
+
+#: Entries of a directed link's sums (:attr:`NormalEquations.directed`) after its two feature
+#: blocks: sum of y, sample count, sum of the environment column.
+_SUM_Y, _COUNT, _SUM_E = 0, 1, 2
 
 
 @dataclass
@@ -143,31 +165,60 @@ class NormalEquations:
         The basis shared by all nodes.
     n_nodes : int
         Number of nodes (patterns) in the problem.
+    environment : bool
+        Also accumulate one shared per-sample regressor (the log-distance column of
+        :mod:`rplearn.core.environment`), given to every :meth:`add`.
+
+    Besides ``X^T X`` and ``X^T y`` of the pattern columns, every directed link keeps the sums
+    of its features, observations and environment values (:attr:`directed`), from which
+    :meth:`with_shared` appends shared columns (the environment column and one electronics
+    offset per link logged both ways) without re-reading samples.
     """
 
     basis: Basis
     n_nodes: int
+    environment: bool = False
     gram: FloatArray = field(init=False)
     rhs: FloatArray = field(init=False)
     yty: float = field(init=False, default=0.0)
     n_samples: int = field(init=False, default=0)
     link_counts: dict[tuple[int, int], int] = field(init=False, default_factory=dict)
+    #: per directed link (tx, rx): [sum f_tx (p), sum f_rx (p), sum y, count, sum e], natural order
+    directed: dict[tuple[int, int], FloatArray] = field(init=False, default_factory=dict)
+    #: environment column: X^T e of the pattern columns, e^T e, e^T y
+    env_cross: FloatArray = field(init=False)
+    env_sq: float = field(init=False, default=0.0)
+    env_y: float = field(init=False, default=0.0)
+    #: shared columns appended after the pattern columns (set by :meth:`with_shared`):
+    #: ``("exponent",)`` or ``("offset", a, b)`` (+1 on a -> b samples, -1 on b -> a)
+    shared: tuple[tuple[Any, ...], ...] = field(init=False, default=())
 
     def __post_init__(self) -> None:
         if self.n_nodes < 2:
             raise InputError(f"a link problem needs at least 2 nodes, got {self.n_nodes}")
         self.gram = np.zeros((self.n_columns, self.n_columns))
         self.rhs = np.zeros(self.n_columns)
-        # link_statistics orders rows [tx features, y, rx features], features in the basis's
-        # row order; this index puts them back as [tx, rx, y] in the natural column order.
+        self.env_cross = np.zeros(self.n_pattern_columns)
+        # link_statistics orders rows [tx features, y, 1, e, rx features], features in the
+        # basis's row order; this index puts them back as [tx, rx, y, 1, e] in natural order.
         p = self.basis.n_coef
         rows = self.basis.row_order
         natural = np.arange(p) if rows is None else np.argsort(rows)
-        self._natural = np.concatenate([natural, natural + p + 1, [p]])
+        m = self._n_extra
+        self._natural = np.concatenate([natural, natural + p + 1 + m, np.arange(p, p + 1 + m)])
+
+    @property
+    def _n_extra(self) -> int:
+        return 2 if self.environment else 1
+
+    @property
+    def n_pattern_columns(self) -> int:
+        """Columns of the patterns (``n_nodes * n_coef``); shared columns follow them."""
+        return self.basis.n_coef * self.n_nodes
 
     @property
     def n_columns(self) -> int:
-        return self.basis.n_coef * self.n_nodes
+        return self.n_pattern_columns + len(self.shared)
 
     def add(
         self,
@@ -175,6 +226,7 @@ class NormalEquations:
         tx_index: ArrayLike,
         rx_index: ArrayLike,
         joint_gain_db: ArrayLike | None = None,
+        environment: ArrayLike | None = None,
     ) -> NormalEquations:
         """Accumulate a chunk of samples.
 
@@ -186,16 +238,27 @@ class NormalEquations:
             Node index of the transmitter and receiver of every sample.
         joint_gain_db : array_like, optional
             Observed joint gain [dB] (paper eq. 5); omitted for an identifiability check only.
+        environment : array_like, optional
+            The shared environment regressor of every sample; required exactly when the
+            statistics were made with ``environment=True``.
         """
+        if self.shared:
+            raise InputError("these statistics have shared columns appended (with_shared); add samples before that")
         az_tx, el_tx, az_rx, el_rx = (np.ascontiguousarray(a, np.float64).ravel() for a in directions)
         tx = np.asarray(tx_index).ravel()
         rx = np.asarray(rx_index).ravel()
         n = az_tx.size
         y = np.zeros(n) if joint_gain_db is None else np.ascontiguousarray(joint_gain_db, np.float64).ravel()
-        for name, arr in (("el_tx", el_tx), ("az_rx", az_rx), ("el_rx", el_rx), ("tx_index", tx), ("rx_index", rx), ("joint_gain_db", y)):
+        if (environment is None) == self.environment:
+            raise InputError("environment: give the environment column exactly when the statistics accumulate one",
+                             param="environment")
+        e = np.zeros(n) if environment is None else np.ascontiguousarray(environment, np.float64).ravel()
+        for name, arr in (("el_tx", el_tx), ("az_rx", az_rx), ("el_rx", el_rx), ("tx_index", tx), ("rx_index", rx),
+                          ("joint_gain_db", y), ("environment", e)):
             if arr.size != n:
                 raise InputError(f"{name} has {arr.size} values, az_tx has {n}")
-        for name, arr in (("az_tx", az_tx), ("el_tx", el_tx), ("az_rx", az_rx), ("el_rx", el_rx), ("joint_gain_db", y)):
+        for name, arr in (("az_tx", az_tx), ("el_tx", el_tx), ("az_rx", az_rx), ("el_rx", el_rx), ("joint_gain_db", y),
+                          ("environment", e)):
             if not np.all(np.isfinite(arr)):
                 raise InputError(f"{name}: {int(np.sum(~np.isfinite(arr)))} NaN or infinite value(s)")
         if n == 0:
@@ -212,12 +275,13 @@ class NormalEquations:
         for code in codes:
             t, r = divmod(int(code), self.n_nodes)
             sel = slice(None) if codes.size == 1 else (pair_code == code)
-            self._add_pair(t, r, az_tx[sel], el_tx[sel], az_rx[sel], el_rx[sel], y[sel])
+            self._add_pair(t, r, az_tx[sel], el_tx[sel], az_rx[sel], el_rx[sel], y[sel], e[sel])
         self.n_samples += n
         return self
 
     def _add_pair(
-        self, t: int, r: int, az_tx: FloatArray, el_tx: FloatArray, az_rx: FloatArray, el_rx: FloatArray, y: FloatArray
+        self, t: int, r: int, az_tx: FloatArray, el_tx: FloatArray, az_rx: FloatArray, el_rx: FloatArray, y: FloatArray,
+        e: FloatArray,
     ) -> None:
         p = self.basis.n_coef
         bt = slice(t * p, (t + 1) * p)
@@ -225,8 +289,10 @@ class NormalEquations:
         n = az_tx.size
         key = (min(t, r), max(t, r))
         self.link_counts[key] = self.link_counts.get(key, 0) + n
-        # Both nodes' blocks of X^T X, X^T y and y^T y from one pass over the samples.
-        block = link_statistics(self.basis, az_tx, el_tx, az_rx, el_rx, y)
+        # Both nodes' blocks of X^T X, X^T y and y^T y, and the sums of the directed link, from
+        # one pass over the samples.
+        extra = np.ones((1, n)) if not self.environment else np.stack([np.ones(n), e])
+        block = link_statistics(self.basis, az_tx, el_tx, az_rx, el_rx, y, extra)
         block = block[np.ix_(self._natural, self._natural)]
         self.gram[bt, bt] += block[:p, :p]
         self.gram[br, br] += block[p : 2 * p, p : 2 * p]
@@ -235,15 +301,94 @@ class NormalEquations:
         self.rhs[bt] += block[:p, 2 * p]
         self.rhs[br] += block[p : 2 * p, 2 * p]
         self.yty += float(block[2 * p, 2 * p])
+        one = 2 * p + 1
+        sums = np.zeros(2 * p + 3)
+        sums[: 2 * p] = block[: 2 * p, one]
+        sums[2 * p + _SUM_Y] = block[2 * p, one]
+        sums[2 * p + _COUNT] = block[one, one]
+        if self.environment:
+            env = one + 1
+            sums[2 * p + _SUM_E] = block[one, env]
+            self.env_cross[bt] += block[:p, env]
+            self.env_cross[br] += block[p : 2 * p, env]
+            self.env_y += float(block[2 * p, env])
+            self.env_sq += float(block[env, env])
+        prev = self.directed.get((t, r))
+        self.directed[(t, r)] = sums if prev is None else prev + sums
 
     def merge(self, other: NormalEquations) -> NormalEquations:
-        """Add another accumulator's statistics (same basis and node count) into this one."""
-        if other.basis != self.basis or other.n_nodes != self.n_nodes:
-            raise InputError("cannot merge normal equations of different bases or node counts")
+        """Add another accumulator's statistics (same basis, node count and columns) into this one."""
+        if other.basis != self.basis or other.n_nodes != self.n_nodes or other.environment != self.environment:
+            raise InputError("cannot merge normal equations of different bases, node counts or environment columns")
+        if self.shared or other.shared:
+            raise InputError("merge statistics before appending shared columns (with_shared)")
         self.gram += other.gram
         self.rhs += other.rhs
         self.yty += other.yty
         self.n_samples += other.n_samples
         for k, v in other.link_counts.items():
             self.link_counts[k] = self.link_counts.get(k, 0) + v
+        for k, v in other.directed.items():
+            self.directed[k] = v.copy() if k not in self.directed else self.directed[k] + v
+        self.env_cross += other.env_cross
+        self.env_sq += other.env_sq
+        self.env_y += other.env_y
         return self
+
+    def two_way_links(self) -> list[tuple[int, int]]:
+        """Links ``(a, b)``, ``a < b``, with samples in both directions (those that can carry an
+        electronics offset), sorted."""
+        return sorted((a, b) for (a, b) in self.directed if a < b and (b, a) in self.directed)
+
+    @property
+    def environment_sum(self) -> float:
+        """Sum of the environment column over all samples."""
+        return float(sum(v[2 * self.basis.n_coef + _SUM_E] for v in self.directed.values()))
+
+    def with_shared(self, offset_links: list[tuple[int, int]] | None = None) -> NormalEquations:
+        """These statistics with shared columns appended after the pattern columns.
+
+        The environment column (``("exponent",)``) when accumulated, then one column per link
+        of ``offset_links`` (``("offset", a, b)``: +1 on the samples ``a -> b``, -1 on
+        ``b -> a``), whose coefficient is half the difference between the two directions'
+        electronics (the gauge that makes a link's two offsets sum to zero; their common part
+        is the patterns' joint level). Links without samples here give zero columns (a unit
+        of a fleet that did not fly them). Returns a new object; this one is unchanged.
+        """
+        links = list(offset_links or [])
+        for a, b in links:
+            if not (0 <= a < b < self.n_nodes):
+                raise InputError(f"offset link ({a}, {b}): expected node indices a < b below {self.n_nodes}")
+        shared: list[tuple[Any, ...]] = ([("exponent",)] if self.environment else []) + [("offset", a, b) for a, b in links]
+        out = NormalEquations(self.basis, self.n_nodes, self.environment)
+        out.yty, out.n_samples = self.yty, self.n_samples
+        out.link_counts = dict(self.link_counts)
+        out.directed = {k: v.copy() for k, v in self.directed.items()}
+        out.env_cross, out.env_sq, out.env_y = self.env_cross.copy(), self.env_sq, self.env_y
+        out.shared = tuple(shared)
+        pc, p = self.n_pattern_columns, self.basis.n_coef
+        size = pc + len(shared)
+        gram = np.zeros((size, size))
+        rhs = np.zeros(size)
+        gram[:pc, :pc] = self.gram
+        rhs[:pc] = self.rhs
+        col = pc
+        if self.environment:
+            gram[:pc, col] = self.env_cross
+            gram[col, col] = self.env_sq
+            rhs[col] = self.env_y
+            col += 1
+        zero = np.zeros(2 * p + 3)
+        for a, b in links:
+            fwd, back = self.directed.get((a, b), zero), self.directed.get((b, a), zero)
+            ba, bb = slice(a * p, (a + 1) * p), slice(b * p, (b + 1) * p)
+            gram[ba, col] = fwd[:p] - back[p : 2 * p]  # a is tx on a -> b, rx on b -> a
+            gram[bb, col] = fwd[p : 2 * p] - back[:p]
+            gram[col, col] = fwd[2 * p + _COUNT] + back[2 * p + _COUNT]
+            rhs[col] = fwd[2 * p + _SUM_Y] - back[2 * p + _SUM_Y]
+            if self.environment:
+                gram[pc, col] = fwd[2 * p + _SUM_E] - back[2 * p + _SUM_E]
+            col += 1
+        out.gram = np.triu(gram) + np.triu(gram, 1).T
+        out.rhs = rhs
+        return out

@@ -122,9 +122,12 @@ class Selection:
         return "\n".join(lines)
 
 
-def penalty_scale(gram: np.ndarray) -> float:
-    """``mean(diag(X^T X))``: the unit of the relative smoothing."""
+def penalty_scale(gram: np.ndarray, n_columns: int | None = None) -> float:
+    """``mean(diag(X^T X))`` over the pattern columns (the first ``n_columns``; all by default,
+    shared columns such as link offsets excluded when given): the unit of the relative smoothing."""
     d = np.diag(gram)
+    if n_columns is not None:
+        d = d[:n_columns]
     return float(np.mean(d)) if d.size and np.mean(d) > 0 else 1.0
 
 
@@ -148,14 +151,25 @@ def sub_statistics(normal: NormalEquations, small: Basis) -> NormalEquations:
     """The statistics of a nested smaller basis, taken from ``normal`` (no samples re-read)."""
     if small == normal.basis:
         return normal
-    idx = nested_columns(normal.basis, small, normal.n_nodes)
-    out = NormalEquations(small, normal.n_nodes)
+    idx = with_shared_columns(nested_columns(normal.basis, small, normal.n_nodes), normal)
+    out = NormalEquations(small, normal.n_nodes, normal.environment)
+    out.shared = normal.shared
     out.gram = normal.gram[np.ix_(idx, idx)].copy()
     out.rhs = normal.rhs[idx].copy()
     out.yty = normal.yty
     out.n_samples = normal.n_samples
     out.link_counts = dict(normal.link_counts)
+    out.env_sq, out.env_y = normal.env_sq, normal.env_y
+    p_big, p_small = normal.basis.n_coef, small.n_coef
+    out.env_cross = normal.env_cross.reshape(normal.n_nodes, p_big)[:, :p_small].ravel().copy()
+    out.directed = {k: np.concatenate([v[:p_small], v[p_big : p_big + p_small], v[2 * p_big :]])
+                    for k, v in normal.directed.items()}
     return out
+
+
+def with_shared_columns(pattern_idx: np.ndarray, normal: NormalEquations) -> np.ndarray:
+    """Column indices of a sub-problem: ``pattern_idx`` and then every shared column of ``normal``."""
+    return np.concatenate([pattern_idx, normal.n_pattern_columns + np.arange(len(normal.shared))]).astype(np.intp)
 
 
 @dataclass
@@ -206,8 +220,15 @@ class _Evaluator:
                  ridge: float, power: float, target: np.ndarray | None = None) -> None:
         first = next(iter(units.values()))
         self.big, self.n_nodes = first.basis, first.n_nodes
+        self.first = first
+        self.n_shared = len(first.shared)
+        if any(u.shared != first.shared for u in units.values()):
+            raise InputError("the units' statistics have different shared columns; append them with one link list",
+                             param="units")
         self.make_basis, self.ridge, self.power = make_basis, float(ridge), float(power)
         self.folds, self.gram, self.rhs, self.yty, self.n = _folds(units)
+        if target is not None and target.size == first.n_pattern_columns and self.n_shared:
+            target = np.concatenate([target, np.zeros(self.n_shared)])  # shared columns are not pulled
         self.target = target
         self.cv = len(units) >= 2
         self.seen: dict[tuple[int, float], float] = {}
@@ -218,13 +239,13 @@ class _Evaluator:
     def _weights(self, basis: Basis) -> np.ndarray:
         w = basis.roughness(self.power)
         floor = _CONSTANT_FLOOR * (float(np.min(w[w > 0])) if np.any(w > 0) else 1.0)
-        return np.tile(np.maximum(w, floor), self.n_nodes)
+        return np.concatenate([np.tile(np.maximum(w, floor), self.n_nodes), np.zeros(self.n_shared)])
 
     def _blocks(self, order: int) -> tuple[np.ndarray, list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]]:
         """Roughness weights and, per fold, the learning and held-out blocks of one order (cached)."""
         if order not in self._cache:
             basis = self.make_basis(order)
-            idx = nested_columns(self.big, basis, self.n_nodes)
+            idx = with_shared_columns(nested_columns(self.big, basis, self.n_nodes), self.first)
             sub = [(_block(f.gram, idx), f.rhs[idx], _block(f.held_gram, idx), f.held_rhs[idx]) for f in self.folds]
             if not self.cv:
                 sub = [(_block(self.gram, idx), self.rhs[idx], np.empty(0), np.empty(0))]
@@ -281,16 +302,15 @@ class _Evaluator:
             predicted += noise_var * float(np.sum(inverse * held_g))  # tr(A^-1 H), both symmetric
         return float(max(1.0, excess / predicted)) if predicted > 0 and np.isfinite(excess) else 1.0
 
-    @staticmethod
-    def _pulled(gram: np.ndarray, rhs: np.ndarray, w: np.ndarray, smoothing: float, target: np.ndarray | None) -> np.ndarray:
+    def _pulled(self, gram: np.ndarray, rhs: np.ndarray, w: np.ndarray, smoothing: float, target: np.ndarray | None) -> np.ndarray:
         """``X^T y`` plus the prior's pull ``P target`` (shrinking toward the prior, not zero)."""
         if target is None or smoothing == 0:
             return rhs
-        return rhs + smoothing * penalty_scale(gram) * w * target
+        return rhs + smoothing * penalty_scale(gram, gram.shape[0] - self.n_shared) * w * target
 
     def _system(self, gram: np.ndarray, w: np.ndarray, smoothing: float) -> np.ndarray:
         a = gram.copy()
-        a[np.diag_indices_from(a)] += self.ridge + smoothing * penalty_scale(gram) * w
+        a[np.diag_indices_from(a)] += self.ridge + smoothing * penalty_scale(gram, gram.shape[0] - self.n_shared) * w
         return a
 
     def _solve(self, gram: np.ndarray, rhs: np.ndarray, w: np.ndarray, smoothing: float) -> tuple[np.ndarray, np.ndarray | None]:

@@ -5,6 +5,12 @@ gain ``y_i = G_t(az_tx_i, el_tx_i) + G_r(az_rx_i, el_rx_i) + noise`` (paper eq. 
 pattern a linear combination of the same basis, ``G_n = f(az, el) . p_n``, the row of sample
 ``i`` in the design matrix holds ``f(az_tx, el_tx)`` in the block of node ``t_i``,
 ``f(az_rx, el_rx)`` in the block of ``r_i`` and zeros elsewhere (the paper's Sec. V-A matrix).
+Shared columns may follow the patterns' (:meth:`NormalEquations.with_shared`): the
+log-distance column of the environment term, whose coefficient is the path-loss exponent less
+2, and one electronics offset per link logged both ways (half the difference of its two
+directions; the common part is the joint level of the patterns). Their coefficients are
+unpenalised; an environment column the directions explain (a flight at constant distance, or
+at constant altitude over a static station) is refused as not identifiable.
 
 The solver never forms the design matrix: it accumulates the sufficient statistics
 ``X^T X``, ``X^T y``, ``y^T y`` and ``n`` chunk by chunk
@@ -48,6 +54,13 @@ FloatArray = NDArray[np.float64]
 DEFAULT_RIDGE = 1.0
 #: Condition numbers above this get a warning in the fit report.
 CONDITION_WARNING = 1e4
+#: The path-loss exponent is refused as not identifiable when the part of its log-distance
+#: column ``10 log10 d`` that the other columns (the patterns) cannot explain has a standard
+#: deviation below this [dB]: the distance then varies by less than about +-12% independently
+#: of the directions (a flight at constant distance, or at constant altitude over a static
+#: station), one unit of exponent moves the gain less than a pattern's misfit does, and the
+#: patterns could take any exponent.
+EXPONENT_MIN_SPREAD_DB = 0.5
 
 
 # -------------------------------------------------------------------------------------------
@@ -179,6 +192,10 @@ class JointSolution:
     covariance: FloatArray
     residual_variance_db2: float
     report: FitReport
+    shared: tuple[tuple[Any, ...], ...] = ()
+    shared_coef: FloatArray = field(default_factory=lambda: np.zeros(0))
+    #: per shared column, the fraction (0..1) of its spread the other columns do not explain
+    shared_unexplained: FloatArray = field(default_factory=lambda: np.zeros(0))
 
 
 def spectrum_report(gram: FloatArray) -> tuple[FloatArray, int, float]:
@@ -305,6 +322,7 @@ def solve(
     if not (np.isfinite(ridge) and ridge >= 0):
         raise InputError(f"ridge must be a non-negative number, got {ridge!r}")
     pcols = normal.n_columns
+    pat = normal.n_pattern_columns
     if normal.n_samples < min_samples_per_coef * pcols:
         raise IdentifiabilityError(
             f"{normal.n_samples} samples cannot identify {pcols} coefficients "
@@ -318,13 +336,14 @@ def solve(
         raise IdentifiabilityError(f"node(s) {', '.join(missing)} appear in no sample; their patterns cannot be learned")
     components = link_components(n_nodes, normal.link_counts.keys())
     cmat, cval, notes = _gauge_constraints(normal.basis, n_nodes, names, components, gauge)
+    cmat = np.pad(cmat, ((0, 0), (0, pcols - pat)))
     sv, rank, cond = spectrum_report(normal.gram)
     k = cmat.shape[0]
     kkt = np.zeros((pcols + k, pcols + k))
     kkt[:pcols, :pcols] = normal.gram
     kkt[np.arange(pcols), np.arange(pcols)] += ridge
     if penalty is not None:
-        penalty = np.asarray(penalty, np.float64)
+        penalty = _pad_shared(np.asarray(penalty, np.float64), pat, pcols)
         if penalty.shape != (pcols,) or not np.all(np.isfinite(penalty)) or np.any(penalty < 0):
             raise InputError(f"penalty: expected {pcols} non-negative finite weights, got shape {penalty.shape}")
         kkt[np.arange(pcols), np.arange(pcols)] += penalty
@@ -333,7 +352,7 @@ def solve(
     kkt[pcols:, :pcols] = cmat
     rhs = np.concatenate([normal.rhs, cval])
     if penalty is not None and penalty_target is not None:
-        target = np.asarray(penalty_target, np.float64)
+        target = _pad_shared(np.asarray(penalty_target, np.float64), pat, pcols)
         if target.shape != (pcols,) or not np.all(np.isfinite(target)):
             raise InputError(f"penalty_target: expected {pcols} finite values, got shape {target.shape}")
         rhs[:pcols] += penalty * target
@@ -358,6 +377,8 @@ def solve(
     kinv = kinv_s * full_scale[:, None] * full_scale[None, :]
     sol = kinv @ rhs
     coef = sol[:pcols]
+    unexplained = _unexplained(normal, kinv)
+    _check_exponent(normal, kinv, unexplained)
     sse = max(normal.yty - 2.0 * coef @ normal.rhs + coef @ normal.gram @ coef, 0.0)
     dof = max(normal.n_samples - min(rank, pcols), 1)
     resid_var = sse / dof
@@ -386,7 +407,60 @@ def solve(
         singular_values=sv,
         warnings=tuple(fit_warnings(normal.basis.label, pcols, rank, k, cond, ridge)),
     )
-    return JointSolution(coef.reshape(n_nodes, normal.basis.n_coef), cov, float(resid_var), report)
+    return JointSolution(coef[:pat].reshape(n_nodes, normal.basis.n_coef), cov, float(resid_var), report,
+                         tuple(normal.shared), coef[pat:].copy(), unexplained)
+
+
+def _pad_shared(values: FloatArray, pat: int, pcols: int) -> FloatArray:
+    """Per-column weights given for the pattern columns only, padded with zeros for shared ones."""
+    if values.ndim == 1 and values.size == pat and pcols > pat:
+        return np.concatenate([values, np.zeros(pcols - pat)])
+    return values
+
+
+def _unexplained(normal: NormalEquations, kinv: FloatArray) -> FloatArray:
+    """Per shared column, the fraction of its centred spread the other columns leave unexplained
+    (``1 - R^2``): the Schur complement ``1 / (K^-1)_jj`` over ``sum (x - mean x)^2``."""
+    pat = normal.n_pattern_columns
+    out = np.ones(len(normal.shared))
+    n = max(normal.n_samples, 1)
+    for j, col in enumerate(normal.shared):
+        i = pat + j
+        total = float(normal.gram[i, i])
+        if col[0] == "exponent":
+            centred = total - normal.environment_sum**2 / n
+        else:
+            centred = total  # +-1 columns: their level is what they describe
+        inv = float(kinv[i, i])
+        if not (centred > 1e-9 * max(total, 1e-300)) or not (inv > 0):
+            out[j] = 0.0
+        else:
+            out[j] = float(min(1.0, 1.0 / (inv * centred)))
+    return out
+
+
+def _check_exponent(normal: NormalEquations, kinv: FloatArray, unexplained: FloatArray) -> None:
+    """Refuse a path-loss exponent the patterns could take (see :data:`EXPONENT_MIN_SPREAD_DB`)."""
+    pat = normal.n_pattern_columns
+    n = max(normal.n_samples, 1)
+    for j, col in enumerate(normal.shared):
+        if col[0] != "exponent":
+            continue
+        inv = float(kinv[pat + j, pat + j])
+        independent_db = float(np.sqrt(1.0 / (inv * n))) if inv > 0 else 0.0
+        if independent_db >= EXPONENT_MIN_SPREAD_DB:
+            continue
+        mean = normal.environment_sum / n
+        std = float(np.sqrt(max(normal.gram[pat + j, pat + j] / n - mean**2, 0.0)))
+        lo, hi = 10 ** ((-mean - 2 * std) / 10), 10 ** ((-mean + 2 * std) / 10)
+        raise IdentifiabilityError(
+            f"the path-loss exponent is not identifiable: the distance spans only about {lo:.3g}-{hi:.3g} m "
+            f"(mean +- 2 std), and the part of 10 log10 d the directions do not explain varies by "
+            f"{independent_db:.2f} dB (std; at least {EXPONENT_MIN_SPREAD_DB:g} dB is needed), so the patterns could "
+            "take any exponent; fit in free space (or with the two-ray term), or fly the same directions at "
+            "several distances",
+            param="path_loss",
+        )
 
 
 def fit_joint(
@@ -402,6 +476,8 @@ def fit_joint(
     chunk_size: int = 1_000_000,
     smoothing: float = 0.0,
     penalty_power: float = 2.0,
+    environment: ArrayLike | None = None,
+    link_offsets: bool = False,
 ) -> JointSolution:
     """Fit one pattern per node from link samples (paper Sec. IV-B and V-A).
 
@@ -429,20 +505,29 @@ def fit_joint(
         Relative weight of the smoothness penalty (:mod:`rplearn.core.selection`).
     penalty_power : float
         Exponent of the SH roughness weights.
+    environment : array_like, optional
+        A shared per-sample regressor learned with the patterns (the log-distance column of
+        :func:`rplearn.core.environment.log_distance_column`).
+    link_offsets : bool
+        Learn one electronics offset per link logged in both directions.
     """
-    normal = NormalEquations(basis, n_nodes)
+    normal = NormalEquations(basis, n_nodes, environment=environment is not None)
+    env = None if environment is None else np.asarray(environment, np.float64).ravel()
     tx = np.asarray(tx_index)
     rx = np.asarray(rx_index)
     y = np.asarray(joint_gain_db, np.float64)
     n = y.size
     for s in range(0, max(n, 1), chunk_size):
         e = min(n, s + chunk_size)
-        normal.add(Directions(*(np.asarray(d)[s:e] for d in directions)), tx[s:e], rx[s:e], y[s:e])
+        normal.add(Directions(*(np.asarray(d)[s:e] for d in directions)), tx[s:e], rx[s:e], y[s:e],
+                   None if env is None else env[s:e])
+    if env is not None or link_offsets:
+        normal = normal.with_shared(normal.two_way_links() if link_offsets else None)
     penalty = None
     if smoothing:
         from rplearn.core.selection import penalty_scale, penalty_vector
 
-        penalty = penalty_vector(basis, n_nodes, smoothing, penalty_scale(normal.gram), penalty_power)
+        penalty = penalty_vector(basis, n_nodes, smoothing, penalty_scale(normal.gram, normal.n_pattern_columns), penalty_power)
     return solve(normal, node_names, ridge=ridge, gauge=gauge, penalty=penalty)
 
 

@@ -312,6 +312,8 @@ class LinkSamples:
     non_unit_quaternions : int
         Samples whose tx or rx quaternion norm was off 1 by more than
         :data:`QUATERNION_NORM_TOLERANCE` (normalised, as in matching; reported by ``fit``).
+    tx_z_m, rx_z_m : ndarray or None
+        ENU heights of both ends [m] (for the two-ray environment term); None when unknown.
     """
 
     directions: Directions
@@ -322,6 +324,8 @@ class LinkSamples:
     distance_m: np.ndarray
     frequency_hz: np.ndarray | None = None
     non_unit_quaternions: int = 0
+    tx_z_m: np.ndarray | None = None
+    rx_z_m: np.ndarray | None = None
 
     def __len__(self) -> int:
         return int(self.joint_gain_db.shape[0])
@@ -390,4 +394,4 @@ def link_samples(
         df["frequency_hz"].to_numpy(np.float64),
     )
     return LinkSamples(dirs, tx_index, rx_index, nodes_t, gain, dist, df["frequency_hz"].to_numpy(np.float64),
-                       non_unit_quaternions=int(off.sum()))
+                       non_unit_quaternions=int(off.sum()), tx_z_m=tx_pos[:, 2].copy(), rx_z_m=rx_pos[:, 2].copy())

@@ -14,7 +14,9 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
+from rplearn.core.environment import PathLoss
 from rplearn.core.normal_equations import NormalEquations, reserve_block_buffer
+from rplearn.models.terms import regression_inputs, shared_fields
 from rplearn.core.selection import (
     DEFAULT_PENALTY_POWER,
     Selection,
@@ -134,7 +136,8 @@ def prior_misfit_var(normal: NormalEquations, target: np.ndarray, basis: Any) ->
     az, el = fibonacci_grid_nodes(max(4 * basis.n_coef, 400))
     half = np.linalg.lstsq(basis.design(az, el), np.full(az.size, 0.5), rcond=None)[0]
     ones = np.tile(half, normal.n_nodes)  # X @ ones = 1 for every sample (half a dB from each end)
-    g, r = normal.gram, normal.rhs
+    pat = normal.n_pattern_columns  # the prior's misfit in the patterns' columns (shared ones at 0)
+    g, r = normal.gram[:pat, :pat], normal.rhs[:pat]
     shift = (ones @ r - ones @ g @ target) / max(float(ones @ g @ ones), 1e-300)
     c = target + shift * ones
     return float(max(normal.yty - 2.0 * c @ r + c @ g @ c, 0.0) / max(normal.n_samples, 1))
@@ -150,6 +153,8 @@ def fit_auto(
     power: float | None = None,
     prior: Mapping[str, Any] | None = None,
     prior_spread_db: float | None = None,
+    path_loss: PathLoss | None = None,
+    link_offsets: bool = True,
 ) -> tuple[FittedModel, Selection]:
     """Learn a regularised pattern set with its order and smoothing chosen from the data.
 
@@ -175,6 +180,10 @@ def fit_auto(
         How far [dB RMS] each prior may be from the truth, where known (a vendor's tolerance);
         by default learned from the prior's misfit where the flight looked. Sets the predictive
         spread where the flight did not look (see :func:`fit_from_statistics`).
+    path_loss : PathLoss, optional
+        The environment term (free space by default; :mod:`rplearn.models.terms`).
+    link_offsets : bool
+        Learn one electronics offset per link logged in both directions.
 
     Returns
     -------
@@ -201,13 +210,17 @@ def fit_auto(
     basis = big.basis()
     reserve_block_buffer(basis, max(len(s) for s in units.values()))
     t0 = time.perf_counter()
-    stats = {u: NormalEquations(basis, len(nodes)).add(s.directions, s.tx_index, s.rx_index, s.joint_gain_db)
-             for u, s in units.items()}
+    path_loss = path_loss or PathLoss()
+    stats = {}
+    for u, s in units.items():
+        y, env = regression_inputs(s, path_loss)
+        stats[u] = NormalEquations(basis, len(nodes), environment=env is not None).add(
+            s.directions, s.tx_index, s.rx_index, y, env)
     freq = Counter()
     for s in units.values():
         frequency_counts(s, freq)
     fitted, choice = fit_from_statistics(stats, kind, orders, nodes, ridge, gauge, power, weighted_median(freq),
-                                         provenance, prior, prior_spread_db)
+                                         provenance, prior, prior_spread_db, path_loss, link_offsets)
     fitted.ltd_s = time.perf_counter() - t0
     fitted.model.training["ltd_s"] = fitted.ltd_s
     fitted.model.training["coverage_deg"] = node_coverage_grids(list(units.values()))
@@ -226,9 +239,15 @@ def fit_from_statistics(
     provenance: Mapping[str, Any] | None = None,
     prior: Mapping[str, Any] | None = None,
     prior_spread_db: float | None = None,
+    path_loss: PathLoss | None = None,
+    link_offsets: bool = True,
 ) -> tuple[FittedModel, Selection]:
     """The selection and the final solve of :func:`fit_auto`, from per-unit statistics
     accumulated at the largest of ``orders`` (in memory, or streamed from a big file).
+
+    Statistics accumulated with an environment column (the log-distance term of
+    ``path_loss``) get it as a shared column, and with ``link_offsets`` one offset per link
+    logged both ways (over all units) is appended, before the selection.
 
     The model's covariance is the posterior's, times the selection's variance inflation. Its
     spread where the data are absent is ``training["prior_std_db"]`` per node (and
@@ -249,16 +268,25 @@ def fit_from_statistics(
             raise InputError(f"prior spread: it states how far the priors may be off, but node(s) {', '.join(missing)} "
                              "have no prior; give a prior for every node", param="prior_spread_db")
     first = next(iter(stats.values()))
+    path_loss = path_loss or PathLoss()
+    if first.environment != path_loss.learns_exponent:
+        raise InputError(f"path loss {path_loss.kind}: the statistics were accumulated "
+                         f"{'with' if first.environment else 'without'} an environment column", param="path_loss")
+    total = NormalEquations(first.basis, first.n_nodes, first.environment)
+    for st in stats.values():
+        total.merge(st)
+    counts = {f"{nodes[t]}->{nodes[r]}": int(v[-2]) for (t, r), v in sorted(total.directed.items())}
+    links = total.two_way_links() if link_offsets else []
+    if first.environment or links:
+        stats = {u: st.with_shared(links) for u, st in stats.items()}
+        total = total.with_shared(links)
     target = prior_coefficients(prior, list(nodes), first.basis) if prior else None
     choice = select_order_and_smoothing(stats, lambda k: ModelSpec(kind, k, ridge=ridge).basis(), orders, ridge, power,
                                         target=target)
     spec = ModelSpec(kind, choice.order, ridge=ridge, smoothing=choice.smoothing)
-    total = NormalEquations(first.basis, first.n_nodes)
-    for st in stats.values():
-        total.merge(st)
     chosen = spec.basis()
     normal = sub_statistics(total, chosen)
-    penalty = penalty_vector(chosen, len(nodes), choice.smoothing, penalty_scale(normal.gram), power)
+    penalty = penalty_vector(chosen, len(nodes), choice.smoothing, penalty_scale(normal.gram, normal.n_pattern_columns), power)
     sub_target = None
     if target is not None:
         sub_target = target[nested_columns(first.basis, chosen, len(nodes))]
@@ -287,7 +315,9 @@ def fit_from_statistics(
         else:
             spread_source = "implied by the cross-validated smoothing (larger than " + spread_source + ")"
     ltd = time.perf_counter() - t0
+    fields, terms = shared_fields(sol, list(nodes), path_loss, counts, inflation)
     training = sol.report.to_dict()
+    training.update(terms)
     training.update(smoothing=choice.smoothing, penalty_power=power, selection=choice.to_dict(), ltd_s=ltd,
                     variance_inflation=inflation, prior_std_db=spread, prior_std_source=spread_source)
     if prior:
@@ -296,7 +326,7 @@ def fit_from_statistics(
     if frequency_hz is not None:
         training["frequency_hz"] = frequency_hz
     model = PatternSet(basis=chosen, nodes=tuple(nodes), coef=sol.coef, covariance=covariance,
-                       gauge=[g.to_dict() for g in sol.report.gauges], training=training)
+                       gauge=[g.to_dict() for g in sol.report.gauges], training=training, **fields)
     model.provenance = {**dict(provenance or {}), "model": spec.label}
     return FittedModel(spec, model, ltd), choice
 

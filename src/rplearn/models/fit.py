@@ -20,6 +20,9 @@ from rplearn.models.patterns import PatternSet
 from rplearn.core.solver import FitReport, fit_joint
 from rplearn.models.base import Model, learned_frequency_hz
 from rplearn.models.spec import ModelSpec, check_model_size
+from rplearn.models.terms import directed_counts, regression_inputs, shared_fields
+from rplearn.core.environment import PathLoss
+from rplearn.errors import InputError
 
 
 @dataclass
@@ -52,13 +55,20 @@ class FittedModel:
 
 
 def solve_patterns(
-    samples: LinkSamples, spec: ModelSpec, gauge: str | Mapping[str, Any] = "equal-mean"
+    samples: LinkSamples,
+    spec: ModelSpec,
+    gauge: str | Mapping[str, Any] = "equal-mean",
+    path_loss: PathLoss | None = None,
+    link_offsets: bool = True,
 ) -> tuple[PatternSet, FitReport]:
     """Learn one pattern per node of the samples (paper Sec. IV-B, V-A), with the solver's report.
 
     The one code path from a :class:`ModelSpec` to patterns: the basis of the spec, the joint
     least-squares solve, the training summary (with the samples' carrier frequency, when known).
     :func:`fit_patterns` and :class:`rplearn.models.estimators.PatternRegressor` both use it.
+
+    ``path_loss`` chooses the environment term (free space by default; :mod:`rplearn.models.terms`);
+    ``link_offsets`` learns one electronics offset per link logged in both directions.
 
     Returns
     -------
@@ -68,19 +78,25 @@ def solve_patterns(
         Rank, null-space dimension, condition number, gauge notes.
     """
     basis = spec.basis()
+    path_loss = path_loss or PathLoss()
+    y, env = regression_inputs(samples, path_loss)
     sol = fit_joint(
         samples.directions,
         samples.tx_index,
         samples.rx_index,
-        samples.joint_gain_db,
+        y,
         len(samples.nodes),
         basis,
         node_names=samples.nodes,
         ridge=spec.ridge,
         gauge=gauge,
         smoothing=spec.smoothing,
+        environment=env,
+        link_offsets=link_offsets,
     )
+    fields, terms = shared_fields(sol, samples.nodes, path_loss, directed_counts(samples))
     training = sol.report.to_dict()
+    training.update(terms)
     if spec.smoothing:
         training["smoothing"] = spec.smoothing
     frequency_hz = learned_frequency_hz(samples)
@@ -93,6 +109,7 @@ def solve_patterns(
         covariance=sol.covariance,
         gauge=[g.to_dict() for g in sol.report.gauges],
         training=training,
+        **fields,
     )
     return patterns, sol.report
 
@@ -120,10 +137,11 @@ def node_coverage_grids(
 
 
 def fit_patterns(
-    samples: LinkSamples, spec: ModelSpec, gauge: str | Mapping[str, Any] = "equal-mean", provenance: Mapping[str, Any] | None = None
+    samples: LinkSamples, spec: ModelSpec, gauge: str | Mapping[str, Any] = "equal-mean",
+    provenance: Mapping[str, Any] | None = None, path_loss: PathLoss | None = None, link_offsets: bool = True,
 ) -> PatternSet:
     """Learn one pattern per node of the samples (paper Sec. IV-B, V-A); see :func:`solve_patterns`."""
-    patterns, _ = solve_patterns(samples, spec, gauge)
+    patterns, _ = solve_patterns(samples, spec, gauge, path_loss, link_offsets)
     patterns.provenance = dict(provenance or {})
     return patterns
 
@@ -148,12 +166,21 @@ def fit_model(
     spec: ModelSpec,
     gauge: str | Mapping[str, Any] = "equal-mean",
     provenance: Mapping[str, Any] | None = None,
+    path_loss: PathLoss | None = None,
+    link_offsets: bool = True,
 ) -> FittedModel:
     """Learn a model of any kind and time it with ``time.perf_counter`` (the paper's LTD).
+
+    Pattern models take the environment term ``path_loss`` and learn link offsets
+    (:func:`solve_patterns`); the baselines, kept per directed link, need neither (a path loss
+    other than free space is refused for them).
 
     One-off costs of the process (imports, the tables of a basis) are paid before the clock
     starts, so that the LTD of a model does not depend on whether it was the first one learned.
     """
+    if path_loss is not None and path_loss.kind != "free" and not spec.decouples:
+        raise InputError(f"path loss {path_loss.kind}: the baselines ({spec.label}) learn no environment term; "
+                         "fit them in free space", param="path_loss")
     check_model_size(spec, len(samples), len(samples.nodes))
     _warm_up(spec, len(samples))
     t0 = time.perf_counter()
@@ -162,7 +189,7 @@ def fit_model(
     elif spec.kind == "knn":
         model = KNNModel.fit(samples, int(spec.order))
     else:
-        model = fit_patterns(samples, spec, gauge)
+        model = fit_patterns(samples, spec, gauge, path_loss=path_loss, link_offsets=link_offsets)
     ltd = time.perf_counter() - t0
     if isinstance(model, PatternSet):
         model.training["coverage_deg"] = node_coverage_grids(samples)

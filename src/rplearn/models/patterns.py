@@ -19,7 +19,8 @@ from rplearn._version import __version__
 from rplearn.core.bases import Basis, basis_from_dict
 from rplearn.core.basis_base import chunk_directions
 from rplearn.errors import InputError, ModelFileError
-from rplearn.core.geometry import distance_m, link_directions
+from rplearn.core.environment import PathLoss
+from rplearn.core.geometry import Directions, distance_m, link_directions
 from rplearn.core.link import received_power_dbm
 from rplearn.io.modelfile import jsonable as _jsonable
 from rplearn.io.modelfile import read_model_file, write_model_file
@@ -48,6 +49,14 @@ class PatternSet:
         Training summary (samples, RMSE, rank, condition number, ridge, ...).
     provenance : dict
         Library version, command and parameters that made the model.
+    path_loss : PathLoss
+        The environment term the patterns were learned with (free space by default).
+    shared_names : tuple of str
+        Coefficients learned with the patterns besides them: ``"exponent"`` (the log-distance
+        exponent less 2) and ``"offset:A->B"`` (half the electronics difference of a link
+        logged both ways: ``A->B`` gets ``+value``, ``B->A`` ``-value``).
+    shared_coef : ndarray
+        Their values; the covariance, when given, covers the patterns and then these.
     """
 
     basis: Basis
@@ -57,6 +66,9 @@ class PatternSet:
     gauge: list[dict[str, Any]] = field(default_factory=list)
     training: dict[str, Any] = field(default_factory=dict)
     provenance: dict[str, Any] = field(default_factory=dict)
+    path_loss: PathLoss = field(default_factory=PathLoss)
+    shared_names: tuple[str, ...] = ()
+    shared_coef: FloatArray = field(default_factory=lambda: np.zeros(0))
 
     def __post_init__(self) -> None:
         self.nodes = tuple(str(n) for n in self.nodes)
@@ -65,6 +77,92 @@ class PatternSet:
             raise InputError(
                 f"coef has shape {self.coef.shape}, expected ({len(self.nodes)}, {self.basis.n_coef})"
             )
+        self.shared_names = tuple(str(n) for n in self.shared_names)
+        self.shared_coef = np.asarray(self.shared_coef, np.float64).ravel()
+        if self.shared_coef.size != len(self.shared_names) or not np.all(np.isfinite(self.shared_coef)):
+            raise InputError(f"shared_coef: expected {len(self.shared_names)} finite values for "
+                             f"{', '.join(self.shared_names) or 'no shared columns'}", param="shared_coef")
+        for name in self.shared_names:
+            if name == "exponent":
+                continue
+            ends = name[len("offset:"):].split("->") if name.startswith("offset:") else []
+            if len(ends) != 2 or any(e not in self.nodes for e in ends):
+                raise InputError(f"shared column {name!r}: expected 'exponent' or 'offset:TX->RX' of known nodes",
+                                 param="shared_names")
+        if ("exponent" in self.shared_names) != self.path_loss.learns_exponent:
+            raise InputError(f"path loss {self.path_loss.kind}: an 'exponent' coefficient is expected exactly with "
+                             "the log-distance term", param="shared_names")
+
+    @property
+    def n_pattern_columns(self) -> int:
+        """Coefficients of the patterns (the covariance's shared columns follow them)."""
+        return len(self.nodes) * self.basis.n_coef
+
+    def shared_std(self) -> FloatArray:
+        """Standard errors of :attr:`shared_coef` (NaN without a covariance)."""
+        m = len(self.shared_names)
+        if self.covariance is None or self.covariance.shape[0] != self.n_pattern_columns + m:
+            return np.full(m, np.nan)
+        d = np.diag(self.covariance)[self.n_pattern_columns:]
+        return np.sqrt(np.maximum(d, 0.0))
+
+    @property
+    def path_loss_exponent(self) -> tuple[float, float] | None:
+        """``(exponent, standard error)`` of a log-distance model; None for another term."""
+        if "exponent" not in self.shared_names:
+            return None
+        j = self.shared_names.index("exponent")
+        return 2.0 + float(self.shared_coef[j]), float(self.shared_std()[j])
+
+    def link_offsets_db(self) -> dict[str, tuple[float, float]]:
+        """Electronics offset of every learned direction ``"TX->RX"``: ``(offset [dB], standard error)``.
+
+        Gauge: the two directions of a link sum to zero (their common part is in the patterns'
+        joint level); a direction not listed is predicted with offset 0.
+        """
+        out = {}
+        se = self.shared_std()
+        for j, name in enumerate(self.shared_names):
+            if name.startswith("offset:"):
+                a, b = name[len("offset:"):].split("->")
+                out[f"{a}->{b}"] = (float(self.shared_coef[j]), float(se[j]))
+                out[f"{b}->{a}"] = (-float(self.shared_coef[j]), float(se[j]))
+        return out
+
+    def shared_regressors(self, samples: "LinkSamples") -> FloatArray:
+        """Values of the shared columns for every sample, shape ``(len(shared_names), n)``."""
+        from rplearn.core.environment import log_distance_column
+
+        n = len(samples)
+        out = np.zeros((len(self.shared_names), n))
+        if not self.shared_names:
+            return out
+        names = np.asarray(samples.nodes, dtype=object)
+        tx = names[samples.tx_index] if n else np.zeros(0, object)
+        rx = names[samples.rx_index] if n else np.zeros(0, object)
+        for j, name in enumerate(self.shared_names):
+            if name == "exponent":
+                d = np.asarray(samples.distance_m, np.float64)
+                positive = d > 0
+                out[j] = np.nan  # no distance, no prediction
+                out[j, positive] = log_distance_column(d[positive])
+            else:
+                a, b = name[len("offset:"):].split("->")
+                out[j] = (tx == a) & (rx == b)
+                out[j] -= (tx == b) & (rx == a)
+        return out
+
+    def environment_db(self, samples: "LinkSamples") -> FloatArray:
+        """What the environment term and the link offsets add to the patterns' joint gain [dB]
+        for every sample (zero for a free-space model without offsets)."""
+        out = np.zeros(len(samples))
+        known = self.path_loss.known_db(samples.distance_m, samples.tx_z_m, samples.rx_z_m, samples.frequency_hz,
+                                        strict=False) if self.path_loss.kind == "two-ray" else None
+        if known is not None:
+            out += known
+        if self.shared_names:
+            out += self.shared_coef @ self.shared_regressors(samples)
+        return out
 
     # -- evaluation ----------------------------------------------------------------------
     def node_index(self, node: str) -> int:
@@ -128,6 +226,11 @@ class PatternSet:
         if self.covariance is None:
             return None
         p = self.basis.n_coef
+        m = len(self.shared_names)
+        if m and self.covariance.shape[0] != self.n_pattern_columns + m:
+            m = 0  # an older covariance of the patterns alone
+        shared = self.shared_regressors(samples)[:m] if m else np.zeros((0, len(samples)))
+        shared_idx = self.n_pattern_columns + np.arange(m)
         idx = np.array([self.node_index(n) for n in samples.nodes], dtype=np.intp)
         tx = idx[samples.tx_index]
         rx = idx[samples.rx_index]
@@ -141,14 +244,15 @@ class PatternSet:
             t, r = divmod(int(c), len(self.nodes))
             sel = np.flatnonzero(code == c)
             # joint covariance of the two ends' coefficients, in the basis's fastest row order
-            both = np.concatenate([t * p + rows, r * p + rows])
+            both = np.concatenate([t * p + rows, r * p + rows, shared_idx])
             joint = self.covariance[np.ix_(both, both)]
-            feats = np.empty((2 * p, min(step, sel.size)))
+            feats = np.empty((2 * p + m, min(step, sel.size)))
             for s0 in range(0, sel.size, step):
                 part = sel[s0 : s0 + step]
                 f = feats[:, : part.size]
                 self.basis.design_rows_into(az_tx[part], el_tx[part], f[:p])
-                self.basis.design_rows_into(az_rx[part], el_rx[part], f[p:])
+                self.basis.design_rows_into(az_rx[part], el_rx[part], f[p : 2 * p])
+                f[2 * p :] = shared[:, part]
                 var[part] = np.einsum("in,in->n", joint @ f, f)  # f^T C f of every sample
         return np.sqrt(np.maximum(var, 0.0))
 
@@ -195,8 +299,24 @@ class PatternSet:
         d = link_directions(tx_position_xyz, tx_quat_wxyz, rx_position_xyz, rx_quat_wxyz)
         gain = self.predict_joint_gain_db(tx_node, rx_node, *d)
         out = {"gain_db": gain}
+        dist = distance_m(tx_position_xyz, rx_position_xyz)
+        if self.path_loss.kind != "free" or self.shared_names:
+            from rplearn.data.tables import LinkSamples
+
+            n = np.atleast_1d(gain).size
+            tx_z = np.broadcast_to(np.asarray(tx_position_xyz, np.float64)[..., 2], (n,))
+            rx_z = np.broadcast_to(np.asarray(rx_position_xyz, np.float64)[..., 2], (n,))
+            nodes = (str(tx_node), str(rx_node))
+            if self.path_loss.kind == "two-ray" and frequency_hz is None:
+                frequency_hz = self.frequency_hz
+            freq = None if frequency_hz is None else np.broadcast_to(np.asarray(frequency_hz, np.float64), (n,))
+            samples = LinkSamples(Directions(*(np.broadcast_to(np.asarray(a, np.float64), (n,)) for a in d)),
+                                  np.zeros(n, np.intp), np.ones(n, np.intp), nodes, np.full(n, np.nan),
+                                  np.broadcast_to(dist, (n,)), freq, tx_z_m=tx_z, rx_z_m=rx_z)
+            out["environment_db"] = self.environment_db(samples)
+            gain = gain + out["environment_db"]
+            out["gain_db"] = gain
         if tx_power_dbm is not None and frequency_hz is not None:
-            dist = distance_m(tx_position_xyz, rx_position_xyz)
             out["rssi_dbm"] = received_power_dbm(tx_power_dbm, gain, dist, frequency_hz)
         return out
 
@@ -214,6 +334,10 @@ class PatternSet:
         }
         if self.covariance is not None:
             payload["covariance"] = self.covariance.tolist()
+        if self.path_loss.kind != "free":
+            payload["path_loss"] = self.path_loss.to_dict()
+        if self.shared_names:
+            payload["shared"] = {n: float(v) for n, v in zip(self.shared_names, self.shared_coef)}
         return payload
 
     def save(self, path: str | os.PathLike[str]) -> None:
@@ -239,26 +363,38 @@ class PatternSet:
             coef = np.array(rows)
             cov = payload.get("covariance")
             cov_arr = None if cov is None else np.asarray(cov, dtype=np.float64)
+            path_loss = PathLoss.from_dict(payload.get("path_loss"))
+            shared = payload.get("shared") or {}
+            if not isinstance(shared, Mapping):
+                raise ModelFileError(f"{source}: 'shared' must map names to numbers")
+            shared_names = tuple(str(k) for k in shared)
+            shared_coef = np.array([float(v) for v in shared.values()], dtype=np.float64)
         except ModelFileError:
             raise
-        except (KeyError, TypeError, ValueError) as exc:
+        except (KeyError, TypeError, ValueError, InputError) as exc:
             raise ModelFileError(f"{source}: malformed model ({type(exc).__name__}: {exc})") from None
         if coef.shape != (len(nodes), basis.n_coef) or not np.all(np.isfinite(coef)):
             raise ModelFileError(
                 f"{source}: coefficients must be {len(nodes)} finite vectors of {basis.n_coef} values"
             )
-        p = len(nodes) * basis.n_coef
+        p = len(nodes) * basis.n_coef + len(shared_names)
         if cov_arr is not None and cov_arr.shape != (p, p):
             raise ModelFileError(f"{source}: covariance must be {p} x {p}")
-        return cls(
-            basis=basis,
-            nodes=tuple(nodes),
-            coef=coef,
-            covariance=cov_arr,
-            gauge=list(payload.get("gauge", [])),
-            training=dict(payload.get("training", {})),
-            provenance=dict(payload.get("provenance", {})),
-        )
+        try:
+            return cls(
+                basis=basis,
+                nodes=tuple(nodes),
+                coef=coef,
+                covariance=cov_arr,
+                gauge=list(payload.get("gauge", [])),
+                training=dict(payload.get("training", {})),
+                provenance=dict(payload.get("provenance", {})),
+                path_loss=path_loss,
+                shared_names=shared_names,
+                shared_coef=shared_coef,
+            )
+        except InputError as exc:
+            raise ModelFileError(f"{source}: {exc}") from None
 
     @classmethod
     def load(cls, path: str | os.PathLike[str]) -> "PatternSet":
@@ -301,7 +437,10 @@ class PatternSet:
         tx = idx[samples.tx_index]
         rx = idx[samples.rx_index]
         d = samples.directions
-        return self._sum_node_gains(tx, d.az_tx, d.el_tx) + self._sum_node_gains(rx, d.az_rx, d.el_rx)
+        gain = self._sum_node_gains(tx, d.az_tx, d.el_tx) + self._sum_node_gains(rx, d.az_rx, d.el_rx)
+        if self.path_loss.kind != "free" or self.shared_names:
+            gain = gain + self.environment_db(samples)
+        return gain
 
     def _sum_node_gains(self, node_idx: np.ndarray, az_rad: FloatArray, el_rad: FloatArray) -> FloatArray:
         """Gain of node ``node_idx[i]`` toward direction ``i`` [dBi], one chunked pass per node."""

@@ -23,7 +23,9 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from rplearn.core.environment import PathLoss
 from rplearn.core.normal_equations import NormalEquations
+from rplearn.models.terms import directed_counts
 from rplearn.core.selection import penalty_scale, penalty_vector
 from rplearn.core.solver import solve
 from rplearn.data.tables import LinkSamples
@@ -116,6 +118,8 @@ def fit_huber(
     gauge: str | Mapping[str, Any] = "equal-mean",
     provenance: Mapping[str, Any] | None = None,
     k: float = HUBER_K,
+    path_loss: PathLoss | None = None,
+    link_offsets: bool = True,
 ) -> tuple[FittedModel, RobustReport]:
     """Learn a pattern model with the Huber loss (module docstring).
 
@@ -126,6 +130,8 @@ def fit_huber(
         A pattern model (sh, bg, poly) of fixed order.
     k : float
         Clipping point in robust standard deviations (:data:`HUBER_K`).
+    path_loss, link_offsets
+        As :func:`rplearn.models.fit.solve_patterns` (each iteration then refits in full).
 
     Returns
     -------
@@ -143,16 +149,21 @@ def fit_huber(
     basis, n_nodes = spec.basis(), len(samples.nodes)
     tx, rx = np.asarray(samples.tx_index), np.asarray(samples.rx_index)
     d = samples.directions
+    path_loss = path_loss or PathLoss()
+    counts = directed_counts(samples)
+    two_way = link_offsets and any(f"{b}->{a}" in counts for a, b in (key.split("->") for key in counts))
+    plain = path_loss.kind == "free" and not two_way  # no shared columns: the fast pseudo-observation path
     normal = NormalEquations(basis, n_nodes).add(d, tx, rx, y)  # X^T X once: only X^T y changes
     penalty = None
     if spec.smoothing:
         penalty = penalty_vector(basis, n_nodes, spec.smoothing, penalty_scale(normal.gram))
-    features = _Features(basis, d, tx, rx, n_nodes) if _features_fit(len(samples), basis.n_coef) else None
+    features = _Features(basis, d, tx, rx, n_nodes) if plain and _features_fit(len(samples), basis.n_coef) else None
 
     def refit(observed: np.ndarray) -> np.ndarray:
         """Least squares on ``observed`` with the same design; the new predictions."""
         if features is None:
-            model, _ = solve_patterns(dataclasses.replace(samples, joint_gain_db=observed), spec, gauge)
+            model, _ = solve_patterns(dataclasses.replace(samples, joint_gain_db=observed), spec, gauge, path_loss,
+                                      link_offsets)
             return model.predict_gain(samples)
         normal.rhs = features.transpose_times(observed)
         normal.yty = float(observed @ observed)
@@ -172,7 +183,7 @@ def fit_huber(
         if change < TOLERANCE_DB:
             converged = True
             break
-    model, report = solve_patterns(dataclasses.replace(samples, joint_gain_db=pseudo), spec, gauge)
+    model, report = solve_patterns(dataclasses.replace(samples, joint_gain_db=pseudo), spec, gauge, path_loss, link_offsets)
     fitted = model.predict_gain(samples)
     ltd = time.perf_counter() - t0
     residual = y - fitted

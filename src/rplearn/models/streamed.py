@@ -20,7 +20,9 @@ from typing import Any, Iterable, Mapping, Sequence
 import numpy as np
 import pandas as pd
 
+from rplearn.core.environment import PathLoss
 from rplearn.core.normal_equations import NormalEquations
+from rplearn.models.terms import regression_inputs, shared_fields
 from rplearn.core.selection import penalty_scale, penalty_vector
 from rplearn.core.solver import FitReport, solve
 from rplearn.data.tables import LinkSamples, link_samples, node_ids
@@ -98,7 +100,7 @@ def units_and_nodes(chunks: Iterable[pd.DataFrame]) -> pd.DataFrame:
 
 def _accumulate(
     chunks: Iterable[pd.DataFrame], spec: ModelSpec, nodes: Sequence[str], units: Sequence[str] | None,
-    source: str, by_unit: bool, block_rows: int | None = None,
+    source: str, by_unit: bool, block_rows: int | None = None, path_loss: PathLoss | None = None,
 ) -> tuple[dict[str, NormalEquations], float | None, int, float, dict[str, list[float]]]:
     """Statistics of the learning rows of every chunk: one accumulator per unit (``by_unit``)
     or one for all; the median frequency, the non-unit quaternions, the time spent [s] and the
@@ -106,6 +108,7 @@ def _accumulate(
     if not spec.decouples:
         raise InputError(f"{spec.label}: only pattern models (sh, bg, poly) learn from a stream", param="spec")
     basis = spec.basis()
+    path_loss = path_loss or PathLoss()
     stats: dict[str, NormalEquations] = {}
     wanted = None if not units else {str(u) for u in units}
     freq: Counter[float] = Counter()
@@ -135,8 +138,9 @@ def _accumulate(
             part = chunk[labels == label] if by_unit else chunk
             samples = link_samples(part, where, nodes=nodes)
             t0 = time.perf_counter()
-            acc = stats.setdefault(str(label), NormalEquations(basis, len(nodes)))
-            acc.add(samples.directions, samples.tx_index, samples.rx_index, samples.joint_gain_db)
+            y, env = regression_inputs(samples, path_loss)
+            acc = stats.setdefault(str(label), NormalEquations(basis, len(nodes), environment=env is not None))
+            acc.add(samples.directions, samples.tx_index, samples.rx_index, y, env)
             learn_s += time.perf_counter() - t0
             non_unit += samples.non_unit_quaternions
             grids = node_coverage_grids(samples, grids)
@@ -150,14 +154,16 @@ def _accumulate(
 
 def unit_statistics_streamed(
     chunks: Iterable[pd.DataFrame], spec: ModelSpec, nodes: Sequence[str], units: Sequence[str] | None = None,
-    source: str = "dataset", block_rows: int | None = None,
+    source: str = "dataset", block_rows: int | None = None, path_loss: PathLoss | None = None,
 ) -> tuple[dict[str, NormalEquations], float | None, int, dict[str, list[float]]]:
     """The statistics of every learning unit of a dataset given in chunks (for ``--degree auto``
     on a big file): ``(statistics by unit, median frequency [Hz], non-unit quaternions,
     coverage grids by node)``. A dataset without a ``unit`` column is one unit, ``"all"``; with
     ``block_rows`` the learning rows are cut into contiguous blocks of that many rows instead
-    (cross-validation of a single flight)."""
-    stats, f, non_unit, _, grids = _accumulate(chunks, spec, nodes, units, source, by_unit=True, block_rows=block_rows)
+    (cross-validation of a single flight). ``path_loss``: the environment term (its
+    log-distance column is accumulated; a two-ray term is subtracted)."""
+    stats, f, non_unit, _, grids = _accumulate(chunks, spec, nodes, units, source, by_unit=True, block_rows=block_rows,
+                                               path_loss=path_loss)
     return stats, f, non_unit, grids
 
 
@@ -168,6 +174,8 @@ def fit_patterns_streamed(
     units: Sequence[str] | None = None,
     gauge: str | Mapping[str, Any] = "equal-mean",
     source: str = "dataset",
+    path_loss: PathLoss | None = None,
+    link_offsets: bool = True,
 ) -> StreamedFit:
     """Learn one pattern per node from a dataset given in chunks (see the module docstring).
 
@@ -187,17 +195,29 @@ def fit_patterns_streamed(
         As :func:`rplearn.models.fit.solve_patterns`.
     source : str
         Name of the dataset in messages (a chunk's rows are named by their place in the file).
+    path_loss : PathLoss, optional
+        The environment term (free space by default; :mod:`rplearn.models.terms`).
+    link_offsets : bool
+        Learn one electronics offset per link logged in both directions.
     """
-    stats, f, non_unit, learn_s, grids = _accumulate(chunks, spec, nodes, units, source, by_unit=False)
+    path_loss = path_loss or PathLoss()
+    stats, f, non_unit, learn_s, grids = _accumulate(chunks, spec, nodes, units, source, by_unit=False,
+                                                     path_loss=path_loss)
     normal = next(iter(stats.values()))
     basis = normal.basis
     t0 = time.perf_counter()
+    counts = {f"{nodes[t]}->{nodes[r]}": int(v[-2]) for (t, r), v in sorted(normal.directed.items())}
+    links = normal.two_way_links() if link_offsets else []
+    if normal.environment or links:
+        normal = normal.with_shared(links)
     penalty = None
     if spec.smoothing:
-        penalty = penalty_vector(basis, len(nodes), spec.smoothing, penalty_scale(normal.gram))
+        penalty = penalty_vector(basis, len(nodes), spec.smoothing, penalty_scale(normal.gram, normal.n_pattern_columns))
     sol = solve(normal, list(nodes), ridge=spec.ridge, gauge=gauge, penalty=penalty)
     learn_s += time.perf_counter() - t0
+    fields, terms = shared_fields(sol, list(nodes), path_loss, counts)
     training = sol.report.to_dict()
+    training.update(terms)
     if spec.smoothing:
         training["smoothing"] = spec.smoothing
     training["coverage_deg"] = grids
@@ -205,7 +225,7 @@ def fit_patterns_streamed(
         training["frequency_hz"] = f
     patterns = PatternSet(
         basis=basis, nodes=tuple(nodes), coef=sol.coef, covariance=sol.covariance,
-        gauge=[g.to_dict() for g in sol.report.gauges], training=training,
+        gauge=[g.to_dict() for g in sol.report.gauges], training=training, **fields,
     )
     return StreamedFit(patterns, sol.report, normal.n_samples, non_unit, learn_s)
 

@@ -128,6 +128,11 @@ class RadioConfig:
         Number of short link dropouts in the whole campaign (both directions silent).
     dropout_duration_s : float
         Duration of each dropout [s].
+    path_loss_exponent : float
+        Log-distance exponent ``n`` of the path loss, free space up to 1 m (2: free space).
+    two_ray : bool
+        Add one ray reflected off flat ground at ``ground_level_m`` (relative permittivity
+        ``ground_permittivity``, ``polarization``), the antennas' true gains along it included.
     """
 
     tx_power_dbm: float = 20.0
@@ -142,6 +147,11 @@ class RadioConfig:
     link_offsets_db: tuple[tuple[tuple[str, str], float], ...] = ()
     dropouts: int = 0
     dropout_duration_s: float = 2.0
+    path_loss_exponent: float = 2.0
+    two_ray: bool = False
+    ground_level_m: float = 0.0
+    ground_permittivity: float = 15.0
+    polarization: str = "vertical"
 
     def offsets_dict(self) -> dict[str, float]:
         """Offsets keyed ``"tx->rx"`` [dB]."""
@@ -186,6 +196,8 @@ class SimulationConfig:
             )
         if self.radio.fading_std_db < 0:
             raise InputError(f"radio fading_std_db: expected >= 0 dB, got {self.radio.fading_std_db}")
+        if not (1.0 <= self.radio.path_loss_exponent <= 8.0):
+            raise InputError(f"radio path_loss_exponent: expected 1..8, got {self.radio.path_loss_exponent}")
 
     def ground_truth(self, seed: int | None = None) -> GroundTruth:
         """The :class:`GroundTruth` of this configuration."""

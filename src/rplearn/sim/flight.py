@@ -38,6 +38,7 @@ from rplearn.io.files import write_table
 from rplearn.errors import InputError
 from rplearn.core.geometry import (
     attitude_from_thrust,
+    direction_in_body,
     distance_m,
     link_directions,
     quat_wxyz_from_euler,
@@ -45,6 +46,7 @@ from rplearn.core.geometry import (
     quat_wxyz_multiply,
 )
 from rplearn.core.link import free_space_path_loss_db
+from rplearn.core.environment import log_distance_column, two_ray_excess_db
 from rplearn.plan.campaign import write_references
 from rplearn.plan.trajectory import G_M_S2, TrajectoryUnit
 from rplearn.sim.config import EstimatorConfig, FlightConfig, RadioConfig, SimulationConfig
@@ -294,6 +296,31 @@ class _Link:
     noise_db: FloatArray
 
 
+def _environment_db(
+    truth_model: GroundTruth, tx: str, rx: str, tx_pos: FloatArray, tx_q: FloatArray, rx_pos: FloatArray,
+    rx_q: FloatArray, direct_gain_db: FloatArray, dist: FloatArray, radio: RadioConfig,
+) -> FloatArray:
+    """What the channel adds to free space [dB]: a log-distance exponent and a ground ray.
+
+    The reflected ray leaves the transmitter toward the receiver's image below the ground and
+    arrives from the transmitter's image, so each antenna's true gain along it differs from
+    the direct ray's: the simulator uses those gains (a two-ray fit cannot know them).
+    """
+    out = (radio.path_loss_exponent - 2.0) * log_distance_column(dist)
+    if radio.two_ray:
+        g = radio.ground_level_m
+        tx_img, rx_img = tx_pos.copy(), rx_pos.copy()
+        tx_img[:, 2] = 2.0 * g - tx_pos[:, 2]
+        rx_img[:, 2] = 2.0 * g - rx_pos[:, 2]
+        az_t, el_t = direction_in_body(tx_pos, tx_q, rx_img)
+        az_r, el_r = direction_in_body(rx_pos, rx_q, tx_img)
+        reflected = truth_model.predict_joint_gain_db(tx, rx, az_t, el_t, az_r, el_r)
+        ratio = 10.0 ** ((reflected - direct_gain_db) / 20.0)
+        out = out + two_ray_excess_db(dist, tx_pos[:, 2] - g, rx_pos[:, 2] - g, radio.frequency_hz,
+                                      radio.ground_permittivity, radio.polarization, gain_ratio=ratio)
+    return out
+
+
 def _link_packets(
     truth: _UnitTruth, j_tx: int, truth_model: GroundTruth, radio: RadioConfig, offsets: dict[str, float],
     dropouts: FloatArray, rng: np.random.Generator,
@@ -316,6 +343,7 @@ def _link_packets(
         + gain
         + offsets.get(f"{tx}->{rx}", 0.0)
         - free_space_path_loss_db(dist, radio.frequency_hz)
+        + _environment_db(truth_model, tx, rx, tx_pos, tx_q, rx_pos, rx_q, gain, dist, radio)
     )
     power = clean + radio.fading_std_db * rng.standard_normal(t.size)
     delivered = np.ones(t.size, bool)

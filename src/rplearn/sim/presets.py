@@ -1,4 +1,4 @@
-"""Ready-made simulation configurations: ``paper``, ``trio``, ``smoke`` and ``ground``.
+"""Ready-made simulation configurations: ``paper``, ``trio``, ``smoke``, ``ground``, ``pathloss`` and ``tworay``.
 
 - ``paper``: a replica of the paper's campaign (Sec. V): two X500-class drones, both antennas
   vertical, one carrying a camera and the other a wireless sensor, which shadow differently;
@@ -14,6 +14,16 @@
   station, at 15 and 25 m (learning) and 35 m (testing): both antennas are seen in a few
   percent of the sphere, as in most real link measurements (:mod:`rplearn.plan.ground`).
 
+- ``pathloss``: the paper's drones and radio without its offsets, in a channel whose path loss
+  grows with a log-distance exponent of 3 (:data:`PATHLOSS_EXPONENT`), flying the paper's
+  vertical circles at three distances (6, 10 and 16 m; testing at 12 m), so that the exponent
+  can be told apart from the patterns (each circle sees every direction at its own distance).
+- ``tworay``: a station (ITU omni on a 5 m mast) and a drone (ITU omni, X500 frame) low over
+  flat ground, the ``ground`` preset's passes at 6 and 10 m altitude, 60 and 100 m away
+  (learning), and at 8 m, 80 m away (testing): the direct ray and one ground reflection at a
+  grazing angle of a few degrees (relative permittivity 15, vertical polarization), with each
+  antenna's true gain along the reflected ray.
+
 All presets are deterministic for a given seed of :func:`rplearn.sim.flight.simulate`.
 """
 
@@ -28,7 +38,7 @@ from rplearn.sim.config import EstimatorConfig, FlightConfig, RadioConfig, Simul
 from rplearn.plan.campaign import Campaign, group_campaign
 from rplearn.plan.trajectory import TrajectoryUnit
 
-__all__ = ["PRESET_NAMES", "fine_structure_lobes", "make_preset", "x500_frame_lobes"]
+__all__ = ["PATHLOSS_EXPONENT", "PATHLOSS_UNITS", "PRESET_NAMES", "fine_structure_lobes", "make_preset", "x500_frame_lobes"]
 
 
 def x500_frame_lobes(battery_az_deg: float = 180.0, arm_depth_db: float = 3.0) -> tuple[AirframeLobe, ...]:
@@ -199,7 +209,63 @@ def _ground() -> SimulationConfig:
     )
 
 
-_PRESETS: dict[str, Callable[[], SimulationConfig]] = {"paper": _paper, "trio": _trio, "smoke": _smoke, "ground": _ground}
+#: Log-distance exponent of the ``pathloss`` preset's channel.
+PATHLOSS_EXPONENT = 3.0
+#: ``pathloss`` preset units: (label, psi0 [deg], circle diameter = distance [m], speed [m/s], role).
+PATHLOSS_UNITS: tuple[tuple[str, float, float, float, str], ...] = (
+    ("learn_6m", 0.0, 6.0, 0.9, "learning"),
+    ("learn_10m", 24.0, 10.0, 1.5, "learning"),
+    ("learn_16m", 48.0, 16.0, 2.4, "learning"),
+    ("test_12m", 36.0, 12.0, 1.8, "testing"),
+)
+
+
+def _pathloss(exponent: float = PATHLOSS_EXPONENT) -> SimulationConfig:
+    units = tuple(TrajectoryUnit(nodes=("A", "B"), psi0_deg=psi, distance_m=d, speed_m_s=v, height_m=20.0, role=role,
+                                 label=label) for label, psi, d, v, role in PATHLOSS_UNITS)
+    paper = _paper()
+    return SimulationConfig(
+        name="pathloss",
+        campaign=Campaign(units, gap_s=60.0),
+        node_antennas=_paper_nodes(),
+        flight=paper.flight,
+        estimator=paper.estimator,
+        radio=replace(paper.radio, link_offsets_db=(), dropouts=0, path_loss_exponent=exponent),
+    )
+
+
+#: ``tworay`` preset: the station's antenna height and the drone's altitudes (learning, learning,
+#: testing) [m], and the horizontal distances of its passes [m].
+TWORAY_STATION_HEIGHT_M = 5.0
+TWORAY_HEIGHTS_M: tuple[float, float, float] = (6.0, 10.0, 8.0)
+TWORAY_DISTANCES_M: tuple[float, float, float] = (60.0, 100.0, 80.0)
+
+
+def _tworay() -> SimulationConfig:
+    from rplearn.plan.ground import GroundPassUnit
+
+    roles = ("learning", "learning", "testing")
+    units = tuple(GroundPassUnit(height_m=h, distance_m=d, station_height_m=TWORAY_STATION_HEIGHT_M, role=role,
+                                 label=f"{'learn' if role == 'learning' else 'test'}_{h:g}m_{d:g}m", station_yaw_deg=10.0)
+                  for h, d, role in zip(TWORAY_HEIGHTS_M, TWORAY_DISTANCES_M, roles))
+    ground = _ground()
+    omni = antenna_from_name("itu_omni")
+    nodes = {
+        "G": NodeAntenna(omni, Mounting.named("vertical"), (), "station, ITU omni on a 5 m mast"),
+        "D": NodeAntenna(omni, Mounting.named("vertical"), x500_frame_lobes(180.0), "X500, ITU omni"),
+    }
+    return SimulationConfig(
+        name="tworay",
+        campaign=Campaign(units, gap_s=60.0),  # type: ignore[arg-type]
+        node_antennas=nodes,
+        flight=ground.flight,
+        estimator=ground.estimator,
+        radio=replace(ground.radio, two_ray=True, ground_level_m=0.0, ground_permittivity=15.0),
+    )
+
+
+_PRESETS: dict[str, Callable[[], SimulationConfig]] = {"paper": _paper, "trio": _trio, "smoke": _smoke, "ground": _ground,
+                                                       "pathloss": _pathloss, "tworay": _tworay}
 #: Names accepted by :func:`make_preset` and :func:`rplearn.sim.flight.simulate`.
 PRESET_NAMES: tuple[str, ...] = tuple(_PRESETS)
 
