@@ -189,7 +189,7 @@ class OrientationResult:
             before, after = self.baseline_gain_db, self.gain_db
             lines.append(f"predicted joint gain: {before:.1f} dB now -> {after:.1f} dB ({after - before:+.1f} dB)")
         if self.gain_std_db is not None:
-            lines[-1] += f", +- {self.gain_std_db:.1f} dB (1 sigma, the pattern's error)"
+            lines[-1] += f", +- {self.gain_std_db:.1f} dB (1 sigma, the model's error: patterns and any learned path-loss exponent or offset)"
         if self.boldest is not None:
             lines.append(
                 f"the prediction alone would turn to tx {self.boldest[0]:.0f} deg, rx {self.boldest[1]:.0f} deg "
@@ -267,15 +267,17 @@ def best_yaw(
     b_tx, b_rx = pick(g_tx, g_rx)
     gain = float(g_tx[i_tx] + g_rx[i_rx])
     bold = float(g_tx[b_tx] + g_rx[b_rx])
+    env_std = float(model.link_environment_std_db(tx_node, rx_node, positions["tx"], positions["rx"])[0])
     result = OrientationResult(
         float(yaws[i_tx]), float(yaws[i_rx]), gain, float(g_tx[n] + g_rx[n + 1]),
         coverage_deg=_link_coverage(model, tx_node, rx_node, positions, float(yaws[i_tx]), float(yaws[i_rx])),
-        gain_std_db=float(np.hypot(s_tx[i_tx], s_rx[i_rx])) if spread else None,
+        gain_std_db=float(np.sqrt(s_tx[i_tx] ** 2 + s_rx[i_rx] ** 2 + env_std**2)) if spread else None,
         boldest=(float(yaws[b_tx]), float(yaws[b_rx]), bold) if bold > gain + 0.5 else None,
     )
     if tx_power_dbm is None:
         return result
-    return _with_received_power(result, positions, float(tx_power_dbm), float(frequency_hz))
+    env = float(model.link_environment_db(tx_node, rx_node, positions["tx"], positions["rx"], frequency_hz)[0])
+    return _with_received_power(result, positions, float(tx_power_dbm), float(frequency_hz), env)
 
 
 def _link_coverage(
@@ -295,15 +297,18 @@ def _link_coverage(
 
 
 def _with_received_power(
-    result: OrientationResult, positions: Mapping[str, Sequence[float]], tx_power_dbm: float, frequency_hz: float
+    result: OrientationResult, positions: Mapping[str, Sequence[float]], tx_power_dbm: float, frequency_hz: float,
+    environment_db: float = 0.0,
 ) -> OrientationResult:
-    """``result`` with the distance [m] and the received power before and after [dBm] (Friis)."""
+    """``result`` with the distance [m] and the received power before and after [dBm] (Friis,
+    plus the model's environment term and link offset, which no heading changes)."""
     d = float(distance_m(np.asarray(positions["tx"], np.float64), np.asarray(positions["rx"], np.float64)))
     return dataclasses.replace(
         result,
         distance_m=d,
-        rssi_dbm=float(received_power_dbm(tx_power_dbm, result.gain_db, d, frequency_hz)),
-        baseline_rssi_dbm=float(received_power_dbm(tx_power_dbm, result.baseline_gain_db, d, frequency_hz)),
+        rssi_dbm=float(received_power_dbm(tx_power_dbm, result.gain_db + environment_db, d, frequency_hz)),
+        baseline_rssi_dbm=float(received_power_dbm(tx_power_dbm, result.baseline_gain_db + environment_db, d,
+                                                   frequency_hz)),
         frequency_hz=frequency_hz,
     )
 
@@ -507,7 +512,10 @@ def _heading_problem(
     base = {}
     for a, b in pairs:
         dist = float(distance_m(np.asarray(positions[a], np.float64), np.asarray(positions[b], np.float64)))
-        base[(a, b)] = tx_power_dbm - float(free_space_path_loss_db(dist, frequency_hz))
+        # the environment term and the offsets change with no heading: the weaker direction's
+        env = min(float(model.link_environment_db(patterns[a], patterns[b], positions[a], positions[b], frequency_hz)[0]),
+                  float(model.link_environment_db(patterns[b], patterns[a], positions[b], positions[a], frequency_hz)[0]))
+        base[(a, b)] = tx_power_dbm - float(free_space_path_loss_db(dist, frequency_hz)) + env
     tables = heading_gain_tables(model, positions, patterns, yaws)
     iu = np.array([drones.index(a) for a, _ in pairs])
     ju = np.array([drones.index(b) for _, b in pairs])

@@ -76,6 +76,12 @@ def validation_sweep(unit_samples: dict[str, LinkSamples], orders: Sequence[int]
     nodes = next(iter(unit_samples.values())).nodes
     stats = {u: NormalEquations(spec.basis(), len(nodes)).add(s.directions, s.tx_index, s.rx_index, s.joint_gain_db)
              for u, s in unit_samples.items() if len(s)}
+    total = NormalEquations(spec.basis(), len(nodes))
+    for st in stats.values():
+        total.merge(st)
+    links = total.two_way_links()  # as the fits of the sweep: one offset per link logged both ways
+    if links:
+        stats = {u: st.with_shared(links) for u, st in stats.items()}
     make = lambda k: ModelSpec("sh", k).basis()  # noqa: E731
     selection = select_order_and_smoothing(stats, make, orders, spec.ridge)
     return selection, validation_rmse(stats, make, orders, selection.smoothing, spec.ridge)

@@ -55,6 +55,7 @@ PARAM_FLAGS: dict[str, str] = {
     "test_units": "--test-units", "learn_units": "--learn-units", "order": "--degree", "ridge": "--ridge",
     "sigma_rad2": "--sigma", "grid": "--grid", "gauge_node": "--gauge-node", "gauge_dbi": "--gauge-dbi", "prior": "--prior NODE=MODEL.json",
     "models": "--models", "orders": "--orders", "n_neighbors": "--degree",
+    "ground_level_m": "--ground-level", "relative_permittivity": "--permittivity",
 }
 
 

@@ -67,7 +67,7 @@ def trajectory(
 @app.command()
 @user_errors
 def simulate(
-    preset: str = typer.Option("paper", "--preset", help="paper, trio or smoke."),
+    preset: str = typer.Option("paper", "--preset", help="paper, trio, smoke, ground, pathloss (log-distance exponent 3) or tworay (ground reflection)."),
     seed: int = typer.Option(0, "--seed", help="Seed of every random effect."),
     out_dir: str = typer.Option("flight", "-o", "--out", help="Output directory."),
     log_format: str = typer.Option("parquet", "--format", help="parquet or csv."),

@@ -25,12 +25,18 @@ def fit(
     prior: Optional[list[str]] = typer.Option(None, "--prior", help="NODE=MODEL.json: shrink NODE's pattern toward this (reference) model instead of toward zero; with --degree auto."),
     prior_std: Optional[float] = typer.Option(None, "--prior-std", help="How far [dB RMS] the --prior patterns may be from the truth (a vendor's tolerance): the spread of predictions where the flight never looked (default: learned from their misfit where it looked)."),
     loss: str = typer.Option("ls", "--loss", help="ls (least squares) or huber: for logs with plateaus and dropouts, samples far from the pattern pull only as hard as 1.345 robust standard deviations (a pattern model of fixed order)."),
+    path_loss: str = typer.Option("free", "--path-loss", help="Environment term of pattern models: free (free space, eq. 1), log-distance (learn the path-loss exponent; refused when the distance does not vary independently of the directions) or two-ray (a ground reflection from the antenna heights)."),
+    ground_level: float = typer.Option(0.0, "--ground-level", help="two-ray: ENU height of the ground plane [m]."),
+    permittivity: float = typer.Option(15.0, "--permittivity", help="two-ray: relative permittivity of the ground (15 medium dry ground, ITU-R P.527; ~30 wet, 3-7 very dry)."),
+    polarization: str = typer.Option("vertical", "--polarization", help="two-ray: vertical (upright whips) or horizontal."),
+    link_offsets: bool = typer.Option(True, "--link-offsets/--no-link-offsets", help="Pattern models: learn one electronics offset per link logged in both directions (non-reciprocal radios; the two directions' offsets sum to 0)."),
     output: str = typer.Option(..., "-o", "--out", help="Model file (.json)."),
 ) -> None:
     """Learn one radiation pattern per node (or a baseline) from a matched dataset.
 
     Example: rplearn fit data.parquet --model sh --degree 10 --units learn_0,learn_24,learn_48 -o sh10.json
     """
+    from rplearn.core.environment import PathLoss
     from rplearn.models.spec import ModelSpec, check_fit_options, gauge_of
     from rplearn.workflows.learning import fit_dataset
 
@@ -39,7 +45,8 @@ def fit(
     check_fit_options(spec, order=order, ridge=ridge, sigma_rad2=sigma, grid=grid, gauge_node=gauge_node,
                       gauge_dbi=gauge_dbi, model=model)
     outcome = fit_dataset(dataset, spec, split_list(units), gauge_of(gauge_node, gauge_dbi), output, auto=auto,
-                          prior=pairs(prior, "--prior") or None, prior_std_db=prior_std, loss=loss)
+                          prior=pairs(prior, "--prior") or None, prior_std_db=prior_std, loss=loss,
+                          path_loss=PathLoss(path_loss, ground_level, permittivity, polarization), link_offsets=link_offsets)
     for line in outcome.units.notes:
         note(f"{line} (pass --units to choose)" if outcome.units.defaulted else line)
     say(outcome.summary())
@@ -144,6 +151,8 @@ def predict(
     if prediction.mismatch is not None:
         note(prediction.mismatch.describe(dataset, model_path), "warning")
     say(prediction.summary(output))
+    for line in prediction.notes:
+        note(line)
     for line in prediction.warnings:
         note(line, "warning")
 
@@ -182,16 +191,24 @@ def report(
     models: str = typer.Option("m,nn-400,sh-10,p-12,bg-7", "--models", help="Models to learn and compare."),
     test_units: Optional[list[str]] = typer.Option(None, "--test-units", help="Testing units (default: labels starting with 'test')."),
     out_dir: str = typer.Option("rplearn-report", "-o", "--out", help="Output directory."),
+    path_loss: str = typer.Option("free", "--path-loss", help="Environment term of the pattern models: free, log-distance or two-ray (see fit)."),
+    ground_level: float = typer.Option(0.0, "--ground-level", help="two-ray: ENU height of the ground plane [m]."),
+    permittivity: float = typer.Option(15.0, "--permittivity", help="two-ray: relative permittivity of the ground."),
+    polarization: str = typer.Option("vertical", "--polarization", help="two-ray: vertical or horizontal."),
+    link_offsets: bool = typer.Option(True, "--link-offsets/--no-link-offsets", help="Pattern models: learn one electronics offset per link logged in both directions."),
 ) -> None:
     """Learn models on a dataset, test them, and write Table I, pattern maps and report.html.
 
     Example: rplearn report data.parquet --models m,sh-10 -o report
     """
+    from rplearn.core.environment import PathLoss
     from rplearn.workflows.learning import learn_and_report
 
     names = split_list([models]) or []
+    terms = PathLoss(path_loss, ground_level, permittivity, polarization)
     with progress_bar() as p:
         task = p.add_task("learning", total=None)
-        outcome = learn_and_report(dataset, names, out_dir, split_list(test_units), progress=step(p, task))
+        outcome = learn_and_report(dataset, names, out_dir, split_list(test_units), progress=step(p, task),
+                                   path_loss=terms, link_offsets=link_offsets)
     say(outcome.markdown)
     say(f"wrote {outcome.report_path}")

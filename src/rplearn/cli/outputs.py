@@ -50,7 +50,7 @@ def plot(
 def demo(
     out_dir: str = typer.Option("rplearn-demo", "-o", "--out", help="Output directory."),
     seed: int = typer.Option(0, "--seed", help="Seed of the simulated flight."),
-    preset: str = typer.Option("paper", "--preset", help="Simulated campaign: paper, trio or smoke."),
+    preset: str = typer.Option("paper", "--preset", help="Simulated campaign: paper, trio, smoke, ground, pathloss or tworay."),
 ) -> None:
     """Reproduce the paper's evaluation on a simulated replica of its campaign (Table I, Figs. 5-10, report.html).
 

@@ -301,24 +301,62 @@ class PatternSet:
         out = {"gain_db": gain}
         dist = distance_m(tx_position_xyz, rx_position_xyz)
         if self.path_loss.kind != "free" or self.shared_names:
-            from rplearn.data.tables import LinkSamples
-
-            n = np.atleast_1d(gain).size
-            tx_z = np.broadcast_to(np.asarray(tx_position_xyz, np.float64)[..., 2], (n,))
-            rx_z = np.broadcast_to(np.asarray(rx_position_xyz, np.float64)[..., 2], (n,))
-            nodes = (str(tx_node), str(rx_node))
-            if self.path_loss.kind == "two-ray" and frequency_hz is None:
-                frequency_hz = self.frequency_hz
-            freq = None if frequency_hz is None else np.broadcast_to(np.asarray(frequency_hz, np.float64), (n,))
-            samples = LinkSamples(Directions(*(np.broadcast_to(np.asarray(a, np.float64), (n,)) for a in d)),
-                                  np.zeros(n, np.intp), np.ones(n, np.intp), nodes, np.full(n, np.nan),
-                                  np.broadcast_to(dist, (n,)), freq, tx_z_m=tx_z, rx_z_m=rx_z)
-            out["environment_db"] = self.environment_db(samples)
+            out["environment_db"] = self.link_environment_db(tx_node, rx_node, tx_position_xyz, rx_position_xyz,
+                                                             frequency_hz)
             gain = gain + out["environment_db"]
             out["gain_db"] = gain
         if tx_power_dbm is not None and frequency_hz is not None:
             out["rssi_dbm"] = received_power_dbm(tx_power_dbm, gain, dist, frequency_hz)
         return out
+
+    def link_environment_db(
+        self,
+        tx_node: str,
+        rx_node: str,
+        tx_position_xyz: ArrayLike,
+        rx_position_xyz: ArrayLike,
+        frequency_hz: ArrayLike | None = None,
+    ) -> FloatArray:
+        """What the environment term and the link's offset add to the joint gain [dB] between
+        positions (ENU [m]); it depends on no attitude. Zero for a free-space model without
+        offsets; NaN where a two-ray antenna is at or below the ground."""
+        from rplearn.data.tables import LinkSamples
+
+        tx_xyz = np.atleast_2d(np.asarray(tx_position_xyz, np.float64))
+        rx_xyz = np.atleast_2d(np.asarray(rx_position_xyz, np.float64))
+        tx_xyz, rx_xyz = np.broadcast_arrays(tx_xyz, rx_xyz)
+        n = tx_xyz.shape[0]
+        if self.path_loss.kind == "two-ray" and frequency_hz is None:
+            frequency_hz = self.frequency_hz
+        freq = None if frequency_hz is None else np.broadcast_to(np.asarray(frequency_hz, np.float64), (n,))
+        zero = np.zeros(n)
+        nodes = (str(tx_node), str(rx_node))
+        for node in nodes:
+            self.node_index(node)
+        samples = LinkSamples(Directions(zero, zero, zero, zero), np.zeros(n, np.intp), np.ones(n, np.intp), nodes,
+                              np.full(n, np.nan), distance_m(tx_xyz, rx_xyz), freq, tx_z_m=tx_xyz[:, 2], rx_z_m=rx_xyz[:, 2])
+        return self.environment_db(samples)
+
+    def link_environment_std_db(
+        self, tx_node: str, rx_node: str, tx_position_xyz: ArrayLike, rx_position_xyz: ArrayLike
+    ) -> FloatArray:
+        """Standard error [dB] of :meth:`link_environment_db` from the learned exponent and offsets
+        (0 when nothing is learned beside the patterns, or without a covariance)."""
+        from rplearn.data.tables import LinkSamples
+
+        tx_xyz = np.atleast_2d(np.asarray(tx_position_xyz, np.float64))
+        rx_xyz = np.atleast_2d(np.asarray(rx_position_xyz, np.float64))
+        tx_xyz, rx_xyz = np.broadcast_arrays(tx_xyz, rx_xyz)
+        n, m = tx_xyz.shape[0], len(self.shared_names)
+        pc = self.n_pattern_columns
+        if not m or self.covariance is None or self.covariance.shape[0] != pc + m:
+            return np.zeros(n)
+        zero = np.zeros(n)
+        samples = LinkSamples(Directions(zero, zero, zero, zero), np.zeros(n, np.intp), np.ones(n, np.intp),
+                              (str(tx_node), str(rx_node)), np.full(n, np.nan), distance_m(tx_xyz, rx_xyz))
+        s = self.shared_regressors(samples)
+        var = np.einsum("in,ij,jn->n", s, self.covariance[pc:, pc:], s)
+        return np.sqrt(np.maximum(var, 0.0))
 
     # -- files ---------------------------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:

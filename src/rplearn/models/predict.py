@@ -89,6 +89,9 @@ class DatasetPrediction:
     n_uncovered : int
         Rows where an end looks more than :data:`UNCOVERED_DEG` from every direction its node
         was learned from (0 when the model stores no coverage).
+    notes : tuple of str
+        What the predictions assume: the link directions the model never learned and the
+        electronics offset taken for them (:func:`unlearned_directions`).
     """
 
     table: pd.DataFrame
@@ -96,6 +99,7 @@ class DatasetPrediction:
     rmse_db: float
     mismatch: FrequencyMismatch | None
     n_uncovered: int = 0
+    notes: tuple[str, ...] = ()
 
     def summary(self, output: str) -> str:
         line = f"wrote {len(self.table):,} predictions to {output}"
@@ -144,7 +148,27 @@ def predict_dataset(model: Model, dataset: pd.DataFrame, source: str = "dataset"
     measured = np.isfinite(samples.joint_gain_db)
     rmse = float(np.sqrt(np.mean((gain[measured] - samples.joint_gain_db[measured]) ** 2))) if measured.any() else float("nan")
     mismatch = frequency_mismatch(model, table["frequency_hz"].to_numpy(np.float64))
-    return DatasetPrediction(table, int(measured.sum()), rmse, mismatch, n_uncovered)
+    return DatasetPrediction(table, int(measured.sum()), rmse, mismatch, n_uncovered,
+                             tuple(unlearned_directions(model, samples)))
+
+
+def unlearned_directions(model: Model, samples: Any) -> list[str]:
+    """Notes on the predicted link directions ``TX->RX`` a pattern model never learned from:
+    they are predicted with an electronics offset of 0 dB, the mean level of the links it
+    learned (a direction learned alone carries its own level in the patterns). Empty for
+    models that do not list their learned directions (baselines, older files)."""
+    learned = model.training.get("directions")
+    if not isinstance(learned, dict):
+        return []
+    names = np.asarray(samples.nodes, dtype=object)
+    code = np.asarray(samples.tx_index, np.int64) * len(samples.nodes) + np.asarray(samples.rx_index)
+    asked = [f"{names[c // len(samples.nodes)]}->{names[c % len(samples.nodes)]}" for c in np.unique(code)]
+    missing = [k for k in asked if k not in learned]
+    if not missing:
+        return []
+    return [f"link direction(s) {', '.join(missing)} were never learned: predicted with an electronics offset of 0 dB "
+            f"(the model learned {', '.join(learned) or 'no direction'}); radios that are not reciprocal may differ by "
+            "a few dB"]
 
 
 def end_coverage_deg(model: Model, samples: Any) -> tuple[np.ndarray, np.ndarray] | None:

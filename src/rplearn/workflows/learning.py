@@ -34,6 +34,8 @@ from rplearn.core.selection import Selection
 from rplearn.models.streamed import fit_patterns_streamed, unit_statistics_streamed, units_and_nodes
 from rplearn.models.predict import UNCOVERED_DEG, DatasetPrediction, distinct_labels, predict_dataset, uncovered_rows
 from rplearn.models.spec import ModelSpec
+from rplearn.models.terms import terms_text
+from rplearn.core.environment import PathLoss
 
 Progress = Callable[[str], None]
 
@@ -91,6 +93,7 @@ class FitOutcome:
                 values = ", ".join(f"{n} {v:.1f} dB" for n, v in spread.items())
                 text += (f"\n  where the flight never looked each pattern may be off by (1 sigma): {values} "
                          f"({training.get('prior_std_source', '')})")
+        text += "".join(f"\n  {line}" for line in terms_text(training))
         text += "".join(f"\n  {line}" for line in self.robust_notes)
         if self.non_unit_quaternions:
             text += (f"\n  samples with a non-unit quaternion (|norm - 1| > {QUATERNION_NORM_TOLERANCE:g}, "
@@ -112,6 +115,8 @@ def fit_dataset(
     prior: Mapping[str, str] | None = None,
     prior_std_db: float | None = None,
     loss: str = "ls",
+    path_loss: PathLoss | None = None,
+    link_offsets: bool = True,
 ) -> FitOutcome:
     """Learn ``spec`` from a matched dataset file (``rplearn fit``).
 
@@ -140,6 +145,12 @@ def fit_dataset(
         Least squares, or the Huber loss (:mod:`rplearn.models.robust`) for logs with
         plateaus and dropouts: a pattern model of fixed order, the dataset in memory; the
         outcome says how many samples were down-weighted, in which units and stretches.
+    path_loss : PathLoss, optional
+        The environment term of pattern models (:mod:`rplearn.core.environment`): free space
+        (default), a learned log-distance exponent, or a two-ray ground reflection.
+    link_offsets : bool
+        Pattern models: learn one electronics offset per link logged in both directions
+        (non-reciprocal radios); off, both directions are taken as reciprocal.
     """
     if output:
         check_output_path(output, [dataset, *(prior or {}).values()])
@@ -160,24 +171,29 @@ def fit_dataset(
                          "not an automatic choice or a baseline", param="loss")
     if auto and not spec.decouples:
         raise InputError(f"order: 'auto' chooses the order of pattern models (sh, bg, poly), not of {spec.label}", param="order")
+    path_loss = path_loss or PathLoss()
+    if path_loss.kind != "free" and not spec.decouples:
+        raise InputError(f"path loss {path_loss.kind}: the baselines ({spec.label}) learn no environment term; fit "
+                         "them in free space", param="path_loss")
+    terms = {"path_loss": path_loss, "link_offsets": link_offsets}
     if spec.decouples and _is_big(dataset):
         if loss == "huber":
             raise InputError(f"{dataset}: loss huber keeps the samples in memory; this file is streamed "
                              f"(over {STREAM_FIT_ROWS:,} rows or {STREAM_FIT_BYTES // 2**20} MiB): write the "
                              "units to learn from into a smaller file", param="loss")
-        return _fit_streamed(dataset, spec, units, gauge, output, auto, priors, prior_std_db)
+        return _fit_streamed(dataset, spec, units, gauge, output, auto, priors, prior_std_db, **terms)
     df = read_dataset(dataset)
     choice = learning_units(df, units, dataset)
     if auto:
-        return _fit_auto(df, dataset, spec, choice, gauge, output, priors, prior_std_db)
+        return _fit_auto(df, dataset, spec, choice, gauge, output, priors, prior_std_db, **terms)
     samples = samples_of(df, choice.units, dataset)
     prov = provenance(dataset=dataset, model=spec.label, ridge=spec.ridge, units=choice.units)
     notes: list[str] = []
     if loss == "huber":
-        fitted, robust = fit_huber(samples, spec, gauge=gauge, provenance=prov)
+        fitted, robust = fit_huber(samples, spec, gauge=gauge, provenance=prov, **terms)
         notes = downweighted_notes(select_units(df, choice.units, dataset), robust)
     else:
-        fitted = fit_model(samples, spec, gauge=gauge, provenance=prov)
+        fitted = fit_model(samples, spec, gauge=gauge, provenance=prov, **(terms if spec.decouples else {}))
     if output:
         fitted.model.save(output)
     return FitOutcome(fitted, choice, len(samples), output, samples.non_unit_quaternions, robust_notes=notes)
@@ -226,7 +242,8 @@ TIME_BLOCKS = 5
 
 def _fit_auto(
     df: Any, dataset: str, spec: ModelSpec, choice: UnitChoice, gauge: str | Mapping[str, Any], output: str | None,
-    priors: Mapping[str, Any] | None = None, prior_std_db: float | None = None,
+    priors: Mapping[str, Any] | None = None, prior_std_db: float | None = None, path_loss: PathLoss | None = None,
+    link_offsets: bool = True,
 ) -> FitOutcome:
     """:func:`fit_dataset` with ``auto=True`` on a dataset in memory: samples per learning unit."""
     learn = choice.units if choice.units is not None else (dataset_units(df) or [None])
@@ -242,7 +259,8 @@ def _fit_auto(
         per_unit = {str(u): samples_of(df, None if u is None else [u], dataset, nodes=nodes) for u in learn}
     prov = provenance(dataset=dataset, model=f"{spec.kind}-auto", ridge=spec.ridge, units=choice.units)
     fitted, selection = fit_auto(per_unit, spec.kind, spec.order if spec.kind != "sh" else None, spec.ridge, gauge, prov,
-                                 prior=priors or None, prior_spread_db=prior_std_db)
+                                 prior=priors or None, prior_spread_db=prior_std_db, path_loss=path_loss,
+                                 link_offsets=link_offsets)
     if output:
         fitted.model.save(output)
     n = sum(len(s) for s in per_unit.values())
@@ -260,6 +278,7 @@ def _is_big(dataset: str) -> bool:
 def _fit_streamed(
     dataset: str, spec: ModelSpec, units: Sequence[str] | None, gauge: str | Mapping[str, Any], output: str | None,
     auto: bool = False, priors: Mapping[str, Any] | None = None, prior_std_db: float | None = None,
+    path_loss: PathLoss | None = None, link_offsets: bool = True,
 ) -> FitOutcome:
     """:func:`fit_dataset` for a big file: units, nodes and the model size from the id columns,
     then the patterns from the whole data a chunk at a time."""
@@ -278,16 +297,18 @@ def _fit_streamed(
         n_units = len(choice.units) if choice.units else max(len(dataset_units(index)), 1)
         stats, freq, non_unit, grids = unit_statistics_streamed(
             iter_table(dataset, STREAM_FIT_CHUNK_ROWS), spec, nodes, choice.units, dataset,
-            block_rows=-(-n // TIME_BLOCKS) if n_units == 1 else None)
+            block_rows=-(-n // TIME_BLOCKS) if n_units == 1 else None, path_loss=path_loss)
         prov = provenance(dataset=dataset, model=f"{spec.kind}-auto", ridge=spec.ridge, units=choice.units)
         fitted, selection = fit_from_statistics(stats, spec.kind, orders, nodes, spec.ridge, gauge,
                                                 frequency_hz=freq, provenance=prov, prior=priors or None,
-                                                prior_spread_db=prior_std_db)
+                                                prior_spread_db=prior_std_db, path_loss=path_loss,
+                                                link_offsets=link_offsets)
         fitted.model.training["coverage_deg"] = grids
         if output:
             fitted.model.save(output)
         return FitOutcome(fitted, choice, sum(s.n_samples for s in stats.values()), output, non_unit, selection)
-    fit = fit_patterns_streamed(iter_table(dataset, STREAM_FIT_CHUNK_ROWS), spec, nodes, choice.units, gauge, dataset)
+    fit = fit_patterns_streamed(iter_table(dataset, STREAM_FIT_CHUNK_ROWS), spec, nodes, choice.units, gauge, dataset,
+                                path_loss=path_loss, link_offsets=link_offsets)
     model = fit.patterns
     model.provenance = {**provenance(dataset=dataset, model=spec.label, ridge=spec.ridge, units=choice.units),
                         "model": spec.label}
@@ -442,9 +463,14 @@ def learn_and_report(
     out_dir: str,
     test_units: Sequence[str] | None = None,
     progress: Progress = no_progress,
+    path_loss: PathLoss | None = None,
+    link_offsets: bool = True,
 ) -> ReportOutcome:
     """Learn models on a dataset's learning units, test them, and write Table I, coverage and
-    pattern maps into ``out_dir/report.html`` (``rplearn report``).
+    pattern maps into ``out_dir/report.html`` (``rplearn report``). Pattern models learn with
+    the environment term ``path_loss`` and the link offsets (:func:`fit_dataset`); the
+    baselines, per directed link, in free space; the report lists what the pattern models
+    learned beside the patterns.
     """
     from rplearn.viz import plot
     from rplearn.viz.report import ReportSection, write_report
@@ -464,7 +490,8 @@ def learn_and_report(
     fitted = []
     for spec in specs:
         progress(f"learning {spec.label}")
-        fitted.append(fit_model(ls, spec, provenance=prov))
+        terms = {"path_loss": path_loss, "link_offsets": link_offsets} if spec.decouples else {}
+        fitted.append(fit_model(ls, spec, provenance=prov, **terms))
     rows = evaluate_models(fitted, ts)
     md = scores_markdown(rows)
     patterns = {f.label: f.model for f in fitted if f.model.kind == "patterns"}
@@ -474,6 +501,9 @@ def learn_and_report(
             plot.plot_pattern_maps(patterns, None, list(ls.nodes), node_directions(ls), os.path.join(out_dir, "patterns.png"))
         )
     sections = [ReportSection("Patterns and coverage", "", images)]
+    lines = [f"- {label}: {line}" for label, m in patterns.items() for line in terms_text(m.training)]
+    if lines:
+        sections.append(ReportSection("Path loss and link offsets", "\n".join(lines), []))
     path = write_report(out_dir, f"rplearn report: {os.path.basename(dataset)}", md, sections, prov)
     return ReportOutcome(fitted, rows, md, learn, test, path)
 
