@@ -8,6 +8,8 @@ module                 public names
                        NED/ENU conversions
 ``link``               :func:`received_power_dbm` (paper eq. 1), :func:`free_space_path_loss_db`,
                        :func:`wavelength_m`, :func:`observed_joint_gain_db` (eq. 5)
+``environment``        :class:`PathLoss` (``fit --path-loss``), :func:`log_distance_column`,
+                       :func:`two_ray_excess_db`, :func:`reflection_coefficient`
 ``bases``, ``sh``      :class:`Basis`, :class:`SphericalHarmonics`, :class:`BasisGrid`,
                        :class:`Polynomial`, :func:`make_basis`, :func:`basis_from_dict`
 ``solver``             :func:`fit_joint`, :func:`identifiability`, :class:`FitReport`,
@@ -61,6 +63,13 @@ _NAMES: dict[str, str] = {
     "observed_joint_gain_db": "link",
     "received_power_dbm": "link",
     "wavelength_m": "link",
+    # environment term beyond free space (fit --path-loss)
+    "DEFAULT_RELATIVE_PERMITTIVITY": "environment",
+    "PATH_LOSS_KINDS": "environment",
+    "PathLoss": "environment",
+    "log_distance_column": "environment",
+    "reflection_coefficient": "environment",
+    "two_ray_excess_db": "environment",
     # bases of pattern functions
     "BASIS_KINDS": "bases",
     "Basis": "basis_base",
@@ -81,6 +90,7 @@ _NAMES: dict[str, str] = {
     "fit_joint": "solver",
     "identifiability": "solver",
     "link_components": "solver",
+    "independent_spread_db": "solver",
     "solve": "solver",
     # metrics (paper Sec. V-C)
     "Scores": "metrics",

@@ -36,6 +36,8 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+import scipy.linalg
+import scipy.linalg.blas
 from numpy.typing import ArrayLike, NDArray
 
 from rplearn.core.bases import Basis
@@ -335,6 +337,7 @@ def solve(
     if missing:
         raise IdentifiabilityError(f"node(s) {', '.join(missing)} appear in no sample; their patterns cannot be learned")
     components = link_components(n_nodes, normal.link_counts.keys())
+    _check_exponent(normal)
     cmat, cval, notes = _gauge_constraints(normal.basis, n_nodes, names, components, gauge)
     cmat = np.pad(cmat, ((0, 0), (0, pcols - pat)))
     sv, rank, cond = spectrum_report(normal.gram)
@@ -378,7 +381,6 @@ def solve(
     sol = kinv @ rhs
     coef = sol[:pcols]
     unexplained = _unexplained(normal, kinv)
-    _check_exponent(normal, kinv, unexplained)
     sse = max(normal.yty - 2.0 * coef @ normal.rhs + coef @ normal.gram @ coef, 0.0)
     dof = max(normal.n_samples - min(rank, pcols), 1)
     resid_var = sse / dof
@@ -439,15 +441,34 @@ def _unexplained(normal: NormalEquations, kinv: FloatArray) -> FloatArray:
     return out
 
 
-def _check_exponent(normal: NormalEquations, kinv: FloatArray, unexplained: FloatArray) -> None:
-    """Refuse a path-loss exponent the patterns could take (see :data:`EXPONENT_MIN_SPREAD_DB`)."""
+def independent_spread_db(normal: NormalEquations, column: int) -> float:
+    """Standard deviation [dB] of the part of a shared column that every other column (the
+    patterns at this order, the other shared columns) cannot explain, from the statistics:
+    ``sqrt(S / n)`` with ``S`` the Schur complement of the column in ``X^T X`` (a tiny
+    jitter keeps the gauge's null directions invertible; they are orthogonal to any column)."""
+    gram = normal.gram
+    i = int(column)
+    others = np.delete(np.arange(gram.shape[0]), i)
+    g = gram[np.ix_(others, others)]
+    c = gram[others, i]
+    jitter = 1e-9 * max(float(np.mean(np.diag(g))), 1e-300)
+    try:
+        lower = np.linalg.cholesky(g + jitter * np.eye(others.size))
+        z = scipy.linalg.blas.dtrsv(lower, c, lower=1)  # level 2, as in rplearn.core.selection
+        schur = float(gram[i, i] - z @ z)
+    except np.linalg.LinAlgError:
+        schur = float(gram[i, i] - c @ np.linalg.lstsq(g, c, rcond=None)[0])
+    return float(np.sqrt(max(schur, 0.0) / max(normal.n_samples, 1)))
+
+
+def _check_exponent(normal: NormalEquations) -> None:
+    """Refuse a path-loss exponent the other columns could take (see :data:`EXPONENT_MIN_SPREAD_DB`)."""
     pat = normal.n_pattern_columns
     n = max(normal.n_samples, 1)
     for j, col in enumerate(normal.shared):
         if col[0] != "exponent":
             continue
-        inv = float(kinv[pat + j, pat + j])
-        independent_db = float(np.sqrt(1.0 / (inv * n))) if inv > 0 else 0.0
+        independent_db = independent_spread_db(normal, pat + j)
         if independent_db >= EXPONENT_MIN_SPREAD_DB:
             continue
         mean = normal.environment_sum / n

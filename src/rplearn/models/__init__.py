@@ -10,7 +10,9 @@ module           public names
 ``baselines``    :class:`MeanModel` (M), :class:`KNNModel` (NN-k)
 ``fit``          :func:`fit_model` -> :class:`FittedModel`, :func:`fit_patterns`,
                  :func:`evaluate_models` (Table I), :func:`scores_markdown`
-``predict``      :func:`predict_dataset` -> :class:`DatasetPrediction`
+``predict``      :func:`predict_dataset` -> :class:`DatasetPrediction`, :func:`unlearned_directions`
+``terms``        the environment term and link offsets learned beside the patterns:
+                 :func:`regression_inputs`, :func:`directed_counts`, :func:`terms_text`
 ``load``         :func:`load_model` (any model file)
 ``estimators``   scikit-learn estimators :class:`PatternRegressor`, :class:`MeanRegressor`,
                  :class:`JointKNNRegressor`
@@ -54,6 +56,10 @@ _NAMES: dict[str, str] = {
     "FrequencyMismatch": "predict",
     "frequency_mismatch": "predict",
     "distinct_labels": "predict",
+    "unlearned_directions": "predict",
+    "directed_counts": "terms",
+    "regression_inputs": "terms",
+    "terms_text": "terms",
     "load_model": "load",
     # scikit-learn estimators
     "ANGLE_COLUMNS": "estimators",

@@ -1,0 +1,63 @@
+"""``fit --path-loss`` and ``--link-offsets`` from the command line (issue 12, items 1 and 2)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+RPLEARN = [sys.executable, "-m", "rplearn.cli"]
+
+
+def run(args, cwd, ok=True):
+    proc = subprocess.run(RPLEARN + list(args), cwd=cwd, capture_output=True, text=True, timeout=300)
+    if ok:
+        assert proc.returncode == 0, f"{args}: {proc.stderr}"
+    return proc
+
+
+@pytest.fixture(scope="module")
+def workdir(tmp_path_factory):
+    d = tmp_path_factory.mktemp("terms")
+    run(["simulate", "--preset", "pathloss", "--seed", "2", "-o", "flight"], d)
+    run(["sync", "--poses", "flight/pose_log.parquet", "--signals", "flight/signal_log.parquet", "-o", "both.parquet"], d)
+    run(["sync", "--poses", "flight/pose_log.parquet", "--signals", "flight/signal_log.parquet", "--link", "A:B",
+         "-o", "ab.parquet"], d)
+    return d
+
+
+@pytest.mark.slow
+def test_fit_learns_and_stores_the_exponent_and_offsets_and_names_its_flags(workdir):
+    d = workdir
+    out = run(["fit", "both.parquet", "--path-loss", "log-distance", "--degree", "8", "-o", "m.json"], d)
+    exponent = float(out.stdout.split("path loss: log-distance, exponent ")[1].split()[0])
+    assert abs(exponent - 3.0) < 0.1
+    assert "electronics offsets" in out.stdout and "A->B" in out.stdout
+    payload = json.loads((d / "m.json").read_text())["model"]
+    assert payload["path_loss"]["kind"] == "log-distance"
+    assert set(payload["shared"]) == {"exponent", "offset:A->B"}
+    assert abs(payload["training"]["path_loss"]["exponent"] - 3.0) < 0.1
+    pred = run(["predict", "m.json", "ab.parquet", "-o", "p.csv"], d)
+    assert "never learned" not in pred.stderr
+    orient = run(["orient", "m.json", "--tx", "A", "--rx", "B", "--tx-pos", "0,0,20", "--rx-pos", "40,0,20"], d)
+    assert "dBm" in orient.stdout
+    # one direction: no offset, and predicting the other says what it assumes
+    run(["fit", "ab.parquet", "--model", "sh", "--degree", "6", "-o", "ab.json"], d)
+    assert "shared" not in json.loads((d / "ab.json").read_text())["model"]
+    pred = run(["predict", "ab.json", "both.parquet", "-o", "p2.csv"], d)  # SH-6: quick
+    assert "B->A were never learned" in pred.stderr
+    # reciprocal on request
+    out = run(["fit", "both.parquet", "--degree", "6", "--no-link-offsets", "-o", "r.json"], d)
+    assert "electronics offsets" not in out.stdout
+    # errors name the flag (one test: the flight is simulated once per worker)
+    bad = run(["fit", "ab.parquet", "--path-loss", "hata", "-o", "x.json"], d, ok=False)
+    assert bad.returncode == 1 and "--path-loss" in bad.stderr and "log-distance" in bad.stderr
+    bad = run(["fit", "ab.parquet", "--path-loss", "two-ray", "--ground-level", "100", "-o", "x.json"], d, ok=False)
+    assert bad.returncode == 1 and "below the ground level" in bad.stderr and "--ground-level" in bad.stderr
+    bad = run(["fit", "ab.parquet", "--model", "m", "--path-loss", "log-distance", "-o", "x.json"], d, ok=False)
+    assert bad.returncode == 1 and "baselines" in bad.stderr
+    bad = run(["fit", "ab.parquet", "--path-loss", "two-ray", "--permittivity", "0.5", "-o", "x.json"], d, ok=False)
+    assert bad.returncode == 1 and "--permittivity" in bad.stderr
+    assert not (d / "x.json").exists()
