@@ -40,6 +40,7 @@ def fit(
     from rplearn.models.spec import ModelSpec, check_fit_options, gauge_of
     from rplearn.workflows.learning import fit_dataset
 
+    two_ray_flags_note(path_loss, ground_level, permittivity, polarization)
     auto, order = degree_option(degree, model)
     spec = ModelSpec.parse(model, order=order, ridge=ridge, sigma_rad2=sigma, grid=grid)
     check_fit_options(spec, order=order, ridge=ridge, sigma_rad2=sigma, grid=grid, gauge_node=gauge_node,
@@ -82,6 +83,14 @@ def reference(
     for node, info in model.training["reference"].items():
         say(f"  {node}: {info['source']}, mount (roll, pitch, yaw) {tuple(info['mount_rpy_deg'])} deg, "
             f"expansion residual {info['expansion_rmse_db']:.3f} dB RMS")
+
+
+def two_ray_flags_note(path_loss: str, ground_level: float, permittivity: float, polarization: str) -> None:
+    """Say when two-ray flags were given without ``--path-loss two-ray`` (they change nothing then)."""
+    given = [flag for flag, value, default in (("--ground-level", ground_level, 0.0), ("--permittivity", permittivity, 15.0),
+                                                ("--polarization", polarization, "vertical")) if value != default]
+    if given and path_loss != "two-ray":
+        note(f"{', '.join(given)} set the two-ray ground reflection; with --path-loss {path_loss} they are ignored")
 
 
 def degree_option(degree: Optional[str], model: str) -> tuple[bool, Optional[int]]:
@@ -205,6 +214,7 @@ def report(
     from rplearn.workflows.learning import learn_and_report
 
     names = split_list([models]) or []
+    two_ray_flags_note(path_loss, ground_level, permittivity, polarization)
     terms = PathLoss(path_loss, ground_level, permittivity, polarization)
     with progress_bar() as p:
         task = p.add_task("learning", total=None)

@@ -110,8 +110,8 @@ def two_ray_excess_db(
         if np.any(~(h > 0)):
             bad = np.asarray(h)[~(np.asarray(h) > 0)].ravel()
             raise InputError(f"two-ray: {name} must be positive; {bad.size} sample(s) at or below the ground level "
-                             f"(lowest {float(np.nanmin(bad)) if np.any(np.isfinite(bad)) else float('nan'):.2f} m): "
-                             "state the ground level (--ground-level)", param="ground_level_m")
+                             f"(lowest {float(np.nanmin(bad)) if np.any(np.isfinite(bad)) else float('nan'):.2f} m "
+                             "above it): state the ground level below every antenna", param="ground_level_m")
     rho2 = np.maximum(d**2 - (ht - hr) ** 2, 0.0)  # squared horizontal distance
     d_r = np.sqrt(rho2 + (ht + hr) ** 2)
     gamma = reflection_coefficient((ht + hr) / d_r, relative_permittivity, polarization)
@@ -206,8 +206,10 @@ class PathLoss:
     @classmethod
     def from_dict(cls, payload: Mapping[str, Any] | None) -> "PathLoss":
         """Rebuild from :meth:`to_dict` (None or an empty mapping: free space)."""
-        if not payload:
+        if payload is None or (isinstance(payload, Mapping) and not payload):
             return cls()
+        if not isinstance(payload, Mapping):
+            raise InputError(f"path loss: expected a mapping with 'kind', got {type(payload).__name__}", param="path_loss")
         try:
             return cls(
                 kind=str(payload.get("kind", "free")),

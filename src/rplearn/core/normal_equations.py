@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+import scipy.linalg.blas
 from numpy.typing import ArrayLike, NDArray
 
 from rplearn.core.bases import Basis
@@ -31,6 +32,14 @@ FloatArray = NDArray[np.float64]
 FEATURE_CHUNK = 4096
 BLOCK_SAMPLES = 65536
 
+
+#: The path-loss exponent is refused as not identifiable when the part of its log-distance
+#: column ``10 log10 d`` that the other columns (the patterns) cannot explain has a standard
+#: deviation below this [dB]: the distance then varies by less than about +-12% independently
+#: of the directions (a flight at constant distance, or at constant altitude over a static
+#: station), one unit of exponent moves the gain less than a pattern's misfit does, and the
+#: patterns could take any exponent.
+EXPONENT_MIN_SPREAD_DB = 0.5
 
 _BUFFERS = threading.local()
 
@@ -392,3 +401,27 @@ class NormalEquations:
         out.gram = np.triu(gram) + np.triu(gram, 1).T
         out.rhs = rhs
         return out
+
+
+def independent_spread_db(normal: NormalEquations, column: int) -> float:
+    """Standard deviation [dB] of the part of a column that every other column (the patterns at
+    this order, the other shared columns) cannot explain, from the statistics: ``sqrt(S / n)``
+    with ``S`` the Schur complement of the column in ``X^T X`` (a tiny jitter keeps the gauge's
+    null directions invertible; they are orthogonal to any column)."""
+    return schur_spread_db(normal.gram, int(column), normal.n_samples)
+
+
+def schur_spread_db(gram: FloatArray, column: int, n_samples: int) -> float:
+    """:func:`independent_spread_db` of one column of a Gram matrix of ``n_samples`` samples."""
+    i = int(column)
+    others = np.delete(np.arange(gram.shape[0]), i)
+    g = gram[np.ix_(others, others)]
+    c = gram[others, i]
+    jitter = 1e-9 * max(float(np.mean(np.diag(g))), 1e-300) if others.size else 0.0
+    try:
+        lower = np.linalg.cholesky(g + jitter * np.eye(others.size))
+        z = scipy.linalg.blas.dtrsv(lower, c, lower=1)  # level 2, as in rplearn.core.selection
+        schur = float(gram[i, i] - z @ z)
+    except np.linalg.LinAlgError:
+        schur = float(gram[i, i] - c @ np.linalg.lstsq(g, c, rcond=None)[0])
+    return float(np.sqrt(max(schur, 0.0) / max(int(n_samples), 1)))

@@ -44,7 +44,7 @@ import scipy.linalg
 import scipy.linalg.blas
 
 from rplearn.core.basis_base import Basis
-from rplearn.core.normal_equations import NormalEquations
+from rplearn.core.normal_equations import EXPONENT_MIN_SPREAD_DB, NormalEquations, schur_spread_db
 from rplearn.errors import IdentifiabilityError, InputError
 
 #: Exponent ``p`` of the SH roughness weights ``(l (l+1))^p``: 2 penalises the squared
@@ -231,10 +231,51 @@ class _Evaluator:
             target = np.concatenate([target, np.zeros(self.n_shared)])  # shared columns are not pulled
         self.target = target
         self.cv = len(units) >= 2
+        self.pins: list[tuple[np.ndarray, np.ndarray] | None] = [None] * len(self.folds)
+        if self.n_shared and self.cv:
+            self.pins = self._fold_pins(units)
         self.seen: dict[tuple[int, float], float] = {}
         self.curve: list[CurvePoint] = []
         self._cache: dict[int, Any] = {}
         self._best_solved: tuple[tuple[int, float], list[tuple[np.ndarray, np.ndarray | None]]] | None = None
+
+    def _fold_pins(self, units: Mapping[str, NormalEquations]) -> list[tuple[np.ndarray, np.ndarray] | None]:
+        """Per fold, the shared columns its learning units cannot identify, pinned to a
+        preliminary estimate from all units: a link's offset when a direction of it flew only
+        in the held-out unit, the exponent when the other units leave too little spread of
+        distance (:data:`EXPONENT_MIN_SPREAD_DB`). Left free, the ridge alone would split
+        them from the joint level and the held-out unit would see a made-up error; the final
+        fit, which sees every unit, identifies them."""
+        p = self.big.n_coef
+        pat = self.first.n_pattern_columns
+        names = list(units)
+        free = []
+        for held, fold in zip(names, self.folds):
+            mask = np.ones(self.n_shared, bool)
+            learn = [units[u] for u in names if u != held]
+            n_learn = sum(u.n_samples for u in learn)
+            for j, col in enumerate(self.first.shared):
+                if col[0] == "offset":
+                    a, b = col[1], col[2]
+                    count = [sum(float(u.directed[k][2 * p + 1]) for u in learn if k in u.directed) for k in ((a, b), (b, a))]
+                    mask[j] = min(count) > 0
+                else:
+                    mask[j] = schur_spread_db(fold.gram, pat + j, n_learn) >= EXPONENT_MIN_SPREAD_DB
+            free.append(mask)
+        if all(m.all() for m in free):
+            return [None] * len(self.folds)
+        w = self._weights(self.big)
+        smoothing = float(SMOOTHING_GRID[len(SMOOTHING_GRID) // 2])
+        c, _ = self._solve(self.gram, self._pulled(self.gram, self.rhs, w, smoothing, self.target), w, smoothing)
+        values = c[pat:]
+        pins: list[tuple[np.ndarray, np.ndarray] | None] = []
+        for mask, fold in zip(free, self.folds):
+            if mask.all():
+                pins.append(None)
+                continue
+            weight = 1e6 * (np.diag(fold.gram)[pat:] + float(np.mean(np.diag(fold.gram)[:pat])))
+            pins.append((np.where(mask, 0.0, weight), values.copy()))
+        return pins
 
     def _weights(self, basis: Basis) -> np.ndarray:
         w = basis.roughness(self.power)
@@ -263,8 +304,8 @@ class _Evaluator:
         if self.cv:
             sse = 0.0
             solved = []
-            for (g, r, held_g, held_r), f in zip(blocks, self.folds):
-                c, upper = self._solve(g, self._pulled(g, r, w, smoothing, target), w, smoothing)
+            for (g, r, held_g, held_r), f, pin in zip(blocks, self.folds, self.pins):
+                c, upper = self._solve(g, self._pulled(g, r, w, smoothing, target, pin), w, smoothing, pin)
                 solved.append((c, upper))
                 sse += max(f.held_yty - 2.0 * c @ held_r + c @ held_g @ c, 0.0)
             value = float(np.sqrt(sse / self.n))
@@ -285,13 +326,14 @@ class _Evaluator:
         key = (int(order), float(smoothing))
         solved = self._best_solved[1] if self._best_solved and self._best_solved[0] == key else None
         excess = predicted = 0.0
-        for k, ((g, r, held_g, held_r), f) in enumerate(zip(blocks, self.folds)):
-            c, upper = solved[k] if solved else self._solve(g, self._pulled(g, r, w, smoothing, target), w, smoothing)
+        for k, ((g, r, held_g, held_r), f, pin) in enumerate(zip(blocks, self.folds, self.pins)):
+            c, upper = solved[k] if solved else self._solve(g, self._pulled(g, r, w, smoothing, target, pin), w,
+                                                            smoothing, pin)
             if upper is None:
                 return 1.0
             # numpy's inverse, not LAPACK's potri from the Cholesky factor through scipy: a third
             # of the work, but scipy's second OpenBLAS pool, woken up, made it slower (see _cholesky_solve)
-            inverse = np.linalg.inv(self._system(g, w, smoothing))
+            inverse = np.linalg.inv(self._system(g, w, smoothing, pin))
             learn_n = self.n - f.held_n
             learn_sse = max((self.yty - f.held_yty) - 2.0 * c @ r + c @ g @ c, 0.0)
             dof = learn_n - float(np.sum(inverse * g))  # less the fit's effective parameters tr(A^-1 G)
@@ -302,24 +344,39 @@ class _Evaluator:
             predicted += noise_var * float(np.sum(inverse * held_g))  # tr(A^-1 H), both symmetric
         return float(max(1.0, excess / predicted)) if predicted > 0 and np.isfinite(excess) else 1.0
 
-    def _pulled(self, gram: np.ndarray, rhs: np.ndarray, w: np.ndarray, smoothing: float, target: np.ndarray | None) -> np.ndarray:
-        """``X^T y`` plus the prior's pull ``P target`` (shrinking toward the prior, not zero)."""
-        if target is None or smoothing == 0:
+    def _pulled(self, gram: np.ndarray, rhs: np.ndarray, w: np.ndarray, smoothing: float, target: np.ndarray | None,
+                pin: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
+        """``X^T y`` plus the prior's pull ``P target`` (shrinking toward the prior, not zero) and
+        the pull of pinned shared columns toward their values."""
+        if (target is None or smoothing == 0) and pin is None:
             return rhs
-        return rhs + smoothing * penalty_scale(gram, gram.shape[0] - self.n_shared) * w * target
+        out = rhs.copy()
+        if target is not None and smoothing != 0:
+            out += smoothing * penalty_scale(gram, gram.shape[0] - self.n_shared) * w * target
+        if pin is not None:
+            out[gram.shape[0] - self.n_shared:] += pin[0] * pin[1]
+        return out
 
-    def _system(self, gram: np.ndarray, w: np.ndarray, smoothing: float) -> np.ndarray:
+    def _system(self, gram: np.ndarray, w: np.ndarray, smoothing: float,
+                pin: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
+        """The penalised normal matrix: the ridge on the pattern columns (shared columns are not
+        shrunk), the smoothness penalty, and the weight of pinned shared columns."""
         a = gram.copy()
-        a[np.diag_indices_from(a)] += self.ridge + smoothing * penalty_scale(gram, gram.shape[0] - self.n_shared) * w
+        k = gram.shape[0] - self.n_shared
+        a[np.arange(k), np.arange(k)] += self.ridge
+        a[np.diag_indices_from(a)] += smoothing * penalty_scale(gram, k) * w
+        if pin is not None:
+            a[np.arange(k, gram.shape[0]), np.arange(k, gram.shape[0])] += pin[0]
         return a
 
-    def _solve(self, gram: np.ndarray, rhs: np.ndarray, w: np.ndarray, smoothing: float) -> tuple[np.ndarray, np.ndarray | None]:
+    def _solve(self, gram: np.ndarray, rhs: np.ndarray, w: np.ndarray, smoothing: float,
+               pin: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, np.ndarray | None]:
         """The penalised solution and the upper Cholesky factor of its system (None when the
         system is not positive definite: least squares then)."""
         try:
-            return _cholesky_solve(self._system(gram, w, smoothing), rhs)
+            return _cholesky_solve(self._system(gram, w, smoothing, pin), rhs)
         except np.linalg.LinAlgError:
-            return scipy.linalg.lstsq(self._system(gram, w, smoothing), rhs)[0], None
+            return scipy.linalg.lstsq(self._system(gram, w, smoothing, pin), rhs)[0], None
 
     def _gcv(self, g: np.ndarray, pulled: np.ndarray, w: np.ndarray, smoothing: float, r: np.ndarray) -> float:
         a = self._system(g, w, smoothing)

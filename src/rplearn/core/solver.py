@@ -36,13 +36,11 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-import scipy.linalg
-import scipy.linalg.blas
 from numpy.typing import ArrayLike, NDArray
 
 from rplearn.core.bases import Basis
 from rplearn.core.geometry import Directions
-from rplearn.core.normal_equations import NormalEquations
+from rplearn.core.normal_equations import EXPONENT_MIN_SPREAD_DB, NormalEquations, independent_spread_db
 from rplearn.errors import IdentifiabilityError, InputError
 
 FloatArray = NDArray[np.float64]
@@ -56,13 +54,6 @@ FloatArray = NDArray[np.float64]
 DEFAULT_RIDGE = 1.0
 #: Condition numbers above this get a warning in the fit report.
 CONDITION_WARNING = 1e4
-#: The path-loss exponent is refused as not identifiable when the part of its log-distance
-#: column ``10 log10 d`` that the other columns (the patterns) cannot explain has a standard
-#: deviation below this [dB]: the distance then varies by less than about +-12% independently
-#: of the directions (a flight at constant distance, or at constant altitude over a static
-#: station), one unit of exponent moves the gain less than a pattern's misfit does, and the
-#: patterns could take any exponent.
-EXPONENT_MIN_SPREAD_DB = 0.5
 
 
 # -------------------------------------------------------------------------------------------
@@ -340,11 +331,11 @@ def solve(
     _check_exponent(normal)
     cmat, cval, notes = _gauge_constraints(normal.basis, n_nodes, names, components, gauge)
     cmat = np.pad(cmat, ((0, 0), (0, pcols - pat)))
-    sv, rank, cond = spectrum_report(normal.gram)
+    sv, rank, cond = spectrum_report(_unit_shared_columns(normal))
     k = cmat.shape[0]
     kkt = np.zeros((pcols + k, pcols + k))
     kkt[:pcols, :pcols] = normal.gram
-    kkt[np.arange(pcols), np.arange(pcols)] += ridge
+    kkt[np.arange(pat), np.arange(pat)] += ridge  # the shared columns are not shrunk
     if penalty is not None:
         penalty = _pad_shared(np.asarray(penalty, np.float64), pat, pcols)
         if penalty.shape != (pcols,) or not np.all(np.isfinite(penalty)) or np.any(penalty < 0):
@@ -413,6 +404,20 @@ def solve(
                          tuple(normal.shared), coef[pat:].copy(), unexplained)
 
 
+def _unit_shared_columns(normal: NormalEquations) -> FloatArray:
+    """``X^T X`` with every shared column scaled to the pattern columns' mean square, so that the
+    rank and condition number reported say how well the samples identify the model, not in
+    which units a shared column (dB per unit of exponent) happens to be written."""
+    pat = normal.n_pattern_columns
+    if pat == normal.n_columns:
+        return normal.gram
+    diag = np.diag(normal.gram)
+    unit = float(np.mean(diag[:pat])) if pat else 1.0
+    scale = np.ones(normal.n_columns)
+    scale[pat:] = np.sqrt(unit / np.maximum(diag[pat:], 1e-300))
+    return normal.gram * scale[:, None] * scale[None, :]
+
+
 def _pad_shared(values: FloatArray, pat: int, pcols: int) -> FloatArray:
     """Per-column weights given for the pattern columns only, padded with zeros for shared ones."""
     if values.ndim == 1 and values.size == pat and pcols > pat:
@@ -439,26 +444,6 @@ def _unexplained(normal: NormalEquations, kinv: FloatArray) -> FloatArray:
         else:
             out[j] = float(min(1.0, 1.0 / (inv * centred)))
     return out
-
-
-def independent_spread_db(normal: NormalEquations, column: int) -> float:
-    """Standard deviation [dB] of the part of a shared column that every other column (the
-    patterns at this order, the other shared columns) cannot explain, from the statistics:
-    ``sqrt(S / n)`` with ``S`` the Schur complement of the column in ``X^T X`` (a tiny
-    jitter keeps the gauge's null directions invertible; they are orthogonal to any column)."""
-    gram = normal.gram
-    i = int(column)
-    others = np.delete(np.arange(gram.shape[0]), i)
-    g = gram[np.ix_(others, others)]
-    c = gram[others, i]
-    jitter = 1e-9 * max(float(np.mean(np.diag(g))), 1e-300)
-    try:
-        lower = np.linalg.cholesky(g + jitter * np.eye(others.size))
-        z = scipy.linalg.blas.dtrsv(lower, c, lower=1)  # level 2, as in rplearn.core.selection
-        schur = float(gram[i, i] - z @ z)
-    except np.linalg.LinAlgError:
-        schur = float(gram[i, i] - c @ np.linalg.lstsq(g, c, rcond=None)[0])
-    return float(np.sqrt(max(schur, 0.0) / max(normal.n_samples, 1)))
 
 
 def _check_exponent(normal: NormalEquations) -> None:

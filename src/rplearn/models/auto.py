@@ -16,7 +16,7 @@ import numpy as np
 
 from rplearn.core.environment import PathLoss
 from rplearn.core.normal_equations import NormalEquations, reserve_block_buffer
-from rplearn.models.terms import regression_inputs, shared_fields
+from rplearn.models.terms import regression_inputs, shared_fields, statistics_counts
 from rplearn.core.selection import (
     DEFAULT_PENALTY_POWER,
     Selection,
@@ -130,16 +130,24 @@ def prior_std_db(basis: Any, nodes: Sequence[str], weights: np.ndarray, noise_va
 def prior_misfit_var(normal: NormalEquations, target: np.ndarray, basis: Any) -> float:
     """Mean squared difference [dB^2] between the joint gains of the samples and those of the
     prior coefficients ``target``, after the best constant offset (a prior's absolute level is
-    a convention the gauge does not share), from the statistics alone."""
+    a convention the gauge does not share) and the best shared coefficients (a path-loss
+    exponent, link offsets: the priors describe antennas, not the channel), from the
+    statistics alone."""
     from rplearn.core.bases import fibonacci_grid_nodes
 
     az, el = fibonacci_grid_nodes(max(4 * basis.n_coef, 400))
     half = np.linalg.lstsq(basis.design(az, el), np.full(az.size, 0.5), rcond=None)[0]
     ones = np.tile(half, normal.n_nodes)  # X @ ones = 1 for every sample (half a dB from each end)
-    pat = normal.n_pattern_columns  # the prior's misfit in the patterns' columns (shared ones at 0)
-    g, r = normal.gram[:pat, :pat], normal.rhs[:pat]
-    shift = (ones @ r - ones @ g @ target) / max(float(ones @ g @ ones), 1e-300)
-    c = target + shift * ones
+    pat = normal.n_pattern_columns
+    g, r = normal.gram, normal.rhs
+    target = np.asarray(target, np.float64)[:pat]
+    # the free part: columns [X_p ones, X_shared], fitted to y - X_p target
+    z = np.zeros((normal.n_columns, 1 + normal.n_columns - pat))
+    z[:pat, 0] = ones
+    z[pat:, 1:] = np.eye(normal.n_columns - pat)
+    full_target = np.concatenate([target, np.zeros(normal.n_columns - pat)])
+    free = np.linalg.lstsq(z.T @ g @ z, z.T @ (r - g @ full_target), rcond=None)[0]
+    c = full_target + z @ free
     return float(max(normal.yty - 2.0 * c @ r + c @ g @ c, 0.0) / max(normal.n_samples, 1))
 
 
@@ -275,7 +283,7 @@ def fit_from_statistics(
     total = NormalEquations(first.basis, first.n_nodes, first.environment)
     for st in stats.values():
         total.merge(st)
-    counts = {f"{nodes[t]}->{nodes[r]}": int(v[-2]) for (t, r), v in sorted(total.directed.items())}
+    counts = statistics_counts(total.directed, nodes)
     links = total.two_way_links() if link_offsets else []
     if first.environment or links:
         stats = {u: st.with_shared(links) for u, st in stats.items()}

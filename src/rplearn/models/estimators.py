@@ -96,6 +96,9 @@ class PatternRegressor(RegressorMixin, BaseEstimator):
         How the constant a two-node problem cannot identify is fixed.
     n_nodes : int or None
         Number of nodes; by default one more than the largest node number seen (2 for 4 columns).
+    link_offsets : bool
+        Learn one electronics offset per link seen in both directions (non-reciprocal radios);
+        False (the default here) takes the radios as reciprocal, as the paper's model does.
 
     Attributes
     ----------
@@ -115,6 +118,7 @@ class PatternRegressor(RegressorMixin, BaseEstimator):
         grid: str = "paper",
         gauge: Any = "equal-mean",
         n_nodes: int | None = None,
+        link_offsets: bool = False,
     ) -> None:
         self.basis = basis
         self.order = order
@@ -123,6 +127,7 @@ class PatternRegressor(RegressorMixin, BaseEstimator):
         self.grid = grid
         self.gauge = gauge
         self.n_nodes = n_nodes
+        self.link_offsets = link_offsets
 
     def _spec(self) -> ModelSpec:
         """The :class:`ModelSpec` of the hyper-parameters (the model classes' spec)."""
@@ -136,7 +141,8 @@ class PatternRegressor(RegressorMixin, BaseEstimator):
         _, tx, rx = split_features(X)
         n_nodes = self.n_nodes if self.n_nodes is not None else int(max(tx.max(), rx.max())) + 1
         names = tuple(str(i) for i in range(max(n_nodes, 2)))
-        self.patterns_, self.report_ = solve_patterns(samples_from_features(X, y, names), self._spec(), self.gauge)
+        self.patterns_, self.report_ = solve_patterns(samples_from_features(X, y, names), self._spec(), self.gauge,
+                                                      link_offsets=bool(self.link_offsets))
         self.coef_ = self.patterns_.coef
         return self
 
@@ -150,9 +156,9 @@ class PatternRegressor(RegressorMixin, BaseEstimator):
 
     @property
     def n_params_(self) -> int:
-        """Coefficients of all antennas (the paper's |phi| column)."""
+        """Coefficients of all antennas (the paper's |phi| column), and any link offsets."""
         check_is_fitted(self, "coef_")
-        return int(self.coef_.size)
+        return int(self.patterns_.n_params)
 
 
 class MeanRegressor(RegressorMixin, BaseEstimator):

@@ -198,12 +198,29 @@ def fit_model(
     return FittedModel(spec, model, ltd)
 
 
-def evaluate_models(fitted: Sequence[FittedModel], samples: LinkSamples) -> list[Scores]:
-    """Table I: RMSE, MAE, Q95, |phi|, AIC, LTD and condition number of every model."""
+def evaluate_models(fitted: Sequence[FittedModel], samples: LinkSamples, notes: list[str] | None = None) -> list[Scores]:
+    """Table I: RMSE, MAE, Q95, |phi|, AIC, LTD and condition number of every model.
+
+    Every model is scored on the same samples: those every model predicts (a two-ray model
+    predicts nothing for an antenna at or below its ground level). How many were left out is
+    appended to ``notes`` when given; when every sample would be left out, it is an error.
+    """
+    predictions = [np.asarray(f.model.predict_gain(samples), np.float64) for f in fitted]
+    keep = np.ones(len(samples), bool)
+    for pred in predictions:
+        keep &= np.isfinite(pred)
+    if not keep.all():
+        missing = [f.label for f, pred in zip(fitted, predictions) if not np.all(np.isfinite(pred))]
+        if not keep.any():
+            raise InputError(f"no sample could be predicted by {', '.join(missing)} (an antenna at or below the two-ray "
+                             "ground level?)", param="units")
+        if notes is not None:
+            notes.append(f"{int((~keep).sum()):,} of {len(samples):,} samples are left out of the scores: {', '.join(missing)} "
+                         "predict(s) nothing there (an antenna at or below the two-ray ground level)")
     rows = []
-    for f in fitted:
-        pred = f.model.predict_gain(samples)
-        rows.append(score(f.label, samples.joint_gain_db, pred, f.n_params, f.ltd_s, f.condition_number))
+    observed = np.asarray(samples.joint_gain_db, np.float64)[keep]
+    for f, pred in zip(fitted, predictions):
+        rows.append(score(f.label, observed, pred[keep], f.n_params, f.ltd_s, f.condition_number))
     return rows
 
 

@@ -25,6 +25,7 @@ from rplearn.core.link import received_power_dbm
 from rplearn.io.modelfile import jsonable as _jsonable
 from rplearn.io.modelfile import read_model_file, write_model_file
 from rplearn.models.base import frequency_from_training
+from rplearn.models.terms import split_offset_name
 
 FloatArray = NDArray[np.float64]
 
@@ -82,13 +83,19 @@ class PatternSet:
         if self.shared_coef.size != len(self.shared_names) or not np.all(np.isfinite(self.shared_coef)):
             raise InputError(f"shared_coef: expected {len(self.shared_names)} finite values for "
                              f"{', '.join(self.shared_names) or 'no shared columns'}", param="shared_coef")
-        for name in self.shared_names:
+        links: set[frozenset[str]] = set()
+        self._offset_ends: dict[int, tuple[str, str]] = {}
+        if len(set(self.shared_names)) != len(self.shared_names):
+            raise InputError("shared_names: a shared column is named twice", param="shared_names")
+        for j, name in enumerate(self.shared_names):
             if name == "exponent":
                 continue
-            ends = name[len("offset:"):].split("->") if name.startswith("offset:") else []
-            if len(ends) != 2 or any(e not in self.nodes for e in ends):
-                raise InputError(f"shared column {name!r}: expected 'exponent' or 'offset:TX->RX' of known nodes",
-                                 param="shared_names")
+            a, b = split_offset_name(name, self.nodes)
+            if a == b or frozenset((a, b)) in links:
+                raise InputError(f"shared column {name!r}: a link's offset is one column, between two nodes "
+                                 "(a -> b is +value, b -> a is -value)", param="shared_names")
+            links.add(frozenset((a, b)))
+            self._offset_ends[j] = (a, b)
         if ("exponent" in self.shared_names) != self.path_loss.learns_exponent:
             raise InputError(f"path loss {self.path_loss.kind}: an 'exponent' coefficient is expected exactly with "
                              "the log-distance term", param="shared_names")
@@ -114,19 +121,17 @@ class PatternSet:
         j = self.shared_names.index("exponent")
         return 2.0 + float(self.shared_coef[j]), float(self.shared_std()[j])
 
-    def link_offsets_db(self) -> dict[str, tuple[float, float]]:
-        """Electronics offset of every learned direction ``"TX->RX"``: ``(offset [dB], standard error)``.
+    def link_offsets_db(self) -> dict[tuple[str, str], tuple[float, float]]:
+        """Electronics offset of every learned direction ``(tx, rx)``: ``(offset [dB], standard error)``.
 
         Gauge: the two directions of a link sum to zero (their common part is in the patterns'
         joint level); a direction not listed is predicted with offset 0.
         """
         out = {}
         se = self.shared_std()
-        for j, name in enumerate(self.shared_names):
-            if name.startswith("offset:"):
-                a, b = name[len("offset:"):].split("->")
-                out[f"{a}->{b}"] = (float(self.shared_coef[j]), float(se[j]))
-                out[f"{b}->{a}"] = (-float(self.shared_coef[j]), float(se[j]))
+        for j, (a, b) in self._offset_ends.items():
+            out[(a, b)] = (float(self.shared_coef[j]), float(se[j]))
+            out[(b, a)] = (-float(self.shared_coef[j]), float(se[j]))
         return out
 
     def shared_regressors(self, samples: "LinkSamples") -> FloatArray:
@@ -147,7 +152,7 @@ class PatternSet:
                 out[j] = np.nan  # no distance, no prediction
                 out[j, positive] = log_distance_column(d[positive])
             else:
-                a, b = name[len("offset:"):].split("->")
+                a, b = self._offset_ends[j]
                 out[j] = (tx == a) & (rx == b)
                 out[j] -= (tx == b) & (rx == a)
         return out
@@ -461,8 +466,9 @@ class PatternSet:
 
     @property
     def n_params(self) -> int:
-        """Coefficients of all antennas (the paper's |phi| column)."""
-        return int(self.coef.size)
+        """Coefficients of all antennas (the paper's |phi| column), plus any learned beside them
+        (the path-loss exponent, link offsets)."""
+        return int(self.coef.size) + len(self.shared_names)
 
     @property
     def frequency_hz(self) -> float | None:

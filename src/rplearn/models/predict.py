@@ -145,11 +145,15 @@ def predict_dataset(model: Model, dataset: pd.DataFrame, source: str = "dataset"
         table["gain_pred_std_db"] = std
         table["rssi_pred_std_db"] = np.sqrt(std**2 + residual_db**2)
     n_uncovered = _add_coverage(model, samples, table)
-    measured = np.isfinite(samples.joint_gain_db)
+    predicted = np.isfinite(gain)
+    measured = np.isfinite(samples.joint_gain_db) & predicted
     rmse = float(np.sqrt(np.mean((gain[measured] - samples.joint_gain_db[measured]) ** 2))) if measured.any() else float("nan")
     mismatch = frequency_mismatch(model, table["frequency_hz"].to_numpy(np.float64))
-    return DatasetPrediction(table, int(measured.sum()), rmse, mismatch, n_uncovered,
-                             tuple(unlearned_directions(model, samples)))
+    notes = unlearned_directions(model, samples)
+    if not predicted.all():
+        notes.append(f"{int((~predicted).sum()):,} of {len(gain):,} rows have no prediction (NaN): an antenna at or "
+                     "below the two-ray ground level of the model; they are left out of the RMSE")
+    return DatasetPrediction(table, int(measured.sum()), rmse, mismatch, n_uncovered, tuple(notes))
 
 
 def unlearned_directions(model: Model, samples: Any) -> list[str]:
@@ -157,18 +161,20 @@ def unlearned_directions(model: Model, samples: Any) -> list[str]:
     they are predicted with an electronics offset of 0 dB, the mean level of the links it
     learned (a direction learned alone carries its own level in the patterns). Empty for
     models that do not list their learned directions (baselines, older files)."""
-    learned = model.training.get("directions")
-    if not isinstance(learned, dict):
+    from rplearn.models.terms import learned_directions
+
+    learned = learned_directions(model.training)
+    if learned is None:
         return []
-    names = np.asarray(samples.nodes, dtype=object)
-    code = np.asarray(samples.tx_index, np.int64) * len(samples.nodes) + np.asarray(samples.rx_index)
-    asked = [f"{names[c // len(samples.nodes)]}->{names[c % len(samples.nodes)]}" for c in np.unique(code)]
-    missing = [k for k in asked if k not in learned]
+    names = [str(n) for n in samples.nodes]
+    code = np.asarray(samples.tx_index, np.int64) * len(names) + np.asarray(samples.rx_index)
+    asked = [(names[c // len(names)], names[c % len(names)]) for c in np.unique(code)]
+    missing = [f"{a}->{b}" for a, b in asked if (a, b) not in learned]
     if not missing:
         return []
+    known = ", ".join(f"{a}->{b}" for a, b in sorted(learned)) or "no direction"
     return [f"link direction(s) {', '.join(missing)} were never learned: predicted with an electronics offset of 0 dB "
-            f"(the model learned {', '.join(learned) or 'no direction'}); radios that are not reciprocal may differ by "
-            "a few dB"]
+            f"(the model learned {known}); radios that are not reciprocal may differ by a few dB"]
 
 
 def end_coverage_deg(model: Model, samples: Any) -> tuple[np.ndarray, np.ndarray] | None:

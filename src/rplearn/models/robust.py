@@ -151,7 +151,7 @@ def fit_huber(
     d = samples.directions
     path_loss = path_loss or PathLoss()
     counts = directed_counts(samples)
-    two_way = link_offsets and any(f"{b}->{a}" in counts for a, b in (key.split("->") for key in counts))
+    two_way = link_offsets and any((b, a) in counts for a, b in counts)
     plain = path_loss.kind == "free" and not two_way  # no shared columns: the fast pseudo-observation path
     normal = NormalEquations(basis, n_nodes).add(d, tx, rx, y)  # X^T X once: only X^T y changes
     penalty = None

@@ -22,7 +22,7 @@ import pandas as pd
 
 from rplearn.core.environment import PathLoss
 from rplearn.core.normal_equations import NormalEquations
-from rplearn.models.terms import regression_inputs, shared_fields
+from rplearn.models.terms import regression_inputs, shared_fields, statistics_counts
 from rplearn.core.selection import penalty_scale, penalty_vector
 from rplearn.core.solver import FitReport, solve
 from rplearn.data.tables import LinkSamples, link_samples, node_ids
@@ -206,7 +206,7 @@ def fit_patterns_streamed(
     normal = next(iter(stats.values()))
     basis = normal.basis
     t0 = time.perf_counter()
-    counts = {f"{nodes[t]}->{nodes[r]}": int(v[-2]) for (t, r), v in sorted(normal.directed.items())}
+    counts = statistics_counts(normal.directed, nodes)
     links = normal.two_way_links() if link_offsets else []
     if normal.environment or links:
         normal = normal.with_shared(links)

@@ -14,13 +14,14 @@ direction learned alone, or never learned, is predicted with offset 0.
 
 from __future__ import annotations
 
-from typing import Any, Sequence
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 
 from rplearn.core.environment import PathLoss, log_distance_column
 from rplearn.core.solver import JointSolution
 from rplearn.data.tables import LinkSamples
+from rplearn.errors import InputError
 
 
 def regression_inputs(samples: LinkSamples, path_loss: PathLoss) -> tuple[np.ndarray, np.ndarray | None]:
@@ -37,31 +38,64 @@ def regression_inputs(samples: LinkSamples, path_loss: PathLoss) -> tuple[np.nda
     return y, env
 
 
-def directed_counts(samples: LinkSamples | Sequence[LinkSamples]) -> dict[str, int]:
-    """Samples of every directed link ``"TX->RX"``, sorted."""
+def directed_counts(samples: LinkSamples | Sequence[LinkSamples]) -> dict[tuple[str, str], int]:
+    """Samples of every directed link ``(tx, rx)``, sorted."""
     parts = [samples] if isinstance(samples, LinkSamples) else list(samples)
-    counts: dict[str, int] = {}
+    counts: dict[tuple[str, str], int] = {}
     for part in parts:
-        names = np.asarray(part.nodes, dtype=object)
-        code = part.tx_index.astype(np.int64) * len(part.nodes) + part.rx_index
+        names = [str(n) for n in part.nodes]
+        code = part.tx_index.astype(np.int64) * len(names) + part.rx_index
         values, n = np.unique(code, return_counts=True)
         for v, c in zip(values, n):
-            t, r = divmod(int(v), len(part.nodes))
-            key = f"{names[t]}->{names[r]}"
+            t, r = divmod(int(v), len(names))
+            key = (names[t], names[r])
             counts[key] = counts.get(key, 0) + int(c)
     return dict(sorted(counts.items()))
 
 
+def statistics_counts(directed: Mapping[tuple[int, int], np.ndarray], nodes: Sequence[str]) -> dict[tuple[str, str], int]:
+    """:func:`directed_counts` from accumulated statistics (``NormalEquations.directed``)."""
+    return {(str(nodes[t]), str(nodes[r])): int(round(float(v[-2]))) for (t, r), v in sorted(directed.items())}
+
+
+def offset_name(tx: str, rx: str) -> str:
+    """Model name of the offset column of the link ``tx -> rx`` (``+value`` on it)."""
+    return f"offset:{tx}->{rx}"
+
+
+def split_offset_name(name: str, nodes: Sequence[str]) -> tuple[str, str]:
+    """``(tx, rx)`` of an offset column name, for node ids that may themselves contain ``->``.
+
+    Raises
+    ------
+    InputError
+        When no split (or more than one) names two known nodes.
+    """
+    if not name.startswith("offset:"):
+        raise InputError(f"shared column {name!r}: expected 'exponent' or 'offset:TX->RX'", param="shared_names")
+    body = name[len("offset:"):]
+    known = {str(n) for n in nodes}
+    splits = []
+    start = body.find("->")
+    while start >= 0:
+        a, b = body[:start], body[start + 2:]
+        if a in known and b in known:
+            splits.append((a, b))
+        start = body.find("->", start + 1)
+    if len(splits) != 1:
+        raise InputError(f"shared column {name!r}: expected 'offset:TX->RX' of two known nodes "
+                         f"({', '.join(sorted(known))})", param="shared_names")
+    return splits[0]
+
+
 def shared_names(shared: Sequence[tuple[Any, ...]], nodes: Sequence[str]) -> tuple[str, ...]:
     """Model names of the solver's shared columns: ``"exponent"``, ``"offset:A->B"``."""
-    out = []
-    for col in shared:
-        out.append("exponent" if col[0] == "exponent" else f"offset:{nodes[col[1]]}->{nodes[col[2]]}")
-    return tuple(out)
+    return tuple("exponent" if col[0] == "exponent" else offset_name(nodes[col[1]], nodes[col[2]]) for col in shared)
 
 
 def shared_fields(
-    sol: JointSolution, nodes: Sequence[str], path_loss: PathLoss, counts: dict[str, int], covariance_scale: float = 1.0
+    sol: JointSolution, nodes: Sequence[str], path_loss: PathLoss, counts: Mapping[tuple[str, str], int],
+    covariance_scale: float = 1.0,
 ) -> tuple[dict[str, Any], dict[str, Any]]:
     """``PatternSet`` keyword arguments (``path_loss``, ``shared_names``, ``shared_coef``) and the
     training summary's entries for the link terms of a solution.
@@ -70,45 +104,59 @@ def shared_fields(
     """
     names = shared_names(sol.shared, nodes)
     coef = np.asarray(sol.shared_coef, np.float64)
-    pat = len(nodes) * (sol.coef.shape[1] if sol.coef.ndim == 2 else 0)
+    pat = sol.coef.size
     var = np.diag(sol.covariance)[pat:] * covariance_scale if sol.covariance is not None else np.full(coef.size, np.nan)
     se = np.sqrt(np.maximum(var, 0.0))
-    training: dict[str, Any] = {"path_loss": path_loss.to_dict(), "directions": counts}
-    for j, name in enumerate(names):
+    training: dict[str, Any] = {
+        "path_loss": path_loss.to_dict(),
+        "directions": [{"tx": a, "rx": b, "samples": int(n)} for (a, b), n in counts.items()],
+    }
+    offsets = []
+    for j, (name, col) in enumerate(zip(names, sol.shared)):
         if name == "exponent":
             training["path_loss"].update(exponent=2.0 + float(coef[j]), exponent_se=float(se[j]),
                                          exponent_unexplained=float(sol.shared_unexplained[j]))
-    offsets = {}
-    for j, name in enumerate(names):
-        if name.startswith("offset:"):
-            a, b = name[len("offset:"):].split("->")
-            offsets[f"{a}->{b}"] = {"offset_db": float(coef[j]), "se_db": float(se[j])}
-            offsets[f"{b}->{a}"] = {"offset_db": -float(coef[j]), "se_db": float(se[j])}
+        else:
+            a, b = str(nodes[col[1]]), str(nodes[col[2]])
+            offsets += [{"tx": a, "rx": b, "offset_db": float(coef[j]), "se_db": float(se[j])},
+                        {"tx": b, "rx": a, "offset_db": -float(coef[j]), "se_db": float(se[j])}]
     if offsets:
         training["link_offsets_db"] = offsets
     return {"path_loss": path_loss, "shared_names": names, "shared_coef": coef}, training
 
 
-def terms_text(training: dict[str, Any]) -> list[str]:
+def learned_directions(training: Mapping[str, Any]) -> set[tuple[str, str]] | None:
+    """The directed links ``(tx, rx)`` a model learned from (None when its file does not say)."""
+    rows = training.get("directions")
+    if not isinstance(rows, list):
+        return None
+    try:
+        return {(str(r["tx"]), str(r["rx"])) for r in rows}
+    except (KeyError, TypeError):
+        return None
+
+
+def terms_text(training: Mapping[str, Any]) -> list[str]:
     """Summary lines of a model's link terms (environment, exponent, offsets, directions)."""
     lines = []
-    pl = PathLoss.from_dict(training.get("path_loss"))
     info = training.get("path_loss") or {}
+    pl = PathLoss.from_dict(info)
     if pl.kind == "log-distance" and "exponent" in info:
         lines.append(f"path loss: log-distance, exponent {info['exponent']:.3f} +- {info['exponent_se']:.3f} "
                      f"(free space 2; d0 = 1 m)")
     elif pl.kind != "free":
         lines.append(f"path loss: {pl.describe()}")
-    offsets = training.get("link_offsets_db") or {}
+    offsets = training.get("link_offsets_db") or []
     if offsets:
-        text = ", ".join(f"{k} {v['offset_db']:+.2f} +- {v['se_db']:.2f} dB" for k, v in sorted(offsets.items()))
+        text = ", ".join(f"{o['tx']}->{o['rx']} {o['offset_db']:+.2f} +- {o['se_db']:.2f} dB" for o in offsets)
         lines.append(f"electronics offsets (each link's two directions sum to 0): {text}")
-    counts = training.get("directions") or {}
-    alone = [k for k in counts if f"{k.split('->')[1]}->{k.split('->')[0]}" not in counts]
+    learned = learned_directions(training) or set()
+    alone = sorted((a, b) for a, b in learned if (b, a) not in learned)
     if alone:
-        lines.append(f"learned in one direction only: {', '.join(alone)} (the other direction is predicted as "
-                     "reciprocal: offset 0)")
+        lines.append(f"learned in one direction only: {', '.join(f'{a}->{b}' for a, b in alone)} (the other direction "
+                     "is predicted as reciprocal: offset 0)")
     return lines
 
 
-__all__ = ["directed_counts", "regression_inputs", "shared_fields", "shared_names", "terms_text"]
+__all__ = ["directed_counts", "learned_directions", "offset_name", "regression_inputs", "shared_fields", "shared_names",
+           "split_offset_name", "statistics_counts", "terms_text"]

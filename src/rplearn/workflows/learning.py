@@ -365,7 +365,7 @@ def evaluate_model_files(
     df = read_dataset(dataset)
     choice = evaluation_units(df, units, [m.provenance for m in models], dataset)
     samples = samples_of(df, choice.units, dataset)
-    rows = evaluate_models([FittedModel.from_model(m) for m in models], samples)
+    rows = evaluate_models([FittedModel.from_model(m) for m in models], samples, choice.warnings)
     labels = distinct_labels([r.model for r in rows], [os.path.basename(p) for p in model_paths])
     rows = [replace(r, model=label) for r, label in zip(rows, labels)]
     for model, label in zip(models, labels):
@@ -492,7 +492,10 @@ def learn_and_report(
         progress(f"learning {spec.label}")
         terms = {"path_loss": path_loss, "link_offsets": link_offsets} if spec.decouples else {}
         fitted.append(fit_model(ls, spec, provenance=prov, **terms))
-    rows = evaluate_models(fitted, ts)
+    left_out: list[str] = []
+    rows = evaluate_models(fitted, ts, left_out)
+    for line in left_out:
+        progress(line)
     md = scores_markdown(rows)
     patterns = {f.label: f.model for f in fitted if f.model.kind == "patterns"}
     images = [plot.plot_coverage(node_directions(ls), node_directions(ts), os.path.join(out_dir, "coverage.png"))]
