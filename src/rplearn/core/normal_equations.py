@@ -118,6 +118,7 @@ def link_statistics(
     el_rx: FloatArray,
     y: FloatArray,
     extra: FloatArray | None = None,
+    moments_out: FloatArray | None = None,
 ) -> FloatArray:
     """``Z^T Z`` with ``Z = [f(tx directions), y, extra..., f(rx directions)]`` over samples of one link.
 
@@ -127,7 +128,10 @@ def link_statistics(
     products. Per block of :data:`BLOCK_SAMPLES` samples, written into this thread's reused
     buffer, either one symmetric rank-k update of all rows, or, for a basis with Gram moments
     (SH), only the product ``[f_tx; y; extra] [y; extra; f_rx]^T`` (about half the work): the
-    two diagonal feature blocks then come from the moments.
+    two diagonal feature blocks then come from the moments. With ``moments_out`` (shape
+    ``(2, *basis.moment_shape)``) the moments of the tx and rx ends are added there instead
+    and the two diagonal blocks are left zero: a caller with many links turns each node's
+    summed moments into its block once (:meth:`NormalEquations.add`).
     """
     az_tx, el_tx, az_rx, el_rx, y = (np.ascontiguousarray(a, np.float64).ravel() for a in (az_tx, el_tx, az_rx, el_rx, y))
     p = basis.n_coef
@@ -137,7 +141,10 @@ def link_statistics(
     gap = 1 + m  # rows between the tx and rx feature groups: y and the extra rows
     k = 2 * p + gap
     use_moments = basis.moment_shape is not None and basis.stacked_samples
-    moments = np.zeros((2, *basis.moment_shape)) if use_moments else None
+    if use_moments:
+        moments = np.zeros((2, *basis.moment_shape)) if moments_out is None else moments_out
+    else:
+        moments = None
     total = np.zeros((k, k))
     block = _block_buffer(k * max(1, min(n, BLOCK_SAMPLES)))  # grows to the largest block seen
     for start in range(0, n, BLOCK_SAMPLES):
@@ -154,8 +161,9 @@ def link_statistics(
             total[: p + gap, p:] += buf[: p + gap] @ buf[p:].T
     if moments is not None:
         total[p:, : p + gap] = total[: p + gap, p:].T
-        total[:p, :p] = basis.gram_from_moments(moments[0])
-        total[p + gap :, p + gap :] = basis.gram_from_moments(moments[1])
+        if moments_out is None:
+            total[:p, :p] = basis.gram_from_moments(moments[0])
+            total[p + gap :, p + gap :] = basis.gram_from_moments(moments[1])
     return total
 
 
@@ -278,19 +286,32 @@ class NormalEquations:
             raise InputError("a sample has the same node as transmitter and receiver")
         pair_code = tx.astype(np.int64) * self.n_nodes + rx
         if pair_code.min() == pair_code.max():  # one link direction: no grouping needed
-            codes = pair_code[:1]
-        else:
-            codes = np.unique(pair_code)
-        for code in codes:
-            t, r = divmod(int(code), self.n_nodes)
-            sel = slice(None) if codes.size == 1 else (pair_code == code)
-            self._add_pair(t, r, az_tx[sel], el_tx[sel], az_rx[sel], el_rx[sel], y[sel], e[sel])
+            groups = [(int(pair_code[0]), slice(None))]
+        else:  # sorted once by link, each link a contiguous slice (no mask per link)
+            order = np.argsort(pair_code, kind="stable")
+            sorted_code = pair_code[order]
+            az_tx, el_tx, az_rx, el_rx, y, e = (a[order] for a in (az_tx, el_tx, az_rx, el_rx, y, e))
+            starts = np.flatnonzero(np.r_[True, sorted_code[1:] != sorted_code[:-1]])
+            ends = np.r_[starts[1:], n]
+            groups = [(int(sorted_code[a]), slice(int(a), int(b))) for a, b in zip(starts, ends)]
+        moment_shape = self.basis.moment_shape if self.basis.stacked_samples else None
+        # with Gram moments, each node's diagonal block comes from its summed moments, once per
+        # node and chunk, not once per link end
+        node_moments: dict[int, FloatArray] | None = {} if moment_shape is not None and len(groups) > 1 else None
+        for code, sel in groups:
+            t, r = divmod(code, self.n_nodes)
+            self._add_pair(t, r, az_tx[sel], el_tx[sel], az_rx[sel], el_rx[sel], y[sel], e[sel], node_moments)
+        if node_moments:
+            p = self.basis.n_coef
+            nat = self._natural[:p]
+            for k, m in sorted(node_moments.items()):
+                self.gram[k * p : (k + 1) * p, k * p : (k + 1) * p] += self.basis.gram_from_moments(m)[np.ix_(nat, nat)]
         self.n_samples += n
         return self
 
     def _add_pair(
         self, t: int, r: int, az_tx: FloatArray, el_tx: FloatArray, az_rx: FloatArray, el_rx: FloatArray, y: FloatArray,
-        e: FloatArray,
+        e: FloatArray, node_moments: dict[int, FloatArray] | None = None,
     ) -> None:
         p = self.basis.n_coef
         bt = slice(t * p, (t + 1) * p)
@@ -301,7 +322,16 @@ class NormalEquations:
         # Both nodes' blocks of X^T X, X^T y and y^T y, and the sums of the directed link, from
         # one pass over the samples.
         extra = np.ones((1, n)) if not self.environment else np.stack([np.ones(n), e])
-        block = link_statistics(self.basis, az_tx, el_tx, az_rx, el_rx, y, extra)
+        moments = None
+        if node_moments is not None:
+            moments = np.zeros((2, *self.basis.moment_shape))
+        block = link_statistics(self.basis, az_tx, el_tx, az_rx, el_rx, y, extra, moments)
+        if moments is not None:
+            for node, m in ((t, moments[0]), (r, moments[1])):
+                if node in node_moments:
+                    node_moments[node] += m
+                else:
+                    node_moments[node] = m
         block = block[np.ix_(self._natural, self._natural)]
         self.gram[bt, bt] += block[:p, :p]
         self.gram[br, br] += block[p : 2 * p, p : 2 * p]

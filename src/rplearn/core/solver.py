@@ -36,11 +36,13 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+import scipy.linalg.blas
 from numpy.typing import ArrayLike, NDArray
 
 from rplearn.core.bases import Basis
 from rplearn.core.geometry import Directions
 from rplearn.core.normal_equations import EXPONENT_MIN_SPREAD_DB, NormalEquations, independent_spread_db
+from rplearn.core.spectrum import constrained_inverse, null_directions, spectrum_estimate, spectrum_report
 from rplearn.errors import IdentifiabilityError, InputError
 
 FloatArray = NDArray[np.float64]
@@ -191,17 +193,11 @@ class JointSolution:
     shared_unexplained: FloatArray = field(default_factory=lambda: np.zeros(0))
 
 
-def spectrum_report(gram: FloatArray) -> tuple[FloatArray, int, float]:
-    """Singular values of X (from X^T X), numerical rank and condition number."""
-    eig = np.linalg.eigvalsh(gram)[::-1]
-    eig = np.clip(eig, 0.0, None)
-    sv = np.sqrt(eig)
-    if sv.size == 0 or sv[0] == 0:
-        return sv, 0, float("inf")
-    tol = sv[0] * np.sqrt(gram.shape[0] * np.finfo(np.float64).eps)
-    rank = int(np.sum(sv > tol))
-    cond = float(sv[0] / sv[rank - 1]) if rank > 0 else float("inf")
-    return sv, rank, cond
+#: Above this many columns the solver estimates the spectrum (:func:`spectrum_estimate`)
+#: instead of a full eigendecomposition, and factorises the regularised system by Cholesky
+#: (:func:`constrained_inverse`) instead of inverting the KKT matrix: swarms of tens of nodes.
+#: At and below it every result is as before.
+LARGE_COLUMNS = 1500
 
 
 def fit_warnings(label: str, n_columns: int, rank: int, n_gauges: int, cond: float, ridge: float) -> list[str]:
@@ -331,7 +327,11 @@ def solve(
     _check_exponent(normal)
     cmat, cval, notes = _gauge_constraints(normal.basis, n_nodes, names, components, gauge)
     cmat = np.pad(cmat, ((0, 0), (0, pcols - pat)))
-    sv, rank, cond = spectrum_report(_unit_shared_columns(normal))
+    large = pcols > LARGE_COLUMNS
+    if large:
+        sv, rank, cond = spectrum_estimate(_unit_shared_columns(normal), null_directions(normal.basis, n_nodes, components, pcols))
+    else:
+        sv, rank, cond = spectrum_report(_unit_shared_columns(normal))
     k = cmat.shape[0]
     kkt = np.zeros((pcols + k, pcols + k))
     kkt[:pcols, :pcols] = normal.gram
@@ -350,40 +350,55 @@ def solve(
         if target.shape != (pcols,) or not np.all(np.isfinite(target)):
             raise InputError(f"penalty_target: expected {pcols} finite values, got shape {target.shape}")
         rhs[:pcols] += penalty * target
-    # Scale rows/columns for a better-conditioned factorisation.
-    scale = 1.0 / np.sqrt(np.maximum(np.abs(np.diag(kkt))[:pcols], 1e-300))
-    full_scale = np.concatenate([scale, np.ones(k)])
-    kkt_s = kkt * full_scale[:, None] * full_scale[None, :]
-    # numpy's LAPACK (not scipy's): a second OpenBLAS thread pool would wait for numpy's
-    # spinning threads after the big rank-k update and make this small inverse 40x slower.
-    try:
-        kinv_s = np.linalg.inv(kkt_s)
-    except np.linalg.LinAlgError:
-        kinv_s = np.full((pcols + k, pcols + k), np.nan)
-    finite = bool(np.all(np.isfinite(kinv_s)))
-    cond_1 = float(np.abs(kkt_s).sum(axis=0).max() * np.abs(kinv_s).sum(axis=0).max()) if finite else np.inf
-    if not finite or cond_1 > 1.0 / (1e3 * np.finfo(np.float64).eps):
-        raise IdentifiabilityError(
-            f"the samples do not identify {normal.basis.label} for {n_nodes} nodes: design rank {rank} of "
-            f"{pcols} columns, {pcols - rank} free direction(s) but only {k} gauge constant(s); "
-            "add samples over the uncovered directions, choose a smaller model, or raise the ridge"
-        )
-    kinv = kinv_s * full_scale[:, None] * full_scale[None, :]
-    sol = kinv @ rhs
-    coef = sol[:pcols]
-    unexplained = _unexplained(normal, kinv)
+    inverse = constrained_inverse(kkt[:pcols, :pcols], cmat) if large else None
+    if inverse is not None:  # large and positive definite: Cholesky, no KKT inverse
+        kinv = None
+        a = inverse
+        coef = a @ rhs[:pcols]
+        if k and np.any(cval != 0):  # a stated gauge level (the equal-mean gauge's value is 0)
+            y = np.linalg.solve(kkt[:pcols, :pcols], cmat.T)
+            coef = coef + y @ np.linalg.solve(cmat @ y, cval)
+    else:
+        # Scale rows/columns for a better-conditioned factorisation.
+        scale = 1.0 / np.sqrt(np.maximum(np.abs(np.diag(kkt))[:pcols], 1e-300))
+        full_scale = np.concatenate([scale, np.ones(k)])
+        kkt_s = kkt * full_scale[:, None] * full_scale[None, :]
+        # numpy's LAPACK (not scipy's): a second OpenBLAS thread pool would wait for numpy's
+        # spinning threads after the big rank-k update and make this small inverse 40x slower.
+        try:
+            kinv_s = np.linalg.inv(kkt_s)
+        except np.linalg.LinAlgError:
+            kinv_s = np.full((pcols + k, pcols + k), np.nan)
+        finite = bool(np.all(np.isfinite(kinv_s)))
+        cond_1 = float(np.abs(kkt_s).sum(axis=0).max() * np.abs(kinv_s).sum(axis=0).max()) if finite else np.inf
+        if not finite or cond_1 > 1.0 / (1e3 * np.finfo(np.float64).eps):
+            raise IdentifiabilityError(
+                f"the samples do not identify {normal.basis.label} for {n_nodes} nodes: design rank {rank} of "
+                f"{pcols} columns, {pcols - rank} free direction(s) but only {k} gauge constant(s); "
+                "add samples over the uncovered directions, choose a smaller model, or raise the ridge"
+            )
+        kinv = kinv_s * full_scale[:, None] * full_scale[None, :]
+        sol = kinv @ rhs
+        coef = sol[:pcols]
+        a = kinv[:pcols, :pcols]
+    unexplained = _unexplained(normal, a)
     sse = max(normal.yty - 2.0 * coef @ normal.rhs + coef @ normal.gram @ coef, 0.0)
     dof = max(normal.n_samples - min(rank, pcols), 1)
     resid_var = sse / dof
     # Covariance of the constrained estimate: top-left block of the inverse KKT matrix,
     # sandwiched with X^T X when a ridge is present.
-    a = kinv[:pcols, :pcols]
     if penalty is not None:
         # A smoothness penalty (or a prior), with the ridge, read as a Gaussian prior on the
         # coefficients: the posterior covariance sigma^2 (X^T X + ridge I + P)^-1, which returns
         # to the prior's variance where the data are absent (the sandwich form shrinks it to
         # zero there). Given for every automatic fit, also one that chose no smoothing.
         cov = resid_var * a
+    elif shrunk and large:
+        # M G M = M - M D M for the constrained inverse M of G + D (D the ridge on the pattern
+        # columns): one product instead of two
+        # (a symmetric rank-k product: half a general one's work)
+        low = scipy.linalg.blas.dsyrk(1.0, np.asfortranarray(a[:, :pat]), lower=1)
+        cov = resid_var * (a - ridge * (np.tril(low) + np.tril(low, -1).T))
     else:
         cov = resid_var * (a @ normal.gram @ a.T) if shrunk else resid_var * a
     cov = 0.5 * (cov + cov.T)
