@@ -118,3 +118,75 @@ def read_model_file(path: str | os.PathLike[str]) -> tuple[str, dict[str, Any]]:
     return model_type, payload
 
 
+
+
+#: Name of a model file's binary sidecar: the model file's name plus this (``m.json.npz``).
+SIDECAR_SUFFIX = ".npz"
+
+
+def sidecar_path(path: str | os.PathLike[str]) -> str:
+    """The binary sidecar of a model file (``model.json`` -> ``model.json.npz``)."""
+    return os.fspath(path) + SIDECAR_SUFFIX
+
+
+def _file_sha256(path: str) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def write_sidecar(path: str | os.PathLike[str], arrays: Mapping[str, np.ndarray]) -> dict[str, str]:
+    """Write the arrays of a model file beside it, atomically, as an uncompressed ``.npz`` of
+    plain numeric arrays (numpy's format, no pickle); return the ``{"file", "sha256"}`` entry
+    the model file's payload records, so that the sidecar is checksummed with it."""
+    from rplearn._atomic import atomic_path
+
+    target = sidecar_path(path)
+    for key, value in arrays.items():
+        if np.asarray(value).dtype.kind not in "fiub":
+            raise ValueError(f"sidecar array {key!r} is not numeric")
+    import zipfile
+
+    with atomic_path(target) as tmp:
+        # numpy's .npz layout, written here with a fixed time stamp per entry (np.savez stamps
+        # the current time), so that the same model gives the same bytes and checksum
+        with zipfile.ZipFile(tmp, "w", compression=zipfile.ZIP_STORED, allowZip64=True) as zf:
+            for key, value in arrays.items():
+                info = zipfile.ZipInfo(f"{key}.npy", date_time=(1980, 1, 1, 0, 0, 0))
+                with zf.open(info, "w", force_zip64=True) as fh:
+                    np.lib.format.write_array(fh, np.ascontiguousarray(value), allow_pickle=False)
+        checksum = _file_sha256(tmp)
+    return {"file": os.path.basename(target), "sha256": checksum}
+
+
+def read_sidecar(model_path: str | os.PathLike[str], entry: Any) -> dict[str, np.ndarray]:
+    """The arrays of a model file's sidecar, checked against the checksum its payload records.
+
+    Raises
+    ------
+    ModelFileError
+        Naming the sidecar: a malformed entry (a name that is not a file beside the model), a
+        missing, truncated, tampered or non-numeric file.
+    """
+    name = os.fspath(model_path)
+    if not isinstance(entry, Mapping) or not isinstance(entry.get("file"), str) or not isinstance(entry.get("sha256"), str):
+        raise ModelFileError(f"{name}: field 'sidecar' must give 'file' and 'sha256'")
+    file = entry["file"]
+    if os.path.basename(file) != file or file in ("", ".", ".."):
+        raise ModelFileError(f"{name}: sidecar {file!r} must be a file name beside the model file")
+    side = os.path.join(os.path.dirname(os.path.abspath(name)), file)
+    if not os.path.isfile(side):
+        raise ModelFileError(f"{side}: the model file's sidecar is missing (keep {file} beside {os.path.basename(name)})")
+    if _file_sha256(side) != entry["sha256"]:
+        raise ModelFileError(f"{side}: checksum mismatch: the sidecar was modified or does not belong to {name}")
+    try:
+        with np.load(side, allow_pickle=False) as data:
+            arrays = {k: data[k] for k in data.files}
+    except (ValueError, OSError, EOFError) as exc:
+        raise ModelFileError(f"{side}: not a readable sidecar ({exc})") from None
+    for k, v in arrays.items():
+        if v.dtype.kind not in "fiub":
+            raise ModelFileError(f"{side}: array {k!r} is not numeric")
+    return arrays
