@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from typing import Callable, Mapping, Sequence
+from typing import Mapping, Sequence
 
 import numpy as np
 import pandas as pd
@@ -34,10 +34,9 @@ from rplearn.errors import InputError
 from rplearn.models.base import model_frequency_hz, require_patterns
 from rplearn.models.patterns import PatternSet
 from rplearn.models.predict import UNCOVERED_DEG
-from rplearn.analysis.swarm import resolve_patterns, spanning_bottleneck
+from rplearn.analysis.heading_search import EXHAUSTIVE_MAX_COMBINATIONS, search  # noqa: F401 (the constant is documented here)
+from rplearn.analysis.swarm import maximum_spanning_edges, resolve_patterns
 
-#: Most yaw combinations :func:`best_swarm_headings` tries exhaustively (about 30 MB of work).
-EXHAUSTIVE_MAX_COMBINATIONS = 400_000
 
 Pair = tuple[str, str]
 Score = tuple[float, float]
@@ -404,8 +403,30 @@ class _HeadingProblem:
 
     def score(self, choice: Mapping[str, int]) -> Score:
         """Bottleneck RSSI, then mean pair RSSI [dBm]: larger is better."""
-        w = self.pair_rssi(choice)
-        return spanning_bottleneck(w, self.iu, self.ju, len(self.drones), self.drones)[0], float(np.mean(w))
+        b, m = self.scores(self.pair_rssi(choice)[None, :])
+        return float(b[0]), float(m[0])
+
+    def scores(self, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Bottleneck and mean pair RSSI [dBm] of many choices at once: ``w`` (choices, pairs)."""
+        n = len(self.drones)
+        full = np.full((w.shape[0], n, n), -np.inf)
+        full[:, self.iu, self.ju] = w
+        full[:, self.ju, self.iu] = w
+        edge_w = maximum_spanning_edges(full)[0]
+        bottleneck = edge_w.min(axis=1) if n > 1 else np.full(w.shape[0], np.inf)
+        return np.where(np.isneginf(bottleneck), np.nan, bottleneck), w.mean(axis=1)
+
+    def yaw_scores(self, choice: Mapping[str, int], drone: str) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`scores` of ``choice`` with ``drone`` at every grid yaw (one sweep step, array
+        operations on the gain tables, no model call)."""
+        k = np.arange(self.n_grid)
+        t = self.tables
+        w = np.empty((self.n_grid, len(self.pairs)))
+        for j, (a, b) in enumerate(self.pairs):
+            ia = k if a == drone else choice[a]
+            ib = k if b == drone else choice[b]
+            w[:, j] = self.base_dbm[(a, b)] + t[(a, b)][ia] + t[(b, a)][ib]
+        return self.scores(w)
 
     def pair_table(self, choice: Mapping[str, int]) -> pd.DataFrame:
         return pd.DataFrame({"pair": [f"{a}-{b}" for a, b in self.pairs], "rssi_dbm": self.pair_rssi(choice)})
@@ -463,7 +484,7 @@ def best_swarm_headings(
     start = {d: float((start_yaw_deg or {}).get(d, 0.0)) for d in drones}
     problem = _heading_problem(model, {d: positions[d] for d in drones}, patterns, grid, start, tx_power_dbm, frequency_hz)
     free = [d for d in drones if d not in fixed]
-    choice, best, sweeps = _search(problem, free, max_sweeps, restarts)
+    choice, best, sweeps = search(problem, free, max_sweeps, restarts)
     start_score = problem.score(problem.start_index)
     if start_score > best:  # never worse than the current yaws (which may lie off the grid)
         best, choice = start_score, problem.start_index
@@ -520,66 +541,3 @@ def _heading_problem(
     iu = np.array([drones.index(a) for a, _ in pairs])
     ju = np.array([drones.index(b) for _, b in pairs])
     return _HeadingProblem(drones, pairs, yaws, grid.size, tables, base, iu, ju)
-
-
-def _search(problem: _HeadingProblem, free: Sequence[str], max_sweeps: int, restarts: int) -> tuple[dict[str, int], Score, int]:
-    """Best choice of grid yaws for the free drones: exhaustive when small, else coordinate ascent.
-
-    Returns the choice, its score and the number of sweeps of the ascent (0 when exhaustive).
-    """
-    n_grid = problem.n_grid
-    if len(problem.drones) <= 3 and n_grid ** len(free) <= EXHAUSTIVE_MAX_COMBINATIONS:
-        choice, best = _exhaustive_three(problem, free)
-        return choice, best, 0
-    # coordinate ascent from the current yaws, then from seeded random yaws
-    start_index = problem.start_index
-    rng = np.random.default_rng(0)
-    starts = [dict(start_index)] + [
-        {d: (int(rng.integers(n_grid)) if d in free else start_index[d]) for d in problem.drones} for _ in range(restarts)
-    ]
-    best, choice, sweeps = (-np.inf, -np.inf), dict(start_index), 0
-    for first in starts:
-        found, s_found, n_sweeps = _coordinate_ascent(first, free, n_grid, problem.score, max_sweeps)
-        sweeps += n_sweeps
-        if s_found > best:
-            best, choice = s_found, found
-    return choice, best, sweeps
-
-
-def _coordinate_ascent(
-    choice: dict[str, int], free: Sequence[str], n_grid: int, score: Callable[[Mapping[str, int]], Score], max_sweeps: int
-) -> tuple[dict[str, int], Score, int]:
-    """Each free drone in turn takes its best grid yaw, until a sweep changes nothing."""
-    best = score(choice)
-    sweeps = 0
-    for sweeps in range(1, max_sweeps + 1):
-        changed = False
-        for d in free:
-            for k in range(n_grid):
-                trial = {**choice, d: k}
-                s = score(trial)
-                if s > best:
-                    best, choice, changed = s, trial, True
-        if not changed:
-            break
-    return choice, best, sweeps
-
-
-def _exhaustive_three(problem: _HeadingProblem, free: Sequence[str]) -> tuple[dict[str, int], Score]:
-    """Best grid yaws of two or three drones by trying every combination (vectorised).
-
-    The bottleneck of two drones is their one pair; of three, the second strongest pair (a
-    triangle's spanning tree is its two strongest edges). Exact ties of the bottleneck go to
-    the best mean.
-    """
-    drones, start_index = problem.drones, problem.start_index
-    axes = [np.arange(problem.n_grid) if d in free else np.array([start_index[d]]) for d in drones]
-    idx = dict(zip(drones, np.meshgrid(*axes, indexing="ij")))
-    w = np.stack([problem.base_dbm[(a, b)] + problem.tables[(a, b)][idx[a]] + problem.tables[(b, a)][idx[b]] for a, b in problem.pairs])
-    bottleneck = w[0] if len(problem.pairs) == 1 else np.sort(w, axis=0)[-2]
-    mean = w.mean(axis=0)
-    top = bottleneck.max()
-    candidates = bottleneck >= top  # exact ties, then the best mean among them
-    flat = int(np.argmax(np.where(candidates, mean, -np.inf)))
-    pos = np.unravel_index(flat, bottleneck.shape)
-    return {d: int(idx[d][pos]) for d in drones}, (float(top), float(mean[pos]))

@@ -338,34 +338,97 @@ def connectivity_over_time(
     A row for every time. The swarm is ``connected`` only when every drone has a pose and the
     pairs up both ways join them all; ``bottleneck_rssi_dbm`` is NaN when a drone is missing
     (connectivity unknown) and +inf when every needed link is closer than the far field.
+
+    Every time at once (:func:`maximum_spanning_edges`, in blocks of times): the groups at the
+    threshold are the drones less the tree's edges at or above it, and the bottleneck is the
+    tree's weakest edge (what :func:`spanning_bottleneck` gives one time).
     """
     n = len(drones)
-    iu, ju = np.triu_indices(n, 1)
-    t_links = links["t"].to_numpy()
+    names = np.asarray(list(drones), dtype=object)
+    times_s = np.asarray(times_s, np.float64)
+    t_index = np.searchsorted(times_s, links["t"].to_numpy(np.float64))
     tx = pd.Categorical(links["tx"], categories=list(drones)).codes.astype(np.intp)
     rx = pd.Categorical(links["rx"], categories=list(drones)).codes.astype(np.intp)
-    rssi_all = links["rssi_pred_dbm"].to_numpy(np.float64)
-    near_all = links["near_field"].to_numpy(bool)
-    starts = np.searchsorted(t_links, times_s, side="left")
-    stops = np.searchsorted(t_links, times_s, side="right")
-    rows = []
-    for t_val, lo, hi in zip(times_s, starts, stops):
-        rssi = np.full((n, n), np.nan)
-        rssi[tx[lo:hi], rx[lo:hi]] = np.where(near_all[lo:hi], np.inf, rssi_all[lo:hi])
-        present = np.zeros(n, bool)
-        present[tx[lo:hi]] = True
-        present[rx[lo:hi]] = True
-        w = np.fmin(rssi, rssi.T)[iu, ju]  # a pair's weight: its weaker direction
-        up = w >= min_rssi_dbm
-        n_groups = connected_components(csr_matrix((np.ones(int(up.sum())), (iu[up], ju[up])), shape=(n, n)), directed=False)[0]
-        missing = [d for d, p in zip(drones, present) if not p]
-        bottleneck, pair = (float("nan"), "") if missing else spanning_bottleneck(w, iu, ju, n, drones)
-        rows.append({
-            "t": float(t_val), "n_drones": int(present.sum()), "n_missing": len(missing), "missing": ",".join(missing),
-            "n_pairs_up": int(up.sum()), "n_components": int(n_groups - len(missing)),
-            "connected": bool(not missing and n_groups == 1), "bottleneck_rssi_dbm": bottleneck, "bottleneck_pair": pair,
-        })
-    return pd.DataFrame(rows)
+    rssi_all = np.where(links["near_field"].to_numpy(bool), np.inf, links["rssi_pred_dbm"].to_numpy(np.float64))
+    iu, ju = np.triu_indices(n, 1)
+    parts = []
+    step = max(1, CONNECTIVITY_BLOCK_VALUES // max(n * n, 1))  # memory: a block of (times, n, n) weights
+    for s0 in range(0, times_s.size, step):
+        s1 = min(times_s.size, s0 + step)
+        sel = (t_index >= s0) & (t_index < s1)
+        k = t_index[sel] - s0
+        m = s1 - s0
+        rssi = np.full((m, n, n), np.nan)
+        rssi[k, tx[sel], rx[sel]] = rssi_all[sel]
+        present = np.zeros((m, n), bool)
+        present[k, tx[sel]] = True
+        present[k, rx[sel]] = True
+        w = np.fmin(rssi, rssi.transpose(0, 2, 1))  # a pair's weight: its weaker direction (NaN: unknown)
+        pairs_up = np.sum(w[:, iu, ju] >= min_rssi_dbm, axis=1)
+        edge_w, edge_a, edge_b = maximum_spanning_edges(np.where(np.isnan(w), -np.inf, w))
+        n_missing = n - present.sum(axis=1)
+        n_groups = n - np.sum(edge_w >= min_rssi_dbm, axis=1)
+        spans = (n_missing == 0) & ~np.any(np.isneginf(edge_w), axis=1)
+        rows = np.arange(m)
+        weakest = np.argmin(edge_w, axis=1)
+        a = np.minimum(edge_a[rows, weakest], edge_b[rows, weakest])
+        b = np.maximum(edge_a[rows, weakest], edge_b[rows, weakest])
+        missing = np.full(m, "", dtype=object)
+        for r in np.flatnonzero(n_missing):
+            missing[r] = ",".join(str(d) for d, p in zip(drones, present[r]) if not p)
+        parts.append(pd.DataFrame({
+            "t": times_s[s0:s1], "n_drones": present.sum(axis=1).astype(int), "n_missing": n_missing.astype(int),
+            "missing": missing, "n_pairs_up": pairs_up.astype(int), "n_components": (n_groups - n_missing).astype(int),
+            "connected": (n_missing == 0) & (n_groups == 1),
+            "bottleneck_rssi_dbm": np.where(spans, edge_w[rows, weakest], np.nan).astype(float),
+            "bottleneck_pair": np.where(spans, names[a] + "-" + names[b], ""),
+        }))
+    return pd.concat(parts, ignore_index=True)
+
+
+#: Weights held at once by :func:`connectivity_over_time` (times x drones x drones).
+CONNECTIVITY_BLOCK_VALUES = 4_000_000
+
+
+def maximum_spanning_edges(weights: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Maximum spanning trees of many complete graphs at once (Prim's algorithm, vectorised
+    over the first axis).
+
+    Parameters
+    ----------
+    weights : ndarray, shape (m, n, n)
+        Symmetric pair weights; ``-inf`` for a pair with no edge, ``+inf`` for one stronger
+        than any.
+
+    Returns
+    -------
+    edge_w, edge_a, edge_b : ndarray, shape (m, n - 1)
+        Each tree's edges in the order Prim adds them: weight and the two nodes. A graph that
+        is not connected gets ``-inf`` edges (its spanning forest, joined arbitrarily).
+    """
+    m, n, _ = weights.shape
+    rows = np.arange(m)
+    in_tree = np.zeros((m, n), bool)
+    in_tree[:, 0] = True
+    best = weights[:, 0, :].copy()
+    parent = np.zeros((m, n), np.intp)
+    edge_w = np.full((m, max(n - 1, 0)), np.inf)
+    edge_a = np.zeros((m, max(n - 1, 0)), np.intp)
+    edge_b = np.zeros((m, max(n - 1, 0)), np.intp)
+    for step in range(n - 1):
+        cand = np.where(in_tree, -np.inf, best)
+        j = np.argmax(cand, axis=1)
+        stuck = np.isneginf(cand[rows, j])  # nothing reachable: take any node not yet in the tree
+        j = np.where(stuck, np.argmax(~in_tree, axis=1), j)
+        edge_w[:, step] = np.where(stuck, -np.inf, best[rows, j])
+        edge_a[:, step] = parent[rows, j]
+        edge_b[:, step] = j
+        in_tree[rows, j] = True
+        row = weights[rows, j, :]
+        better = row > best
+        best = np.where(better, row, best)
+        parent = np.where(better, j[:, None], parent)
+    return edge_w, edge_a, edge_b
 
 
 def spanning_bottleneck(w: np.ndarray, iu: np.ndarray, ju: np.ndarray, n: int, names: Sequence[str]) -> tuple[float, str]:

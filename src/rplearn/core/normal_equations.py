@@ -19,7 +19,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-import scipy.linalg.blas
 from numpy.typing import ArrayLike, NDArray
 
 from rplearn.core.bases import Basis
@@ -450,7 +449,9 @@ def schur_spread_db(gram: FloatArray, column: int, n_samples: int) -> float:
     jitter = 1e-9 * max(float(np.mean(np.diag(g))), 1e-300) if others.size else 0.0
     try:
         lower = np.linalg.cholesky(g + jitter * np.eye(others.size))
-        z = scipy.linalg.blas.dtrsv(lower, c, lower=1)  # level 2, as in rplearn.core.selection
+        from scipy.linalg import blas  # here, not at import: scipy.linalg costs 0.35 s to import
+
+        z = blas.dtrsv(lower, c, lower=1)  # level 2, as in rplearn.core.selection
         schur = float(gram[i, i] - z @ z)
     except np.linalg.LinAlgError:
         schur = float(gram[i, i] - c @ np.linalg.lstsq(g, c, rcond=None)[0])

@@ -36,7 +36,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-import scipy.linalg.blas
 from numpy.typing import ArrayLike, NDArray
 
 from rplearn.core.bases import Basis
@@ -397,7 +396,9 @@ def solve(
         # M G M = M - M D M for the constrained inverse M of G + D (D the ridge on the pattern
         # columns): one product instead of two
         # (a symmetric rank-k product: half a general one's work)
-        low = scipy.linalg.blas.dsyrk(1.0, np.asfortranarray(a[:, :pat]), lower=1)
+        from scipy.linalg import blas  # here, not at import: scipy.linalg costs 0.35 s to import
+
+        low = blas.dsyrk(1.0, np.asfortranarray(a[:, :pat]), lower=1)
         cov = resid_var * (a - ridge * (np.tril(low) + np.tril(low, -1).T))
     else:
         cov = resid_var * (a @ normal.gram @ a.T) if shrunk else resid_var * a

@@ -14,14 +14,16 @@ direction learned alone, or never learned, is predicted with offset 0.
 
 from __future__ import annotations
 
-from typing import Any, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Mapping, Sequence
 
 import numpy as np
 
 from rplearn.core.environment import PathLoss, log_distance_column
-from rplearn.core.solver import JointSolution
 from rplearn.data.tables import LinkSamples
 from rplearn.errors import InputError
+
+if TYPE_CHECKING:
+    from rplearn.core.solver import JointSolution
 
 
 def regression_inputs(samples: LinkSamples, path_loss: PathLoss) -> tuple[np.ndarray, np.ndarray | None]:
@@ -94,7 +96,7 @@ def shared_names(shared: Sequence[tuple[Any, ...]], nodes: Sequence[str]) -> tup
 
 
 def shared_fields(
-    sol: JointSolution, nodes: Sequence[str], path_loss: PathLoss, counts: Mapping[tuple[str, str], int],
+    sol: "JointSolution", nodes: Sequence[str], path_loss: PathLoss, counts: Mapping[tuple[str, str], int],
     covariance_scale: float = 1.0,
 ) -> tuple[dict[str, Any], dict[str, Any]]:
     """``PatternSet`` keyword arguments (``path_loss``, ``shared_names``, ``shared_coef``) and the
