@@ -1,0 +1,176 @@
+"""Benchmark of swarm prediction and headings (issue 13, acceptance 1).
+
+``predict_swarm`` for 10, 30 (and, without ``--quick``, 100) drones x 1000 times, against a
+plain numpy reference of the same computation written here: the drones' poses at the
+prediction times as arrays (no log to interpolate), every ordered pair's directions in both
+body frames, the joint gain (features from the same basis, times the coefficients), its
+standard error ``f^T C f``, the received power, and per time the pairs up, the groups and the
+bottleneck from a maximum spanning tree (Prim on every time at once). Timed alternately, best
+of several, with the ratio and the peak memory each adds (tracemalloc). Targets: within 2x
+the reference's time and 1.5x its peak memory.
+
+``best_swarm_headings`` for 10 and 20 drones: its time and bottleneck (the acceptance's
+reference coordinate ascent on gain tables is not written yet).
+
+Run: ``.venv/bin/python benchmarks/swarm.py [--quick]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+import tracemalloc
+
+import numpy as np
+import pandas as pd
+
+from rplearn.analysis.headings import best_swarm_headings
+from rplearn.analysis.swarm import predict_swarm
+from rplearn.core.bases import make_basis
+from rplearn.core.geometry import quat_wxyz_to_matrix
+from rplearn.core.link import free_space_path_loss_db
+from rplearn.models.patterns import PatternSet
+
+TIMES = 1000
+THRESHOLD_DBM = -80.0
+TX_POWER_DBM = 20.0
+FREQUENCY_HZ = 2.4e9
+
+
+def model_of(rng: np.random.Generator) -> PatternSet:
+    basis = make_basis("sh", 10)
+    p = basis.n_coef
+    a = rng.normal(0, 0.03, (2 * p, 2 * p))
+    return PatternSet(basis, ("A", "B"), rng.normal(size=(2, p)), covariance=a @ a.T,
+                      training={"rmse_db": 4.0, "frequency_hz": FREQUENCY_HZ})
+
+
+def swarm_poses(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Times [s], positions (n, T, 3) [m] and quaternions (n, T, 4) of drones circling."""
+    t = np.arange(TIMES) * 0.1
+    phase = np.arange(n)[:, None]
+    pos = np.stack([60 * np.cos(0.05 * t + phase), 60 * np.sin(0.05 * t + phase), 20 + phase + 0 * t], axis=-1)
+    yaw = 0.05 * t + phase + np.pi / 2
+    quat = np.stack([np.cos(yaw / 2), 0 * yaw, 0 * yaw, np.sin(yaw / 2)], axis=-1)
+    return t, pos, quat
+
+
+def as_log(t, pos, quat) -> pd.DataFrame:
+    n = pos.shape[0]
+    return pd.concat([pd.DataFrame({"t": t, "node": f"d{i:03d}", "x": pos[i, :, 0], "y": pos[i, :, 1], "z": pos[i, :, 2],
+                                    "qw": quat[i, :, 0], "qx": quat[i, :, 1], "qy": quat[i, :, 2], "qz": quat[i, :, 3]})
+                      for i in range(n)], ignore_index=True)
+
+
+def reference_swarm(model: PatternSet, pos, quat, pattern: np.ndarray):
+    """Plain numpy: gains, spreads, RSSI of every (time, ordered pair); connectivity per time."""
+    n, T, _ = pos.shape
+    ia, ib = np.nonzero(~np.eye(n, dtype=bool))
+    rot = quat_wxyz_to_matrix(quat.reshape(-1, 4)).reshape(n, T, 3, 3)  # body -> ENU
+    d = pos[ib] - pos[ia]  # (pairs, T, 3): a -> b in ENU
+    dist = np.linalg.norm(d, axis=-1)
+    body_a = np.einsum("ptji,ptj->pti", rot[ia], d)  # R^T d
+    body_b = np.einsum("ptji,ptj->pti", rot[ib], -d)
+    az_a, el_a = np.arctan2(body_a[..., 1], body_a[..., 0]), np.arctan2(body_a[..., 2], np.hypot(body_a[..., 0], body_a[..., 1]))
+    az_b, el_b = np.arctan2(body_b[..., 1], body_b[..., 0]), np.arctan2(body_b[..., 2], np.hypot(body_b[..., 0], body_b[..., 1]))
+    basis, p = model.basis, model.basis.n_coef
+    gain = np.empty((ia.size, T))
+    std = np.empty((ia.size, T))
+    block = max(1, 100_000 // T)  # pairs per batch of features (about 80 MB per end)
+    for k0 in range(0, ia.size, block):
+        ks = np.arange(k0, min(ia.size, k0 + block))
+        fa = basis.design(az_a[ks].ravel(), el_a[ks].ravel())
+        fb = basis.design(az_b[ks].ravel(), el_b[ks].ravel())
+        ta, tb = np.repeat(pattern[ia[ks]], T), np.repeat(pattern[ib[ks]], T)
+        g = np.empty(ks.size * T)
+        v = np.empty(ks.size * T)
+        for a in (0, 1):
+            for b in (0, 1):
+                sel = (ta == a) & (tb == b)
+                if not sel.any():
+                    continue
+                f = np.hstack([fa[sel], fb[sel]])
+                g[sel] = f[:, :p] @ model.coef[a] + f[:, p:] @ model.coef[b]
+                idx = np.r_[a * p:(a + 1) * p, b * p:(b + 1) * p]
+                v[sel] = np.einsum("ni,ni->n", f @ model.covariance[np.ix_(idx, idx)], f)
+        gain[ks] = g.reshape(ks.size, T)
+        std[ks] = np.sqrt(v).reshape(ks.size, T)
+    rssi = TX_POWER_DBM + gain - free_space_path_loss_db(dist, FREQUENCY_HZ)
+    w = np.full((T, n, n), -np.inf)
+    w[:, ia, ib] = rssi.T
+    w = np.minimum(w, w.transpose(0, 2, 1))
+    iu, ju = np.triu_indices(n, 1)
+    pairs_up = np.sum(w[:, iu, ju] >= THRESHOLD_DBM, axis=1)
+    in_tree = np.zeros((T, n), bool)
+    in_tree[:, 0] = True
+    best = w[:, 0, :].copy()
+    rows = np.arange(T)
+    edges = np.empty((T, n - 1))
+    for step in range(n - 1):
+        j = np.argmax(np.where(in_tree, -np.inf, best), axis=1)
+        edges[:, step] = best[rows, j]
+        in_tree[rows, j] = True
+        best = np.maximum(best, w[rows, j, :])
+    return gain, std, pairs_up, n - np.sum(edges >= THRESHOLD_DBM, axis=1), edges.min(axis=1)
+
+
+def timed(fn):
+    """Wall time of ``fn`` [s], then the peak of memory it allocates [bytes] from a second,
+    traced run (tracing slows allocation, so it is not timed)."""
+    t0 = time.perf_counter()
+    out = fn()
+    dt = time.perf_counter() - t0
+    tracemalloc.start()
+    fn()
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    return dt, peak, out
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="10 and 30 drones, 2 repeats")
+    args = parser.parse_args()
+    sizes = (10, 30) if args.quick else (10, 30, 100)
+    repeats = 2 if args.quick else 3
+    rng = np.random.default_rng(0)
+    model = model_of(rng)
+    ok = True
+    for n in sizes:
+        t, pos, quat = swarm_poses(n)
+        log = as_log(t, pos, quat)
+        drones = [f"d{i:03d}" for i in range(n)]
+        pattern_of = {d: ("A" if i % 2 == 0 else "B") for i, d in enumerate(drones)}
+        pattern = np.array([0 if i % 2 == 0 else 1 for i in range(n)])
+        best = {"ours": (np.inf, 0), "ref": (np.inf, 0)}
+        for _ in range(repeats):
+            dt, peak, ours = timed(lambda: predict_swarm(model, log, TX_POWER_DBM, FREQUENCY_HZ, pattern_of, times_s=t,
+                                                         min_rssi_dbm=THRESHOLD_DBM))
+            best["ours"] = (min(best["ours"][0], dt), max(best["ours"][1], peak))
+            dt, peak, ref = timed(lambda: reference_swarm(model, pos, quat, pattern))
+            best["ref"] = (min(best["ref"][0], dt), max(best["ref"][1], peak))
+        # the same numbers (links sorted by time, then tx, then rx: the reference's pair order per time)
+        gain = ours.links["gain_pred_db"].to_numpy().reshape(TIMES, n * (n - 1)).T
+        same = np.allclose(gain, ref[0], atol=1e-8) and np.array_equal(ours.connectivity["n_pairs_up"].to_numpy(), ref[2])
+        same &= np.allclose(ours.connectivity["bottleneck_rssi_dbm"].to_numpy(), ref[4], atol=1e-8)
+        ratio_t = best["ours"][0] / best["ref"][0]
+        ratio_m = best["ours"][1] / max(best["ref"][1], 1)
+        ok &= ratio_t <= 2.0 and ratio_m <= 1.5 and same
+        print(f"predict_swarm, {n} drones x {TIMES} times ({n * (n - 1) * TIMES:,} links): "
+              f"{best['ours'][0]:.2f} s against {best['ref'][0]:.2f} s, ratio {ratio_t:.2f} (target 2); "
+              f"peak {best['ours'][1] / 2**20:.0f} MiB against {best['ref'][1] / 2**20:.0f} MiB, ratio {ratio_m:.2f} "
+              f"(target 1.5); same numbers: {same}")
+    for n in (10, 20):
+        positions = {f"d{i:02d}": (rng.uniform(-100, 100), rng.uniform(-100, 100), rng.uniform(10, 40)) for i in range(n)}
+        pattern_of = {d: ("A" if i % 2 else "B") for i, d in enumerate(positions)}
+        t0 = time.perf_counter()
+        result = best_swarm_headings(model, positions, TX_POWER_DBM, FREQUENCY_HZ, pattern_of)
+        dt = time.perf_counter() - t0
+        print(f"best_swarm_headings, {n} drones: {dt:.2f} s, bottleneck {result.to_dict()['bottleneck_dbm']:.3f} dBm "
+              "(reference coordinate ascent: not yet written)")
+    print("predict_swarm targets met" if ok else "predict_swarm TARGETS MISSED")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
