@@ -128,3 +128,26 @@ def test_constant_distance_exponent_is_not_identifiable():
     dist = dist * rng.choice([1.0, 2.0], tx.size)
     sol = fit_joint(d, tx, rx, rng.normal(size=tx.size), 2, basis, environment=log_distance_column(dist))
     assert sol.shared == (("exponent",),)
+
+
+def test_the_block_buffer_is_capped_and_blocks_add_up():
+    """SH-24: the accumulation buffer stays within BLOCK_MAX_VALUES (issue 13, item 4), and
+    statistics over several blocks equal those over one block each."""
+    from rplearn.core import normal_equations as ne_module
+
+    rng = np.random.default_rng(11)
+    basis = make_basis("sh", 24)
+    rows = ne_module.block_rows(basis)
+    per_block = ne_module.block_samples(rows)
+    assert per_block < ne_module.BLOCK_SAMPLES and rows * per_block <= ne_module.BLOCK_MAX_VALUES
+    n = per_block + 500  # two blocks
+    d, tx, rx = _random_samples(rng, n, 2)
+    y = rng.normal(size=n)
+    whole = NormalEquations(basis, 2).add(d, tx, rx, y)
+    assert ne_module._BUFFERS.block.size <= ne_module.BLOCK_MAX_VALUES
+    half = n // 2
+    parts = NormalEquations(basis, 2)
+    parts.add(Directions(*(a[:half] for a in d)), tx[:half], rx[:half], y[:half])
+    parts.add(Directions(*(a[half:] for a in d)), tx[half:], rx[half:], y[half:])
+    np.testing.assert_allclose(whole.gram, parts.gram, atol=1e-9 * np.abs(whole.gram).max())
+    np.testing.assert_allclose(whole.rhs, parts.rhs, atol=1e-9 * np.abs(whole.rhs).max())

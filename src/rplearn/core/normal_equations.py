@@ -30,6 +30,10 @@ FloatArray = NDArray[np.float64]
 #: Samples per feature sub-chunk (fits the CPU cache) and per accumulation block.
 FEATURE_CHUNK = 4096
 BLOCK_SAMPLES = 65536
+#: The block buffer holds at most this many values (64 MiB): high orders take fewer samples per
+#: block (SH-24, 1,155 rows: about 7,000), so the buffer kept between fits stays bounded
+#: (it was 0.6 GB after one SH-24 fit).
+BLOCK_MAX_VALUES = 8 * 2**20
 
 
 #: The path-loss exponent is refused as not identifiable when the part of its log-distance
@@ -58,6 +62,11 @@ def _block_buffer(size: int) -> FloatArray:
     return buf[:size]
 
 
+def block_samples(rows: int) -> int:
+    """Samples per accumulation block of ``rows`` rows (:data:`BLOCK_SAMPLES`, fewer for big bases)."""
+    return int(max(256, min(BLOCK_SAMPLES, BLOCK_MAX_VALUES // max(int(rows), 1))))
+
+
 def block_rows(basis: Basis, n_extra: int = 2) -> int:
     """Rows of the accumulation block of :func:`link_statistics` for this basis (with the
     ``n_extra`` rows :class:`NormalEquations` adds: a constant and the environment column)."""
@@ -70,7 +79,8 @@ def reserve_block_buffer(basis: Basis, n_samples: int) -> None:
     Called before a timed fit so that its learning time does not include the one-off page
     faults of the buffer (measured 0.2 s for the first SH-10 fit of the paper's 56k samples).
     """
-    _block_buffer(block_rows(basis) * max(1, min(int(n_samples), BLOCK_SAMPLES)))
+    rows = block_rows(basis)
+    _block_buffer(rows * max(1, min(int(n_samples), block_samples(rows))))
 
 
 def _fill_features(
@@ -124,7 +134,7 @@ def link_statistics(
     A ``(2p + 1 + m, 2p + 1 + m)`` matrix (``m`` rows of ``extra``, shape ``(m, n)``: shared
     regressors such as a constant or the log-distance column), features in the basis's row
     order: the tx and rx blocks of ``X^T X``, ``X^T y``, ``y^T y`` and the extra columns'
-    products. Per block of :data:`BLOCK_SAMPLES` samples, written into this thread's reused
+    products. Per block of :func:`block_samples` samples, written into this thread's reused
     buffer, either one symmetric rank-k update of all rows, or, for a basis with Gram moments
     (SH), only the product ``[f_tx; y; extra] [y; extra; f_rx]^T`` (about half the work): the
     two diagonal feature blocks then come from the moments. With ``moments_out`` (shape
@@ -145,9 +155,10 @@ def link_statistics(
     else:
         moments = None
     total = np.zeros((k, k))
-    block = _block_buffer(k * max(1, min(n, BLOCK_SAMPLES)))  # grows to the largest block seen
-    for start in range(0, n, BLOCK_SAMPLES):
-        stop = min(n, start + BLOCK_SAMPLES)
+    per_block = block_samples(k)
+    block = _block_buffer(k * max(1, min(n, per_block)))  # grows to the largest block seen, within the cap
+    for start in range(0, n, per_block):
+        stop = min(n, start + per_block)
         buf = block[: k * (stop - start)].reshape(k, stop - start)
         part = slice(start, stop)
         _fill_features(basis, buf, az_tx[part], el_tx[part], az_rx[part], el_rx[part], moments, gap)
