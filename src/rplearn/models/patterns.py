@@ -314,6 +314,26 @@ class PatternSet:
             out["rssi_dbm"] = received_power_dbm(tx_power_dbm, gain, dist, frequency_hz)
         return out
 
+    def _link_samples_between(
+        self, tx_node: str, rx_node: str, tx_position_xyz: ArrayLike, rx_position_xyz: ArrayLike,
+        frequency_hz: ArrayLike | None = None,
+    ) -> "LinkSamples":
+        """Samples of the link ``tx_node -> rx_node`` between positions (ENU [m]), with no
+        attitude: what the environment term and the offsets need (distance, heights, nodes)."""
+        from rplearn.data.tables import LinkSamples
+
+        tx_xyz = np.atleast_2d(np.asarray(tx_position_xyz, np.float64))
+        rx_xyz = np.atleast_2d(np.asarray(rx_position_xyz, np.float64))
+        tx_xyz, rx_xyz = np.broadcast_arrays(tx_xyz, rx_xyz)
+        n = tx_xyz.shape[0]
+        nodes = (str(tx_node), str(rx_node))
+        for node in nodes:
+            self.node_index(node)
+        freq = None if frequency_hz is None else np.broadcast_to(np.asarray(frequency_hz, np.float64), (n,))
+        zero = np.zeros(n)
+        return LinkSamples(Directions(zero, zero, zero, zero), np.zeros(n, np.intp), np.ones(n, np.intp), nodes,
+                           np.full(n, np.nan), distance_m(tx_xyz, rx_xyz), freq, tx_z_m=tx_xyz[:, 2], rx_z_m=rx_xyz[:, 2])
+
     def link_environment_db(
         self,
         tx_node: str,
@@ -325,21 +345,9 @@ class PatternSet:
         """What the environment term and the link's offset add to the joint gain [dB] between
         positions (ENU [m]); it depends on no attitude. Zero for a free-space model without
         offsets; NaN where a two-ray antenna is at or below the ground."""
-        from rplearn.data.tables import LinkSamples
-
-        tx_xyz = np.atleast_2d(np.asarray(tx_position_xyz, np.float64))
-        rx_xyz = np.atleast_2d(np.asarray(rx_position_xyz, np.float64))
-        tx_xyz, rx_xyz = np.broadcast_arrays(tx_xyz, rx_xyz)
-        n = tx_xyz.shape[0]
         if self.path_loss.kind == "two-ray" and frequency_hz is None:
             frequency_hz = self.frequency_hz
-        freq = None if frequency_hz is None else np.broadcast_to(np.asarray(frequency_hz, np.float64), (n,))
-        zero = np.zeros(n)
-        nodes = (str(tx_node), str(rx_node))
-        for node in nodes:
-            self.node_index(node)
-        samples = LinkSamples(Directions(zero, zero, zero, zero), np.zeros(n, np.intp), np.ones(n, np.intp), nodes,
-                              np.full(n, np.nan), distance_m(tx_xyz, rx_xyz), freq, tx_z_m=tx_xyz[:, 2], rx_z_m=rx_xyz[:, 2])
+        samples = self._link_samples_between(tx_node, rx_node, tx_position_xyz, rx_position_xyz, frequency_hz)
         return self.environment_db(samples)
 
     def link_environment_std_db(
@@ -347,18 +355,10 @@ class PatternSet:
     ) -> FloatArray:
         """Standard error [dB] of :meth:`link_environment_db` from the learned exponent and offsets
         (0 when nothing is learned beside the patterns, or without a covariance)."""
-        from rplearn.data.tables import LinkSamples
-
-        tx_xyz = np.atleast_2d(np.asarray(tx_position_xyz, np.float64))
-        rx_xyz = np.atleast_2d(np.asarray(rx_position_xyz, np.float64))
-        tx_xyz, rx_xyz = np.broadcast_arrays(tx_xyz, rx_xyz)
-        n, m = tx_xyz.shape[0], len(self.shared_names)
-        pc = self.n_pattern_columns
+        samples = self._link_samples_between(tx_node, rx_node, tx_position_xyz, rx_position_xyz)
+        m, pc = len(self.shared_names), self.n_pattern_columns
         if not m or self.covariance is None or self.covariance.shape[0] != pc + m:
-            return np.zeros(n)
-        zero = np.zeros(n)
-        samples = LinkSamples(Directions(zero, zero, zero, zero), np.zeros(n, np.intp), np.ones(n, np.intp),
-                              (str(tx_node), str(rx_node)), np.full(n, np.nan), distance_m(tx_xyz, rx_xyz))
+            return np.zeros(len(samples))
         s = self.shared_regressors(samples)
         var = np.einsum("in,ij,jn->n", s, self.covariance[pc:, pc:], s)
         return np.sqrt(np.maximum(var, 0.0))
