@@ -34,16 +34,17 @@ LAYERS: tuple[str, ...] = (
 )
 
 #: Third-party packages a layer may not import (DESIGN.md: the core needs numpy and scipy only;
-#: nothing below viz draws; nothing below the CLI parses arguments or styles text).
+#: nothing below viz draws; nothing below the CLI parses arguments or styles text; only the
+#: workflows run on a Dask cluster).
 FORBIDDEN_THIRD_PARTY: dict[str, tuple[str, ...]] = {
-    "rplearn.core": ("pandas", "pyarrow", "sklearn", "matplotlib", "typer", "rich", "rosbags", "pyulog", "dpkt", "pymap3d"),
-    "rplearn.data": ("matplotlib", "typer", "rich"),
-    "rplearn.io": ("matplotlib", "typer", "rich"),
-    "rplearn.plan": ("matplotlib", "typer", "rich"),
-    "rplearn.sim": ("matplotlib", "typer", "rich"),
-    "rplearn.models": ("matplotlib", "typer", "rich"),
-    "rplearn.analysis": ("matplotlib", "typer", "rich"),
-    "rplearn.viz": ("typer", "rich"),
+    "rplearn.core": ("pandas", "pyarrow", "sklearn", "matplotlib", "typer", "rich", "rosbags", "pyulog", "dpkt", "pymap3d", "dask", "distributed"),
+    "rplearn.data": ("matplotlib", "typer", "rich", "dask", "distributed"),
+    "rplearn.io": ("matplotlib", "typer", "rich", "dask", "distributed"),
+    "rplearn.plan": ("matplotlib", "typer", "rich", "dask", "distributed"),
+    "rplearn.sim": ("matplotlib", "typer", "rich", "dask", "distributed"),
+    "rplearn.models": ("matplotlib", "typer", "rich", "dask", "distributed"),
+    "rplearn.analysis": ("matplotlib", "typer", "rich", "dask", "distributed"),
+    "rplearn.viz": ("typer", "rich", "dask", "distributed"),
     "rplearn.workflows": ("typer", "rich"),
     # the command line parses and prints; every computation on data is in the library
     "rplearn.cli": ("numpy", "pandas", "scipy", "sklearn", "matplotlib"),

@@ -37,6 +37,14 @@ def _same_file(a: str, b: str) -> bool:
         return os.path.realpath(a) == os.path.realpath(b)
 
 
+def _inside(path: str, folder: str) -> bool:
+    """Whether ``path`` lies below ``folder`` (symbolic links resolved)."""
+    try:
+        return os.path.commonpath([os.path.realpath(path), os.path.realpath(folder)]) == os.path.realpath(folder)
+    except ValueError:  # different drives
+        return False
+
+
 def check_output(path: PathLike, inputs: Iterable[PathLike] = (), param: str | None = None) -> str:
     """Refuse an output path before any work is done; return it as a string.
 
@@ -58,6 +66,9 @@ def check_output(path: PathLike, inputs: Iterable[PathLike] = (), param: str | N
     for source in inputs:
         if source is not None and _same_file(name, os.fspath(source)):
             raise InputError(f"{name}: is also an input of this command; write the output elsewhere", param=param)
+        if source is not None and os.path.isdir(os.fspath(source)) and _inside(name, os.fspath(source)):
+            raise InputError(f"{name}: is inside {os.fspath(source)}, a dataset folder this command reads (the file "
+                             "would join the dataset); write the output elsewhere", param=param)
     if os.path.lexists(name):
         mode = os.stat(name).st_mode if os.path.exists(name) else 0
         if not stat.S_ISREG(mode):

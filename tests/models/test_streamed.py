@@ -12,7 +12,7 @@ from rplearn.errors import InputError, RplearnError
 from rplearn.models import ModelSpec
 from rplearn.models.streamed import weighted_median
 from rplearn.sim import simulate
-from rplearn.workflows import learning
+from rplearn.workflows import fleet, learning
 from rplearn.workflows.logs import sync_logs
 
 
@@ -32,7 +32,7 @@ def dataset(tmp_path_factory):
 def streamed(monkeypatch, chunk_rows=97):
     monkeypatch.setattr(learning, "STREAM_FIT_ROWS", 0)
     monkeypatch.setattr(learning, "STREAM_FIT_BYTES", 0)
-    monkeypatch.setattr(learning, "STREAM_FIT_CHUNK_ROWS", chunk_rows)
+    monkeypatch.setattr(fleet, "PART_CHUNK_ROWS", chunk_rows)
 
 
 @pytest.mark.parametrize("name", ["m.parquet", "m.csv"])
@@ -55,8 +55,8 @@ def test_streamed_fit_equals_the_whole_fit(dataset, monkeypatch, name, label):
 def test_streamed_fit_checks_the_size_before_reading_the_data(dataset, monkeypatch):
     streamed(monkeypatch)
     read = []
-    real = learning.iter_table
-    monkeypatch.setattr(learning, "iter_table", lambda *a, **k: (read.append(k.get("columns")), real(*a, **k))[1])
+    real = fleet.iter_parts
+    monkeypatch.setattr(fleet, "iter_parts", lambda *a, **k: (read.append(k.get("columns")), real(*a, **k))[1])
     with pytest.raises(RplearnError, match="the largest sh order that fits is"):
         learning.fit_dataset(str(dataset / "m.csv"), ModelSpec("sh", 1000))
     assert read == [("tx", "rx", "unit")]  # only the id columns were read

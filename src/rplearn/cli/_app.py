@@ -203,6 +203,19 @@ def step(progress: Progress, task: Any) -> Callable[[str], None]:
     return report
 
 
+def parts_step(progress: Progress, task: Any, what: str, noun: str = "part") -> Callable[[int, int], None]:
+    """Progress callback ``(parts done, parts)`` of work over a dataset's files: the bar on a
+    terminal, otherwise a plain line at every tenth of the parts."""
+
+    def report(done: int, total: int) -> None:
+        if console.is_terminal:
+            progress.update(task, description=Text(f"{what}: {done:,} of {total:,} {noun}(s)"))
+        elif total > 1 and (done == total or done % max(total // 10, 1) == 0):
+            console.print(Text(f"... {what}: {done:,} of {total:,} {noun}(s)"), soft_wrap=True)
+
+    return report
+
+
 # -------------------------------------------------------------------------------------------
 # Parsing flag values
 

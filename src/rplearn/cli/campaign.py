@@ -8,7 +8,7 @@ from typing import Optional
 import typer
 from rich.table import Table
 
-from rplearn.cli._app import app, floats, out, progress_bar, say, user_errors
+from rplearn.cli._app import app, floats, out, parts_step, progress_bar, say, user_errors
 from rplearn.errors import InputError
 
 #: The plan's library parameters whose flags have other names.
@@ -67,10 +67,12 @@ def trajectory(
 @app.command()
 @user_errors
 def simulate(
-    preset: str = typer.Option("paper", "--preset", help="paper, trio, smoke, ground, pathloss (log-distance exponent 3) or tworay (ground reflection)."),
+    preset: str = typer.Option("paper", "--preset", help="paper, trio, smoke, ground, pathloss (log-distance exponent 3), tworay (ground reflection) or fleet (many flights of a fleet as a partitioned matched dataset, one Parquet file per flight)."),
     seed: int = typer.Option(0, "--seed", help="Seed of every random effect."),
     out_dir: str = typer.Option("flight", "-o", "--out", help="Output directory."),
     log_format: str = typer.Option("parquet", "--format", help="parquet or csv."),
+    flights: int = typer.Option(8, "--flights", help="fleet: number of flights (about 160,000 samples each)."),
+    drones: int = typer.Option(4, "--drones", help="fleet: drones in the fleet, flying in pairs taken in turn."),
 ) -> None:
     """Simulate a calibration flight: raw pose and signal logs plus the true patterns.
 
@@ -80,6 +82,18 @@ def simulate(
 
     if log_format not in ("parquet", "csv"):
         raise InputError(f"--format: expected parquet or csv, got {log_format!r}")
+    if preset == "fleet":
+        from rplearn.sim.fleet import simulate_fleet
+
+        if log_format != "parquet":
+            raise InputError("--format: the fleet preset writes Parquet")
+        with progress_bar() as p:
+            task = p.add_task("simulating a fleet", total=None)
+            fleet = simulate_fleet(out_dir, flights=flights, drones=drones, seed=seed,
+                                   progress=parts_step(p, task, "simulated", "flight"))
+        say(f"{len(fleet.files):,} flights of {drones} drones, {fleet.samples:,} matched samples, {fleet.elapsed_s:.1f} s "
+            f"-> {out_dir} (give the folder to fit and evaluate)")
+        return
     with progress_bar() as p:
         p.add_task(f"simulating preset '{preset}'", total=None)
         result = run(preset, seed=seed, out_dir=out_dir, log_format=log_format)

@@ -6,14 +6,22 @@ from typing import Optional
 
 import typer
 
-from rplearn.cli._app import app, note, orders as parse_orders, pairs, progress_bar, say, split_list, step, user_errors
+from rplearn.cli._app import (
+    app, note, orders as parse_orders, pairs, parts_step, progress_bar, say, split_list, step, user_errors,
+)
 from rplearn.errors import InputError
+
+
+#: Help of ``--dask`` (fit, evaluate).
+DASK_HELP = ("Run on Dask, part by part (pattern models): local (2 worker processes), local:N, or a scheduler address "
+             "tcp://host:8786; needs pip install 'rplearn[dask]'. The dataset may be a directory, a glob, a "
+             "comma-separated list or a URL (s3://..., with its fsspec plugin) of Parquet/CSV files.")
 
 
 @app.command()
 @user_errors
 def fit(
-    dataset: str = typer.Argument(..., help="Matched dataset (.parquet or .csv)."),
+    dataset: str = typer.Argument(..., help="Matched dataset (.parquet or .csv), or many: a directory, a glob, a comma-separated list or a URL."),
     model: str = typer.Option("sh", "--model", help="sh, bg, poly, mean or knn (also sh-10, nn-400...)."),
     degree: Optional[str] = typer.Option(None, "--degree", help="SH-L / BG-k / P-k order, k of knn, or 'auto': order (SH) and smoothing chosen by cross-validation over flight units (default for sh; bg, poly, knn default to 7, 12, 400)."),
     ridge: Optional[float] = typer.Option(None, "--ridge", help="Pattern models: ridge weight on the diagonal of X^T X (default 1; the paper used 50)."),
@@ -30,6 +38,7 @@ def fit(
     permittivity: float = typer.Option(15.0, "--permittivity", help="two-ray: relative permittivity of the ground (15 medium dry ground, ITU-R P.527; ~30 wet, 3-7 very dry)."),
     polarization: str = typer.Option("vertical", "--polarization", help="two-ray: vertical (upright whips) or horizontal."),
     link_offsets: bool = typer.Option(True, "--link-offsets/--no-link-offsets", help="Pattern models: learn one electronics offset per link logged in both directions (non-reciprocal radios; the two directions' offsets sum to 0)."),
+    dask: Optional[str] = typer.Option(None, "--dask", help=DASK_HELP),
     output: str = typer.Option(..., "-o", "--out", help="Model file (.json)."),
 ) -> None:
     """Learn one radiation pattern per node (or a baseline) from a matched dataset.
@@ -45,9 +54,12 @@ def fit(
     spec = ModelSpec.parse(model, order=order, ridge=ridge, sigma_rad2=sigma, grid=grid)
     check_fit_options(spec, order=order, ridge=ridge, sigma_rad2=sigma, grid=grid, gauge_node=gauge_node,
                       gauge_dbi=gauge_dbi, model=model)
-    outcome = fit_dataset(dataset, spec, split_list(units), gauge_of(gauge_node, gauge_dbi), output, auto=auto,
-                          prior=pairs(prior, "--prior") or None, prior_std_db=prior_std, loss=loss,
-                          path_loss=PathLoss(path_loss, ground_level, permittivity, polarization), link_offsets=link_offsets)
+    with progress_bar() as p:
+        task = p.add_task("learning", total=None)
+        outcome = fit_dataset(dataset, spec, split_list(units), gauge_of(gauge_node, gauge_dbi), output, auto=auto,
+                              prior=pairs(prior, "--prior") or None, prior_std_db=prior_std, loss=loss,
+                              path_loss=PathLoss(path_loss, ground_level, permittivity, polarization),
+                              link_offsets=link_offsets, dask=dask, progress=parts_step(p, task, "statistics"))
     for line in outcome.units.notes:
         note(f"{line} (pass --units to choose)" if outcome.units.defaulted else line)
     say(outcome.summary())
@@ -118,6 +130,7 @@ def evaluate(
     units: Optional[list[str]] = typer.Option(None, "--units", help="Evaluation units (repeat or comma-separate)."),
     json_out: Optional[str] = typer.Option(None, "--json", help="Also write Table I as JSON here."),
     markdown_out: Optional[str] = typer.Option(None, "--markdown", help="Also write Table I as Markdown here."),
+    dask: Optional[str] = typer.Option(None, "--dask", help=DASK_HELP),
 ) -> None:
     """Table I (RMSE, MAE, |phi|, AIC, LTD, Q95) of models on a dataset.
 
@@ -128,7 +141,10 @@ def evaluate(
     if len(paths) < 2:
         raise InputError("evaluate: give at least one MODEL.json and a DATASET")
     *model_paths, dataset = paths
-    outcome = evaluate_model_files(model_paths, dataset, split_list(units), json_out, markdown_out)
+    with progress_bar() as p:
+        task = p.add_task("predicting", total=None)
+        outcome = evaluate_model_files(model_paths, dataset, split_list(units), json_out, markdown_out, dask=dask,
+                                       progress=parts_step(p, task, "predictions"))
     for line in outcome.units.warnings:
         note(line, "warning")
     for line in outcome.units.notes:

@@ -44,6 +44,11 @@ _NAMES: dict[str, str] = {
     "write_table_chunks": "files",
     "iter_table": "files",
     "table_rows": "files",
+    "iter_parts": "files",
+    # datasets in many files (a directory, a glob, a list, a URL)
+    "Part": "partitions",
+    "dataset_parts": "partitions",
+    "is_partitioned": "partitions",
     # per-format readers
     "COLUMN_ALIASES": "tables",
     "canonical_pose": "tables",

@@ -10,7 +10,7 @@ import json
 import os
 import sys
 import time
-from typing import Any, Iterable, Iterator
+from typing import Any, Iterable, Iterator, Sequence
 
 import pandas as pd
 
@@ -20,6 +20,7 @@ from rplearn._version import __version__
 from rplearn.data.tables import CSV_DTYPES, normalise_times, validate_matched
 from rplearn.errors import InputError
 from rplearn.io._common import read_parquet_lean
+from rplearn.io.partitions import Part, dataset_parts, is_partitioned, is_url, open_source, with_hive_columns
 
 
 def read_table(path: str, source: str | None = None) -> pd.DataFrame:
@@ -44,6 +45,9 @@ def table_rows(path: str) -> int | None:
     import pyarrow.parquet as pq
 
     try:
+        if is_url(path):
+            with open_source(path) as fh:
+                return int(pq.ParquetFile(fh).metadata.num_rows)
         return int(pq.ParquetFile(path).metadata.num_rows)
     except Exception as exc:  # pyarrow's own errors on a corrupt footer
         raise InputError(f"{path}: cannot read table ({type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''})") from None
@@ -56,25 +60,42 @@ def iter_table(path: str, chunk_rows: int = 500_000, columns: Iterable[str] | No
     the file, as :func:`read_table`.
     """
     name = str(path)
-    if not os.path.exists(path):
+    url = is_url(name)
+    if not url and not os.path.exists(path):
         raise InputError(f"{name}: no such file")
     wanted = None if columns is None else list(columns)
+    source = None
     try:
+        source = open_source(name)
         if name.lower().endswith((".parquet", ".pq")):
             import pyarrow.parquet as pq
 
-            pf = pq.ParquetFile(path)
+            pf = pq.ParquetFile(source)
             cols = None if wanted is None else [c for c in wanted if c in pf.schema_arrow.names]
             for batch in pf.iter_batches(batch_size=chunk_rows, columns=cols):
                 yield normalise_times(batch.to_pandas(), name)
         else:
             use = None if wanted is None else (lambda c: c in wanted)
-            for chunk in pd.read_csv(path, dtype=CSV_DTYPES, chunksize=chunk_rows, usecols=use):
+            gz = "gzip" if name.lower().endswith(".gz") else "infer"
+            for chunk in pd.read_csv(source, dtype=CSV_DTYPES, chunksize=chunk_rows, usecols=use, compression=gz):
                 yield normalise_times(chunk, name)
     except InputError:
         raise
     except Exception as exc:  # parsers raise many classes on corrupt bytes
         raise InputError(f"{name}: cannot read table ({type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''})") from None
+    finally:
+        if url and source is not None:
+            source.close()
+
+
+def iter_parts(parts: Sequence[Part], chunk_rows: int = 500_000, columns: Iterable[str] | None = None) -> Iterator[pd.DataFrame]:
+    """Every part of a dataset (:func:`rplearn.io.partitions.dataset_parts`), a chunk at a
+    time, in order, with its Hive columns (see :func:`iter_table`)."""
+    wanted = None if columns is None else list(columns)
+    for part in parts:
+        for chunk in iter_table(part.path, chunk_rows, wanted):
+            chunk = with_hive_columns(chunk, part)
+            yield chunk if wanted is None else chunk[[c for c in chunk.columns if c in wanted]]
 
 
 def write_table(df: pd.DataFrame, path: str) -> None:
@@ -208,10 +229,15 @@ def read_dataset(path: str, require_rssi: bool = True) -> pd.DataFrame:
     Parameters
     ----------
     path : str
-        CSV or Parquet file.
+        CSV or Parquet file, or a dataset in many files (a directory, a glob, a comma-separated
+        list or a URL: :mod:`rplearn.io.partitions`), read whole.
     require_rssi : bool
         False for datasets of poses to predict, whose ``rssi_dbm`` may be absent.
     """
+    if is_partitioned(path):
+        frames = list(iter_parts(dataset_parts(path), 2_000_000))
+        table = pd.concat(frames, ignore_index=True) if len(frames) > 1 else frames[0]
+        return validate_matched(table, path, require_rssi=require_rssi)
     return validate_matched(read_table(path), path, require_rssi=require_rssi)
 
 

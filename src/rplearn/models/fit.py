@@ -206,7 +206,15 @@ def evaluate_models(fitted: Sequence[FittedModel], samples: LinkSamples, notes: 
     appended to ``notes`` when given; when every sample would be left out, it is an error.
     """
     predictions = [np.asarray(f.model.predict_gain(samples), np.float64) for f in fitted]
-    keep = np.ones(len(samples), bool)
+    return scores_of_predictions(fitted, np.asarray(samples.joint_gain_db, np.float64), predictions, notes)
+
+
+def scores_of_predictions(
+    fitted: Sequence[FittedModel], observed: np.ndarray, predictions: Sequence[np.ndarray], notes: list[str] | None = None,
+) -> list[Scores]:
+    """:func:`evaluate_models` from the observed joint gains [dB] and each model's predictions
+    (gathered from the parts of a dataset, say)."""
+    keep = np.ones(observed.size, bool)
     for pred in predictions:
         keep &= np.isfinite(pred)
     if not keep.all():
@@ -215,12 +223,11 @@ def evaluate_models(fitted: Sequence[FittedModel], samples: LinkSamples, notes: 
             raise InputError(f"no sample could be predicted by {', '.join(missing)} (an antenna at or below the two-ray "
                              "ground level?)", param="units")
         if notes is not None:
-            notes.append(f"{int((~keep).sum()):,} of {len(samples):,} samples are left out of the scores: {', '.join(missing)} "
+            notes.append(f"{int((~keep).sum()):,} of {observed.size:,} samples are left out of the scores: {', '.join(missing)} "
                          "predict(s) nothing there (an antenna at or below the two-ray ground level)")
     rows = []
-    observed = np.asarray(samples.joint_gain_db, np.float64)[keep]
     for f, pred in zip(fitted, predictions):
-        rows.append(score(f.label, observed, pred[keep], f.n_params, f.ltd_s, f.condition_number))
+        rows.append(score(f.label, observed[keep], pred[keep], f.n_params, f.ltd_s, f.condition_number))
     return rows
 
 

@@ -98,22 +98,88 @@ def units_and_nodes(chunks: Iterable[pd.DataFrame]) -> pd.DataFrame:
     return every.groupby(keys, sort=True, dropna=False)["n"].sum().reset_index()
 
 
-def _accumulate(
+@dataclass
+class Accumulated:
+    """The statistics of the learning rows of some chunks, and what they held.
+
+    Several accumulations (the parts of a partitioned dataset, computed anywhere) add up with
+    :meth:`merge`, in the order of the rows, to what one pass over all of them gives.
+
+    Attributes
+    ----------
+    stats : dict of str to NormalEquations
+        One accumulator per learning unit (or time block), or ``{"all": ...}``.
+    freq : Counter
+        Samples per carrier frequency [Hz].
+    non_unit : int
+        Samples with a non-unit quaternion.
+    learn_s : float
+        Time spent turning samples into statistics [s].
+    grids : dict of str to list of float, or None
+        Coverage grids by node (None before any sample).
+    t_first, t_last : float
+        Time of the first and last learning row [s] (nan without rows); with time blocks,
+        the rows of a later part must not start before an earlier part's last row.
+    time_blocks : bool
+        Whether the labels are time blocks of one unit.
+    source : str
+        Where the rows came from (in messages).
+    """
+
+    stats: dict[str, NormalEquations]
+    freq: Counter[float]
+    non_unit: int = 0
+    learn_s: float = 0.0
+    grids: dict[str, list[float]] | None = None
+    t_first: float = float("nan")
+    t_last: float = float("nan")
+    time_blocks: bool = False
+    source: str = "dataset"
+
+    @property
+    def n_samples(self) -> int:
+        return sum(a.n_samples for a in self.stats.values())
+
+    def merge(self, later: Accumulated) -> Accumulated:
+        """Add the accumulation of rows that follow these (in place; returns self)."""
+        if self.time_blocks and np.isfinite(self.t_last) and np.isfinite(later.t_first) and later.t_first < self.t_last:
+            raise InputError(f"{later.source}: field t goes backwards (from {self.t_last:.3f} s in {self.source}); cutting "
+                             "a single flight into time blocks for cross-validation needs rows sorted by time (sort the "
+                             "files, or label units)")
+        for label, acc in later.stats.items():
+            if label in self.stats:
+                self.stats[label].merge(acc)
+            else:
+                self.stats[label] = acc
+        self.freq.update(later.freq)
+        self.non_unit += later.non_unit
+        self.learn_s += later.learn_s
+        if later.grids is not None:
+            self.grids = later.grids if self.grids is None else {
+                k: np.minimum(np.asarray(v), np.asarray(later.grids[k])).tolist() for k, v in self.grids.items()}
+        if np.isfinite(later.t_first):
+            self.t_first = later.t_first if not np.isfinite(self.t_first) else self.t_first
+            self.t_last = later.t_last
+        self.source = self.source if self.source == later.source else f"{self.source}, ..."
+        return self
+
+
+def accumulate(
     chunks: Iterable[pd.DataFrame], spec: ModelSpec, nodes: Sequence[str], units: Sequence[str] | None,
     source: str, by_unit: bool, block_rows: int | None = None, path_loss: PathLoss | None = None,
-) -> tuple[dict[str, NormalEquations], float | None, int, float, dict[str, list[float]]]:
+    first_learn_row: int = 0,
+) -> Accumulated:
     """Statistics of the learning rows of every chunk: one accumulator per unit (``by_unit``)
-    or one for all; the median frequency, the non-unit quaternions, the time spent [s] and the
-    nodes' coverage grids (:func:`rplearn.models.fit.node_coverage_grids`)."""
+    or one for all, or (``block_rows``) per contiguous block of that many learning rows, the
+    first of these rows being the ``first_learn_row``-th learning row of the whole dataset.
+    An empty result is allowed (a part without learning rows); see :func:`checked`."""
     if not spec.decouples:
         raise InputError(f"{spec.label}: only pattern models (sh, bg, poly) learn from a stream", param="spec")
     basis = spec.basis()
     path_loss = path_loss or PathLoss()
-    stats: dict[str, NormalEquations] = {}
+    out = Accumulated({}, Counter(), time_blocks=bool(block_rows), source=source)
     wanted = None if not units else {str(u) for u in units}
-    freq: Counter[float] = Counter()
-    non_unit, learn_s, first_row, learn_row, last_t = 0, 0.0, 0, 0, -np.inf
-    grids: dict[str, list[float]] | None = None
+    first_row, learn_row, last_t = 0, int(first_learn_row), -np.inf
     for chunk in chunks:
         where = f"{source} (rows {first_row:,} to {first_row + len(chunk) - 1:,})"
         first_row += len(chunk)
@@ -121,8 +187,8 @@ def _accumulate(
             chunk = chunk[chunk["unit"].astype(str).isin(wanted).to_numpy()]
         if chunk.empty:
             continue
+        t = chunk["t"].to_numpy(np.float64)
         if block_rows:  # one unit: contiguous stretches of its rows, which must be in time order
-            t = chunk["t"].to_numpy(np.float64)
             if t.size and (np.any(np.diff(t) < 0) or t[0] < last_t):
                 raise InputError(f"{where}: field t goes backwards; cutting a single flight into time blocks "
                                  "for cross-validation needs rows sorted by time (sort the file, or label units)")
@@ -133,23 +199,31 @@ def _accumulate(
             labels = chunk["unit"].astype(str).to_numpy()
         else:
             labels = np.full(len(chunk), "all")
+        if t.size:
+            out.t_first = float(t[0]) if not np.isfinite(out.t_first) else out.t_first
+            out.t_last = float(t[-1])
         learn_row += len(chunk)
         for label in np.unique(labels):
             part = chunk[labels == label] if by_unit else chunk
             samples = link_samples(part, where, nodes=nodes)
             t0 = time.perf_counter()
             y, env = regression_inputs(samples, path_loss)
-            acc = stats.setdefault(str(label), NormalEquations(basis, len(nodes), environment=env is not None))
+            acc = out.stats.setdefault(str(label), NormalEquations(basis, len(nodes), environment=env is not None))
             acc.add(samples.directions, samples.tx_index, samples.rx_index, y, env)
-            learn_s += time.perf_counter() - t0
-            non_unit += samples.non_unit_quaternions
-            grids = node_coverage_grids(samples, grids)
-            frequency_counts(samples, freq)
+            out.learn_s += time.perf_counter() - t0
+            out.non_unit += samples.non_unit_quaternions
+            out.grids = node_coverage_grids(samples, out.grids)
+            frequency_counts(samples, out.freq)
             if not by_unit:
                 break
-    if not stats or sum(a.n_samples for a in stats.values()) == 0:
+    return out
+
+
+def checked(acc: Accumulated, source: str) -> Accumulated:
+    """``acc``, or an error when it holds no sample."""
+    if not acc.stats or acc.n_samples == 0:
         raise InputError(f"{source}: no samples selected", param="units")
-    return stats, weighted_median(freq), non_unit, learn_s, grids or {}
+    return acc
 
 
 def unit_statistics_streamed(
@@ -162,9 +236,9 @@ def unit_statistics_streamed(
     ``block_rows`` the learning rows are cut into contiguous blocks of that many rows instead
     (cross-validation of a single flight). ``path_loss``: the environment term (its
     log-distance column is accumulated; a two-ray term is subtracted)."""
-    stats, f, non_unit, _, grids = _accumulate(chunks, spec, nodes, units, source, by_unit=True, block_rows=block_rows,
-                                               path_loss=path_loss)
-    return stats, f, non_unit, grids
+    acc = checked(accumulate(chunks, spec, nodes, units, source, by_unit=True, block_rows=block_rows,
+                             path_loss=path_loss), source)
+    return acc.stats, weighted_median(acc.freq), acc.non_unit, acc.grids or {}
 
 
 def fit_patterns_streamed(
@@ -200,9 +274,20 @@ def fit_patterns_streamed(
     link_offsets : bool
         Learn one electronics offset per link logged in both directions.
     """
+    acc = checked(accumulate(chunks, spec, nodes, units, source, by_unit=False, path_loss=path_loss), source)
+    return fit_patterns_accumulated(acc, spec, nodes, gauge, path_loss, link_offsets)
+
+
+def fit_patterns_accumulated(
+    acc: Accumulated, spec: ModelSpec, nodes: Sequence[str], gauge: str | Mapping[str, Any] = "equal-mean",
+    path_loss: PathLoss | None = None, link_offsets: bool = True,
+) -> StreamedFit:
+    """:func:`fit_patterns_streamed` from statistics already accumulated (one label), e.g.
+    merged from the parts of a dataset computed on a cluster."""
     path_loss = path_loss or PathLoss()
-    stats, f, non_unit, learn_s, grids = _accumulate(chunks, spec, nodes, units, source, by_unit=False,
-                                                     path_loss=path_loss)
+    stats, f, non_unit, learn_s, grids = acc.stats, weighted_median(acc.freq), acc.non_unit, acc.learn_s, acc.grids or {}
+    if len(stats) != 1:
+        raise InputError(f"expected the statistics of all learning rows together, got {len(stats)} labels", param="spec")
     normal = next(iter(stats.values()))
     basis = normal.basis
     t0 = time.perf_counter()
@@ -230,4 +315,4 @@ def fit_patterns_streamed(
     return StreamedFit(patterns, sol.report, normal.n_samples, non_unit, learn_s)
 
 
-__all__ = ["StreamedFit", "frequency_counts", "fit_patterns_streamed", "unit_statistics_streamed", "units_and_nodes", "weighted_median"]
+__all__ = ["Accumulated", "StreamedFit", "accumulate", "checked", "fit_patterns_accumulated", "frequency_counts", "fit_patterns_streamed", "unit_statistics_streamed", "units_and_nodes", "weighted_median"]

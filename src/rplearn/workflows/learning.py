@@ -8,6 +8,8 @@ prints it. Output paths are checked before any work.
 from __future__ import annotations
 
 import os
+import time
+from contextlib import nullcontext
 from dataclasses import dataclass, field, replace
 from typing import Any, Callable, Mapping, Sequence
 
@@ -22,16 +24,18 @@ from rplearn.data.units import UnitChoice, dataset_units, evaluation_units, lear
 from rplearn.errors import InputError
 from rplearn.data.tables import QUATERNION_NORM_TOLERANCE
 from rplearn.io.files import (
-    check_output_path, check_table_path, iter_table, provenance, read_dataset, table_rows, write_json, write_table,
+    check_output_path, check_table_path, provenance, read_dataset, table_rows, write_json, write_table,
 )
-from rplearn.models.fit import FittedModel, evaluate_models, fit_model, scores_markdown
+from rplearn.io.partitions import dataset_parts, is_partitioned
+from rplearn.workflows.fleet import accumulate_parts, dask_client, dataset_index, parse_dask, predict_parts, selected_rows
+from rplearn.models.fit import FittedModel, evaluate_models, fit_model, scores_markdown, scores_of_predictions
 from rplearn.models.base import require_patterns
 from rplearn.models.load import load_model
 from rplearn.models.spec import check_model_size
 from rplearn.models.robust import LOSSES, fit_huber
 from rplearn.models.auto import auto_orders, fit_auto, fit_from_statistics
 from rplearn.core.selection import Selection
-from rplearn.models.streamed import fit_patterns_streamed, unit_statistics_streamed, units_and_nodes
+from rplearn.models.streamed import checked, fit_patterns_accumulated, weighted_median
 from rplearn.models.predict import UNCOVERED_DEG, DatasetPrediction, distinct_labels, predict_dataset, uncovered_rows
 from rplearn.models.spec import ModelSpec
 from rplearn.models.terms import terms_text
@@ -64,6 +68,7 @@ class FitOutcome:
     output: str | None = None
     non_unit_quaternions: int = 0
     selection: Selection | None = None
+    wall_s: float | None = None
     robust_notes: list[str] = field(default_factory=list)
 
     def summary(self) -> str:
@@ -95,6 +100,9 @@ class FitOutcome:
                          f"({training.get('prior_std_source', '')})")
         text += "".join(f"\n  {line}" for line in terms_text(training))
         text += "".join(f"\n  {line}" for line in self.robust_notes)
+        if self.wall_s is not None and self.wall_s > 0:
+            text += (f"\n  read, accumulated and solved in {self.wall_s:.1f} s "
+                     f"({self.n_samples / self.wall_s:,.0f} samples/s)")
         if self.non_unit_quaternions:
             text += (f"\n  samples with a non-unit quaternion (|norm - 1| > {QUATERNION_NORM_TOLERANCE:g}, "
                      f"normalised): {self.non_unit_quaternions:,}")
@@ -117,13 +125,17 @@ def fit_dataset(
     loss: str = "ls",
     path_loss: PathLoss | None = None,
     link_offsets: bool = True,
+    dask: str | None = None,
+    progress: Callable[[int, int], None] | None = None,
 ) -> FitOutcome:
     """Learn ``spec`` from a matched dataset file (``rplearn fit``).
 
     Parameters
     ----------
     dataset : str
-        Matched dataset (CSV or Parquet).
+        Matched dataset (CSV or Parquet), or a dataset in many files: a directory, a glob, a
+        comma-separated list or an fsspec URL (:mod:`rplearn.io.partitions`); pattern models
+        learn from such a dataset part by part.
     spec : ModelSpec
     units : sequence of str, optional
         Learning units; default every unit not labelled ``test...`` (:func:`learning_units`).
@@ -151,6 +163,12 @@ def fit_dataset(
     link_offsets : bool
         Pattern models: learn one electronics offset per link logged in both directions
         (non-reciprocal radios); off, both directions are taken as reciprocal.
+    dask : str, optional
+        Run on Dask (pattern models, least squares): ``"local"``, ``"local:N"`` (a local
+        cluster of N workers) or a scheduler address ``"tcp://host:8786"``
+        (:mod:`rplearn.workflows.fleet`): statistics per part, tree-reduced, solved here.
+    progress : callable, optional
+        Called with ``(parts done, parts)`` while a dataset is read part by part.
     """
     if output:
         check_output_path(output, [dataset, *(prior or {}).values()])
@@ -176,12 +194,20 @@ def fit_dataset(
         raise InputError(f"path loss {path_loss.kind}: the baselines ({spec.label}) learn no environment term; fit "
                          "them in free space", param="path_loss")
     terms = {"path_loss": path_loss, "link_offsets": link_offsets}
+    if dask is not None:
+        parse_dask(dask)
+        if not spec.decouples or loss != "ls":
+            raise InputError(f"--dask: pattern models (sh, bg, poly) with least squares learn on a cluster, not "
+                             f"{spec.label}{' with loss ' + loss if loss != 'ls' else ''}", param="dask")
+        with dask_client(dask) as client:
+            return _fit_streamed(dataset, spec, units, gauge, output, auto, priors, prior_std_db, client=client,
+                                 progress=progress, **terms)
     if spec.decouples and _is_big(dataset):
         if loss == "huber":
             raise InputError(f"{dataset}: loss huber keeps the samples in memory; this file is streamed "
                              f"(over {STREAM_FIT_ROWS:,} rows or {STREAM_FIT_BYTES // 2**20} MiB): write the "
                              "units to learn from into a smaller file", param="loss")
-        return _fit_streamed(dataset, spec, units, gauge, output, auto, priors, prior_std_db, **terms)
+        return _fit_streamed(dataset, spec, units, gauge, output, auto, priors, prior_std_db, progress=progress, **terms)
     df = read_dataset(dataset)
     choice = learning_units(df, units, dataset)
     if auto:
@@ -231,8 +257,7 @@ def downweighted_notes(part: Any, robust: Any, stretches: int = 3) -> list[str]:
 #: Parquet file, or this many bytes of a CSV file, on: memory then holds one chunk.
 STREAM_FIT_ROWS = 2_000_000
 STREAM_FIT_BYTES = 256 * 2**20
-#: Rows read at a time by a streamed fit.
-STREAM_FIT_CHUNK_ROWS = 500_000
+#: Rows read at a time by a streamed fit: :data:`rplearn.workflows.fleet.PART_CHUNK_ROWS`.
 
 
 #: A single learning unit is cross-validated over this many contiguous stretches of time (one
@@ -268,7 +293,10 @@ def _fit_auto(
 
 
 def _is_big(dataset: str) -> bool:
-    """Whether a dataset file is big enough to be streamed (see :data:`STREAM_FIT_ROWS`)."""
+    """Whether a dataset is in many files or a file big enough to be streamed (see
+    :data:`STREAM_FIT_ROWS`)."""
+    if is_partitioned(dataset):
+        return True
     if not os.path.isfile(dataset):
         return False
     rows = table_rows(dataset)
@@ -278,11 +306,15 @@ def _is_big(dataset: str) -> bool:
 def _fit_streamed(
     dataset: str, spec: ModelSpec, units: Sequence[str] | None, gauge: str | Mapping[str, Any], output: str | None,
     auto: bool = False, priors: Mapping[str, Any] | None = None, prior_std_db: float | None = None,
-    path_loss: PathLoss | None = None, link_offsets: bool = True,
+    path_loss: PathLoss | None = None, link_offsets: bool = True, client: Any = None,
+    progress: Callable[[int, int], None] | None = None,
 ) -> FitOutcome:
-    """:func:`fit_dataset` for a big file: units, nodes and the model size from the id columns,
-    then the patterns from the whole data a chunk at a time."""
-    index = units_and_nodes(iter_table(dataset, STREAM_FIT_CHUNK_ROWS, columns=("tx", "rx", "unit")))
+    """:func:`fit_dataset` for a big file or a dataset in many files (:mod:`rplearn.io.partitions`):
+    units, nodes and the model size from the id columns, then the patterns from the statistics
+    of every part, a chunk at a time, here or on a Dask cluster (``client``;
+    :mod:`rplearn.workflows.fleet`)."""
+    parts = dataset_parts(dataset)
+    index, per_part = dataset_index(parts, client)
     choice = learning_units(index, units, dataset)
     part = select_units(index, choice.units, dataset)
     nodes = sorted(set(part["tx"]) | set(part["rx"]))
@@ -293,22 +325,23 @@ def _fit_streamed(
         orders = auto_orders(spec.kind, n, len(nodes), spec.order if spec.kind != "sh" else None)
         spec = replace(spec, order=orders[-1])
     check_model_size(spec, n, len(nodes))
+    t0 = time.perf_counter()
     if auto:
         n_units = len(choice.units) if choice.units else max(len(dataset_units(index)), 1)
-        stats, freq, non_unit, grids = unit_statistics_streamed(
-            iter_table(dataset, STREAM_FIT_CHUNK_ROWS), spec, nodes, choice.units, dataset,
-            block_rows=-(-n // TIME_BLOCKS) if n_units == 1 else None, path_loss=path_loss)
+        blocks = -(-n // TIME_BLOCKS) if n_units == 1 else None
+        acc = checked(accumulate_parts(parts, spec, nodes, choice.units, True, blocks, path_loss,
+                                       [selected_rows(p, choice.units) for p in per_part], client, progress), dataset)
         prov = provenance(dataset=dataset, model=f"{spec.kind}-auto", ridge=spec.ridge, units=choice.units)
-        fitted, selection = fit_from_statistics(stats, spec.kind, orders, nodes, spec.ridge, gauge,
-                                                frequency_hz=freq, provenance=prov, prior=priors or None,
-                                                prior_spread_db=prior_std_db, path_loss=path_loss,
-                                                link_offsets=link_offsets)
-        fitted.model.training["coverage_deg"] = grids
+        fitted, selection = fit_from_statistics(acc.stats, spec.kind, orders, nodes, spec.ridge, gauge,
+                                                frequency_hz=weighted_median(acc.freq), provenance=prov,
+                                                prior=priors or None, prior_spread_db=prior_std_db,
+                                                path_loss=path_loss, link_offsets=link_offsets)
+        fitted.model.training["coverage_deg"] = acc.grids or {}
         if output:
             fitted.model.save(output)
-        return FitOutcome(fitted, choice, sum(s.n_samples for s in stats.values()), output, non_unit, selection)
-    fit = fit_patterns_streamed(iter_table(dataset, STREAM_FIT_CHUNK_ROWS), spec, nodes, choice.units, gauge, dataset,
-                                path_loss=path_loss, link_offsets=link_offsets)
+        return FitOutcome(fitted, choice, acc.n_samples, output, acc.non_unit, selection, wall_s=time.perf_counter() - t0)
+    acc = checked(accumulate_parts(parts, spec, nodes, choice.units, False, None, path_loss, None, client, progress), dataset)
+    fit = fit_patterns_accumulated(acc, spec, nodes, gauge, path_loss, link_offsets)
     model = fit.patterns
     model.provenance = {**provenance(dataset=dataset, model=spec.label, ridge=spec.ridge, units=choice.units),
                         "model": spec.label}
@@ -316,7 +349,7 @@ def _fit_streamed(
     fitted = FittedModel(spec, model, fit.learn_s)
     if output:
         model.save(output)
-    return FitOutcome(fitted, choice, fit.n_samples, output, fit.non_unit_quaternions)
+    return FitOutcome(fitted, choice, fit.n_samples, output, fit.non_unit_quaternions, wall_s=time.perf_counter() - t0)
 
 
 @dataclass
@@ -348,11 +381,15 @@ def evaluate_model_files(
     units: Sequence[str] | None = None,
     json_out: str | None = None,
     markdown_out: str | None = None,
+    dask: str | None = None,
+    progress: Callable[[int, int], None] | None = None,
 ) -> EvaluationOutcome:
     """Score model files on a dataset file (``rplearn evaluate``): Table I.
 
     Without ``units``, the models are scored on the units none of them learned from
-    (:func:`rplearn.data.units.evaluation_units`).
+    (:func:`rplearn.data.units.evaluation_units`). A dataset in many files
+    (:mod:`rplearn.io.partitions`) is predicted part by part, here or on Dask (``dask``, as
+    :func:`fit_dataset`); the errors are gathered, so the scores are those of one process.
     """
     if not model_paths:
         raise InputError("evaluate: give at least one model file and a dataset", param="model_paths")
@@ -362,17 +399,32 @@ def evaluate_model_files(
     if json_out and markdown_out:
         check_output_path(markdown_out, [json_out])
     models = [load_model(p) for p in model_paths]
-    df = read_dataset(dataset)
-    choice = evaluation_units(df, units, [m.provenance for m in models], dataset)
-    samples = samples_of(df, choice.units, dataset)
-    rows = evaluate_models([FittedModel.from_model(m) for m in models], samples, choice.warnings)
+    fitted = [FittedModel.from_model(m) for m in models]
+    if dask is not None or is_partitioned(dataset):
+        if dask is not None:
+            parse_dask(dask)
+        with (dask_client(dask) if dask is not None else nullcontext()) as client:
+            parts = dataset_parts(dataset)
+            index, _ = dataset_index(parts, client)
+            choice = evaluation_units(index, units, [m.provenance for m in models], dataset)
+            if selected_rows(index, choice.units) == 0:
+                raise InputError(f"{dataset}: no samples selected", param="units")
+            observed, predictions, uncovered = predict_parts(parts, models, choice.units, client, progress)
+        rows = scores_of_predictions(fitted, observed, predictions, choice.warnings)
+        n_eval = observed.size
+    else:
+        df = read_dataset(dataset)
+        choice = evaluation_units(df, units, [m.provenance for m in models], dataset)
+        samples = samples_of(df, choice.units, dataset)
+        rows = evaluate_models(fitted, samples, choice.warnings)
+        uncovered = [uncovered_rows(m, samples) for m in models]
+        n_eval = len(samples)
     labels = distinct_labels([r.model for r in rows], [os.path.basename(p) for p in model_paths])
     rows = [replace(r, model=label) for r, label in zip(rows, labels)]
-    for model, label in zip(models, labels):
-        n_out = uncovered_rows(model, samples)
+    for n_out, label in zip(uncovered, labels):
         if n_out:
             choice.warnings.append(
-                f"{label}: {n_out:,} of {len(samples):,} evaluation samples ({n_out / len(samples):.0%}) look more than "
+                f"{label}: {n_out:,} of {n_eval:,} evaluation samples ({n_out / n_eval:.0%}) look more than "
                 f"{UNCOVERED_DEG:g} deg from any direction the model's antennas were learned from; their errors "
                 "measure extrapolation (or the prior), not the fit: fly those directions to learn them")
     outcome = EvaluationOutcome(rows, scores_markdown(rows), choice, provenance(dataset=dataset, models=list(model_paths)))

@@ -1,0 +1,184 @@
+"""Datasets in many files: a directory, a glob, a comma-separated list, local or any fsspec URL.
+
+A fleet's flights are logged as partitioned Parquet (one file per flight or per day, often in
+Hive-style folders such as ``flight=0007/part-0.parquet``) on a disk or in object storage. Such
+a dataset is named by one string, the *dataset spec*:
+
+- a file (``flights.parquet``): one part, the usual case;
+- a directory: every ``.parquet``, ``.pq``, ``.csv`` and ``.csv.gz`` file below it, sorted by
+  path (hidden files and folders, and those starting with ``_``, are skipped, as Spark and Dask
+  write metadata there);
+- a glob (``logs/2026-*/*.parquet``), or files separated by commas;
+- any of these as a URL (``s3://bucket/fleet/``, ``gs://...``, ``file:///data/fleet``), read
+  with fsspec (installed with ``rplearn[dask]``; each store needs its own fsspec plugin, e.g.
+  ``s3fs``).
+
+Hive ``key=value`` folder names below the root become columns of the rows read from the files
+beneath them, unless the file has a column of that name already.
+"""
+
+from __future__ import annotations
+
+import glob
+import os
+from dataclasses import dataclass, field
+from typing import Any, Mapping
+
+import pandas as pd
+
+from rplearn.errors import InputError
+
+#: File endings of the tables a partitioned dataset is made of.
+TABLE_SUFFIXES: tuple[str, ...] = (".parquet", ".pq", ".csv", ".csv.gz")
+
+
+@dataclass(frozen=True)
+class Part:
+    """One file of a dataset.
+
+    Attributes
+    ----------
+    path : str
+        Local path or URL.
+    columns : mapping of str to str
+        Hive ``key=value`` folder names between the dataset's root and the file.
+    """
+
+    path: str
+    columns: Mapping[str, str] = field(default_factory=dict)
+
+
+def is_url(spec: str) -> bool:
+    """Whether a path is a URL (``scheme://...``), read with fsspec."""
+    head, sep, _ = str(spec).partition("://")
+    return bool(sep) and head.replace("+", "").replace("-", "").isalnum() and len(head) > 1
+
+
+def is_partitioned(spec: str) -> bool:
+    """Whether a dataset spec names more than a single local file: a directory, a glob, a
+    comma-separated list or a URL (see the module docstring)."""
+    spec = str(spec)
+    if is_url(spec) or "," in spec and not os.path.exists(spec):
+        return True
+    if os.path.isdir(spec):
+        return True
+    return glob.has_magic(spec) and not os.path.exists(spec)
+
+
+def _is_table(path: str) -> bool:
+    name = os.path.basename(path)
+    return path.lower().endswith(TABLE_SUFFIXES) and not name.startswith((".", "_"))
+
+
+def _hidden(rel: str) -> bool:
+    return any(p.startswith((".", "_")) for p in rel.replace("\\", "/").split("/")[:-1])
+
+
+def hive_columns(root: str, path: str) -> dict[str, str]:
+    """``key=value`` folder names between ``root`` and ``path`` (Hive partitioning)."""
+    rel = os.path.relpath(path, root) if not is_url(path) else path[len(root):].lstrip("/")
+    out: dict[str, str] = {}
+    for piece in rel.replace("\\", "/").split("/")[:-1]:
+        key, sep, value = piece.partition("=")
+        if sep and key:
+            out[key] = value
+    return out
+
+
+def _filesystem(url: str) -> tuple[Any, str]:
+    try:
+        import fsspec
+    except ImportError:
+        raise InputError(f"{url}: reading URLs needs fsspec: pip install 'rplearn[dask]' (and the store's "
+                         "plugin, e.g. s3fs for s3://)", param="dataset") from None
+    try:
+        return fsspec.core.url_to_fs(url)
+    except (ImportError, ValueError) as exc:
+        raise InputError(f"{url}: {type(exc).__name__}: {exc}", param="dataset") from None
+
+
+def _url_parts(spec: str) -> list[Part]:
+    fs, path = _filesystem(spec)
+    try:
+        if glob.has_magic(path):
+            found, root = sorted(fs.glob(path)), path.split("*")[0].rsplit("/", 1)[0]
+        elif fs.isdir(path):
+            found, root = sorted(fs.find(path)), path.rstrip("/")
+        elif fs.exists(path):
+            found, root = [path], path.rsplit("/", 1)[0]
+        else:
+            raise InputError(f"{spec}: no such file", param="dataset")
+    except InputError:
+        raise
+    except Exception as exc:  # each store raises its own errors
+        raise InputError(f"{spec}: cannot list ({type(exc).__name__}: {exc})", param="dataset") from None
+    parts = []
+    for p in found:
+        rel = p[len(root):].lstrip("/")
+        if _is_table(p) and not _hidden(rel):
+            parts.append(Part(fs.unstrip_protocol(p), hive_columns(root, p)))
+    return parts
+
+
+def _local_parts(spec: str) -> list[Part]:
+    if os.path.isdir(spec):
+        parts = []
+        for folder, dirs, files in os.walk(spec):
+            dirs[:] = sorted(d for d in dirs if not d.startswith((".", "_")))
+            parts += [Part(os.path.join(folder, f), hive_columns(spec, os.path.join(folder, f)))
+                      for f in sorted(files) if _is_table(f)]
+        return sorted(parts, key=lambda p: p.path)
+    if os.path.isfile(spec):
+        return [Part(spec)]
+    if glob.has_magic(spec):
+        root = os.path.dirname(spec.split("*")[0].split("?")[0].split("[")[0]) or "."
+        found = [p for p in sorted(glob.glob(spec, recursive=True)) if os.path.isfile(p)]
+        if not found:  # a pattern that matches nothing, or a file name with brackets that does not exist
+            raise InputError(f"{spec}: no such file", param="dataset")
+        return [Part(p, hive_columns(root, p)) for p in found if _is_table(p)]
+    raise InputError(f"{spec}: no such file", param="dataset")
+
+
+def dataset_parts(spec: str) -> list[Part]:
+    """The files of a dataset spec (see the module docstring), sorted; an error when none.
+
+    Raises
+    ------
+    InputError
+        When a path does not exist, a URL cannot be listed, or no table file is found.
+    """
+    spec = str(spec)
+    pieces = [s.strip() for s in spec.split(",")] if "," in spec and not os.path.exists(spec) else [spec]
+    parts: list[Part] = []
+    for piece in pieces:
+        if not piece:
+            continue
+        parts += _url_parts(piece) if is_url(piece) else _local_parts(piece)
+    if not parts:
+        raise InputError(f"{spec}: no table files ({', '.join(TABLE_SUFFIXES)}) found", param="dataset")
+    seen: set[str] = set()
+    for p in parts:
+        if p.path in seen:
+            raise InputError(f"{spec}: file {p.path} is named twice", param="dataset")
+        seen.add(p.path)
+    return parts
+
+
+def open_source(path: str) -> Any:
+    """A local path as it is, a URL as an open binary file (fsspec)."""
+    if not is_url(path):
+        return path
+    fs, inner = _filesystem(path)
+    return fs.open(inner, "rb")
+
+
+def with_hive_columns(chunk: pd.DataFrame, part: Part) -> pd.DataFrame:
+    """``chunk`` with the part's Hive columns added where it lacks them (as strings)."""
+    extra = {k: v for k, v in part.columns.items() if k not in chunk.columns}
+    if not extra:
+        return chunk
+    return chunk.assign(**{k: pd.Series([v] * len(chunk), index=chunk.index, dtype=object) for k, v in extra.items()})
+
+
+__all__ = ["Part", "TABLE_SUFFIXES", "dataset_parts", "hive_columns", "is_partitioned", "is_url", "open_source",
+           "with_hive_columns"]

@@ -1,0 +1,251 @@
+"""Datasets in many files, in one process or on a Dask cluster (``--dask``).
+
+A fit needs only sufficient statistics (:mod:`rplearn.models.streamed`), which add up: each
+part of a partitioned dataset (:mod:`rplearn.io.partitions`) is turned into its statistics
+where it is read, the statistics are added in a binary tree in the order of the parts, and the
+small result is solved on the client. In one process the same per-part work runs one part
+after the other, so both give the same model to rounding (about 1e-12 dB).
+
+``--dask local`` (``local:N`` for N workers; default 2) starts a
+:class:`distributed.LocalCluster` of single-threaded worker processes for the command;
+``--dask tcp://host:8786`` joins a running scheduler (its workers must have rplearn installed
+and see the files: object storage URLs, or a shared disk).
+"""
+
+from __future__ import annotations
+
+from contextlib import contextmanager
+from typing import Any, Callable, Iterator, Sequence
+
+import numpy as np
+import pandas as pd
+
+from rplearn.core.environment import PathLoss
+from rplearn.data.tables import link_samples
+from rplearn.errors import InputError
+from rplearn.io.files import iter_parts
+from rplearn.io.partitions import Part
+from rplearn.models.base import Model
+from rplearn.models.predict import uncovered_rows
+from rplearn.models.spec import ModelSpec
+from rplearn.models.streamed import Accumulated, accumulate, units_and_nodes
+
+#: Rows read at a time from one part.
+PART_CHUNK_ROWS = 500_000
+
+#: How to install what ``--dask`` needs.
+DASK_INSTALL = "pip install 'rplearn[dask]'"
+
+Progress = Callable[[int, int], None]
+
+
+def parse_dask(address: str) -> tuple[str, int | str]:
+    """``("local", workers)`` or ``("remote", address)`` from a ``--dask`` value."""
+    text = str(address).strip()
+    if text == "local" or text.startswith("local:"):
+        count = text.partition(":")[2] or "2"
+        if not count.isdigit() or not 1 <= int(count) <= 256:
+            raise InputError(f"--dask: expected local or local:N with N workers (1 to 256), got {address!r}", param="dask")
+        return "local", int(count)
+    if "://" in text and text.partition("://")[2]:
+        return "remote", text
+    raise InputError(f"--dask: expected local, local:N or a scheduler address such as tcp://host:8786, got {address!r}",
+                     param="dask")
+
+
+def _distributed() -> Any:
+    try:
+        import distributed
+    except ImportError:
+        raise InputError(f"--dask needs dask[distributed], which is not installed: {DASK_INSTALL}", param="dask") from None
+    return distributed
+
+
+@contextmanager
+def dask_client(address: str) -> Iterator[Any]:
+    """A :class:`distributed.Client` for a ``--dask`` value, closed (and its local cluster
+    stopped) on exit."""
+    kind, where = parse_dask(address)
+    distributed = _distributed()
+    import logging
+
+    import dask
+
+    for name in ("distributed", "dask"):  # the cluster's chatter would bury the command's output
+        logging.getLogger(name).setLevel(logging.WARNING)
+
+    # Single-threaded BLAS in each worker: the workers are the parallelism.
+    env = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+    with dask.config.set({"distributed.nanny.pre-spawn-environ": env}):
+        if kind == "local":
+            cluster = distributed.LocalCluster(n_workers=int(where), threads_per_worker=1, processes=True,
+                                               dashboard_address=":0", silence_logs=40)
+            try:
+                with distributed.Client(cluster) as client:
+                    yield client
+            finally:
+                cluster.close()
+        else:
+            try:
+                client = distributed.Client(str(where), timeout="20s")
+            except (OSError, TimeoutError) as exc:
+                raise InputError(f"--dask {where}: cannot reach the scheduler ({type(exc).__name__}: {exc})",
+                                 param="dask") from None
+            try:
+                yield client
+            finally:
+                client.close()
+
+
+def _tree_reduce(client: Any, futures: list[Any], merge: Callable[[Any, Any], Any]) -> Any:
+    """Merge futures pairwise, level by level, keeping their order (left before right)."""
+    while len(futures) > 1:
+        pairs = [client.submit(merge, futures[i], futures[i + 1], pure=False) for i in range(0, len(futures) - 1, 2)]
+        futures = pairs + ([futures[-1]] if len(futures) % 2 else [])
+    return futures[0]
+
+
+def _merge_accumulated(a: Accumulated, b: Accumulated) -> Accumulated:
+    return a.merge(b)
+
+
+def _watch(client: Any, futures: list[Any], progress: Progress | None) -> None:
+    if progress is None:
+        return
+    from distributed import as_completed
+
+    for done, _ in enumerate(as_completed(futures), start=1):
+        progress(done, len(futures))
+
+
+def map_parts(function: Callable[..., Any], parts: Sequence[Part], client: Any = None, progress: Progress | None = None,
+              **kwargs: Any) -> list[Any]:
+    """``function(part, **kwargs)`` of every part, in order: here, or on the cluster."""
+    if client is None:
+        out = []
+        for k, part in enumerate(parts):
+            out.append(function(part, **kwargs))
+            if progress is not None:
+                progress(k + 1, len(parts))
+        return out
+    futures = client.map(function, list(parts), pure=False, **kwargs)
+    _watch(client, futures, progress)
+    return client.gather(futures)
+
+
+def part_index(part: Part) -> pd.DataFrame:
+    """Rows per ``(unit, tx, rx)`` of one part (:func:`rplearn.models.streamed.units_and_nodes`)."""
+    return units_and_nodes(iter_parts([part], PART_CHUNK_ROWS, columns=("tx", "rx", "unit")))
+
+
+def dataset_index(parts: Sequence[Part], client: Any = None) -> tuple[pd.DataFrame, list[pd.DataFrame]]:
+    """The index of the whole dataset (rows per unit and link direction) and of each part."""
+    each = map_parts(part_index, parts, client)
+    every = pd.concat(each, ignore_index=True)
+    keys = [c for c in every.columns if c != "n"]
+    whole = every.groupby(keys, sort=True, dropna=False)["n"].sum().reset_index() if len(every) else every
+    return whole, each
+
+
+def _part_statistics(part: Part, first_learn_row: int, **kwargs: Any) -> Accumulated:
+    return accumulate(iter_parts([part], PART_CHUNK_ROWS), source=part.path, first_learn_row=first_learn_row, **kwargs)
+
+
+def accumulate_parts(
+    parts: Sequence[Part], spec: ModelSpec, nodes: Sequence[str], units: Sequence[str] | None, by_unit: bool,
+    block_rows: int | None = None, path_loss: PathLoss | None = None, learn_rows: Sequence[int] | None = None,
+    client: Any = None, progress: Progress | None = None,
+) -> Accumulated:
+    """The statistics of every part, added in order (see the module docstring).
+
+    ``learn_rows`` (the learning rows of each part) places the time blocks of a single flight
+    cut across parts (``block_rows``)."""
+    starts = np.concatenate([[0], np.cumsum(learn_rows if learn_rows is not None else np.zeros(len(parts)))])[:-1]
+    kwargs = dict(spec=spec, nodes=list(nodes), units=None if units is None else list(units), by_unit=by_unit,
+                  block_rows=block_rows, path_loss=path_loss)
+    if client is None:
+        total: Accumulated | None = None
+        for k, part in enumerate(parts):
+            acc = _part_statistics(part, int(starts[k]), **kwargs)
+            total = acc if total is None else total.merge(acc)
+            if progress is not None:
+                progress(k + 1, len(parts))
+        assert total is not None
+        return total
+    futures = client.map(_part_statistics, list(parts), [int(s) for s in starts], pure=False, **kwargs)
+    root = _tree_reduce(client, list(futures), _merge_accumulated)
+    _watch(client, futures, progress)
+    return root.result()
+
+
+def _part_predictions(part: Part, models: Sequence[Model], units: Sequence[str] | None
+                      ) -> tuple[np.ndarray, list[np.ndarray], list[int | None]]:
+    observed: list[np.ndarray] = []
+    predicted: list[list[np.ndarray]] = [[] for _ in models]
+    uncovered: list[int | None] = [None] * len(models)
+    for chunk in iter_parts([part], PART_CHUNK_ROWS):
+        if units:
+            chunk = chunk[chunk["unit"].astype(str).isin(set(units)).to_numpy()] if "unit" in chunk.columns else chunk.iloc[:0]
+        if chunk.empty:
+            continue
+        samples = link_samples(chunk, part.path)
+        observed.append(np.asarray(samples.joint_gain_db, np.float64))
+        for k, model in enumerate(models):
+            predicted[k].append(np.asarray(model.predict_gain(samples), np.float64))
+            n = uncovered_rows(model, samples)
+            if n is not None:
+                uncovered[k] = (uncovered[k] or 0) + n
+    cat = (lambda xs: np.concatenate(xs) if xs else np.zeros(0))
+    return cat(observed), [cat(p) for p in predicted], uncovered
+
+
+def predict_parts(
+    parts: Sequence[Part], models: Sequence[Model], units: Sequence[str] | None, client: Any = None,
+    progress: Progress | None = None,
+) -> tuple[np.ndarray, list[np.ndarray], list[int | None]]:
+    """Observed joint gains [dB] of the chosen units of every part, each model's predictions
+    of them, and per model the samples outside its coverage (None without a coverage grid)."""
+    if client is not None:
+        [models] = client.scatter([list(models)], broadcast=True, hash=False)
+    results = map_parts(_part_predictions, parts, client, progress, models=models, units=units)
+    n_models = len(results[0][1]) if results else 0
+    observed = np.concatenate([r[0] for r in results])
+    predictions = [np.concatenate([r[1][k] for r in results]) for k in range(n_models)]
+    uncovered: list[int | None] = []
+    for k in range(n_models):
+        counts = [r[2][k] for r in results if r[2][k] is not None]
+        uncovered.append(int(sum(counts)) if counts else None)
+    return observed, predictions, uncovered
+
+
+def selected_rows(index: pd.DataFrame, units: Sequence[str] | None) -> int:
+    """Rows of the chosen units in an index (:func:`dataset_index`)."""
+    if not len(index):
+        return 0
+    if not units:
+        return int(index["n"].sum())
+    if "unit" not in index.columns:
+        return 0
+    return int(index.loc[index["unit"].astype(str).isin([str(u) for u in units]), "n"].sum())
+
+
+def worker_peak_rss_bytes(client: Any) -> dict[str, int]:
+    """Peak resident memory of each worker process [bytes] (Linux; ``ru_maxrss``)."""
+    def peak() -> int:
+        import resource
+
+        return int(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss) * 1024
+
+    return {str(k): int(v) for k, v in client.run(peak).items()}
+
+
+def cluster_summary(client: Any) -> str:
+    """``N workers, T threads`` of a client's cluster."""
+    info = client.scheduler_info()
+    workers = info.get("workers", {})
+    threads = sum(int(w.get("nthreads", 0)) for w in workers.values())
+    return f"{len(workers)} worker(s), {threads} thread(s) at {info.get('address', '?')}"
+
+
+__all__ = ["DASK_INSTALL", "PART_CHUNK_ROWS", "accumulate_parts", "cluster_summary", "dask_client", "dataset_index",
+           "map_parts", "parse_dask", "part_index", "predict_parts", "selected_rows", "worker_peak_rss_bytes"]

@@ -1,0 +1,183 @@
+"""Fleets of flights: fit and evaluate a partitioned dataset in one process and on Dask
+(issue 13, item 3)."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from rplearn.errors import InputError
+from rplearn.io.files import write_table
+from rplearn.models.load import load_model
+from rplearn.models.spec import ModelSpec
+from rplearn.sim.fleet import drone_ids, fleet_pairs, simulate_fleet
+from rplearn.workflows.fleet import dask_client, parse_dask
+from rplearn.workflows.learning import evaluate_model_files, fit_dataset
+
+RPLEARN = [sys.executable, "-m", "rplearn.cli"]
+FLIGHTS = 8
+
+
+def need_dask():
+    """Skip without dask[distributed], except under CI=true, where it must be installed."""
+    if importlib.util.find_spec("distributed") is None:
+        if os.environ.get("CI") == "true":
+            pytest.fail("CI=true but dask[distributed] is not installed (.ci/run installs rplearn[dask])")
+        pytest.skip("dask[distributed] not installed (pip install 'rplearn[dask]')")
+
+
+@pytest.fixture(scope="module")
+def fleet(tmp_path_factory):
+    root = tmp_path_factory.mktemp("fleet") / "flights"
+    result = simulate_fleet(str(root), flights=FLIGHTS, drones=4, seed=5, preset="smoke")
+    return root, result
+
+
+@pytest.fixture(scope="module")
+def client():
+    need_dask()
+    with dask_client("local:2") as c:
+        yield c
+
+
+def coef(model):
+    return np.concatenate([np.ravel(model.coef), np.ravel(model.shared_coef)])
+
+
+def test_the_fleet_preset_writes_one_file_per_flight_and_links_every_drone(fleet):
+    root, result = fleet
+    assert len(result.files) == FLIGHTS and all(os.path.isfile(f) for f in result.files)
+    assert result.pairs[:4] == fleet_pairs(4)[:4]
+    df = pd.concat([pd.read_parquet(f) for f in result.files])
+    assert len(df) == result.samples
+    assert set(df["tx"]) == set(drone_ids(4))
+    assert df["unit"].str.endswith("@f0007").sum() > 0 and df["unit"].str.startswith("test").sum() > 0
+    meta = json.loads((root / "_fleet.json").read_text())
+    assert meta["flights"] == FLIGHTS and meta["samples"] == result.samples
+    with pytest.raises(InputError, match="already holds flight"):
+        simulate_fleet(str(root), flights=1, preset="smoke")
+    with pytest.raises(InputError, match="preset"):
+        simulate_fleet(str(root.parent / "other"), flights=1, preset="tworay")
+
+
+def test_a_folder_fit_equals_the_fit_of_the_same_rows_in_one_file(fleet, tmp_path):
+    root, result = fleet
+    whole = pd.concat([pd.read_parquet(f) for f in result.files], ignore_index=True)
+    write_table(whole, str(tmp_path / "all.parquet"))
+    spec = ModelSpec.parse("sh", order=6)
+    parts = fit_dataset(str(root), spec, output=str(tmp_path / "parts.json"))
+    one = fit_dataset(str(tmp_path / "all.parquet"), spec, output=str(tmp_path / "one.json"))
+    assert parts.n_samples == one.n_samples
+    assert np.max(np.abs(coef(parts.fitted.model) - coef(one.fitted.model))) < 1e-9
+    assert parts.wall_s is not None and "samples/s" in parts.summary()
+
+
+def test_dask_fit_and_automatic_choice_equal_the_single_process(fleet, client, tmp_path):
+    from rplearn.workflows.learning import _fit_streamed
+
+    root, _ = fleet
+    spec = ModelSpec.parse("sh", order=6)
+    here = _fit_streamed(str(root), spec, None, "equal-mean", None)
+    there = _fit_streamed(str(root), spec, None, "equal-mean", None, client=client)
+    assert there.n_samples == here.n_samples
+    assert np.max(np.abs(coef(there.fitted.model) - coef(here.fitted.model))) < 1e-9
+    auto_here = _fit_streamed(str(root), ModelSpec.parse("sh"), None, "equal-mean", None, auto=True)
+    auto_there = _fit_streamed(str(root), ModelSpec.parse("sh"), None, "equal-mean", None, auto=True, client=client)
+    assert auto_there.selection.order == auto_here.selection.order
+    assert auto_there.selection.smoothing == auto_here.selection.smoothing
+    assert np.max(np.abs(coef(auto_there.fitted.model) - coef(auto_here.fitted.model))) < 1e-9
+
+
+def test_one_flight_cut_into_time_blocks_across_files_matches_on_dask(fleet, client, tmp_path):
+    from rplearn.workflows.learning import _fit_streamed
+
+    _, result = fleet
+    one = pd.read_parquet(result.files[0])
+    one = one[one["unit"].str.startswith("learn")].drop(columns="unit").sort_values("t", kind="stable")
+    folder = tmp_path / "one"
+    folder.mkdir()
+    n = len(one)
+    for i in range(8):  # the time blocks (5) straddle the files (8)
+        write_table(one.iloc[i * n // 8:(i + 1) * n // 8], str(folder / f"p{i}.parquet"))
+    here = _fit_streamed(str(folder), ModelSpec.parse("sh"), None, "equal-mean", None, auto=True)
+    there = _fit_streamed(str(folder), ModelSpec.parse("sh"), None, "equal-mean", None, auto=True, client=client)
+    assert len(here.selection.units) == 5
+    assert np.max(np.abs(coef(there.fitted.model) - coef(here.fitted.model))) < 1e-9
+    # the same files listed out of time order: refused on both
+    shuffled = ",".join(str(folder / f"p{i}.parquet") for i in (1, 0, *range(2, 8)))
+    for c in (None, client):
+        with pytest.raises(InputError, match="goes backwards"):
+            _fit_streamed(shuffled, ModelSpec.parse("sh"), None, "equal-mean", None, auto=True, client=c)
+
+
+def test_dask_evaluation_equals_the_single_process(fleet, client, tmp_path):
+    from rplearn.workflows.fleet import predict_parts
+    from rplearn.io.partitions import dataset_parts
+
+    root, _ = fleet
+    model_path = str(tmp_path / "m.json")
+    fit_dataset(str(root), ModelSpec.parse("sh", order=6), output=model_path)
+    here = evaluate_model_files([model_path], str(root))
+    model = load_model(model_path)
+    observed, predictions, _ = predict_parts(dataset_parts(str(root)), [model], ["test_90@f0003"], client)
+    assert observed.size > 0 and np.all(np.isfinite(predictions[0]))
+    units = sorted({u for u in here.units.units})
+    assert all(u.startswith("test") for u in units)
+    from rplearn.workflows import fleet as fleet_module
+
+    observed_all, pred_all, _ = fleet_module.predict_parts(dataset_parts(str(root)), [model], units, client)
+    rmse = float(np.sqrt(np.mean((observed_all - pred_all[0]) ** 2)))
+    assert abs(rmse - here.rows[0].rmse_db) < 1e-9
+    assert here.rows[0].n_samples == observed_all.size
+
+
+def test_fit_and_evaluate_dask_local_2_from_the_command_line(fleet, tmp_path):
+    """Acceptance 3: ``fit --dask local:2`` on 8 files gives the single-process coefficients."""
+    need_dask()
+    root, _ = fleet
+    run = lambda *a: subprocess.run(RPLEARN + list(a), cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    one = run("fit", str(root), "--degree", "6", "-o", "one.json")
+    assert one.returncode == 0, one.stderr
+    dask = run("fit", str(root), "--degree", "6", "--dask", "local:2", "-o", "dask.json")
+    assert dask.returncode == 0, dask.stderr
+    assert "distributed" not in dask.stderr  # the cluster's logs stay quiet
+    a, b = load_model(str(tmp_path / "one.json")), load_model(str(tmp_path / "dask.json"))
+    assert np.max(np.abs(coef(a) - coef(b))) < 1e-9
+    ev = run("evaluate", "dask.json", str(root), "--dask", "local:2", "--json", "t.json")
+    ev1 = run("evaluate", "dask.json", str(root), "--json", "t1.json")
+    assert ev.returncode == 0 and ev1.returncode == 0, ev.stderr + ev1.stderr
+    r, r1 = (json.loads((tmp_path / n).read_text())["rows"][0] for n in ("t.json", "t1.json"))
+    assert abs(r["rmse_db"] - r1["rmse_db"]) < 1e-9 and r["n_samples"] == r1["n_samples"]
+
+
+def test_dask_option_errors_are_one_line():
+    for bad in ("locl", "local:0", "local:x", "tcp://", ""):
+        with pytest.raises(InputError, match="--dask"):
+            parse_dask(bad)
+    assert parse_dask("local") == ("local", 2) and parse_dask("local:3") == ("local", 3)
+    assert parse_dask("tcp://10.0.0.1:8786") == ("remote", "tcp://10.0.0.1:8786")
+    with pytest.raises(InputError, match="pattern models"):
+        fit_dataset("x.parquet", ModelSpec.parse("mean"), dask="local")
+
+
+def test_a_missing_dask_says_how_to_install_it(monkeypatch):
+    import builtins
+
+    real = builtins.__import__
+
+    def no_dask(name, *args, **kwargs):
+        if name.split(".")[0] in ("dask", "distributed"):
+            raise ImportError(name)
+        return real(name, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "__import__", no_dask)
+    with pytest.raises(InputError, match=r"pip install 'rplearn\[dask\]'"):
+        with dask_client("local"):
+            pass
