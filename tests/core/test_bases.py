@@ -196,3 +196,14 @@ def test_chunked_evaluation_equals_the_design_matrix(monkeypatch):
         np.testing.assert_allclose(b.quadratic_form(m, az, el), np.einsum("ni,ij,nj->n", F, m, F), atol=1e-10)
     with pytest.raises(InputError, match="coefficients"):
         SphericalHarmonics(3).evaluate(np.zeros(8), az, el)
+
+
+@pytest.mark.parametrize("order", [1, 2, 7, 24, 50])
+def test_the_numpy_legendre_recurrence_equals_scipy_at_azimuth_zero(order):
+    """The SH tables are built without scipy.special (issue 13, item 4): same values as it gives."""
+    from rplearn.core.sh import legendre_factors, real_sh_reference
+
+    x = np.concatenate([[-1.0, 1.0], np.random.default_rng(order).uniform(-1, 1, 40)])
+    ours = legendre_factors(order, x)
+    ref = real_sh_reference(order, np.zeros(x.size), np.arcsin(x))
+    assert np.max(np.abs(ours - ref)) < 1e-13 * max(1.0, np.max(np.abs(ref)))

@@ -75,6 +75,34 @@ def real_sh_reference(order: int, az_rad: ArrayLike, el_rad: ArrayLike) -> Float
     return out
 
 
+def legendre_factors(order: int, sin_el: ArrayLike) -> FloatArray:
+    """The real SH at azimuth 0, ``Q_lm(x) cos(el)^m`` for ``m >= 0``, by the standard recurrence.
+
+    Fully normalised associated Legendre functions of ``x = sin(el)`` (colatitude cosine)
+    without the Condon-Shortley phase, times ``sqrt(2)`` for ``m > 0``: the columns
+    :func:`sh_index` ``(l, m)``, ``m >= 0``, of :func:`real_sh_reference` at ``az = 0``
+    (the ``m < 0`` columns are left zero, as they are there), to rounding. Numpy only, so that
+    building a basis does not import ``scipy.special``.
+    """
+    x = np.asarray(sin_el, np.float64).ravel()
+    s = np.sqrt(np.clip((1.0 - x) * (1.0 + x), 0.0, None))
+    out = np.zeros((x.size, order * order))
+    diag = np.full(x.size, 1.0 / np.sqrt(4.0 * np.pi))
+    for m in range(order):
+        if m > 0:
+            diag = np.sqrt((2.0 * m + 1.0) / (2.0 * m)) * s * diag
+        scale = np.sqrt(2.0) if m > 0 else 1.0
+        out[:, sh_index(m, m)] = scale * diag
+        prev2, prev = np.zeros_like(diag), diag
+        for l in range(m + 1, order):
+            a = np.sqrt((4.0 * l * l - 1.0) / (l * l - m * m))
+            b = np.sqrt(((l - 1.0) ** 2 - m * m) / (4.0 * (l - 1.0) ** 2 - 1.0))
+            cur = a * (x * prev - b * prev2)
+            out[:, sh_index(l, m)] = scale * cur
+            prev2, prev = prev, cur
+    return out
+
+
 @lru_cache(maxsize=32)
 def _sh_chebyshev_tables(order: int) -> tuple[FloatArray, NDArray[np.intp], NDArray[np.intp]]:
     """Chebyshev coefficients of the Legendre factors, and the row order they produce.
@@ -84,7 +112,7 @@ def _sh_chebyshev_tables(order: int) -> tuple[FloatArray, NDArray[np.intp], NDAr
     ``cos(el)`` when ``m`` is odd; ``Q_lm`` is then a polynomial of degree < ``order`` (the
     normalised associated Legendre function, with ``sqrt(2)`` folded in for ``m > 0``).
     Its coefficients in Chebyshev polynomials ``T_j(x)`` are found once by interpolation at
-    ``order`` Chebyshev points of values from :func:`real_sh_reference` (scipy). The sum of
+    ``order`` Chebyshev points of values from :func:`legendre_factors`. The sum of
     their magnitudes equals ``max |Q_lm|`` (8.2 at SH-10, 32 at SH-24, against
     ``max |Y_lm|`` of 1.2 and 2.4): features stay within 1e-14 (SH-10) to 3e-13 (SH-50) of
     scipy's, but a Gram rebuilt from moments (:meth:`SphericalHarmonics.gram_from_moments`)
@@ -96,7 +124,7 @@ def _sh_chebyshev_tables(order: int) -> tuple[FloatArray, NDArray[np.intp], NDAr
     """
     L = order
     nodes = np.cos(np.pi * (np.arange(L) + 0.5) / L)  # x = sin(el) at Chebyshev points
-    values = real_sh_reference(L, np.zeros(L), np.arcsin(nodes))  # az = 0: sine rows vanish
+    values = legendre_factors(L, nodes)  # az = 0: sine rows vanish
     vander = np.polynomial.chebyshev.chebvander(nodes, L - 1)
     cos_el = np.sqrt((1.0 - nodes) * (1.0 + nodes))
     rows = [sh_index(l, m) for m in range(L) for l in range(m, L)]
@@ -167,7 +195,8 @@ SH_MOMENTS_MAX_ORDER = 24
 class _MomentTables:
     """See :func:`_sh_moment_tables`."""
 
-    lam_map: Any  # scipy.sparse CSR matrix: moments (plain, then odd-odd) -> Lambda of every block pair
+    lam_cols: NDArray[np.intp]  # (pairs * L * L, 4): the moments (plain, then odd-odd) summed into each Lambda entry
+    lam_weights: FloatArray  # (pairs * L * L, 4): their weights
     coef_a: FloatArray  # (pairs, L, L) Chebyshev coefficients of the first block, zero-padded
     coef_b_t: FloatArray  # (pairs, L, L) same for the second block, transposed
     dest: NDArray[np.intp]  # flat index in the Gram of every block entry kept
@@ -184,10 +213,8 @@ def _sh_moment_tables(order: int) -> _MomentTables:
     over samples of ``T_j T_k w_a w_b``. Products reduce to the moments by
     ``T_j T_k = (T_{j+k} + T_{|j-k|}) / 2``, ``cos^2(el) T_J = T_J / 2 - (T_{J+2} + T_{|J-2|}) / 4``
     (both orders odd) and the product-to-sum rules of cosines and sines: ``Lambda`` is a sparse
-    linear map of the moments, four terms per entry.
+    linear map of the moments, four terms per entry (gathered and summed: no sparse library).
     """
-    from scipy import sparse
-
     L = order
     coef, _, _ = _sh_chebyshev_tables(order)
     n_cos = coef.shape[0]
@@ -210,7 +237,7 @@ def _sh_moment_tables(order: int) -> _MomentTables:
         c_pad[i, :rows] = coef[coef_row : coef_row + rows]
     j, k = np.meshgrid(np.arange(L), np.arange(L), indexing="ij")
     j_sum, j_diff = (j + k).ravel(), np.abs(j - k).ravel()
-    pair_a, pair_b, map_rows, map_cols, map_vals, dest, src = [], [], [], [], [], [], []
+    pair_a, pair_b, map_cols, map_vals, dest, src = [], [], [], [], [], []
     for ia, (a, sine_a, first_a, rows_a, _) in enumerate(blocks):
         for ib in range(ia, len(blocks)):
             b, sine_b, first_b, rows_b, _ = blocks[ib]
@@ -225,23 +252,16 @@ def _sh_moment_tables(order: int) -> _MomentTables:
                 terms = [(1.0, n_trig + a + b), (-sgn, n_trig + abs(a - b))]
             base = int(a % 2 == 1 and b % 2 == 1) * n_cheb * n_cols
             pair = len(pair_a)
-            row_idx = pair * L * L + np.arange(L * L)
-            for weight, col in terms:
-                for jj in (j_sum, j_diff):
-                    map_rows.append(row_idx)
-                    map_cols.append(base + jj * n_cols + col)
-                    map_vals.append(np.full(L * L, weight / 4.0))
+            map_cols.append(np.stack([base + jj * n_cols + col for _, col in terms for jj in (j_sum, j_diff)], axis=1))
+            map_vals.append(np.repeat([[w / 4.0 for w, _ in terms for _ in (0, 1)]], L * L, axis=0))
             pair_a.append(ia)
             pair_b.append(ib)
             ra, rb = np.meshgrid(np.arange(rows_a), np.arange(rows_b), indexing="ij")
             dest.append(((first_a + ra) * n_coef + first_b + rb).ravel())
             src.append((pair * L * L + ra * L + rb).ravel())
-    lam_map = sparse.csr_matrix(
-        (np.concatenate(map_vals), (np.concatenate(map_rows), np.concatenate(map_cols))),
-        shape=(len(pair_a) * L * L, 2 * n_cheb * n_cols),
-    )
     return _MomentTables(
-        lam_map=lam_map,
+        lam_cols=np.concatenate(map_cols).astype(np.intp),
+        lam_weights=np.concatenate(map_vals),
         coef_a=c_pad[pair_a],
         coef_b_t=np.ascontiguousarray(c_pad[pair_b].transpose(0, 2, 1)),
         dest=np.concatenate(dest),
@@ -391,7 +411,8 @@ class SphericalHarmonics(Basis):
         mu_odd = np.zeros_like(mu)
         J = np.arange(2 * L - 1)
         mu_odd[: 2 * L - 1] = 0.5 * mu[J] - 0.25 * mu[J + 2] - 0.25 * mu[np.abs(J - 2)]
-        lam = (tables.lam_map @ np.concatenate([mu.ravel(), mu_odd.ravel()])).reshape(-1, L, L)
+        every = np.concatenate([mu.ravel(), mu_odd.ravel()])
+        lam = np.einsum("ij,ij->i", every[tables.lam_cols], tables.lam_weights).reshape(-1, L, L)
         blocks = tables.coef_a @ lam @ tables.coef_b_t
         gram = np.zeros(self.n_coef * self.n_coef)
         gram[tables.dest] = blocks.ravel()[tables.src]

@@ -16,6 +16,7 @@ import numpy as np
 
 from rplearn.core.environment import PathLoss
 from rplearn.core.normal_equations import NormalEquations, reserve_block_buffer
+from rplearn.models.blas import blas_threads_for, warm_up as warm_up_blas
 from rplearn.models.terms import regression_inputs, shared_fields, statistics_counts
 from rplearn.core.selection import (
     DEFAULT_PENALTY_POWER,
@@ -217,19 +218,21 @@ def fit_auto(
     check_model_size(big, n, len(nodes))
     basis = big.basis()
     reserve_block_buffer(basis, max(len(s) for s in units.values()))
-    t0 = time.perf_counter()
-    path_loss = path_loss or PathLoss()
-    stats = {}
-    for u, s in units.items():
-        y, env = regression_inputs(s, path_loss)
-        stats[u] = NormalEquations(basis, len(nodes), environment=env is not None).add(
-            s.directions, s.tx_index, s.rx_index, y, env)
-    freq = Counter()
-    for s in units.values():
-        frequency_counts(s, freq)
-    fitted, choice = fit_from_statistics(stats, kind, orders, nodes, ridge, gauge, power, weighted_median(freq),
-                                         provenance, prior, prior_spread_db, path_loss, link_offsets)
-    fitted.ltd_s = time.perf_counter() - t0
+    warm_up_blas()
+    with blas_threads_for(n, basis.n_coef * len(nodes)):
+        t0 = time.perf_counter()
+        path_loss = path_loss or PathLoss()
+        stats = {}
+        for u, s in units.items():
+            y, env = regression_inputs(s, path_loss)
+            stats[u] = NormalEquations(basis, len(nodes), environment=env is not None).add(
+                s.directions, s.tx_index, s.rx_index, y, env)
+        freq = Counter()
+        for s in units.values():
+            frequency_counts(s, freq)
+        fitted, choice = fit_from_statistics(stats, kind, orders, nodes, ridge, gauge, power, weighted_median(freq),
+                                             provenance, prior, prior_spread_db, path_loss, link_offsets)
+        fitted.ltd_s = time.perf_counter() - t0
     fitted.model.training["ltd_s"] = fitted.ltd_s
     fitted.model.training["coverage_deg"] = node_coverage_grids(list(units.values()))
     return fitted, choice

@@ -13,6 +13,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
+from rplearn.models.blas import blas_threads_for, warm_up as warm_up_blas
 from rplearn.models.baselines import KNNModel, MeanModel
 from rplearn.data.tables import LinkSamples
 from rplearn.core.metrics import Scores, score
@@ -149,6 +150,7 @@ def fit_patterns(
 def _warm_up(spec: ModelSpec, n_samples: int = 1) -> None:
     """Pay a model's one-off costs: imports, cached basis tables, the solver's block buffer
     (see :func:`fit_model`)."""
+    warm_up_blas()
     if spec.kind == "knn":
         import sklearn.neighbors  # noqa: F401
     elif spec.decouples:
@@ -183,14 +185,16 @@ def fit_model(
                          "fit them in free space", param="path_loss")
     check_model_size(spec, len(samples), len(samples.nodes))
     _warm_up(spec, len(samples))
-    t0 = time.perf_counter()
-    if spec.kind == "mean":
-        model: Model = MeanModel.fit(samples)
-    elif spec.kind == "knn":
-        model = KNNModel.fit(samples, int(spec.order))
-    else:
-        model = fit_patterns(samples, spec, gauge, path_loss=path_loss, link_offsets=link_offsets)
-    ltd = time.perf_counter() - t0
+    columns = spec.basis().n_coef * len(samples.nodes) if spec.decouples else 0
+    with blas_threads_for(len(samples), columns):
+        t0 = time.perf_counter()
+        if spec.kind == "mean":
+            model: Model = MeanModel.fit(samples)
+        elif spec.kind == "knn":
+            model = KNNModel.fit(samples, int(spec.order))
+        else:
+            model = fit_patterns(samples, spec, gauge, path_loss=path_loss, link_offsets=link_offsets)
+        ltd = time.perf_counter() - t0
     if isinstance(model, PatternSet):
         model.training["coverage_deg"] = node_coverage_grids(samples)
     model.provenance = {**dict(provenance or {}), "model": spec.label}

@@ -1,0 +1,72 @@
+"""Benchmark of small fits on a busy machine (issue 13, item 4): one BLAS thread for small problems.
+
+While another process keeps one core busy, fits SH-10 on 1,333 samples (the paper's
+two drones) 20 times with the thread limit of :mod:`rplearn.models.blas` and 20 times with
+every BLAS thread (the reference, what the fit did before), alternating in rounds of 5, and
+prints each side's fastest and slowest LTD and their ratio. Target: slowest within 3x of the
+fastest with the limit.
+
+Run: ``.venv/bin/python benchmarks/steady_fit.py``.
+"""
+
+from __future__ import annotations
+
+import multiprocessing as mp
+import time
+
+import numpy as np
+
+from rplearn.data.tables import link_samples
+from rplearn.models import blas
+from rplearn.models.fit import fit_model
+from rplearn.models.spec import ModelSpec
+from rplearn.sim.flight import simulate
+
+N = 1_333
+REPEATS = 20
+
+
+def spin(stop) -> None:
+    """Keep one core busy until told to stop."""
+    x = 0.0
+    while not stop.is_set():
+        for _ in range(100_000):
+            x += 1.0
+
+
+def main() -> int:
+    matched = simulate("paper", seed=1).matched_truth
+    ab = matched[(matched["tx"] == "A") & matched["unit"].str.startswith("learn")]
+    samples = link_samples(ab.iloc[np.linspace(0, len(ab) - 1, N).astype(int)], "paper")
+    spec = ModelSpec.parse("sh", order=10)
+    fit_model(samples, spec)  # one-off costs
+    always_big = lambda n, c: False  # noqa: E731  (the reference: every BLAS thread, as before)
+    small = blas.is_small_fit
+    times: dict[str, list[float]] = {"one thread (limit)": [], "every thread (reference)": []}
+    stop = mp.Event()
+    busy = mp.Process(target=spin, args=(stop,), daemon=True)
+    busy.start()
+    time.sleep(0.5)
+    try:
+        for _ in range(REPEATS // 5):
+            for label, rule in (("one thread (limit)", small), ("every thread (reference)", always_big)):
+                blas.is_small_fit = rule
+                for _ in range(5):
+                    times[label].append(fit_model(samples, spec).ltd_s)
+    finally:
+        blas.is_small_fit = small
+        stop.set()
+        busy.join()
+    print(f"SH-10, {N:,} samples, {REPEATS} fits each, one core kept busy by another process")
+    for label, t in times.items():
+        t = np.array(t) * 1e3
+        print(f"  {label:26s}: fastest {t.min():7.1f} ms, median {np.median(t):7.1f} ms, slowest {t.max():7.1f} ms, "
+              f"slowest/fastest {t.max() / t.min():5.1f}x")
+    limited = np.array(times["one thread (limit)"])
+    ok = limited.max() / limited.min() <= 3.0
+    print("target met (slowest within 3x of fastest)" if ok else "TARGET MISSED")
+    return 0 if ok else 1
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
