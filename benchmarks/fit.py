@@ -16,6 +16,8 @@ two diagonal blocks come from (2L+1) x (4L-2) moment sums per node
 (:meth:`rplearn.core.bases.SphericalHarmonics.gram_from_moments`), so the BLAS work is half the
 floor's.
 Then the peak memory of a fit over 10 million samples streamed in chunks (target < 1 GiB).
+Then, with ``--swarm``, the many-node rows (issue 13): SH-10 with 10, 30 and 50 drones against
+the ``X^T X`` floor of the same columns (``benchmarks/fit_swarm.py``, which also runs alone).
 
 Run: ``.venv/bin/python benchmarks/fit.py [--quick]``. Timings are the best of several runs.
 """
@@ -58,6 +60,7 @@ def random_directions(rng: np.random.Generator, n: int) -> Directions:
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="fewer repeats and 2 M streamed samples")
+    parser.add_argument("--swarm", action="store_true", help="also the many-node rows (benchmarks/fit_swarm.py)")
     args = parser.parse_args()
     repeats = 3 if args.quick else 7
     rng = np.random.default_rng(0)
@@ -144,6 +147,11 @@ def main() -> int:
     print(f"  max coefficient error (noise-free, shapes): {err:.1e}")
     ok = t_ours / t_floor <= 1.5 and t_hand / t_ours_b >= 30 and max_diff <= 1e-6 and peak < 2**30
     print("targets met" if ok else "TARGETS MISSED")
+    if args.swarm:  # a fresh process: its peak memory is the swarm fits' own
+        import subprocess
+
+        swarm = [sys.executable, __file__.replace("fit.py", "fit_swarm.py")] + (["--quick"] if args.quick else [])
+        ok = subprocess.run(swarm).returncode == 0 and ok
     return 0 if ok else 1
 
 

@@ -60,3 +60,55 @@ def test_spectrum_estimate_finds_free_directions_beyond_the_gauge():
     sv, rank, cond = solver.spectrum_estimate(normal.gram, null)
     assert rank == exact[1] < normal.n_columns - 1
     assert cond == float("inf")
+
+
+def test_large_path_with_link_offsets_and_a_penalty_gives_the_small_paths_solution(monkeypatch):
+    """Shared columns (one offset per two-way link) are unridged and scaled for the report; a
+    smoothness penalty takes the estimate without the factor: both as the KKT path."""
+    from rplearn.core.selection import penalty_vector
+
+    normal = _statistics(3, 6, n=20000).with_shared(_statistics(3, 6, n=20000).two_way_links())
+    penalty = penalty_vector(normal.basis, 3, 1e-3, 1e3)
+    for pen in (None, penalty):
+        monkeypatch.setattr(solver, "LARGE_COLUMNS", 10**9)
+        small = solver.solve(normal, penalty=pen)
+        monkeypatch.setattr(solver, "LARGE_COLUMNS", 0)
+        large = solver.solve(normal, penalty=pen)
+        np.testing.assert_allclose(large.coef, small.coef, atol=1e-10)
+        np.testing.assert_allclose(large.shared_coef, small.shared_coef, atol=1e-10)
+        np.testing.assert_allclose(large.shared_unexplained, small.shared_unexplained, atol=1e-10)
+        np.testing.assert_allclose(large.covariance, small.covariance, atol=1e-10 * np.abs(small.covariance).max())
+        assert large.report.rank == small.report.rank
+        assert large.report.condition_number == pytest.approx(small.report.condition_number, rel=0.03)
+
+
+def test_the_large_covariance_is_formed_only_when_read(monkeypatch):
+    normal = _statistics(2, 8)
+    monkeypatch.setattr(solver, "LARGE_COLUMNS", 0)
+    sol = solver.solve(normal)
+    assert sol.covariance_matrix is None and sol.covariance_fn is not None
+    cov = sol.covariance
+    assert cov.shape == (normal.n_columns, normal.n_columns)
+    assert sol.covariance_matrix is cov and sol.covariance_fn is None and sol.covariance is cov
+
+
+def test_a_swarm_whose_drones_link_to_few_others_is_factorised_sparse_with_the_same_solution(monkeypatch):
+    """Twelve drones on a ring, each linked to its two neighbours: a quarter of the blocks."""
+    from rplearn.core import spectrum
+
+    links = [(k, (k + 1) % 12) for k in range(12)] + [((k + 1) % 12, k) for k in range(12)]
+    normal = _statistics(12, 4, links, n=20000)
+    assert spectrum.block_fraction(normal.gram, normal.basis.n_coef) <= spectrum.SPARSE_BLOCK_FRACTION
+    made = []
+    real = spectrum.ConstrainedFactor.__init__
+    monkeypatch.setattr(spectrum.ConstrainedFactor, "__init__",
+                        lambda self, *a: (real(self, *a), made.append(self.sparse))[0])
+    monkeypatch.setattr(solver, "LARGE_COLUMNS", 10**9)
+    small = solver.solve(normal)
+    monkeypatch.setattr(solver, "LARGE_COLUMNS", 0)
+    large = solver.solve(normal)
+    assert made == [True]
+    np.testing.assert_allclose(large.coef, small.coef, atol=1e-10)
+    np.testing.assert_allclose(large.covariance, small.covariance, atol=1e-10 * np.abs(small.covariance).max())
+    assert large.report.rank == small.report.rank
+    assert large.report.condition_number == pytest.approx(small.report.condition_number, rel=0.03)

@@ -316,6 +316,10 @@ class NormalEquations:
             nat = self._natural[:p]
             for k, m in sorted(node_moments.items()):
                 self.gram[k * p : (k + 1) * p, k * p : (k + 1) * p] += self.basis.gram_from_moments(m)[np.ix_(nat, nat)]
+            # the links' cross blocks went into the upper block triangle: mirror them
+            for a, b in {(min(c // self.n_nodes, c % self.n_nodes), max(c // self.n_nodes, c % self.n_nodes))
+                         for c, _ in groups}:
+                self.gram[b * p : (b + 1) * p, a * p : (a + 1) * p] = self.gram[a * p : (a + 1) * p, b * p : (b + 1) * p].T
         self.n_samples += n
         return self
 
@@ -342,6 +346,8 @@ class NormalEquations:
                     node_moments[node] += m
                 else:
                     node_moments[node] = m
+            self._add_link_block(t, r, block)
+            return
         block = block[np.ix_(self._natural, self._natural)]
         self.gram[bt, bt] += block[:p, :p]
         self.gram[br, br] += block[p : 2 * p, p : 2 * p]
@@ -361,6 +367,40 @@ class NormalEquations:
             self.env_cross[bt] += block[:p, env]
             self.env_cross[br] += block[p : 2 * p, env]
             self.env_y += float(block[2 * p, env])
+            self.env_sq += float(block[env, env])
+        prev = self.directed.get((t, r))
+        self.directed[(t, r)] = sums if prev is None else prev + sums
+
+    def _add_link_block(self, t: int, r: int, block: FloatArray) -> None:
+        """:meth:`_add_pair`'s bookkeeping for a block from the moments path of
+        :func:`link_statistics` (rows ``[f_tx, y, extra, f_rx]`` in the basis's row order, the
+        diagonal feature blocks left zero): only the parts that are needed are put back into
+        natural order, and the cross block goes into the upper block triangle of the Gram
+        (:meth:`add` mirrors it)."""
+        p = self.basis.n_coef
+        m = self._n_extra
+        nat = self._natural[:p]
+        rx0 = p + 1 + m  # first rx feature row
+        cross = block[:p, rx0:][np.ix_(nat, nat)]  # F_tx^T F_rx
+        if t < r:
+            self.gram[t * p : (t + 1) * p, r * p : (r + 1) * p] += cross
+        else:
+            self.gram[r * p : (r + 1) * p, t * p : (t + 1) * p] += cross.T
+        y_row, one = p, p + 1
+        self.rhs[t * p : (t + 1) * p] += block[:p, y_row][nat]
+        self.rhs[r * p : (r + 1) * p] += block[y_row, rx0:][nat]
+        self.yty += float(block[y_row, y_row])
+        sums = np.zeros(2 * p + 3)
+        sums[:p] = block[:p, one][nat]
+        sums[p : 2 * p] = block[one, rx0:][nat]
+        sums[2 * p + _SUM_Y] = block[y_row, one]
+        sums[2 * p + _COUNT] = block[one, one]
+        if self.environment:
+            env = one + 1
+            sums[2 * p + _SUM_E] = block[one, env]
+            self.env_cross[t * p : (t + 1) * p] += block[:p, env][nat]
+            self.env_cross[r * p : (r + 1) * p] += block[env, rx0:][nat]
+            self.env_y += float(block[y_row, env])
             self.env_sq += float(block[env, env])
         prev = self.directed.get((t, r))
         self.directed[(t, r)] = sums if prev is None else prev + sums

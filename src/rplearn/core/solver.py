@@ -32,7 +32,6 @@ from __future__ import annotations
 
 from collections import deque
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -41,7 +40,9 @@ from numpy.typing import ArrayLike, NDArray
 from rplearn.core.bases import Basis
 from rplearn.core.geometry import Directions
 from rplearn.core.normal_equations import EXPONENT_MIN_SPREAD_DB, NormalEquations, independent_spread_db
-from rplearn.core.spectrum import constrained_inverse, null_directions, spectrum_estimate, spectrum_report
+from rplearn.core.spectrum import null_directions, spectrum_estimate, spectrum_report
+from rplearn.core.solution import FitReport, GaugeNote, JointSolution, fit_warnings
+from rplearn.core.solver_large import solve_large, unexplained_fraction, unit_shared_scaling
 from rplearn.errors import IdentifiabilityError, InputError
 
 FloatArray = NDArray[np.float64]
@@ -53,8 +54,6 @@ FloatArray = NDArray[np.float64]
 #: changes no prediction measurably (paper replica: SH-10 test RMSE 4.481 dB with 1e-6 or 1),
 #: while on a single short unit it keeps SH-10 from extrapolating to 1,323 dB RMSE (7.8 dB).
 DEFAULT_RIDGE = 1.0
-#: Condition numbers above this get a warning in the fit report.
-CONDITION_WARNING = 1e4
 
 
 # -------------------------------------------------------------------------------------------
@@ -101,118 +100,11 @@ def link_components(n_nodes: int, links: Iterable[tuple[int, int]]) -> list[tupl
 # Reports and solutions
 
 
-@dataclass(frozen=True)
-class GaugeNote:
-    """How the free constant of one bipartite component was fixed."""
-
-    nodes: tuple[str, ...]
-    side_a: tuple[str, ...]
-    side_b: tuple[str, ...]
-    rule: str
-    text: str
-
-    def to_dict(self) -> dict[str, Any]:
-        return {"nodes": list(self.nodes), "side_a": list(self.side_a), "side_b": list(self.side_b), "rule": self.rule, "text": self.text}
-
-
-@dataclass(frozen=True)
-class FitReport:
-    """Numerical health of a fit (paper Sec. V-A, V-C).
-
-    Attributes
-    ----------
-    n_samples : int
-    n_columns : int
-        Columns of the joint design matrix (``n_nodes * n_coef``).
-    rank : int
-        Numerical rank of the design matrix (singular values above
-        ``s_max * sqrt(n_columns * eps)``, judged on ``X^T X``).
-    null_dim : int
-        ``n_columns - rank``.
-    condition_number : float
-        Largest / smallest non-zero singular value of the design matrix.
-    expected_null_dim : int
-        Free constants the link graph predicts (one per bipartite component).
-    gauges : tuple of GaugeNote
-    ridge : float
-    rmse_db : float
-        Training RMSE [dB].
-    singular_values : ndarray
-        All singular values of the design matrix, descending.
-    """
-
-    n_samples: int
-    n_columns: int
-    rank: int
-    null_dim: int
-    condition_number: float
-    expected_null_dim: int
-    gauges: tuple[GaugeNote, ...]
-    ridge: float
-    rmse_db: float
-    singular_values: FloatArray = field(repr=False)
-    warnings: tuple[str, ...] = ()
-
-    @property
-    def decoupled(self) -> bool:
-        """True when the only unidentified directions are the gauge constants."""
-        return self.null_dim == self.expected_null_dim
-
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "n_samples": self.n_samples,
-            "n_columns": self.n_columns,
-            "rank": self.rank,
-            "null_dim": self.null_dim,
-            "expected_null_dim": self.expected_null_dim,
-            "condition_number": self.condition_number,
-            "ridge": self.ridge,
-            "rmse_db": self.rmse_db,
-            "gauges": [g.to_dict() for g in self.gauges],
-            "warnings": list(self.warnings),
-        }
-
-
-@dataclass(frozen=True)
-class JointSolution:
-    """Coefficients of every node's pattern and the fit's report.
-
-    ``coef[k]`` are the coefficients of node ``k``; ``covariance`` is the estimated covariance
-    of all coefficients (``n_columns x n_columns``, gauge-constrained), from the residual
-    variance; it gives the standard error of any pattern value or prediction.
-    """
-
-    coef: FloatArray
-    covariance: FloatArray
-    residual_variance_db2: float
-    report: FitReport
-    shared: tuple[tuple[Any, ...], ...] = ()
-    shared_coef: FloatArray = field(default_factory=lambda: np.zeros(0))
-    #: per shared column, the fraction (0..1) of its spread the other columns do not explain
-    shared_unexplained: FloatArray = field(default_factory=lambda: np.zeros(0))
-
-
 #: Above this many columns the solver estimates the spectrum (:func:`spectrum_estimate`)
 #: instead of a full eigendecomposition, and factorises the regularised system by Cholesky
 #: (:func:`constrained_inverse`) instead of inverting the KKT matrix: swarms of tens of nodes.
 #: At and below it every result is as before.
 LARGE_COLUMNS = 1500
-
-
-def fit_warnings(label: str, n_columns: int, rank: int, n_gauges: int, cond: float, ridge: float) -> list[str]:
-    """Plain-language warnings about a fit whose samples barely identify the model."""
-    out = []
-    if n_columns - rank > n_gauges:
-        out.append(
-            f"{n_columns - rank - n_gauges} direction(s) of {label} are not identified by the samples "
-            f"(rank {rank} of {n_columns}); the ridge ({ridge:g}) decides them: add headings or lower the order"
-        )
-    if cond > CONDITION_WARNING:
-        out.append(
-            f"condition number {cond:.3g}: the flight left directions (nearly) uncovered, and predictions "
-            "there are extrapolations; check the coverage, add headings, or lower the order"
-        )
-    return out
 
 
 def _gauge_constraints(
@@ -327,60 +219,56 @@ def solve(
     cmat, cval, notes = _gauge_constraints(normal.basis, n_nodes, names, components, gauge)
     cmat = np.pad(cmat, ((0, 0), (0, pcols - pat)))
     large = pcols > LARGE_COLUMNS
-    if large:
-        sv, rank, cond = spectrum_estimate(_unit_shared_columns(normal), null_directions(normal.basis, n_nodes, components, pcols))
-    else:
-        sv, rank, cond = spectrum_report(_unit_shared_columns(normal))
     k = cmat.shape[0]
-    kkt = np.zeros((pcols + k, pcols + k))
-    kkt[:pcols, :pcols] = normal.gram
-    kkt[np.arange(pat), np.arange(pat)] += ridge  # the shared columns are not shrunk
     if penalty is not None:
         penalty = _pad_shared(np.asarray(penalty, np.float64), pat, pcols)
         if penalty.shape != (pcols,) or not np.all(np.isfinite(penalty)) or np.any(penalty < 0):
             raise InputError(f"penalty: expected {pcols} non-negative finite weights, got shape {penalty.shape}")
-        kkt[np.arange(pcols), np.arange(pcols)] += penalty
-    shrunk = ridge > 0 or (penalty is not None and bool(np.any(penalty > 0)))
-    kkt[:pcols, pcols:] = cmat.T
-    kkt[pcols:, :pcols] = cmat
     rhs = np.concatenate([normal.rhs, cval])
     if penalty is not None and penalty_target is not None:
         target = _pad_shared(np.asarray(penalty_target, np.float64), pat, pcols)
         if target.shape != (pcols,) or not np.all(np.isfinite(target)):
             raise InputError(f"penalty_target: expected {pcols} finite values, got shape {target.shape}")
         rhs[:pcols] += penalty * target
-    inverse = constrained_inverse(kkt[:pcols, :pcols], cmat) if large else None
-    if inverse is not None:  # large and positive definite: Cholesky, no KKT inverse
-        kinv = None
-        a = inverse
-        coef = a @ rhs[:pcols]
-        if k and np.any(cval != 0):  # a stated gauge level (the equal-mean gauge's value is 0)
-            y = np.linalg.solve(kkt[:pcols, :pcols], cmat.T)
-            coef = coef + y @ np.linalg.solve(cmat @ y, cval)
+    shrunk = ridge > 0 or (penalty is not None and bool(np.any(penalty > 0)))
+    if large:
+        solution = solve_large(normal, n_nodes, components, cmat, cval, rhs[:pcols], ridge, penalty, shrunk, notes)
+        if solution is not None:
+            return solution
+        sv, rank, cond = spectrum_estimate(_unit_shared_columns(normal), null_directions(normal.basis, n_nodes, components, pcols))
     else:
-        # Scale rows/columns for a better-conditioned factorisation.
-        scale = 1.0 / np.sqrt(np.maximum(np.abs(np.diag(kkt))[:pcols], 1e-300))
-        full_scale = np.concatenate([scale, np.ones(k)])
-        kkt_s = kkt * full_scale[:, None] * full_scale[None, :]
-        # numpy's LAPACK (not scipy's): a second OpenBLAS thread pool would wait for numpy's
-        # spinning threads after the big rank-k update and make this small inverse 40x slower.
-        try:
-            kinv_s = np.linalg.inv(kkt_s)
-        except np.linalg.LinAlgError:
-            kinv_s = np.full((pcols + k, pcols + k), np.nan)
-        finite = bool(np.all(np.isfinite(kinv_s)))
-        cond_1 = float(np.abs(kkt_s).sum(axis=0).max() * np.abs(kinv_s).sum(axis=0).max()) if finite else np.inf
-        if not finite or cond_1 > 1.0 / (1e3 * np.finfo(np.float64).eps):
-            raise IdentifiabilityError(
-                f"the samples do not identify {normal.basis.label} for {n_nodes} nodes: design rank {rank} of "
-                f"{pcols} columns, {pcols - rank} free direction(s) but only {k} gauge constant(s); "
-                "add samples over the uncovered directions, choose a smaller model, or raise the ridge"
-            )
-        kinv = kinv_s * full_scale[:, None] * full_scale[None, :]
-        sol = kinv @ rhs
-        coef = sol[:pcols]
-        a = kinv[:pcols, :pcols]
-    unexplained = _unexplained(normal, a)
+        sv, rank, cond = spectrum_report(_unit_shared_columns(normal))
+    kkt = np.zeros((pcols + k, pcols + k))
+    kkt[:pcols, :pcols] = normal.gram
+    kkt[np.arange(pat), np.arange(pat)] += ridge  # the shared columns are not shrunk
+    if penalty is not None:
+        kkt[np.arange(pcols), np.arange(pcols)] += penalty
+    kkt[:pcols, pcols:] = cmat.T
+    kkt[pcols:, :pcols] = cmat
+    # the KKT inverse (every system of up to LARGE_COLUMNS columns)
+    # Scale rows/columns for a better-conditioned factorisation.
+    scale = 1.0 / np.sqrt(np.maximum(np.abs(np.diag(kkt))[:pcols], 1e-300))
+    full_scale = np.concatenate([scale, np.ones(k)])
+    kkt_s = kkt * full_scale[:, None] * full_scale[None, :]
+    # numpy's LAPACK (not scipy's): a second OpenBLAS thread pool would wait for numpy's
+    # spinning threads after the big rank-k update and make this small inverse 40x slower.
+    try:
+        kinv_s = np.linalg.inv(kkt_s)
+    except np.linalg.LinAlgError:
+        kinv_s = np.full((pcols + k, pcols + k), np.nan)
+    finite = bool(np.all(np.isfinite(kinv_s)))
+    cond_1 = float(np.abs(kkt_s).sum(axis=0).max() * np.abs(kinv_s).sum(axis=0).max()) if finite else np.inf
+    if not finite or cond_1 > 1.0 / (1e3 * np.finfo(np.float64).eps):
+        raise IdentifiabilityError(
+            f"the samples do not identify {normal.basis.label} for {n_nodes} nodes: design rank {rank} of "
+            f"{pcols} columns, {pcols - rank} free direction(s) but only {k} gauge constant(s); "
+            "add samples over the uncovered directions, choose a smaller model, or raise the ridge"
+        )
+    kinv = kinv_s * full_scale[:, None] * full_scale[None, :]
+    sol = kinv @ rhs
+    coef = sol[:pcols]
+    a = kinv[:pcols, :pcols]
+    unexplained = unexplained_fraction(normal, np.diag(a)[pat:])
     sse = max(normal.yty - 2.0 * coef @ normal.rhs + coef @ normal.gram @ coef, 0.0)
     dof = max(normal.n_samples - min(rank, pcols), 1)
     resid_var = sse / dof
@@ -392,14 +280,6 @@ def solve(
         # to the prior's variance where the data are absent (the sandwich form shrinks it to
         # zero there). Given for every automatic fit, also one that chose no smoothing.
         cov = resid_var * a
-    elif shrunk and large:
-        # M G M = M - M D M for the constrained inverse M of G + D (D the ridge on the pattern
-        # columns): one product instead of two
-        # (a symmetric rank-k product: half a general one's work)
-        from scipy.linalg import blas  # here, not at import: scipy.linalg costs 0.35 s to import
-
-        low = blas.dsyrk(1.0, np.asfortranarray(a[:, :pat]), lower=1)
-        cov = resid_var * (a - ridge * (np.tril(low) + np.tril(low, -1).T))
     else:
         cov = resid_var * (a @ normal.gram @ a.T) if shrunk else resid_var * a
     cov = 0.5 * (cov + cov.T)
@@ -421,17 +301,8 @@ def solve(
 
 
 def _unit_shared_columns(normal: NormalEquations) -> FloatArray:
-    """``X^T X`` with every shared column scaled to the pattern columns' mean square, so that the
-    rank and condition number reported say how well the samples identify the model, not in
-    which units a shared column (dB per unit of exponent) happens to be written."""
-    pat = normal.n_pattern_columns
-    if pat == normal.n_columns:
-        return normal.gram
-    diag = np.diag(normal.gram)
-    unit = float(np.mean(diag[:pat])) if pat else 1.0
-    scale = np.ones(normal.n_columns)
-    scale[pat:] = np.sqrt(unit / np.maximum(diag[pat:], 1e-300))
-    return normal.gram * scale[:, None] * scale[None, :]
+    """See :func:`rplearn.core.solver_large.unit_shared_scaling`."""
+    return unit_shared_scaling(normal)[0]
 
 
 def _pad_shared(values: FloatArray, pat: int, pcols: int) -> FloatArray:
@@ -439,27 +310,6 @@ def _pad_shared(values: FloatArray, pat: int, pcols: int) -> FloatArray:
     if values.ndim == 1 and values.size == pat and pcols > pat:
         return np.concatenate([values, np.zeros(pcols - pat)])
     return values
-
-
-def _unexplained(normal: NormalEquations, kinv: FloatArray) -> FloatArray:
-    """Per shared column, the fraction of its centred spread the other columns leave unexplained
-    (``1 - R^2``): the Schur complement ``1 / (K^-1)_jj`` over ``sum (x - mean x)^2``."""
-    pat = normal.n_pattern_columns
-    out = np.ones(len(normal.shared))
-    n = max(normal.n_samples, 1)
-    for j, col in enumerate(normal.shared):
-        i = pat + j
-        total = float(normal.gram[i, i])
-        if col[0] == "exponent":
-            centred = total - normal.environment_sum**2 / n
-        else:
-            centred = total  # +-1 columns: their level is what they describe
-        inv = float(kinv[i, i])
-        if not (centred > 1e-9 * max(total, 1e-300)) or not (inv > 0):
-            out[j] = 0.0
-        else:
-            out[j] = float(min(1.0, 1.0 / (inv * centred)))
-    return out
 
 
 def _check_exponent(normal: NormalEquations) -> None:

@@ -1,0 +1,124 @@
+"""The joint solve above :data:`rplearn.core.solver.LARGE_COLUMNS` columns (swarms of tens of nodes).
+
+One Cholesky factorisation of the regularised, gauge-constrained system
+(:class:`~rplearn.core.spectrum.ConstrainedFactor`) gives the coefficients and the spectrum
+estimate (:func:`~rplearn.core.spectrum.spectrum_from_factor`, reusing the factor); the
+covariance, an ``n^3`` inverse, is formed only when ``JointSolution.covariance`` is first
+read.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from rplearn.core.normal_equations import NormalEquations
+from rplearn.core.solution import FitReport, GaugeNote, JointSolution, fit_warnings
+from rplearn.core.spectrum import ConstrainedFactor, null_directions, spectrum_estimate, spectrum_from_factor
+from rplearn.errors import IdentifiabilityError
+
+FloatArray = NDArray[np.float64]
+
+
+def solve_large(
+    normal: NormalEquations, n_nodes: int, components: list[tuple[list[int], Any]], cmat: FloatArray,
+    cval: FloatArray, rhs: FloatArray, ridge: float, penalty: FloatArray | None, shrunk: bool,
+    notes: list[GaugeNote],
+) -> JointSolution | None:
+    """:func:`solve` above :data:`LARGE_COLUMNS` columns: one Cholesky factorisation of the
+    regularised system (:class:`~rplearn.core.spectrum.ConstrainedFactor`) gives the
+    coefficients, the spectrum estimate (reusing the factor when the only regularisation is
+    the ridge) and, on first use only, the covariance. None when the regularised matrix is not
+    positive definite (the KKT path then decides)."""
+    pcols, pat = normal.n_columns, normal.n_pattern_columns
+    a = normal.gram.copy()
+    a[np.arange(pat), np.arange(pat)] += ridge  # the shared columns are not shrunk
+    if penalty is not None:
+        a[np.arange(pcols), np.arange(pcols)] += penalty
+    factor = ConstrainedFactor.of(a, cmat, block=normal.basis.n_coef)
+    del a
+    if factor is None:
+        return None
+    gram_u, unit = unit_shared_scaling(normal)
+    null = null_directions(normal.basis, n_nodes, components, pcols)
+    if penalty is None and ridge > 0:
+        sv, rank, cond = spectrum_from_factor(gram_u, null, factor, 1.0 / unit)
+    else:
+        sv, rank, cond = spectrum_estimate(gram_u, null)
+    del gram_u
+    k = cmat.shape[0]
+    if pcols - rank > k:  # free directions the gauge does not fix: as the KKT path refuses
+        raise IdentifiabilityError(
+            f"the samples do not identify {normal.basis.label} for {n_nodes} nodes: design rank {rank} of "
+            f"{pcols} columns, {pcols - rank} free direction(s) but only {k} gauge constant(s); "
+            "add samples over the uncovered directions, choose a smaller model, or raise the ridge"
+        )
+    coef = factor.solve(rhs) + factor.particular(cval)
+    unexplained = unexplained_fraction(normal, factor.diagonal_at(np.arange(pat, pcols)))
+    sse = max(normal.yty - 2.0 * coef @ normal.rhs + coef @ normal.gram @ coef, 0.0)
+    resid_var = sse / max(normal.n_samples - min(rank, pcols), 1)
+
+    def covariance() -> FloatArray:
+        m = factor.inverse()
+        if penalty is not None or not shrunk:
+            cov = resid_var * m  # the posterior's (see solve), or no regularisation at all
+        else:
+            # M G M = M - M D M for the constrained inverse M of G + D (D the ridge on the
+            # pattern columns): one symmetric rank-k product instead of two general ones
+            from scipy.linalg import blas
+
+            low = blas.dsyrk(1.0, np.asfortranarray(m[:, :pat]), lower=1)
+            i, j = np.triu_indices(pcols, 1)
+            low[i, j] = low[j, i]
+            cov = resid_var * (m - ridge * low)
+        return 0.5 * (cov + cov.T)
+
+    report = FitReport(
+        n_samples=normal.n_samples, n_columns=pcols, rank=rank, null_dim=pcols - rank, condition_number=cond,
+        expected_null_dim=k, gauges=tuple(notes), ridge=float(ridge), rmse_db=float(np.sqrt(sse / normal.n_samples)),
+        singular_values=sv, warnings=tuple(fit_warnings(normal.basis.label, pcols, rank, k, cond, ridge)),
+    )
+    return JointSolution(coef[:pat].reshape(n_nodes, normal.basis.n_coef), None, float(resid_var), report,
+                         tuple(normal.shared), coef[pat:].copy(), unexplained, covariance_fn=covariance)
+
+
+def unit_shared_scaling(normal: NormalEquations) -> tuple[FloatArray, FloatArray]:
+    """``X^T X`` with every shared column scaled to the pattern columns' mean square, so that the
+    rank and condition number reported say how well the samples identify the model, not in
+    which units a shared column (dB per unit of exponent) happens to be written; and the
+    column scale applied."""
+    pat = normal.n_pattern_columns
+    scale = np.ones(normal.n_columns)
+    if pat == normal.n_columns:
+        return normal.gram, scale
+    diag = np.diag(normal.gram)
+    unit = float(np.mean(diag[:pat])) if pat else 1.0
+    scale[pat:] = np.sqrt(unit / np.maximum(diag[pat:], 1e-300))
+    return normal.gram * scale[:, None] * scale[None, :], scale
+
+
+def unexplained_fraction(normal: NormalEquations, shared_diag: FloatArray) -> FloatArray:
+    """Per shared column, the fraction of its centred spread the other columns leave unexplained
+    (``1 - R^2``): the Schur complement ``1 / (K^-1)_jj`` over ``sum (x - mean x)^2``
+    (``shared_diag``: the diagonal of ``K^-1`` at the shared columns)."""
+    pat = normal.n_pattern_columns
+    out = np.ones(len(normal.shared))
+    n = max(normal.n_samples, 1)
+    for j, col in enumerate(normal.shared):
+        i = pat + j
+        total = float(normal.gram[i, i])
+        if col[0] == "exponent":
+            centred = total - normal.environment_sum**2 / n
+        else:
+            centred = total  # +-1 columns: their level is what they describe
+        inv = float(shared_diag[j])
+        if not (centred > 1e-9 * max(total, 1e-300)) or not (inv > 0):
+            out[j] = 0.0
+        else:
+            out[j] = float(min(1.0, 1.0 / (inv * centred)))
+    return out
+
+
+__all__ = ["solve_large", "unexplained_fraction", "unit_shared_scaling"]
