@@ -28,7 +28,7 @@ import time
 import numpy as np
 
 ONE_RUN = r"""
-import json, resource, sys, time
+import json, sys, time
 from rplearn.models.spec import ModelSpec
 from rplearn.workflows.learning import _fit_streamed
 from rplearn.workflows.fleet import dask_client, worker_peak_rss_bytes
@@ -48,7 +48,8 @@ else:
         report["fit_s"] = time.perf_counter() - t1
         report["workers_peak_bytes"] = worker_peak_rss_bytes(client)
 report["samples"] = fit.n_samples
-report["peak_bytes"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+# VmHWM: ru_maxrss would keep the parent's high-water mark across fork and exec
+report["peak_bytes"] = [int(l.split()[1]) for l in open("/proc/self/status") if l.startswith("VmHWM")][0] * 1024
 print(json.dumps(report))
 """
 

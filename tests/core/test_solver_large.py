@@ -98,7 +98,7 @@ def test_a_swarm_whose_drones_link_to_few_others_is_factorised_sparse_with_the_s
 
     links = [(k, (k + 1) % 12) for k in range(12)] + [((k + 1) % 12, k) for k in range(12)]
     normal = _statistics(12, 4, links, n=20000)
-    assert spectrum.block_fraction(normal.gram, normal.basis.n_coef) <= spectrum.SPARSE_BLOCK_FRACTION
+    assert spectrum.block_fraction(12, normal.link_counts) <= spectrum.SPARSE_BLOCK_FRACTION
     made = []
     real = spectrum.ConstrainedFactor.__init__
     monkeypatch.setattr(spectrum.ConstrainedFactor, "__init__",

@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 
 from rplearn.core.normal_equations import NormalEquations
 from rplearn.core.solution import FitReport, GaugeNote, JointSolution, fit_warnings
-from rplearn.core.spectrum import ConstrainedFactor, null_directions, spectrum_estimate, spectrum_from_factor
+from rplearn.core.spectrum import ConstrainedFactor, block_fraction, null_directions, spectrum_estimate, spectrum_from_factor
 from rplearn.errors import IdentifiabilityError
 
 FloatArray = NDArray[np.float64]
@@ -37,7 +37,7 @@ def solve_large(
     a[np.arange(pat), np.arange(pat)] += ridge  # the shared columns are not shrunk
     if penalty is not None:
         a[np.arange(pcols), np.arange(pcols)] += penalty
-    factor = ConstrainedFactor.of(a, cmat, block=normal.basis.n_coef)
+    factor = ConstrainedFactor.of(a, cmat, block_fraction(n_nodes, normal.link_counts))
     del a
     if factor is None:
         return None

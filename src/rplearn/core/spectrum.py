@@ -156,14 +156,11 @@ def spectrum_estimate(
 SPARSE_BLOCK_FRACTION = 0.25
 
 
-def block_fraction(a: FloatArray, block: int) -> float:
-    """Fraction of the ``block x block`` blocks of the pattern part of ``a`` that hold a non-zero."""
-    n = (a.shape[0] // block) * block
-    if n == 0:
-        return 1.0
-    nb = n // block
-    blocks = np.abs(a[:n, :n]).reshape(nb, block, nb, block).max(axis=(1, 3))
-    return float(np.count_nonzero(blocks)) / (nb * nb)
+def block_fraction(n_nodes: int, links: Any) -> float:
+    """Fraction of the node blocks of ``X^T X`` that can be non-zero: each node's own and those
+    of the (unordered) node pairs that share samples."""
+    pairs = {(min(a, b), max(a, b)) for a, b in links if a != b}
+    return (n_nodes + 2 * len(pairs)) / float(n_nodes * n_nodes)
 
 
 class ConstrainedFactor:
@@ -178,34 +175,39 @@ class ConstrainedFactor:
     def __init__(self, factor: Any, scale: FloatArray, cmat: FloatArray) -> None:
         self.factor, self.scale, self.cmat = factor, scale, cmat
         self.sparse = not isinstance(factor, np.ndarray)  # a SuperLU factor of a block-sparse matrix
+        self.sparse_a: Any = None  # then also the scaled matrix itself (for the dense inverse)
         self.y = self.solve_a(cmat.T) if cmat.shape[0] else np.zeros((scale.size, 0))  # A^-1 C^T
         self.s = cmat @ self.y if cmat.shape[0] else np.zeros((0, 0))  # C A^-1 C^T
 
     @classmethod
-    def of(cls, a: FloatArray, cmat: FloatArray, block: int | None = None) -> "ConstrainedFactor | None":
-        """Factorise ``A`` (overwritten with its scaled form). With ``block`` (the columns of one
-        node's pattern), a matrix whose nodes link to few others (at most
-        :data:`SPARSE_BLOCK_FRACTION` of its blocks non-zero) is factorised as a sparse matrix
+    def of(cls, a: FloatArray, cmat: FloatArray, block_share: float = 1.0) -> "ConstrainedFactor | None":
+        """Factorise ``A`` (overwritten with its scaled form). A matrix whose nodes link to few
+        others (``block_share``, the fraction of its node blocks that are non-zero, at most
+        :data:`SPARSE_BLOCK_FRACTION`; see :func:`block_fraction`) is factorised as a sparse matrix
         (SuperLU with a minimum-degree ordering of ``A + A^T``, symmetric mode), whose fill
         stays near the links instead of the ``n^3 / 3`` of a dense Cholesky."""
         d = 1.0 / np.sqrt(np.maximum(np.diag(a), 1e-300))
         a *= d[:, None]
         a *= d[None, :]
-        if block and block_fraction(a, block) <= SPARSE_BLOCK_FRACTION:
+        if block_share <= SPARSE_BLOCK_FRACTION:
             from scipy.sparse import csc_matrix
             from scipy.sparse.linalg import splu
 
+            sparse_a = csc_matrix(a)
             try:
-                lu = splu(csc_matrix(a), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                lu = splu(sparse_a, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
                           options={"SymmetricMode": True})
             except RuntimeError:  # exactly singular
                 return None
             if not np.all(lu.U.diagonal() > 0):  # pivots of a positive definite matrix are positive
                 return None
-            return cls(lu, d, cmat)
+            out = cls(lu, d, cmat)
+            out.sparse_a = sparse_a
+            return out
         from scipy.linalg import lapack
 
-        factor, info = lapack.dpotrf(a, lower=1, clean=0, overwrite_a=1)
+        # a is symmetric: its transpose is the same matrix in Fortran order, factorised in place
+        factor, info = lapack.dpotrf(a.T, lower=1, clean=0, overwrite_a=1)
         if info != 0:
             return None
         return cls(factor, d, cmat)
@@ -245,8 +247,11 @@ class ConstrainedFactor:
 
     def inverse(self) -> FloatArray:
         """``M`` itself (``n^3`` work: only when the whole covariance is asked for)."""
-        if self.sparse:
-            inv = self.solve_a(np.eye(self.scale.size))
+        if self.sparse:  # the inverse is dense: factorise densely now (SuperLU solves n columns slowly)
+            dense = ConstrainedFactor.of(self.sparse_a.toarray() / np.outer(self.scale, self.scale), self.cmat)
+            if dense is None:
+                raise ValueError("the regularised matrix is not positive definite")
+            return dense.inverse()
         else:
             from scipy.linalg import lapack
 

@@ -230,11 +230,11 @@ def selected_rows(index: pd.DataFrame, units: Sequence[str] | None) -> int:
 
 
 def worker_peak_rss_bytes(client: Any) -> dict[str, int]:
-    """Peak resident memory of each worker process [bytes] (Linux; ``ru_maxrss``)."""
+    """Peak resident memory of each worker process [bytes] (Linux: ``VmHWM``, which, unlike
+    ``ru_maxrss``, does not keep the parent's high-water mark across fork and exec)."""
     def peak() -> int:
-        import resource
-
-        return int(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss) * 1024
+        with open("/proc/self/status") as fh:
+            return next(int(line.split()[1]) for line in fh if line.startswith("VmHWM")) * 1024
 
     return {str(k): int(v) for k, v in client.run(peak).items()}
 
