@@ -112,3 +112,25 @@ def test_a_swarm_whose_drones_link_to_few_others_is_factorised_sparse_with_the_s
     np.testing.assert_allclose(large.covariance, small.covariance, atol=1e-10 * np.abs(small.covariance).max())
     assert large.report.rank == small.report.rank
     assert large.report.condition_number == pytest.approx(small.report.condition_number, rel=0.03)
+
+
+def test_free_directions_beyond_the_gauge_are_decided_by_the_ridge_with_a_warning_as_on_the_kkt_path(monkeypatch):
+    """A node seen at one elevation only: rank-deficient, but the ridge makes the system solvable;
+    the large path solves and warns like the small one (found by review: it used to refuse)."""
+    rng = np.random.default_rng(3)
+    basis = make_basis("sh", 4)
+    n = 6000
+    az = rng.uniform(-np.pi, np.pi, (2, n))
+    el = rng.uniform(-1.5, 1.5, (2, n))
+    tx = rng.integers(0, 4, n)
+    rx = (tx + 1 + rng.integers(0, 3, n)) % 4
+    el[0, tx == 0] = 0.3
+    el[1, rx == 0] = 0.3
+    normal = NormalEquations(basis, 4).add(Directions(az[0], el[0], az[1], el[1]), tx, rx, rng.normal(size=n))
+    monkeypatch.setattr(solver, "LARGE_COLUMNS", 10**9)
+    small = solver.solve(normal)
+    monkeypatch.setattr(solver, "LARGE_COLUMNS", 0)
+    large = solver.solve(normal)
+    assert large.report.rank == small.report.rank < normal.n_columns - large.report.expected_null_dim
+    assert any("not identified" in w for w in large.report.warnings)
+    np.testing.assert_allclose(large.coef, small.coef, atol=1e-8)

@@ -181,3 +181,29 @@ def test_a_missing_dask_says_how_to_install_it(monkeypatch):
     with pytest.raises(InputError, match=r"pip install 'rplearn\[dask\]'"):
         with dask_client("local"):
             pass
+
+
+def test_files_with_and_without_units_are_refused_naming_one(fleet, tmp_path):
+    _, result = fleet
+    df = pd.read_parquet(result.files[0])
+    write_table(df, str(tmp_path / "a.parquet"))
+    write_table(df.drop(columns="unit"), str(tmp_path / "b.parquet"))
+    with pytest.raises(InputError, match=r"b\.parquet: field unit is missing.*a\.parquet"):
+        fit_dataset(str(tmp_path), ModelSpec.parse("sh", order=4))
+
+
+def test_a_merge_task_leaves_its_inputs_unchanged(fleet):
+    """Dask may recompute from stored results: merging must not change them (found by review)."""
+    from rplearn.io.partitions import dataset_parts
+    from rplearn.workflows.fleet import _merge_accumulated, _part_statistics
+
+    root, _ = fleet
+    parts = dataset_parts(str(root))[:2]
+    kwargs = dict(spec=ModelSpec.parse("sh", order=4), nodes=drone_ids(4), units=None, by_unit=True, block_rows=None,
+                  path_loss=None)
+    a, b = (_part_statistics(p, 0, **kwargs) for p in parts)
+    before = (a.n_samples, b.n_samples, a.non_unit, {k: v.gram.copy() for k, v in a.stats.items()})
+    merged = _merge_accumulated(a, b)
+    assert merged.n_samples == before[0] + before[1]
+    assert (a.n_samples, b.n_samples, a.non_unit) == before[:3]
+    assert all(np.array_equal(a.stats[k].gram, g) for k, g in before[3].items())

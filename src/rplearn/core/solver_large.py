@@ -17,7 +17,6 @@ from numpy.typing import NDArray
 from rplearn.core.normal_equations import NormalEquations
 from rplearn.core.solution import FitReport, GaugeNote, JointSolution, fit_warnings
 from rplearn.core.spectrum import ConstrainedFactor, block_fraction, null_directions, spectrum_estimate, spectrum_from_factor
-from rplearn.errors import IdentifiabilityError
 
 FloatArray = NDArray[np.float64]
 
@@ -49,12 +48,8 @@ def solve_large(
         sv, rank, cond = spectrum_estimate(gram_u, null)
     del gram_u
     k = cmat.shape[0]
-    if pcols - rank > k:  # free directions the gauge does not fix: as the KKT path refuses
-        raise IdentifiabilityError(
-            f"the samples do not identify {normal.basis.label} for {n_nodes} nodes: design rank {rank} of "
-            f"{pcols} columns, {pcols - rank} free direction(s) but only {k} gauge constant(s); "
-            "add samples over the uncovered directions, choose a smaller model, or raise the ridge"
-        )
+    # more free directions than the gauge fixes: the regularised matrix is positive definite, so
+    # the ridge decides them, as on the KKT path, and the report warns (fit_warnings)
     coef = factor.solve(rhs) + factor.particular(cval)
     unexplained = unexplained_fraction(normal, factor.diagonal_at(np.arange(pat, pcols)))
     sse = max(normal.yty - 2.0 * coef @ normal.rhs + coef @ normal.gram @ coef, 0.0)

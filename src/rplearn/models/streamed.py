@@ -187,7 +187,7 @@ def accumulate(
             chunk = chunk[chunk["unit"].astype(str).isin(wanted).to_numpy()]
         if chunk.empty:
             continue
-        t = chunk["t"].to_numpy(np.float64)
+        t = chunk["t"].to_numpy(np.float64) if "t" in chunk.columns else np.zeros(0)  # link_samples names a missing t
         if block_rows:  # one unit: contiguous stretches of its rows, which must be in time order
             if t.size and (np.any(np.diff(t) < 0) or t[0] < last_t):
                 raise InputError(f"{where}: field t goes backwards; cutting a single flight into time blocks "

@@ -106,7 +106,11 @@ def _tree_reduce(client: Any, futures: list[Any], merge: Callable[[Any, Any], An
 
 
 def _merge_accumulated(a: Accumulated, b: Accumulated) -> Accumulated:
-    return a.merge(b)
+    """A new accumulation of ``a`` then ``b``: a task must not change its inputs (the stored
+    results of other tasks, which Dask may reuse when it recomputes after a lost worker)."""
+    import copy
+
+    return copy.deepcopy(a).merge(copy.deepcopy(b))
 
 
 def _watch(client: Any, futures: list[Any], progress: Progress | None) -> None:
@@ -141,6 +145,11 @@ def part_index(part: Part) -> pd.DataFrame:
 def dataset_index(parts: Sequence[Part], client: Any = None) -> tuple[pd.DataFrame, list[pd.DataFrame]]:
     """The index of the whole dataset (rows per unit and link direction) and of each part."""
     each = map_parts(part_index, parts, client)
+    labelled = ["unit" in e.columns for e in each]
+    if any(labelled) and not all(labelled):
+        bare = parts[labelled.index(False)].path
+        raise InputError(f"{bare}: field unit is missing, but other files of the dataset have it (e.g. "
+                         f"{parts[labelled.index(True)].path}); label every file's rows, or none", param="dataset")
     every = pd.concat(each, ignore_index=True)
     keys = [c for c in every.columns if c != "n"]
     whole = every.groupby(keys, sort=True, dropna=False)["n"].sum().reset_index() if len(every) else every
