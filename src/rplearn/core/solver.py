@@ -102,7 +102,7 @@ def link_components(n_nodes: int, links: Iterable[tuple[int, int]]) -> list[tupl
 
 #: Above this many columns the solver estimates the spectrum (:func:`spectrum_estimate`)
 #: instead of a full eigendecomposition, and factorises the regularised system by Cholesky
-#: (:func:`constrained_inverse`) instead of inverting the KKT matrix: swarms of tens of nodes.
+#: (:mod:`rplearn.core.solver_large`) instead of inverting the KKT matrix: swarms of tens of nodes.
 #: At and below it every result is as before.
 LARGE_COLUMNS = 1500
 

@@ -4,7 +4,7 @@
 fit report gives for every problem of up to :data:`rplearn.core.solver.LARGE_COLUMNS`
 columns. Above that (swarms of tens of nodes) the solver uses :func:`spectrum_estimate`
 (subspace iterations: a few matrix products and triangular solves) and
-:func:`constrained_inverse` (Cholesky) instead of a full eigendecomposition and the inverse of
+:class:`ConstrainedFactor` (one Cholesky, the covariance only when read) instead of a full eigendecomposition and the inverse of
 the KKT matrix, which grow as the cube of the columns with large constants (3,000 columns:
 3.3 s of eigenvalues and 2.5 s of inverse).
 """
@@ -119,15 +119,12 @@ def spectrum_estimate(
     ``dpstrf``) and the condition number is infinite. Within 3% of the exact condition number
     on the tested problems.
     """
-    from scipy.linalg import lapack, solve_triangular
+    from scipy.linalg import solve_triangular
 
     n = gram.shape[0]
     b = min(block, n)
     rng = np.random.default_rng(0)
-    v = np.linalg.qr(rng.standard_normal((n, b)))[0]
-    for _ in range(iterations):
-        v = np.linalg.qr(gram @ v)[0]
-    lam_max = float(np.linalg.eigvalsh(v.T @ gram @ v)[-1])
+    lam_max = _largest_eigenvalue(gram, iterations, block, rng)
     if not lam_max > 0:
         return np.zeros(1), 0, float("inf")
     tol = lam_max * n * np.finfo(np.float64).eps  # the eigenvalue form of spectrum_report's tolerance
@@ -145,8 +142,7 @@ def spectrum_estimate(
             x = np.linalg.qr(z)[0]
         lam_min = float(np.linalg.eigvalsh(x.T @ gram @ x)[0])
     if not lam_min > tol:
-        rank = int(lapack.dpstrf(gram.copy(), tol=tol)[2])
-        return np.sqrt(np.array([lam_max, 0.0])), rank, float("inf")
+        return _rank_deficient(gram, lam_max, tol)
     sv = np.sqrt(np.array([lam_max, lam_min]))
     return sv, n - null.shape[1], float(sv[0] / sv[1])
 
@@ -266,26 +262,4 @@ class ConstrainedFactor:
         return 0.5 * (inv + inv.T)
 
 
-def constrained_inverse(a: FloatArray, cmat: FloatArray) -> FloatArray | None:
-    """``M = A^-1 - A^-1 C^T (C A^-1 C^T)^-1 C A^-1`` (the KKT inverse's top-left block) by a
-    Cholesky factorisation of the diagonally scaled ``A``, for a symmetric positive definite
-    ``A``; None when it is not."""
-    from scipy.linalg import lapack
-
-    d = 1.0 / np.sqrt(np.maximum(np.diag(a), 1e-300))
-    a_s = a * d[:, None] * d[None, :]
-    factor, info = lapack.dpotrf(a_s, lower=1, clean=1)
-    if info != 0:
-        return None
-    inv_s, info = lapack.dpotri(factor, lower=1)
-    if info != 0:
-        return None
-    inv_s = np.tril(inv_s) + np.tril(inv_s, -1).T
-    inv = inv_s * d[:, None] * d[None, :]
-    if cmat.shape[0]:
-        y = inv @ cmat.T
-        inv = inv - y @ np.linalg.solve(cmat @ y, y.T)
-    return 0.5 * (inv + inv.T)
-
-
-__all__ = ["SPARSE_BLOCK_FRACTION", "block_fraction", "ConstrainedFactor", "constrained_inverse", "null_directions", "spectrum_estimate", "spectrum_from_factor", "spectrum_report"]
+__all__ = ["SPARSE_BLOCK_FRACTION", "block_fraction", "ConstrainedFactor", "null_directions", "spectrum_estimate", "spectrum_from_factor", "spectrum_report"]
