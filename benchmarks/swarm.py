@@ -208,8 +208,9 @@ def timed(fn):
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="10 and 30 drones, 2 repeats")
+    parser.add_argument("--drones", type=int, nargs="+", help="only these swarm sizes for predict_swarm (and no headings)")
     args = parser.parse_args()
-    sizes = (10, 30) if args.quick else (10, 30, 100)
+    sizes = args.drones or ((10, 30) if args.quick else (10, 30, 100))
     repeats = 2 if args.quick else 3
     rng = np.random.default_rng(0)
     model = model_of(rng)
@@ -238,7 +239,7 @@ def main() -> int:
               f"{best['ours'][0]:.2f} s against {best['ref'][0]:.2f} s, ratio {ratio_t:.2f} (target 2); "
               f"peak {best['ours'][1] / 2**20:.0f} MiB against {best['ref'][1] / 2**20:.0f} MiB, ratio {ratio_m:.2f} "
               f"(target 1.5); same numbers: {same}")
-    for n in (10, 20):
+    for n in () if args.drones else (10, 20):
         positions = {f"d{i:02d}": (rng.uniform(-100, 100), rng.uniform(-100, 100), rng.uniform(10, 40)) for i in range(n)}
         pattern_of = {d: ("A" if i % 2 else "B") for i, d in enumerate(positions)}
         t_ours = t_ref = np.inf

@@ -217,16 +217,17 @@ def predict_swarm(
     patterns = resolve_patterns(drones, model.nodes, pattern_of)
     t = prediction_times(tracks, step_s, times_s)
     poses = {d: tracks[d].interpolate(t, max_gap_s) for d in drones}
-    rows = _pair_time_rows(poses, drones)
-    if rows[0].size == 0:
+    present = np.stack([poses[d][2] == 0 for d in drones], axis=1)  # (times, drones)
+    n_present = present.sum(axis=1)
+    if not np.any(n_present >= 2):
         raise InputError(
             f"{source}: no time at which two drones both have a pose; check the logs' spans, or allow longer "
             f"gaps between pose rows (max_gap_s, now {max_gap_s:g} s)",
             param="max_gap_s",
         )
-    links = _predict_links(model, poses, drones, patterns, rows, t, tx_power_dbm, frequency_hz, min_rssi_dbm)
+    links, connectivity = _predict_blocks(model, poses, present, drones, patterns, t, tx_power_dbm, frequency_hz,
+                                          min_rssi_dbm)
     notes = _swarm_notes(links, poses, frequency_hz)
-    connectivity = connectivity_over_time(links, t, drones, min_rssi_dbm)
     return SwarmPrediction(links, connectivity, patterns, float(min_rssi_dbm), float(tx_power_dbm), frequency_hz, notes)
 
 
@@ -243,22 +244,75 @@ def _check_link_options(tx_power_dbm: float, max_gap_s: float, min_rssi_dbm: flo
 Poses = Mapping[str, tuple[np.ndarray, np.ndarray, np.ndarray]]
 
 
-def _pair_time_rows(poses: Poses, drones: Sequence[str]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Time index and drone indices of every (time, ordered pair) with both poses known.
+#: (time, ordered pair) rows predicted at once: bounds the geometry and features in memory.
+LINK_BLOCK_ROWS = 200_000
 
-    Gathered into one batch, so that the geometry, the gains and their spreads are computed by
-    a few vectorised calls, not per pair.
-    """
-    rows_t, rows_a, rows_b = [], [], []
-    for i, a in enumerate(drones):
-        for j, b in enumerate(drones):
-            if a != b:
-                ok = np.flatnonzero((poses[a][2] == 0) & (poses[b][2] == 0))
-                rows_t.append(ok)
-                rows_a.append(np.full(ok.size, i, np.intp))
-                rows_b.append(np.full(ok.size, j, np.intp))
-    ti, ia, ib = (np.concatenate(r) for r in (rows_t, rows_a, rows_b))
-    return ti, ia, ib
+
+def _time_blocks(n_times: int, n_drones: int) -> list[tuple[int, int]]:
+    """Consecutive time ranges ``[s0, s1)`` predicted together: at most
+    :data:`LINK_BLOCK_ROWS` links and :data:`CONNECTIVITY_BLOCK_VALUES` pair weights each."""
+    pairs = max(n_drones * (n_drones - 1), 1)
+    step = max(1, min(LINK_BLOCK_ROWS // pairs, CONNECTIVITY_BLOCK_VALUES // max(n_drones * n_drones, 1)))
+    return [(s0, min(n_times, s0 + step)) for s0 in range(0, n_times, step)]
+
+
+def _block_rows(present: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Time index (within the block) and drone indices of every ordered pair with both poses
+    known, in the order of time, then transmitter, then receiver (the drones are sorted)."""
+    n = present.shape[1]
+    both = present[:, :, None] & present[:, None, :] & ~np.eye(n, dtype=bool)
+    return np.nonzero(both)
+
+
+def _predict_blocks(
+    model: PatternSet, poses: Poses, present: np.ndarray, drones: Sequence[str], patterns: Mapping[str, str],
+    t: np.ndarray, tx_power_dbm: float, frequency_hz: float, min_rssi_dbm: float,
+) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """The links and connectivity tables of :class:`SwarmPrediction`, a block of times at a
+    time: each block's links are written into the whole table's columns, already in order, so
+    memory holds the table and one block's work, not copies of the table."""
+    n = len(drones)
+    n_present = present.sum(axis=1)
+    total = int(np.sum(n_present * (n_present - 1)))
+    position = np.stack([poses[d][0] for d in drones])  # (drones, times, 3)
+    quat = np.stack([poses[d][1] for d in drones])
+    pattern_index = np.array([model.node_index(patterns[x]) for x in drones], np.intp)
+    names = np.array(drones, dtype=object)
+    pattern_names = np.array([patterns[x] for x in drones], dtype=object)
+    limit_m = _far_field_limit_m(frequency_hz)
+    residual_db = float(model.training.get("rmse_db", np.nan))
+    columns: dict[str, np.ndarray] = {}
+    parts = []
+    offset = 0
+    for s0, s1 in _time_blocks(t.size, n):
+        k, ia, ib = _block_rows(present[s0:s1])
+        ti = k + s0
+        pa, pb = position[ia, ti], position[ib, ti]
+        d = distance_m(pa, pb)
+        samples = LinkSamples(link_directions(pa, quat[ia, ti], pb, quat[ib, ti]), pattern_index[ia], pattern_index[ib],
+                              model.nodes, np.full(d.size, np.nan), d, np.full(d.size, frequency_hz),
+                              tx_z_m=pa[:, 2], rx_z_m=pb[:, 2])
+        gain = model.predict_gain(samples)
+        near = d <= limit_m
+        rssi = np.where(near, np.nan, tx_power_dbm + gain - free_space_path_loss_db(np.where(near, 1.0, d), frequency_hz))
+        block = {"t": t[ti], "tx": names[ia], "rx": names[ib], "tx_pattern": pattern_names[ia],
+                 "rx_pattern": pattern_names[ib], "distance_m": d, "gain_pred_db": gain, "rssi_pred_dbm": rssi}
+        std = model.predict_gain_std(samples)
+        if std is not None:
+            block["gain_pred_std_db"] = std
+            block["rssi_pred_std_db"] = np.sqrt(std**2 + residual_db**2)
+        ends = end_coverage_deg(model, samples)
+        if ends is not None:  # how far each end looks from where its pattern was learned [deg]
+            block["tx_coverage_deg"], block["rx_coverage_deg"] = ends
+        block["near_field"] = near
+        block["up"] = (rssi >= min_rssi_dbm) | near
+        if not columns:
+            columns = {name: np.empty(total, dtype=v.dtype) for name, v in block.items()}
+        for name, v in block.items():
+            columns[name][offset:offset + d.size] = v
+        offset += d.size
+        parts.append(_connectivity_block(k, ia, ib, np.where(near, np.inf, rssi), t[s0:s1], drones, min_rssi_dbm))
+    return pd.DataFrame(columns, copy=False), pd.concat(parts, ignore_index=True)
 
 
 def _far_field_limit_m(frequency_hz: float) -> float:
@@ -344,50 +398,59 @@ def connectivity_over_time(
     tree's weakest edge (what :func:`spanning_bottleneck` gives one time).
     """
     n = len(drones)
-    names = np.asarray(list(drones), dtype=object)
     times_s = np.asarray(times_s, np.float64)
     t_index = np.searchsorted(times_s, links["t"].to_numpy(np.float64))
     tx = pd.Categorical(links["tx"], categories=list(drones)).codes.astype(np.intp)
     rx = pd.Categorical(links["rx"], categories=list(drones)).codes.astype(np.intp)
     rssi_all = np.where(links["near_field"].to_numpy(bool), np.inf, links["rssi_pred_dbm"].to_numpy(np.float64))
-    iu, ju = np.triu_indices(n, 1)
     parts = []
     step = max(1, CONNECTIVITY_BLOCK_VALUES // max(n * n, 1))  # memory: a block of (times, n, n) weights
     for s0 in range(0, times_s.size, step):
         s1 = min(times_s.size, s0 + step)
         sel = (t_index >= s0) & (t_index < s1)
-        k = t_index[sel] - s0
-        m = s1 - s0
-        rssi = np.full((m, n, n), np.nan)
-        rssi[k, tx[sel], rx[sel]] = rssi_all[sel]
-        present = np.zeros((m, n), bool)
-        present[k, tx[sel]] = True
-        present[k, rx[sel]] = True
-        w = np.fmin(rssi, rssi.transpose(0, 2, 1))  # a pair's weight: its weaker direction (NaN: unknown)
-        pairs_up = np.sum(w[:, iu, ju] >= min_rssi_dbm, axis=1)
-        edge_w, edge_a, edge_b = maximum_spanning_edges(np.where(np.isnan(w), -np.inf, w))
-        n_missing = n - present.sum(axis=1)
-        n_groups = n - np.sum(edge_w >= min_rssi_dbm, axis=1)
-        spans = (n_missing == 0) & ~np.any(np.isneginf(edge_w), axis=1)
-        rows = np.arange(m)
-        weakest = np.argmin(edge_w, axis=1)
-        a = np.minimum(edge_a[rows, weakest], edge_b[rows, weakest])
-        b = np.maximum(edge_a[rows, weakest], edge_b[rows, weakest])
-        missing = np.full(m, "", dtype=object)
-        for r in np.flatnonzero(n_missing):
-            missing[r] = ",".join(str(d) for d, p in zip(drones, present[r]) if not p)
-        parts.append(pd.DataFrame({
-            "t": times_s[s0:s1], "n_drones": present.sum(axis=1).astype(int), "n_missing": n_missing.astype(int),
-            "missing": missing, "n_pairs_up": pairs_up.astype(int), "n_components": (n_groups - n_missing).astype(int),
-            "connected": (n_missing == 0) & (n_groups == 1),
-            "bottleneck_rssi_dbm": np.where(spans, edge_w[rows, weakest], np.nan).astype(float),
-            "bottleneck_pair": np.where(spans, names[a] + "-" + names[b], ""),
-        }))
+        parts.append(_connectivity_block(t_index[sel] - s0, tx[sel], rx[sel], rssi_all[sel], times_s[s0:s1], drones,
+                                         min_rssi_dbm))
     return pd.concat(parts, ignore_index=True)
 
 
 #: Weights held at once by :func:`connectivity_over_time` (times x drones x drones).
 CONNECTIVITY_BLOCK_VALUES = 4_000_000
+
+
+def _connectivity_block(
+    k: np.ndarray, tx: np.ndarray, rx: np.ndarray, rssi_dbm: np.ndarray, times_s: np.ndarray,
+    drones: Sequence[str], min_rssi_dbm: float,
+) -> pd.DataFrame:
+    """Rows of :func:`connectivity_over_time` for the times ``times_s`` of one block, from its
+    links: time index ``k`` within the block, drone indices, RSSI (+inf near field) [dBm]."""
+    n, m = len(drones), times_s.size
+    names = np.asarray(list(drones), dtype=object)
+    iu, ju = np.triu_indices(n, 1)
+    rssi = np.full((m, n, n), np.nan)
+    rssi[k, tx, rx] = rssi_dbm
+    present = np.zeros((m, n), bool)
+    present[k, tx] = True
+    present[k, rx] = True
+    w = np.fmin(rssi, rssi.transpose(0, 2, 1))  # a pair's weight: its weaker direction (NaN: unknown)
+    pairs_up = np.sum(w[:, iu, ju] >= min_rssi_dbm, axis=1)
+    edge_w, edge_a, edge_b = maximum_spanning_edges(np.where(np.isnan(w), -np.inf, w))
+    n_missing = n - present.sum(axis=1)
+    n_groups = n - np.sum(edge_w >= min_rssi_dbm, axis=1)
+    spans = (n_missing == 0) & ~np.any(np.isneginf(edge_w), axis=1)
+    rows = np.arange(m)
+    weakest = np.argmin(edge_w, axis=1)
+    a = np.minimum(edge_a[rows, weakest], edge_b[rows, weakest])
+    b = np.maximum(edge_a[rows, weakest], edge_b[rows, weakest])
+    missing = np.full(m, "", dtype=object)
+    for r in np.flatnonzero(n_missing):
+        missing[r] = ",".join(str(d) for d, p in zip(drones, present[r]) if not p)
+    return pd.DataFrame({
+        "t": times_s, "n_drones": present.sum(axis=1).astype(int), "n_missing": n_missing.astype(int),
+        "missing": missing, "n_pairs_up": pairs_up.astype(int), "n_components": (n_groups - n_missing).astype(int),
+        "connected": (n_missing == 0) & (n_groups == 1),
+        "bottleneck_rssi_dbm": np.where(spans, edge_w[rows, weakest], np.nan).astype(float),
+        "bottleneck_pair": np.where(spans, names[a] + "-" + names[b], ""),
+    })
 
 
 def maximum_spanning_edges(weights: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
