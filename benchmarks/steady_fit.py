@@ -1,7 +1,7 @@
 """Benchmark of small fits on a busy machine (issue 13, item 4): one BLAS thread for small problems.
 
 While another process keeps one core busy, fits SH-10 on 1,333 samples (the paper's
-two drones) 20 times with the thread limit of :mod:`rplearn.models.blas` and 20 times with
+two drones) 20 times with the thread limit of :mod:`rplearn.core.blas` and 20 times with
 every BLAS thread (the reference, what the fit did before), alternating in rounds of 5, and
 prints each side's fastest and slowest LTD and their ratio. Target: slowest within 3x of the
 fastest with the limit.
@@ -17,7 +17,7 @@ import time
 import numpy as np
 
 from rplearn.data.tables import link_samples
-from rplearn.models import blas
+from rplearn.core import blas
 from rplearn.models.fit import fit_model
 from rplearn.models.spec import ModelSpec
 from rplearn.sim.flight import simulate

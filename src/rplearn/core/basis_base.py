@@ -142,13 +142,14 @@ class Basis:
     moment_shape: tuple[int, int] | None = None
 
     def design_rows_into(
-        self, az_rad: FloatArray, el_rad: FloatArray, out: FloatArray, moments: FloatArray | None = None
+        self, az_rad: FloatArray, el_rad: FloatArray, out: FloatArray, moments: FloatArray | None = None,
+        segments: NDArray[np.intp] | None = None,
     ) -> None:
         """Like :meth:`design_into`, rows in :attr:`row_order` (the fastest order to compute).
 
-        ``moments`` is only accepted by bases with a :attr:`moment_shape`.
+        ``moments`` (and ``segments``) are only accepted by bases with a :attr:`moment_shape`.
         """
-        if moments is not None:
+        if moments is not None or segments is not None:
             raise TypeError(f"{type(self).__name__} has no Gram moments")
         self.design_into(az_rad, el_rad, out)
 

@@ -8,13 +8,12 @@ pattern a linear combination of the same basis, ``G_n = f(az, el) . p_n``, the r
 
 The design matrix is never formed: :class:`NormalEquations` accumulates ``X^T X``, ``X^T y``,
 ``y^T y`` and ``n`` chunk by chunk, one link direction at a time (:func:`link_statistics`),
-through a block buffer reused by later fits in the same thread, so memory does not grow with
-the number of samples. :mod:`rplearn.core.solver` solves the result.
+through a block buffer reused by later fits in the same thread (:mod:`rplearn.core.link_statistics`),
+so memory does not grow with the number of samples. :mod:`rplearn.core.solver` solves the result.
 """
 
 from __future__ import annotations
 
-import threading
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -23,18 +22,12 @@ from numpy.typing import ArrayLike, NDArray
 
 from rplearn.core.bases import Basis
 from rplearn.core.geometry import Directions
+from rplearn.core.link_statistics import (
+    _in_order, block_rows, block_samples, link_statistics, segmented_link_statistics,
+)
 from rplearn.errors import InputError
 
 FloatArray = NDArray[np.float64]
-
-#: Samples per feature sub-chunk (fits the CPU cache) and per accumulation block.
-FEATURE_CHUNK = 4096
-BLOCK_SAMPLES = 65536
-#: The block buffer holds at most this many values (64 MiB): high orders take fewer samples per
-#: block (SH-24, 1,155 rows: about 7,000), so the buffer kept between fits stays bounded
-#: (it was 0.6 GB after one SH-24 fit).
-BLOCK_MAX_VALUES = 8 * 2**20
-
 
 #: The path-loss exponent is refused as not identifiable when the part of its log-distance
 #: column ``10 log10 d`` that the other columns (the patterns) cannot explain has a standard
@@ -43,139 +36,6 @@ BLOCK_MAX_VALUES = 8 * 2**20
 #: station), one unit of exponent moves the gain less than a pattern's misfit does, and the
 #: patterns could take any exponent.
 EXPONENT_MIN_SPREAD_DB = 0.5
-
-_BUFFERS = threading.local()
-
-
-def _block_buffer(size: int) -> FloatArray:
-    """A float64 scratch buffer of at least ``size`` values, reused by later fits in this thread.
-
-    Fresh memory is slow on first touch (one page fault per 4 KiB; measured 20-30 ms for the
-    52 MB block of an SH-10 fit on this kind of machine), so the block buffer is kept.
-    """
-    buf = getattr(_BUFFERS, "block", None)
-    if buf is None or buf.size < size:
-        _BUFFERS.block = None  # let the old one go first
-        buf = np.empty(size)
-        buf.fill(0.0)  # pay the page faults now, once, not inside the first rank-k update
-        _BUFFERS.block = buf
-    return buf[:size]
-
-
-def block_samples(rows: int) -> int:
-    """Samples per accumulation block of ``rows`` rows (:data:`BLOCK_SAMPLES`, fewer for big bases)."""
-    return int(max(256, min(BLOCK_SAMPLES, BLOCK_MAX_VALUES // max(int(rows), 1))))
-
-
-def block_rows(basis: Basis, n_extra: int = 2) -> int:
-    """Rows of the accumulation block of :func:`link_statistics` for this basis (with the
-    ``n_extra`` rows :class:`NormalEquations` adds: a constant and the environment column)."""
-    return 2 * basis.n_coef + 1 + n_extra
-
-
-def reserve_block_buffer(basis: Basis, n_samples: int) -> None:
-    """Allocate (and touch) this thread's block buffer for a fit of ``n_samples`` samples.
-
-    Called before a timed fit so that its learning time does not include the one-off page
-    faults of the buffer (measured 0.2 s for the first SH-10 fit of the paper's 56k samples).
-    """
-    rows = block_rows(basis)
-    _block_buffer(rows * max(1, min(int(n_samples), block_samples(rows))))
-
-
-def _fill_features(
-    basis: Basis,
-    buf: FloatArray,
-    az_tx: FloatArray,
-    el_tx: FloatArray,
-    az_rx: FloatArray,
-    el_rx: FloatArray,
-    moments: FloatArray | None,
-    gap: int = 1,
-) -> None:
-    """Write tx features into rows ``0 .. p-1`` and rx features into rows ``p+gap .. 2p+gap-1`` of ``buf``.
-
-    Rows are in the basis's :attr:`~rplearn.core.bases.Basis.row_order`; rows ``p .. p+gap-1``
-    are left for the observations and extra columns. Works in cache-sized chunks; a basis that
-    accepts stacked samples computes both ends of a chunk in one pass, through a (p, 2, chunk)
-    strided view of the two row groups, and adds to ``moments[0]`` (tx) and ``moments[1]`` (rx)
-    when given.
-    """
-    p = basis.n_coef
-    n = az_tx.size
-    if basis.stacked_samples:
-        az_both = np.stack([az_tx, az_rx])
-        el_both = np.stack([el_tx, el_rx])
-    for s in range(0, n, FEATURE_CHUNK):
-        e = min(n, s + FEATURE_CHUNK)
-        view = buf[:, s:e]
-        if basis.stacked_samples:
-            both = np.lib.stride_tricks.as_strided(
-                view, shape=(p, 2, e - s), strides=(view.strides[0], (p + gap) * view.strides[0], view.strides[1])
-            )
-            basis.design_rows_into(az_both[:, s:e], el_both[:, s:e], both, moments)
-        else:
-            basis.design_rows_into(az_tx[s:e], el_tx[s:e], view[:p])
-            basis.design_rows_into(az_rx[s:e], el_rx[s:e], view[p + gap : 2 * p + gap])
-
-
-def link_statistics(
-    basis: Basis,
-    az_tx: FloatArray,
-    el_tx: FloatArray,
-    az_rx: FloatArray,
-    el_rx: FloatArray,
-    y: FloatArray,
-    extra: FloatArray | None = None,
-    moments_out: FloatArray | None = None,
-) -> FloatArray:
-    """``Z^T Z`` with ``Z = [f(tx directions), y, extra..., f(rx directions)]`` over samples of one link.
-
-    A ``(2p + 1 + m, 2p + 1 + m)`` matrix (``m`` rows of ``extra``, shape ``(m, n)``: shared
-    regressors such as a constant or the log-distance column), features in the basis's row
-    order: the tx and rx blocks of ``X^T X``, ``X^T y``, ``y^T y`` and the extra columns'
-    products. Per block of :func:`block_samples` samples, written into this thread's reused
-    buffer, either one symmetric rank-k update of all rows, or, for a basis with Gram moments
-    (SH), only the product ``[f_tx; y; extra] [y; extra; f_rx]^T`` (about half the work): the
-    two diagonal feature blocks then come from the moments. With ``moments_out`` (shape
-    ``(2, *basis.moment_shape)``) the moments of the tx and rx ends are added there instead
-    and the two diagonal blocks are left zero: a caller with many links turns each node's
-    summed moments into its block once (:meth:`NormalEquations.add`).
-    """
-    az_tx, el_tx, az_rx, el_rx, y = (np.ascontiguousarray(a, np.float64).ravel() for a in (az_tx, el_tx, az_rx, el_rx, y))
-    p = basis.n_coef
-    n = az_tx.size
-    extra = np.zeros((0, n)) if extra is None else np.asarray(extra, np.float64).reshape(-1, n)
-    m = extra.shape[0]
-    gap = 1 + m  # rows between the tx and rx feature groups: y and the extra rows
-    k = 2 * p + gap
-    use_moments = basis.moment_shape is not None and basis.stacked_samples
-    if use_moments:
-        moments = np.zeros((2, *basis.moment_shape)) if moments_out is None else moments_out
-    else:
-        moments = None
-    total = np.zeros((k, k))
-    per_block = block_samples(k)
-    block = _block_buffer(k * max(1, min(n, per_block)))  # grows to the largest block seen, within the cap
-    for start in range(0, n, per_block):
-        stop = min(n, start + per_block)
-        buf = block[: k * (stop - start)].reshape(k, stop - start)
-        part = slice(start, stop)
-        _fill_features(basis, buf, az_tx[part], el_tx[part], az_rx[part], el_rx[part], moments, gap)
-        buf[p] = y[part]
-        if m:
-            buf[p + 1 : p + gap] = extra[:, part]
-        if moments is None:
-            total += buf @ buf.T
-        else:
-            total[: p + gap, p:] += buf[: p + gap] @ buf[p:].T
-    if moments is not None:
-        total[p:, : p + gap] = total[: p + gap, p:].T
-        if moments_out is None:
-            total[:p, :p] = basis.gram_from_moments(moments[0])
-            total[p + gap :, p + gap :] = basis.gram_from_moments(moments[1])
-    return total
-
 
 #: Entries of a directed link's sums (:attr:`NormalEquations.directed`) after its two feature
 #: blocks: sum of y, sample count, sum of the environment column.
@@ -304,28 +164,101 @@ class NormalEquations:
             starts = np.flatnonzero(np.r_[True, sorted_code[1:] != sorted_code[:-1]])
             ends = np.r_[starts[1:], n]
             groups = [(int(sorted_code[a]), slice(int(a), int(b))) for a, b in zip(starts, ends)]
-        moment_shape = self.basis.moment_shape if self.basis.stacked_samples else None
-        # with Gram moments, each node's diagonal block comes from its summed moments, once per
-        # node and chunk, not once per link end
-        node_moments: dict[int, FloatArray] | None = {} if moment_shape is not None and len(groups) > 1 else None
-        for code, sel in groups:
-            t, r = divmod(code, self.n_nodes)
-            self._add_pair(t, r, az_tx[sel], el_tx[sel], az_rx[sel], el_rx[sel], y[sel], e[sel], node_moments)
-        if node_moments:
-            p = self.basis.n_coef
-            nat = self._natural[:p]
-            for k, m in sorted(node_moments.items()):
-                self.gram[k * p : (k + 1) * p, k * p : (k + 1) * p] += self.basis.gram_from_moments(m)[np.ix_(nat, nat)]
-            # the links' cross blocks went into the upper block triangle: mirror them
-            for a, b in {(min(c // self.n_nodes, c % self.n_nodes), max(c // self.n_nodes, c % self.n_nodes))
-                         for c, _ in groups}:
-                self.gram[b * p : (b + 1) * p, a * p : (a + 1) * p] = self.gram[a * p : (a + 1) * p, b * p : (b + 1) * p].T
+        if len(groups) > 1 and self.basis.moment_shape is not None and self.basis.stacked_samples:
+            # many links: features of many links per pass, each node's diagonal block from its
+            # summed moments once per call, not once per link end
+            codes = np.array([c for c, _ in groups], np.int64)
+            starts = np.array([sel.start for _, sel in groups], np.intp)
+            self._add_links(codes, np.r_[starts, n], az_tx, el_tx, az_rx, el_rx, y, e)
+        else:
+            for code, sel in groups:
+                t, r = divmod(code, self.n_nodes)
+                self._add_pair(t, r, az_tx[sel], el_tx[sel], az_rx[sel], el_rx[sel], y[sel], e[sel])
         self.n_samples += n
         return self
 
+    def _add_links(
+        self, codes: NDArray[np.int64], bounds: NDArray[np.intp], az_tx: FloatArray, el_tx: FloatArray,
+        az_rx: FloatArray, el_rx: FloatArray, y: FloatArray, e: FloatArray,
+    ) -> None:
+        """Add samples sorted by link (link ``codes[j]`` = ``tx * n_nodes + rx`` holds samples
+        ``bounds[j]:bounds[j + 1]``) in blocks of samples (:func:`segmented_link_statistics`);
+        the diagonal blocks from the nodes' summed moments, the cross blocks into the upper
+        block triangle, then mirrored."""
+        p = self.basis.n_coef
+        n = az_tx.size
+        m = self._n_extra
+        per_block = block_samples(block_rows(self.basis, m))
+        node_moments = np.zeros((self.n_nodes, *self.basis.moment_shape))
+        touched: set[tuple[int, int]] = set()
+        nodes = np.arange(self.n_nodes)[:, None]
+
+        def statistics(s: int) -> tuple[FloatArray, FloatArray, int, int]:
+            stop = min(n, s + per_block)
+            first = int(np.searchsorted(bounds, s, side="right")) - 1
+            last = int(np.searchsorted(bounds, stop, side="left"))
+            local = np.clip(bounds[first : last + 1], s, stop) - s
+            extra = np.ones((1, stop - s)) if not self.environment else np.stack([np.ones(stop - s), e[s:stop]])
+            part = slice(s, stop)
+            products, moments = segmented_link_statistics(
+                self.basis, az_tx[part], el_tx[part], az_rx[part], el_rx[part], y[part], extra, local, self._natural[:p])
+            return products, moments, first, last
+
+        for products, moments, first, last in _in_order(statistics, range(0, n, per_block)):
+            tx, rx = np.divmod(codes[first:last], self.n_nodes)
+            flat = node_moments.reshape(self.n_nodes, -1)
+            flat += (tx[None, :] == nodes).astype(np.float64) @ moments[0].reshape(tx.size, -1)
+            flat += (rx[None, :] == nodes).astype(np.float64) @ moments[1].reshape(rx.size, -1)
+            self._add_products(tx, rx, products)
+            touched.update(zip(np.minimum(tx, rx).tolist(), np.maximum(tx, rx).tolist()))
+        nat = self._natural[:p]
+        for k in np.flatnonzero(np.any(node_moments != 0, axis=(1, 2))):
+            self.gram[k * p : (k + 1) * p, k * p : (k + 1) * p] += self.basis.gram_from_moments(node_moments[k])[
+                np.ix_(nat, nat)]
+        for a, b in touched:  # the cross blocks went into the upper block triangle: mirror them
+            self.gram[b * p : (b + 1) * p, a * p : (a + 1) * p] = self.gram[a * p : (a + 1) * p, b * p : (b + 1) * p].T
+
+    def _add_products(self, tx: NDArray[np.int64], rx: NDArray[np.int64], products: FloatArray) -> None:
+        """Add the per-link products of :func:`segmented_link_statistics` (rows ``[f_tx, y, 1,
+        e]``, columns ``[y, 1, e, f_rx]``, features in natural order): cross blocks into
+        the upper block triangle of the Gram, then ``X^T y``, ``y^T y``, the environment
+        column's products and each directed link's sums (:attr:`directed`)."""
+        p = self.basis.n_coef
+        gap = 1 + self._n_extra
+        y_row, one_row, env_row = p, p + 1, p + 2
+        cross = products[:, :p, gap:]  # F_tx^T F_rx
+        for j, (t, r) in enumerate(zip(tx.tolist(), rx.tolist())):
+            if t < r:
+                self.gram[t * p : (t + 1) * p, r * p : (r + 1) * p] += cross[j]
+            else:
+                self.gram[r * p : (r + 1) * p, t * p : (t + 1) * p] += cross[j].T
+        # per node: sums over its links as a product with the links' node indicator
+        nodes = np.arange(self.n_nodes)
+        at_tx = (tx[None, :] == nodes[:, None]).astype(np.float64)  # (nodes, links)
+        at_rx = (rx[None, :] == nodes[:, None]).astype(np.float64)
+        tx_cols = products[:, :p, :gap]  # rows f_tx times columns y, 1, e
+        rx_rows = products[:, p:, gap:]  # rows y, 1, e times columns f_rx
+        self.rhs[: self.n_pattern_columns] += (at_tx @ tx_cols[:, :, 0] + at_rx @ rx_rows[:, 0, :]).ravel()
+        self.yty += float(products[:, y_row, 0].sum())
+        sums = np.zeros((tx.size, 2 * p + 3))
+        sums[:, :p] = tx_cols[:, :, 1]
+        sums[:, p : 2 * p] = rx_rows[:, 1, :]
+        sums[:, 2 * p + _SUM_Y] = products[:, y_row, 1]
+        sums[:, 2 * p + _COUNT] = products[:, one_row, 1]
+        if self.environment:
+            sums[:, 2 * p + _SUM_E] = products[:, one_row, 2]
+            self.env_cross += (at_tx @ tx_cols[:, :, 2] + at_rx @ rx_rows[:, 2, :]).ravel()
+            self.env_y += float(products[:, y_row, 2].sum())
+            self.env_sq += float(products[:, env_row, 2].sum())
+        for j, (t, r) in enumerate(zip(tx.tolist(), rx.tolist())):
+            key = (min(t, r), max(t, r))
+            self.link_counts[key] = self.link_counts.get(key, 0) + int(round(sums[j, 2 * p + _COUNT]))
+            prev = self.directed.get((t, r))
+            self.directed[(t, r)] = sums[j] if prev is None else prev + sums[j]
+
     def _add_pair(
         self, t: int, r: int, az_tx: FloatArray, el_tx: FloatArray, az_rx: FloatArray, el_rx: FloatArray, y: FloatArray,
-        e: FloatArray, node_moments: dict[int, FloatArray] | None = None,
+        e: FloatArray,
     ) -> None:
         p = self.basis.n_coef
         bt = slice(t * p, (t + 1) * p)
@@ -336,18 +269,7 @@ class NormalEquations:
         # Both nodes' blocks of X^T X, X^T y and y^T y, and the sums of the directed link, from
         # one pass over the samples.
         extra = np.ones((1, n)) if not self.environment else np.stack([np.ones(n), e])
-        moments = None
-        if node_moments is not None:
-            moments = np.zeros((2, *self.basis.moment_shape))
-        block = link_statistics(self.basis, az_tx, el_tx, az_rx, el_rx, y, extra, moments)
-        if moments is not None:
-            for node, m in ((t, moments[0]), (r, moments[1])):
-                if node in node_moments:
-                    node_moments[node] += m
-                else:
-                    node_moments[node] = m
-            self._add_link_block(t, r, block)
-            return
+        block = link_statistics(self.basis, az_tx, el_tx, az_rx, el_rx, y, extra)
         block = block[np.ix_(self._natural, self._natural)]
         self.gram[bt, bt] += block[:p, :p]
         self.gram[br, br] += block[p : 2 * p, p : 2 * p]
@@ -367,40 +289,6 @@ class NormalEquations:
             self.env_cross[bt] += block[:p, env]
             self.env_cross[br] += block[p : 2 * p, env]
             self.env_y += float(block[2 * p, env])
-            self.env_sq += float(block[env, env])
-        prev = self.directed.get((t, r))
-        self.directed[(t, r)] = sums if prev is None else prev + sums
-
-    def _add_link_block(self, t: int, r: int, block: FloatArray) -> None:
-        """:meth:`_add_pair`'s bookkeeping for a block from the moments path of
-        :func:`link_statistics` (rows ``[f_tx, y, extra, f_rx]`` in the basis's row order, the
-        diagonal feature blocks left zero): only the parts that are needed are put back into
-        natural order, and the cross block goes into the upper block triangle of the Gram
-        (:meth:`add` mirrors it)."""
-        p = self.basis.n_coef
-        m = self._n_extra
-        nat = self._natural[:p]
-        rx0 = p + 1 + m  # first rx feature row
-        cross = block[:p, rx0:][np.ix_(nat, nat)]  # F_tx^T F_rx
-        if t < r:
-            self.gram[t * p : (t + 1) * p, r * p : (r + 1) * p] += cross
-        else:
-            self.gram[r * p : (r + 1) * p, t * p : (t + 1) * p] += cross.T
-        y_row, one = p, p + 1
-        self.rhs[t * p : (t + 1) * p] += block[:p, y_row][nat]
-        self.rhs[r * p : (r + 1) * p] += block[y_row, rx0:][nat]
-        self.yty += float(block[y_row, y_row])
-        sums = np.zeros(2 * p + 3)
-        sums[:p] = block[:p, one][nat]
-        sums[p : 2 * p] = block[one, rx0:][nat]
-        sums[2 * p + _SUM_Y] = block[y_row, one]
-        sums[2 * p + _COUNT] = block[one, one]
-        if self.environment:
-            env = one + 1
-            sums[2 * p + _SUM_E] = block[one, env]
-            self.env_cross[t * p : (t + 1) * p] += block[:p, env][nat]
-            self.env_cross[r * p : (r + 1) * p] += block[env, rx0:][nat]
-            self.env_y += float(block[y_row, env])
             self.env_sq += float(block[env, env])
         prev = self.directed.get((t, r))
         self.directed[(t, r)] = sums if prev is None else prev + sums

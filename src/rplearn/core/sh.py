@@ -140,8 +140,18 @@ def _sh_chebyshev_tables(order: int) -> tuple[FloatArray, NDArray[np.intp], NDAr
     return coef, row_order, natural
 
 
-def _add_moments(cheb: FloatArray, trig: FloatArray, moments: FloatArray) -> None:
-    """``moments[...] += cheb @ trig^T`` over the last (sample) axis, per leading sample index."""
+def _add_moments(cheb: FloatArray, trig: FloatArray, moments: FloatArray,
+                 segments: NDArray[np.intp] | None = None) -> None:
+    """``moments[...] += cheb @ trig^T`` over the last (sample) axis, per leading sample index;
+    with ``segments`` (bounds of consecutive sample ranges), per range: ``moments[..., j, :, :]``
+    sums samples ``segments[j]:segments[j + 1]``."""
+    if segments is not None:
+        for idx in np.ndindex(*cheb.shape[1:-1]):
+            c, t = cheb[(slice(None), *idx)], trig[(slice(None), *idx)]
+            for j in np.flatnonzero(np.diff(segments)):
+                a, b = segments[j], segments[j + 1]
+                moments[(*idx, j)] += c[:, a:b] @ t[:, a:b].T
+        return
     if cheb.ndim == 2:
         moments += cheb @ trig.T
     elif cheb.ndim == 3:
@@ -346,13 +356,16 @@ class SphericalHarmonics(Basis):
         return self._tables[1]
 
     def design_rows_into(
-        self, az_rad: FloatArray, el_rad: FloatArray, out: FloatArray, moments: FloatArray | None = None
+        self, az_rad: FloatArray, el_rad: FloatArray, out: FloatArray, moments: FloatArray | None = None,
+        segments: NDArray[np.intp] | None = None,
     ) -> None:
         """Features in :attr:`row_order`; optionally also accumulate the Gram moments.
 
         ``moments``, of shape ``(*lead, *moment_shape)`` where ``lead`` is every sample axis but
         the last (``()`` for 1-D samples, ``(2,)`` for both ends of a link), receives ``+=``
-        the sums over samples that :meth:`gram_from_moments` turns into ``F F^T``.
+        the sums over samples that :meth:`gram_from_moments` turns into ``F F^T``. With
+        ``segments`` (``k + 1`` increasing bounds from 0 to the number of samples), the moments
+        are kept per range of samples: shape ``(*lead, k, *moment_shape)``.
         """
         # All values come from cheap array operations: the sines and cosines of the angles from
         # one tangent each (numpy's float64 tan is vectorised, sin and cos are not: 7x faster),
@@ -373,7 +386,7 @@ class SphericalHarmonics(Basis):
             r += k
             q += k
         if moments is not None:
-            _add_moments(cheb, trig, moments)
+            _add_moments(cheb, trig, moments, segments)
 
     @property
     def moment_shape(self) -> tuple[int, int] | None:  # type: ignore[override]

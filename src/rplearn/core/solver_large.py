@@ -32,11 +32,16 @@ def solve_large(
     the ridge) and, on first use only, the covariance. None when the regularised matrix is not
     positive definite (the KKT path then decides)."""
     pcols, pat = normal.n_columns, normal.n_pattern_columns
-    a = normal.gram.copy()
-    a[np.arange(pat), np.arange(pat)] += ridge  # the shared columns are not shrunk
+    added = np.zeros(pcols)
+    added[:pat] = ridge  # the shared columns are not shrunk
     if penalty is not None:
-        a[np.arange(pcols), np.arange(pcols)] += penalty
-    factor = ConstrainedFactor.of(a, cmat, block_fraction(n_nodes, normal.link_counts))
+        added += penalty
+    # the scaled regularised matrix in one pass over the Gram (a copy, scaled on the way)
+    scale = 1.0 / np.sqrt(np.maximum(np.diag(normal.gram) + added, 1e-300))
+    a = np.multiply(normal.gram, scale[:, None])
+    a *= scale[None, :]
+    a[np.arange(pcols), np.arange(pcols)] += added * scale**2
+    factor = ConstrainedFactor.of(a, cmat, block_fraction(n_nodes, normal.link_counts), scale=scale)
     del a
     if factor is None:
         return None

@@ -40,12 +40,14 @@ def null_directions(basis: Basis, n_nodes: int, components: list[tuple[list[int]
     from rplearn.core.bases import fibonacci_grid_nodes
 
     p = basis.n_coef
-    az, el = fibonacci_grid_nodes(max(4 * p, 400))
-    const = np.linalg.lstsq(basis.design(az, el), np.ones(az.size), rcond=None)[0]
+    const = None
     cols = []
     for comp, side_b in components:
         if side_b is None or len(comp) < 2:
             continue
+        if const is None:  # the coefficients of the constant function (only for bipartite components)
+            az, el = fibonacci_grid_nodes(max(4 * p, 400))
+            const = np.linalg.lstsq(basis.design(az, el), np.ones(az.size), rcond=None)[0]
         v = np.zeros(n_columns)
         for node in comp:
             v[node * p : (node + 1) * p] = -const if node in side_b else const
@@ -53,12 +55,53 @@ def null_directions(basis: Basis, n_nodes: int, components: list[tuple[list[int]
     return np.array(cols).T if cols else np.zeros((n_columns, 0))
 
 
+def _krylov_ritz(
+    apply: Any, start: FloatArray, steps: int, gram: FloatArray, project: Any = None, apply_is_gram: bool = False
+) -> FloatArray:
+    """Ritz values of ``gram`` on the block Krylov space ``span{X, KX, ..., K^steps X}`` of
+    the operator ``apply`` (``K``) from the block ``start``, within the complement ``project``
+    keeps (ascending).
+
+    Every block is kept (not only the last, as subspace iteration does), so ``steps``
+    applications give a space ``steps + 1`` blocks wide whose extreme Ritz values converge
+    like a Chebyshev polynomial of the spectrum: far faster on clustered eigenvalues. Each
+    new block is orthogonalised against the earlier ones (twice); the Ritz values come from
+    the space's orthonormal basis (its well-determined singular directions), so that they
+    bound the extreme eigenvalues of ``gram`` on that complement from inside. When the
+    operator is ``gram`` itself (``apply_is_gram``), its products with the blocks are reused.
+    """
+    keep = project if project is not None else (lambda x: x)
+    blocks = [np.linalg.qr(keep(start))[0]]
+    products = []
+    for _ in range(steps):
+        z = apply(blocks[-1])
+        if apply_is_gram:
+            products.append(z.copy())
+        z = keep(z)
+        for _ in range(2):
+            for b in blocks:
+                z -= b @ (b.T @ z)
+        blocks.append(np.linalg.qr(z)[0])
+    v = keep(np.hstack(blocks))
+    u, s, wt = np.linalg.svd(v, full_matrices=False)
+    good = s > s[0] * 1e-8
+    u = u[:, good]
+    if apply_is_gram and project is None:  # G u = (G v) w s^-1, G v known but for the last block
+        gv = np.hstack([*products, gram @ blocks[-1]])
+        gu = gv @ (wt[good].T / s[good])
+    else:
+        gu = gram @ u
+    return np.linalg.eigvalsh(u.T @ gu)
+
+
+#: Krylov steps for the largest eigenvalue (usually well apart from the next: a few suffice).
+LARGEST_STEPS = 3
+
+
 def _largest_eigenvalue(gram: FloatArray, iterations: int, block: int, rng: np.random.Generator) -> float:
     n = gram.shape[0]
-    v = np.linalg.qr(rng.standard_normal((n, min(block, n))))[0]
-    for _ in range(iterations):
-        v = np.linalg.qr(gram @ v)[0]
-    return float(np.linalg.eigvalsh(v.T @ gram @ v)[-1])
+    start = rng.standard_normal((n, min(block, n)))
+    return float(_krylov_ritz(lambda x: gram @ x, start, min(iterations, LARGEST_STEPS), gram, apply_is_gram=True)[-1])
 
 
 def _rank_deficient(gram: FloatArray, lam_max: float, tol: float) -> tuple[FloatArray, int, float]:
@@ -70,7 +113,7 @@ def _rank_deficient(gram: FloatArray, lam_max: float, tol: float) -> tuple[Float
 
 
 def spectrum_from_factor(
-    gram: FloatArray, null: FloatArray, factor: ConstrainedFactor, scale: FloatArray, iterations: int = 10,
+    gram: FloatArray, null: FloatArray, factor: ConstrainedFactor, scale: FloatArray, iterations: int = 5,
     block: int = 8,
 ) -> tuple[FloatArray, int, float]:
     """:func:`spectrum_estimate` reusing the Cholesky factor of the regularised system
@@ -92,11 +135,10 @@ def spectrum_from_factor(
     def project(x: FloatArray) -> FloatArray:
         return x - null @ (null.T @ x) if null.size else x
 
-    x = np.linalg.qr(project(rng.standard_normal((n, b))))[0]
-    for _ in range(iterations):
-        z = factor.solve_a(x * scale[:, None]) * scale[:, None]
-        x = np.linalg.qr(project(z))[0]
-    lam_min = float(np.linalg.eigvalsh(x.T @ gram @ x)[0])
+    def inverse(x: FloatArray) -> FloatArray:
+        return factor.solve_a(x * scale[:, None]) * scale[:, None]
+
+    lam_min = float(_krylov_ritz(inverse, rng.standard_normal((n, b)), iterations, gram, project)[0])
     if not lam_min > tol:
         return _rank_deficient(gram, lam_max, tol)
     sv = np.sqrt(np.array([lam_max, lam_min]))
@@ -104,7 +146,7 @@ def spectrum_from_factor(
 
 
 def spectrum_estimate(
-    gram: FloatArray, null: FloatArray, iterations: int = 20, block: int = 8
+    gram: FloatArray, null: FloatArray, iterations: int = 8, block: int = 8
 ) -> tuple[FloatArray, int, float]:
     """:func:`spectrum_report` for large systems, estimated: ``(sv, rank, cond)`` with ``sv``
     the largest and smallest non-zero singular values of the design matrix.
@@ -135,12 +177,14 @@ def spectrum_estimate(
         lower = None
     lam_min = 0.0
     if lower is not None:
-        x = np.linalg.qr(rng.standard_normal((n, b)))[0]
-        for _ in range(iterations):
+        def inverse(x: FloatArray) -> FloatArray:
             z = solve_triangular(lower, x, lower=True, check_finite=False)
-            z = solve_triangular(lower, z, lower=True, trans="T", check_finite=False)
-            x = np.linalg.qr(z)[0]
-        lam_min = float(np.linalg.eigvalsh(x.T @ gram @ x)[0])
+            return solve_triangular(lower, z, lower=True, trans="T", check_finite=False)
+
+        def project(x: FloatArray) -> FloatArray:
+            return x - null @ (null.T @ x) if null.size else x
+
+        lam_min = float(_krylov_ritz(inverse, rng.standard_normal((n, b)), iterations, gram, project)[0])
     if not lam_min > tol:
         return _rank_deficient(gram, lam_max, tol)
     sv = np.sqrt(np.array([lam_max, lam_min]))
@@ -176,15 +220,22 @@ class ConstrainedFactor:
         self.s = cmat @ self.y if cmat.shape[0] else np.zeros((0, 0))  # C A^-1 C^T
 
     @classmethod
-    def of(cls, a: FloatArray, cmat: FloatArray, block_share: float = 1.0) -> "ConstrainedFactor | None":
-        """Factorise ``A`` (overwritten with its scaled form). A matrix whose nodes link to few
+    def of(
+        cls, a: FloatArray, cmat: FloatArray, block_share: float = 1.0, scale: FloatArray | None = None
+    ) -> "ConstrainedFactor | None":
+        """Factorise ``A`` (overwritten with its scaled form; or given already scaled as
+        ``diag(scale) A diag(scale)``, ``scale`` the inverse square roots of its diagonal).
+        A matrix whose nodes link to few
         others (``block_share``, the fraction of its node blocks that are non-zero, at most
         :data:`SPARSE_BLOCK_FRACTION`; see :func:`block_fraction`) is factorised as a sparse matrix
         (SuperLU with a minimum-degree ordering of ``A + A^T``, symmetric mode), whose fill
         stays near the links instead of the ``n^3 / 3`` of a dense Cholesky."""
-        d = 1.0 / np.sqrt(np.maximum(np.diag(a), 1e-300))
-        a *= d[:, None]
-        a *= d[None, :]
+        if scale is None:
+            d = 1.0 / np.sqrt(np.maximum(np.diag(a), 1e-300))
+            a *= d[:, None]
+            a *= d[None, :]
+        else:
+            d = scale
         if block_share <= SPARSE_BLOCK_FRACTION:
             from scipy.sparse import csc_matrix
             from scipy.sparse.linalg import splu

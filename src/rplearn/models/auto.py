@@ -15,8 +15,9 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from rplearn.core.environment import PathLoss
-from rplearn.core.normal_equations import NormalEquations, reserve_block_buffer
-from rplearn.models.blas import blas_threads_for, warm_up as warm_up_blas
+from rplearn.core.link_statistics import reserve_block_buffer
+from rplearn.core.normal_equations import NormalEquations
+from rplearn.core.blas import blas_threads_for, warm_up as warm_up_blas
 from rplearn.models.terms import regression_inputs, shared_fields, statistics_counts
 from rplearn.core.selection import (
     DEFAULT_PENALTY_POWER,

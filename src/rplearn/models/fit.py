@@ -13,7 +13,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from rplearn.models.blas import blas_threads_for, warm_up as warm_up_blas
+from rplearn.core.blas import blas_threads_for, warm_up as warm_up_blas
 from rplearn.models.baselines import KNNModel, MeanModel
 from rplearn.data.tables import LinkSamples
 from rplearn.core.metrics import Scores, score
@@ -154,7 +154,7 @@ def _warm_up(spec: ModelSpec, n_samples: int = 1) -> None:
     if spec.kind == "knn":
         import sklearn.neighbors  # noqa: F401
     elif spec.decouples:
-        from rplearn.core.normal_equations import reserve_block_buffer
+        from rplearn.core.link_statistics import reserve_block_buffer
 
         basis = spec.basis()
         basis.evaluate(np.zeros(basis.n_coef), [0.0], [0.0])

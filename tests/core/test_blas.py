@@ -6,7 +6,7 @@ import numpy  # noqa: F401  (loads the BLAS libraries whose threads are counted)
 import scipy.linalg  # noqa: F401
 from threadpoolctl import threadpool_info
 
-from rplearn.models.blas import SMALL_FIT_FLOPS, blas_threads_for, is_small_fit
+from rplearn.core.blas import SMALL_FIT_FLOPS, blas_threads_for, is_small_fit
 
 
 def blas_threads() -> list[int]:

@@ -43,9 +43,16 @@ def blas_threads_for(n_samples: int, n_columns: int) -> Iterator[None]:
         yield
 
 
+@contextmanager
+def one_blas_thread() -> Iterator[None]:
+    """One BLAS thread inside the block (for work that runs its own threads, one per core)."""
+    with _controller().limit(limits=1, user_api="blas"):
+        yield
+
+
 def warm_up() -> None:
     """Build the controller now (its library scan is a one-off cost, kept out of the LTD)."""
     _controller()
 
 
-__all__ = ["SMALL_FIT_FLOPS", "blas_threads_for", "is_small_fit", "warm_up"]
+__all__ = ["SMALL_FIT_FLOPS", "blas_threads_for", "is_small_fit", "one_blas_thread", "warm_up"]
