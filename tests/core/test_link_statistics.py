@@ -69,7 +69,7 @@ def test_segmented_statistics_are_each_links_products():
         np.testing.assert_allclose(products[j, :p, 0], f_t[s].T @ y[s], atol=1e-10)
         np.testing.assert_allclose(products[j, p, 2:], y[s] @ f_r[s], atol=1e-10)
         assert products[j, p + 1, 1] == bounds[j + 1] - bounds[j]
-        gram_tx = basis.gram_from_moments(moments[0, j])[np.ix_(np.argsort(basis.row_order), np.argsort(basis.row_order))]
+        gram_tx = basis.gram_from_moments(moments[0][j])[np.ix_(np.argsort(basis.row_order), np.argsort(basis.row_order))]
         np.testing.assert_allclose(gram_tx, f_t[s].T @ f_t[s], atol=1e-9)
 
 

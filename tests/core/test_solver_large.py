@@ -92,22 +92,33 @@ def test_the_large_covariance_is_formed_only_when_read(monkeypatch):
     assert sol.covariance_matrix is cov and sol.covariance_fn is None and sol.covariance is cov
 
 
-def test_a_swarm_whose_drones_link_to_few_others_is_factorised_sparse_with_the_same_solution(monkeypatch):
-    """Twelve drones on a ring, each linked to its two neighbours: a quarter of the blocks."""
+@pytest.mark.parametrize("shape, kind", [("ring", "banded"), ("star", "sparse"), ("ring+offsets", "sparse")])
+def test_a_swarm_whose_drones_link_to_few_others_is_factorised_sparse_with_the_same_solution(shape, kind, monkeypatch):
+    """24 drones on a ring, each linked to its two neighbours: a band once the nodes are
+    reordered; 12 drones around a hub (a star), or the ring with link offset columns
+    (full rows): a general sparse factor. The solution, covariance and rank equal the exact
+    path's either way."""
     from rplearn.core import spectrum
+    from rplearn.core.node_blocks import NodeBlocks
 
-    links = [(k, (k + 1) % 12) for k in range(12)] + [((k + 1) % 12, k) for k in range(12)]
-    normal = _statistics(12, 4, links, n=20000)
-    assert spectrum.block_fraction(12, normal.link_counts) <= spectrum.SPARSE_BLOCK_FRACTION
+    if shape == "star":
+        links = [(0, k) for k in range(1, 12)] + [(k, 0) for k in range(1, 12)]
+        normal = _statistics(12, 4, links, n=20000)
+    else:
+        links = [(k, (k + 1) % 24) for k in range(24)] + [((k + 1) % 24, k) for k in range(24)]
+        normal = _statistics(24, 4, links, n=20000)
+        if shape == "ring+offsets":  # one offset column per link: full rows, no band
+            normal = normal.with_shared(normal.two_way_links())
+    assert NodeBlocks.of(normal.n_nodes, normal.basis.n_coef, normal.link_counts).fraction <= spectrum.SPARSE_BLOCK_FRACTION
     made = []
     real = spectrum.ConstrainedFactor.__init__
     monkeypatch.setattr(spectrum.ConstrainedFactor, "__init__",
-                        lambda self, *a: (real(self, *a), made.append(self.sparse))[0])
+                        lambda self, *a: (real(self, *a), made.append(self.kind))[0])
     monkeypatch.setattr(solver, "LARGE_COLUMNS", 10**9)
     small = solver.solve(normal)
     monkeypatch.setattr(solver, "LARGE_COLUMNS", 0)
     large = solver.solve(normal)
-    assert made == [True]
+    assert made == [kind]
     np.testing.assert_allclose(large.coef, small.coef, atol=1e-10)
     np.testing.assert_allclose(large.covariance, small.covariance, atol=1e-10 * np.abs(small.covariance).max())
     assert large.report.rank == small.report.rank

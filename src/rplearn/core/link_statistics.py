@@ -159,7 +159,8 @@ def link_statistics(
 def segmented_link_statistics(
     basis: Basis, az_tx: FloatArray, el_tx: FloatArray, az_rx: FloatArray, el_rx: FloatArray, y: FloatArray,
     extra: FloatArray, bounds: NDArray[np.intp], natural: NDArray[np.intp] | None = None,
-) -> tuple[FloatArray, FloatArray]:
+    tx_bounds: NDArray[np.intp] | None = None,
+) -> tuple[FloatArray, tuple[FloatArray, FloatArray]]:
     """:func:`link_statistics` of many links at once, for a basis with Gram moments (SH).
 
     The samples (at most :func:`block_samples` of the rows) are sorted by link, link ``j``
@@ -173,8 +174,11 @@ def segmented_link_statistics(
         Per link, rows ``[f_tx, y, extra]`` times columns ``[y, extra, f_rx]``, features in the
         basis's row order (``m`` rows of ``extra``), or in natural order when ``natural`` (the
         row of each feature) is given.
-    moments : ndarray, shape (2, links, *basis.moment_shape)
-        Gram moments of each link's tx (``[0]``) and rx (``[1]``) directions.
+    moments : tuple of two ndarrays
+        Gram moments of the tx directions, shape ``(runs, *basis.moment_shape)``, per range of
+        ``tx_bounds`` (by default per link: give the ranges of equal transmitters, fewer and
+        longer, when the links are sorted by it), and of each link's rx directions, shape
+        ``(links, *basis.moment_shape)``.
     """
     p = basis.n_coef
     n = az_tx.size
@@ -183,7 +187,8 @@ def segmented_link_statistics(
     k = 2 * p + gap
     n_links = bounds.size - 1
     buf = _block_buffer(k * n)[: k * n].reshape(k, n)
-    moments = np.zeros((2, n_links, *basis.moment_shape))
+    tx_bounds = bounds if tx_bounds is None else tx_bounds
+    moments = (np.zeros((tx_bounds.size - 1, *basis.moment_shape)), np.zeros((n_links, *basis.moment_shape)))
     az_both, el_both = np.stack([az_tx, az_rx]), np.stack([el_tx, el_rx])
     for s in range(0, n, FEATURE_CHUNK):
         e = min(n, s + FEATURE_CHUNK)
@@ -191,7 +196,8 @@ def segmented_link_statistics(
         both = np.lib.stride_tricks.as_strided(
             view, shape=(p, 2, e - s), strides=(view.strides[0], (p + gap) * view.strides[0], view.strides[1])
         )
-        basis.design_rows_into(az_both[:, s:e], el_both[:, s:e], both, moments, np.clip(bounds - s, 0, e - s))
+        local = (np.clip(tx_bounds - s, 0, e - s), np.clip(bounds - s, 0, e - s))
+        basis.design_rows_into(az_both[:, s:e], el_both[:, s:e], both, moments, local)
     buf[p] = y
     buf[p + 1 : p + gap] = extra
     products = np.empty((n_links, p + gap, gap + p))

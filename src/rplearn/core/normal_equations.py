@@ -198,16 +198,19 @@ class NormalEquations:
             first = int(np.searchsorted(bounds, s, side="right")) - 1
             last = int(np.searchsorted(bounds, stop, side="left"))
             local = np.clip(bounds[first : last + 1], s, stop) - s
+            tx = codes[first:last] // self.n_nodes
+            runs = np.r_[0, np.flatnonzero(tx[1:] != tx[:-1]) + 1, tx.size]  # links sorted by tx: its runs
             extra = np.ones((1, stop - s)) if not self.environment else np.stack([np.ones(stop - s), e[s:stop]])
             part = slice(s, stop)
             products, moments = segmented_link_statistics(
-                self.basis, az_tx[part], el_tx[part], az_rx[part], el_rx[part], y[part], extra, local, self._natural[:p])
-            return products, moments, first, last
+                self.basis, az_tx[part], el_tx[part], az_rx[part], el_rx[part], y[part], extra, local, self._natural[:p],
+                local[runs])
+            return products, moments, first, last, tx[runs[:-1]]
 
-        for products, moments, first, last in _in_order(statistics, range(0, n, per_block)):
+        for products, moments, first, last, run_tx in _in_order(statistics, range(0, n, per_block)):
             tx, rx = np.divmod(codes[first:last], self.n_nodes)
             flat = node_moments.reshape(self.n_nodes, -1)
-            flat += (tx[None, :] == nodes).astype(np.float64) @ moments[0].reshape(tx.size, -1)
+            flat += (run_tx[None, :] == nodes).astype(np.float64) @ moments[0].reshape(run_tx.size, -1)
             flat += (rx[None, :] == nodes).astype(np.float64) @ moments[1].reshape(rx.size, -1)
             self._add_products(tx, rx, products)
             touched.update(zip(np.minimum(tx, rx).tolist(), np.maximum(tx, rx).tolist()))
@@ -227,11 +230,12 @@ class NormalEquations:
         gap = 1 + self._n_extra
         y_row, one_row, env_row = p, p + 1, p + 2
         cross = products[:, :p, gap:]  # F_tx^T F_rx
-        for j, (t, r) in enumerate(zip(tx.tolist(), rx.tolist())):
-            if t < r:
-                self.gram[t * p : (t + 1) * p, r * p : (r + 1) * p] += cross[j]
-            else:
-                self.gram[r * p : (r + 1) * p, t * p : (t + 1) * p] += cross[j].T
+        # into the upper block triangle, in two passes (a block's links are distinct, but a -> b
+        # and b -> a share a block): fancy-indexed adds on the (node, coef, node, coef) view
+        blocks = self.gram.reshape(self.n_nodes, p, self.n_nodes, p)  # (no shared columns while adding)
+        up = tx < rx
+        blocks[tx[up], :, rx[up], :] += cross[up]
+        blocks[rx[~up], :, tx[~up], :] += cross[~up].transpose(0, 2, 1)
         # per node: sums over its links as a product with the links' node indicator
         nodes = np.arange(self.n_nodes)
         at_tx = (tx[None, :] == nodes[:, None]).astype(np.float64)  # (nodes, links)

@@ -144,13 +144,18 @@ def _add_moments(cheb: FloatArray, trig: FloatArray, moments: FloatArray,
                  segments: NDArray[np.intp] | None = None) -> None:
     """``moments[...] += cheb @ trig^T`` over the last (sample) axis, per leading sample index;
     with ``segments`` (bounds of consecutive sample ranges), per range: ``moments[..., j, :, :]``
-    sums samples ``segments[j]:segments[j + 1]``."""
+    sums samples ``segments[j]:segments[j + 1]``; with a tuple of bounds, one per sample row,
+    ``moments`` is a matching tuple of arrays."""
     if segments is not None:
         for idx in np.ndindex(*cheb.shape[1:-1]):
             c, t = cheb[(slice(None), *idx)], trig[(slice(None), *idx)]
-            for j in np.flatnonzero(np.diff(segments)):
-                a, b = segments[j], segments[j + 1]
-                moments[(*idx, j)] += c[:, a:b] @ t[:, a:b].T
+            if isinstance(segments, tuple):  # ranges (and moments) of their own per sample row
+                bounds, out = segments[idx[0]], moments[idx[0]]
+            else:
+                bounds, out = segments, moments[idx]
+            for j in np.flatnonzero(np.diff(bounds)):
+                a, b = bounds[j], bounds[j + 1]
+                out[j] += c[:, a:b] @ t[:, a:b].T
         return
     if cheb.ndim == 2:
         moments += cheb @ trig.T
@@ -365,7 +370,9 @@ class SphericalHarmonics(Basis):
         the last (``()`` for 1-D samples, ``(2,)`` for both ends of a link), receives ``+=``
         the sums over samples that :meth:`gram_from_moments` turns into ``F F^T``. With
         ``segments`` (``k + 1`` increasing bounds from 0 to the number of samples), the moments
-        are kept per range of samples: shape ``(*lead, k, *moment_shape)``.
+        are kept per range of samples: shape ``(*lead, k, *moment_shape)``; or, for samples
+        ``(2, n)``, a tuple of two bounds arrays and ``moments`` a tuple of two arrays
+        ``(k_i, *moment_shape)``: each row's ranges of its own.
         """
         # All values come from cheap array operations: the sines and cosines of the angles from
         # one tangent each (numpy's float64 tan is vectorised, sin and cos are not: 7x faster),

@@ -16,7 +16,8 @@ from numpy.typing import NDArray
 
 from rplearn.core.normal_equations import NormalEquations
 from rplearn.core.solution import FitReport, GaugeNote, JointSolution, fit_warnings
-from rplearn.core.spectrum import ConstrainedFactor, block_fraction, null_directions, spectrum_estimate, spectrum_from_factor
+from rplearn.core.node_blocks import NodeBlocks
+from rplearn.core.spectrum import ConstrainedFactor, null_directions, spectrum_estimate, spectrum_from_factor
 
 FloatArray = NDArray[np.float64]
 
@@ -41,14 +42,16 @@ def solve_large(
     a = np.multiply(normal.gram, scale[:, None])
     a *= scale[None, :]
     a[np.arange(pcols), np.arange(pcols)] += added * scale**2
-    factor = ConstrainedFactor.of(a, cmat, block_fraction(n_nodes, normal.link_counts), scale=scale)
+    blocks = NodeBlocks.of(n_nodes, normal.basis.n_coef, normal.link_counts)
+    factor = ConstrainedFactor.of(a, cmat, blocks, scale=scale)
     del a
     if factor is None:
         return None
     gram_u, unit = unit_shared_scaling(normal)
     null = null_directions(normal.basis, n_nodes, components, pcols)
     if penalty is None and ridge > 0:
-        sv, rank, cond = spectrum_from_factor(gram_u, null, factor, 1.0 / unit)
+        operator = blocks.sparse(gram_u) if factor.kind != "dense" else None  # few links: sparse products
+        sv, rank, cond = spectrum_from_factor(gram_u, null, factor, 1.0 / unit, operator=operator)
     else:
         sv, rank, cond = spectrum_estimate(gram_u, null)
     del gram_u

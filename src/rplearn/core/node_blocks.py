@@ -1,0 +1,90 @@
+"""The block structure of a joint normal matrix: which nodes share samples.
+
+``X^T X`` of ``n`` nodes is an ``n x n`` grid of ``p x p`` blocks (``p`` coefficients per
+node) of which only the diagonal and the blocks of linked node pairs can be non-zero; shared
+columns (an exponent, link offsets) follow as full rows and columns. A swarm calibrated by
+neighbours (each drone links to a few others) leaves most blocks zero, which the solver uses
+(:meth:`rplearn.core.spectrum.ConstrainedFactor.of`): a band after reordering the nodes, or a
+general sparse matrix.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Iterable
+
+import numpy as np
+from numpy.typing import NDArray
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class NodeBlocks:
+    """Nodes, coefficients per node and the (unordered) node pairs that share samples."""
+
+    n_nodes: int
+    n_coef: int
+    pairs: tuple[tuple[int, int], ...]
+
+    @classmethod
+    def of(cls, n_nodes: int, n_coef: int, links: Iterable[tuple[int, int]]) -> "NodeBlocks":
+        pairs = sorted({(min(a, b), max(a, b)) for a, b in links if a != b})
+        return cls(int(n_nodes), int(n_coef), tuple(pairs))
+
+    @property
+    def fraction(self) -> float:
+        """Fraction of the node blocks that can be non-zero (each node's own and its pairs')."""
+        return (self.n_nodes + 2 * len(self.pairs)) / float(self.n_nodes * self.n_nodes)
+
+    def band(self) -> tuple[NDArray[np.intp], int]:
+        """A column order that makes the pattern columns a band, and its half-bandwidth.
+
+        The nodes in reverse Cuthill-McKee order of their link graph (drones on a ring, or
+        along a line, that link to their neighbours: a narrow band), each node's columns kept
+        together; the half-bandwidth in columns is ``(b + 1) p - 1`` for a node bandwidth ``b``.
+        """
+        from scipy.sparse import csr_matrix
+        from scipy.sparse.csgraph import reverse_cuthill_mckee
+
+        n, p = self.n_nodes, self.n_coef
+        if not self.pairs:
+            return np.arange(n * p), p - 1
+        i, j = np.array(self.pairs).T
+        graph = csr_matrix((np.ones(2 * i.size), (np.r_[i, j], np.r_[j, i])), shape=(n, n))
+        order = np.asarray(reverse_cuthill_mckee(graph, symmetric_mode=True), np.intp)
+        pos = np.empty(n, np.intp)
+        pos[order] = np.arange(n)
+        width = int(np.max(np.abs(pos[i] - pos[j])))
+        return (order[:, None] * p + np.arange(p)[None, :]).ravel(), (width + 1) * p - 1
+
+    def sparse(self, a: FloatArray) -> Any:
+        """``a`` (the pattern blocks, then any shared columns in full) as a CSC matrix, read from
+        the blocks that can be non-zero only (not by scanning the whole dense matrix)."""
+        from scipy.sparse import csc_matrix
+
+        n, p = self.n_nodes, self.n_coef
+        pat = n * p
+        if self.pairs:
+            i, j = np.array(self.pairs).T
+            bi = np.r_[np.arange(n), i, j]
+            bj = np.r_[np.arange(n), j, i]
+        else:
+            bi = bj = np.arange(n)
+        blocks = a[:pat, :pat].reshape(n, p, n, p)[bi, :, bj, :]  # (blocks, p, p)
+        k = np.arange(p)
+        rows = [(bi[:, None, None] * p + k[None, :, None]) + 0 * k[None, None, :]]
+        cols = [(bj[:, None, None] * p + k[None, None, :]) + 0 * k[None, :, None]]
+        data = [blocks]
+        extra = a.shape[0] - pat
+        if extra:  # shared columns: full rows and columns
+            r, c = np.meshgrid(np.arange(a.shape[0]), np.arange(pat, a.shape[0]), indexing="ij")
+            rows += [r, c[:pat].T]
+            cols += [c, r[:pat].T]
+            data += [a[:, pat:], a[pat:, :pat]]
+        return csc_matrix((np.concatenate([x.ravel() for x in data]),
+                           (np.concatenate([x.ravel() for x in rows]), np.concatenate([x.ravel() for x in cols]))),
+                          shape=a.shape)
+
+
+__all__ = ["NodeBlocks"]
