@@ -83,3 +83,63 @@ def test_blocks_come_back_in_order_and_errors_reach_the_caller():
     assert list(_in_order(work, [3])) == [9]
     with pytest.raises(ValueError, match="block 7"):
         list(_in_order(work, range(10)))
+
+
+def test_blocks_hold_a_bounded_number_of_samples_and_links():
+    """Short links (found by review: thousands of 2-sample links made a block's products GBs)."""
+    bounds = np.r_[0, np.cumsum(np.random.default_rng(1).integers(1, 4, 5000))]
+    starts = link_statistics.block_starts(bounds, 700, 100)
+    stops = [*starts[1:], int(bounds[-1])]
+    assert starts[0] == 0 and all(a < b for a, b in zip(starts, stops))
+    for a, b in zip(starts, stops):
+        links = np.searchsorted(bounds, b, side="left") - (np.searchsorted(bounds, a, side="right") - 1)
+        assert b - a <= 700 and links <= 101
+    assert link_statistics.max_links_per_block(SphericalHarmonics(10), 1) * 102**2 * 4 <= link_statistics.BLOCK_MAX_VALUES
+
+
+def _blas_threads() -> list[int]:
+    from threadpoolctl import threadpool_info
+
+    return sorted(i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas")
+
+
+def test_concurrent_accumulations_are_right_and_leave_the_blas_threads_as_they_were(monkeypatch):
+    """Two threads adding at once (found by review: the process-wide one-thread BLAS limit was
+    restored by the first to finish, and the second left it at one thread for good)."""
+    import threading
+
+    monkeypatch.setattr(link_statistics, "BLOCK_SAMPLES", 700)
+    before = _blas_threads()
+    basis = SphericalHarmonics(5)
+    data = [_samples(np.random.default_rng(k), 6, 20000) for k in range(2)]
+    out: dict[int, NormalEquations] = {}
+
+    def run(k: int) -> None:
+        d, tx, rx, y, _ = data[k]
+        out[k] = NormalEquations(basis, 6).add(d, tx, rx, y)
+
+    threads = [threading.Thread(target=run, args=(k,)) for k in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert _blas_threads() == before
+    for k in range(2):
+        d, tx, rx, y, _ = data[k]
+        alone = NormalEquations(basis, 6).add(d, tx, rx, y)
+        np.testing.assert_allclose(out[k].gram, alone.gram, atol=1e-9 * np.abs(alone.gram).max())
+
+
+def _fit_in_child(seed: int) -> float:
+    d, tx, rx, y, _ = _samples(np.random.default_rng(seed), 5, 200_000)
+    return float(NormalEquations(SphericalHarmonics(4), 5).add(d, tx, rx, y).yty)
+
+
+def test_a_forked_child_accumulates_after_the_parent_used_the_worker_threads():
+    """Found by review: a forked child inherited the pool object without its threads and hung."""
+    import multiprocessing
+
+    assert _fit_in_child(0) > 0  # the parent's pool now exists
+    with multiprocessing.get_context("fork").Pool(1) as pool:
+        got = pool.apply_async(_fit_in_child, (0,)).get(timeout=60)
+    assert got == pytest.approx(_fit_in_child(0), rel=1e-12)

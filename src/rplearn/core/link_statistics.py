@@ -8,6 +8,7 @@ compute ahead (:func:`_in_order`).
 
 from __future__ import annotations
 
+import os
 import threading
 from typing import Any
 
@@ -212,7 +213,21 @@ def segmented_link_statistics(
 
 #: Blocks of samples computed ahead by the worker threads of :func:`_in_order`.
 _AHEAD = 3
+#: The worker pool (created on first use, kept with its threads' block buffers) and the lock
+#: that gives it, and the process-wide BLAS thread limit, to one caller at a time.
 _POOL: list[Any] = []
+_POOL_LOCK = threading.Lock()
+
+
+def _forget_pool_in_child() -> None:
+    """A forked child inherits the pool object but not its threads: start afresh."""
+    global _POOL_LOCK
+    _POOL.clear()
+    _POOL_LOCK = threading.Lock()
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_forget_pool_in_child)
 
 
 def _in_order(work: Any, starts: Any) -> Any:
@@ -223,9 +238,14 @@ def _in_order(work: Any, starts: Any) -> Any:
     core (and releases the interpreter lock), so two blocks at a time use both cores of a
     2-core machine, where one block with a 2-thread BLAS leaves one idle while the features
     are computed. The threads are kept between calls, with their block buffers.
+
+    The BLAS thread limit is process-wide, so one caller at a time has the pool: a caller that
+    finds it busy (another thread accumulating at the same time, e.g. a Dask worker's) computes
+    its blocks itself, in order, leaving the BLAS threads as they are.
     """
     starts = list(starts)
-    if len(starts) < 2:
+    lock = _POOL_LOCK
+    if len(starts) < 2 or not lock.acquire(blocking=False):
         yield from (work(s) for s in starts)
         return
     from collections import deque
@@ -233,18 +253,46 @@ def _in_order(work: Any, starts: Any) -> Any:
 
     from rplearn.core.blas import one_blas_thread
 
-    if not _POOL:
-        _POOL.append(ThreadPoolExecutor(max_workers=2, thread_name_prefix="rplearn-stats"))
-    pool = _POOL[0]
-    with one_blas_thread():
-        pending: deque[Any] = deque()
-        for s in starts:
-            pending.append(pool.submit(work, s))
-            if len(pending) >= _AHEAD:
+    pending: deque[Any] = deque()
+    try:
+        if not _POOL:
+            _POOL.append(ThreadPoolExecutor(max_workers=2, thread_name_prefix="rplearn-stats"))
+        pool = _POOL[0]
+        with one_blas_thread():
+            for s in starts:
+                pending.append(pool.submit(work, s))
+                if len(pending) >= _AHEAD:
+                    yield pending.popleft().result()
+            while pending:
                 yield pending.popleft().result()
-        while pending:
-            yield pending.popleft().result()
+    finally:
+        for future in pending:  # an error (or a caller that stopped early): drop the rest
+            future.cancel()
+        for future in pending:
+            if not future.cancelled():
+                try:
+                    future.result()  # let a running block finish before the limit is lifted
+                except Exception:  # noqa: BLE001  (the first error is the one raised)
+                    pass
+        lock.release()
 
 
-__all__ = ["BLOCK_MAX_VALUES", "BLOCK_SAMPLES", "FEATURE_CHUNK", "block_rows", "block_samples", "link_statistics",
+def block_starts(bounds: NDArray[np.intp], per_block: int, max_links: int) -> list[int]:
+    """Starts of the blocks of samples sorted by link (link ``j`` holds samples
+    ``bounds[j]:bounds[j + 1]``): at most ``per_block`` samples and about ``max_links`` links
+    each (the per-link products of a block, ``links x (p + 1 + m)^2`` values, stay bounded
+    however short the links are)."""
+    n = int(bounds[-1])
+    cuts = set(range(0, n, per_block)) | {int(b) for b in bounds[: -1 : max(1, max_links)]}
+    return sorted(c for c in cuts if c < n)
+
+
+def max_links_per_block(basis: Basis, n_extra: int) -> int:
+    """Links per block that keep a block's products within a quarter of :data:`BLOCK_MAX_VALUES`."""
+    side = basis.n_coef + 1 + n_extra
+    return max(1, BLOCK_MAX_VALUES // (4 * side * side))
+
+
+__all__ = ["BLOCK_MAX_VALUES", "BLOCK_SAMPLES", "FEATURE_CHUNK", "block_rows", "block_samples", "block_starts", "link_statistics",
+           "max_links_per_block",
            "reserve_block_buffer", "segmented_link_statistics"]

@@ -23,7 +23,7 @@ from numpy.typing import ArrayLike, NDArray
 from rplearn.core.bases import Basis
 from rplearn.core.geometry import Directions
 from rplearn.core.link_statistics import (
-    _in_order, block_rows, block_samples, link_statistics, segmented_link_statistics,
+    _in_order, block_rows, block_samples, block_starts, link_statistics, max_links_per_block, segmented_link_statistics,
 )
 from rplearn.errors import InputError
 
@@ -193,8 +193,11 @@ class NormalEquations:
         touched: set[tuple[int, int]] = set()
         nodes = np.arange(self.n_nodes)[:, None]
 
-        def statistics(s: int) -> tuple[FloatArray, FloatArray, int, int]:
-            stop = min(n, s + per_block)
+        starts = block_starts(bounds, per_block, max_links_per_block(self.basis, m))
+        stops = dict(zip(starts, [*starts[1:], n]))
+
+        def statistics(s: int) -> tuple[FloatArray, tuple[FloatArray, FloatArray], int, int, NDArray[np.int64]]:
+            stop = stops[s]
             first = int(np.searchsorted(bounds, s, side="right")) - 1
             last = int(np.searchsorted(bounds, stop, side="left"))
             local = np.clip(bounds[first : last + 1], s, stop) - s
@@ -207,7 +210,7 @@ class NormalEquations:
                 local[runs])
             return products, moments, first, last, tx[runs[:-1]]
 
-        for products, moments, first, last, run_tx in _in_order(statistics, range(0, n, per_block)):
+        for products, moments, first, last, run_tx in _in_order(statistics, starts):
             tx, rx = np.divmod(codes[first:last], self.n_nodes)
             flat = node_moments.reshape(self.n_nodes, -1)
             flat += (run_tx[None, :] == nodes).astype(np.float64) @ moments[0].reshape(run_tx.size, -1)
