@@ -54,7 +54,7 @@ FORBIDDEN_THIRD_PARTY: dict[str, tuple[str, ...]] = {
 MAX_MODULE_LINES = 600
 
 #: Format libraries that io imports only inside the functions that need them.
-LAZY_FORMAT_LIBRARIES: tuple[str, ...] = ("rosbags", "pyulog", "dpkt")
+LAZY_FORMAT_LIBRARIES: tuple[str, ...] = ("rosbags", "pyulog", "dpkt", "pymavlink")
 
 
 def module_name(path: Path, package_dir: Path = PACKAGE_DIR) -> str:

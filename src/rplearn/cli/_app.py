@@ -297,6 +297,19 @@ def orders(text: str) -> list[int]:
     return found
 
 
+def geodetic_flag(text: Optional[str], flag: str) -> Optional[tuple[float, ...]]:
+    """``LAT,LON,ALT`` [deg, deg, m] as three numbers (checked further by ReaderOptions), or None."""
+    if text is None:
+        return None
+    try:
+        values = tuple(float(v) for v in text.split(","))
+    except ValueError:
+        values = ()
+    if len(values) != 3:
+        raise InputError(f"{flag}: expected LAT,LON,ALT (e.g. 41.185,-96.010,330), got {text!r}")
+    return values
+
+
 def reader_options(
     node: Optional[list[str]] = None, receiver: Optional[list[str]] = None, address: Optional[list[str]] = None,
     pose_topic: Optional[list[str]] = None, rssi_topic: Optional[list[str]] = None, rssi_field: Optional[str] = None,

@@ -6,13 +6,13 @@ from typing import Optional
 
 import typer
 
-from rplearn.cli._app import app, fail, link, numbers, pairs, reader_options, note, say, user_errors, with_flag
+from rplearn.cli._app import app, fail, geodetic_flag, link, numbers, pairs, reader_options, note, say, user_errors, with_flag
 
 
 @app.command()
 @user_errors
 def inspect(
-    logs: list[str] = typer.Argument(..., help="Log files: CSV/Parquet, ROS 1/2 bags, PX4 ULog, pcap."),
+    logs: list[str] = typer.Argument(..., help="Log files: CSV/Parquet, ROS 1/2 bags, PX4 ULog, pcap, MAVLink .tlog and ArduPilot DataFlash .bin."),
     node: Optional[list[str]] = typer.Option(None, "--node", help="FILE=NODE for ULogs and one-node tables."),
     receiver: Optional[list[str]] = typer.Option(None, "--receiver", help="FILE=NODE: capturing node of a pcap."),
     address: Optional[list[str]] = typer.Option(None, "--address", help="MAC=NODE: transmitter addresses of pcaps."),
@@ -21,6 +21,8 @@ def inspect(
     rssi_field: Optional[str] = typer.Option(None, "--rssi-field", help="Field of the RSSI [dBm] in --rssi-topic messages, dots for nested fields (default rssi)."),
     msg_definition: Optional[list[str]] = typer.Option(None, "--msg-definition", help="TYPE=FILE.msg: custom message type a bag does not describe (e.g. pkg/msg/LinkQuality=LinkQuality.msg)."),
     require_valid: bool = typer.Option(False, "--require-valid/--accept-invalid", help="Drop ULog positions the autopilot flags invalid (xy_valid or z_valid = 0), or keep them (default)."),
+    station_geodetic: Optional[str] = typer.Option(None, "--station", help="LAT,LON,ALT: ground station position of MAVLink logs (.tlog, DataFlash) [deg, deg, m AMSL] (default: the log's home position, else the vehicle's first fix)."),
+    station: Optional[str] = typer.Option(None, "--station-node", help="Node id of the ground station of MAVLink logs (default gcs)."),
     markdown: bool = typer.Option(False, "--markdown", help="Print Markdown instead of text."),
 ) -> None:
     """Summarise logs: nodes, time spans, rates, RSSI range, gaps, and anything suspicious.
@@ -29,7 +31,8 @@ def inspect(
     """
     from rplearn.io.inspect import inspect_logs
 
-    options = reader_options(node, receiver, address, pose_topic, rssi_topic, rssi_field, msg_definition, require_valid=require_valid)
+    options = reader_options(node, receiver, address, pose_topic, rssi_topic, rssi_field, msg_definition, require_valid=require_valid,
+                             station_geodetic=geodetic_flag(station_geodetic, "--station"), station=station)
     report = inspect_logs(logs, options)
     text = report.to_markdown() if markdown else report.to_text()
     # the report names reader options as the library knows them; here they are flags
@@ -42,8 +45,8 @@ def inspect(
 @app.command()
 @user_errors
 def sync(
-    poses: list[str] = typer.Option(..., "--poses", help="Pose log(s): CSV/Parquet, bag, ULog. Repeat for several."),
-    signals: list[str] = typer.Option(..., "--signals", help="Signal log(s): CSV/Parquet, bag, pcap. Repeat for several."),
+    poses: list[str] = typer.Option(..., "--poses", help="Pose log(s): CSV/Parquet, bag, ULog, MAVLink .tlog/.bin. Repeat for several."),
+    signals: list[str] = typer.Option(..., "--signals", help="Signal log(s): CSV/Parquet, bag, pcap, MAVLink .tlog/.bin. Repeat for several."),
     output: str = typer.Option(..., "-o", "--out", help="Matched dataset (.parquet or .csv)."),
     link_text: Optional[str] = typer.Option(None, "--link", help="Keep one direction TX:RX (the paper's choice), or 'all'."),
     max_gap_s: float = typer.Option(0.2, "--max-gap", help="Drop samples inside pose gaps longer than this [s]."),
@@ -60,6 +63,8 @@ def sync(
     nan_policy: str = typer.Option("error", "--nan-policy", help="Pose-table rows with NaN or non-numeric values: error (default) or drop (counted)."),
     allow_unsorted: bool = typer.Option(False, "--allow-unsorted", help="Accept pose tables whose times go backwards within a node (the rows are sorted)."),
     require_valid: bool = typer.Option(False, "--require-valid/--accept-invalid", help="Drop ULog positions the autopilot flags invalid (xy_valid or z_valid = 0), or keep them (default)."),
+    station_geodetic: Optional[str] = typer.Option(None, "--station", help="LAT,LON,ALT: ground station position of MAVLink logs (.tlog, DataFlash) [deg, deg, m AMSL] (default: the log's home position, else the vehicle's first fix)."),
+    station: Optional[str] = typer.Option(None, "--station-node", help="Node id of the ground station of MAVLink logs (default gcs)."),
     on_unknown_node: str = typer.Option("drop", "--on-unknown-node", help="Signals naming a node without a pose log: drop (counted, default) or error."),
     rssi_scale: str = typer.Option("dbm", "--rssi-scale", help="dbm (default: calibrated, dropped outside -150..30 dBm or above the transmit power) or relative (uncalibrated dB on the radio's own scale: no plausibility window)."),
     estimate_offset: Optional[str] = typer.Option(None, "--estimate-offset", help="NODE: find the clock offset of NODE's poses that best explains the signal (a low-order pattern fit's residual over shifts of its pose times) and report it with its uncertainty."),
@@ -75,7 +80,8 @@ def sync(
 
     readers = reader_options(
         node, receiver, address, pose_topic, rssi_topic, rssi_field, msg_definition, tx_power_dbm=tx_power_dbm,
-        frequency_hz=frequency_hz, nan_policy=nan_policy, allow_unsorted=allow_unsorted, require_valid=require_valid)
+        frequency_hz=frequency_hz, nan_policy=nan_policy, allow_unsorted=allow_unsorted, require_valid=require_valid,
+        station_geodetic=geodetic_flag(station_geodetic, "--station"), station=station)
     offsets = numbers(pairs(offset, "--offset"), "--offset", "NODE=SECONDS")
     options = SyncOptions(link=link(link_text), max_gap_s=max_gap_s, clock_offsets_s=offsets or None, on_unknown_node=on_unknown_node,
                           rssi_scale=rssi_scale)

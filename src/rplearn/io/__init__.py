@@ -8,12 +8,14 @@ CSV, Parquet       :func:`rplearn.io.tables.read_pose_table`,  pose or signal lo
 ROS 2 / ROS 1 bag  :func:`rplearn.io.rosbag.read_rosbag`       pose and signal logs
 PX4 ULog           :func:`rplearn.io.ulog.read_ulog`           pose log
 pcap / pcapng      :func:`rplearn.io.pcap.read_pcap`           signal log
+MAVLink .tlog,     :func:`rplearn.io.mavlink.read_mavlink`     pose and signal logs
+DataFlash .bin
 =================  =========================================  ==================================
 
 :func:`read_logs` chooses the reader of every path by its content (magic bytes) and, failing
 that, its extension, and concatenates the results; :class:`~rplearn.io.options.ReaderOptions`
 carries what the readers need beyond the files. Each format library (rosbags, pyulog,
-dpkt, pymap3d) is imported only when a file of its format is read.
+dpkt, pymavlink, pymap3d) is imported only when a file of its format is read.
 
 The other public names of the subpackage can be imported from here too, their modules being
 imported on first use (:mod:`rplearn._lazy`): tables (:func:`~rplearn.io.files.read_table`,
@@ -63,6 +65,8 @@ _NAMES: dict[str, str] = {
     "read_ulogs": "ulog",
     "read_pcap": "pcap",
     "write_radiotap_pcap": "pcap",
+    "read_mavlink": "mavlink",
+    "sik_rssi_to_dbm": "mavlink",
     "NAN_POLICIES": "options",
     "geodetic_to_enu": "geodetic",
     # looking at logs before learning

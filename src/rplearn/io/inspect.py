@@ -106,6 +106,7 @@ class InspectReport:
         for f in self.files:
             out.append(f"  {f['path']}: {f['format']}" + (f" ({f['kind']} log)" if f.get("kind") else "")
                        + ("" if f.get("error") is None else f"  UNREADABLE: {f['error']}"))
+            out.extend(f"    {note}" for note in f.get("notes", ()))
         out.append("pose logs:")
         for n in self.nodes:
             span = "static" if n.static else (
@@ -290,6 +291,12 @@ def _forgiving_options(path: str, kind: str, options: ReaderOptions) -> ReaderOp
             tx_power_dbm=0.0 if options.tx_power_dbm is None else options.tx_power_dbm,
             receivers={path: "capture"} if options.receivers is None else options.receivers,
         )
+    if kind == "mavlink":
+        return replace(
+            options,
+            tx_power_dbm=0.0 if options.tx_power_dbm is None else options.tx_power_dbm,
+            frequency_hz=1e9 if options.frequency_hz is None else options.frequency_hz,
+        )
     if kind in ("ros1", "ros2") and options.rssi_topics:
         return replace(
             options,
@@ -318,9 +325,11 @@ def _read_one(path: str, options: ReaderOptions) -> tuple[pd.DataFrame | None, p
     info = {"format": f.get("format", kind), "kind": f.get("kind")}
     if f.get("invalid_flag_rows"):
         info["invalid_flag_rows"] = int(f["invalid_flag_rows"])
-    for key in ("cut_off_at_byte", "corrupt"):
+    for key in ("cut_off_at_byte", "cut_off_record", "corrupt", "corrupt_bytes"):
         if f.get(key):
             info[key] = f[key]
+    if f.get("notes"):
+        info["notes"] = [str(n).removeprefix(f"{path}: ") for n in f["notes"]]
     if logs.pose is not None:
         info["non_unit_quaternion_rows"] = non_unit_quaternion_rows(logs.pose)
     return logs.pose, logs.signal, info, {}
@@ -394,11 +403,15 @@ def file_damage(path: str, info: dict[str, Any]) -> list[str]:
     lines = []
     if info.get("cut_off_at_byte") is not None:
         lines.append(
-            f"{path}: the file is cut off inside the message at byte {info['cut_off_at_byte']:,} "
+            f"{path}: the file is cut off inside the message at byte {info['cut_off_at_byte']:,}"
+            + (f" ({info['cut_off_record']})" if info.get("cut_off_record") else "") + " "
             "(a log that ends early: power loss or an interrupted copy); the complete messages before it were read"
         )
     if info.get("corrupt"):
         lines.append(f"{path}: corrupt bytes were skipped by the ULog reader (pyulog); what follows them was read")
+    if info.get("corrupt_bytes"):
+        lines.append(f"{path}: {info['corrupt_bytes']:,} corrupt byte(s) between DataFlash records were skipped; "
+                     "what follows them was read")
     return lines
 
 

@@ -37,8 +37,8 @@ def _finite(value: Any) -> bool:
     return isinstance(value, Real) and not isinstance(value, bool) and math.isfinite(float(value))
 
 
-def _check_origin(origin: Any) -> tuple[float, float, float] | None:
-    """The origin as three floats (lat [deg], lon [deg], alt [m]), or None."""
+def _check_origin(origin: Any, name: str = "origin_geodetic") -> tuple[float, float, float] | None:
+    """A geodetic position as three floats (lat [deg], lon [deg], alt [m]), or None."""
     if origin is None:
         return None
     try:
@@ -47,15 +47,15 @@ def _check_origin(origin: Any) -> tuple[float, float, float] | None:
         values = ()
     if len(values) != 3 or not all(_finite(v) for v in values):
         raise InputError(
-            f"origin_geodetic: expected (lat_deg, lon_deg, alt_m), three finite numbers, got {origin!r}",
-            param="origin_geodetic",
+            f"{name}: expected (lat_deg, lon_deg, alt_m), three finite numbers, got {origin!r}",
+            param=name,
         )
     lat, lon, alt = (float(v) for v in values)
     if abs(lat) > 90.0 or abs(lon) > 180.0:
         raise InputError(
-            f"origin_geodetic: latitude must lie in [-90, 90] and longitude in [-180, 180] degrees, "
+            f"{name}: latitude must lie in [-90, 90] and longitude in [-180, 180] degrees, "
             f"got ({lat!r}, {lon!r})",
-            param="origin_geodetic",
+            param=name,
         )
     return lat, lon, alt
 
@@ -111,7 +111,8 @@ class ReaderOptions:
         tables and ULogs. By default the first geodetic file's origin (its first fix, or a
         ULog's anchor) is used for all the others.
     nodes : mapping of path to node id, optional
-        Node id of a ULog, or of a one-node table without a ``node`` column.
+        Node id of a ULog, of the vehicle of a MAVLink log (``.tlog``, DataFlash), or of a
+        one-node table without a ``node`` column.
     pose_topics : mapping of topic to node id, optional
         Pose topics of ROS bags (Odometry, PoseStamped or PoseWithCovarianceStamped).
     rssi_topics : mapping of topic to (tx, rx), optional
@@ -126,7 +127,7 @@ class ReaderOptions:
         Transmitter addresses of pcap files; frames from other addresses are dropped.
     tx_power_dbm : float or mapping of node id to float, optional
         Transmit power [dBm] for logs that do not carry it (pcap, bags, tables without the
-        column). A mapping (per transmitter) is accepted by pcap files only.
+        column). A mapping (per transmitter) is accepted by pcap and MAVLink files only.
     frequency_hz : float, optional
         Carrier frequency [Hz] for logs that do not carry it.
     nan_policy : {"error", "drop"}
@@ -136,6 +137,12 @@ class ReaderOptions:
     require_valid : bool
         Drop ULog local-position rows flagged invalid by the autopilot (``xy_valid`` or
         ``z_valid`` = 0).
+    station : str
+        Node id of the ground station of MAVLink logs (``.tlog``, DataFlash); the vehicle's
+        id comes from ``nodes`` (default ``sys<system id>``).
+    station_geodetic : (float, float, float), optional
+        Position of that ground station (lat [deg], lon [deg], alt [m] AMSL); by default the
+        log's home position, else the vehicle's first fix.
 
     Raises
     ------
@@ -157,6 +164,8 @@ class ReaderOptions:
     nan_policy: str = "error"
     allow_unsorted: bool = False
     require_valid: bool = False
+    station: str = "gcs"
+    station_geodetic: tuple[float, float, float] | None = None
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -166,6 +175,9 @@ class ReaderOptions:
             set_(self, name, _mapping(getattr(self, name), name, key_is_path=True))
         set_(self, "rssi_topics", _check_rssi_topics(self.rssi_topics))
         set_(self, "origin_geodetic", _check_origin(self.origin_geodetic))
+        set_(self, "station_geodetic", _check_origin(self.station_geodetic, "station_geodetic"))
+        if not isinstance(self.station, str) or not self.station.strip():
+            raise InputError(f"station: expected a node id, got {self.station!r}", param="station")
         set_(self, "tx_power_dbm", _check_tx_power(self.tx_power_dbm))
         if self.frequency_hz is not None and not (_finite(self.frequency_hz) and self.frequency_hz > 0):
             raise InputError(

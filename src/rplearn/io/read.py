@@ -25,6 +25,8 @@ _MAGIC: tuple[tuple[bytes, str], ...] = (
     (b"\x4d\x3c\xb2\xa1", "pcap"),
     (b"\xa1\xb2\x3c\x4d", "pcap"),
     (b"PAR1", "table"),
+    (b"\xa3\x95\x80", "mavlink"),  # DataFlash: the first record is an FMT (type 128)
+    (b"FMT, ", "mavlink"),  # DataFlash as text
 )
 _EXTENSIONS: dict[str, str] = {
     ".ulg": "ulog",
@@ -37,11 +39,14 @@ _EXTENSIONS: dict[str, str] = {
     ".csv": "table",
     ".parquet": "table",
     ".pq": "table",
+    ".tlog": "mavlink",
+    ".bin": "mavlink",
 }
 
 
 def detect_format(path: str | os.PathLike) -> str:
-    """Format of a log: ``"ulog"``, ``"ros1"``, ``"ros2"``, ``"pcap"`` or ``"table"``.
+    """Format of a log: ``"ulog"``, ``"ros1"``, ``"ros2"``, ``"pcap"``, ``"mavlink"`` (a
+    ``.tlog`` or an ArduPilot DataFlash log) or ``"table"``.
 
     A directory holding ``metadata.yaml`` is a ROS 2 bag. Files are judged by their first
     bytes, then by extension.
@@ -194,12 +199,36 @@ def _read_pcap(path: str, options: ReaderOptions, got: _Gathered) -> dict[str, A
     return meta
 
 
+def _read_mavlink(path: str, options: ReaderOptions, got: _Gathered) -> dict[str, Any]:
+    """Read an ArduPilot telemetry or DataFlash log: the vehicle's poses, the station, both links."""
+    from rplearn.io import mavlink as _mavlink
+
+    missing = [f for f in ("tx_power_dbm", "frequency_hz") if getattr(options, f) is None]
+    if missing:
+        raise InputError(
+            f"{path}: give the telemetry radios' transmit power [dBm] and carrier frequency [Hz], "
+            f"a MAVLink log carries neither (ReaderOptions.{' and ReaderOptions.'.join(missing)})",
+            param=missing[0], related=missing[1:],
+        )
+    logs, meta = _mavlink.read_mavlink(
+        path, options.tx_power_dbm, options.frequency_hz, vehicle=(options.nodes or {}).get(path),
+        station=options.station, station_geodetic=options.station_geodetic, origin_geodetic=got.origin,
+    )
+    if got.origin is None:
+        got.origin = meta["origin_geodetic"]
+    got.poses.append(logs.pose)
+    got.signals.append(logs.signal)
+    meta["kind"] = "pose+signal"
+    return meta
+
+
 _READERS: dict[str, Callable[[str, ReaderOptions, _Gathered], dict[str, Any]]] = {
     "table": _read_table,
     "ros1": _read_bag,
     "ros2": _read_bag,
     "ulog": _read_ulog,
     "pcap": _read_pcap,
+    "mavlink": _read_mavlink,
 }
 
 

@@ -37,6 +37,7 @@ def reader_notes(metadata: Mapping[str, Any]) -> list[str]:
         if f.get("level_assumed"):
             notes.append(f"{source}: yaw only, so level flight (roll = pitch = 0) is assumed")
         notes += file_damage(source, f)
+        notes += list(f.get("notes") or [])
     return notes
 
 

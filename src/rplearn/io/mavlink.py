@@ -1,0 +1,535 @@
+"""ArduPilot / MAVLink logs -> canonical pose and signal logs, through ``pymavlink``.
+
+Two kinds of file are read with ``mavutil.mavlink_connection(path, dialect="ardupilotmega")``:
+
+- a ground station's telemetry log (``.tlog``: every MAVLink packet the ground station
+  received, each after an 8-byte big-endian receive time [us since the UNIX epoch]);
+- the autopilot's own DataFlash log (binary ``.bin``/``.BIN``, or its text ``.log`` form).
+
+Pose of the vehicle (DESIGN.md: ENU world, FLU body, quaternion wxyz FLU -> ENU):
+
+- attitude: ``ATTITUDE`` (roll, pitch, yaw [rad]) or DataFlash ``ATT`` (Roll, Pitch, Yaw
+  [deg]), aerospace yaw-pitch-roll of the FRD body in the NED world (yaw = heading clockwise
+  from north), converted once by
+  :func:`rplearn.core.geometry.quat_wxyz_from_euler_ned_frd_deg` (the conversion the PX4 and
+  table readers use);
+- position: ``GLOBAL_POSITION_INT`` (lat, lon [1e-7 deg], alt [mm] AMSL) or DataFlash ``POS``
+  (Lat, Lng [deg], Alt [m] AMSL), else ``GPS`` (3-D fixes), converted to ENU around
+  ``origin_geodetic`` (default: the ground station) by :func:`rplearn.io.geodetic.geodetic_to_enu`
+  and interpolated linearly at the attitude instants (rows outside the position span or in a
+  position gap longer than ``max_gap_s`` are dropped and counted, as in :mod:`rplearn.io.ulog`).
+
+Signal log of both directions of a 3DR/SiK telemetry link, from ``RADIO_STATUS`` (id 109,
+common dialect) or ``RADIO`` (id 166, ardupilotmega dialect; same fields) or DataFlash ``RAD``.
+The MAVLink definitions (https://mavlink.io/en/messages/common.html#RADIO_STATUS) say
+``rssi`` = "Local (message sender) received signal strength" and ``remrssi`` = "Remote (message
+receiver) signal strength", values 0-254, 255 = unknown. Which radio sends the message fixes
+the direction:
+
+- in a ``.tlog`` the message comes from the ground radio, injected into the ground station's
+  stream (SiK: system 51, component 68; ``metadata["radio_senders"]`` lists the senders seen):
+  ``rssi`` is the station receiving (link vehicle -> station, rx = station) and ``remrssi`` the
+  vehicle receiving (link station -> vehicle, rx = vehicle);
+- in a DataFlash log ``RAD`` records the message the *air* radio sent to the autopilot
+  (ArduPilot ``GCS_MAVLINK::handle_radio_status`` in libraries/GCS_MAVLink/GCS_Common.cpp,
+  https://github.com/ArduPilot/ardupilot, logs the decoded packet and takes a non-zero
+  ``remrssi`` to mean "the GCS has been receiving radio messages from the aircraft"), so
+  ``RSSI`` is the vehicle receiving and ``RemRSSI`` the station receiving: the opposite
+  assignment.
+
+Each direction is its own link (``tx``, ``rx``). SiK units are converted to dBm with the SiK
+formula ``signal_dBm = rssi / 1.9 - 127`` (ArduPilot wiki, SiK Radio - Advanced Configuration,
+https://ardupilot.org/copter/docs/common-3dr-radio-advanced-configuration-and-technical-information.html;
+also mavros' ``3dr_radio`` plugin). SiK zeroes the remote statistics when the link drops, so a
+message with ``rssi`` or ``remrssi`` = 0 while the vehicle's own messages are absent (none
+within ``stream_timeout_s``; in a DataFlash log always) is *link-lost*: both of its rows are
+dropped and counted, never learned from. A 0 while the vehicle streams is a censored sample
+(below sensitivity) and dropped for that direction only; 255 (unknown) likewise.
+
+Clock: tlog rows are on the ground station's receive clock [s, UNIX]; the vehicle's messages
+are placed there through their ``time_boot_ms`` plus the median receive-minus-boot offset (per
+boot), which avoids the receive clock's coarse ticks and queueing jitter. DataFlash rows use
+``TimeUS`` [s since boot] for both logs.
+
+The ground station is a static node (one pose row, level, facing east: its attitude is not
+logged) at ``station_geodetic`` if given, else ``HOME_POSITION`` (tlog) / ``ORGN`` type 1
+(DataFlash home), else the vehicle's first fix; ``metadata["station_note"]`` says which.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from rplearn.core.geometry import quat_wxyz_from_euler_ned_frd_deg
+from rplearn.data.tables import (
+    check_frequency_hz,
+    check_tx_power_dbm,
+    validate_pose_log,
+    validate_signal_log,
+)
+from rplearn.errors import InputError, LogFormatError
+from rplearn.io._common import Logs
+from rplearn.io.geodetic import geodetic_to_enu
+from rplearn.io.options import _check_origin
+
+#: SiK RSSI units per dB and the dBm of a raw 0 (``dBm = raw / 1.9 - 127``, see the module docstring).
+SIK_UNITS_PER_DB = 1.9
+SIK_ZERO_DBM = -127.0
+#: Raw value meaning "unknown" in RADIO_STATUS.
+_UNKNOWN = 255
+
+_RADIO_TYPES = ("RADIO_STATUS", "RADIO")
+_TLOG_TYPES = ["ATTITUDE", "GLOBAL_POSITION_INT", "HOME_POSITION", *_RADIO_TYPES]
+_DF_TYPES = ["ATT", "POS", "GPS", "ORGN", "RAD"]
+_DF_HEAD = b"\xa3\x95"
+_DF_FMT_TYPE = 128
+
+
+def _mavutil() -> Any:
+    try:
+        from pymavlink import mavutil
+    except ImportError:  # pragma: no cover - pymavlink is a dependency
+        raise InputError("reading MAVLink logs needs the 'pymavlink' package (pip install pymavlink)") from None
+    return mavutil
+
+
+def sik_rssi_to_dbm(raw: Any) -> np.ndarray:
+    """SiK radio RSSI units -> received power [dBm]: ``raw / 1.9 - 127`` (module docstring).
+
+    Raises
+    ------
+    InputError
+        When ``raw`` is not real numbers.
+    """
+    try:
+        values = np.asarray(raw, np.float64)
+    except (TypeError, ValueError):
+        raise InputError(f"raw: expected SiK RSSI units (real numbers 0-254), got {type(raw).__name__}",
+                         param="raw") from None
+    return values / SIK_UNITS_PER_DB + SIK_ZERO_DBM
+
+
+def quat_from_ned_euler_rad(roll_rad: Any, pitch_rad: Any, yaw_rad: Any) -> np.ndarray:
+    """FLU -> ENU quaternions (w, x, y, z) of ArduPilot attitudes: NED/FRD roll, pitch, yaw [rad]."""
+    return quat_wxyz_from_euler_ned_frd_deg(np.degrees(roll_rad), np.degrees(pitch_rad), np.degrees(yaw_rad))
+
+
+def dataflash_cut_off_at(path: str | os.PathLike) -> tuple[int | None, str | None, int]:
+    """Where a binary DataFlash log ends inside a record: its byte offset (None if the file
+    ends whole), the record's message name, and the bytes skipped as corrupt before it.
+
+    A binary DataFlash log is a sequence of records ``A3 95 <type> <payload>`` whose lengths
+    (header included) are declared by ``FMT`` records (type 128, 89 bytes: ``B type, B length,
+    4s name, 16s format, 64s columns``). A log cut off by a power loss or a failed copy ends
+    inside a record; pymavlink then stops without a word. Text logs (``FMT, ...``) and other
+    files give ``(None, None, 0)``.
+    """
+    import mmap
+
+    with open(path, "rb") as fh:
+        if os.fstat(fh.fileno()).st_size < 3 or fh.read(2) != _DF_HEAD:
+            return None, None, 0
+        with mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ) as data:
+            return _walk_records(data, len(data))
+
+
+def _walk_records(data: Any, size: int) -> tuple[int | None, str | None, int]:
+    """:func:`dataflash_cut_off_at` on the bytes ``data`` (``size`` long)."""
+    formats = {_DF_FMT_TYPE: (89, "FMT")}
+    pos, skipped = 0, 0
+    while pos < size:
+        if size - pos < 3:
+            if data[pos:size] == _DF_HEAD[: size - pos]:
+                return pos, None, skipped
+            return None, None, skipped + size - pos
+        known = data[pos:pos + 2] == _DF_HEAD and data[pos + 2] in formats
+        if not known or formats[data[pos + 2]][0] < 3:
+            nxt = data.find(_DF_HEAD, pos + 1)
+            nxt = size if nxt < 0 else nxt
+            skipped += nxt - pos
+            pos = nxt
+            continue
+        length, name = formats[data[pos + 2]]
+        if pos + length > size:
+            return pos, name, skipped
+        if data[pos + 2] == _DF_FMT_TYPE:
+            formats[data[pos + 3]] = (data[pos + 4], bytes(data[pos + 5:pos + 9]).rstrip(b"\0").decode("ascii", "replace"))
+        pos += length
+    return None, None, skipped
+
+
+@dataclass
+class _Raw:
+    """What one pass over a log gave, as plain arrays (times [s] on the log's clock)."""
+
+    fmt: str
+    att: np.ndarray  # (n, 4): t, roll, pitch, yaw [rad]
+    pos: np.ndarray  # (n, 4): t, lat [deg], lon [deg], alt [m]
+    radio: np.ndarray  # (n, 3): t, rssi, remrssi (raw SiK units)
+    vehicle_t: np.ndarray  # receive times of the vehicle's messages (tlog) [s]
+    home: tuple[float, float, float] | None
+    counts: dict[str, int] = field(default_factory=dict)
+    notes: dict[str, Any] = field(default_factory=dict)
+
+
+def _arr(rows: list[tuple[float, ...]], width: int) -> np.ndarray:
+    return np.asarray(rows, np.float64).reshape(-1, width)
+
+
+def _boot_offsets(t_recv: np.ndarray, t_boot: np.ndarray) -> np.ndarray:
+    """Per message, the median ``t_recv - t_boot`` [s] of its boot (a new boot where the boot
+    clock steps back by more than 1 s, in receive order)."""
+    order = np.argsort(t_recv, kind="stable")
+    boot_sorted = t_boot[order]
+    seg_sorted = np.concatenate([[0], np.cumsum(np.diff(boot_sorted) < -1.0)])
+    seg = np.empty_like(seg_sorted)
+    seg[order] = seg_sorted
+    out = np.empty(len(t_recv))
+    for s in np.unique(seg):
+        m = seg == s
+        out[m] = np.median(t_recv[m] - t_boot[m])
+    return out
+
+
+def _open(mavutil: Any, source: str) -> Any:
+    try:
+        return mavutil.mavlink_connection(source, dialect="ardupilotmega")
+    except Exception as exc:
+        msg = str(exc).splitlines()[0] if str(exc) else ""
+        raise LogFormatError(f"{source}: cannot read MAVLink log ({type(exc).__name__}: {msg})") from None
+
+
+def _collect_tlog(source: str, system_id: int | None) -> _Raw:
+    """One pass over a ``.tlog``: attitude, position, radio, home and the vehicle's message times."""
+    conn = _open(_mavutil(), source)
+    rows: dict[str, list[tuple[Any, ...]]] = {k: [] for k in _TLOG_TYPES}
+    by_sys: dict[int, list[float]] = {}
+    counts: dict[str, int] = {}
+    radio_senders: dict[str, int] = {}
+    while True:
+        try:
+            msg = conn.recv_msg()
+        except Exception as exc:
+            raise LogFormatError(f"{source}: corrupt MAVLink data ({type(exc).__name__}: {exc})") from None
+        if msg is None:
+            break
+        kind = msg.get_type()
+        if kind == "BAD_DATA":
+            counts["BAD_DATA"] = counts.get("BAD_DATA", 0) + 1
+            continue
+        t, sysid = float(msg._timestamp), int(msg.get_srcSystem())
+        by_sys.setdefault(sysid, []).append(t)
+        if kind not in rows:
+            continue
+        counts[kind] = counts.get(kind, 0) + 1
+        src = sysid * 256 + int(msg.get_srcComponent())  # a gimbal may send ATTITUDE too
+        if kind == "ATTITUDE":
+            rows[kind].append((src, t, msg.time_boot_ms * 1e-3, msg.roll, msg.pitch, msg.yaw))
+        elif kind == "GLOBAL_POSITION_INT":
+            rows[kind].append((src, t, msg.time_boot_ms * 1e-3, msg.lat * 1e-7, msg.lon * 1e-7, msg.alt * 1e-3))
+        elif kind == "HOME_POSITION":
+            rows[kind].append((src, msg.latitude * 1e-7, msg.longitude * 1e-7, msg.altitude * 1e-3))
+        else:
+            rows[kind].append((t, msg.rssi, msg.remrssi))
+            key = f"{sysid}/{msg.get_srcComponent()}"
+            radio_senders[key] = radio_senders.get(key, 0) + 1
+    att = _arr(rows["ATTITUDE"], 6)
+    if not len(att):
+        raise LogFormatError(f"{source}: no ATTITUDE messages (the vehicle's attitude)")
+    srcs, n = np.unique(att[:, 0].astype(int), return_counts=True)
+    if system_id is not None:
+        if int(system_id) not in srcs // 256:
+            raise InputError(f"{source}: no ATTITUDE messages from system id {system_id} "
+                             f"(it has {', '.join(map(str, np.unique(srcs // 256)))})", param="system_id")
+        srcs, n = srcs[srcs // 256 == int(system_id)], n[srcs // 256 == int(system_id)]
+    chosen = int(srcs[np.argmax(n)])  # the (system, component) sending most ATTITUDE
+    vehicle = chosen // 256
+    att = att[att[:, 0] == chosen]
+    gpi = _arr(rows["GLOBAL_POSITION_INT"], 6)
+    gpi = gpi[(gpi[:, 0] == chosen) & ((gpi[:, 3] != 0) | (gpi[:, 4] != 0))]
+    both = np.concatenate([att[:, 1:3], gpi[:, 1:3]])
+    boot_clock = len(np.unique(att[:, 2])) >= 0.9 * len(att)  # some senders leave time_boot_ms at 0
+    offset = _boot_offsets(both[:, 0], both[:, 1]) if boot_clock else both[:, 0] - both[:, 1]
+    home = [h for h in rows["HOME_POSITION"] if h[0] // 256 == vehicle and (h[1] != 0 or h[2] != 0)]
+    radio = [*rows["RADIO_STATUS"], *rows["RADIO"]]
+    return _Raw(
+        fmt="tlog",
+        att=np.column_stack([att[:, 2] + offset[:len(att)], att[:, 3:6]]),
+        pos=np.column_stack([gpi[:, 2] + offset[len(att):], gpi[:, 3:6]]),
+        radio=_arr(sorted(radio), 3), vehicle_t=np.sort(np.asarray(by_sys.get(vehicle, []), np.float64)),
+        home=tuple(float(v) for v in home[0][1:]) if home else None, counts=counts,
+        notes={"system_id": vehicle, "component_id": chosen % 256, "radio_senders": radio_senders,
+               "clock_offset_s": float(np.median(offset)) if len(offset) and boot_clock else None,
+               "time_reference": "ground station receive time, seconds since the UNIX epoch"
+                                 + (" (vehicle messages through time_boot_ms + median offset)" if boot_clock else "")},
+    )
+
+
+def _collect_dataflash(source: str) -> _Raw:
+    """One pass over a DataFlash log: ATT, POS (else GPS), RAD and the home (ORGN type 1)."""
+    conn = _open(_mavutil(), source)
+    rows: dict[str, list[tuple[float, ...]]] = {k: [] for k in _DF_TYPES}
+    home = None
+    utc: list[float] = []
+    while True:
+        try:
+            msg = conn.recv_match(type=_DF_TYPES)
+        except Exception as exc:
+            raise LogFormatError(f"{source}: corrupt DataFlash data ({type(exc).__name__}: {exc})") from None
+        if msg is None:
+            break
+        kind = msg.get_type()
+        t = msg.TimeUS * 1e-6 if hasattr(msg, "TimeUS") else msg.TimeMS * 1e-3  # older logs: TimeMS
+        if kind == "ATT":
+            rows[kind].append((t, *np.radians([msg.Roll, msg.Pitch, msg.Yaw])))
+        elif kind == "POS" or (kind == "GPS" and msg.Status >= 3 and getattr(msg, "I", 0) == 0):
+            rows[kind].append((t, msg.Lat, msg.Lng, msg.Alt))
+            if kind == "GPS":
+                utc.append(float(msg._timestamp) - t)
+        elif kind == "RAD":
+            rows[kind].append((t, msg.RSSI, msg.RemRSSI))
+        elif kind == "ORGN" and msg.Type == 1 and home is None:
+            home = (float(msg.Lat), float(msg.Lng), float(msg.Alt))
+        else:
+            continue
+    counts = {k: len(v) for k, v in rows.items() if v}
+    if not rows["ATT"]:
+        raise LogFormatError(f"{source}: no ATT messages (the vehicle's attitude)")
+    pos_kind = "POS" if rows["POS"] else "GPS"
+    # the vehicle logs itself throughout: its stream is never absent
+    return _Raw(
+        fmt="dataflash", att=_arr(rows["ATT"], 4), pos=_arr(rows[pos_kind], 4), radio=_arr(rows["RAD"], 3),
+        vehicle_t=np.array([]), home=home, counts=counts,
+        notes={"position_message": pos_kind, "time_reference": "TimeUS, seconds since the autopilot booted",
+               "utc_offset_s": float(np.median(utc)) if utc else None},
+    )
+
+
+def _station(
+    raw: _Raw, station_geodetic: tuple[float, float, float] | None
+) -> tuple[tuple[float, float, float], str]:
+    """Geodetic position of the ground station (lat, lon [deg], alt [m]) and where it came from."""
+    if station_geodetic is not None:
+        return station_geodetic, "station position given (station_geodetic)"
+    home = "HOME_POSITION" if raw.fmt == "tlog" else "ORGN type 1 (home)"
+    if raw.home is not None:
+        return raw.home, f"station placed at the vehicle's home from {home}"
+    lat, lon, alt = (float(v) for v in raw.pos[0, 1:4])
+    return (lat, lon, alt), f"station placed at the vehicle's first position fix (no {home} in the log)"
+
+
+def _increasing(t: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Strictly increasing times with their values, the first of repeated instants kept."""
+    t_u, first = np.unique(t, return_index=True)
+    return t_u, values[first]
+
+
+def _vehicle_pose(raw: _Raw, origin: tuple[float, float, float], max_gap_s: float, node: str,
+                  source: str, dropped: dict[str, int]) -> pd.DataFrame:
+    """Pose rows at the attitude instants, positions (ENU [m] around ``origin``) interpolated."""
+    att, pos = raw.att, raw.pos
+    ok = np.all(np.isfinite(att), axis=1)
+    dropped["nan_attitude"] = int((~ok).sum())
+    att = att[ok]
+    pos = pos[np.all(np.isfinite(pos), axis=1)]
+    if len(pos) < 2:
+        what = "GLOBAL_POSITION_INT" if raw.fmt == "tlog" else "POS or GPS"
+        raise LogFormatError(f"{source}: fewer than 2 {what} position fixes of the vehicle")
+    n_att = len(att)
+    ta, att_v = _increasing(att[:, 0], att[:, 1:4])
+    dropped["duplicate_time"] = n_att - len(ta)
+    tp, geo = _increasing(pos[:, 0], pos[:, 1:4])
+    enu = geodetic_to_enu(geo[:, 0], geo[:, 1], geo[:, 2], origin)
+    out = (ta < tp[0]) | (ta > tp[-1])
+    i = np.clip(np.searchsorted(tp, ta, side="right") - 1, 0, len(tp) - 2)
+    gap = ((tp[i + 1] - tp[i]) > max_gap_s) & ~out
+    dropped["out_of_span"], dropped["gap"] = int(out.sum()), int(gap.sum())
+    keep = ~(out | gap)
+    t = ta[keep]
+    xyz = np.stack([np.interp(t, tp, enu[:, j]) for j in range(3)], axis=-1)
+    q = quat_from_ned_euler_rad(att_v[keep, 0], att_v[keep, 1], att_v[keep, 2])
+    return pd.DataFrame({"t": t, "node": node, "x": xyz[:, 0], "y": xyz[:, 1], "z": xyz[:, 2],
+                         "qw": q[:, 0], "qx": q[:, 1], "qy": q[:, 2], "qz": q[:, 3]})
+
+
+def stream_present(t: np.ndarray, stream_t: np.ndarray, timeout_s: float) -> np.ndarray:
+    """Whether a message of a stream (sorted times ``stream_t`` [s]) lies within ``timeout_s``
+    [s] of each time ``t``."""
+    t = np.asarray(t, np.float64)
+    if len(stream_t) == 0:
+        return np.zeros(len(t), bool)
+    j = np.searchsorted(stream_t, t)
+    before = np.abs(t - stream_t[np.clip(j - 1, 0, len(stream_t) - 1)])
+    after = np.abs(stream_t[np.clip(j, 0, len(stream_t) - 1)] - t)
+    return np.minimum(before, after) <= timeout_s
+
+
+def _signal(raw: _Raw, vehicle: str, station: str, tx_power_dbm: float | Mapping[str, float],
+            frequency_hz: float, stream_timeout_s: float, counts: dict[str, int]) -> pd.DataFrame:
+    """Both directions of the telemetry link, link-lost messages and unusable values dropped."""
+    t, rssi, remrssi = raw.radio[:, 0], raw.radio[:, 1], raw.radio[:, 2]
+    zero = (rssi == 0) | (remrssi == 0)
+    # in the vehicle's own (DataFlash) log a zero always means the link dropped
+    present = (np.zeros(len(t), bool) if raw.fmt == "dataflash"
+               else stream_present(t, raw.vehicle_t, stream_timeout_s))
+    lost = zero & ~present
+    counts["link_lost"] = int(lost.sum())
+    # which raw field the station receives in (module docstring: tlog vs. DataFlash)
+    at_station, at_vehicle = (rssi, remrssi) if raw.fmt == "tlog" else (remrssi, rssi)
+    parts = []
+    for tx, rx, value, name in ((vehicle, station, at_station, "vehicle_to_station"),
+                                (station, vehicle, at_vehicle, "station_to_vehicle")):
+        unknown, censored = (value == _UNKNOWN) & ~lost, (value == 0) & ~lost
+        counts[f"unknown_{name}"], counts[f"zero_{name}"] = int(unknown.sum()), int(censored.sum())
+        keep = ~(lost | unknown | censored)
+        ptx = tx_power_dbm.get(tx) if isinstance(tx_power_dbm, Mapping) else tx_power_dbm
+        if ptx is None:
+            raise InputError(f"tx_power_dbm: no transmit power [dBm] for node {tx}", param="tx_power_dbm")
+        parts.append(pd.DataFrame({
+            "t": t[keep], "tx": tx, "rx": rx, "rssi_dbm": sik_rssi_to_dbm(value[keep]),
+            "tx_power_dbm": float(ptx), "frequency_hz": float(frequency_hz),
+            "rssi_raw": value[keep].astype(np.int64),
+        }))
+        counts[f"rows_{name}"] = int(keep.sum())
+    return pd.concat(parts, ignore_index=True).sort_values("t", kind="stable").reset_index(drop=True)
+
+
+def _detect(source: str) -> str:
+    """``"tlog"`` or ``"dataflash"`` from the extension (``.tlog``; ``.bin``, ``.log``) or the bytes."""
+    ext = os.path.splitext(source)[1].lower()
+    with open(source, "rb") as fh:
+        head = fh.read(5)
+    if head.startswith(_DF_HEAD) or head == b"FMT, " or ext in (".bin", ".log"):
+        return "dataflash"
+    return "tlog"
+
+
+def _check_arguments(tx_power_dbm: Any, frequency_hz: Any, max_gap_s: Any, stream_timeout_s: Any,
+                     vehicle: Any, station: Any) -> None:
+    """Refuse arguments out of their domain (:class:`InputError` naming the parameter)."""
+    for name, value in (("max_gap_s", max_gap_s), ("stream_timeout_s", stream_timeout_s),
+                        ("frequency_hz", frequency_hz)):
+        if not (isinstance(value, (int, float)) and np.isfinite(value) and value > 0):
+            raise InputError(f"{name}: expected a positive number, got {value!r}", param=name)
+    check_frequency_hz(frequency_hz, "frequency_hz")
+    powers = list(tx_power_dbm.values()) if isinstance(tx_power_dbm, Mapping) else [tx_power_dbm]
+    check_tx_power_dbm(powers, "tx_power_dbm")
+    for name, value in (("vehicle", vehicle), ("station", station)):
+        if value is not None and (not isinstance(value, str) or not value.strip()):
+            raise InputError(f"{name}: expected a node id, got {value!r}", param=name)
+
+
+def read_mavlink(
+    path: str | os.PathLike,
+    tx_power_dbm: float | Mapping[str, float],
+    frequency_hz: float,
+    vehicle: str | None = None,
+    station: str = "gcs",
+    station_geodetic: tuple[float, float, float] | None = None,
+    origin_geodetic: tuple[float, float, float] | None = None,
+    system_id: int | None = None,
+    max_gap_s: float = 2.0,
+    stream_timeout_s: float = 2.0,
+) -> tuple[Logs, dict[str, Any]]:
+    """Read an ArduPilot ``.tlog`` or DataFlash log into pose and signal logs (module docstring).
+
+    Parameters
+    ----------
+    path : str or PathLike
+        ``.tlog`` (telemetry log) or ``.bin`` / ``.log`` (DataFlash).
+    tx_power_dbm : float or mapping of node id to float
+        Transmit power of the SiK radios [dBm] (the ``TXPOWER`` setting; not logged).
+    frequency_hz : float
+        Carrier frequency [Hz] (433 or 915 MHz bands; not logged).
+    vehicle : str, optional
+        Node id of the vehicle; ``"sys<N>"`` from its MAVLink system id by default
+        (``"sys1"`` for a DataFlash log).
+    station : str
+        Node id of the ground station.
+    station_geodetic : (lat_deg, lon_deg, alt_m), optional
+        Ground station position (altitude AMSL, the autopilot's datum); by default the home
+        position, else the vehicle's first fix.
+    origin_geodetic : (lat_deg, lon_deg, alt_m), optional
+        ENU origin; the ground station's position by default.
+    system_id : int, optional
+        MAVLink system id of the vehicle in a tlog; by default the one sending most ATTITUDE.
+    max_gap_s : float
+        Longest gap of the position fixes bridged by interpolation [s].
+    stream_timeout_s : float
+        A tlog's vehicle stream is absent at a radio message when none of the vehicle's
+        messages lies within this many seconds [s].
+
+    Returns
+    -------
+    logs : Logs
+        ``pose`` (the vehicle's attitude rows and one static row of the station) and
+        ``signal`` (both link directions; extra column ``rssi_raw`` in SiK units).
+    metadata : dict
+        ``source``, ``format`` ("tlog" or "dataflash"), ``notes`` (lines for the user: where
+        the station was placed, link-lost messages dropped), ``vehicle``, ``station``,
+        ``station_geodetic``, ``station_note`` (where the station position came from),
+        ``origin_geodetic``, ``messages`` (counts of the messages used), ``dropped`` (pose
+        rows per reason), ``signal`` (rows per direction, ``link_lost`` messages, zero and
+        unknown values per direction), ``time_reference``, ``cut_off_at_byte`` and
+        ``cut_off_record`` (offset and message name of the record a cut-off DataFlash file
+        ends inside, whose data are lost; None when whole), ``corrupt_bytes`` (skipped between DataFlash records).
+
+    Raises
+    ------
+    LogFormatError
+        When the file cannot be parsed or lacks the attitude, position or radio messages.
+    InputError
+        On a missing file or a bad argument (``param`` names it).
+    """
+    source = str(path)
+    if not os.path.isfile(source):
+        raise InputError(f"{source}: no such file")
+    _check_arguments(tx_power_dbm, frequency_hz, max_gap_s, stream_timeout_s, vehicle, station)
+    station_geodetic = _check_origin(station_geodetic, "station_geodetic")
+    origin_geodetic = _check_origin(origin_geodetic, "origin_geodetic")
+    fmt = _detect(source)
+    raw = _collect_tlog(source, system_id) if fmt == "tlog" else _collect_dataflash(source)
+    if not len(raw.radio):
+        what = "RADIO_STATUS (id 109) or RADIO (id 166)" if fmt == "tlog" else "RAD"
+        raise LogFormatError(f"{source}: no {what} messages: the log holds no telemetry-radio RSSI")
+    if not len(raw.pos):
+        what = "GLOBAL_POSITION_INT" if fmt == "tlog" else "POS or GPS"
+        raise LogFormatError(f"{source}: no {what} messages with a position fix")
+    vehicle = vehicle or f"sys{raw.notes.get('system_id', 1)}"
+    if vehicle == station:
+        raise InputError(f"vehicle and station must differ, both are {vehicle!r}", param="station")
+    station_geo, station_note = _station(raw, station_geodetic)
+    origin = station_geo if origin_geodetic is None else tuple(float(v) for v in origin_geodetic)
+    dropped: dict[str, int] = {}
+    pose = _vehicle_pose(raw, origin, float(max_gap_s), vehicle, source, dropped)  # type: ignore[arg-type]
+    s_xyz = geodetic_to_enu(*station_geo, origin)  # type: ignore[arg-type]
+    t0 = float(min(raw.radio[0, 0], pose["t"].iloc[0] if len(pose) else np.inf))
+    station_row = pd.DataFrame({"t": [t0], "node": [station], "x": [s_xyz[0]], "y": [s_xyz[1]], "z": [s_xyz[2]],
+                                "qw": [1.0], "qx": [0.0], "qy": [0.0], "qz": [0.0]})
+    pose = validate_pose_log(pd.concat([pose, station_row], ignore_index=True), source)
+    sig_counts: dict[str, int] = {}
+    signal = _signal(raw, vehicle, station, tx_power_dbm, float(frequency_hz), float(stream_timeout_s), sig_counts)
+    signal = validate_signal_log(signal, source)
+    cut, cut_name, corrupt = dataflash_cut_off_at(source) if fmt == "dataflash" else (None, None, 0)
+    lost = sig_counts["link_lost"]
+    notes = [f"{source}: {station_note}",
+             (f"{source}: {lost:,} radio message(s) with a zero RSSI while the vehicle was silent "
+              "(link lost) dropped, both directions")]
+    meta = {
+        "source": source, "format": fmt, "notes": notes, "vehicle": vehicle, "station": station,
+        "station_geodetic": station_geo, "station_note": station_note,
+        "origin_geodetic": origin, "messages": raw.counts, "dropped": dropped,
+        "signal": sig_counts, "rows": int((pose["node"] == vehicle).sum()),
+        "cut_off_at_byte": cut, "cut_off_record": cut_name, "corrupt_bytes": int(corrupt), **raw.notes,
+    }
+    return Logs(pose=pose, signal=signal), meta
+
+
+__all__ = ["dataflash_cut_off_at", "quat_from_ned_euler_rad", "read_mavlink", "sik_rssi_to_dbm",
+           "stream_present"]

@@ -1,0 +1,386 @@
+"""ArduPilot / MAVLink readers (rplearn.io.mavlink): real tlogs and DataFlash, and a round trip
+through pymavlink's encoder."""
+
+from __future__ import annotations
+
+import shutil
+import struct
+from pathlib import Path
+
+import numpy as np
+import pytest
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+
+from rplearn.core.geometry import rotate_body_to_world
+from rplearn.errors import LogFormatError, RplearnError
+from rplearn.io.mavlink import dataflash_cut_off_at, read_mavlink, sik_rssi_to_dbm
+
+DATA = Path(__file__).resolve().parents[1] / "fixtures" / "ardupilot"
+TLOG_1 = DATA / "mavlink-log_2013-10-13_16-58-51.tlog"
+TLOG_2 = DATA / "mavlink-log_2013-10-13_18-31-24.tlog"
+BIN = DATA / "pymavlink_test.BIN"
+
+
+def test_folder_carries_licenses_and_provenance():
+    names = {p.name for p in DATA.iterdir()}
+    assert {"LICENSE-code-lever-mavlink-log.txt", "COPYING-pymavlink", "PROVENANCE.md"} <= names
+
+
+# ------------------------------------------------------------------------------ real tlogs
+
+
+@pytest.mark.parametrize(
+    "path, attitude, positions, radio, link_lost",
+    [(TLOG_1, 2743, 974, 570, 57), (TLOG_2, 1977, 702, 1114, 695)],
+)
+def test_real_tlog_counts_match_pymavlink(path, attitude, positions, radio, link_lost):
+    logs, meta = read_mavlink(path, tx_power_dbm=20.0, frequency_hz=915e6)
+    assert meta["format"] == "tlog"
+    assert meta["messages"] == {"ATTITUDE": attitude, "GLOBAL_POSITION_INT": positions, "RADIO": radio}
+    # every ATTITUDE is a pose row or a counted drop
+    vehicle = logs.pose[logs.pose["node"] == "sys1"]
+    assert len(vehicle) == meta["rows"]
+    assert len(vehicle) + sum(meta["dropped"].values()) == attitude
+    assert sum(meta["dropped"].values()) < 0.01 * attitude
+    # every RADIO message gives one row per direction unless link-lost (counted)
+    s = meta["signal"]
+    assert s["link_lost"] == link_lost
+    links = logs.signal.groupby(["tx", "rx"]).size().to_dict()
+    assert links == {("sys1", "gcs"): radio - link_lost, ("gcs", "sys1"): radio - link_lost}
+    assert s["rows_vehicle_to_station"] == s["rows_station_to_vehicle"] == radio - link_lost
+    # the ground station: one static row at the first fix, said so
+    station = logs.pose[logs.pose["node"] == "gcs"]
+    assert len(station) == 1
+    assert "first position fix" in meta["station_note"]
+    assert np.allclose(station[["x", "y", "z"]].to_numpy(), 0.0, atol=1e-6)
+    assert meta["station_geodetic"][0] == pytest.approx(41.185, abs=0.01)
+    assert meta["station_geodetic"][1] == pytest.approx(-96.010, abs=0.01)
+
+
+@pytest.mark.parametrize("path, top", [(TLOG_1, 100.8), (TLOG_2, 150.9)])
+def test_real_tlog_poses_are_plausible(path, top):
+    logs, _ = read_mavlink(path, tx_power_dbm=20.0, frequency_hz=915e6)
+    pose = logs.pose
+    q = pose[["qw", "qx", "qy", "qz"]].to_numpy()
+    assert np.isfinite(q).all()
+    np.testing.assert_allclose(np.linalg.norm(q, axis=1), 1.0, atol=1e-9)
+    z = pose["z"].to_numpy()
+    # relative altitude (PROVENANCE.md) within a few metres: the station sits at the first fix
+    assert -10.0 < z.min() < 1.0 and top - 10.0 < z.max() < top + 10.0
+    assert np.hypot(pose["x"], pose["y"]).max() < 1000.0
+    # poses and signal share the ground station's UNIX clock (2013-10-13)
+    for t in (pose["t"], logs.signal["t"]):
+        assert 1381701000 < t.min() and t.max() < 1381709000
+    assert pose.groupby("node")["t"].apply(lambda s: s.is_monotonic_increasing).all()
+    # SiK units -> dBm: every value is raw / 1.9 - 127 for a raw value in 1..254
+    raw = (logs.signal["rssi_dbm"].to_numpy() + 127.0) * 1.9
+    np.testing.assert_allclose(raw, np.round(raw), atol=1e-9)
+    assert raw.min() >= 1 and raw.max() <= 254
+
+
+def test_real_tlog_link_lost_rows_follow_the_vehicle_stream():
+    logs, _ = read_mavlink(TLOG_1, tx_power_dbm=20.0, frequency_hz=915e6)
+    last_pose = logs.pose.loc[logs.pose["node"] == "sys1", "t"].max()
+    # the 57 dropped messages came after the vehicle's last message: what is kept ends
+    # within seconds of it (the radio holds its remote statistics until the link times out)
+    assert logs.signal["t"].max() < last_pose + 5.0
+    assert logs.signal["t"].max() > last_pose - 5.0
+
+
+# ------------------------------------------------------------------------------ DataFlash
+
+
+def test_dataflash_counts_and_cut_off_record():
+    logs, meta = read_mavlink(BIN, tx_power_dbm=20.0, frequency_hz=433e6)
+    assert meta["format"] == "dataflash"
+    assert meta["messages"]["ATT"] == 24 and meta["messages"]["POS"] == 23 and meta["messages"]["RAD"] == 1
+    vehicle = logs.pose[logs.pose["node"] == "sys1"]
+    assert len(vehicle) + sum(meta["dropped"].values()) == 24
+    assert meta["cut_off_at_byte"] == 65512 and meta["cut_off_record"] == "AHR2"
+    assert meta["corrupt_bytes"] == 0
+    assert "ORGN" in meta["station_note"]
+    # RAD is logged from the air radio: RSSI = vehicle receiving, RemRSSI = station receiving
+    sig = logs.signal.set_index(["tx", "rx"])
+    assert sig.loc[("gcs", "sys1"), "rssi_dbm"] == pytest.approx(111 / 1.9 - 127)
+    assert sig.loc[("sys1", "gcs"), "rssi_dbm"] == pytest.approx(115 / 1.9 - 127)
+    assert sig["t"].iloc[0] == pytest.approx(82.570082)
+    assert vehicle["t"].between(81.7, 82.8).all()
+    # sitting still on the ground at CMAC, within a metre of home
+    assert np.abs(vehicle[["x", "y", "z"]].to_numpy()).max() < 1.0
+
+
+def test_dataflash_corrupt_bytes_are_counted(tmp_path):
+    data = BIN.read_bytes()
+    junk = tmp_path / "junk.bin"
+    junk.write_bytes(data[:89 * 3] + b"\x00garbage" + data[89 * 3:])  # between two FMT records
+    assert dataflash_cut_off_at(junk) == (65512 + 8, "AHR2", 8)
+    _, meta = read_mavlink(junk, tx_power_dbm=20.0, frequency_hz=433e6)
+    assert meta["corrupt_bytes"] == 8 and meta["messages"]["ATT"] == 24
+
+
+def test_dataflash_cut_off_detection(tmp_path):
+    whole = tmp_path / "whole.bin"
+    whole.write_bytes(BIN.read_bytes()[:65512])
+    assert dataflash_cut_off_at(whole) == (None, None, 0)
+    assert dataflash_cut_off_at(BIN) == (65512, "AHR2", 0)
+    _, meta = read_mavlink(whole, tx_power_dbm=20.0, frequency_hz=433e6)
+    assert meta["cut_off_at_byte"] is None
+
+
+# ------------------------------------------------------------------------------ round trip
+
+T0 = 1_700_000_000.0
+
+
+def _write_tlog(path, *, radio=True, home=None, yaw=np.pi / 2, pitch=0.0, roll=0.0, lost=0, censored=False,
+                boot_ms=True):
+    """A tlog written with pymavlink's encoder: 5 s of ATTITUDE (10 Hz) and GLOBAL_POSITION_INT
+    (5 Hz) moving east, a gimbal's ATTITUDE (same system, component 154, 1 Hz), RADIO_STATUS
+    from the ground radio at 2 Hz (with ``censored``, one remrssi = 0 while the vehicle
+    streams), then ``lost`` radio messages with remrssi = 0 after the vehicle stops."""
+    vehicle = mavlink2.MAVLink(None, srcSystem=1, srcComponent=1)
+    gimbal = mavlink2.MAVLink(None, srcSystem=1, srcComponent=154)
+    radio_mav = mavlink2.MAVLink(None, srcSystem=51, srcComponent=68)
+    packets = []
+    boot_offset = T0 - 100.0  # time_boot_ms 100 000 at T0
+    if home is not None:
+        lat, lon, alt = home
+        packets.append((T0 - 0.5, vehicle, vehicle.home_position_encode(
+            int(lat * 1e7), int(lon * 1e7), int(alt * 1e3), 0, 0, 0, [1, 0, 0, 0], 0, 0, 0)))
+    for k in range(51):
+        t = T0 + 0.1 * k
+        packets.append((t + 0.03, vehicle, vehicle.attitude_encode(
+            int(round((t - boot_offset) * 1e3)) if boot_ms else 0, roll, pitch, yaw, 0, 0, 0)))
+        if k % 10 == 5:
+            packets.append((t + 0.04, gimbal, gimbal.attitude_encode(
+                int(round((t - boot_offset) * 1e3)), 0.5, -0.5, 2.0, 0, 0, 0)))
+        if k % 2 == 0:
+            east = 2.0 * (t - T0)  # m
+            packets.append((t + 0.03, vehicle, vehicle.global_position_int_encode(
+                int(round((t - boot_offset) * 1e3)), int(round(47.0 * 1e7)),
+                int(round((8.0 + east / (111_320 * np.cos(np.radians(47.0)))) * 1e7)),
+                510_000, 10_000, 0, 0, 0, 0)))
+    if radio:
+        for k in range(10):
+            remrssi = 0 if censored and k == 4 else 95
+            packets.append((T0 + 0.25 + 0.5 * k, radio_mav,
+                            radio_mav.radio_status_encode(190, remrssi, 100, 30, 28, 0, 0)))
+        for k in range(lost):
+            packets.append((T0 + 10.0 + k, radio_mav, radio_mav.radio_status_encode(40, 0, 100, 30, 0, 0, 0)))
+    packets.sort(key=lambda p: p[0])
+    with open(path, "wb") as fh:
+        for t, mav, msg in packets:
+            fh.write(struct.pack(">Q", int(round(t * 1e6))) + msg.pack(mav))
+    return path
+
+
+def test_round_trip_attitude_position_and_dbm(tmp_path):
+    path = _write_tlog(tmp_path / "flight.tlog", home=(47.0, 8.0, 500.0), lost=3)
+    logs, meta = read_mavlink(path, tx_power_dbm=20.0, frequency_hz=915e6)
+    assert meta["messages"] == {"HOME_POSITION": 1, "ATTITUDE": 56, "GLOBAL_POSITION_INT": 26, "RADIO_STATUS": 13}
+    assert (meta["system_id"], meta["component_id"]) == (1, 1)  # the gimbal's 5 ATTITUDE ignored
+    assert "HOME_POSITION" in meta["station_note"]
+    vehicle = logs.pose[logs.pose["node"] == "sys1"]
+    assert len(vehicle) == 51 and sum(meta["dropped"].values()) == 0
+    # NED yaw 90 deg = facing east = the ENU/FLU identity
+    q = vehicle[["qw", "qx", "qy", "qz"]].to_numpy()
+    np.testing.assert_allclose(q, np.tile([1.0, 0.0, 0.0, 0.0], (51, 1)), atol=1e-6)
+    # 10 m above home, moving east at 2 m/s from home; times back on the receive clock
+    np.testing.assert_allclose(vehicle["z"], 10.0, atol=0.01)
+    np.testing.assert_allclose(vehicle["x"], 2.0 * (vehicle["t"] - T0 - 0.03), atol=0.05)
+    np.testing.assert_allclose(vehicle["y"], 0.0, atol=0.05)
+    np.testing.assert_allclose(vehicle["t"].to_numpy(), T0 + 0.03 + 0.1 * np.arange(51), atol=1e-3)
+    # SiK units -> dBm exactly; the ground radio's rssi is the station receiving
+    sig = logs.signal
+    up = sig[(sig["tx"] == "sys1") & (sig["rx"] == "gcs")]
+    down = sig[(sig["tx"] == "gcs") & (sig["rx"] == "sys1")]
+    assert len(up) == len(down) == 10
+    assert (up["rssi_dbm"] == 190 / 1.9 - 127).all() and (down["rssi_dbm"] == 95 / 1.9 - 127).all()
+    assert up["rssi_dbm"].iloc[0] == pytest.approx(-27.0) and down["rssi_dbm"].iloc[0] == pytest.approx(-77.0)
+    assert (sig["tx_power_dbm"] == 20.0).all() and (sig["frequency_hz"] == 915e6).all()
+    assert meta["signal"]["link_lost"] == 3
+
+
+@pytest.mark.parametrize(
+    "roll, pitch, body_axis, world_z",
+    [(0.0, np.radians(30), [1, 0, 0], 0.5),    # NED pitch up: the nose (FLU x) rises
+     (np.radians(30), 0.0, [0, 1, 0], 0.5)],   # NED roll right: the left wing (FLU y) rises
+)
+def test_round_trip_tilts(tmp_path, roll, pitch, body_axis, world_z):
+    path = _write_tlog(tmp_path / "tilt.tlog", roll=roll, pitch=pitch, yaw=0.0)
+    logs, _ = read_mavlink(path, tx_power_dbm=20.0, frequency_hz=915e6, vehicle="drone",
+                           station_geodetic=(47.0, 8.0, 505.0))
+    q = logs.pose.loc[logs.pose["node"] == "drone", ["qw", "qx", "qy", "qz"]].to_numpy()[0]
+    v = rotate_body_to_world(q, np.array(body_axis, float))
+    assert v[2] == pytest.approx(world_z, abs=1e-6)
+    # yaw 0 NED = facing north: the level part of the nose points north (ENU +y)
+    if pitch:
+        assert v[1] == pytest.approx(np.cos(pitch), abs=1e-6)
+    station = logs.pose[logs.pose["node"] == "gcs"]
+    assert station["z"].iloc[0] == pytest.approx(0.0, abs=1e-6)  # the station is the origin
+    assert logs.pose.loc[logs.pose["node"] == "drone", "z"].iloc[0] == pytest.approx(5.0, abs=0.01)
+
+
+def test_zero_while_streaming_drops_that_direction_only(tmp_path):
+    path = _write_tlog(tmp_path / "censored.tlog", censored=True)
+    logs, meta = read_mavlink(path, tx_power_dbm=20.0, frequency_hz=915e6)
+    assert meta["signal"]["link_lost"] == 0
+    assert meta["signal"]["zero_station_to_vehicle"] == 1 and meta["signal"]["rows_station_to_vehicle"] == 9
+    assert meta["signal"]["rows_vehicle_to_station"] == 10
+    assert len(logs.signal) == 19
+    assert "first position fix" in meta["station_note"]
+
+
+def test_without_boot_times_the_receive_clock_is_used(tmp_path):
+    path = _write_tlog(tmp_path / "noboot.tlog", boot_ms=False)
+    logs, meta = read_mavlink(path, tx_power_dbm=20.0, frequency_hz=915e6)
+    t = logs.pose.loc[logs.pose["node"] == "sys1", "t"].to_numpy()
+    np.testing.assert_allclose(t, T0 + 0.03 + 0.1 * np.arange(51), atol=1e-5)
+    assert meta["clock_offset_s"] is None and "time_boot_ms" not in meta["time_reference"]
+
+
+def test_sik_formula():
+    np.testing.assert_allclose(sik_rssi_to_dbm([0, 19, 190, 254]), [-127.0, -117.0, -27.0, 254 / 1.9 - 127])
+
+
+# ------------------------------------------------------------------------------ errors
+
+
+def test_tlog_without_radio_is_a_one_line_error(tmp_path):
+    path = _write_tlog(tmp_path / "noradio.tlog", radio=False)
+    with pytest.raises(LogFormatError) as exc:
+        read_mavlink(path, tx_power_dbm=20.0, frequency_hz=915e6)
+    msg = str(exc.value)
+    assert "\n" not in msg and str(path) in msg and "RADIO_STATUS" in msg and "RADIO (id 166)" in msg
+
+
+def test_tlog_without_attitude_is_a_one_line_error(tmp_path):
+    path = tmp_path / "radio_only.tlog"
+    mav = mavlink2.MAVLink(None, srcSystem=51, srcComponent=68)
+    path.write_bytes(struct.pack(">Q", int(T0 * 1e6)) + mav.radio_status_encode(100, 100, 100, 30, 30, 0, 0).pack(mav))
+    with pytest.raises(LogFormatError, match=r"no ATTITUDE messages") as exc:
+        read_mavlink(path, tx_power_dbm=20.0, frequency_hz=915e6)
+    assert "\n" not in str(exc.value) and str(path) in str(exc.value)
+
+
+def test_bad_arguments(tmp_path):
+    with pytest.raises(RplearnError, match="no such file"):
+        read_mavlink(tmp_path / "missing.tlog", tx_power_dbm=20.0, frequency_hz=915e6)
+    path = shutil.copy(TLOG_1, tmp_path / "a.tlog")
+    with pytest.raises(RplearnError) as exc:
+        read_mavlink(path, tx_power_dbm=20.0, frequency_hz=-1.0)
+    assert exc.value.param == "frequency_hz"
+    with pytest.raises(RplearnError) as exc:
+        read_mavlink(path, tx_power_dbm=20.0, frequency_hz=915e6, system_id=7)
+    assert exc.value.param == "system_id"
+    for bad in ({"frequency_hz": 915.0}, {"tx_power_dbm": 1e6}, {"station": ""},
+                {"station_geodetic": (41.0, -96.0)}, {"origin_geodetic": (100.0, 0.0, 0.0)}):
+        args = {"tx_power_dbm": 20.0, "frequency_hz": 915e6, **bad}
+        with pytest.raises(RplearnError) as exc:
+            read_mavlink(BIN, **args)
+        assert exc.value.param == next(iter(bad)) and "\n" not in str(exc.value)
+
+
+# ------------------------------------------------------------------------------ dispatch
+
+
+def test_formats_are_detected(tmp_path):
+    from rplearn.io import detect_format
+
+    text_log = tmp_path / "00000001.log"
+    text_log.write_text("FMT, 128, 89, FMT, BBnNZ, Type,Length,Name,Format,Columns\n")
+    renamed = tmp_path / "flight.dat"
+    renamed.write_bytes(BIN.read_bytes()[:1000])
+    for path in (TLOG_1, BIN, text_log, renamed):
+        assert detect_format(path) == "mavlink"
+
+
+def test_read_logs_reads_a_tlog_with_reader_options():
+    from rplearn.io import ReaderOptions, read_logs
+
+    options = ReaderOptions(tx_power_dbm={"copter": 20.0, "base": 17.0}, frequency_hz=433e6,
+                            nodes={str(TLOG_1): "copter"}, station="base",
+                            station_geodetic=(41.1857, -96.0105, 304.0))
+    logs, meta = read_logs([TLOG_1], options)
+    assert set(logs.pose["node"]) == {"copter", "base"}
+    assert set(map(tuple, logs.signal[["tx", "rx"]].drop_duplicates().to_numpy())) == {
+        ("copter", "base"), ("base", "copter")}
+    assert logs.signal.groupby("tx")["tx_power_dbm"].first().to_dict() == {"copter": 20.0, "base": 17.0}
+    assert meta["origin_geodetic"] == (41.1857, -96.0105, 304.0)
+    f = meta["files"][0]
+    assert f["kind"] == "pose+signal" and f["format"] == "tlog"
+    assert f["station_note"] == "station position given (station_geodetic)"
+    base = logs.pose[logs.pose["node"] == "base"]
+    np.testing.assert_allclose(base[["x", "y", "z"]].to_numpy(), 0.0, atol=1e-6)
+
+
+def test_read_logs_names_the_missing_options():
+    from rplearn.io import ReaderOptions, read_logs
+
+    with pytest.raises(RplearnError) as exc:
+        read_logs([TLOG_1], ReaderOptions(frequency_hz=915e6))
+    assert exc.value.param == "tx_power_dbm" and "\n" not in str(exc.value)
+    assert str(TLOG_1) in str(exc.value)
+    with pytest.raises(RplearnError) as exc:
+        ReaderOptions(station_geodetic=(95.0, 0.0, 0.0))
+    assert exc.value.param == "station_geodetic"
+
+
+def test_inspect_reports_station_link_lost_and_cut_off():
+    from rplearn.io import inspect_logs
+
+    report = inspect_logs([TLOG_2])
+    f = report.files[0]
+    assert f["error"] is None and f["format"] == "tlog"
+    assert any("first position fix" in n for n in f["notes"])
+    assert any("695 radio message(s)" in n for n in f["notes"])
+    assert {lk.tx for lk in report.links} == {"sys1", "gcs"}
+    text = inspect_logs([BIN]).to_text()
+    assert "cut off inside the message at byte 65,512 (AHR2)" in text
+
+
+def test_cli_sync_of_a_tlog(tmp_path):
+    import os
+    import subprocess
+    import sys
+
+    from rplearn.io.files import read_table
+
+    rplearn = os.path.join(os.path.dirname(sys.executable), "rplearn")
+    out = tmp_path / "m.parquet"
+    proc = subprocess.run(
+        [rplearn, "sync", "--poses", str(TLOG_1), "--signals", str(TLOG_1), "--tx-power", "20",
+         "--frequency", "915e6", "--link", "all", "--max-gap", "1.0", "-o", str(out)],
+        check=False, capture_output=True, text=True, timeout=300,
+    )
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert "station placed at the vehicle's first position fix" in proc.stdout
+    assert "57 radio message(s)" in proc.stdout
+    matched = read_table(str(out))
+    assert set(zip(matched["tx"], matched["rx"])) == {("sys1", "gcs"), ("gcs", "sys1")}
+    assert 900 < len(matched) <= 1026
+
+
+def test_cli_station_flags(tmp_path):
+    """--station LAT,LON,ALT places the ground station (said so), --station-node names it; a
+    malformed position is a one-line error naming the flag."""
+    import os
+    import subprocess
+    import sys
+
+    from rplearn.io.files import read_table
+
+    rplearn = os.path.join(os.path.dirname(sys.executable), "rplearn")
+    out = tmp_path / "m.parquet"
+    base = [rplearn, "sync", "--poses", str(TLOG_1), "--signals", str(TLOG_1), "--tx-power", "20",
+            "--frequency", "915e6", "--link", "all", "--max-gap", "1.0", "-o", str(out)]
+    proc = subprocess.run(base + ["--station", "41.1855,-96.0105,330", "--station-node", "base"],
+                          check=False, capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert "station position given" in proc.stdout
+    matched = read_table(str(out))
+    assert set(zip(matched["tx"], matched["rx"])) == {("sys1", "base"), ("base", "sys1")}
+    bad = subprocess.run(base + ["--station", "41.1855,-96.0105"], check=False, capture_output=True, text=True,
+                         timeout=300)
+    assert bad.returncode != 0 and "--station" in bad.stderr and "LAT,LON,ALT" in bad.stderr
+    assert "Traceback" not in bad.stderr
