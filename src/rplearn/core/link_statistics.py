@@ -74,8 +74,9 @@ def _fill_features(
     el_tx: FloatArray,
     az_rx: FloatArray,
     el_rx: FloatArray,
-    moments: FloatArray | None,
+    moments: Any,
     gap: int = 1,
+    segments: tuple[NDArray[np.intp], NDArray[np.intp]] | None = None,
 ) -> None:
     """Write tx features into rows ``0 .. p-1`` and rx features into rows ``p+gap .. 2p+gap-1`` of ``buf``.
 
@@ -83,7 +84,8 @@ def _fill_features(
     are left for the observations and extra columns. Works in cache-sized chunks; a basis that
     accepts stacked samples computes both ends of a chunk in one pass, through a (p, 2, chunk)
     strided view of the two row groups, and adds to ``moments[0]`` (tx) and ``moments[1]`` (rx)
-    when given.
+    when given: per range of samples when ``segments`` (bounds of the tx ranges, of the rx
+    ranges) are given, see :meth:`~rplearn.core.sh.SphericalHarmonics.design_rows_into`.
     """
     p = basis.n_coef
     n = az_tx.size
@@ -97,7 +99,8 @@ def _fill_features(
             both = np.lib.stride_tricks.as_strided(
                 view, shape=(p, 2, e - s), strides=(view.strides[0], (p + gap) * view.strides[0], view.strides[1])
             )
-            basis.design_rows_into(az_both[:, s:e], el_both[:, s:e], both, moments)
+            local = None if segments is None else tuple(np.clip(b - s, 0, e - s) for b in segments)
+            basis.design_rows_into(az_both[:, s:e], el_both[:, s:e], both, moments, local)
         else:
             basis.design_rows_into(az_tx[s:e], el_tx[s:e], view[:p])
             basis.design_rows_into(az_rx[s:e], el_rx[s:e], view[p + gap : 2 * p + gap])
@@ -190,15 +193,7 @@ def segmented_link_statistics(
     buf = _block_buffer(k * n)[: k * n].reshape(k, n)
     tx_bounds = bounds if tx_bounds is None else tx_bounds
     moments = (np.zeros((tx_bounds.size - 1, *basis.moment_shape)), np.zeros((n_links, *basis.moment_shape)))
-    az_both, el_both = np.stack([az_tx, az_rx]), np.stack([el_tx, el_rx])
-    for s in range(0, n, FEATURE_CHUNK):
-        e = min(n, s + FEATURE_CHUNK)
-        view = buf[:, s:e]
-        both = np.lib.stride_tricks.as_strided(
-            view, shape=(p, 2, e - s), strides=(view.strides[0], (p + gap) * view.strides[0], view.strides[1])
-        )
-        local = (np.clip(tx_bounds - s, 0, e - s), np.clip(bounds - s, 0, e - s))
-        basis.design_rows_into(az_both[:, s:e], el_both[:, s:e], both, moments, local)
+    _fill_features(basis, buf, az_tx, el_tx, az_rx, el_rx, moments, gap, (tx_bounds, bounds))
     buf[p] = y
     buf[p + 1 : p + gap] = extra
     products = np.empty((n_links, p + gap, gap + p))

@@ -3,7 +3,7 @@
 :func:`spectrum_report` is exact (a full eigendecomposition): the rank and condition number the
 fit report gives for every problem of up to :data:`rplearn.core.solver.LARGE_COLUMNS`
 columns. Above that (swarms of tens of nodes) the solver uses :func:`spectrum_estimate`
-(subspace iterations: a few matrix products and triangular solves) and
+(block Krylov iterations: a few matrix products and triangular solves) and
 :class:`ConstrainedFactor` (one Cholesky, the covariance only when read) instead of a full eigendecomposition and the inverse of
 the KKT matrix, which grow as the cube of the columns with large constants (3,000 columns:
 3.3 s of eigenvalues and 2.5 s of inverse).
@@ -120,7 +120,7 @@ def spectrum_from_factor(
     """:func:`spectrum_estimate` reusing the Cholesky factor of the regularised system
     ``A = S^-1 G S^-1 + R`` (``G`` = ``gram``, the columns scaled by ``S``; ``R`` a ridge equal
     on the pattern columns, where the gauge's null directions lie), so that no second
-    factorisation is needed: inverse subspace iteration with ``S A^-1 S = (G + R)^-1`` on the
+    factorisation is needed: inverse block Krylov iterations with ``S A^-1 S = (G + R)^-1`` on the
     complement of the null directions (which are eigenvectors of both), then Rayleigh-Ritz
     with ``G`` itself. For fits whose only regularisation is that ridge; a smoothness penalty
     shifts the eigenvectors, and :func:`spectrum_estimate` is used instead. ``operator``, when
@@ -154,9 +154,9 @@ def spectrum_estimate(
     """:func:`spectrum_report` for large systems, estimated: ``(sv, rank, cond)`` with ``sv``
     the largest and smallest non-zero singular values of the design matrix.
 
-    The largest eigenvalue of ``X^T X`` by subspace iteration on a block of ``block`` vectors
+    The largest eigenvalue of ``X^T X`` by block Krylov iterations from ``block`` vectors
     (matrix products, not matrix-vector ones: the matrix is read ``iterations`` times, not
-    hundreds), then Rayleigh-Ritz; the smallest non-zero one by inverse subspace iteration on
+    hundreds), then Rayleigh-Ritz; the smallest non-zero one by inverse block Krylov iterations on
     ``X^T X + lam_max N N^T`` (``N`` the gauge's null directions, which it lifts out of the
     way) through its Cholesky factor. When that matrix is not positive definite, or its
     smallest eigenvalue is below the rank tolerance, the samples leave more directions free
@@ -214,11 +214,15 @@ class ConstrainedFactor:
 
     def __init__(self, factor: Any, scale: FloatArray, cmat: FloatArray, kind: str = "dense") -> None:
         self.factor, self.scale, self.cmat, self.kind = factor, scale, cmat, kind
-        self.sparse = kind == "sparse"  # a SuperLU factor of a block-sparse matrix
         self.sparse_a: Any = None  # then also the scaled matrix itself (for the dense inverse)
         self.band: tuple[FloatArray, NDArray[np.intp]] | None = None  # "banded": the band and the column order
         self.y = self.solve_a(cmat.T) if cmat.shape[0] else np.zeros((scale.size, 0))  # A^-1 C^T
         self.s = cmat @ self.y if cmat.shape[0] else np.zeros((0, 0))  # C A^-1 C^T
+
+    @property
+    def sparse(self) -> bool:
+        """Whether the factor is SuperLU's, of a block-sparse matrix."""
+        return self.kind == "sparse"
 
     @classmethod
     def of(
