@@ -23,6 +23,7 @@ def inspect(
     require_valid: bool = typer.Option(False, "--require-valid/--accept-invalid", help="Drop ULog positions the autopilot flags invalid (xy_valid or z_valid = 0), or keep them (default)."),
     station_geodetic: Optional[str] = typer.Option(None, "--station", help="LAT,LON,ALT: ground station position of MAVLink logs (.tlog, DataFlash) [deg, deg, m AMSL] (default: the log's home position, else the vehicle's first fix)."),
     station: Optional[str] = typer.Option(None, "--station-node", help="Node id of the ground station of MAVLink logs (default gcs)."),
+    station_heading: Optional[float] = typer.Option(None, "--station-heading", help="Compass heading of the ground station's antenna (its body x axis) in MAVLink logs [deg clockwise from north] (default 90, east)."),
     markdown: bool = typer.Option(False, "--markdown", help="Print Markdown instead of text."),
 ) -> None:
     """Summarise logs: nodes, time spans, rates, RSSI range, gaps, and anything suspicious.
@@ -32,7 +33,8 @@ def inspect(
     from rplearn.io.inspect import inspect_logs
 
     options = reader_options(node, receiver, address, pose_topic, rssi_topic, rssi_field, msg_definition, require_valid=require_valid,
-                             station_geodetic=geodetic_flag(station_geodetic, "--station"), station=station)
+                             station_geodetic=geodetic_flag(station_geodetic, "--station"), station=station,
+                             station_heading_deg=station_heading)
     report = inspect_logs(logs, options)
     text = report.to_markdown() if markdown else report.to_text()
     # the report names reader options as the library knows them; here they are flags
@@ -65,6 +67,7 @@ def sync(
     require_valid: bool = typer.Option(False, "--require-valid/--accept-invalid", help="Drop ULog positions the autopilot flags invalid (xy_valid or z_valid = 0), or keep them (default)."),
     station_geodetic: Optional[str] = typer.Option(None, "--station", help="LAT,LON,ALT: ground station position of MAVLink logs (.tlog, DataFlash) [deg, deg, m AMSL] (default: the log's home position, else the vehicle's first fix)."),
     station: Optional[str] = typer.Option(None, "--station-node", help="Node id of the ground station of MAVLink logs (default gcs)."),
+    station_heading: Optional[float] = typer.Option(None, "--station-heading", help="Compass heading of the ground station's antenna (its body x axis) in MAVLink logs [deg clockwise from north] (default 90, east)."),
     on_unknown_node: str = typer.Option("drop", "--on-unknown-node", help="Signals naming a node without a pose log: drop (counted, default) or error."),
     rssi_scale: str = typer.Option("dbm", "--rssi-scale", help="dbm (default: calibrated, dropped outside -150..30 dBm or above the transmit power) or relative (uncalibrated dB on the radio's own scale: no plausibility window)."),
     estimate_offset: Optional[str] = typer.Option(None, "--estimate-offset", help="NODE: find the clock offset of NODE's poses that best explains the signal (a low-order pattern fit's residual over shifts of its pose times) and report it with its uncertainty."),
@@ -81,7 +84,8 @@ def sync(
     readers = reader_options(
         node, receiver, address, pose_topic, rssi_topic, rssi_field, msg_definition, tx_power_dbm=tx_power_dbm,
         frequency_hz=frequency_hz, nan_policy=nan_policy, allow_unsorted=allow_unsorted, require_valid=require_valid,
-        station_geodetic=geodetic_flag(station_geodetic, "--station"), station=station)
+        station_geodetic=geodetic_flag(station_geodetic, "--station"), station=station,
+                             station_heading_deg=station_heading)
     offsets = numbers(pairs(offset, "--offset"), "--offset", "NODE=SECONDS")
     options = SyncOptions(link=link(link_text), max_gap_s=max_gap_s, clock_offsets_s=offsets or None, on_unknown_node=on_unknown_node,
                           rssi_scale=rssi_scale)

@@ -23,7 +23,9 @@ imported on first use (:mod:`rplearn._lazy`): tables (:func:`~rplearn.io.files.r
 readers, :func:`~rplearn.io.inspect.inspect_logs`, pattern export
 (:func:`~rplearn.io.export.export_grid`, :func:`~rplearn.io.export.export_msi`,
 :func:`~rplearn.io.export.read_msi`) and model files
-(:func:`~rplearn.io.modelfile.read_model_file`, :func:`~rplearn.io.modelfile.write_model_file`).
+(:func:`~rplearn.io.modelfile.read_model_file`, :func:`~rplearn.io.modelfile.write_model_file`),
+and a vehicle-to-station flight as a MAVLink telemetry log (:func:`~rplearn.io.tlog.write_tlog`,
+the inverse of the ``.tlog`` reader, for simulated flights).
 """
 
 from __future__ import annotations
@@ -67,6 +69,8 @@ _NAMES: dict[str, str] = {
     "write_radiotap_pcap": "pcap",
     "read_mavlink": "mavlink",
     "sik_rssi_to_dbm": "mavlink",
+    "write_tlog": "tlog",
+    "dbm_to_sik_rssi": "tlog",
     "NAN_POLICIES": "options",
     "geodetic_to_enu": "geodetic",
     # looking at logs before learning

@@ -51,14 +51,15 @@ are placed there through their ``time_boot_ms`` plus the median receive-minus-bo
 boot), which avoids the receive clock's coarse ticks and queueing jitter. DataFlash rows use
 ``TimeUS`` [s since boot] for both logs.
 
-The ground station is a static node (one pose row, level, facing east: its attitude is not
-logged) at ``station_geodetic`` if given, else ``HOME_POSITION`` (tlog) / ``ORGN`` type 1
+The ground station is a static node (one pose row, level, its body x axis facing east, or
+``station_heading_deg``: its attitude is not logged) at ``station_geodetic`` if given, else ``HOME_POSITION`` (tlog) / ``ORGN`` type 1
 (DataFlash home), else the vehicle's first fix; ``metadata["station_note"]`` says which.
 """
 
 from __future__ import annotations
 
 import os
+import sys
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
@@ -205,6 +206,24 @@ def _open(mavutil: Any, source: str) -> Any:
         raise LogFormatError(f"{source}: cannot read MAVLink log ({type(exc).__name__}: {msg})") from None
 
 
+def _tlog_cut_off(conn: Any, source: str) -> dict[str, Any]:
+    """Where a tlog ends inside a MAVLink frame (pymavlink keeps its bytes unparsed at the end):
+    ``cut_off_at_byte`` (None when whole) and ``cut_off_record`` (the frame's message name)."""
+    try:
+        left = int(conn.mav.buf_len())
+        head = bytes(conn.mav.buf[conn.mav.buf_index:conn.mav.buf_index + 10])
+    except (AttributeError, TypeError, ValueError):  # pragma: no cover - a pymavlink without these
+        return {}
+    if left <= 0:
+        return {"cut_off_at_byte": None, "cut_off_record": None}
+    msgid = head[5] if head[:1] == b"\xfe" and len(head) > 5 else (
+        int.from_bytes(head[7:10], "little") if head[:1] == b"\xfd" and len(head) >= 10 else None)
+    table = getattr(sys.modules.get(type(conn.mav).__module__), "mavlink_map", {})
+    kind = table.get(msgid) if msgid is not None else None
+    return {"cut_off_at_byte": os.path.getsize(source) - left,
+            "cut_off_record": getattr(kind, "msgname", None) if kind is not None else None}
+
+
 def _collect_tlog(source: str, system_id: int | None) -> _Raw:
     """One pass over a ``.tlog``: attitude, position, radio, home and the vehicle's message times."""
     conn = _open(_mavutil(), source)
@@ -239,6 +258,7 @@ def _collect_tlog(source: str, system_id: int | None) -> _Raw:
             rows[kind].append((t, msg.rssi, msg.remrssi))
             key = f"{sysid}/{msg.get_srcComponent()}"
             radio_senders[key] = radio_senders.get(key, 0) + 1
+    cut_off = _tlog_cut_off(conn, source)
     att = _arr(rows["ATTITUDE"], 6)
     if not len(att):
         raise LogFormatError(f"{source}: no ATTITUDE messages (the vehicle's attitude)")
@@ -264,7 +284,7 @@ def _collect_tlog(source: str, system_id: int | None) -> _Raw:
         pos=np.column_stack([gpi[:, 2] + offset[len(att):], gpi[:, 3:6]]),
         radio=_arr(sorted(radio), 3), vehicle_t=np.sort(np.asarray(by_sys.get(vehicle, []), np.float64)),
         home=tuple(float(v) for v in home[0][1:]) if home else None, counts=counts,
-        notes={"system_id": vehicle, "component_id": chosen % 256, "radio_senders": radio_senders,
+        notes={"system_id": vehicle, "component_id": chosen % 256, "radio_senders": radio_senders, **cut_off,
                "clock_offset_s": float(np.median(offset)) if len(offset) and boot_clock else None,
                "time_reference": "ground station receive time, seconds since the UNIX epoch"
                                  + (" (vehicle messages through time_boot_ms + median offset)" if boot_clock else "")},
@@ -348,7 +368,7 @@ def _vehicle_pose(raw: _Raw, origin: tuple[float, float, float], max_gap_s: floa
     enu = geodetic_to_enu(geo[:, 0], geo[:, 1], geo[:, 2], origin)
     out = (ta < tp[0]) | (ta > tp[-1])
     i = np.clip(np.searchsorted(tp, ta, side="right") - 1, 0, len(tp) - 2)
-    gap = ((tp[i + 1] - tp[i]) > max_gap_s) & ~out
+    gap = ((tp[i + 1] - tp[i]) > max_gap_s) & (ta != tp[i]) & ~out  # an instant at a fix is not in its gap
     dropped["out_of_span"], dropped["gap"] = int(out.sum()), int(gap.sum())
     keep = ~(out | gap)
     t = ta[keep]
@@ -434,6 +454,7 @@ def read_mavlink(
     station_geodetic: tuple[float, float, float] | None = None,
     origin_geodetic: tuple[float, float, float] | None = None,
     system_id: int | None = None,
+    station_heading_deg: float | None = None,
     max_gap_s: float = 2.0,
     stream_timeout_s: float = 2.0,
 ) -> tuple[Logs, dict[str, Any]]:
@@ -459,6 +480,10 @@ def read_mavlink(
         ENU origin; the ground station's position by default.
     system_id : int, optional
         MAVLink system id of the vehicle in a tlog; by default the one sending most ATTITUDE.
+    station_heading_deg : float, optional
+        Compass heading of the station's body x axis (its antenna's forward direction)
+        [deg, clockwise from north]; not logged, so by default 90 (east, said in the notes):
+        the station's body frame is then the ENU world frame.
     max_gap_s : float
         Longest gap of the position fixes bridged by interpolation [s].
     stream_timeout_s : float
@@ -492,6 +517,9 @@ def read_mavlink(
         raise InputError(f"{source}: no such file")
     _check_arguments(tx_power_dbm, frequency_hz, max_gap_s, stream_timeout_s, vehicle, station)
     station_geodetic = _check_origin(station_geodetic, "station_geodetic")
+    if station_heading_deg is not None and not (
+            isinstance(station_heading_deg, (int, float)) and np.isfinite(station_heading_deg)):
+        raise InputError(f"station_heading_deg: expected degrees, got {station_heading_deg!r}", param="station_heading_deg")
     origin_geodetic = _check_origin(origin_geodetic, "origin_geodetic")
     fmt = _detect(source)
     raw = _collect_tlog(source, system_id) if fmt == "tlog" else _collect_dataflash(source)
@@ -510,17 +538,25 @@ def read_mavlink(
     pose = _vehicle_pose(raw, origin, float(max_gap_s), vehicle, source, dropped)  # type: ignore[arg-type]
     s_xyz = geodetic_to_enu(*station_geo, origin)  # type: ignore[arg-type]
     t0 = float(min(raw.radio[0, 0], pose["t"].iloc[0] if len(pose) else np.inf))
+    heading = 90.0 if station_heading_deg is None else float(station_heading_deg)
+    sq = quat_wxyz_from_euler_ned_frd_deg(0.0, 0.0, heading)
     station_row = pd.DataFrame({"t": [t0], "node": [station], "x": [s_xyz[0]], "y": [s_xyz[1]], "z": [s_xyz[2]],
-                                "qw": [1.0], "qx": [0.0], "qy": [0.0], "qz": [0.0]})
+                                "qw": [sq[0]], "qx": [sq[1]], "qy": [sq[2]], "qz": [sq[3]]})
     pose = validate_pose_log(pd.concat([pose, station_row], ignore_index=True), source)
     sig_counts: dict[str, int] = {}
     signal = _signal(raw, vehicle, station, tx_power_dbm, float(frequency_hz), float(stream_timeout_s), sig_counts)
     signal = validate_signal_log(signal, source)
-    cut, cut_name, corrupt = dataflash_cut_off_at(source) if fmt == "dataflash" else (None, None, 0)
+    cut, cut_name, corrupt = (dataflash_cut_off_at(source) if fmt == "dataflash"
+                              else (raw.notes.pop("cut_off_at_byte", None), raw.notes.pop("cut_off_record", None), 0))
     lost = sig_counts["link_lost"]
-    notes = [f"{source}: {station_note}",
+    heading_note = ("assumed level and facing east (heading 90 deg): its attitude is not logged"
+                    if station_heading_deg is None else f"level, heading {heading:g} deg (given)")
+    notes = [f"{source}: {station_note}", f"{source}: station {station!r} {heading_note}",
              (f"{source}: {lost:,} radio message(s) with a zero RSSI while the vehicle was silent "
               "(link lost) dropped, both directions")]
+    if cut is not None:
+        notes.append(f"{source}: the file is cut off inside {'a ' + cut_name if cut_name else 'a'} message at byte "
+                     f"{cut:,}: that message is lost, the complete ones before it are read")
     meta = {
         "source": source, "format": fmt, "notes": notes, "vehicle": vehicle, "station": station,
         "station_geodetic": station_geo, "station_note": station_note,

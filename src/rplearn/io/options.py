@@ -143,6 +143,9 @@ class ReaderOptions:
     station_geodetic : (float, float, float), optional
         Position of that ground station (lat [deg], lon [deg], alt [m] AMSL); by default the
         log's home position, else the vehicle's first fix.
+    station_heading_deg : float, optional
+        Compass heading of that station's body x axis [deg, clockwise from north]; by default
+        90 (east, assumed), which makes its body frame the ENU world frame.
 
     Raises
     ------
@@ -166,6 +169,7 @@ class ReaderOptions:
     require_valid: bool = False
     station: str = "gcs"
     station_geodetic: tuple[float, float, float] | None = None
+    station_heading_deg: float | None = None
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -178,6 +182,9 @@ class ReaderOptions:
         set_(self, "station_geodetic", _check_origin(self.station_geodetic, "station_geodetic"))
         if not isinstance(self.station, str) or not self.station.strip():
             raise InputError(f"station: expected a node id, got {self.station!r}", param="station")
+        if self.station_heading_deg is not None and not _finite(self.station_heading_deg):
+            raise InputError(f"station_heading_deg: expected degrees, got {self.station_heading_deg!r}",
+                             param="station_heading_deg")
         set_(self, "tx_power_dbm", _check_tx_power(self.tx_power_dbm))
         if self.frequency_hz is not None and not (_finite(self.frequency_hz) and self.frequency_hz > 0):
             raise InputError(

@@ -213,6 +213,7 @@ def _read_mavlink(path: str, options: ReaderOptions, got: _Gathered) -> dict[str
     logs, meta = _mavlink.read_mavlink(
         path, options.tx_power_dbm, options.frequency_hz, vehicle=(options.nodes or {}).get(path),
         station=options.station, station_geodetic=options.station_geodetic, origin_geodetic=got.origin,
+        station_heading_deg=options.station_heading_deg,
     )
     if got.origin is None:
         got.origin = meta["origin_geodetic"]

@@ -1,0 +1,199 @@
+"""Canonical pose and signal logs -> a MAVLink telemetry log (``.tlog``), through ``pymavlink``.
+
+The inverse of :func:`rplearn.io.mavlink.read_mavlink` for a ground station's log: a vehicle
+flying around a static ground station, the two linked by a 3DR/SiK telemetry radio. It lets a
+simulated flight (:func:`rplearn.sim.flight.simulate`) go through the same path as a real one,
+and gives ground-station tools (MAVExplorer, Mission Planner) a file to replay.
+
+What is written (MAVLink 2 frames of the ``ardupilotmega`` dialect, each after the tlog's
+8-byte big-endian receive time [us since the UNIX epoch]):
+
+- per vehicle pose row, ``ATTITUDE`` (NED/FRD roll, pitch, yaw [rad] from the FLU -> ENU
+  quaternion) and ``GLOBAL_POSITION_INT`` (lat, lon [1e-7 deg], alt [mm]) from system
+  ``system_id``, component 1, with ``time_boot_ms`` = the row's time on a boot clock;
+- one ``HOME_POSITION`` with the station's position (the median of its pose rows; the station
+  must be static, its attitude is not loggable: pass its heading back to the reader);
+- per signal row, one ``RADIO_STATUS`` from the ground radio (system 51, component 68, as SiK
+  firmware sends it) with the row's RSSI in SiK units, ``round((dBm + 127) * 1.9)`` clipped to
+  1-254 (0 means link lost and 255 unknown), in ``rssi`` when the station received it and in
+  ``remrssi`` when the vehicle did; the other field is 255 (unknown).
+
+Positions go through WGS-84 geodetic coordinates around ``origin_geodetic``; ``tx_power_dbm``
+and ``frequency_hz`` are not loggable and must be given to the reader again.
+"""
+
+from __future__ import annotations
+
+import os
+import struct
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from rplearn._atomic import atomic_open
+from rplearn.core.geometry import euler_from_quat_wxyz, quat_enu_flu_to_ned_frd
+from rplearn.errors import InputError
+from rplearn.io._common import Logs
+from rplearn.io.mavlink import SIK_UNITS_PER_DB, SIK_ZERO_DBM
+
+#: The MAVLink system and component ids SiK radios send ``RADIO_STATUS`` with.
+SIK_SYSTEM_ID, SIK_COMPONENT_ID = 51, 68
+#: Receive time of the log's first message [s since the UNIX epoch] (2026-01-01T00:00:00Z).
+DEFAULT_START_UNIX_S = 1_767_225_600.0
+#: The boot clock reads this at the first row [s].
+BOOT_LEAD_S = 1.0
+
+
+def dbm_to_sik_rssi(rssi_dbm: Any) -> tuple[np.ndarray, int]:
+    """Received power [dBm] -> SiK RSSI units (1-254) and the count of values clipped to that range.
+
+    Raises
+    ------
+    InputError
+        When ``rssi_dbm`` is not finite real numbers.
+    """
+    try:
+        dbm = np.asarray(rssi_dbm, np.float64)
+    except (TypeError, ValueError):
+        raise InputError(f"rssi_dbm: expected received powers [dBm] (real numbers), got {type(rssi_dbm).__name__}",
+                         param="rssi_dbm") from None
+    if not np.all(np.isfinite(dbm)):
+        raise InputError(f"rssi_dbm: {int(np.count_nonzero(~np.isfinite(dbm)))} value(s) are NaN or infinite, "
+                         "which SiK units cannot hold", param="rssi_dbm")
+    raw = np.rint((dbm - SIK_ZERO_DBM) * SIK_UNITS_PER_DB)
+    clipped = int(np.count_nonzero((raw < 1) | (raw > 254)))
+    return np.clip(raw, 1, 254).astype(np.int64), clipped
+
+
+def _enu_to_geodetic(xyz_enu: np.ndarray, origin: tuple[float, float, float]) -> tuple[np.ndarray, ...]:
+    import pymap3d
+
+    lat, lon, alt = pymap3d.enu2geodetic(xyz_enu[:, 0], xyz_enu[:, 1], xyz_enu[:, 2], *origin)
+    return np.asarray(lat, np.float64), np.asarray(lon, np.float64), np.asarray(alt, np.float64)
+
+
+def _dialect() -> Any:
+    try:
+        from pymavlink.dialects.v20 import ardupilotmega
+    except ImportError:  # pragma: no cover - pymavlink is a dependency
+        raise InputError("writing MAVLink logs needs the 'pymavlink' package (pip install pymavlink)") from None
+    return ardupilotmega
+
+
+def _check(logs: Logs, vehicle: str, station: str, origin_geodetic: Any) -> tuple[pd.DataFrame, pd.DataFrame]:
+    if logs.pose is None or logs.signal is None:
+        raise InputError("write_tlog: needs both a pose log and a signal log", param="logs")
+    pose, signal = logs.pose, logs.signal
+    if vehicle == station:
+        raise InputError(f"vehicle and station must differ, both are {vehicle!r}", param="station")
+    for node in (vehicle, station):
+        if not (pose["node"] == node).any():
+            raise InputError(f"write_tlog: node {node!r} has no pose rows", param="vehicle" if node == vehicle else "station")
+    pair = {vehicle, station}
+    other = ~(signal["tx"].isin(pair) & signal["rx"].isin(pair) & (signal["tx"] != signal["rx"]))
+    if other.any():
+        row = signal[other].iloc[0]
+        raise InputError(f"write_tlog: a telemetry log holds the link {vehicle} <-> {station} only, "
+                         f"the signal log has {int(other.sum())} row(s) of others (e.g. {row['tx']} -> {row['rx']})",
+                         param="signal")
+    cols = ["t", "x", "y", "z", "qw", "qx", "qy", "qz"]
+    bad = ~np.isfinite(pose[cols].to_numpy(np.float64)).all(axis=1)
+    if bad.any():
+        raise InputError(f"write_tlog: {int(bad.sum())} pose row(s) hold NaN or infinite values "
+                         "(drop them first)", param="pose")
+    if len(origin_geodetic) != 3 or not np.all(np.isfinite(np.asarray(origin_geodetic, np.float64))):
+        raise InputError(f"origin_geodetic: expected (lat, lon, alt), got {origin_geodetic!r}", param="origin_geodetic")
+    return pose, signal
+
+
+def _records(pose: pd.DataFrame, signal: pd.DataFrame, vehicle: str, station: str,
+             origin: tuple[float, float, float], start_unix_s: float, system_id: int) -> tuple[list[tuple[float, int, bytes]], dict[str, Any]]:
+    """(receive time [us], order, frame) of every message, and what was written."""
+    mav = _dialect()
+    air = mav.MAVLink(None, srcSystem=system_id, srcComponent=1)
+    radio = mav.MAVLink(None, srcSystem=SIK_SYSTEM_ID, srcComponent=SIK_COMPONENT_ID)
+    veh = pose[pose["node"] == vehicle].sort_values("t", kind="stable")
+    t0 = float(min(veh["t"].iloc[0], signal["t"].min())) - BOOT_LEAD_S
+    xyz = veh[["x", "y", "z"]].to_numpy(np.float64)
+    lat, lon, alt = _enu_to_geodetic(xyz, origin)
+    roll, pitch, yaw = euler_from_quat_wxyz(quat_enu_flu_to_ned_frd(veh[["qw", "qx", "qy", "qz"]].to_numpy(np.float64)))
+    boot_ms = np.rint((veh["t"].to_numpy(np.float64) - t0) * 1e3).astype(np.int64)
+    recv_us = start_unix_s * 1e6 + boot_ms * 1e3
+    out: list[tuple[float, int, bytes]] = []
+    sxyz = np.median(pose.loc[pose["node"] == station, ["x", "y", "z"]].to_numpy(np.float64), axis=0)
+    slat, slon, salt = (float(v[0]) for v in _enu_to_geodetic(sxyz[None, :], origin))
+    home = air.home_position_encode(int(round(slat * 1e7)), int(round(slon * 1e7)), int(round(salt * 1e3)),
+                                    0.0, 0.0, 0.0, [1.0, 0.0, 0.0, 0.0], 0.0, 0.0, 0.0)
+    out.append((start_unix_s * 1e6, 0, home.pack(air)))
+    for i in range(len(veh)):
+        b = int(boot_ms[i])
+        att = air.attitude_encode(b, float(roll[i]), float(pitch[i]), float(yaw[i]), 0.0, 0.0, 0.0)
+        gpi = air.global_position_int_encode(b, int(round(lat[i] * 1e7)), int(round(lon[i] * 1e7)),
+                                             int(round(alt[i] * 1e3)), int(round((alt[i] - salt) * 1e3)), 0, 0, 0, 65535)
+        out.append((float(recv_us[i]), 1, att.pack(air)))
+        out.append((float(recv_us[i]), 2, gpi.pack(air)))
+    raw, clipped = dbm_to_sik_rssi(signal["rssi_dbm"].to_numpy(np.float64))
+    to_station = (signal["rx"] == station).to_numpy()
+    sig_us = np.rint((signal["t"].to_numpy(np.float64) - t0) * 1e6) + start_unix_s * 1e6
+    for i in range(len(signal)):
+        rssi, rem = (int(raw[i]), 255) if to_station[i] else (255, int(raw[i]))
+        msg = radio.radio_status_encode(rssi, rem, 100, 0, 0, 0, 0)
+        out.append((float(sig_us[i]), 3, msg.pack(radio)))
+    written = {"attitude": len(veh), "global_position_int": len(veh), "radio_status": len(signal),
+               "rssi_clipped": clipped, "station_geodetic": (slat, slon, salt), "start_unix_s": start_unix_s}
+    return out, written
+
+
+def write_tlog(
+    logs: Logs,
+    path: str | os.PathLike,
+    vehicle: str,
+    station: str,
+    origin_geodetic: tuple[float, float, float],
+    start_unix_s: float = DEFAULT_START_UNIX_S,
+    system_id: int = 1,
+) -> dict[str, Any]:
+    """Write a vehicle's poses and its telemetry link to a static station as a ``.tlog`` (module docstring).
+
+    Parameters
+    ----------
+    logs : Logs
+        Pose log (the vehicle's rows and the station's) and signal log (rows of the two
+        directions between them only), canonical schemas (DESIGN.md).
+    path : str or PathLike
+        Output ``.tlog``; written atomically (a failed write leaves no partial file).
+    vehicle, station : str
+        Node ids of the vehicle and the ground station.
+    origin_geodetic : (lat_deg, lon_deg, alt_m)
+        Geodetic position of the logs' ENU origin (altitude AMSL).
+    start_unix_s : float
+        Receive time of the vehicle's boot-clock zero [s since the UNIX epoch].
+    system_id : int
+        MAVLink system id of the vehicle (1-255).
+
+    Returns
+    -------
+    dict
+        Messages written per type, ``rssi_clipped`` (values outside SiK's 1-254 range) and
+        ``station_geodetic`` (the HOME_POSITION written).
+
+    Raises
+    ------
+    InputError
+        On a missing log or node, rows of other links, or a bad argument (``param`` names it).
+    """
+    if not (isinstance(system_id, int) and 1 <= system_id <= 255 and system_id != SIK_SYSTEM_ID):
+        raise InputError(f"system_id: expected 1-255 other than the radio's {SIK_SYSTEM_ID}, got {system_id!r}",
+                         param="system_id")
+    pose, signal = _check(logs, vehicle, station, origin_geodetic)
+    origin = tuple(float(v) for v in origin_geodetic)
+    records, written = _records(pose, signal, vehicle, station, origin, float(start_unix_s), system_id)  # type: ignore[arg-type]
+    records.sort(key=lambda r: (r[0], r[1]))
+    with atomic_open(path, "wb", param="path") as fh:
+        for t_us, _, frame in records:
+            fh.write(struct.pack(">Q", int(round(t_us))) + frame)
+    return written
+
+
+__all__ = ["dbm_to_sik_rssi", "write_tlog"]

@@ -1,0 +1,177 @@
+"""rplearn.io.tlog: a simulated flight written as a MAVLink telemetry log and read back."""
+
+from __future__ import annotations
+
+import os
+import struct
+import subprocess
+import sys
+
+import numpy as np
+import pandas as pd
+import pytest
+from pymavlink.dialects.v10 import ardupilotmega as mavlink1
+
+from rplearn.core.geometry import quat_wxyz_from_yaw
+from rplearn.data.sync import synchronise
+from rplearn.errors import InputError
+from rplearn.io import ReaderOptions, read_logs
+from rplearn.io._common import Logs
+from rplearn.io.files import read_table, write_table
+from rplearn.io.mavlink import SIK_UNITS_PER_DB, read_mavlink
+from rplearn.io.tlog import dbm_to_sik_rssi, write_tlog
+
+ORIGIN = (47.3977, 8.5456, 488.0)  # lat, lon [deg], alt [m AMSL] of the simulation's ENU origin
+#: the ``ground`` preset's station faces 10 deg ccw from east (ENU) = compass heading 80 deg
+STATION_YAW_ENU_DEG = 10.0
+HALF_STEP_DB = 0.5 / SIK_UNITS_PER_DB
+
+
+@pytest.fixture(scope="module")
+def flight(tmp_path_factory):
+    """The ``ground`` preset's flight with its station static (a tlog cannot log the station's
+    pose: one row, its median position and true heading), as Parquet logs and as a .tlog."""
+    from rplearn.sim.flight import simulate
+
+    sim = simulate("ground", seed=1)
+    pose, signal = sim.pose_log, sim.signal_log
+    g = pose[pose["node"] == "G"]
+    q = quat_wxyz_from_yaw(np.radians(STATION_YAW_ENU_DEG))
+    station = pd.DataFrame({"t": [g["t"].min()], "node": ["G"], "x": [g["x"].median()], "y": [g["y"].median()],
+                            "z": [g["z"].median()], "qw": [q[0]], "qx": [q[1]], "qy": [q[2]], "qz": [q[3]]})
+    pose = pd.concat([pose[pose["node"] == "D"], station], ignore_index=True)
+    folder = tmp_path_factory.mktemp("tlog")
+    write_table(pose, str(folder / "pose.parquet"))
+    write_table(signal, str(folder / "signal.parquet"))
+    written = write_tlog(Logs(pose, signal), folder / "flight.tlog", vehicle="D", station="G", origin_geodetic=ORIGIN)
+    return folder, written, len(signal)
+
+
+def _tlog_options(folder) -> ReaderOptions:
+    return ReaderOptions(tx_power_dbm=20.0, frequency_hz=2.412e9, nodes={str(folder / "flight.tlog"): "D"},
+                         station="G", station_heading_deg=90.0 - STATION_YAW_ENU_DEG, origin_geodetic=ORIGIN)
+
+
+def _by_link(dataset: pd.DataFrame) -> dict[tuple[str, str], pd.DataFrame]:
+    return {k: g.sort_values("t", kind="stable").reset_index(drop=True) for k, g in dataset.groupby(["tx", "rx"])}
+
+
+def _angle_deg(qa: np.ndarray, qb: np.ndarray) -> np.ndarray:
+    return np.degrees(2 * np.arccos(np.clip(np.abs((qa * qb).sum(axis=1)), 0.0, 1.0)))
+
+
+def test_simulated_flight_as_tlog_gives_the_same_matched_dataset(flight):
+    folder, written, n_signal = flight
+    assert written["radio_status"] == n_signal and written["rssi_clipped"] == 0
+    parquet, _ = read_logs([str(folder / "pose.parquet"), str(folder / "signal.parquet")])
+    tlog, meta = read_logs([str(folder / "flight.tlog")], _tlog_options(folder))
+    want, got = synchronise(parquet.pose, parquet.signal), synchronise(tlog.pose, tlog.signal)
+    assert got.summary.n_out == want.summary.n_out > 0.99 * n_signal
+    want_links, got_links = _by_link(want.dataset), _by_link(got.dataset)
+    assert set(got_links) == set(want_links) == {("D", "G"), ("G", "D")}
+    for link, a in want_links.items():
+        b = got_links[link]
+        assert len(a) == len(b)
+        shift = b["t"].to_numpy() - a["t"].to_numpy()  # the tlog's clock is UNIX time
+        assert np.ptp(shift) < 1e-5
+        # RSSI within the SiK quantisation (1/1.9 dB steps): at most half a step
+        assert np.abs(b["rssi_dbm"] - a["rssi_dbm"]).max() <= HALF_STEP_DB + 1e-9
+        assert np.abs(b["rssi_dbm"] - a["rssi_dbm"]).max() > 0.2  # it did go through SiK units
+        for end in ("tx", "rx"):
+            xyz = [f"{end}_{c}" for c in "xyz"]
+            q = [f"{end}_q{c}" for c in "wxyz"]
+            # 1e-7 deg (1.1 cm) and 1 mm in GLOBAL_POSITION_INT, 1 ms in time_boot_ms
+            assert np.abs(b[xyz].to_numpy() - a[xyz].to_numpy()).max() < 0.02
+            assert _angle_deg(a[q].to_numpy(), b[q].to_numpy()).max() < 0.2
+
+
+def test_station_heading_sets_the_station_attitude(flight):
+    folder, _, _ = flight
+    logs, meta = read_mavlink(folder / "flight.tlog", 20.0, 2.412e9, vehicle="D", station="G",
+                              station_heading_deg=80.0)
+    row = logs.pose[logs.pose["node"] == "G"]
+    q = quat_wxyz_from_yaw(np.radians(STATION_YAW_ENU_DEG))
+    assert len(row) == 1 and _angle_deg(row[["qw", "qx", "qy", "qz"]].to_numpy(), q[None, :])[0] < 1e-9
+    assert "HOME_POSITION" in meta["station_note"]
+    with pytest.raises(InputError) as err:
+        read_mavlink(folder / "flight.tlog", 20.0, 2.412e9, station_heading_deg=float("nan"))
+    assert err.value.param == "station_heading_deg"
+
+
+def test_cli_sync_of_the_simulated_tlog(flight, tmp_path):
+    folder, _, _ = flight
+    rplearn = os.path.join(os.path.dirname(sys.executable), "rplearn")
+    tlog, out = str(folder / "flight.tlog"), tmp_path / "m.parquet"
+    proc = subprocess.run(
+        [rplearn, "sync", "--poses", tlog, "--signals", tlog, "--tx-power", "20", "--frequency", "2.412e9",
+         "--link", "all", "--node", f"{tlog}=D", "--station-node", "G", "--station-heading", "80", "-o", str(out)],
+        check=False, capture_output=True, text=True, timeout=300,
+    )
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    matched = read_table(str(out))
+    g = matched[matched["rx"] == "G"]
+    q = quat_wxyz_from_yaw(np.radians(STATION_YAW_ENU_DEG))
+    assert _angle_deg(g[["rx_qw", "rx_qx", "rx_qy", "rx_qz"]].to_numpy(), q[None, :]).max() < 1e-9
+
+
+def test_a_log_that_switches_from_mavlink_1_to_2_is_read_whole(flight, tmp_path):
+    """Ground stations start in MAVLink 1 and negotiate 2: frames of both kinds are read."""
+    folder, _, n_signal = flight
+    v1 = mavlink1.MAVLink(None, srcSystem=51, srcComponent=68)
+    data = (folder / "flight.tlog").read_bytes()
+    t_us = struct.unpack(">Q", data[:8])[0]
+    head = b"".join(struct.pack(">Q", t_us - 10_000_000 * (3 - k)) + v1.radio_status_encode(0, 0, 100, 0, 0, 0, 0).pack(v1)
+                    for k in range(3))  # link-lost reports 30-10 s before the vehicle appears
+    mixed = tmp_path / "mixed.tlog"
+    mixed.write_bytes(head + data)
+    _, meta = read_mavlink(mixed, 20.0, 2.412e9, vehicle="D", station="G")
+    assert meta["messages"]["RADIO_STATUS"] == n_signal + 3
+    assert meta["messages"].get("BAD_DATA", 0) == 0
+    assert meta["signal"]["link_lost"] == 3
+
+
+def test_sik_units_clip_and_count():
+    raw, clipped = dbm_to_sik_rssi([-127.0, -60.0, 6.6, 20.0, -200.0])
+    assert raw.tolist() == [1, 127, 254, 254, 1] and clipped == 3
+    with pytest.raises(InputError, match="1 value"):
+        dbm_to_sik_rssi([-60.0, float("nan")])
+
+
+def test_write_tlog_rejects_other_links_and_nodes(flight, tmp_path):
+    folder, _, _ = flight
+    pose = read_table(str(folder / "pose.parquet"))
+    signal = read_table(str(folder / "signal.parquet")).head(10).copy()
+    bad = signal.copy()
+    bad.loc[0, "rx"] = "X"
+    with pytest.raises(InputError, match="D <-> G only"):
+        write_tlog(Logs(pose, bad), tmp_path / "a.tlog", vehicle="D", station="G", origin_geodetic=ORIGIN)
+    with pytest.raises(InputError, match="no pose rows"):
+        write_tlog(Logs(pose, signal), tmp_path / "a.tlog", vehicle="Q", station="G", origin_geodetic=ORIGIN)
+    with pytest.raises(InputError) as err:
+        write_tlog(Logs(pose, signal), tmp_path / "a.tlog", vehicle="D", station="G", origin_geodetic=ORIGIN,
+                   system_id=51)
+    assert err.value.param == "system_id"
+    nan_pose = pose.copy()
+    nan_pose.loc[3, "qw"] = float("nan")
+    with pytest.raises(InputError, match="1 pose row"):
+        write_tlog(Logs(nan_pose, signal), tmp_path / "a.tlog", vehicle="D", station="G", origin_geodetic=ORIGIN)
+    with pytest.raises(InputError):
+        write_tlog(Logs(pose, None), tmp_path / "a.tlog", vehicle="D", station="G", origin_geodetic=ORIGIN)
+    assert not (tmp_path / "a.tlog").exists()
+
+
+def test_a_truncated_tlog_reads_its_complete_messages_and_reports_the_cut_off_one(flight, tmp_path):
+    folder, written, _ = flight
+    data = (folder / "flight.tlog").read_bytes()
+    whole_logs, whole = read_mavlink(folder / "flight.tlog", 20.0, 2.412e9, vehicle="D", station="G")
+    assert whole["cut_off_at_byte"] is None and not any("cut off" in n for n in whole["notes"])
+    cut = tmp_path / "cut.tlog"
+    cut.write_bytes(data[:-7])  # the last frame (a GLOBAL_POSITION_INT) loses its last 7 bytes
+    logs, meta = read_mavlink(cut, 20.0, 2.412e9, vehicle="D", station="G")
+    assert meta["cut_off_record"] == "GLOBAL_POSITION_INT"
+    # the frame: a MAVLink 2 header (10 bytes), GLOBAL_POSITION_INT's 28-byte payload, the CRC (2)
+    assert meta["cut_off_at_byte"] == len(data) - (10 + 28 + 2)
+    assert meta["messages"]["GLOBAL_POSITION_INT"] == written["global_position_int"] - 1
+    assert meta["messages"]["ATTITUDE"] == written["attitude"]
+    assert any("cut off inside a GLOBAL_POSITION_INT message" in n for n in meta["notes"])
+    assert len(logs.signal) == len(whole_logs.signal)
