@@ -29,6 +29,7 @@ LAYERS: tuple[str, ...] = (
     "rplearn.models",
     "rplearn.analysis",
     "rplearn.viz",
+    "rplearn.integrations",
     "rplearn.workflows",
     "rplearn.cli",
 )
@@ -45,6 +46,8 @@ FORBIDDEN_THIRD_PARTY: dict[str, tuple[str, ...]] = {
     "rplearn.models": ("matplotlib", "typer", "rich", "dask", "distributed"),
     "rplearn.analysis": ("matplotlib", "typer", "rich", "dask", "distributed"),
     "rplearn.viz": ("typer", "rich", "dask", "distributed"),
+    # bridges to other tools (Sionna RT), which import their tool only where it is used
+    "rplearn.integrations": ("typer", "rich", "dask", "distributed"),
     "rplearn.workflows": ("typer", "rich"),
     # the command line parses and prints; every computation on data is in the library
     "rplearn.cli": ("numpy", "pandas", "scipy", "sklearn", "matplotlib"),

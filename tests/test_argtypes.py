@@ -14,7 +14,7 @@ import pytest
 
 from rplearn.errors import ArgumentTypeError, InputError, RplearnError
 
-PACKAGES = ["rplearn"] + [f"rplearn.{p}" for p in ("core", "data", "io", "plan", "sim", "models", "analysis", "viz", "workflows")]
+PACKAGES = ["rplearn"] + [f"rplearn.{p}" for p in ("core", "data", "io", "plan", "sim", "models", "analysis", "viz", "integrations", "workflows")]
 
 
 def public_callables():

@@ -24,7 +24,7 @@ README = ROOT / "README.md"
 
 #: The layer subpackages with a public API (the CLI has none: it is a program).
 SUBPACKAGES: tuple[str, ...] = tuple(
-    f"rplearn.{name}" for name in ("core", "data", "io", "plan", "sim", "models", "analysis", "viz")
+    f"rplearn.{name}" for name in ("core", "data", "io", "plan", "sim", "models", "analysis", "viz", "integrations")
 )
 PACKAGES: tuple[str, ...] = ("rplearn", *SUBPACKAGES)
 
