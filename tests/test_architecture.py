@@ -38,19 +38,19 @@ LAYERS: tuple[str, ...] = (
 #: nothing below viz draws; nothing below the CLI parses arguments or styles text; only the
 #: workflows run on a Dask cluster).
 FORBIDDEN_THIRD_PARTY: dict[str, tuple[str, ...]] = {
-    "rplearn.core": ("pandas", "pyarrow", "sklearn", "matplotlib", "typer", "rich", "rosbags", "pyulog", "dpkt", "pymap3d", "dask", "distributed"),
-    "rplearn.data": ("matplotlib", "typer", "rich", "dask", "distributed"),
-    "rplearn.io": ("matplotlib", "typer", "rich", "dask", "distributed"),
-    "rplearn.plan": ("matplotlib", "typer", "rich", "dask", "distributed"),
-    "rplearn.sim": ("matplotlib", "typer", "rich", "dask", "distributed"),
-    "rplearn.models": ("matplotlib", "typer", "rich", "dask", "distributed"),
-    "rplearn.analysis": ("matplotlib", "typer", "rich", "dask", "distributed"),
+    "rplearn.core": ("pandas", "pyarrow", "sklearn", "matplotlib", "plotly", "typer", "rich", "rosbags", "pyulog", "dpkt", "pymap3d", "dask", "distributed"),
+    "rplearn.data": ("matplotlib", "plotly", "typer", "rich", "dask", "distributed"),
+    "rplearn.io": ("matplotlib", "plotly", "typer", "rich", "dask", "distributed"),
+    "rplearn.plan": ("matplotlib", "plotly", "typer", "rich", "dask", "distributed"),
+    "rplearn.sim": ("matplotlib", "plotly", "typer", "rich", "dask", "distributed"),
+    "rplearn.models": ("matplotlib", "plotly", "typer", "rich", "dask", "distributed"),
+    "rplearn.analysis": ("matplotlib", "plotly", "typer", "rich", "dask", "distributed"),
     "rplearn.viz": ("typer", "rich", "dask", "distributed"),
     # bridges to other tools (Sionna RT), which import their tool only where it is used
     "rplearn.integrations": ("typer", "rich", "dask", "distributed"),
     "rplearn.workflows": ("typer", "rich"),
     # the command line parses and prints; every computation on data is in the library
-    "rplearn.cli": ("numpy", "pandas", "scipy", "sklearn", "matplotlib"),
+    "rplearn.cli": ("numpy", "pandas", "scipy", "sklearn", "matplotlib", "plotly"),
 }
 
 #: No module of the package is longer than this (lines).

@@ -32,7 +32,7 @@ PACKAGES: tuple[str, ...] = ("rplearn", *SUBPACKAGES)
 CONSTANT_TYPES: tuple[type, ...] = (str, int, float, tuple, dict, frozenset)
 
 #: Third-party libraries ``import rplearn`` must not import.
-HEAVY: tuple[str, ...] = ("pandas", "sklearn", "matplotlib", "typer", "rich")
+HEAVY: tuple[str, ...] = ("pandas", "sklearn", "matplotlib", "plotly", "typer", "rich")
 
 
 def _run(code: str) -> subprocess.CompletedProcess[str]:

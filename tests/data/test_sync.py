@@ -70,19 +70,22 @@ def test_drops_are_counted_by_reason(two_nodes):
         signal_log([0.05], "A", "A"),                       # tx equals rx
         signal_log([np.nan], "A", "B"),                     # no time
         signal_log([0.15], "B", "A"),                       # kept (other direction)
+        signal_log([0.05], "A", "N"),                       # N sits 0.1 m from A: near field at 2.4 GHz
     ], ignore_index=True)
+    near = pose_log("N", [0.0], [[0.5, 0.0, 0.1]], [0.0])
+    two_nodes = pd.concat([two_nodes, near], ignore_index=True)
     res = synchronise(two_nodes, sig)
     s = res.summary
     assert s.n_in == len(sig) and s.n_out == 2 == len(res.dataset)
     assert s.dropped == {"duplicate": 0, "invalid_value": 1, "sentinel_rssi": 6, "implausible_rssi": 2, "tx_equals_rx": 1, "other_link": 0,
-                         "unknown_node": 1, "out_of_span": 2, "pose_gap": 1}
+                         "unknown_node": 1, "out_of_span": 2, "pose_gap": 1, "near_field": 1}
     assert s.n_in == s.n_out + s.n_dropped
     assert s.unknown_nodes == ["C"]
     text = s.to_text()
     assert "sentinel_rssi): 6" in text and "nodes without a pose log: C" in text
     # one direction only, as the paper does for non-reciprocal links
     one = synchronise(two_nodes, sig, SyncOptions(link=("B", "A")))
-    assert one.summary.n_out == 1 and one.summary.dropped["other_link"] == 5  # A->B (4), A->C
+    assert one.summary.n_out == 1 and one.summary.dropped["other_link"] == 6  # A->B (4), A->C, A->N
     assert set(one.dataset["tx"]) == {"B"}
     # a larger gap threshold bridges the gap
     assert synchronise(two_nodes, sig, SyncOptions(max_gap_s=1.0)).summary.dropped["pose_gap"] == 0

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pandas as pd
 import pytest
 
-from rplearn.data.units import evaluation_units, is_test_unit, learning_units, select_units, split_units
+from rplearn.data.units import evaluation_units, is_test_unit, learning_units, select_units, split_units, time_units
 from rplearn.errors import InputError
 
 
@@ -63,3 +63,30 @@ def test_select_units_names_unknown_units_and_the_parameter():
         select_units(frame(["a"]), ["b"], "d.parquet")
     assert err.value.param == "units"
     assert len(select_units(frame(["a", "b", "a"]), ["a"])) == 2
+
+
+def test_time_units_cut_a_flight_without_units_into_stretches_of_time():
+    import numpy as np
+
+    rng = np.random.default_rng(0)
+    t = rng.permutation(np.arange(103, dtype=float))  # unsorted rows
+    df = pd.DataFrame({"t": t, "rssi_dbm": -60.0})
+    out, note = time_units(df, source="flight.parquet")
+    assert len(out) == len(df) and (out["t"] == df["t"]).all()  # rows neither dropped nor moved
+    counts = out["unit"].value_counts()
+    assert sorted(counts.index) == ["flight[1/5]", "flight[2/5]", "flight[3/5]", "flight[4/5]", "test[5/5]"]
+    assert counts.max() - counts.min() <= 1
+    # contiguous in time: every stretch ends before the next begins, the test is last
+    spans = out.groupby("unit")["t"].agg(["min", "max"]).sort_values("min")
+    assert list(spans.index)[-1] == "test[5/5]"
+    assert (spans["max"].to_numpy()[:-1] < spans["min"].to_numpy()[1:]).all()
+    first_test = spans.loc["test[5/5]", "min"]
+    assert "flight.parquet has no 'unit' column" in note and f"from t = {first_test:.3f} s" in note
+    assert split_units(out) == (["flight[1/5]", "flight[2/5]", "flight[3/5]", "flight[4/5]"], ["test[5/5]"])
+    # a dataset with units is left alone; too few or non-finite times are refused
+    labelled = df.assign(unit="learn_0")
+    assert time_units(labelled) == (labelled, None)
+    with pytest.raises(InputError, match="3 sample"):
+        time_units(df.head(3))
+    with pytest.raises(InputError):
+        time_units(df.assign(t=np.where(df["t"] == 5, np.nan, df["t"])))

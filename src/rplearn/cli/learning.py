@@ -236,5 +236,7 @@ def report(
         task = p.add_task("learning", total=None)
         outcome = learn_and_report(dataset, names, out_dir, split_list(test_units), progress=step(p, task),
                                    path_loss=terms, link_offsets=link_offsets)
+    for line in outcome.notes:
+        note(line)
     say(outcome.markdown)
     say(f"wrote {outcome.report_path}")

@@ -59,6 +59,8 @@ _NAMES: dict[str, str] = {
     "samples_of": "units",
     "select_units": "units",
     "split_units": "units",
+    "time_units": "units",
+    "TIME_UNITS": "units",
     "trained_units": "units",
 }
 

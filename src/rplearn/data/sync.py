@@ -32,7 +32,11 @@ after optional clock offsets. A sample is dropped, and counted by reason, when:
 ``out_of_span``
     its time lies before the first or after the last pose of one end;
 ``pose_gap``
-    its time lies inside a gap of one end's pose log longer than ``max_gap_s``.
+    its time lies inside a gap of one end's pose log longer than ``max_gap_s``;
+``near_field``
+    its ends are no farther apart than the far-field limit, two wavelengths (paper Sec. III),
+    where the link budget of eq. 1 does not hold and which :func:`rplearn.core.link.check_far_field`
+    refuses: a drone on the ground beside its station, before take-off.
 
 A node whose pose log has a single row is static (a ground station, a parked drone): its pose
 holds at every time and it never causes ``out_of_span`` or ``pose_gap``.
@@ -54,6 +58,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 import pandas as pd
 
+from rplearn.core.link import FAR_FIELD_WAVELENGTHS, SPEED_OF_LIGHT_M_S
 from rplearn.data.poses import (
     STATUS_OUT_OF_SPAN,
     STATUS_POSE_GAP,
@@ -97,6 +102,7 @@ DROP_REASONS: tuple[str, ...] = (
     "unknown_node",
     "out_of_span",
     "pose_gap",
+    "near_field",
 )
 
 
@@ -385,6 +391,10 @@ def _match_chunk(
     st_tx, st_rx = poses["tx"][2], poses["rx"][2]
     drop((st_tx == STATUS_OUT_OF_SPAN) | (st_rx == STATUS_OUT_OF_SPAN), "out_of_span")
     drop((st_tx == STATUS_POSE_GAP) | (st_rx == STATUS_POSE_GAP), "pose_gap")
+    with np.errstate(invalid="ignore"):
+        distance = np.linalg.norm(poses["tx"][0] - poses["rx"][0], axis=1)
+        limit = FAR_FIELD_WAVELENGTHS * SPEED_OF_LIGHT_M_S / np.where(keep, freq, 1.0)
+        drop(keep & ~(distance > limit), "near_field")
     idx = np.flatnonzero(keep)
     summary.n_out = int(idx.size)
     matched = _matched_frame(signal, idx, values, poses)

@@ -126,6 +126,50 @@ def evaluation_units(
     return UnitChoice(chosen, units is None, notes, warnings)
 
 
+#: A dataset without units (one flight, e.g. a telemetry log) is cut into this many contiguous
+#: stretches of time for a report or a sweep; the last one is the test.
+TIME_UNITS = 5
+
+
+def time_units(df: pd.DataFrame, blocks: int = TIME_UNITS, source: str = "dataset") -> tuple[pd.DataFrame, str | None]:
+    """A dataset without a ``unit`` column, labelled by contiguous stretches of time.
+
+    Rows are cut by time into ``blocks`` stretches of equal sample counts, labelled
+    ``flight[k/blocks]`` and the last ``test[blocks/blocks]``: learning on the first ones and
+    testing on the last keeps neighbouring (correlated) packets on one side. A dataset with a
+    ``unit`` column is returned as it is.
+
+    Returns
+    -------
+    df : DataFrame
+        The dataset with a ``unit`` column (the input when it had one).
+    note : str or None
+        What was done, for the user; None when nothing was.
+
+    Raises
+    ------
+    InputError
+        When the dataset has fewer rows than ``blocks`` or times that are not finite.
+    """
+    if "unit" in df.columns:
+        return df, None
+    if "t" not in df.columns:
+        raise InputError(f"{source}: neither a 'unit' column nor a 't' column to split learning from testing samples")
+    t = pd.to_numeric(df["t"], errors="coerce").to_numpy(dtype=float)
+    if len(t) < blocks or not (t == t).all():
+        raise InputError(f"{source}: cannot cut {len(t)} sample(s) with finite times into {blocks} stretches of time",
+                         param="t")
+    order = t.argsort(kind="stable")
+    rank = order.argsort(kind="stable")
+    k = rank * blocks // len(t)  # 0 .. blocks-1, equal counts in time order
+    labels = [f"flight[{j + 1}/{blocks}]" for j in range(blocks - 1)] + [f"test[{blocks}/{blocks}]"]
+    out = df.assign(unit=[labels[j] for j in k])
+    note = (f"{source} has no 'unit' column: its flight is cut into {blocks} stretches of time with equal "
+            f"sample counts, learning on the first {blocks - 1} (flight[1/{blocks}]..flight[{blocks - 1}/{blocks}]) "
+            f"and testing on the last (test[{blocks}/{blocks}], from t = {t[k == blocks - 1].min():.3f} s)")
+    return out, note
+
+
 def split_units(
     df: pd.DataFrame,
     learn_units: Sequence[str] | None = None,

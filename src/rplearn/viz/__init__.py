@@ -1,16 +1,18 @@
 """Figures and reports: pattern maps, coverage, the paper's charts, a self-contained HTML report.
 
-=============  =================================================================================
-module         public names
-=============  =================================================================================
-``plot``       :func:`plot_pattern_maps` (paper Fig. 9), :func:`plot_coverage` (Fig. 8a),
-               :func:`plot_pattern_3d` and the figures behind them
-``charts``     :func:`plot_rssi_time` (Fig. 8b), :func:`plot_order_sweep` (Fig. 10),
-               :func:`plot_epsilon_sweep` (Fig. 5a), :func:`plot_rank_study` (Fig. 6),
-               :func:`plot_swarm`
-``images``     :func:`export_pattern_images` (one 3-D image per node)
-``report``     :func:`write_report` with :class:`ReportSection`, :func:`screenshot_report`
-=============  =================================================================================
+===============  ===============================================================================
+module           public names
+===============  ===============================================================================
+``plot``         :func:`plot_pattern_maps` (paper Fig. 9), :func:`plot_coverage` (Fig. 8a),
+                 :func:`plot_pattern_3d` and the figures behind them
+``charts``       :func:`plot_rssi_time` (Fig. 8b), :func:`plot_order_sweep` (Fig. 10),
+                 :func:`plot_epsilon_sweep` (Fig. 5a), :func:`plot_rank_study` (Fig. 6),
+                 :func:`plot_swarm`
+``images``       :func:`export_pattern_images` (one 3-D image per node)
+``interactive``  :func:`pattern_3d_html` (a rotatable 3-D pattern for the report, plotly) and
+                 :class:`InteractiveFigure`
+``report``       :func:`write_report` with :class:`ReportSection`, :func:`screenshot_report`
+===============  ===============================================================================
 
 Every name of ``__all__`` can be imported from here (``from rplearn.viz import plot_coverage``);
 its module, and matplotlib, are imported on first use (:mod:`rplearn._lazy`).
@@ -42,6 +44,15 @@ _NAMES: dict[str, str] = {
     "rssi_time_figure": "charts",
     # 3-D images
     "export_pattern_images": "images",
+    # interactive figures (plotly, imported on first use)
+    "InteractiveFigure": "interactive",
+    "pattern_3d_figures": "interactive",
+    "pattern_3d_html": "interactive",
+    "pattern_3d_plotly": "interactive",
+    # pattern surfaces and coverage on a grid
+    "PatternSurface": "plot",
+    "pattern_surface": "plot",
+    "uncovered_directions": "plot",
     # the HTML report
     "ReportSection": "report",
     "ScreenshotError": "report",

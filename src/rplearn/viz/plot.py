@@ -18,6 +18,7 @@ from __future__ import annotations
 import os
 import sys
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from typing import Any, Protocol
 
 import matplotlib
@@ -158,20 +159,27 @@ def colour_limits_db(maps_db: FloatArray, has_truth: bool) -> tuple[float, float
     return (lo, hi) if hi > lo else (lo - 0.5, hi + 0.5)
 
 
-def _hatch_uncovered(ax: Any, model: Any, node: str, az_deg: np.ndarray, el_deg: np.ndarray) -> None:
-    """Hatch (and fade) the directions further than ``UNCOVERED_DEG`` from every direction the
-    model learned ``node`` from (models that store their coverage)."""
+def uncovered_directions(model: Any, node: str, az_deg: FloatArray, el_deg: FloatArray) -> NDArray[np.bool_] | None:
+    """Which directions of the grid ``el_deg x az_deg`` lie further than ``UNCOVERED_DEG`` from
+    every direction ``model`` learned ``node`` from: a boolean ``(n_el, n_az)`` array, or None
+    for a model that stores no coverage (references, baselines, older files)."""
     coverage = getattr(model, "coverage_deg", None)
     if coverage is None:
-        return
+        return None
     from rplearn.models.predict import UNCOVERED_DEG
 
     el_g, az_g = np.meshgrid(el_deg, az_deg, indexing="ij")
-    cov = coverage(node, np.radians(az_g.ravel()), np.radians(el_g.ravel()))
+    cov = coverage(str(node), np.radians(az_g.ravel()), np.radians(el_g.ravel()))
     if cov is None:
-        return
-    far = (np.asarray(cov).reshape(el_g.shape) > UNCOVERED_DEG).astype(float)
-    if far.any():
+        return None
+    return np.asarray(cov).reshape(el_g.shape) > UNCOVERED_DEG
+
+
+def _hatch_uncovered(ax: Any, model: Any, node: str, az_deg: np.ndarray, el_deg: np.ndarray) -> None:
+    """Hatch (and fade) the :func:`uncovered_directions` of ``node`` on an az-el map."""
+    far = uncovered_directions(model, node, az_deg, el_deg)
+    if far is not None and far.any():
+        far = far.astype(float)
         ax.contourf(az_deg, el_deg, far, levels=[0.5, 1.5], colors=["white"], alpha=0.35)
         ax.contourf(az_deg, el_deg, far, levels=[0.5, 1.5], colors="none", hatches=["////"])
 
@@ -359,6 +367,72 @@ def plot_coverage(
 
 
 # -- 3-D pattern image ---------------------------------------------------------------------
+@dataclass(frozen=True)
+class PatternSurface:
+    """One node's pattern on a closed az-el grid, drawn as a surface whose radius is the gain.
+
+    Attributes
+    ----------
+    az_deg, el_deg : ndarray
+        Grid [deg]: az -180..180 and el -90..90, both ends included (a closed surface).
+    gain_db : ndarray
+        Gain on the grid ``(n_el, n_az)`` [dBi, or dB relative to the sphere mean if centred].
+    floor_db, max_db, offset_db : float
+        ``radius = max(gain - floor, 0) + offset`` [dB].
+    x, y, z : ndarray
+        The surface in the body frame (FLU: x forward, y left, z up) [dB of radius].
+    """
+
+    az_deg: FloatArray
+    el_deg: FloatArray
+    gain_db: FloatArray
+    floor_db: float
+    max_db: float
+    offset_db: float
+    x: FloatArray
+    y: FloatArray
+    z: FloatArray
+
+    @property
+    def radius_max(self) -> float:
+        """Largest radius of the surface [dB]."""
+        return float(np.nanmax(np.sqrt(self.x**2 + self.y**2 + self.z**2)))
+
+
+def pattern_surface(
+    pattern_like: PatternLike,
+    node: str,
+    step_deg: float = 3.0,
+    dynamic_range_db: float = 40.0,
+    center: bool = False,
+) -> PatternSurface:
+    """One node's pattern as a 3-D surface in its body frame (FLU: x forward, y left, z up).
+
+    The gain comes from :func:`pattern_map_db` on a closed grid of step ``step_deg``; with
+    ``center`` its sphere mean (:func:`sphere_mean_db`) is removed. The radius is the gain
+    shifted to be positive, ``max(G - floor, 0) + offset`` with ``floor = max(G_min, G_max -
+    dynamic_range_db)`` and ``offset`` 5 % of the range (at least 1 dB, so that nulls and
+    isotropic patterns stay visible) [dB].
+    """
+    _check_pattern_like(pattern_like, "pattern")
+    if not np.isfinite(dynamic_range_db) or dynamic_range_db <= 0:
+        raise InputError(f"dynamic_range_db: expected > 0, got {dynamic_range_db}")
+    if not np.isfinite(step_deg) or step_deg <= 0 or step_deg > 90:
+        raise InputError(f"step_deg: expected a step in (0, 90] deg, got {step_deg}")
+    az_deg = np.linspace(-180.0, 180.0, round(float(360 / step_deg)) + 1)
+    el_deg = np.linspace(-90.0, 90.0, round(float(180 / step_deg)) + 1)
+    g = pattern_map_db(pattern_like, str(node), az_deg, el_deg)
+    if center:
+        g = g - sphere_mean_db(g[:, :-1], el_deg)  # az = 180 repeats az = -180
+    g_max = float(np.nanmax(g))
+    floor = max(float(np.nanmin(g)), g_max - dynamic_range_db)
+    offset_db = 0.05 * max(g_max - floor, 20.0)  # keeps nulls (and isotropic patterns) visible
+    r = np.clip(g - floor, 0.0, None) + offset_db
+    az, el = np.meshgrid(np.radians(az_deg), np.radians(el_deg))
+    x, y, z = r * np.cos(el) * np.cos(az), r * np.cos(el) * np.sin(az), r * np.sin(el)
+    return PatternSurface(az_deg, el_deg, g, floor, g_max, offset_db, x, y, z)
+
+
 def pattern_3d_figure(
     pattern_like: PatternLike,
     node: str,
@@ -368,23 +442,10 @@ def pattern_3d_figure(
 ) -> Figure:
     """One node's pattern as a 3-D surface in its body frame (FLU: x forward, y left, z up).
 
-    The radius is the gain shifted to be positive, ``max(G - floor, 0) + offset`` with
-    ``floor = max(G_min, G_max - dynamic_range_db)`` and ``offset`` 5 % of the range (at
-    least 1 dB, so that nulls and isotropic patterns stay visible) [dB]; the colour is the
-    gain [``unit``].
+    Radius and colour are the gain (:func:`pattern_surface`); the colour is in ``unit``.
     """
-    _check_pattern_like(pattern_like, "pattern")
-    if dynamic_range_db <= 0:
-        raise InputError(f"dynamic_range_db: expected > 0, got {dynamic_range_db}")
-    az_deg = np.linspace(-180.0, 180.0, round(float(360 / step_deg)) + 1)
-    el_deg = np.linspace(-90.0, 90.0, round(float(180 / step_deg)) + 1)
-    az, el = np.meshgrid(np.radians(az_deg), np.radians(el_deg))
-    g = np.asarray(pattern_like.evaluate(str(node), az, el), np.float64).reshape(az.shape)
-    g_max = float(np.nanmax(g))
-    floor = max(float(np.nanmin(g)), g_max - dynamic_range_db)
-    offset_db = 0.05 * max(g_max - floor, 20.0)  # keeps nulls (and isotropic patterns) visible
-    r = np.clip(g - floor, 0.0, None) + offset_db
-    x, y, z = r * np.cos(el) * np.cos(az), r * np.cos(el) * np.sin(az), r * np.sin(el)
+    s = pattern_surface(pattern_like, node, step_deg, dynamic_range_db)
+    g, floor, g_max, offset_db, x, y, z = s.gain_db, s.floor_db, s.max_db, s.offset_db, s.x, s.y, s.z
     from matplotlib import cm
     from matplotlib.colors import Normalize
     from mpl_toolkits.mplot3d import Axes3D  # noqa: F401  (registers the projection)
@@ -404,7 +465,7 @@ def pattern_3d_figure(
         antialiased=False,
         shade=False,
     )
-    lim = float(np.nanmax(r))
+    lim = s.radius_max
     ax.set_xlim(-lim, lim)
     ax.set_ylim(-lim, lim)
     ax.set_zlim(-lim, lim)

@@ -1,9 +1,12 @@
 """A self-contained HTML report (Table I, figures with captions, provenance) and its screenshot.
 
 :func:`write_report` writes ONE file, ``report.html``: inline CSS, every image embedded as a
-base64 ``data:`` URI, no JavaScript and no external resource, so the page can be mailed or
-archived as it is. :func:`screenshot_report` renders it to PNG with headless Chromium when one
-is installed.
+base64 ``data:`` URI and no external resource, so the page can be mailed or archived as it is
+and opens offline. A report without interactive figures holds no JavaScript; one with
+interactive figures (:class:`rplearn.viz.interactive.InteractiveFigure`, e.g. rotatable 3-D
+patterns) embeds plotly.js once, inline, and each figure as a ``<div>`` and its ``<script>``.
+:func:`screenshot_report` renders it to PNG with headless Chromium (software WebGL, no
+network) when one is installed.
 
 Text accepted by the report
 ---------------------------
@@ -36,11 +39,14 @@ from typing import Any
 from rplearn._atomic import atomic_open
 from rplearn._version import __version__
 from rplearn.errors import InputError, RplearnError
+from rplearn.viz.interactive import InteractiveFigure
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 PAGE_WIDTH_PX = 1400
 CONTENT_WIDTH_PX = 1200
 CHROMIUM_NAMES = ("chromium", "chromium-browser")
+#: Virtual time Chromium gives the page's scripts before the screenshot [ms].
+VIRTUAL_TIME_MS = 15000
 
 
 class ScreenshotError(RplearnError):
@@ -61,12 +67,16 @@ class ReportSection:
     captions : list of str, optional
         One caption per image; default the PNG's ``Description`` text (every figure of
         :mod:`rplearn.viz.plot` carries one), else the file name without extension.
+    interactive : list of InteractiveFigure
+        HTML figures (e.g. :func:`rplearn.viz.interactive.pattern_3d_html`), after the images,
+        two to a row, numbered on from them; each carries its caption.
     """
 
     title: str
     text: str = ""
     images: list[str | os.PathLike[str]] = field(default_factory=list)
     captions: list[str] | None = None
+    interactive: list[InteractiveFigure] = field(default_factory=list)
 
 
 # -- Markdown subset -----------------------------------------------------------------------
@@ -293,6 +303,9 @@ figcaption {{ font-size: 14px; color: #444; margin-top: 4px; }}
 code {{ background: #f2f2f2; padding: 0 3px; }}
 pre {{ background: #f6f6f6; border: 1px solid #ddd; padding: 8px; overflow-x: auto; font-size: 13px; }}
 pre code {{ background: none; padding: 0; }}
+.fig3d-grid {{ display: grid; grid-template-columns: repeat(2, minmax(0, 1fr)); gap: 14px; margin: 18px 0; }}
+.fig3d-grid figure {{ margin: 0; border: 1px solid #ddd; }}
+.fig3d-grid figcaption {{ padding: 0 8px 6px; }}
 footer {{ margin-top: 40px; border-top: 1px solid #bbb; font-size: 12px; color: #555; }}
 footer table {{ font-size: 12px; }}
 """
@@ -322,6 +335,12 @@ def render_report_html(
         '<html lang="en"><head><meta charset="utf-8">',
         f"<title>{html.escape(title)}</title>",
         f"<style>{_CSS}</style>",
+    ]
+    if any(s.interactive for s in sections):  # the library once, before every figure's script
+        from rplearn.viz.interactive import plotly_library_script
+
+        parts.append(plotly_library_script())
+    parts += [
         "</head><body>",
         f"<h1>{html.escape(title)}</h1>",
     ]
@@ -346,6 +365,17 @@ def render_report_html(
                 f'<figure><img src="{image_data_uri(img)}" alt="{html.escape(cap)}">'
                 f"<figcaption><strong>Figure {n_fig}.</strong> {_inline_md(cap)}</figcaption></figure>"
             )
+        if s.interactive:
+            rows = (len(s.interactive) + 1) // 2
+            height = sum(max(f.height_px for f in s.interactive[2 * r : 2 * r + 2]) + 70 for r in range(rows))
+            parts.append(f'<div class="fig3d-grid" data-rplearn-height="{height}">')
+            for fig in s.interactive:
+                n_fig += 1
+                parts.append(
+                    f"<figure>{fig.html}<figcaption><strong>Figure {n_fig}.</strong> "
+                    f"{_inline_md(fig.caption)}</figcaption></figure>"
+                )
+            parts.append("</div>")
         parts.append("</section>")
     parts.append(f"<footer><h3>Provenance</h3>{_provenance_html(provenance)}</footer>")
     parts.append("</body></html>")
@@ -401,12 +431,15 @@ def find_chromium() -> str | None:
 
 
 _DATA_PNG = re.compile(r'src="data:image/png;base64,([A-Za-z0-9+/=]+)"')
+_SCRIPT = re.compile(r"<script\b.*?</script>", re.DOTALL | re.IGNORECASE)
+_GRID_HEIGHT = re.compile(r'data-rplearn-height="(\d+)"')
 
 
 def estimate_page_height_px(page_html: str, width_px: int = PAGE_WIDTH_PX) -> int:
     """A window height [px] tall enough for the whole report (images, tables, text)."""
     content = min(CONTENT_WIDTH_PX, width_px - 48)
-    h = 300
+    page_html = _SCRIPT.sub("", page_html)  # plotly.js and figure data are no text
+    h = 300 + sum(int(v) for v in _GRID_HEIGHT.findall(page_html))
     for m in _DATA_PNG.finditer(page_html):
         try:
             w, hh = png_size_px(base64.b64decode(m.group(1)))
@@ -425,8 +458,13 @@ def screenshot_report(
     width_px: int = PAGE_WIDTH_PX,
     height_px: int | None = None,
     timeout_s: float = 120.0,
+    chromium_flags: Sequence[str] = (),
 ) -> bool:
     """Render the report to PNG with headless Chromium.
+
+    Chromium runs without network (every host name unresolvable, a dead proxy), so the
+    screenshot shows what the report holds itself, and with software WebGL (SwiftShader), so
+    that 3-D figures are drawn without a GPU; it waits for scripts (a virtual time budget).
 
     Parameters
     ----------
@@ -437,6 +475,8 @@ def screenshot_report(
         Window height [px]; default estimated from the page (:func:`estimate_page_height_px`).
     timeout_s : float
         Time limit of the Chromium run [s].
+    chromium_flags : sequence of str
+        More command-line flags for Chromium (after the default ones).
 
     Returns
     -------
@@ -468,6 +508,14 @@ def screenshot_report(
             "--headless",
             "--no-sandbox",
             "--disable-gpu",
+            # WebGL for 3-D figures on SwiftShader (software); Chromium no longer falls back to
+            # it silently
+            "--use-angle=swiftshader",
+            "--enable-unsafe-swiftshader",
+            # no network: the report must render from itself
+            "--proxy-server=127.0.0.1:9",
+            "--proxy-bypass-list=<-loopback>",
+            "--host-resolver-rules=MAP * ~NOTFOUND",
             "--disable-quic",
             "--no-first-run",
             "--disable-background-networking",
@@ -477,7 +525,9 @@ def screenshot_report(
             "--hide-scrollbars",
             f"--user-data-dir={profile}",
             f"--window-size={int(width_px)},{int(height_px)}",
+            f"--virtual-time-budget={VIRTUAL_TIME_MS}",
             f"--screenshot={png}",
+            *[str(f) for f in chromium_flags],
             html_file.as_uri(),
         ]
         try:

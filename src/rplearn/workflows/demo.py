@@ -169,6 +169,7 @@ def run_demo(
 
 def _demo_figures_and_report(result, sim, dataset, learn, test, fitted, prov) -> dict[str, str]:
     from rplearn.viz import charts, plot
+    from rplearn.viz.interactive import pattern_3d_figures
     from rplearn.viz.report import ReportSection, write_report
 
     out = result.out_dir
@@ -194,6 +195,7 @@ def _demo_figures_and_report(result, sim, dataset, learn, test, fitted, prov) ->
     files["fig_epsilon"] = charts.plot_epsilon_sweep(st.epsilons[1:], st.rmse_db[1:], os.path.join(fig_dir, "epsilon.png"))
     files["fig_rank"] = charts.plot_rank_study(st.rank_cases, os.path.join(fig_dir, "rank.png"))
     best = min((r for r in result.table if r.model in pattern_models), key=lambda r: r.rmse_db)
+    views_3d, text_3d = pattern_3d_figures(pattern_models, list(learn.nodes), center=True)
     sections = [
         ReportSection(
             "Dataset",
@@ -205,8 +207,9 @@ def _demo_figures_and_report(result, sim, dataset, learn, test, fitted, prov) ->
             "Learned radiation patterns (Fig. 9)",
             "Each model's two patterns in the azimuth-elevation domain, beside the true patterns, with the "
             "learning samples drawn over them. Two-node fits identify shapes only, so every map is shown "
-            "relative to its own sphere mean.",
+            f"relative to its own sphere mean.\n\n{text_3d}",
             [files["fig_patterns"]],
+            interactive=views_3d,
         ),
         ReportSection(
             "Model-order selection (Fig. 10)",

@@ -20,8 +20,10 @@ from rplearn._atomic import atomic_open
 from rplearn.analysis.pattern_error import node_directions
 from rplearn.analysis.sweep import SweepResult, no_progress, order_sweep, validation_sweep
 from rplearn.core.metrics import Scores
-from rplearn.data.units import UnitChoice, dataset_units, evaluation_units, learning_units, samples_of, select_units, split_units
-from rplearn.errors import InputError
+from rplearn.data.units import (
+    UnitChoice, dataset_units, evaluation_units, learning_units, samples_of, select_units, split_units, time_units,
+)
+from rplearn.errors import IdentifiabilityError, InputError
 from rplearn.data.tables import QUATERNION_NORM_TOLERANCE
 from rplearn.io.files import (
     check_output_path, check_table_path, provenance, read_dataset, table_rows, write_json, write_table,
@@ -474,6 +476,9 @@ def sweep_dataset(
     if output:
         check_table_path(output)
     df = read_dataset(dataset)
+    df, unit_note = time_units(df, source=dataset) if not (learn_units or test_units) else (df, None)
+    if unit_note:
+        progress(unit_note)
     learn, test = split_units(df, learn_units, test_units, dataset)
     ls = samples_of(df, learn, dataset)
     ts = samples_of(df, test, dataset, nodes=ls.nodes)
@@ -507,6 +512,7 @@ class ReportOutcome:
     learn_units: list[str]
     test_units: list[str]
     report_path: str
+    notes: list[str] = field(default_factory=list)
 
 
 def learn_and_report(
@@ -518,13 +524,11 @@ def learn_and_report(
     path_loss: PathLoss | None = None,
     link_offsets: bool = True,
 ) -> ReportOutcome:
-    """Learn models on a dataset's learning units, test them, and write Table I, coverage and
-    pattern maps into ``out_dir/report.html`` (``rplearn report``). Pattern models learn with
-    the environment term ``path_loss`` and the link offsets (:func:`fit_dataset`); the
-    baselines, per directed link, in free space; the report lists what the pattern models
-    learned beside the patterns.
-    """
-    from rplearn.viz import plot
+    """Learn models on a dataset's learning units (by time without units), test them, and write Table I,
+    coverage and pattern maps (also in 3-D) into ``out_dir/report.html`` (``rplearn report``). Pattern
+    models learn with ``path_loss`` and the link offsets (:func:`fit_dataset`), the baselines per directed
+    link in free space; a model the data cannot identify is a note, the others still go."""
+    from rplearn.viz import interactive, plot
     from rplearn.viz.report import ReportSection, write_report
 
     if not models:
@@ -534,16 +538,23 @@ def learn_and_report(
         if os.path.lexists(os.path.join(out_dir, name)):
             check_output_path(os.path.join(out_dir, name), [dataset])
     df = read_dataset(dataset)
+    df, unit_note = time_units(df, source=dataset) if not test_units else (df, None)
     learn, test = split_units(df, None, test_units, dataset)
     ls = samples_of(df, learn, dataset)
     ts = samples_of(df, test, dataset, nodes=ls.nodes)
     prov = provenance(dataset=dataset, models=",".join(models), test_units=test)
     os.makedirs(out_dir, exist_ok=True)
-    fitted = []
+    fitted, notes = [], [unit_note] if unit_note else []
     for spec in specs:
         progress(f"learning {spec.label}")
         terms = {"path_loss": path_loss, "link_offsets": link_offsets} if spec.decouples else {}
-        fitted.append(fit_model(ls, spec, provenance=prov, **terms))
+        try:
+            fitted.append(fit_model(ls, spec, provenance=prov, **terms))
+        except (InputError, IdentifiabilityError) as exc:  # too few samples for this model: the others still go
+            notes.append(f"{spec.label} not learned: {exc}")
+            progress(notes[-1])
+    if not fitted:
+        raise InputError(f"{dataset}: none of the models could be learned ({'; '.join(notes)})", param="models")
     left_out: list[str] = []
     rows = evaluate_models(fitted, ts, left_out)
     for line in left_out:
@@ -555,12 +566,15 @@ def learn_and_report(
         images.append(
             plot.plot_pattern_maps(patterns, None, list(ls.nodes), node_directions(ls), os.path.join(out_dir, "patterns.png"))
         )
-    sections = [ReportSection("Patterns and coverage", "", images)]
+    views_3d, text_3d = interactive.pattern_3d_figures(patterns, list(ls.nodes))
+    sections = [ReportSection("Patterns and coverage", text_3d, images, interactive=views_3d)]
     lines = [f"- {label}: {line}" for label, m in patterns.items() for line in terms_text(m.training)]
     if lines:
         sections.append(ReportSection("Path loss and link offsets", "\n".join(lines), []))
+    if notes:
+        sections.insert(0, ReportSection("Notes", "\n".join(f"- {line}" for line in notes), []))
     path = write_report(out_dir, f"rplearn report: {os.path.basename(dataset)}", md, sections, prov)
-    return ReportOutcome(fitted, rows, md, learn, test, path)
+    return ReportOutcome(fitted, rows, md, learn, test, path, notes)
 
 
 def draw_pattern_files(
