@@ -2,8 +2,9 @@
 
 While another process keeps one core busy, fits SH-10 on 1,333 samples (the paper's
 two drones) 20 times with the thread limit of :mod:`rplearn.core.blas` and 20 times with
-every BLAS thread (the reference, what the fit did before), alternating in rounds of 5, and
-prints each side's fastest and slowest LTD and their ratio. Target: slowest within 3x of the
+every BLAS thread (the reference, what the fit did before), alternating in rounds of 5 with a
+pause of 0.3 s between rounds (the reference's spinning BLAS workers would otherwise slow the
+first fits of the next round), and prints each side's fastest and slowest LTD and their ratio. Target: slowest within 3x of the
 fastest with the limit.
 
 Run: ``.venv/bin/python benchmarks/steady_fit.py``.
@@ -39,7 +40,6 @@ def main() -> int:
     ab = matched[(matched["tx"] == "A") & matched["unit"].str.startswith("learn")]
     samples = link_samples(ab.iloc[np.linspace(0, len(ab) - 1, N).astype(int)], "paper")
     spec = ModelSpec.parse("sh", order=10)
-    fit_model(samples, spec)  # one-off costs
     always_big = lambda n, c: False  # noqa: E731  (the reference: every BLAS thread, as before)
     small = blas.is_small_fit
     times: dict[str, list[float]] = {"one thread (limit)": [], "every thread (reference)": []}
@@ -47,16 +47,22 @@ def main() -> int:
     busy = mp.Process(target=spin, args=(stop,), daemon=True)
     busy.start()
     time.sleep(0.5)
+    for _ in range(3):  # one-off costs, and the first fits while the scheduler settles with the busy process
+        fit_model(samples, spec)
     try:
         for _ in range(REPEATS // 5):
             for label, rule in (("one thread (limit)", small), ("every thread (reference)", always_big)):
                 blas.is_small_fit = rule
+                # OpenBLAS workers spin for ~0.1 s after a multi-threaded call: let those of the
+                # other side's round go idle, so that each side is timed as it runs on its own
+                time.sleep(0.3)
                 for _ in range(5):
                     times[label].append(fit_model(samples, spec).ltd_s)
     finally:
         blas.is_small_fit = small
         stop.set()
         busy.join()
+    print("LTD [ms] per fit: " + "; ".join(f"{k}: {', '.join(f'{x * 1e3:.1f}' for x in v)}" for k, v in times.items()))
     print(f"SH-10, {N:,} samples, {REPEATS} fits each, one core kept busy by another process")
     for label, t in times.items():
         t = np.array(t) * 1e3

@@ -7,6 +7,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 import pandas as pd
+import scipy.linalg  # noqa: F401  (order selection solves through scipy: loaded before any BLAS limit, rplearn.core.blas)
 
 from rplearn.core.normal_equations import NormalEquations
 from rplearn.core.selection import Selection, select_order_and_smoothing, validation_rmse

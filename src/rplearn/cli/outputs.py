@@ -40,7 +40,7 @@ def plot(
 
     Example: rplearn plot sh10.json --truth flight/ground_truth.json --dataset data.parquet -o patterns.png
     """
-    from rplearn.workflows.learning import draw_pattern_files
+    from rplearn.workflows.planning import draw_pattern_files
 
     say(f"wrote {draw_pattern_files(model_paths, output, truth, dataset)}")
 

@@ -10,6 +10,7 @@ every thread. The controller is built once (it scans the loaded libraries).
 
 from __future__ import annotations
 
+import sys
 from contextlib import contextmanager, nullcontext
 from functools import lru_cache
 from typing import Any, Iterator
@@ -23,10 +24,22 @@ def is_small_fit(n_samples: int, n_columns: int) -> bool:
     return float(n_samples) * n_columns**2 + 10.0 * float(n_columns) ** 3 < SMALL_FIT_FLOPS
 
 
-@lru_cache(maxsize=1)
+#: Modules whose thread pools a limit must reach once they are loaded (scipy has its own
+#: OpenBLAS; pykdtree, for coverage, an OpenMP runtime).
+BLAS_MODULES: tuple[str, ...] = ("numpy", "scipy.linalg", "pykdtree.kdtree")
+
+
 def _controller() -> Any:
+    """The controller of the BLAS libraries loaded now: numpy's, and scipy's once a module that
+    uses it (:mod:`rplearn.models.auto`, :mod:`rplearn.analysis.sweep`) has imported it. A
+    fixed-order fit imports no scipy, which costs 0.1-0.3 s to import."""
     import numpy  # noqa: F401  (the BLAS to control must be loaded before the scan)
-    import scipy.linalg  # noqa: F401
+
+    return _controller_of(tuple(m for m in BLAS_MODULES if m in sys.modules))
+
+
+@lru_cache(maxsize=4)
+def _controller_of(loaded: tuple[str, ...]) -> Any:
     from threadpoolctl import ThreadpoolController
 
     return ThreadpoolController()
@@ -50,9 +63,18 @@ def one_blas_thread() -> Iterator[None]:
         yield
 
 
+@contextmanager
+def one_openmp_thread() -> Iterator[None]:
+    """One OpenMP thread inside the block: pykdtree's queries are small, and OpenMP workers left
+    spinning after them slowed the next small fit on a busy 2-core machine from 5 to 13 ms."""
+    with _controller().limit(limits=1, user_api="openmp"):
+        yield
+
+
 def warm_up() -> None:
     """Build the controller now (its library scan is a one-off cost, kept out of the LTD)."""
     _controller()
 
 
-__all__ = ["SMALL_FIT_FLOPS", "blas_threads_for", "is_small_fit", "one_blas_thread", "warm_up"]
+__all__ = ["BLAS_MODULES", "SMALL_FIT_FLOPS", "blas_threads_for", "is_small_fit", "one_blas_thread", "one_openmp_thread",
+           "warm_up"]

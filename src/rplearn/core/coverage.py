@@ -1,18 +1,21 @@
 """How much of the sphere of directions a flight looked at: angular distance to the nearest
 learning direction, and the covered fraction of the sphere.
 
-Both use a k-d tree of unit vectors (``scipy.spatial.cKDTree``): the chord between unit vectors
-is ``2 sin(angle / 2)``, monotonic in the great-circle angle, so the nearest neighbour by chord
-is the nearest by angle.
+Both use a k-d tree of unit vectors (``pykdtree``: exact nearest neighbours, the same as
+``scipy.spatial.cKDTree``'s, 2.6x faster for 200,000 queries among 16,384 points, and imported
+in milliseconds where ``scipy.spatial`` takes 0.1-0.3 s, which every ``rplearn fit`` paid): the
+chord between unit vectors is ``2 sin(angle / 2)``, monotonic in the great-circle angle, so the
+nearest neighbour by chord is the nearest by angle.
 """
 
 from __future__ import annotations
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.spatial import cKDTree
+from pykdtree.kdtree import KDTree
 
 from rplearn.core.bases import fibonacci_grid_nodes
+from rplearn.core.blas import one_openmp_thread
 from rplearn.core.geometry import unit_vector
 from rplearn.errors import InputError
 
@@ -20,17 +23,23 @@ from rplearn.errors import InputError
 COVERED_WITHIN_DEG = 10.0
 
 
-def _tree(az_rad: ArrayLike, el_rad: ArrayLike) -> cKDTree:
+def _tree(az_rad: ArrayLike, el_rad: ArrayLike) -> KDTree:
     v = unit_vector(np.asarray(az_rad, np.float64).ravel(), np.asarray(el_rad, np.float64).ravel())
     if v.shape[0] == 0:
         raise InputError("coverage: no learning directions")
-    return cKDTree(v)
+    return KDTree(np.ascontiguousarray(v))
+
+
+def _query(tree: KDTree, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Chord to, and index of, each point's nearest neighbour in ``tree`` (one OpenMP thread)."""
+    with one_openmp_thread():
+        return tree.query(np.ascontiguousarray(points), k=1)
 
 
 def nearest_angle_deg(az_rad: ArrayLike, el_rad: ArrayLike, learn_az_rad: ArrayLike, learn_el_rad: ArrayLike) -> np.ndarray:
     """Great-circle angle [deg] from each direction to the nearest learning direction."""
     q = unit_vector(np.asarray(az_rad, np.float64).ravel(), np.asarray(el_rad, np.float64).ravel())
-    chord, _ = _tree(learn_az_rad, learn_el_rad).query(q, k=1)
+    chord, _ = _query(_tree(learn_az_rad, learn_el_rad), q)
     return np.degrees(2.0 * np.arcsin(np.clip(np.asarray(chord) / 2.0, 0.0, 1.0)))
 
 
@@ -46,13 +55,13 @@ __all__ = ["COVERED_WITHIN_DEG", "covered_fraction", "nearest_angle_deg"]
 
 #: Points of the Fibonacci grid on which a model stores its coverage (about 1.6 degrees apart).
 COVERAGE_GRID_POINTS = 16384
-_GRID_TREE: dict[int, cKDTree] = {}
+_GRID_TREE: dict[int, KDTree] = {}
 
 
-def _grid_tree(n_points: int) -> cKDTree:
+def _grid_tree(n_points: int) -> KDTree:
     if n_points not in _GRID_TREE:
         az, el = fibonacci_grid_nodes(n_points)
-        _GRID_TREE[n_points] = cKDTree(unit_vector(az, el))
+        _GRID_TREE[n_points] = KDTree(np.ascontiguousarray(unit_vector(az, el)))
     return _GRID_TREE[n_points]
 
 
@@ -74,7 +83,7 @@ def coverage_grid(az_rad: ArrayLike, el_rad: ArrayLike, previous: ArrayLike | No
         # by scanning it all, and the same set whatever the chunking (the result moves by less
         # than a cell's radius, about 1 degree).
         v = unit_vector(az, np.asarray(el_rad, np.float64).ravel())
-        _, cell = _grid_tree(n_points).query(v, k=1)
+        _, cell = _query(_grid_tree(n_points), v)
         occupied = np.unique(cell)
         out = nearest_angle_deg(gaz, gel, gaz[occupied], gel[occupied])
     if previous is not None:
@@ -87,7 +96,7 @@ def coverage_at(grid_deg: ArrayLike, az_rad: ArrayLike, el_rad: ArrayLike) -> np
     the nearest grid point plus the distance to it (an upper bound of the true nearest angle)."""
     grid = np.asarray(grid_deg, np.float64).ravel()
     q = unit_vector(np.asarray(az_rad, np.float64).ravel(), np.asarray(el_rad, np.float64).ravel())
-    chord, idx = _grid_tree(grid.size).query(q, k=1)
+    chord, idx = _query(_grid_tree(grid.size), q)
     return grid[idx] + np.degrees(2.0 * np.arcsin(np.clip(np.asarray(chord) / 2.0, 0.0, 1.0)))
 
 

@@ -40,8 +40,6 @@ from dataclasses import dataclass, field
 from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
-import scipy.linalg
-import scipy.linalg.blas
 
 from rplearn.core.basis_base import Basis
 from rplearn.core.normal_equations import EXPONENT_MIN_SPREAD_DB, NormalEquations, schur_spread_db
@@ -209,6 +207,8 @@ def _cholesky_solve(a: np.ndarray, rhs: np.ndarray) -> tuple[np.ndarray, np.ndar
     slow numpy's next factorisation (the final solve) several-fold on a 2-core machine.
     """
     upper = np.linalg.cholesky(a).T  # a = U^T U; the transpose is Fortran-ordered, as BLAS wants it (no copy)
+    import scipy.linalg.blas  # here: a fixed-order fit needs no scipy (models.auto loads it before a BLAS limit)
+
     half = scipy.linalg.blas.dtrsv(upper, rhs, lower=0, trans=1)
     return scipy.linalg.blas.dtrsv(upper, half, lower=0, trans=0), upper
 
@@ -376,11 +376,15 @@ class _Evaluator:
         try:
             return _cholesky_solve(self._system(gram, w, smoothing, pin), rhs)
         except np.linalg.LinAlgError:
+            import scipy.linalg
+
             return scipy.linalg.lstsq(self._system(gram, w, smoothing, pin), rhs)[0], None
 
     def _gcv(self, g: np.ndarray, pulled: np.ndarray, w: np.ndarray, smoothing: float, r: np.ndarray) -> float:
         a = self._system(g, w, smoothing)
         try:
+            import scipy.linalg
+
             factor = scipy.linalg.cho_factor(a, overwrite_a=True, check_finite=False)
             c = scipy.linalg.cho_solve(factor, pulled)
             trace = float(np.trace(scipy.linalg.cho_solve(factor, g)))  # tr(H) = tr((G + P)^-1 G)

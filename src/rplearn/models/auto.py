@@ -13,6 +13,7 @@ from collections import Counter
 from typing import Any, Mapping, Sequence
 
 import numpy as np
+import scipy.linalg  # noqa: F401  (order selection solves through scipy: loaded before any BLAS limit, rplearn.core.blas)
 
 from rplearn.core.environment import PathLoss
 from rplearn.core.link_statistics import reserve_block_buffer

@@ -16,7 +16,7 @@ _NAMES: dict[str, str] = {
     "EvaluationOutcome": "learning",
     "FitOutcome": "learning",
     "ReportOutcome": "learning",
-    "draw_pattern_files": "learning",
+    "draw_pattern_files": "planning",
     "evaluate_model_files": "learning",
     "fit_dataset": "learning",
     "learn_and_report": "learning",

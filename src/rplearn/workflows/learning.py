@@ -11,14 +11,13 @@ import os
 import time
 from contextlib import nullcontext
 from dataclasses import dataclass, field, replace
-from typing import Any, Callable, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Mapping, Sequence
 
 import numpy as np
 import pandas as pd
 
 from rplearn._atomic import atomic_open
 from rplearn.analysis.pattern_error import node_directions
-from rplearn.analysis.sweep import SweepResult, no_progress, order_sweep, validation_sweep
 from rplearn.core.metrics import Scores
 from rplearn.data.units import (
     UnitChoice, dataset_units, evaluation_units, learning_units, samples_of, select_units, split_units, time_units,
@@ -33,17 +32,22 @@ from rplearn.workflows.fleet import accumulate_parts, dask_client, dataset_index
 from rplearn.models.fit import FittedModel, evaluate_models, fit_model, scores_markdown, scores_of_predictions
 from rplearn.models.base import require_patterns
 from rplearn.models.load import load_model
-from rplearn.models.spec import check_model_size
+from rplearn.models.spec import ModelSpec, check_model_size
 from rplearn.models.robust import LOSSES, fit_huber
-from rplearn.models.auto import auto_orders, fit_auto, fit_from_statistics
-from rplearn.core.selection import Selection
 from rplearn.models.streamed import checked, fit_patterns_accumulated, weighted_median
 from rplearn.models.predict import UNCOVERED_DEG, DatasetPrediction, distinct_labels, predict_dataset, uncovered_rows
-from rplearn.models.spec import ModelSpec
 from rplearn.models.terms import terms_text
 from rplearn.core.environment import PathLoss
 
+if TYPE_CHECKING:  # order selection (models.auto, analysis.sweep) loads scipy: imported when used
+    from rplearn.analysis.sweep import SweepResult
+    from rplearn.core.selection import Selection
+
 Progress = Callable[[str], None]
+
+
+def no_progress(message: str) -> None:
+    """The default progress callback: says nothing."""
 
 
 @dataclass
@@ -273,6 +277,7 @@ def _fit_auto(
     link_offsets: bool = True,
 ) -> FitOutcome:
     """:func:`fit_dataset` with ``auto=True`` on a dataset in memory: samples per learning unit."""
+    from rplearn.models.auto import fit_auto
     learn = choice.units if choice.units is not None else (dataset_units(df) or [None])
     part = select_units(df, choice.units, dataset)
     nodes = sorted(set(part["tx"].astype(str)) | set(part["rx"].astype(str)))
@@ -324,6 +329,7 @@ def _fit_streamed(
     if n == 0:
         raise InputError(f"{dataset}: no samples selected", param="units")
     if auto:
+        from rplearn.models.auto import auto_orders, fit_from_statistics
         orders = auto_orders(spec.kind, n, len(nodes), spec.order if spec.kind != "sh" else None)
         spec = replace(spec, order=orders[-1])
     check_model_size(spec, n, len(nodes))
@@ -466,6 +472,7 @@ def sweep_dataset(
     Learning and testing units default to the unit rule (:func:`split_units`); every order
     is learned and tested (no early stop).
     """
+    from rplearn.analysis.sweep import order_sweep, validation_sweep
     if not orders or min(int(o) for o in orders) < 1:
         raise InputError(f"orders: expected positive orders, got {list(orders)!r}", param="orders")
     for path in (output, plot_path):
@@ -576,25 +583,3 @@ def learn_and_report(
     path = write_report(out_dir, f"rplearn report: {os.path.basename(dataset)}", md, sections, prov)
     return ReportOutcome(fitted, rows, md, learn, test, path, notes)
 
-
-def draw_pattern_files(
-    model_paths: Sequence[str], output: str, truth: str | None = None, dataset: str | None = None
-) -> str:
-    """Draw learned patterns of model files in the azimuth-elevation domain (paper Fig. 9,
-    ``rplearn plot``), beside a simulation's true patterns and over a dataset's sample
-    directions when given. Returns the PNG path."""
-    from rplearn.data.tables import link_samples
-    from rplearn.sim.antennas import load_ground_truth
-    from rplearn.viz.plot import plot_pattern_maps
-
-    check_output_path(output, [*model_paths, truth, dataset])
-    models = {}
-    for path in model_paths:
-        model = load_model(path)
-        if model.kind != "patterns":
-            raise InputError(f"{path}: a {model.kind} baseline has no per-node pattern to draw", param="model_paths")
-        models[model.label] = model
-    gt = load_ground_truth(truth) if truth else None
-    nodes = list(next(iter(models.values())).nodes)
-    dirs = node_directions(link_samples(read_dataset(dataset), dataset)) if dataset else None
-    return plot_pattern_maps(models, gt, nodes, dirs, output, center=gt is not None)

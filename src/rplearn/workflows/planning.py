@@ -1,6 +1,6 @@
 """Pipelines before and after learning that write or answer one thing: plan a calibration
-campaign (``rplearn trajectory``), export a model file (``rplearn export``) and orient one link
-(``rplearn orient``)."""
+campaign (``rplearn trajectory``), export a model file (``rplearn export``), draw its patterns
+(``rplearn plot``) and orient one link (``rplearn orient``)."""
 
 from __future__ import annotations
 
@@ -122,3 +122,28 @@ def reference_model_file(
     model = reference_model(samples, mounts, provenance=provenance(patterns=dict(patterns), mounts=mounts))
     model.save(output)
     return model
+
+
+def draw_pattern_files(
+    model_paths: Sequence[str], output: str, truth: str | None = None, dataset: str | None = None
+) -> str:
+    """Draw learned patterns of model files in the azimuth-elevation domain (paper Fig. 9,
+    ``rplearn plot``), beside a simulation's true patterns and over a dataset's sample
+    directions when given. Returns the PNG path."""
+    from rplearn.analysis.pattern_error import node_directions
+    from rplearn.data.tables import link_samples
+    from rplearn.io.files import read_dataset
+    from rplearn.sim.antennas import load_ground_truth
+    from rplearn.viz.plot import plot_pattern_maps
+
+    check_output_path(output, [*model_paths, truth, dataset])
+    models = {}
+    for path in model_paths:
+        model = load_model(path)
+        if model.kind != "patterns":
+            raise InputError(f"{path}: a {model.kind} baseline has no per-node pattern to draw", param="model_paths")
+        models[model.label] = model
+    gt = load_ground_truth(truth) if truth else None
+    nodes = list(next(iter(models.values())).nodes)
+    dirs = node_directions(link_samples(read_dataset(dataset), dataset)) if dataset else None
+    return plot_pattern_maps(models, gt, nodes, dirs, output, center=gt is not None)
