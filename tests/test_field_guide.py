@@ -51,6 +51,9 @@ def test_the_field_guide_runs_on_the_real_log_and_prints_what_it_says(tmp_path):
     assert (tmp_path / "patterns.png").stat().st_size > 10_000
     html = (tmp_path / "report" / "report.html").read_text(encoding="utf-8")
     assert "no &#x27;unit&#x27; column" in html or "no 'unit' column" in html
+    knn = re.search(r"NN-400 not learned: link \S+ has (\d+) samples", out["report"])
+    assert knn and "NN-400 not learned" in html and f"only {knn.group(1)} learning samples" in readme
+    assert "| SH-10 |" in out["report"] and "| BG-7 |" in out["report"]
     gain = re.search(r"\(([+-][\d.]+) dB\), \+- ([\d.]+) dB", out["orient"])
     assert gain, out["orient"]
     assert f"{gain.group(1)} dB" in readme and f"±{gain.group(2)} dB" in readme

@@ -88,5 +88,12 @@ def test_time_units_cut_a_flight_without_units_into_stretches_of_time():
     assert time_units(labelled) == (labelled, None)
     with pytest.raises(InputError, match="3 sample"):
         time_units(df.head(3))
+    # both directions of a telemetry report share their time: a pair is never split
+    pairs = pd.DataFrame({"t": np.repeat(np.arange(49, dtype=float), 2), "tx": ["a", "b"] * 49})
+    cut, _ = time_units(pairs)
+    assert (cut.groupby("t")["unit"].nunique() == 1).all()
+    assert cut["unit"].nunique() == 5
+    with pytest.raises(InputError, match="too few distinct times"):
+        time_units(pd.DataFrame({"t": [0.0] * 4 + [1.0] * 3 + [2.0] * 3}))
     with pytest.raises(InputError):
         time_units(df.assign(t=np.where(df["t"] == 5, np.nan, df["t"])))

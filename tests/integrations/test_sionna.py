@@ -233,6 +233,21 @@ def test_bad_inputs_are_refused_before_sionna_is_needed():
         add_link(None, bare, "A", "B", [0, 0, 0], [1, 0, 0, 0], [9, 0, 0], [1, 0, 0, 0])
     with pytest.raises(InputError, match="tx_quat_wxyz"):
         add_link(None, model, "A", "B", [0, 0, 0], [1, 0, 0], [9, 0, 0], [1, 0, 0, 0])
+    with pytest.raises(InputError, match="rx_quat_wxyz"):  # refused before the scene is touched
+        add_link(None, model, "A", "B", [0, 0, 0], [1, 0, 0, 0], [9, 0, 0], [np.nan, 0, 0, 0])
+
+
+def test_a_scene_holds_one_link(rt):
+    """Every transmitter of a Sionna scene shares one tx_array: a second link would silently give
+    the first one's transmitters its antenna, so it is refused; more poses of the same link are fine."""
+    model = _model()
+    scene = rt.load_scene()
+    add_link(scene, model, "A", "B", [0, 0, 20], [1, 0, 0, 0], [40, 0, 20], [1, 0, 0, 0], prefix="p1_")
+    add_link(scene, model, "A", "B", [0, 5, 20], [1, 0, 0, 0], [40, 5, 20], [1, 0, 0, 0], prefix="p2_")
+    with pytest.raises(InputError, match="already holds the link A -> B") as err:
+        add_link(scene, model, "B", "A", [0, 0, 20], [1, 0, 0, 0], [40, 0, 20], [1, 0, 0, 0], prefix="l2_")
+    assert err.value.param == "scene"
+    assert sorted(scene.transmitters) == ["p1_tx0", "p2_tx0"]
 
 
 def test_missing_sionna_is_one_error_naming_the_extra(monkeypatch):

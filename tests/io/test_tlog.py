@@ -160,18 +160,80 @@ def test_write_tlog_rejects_other_links_and_nodes(flight, tmp_path):
     assert not (tmp_path / "a.tlog").exists()
 
 
-def test_a_truncated_tlog_reads_its_complete_messages_and_reports_the_cut_off_one(flight, tmp_path):
+@pytest.mark.parametrize("cut", [1, 7, 33, 39, 40, 44, 47])
+def test_a_truncated_tlog_reads_its_complete_messages_and_reports_the_cut_off_one(flight, tmp_path, cut):
+    """The last record (8-byte time, then a 40-byte GLOBAL_POSITION_INT frame: a MAVLink 2 header
+    of 10 bytes, its 28-byte payload, the CRC) loses its last ``cut`` bytes: in its frame, or in
+    its time (the frame's name is then unknown)."""
     folder, written, _ = flight
     data = (folder / "flight.tlog").read_bytes()
-    whole_logs, whole = read_mavlink(folder / "flight.tlog", 20.0, 2.412e9, vehicle="D", station="G")
-    assert whole["cut_off_at_byte"] is None and not any("cut off" in n for n in whole["notes"])
-    cut = tmp_path / "cut.tlog"
-    cut.write_bytes(data[:-7])  # the last frame (a GLOBAL_POSITION_INT) loses its last 7 bytes
-    logs, meta = read_mavlink(cut, 20.0, 2.412e9, vehicle="D", station="G")
-    assert meta["cut_off_record"] == "GLOBAL_POSITION_INT"
-    # the frame: a MAVLink 2 header (10 bytes), GLOBAL_POSITION_INT's 28-byte payload, the CRC (2)
-    assert meta["cut_off_at_byte"] == len(data) - (10 + 28 + 2)
+    cut_file = tmp_path / "cut.tlog"
+    cut_file.write_bytes(data[:-cut])
+    logs, meta = read_mavlink(cut_file, 20.0, 2.412e9, vehicle="D", station="G")
+    assert meta["cut_off_at_byte"] == len(data) - 48
+    assert meta["cut_off_record"] == ("GLOBAL_POSITION_INT" if cut <= 30 else None)  # 10-byte header kept
     assert meta["messages"]["GLOBAL_POSITION_INT"] == written["global_position_int"] - 1
     assert meta["messages"]["ATTITUDE"] == written["attitude"]
-    assert any("cut off inside a GLOBAL_POSITION_INT message" in n for n in meta["notes"])
-    assert len(logs.signal) == len(whole_logs.signal)
+    assert any(f"cut off inside a{' GLOBAL_POSITION_INT' if cut <= 30 else ''} record at byte" in n for n in meta["notes"])
+    assert len(logs.signal) > 0
+
+
+def test_a_whole_tlog_is_not_reported_cut(flight):
+    folder, _, _ = flight
+    _, whole = read_mavlink(folder / "flight.tlog", 20.0, 2.412e9, vehicle="D", station="G")
+    assert whole["cut_off_at_byte"] is None and not any("cut off" in n for n in whole["notes"])
+
+
+def test_the_station_heading_and_clock_offset_are_returned_for_the_reader(tmp_path):
+    """A simulated station's pose rows (estimator noise) give its heading; a moving one is refused."""
+    from rplearn.sim.flight import simulate
+
+    sim = simulate("ground", seed=1)
+    signal = sim.signal_log.head(200)
+    written = write_tlog(Logs(sim.pose_log, signal), tmp_path / "a.tlog", vehicle="D", station="G",
+                         origin_geodetic=ORIGIN, system_id=np.int64(7))
+    assert abs(written["station_heading_deg"] - (90.0 - STATION_YAW_ENU_DEG)) < 2.0
+    assert 0.05 < written["station_spread_m"] < 2.0
+    logs, meta = read_mavlink(tmp_path / "a.tlog", 20.0, 2.412e9, vehicle="D", station="G",
+                              origin_geodetic=ORIGIN)
+    assert meta["system_id"] == 7
+    np.testing.assert_allclose(np.sort(logs.signal["t"].to_numpy()) - written["clock_offset_s"],
+                               np.sort(signal["t"].to_numpy()), atol=2e-6)
+    moving = sim.pose_log.replace({"node": {"D": "G", "G": "D"}})  # the flying drone as the "station"
+    with pytest.raises(InputError, match="moves") as err:
+        write_tlog(Logs(moving, signal), tmp_path / "b.tlog", vehicle="D", station="G", origin_geodetic=ORIGIN)
+    assert err.value.param == "station"
+
+
+@pytest.mark.parametrize("change, param", [
+    (lambda p, s: (p, s.assign(t=np.where(np.arange(len(s)) == 3, np.nan, s["t"]))), "signal"),
+    (lambda p, s: (p, s.head(0)), "signal"),
+])
+def test_write_tlog_refuses_bad_signal_logs(flight, tmp_path, change, param):
+    folder, _, _ = flight
+    pose, signal = change(read_table(str(folder / "pose.parquet")), read_table(str(folder / "signal.parquet")).head(20))
+    with pytest.raises(InputError) as err:
+        write_tlog(Logs(pose, signal), tmp_path / "a.tlog", vehicle="D", station="G", origin_geodetic=ORIGIN)
+    assert err.value.param == param and not (tmp_path / "a.tlog").exists()
+
+
+@pytest.mark.parametrize("kwargs, param", [
+    ({"start_unix_s": float("nan")}, "start_unix_s"), ({"start_unix_s": -1e9}, "start_unix_s"),
+    ({"origin_geodetic": "abc"}, "origin_geodetic"), ({"system_id": True}, "system_id"),
+])
+def test_write_tlog_refuses_bad_arguments(flight, tmp_path, kwargs, param):
+    folder, _, _ = flight
+    pose, signal = read_table(str(folder / "pose.parquet")), read_table(str(folder / "signal.parquet")).head(20)
+    args = {"vehicle": "D", "station": "G", "origin_geodetic": ORIGIN, **kwargs}
+    with pytest.raises(InputError) as err:
+        write_tlog(Logs(pose, signal), tmp_path / "a.tlog", **args)
+    assert err.value.param == param
+
+
+def test_inspect_finds_no_problem_in_the_written_tlog(flight):
+    """A static station's one pose row holds at every time: its instant is no span to overlap."""
+    from rplearn.io.inspect import inspect_logs
+
+    folder, _, _ = flight
+    report = inspect_logs([str(folder / "flight.tlog")], _tlog_options(folder))
+    assert not [p for p in report.problems if "overlap" in p], report.problems

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Callable, Sequence
 
 import numpy as np
@@ -39,6 +39,8 @@ class SweepResult:
     #: with per-unit learning samples, see :func:`validation_sweep`), else None.
     validation_rmse_db: list[float] | None = None
     selection: Selection | None = None
+    #: What the user should know about the data used (e.g. how a dataset without units was split).
+    notes: list[str] = field(default_factory=list)
 
     @property
     def best_order(self) -> int:

@@ -206,6 +206,8 @@ def sweep(
             dataset, model, order_list, split_list(learn_units), split_list(test_units),
             progress=lambda m: p.update(task, advance=1, description=m), output=output, plot_path=plot_path,
         )
+    for line in result.notes:
+        note(line)
     say(result.summary())
 
 

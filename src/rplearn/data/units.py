@@ -13,6 +13,7 @@ import os
 from dataclasses import dataclass, field
 from typing import Sequence
 
+import numpy as np
 import pandas as pd
 
 from rplearn.data.tables import LinkSamples, link_samples
@@ -134,7 +135,8 @@ TIME_UNITS = 5
 def time_units(df: pd.DataFrame, blocks: int = TIME_UNITS, source: str = "dataset") -> tuple[pd.DataFrame, str | None]:
     """A dataset without a ``unit`` column, labelled by contiguous stretches of time.
 
-    Rows are cut by time into ``blocks`` stretches of equal sample counts, labelled
+    Rows are cut by time into ``blocks`` stretches of about equal sample counts (rows of one
+    instant never split), labelled
     ``flight[k/blocks]`` and the last ``test[blocks/blocks]``: learning on the first ones and
     testing on the last keeps neighbouring (correlated) packets on one side. A dataset with a
     ``unit`` column is returned as it is.
@@ -159,12 +161,16 @@ def time_units(df: pd.DataFrame, blocks: int = TIME_UNITS, source: str = "datase
     if len(t) < blocks or not (t == t).all():
         raise InputError(f"{source}: cannot cut {len(t)} sample(s) with finite times into {blocks} stretches of time",
                          param="t")
-    order = t.argsort(kind="stable")
-    rank = order.argsort(kind="stable")
-    k = rank * blocks // len(t)  # 0 .. blocks-1, equal counts in time order
+    # cut at the times of equal-count quantiles: rows of one instant (both directions of a
+    # telemetry report) stay in one stretch, so no instant is on both sides of the test
+    edges = np.sort(t)[[len(t) * j // blocks for j in range(1, blocks)]]
+    k = np.searchsorted(edges, t, side="right")  # 0 .. blocks-1
+    if len(np.unique(k)) < blocks:
+        raise InputError(f"{source}: its {len(t)} sample(s) have too few distinct times to cut into {blocks} "
+                         "stretches of time", param="t")
     labels = [f"flight[{j + 1}/{blocks}]" for j in range(blocks - 1)] + [f"test[{blocks}/{blocks}]"]
     out = df.assign(unit=[labels[j] for j in k])
-    note = (f"{source} has no 'unit' column: its flight is cut into {blocks} stretches of time with equal "
+    note = (f"{source} has no 'unit' column: its flight is cut into {blocks} stretches of time with about equal "
             f"sample counts, learning on the first {blocks - 1} (flight[1/{blocks}]..flight[{blocks - 1}/{blocks}]) "
             f"and testing on the last (test[{blocks}/{blocks}], from t = {t[k == blocks - 1].min():.3f} s)")
     return out, note

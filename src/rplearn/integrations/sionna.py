@@ -405,9 +405,9 @@ def _poses(position_xyz: ArrayLike, quat_wxyz: ArrayLike, what: str) -> tuple[Fl
     if p.ndim != 2 or p.shape[1] != 3 or not np.all(np.isfinite(p)):
         raise InputError(f"{what}_position_xyz: expected finite (n, 3) ENU positions [m], got shape {p.shape}",
                          param=f"{what}_position_xyz")
-    if q.ndim != 2 or q.shape[1] != 4:
-        raise InputError(f"{what}_quat_wxyz: expected (n, 4) quaternions (qw, qx, qy, qz), got shape {q.shape}",
-                         param=f"{what}_quat_wxyz")
+    if q.ndim != 2 or q.shape[1] != 4 or not np.all(np.isfinite(q)) or np.any(np.linalg.norm(q, axis=1) == 0):
+        raise InputError(f"{what}_quat_wxyz: expected finite non-zero (n, 4) quaternions (qw, qx, qy, qz), "
+                         f"got shape {q.shape}", param=f"{what}_quat_wxyz")
     if len(p) != len(q) and 1 not in (len(p), len(q)):
         raise InputError(f"{what}_quat_wxyz: {len(q)} attitudes for {len(p)} positions", param=f"{what}_quat_wxyz")
     n = max(len(p), len(q))
@@ -453,7 +453,8 @@ def add_link(
     step_deg : float
         Grid step of the pattern tables [deg].
     prefix : str
-        Prefix of the device names (to add several links to one scene).
+        Prefix of the device names (to add more poses of the same link to a scene; another
+        link needs another scene, since a scene's transmitters share one antenna array).
 
     Returns
     -------
@@ -463,7 +464,8 @@ def add_link(
     Raises
     ------
     InputError
-        Without a frequency, or for bad poses.
+        Without a frequency, for bad poses (checked before the scene is touched), or when the
+        scene already holds another link.
     """
     f = getattr(model, "frequency_hz", None) if frequency_hz is None else frequency_hz
     if f is None or not (math.isfinite(float(f)) and float(f) > 0):
@@ -471,10 +473,17 @@ def add_link(
                          param="frequency_hz")
     tx_p, tx_q = _poses(tx_position_xyz, tx_quat_wxyz, "tx")
     rx_p, rx_q = _poses(rx_position_xyz, rx_quat_wxyz, "rx")
+    link = (id(model), str(tx_node), str(rx_node), float(f), float(step_deg))
+    held = getattr(scene, "_rplearn_link", None)
+    if held is not None and held != link:
+        raise InputError(f"this Sionna scene already holds the link {held[1]} -> {held[2]}: every transmitter of a "
+                         "scene shares one tx_array and every receiver one rx_array, so one scene holds one link "
+                         "(more poses of it are fine); use another scene", param="scene")
     rt = import_sionna_rt()
     scene.frequency = float(f)
     scene.tx_array = planar_array(model, tx_node, step_deg=step_deg)
     scene.rx_array = planar_array(model, rx_node, step_deg=step_deg)
+    scene._rplearn_link = link
     return (_add(scene, rt.Transmitter, f"{prefix}tx", tx_p, tx_q),
             _add(scene, rt.Receiver, f"{prefix}rx", rx_p, rx_q))
 

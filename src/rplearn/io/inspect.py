@@ -466,9 +466,10 @@ def _flag(report: InspectReport, max_gap_s: float) -> None:
                 if msg not in report.problems:
                     report.problems.append(msg)
         if report.nodes and lk.tx in known and lk.rx in known:
-            lo = max(known[lk.tx].t_start_s, known[lk.rx].t_start_s)
-            hi = min(known[lk.tx].t_end_s, known[lk.rx].t_end_s)
-            if not (known[lk.tx].static and known[lk.rx].static) and (lk.t_end_s < lo or lk.t_start_s > hi):
+            moving = [known[n] for n in (lk.tx, lk.rx) if not known[n].static]  # a static node holds at all times
+            lo = max((n.t_start_s for n in moving), default=-np.inf)
+            hi = min((n.t_end_s for n in moving), default=np.inf)
+            if moving and (lk.t_end_s < lo or lk.t_start_s > hi):
                 report.problems.append(
                     f"link {lk.tx} -> {lk.rx}: signal times {lk.t_start_s:.3f} .. {lk.t_end_s:.3f} s "
                     f"do not overlap the poses ({lo:.3f} .. {hi:.3f} s): a clock offset?")

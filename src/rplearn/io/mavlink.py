@@ -58,6 +58,7 @@ The ground station is a static node (one pose row, level, its body x axis facing
 
 from __future__ import annotations
 
+import numbers
 import os
 import sys
 from collections.abc import Mapping
@@ -206,22 +207,23 @@ def _open(mavutil: Any, source: str) -> Any:
         raise LogFormatError(f"{source}: cannot read MAVLink log ({type(exc).__name__}: {msg})") from None
 
 
-def _tlog_cut_off(conn: Any, source: str) -> dict[str, Any]:
-    """Where a tlog ends inside a MAVLink frame (pymavlink keeps its bytes unparsed at the end):
-    ``cut_off_at_byte`` (None when whole) and ``cut_off_record`` (the frame's message name)."""
-    try:
-        left = int(conn.mav.buf_len())
-        head = bytes(conn.mav.buf[conn.mav.buf_index:conn.mav.buf_index + 10])
-    except (AttributeError, TypeError, ValueError):  # pragma: no cover - a pymavlink without these
-        return {}
-    if left <= 0:
+def _tlog_cut_off(conn: Any, source: str, whole_to: int) -> dict[str, Any]:
+    """Where a tlog ends inside a record (its 8-byte time or its MAVLink frame), given the byte
+    ``whole_to`` where its last whole record ends: ``cut_off_at_byte`` (the cut record's start;
+    None when the file ends whole) and ``cut_off_record`` (the message name when its frame's
+    header is there, else None)."""
+    size = os.path.getsize(source)
+    if size <= whole_to:
         return {"cut_off_at_byte": None, "cut_off_record": None}
+    try:
+        head = bytes(conn.mav.buf[conn.mav.buf_index:conn.mav.buf_index + 10]) if conn.mav.buf_len() else b""
+    except (AttributeError, TypeError, ValueError):  # pragma: no cover - a pymavlink without these
+        head = b""
     msgid = head[5] if head[:1] == b"\xfe" and len(head) > 5 else (
         int.from_bytes(head[7:10], "little") if head[:1] == b"\xfd" and len(head) >= 10 else None)
     table = getattr(sys.modules.get(type(conn.mav).__module__), "mavlink_map", {})
     kind = table.get(msgid) if msgid is not None else None
-    return {"cut_off_at_byte": os.path.getsize(source) - left,
-            "cut_off_record": getattr(kind, "msgname", None) if kind is not None else None}
+    return {"cut_off_at_byte": int(whole_to), "cut_off_record": getattr(kind, "msgname", None) if kind is not None else None}
 
 
 def _collect_tlog(source: str, system_id: int | None) -> _Raw:
@@ -231,6 +233,7 @@ def _collect_tlog(source: str, system_id: int | None) -> _Raw:
     by_sys: dict[int, list[float]] = {}
     counts: dict[str, int] = {}
     radio_senders: dict[str, int] = {}
+    whole_to = 0
     while True:
         try:
             msg = conn.recv_msg()
@@ -238,6 +241,7 @@ def _collect_tlog(source: str, system_id: int | None) -> _Raw:
             raise LogFormatError(f"{source}: corrupt MAVLink data ({type(exc).__name__}: {exc})") from None
         if msg is None:
             break
+        whole_to = conn.f.tell() - conn.mav.buf_len()  # where the records read so far end
         kind = msg.get_type()
         if kind == "BAD_DATA":
             counts["BAD_DATA"] = counts.get("BAD_DATA", 0) + 1
@@ -258,7 +262,7 @@ def _collect_tlog(source: str, system_id: int | None) -> _Raw:
             rows[kind].append((t, msg.rssi, msg.remrssi))
             key = f"{sysid}/{msg.get_srcComponent()}"
             radio_senders[key] = radio_senders.get(key, 0) + 1
-    cut_off = _tlog_cut_off(conn, source)
+    cut_off = _tlog_cut_off(conn, source, whole_to)
     att = _arr(rows["ATTITUDE"], 6)
     if not len(att):
         raise LogFormatError(f"{source}: no ATTITUDE messages (the vehicle's attitude)")
@@ -368,7 +372,7 @@ def _vehicle_pose(raw: _Raw, origin: tuple[float, float, float], max_gap_s: floa
     enu = geodetic_to_enu(geo[:, 0], geo[:, 1], geo[:, 2], origin)
     out = (ta < tp[0]) | (ta > tp[-1])
     i = np.clip(np.searchsorted(tp, ta, side="right") - 1, 0, len(tp) - 2)
-    gap = ((tp[i + 1] - tp[i]) > max_gap_s) & (ta != tp[i]) & ~out  # an instant at a fix is not in its gap
+    gap = ((tp[i + 1] - tp[i]) > max_gap_s) & (ta != tp[i]) & (ta != tp[i + 1]) & ~out  # an instant at a fix is not in a gap
     dropped["out_of_span"], dropped["gap"] = int(out.sum()), int(gap.sum())
     keep = ~(out | gap)
     t = ta[keep]
@@ -502,8 +506,10 @@ def read_mavlink(
         ``origin_geodetic``, ``messages`` (counts of the messages used), ``dropped`` (pose
         rows per reason), ``signal`` (rows per direction, ``link_lost`` messages, zero and
         unknown values per direction), ``time_reference``, ``cut_off_at_byte`` and
-        ``cut_off_record`` (offset and message name of the record a cut-off DataFlash file
-        ends inside, whose data are lost; None when whole), ``corrupt_bytes`` (skipped between DataFlash records).
+        ``cut_off_record`` (offset and message name of the record a cut-off file ends inside,
+        whose data are lost: a tlog's record is its 8-byte time and MAVLink frame, whose name is
+        unknown when the cut is before the frame's header; None when whole), ``corrupt_bytes``
+        (skipped between DataFlash records).
 
     Raises
     ------
@@ -518,7 +524,8 @@ def read_mavlink(
     _check_arguments(tx_power_dbm, frequency_hz, max_gap_s, stream_timeout_s, vehicle, station)
     station_geodetic = _check_origin(station_geodetic, "station_geodetic")
     if station_heading_deg is not None and not (
-            isinstance(station_heading_deg, (int, float)) and np.isfinite(station_heading_deg)):
+            isinstance(station_heading_deg, numbers.Real) and not isinstance(station_heading_deg, bool)
+            and np.isfinite(station_heading_deg)):
         raise InputError(f"station_heading_deg: expected degrees, got {station_heading_deg!r}", param="station_heading_deg")
     origin_geodetic = _check_origin(origin_geodetic, "origin_geodetic")
     fmt = _detect(source)
@@ -555,7 +562,7 @@ def read_mavlink(
              (f"{source}: {lost:,} radio message(s) with a zero RSSI while the vehicle was silent "
               "(link lost) dropped, both directions")]
     if cut is not None:
-        notes.append(f"{source}: the file is cut off inside {'a ' + cut_name if cut_name else 'a'} message at byte "
+        notes.append(f"{source}: the file is cut off inside {'a ' + cut_name if cut_name else 'a'} record at byte "
                      f"{cut:,}: that message is lost, the complete ones before it are read")
     meta = {
         "source": source, "format": fmt, "notes": notes, "vehicle": vehicle, "station": station,

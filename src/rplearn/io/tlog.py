@@ -11,8 +11,9 @@ What is written (MAVLink 2 frames of the ``ardupilotmega`` dialect, each after t
 - per vehicle pose row, ``ATTITUDE`` (NED/FRD roll, pitch, yaw [rad] from the FLU -> ENU
   quaternion) and ``GLOBAL_POSITION_INT`` (lat, lon [1e-7 deg], alt [mm]) from system
   ``system_id``, component 1, with ``time_boot_ms`` = the row's time on a boot clock;
-- one ``HOME_POSITION`` with the station's position (the median of its pose rows; the station
-  must be static, its attitude is not loggable: pass its heading back to the reader);
+- one ``HOME_POSITION`` with the station's position (the median of its pose rows, which may
+  spread by estimator noise but not move: :func:`station_pose`); its attitude is not loggable:
+  pass the returned ``station_heading_deg`` back to the reader;
 - per signal row, one ``RADIO_STATUS`` from the ground radio (system 51, component 68, as SiK
   firmware sends it) with the row's RSSI in SiK units, ``round((dBm + 127) * 1.9)`` clipped to
   1-254 (0 means link lost and 255 unknown), in ``rssi`` when the station received it and in
@@ -32,7 +33,7 @@ import numpy as np
 import pandas as pd
 
 from rplearn._atomic import atomic_open
-from rplearn.core.geometry import euler_from_quat_wxyz, quat_enu_flu_to_ned_frd
+from rplearn.core.geometry import euler_from_quat_wxyz, quat_enu_flu_to_ned_frd, yaw_from_quat_wxyz
 from rplearn.errors import InputError
 from rplearn.io._common import Logs
 from rplearn.io.mavlink import SIK_UNITS_PER_DB, SIK_ZERO_DBM
@@ -97,14 +98,48 @@ def _check(logs: Logs, vehicle: str, station: str, origin_geodetic: Any) -> tupl
         raise InputError(f"write_tlog: a telemetry log holds the link {vehicle} <-> {station} only, "
                          f"the signal log has {int(other.sum())} row(s) of others (e.g. {row['tx']} -> {row['rx']})",
                          param="signal")
-    cols = ["t", "x", "y", "z", "qw", "qx", "qy", "qz"]
-    bad = ~np.isfinite(pose[cols].to_numpy(np.float64)).all(axis=1)
-    if bad.any():
-        raise InputError(f"write_tlog: {int(bad.sum())} pose row(s) hold NaN or infinite values "
-                         "(drop them first)", param="pose")
-    if len(origin_geodetic) != 3 or not np.all(np.isfinite(np.asarray(origin_geodetic, np.float64))):
+    if not len(signal):
+        raise InputError("write_tlog: the signal log is empty: a telemetry log without RADIO_STATUS holds no link",
+                         param="signal")
+    for name, frame, cols in (("pose", pose, ["t", "x", "y", "z", "qw", "qx", "qy", "qz"]),
+                              ("signal", signal, ["t", "rssi_dbm"])):
+        bad = ~np.isfinite(frame[cols].to_numpy(np.float64)).all(axis=1)
+        if bad.any():
+            raise InputError(f"write_tlog: {int(bad.sum())} {name} row(s) hold NaN or infinite values in "
+                             f"{', '.join(cols)} (drop them first)", param=name)
+    try:
+        origin = np.asarray(origin_geodetic, np.float64)
+    except (TypeError, ValueError):
+        origin = np.zeros(0)
+    if origin.shape != (3,) or not np.all(np.isfinite(origin)):
         raise InputError(f"origin_geodetic: expected (lat, lon, alt), got {origin_geodetic!r}", param="origin_geodetic")
     return pose, signal
+
+
+#: A station whose pose rows spread farther than this from their median is moving [m].
+STATION_SPREAD_LIMIT_M = 5.0
+
+
+def station_pose(pose: pd.DataFrame, station: str) -> tuple[np.ndarray, float, float]:
+    """The static station a tlog can hold: median ENU position [m], compass heading of its body
+    x axis [deg, clockwise from north] (from the mean of its rows' yaws) and how far its rows
+    spread from that position [m] (estimator noise).
+
+    Raises
+    ------
+    InputError
+        When the rows spread farther than :data:`STATION_SPREAD_LIMIT_M`: a moving node.
+    """
+    rows = pose[pose["node"] == station]
+    xyz = rows[["x", "y", "z"]].to_numpy(np.float64)
+    centre = np.median(xyz, axis=0)
+    spread = float(np.max(np.linalg.norm(xyz - centre, axis=1)))
+    if spread > STATION_SPREAD_LIMIT_M:
+        raise InputError(f"write_tlog: station {station!r} moves ({spread:.1f} m from its median position); "
+                         "a telemetry log holds a static ground station", param="station")
+    yaw = yaw_from_quat_wxyz(rows[["qw", "qx", "qy", "qz"]].to_numpy(np.float64))
+    mean_yaw = float(np.arctan2(np.mean(np.sin(yaw)), np.mean(np.cos(yaw))))
+    return centre, float(np.mod(90.0 - np.degrees(mean_yaw), 360.0)), spread
 
 
 def _records(pose: pd.DataFrame, signal: pd.DataFrame, vehicle: str, station: str,
@@ -121,7 +156,7 @@ def _records(pose: pd.DataFrame, signal: pd.DataFrame, vehicle: str, station: st
     boot_ms = np.rint((veh["t"].to_numpy(np.float64) - t0) * 1e3).astype(np.int64)
     recv_us = start_unix_s * 1e6 + boot_ms * 1e3
     out: list[tuple[float, int, bytes]] = []
-    sxyz = np.median(pose.loc[pose["node"] == station, ["x", "y", "z"]].to_numpy(np.float64), axis=0)
+    sxyz, heading, spread = station_pose(pose, station)
     slat, slon, salt = (float(v[0]) for v in _enu_to_geodetic(sxyz[None, :], origin))
     home = air.home_position_encode(int(round(slat * 1e7)), int(round(slon * 1e7)), int(round(salt * 1e3)),
                                     0.0, 0.0, 0.0, [1.0, 0.0, 0.0, 0.0], 0.0, 0.0, 0.0)
@@ -141,7 +176,8 @@ def _records(pose: pd.DataFrame, signal: pd.DataFrame, vehicle: str, station: st
         msg = radio.radio_status_encode(rssi, rem, 100, 0, 0, 0, 0)
         out.append((float(sig_us[i]), 3, msg.pack(radio)))
     written = {"attitude": len(veh), "global_position_int": len(veh), "radio_status": len(signal),
-               "rssi_clipped": clipped, "station_geodetic": (slat, slon, salt), "start_unix_s": start_unix_s}
+               "rssi_clipped": clipped, "station_geodetic": (slat, slon, salt), "start_unix_s": start_unix_s,
+               "station_heading_deg": heading, "station_spread_m": spread, "clock_offset_s": start_unix_s - t0}
     return out, written
 
 
@@ -175,20 +211,26 @@ def write_tlog(
     Returns
     -------
     dict
-        Messages written per type, ``rssi_clipped`` (values outside SiK's 1-254 range) and
-        ``station_geodetic`` (the HOME_POSITION written).
+        Messages written per type, ``rssi_clipped`` (values outside SiK's 1-254 range),
+        ``station_geodetic`` (the HOME_POSITION written), ``station_heading_deg`` (compass, for
+        the reader's ``station_heading_deg``), ``station_spread_m`` and ``clock_offset_s`` (the
+        tlog's time minus the logs' time [s]). Extra signal columns (``unit``) are not written.
 
     Raises
     ------
     InputError
         On a missing log or node, rows of other links, or a bad argument (``param`` names it).
     """
-    if not (isinstance(system_id, int) and 1 <= system_id <= 255 and system_id != SIK_SYSTEM_ID):
+    if not (isinstance(system_id, (int, np.integer)) and not isinstance(system_id, bool)
+            and 1 <= system_id <= 255 and system_id != SIK_SYSTEM_ID):
         raise InputError(f"system_id: expected 1-255 other than the radio's {SIK_SYSTEM_ID}, got {system_id!r}",
                          param="system_id")
+    if not (isinstance(start_unix_s, (int, float, np.number)) and 0 <= float(start_unix_s) < 2**63 / 1e6):
+        raise InputError(f"start_unix_s: expected a time in seconds since the UNIX epoch, got {start_unix_s!r}",
+                         param="start_unix_s")
     pose, signal = _check(logs, vehicle, station, origin_geodetic)
     origin = tuple(float(v) for v in origin_geodetic)
-    records, written = _records(pose, signal, vehicle, station, origin, float(start_unix_s), system_id)  # type: ignore[arg-type]
+    records, written = _records(pose, signal, vehicle, station, origin, float(start_unix_s), int(system_id))  # type: ignore[arg-type]
     records.sort(key=lambda r: (r[0], r[1]))
     with atomic_open(path, "wb", param="path") as fh:
         for t_us, _, frame in records:
@@ -196,4 +238,4 @@ def write_tlog(
     return written
 
 
-__all__ = ["dbm_to_sik_rssi", "write_tlog"]
+__all__ = ["STATION_SPREAD_LIMIT_M", "dbm_to_sik_rssi", "station_pose", "write_tlog"]

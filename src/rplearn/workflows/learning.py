@@ -482,14 +482,12 @@ def sweep_dataset(
         check_output_path(plot_path, [output])
     if output:
         check_table_path(output)
-    df = read_dataset(dataset)
-    df, unit_note = time_units(df, source=dataset) if not (learn_units or test_units) else (df, None)
-    if unit_note:
-        progress(unit_note)
+    df, unit_note = time_units(read_dataset(dataset), source=dataset)
     learn, test = split_units(df, learn_units, test_units, dataset)
     ls = samples_of(df, learn, dataset)
     ts = samples_of(df, test, dataset, nodes=ls.nodes)
     result = order_sweep(ls, ts, kind, [int(o) for o in orders], stop_after_rises=None, progress=progress)
+    result.notes = [unit_note] if unit_note else []
     if kind == "sh":
         progress("cross-validating the orders over the learning units")
         per_unit = {str(u): samples_of(df, [u], dataset, nodes=ls.nodes) for u in learn}
@@ -544,24 +542,23 @@ def learn_and_report(
     for name in REPORT_FILES:  # the report's own files may not overwrite its dataset
         if os.path.lexists(os.path.join(out_dir, name)):
             check_output_path(os.path.join(out_dir, name), [dataset])
-    df = read_dataset(dataset)
-    df, unit_note = time_units(df, source=dataset) if not test_units else (df, None)
+    df, unit_note = time_units(read_dataset(dataset), source=dataset)
     learn, test = split_units(df, None, test_units, dataset)
     ls = samples_of(df, learn, dataset)
     ts = samples_of(df, test, dataset, nodes=ls.nodes)
     prov = provenance(dataset=dataset, models=",".join(models), test_units=test)
-    os.makedirs(out_dir, exist_ok=True)
-    fitted, notes = [], [unit_note] if unit_note else []
+    fitted, failed = [], []
     for spec in specs:
         progress(f"learning {spec.label}")
         terms = {"path_loss": path_loss, "link_offsets": link_offsets} if spec.decouples else {}
         try:
             fitted.append(fit_model(ls, spec, provenance=prov, **terms))
         except (InputError, IdentifiabilityError) as exc:  # too few samples for this model: the others still go
-            notes.append(f"{spec.label} not learned: {exc}")
-            progress(notes[-1])
+            failed.append(f"{spec.label} not learned: {exc}")
     if not fitted:
-        raise InputError(f"{dataset}: none of the models could be learned ({'; '.join(notes)})", param="models")
+        raise InputError(f"{dataset}: none of the models could be learned ({'; '.join(failed)})", param="models")
+    os.makedirs(out_dir, exist_ok=True)
+    notes = ([unit_note] if unit_note else []) + failed
     left_out: list[str] = []
     rows = evaluate_models(fitted, ts, left_out)
     for line in left_out:
