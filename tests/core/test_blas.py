@@ -50,9 +50,63 @@ def test_a_fixed_order_fit_imports_no_scipy_and_order_selection_limits_scipys_bl
         import rplearn.models.auto  # order selection
         assert "scipy.linalg" in sys.modules
         libs = [p for p in threadpool_info() if p["user_api"] == "blas"]
+        assert len(libs) == 2 and min(p["num_threads"] for p in libs) > 1, libs  # numpy's and scipy's, threaded
         with blas_threads_for(1_333, 242):
             assert [p["num_threads"] for p in threadpool_info() if p["user_api"] == "blas"] == [1] * len(libs)
         print("ok", len(libs))
     """)
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300, check=False)
     assert proc.returncode == 0 and proc.stdout.startswith("ok"), proc.stdout + proc.stderr
+
+
+def test_an_openmp_limit_leaves_a_concurrent_blas_limit_alone():
+    """threadpoolctl's limiter restores every library it holds: the OpenMP limit of a coverage
+    query, ending while another thread holds a BLAS limit, must not undo (or keep) that one."""
+    import threading
+
+    import pykdtree.kdtree  # noqa: F401  (its OpenMP runtime)
+
+    from rplearn.core.blas import one_blas_thread, one_openmp_thread
+
+    before = blas_threads()
+    if max(before) < 2:
+        import pytest
+
+        pytest.skip("BLAS runs one thread here: nothing to restore")
+    a_in, b_in, a_out = threading.Event(), threading.Event(), threading.Event()
+    seen: list[list[int]] = []
+
+    def a() -> None:
+        with one_blas_thread():
+            a_in.set()
+            b_in.wait(5)
+        a_out.set()
+
+    def b() -> None:
+        a_in.wait(5)
+        with one_openmp_thread():
+            b_in.set()
+            a_out.wait(5)
+        seen.append(blas_threads())
+
+    threads = [threading.Thread(target=a), threading.Thread(target=b)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(10)
+    assert seen == [before] and blas_threads() == before
+
+
+def test_a_log_distance_fit_loads_scipy_before_its_clock_starts():
+    """The exponent's identifiability check solves through scipy: imported during the warm-up
+    (not timed), not inside the first fit's LTD."""
+    import subprocess
+    import sys
+
+    code = ("import sys\nfrom rplearn.models.fit import _warm_up\nfrom rplearn.models.spec import ModelSpec\n"
+            "from rplearn.core.environment import PathLoss\n"
+            "_warm_up(ModelSpec.parse('sh-6'), 100)\nassert 'scipy.linalg' not in sys.modules\n"
+            "_warm_up(ModelSpec.parse('sh-6'), 100, PathLoss('log-distance'))\nassert 'scipy.linalg' in sys.modules\n"
+            "print('ok')")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, check=False)
+    assert proc.returncode == 0 and proc.stdout.strip() == "ok", proc.stdout + proc.stderr

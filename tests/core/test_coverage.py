@@ -40,3 +40,21 @@ def test_a_grid_accumulates_chunk_by_chunk_and_bounds_the_true_angle():
     exact = nearest_angle_deg(qa, qe, la, le)
     bound = coverage_at(whole, qa, qe)
     assert np.all(bound >= exact - 1.2) and np.all(bound <= exact + 3.0)  # within the grid spacing
+
+
+def test_non_finite_directions_are_refused():
+    import numpy as np
+    import pytest
+
+    from rplearn.core.coverage import coverage_at, coverage_grid, nearest_angle_deg
+    from rplearn.errors import InputError
+
+    with pytest.raises(InputError, match="1 query direction"):
+        nearest_angle_deg([0.0, np.nan], [0.0, 0.0], [0.1], [0.2])
+    with pytest.raises(InputError, match="1 learning direction"):
+        nearest_angle_deg([0.0], [0.0], [0.1, np.nan], [0.2, 0.0])
+    with pytest.raises(InputError):
+        coverage_grid(np.array([np.nan, 0.1]), np.array([0.0, 0.2]))
+    grid = coverage_grid(np.array([0.1]), np.array([0.2]))
+    with pytest.raises(InputError):
+        coverage_at(grid, [np.nan], [0.0])

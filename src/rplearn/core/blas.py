@@ -67,7 +67,9 @@ def one_blas_thread() -> Iterator[None]:
 def one_openmp_thread() -> Iterator[None]:
     """One OpenMP thread inside the block: pykdtree's queries are small, and OpenMP workers left
     spinning after them slowed the next small fit on a busy 2-core machine from 5 to 13 ms."""
-    with _controller().limit(limits=1, user_api="openmp"):
+    # only the OpenMP libraries: a limiter restores every library it holds when it ends, and the
+    # BLAS count is process-wide (another thread may hold its own BLAS limit meanwhile)
+    with _controller().select(user_api="openmp").limit(limits=1):
         yield
 
 

@@ -23,17 +23,26 @@ from rplearn.errors import InputError
 COVERED_WITHIN_DEG = 10.0
 
 
+def _finite(v: np.ndarray, what: str) -> np.ndarray:
+    """``v`` if every direction is finite (pykdtree takes NaN silently: wrong neighbours)."""
+    if not np.all(np.isfinite(v)):
+        bad = int(np.count_nonzero(~np.isfinite(v).all(axis=-1)))
+        raise InputError(f"coverage: {bad} {what} direction(s) are NaN or infinite")
+    return np.ascontiguousarray(v)
+
+
 def _tree(az_rad: ArrayLike, el_rad: ArrayLike) -> KDTree:
     v = unit_vector(np.asarray(az_rad, np.float64).ravel(), np.asarray(el_rad, np.float64).ravel())
     if v.shape[0] == 0:
         raise InputError("coverage: no learning directions")
-    return KDTree(np.ascontiguousarray(v))
+    return KDTree(_finite(v, "learning"))
 
 
 def _query(tree: KDTree, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Chord to, and index of, each point's nearest neighbour in ``tree`` (one OpenMP thread)."""
+    points = _finite(points, "query")
     with one_openmp_thread():
-        return tree.query(np.ascontiguousarray(points), k=1)
+        return tree.query(points, k=1)
 
 
 def nearest_angle_deg(az_rad: ArrayLike, el_rad: ArrayLike, learn_az_rad: ArrayLike, learn_el_rad: ArrayLike) -> np.ndarray:

@@ -147,20 +147,22 @@ def fit_patterns(
     return patterns
 
 
-def _warm_up(spec: ModelSpec, n_samples: int = 1) -> None:
+def _warm_up(spec: ModelSpec, n_samples: int = 1, path_loss: PathLoss | None = None) -> None:
     """Pay a model's one-off costs: imports, cached basis tables, the solver's block buffer
-    (see :func:`fit_model`)."""
-    warm_up_blas()
+    (see :func:`fit_model`); the BLAS controller last, once every library a fit uses is loaded."""
     if spec.kind == "knn":
-        import sklearn.neighbors  # noqa: F401
+        import sklearn.neighbors  # noqa: F401  (loads scipy's BLAS too)
     elif spec.decouples:
         from rplearn.core.link_statistics import reserve_block_buffer
 
+        if path_loss is not None and path_loss.learns_exponent:
+            import scipy.linalg.blas  # noqa: F401  (the exponent's identifiability check solves through it)
         basis = spec.basis()
         basis.evaluate(np.zeros(basis.n_coef), [0.0], [0.0])
         if basis.moment_shape is not None:
             basis.gram_from_moments(np.zeros(basis.moment_shape))
         reserve_block_buffer(basis, n_samples)
+    warm_up_blas()
 
 
 def fit_model(
@@ -184,7 +186,7 @@ def fit_model(
         raise InputError(f"path loss {path_loss.kind}: the baselines ({spec.label}) learn no environment term; "
                          "fit them in free space", param="path_loss")
     check_model_size(spec, len(samples), len(samples.nodes))
-    _warm_up(spec, len(samples))
+    _warm_up(spec, len(samples), path_loss)
     columns = spec.basis().n_coef * len(samples.nodes) if spec.decouples else 0
     with blas_threads_for(len(samples), columns):
         t0 = time.perf_counter()
