@@ -5,19 +5,27 @@ For SH-10 (100 coefficients per node) and 10, 30 and 50 drones (500,000 samples;
 pairs (every node linked to every other: a dense normal matrix), and ``ring``, each drone
 linked to its four nearest neighbours on a ring (how a swarm calibrates: few links per node),
 prints the whole fit time (statistics and solve; the covariance, formed only when read, apart)
-as a ratio against the ``X^T X`` floor of the same
-columns, measured in the same run, alternately, best of several: numpy products of each link's
-feature block ``[F_tx F_rx]^T [F_tx F_rx]`` added into the Gram, with the features computed
-beforehand (not timed), the least any normal-equations method must do. The target is 2x.
+as a ratio against the ``X^T X`` floor of the same columns, measured in the same run,
+alternately, best of 5 (the machines are noisy: the floor of one case varied by 1.5x between
+runs): numpy products of each link's feature block ``[F_tx F_rx]^T [F_tx F_rx]`` added into
+the Gram, with the features computed beforehand (not timed), the least any normal-equations
+method must do. The target is 2x.
 
 Also prints the process's peak resident memory after the largest fit (target < 1 GiB at 50).
 
-Run: ``.venv/bin/python benchmarks/fit_swarm.py [--quick]``.
+Both sides run in one process on the same BLAS. Machines that force an older OpenBLAS kernel
+(``OPENBLAS_CORETYPE``, ``OPENBLAS_L2_SIZE``: a workaround for old OpenBLAS builds, which slows
+a current numpy) get the run restarted without them, as the kernel detected for the processor
+is what a user's numpy runs; ``--keep-env`` measures with them. The kernel is printed.
+
+Run: ``.venv/bin/python benchmarks/fit_swarm.py [--quick] [--keep-env]``.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
+import sys
 import time
 
 import numpy as np
@@ -67,9 +75,21 @@ def main() -> int:
     parser.add_argument("--quick", action="store_true", help="200,000 samples, 2 repeats")
     parser.add_argument("--nodes", default="10,30,50", help="node counts (comma-separated)")
     parser.add_argument("--topology", default="all,ring", help="all and/or ring (comma-separated)")
+    parser.add_argument("--keep-env", action="store_true", help="keep OPENBLAS_CORETYPE / OPENBLAS_L2_SIZE")
+    parser.add_argument("--repeats", type=int, default=None, help="best of this many (default 5; 2 with --quick)")
     args = parser.parse_args()
+    forced = [k for k in ("OPENBLAS_CORETYPE", "OPENBLAS_L2_SIZE") if k in os.environ]
+    if forced and not args.keep_env:
+        print(f"restarting without {' and '.join(forced)} (they force an older OpenBLAS kernel; --keep-env keeps them)",
+              flush=True)
+        env = {k: v for k, v in os.environ.items() if k not in forced}
+        os.execve(sys.executable, [sys.executable, *sys.argv], env)
+    from threadpoolctl import threadpool_info
+
+    kernels = sorted({f"{p['internal_api']} {p.get('architecture')}" for p in threadpool_info() if p["user_api"] == "blas"})
+    print(f"BLAS: {', '.join(kernels)}")
     n = 200_000 if args.quick else 500_000
-    repeats = 2 if args.quick else 3
+    repeats = args.repeats or (2 if args.quick else 5)
     basis = SphericalHarmonics(ORDER)
     p = basis.n_coef
     ok = True
@@ -104,7 +124,6 @@ def main() -> int:
     # process also holds the floor's precomputed features); VmHWM, since ru_maxrss keeps the
     # parent's high-water mark across fork and exec
     import subprocess
-    import sys
 
     largest = max(cases, key=lambda c: c[1])
     code = (f"import sys, numpy as np; sys.path.insert(0, {__file__.rsplit('/', 1)[0]!r}); "
