@@ -435,8 +435,12 @@ def _detect(source: str) -> str:
 
 
 def _check_arguments(tx_power_dbm: Any, frequency_hz: Any, max_gap_s: Any, stream_timeout_s: Any,
-                     vehicle: Any, station: Any) -> None:
+                     vehicle: Any, station: Any, station_heading_deg: Any = None) -> None:
     """Refuse arguments out of their domain (:class:`InputError` naming the parameter)."""
+    if station_heading_deg is not None and not (
+            isinstance(station_heading_deg, numbers.Real) and not isinstance(station_heading_deg, bool)
+            and np.isfinite(station_heading_deg)):
+        raise InputError(f"station_heading_deg: expected degrees, got {station_heading_deg!r}", param="station_heading_deg")
     for name, value in (("max_gap_s", max_gap_s), ("stream_timeout_s", stream_timeout_s),
                         ("frequency_hz", frequency_hz)):
         if not (isinstance(value, (int, float)) and np.isfinite(value) and value > 0):
@@ -521,12 +525,8 @@ def read_mavlink(
     source = str(path)
     if not os.path.isfile(source):
         raise InputError(f"{source}: no such file")
-    _check_arguments(tx_power_dbm, frequency_hz, max_gap_s, stream_timeout_s, vehicle, station)
+    _check_arguments(tx_power_dbm, frequency_hz, max_gap_s, stream_timeout_s, vehicle, station, station_heading_deg)
     station_geodetic = _check_origin(station_geodetic, "station_geodetic")
-    if station_heading_deg is not None and not (
-            isinstance(station_heading_deg, numbers.Real) and not isinstance(station_heading_deg, bool)
-            and np.isfinite(station_heading_deg)):
-        raise InputError(f"station_heading_deg: expected degrees, got {station_heading_deg!r}", param="station_heading_deg")
     origin_geodetic = _check_origin(origin_geodetic, "origin_geodetic")
     fmt = _detect(source)
     raw = _collect_tlog(source, system_id) if fmt == "tlog" else _collect_dataflash(source)

@@ -33,9 +33,10 @@ import numpy as np
 import pandas as pd
 
 from rplearn._atomic import atomic_open
-from rplearn.core.geometry import euler_from_quat_wxyz, quat_enu_flu_to_ned_frd, yaw_from_quat_wxyz
+from rplearn.core.geometry import enu_to_ned, euler_from_quat_wxyz, quat_enu_flu_to_ned_frd, yaw_from_quat_wxyz
 from rplearn.errors import InputError
 from rplearn.io._common import Logs
+from rplearn.io.geodetic import local_ned_to_geodetic
 from rplearn.io.mavlink import SIK_UNITS_PER_DB, SIK_ZERO_DBM
 
 #: The MAVLink system and component ids SiK radios send ``RADIO_STATUS`` with.
@@ -65,13 +66,6 @@ def dbm_to_sik_rssi(rssi_dbm: Any) -> tuple[np.ndarray, int]:
     raw = np.rint((dbm - SIK_ZERO_DBM) * SIK_UNITS_PER_DB)
     clipped = int(np.count_nonzero((raw < 1) | (raw > 254)))
     return np.clip(raw, 1, 254).astype(np.int64), clipped
-
-
-def _enu_to_geodetic(xyz_enu: np.ndarray, origin: tuple[float, float, float]) -> tuple[np.ndarray, ...]:
-    import pymap3d
-
-    lat, lon, alt = pymap3d.enu2geodetic(xyz_enu[:, 0], xyz_enu[:, 1], xyz_enu[:, 2], *origin)
-    return np.asarray(lat, np.float64), np.asarray(lon, np.float64), np.asarray(alt, np.float64)
 
 
 def _dialect() -> Any:
@@ -151,13 +145,13 @@ def _records(pose: pd.DataFrame, signal: pd.DataFrame, vehicle: str, station: st
     veh = pose[pose["node"] == vehicle].sort_values("t", kind="stable")
     t0 = float(min(veh["t"].iloc[0], signal["t"].min())) - BOOT_LEAD_S
     xyz = veh[["x", "y", "z"]].to_numpy(np.float64)
-    lat, lon, alt = _enu_to_geodetic(xyz, origin)
+    lat, lon, alt = local_ned_to_geodetic(enu_to_ned(xyz), origin)
     roll, pitch, yaw = euler_from_quat_wxyz(quat_enu_flu_to_ned_frd(veh[["qw", "qx", "qy", "qz"]].to_numpy(np.float64)))
     boot_ms = np.rint((veh["t"].to_numpy(np.float64) - t0) * 1e3).astype(np.int64)
     recv_us = start_unix_s * 1e6 + boot_ms * 1e3
     out: list[tuple[float, int, bytes]] = []
     sxyz, heading, spread = station_pose(pose, station)
-    slat, slon, salt = (float(v[0]) for v in _enu_to_geodetic(sxyz[None, :], origin))
+    slat, slon, salt = (float(v) for v in local_ned_to_geodetic(enu_to_ned(sxyz), origin))
     home = air.home_position_encode(int(round(slat * 1e7)), int(round(slon * 1e7)), int(round(salt * 1e3)),
                                     0.0, 0.0, 0.0, [1.0, 0.0, 0.0, 0.0], 0.0, 0.0, 0.0)
     out.append((start_unix_s * 1e6, 0, home.pack(air)))
