@@ -6,8 +6,8 @@ pairs (every node linked to every other: a dense normal matrix), and ``ring``, e
 linked to its four nearest neighbours on a ring (how a swarm calibrates: few links per node),
 prints the whole fit time (statistics and solve; the covariance, formed only when read, apart)
 as a ratio against the ``X^T X`` floor of the same columns, measured in the same run,
-alternately, best of 5 (the machines are noisy: the floor of one case varied by 1.5x between
-runs): numpy products of each link's feature block ``[F_tx F_rx]^T [F_tx F_rx]`` added into
+alternately with a pause before each (so that neither side's spinning BLAS threads slow the
+other), best of 5 (the machines are noisy: the floor of one case varied by 1.5x between runs): numpy products of each link's feature block ``[F_tx F_rx]^T [F_tx F_rx]`` added into
 the Gram, with the features computed beforehand (not timed), the least any normal-equations
 method must do. The target is 2x.
 
@@ -37,6 +37,9 @@ from rplearn.core.solver import solve
 
 ORDER = 10
 TARGET = 2.0
+#: Pause before each timed call: OpenBLAS threads spin for a while after a call, and those of
+#: one side (scipy's BLAS for the solve, numpy's for the floor) would otherwise slow the other.
+PAUSE_S = 0.3
 
 
 def problem(rng: np.random.Generator, n_nodes: int, n: int, topology: str = "all"):
@@ -104,12 +107,14 @@ def main() -> int:
         del f_tx, f_rx
         t_ours = t_floor = t_cov = float("inf")
         for _ in range(repeats):
+            time.sleep(PAUSE_S)
             t0 = time.perf_counter()
             sol = ours(basis, n_nodes, d, tx, rx, y)
             t_ours = min(t_ours, time.perf_counter() - t0)
             t0 = time.perf_counter()
             sol.covariance
             t_cov = min(t_cov, time.perf_counter() - t0)
+            time.sleep(PAUSE_S)
             t0 = time.perf_counter()
             floor_products(blocks, n_nodes, p)
             t_floor = min(t_floor, time.perf_counter() - t0)

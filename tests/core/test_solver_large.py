@@ -10,6 +10,15 @@ from rplearn.core import solver
 from rplearn.core.bases import make_basis
 from rplearn.core.geometry import Directions
 from rplearn.core.normal_equations import NormalEquations
+from rplearn.core import solver_large
+
+
+@pytest.fixture(autouse=True, params=["float64", "refined"])
+def factor_precision(request, monkeypatch):
+    """Every test runs with the float64 factor and with the single-precision factor and refined
+    solves (which large dense systems use, :data:`rplearn.core.solver_large.REFINED_COLUMNS`)."""
+    monkeypatch.setattr(solver_large, "REFINED_COLUMNS", 0 if request.param == "refined" else 10**9)
+    return request.param
 
 
 def _statistics(n_nodes, order, links=None, n=30000, seed=1):
@@ -118,7 +127,7 @@ def test_a_swarm_whose_drones_link_to_few_others_is_factorised_sparse_with_the_s
     small = solver.solve(normal)
     monkeypatch.setattr(solver, "LARGE_COLUMNS", 0)
     large = solver.solve(normal)
-    assert made == [kind]
+    assert made == [kind]  # sparse layouts are never refined
     np.testing.assert_allclose(large.coef, small.coef, atol=1e-10)
     np.testing.assert_allclose(large.covariance, small.covariance, atol=1e-10 * np.abs(small.covariance).max())
     assert large.report.rank == small.report.rank

@@ -58,9 +58,10 @@ class NodeBlocks:
         width = int(np.max(np.abs(pos[i] - pos[j])))
         return (order[:, None] * p + np.arange(p)[None, :]).ravel(), (width + 1) * p - 1
 
-    def sparse(self, a: FloatArray) -> Any:
+    def sparse(self, a: FloatArray, scale: FloatArray | None = None, diagonal: FloatArray | None = None) -> Any:
         """``a`` (the pattern blocks, then any shared columns in full) as a CSC matrix, read from
-        the blocks that can be non-zero only (not by scanning the whole dense matrix)."""
+        the blocks that can be non-zero only (not by scanning the whole dense matrix); with
+        ``scale`` and ``diagonal``, ``diag(scale) a diag(scale) + diag(diagonal)``."""
         from scipy.sparse import csc_matrix
 
         n, p = self.n_nodes, self.n_coef
@@ -82,9 +83,15 @@ class NodeBlocks:
             rows += [r, c[:pat].T]
             cols += [c, r[:pat].T]
             data += [a[:, pat:], a[pat:, :pat]]
-        return csc_matrix((np.concatenate([x.ravel() for x in data]),
-                           (np.concatenate([x.ravel() for x in rows]), np.concatenate([x.ravel() for x in cols]))),
-                          shape=a.shape)
+        rows = np.concatenate([x.ravel() for x in rows])
+        cols = np.concatenate([x.ravel() for x in cols])
+        values = np.concatenate([x.ravel() for x in data])
+        if scale is not None:
+            values *= scale[rows] * scale[cols]
+        if diagonal is not None:  # duplicates are summed
+            rows, cols = np.r_[rows, np.arange(a.shape[0])], np.r_[cols, np.arange(a.shape[0])]
+            values = np.r_[values, diagonal]
+        return csc_matrix((values, (rows, cols)), shape=a.shape)
 
 
 __all__ = ["NodeBlocks"]

@@ -158,7 +158,10 @@ class NormalEquations:
         if pair_code.min() == pair_code.max():  # one link direction: no grouping needed
             groups = [(int(pair_code[0]), slice(None))]
         else:  # sorted once by link, each link a contiguous slice (no mask per link)
-            order = np.argsort(pair_code, kind="stable")
+            # codes below 2^16 (up to 256 nodes) sort as uint16: numpy's stable sort is then a
+            # radix sort (4 ms for 500,000 samples against 30 ms as int64)
+            keys = pair_code.astype(np.uint16) if self.n_nodes**2 <= 2**16 else pair_code
+            order = np.argsort(keys, kind="stable")
             sorted_code = pair_code[order]
             az_tx, el_tx, az_rx, el_rx, y, e = (a[order] for a in (az_tx, el_tx, az_rx, el_rx, y, e))
             starts = np.flatnonzero(np.r_[True, sorted_code[1:] != sorted_code[:-1]])
@@ -232,13 +235,7 @@ class NormalEquations:
         p = self.basis.n_coef
         gap = 1 + self._n_extra
         y_row, one_row, env_row = p, p + 1, p + 2
-        cross = products[:, :p, gap:]  # F_tx^T F_rx
-        # into the upper block triangle, in two passes (a block's links are distinct, but a -> b
-        # and b -> a share a block): fancy-indexed adds on the (node, coef, node, coef) view
-        blocks = self.gram.reshape(self.n_nodes, p, self.n_nodes, p)  # (no shared columns while adding)
-        up = tx < rx
-        blocks[tx[up], :, rx[up], :] += cross[up]
-        blocks[rx[~up], :, tx[~up], :] += cross[~up].transpose(0, 2, 1)
+        cross = products[:, :p, gap:]  # F_tx^T F_rx, into the upper block triangle (loop below)
         # per node: sums over its links as a product with the links' node indicator
         nodes = np.arange(self.n_nodes)
         at_tx = (tx[None, :] == nodes[:, None]).astype(np.float64)  # (nodes, links)
@@ -257,7 +254,13 @@ class NormalEquations:
             self.env_cross += (at_tx @ tx_cols[:, :, 2] + at_rx @ rx_rows[:, 2, :]).ravel()
             self.env_y += float(products[:, y_row, 2].sum())
             self.env_sq += float(products[:, env_row, 2].sum())
+        gram = self.gram  # (no shared columns while adding)
         for j, (t, r) in enumerate(zip(tx.tolist(), rx.tolist())):
+            # a slice add per link: 16 us against 22 us for fancy-indexed adds of all links at once
+            if t < r:
+                gram[t * p : (t + 1) * p, r * p : (r + 1) * p] += cross[j]
+            else:
+                gram[r * p : (r + 1) * p, t * p : (t + 1) * p] += cross[j].T
             key = (min(t, r), max(t, r))
             self.link_counts[key] = self.link_counts.get(key, 0) + int(round(sums[j, 2 * p + _COUNT]))
             prev = self.directed.get((t, r))

@@ -17,9 +17,17 @@ from numpy.typing import NDArray
 from rplearn.core.normal_equations import NormalEquations
 from rplearn.core.solution import FitReport, GaugeNote, JointSolution, fit_warnings
 from rplearn.core.node_blocks import NodeBlocks
-from rplearn.core.spectrum import ConstrainedFactor, null_directions, spectrum_estimate, spectrum_from_factor
+from rplearn.core.blas import numpy_blas_one_thread, symmetric_product
+from rplearn.core.spectrum import (
+    ConstrainedFactor, null_directions, spectrum_estimate, spectrum_from_factor,
+)
 
 FloatArray = NDArray[np.float64]
+
+#: From this many columns a dense system is factorised in single precision with refined solves
+#: (:meth:`~rplearn.core.spectrum.ConstrainedFactor.refined`): there the factorisation's
+#: ``n^3 / 3`` dominates; below it the refinement's matrix products would not pay for themselves.
+REFINED_COLUMNS = 2000
 
 
 def solve_large(
@@ -31,7 +39,21 @@ def solve_large(
     regularised system (:class:`~rplearn.core.spectrum.ConstrainedFactor`) gives the
     coefficients, the spectrum estimate (reusing the factor when the only regularisation is
     the ridge) and, on first use only, the covariance. None when the regularised matrix is not
-    positive definite (the KKT path then decides)."""
+    positive definite (the KKT path then decides).
+
+    The heavy work runs in scipy's BLAS, with numpy's (a second library in the wheels) held to
+    one thread meanwhile (:func:`~rplearn.core.blas.numpy_blas_one_thread`)."""
+    import scipy.linalg  # noqa: F401  (loaded before the limit looks for scipy's BLAS)
+
+    with numpy_blas_one_thread():
+        return _solve_large(normal, n_nodes, components, cmat, cval, rhs, ridge, penalty, shrunk, notes)
+
+
+def _solve_large(
+    normal: NormalEquations, n_nodes: int, components: list[tuple[list[int], Any]], cmat: FloatArray,
+    cval: FloatArray, rhs: FloatArray, ridge: float, penalty: FloatArray | None, shrunk: bool,
+    notes: list[GaugeNote],
+) -> JointSolution | None:
     pcols, pat = normal.n_columns, normal.n_pattern_columns
     added = np.zeros(pcols)
     added[:pat] = ridge  # the shared columns are not shrunk
@@ -39,19 +61,14 @@ def solve_large(
         added += penalty
     # the scaled regularised matrix in one pass over the Gram (a copy, scaled on the way)
     scale = 1.0 / np.sqrt(np.maximum(np.diag(normal.gram) + added, 1e-300))
-    a = np.multiply(normal.gram, scale[:, None])
-    a *= scale[None, :]
-    a[np.arange(pcols), np.arange(pcols)] += added * scale**2
     blocks = NodeBlocks.of(n_nodes, normal.basis.n_coef, normal.link_counts)
-    factor = ConstrainedFactor.of(a, cmat, blocks, scale=scale)
-    del a
+    factor = ConstrainedFactor.of_gram(normal.gram, added, scale, cmat, blocks, refined=pcols >= REFINED_COLUMNS)
     if factor is None:
         return None
     gram_u, unit = unit_shared_scaling(normal)
     null = null_directions(normal.basis, n_nodes, components, pcols)
     if penalty is None and ridge > 0:
-        operator = blocks.sparse(gram_u) if factor.kind != "dense" else None  # few links: sparse products
-        sv, rank, cond = spectrum_from_factor(gram_u, null, factor, 1.0 / unit, operator=operator)
+        sv, rank, cond = spectrum_from_factor(gram_u, null, factor, 1.0 / unit)
     else:
         sv, rank, cond = spectrum_estimate(gram_u, null)
     del gram_u
@@ -60,7 +77,7 @@ def solve_large(
     # the ridge decides them, as on the KKT path, and the report warns (fit_warnings)
     coef = factor.solve(rhs) + factor.particular(cval)
     unexplained = unexplained_fraction(normal, factor.diagonal_at(np.arange(pat, pcols)))
-    sse = max(normal.yty - 2.0 * coef @ normal.rhs + coef @ normal.gram @ coef, 0.0)
+    sse = max(normal.yty - 2.0 * coef @ normal.rhs + coef @ symmetric_product(normal.gram)(coef), 0.0)
     resid_var = sse / max(normal.n_samples - min(rank, pcols), 1)
 
     def covariance() -> FloatArray:
@@ -124,4 +141,4 @@ def unexplained_fraction(normal: NormalEquations, shared_diag: FloatArray) -> Fl
     return out
 
 
-__all__ = ["solve_large", "unexplained_fraction", "unit_shared_scaling"]
+__all__ = ["REFINED_COLUMNS", "solve_large", "unexplained_fraction", "unit_shared_scaling"]
