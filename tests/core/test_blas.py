@@ -110,3 +110,40 @@ def test_a_log_distance_fit_loads_scipy_before_its_clock_starts():
             "print('ok')")
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, check=False)
     assert proc.returncode == 0 and proc.stdout.strip() == "ok", proc.stdout + proc.stderr
+
+
+def test_overlapping_blas_limits_from_two_threads_leave_the_threads_as_they_were():
+    """A limit is process-wide and restores what it found: one thread's limit (the statistics'
+    workers) and another's (a large solve's hold on numpy's BLAS) ending in either order must
+    not leave numpy on one thread, or lift a limit whose work still runs (found by review)."""
+    import threading
+
+    from rplearn.core.blas import numpy_blas_one_thread, one_blas_thread
+
+    before = blas_threads()
+    assert max(before) > 1, "this machine's BLAS runs several threads"
+    for first, second in ((one_blas_thread, numpy_blas_one_thread), (numpy_blas_one_thread, one_blas_thread)):
+        a_in, b_in, a_out = threading.Event(), threading.Event(), threading.Event()
+        inside_a: list[list[int]] = []
+
+        def a() -> None:
+            with first():
+                a_in.set()
+                b_in.wait(5)
+                inside_a.append(blas_threads())  # b's limit has ended by now: a's must still hold
+            a_out.set()
+
+        def b() -> None:
+            a_in.wait(5)
+            with second():
+                pass
+            b_in.set()
+            a_out.wait(5)
+
+        threads = [threading.Thread(target=a), threading.Thread(target=b)]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join(10)
+        assert min(inside_a[0]) == 1, (first.__name__, inside_a)
+        assert blas_threads() == before, (first.__name__, second.__name__)

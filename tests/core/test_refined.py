@@ -94,3 +94,105 @@ def test_the_inverse_of_a_refined_factor_is_float64s():
     factor = spectrum.ConstrainedFactor.refined(g, added, scale, cmat)
     dense = spectrum.ConstrainedFactor.of(scaled_double(g, scale, added), cmat, scale=scale)
     np.testing.assert_allclose(factor.inverse(), dense.inverse(), rtol=1e-9, atol=1e-12 * np.abs(dense.inverse()).max())
+
+
+def _swarm_statistics(n_nodes=6, order=5, n=20000, seed=0):
+    from rplearn.core.bases import make_basis
+    from rplearn.core.geometry import Directions
+    from rplearn.core.normal_equations import NormalEquations
+
+    rng = np.random.default_rng(seed)
+    az, el = rng.uniform(-np.pi, np.pi, (2, n)), rng.uniform(-1.2, 1.2, (2, n))
+    tx = rng.integers(0, n_nodes, n)
+    rx = (tx + rng.integers(1, n_nodes, n)) % n_nodes
+    y = rng.normal(size=n) + np.sin(el[0])
+    return NormalEquations(make_basis("sh", order), n_nodes), (Directions(az[0], el[0], az[1], el[1]), tx, rx, y)
+
+
+@pytest.fixture
+def refined_everywhere(monkeypatch):
+    from rplearn.core import solver, solver_large
+
+    monkeypatch.setattr(solver, "LARGE_COLUMNS", 0)
+    monkeypatch.setattr(solver_large, "REFINED_COLUMNS", 0)
+
+
+def test_a_solution_keeps_its_gram_when_samples_are_added_later(refined_everywhere):
+    """The refined factor reads the Gram for its lazy covariance: adding samples to the normal
+    equations afterwards must not change an earlier solution's covariance (found by review:
+    it was off by 54%)."""
+    import copy
+
+    from rplearn.core import solver
+
+    normal, (d, tx, rx, y) = _swarm_statistics()
+    normal.add(d, tx, rx, y)
+    before = copy.deepcopy(normal)
+    first = solver.solve(normal)
+    assert not normal.gram.flags.writeable  # kept by the solution
+    more_normal, (d2, tx2, rx2, y2) = _swarm_statistics(seed=1)
+    normal.add(d2, tx2, rx2, y2)  # works on a copy
+    assert normal.gram.flags.writeable and normal.n_samples == 2 * before.n_samples
+    expected = solver.solve(before).covariance
+    np.testing.assert_allclose(first.covariance, expected, rtol=1e-9, atol=1e-12 * np.abs(expected).max())
+    both = copy.deepcopy(before)
+    both.add(d2, tx2, rx2, y2)
+    np.testing.assert_array_equal(normal.gram, both.gram)
+
+
+def test_float64_trouble_after_single_precision_leaves_the_decision_to_the_kkt_path(refined_everywhere, monkeypatch):
+    """When the refined solves give up and the float64 factor fails too, the large path gives
+    way to the KKT path (as a failed float64 factor always did) instead of raising."""
+    from rplearn.core import solver
+
+    normal, (d, tx, rx, y) = _swarm_statistics()
+    normal.add(d, tx, rx, y)
+    monkeypatch.setattr(solver, "LARGE_COLUMNS", 10**9)
+    small = solver.solve(normal)
+    monkeypatch.setattr(solver, "LARGE_COLUMNS", 0)
+    monkeypatch.setattr(refined, "MAX_STEPS", 0)
+
+    def fail(self):
+        raise spectrum.NotPositiveDefinite("forced")
+
+    monkeypatch.setattr(spectrum.ConstrainedFactor, "_to_double", fail)
+    large = solver.solve(normal)
+    assert large.covariance_fn is None  # the KKT path's eager covariance
+    np.testing.assert_allclose(large.coef, small.coef, atol=1e-12)
+
+
+def test_a_matrix_without_a_ridge_is_never_refined():
+    """Only positive semi-definite (no ridge): single precision might factorise it where float64
+    refuses; the float64 factor decides (found by review: a ValueError escaped)."""
+    rng = np.random.default_rng(4)
+    b = rng.standard_normal((40, 39))
+    g = b @ b.T  # exactly singular
+    scale = 1.0 / np.sqrt(np.diag(g))
+    cmat = np.zeros((1, 40))
+    cmat[0, :20] = 1.0
+    for added in (np.zeros(40), np.r_[np.ones(39), 0.0]):
+        with_refined = spectrum.ConstrainedFactor.of_gram(g, added, scale, cmat, None, refined=True)
+        without = spectrum.ConstrainedFactor.of_gram(g, added, scale, cmat, None, refined=False)
+        assert (with_refined is None) == (without is None)
+        assert with_refined is None or with_refined.kind == "dense"
+
+
+@pytest.mark.parametrize("low, zeros", [(1e-4, 0), (1e2, 3)])
+def test_the_spectrum_through_a_regularised_factor_is_not_masked_by_the_ridge(low, zeros):
+    """Eigenvalues far below the ridge look alike through ``(G + ridge)^-1``: the estimate of an
+    exact condition number of 1e5 was 1.1e4. Now within 3% (and exact zeros found), with the
+    float64 and the refined factor alike."""
+    n = 400
+    rng = np.random.default_rng(0)
+    q, _ = np.linalg.qr(rng.standard_normal((n, n)))
+    lam = np.r_[np.geomspace(1e6, low, n - zeros), np.zeros(zeros)]
+    g = (q * lam) @ q.T
+    g = 0.5 * (g + g.T)
+    added = np.ones(n)
+    scale = 1.0 / np.sqrt(np.diag(g) + added)
+    none, null = np.zeros((0, n)), np.zeros((n, 0))
+    for factor in (spectrum.ConstrainedFactor.of(scaled_double(g, scale, added), none, scale=scale),
+                   spectrum.ConstrainedFactor.refined(g, added, scale, none)):
+        sv, rank, cond = spectrum.spectrum_from_factor(g, null, factor, np.ones(n), ridge=1.0)
+        assert rank == n - zeros
+        assert cond == pytest.approx(np.sqrt(1e6 / low), rel=0.03) if not zeros else cond == float("inf")

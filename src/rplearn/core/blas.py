@@ -11,6 +11,7 @@ every thread. The controller is built once (it scans the loaded libraries).
 from __future__ import annotations
 
 import sys
+import threading
 from contextlib import contextmanager, nullcontext
 from functools import lru_cache
 from typing import Any, Iterator
@@ -45,6 +46,27 @@ def _controller_of(loaded: tuple[str, ...]) -> Any:
     return ThreadpoolController()
 
 
+#: Held by the thread whose BLAS limit is in force. A limit is process-wide and, when it ends,
+#: restores the counts it found: two threads whose limits overlap could leave numpy on one thread
+#: for good, or lift the other's limit while its work still runs. So one thread at a time
+#: limits; a limit asked for meanwhile by another thread is skipped (its work runs with the
+#: threads as they are), as :func:`rplearn.core.link_statistics._in_order` does with its pool.
+_LIMIT_LOCK = threading.RLock()
+
+
+@contextmanager
+def _exclusive_limit(selection: Any, limits: int) -> Iterator[None]:
+    """``selection.limit(limits)`` inside the block, unless another thread holds a limit."""
+    if not _LIMIT_LOCK.acquire(blocking=False):
+        yield
+        return
+    try:
+        with selection.limit(limits=limits):
+            yield
+    finally:
+        _LIMIT_LOCK.release()
+
+
 @contextmanager
 def blas_threads_for(n_samples: int, n_columns: int) -> Iterator[None]:
     """One BLAS thread inside the block when the fit is small (:func:`is_small_fit`)."""
@@ -52,14 +74,14 @@ def blas_threads_for(n_samples: int, n_columns: int) -> Iterator[None]:
         with nullcontext():
             yield
         return
-    with _controller().limit(limits=1, user_api="blas"):
+    with _exclusive_limit(_controller().select(user_api="blas"), 1):
         yield
 
 
 @contextmanager
 def one_blas_thread() -> Iterator[None]:
     """One BLAS thread inside the block (for work that runs its own threads, one per core)."""
-    with _controller().limit(limits=1, user_api="blas"):
+    with _exclusive_limit(_controller().select(user_api="blas"), 1):
         yield
 
 
@@ -103,7 +125,7 @@ def numpy_blas_one_thread() -> Iterator[None]:
     if not numpy_libs or "scipy.linalg" not in sys.modules:
         yield
         return
-    with _controller().select(filepath=sorted(numpy_libs)).limit(limits=1):
+    with _exclusive_limit(_controller().select(filepath=sorted(numpy_libs)), 1):
         yield
 
 

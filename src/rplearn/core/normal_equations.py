@@ -154,6 +154,7 @@ class NormalEquations:
             raise InputError(f"node index out of range 0..{self.n_nodes - 1}")
         if np.any(tx == rx):
             raise InputError("a sample has the same node as transmitter and receiver")
+        self._own_gram()
         pair_code = tx.astype(np.int64) * self.n_nodes + rx
         if pair_code.min() == pair_code.max():  # one link direction: no grouping needed
             groups = [(int(pair_code[0]), slice(None))]
@@ -303,12 +304,19 @@ class NormalEquations:
         prev = self.directed.get((t, r))
         self.directed[(t, r)] = sums if prev is None else prev + sums
 
+    def _own_gram(self) -> None:
+        """Copy the Gram before changing it when it is read-only: a large solve keeps it (its
+        solves and lazy covariance read it, :mod:`rplearn.core.refined`) and marks it so."""
+        if not self.gram.flags.writeable:
+            self.gram = self.gram.copy()
+
     def merge(self, other: NormalEquations) -> NormalEquations:
         """Add another accumulator's statistics (same basis, node count and columns) into this one."""
         if other.basis != self.basis or other.n_nodes != self.n_nodes or other.environment != self.environment:
             raise InputError("cannot merge normal equations of different bases, node counts or environment columns")
         if self.shared or other.shared:
             raise InputError("merge statistics before appending shared columns (with_shared)")
+        self._own_gram()
         self.gram += other.gram
         self.rhs += other.rhs
         self.yty += other.yty

@@ -19,7 +19,7 @@ from rplearn.core.solution import FitReport, GaugeNote, JointSolution, fit_warni
 from rplearn.core.node_blocks import NodeBlocks
 from rplearn.core.blas import numpy_blas_one_thread, symmetric_product
 from rplearn.core.spectrum import (
-    ConstrainedFactor, null_directions, spectrum_estimate, spectrum_from_factor,
+    ConstrainedFactor, NotPositiveDefinite, null_directions, spectrum_estimate, spectrum_from_factor,
 )
 
 FloatArray = NDArray[np.float64]
@@ -62,13 +62,28 @@ def _solve_large(
     # the scaled regularised matrix in one pass over the Gram (a copy, scaled on the way)
     scale = 1.0 / np.sqrt(np.maximum(np.diag(normal.gram) + added, 1e-300))
     blocks = NodeBlocks.of(n_nodes, normal.basis.n_coef, normal.link_counts)
+    try:
+        return _solve_with(normal, n_nodes, components, cmat, cval, rhs, ridge, penalty, shrunk, notes, added, scale,
+                           blocks)
+    except NotPositiveDefinite:  # single precision solved what float64 cannot factorise: the KKT path decides
+        return None
+
+
+def _solve_with(
+    normal: NormalEquations, n_nodes: int, components: list[tuple[list[int], Any]], cmat: FloatArray,
+    cval: FloatArray, rhs: FloatArray, ridge: float, penalty: FloatArray | None, shrunk: bool,
+    notes: list[GaugeNote], added: FloatArray, scale: FloatArray, blocks: NodeBlocks,
+) -> JointSolution | None:
+    pcols, pat = normal.n_columns, normal.n_pattern_columns
     factor = ConstrainedFactor.of_gram(normal.gram, added, scale, cmat, blocks, refined=pcols >= REFINED_COLUMNS)
     if factor is None:
         return None
+    if factor.kind == "refined":  # its solves and the lazy covariance read the Gram: the next add copies it
+        normal.gram.flags.writeable = False
     gram_u, unit = unit_shared_scaling(normal)
     null = null_directions(normal.basis, n_nodes, components, pcols)
     if penalty is None and ridge > 0:
-        sv, rank, cond = spectrum_from_factor(gram_u, null, factor, 1.0 / unit)
+        sv, rank, cond = spectrum_from_factor(gram_u, null, factor, 1.0 / unit, ridge=ridge)
     else:
         sv, rank, cond = spectrum_estimate(gram_u, null)
     del gram_u

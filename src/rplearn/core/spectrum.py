@@ -11,6 +11,7 @@ the KKT matrix, which grow as the cube of the columns with large constants (3,00
 
 from __future__ import annotations
 
+import threading
 from typing import Any
 
 import numpy as np
@@ -113,9 +114,19 @@ def _rank_deficient(gram: FloatArray, lam_max: float, tol: float) -> tuple[Float
     return np.sqrt(np.array([lam_max, 0.0])), rank, float("inf")
 
 
+#: The spectrum read through the regularised factor is trusted down to this many times the
+#: ridge (there ``1 / (lam + ridge)`` differs from ``1 / lam`` by 1%); below it a factor of the
+#: unregularised matrix decides (:func:`spectrum_from_factor`).
+RIDGE_RESOLVES = 100.0
+#: Smallest eigenvalue ratio ``lam_min / lam_max`` that the spectrum trusts from a
+#: single-precision inverse (a hundred times float32's resolution); below it the smallest
+#: eigenvalue is estimated again with refined solves (:func:`spectrum_from_factor`).
+SINGLE_RESOLVES = 100 * float(np.finfo(np.float32).eps)
+
+
 def spectrum_from_factor(
     gram: FloatArray, null: FloatArray, factor: ConstrainedFactor, scale: FloatArray, iterations: int = 4,
-    block: int = 8,
+    block: int = 8, ridge: float = 0.0,
 ) -> tuple[FloatArray, int, float]:
     """:func:`spectrum_estimate` reusing the Cholesky factor of the regularised system
     ``A = S^-1 G S^-1 + R`` (``G`` = ``gram``, the columns scaled by ``S``; ``R`` a ridge equal
@@ -126,6 +137,11 @@ def spectrum_from_factor(
     shifts the eigenvectors, and :func:`spectrum_estimate` is used instead. The products with
     ``gram`` are dense BLAS ones also when the factor is banded or sparse: at 50 drones on a
     ring they took 43 ms where building a sparse copy (53 ms) and its products (40 ms) took 93.
+
+    Where the smallest eigenvalue found is within :data:`RIDGE_RESOLVES` times the ``ridge``,
+    the ridge masks the small end of the spectrum (``1 / (lam + ridge)`` no longer tells small
+    eigenvalues apart: on a test matrix whose exact condition number was 1e5 the estimate was
+    1.1e4), and :func:`spectrum_estimate` estimates it again through a factor of ``G`` itself.
     """
     n = gram.shape[0]
     rng = np.random.default_rng(0)
@@ -142,7 +158,18 @@ def spectrum_from_factor(
     def inverse(x: FloatArray) -> FloatArray:
         return factor.approximate_a(x * scale[:, None]) * scale[:, None]
 
-    lam_min = float(_krylov_ritz(inverse, rng.standard_normal((n, b)), iterations, product, project)[0])
+    def refined_inverse(x: FloatArray) -> FloatArray:
+        return factor.solve_a(x * scale[:, None]) * scale[:, None]
+
+    start = rng.standard_normal((n, b))
+    lam_min = float(_krylov_ritz(inverse, start, iterations, product, project)[0])
+    if lam_min > tol and not lam_min > RIDGE_RESOLVES * ridge:
+        return spectrum_estimate(gram, null, lam_max=lam_max)
+    if factor.kind == "refined" and not lam_min > lam_max * SINGLE_RESOLVES:
+        # beyond what a single-precision inverse resolves (its Krylov vectors carry errors of
+        # eps32 times the condition number, which can lift a free direction's Ritz value above
+        # the rank tolerance): again with refined solves
+        lam_min = float(_krylov_ritz(refined_inverse, start, iterations, product, project)[0])
     if not lam_min > tol:
         return _rank_deficient(gram, lam_max, tol)
     sv = np.sqrt(np.array([lam_max, lam_min]))
@@ -150,7 +177,7 @@ def spectrum_from_factor(
 
 
 def spectrum_estimate(
-    gram: FloatArray, null: FloatArray, iterations: int = 8, block: int = 8
+    gram: FloatArray, null: FloatArray, iterations: int = 8, block: int = 8, lam_max: float | None = None
 ) -> tuple[FloatArray, int, float]:
     """:func:`spectrum_report` for large systems, estimated: ``(sv, rank, cond)`` with ``sv``
     the largest and smallest non-zero singular values of the design matrix.
@@ -171,14 +198,18 @@ def spectrum_estimate(
     b = min(block, n)
     rng = np.random.default_rng(0)
     product = symmetric_product(gram)
-    lam_max = _largest_eigenvalue(product, n, iterations, block, rng)
+    if lam_max is None:  # (given when already estimated)
+        lam_max = _largest_eigenvalue(product, n, iterations, block, rng)
     if not lam_max > 0:
         return np.zeros(1), 0, float("inf")
     tol = lam_max * n * np.finfo(np.float64).eps  # the eigenvalue form of spectrum_report's tolerance
+    from scipy.linalg import lapack
+
     lifted = gram + lam_max * (null @ null.T) if null.size else gram
-    try:
-        lower = np.linalg.cholesky(lifted)
-    except np.linalg.LinAlgError:
+    # scipy's LAPACK, as the rest of a large solve (numpy's BLAS is held to one thread there);
+    # a copy unless ``lifted`` is already one
+    lower, info = lapack.dpotrf(lifted.T, lower=1, clean=0, overwrite_a=int(lifted is not gram))
+    if info != 0:
         lower = None
     lam_min = 0.0
     if lower is not None:
@@ -223,6 +254,11 @@ def band_of(source: FloatArray, s: FloatArray, diagonal: FloatArray, order: NDAr
     return band_t.T
 
 
+class NotPositiveDefinite(ValueError):
+    """The regularised matrix turned out not positive definite in float64 (after its
+    single-precision factor's solves did not converge)."""
+
+
 class ConstrainedFactor:
     """The constrained inverse ``M = A^-1 - A^-1 C^T (C A^-1 C^T)^-1 C A^-1`` of a symmetric
     positive definite ``A`` (the regularised normal matrix) and constraints ``C`` (the gauge),
@@ -236,6 +272,7 @@ class ConstrainedFactor:
         self.factor, self.scale, self.cmat, self.kind = factor, scale, cmat, kind
         self.sparse_a: Any = None  # then also the scaled matrix itself (for the dense inverse)
         self.band: tuple[FloatArray, NDArray[np.intp]] | None = None  # "banded": the band and the column order
+        self._lock = threading.Lock()  # a lazy covariance may be read from several threads
         self.y = self.solve_a(cmat.T) if cmat.shape[0] else np.zeros((scale.size, 0))  # A^-1 C^T
         self.s = cmat @ self.y if cmat.shape[0] else np.zeros((0, 0))  # C A^-1 C^T
 
@@ -284,12 +321,14 @@ class ConstrainedFactor:
         """:meth:`of` for ``A = S (G + diag(added)) S`` (``S = diag(scale)``), reading from the
         Gram ``G`` only what the layout needs: a band or the linked blocks, scaled on the way
         (no scaled copy of the whole matrix); a dense matrix in single precision with refined
-        solves when ``refined`` (:meth:`refined`; float64 when that fails)."""
+        solves when ``refined`` and every column is regularised (``added > 0``: a matrix only
+        positive semi-definite could pass in single precision and be solved where float64 would
+        refuse it; :meth:`refined`, float64 when that fails)."""
         n = gram.shape[0]
         layout = cls.layout(blocks, n)
         if layout != "dense":
             return cls._structured(gram, scale, added * scale**2, cmat, blocks, layout, scale)
-        if refined:
+        if refined and np.all(added > 0):  # positive definite in exact arithmetic: else float64 decides
             out = cls.refined(gram, added, scale, cmat)
             if out is not None:
                 return out
@@ -354,7 +393,7 @@ class ConstrainedFactor:
         a = scaled_double(refined.gram, self.scale, refined.added)
         factor, info = lapack.dpotrf(a.T, lower=1, clean=0, overwrite_a=1)
         if info != 0:
-            raise ValueError("the regularised matrix is not positive definite")
+            raise NotPositiveDefinite("the regularised matrix is not positive definite")
         self.factor, self.kind = factor, "dense"
         if self.cmat.shape[0]:  # the constraint's products again, consistent with the new factor
             self.y = self.solve_a(self.cmat.T)
@@ -444,8 +483,9 @@ class ConstrainedFactor:
 
     def inverse(self) -> FloatArray:
         """``M`` itself (``n^3`` work: only when the whole covariance is asked for)."""
-        if self.kind == "refined":
-            self._to_double()
+        with self._lock:  # one conversion, and no reader between its two assignments
+            if self.kind == "refined":
+                self._to_double()
         if self.kind != "dense":  # the inverse is dense: factorise densely now (n sparse solves are slow)
             dense = ConstrainedFactor.of(self.scaled_dense() / np.outer(self.scale, self.scale), self.cmat)
             if dense is None:
@@ -465,4 +505,4 @@ class ConstrainedFactor:
         return 0.5 * (inv + inv.T)
 
 
-__all__ = ["BAND_FRACTION", "SPARSE_BLOCK_FRACTION", "ConstrainedFactor", "null_directions", "spectrum_estimate", "spectrum_from_factor", "spectrum_report"]
+__all__ = ["BAND_FRACTION", "RIDGE_RESOLVES", "SINGLE_RESOLVES", "SPARSE_BLOCK_FRACTION", "ConstrainedFactor", "NotPositiveDefinite", "null_directions", "spectrum_estimate", "spectrum_from_factor", "spectrum_report"]
