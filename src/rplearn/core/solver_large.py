@@ -83,7 +83,9 @@ def _solve_with(
     gram_u, unit = unit_shared_scaling(normal)
     null = null_directions(normal.basis, n_nodes, components, pcols)
     if penalty is None and ridge > 0:
-        sv, rank, cond = spectrum_from_factor(gram_u, null, factor, 1.0 / unit, ridge=ridge)
+        few_links = factor.kind in ("banded", "sparse")  # products of the linked blocks only
+        sv, rank, cond = spectrum_from_factor(gram_u, null, factor, 1.0 / unit, ridge=ridge,
+                                              product=blocks.product(gram_u) if few_links else None)
     else:
         sv, rank, cond = spectrum_estimate(gram_u, null)
     del gram_u
