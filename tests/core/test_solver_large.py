@@ -154,3 +154,22 @@ def test_free_directions_beyond_the_gauge_are_decided_by_the_ridge_with_a_warnin
     assert large.report.rank == small.report.rank < normal.n_columns - large.report.expected_null_dim
     assert any("not identified" in w for w in large.report.warnings)
     np.testing.assert_allclose(large.coef, small.coef, atol=1e-8)
+
+
+@pytest.mark.parametrize("n, rows", [(7, 3), (300, 256), (5, 256)])
+def test_symmetric_from_lower_mirrors_the_lower_triangle(n, rows):
+    from rplearn.core.spectrum import symmetric_from_lower
+
+    x = np.random.default_rng(n).standard_normal((n, n))
+    low = np.tril(x)
+    expected = low + np.tril(x, -1).T
+    for layout in ("C", "F"):
+        got = symmetric_from_lower(np.array(x, order=layout), rows=rows)
+        np.testing.assert_array_equal(got, expected)
+
+
+def test_the_large_covariance_is_exactly_symmetric(monkeypatch):
+    normal = _statistics(3, 6)
+    monkeypatch.setattr(solver, "LARGE_COLUMNS", 0)
+    cov = solver.solve(normal).covariance
+    assert np.array_equal(cov, cov.T) and np.all(np.diag(cov) > 0)

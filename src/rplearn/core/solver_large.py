@@ -20,6 +20,7 @@ from rplearn.core.node_blocks import NodeBlocks
 from rplearn.core.blas import numpy_blas_one_thread, symmetric_product
 from rplearn.core.spectrum import (
     ConstrainedFactor, NotPositiveDefinite, null_directions, spectrum_estimate, spectrum_from_factor,
+    symmetric_from_lower,
 )
 
 FloatArray = NDArray[np.float64]
@@ -98,19 +99,21 @@ def _solve_with(
     resid_var = sse / max(normal.n_samples - min(rank, pcols), 1)
 
     def covariance() -> FloatArray:
-        m = factor.inverse()
+        m = factor.inverse()  # exactly symmetric
         if penalty is not None or not shrunk:
-            cov = resid_var * m  # the posterior's (see solve), or no regularisation at all
-        else:
-            # M G M = M - M D M for the constrained inverse M of G + D (D the ridge on the
-            # pattern columns): one symmetric rank-k product instead of two general ones
-            from scipy.linalg import blas
+            m *= resid_var  # the posterior's (see solve), or no regularisation at all
+            return m
+        # M G M = M - M D M for the constrained inverse M of G + D (D the ridge on the pattern
+        # columns): one symmetric rank-k product instead of two general ones, its columns read
+        # in Fortran order without a copy (M is symmetric: M^T's columns are M's)
+        from scipy.linalg import blas
 
-            low = blas.dsyrk(1.0, np.asfortranarray(m[:, :pat]), lower=1)
-            i, j = np.triu_indices(pcols, 1)
-            low[i, j] = low[j, i]
-            cov = resid_var * (m - ridge * low)
-        return 0.5 * (cov + cov.T)
+        columns = m[:, :pat] if m.flags.f_contiguous else m.T[:, :pat]
+        cov = blas.dsyrk(-ridge, columns, lower=1)  # its lower triangle
+        cov += m
+        cov *= resid_var
+        del m
+        return symmetric_from_lower(cov)
 
     report = FitReport(
         n_samples=normal.n_samples, n_columns=pcols, rank=rank, null_dim=pcols - rank, condition_number=cond,
