@@ -1,7 +1,7 @@
 """Benchmark of the k-NN model file (issue 13, item 5): training samples in a binary sidecar.
 
 Saves and loads an NN-400 model of 150,000 training samples (a campaign's worth) both ways, alternately, best of
-several: the model file with its sidecar (``model.json`` + ``model.json.npz``, what ``save``
+several: the model file with its sidecar (``model.json`` + ``model.json.<sha>.npz``, what ``save``
 writes) and the same payload as JSON text (what the files held before). Prints the times,
 the sizes and the ratios. Target: loading well under a second.
 
@@ -18,7 +18,7 @@ import numpy as np
 
 from rplearn.core.geometry import Directions
 from rplearn.data.tables import LinkSamples
-from rplearn.io.modelfile import sidecar_path, write_model_file
+from rplearn.io.modelfile import named_sidecar, write_model_file
 from rplearn.models.baselines import KNNModel
 from rplearn.models.load import load_model
 
@@ -47,7 +47,7 @@ def main() -> int:
             t_save_old = min(t_save_old, best(lambda: write_model_file(old, "knn", model.to_dict()), 1))
             t_load_new = min(t_load_new, best(lambda: load_model(new), 1))
             t_load_old = min(t_load_old, best(lambda: load_model(old), 1))
-        size_new = os.path.getsize(new) + os.path.getsize(sidecar_path(new))
+        size_new = os.path.getsize(new) + os.path.getsize(named_sidecar(new))
         size_old = os.path.getsize(old)
     print(f"NN-400, {N:,} training samples")
     print(f"  save: sidecar {t_save_new:.3f} s, JSON text {t_save_old:.3f} s ({t_save_old / t_save_new:.0f}x)")

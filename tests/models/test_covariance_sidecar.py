@@ -11,7 +11,8 @@ import pytest
 
 from rplearn.core.sh import SphericalHarmonics
 from rplearn.errors import ModelFileError
-from rplearn.io.modelfile import sidecar_path
+from rplearn.io import modelfile
+from rplearn.io.modelfile import named_sidecar
 from rplearn.models import patterns
 from rplearn.models.load import load_model
 from rplearn.models.patterns import PatternSet
@@ -31,7 +32,9 @@ def test_a_swarms_covariance_goes_beside_the_model_file(tmp_path):
     path = tmp_path / "swarm.json"
     model.save(path)
     doc = json.loads(path.read_text())
-    assert "covariance" not in doc["model"] and doc["model"]["sidecar"]["file"] == "swarm.json.npz"
+    entry = doc["model"]["sidecar"]
+    assert "covariance" not in doc["model"] and entry["file"] == f"swarm.json.{entry['sha256'][:12]}.npz"
+    assert doc["schema_version"] == 2  # an rplearn that cannot read sidecars refuses it (not: no covariance)
     assert os.path.getsize(path) < 100_000
     again = load_model(path)
     np.testing.assert_array_equal(again.covariance, model.covariance)
@@ -44,15 +47,16 @@ def test_the_paper_sized_model_keeps_its_covariance_inline(tmp_path):
     model = _model(2)  # 200 x 200
     path = tmp_path / "pair.json"
     model.save(path)
-    assert "covariance" in json.loads(path.read_text())["model"]
-    assert not os.path.exists(sidecar_path(path))
+    doc = json.loads(path.read_text())
+    assert "covariance" in doc["model"] and doc["schema_version"] == 1
+    assert named_sidecar(path) is None and os.listdir(tmp_path) == ["pair.json"]
     np.testing.assert_array_equal(load_model(path).covariance, model.covariance)
 
 
 def test_a_missing_or_altered_covariance_sidecar_is_refused_by_name(tmp_path):
     path = tmp_path / "swarm.json"
     _model(6).save(path)
-    side = sidecar_path(path)
+    side = named_sidecar(path)
     data = bytearray(open(side, "rb").read())
     data[-100] ^= 1
     open(side, "wb").write(bytes(data))
@@ -61,3 +65,46 @@ def test_a_missing_or_altered_covariance_sidecar_is_refused_by_name(tmp_path):
     os.remove(side)
     with pytest.raises(ModelFileError, match="sidecar is missing"):
         load_model(path)
+
+
+def test_a_failed_save_leaves_the_previous_model_and_its_sidecar_readable(tmp_path, monkeypatch):
+    """The new sidecar gets a new name, and earlier ones go only after the model file is
+    replaced (found by review: a failed second save left the first unreadable)."""
+    path = tmp_path / "swarm.json"
+    first = _model(6)
+    first.save(path)
+
+    def full_disk(*args, **kwargs):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(modelfile, "write_model_file", full_disk)
+    with pytest.raises(OSError):
+        _model(6, seed=1).save(path)
+    monkeypatch.undo()
+    np.testing.assert_array_equal(load_model(path).covariance, first.covariance)
+    assert sorted(os.listdir(tmp_path)) == sorted(["swarm.json", os.path.basename(named_sidecar(path))])
+
+
+def test_saving_again_leaves_only_the_sidecar_the_model_file_names(tmp_path):
+    path = tmp_path / "swarm.json"
+    _model(6).save(path)
+    _model(6, seed=1).save(path)
+    assert sorted(os.listdir(tmp_path)) == sorted(["swarm.json", os.path.basename(named_sidecar(path))])
+    _model(2).save(path)  # inline now: the old sidecar goes
+    assert os.listdir(tmp_path) == ["swarm.json"]
+
+
+def test_a_payload_read_without_its_file_path_says_how_to_read_it(tmp_path):
+    path = tmp_path / "swarm.json"
+    _model(6).save(path)
+    _, payload = modelfile.read_model_file(path)
+    with pytest.raises(ModelFileError, match="source=path"):
+        PatternSet.from_dict(payload)
+    assert PatternSet.from_dict(payload, source=str(path)).covariance.shape == (600, 600)
+
+
+def test_saving_over_a_folder_writes_nothing(tmp_path):
+    (tmp_path / "adir").mkdir()
+    with pytest.raises(Exception, match="folder|directory"):
+        _model(6).save(tmp_path / "adir")
+    assert os.listdir(tmp_path) == ["adir"]

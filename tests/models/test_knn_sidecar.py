@@ -12,7 +12,7 @@ import pytest
 from rplearn.core.geometry import Directions
 from rplearn.data.tables import LinkSamples
 from rplearn.errors import ModelFileError
-from rplearn.io.modelfile import sidecar_path, write_model_file
+from rplearn.io.modelfile import named_sidecar, write_model_file
 from rplearn.models.baselines import KNNModel
 from rplearn.models.load import load_model
 
@@ -32,7 +32,7 @@ def test_sidecar_round_trip_and_size(tmp_path):
     model = KNNModel.fit(samples, 400)
     path = tmp_path / "nn.json"
     model.save(path)
-    side = sidecar_path(path)
+    side = named_sidecar(path)
     assert os.path.getsize(path) < 10_000  # the JSON holds no samples
     assert os.path.getsize(side) < 8_000_000  # 150k x 5 float64 and the npz headers
     again = load_model(path)  # its speed: benchmarks/knn_file.py
@@ -47,7 +47,7 @@ def test_sidecar_bytes_are_reproducible(tmp_path, monkeypatch):
     model.save(tmp_path / "a.json")
     time.sleep(1.1)
     model.save(tmp_path / "b.json")
-    assert open(sidecar_path(tmp_path / "a.json"), "rb").read() == open(sidecar_path(tmp_path / "b.json"), "rb").read()
+    assert open(named_sidecar(tmp_path / "a.json"), "rb").read() == open(named_sidecar(tmp_path / "b.json"), "rb").read()
     assert len(load_model(tmp_path / "b.json").train_gain_db) == 2
 
 
@@ -55,7 +55,7 @@ def test_missing_tampered_or_foreign_sidecars_are_refused(tmp_path):
     model = KNNModel.fit(_samples(2000), 50)
     path = tmp_path / "nn.json"
     model.save(path)
-    side = sidecar_path(path)
+    side = named_sidecar(path)
     data = bytearray(open(side, "rb").read())
     data[-100] ^= 0xFF
     open(side, "wb").write(bytes(data))
@@ -75,7 +75,8 @@ def test_missing_tampered_or_foreign_sidecars_are_refused(tmp_path):
     other = KNNModel.fit(_samples(2000, seed=3), 50)
     other.save(tmp_path / "other.json")
     model.save(path)
-    os.replace(sidecar_path(tmp_path / "other.json"), side)
+    side = named_sidecar(path)
+    os.replace(named_sidecar(tmp_path / "other.json"), side)
     with pytest.raises(ModelFileError, match="does not belong"):
         load_model(path)
 

@@ -1,9 +1,14 @@
 """The JSON model-file envelope shared by every model type (DESIGN.md: versioned, no pickle).
 
-A model file is ``{"schema": "rplearn.model", "schema_version": 1, "type": T, "sha256": H,
+A model file is ``{"schema": "rplearn.model", "schema_version": V, "type": T, "sha256": H,
 "model": PAYLOAD}`` where ``H`` is the SHA-256 of the canonical JSON of ``PAYLOAD`` (sorted keys,
 no spaces), so truncation and tampering are detected. ``T`` is ``"patterns"`` (a
 :class:`~rplearn.models.patterns.PatternSet`), ``"mean"`` or ``"knn"`` (baselines).
+
+Large arrays (a k-NN model's training samples, a swarm's covariance) go into a binary sidecar
+beside the model file, named in the payload with its SHA-256 (:func:`write_model_with_sidecar`);
+such a file is schema version 2, which an rplearn that cannot read sidecars refuses instead of
+silently dropping the arrays. Files without a sidecar stay version 1.
 """
 
 from __future__ import annotations
@@ -12,6 +17,7 @@ import hashlib
 import json
 import math
 import os
+import re
 from typing import Any, Mapping
 
 import numpy as np
@@ -21,6 +27,8 @@ from rplearn.errors import ModelFileError
 
 MODEL_SCHEMA = "rplearn.model"
 MODEL_SCHEMA_VERSION = 1
+#: The version of a model file whose payload names a binary sidecar.
+SIDECAR_SCHEMA_VERSION = 2
 MODEL_TYPES = ("patterns", "mean", "knn")
 
 
@@ -68,7 +76,7 @@ def write_model_file(path: str | os.PathLike[str], model_type: str, payload: Map
         payload["training"].pop("ltd_s", None)
     doc = {
         "schema": MODEL_SCHEMA,
-        "schema_version": MODEL_SCHEMA_VERSION,
+        "schema_version": SIDECAR_SCHEMA_VERSION if "sidecar" in payload else MODEL_SCHEMA_VERSION,
         "type": model_type,
         "sha256": digest(payload),
         "model": payload,
@@ -103,9 +111,10 @@ def read_model_file(path: str | os.PathLike[str]) -> tuple[str, dict[str, Any]]:
         raise ModelFileError(f"{name}: cannot read ({exc.strerror})") from None
     if not isinstance(doc, dict) or doc.get("schema") != MODEL_SCHEMA:
         raise ModelFileError(f"{name}: not an rplearn model file (field 'schema' must be {MODEL_SCHEMA!r})")
-    if doc.get("schema_version") != MODEL_SCHEMA_VERSION:
+    if doc.get("schema_version") not in (MODEL_SCHEMA_VERSION, SIDECAR_SCHEMA_VERSION):
         raise ModelFileError(
-            f"{name}: schema_version {doc.get('schema_version')!r} is not supported (expected {MODEL_SCHEMA_VERSION})"
+            f"{name}: schema_version {doc.get('schema_version')!r} is not supported (expected {MODEL_SCHEMA_VERSION} "
+            f"or {SIDECAR_SCHEMA_VERSION})"
         )
     model_type = doc.get("type", "patterns")
     if model_type not in MODEL_TYPES:
@@ -120,13 +129,25 @@ def read_model_file(path: str | os.PathLike[str]) -> tuple[str, dict[str, Any]]:
 
 
 
-#: Name of a model file's binary sidecar: the model file's name plus this (``m.json.npz``).
+#: A model file's binary sidecar is named after it and the start of its own SHA-256
+#: (``m.json`` -> ``m.json.<12 hex digits>.npz``), so that a new save never overwrites the
+#: sidecar the previous model file still names.
 SIDECAR_SUFFIX = ".npz"
+_SIDECAR_NAME = re.compile(r"\.(?:[0-9a-f]{12}\.)?npz$")
 
 
-def sidecar_path(path: str | os.PathLike[str]) -> str:
-    """The binary sidecar of a model file (``model.json`` -> ``model.json.npz``)."""
-    return os.fspath(path) + SIDECAR_SUFFIX
+def sidecar_path(path: str | os.PathLike[str], sha256: str) -> str:
+    """The binary sidecar of model file ``path`` whose contents have this SHA-256."""
+    return f"{os.fspath(path)}.{sha256[:12]}{SIDECAR_SUFFIX}"
+
+
+def named_sidecar(path: str | os.PathLike[str]) -> str | None:
+    """The sidecar a model file names (its path), or None."""
+    _, payload = read_model_file(path)
+    entry = payload.get("sidecar")
+    if not isinstance(entry, Mapping) or not isinstance(entry.get("file"), str):
+        return None
+    return os.path.join(os.path.dirname(os.path.abspath(os.fspath(path))), entry["file"])
 
 
 def _file_sha256(path: str) -> str:
@@ -137,28 +158,76 @@ def _file_sha256(path: str) -> str:
     return h.hexdigest()
 
 
-def write_sidecar(path: str | os.PathLike[str], arrays: Mapping[str, np.ndarray]) -> dict[str, str]:
-    """Write the arrays of a model file beside it, atomically, as an uncompressed ``.npz`` of
-    plain numeric arrays (numpy's format, no pickle); return the ``{"file", "sha256"}`` entry
-    the model file's payload records, so that the sidecar is checksummed with it."""
-    from rplearn._atomic import atomic_path
+def _write_sidecar(path: str, arrays: Mapping[str, np.ndarray]) -> dict[str, str]:
+    """Write the arrays beside model file ``path`` as an uncompressed ``.npz`` of plain numeric
+    arrays (numpy's format, no pickle) under its content-addressed name; return the
+    ``{"file", "sha256"}`` entry the payload records."""
+    import tempfile
+    import zipfile
 
-    target = sidecar_path(path)
     for key, value in arrays.items():
         if np.asarray(value).dtype.kind not in "fiub":
             raise ValueError(f"sidecar array {key!r} is not numeric")
-    import zipfile
-
-    with atomic_path(target) as tmp:
-        # numpy's .npz layout, written here with a fixed time stamp per entry (np.savez stamps
-        # the current time), so that the same model gives the same bytes and checksum
-        with zipfile.ZipFile(tmp, "w", compression=zipfile.ZIP_STORED, allowZip64=True) as zf:
-            for key, value in arrays.items():
-                info = zipfile.ZipInfo(f"{key}.npy", date_time=(1980, 1, 1, 0, 0, 0))
-                with zf.open(info, "w", force_zip64=True) as fh:
-                    np.lib.format.write_array(fh, np.ascontiguousarray(value), allow_pickle=False)
+    folder = os.path.dirname(os.path.abspath(path))
+    fd, tmp = tempfile.mkstemp(prefix=f".{os.path.basename(path)}.", suffix=".tmp", dir=folder)
+    try:
+        with os.fdopen(fd, "wb") as raw:
+            # numpy's .npz layout, written here with a fixed time stamp per entry (np.savez
+            # stamps the current time), so that the same model gives the same bytes and name
+            with zipfile.ZipFile(raw, "w", compression=zipfile.ZIP_STORED, allowZip64=True) as zf:
+                for key, value in arrays.items():
+                    info = zipfile.ZipInfo(f"{key}.npy", date_time=(1980, 1, 1, 0, 0, 0))
+                    with zf.open(info, "w", force_zip64=True) as fh:
+                        np.lib.format.write_array(fh, np.ascontiguousarray(value), allow_pickle=False)
+            raw.flush()
+            os.fsync(raw.fileno())
         checksum = _file_sha256(tmp)
+        target = sidecar_path(path, checksum)
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, target)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+        raise
     return {"file": os.path.basename(target), "sha256": checksum}
+
+
+def _remove_stale_sidecars(path: str, keep: str | None) -> None:
+    """Remove the sidecars of earlier saves of model file ``path`` (not ``keep``)."""
+    folder = os.path.dirname(os.path.abspath(path))
+    base = os.path.basename(path)
+    for name in os.listdir(folder):
+        if name != keep and name.startswith(base) and _SIDECAR_NAME.fullmatch(name[len(base):]):
+            try:
+                os.remove(os.path.join(folder, name))
+            except OSError:
+                pass
+
+
+def write_model_with_sidecar(path: str | os.PathLike[str], model_type: str, payload: Mapping[str, Any],
+                             arrays: Mapping[str, np.ndarray] | None) -> None:
+    """Write a model file and, when ``arrays`` are given, its binary sidecar, so that a failure
+    at any point leaves the previous model file and the sidecar it names intact: the output is
+    checked first, the sidecar is written under a new content-addressed name, then the model
+    file is replaced, and only then are earlier sidecars of this path removed."""
+    from rplearn._atomic import check_output
+
+    name = check_output(path)
+    payload = dict(payload)
+    entry = None
+    if arrays:
+        entry = _write_sidecar(name, arrays)
+        payload["sidecar"] = entry
+    try:
+        write_model_file(name, model_type, payload)
+    except BaseException:
+        if entry is not None:  # the new sidecar belongs to no model file
+            try:
+                os.remove(os.path.join(os.path.dirname(os.path.abspath(name)), entry["file"]))
+            except OSError:
+                pass
+        raise
+    _remove_stale_sidecars(name, keep=None if entry is None else entry["file"])
 
 
 def read_sidecar(model_path: str | os.PathLike[str], entry: Any) -> dict[str, np.ndarray]:
@@ -173,6 +242,9 @@ def read_sidecar(model_path: str | os.PathLike[str], entry: Any) -> dict[str, np
     name = os.fspath(model_path)
     if not isinstance(entry, Mapping) or not isinstance(entry.get("file"), str) or not isinstance(entry.get("sha256"), str):
         raise ModelFileError(f"{name}: field 'sidecar' must give 'file' and 'sha256'")
+    if not os.path.isfile(name):
+        raise ModelFileError(f"{name}: the model keeps arrays in a sidecar ({entry['file']}); read it from its file "
+                             "(load_model(path), or from_dict(payload, source=path))")
     file = entry["file"]
     if os.path.basename(file) != file or file in ("", ".", ".."):
         raise ModelFileError(f"{name}: sidecar {file!r} must be a file name beside the model file")

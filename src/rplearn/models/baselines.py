@@ -25,7 +25,7 @@ from numpy.typing import ArrayLike
 
 from rplearn.data.tables import LinkSamples
 from rplearn.errors import IdentifiabilityError, InputError, ModelFileError
-from rplearn.io.modelfile import read_sidecar, write_model_file, write_sidecar
+from rplearn.io.modelfile import read_sidecar, write_model_with_sidecar
 from rplearn.models.base import frequency_from_training, learned_frequency_hz
 
 Link = tuple[str, str]
@@ -192,7 +192,7 @@ class MeanModel(_PerLinkBaseline):
         }
 
     def save(self, path: str | os.PathLike[str]) -> None:
-        write_model_file(path, "mean", self.to_dict())
+        write_model_with_sidecar(path, "mean", self.to_dict(), None)  # (removes an earlier save's sidecar)
 
     @classmethod
     def from_dict(cls, payload: Mapping[str, Any], source: str = "model") -> "MeanModel":
@@ -276,24 +276,22 @@ class KNNModel(_PerLinkBaseline):
 
     def save(self, path: str | os.PathLike[str]) -> None:
         """Write the model file, its training samples in a binary sidecar beside it
-        (``model.json.npz``, checksummed in the model file; see
-        :func:`rplearn.io.modelfile.write_sidecar`): JSON text of 150k samples was 22 MB and
+        (``model.json.<sha>.npz``, checksummed in the model file; see
+        :func:`rplearn.io.modelfile.write_model_with_sidecar`): JSON text of 150k samples was 22 MB and
         took seconds to read."""
         links = list(self.train_gain_db)
         arrays: dict[str, np.ndarray] = {}
         for i, key in enumerate(links):
             arrays[f"angles_{i}"] = np.asarray(self.train_angles_rad[key], np.float64)
             arrays[f"gain_{i}"] = np.asarray(self.train_gain_db[key], np.float64)
-        entry = write_sidecar(path, arrays)
         payload = {
             "label": self.label,
             "n_neighbors": self.n_neighbors,
             "links": [{"tx": t, "rx": r, "samples": int(self.train_gain_db[(t, r)].size)} for t, r in links],
-            "sidecar": entry,
             "training": self.training,
             "provenance": self.provenance,
         }
-        write_model_file(path, "knn", payload)
+        write_model_with_sidecar(path, "knn", payload, arrays)
 
     @classmethod
     def from_dict(cls, payload: Mapping[str, Any], source: str = "model") -> "KNNModel":

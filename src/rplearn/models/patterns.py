@@ -23,7 +23,7 @@ from rplearn.core.environment import PathLoss
 from rplearn.core.geometry import Directions, distance_m, link_directions
 from rplearn.core.link import received_power_dbm
 from rplearn.io.modelfile import jsonable as _jsonable
-from rplearn.io.modelfile import read_model_file, read_sidecar, write_model_file, write_sidecar
+from rplearn.io.modelfile import read_model_file, read_sidecar, write_model_with_sidecar
 from rplearn.models.base import frequency_from_training
 from rplearn.models.terms import split_offset_name
 
@@ -392,14 +392,12 @@ class PatternSet:
     def save(self, path: str | os.PathLike[str]) -> None:
         """Write the JSON model file (schema ``rplearn.model`` v1, SHA-256 checksummed); a
         covariance of more than :data:`INLINE_COVARIANCE_VALUES` values (a swarm's) goes into a
-        binary sidecar beside it (``model.json.npz``, checksummed in the model file: see
-        :func:`rplearn.io.modelfile.write_sidecar`). As JSON text the covariance of 30 drones
-        at SH-10 was 239 MiB, 20 s to write and 7.6 s to read."""
+        binary sidecar beside it (``model.json.<sha>.npz``, checksummed in the model file: see
+        :func:`rplearn.io.modelfile.write_model_with_sidecar`). As JSON text the covariance of
+        30 drones at SH-10 was 239 MiB, 20 s to write and 7.6 s to read."""
         inline = self.covariance is None or self.covariance.size <= INLINE_COVARIANCE_VALUES
-        payload = self.to_dict(inline_covariance=inline)
-        if not inline:
-            payload["sidecar"] = write_sidecar(path, {"covariance": self.covariance})
-        write_model_file(path, "patterns", payload)
+        write_model_with_sidecar(path, "patterns", self.to_dict(inline_covariance=inline),
+                                 None if inline else {"covariance": self.covariance})
 
     @classmethod
     def from_dict(cls, payload: Mapping[str, Any], source: str = "model") -> "PatternSet":
