@@ -97,3 +97,17 @@ def test_time_units_cut_a_flight_without_units_into_stretches_of_time():
         time_units(pd.DataFrame({"t": [0.0] * 4 + [1.0] * 3 + [2.0] * 3}))
     with pytest.raises(InputError):
         time_units(df.assign(t=np.where(df["t"] == 5, np.nan, df["t"])))
+
+
+def test_a_fleets_hundreds_of_units_are_summarised_in_notes():
+    """A fleet dataset has a unit per flight and leg: a note lists the first and last few."""
+    import pandas as pd
+
+    from rplearn.data.units import learning_units, unit_list
+
+    assert unit_list(["a", "b"]) == "a, b"
+    units = [f"learn_{k}@f{f:04d}" for f in range(30) for k in (0, 24)] + [f"test_36@f{f:04d}" for f in range(30)]
+    df = pd.DataFrame({"unit": units})
+    note = learning_units(df).notes[0]
+    assert "(60 units)" in note and "(30 units)" in note and len(note) < 400  # all 90 names: 1,378 characters
+    assert note.startswith("learning from units learn_0@f0000, learn_0@f0001,") and ", ..., " in note

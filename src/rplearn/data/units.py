@@ -70,8 +70,21 @@ def learning_units(df: pd.DataFrame, units: Sequence[str] | None = None, source:
     if not learn:
         return UnitChoice(None, True, [f"{source}: every unit is labelled {TEST_UNIT_PREFIX}...; learning from all of them"])
     left_out = [u for u in available if u not in learn]
-    notes = [f"learning from units {', '.join(learn)}; left out {', '.join(left_out)}"] if left_out else []
+    notes = [f"learning from units {unit_list(learn)}; left out {unit_list(left_out)}"] if left_out else []
     return UnitChoice(learn, True, notes)
+
+
+#: Unit names a note lists in full; longer lists (a fleet logs hundreds of flights, a note per
+#: command) show their first and last few and how many there are.
+NOTE_UNITS = 8
+
+
+def unit_list(units: Sequence[str], limit: int = NOTE_UNITS) -> str:
+    """Unit names for a note: all of them, or the first and last few and their count."""
+    units = [str(u) for u in units]
+    if len(units) <= limit:
+        return ", ".join(units)
+    return f"{', '.join(units[: limit - 2])}, ..., {', '.join(units[-2:])} ({len(units):,} units)"
 
 
 def trained_units(provenances: Sequence[dict]) -> list[str]:
@@ -116,14 +129,14 @@ def evaluation_units(
     if units is None and trained and available:
         unseen = [u for u in available if u not in trained]
         if unseen:
-            return UnitChoice(unseen, True, [f"scoring on units {', '.join(unseen)}, which no model learned from"], warnings)
+            return UnitChoice(unseen, True, [f"scoring on units {unit_list(unseen)}, which no model learned from"], warnings)
     chosen = [str(u) for u in units] if units is not None else (available or None)
     overlap = sorted(set(chosen or available) & set(trained))
     notes: list[str] = []
     if overlap:
-        warnings.append(f"scoring on unit(s) {', '.join(overlap)} that a model learned from: these are training scores")
+        warnings.append(f"scoring on unit(s) {unit_list(overlap)} that a model learned from: these are training scores")
     elif units is None and available:
-        notes.append(f"scoring on all units ({', '.join(available)})")
+        notes.append(f"scoring on all units ({unit_list(available)})")
     return UnitChoice(chosen, units is None, notes, warnings)
 
 
@@ -198,7 +211,7 @@ def split_units(
     test = [str(u) for u in test_units] if test_units else [u for u in available if is_test_unit(u)]
     learn = [str(u) for u in learn_units] if learn_units else [u for u in available if u not in test]
     if not test or not learn:
-        raise InputError(f"{source}: cannot split units {', '.join(available)} into learning and testing", param="test_units")
+        raise InputError(f"{source}: cannot split units {unit_list(available)} into learning and testing", param="test_units")
     shared = sorted(set(test) & set(learn))
     if shared:
         raise InputError(f"learning and testing units share {', '.join(shared)}; a test must use unseen data", param="test_units")
@@ -215,7 +228,7 @@ def select_units(df: pd.DataFrame, units: Sequence[str] | None, source: str = "d
     known = dataset_units(df)
     unknown = [u for u in wanted if u not in known]
     if unknown:
-        raise InputError(f"{source}: unknown unit(s) {', '.join(unknown)}; the dataset has {', '.join(known)}", param="units")
+        raise InputError(f"{source}: unknown unit(s) {unit_list(unknown)}; the dataset has {unit_list(known)}", param="units")
     return df[df["unit"].astype(str).isin(wanted)]
 
 
