@@ -11,6 +11,7 @@ general sparse matrix.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Any, Iterable
 
 import numpy as np
@@ -38,6 +39,11 @@ class NodeBlocks:
         return (self.n_nodes + 2 * len(self.pairs)) / float(self.n_nodes * self.n_nodes)
 
     def band(self) -> tuple[NDArray[np.intp], int]:
+        """See :attr:`_band` (found once per instance: the layout decision and the factor ask)."""
+        return self._band
+
+    @cached_property
+    def _band(self) -> tuple[NDArray[np.intp], int]:
         """A column order that makes the pattern columns a band, and its half-bandwidth.
 
         The nodes in reverse Cuthill-McKee order of their link graph (drones on a ring, or

@@ -47,7 +47,10 @@ def solve_large(
     import scipy.linalg  # noqa: F401  (loaded before the limit looks for scipy's BLAS)
 
     with numpy_blas_one_thread():
-        return _solve_large(normal, n_nodes, components, cmat, cval, rhs, ridge, penalty, shrunk, notes)
+        try:
+            return _solve_large(normal, n_nodes, components, cmat, cval, rhs, ridge, penalty, shrunk, notes)
+        except NotPositiveDefinite:  # single precision solved what float64 cannot factorise: the KKT path decides
+            return None
 
 
 def _solve_large(
@@ -60,22 +63,8 @@ def _solve_large(
     added[:pat] = ridge  # the shared columns are not shrunk
     if penalty is not None:
         added += penalty
-    # the scaled regularised matrix in one pass over the Gram (a copy, scaled on the way)
-    scale = 1.0 / np.sqrt(np.maximum(np.diag(normal.gram) + added, 1e-300))
+    scale = 1.0 / np.sqrt(np.maximum(np.diag(normal.gram) + added, 1e-300))  # a unit diagonal
     blocks = NodeBlocks.of(n_nodes, normal.basis.n_coef, normal.link_counts)
-    try:
-        return _solve_with(normal, n_nodes, components, cmat, cval, rhs, ridge, penalty, shrunk, notes, added, scale,
-                           blocks)
-    except NotPositiveDefinite:  # single precision solved what float64 cannot factorise: the KKT path decides
-        return None
-
-
-def _solve_with(
-    normal: NormalEquations, n_nodes: int, components: list[tuple[list[int], Any]], cmat: FloatArray,
-    cval: FloatArray, rhs: FloatArray, ridge: float, penalty: FloatArray | None, shrunk: bool,
-    notes: list[GaugeNote], added: FloatArray, scale: FloatArray, blocks: NodeBlocks,
-) -> JointSolution | None:
-    pcols, pat = normal.n_columns, normal.n_pattern_columns
     factor = ConstrainedFactor.of_gram(normal.gram, added, scale, cmat, blocks, refined=pcols >= REFINED_COLUMNS)
     if factor is None:
         return None
