@@ -30,13 +30,14 @@ def test_folder_carries_licenses_and_provenance():
 
 
 @pytest.mark.parametrize(
-    "path, attitude, positions, radio, link_lost",
-    [(TLOG_1, 2743, 974, 570, 57), (TLOG_2, 1977, 702, 1114, 695)],
+    "path, attitude, positions, radio, link_lost, heartbeat, gps",
+    [(TLOG_1, 2743, 974, 570, 57, 1082, 650), (TLOG_2, 1977, 702, 1114, 695, 1529, 473)],
 )
-def test_real_tlog_counts_match_pymavlink(path, attitude, positions, radio, link_lost):
+def test_real_tlog_counts_match_pymavlink(path, attitude, positions, radio, link_lost, heartbeat, gps):
     logs, meta = read_mavlink(path, tx_power_dbm=20.0, frequency_hz=915e6)
     assert meta["format"] == "tlog"
-    assert meta["messages"] == {"ATTITUDE": attitude, "GLOBAL_POSITION_INT": positions, "RADIO": radio}
+    assert meta["messages"] == {"ATTITUDE": attitude, "GLOBAL_POSITION_INT": positions, "RADIO": radio,
+                                "HEARTBEAT": heartbeat, "GPS_RAW_INT": gps}
     # every ATTITUDE is a pose row or a counted drop
     vehicle = logs.pose[logs.pose["node"] == "sys1"]
     assert len(vehicle) == meta["rows"]

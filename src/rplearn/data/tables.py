@@ -100,6 +100,9 @@ def empty_ids(ids: np.ndarray) -> np.ndarray:
 def validate_pose_log(df: pd.DataFrame, source: str = "pose log") -> pd.DataFrame:
     """Check a canonical pose log and return it typed, sorted by (node, t), quaternions normalised.
 
+    An optional ``armed`` column (whether the vehicle was armed, as an ArduPilot log says) is
+    kept: ``bool``, or pandas' nullable ``boolean`` where some rows (logs that do not say) miss it.
+
     The number of rows whose quaternion norm was off 1 by more than
     :data:`QUATERNION_NORM_TOLERANCE` (plus any count the input carries) is recorded in
     ``attrs["non_unit_quaternion_rows"]`` of the result; read it with
@@ -145,6 +148,9 @@ def validate_pose_log(df: pd.DataFrame, source: str = "pose log") -> pd.DataFram
             f"(first: node {cols['node'][i]}, t = {float(ts[i])!r})"
         )
     out = pd.DataFrame(cols, columns=list(POSE_COLUMNS))
+    if "armed" in df.columns:  # optional: the vehicle armed (bool; missing where a log does not say)
+        armed = df["armed"].astype("boolean").to_numpy()[take]
+        out["armed"] = armed.astype(bool) if not pd.isna(armed).any() else pd.array(armed, dtype="boolean")
     out.attrs[NON_UNIT_QUATERNION_ATTR] = non_unit
     return out
 

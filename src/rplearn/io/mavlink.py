@@ -60,9 +60,7 @@ from __future__ import annotations
 
 import numbers
 import os
-import sys
 from collections.abc import Mapping
-from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -76,7 +74,9 @@ from rplearn.data.tables import (
     validate_signal_log,
 )
 from rplearn.errors import InputError, LogFormatError
+from rplearn.io import mavlink_phases as phases
 from rplearn.io._common import Logs
+from rplearn.io._mavlink_records import Raw, collect_dataflash, collect_tlog
 from rplearn.io.geodetic import geodetic_to_enu
 from rplearn.io.options import _check_origin
 
@@ -86,19 +86,8 @@ SIK_ZERO_DBM = -127.0
 #: Raw value meaning "unknown" in RADIO_STATUS.
 _UNKNOWN = 255
 
-_RADIO_TYPES = ("RADIO_STATUS", "RADIO")
-_TLOG_TYPES = ["ATTITUDE", "GLOBAL_POSITION_INT", "HOME_POSITION", *_RADIO_TYPES]
-_DF_TYPES = ["ATT", "POS", "GPS", "ORGN", "RAD"]
 _DF_HEAD = b"\xa3\x95"
 _DF_FMT_TYPE = 128
-
-
-def _mavutil() -> Any:
-    try:
-        from pymavlink import mavutil
-    except ImportError:  # pragma: no cover - pymavlink is a dependency
-        raise InputError("reading MAVLink logs needs the 'pymavlink' package (pip install pymavlink)") from None
-    return mavutil
 
 
 def sik_rssi_to_dbm(raw: Any) -> np.ndarray:
@@ -166,177 +155,8 @@ def _walk_records(data: Any, size: int) -> tuple[int | None, str | None, int]:
     return None, None, skipped
 
 
-@dataclass
-class _Raw:
-    """What one pass over a log gave, as plain arrays (times [s] on the log's clock)."""
-
-    fmt: str
-    att: np.ndarray  # (n, 4): t, roll, pitch, yaw [rad]
-    pos: np.ndarray  # (n, 4): t, lat [deg], lon [deg], alt [m]
-    radio: np.ndarray  # (n, 3): t, rssi, remrssi (raw SiK units)
-    vehicle_t: np.ndarray  # receive times of the vehicle's messages (tlog) [s]
-    home: tuple[float, float, float] | None
-    counts: dict[str, int] = field(default_factory=dict)
-    notes: dict[str, Any] = field(default_factory=dict)
-
-
-def _arr(rows: list[tuple[float, ...]], width: int) -> np.ndarray:
-    return np.asarray(rows, np.float64).reshape(-1, width)
-
-
-def _boot_offsets(t_recv: np.ndarray, t_boot: np.ndarray) -> np.ndarray:
-    """Per message, the median ``t_recv - t_boot`` [s] of its boot (a new boot where the boot
-    clock steps back by more than 1 s, in receive order)."""
-    order = np.argsort(t_recv, kind="stable")
-    boot_sorted = t_boot[order]
-    seg_sorted = np.concatenate([[0], np.cumsum(np.diff(boot_sorted) < -1.0)])
-    seg = np.empty_like(seg_sorted)
-    seg[order] = seg_sorted
-    out = np.empty(len(t_recv))
-    for s in np.unique(seg):
-        m = seg == s
-        out[m] = np.median(t_recv[m] - t_boot[m])
-    return out
-
-
-def _open(mavutil: Any, source: str) -> Any:
-    try:
-        return mavutil.mavlink_connection(source, dialect="ardupilotmega")
-    except Exception as exc:
-        msg = str(exc).splitlines()[0] if str(exc) else ""
-        raise LogFormatError(f"{source}: cannot read MAVLink log ({type(exc).__name__}: {msg})") from None
-
-
-def _tlog_cut_off(conn: Any, source: str, whole_to: int) -> dict[str, Any]:
-    """Where a tlog ends inside a record (its 8-byte time or its MAVLink frame), given the byte
-    ``whole_to`` where its last whole record ends: ``cut_off_at_byte`` (the cut record's start;
-    None when the file ends whole) and ``cut_off_record`` (the message name when its frame's
-    header is there, else None)."""
-    size = os.path.getsize(source)
-    if size <= whole_to:
-        return {"cut_off_at_byte": None, "cut_off_record": None}
-    try:
-        head = bytes(conn.mav.buf[conn.mav.buf_index:conn.mav.buf_index + 10]) if conn.mav.buf_len() else b""
-    except (AttributeError, TypeError, ValueError):  # pragma: no cover - a pymavlink without these
-        head = b""
-    msgid = head[5] if head[:1] == b"\xfe" and len(head) > 5 else (
-        int.from_bytes(head[7:10], "little") if head[:1] == b"\xfd" and len(head) >= 10 else None)
-    table = getattr(sys.modules.get(type(conn.mav).__module__), "mavlink_map", {})
-    kind = table.get(msgid) if msgid is not None else None
-    return {"cut_off_at_byte": int(whole_to), "cut_off_record": getattr(kind, "msgname", None) if kind is not None else None}
-
-
-def _collect_tlog(source: str, system_id: int | None) -> _Raw:
-    """One pass over a ``.tlog``: attitude, position, radio, home and the vehicle's message times."""
-    conn = _open(_mavutil(), source)
-    rows: dict[str, list[tuple[Any, ...]]] = {k: [] for k in _TLOG_TYPES}
-    by_sys: dict[int, list[float]] = {}
-    counts: dict[str, int] = {}
-    radio_senders: dict[str, int] = {}
-    whole_to = 0
-    while True:
-        try:
-            msg = conn.recv_msg()
-        except Exception as exc:
-            raise LogFormatError(f"{source}: corrupt MAVLink data ({type(exc).__name__}: {exc})") from None
-        if msg is None:
-            break
-        whole_to = conn.f.tell() - conn.mav.buf_len()  # where the records read so far end
-        kind = msg.get_type()
-        if kind == "BAD_DATA":
-            counts["BAD_DATA"] = counts.get("BAD_DATA", 0) + 1
-            continue
-        t, sysid = float(msg._timestamp), int(msg.get_srcSystem())
-        by_sys.setdefault(sysid, []).append(t)
-        if kind not in rows:
-            continue
-        counts[kind] = counts.get(kind, 0) + 1
-        src = sysid * 256 + int(msg.get_srcComponent())  # a gimbal may send ATTITUDE too
-        if kind == "ATTITUDE":
-            rows[kind].append((src, t, msg.time_boot_ms * 1e-3, msg.roll, msg.pitch, msg.yaw))
-        elif kind == "GLOBAL_POSITION_INT":
-            rows[kind].append((src, t, msg.time_boot_ms * 1e-3, msg.lat * 1e-7, msg.lon * 1e-7, msg.alt * 1e-3))
-        elif kind == "HOME_POSITION":
-            rows[kind].append((src, msg.latitude * 1e-7, msg.longitude * 1e-7, msg.altitude * 1e-3))
-        else:
-            rows[kind].append((t, msg.rssi, msg.remrssi))
-            key = f"{sysid}/{msg.get_srcComponent()}"
-            radio_senders[key] = radio_senders.get(key, 0) + 1
-    cut_off = _tlog_cut_off(conn, source, whole_to)
-    att = _arr(rows["ATTITUDE"], 6)
-    if not len(att):
-        raise LogFormatError(f"{source}: no ATTITUDE messages (the vehicle's attitude)")
-    srcs, n = np.unique(att[:, 0].astype(int), return_counts=True)
-    if system_id is not None:
-        if int(system_id) not in srcs // 256:
-            raise InputError(f"{source}: no ATTITUDE messages from system id {system_id} "
-                             f"(it has {', '.join(map(str, np.unique(srcs // 256)))})", param="system_id")
-        srcs, n = srcs[srcs // 256 == int(system_id)], n[srcs // 256 == int(system_id)]
-    chosen = int(srcs[np.argmax(n)])  # the (system, component) sending most ATTITUDE
-    vehicle = chosen // 256
-    att = att[att[:, 0] == chosen]
-    gpi = _arr(rows["GLOBAL_POSITION_INT"], 6)
-    gpi = gpi[(gpi[:, 0] == chosen) & ((gpi[:, 3] != 0) | (gpi[:, 4] != 0))]
-    both = np.concatenate([att[:, 1:3], gpi[:, 1:3]])
-    boot_clock = len(np.unique(att[:, 2])) >= 0.9 * len(att)  # some senders leave time_boot_ms at 0
-    offset = _boot_offsets(both[:, 0], both[:, 1]) if boot_clock else both[:, 0] - both[:, 1]
-    home = [h for h in rows["HOME_POSITION"] if h[0] // 256 == vehicle and (h[1] != 0 or h[2] != 0)]
-    radio = [*rows["RADIO_STATUS"], *rows["RADIO"]]
-    return _Raw(
-        fmt="tlog",
-        att=np.column_stack([att[:, 2] + offset[:len(att)], att[:, 3:6]]),
-        pos=np.column_stack([gpi[:, 2] + offset[len(att):], gpi[:, 3:6]]),
-        radio=_arr(sorted(radio), 3), vehicle_t=np.sort(np.asarray(by_sys.get(vehicle, []), np.float64)),
-        home=tuple(float(v) for v in home[0][1:]) if home else None, counts=counts,
-        notes={"system_id": vehicle, "component_id": chosen % 256, "radio_senders": radio_senders, **cut_off,
-               "clock_offset_s": float(np.median(offset)) if len(offset) and boot_clock else None,
-               "time_reference": "ground station receive time, seconds since the UNIX epoch"
-                                 + (" (vehicle messages through time_boot_ms + median offset)" if boot_clock else "")},
-    )
-
-
-def _collect_dataflash(source: str) -> _Raw:
-    """One pass over a DataFlash log: ATT, POS (else GPS), RAD and the home (ORGN type 1)."""
-    conn = _open(_mavutil(), source)
-    rows: dict[str, list[tuple[float, ...]]] = {k: [] for k in _DF_TYPES}
-    home = None
-    utc: list[float] = []
-    while True:
-        try:
-            msg = conn.recv_match(type=_DF_TYPES)
-        except Exception as exc:
-            raise LogFormatError(f"{source}: corrupt DataFlash data ({type(exc).__name__}: {exc})") from None
-        if msg is None:
-            break
-        kind = msg.get_type()
-        t = msg.TimeUS * 1e-6 if hasattr(msg, "TimeUS") else msg.TimeMS * 1e-3  # older logs: TimeMS
-        if kind == "ATT":
-            rows[kind].append((t, *np.radians([msg.Roll, msg.Pitch, msg.Yaw])))
-        elif kind == "POS" or (kind == "GPS" and msg.Status >= 3 and getattr(msg, "I", 0) == 0):
-            rows[kind].append((t, msg.Lat, msg.Lng, msg.Alt))
-            if kind == "GPS":
-                utc.append(float(msg._timestamp) - t)
-        elif kind == "RAD":
-            rows[kind].append((t, msg.RSSI, msg.RemRSSI))
-        elif kind == "ORGN" and msg.Type == 1 and home is None:
-            home = (float(msg.Lat), float(msg.Lng), float(msg.Alt))
-        else:
-            continue
-    counts = {k: len(v) for k, v in rows.items() if v}
-    if not rows["ATT"]:
-        raise LogFormatError(f"{source}: no ATT messages (the vehicle's attitude)")
-    pos_kind = "POS" if rows["POS"] else "GPS"
-    # the vehicle logs itself throughout: its stream is never absent
-    return _Raw(
-        fmt="dataflash", att=_arr(rows["ATT"], 4), pos=_arr(rows[pos_kind], 4), radio=_arr(rows["RAD"], 3),
-        vehicle_t=np.array([]), home=home, counts=counts,
-        notes={"position_message": pos_kind, "time_reference": "TimeUS, seconds since the autopilot booted",
-               "utc_offset_s": float(np.median(utc)) if utc else None},
-    )
-
-
 def _station(
-    raw: _Raw, station_geodetic: tuple[float, float, float] | None
+    raw: Raw, station_geodetic: tuple[float, float, float] | None, first_fix: np.ndarray
 ) -> tuple[tuple[float, float, float], str]:
     """Geodetic position of the ground station (lat, lon [deg], alt [m]) and where it came from."""
     if station_geodetic is not None:
@@ -344,7 +164,7 @@ def _station(
     home = "HOME_POSITION" if raw.fmt == "tlog" else "ORGN type 1 (home)"
     if raw.home is not None:
         return raw.home, f"station placed at the vehicle's home from {home}"
-    lat, lon, alt = (float(v) for v in raw.pos[0, 1:4])
+    lat, lon, alt = (float(v) for v in first_fix[1:4])
     return (lat, lon, alt), f"station placed at the vehicle's first position fix (no {home} in the log)"
 
 
@@ -354,32 +174,73 @@ def _increasing(t: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, np.ndarr
     return t_u, values[first]
 
 
-def _vehicle_pose(raw: _Raw, origin: tuple[float, float, float], max_gap_s: float, node: str,
-                  source: str, dropped: dict[str, int]) -> pd.DataFrame:
-    """Pose rows at the attitude instants, positions (ENU [m] around ``origin``) interpolated."""
-    att, pos = raw.att, raw.pos
-    ok = np.all(np.isfinite(att), axis=1)
-    dropped["nan_attitude"] = int((~ok).sum())
-    att = att[ok]
-    pos = pos[np.all(np.isfinite(pos), axis=1)]
+def _step_state(t: np.ndarray, events: np.ndarray, default: float) -> np.ndarray:
+    """The value of the latest event (rows ``t, value``) at or before each time; before the
+    first event, the first event's value (``default`` without events)."""
+    if not len(events):
+        return np.full(len(t), default)
+    order = np.argsort(events[:, 0], kind="stable")
+    et, ev = events[order, 0], events[order, 1]
+    return ev[np.clip(np.searchsorted(et, t, side="right") - 1, 0, len(et) - 1)]
+
+
+def _fixes(raw: Raw, source: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[dict[str, Any]]]:
+    """The position fixes (times, rows of ``raw.pos``) sorted, which are valid, and the excluded
+    periods (:mod:`rplearn.io.mavlink_phases`)."""
+    pos = raw.pos[np.all(np.isfinite(raw.pos[:, :4]), axis=1)]
     if len(pos) < 2:
         what = "GLOBAL_POSITION_INT" if raw.fmt == "tlog" else "POS or GPS"
         raise LogFormatError(f"{source}: fewer than 2 {what} position fixes of the vehicle")
+    tp, pos = _increasing(pos[:, 0], pos)
+    enu = geodetic_to_enu(pos[:, 1], pos[:, 2], pos[:, 3], tuple(pos[0, 1:4]))  # steps only: any origin
+    times = np.concatenate([raw.att[:, 0], tp, raw.radio[:, 0]])
+    boot = pos[:, 6].astype(np.int64)
+    fix_ok = _step_state(tp, raw.fix, 1.0) > 0.5
+    invalid, steps = phases.invalid_fixes(tp, enu, pos[:, 4], pos[:, 5], boot, fix_ok)
+    name = "HOME_POSITION or GPS_GLOBAL_ORIGIN" if raw.fmt == "tlog" else "ORGN"
+    periods = phases.excluded_periods(tp, invalid, boot, raw.boot_last_t, float(np.nanmin(times)),
+                                      float(np.nanmax(times)), steps, fix_ok, raw.origin_t, name)
+    if (~invalid).sum() < 2:
+        raise LogFormatError(f"{source}: fewer than 2 valid position fixes of the vehicle "
+                             f"({int(invalid.sum())} before a valid position solution)")
+    return tp, pos, ~invalid, periods
+
+
+def _vehicle_pose(raw: Raw, fixes: tuple[np.ndarray, np.ndarray, np.ndarray, list[dict[str, Any]]],
+                  origin: tuple[float, float, float], max_gap_s: float, node: str,
+                  dropped: dict[str, int]) -> pd.DataFrame:
+    """Pose rows at the attitude instants, positions (ENU [m] around ``origin``) interpolated
+    from the valid fixes, rows in excluded periods dropped (counted in the periods)."""
+    tp, pos, valid, periods = fixes
+    att = raw.att
+    ok = np.all(np.isfinite(att[:, :4]), axis=1)
+    dropped["nan_attitude"] = int((~ok).sum())
+    att = att[ok]
     n_att = len(att)
     ta, att_v = _increasing(att[:, 0], att[:, 1:4])
     dropped["duplicate_time"] = n_att - len(ta)
-    tp, geo = _increasing(pos[:, 0], pos[:, 1:4])
+    where = phases.in_periods(ta, periods)
+    for reason in phases.REASONS:
+        dropped[reason] = 0
+    for k, p in enumerate(periods):
+        p["pose_rows"] = int((where == k).sum())
+        dropped[p["reason"]] += p["pose_rows"]
+    tp, geo = tp[valid], pos[valid, 1:4]
     enu = geodetic_to_enu(geo[:, 0], geo[:, 1], geo[:, 2], origin)
-    out = (ta < tp[0]) | (ta > tp[-1])
+    inside = where >= 0
+    out = ((ta < tp[0]) | (ta > tp[-1])) & ~inside
     i = np.clip(np.searchsorted(tp, ta, side="right") - 1, 0, len(tp) - 2)
-    gap = ((tp[i + 1] - tp[i]) > max_gap_s) & (ta != tp[i]) & (ta != tp[i + 1]) & ~out  # an instant at a fix is not in a gap
+    gap = ((tp[i + 1] - tp[i]) > max_gap_s) & (ta != tp[i]) & (ta != tp[i + 1]) & ~out & ~inside  # an instant at a fix is not in a gap
     dropped["out_of_span"], dropped["gap"] = int(out.sum()), int(gap.sum())
-    keep = ~(out | gap)
+    keep = ~(out | gap | inside)
     t = ta[keep]
     xyz = np.stack([np.interp(t, tp, enu[:, j]) for j in range(3)], axis=-1)
     q = quat_from_ned_euler_rad(att_v[keep, 0], att_v[keep, 1], att_v[keep, 2])
-    return pd.DataFrame({"t": t, "node": node, "x": xyz[:, 0], "y": xyz[:, 1], "z": xyz[:, 2],
-                         "qw": q[:, 0], "qx": q[:, 1], "qy": q[:, 2], "qz": q[:, 3]})
+    frame = pd.DataFrame({"t": t, "node": node, "x": xyz[:, 0], "y": xyz[:, 1], "z": xyz[:, 2],
+                          "qw": q[:, 0], "qx": q[:, 1], "qy": q[:, 2], "qz": q[:, 3]})
+    if len(raw.armed):
+        frame["armed"] = _step_state(t, raw.armed, 0.0) > 0.5
+    return frame
 
 
 def stream_present(t: np.ndarray, stream_t: np.ndarray, timeout_s: float) -> np.ndarray:
@@ -394,10 +255,18 @@ def stream_present(t: np.ndarray, stream_t: np.ndarray, timeout_s: float) -> np.
     return np.minimum(before, after) <= timeout_s
 
 
-def _signal(raw: _Raw, vehicle: str, station: str, tx_power_dbm: float | Mapping[str, float],
-            frequency_hz: float, stream_timeout_s: float, counts: dict[str, int]) -> pd.DataFrame:
-    """Both directions of the telemetry link, link-lost messages and unusable values dropped."""
-    t, rssi, remrssi = raw.radio[:, 0], raw.radio[:, 1], raw.radio[:, 2]
+def _signal(raw: Raw, vehicle: str, station: str, tx_power_dbm: float | Mapping[str, float],
+            frequency_hz: float, stream_timeout_s: float, counts: dict[str, int],
+            periods: list[dict[str, Any]]) -> pd.DataFrame:
+    """Both directions of the telemetry link: one row per reading, link-lost messages, unusable
+    values and rows in excluded periods dropped."""
+    radio = raw.radio[np.argsort(raw.radio[:, 0], kind="stable")]
+    copy, period = phases.repeated_readings(radio[:, 0], radio[:, 1:])
+    counts["duplicate_reading"] = int(copy.sum())
+    raw.notes["radio_report_period_s"] = period
+    radio = radio[~copy]
+    t, rssi, remrssi = radio[:, 0], radio[:, 1], radio[:, 2]
+    where = phases.in_periods(t, periods)
     zero = (rssi == 0) | (remrssi == 0)
     # in the vehicle's own (DataFlash) log a zero always means the link dropped
     present = (np.zeros(len(t), bool) if raw.fmt == "dataflash"
@@ -412,6 +281,10 @@ def _signal(raw: _Raw, vehicle: str, station: str, tx_power_dbm: float | Mapping
         unknown, censored = (value == _UNKNOWN) & ~lost, (value == 0) & ~lost
         counts[f"unknown_{name}"], counts[f"zero_{name}"] = int(unknown.sum()), int(censored.sum())
         keep = ~(lost | unknown | censored)
+        for k, p in enumerate(periods):
+            p["signal_rows"] = p.get("signal_rows", 0) + int((keep & (where == k)).sum())
+            counts[p["reason"]] = counts.get(p["reason"], 0) + int((keep & (where == k)).sum())
+        keep &= where < 0
         ptx = tx_power_dbm.get(tx) if isinstance(tx_power_dbm, Mapping) else tx_power_dbm
         if ptx is None:
             raise InputError(f"tx_power_dbm: no transmit power [dBm] for node {tx}", param="tx_power_dbm")
@@ -422,6 +295,21 @@ def _signal(raw: _Raw, vehicle: str, station: str, tx_power_dbm: float | Mapping
         }))
         counts[f"rows_{name}"] = int(keep.sum())
     return pd.concat(parts, ignore_index=True).sort_values("t", kind="stable").reset_index(drop=True)
+
+
+def _hygiene_notes(source: str, periods: list[dict[str, Any]], counts: dict[str, int], raw: Raw) -> list[str]:
+    """One line per excluded period and one for merged copies of radio readings."""
+    notes = []
+    for p in periods:
+        p.setdefault("signal_rows", 0)
+        notes.append(f"{source}: excluded {p['reason']} from t = {p['from_t']:.3f} to {p['to_t']:.3f} s "
+                     f"({p['to_t'] - p['from_t']:.1f} s): {p['pose_rows']:,} pose row(s) and {p['signal_rows']:,} "
+                     f"signal row(s) dropped ({p['detail']})")
+    period = raw.notes.get("radio_report_period_s")
+    if counts.get("duplicate_reading"):
+        notes.append(f"{source}: {counts['duplicate_reading']:,} radio report(s) repeated the reading before them "
+                     f"within a quarter of the {period:.3g} s report period and were merged: one row per reading")
+    return notes
 
 
 def _detect(source: str) -> str:
@@ -529,7 +417,7 @@ def read_mavlink(
     station_geodetic = _check_origin(station_geodetic, "station_geodetic")
     origin_geodetic = _check_origin(origin_geodetic, "origin_geodetic")
     fmt = _detect(source)
-    raw = _collect_tlog(source, system_id) if fmt == "tlog" else _collect_dataflash(source)
+    raw = collect_tlog(source, system_id) if fmt == "tlog" else collect_dataflash(source)
     if not len(raw.radio):
         what = "RADIO_STATUS (id 109) or RADIO (id 166)" if fmt == "tlog" else "RAD"
         raise LogFormatError(f"{source}: no {what} messages: the log holds no telemetry-radio RSSI")
@@ -539,19 +427,24 @@ def read_mavlink(
     vehicle = vehicle or f"sys{raw.notes.get('system_id', 1)}"
     if vehicle == station:
         raise InputError(f"vehicle and station must differ, both are {vehicle!r}", param="station")
-    station_geo, station_note = _station(raw, station_geodetic)
+    fixes = _fixes(raw, source)
+    station_geo, station_note = _station(raw, station_geodetic, fixes[1][fixes[2]][0])
     origin = station_geo if origin_geodetic is None else tuple(float(v) for v in origin_geodetic)
     dropped: dict[str, int] = {}
-    pose = _vehicle_pose(raw, origin, float(max_gap_s), vehicle, source, dropped)  # type: ignore[arg-type]
+    pose = _vehicle_pose(raw, fixes, origin, float(max_gap_s), vehicle, dropped)  # type: ignore[arg-type]
     s_xyz = geodetic_to_enu(*station_geo, origin)  # type: ignore[arg-type]
     t0 = float(min(raw.radio[0, 0], pose["t"].iloc[0] if len(pose) else np.inf))
     heading = 90.0 if station_heading_deg is None else float(station_heading_deg)
     sq = quat_wxyz_from_euler_ned_frd_deg(0.0, 0.0, heading)
     station_row = pd.DataFrame({"t": [t0], "node": [station], "x": [s_xyz[0]], "y": [s_xyz[1]], "z": [s_xyz[2]],
                                 "qw": [sq[0]], "qx": [sq[1]], "qy": [sq[2]], "qz": [sq[3]]})
+    if "armed" in pose:
+        station_row["armed"] = False
     pose = validate_pose_log(pd.concat([pose, station_row], ignore_index=True), source)
     sig_counts: dict[str, int] = {}
-    signal = _signal(raw, vehicle, station, tx_power_dbm, float(frequency_hz), float(stream_timeout_s), sig_counts)
+    periods = fixes[3]
+    signal = _signal(raw, vehicle, station, tx_power_dbm, float(frequency_hz), float(stream_timeout_s), sig_counts,
+                     periods)
     signal = validate_signal_log(signal, source)
     cut, cut_name, corrupt = (dataflash_cut_off_at(source) if fmt == "dataflash"
                               else (raw.notes.pop("cut_off_at_byte", None), raw.notes.pop("cut_off_record", None), 0))
@@ -561,6 +454,7 @@ def read_mavlink(
     notes = [f"{source}: {station_note}", f"{source}: station {station!r} {heading_note}",
              (f"{source}: {lost:,} radio message(s) with a zero RSSI while the vehicle was silent "
               "(link lost) dropped, both directions")]
+    notes += _hygiene_notes(source, periods, sig_counts, raw)
     if cut is not None:
         notes.append(f"{source}: the file is cut off inside {'a ' + cut_name if cut_name else 'a'} record at byte "
                      f"{cut:,}: that message is lost, the complete ones before it are read")
@@ -569,7 +463,10 @@ def read_mavlink(
         "station_geodetic": station_geo, "station_note": station_note,
         "origin_geodetic": origin, "messages": raw.counts, "dropped": dropped,
         "signal": sig_counts, "rows": int((pose["node"] == vehicle).sum()),
-        "cut_off_at_byte": cut, "cut_off_record": cut_name, "corrupt_bytes": int(corrupt), **raw.notes,
+        "cut_off_at_byte": cut, "cut_off_record": cut_name, "corrupt_bytes": int(corrupt),
+        "reboots": len(raw.boot_last_t) - 1 if len(raw.boot_last_t) else 0,
+        "excluded_periods": [{k: p[k] for k in ("reason", "from_t", "to_t", "pose_rows", "signal_rows", "detail")}
+                             for p in periods], **raw.notes,
     }
     return Logs(pose=pose, signal=signal), meta
 

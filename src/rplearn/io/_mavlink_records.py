@@ -1,0 +1,273 @@
+"""One pass over an ArduPilot ``.tlog`` or DataFlash log into plain arrays, for
+:mod:`rplearn.io.mavlink` (which documents the messages and their units)."""
+
+from __future__ import annotations
+
+import os
+import sys
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from rplearn.errors import InputError, LogFormatError
+from rplearn.io.mavlink_phases import REBOOT_STEP_S
+
+_RADIO_TYPES = ("RADIO_STATUS", "RADIO")
+_ORIGIN_TYPES = ("HOME_POSITION", "GPS_GLOBAL_ORIGIN")
+_TLOG_TYPES = ["ATTITUDE", "GLOBAL_POSITION_INT", *_ORIGIN_TYPES, "GPS_RAW_INT", "HEARTBEAT", *_RADIO_TYPES]
+_DF_TYPES = ["ATT", "POS", "GPS", "ORGN", "RAD", "ARM", "EV"]
+#: ``base_mode`` bit of an armed vehicle (MAV_MODE_FLAG_SAFETY_ARMED) and the GCS's MAV_TYPE.
+_ARMED_FLAG, _MAV_TYPE_GCS = 128, 6
+#: DataFlash EV ids of arming and disarming (ArduPilot LogEvent ARMED = 10, DISARMED = 11).
+_EV_ARMED, _EV_DISARMED = 10, 11
+
+
+@dataclass
+class Raw:
+    """What one pass over a log gave, as plain arrays (times [s] on the log's clock)."""
+
+    fmt: str
+    att: np.ndarray  # (n, 5): t, roll, pitch, yaw [rad], boot
+    pos: np.ndarray  # (n, 7): t, lat [deg], lon [deg], alt [m], horizontal, vertical speed [m/s] (NaN: none), boot
+    radio: np.ndarray  # (n, 7): t, rssi, remrssi (raw SiK units), noise, remnoise, rxerrors, fixed
+    vehicle_t: np.ndarray  # receive times of the vehicle's messages (tlog) [s]
+    home: tuple[float, float, float] | None
+    boot_last_t: np.ndarray = field(default_factory=lambda: np.zeros(0))  # last vehicle message per boot [s]
+    origin_t: np.ndarray = field(default_factory=lambda: np.zeros(0))  # times of origin messages [s]
+    fix: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))  # (n, 2): t, 3-D fix (1) or not (0)
+    armed: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))  # (n, 2): t, armed (1) or not (0)
+    counts: dict[str, int] = field(default_factory=dict)
+    notes: dict[str, Any] = field(default_factory=dict)
+
+
+def _arr(rows: list[tuple[float, ...]], width: int) -> np.ndarray:
+    return np.asarray(rows, np.float64).reshape(-1, width)
+
+
+def _mavutil() -> Any:
+    try:
+        from pymavlink import mavutil
+    except ImportError:  # pragma: no cover - pymavlink is a dependency
+        raise InputError("reading MAVLink logs needs the 'pymavlink' package (pip install pymavlink)") from None
+    return mavutil
+
+
+def _open(source: str) -> Any:
+    try:
+        return _mavutil().mavlink_connection(source, dialect="ardupilotmega")
+    except Exception as exc:
+        msg = str(exc).splitlines()[0] if str(exc) else ""
+        raise LogFormatError(f"{source}: cannot read MAVLink log ({type(exc).__name__}: {msg})") from None
+
+
+def boot_offsets(t_recv: np.ndarray, t_boot: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per message, the median ``t_recv - t_boot`` [s] of its boot and the boot's number (a
+    new boot where the boot clock steps back by more than ``REBOOT_STEP_S``, in receive order)."""
+    order = np.argsort(t_recv, kind="stable")
+    boot_sorted = t_boot[order]
+    seg_sorted = np.concatenate([[0], np.cumsum(np.diff(boot_sorted) < -REBOOT_STEP_S)])
+    seg = np.empty_like(seg_sorted)
+    seg[order] = seg_sorted
+    out = np.empty(len(t_recv))
+    for s in np.unique(seg):
+        m = seg == s
+        out[m] = np.median(t_recv[m] - t_boot[m])
+    return out, seg
+
+
+def _tlog_cut_off(conn: Any, source: str, whole_to: int) -> dict[str, Any]:
+    """Where a tlog ends inside a record (its 8-byte time or its MAVLink frame), given the byte
+    ``whole_to`` where its last whole record ends: ``cut_off_at_byte`` (the cut record's start;
+    None when the file ends whole) and ``cut_off_record`` (the message name when its frame's
+    header is there, else None)."""
+    size = os.path.getsize(source)
+    if size <= whole_to:
+        return {"cut_off_at_byte": None, "cut_off_record": None}
+    try:
+        head = bytes(conn.mav.buf[conn.mav.buf_index:conn.mav.buf_index + 10]) if conn.mav.buf_len() else b""
+    except (AttributeError, TypeError, ValueError):  # pragma: no cover - a pymavlink without these
+        head = b""
+    msgid = head[5] if head[:1] == b"\xfe" and len(head) > 5 else (
+        int.from_bytes(head[7:10], "little") if head[:1] == b"\xfd" and len(head) >= 10 else None)
+    table = getattr(sys.modules.get(type(conn.mav).__module__), "mavlink_map", {})
+    kind = table.get(msgid) if msgid is not None else None
+    return {"cut_off_at_byte": int(whole_to), "cut_off_record": getattr(kind, "msgname", None) if kind is not None else None}
+
+
+def _tlog_row(kind: str, msg: Any, src: int, t: float) -> tuple[Any, ...]:
+    """The fields of one tlog message the reader uses (units: module docstring of mavlink.py)."""
+    if kind == "ATTITUDE":
+        return (src, t, msg.time_boot_ms * 1e-3, msg.roll, msg.pitch, msg.yaw)
+    if kind == "GLOBAL_POSITION_INT":
+        return (src, t, msg.time_boot_ms * 1e-3, msg.lat * 1e-7, msg.lon * 1e-7, msg.alt * 1e-3,
+                np.hypot(msg.vx, msg.vy) * 1e-2, abs(msg.vz) * 1e-2)
+    if kind == "HOME_POSITION":
+        return (src, t, msg.latitude * 1e-7, msg.longitude * 1e-7, msg.altitude * 1e-3)
+    if kind == "GPS_GLOBAL_ORIGIN":
+        return (src, t, msg.latitude * 1e-7, msg.longitude * 1e-7, msg.altitude * 1e-3)
+    if kind == "GPS_RAW_INT":
+        return (src, t, float(msg.fix_type >= 3))
+    if kind == "HEARTBEAT":
+        return (src, t, float(msg.base_mode & _ARMED_FLAG != 0), msg.type)
+    return (t, msg.rssi, msg.remrssi, msg.noise, msg.remnoise, msg.rxerrors, msg.fixed)
+
+
+def collect_tlog(source: str, system_id: int | None) -> Raw:
+    """One pass over a ``.tlog``: attitude, position, origin, fix, armed state, radio."""
+    conn = _open(source)
+    rows: dict[str, list[tuple[Any, ...]]] = {k: [] for k in _TLOG_TYPES}
+    by_sys: dict[int, list[float]] = {}
+    counts: dict[str, int] = {}
+    radio_senders: dict[str, int] = {}
+    whole_to = 0
+    while True:
+        try:
+            msg = conn.recv_msg()
+        except Exception as exc:
+            raise LogFormatError(f"{source}: corrupt MAVLink data ({type(exc).__name__}: {exc})") from None
+        if msg is None:
+            break
+        whole_to = conn.f.tell() - conn.mav.buf_len()  # where the records read so far end
+        kind = msg.get_type()
+        if kind == "BAD_DATA":
+            counts["BAD_DATA"] = counts.get("BAD_DATA", 0) + 1
+            continue
+        t, sysid = float(msg._timestamp), int(msg.get_srcSystem())
+        by_sys.setdefault(sysid, []).append(t)
+        if kind not in rows:
+            continue
+        counts[kind] = counts.get(kind, 0) + 1
+        src = sysid * 256 + int(msg.get_srcComponent())  # a gimbal may send ATTITUDE too
+        rows[kind].append(_tlog_row(kind, msg, src, t))
+        if kind in _RADIO_TYPES:
+            key = f"{sysid}/{msg.get_srcComponent()}"
+            radio_senders[key] = radio_senders.get(key, 0) + 1
+    cut_off = _tlog_cut_off(conn, source, whole_to)
+    att = _arr(rows["ATTITUDE"], 6)
+    if not len(att):
+        raise LogFormatError(f"{source}: no ATTITUDE messages (the vehicle's attitude)")
+    srcs, n = np.unique(att[:, 0].astype(int), return_counts=True)
+    if system_id is not None:
+        if int(system_id) not in srcs // 256:
+            raise InputError(f"{source}: no ATTITUDE messages from system id {system_id} "
+                             f"(it has {', '.join(map(str, np.unique(srcs // 256)))})", param="system_id")
+        srcs, n = srcs[srcs // 256 == int(system_id)], n[srcs // 256 == int(system_id)]
+    chosen = int(srcs[np.argmax(n)])  # the (system, component) sending most ATTITUDE
+    vehicle = chosen // 256
+    att = att[att[:, 0] == chosen]
+    gpi = _arr(rows["GLOBAL_POSITION_INT"], 8)
+    gpi = gpi[(gpi[:, 0] == chosen) & ((gpi[:, 3] != 0) | (gpi[:, 4] != 0))]
+    both = np.concatenate([att[:, 1:3], gpi[:, 1:3]])
+    boot_clock = len(np.unique(att[:, 2])) >= 0.9 * len(att)  # some senders leave time_boot_ms at 0
+    if boot_clock:
+        offset, boot = boot_offsets(both[:, 0], both[:, 1])
+    else:
+        offset, boot = both[:, 0] - both[:, 1], np.zeros(len(both), np.int64)
+    t_log = both[:, 1] + offset
+    boot_last_t = np.array([t_log[boot == b].max() for b in range(int(boot.max()) + 1)]) if len(boot) else np.zeros(0)
+    home = [h for h in rows["HOME_POSITION"] if h[0] // 256 == vehicle and (h[2] != 0 or h[3] != 0)]
+    origin = [h[1] for k in _ORIGIN_TYPES for h in rows[k] if h[0] // 256 == vehicle and (h[2] != 0 or h[3] != 0)]
+    fix = [r[1:] for r in rows["GPS_RAW_INT"] if r[0] // 256 == vehicle]
+    beats = [r[1:3] for r in rows["HEARTBEAT"] if r[0] // 256 == vehicle and r[3] != _MAV_TYPE_GCS]
+    radio = [*rows["RADIO_STATUS"], *rows["RADIO"]]
+    n_att = len(att)
+    return Raw(
+        fmt="tlog",
+        att=np.column_stack([t_log[:n_att], att[:, 3:6], boot[:n_att]]),
+        pos=np.column_stack([t_log[n_att:], gpi[:, 3:8], boot[n_att:]]),
+        radio=_arr(sorted(radio), 7), vehicle_t=np.sort(np.asarray(by_sys.get(vehicle, []), np.float64)),
+        home=tuple(float(v) for v in home[0][2:]) if home else None, counts=counts,
+        boot_last_t=boot_last_t, origin_t=np.sort(np.asarray(origin, np.float64)), fix=_arr(sorted(fix), 2),
+        armed=_arr(sorted(beats), 2),
+        notes={"system_id": vehicle, "component_id": chosen % 256, "radio_senders": radio_senders, **cut_off,
+               "clock_offset_s": float(np.median(offset)) if len(offset) and boot_clock else None,
+               "time_reference": "ground station receive time, seconds since the UNIX epoch"
+                                 + (" (vehicle messages through time_boot_ms + median offset)" if boot_clock else "")},
+    )
+
+
+def _df_chain(boot_t: list[tuple[float, int]]) -> tuple[dict[int, float], np.ndarray]:
+    """Offsets [s] that put each later boot's TimeUS right after the previous boot's last record
+    (a DataFlash log holds no clock across a reboot), and each boot's last time on that clock."""
+    last: dict[int, float] = {}
+    first: dict[int, float] = {}
+    for t, b in boot_t:
+        last[b] = max(last.get(b, t), t)
+        first[b] = min(first.get(b, t), t)
+    offsets, ends = {0: 0.0}, []
+    for b in range(max(last) + 1 if last else 0):
+        if b > 0:
+            offsets[b] = ends[-1] + REBOOT_STEP_S - first.get(b, 0.0)
+        ends.append(last.get(b, first.get(b, 0.0)) + offsets[b])
+    return offsets, np.asarray(ends, np.float64)
+
+
+def collect_dataflash(source: str) -> Raw:
+    """One pass over a DataFlash log: ATT, POS (else GPS), RAD, ORGN, GPS status, ARM and EV."""
+    conn = _open(source)
+    rows: dict[str, list[tuple[float, ...]]] = {k: [] for k in _DF_TYPES}
+    home = None
+    utc: list[float] = []
+    boot, last_t, boot_t = 0, -np.inf, []
+    fix_rows: list[tuple[float, ...]] = []
+    arm_rows: list[tuple[float, ...]] = []
+    while True:
+        try:
+            msg = conn.recv_match(type=_DF_TYPES)
+        except Exception as exc:
+            raise LogFormatError(f"{source}: corrupt DataFlash data ({type(exc).__name__}: {exc})") from None
+        if msg is None:
+            break
+        kind = msg.get_type()
+        t = msg.TimeUS * 1e-6 if hasattr(msg, "TimeUS") else msg.TimeMS * 1e-3  # older logs: TimeMS
+        if t < last_t - REBOOT_STEP_S:
+            boot += 1
+        last_t = t
+        boot_t.append((t, boot))
+        if kind == "ATT":
+            rows[kind].append((t, *np.radians([msg.Roll, msg.Pitch, msg.Yaw]), boot))
+        elif kind == "POS":
+            rows[kind].append((t, msg.Lat, msg.Lng, msg.Alt, np.nan, np.nan, boot))
+        elif kind == "GPS" and getattr(msg, "I", 0) == 0:
+            fix_rows.append((t, float(msg.Status >= 3), boot))
+            if msg.Status >= 3:
+                rows[kind].append((t, msg.Lat, msg.Lng, msg.Alt, getattr(msg, "Spd", np.nan),
+                                   abs(getattr(msg, "VZ", np.nan)), boot))
+                utc.append(float(msg._timestamp) - t)
+        elif kind == "RAD":
+            rows[kind].append((t, msg.RSSI, msg.RemRSSI, msg.Noise, msg.RemNoise, msg.RxErrors, msg.Fixed, boot))
+        elif kind == "ORGN":
+            rows[kind].append((t, boot))
+            if msg.Type == 1 and home is None:
+                home = (float(msg.Lat), float(msg.Lng), float(msg.Alt))
+        elif kind == "ARM":
+            arm_rows.append((t, float(msg.ArmState != 0), boot))
+        elif kind == "EV" and msg.Id in (_EV_ARMED, _EV_DISARMED):
+            arm_rows.append((t, float(msg.Id == _EV_ARMED), boot))
+    offsets, ends = _df_chain(boot_t)
+
+    def chained(a: np.ndarray, tcol: int, bcol: int) -> np.ndarray:
+        if len(a):
+            a[:, tcol] += np.array([offsets[int(b)] for b in a[:, bcol]])
+        return a
+
+    counts = {k: len(v) for k, v in rows.items() if v}
+    if not rows["ATT"]:
+        raise LogFormatError(f"{source}: no ATT messages (the vehicle's attitude)")
+    pos_kind = "POS" if rows["POS"] else "GPS"
+    orgn = chained(_arr(rows["ORGN"], 2), 0, 1)
+    # the vehicle logs itself throughout: its stream is never absent
+    return Raw(
+        fmt="dataflash", att=chained(_arr(rows["ATT"], 5), 0, 4), pos=chained(_arr(rows[pos_kind], 7), 0, 6),
+        radio=chained(_arr(rows["RAD"], 8), 0, 7)[:, :7], vehicle_t=np.array([]), home=home, counts=counts,
+        boot_last_t=ends, origin_t=orgn[:, 0],
+        fix=chained(_arr(fix_rows, 3), 0, 2)[:, :2], armed=chained(_arr(arm_rows, 3), 0, 2)[:, :2],
+        notes={"position_message": pos_kind,
+               "time_reference": "TimeUS, seconds since the autopilot booted"
+                                 + (" (later boots placed right after the previous one)" if len(ends) > 1 else ""),
+               "utc_offset_s": float(np.median(utc)) if utc else None},
+    )
+
+
+__all__ = ["Raw", "boot_offsets", "collect_dataflash", "collect_tlog"]
