@@ -25,7 +25,9 @@ readers, :func:`~rplearn.io.inspect.inspect_logs`, pattern export
 :func:`~rplearn.io.export.read_msi`) and model files
 (:func:`~rplearn.io.modelfile.read_model_file`, :func:`~rplearn.io.modelfile.write_model_file`),
 and a vehicle-to-station flight as a MAVLink telemetry log (:func:`~rplearn.io.tlog.write_tlog`,
-the inverse of the ``.tlog`` reader, for simulated flights).
+the inverse of the ``.tlog`` reader, for simulated flights, with the defects of real logs:
+:class:`~rplearn.io.tlog.TlogDefects`) or a DataFlash log
+(:func:`~rplearn.io.dataflash_writer.write_dataflash`).
 """
 
 from __future__ import annotations
@@ -70,6 +72,8 @@ _NAMES: dict[str, str] = {
     "read_mavlink": "mavlink",
     "sik_rssi_to_dbm": "mavlink",
     "write_tlog": "tlog",
+    "TlogDefects": "tlog",
+    "write_dataflash": "dataflash_writer",
     "dbm_to_sik_rssi": "tlog",
     "NAN_POLICIES": "options",
     "geodetic_to_enu": "geodetic",

@@ -9,15 +9,23 @@ What is written (MAVLink 2 frames of the ``ardupilotmega`` dialect, each after t
 8-byte big-endian receive time [us since the UNIX epoch]):
 
 - per vehicle pose row, ``ATTITUDE`` (NED/FRD roll, pitch, yaw [rad] from the FLU -> ENU
-  quaternion) and ``GLOBAL_POSITION_INT`` (lat, lon [1e-7 deg], alt [mm]) from system
-  ``system_id``, component 1, with ``time_boot_ms`` = the row's time on a boot clock;
-- one ``HOME_POSITION`` with the station's position (the median of its pose rows, which may
-  spread by estimator noise but not move: :func:`station_pose`); its attitude is not loggable:
-  pass the returned ``station_heading_deg`` back to the reader;
+  quaternion) and ``GLOBAL_POSITION_INT`` (lat, lon [1e-7 deg], alt [mm], NED velocity vx,
+  vy, vz [cm/s] from finite differences of the positions) from system ``system_id``,
+  component 1, with ``time_boot_ms`` = the row's time on a boot clock; a ``HEARTBEAT`` (a
+  quadrotor, ``base_mode`` armed) at the first row of each second;
+- one ``HOME_POSITION`` and one ``GPS_GLOBAL_ORIGIN`` with the station's position (the median
+  of its pose rows, which may spread by estimator noise but not move: :func:`station_pose`);
+  its attitude is not loggable: pass the returned ``station_heading_deg`` back to the reader;
 - per signal row, one ``RADIO_STATUS`` from the ground radio (system 51, component 68, as SiK
   firmware sends it) with the row's RSSI in SiK units, ``round((dBm + 127) * 1.9)`` clipped to
   1-254 (0 means link lost and 255 unknown), in ``rssi`` when the station received it and in
   ``remrssi`` when the vehicle did; the other field is 255 (unknown).
+
+:class:`TlogDefects` writes what real logs hold into such a clean flight: positions before
+the EKF origin is set (the altitude at a fixed wrong value, no ``HOME_POSITION`` yet, the
+vehicle disarmed), a reboot (``time_boot_ms`` restarts after a silent gap, then positions
+invalid again until the origin is set anew), and every radio reading written twice (as
+``RADIO_STATUS`` and as ``RADIO``).
 
 Positions go through WGS-84 geodetic coordinates around ``origin_geodetic``; ``tx_power_dbm``
 and ``frequency_hz`` are not loggable and must be given to the reader again.
@@ -27,6 +35,7 @@ from __future__ import annotations
 
 import os
 import struct
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -136,40 +145,140 @@ def station_pose(pose: pd.DataFrame, station: str) -> tuple[np.ndarray, float, f
     return centre, float(np.mod(90.0 - np.degrees(mean_yaw), 360.0)), spread
 
 
+@dataclass(frozen=True)
+class TlogDefects:
+    """Defects of real ground-station logs to write into a clean simulated flight (all off by default).
+
+    Attributes
+    ----------
+    invalid_until_s : float
+        For this long from the vehicle's first row [s], ``GLOBAL_POSITION_INT.alt`` reads
+        ``invalid_alt_m`` and no ``HOME_POSITION`` / ``GPS_GLOBAL_ORIGIN`` is sent (the EKF
+        origin is not set yet); the vehicle is disarmed.
+    invalid_alt_m : float
+        The altitude [m AMSL] an estimator without origin reports (0.8 m in a real log).
+    reboot_at_s : float or None
+        A reboot this long after the vehicle's first row [s]: the vehicle falls silent for
+        ``reboot_silence_s``, its ``time_boot_ms`` restarts, and the altitude reads
+        ``invalid_alt_m`` for ``invalid_after_reboot_s`` until the origin is set again.
+    reboot_silence_s, invalid_after_reboot_s : float
+        See ``reboot_at_s`` [s].
+    radio_twice : bool
+        Every radio reading is written as ``RADIO_STATUS`` and again as ``RADIO`` (id 166).
+    copy_delay_s : float
+        How long after the ``RADIO_STATUS`` its ``RADIO`` copy is received [s].
+    """
+
+    invalid_until_s: float = 0.0
+    invalid_alt_m: float = 0.8
+    reboot_at_s: float | None = None
+    reboot_silence_s: float = 10.0
+    invalid_after_reboot_s: float = 60.0
+    radio_twice: bool = False
+    copy_delay_s: float = 0.004
+
+    def __post_init__(self) -> None:
+        for name in ("invalid_until_s", "reboot_silence_s", "invalid_after_reboot_s", "copy_delay_s", "reboot_at_s"):
+            value = getattr(self, name)
+            if value is None and name == "reboot_at_s":
+                continue
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(value) or value < 0:
+                raise InputError(f"{name}: expected a non-negative number of seconds, got {value!r}", param=name)
+        if isinstance(self.invalid_alt_m, bool) or not isinstance(self.invalid_alt_m, (int, float)) \
+                or not np.isfinite(self.invalid_alt_m):
+            raise InputError(f"invalid_alt_m: expected metres, got {self.invalid_alt_m!r}", param="invalid_alt_m")
+
+    def phases(self, rel_s: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Per time since the vehicle's first row [s]: silent (rebooting), position invalid,
+        and the boot (0, or 1 after the reboot)."""
+        rel = np.asarray(rel_s, np.float64)
+        invalid = rel < self.invalid_until_s
+        silent = np.zeros(len(rel), bool)
+        boot = np.zeros(len(rel), np.int64)
+        if self.reboot_at_s is not None:
+            back = self.reboot_at_s + self.reboot_silence_s
+            silent = (rel >= self.reboot_at_s) & (rel < back)
+            invalid |= (rel >= back) & (rel < back + self.invalid_after_reboot_s)
+            boot = (rel >= self.reboot_at_s).astype(np.int64)
+        return silent, invalid, boot
+
+
+def vehicle_fields(pose: pd.DataFrame, vehicle: str, origin: tuple[float, float, float]) -> dict[str, np.ndarray]:
+    """The vehicle's rows as an autopilot logs them: ``t`` [s], ``lat``, ``lon`` [deg], ``alt``
+    [m AMSL], NED/FRD ``roll``, ``pitch``, ``yaw`` [rad] and NED velocity ``vel`` (n, 3) [m/s]
+    (finite differences of the positions)."""
+    veh = pose[pose["node"] == vehicle].sort_values("t", kind="stable")
+    t = veh["t"].to_numpy(np.float64)
+    ned = enu_to_ned(veh[["x", "y", "z"]].to_numpy(np.float64))
+    lat, lon, alt = local_ned_to_geodetic(ned, origin)
+    roll, pitch, yaw = euler_from_quat_wxyz(quat_enu_flu_to_ned_frd(veh[["qw", "qx", "qy", "qz"]].to_numpy(np.float64)))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        vel = np.stack([np.gradient(ned[:, j], t) for j in range(3)], axis=-1) if len(t) > 1 else np.zeros((len(t), 3))
+    vel = np.nan_to_num(vel, nan=0.0, posinf=0.0, neginf=0.0)
+    return {"t": t, "lat": lat, "lon": lon, "alt": alt, "roll": roll, "pitch": pitch, "yaw": yaw, "vel": vel}
+
+
+def _cm_s(v: np.ndarray) -> np.ndarray:
+    return np.clip(np.rint(v * 100.0), -32767, 32767).astype(np.int64)
+
+
 def _records(pose: pd.DataFrame, signal: pd.DataFrame, vehicle: str, station: str,
-             origin: tuple[float, float, float], start_unix_s: float, system_id: int) -> tuple[list[tuple[float, int, bytes]], dict[str, Any]]:
+             origin: tuple[float, float, float], start_unix_s: float, system_id: int,
+             defects: TlogDefects) -> tuple[list[tuple[float, int, bytes]], dict[str, Any]]:
     """(receive time [us], order, frame) of every message, and what was written."""
     mav = _dialect()
     air = mav.MAVLink(None, srcSystem=system_id, srcComponent=1)
     radio = mav.MAVLink(None, srcSystem=SIK_SYSTEM_ID, srcComponent=SIK_COMPONENT_ID)
-    veh = pose[pose["node"] == vehicle].sort_values("t", kind="stable")
-    t0 = float(min(veh["t"].iloc[0], signal["t"].min())) - BOOT_LEAD_S
-    xyz = veh[["x", "y", "z"]].to_numpy(np.float64)
-    lat, lon, alt = local_ned_to_geodetic(enu_to_ned(xyz), origin)
-    roll, pitch, yaw = euler_from_quat_wxyz(quat_enu_flu_to_ned_frd(veh[["qw", "qx", "qy", "qz"]].to_numpy(np.float64)))
-    boot_ms = np.rint((veh["t"].to_numpy(np.float64) - t0) * 1e3).astype(np.int64)
-    recv_us = start_unix_s * 1e6 + boot_ms * 1e3
+    v = vehicle_fields(pose, vehicle, origin)
+    t0 = float(min(v["t"][0], signal["t"].min())) - BOOT_LEAD_S
+    rel = v["t"] - v["t"][0]
+    silent, invalid, boot = defects.phases(rel)
+    boot_zero = np.where(boot > 0, v["t"][0] + (defects.reboot_at_s or 0.0) + 0.5 * defects.reboot_silence_s, t0)
+    boot_ms = np.rint((v["t"] - boot_zero) * 1e3).astype(np.int64)
+    recv_us = start_unix_s * 1e6 + np.rint((v["t"] - t0) * 1e6)
+    alt = np.where(invalid, defects.invalid_alt_m, v["alt"])
+    vx, vy, vz = (_cm_s(v["vel"][:, j]) for j in range(3))
     out: list[tuple[float, int, bytes]] = []
     sxyz, heading, spread = station_pose(pose, station)
-    slat, slon, salt = (float(v) for v in local_ned_to_geodetic(enu_to_ned(sxyz), origin))
-    home = air.home_position_encode(int(round(slat * 1e7)), int(round(slon * 1e7)), int(round(salt * 1e3)),
-                                    0.0, 0.0, 0.0, [1.0, 0.0, 0.0, 0.0], 0.0, 0.0, 0.0)
-    out.append((start_unix_s * 1e6, 0, home.pack(air)))
-    for i in range(len(veh)):
+    slat, slon, salt = (float(v_) for v_ in local_ned_to_geodetic(enu_to_ned(sxyz), origin))
+    home_lat, home_lon, home_alt = int(round(slat * 1e7)), int(round(slon * 1e7)), int(round(salt * 1e3))
+    valid = ~invalid & ~silent
+    # the origin is set (HOME_POSITION, GPS_GLOBAL_ORIGIN) at the first valid row of each boot
+    origin_rows = [int(np.flatnonzero(valid & (boot == b))[0]) for b in np.unique(boot) if np.any(valid & (boot == b))]
+    for i in origin_rows:
+        at = recv_us[i] if invalid.any() or i > 0 else start_unix_s * 1e6
+        out.append((float(at), 0, air.home_position_encode(home_lat, home_lon, home_alt, 0.0, 0.0, 0.0,
+                                                           [1.0, 0.0, 0.0, 0.0], 0.0, 0.0, 0.0).pack(air)))
+        out.append((float(at), 0, air.gps_global_origin_encode(home_lat, home_lon, home_alt).pack(air)))
+    second = np.floor(v["t"] - t0)
+    beat = np.concatenate([[True], second[1:] != second[:-1]]) & ~silent
+    counts = {"attitude": 0, "heartbeat": 0}
+    for i in np.flatnonzero(~silent):
         b = int(boot_ms[i])
-        att = air.attitude_encode(b, float(roll[i]), float(pitch[i]), float(yaw[i]), 0.0, 0.0, 0.0)
-        gpi = air.global_position_int_encode(b, int(round(lat[i] * 1e7)), int(round(lon[i] * 1e7)),
-                                             int(round(alt[i] * 1e3)), int(round((alt[i] - salt) * 1e3)), 0, 0, 0, 65535)
+        if beat[i]:
+            base = 128 if valid[i] else 0  # MAV_MODE_FLAG_SAFETY_ARMED once the origin is set
+            out.append((float(recv_us[i]), 0, air.heartbeat_encode(2, 3, base | 1, 0, 4).pack(air)))
+            counts["heartbeat"] += 1
+        att = air.attitude_encode(b, float(v["roll"][i]), float(v["pitch"][i]), float(v["yaw"][i]), 0.0, 0.0, 0.0)
+        gpi = air.global_position_int_encode(b, int(round(v["lat"][i] * 1e7)), int(round(v["lon"][i] * 1e7)),
+                                             int(round(alt[i] * 1e3)), int(round((alt[i] - salt) * 1e3)),
+                                             int(vx[i]), int(vy[i]), int(vz[i]), 65535)
         out.append((float(recv_us[i]), 1, att.pack(air)))
         out.append((float(recv_us[i]), 2, gpi.pack(air)))
+        counts["attitude"] += 1
     raw, clipped = dbm_to_sik_rssi(signal["rssi_dbm"].to_numpy(np.float64))
     to_station = (signal["rx"] == station).to_numpy()
     sig_us = np.rint((signal["t"].to_numpy(np.float64) - t0) * 1e6) + start_unix_s * 1e6
     for i in range(len(signal)):
         rssi, rem = (int(raw[i]), 255) if to_station[i] else (255, int(raw[i]))
-        msg = radio.radio_status_encode(rssi, rem, 100, 0, 0, 0, 0)
-        out.append((float(sig_us[i]), 3, msg.pack(radio)))
-    written = {"attitude": len(veh), "global_position_int": len(veh), "radio_status": len(signal),
+        out.append((float(sig_us[i]), 3, radio.radio_status_encode(rssi, rem, 100, 0, 0, 0, 0).pack(radio)))
+        if defects.radio_twice:
+            out.append((float(sig_us[i] + round(defects.copy_delay_s * 1e6)), 3,
+                        radio.radio_encode(rssi, rem, 100, 0, 0, 0, 0).pack(radio)))
+    written = {"attitude": counts["attitude"], "global_position_int": counts["attitude"], "radio_status": len(signal),
+               "radio": len(signal) if defects.radio_twice else 0, "heartbeat": counts["heartbeat"],
+               "home_position": len(origin_rows), "invalid_position_rows": int((invalid & ~silent).sum()),
+               "silent_rows": int(silent.sum()),
                "rssi_clipped": clipped, "station_geodetic": (slat, slon, salt), "start_unix_s": start_unix_s,
                "station_heading_deg": heading, "station_spread_m": spread, "clock_offset_s": start_unix_s - t0}
     return out, written
@@ -183,6 +292,7 @@ def write_tlog(
     origin_geodetic: tuple[float, float, float],
     start_unix_s: float = DEFAULT_START_UNIX_S,
     system_id: int = 1,
+    defects: TlogDefects | None = None,
 ) -> dict[str, Any]:
     """Write a vehicle's poses and its telemetry link to a static station as a ``.tlog`` (module docstring).
 
@@ -201,6 +311,9 @@ def write_tlog(
         Receive time of the vehicle's boot-clock zero [s since the UNIX epoch].
     system_id : int
         MAVLink system id of the vehicle (1-255).
+    defects : TlogDefects, optional
+        Defects of real logs to write (a position before the origin is set, a reboot, radio
+        readings written twice); none by default.
 
     Returns
     -------
@@ -224,7 +337,10 @@ def write_tlog(
                          param="start_unix_s")
     pose, signal = _check(logs, vehicle, station, origin_geodetic)
     origin = tuple(float(v) for v in origin_geodetic)
-    records, written = _records(pose, signal, vehicle, station, origin, float(start_unix_s), int(system_id))  # type: ignore[arg-type]
+    if defects is not None and not isinstance(defects, TlogDefects):
+        raise InputError(f"defects: expected a TlogDefects, got {type(defects).__name__}", param="defects")
+    records, written = _records(pose, signal, vehicle, station, origin, float(start_unix_s), int(system_id),  # type: ignore[arg-type]
+                                defects or TlogDefects())
     records.sort(key=lambda r: (r[0], r[1]))
     with atomic_open(path, "wb", param="path") as fh:
         for t_us, _, frame in records:
@@ -232,4 +348,4 @@ def write_tlog(
     return written
 
 
-__all__ = ["STATION_SPREAD_LIMIT_M", "dbm_to_sik_rssi", "station_pose", "write_tlog"]
+__all__ = ["STATION_SPREAD_LIMIT_M", "TlogDefects", "dbm_to_sik_rssi", "station_pose", "vehicle_fields", "write_tlog"]
