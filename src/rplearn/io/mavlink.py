@@ -51,6 +51,24 @@ are placed there through their ``time_boot_ms`` plus the median receive-minus-bo
 boot), which avoids the receive clock's coarse ticks and queueing jitter. DataFlash rows use
 ``TimeUS`` [s since boot] for both logs.
 
+Flight phases and record hygiene (:mod:`rplearn.io.mavlink_phases`): position fixes before a
+valid position solution (GPS fix below 3-D from ``GPS_RAW_INT.fix_type`` / DataFlash
+``GPS.Status``; a position step the logged speed, ``GLOBAL_POSITION_INT`` vx, vy, vz, else a
+plausible maximum, does not explain, the stretch from the log start or a reboot up to it
+being invalid) and the stretch after each reboot (the boot clock stepping back) until the
+position is valid again are excluded: their pose and signal rows are dropped and counted
+under the period's reason, and ``metadata["excluded_periods"]`` lists each period (``reason``,
+``from_t``, ``to_t`` on the log's clock, ``pose_rows``, ``signal_rows``, ``detail``), with a
+line in ``notes``; ``metadata["reboots"]`` counts reboots. A radio reading reported twice
+(DataFlash ``RAD`` twice; ``RADIO`` and ``RADIO_STATUS``) gives one row
+(``metadata["signal"]["duplicate_reading"]`` counts the copies merged,
+``metadata["radio_report_period_s"]`` the report period).
+
+Armed state: when the log says it (a ``.tlog``'s ``HEARTBEAT`` of the vehicle, ``base_mode &
+MAV_MODE_FLAG_SAFETY_ARMED``; DataFlash ``ARM`` records or ``EV`` armed/disarmed events), the
+pose log has a boolean ``armed`` column: the latest state at or before each row (before the
+first report, the first report's state); the station's row is False.
+
 The ground station is a static node (one pose row, level, its body x axis facing east, or
 ``station_heading_deg``: its attitude is not logged) at ``station_geodetic`` if given, else ``HOME_POSITION`` (tlog) / ``ORGN`` type 1
 (DataFlash home), else the vehicle's first fix; ``metadata["station_note"]`` says which.
@@ -389,7 +407,8 @@ def read_mavlink(
     Returns
     -------
     logs : Logs
-        ``pose`` (the vehicle's attitude rows and one static row of the station) and
+        ``pose`` (the vehicle's attitude rows and one static row of the station; a boolean
+        ``armed`` column when the log holds the armed state) and
         ``signal`` (both link directions; extra column ``rssi_raw`` in SiK units).
     metadata : dict
         ``source``, ``format`` ("tlog" or "dataflash"), ``notes`` (lines for the user: where
@@ -397,7 +416,9 @@ def read_mavlink(
         ``station_geodetic``, ``station_note`` (where the station position came from),
         ``origin_geodetic``, ``messages`` (counts of the messages used), ``dropped`` (pose
         rows per reason), ``signal`` (rows per direction, ``link_lost`` messages, zero and
-        unknown values per direction), ``time_reference``, ``cut_off_at_byte`` and
+        unknown values per direction, ``duplicate_reading`` copies merged, rows dropped per
+        excluded period's reason), ``excluded_periods``, ``reboots``,
+        ``radio_report_period_s``, ``time_reference``, ``cut_off_at_byte`` and
         ``cut_off_record`` (offset and message name of the record a cut-off file ends inside,
         whose data are lost: a tlog's record is its 8-byte time and MAVLink frame, whose name is
         unknown when the cut is before the frame's header; None when whole), ``corrupt_bytes``
