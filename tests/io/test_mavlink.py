@@ -411,3 +411,21 @@ def test_a_text_dataflash_log_reads_as_its_binary(tmp_path):
     pd.testing.assert_frame_equal(text_logs.signal.drop(columns=["rssi_raw"], errors="ignore"),
                                   binary_logs.signal.drop(columns=["rssi_raw"], errors="ignore"), check_exact=False, atol=1e-9)
     assert meta["station_geodetic"] == pytest.approx(binary["station_geodetic"], abs=1e-7)
+
+
+def test_fixes_without_a_3d_fix_are_excluded(tmp_path):
+    """GPS_RAW_INT.fix_type < 3 until T0 + 2 s: the positions before are not learned from."""
+    path = _write_tlog(tmp_path / "nofix.tlog", home=(47.0, 8.0, 500.0))
+    vehicle = mavlink2.MAVLink(None, srcSystem=1, srcComponent=1)
+    extra = b"".join(struct.pack(">Q", int(round(t * 1e6))) + vehicle.gps_raw_int_encode(
+        0, fix, 470000000, 80000000, 510000, 100, 100, 0, 0, 8).pack(vehicle)
+        for t, fix in ((T0 - 1.0, 1), (T0 + 2.0, 3)))
+    path.write_bytes(path.read_bytes() + extra)  # the reader orders messages by time
+    logs, meta = read_mavlink(path, tx_power_dbm=20.0, frequency_hz=915e6)
+    (period,) = meta["excluded_periods"]
+    assert period["reason"] == "before_valid_position" and "GPS fix below 3-D" in period["detail"]
+    assert period["to_t"] == pytest.approx(T0 + 2.03, abs=1e-3)  # the first fix after the 3-D fix
+    vehicle_rows = logs.pose[logs.pose["node"] == "sys1"]
+    assert vehicle_rows["t"].min() >= period["to_t"] and meta["dropped"]["before_valid_position"] == 20
+    assert len(vehicle_rows) + sum(meta["dropped"].values()) == 51
+    assert (logs.signal["t"] > period["to_t"]).all() and meta["signal"]["before_valid_position"] == 2 * 4

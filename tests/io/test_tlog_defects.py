@@ -210,3 +210,29 @@ def test_tlog_defects_refuse_bad_values(kwargs, param):
     with pytest.raises(InputError) as err:
         TlogDefects(**kwargs)
     assert err.value.param == param
+
+
+def test_a_dataflash_reboot_is_counted_and_excluded_until_the_origin_is_set_again(ground, tmp_path):
+    """Two boots in one file (TimeUS restarts): the second boot's first 10 s read 0.8 m."""
+    flight = _slow_radio(ground)
+    t0 = flight.pose.loc[flight.pose["node"] == "D", "t"].min()
+    parts = []
+    for k, (lo, hi) in enumerate(((-np.inf, t0 + 200.0), (t0 + 200.0, np.inf))):
+        pose = flight.pose[((flight.pose["t"] >= lo) & (flight.pose["t"] < hi)) | (flight.pose["node"] == "G")]
+        signal = flight.signal[(flight.signal["t"] >= lo) & (flight.signal["t"] < hi)]
+        path = tmp_path / f"boot{k}.bin"
+        write_dataflash(Logs(pose, signal), path, vehicle="D", station="G", origin_geodetic=ORIGIN,
+                        defects=TlogDefects(invalid_until_s=10.0 * k))
+        parts.append(path.read_bytes())
+    both = tmp_path / "both.bin"
+    both.write_bytes(parts[0] + parts[1])  # the second boot's FMT records again, as a new log would
+    logs, meta = read_mavlink(both, 20.0, 2.412e9, vehicle="D", station="G", origin_geodetic=ORIGIN)
+    assert meta["reboots"] == 1
+    (period,) = meta["excluded_periods"]
+    assert period["reason"] == "after_reboot" and "reboot" in period["detail"] and "no ORGN until" in period["detail"]
+    assert period["pose_rows"] == meta["dropped"]["after_reboot"] >= 1000  # 10 s at 100 Hz, and more
+    # the reader puts the new boot 1 s after the old one's last record (the log holds no clock across)
+    assert period["to_t"] - period["from_t"] == pytest.approx(1.0 + 10.0, abs=0.05)
+    assert "later boots placed right after the previous one" in meta["time_reference"]
+    vehicle = logs.pose[logs.pose["node"] == "D"]
+    assert vehicle["z"].min() > 0.0  # no row at the wrong altitude
