@@ -240,8 +240,8 @@ def _vehicle_pose(raw: Raw, fixes: tuple[np.ndarray, np.ndarray, np.ndarray, lis
     where = phases.in_periods(ta, periods)
     for reason in phases.REASONS:
         dropped[reason] = 0
-    for k, p in enumerate(periods):
-        p["pose_rows"] = int((where == k).sum())
+    for p, n in zip(periods, np.bincount(where[where >= 0], minlength=len(periods))):
+        p["pose_rows"] = int(n)
         dropped[p["reason"]] += p["pose_rows"]
     tp, geo = tp[valid], pos[valid, 1:4]
     enu = geodetic_to_enu(geo[:, 0], geo[:, 1], geo[:, 2], origin)
@@ -299,9 +299,10 @@ def _signal(raw: Raw, vehicle: str, station: str, tx_power_dbm: float | Mapping[
         unknown, censored = (value == _UNKNOWN) & ~lost, (value == 0) & ~lost
         counts[f"unknown_{name}"], counts[f"zero_{name}"] = int(unknown.sum()), int(censored.sum())
         keep = ~(lost | unknown | censored)
-        for k, p in enumerate(periods):
-            p["signal_rows"] = p.get("signal_rows", 0) + int((keep & (where == k)).sum())
-            counts[p["reason"]] = counts.get(p["reason"], 0) + int((keep & (where == k)).sum())
+        per_period = np.bincount(where[keep & (where >= 0)], minlength=len(periods))
+        for p, n in zip(periods, per_period):
+            p["signal_rows"] = p.get("signal_rows", 0) + int(n)
+            counts[p["reason"]] = counts.get(p["reason"], 0) + int(n)
         keep &= where < 0
         ptx = tx_power_dbm.get(tx) if isinstance(tx_power_dbm, Mapping) else tx_power_dbm
         if ptx is None:

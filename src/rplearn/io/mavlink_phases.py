@@ -122,10 +122,11 @@ def invalid_fixes(t: np.ndarray, xyz: np.ndarray, speed_h: np.ndarray, speed_v: 
             continue
         a, c = idx[:-1], idx[1:]
         bad, _, _ = _unexplained(t[a], xyz[a], h[a], v[a], t[c], xyz[c], h[c], v[c])
-        piece = np.concatenate([[0], np.cumsum(bad)])
-        chain = idx[piece == piece[-1]][0]  # first fix of the valid fixes after the piece
-        for p in range(int(piece[-1]) - 1, -1, -1):
-            members = idx[piece == p]
+        cuts = np.flatnonzero(bad) + 1
+        starts, ends = np.concatenate([[0], cuts]), np.concatenate([cuts, [len(idx)]])
+        chain = idx[starts[-1]]  # first fix of the valid fixes after the piece
+        for lo, hi in zip(starts[-2::-1], ends[-2::-1]):
+            members = idx[lo:hi]
             last = members[-1]
             jump, dh, dv = _unexplained(t[last], xyz[last], h[last], v[last], t[chain], xyz[chain], h[chain], v[chain])
             if jump:
@@ -207,10 +208,14 @@ def _evidence(reason: str, t: np.ndarray, members: np.ndarray, steps: dict[int, 
 def in_periods(t: np.ndarray, periods: list[dict[str, Any]]) -> np.ndarray:
     """Index of the period each time lies in (-1: none)."""
     t = np.asarray(t, np.float64)
-    out = np.full(len(t), -1, np.int64)
-    for k, p in enumerate(periods):
-        out[(out < 0) & (t > p["lo"]) & (t < p["hi"])] = k
-    return out
+    if not periods:
+        return np.full(len(t), -1, np.int64)
+    lo = np.array([p["lo"] for p in periods], np.float64)
+    hi = np.array([p["hi"] for p in periods], np.float64)
+    order = np.argsort(lo, kind="stable")
+    k = np.searchsorted(lo[order], t, side="left") - 1  # the last period starting before t
+    inside = (k >= 0) & (t < hi[order][np.clip(k, 0, None)])
+    return np.where(inside, order[np.clip(k, 0, None)], -1).astype(np.int64)
 
 
 def report_period_s(t: np.ndarray, values: np.ndarray) -> float | None:
