@@ -27,3 +27,13 @@ def test_armed_is_missing_where_a_log_does_not_say():
     assert str(out["armed"].dtype) == "boolean"
     assert out.loc[out["node"] == "D", "armed"].tolist() == [False, True]
     assert out.loc[out["node"] == "G", "armed"].isna().all()
+
+
+def test_armed_values_that_are_not_booleans_are_refused():
+    import pytest
+
+    from rplearn.errors import InputError
+
+    with pytest.raises(InputError, match="poses.csv: column armed"):
+        validate_pose_log(_pose("D", [1.0, 2.0], armed=["yes", "no"]), "poses.csv")
+    assert validate_pose_log(_pose("D", [1.0, 2.0], armed=[1, 0]))["armed"].tolist() == [True, False]

@@ -149,7 +149,10 @@ def validate_pose_log(df: pd.DataFrame, source: str = "pose log") -> pd.DataFram
         )
     out = pd.DataFrame(cols, columns=list(POSE_COLUMNS))
     if "armed" in df.columns:  # optional: the vehicle armed (bool; missing where a log does not say)
-        armed = df["armed"].astype("boolean").to_numpy()[take]
+        try:
+            armed = df["armed"].astype("boolean").to_numpy()[take]
+        except (TypeError, ValueError):
+            raise InputError(f"{source}: column armed: expected true/false (or 1/0) values") from None
         out["armed"] = armed.astype(bool) if not pd.isna(armed).any() else pd.array(armed, dtype="boolean")
     out.attrs[NON_UNIT_QUATERNION_ATTR] = non_unit
     return out
