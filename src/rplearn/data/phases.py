@@ -8,13 +8,15 @@ a pose rate needs, and whether a log holds a calibration flight at all.
 **Airborne.** A vehicle is airborne while it is armed (where its pose log has an ``armed``
 column, as MAVLink readers give it; a node without one is taken as armed) and higher than its
 **take-off altitude** by more than ``margin_m`` (default :data:`AIRBORNE_MARGIN_M`). The take-off
-altitude of a node is its lowest *settled* altitude: the minimum of the running median of its
-``z`` over :data:`SETTLE_POSES` consecutive poses (a single low outlier does not move it). The
-margin, 2 m, is above the altitude noise of a barometer or GNSS (0.5-1 m) and the height of a
-drone's legs, and below any calibration flight. A **vehicle** is a node that is ever armed or
-ever airborne; the others (a ground station, a node that never leaves the ground) do not
-restrict samples. A log where no node is a vehicle holds no flight: every sample is on the
-ground.
+altitude of a node is its lowest altitude while it **holds still**: over :data:`SETTLE_S`
+seconds, its one-second mean positions stay within :data:`STILL_VERTICAL_M` vertically and
+:data:`STILL_HORIZONTAL_M` horizontally (a drone on the ground; GNSS noise is averaged out, a
+single low outlier does not count). A node that never holds still (a simulated or cut
+calibration flight, which starts and ends in the air) is airborne throughout. The margin, 2 m,
+is above the altitude noise of a barometer or GNSS (0.5-1 m) and the height of a drone's legs,
+and below any calibration flight. A **vehicle** is a node that is ever armed or ever airborne;
+the others (a ground station, a node that never leaves the ground) do not restrict samples. A
+log where no node is a vehicle holds no flight: every sample is on the ground.
 
 **No calibration flight.** :func:`calibration_problems` says when a log cannot teach a pattern:
 no node ever airborne, or two linked nodes never farther apart than
@@ -40,8 +42,12 @@ from rplearn.errors import InputError
 
 #: A vehicle higher than its take-off altitude by more than this is airborne [m].
 AIRBORNE_MARGIN_M: float = 2.0
-#: Poses whose running median gives a node's settled altitude.
-SETTLE_POSES: int = 5
+#: A node holds still when its 1 s mean positions stay within these over this long [s] ...
+SETTLE_S: int = 3
+#: ... vertically [m] ...
+STILL_VERTICAL_M: float = 0.5
+#: ... and horizontally [m].
+STILL_HORIZONTAL_M: float = 1.0
 #: The ``max_gap_s`` advised for a slow pose log, in units of its median pose interval.
 MAX_GAP_FACTOR: float = 1.5
 #: A calibration flight takes two linked nodes farther apart than this many wavelengths ...
@@ -74,17 +80,33 @@ def window_mask(t_s: np.ndarray, from_s: float | None, to_s: float | None, origi
     return keep
 
 
-def takeoff_altitude_m(z_m: np.ndarray) -> float:
-    """Lowest settled altitude [m]: the minimum of the running median of ``z`` over
-    :data:`SETTLE_POSES` poses (the median of all when there are fewer)."""
-    z = np.asarray(z_m, np.float64)
-    z = z[np.isfinite(z)]
-    if z.size == 0:
+def takeoff_altitude_m(t_s: np.ndarray, position_xyz: np.ndarray) -> float:
+    """Lowest altitude while the node holds still [m] (module docstring); NaN when it never does.
+
+    Parameters
+    ----------
+    t_s : ndarray (n,)
+        Pose times [s].
+    position_xyz : ndarray (n, 3)
+        ENU positions [m].
+    """
+    t = np.asarray(t_s, np.float64)
+    xyz = np.asarray(position_xyz, np.float64)
+    ok = np.isfinite(t) & np.isfinite(xyz).all(axis=1)
+    t, xyz = t[ok], xyz[ok]
+    if t.size == 0:
         return float("nan")
-    if z.size < SETTLE_POSES:
-        return float(np.median(z))
-    windows = np.lib.stride_tricks.sliding_window_view(z, SETTLE_POSES)
-    return float(np.median(windows, axis=1).min())
+    second = np.floor(t - t[0]).astype(np.int64)
+    count = np.bincount(second)
+    if count.size < SETTLE_S:
+        return float("nan")
+    with np.errstate(invalid="ignore"):
+        mean = np.column_stack([np.bincount(second, xyz[:, j]) / count for j in range(3)])
+    windows = np.lib.stride_tricks.sliding_window_view(mean, SETTLE_S, axis=0)  # (bins, 3, SETTLE_S)
+    spread = windows.max(axis=2) - windows.min(axis=2)
+    still = (np.hypot(spread[:, 0], spread[:, 1]) <= STILL_HORIZONTAL_M) & (spread[:, 2] <= STILL_VERTICAL_M)
+    still &= np.isfinite(spread).all(axis=1)  # every second of the window has a pose
+    return float(np.median(windows[still, 2, :], axis=1).min()) if still.any() else float("nan")
 
 
 def armed_log(pose_log: pd.DataFrame, clock_offsets_s: Mapping[str, float] | None = None,
@@ -146,8 +168,9 @@ class FlightPhases:
             sel = np.flatnonzero((code == c) & rows)
             if sel.size:
                 disarmed[sel] = ~self.armed_at(node, t_s[sel])
-                with np.errstate(invalid="ignore"):
-                    ground[sel] = ~(z_m[sel] - self.takeoff_m[node] > self.margin_m)
+                if np.isfinite(self.takeoff_m[node]):  # else never still: airborne throughout
+                    with np.errstate(invalid="ignore"):
+                        ground[sel] = ~(z_m[sel] - self.takeoff_m[node] > self.margin_m)
         return disarmed, ground
 
     def describe(self) -> str:
@@ -156,6 +179,7 @@ class FlightPhases:
             return (f"no node is ever armed or more than {self.margin_m:g} m above its take-off altitude: "
                     "the log holds no flight")
         each = ", ".join(f"{v} (take-off altitude z = {self.takeoff_m[v]:.1f} m, highest {self.highest_m[v]:.1f} m above it)"
+                         if np.isfinite(self.takeoff_m[v]) else f"{v} (never holds still: in the air throughout)"
                          for v in self.vehicles)
         return f"airborne: armed and more than {self.margin_m:g} m above the take-off altitude; vehicles: {each}"
 
@@ -169,10 +193,11 @@ def flight_phases(pose_log: pd.DataFrame, tracks: Mapping[str, PoseTrack],
     takeoff, highest, vehicles = {}, {}, []
     for node, tr in sorted(tracks.items()):
         z = tr.position_xyz[:, 2]
-        takeoff[node] = takeoff_altitude_m(z)
-        highest[node] = float(np.nanmax(z) - takeoff[node]) if z.size else 0.0
+        fixed = tr.static or tr.still
+        takeoff[node] = float(np.median(z)) if fixed else takeoff_altitude_m(tr.t_s, tr.position_xyz)
+        highest[node] = float(np.max(z) - takeoff[node])  # NaN: never holds still, airborne throughout
         ever_armed = node in armed and bool(armed[node][1].any())
-        if not tr.static and (ever_armed or highest[node] > margin_m):
+        if not fixed and (ever_armed or not highest[node] <= margin_m):
             vehicles.append(node)
     return FlightPhases(log_start_s(tracks), takeoff, highest, armed, tuple(vehicles), float(margin_m))
 
@@ -291,7 +316,7 @@ def calibration_problems(phases: FlightPhases, tracks: Mapping[str, PoseTrack],
 
 __all__ = [
     "AIRBORNE_MARGIN_M", "CALIBRATION_MIN_DISTANCE_M", "CALIBRATION_WAVELENGTHS", "FlightPhases", "MAX_GAP_FACTOR",
-    "SETTLE_POSES", "UNKNOWN_FREQUENCY_HZ", "WINDOW_CLOCKS", "armed_log", "calibration_distance_m",
+    "SETTLE_S", "STILL_HORIZONTAL_M", "STILL_VERTICAL_M", "UNKNOWN_FREQUENCY_HZ", "WINDOW_CLOCKS", "armed_log", "calibration_distance_m",
     "calibration_problems", "flight_phases", "largest_distance_m", "log_start_s", "max_gap_advice", "phase_notes",
     "takeoff_altitude_m", "window_mask",
 ]

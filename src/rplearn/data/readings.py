@@ -16,7 +16,7 @@ doubles every one of them). The first copy is kept.
 The rule never merges the packets of a radio that reports at a steady rate, however fast and
 however often its RSSI repeats (each packet follows the one before by about one period, ten
 times the window), nor the few packets of a radio with random timing (Wi-Fi) that happen to
-arrive close together with the same RSSI (with exponential intervals, about 12% of its
+arrive close together with the same RSSI (with exponential intervals, about 10% of its
 packets follow the one before by less than a tenth of the report period estimated here, so that
 even with a constant RSSI they stay below the 25% share). It can merge distinct packets only when a link sends most of them in pairs far
 closer than its usual spacing *and* every column of both (RSSI, and any extra column such as a
@@ -36,11 +36,11 @@ import pandas as pd
 #: are one reading reported twice. A tenth of the period: far above the 2-6 ms between the two
 #: copies of a 1 Hz radio's reading, far below the spacing of distinct reports.
 REPEAT_FRACTION: float = 0.1
-#: Intervals shorter than this fraction of the link's 90th-percentile interval are left out
+#: Intervals shorter than this fraction of the link's 75th-percentile interval are left out
 #: of its report period (they are the gaps between copies of one reading).
 _SHORT_INTERVAL_FRACTION = 0.25
 #: Close copies are merged only on a link where at least this share of consecutive rows are
-#: close copies (doubled readings give 50%, a radio with random timing about 12% at most).
+#: close copies (doubled readings give 50%, a radio with random timing about 10%).
 REPEAT_MIN_SHARE: float = 0.25
 
 
@@ -48,7 +48,7 @@ def report_period_s(t_s: np.ndarray) -> float:
     """The usual interval between a link's distinct reports [s], even when readings are doubled.
 
     The median of the positive intervals between consecutive (sorted) times that are at least
-    a quarter of their 90th percentile: for a steady radio the median interval; for a radio
+    a quarter of their 75th percentile: for a steady radio the median interval; for a radio
     whose every reading is logged two or three times a few ms apart, the interval between
     readings, not between copies. NaN with fewer than two distinct finite times.
 
@@ -62,7 +62,7 @@ def report_period_s(t_s: np.ndarray) -> float:
     d = d[d > 0]
     if d.size == 0:
         return float("nan")
-    long = d[d >= _SHORT_INTERVAL_FRACTION * np.quantile(d, 0.9)]
+    long = d[d >= _SHORT_INTERVAL_FRACTION * np.quantile(d, 0.75)]
     return float(np.median(long))
 
 
