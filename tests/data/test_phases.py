@@ -77,7 +77,7 @@ def test_airborne_drops_disarmed_and_on_ground_samples_exactly():
     assert s.dropped["on_ground"] == int((armed & ~(height > 2.0)).sum())
     assert s.n_out == int((armed & (height > 2.0)).sum()) > 0
     assert (res.dataset["tx_z"] - 0.3 > 2.0).all()
-    assert "airborne only: airborne: armed and more than 2 m above the take-off altitude; vehicles: A " \
+    assert "airborne only: armed (where the log says) and more than 2 m above the take-off altitude; vehicles: A " \
         "(take-off altitude z = 0.3 m, highest 20.0 m above it)" in s.to_text()
     # off (the default): nothing dropped, but the summary says how many were on the ground
     off = synchronise(pose, sig)
@@ -158,6 +158,6 @@ def test_max_gap_advice_on_a_1_2_hz_pose_log_keeps_most_samples(tmp_path):
     assert res.summary.dropped["pose_gap"] <= 0.02 * len(sig)  # only the 5 s pause between two units
     assert res.summary.n_out >= 0.95 * full
     assert max_gap_advice(pose_tracks(slow), value) is None  # the advice is not repeated once followed
-    # most (not all) samples in gaps: a warning in the summary
+    # many (not all) samples in gaps: a warning in the summary
     half = synchronise(slow, sig, SyncOptions(max_gap_s=0.83))
     assert 0 < half.summary.n_out and f"max_gap_s={value:g}" in half.summary.to_text()

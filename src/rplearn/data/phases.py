@@ -181,7 +181,7 @@ class FlightPhases:
         each = ", ".join(f"{v} (take-off altitude z = {self.takeoff_m[v]:.1f} m, highest {self.highest_m[v]:.1f} m above it)"
                          if np.isfinite(self.takeoff_m[v]) else f"{v} (never holds still: in the air throughout)"
                          for v in self.vehicles)
-        return f"airborne: armed and more than {self.margin_m:g} m above the take-off altitude; vehicles: {each}"
+        return f"armed (where the log says) and more than {self.margin_m:g} m above the take-off altitude; vehicles: {each}"
 
 
 def flight_phases(pose_log: pd.DataFrame, tracks: Mapping[str, PoseTrack],
