@@ -24,9 +24,11 @@ def inspect(
     station_geodetic: Optional[str] = typer.Option(None, "--station", help="LAT,LON,ALT: ground station position of MAVLink logs (.tlog, DataFlash) [deg, deg, m AMSL] (default: the log's home position, else the vehicle's first fix)."),
     station: Optional[str] = typer.Option(None, "--station-node", help="Node id of the ground station of MAVLink logs (default gcs)."),
     station_heading: Optional[float] = typer.Option(None, "--station-heading", help="Compass heading of the ground station's antenna (its body x axis) in MAVLink logs [deg clockwise from north] (default 90, east)."),
+    frequency_hz: Optional[float] = typer.Option(None, "--frequency", help="Carrier frequency for logs without it [Hz]: the distance a calibration flight needs is 10 wavelengths (433 MHz assumed without it)."),
     markdown: bool = typer.Option(False, "--markdown", help="Print Markdown instead of text."),
 ) -> None:
-    """Summarise logs: nodes, time spans, rates, RSSI range, gaps, and anything suspicious.
+    """Summarise logs: nodes, time spans (seconds from the log start), report rates, RSSI range, gaps,
+    what the readers excluded, whether the log holds a calibration flight, and anything suspicious.
 
     Example: rplearn inspect flight/pose_log.parquet flight/signal_log.parquet
     """
@@ -34,7 +36,7 @@ def inspect(
 
     options = reader_options(node, receiver, address, pose_topic, rssi_topic, rssi_field, msg_definition, require_valid=require_valid,
                              station_geodetic=geodetic_flag(station_geodetic, "--station"), station=station,
-                             station_heading_deg=station_heading)
+                             station_heading_deg=station_heading, frequency_hz=frequency_hz)
     report = inspect_logs(logs, options)
     text = report.to_markdown() if markdown else report.to_text()
     # the report names reader options as the library knows them; here they are flags

@@ -294,7 +294,7 @@ def calibration_problems(phases: FlightPhases, tracks: Mapping[str, PoseTrack],
     out = []
     if len(tracks) and not phases.vehicles:
         highest = ", ".join(f"{n} {h:.1f} m" for n, h in sorted(phases.highest_m.items()) if not tracks[n].static)
-        armed = [n for n in phases.armed if n in tracks]
+        armed = [n for n in phases.armed if n in tracks and not (tracks[n].static or tracks[n].still)]
         never = f"; never armed: {', '.join(sorted(armed))}" if armed else ""
         out.append(f"no calibration flight: no node ever rises more than {phases.margin_m:g} m above its take-off "
                    f"altitude (highest above it: {highest or 'static nodes only'}){never}")

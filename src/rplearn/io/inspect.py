@@ -456,6 +456,8 @@ def inspect_logs(
         lk.t_start_s for lk in report.links if np.isfinite(lk.t_start_s)]
     report.start_s = float(min(starts)) if starts else 0.0
     frequencies = [f["frequency_hz"] for f in report.files if f.get("frequency_hz")]
+    if not frequencies and isinstance(options.frequency_hz, (int, float)):
+        frequencies = [float(options.frequency_hz)]  # the user's, for logs that do not say it
     report.calibration = _calibration(canonical, report.links, min(frequencies) if frequencies else None)
     _flag(report, max_gap_s)
     return report
