@@ -67,29 +67,33 @@ def report_period_s(t_s: np.ndarray) -> float:
 
 
 def value_hashes(signal: pd.DataFrame) -> np.ndarray:
-    """64-bit hash of every row's columns other than ``t`` (numbers as float64, the rest as text)."""
-    cols: dict[str, Any] = {}
+    """64-bit hash of every row's columns other than ``t`` (numbers as float64, the rest as text),
+    equal for equal rows of any chunk of one log."""
+    out = np.zeros(len(signal), np.uint64)
     for c in signal.columns:
         if c == "t":
             continue
         col = signal[c]
         if pd.api.types.is_numeric_dtype(col) and not pd.api.types.is_bool_dtype(col):
-            cols[str(c)] = col.to_numpy(np.float64, na_value=np.nan)
+            h = pd.util.hash_array(col.to_numpy(np.float64, na_value=np.nan))
         else:
-            missing = col.isna().to_numpy()
-            cols[str(c)] = np.where(missing, "\x00missing", col.astype(object).astype(str).to_numpy(dtype=object))
-    frame = pd.DataFrame(cols, index=range(len(signal)))
-    if frame.shape[1] == 0:
-        return np.zeros(len(signal), np.uint64)
-    return pd.util.hash_pandas_object(frame, index=False).to_numpy(np.uint64)
+            values = col.to_numpy(dtype=object, na_value="\x00missing")
+            try:
+                h = pd.util.hash_array(values)
+            except TypeError:  # not all text (numbers or lists in a text column): hash their text
+                h = pd.util.hash_array(values.astype(str).astype(object))
+        with np.errstate(over="ignore"):
+            out = out * np.uint64(1099511628211) ^ h  # FNV-style combination, column order matters
+    return out
 
 
-def _link_codes(signal: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
-    """Code of each row's directed link and the link names ``"tx\\x00rx"``."""
-    tx = signal["tx"].astype(str).to_numpy(dtype=object)
-    rx = signal["rx"].astype(str).to_numpy(dtype=object)
-    codes, names = pd.factorize(tx + "\x00" + rx)
-    return codes, np.asarray(names, dtype=object)
+def _link_codes(signal: pd.DataFrame) -> tuple[np.ndarray, list[str]]:
+    """Code of each row's directed link and the link names ``"tx\x00rx"``."""
+    tx, tx_names = pd.factorize(signal["tx"].to_numpy(dtype=object, na_value=""))
+    rx, rx_names = pd.factorize(signal["rx"].to_numpy(dtype=object, na_value=""))
+    codes, pairs = pd.factorize(tx.astype(np.int64) * (len(rx_names) + 1) + rx)
+    names = [f"{tx_names[p // (len(rx_names) + 1)]}\x00{rx_names[p % (len(rx_names) + 1)]}" for p in pairs]
+    return codes, names
 
 
 def repeated_readings(
@@ -131,7 +135,7 @@ def repeated_readings(
     ends = np.r_[starts[1:], n]
     for s, e in zip(starts, ends):
         rows = order[s:e]
-        name = str(names[codes[rows[0]]])
+        name = names[codes[rows[0]]]
         tr, hr = t[rows], hashes[rows]
         period = report_period_s(tr)
         before = carry.get(name) if carry is not None else None
