@@ -221,3 +221,12 @@ def test_reader_findings_are_listed_with_times_from_the_log_start():
     assert "dropped on reading: 17 signal row(s) (duplicate_reading)" in text
     assert "sys1: 10 rows, 0.000 .. 500.000 s" in text
     assert "## Reader findings" in rep.to_markdown()
+
+
+def test_a_slow_pose_log_is_told_the_max_gap_it_needs(tmp_path):
+    t = np.arange(0.0, 60.0, 1 / 1.2)  # 1.2 Hz poses
+    pose = pd.concat([_pose("A", t), _pose("B", [0.0], 30.0)], ignore_index=True)
+    pose.to_csv(tmp_path / "slow.csv", index=False)
+    rep = inspect_logs([tmp_path / "slow.csv"])
+    assert any("node A: pose rate 1.20 Hz is below 1 / max_gap_s; most samples would drop (sync with "
+               "max_gap_s=1.3: 1.5 x its median pose interval)" in p for p in rep.problems), rep.problems

@@ -224,6 +224,12 @@ def _nice_ceil(x: float) -> float:
     return round(math.ceil(x / step - 1e-9) * step, 12)
 
 
+def advised_max_gap_s(pose_interval_s: float) -> float:
+    """The ``max_gap_s`` a pose log with this median interval needs [s]: :data:`MAX_GAP_FACTOR`
+    times it, rounded up to two digits."""
+    return _nice_ceil(MAX_GAP_FACTOR * float(pose_interval_s))
+
+
 def max_gap_advice(tracks: Mapping[str, PoseTrack], max_gap_s: float) -> str | None:
     """What ``max_gap_s`` the slowest moving node's pose rate needs, or None when it is no slower
     than ``max_gap_s`` allows.
@@ -237,7 +243,7 @@ def max_gap_advice(tracks: Mapping[str, PoseTrack], max_gap_s: float) -> str | N
         return None
     medians = {n: float(np.median(np.diff(tr.t_s))) for n, tr in moving.items()}
     slowest = max(medians, key=lambda n: medians[n])
-    value = _nice_ceil(MAX_GAP_FACTOR * medians[slowest])
+    value = advised_max_gap_s(medians[slowest])
     if value <= max_gap_s:
         return None
     covered = []
@@ -315,7 +321,7 @@ def calibration_problems(phases: FlightPhases, tracks: Mapping[str, PoseTrack],
 
 
 __all__ = [
-    "AIRBORNE_MARGIN_M", "CALIBRATION_MIN_DISTANCE_M", "CALIBRATION_WAVELENGTHS", "FlightPhases", "MAX_GAP_FACTOR",
+    "AIRBORNE_MARGIN_M", "CALIBRATION_MIN_DISTANCE_M", "advised_max_gap_s", "CALIBRATION_WAVELENGTHS", "FlightPhases", "MAX_GAP_FACTOR",
     "SETTLE_S", "STILL_HORIZONTAL_M", "STILL_VERTICAL_M", "UNKNOWN_FREQUENCY_HZ", "WINDOW_CLOCKS", "armed_log", "calibration_distance_m",
     "calibration_problems", "flight_phases", "largest_distance_m", "log_start_s", "max_gap_advice", "phase_notes",
     "takeoff_altitude_m", "window_mask",

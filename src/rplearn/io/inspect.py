@@ -39,7 +39,7 @@ from typing import Any, Iterable, Sequence
 import numpy as np
 import pandas as pd
 
-from rplearn.data.phases import calibration_problems, flight_phases
+from rplearn.data.phases import advised_max_gap_s, calibration_problems, flight_phases
 from rplearn.data.poses import pose_tracks
 from rplearn.data.readings import REPEAT_FRACTION, duplicate_rows, repeated_readings, report_period_s, report_rate_hz
 from rplearn.data.tables import QUATERNION_NORM_TOLERANCE, non_unit_quaternion_rows
@@ -530,7 +530,8 @@ def _flag(report: InspectReport, max_gap_s: float) -> None:
                 f"(longest {n.longest_gap_s:.3f} s); samples inside are dropped")
         if not n.static and np.isfinite(n.rate_hz) and n.rate_hz < 1.0 / max_gap_s:
             report.problems.append(
-                f"node {n.node}: pose rate {n.rate_hz:.2f} Hz is below 1 / max_gap_s; most samples would drop")
+                f"node {n.node}: pose rate {n.rate_hz:.2f} Hz is below 1 / max_gap_s; most samples would drop "
+                f"(sync with max_gap_s={advised_max_gap_s(1.0 / n.rate_hz):g}: 1.5 x its median pose interval)")
     for lk in report.links:
         if lk.sentinel_rssi:
             report.problems.append(
