@@ -10,9 +10,12 @@ column, as MAVLink readers give it; a node without one is taken as armed) and hi
 **take-off altitude** by more than ``margin_m`` (default :data:`AIRBORNE_MARGIN_M`). The take-off
 altitude of a node is its lowest altitude while it **holds still**: over :data:`SETTLE_S`
 seconds, its one-second mean positions stay within :data:`STILL_VERTICAL_M` vertically and
-:data:`STILL_HORIZONTAL_M` horizontally (a drone on the ground; GNSS noise is averaged out, a
-single low outlier does not count). A node that never holds still (a simulated or cut
-calibration flight, which starts and ends in the air) is airborne throughout. The margin, 2 m,
+:data:`STILL_HORIZONTAL_M` horizontally (a drone on the ground before take-off or after landing;
+GNSS noise is averaged out, a single low outlier does not count), provided the node spends less
+than :data:`BELOW_GROUND_SHARE` of its poses more than the margin below it (else that still
+stretch was a hover, not the ground). A node that never holds still on the ground (a simulated
+or cut calibration flight, which starts and ends in the air, pausing at most a few seconds) is
+airborne throughout. The margin, 2 m,
 is above the altitude noise of a barometer or GNSS (0.5-1 m) and the height of a drone's legs,
 and below any calibration flight. A **vehicle** is a node that is ever armed or ever airborne;
 the others (a ground station, a node that never leaves the ground) do not restrict samples. A
@@ -43,11 +46,13 @@ from rplearn.errors import InputError
 #: A vehicle higher than its take-off altitude by more than this is airborne [m].
 AIRBORNE_MARGIN_M: float = 2.0
 #: A node holds still when its 1 s mean positions stay within these over this long [s] ...
-SETTLE_S: int = 3
+SETTLE_S: int = 10
 #: ... vertically [m] ...
 STILL_VERTICAL_M: float = 0.5
 #: ... and horizontally [m].
 STILL_HORIZONTAL_M: float = 1.0
+#: A still stretch with more than this share of the node's poses well below it is a hover.
+BELOW_GROUND_SHARE: float = 0.01
 #: The ``max_gap_s`` advised for a slow pose log, in units of its median pose interval.
 MAX_GAP_FACTOR: float = 1.5
 #: A calibration flight takes two linked nodes farther apart than this many wavelengths ...
@@ -106,7 +111,10 @@ def takeoff_altitude_m(t_s: np.ndarray, position_xyz: np.ndarray) -> float:
     spread = windows.max(axis=2) - windows.min(axis=2)
     still = (np.hypot(spread[:, 0], spread[:, 1]) <= STILL_HORIZONTAL_M) & (spread[:, 2] <= STILL_VERTICAL_M)
     still &= np.isfinite(spread).all(axis=1)  # every second of the window has a pose
-    return float(np.median(windows[still, 2, :], axis=1).min()) if still.any() else float("nan")
+    if not still.any():
+        return float("nan")
+    ground = float(np.median(windows[still, 2, :], axis=1).min())
+    return ground if np.mean(xyz[:, 2] < ground - AIRBORNE_MARGIN_M) <= BELOW_GROUND_SHARE else float("nan")
 
 
 def armed_log(pose_log: pd.DataFrame, clock_offsets_s: Mapping[str, float] | None = None,
@@ -322,7 +330,7 @@ def calibration_problems(phases: FlightPhases, tracks: Mapping[str, PoseTrack],
 
 __all__ = [
     "AIRBORNE_MARGIN_M", "CALIBRATION_MIN_DISTANCE_M", "advised_max_gap_s", "CALIBRATION_WAVELENGTHS", "FlightPhases", "MAX_GAP_FACTOR",
-    "SETTLE_S", "STILL_HORIZONTAL_M", "STILL_VERTICAL_M", "UNKNOWN_FREQUENCY_HZ", "WINDOW_CLOCKS", "armed_log", "calibration_distance_m",
+    "BELOW_GROUND_SHARE", "SETTLE_S", "STILL_HORIZONTAL_M", "STILL_VERTICAL_M", "UNKNOWN_FREQUENCY_HZ", "WINDOW_CLOCKS", "armed_log", "calibration_distance_m",
     "calibration_problems", "flight_phases", "largest_distance_m", "log_start_s", "max_gap_advice", "phase_notes",
     "takeoff_altitude_m", "window_mask",
 ]
