@@ -27,7 +27,7 @@ chunks is found).
 
 from __future__ import annotations
 
-from typing import Any, MutableMapping
+from typing import MutableMapping
 
 import numpy as np
 import pandas as pd
