@@ -142,3 +142,91 @@ def test_pose_only_long_step_stays_flagged(tmp_path):
     _pose("A", np.r_[t, t[-1] + 60 + t]).to_csv(tmp_path / "p.csv", index=False)
     rep = inspect_logs([tmp_path / "p.csv"])
     assert rep.nodes[0].pauses == 0 and rep.nodes[0].clock_jumps == 1 and rep.nodes[0].gaps == 1
+
+
+T0 = 1_381_700_000.0
+
+
+def _flight_files(tmp_path, radius_m, doubled=False, name="f", height_m=10.0):
+    """A drone circling its station at ``radius_m`` and ``height_m`` up (on the ground, still, for the first
+    10 s), 10 Hz poses from T0 (log clock); a 1 Hz radio at 2.4 GHz, every reading written twice
+    2-6 ms apart when ``doubled``. Returns (pose path, signal path, readings per link)."""
+    t = np.round(np.arange(0.0, 300.0, 0.1), 6)
+    s = np.clip(t - 10, 0, None)
+    z = np.clip(t - 10, 0, height_m)
+    drone = pd.DataFrame({"t": T0 + t, "node": "D", "x": radius_m * np.cos(s / 20), "y": radius_m * np.sin(s / 20),
+                          "z": z, "qw": 1.0, "qx": 0.0, "qy": 0.0, "qz": 0.0})
+    station = pd.DataFrame({"t": [T0], "node": "S", "x": [0.0], "y": [0.0], "z": [0.0], "qw": 1.0, "qx": 0.0,
+                            "qy": 0.0, "qz": 0.0})
+    pose_path = tmp_path / f"{name}_pose.csv"
+    pd.concat([drone, station]).to_csv(pose_path, index=False)
+    rng = np.random.default_rng(0)
+    rows = []
+    n = 290
+    for tx, rx in (("D", "S"), ("S", "D")):
+        ts = T0 + 5.0 + np.cumsum(rng.uniform(0.97, 1.03, n))
+        rssi = np.round(rng.uniform(-80, -60, n))
+        copies = [ts, ts + rng.uniform(0.002, 0.006, n)] if doubled else [ts]
+        rows += [pd.DataFrame({"t": c, "tx": tx, "rx": rx, "rssi_dbm": rssi, "tx_power_dbm": 20.0,
+                               "frequency_hz": 2.4e9}) for c in copies]
+    sig_path = tmp_path / f"{name}_signal.parquet"
+    pd.concat(rows).sort_values("t", kind="stable").to_parquet(sig_path, index=False)
+    return pose_path, sig_path, n
+
+
+def test_doubled_readings_read_at_the_report_rate(tmp_path):
+    pose, sig, n = _flight_files(tmp_path, 40.0, doubled=True)
+    rep = inspect_logs([pose, sig])
+    for lk in rep.links:
+        assert lk.samples == 2 * n and lk.repeated_readings == n
+        assert lk.rate_hz == pytest.approx(1.0, rel=0.10)  # the radio's report rate, not ~200 Hz
+    joined = "\n".join(rep.problems)
+    assert f"link D -> S: {n} reading(s) logged twice" in joined and "sync merges them (duplicate_reading)" in joined
+    assert "no calibration flight" not in joined
+    # times from the log start, the absolute start once
+    text = rep.to_text()
+    assert text.splitlines()[0] == "log start: t = 1381700000.000 s on the log's clock; times below are seconds from it"
+    assert "D: 3000 rows, 0.000 .. 299.900 s (299.9 s), 10.0 Hz" in text
+    assert "repeated readings: 290" in text and "| repeated readings |" in rep.to_markdown()
+
+
+def test_a_drone_that_never_leaves_its_station_is_no_calibration_flight(tmp_path):
+    pose, sig, _ = _flight_files(tmp_path, 2.0, name="near", height_m=2.5)  # up to 3.2 m away, 2.5 m up
+    rep = inspect_logs([pose, sig])
+    assert rep.calibration and rep.calibration[0].startswith(
+        "no calibration flight: nodes D and S never get farther apart than 3.2 m")
+    assert "at 2400 MHz" in rep.calibration[0]
+    text = rep.to_text()
+    assert "problems: none found" not in text and "- no calibration flight: nodes D and S" in text
+    # the same flight 40 m out holds one
+    pose, sig, _ = _flight_files(tmp_path, 40.0, name="far")
+    assert inspect_logs([pose, sig]).calibration == []
+
+
+def test_reader_findings_are_listed_with_times_from_the_log_start():
+    from rplearn.io.inspect import NodeSummary
+
+    f = {"path": "a.tlog", "format": "tlog", "kind": "pose+signal", "error": None,
+         "excluded_periods": [{"reason": "no_position_fix", "from_t": T0 - 250.0, "to_t": T0 - 0.5,
+                               "pose_rows": 1200, "signal_rows": 250, "detail": "EKF origin not set"},
+                              {"reason": "reboot", "from_t": T0 + 100.0, "to_t": T0 + 130.0, "pose_rows": 90,
+                               "signal_rows": 30, "detail": ""}],
+         "dropped": {"gap": 4, "nan_attitude": 0}, "signal_dropped": {"duplicate_reading": 17}}
+    rep = InspectReport(files=[f], nodes=[NodeSummary("sys1", 10, T0, T0 + 500.0, 5.0, 0, 0.1)], start_s=T0)
+    text = rep.to_text()
+    assert "    excluded (no_position_fix): -250.000 .. -0.500 s, 1200 pose row(s), 250 signal row(s): " \
+        "EKF origin not set" in text
+    assert "    excluded (reboot): 100.000 .. 130.000 s, 90 pose row(s), 30 signal row(s)" in text
+    assert "dropped on reading: 4 pose row(s) (gap)" in text and "(nan_attitude)" not in text
+    assert "dropped on reading: 17 signal row(s) (duplicate_reading)" in text
+    assert "sys1: 10 rows, 0.000 .. 500.000 s" in text
+    assert "## Reader findings" in rep.to_markdown()
+
+
+def test_a_slow_pose_log_is_told_the_max_gap_it_needs(tmp_path):
+    t = np.arange(0.0, 60.0, 1 / 1.2)  # 1.2 Hz poses
+    pose = pd.concat([_pose("A", t), _pose("B", [0.0], 30.0)], ignore_index=True)
+    pose.to_csv(tmp_path / "slow.csv", index=False)
+    rep = inspect_logs([tmp_path / "slow.csv"])
+    assert any("node A: pose rate 1.20 Hz is below 1 / max_gap_s; most samples would drop (sync with "
+               "max_gap_s=1.3: 1.5 x its median pose interval)" in p for p in rep.problems), rep.problems

@@ -116,3 +116,25 @@ def test_rows_are_named_by_their_file(flight, monkeypatch):
     with pytest.raises(InputError, match=r"^.*unk\.csv: field tx/rx: unknown node id\(s\) Z at row 750"):
         sync_logs([pose], [str(d / "first.csv"), str(d / "unk.csv")], str(d / "x.csv"),
                   sync_options=SyncOptions(on_unknown_node="error"))
+
+
+def test_streamed_window_and_doubled_readings_equal_the_whole_log(flight, monkeypatch):
+    """Readings written twice 2-6 ms apart, cut across chunks; a window: the streamed sync drops
+    exactly what the whole-log match drops, and its summary says what the window kept."""
+    d, pose, _ = flight
+    sig = pd.read_parquet(d / "f" / "signal_log.parquet")
+    one = sig[(sig["tx"] == "A")].iloc[::20].copy()  # a slow radio: one reading a second or so
+    copies = one.assign(t=one["t"] + np.random.default_rng(0).uniform(0.002, 0.006, len(one)))
+    doubled = pd.concat([one, copies]).sort_values("t", kind="stable")
+    doubled.to_csv(d / "doubled.csv", index=False)
+    monkeypatch.setattr(wlogs, "SYNC_CHUNK_ROWS", 7)  # many pairs cut apart
+    opts = SyncOptions(from_s=10.0, to_s=60.0)
+    outcome = sync_logs([pose], [str(d / "doubled.csv")], str(d / "doubled.parquet"), sync_options=opts)
+    assert outcome.streamed
+    logs, _ = read_logs([pose, str(d / "doubled.csv")])
+    whole = synchronise(logs.pose, logs.signal, opts)
+    assert outcome.counts.dropped == whole.summary.dropped
+    inside = int(((one["t"] >= 10.0 + logs.pose["t"].min()) & (one["t"] <= 60.0 + logs.pose["t"].min())).sum())
+    assert outcome.counts.dropped["duplicate_reading"] == inside > 0
+    assert outcome.counts.dropped["outside_window"] == 2 * (len(one) - inside)
+    assert "window: samples from 10 s to 60 s kept (seconds from the log start" in outcome.summary()

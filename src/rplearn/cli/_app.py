@@ -112,13 +112,16 @@ def flag_table(names: Iterable[str], command: Callable | None, flags: Mapping[st
 
 
 def _rendered(flag: str, value: str | None) -> str:
-    """A flag as the user types it, for a field ``name`` (None), ``name=True``, ``name='x'``
-    or ``name={...}``: the flag with its metavar, alone, with the value, with its metavar."""
+    """A flag as the user types it, for a field ``name`` (None), ``name=True``, ``name='x'``,
+    ``name=1.5`` or ``name={...}``: the flag with its metavar, alone, with the value, with the
+    number, with its metavar."""
     name = flag.split()[0]
     if value == "True":
         return name
     if value and value[0] in "'\"" and value[-1] == value[0]:
         return f"{name} {value[1:-1]}"
+    if value and re.fullmatch(r"[-+]?\d+(\.\d*)?([eE][-+]?\d+)?", value):  # a number: as the user types it
+        return f"{name} {value}"
     return flag
 
 

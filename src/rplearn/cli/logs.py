@@ -24,9 +24,11 @@ def inspect(
     station_geodetic: Optional[str] = typer.Option(None, "--station", help="LAT,LON,ALT: ground station position of MAVLink logs (.tlog, DataFlash) [deg, deg, m AMSL] (default: the log's home position, else the vehicle's first fix)."),
     station: Optional[str] = typer.Option(None, "--station-node", help="Node id of the ground station of MAVLink logs (default gcs)."),
     station_heading: Optional[float] = typer.Option(None, "--station-heading", help="Compass heading of the ground station's antenna (its body x axis) in MAVLink logs [deg clockwise from north] (default 90, east)."),
+    frequency_hz: Optional[float] = typer.Option(None, "--frequency", help="Carrier frequency for logs without it [Hz]: the distance a calibration flight needs is 10 wavelengths (433 MHz assumed without it)."),
     markdown: bool = typer.Option(False, "--markdown", help="Print Markdown instead of text."),
 ) -> None:
-    """Summarise logs: nodes, time spans, rates, RSSI range, gaps, and anything suspicious.
+    """Summarise logs: nodes, time spans (seconds from the log start), report rates, RSSI range, gaps,
+    what the readers excluded, whether the log holds a calibration flight, and anything suspicious.
 
     Example: rplearn inspect flight/pose_log.parquet flight/signal_log.parquet
     """
@@ -34,7 +36,7 @@ def inspect(
 
     options = reader_options(node, receiver, address, pose_topic, rssi_topic, rssi_field, msg_definition, require_valid=require_valid,
                              station_geodetic=geodetic_flag(station_geodetic, "--station"), station=station,
-                             station_heading_deg=station_heading)
+                             station_heading_deg=station_heading, frequency_hz=frequency_hz)
     report = inspect_logs(logs, options)
     text = report.to_markdown() if markdown else report.to_text()
     # the report names reader options as the library knows them; here they are flags
@@ -73,6 +75,12 @@ def sync(
     estimate_offset: Optional[str] = typer.Option(None, "--estimate-offset", help="NODE: find the clock offset of NODE's poses that best explains the signal (a low-order pattern fit's residual over shifts of its pose times) and report it with its uncertainty."),
     offset_window: float = typer.Option(1.0, "--offset-window", help="Shifts tried by --estimate-offset, +- this [s]."),
     apply_offset: bool = typer.Option(False, "--apply-offset", help="Add the offset --estimate-offset found to NODE's pose times in the matched dataset (default: report only)."),
+    from_s: Optional[float] = typer.Option(None, "--from", help="Keep samples from this time on [s]: seconds from the log start (the origin inspect prints), or a log time with --log-time."),
+    to_s: Optional[float] = typer.Option(None, "--to", help="Keep samples up to this time [s]: seconds from the log start, or a log time with --log-time."),
+    log_time: bool = typer.Option(False, "--log-time", help="Read --from/--to as times on the logs' own clock instead of seconds from the log start."),
+    airborne: bool = typer.Option(False, "--airborne/--all-phases", help="Keep only samples while every vehicle is armed (where the log says) and more than --airborne-margin above its take-off altitude; default: all phases (CSV/Parquet logs are usually calibration flights already), the summary counts samples taken on the ground."),
+    airborne_margin_m: float = typer.Option(2.0, "--airborne-margin", help="Height above the take-off altitude from which a vehicle is airborne [m]."),
+    repeat_fraction: float = typer.Option(0.1, "--repeat-fraction", help="Rows of one link with equal values closer than this fraction of its report period are one reading logged twice, merged (0 keeps every row)."),
 ) -> None:
     """Match every signal sample with the interpolated poses of both ends (paper Sec. V-B4).
 
@@ -88,7 +96,8 @@ def sync(
                              station_heading_deg=station_heading)
     offsets = numbers(pairs(offset, "--offset"), "--offset", "NODE=SECONDS")
     options = SyncOptions(link=link(link_text), max_gap_s=max_gap_s, clock_offsets_s=offsets or None, on_unknown_node=on_unknown_node,
-                          rssi_scale=rssi_scale)
+                          rssi_scale=rssi_scale, from_s=from_s, to_s=to_s, window_clock="log" if log_time else "start",
+                          airborne=airborne, airborne_margin_m=airborne_margin_m, repeat_fraction=repeat_fraction)
     outcome = sync_logs(poses, signals, output, readers, options, estimate_offset=estimate_offset,
                         offset_window_s=offset_window, apply_offset=apply_offset)
     if outcome.clock is not None:
@@ -98,4 +107,4 @@ def sync(
             note(f"the offset was not applied; rerun with --apply-offset (or --offset {c.node}={c.offset_s:.3f}) to use it")
     for line in outcome.notes:  # part of the data's accounting: on standard output
         say(line)
-    say(outcome.summary())
+    say("\n".join(with_flag(line, None, sync) for line in outcome.summary().splitlines()))

@@ -11,6 +11,10 @@ module        public names
               :class:`SyncResult`
 ``streaming`` the same for logs too big for memory: :func:`synchronise_stream`,
               :func:`synchronise_to_parquet`, :func:`row_hashes`
+``readings``  one reading, one row: :func:`repeated_readings`, :func:`report_period_s`,
+              :func:`report_rate_hz`
+``phases``    flight phases: :func:`flight_phases` -> :class:`FlightPhases` (take-off
+              altitudes, airborne), :func:`max_gap_advice`, :func:`calibration_problems`
 ``units``     :func:`samples_of`, :func:`learning_units`, :func:`evaluation_units`,
               :func:`split_units`, :func:`select_units` -> :class:`UnitChoice`
 ============  ==================================================================================
@@ -49,6 +53,16 @@ _NAMES: dict[str, str] = {
     "row_hashes": "streaming",
     "synchronise_stream": "streaming",
     "synchronise_to_parquet": "streaming",
+    # one reading, one row; flight phases
+    "REPEAT_FRACTION": "readings",
+    "repeated_readings": "readings",
+    "report_period_s": "readings",
+    "report_rate_hz": "readings",
+    "AIRBORNE_MARGIN_M": "phases",
+    "FlightPhases": "phases",
+    "calibration_problems": "phases",
+    "flight_phases": "phases",
+    "max_gap_advice": "phases",
     # learning and testing units
     "TEST_UNIT_PREFIX": "units",
     "UnitChoice": "units",

@@ -29,10 +29,11 @@ from rplearn.data.sync import (
     _match_chunk,
     _options,
     check_link_nodes,
+    finish_summary,
 )
+from rplearn.data.phases import flight_phases
 from rplearn.data.tables import MATCHED_COLUMNS, SIGNAL_COLUMNS, non_unit_quaternion_rows, validate_pose_log
 from rplearn.data.poses import tracks_of_checked_log
-from rplearn.errors import InputError
 
 
 def row_hashes(signal: pd.DataFrame) -> np.ndarray:
@@ -109,7 +110,9 @@ def synchronise_stream(
     options: SyncOptions | None = None,
     source: str = "signal log",
 ) -> Iterator[SyncResult]:
-    """Match a signal log chunk by chunk; yields one :class:`SyncResult` per chunk.
+    """Match a signal log chunk by chunk; yields one :class:`SyncResult` per chunk, and, if
+    there is any, a last one without rows whose summary carries the notes on the whole log (the window, the airborne
+    filter, the ``max_gap_s`` the poses need).
 
     The pose log is held in memory (a 100 Hz log of an hour is 360,000 rows per node); the
     signal log is consumed lazily, so memory stays bounded by the chunk size (plus 8 bytes a
@@ -129,6 +132,8 @@ def synchronise_stream(
     pose = validate_pose_log(pose_log, "pose log")
     tracks = tracks_of_checked_log(pose, options.clock_offsets_s, "pose log", options.max_gap_s)
     non_unit = non_unit_quaternion_rows(pose)
+    phases = flight_phases(pose_log, tracks, options.clock_offsets_s, options.airborne_margin_m)
+    carry: dict = {}  # the last reading of each link, for readings repeated across chunks
     seen = _SeenRows()
     pairs: set[tuple[str, str]] = set()
     n_out = 0
@@ -139,18 +144,18 @@ def synchronise_stream(
             pairs |= _pairs(chunk)
         where = str(chunk.attrs.get("source", source))
         first_row = int(chunk.attrs.get("first_row", total.n_in))
-        result = _match_chunk(tracks, chunk, options, where, seen_before=repeats, first_row=first_row)
+        result = _match_chunk(tracks, chunk, options, where, seen_before=repeats, first_row=first_row,
+                              phases=phases, carry=carry)
         result.summary.non_unit_quaternions, non_unit = non_unit, 0  # counted once, in the first chunk
         n_out += result.summary.n_out
         total.merge(result.summary)
         yield result
     if options.link is not None:
         check_link_nodes(pd.DataFrame(sorted(pairs), columns=["tx", "rx"]), options.link, source)
-    if n_out < options.min_samples:
-        raise InputError(
-            f"{source}: only {n_out} signal sample(s) matched, at least "
-            f"{options.min_samples} needed ({total.to_text().replace(chr(10), ';')})"
-        )
+    notes = list(total.notes)
+    finish_summary(total, tracks, phases, options, source)  # raises when too few matched
+    if len(total.notes) > len(notes):
+        yield SyncResult(pd.DataFrame(columns=list(MATCHED_COLUMNS)), SyncSummary(notes=total.notes[len(notes):]))
 
 
 def synchronise_to_parquet(

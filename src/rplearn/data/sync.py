@@ -14,6 +14,9 @@ after optional clock offsets. A sample is dropped, and counted by reason, when:
     (:data:`~rplearn.data.tables.FREQUENCY_BAND_HZ`, :data:`~rplearn.data.tables.TX_POWER_BAND_DBM`)
     is no drop but an :class:`~rplearn.errors.InputError` naming the row: a unit mistake
     (MHz for Hz) that would otherwise drop every sample;
+``outside_window``
+    its time lies outside ``[from_s, to_s]``: seconds from the log start (the origin ``inspect``
+    prints, :func:`~rplearn.data.phases.log_start_s`) or log times (``window_clock="log"``);
 ``sentinel_rssi``
     its RSSI is NaN, infinite or one of the sentinel values radios report for "no
     measurement" (default ``0, -127, -128, 127``);
@@ -25,6 +28,10 @@ after optional clock offsets. A sample is dropped, and counted by reason, when:
     its transmitter is its receiver;
 ``other_link``
     it belongs to another direction than the one chosen with ``SyncOptions(link=(tx, rx))``;
+``duplicate_reading``
+    it repeats the reading of the row before it on its link, every column but the time equal,
+    within ``repeat_fraction`` of the link's report period (:mod:`rplearn.data.readings`: a
+    DataFlash ``RAD`` written twice; never two packets of a radio reporting at a steady rate);
 ``unknown_node``
     one of its ends has no pose log. By default this is a counted drop (a capture often
     hears nodes that are not part of the experiment); ``SyncOptions(on_unknown_node="error")``
@@ -36,7 +43,15 @@ after optional clock offsets. A sample is dropped, and counted by reason, when:
 ``near_field``
     its ends are no farther apart than the far-field limit, two wavelengths (paper Sec. III),
     where the link budget of eq. 1 does not hold and which :func:`rplearn.core.link.check_far_field`
-    refuses: a drone on the ground beside its station, before take-off.
+    refuses: a drone on the ground beside its station, before take-off;
+``disarmed``, ``on_ground``
+    only with ``airborne=True``: an end is a vehicle that is disarmed (``armed`` pose column) or
+    not more than ``airborne_margin_m`` above its take-off altitude (:mod:`rplearn.data.phases`).
+    Off by default: CSV/Parquet logs are usually calibration flights already, and a pattern may
+    be learned on the ground on purpose; the summary counts the samples taken on the ground.
+
+When a quarter or more of the samples reaching the pose-gap test fall in pose gaps, the summary
+(or the error) names the ``max_gap_s`` the pose rate needs (:func:`~rplearn.data.phases.max_gap_advice`).
 
 A node whose pose log has a single row is static (a ground station, a parked drone): its pose
 holds at every time and it never causes ``out_of_span`` or ``pose_gap``.
@@ -59,6 +74,9 @@ import numpy as np
 import pandas as pd
 
 from rplearn.core.link import FAR_FIELD_WAVELENGTHS, SPEED_OF_LIGHT_M_S
+from rplearn.data.phases import (
+    AIRBORNE_MARGIN_M, WINDOW_CLOCKS, FlightPhases, flight_phases, max_gap_advice, phase_notes, window_mask,
+)
 from rplearn.data.poses import (
     STATUS_OUT_OF_SPAN,
     STATUS_POSE_GAP,
@@ -80,6 +98,7 @@ from rplearn.data.tables import (
     normalise_times,
     validate_pose_log,
 )
+from rplearn.data.readings import REPEAT_FRACTION, duplicate_rows, repeated_readings
 from rplearn.errors import InputError
 
 logger = logging.getLogger(__name__)
@@ -95,14 +114,18 @@ RSSI_SCALES: tuple[str, ...] = ("dbm", "relative")
 DROP_REASONS: tuple[str, ...] = (
     "duplicate",
     "invalid_value",
+    "outside_window",
     "sentinel_rssi",
     "implausible_rssi",
     "tx_equals_rx",
     "other_link",
+    "duplicate_reading",
     "unknown_node",
     "out_of_span",
     "pose_gap",
     "near_field",
+    "disarmed",
+    "on_ground",
 )
 
 
@@ -123,6 +146,10 @@ class SyncSummary:
     non_unit_quaternions : int
         Pose rows whose quaternion norm was off 1 by more than
         :data:`~rplearn.data.tables.QUATERNION_NORM_TOLERANCE` (normalised, not dropped).
+    ground_kept : int
+        Matched samples with an end on the ground or disarmed, kept (``airborne=False``).
+    notes : list of str
+        What was done (window, airborne filter), advice (``max_gap_s``).
     """
 
     n_in: int = 0
@@ -130,6 +157,8 @@ class SyncSummary:
     dropped: dict[str, int] = field(default_factory=lambda: {r: 0 for r in DROP_REASONS})
     unknown_nodes: list[str] = field(default_factory=list)
     non_unit_quaternions: int = 0
+    ground_kept: int = 0
+    notes: list[str] = field(default_factory=list)
 
     @property
     def n_dropped(self) -> int:
@@ -143,6 +172,8 @@ class SyncSummary:
             self.dropped[k] = self.dropped.get(k, 0) + int(v)
         self.unknown_nodes = sorted(set(self.unknown_nodes) | set(other.unknown_nodes))
         self.non_unit_quaternions += other.non_unit_quaternions
+        self.ground_kept += other.ground_kept
+        self.notes += [n for n in other.notes if n not in self.notes]
         return self
 
     def to_text(self) -> str:
@@ -157,6 +188,10 @@ class SyncSummary:
                 f"  pose rows with a non-unit quaternion (|norm - 1| > {QUATERNION_NORM_TOLERANCE:g}, "
                 f"normalised): {self.non_unit_quaternions}"
             )
+        lines += [f"  {n}" for n in self.notes]
+        if self.ground_kept:
+            lines.append(f"  {self.ground_kept} matched sample(s) were taken with an end on the ground or disarmed "
+                         "(kept; airborne=True drops them)")
         return "\n".join(lines)
 
 
@@ -227,6 +262,18 @@ class SyncOptions:
         power in dB on the radio's own scale (no plausibility window; the unknown offset goes
         into the patterns' shared constant); the matched dataset carries a column
         ``rssi_scale`` = ``relative`` so that later checks know.
+    from_s, to_s : float, optional
+        Keep only samples from / up to this time [s]: seconds from the log start
+        (``window_clock="start"``, default) or log times (``window_clock="log"``).
+    airborne : bool
+        Keep only samples while every vehicle at either end is armed and more than
+        ``airborne_margin_m`` above its take-off altitude (``disarmed``, ``on_ground`` drops).
+        Default False (see the module docstring).
+    airborne_margin_m : float
+        Height above the take-off altitude from which a vehicle is airborne [m].
+    repeat_fraction : float
+        Rows of one link with equal values closer than this fraction of the link's report
+        period are one reading (``duplicate_reading``); 0 keeps every row.
 
     Raises
     ------
@@ -242,6 +289,12 @@ class SyncOptions:
     on_unknown_node: str = "drop"
     min_samples: int = 1
     rssi_scale: str = "dbm"
+    from_s: float | None = None
+    to_s: float | None = None
+    window_clock: str = "start"
+    airborne: bool = False
+    airborne_margin_m: float = AIRBORNE_MARGIN_M
+    repeat_fraction: float = REPEAT_FRACTION
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -264,6 +317,16 @@ class SyncOptions:
         _check(self.rssi_scale in RSSI_SCALES, "rssi_scale", "'dbm' or 'relative'", self.rssi_scale)
         _check(isinstance(self.min_samples, (int, np.integer)) and not isinstance(self.min_samples, bool)
                and self.min_samples >= 0, "min_samples", "a non-negative integer", self.min_samples)
+        for name, value in (("from_s", self.from_s), ("to_s", self.to_s)):
+            _check(value is None or _finite(value), name, "a finite number of seconds, or None", value)
+        _check(self.from_s is None or self.to_s is None or self.from_s < self.to_s, "to_s",
+               f"a time after from_s={self.from_s!r}", self.to_s)
+        _check(self.window_clock in WINDOW_CLOCKS, "window_clock", "'start' or 'log'", self.window_clock)
+        _check(isinstance(self.airborne, (bool, np.bool_)), "airborne", "True or False", self.airborne)
+        _check(_finite(self.airborne_margin_m) and self.airborne_margin_m >= 0, "airborne_margin_m",
+               "a non-negative number of metres", self.airborne_margin_m)
+        _check(_finite(self.repeat_fraction) and 0 <= self.repeat_fraction <= 0.5, "repeat_fraction",
+               "a number from 0 to 0.5", self.repeat_fraction)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -344,13 +407,16 @@ def _matched_frame(
 
 def _match_chunk(
     tracks: Mapping[str, PoseTrack], signal: pd.DataFrame, options: SyncOptions, source: str,
-    seen_before: np.ndarray | None = None, first_row: int = 0,
+    seen_before: np.ndarray | None = None, first_row: int = 0, phases: FlightPhases | None = None,
+    carry: dict | None = None,
 ) -> SyncResult:
     """Match one signal log (or chunk of one) with the pose tracks; drops counted by reason.
 
     ``seen_before`` marks rows that repeat a row of an earlier chunk (counted as duplicates);
-    ``first_row`` is the row number of the chunk's first row in the whole log (for messages).
+    ``first_row`` is the row number of the chunk's first row in the whole log (for messages);
+    ``phases``: the pose log's; ``carry``: see :func:`~rplearn.data.readings.repeated_readings`.
     """
+    phases = phases if phases is not None else flight_phases(pd.DataFrame(), tracks)
     missing = [c for c in SIGNAL_COLUMNS if c not in signal.columns]
     if missing:
         raise InputError(
@@ -372,6 +438,9 @@ def _match_chunk(
     drop(duplicate_rows(signal) | (False if seen_before is None else seen_before), "duplicate")
     drop(~(np.isfinite(t) & np.isfinite(ptx) & np.isfinite(freq) & (freq > 0)) | empty_ids(tx) | empty_ids(rx),
          "invalid_value")
+    if options.from_s is not None or options.to_s is not None:
+        origin = phases.start_s if options.window_clock == "start" else 0.0
+        drop(~window_mask(t, options.from_s, options.to_s, origin), "outside_window")
     # a unit mistake or a corrupt field: refused, naming the row (a NaN is a counted drop above)
     check_frequency_hz(np.where(keep, freq, FREQUENCY_BAND_HZ[0]), source, None, first_row)
     check_tx_power_dbm(np.where(keep, ptx, 0.0), source, None, first_row)
@@ -381,6 +450,7 @@ def _match_chunk(
     drop(tx == rx, "tx_equals_rx")
     if options.link is not None:
         drop(~((tx == options.link[0]) & (rx == options.link[1])), "other_link")
+    drop(repeated_readings(signal, options.repeat_fraction, t, carry), "duplicate_reading")
     tx_code, rx_code, uniques, known, unknown, names = _unknown_nodes(
         tx, rx, tracks, keep, options.on_unknown_node, source, first_row)
     if names:
@@ -395,41 +465,20 @@ def _match_chunk(
         distance = np.linalg.norm(poses["tx"][0] - poses["rx"][0], axis=1)
         limit = FAR_FIELD_WAVELENGTHS * SPEED_OF_LIGHT_M_S / np.where(keep, freq, 1.0)
         drop(keep & ~(distance > limit), "near_field")
+    off = np.zeros(len(signal), bool)
+    for end, code in (("tx", tx_code), ("rx", rx_code)):
+        disarmed, ground = phases.masks(uniques, code, t, poses[end][0][:, 2], keep & known[code])
+        if options.airborne:
+            drop(disarmed, "disarmed")
+            drop(ground, "on_ground")
+        off |= disarmed | ground
+    summary.ground_kept = 0 if options.airborne else int((off & keep).sum())
     idx = np.flatnonzero(keep)
     summary.n_out = int(idx.size)
     matched = _matched_frame(signal, idx, values, poses)
     if options.rssi_scale == "relative":
         matched["rssi_scale"] = pd.Series(["relative"] * len(matched), index=matched.index, dtype=object)
     return SyncResult(matched, summary)
-
-
-def duplicate_rows(signal: pd.DataFrame) -> np.ndarray:
-    """Mask of rows repeating an earlier row exactly, in every column (the first copy is False)."""
-    mask = np.zeros(len(signal), bool)
-    if signal.empty:
-        return mask
-    # Only rows sharing a time can repeat each other: compare whole rows within those (few)
-    # rows only, which is 10x faster than hashing every row of a long log.
-    t = signal["t"].to_numpy() if "t" in signal.columns else None
-    if t is not None:
-        try:
-            order = np.argsort(t, kind="stable")
-            same = np.flatnonzero(t[order][1:] == t[order][:-1])
-        except TypeError:  # times of mixed types: compare everything
-            candidates = np.arange(len(signal))
-        else:
-            if same.size == 0:
-                return mask
-            candidates = np.unique(np.concatenate([order[same], order[same + 1]]))
-    else:
-        candidates = np.arange(len(signal))
-    subset = signal.iloc[candidates]
-    try:
-        repeated = subset.duplicated(keep="first").to_numpy(bool)
-    except TypeError:  # unhashable cells (lists): compare their text
-        repeated = subset.astype(str).duplicated(keep="first").to_numpy(bool)
-    mask[candidates[repeated]] = True
-    return mask
 
 
 def check_link_nodes(signal: pd.DataFrame, link: tuple[str, str], source: str = "signal log") -> None:
@@ -508,16 +557,32 @@ def synchronise(
     options = _options(options)
     pose = validate_pose_log(pose_log, "pose log")
     tracks = tracks_of_checked_log(pose, options.clock_offsets_s, "pose log", options.max_gap_s)
+    phases = flight_phases(pose_log, tracks, options.clock_offsets_s, options.airborne_margin_m)
     if options.link is not None:
         check_link_nodes(signal_log, options.link, source)
-    result = _match_chunk(tracks, signal_log, options, source)
+    result = _match_chunk(tracks, signal_log, options, source, phases=phases, carry={})
     result.summary.non_unit_quaternions = non_unit_quaternion_rows(pose)
-    if result.summary.n_out < options.min_samples:
-        raise InputError(
-            f"{source}: only {result.summary.n_out} signal sample(s) matched, at least "
-            f"{options.min_samples} needed ({result.summary.to_text().replace(chr(10), ';')})"
-        )
+    finish_summary(result.summary, tracks, phases, options, source)
     return result
+
+
+def finish_summary(summary: SyncSummary, tracks: Mapping[str, PoseTrack], phases: FlightPhases,
+                   options: SyncOptions, source: str) -> None:
+    """Add the phase notes and any ``max_gap_s`` advice to a whole log's summary; raise when
+    fewer than ``min_samples`` were matched (naming the ``max_gap_s`` the poses need)."""
+    notes = phase_notes(phases, options.from_s, options.to_s, options.window_clock, options.airborne)
+    summary.notes += [n for n in notes if n not in summary.notes]
+    later = DROP_REASONS[DROP_REASONS.index("pose_gap"):]
+    reached = summary.n_out + sum(summary.dropped.get(r, 0) for r in later)
+    share = summary.dropped["pose_gap"] / reached if reached else 0.0
+    advice = max_gap_advice(tracks, options.max_gap_s) if share >= 0.25 else None
+    if advice:  # in the summary (and the error below), not a log warning that would repeat it
+        summary.notes.append(f"{100 * share:.0f}% of the samples fall in pose gaps: {advice}")
+    if summary.n_out < options.min_samples:
+        raise InputError(
+            f"{source}: only {summary.n_out} signal sample(s) matched, at least "
+            f"{options.min_samples} needed ({summary.to_text().replace(chr(10), ';')})"
+        )
 
 
 __all__ = [
@@ -529,5 +594,6 @@ __all__ = [
     "SyncSummary",
     "check_link_nodes",
     "duplicate_rows",
+    "finish_summary",
     "synchronise",
 ]

@@ -19,6 +19,15 @@ swaps) are pauses; they lose no sample and are reported, not flagged. Any other 
 a **gap** (poses missing while signals continue, or no signal log to tell): the samples inside
 are dropped by :mod:`rplearn.data.sync`. A gap longer than ``clock_jump_s`` is also reported as a
 possible **clock jump**: a logger's clock stepping forward looks exactly like that.
+
+Times are printed in seconds from the **log start** (the first pose of a moving node, printed
+once on the log's own clock): the same origin as ``sync``'s time window. Each reader finding is
+listed under its file: periods the reader excluded (before a valid position solution, across a
+reboot; ``excluded_periods`` in the reader metadata) with their reasons and row counts, and the
+rows it dropped by reason. Link rates are report rates: copies of one reading
+(:mod:`rplearn.data.readings`, merged by ``sync``) are counted once. A log that holds **no
+calibration flight** (no node ever airborne, or two linked nodes never farther apart than a
+few wavelengths: :func:`rplearn.data.phases.calibration_problems`) is a problem.
 """
 
 from __future__ import annotations
@@ -30,9 +39,12 @@ from typing import Any, Iterable, Sequence
 import numpy as np
 import pandas as pd
 
+from rplearn.data.phases import advised_max_gap_s, calibration_problems, flight_phases
+from rplearn.data.poses import pose_tracks
+from rplearn.data.readings import REPEAT_FRACTION, duplicate_rows, repeated_readings, report_period_s, report_rate_hz
 from rplearn.data.tables import QUATERNION_NORM_TOLERANCE, non_unit_quaternion_rows
 from rplearn.errors import RplearnError
-from rplearn.data.sync import DEFAULT_SENTINEL_RSSI_DBM, duplicate_rows
+from rplearn.data.sync import DEFAULT_SENTINEL_RSSI_DBM
 from rplearn.io.options import ReaderOptions
 
 #: A pose step is a pause only if it spans more than this many median signal intervals.
@@ -72,7 +84,8 @@ class NodeSummary:
 
 @dataclass
 class LinkSummary:
-    """One direction tx -> rx of the signal log: counts, span, rate and RSSI range [dBm]."""
+    """One direction tx -> rx of the signal log: counts, span, report rate [Hz] (copies of one
+    reading counted once), RSSI range [dBm], exact duplicate rows and repeated readings."""
 
     tx: str
     rx: str
@@ -86,65 +99,87 @@ class LinkSummary:
     sentinel_rssi: int
     backward_steps: int = 0
     duplicates: int = 0
+    repeated_readings: int = 0
+    period_s: float = float("nan")
 
 
 @dataclass
 class InspectReport:
-    """What :func:`inspect_logs` found; ``problems`` lists everything suspicious, one line each."""
+    """What :func:`inspect_logs` found; ``problems`` lists everything suspicious, one line each;
+    ``start_s`` is the log start [s, log clock] that printed times count from; ``calibration``
+    lists why the logs hold no calibration flight (also in ``problems``)."""
 
     files: list[dict[str, Any]] = field(default_factory=list)
     nodes: list[NodeSummary] = field(default_factory=list)
     links: list[LinkSummary] = field(default_factory=list)
     problems: list[str] = field(default_factory=list)
+    start_s: float = 0.0
+    calibration: list[str] = field(default_factory=list)
 
     @property
     def ok(self) -> bool:
         return not self.problems
 
+    def _rel(self, t_s: float) -> str:
+        return f"{t_s - self.start_s:.3f}"
+
+    def findings(self, f: dict[str, Any]) -> list[str]:
+        """A file's reader findings: excluded periods (times from the log start) and drops."""
+        out = [f"excluded ({p.get('reason', '?')}): {self._rel(float(p['from_t']))} .. {self._rel(float(p['to_t']))} s, "
+               f"{int(p.get('pose_rows', 0))} pose row(s), {int(p.get('signal_rows', 0))} signal row(s)"
+               + (f": {p['detail']}" if p.get("detail") else "") for p in f.get("excluded_periods") or ()]
+        for what, counts in (("pose", f.get("dropped")), ("signal", f.get("signal_dropped"))):
+            out += [f"dropped on reading: {n:,} {what} row(s) ({why})" for why, n in (counts or {}).items() if n]
+        return out
+
     def to_text(self) -> str:
-        out = ["files:"]
+        out = [f"log start: t = {self.start_s:.3f} s on the log's clock; times below are seconds from it", "files:"]
         for f in self.files:
             out.append(f"  {f['path']}: {f['format']}" + (f" ({f['kind']} log)" if f.get("kind") else "")
                        + ("" if f.get("error") is None else f"  UNREADABLE: {f['error']}"))
-            out.extend(f"    {note}" for note in f.get("notes", ()))
+            out.extend(f"    {note}" for note in [*f.get("notes", ()), *self.findings(f)])
         out.append("pose logs:")
         for n in self.nodes:
             span = "static" if n.static else (
-                f"{n.t_start_s:.3f} .. {n.t_end_s:.3f} s ({n.t_end_s - n.t_start_s:.1f} s), "
+                f"{self._rel(n.t_start_s)} .. {self._rel(n.t_end_s)} s ({n.t_end_s - n.t_start_s:.1f} s), "
                 f"{n.rate_hz:.1f} Hz, gaps > threshold: {n.gaps} (longest {n.longest_gap_s:.3f} s)"
                 + (f", pauses (signals stop too): {n.pauses} (longest {n.longest_pause_s:.1f} s)" if n.pauses else ""))
             out.append(f"  {n.node}: {n.rows} rows, {span}")
         out.append("signal links:")
         for lk in self.links:
             out.append(
-                f"  {lk.tx} -> {lk.rx}: {lk.samples} samples, {lk.t_start_s:.3f} .. {lk.t_end_s:.3f} s, "
+                f"  {lk.tx} -> {lk.rx}: {lk.samples} samples, {self._rel(lk.t_start_s)} .. {self._rel(lk.t_end_s)} s, "
                 f"{lk.rate_hz:.1f} Hz, RSSI {lk.rssi_min_dbm:.1f} / {lk.rssi_median_dbm:.1f} / "
                 f"{lk.rssi_max_dbm:.1f} dBm (min/median/max), sentinel values: {lk.sentinel_rssi}"
-                + (f", exact duplicate rows: {lk.duplicates}" if lk.duplicates else ""))
+                + (f", exact duplicate rows: {lk.duplicates}" if lk.duplicates else "")
+                + (f", repeated readings: {lk.repeated_readings}" if lk.repeated_readings else ""))
         out.append("problems:" if self.problems else "problems: none found")
         out.extend(f"  - {p}" for p in self.problems)
         return "\n".join(out)
 
     def to_markdown(self) -> str:
-        out = ["## Files", "", "| path | format | kind | status |", "| --- | --- | --- | --- |"]
+        out = [f"Times in seconds from the log start, t = {self.start_s:.3f} s on the log's clock.", "",
+               "## Files", "", "| path | format | kind | status |", "| --- | --- | --- | --- |"]
         for f in self.files:
             out.append(f"| {f['path']} | {f['format']} | {f.get('kind', '?')} | "
                        f"{'ok' if f.get('error') is None else 'unreadable: ' + f['error']} |")
+        found = [f"- {f['path']}: {line}" for f in self.files for line in self.findings(f)]
+        out += ["", "## Reader findings", "", *found] if found else []
         out += ["", "## Pose logs", "",
                 "| node | rows | start [s] | end [s] | rate [Hz] | gaps | longest gap [s] | pauses | "
                 "longest pause [s] | NaN rows |",
                 "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
         for n in self.nodes:
-            out.append(f"| {n.node} | {n.rows} | {n.t_start_s:.3f} | {n.t_end_s:.3f} | {n.rate_hz:.1f} | "
+            out.append(f"| {n.node} | {n.rows} | {self._rel(n.t_start_s)} | {self._rel(n.t_end_s)} | {n.rate_hz:.1f} | "
                        f"{n.gaps} | {n.longest_gap_s:.3f} | {n.pauses} | {n.longest_pause_s:.1f} | {n.nan_rows} |")
         out += ["", "## Signal links", "",
                 "| tx | rx | samples | start [s] | end [s] | rate [Hz] | RSSI min [dBm] | median | max | sentinels "
-                "| duplicates |",
-                "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+                "| duplicates | repeated readings |",
+                "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
         for lk in self.links:
-            out.append(f"| {lk.tx} | {lk.rx} | {lk.samples} | {lk.t_start_s:.3f} | {lk.t_end_s:.3f} | "
+            out.append(f"| {lk.tx} | {lk.rx} | {lk.samples} | {self._rel(lk.t_start_s)} | {self._rel(lk.t_end_s)} | "
                        f"{lk.rate_hz:.1f} | {lk.rssi_min_dbm:.1f} | {lk.rssi_median_dbm:.1f} | "
-                       f"{lk.rssi_max_dbm:.1f} | {lk.sentinel_rssi} | {lk.duplicates} |")
+                       f"{lk.rssi_max_dbm:.1f} | {lk.sentinel_rssi} | {lk.duplicates} | {lk.repeated_readings} |")
         out += ["", "## Problems", ""]
         out += [f"- {p}" for p in self.problems] or ["none found"]
         return "\n".join(out)
@@ -230,29 +265,35 @@ def summarise_pose(pose: pd.DataFrame, max_gap_s: float = 0.2, clock_jump_s: flo
 
 def summarise_signal(signal: pd.DataFrame,
                      sentinel_rssi_dbm: Sequence[float] = DEFAULT_SENTINEL_RSSI_DBM) -> list[LinkSummary]:
-    """Per-direction summaries of a signal log (sentinel and non-finite RSSI counted apart)."""
+    """Per-direction summaries of a signal log (sentinel and non-finite RSSI counted apart; the
+    rate counts repeated readings once)."""
     out = []
     dup = pd.Series(duplicate_rows(signal), index=signal.index)
+    repeated = pd.Series(repeated_readings(signal), index=signal.index)
     for (tx, rx), g in signal.groupby(["tx", "rx"], sort=True):
         t = pd.to_numeric(g["t"], errors="coerce").to_numpy(np.float64)
         r = pd.to_numeric(g["rssi_dbm"], errors="coerce").to_numpy(np.float64)
         bad = ~np.isfinite(r) | np.isin(r, np.asarray(sentinel_rssi_dbm, float))
         good = r[~bad]
         tf = t[np.isfinite(t)]
+        copies = repeated.loc[g.index].to_numpy(bool)
         out.append(LinkSummary(
             tx=str(tx), rx=str(rx), samples=int(len(g)),
             t_start_s=float(tf.min()) if tf.size else np.nan, t_end_s=float(tf.max()) if tf.size else np.nan,
-            rate_hz=_rate_hz(tf), rssi_min_dbm=float(good.min()) if good.size else np.nan,
+            rate_hz=report_rate_hz(t, copies), rssi_min_dbm=float(good.min()) if good.size else np.nan,
             rssi_median_dbm=float(np.median(good)) if good.size else np.nan,
             rssi_max_dbm=float(good.max()) if good.size else np.nan,
             sentinel_rssi=int(bad.sum()), backward_steps=int((_steps(tf) < 0).sum()),
-            duplicates=int(dup.loc[g.index].sum()),
+            duplicates=int(dup.loc[g.index].sum()), repeated_readings=int(copies.sum()),
+            period_s=report_period_s(t),
         ))
     return out
 
 
-def _read_pose_table(path: str, options: ReaderOptions) -> tuple[pd.DataFrame, dict[str, Any], dict[str, int]]:
-    """A pose table in file order (``t``, ``node``), its facts and its NaN rows per node.
+def _read_pose_table(path: str, options: ReaderOptions) -> tuple[pd.DataFrame, dict[str, Any], dict[str, int],
+                                                                 pd.DataFrame]:
+    """A pose table in file order (``t``, ``node``), its facts, its NaN rows per node, and the
+    canonical pose log (sorted, for the flight checks).
 
     The table is read forgivingly (NaN rows dropped, unsorted times accepted) to check it,
     then its valid rows are returned unsorted: inspection wants the file order.
@@ -267,7 +308,6 @@ def _read_pose_table(path: str, options: ReaderOptions) -> tuple[pd.DataFrame, d
     )
     info = {"format": _tables.table_format(path), "kind": "pose",
             "non_unit_quaternion_rows": non_unit_quaternion_rows(pose)}
-    del pose  # validated and sorted; inspection wants the file order
     df = _tables.rename_columns(raw, options.columns)
     node = (df["node"].astype(str) if "node" in df.columns
             else pd.Series([node_of_file if node_of_file is not None else "?"] * len(df)))
@@ -276,7 +316,7 @@ def _read_pose_table(path: str, options: ReaderOptions) -> tuple[pd.DataFrame, d
     bad = ~np.isfinite(values).all(axis=1)
     nan_rows = {str(k): int(v) for k, v in node[bad].value_counts().items()}
     file_order = pd.DataFrame({"t": values[~bad, cols.index("t")], "node": node[~bad].to_numpy()})
-    return file_order, info, nan_rows
+    return file_order, info, nan_rows, pose
 
 
 def _forgiving_options(path: str, kind: str, options: ReaderOptions) -> ReaderOptions:
@@ -307,22 +347,31 @@ def _forgiving_options(path: str, kind: str, options: ReaderOptions) -> ReaderOp
 
 
 def _read_one(path: str, options: ReaderOptions) -> tuple[pd.DataFrame | None, pd.DataFrame | None,
-                                                         dict[str, Any], dict[str, int]]:
+                                                         dict[str, Any], dict[str, int], pd.DataFrame | None]:
+    """A file's poses in file order, signals, facts (``frequency_hz`` [Hz] when the log or the
+    options give it), NaN pose rows per node, and canonical poses."""
     from rplearn.io.read import detect_format, read_logs
     from rplearn.io import tables as _tables
 
     kind = detect_format(path)
     if kind == "table":
         if _tables.table_kind(path, options.columns) == "pose":
-            pose, info, nan_rows = _read_pose_table(path, options)
-            return pose, None, info, nan_rows
+            pose, info, nan_rows, canonical = _read_pose_table(path, options)
+            return pose, None, info, nan_rows, canonical
         sig, meta = _tables.read_signal_table(
             path, columns=options.columns, rx=(options.receivers or {}).get(path),
-            tx_power_dbm=0.0, frequency_hz=1.0)
-        return None, sig, {"format": meta["format"], "kind": "signal"}, {}
+            tx_power_dbm=0.0, frequency_hz=1.0)  # 1 Hz: a placeholder, never a real frequency
+        return None, sig, {"format": meta["format"], "kind": "signal", "frequency_hz": _frequency_hz(sig)}, {}, None
     logs, meta = read_logs(path, _forgiving_options(path, kind, options))
     f = meta["files"][0]
     info = {"format": f.get("format", kind), "kind": f.get("kind")}
+    if logs.signal is not None and (kind != "mavlink" or options.frequency_hz is not None):
+        info["frequency_hz"] = _frequency_hz(logs.signal)
+    for key in ("excluded_periods", "dropped"):
+        if f.get(key):
+            info[key] = f[key]
+    if isinstance(f.get("signal"), dict):  # counts of signal rows dropped on reading; rows_* are kept rows
+        info["signal_dropped"] = {k: v for k, v in f["signal"].items() if not str(k).startswith("rows")}
     if f.get("invalid_flag_rows"):
         info["invalid_flag_rows"] = int(f["invalid_flag_rows"])
     for key in ("cut_off_at_byte", "cut_off_record", "corrupt", "corrupt_bytes"):
@@ -332,7 +381,14 @@ def _read_one(path: str, options: ReaderOptions) -> tuple[pd.DataFrame | None, p
         info["notes"] = [str(n).removeprefix(f"{path}: ") for n in f["notes"]]
     if logs.pose is not None:
         info["non_unit_quaternion_rows"] = non_unit_quaternion_rows(logs.pose)
-    return logs.pose, logs.signal, info, {}
+    return logs.pose, logs.signal, info, {}, logs.pose
+
+
+def _frequency_hz(signal: pd.DataFrame) -> float | None:
+    """The lowest carrier frequency a signal log gives [Hz] (None for placeholders below 1 MHz)."""
+    f = pd.to_numeric(signal["frequency_hz"], errors="coerce").to_numpy(np.float64) if len(signal) else np.zeros(0)
+    f = f[np.isfinite(f) & (f >= 1e6)]
+    return float(f.min()) if f.size else None
 
 
 def inspect_logs(
@@ -370,12 +426,12 @@ def inspect_logs(
     if isinstance(paths, str) or hasattr(paths, "__fspath__"):
         paths = [paths]  # type: ignore[list-item]
     report = InspectReport()
-    poses, signals = [], []
+    poses, signals, canonical = [], [], []
     nan_rows: dict[str, int] = {}
     for p in paths:
         path = str(p)
         try:
-            pose, sig, info, nans = _read_one(path, options)
+            pose, sig, info, nans, full = _read_one(path, options)
         except RplearnError as exc:
             report.files.append({"path": path, "format": "?", "kind": None, "error": str(exc)})
             report.problems.append(f"{path}: unreadable: {exc}")
@@ -388,14 +444,37 @@ def inspect_logs(
             poses.append(pose)
         if sig is not None:
             signals.append(sig)
+        if full is not None:
+            canonical.append(full)
     signal = pd.concat(signals, ignore_index=True) if signals else None
     if poses:
         report.nodes = summarise_pose(pd.concat(poses, ignore_index=True), max_gap_s, clock_jump_s, nan_rows,
                                       signal)
     if signal is not None:
         report.links = summarise_signal(signal, sentinel_rssi_dbm)
+    starts = [n.t_start_s for n in report.nodes if not n.static] or [n.t_start_s for n in report.nodes] or [
+        lk.t_start_s for lk in report.links if np.isfinite(lk.t_start_s)]
+    report.start_s = float(min(starts)) if starts else 0.0
+    frequencies = [f["frequency_hz"] for f in report.files if f.get("frequency_hz")]
+    if not frequencies and isinstance(options.frequency_hz, (int, float)):
+        frequencies = [float(options.frequency_hz)]  # the user's, for logs that do not say it
+    report.calibration = _calibration(canonical, report.links, min(frequencies) if frequencies else None)
     _flag(report, max_gap_s)
     return report
+
+
+def _calibration(poses: list[pd.DataFrame], links: list[LinkSummary], frequency_hz: float | None) -> list[str]:
+    """Why the pose logs hold no calibration flight (:func:`~rplearn.data.phases.calibration_problems`);
+    nothing when the poses cannot be checked (no pose log, or logs that disagree)."""
+    if not poses:
+        return []
+    try:
+        pose = pd.concat(poses, ignore_index=True)
+        tracks = pose_tracks(pose)
+    except RplearnError:
+        return []
+    pairs = [(lk.tx, lk.rx) for lk in links] or None
+    return calibration_problems(flight_phases(pose, tracks), tracks, pairs, frequency_hz)
 
 
 def file_damage(path: str, info: dict[str, Any]) -> list[str]:
@@ -435,6 +514,7 @@ def _flag_file(report: InspectReport, path: str, info: dict[str, Any]) -> None:
 
 def _flag(report: InspectReport, max_gap_s: float) -> None:
     known = {n.node: n for n in report.nodes}
+    report.problems.extend(report.calibration)
     for n in report.nodes:
         if n.nan_rows:
             report.problems.append(f"node {n.node}: {n.nan_rows} pose row(s) with NaN or non-numeric values")
@@ -450,7 +530,8 @@ def _flag(report: InspectReport, max_gap_s: float) -> None:
                 f"(longest {n.longest_gap_s:.3f} s); samples inside are dropped")
         if not n.static and np.isfinite(n.rate_hz) and n.rate_hz < 1.0 / max_gap_s:
             report.problems.append(
-                f"node {n.node}: pose rate {n.rate_hz:.2f} Hz is below 1 / max_gap_s; most samples would drop")
+                f"node {n.node}: pose rate {n.rate_hz:.2f} Hz is below 1 / max_gap_s; most samples would drop "
+                f"(sync with max_gap_s={advised_max_gap_s(1.0 / n.rate_hz):g}: 1.5 x its median pose interval)")
     for lk in report.links:
         if lk.sentinel_rssi:
             report.problems.append(
@@ -458,6 +539,10 @@ def _flag(report: InspectReport, max_gap_s: float) -> None:
         if lk.duplicates:
             report.problems.append(
                 f"link {lk.tx} -> {lk.rx}: {lk.duplicates} exact duplicate row(s); sync drops them (duplicate)")
+        if lk.repeated_readings:
+            report.problems.append(
+                f"link {lk.tx} -> {lk.rx}: {lk.repeated_readings} reading(s) logged twice (equal values within "
+                f"{REPEAT_FRACTION:g} of the {lk.period_s:.3g} s report period); sync merges them (duplicate_reading)")
         if lk.backward_steps:
             report.problems.append(f"link {lk.tx} -> {lk.rx}: time goes backwards {lk.backward_steps} time(s)")
         for end in (lk.tx, lk.rx):
@@ -470,9 +555,10 @@ def _flag(report: InspectReport, max_gap_s: float) -> None:
             lo = max((n.t_start_s for n in moving), default=-np.inf)
             hi = min((n.t_end_s for n in moving), default=np.inf)
             if moving and (lk.t_end_s < lo or lk.t_start_s > hi):
+                rel = report._rel
                 report.problems.append(
-                    f"link {lk.tx} -> {lk.rx}: signal times {lk.t_start_s:.3f} .. {lk.t_end_s:.3f} s "
-                    f"do not overlap the poses ({lo:.3f} .. {hi:.3f} s): a clock offset?")
+                    f"link {lk.tx} -> {lk.rx}: signal times {rel(lk.t_start_s)} .. {rel(lk.t_end_s)} s "
+                    f"do not overlap the poses ({rel(lo)} .. {rel(hi)} s from the log start): a clock offset?")
 
 
 __all__ = [
