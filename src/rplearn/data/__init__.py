@@ -12,7 +12,9 @@ module        public names
 ``streaming`` the same for logs too big for memory: :func:`synchronise_stream`,
               :func:`synchronise_to_parquet`, :func:`row_hashes`
 ``units``     :func:`samples_of`, :func:`learning_units`, :func:`evaluation_units`,
-              :func:`split_units`, :func:`select_units` -> :class:`UnitChoice`
+              :func:`split_units`, :func:`select_units` -> :class:`UnitChoice`; a flight
+              without units cut into named stretches of time (:func:`time_units`,
+              :class:`Stretches`, :func:`stretched`)
 ============  ==================================================================================
 
 Every name of ``__all__`` can be imported from here (``from rplearn.data import samples_of``);
@@ -60,6 +62,12 @@ _NAMES: dict[str, str] = {
     "select_units": "units",
     "split_units": "units",
     "time_units": "units",
+    "Stretches": "units",
+    "is_stretch_label": "units",
+    "stretch_labels": "units",
+    "stretched": "units",
+    "refuse_streamed_stretches": "units",
+    "whole_flight_note": "units",
     "TIME_UNITS": "units",
     "trained_units": "units",
 }
