@@ -17,6 +17,7 @@ import numpy as np
 import pandas as pd
 
 from rplearn._atomic import atomic_open
+from rplearn.analysis.budget import check_dataset_budget
 from rplearn.analysis.pattern_error import node_directions
 from rplearn.core.metrics import Scores
 from rplearn.data.units import (
@@ -234,6 +235,7 @@ def fit_dataset(
         notes = downweighted_notes(select_units(df, choice.units, dataset), robust)
     else:
         fitted = fit_model(samples, spec, gauge=gauge, provenance=prov, **(terms if spec.decouples else {}))
+    check_dataset_budget(fitted.model, select_units(df, choice.units, dataset), dataset)
     if output:
         fitted.model.save(output)
     return FitOutcome(fitted, choice, len(samples), output, samples.non_unit_quaternions, robust_notes=notes)
@@ -302,6 +304,7 @@ def _fit_auto(
     fitted, selection = fit_auto(per_unit, spec.kind, spec.order if spec.kind != "sh" else None, spec.ridge, gauge, prov,
                                  prior=priors or None, prior_spread_db=prior_std_db, path_loss=path_loss,
                                  link_offsets=link_offsets)
+    check_dataset_budget(fitted.model, part, dataset)
     if output:
         fitted.model.save(output)
     n = sum(len(s) for s in per_unit.values())
