@@ -94,3 +94,18 @@ def test_the_ranges_and_which_input_each_finding_names():
     assert budget_findings([_link()], offsets=[{**offsets[0], "se_db": 3.0}]) == []
     [mean] = budget_findings([_link()], sphere_means={"uav": -25.0})
     assert mean.check == "pattern-mean" and mean.subject == "uav" and mean.inputs[0] == "--tx-power"
+
+
+def test_a_swarm_judges_each_node_by_its_power_mean(tmp_path):
+    """Odd cycles identify each node's mean: a patch with deep nulls (dB-mean -11 dBi, power mean
+    -2 dBi) is no finding; every transmit power 25 dB too high puts about half of it on each end."""
+    from rplearn.sim.flight import simulate
+
+    trio = simulate("trio", seed=0).matched_truth
+    _, clean = _fit(trio, tmp_path, "trio")
+    assert clean == []
+    _, found = _fit(trio.assign(tx_power_dbm=trio["tx_power_dbm"] + TX_ERROR_DB), tmp_path, "trio-wrong")
+    means = {f["subject"]: f for f in found if f["check"] == "pattern-mean"}
+    assert sorted(means) == ["A", "B", "C"]
+    for f in means.values():
+        assert f["inputs"][0] == "--tx-power" and f["off_by_db"] == pytest.approx(TX_ERROR_DB, abs=6.0)
