@@ -109,3 +109,16 @@ def test_a_swarm_judges_each_node_by_its_power_mean(tmp_path):
     assert sorted(means) == ["A", "B", "C"]
     for f in means.values():
         assert f["inputs"][0] == "--tx-power" and f["off_by_db"] == pytest.approx(TX_ERROR_DB, abs=6.0)
+
+
+def test_a_node_placed_5_m_off_shows_as_a_distance_trend_naming_the_stations_place(flight, tmp_path):
+    """The smoke flight hovers at one distance: placed 5 m off, a node's computed distances vary
+    while the received power does not (apparent exponent near 0), which free space cannot do."""
+    moved = flight.copy()
+    for end in ("tx", "rx"):
+        moved.loc[moved[end] == "B", f"{end}_x"] += 5.0
+    _, found = _fit(moved, tmp_path, "moved")
+    [far] = [f for f in found if f["check"] == "distance"]
+    assert far["inputs"][0] == "the station's place" and far["value"] < EXPONENT_RANGE[0]
+    _, clean = _fit(flight, tmp_path, "still")
+    assert not [f for f in clean if f["check"] == "distance"]
