@@ -4,7 +4,10 @@ The one place that decides it. A matched dataset may carry a ``unit`` column, th
 trajectory unit (paper Sec. IV-A) every sample was flown in. Units labelled ``test...`` (any
 case) are held out for testing by default; every other unit is for learning. Functions return
 a :class:`UnitChoice`: the units, plus the notes and warnings a user should read about the
-choice (which units were left out, when a score would be a training score).
+choice (which units were left out, when a score would be a training score). A dataset without
+units (one flight, e.g. a telemetry log) is cut into named stretches of time
+(:class:`Stretches`, :func:`time_units`), which every command takes as units and the automatic
+selection uses as its folds.
 """
 
 from __future__ import annotations
