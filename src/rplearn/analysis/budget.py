@@ -171,10 +171,14 @@ def link_summaries(samples: LinkSamples, min_samples: int = 10) -> list[LinkSumm
     d = np.asarray(samples.distance_m, np.float64)
     tx, rx = np.asarray(samples.tx_index), np.asarray(samples.rx_index)
     lo, hi = np.minimum(tx, rx), np.maximum(tx, rx)
+    pairs, group = np.unique(np.stack([lo, hi], axis=1), axis=0, return_inverse=True)
+    group = np.asarray(group).ravel()
+    order = np.argsort(group, kind="stable")
+    bounds = np.searchsorted(group[order], np.arange(len(pairs) + 1))
     out = []
-    for i, j in sorted(set(zip(lo.tolist(), hi.tolist()))):
-        sel = (lo == i) & (hi == j)
-        if sel.sum() < min_samples:
+    for (i, j), a, b in zip(pairs.tolist(), bounds[:-1], bounds[1:]):  # one pass per link, not per row
+        sel = order[a:b]
+        if sel.size < min_samples:
             continue
         gl, dl, forward = g[sel], d[sel], tx[sel] == i
         centred = gl.copy()
@@ -185,7 +189,7 @@ def link_summaries(samples: LinkSamples, min_samples: int = 10) -> list[LinkSumm
         x = x - x.mean()
         slope = float(x @ centred / (x @ x)) if x @ x > 0 else 0.0
         f = None if samples.frequency_hz is None else float(np.median(np.asarray(samples.frequency_hz)[sel]))
-        out.append(LinkSummary(str(samples.nodes[i]), str(samples.nodes[j]), int(sel.sum()), float(np.median(gl)),
+        out.append(LinkSummary(str(samples.nodes[i]), str(samples.nodes[j]), int(sel.size), float(np.median(gl)),
                                (float(np.percentile(dl, 10)), float(np.percentile(dl, 90))), 2.0 - slope, f))
     return out
 
