@@ -330,6 +330,9 @@ def check_dataset_budget(model: Any, part: pd.DataFrame, source: str = "dataset"
     return check_fit_budget(model, link_samples(part, source, nodes=model.nodes), relative)
 
 
-__all__ = ["BAND_MATCH_DB", "BAND_TOLERANCE", "BudgetFinding", "EXPONENT_RANGE", "JOINT_LEVEL_RANGE_DB", "JOINT_LEVEL_TYPICAL_DB",
-           "LINK_OFFSET_LIMIT_DB", "LinkSummary", "MIN_DISTANCE_SPREAD_DB", "PATTERN_MEAN_RANGE_DBI", "PATTERN_MEAN_TYPICAL_DBI", "RADIO_BANDS_HZ",
-           "SPHERE_NODES", "budget_findings", "check_dataset_budget", "check_fit_budget", "link_summaries", "sphere_means_dbi"]
+__all__ = [
+    "BAND_MATCH_DB", "BAND_TOLERANCE", "BudgetFinding", "EXPONENT_RANGE", "JOINT_LEVEL_RANGE_DB",
+    "JOINT_LEVEL_TYPICAL_DB", "LINK_OFFSET_LIMIT_DB", "LinkSummary", "MIN_DISTANCE_SPREAD_DB",
+    "PATTERN_MEAN_RANGE_DBI", "PATTERN_MEAN_TYPICAL_DBI", "RADIO_BANDS_HZ", "SPHERE_NODES", "budget_findings",
+    "check_dataset_budget", "check_fit_budget", "link_summaries", "sphere_means_dbi",
+]
