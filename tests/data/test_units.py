@@ -111,3 +111,33 @@ def test_a_fleets_hundreds_of_units_are_summarised_in_notes():
     note = learning_units(df).notes[0]
     assert "(60 units)" in note and "(30 units)" in note and len(note) < 400  # all 90 names: 1,378 characters
     assert note.startswith("learning from units learn_0@f0000, learn_0@f0001,") and ", ..., " in note
+
+
+def test_one_naming_of_stretches_cut_at_instants():
+    import numpy as np
+
+    from rplearn.data.units import Stretches, is_stretch_label, refuse_streamed_stretches, stretch_labels, stretched
+
+    assert stretch_labels() == ["flight[1/5]", "flight[2/5]", "flight[3/5]", "flight[4/5]", "test[5/5]"]
+    assert stretch_labels(3, "learn_0") == ["learn_0[1/3]", "learn_0[2/3]", "learn_0[3/3]"]
+    assert all(is_stretch_label(u) for u in stretch_labels()) and not is_stretch_label("learn_0[1/3]")
+    assert not is_stretch_label("flight[6/5]") and not is_stretch_label("test_36")
+    # three rows at each of 7 instants: equal-count cuts fall inside instants (as a cut by row counts
+    # would split them) and move to their start
+    t = np.repeat(np.arange(7.0), 3)[::-1]  # any order
+    by_rows = np.array_split(np.sort(t), 5)
+    assert any(a[-1] == b[0] for a, b in zip(by_rows[:-1], by_rows[1:]))
+    cut = Stretches.of_times(t)
+    k = cut.index(t)
+    assert all(len(set(k[t == x])) == 1 for x in np.unique(t))  # no instant split
+    assert np.all(np.diff(k[np.argsort(t)]) >= 0)  # contiguous in time
+    assert sorted(set(cut.label(t))) == stretch_labels()
+    # only a dataset without units, with units chosen, is cut; a streamed one is refused with the names
+    df = pd.DataFrame({"t": t})
+    assert stretched(df, None)[0] is df and "unit" in stretched(df, ["test[5/5]"])[0].columns
+    with pytest.raises(InputError, match=r"flight\[1/5\]") as err:
+        refuse_streamed_stretches(pd.DataFrame({"tx": ["a"], "n": [3]}), ["test[5/5]"], "big")
+    assert err.value.param == "units"
+    refuse_streamed_stretches(pd.DataFrame({"unit": ["u"], "n": [3]}), ["u"], "big")
+    with pytest.raises(InputError, match=r"lacks \(a flight without units is cut into stretches"):
+        select_units(df, ["test[5/5]"], "d.parquet")

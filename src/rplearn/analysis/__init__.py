@@ -14,6 +14,8 @@ module               public names
                      connectivity), :func:`connectivity_over_time`
 ``clock``            :func:`estimate_clock_offset` -> :class:`ClockOffsetEstimate` (a node's
                      pose clock offset, from the signal)
+``budget``           :func:`check_fit_budget`, :func:`budget_findings` -> :class:`BudgetFinding`
+                     (an implausible link budget and the input most likely wrong)
 ===================  ===========================================================================
 
 Every name of ``__all__`` can be imported from here (``from rplearn.analysis import
@@ -52,6 +54,13 @@ _NAMES: dict[str, str] = {
     "connectivity_over_time": "swarm",
     "predict_swarm": "swarm",
     "spanning_bottleneck": "swarm",
+    # plausible link budgets
+    "BudgetFinding": "budget",
+    "LinkSummary": "budget",
+    "budget_findings": "budget",
+    "check_dataset_budget": "budget",
+    "check_fit_budget": "budget",
+    "link_summaries": "budget",
 }
 
 __all__ = sorted(_NAMES)

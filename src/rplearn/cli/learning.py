@@ -27,7 +27,7 @@ def fit(
     ridge: Optional[float] = typer.Option(None, "--ridge", help="Pattern models: ridge weight on the diagonal of X^T X (default 1; the paper used 50)."),
     sigma: Optional[float] = typer.Option(None, "--sigma", help="BG only: kernel variance sigma [rad^2] (default 0.5, about the paper's)."),
     grid: Optional[str] = typer.Option(None, "--grid", help="BG only: nodes on the paper grid (default) or fibonacci."),
-    units: Optional[list[str]] = typer.Option(None, "--units", help="Learning units (repeat or comma-separate; default: all but units labelled test...)."),
+    units: Optional[list[str]] = typer.Option(None, "--units", help="Learning units (repeat or comma-separate; default: all but units labelled test...). A dataset without units (a .tlog) names its 5 stretches of time flight[1/5]..flight[4/5], test[5/5]."),
     gauge_node: Optional[str] = typer.Option(None, "--gauge-node", help="Pattern models: fix this node's mean gain instead of splitting equally."),
     gauge_dbi: Optional[float] = typer.Option(None, "--gauge-dbi", help="Sphere-mean gain of --gauge-node [dBi] (default 0)."),
     prior: Optional[list[str]] = typer.Option(None, "--prior", help="NODE=MODEL.json: shrink NODE's pattern toward this (reference) model instead of toward zero; with --degree auto."),
@@ -127,7 +127,7 @@ def degree_option(degree: Optional[str], model: str) -> tuple[bool, Optional[int
 @user_errors
 def evaluate(
     paths: list[str] = typer.Argument(..., help="MODEL.json... DATASET (the last argument is the dataset)."),
-    units: Optional[list[str]] = typer.Option(None, "--units", help="Evaluation units (repeat or comma-separate)."),
+    units: Optional[list[str]] = typer.Option(None, "--units", help="Evaluation units (repeat or comma-separate; a dataset without units: its stretches of time flight[1/5]..test[5/5], as fit names them)."),
     json_out: Optional[str] = typer.Option(None, "--json", help="Also write Table I as JSON here."),
     markdown_out: Optional[str] = typer.Option(None, "--markdown", help="Also write Table I as Markdown here."),
     dask: Optional[str] = typer.Option(None, "--dask", help=DASK_HELP),
@@ -214,7 +214,7 @@ def sweep(
 @app.command()
 @user_errors
 def report(
-    dataset: str = typer.Argument(..., help="Matched dataset with a 'unit' column."),
+    dataset: str = typer.Argument(..., help="Matched dataset (without a 'unit' column it is cut into stretches of time flight[1/5]..test[5/5])."),
     models: str = typer.Option("m,nn-400,sh-10,p-12,bg-7", "--models", help="Models to learn and compare."),
     test_units: Optional[list[str]] = typer.Option(None, "--test-units", help="Testing units (default: labels starting with 'test')."),
     out_dir: str = typer.Option("rplearn-report", "-o", "--out", help="Output directory."),

@@ -16,7 +16,9 @@ module        public names
 ``phases``    flight phases: :func:`flight_phases` -> :class:`FlightPhases` (take-off
               altitudes, airborne), :func:`max_gap_advice`, :func:`calibration_problems`
 ``units``     :func:`samples_of`, :func:`learning_units`, :func:`evaluation_units`,
-              :func:`split_units`, :func:`select_units` -> :class:`UnitChoice`
+              :func:`split_units`, :func:`select_units` -> :class:`UnitChoice`; a flight
+              without units cut into named stretches of time (:func:`time_units`,
+              :class:`Stretches`, :func:`stretched`)
 ============  ==================================================================================
 
 Every name of ``__all__`` can be imported from here (``from rplearn.data import samples_of``);
@@ -74,6 +76,12 @@ _NAMES: dict[str, str] = {
     "select_units": "units",
     "split_units": "units",
     "time_units": "units",
+    "Stretches": "units",
+    "is_stretch_label": "units",
+    "stretch_labels": "units",
+    "stretched": "units",
+    "refuse_streamed_stretches": "units",
+    "whole_flight_note": "units",
     "TIME_UNITS": "units",
     "trained_units": "units",
 }

@@ -4,12 +4,16 @@ The one place that decides it. A matched dataset may carry a ``unit`` column, th
 trajectory unit (paper Sec. IV-A) every sample was flown in. Units labelled ``test...`` (any
 case) are held out for testing by default; every other unit is for learning. Functions return
 a :class:`UnitChoice`: the units, plus the notes and warnings a user should read about the
-choice (which units were left out, when a score would be a training score).
+choice (which units were left out, when a score would be a training score). A dataset without
+units (one flight, e.g. a telemetry log) is cut into named stretches of time
+(:class:`Stretches`, :func:`time_units`), which every command takes as units and the automatic
+selection uses as its folds.
 """
 
 from __future__ import annotations
 
 import os
+import re
 from dataclasses import dataclass, field
 from typing import Sequence
 
@@ -141,18 +145,84 @@ def evaluation_units(
 
 
 #: A dataset without units (one flight, e.g. a telemetry log) is cut into this many contiguous
-#: stretches of time for a report or a sweep; the last one is the test.
+#: stretches of time for a report or a sweep (the last one the test), which ``fit --units`` and
+#: ``evaluate --units`` accept by name; a single learning unit is cross-validated over as many.
 TIME_UNITS = 5
+
+#: A stretch label: ``flight[k/n]``, ``test[n/n]`` or ``UNIT[k/n]`` (a stretch of one unit).
+_STRETCH = re.compile(r"^(?P<unit>.+)\[(?P<k>\d+)/(?P<n>\d+)\]$")
+
+
+def stretch_labels(blocks: int = TIME_UNITS, unit: str | None = None) -> list[str]:
+    """Names of the ``blocks`` stretches of time of a flight, in time order.
+
+    Without ``unit`` (a dataset without units): ``flight[1/n]`` .. ``flight[n-1/n]`` and
+    ``test[n/n]``, the last held out by the unit rule (:func:`is_test_unit`); the stretches of
+    one unit ``u`` (the folds of its cross-validation) are ``u[1/n]`` .. ``u[n/n]``.
+    """
+    if unit is None:
+        return [f"flight[{j}/{blocks}]" for j in range(1, blocks)] + [f"test[{blocks}/{blocks}]"]
+    return [f"{unit}[{j}/{blocks}]" for j in range(1, blocks + 1)]
+
+
+def is_stretch_label(label: object) -> bool:
+    """Whether a unit label names a stretch of time of a flight without units (``flight[2/5]``)."""
+    m = _STRETCH.match(str(label))
+    return bool(m) and m.group("unit") in ("flight", "test") and 1 <= int(m.group("k")) <= int(m.group("n"))
+
+
+@dataclass(frozen=True)
+class Stretches:
+    """Contiguous stretches of time of one flight: where they start and what they are called.
+
+    The one cut of a flight into stretches, used alike by ``fit`` (learning units and the
+    folds of ``--degree auto``), ``evaluate``, ``sweep`` and ``report``, in memory and streamed.
+    Rows of one instant (both directions of a telemetry report) share a stretch: a stretch
+    starts at an instant, never inside one.
+
+    Attributes
+    ----------
+    starts_s : tuple of float
+        Start time [s] of every stretch but the first (increasing; a row at a start time
+        belongs to the later stretch).
+    labels : tuple of str
+        One name per stretch (:func:`stretch_labels`), in time order.
+    """
+
+    starts_s: tuple[float, ...]
+    labels: tuple[str, ...]
+
+    @classmethod
+    def of_times(cls, t: np.ndarray, blocks: int = TIME_UNITS, unit: str | None = None) -> Stretches:
+        """Stretches of about equal sample counts of the times ``t`` [s] (any order).
+
+        Each start is the time of the sample at an equal-count quantile, so that every row of
+        the instant it falls in goes to the later stretch; with many rows at one instant a
+        stretch may hold none (:meth:`index` never yields it).
+        """
+        t = np.sort(np.asarray(t, np.float64))
+        if t.size == 0:
+            return cls((), tuple(stretch_labels(1, unit)[:1]))
+        return cls(tuple(float(x) for x in t[[t.size * j // blocks for j in range(1, blocks)]]),
+                   tuple(stretch_labels(blocks, unit)))
+
+    def index(self, t: np.ndarray) -> np.ndarray:
+        """The stretch (0-based) of every time ``t`` [s]."""
+        return np.searchsorted(np.asarray(self.starts_s, np.float64), np.asarray(t, np.float64), side="right")
+
+    def label(self, t: np.ndarray) -> np.ndarray:
+        """The stretch name of every time ``t`` [s]."""
+        return np.asarray(self.labels, dtype=object)[self.index(t)]
 
 
 def time_units(df: pd.DataFrame, blocks: int = TIME_UNITS, source: str = "dataset") -> tuple[pd.DataFrame, str | None]:
     """A dataset without a ``unit`` column, labelled by contiguous stretches of time.
 
-    Rows are cut by time into ``blocks`` stretches of about equal sample counts (rows of one
-    instant never split), labelled
-    ``flight[k/blocks]`` and the last ``test[blocks/blocks]``: learning on the first ones and
-    testing on the last keeps neighbouring (correlated) packets on one side. A dataset with a
-    ``unit`` column is returned as it is.
+    Rows are cut by time into ``blocks`` stretches of about equal sample counts
+    (:class:`Stretches`: rows of one instant never split), labelled ``flight[k/blocks]`` and
+    the last ``test[blocks/blocks]``: learning on the first ones and testing on the last keeps
+    neighbouring (correlated) packets on one side. A dataset with a ``unit`` column is
+    returned as it is.
 
     Returns
     -------
@@ -174,19 +244,50 @@ def time_units(df: pd.DataFrame, blocks: int = TIME_UNITS, source: str = "datase
     if len(t) < blocks or not (t == t).all():
         raise InputError(f"{source}: cannot cut {len(t)} sample(s) with finite times into {blocks} stretches of time",
                          param="t")
-    # cut at the times of equal-count quantiles: rows of one instant (both directions of a
-    # telemetry report) stay in one stretch, so no instant is on both sides of the test
-    edges = np.sort(t)[[len(t) * j // blocks for j in range(1, blocks)]]
-    k = np.searchsorted(edges, t, side="right")  # 0 .. blocks-1
+    stretches = Stretches.of_times(t, blocks)
+    k = stretches.index(t)  # 0 .. blocks-1
     if len(np.unique(k)) < blocks:
         raise InputError(f"{source}: its {len(t)} sample(s) have too few distinct times to cut into {blocks} "
                          "stretches of time", param="t")
-    labels = [f"flight[{j + 1}/{blocks}]" for j in range(blocks - 1)] + [f"test[{blocks}/{blocks}]"]
-    out = df.assign(unit=[labels[j] for j in k])
+    out = df.assign(unit=stretches.label(t))
+    labels = stretches.labels
     note = (f"{source} has no 'unit' column: its flight is cut into {blocks} stretches of time with about equal "
-            f"sample counts, learning on the first {blocks - 1} (flight[1/{blocks}]..flight[{blocks - 1}/{blocks}]) "
-            f"and testing on the last (test[{blocks}/{blocks}], from t = {t[k == blocks - 1].min():.3f} s)")
+            f"sample counts, {labels[0]}..{labels[-2]} and {labels[-1]} (from t = {t[k == blocks - 1].min():.3f} s); "
+            "these names choose stretches (fit --units, evaluate --units, sweep --learn-units/--test-units, "
+            "report --test-units)")
     return out, note
+
+
+def stretched(df: pd.DataFrame, units: Sequence[str] | None, source: str = "dataset") -> tuple[pd.DataFrame, str | None]:
+    """A dataset ready for choosing ``units``: a dataset without units, when units are chosen,
+    labelled by its stretches of time (:func:`time_units`); otherwise as it is."""
+    if "unit" in df.columns or not units:
+        return df, None
+    return time_units(df, source=source)
+
+
+def whole_flight_note(source: str = "dataset") -> str:
+    """The note of a fit on the whole of a flight without units: how to name its stretches."""
+    names = stretch_labels()
+    return (f"{source} has no 'unit' column: learning from its whole flight; its {len(names)} stretches of time "
+            f"{names[0]}..{names[-1]} can be chosen (e.g. --units {','.join(names[:-1])} holds out {names[-1]} "
+            f"for evaluate --units {names[-1]})")
+
+
+def refuse_streamed_stretches(index: pd.DataFrame, units: Sequence[str] | None, source: str = "dataset") -> None:
+    """Refuse units chosen in a dataset without units that is read part by part (its stretches
+    of time are cut only when it is read whole).
+
+    Raises
+    ------
+    InputError
+        When ``units`` are given and ``index`` (the dataset's rows per unit and link) has no
+        ``unit`` column.
+    """
+    if units and "unit" not in index.columns:
+        raise InputError(f"{source}: has no 'unit' column and is read part by part: stretches of time "
+                         f"({', '.join(stretch_labels())}) are chosen in a dataset read whole; label its rows "
+                         "with a 'unit' column to choose units", param="units")
 
 
 def split_units(
@@ -223,7 +324,8 @@ def select_units(df: pd.DataFrame, units: Sequence[str] | None, source: str = "d
     if not units:
         return df
     if "unit" not in df.columns:
-        raise InputError(f"{source}: choosing units needs a 'unit' column, which this dataset lacks")
+        raise InputError(f"{source}: choosing units needs a 'unit' column, which this dataset lacks (a flight "
+                         f"without units is cut into stretches of time named {', '.join(stretch_labels())})", param="units")
     wanted = [str(u) for u in units]
     known = dataset_units(df)
     unknown = [u for u in wanted if u not in known]

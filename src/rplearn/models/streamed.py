@@ -26,6 +26,7 @@ from rplearn.models.terms import regression_inputs, shared_fields, statistics_co
 from rplearn.core.selection import penalty_scale, penalty_vector
 from rplearn.core.solver import FitReport, solve
 from rplearn.data.tables import LinkSamples, link_samples, node_ids
+from rplearn.data.units import Stretches
 from rplearn.errors import InputError
 from rplearn.models.fit import node_coverage_grids
 from rplearn.models.patterns import PatternSet
@@ -117,11 +118,6 @@ class Accumulated:
         Time spent turning samples into statistics [s].
     grids : dict of str to list of float, or None
         Coverage grids by node (None before any sample).
-    t_first, t_last : float
-        Time of the first and last learning row [s] (nan without rows); with time blocks,
-        the rows of a later part must not start before an earlier part's last row.
-    time_blocks : bool
-        Whether the labels are time blocks of one unit.
     source : str
         Where the rows came from (in messages).
     """
@@ -131,9 +127,6 @@ class Accumulated:
     non_unit: int = 0
     learn_s: float = 0.0
     grids: dict[str, list[float]] | None = None
-    t_first: float = float("nan")
-    t_last: float = float("nan")
-    time_blocks: bool = False
     source: str = "dataset"
 
     @property
@@ -142,10 +135,6 @@ class Accumulated:
 
     def merge(self, later: Accumulated) -> Accumulated:
         """Add the accumulation of rows that follow these (in place; returns self)."""
-        if self.time_blocks and np.isfinite(self.t_last) and np.isfinite(later.t_first) and later.t_first < self.t_last:
-            raise InputError(f"{later.source}: field t goes backwards (from {self.t_last:.3f} s in {self.source}); cutting "
-                             "a single flight into time blocks for cross-validation needs rows sorted by time (sort the "
-                             "files, or label units)")
         for label, acc in later.stats.items():
             if label in self.stats:
                 self.stats[label].merge(acc)
@@ -157,29 +146,25 @@ class Accumulated:
         if later.grids is not None:
             self.grids = later.grids if self.grids is None else {
                 k: np.minimum(np.asarray(v), np.asarray(later.grids[k])).tolist() for k, v in self.grids.items()}
-        if np.isfinite(later.t_first):
-            self.t_first = later.t_first if not np.isfinite(self.t_first) else self.t_first
-            self.t_last = later.t_last
         self.source = self.source if self.source == later.source else f"{self.source}, ..."
         return self
 
 
 def accumulate(
     chunks: Iterable[pd.DataFrame], spec: ModelSpec, nodes: Sequence[str], units: Sequence[str] | None,
-    source: str, by_unit: bool, block_rows: int | None = None, path_loss: PathLoss | None = None,
-    first_learn_row: int = 0,
+    source: str, by_unit: bool, stretches: Stretches | None = None, path_loss: PathLoss | None = None,
 ) -> Accumulated:
     """Statistics of the learning rows of every chunk: one accumulator per unit (``by_unit``)
-    or one for all, or (``block_rows``) per contiguous block of that many learning rows, the
-    first of these rows being the ``first_learn_row``-th learning row of the whole dataset.
-    An empty result is allowed (a part without learning rows); see :func:`checked`."""
+    or one for all, or per stretch of time of a single flight (``stretches``, the folds of its
+    cross-validation; rows in any order). An empty result is allowed (a part without learning
+    rows); see :func:`checked`."""
     if not spec.decouples:
         raise InputError(f"{spec.label}: only pattern models (sh, bg, poly) learn from a stream", param="spec")
     basis = spec.basis()
     path_loss = path_loss or PathLoss()
-    out = Accumulated({}, Counter(), time_blocks=bool(block_rows), source=source)
+    out = Accumulated({}, Counter(), source=source)
     wanted = None if not units else {str(u) for u in units}
-    first_row, learn_row, last_t = 0, int(first_learn_row), -np.inf
+    first_row = 0
     for chunk in chunks:
         where = f"{source} (rows {first_row:,} to {first_row + len(chunk) - 1:,})"
         first_row += len(chunk)
@@ -188,21 +173,12 @@ def accumulate(
         if chunk.empty:
             continue
         t = chunk["t"].to_numpy(np.float64) if "t" in chunk.columns else np.zeros(0)  # link_samples names a missing t
-        if block_rows:  # one unit: contiguous stretches of its rows, which must be in time order
-            if t.size and (np.any(np.diff(t) < 0) or t[0] < last_t):
-                raise InputError(f"{where}: field t goes backwards; cutting a single flight into time blocks "
-                                 "for cross-validation needs rows sorted by time (sort the file, or label units)")
-            last_t = float(t[-1]) if t.size else last_t
-            block = (learn_row + np.arange(len(chunk))) // block_rows + 1
-            labels = np.char.add("block ", block.astype(str))
+        if stretches is not None and t.size:  # one unit: its contiguous stretches of time
+            labels = stretches.label(t).astype(str)
         elif by_unit and "unit" in chunk.columns:
             labels = chunk["unit"].astype(str).to_numpy()
         else:
             labels = np.full(len(chunk), "all")
-        if t.size:
-            out.t_first = float(t[0]) if not np.isfinite(out.t_first) else out.t_first
-            out.t_last = float(t[-1])
-        learn_row += len(chunk)
         for label in np.unique(labels):
             part = chunk[labels == label] if by_unit else chunk
             samples = link_samples(part, where, nodes=nodes)
@@ -228,15 +204,15 @@ def checked(acc: Accumulated, source: str) -> Accumulated:
 
 def unit_statistics_streamed(
     chunks: Iterable[pd.DataFrame], spec: ModelSpec, nodes: Sequence[str], units: Sequence[str] | None = None,
-    source: str = "dataset", block_rows: int | None = None, path_loss: PathLoss | None = None,
+    source: str = "dataset", stretches: Stretches | None = None, path_loss: PathLoss | None = None,
 ) -> tuple[dict[str, NormalEquations], float | None, int, dict[str, list[float]]]:
     """The statistics of every learning unit of a dataset given in chunks (for ``--degree auto``
     on a big file): ``(statistics by unit, median frequency [Hz], non-unit quaternions,
     coverage grids by node)``. A dataset without a ``unit`` column is one unit, ``"all"``; with
-    ``block_rows`` the learning rows are cut into contiguous blocks of that many rows instead
-    (cross-validation of a single flight). ``path_loss``: the environment term (its
+    ``stretches`` the learning rows are cut into those stretches of time instead
+    (cross-validation of a single flight, :class:`rplearn.data.units.Stretches`). ``path_loss``: the environment term (its
     log-distance column is accumulated; a two-ray term is subtracted)."""
-    acc = checked(accumulate(chunks, spec, nodes, units, source, by_unit=True, block_rows=block_rows,
+    acc = checked(accumulate(chunks, spec, nodes, units, source, by_unit=True, stretches=stretches,
                              path_loss=path_loss), source)
     return acc.stats, weighted_median(acc.freq), acc.non_unit, acc.grids or {}
 

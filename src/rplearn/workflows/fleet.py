@@ -22,6 +22,7 @@ import pandas as pd
 
 from rplearn.core.environment import PathLoss
 from rplearn.data.tables import link_samples
+from rplearn.data.units import Stretches
 from rplearn.errors import InputError
 from rplearn.io.files import iter_parts
 from rplearn.io.partitions import Part
@@ -156,35 +157,51 @@ def dataset_index(parts: Sequence[Part], client: Any = None) -> tuple[pd.DataFra
     return whole, each
 
 
-def _part_statistics(part: Part, first_learn_row: int, **kwargs: Any) -> Accumulated:
-    return accumulate(iter_parts([part], PART_CHUNK_ROWS), source=part.path, first_learn_row=first_learn_row, **kwargs)
+def _part_statistics(part: Part, **kwargs: Any) -> Accumulated:
+    return accumulate(iter_parts([part], PART_CHUNK_ROWS), source=part.path, **kwargs)
 
 
 def accumulate_parts(
     parts: Sequence[Part], spec: ModelSpec, nodes: Sequence[str], units: Sequence[str] | None, by_unit: bool,
-    block_rows: int | None = None, path_loss: PathLoss | None = None, learn_rows: Sequence[int] | None = None,
-    client: Any = None, progress: Progress | None = None,
+    stretches: Stretches | None = None, path_loss: PathLoss | None = None, client: Any = None,
+    progress: Progress | None = None,
 ) -> Accumulated:
     """The statistics of every part, added in order (see the module docstring).
 
-    ``learn_rows`` (the learning rows of each part) places the time blocks of a single flight
-    cut across parts (``block_rows``)."""
-    starts = np.concatenate([[0], np.cumsum(learn_rows if learn_rows is not None else np.zeros(len(parts)))])[:-1]
+    ``stretches`` (of a single flight, :func:`learning_times`) label each row by its stretch of
+    time wherever the part that holds it is read."""
     kwargs = dict(spec=spec, nodes=list(nodes), units=None if units is None else list(units), by_unit=by_unit,
-                  block_rows=block_rows, path_loss=path_loss)
+                  stretches=stretches, path_loss=path_loss)
     if client is None:
         total: Accumulated | None = None
         for k, part in enumerate(parts):
-            acc = _part_statistics(part, int(starts[k]), **kwargs)
+            acc = _part_statistics(part, **kwargs)
             total = acc if total is None else total.merge(acc)
             if progress is not None:
                 progress(k + 1, len(parts))
         assert total is not None
         return total
-    futures = client.map(_part_statistics, list(parts), [int(s) for s in starts], pure=False, **kwargs)
+    futures = client.map(_part_statistics, list(parts), pure=False, **kwargs)
     root = _tree_reduce(client, list(futures), _merge_accumulated)
     _watch(client, futures, progress)
     return root.result()
+
+
+def _part_times(part: Part, units: Sequence[str] | None) -> np.ndarray:
+    times = []
+    for chunk in iter_parts([part], PART_CHUNK_ROWS, columns=("t", "unit")):
+        if units:
+            chunk = chunk[chunk["unit"].astype(str).isin(set(units)).to_numpy()] if "unit" in chunk.columns else chunk.iloc[:0]
+        times.append(pd.to_numeric(chunk["t"], errors="coerce").to_numpy(np.float64) if "t" in chunk.columns
+                     else np.zeros(0))
+    return np.concatenate(times) if times else np.zeros(0)
+
+
+def learning_times(parts: Sequence[Part], units: Sequence[str] | None, client: Any = None) -> np.ndarray:
+    """The times [s] of the learning rows (of ``units``; all without) of every part, to cut a
+    single flight into its stretches of time (:class:`rplearn.data.units.Stretches`)."""
+    each = map_parts(_part_times, parts, client, units=None if units is None else list(units))
+    return np.concatenate(each) if each else np.zeros(0)
 
 
 def _part_predictions(part: Part, models: Sequence[Model], units: Sequence[str] | None

@@ -17,10 +17,13 @@ import numpy as np
 import pandas as pd
 
 from rplearn._atomic import atomic_open
+from rplearn.analysis.budget import check_dataset_budget
 from rplearn.analysis.pattern_error import node_directions
 from rplearn.core.metrics import Scores
 from rplearn.data.units import (
-    UnitChoice, dataset_units, evaluation_units, learning_units, samples_of, select_units, split_units, time_units,
+    TIME_UNITS, Stretches, UnitChoice, dataset_units, evaluation_units, is_stretch_label, learning_units,
+    refuse_streamed_stretches, samples_of, select_units, split_units, stretched, time_units, trained_units,
+    whole_flight_note,
 )
 from rplearn.errors import IdentifiabilityError, InputError
 from rplearn.data.tables import QUATERNION_NORM_TOLERANCE
@@ -28,7 +31,9 @@ from rplearn.io.files import (
     check_output_path, check_table_path, provenance, read_dataset, table_rows, write_json, write_table,
 )
 from rplearn.io.partitions import dataset_parts, is_partitioned
-from rplearn.workflows.fleet import accumulate_parts, dask_client, dataset_index, parse_dask, predict_parts, selected_rows
+from rplearn.workflows.fleet import (
+    accumulate_parts, dask_client, dataset_index, learning_times, parse_dask, predict_parts, selected_rows,
+)
 from rplearn.models.fit import FittedModel, evaluate_models, fit_model, scores_markdown, scores_of_predictions
 from rplearn.models.base import require_patterns
 from rplearn.models.load import load_model
@@ -214,8 +219,12 @@ def fit_dataset(
                              f"(over {STREAM_FIT_ROWS:,} rows or {STREAM_FIT_BYTES // 2**20} MiB): write the "
                              "units to learn from into a smaller file", param="loss")
         return _fit_streamed(dataset, spec, units, gauge, output, auto, priors, prior_std_db, progress=progress, **terms)
-    df = read_dataset(dataset)
+    df, stretch_note = stretched(read_dataset(dataset), units, dataset)
     choice = learning_units(df, units, dataset)
+    if stretch_note:
+        choice = replace(choice, notes=[stretch_note, *choice.notes])
+    elif "unit" not in df.columns:
+        choice = replace(choice, notes=[whole_flight_note(dataset)])
     if auto:
         return _fit_auto(df, dataset, spec, choice, gauge, output, priors, prior_std_db, **terms)
     samples = samples_of(df, choice.units, dataset)
@@ -226,6 +235,7 @@ def fit_dataset(
         notes = downweighted_notes(select_units(df, choice.units, dataset), robust)
     else:
         fitted = fit_model(samples, spec, gauge=gauge, provenance=prov, **(terms if spec.decouples else {}))
+    check_dataset_budget(fitted.model, select_units(df, choice.units, dataset), dataset)
     if output:
         fitted.model.save(output)
     return FitOutcome(fitted, choice, len(samples), output, samples.non_unit_quaternions, robust_notes=notes)
@@ -267,8 +277,9 @@ STREAM_FIT_BYTES = 256 * 2**20
 
 
 #: A single learning unit is cross-validated over this many contiguous stretches of time (one
-#: held out at a time), so that neighbouring packets never sit on both sides of a fold.
-TIME_BLOCKS = 5
+#: held out at a time; :class:`rplearn.data.units.Stretches`, the stretches ``fit --units`` and
+#: ``evaluate --units`` name), so that neighbouring packets never sit on both sides of a fold.
+TIME_BLOCKS = TIME_UNITS
 
 
 def _fit_auto(
@@ -282,17 +293,18 @@ def _fit_auto(
     part = select_units(df, choice.units, dataset)
     nodes = sorted(set(part["tx"].astype(str)) | set(part["rx"].astype(str)))
     if len(learn) == 1:  # one flight: cross-validate over contiguous stretches of it, not samples
-        ordered = part.iloc[np.argsort(part["t"].to_numpy(np.float64), kind="stable")]
-        blocks = np.array_split(np.arange(len(ordered)), TIME_BLOCKS)
-        name = "all" if learn[0] is None else str(learn[0])
-        per_unit = {f"{name}[{k + 1}/{TIME_BLOCKS}]": samples_of(ordered.iloc[b], None, dataset, nodes=nodes)
-                    for k, b in enumerate(blocks) if b.size}
+        t = part["t"].to_numpy(np.float64)
+        stretches = Stretches.of_times(t, TIME_BLOCKS, None if learn[0] is None else str(learn[0]))
+        k = stretches.index(t)
+        per_unit = {label: samples_of(part[k == j], None, dataset, nodes=nodes)
+                    for j, label in enumerate(stretches.labels) if np.any(k == j)}
     else:
         per_unit = {str(u): samples_of(df, None if u is None else [u], dataset, nodes=nodes) for u in learn}
     prov = provenance(dataset=dataset, model=f"{spec.kind}-auto", ridge=spec.ridge, units=choice.units)
     fitted, selection = fit_auto(per_unit, spec.kind, spec.order if spec.kind != "sh" else None, spec.ridge, gauge, prov,
                                  prior=priors or None, prior_spread_db=prior_std_db, path_loss=path_loss,
                                  link_offsets=link_offsets)
+    check_dataset_budget(fitted.model, part, dataset)
     if output:
         fitted.model.save(output)
     n = sum(len(s) for s in per_unit.values())
@@ -323,6 +335,7 @@ def _fit_streamed(
     parts = dataset_parts(dataset)
     index, per_part = dataset_index(parts, client)
     choice = learning_units(index, units, dataset)
+    refuse_streamed_stretches(index, units, dataset)
     part = select_units(index, choice.units, dataset)
     nodes = sorted(set(part["tx"]) | set(part["rx"]))
     n = int(part["n"].sum())
@@ -335,10 +348,10 @@ def _fit_streamed(
     check_model_size(spec, n, len(nodes))
     t0 = time.perf_counter()
     if auto:
-        n_units = len(choice.units) if choice.units else max(len(dataset_units(index)), 1)
-        blocks = -(-n // TIME_BLOCKS) if n_units == 1 else None
-        acc = checked(accumulate_parts(parts, spec, nodes, choice.units, True, blocks, path_loss,
-                                       [selected_rows(p, choice.units) for p in per_part], client, progress), dataset)
+        learn = choice.units or dataset_units(index) or [None]
+        stretches = Stretches.of_times(learning_times(parts, choice.units, client), TIME_BLOCKS, learn[0]) if len(learn) == 1 else None
+        acc = checked(accumulate_parts(parts, spec, nodes, choice.units, True, stretches, path_loss, client, progress),
+                      dataset)
         prov = provenance(dataset=dataset, model=f"{spec.kind}-auto", ridge=spec.ridge, units=choice.units)
         fitted, selection = fit_from_statistics(acc.stats, spec.kind, orders, nodes, spec.ridge, gauge,
                                                 frequency_hz=weighted_median(acc.freq), provenance=prov,
@@ -348,7 +361,7 @@ def _fit_streamed(
         if output:
             fitted.model.save(output)
         return FitOutcome(fitted, choice, acc.n_samples, output, acc.non_unit, selection, wall_s=time.perf_counter() - t0)
-    acc = checked(accumulate_parts(parts, spec, nodes, choice.units, False, None, path_loss, None, client, progress), dataset)
+    acc = checked(accumulate_parts(parts, spec, nodes, choice.units, False, None, path_loss, client, progress), dataset)
     fit = fit_patterns_accumulated(acc, spec, nodes, gauge, path_loss, link_offsets)
     model = fit.patterns
     model.provenance = {**provenance(dataset=dataset, model=spec.label, ridge=spec.ridge, units=choice.units),
@@ -414,6 +427,7 @@ def evaluate_model_files(
         with (dask_client(dask) if dask is not None else nullcontext()) as client:
             parts = dataset_parts(dataset)
             index, _ = dataset_index(parts, client)
+            refuse_streamed_stretches(index, units, dataset)
             choice = evaluation_units(index, units, [m.provenance for m in models], dataset)
             if selected_rows(index, choice.units) == 0:
                 raise InputError(f"{dataset}: no samples selected", param="units")
@@ -421,8 +435,9 @@ def evaluate_model_files(
         rows = scores_of_predictions(fitted, observed, predictions, choice.warnings)
         n_eval = observed.size
     else:
-        df = read_dataset(dataset)
-        choice = evaluation_units(df, units, [m.provenance for m in models], dataset)
+        provs = [m.provenance for m in models]  # models learned on stretches: the dataset's stretches, unseen ones by default
+        df, _ = stretched(read_dataset(dataset), units or [u for u in trained_units(provs) if is_stretch_label(u)], dataset)
+        choice = evaluation_units(df, units, provs, dataset)
         samples = samples_of(df, choice.units, dataset)
         rows = evaluate_models(fitted, samples, choice.warnings)
         uncovered = [uncovered_rows(m, samples) for m in models]
