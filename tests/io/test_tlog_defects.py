@@ -236,3 +236,34 @@ def test_a_dataflash_reboot_is_counted_and_excluded_until_the_origin_is_set_agai
     assert "later boots placed right after the previous one" in meta["time_reference"]
     vehicle = logs.pose[logs.pose["node"] == "D"]
     assert vehicle["z"].min() > 0.0  # no row at the wrong altitude
+
+
+def test_inspect_names_each_excluded_period_from_the_log_start(written):
+    """Issue 24, acceptance 1 (inspect): the reader's periods, with their reasons and times."""
+    from rplearn.io.inspect import inspect_logs
+
+    _, _, broken, _, _ = written
+    report = inspect_logs([broken], _options(broken))
+    text = report.to_text()
+    for reason in ("before_valid_position", "after_reboot"):
+        assert reason in text, text
+    assert "reboot" in text
+    clean = inspect_logs([written[1]], _options(written[1])).to_text()
+    assert "before_valid_position" not in clean and "after_reboot" not in clean
+
+
+@pytest.mark.parametrize("fmt", ["tlog", "dataflash"])
+def test_inspect_reads_the_report_rate_of_readings_written_twice(ground, tmp_path, fmt):
+    """Issue 24, acceptance 2 (inspect): a link's rate within 10% of the true report rate."""
+    from rplearn.io.inspect import inspect_logs
+
+    flight = _slow_radio(ground)
+    path = tmp_path / ("twice.tlog" if fmt == "tlog" else "twice.bin")
+    writer = write_tlog if fmt == "tlog" else write_dataflash
+    writer(flight, path, vehicle="D", station="G", origin_geodetic=ORIGIN, defects=TlogDefects(radio_twice=True))
+    report = inspect_logs([path], _options(path))
+    for (tx, rx), rows in flight.signal.groupby(["tx", "rx"]):
+        t = np.sort(rows["t"].to_numpy())
+        true_hz = 1.0 / np.median(np.diff(t))
+        (link,) = [lk for lk in report.links if (lk.tx, lk.rx) == (tx, rx)]
+        assert link.rate_hz == pytest.approx(true_hz, rel=0.10), (tx, rx, link.rate_hz, true_hz)
