@@ -185,7 +185,8 @@ def fit_auto(
         Exponent of the SH roughness weights: :data:`DEFAULT_PENALTY_POWER` without a prior,
         :data:`PRIOR_PENALTY_POWER` (plain ridge toward the prior) with one.
     prior : mapping of node to model, optional
-        Reference patterns to shrink toward instead of toward zero (``fit --prior``): where the
+        Reference patterns whose shape to shrink toward instead of toward zero (``fit --prior``;
+        their absolute level is not imposed: it is the data's, or the gauge's): where the
         flight looked, the data win; where it did not, the pattern falls back to the prior.
     prior_spread_db : float, optional
         How far [dB RMS] each prior may be from the truth, where known (a vendor's tolerance);
