@@ -19,6 +19,7 @@ from rplearn.core.level import constant_coefficients, pattern_shape, shrink_targ
 from rplearn.core.bases import make_basis
 from rplearn.data.tables import LinkSamples
 from rplearn.data.units import samples_of, split_units
+from rplearn.errors import InputError
 from rplearn.io.files import read_dataset
 from rplearn.io.reference import read_reference_pattern
 from rplearn.models import ModelSpec
@@ -149,6 +150,18 @@ def test_a_prior_fixes_the_shape_and_the_data_the_level(flight):
     fitted_raised, sel_raised = fit_auto(per_unit, prior={n: raised for n in prior.nodes})
     assert (sel.order, sel.smoothing) == (sel_raised.order, sel_raised.smoothing)
     np.testing.assert_allclose(fitted_raised.model.predict_gain(test), fitted.model.predict_gain(test), atol=1e-6)
+
+
+def test_a_prior_level_is_imposed_only_when_asked(flight):
+    """``prior_level="prior"`` (calibrated power, a trusted reference) shrinks toward the
+    prior's absolute dBi: a prior moved by 30 dBi then moves the fit; anything else is refused."""
+    per_unit, _, test, prior = flight
+    raised = dataclasses.replace(prior, coef=np.asarray(prior.coef) + 30.0 * constant_coefficients(prior.basis))
+    kept = fit_auto(per_unit, prior={n: prior for n in prior.nodes}, prior_level="prior")[0].model.predict_gain(test)
+    moved = fit_auto(per_unit, prior={n: raised for n in prior.nodes}, prior_level="prior")[0].model.predict_gain(test)
+    assert np.mean(moved - kept) > 0.1
+    with pytest.raises(InputError, match="prior level"):
+        fit_auto(per_unit, prior={n: prior for n in prior.nodes}, prior_level="absolute")
 
 
 def test_the_target_is_the_shape_plus_the_least_squares_constants():

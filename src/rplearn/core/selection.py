@@ -220,7 +220,7 @@ class _Evaluator:
     """Validation RMSE of (order, smoothing) from the statistics at the largest order."""
 
     def __init__(self, units: Mapping[str, NormalEquations], make_basis: Callable[[int], Basis],
-                 ridge: float, power: float, target: np.ndarray | None = None) -> None:
+                 ridge: float, power: float, target: np.ndarray | None = None, prior_level: str = "data") -> None:
         first = next(iter(units.values()))
         self.big, self.n_nodes = first.basis, first.n_nodes
         self.first = first
@@ -233,6 +233,7 @@ class _Evaluator:
         if target is not None:
             target = np.asarray(target, np.float64)[:first.n_pattern_columns]  # the prior's: shared columns are not pulled
         self.target = target
+        self.prior_level = prior_level
         self.cv = len(units) >= 2
         self.pins: list[tuple[np.ndarray, np.ndarray] | None] = [None] * len(self.folds)
         if self.n_shared and self.cv:
@@ -269,7 +270,7 @@ class _Evaluator:
             return [None] * len(self.folds)
         w = self._weights(self.big)
         smoothing = float(SMOOTHING_GRID[len(SMOOTHING_GRID) // 2])
-        target = shrink_target(self.gram, self.rhs, self.big, self.n_nodes, self.target)
+        target = self._target(self.gram, self.rhs, self.big, self.target)
         c, _ = self._solve(self.gram, self._pulled(self.gram, self.rhs, w, smoothing, target), w, smoothing)
         values = c[pat:]
         pins: list[tuple[np.ndarray, np.ndarray] | None] = []
@@ -280,6 +281,13 @@ class _Evaluator:
             weight = 1e6 * (np.diag(fold.gram)[pat:] + float(np.mean(np.diag(fold.gram)[:pat])))
             pins.append((np.where(mask, 0.0, weight), values.copy()))
         return pins
+
+    def _target(self, gram: np.ndarray, rhs: np.ndarray, basis: Basis, prior: np.ndarray | None) -> np.ndarray:
+        """What one fit shrinks toward: the prior's shape and the data's level, or (``prior_level``
+        ``"prior"``) the prior itself."""
+        if prior is not None and self.prior_level == "prior":
+            return np.concatenate([prior, np.zeros(self.n_shared)])
+        return shrink_target(gram, rhs, basis, self.n_nodes, prior)
 
     def _weights(self, basis: Basis) -> np.ndarray:
         w = basis.roughness(self.power)
@@ -299,7 +307,7 @@ class _Evaluator:
             if not self.cv:
                 sub = [(_block(self.gram, idx), self.rhs[idx], np.empty(0), np.empty(0))]
             prior = None if self.target is None else self.target[pattern_idx]
-            targets = [shrink_target(g, r, basis, self.n_nodes, prior) for g, r, _, _ in sub]
+            targets = [self._target(g, r, basis, prior) for g, r, _, _ in sub]
             while len(self._cache) >= _CACHED_ORDERS:  # a few orders at a time: bounded memory
                 self._cache.pop(next(iter(self._cache)))
             self._cache[order] = (self._weights(basis), sub, targets)
@@ -446,6 +454,7 @@ def select_order_and_smoothing(
     power: float = DEFAULT_PENALTY_POWER,
     grid: Sequence[float] = SMOOTHING_GRID,
     target: np.ndarray | None = None,
+    prior_level: str = "data",
 ) -> Selection:
     """Choose order and smoothing by grouped cross-validation (or GCV for one unit).
 
@@ -469,6 +478,9 @@ def select_order_and_smoothing(
         instead of toward zero. With or without it, each fold's constant per node is its
         learning units' own level (:func:`rplearn.core.level.shrink_target`), so a constant
         added to every sample changes no validation error.
+    prior_level : {"data", "prior"}
+        ``"prior"``: shrink toward ``target`` itself, its absolute level included (calibrated
+        power and a trusted reference; see :func:`rplearn.core.solver.solve`).
 
     Raises
     ------
@@ -481,7 +493,7 @@ def select_order_and_smoothing(
     orders = sorted({int(o) for o in orders})
     if not orders:
         raise InputError("orders: no candidate order", param="orders")
-    ev = _Evaluator(units, make_basis, ridge, power, target)
+    ev = _Evaluator(units, make_basis, ridge, power, target, prior_level)
     best_s = _best_smoothing(ev, orders[(len(orders) - 1) // 2], grid)
     best_o = _best_order(ev, orders, best_s)
     values = sorted({float(g) for g in grid} | {best_s})
@@ -507,6 +519,7 @@ def variance_inflation(
     ridge: float = 1.0,
     power: float = DEFAULT_PENALTY_POWER,
     target: np.ndarray | None = None,
+    prior_level: str = "data",
 ) -> float:
     """How much the posterior covariance understates the error on held-out flight units.
 
@@ -526,7 +539,7 @@ def variance_inflation(
     units = {str(k): v for k, v in units.items() if v.n_samples > 0}
     if not units:
         raise IdentifiabilityError("no learning samples to validate on")
-    return _Evaluator(units, make_basis, ridge, power, target).inflation(int(order), float(smoothing))
+    return _Evaluator(units, make_basis, ridge, power, target, prior_level).inflation(int(order), float(smoothing))
 
 
 def validation_rmse(

@@ -55,6 +55,10 @@ FloatArray = NDArray[np.float64]
 #: changes no prediction measurably (paper replica: SH-10 test RMSE 4.481 dB with 1e-6 or 1),
 #: while on a single short unit it keeps SH-10 from extrapolating to 1,323 dB RMSE (7.8 dB).
 DEFAULT_RIDGE = 1.0
+#: Where the level a prior's pattern is shrunk toward comes from: ``"data"`` (the prior gives
+#: only its shape; :mod:`rplearn.core.level`) or ``"prior"`` (its absolute dBi, for calibrated
+#: power and a trusted reference).
+PRIOR_LEVELS: tuple[str, ...] = ("data", "prior")
 
 
 # -------------------------------------------------------------------------------------------
@@ -179,6 +183,7 @@ def solve(
     min_samples_per_coef: float = 1.0,
     penalty: FloatArray | None = None,
     penalty_target: FloatArray | None = None,
+    prior_level: str = "data",
 ) -> JointSolution:
     """Solve accumulated normal equations with a ridge and explicit gauge constraints.
 
@@ -193,7 +198,9 @@ def solve(
     per-node sphere mean is dropped) or zero, and its constant per node is the data's (the
     least-squares constants under the same gauge), so that adding a constant to every ``y``
     moves every prediction by that constant and changes nothing else. A known absolute level
-    is given by the gauge (``{"node": N, "mean_gain_dbi": V}``).
+    is given by the gauge (``{"node": N, "mean_gain_dbi": V}``), or, with calibrated power and a
+    trusted reference, by ``prior_level="prior"``: the target is then ``penalty_target`` itself,
+    its absolute level included (shifting the data then moves the fit toward or away from it).
 
     Raises
     ------
@@ -236,8 +243,14 @@ def solve(
         prior = _pad_shared(np.asarray(penalty_target, np.float64), pat, pcols)
         if prior.shape != (pcols,) or not np.all(np.isfinite(prior)):
             raise InputError(f"penalty_target: expected {pcols} finite values, got shape {prior.shape}")
+    if prior_level not in PRIOR_LEVELS:
+        raise InputError(f"prior level: expected {' or '.join(PRIOR_LEVELS)}, got {prior_level!r}", param="prior_level")
     shrunk = ridge > 0 or (penalty is not None and bool(np.any(penalty > 0)))
-    if shrunk:  # toward the data's level and the prior's shape, never toward a fixed level
+    if shrunk and prior is not None and prior_level == "prior":
+        weights = np.zeros(pcols)
+        weights[:pat] = ridge
+        rhs[:pcols] += (weights + (0.0 if penalty is None else penalty)) * prior
+    elif shrunk:  # toward the data's level and the prior's shape, never toward a fixed level
         weights = np.zeros(pcols)
         weights[:pat] = ridge
         if penalty is not None:

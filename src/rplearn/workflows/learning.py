@@ -133,6 +133,7 @@ def fit_dataset(
     link_offsets: bool = True,
     dask: str | None = None,
     progress: Callable[[int, int], None] | None = None,
+    prior_level: str = "data",
 ) -> FitOutcome:
     """Learn ``spec`` from a matched dataset file (``rplearn fit``).
 
@@ -175,12 +176,17 @@ def fit_dataset(
         (:mod:`rplearn.workflows.fleet`): statistics per part, tree-reduced, solved here.
     progress : callable, optional
         Called with ``(parts done, parts)`` while a dataset is read part by part.
+    prior_level : {"data", "prior"}
+        Where the level of a prior's pattern comes from: the data (default; the prior gives
+        its shape) or the prior's absolute dBi (calibrated power and a trusted reference).
     """
     if output:
         check_output_path(output, [dataset, *(prior or {}).values()])
     if prior and not auto:
         raise InputError("prior: a prior is weighed against the data by the automatic choice; use it with "
                          "order 'auto' (--degree auto)", param="prior")
+    if prior_level != "data" and not prior:
+        raise InputError("prior-level: it says where a prior's level comes from; give --prior too", param="prior_level")
     if prior_std_db is not None and not prior:
         raise InputError("prior-std: it states how far the priors may be off; give --prior too", param="prior_std_db")
     if prior_std_db is not None and not (np.isfinite(prior_std_db) and prior_std_db > 0):
@@ -207,17 +213,18 @@ def fit_dataset(
                              f"{spec.label}{' with loss ' + loss if loss != 'ls' else ''}", param="dask")
         with dask_client(dask) as client:
             return _fit_streamed(dataset, spec, units, gauge, output, auto, priors, prior_std_db, client=client,
-                                 progress=progress, **terms)
+                                 progress=progress, prior_level=prior_level, **terms)
     if spec.decouples and _is_big(dataset):
         if loss == "huber":
             raise InputError(f"{dataset}: loss huber keeps the samples in memory; this file is streamed "
                              f"(over {STREAM_FIT_ROWS:,} rows or {STREAM_FIT_BYTES // 2**20} MiB): write the "
                              "units to learn from into a smaller file", param="loss")
-        return _fit_streamed(dataset, spec, units, gauge, output, auto, priors, prior_std_db, progress=progress, **terms)
+        return _fit_streamed(dataset, spec, units, gauge, output, auto, priors, prior_std_db, progress=progress,
+                             prior_level=prior_level, **terms)
     df = read_dataset(dataset)
     choice = learning_units(df, units, dataset)
     if auto:
-        return _fit_auto(df, dataset, spec, choice, gauge, output, priors, prior_std_db, **terms)
+        return _fit_auto(df, dataset, spec, choice, gauge, output, priors, prior_std_db, prior_level=prior_level, **terms)
     samples = samples_of(df, choice.units, dataset)
     prov = provenance(dataset=dataset, model=spec.label, ridge=spec.ridge, units=choice.units)
     notes: list[str] = []
@@ -274,7 +281,7 @@ TIME_BLOCKS = 5
 def _fit_auto(
     df: Any, dataset: str, spec: ModelSpec, choice: UnitChoice, gauge: str | Mapping[str, Any], output: str | None,
     priors: Mapping[str, Any] | None = None, prior_std_db: float | None = None, path_loss: PathLoss | None = None,
-    link_offsets: bool = True,
+    link_offsets: bool = True, prior_level: str = "data",
 ) -> FitOutcome:
     """:func:`fit_dataset` with ``auto=True`` on a dataset in memory: samples per learning unit."""
     from rplearn.models.auto import fit_auto
@@ -292,7 +299,7 @@ def _fit_auto(
     prov = provenance(dataset=dataset, model=f"{spec.kind}-auto", ridge=spec.ridge, units=choice.units)
     fitted, selection = fit_auto(per_unit, spec.kind, spec.order if spec.kind != "sh" else None, spec.ridge, gauge, prov,
                                  prior=priors or None, prior_spread_db=prior_std_db, path_loss=path_loss,
-                                 link_offsets=link_offsets)
+                                 link_offsets=link_offsets, prior_level=prior_level)
     if output:
         fitted.model.save(output)
     n = sum(len(s) for s in per_unit.values())
@@ -314,7 +321,7 @@ def _fit_streamed(
     dataset: str, spec: ModelSpec, units: Sequence[str] | None, gauge: str | Mapping[str, Any], output: str | None,
     auto: bool = False, priors: Mapping[str, Any] | None = None, prior_std_db: float | None = None,
     path_loss: PathLoss | None = None, link_offsets: bool = True, client: Any = None,
-    progress: Callable[[int, int], None] | None = None,
+    progress: Callable[[int, int], None] | None = None, prior_level: str = "data",
 ) -> FitOutcome:
     """:func:`fit_dataset` for a big file or a dataset in many files (:mod:`rplearn.io.partitions`):
     units, nodes and the model size from the id columns, then the patterns from the statistics
@@ -343,7 +350,7 @@ def _fit_streamed(
         fitted, selection = fit_from_statistics(acc.stats, spec.kind, orders, nodes, spec.ridge, gauge,
                                                 frequency_hz=weighted_median(acc.freq), provenance=prov,
                                                 prior=priors or None, prior_spread_db=prior_std_db,
-                                                path_loss=path_loss, link_offsets=link_offsets)
+                                                path_loss=path_loss, link_offsets=link_offsets, prior_level=prior_level)
         fitted.model.training["coverage_deg"] = acc.grids or {}
         if output:
             fitted.model.save(output)
