@@ -114,7 +114,7 @@ def prior_std_db(basis: Any, nodes: Sequence[str], weights: np.ndarray, noise_va
 
     Where the flight never looked, the predictive spread of a node's gain returns to this
     value; close to the data it is far smaller. With a prior pattern it is how far the truth
-    may stray from the prior; without one, how far from zero the pattern may be.
+    may stray from the prior; without one, how far from its level (the data's) the pattern may be.
     """
     from rplearn.core.bases import fibonacci_grid_nodes
 
