@@ -15,8 +15,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from rplearn.core.environment import PathLoss
-from rplearn.core.level import constant_coefficients, pattern_shape, shrink_target
-from rplearn.core.bases import make_basis
+from rplearn.core.level import constant_coefficients
 from rplearn.data.tables import LinkSamples
 from rplearn.data.units import samples_of, split_units
 from rplearn.errors import InputError
@@ -162,39 +161,3 @@ def test_a_prior_level_is_imposed_only_when_asked(flight):
     assert np.mean(moved - kept) > 0.1
     with pytest.raises(InputError, match="prior level"):
         fit_auto(per_unit, prior={n: prior for n in prior.nodes}, prior_level="absolute")
-
-
-def test_the_target_is_the_shape_plus_the_least_squares_constants():
-    """One node's constant is the mean of what the prior's shape leaves of the data, from the
-    statistics alone; and the constant function's coefficients give 1 everywhere."""
-    from rplearn.core.geometry import Directions
-    from rplearn.core.normal_equations import NormalEquations
-
-    rng = np.random.default_rng(0)
-    for kind, order in (("sh", 4), ("poly", 3), ("bg", 5)):
-        basis = make_basis(kind, order)
-        az, el = rng.uniform(-np.pi, np.pi, 50), np.arcsin(rng.uniform(-1, 1, 50))
-        ones = basis.evaluate(constant_coefficients(basis), az, el)
-        np.testing.assert_allclose(ones, 1.0, atol=1e-9 if kind != "bg" else 0.05)
-    basis = make_basis("sh", 3)
-    n = 400
-    d = Directions(*(rng.uniform(-1.0, 1.0, n) for _ in range(4)))
-    tx = np.zeros(n, int)
-    rx = np.array([1, 2] * (n // 2))  # node 0 to 1 and 2, and 1-2 never: bipartite
-    prior = rng.normal(0.0, 2.0, 3 * basis.n_coef)
-    y = 7.0 + rng.normal(0.0, 1.0, n)
-    normal = NormalEquations(basis, 3).add(d, tx, rx, y)
-    target = shrink_target(normal.gram, normal.rhs, basis, 3, prior)
-    shape = pattern_shape(prior, basis, 3)
-    assert np.allclose(shape.reshape(3, -1) @ basis.sphere_mean, 0.0)
-    level = (target - shape).reshape(3, -1)
-    assert np.allclose(level[:, 1:], 0.0)
-    x = np.zeros((n, 3 * basis.n_coef))
-    ft, fr = basis.design(d.az_tx, d.el_tx), basis.design(d.az_rx, d.el_rx)
-    x[np.arange(n)[:, None], tx[:, None] * basis.n_coef + np.arange(basis.n_coef)] += ft
-    x[np.arange(n)[:, None], rx[:, None] * basis.n_coef + np.arange(basis.n_coef)] += fr
-    # every sample sees node 0 and one of 1, 2: the constants' least squares
-    k = level[:, 0] / np.sqrt(4.0 * np.pi)
-    fitted = k[tx] + k[rx]
-    np.testing.assert_allclose(x.T @ (y - x @ shape - fitted) @ np.kron(np.eye(3), constant_coefficients(basis)).T,
-                               0.0, atol=1e-6)
