@@ -128,25 +128,25 @@ def shrink_target(
     if prior is not None:
         target[:pat] = pattern_shape(np.asarray(prior, np.float64)[:pat], basis, n_nodes)
     rest = rhs - gram @ target if prior is not None else np.asarray(rhs, np.float64)
-    # the free columns Z = [Q, shared]: Z^T G Z and Z^T (X^T y - G shape)
-    n_free = n_nodes + n_cols - pat
-    gz = np.empty((n_cols, n_free))
+    # the free columns [Q, shared]: their normal equations, the shared ones eliminated (a
+    # Schur complement: one LU of the shared block, a swarm's many link offsets included)
+    level_gram = np.empty((n_cols, n_nodes))  # G Q
     for n in range(n_nodes):
-        gz[:, n] = gram[:, cols[n]] @ qz
-    gz[:, n_nodes:] = gram[:, pat:]
-    h = np.empty((n_free, n_free))
-    b = np.empty(n_free)
-    for n in range(n_nodes):
-        h[n] = qz @ gz[cols[n]]
-        b[n] = qz @ rest[cols[n]]
-    h[n_nodes:] = gz[pat:]
-    b[n_nodes:] = rest[pat:]
+        level_gram[:, n] = gram[:, cols[n]] @ qz
+    h = np.stack([qz @ level_gram[cols[n]] for n in range(n_nodes)])  # Q^T G Q
+    b = np.array([qz @ rest[cols[n]] for n in range(n_nodes)])
+    if n_cols > pat:
+        shared = np.array(gram[pat:, pat:], np.float64)
+        d = np.diag(shared)
+        shared[np.diag_indices_from(shared)] += np.where(d > 0, _SHARED_FLOOR * d, 1.0)
+        cross = level_gram[pat:]  # X_shared^T X Q
+        eliminated = np.linalg.solve(shared, np.column_stack([cross, rest[pat:]]))
+        h = h - cross.T @ eliminated[:, :n_nodes]
+        b = b - cross.T @ eliminated[:, n_nodes]
     h = 0.5 * (h + h.T)
-    h[np.arange(n_nodes, n_free), np.arange(n_nodes, n_free)] *= 1.0 + _SHARED_FLOOR
     diag = np.diag(h)
     scale = 1.0 / np.sqrt(np.where(diag > 0, diag, 1.0))
-    z = scale * np.linalg.lstsq(h * scale[:, None] * scale[None, :], b * scale, rcond=None)[0]  # least norm
-    level = z[:n_nodes]
+    level = scale * np.linalg.lstsq(h * scale[:, None] * scale[None, :], b * scale, rcond=1e-10)[0]  # least norm
     if constraints is not None and constraints[0].shape[0]:
         cmat, cval = constraints
         on_level = np.stack([cmat[:, cols[n]] @ qz for n in range(n_nodes)], axis=1)  # (constraints, n_nodes)
