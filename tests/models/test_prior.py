@@ -88,6 +88,13 @@ def test_fit_cli_takes_a_prior_per_node(tmp_path):
     proc = subprocess.run(rplearn + ["fit", "m.parquet", "--prior-std", "4", "-o", "y.json"], cwd=tmp_path,
                           capture_output=True, text=True)
     assert proc.returncode == 1 and "give --prior too" in proc.stderr, proc.stderr
+    assert load_model(tmp_path / "p.json").training["prior_level"] == "data"  # the prior gives its shape
+    proc = subprocess.run(rplearn + ["fit", "m.parquet", "--prior", "G=ref.json", "--prior", "D=ref.json", "--prior-level",
+                                     "prior", "-o", "a.json"], cwd=tmp_path, capture_output=True, text=True)
+    assert proc.returncode == 0 and load_model(tmp_path / "a.json").training["prior_level"] == "prior", proc.stderr
+    proc = subprocess.run(rplearn + ["fit", "m.parquet", "--prior-level", "prior", "-o", "z.json"], cwd=tmp_path,
+                          capture_output=True, text=True)
+    assert proc.returncode == 1 and "--prior-level" in proc.stderr and "give --prior too" in proc.stderr, proc.stderr
     proc = subprocess.run(rplearn + ["fit", "m.parquet", "--prior", "X=ref.json", "-o", "x.json"], cwd=tmp_path,
                           capture_output=True, text=True)
     assert proc.returncode == 1 and "prior: node X is not in the learning data" in proc.stderr, proc.stderr
