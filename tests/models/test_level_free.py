@@ -62,7 +62,8 @@ def flight(tmp_path_factory):
         imperfect_reference(sim.ground_truth, n, 2.0, 10.0, seed=3).to_csv(d / f"ref_{n}.csv", index=False)
         refs[n] = read_reference_pattern(d / f"ref_{n}.csv")
     per_unit = {u: samples_of(df, [u], "d", nodes=nodes) for u in learn}
-    return per_unit, samples_of(df, learn, "d", nodes=nodes), samples_of(df, test, "d", nodes=nodes), reference_model(refs)
+    return (per_unit, samples_of(df, learn, "d", nodes=nodes), samples_of(df, test, "d", nodes=nodes), reference_model(refs),
+            df.assign(rssi_scale="relative"))
 
 
 def shifted(samples: LinkSamples, shift_db: float) -> LinkSamples:
@@ -72,7 +73,7 @@ def shifted(samples: LinkSamples, shift_db: float) -> LinkSamples:
 
 def fits(flight, shift_db):
     """Every model kind, learned from the flight with ``shift_db`` added to every RSSI value."""
-    per_unit, learn, _, prior = flight
+    per_unit, learn, _, prior, _ = flight
     units = {u: shifted(s, shift_db) for u, s in per_unit.items()}
     learn = shifted(learn, shift_db)
     auto, sel = fit_auto(units)
@@ -99,7 +100,7 @@ def unshifted(flight):
 @PROPERTY
 @given(shift_db=SHIFTS)
 def test_a_constant_added_to_every_rssi_shifts_every_prediction_and_changes_nothing_else(flight, unshifted, shift_db):
-    _, _, test, _ = flight
+    test = flight[2]
     for name, (model, extra) in fits(flight, shift_db).items():
         ref, ref_extra = unshifted[name]
         np.testing.assert_allclose(model.predict_gain(test) - shift_db, ref.predict_gain(test), rtol=0, atol=1e-6,
@@ -134,7 +135,7 @@ def test_a_constant_added_to_every_rssi_shifts_every_prediction_and_changes_noth
 def test_a_gaussian_grid_represents_a_constant_only_approximately(flight):
     """BG cannot represent a constant exactly (nor can its unregularised least squares follow a
     shift exactly): the shift holds to 1e-3 dB at BG-7 over 100 dB."""
-    _, learn, test, _ = flight
+    _, learn, test, _, _ = flight
     base = fit_model(learn, ModelSpec("bg", 7)).model.predict_gain(test)
     for shift_db in (-100.0, 100.0):
         got = fit_model(shifted(learn, shift_db), ModelSpec("bg", 7)).model.predict_gain(test) - shift_db
@@ -143,7 +144,7 @@ def test_a_gaussian_grid_represents_a_constant_only_approximately(flight):
 
 def test_a_prior_fixes_the_shape_and_the_data_the_level(flight):
     """The prior's absolute level is not imposed: a prior moved by 30 dBi gives the same fit."""
-    per_unit, _, test, prior = flight
+    per_unit, _, test, prior, _ = flight
     fitted, sel = fit_auto(per_unit, prior={n: prior for n in prior.nodes})
     raised = dataclasses.replace(prior, coef=np.asarray(prior.coef) + 30.0 * constant_coefficients(prior.basis))
     fitted_raised, sel_raised = fit_auto(per_unit, prior={n: raised for n in prior.nodes})
@@ -154,10 +155,26 @@ def test_a_prior_fixes_the_shape_and_the_data_the_level(flight):
 def test_a_prior_level_is_imposed_only_when_asked(flight):
     """``prior_level="prior"`` (calibrated power, a trusted reference) shrinks toward the
     prior's absolute dBi: a prior moved by 30 dBi then moves the fit; anything else is refused."""
-    per_unit, _, test, prior = flight
+    per_unit, _, test, prior, _ = flight
     raised = dataclasses.replace(prior, coef=np.asarray(prior.coef) + 30.0 * constant_coefficients(prior.basis))
     kept = fit_auto(per_unit, prior={n: prior for n in prior.nodes}, prior_level="prior")[0].model.predict_gain(test)
     moved = fit_auto(per_unit, prior={n: raised for n in prior.nodes}, prior_level="prior")[0].model.predict_gain(test)
     assert np.mean(moved - kept) > 0.1
     with pytest.raises(InputError, match="prior level"):
         fit_auto(per_unit, prior={n: prior for n in prior.nodes}, prior_level="absolute")
+
+
+def test_a_streamed_fit_is_level_free(flight):
+    """``fit`` on a big file (statistics a chunk at a time): the same shift, through the table's
+    ``rssi_dbm`` (uncalibrated: ``rssi_scale`` relative; shifts off the readers' integer sentinels)."""
+    from rplearn.models.streamed import fit_patterns_streamed
+
+    _, _, test, _, df = flight
+    nodes = list(test.nodes)
+    learn = df[~df["unit"].astype(str).str.startswith("test")]
+    base = fit_patterns_streamed([learn.iloc[:1000], learn.iloc[1000:]], ModelSpec("sh", 6), nodes).patterns
+    for shift_db in (-77.25, 55.5):
+        moved = learn.assign(rssi_dbm=learn["rssi_dbm"] + shift_db)
+        fit = fit_patterns_streamed([moved.iloc[:1000], moved.iloc[1000:]], ModelSpec("sh", 6), nodes).patterns
+        np.testing.assert_allclose(fit.predict_gain(test) - shift_db, base.predict_gain(test), rtol=0, atol=1e-6)
+        np.testing.assert_allclose(fit.predict_gain_std(test), base.predict_gain_std(test), rtol=1e-6)
