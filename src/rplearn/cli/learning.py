@@ -30,7 +30,8 @@ def fit(
     units: Optional[list[str]] = typer.Option(None, "--units", help="Learning units (repeat or comma-separate; default: all but units labelled test...). A dataset without units (a .tlog) names its 5 stretches of time flight[1/5]..flight[4/5], test[5/5]."),
     gauge_node: Optional[str] = typer.Option(None, "--gauge-node", help="Pattern models: fix this node's mean gain instead of splitting equally."),
     gauge_dbi: Optional[float] = typer.Option(None, "--gauge-dbi", help="Sphere-mean gain of --gauge-node [dBi] (default 0)."),
-    prior: Optional[list[str]] = typer.Option(None, "--prior", help="NODE=MODEL.json: shrink NODE's pattern toward this (reference) model instead of toward zero; with --degree auto."),
+    prior: Optional[list[str]] = typer.Option(None, "--prior", help="NODE=MODEL.json: shrink NODE's pattern toward the shape of this (reference) model instead of toward zero (its level comes from the data, see --prior-level); with --degree auto."),
+    prior_level: str = typer.Option("data", "--prior-level", help="Where the level of the --prior patterns comes from: data (default: the prior gives only its shape, so a constant added to every RSSI value only shifts the predictions) or prior (its absolute dBi: calibrated power and a trusted reference)."),
     prior_std: Optional[float] = typer.Option(None, "--prior-std", help="How far [dB RMS] the --prior patterns may be from the truth (a vendor's tolerance): the spread of predictions where the flight never looked (default: learned from their misfit where it looked)."),
     loss: str = typer.Option("ls", "--loss", help="ls (least squares) or huber: for logs with plateaus and dropouts, samples far from the pattern pull only as hard as 1.345 robust standard deviations (a pattern model of fixed order)."),
     path_loss: str = typer.Option("free", "--path-loss", help="Environment term of pattern models: free (free space, eq. 1), log-distance (learn the path-loss exponent; refused when the distance does not vary independently of the directions) or two-ray (a ground reflection from the antenna heights)."),
@@ -59,7 +60,8 @@ def fit(
         outcome = fit_dataset(dataset, spec, split_list(units), gauge_of(gauge_node, gauge_dbi), output, auto=auto,
                               prior=pairs(prior, "--prior") or None, prior_std_db=prior_std, loss=loss,
                               path_loss=PathLoss(path_loss, ground_level, permittivity, polarization),
-                              link_offsets=link_offsets, dask=dask, progress=parts_step(p, task, "statistics"))
+                              link_offsets=link_offsets, dask=dask, progress=parts_step(p, task, "statistics"),
+                              prior_level=prior_level)
     for line in outcome.units.notes:
         note(f"{line} (pass --units to choose)" if outcome.units.defaulted else line)
     say(outcome.summary())

@@ -5,7 +5,9 @@ The learned coefficients are shrunk by a smoothness penalty ``lambda * sum_j w_j
 spherical harmonic of degree ``l``, ``p`` = :data:`DEFAULT_PENALTY_POWER`; plain ridge for BG and
 P). ``lambda`` is given *relative* to the mean diagonal of the learning data's ``X^T X``, so one
 value means the same shrinkage for a short and a long flight: the absolute weight added to
-``X^T X`` is ``smoothing * mean(diag(X^T X)) * w_j``.
+``X^T X`` is ``smoothing * mean(diag(X^T X)) * w_j``. The penalty and the ridge shrink toward
+a target whose constant per node is the learning data's own level, not zero
+(:mod:`rplearn.core.level`), so that no validation error depends on the level of the RSSI values.
 
 Order and smoothing are chosen by **grouped cross-validation over flight units**: each unit in
 turn is held out, the pattern learned from the others, and its squared error on the held-out
@@ -42,6 +44,7 @@ from typing import Any, Callable, Mapping, Sequence
 import numpy as np
 
 from rplearn.core.basis_base import Basis
+from rplearn.core.level import shrink_target
 from rplearn.core.normal_equations import EXPONENT_MIN_SPREAD_DB, NormalEquations, schur_spread_db
 from rplearn.errors import IdentifiabilityError, InputError
 
@@ -217,7 +220,7 @@ class _Evaluator:
     """Validation RMSE of (order, smoothing) from the statistics at the largest order."""
 
     def __init__(self, units: Mapping[str, NormalEquations], make_basis: Callable[[int], Basis],
-                 ridge: float, power: float, target: np.ndarray | None = None) -> None:
+                 ridge: float, power: float, target: np.ndarray | None = None, prior_level: str = "data") -> None:
         first = next(iter(units.values()))
         self.big, self.n_nodes = first.basis, first.n_nodes
         self.first = first
@@ -227,9 +230,10 @@ class _Evaluator:
                              param="units")
         self.make_basis, self.ridge, self.power = make_basis, float(ridge), float(power)
         self.folds, self.gram, self.rhs, self.yty, self.n = _folds(units)
-        if target is not None and target.size == first.n_pattern_columns and self.n_shared:
-            target = np.concatenate([target, np.zeros(self.n_shared)])  # shared columns are not pulled
+        if target is not None:
+            target = np.asarray(target, np.float64)[:first.n_pattern_columns]  # the prior's: shared columns are not pulled
         self.target = target
+        self.prior_level = prior_level
         self.cv = len(units) >= 2
         self.pins: list[tuple[np.ndarray, np.ndarray] | None] = [None] * len(self.folds)
         if self.n_shared and self.cv:
@@ -266,7 +270,8 @@ class _Evaluator:
             return [None] * len(self.folds)
         w = self._weights(self.big)
         smoothing = float(SMOOTHING_GRID[len(SMOOTHING_GRID) // 2])
-        c, _ = self._solve(self.gram, self._pulled(self.gram, self.rhs, w, smoothing, self.target), w, smoothing)
+        target = self._target(self.gram, self.rhs, self.big, self.target)
+        c, _ = self._solve(self.gram, self._pulled(self.gram, self.rhs, w, smoothing, target), w, smoothing)
         values = c[pat:]
         pins: list[tuple[np.ndarray, np.ndarray] | None] = []
         for mask, fold in zip(free, self.folds):
@@ -277,34 +282,46 @@ class _Evaluator:
             pins.append((np.where(mask, 0.0, weight), values.copy()))
         return pins
 
+    def _target(self, gram: np.ndarray, rhs: np.ndarray, basis: Basis, prior: np.ndarray | None) -> np.ndarray:
+        """What one fit shrinks toward: the prior's shape and the data's level, or (``prior_level``
+        ``"prior"``) the prior itself."""
+        if prior is not None and self.prior_level == "prior":
+            return np.concatenate([prior, np.zeros(self.n_shared)])
+        return shrink_target(gram, rhs, basis, self.n_nodes, prior)
+
     def _weights(self, basis: Basis) -> np.ndarray:
         w = basis.roughness(self.power)
         floor = _CONSTANT_FLOOR * (float(np.min(w[w > 0])) if np.any(w > 0) else 1.0)
         return np.concatenate([np.tile(np.maximum(w, floor), self.n_nodes), np.zeros(self.n_shared)])
 
-    def _blocks(self, order: int) -> tuple[np.ndarray, list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]]:
-        """Roughness weights and, per fold, the learning and held-out blocks of one order (cached)."""
+    def _blocks(self, order: int) -> tuple[np.ndarray, list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]],
+                                           list[np.ndarray]]:
+        """Roughness weights and, per fold, the learning and held-out blocks of one order and the
+        target its fit shrinks toward (the prior's shape and the learning units' own level,
+        :func:`~rplearn.core.level.shrink_target`; cached)."""
         if order not in self._cache:
             basis = self.make_basis(order)
-            idx = with_shared_columns(nested_columns(self.big, basis, self.n_nodes), self.first)
+            pattern_idx = nested_columns(self.big, basis, self.n_nodes)
+            idx = with_shared_columns(pattern_idx, self.first)
             sub = [(_block(f.gram, idx), f.rhs[idx], _block(f.held_gram, idx), f.held_rhs[idx]) for f in self.folds]
             if not self.cv:
                 sub = [(_block(self.gram, idx), self.rhs[idx], np.empty(0), np.empty(0))]
-            target = None if self.target is None else self.target[idx]
+            prior = None if self.target is None else self.target[pattern_idx]
+            targets = [self._target(g, r, basis, prior) for g, r, _, _ in sub]
             while len(self._cache) >= _CACHED_ORDERS:  # a few orders at a time: bounded memory
                 self._cache.pop(next(iter(self._cache)))
-            self._cache[order] = (self._weights(basis), sub, target)
+            self._cache[order] = (self._weights(basis), sub, targets)
         return self._cache[order]
 
     def rmse(self, order: int, smoothing: float) -> float:
         key = (int(order), float(smoothing))
         if key in self.seen:
             return self.seen[key]
-        w, blocks, target = self._blocks(int(order))
+        w, blocks, targets = self._blocks(int(order))
         if self.cv:
             sse = 0.0
             solved = []
-            for (g, r, held_g, held_r), f, pin in zip(blocks, self.folds, self.pins):
+            for (g, r, held_g, held_r), f, pin, target in zip(blocks, self.folds, self.pins, targets):
                 c, upper = self._solve(g, self._pulled(g, r, w, smoothing, target, pin), w, smoothing, pin)
                 solved.append((c, upper))
                 sse += max(f.held_yty - 2.0 * c @ held_r + c @ held_g @ c, 0.0)
@@ -313,7 +330,7 @@ class _Evaluator:
                 self._best_solved = (key, solved)  # the factors of the best point, for inflation()
         else:
             g, r, _, _ = blocks[0]
-            value = self._gcv(g, self._pulled(g, r, w, smoothing, target), w, smoothing, r)
+            value = self._gcv(g, self._pulled(g, r, w, smoothing, targets[0]), w, smoothing, r)
         self.seen[key] = value
         self.curve.append(CurvePoint(int(order), float(smoothing), value))
         return value
@@ -322,11 +339,11 @@ class _Evaluator:
         """:func:`variance_inflation` of one (order, smoothing) (1 without held-out units)."""
         if not self.cv:
             return 1.0
-        w, blocks, target = self._blocks(int(order))
+        w, blocks, targets = self._blocks(int(order))
         key = (int(order), float(smoothing))
         solved = self._best_solved[1] if self._best_solved and self._best_solved[0] == key else None
         excess = predicted = 0.0
-        for k, ((g, r, held_g, held_r), f, pin) in enumerate(zip(blocks, self.folds, self.pins)):
+        for k, ((g, r, held_g, held_r), f, pin, target) in enumerate(zip(blocks, self.folds, self.pins, targets)):
             c, upper = solved[k] if solved else self._solve(g, self._pulled(g, r, w, smoothing, target, pin), w,
                                                             smoothing, pin)
             if upper is None:
@@ -344,15 +361,14 @@ class _Evaluator:
             predicted += noise_var * float(np.sum(inverse * held_g))  # tr(A^-1 H), both symmetric
         return float(max(1.0, excess / predicted)) if predicted > 0 and np.isfinite(excess) else 1.0
 
-    def _pulled(self, gram: np.ndarray, rhs: np.ndarray, w: np.ndarray, smoothing: float, target: np.ndarray | None,
+    def _pulled(self, gram: np.ndarray, rhs: np.ndarray, w: np.ndarray, smoothing: float, target: np.ndarray,
                 pin: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
-        """``X^T y`` plus the prior's pull ``P target`` (shrinking toward the prior, not zero) and
-        the pull of pinned shared columns toward their values."""
-        if (target is None or smoothing == 0) and pin is None:
-            return rhs
+        """``X^T y`` plus the pull ``(ridge + P) target`` of the ridge and the penalty toward the
+        target (the prior's shape and the data's level, never a fixed level) and the pull of
+        pinned shared columns toward their values."""
         out = rhs.copy()
-        if target is not None and smoothing != 0:
-            out += smoothing * penalty_scale(gram, gram.shape[0] - self.n_shared) * w * target
+        k = gram.shape[0] - self.n_shared
+        out[:k] += (self.ridge + smoothing * penalty_scale(gram, k) * w[:k]) * target[:k]
         if pin is not None:
             out[gram.shape[0] - self.n_shared:] += pin[0] * pin[1]
         return out
@@ -438,6 +454,7 @@ def select_order_and_smoothing(
     power: float = DEFAULT_PENALTY_POWER,
     grid: Sequence[float] = SMOOTHING_GRID,
     target: np.ndarray | None = None,
+    prior_level: str = "data",
 ) -> Selection:
     """Choose order and smoothing by grouped cross-validation (or GCV for one unit).
 
@@ -456,8 +473,14 @@ def select_order_and_smoothing(
     grid : sequence of float
         Relative smoothing values tried.
     target : ndarray, optional
-        Prior coefficients at the largest order (one per column): the penalty shrinks toward
-        them instead of toward zero (``fit --prior``).
+        Prior coefficients at the largest order (one per pattern column, ``fit --prior``): the
+        ridge and the penalty shrink toward their shape (each node's sphere mean dropped)
+        instead of toward zero. With or without it, each fold's constant per node is its
+        learning units' own level (:func:`rplearn.core.level.shrink_target`), so a constant
+        added to every sample changes no validation error.
+    prior_level : {"data", "prior"}
+        ``"prior"``: shrink toward ``target`` itself, its absolute level included (calibrated
+        power and a trusted reference; see :func:`rplearn.core.solver.solve`).
 
     Raises
     ------
@@ -470,7 +493,7 @@ def select_order_and_smoothing(
     orders = sorted({int(o) for o in orders})
     if not orders:
         raise InputError("orders: no candidate order", param="orders")
-    ev = _Evaluator(units, make_basis, ridge, power, target)
+    ev = _Evaluator(units, make_basis, ridge, power, target, prior_level)
     best_s = _best_smoothing(ev, orders[(len(orders) - 1) // 2], grid)
     best_o = _best_order(ev, orders, best_s)
     values = sorted({float(g) for g in grid} | {best_s})
@@ -496,6 +519,7 @@ def variance_inflation(
     ridge: float = 1.0,
     power: float = DEFAULT_PENALTY_POWER,
     target: np.ndarray | None = None,
+    prior_level: str = "data",
 ) -> float:
     """How much the posterior covariance understates the error on held-out flight units.
 
@@ -515,7 +539,7 @@ def variance_inflation(
     units = {str(k): v for k, v in units.items() if v.n_samples > 0}
     if not units:
         raise IdentifiabilityError("no learning samples to validate on")
-    return _Evaluator(units, make_basis, ridge, power, target).inflation(int(order), float(smoothing))
+    return _Evaluator(units, make_basis, ridge, power, target, prior_level).inflation(int(order), float(smoothing))
 
 
 def validation_rmse(

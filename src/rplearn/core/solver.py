@@ -39,6 +39,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from rplearn.core.bases import Basis
 from rplearn.core.geometry import Directions
+from rplearn.core.level import shrink_target
 from rplearn.core.normal_equations import EXPONENT_MIN_SPREAD_DB, NormalEquations, independent_spread_db
 from rplearn.core.spectrum import null_directions, spectrum_estimate, spectrum_report
 from rplearn.core.solution import FitReport, GaugeNote, JointSolution, fit_warnings
@@ -54,6 +55,10 @@ FloatArray = NDArray[np.float64]
 #: changes no prediction measurably (paper replica: SH-10 test RMSE 4.481 dB with 1e-6 or 1),
 #: while on a single short unit it keeps SH-10 from extrapolating to 1,323 dB RMSE (7.8 dB).
 DEFAULT_RIDGE = 1.0
+#: Where the level a prior's pattern is shrunk toward comes from: ``"data"`` (the prior gives
+#: only its shape; :mod:`rplearn.core.level`) or ``"prior"`` (its absolute dBi, for calibrated
+#: power and a trusted reference).
+PRIOR_LEVELS: tuple[str, ...] = ("data", "prior")
 
 
 # -------------------------------------------------------------------------------------------
@@ -178,16 +183,24 @@ def solve(
     min_samples_per_coef: float = 1.0,
     penalty: FloatArray | None = None,
     penalty_target: FloatArray | None = None,
+    prior_level: str = "data",
 ) -> JointSolution:
     """Solve accumulated normal equations with a ridge and explicit gauge constraints.
 
-    Minimises ``||X p - y||^2 + ridge ||p||^2 + sum_j penalty_j p_j^2`` subject to one gauge
-    constraint per bipartite component of the link graph (see module docstring), through the
-    KKT system ``[[X^T X + ridge I + diag(penalty), C^T], [C, 0]] [p; mu] = [X^T y; d]``.
+    Minimises ``||X p - y||^2 + sum_j (ridge + penalty_j) (p_j - t_j)^2`` (the ridge on the
+    pattern columns only) subject to one gauge constraint per bipartite component of the link
+    graph (see module docstring), through the KKT system
+    ``[[X^T X + ridge I + diag(penalty), C^T], [C, 0]] [p; mu] = [X^T y + (ridge + penalty) t; d]``.
     ``penalty`` (one non-negative weight per column, absolute units of ``X^T X``) is the
-    smoothness penalty of :mod:`rplearn.core.selection`; with ``penalty_target`` (one value per
-    column: a prior pattern's coefficients) it penalises ``sum_j penalty_j (p_j - target_j)^2``
-    instead, shrinking toward the prior rather than toward zero.
+    smoothness penalty of :mod:`rplearn.core.selection`. The target ``t``
+    (:func:`rplearn.core.level.shrink_target`) is never a fixed level: its shape is that of
+    ``penalty_target`` (one value per pattern column: a prior pattern's coefficients, whose
+    per-node sphere mean is dropped) or zero, and its constant per node is the data's (the
+    least-squares constants under the same gauge), so that adding a constant to every ``y``
+    moves every prediction by that constant and changes nothing else. A known absolute level
+    is given by the gauge (``{"node": N, "mean_gain_dbi": V}``), or, with calibrated power and a
+    trusted reference, by ``prior_level="prior"``: the target is then ``penalty_target`` itself,
+    its absolute level included (shifting the data then moves the fit toward or away from it).
 
     Raises
     ------
@@ -225,12 +238,26 @@ def solve(
         if penalty.shape != (pcols,) or not np.all(np.isfinite(penalty)) or np.any(penalty < 0):
             raise InputError(f"penalty: expected {pcols} non-negative finite weights, got shape {penalty.shape}")
     rhs = np.concatenate([normal.rhs, cval])
-    if penalty is not None and penalty_target is not None:
-        target = _pad_shared(np.asarray(penalty_target, np.float64), pat, pcols)
-        if target.shape != (pcols,) or not np.all(np.isfinite(target)):
-            raise InputError(f"penalty_target: expected {pcols} finite values, got shape {target.shape}")
-        rhs[:pcols] += penalty * target
+    prior = None
+    if penalty_target is not None:
+        prior = _pad_shared(np.asarray(penalty_target, np.float64), pat, pcols)
+        if prior.shape != (pcols,) or not np.all(np.isfinite(prior)):
+            raise InputError(f"penalty_target: expected {pcols} finite values, got shape {prior.shape}")
+    if prior_level not in PRIOR_LEVELS:
+        raise InputError(f"prior level: expected {' or '.join(PRIOR_LEVELS)}, got {prior_level!r}", param="prior_level")
     shrunk = ridge > 0 or (penalty is not None and bool(np.any(penalty > 0)))
+    if shrunk and prior is not None and prior_level == "prior":
+        weights = np.zeros(pcols)
+        weights[:pat] = ridge
+        rhs[:pcols] += (weights + (0.0 if penalty is None else penalty)) * prior
+    elif shrunk:  # toward the data's level and the prior's shape, never toward a fixed level
+        weights = np.zeros(pcols)
+        weights[:pat] = ridge
+        if penalty is not None:
+            weights += penalty
+        target = shrink_target(normal.gram, normal.rhs, normal.basis, n_nodes, None if prior is None else prior[:pat],
+                               (cmat, cval), components)
+        rhs[:pcols] += weights * target
     if large:
         solution = solve_large(normal, n_nodes, components, cmat, cval, rhs[:pcols], ridge, penalty, shrunk, notes)
         if solution is not None:

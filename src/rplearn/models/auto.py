@@ -29,7 +29,7 @@ from rplearn.core.selection import (
     select_order_and_smoothing,
     sub_statistics,
 )
-from rplearn.core.solver import solve
+from rplearn.core.solver import PRIOR_LEVELS, solve
 from rplearn.data.tables import LinkSamples
 from rplearn.errors import InputError
 from rplearn.models.fit import FittedModel, node_coverage_grids
@@ -114,7 +114,7 @@ def prior_std_db(basis: Any, nodes: Sequence[str], weights: np.ndarray, noise_va
 
     Where the flight never looked, the predictive spread of a node's gain returns to this
     value; close to the data it is far smaller. With a prior pattern it is how far the truth
-    may stray from the prior; without one, how far from zero the pattern may be.
+    may stray from the prior; without one, how far from its level (the data's) the pattern may be.
     """
     from rplearn.core.bases import fibonacci_grid_nodes
 
@@ -166,6 +166,7 @@ def fit_auto(
     prior_spread_db: float | None = None,
     path_loss: PathLoss | None = None,
     link_offsets: bool = True,
+    prior_level: str = "data",
 ) -> tuple[FittedModel, Selection]:
     """Learn a regularised pattern set with its order and smoothing chosen from the data.
 
@@ -185,7 +186,8 @@ def fit_auto(
         Exponent of the SH roughness weights: :data:`DEFAULT_PENALTY_POWER` without a prior,
         :data:`PRIOR_PENALTY_POWER` (plain ridge toward the prior) with one.
     prior : mapping of node to model, optional
-        Reference patterns to shrink toward instead of toward zero (``fit --prior``): where the
+        Reference patterns whose shape to shrink toward instead of toward zero (``fit --prior``;
+        their absolute level is not imposed: it is the data's, or the gauge's): where the
         flight looked, the data win; where it did not, the pattern falls back to the prior.
     prior_spread_db : float, optional
         How far [dB RMS] each prior may be from the truth, where known (a vendor's tolerance);
@@ -195,6 +197,10 @@ def fit_auto(
         The environment term (free space by default; :mod:`rplearn.models.terms`).
     link_offsets : bool
         Learn one electronics offset per link logged in both directions.
+    prior_level : {"data", "prior"}
+        Where the level of a prior's pattern comes from: the data (default: the prior gives
+        only its shape, and a constant added to every RSSI value only shifts the predictions),
+        or the prior's absolute dBi (``"prior"``: calibrated power and a trusted reference).
 
     Returns
     -------
@@ -233,7 +239,7 @@ def fit_auto(
         for s in units.values():
             frequency_counts(s, freq)
         fitted, choice = fit_from_statistics(stats, kind, orders, nodes, ridge, gauge, power, weighted_median(freq),
-                                             provenance, prior, prior_spread_db, path_loss, link_offsets)
+                                             provenance, prior, prior_spread_db, path_loss, link_offsets, prior_level)
         fitted.ltd_s = time.perf_counter() - t0
     fitted.model.training["ltd_s"] = fitted.ltd_s
     fitted.model.training["coverage_deg"] = node_coverage_grids(list(units.values()))
@@ -254,6 +260,7 @@ def fit_from_statistics(
     prior_spread_db: float | None = None,
     path_loss: PathLoss | None = None,
     link_offsets: bool = True,
+    prior_level: str = "data",
 ) -> tuple[FittedModel, Selection]:
     """The selection and the final solve of :func:`fit_auto`, from per-unit statistics
     accumulated at the largest of ``orders`` (in memory, or streamed from a big file).
@@ -273,6 +280,8 @@ def fit_from_statistics(
     t0 = time.perf_counter()
     if power is None:
         power = PRIOR_PENALTY_POWER if prior else DEFAULT_PENALTY_POWER
+    if prior_level not in PRIOR_LEVELS:
+        raise InputError(f"prior level: expected {' or '.join(PRIOR_LEVELS)}, got {prior_level!r}", param="prior_level")
     if prior_spread_db is not None:
         if not (isinstance(prior_spread_db, (int, float)) and np.isfinite(prior_spread_db) and prior_spread_db > 0):
             raise InputError(f"prior spread: expected a positive number of dB, got {prior_spread_db!r}", param="prior_spread_db")
@@ -295,7 +304,7 @@ def fit_from_statistics(
         total = total.with_shared(links)
     target = prior_coefficients(prior, list(nodes), first.basis) if prior else None
     choice = select_order_and_smoothing(stats, lambda k: ModelSpec(kind, k, ridge=ridge).basis(), orders, ridge, power,
-                                        target=target)
+                                        target=target, prior_level=prior_level)
     spec = ModelSpec(kind, choice.order, ridge=ridge, smoothing=choice.smoothing)
     chosen = spec.basis()
     normal = sub_statistics(total, chosen)
@@ -303,7 +312,8 @@ def fit_from_statistics(
     sub_target = None
     if target is not None:
         sub_target = target[nested_columns(first.basis, chosen, len(nodes))]
-    sol = solve(normal, list(nodes), ridge=ridge, gauge=gauge, penalty=penalty, penalty_target=sub_target)
+    sol = solve(normal, list(nodes), ridge=ridge, gauge=gauge, penalty=penalty, penalty_target=sub_target,
+                prior_level=prior_level)
     inflation = float(choice.variance_inflation)
     noise_var = sol.residual_variance_db2 * inflation
     spread = prior_std_db(chosen, list(nodes), ridge + penalty, noise_var, power)
@@ -322,7 +332,8 @@ def fit_from_statistics(
             # the same posterior, read with a prior of the wanted spread: the penalty per node
             # scaled so that its implied prior spread is the wanted one (the mean is the CV's)
             weights = (ridge + penalty) * np.repeat(factor, chosen.n_coef)
-            wide = solve(normal, list(nodes), ridge=0.0, gauge=gauge, penalty=weights, penalty_target=sub_target)
+            wide = solve(normal, list(nodes), ridge=0.0, gauge=gauge, penalty=weights, penalty_target=sub_target,
+                         prior_level=prior_level)
             covariance = wide.covariance * (sol.residual_variance_db2 / wide.residual_variance_db2) * inflation
             spread = prior_std_db(chosen, list(nodes), weights, noise_var, power)
         else:
@@ -334,6 +345,7 @@ def fit_from_statistics(
     training.update(smoothing=choice.smoothing, penalty_power=power, selection=choice.to_dict(), ltd_s=ltd,
                     variance_inflation=inflation, prior_std_db=spread, prior_std_source=spread_source)
     if prior:
+        training["prior_level"] = prior_level
         training["prior"] = {str(n): str(getattr(m, "provenance", {}).get("model", getattr(m, "label", "?")))
                              for n, m in prior.items()}
     if frequency_hz is not None:

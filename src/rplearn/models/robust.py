@@ -22,6 +22,7 @@ from dataclasses import dataclass
 from typing import Any, Mapping
 
 import numpy as np
+import pandas as pd
 
 from rplearn.core.environment import PathLoss
 from rplearn.core.normal_equations import NormalEquations
@@ -198,4 +199,32 @@ def fit_huber(
     return FittedModel(spec, model, ltd), robust
 
 
-__all__ = ["HUBER_K", "LOSSES", "MAX_ITERATIONS", "TOLERANCE_DB", "RobustReport", "fit_huber", "robust_scale_db"]
+def downweighted_notes(part: Any, robust: Any, stretches: int = 3) -> list[str]:
+    """Where a Huber fit down-weighted samples: how many, by unit, and the longest stretches
+    of consecutive down-weighted packets (plateaus and dropouts look like that)."""
+    mask = np.asarray(robust.downweighted, bool)
+    n = mask.size
+    lines = [f"huber: {int(mask.sum()):,} of {n:,} samples ({100.0 * mask.mean():.1f}%) lie beyond "
+             f"{robust.k:g} x {robust.scale_db:.2f} dB and pull less than least squares would "
+             f"({robust.iterations} iterations{'' if robust.converged else ', not converged'})"]
+    if not mask.any():
+        return lines
+    units = part["unit"].astype(str).to_numpy() if "unit" in part.columns else np.full(n, "all")
+    t = part["t"].to_numpy(np.float64)
+    counts = pd.Series(units[mask]).value_counts()
+    lines.append("  by unit: " + ", ".join(f"{u} {c:,}" for u, c in counts.items()))
+    order = np.lexsort((t, units))
+    m, u, tt = mask[order], units[order], t[order]
+    starts = np.flatnonzero(m & ~np.r_[False, m[:-1] & (u[1:] == u[:-1])])
+    runs = []
+    for s in starts:
+        e = s
+        while e + 1 < n and m[e + 1] and u[e + 1] == u[s]:
+            e += 1
+        runs.append((e - s + 1, u[s], tt[s], tt[e]))
+    runs.sort(key=lambda r: -r[0])
+    lines.append("  longest stretches: " + ", ".join(f"{c:,} samples in {un} at {a:.1f}-{b:.1f} s" for c, un, a, b in runs[:stretches]))
+    return lines
+
+
+__all__ = ["HUBER_K", "LOSSES", "MAX_ITERATIONS", "TOLERANCE_DB", "RobustReport", "downweighted_notes", "fit_huber", "robust_scale_db"]

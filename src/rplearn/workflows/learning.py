@@ -38,7 +38,7 @@ from rplearn.models.fit import FittedModel, evaluate_models, fit_model, scores_m
 from rplearn.models.base import require_patterns
 from rplearn.models.load import load_model
 from rplearn.models.spec import ModelSpec, check_model_size
-from rplearn.models.robust import LOSSES, fit_huber
+from rplearn.models.robust import LOSSES, downweighted_notes, fit_huber
 from rplearn.models.streamed import checked, fit_patterns_accumulated, weighted_median
 from rplearn.models.predict import UNCOVERED_DEG, DatasetPrediction, distinct_labels, predict_dataset, uncovered_rows
 from rplearn.models.terms import terms_text
@@ -138,6 +138,7 @@ def fit_dataset(
     link_offsets: bool = True,
     dask: str | None = None,
     progress: Callable[[int, int], None] | None = None,
+    prior_level: str = "data",
 ) -> FitOutcome:
     """Learn ``spec`` from a matched dataset file (``rplearn fit``).
 
@@ -180,12 +181,17 @@ def fit_dataset(
         (:mod:`rplearn.workflows.fleet`): statistics per part, tree-reduced, solved here.
     progress : callable, optional
         Called with ``(parts done, parts)`` while a dataset is read part by part.
+    prior_level : {"data", "prior"}
+        Where the level of a prior's pattern comes from: the data (default; the prior gives
+        its shape) or the prior's absolute dBi (calibrated power and a trusted reference).
     """
     if output:
         check_output_path(output, [dataset, *(prior or {}).values()])
     if prior and not auto:
         raise InputError("prior: a prior is weighed against the data by the automatic choice; use it with "
                          "order 'auto' (--degree auto)", param="prior")
+    if prior_level != "data" and not prior:
+        raise InputError("prior-level: it says where a prior's level comes from; give --prior too", param="prior_level")
     if prior_std_db is not None and not prior:
         raise InputError("prior-std: it states how far the priors may be off; give --prior too", param="prior_std_db")
     if prior_std_db is not None and not (np.isfinite(prior_std_db) and prior_std_db > 0):
@@ -212,13 +218,14 @@ def fit_dataset(
                              f"{spec.label}{' with loss ' + loss if loss != 'ls' else ''}", param="dask")
         with dask_client(dask) as client:
             return _fit_streamed(dataset, spec, units, gauge, output, auto, priors, prior_std_db, client=client,
-                                 progress=progress, **terms)
+                                 progress=progress, prior_level=prior_level, **terms)
     if spec.decouples and _is_big(dataset):
         if loss == "huber":
             raise InputError(f"{dataset}: loss huber keeps the samples in memory; this file is streamed "
                              f"(over {STREAM_FIT_ROWS:,} rows or {STREAM_FIT_BYTES // 2**20} MiB): write the "
                              "units to learn from into a smaller file", param="loss")
-        return _fit_streamed(dataset, spec, units, gauge, output, auto, priors, prior_std_db, progress=progress, **terms)
+        return _fit_streamed(dataset, spec, units, gauge, output, auto, priors, prior_std_db, progress=progress,
+                             prior_level=prior_level, **terms)
     df, stretch_note = stretched(read_dataset(dataset), units, dataset)
     choice = learning_units(df, units, dataset)
     if stretch_note:
@@ -226,7 +233,7 @@ def fit_dataset(
     elif "unit" not in df.columns:
         choice = replace(choice, notes=[whole_flight_note(dataset)])
     if auto:
-        return _fit_auto(df, dataset, spec, choice, gauge, output, priors, prior_std_db, **terms)
+        return _fit_auto(df, dataset, spec, choice, gauge, output, priors, prior_std_db, prior_level=prior_level, **terms)
     samples = samples_of(df, choice.units, dataset)
     prov = provenance(dataset=dataset, model=spec.label, ridge=spec.ridge, units=choice.units)
     notes: list[str] = []
@@ -239,34 +246,6 @@ def fit_dataset(
     if output:
         fitted.model.save(output)
     return FitOutcome(fitted, choice, len(samples), output, samples.non_unit_quaternions, robust_notes=notes)
-
-
-def downweighted_notes(part: Any, robust: Any, stretches: int = 3) -> list[str]:
-    """Where a Huber fit down-weighted samples: how many, by unit, and the longest stretches
-    of consecutive down-weighted packets (plateaus and dropouts look like that)."""
-    mask = np.asarray(robust.downweighted, bool)
-    n = mask.size
-    lines = [f"huber: {int(mask.sum()):,} of {n:,} samples ({100.0 * mask.mean():.1f}%) lie beyond "
-             f"{robust.k:g} x {robust.scale_db:.2f} dB and pull less than least squares would "
-             f"({robust.iterations} iterations{'' if robust.converged else ', not converged'})"]
-    if not mask.any():
-        return lines
-    units = part["unit"].astype(str).to_numpy() if "unit" in part.columns else np.full(n, "all")
-    t = part["t"].to_numpy(np.float64)
-    counts = pd.Series(units[mask]).value_counts()
-    lines.append("  by unit: " + ", ".join(f"{u} {c:,}" for u, c in counts.items()))
-    order = np.lexsort((t, units))
-    m, u, tt = mask[order], units[order], t[order]
-    starts = np.flatnonzero(m & ~np.r_[False, m[:-1] & (u[1:] == u[:-1])])
-    runs = []
-    for s in starts:
-        e = s
-        while e + 1 < n and m[e + 1] and u[e + 1] == u[s]:
-            e += 1
-        runs.append((e - s + 1, u[s], tt[s], tt[e]))
-    runs.sort(key=lambda r: -r[0])
-    lines.append("  longest stretches: " + ", ".join(f"{c:,} samples in {un} at {a:.1f}-{b:.1f} s" for c, un, a, b in runs[:stretches]))
-    return lines
 
 
 #: A pattern fit streams its dataset (:mod:`rplearn.models.streamed`) from this many rows of a
@@ -285,7 +264,7 @@ TIME_BLOCKS = TIME_UNITS
 def _fit_auto(
     df: Any, dataset: str, spec: ModelSpec, choice: UnitChoice, gauge: str | Mapping[str, Any], output: str | None,
     priors: Mapping[str, Any] | None = None, prior_std_db: float | None = None, path_loss: PathLoss | None = None,
-    link_offsets: bool = True,
+    link_offsets: bool = True, prior_level: str = "data",
 ) -> FitOutcome:
     """:func:`fit_dataset` with ``auto=True`` on a dataset in memory: samples per learning unit."""
     from rplearn.models.auto import fit_auto
@@ -303,7 +282,7 @@ def _fit_auto(
     prov = provenance(dataset=dataset, model=f"{spec.kind}-auto", ridge=spec.ridge, units=choice.units)
     fitted, selection = fit_auto(per_unit, spec.kind, spec.order if spec.kind != "sh" else None, spec.ridge, gauge, prov,
                                  prior=priors or None, prior_spread_db=prior_std_db, path_loss=path_loss,
-                                 link_offsets=link_offsets)
+                                 link_offsets=link_offsets, prior_level=prior_level)
     check_dataset_budget(fitted.model, part, dataset)
     if output:
         fitted.model.save(output)
@@ -326,7 +305,7 @@ def _fit_streamed(
     dataset: str, spec: ModelSpec, units: Sequence[str] | None, gauge: str | Mapping[str, Any], output: str | None,
     auto: bool = False, priors: Mapping[str, Any] | None = None, prior_std_db: float | None = None,
     path_loss: PathLoss | None = None, link_offsets: bool = True, client: Any = None,
-    progress: Callable[[int, int], None] | None = None,
+    progress: Callable[[int, int], None] | None = None, prior_level: str = "data",
 ) -> FitOutcome:
     """:func:`fit_dataset` for a big file or a dataset in many files (:mod:`rplearn.io.partitions`):
     units, nodes and the model size from the id columns, then the patterns from the statistics
@@ -356,7 +335,7 @@ def _fit_streamed(
         fitted, selection = fit_from_statistics(acc.stats, spec.kind, orders, nodes, spec.ridge, gauge,
                                                 frequency_hz=weighted_median(acc.freq), provenance=prov,
                                                 prior=priors or None, prior_spread_db=prior_std_db,
-                                                path_loss=path_loss, link_offsets=link_offsets)
+                                                path_loss=path_loss, link_offsets=link_offsets, prior_level=prior_level)
         fitted.model.training["coverage_deg"] = acc.grids or {}
         if output:
             fitted.model.save(output)
