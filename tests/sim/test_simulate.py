@@ -214,7 +214,7 @@ def test_bad_inputs() -> None:
         replace(cfg, radio=RadioConfig(loss_probability=1.5))
     with pytest.raises(InputError, match="log_format"):
         simulate(cfg, out_dir="/tmp", log_format="xlsx")
-    assert set(PRESET_NAMES) == {"paper", "trio", "smoke", "ground", "pathloss", "tworay"}
+    assert set(PRESET_NAMES) == {"paper", "trio", "smoke", "ground", "pathloss", "tworay", "campaign"}
     assert isinstance(cfg.flight, FlightConfig) and isinstance(cfg.estimator, EstimatorConfig)
 
 

@@ -154,6 +154,49 @@ def prior_misfit_var(normal: NormalEquations, target: np.ndarray, basis: Any) ->
     return float(max(normal.yty - 2.0 * c @ r + c @ g @ c, 0.0) / max(normal.n_samples, 1))
 
 
+#: Smallest spread [dB] the cap of the spread where the flight never looked goes down to (data
+#: whose gains barely vary still leave the pattern unknown there to about this much).
+MIN_UNSEEN_SPREAD_DB = 1.0
+
+
+def within_unit_noise_var(stats: Mapping[str, NormalEquations], normal: NormalEquations, coef: np.ndarray,
+                          rank: int) -> float:
+    """Residual variance [dB^2] of the fit ``coef`` about each unit's own mean residual: the
+    noise of one packet around its flight's level (the training residual variance with the
+    flights' levels, which the patterns cannot know, taken out). Degrees of freedom: the
+    samples less ``rank`` and the units' means beyond the common level."""
+    c = np.asarray(coef, np.float64)
+    sse = normal.yty - 2.0 * c @ normal.rhs + c @ normal.gram @ c
+    for st in stats.values():
+        if st.n_samples:
+            a, sum_y = st.column_sums()
+            idx = np.concatenate([nested_columns(st.basis, normal.basis, st.n_nodes),
+                                  st.n_pattern_columns + np.arange(len(st.shared))])
+            sse -= (sum_y - c @ a[idx]) ** 2 / st.n_samples
+    units = sum(1 for st in stats.values() if st.n_samples)
+    return float(max(sse, 0.0) / max(normal.n_samples - rank - (units - 1), 1))
+
+
+def unseen_spread_cap_db(normal: NormalEquations, basis: Any, noise_var: float, level_var: float) -> float:
+    """The largest spread [dB, 1 sigma] a node's gain may be given where the flight never
+    looked: the spread of the joint gains the flight measured about their best constant
+    (and the path-loss and offset terms), less the noise and the flights' levels,
+    at least :data:`MIN_UNSEEN_SPREAD_DB`.
+
+    Why this cap: far from every learning direction the penalised fit returns toward the
+    pattern's level, so its error there is how far the pattern strays from that level, about
+    which the flight says only how far it strayed where it looked. A 1-sigma beyond the whole
+    spread of the measured joint gains (both ends' variation, given to each end alone) would
+    claim that the pattern varies more where unseen than anything the flight measured, which
+    no data support: it would only restate the smoothing's arbitrary prior variance (tens of
+    dB once multiplied by the variance inflation), a number no user can act on. It is an
+    assumption, stated: an antenna whose unseen side holds a deeper null than anything seen
+    is off by more; the warning on uncovered predictions says where that can happen.
+    """
+    spread = prior_misfit_var(normal, np.zeros(normal.n_pattern_columns), basis)
+    return float(max(np.sqrt(max(spread - noise_var - level_var, 0.0)), MIN_UNSEEN_SPREAD_DB))
+
+
 def fit_auto(
     unit_samples: Mapping[str, LinkSamples],
     kind: str = "sh",
@@ -305,34 +348,48 @@ def fit_from_statistics(
         sub_target = target[nested_columns(first.basis, chosen, len(nodes))]
     sol = solve(normal, list(nodes), ridge=ridge, gauge=gauge, penalty=penalty, penalty_target=sub_target)
     inflation = float(choice.variance_inflation)
-    noise_var = sol.residual_variance_db2 * inflation
+    # the flights' levels: apart from the noise (the residual about each flight's own level)
+    # and added to the spread of a new flight's predictions (its level about the common one)
+    level_var = float(choice.flight_level_std_db) ** 2
+    within_var = sol.residual_variance_db2
+    if choice.method == "grouped-cv":
+        within_var = within_unit_noise_var(stats, normal, np.concatenate([sol.coef.ravel(), sol.shared_coef]),
+                                           sol.report.rank)
+    shares = np.array([st.n_samples for st in stats.values()], np.float64) / max(normal.n_samples, 1)
+    new_level_var = level_var * (1.0 + float(shares @ shares)) if level_var > 0 else 0.0
+    noise_var = within_var * inflation
+    rescale = within_var / sol.residual_variance_db2 if sol.residual_variance_db2 > 0 else 1.0
     spread = prior_std_db(chosen, list(nodes), ridge + penalty, noise_var, power)
     spread_source = "implied by the cross-validated smoothing"
-    covariance = None if sol.covariance is None else sol.covariance * inflation
+    covariance = None if sol.covariance is None else sol.covariance * (rescale * inflation)
+    wanted = {str(n): min(spread[str(n)], unseen_spread_cap_db(normal, chosen, within_var, level_var)) for n in nodes}
     if sub_target is not None and covariance is not None and set(map(str, prior)) >= set(map(str, nodes)):
         if prior_spread_db is None:
             misfit = prior_misfit_var(normal, sub_target, chosen)
-            wanted = float(np.sqrt(max(misfit - sol.residual_variance_db2, 0.0) / 2.0))  # two ends a sample
+            stated = float(np.sqrt(max(misfit - within_var - level_var, 0.0) / 2.0))  # two ends a sample
             spread_source = "learned from the prior's misfit to the flight"
         else:
-            wanted = float(prior_spread_db)
+            stated = float(prior_spread_db)
             spread_source = "stated"
-        factor = np.array([(spread[str(n)] / max(wanted, spread[str(n)])) ** 2 for n in nodes])
-        if np.any(factor < 1.0):
-            # the same posterior, read with a prior of the wanted spread: the penalty per node
-            # scaled so that its implied prior spread is the wanted one (the mean is the CV's)
-            weights = (ridge + penalty) * np.repeat(factor, chosen.n_coef)
-            wide = solve(normal, list(nodes), ridge=0.0, gauge=gauge, penalty=weights, penalty_target=sub_target)
-            covariance = wide.covariance * (sol.residual_variance_db2 / wide.residual_variance_db2) * inflation
-            spread = prior_std_db(chosen, list(nodes), weights, noise_var, power)
-        else:
-            spread_source = "implied by the cross-validated smoothing (larger than " + spread_source + ")"
+        wanted = {str(n): stated for n in nodes}
+    elif any(wanted[str(n)] < spread[str(n)] for n in nodes):
+        spread_source = "the spread of the measured gains (the smoothing implied more)"
+    factor = np.array([(spread[str(n)] / max(wanted[str(n)], 1e-9)) ** 2 for n in nodes])
+    if covariance is not None and np.any(np.abs(factor - 1.0) > 1e-9):
+        # the same posterior, read with a prior of the wanted spread: the penalty per node
+        # scaled so that its implied prior spread is the wanted one (the mean is the CV's)
+        weights = (ridge + penalty) * np.repeat(factor, chosen.n_coef)
+        wide = solve(normal, list(nodes), ridge=0.0, gauge=gauge, penalty=weights, penalty_target=sub_target)
+        covariance = wide.covariance * (within_var / wide.residual_variance_db2) * inflation
+        spread = prior_std_db(chosen, list(nodes), weights, noise_var, power)
     ltd = time.perf_counter() - t0
-    fields, terms = shared_fields(sol, list(nodes), path_loss, counts, inflation)
+    fields, terms = shared_fields(sol, list(nodes), path_loss, counts, rescale * inflation)
     training = sol.report.to_dict()
     training.update(terms)
     training.update(smoothing=choice.smoothing, penalty_power=power, selection=choice.to_dict(), ltd_s=ltd,
-                    variance_inflation=inflation, prior_std_db=spread, prior_std_source=spread_source)
+                    variance_inflation=inflation, prior_std_db=spread, prior_std_source=spread_source,
+                    noise_std_db=float(np.sqrt(within_var)), flight_level_std_db=float(np.sqrt(level_var)),
+                    new_flight_level_std_db=float(np.sqrt(new_level_var)))
     if prior:
         training["prior"] = {str(n): str(getattr(m, "provenance", {}).get("model", getattr(m, "label", "?")))
                              for n, m in prior.items()}
@@ -344,4 +401,4 @@ def fit_from_statistics(
     return FittedModel(spec, model, ltd), choice
 
 
-__all__ = ["MAX_AUTO_ORDER", "PRIOR_PENALTY_POWER", "SAMPLES_PER_COEF", "auto_orders", "fit_auto", "fit_from_statistics", "prior_coefficients", "prior_misfit_var", "prior_std_db"]
+__all__ = ["MIN_UNSEEN_SPREAD_DB", "unseen_spread_cap_db", "within_unit_noise_var", "MAX_AUTO_ORDER", "PRIOR_PENALTY_POWER", "SAMPLES_PER_COEF", "auto_orders", "fit_auto", "fit_from_statistics", "prior_coefficients", "prior_misfit_var", "prior_std_db"]
