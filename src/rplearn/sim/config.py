@@ -137,7 +137,9 @@ class RadioConfig:
         Standard deviation of a level offset [dB] drawn once per trajectory unit (flight) from
         the seed and added to every packet of that unit, both directions: what changes from
         flight to flight in a real campaign (another battery and radio temperature, a cable
-        re-plugged, the ground wetter). 0 switches it off; the drawn levels are in
+        re-plugged, the ground wetter). The learning and the testing units' levels each have
+        a root mean square of exactly this value (:func:`rplearn.sim.flight.unit_levels_db`).
+        0 switches it off; the levels are in
         :attr:`rplearn.sim.flight.SimulationResult.unit_levels_db`.
     """
 

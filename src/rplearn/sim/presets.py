@@ -276,7 +276,7 @@ def _tworay() -> SimulationConfig:
 #: (cycled), the number of learning and testing flights, and the testing flights' arc [deg].
 CAMPAIGN_LEVEL_STD_DB = 3.0
 CAMPAIGN_HEIGHTS_M: tuple[float, ...] = (15.0, 20.0, 25.0)
-CAMPAIGN_FLIGHTS: tuple[int, int] = (9, 3)
+CAMPAIGN_FLIGHTS: tuple[int, int] = (9, 6)
 CAMPAIGN_TEST_ARC_DEG = 70.0
 
 
