@@ -106,3 +106,19 @@ def test_a_new_flight_of_a_campaign_is_covered_inside_and_outside(tmp_path_facto
     training = fitted.model.training
     assert all(v < 10.0 for v in training["prior_std_db"].values()), training["prior_std_db"]
     assert training["variance_inflation"] < 10.0
+
+
+@pytest.mark.parametrize("seed,error_db", [(3, 2.0), (4, 4.0)])
+def test_the_unseen_spread_is_capped_by_the_measured_gains_spread(seed, error_db):
+    """Flights with their own smooth errors inflate the within-flight variance ~x50; the spread
+    the smoothing then implies where the flight never looked is capped at the measured joint
+    gains' spread (what the data allow; 4.4 and 7.4 dB here)."""
+    from test_calibration import flights_with_their_own_errors
+
+    units = flights_with_their_own_errors(8, seed=seed, unit_error_db=error_db, n=400)
+    y = np.concatenate([u.joint_gain_db for u in units.values()])
+    fitted, sel = fit_auto(units)
+    training = fitted.model.training
+    assert sel.variance_inflation > 10 and training["prior_std_source"].startswith("the spread of the measured gains")
+    spread = training["prior_std_db"]
+    assert all(0.8 * y.std() < v <= y.std() for v in spread.values()), (spread, y.std())

@@ -154,11 +154,6 @@ def prior_misfit_var(normal: NormalEquations, target: np.ndarray, basis: Any) ->
     return float(max(normal.yty - 2.0 * c @ r + c @ g @ c, 0.0) / max(normal.n_samples, 1))
 
 
-#: Smallest spread [dB] the cap of the spread where the flight never looked goes down to (data
-#: whose gains barely vary still leave the pattern unknown there to about this much).
-MIN_UNSEEN_SPREAD_DB = 1.0
-
-
 def within_unit_noise_var(stats: Mapping[str, NormalEquations], normal: NormalEquations, coef: np.ndarray,
                           rank: int) -> float:
     """Residual variance [dB^2] of the fit ``coef`` about each unit's own mean residual: the
@@ -177,24 +172,22 @@ def within_unit_noise_var(stats: Mapping[str, NormalEquations], normal: NormalEq
     return float(max(sse, 0.0) / max(normal.n_samples - rank - (units - 1), 1))
 
 
-def unseen_spread_cap_db(normal: NormalEquations, basis: Any, noise_var: float, level_var: float) -> float:
-    """The largest spread [dB, 1 sigma] a node's gain may be given where the flight never
-    looked: the spread of the joint gains the flight measured about their best constant
-    (and the path-loss and offset terms), less the noise and the flights' levels,
-    at least :data:`MIN_UNSEEN_SPREAD_DB`.
+def unseen_spread_cap_db(normal: NormalEquations, basis: Any) -> float:
+    """The largest spread [dB, 1 sigma] a node's gain is given where the flight never looked:
+    the root mean square of the joint gains the flight measured about their best constant
+    (and the path-loss and offset terms), noise and flights' levels included.
 
     Why this cap: far from every learning direction the penalised fit returns toward the
     pattern's level, so its error there is how far the pattern strays from that level, about
-    which the flight says only how far it strayed where it looked. A 1-sigma beyond the whole
-    spread of the measured joint gains (both ends' variation, given to each end alone) would
-    claim that the pattern varies more where unseen than anything the flight measured, which
-    no data support: it would only restate the smoothing's arbitrary prior variance (tens of
-    dB once multiplied by the variance inflation), a number no user can act on. It is an
-    assumption, stated: an antenna whose unseen side holds a deeper null than anything seen
-    is off by more; the warning on uncovered predictions says where that can happen.
+    which the flight says only how far the gains strayed where it looked. Nothing the flight
+    measured varied by more than this (the joint gain of both ends, noise included, given to
+    each end alone): a larger 1-sigma would only restate the smoothing's arbitrary prior
+    variance (tens of dB once multiplied by a variance inflation), a number no user can act
+    on; this one is generous (the pattern's own variation where seen is smaller). It is an
+    assumption, stated: an antenna whose unseen side holds a deeper null than anything the
+    flight measured is off by more there; the warning on uncovered predictions says where.
     """
-    spread = prior_misfit_var(normal, np.zeros(normal.n_pattern_columns), basis)
-    return float(max(np.sqrt(max(spread - noise_var - level_var, 0.0)), MIN_UNSEEN_SPREAD_DB))
+    return float(np.sqrt(prior_misfit_var(normal, np.zeros(normal.n_pattern_columns), basis)))
 
 
 def fit_auto(
@@ -305,13 +298,18 @@ def fit_from_statistics(
     ``path_loss``) get it as a shared column, and with ``link_offsets`` one offset per link
     logged both ways (over all units) is appended, before the selection.
 
-    The model's covariance is the posterior's, times the selection's variance inflation. Its
-    spread where the data are absent is ``training["prior_std_db"]`` per node (and
-    ``training["prior_std_source"]`` says where that number comes from): without a prior, the
-    spread the cross-validated smoothing implies; with a prior for every node, how far the
-    flight found the prior off where it looked (its RMS misfit, less the noise, shared by the
-    two ends of a link), or ``prior_spread_db`` when given, whichever is larger than the
-    implied spread.
+    The model's covariance is the posterior's, read with the noise about each flight's own
+    level (``training["noise_std_db"]``, :func:`within_unit_noise_var`), times the selection's
+    within-flight variance inflation; the selection's between-flight level spread is stored
+    (``flight_level_std_db``) with that of a new flight's level about the learned flights'
+    mean (``new_flight_level_std_db``: times ``sqrt(1 + sum of the flights' squared sample
+    shares)``), which :meth:`PatternSet.predict_gain_std` adds. Its spread where the data are
+    absent is ``training["prior_std_db"]`` per node (and ``training["prior_std_source"]`` says
+    where that number comes from): without a prior, the spread the cross-validated smoothing
+    implies, at most :func:`unseen_spread_cap_db`; with a prior for every node,
+    ``prior_spread_db`` when given, else how far the flight found the prior off where it
+    looked (its RMS misfit, less the noise and the levels, shared by the two ends of a link)
+    or the capped implied spread, whichever is larger.
     """
     t0 = time.perf_counter()
     if power is None:
@@ -362,16 +360,21 @@ def fit_from_statistics(
     spread = prior_std_db(chosen, list(nodes), ridge + penalty, noise_var, power)
     spread_source = "implied by the cross-validated smoothing"
     covariance = None if sol.covariance is None else sol.covariance * (rescale * inflation)
-    wanted = {str(n): min(spread[str(n)], unseen_spread_cap_db(normal, chosen, within_var, level_var)) for n in nodes}
+    cap = unseen_spread_cap_db(normal, chosen)
+    wanted = {str(n): min(spread[str(n)], cap) for n in nodes}
     if sub_target is not None and covariance is not None and set(map(str, prior)) >= set(map(str, nodes)):
         if prior_spread_db is None:
             misfit = prior_misfit_var(normal, sub_target, chosen)
-            stated = float(np.sqrt(max(misfit - within_var - level_var, 0.0) / 2.0))  # two ends a sample
+            learned = float(np.sqrt(max(misfit - within_var - level_var, 0.0) / 2.0))  # two ends a sample
             spread_source = "learned from the prior's misfit to the flight"
+            if any(learned < wanted[str(n)] for n in nodes):
+                spread_source = "implied by the cross-validated smoothing (larger than " + spread_source + ")"
+            # never below the smoothing's (capped) spread: a prior that fits where the flight
+            # looked is not thereby known to fit everywhere
+            wanted = {str(n): max(learned, wanted[str(n)]) for n in nodes}
         else:
-            stated = float(prior_spread_db)
+            wanted = {str(n): float(prior_spread_db) for n in nodes}  # the user's tolerance, both ways
             spread_source = "stated"
-        wanted = {str(n): stated for n in nodes}
     elif any(wanted[str(n)] < spread[str(n)] for n in nodes):
         spread_source = "the spread of the measured gains (the smoothing implied more)"
     factor = np.array([(spread[str(n)] / max(wanted[str(n)], 1e-9)) ** 2 for n in nodes])
@@ -401,4 +404,4 @@ def fit_from_statistics(
     return FittedModel(spec, model, ltd), choice
 
 
-__all__ = ["MIN_UNSEEN_SPREAD_DB", "unseen_spread_cap_db", "within_unit_noise_var", "MAX_AUTO_ORDER", "PRIOR_PENALTY_POWER", "SAMPLES_PER_COEF", "auto_orders", "fit_auto", "fit_from_statistics", "prior_coefficients", "prior_misfit_var", "prior_std_db"]
+__all__ = ["unseen_spread_cap_db", "within_unit_noise_var", "MAX_AUTO_ORDER", "PRIOR_PENALTY_POWER", "SAMPLES_PER_COEF", "auto_orders", "fit_auto", "fit_from_statistics", "prior_coefficients", "prior_misfit_var", "prior_std_db"]
