@@ -151,3 +151,19 @@ def test_the_block_buffer_is_capped_and_blocks_add_up():
     parts.add(Directions(*(a[half:] for a in d)), tx[half:], rx[half:], y[half:])
     np.testing.assert_allclose(whole.gram, parts.gram, atol=1e-9 * np.abs(whole.gram).max())
     np.testing.assert_allclose(whole.rhs, parts.rhs, atol=1e-9 * np.abs(whole.rhs).max())
+
+
+@pytest.mark.parametrize("kind,order", [("sh", 4), ("bg", 3)])
+def test_column_sums_are_those_of_the_explicit_design(kind, order):
+    """``X^T 1`` and ``1^T y`` from the directed links' sums (each unit's mean residual in the
+    selection's between-flight level spread), shared columns included."""
+    rng = np.random.default_rng(5)
+    basis = make_basis(kind, order)
+    d, tx, rx = _random_samples(rng, 1200, 3, one_way=[(1, 2)])
+    y, e = rng.normal(size=tx.size), rng.normal(size=tx.size)
+    ne = NormalEquations(basis, 3, environment=True).add(d, tx, rx, y, e)
+    full = ne.with_shared(ne.two_way_links())
+    sums, sum_y = full.column_sums()
+    x = _design(basis, d, tx, rx, 3, e, ne.two_way_links())
+    np.testing.assert_allclose(sums, x.sum(axis=0), atol=1e-9 * np.abs(x).sum())
+    assert sum_y == pytest.approx(y.sum()) and ne.column_sums()[0].size == ne.n_columns

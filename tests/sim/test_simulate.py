@@ -214,7 +214,7 @@ def test_bad_inputs() -> None:
         replace(cfg, radio=RadioConfig(loss_probability=1.5))
     with pytest.raises(InputError, match="log_format"):
         simulate(cfg, out_dir="/tmp", log_format="xlsx")
-    assert set(PRESET_NAMES) == {"paper", "trio", "smoke", "ground", "pathloss", "tworay"}
+    assert set(PRESET_NAMES) == {"paper", "trio", "smoke", "ground", "pathloss", "tworay", "campaign"}
     assert isinstance(cfg.flight, FlightConfig) and isinstance(cfg.estimator, EstimatorConfig)
 
 
@@ -271,3 +271,20 @@ def test_trio_preset_flies_a_triangle_of_different_antennas() -> None:
     }
     r = _residual_db(res)
     assert np.sqrt(np.mean(r**2)) == pytest.approx(res.noise_std_db, rel=0.05)
+
+
+def test_campaign_preset_gives_every_flight_its_own_level() -> None:
+    """The ``campaign`` preset: at least 8 learning flights, each role's levels at exactly the
+    configured RMS about zero, drawn from the seed and stored; the levels are not noise."""
+    from rplearn.sim.presets import CAMPAIGN_LEVEL_STD_DB
+
+    sim = simulate("campaign", seed=3)
+    again = simulate("campaign", seed=3)
+    assert sim.unit_levels_db == again.unit_levels_db != simulate("campaign", seed=4).unit_levels_db
+    assert sim.ground_truth.metadata["unit_levels_db"] == sim.unit_levels_db
+    for role in ("learning", "testing"):
+        levels = np.array([sim.unit_levels_db[u] for u in sim.units(role)])
+        assert levels.size >= (8 if role == "learning" else 2)
+        assert abs(levels.mean()) < 1e-9 and np.sqrt(np.mean(levels**2)) == pytest.approx(CAMPAIGN_LEVEL_STD_DB)
+    assert sim.realised_noise_std_db < 1.1 * sim.noise_std_db  # the levels are in the clean power, not the noise
+    assert set(simulate("smoke", seed=0).unit_levels_db.values()) == {0.0}

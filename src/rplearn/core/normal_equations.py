@@ -340,6 +340,26 @@ class NormalEquations:
         """Sum of the environment column over all samples."""
         return float(sum(v[2 * self.basis.n_coef + _SUM_E] for v in self.directed.values()))
 
+    def column_sums(self) -> tuple[FloatArray, float]:
+        """``X^T 1`` (the sum of every column over the samples, shared columns included) and
+        ``1^T y``, from each directed link's sums (no sample re-read): the mean residual of a fit
+        ``c`` over these samples is ``(1^T y - c . X^T 1) / n``."""
+        p = self.basis.n_coef
+        out = np.zeros(self.n_columns)
+        sum_y = 0.0
+        for (t, r), v in self.directed.items():
+            out[t * p:(t + 1) * p] += v[:p]
+            out[r * p:(r + 1) * p] += v[p:2 * p]
+            sum_y += float(v[2 * p + _SUM_Y])
+        for j, shared in enumerate(self.shared):
+            if shared[0] == "exponent":
+                out[self.n_pattern_columns + j] = self.environment_sum
+            else:
+                a, b = shared[1], shared[2]
+                out[self.n_pattern_columns + j] = sum(float(self.directed[k][2 * p + _COUNT]) * sign
+                                                      for k, sign in (((a, b), 1.0), ((b, a), -1.0)) if k in self.directed)
+        return out, sum_y
+
     def with_shared(self, offset_links: list[tuple[int, int]] | None = None) -> NormalEquations:
         """These statistics with shared columns appended after the pattern columns.
 

@@ -95,9 +95,12 @@ class Selection:
     power : float
         Exponent of the SH roughness weights.
     variance_inflation : float
-        Factor (at least 1) by which the held-out units' squared errors exceed what the
-        posterior covariance of the folds' fits predicts (see :func:`variance_inflation`); 1
-        for GCV.
+        Factor (at least 1) by which the held-out units' squared errors *within* each unit
+        (each unit's mean residual removed) exceed what the posterior covariance of the folds'
+        fits predicts (see :func:`variance_inflation`); 1 for GCV.
+    flight_level_std_db : float
+        Standard deviation [dB] of a unit's (flight's) own level about the common level, from
+        the held-out units' mean residuals (see :func:`variance_inflation`); 0 for GCV.
     """
 
     method: str
@@ -108,11 +111,12 @@ class Selection:
     units: list[str] = field(default_factory=list)
     power: float = DEFAULT_PENALTY_POWER
     variance_inflation: float = 1.0
+    flight_level_std_db: float = 0.0
 
     def to_dict(self) -> dict[str, Any]:
         return {"method": self.method, "order": self.order, "smoothing": self.smoothing, "rmse_db": self.rmse_db,
                 "power": self.power, "units": list(self.units), "variance_inflation": self.variance_inflation,
-                "curve": [p.to_dict() for p in self.curve]}
+                "flight_level_std_db": self.flight_level_std_db, "curve": [p.to_dict() for p in self.curve]}
 
     def curve_text(self) -> str:
         """The validation curve as a small table (order, smoothing, RMSE), the choice marked."""
@@ -230,6 +234,7 @@ class _Evaluator:
                              param="units")
         self.make_basis, self.ridge, self.power = make_basis, float(ridge), float(power)
         self.folds, self.gram, self.rhs, self.yty, self.n = _folds(units)
+        self.sums = [u.column_sums() for u in units.values()]
         if target is not None:
             target = np.asarray(target, np.float64)[:first.n_pattern_columns]  # the prior's: shared columns are not pulled
         self.target = target
@@ -337,29 +342,51 @@ class _Evaluator:
 
     def inflation(self, order: int, smoothing: float) -> float:
         """:func:`variance_inflation` of one (order, smoothing) (1 without held-out units)."""
+        return self.spread(order, smoothing)[0]
+
+    def spread(self, order: int, smoothing: float) -> tuple[float, float]:
+        """The within-unit variance inflation and the between-unit level variance [dB^2] of
+        one (order, smoothing) (1 and 0 without held-out units); see :func:`variance_inflation`."""
         if not self.cv:
-            return 1.0
+            return 1.0, 0.0
         w, blocks, targets = self._blocks(int(order))
+        idx = with_shared_columns(nested_columns(self.big, self.make_basis(int(order)), self.n_nodes), self.first)
+        sums = [(a[idx], sum_y) for a, sum_y in self.sums]
+        counts = np.array([f.held_n for f in self.folds], np.float64)
         key = (int(order), float(smoothing))
         solved = self._best_solved[1] if self._best_solved and self._best_solved[0] == key else None
         excess = predicted = 0.0
+        means = []  # per held-out unit: its squared mean residual, that of noise and fit, the level's weight
         for k, ((g, r, held_g, held_r), f, pin, target) in enumerate(zip(blocks, self.folds, self.pins, targets)):
             c, upper = solved[k] if solved else self._solve(g, self._pulled(g, r, w, smoothing, target, pin), w,
                                                             smoothing, pin)
             if upper is None:
-                return 1.0
+                return 1.0, 0.0
             # numpy's inverse, not LAPACK's potri from the Cholesky factor through scipy: a third
             # of the work, but scipy's second OpenBLAS pool, woken up, made it slower (see _cholesky_solve)
             inverse = np.linalg.inv(self._system(g, w, smoothing, pin))
+            learn = [j for j in range(len(self.folds)) if j != k]
             learn_n = self.n - f.held_n
-            learn_sse = max((self.yty - f.held_yty) - 2.0 * c @ r + c @ g @ c, 0.0)
-            dof = learn_n - float(np.sum(inverse * g))  # less the fit's effective parameters tr(A^-1 G)
-            noise_var = learn_sse / max(dof, 1.0)
+            # the learning residual about each learning unit's own mean: noise, not the units' levels
+            unit_means = np.array([(sums[j][1] - c @ sums[j][0]) / counts[j] for j in learn])
+            learn_sse = (self.yty - f.held_yty) - 2.0 * c @ r + c @ g @ c - float(counts[learn] @ unit_means**2)
+            # less the fit's effective parameters tr(A^-1 G) and the other units' means
+            dof = learn_n - float(np.sum(inverse * g)) - (len(learn) - 1)
+            noise_var = max(learn_sse, 0.0) / max(dof, 1.0)
             held_sse = max(f.held_yty - 2.0 * c @ held_r + c @ held_g @ c, 0.0)
-            excess += held_sse - f.held_n * noise_var
-            # sum over the held-out samples of x^T (sigma^2 A^-1) x = sigma^2 tr(A^-1 X_u^T X_u)
-            predicted += noise_var * float(np.sum(inverse * held_g))  # tr(A^-1 H), both symmetric
-        return float(max(1.0, excess / predicted)) if predicted > 0 and np.isfinite(excess) else 1.0
+            a, sum_y = sums[k]
+            mean = (sum_y - c @ a) / f.held_n
+            quad = float(a @ inverse @ a)  # n^2 times the posterior variance of the unit's mean, over sigma^2
+            excess += held_sse - f.held_n * mean**2 - (f.held_n - 1) * noise_var
+            # sum over the held-out samples of x^T (sigma^2 A^-1) x = sigma^2 tr(A^-1 X_u^T X_u),
+            # less the part along the unit's mean (removed above)
+            predicted += noise_var * (float(np.sum(inverse * held_g)) - quad / f.held_n)  # tr(A^-1 H)
+            weights = counts[learn] / learn_n  # the fit's level: the learning units' levels, weighed by samples
+            means.append((mean**2, noise_var * (1.0 + quad / f.held_n) / f.held_n, 1.0 + float(weights @ weights)))
+        kappa = float(max(1.0, excess / predicted)) if predicted > 0 and np.isfinite(excess) else 1.0
+        square, expected, weight = (np.array(v) for v in zip(*means))
+        level_var = float(np.sum(square - kappa * expected) / np.sum(weight))
+        return kappa, max(level_var, 0.0) if np.isfinite(level_var) else 0.0
 
     def _pulled(self, gram: np.ndarray, rhs: np.ndarray, w: np.ndarray, smoothing: float, target: np.ndarray,
                 pin: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
@@ -507,8 +534,9 @@ def select_order_and_smoothing(
     if not finite:
         raise IdentifiabilityError("no candidate order and smoothing could be fitted")
     choice = min(finite, key=lambda p: (p.rmse_db, p.order, -p.smoothing))
+    kappa, level_var = ev.spread(choice.order, choice.smoothing)
     return Selection("grouped-cv" if ev.cv else "gcv", choice.order, choice.smoothing, choice.rmse_db,
-                     ev.curve, sorted(units) if ev.cv else [], float(power), ev.inflation(choice.order, choice.smoothing))
+                     ev.curve, sorted(units) if ev.cv else [], float(power), kappa, float(np.sqrt(level_var)))
 
 
 def variance_inflation(
@@ -521,20 +549,31 @@ def variance_inflation(
     target: np.ndarray | None = None,
     prior_level: str = "data",
 ) -> float:
-    """How much the posterior covariance understates the error on held-out flight units.
+    """How much the posterior covariance understates the error *within* held-out flight units.
 
-    For each unit ``u`` held out, the fit ``c`` of the others predicts its samples with a
-    squared error whose expectation under the Bayesian reading of the penalised solve is
-    ``n_u sigma^2 + sigma^2 tr(A^-1 X_u^T X_u)``: new noise plus the posterior variance of the
-    fit at the held-out directions (``A`` the penalised normal matrix, ``sigma^2`` the fold's
-    learning residual variance, its squared error over the samples less the fit's effective
-    number of parameters ``tr(A^-1 X^T X)``, so that a correct model gives 1). The factor returned is the observed excess over the noise
-    divided by that predicted variance, summed over the folds, and at least 1. It is above 1
-    when neighbouring packets share their errors (fading and shadowing correlated in time:
-    fewer independent samples than packets) and when the pattern misfits between units
-    (another altitude, another stretch of the sphere); multiplying the posterior covariance
-    by it makes the predictive spread of a new flight honest. Everything comes from the
-    per-unit statistics; 1 for a single unit.
+    For each unit ``u`` held out, the fit ``c`` of the others predicts its samples with errors
+    ``e``; their mean ``m_u`` over the unit (from :meth:`NormalEquations.column_sums`) is the unit's own level
+    against the others', which no pattern can know and which is estimated apart (below). About
+    that mean, the squared error's expectation under the Bayesian reading of the penalised
+    solve is ``(n_u - 1) sigma^2 + sigma^2 (tr(A^-1 X_u^T X_u) - a_u^T A^-1 a_u / n_u)``: new
+    noise plus the posterior variance of the fit at the held-out directions less its part
+    along the unit's mean (``A`` the penalised normal matrix, ``a_u = X_u^T 1``, ``sigma^2``
+    the fold's learning residual variance about each learning unit's own mean, over the
+    samples less the fit's effective number of parameters ``tr(A^-1 X^T X)`` and the units'
+    means, so that a correct model gives 1). The factor returned is the observed excess over
+    the noise divided by that predicted variance, summed over the folds, and at least 1. It is
+    above 1 when neighbouring packets share their errors (fading and shadowing correlated in
+    time: fewer independent samples than packets) and when the pattern misfits within units
+    (another altitude, another stretch of the sphere); multiplying the posterior covariance by
+    it makes the predictive spread honest. Everything comes from the per-unit statistics; 1 for
+    a single unit.
+
+    The between-unit level variance (:attr:`Selection.flight_level_std_db`, squared) is the
+    mean over the folds of ``m_u^2`` less its expected noise and posterior variance
+    (``kappa sigma^2 (1 + a_u^T A^-1 a_u / n_u) / n_u``), divided by ``1 + sum_v w_v^2``: the
+    fit's level is the learning units' levels weighed by their shares ``w_v`` of the samples,
+    so ``m_u`` varies by the held-out unit's level and by that average. It is 0 when the
+    units' means vary no more than noise and fit explain.
     """
     units = {str(k): v for k, v in units.items() if v.n_samples > 0}
     if not units:

@@ -154,6 +154,42 @@ def prior_misfit_var(normal: NormalEquations, target: np.ndarray, basis: Any) ->
     return float(max(normal.yty - 2.0 * c @ r + c @ g @ c, 0.0) / max(normal.n_samples, 1))
 
 
+def within_unit_noise_var(stats: Mapping[str, NormalEquations], normal: NormalEquations, coef: np.ndarray,
+                          rank: int) -> float:
+    """Residual variance [dB^2] of the fit ``coef`` about each unit's own mean residual: the
+    noise of one packet around its flight's level (the training residual variance with the
+    flights' levels, which the patterns cannot know, taken out). Degrees of freedom: the
+    samples less ``rank`` and the units' means beyond the common level."""
+    c = np.asarray(coef, np.float64)
+    sse = normal.yty - 2.0 * c @ normal.rhs + c @ normal.gram @ c
+    for st in stats.values():
+        if st.n_samples:
+            a, sum_y = st.column_sums()
+            idx = np.concatenate([nested_columns(st.basis, normal.basis, st.n_nodes),
+                                  st.n_pattern_columns + np.arange(len(st.shared))])
+            sse -= (sum_y - c @ a[idx]) ** 2 / st.n_samples
+    units = sum(1 for st in stats.values() if st.n_samples)
+    return float(max(sse, 0.0) / max(normal.n_samples - rank - (units - 1), 1))
+
+
+def unseen_spread_cap_db(normal: NormalEquations, basis: Any) -> float:
+    """The largest spread [dB, 1 sigma] a node's gain is given where the flight never looked:
+    the root mean square of the joint gains the flight measured about their best constant
+    (and the path-loss and offset terms), noise and flights' levels included.
+
+    Why this cap: far from every learning direction the penalised fit returns toward the
+    pattern's level, so its error there is how far the pattern strays from that level, about
+    which the flight says only how far the gains strayed where it looked. Nothing the flight
+    measured varied by more than this (the joint gain of both ends, noise included, given to
+    each end alone): a larger 1-sigma would only restate the smoothing's arbitrary prior
+    variance (tens of dB once multiplied by a variance inflation), a number no user can act
+    on; this one is generous (the pattern's own variation where seen is smaller). It is an
+    assumption, stated: an antenna whose unseen side holds a deeper null than anything the
+    flight measured is off by more there; the warning on uncovered predictions says where.
+    """
+    return float(np.sqrt(prior_misfit_var(normal, np.zeros(normal.n_pattern_columns), basis)))
+
+
 def fit_auto(
     unit_samples: Mapping[str, LinkSamples],
     kind: str = "sh",
@@ -269,13 +305,18 @@ def fit_from_statistics(
     ``path_loss``) get it as a shared column, and with ``link_offsets`` one offset per link
     logged both ways (over all units) is appended, before the selection.
 
-    The model's covariance is the posterior's, times the selection's variance inflation. Its
-    spread where the data are absent is ``training["prior_std_db"]`` per node (and
-    ``training["prior_std_source"]`` says where that number comes from): without a prior, the
-    spread the cross-validated smoothing implies; with a prior for every node, how far the
-    flight found the prior off where it looked (its RMS misfit, less the noise, shared by the
-    two ends of a link), or ``prior_spread_db`` when given, whichever is larger than the
-    implied spread.
+    The model's covariance is the posterior's, read with the noise about each flight's own
+    level (``training["noise_std_db"]``, :func:`within_unit_noise_var`), times the selection's
+    within-flight variance inflation; the selection's between-flight level spread is stored
+    (``flight_level_std_db``) with that of a new flight's level about the learned flights'
+    mean (``new_flight_level_std_db``: times ``sqrt(1 + sum of the flights' squared sample
+    shares)``), which :meth:`PatternSet.predict_gain_std` adds. Its spread where the data are
+    absent is ``training["prior_std_db"]`` per node (and ``training["prior_std_source"]`` says
+    where that number comes from): without a prior, the spread the cross-validated smoothing
+    implies, at most :func:`unseen_spread_cap_db`; with a prior for every node,
+    ``prior_spread_db`` when given, else how far the flight found the prior off where it
+    looked (its RMS misfit, less the noise and the levels, shared by the two ends of a link)
+    or the capped implied spread, whichever is larger.
     """
     t0 = time.perf_counter()
     if power is None:
@@ -315,35 +356,54 @@ def fit_from_statistics(
     sol = solve(normal, list(nodes), ridge=ridge, gauge=gauge, penalty=penalty, penalty_target=sub_target,
                 prior_level=prior_level)
     inflation = float(choice.variance_inflation)
-    noise_var = sol.residual_variance_db2 * inflation
+    # the flights' levels: apart from the noise (the residual about each flight's own level)
+    # and added to the spread of a new flight's predictions (its level about the common one)
+    level_var = float(choice.flight_level_std_db) ** 2
+    within_var = sol.residual_variance_db2
+    if choice.method == "grouped-cv":
+        within_var = within_unit_noise_var(stats, normal, np.concatenate([sol.coef.ravel(), sol.shared_coef]),
+                                           sol.report.rank)
+    shares = np.array([st.n_samples for st in stats.values()], np.float64) / max(normal.n_samples, 1)
+    new_level_var = level_var * (1.0 + float(shares @ shares)) if level_var > 0 else 0.0
+    noise_var = within_var * inflation
+    rescale = within_var / sol.residual_variance_db2 if sol.residual_variance_db2 > 0 else 1.0
     spread = prior_std_db(chosen, list(nodes), ridge + penalty, noise_var, power)
     spread_source = "implied by the cross-validated smoothing"
-    covariance = None if sol.covariance is None else sol.covariance * inflation
+    covariance = None if sol.covariance is None else sol.covariance * (rescale * inflation)
+    cap = unseen_spread_cap_db(normal, chosen)
+    wanted = {str(n): min(spread[str(n)], cap) for n in nodes}
     if sub_target is not None and covariance is not None and set(map(str, prior)) >= set(map(str, nodes)):
         if prior_spread_db is None:
             misfit = prior_misfit_var(normal, sub_target, chosen)
-            wanted = float(np.sqrt(max(misfit - sol.residual_variance_db2, 0.0) / 2.0))  # two ends a sample
+            learned = float(np.sqrt(max(misfit - within_var - level_var, 0.0) / 2.0))  # two ends a sample
             spread_source = "learned from the prior's misfit to the flight"
+            if any(learned < wanted[str(n)] for n in nodes):
+                spread_source = "implied by the cross-validated smoothing (larger than " + spread_source + ")"
+            # never below the smoothing's (capped) spread: a prior that fits where the flight
+            # looked is not thereby known to fit everywhere
+            wanted = {str(n): max(learned, wanted[str(n)]) for n in nodes}
         else:
-            wanted = float(prior_spread_db)
+            wanted = {str(n): float(prior_spread_db) for n in nodes}  # the user's tolerance, both ways
             spread_source = "stated"
-        factor = np.array([(spread[str(n)] / max(wanted, spread[str(n)])) ** 2 for n in nodes])
-        if np.any(factor < 1.0):
-            # the same posterior, read with a prior of the wanted spread: the penalty per node
-            # scaled so that its implied prior spread is the wanted one (the mean is the CV's)
-            weights = (ridge + penalty) * np.repeat(factor, chosen.n_coef)
-            wide = solve(normal, list(nodes), ridge=0.0, gauge=gauge, penalty=weights, penalty_target=sub_target,
-                         prior_level=prior_level)
-            covariance = wide.covariance * (sol.residual_variance_db2 / wide.residual_variance_db2) * inflation
-            spread = prior_std_db(chosen, list(nodes), weights, noise_var, power)
-        else:
-            spread_source = "implied by the cross-validated smoothing (larger than " + spread_source + ")"
+    elif any(wanted[str(n)] < spread[str(n)] for n in nodes):
+        spread_source = "the spread of the measured gains (the smoothing implied more)"
+    factor = np.array([(spread[str(n)] / max(wanted[str(n)], 1e-9)) ** 2 for n in nodes])
+    if covariance is not None and np.any(np.abs(factor - 1.0) > 1e-9):
+        # the same posterior, read with a prior of the wanted spread: the penalty per node
+        # scaled so that its implied prior spread is the wanted one (the mean is the CV's)
+        weights = (ridge + penalty) * np.repeat(factor, chosen.n_coef)
+        wide = solve(normal, list(nodes), ridge=0.0, gauge=gauge, penalty=weights, penalty_target=sub_target,
+                     prior_level=prior_level)
+        covariance = wide.covariance * (within_var / wide.residual_variance_db2) * inflation
+        spread = prior_std_db(chosen, list(nodes), weights, noise_var, power)
     ltd = time.perf_counter() - t0
-    fields, terms = shared_fields(sol, list(nodes), path_loss, counts, inflation)
+    fields, terms = shared_fields(sol, list(nodes), path_loss, counts, rescale * inflation)
     training = sol.report.to_dict()
     training.update(terms)
     training.update(smoothing=choice.smoothing, penalty_power=power, selection=choice.to_dict(), ltd_s=ltd,
-                    variance_inflation=inflation, prior_std_db=spread, prior_std_source=spread_source)
+                    variance_inflation=inflation, prior_std_db=spread, prior_std_source=spread_source,
+                    noise_std_db=float(np.sqrt(within_var)), flight_level_std_db=float(np.sqrt(level_var)),
+                    new_flight_level_std_db=float(np.sqrt(new_level_var)))
     if prior:
         training["prior_level"] = prior_level
         training["prior"] = {str(n): str(getattr(m, "provenance", {}).get("model", getattr(m, "label", "?")))
@@ -356,4 +416,4 @@ def fit_from_statistics(
     return FittedModel(spec, model, ltd), choice
 
 
-__all__ = ["MAX_AUTO_ORDER", "PRIOR_PENALTY_POWER", "SAMPLES_PER_COEF", "auto_orders", "fit_auto", "fit_from_statistics", "prior_coefficients", "prior_misfit_var", "prior_std_db"]
+__all__ = ["unseen_spread_cap_db", "within_unit_noise_var", "MAX_AUTO_ORDER", "PRIOR_PENALTY_POWER", "SAMPLES_PER_COEF", "auto_orders", "fit_auto", "fit_from_statistics", "prior_coefficients", "prior_misfit_var", "prior_std_db"]

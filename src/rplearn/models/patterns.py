@@ -220,13 +220,23 @@ class PatternSet:
 
         return coverage_at(grids[str(node)], az_rad, el_rad)
 
-    def predict_gain_std(self, samples: "LinkSamples") -> FloatArray | None:
-        """Standard error of :meth:`predict_gain` from the coefficient covariance [dB].
+    @property
+    def new_flight_level_std_db(self) -> float:
+        """Spread [dB] of a new flight's own level about the level the model learned (the
+        between-flight spread of an automatic fit over several flights, plus the uncertainty of
+        the learned flights' mean level; 0 for a model that did not estimate it)."""
+        value = self.training.get("new_flight_level_std_db")
+        return float(value) if isinstance(value, (int, float)) and np.isfinite(value) else 0.0
+
+    def predict_gain_std(self, samples: "LinkSamples", new_flight: bool = True) -> FloatArray | None:
+        """Standard error of :meth:`predict_gain` for a new flight [dB]: from the coefficient
+        covariance and, with ``new_flight``, the spread of a new flight's level
+        (:attr:`new_flight_level_std_db`).
 
         The joint gain ``G_tx + G_rx`` does not depend on the constant a two-node fit cannot
-        identify, so this error is meaningful for every fit. It covers the estimation error of
-        the coefficients only, not the measurement noise of a new packet (add the training
-        residual variance for that) nor model misfit.
+        identify, so this error is meaningful for every fit. It does not cover the measurement
+        noise of a new packet (add ``training["noise_std_db"]``, or the training residual, for
+        that; :func:`rplearn.models.predict.predict_dataset` does).
 
         Returns
         -------
@@ -235,6 +245,7 @@ class PatternSet:
         """
         if self.covariance is None:
             return None
+        level_var = self.new_flight_level_std_db ** 2 if new_flight else 0.0
         p = self.basis.n_coef
         m = len(self.shared_names)
         if m and self.covariance.shape[0] != self.n_pattern_columns + m:
@@ -264,7 +275,7 @@ class PatternSet:
                 self.basis.design_rows_into(az_rx[part], el_rx[part], f[p : 2 * p])
                 f[2 * p :] = shared[:, part]
                 var[part] = np.einsum("in,in->n", joint @ f, f)  # f^T C f of every sample
-        return np.sqrt(np.maximum(var, 0.0))
+        return np.sqrt(np.maximum(var, 0.0) + level_var)
 
     def predict_joint_gain_db(
         self,

@@ -3,8 +3,9 @@
 :func:`predict_dataset` adds to every row of a matched dataset (``rssi_dbm`` optional, so that
 links never flown can be predicted) the predicted joint gain ``G_tx + G_rx`` [dB] and received
 power (paper eq. 1) [dBm], and for pattern models two spreads: the standard error of the gain
-from the learned coefficients alone, and the spread of one new packet's RSSI, which adds the
-training residual (fading, noise and misfit). :func:`frequency_mismatch` says when rows are at
+for a new flight (the learned coefficients' and the flight's own level's, when the model
+estimated the flights' spread), and the spread of one new packet's RSSI, which adds the
+noise about the flight's level (or the training residual: fading, noise and misfit). :func:`frequency_mismatch` says when rows are at
 a carrier other than the one the model learned at.
 """
 
@@ -140,7 +141,9 @@ def predict_dataset(model: Model, dataset: pd.DataFrame, source: str = "dataset"
     )
     std = model.predict_gain_std(samples)
     if std is not None:
-        rmse = model.training.get("rmse_db")  # unknown (None) in a hand-made file: the spread is then NaN
+        # one packet's noise about its flight's level (an automatic fit over flights), else the
+        # training residual; unknown (None) in a hand-made file: the spread is then NaN
+        rmse = model.training.get("noise_std_db", model.training.get("rmse_db"))
         residual_db = float(rmse) if rmse is not None else float("nan")
         table["gain_pred_std_db"] = std
         table["rssi_pred_std_db"] = np.sqrt(std**2 + residual_db**2)

@@ -133,6 +133,14 @@ class RadioConfig:
     two_ray : bool
         Add one ray reflected off flat ground at ``ground_level_m`` (relative permittivity
         ``ground_permittivity``, ``polarization``), the antennas' true gains along it included.
+    unit_level_std_db : float
+        Standard deviation of a level offset [dB] drawn once per trajectory unit (flight) from
+        the seed and added to every packet of that unit, both directions: what changes from
+        flight to flight in a real campaign (another battery and radio temperature, a cable
+        re-plugged, the ground wetter). The learning and the testing units' levels each have
+        a root mean square of exactly this value (:func:`rplearn.sim.flight.unit_levels_db`).
+        0 switches it off; the levels are in
+        :attr:`rplearn.sim.flight.SimulationResult.unit_levels_db`.
     """
 
     tx_power_dbm: float = 20.0
@@ -152,6 +160,7 @@ class RadioConfig:
     ground_level_m: float = 0.0
     ground_permittivity: float = 15.0
     polarization: str = "vertical"
+    unit_level_std_db: float = 0.0
 
     def offsets_dict(self) -> dict[str, float]:
         """Offsets keyed ``"tx->rx"`` [dB]."""
@@ -196,6 +205,8 @@ class SimulationConfig:
             )
         if self.radio.fading_std_db < 0:
             raise InputError(f"radio fading_std_db: expected >= 0 dB, got {self.radio.fading_std_db}")
+        if not (self.radio.unit_level_std_db >= 0):
+            raise InputError(f"radio unit_level_std_db: expected >= 0 dB, got {self.radio.unit_level_std_db}")
         if not (1.0 <= self.radio.path_loss_exponent <= 8.0):
             raise InputError(f"radio path_loss_exponent: expected 1..8, got {self.radio.path_loss_exponent}")
 

@@ -1,4 +1,4 @@
-"""Ready-made simulation configurations: ``paper``, ``trio``, ``smoke``, ``ground``, ``pathloss`` and ``tworay``.
+"""Ready-made simulation configurations: ``paper``, ``trio``, ``smoke``, ``ground``, ``pathloss``, ``tworay`` and ``campaign``.
 
 - ``paper``: a replica of the paper's campaign (Sec. V): two X500-class drones, both antennas
   vertical, one carrying a camera and the other a wireless sensor, which shadow differently;
@@ -23,6 +23,14 @@
   (learning), and at 8 m, 80 m away (testing): the direct ray and one ground reflection at a
   grazing angle of a few degrees (relative permittivity 15, vertical polarization), with each
   antenna's true gain along the reflected ray.
+- ``campaign``: the ``ground`` station and drone over many short flights whose levels differ
+  (:data:`CAMPAIGN_LEVEL_STD_DB` RMS, drawn per flight from the seed: another battery, radio
+  temperature, cable, ground), as in a real campaign of a dozen flights: learning flights
+  along the ``ground`` arc at three altitudes (:data:`CAMPAIGN_HEIGHTS_M`, each flown by
+  several flights), and testing flights at the middle altitude along an arc
+  (:data:`CAMPAIGN_TEST_ARC_DEG`) wider than the learned one, so that about half of their
+  samples look at the station from azimuths no learning flight came within 10 deg of.
+  Small (10 packets/s) so that tests can fit it in seconds.
 
 All presets are deterministic for a given seed of :func:`rplearn.sim.flight.simulate`.
 """
@@ -38,7 +46,7 @@ from rplearn.sim.config import EstimatorConfig, FlightConfig, RadioConfig, Simul
 from rplearn.plan.campaign import Campaign, group_campaign
 from rplearn.plan.trajectory import TrajectoryUnit
 
-__all__ = ["PATHLOSS_EXPONENT", "PATHLOSS_UNITS", "PRESET_NAMES", "fine_structure_lobes", "make_preset", "x500_frame_lobes"]
+__all__ = ["CAMPAIGN_FLIGHTS", "CAMPAIGN_HEIGHTS_M", "CAMPAIGN_LEVEL_STD_DB", "CAMPAIGN_TEST_ARC_DEG", "PATHLOSS_EXPONENT", "PATHLOSS_UNITS", "PRESET_NAMES", "fine_structure_lobes", "make_preset", "x500_frame_lobes"]
 
 
 def x500_frame_lobes(battery_az_deg: float = 180.0, arm_depth_db: float = 3.0) -> tuple[AirframeLobe, ...]:
@@ -264,8 +272,37 @@ def _tworay() -> SimulationConfig:
     )
 
 
+#: ``campaign`` preset: the RMS of the flights' levels [dB], the learning flights' altitudes
+#: (cycled), the number of learning and testing flights, and the testing flights' arc [deg].
+CAMPAIGN_LEVEL_STD_DB = 3.0
+CAMPAIGN_HEIGHTS_M: tuple[float, ...] = (15.0, 20.0, 25.0)
+CAMPAIGN_FLIGHTS: tuple[int, int] = (9, 6)
+CAMPAIGN_TEST_ARC_DEG = 70.0
+
+
+def _campaign() -> SimulationConfig:
+    from rplearn.plan.ground import GroundPassUnit
+
+    n_learn, n_test = CAMPAIGN_FLIGHTS
+    common: dict[str, Any] = dict(station_yaw_deg=10.0, n_passes=4)
+    learn = [GroundPassUnit(height_m=CAMPAIGN_HEIGHTS_M[k % len(CAMPAIGN_HEIGHTS_M)], role="learning",
+                            label=f"flight_{k + 1:02d}", **common) for k in range(n_learn)]
+    middle = CAMPAIGN_HEIGHTS_M[len(CAMPAIGN_HEIGHTS_M) // 2]
+    test = [GroundPassUnit(height_m=middle, arc_deg=CAMPAIGN_TEST_ARC_DEG, role="testing",
+                           label=f"test_flight_{k + 1:02d}", **common) for k in range(n_test)]
+    ground = _ground()
+    return SimulationConfig(
+        name="campaign",
+        campaign=Campaign(tuple(learn + test), gap_s=30.0),  # type: ignore[arg-type]
+        node_antennas=ground.node_antennas,
+        flight=ground.flight,
+        estimator=ground.estimator,
+        radio=replace(ground.radio, packet_rate_hz=10.0, unit_level_std_db=CAMPAIGN_LEVEL_STD_DB),
+    )
+
+
 _PRESETS: dict[str, Callable[[], SimulationConfig]] = {"paper": _paper, "trio": _trio, "smoke": _smoke, "ground": _ground,
-                                                       "pathloss": _pathloss, "tworay": _tworay}
+                                                       "pathloss": _pathloss, "tworay": _tworay, "campaign": _campaign}
 #: Names accepted by :func:`make_preset` and :func:`rplearn.sim.flight.simulate`.
 PRESET_NAMES: tuple[str, ...] = tuple(_PRESETS)
 

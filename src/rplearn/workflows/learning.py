@@ -102,8 +102,13 @@ class FitOutcome:
                      f"validation RMSE {sel.rmse_db:.2f} dB; the curve:\n    "
                      + sel.curve_text().replace("\n", "\n    "))
             if "variance_inflation" in training and sel.method == "grouped-cv":
-                text += (f"\n  spread: the held-out units' errors exceed the posterior's by x{training['variance_inflation']:.2f} "
-                         "in variance (correlated packets, misfit between flights); the covariance is inflated to match")
+                text += (f"\n  spread: within each held-out unit, the errors exceed the posterior's by "
+                         f"x{training['variance_inflation']:.2f} in variance (correlated packets, misfit); the covariance "
+                         "is inflated to match")
+                if "flight_level_std_db" in training:
+                    text += (f"\n  flight-to-flight level: {training['flight_level_std_db']:.1f} dB (1 sigma) between units, "
+                             f"{training.get('new_flight_level_std_db', 0.0):.1f} dB for a new flight's predictions; "
+                             f"noise about a flight's level {training.get('noise_std_db', float('nan')):.1f} dB")
             spread = training.get("prior_std_db") or {}
             if spread:
                 values = ", ".join(f"{n} {v:.1f} dB" for n, v in spread.items())
