@@ -56,6 +56,14 @@ MAX_SMOOTHING = 1e6
 #: Weight of the (unpenalised) constant in the cross-validation solves, relative to the
 #: roughness of degree 1: keeps them positive definite; moves only the free gauge constant.
 _CONSTANT_FLOOR = 1e-6
+#: Points within this many standard errors (of the held-out units' paired difference in squared
+#: error) of the best validation error count as equally good: the least smoothed of them is chosen.
+WITHIN_NOISE_SE = 2.0
+#: ... and by at most this fraction of the best validation mean square (a cap on what a noisy
+#: standard error from a few units may excuse: 1% is 0.5% of the RMSE, 0.02 dB at 4.4 dB).
+WITHIN_NOISE_FRACTION = 0.01
+#: Held-out units needed to estimate that standard error (with fewer the best point is chosen).
+MIN_NOISE_UNITS = 3
 #: Orders whose fold blocks are kept at once (the coordinate descent moves between neighbours).
 _CACHED_ORDERS = 3
 
@@ -235,6 +243,7 @@ class _Evaluator:
         if self.n_shared and self.cv:
             self.pins = self._fold_pins(units)
         self.seen: dict[tuple[int, float], float] = {}
+        self.fold_sse: dict[tuple[int, float], np.ndarray] = {}  # per held-out unit, for within_noise()
         self.curve: list[CurvePoint] = []
         self._cache: dict[int, Any] = {}
         self._best_solved: tuple[tuple[int, float], list[tuple[np.ndarray, np.ndarray | None]]] | None = None
@@ -302,13 +311,14 @@ class _Evaluator:
             return self.seen[key]
         w, blocks, target = self._blocks(int(order))
         if self.cv:
-            sse = 0.0
+            per_fold = []
             solved = []
             for (g, r, held_g, held_r), f, pin in zip(blocks, self.folds, self.pins):
                 c, upper = self._solve(g, self._pulled(g, r, w, smoothing, target, pin), w, smoothing, pin)
                 solved.append((c, upper))
-                sse += max(f.held_yty - 2.0 * c @ held_r + c @ held_g @ c, 0.0)
-            value = float(np.sqrt(sse / self.n))
+                per_fold.append(max(f.held_yty - 2.0 * c @ held_r + c @ held_g @ c, 0.0))
+            self.fold_sse[key] = np.asarray(per_fold)
+            value = float(np.sqrt(sum(per_fold) / self.n))
             if not self.seen or value < min(self.seen.values()):
                 self._best_solved = (key, solved)  # the factors of the best point, for inflation()
         else:
@@ -430,6 +440,29 @@ def _walk_smoothing(ev: _Evaluator, order: int, start: float, values: list[float
     return best, values
 
 
+def _within_noise(ev: _Evaluator, best: CurvePoint, point: CurvePoint) -> bool:
+    """Whether ``point``'s validation mean square exceeds ``best``'s by at most
+    :data:`WITHIN_NOISE_SE` standard errors of their paired difference (the held-out units'
+    differences taken as independent draws) and by at most :data:`WITHIN_NOISE_FRACTION` of it.
+    Needs :data:`MIN_NOISE_UNITS` held-out units: from two, the standard error is no estimate."""
+    if not ev.cv or len(ev.folds) < MIN_NOISE_UNITS:
+        return point == best
+    b = ev.fold_sse[(best.order, best.smoothing)]
+    d = (ev.fold_sse[(point.order, point.smoothing)] - b) / ev.n
+    se = float(np.sqrt(d.size * np.var(d, ddof=1)))
+    return float(d.sum()) <= min(WITHIN_NOISE_SE * se, WITHIN_NOISE_FRACTION * float(b.sum()) / ev.n)
+
+
+def _tightest_split(ev: _Evaluator, best: CurvePoint, points: Sequence[CurvePoint]) -> CurvePoint:
+    """Among the points within noise of the best validation error, the one that shrinks the
+    patterns least (the least smoothing, then the largest order): smoothing chosen for the joint
+    prediction alone leaves the split between the nodes' patterns (what the joint gain does not
+    see) to the penalty, so a smoothing the held-out units cannot tell from the best is no
+    reason to pull the patterns further toward the prior."""
+    close = [p for p in points if _within_noise(ev, best, p)]
+    return min(close, key=lambda p: (p.smoothing, -p.order)) if close else best
+
+
 def select_order_and_smoothing(
     units: Mapping[str, NormalEquations],
     make_basis: Callable[[int], Basis],
@@ -483,7 +516,8 @@ def select_order_and_smoothing(
     finite = [p for p in ev.curve if np.isfinite(p.rmse_db)]
     if not finite:
         raise IdentifiabilityError("no candidate order and smoothing could be fitted")
-    choice = min(finite, key=lambda p: (p.rmse_db, p.order, -p.smoothing))
+    best = min(finite, key=lambda p: (p.rmse_db, p.order, -p.smoothing))
+    choice = _tightest_split(ev, best, finite)
     return Selection("grouped-cv" if ev.cv else "gcv", choice.order, choice.smoothing, choice.rmse_db,
                      ev.curve, sorted(units) if ev.cv else [], float(power), ev.inflation(choice.order, choice.smoothing))
 
