@@ -99,9 +99,9 @@ class SplitComponent:
     peaks: dict[str, tuple[float, float, int, float]]
 
     def text(self) -> str:
-        parts = [f"{n} {'+' if s > 0 else '-'} at az {az:.0f} el {el:.0f} ({share:.0%})"
+        parts = [f"{n} {share:.0%} of it, peak {'+' if s > 0 else '-'} at az {az:.0f} el {el:.0f} deg"
                  for n, (az, el, s, share) in self.peaks.items() if share >= 0.05]
-        return f"{self.per_node_db:.2f} dB per node, {self.joint_db:.2f} dB joint: " + "; ".join(parts)
+        return f"{self.per_node_db:.2f} dB per node, {self.joint_db:.2f} dB in the joint gain: " + "; ".join(parts)
 
     def to_dict(self) -> dict[str, Any]:
         return {"per_node_db": self.per_node_db, "joint_db": self.joint_db,
@@ -208,17 +208,18 @@ def _node_spreads(model: PatternSet, covered: Mapping[str, tuple[np.ndarray, np.
     return spreads, metrics
 
 
-def _joint_metric(model: PatternSet, samples: LinkSamples | None, gram: np.ndarray | None, n_samples: int | None) -> np.ndarray:
+def _joint_metric(model: PatternSet, samples: LinkSamples | Sequence[LinkSamples] | None, gram: np.ndarray | None, n_samples: int | None) -> np.ndarray:
     """Mean ``x x^T`` of the joint design rows of the learning samples (pattern columns)."""
     pat = model.n_pattern_columns
     if gram is not None:
         g = np.asarray(gram, np.float64)[:pat, :pat]
         return g / float(n_samples or 1)
-    assert samples is not None
-    if tuple(samples.nodes) != tuple(model.nodes):
-        raise InputError(f"samples: nodes {', '.join(samples.nodes)} are not the model's ({', '.join(model.nodes)})",
-                         param="samples")
-    normal = NormalEquations(model.basis, len(model.nodes)).add(samples.directions, samples.tx_index, samples.rx_index)
+    normal = NormalEquations(model.basis, len(model.nodes))
+    for part in [samples] if isinstance(samples, LinkSamples) else list(samples or []):
+        if tuple(part.nodes) != tuple(model.nodes):
+            raise InputError(f"samples: nodes {', '.join(part.nodes)} are not the model's ({', '.join(model.nodes)})",
+                             param="samples")
+        normal.add(part.directions, part.tx_index, part.rx_index)
     return normal.gram[:pat, :pat] / max(normal.n_samples, 1)
 
 
@@ -257,9 +258,11 @@ def unsplit_components(model: PatternSet, covered: Mapping[str, tuple[np.ndarray
     b = root.T @ joint @ root
     a, b = 0.5 * (a + a.T), 0.5 * (b + b.T)
     b_reg = b + np.eye(b.shape[0]) * (1e-9 * max(float(np.trace(b)) / b.shape[0], 1e-300))
-    import scipy.linalg
-
-    tau, u = scipy.linalg.eigh(a, b_reg)  # u^T b_reg u = I, u^T a u = diag(tau)
+    # the generalised problem through b_reg's Cholesky factor (numpy only: a fixed-order fit imports no scipy)
+    chol = np.linalg.cholesky(b_reg)
+    half = np.linalg.solve(chol, a)
+    tau, w = np.linalg.eigh(0.5 * (np.linalg.solve(chol, half.T) + np.linalg.solve(chol, half.T).T))
+    u = np.linalg.solve(chol.T, w)  # u^T b_reg u = I, u^T a u = diag(tau)
     s = np.sum((b_reg @ u) ** 2, axis=0)  # E[a_i^2] with z = u a: ((u^T u)^-1)_ii = |b_reg u_i|^2
     node_ms = tau * s
     joint_ms = np.einsum("ij,ij->j", u, b @ u) * s
@@ -277,7 +280,7 @@ def unsplit_components(model: PatternSet, covered: Mapping[str, tuple[np.ndarray
 
 def decoupling_certificate(
     model: PatternSet,
-    samples: LinkSamples | None = None,
+    samples: LinkSamples | Sequence[LinkSamples] | None = None,
     gram: np.ndarray | None = None,
     n_samples: int | None = None,
     within_deg: float = COVERED_WITHIN_DEG,
@@ -288,8 +291,8 @@ def decoupling_certificate(
     ----------
     model : PatternSet
         A fitted pattern model with a covariance and a coverage grid (every ``fit`` stores both).
-    samples : LinkSamples, optional
-        The learning samples (their pairs of directions make the joint metric).
+    samples : LinkSamples or sequence of LinkSamples, optional
+        The learning samples (their pairs of directions make the joint metric), e.g. one per unit.
     gram, n_samples : ndarray and int, optional
         Instead of ``samples``: the learning design's ``X^T X`` at the model's basis (pattern
         columns first) and its number of samples.
@@ -299,7 +302,8 @@ def decoupling_certificate(
     Returns
     -------
     DecouplingCertificate
-        Without samples or gram, or above :data:`MAX_COMPONENT_COLUMNS` pattern columns, the
+        For a fixed-order fit (no ``training["selection"]``: its covariance is the ridge
+        estimate's sandwich, not a posterior), without samples or gram, or above :data:`MAX_COMPONENT_COLUMNS` pattern columns, the
         per-node spreads only (a note says why).
 
     Raises
@@ -313,9 +317,14 @@ def decoupling_certificate(
     cov = np.asarray(model.covariance, np.float64)
     spreads, metrics = _node_spreads(model, covered, cov)
     covered_db = float(np.sqrt(np.mean([s.covered_std_db**2 for s in spreads.values()])))
+    if "selection" not in model.training:  # a fixed order: the ridge's estimate, no posterior
+        return DecouplingCertificate(spreads, covered_db=covered_db, notes=[
+            "(a fixed-order fit's covariance leaves out what its ridge decides where the flight cannot split the "
+            "patterns, so these spreads are lower bounds and the unsplit components are not computed; "
+            "--degree auto gives the posterior's)"])
     if samples is None and gram is None:
         return DecouplingCertificate(spreads, covered_db=covered_db,
-                                     notes=["(components not computed: the learning samples were not given)"])
+                                     notes=["(the components not split between nodes are not computed: the pairs of learning directions were not kept)"])
     if model.n_pattern_columns > MAX_COMPONENT_COLUMNS:
         return DecouplingCertificate(spreads, covered_db=covered_db, notes=[
             f"(components not computed: {model.n_pattern_columns} pattern columns, above {MAX_COMPONENT_COLUMNS})"])
@@ -324,5 +333,16 @@ def decoupling_certificate(
     return DecouplingCertificate(spreads, tuple(comps), n_unsplit, unsplit_db, total_db)
 
 
-__all__ = ["MAX_COMPONENT_COLUMNS", "MIN_LISTED_DB", "UNSPLIT_JOINT_FRACTION", "DecouplingCertificate", "NodeSpread",
+def certify(model: Any, samples: LinkSamples | Sequence[LinkSamples] | None = None) -> DecouplingCertificate | None:
+    """:func:`decoupling_certificate` of a fitted model, stored in ``model.training["decoupling"]``
+    (with its :meth:`~DecouplingCertificate.summary` text, which ``fit`` prints); None, and
+    nothing stored, for a model without patterns, covariance or coverage grid (a baseline)."""
+    if not isinstance(model, PatternSet) or model.covariance is None or not model.training.get("coverage_deg"):
+        return None
+    cert = decoupling_certificate(model, samples)
+    model.training["decoupling"] = {**cert.to_dict(), "summary": cert.summary()}
+    return cert
+
+
+__all__ = ["MAX_COMPONENT_COLUMNS", "certify", "MIN_LISTED_DB", "UNSPLIT_JOINT_FRACTION", "DecouplingCertificate", "NodeSpread",
            "SplitComponent", "covered_directions", "decoupling_certificate", "unsplit_components"]

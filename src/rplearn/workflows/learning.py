@@ -17,6 +17,7 @@ import numpy as np
 import pandas as pd
 
 from rplearn._atomic import atomic_open
+from rplearn.analysis.decoupling import certify
 from rplearn.analysis.pattern_error import node_directions
 from rplearn.core.metrics import Scores
 from rplearn.data.units import (
@@ -105,6 +106,7 @@ class FitOutcome:
                 text += (f"\n  where the flight never looked each pattern may be off by (1 sigma): {values} "
                          f"({training.get('prior_std_source', '')})")
         text += "".join(f"\n  {line}" for line in terms_text(training))
+        text += "".join(f"\n  {line}" for line in training.get("decoupling", {}).get("summary", "").splitlines())
         text += "".join(f"\n  {line}" for line in self.robust_notes)
         if self.wall_s is not None and self.wall_s > 0:
             text += (f"\n  read, accumulated and solved in {self.wall_s:.1f} s "
@@ -226,6 +228,7 @@ def fit_dataset(
         notes = downweighted_notes(select_units(df, choice.units, dataset), robust)
     else:
         fitted = fit_model(samples, spec, gauge=gauge, provenance=prov, **(terms if spec.decouples else {}))
+    certify(fitted.model, samples)
     if output:
         fitted.model.save(output)
     return FitOutcome(fitted, choice, len(samples), output, samples.non_unit_quaternions, robust_notes=notes)
@@ -293,6 +296,7 @@ def _fit_auto(
     fitted, selection = fit_auto(per_unit, spec.kind, spec.order if spec.kind != "sh" else None, spec.ridge, gauge, prov,
                                  prior=priors or None, prior_spread_db=prior_std_db, path_loss=path_loss,
                                  link_offsets=link_offsets)
+    certify(fitted.model, list(per_unit.values()))
     if output:
         fitted.model.save(output)
     n = sum(len(s) for s in per_unit.values())
@@ -345,6 +349,7 @@ def _fit_streamed(
                                                 prior=priors or None, prior_spread_db=prior_std_db,
                                                 path_loss=path_loss, link_offsets=link_offsets)
         fitted.model.training["coverage_deg"] = acc.grids or {}
+        certify(fitted.model)  # the spreads alone: the pairs of directions were streamed, not kept
         if output:
             fitted.model.save(output)
         return FitOutcome(fitted, choice, acc.n_samples, output, acc.non_unit, selection, wall_s=time.perf_counter() - t0)
