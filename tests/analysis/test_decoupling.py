@@ -128,8 +128,35 @@ def test_certificate_needs_a_covariance_and_a_coverage_grid(fits):
 
 def test_split_benchmark_tiny_meets_acceptance_5():
     """The reduced case of acceptance 5 (the `smoke` preset; the full grid: benchmarks/split.py)."""
+    import os
+
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT / "src"), os.environ.get("PYTHONPATH", "")])}
     proc = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "split.py"), "--tiny"], capture_output=True,
-                          text=True, cwd=ROOT, timeout=300)
+                          text=True, cwd=ROOT, timeout=300, env=env)
     assert proc.returncode == 0, proc.stderr
     assert "1 of 1 cases meet all three criteria" in proc.stdout, proc.stdout
     assert "own-pattern spread" in proc.stdout
+
+
+def test_fit_prints_and_stores_the_certificate_and_plot_draws_it(tmp_path):
+    """`rplearn fit` (automatic) prints each node's own-pattern spread and the unsplit
+    components, stores them in the model file; `rplearn plot --spread` draws them."""
+    from rplearn.models import load_model
+
+    import os
+
+    cli = [sys.executable, "-m", "rplearn.cli"]
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT / "src"), os.environ.get("PYTHONPATH", "")])}
+    run = lambda *a: subprocess.run([*cli, *a], cwd=tmp_path, capture_output=True, text=True, timeout=300, env=env)  # noqa: E731
+    assert run("simulate", "--preset", "smoke", "--seed", "5", "-o", "f").returncode == 0
+    assert run("sync", "--poses", "f/pose_log.parquet", "--signals", "f/signal_log.parquet", "-o", "m.parquet").returncode == 0
+    proc = run("fit", "m.parquet", "-o", "a.json")
+    assert proc.returncode == 0, proc.stderr
+    assert "own-pattern spread (1 sigma" in proc.stdout and "not split between nodes by this flight" in proc.stdout
+    stored = load_model(str(tmp_path / "a.json")).training["decoupling"]
+    assert set(stored["nodes"]) == {"A", "B"} and stored["summary"].splitlines()[0] in proc.stdout
+    proc = run("plot", "a.json", "-o", "p.png", "--spread", "s.png")
+    assert proc.returncode == 0 and "wrote s.png" in proc.stdout, proc.stderr
+    assert (tmp_path / "s.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    proc = run("plot", "a.json", "-o", "p.png", "--spread", "a.json")
+    assert proc.returncode == 1 and len(proc.stderr.strip().splitlines()) == 1, proc.stderr
