@@ -122,3 +122,49 @@ def test_one_unit_is_chosen_by_generalised_cross_validation():
     assert sel.method == "gcv" and sel.units == [] and np.isfinite(sel.rmse_db)
     assert 1.5 < sel.rmse_db < 2.6
     assert sel.to_dict()["curve"][0].keys() == {"order", "smoothing", "rmse_db"}
+
+
+class _Points:
+    """The parts of the evaluator the choice among equally good points reads."""
+
+    def __init__(self, fold_sse, n=1000):
+        self.cv, self.n = True, n
+        self.fold_sse = {k: np.asarray(v, float) for k, v in fold_sse.items()}
+        self.folds = [None] * len(next(iter(fold_sse.values())))
+
+
+def _point(order, smoothing, ev):
+    from rplearn.core.selection import CurvePoint
+
+    return CurvePoint(order, smoothing, float(np.sqrt(ev.fold_sse[(order, smoothing)].sum() / ev.n)))
+
+
+def test_the_least_smoothing_within_noise_of_the_best_is_chosen():
+    """Issue 24, item 5: points the held-out units cannot tell from the best do not loosen the split."""
+    from rplearn.core.selection import _tightest_split
+
+    sse = {(8, 1e-4): [100.0, 100.0, 100.0],   # the best
+           (8, 1e-5): [101.0, 99.5, 100.2],    # 0.7 above in total, paired spread 1.3 per unit: noise
+           (9, 1e-5): [100.9, 99.6, 100.3],    # as close, and a larger order at the same smoothing
+           (8, 0.0): [110.0, 110.0, 110.0]}    # consistently worse in every unit: not noise
+    ev = _Points(sse)
+    points = [_point(o, s, ev) for o, s in sse]
+    best = points[0]
+    chosen = _tightest_split(ev, best, points)
+    assert (chosen.order, chosen.smoothing) == (9, 1e-5)
+    # a cap on what a noisy spread may excuse: 1% of the best mean square
+    wide = _Points({(8, 1e-4): [100.0, 100.0, 100.0], (8, 1e-5): [120.0, 90.0, 94.0]})
+    pts = [_point(o, s, wide) for o, s in wide.fold_sse]
+    assert _tightest_split(wide, pts[0], pts) == pts[0]
+    # two held-out units estimate no spread: the best point stays
+    two = _Points({(8, 1e-4): [100.0, 100.0], (8, 1e-5): [100.1, 99.95]})
+    pts = [_point(o, s, two) for o, s in two.fold_sse]
+    assert _tightest_split(two, pts[0], pts) == pts[0]
+
+
+def test_the_choice_is_within_noise_of_the_best_validation_error():
+    units = synthetic_units(n_units=4, n_per_unit=500, truth_order=3, noise_db=2.0, seed=1)
+    sel = select_order_and_smoothing(stats_of(units, SphericalHarmonics(9)), SphericalHarmonics, range(2, 10), RIDGE)
+    best = min(p.rmse_db for p in sel.curve)
+    assert best <= sel.rmse_db <= best * np.sqrt(1.01)
+    assert all(p.smoothing >= sel.smoothing for p in sel.curve if p.rmse_db == best)

@@ -248,3 +248,36 @@ def test_a_figure_is_never_written_into_a_missing_folder(truth, tmp_path):
     with pytest.raises(InputError, match="non-existent directory"):
         plot.plot_pattern_3d(truth, "A", tmp_path / "sub" / "p3d.png", step_deg=10)
     assert not (tmp_path / "sub").exists()
+
+
+def test_spread_maps_of_an_automatic_fit(tmp_path):
+    """Issue 24, item 5: each node's own-pattern spread, uncovered directions hatched, the
+    certificate's figures in the titles."""
+    from rplearn.analysis.decoupling import certify
+    from rplearn.data.units import samples_of
+    from rplearn.models.auto import fit_auto
+    from rplearn.sim.flight import simulate
+
+    sim = simulate("smoke", 0)
+    s = samples_of(sim.matched_truth, sim.units("learning"))
+    blocks = np.array_split(np.arange(len(s)), 3)
+    from rplearn.data.tables import LinkSamples
+    from rplearn.core.geometry import Directions
+
+    part = lambda b: LinkSamples(Directions(*(np.asarray(v)[b] for v in s.directions)), s.tx_index[b], s.rx_index[b],  # noqa: E731
+                                 s.nodes, s.joint_gain_db[b], s.distance_m[b])
+    model = fit_auto({f"u{k}": part(b) for k, b in enumerate(blocks)})[0].model
+    cert = certify(model, [s])
+    fig = plot.spread_maps_figure({"auto": model}, step_deg=6)
+    maps = [ax for ax in fig.axes if ax.get_title()]  # the colour bar has no title
+    meshes = [a for ax in maps for a in ax.collections if isinstance(a, QuadMesh)]
+    assert len(maps) == len(meshes) == len(model.nodes)
+    values = np.asarray(meshes[0].get_array())
+    assert values.min() >= 0 and values.max() > values.min()
+    titles = [ax.get_title() for ax in maps]
+    assert any(f"{cert.nodes['A'].covered_std_db:.2f} dB where looked" in t for t in titles)
+    assert all(len(ax.collections) > 1 for ax in maps)  # the hatched uncovered region
+    assert_valid_png(plot.plot_spread_maps({"auto": model}, tmp_path / "spread.png", step_deg=6), min_w=600, min_h=300)
+    model.covariance = None
+    with pytest.raises(InputError, match="no covariance"):
+        plot.spread_maps_figure({"auto": model})

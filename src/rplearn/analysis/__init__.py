@@ -12,6 +12,9 @@ module               public names
                      :func:`best_swarm_headings` -> :class:`SwarmHeadings` (hovering swarm)
 ``swarm``            :func:`predict_swarm` -> :class:`SwarmPrediction` (every link over time,
                      connectivity), :func:`connectivity_over_time`
+``decoupling``       :func:`decoupling_certificate` -> :class:`DecouplingCertificate` (each
+                     node's own-pattern spread, the components a flight cannot split),
+                     :func:`certify`
 ``clock``            :func:`estimate_clock_offset` -> :class:`ClockOffsetEstimate` (a node's
                      pose clock offset, from the signal)
 ``budget``           :func:`check_fit_budget`, :func:`budget_findings` -> :class:`BudgetFinding`
@@ -38,6 +41,10 @@ _NAMES: dict[str, str] = {
     "gauged_nodes": "pattern_error",
     "node_directions": "pattern_error",
     "pattern_errors_db": "pattern_error",
+    # decoupling certificate
+    "DecouplingCertificate": "decoupling",
+    "certify": "decoupling",
+    "decoupling_certificate": "decoupling",
     # headings
     "OrientationResult": "headings",
     "SwarmHeadings": "headings",

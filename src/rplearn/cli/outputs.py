@@ -35,14 +35,17 @@ def plot(
     truth: Optional[str] = typer.Option(None, "--truth", help="ground_truth.json of a simulation, drawn beside."),
     dataset: Optional[str] = typer.Option(None, "--dataset", help="Draw the sample directions of this dataset."),
     output: str = typer.Option("patterns.png", "-o", "--out", help="PNG file."),
+    spread: Optional[str] = typer.Option(None, "--spread", help="Also draw each node's own-pattern spread (posterior std, uncovered directions hatched) to this PNG."),
 ) -> None:
     """Draw learned patterns in the azimuth-elevation domain (paper Fig. 9).
 
-    Example: rplearn plot sh10.json --truth flight/ground_truth.json --dataset data.parquet -o patterns.png
+    Example: rplearn plot sh10.json --truth flight/ground_truth.json --dataset data.parquet -o patterns.png --spread spread.png
     """
     from rplearn.workflows.planning import draw_pattern_files
 
-    say(f"wrote {draw_pattern_files(model_paths, output, truth, dataset)}")
+    say(f"wrote {draw_pattern_files(model_paths, output, truth, dataset, spread)}")
+    if spread:
+        say(f"wrote {spread}")
 
 
 @app.command()

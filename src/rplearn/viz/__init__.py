@@ -4,7 +4,8 @@
 module           public names
 ===============  ===============================================================================
 ``plot``         :func:`plot_pattern_maps` (paper Fig. 9), :func:`plot_coverage` (Fig. 8a),
-                 :func:`plot_pattern_3d` and the figures behind them
+                 :func:`plot_pattern_3d`, :func:`plot_spread_maps` (each node's own-pattern
+                 spread) and the figures behind them
 ``charts``       :func:`plot_rssi_time` (Fig. 8b), :func:`plot_order_sweep` (Fig. 10),
                  :func:`plot_epsilon_sweep` (Fig. 5a), :func:`plot_rank_study` (Fig. 6),
                  :func:`plot_swarm`
@@ -31,6 +32,8 @@ _NAMES: dict[str, str] = {
     "plot_coverage": "plot",
     "plot_pattern_3d": "plot",
     "plot_pattern_maps": "plot",
+    "plot_spread_maps": "plot",
+    "spread_maps_figure": "plot",
     "save_figure": "plot",
     # the paper's charts and swarm links
     "epsilon_sweep_figure": "charts",

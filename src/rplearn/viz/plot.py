@@ -301,6 +301,50 @@ def plot_pattern_maps(
     return save_figure(fig, path, caption)
 
 
+def spread_maps_figure(models: Mapping[str, Any], nodes: Sequence[str] | None = None, step_deg: float = 3.0) -> Figure:
+    """Posterior std of each node's own pattern [dB] as az-el maps (rows = models, columns =
+    nodes), the directions further than ``UNCOVERED_DEG`` from any learning direction hatched;
+    each title gives the node's spread where the flight looked and over the sphere, from the
+    model's decoupling certificate (``training["decoupling"]``, written by ``fit``) when stored."""
+    rows = [(str(k), m) for k, m in models.items()]
+    if not rows:
+        raise InputError("models: nothing to draw")
+    for label, m in rows:
+        if getattr(m, "covariance", None) is None:
+            raise InputError(f"model {label!r}: it carries no covariance, so no spread to draw", param="models")
+    nodes = [str(n) for n in (nodes or rows[0][1].nodes)]
+    az, el = az_el_grid_deg(step_deg)
+    azg, elg = np.meshgrid(np.radians(az), np.radians(el))
+    maps = np.array([[np.asarray(m.standard_error(n, azg.ravel(), elg.ravel())).reshape(azg.shape) for n in nodes]
+                     for _, m in rows])
+    fig = _new_figure(3.6 * len(nodes) + 0.6, 2.2 * len(rows) + 1.2)
+    axes = fig.subplots(len(rows), len(nodes), squeeze=False, sharex=True, sharey=True)
+    vmax = float(np.nanpercentile(maps, 99)) or 1.0
+    im = None
+    for i, (label, m) in enumerate(rows):
+        cert = (getattr(m, "training", {}) or {}).get("decoupling", {}).get("nodes", {})
+        for j, n in enumerate(nodes):
+            ax = axes[i, j]
+            im = ax.pcolormesh(az, el, maps[i, j], cmap="magma", vmin=0.0, vmax=vmax, shading="nearest", rasterized=True)
+            _hatch_uncovered(ax, m, n, az, el)
+            _style_az_el_axes(ax, xlabel=i == len(rows) - 1, ylabel=j == 0)
+            extra = (f"\n{cert[n]['covered_std_db']:.2f} dB where looked, {cert[n]['sphere_std_db']:.2f} dB on the sphere"
+                     if n in cert else "")
+            ax.set_title(f"{label}: node {n}{extra}", fontsize=8)
+    cb = fig.colorbar(im, ax=axes, orientation="horizontal", fraction=0.05, aspect=40, extend="max")
+    cb.set_label("posterior std of the node's own gain / dB")
+    fig.suptitle("Own-pattern spread (1 sigma)\nhatched: more than 10 deg from any learning direction")
+    return fig
+
+
+def plot_spread_maps(models: Mapping[str, Any], path: str | os.PathLike[str], nodes: Sequence[str] | None = None,
+                     step_deg: float = 3.0) -> str:
+    """Write :func:`spread_maps_figure` as a PNG; return the path."""
+    caption = ("Posterior standard deviation of each node's own learned pattern over azimuth and elevation; "
+               "hatched: directions the flight never looked at.")
+    return save_figure(spread_maps_figure(models, nodes, step_deg), path, caption)
+
+
 # -- Fig. 8a: coverage ---------------------------------------------------------------------
 def coverage_figure(
     learn_az_el: Mapping[str, AzEl],

@@ -18,6 +18,7 @@ import pandas as pd
 
 from rplearn._atomic import atomic_open
 from rplearn.analysis.budget import check_dataset_budget
+from rplearn.analysis.decoupling import certify
 from rplearn.analysis.pattern_error import node_directions
 from rplearn.core.metrics import Scores
 from rplearn.data.units import (
@@ -115,6 +116,7 @@ class FitOutcome:
                 text += (f"\n  where the flight never looked each pattern may be off by (1 sigma): {values} "
                          f"({training.get('prior_std_source', '')})")
         text += "".join(f"\n  {line}" for line in terms_text(training))
+        text += "".join(f"\n  {line}" for line in training.get("decoupling", {}).get("summary", "").splitlines())
         text += "".join(f"\n  {line}" for line in self.robust_notes)
         if self.wall_s is not None and self.wall_s > 0:
             text += (f"\n  read, accumulated and solved in {self.wall_s:.1f} s "
@@ -248,6 +250,7 @@ def fit_dataset(
     else:
         fitted = fit_model(samples, spec, gauge=gauge, provenance=prov, **(terms if spec.decouples else {}))
     check_dataset_budget(fitted.model, select_units(df, choice.units, dataset), dataset)
+    certify(fitted.model, samples)
     if output:
         fitted.model.save(output)
     return FitOutcome(fitted, choice, len(samples), output, samples.non_unit_quaternions, robust_notes=notes)
@@ -289,6 +292,7 @@ def _fit_auto(
                                  prior=priors or None, prior_spread_db=prior_std_db, path_loss=path_loss,
                                  link_offsets=link_offsets, prior_level=prior_level)
     check_dataset_budget(fitted.model, part, dataset)
+    certify(fitted.model, list(per_unit.values()))
     if output:
         fitted.model.save(output)
     n = sum(len(s) for s in per_unit.values())
@@ -342,6 +346,7 @@ def _fit_streamed(
                                                 prior=priors or None, prior_spread_db=prior_std_db,
                                                 path_loss=path_loss, link_offsets=link_offsets, prior_level=prior_level)
         fitted.model.training["coverage_deg"] = acc.grids or {}
+        certify(fitted.model)  # the spreads alone: the pairs of directions were streamed, not kept
         if output:
             fitted.model.save(output)
         return FitOutcome(fitted, choice, acc.n_samples, output, acc.non_unit, selection, wall_s=time.perf_counter() - t0)

@@ -125,11 +125,13 @@ def reference_model_file(
 
 
 def draw_pattern_files(
-    model_paths: Sequence[str], output: str, truth: str | None = None, dataset: str | None = None
+    model_paths: Sequence[str], output: str, truth: str | None = None, dataset: str | None = None,
+    spread: str | None = None,
 ) -> str:
     """Draw learned patterns of model files in the azimuth-elevation domain (paper Fig. 9,
     ``rplearn plot``), beside a simulation's true patterns and over a dataset's sample
-    directions when given. Returns the PNG path."""
+    directions when given; with ``spread``, also each node's own-pattern spread there
+    (:func:`rplearn.viz.plot.plot_spread_maps`). Returns the PNG path (of the patterns)."""
     from rplearn.analysis.pattern_error import node_directions
     from rplearn.data.tables import link_samples
     from rplearn.io.files import read_dataset
@@ -137,6 +139,8 @@ def draw_pattern_files(
     from rplearn.viz.plot import plot_pattern_maps
 
     check_output_path(output, [*model_paths, truth, dataset])
+    if spread:
+        check_output_path(spread, [*model_paths, truth, dataset, output])
     models = {}
     for path in model_paths:
         model = load_model(path)
@@ -146,4 +150,8 @@ def draw_pattern_files(
     gt = load_ground_truth(truth) if truth else None
     nodes = list(next(iter(models.values())).nodes)
     dirs = node_directions(link_samples(read_dataset(dataset), dataset)) if dataset else None
+    if spread:
+        from rplearn.viz.plot import plot_spread_maps
+
+        plot_spread_maps(models, spread, nodes)
     return plot_pattern_maps(models, gt, nodes, dirs, output, center=gt is not None)
