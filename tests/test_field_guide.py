@@ -56,4 +56,4 @@ def test_the_field_guide_runs_on_the_real_log_and_prints_what_it_says(tmp_path):
     assert "| SH-10 |" in out["report"] and "| BG-7 |" in out["report"]
     gain = re.search(r"\(([+-][\d.]+) dB\), \+- ([\d.]+) dB", out["orient"])
     assert gain, out["orient"]
-    assert f"{gain.group(1)} dB" in readme and f"±{gain.group(2)} dB" in readme
+    assert f"{gain.group(1)} dB" in readme and f"±{gain.group(2)} dB" in readme, out["orient"]
