@@ -1,4 +1,4 @@
-"""Readers of flight and signal logs, each giving canonical pose and signal logs (DESIGN.md).
+"""Readers of flight and signal logs, each giving canonical pose and signal logs (docs/CONVENTIONS.md).
 
 =================  =========================================  ==================================
 format             reader                                     gives
