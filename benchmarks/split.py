@@ -129,7 +129,7 @@ def run_case(preset: str, seed: int, orders: list[int]) -> Case:
     auto = fitted.model
     covered = covered_directions(auto)
     everything = link_samples(learn, nodes=nodes)
-    cert = decoupling_certificate(auto, list(units.values()))
+    cert = decoupling_certificate(auto, list(units.values()), posterior=fitted.own_posterior)
     fixed_rmse, fixed_err = {}, {}
     for k in orders:
         model = fit_model(everything, ModelSpec("sh", k), path_loss=path_loss).model

@@ -33,6 +33,7 @@ from rplearn.core.solver import PRIOR_LEVELS, solve
 from rplearn.data.tables import LinkSamples
 from rplearn.errors import InputError
 from rplearn.models.fit import FittedModel, node_coverage_grids
+from rplearn.models.own_posterior import OwnPrior, own_pattern_posterior
 from rplearn.models.patterns import PatternSet
 from rplearn.models.spec import ModelSpec, check_model_size, default_ridge
 from rplearn.models.streamed import frequency_counts, weighted_median
@@ -387,6 +388,7 @@ def fit_from_statistics(
             spread_source = "stated"
     elif any(wanted[str(n)] < spread[str(n)] for n in nodes):
         spread_source = "the spread of the measured gains (the smoothing implied more)"
+    uncapped = covariance
     factor = np.array([(spread[str(n)] / max(wanted[str(n)], 1e-9)) ** 2 for n in nodes])
     if covariance is not None and np.any(np.abs(factor - 1.0) > 1e-9):
         # the same posterior, read with a prior of the wanted spread: the penalty per node
@@ -396,6 +398,9 @@ def fit_from_statistics(
                      prior_level=prior_level)
         covariance = wide.covariance * (within_var / wide.residual_variance_db2) * inflation
         spread = prior_std_db(chosen, list(nodes), weights, noise_var, power)
+    own_prior = OwnPrior(choice.smoothing, penalty_scale(normal.gram, normal.n_pattern_columns), power, ridge, gauge,
+                         target, prior_level)
+    own = own_pattern_posterior(total, chosen, list(map(str, nodes)), own_prior, noise_var, uncapped)
     ltd = time.perf_counter() - t0
     fields, terms = shared_fields(sol, list(nodes), path_loss, counts, rescale * inflation)
     training = sol.report.to_dict()
@@ -413,7 +418,7 @@ def fit_from_statistics(
     model = PatternSet(basis=chosen, nodes=tuple(nodes), coef=sol.coef, covariance=covariance,
                        gauge=[g.to_dict() for g in sol.report.gauges], training=training, **fields)
     model.provenance = {**dict(provenance or {}), "model": spec.label}
-    return FittedModel(spec, model, ltd), choice
+    return FittedModel(spec, model, ltd, own_posterior=own), choice
 
 
 __all__ = ["unseen_spread_cap_db", "within_unit_noise_var", "MAX_AUTO_ORDER", "PRIOR_PENALTY_POWER", "SAMPLES_PER_COEF", "auto_orders", "fit_auto", "fit_from_statistics", "prior_coefficients", "prior_misfit_var", "prior_std_db"]

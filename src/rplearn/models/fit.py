@@ -28,11 +28,17 @@ from rplearn.errors import InputError
 
 @dataclass
 class FittedModel:
-    """A learned model, its spec and its learning wall time (LTD) [s]."""
+    """A learned model, its spec and its learning wall time (LTD) [s].
+
+    ``own_posterior`` (automatic fits): the posterior of each node's own pattern, continued to
+    the largest candidate order (:mod:`rplearn.models.own_posterior`), which the decoupling
+    certificate reads; not saved with the model (the certificate it gives is).
+    """
 
     spec: ModelSpec
     model: Model
     ltd_s: float
+    own_posterior: Any = None
 
     @property
     def label(self) -> str:

@@ -292,7 +292,7 @@ def _fit_auto(
                                  prior=priors or None, prior_spread_db=prior_std_db, path_loss=path_loss,
                                  link_offsets=link_offsets, prior_level=prior_level)
     check_dataset_budget(fitted.model, part, dataset)
-    certify(fitted.model, list(per_unit.values()))
+    certify(fitted.model, list(per_unit.values()), fitted.own_posterior)
     if output:
         fitted.model.save(output)
     n = sum(len(s) for s in per_unit.values())
@@ -346,7 +346,7 @@ def _fit_streamed(
                                                 prior=priors or None, prior_spread_db=prior_std_db,
                                                 path_loss=path_loss, link_offsets=link_offsets, prior_level=prior_level)
         fitted.model.training["coverage_deg"] = acc.grids or {}
-        certify(fitted.model)  # the spreads alone: the pairs of directions were streamed, not kept
+        certify(fitted.model, None, fitted.own_posterior)  # the spreads alone: the pairs of directions were streamed, not kept
         if output:
             fitted.model.save(output)
         return FitOutcome(fitted, choice, acc.n_samples, output, acc.non_unit, selection, wall_s=time.perf_counter() - t0)
