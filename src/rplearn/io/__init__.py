@@ -1,4 +1,4 @@
-"""Readers of flight and signal logs, each giving canonical pose and signal logs (docs/CONVENTIONS.md).
+"""Readers of flight and signal logs, each giving canonical pose and signal logs (docs/conventions.md).
 
 =================  =========================================  ==================================
 format             reader                                     gives

@@ -1,6 +1,6 @@
 """Measured or vendor antenna patterns ("reference patterns") as gains at body-frame directions.
 
-Formats (docs/CONVENTIONS.md, "Reference pattern"), chosen by content:
+Formats (docs/conventions.md, "Reference pattern"), chosen by content:
 
 - CSV with ``az_deg, el_deg, gain_dbi`` (or ``gain_db``): directions already in the drone's
   body frame (FLU; azimuth counter-clockwise from forward, elevation up). rplearn's own grid
