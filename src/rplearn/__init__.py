@@ -63,7 +63,7 @@ _NAMES: dict[str, str] = {
     "write_table": "rplearn.io.files",
     "inspect_logs": "rplearn.io.inspect",
     "export_grid": "rplearn.io.export",
-    "export_msi": "rplearn.io.export",
+    "export_msi": "rplearn.io.msi",
     # plan
     "Campaign": "rplearn.plan.campaign",
     "paper_campaign": "rplearn.plan.campaign",

@@ -11,8 +11,8 @@ Formats (docs/conventions.md, "Reference pattern"), chosen by content:
   axis towards +y (the convention of chamber measurements and of most vendor files).
 - MSI Planet (``.msi``, ``.pln``, ``.txt`` with an MSI header), e.g. as written by
   ``rplearn export --format msi``: the horizontal and vertical cuts, gain = reference gain
-  minus loss, at the directions of :func:`~rplearn.io.export.msi_horizontal_directions_rad`
-  and :func:`~rplearn.io.export.msi_vertical_directions_rad`.
+  minus loss, at the directions of :func:`~rplearn.io.msi.msi_horizontal_directions_rad`
+  and :func:`~rplearn.io.msi.msi_vertical_directions_rad`.
 
 A **mounting rotation** ``(roll, pitch, yaw)`` [deg] says how the antenna is mounted on the drone:
 the rotation of the antenna frame in the body frame, applied as for an attitude (yaw about z,
@@ -32,7 +32,7 @@ import pandas as pd
 
 from rplearn.core.geometry import quat_wxyz_from_euler_enu_flu_deg, rotate_body_to_world
 from rplearn.errors import InputError
-from rplearn.io.export import msi_horizontal_directions_rad, msi_vertical_directions_rad, read_msi
+from rplearn.io.msi import msi_horizontal_directions_rad, msi_vertical_directions_rad, read_msi
 
 _MSI_EXTENSIONS = (".msi", ".pln", ".ant", ".txt")
 
