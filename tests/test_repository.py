@@ -34,7 +34,9 @@ def test_citation_file_is_valid_cff_citing_the_software_and_the_paper():
     assert re.fullmatch(r"\d+\.\d+\.\d+", str(cff["version"]))
     paper = cff["preferred-citation"]
     assert paper["type"] == "article" and isinstance(paper["year"], int)
-    assert " ".join(paper["title"].split()).startswith("Orientation Matters: Learning Radiation Patterns")
+    assert " ".join(paper["title"].split()).startswith(
+        "Orientation Matters: Learning Radiation Patterns"
+    )
     assert tuple(a["family-names"] for a in paper["authors"]) == PAPER_AUTHORS
     assert all(a["given-names"] for a in paper["authors"])
     assert paper["doi"] == PAPER_DOI and ARXIV_ID in paper["url"]
@@ -52,14 +54,19 @@ def test_license_file_matches_the_declared_license():
     text = (ROOT / "LICENSE").read_text(encoding="utf-8")
     assert text.startswith("BSD 3-Clause License")
     assert "the rplearn authors" in text and "Neither the name of the copyright holder" in text
-    assert 'license = { text = "BSD-3-Clause" }' in (ROOT / "pyproject.toml").read_text(encoding="utf-8")
+    assert 'license = { text = "BSD-3-Clause" }' in (ROOT / "pyproject.toml").read_text(
+        encoding="utf-8"
+    )
 
 
 def test_readme_and_package_docstring_cite_the_paper():
     readme = (ROOT / "README.md").read_text(encoding="utf-8")
     docstring = subprocess.run(
         [sys.executable, "-c", "import rplearn; print(rplearn.__doc__)"],
-        capture_output=True, text=True, check=True, cwd=ROOT,
+        capture_output=True,
+        text=True,
+        check=True,
+        cwd=ROOT,
     ).stdout
     for text in (readme, docstring):
         assert f"arXiv:{ARXIV_ID}" in text and PAPER_DOI in text
@@ -73,18 +80,29 @@ def _tracked_text_files() -> list[Path]:
     files = []
     for name in out.stdout.splitlines():
         path = ROOT / name
-        if path.suffix in (".py", ".md", ".toml", ".cff", ".txt", ".cfg") or path.name in ("Makefile", "run"):
+        if path.suffix in (".py", ".md", ".toml", ".cff", ".txt", ".cfg") or path.name in (
+            "Makefile",
+            "run",
+        ):
             files.append(path)
     return files
 
 
 def test_no_document_outside_the_repository_is_named():
     outside = ("DESIGN" + ".md", "../" + "shared", "/work/" + "shared")
-    found = [f"{p.relative_to(ROOT)}: {word}" for p in _tracked_text_files() if p.is_file()
-             for word in outside if word in p.read_text(encoding="utf-8", errors="replace")]
+    found = [
+        f"{p.relative_to(ROOT)}: {word}"
+        for p in _tracked_text_files()
+        if p.is_file()
+        for word in outside
+        if word in p.read_text(encoding="utf-8", errors="replace")
+    ]
     assert not found, found
     assert (ROOT / "docs" / "conventions.md").is_file()
     # every reference to the conventions names the file as it is spelt
-    wrong = [str(p.relative_to(ROOT)) for p in _tracked_text_files() if p.is_file()
-             and "CONVENTIONS" + ".md" in p.read_text(encoding="utf-8", errors="replace")]
+    wrong = [
+        str(p.relative_to(ROOT))
+        for p in _tracked_text_files()
+        if p.is_file() and "CONVENTIONS" + ".md" in p.read_text(encoding="utf-8", errors="replace")
+    ]
     assert not wrong, wrong
