@@ -34,7 +34,7 @@ LAYERS: tuple[str, ...] = (
     "rplearn.cli",
 )
 
-#: Third-party packages a layer may not import (docs/CONVENTIONS.md: the core needs numpy and scipy only;
+#: Third-party packages a layer may not import (docs/conventions.md: the core needs numpy and scipy only;
 #: nothing below viz draws; nothing below the CLI parses arguments or styles text; only the
 #: workflows run on a Dask cluster).
 FORBIDDEN_THIRD_PARTY: dict[str, tuple[str, ...]] = {

@@ -17,7 +17,7 @@ The solver never forms the design matrix: it accumulates the sufficient statisti
 (:class:`~rplearn.core.normal_equations.NormalEquations`), so memory does not grow with the
 number of samples, then solves the ridge-regularised normal equations (:func:`solve`).
 
-Identifiability (paper Sec. V-A, docs/CONVENTIONS.md). A constant can move between the two ends of a
+Identifiability (paper Sec. V-A, docs/conventions.md). A constant can move between the two ends of a
 link: ``G_t + c`` and ``G_r - c`` predict the same. In a connected group of nodes whose link
 graph is bipartite (two nodes, or an even cycle) this leaves exactly one free constant,
 ``+c`` on one side of the bipartition and ``-c`` on the other; a link graph with an odd cycle

@@ -18,7 +18,7 @@ module        public names
 ``units``     :func:`samples_of`, :func:`learning_units`, :func:`evaluation_units`,
               :func:`split_units`, :func:`select_units` -> :class:`UnitChoice`; a flight
               without units cut into named stretches of time (:func:`time_units`,
-              :class:`Stretches`, :func:`stretched`)
+              :class:`Stretches`, :func:`stretched`, :func:`stretch_samples`)
 ============  ==================================================================================
 
 Every name of ``__all__`` can be imported from here (``from rplearn.data import samples_of``);
@@ -80,6 +80,7 @@ _NAMES: dict[str, str] = {
     "is_stretch_label": "units",
     "stretch_labels": "units",
     "stretched": "units",
+    "stretch_samples": "units",
     "refuse_streamed_stretches": "units",
     "whole_flight_note": "units",
     "TIME_UNITS": "units",

@@ -9,7 +9,7 @@ import pandas as pd
 
 @dataclass
 class Logs:
-    """Canonical logs read from one or more files (docs/CONVENTIONS.md schemas); either may be None.
+    """Canonical logs read from one or more files (docs/conventions.md schemas); either may be None.
 
     Attributes
     ----------

@@ -10,7 +10,7 @@ the az-el domain: pattern maps, coverage and 3-D patterns; the charts over time 
 study's parameter (RSSI, order and epsilon sweeps, rank study, swarm links) are in
 :mod:`rplearn.viz.charts`.
 
-Angles are radians in the API and degrees on every axis (docs/CONVENTIONS.md): azimuth ``az`` in
+Angles are radians in the API and degrees on every axis (docs/conventions.md): azimuth ``az`` in
 (-180, 180] deg, 0 = forward, +90 = left; elevation ``el`` in [-90, 90] deg, positive up.
 """
 from __future__ import annotations
