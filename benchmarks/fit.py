@@ -35,7 +35,7 @@ from sklearn.linear_model import Ridge
 
 from rplearn.core.sh import SphericalHarmonics, real_sh_reference
 from rplearn.core.geometry import Directions
-from rplearn.core.solver import NormalEquations, fit_joint, solve
+from rplearn.core.lsq.solver import NormalEquations, fit_joint, solve
 
 N_SAMPLES = 56_164
 ORDER = 10
@@ -113,7 +113,7 @@ def main() -> int:
     # Streaming: 10 million samples in chunks, never materialised at once.
     total = 2_000_000 if args.quick else 10_000_000
     chunk = 200_000
-    import rplearn.core.normal_equations as solver_module
+    import rplearn.core.lsq.normal_equations as solver_module
 
     import rplearn.core.basis_base as bases_module
 

@@ -245,7 +245,7 @@ def test_no_module_is_longer_than_the_limit() -> None:
         ("models/spec.py", "from rplearn import RplearnError\n", "layer"),
         ("core/link.py", "import matplotlib\n", "third"),
         ("cli/swarm.py", "def f():\n    import numpy as np\n", "third"),
-        ("core/bases.py", "def f():\n    from rplearn.core.solver import DEFAULT_RIDGE\n", "cycle"),
+        ("core/bases.py", "def f():\n    from rplearn.core.lsq.solver import DEFAULT_RIDGE\n", "cycle"),
         ("io/options.py", "from rplearn.io import read_logs\n", "cycle"),
         ("core/__init__.py", "_NAMES = {'plot_coverage': 'rplearn.viz.plot'}\n", "layer"),
     ],

@@ -6,10 +6,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rplearn.core import link_statistics
+from rplearn.core.lsq import link_statistics
 from rplearn.core.geometry import Directions
-from rplearn.core.link_statistics import _in_order, segmented_link_statistics
-from rplearn.core.normal_equations import NormalEquations
+from rplearn.core.lsq.link_statistics import _in_order, segmented_link_statistics
+from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.core.sh import SphericalHarmonics
 
 

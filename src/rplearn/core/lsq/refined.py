@@ -9,7 +9,7 @@ of 32 bit floating point arithmetic in obtaining 64 bit accuracy", SC 2006). At 
 solve needs two or three corrections of about 15 ms each. A matrix whose single-precision
 factorisation fails, or whose solves do not converge within :data:`MAX_STEPS` corrections
 (condition numbers near ``1 / eps32``), is left to the float64 factor
-(:class:`~rplearn.core.spectrum.ConstrainedFactor` decides).
+(:class:`~rplearn.core.lsq.spectrum.ConstrainedFactor` decides).
 
 The matrix is ``A = S (G + diag(added)) S``: the Gram ``G`` (kept by its owner, read here, never
 copied in float64), a ridge or penalty on the diagonal, and ``S`` the diagonal scaling that
@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from rplearn.core.blas import symmetric_product
+from rplearn.core.threads import symmetric_product
 
 FloatArray = NDArray[np.float64]
 

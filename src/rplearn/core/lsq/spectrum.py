@@ -1,7 +1,7 @@
 """Spectra and factorisations of the joint problem's normal matrix, for the solver.
 
 :func:`spectrum_report` is exact (a full eigendecomposition): the rank and condition number the
-fit report gives for every problem of up to :data:`rplearn.core.solver.LARGE_COLUMNS`
+fit report gives for every problem of up to :data:`rplearn.core.lsq.solver.LARGE_COLUMNS`
 columns. Above that (swarms of tens of nodes) the solver uses :func:`spectrum_estimate`
 (block Krylov iterations: a few matrix products and triangular solves) and
 :class:`ConstrainedFactor` (one Cholesky, the covariance only when read) instead of a full eigendecomposition and the inverse of
@@ -18,8 +18,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rplearn.core.bases import Basis
-from rplearn.core.blas import symmetric_product
-from rplearn.core.node_blocks import NodeBlocks
+from rplearn.core.threads import symmetric_product
+from rplearn.core.lsq.node_blocks import NodeBlocks
 
 FloatArray = NDArray[np.float64]
 
@@ -135,9 +135,9 @@ def spectrum_from_factor(
     complement of the null directions (which are eigenvectors of both), then Rayleigh-Ritz
     with ``G`` itself. For fits whose only regularisation is that ridge; a smoothness penalty
     shifts the eigenvectors, and :func:`spectrum_estimate` is used instead. The products with
-    ``gram`` are dense BLAS ones (:func:`~rplearn.core.blas.symmetric_product`) unless
+    ``gram`` are dense BLAS ones (:func:`~rplearn.core.threads.symmetric_product`) unless
     ``product`` (``x -> gram @ x``) is given: for drones that link to few others, one that reads
-    only the blocks that can be non-zero (:meth:`~rplearn.core.node_blocks.NodeBlocks.product`;
+    only the blocks that can be non-zero (:meth:`~rplearn.core.lsq.node_blocks.NodeBlocks.product`;
     at 50 drones on a ring 1.3 ms per product against 8.4 ms dense, where a scipy sparse copy
     cost 53 ms to build and 8 ms per product).
 
@@ -243,7 +243,7 @@ def band_of(source: FloatArray, s: FloatArray, diagonal: FloatArray, order: NDAr
             p: int) -> FloatArray:
     """The lower band (half-width ``kd``) of ``diag(s) source diag(s) + diag(diagonal)`` with
     its columns in ``order`` (whole node blocks of ``p`` columns, as
-    :meth:`~rplearn.core.node_blocks.NodeBlocks.band` gives), in LAPACK's band storage (row
+    :meth:`~rplearn.core.lsq.node_blocks.NodeBlocks.band` gives), in LAPACK's band storage (row
     ``k`` the ``k``-th subdiagonal, as a Fortran-ordered array).
 
     Band column ``j`` is a stretch of row ``order[j]`` of the symmetric ``source``: per node,
@@ -316,7 +316,7 @@ class ConstrainedFactor:
         """Factorise ``A`` (overwritten with its scaled form; or given already scaled as
         ``diag(scale) A diag(scale)``, ``scale`` the inverse square roots of its diagonal).
 
-        With the node ``blocks`` of ``A`` (:class:`~rplearn.core.node_blocks.NodeBlocks`), a
+        With the node ``blocks`` of ``A`` (:class:`~rplearn.core.lsq.node_blocks.NodeBlocks`), a
         matrix whose nodes link to few others is factorised for what it is: as a band (LAPACK
         ``dpbtrf``, ``n kd^2`` work) when a reordering of the nodes makes the band at most
         :data:`BAND_FRACTION` of the columns wide (drones that link to their neighbours on a
@@ -360,7 +360,7 @@ class ConstrainedFactor:
             out = cls.refined(gram, added, scale, cmat)
             if out is not None:
                 return out
-        from rplearn.core.refined import scaled_double
+        from rplearn.core.lsq.refined import scaled_double
 
         return cls.of(scaled_double(gram, scale, added), cmat, scale=scale)
 
@@ -399,11 +399,11 @@ class ConstrainedFactor:
     def refined(cls, gram: FloatArray, added: FloatArray, scale: FloatArray,
                 cmat: FloatArray) -> "ConstrainedFactor | None":
         """The dense factor of ``A = S (G + diag(added)) S`` (``S = diag(scale)``) in single
-        precision, solves refined to double (:class:`~rplearn.core.refined.RefinedCholesky`):
+        precision, solves refined to double (:class:`~rplearn.core.lsq.refined.RefinedCholesky`):
         about half the time of :meth:`of`'s float64 factor for thousands of columns. None when
         the single-precision factorisation fails (then use :meth:`of`). ``gram`` is read, not
         copied, and must not change while the factor is in use."""
-        from rplearn.core.refined import RefinedCholesky
+        from rplearn.core.lsq.refined import RefinedCholesky
 
         factor = RefinedCholesky.of(gram, scale, added)
         if factor is None:
@@ -415,7 +415,7 @@ class ConstrainedFactor:
         inverse is asked for)."""
         from scipy.linalg import lapack
 
-        from rplearn.core.refined import scaled_double
+        from rplearn.core.lsq.refined import scaled_double
 
         refined = self.factor
         a = scaled_double(refined.gram, self.scale, refined.added)

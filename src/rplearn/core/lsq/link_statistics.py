@@ -1,4 +1,4 @@
-"""Products of the feature blocks of links: the work inside :class:`~rplearn.core.normal_equations.NormalEquations`.
+"""Products of the feature blocks of links: the work inside :class:`~rplearn.core.lsq.normal_equations.NormalEquations`.
 
 Per link direction, ``Z^T Z`` with ``Z = [f(tx directions), y, extra..., f(rx directions)]``
 (:func:`link_statistics`), or for many short links at once (:func:`segmented_link_statistics`),
@@ -246,7 +246,7 @@ def _in_order(work: Any, starts: Any) -> Any:
     from collections import deque
     from concurrent.futures import ThreadPoolExecutor
 
-    from rplearn.core.blas import one_blas_thread
+    from rplearn.core.threads import one_blas_thread
 
     pending: deque[Any] = deque()
     try:

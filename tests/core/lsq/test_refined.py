@@ -1,4 +1,4 @@
-"""The single-precision Cholesky factor with refined solves (rplearn.core.refined) and its use
+"""The single-precision Cholesky factor with refined solves (rplearn.core.lsq.refined) and its use
 by ConstrainedFactor: double-precision answers, and the float64 factor where single precision
 cannot deliver them."""
 
@@ -7,8 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rplearn.core import refined, spectrum
-from rplearn.core.refined import RefinedCholesky, scaled_double, scaled_single
+from rplearn.core.lsq import refined, spectrum
+from rplearn.core.lsq.refined import RefinedCholesky, scaled_double, scaled_single
 
 
 def _gram(n, cond, seed=0):
@@ -99,7 +99,7 @@ def test_the_inverse_of_a_refined_factor_is_float64s():
 def _swarm_statistics(n_nodes=6, order=5, n=20000, seed=0):
     from rplearn.core.bases import make_basis
     from rplearn.core.geometry import Directions
-    from rplearn.core.normal_equations import NormalEquations
+    from rplearn.core.lsq.normal_equations import NormalEquations
 
     rng = np.random.default_rng(seed)
     az, el = rng.uniform(-np.pi, np.pi, (2, n)), rng.uniform(-1.2, 1.2, (2, n))
@@ -111,7 +111,7 @@ def _swarm_statistics(n_nodes=6, order=5, n=20000, seed=0):
 
 @pytest.fixture
 def refined_everywhere(monkeypatch):
-    from rplearn.core import solver, solver_large
+    from rplearn.core.lsq import solver, solver_large
 
     monkeypatch.setattr(solver, "LARGE_COLUMNS", 0)
     monkeypatch.setattr(solver_large, "REFINED_COLUMNS", 0)
@@ -123,7 +123,7 @@ def test_a_solution_keeps_its_gram_when_samples_are_added_later(refined_everywhe
     it was off by 54%)."""
     import copy
 
-    from rplearn.core import solver
+    from rplearn.core.lsq import solver
 
     normal, (d, tx, rx, y) = _swarm_statistics()
     normal.add(d, tx, rx, y)
@@ -143,7 +143,7 @@ def test_a_solution_keeps_its_gram_when_samples_are_added_later(refined_everywhe
 def test_float64_trouble_after_single_precision_leaves_the_decision_to_the_kkt_path(refined_everywhere, monkeypatch):
     """When the refined solves give up and the float64 factor fails too, the large path gives
     way to the KKT path (as a failed float64 factor always did) instead of raising."""
-    from rplearn.core import solver
+    from rplearn.core.lsq import solver
 
     normal, (d, tx, rx, y) = _swarm_statistics()
     normal.add(d, tx, rx, y)

@@ -1,8 +1,8 @@
-"""The joint solve above :data:`rplearn.core.solver.LARGE_COLUMNS` columns (swarms of tens of nodes).
+"""The joint solve above :data:`rplearn.core.lsq.solver.LARGE_COLUMNS` columns (swarms of tens of nodes).
 
 One Cholesky factorisation of the regularised, gauge-constrained system
-(:class:`~rplearn.core.spectrum.ConstrainedFactor`) gives the coefficients and the spectrum
-estimate (:func:`~rplearn.core.spectrum.spectrum_from_factor`, reusing the factor); the
+(:class:`~rplearn.core.lsq.spectrum.ConstrainedFactor`) gives the coefficients and the spectrum
+estimate (:func:`~rplearn.core.lsq.spectrum.spectrum_from_factor`, reusing the factor); the
 covariance, an ``n^3`` inverse, is formed only when ``JointSolution.covariance`` is first
 read.
 """
@@ -14,11 +14,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from rplearn.core.normal_equations import NormalEquations
-from rplearn.core.solution import FitReport, GaugeNote, JointSolution, fit_warnings
-from rplearn.core.node_blocks import NodeBlocks
-from rplearn.core.blas import numpy_blas_one_thread, symmetric_product
-from rplearn.core.spectrum import (
+from rplearn.core.lsq.normal_equations import NormalEquations
+from rplearn.core.lsq.solution import FitReport, GaugeNote, JointSolution, fit_warnings
+from rplearn.core.lsq.node_blocks import NodeBlocks
+from rplearn.core.threads import numpy_blas_one_thread, symmetric_product
+from rplearn.core.lsq.spectrum import (
     ConstrainedFactor, NotPositiveDefinite, null_directions, spectrum_estimate, spectrum_from_factor,
     symmetric_from_lower,
 )
@@ -26,7 +26,7 @@ from rplearn.core.spectrum import (
 FloatArray = NDArray[np.float64]
 
 #: From this many columns a dense system is factorised in single precision with refined solves
-#: (:meth:`~rplearn.core.spectrum.ConstrainedFactor.refined`): there the factorisation's
+#: (:meth:`~rplearn.core.lsq.spectrum.ConstrainedFactor.refined`): there the factorisation's
 #: ``n^3 / 3`` dominates; below it the refinement's matrix products would not pay for themselves.
 REFINED_COLUMNS = 2000
 
@@ -37,13 +37,13 @@ def solve_large(
     notes: list[GaugeNote],
 ) -> JointSolution | None:
     """:func:`solve` above :data:`LARGE_COLUMNS` columns: one Cholesky factorisation of the
-    regularised system (:class:`~rplearn.core.spectrum.ConstrainedFactor`) gives the
+    regularised system (:class:`~rplearn.core.lsq.spectrum.ConstrainedFactor`) gives the
     coefficients, the spectrum estimate (reusing the factor when the only regularisation is
     the ridge) and, on first use only, the covariance. None when the regularised matrix is not
     positive definite (the KKT path then decides).
 
     The heavy work runs in scipy's BLAS, with numpy's (a second library in the wheels) held to
-    one thread meanwhile (:func:`~rplearn.core.blas.numpy_blas_one_thread`)."""
+    one thread meanwhile (:func:`~rplearn.core.threads.numpy_blas_one_thread`)."""
     import scipy.linalg  # noqa: F401  (loaded before the limit looks for scipy's BLAS)
 
     with numpy_blas_one_thread():

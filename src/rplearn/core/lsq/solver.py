@@ -14,7 +14,7 @@ at constant altitude over a static station) is refused as not identifiable.
 
 The solver never forms the design matrix: it accumulates the sufficient statistics
 ``X^T X``, ``X^T y``, ``y^T y`` and ``n`` chunk by chunk
-(:class:`~rplearn.core.normal_equations.NormalEquations`), so memory does not grow with the
+(:class:`~rplearn.core.lsq.normal_equations.NormalEquations`), so memory does not grow with the
 number of samples, then solves the ridge-regularised normal equations (:func:`solve`).
 
 Identifiability (paper Sec. V-A, docs/CONVENTIONS.md). A constant can move between the two ends of a
@@ -39,11 +39,11 @@ from numpy.typing import ArrayLike, NDArray
 
 from rplearn.core.bases import Basis
 from rplearn.core.geometry import Directions
-from rplearn.core.level import shrink_target
-from rplearn.core.normal_equations import EXPONENT_MIN_SPREAD_DB, NormalEquations, independent_spread_db
-from rplearn.core.spectrum import null_directions, spectrum_estimate, spectrum_report
-from rplearn.core.solution import FitReport, GaugeNote, JointSolution, fit_warnings
-from rplearn.core.solver_large import solve_large, unexplained_fraction, unit_shared_scaling
+from rplearn.core.lsq.level import shrink_target
+from rplearn.core.lsq.normal_equations import EXPONENT_MIN_SPREAD_DB, NormalEquations, independent_spread_db
+from rplearn.core.lsq.spectrum import null_directions, spectrum_estimate, spectrum_report
+from rplearn.core.lsq.solution import FitReport, GaugeNote, JointSolution, fit_warnings
+from rplearn.core.lsq.solver_large import solve_large, unexplained_fraction, unit_shared_scaling
 from rplearn.errors import IdentifiabilityError, InputError
 
 FloatArray = NDArray[np.float64]
@@ -56,7 +56,7 @@ FloatArray = NDArray[np.float64]
 #: while on a single short unit it keeps SH-10 from extrapolating to 1,323 dB RMSE (7.8 dB).
 DEFAULT_RIDGE = 1.0
 #: Where the level a prior's pattern is shrunk toward comes from: ``"data"`` (the prior gives
-#: only its shape; :mod:`rplearn.core.level`) or ``"prior"`` (its absolute dBi, for calibrated
+#: only its shape; :mod:`rplearn.core.lsq.level`) or ``"prior"`` (its absolute dBi, for calibrated
 #: power and a trusted reference).
 PRIOR_LEVELS: tuple[str, ...] = ("data", "prior")
 
@@ -107,7 +107,7 @@ def link_components(n_nodes: int, links: Iterable[tuple[int, int]]) -> list[tupl
 
 #: Above this many columns the solver estimates the spectrum (:func:`spectrum_estimate`)
 #: instead of a full eigendecomposition, and factorises the regularised system by Cholesky
-#: (:mod:`rplearn.core.solver_large`) instead of inverting the KKT matrix: swarms of tens of nodes.
+#: (:mod:`rplearn.core.lsq.solver_large`) instead of inverting the KKT matrix: swarms of tens of nodes.
 #: At and below it every result is as before.
 LARGE_COLUMNS = 1500
 
@@ -192,8 +192,8 @@ def solve(
     graph (see module docstring), through the KKT system
     ``[[X^T X + ridge I + diag(penalty), C^T], [C, 0]] [p; mu] = [X^T y + (ridge + penalty) t; d]``.
     ``penalty`` (one non-negative weight per column, absolute units of ``X^T X``) is the
-    smoothness penalty of :mod:`rplearn.core.selection`. The target ``t``
-    (:func:`rplearn.core.level.shrink_target`) is never a fixed level: its shape is that of
+    smoothness penalty of :mod:`rplearn.core.lsq.selection`. The target ``t``
+    (:func:`rplearn.core.lsq.level.shrink_target`) is never a fixed level: its shape is that of
     ``penalty_target`` (one value per pattern column: a prior pattern's coefficients, whose
     per-node sphere mean is dropped) or zero, and its constant per node is the data's (the
     least-squares constants under the same gauge), so that adding a constant to every ``y``
@@ -328,7 +328,7 @@ def solve(
 
 
 def _unit_shared_columns(normal: NormalEquations) -> FloatArray:
-    """See :func:`rplearn.core.solver_large.unit_shared_scaling`."""
+    """See :func:`rplearn.core.lsq.solver_large.unit_shared_scaling`."""
     return unit_shared_scaling(normal)[0]
 
 
@@ -401,7 +401,7 @@ def fit_joint(
     chunk_size : int
         Samples accumulated per step.
     smoothing : float
-        Relative weight of the smoothness penalty (:mod:`rplearn.core.selection`).
+        Relative weight of the smoothness penalty (:mod:`rplearn.core.lsq.selection`).
     penalty_power : float
         Exponent of the SH roughness weights.
     environment : array_like, optional
@@ -424,7 +424,7 @@ def fit_joint(
         normal = normal.with_shared(normal.two_way_links() if link_offsets else None)
     penalty = None
     if smoothing:
-        from rplearn.core.selection import penalty_scale, penalty_vector
+        from rplearn.core.lsq.selection import penalty_scale, penalty_vector
 
         penalty = penalty_vector(basis, n_nodes, smoothing, penalty_scale(normal.gram, normal.n_pattern_columns), penalty_power)
     return solve(normal, node_names, ridge=ridge, gauge=gauge, penalty=penalty)
