@@ -83,9 +83,9 @@ _NAMES: dict[str, str] = {
     "sh_index": "sh",
     # joint least squares
     "DEFAULT_RIDGE": "lsq.solver",
-    "FitReport": "lsq.solver",
-    "GaugeNote": "lsq.solver",
-    "JointSolution": "lsq.solver",
+    "FitReport": "lsq.solution",
+    "GaugeNote": "lsq.solution",
+    "JointSolution": "lsq.solution",
     "NormalEquations": "lsq.normal_equations",
     "fit_joint": "lsq.solver",
     "identifiability": "lsq.solver",

@@ -107,7 +107,7 @@ def test_a_swarm_whose_drones_link_to_few_others_is_factorised_sparse_with_the_s
     reordered; 12 drones around a hub (a star), or the ring with link offset columns
     (full rows): a general sparse factor. The solution, covariance and rank equal the exact
     path's either way."""
-    from rplearn.core.lsq import spectrum
+    from rplearn.core.lsq import factor
     from rplearn.core.lsq.node_blocks import NodeBlocks
 
     if shape == "star":
@@ -118,10 +118,10 @@ def test_a_swarm_whose_drones_link_to_few_others_is_factorised_sparse_with_the_s
         normal = _statistics(24, 4, links, n=20000)
         if shape == "ring+offsets":  # one offset column per link: full rows, no band
             normal = normal.with_shared(normal.two_way_links())
-    assert NodeBlocks.of(normal.n_nodes, normal.basis.n_coef, normal.link_counts).fraction <= spectrum.SPARSE_BLOCK_FRACTION
+    assert NodeBlocks.of(normal.n_nodes, normal.basis.n_coef, normal.link_counts).fraction <= factor.SPARSE_BLOCK_FRACTION
     made = []
-    real = spectrum.ConstrainedFactor.__init__
-    monkeypatch.setattr(spectrum.ConstrainedFactor, "__init__",
+    real = factor.ConstrainedFactor.__init__
+    monkeypatch.setattr(factor.ConstrainedFactor, "__init__",
                         lambda self, *a: (real(self, *a), made.append(self.kind))[0])
     monkeypatch.setattr(solver, "LARGE_COLUMNS", 10**9)
     small = solver.solve(normal)
@@ -158,7 +158,7 @@ def test_free_directions_beyond_the_gauge_are_decided_by_the_ridge_with_a_warnin
 
 @pytest.mark.parametrize("n, rows", [(7, 3), (300, 256), (5, 256)])
 def test_symmetric_from_lower_mirrors_the_lower_triangle(n, rows):
-    from rplearn.core.lsq.spectrum import symmetric_from_lower
+    from rplearn.core.lsq.factor import symmetric_from_lower
 
     x = np.random.default_rng(n).standard_normal((n, n))
     low = np.tril(x)

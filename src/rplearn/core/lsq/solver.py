@@ -32,7 +32,7 @@ from __future__ import annotations
 
 from collections import deque
 from collections.abc import Iterable, Mapping, Sequence
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -42,8 +42,8 @@ from rplearn.core.geometry import Directions
 from rplearn.core.lsq.level import shrink_target
 from rplearn.core.lsq.normal_equations import EXPONENT_MIN_SPREAD_DB, NormalEquations, independent_spread_db
 from rplearn.core.lsq.spectrum import null_directions, spectrum_estimate, spectrum_report
-from rplearn.core.lsq.solution import FitReport, GaugeNote, JointSolution, fit_warnings
-from rplearn.core.lsq.solver_large import solve_large, unexplained_fraction, unit_shared_scaling
+from rplearn.core.lsq.solution import FitReport, GaugeNote, JointSolution, Regularisation, close_solution
+from rplearn.core.lsq.solver_large import solve_large, unit_shared_scaling
 from rplearn.errors import IdentifiabilityError, InputError
 
 FloatArray = NDArray[np.float64]
@@ -292,39 +292,32 @@ def solve(
             "add samples over the uncovered directions, choose a smaller model, or raise the ridge"
         )
     kinv = kinv_s * full_scale[:, None] * full_scale[None, :]
-    sol = kinv @ rhs
-    coef = sol[:pcols]
-    a = kinv[:pcols, :pcols]
-    unexplained = unexplained_fraction(normal, np.diag(a)[pat:])
-    sse = max(normal.yty - 2.0 * coef @ normal.rhs + coef @ normal.gram @ coef, 0.0)
-    dof = max(normal.n_samples - min(rank, pcols), 1)
-    resid_var = sse / dof
-    # Covariance of the constrained estimate: top-left block of the inverse KKT matrix,
-    # sandwiched with X^T X when a ridge is present.
-    if penalty is not None:
-        # A smoothness penalty (or a prior), with the ridge, read as a Gaussian prior on the
-        # coefficients: the posterior covariance sigma^2 (X^T X + ridge I + P)^-1, which returns
-        # to the prior's variance where the data are absent (the sandwich form shrinks it to
-        # zero there). Given for every automatic fit, also one that chose no smoothing.
-        cov = resid_var * a
-    else:
-        cov = resid_var * (a @ normal.gram @ a.T) if shrunk else resid_var * a
-    cov = 0.5 * (cov + cov.T)
-    report = FitReport(
-        n_samples=normal.n_samples,
-        n_columns=pcols,
-        rank=rank,
-        null_dim=pcols - rank,
-        condition_number=cond,
-        expected_null_dim=k,
-        gauges=tuple(notes),
-        ridge=float(ridge),
-        rmse_db=float(np.sqrt(sse / normal.n_samples)),
-        singular_values=sv,
-        warnings=tuple(fit_warnings(normal.basis.label, pcols, rank, k, cond, ridge)),
-    )
-    return JointSolution(coef[:pat].reshape(n_nodes, normal.basis.n_coef), cov, float(resid_var), report,
-                         tuple(normal.shared), coef[pat:].copy(), unexplained)
+    coef = (kinv @ rhs)[:pcols]
+    return close_solution(normal, coef, (sv, rank, cond), notes, k,
+                          Regularisation(float(ridge), penalty is not None, shrunk),
+                          KktInverse(kinv[:pcols, :pcols], normal.gram))
+
+
+class KktInverse:
+    """The dense path's :class:`~rplearn.core.lsq.solution.SolvedSystem`: the top-left block
+    ``M`` of the inverse KKT matrix (the covariance of the constrained estimate, sandwiched with
+    ``X^T X`` when a ridge alone regularises), its covariance formed at once."""
+
+    lazy: ClassVar[bool] = False
+
+    def __init__(self, inverse: FloatArray, gram: FloatArray) -> None:
+        self.inverse, self.gram = inverse, gram
+
+    def fitted_square(self, gram: FloatArray, coef: FloatArray) -> float:
+        return float(coef @ gram @ coef)  # numpy's BLAS: a fixed-order fit imports no scipy
+
+    def inverse_diagonal(self, index: NDArray[np.intp]) -> FloatArray:
+        return np.diag(self.inverse)[index]
+
+    def covariance(self, variance: float, sandwich: bool) -> FloatArray:
+        a = self.inverse
+        cov = variance * (a @ self.gram @ a.T) if sandwich else variance * a
+        return 0.5 * (cov + cov.T)
 
 
 def _unit_shared_columns(normal: NormalEquations) -> FloatArray:

@@ -1,25 +1,26 @@
-"""Spectra and factorisations of the joint problem's normal matrix, for the solver.
+"""Spectra of the joint problem's normal matrix: the rank and condition number of a fit report.
 
 :func:`spectrum_report` is exact (a full eigendecomposition): the rank and condition number the
 fit report gives for every problem of up to :data:`rplearn.core.lsq.solver.LARGE_COLUMNS`
 columns. Above that (swarms of tens of nodes) the solver uses :func:`spectrum_estimate`
-(block Krylov iterations: a few matrix products and triangular solves) and
-:class:`ConstrainedFactor` (one Cholesky, the covariance only when read) instead of a full eigendecomposition and the inverse of
-the KKT matrix, which grow as the cube of the columns with large constants (3,000 columns:
-3.3 s of eigenvalues and 2.5 s of inverse).
+(block Krylov iterations: a few matrix products and triangular solves), or
+:func:`spectrum_from_factor` through the factor the solve made
+(:class:`~rplearn.core.lsq.factor.ConstrainedFactor`), instead of a full eigendecomposition,
+which grows as the cube of the columns with a large constant (3,000 columns: 3.3 s).
 """
 
 from __future__ import annotations
 
-import threading
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from rplearn.core.bases import Basis
-from rplearn.core.threads import symmetric_product
-from rplearn.core.lsq.node_blocks import NodeBlocks
+from rplearn.core.lsq.products import symmetric_product
+
+if TYPE_CHECKING:
+    from rplearn.core.lsq.factor import ConstrainedFactor
 
 FloatArray = NDArray[np.float64]
 
@@ -135,7 +136,7 @@ def spectrum_from_factor(
     complement of the null directions (which are eigenvectors of both), then Rayleigh-Ritz
     with ``G`` itself. For fits whose only regularisation is that ridge; a smoothness penalty
     shifts the eigenvectors, and :func:`spectrum_estimate` is used instead. The products with
-    ``gram`` are dense BLAS ones (:func:`~rplearn.core.threads.symmetric_product`) unless
+    ``gram`` are dense BLAS ones (:func:`~rplearn.core.lsq.products.symmetric_product`) unless
     ``product`` (``x -> gram @ x``) is given: for drones that link to few others, one that reads
     only the blocks that can be non-zero (:meth:`~rplearn.core.lsq.node_blocks.NodeBlocks.product`;
     at 50 drones on a ring 1.3 ms per product against 8.4 ms dense, where a scipy sparse copy
@@ -168,7 +169,7 @@ def spectrum_from_factor(
     lam_min = float(_krylov_ritz(inverse, start, iterations, product, project)[0])
     if lam_min > tol and not lam_min > RIDGE_RESOLVES * ridge:
         return spectrum_estimate(gram, null, lam_max=lam_max)
-    if factor.kind == "refined" and not lam_min > lam_max * SINGLE_RESOLVES:
+    if factor.single_precision and not lam_min > lam_max * SINGLE_RESOLVES:
         # beyond what a single-precision inverse resolves (its Krylov vectors carry errors of
         # eps32 times the condition number, which can lift a free direction's Ritz value above
         # the rank tolerance): again with refined solves
@@ -230,307 +231,4 @@ def spectrum_estimate(
     return sv, n - null.shape[1], float(sv[0] / sv[1])
 
 
-#: A normal matrix with at most this fraction of its node blocks non-zero (nodes that link to
-#: few others) is factorised as a sparse matrix (:meth:`ConstrainedFactor.of`).
-SPARSE_BLOCK_FRACTION = 0.25
-#: ... or as a band when its nodes can be ordered so that the band's half-width is at most this
-#: fraction of the columns (the work is then at most 1/8 of a dense Cholesky's: ``n kd^2``
-#: against ``n^3 / 3``).
-BAND_FRACTION = 0.2
-
-
-def band_of(source: FloatArray, s: FloatArray, diagonal: FloatArray, order: NDArray[np.intp], kd: int,
-            p: int) -> FloatArray:
-    """The lower band (half-width ``kd``) of ``diag(s) source diag(s) + diag(diagonal)`` with
-    its columns in ``order`` (whole node blocks of ``p`` columns, as
-    :meth:`~rplearn.core.lsq.node_blocks.NodeBlocks.band` gives), in LAPACK's band storage (row
-    ``k`` the ``k``-th subdiagonal, as a Fortran-ordered array).
-
-    Band column ``j`` is a stretch of row ``order[j]`` of the symmetric ``source``: per node,
-    its rows' stretches are windows into the node's rows at the next few nodes' columns
-    (contiguous runs of ``p``), read once (an element-wise gather took 35 ms at 50 drones on a
-    ring, this about a fifth)."""
-    n = source.shape[0]
-    nodes = order[::p] // p
-    n_nodes = nodes.size
-    reach = (kd + 1 + p - 1) // p + 1  # node blocks a block row's band touches (its own included)
-    band_t = np.empty((n, kd + 1))
-    rows_buf = np.zeros((p, reach * p))
-    window = np.lib.stride_tricks.as_strided(
-        rows_buf, shape=(p, kd + 1), strides=(rows_buf.strides[0] + rows_buf.strides[1], rows_buf.strides[1]))
-    for b in range(n_nodes):
-        rows = slice(nodes[b] * p, (nodes[b] + 1) * p)
-        cols = (nodes[b : b + reach, None] * p + np.arange(p)[None, :]).ravel()
-        np.multiply(np.take(source[rows], cols, axis=1), np.multiply.outer(s[rows], s[cols]), out=rows_buf[:, : cols.size])
-        rows_buf[:, cols.size :] = 0.0  # past the last node: outside the matrix
-        band_t[b * p : (b + 1) * p] = window
-    band_t[:, 0] += diagonal[order]
-    return band_t.T
-
-
-def symmetric_from_lower(x: FloatArray, rows: int = 256) -> FloatArray:
-    """``x`` (square) made exactly symmetric from its lower triangle, in place, a block of rows
-    at a time (at 5,000 columns, index arrays of the upper triangle took 200 MB and the
-    averaging ``(x + x^T) / 2`` another pass over two copies)."""
-    n = x.shape[0]
-    for i in range(0, n, rows):
-        j = min(n, i + rows)
-        x[i:j, j:] = x[j:, i:j].T
-        diag = x[i:j, i:j]
-        upper = np.triu_indices(j - i, 1)
-        diag[upper] = diag.T[upper]
-    return x
-
-
-class NotPositiveDefinite(ValueError):
-    """The regularised matrix turned out not positive definite in float64 (after its
-    single-precision factor's solves did not converge)."""
-
-
-class ConstrainedFactor:
-    """The constrained inverse ``M = A^-1 - A^-1 C^T (C A^-1 C^T)^-1 C A^-1`` of a symmetric
-    positive definite ``A`` (the regularised normal matrix) and constraints ``C`` (the gauge),
-    kept as a Cholesky factor of the diagonally scaled ``A``: products with ``M`` cost two
-    triangular solves, and ``M`` itself is formed only when asked for (:meth:`inverse`).
-
-    Build it with :meth:`of`, which gives None when ``A`` is not positive definite.
-    """
-
-    def __init__(self, factor: Any, scale: FloatArray, cmat: FloatArray, kind: str = "dense") -> None:
-        self.factor, self.scale, self.cmat, self.kind = factor, scale, cmat, kind
-        self.sparse_a: Any = None  # then also the scaled matrix itself (for the dense inverse)
-        self.band: tuple[FloatArray, NDArray[np.intp]] | None = None  # "banded": the band and the column order
-        self._lock = threading.Lock()  # a lazy covariance may be read from several threads
-        self.y = self.solve_a(cmat.T) if cmat.shape[0] else np.zeros((scale.size, 0))  # A^-1 C^T
-        self.s = cmat @ self.y if cmat.shape[0] else np.zeros((0, 0))  # C A^-1 C^T
-
-    @property
-    def sparse(self) -> bool:
-        """Whether the factor is SuperLU's, of a block-sparse matrix."""
-        return self.kind == "sparse"
-
-    @classmethod
-    def of(
-        cls, a: FloatArray, cmat: FloatArray, blocks: NodeBlocks | None = None, scale: FloatArray | None = None
-    ) -> "ConstrainedFactor | None":
-        """Factorise ``A`` (overwritten with its scaled form; or given already scaled as
-        ``diag(scale) A diag(scale)``, ``scale`` the inverse square roots of its diagonal).
-
-        With the node ``blocks`` of ``A`` (:class:`~rplearn.core.lsq.node_blocks.NodeBlocks`), a
-        matrix whose nodes link to few others is factorised for what it is: as a band (LAPACK
-        ``dpbtrf``, ``n kd^2`` work) when a reordering of the nodes makes the band at most
-        :data:`BAND_FRACTION` of the columns wide (drones that link to their neighbours on a
-        ring or a line; no shared columns), else, with at most :data:`SPARSE_BLOCK_FRACTION`
-        of the node blocks non-zero, as a sparse matrix (SuperLU with a minimum-degree ordering
-        of ``A + A^T``, symmetric mode), whose fill stays near the links instead of the
-        ``n^3 / 3`` of a dense Cholesky.
-        """
-        if scale is None:
-            d = 1.0 / np.sqrt(np.maximum(np.diag(a), 1e-300))
-            a *= d[:, None]
-            a *= d[None, :]
-        else:
-            d = scale
-        n = a.shape[0]
-        layout = cls.layout(blocks, n)
-        if layout != "dense":
-            return cls._structured(a, np.ones(n), np.zeros(n), cmat, blocks, layout, d)
-        from scipy.linalg import lapack
-
-        # a is symmetric: its transpose is the same matrix in Fortran order, factorised in place
-        factor, info = lapack.dpotrf(a.T, lower=1, clean=0, overwrite_a=1)
-        if info != 0:
-            return None
-        return cls(factor, d, cmat)
-
-    @classmethod
-    def of_gram(cls, gram: FloatArray, added: FloatArray, scale: FloatArray, cmat: FloatArray,
-                blocks: NodeBlocks | None, refined: bool = False) -> "ConstrainedFactor | None":
-        """:meth:`of` for ``A = S (G + diag(added)) S`` (``S = diag(scale)``), reading from the
-        Gram ``G`` only what the layout needs: a band or the linked blocks, scaled on the way
-        (no scaled copy of the whole matrix); a dense matrix in single precision with refined
-        solves when ``refined`` and every column is regularised (``added > 0``: a matrix only
-        positive semi-definite could pass in single precision and be solved where float64 would
-        refuse it; :meth:`refined`, float64 when that fails)."""
-        n = gram.shape[0]
-        layout = cls.layout(blocks, n)
-        if layout != "dense":
-            return cls._structured(gram, scale, added * scale**2, cmat, blocks, layout, scale)
-        if refined and np.all(added > 0):  # positive definite in exact arithmetic: else float64 decides
-            out = cls.refined(gram, added, scale, cmat)
-            if out is not None:
-                return out
-        from rplearn.core.lsq.refined import scaled_double
-
-        return cls.of(scaled_double(gram, scale, added), cmat, scale=scale)
-
-    @classmethod
-    def _structured(cls, source: FloatArray, s: FloatArray, diagonal: FloatArray, cmat: FloatArray,
-                    blocks: NodeBlocks, layout: str, scale: FloatArray) -> "ConstrainedFactor | None":
-        """The banded or sparse factor of ``diag(s) source diag(s) + diag(diagonal)`` (the
-        scaled matrix ``A``; ``scale`` its scaling from the unscaled system)."""
-        if layout == "banded":
-            order, kd = blocks.band()
-            return cls._banded(band_of(source, s, diagonal, order, kd, blocks.n_coef), cmat, scale, order)
-        from scipy.sparse.linalg import splu
-
-        sparse_a = blocks.sparse(source, s, diagonal)
-        try:
-            lu = splu(sparse_a, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
-        except RuntimeError:  # exactly singular
-            return None
-        if not np.all(lu.U.diagonal() > 0):  # pivots of a positive definite matrix are positive
-            return None
-        out = cls(lu, scale, cmat, "sparse")
-        out.sparse_a = sparse_a
-        return out
-
-    @staticmethod
-    def layout(blocks: NodeBlocks | None, n: int) -> str:
-        """How :meth:`of` factorises a matrix of ``n`` columns with these node ``blocks``:
-        ``"banded"``, ``"sparse"`` or ``"dense"``."""
-        if blocks is not None and blocks.n_nodes * blocks.n_coef == n and blocks.band()[1] < BAND_FRACTION * n:
-            return "banded"
-        if blocks is not None and blocks.fraction <= SPARSE_BLOCK_FRACTION:
-            return "sparse"
-        return "dense"
-
-    @classmethod
-    def refined(cls, gram: FloatArray, added: FloatArray, scale: FloatArray,
-                cmat: FloatArray) -> "ConstrainedFactor | None":
-        """The dense factor of ``A = S (G + diag(added)) S`` (``S = diag(scale)``) in single
-        precision, solves refined to double (:class:`~rplearn.core.lsq.refined.RefinedCholesky`):
-        about half the time of :meth:`of`'s float64 factor for thousands of columns. None when
-        the single-precision factorisation fails (then use :meth:`of`). ``gram`` is read, not
-        copied, and must not change while the factor is in use."""
-        from rplearn.core.lsq.refined import RefinedCholesky
-
-        factor = RefinedCholesky.of(gram, scale, added)
-        if factor is None:
-            return None
-        return cls(factor, scale, cmat, "refined")
-
-    def _to_double(self) -> None:
-        """Replace a refined factor by the float64 one (a solve did not converge, or the whole
-        inverse is asked for)."""
-        from scipy.linalg import lapack
-
-        from rplearn.core.lsq.refined import scaled_double
-
-        refined = self.factor
-        a = scaled_double(refined.gram, self.scale, refined.added)
-        factor, info = lapack.dpotrf(a.T, lower=1, clean=0, overwrite_a=1)
-        if info != 0:
-            raise NotPositiveDefinite("the regularised matrix is not positive definite")
-        self.factor, self.kind = factor, "dense"
-        if self.cmat.shape[0]:  # the constraint's products again, consistent with the new factor
-            self.y = self.solve_a(self.cmat.T)
-            self.s = self.cmat @ self.y
-
-    def approximate_a(self, b: FloatArray) -> FloatArray:
-        """``A^-1 b`` to single precision when the factor is refined (no corrections: for the
-        spectrum's Krylov iterations, whose Ritz values come from ``G`` itself), else
-        :meth:`solve_a`."""
-        if self.kind != "refined":
-            return self.solve_a(b)
-        d = self.scale if b.ndim == 1 else self.scale[:, None]
-        return self.factor.approximate(b * d) * d
-
-    @classmethod
-    def _banded(cls, band: FloatArray, cmat: FloatArray, d: FloatArray,
-                order: NDArray[np.intp]) -> "ConstrainedFactor | None":
-        """The factor of a band (:func:`band_of`) by ``dpbtrf``."""
-        from scipy.linalg import lapack
-
-        factor, info = lapack.dpbtrf(band, lower=1)
-        if info != 0:
-            return None
-        out = cls((factor, order), d, cmat, "banded")
-        out.band = (band, order)
-        return out
-
-    def solve_a(self, b: FloatArray) -> FloatArray:
-        """``A^-1 b`` (``b`` a vector or a block of columns)."""
-        d = self.scale if b.ndim == 1 else self.scale[:, None]
-        if self.kind == "refined":
-            x = self.factor.solve(b * d)
-            if x is None:  # too ill-conditioned for single precision: the float64 factor
-                self._to_double()
-                return self.solve_a(b)
-            return x * d
-        if self.sparse:
-            return self.factor.solve(np.asfortranarray(b * d)) * d
-        from scipy.linalg import lapack
-
-        if self.kind == "banded":
-            factor, order = self.factor
-            x = np.empty_like(b, dtype=np.float64)
-            xo, info = lapack.dpbtrs(factor, np.asfortranarray((b * d)[order]), lower=1)
-            if info != 0:
-                raise ValueError(f"dpbtrs failed ({info})")
-            x[order] = xo
-            return x * d
-        x, info = lapack.dpotrs(self.factor, np.asfortranarray(b * d), lower=1)
-        if info != 0:
-            raise ValueError(f"dpotrs failed ({info})")
-        return x * d
-
-    def scaled_dense(self) -> FloatArray:
-        """The scaled matrix ``A`` as a dense array (sparse and banded factors)."""
-        if self.sparse:
-            return self.sparse_a.toarray()
-        band, order = self.band
-        kd, n = band.shape[0] - 1, band.shape[1]
-        dense = np.zeros((n, n))
-        for k in range(kd + 1):
-            rows, cols = order[k:], order[: n - k]
-            dense[rows, cols] = band[k, : n - k]
-            dense[cols, rows] = band[k, : n - k]
-        return dense
-
-    def solve(self, b: FloatArray) -> FloatArray:
-        """``M b``: the constrained solution of ``A x = b`` with ``C x = 0``."""
-        x = self.solve_a(b)
-        if self.cmat.shape[0]:
-            x = x - self.y @ np.linalg.solve(self.s, self.cmat @ x)
-        return x
-
-    def particular(self, value: FloatArray) -> FloatArray:
-        """The part of the constrained solution a constraint value ``C x = value`` adds."""
-        if not self.cmat.shape[0] or not np.any(value != 0):
-            return np.zeros(self.scale.size)
-        return self.y @ np.linalg.solve(self.s, value)
-
-    def diagonal_at(self, index: NDArray[np.intp]) -> FloatArray:
-        """``M[i, i]`` for the given columns (a solve each)."""
-        if not len(index):
-            return np.zeros(0)
-        e = np.zeros((self.scale.size, len(index)))
-        e[np.asarray(index), np.arange(len(index))] = 1.0
-        return np.einsum("ij,ij->j", e, self.solve(e))
-
-    def inverse(self) -> FloatArray:
-        """``M`` itself (``n^3`` work: only when the whole covariance is asked for)."""
-        with self._lock:  # one conversion, and no reader between its two assignments
-            if self.kind == "refined":
-                self._to_double()
-        if self.kind != "dense":  # the inverse is dense: factorise densely now (n sparse solves are slow)
-            dense = ConstrainedFactor.of(self.scaled_dense() / np.outer(self.scale, self.scale), self.cmat)
-            if dense is None:
-                raise ValueError("the regularised matrix is not positive definite")
-            return dense.inverse()
-        else:
-            from scipy.linalg import lapack
-
-            inv, info = lapack.dpotri(self.factor, lower=1)  # its lower triangle
-            if info != 0:
-                raise ValueError(f"dpotri failed ({info})")
-            inv *= self.scale[:, None]
-            inv *= self.scale[None, :]
-        if self.cmat.shape[0]:
-            inv -= self.y @ np.linalg.solve(self.s, self.y.T)
-        return symmetric_from_lower(inv)
-
-
-__all__ = ["BAND_FRACTION", "RIDGE_RESOLVES", "SINGLE_RESOLVES", "SPARSE_BLOCK_FRACTION", "ConstrainedFactor", "NotPositiveDefinite", "null_directions", "spectrum_estimate", "spectrum_from_factor", "spectrum_report",
-           "symmetric_from_lower"]
+__all__ = ["RIDGE_RESOLVES", "SINGLE_RESOLVES", "null_directions", "spectrum_estimate", "spectrum_from_factor", "spectrum_report"]
