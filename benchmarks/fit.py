@@ -113,11 +113,10 @@ def main() -> int:
     # Streaming: 10 million samples in chunks, never materialised at once.
     total = 2_000_000 if args.quick else 10_000_000
     chunk = 200_000
-    import rplearn.core.lsq.normal_equations as solver_module
-
     import rplearn.core.basis_base as bases_module
+    from rplearn.core.lsq.runtime import DEFAULT_RUNTIME
 
-    solver_module._BUFFERS.__dict__.clear()  # count the solver's reusable block buffer too
+    DEFAULT_RUNTIME.release_buffer()  # count the solver's reusable block buffer too
     bases_module._SCRATCH.__dict__.clear()  # and the feature scratch arrays
     tracemalloc.start()
     t0 = time.perf_counter()

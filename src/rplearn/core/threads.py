@@ -51,7 +51,7 @@ def _controller_of(loaded: tuple[str, ...]) -> Any:
 #: restores the counts it found: two threads whose limits overlap could leave numpy on one thread
 #: for good, or lift the other's limit while its work still runs. So one thread at a time
 #: limits; a limit asked for meanwhile by another thread is skipped (its work runs with the
-#: threads as they are), as :func:`rplearn.core.lsq.link_statistics._in_order` does with its pool.
+#: threads as they are), as :meth:`rplearn.core.lsq.runtime.StatisticsRuntime.in_order` does with its pool.
 _LIMIT_LOCK = threading.RLock()
 
 

@@ -134,6 +134,7 @@ def test_the_block_buffer_is_capped_and_blocks_add_up():
     """SH-24: the accumulation buffer stays within BLOCK_MAX_VALUES (issue 13, item 4), and
     statistics over several blocks equal those over one block each."""
     from rplearn.core.lsq import link_statistics as ne_module
+    from rplearn.core.lsq.runtime import DEFAULT_RUNTIME
 
     rng = np.random.default_rng(11)
     basis = make_basis("sh", 24)
@@ -144,7 +145,7 @@ def test_the_block_buffer_is_capped_and_blocks_add_up():
     d, tx, rx = _random_samples(rng, n, 2)
     y = rng.normal(size=n)
     whole = NormalEquations(basis, 2).add(d, tx, rx, y)
-    assert ne_module._BUFFERS.block.size <= ne_module.BLOCK_MAX_VALUES
+    assert 0 < DEFAULT_RUNTIME.buffer_size() <= ne_module.BLOCK_MAX_VALUES
     half = n // 2
     parts = NormalEquations(basis, 2)
     parts.add(Directions(*(a[:half] for a in d)), tx[:half], rx[:half], y[:half])

@@ -8,7 +8,7 @@ pattern a linear combination of the same basis, ``G_n = f(az, el) . p_n``, the r
 
 The design matrix is never formed: :class:`NormalEquations` accumulates ``X^T X``, ``X^T y``,
 ``y^T y`` and ``n`` chunk by chunk, one link direction at a time (:func:`link_statistics`),
-through a block buffer reused by later fits in the same thread (:mod:`rplearn.core.lsq.link_statistics`),
+through a block buffer reused by later fits in the same thread (:mod:`rplearn.core.lsq.runtime`),
 so memory does not grow with the number of samples. :mod:`rplearn.core.lsq.solver` solves the result.
 """
 
@@ -23,8 +23,9 @@ from numpy.typing import ArrayLike, NDArray
 from rplearn.core.bases import Basis
 from rplearn.core.geometry import Directions
 from rplearn.core.lsq.link_statistics import (
-    _in_order, block_rows, block_samples, block_starts, link_statistics, max_links_per_block, segmented_link_statistics,
+    block_rows, block_samples, block_starts, link_statistics, max_links_per_block, segmented_link_statistics,
 )
+from rplearn.core.lsq.runtime import DEFAULT_RUNTIME
 from rplearn.errors import InputError
 
 FloatArray = NDArray[np.float64]
@@ -214,7 +215,7 @@ class NormalEquations:
                 local[runs])
             return products, moments, first, last, tx[runs[:-1]]
 
-        for products, moments, first, last, run_tx in _in_order(statistics, starts):
+        for products, moments, first, last, run_tx in DEFAULT_RUNTIME.in_order(statistics, starts):
             tx, rx = np.divmod(codes[first:last], self.n_nodes)
             flat = node_moments.reshape(self.n_nodes, -1)
             flat += (run_tx[None, :] == nodes).astype(np.float64) @ moments[0].reshape(run_tx.size, -1)
