@@ -8,8 +8,9 @@ them: each gives what it solved as a :class:`SolvedSystem`.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Callable, ClassVar, Protocol, Sequence
+from typing import Any, ClassVar, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
@@ -217,7 +218,7 @@ def close_solution(
     pcols, pat = normal.n_columns, normal.n_pattern_columns
     ridge = regularisation.ridge
     unexplained = unexplained_fraction(normal, system.inverse_diagonal(np.arange(pat, pcols)))
-    sse = max(normal.yty - 2.0 * coef @ normal.rhs + system.fitted_square(normal.gram, coef), 0.0)
+    sse = max(float(normal.yty - 2.0 * coef @ normal.rhs + system.fitted_square(normal.gram, coef)), 0.0)
     resid_var = sse / max(normal.n_samples - min(rank, pcols), 1)
     sandwich = regularisation.sandwich
 
