@@ -11,8 +11,8 @@ statistics
 solve
 ``solver``             :func:`solve`, :func:`fit_joint`, :func:`identifiability`: gauge, KKT path
 ``solver_large``       the path above ``LARGE_COLUMNS`` columns: one factor, lazy covariance
-``solution``           :class:`JointSolution`, :class:`FitReport`, and :func:`close_solution`,
-                       the closing arithmetic both paths share
+``solution``           :class:`JointSolution`, :class:`FitReport`, :class:`GaugeNote`
+``closing``            :func:`close_solution`: the closing arithmetic both paths share
 ``level``              the level a regularised solve shrinks toward (the data's own)
 ``penalty``            smoothness penalty weights, nested sub-problems
 factorisations

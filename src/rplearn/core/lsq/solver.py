@@ -42,7 +42,8 @@ from rplearn.core.geometry import Directions
 from rplearn.core.lsq.level import shrink_target
 from rplearn.core.lsq.normal_equations import EXPONENT_MIN_SPREAD_DB, NormalEquations, independent_spread_db
 from rplearn.core.lsq.spectrum import null_directions, spectrum_estimate, spectrum_report
-from rplearn.core.lsq.solution import FitReport, GaugeNote, JointSolution, Regularisation, close_solution
+from rplearn.core.lsq.closing import Regularisation, close_solution
+from rplearn.core.lsq.solution import FitReport, GaugeNote, JointSolution
 from rplearn.core.lsq.solver_large import solve_large, unit_shared_scaling
 from rplearn.errors import IdentifiabilityError, InputError
 
@@ -299,7 +300,7 @@ def solve(
 
 
 class KktInverse:
-    """The dense path's :class:`~rplearn.core.lsq.solution.SolvedSystem`: the top-left block
+    """The dense path's :class:`~rplearn.core.lsq.closing.SolvedSystem`: the top-left block
     ``M`` of the inverse KKT matrix (the covariance of the constrained estimate, sandwiched with
     ``X^T X`` when a ridge alone regularises), its covariance formed at once."""
 

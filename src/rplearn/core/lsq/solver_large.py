@@ -5,7 +5,7 @@ One Cholesky factorisation of the regularised, gauge-constrained system
 estimate (:func:`~rplearn.core.lsq.spectrum.spectrum_from_factor`, reusing the factor); the
 covariance, an ``n^3`` inverse, is formed only when ``JointSolution.covariance`` is first
 read (:class:`FactorInverse`; the closing arithmetic is the dense path's,
-:func:`~rplearn.core.lsq.solution.close_solution`).
+:func:`~rplearn.core.lsq.closing.close_solution`).
 """
 
 from __future__ import annotations
@@ -19,7 +19,8 @@ from rplearn.core.lsq.factor import ConstrainedFactor, symmetric_from_lower
 from rplearn.core.lsq.node_blocks import NodeBlocks
 from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.core.lsq.products import symmetric_product
-from rplearn.core.lsq.solution import GaugeNote, JointSolution, Regularisation, close_solution
+from rplearn.core.lsq.closing import Regularisation, close_solution
+from rplearn.core.lsq.solution import GaugeNote, JointSolution
 from rplearn.core.lsq.spectrum import null_directions, spectrum_estimate, spectrum_from_factor
 from rplearn.core.threads import numpy_blas_one_thread
 from rplearn.errors import NotPositiveDefinite
@@ -88,7 +89,7 @@ def _solve_large(
 
 
 class FactorInverse:
-    """The large path's :class:`~rplearn.core.lsq.solution.SolvedSystem`: the constrained
+    """The large path's :class:`~rplearn.core.lsq.closing.SolvedSystem`: the constrained
     inverse ``M`` kept as its factor, the covariance formed when first read."""
 
     lazy: ClassVar[bool] = True
