@@ -95,7 +95,7 @@ def test_components_add_up_to_the_whole_spread(fits):
 
 
 def _gram(model, s):
-    from rplearn.core.normal_equations import NormalEquations
+    from rplearn.core.lsq.normal_equations import NormalEquations
 
     return NormalEquations(model.basis, 2).add(s.directions, s.tx_index, s.rx_index).gram
 

@@ -36,7 +36,7 @@ import numpy as np
 from rplearn.analysis.pattern_error import gauged_nodes
 from rplearn.core.bases import fibonacci_grid_nodes
 from rplearn.core.coverage import COVERED_WITHIN_DEG
-from rplearn.core.normal_equations import NormalEquations
+from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.data.tables import LinkSamples
 from rplearn.errors import InputError
 from rplearn.models.own_posterior import OwnPosterior

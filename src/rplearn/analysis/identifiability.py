@@ -9,7 +9,7 @@ import numpy as np
 
 from rplearn.core.bases import SphericalHarmonics
 from rplearn.core.geometry import Directions
-from rplearn.core.solver import fit_joint, identifiability
+from rplearn.core.lsq.solver import fit_joint, identifiability
 from rplearn.models.patterns import PatternSet
 
 Progress = Callable[[str], None]

@@ -1,7 +1,7 @@
 """``fit --degree auto``: a regularised pattern whose order and smoothing the data choose.
 
 The statistics of every learning unit are accumulated once, at the largest candidate order;
-:func:`rplearn.core.selection.select_order_and_smoothing` chooses order and smoothing by grouped
+:func:`rplearn.core.lsq.selection.select_order_and_smoothing` chooses order and smoothing by grouped
 cross-validation over the units (GCV with one unit); the model is then solved from the sum of
 the same statistics (a sub-block for a smaller SH order), so no sample is read twice.
 """
@@ -13,14 +13,14 @@ from collections import Counter
 from typing import Any, Mapping, Sequence
 
 import numpy as np
-import scipy.linalg  # noqa: F401  (order selection solves through scipy: loaded before any BLAS limit, rplearn.core.blas)
+import scipy.linalg  # noqa: F401  (order selection solves through scipy: loaded before any BLAS limit, rplearn.core.threads)
 
 from rplearn.core.environment import PathLoss
-from rplearn.core.link_statistics import reserve_block_buffer
-from rplearn.core.normal_equations import NormalEquations
-from rplearn.core.blas import blas_threads_for, warm_up as warm_up_blas
+from rplearn.core.lsq.link_statistics import reserve_block_buffer
+from rplearn.core.lsq.normal_equations import NormalEquations
+from rplearn.core.threads import blas_threads_for, warm_up as warm_up_blas
 from rplearn.models.terms import regression_inputs, shared_fields, statistics_counts
-from rplearn.core.selection import (
+from rplearn.core.lsq.selection import (
     DEFAULT_PENALTY_POWER,
     Selection,
     nested_columns,
@@ -29,7 +29,7 @@ from rplearn.core.selection import (
     select_order_and_smoothing,
     sub_statistics,
 )
-from rplearn.core.solver import PRIOR_LEVELS, solve
+from rplearn.core.lsq.solver import PRIOR_LEVELS, solve
 from rplearn.data.tables import LinkSamples
 from rplearn.errors import InputError
 from rplearn.models.fit import FittedModel, node_coverage_grids

@@ -13,12 +13,12 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from rplearn.core.blas import blas_threads_for, warm_up as warm_up_blas
+from rplearn.core.threads import blas_threads_for, warm_up as warm_up_blas
 from rplearn.models.baselines import KNNModel, MeanModel
 from rplearn.data.tables import LinkSamples
 from rplearn.core.metrics import Scores, score
 from rplearn.models.patterns import PatternSet
-from rplearn.core.solver import FitReport, fit_joint
+from rplearn.core.lsq.solver import FitReport, fit_joint
 from rplearn.models.base import Model, learned_frequency_hz
 from rplearn.models.spec import ModelSpec, check_model_size
 from rplearn.models.terms import directed_counts, regression_inputs, shared_fields
@@ -159,7 +159,7 @@ def _warm_up(spec: ModelSpec, n_samples: int = 1, path_loss: PathLoss | None = N
     if spec.kind == "knn":
         import sklearn.neighbors  # noqa: F401  (loads scipy's BLAS too)
     elif spec.decouples:
-        from rplearn.core.link_statistics import reserve_block_buffer
+        from rplearn.core.lsq.link_statistics import reserve_block_buffer
 
         if path_loss is not None and path_loss.learns_exponent:
             import scipy.linalg.blas  # noqa: F401  (the exponent's identifiability check solves through it)

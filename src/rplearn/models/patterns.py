@@ -50,7 +50,7 @@ class PatternSet:
     covariance : ndarray or None
         Covariance of all coefficients (``n_nodes * n_coef`` square), for standard errors.
     gauge : list of dict
-        How unidentifiable constants were fixed (see :mod:`rplearn.core.solver`).
+        How unidentifiable constants were fixed (see :mod:`rplearn.core.lsq.solver`).
     training : dict
         Training summary (samples, RMSE, rank, condition number, ridge, ...).
     provenance : dict

@@ -1,7 +1,7 @@
 """Learning patterns from a matched dataset too big for memory, chunk by chunk.
 
 The joint least-squares problem needs only its sufficient statistics (``X^T X``, ``X^T y``,
-``y^T y`` and the sample count per link, :class:`~rplearn.core.normal_equations.NormalEquations`),
+``y^T y`` and the sample count per link, :class:`~rplearn.core.lsq.normal_equations.NormalEquations`),
 so a dataset can be read a chunk at a time: each chunk is checked, turned into link samples,
 accumulated and dropped. The solve, the training RMSE (from the statistics) and the model are
 the same as :func:`rplearn.models.fit.solve_patterns` gives on the whole dataset, to rounding.
@@ -27,10 +27,10 @@ import numpy as np
 import pandas as pd
 
 from rplearn.core.environment import PathLoss
-from rplearn.core.normal_equations import NormalEquations
+from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.models.terms import regression_inputs, shared_fields, statistics_counts
-from rplearn.core.selection import penalty_scale, penalty_vector
-from rplearn.core.solver import FitReport, solve
+from rplearn.core.lsq.selection import penalty_scale, penalty_vector
+from rplearn.core.lsq.solver import FitReport, solve
 from rplearn.data.tables import LinkSamples, link_samples, node_ids
 from rplearn.data.units import Stretches
 from rplearn.errors import InputError

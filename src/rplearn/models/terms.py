@@ -23,7 +23,7 @@ from rplearn.data.tables import LinkSamples
 from rplearn.errors import InputError
 
 if TYPE_CHECKING:
-    from rplearn.core.solver import JointSolution
+    from rplearn.core.lsq.solver import JointSolution
 
 
 def regression_inputs(samples: LinkSamples, path_loss: PathLoss) -> tuple[np.ndarray, np.ndarray | None]:

@@ -47,7 +47,7 @@ from rplearn.core.environment import PathLoss
 
 if TYPE_CHECKING:  # order selection (models.auto, analysis.sweep) loads scipy: imported when used
     from rplearn.analysis.sweep import SweepResult
-    from rplearn.core.selection import Selection
+    from rplearn.core.lsq.selection import Selection
 
 Progress = Callable[[str], None]
 
