@@ -38,6 +38,8 @@ LAYERS: tuple[str, ...] = (
     "rplearn.integrations",
     "rplearn.workflows",
     "rplearn.cli",
+    # ``python -m rplearn``: runs the command line
+    "rplearn.__main__",
 )
 
 #: Third-party packages a layer may not import (docs/conventions.md: the core needs numpy and scipy only;

@@ -34,7 +34,7 @@ app = typer.Typer(
         "  rplearn demo -o rplearn-demo"
     ),
     no_args_is_help=True,
-    add_completion=False,
+    add_completion=True,  # --install-completion / --show-completion for bash, zsh, fish, PowerShell
     rich_markup_mode=None,  # help texts carry units in brackets, e.g. [m/s], which markup would eat
     pretty_exceptions_enable=False,
 )
