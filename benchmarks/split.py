@@ -31,7 +31,7 @@ import argparse
 import json
 import sys
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -44,6 +44,7 @@ from rplearn.data.tables import link_samples
 from rplearn.models import ModelSpec
 from rplearn.models.auto import fit_auto
 from rplearn.models.fit import fit_model
+from rplearn.models.options import FitOptions
 from rplearn.sim import simulate
 from rplearn.workflows.learning import TIME_BLOCKS
 
@@ -119,20 +120,20 @@ def run_case(preset: str, seed: int, orders: list[int]) -> Case:
     nodes = tuple(sorted(set(ds["tx"]) | set(ds["rx"])))
     learn = ds[~ds["unit"].str.startswith("test")]
     test = link_samples(ds[ds["unit"].str.startswith("test")], nodes=nodes)
-    path_loss = PathLoss("log-distance") if preset == "pathloss" else None
+    options = FitOptions(path_loss=PathLoss("log-distance") if preset == "pathloss" else PathLoss())
     units = {u: link_samples(g, nodes=nodes) for u, g in learn.groupby("unit")}
     if len(units) == 1:  # one flight: contiguous stretches of time, as `rplearn fit` cuts it
         ordered = learn.sort_values("t", kind="stable")
         units = {f"{u}[{k + 1}/{TIME_BLOCKS}]": link_samples(ordered.iloc[b], nodes=nodes)
                  for u in units for k, b in enumerate(np.array_split(np.arange(len(ordered)), TIME_BLOCKS))}
-    fitted, sel = fit_auto(units, path_loss=path_loss)
+    fitted, sel = fit_auto(units, options=replace(options, auto=True))
     auto = fitted.model
     covered = covered_directions(auto)
     everything = link_samples(learn, nodes=nodes)
     cert = decoupling_certificate(auto, list(units.values()))
     fixed_rmse, fixed_err = {}, {}
     for k in orders:
-        model = fit_model(everything, ModelSpec("sh", k), path_loss=path_loss).model
+        model = fit_model(everything, ModelSpec("sh", k), options).model
         fixed_rmse[k] = _rmse(model, test)
         fixed_err[k] = pattern_errors_db(model, sim.ground_truth, covered)
     case = Case(preset, seed, fitted.spec.label, sel.smoothing, _rmse(auto, test),

@@ -83,6 +83,7 @@ _NAMES: dict[str, str] = {
     "sh_index": "sh",
     # joint least squares
     "DEFAULT_RIDGE": "solver",
+    "Gauge": "gauge",
     "FitReport": "solver",
     "GaugeNote": "solver",
     "JointSolution": "solver",

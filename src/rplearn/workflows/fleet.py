@@ -20,13 +20,13 @@ from typing import Any, Callable, Iterator, Sequence
 import numpy as np
 import pandas as pd
 
-from rplearn.core.environment import PathLoss
 from rplearn.data.tables import link_samples
 from rplearn.data.units import Stretches
 from rplearn.errors import InputError
 from rplearn.io.files import iter_parts
 from rplearn.io.partitions import Part
 from rplearn.models.base import Model
+from rplearn.models.options import FitOptions
 from rplearn.models.predict import uncovered_rows
 from rplearn.models.spec import ModelSpec
 from rplearn.models.streamed import Accumulated, accumulate, units_and_nodes
@@ -162,16 +162,17 @@ def _part_statistics(part: Part, **kwargs: Any) -> Accumulated:
 
 
 def accumulate_parts(
-    parts: Sequence[Part], spec: ModelSpec, nodes: Sequence[str], units: Sequence[str] | None, by_unit: bool,
-    stretches: Stretches | None = None, path_loss: PathLoss | None = None, client: Any = None,
-    progress: Progress | None = None,
+    parts: Sequence[Part], spec: ModelSpec, nodes: Sequence[str], units: Sequence[str] | None,
+    options: FitOptions, stretches: Stretches | None = None, client: Any = None, progress: Progress | None = None,
 ) -> Accumulated:
-    """The statistics of every part, added in order (see the module docstring).
+    """The statistics of every part, added in order (see the module docstring), with the
+    environment term of ``options``: one accumulator per unit when ``options.auto`` (the folds
+    of the automatic choice), else one for all learning rows.
 
     ``stretches`` (of a single flight, :func:`learning_times`) label each row by its stretch of
     time wherever the part that holds it is read."""
-    kwargs = dict(spec=spec, nodes=list(nodes), units=None if units is None else list(units), by_unit=by_unit,
-                  stretches=stretches, path_loss=path_loss)
+    kwargs = dict(spec=spec, nodes=list(nodes), units=None if units is None else list(units), by_unit=options.auto,
+                  stretches=stretches, options=options)
     if client is None:
         total: Accumulated | None = None
         for k, part in enumerate(parts):
