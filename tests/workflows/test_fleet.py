@@ -85,8 +85,8 @@ def test_dask_fit_and_automatic_choice_equal_the_single_process(fleet, client, t
 
     root, _ = fleet
     spec = ModelSpec.parse("sh", order=6)
-    here = _fit_streamed(str(root), spec, None, "equal-mean", None)
-    there = _fit_streamed(str(root), spec, None, "equal-mean", None, client=client)
+    here = _fit_streamed(str(root), spec, None, FitOptions(), None)
+    there = _fit_streamed(str(root), spec, None, FitOptions(), None, client=client)
     assert there.n_samples == here.n_samples
     assert np.max(np.abs(coef(there.fitted.model) - coef(here.fitted.model))) < 1e-9
     auto_here = _fit_streamed(str(root), ModelSpec.parse("sh"), None, FitOptions(auto=True), None)

@@ -167,7 +167,7 @@ def covered_directions(model: PatternSet, within_deg: float = COVERED_WITHIN_DEG
     InputError
         When the model stores no coverage grid for a node.
     """
-    grids = model.training.get("coverage_deg") or {}
+    grids = model.training.coverage_deg or {}
     out = {}
     for node in model.nodes:
         if node not in grids:
@@ -194,7 +194,7 @@ def _node_spreads(model: PatternSet, covered: Mapping[str, tuple[np.ndarray, np.
     gauged = gauged_nodes(model)
     saz, sel = fibonacci_grid_nodes(SPHERE_POINTS)
     sphere = basis.design(saz, sel)
-    grid_sizes = {n: len(model.training["coverage_deg"][n]) for n in model.nodes}
+    grid_sizes = {n: len((model.training.coverage_deg or {})[n]) for n in model.nodes}
     spreads, metrics = {}, []
     for k, node in enumerate(model.nodes):
         block = cov[k * p:(k + 1) * p, k * p:(k + 1) * p]
@@ -317,7 +317,7 @@ def decoupling_certificate(
     cov = np.asarray(model.covariance, np.float64)
     spreads, metrics = _node_spreads(model, covered, cov)
     covered_db = float(np.sqrt(np.mean([s.covered_std_db**2 for s in spreads.values()])))
-    if "selection" not in model.training:  # a fixed order: the ridge's estimate, no posterior
+    if model.training.selection is None:  # a fixed order: the ridge's estimate, no posterior
         return DecouplingCertificate(spreads, covered_db=covered_db, notes=[
             "(a fixed-order fit's covariance leaves out what its ridge decides where the flight cannot split the "
             "patterns, so these spreads are lower bounds and the unsplit components are not computed; "
@@ -334,13 +334,13 @@ def decoupling_certificate(
 
 
 def certify(model: Any, samples: LinkSamples | Sequence[LinkSamples] | None = None) -> DecouplingCertificate | None:
-    """:func:`decoupling_certificate` of a fitted model, stored in ``model.training["decoupling"]``
+    """:func:`decoupling_certificate` of a fitted model, stored in ``model.training.decoupling``
     (with its :meth:`~DecouplingCertificate.summary` text, which ``fit`` prints); None, and
     nothing stored, for a model without patterns, covariance or coverage grid (a baseline)."""
-    if not isinstance(model, PatternSet) or model.covariance is None or not model.training.get("coverage_deg"):
+    if not isinstance(model, PatternSet) or model.covariance is None or not model.training.coverage_deg:
         return None
     cert = decoupling_certificate(model, samples)
-    model.training["decoupling"] = {**cert.to_dict(), "summary": cert.summary()}
+    model.training = model.training.replace(decoupling={**cert.to_dict(), "summary": cert.summary()})
     return cert
 
 

@@ -280,7 +280,7 @@ def _predict_blocks(
     names = np.array(drones, dtype=object)
     pattern_names = np.array([patterns[x] for x in drones], dtype=object)
     limit_m = _far_field_limit_m(frequency_hz)
-    residual_db = float(model.training.get("rmse_db", np.nan))
+    residual_db = float(model.training.rmse_db if model.training.rmse_db is not None else np.nan)
     columns: dict[str, np.ndarray] = {}
     parts = []
     offset = 0
@@ -348,7 +348,7 @@ def _predict_links(
     }
     std = model.predict_gain_std(samples)
     if std is not None:
-        residual_db = float(model.training.get("rmse_db", np.nan))
+        residual_db = float(model.training.rmse_db if model.training.rmse_db is not None else np.nan)
         columns["gain_pred_std_db"] = std
         columns["rssi_pred_std_db"] = np.sqrt(std**2 + residual_db**2)
     ends = end_coverage_deg(model, samples)

@@ -98,7 +98,7 @@ def reference(
             raise InputError(f"--mount: expected NODE=ROLL,PITCH,YAW in degrees, got {node}={text}")
     model = reference_model_file(files, output, mounts)
     say(f"reference model of {', '.join(model.nodes)} ({model.label}) -> {output}")
-    for node, info in model.training["reference"].items():
+    for node, info in (model.training.reference or {}).items():
         say(f"  {node}: {info['source']}, mount (roll, pitch, yaw) {tuple(info['mount_rpy_deg'])} deg, "
             f"expansion residual {info['expansion_rmse_db']:.3f} dB RMS")
 

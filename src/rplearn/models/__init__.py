@@ -7,6 +7,7 @@ module           public names
                  ``predict_gain_std``, ``save``, ...); :func:`model_frequency_hz`
 ``spec``         :class:`ModelSpec` (``"sh-10"``, ``"bg-7"``, ``"p-12"``, ``"nn-400"``, ``"m"``)
 ``options``      :class:`FitOptions`, how a model is learned (with :class:`Gauge`); checked once
+``training``     :class:`TrainingSummary`, what a fit says about itself (``model.training``)
 ``patterns``     :class:`PatternSet`, one radiation pattern per node
 ``baselines``    :class:`MeanModel` (M), :class:`KNNModel` (NN-k)
 ``fit``          :func:`fit_model` -> :class:`FittedModel`, :func:`fit_patterns`,
@@ -39,8 +40,8 @@ _NAMES: dict[str, str] = {
     "check_fit_options": "spec",
     # how a model is learned (one fit request)
     "FitOptions": "options",
-    "Gauge": "options",
     "LOSSES": "options",
+    "TrainingSummary": "training",
     "default_ridge": "spec",
     # model kinds
     "KNNModel": "baselines",

@@ -259,8 +259,8 @@ def fit_auto(
         fitted, choice = fit_from_statistics(stats, big, orders, nodes, options, weighted_median(freq), provenance,
                                              power)
         fitted.ltd_s = time.perf_counter() - t0
-    fitted.model.training["ltd_s"] = fitted.ltd_s
-    fitted.model.training["coverage_deg"] = node_coverage_grids(list(units.values()))
+    fitted.model.training = fitted.model.training.replace(ltd_s=fitted.ltd_s,
+                                                          coverage_deg=node_coverage_grids(list(units.values())))
     return fitted, choice
 
 

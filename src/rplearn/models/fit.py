@@ -45,14 +45,14 @@ class FittedModel:
     @classmethod
     def from_model(cls, model: Model) -> "FittedModel":
         """Wrap a loaded model; its LTD comes from its training summary (NaN if absent)."""
-        ltd = model.training.get("ltd_s")
+        ltd = model.training.ltd_s
         spec = ModelSpec.parse(model.label)
         return cls(spec, model, float("nan") if ltd is None else float(ltd))
 
     @property
     def condition_number(self) -> float:
         """Condition number of the fit's normal equations (NaN for the baselines, which have none)."""
-        return float(self.model.training.get("condition_number") or np.nan)
+        return float(self.model.training.condition_number or np.nan)
 
 
 def solve_patterns(
@@ -196,10 +196,9 @@ def fit_model(
         else:
             model = fit_patterns(samples, spec, options)
         ltd = time.perf_counter() - t0
-    if isinstance(model, PatternSet):
-        model.training["coverage_deg"] = node_coverage_grids(samples)
+    coverage = node_coverage_grids(samples) if isinstance(model, PatternSet) else model.training.coverage_deg
     model.provenance = {**dict(provenance or {}), "model": spec.label}
-    model.training["ltd_s"] = ltd
+    model.training = model.training.replace(ltd_s=ltd, coverage_deg=coverage)
     return FittedModel(spec, model, ltd)
 
 

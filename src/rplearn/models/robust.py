@@ -188,11 +188,10 @@ def fit_huber(
     residual = y - fitted
     scale = robust_scale_db(residual)
     robust = RobustReport(scale, float(k), np.abs(residual) > k * scale, iterations, converged)
-    model.training.update(report.to_dict())
-    model.training["robust"] = robust.to_dict()
-    model.training["rmse_db"] = float(np.sqrt(np.mean(residual**2)))
-    model.training["coverage_deg"] = node_coverage_grids(samples)
-    model.training["ltd_s"] = ltd
+    model.training = model.training.replace(**{
+        **report.to_dict(), "robust": robust.to_dict(), "rmse_db": float(np.sqrt(np.mean(residual**2))),
+        "coverage_deg": node_coverage_grids(samples), "ltd_s": ltd,
+    })
     model.provenance = {**dict(provenance or {}), "model": spec.label, "loss": "huber"}
     return FittedModel(spec, model, ltd), robust
 

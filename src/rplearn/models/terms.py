@@ -22,6 +22,7 @@ from rplearn.core.environment import PathLoss, log_distance_column
 from rplearn.data.tables import LinkSamples
 from rplearn.errors import InputError
 from rplearn.models.options import FitOptions
+from rplearn.models.training import TrainingSummary
 
 if TYPE_CHECKING:
     from rplearn.core.solver import JointSolution
@@ -130,9 +131,9 @@ def shared_fields(
     return {"path_loss": path_loss, "shared_names": names, "shared_coef": coef}, training
 
 
-def learned_directions(training: Mapping[str, Any]) -> set[tuple[str, str]] | None:
+def learned_directions(training: TrainingSummary | Mapping[str, Any]) -> set[tuple[str, str]] | None:
     """The directed links ``(tx, rx)`` a model learned from (None when its file does not say)."""
-    rows = training.get("directions")
+    rows = TrainingSummary.from_dict(training).directions
     if not isinstance(rows, list):
         return None
     try:
@@ -141,17 +142,18 @@ def learned_directions(training: Mapping[str, Any]) -> set[tuple[str, str]] | No
         return None
 
 
-def terms_text(training: Mapping[str, Any]) -> list[str]:
+def terms_text(training: TrainingSummary | Mapping[str, Any]) -> list[str]:
     """Summary lines of a model's link terms (environment, exponent, offsets, directions)."""
+    training = TrainingSummary.from_dict(training)
     lines = []
-    info = training.get("path_loss") or {}
+    info = training.path_loss or {}
     pl = PathLoss.from_dict(info)
     if pl.kind == "log-distance" and "exponent" in info:
         lines.append(f"path loss: log-distance, exponent {info['exponent']:.3f} +- {info['exponent_se']:.3f} "
                      f"(free space 2; d0 = 1 m)")
     elif pl.kind != "free":
         lines.append(f"path loss: {pl.describe()}")
-    offsets = training.get("link_offsets_db") or []
+    offsets = training.link_offsets_db or []
     if offsets:
         text = ", ".join(f"{o['tx']}->{o['rx']} {o['offset_db']:+.2f} +- {o['se_db']:.2f} dB" for o in offsets)
         lines.append(f"electronics offsets (each link's two directions sum to 0): {text}")

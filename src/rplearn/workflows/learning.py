@@ -88,12 +88,12 @@ class FitOutcome:
         text = f"{self.fitted.label} learned from {self.n_samples:,} samples in {self.fitted.ltd_s:.3f} s"
         if self.output:
             text += f" -> {self.output}"
-        if "rank" in training:
+        if training.rank is not None:
             text += (
-                f"\n  rank {training['rank']} of {training['n_columns']}, condition number "
-                f"{training['condition_number']:.2f}, training RMSE {training['rmse_db']:.2f} dB"
+                f"\n  rank {training.rank} of {training.n_columns}, condition number "
+                f"{training.condition_number:.2f}, training RMSE {training.rmse_db:.2f} dB"
             )
-            text += "".join(f"\n  gauge: {g['text']}" for g in training.get("gauges", []))
+            text += "".join(f"\n  gauge: {g['text']}" for g in training.gauges or ())
         if self.selection is not None:
             sel = self.selection
             how = (f"grouped cross-validation over units {', '.join(sel.units)}" if sel.method == "grouped-cv"
@@ -101,21 +101,23 @@ class FitOutcome:
             text += (f"\n  chosen by {how}: order {sel.order}, smoothing {sel.smoothing:.1e}, "
                      f"validation RMSE {sel.rmse_db:.2f} dB; the curve:\n    "
                      + sel.curve_text().replace("\n", "\n    "))
-            if "variance_inflation" in training and sel.method == "grouped-cv":
+            if training.variance_inflation is not None and sel.method == "grouped-cv":
                 text += (f"\n  spread: within each held-out unit, the errors exceed the posterior's by "
-                         f"x{training['variance_inflation']:.2f} in variance (correlated packets, misfit); the covariance "
+                         f"x{training.variance_inflation:.2f} in variance (correlated packets, misfit); the covariance "
                          "is inflated to match")
-                if "flight_level_std_db" in training:
-                    text += (f"\n  flight-to-flight level: {training['flight_level_std_db']:.1f} dB (1 sigma) between units, "
-                             f"{training.get('new_flight_level_std_db', 0.0):.1f} dB for a new flight's predictions; "
-                             f"noise about a flight's level {training.get('noise_std_db', float('nan')):.1f} dB")
-            spread = training.get("prior_std_db") or {}
+                if training.flight_level_std_db is not None:
+                    new_level = training.new_flight_level_std_db or 0.0
+                    noise = training.noise_std_db if training.noise_std_db is not None else float("nan")
+                    text += (f"\n  flight-to-flight level: {training.flight_level_std_db:.1f} dB (1 sigma) between units, "
+                             f"{new_level:.1f} dB for a new flight's predictions; "
+                             f"noise about a flight's level {noise:.1f} dB")
+            spread = training.prior_std_db or {}
             if spread:
                 values = ", ".join(f"{n} {v:.1f} dB" for n, v in spread.items())
                 text += (f"\n  where the flight never looked each pattern may be off by (1 sigma): {values} "
-                         f"({training.get('prior_std_source', '')})")
+                         f"({training.prior_std_source or ''})")
         text += "".join(f"\n  {line}" for line in terms_text(training))
-        text += "".join(f"\n  {line}" for line in training.get("decoupling", {}).get("summary", "").splitlines())
+        text += "".join(f"\n  {line}" for line in (training.decoupling or {}).get("summary", "").splitlines())
         text += "".join(f"\n  {line}" for line in self.robust_notes)
         if self.wall_s is not None and self.wall_s > 0:
             text += (f"\n  read, accumulated and solved in {self.wall_s:.1f} s "
@@ -127,7 +129,7 @@ class FitOutcome:
 
     @property
     def warnings(self) -> list[str]:
-        return list(self.fitted.model.training.get("warnings", []))
+        return list(self.fitted.model.training.warnings or ())
 
 
 def fit_dataset(
@@ -290,7 +292,7 @@ def _fit_streamed(
         prov = provenance(dataset=dataset, model=f"{spec.kind}-auto", ridge=spec.ridge, units=choice.units)
         fitted, selection = fit_from_statistics(acc.stats, spec, orders, nodes, options,
                                                 frequency_hz=weighted_median(acc.freq), provenance=prov)
-        fitted.model.training["coverage_deg"] = acc.grids or {}
+        fitted.model.training = fitted.model.training.replace(coverage_deg=acc.grids or {})
         certify(fitted.model)  # the spreads alone: the pairs of directions were streamed, not kept
         if output:
             fitted.model.save(output)
@@ -300,7 +302,7 @@ def _fit_streamed(
     model = fit.patterns
     model.provenance = {**provenance(dataset=dataset, model=spec.label, ridge=spec.ridge, units=choice.units),
                         "model": spec.label}
-    model.training["ltd_s"] = fit.learn_s
+    model.training = model.training.replace(ltd_s=fit.learn_s)
     fitted = FittedModel(spec, model, fit.learn_s)
     if output:
         model.save(output)
