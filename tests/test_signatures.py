@@ -44,16 +44,10 @@ PENDING: frozenset[str] = frozenset({
     "analysis/headings.py:best_yaw",
     "analysis/headings.py:best_swarm_headings",
     "analysis/swarm.py:predict_swarm",
-    "analysis/swarm.py:_predict_blocks",
-    "analysis/swarm.py:_predict_links",
     "integrations/sionna.py:add_link",
     "io/mavlink.py:read_mavlink",
-    "io/mavlink_phases.py:excluded_periods",
-    "io/mavlink_phases.py:_evidence",
     "io/rosbag.py:read_rosbag",
     "plan/check.py:check_plan",
-    "sim/flight.py:_environment_db",
-    "sim/gain_formulas.py:_sectoral_dbi",
     "workflows/planning.py:plan_campaign",
     "workflows/logs.py:swarm_links",  # forwards **swarm_options to predict_swarm
 })

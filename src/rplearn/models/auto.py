@@ -32,10 +32,12 @@ from rplearn.core.solver import solve
 from rplearn.data.tables import LinkSamples
 from rplearn.errors import InputError
 from rplearn.models.fit import FittedModel, node_coverage_grids
+from rplearn.models.load import load_priors
 from rplearn.models.options import FitOptions
 from rplearn.models.patterns import PatternSet
 from rplearn.models.spec import ModelSpec, check_model_size, default_ridge
 from rplearn.models.streamed import frequency_counts, weighted_median
+from rplearn.models.training import TrainingSummary
 
 #: Largest SH order ``--degree auto`` considers (the cost of the selection is that of one fit
 #: at this order: its statistics are accumulated once). A cost cap: on the paper's data the
@@ -277,7 +279,7 @@ def fit_from_statistics(
     """The selection and the final solve of :func:`fit_auto`, from per-unit statistics
     accumulated at the largest of ``orders`` (in memory, or streamed from a big file), for the
     kind and ridge of ``spec``, learned as ``options`` say (:class:`FitOptions`; prior files are
-    loaded here, :meth:`FitOptions.prior_models`).
+    loaded here, :func:`rplearn.models.load.load_priors`).
 
     Statistics accumulated with an environment column (the log-distance term of
     ``path_loss``) get it as a shared column, and with ``link_offsets`` one offset per link
@@ -300,7 +302,7 @@ def fit_from_statistics(
     options = options or FitOptions(auto=True)
     kind, ridge = spec.kind, float(spec.ridge if spec.ridge is not None else default_ridge(spec.kind))
     gauge, path_loss, link_offsets = options.gauge, options.path_loss, options.link_offsets
-    prior, prior_spread_db, prior_level = options.prior_models() or None, options.prior_std_db, options.prior_level
+    prior, prior_spread_db, prior_level = load_priors(options).priors or None, options.prior_std_db, options.prior_level
     if power is None:
         power = PRIOR_PENALTY_POWER if prior else DEFAULT_PENALTY_POWER
     if prior_spread_db is not None:
@@ -388,7 +390,7 @@ def fit_from_statistics(
     if frequency_hz is not None:
         training["frequency_hz"] = frequency_hz
     model = PatternSet(basis=chosen, nodes=tuple(nodes), coef=sol.coef, covariance=covariance,
-                       gauge=[g.to_dict() for g in sol.report.gauges], training=training, **fields)
+                       gauge=[g.to_dict() for g in sol.report.gauges], training=TrainingSummary.from_dict(training), **fields)
     model.provenance = {**dict(provenance or {}), "model": final.label}
     return FittedModel(final, model, ltd), choice
 

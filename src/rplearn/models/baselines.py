@@ -58,13 +58,9 @@ def _nodes_of_links(links) -> tuple[str, ...]:
     return tuple(dict.fromkeys(n for key in links for n in key))
 
 
-def _baseline_training(samples: LinkSamples) -> dict[str, Any]:
+def _baseline_training(samples: LinkSamples) -> TrainingSummary:
     """Training summary of a baseline: sample count and, when known, the carrier [Hz]."""
-    training: dict[str, Any] = {"n_samples": len(samples)}
-    frequency_hz = learned_frequency_hz(samples)
-    if frequency_hz is not None:
-        training["frequency_hz"] = frequency_hz
-    return training
+    return TrainingSummary(n_samples=len(samples), frequency_hz=learned_frequency_hz(samples))
 
 
 # -- the maths of one link, shared with the scikit-learn estimators -------------------------

@@ -24,6 +24,7 @@ from rplearn.models.options import FitOptions
 from rplearn.models.spec import ModelSpec, check_model_size
 from rplearn.models.terms import directed_counts, regression_inputs, shared_fields
 from rplearn.errors import InputError
+from rplearn.models.training import TrainingSummary
 
 
 @dataclass
@@ -106,7 +107,7 @@ def solve_patterns(
         coef=sol.coef,
         covariance=sol.covariance,
         gauge=[g.to_dict() for g in sol.report.gauges],
-        training=training,
+        training=TrainingSummary.from_dict(training),
         **fields,
     )
     return patterns, sol.report

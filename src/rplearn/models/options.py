@@ -10,6 +10,7 @@ and passed down unchanged: no function below re-reads a flag or re-checks an opt
 
 from __future__ import annotations
 
+import os
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
@@ -22,7 +23,6 @@ from rplearn.core.solver import PRIOR_LEVELS
 from rplearn.errors import InputError
 
 if TYPE_CHECKING:
-    from rplearn.models.base import Model
     from rplearn.models.spec import ModelSpec
 
 #: The losses a pattern fit may minimise: least squares, or Huber (:mod:`rplearn.models.robust`).
@@ -122,33 +122,14 @@ class FitOptions:
             raise InputError(f"gauge_node: not used by {spec.label}, a baseline without patterns", param="gauge_node")
 
     def prior_files(self) -> list[str]:
-        """The priors given as model files (inputs a fit's output may not overwrite)."""
-        return [str(m) for m in self.priors.values() if isinstance(m, (str, bytes)) or hasattr(m, "__fspath__")]
+        """The priors given as model files (inputs a fit's output may not overwrite; they are
+        read by :func:`rplearn.models.load.load_priors`)."""
+        return [os.fspath(m) for m in self.priors.values() if is_model_file(m)]
 
-    def prior_models(self) -> dict[str, "Model"]:
-        """The priors as pattern models (files loaded).
 
-        Raises
-        ------
-        InputError
-            A prior that is not a pattern model.
-        """
-        from rplearn.models.base import require_patterns
-        from rplearn.models.load import load_model
-
-        out = {}
-        for node, m in self.priors.items():
-            model = load_model(str(m)) if isinstance(m, str) or hasattr(m, "__fspath__") else m
-            require_patterns(model, "serving as a prior")
-            out[node] = model
-        return out
-
-    def with_prior_models(self) -> "FitOptions":
-        """These options with the prior files loaded (:meth:`prior_models`); self without priors."""
-        if not self.priors:
-            return self
-        return FitOptions(self.gauge, self.path_loss, self.link_offsets, self.loss, self.auto, self.prior_models(),
-                          self.prior_std_db, self.prior_level)
+def is_model_file(value: Any) -> bool:
+    """Whether a prior is given as a model file (a path) rather than a model."""
+    return isinstance(value, str) or hasattr(value, "__fspath__")
 
 
 __all__ = ["LOSSES", "FitOptions"]

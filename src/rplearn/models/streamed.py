@@ -31,6 +31,7 @@ from rplearn.errors import InputError
 from rplearn.models.fit import node_coverage_grids
 from rplearn.models.patterns import PatternSet
 from rplearn.models.spec import ModelSpec
+from rplearn.models.training import TrainingSummary
 
 
 @dataclass
@@ -279,7 +280,7 @@ def fit_patterns_accumulated(
         training["frequency_hz"] = f
     patterns = PatternSet(
         basis=basis, nodes=tuple(nodes), coef=sol.coef, covariance=sol.covariance,
-        gauge=[g.to_dict() for g in sol.report.gauges], training=training, **fields,
+        gauge=[g.to_dict() for g in sol.report.gauges], training=TrainingSummary.from_dict(training), **fields,
     )
     return StreamedFit(patterns, sol.report, normal.n_samples, non_unit, learn_s)
 

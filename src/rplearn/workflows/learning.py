@@ -36,7 +36,7 @@ from rplearn.workflows.fleet import (
     accumulate_parts, dask_client, dataset_index, learning_times, parse_dask, predict_parts, selected_rows,
 )
 from rplearn.models.fit import FittedModel, evaluate_models, fit_model, scores_markdown, scores_of_predictions
-from rplearn.models.load import load_model
+from rplearn.models.load import load_model, load_priors
 from rplearn.models.options import FitOptions
 from rplearn.models.spec import ModelSpec, check_model_size
 from rplearn.models.robust import downweighted_notes, fit_huber
@@ -174,7 +174,7 @@ def fit_dataset(
     options.check(spec)
     if output:
         check_output_path(output, [dataset, *options.prior_files()])
-    options = options.with_prior_models()
+    options = load_priors(options)
     if dask is not None:
         parse_dask(dask)
         if not spec.decouples or options.loss != "ls":
