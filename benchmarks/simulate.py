@@ -33,7 +33,7 @@ def main() -> None:
 
     from rplearn.data.tables import link_samples
     from rplearn.models.estimators import JointKNNRegressor, MeanRegressor, PatternRegressor
-    from rplearn.plan.check import check_plan
+    from rplearn.plan.check import NominalAttitude, check_plan
     from rplearn.sim.flight import simulate
     from rplearn.data.sync import synchronise
 
@@ -90,7 +90,7 @@ def main() -> None:
     check = check_plan(res.config.campaign, ("sh", 10))
     print("\nplan check (SH-10, learning units, nominal tilt, no wind):")
     print("  " + check.summary().replace("\n", "\n  "))
-    windy = check_plan(res.config.campaign, ("sh", 10), wind_speed_m_s=10.0)
+    windy = check_plan(res.config.campaign, ("sh", 10), attitude=NominalAttitude(wind_speed_m_s=10.0))
     print(f"  with a 10 m/s wind: rank {windy.rank}/{windy.n_columns}, condition number {windy.condition_number:.1f}")
 
 

@@ -47,7 +47,6 @@ PENDING: frozenset[str] = frozenset({
     "integrations/sionna.py:add_link",
     "io/mavlink.py:read_mavlink",
     "io/rosbag.py:read_rosbag",
-    "plan/check.py:check_plan",
     "workflows/planning.py:plan_campaign",
     "workflows/logs.py:swarm_links",  # forwards **swarm_options to predict_swarm
 })
