@@ -177,7 +177,7 @@ class TrainingSummary(Mapping[str, Any]):
             return self.to_dict() == dict(other)
         return NotImplemented
 
-    __hash__ = None  # type: ignore[assignment]  (holds dictionaries)
+    __hash__ = None  # type: ignore[assignment]  # holds dictionaries
 
 
 __all__ = ["TrainingSummary"]
