@@ -53,7 +53,7 @@ PENDING: frozenset[str] = frozenset({
 
 
 def _is_solver_entry(module: str) -> bool:
-    return module.startswith("core/solver") or module.startswith("core/lsq/")
+    return module.startswith(("core/solver", "core/lsq/"))
 
 
 def _functions():
@@ -62,18 +62,18 @@ def _functions():
         module = path.relative_to(SRC).as_posix()
         tree = ast.parse(path.read_text(), str(path))
 
-        def walk(node, prefix, in_class):
+        def walk(node, prefix, in_class, module=module):
             for child in ast.iter_child_nodes(node):
                 if isinstance(child, ast.ClassDef):
-                    yield from walk(child, f"{prefix}{child.name}.", True)
+                    yield from walk(child, f"{prefix}{child.name}.", True, module)
                 elif isinstance(child, (ast.FunctionDef, ast.AsyncFunctionDef)):
                     command = module.startswith("cli/") and any(
                         isinstance(d, ast.Call) and isinstance(d.func, ast.Attribute) and d.func.attr == "command"
                         for d in child.decorator_list)
                     yield module, f"{prefix}{child.name}", child, in_class, command
-                    yield from walk(child, f"{prefix}{child.name}.", False)
+                    yield from walk(child, f"{prefix}{child.name}.", False, module)
                 else:
-                    yield from walk(child, prefix, in_class)
+                    yield from walk(child, prefix, in_class, module)
 
         yield from walk(tree, "", False)
 

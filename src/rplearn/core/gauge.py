@@ -68,7 +68,7 @@ class Gauge:
         return self.node is None
 
     @classmethod
-    def of(cls, value: "Gauge | str | Mapping[str, Any] | None") -> "Gauge":
+    def of(cls, value: Gauge | str | Mapping[str, Any] | None) -> Gauge:
         """A gauge from itself, None or ``"equal-mean"`` (the default), or the legacy mapping
         ``{"node": ID, "mean_gain_dbi": VALUE}``.
 

@@ -99,7 +99,7 @@ class FitOptions:
             raise InputError("loss huber: for a pattern model of fixed order (--model sh --degree N, bg, poly), "
                              "not an automatic choice or a baseline", param="loss")
 
-    def check(self, spec: "ModelSpec") -> None:
+    def check(self, spec: ModelSpec) -> None:
         """Refuse options the model ``spec`` cannot honour (the baselines learn no patterns).
 
         Raises

@@ -120,7 +120,7 @@ class TrainingSummary(Mapping[str, Any]):
                 object.__setattr__(self, name, tuple(value))
 
     @classmethod
-    def from_dict(cls, data: "Mapping[str, Any] | TrainingSummary | None") -> "TrainingSummary":
+    def from_dict(cls, data: Mapping[str, Any] | TrainingSummary | None) -> TrainingSummary:
         """The summary of a model file's ``training`` object (any version; unknown entries kept
         in ``extra``), or of a summary itself.
 
@@ -153,7 +153,7 @@ class TrainingSummary(Mapping[str, Any]):
         out.update(self.extra)
         return out
 
-    def replace(self, **changes: Any) -> "TrainingSummary":
+    def replace(self, **changes: Any) -> TrainingSummary:
         """A copy with ``changes`` (entry names as the attributes; an unknown name goes to ``extra``)."""
         known = {f.name for f in fields(self)}
         extra = {k: v for k, v in changes.items() if k not in known}
