@@ -104,9 +104,9 @@ def test_a_log_distance_fit_loads_scipy_before_its_clock_starts():
     import sys
 
     code = ("import sys\nfrom rplearn.models.fit import _warm_up\nfrom rplearn.models.spec import ModelSpec\n"
-            "from rplearn.core.environment import PathLoss\n"
+            "from rplearn.core.environment import PathLoss\nfrom rplearn.models.options import FitOptions\n"
             "_warm_up(ModelSpec.parse('sh-6'), 100)\nassert 'scipy.linalg' not in sys.modules\n"
-            "_warm_up(ModelSpec.parse('sh-6'), 100, PathLoss('log-distance'))\nassert 'scipy.linalg' in sys.modules\n"
+            "_warm_up(ModelSpec.parse('sh-6'), 100, FitOptions(path_loss=PathLoss('log-distance')))\nassert 'scipy.linalg' in sys.modules\n"
             "print('ok')")
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, check=False)
     assert proc.returncode == 0 and proc.stdout.strip() == "ok", proc.stdout + proc.stderr

@@ -87,6 +87,7 @@ _NAMES: dict[str, str] = {
     "sh_index": "sh",
     # joint least squares
     "DEFAULT_RIDGE": "lsq.solver",
+    "Gauge": "gauge",
     "FitReport": "lsq.solution",
     "GaugeNote": "lsq.solution",
     "JointSolution": "lsq.solution",

@@ -24,6 +24,7 @@ from rplearn.core.sh import SphericalHarmonics
 from rplearn.errors import InputError
 from rplearn.io.reference import ReferenceSamples
 from rplearn.models.patterns import PatternSet
+from rplearn.models.training import TrainingSummary
 
 #: SH order of a reference model (degrees 0..19): resolves features of about 180/20 = 9 degrees.
 REFERENCE_ORDER = 20
@@ -83,7 +84,7 @@ def reference_model(
     if freqs:
         training["frequency_hz"] = float(np.median(freqs))
     model = PatternSet(basis=basis, nodes=nodes, coef=np.array(coefs), covariance=np.zeros((len(nodes) * p, len(nodes) * p)),
-                       gauge=[], training=training)
+                       gauge=[], training=TrainingSummary.from_dict(training))
     model.provenance = {**dict(provenance or {}), "model": f"reference {basis.label}"}
     return model
 

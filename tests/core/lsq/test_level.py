@@ -9,6 +9,7 @@ import pytest
 
 from rplearn.core.lsq import solver, solver_large
 from rplearn.core.bases import make_basis
+from rplearn.core.gauge import Gauge
 from rplearn.core.geometry import Directions
 from rplearn.core.lsq.level import constant_coefficients, pattern_shape, shrink_target
 from rplearn.core.lsq.normal_equations import NormalEquations
@@ -84,7 +85,7 @@ def test_the_target_is_the_prior_shape_plus_the_least_squares_constants():
     shape = pattern_shape(prior, basis, 3)
     np.testing.assert_allclose(shape.reshape(3, p) @ basis.sphere_mean, 0.0, atol=1e-12)
     components = solver.link_components(3, normal.link_counts.keys())
-    cmat, cval, _ = solver._gauge_constraints(basis, 3, ["0", "1", "2"], components, {"node": "0", "mean_gain_dbi": 1.5})
+    cmat, cval, _ = solver._gauge_constraints(basis, 3, ["0", "1", "2"], components, Gauge("0", 1.5))
     target = shrink_target(normal.gram, normal.rhs, basis, 3, prior, (cmat, cval), components)
     level = (target - shape).reshape(3, p)
     np.testing.assert_allclose(level[:, 1:], 0.0, atol=1e-12)  # only the constants

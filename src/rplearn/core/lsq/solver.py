@@ -38,6 +38,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from rplearn.core.bases import Basis
+from rplearn.core.gauge import EQUAL_MEAN, Gauge
 from rplearn.core.geometry import Directions
 from rplearn.core.lsq.level import shrink_target
 from rplearn.core.lsq.normal_equations import EXPONENT_MIN_SPREAD_DB, NormalEquations, independent_spread_db
@@ -118,21 +119,18 @@ def _gauge_constraints(
     n_nodes: int,
     node_names: Sequence[str],
     components: list[tuple[list[int], list[int] | None]],
-    gauge: str | Mapping[str, Any],
+    gauge: Gauge,
 ) -> tuple[FloatArray, FloatArray, list[GaugeNote]]:
     p = basis.n_coef
     mean = basis.sphere_mean
     rows, values, notes = [], [], []
     fixed_node = None
-    if isinstance(gauge, Mapping):
-        if "node" not in gauge:
-            raise InputError("gauge: expected 'equal-mean' or {'node': ID, 'mean_gain_dbi': VALUE}")
-        if str(gauge["node"]) not in node_names:
-            raise InputError(f"gauge: unknown node {gauge['node']!r}; nodes are {', '.join(node_names)}", param="gauge_node")
-        fixed_node = node_names.index(str(gauge["node"]))
-        fixed_value = float(gauge.get("mean_gain_dbi", 0.0))
-    elif gauge != "equal-mean":
-        raise InputError(f"gauge: expected 'equal-mean' or {{'node': ID, 'mean_gain_dbi': V}}, got {gauge!r}")
+    fixed_value = 0.0
+    if gauge.node is not None:
+        if gauge.node not in node_names:
+            raise InputError(f"gauge: unknown node {gauge.node!r}; nodes are {', '.join(node_names)}", param="gauge_node")
+        fixed_node = list(node_names).index(gauge.node)
+        fixed_value = float(gauge.mean_gain_dbi or 0.0)
     if fixed_node is not None:
         for comp, side_b in components:
             if fixed_node in comp and side_b is None:
@@ -180,7 +178,7 @@ def solve(
     normal: NormalEquations,
     node_names: Sequence[str] | None = None,
     ridge: float = DEFAULT_RIDGE,
-    gauge: str | Mapping[str, Any] = "equal-mean",
+    gauge: Gauge | str | Mapping[str, Any] = EQUAL_MEAN,
     min_samples_per_coef: float = 1.0,
     penalty: FloatArray | None = None,
     penalty_target: FloatArray | None = None,
@@ -230,7 +228,7 @@ def solve(
         raise IdentifiabilityError(f"node(s) {', '.join(missing)} appear in no sample; their patterns cannot be learned")
     components = link_components(n_nodes, normal.link_counts.keys())
     _check_exponent(normal)
-    cmat, cval, notes = _gauge_constraints(normal.basis, n_nodes, names, components, gauge)
+    cmat, cval, notes = _gauge_constraints(normal.basis, n_nodes, names, components, Gauge.of(gauge))
     cmat = np.pad(cmat, ((0, 0), (0, pcols - pat)))
     large = pcols > LARGE_COLUMNS
     k = cmat.shape[0]
@@ -365,7 +363,7 @@ def fit_joint(
     basis: Basis,
     node_names: Sequence[str] | None = None,
     ridge: float = DEFAULT_RIDGE,
-    gauge: str | Mapping[str, Any] = "equal-mean",
+    gauge: Gauge | str | Mapping[str, Any] = EQUAL_MEAN,
     chunk_size: int = 1_000_000,
     smoothing: float = 0.0,
     penalty_power: float = 2.0,
@@ -390,8 +388,9 @@ def fit_joint(
         Names used in reports and gauge notes.
     ridge : float
         Ridge weight added to the diagonal of ``X^T X`` (default :data:`DEFAULT_RIDGE`).
-    gauge : "equal-mean" or dict
-        How the free constant of a two-node (bipartite) problem is fixed.
+    gauge : Gauge
+        How the free constant of a two-node (bipartite) problem is fixed (also the legacy
+        ``"equal-mean"`` or ``{"node": ID, "mean_gain_dbi": V}``, read by :meth:`Gauge.of`).
     chunk_size : int
         Samples accumulated per step.
     smoothing : float
@@ -441,7 +440,7 @@ def identifiability(
     names = list(node_names) if node_names is not None else [str(i) for i in range(n_nodes)]
     components = link_components(n_nodes, normal.link_counts.keys())
     expected = sum(1 for comp, side_b in components if side_b is not None and len(comp) > 1)
-    notes = _gauge_constraints(basis, n_nodes, names, components, "equal-mean")[2]
+    notes = _gauge_constraints(basis, n_nodes, names, components, Gauge())[2]
     sv, rank, cond = spectrum_report(normal.gram)
     return FitReport(
         n_samples=normal.n_samples,
