@@ -7,6 +7,7 @@ from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 
+from rplearn._argtypes import check_types
 from rplearn.core.bases import SphericalHarmonics
 from rplearn.core.geometry import Directions
 from rplearn.core.solver import fit_joint, identifiability
@@ -15,6 +16,7 @@ from rplearn.models.patterns import PatternSet
 Progress = Callable[[str], None]
 
 
+@check_types
 @dataclass
 class IdentifiabilityStudy:
     """Epsilon sweep of a two-antenna fit and the ranks of two- and three-antenna problems."""
@@ -48,6 +50,7 @@ class _AntennaSet:
         return self.antennas[node].gain_dbi(az_rad, el_rad)
 
 
+@check_types
 def study_antennas() -> _AntennaSet:
     """The ITU-R F.1336-5 surrogates of the paper's Fig. 6: omni "O", sectoral "S", circular "C"."""
     from rplearn.sim.antennas import AntennaSpec, Mounting, NodeAntenna
@@ -64,6 +67,7 @@ def study_antennas() -> _AntennaSet:
     )
 
 
+@check_types
 def identifiability_study(order: int = 8, n_samples: int = 20000, seed: int = 0) -> IdentifiabilityStudy:
     """Reproduce paper Sec. V-A with SH of degrees < ``order``.
 

@@ -27,6 +27,7 @@ from numpy.typing import ArrayLike
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
 
+from rplearn._argtypes import check_types
 from rplearn.data.tables import check_tx_power_dbm
 from rplearn.data.tables import LinkSamples
 from rplearn.errors import InputError
@@ -46,6 +47,7 @@ DEFAULT_MIN_RSSI_DBM = -85.0
 DEFAULT_MAX_GAP_S = 2.0
 
 
+@check_types
 @dataclass(frozen=True)
 class SwarmPrediction:
     """Predicted links of a swarm and its connectivity over time.
@@ -174,6 +176,7 @@ def resolve_patterns(drones: Sequence[str], model_nodes: Sequence[str], pattern_
     return out
 
 
+@check_types
 def predict_swarm(
     model: PatternSet,
     pose_log: pd.DataFrame,
@@ -384,6 +387,7 @@ def _swarm_notes(links: pd.DataFrame, poses: Poses, frequency_hz: float) -> list
     return notes
 
 
+@check_types
 def connectivity_over_time(
     links: pd.DataFrame, times_s: np.ndarray, drones: Sequence[str], min_rssi_dbm: float
 ) -> pd.DataFrame:
@@ -494,6 +498,7 @@ def maximum_spanning_edges(weights: np.ndarray) -> tuple[np.ndarray, np.ndarray,
     return edge_w, edge_a, edge_b
 
 
+@check_types
 def spanning_bottleneck(w: np.ndarray, iu: np.ndarray, ju: np.ndarray, n: int, names: Sequence[str]) -> tuple[float, str]:
     """Weakest link of the maximum spanning tree of pair weights (see the module docstring).
 

@@ -9,6 +9,7 @@ import numpy as np
 import pandas as pd
 import scipy.linalg  # noqa: F401  (order selection solves through scipy: loaded before any BLAS limit, rplearn.core.blas)
 
+from rplearn._argtypes import check_types
 from rplearn.core.normal_equations import NormalEquations
 from rplearn.core.selection import Selection, select_order_and_smoothing, validation_rmse
 from rplearn.data.tables import LinkSamples
@@ -23,6 +24,7 @@ def no_progress(_: str) -> None:
     return None
 
 
+@check_types
 @dataclass
 class SweepResult:
     """Test RMSE, AIC, LTD and condition number against the model order."""
@@ -90,6 +92,7 @@ def validation_sweep(unit_samples: dict[str, LinkSamples], orders: Sequence[int]
     return selection, validation_rmse(stats, make, orders, selection.smoothing, spec.ridge)
 
 
+@check_types
 def order_sweep(
     learn: LinkSamples,
     test: LinkSamples,

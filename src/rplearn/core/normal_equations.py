@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from rplearn._argtypes import check_types
 from rplearn.core.bases import Basis
 from rplearn.core.geometry import Directions
 from rplearn.core.link_statistics import (
@@ -42,6 +43,7 @@ EXPONENT_MIN_SPREAD_DB = 0.5
 _SUM_Y, _COUNT, _SUM_E = 0, 1, 2
 
 
+@check_types
 @dataclass
 class NormalEquations:
     """Sufficient statistics of the joint least-squares problem, accumulated chunk by chunk.
@@ -409,6 +411,7 @@ class NormalEquations:
         return out
 
 
+@check_types
 def independent_spread_db(normal: NormalEquations, column: int) -> float:
     """Standard deviation [dB] of the part of a column that every other column (the patterns at
     this order, the other shared columns) cannot explain, from the statistics: ``sqrt(S / n)``

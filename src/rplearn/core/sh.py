@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from rplearn._argtypes import check_types
 from rplearn.core.basis_base import (
     _SLOT_DESIGN,
     Basis,
@@ -34,6 +35,7 @@ from rplearn.core.basis_base import (
 from rplearn.errors import InputError
 
 
+@check_types
 def sh_index(degree: int, order: int) -> int:
     """Column of the real SH of degree ``l`` and order ``m`` (``-l <= m <= l``).
 
@@ -305,6 +307,7 @@ def _sh_series(order: int, coef_rows: FloatArray) -> FloatArray:
     return series
 
 
+@check_types
 @dataclass(frozen=True)
 class SphericalHarmonics(Basis):
     """Real orthonormal spherical harmonics of degrees ``0 .. order-1`` (paper's SH-``order``).

@@ -37,6 +37,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from rplearn._argtypes import check_types
 from rplearn.core.bases import Basis
 from rplearn.core.geometry import Directions
 from rplearn.core.level import shrink_target
@@ -65,6 +66,7 @@ PRIOR_LEVELS: tuple[str, ...] = ("data", "prior")
 # Link graph
 
 
+@check_types
 def link_components(n_nodes: int, links: Iterable[tuple[int, int]]) -> list[tuple[list[int], list[int] | None]]:
     """Connected components of the link graph and, for bipartite ones, their two sides.
 
@@ -175,6 +177,7 @@ def _gauge_constraints(
     return np.zeros((0, n_nodes * p)), np.zeros(0), notes
 
 
+@check_types
 def solve(
     normal: NormalEquations,
     node_names: Sequence[str] | None = None,
@@ -362,6 +365,7 @@ def _check_exponent(normal: NormalEquations) -> None:
         )
 
 
+@check_types
 def fit_joint(
     directions: Directions,
     tx_index: ArrayLike,
@@ -430,6 +434,7 @@ def fit_joint(
     return solve(normal, node_names, ridge=ridge, gauge=gauge, penalty=penalty)
 
 
+@check_types
 def identifiability(
     directions: Directions,
     tx_index: ArrayLike,

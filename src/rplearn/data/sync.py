@@ -73,16 +73,13 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 import pandas as pd
 
+from rplearn._argtypes import check_types
 from rplearn.core.link import FAR_FIELD_WAVELENGTHS, SPEED_OF_LIGHT_M_S
 from rplearn.data.phases import (
     AIRBORNE_MARGIN_M, WINDOW_CLOCKS, FlightPhases, flight_phases, max_gap_advice, phase_notes, window_mask,
 )
 from rplearn.data.poses import (
-    STATUS_OUT_OF_SPAN,
-    STATUS_POSE_GAP,
-    PoseTrack,
-    interpolate_nodes,
-    tracks_of_checked_log,
+    STATUS_OUT_OF_SPAN, STATUS_POSE_GAP, PoseTrack, interpolate_nodes, tracks_of_checked_log,
 )
 from rplearn.data.tables import (
     MATCHED_COLUMNS,
@@ -129,6 +126,7 @@ DROP_REASONS: tuple[str, ...] = (
 )
 
 
+@check_types
 @dataclass
 class SyncSummary:
     """How many signal samples came in, went out, and why each dropped one was dropped.
@@ -195,6 +193,7 @@ class SyncSummary:
         return "\n".join(lines)
 
 
+@check_types
 @dataclass
 class SyncResult:
     """Matched dataset (columns :data:`~rplearn.data.tables.MATCHED_COLUMNS` first, then any
@@ -233,6 +232,7 @@ def _checked_link(link: Any) -> tuple[str, str] | None:
     return pair[0], pair[1]
 
 
+@check_types
 @dataclass(frozen=True)
 class SyncOptions:
     """How :func:`synchronise` matches signal samples with poses.
@@ -521,6 +521,7 @@ def _options(options: SyncOptions | None) -> SyncOptions:
     return options
 
 
+@check_types
 def synchronise(
     pose_log: pd.DataFrame,
     signal_log: pd.DataFrame,

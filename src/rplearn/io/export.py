@@ -52,6 +52,7 @@ import numpy as np
 import pandas as pd
 from numpy.typing import ArrayLike, NDArray
 
+from rplearn._argtypes import check_types
 from rplearn._version import __version__
 from rplearn._atomic import atomic_open, atomic_path
 from rplearn.errors import InputError
@@ -160,6 +161,7 @@ def grid_angles_deg(step_deg: float) -> tuple[FloatArray, FloatArray]:
     return az, el
 
 
+@check_types
 def export_grid(
     model_or_truth: Any,
     step_deg: float,
@@ -204,6 +206,7 @@ def export_grid(
 
 
 # -- MSI Planet ----------------------------------------------------------------------------
+@check_types
 @dataclass
 class MsiPattern:
     """Horizontal and vertical cuts of one antenna, as in an MSI Planet file.
@@ -253,6 +256,7 @@ def peak_gain_dbi(pattern_like: Any, node: str, step_deg: float = 1.0) -> float:
     return float(np.nanmax(pattern_like.evaluate(node, az_g, el_g)))
 
 
+@check_types
 def msi_pattern(
     pattern_like: Any,
     node: str,
@@ -317,6 +321,7 @@ def _fmt_loss(v: float) -> str:
     return "0.00" if s == "-0.00" else s
 
 
+@check_types
 def write_msi(msi: MsiPattern, path: str | os.PathLike[str]) -> str:
     """Write an :class:`MsiPattern` as an MSI Planet file; return the path.
 
@@ -340,6 +345,7 @@ def write_msi(msi: MsiPattern, path: str | os.PathLike[str]) -> str:
     return path
 
 
+@check_types
 def export_msi(
     pattern_like: Any,
     node: str,
@@ -373,6 +379,7 @@ def export_msi(
     return msi
 
 
+@check_types
 def safe_file_name(name: str, fallback: str = "node") -> str:
     """A node id as a file name: characters other than letters, digits and ``_.-`` become ``_``
     (so an id never names a path outside the output folder)."""
@@ -380,6 +387,7 @@ def safe_file_name(name: str, fallback: str = "node") -> str:
     return safe or fallback
 
 
+@check_types
 def node_file_names(nodes: Sequence[str]) -> dict[str, str]:
     """Node id -> file name (:func:`safe_file_name`) for every node; two nodes whose ids give
     the same name are refused rather than one file overwriting the other."""
@@ -393,6 +401,7 @@ def node_file_names(nodes: Sequence[str]) -> dict[str, str]:
     return names
 
 
+@check_types
 def export_msi_files(
     pattern_like: Any, out_dir: str | os.PathLike[str], frequency_hz: float | None = None
 ) -> list[str]:
@@ -458,6 +467,7 @@ def _parse_gain_dbi(text: str, where: str) -> float:
     return value if (m.group(2) or "").lower() == "dbi" else value + DBD_TO_DBI
 
 
+@check_types
 def read_msi(path: str | os.PathLike[str]) -> MsiPattern:
     """Read an MSI Planet antenna file (see the module docstring for the format).
 

@@ -84,6 +84,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from rplearn._argtypes import check_types
 from rplearn.core.geometry import quat_wxyz_from_euler_ned_frd_deg
 from rplearn.data.tables import (
     check_frequency_hz,
@@ -108,6 +109,7 @@ _DF_HEAD = b"\xa3\x95"
 _DF_FMT_TYPE = 128
 
 
+@check_types
 def sik_rssi_to_dbm(raw: Any) -> np.ndarray:
     """SiK radio RSSI units -> received power [dBm]: ``raw / 1.9 - 127`` (module docstring).
 
@@ -360,6 +362,7 @@ def _check_arguments(tx_power_dbm: Any, frequency_hz: Any, max_gap_s: Any, strea
             raise InputError(f"{name}: expected a node id, got {value!r}", param=name)
 
 
+@check_types
 def read_mavlink(
     path: str | os.PathLike,
     tx_power_dbm: float | Mapping[str, float],

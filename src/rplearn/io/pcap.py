@@ -35,6 +35,7 @@ from typing import Any, Iterator, Mapping
 import numpy as np
 import pandas as pd
 
+from rplearn._argtypes import check_types
 from rplearn._atomic import atomic_open
 from rplearn.errors import InputError, LogFormatError
 
@@ -333,6 +334,7 @@ def read_radiotap_frames(path: str) -> pd.DataFrame:
     return pd.DataFrame(rows, columns=cols)
 
 
+@check_types
 def read_pcap(
     path: str,
     receiver: str,
@@ -425,6 +427,7 @@ def read_pcap(
     return signal, meta
 
 
+@check_types
 def write_radiotap_pcap(
     path: str,
     t_s: np.ndarray,

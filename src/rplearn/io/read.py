@@ -9,6 +9,7 @@ from typing import Any, Callable, Iterable, Mapping
 
 import pandas as pd
 
+from rplearn._argtypes import check_types
 from rplearn.data.tables import NON_UNIT_QUATERNION_ATTR, validate_pose_log
 from rplearn.errors import InputError, RplearnError
 from rplearn.io._common import Logs
@@ -44,6 +45,7 @@ _EXTENSIONS: dict[str, str] = {
 }
 
 
+@check_types
 def detect_format(path: str | os.PathLike) -> str:
     """Format of a log: ``"ulog"``, ``"ros1"``, ``"ros2"``, ``"pcap"``, ``"mavlink"`` (a
     ``.tlog`` or an ArduPilot DataFlash log) or ``"table"``.
@@ -248,6 +250,7 @@ def _merge(got: _Gathered) -> tuple[Logs, dict[str, Any]]:
     return Logs(pose=pose, signal=signal), {"files": got.files, "origin_geodetic": got.origin}
 
 
+@check_types
 def read_logs(
     paths: str | os.PathLike | Iterable[str | os.PathLike],
     options: ReaderOptions | None = None,

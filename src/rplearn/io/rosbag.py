@@ -30,6 +30,7 @@ from typing import Any, Iterator, Mapping
 import numpy as np
 import pandas as pd
 
+from rplearn._argtypes import check_types
 from rplearn.data.tables import validate_pose_log
 from rplearn.errors import InputError, LogFormatError
 from rplearn.io._common import Logs
@@ -190,6 +191,7 @@ def _messages(reader: Any, connections: list, path: str) -> Iterator[tuple[Any, 
         yield conn, ts, msg
 
 
+@check_types
 def bag_topics(
     path: str | os.PathLike, msg_definitions: Mapping[str, str] | None = None
 ) -> dict[str, str]:
@@ -211,6 +213,7 @@ def describe_topics(topics: Mapping[str, str], limit: int = 10) -> str:
     return shown + (f" and {rest} more" if rest > 0 else "")
 
 
+@check_types
 def read_rosbag(
     path: str | os.PathLike,
     pose_topics: Mapping[str, str],

@@ -23,6 +23,7 @@ from typing import Any, Mapping
 import numpy as np
 from numpy.typing import ArrayLike
 
+from rplearn._argtypes import check_types
 from rplearn.data.tables import LinkSamples
 from rplearn.errors import IdentifiabilityError, InputError, ModelFileError
 from rplearn.io.modelfile import read_sidecar, write_model_with_sidecar
@@ -145,6 +146,7 @@ class _PerLinkBaseline:
         return frequency_from_training(self.training)
 
 
+@check_types
 @dataclass
 class MeanModel(_PerLinkBaseline):
     """The paper's M: mean training joint gain per directed link [dB]."""
@@ -205,6 +207,7 @@ class MeanModel(_PerLinkBaseline):
         return cls(means, dict(payload.get("training", {})), dict(payload.get("provenance", {})))
 
 
+@check_types
 @dataclass
 class KNNModel(_PerLinkBaseline):
     """The paper's NN-k: k nearest neighbours in the 4-D joint-angle space, per directed link."""

@@ -13,6 +13,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
+from rplearn._argtypes import check_types
 from rplearn.core.blas import blas_threads_for, warm_up as warm_up_blas
 from rplearn.models.baselines import KNNModel, MeanModel
 from rplearn.data.tables import LinkSamples
@@ -26,6 +27,7 @@ from rplearn.core.environment import PathLoss
 from rplearn.errors import InputError
 
 
+@check_types
 @dataclass
 class FittedModel:
     """A learned model, its spec and its learning wall time (LTD) [s]."""
@@ -55,6 +57,7 @@ class FittedModel:
         return float(self.model.training.get("condition_number") or np.nan)
 
 
+@check_types
 def solve_patterns(
     samples: LinkSamples,
     spec: ModelSpec,
@@ -137,6 +140,7 @@ def node_coverage_grids(
     return out
 
 
+@check_types
 def fit_patterns(
     samples: LinkSamples, spec: ModelSpec, gauge: str | Mapping[str, Any] = "equal-mean",
     provenance: Mapping[str, Any] | None = None, path_loss: PathLoss | None = None, link_offsets: bool = True,
@@ -165,6 +169,7 @@ def _warm_up(spec: ModelSpec, n_samples: int = 1, path_loss: PathLoss | None = N
     warm_up_blas()
 
 
+@check_types
 def fit_model(
     samples: LinkSamples,
     spec: ModelSpec,
@@ -204,6 +209,7 @@ def fit_model(
     return FittedModel(spec, model, ltd)
 
 
+@check_types
 def evaluate_models(fitted: Sequence[FittedModel], samples: LinkSamples, notes: list[str] | None = None) -> list[Scores]:
     """Table I: RMSE, MAE, Q95, |phi|, AIC, LTD and condition number of every model.
 
@@ -237,6 +243,7 @@ def scores_of_predictions(
     return rows
 
 
+@check_types
 def scores_markdown(rows: Sequence[Scores], extra: Mapping[str, Mapping[str, float]] | None = None) -> str:
     """Table I as Markdown (AIC in thousands, as the paper prints it)."""
     extra = extra or {}

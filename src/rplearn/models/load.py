@@ -5,11 +5,13 @@ from __future__ import annotations
 
 import os
 
+from rplearn._argtypes import check_types
 from rplearn.io.modelfile import read_model_file
 from rplearn.models.baselines import KNNModel, MeanModel
 from rplearn.models.patterns import PatternSet
 
 
+@check_types
 def load_model(path: str | os.PathLike[str]):
     """Load any model file: a PatternSet or a baseline model."""
     model_type, payload = read_model_file(path)

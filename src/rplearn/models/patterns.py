@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any, Mapping, Sequence
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from rplearn._argtypes import check_types
 from rplearn._version import __version__
 from rplearn.core.bases import Basis, basis_from_dict
 from rplearn.core.basis_base import chunk_directions
@@ -38,6 +39,7 @@ if TYPE_CHECKING:
 INLINE_COVARIANCE_VALUES = 250_000
 
 
+@check_types
 @dataclass
 class PatternSet:
     """One radiation pattern per node, each ``G_n = basis(az, el) . coef[n]`` [dBi].

@@ -24,6 +24,7 @@ from typing import Any, Mapping
 import numpy as np
 import pandas as pd
 
+from rplearn._argtypes import check_types
 from rplearn.core.environment import PathLoss
 from rplearn.core.normal_equations import NormalEquations
 from rplearn.models.terms import directed_counts
@@ -45,6 +46,7 @@ MIN_SCALE_DB = 1e-3
 LOSSES: tuple[str, ...] = ("ls", "huber")
 
 
+@check_types
 @dataclass(frozen=True)
 class RobustReport:
     """What the Huber fit did.
@@ -113,6 +115,7 @@ def robust_scale_db(residual_db: np.ndarray) -> float:
     return float(max(1.4826 * np.median(np.abs(r - np.median(r))), MIN_SCALE_DB))
 
 
+@check_types
 def fit_huber(
     samples: LinkSamples,
     spec: ModelSpec,

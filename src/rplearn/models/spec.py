@@ -9,6 +9,7 @@ from typing import Any
 
 import numpy as np
 
+from rplearn._argtypes import check_types
 from rplearn.core.bases import make_basis
 from rplearn.core.solver import DEFAULT_RIDGE
 from rplearn.errors import InputError
@@ -27,11 +28,13 @@ _ALIASES = {"m": "mean", "p": "poly", "nn": "knn", "bucketized": "bg"}
 DEFAULT_RIDGE_BY_KIND = {"sh": DEFAULT_RIDGE, "poly": DEFAULT_RIDGE, "bg": DEFAULT_RIDGE, "mean": 0.0, "knn": 0.0}
 
 
+@check_types
 def default_ridge(kind: str) -> float:
     """Default ridge weight of a model family (see :data:`DEFAULT_RIDGE_BY_KIND`)."""
     return DEFAULT_RIDGE_BY_KIND.get(kind, DEFAULT_RIDGE)
 
 
+@check_types
 @dataclass(frozen=True)
 class ModelSpec:
     """A model family and its hyper-parameters.
@@ -104,6 +107,7 @@ class ModelSpec:
         return make_basis(self.kind, self.order)
 
 
+@check_types
 def check_fit_options(
     spec: ModelSpec,
     *,
@@ -195,6 +199,7 @@ def check_model_size(spec: ModelSpec, n_samples: int, n_nodes: int, source: str 
         )
 
 
+@check_types
 def gauge_of(gauge_node: str | None = None, gauge_dbi: float | None = None) -> str | dict[str, Any]:
     """The gauge of a two-node fit: equal sphere-mean gains by default, or a known mean gain
     ``gauge_dbi`` [dBi] (default 0) of ``gauge_node``."""

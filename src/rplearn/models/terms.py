@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any, Mapping, Sequence
 
 import numpy as np
 
+from rplearn._argtypes import check_types
 from rplearn.core.environment import PathLoss, log_distance_column
 from rplearn.data.tables import LinkSamples
 from rplearn.errors import InputError
@@ -26,6 +27,7 @@ if TYPE_CHECKING:
     from rplearn.core.solver import JointSolution
 
 
+@check_types
 def regression_inputs(samples: LinkSamples, path_loss: PathLoss) -> tuple[np.ndarray, np.ndarray | None]:
     """The observations the patterns are fitted to and the shared environment column.
 
@@ -40,6 +42,7 @@ def regression_inputs(samples: LinkSamples, path_loss: PathLoss) -> tuple[np.nda
     return y, env
 
 
+@check_types
 def directed_counts(samples: LinkSamples | Sequence[LinkSamples]) -> dict[tuple[str, str], int]:
     """Samples of every directed link ``(tx, rx)``, sorted."""
     parts = [samples] if isinstance(samples, LinkSamples) else list(samples)
@@ -138,6 +141,7 @@ def learned_directions(training: Mapping[str, Any]) -> set[tuple[str, str]] | No
         return None
 
 
+@check_types
 def terms_text(training: Mapping[str, Any]) -> list[str]:
     """Summary lines of a model's link terms (environment, exponent, offsets, directions)."""
     lines = []

@@ -18,10 +18,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rplearn._argtypes import check_types
 from rplearn.errors import InputError
 from rplearn.plan.trajectory import UnitReference, check_unit_fields
 
 
+@check_types
 @dataclass(frozen=True)
 class GroundPassUnit:
     """A drone flying back and forth along an arc in front of a static ground station.

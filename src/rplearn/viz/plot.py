@@ -31,6 +31,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from numpy.typing import ArrayLike, NDArray
 
+from rplearn._argtypes import check_types
 from rplearn._atomic import atomic_path
 from rplearn._version import __version__
 from rplearn.errors import InputError
@@ -59,6 +60,7 @@ def _new_figure(width_in: float, height_in: float) -> Figure:
     return fig
 
 
+@check_types
 def save_figure(fig: Figure, path: str | os.PathLike[str], caption: str | None = None) -> str:
     """Write ``fig`` as a PNG at :data:`DPI` and return the path as a string.
 
@@ -159,6 +161,7 @@ def colour_limits_db(maps_db: FloatArray, has_truth: bool) -> tuple[float, float
     return (lo, hi) if hi > lo else (lo - 0.5, hi + 0.5)
 
 
+@check_types
 def uncovered_directions(model: Any, node: str, az_deg: FloatArray, el_deg: FloatArray) -> NDArray[np.bool_] | None:
     """Which directions of the grid ``el_deg x az_deg`` lie further than ``UNCOVERED_DEG`` from
     every direction ``model`` learned ``node`` from: a boolean ``(n_el, n_az)`` array, or None
@@ -184,6 +187,7 @@ def _hatch_uncovered(ax: Any, model: Any, node: str, az_deg: np.ndarray, el_deg:
         ax.contourf(az_deg, el_deg, far, levels=[0.5, 1.5], colors="none", hatches=["////"])
 
 
+@check_types
 def pattern_maps_figure(
     models: Mapping[str, PatternLike],
     truth: PatternLike | None = None,
@@ -275,6 +279,7 @@ def pattern_maps_figure(
     return fig
 
 
+@check_types
 def plot_pattern_maps(
     models: Mapping[str, PatternLike],
     truth: PatternLike | None,
@@ -301,6 +306,7 @@ def plot_pattern_maps(
     return save_figure(fig, path, caption)
 
 
+@check_types
 def spread_maps_figure(models: Mapping[str, Any], nodes: Sequence[str] | None = None, step_deg: float = 3.0) -> Figure:
     """Posterior std of each node's own pattern [dB] as az-el maps (rows = models, columns =
     nodes), the directions further than ``UNCOVERED_DEG`` from any learning direction hatched;
@@ -337,6 +343,7 @@ def spread_maps_figure(models: Mapping[str, Any], nodes: Sequence[str] | None = 
     return fig
 
 
+@check_types
 def plot_spread_maps(models: Mapping[str, Any], path: str | os.PathLike[str], nodes: Sequence[str] | None = None,
                      step_deg: float = 3.0) -> str:
     """Write :func:`spread_maps_figure` as a PNG; return the path."""
@@ -346,6 +353,7 @@ def plot_spread_maps(models: Mapping[str, Any], path: str | os.PathLike[str], no
 
 
 # -- Fig. 8a: coverage ---------------------------------------------------------------------
+@check_types
 def coverage_figure(
     learn_az_el: Mapping[str, AzEl],
     test_az_el: Mapping[str, AzEl] | None = None,
@@ -396,6 +404,7 @@ def coverage_figure(
     return fig
 
 
+@check_types
 def plot_coverage(
     learn_az_el: Mapping[str, AzEl],
     test_az_el: Mapping[str, AzEl] | None,
@@ -411,6 +420,7 @@ def plot_coverage(
 
 
 # -- 3-D pattern image ---------------------------------------------------------------------
+@check_types
 @dataclass(frozen=True)
 class PatternSurface:
     """One node's pattern on a closed az-el grid, drawn as a surface whose radius is the gain.
@@ -443,6 +453,7 @@ class PatternSurface:
         return float(np.nanmax(np.sqrt(self.x**2 + self.y**2 + self.z**2)))
 
 
+@check_types
 def pattern_surface(
     pattern_like: PatternLike,
     node: str,
@@ -477,6 +488,7 @@ def pattern_surface(
     return PatternSurface(az_deg, el_deg, g, floor, g_max, offset_db, x, y, z)
 
 
+@check_types
 def pattern_3d_figure(
     pattern_like: PatternLike,
     node: str,
@@ -529,6 +541,7 @@ def pattern_3d_figure(
     return fig
 
 
+@check_types
 def plot_pattern_3d(
     pattern_like: PatternLike, node: str, path: str | os.PathLike[str], step_deg: float = 3.0
 ) -> str:

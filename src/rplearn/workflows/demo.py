@@ -10,6 +10,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
+from rplearn._argtypes import check_types
 from rplearn._atomic import atomic_open
 from rplearn.core.metrics import Scores
 from rplearn.io.files import write_table
@@ -28,6 +29,7 @@ Progress = Callable[[str], None]
 DEMO_MODELS = ("m", "nn-400", "sh-10", "p-12", "bg-7")
 
 
+@check_types
 @dataclass
 class DemoResult:
     """Everything the demo measured and wrote."""
@@ -62,6 +64,7 @@ class DemoResult:
         return "\n".join(lines)
 
 
+@check_types
 def run_demo(
     out_dir: str = "rplearn-demo",
     seed: int = 0,

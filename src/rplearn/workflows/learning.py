@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any, Callable, Mapping, Sequence
 import numpy as np
 import pandas as pd
 
+from rplearn._argtypes import check_types
 from rplearn._atomic import atomic_open
 from rplearn.analysis.budget import check_dataset_budget
 from rplearn.analysis.decoupling import certify
@@ -56,6 +57,7 @@ def no_progress(message: str) -> None:
     """The default progress callback: says nothing."""
 
 
+@check_types
 @dataclass
 class FitOutcome:
     """A model learned from a dataset file.
@@ -131,6 +133,7 @@ class FitOutcome:
         return list(self.fitted.model.training.get("warnings", []))
 
 
+@check_types
 def fit_dataset(
     dataset: str,
     spec: ModelSpec,
@@ -362,6 +365,7 @@ def _fit_streamed(
     return FitOutcome(fitted, choice, fit.n_samples, output, fit.non_unit_quaternions, wall_s=time.perf_counter() - t0)
 
 
+@check_types
 @dataclass
 class EvaluationOutcome:
     """Table I of some models on a dataset.
@@ -385,6 +389,7 @@ class EvaluationOutcome:
         return {"provenance": self.provenance, "rows": [r.to_dict() for r in self.rows]}
 
 
+@check_types
 def evaluate_model_files(
     model_paths: Sequence[str],
     dataset: str,
@@ -448,6 +453,7 @@ def evaluate_model_files(
     return outcome
 
 
+@check_types
 def predict_file(model_path: str, dataset: str, output: str) -> DatasetPrediction:
     """Predict every row of a dataset of poses and write it with the predictions (``rplearn predict``).
 
@@ -461,6 +467,7 @@ def predict_file(model_path: str, dataset: str, output: str) -> DatasetPredictio
     return prediction
 
 
+@check_types
 def sweep_dataset(
     dataset: str,
     kind: str,
@@ -511,6 +518,7 @@ def sweep_dataset(
 REPORT_FILES: tuple[str, ...] = ("coverage.png", "patterns.png", "report.html")
 
 
+@check_types
 @dataclass
 class ReportOutcome:
     """Models learned and tested on a dataset, and the report written."""
@@ -524,6 +532,7 @@ class ReportOutcome:
     notes: list[str] = field(default_factory=list)
 
 
+@check_types
 def learn_and_report(
     dataset: str,
     models: Sequence[str],

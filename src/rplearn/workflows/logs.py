@@ -15,6 +15,7 @@ from typing import Any, Iterator, Mapping, Sequence
 import pandas as pd
 from numpy.typing import ArrayLike
 
+from rplearn._argtypes import check_types
 from rplearn.analysis.headings import SwarmHeadings, best_swarm_headings
 from rplearn.analysis.swarm import SwarmPrediction, predict_swarm
 from rplearn.data.streaming import conform_chunk, synchronise_stream
@@ -28,6 +29,7 @@ from rplearn.models.load import load_model
 from rplearn.models.predict import FrequencyMismatch, frequency_mismatch
 
 
+@check_types
 def reader_notes(metadata: Mapping[str, Any]) -> list[str]:
     """What the log readers dropped or assumed, file by file (from :func:`read_logs` metadata)."""
     notes = []
@@ -41,6 +43,7 @@ def reader_notes(metadata: Mapping[str, Any]) -> list[str]:
     return notes
 
 
+@check_types
 @dataclass
 class SyncOutcome:
     """A matched dataset written from logs: its counts, where it went, what the readers said.
@@ -144,6 +147,7 @@ def _signal_chunks(signal_paths: Sequence[str], options: ReaderOptions) -> Itera
             yield out
 
 
+@check_types
 def sync_logs(
     pose_paths: Sequence[str],
     signal_paths: Sequence[str],
@@ -209,6 +213,7 @@ def sync_logs(
     return SyncOutcome(result.summary, output, reader_notes(pose_meta), clock=clock)
 
 
+@check_types
 @dataclass
 class LinksOutcome:
     """A swarm's predicted links, and what the user should know about the inputs."""
@@ -218,6 +223,7 @@ class LinksOutcome:
     mismatch: FrequencyMismatch | None = None
 
 
+@check_types
 def swarm_links(
     model_path: str,
     pose_paths: Sequence[str],
@@ -255,6 +261,7 @@ def swarm_links(
     return LinksOutcome(prediction, reader_notes(meta), mismatch)
 
 
+@check_types
 def swarm_headings(
     model_path: str,
     positions: Mapping[str, ArrayLike],

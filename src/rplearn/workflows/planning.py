@@ -8,6 +8,7 @@ import os
 from dataclasses import dataclass
 from typing import Mapping, Sequence
 
+from rplearn._argtypes import check_types
 from rplearn.analysis.headings import OrientationResult, best_yaw
 from rplearn.errors import InputError
 from rplearn.io.export import export_grid, export_msi_files
@@ -25,6 +26,7 @@ PAPER_LEARNING_PSI0_DEG: tuple[float, ...] = (0.0, 24.0, 48.0)
 PAPER_TESTING_PSI0_DEG: tuple[float, ...] = (36.0,)
 
 
+@check_types
 @dataclass
 class CampaignPlan:
     """A planned campaign, what each unit asks of the drones, the references written and the
@@ -36,6 +38,7 @@ class CampaignPlan:
     check: PlanCheck | None = None
 
 
+@check_types
 def plan_campaign(
     out_dir: str,
     learning_psi0_deg: Sequence[float] = PAPER_LEARNING_PSI0_DEG,
@@ -68,6 +71,7 @@ def plan_campaign(
     return CampaignPlan(campaign, units, paths, check)
 
 
+@check_types
 def export_model_file(
     model_path: str, fmt: str, output: str, step_deg: float = 5.0, frequency_hz: float | None = None
 ) -> list[str]:
@@ -93,6 +97,7 @@ def export_model_file(
     return export_pattern_images(model, output)
 
 
+@check_types
 def orient_link(model_path: str, tx_node: str, rx_node: str, **options: object) -> OrientationResult:
     """Heading(s) that maximise one link of a model file (``rplearn orient``); ``options`` go
     to :func:`rplearn.analysis.headings.best_yaw`."""
@@ -101,6 +106,7 @@ def orient_link(model_path: str, tx_node: str, rx_node: str, **options: object) 
     return best_yaw(model, tx_node, rx_node, **options)  # type: ignore[arg-type]
 
 
+@check_types
 def reference_model_file(
     patterns: Mapping[str, str], output: str, mounts: Mapping[str, Sequence[float]] | None = None
 ) -> PatternSet:
@@ -124,6 +130,7 @@ def reference_model_file(
     return model
 
 
+@check_types
 def draw_pattern_files(
     model_paths: Sequence[str], output: str, truth: str | None = None, dataset: str | None = None,
     spread: str | None = None,
