@@ -232,7 +232,7 @@ def _level_finding(link: LinkSummary) -> BudgetFinding | None:
             f"antennas allow: the transmit power given (--tx-power) is probably {direction} by about {abs(off):.0f} dB "
             f"(at least {min(abs(link.level_db - lo), abs(link.level_db - hi)):.0f} dB), or the RSSI is not in dBm "
             "(--rssi-scale; relative for uncalibrated radios)")
-    if band:
+    if band and link.frequency_hz:
         text += (f", or the radio is on {band}, not {link.frequency_hz / 1e6:g} MHz (--frequency: "
                  f"{abs(off):.0f} dB is the free-space loss between the two)")
     return BudgetFinding("level", link.name, link.level_db, JOINT_LEVEL_RANGE_DB, tuple(inputs), -off, text)

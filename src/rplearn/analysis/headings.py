@@ -281,7 +281,7 @@ def best_yaw(
     if tx_power_dbm is None:
         return result
     env = float(model.link_environment_db(tx_node, rx_node, positions["tx"], positions["rx"], frequency_hz)[0])
-    return _with_received_power(result, positions, float(tx_power_dbm), float(frequency_hz), env)
+    return _with_received_power(result, positions, float(tx_power_dbm), model_frequency_hz(model, frequency_hz), env)
 
 
 def _link_coverage(

@@ -46,7 +46,7 @@ class _AntennaSet:
     def nodes(self) -> tuple[str, ...]:
         return tuple(self.antennas)
 
-    def evaluate(self, node: str, az_rad, el_rad) -> np.ndarray:
+    def evaluate(self, node: str, az_rad: np.ndarray, el_rad: np.ndarray) -> np.ndarray:
         return self.antennas[node].gain_dbi(az_rad, el_rad)
 
 
@@ -82,7 +82,7 @@ def identifiability_study(order: int = 8, n_samples: int = 20000, seed: int = 0)
     ants = study_antennas()
     basis = SphericalHarmonics(order)
 
-    def draw(pairs: np.ndarray, names: Sequence[str]):
+    def draw(pairs: np.ndarray, names: Sequence[str]) -> tuple[Directions, np.ndarray, np.ndarray, np.ndarray]:
         sel = pairs[rng.integers(0, len(pairs), n_samples)]
         az = rng.uniform(-np.pi, np.pi, (2, n_samples))
         el = np.arcsin(rng.uniform(-1, 1, (2, n_samples)))

@@ -19,7 +19,7 @@ Headings that keep a hovering swarm best connected are chosen in :mod:`rplearn.a
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, Mapping, Sequence
+from typing import Any, Mapping, Sequence, cast
 
 import numpy as np
 import pandas as pd
@@ -94,7 +94,7 @@ class SwarmPrediction:
             )
         per_pair = self.links.groupby(["tx", "rx"])["rssi_pred_dbm"].median().dropna()
         if len(per_pair):
-            weakest = per_pair.idxmin()
+            weakest = cast(tuple[str, str], per_pair.idxmin())  # (tx, rx): the index's two levels
             lines.append(f"weakest direction (median): {weakest[0]} -> {weakest[1]} at {per_pair.min():.1f} dBm")
         incomplete = int((c["n_missing"] > 0).sum())
         if incomplete:
@@ -264,7 +264,8 @@ def _block_rows(present: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray
     known, in the order of time, then transmitter, then receiver (the drones are sorted)."""
     n = present.shape[1]
     both = present[:, :, None] & present[:, None, :] & ~np.eye(n, dtype=bool)
-    return np.nonzero(both)
+    t, i, j = np.nonzero(both)
+    return t, i, j
 
 
 def _predict_blocks(

@@ -88,8 +88,8 @@ def validation_sweep(unit_samples: dict[str, LinkSamples], orders: Sequence[int]
     if links:
         stats = {u: st.with_shared(links) for u, st in stats.items()}
     make = lambda k: ModelSpec("sh", k).basis()  # noqa: E731
-    selection = select_order_and_smoothing(stats, make, orders, spec.ridge)
-    return selection, validation_rmse(stats, make, orders, selection.smoothing, spec.ridge)
+    selection = select_order_and_smoothing(stats, make, orders, spec.ridge_weight)
+    return selection, validation_rmse(stats, make, orders, selection.smoothing, spec.ridge_weight)
 
 
 @check_types

@@ -195,7 +195,7 @@ class NormalEquations:
         n = az_tx.size
         m = self._n_extra
         per_block = block_samples(block_rows(self.basis, m))
-        node_moments = np.zeros((self.n_nodes, *self.basis.moment_shape))
+        node_moments = np.zeros((self.n_nodes, *(self.basis.moment_shape or ())))
         touched: set[tuple[int, int]] = set()
         nodes = np.arange(self.n_nodes)[:, None]
 
@@ -325,8 +325,8 @@ class NormalEquations:
         self.n_samples += other.n_samples
         for k, v in other.link_counts.items():
             self.link_counts[k] = self.link_counts.get(k, 0) + v
-        for k, v in other.directed.items():
-            self.directed[k] = v.copy() if k not in self.directed else self.directed[k] + v
+        for k, sums in other.directed.items():
+            self.directed[k] = sums.copy() if k not in self.directed else self.directed[k] + sums
         self.env_cross += other.env_cross
         self.env_sq += other.env_sq
         self.env_y += other.env_y

@@ -224,7 +224,7 @@ def solve(
             f"{normal.n_samples} samples cannot identify {pcols} coefficients "
             f"({n_nodes} nodes x {normal.basis.label}); fly longer or choose a smaller model"
         )
-    seen = set()
+    seen: set[int] = set()
     for a, b in normal.link_counts:
         seen.update((a, b))
     missing = [names[i] for i in range(n_nodes) if i not in seen]

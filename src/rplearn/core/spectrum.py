@@ -333,7 +333,7 @@ class ConstrainedFactor:
             d = scale
         n = a.shape[0]
         layout = cls.layout(blocks, n)
-        if layout != "dense":
+        if layout != "dense" and blocks is not None:  # (a band or sparse layout needs the blocks)
             return cls._structured(a, np.ones(n), np.zeros(n), cmat, blocks, layout, d)
         from scipy.linalg import lapack
 
@@ -354,7 +354,7 @@ class ConstrainedFactor:
         refuse it; :meth:`refined`, float64 when that fails)."""
         n = gram.shape[0]
         layout = cls.layout(blocks, n)
-        if layout != "dense":
+        if layout != "dense" and blocks is not None:
             return cls._structured(gram, scale, added * scale**2, cmat, blocks, layout, scale)
         if refined and np.all(added > 0):  # positive definite in exact arithmetic: else float64 decides
             out = cls.refined(gram, added, scale, cmat)
@@ -479,6 +479,7 @@ class ConstrainedFactor:
         """The scaled matrix ``A`` as a dense array (sparse and banded factors)."""
         if self.sparse:
             return self.sparse_a.toarray()
+        assert self.band is not None  # a factor is dense, sparse or banded
         band, order = self.band
         kd, n = band.shape[0] - 1, band.shape[1]
         dense = np.zeros((n, n))

@@ -203,7 +203,7 @@ def synchronise_to_parquet(
                 if res.dataset.empty:
                     continue
                 table = pa.Table.from_pandas(res.dataset, preserve_index=False)
-                if writer is None:
+                if writer is None or schema is None:
                     schema = table.schema
                     writer = pq.ParquetWriter(tmp, schema)
                 else:

@@ -456,7 +456,7 @@ def _match_chunk(
     if names:
         summary.unknown_nodes = names
     drop(unknown, "unknown_node")
-    poses = {end: interpolate_nodes(tracks, uniques, code, t, options.max_gap_s, keep & known[code])
+    poses = {end: interpolate_nodes(tracks, list(uniques), code, t, options.max_gap_s, keep & known[code])
              for end, code in (("tx", tx_code), ("rx", rx_code))}
     st_tx, st_rx = poses["tx"][2], poses["rx"][2]
     drop((st_tx == STATUS_OUT_OF_SPAN) | (st_rx == STATUS_OUT_OF_SPAN), "out_of_span")
@@ -467,7 +467,7 @@ def _match_chunk(
         drop(keep & ~(distance > limit), "near_field")
     off = np.zeros(len(signal), bool)
     for end, code in (("tx", tx_code), ("rx", rx_code)):
-        disarmed, ground = phases.masks(uniques, code, t, poses[end][0][:, 2], keep & known[code])
+        disarmed, ground = phases.masks(list(uniques), code, t, poses[end][0][:, 2], keep & known[code])
         if options.airborne:
             drop(disarmed, "disarmed")
             drop(ground, "on_ground")

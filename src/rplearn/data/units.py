@@ -177,7 +177,7 @@ def stretch_labels(blocks: int = TIME_UNITS, unit: str | None = None) -> list[st
 def is_stretch_label(label: object) -> bool:
     """Whether a unit label names a stretch of time of a flight without units (``flight[2/5]``)."""
     m = _STRETCH.match(str(label))
-    return bool(m) and m.group("unit") in ("flight", "test") and 1 <= int(m.group("k")) <= int(m.group("n"))
+    return m is not None and m.group("unit") in ("flight", "test") and 1 <= int(m.group("k")) <= int(m.group("n"))
 
 
 @check_types

@@ -156,8 +156,8 @@ def grid_angles_deg(step_deg: float) -> tuple[FloatArray, FloatArray]:
     n_half = round(180.0 / step)
     if abs(n_half * step - 180.0) > 1e-9 * 180.0:
         raise InputError(f"step_deg: {step_deg} does not divide 180 deg (try 1, 2, 2.5, 5, 10)", param="step_deg")
-    az = -180.0 + step * np.arange(2 * n_half)
-    el = -90.0 + step * np.arange(n_half + 1)
+    az = np.asarray(-180.0 + step * np.arange(2 * n_half), np.float64)
+    el = np.asarray(-90.0 + step * np.arange(n_half + 1), np.float64)
     return az, el
 
 

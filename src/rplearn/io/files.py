@@ -10,7 +10,7 @@ import json
 import os
 import sys
 import time
-from typing import Any, Iterable, Iterator, Sequence
+from typing import Any, Iterable, Iterator, Literal, Sequence
 
 import pandas as pd
 
@@ -80,7 +80,7 @@ def iter_table(path: str, chunk_rows: int = 500_000, columns: Iterable[str] | No
                 yield normalise_times(batch.to_pandas(), name)
         else:
             use = None if wanted is None else (lambda c: c in wanted)
-            gz = "gzip" if name.lower().endswith(".gz") else "infer"
+            gz: Literal["gzip", "infer"] = "gzip" if name.lower().endswith(".gz") else "infer"
             for chunk in pd.read_csv(source, dtype=CSV_DTYPES, chunksize=chunk_rows, usecols=use, compression=gz):
                 yield normalise_times(chunk, name)
     except InputError:

@@ -76,6 +76,7 @@ The ground station is a static node (one pose row, level, its body x axis facing
 
 from __future__ import annotations
 
+import math
 import numbers
 import os
 from collections.abc import Mapping
@@ -348,7 +349,7 @@ def _check_arguments(tx_power_dbm: Any, frequency_hz: Any, max_gap_s: Any, strea
     """Refuse arguments out of their domain (:class:`InputError` naming the parameter)."""
     if station_heading_deg is not None and not (
             isinstance(station_heading_deg, numbers.Real) and not isinstance(station_heading_deg, bool)
-            and np.isfinite(station_heading_deg)):
+            and math.isfinite(station_heading_deg)):
         raise InputError(f"station_heading_deg: expected degrees, got {station_heading_deg!r}", param="station_heading_deg")
     for name, value in (("max_gap_s", max_gap_s), ("stream_timeout_s", stream_timeout_s),
                         ("frequency_hz", frequency_hz)):

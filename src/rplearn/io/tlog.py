@@ -256,7 +256,7 @@ def _records(pose: pd.DataFrame, signal: pd.DataFrame, vehicle: str, station: st
     second = np.floor(v["t"] - t0)
     beat = np.concatenate([[True], second[1:] != second[:-1]]) & ~silent
     counts = {"attitude": 0, "heartbeat": 0}
-    for i in np.flatnonzero(~silent):
+    for i in np.flatnonzero(~silent).tolist():
         b = int(boot_ms[i])
         if beat[i]:
             base = 128 if valid[i] else 0  # MAV_MODE_FLAG_SAFETY_ARMED once the origin is set

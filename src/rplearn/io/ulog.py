@@ -40,7 +40,7 @@ from rplearn.core.geometry import quat_ned_frd_to_enu_flu
 from rplearn.io.geodetic import local_ned_to_enu, local_ned_to_geodetic
 
 
-def _pyulog():
+def _pyulog() -> Any:
     try:
         from pyulog import ULog
     except ImportError:  # pragma: no cover - pyulog is a dependency

@@ -92,7 +92,7 @@ def solve_patterns(
         len(samples.nodes),
         basis,
         node_names=samples.nodes,
-        ridge=spec.ridge,
+        ridge=spec.ridge_weight,
         gauge=gauge,
         smoothing=spec.smoothing,
         environment=env,
@@ -196,9 +196,9 @@ def fit_model(
     with blas_threads_for(len(samples), columns):
         t0 = time.perf_counter()
         if spec.kind == "mean":
-            model: Model = MeanModel.fit(samples)
+            model: MeanModel | KNNModel | PatternSet = MeanModel.fit(samples)
         elif spec.kind == "knn":
-            model = KNNModel.fit(samples, int(spec.order))
+            model = KNNModel.fit(samples, int(spec.order or 0))  # ModelSpec refuses a knn without an order
         else:
             model = fit_patterns(samples, spec, gauge, path_loss=path_loss, link_offsets=link_offsets)
         ltd = time.perf_counter() - t0

@@ -171,7 +171,7 @@ def fit_huber(
             return model.predict_gain(samples)
         normal.rhs = features.transpose_times(observed)
         normal.yty = float(observed @ observed)
-        coef = solve(normal, list(samples.nodes), ridge=spec.ridge, gauge=gauge, penalty=penalty).coef
+        coef = solve(normal, list(samples.nodes), ridge=spec.ridge_weight, gauge=gauge, penalty=penalty).coef
         return features.times(coef)
 
     fitted = refit(y)

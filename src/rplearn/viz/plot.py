@@ -48,7 +48,8 @@ TEST_COLOR = "tab:orange"
 class PatternLike(Protocol):
     """Anything with ``nodes`` and ``evaluate(node, az_rad, el_rad) -> gain [dB]``."""
 
-    nodes: Sequence[str]
+    @property
+    def nodes(self) -> Sequence[str]: ...
 
     def evaluate(self, node: str, az_rad: ArrayLike, el_rad: ArrayLike) -> FloatArray: ...
 
@@ -268,6 +269,7 @@ def pattern_maps_figure(
                 ax.scatter(saz[keep], sel[keep], s=0.6, c="k", marker=".", linewidths=0, alpha=0.6)
             _style_az_el_axes(ax, xlabel=i == len(rows) - 1, ylabel=j == 0)
             ax.set_title(f"{label}: node {n}", fontsize=9)
+        assert im is not None  # one panel per node at least
         cb = fig.colorbar(
             im, ax=axes[:, j], orientation="horizontal", fraction=0.05, aspect=30, extend="both"
         )
@@ -337,6 +339,7 @@ def spread_maps_figure(models: Mapping[str, Any], nodes: Sequence[str] | None = 
             extra = (f"\n{cert[n]['covered_std_db']:.2f} dB where looked, {cert[n]['sphere_std_db']:.2f} dB on the sphere"
                      if n in cert else "")
             ax.set_title(f"{label}: node {n}{extra}", fontsize=8)
+    assert im is not None  # one panel per node at least
     cb = fig.colorbar(im, ax=axes, orientation="horizontal", fraction=0.05, aspect=40, extend="max")
     cb.set_label("posterior std of the node's own gain / dB")
     fig.suptitle("Own-pattern spread (1 sigma)\nhatched: more than 10 deg from any learning direction")

@@ -76,7 +76,7 @@ class ReportSection:
 
     title: str
     text: str = ""
-    images: list[str | os.PathLike[str]] = field(default_factory=list)
+    images: Sequence[str | os.PathLike[str]] = field(default_factory=list)
     captions: list[str] | None = None
     interactive: list[InteractiveFigure] = field(default_factory=list)
 

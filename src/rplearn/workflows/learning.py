@@ -39,6 +39,7 @@ from rplearn.workflows.fleet import (
 from rplearn.models.fit import FittedModel, evaluate_models, fit_model, scores_markdown, scores_of_predictions
 from rplearn.models.base import require_patterns
 from rplearn.models.load import load_model
+from rplearn.models.patterns import PatternSet
 from rplearn.models.spec import ModelSpec, check_model_size
 from rplearn.models.robust import LOSSES, downweighted_notes, fit_huber
 from rplearn.models.streamed import checked, fit_patterns_accumulated, weighted_median
@@ -220,7 +221,7 @@ def fit_dataset(
     if path_loss.kind != "free" and not spec.decouples:
         raise InputError(f"path loss {path_loss.kind}: the baselines ({spec.label}) learn no environment term; fit "
                          "them in free space", param="path_loss")
-    terms = {"path_loss": path_loss, "link_offsets": link_offsets}
+    terms: dict[str, Any] = {"path_loss": path_loss, "link_offsets": link_offsets}
     if dask is not None:
         parse_dask(dask)
         if not spec.decouples or loss != "ls":
@@ -279,7 +280,7 @@ def _fit_auto(
 ) -> FitOutcome:
     """:func:`fit_dataset` with ``auto=True`` on a dataset in memory: samples per learning unit."""
     from rplearn.models.auto import fit_auto
-    learn = choice.units if choice.units is not None else (dataset_units(df) or [None])
+    learn: list[str | None] = list(choice.units) if choice.units is not None else (list(dataset_units(df)) or [None])
     part = select_units(df, choice.units, dataset)
     nodes = sorted(set(part["tx"].astype(str)) | set(part["rx"].astype(str)))
     if len(learn) == 1:  # one flight: cross-validate over contiguous stretches of it, not samples
@@ -339,12 +340,12 @@ def _fit_streamed(
     check_model_size(spec, n, len(nodes))
     t0 = time.perf_counter()
     if auto:
-        learn = choice.units or dataset_units(index) or [None]
+        learn: list[str | None] = [*(choice.units or dataset_units(index) or [])] or [None]
         stretches = Stretches.of_times(learning_times(parts, choice.units, client), TIME_BLOCKS, learn[0]) if len(learn) == 1 else None
         acc = checked(accumulate_parts(parts, spec, nodes, choice.units, True, stretches, path_loss, client, progress),
                       dataset)
         prov = provenance(dataset=dataset, model=f"{spec.kind}-auto", ridge=spec.ridge, units=choice.units)
-        fitted, selection = fit_from_statistics(acc.stats, spec.kind, orders, nodes, spec.ridge, gauge,
+        fitted, selection = fit_from_statistics(acc.stats, spec.kind, orders, nodes, spec.ridge_weight, gauge,
                                                 frequency_hz=weighted_median(acc.freq), provenance=prov,
                                                 prior=priors or None, prior_spread_db=prior_std_db,
                                                 path_loss=path_loss, link_offsets=link_offsets, prior_level=prior_level)
@@ -563,7 +564,7 @@ def learn_and_report(
     fitted, failed = [], []
     for spec in specs:
         progress(f"learning {spec.label}")
-        terms = {"path_loss": path_loss, "link_offsets": link_offsets} if spec.decouples else {}
+        terms: dict[str, Any] = {"path_loss": path_loss, "link_offsets": link_offsets} if spec.decouples else {}
         try:
             fitted.append(fit_model(ls, spec, provenance=prov, **terms))
         except (InputError, IdentifiabilityError) as exc:  # too few samples for this model: the others still go
@@ -577,7 +578,7 @@ def learn_and_report(
     for line in left_out:
         progress(line)
     md = scores_markdown(rows)
-    patterns = {f.label: f.model for f in fitted if f.model.kind == "patterns"}
+    patterns = {f.label: f.model for f in fitted if isinstance(f.model, PatternSet)}
     images = [plot.plot_coverage(node_directions(ls), node_directions(ts), os.path.join(out_dir, "coverage.png"))]
     if patterns:
         images.append(

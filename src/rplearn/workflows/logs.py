@@ -10,7 +10,7 @@ from __future__ import annotations
 import dataclasses
 
 from dataclasses import dataclass, field
-from typing import Any, Iterator, Mapping, Sequence
+from typing import Any, Iterator, Mapping, Sequence, cast
 
 import pandas as pd
 from numpy.typing import ArrayLike
@@ -26,6 +26,7 @@ from rplearn.io import ReaderOptions, read_logs
 from rplearn.io.inspect import file_damage
 from rplearn.io.files import check_output_path, check_table_path, write_json, write_table, write_table_chunks
 from rplearn.models.load import load_model
+from rplearn.models.patterns import PatternSet
 from rplearn.models.predict import FrequencyMismatch, frequency_mismatch
 
 
@@ -177,6 +178,7 @@ def sync_logs(
     pose_logs, pose_meta = read_logs(pose_paths, reader_options)
     if pose_logs.pose is None:
         raise InputError(f"{', '.join(pose_paths)}: no pose log found", param="pose_paths")
+    poses = pose_logs.pose
     clock = None
     if apply_offset and estimate_offset is None:
         raise InputError("apply-offset: nothing to apply; give --estimate-offset NODE", param="estimate_offset")
@@ -198,7 +200,7 @@ def sync_logs(
         summary = SyncSummary()
 
         def frames() -> Iterator[pd.DataFrame]:
-            for res in synchronise_stream(pose_logs.pose, _signal_chunks(signal_paths, reader_options),
+            for res in synchronise_stream(poses, _signal_chunks(signal_paths, reader_options),
                                           sync_options, source=source):
                 summary.merge(res.summary)
                 yield res.dataset
@@ -250,7 +252,8 @@ def swarm_links(
     if logs.pose is None:
         raise InputError(f"{', '.join(pose_paths)}: no pose log found", param="pose_paths")
     mismatch = frequency_mismatch(model, [frequency_hz]) if frequency_hz is not None else None
-    prediction = predict_swarm(model, logs.pose, tx_power_dbm, frequency_hz, source=", ".join(pose_paths), **swarm_options)
+    prediction = predict_swarm(cast(PatternSet, model), logs.pose,  # predict_swarm refuses a baseline
+                                tx_power_dbm, frequency_hz, source=", ".join(pose_paths), **swarm_options)
     write_table(prediction.links, output)
     if connectivity_out:
         write_table(prediction.connectivity, connectivity_out)
@@ -278,7 +281,8 @@ def swarm_headings(
         check_output_path(output, [model_path])
         if not output.lower().endswith(".json"):
             check_table_path(output)
-    result = best_swarm_headings(load_model(model_path), positions, tx_power_dbm, **options)
+    result = best_swarm_headings(cast(PatternSet, load_model(model_path)), positions,  # refuses a baseline
+                                  tx_power_dbm, **options)
     if output:
         if output.lower().endswith(".json"):
             write_json(output, result.to_dict())

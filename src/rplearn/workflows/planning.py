@@ -151,7 +151,7 @@ def draw_pattern_files(
     models = {}
     for path in model_paths:
         model = load_model(path)
-        if model.kind != "patterns":
+        if not isinstance(model, PatternSet):
             raise InputError(f"{path}: a {model.kind} baseline has no per-node pattern to draw", param="model_paths")
         models[model.label] = model
     gt = load_ground_truth(truth) if truth else None
