@@ -8,13 +8,13 @@ from __future__ import annotations
 import importlib
 import inspect
 import os
+import subprocess
+import sys
+import textwrap
 from pathlib import Path
 
 import numpy as np
 import pytest
-import subprocess
-import sys
-import textwrap
 
 from rplearn.errors import ArgumentTypeError, InputError, RplearnError
 

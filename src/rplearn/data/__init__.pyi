@@ -1,67 +1,53 @@
-# Public names of rplearn.data: read by type checkers and IDEs, and by lazy_loader.attach_stub in
-# __init__.py, which imports each name's module on first use. Only `from .module import name as
-# name` lines here (tests/test_public_api.py).
+# Public names of this package: read by type checkers and IDEs, and by lazy_loader.attach_stub
+# in __init__.py, which imports each name's module on first use. Only `from .module import name
+# as name` lines here (tests/test_public_api.py).
 
-from .tables import (
-    LinkSamples as LinkSamples,
-    MATCHED_COLUMNS as MATCHED_COLUMNS,
-    OPTIONAL_SIGNAL_COLUMNS as OPTIONAL_SIGNAL_COLUMNS,
-    POSE_COLUMNS as POSE_COLUMNS,
-    SENTINEL_RSSI_DBM as SENTINEL_RSSI_DBM,
-    SIGNAL_COLUMNS as SIGNAL_COLUMNS,
-    link_samples as link_samples,
-    normalise_times as normalise_times,
-    validate_matched as validate_matched,
-    validate_pose_log as validate_pose_log,
-    validate_signal_log as validate_signal_log,
-)
-from .poses import (
-    PoseTrack as PoseTrack,
-    interpolate_nodes as interpolate_nodes,
-    pose_tracks as pose_tracks,
-)
-from .sync import (
-    DROP_REASONS as DROP_REASONS,
-    SyncOptions as SyncOptions,
-    SyncResult as SyncResult,
-    SyncSummary as SyncSummary,
-    synchronise as synchronise,
-)
-from .streaming import (
-    row_hashes as row_hashes,
-    synchronise_stream as synchronise_stream,
-    synchronise_to_parquet as synchronise_to_parquet,
-)
-from .readings import (
-    REPEAT_FRACTION as REPEAT_FRACTION,
-    repeated_readings as repeated_readings,
-    report_period_s as report_period_s,
-    report_rate_hz as report_rate_hz,
-)
-from .phases import (
-    AIRBORNE_MARGIN_M as AIRBORNE_MARGIN_M,
-    FlightPhases as FlightPhases,
-    calibration_problems as calibration_problems,
-    flight_phases as flight_phases,
-    max_gap_advice as max_gap_advice,
-)
-from .units import (
-    Stretches as Stretches,
-    TEST_UNIT_PREFIX as TEST_UNIT_PREFIX,
-    TIME_UNITS as TIME_UNITS,
-    UnitChoice as UnitChoice,
-    dataset_units as dataset_units,
-    evaluation_units as evaluation_units,
-    is_stretch_label as is_stretch_label,
-    is_test_unit as is_test_unit,
-    learning_units as learning_units,
-    refuse_streamed_stretches as refuse_streamed_stretches,
-    samples_of as samples_of,
-    select_units as select_units,
-    split_units as split_units,
-    stretch_labels as stretch_labels,
-    stretched as stretched,
-    time_units as time_units,
-    trained_units as trained_units,
-    whole_flight_note as whole_flight_note,
-)
+from .phases import AIRBORNE_MARGIN_M as AIRBORNE_MARGIN_M
+from .phases import FlightPhases as FlightPhases
+from .phases import calibration_problems as calibration_problems
+from .phases import flight_phases as flight_phases
+from .phases import max_gap_advice as max_gap_advice
+from .poses import PoseTrack as PoseTrack
+from .poses import interpolate_nodes as interpolate_nodes
+from .poses import pose_tracks as pose_tracks
+from .readings import REPEAT_FRACTION as REPEAT_FRACTION
+from .readings import repeated_readings as repeated_readings
+from .readings import report_period_s as report_period_s
+from .readings import report_rate_hz as report_rate_hz
+from .streaming import row_hashes as row_hashes
+from .streaming import synchronise_stream as synchronise_stream
+from .streaming import synchronise_to_parquet as synchronise_to_parquet
+from .sync import DROP_REASONS as DROP_REASONS
+from .sync import SyncOptions as SyncOptions
+from .sync import SyncResult as SyncResult
+from .sync import SyncSummary as SyncSummary
+from .sync import synchronise as synchronise
+from .tables import MATCHED_COLUMNS as MATCHED_COLUMNS
+from .tables import OPTIONAL_SIGNAL_COLUMNS as OPTIONAL_SIGNAL_COLUMNS
+from .tables import POSE_COLUMNS as POSE_COLUMNS
+from .tables import SENTINEL_RSSI_DBM as SENTINEL_RSSI_DBM
+from .tables import SIGNAL_COLUMNS as SIGNAL_COLUMNS
+from .tables import LinkSamples as LinkSamples
+from .tables import link_samples as link_samples
+from .tables import normalise_times as normalise_times
+from .tables import validate_matched as validate_matched
+from .tables import validate_pose_log as validate_pose_log
+from .tables import validate_signal_log as validate_signal_log
+from .units import TEST_UNIT_PREFIX as TEST_UNIT_PREFIX
+from .units import TIME_UNITS as TIME_UNITS
+from .units import Stretches as Stretches
+from .units import UnitChoice as UnitChoice
+from .units import dataset_units as dataset_units
+from .units import evaluation_units as evaluation_units
+from .units import is_stretch_label as is_stretch_label
+from .units import is_test_unit as is_test_unit
+from .units import learning_units as learning_units
+from .units import refuse_streamed_stretches as refuse_streamed_stretches
+from .units import samples_of as samples_of
+from .units import select_units as select_units
+from .units import split_units as split_units
+from .units import stretch_labels as stretch_labels
+from .units import stretched as stretched
+from .units import time_units as time_units
+from .units import trained_units as trained_units
+from .units import whole_flight_note as whole_flight_note
