@@ -124,7 +124,7 @@ class NodeBlocks:
         if diagonal is not None:  # duplicates are summed
             row, col = np.r_[row, np.arange(a.shape[0])], np.r_[col, np.arange(a.shape[0])]
             values = np.r_[values, diagonal]
-        return csc_matrix((values, (rows, cols)), shape=a.shape)
+        return csc_matrix((values, (row, col)), shape=a.shape)
 
 
 __all__ = ["NodeBlocks"]

@@ -195,7 +195,9 @@ class NormalEquations:
         n = az_tx.size
         m = self._n_extra
         per_block = block_samples(block_rows(self.basis, m))
-        node_moments = np.zeros((self.n_nodes, *(self.basis.moment_shape or ())))
+        shape = self.basis.moment_shape
+        assert shape is not None  # only bases with Gram moments come here
+        node_moments = np.zeros((self.n_nodes, *shape))
         touched: set[tuple[int, int]] = set()
         nodes = np.arange(self.n_nodes)[:, None]
 
