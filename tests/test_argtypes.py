@@ -96,12 +96,12 @@ def test_the_same_class_with_the_same_checks_whatever_the_import_path(module):
     """In a fresh interpreter, whichever path is imported first: one class, one check."""
     result = _fresh(f"""
         from {module} import PatternSet
-        import rplearn.models, rplearn.models.patterns
-        assert PatternSet is rplearn.models.PatternSet is rplearn.models.patterns.PatternSet
-        try:
+        try:  # before any other look-up of the name
             PatternSet("sh5", ("A", "B"), [[0.0]])
         except Exception as exc:
             print(type(exc).__name__, exc)
+        import rplearn.models, rplearn.models.patterns
+        assert PatternSet is rplearn.models.PatternSet is rplearn.models.patterns.PatternSet
     """)
     assert result.returncode == 0, result.stderr
     assert result.stdout.strip() == (
