@@ -12,7 +12,8 @@ The `paper` preset (seed 0) is simulated and synchronised (the A->B link, three 
 
 Printed: the times and the ratios auto / SH-10 (target 3) and floor / SH-10.
 
-Usage: ``python benchmarks/auto_fit.py [--repeats 5]``
+Usage: ``python benchmarks/auto_fit.py [--repeats 5]``; ``--tiny``: the ``smoke`` preset, one
+repeat (the smoke test of tests/test_benchmarks.py).
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ import argparse
 import tempfile
 import time
 
-from rplearn.core.normal_equations import NormalEquations
+from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.data.sync import SyncOptions
 from rplearn.data.units import samples_of, split_units
 from rplearn.io.files import read_dataset
@@ -40,9 +41,13 @@ def timed(fn) -> float:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--tiny", action="store_true", help="the smoke preset, one repeat (seconds)")
     args = ap.parse_args()
+    preset = "smoke" if args.tiny else "paper"
+    if args.tiny:
+        args.repeats = 1
     with tempfile.TemporaryDirectory() as d:
-        simulate("paper", seed=0, out_dir=f"{d}/f")
+        simulate(preset, seed=0, out_dir=f"{d}/f")
         sync_logs([f"{d}/f/pose_log.parquet"], [f"{d}/f/signal_log.parquet"], f"{d}/m.parquet",
                   sync_options=SyncOptions(link=("A", "B")))
         df = read_dataset(f"{d}/m.parquet")
@@ -65,7 +70,7 @@ def main() -> None:
         best["auto"] = min(best["auto"], timed(lambda: fit_auto(per_unit)))
         best["floor"] = min(best["floor"], timed(accumulate))
     _, sel = fit_auto(per_unit)
-    print(f"paper data: {len(everything):,} learning samples in {len(per_unit)} units; candidates SH-2..SH-{top}")
+    print(f"{preset} data: {len(everything):,} learning samples in {len(per_unit)} units; candidates SH-2..SH-{top}")
     print(f"chosen: SH-{sel.order}, smoothing {sel.smoothing:.1e} ({len(sel.curve)} points of the validation curve)")
     print(f"best of {args.repeats}: SH-10 fit {best['SH-10'] * 1e3:.0f} ms, auto {best['auto'] * 1e3:.0f} ms, "
           f"accumulation at SH-{top} alone {best['floor'] * 1e3:.0f} ms")

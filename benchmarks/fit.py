@@ -20,6 +20,7 @@ Then, with ``--swarm``, the many-node rows (issue 13): SH-10 with 10, 30 and 50 
 the ``X^T X`` floor of the same columns (``benchmarks/fit_swarm.py``, which also runs alone).
 
 Run: ``.venv/bin/python benchmarks/fit.py [--quick]``. Timings are the best of several runs.
+``--tiny`` (the smoke test of tests/test_benchmarks.py) runs a small case and checks the numbers only.
 """
 
 from __future__ import annotations
@@ -35,7 +36,7 @@ from sklearn.linear_model import Ridge
 
 from rplearn.core.sh import SphericalHarmonics, real_sh_reference
 from rplearn.core.geometry import Directions
-from rplearn.core.solver import NormalEquations, fit_joint, solve
+from rplearn.core.lsq.solver import NormalEquations, fit_joint, solve
 
 N_SAMPLES = 56_164
 ORDER = 10
@@ -61,64 +62,20 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="fewer repeats and 2 M streamed samples")
     parser.add_argument("--swarm", action="store_true", help="also the many-node rows (benchmarks/fit_swarm.py)")
+    parser.add_argument("--tiny", action="store_true",
+                        help="a smoke run (5,000 samples, SH-6, one repeat, 50,000 streamed); targets not enforced")
     args = parser.parse_args()
-    repeats = 3 if args.quick else 7
+    repeats = 1 if args.tiny else 3 if args.quick else 7
+    n_samples, order = (5_000, 6) if args.tiny else (N_SAMPLES, ORDER)
     rng = np.random.default_rng(0)
-    basis = SphericalHarmonics(ORDER)
-    d = random_directions(rng, N_SAMPLES)
+    basis = SphericalHarmonics(order)
+    d = random_directions(rng, n_samples)
     true = rng.normal(0, 2, (2, basis.n_coef))
-    y = basis.design(d.az_tx, d.el_tx) @ true[0] + basis.design(d.az_rx, d.el_rx) @ true[1]
-    y += rng.normal(0, 3.0, N_SAMPLES)
-    tx = np.zeros(N_SAMPLES, np.intp)
-    rx = np.ones(N_SAMPLES, np.intp)
 
-    X = np.hstack([basis.design(d.az_tx, d.el_tx), basis.design(d.az_rx, d.el_rx)])
-    X = np.ascontiguousarray(X)
-    fit_joint(d, tx, rx, y, 2, basis, ridge=RIDGE)  # warm-up (caches, BLAS threads)
-    X.T @ X
-    # Interleaved: this machine's speed drifts by tens of percent within a minute, so the fit
-    # and its reference are timed alternately and the best of each is kept.
-    t_ours = t_floor = float("inf")
-    for _ in range(repeats * 2):
-        t, sol = best_of(lambda: fit_joint(d, tx, rx, y, 2, basis, ridge=RIDGE), 1)
-        t_ours = min(t_ours, t)
-        t, _ = best_of(lambda: X.T @ X, 1)
-        t_floor = min(t_floor, t)
-
-    def by_hand():
-        Xs = np.hstack([real_sh_reference(ORDER, d.az_tx, d.el_tx), real_sh_reference(ORDER, d.az_rx, d.el_rx)])
-        return Ridge(alpha=RIDGE, fit_intercept=False).fit(Xs, y), Xs
-
-    # Also interleaved with runs of ours, so that both can meet the machine in the same mood.
-    t_hand = t_ours_b = float("inf")
-    for _ in range(max(2, repeats // 3)):
-        t, sol = best_of(lambda: fit_joint(d, tx, rx, y, 2, basis, ridge=RIDGE), 3)
-        t_ours_b = min(t_ours_b, t)
-        t, (ridge_model, Xs) = best_of(by_hand, 1)
-        t_hand = min(t_hand, t)
-    pred_ours = X @ sol.coef.ravel()
-    pred_hand = ridge_model.predict(Xs)
-    max_diff = float(np.max(np.abs(pred_ours - pred_hand)))
-
-    print(f"SH-{ORDER}, 2 nodes, {N_SAMPLES} samples, {2 * basis.n_coef} columns")
-    print(f"  rplearn fit (features + solve): {t_ours * 1e3:8.1f} ms")
-    print(f"  (a) numpy X.T @ X floor:        {t_floor * 1e3:8.1f} ms   ratio ours/(a) = {t_ours / t_floor:5.2f}  (target <= 1.5)")
-    print(
-        f"  (b) sph_harm_y + sklearn Ridge: {t_hand * 1e3:8.1f} ms   speed-up (b)/ours = {t_hand / t_ours_b:5.1f}x (target >= 30;"
-        f" ours {t_ours_b * 1e3:.1f} ms in the rounds alternating with (b))"
-    )
-    print(f"  max |prediction difference| vs (b): {max_diff:.2e} dB (target <= 1e-6)")
-    print(f"  rank {sol.report.rank} of {sol.report.n_columns}, condition number {sol.report.condition_number:.2f}")
-
-    # Streaming: 10 million samples in chunks, never materialised at once.
-    total = 2_000_000 if args.quick else 10_000_000
-    chunk = 200_000
-    import rplearn.core.normal_equations as solver_module
-
-    import rplearn.core.basis_base as bases_module
-
-    solver_module._BUFFERS.__dict__.clear()  # count the solver's reusable block buffer too
-    bases_module._SCRATCH.__dict__.clear()  # and the feature scratch arrays
+    # Streaming: 10 million samples in chunks, never materialised at once; first, before any other fit: the solver's reusable block buffer and the feature scratch
+    # arrays are then allocated while traced, so the peak counts them.
+    total = 50_000 if args.tiny else 2_000_000 if args.quick else 10_000_000
+    chunk = 25_000 if args.tiny else 200_000
     tracemalloc.start()
     t0 = time.perf_counter()
     normal = NormalEquations(basis, 2)
@@ -145,8 +102,54 @@ def main() -> int:
     print(f"streamed fit of {total:,} samples in chunks of {chunk:,}: {elapsed:.1f} s")
     print(f"  peak traced memory {peak / 2**20:.0f} MiB (target < 1024 MiB); process max RSS {rss_gib:.2f} GiB")
     print(f"  max coefficient error (noise-free, shapes): {err:.1e}")
+
+    y = basis.design(d.az_tx, d.el_tx) @ true[0] + basis.design(d.az_rx, d.el_rx) @ true[1]
+    y += rng.normal(0, 3.0, n_samples)
+    tx = np.zeros(n_samples, np.intp)
+    rx = np.ones(n_samples, np.intp)
+
+    X = np.hstack([basis.design(d.az_tx, d.el_tx), basis.design(d.az_rx, d.el_rx)])
+    X = np.ascontiguousarray(X)
+    fit_joint(d, tx, rx, y, 2, basis, ridge=RIDGE)  # warm-up (caches, BLAS threads)
+    X.T @ X
+    # Interleaved: this machine's speed drifts by tens of percent within a minute, so the fit
+    # and its reference are timed alternately and the best of each is kept.
+    t_ours = t_floor = float("inf")
+    for _ in range(repeats * 2):
+        t, sol = best_of(lambda: fit_joint(d, tx, rx, y, 2, basis, ridge=RIDGE), 1)
+        t_ours = min(t_ours, t)
+        t, _ = best_of(lambda: X.T @ X, 1)
+        t_floor = min(t_floor, t)
+
+    def by_hand():
+        Xs = np.hstack([real_sh_reference(order, d.az_tx, d.el_tx), real_sh_reference(order, d.az_rx, d.el_rx)])
+        return Ridge(alpha=RIDGE, fit_intercept=False).fit(Xs, y), Xs
+
+    # Also interleaved with runs of ours, so that both can meet the machine in the same mood.
+    t_hand = t_ours_b = float("inf")
+    for _ in range(max(2, repeats // 3)):
+        t, sol = best_of(lambda: fit_joint(d, tx, rx, y, 2, basis, ridge=RIDGE), 3)
+        t_ours_b = min(t_ours_b, t)
+        t, (ridge_model, Xs) = best_of(by_hand, 1)
+        t_hand = min(t_hand, t)
+    pred_ours = X @ sol.coef.ravel()
+    pred_hand = ridge_model.predict(Xs)
+    max_diff = float(np.max(np.abs(pred_ours - pred_hand)))
+
+    print(f"SH-{order}, 2 nodes, {n_samples} samples, {2 * basis.n_coef} columns")
+    print(f"  rplearn fit (features + solve): {t_ours * 1e3:8.1f} ms")
+    print(f"  (a) numpy X.T @ X floor:        {t_floor * 1e3:8.1f} ms   ratio ours/(a) = {t_ours / t_floor:5.2f}  (target <= 1.5)")
+    print(
+        f"  (b) sph_harm_y + sklearn Ridge: {t_hand * 1e3:8.1f} ms   speed-up (b)/ours = {t_hand / t_ours_b:5.1f}x (target >= 30;"
+        f" ours {t_ours_b * 1e3:.1f} ms in the rounds alternating with (b))"
+    )
+    print(f"  max |prediction difference| vs (b): {max_diff:.2e} dB (target <= 1e-6)")
+    print(f"  rank {sol.report.rank} of {sol.report.n_columns}, condition number {sol.report.condition_number:.2f}")
+
     ok = t_ours / t_floor <= 1.5 and t_hand / t_ours_b >= 30 and max_diff <= 1e-6 and peak < 2**30
     print("targets met" if ok else "TARGETS MISSED")
+    if args.tiny:  # a smoke run: the timings of so small a case say nothing; the numbers must still agree
+        return 0 if max_diff <= 1e-6 and err < 1e-6 else 1
     if args.swarm:  # a fresh process: its peak memory is the swarm fits' own
         import subprocess
 

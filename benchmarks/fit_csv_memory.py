@@ -11,7 +11,8 @@ positions and attitudes, SH-5 ground truth plus noise) is written as CSV. Then, 
 Each child prints its peak resident memory (VmHWM) and the model's coefficients; the best of
 each is printed with the ratio streamed / whole, and the two models are checked to agree.
 
-Usage: ``python benchmarks/fit_csv_memory.py [--rows 6000000] [--repeats 2]``
+Usage: ``python benchmarks/fit_csv_memory.py [--rows 6000000] [--repeats 2]`` (``--tiny``: 20,000
+rows, once).
 """
 
 from __future__ import annotations
@@ -79,7 +80,10 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--rows", type=int, default=6_000_000)
     ap.add_argument("--repeats", type=int, default=2)
+    ap.add_argument("--tiny", action="store_true", help="20,000 rows, one repeat (seconds)")
     args = ap.parse_args()
+    if args.tiny:
+        args.rows, args.repeats = 20_000, 1
     with tempfile.TemporaryDirectory() as d:
         data = os.path.join(d, "matched.csv")
         t0 = time.perf_counter()

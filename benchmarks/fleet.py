@@ -12,7 +12,8 @@ best of ``--repeats``. Prints samples/s, the wall time (the cluster's start-up s
 the peak resident memory of the process and, on Dask, of each worker; checks that the two
 models agree to 1e-9.
 
-Run: ``.venv/bin/python benchmarks/fleet.py`` (``--samples 2e6`` for a quick look).
+Run: ``.venv/bin/python benchmarks/fleet.py`` (``--samples 2e6`` for a quick look; ``--tiny``: two
+flights of the ``smoke`` preset in a fresh folder, SH-4, once).
 """
 
 from __future__ import annotations
@@ -32,8 +33,8 @@ import json, sys, time
 from rplearn.models.spec import ModelSpec
 from rplearn.workflows.learning import _fit_streamed
 from rplearn.workflows.fleet import dask_client, worker_peak_rss_bytes
-data, dask, out = sys.argv[1], sys.argv[2], sys.argv[3]
-spec = ModelSpec.parse("sh", order=10)
+data, dask, out, order = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4])
+spec = ModelSpec.parse("sh", order=order)
 report = {}
 if dask == "none":
     t0 = time.perf_counter()
@@ -54,7 +55,7 @@ print(json.dumps(report))
 """
 
 
-def make_fleet(folder: str, samples: float) -> tuple[int, int]:
+def make_fleet(folder: str, samples: float, preset: str = "paper", flights: int | None = None) -> tuple[int, int]:
     """The cached fleet (flights, samples), simulated here when missing or too small."""
     from rplearn.sim.fleet import simulate_fleet
 
@@ -67,16 +68,16 @@ def make_fleet(folder: str, samples: float) -> tuple[int, int]:
 
         shutil.rmtree(folder)
     per_flight = 159_000
-    flights = int(np.ceil(samples / per_flight))
+    flights = flights or int(np.ceil(samples / per_flight))
     t0 = time.perf_counter()
-    result = simulate_fleet(folder, flights=flights, seed=11,
+    result = simulate_fleet(folder, flights=flights, seed=11, preset=preset,
                             progress=lambda k, n: print(f"\r  simulated {k}/{n} flights", end="", flush=True))
     print(f"\n  {result.samples:,} samples in {flights} flights, {time.perf_counter() - t0:.0f} s")
     return flights, result.samples
 
 
-def run(data: str, dask: str, out: str) -> dict:
-    proc = subprocess.run([sys.executable, "-c", ONE_RUN, data, dask, out], capture_output=True, text=True)
+def run(data: str, dask: str, out: str, order: int = 10) -> dict:
+    proc = subprocess.run([sys.executable, "-c", ONE_RUN, data, dask, out, str(order)], capture_output=True, text=True)
     if proc.returncode:
         raise SystemExit(proc.stderr)
     return json.loads(proc.stdout.strip().splitlines()[-1])
@@ -87,14 +88,18 @@ def main() -> int:
     parser.add_argument("--samples", type=float, default=10e6)
     parser.add_argument("--data", default=os.path.join(tempfile.gettempdir(), "rplearn-fleet-bench"))
     parser.add_argument("--repeats", type=int, default=2)
+    parser.add_argument("--tiny", action="store_true", help="two smoke flights in a fresh folder, SH-4, once (seconds)")
     args = parser.parse_args()
-    flights, total = make_fleet(args.data, args.samples)
-    best: dict[str, dict] = {}
+    order, preset = (4, "smoke") if args.tiny else (10, "paper")
     with tempfile.TemporaryDirectory() as d:
+        if args.tiny:
+            args.data, args.samples, args.repeats = os.path.join(d, "fleet"), 1, 1
+        flights, total = make_fleet(args.data, args.samples, preset, 2 if args.tiny else None)
+        best: dict[str, dict] = {}
         outs = {"none": os.path.join(d, "one.json"), "local:2": os.path.join(d, "dask.json")}
         for _ in range(args.repeats):
             for mode in ("none", "local:2"):
-                r = run(args.data, mode, outs[mode])
+                r = run(args.data, mode, outs[mode], order)
                 if mode not in best or r["fit_s"] < best[mode]["fit_s"]:
                     best[mode] = r
         from rplearn.models.load import load_model
@@ -103,7 +108,7 @@ def main() -> int:
         diff = float(np.max(np.abs(np.asarray(a.coef) - np.asarray(b.coef))))
     mib = 2.0**20
     one, dk = best["none"], best["local:2"]
-    print(f"SH-10 on {flights} flights, {total:,} samples ({one['samples']:,} learning), partitioned Parquet; best of "
+    print(f"SH-{order} on {flights} flights, {total:,} samples ({one['samples']:,} learning), partitioned Parquet; best of "
           f"{args.repeats}, alternating")
     print(f"  one process : {one['samples'] / one['fit_s']:>10,.0f} samples/s, {one['fit_s']:.1f} s, "
           f"peak {one['peak_bytes'] / mib:,.0f} MiB")

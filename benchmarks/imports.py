@@ -6,7 +6,7 @@ pandas, pyarrow.parquet"`` (the floor of any command that reads a Parquet table 
 best of ``--repeats``, and prints the sum of the top-level imports of each, their ratio and the
 largest top-level imports of the fit. Target: under 0.5 s.
 
-Run: ``.venv/bin/python benchmarks/imports.py``.
+Run: ``.venv/bin/python benchmarks/imports.py`` (``--tiny``: one repeat, the target not enforced).
 """
 
 from __future__ import annotations
@@ -39,7 +39,10 @@ def import_times(args: list[str], cwd: str) -> tuple[float, list[tuple[float, st
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument("--tiny", action="store_true", help="one repeat; the target is printed, not enforced")
     args = parser.parse_args()
+    if args.tiny:
+        args.repeats = 1
     from rplearn.sim.flight import simulate
 
     with tempfile.TemporaryDirectory() as d:
@@ -47,7 +50,8 @@ def main() -> int:
         fit = ["-m", "rplearn.cli", "fit", "m.parquet", "--degree", "6", "-o", "m.json"]
         floor = ["-c", "import numpy, pandas, pyarrow.parquet"]
         best_fit, best_floor, detail = float("inf"), float("inf"), []
-        import_times(fit, d)  # writes the bytecode caches of an editable install
+        if not args.tiny:  # (a tiny run times nothing it enforces)
+            import_times(fit, d)  # writes the bytecode caches of an editable install
         for _ in range(args.repeats):
             t, top = import_times(fit, d)
             if t < best_fit:
@@ -58,7 +62,7 @@ def main() -> int:
     print("  largest top-level imports: " + ", ".join(f"{n} {t * 1e3:.0f} ms" for t, n in detail[:8]))
     ok = best_fit < 0.5
     print("target met (under 0.5 s)" if ok else "TARGET MISSED (0.5 s)")
-    return 0 if ok else 1
+    return 0 if ok or args.tiny else 1
 
 
 if __name__ == "__main__":

@@ -5,11 +5,12 @@ several: the model file with its sidecar (``model.json`` + ``model.json.<sha>.np
 writes) and the same payload as JSON text (what the files held before). Prints the times,
 the sizes and the ratios. Target: loading well under a second.
 
-Run: ``.venv/bin/python benchmarks/knn_file.py``.
+Run: ``.venv/bin/python benchmarks/knn_file.py`` (``--tiny``: NN-40 of 5,000 samples, once).
 """
 
 from __future__ import annotations
 
+import argparse
 import os
 import tempfile
 import time
@@ -35,21 +36,25 @@ def best(fn, repeats=3):
 
 
 def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--tiny", action="store_true", help="NN-40 of 5,000 samples, one round (seconds)")
+    args = parser.parse_args()
+    n, k, rounds = (5_000, 40, 1) if args.tiny else (N, 400, 3)
     rng = np.random.default_rng(0)
-    samples = LinkSamples(Directions(*rng.uniform(-1.0, 1.0, (4, N))), np.zeros(N, int), np.ones(N, int), ("A", "B"),
-                          rng.normal(size=N), np.full(N, 10.0))
-    model = KNNModel.fit(samples, 400)
+    samples = LinkSamples(Directions(*rng.uniform(-1.0, 1.0, (4, n))), np.zeros(n, int), np.ones(n, int), ("A", "B"),
+                          rng.normal(size=n), np.full(n, 10.0))
+    model = KNNModel.fit(samples, k)
     with tempfile.TemporaryDirectory() as d:
         new, old = os.path.join(d, "nn.json"), os.path.join(d, "nn_text.json")
         t_save_new = t_save_old = t_load_new = t_load_old = float("inf")
-        for _ in range(3):
+        for _ in range(rounds):
             t_save_new = min(t_save_new, best(lambda: model.save(new), 1))
             t_save_old = min(t_save_old, best(lambda: write_model_file(old, "knn", model.to_dict()), 1))
             t_load_new = min(t_load_new, best(lambda: load_model(new), 1))
             t_load_old = min(t_load_old, best(lambda: load_model(old), 1))
         size_new = os.path.getsize(new) + os.path.getsize(named_sidecar(new))
         size_old = os.path.getsize(old)
-    print(f"NN-400, {N:,} training samples")
+    print(f"NN-{k}, {n:,} training samples")
     print(f"  save: sidecar {t_save_new:.3f} s, JSON text {t_save_old:.3f} s ({t_save_old / t_save_new:.0f}x)")
     print(f"  load: sidecar {t_load_new:.3f} s, JSON text {t_load_old:.3f} s ({t_load_old / t_load_new:.0f}x)")
     print(f"  size: sidecar + model file {size_new / 2**20:.1f} MiB, JSON text {size_old / 2**20:.1f} MiB")

@@ -9,7 +9,8 @@ Prints
   the testing unit (true poses, and poses after synchronising the logged estimates), the
   mean and k-NN-400 baselines, an SH-10 fit, and the plan check.
 
-Run: ``.venv/bin/python benchmarks/simulate.py [--repeats 3] [--seed 0]``.
+Run: ``.venv/bin/python benchmarks/simulate.py [--repeats 3] [--seed 0]`` (``--tiny``: the
+``smoke`` preset once, SH-4 and k-NN-40).
 """
 
 from __future__ import annotations
@@ -29,7 +30,11 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--tiny", action="store_true", help="the smoke preset once, SH-4 and k-NN-40 (seconds)")
     args = parser.parse_args()
+    preset, order, k = ("smoke", 4, 40) if args.tiny else ("paper", 10, 400)
+    if args.tiny:
+        args.repeats = 1
 
     from rplearn.data.tables import link_samples
     from rplearn.models.estimators import JointKNNRegressor, MeanRegressor, PatternRegressor
@@ -41,7 +46,7 @@ def main() -> None:
     res = None
     for _ in range(args.repeats):
         t0 = time.perf_counter()
-        res = simulate("paper", seed=args.seed)
+        res = simulate(preset, seed=args.seed)
         times.append(time.perf_counter() - t0)
     assert res is not None
     t_sim = statistics.median(times)
@@ -53,7 +58,7 @@ def main() -> None:
         rng.standard_normal(n_cells)
         ref_times.append(time.perf_counter() - t0)
     t_ref = statistics.median(ref_times)
-    print(f"simulate('paper'): {t_sim:.2f} s (median of {args.repeats}); {len(res.pose_log)} poses, "
+    print(f"simulate({preset!r}): {t_sim:.2f} s (median of {args.repeats}); {len(res.pose_log)} poses, "
           f"{len(res.signal_log)} packets")
     print(f"reference (draw {n_cells} standard normals): {t_ref * 1e3:.1f} ms; ratio {t_sim / t_ref:.0f}x")
     print(f"noise level: nominal {res.noise_std_db:.3f} dB (sqrt(fading^2 + 1/12)), realised {res.realised_noise_std_db:.3f} dB")
@@ -66,16 +71,16 @@ def main() -> None:
         truth = res.ground_truth.predict_joint_gain_db(tx, rx, *d, include_link_offset=True)
         xl, xt = np.column_stack(sl.directions), np.column_stack(d)
         mean = MeanRegressor().fit(xl, sl.joint_gain_db).predict(xt)
-        knn = JointKNNRegressor(400).fit(xl, sl.joint_gain_db).predict(xt)
+        knn = JointKNNRegressor(k).fit(xl, sl.joint_gain_db).predict(xt)
         t0 = time.perf_counter()
-        sh = PatternRegressor("sh", 10).fit(xl, sl.joint_gain_db)
+        sh = PatternRegressor("sh", order).fit(xl, sl.joint_gain_db)
         t_sh = time.perf_counter() - t0
         print(f"\n{tx}->{rx}: {len(learn)} learning, {len(test)} testing samples")
         rt = _rmse(st.joint_gain_db, truth)
         print(f"  true patterns, true poses:   RMSE {rt:.3f} dB ({100 * (rt / res.noise_std_db - 1):+.2f}% vs noise level)")
         print(f"  mean baseline:               RMSE {_rmse(st.joint_gain_db, mean):.2f} dB (paper 11.15)")
-        print(f"  k-NN-400:                    RMSE {_rmse(st.joint_gain_db, knn):.2f} dB (paper 4.82)")
-        print(f"  SH-10 (lead's solver):       RMSE {_rmse(st.joint_gain_db, sh.predict(xt)):.2f} dB (paper 4.56), "
+        print(f"  k-NN-{k}:{' ' * (24 - len(str(k)))}RMSE {_rmse(st.joint_gain_db, knn):.2f} dB (paper, k-NN-400: 4.82)")
+        print(f"  SH-{order} (lead's solver):{' ' * (8 - len(str(order)))}RMSE {_rmse(st.joint_gain_db, sh.predict(xt)):.2f} dB (paper, SH-10: 4.56), "
               f"rank {sh.report_.rank}/{sh.report_.n_columns}, cond {sh.report_.condition_number:.1f}, {t_sh:.2f} s")
         # the same with the poses the autopilots logged, after synchronisation
         sy = synced[(synced.tx == tx) & (synced.rx == rx)]
@@ -83,14 +88,14 @@ def main() -> None:
         sy_t = link_samples(sy[sy["unit"].isin(res.units("testing"))])
         dt = sy_t.directions
         truth_est = res.ground_truth.predict_joint_gain_db(tx, rx, *dt, include_link_offset=True)
-        knn_est = JointKNNRegressor(400).fit(np.column_stack(sy_l.directions), sy_l.joint_gain_db).predict(np.column_stack(dt))
+        knn_est = JointKNNRegressor(k).fit(np.column_stack(sy_l.directions), sy_l.joint_gain_db).predict(np.column_stack(dt))
         print(f"  after sync (logged poses):   true patterns RMSE {_rmse(sy_t.joint_gain_db, truth_est):.3f} dB, "
-              f"k-NN-400 {_rmse(sy_t.joint_gain_db, knn_est):.2f} dB")
+              f"k-NN-{k} {_rmse(sy_t.joint_gain_db, knn_est):.2f} dB")
 
-    check = check_plan(res.config.campaign, ("sh", 10))
-    print("\nplan check (SH-10, learning units, nominal tilt, no wind):")
+    check = check_plan(res.config.campaign, ("sh", order))
+    print(f"\nplan check (SH-{order}, learning units, nominal tilt, no wind):")
     print("  " + check.summary().replace("\n", "\n  "))
-    windy = check_plan(res.config.campaign, ("sh", 10), wind_speed_m_s=10.0)
+    windy = check_plan(res.config.campaign, ("sh", order), wind_speed_m_s=10.0)
     print(f"  with a 10 m/s wind: rank {windy.rank}/{windy.n_columns}, condition number {windy.condition_number:.1f}")
 
 

@@ -41,11 +41,11 @@ from rplearn.analysis.pattern_error import pattern_errors_db
 from rplearn.core.environment import PathLoss
 from rplearn.data.sync import SyncOptions, synchronise
 from rplearn.data.tables import link_samples
+from rplearn.data.units import stretch_samples
 from rplearn.models import ModelSpec
 from rplearn.models.auto import fit_auto
 from rplearn.models.fit import fit_model
 from rplearn.sim import simulate
-from rplearn.workflows.learning import TIME_BLOCKS
 
 #: Acceptance 5's tolerances.
 PATTERN_TOLERANCE_DB = 0.1
@@ -90,7 +90,8 @@ class Case:
 
     def line(self) -> str:
         worst = max(self.auto_error_db.values())
-        ratios = ", ".join(f"{n} {self.auto_spread_db[n]:.2f}/{self.auto_error_db[n]:.2f}" for n in self.auto_error_db)
+        ratios = ", ".join(f"{n} {self.auto_spread_db[n]:.2f}/{self.auto_error_db[n]:.2f} = "
+                           f"{self.auto_spread_db[n] / self.auto_error_db[n]:.2f}" for n in self.auto_error_db)
         best_k = min(self.fixed_error_db, key=lambda k: max(self.fixed_error_db[k].values()))
         best_r = min(self.fixed_rmse_db, key=self.fixed_rmse_db.get)
         ok = " ".join(f"{k}:{'ok' if v else 'MISS'}" for k, v in self.checks.items())
@@ -98,7 +99,7 @@ class Case:
                 f"{worst:.3f} dB (best fixed SH-{best_k} {self.best_fixed_error_db:.3f}, "
                 f"{worst - self.best_fixed_error_db:+.3f}); test RMSE {self.auto_rmse_db:.3f} dB (best fixed "
                 f"SH-{best_r} {self.best_fixed_rmse_db:.3f}, {self.auto_rmse_db - self.best_fixed_rmse_db:+.3f}); "
-                f"spread/error {ratios}  [{ok}] {self.seconds:.0f} s")
+                f"ratio spread/error {ratios}  [{ok}] {self.seconds:.0f} s")
 
     def to_dict(self) -> dict[str, Any]:
         return {"preset": self.preset, "seed": self.seed, "auto": self.auto_label, "smoothing": self.auto_smoothing,
@@ -121,15 +122,13 @@ def run_case(preset: str, seed: int, orders: list[int]) -> Case:
     test = link_samples(ds[ds["unit"].str.startswith("test")], nodes=nodes)
     path_loss = PathLoss("log-distance") if preset == "pathloss" else None
     units = {u: link_samples(g, nodes=nodes) for u, g in learn.groupby("unit")}
-    if len(units) == 1:  # one flight: contiguous stretches of time, as `rplearn fit` cuts it
-        ordered = learn.sort_values("t", kind="stable")
-        units = {f"{u}[{k + 1}/{TIME_BLOCKS}]": link_samples(ordered.iloc[b], nodes=nodes)
-                 for u in units for k, b in enumerate(np.array_split(np.arange(len(ordered)), TIME_BLOCKS))}
+    if len(units) == 1:  # one flight: its contiguous stretches of time, as `rplearn fit` cuts it
+        units = stretch_samples(learn, str(next(iter(units))), preset, nodes)
     fitted, sel = fit_auto(units, path_loss=path_loss)
     auto = fitted.model
     covered = covered_directions(auto)
     everything = link_samples(learn, nodes=nodes)
-    cert = decoupling_certificate(auto, list(units.values()))
+    cert = decoupling_certificate(auto, list(units.values()), posterior=fitted.own_posterior)
     fixed_rmse, fixed_err = {}, {}
     for k in orders:
         model = fit_model(everything, ModelSpec("sh", k), path_loss=path_loss).model

@@ -17,7 +17,8 @@ yaw, the first of equal best, only when strictly better; scored by the bottlenec
 maximum spanning tree, then the mean pair RSSI), scoring one candidate yaw at a time. Target:
 within 3x its time, with the same yaws and bottleneck.
 
-Run: ``.venv/bin/python benchmarks/swarm.py [--quick]``.
+Run: ``.venv/bin/python benchmarks/swarm.py [--quick]`` (``--tiny``: 4 drones x 50 times, headings
+of 4 drones, once; the numbers must agree, the time targets are not enforced).
 """
 
 from __future__ import annotations
@@ -50,9 +51,9 @@ def model_of(rng: np.random.Generator) -> PatternSet:
                       training={"rmse_db": 4.0, "frequency_hz": FREQUENCY_HZ})
 
 
-def swarm_poses(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def swarm_poses(n: int, times: int = TIMES) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Times [s], positions (n, T, 3) [m] and quaternions (n, T, 4) of drones circling."""
-    t = np.arange(TIMES) * 0.1
+    t = np.arange(times) * 0.1
     phase = np.arange(n)[:, None]
     pos = np.stack([60 * np.cos(0.05 * t + phase), 60 * np.sin(0.05 * t + phase), 20 + phase + 0 * t], axis=-1)
     yaw = 0.05 * t + phase + np.pi / 2
@@ -209,14 +210,16 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="10 and 30 drones, 2 repeats")
     parser.add_argument("--drones", type=int, nargs="+", help="only these swarm sizes for predict_swarm (and no headings)")
+    parser.add_argument("--tiny", action="store_true", help="4 drones x 50 times, headings of 4 drones, once (seconds)")
     args = parser.parse_args()
-    sizes = args.drones or ((10, 30) if args.quick else (10, 30, 100))
-    repeats = 2 if args.quick else 3
+    sizes = args.drones or ((4,) if args.tiny else (10, 30) if args.quick else (10, 30, 100))
+    repeats = 1 if args.tiny else 2 if args.quick else 3
+    n_times = 50 if args.tiny else TIMES
     rng = np.random.default_rng(0)
     model = model_of(rng)
-    ok = True
+    ok = agree = True
     for n in sizes:
-        t, pos, quat = swarm_poses(n)
+        t, pos, quat = swarm_poses(n, n_times)
         log = as_log(t, pos, quat)
         drones = [f"d{i:03d}" for i in range(n)]
         pattern_of = {d: ("A" if i % 2 == 0 else "B") for i, d in enumerate(drones)}
@@ -229,21 +232,22 @@ def main() -> int:
             dt, peak, ref = timed(lambda: reference_swarm(model, pos, quat, pattern))
             best["ref"] = (min(best["ref"][0], dt), max(best["ref"][1], peak))
         # the same numbers (links sorted by time, then tx, then rx: the reference's pair order per time)
-        gain = ours.links["gain_pred_db"].to_numpy().reshape(TIMES, n * (n - 1)).T
+        gain = ours.links["gain_pred_db"].to_numpy().reshape(n_times, n * (n - 1)).T
         same = np.allclose(gain, ref[0], atol=1e-8) and np.array_equal(ours.connectivity["n_pairs_up"].to_numpy(), ref[2])
         same &= np.allclose(ours.connectivity["bottleneck_rssi_dbm"].to_numpy(), ref[4], atol=1e-8)
         ratio_t = best["ours"][0] / best["ref"][0]
         ratio_m = best["ours"][1] / max(best["ref"][1], 1)
         ok &= ratio_t <= 2.0 and ratio_m <= 1.5 and same
-        print(f"predict_swarm, {n} drones x {TIMES} times ({n * (n - 1) * TIMES:,} links): "
+        agree &= same
+        print(f"predict_swarm, {n} drones x {n_times} times ({n * (n - 1) * n_times:,} links): "
               f"{best['ours'][0]:.2f} s against {best['ref'][0]:.2f} s, ratio {ratio_t:.2f} (target 2); "
               f"peak {best['ours'][1] / 2**20:.0f} MiB against {best['ref'][1] / 2**20:.0f} MiB, ratio {ratio_m:.2f} "
               f"(target 1.5); same numbers: {same}")
-    for n in () if args.drones else (10, 20):
+    for n in () if args.drones else (4,) if args.tiny else (10, 20):
         positions = {f"d{i:02d}": (rng.uniform(-100, 100), rng.uniform(-100, 100), rng.uniform(10, 40)) for i in range(n)}
         pattern_of = {d: ("A" if i % 2 else "B") for i, d in enumerate(positions)}
         t_ours = t_ref = np.inf
-        for _ in range(2 if args.quick else 3):
+        for _ in range(repeats):
             t0 = time.perf_counter()
             result = best_swarm_headings(model, positions, TX_POWER_DBM, FREQUENCY_HZ, pattern_of)
             t_ours = min(t_ours, time.perf_counter() - t0)
@@ -253,11 +257,12 @@ def main() -> int:
         same = (all(abs(result.yaw_deg[d] - ref_yaws[d]) < 1e-9 for d in positions)
                 and abs(result.bottleneck_dbm - ref_bottleneck) < 1e-9)
         ok &= t_ours / t_ref <= 3.0 and same
+        agree &= same
         print(f"best_swarm_headings, {n} drones: {t_ours:.2f} s against the reference ascent {t_ref:.2f} s, ratio "
               f"{t_ours / t_ref:.2f} (target 3); bottleneck {result.bottleneck_dbm:.3f} against {ref_bottleneck:.3f} dBm; "
               f"same yaws and bottleneck: {same}")
     print("targets met" if ok else "TARGETS MISSED")
-    return 0 if ok else 1
+    return 0 if ok or (args.tiny and agree) else 1
 
 
 if __name__ == "__main__":

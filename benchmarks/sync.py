@@ -9,7 +9,8 @@
    in a child process; its peak resident memory (VmHWM of /proc/self/status) is printed beside
    the size the matched dataset would take in memory at once.
 
-Usage: ``python benchmarks/sync.py [--samples 1000000] [--stream-samples 10000000]``
+Usage: ``python benchmarks/sync.py [--samples 1000000] [--stream-samples 10000000]`` (``--tiny``:
+20,000 samples, 40,000 streamed over 2 minutes).
 """
 
 from __future__ import annotations
@@ -154,7 +155,10 @@ def main() -> None:
     ap.add_argument("--stream-duration-s", type=float, default=7200.0,
                     help="flight duration of the streamed log (its pose logs stay in memory)")
     ap.add_argument("--child", nargs=4, help=argparse.SUPPRESS)
+    ap.add_argument("--tiny", action="store_true", help="20,000 samples, 40,000 streamed over 120 s (seconds)")
     args = ap.parse_args()
+    if args.tiny:
+        args.samples, args.stream_samples, args.chunk_rows, args.stream_duration_s = 20_000, 40_000, 20_000, 120.0
     if args.child:
         _stream_child(args.child[0], args.child[1], float(args.child[2]), int(args.child[3]))
         return

@@ -11,7 +11,8 @@ fresh child process:
 Each child prints its peak resident memory (VmHWM); the best of each is printed with the
 ratio streamed / whole and the 1 GiB budget. Both outputs are checked to hold the same rows.
 
-Usage: ``python benchmarks/sync_csv_memory.py [--rows 5000000] [--repeats 2]``
+Usage: ``python benchmarks/sync_csv_memory.py [--rows 5000000] [--repeats 2]`` (``--tiny``: 20,000
+rows over 2 minutes, once).
 """
 
 from __future__ import annotations
@@ -74,7 +75,10 @@ def main() -> None:
     ap.add_argument("--rows", type=int, default=5_000_000)
     ap.add_argument("--repeats", type=int, default=2)
     ap.add_argument("--duration-s", type=float, default=7200.0)
+    ap.add_argument("--tiny", action="store_true", help="20,000 rows over 120 s, one repeat (seconds)")
     args = ap.parse_args()
+    if args.tiny:
+        args.rows, args.repeats, args.duration_s = 20_000, 1, 120.0
     import pyarrow.parquet as pq
 
     with tempfile.TemporaryDirectory() as d:

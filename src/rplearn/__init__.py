@@ -1,8 +1,10 @@
 """rplearn: learn drone-with-antenna radiation patterns from calibration flights.
 
-The method follows Hert et al., "Orientation matters" (see README): the joint gain of a
-radio link is split into one radiation pattern per drone-with-antenna, each a linear
-combination of basis functions of the direction (azimuth, elevation) in the drone's body
+The method follows Zoula, Bonilla Licea, Faigl, Navrátil and Saska, "Orientation Matters:
+Learning Radiation Patterns of Multi-Rotor UAVs In-Flight to Enhance Communication
+Availability Modeling", arXiv:2604.02827, doi:10.48550/arXiv.2604.02827 (CITATION.cff): the
+joint gain of a radio link is split into one radiation pattern per drone-with-antenna, each a
+linear combination of basis functions of the direction (azimuth, elevation) in the drone's body
 frame, identified by linear least squares over signal samples of a calibration flight.
 
 The package is layered, bottom to top (ARCHITECTURE.md): :mod:`rplearn.core` (frames, link

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pandas as pd
 import pytest
 
@@ -141,3 +142,25 @@ def test_one_naming_of_stretches_cut_at_instants():
     refuse_streamed_stretches(pd.DataFrame({"unit": ["u"], "n": [3]}), ["u"], "big")
     with pytest.raises(InputError, match=r"lacks \(a flight without units is cut into stretches"):
         select_units(df, ["test[5/5]"], "d.parquet")
+
+
+def test_one_flight_cut_into_stretch_samples_the_way_time_units_cuts_it():
+    """stretch_samples (the folds of a single unit) uses the one cut of data/units.py: every row
+    in exactly one stretch, no instant split, named after the unit, the same rows time_units
+    labels."""
+    from rplearn.data.units import TIME_UNITS, samples_of, stretch_samples, time_units
+    from rplearn.sim.flight import simulate
+
+    df = simulate("smoke", seed=3).matched_truth.drop(columns=["unit"])
+    df = pd.concat([df, df.iloc[::7]]).sort_values("t", kind="stable")  # repeated instants
+    folds = stretch_samples(df, "u", "d.parquet")
+    assert list(folds) == [f"u[{k}/{TIME_UNITS}]" for k in range(1, TIME_UNITS + 1)]
+    assert sum(len(s) for s in folds.values()) == len(df)
+    cut, _ = time_units(df)
+    assert cut.groupby("t")["unit"].nunique().max() == 1  # no instant in two stretches
+    for (label, samples), unit in zip(folds.items(), cut["unit"].drop_duplicates()):
+        rows = samples_of(cut, [unit])
+        assert len(samples) == len(rows), label
+        np.testing.assert_array_equal(np.sort(samples.joint_gain_db), np.sort(rows.joint_gain_db))
+    flight = stretch_samples(df)
+    assert list(flight)[-1] == f"test[{TIME_UNITS}/{TIME_UNITS}]"

@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 
 from rplearn.data.sync import synchronise
 from rplearn.errors import RplearnError
-from rplearn.io.export import export_msi_files
+from rplearn.io.msi import export_msi_files
 from rplearn.io.files import write_table
 from rplearn.io.inspect import inspect_logs
 from rplearn.models import ModelSpec, fit_model

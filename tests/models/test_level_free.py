@@ -2,7 +2,7 @@
 values is arbitrary, so adding a constant to every one of them must shift every prediction by
 exactly that constant and change nothing else (the chosen order and smoothing, the spreads,
 the coverage), for every model kind. The regularisation shrinks toward the data's own level
-(:mod:`rplearn.core.level`), never toward 0 dB nor toward a prior's absolute dBi."""
+(:mod:`rplearn.core.lsq.level`), never toward 0 dB nor toward a prior's absolute dBi."""
 
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from rplearn.core.environment import PathLoss
-from rplearn.core.level import constant_coefficients
+from rplearn.core.lsq.level import constant_coefficients
 from rplearn.data.tables import LinkSamples
 from rplearn.data.units import samples_of, split_units
 from rplearn.errors import InputError

@@ -13,7 +13,7 @@ import pandas as pd
 import pytest
 
 from rplearn.errors import InputError
-from rplearn.io.export import export_msi_files, msi_horizontal_directions_rad, msi_vertical_directions_rad
+from rplearn.io.msi import export_msi_files, msi_horizontal_directions_rad, msi_vertical_directions_rad
 from rplearn.io.reference import mount_rotation, read_reference_pattern
 from rplearn.models import load_model
 from rplearn.models.reference import reference_model

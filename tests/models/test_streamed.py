@@ -10,6 +10,7 @@ import pytest
 
 from rplearn.errors import InputError, RplearnError
 from rplearn.models import ModelSpec
+from rplearn.models import streamed as streamed_module
 from rplearn.models.streamed import weighted_median
 from rplearn.sim import simulate
 from rplearn.workflows import fleet, learning
@@ -32,7 +33,8 @@ def dataset(tmp_path_factory):
 def streamed(monkeypatch, chunk_rows=97):
     monkeypatch.setattr(learning, "STREAM_FIT_ROWS", 0)
     monkeypatch.setattr(learning, "STREAM_FIT_BYTES", 0)
-    monkeypatch.setattr(fleet, "PART_CHUNK_ROWS", chunk_rows)
+    monkeypatch.setattr(fleet, "PART_CHUNK_ROWS", chunk_rows)  # the id columns and the times
+    monkeypatch.setattr(streamed_module, "PART_CHUNK_ROWS", chunk_rows)  # the statistics
 
 
 @pytest.mark.parametrize("name", ["m.parquet", "m.csv"])
@@ -56,7 +58,8 @@ def test_streamed_fit_checks_the_size_before_reading_the_data(dataset, monkeypat
     streamed(monkeypatch)
     read = []
     real = fleet.iter_parts
-    monkeypatch.setattr(fleet, "iter_parts", lambda *a, **k: (read.append(k.get("columns")), real(*a, **k))[1])
+    for module in (fleet, streamed_module):  # the index, and the statistics
+        monkeypatch.setattr(module, "iter_parts", lambda *a, **k: (read.append(k.get("columns")), real(*a, **k))[1])
     with pytest.raises(RplearnError, match="the largest sh order that fits is"):
         learning.fit_dataset(str(dataset / "m.csv"), ModelSpec("sh", 1000))
     assert read == [("tx", "rx", "unit")]  # only the id columns were read

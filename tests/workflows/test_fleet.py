@@ -197,15 +197,38 @@ def test_files_with_and_without_units_are_refused_naming_one(fleet, tmp_path):
 def test_a_merge_task_leaves_its_inputs_unchanged(fleet):
     """Dask may recompute from stored results: merging must not change them (found by review)."""
     from rplearn.io.partitions import dataset_parts
-    from rplearn.workflows.fleet import _merge_accumulated, _part_statistics
+    from rplearn.models.streamed import part_statistics
+    from rplearn.workflows.fleet import _merge_accumulated
 
     root, _ = fleet
     parts = dataset_parts(str(root))[:2]
     kwargs = dict(spec=ModelSpec.parse("sh", order=4), nodes=drone_ids(4), units=None, by_unit=True, stretches=None,
                   path_loss=None)
-    a, b = (_part_statistics(p, **kwargs) for p in parts)
+    a, b = (part_statistics(p, **kwargs) for p in parts)
     before = (a.n_samples, b.n_samples, a.non_unit, {k: v.gram.copy() for k, v in a.stats.items()})
     merged = _merge_accumulated(a, b)
     assert merged.n_samples == before[0] + before[1]
     assert (a.n_samples, b.n_samples, a.non_unit) == before[:3]
     assert all(np.array_equal(a.stats[k].gram, g) for k, g in before[3].items())
+
+
+def test_parts_add_up_in_one_process_to_one_pass_over_their_rows(fleet):
+    """models.streamed.accumulate_parts (no Dask) is the sum of each part's statistics, in order,
+    and equals accumulating every part's chunks in one pass."""
+    from rplearn.io.files import iter_parts
+    from rplearn.io.partitions import dataset_parts
+    from rplearn.models.streamed import accumulate, accumulate_parts, part_statistics
+
+    root, _ = fleet
+    parts = dataset_parts(str(root))[:3]
+    kwargs = dict(spec=ModelSpec.parse("sh", order=3), nodes=drone_ids(4), units=None, by_unit=False)
+    seen = []
+    total = accumulate_parts(parts, **kwargs, progress=lambda done, n: seen.append((done, n)))
+    assert seen == [(1, 3), (2, 3), (3, 3)]
+    each = [part_statistics(p, **kwargs) for p in parts]
+    assert total.n_samples == sum(a.n_samples for a in each) > 0
+    one_pass = accumulate(iter_parts(parts, 97), source="all", **kwargs)
+    np.testing.assert_allclose(total.stats["all"].gram, one_pass.stats["all"].gram, rtol=1e-12, atol=1e-9)
+    np.testing.assert_allclose(total.stats["all"].rhs, one_pass.stats["all"].rhs, rtol=1e-12, atol=1e-9)
+    assert total.non_unit == one_pass.non_unit and total.freq == one_pass.freq
+    assert accumulate_parts([], **kwargs).n_samples == 0

@@ -37,9 +37,10 @@ from rplearn._argtypes import check_types
 from rplearn.analysis.pattern_error import gauged_nodes
 from rplearn.core.bases import fibonacci_grid_nodes
 from rplearn.core.coverage import COVERED_WITHIN_DEG
-from rplearn.core.normal_equations import NormalEquations
+from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.data.tables import LinkSamples
 from rplearn.errors import InputError
+from rplearn.models.own_posterior import OwnPosterior
 from rplearn.models.patterns import PatternSet
 
 #: A component is *unsplit* when the joint mean square it causes on the learning pairs is below
@@ -52,6 +53,8 @@ MIN_LISTED_DB = 0.05
 MAX_LISTED = 3
 #: Points of the Fibonacci grid over which the sphere average is taken.
 SPHERE_POINTS = 2048
+#: Points of the Fibonacci grid on which the own-pattern std is stored (about 4.5 deg apart).
+OWN_MAP_POINTS = 2048
 #: Pattern columns above which the components are not computed (an eigenproblem of that size).
 MAX_COMPONENT_COLUMNS = 1500
 
@@ -127,6 +130,9 @@ class DecouplingCertificate:
     covered_db : float
         Per-node RMS [dB] of the whole posterior over the covered directions (the nodes' mean square).
     notes : list of str
+    own_std_db : dict of node to ndarray
+        With an own-pattern posterior: the posterior std of each node's gain [dB] at the
+        :data:`OWN_MAP_POINTS` points of a Fibonacci grid, which ``plot --spread`` draws.
     """
 
     nodes: dict[str, NodeSpread]
@@ -135,6 +141,7 @@ class DecouplingCertificate:
     unsplit_db: float = float("nan")
     covered_db: float = float("nan")
     notes: list[str] = field(default_factory=list)
+    own_std_db: dict[str, np.ndarray] = field(default_factory=dict)
 
     def summary(self) -> str:
         """A few lines: each node's spread, then the unsplit components."""
@@ -158,7 +165,8 @@ class DecouplingCertificate:
                 "components": [c.to_dict() for c in self.components], "n_unsplit": self.n_unsplit,
                 "unsplit_db": self.unsplit_db, "covered_db": self.covered_db,
                 "unsplit_joint_fraction": UNSPLIT_JOINT_FRACTION, "covered_within_deg": COVERED_WITHIN_DEG,
-                "notes": list(self.notes)}
+                "notes": list(self.notes),
+                **({"own_std_db": {n: np.round(v, 3).tolist() for n, v in self.own_std_db.items()}} if self.own_std_db else {})}
 
 
 def covered_directions(model: PatternSet, within_deg: float = COVERED_WITHIN_DEG) -> dict[str, tuple[np.ndarray, np.ndarray]]:
@@ -191,11 +199,15 @@ def _metric(design: np.ndarray, demean: bool) -> np.ndarray:
 
 
 def _node_spreads(model: PatternSet, covered: Mapping[str, tuple[np.ndarray, np.ndarray]],
-                  cov: np.ndarray) -> tuple[dict[str, NodeSpread], list[np.ndarray]]:
-    basis, p = model.basis, model.basis.n_coef
+                  cov: np.ndarray, own: OwnPosterior | None = None) -> tuple[dict[str, NodeSpread], list[np.ndarray]]:
+    """Per node: the covered spread (from ``own`` when given, at its basis), the sphere spread
+    (from the model's covariance ``cov``: the predictive spread ``fit`` uses, capped where the
+    flight never looked), and the covered metric at the basis of the covered spread."""
+    p = model.basis.n_coef
+    basis, q, own_cov = (model.basis, p, cov) if own is None else (own.basis, own.basis.n_coef, own.covariance)
     gauged = gauged_nodes(model)
     saz, sel = fibonacci_grid_nodes(SPHERE_POINTS)
-    sphere = basis.design(saz, sel)
+    sphere = model.basis.design(saz, sel)
     grid_sizes = {n: len(model.training["coverage_deg"][n]) for n in model.nodes}
     spreads, metrics = {}, []
     for k, node in enumerate(model.nodes):
@@ -203,20 +215,35 @@ def _node_spreads(model: PatternSet, covered: Mapping[str, tuple[np.ndarray, np.
         az, el = covered[node]
         m = _metric(basis.design(az, el), node in gauged)
         metrics.append(m)
-        covered_var = float(np.sum(m * block))
+        covered_var = float(np.sum(m * own_cov[k * q:(k + 1) * q, k * q:(k + 1) * q]))
         sphere_var = float(np.sum(_metric(sphere, node in gauged) * block))
         spreads[node] = NodeSpread(float(np.sqrt(max(covered_var, 0.0))), float(np.sqrt(max(sphere_var, 0.0))),
                                    float(az.size / grid_sizes[node]))
     return spreads, metrics
 
 
-def _joint_metric(model: PatternSet, samples: LinkSamples | Sequence[LinkSamples] | None, gram: np.ndarray | None, n_samples: int | None) -> np.ndarray:
-    """Mean ``x x^T`` of the joint design rows of the learning samples (pattern columns)."""
-    pat = model.n_pattern_columns
+def own_std_maps(model: PatternSet, own: OwnPosterior) -> dict[str, np.ndarray]:
+    """Posterior std [dB] of each node's gain under ``own`` at the :data:`OWN_MAP_POINTS` points
+    of a Fibonacci grid (:func:`rplearn.core.bases.fibonacci_grid_nodes`, in its order)."""
+    q = own.basis.n_coef
+    az, el = fibonacci_grid_nodes(OWN_MAP_POINTS)
+    out = {}
+    for k, node in enumerate(model.nodes):
+        block = own.covariance[k * q:(k + 1) * q, k * q:(k + 1) * q]
+        out[node] = np.sqrt(np.maximum(own.basis.quadratic_form(block, az, el), 0.0))
+    return out
+
+
+def _joint_metric(model: PatternSet, samples: LinkSamples | Sequence[LinkSamples] | None, gram: np.ndarray | None,
+                  n_samples: int | None, basis: Any = None) -> np.ndarray:
+    """Mean ``x x^T`` of the joint design rows of the learning samples (pattern columns, at
+    ``basis``: the model's by default; ``gram`` must be at that basis)."""
+    basis = model.basis if basis is None else basis
+    pat = basis.n_coef * len(model.nodes)
     if gram is not None:
         g = np.asarray(gram, np.float64)[:pat, :pat]
         return g / float(n_samples or 1)
-    normal = NormalEquations(model.basis, len(model.nodes))
+    normal = NormalEquations(basis, len(model.nodes))
     for part in [samples] if isinstance(samples, LinkSamples) else list(samples or []):
         if tuple(part.nodes) != tuple(model.nodes):
             raise InputError(f"samples: nodes {', '.join(part.nodes)} are not the model's ({', '.join(model.nodes)})",
@@ -226,8 +253,9 @@ def _joint_metric(model: PatternSet, samples: LinkSamples | Sequence[LinkSamples
 
 
 def _peaks(model: PatternSet, covered: Mapping[str, tuple[np.ndarray, np.ndarray]], vec: np.ndarray,
-           metrics: Sequence[np.ndarray]) -> dict[str, tuple[float, float, int, float]]:
-    p = model.basis.n_coef
+           metrics: Sequence[np.ndarray], basis: Any = None) -> dict[str, tuple[float, float, int, float]]:
+    basis = model.basis if basis is None else basis
+    p = basis.n_coef
     energy = [float(vec[k * p:(k + 1) * p] @ metrics[k] @ vec[k * p:(k + 1) * p]) for k in range(len(model.nodes))]
     total = sum(energy) or 1.0
     out = {}
@@ -235,7 +263,7 @@ def _peaks(model: PatternSet, covered: Mapping[str, tuple[np.ndarray, np.ndarray
         az, el = covered[node]
         if az.size == 0:
             continue
-        values = model.basis.design(az, el) @ vec[k * p:(k + 1) * p]
+        values = basis.design(az, el) @ vec[k * p:(k + 1) * p]
         values = values - values.mean() if node in gauged_nodes(model) else values
         i = int(np.argmax(np.abs(values)))
         out[node] = (float(np.degrees(az[i])), float(np.degrees(el[i])), int(np.sign(values[i]) or 1), energy[k] / total)
@@ -243,16 +271,18 @@ def _peaks(model: PatternSet, covered: Mapping[str, tuple[np.ndarray, np.ndarray
 
 
 def unsplit_components(model: PatternSet, covered: Mapping[str, tuple[np.ndarray, np.ndarray]], metrics: Sequence[np.ndarray],
-                       joint: np.ndarray) -> tuple[list[SplitComponent], int, float, float]:
+                       joint: np.ndarray, own: OwnPosterior | None = None) -> tuple[list[SplitComponent], int, float, float]:
     """The posterior's components and their per-node and joint mean squares (module docstring):
-    the unsplit ones listed (largest first), their count, their per-node RMS and the total's."""
-    pat = model.n_pattern_columns
-    cov = np.asarray(model.covariance, np.float64)[:pat, :pat]
+    the unsplit ones listed (largest first), their count, their per-node RMS and the total's.
+    The posterior is ``own`` when given (at its basis), else the model's covariance."""
+    basis = model.basis if own is None else own.basis
+    pat = basis.n_coef * len(model.nodes)
+    cov = np.asarray(model.covariance if own is None else own.covariance, np.float64)[:pat, :pat]
     values, vectors = np.linalg.eigh(0.5 * (cov + cov.T))
     keep = values > 1e-12 * max(float(values.max()), 1e-300)
     root = vectors[:, keep] * np.sqrt(values[keep])  # Sigma = L L^T
     n_nodes = len(model.nodes)
-    p = model.basis.n_coef
+    p = basis.n_coef
     per_node = np.zeros((pat, pat))
     for k in range(n_nodes):
         per_node[k * p:(k + 1) * p, k * p:(k + 1) * p] = metrics[k] / n_nodes
@@ -276,7 +306,7 @@ def unsplit_components(model: PatternSet, covered: Mapping[str, tuple[np.ndarray
     for i in listed[:MAX_LISTED]:
         vec = root @ u[:, i]
         comps.append(SplitComponent(float(np.sqrt(node_ms[i])), float(np.sqrt(max(joint_ms[i], 0.0))),
-                                    _peaks(model, covered, vec, metrics)))
+                                    _peaks(model, covered, vec, metrics, basis)))
     return comps, len(listed), float(np.sqrt(max(float(np.sum(node_ms[unsplit])), 0.0))), float(np.sqrt(max(total_ms, 0.0)))
 
 
@@ -287,6 +317,7 @@ def decoupling_certificate(
     gram: np.ndarray | None = None,
     n_samples: int | None = None,
     within_deg: float = COVERED_WITHIN_DEG,
+    posterior: OwnPosterior | None = None,
 ) -> DecouplingCertificate:
     """Per-node spread of a pattern model's own patterns and the components its flight cannot split.
 
@@ -301,6 +332,13 @@ def decoupling_certificate(
         columns first) and its number of samples.
     within_deg : float
         Radius of a covered direction [deg].
+    posterior : OwnPosterior, optional
+        The own-pattern posterior of an automatic fit (``FittedModel.own_posterior``: the
+        cross-validated prior continued to the largest candidate order,
+        :mod:`rplearn.models.own_posterior`), read for the covered spreads and the unsplit
+        components; by default the model's covariance (the chosen order's, capped where the
+        flight never looked: its covered spreads are then lower bounds). ``gram``, if given,
+        must be at the posterior's basis.
 
     Returns
     -------
@@ -318,35 +356,40 @@ def decoupling_certificate(
         raise InputError("model: it carries no covariance; the per-node spread needs one", param="model")
     covered = covered_directions(model, within_deg)
     cov = np.asarray(model.covariance, np.float64)
-    spreads, metrics = _node_spreads(model, covered, cov)
+    own = posterior if "selection" in model.training else None
+    spreads, metrics = _node_spreads(model, covered, cov, own)
+    maps = {} if own is None else own_std_maps(model, own)
     covered_db = float(np.sqrt(np.mean([s.covered_std_db**2 for s in spreads.values()])))
+    notes = [own.note] if own is not None and own.note else []
     if "selection" not in model.training:  # a fixed order: the ridge's estimate, no posterior
         return DecouplingCertificate(spreads, covered_db=covered_db, notes=[
             "(a fixed-order fit's covariance leaves out what its ridge decides where the flight cannot split the "
             "patterns, so these spreads are lower bounds and the unsplit components are not computed; "
             "--degree auto gives the posterior's)"])
     if samples is None and gram is None:
-        return DecouplingCertificate(spreads, covered_db=covered_db,
-                                     notes=["(the components not split between nodes are not computed: the pairs of learning directions were not kept)"])
-    if model.n_pattern_columns > MAX_COMPONENT_COLUMNS:
-        return DecouplingCertificate(spreads, covered_db=covered_db, notes=[
-            f"(components not computed: {model.n_pattern_columns} pattern columns, above {MAX_COMPONENT_COLUMNS})"])
-    joint = _joint_metric(model, samples, gram, n_samples)
-    comps, n_unsplit, unsplit_db, total_db = unsplit_components(model, covered, metrics, joint)
-    return DecouplingCertificate(spreads, tuple(comps), n_unsplit, unsplit_db, total_db)
+        return DecouplingCertificate(spreads, covered_db=covered_db, own_std_db=maps, notes=notes + [
+            "(the components not split between nodes are not computed: the pairs of learning directions were not kept)"])
+    columns = (model.basis if own is None else own.basis).n_coef * len(model.nodes)
+    if columns > MAX_COMPONENT_COLUMNS:
+        return DecouplingCertificate(spreads, covered_db=covered_db, own_std_db=maps, notes=notes + [
+            f"(components not computed: {columns} pattern columns, above {MAX_COMPONENT_COLUMNS})"])
+    joint = _joint_metric(model, samples, gram, n_samples, None if own is None else own.basis)
+    comps, n_unsplit, unsplit_db, total_db = unsplit_components(model, covered, metrics, joint, own)
+    return DecouplingCertificate(spreads, tuple(comps), n_unsplit, unsplit_db, total_db, notes, maps)
 
 
 @check_types
-def certify(model: Any, samples: LinkSamples | Sequence[LinkSamples] | None = None) -> DecouplingCertificate | None:
+def certify(model: Any, samples: LinkSamples | Sequence[LinkSamples] | None = None,
+            posterior: OwnPosterior | None = None) -> DecouplingCertificate | None:
     """:func:`decoupling_certificate` of a fitted model, stored in ``model.training["decoupling"]``
     (with its :meth:`~DecouplingCertificate.summary` text, which ``fit`` prints); None, and
     nothing stored, for a model without patterns, covariance or coverage grid (a baseline)."""
     if not isinstance(model, PatternSet) or model.covariance is None or not model.training.get("coverage_deg"):
         return None
-    cert = decoupling_certificate(model, samples)
+    cert = decoupling_certificate(model, samples, posterior=posterior)
     model.training["decoupling"] = {**cert.to_dict(), "summary": cert.summary()}
     return cert
 
 
-__all__ = ["MAX_COMPONENT_COLUMNS", "certify", "MIN_LISTED_DB", "UNSPLIT_JOINT_FRACTION", "DecouplingCertificate", "NodeSpread",
+__all__ = ["MAX_COMPONENT_COLUMNS", "OWN_MAP_POINTS", "certify", "own_std_maps", "MIN_LISTED_DB", "UNSPLIT_JOINT_FRACTION", "DecouplingCertificate", "NodeSpread",
            "SplitComponent", "covered_directions", "decoupling_certificate", "unsplit_components"]

@@ -10,7 +10,7 @@ import numpy as np
 from rplearn._argtypes import check_types
 from rplearn.core.bases import SphericalHarmonics
 from rplearn.core.geometry import Directions
-from rplearn.core.solver import fit_joint, identifiability
+from rplearn.core.lsq.solver import fit_joint, identifiability
 from rplearn.models.patterns import PatternSet
 
 Progress = Callable[[str], None]
@@ -72,7 +72,7 @@ def identifiability_study(order: int = 8, n_samples: int = 20000, seed: int = 0)
     """Reproduce paper Sec. V-A with SH of degrees < ``order``.
 
     The paper's Fig. 6 reports 192 columns for three antennas, i.e. 64 per antenna: SH-8 in
-    docs/CONVENTIONS.md's labels (degrees 0..7), which is the default here.
+    docs/conventions.md's labels (degrees 0..7), which is the default here.
 
     Pairwise transmissions at random directions between ITU antennas: with two antennas
     (C and S) the rank is one below the column count and +-epsilon on the two Y00 terms

@@ -1,7 +1,7 @@
 """Basis families turning directions (azimuth, elevation) into design-matrix blocks (paper Sec. IV-B to IV-E).
 
 A radiation pattern is a linear combination ``G(az, el) = sum_i p_i f_i(az, el)`` [dBi]. Three
-families are offered, sized as the paper labels them (docs/CONVENTIONS.md, "model sizes", counted per antenna):
+families are offered, sized as the paper labels them (docs/conventions.md, "model sizes", counted per antenna):
 
 - :class:`SphericalHarmonics` ``SH-L``: real orthonormal spherical harmonics of degrees
   0 .. L-1, ``L**2`` functions (SH-10 = 100), checked against ``scipy.special.sph_harm_y``.

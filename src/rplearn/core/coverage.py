@@ -15,7 +15,7 @@ from numpy.typing import ArrayLike
 from pykdtree.kdtree import KDTree
 
 from rplearn.core.bases import fibonacci_grid_nodes
-from rplearn.core.blas import one_openmp_thread
+from rplearn.core.threads import one_openmp_thread
 from rplearn.core.geometry import unit_vector
 from rplearn.errors import InputError
 
@@ -109,4 +109,13 @@ def coverage_at(grid_deg: ArrayLike, az_rad: ArrayLike, el_rad: ArrayLike) -> np
     return grid[idx] + np.degrees(2.0 * np.arcsin(np.clip(np.asarray(chord) / 2.0, 0.0, 1.0)))
 
 
-__all__ += ["COVERAGE_GRID_POINTS", "coverage_at", "coverage_grid"]
+def grid_value_at(grid_values: ArrayLike, az_rad: ArrayLike, el_rad: ArrayLike) -> np.ndarray:
+    """Values stored on a coverage grid's points (one per point, in :func:`coverage_grid`'s
+    order) read at directions: the value of the nearest grid point."""
+    values = np.asarray(grid_values, np.float64).ravel()
+    q = unit_vector(np.asarray(az_rad, np.float64).ravel(), np.asarray(el_rad, np.float64).ravel())
+    _, idx = _query(_grid_tree(values.size), q)
+    return values[idx]
+
+
+__all__ += ["COVERAGE_GRID_POINTS", "coverage_at", "coverage_grid", "grid_value_at"]

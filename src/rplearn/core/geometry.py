@@ -1,6 +1,6 @@
 """Frames, attitudes and the direction of one node seen from another (paper eq. 3).
 
-Conventions (docs/CONVENTIONS.md): the world frame is ENU (x east, y north, z up) in metres; the body
+Conventions (docs/conventions.md): the world frame is ENU (x east, y north, z up) in metres; the body
 frame is FLU (x forward, y left, z up); attitudes are unit quaternions rotating body vectors
 into the world, scalar first ``(qw, qx, qy, qz)``. Every conversion from other conventions
 (PX4's NED world / FRD body, Euler angles) lives in this module and nowhere else.

@@ -1,4 +1,4 @@
-"""Metrics of paper Sec. V-C and docs/CONVENTIONS.md: RMSE, MAE, Q95, AIC, LTD, condition number."""
+"""Metrics of paper Sec. V-C and docs/conventions.md: RMSE, MAE, Q95, AIC, LTD, condition number."""
 
 from __future__ import annotations
 
@@ -47,7 +47,7 @@ def q95(y_true: ArrayLike, y_pred: ArrayLike) -> float:
 def aic(n_samples: int, mse: float, n_params: int) -> float:
     """Akaike information criterion ``n ln(MSE) + 2k`` on the evaluation set (paper Table I).
 
-    ``k`` counts the coefficients of all antennas (docs/CONVENTIONS.md). Example: the paper's M row,
+    ``k`` counts the coefficients of all antennas (docs/conventions.md). Example: the paper's M row,
     ``aic(24087, 11.15**2, 1)`` = 116.17e3 (the paper prints 116.16e3 from the unrounded RMSE).
     """
     if n_samples <= 0 or not mse > 0:

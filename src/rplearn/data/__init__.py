@@ -18,7 +18,7 @@ module        public names
 ``units``     :func:`samples_of`, :func:`learning_units`, :func:`evaluation_units`,
               :func:`split_units`, :func:`select_units` -> :class:`UnitChoice`; a flight
               without units cut into named stretches of time (:func:`time_units`,
-              :class:`Stretches`, :func:`stretched`)
+              :class:`Stretches`, :func:`stretched`, :func:`stretch_samples`)
 ============  ==================================================================================
 
 Every name of ``__all__`` can be imported from here (``from rplearn.data import samples_of``);

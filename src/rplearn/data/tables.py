@@ -1,4 +1,4 @@
-"""Canonical tables: pose logs, signal logs and matched link datasets (docs/CONVENTIONS.md).
+"""Canonical tables: pose logs, signal logs and matched link datasets (docs/conventions.md).
 
 All three are :class:`pandas.DataFrame` objects with fixed column names, so that every reader,
 the simulator and the synchroniser speak the same language:

@@ -226,6 +226,32 @@ class Stretches:
 
 
 @check_types
+def stretch_samples(
+    df: pd.DataFrame, unit: str | None = None, source: str = "dataset", nodes: Sequence[str] | None = None
+) -> dict[str, LinkSamples]:
+    """The rows of one flight cut into its :data:`TIME_UNITS` stretches of time
+    (:class:`Stretches`, the folds of a single unit's cross-validation), as learning-ready
+    samples by stretch name; a stretch that holds no row is left out.
+
+    Parameters
+    ----------
+    df : DataFrame
+        Matched rows of one flight (one unit, or a dataset without units), with ``t`` [s].
+    unit : str, optional
+        The unit's label, which names the stretches (``u[1/5]``); None: ``flight[1/5]``.
+    source : str
+        Dataset name, for messages.
+    nodes : sequence of str, optional
+        Node ids in model order (:func:`rplearn.data.tables.link_samples`).
+    """
+    t = pd.to_numeric(df["t"], errors="coerce").to_numpy(np.float64)
+    stretches = Stretches.of_times(t, TIME_UNITS, unit)
+    k = stretches.index(t)
+    return {label: samples_of(df[k == j], None, source, nodes=nodes)
+            for j, label in enumerate(stretches.labels) if np.any(k == j)}
+
+
+@check_types
 def time_units(df: pd.DataFrame, blocks: int = TIME_UNITS, source: str = "dataset") -> tuple[pd.DataFrame, str | None]:
     """A dataset without a ``unit`` column, labelled by contiguous stretches of time.
 

@@ -20,7 +20,7 @@ angles                     Sionna evaluates a pattern at the zenith angle ``thet
                            and azimuth ``phi = atan2(y, x)`` (from local +x toward +y) of the
                            direction of departure (transmitter) or arrival, pointing back toward the
                            source (receiver). rplearn's azimuth and elevation of the same direction
-                           (docs/CONVENTIONS.md, paper eq. 3) are ``az = phi`` and ``el = pi/2 - theta``.
+                           (docs/conventions.md, paper eq. 3) are ``az = phi`` and ``el = pi/2 - theta``.
 attitude                   Sionna's device ``orientation = (alpha, beta, gamma)`` rotates the antenna
                            frame into the scene frame by ``Rz(alpha) Ry(beta) Rx(gamma)`` (3GPP TR
                            38.901 eq. 7.1-4), the same matrix as rplearn's aerospace ``(yaw, pitch,

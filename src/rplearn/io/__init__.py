@@ -1,4 +1,4 @@
-"""Readers of flight and signal logs, each giving canonical pose and signal logs (docs/CONVENTIONS.md).
+"""Readers of flight and signal logs, each giving canonical pose and signal logs (docs/conventions.md).
 
 =================  =========================================  ==================================
 format             reader                                     gives
@@ -21,8 +21,8 @@ The other public names of the subpackage can be imported from here too, their mo
 imported on first use (``__init__.pyi``, lazy_loader): tables (:func:`~rplearn.io.files.read_table`,
 :func:`~rplearn.io.files.write_table`, :func:`~rplearn.io.files.provenance`), per-format
 readers, :func:`~rplearn.io.inspect.inspect_logs`, pattern export
-(:func:`~rplearn.io.export.export_grid`, :func:`~rplearn.io.export.export_msi`,
-:func:`~rplearn.io.export.read_msi`) and model files
+(:func:`~rplearn.io.export.export_grid`), MSI antenna files (:func:`~rplearn.io.msi.read_msi`,
+:func:`~rplearn.io.msi.write_msi`, :func:`~rplearn.io.msi.export_msi`) and model files
 (:func:`~rplearn.io.modelfile.read_model_file`, :func:`~rplearn.io.modelfile.write_model_file`),
 and a vehicle-to-station flight as a MAVLink telemetry log (:func:`~rplearn.io.tlog.write_tlog`,
 the inverse of the ``.tlog`` reader, for simulated flights, with the defects of real logs:

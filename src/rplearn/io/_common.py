@@ -12,7 +12,7 @@ from rplearn._argtypes import check_types
 @check_types
 @dataclass
 class Logs:
-    """Canonical logs read from one or more files (docs/CONVENTIONS.md schemas); either may be None.
+    """Canonical logs read from one or more files (docs/conventions.md schemas); either may be None.
 
     Attributes
     ----------

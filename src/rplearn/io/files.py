@@ -235,7 +235,7 @@ def provenance(command: str | None = None, **parameters: Any) -> dict[str, Any]:
 
 @check_types
 def read_dataset(path: str, require_rssi: bool = True) -> pd.DataFrame:
-    """Read and check a matched dataset (docs/CONVENTIONS.md schema; see :func:`validate_matched`).
+    """Read and check a matched dataset (docs/conventions.md schema; see :func:`validate_matched`).
 
     Parameters
     ----------

@@ -6,7 +6,7 @@ Two kinds of file are read with ``mavutil.mavlink_connection(path, dialect="ardu
   received, each after an 8-byte big-endian receive time [us since the UNIX epoch]);
 - the autopilot's own DataFlash log (binary ``.bin``/``.BIN``, or its text ``.log`` form).
 
-Pose of the vehicle (docs/CONVENTIONS.md: ENU world, FLU body, quaternion wxyz FLU -> ENU):
+Pose of the vehicle (docs/conventions.md: ENU world, FLU body, quaternion wxyz FLU -> ENU):
 
 - attitude: ``ATTITUDE`` (roll, pitch, yaw [rad]) or DataFlash ``ATT`` (Roll, Pitch, Yaw
   [deg]), aerospace yaw-pitch-roll of the FRD body in the NED world (yaw = heading clockwise

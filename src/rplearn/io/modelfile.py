@@ -1,4 +1,4 @@
-"""The JSON model-file envelope shared by every model type (docs/CONVENTIONS.md: versioned, no pickle).
+"""The JSON model-file envelope shared by every model type (docs/conventions.md: versioned, no pickle).
 
 A model file is ``{"schema": "rplearn.model", "schema_version": V, "type": T, "sha256": H,
 "model": PAYLOAD}`` where ``H`` is the SHA-256 of the canonical JSON of ``PAYLOAD`` (sorted keys,

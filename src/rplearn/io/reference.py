@@ -1,6 +1,6 @@
 """Measured or vendor antenna patterns ("reference patterns") as gains at body-frame directions.
 
-Formats (docs/CONVENTIONS.md, "Reference pattern"), chosen by content:
+Formats (docs/conventions.md, "Reference pattern"), chosen by content:
 
 - CSV with ``az_deg, el_deg, gain_dbi`` (or ``gain_db``): directions already in the drone's
   body frame (FLU; azimuth counter-clockwise from forward, elevation up). rplearn's own grid
@@ -11,8 +11,8 @@ Formats (docs/CONVENTIONS.md, "Reference pattern"), chosen by content:
   axis towards +y (the convention of chamber measurements and of most vendor files).
 - MSI Planet (``.msi``, ``.pln``, ``.txt`` with an MSI header), e.g. as written by
   ``rplearn export --format msi``: the horizontal and vertical cuts, gain = reference gain
-  minus loss, at the directions of :func:`~rplearn.io.export.msi_horizontal_directions_rad`
-  and :func:`~rplearn.io.export.msi_vertical_directions_rad`.
+  minus loss, at the directions of :func:`~rplearn.io.msi.msi_horizontal_directions_rad`
+  and :func:`~rplearn.io.msi.msi_vertical_directions_rad`.
 
 A **mounting rotation** ``(roll, pitch, yaw)`` [deg] says how the antenna is mounted on the drone:
 the rotation of the antenna frame in the body frame, applied as for an attitude (yaw about z,
@@ -32,7 +32,7 @@ import pandas as pd
 
 from rplearn.core.geometry import quat_wxyz_from_euler_enu_flu_deg, rotate_body_to_world
 from rplearn.errors import InputError
-from rplearn.io.export import msi_horizontal_directions_rad, msi_vertical_directions_rad, read_msi
+from rplearn.io.msi import msi_horizontal_directions_rad, msi_vertical_directions_rad, read_msi
 
 _MSI_EXTENSIONS = (".msi", ".pln", ".ant", ".txt")
 

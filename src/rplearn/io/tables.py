@@ -1,4 +1,4 @@
-"""CSV and Parquet logs in the canonical schemas (docs/CONVENTIONS.md), with their common variants.
+"""CSV and Parquet logs in the canonical schemas (docs/conventions.md), with their common variants.
 
 Pose tables: ``t, node, x, y, z, qw, qx, qy, qz``. Instead of ``x, y, z`` a table may carry
 ``lat, lon, alt`` (degrees, metres above the ellipsoid), converted to a local ENU frame with

@@ -304,7 +304,7 @@ def write_tlog(
     ----------
     logs : Logs
         Pose log (the vehicle's rows and the station's) and signal log (rows of the two
-        directions between them only), canonical schemas (docs/CONVENTIONS.md).
+        directions between them only), canonical schemas (docs/conventions.md).
     path : str or PathLike
         Output ``.tlog``; written atomically (a failed write leaves no partial file).
     vehicle, station : str

@@ -1,7 +1,7 @@
 """``fit --degree auto``: a regularised pattern whose order and smoothing the data choose.
 
 The statistics of every learning unit are accumulated once, at the largest candidate order;
-:func:`rplearn.core.selection.select_order_and_smoothing` chooses order and smoothing by grouped
+:func:`rplearn.core.lsq.selection.select_order_and_smoothing` chooses order and smoothing by grouped
 cross-validation over the units (GCV with one unit); the model is then solved from the sum of
 the same statistics (a sub-block for a smaller SH order), so no sample is read twice.
 """
@@ -13,14 +13,14 @@ from collections import Counter
 from typing import Any, Mapping, Sequence
 
 import numpy as np
-import scipy.linalg  # noqa: F401  (order selection solves through scipy: loaded before any BLAS limit, rplearn.core.blas)
+import scipy.linalg  # noqa: F401  (order selection solves through scipy: loaded before any BLAS limit, rplearn.core.threads)
 
 from rplearn.core.environment import PathLoss
-from rplearn.core.link_statistics import reserve_block_buffer
-from rplearn.core.normal_equations import NormalEquations
-from rplearn.core.blas import blas_threads_for, warm_up as warm_up_blas
+from rplearn.core.lsq.link_statistics import reserve_block_buffer
+from rplearn.core.lsq.normal_equations import NormalEquations
+from rplearn.core.threads import blas_threads_for, warm_up as warm_up_blas
 from rplearn.models.terms import regression_inputs, shared_fields, statistics_counts
-from rplearn.core.selection import (
+from rplearn.core.lsq.selection import (
     DEFAULT_PENALTY_POWER,
     Selection,
     nested_columns,
@@ -29,10 +29,11 @@ from rplearn.core.selection import (
     select_order_and_smoothing,
     sub_statistics,
 )
-from rplearn.core.solver import PRIOR_LEVELS, solve
+from rplearn.core.lsq.solver import PRIOR_LEVELS, solve
 from rplearn.data.tables import LinkSamples
 from rplearn.errors import InputError
 from rplearn.models.fit import FittedModel, node_coverage_grids
+from rplearn.models.own_posterior import OwnPrior, own_pattern_posterior
 from rplearn.models.patterns import PatternSet
 from rplearn.models.spec import ModelSpec, check_model_size, default_ridge
 from rplearn.models.streamed import frequency_counts, weighted_median
@@ -387,6 +388,7 @@ def fit_from_statistics(
             spread_source = "stated"
     elif any(wanted[str(n)] < spread[str(n)] for n in nodes):
         spread_source = "the spread of the measured gains (the smoothing implied more)"
+    uncapped = covariance
     factor = np.array([(spread[str(n)] / max(wanted[str(n)], 1e-9)) ** 2 for n in nodes])
     if covariance is not None and np.any(np.abs(factor - 1.0) > 1e-9):
         # the same posterior, read with a prior of the wanted spread: the penalty per node
@@ -396,6 +398,9 @@ def fit_from_statistics(
                      prior_level=prior_level)
         covariance = wide.covariance * (within_var / wide.residual_variance_db2) * inflation
         spread = prior_std_db(chosen, list(nodes), weights, noise_var, power)
+    own_prior = OwnPrior(choice.smoothing, penalty_scale(normal.gram, normal.n_pattern_columns), power, ridge, gauge,
+                         target, prior_level)
+    own = own_pattern_posterior(total, chosen, list(map(str, nodes)), own_prior, noise_var, uncapped)
     ltd = time.perf_counter() - t0
     fields, terms = shared_fields(sol, list(nodes), path_loss, counts, rescale * inflation)
     training = sol.report.to_dict()
@@ -413,7 +418,7 @@ def fit_from_statistics(
     model = PatternSet(basis=chosen, nodes=tuple(nodes), coef=sol.coef, covariance=covariance,
                        gauge=[g.to_dict() for g in sol.report.gauges], training=training, **fields)
     model.provenance = {**dict(provenance or {}), "model": spec.label}
-    return FittedModel(spec, model, ltd), choice
+    return FittedModel(spec, model, ltd, own_posterior=own), choice
 
 
 __all__ = ["unseen_spread_cap_db", "within_unit_noise_var", "MAX_AUTO_ORDER", "PRIOR_PENALTY_POWER", "SAMPLES_PER_COEF", "auto_orders", "fit_auto", "fit_from_statistics", "prior_coefficients", "prior_misfit_var", "prior_std_db"]

@@ -33,7 +33,7 @@ from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.utils.validation import check_is_fitted, validate_data
 
 from rplearn.core.geometry import Directions
-from rplearn.core.solver import DEFAULT_RIDGE
+from rplearn.core.lsq.solver import DEFAULT_RIDGE
 from rplearn.data.tables import LinkSamples
 from rplearn.errors import InputError
 from rplearn.models.baselines import knn_regressor, mean_joint_gain_db

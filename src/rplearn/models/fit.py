@@ -14,12 +14,12 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from rplearn._argtypes import check_types
-from rplearn.core.blas import blas_threads_for, warm_up as warm_up_blas
+from rplearn.core.threads import blas_threads_for, warm_up as warm_up_blas
 from rplearn.models.baselines import KNNModel, MeanModel
 from rplearn.data.tables import LinkSamples
 from rplearn.core.metrics import Scores, score
 from rplearn.models.patterns import PatternSet
-from rplearn.core.solver import FitReport, fit_joint
+from rplearn.core.lsq.solver import FitReport, fit_joint
 from rplearn.models.base import Model, learned_frequency_hz
 from rplearn.models.spec import ModelSpec, check_model_size
 from rplearn.models.terms import directed_counts, regression_inputs, shared_fields
@@ -30,11 +30,17 @@ from rplearn.errors import InputError
 @check_types
 @dataclass
 class FittedModel:
-    """A learned model, its spec and its learning wall time (LTD) [s]."""
+    """A learned model, its spec and its learning wall time (LTD) [s].
+
+    ``own_posterior`` (automatic fits): the posterior of each node's own pattern, continued to
+    the largest candidate order (:mod:`rplearn.models.own_posterior`), which the decoupling
+    certificate reads; not saved with the model (the certificate it gives is).
+    """
 
     spec: ModelSpec
     model: Model
     ltd_s: float
+    own_posterior: Any = None
 
     @property
     def label(self) -> str:
@@ -157,7 +163,7 @@ def _warm_up(spec: ModelSpec, n_samples: int = 1, path_loss: PathLoss | None = N
     if spec.kind == "knn":
         import sklearn.neighbors  # noqa: F401  (loads scipy's BLAS too)
     elif spec.decouples:
-        from rplearn.core.link_statistics import reserve_block_buffer
+        from rplearn.core.lsq.link_statistics import reserve_block_buffer
 
         if path_loss is not None and path_loss.learns_exponent:
             import scipy.linalg.blas  # noqa: F401  (the exponent's identifiability check solves through it)

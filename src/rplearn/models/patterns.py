@@ -3,7 +3,7 @@
 A :class:`PatternSet` holds one pattern per node in a common basis. It evaluates
 ``G_n(az, el)`` [dBi] at any body-frame directions, predicts the joint gain of any link and the
 received power for any pair of poses (paper eq. 1), and round-trips through the JSON model file
-of docs/CONVENTIONS.md (versioned schema, SHA-256 checksum of the payload; no pickle).
+of docs/conventions.md (versioned schema, SHA-256 checksum of the payload; no pickle).
 """
 
 from __future__ import annotations
@@ -52,7 +52,7 @@ class PatternSet:
     covariance : ndarray or None
         Covariance of all coefficients (``n_nodes * n_coef`` square), for standard errors.
     gauge : list of dict
-        How unidentifiable constants were fixed (see :mod:`rplearn.core.solver`).
+        How unidentifiable constants were fixed (see :mod:`rplearn.core.lsq.solver`).
     training : dict
         Training summary (samples, RMSE, rank, condition number, ridge, ...).
     provenance : dict

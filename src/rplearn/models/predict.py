@@ -133,7 +133,7 @@ def predict_dataset(model: Model, dataset: pd.DataFrame, source: str = "dataset"
     model : Model
         Any learned model.
     dataset : DataFrame
-        Matched dataset (docs/CONVENTIONS.md); ``rssi_dbm`` may be absent or NaN.
+        Matched dataset (docs/conventions.md); ``rssi_dbm`` may be absent or NaN.
     source : str
         File name for messages.
     """

@@ -26,10 +26,10 @@ import pandas as pd
 
 from rplearn._argtypes import check_types
 from rplearn.core.environment import PathLoss
-from rplearn.core.normal_equations import NormalEquations
+from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.models.terms import directed_counts
-from rplearn.core.selection import penalty_scale, penalty_vector
-from rplearn.core.solver import solve
+from rplearn.core.lsq.selection import penalty_scale, penalty_vector
+from rplearn.core.lsq.solver import solve
 from rplearn.data.tables import LinkSamples
 from rplearn.errors import InputError
 from rplearn.models.fit import FittedModel, node_coverage_grids, solve_patterns

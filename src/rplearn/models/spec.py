@@ -11,7 +11,7 @@ import numpy as np
 
 from rplearn._argtypes import check_types
 from rplearn.core.bases import make_basis
-from rplearn.core.solver import DEFAULT_RIDGE
+from rplearn.core.lsq.solver import DEFAULT_RIDGE
 from rplearn.errors import InputError
 
 if TYPE_CHECKING:
@@ -27,7 +27,7 @@ _DEFAULT_ORDER = {"sh": 10, "bg": 7, "poly": 12, "knn": 400}
 _ALIASES = {"m": "mean", "p": "poly", "nn": "knn", "bucketized": "bg"}
 
 
-#: Default ridge per family (see :data:`rplearn.core.solver.DEFAULT_RIDGE`; the paper used 50).
+#: Default ridge per family (see :data:`rplearn.core.lsq.solver.DEFAULT_RIDGE`; the paper used 50).
 DEFAULT_RIDGE_BY_KIND = {"sh": DEFAULT_RIDGE, "poly": DEFAULT_RIDGE, "bg": DEFAULT_RIDGE, "mean": 0.0, "knn": 0.0}
 
 
@@ -54,7 +54,7 @@ class ModelSpec:
     grid : {"paper", "fibonacci"}
         BG node layout.
     smoothing : float
-        Relative weight of the smoothness penalty (:mod:`rplearn.core.selection`); 0: none.
+        Relative weight of the smoothness penalty (:mod:`rplearn.core.lsq.selection`); 0: none.
     """
 
     kind: str

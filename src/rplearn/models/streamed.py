@@ -1,10 +1,15 @@
 """Learning patterns from a matched dataset too big for memory, chunk by chunk.
 
 The joint least-squares problem needs only its sufficient statistics (``X^T X``, ``X^T y``,
-``y^T y`` and the sample count per link, :class:`~rplearn.core.normal_equations.NormalEquations`),
+``y^T y`` and the sample count per link, :class:`~rplearn.core.lsq.normal_equations.NormalEquations`),
 so a dataset can be read a chunk at a time: each chunk is checked, turned into link samples,
 accumulated and dropped. The solve, the training RMSE (from the statistics) and the model are
 the same as :func:`rplearn.models.fit.solve_patterns` gives on the whole dataset, to rounding.
+
+A dataset in many files (:mod:`rplearn.io.partitions`) is accumulated part by part: each
+part's statistics (:func:`part_statistics`) add up in the parts' order (:meth:`Accumulated.merge`,
+:func:`accumulate_parts`) to what one pass over all of them gives; :mod:`rplearn.workflows.fleet`
+runs the same per-part work on a Dask cluster.
 
 Only pattern models (SH, BG, P) stream; the baselines need every sample (the mean model could,
 k-NN stores them).
@@ -12,22 +17,25 @@ k-NN stores them).
 
 from __future__ import annotations
 
+import copy
 import time
 from collections import Counter
 from dataclasses import dataclass
-from typing import Any, Iterable, Mapping, Sequence
+from typing import Any, Callable, Iterable, Mapping, Sequence
 
 import numpy as np
 import pandas as pd
 
 from rplearn.core.environment import PathLoss
-from rplearn.core.normal_equations import NormalEquations
+from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.models.terms import regression_inputs, shared_fields, statistics_counts
-from rplearn.core.selection import penalty_scale, penalty_vector
-from rplearn.core.solver import FitReport, solve
+from rplearn.core.lsq.selection import penalty_scale, penalty_vector
+from rplearn.core.lsq.solver import FitReport, solve
 from rplearn.data.tables import LinkSamples, link_samples, node_ids
 from rplearn.data.units import Stretches
 from rplearn.errors import InputError
+from rplearn.io.files import iter_parts
+from rplearn.io.partitions import Part
 from rplearn.models.fit import node_coverage_grids
 from rplearn.models.patterns import PatternSet
 from rplearn.models.spec import ModelSpec
@@ -149,6 +157,11 @@ class Accumulated:
         self.source = self.source if self.source == later.source else f"{self.source}, ..."
         return self
 
+    def combined(self, later: Accumulated) -> Accumulated:
+        """A new accumulation of these rows then ``later``'s; neither input changes (a task on
+        a cluster must not change the stored results of others, which may be reused)."""
+        return copy.deepcopy(self).merge(copy.deepcopy(later))
+
 
 def accumulate(
     chunks: Iterable[pd.DataFrame], spec: ModelSpec, nodes: Sequence[str], units: Sequence[str] | None,
@@ -193,6 +206,38 @@ def accumulate(
             if not by_unit:
                 break
     return out
+
+
+#: Rows read at a time from one part of a dataset.
+PART_CHUNK_ROWS = 500_000
+
+
+def part_statistics(
+    part: Part, spec: ModelSpec, nodes: Sequence[str], units: Sequence[str] | None, by_unit: bool,
+    stretches: Stretches | None = None, path_loss: PathLoss | None = None,
+) -> Accumulated:
+    """:func:`accumulate` over one part of a dataset, read :data:`PART_CHUNK_ROWS` rows at a
+    time (its rows named by their place in its file)."""
+    return accumulate(iter_parts([part], PART_CHUNK_ROWS), spec, nodes, units, part.path, by_unit, stretches,
+                      path_loss)
+
+
+def accumulate_parts(
+    parts: Sequence[Part], spec: ModelSpec, nodes: Sequence[str], units: Sequence[str] | None, by_unit: bool,
+    stretches: Stretches | None = None, path_loss: PathLoss | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> Accumulated:
+    """The statistics of every part (:func:`part_statistics`), added in the parts' order, in
+    this process; ``progress(done, parts)`` after each part. ``stretches`` (of a single flight)
+    label each row by its stretch of time wherever it is read. An empty result is allowed
+    (see :func:`checked`)."""
+    total = Accumulated({}, Counter(), source=parts[0].path if parts else "dataset")
+    for k, part in enumerate(parts):
+        acc = part_statistics(part, spec, nodes, units, by_unit, stretches, path_loss)
+        total = acc if k == 0 else total.merge(acc)
+        if progress is not None:
+            progress(k + 1, len(parts))
+    return total
 
 
 def checked(acc: Accumulated, source: str) -> Accumulated:
@@ -291,4 +336,4 @@ def fit_patterns_accumulated(
     return StreamedFit(patterns, sol.report, normal.n_samples, non_unit, learn_s)
 
 
-__all__ = ["Accumulated", "StreamedFit", "accumulate", "checked", "fit_patterns_accumulated", "frequency_counts", "fit_patterns_streamed", "unit_statistics_streamed", "units_and_nodes", "weighted_median"]
+__all__ = ["PART_CHUNK_ROWS", "Accumulated", "StreamedFit", "accumulate", "accumulate_parts", "checked", "fit_patterns_accumulated", "frequency_counts", "fit_patterns_streamed", "part_statistics", "unit_statistics_streamed", "units_and_nodes", "weighted_median"]

@@ -24,7 +24,7 @@ from rplearn.data.tables import LinkSamples
 from rplearn.errors import InputError
 
 if TYPE_CHECKING:
-    from rplearn.core.solver import JointSolution
+    from rplearn.core.lsq.solver import JointSolution
 
 
 @check_types

@@ -4,7 +4,7 @@ Several units (:class:`~rplearn.plan.trajectory.TrajectoryUnit`) with different 
 a *campaign*, flown one after the other (the paper's default: learning units
 ``psi0 = 0, 24, 48`` deg and a testing unit ``psi0 = 36`` deg, Sec. V-C). For more than two
 drones, :func:`pair_schedule` picks pairs whose link graph identifies absolute gains
-(docs/CONVENTIONS.md: every connected part needs an odd cycle), and :func:`group_campaign` flies the
+(docs/conventions.md: every connected part needs an odd cycle), and :func:`group_campaign` flies the
 paper's units with each pair. :func:`write_references` writes the per-drone references.
 """
 
@@ -117,7 +117,7 @@ def link_graph_identifies_gains(pairs: Iterable[tuple[str, str]]) -> bool:
     """Whether a link graph identifies absolute gains: every component has an odd cycle.
 
     A connected component without an odd cycle is bipartite, and an alternating ``+c/-c``
-    constant on its two sides leaves every joint gain unchanged (docs/CONVENTIONS.md).
+    constant on its two sides leaves every joint gain unchanged (docs/conventions.md).
     """
     adj: dict[str, set[str]] = {}
     for a, b in pairs:

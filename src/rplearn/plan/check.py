@@ -7,7 +7,7 @@ acceleration and an expected wind), and reports
 - per node, the azimuth-elevation coverage of its body sphere (a 2-D histogram and the
   area-weighted fraction of cells sampled);
 - the rank, null-space dimension and condition number of the learning problem (the design
-  matrix of paper Sec. V-A, via :func:`rplearn.core.solver.identifiability`), and the null-space
+  matrix of paper Sec. V-A, via :func:`rplearn.core.lsq.solver.identifiability`), and the null-space
   dimension expected from the link graph (one per connected part without an odd cycle: with
   two drones, the constant that moves between the patterns);
 - whether the plan decouples the patterns (null space no larger than expected) and whether it
@@ -224,7 +224,7 @@ def check_plan(
     wind_speed_m_s, wind_toward_deg, tilt_into_motion
         Nominal attitude model, see :func:`plan_directions`.
     """
-    from rplearn.core.solver import identifiability
+    from rplearn.core.lsq.solver import identifiability
 
     sub = campaign.with_role(role) if role is not None else campaign
     units = sub.summarize(limits)

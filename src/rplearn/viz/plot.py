@@ -10,7 +10,7 @@ the az-el domain: pattern maps, coverage and 3-D patterns; the charts over time 
 study's parameter (RSSI, order and epsilon sweeps, rank study, swarm links) are in
 :mod:`rplearn.viz.charts`.
 
-Angles are radians in the API and degrees on every axis (docs/CONVENTIONS.md): azimuth ``az`` in
+Angles are radians in the API and degrees on every axis (docs/conventions.md): azimuth ``az`` in
 (-180, 180] deg, 0 = forward, +90 = left; elevation ``el`` in [-90, 90] deg, positive up.
 """
 from __future__ import annotations
@@ -308,12 +308,26 @@ def plot_pattern_maps(
     return save_figure(fig, path, caption)
 
 
+def _own_std_map(model: Any, node: str, az_rad: np.ndarray, el_rad: np.ndarray) -> np.ndarray:
+    """The posterior std of ``node``'s own gain on an az-el mesh [dB]: from the decoupling
+    certificate's map (nearest point of its Fibonacci grid) when ``fit`` stored one (an automatic fit's posterior
+    continued to the largest order), else from the model's covariance."""
+    stored = ((getattr(model, "training", {}) or {}).get("decoupling", {}).get("own_std_db") or {}).get(node)
+    if stored is not None:
+        from rplearn.core.coverage import grid_value_at
+
+        return grid_value_at(stored, az_rad.ravel(), el_rad.ravel()).reshape(az_rad.shape)
+    return np.asarray(model.standard_error(node, az_rad.ravel(), el_rad.ravel())).reshape(az_rad.shape)
+
+
 @check_types
 def spread_maps_figure(models: Mapping[str, Any], nodes: Sequence[str] | None = None, step_deg: float = 3.0) -> Figure:
     """Posterior std of each node's own pattern [dB] as az-el maps (rows = models, columns =
     nodes), the directions further than ``UNCOVERED_DEG`` from any learning direction hatched;
     each title gives the node's spread where the flight looked and over the sphere, from the
-    model's decoupling certificate (``training["decoupling"]``, written by ``fit``) when stored."""
+    model's decoupling certificate (``training["decoupling"]``, written by ``fit``) when stored,
+    whose own-pattern map (an automatic fit's posterior continued to the largest candidate
+    order) is drawn when present, else the model's covariance."""
     rows = [(str(k), m) for k, m in models.items()]
     if not rows:
         raise InputError("models: nothing to draw")
@@ -323,8 +337,7 @@ def spread_maps_figure(models: Mapping[str, Any], nodes: Sequence[str] | None = 
     nodes = [str(n) for n in (nodes or rows[0][1].nodes)]
     az, el = az_el_grid_deg(step_deg)
     azg, elg = np.meshgrid(np.radians(az), np.radians(el))
-    maps = np.array([[np.asarray(m.standard_error(n, azg.ravel(), elg.ravel())).reshape(azg.shape) for n in nodes]
-                     for _, m in rows])
+    maps = np.array([[_own_std_map(m, n, azg, elg) for n in nodes] for _, m in rows])
     fig = _new_figure(3.6 * len(nodes) + 0.6, 2.2 * len(rows) + 1.2)
     axes = fig.subplots(len(rows), len(nodes), squeeze=False, sharex=True, sharey=True)
     vmax = float(np.nanpercentile(maps, 99)) or 1.0

@@ -2,9 +2,12 @@
 
 A fit needs only sufficient statistics (:mod:`rplearn.models.streamed`), which add up: each
 part of a partitioned dataset (:mod:`rplearn.io.partitions`) is turned into its statistics
-where it is read, the statistics are added in a binary tree in the order of the parts, and the
-small result is solved on the client. In one process the same per-part work runs one part
-after the other, so both give the same model to rounding (about 1e-12 dB).
+(:func:`~rplearn.models.streamed.part_statistics`) where it is read, the statistics are added
+(:meth:`~rplearn.models.streamed.Accumulated.combined`) in a binary tree in the order of the
+parts, and the small result is solved on the client. In one process
+(:func:`rplearn.models.streamed.accumulate_parts`) the same per-part work runs one part after
+the other, so both give the same model to rounding (about 1e-12 dB). This module is the Dask
+adaptor: the cluster, mapping parts onto it, and the tree of additions.
 
 ``--dask local`` (``local:N`` for N workers; default 2) starts a
 :class:`distributed.LocalCluster` of single-threaded worker processes for the command;
@@ -29,10 +32,8 @@ from rplearn.io.partitions import Part
 from rplearn.models.base import Model
 from rplearn.models.predict import uncovered_rows
 from rplearn.models.spec import ModelSpec
-from rplearn.models.streamed import Accumulated, accumulate, units_and_nodes
-
-#: Rows read at a time from one part.
-PART_CHUNK_ROWS = 500_000
+from rplearn.models.streamed import PART_CHUNK_ROWS, Accumulated, part_statistics, units_and_nodes
+from rplearn.models.streamed import accumulate_parts as accumulate_parts_here
 
 #: How to install what ``--dask`` needs.
 DASK_INSTALL = "pip install 'rplearn[dask]'"
@@ -107,11 +108,9 @@ def _tree_reduce(client: Any, futures: list[Any], merge: Callable[[Any, Any], An
 
 
 def _merge_accumulated(a: Accumulated, b: Accumulated) -> Accumulated:
-    """A new accumulation of ``a`` then ``b``: a task must not change its inputs (the stored
-    results of other tasks, which Dask may reuse when it recomputes after a lost worker)."""
-    import copy
-
-    return copy.deepcopy(a).merge(copy.deepcopy(b))
+    """``a`` then ``b`` as a task: it must not change its inputs (the stored results of other
+    tasks, which Dask may reuse when it recomputes after a lost worker)."""
+    return a.combined(b)
 
 
 def _watch(client: Any, futures: list[Any], progress: Progress | None) -> None:
@@ -157,31 +156,23 @@ def dataset_index(parts: Sequence[Part], client: Any = None) -> tuple[pd.DataFra
     return whole, each
 
 
-def _part_statistics(part: Part, **kwargs: Any) -> Accumulated:
-    return accumulate(iter_parts([part], PART_CHUNK_ROWS), source=part.path, **kwargs)
-
-
 def accumulate_parts(
     parts: Sequence[Part], spec: ModelSpec, nodes: Sequence[str], units: Sequence[str] | None, by_unit: bool,
     stretches: Stretches | None = None, path_loss: PathLoss | None = None, client: Any = None,
     progress: Progress | None = None,
 ) -> Accumulated:
-    """The statistics of every part, added in order (see the module docstring).
+    """The statistics of every part, added in order (see the module docstring): on the cluster
+    of ``client``, or without one in this process
+    (:func:`rplearn.models.streamed.accumulate_parts`).
 
     ``stretches`` (of a single flight, :func:`learning_times`) label each row by its stretch of
     time wherever the part that holds it is read."""
-    kwargs = dict(spec=spec, nodes=list(nodes), units=None if units is None else list(units), by_unit=by_unit,
-                  stretches=stretches, path_loss=path_loss)
+    units = None if units is None else list(units)
     if client is None:
-        total: Accumulated | None = None
-        for k, part in enumerate(parts):
-            acc = _part_statistics(part, **kwargs)
-            total = acc if total is None else total.merge(acc)
-            if progress is not None:
-                progress(k + 1, len(parts))
-        assert total is not None
-        return total
-    futures = client.map(_part_statistics, list(parts), pure=False, **kwargs)
+        return accumulate_parts_here(parts, spec, list(nodes), units, by_unit, stretches, path_loss, progress)
+    kwargs = dict(spec=spec, nodes=list(nodes), units=units, by_unit=by_unit, stretches=stretches,
+                  path_loss=path_loss)
+    futures = client.map(part_statistics, list(parts), pure=False, **kwargs)
     root = _tree_reduce(client, list(futures), _merge_accumulated)
     _watch(client, futures, progress)
     return root.result()

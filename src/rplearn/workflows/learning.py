@@ -24,8 +24,8 @@ from rplearn.analysis.pattern_error import node_directions
 from rplearn.core.metrics import Scores
 from rplearn.data.units import (
     TIME_UNITS, Stretches, UnitChoice, dataset_units, evaluation_units, is_stretch_label, learning_units,
-    refuse_streamed_stretches, samples_of, select_units, split_units, stretched, time_units, trained_units,
-    whole_flight_note,
+    refuse_streamed_stretches, samples_of, select_units, split_units, stretch_samples, stretched, time_units,
+    trained_units, whole_flight_note,
 )
 from rplearn.errors import IdentifiabilityError, InputError
 from rplearn.data.tables import QUATERNION_NORM_TOLERANCE
@@ -49,7 +49,7 @@ from rplearn.core.environment import PathLoss
 
 if TYPE_CHECKING:  # order selection (models.auto, analysis.sweep) loads scipy: imported when used
     from rplearn.analysis.sweep import SweepResult
-    from rplearn.core.selection import Selection
+    from rplearn.core.lsq.selection import Selection
 
 Progress = Callable[[str], None]
 
@@ -217,10 +217,7 @@ def fit_dataset(
                          "not an automatic choice or a baseline", param="loss")
     if auto and not spec.decouples:
         raise InputError(f"order: 'auto' chooses the order of pattern models (sh, bg, poly), not of {spec.label}", param="order")
-    path_loss = path_loss or PathLoss()
-    if path_loss.kind != "free" and not spec.decouples:
-        raise InputError(f"path loss {path_loss.kind}: the baselines ({spec.label}) learn no environment term; fit "
-                         "them in free space", param="path_loss")
+    path_loss = path_loss or PathLoss()  # a baseline with another path loss is refused by fit_model
     terms: dict[str, Any] = {"path_loss": path_loss, "link_offsets": link_offsets}
     if dask is not None:
         parse_dask(dask)
@@ -252,7 +249,7 @@ def fit_dataset(
         fitted, robust = fit_huber(samples, spec, gauge=gauge, provenance=prov, **terms)
         notes = downweighted_notes(select_units(df, choice.units, dataset), robust)
     else:
-        fitted = fit_model(samples, spec, gauge=gauge, provenance=prov, **(terms if spec.decouples else {}))
+        fitted = fit_model(samples, spec, gauge=gauge, provenance=prov, **terms)
     check_dataset_budget(fitted.model, select_units(df, choice.units, dataset), dataset)
     certify(fitted.model, samples)
     if output:
@@ -267,12 +264,6 @@ STREAM_FIT_BYTES = 256 * 2**20
 #: Rows read at a time by a streamed fit: :data:`rplearn.workflows.fleet.PART_CHUNK_ROWS`.
 
 
-#: A single learning unit is cross-validated over this many contiguous stretches of time (one
-#: held out at a time; :class:`rplearn.data.units.Stretches`, the stretches ``fit --units`` and
-#: ``evaluate --units`` name), so that neighbouring packets never sit on both sides of a fold.
-TIME_BLOCKS = TIME_UNITS
-
-
 def _fit_auto(
     df: Any, dataset: str, spec: ModelSpec, choice: UnitChoice, gauge: str | Mapping[str, Any], output: str | None,
     priors: Mapping[str, Any] | None = None, prior_std_db: float | None = None, path_loss: PathLoss | None = None,
@@ -284,11 +275,7 @@ def _fit_auto(
     part = select_units(df, choice.units, dataset)
     nodes = sorted(set(part["tx"].astype(str)) | set(part["rx"].astype(str)))
     if len(learn) == 1:  # one flight: cross-validate over contiguous stretches of it, not samples
-        t = part["t"].to_numpy(np.float64)
-        stretches = Stretches.of_times(t, TIME_BLOCKS, None if learn[0] is None else str(learn[0]))
-        k = stretches.index(t)
-        per_unit = {label: samples_of(part[k == j], None, dataset, nodes=nodes)
-                    for j, label in enumerate(stretches.labels) if np.any(k == j)}
+        per_unit = stretch_samples(part, None if learn[0] is None else str(learn[0]), dataset, nodes)
     else:
         per_unit = {str(u): samples_of(df, None if u is None else [u], dataset, nodes=nodes) for u in learn}
     prov = provenance(dataset=dataset, model=f"{spec.kind}-auto", ridge=spec.ridge, units=choice.units)
@@ -296,7 +283,7 @@ def _fit_auto(
                                  prior=priors or None, prior_spread_db=prior_std_db, path_loss=path_loss,
                                  link_offsets=link_offsets, prior_level=prior_level)
     check_dataset_budget(fitted.model, part, dataset)
-    certify(fitted.model, list(per_unit.values()))
+    certify(fitted.model, list(per_unit.values()), fitted.own_posterior)
     if output:
         fitted.model.save(output)
     n = sum(len(s) for s in per_unit.values())
@@ -341,7 +328,7 @@ def _fit_streamed(
     t0 = time.perf_counter()
     if auto:
         learn: list[str | None] = [*(choice.units or dataset_units(index) or [])] or [None]
-        stretches = Stretches.of_times(learning_times(parts, choice.units, client), TIME_BLOCKS, learn[0]) if len(learn) == 1 else None
+        stretches = Stretches.of_times(learning_times(parts, choice.units, client), TIME_UNITS, learn[0]) if len(learn) == 1 else None
         acc = checked(accumulate_parts(parts, spec, nodes, choice.units, True, stretches, path_loss, client, progress),
                       dataset)
         prov = provenance(dataset=dataset, model=f"{spec.kind}-auto", ridge=spec.ridge, units=choice.units)
@@ -350,7 +337,7 @@ def _fit_streamed(
                                                 prior=priors or None, prior_spread_db=prior_std_db,
                                                 path_loss=path_loss, link_offsets=link_offsets, prior_level=prior_level)
         fitted.model.training["coverage_deg"] = acc.grids or {}
-        certify(fitted.model)  # the spreads alone: the pairs of directions were streamed, not kept
+        certify(fitted.model, None, fitted.own_posterior)  # the spreads alone: the pairs of directions were streamed, not kept
         if output:
             fitted.model.save(output)
         return FitOutcome(fitted, choice, acc.n_samples, output, acc.non_unit, selection, wall_s=time.perf_counter() - t0)

@@ -11,7 +11,8 @@ from typing import Mapping, Sequence
 from rplearn._argtypes import check_types
 from rplearn.analysis.headings import OrientationResult, best_yaw
 from rplearn.errors import InputError
-from rplearn.io.export import export_grid, export_msi_files
+from rplearn.io.export import export_grid
+from rplearn.io.msi import export_msi_files
 from rplearn.io.files import check_output_path, provenance
 from rplearn.models.base import require_patterns
 from rplearn.models.load import load_model

@@ -6,17 +6,17 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rplearn.core import solver
+from rplearn.core.lsq import solver
 from rplearn.core.bases import make_basis
 from rplearn.core.geometry import Directions
-from rplearn.core.normal_equations import NormalEquations
-from rplearn.core import solver_large
+from rplearn.core.lsq.normal_equations import NormalEquations
+from rplearn.core.lsq import solver_large
 
 
 @pytest.fixture(autouse=True, params=["float64", "refined"])
 def factor_precision(request, monkeypatch):
     """Every test runs with the float64 factor and with the single-precision factor and refined
-    solves (which large dense systems use, :data:`rplearn.core.solver_large.REFINED_COLUMNS`)."""
+    solves (which large dense systems use, :data:`rplearn.core.lsq.solver_large.REFINED_COLUMNS`)."""
     monkeypatch.setattr(solver_large, "REFINED_COLUMNS", 0 if request.param == "refined" else 10**9)
     return request.param
 
@@ -74,7 +74,7 @@ def test_spectrum_estimate_finds_free_directions_beyond_the_gauge():
 def test_large_path_with_link_offsets_and_a_penalty_gives_the_small_paths_solution(monkeypatch):
     """Shared columns (one offset per two-way link) are unridged and scaled for the report; a
     smoothness penalty takes the estimate without the factor: both as the KKT path."""
-    from rplearn.core.selection import penalty_vector
+    from rplearn.core.lsq.selection import penalty_vector
 
     normal = _statistics(3, 6, n=20000).with_shared(_statistics(3, 6, n=20000).two_way_links())
     penalty = penalty_vector(normal.basis, 3, 1e-3, 1e3)
@@ -107,8 +107,8 @@ def test_a_swarm_whose_drones_link_to_few_others_is_factorised_sparse_with_the_s
     reordered; 12 drones around a hub (a star), or the ring with link offset columns
     (full rows): a general sparse factor. The solution, covariance and rank equal the exact
     path's either way."""
-    from rplearn.core import spectrum
-    from rplearn.core.node_blocks import NodeBlocks
+    from rplearn.core.lsq import factor
+    from rplearn.core.lsq.node_blocks import NodeBlocks
 
     if shape == "star":
         links = [(0, k) for k in range(1, 12)] + [(k, 0) for k in range(1, 12)]
@@ -118,10 +118,10 @@ def test_a_swarm_whose_drones_link_to_few_others_is_factorised_sparse_with_the_s
         normal = _statistics(24, 4, links, n=20000)
         if shape == "ring+offsets":  # one offset column per link: full rows, no band
             normal = normal.with_shared(normal.two_way_links())
-    assert NodeBlocks.of(normal.n_nodes, normal.basis.n_coef, normal.link_counts).fraction <= spectrum.SPARSE_BLOCK_FRACTION
+    assert NodeBlocks.of(normal.n_nodes, normal.basis.n_coef, normal.link_counts).fraction <= factor.SPARSE_BLOCK_FRACTION
     made = []
-    real = spectrum.ConstrainedFactor.__init__
-    monkeypatch.setattr(spectrum.ConstrainedFactor, "__init__",
+    real = factor.ConstrainedFactor.__init__
+    monkeypatch.setattr(factor.ConstrainedFactor, "__init__",
                         lambda self, *a: (real(self, *a), made.append(self.kind))[0])
     monkeypatch.setattr(solver, "LARGE_COLUMNS", 10**9)
     small = solver.solve(normal)
@@ -158,7 +158,7 @@ def test_free_directions_beyond_the_gauge_are_decided_by_the_ridge_with_a_warnin
 
 @pytest.mark.parametrize("n, rows", [(7, 3), (300, 256), (5, 256)])
 def test_symmetric_from_lower_mirrors_the_lower_triangle(n, rows):
-    from rplearn.core.spectrum import symmetric_from_lower
+    from rplearn.core.lsq.factor import symmetric_from_lower
 
     x = np.random.default_rng(n).standard_normal((n, n))
     low = np.tril(x)

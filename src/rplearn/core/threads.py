@@ -1,4 +1,5 @@
-"""One BLAS thread for small fits (threadpoolctl).
+"""Thread control (threadpoolctl): one BLAS thread for small fits, and the limits around work that
+runs threads of its own (the statistics' workers, scipy's BLAS in a large solve, k-d tree queries).
 
 On a busy 2-core machine OpenBLAS's second thread makes a small problem slower and its time
 erratic: a 1,333-sample SH-10 fit took 33-340 ms instead of 15 ms, and ``eigvalsh`` of a
@@ -50,7 +51,7 @@ def _controller_of(loaded: tuple[str, ...]) -> Any:
 #: restores the counts it found: two threads whose limits overlap could leave numpy on one thread
 #: for good, or lift the other's limit while its work still runs. So one thread at a time
 #: limits; a limit asked for meanwhile by another thread is skipped (its work runs with the
-#: threads as they are), as :func:`rplearn.core.link_statistics._in_order` does with its pool.
+#: threads as they are), as :meth:`rplearn.core.lsq.runtime.StatisticsRuntime.in_order` does with its pool.
 _LIMIT_LOCK = threading.RLock()
 
 
@@ -130,37 +131,10 @@ def numpy_blas_one_thread() -> Iterator[None]:
         yield
 
 
-def symmetric_product(matrix: Any) -> Any:
-    """``x -> matrix @ x`` for a symmetric ``matrix`` and blocks (or vectors) ``x``.
-
-    A dense float64 matrix is multiplied by scipy's BLAS (the library that factorises it:
-    numpy's is held to one thread meanwhile, :func:`numpy_blas_one_thread`),
-    read in its own memory order (symmetric: a C-ordered matrix is its own transpose in Fortran
-    order), which measured 8.5 ms per 5,000 x 8 block against numpy's 14 ms; anything else (a
-    sparse matrix) by its own ``@``.
-    """
-    import numpy as np
-
-    if not (isinstance(matrix, np.ndarray) and matrix.ndim == 2 and matrix.dtype == np.float64
-            and (matrix.flags.c_contiguous or matrix.flags.f_contiguous)):
-        return lambda x: matrix @ x
-    from scipy.linalg import blas
-
-    fortran = matrix if matrix.flags.f_contiguous else matrix.T
-
-    def product(x: Any) -> Any:
-        if x.ndim == 1:
-            return blas.dgemv(1.0, fortran, x)
-        return blas.dgemm(1.0, fortran, np.asfortranarray(x))
-
-    return product
-
-
 def warm_up() -> None:
     """Build the controller now (its library scan is a one-off cost, kept out of the LTD)."""
     _controller()
 
 
 __all__ = ["BLAS_MODULES", "SMALL_FIT_FLOPS", "blas_threads_for", "is_small_fit", "numpy_blas_one_thread", "one_blas_thread", "one_openmp_thread",
-           "symmetric_product",
            "warm_up"]

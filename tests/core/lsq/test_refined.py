@@ -1,4 +1,4 @@
-"""The single-precision Cholesky factor with refined solves (rplearn.core.refined) and its use
+"""The single-precision Cholesky factor with refined solves (rplearn.core.lsq.refined) and its use
 by ConstrainedFactor: double-precision answers, and the float64 factor where single precision
 cannot deliver them."""
 
@@ -7,8 +7,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rplearn.core import refined, spectrum
-from rplearn.core.refined import RefinedCholesky, scaled_double, scaled_single
+from rplearn.core.lsq import factor as factor_module, refined, spectrum
+from rplearn.core.lsq.refined import RefinedCholesky, scaled_double, scaled_single
+from rplearn.errors import NotPositiveDefinite
 
 
 def _gram(n, cond, seed=0):
@@ -62,11 +63,11 @@ def test_an_ill_conditioned_matrix_is_left_to_the_float64_factor(cond):
     added = np.zeros(200)
     scale = 1.0 / np.sqrt(np.diag(g))
     none = np.zeros((0, 200))
-    factor = spectrum.ConstrainedFactor.refined(g, added, scale, none)
+    factor = factor_module.ConstrainedFactor.refined(g, added, scale, none)
     b = np.random.default_rng(4).standard_normal(200)
-    reference = spectrum.ConstrainedFactor.of(scaled_double(g, scale, added), none, scale=scale)
+    reference = factor_module.ConstrainedFactor.of(scaled_double(g, scale, added), none, scale=scale)
     if factor is None:
-        factor = spectrum.ConstrainedFactor.of(scaled_double(g, scale, added), none, scale=scale)
+        factor = factor_module.ConstrainedFactor.of(scaled_double(g, scale, added), none, scale=scale)
     x = factor.solve_a(b)
     assert factor.kind == "dense"
     np.testing.assert_allclose(x, reference.solve_a(b), rtol=1e-12)
@@ -77,7 +78,7 @@ def test_a_solve_that_does_not_converge_switches_to_float64(monkeypatch):
     added = np.full(120, 0.5)
     scale = 1.0 / np.sqrt(np.diag(g) + added)
     monkeypatch.setattr(refined, "MAX_STEPS", 0)  # no corrections allowed: float32 never suffices
-    factor = spectrum.ConstrainedFactor.refined(g, added, scale, np.zeros((0, 120)))
+    factor = factor_module.ConstrainedFactor.refined(g, added, scale, np.zeros((0, 120)))
     assert factor.kind == "refined"
     b = np.random.default_rng(5).standard_normal(120)
     x = factor.solve_a(b)
@@ -91,15 +92,15 @@ def test_the_inverse_of_a_refined_factor_is_float64s():
     scale = 1.0 / np.sqrt(np.diag(g) + added)
     cmat = np.zeros((1, 100))
     cmat[0, :50] = 1.0
-    factor = spectrum.ConstrainedFactor.refined(g, added, scale, cmat)
-    dense = spectrum.ConstrainedFactor.of(scaled_double(g, scale, added), cmat, scale=scale)
+    factor = factor_module.ConstrainedFactor.refined(g, added, scale, cmat)
+    dense = factor_module.ConstrainedFactor.of(scaled_double(g, scale, added), cmat, scale=scale)
     np.testing.assert_allclose(factor.inverse(), dense.inverse(), rtol=1e-9, atol=1e-12 * np.abs(dense.inverse()).max())
 
 
 def _swarm_statistics(n_nodes=6, order=5, n=20000, seed=0):
     from rplearn.core.bases import make_basis
     from rplearn.core.geometry import Directions
-    from rplearn.core.normal_equations import NormalEquations
+    from rplearn.core.lsq.normal_equations import NormalEquations
 
     rng = np.random.default_rng(seed)
     az, el = rng.uniform(-np.pi, np.pi, (2, n)), rng.uniform(-1.2, 1.2, (2, n))
@@ -111,7 +112,7 @@ def _swarm_statistics(n_nodes=6, order=5, n=20000, seed=0):
 
 @pytest.fixture
 def refined_everywhere(monkeypatch):
-    from rplearn.core import solver, solver_large
+    from rplearn.core.lsq import solver, solver_large
 
     monkeypatch.setattr(solver, "LARGE_COLUMNS", 0)
     monkeypatch.setattr(solver_large, "REFINED_COLUMNS", 0)
@@ -123,7 +124,7 @@ def test_a_solution_keeps_its_gram_when_samples_are_added_later(refined_everywhe
     it was off by 54%)."""
     import copy
 
-    from rplearn.core import solver
+    from rplearn.core.lsq import solver
 
     normal, (d, tx, rx, y) = _swarm_statistics()
     normal.add(d, tx, rx, y)
@@ -143,7 +144,7 @@ def test_a_solution_keeps_its_gram_when_samples_are_added_later(refined_everywhe
 def test_float64_trouble_after_single_precision_leaves_the_decision_to_the_kkt_path(refined_everywhere, monkeypatch):
     """When the refined solves give up and the float64 factor fails too, the large path gives
     way to the KKT path (as a failed float64 factor always did) instead of raising."""
-    from rplearn.core import solver
+    from rplearn.core.lsq import solver
 
     normal, (d, tx, rx, y) = _swarm_statistics()
     normal.add(d, tx, rx, y)
@@ -153,9 +154,9 @@ def test_float64_trouble_after_single_precision_leaves_the_decision_to_the_kkt_p
     monkeypatch.setattr(refined, "MAX_STEPS", 0)
 
     def fail(self):
-        raise spectrum.NotPositiveDefinite("forced")
+        raise NotPositiveDefinite("forced")
 
-    monkeypatch.setattr(spectrum.ConstrainedFactor, "_to_double", fail)
+    monkeypatch.setattr(factor_module.ConstrainedFactor, "_to_double", fail)
     large = solver.solve(normal)
     assert large.covariance_fn is None  # the KKT path's eager covariance
     np.testing.assert_allclose(large.coef, small.coef, atol=1e-12)
@@ -171,8 +172,8 @@ def test_a_matrix_without_a_ridge_is_never_refined():
     cmat = np.zeros((1, 40))
     cmat[0, :20] = 1.0
     for added in (np.zeros(40), np.r_[np.ones(39), 0.0]):
-        with_refined = spectrum.ConstrainedFactor.of_gram(g, added, scale, cmat, None, refined=True)
-        without = spectrum.ConstrainedFactor.of_gram(g, added, scale, cmat, None, refined=False)
+        with_refined = factor_module.ConstrainedFactor.of_gram(g, added, scale, cmat, None, refined=True)
+        without = factor_module.ConstrainedFactor.of_gram(g, added, scale, cmat, None, refined=False)
         assert (with_refined is None) == (without is None)
         assert with_refined is None or with_refined.kind == "dense"
 
@@ -191,8 +192,8 @@ def test_the_spectrum_through_a_regularised_factor_is_not_masked_by_the_ridge(lo
     added = np.ones(n)
     scale = 1.0 / np.sqrt(np.diag(g) + added)
     none, null = np.zeros((0, n)), np.zeros((n, 0))
-    for factor in (spectrum.ConstrainedFactor.of(scaled_double(g, scale, added), none, scale=scale),
-                   spectrum.ConstrainedFactor.refined(g, added, scale, none)):
+    for factor in (factor_module.ConstrainedFactor.of(scaled_double(g, scale, added), none, scale=scale),
+                   factor_module.ConstrainedFactor.refined(g, added, scale, none)):
         sv, rank, cond = spectrum.spectrum_from_factor(g, null, factor, np.ones(n), ridge=1.0)
         assert rank == n - zeros
         assert cond == pytest.approx(np.sqrt(1e6 / low), rel=0.03) if not zeros else cond == float("inf")

@@ -1,4 +1,4 @@
-"""The result of choosing a pattern's order and smoothing (:mod:`rplearn.core.selection`,
+"""The result of choosing a pattern's order and smoothing (:mod:`rplearn.core.lsq.selection`,
 which re-exports these names): the choice and the validation curve behind it."""
 
 from __future__ import annotations
@@ -6,7 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
-from rplearn.core.penalty import DEFAULT_PENALTY_POWER
+from rplearn.core.lsq.penalty import DEFAULT_PENALTY_POWER
 
 
 @dataclass(frozen=True)
@@ -43,10 +43,10 @@ class Selection:
     variance_inflation : float
         Factor (at least 1) by which the held-out units' squared errors *within* each unit
         (each unit's mean residual removed) exceed what the posterior covariance of the folds'
-        fits predicts (see :func:`rplearn.core.selection.variance_inflation`); 1 for GCV.
+        fits predicts (see :func:`rplearn.core.lsq.selection.variance_inflation`); 1 for GCV.
     flight_level_std_db : float
         Standard deviation [dB] of a unit's (flight's) own level about the common level, from
-        the held-out units' mean residuals (see :func:`rplearn.core.selection.variance_inflation`); 0 for GCV.
+        the held-out units' mean residuals (see :func:`rplearn.core.lsq.selection.variance_inflation`); 0 for GCV.
     """
 
     method: str

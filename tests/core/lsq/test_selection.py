@@ -1,4 +1,4 @@
-"""rplearn.core.selection: smoothness penalty, nested statistics, and the choice of order and
+"""rplearn.core.lsq.selection: smoothness penalty, nested statistics, and the choice of order and
 smoothing by grouped cross-validation from per-unit statistics (issue 11, item 1)."""
 
 from __future__ import annotations
@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from rplearn.core.geometry import Directions
-from rplearn.core.normal_equations import NormalEquations
-from rplearn.core.selection import (
+from rplearn.core.lsq.normal_equations import NormalEquations
+from rplearn.core.lsq.selection import (
     nested_columns,
     penalty_scale,
     penalty_vector,
@@ -134,14 +134,14 @@ class _Points:
 
 
 def _point(order, smoothing, ev):
-    from rplearn.core.selection import CurvePoint
+    from rplearn.core.lsq.selection import CurvePoint
 
     return CurvePoint(order, smoothing, float(np.sqrt(ev.fold_sse[(order, smoothing)].sum() / ev.n)))
 
 
 def test_the_least_smoothing_within_noise_of_the_best_is_chosen():
     """Issue 24, item 5: points the held-out units cannot tell from the best do not loosen the split."""
-    from rplearn.core.selection import _tightest_split
+    from rplearn.core.lsq.selection import _tightest_split
 
     sse = {(8, 1e-4): [100.0, 100.0, 100.0],   # the best
            (8, 1e-5): [101.0, 99.5, 100.2],    # 0.7 above in total, paired spread 1.3 per unit: noise

@@ -1,6 +1,6 @@
 """The smoothness penalty of a pattern fit and the nested sub-problems of smaller SH orders.
 
-Split from :mod:`rplearn.core.selection` (which re-exports these names): the weights of the
+Split from :mod:`rplearn.core.lsq.selection` (which re-exports these names): the weights of the
 penalty, its unit, and the statistics of a smaller, nested basis taken from a larger one's.
 """
 
@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from rplearn.core.basis_base import Basis
-from rplearn.core.normal_equations import NormalEquations
+from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.errors import InputError
 
 #: Exponent ``p`` of the SH roughness weights ``(l (l+1))^p``: 2 penalises the squared

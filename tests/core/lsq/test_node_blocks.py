@@ -1,4 +1,4 @@
-"""Node blocks of a swarm's normal matrix (rplearn.core.node_blocks): the band a reordering
+"""Node blocks of a swarm's normal matrix (rplearn.core.lsq.node_blocks): the band a reordering
 gives, products and sparse copies that read only the blocks links can fill."""
 
 from __future__ import annotations
@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rplearn.core.node_blocks import NodeBlocks
-from rplearn.core.spectrum import band_of
+from rplearn.core.lsq.node_blocks import NodeBlocks
+from rplearn.core.lsq.factor import band_of
 
 
 def _blocked(n_nodes, p, links, shared=0, seed=0):

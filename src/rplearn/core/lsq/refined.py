@@ -9,7 +9,7 @@ of 32 bit floating point arithmetic in obtaining 64 bit accuracy", SC 2006). At 
 solve needs two or three corrections of about 15 ms each. A matrix whose single-precision
 factorisation fails, or whose solves do not converge within :data:`MAX_STEPS` corrections
 (condition numbers near ``1 / eps32``), is left to the float64 factor
-(:class:`~rplearn.core.spectrum.ConstrainedFactor` decides).
+(:class:`~rplearn.core.lsq.factor.ConstrainedFactor` decides).
 
 The matrix is ``A = S (G + diag(added)) S``: the Gram ``G`` (kept by its owner, read here, never
 copied in float64), a ridge or penalty on the diagonal, and ``S`` the diagonal scaling that
@@ -18,12 +18,13 @@ gives ``A`` a unit diagonal.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import NDArray
 
-from rplearn.core.blas import symmetric_product
+from rplearn.core.lsq.products import symmetric_product
+from rplearn.errors import NotPositiveDefinite
 
 FloatArray = NDArray[np.float64]
 
@@ -68,7 +69,12 @@ def scaled_double(gram: FloatArray, scale: FloatArray, added: FloatArray) -> Flo
 
 class RefinedCholesky:
     """Solves with ``A = S (G + diag(added)) S`` through a float32 Cholesky factor of ``A``,
-    refined in float64 against ``G``. Build it with :meth:`of`."""
+    refined in float64 against ``G``. Build it with :meth:`of`. A
+    :class:`~rplearn.core.lsq.factor.Factor` (its solves take and give scaled vectors)."""
+
+    kind: ClassVar[str] = "refined"
+    single_precision: ClassVar[bool] = True
+    structured: ClassVar[bool] = False
 
     def __init__(self, gram: FloatArray, scale: FloatArray, added: FloatArray, factor32: Any, norm_inf: float) -> None:
         self.gram, self.scale, self.added = gram, scale, added
@@ -89,6 +95,10 @@ class RefinedCholesky:
             return None
         return cls(gram, scale, added, factor, norm)
 
+    def as_double(self) -> FloatArray:
+        """``A`` in float64 (for the float64 factor that replaces this one)."""
+        return scaled_double(self.gram, self.scale, self.added)
+
     def apply(self, u: FloatArray) -> FloatArray:
         """``A u`` in float64 (``u`` a vector or a block of columns)."""
         s = self.scale if u.ndim == 1 else self.scale[:, None]
@@ -101,7 +111,7 @@ class RefinedCholesky:
 
         x, info = lapack.spotrs(self.factor32, np.asfortranarray(c, np.float32), lower=1)
         if info != 0:
-            raise ValueError(f"spotrs failed ({info})")
+            raise NotPositiveDefinite(f"LAPACK spotrs failed (info {info})")
         return x.astype(np.float64)
 
     def solve(self, c: FloatArray) -> FloatArray | None:

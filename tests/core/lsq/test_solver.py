@@ -7,7 +7,7 @@ import pytest
 
 from rplearn.core.bases import BasisGrid, Polynomial, SphericalHarmonics
 from rplearn.core.geometry import Directions
-from rplearn.core.solver import NormalEquations, fit_joint, identifiability, link_components, solve
+from rplearn.core.lsq.solver import NormalEquations, fit_joint, identifiability, link_components, solve
 from rplearn.errors import IdentifiabilityError, InputError
 
 
@@ -138,7 +138,7 @@ def test_streaming_equals_one_shot_and_merge():
 )
 def test_accumulated_statistics_equal_the_explicit_design(basis, monkeypatch):
     """X^T X, X^T y and y^T y of three nodes with links both ways, over several blocks and chunks."""
-    import rplearn.core.link_statistics as solver_module
+    import rplearn.core.lsq.link_statistics as solver_module
 
     monkeypatch.setattr(solver_module, "BLOCK_SAMPLES", 1000)
     monkeypatch.setattr(solver_module, "FEATURE_CHUNK", 300)

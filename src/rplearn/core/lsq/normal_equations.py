@@ -8,8 +8,8 @@ pattern a linear combination of the same basis, ``G_n = f(az, el) . p_n``, the r
 
 The design matrix is never formed: :class:`NormalEquations` accumulates ``X^T X``, ``X^T y``,
 ``y^T y`` and ``n`` chunk by chunk, one link direction at a time (:func:`link_statistics`),
-through a block buffer reused by later fits in the same thread (:mod:`rplearn.core.link_statistics`),
-so memory does not grow with the number of samples. :mod:`rplearn.core.solver` solves the result.
+through a block buffer reused by later fits in the same thread (:mod:`rplearn.core.lsq.runtime`),
+so memory does not grow with the number of samples. :mod:`rplearn.core.lsq.solver` solves the result.
 """
 
 from __future__ import annotations
@@ -23,9 +23,10 @@ from numpy.typing import ArrayLike, NDArray
 from rplearn._argtypes import check_types
 from rplearn.core.bases import Basis
 from rplearn.core.geometry import Directions
-from rplearn.core.link_statistics import (
-    _in_order, block_rows, block_samples, block_starts, link_statistics, max_links_per_block, segmented_link_statistics,
+from rplearn.core.lsq.link_statistics import (
+    block_rows, block_samples, block_starts, link_statistics, max_links_per_block, segmented_link_statistics,
 )
+from rplearn.core.lsq.runtime import DEFAULT_RUNTIME
 from rplearn.errors import InputError
 
 FloatArray = NDArray[np.float64]
@@ -218,7 +219,7 @@ class NormalEquations:
                 local[runs])
             return products, moments, first, last, tx[runs[:-1]]
 
-        for products, moments, first, last, run_tx in _in_order(statistics, starts):
+        for products, moments, first, last, run_tx in DEFAULT_RUNTIME.in_order(statistics, starts):
             tx, rx = np.divmod(codes[first:last], self.n_nodes)
             flat = node_moments.reshape(self.n_nodes, -1)
             flat += (run_tx[None, :] == nodes).astype(np.float64) @ moments[0].reshape(run_tx.size, -1)
@@ -310,7 +311,7 @@ class NormalEquations:
 
     def _own_gram(self) -> None:
         """Copy the Gram before changing it when it is read-only: a large solve keeps it (its
-        solves and lazy covariance read it, :mod:`rplearn.core.refined`) and marks it so."""
+        solves and lazy covariance read it, :mod:`rplearn.core.lsq.refined`) and marks it so."""
         if not self.gram.flags.writeable:
             self.gram = self.gram.copy()
 
@@ -433,7 +434,7 @@ def schur_spread_db(gram: FloatArray, column: int, n_samples: int) -> float:
         lower = np.linalg.cholesky(g + jitter * np.eye(others.size))
         from scipy.linalg import blas  # here, not at import: scipy.linalg costs 0.35 s to import
 
-        z = blas.dtrsv(lower, c, lower=1)  # level 2, as in rplearn.core.selection
+        z = blas.dtrsv(lower, c, lower=1)  # level 2, as in rplearn.core.lsq.selection
         schur = float(gram[i, i] - z @ z)
     except np.linalg.LinAlgError:
         schur = float(gram[i, i] - c @ np.linalg.lstsq(g, c, rcond=None)[0])

@@ -14,10 +14,10 @@ at constant altitude over a static station) is refused as not identifiable.
 
 The solver never forms the design matrix: it accumulates the sufficient statistics
 ``X^T X``, ``X^T y``, ``y^T y`` and ``n`` chunk by chunk
-(:class:`~rplearn.core.normal_equations.NormalEquations`), so memory does not grow with the
+(:class:`~rplearn.core.lsq.normal_equations.NormalEquations`), so memory does not grow with the
 number of samples, then solves the ridge-regularised normal equations (:func:`solve`).
 
-Identifiability (paper Sec. V-A, docs/CONVENTIONS.md). A constant can move between the two ends of a
+Identifiability (paper Sec. V-A, docs/conventions.md). A constant can move between the two ends of a
 link: ``G_t + c`` and ``G_r - c`` predict the same. In a connected group of nodes whose link
 graph is bipartite (two nodes, or an even cycle) this leaves exactly one free constant,
 ``+c`` on one side of the bipartition and ``-c`` on the other; a link graph with an odd cycle
@@ -32,7 +32,7 @@ from __future__ import annotations
 
 from collections import deque
 from collections.abc import Iterable, Mapping, Sequence
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -40,11 +40,12 @@ from numpy.typing import ArrayLike, NDArray
 from rplearn._argtypes import check_types
 from rplearn.core.bases import Basis
 from rplearn.core.geometry import Directions
-from rplearn.core.level import shrink_target
-from rplearn.core.normal_equations import EXPONENT_MIN_SPREAD_DB, NormalEquations, independent_spread_db
-from rplearn.core.spectrum import null_directions, spectrum_estimate, spectrum_report
-from rplearn.core.solution import FitReport, GaugeNote, JointSolution, fit_warnings
-from rplearn.core.solver_large import solve_large, unexplained_fraction, unit_shared_scaling
+from rplearn.core.lsq.level import shrink_target
+from rplearn.core.lsq.normal_equations import EXPONENT_MIN_SPREAD_DB, NormalEquations, independent_spread_db
+from rplearn.core.lsq.spectrum import null_directions, spectrum_estimate, spectrum_report
+from rplearn.core.lsq.closing import Regularisation, close_solution
+from rplearn.core.lsq.solution import FitReport, GaugeNote, JointSolution
+from rplearn.core.lsq.solver_large import solve_large, unit_shared_scaling
 from rplearn.errors import IdentifiabilityError, InputError
 
 FloatArray = NDArray[np.float64]
@@ -57,7 +58,7 @@ FloatArray = NDArray[np.float64]
 #: while on a single short unit it keeps SH-10 from extrapolating to 1,323 dB RMSE (7.8 dB).
 DEFAULT_RIDGE = 1.0
 #: Where the level a prior's pattern is shrunk toward comes from: ``"data"`` (the prior gives
-#: only its shape; :mod:`rplearn.core.level`) or ``"prior"`` (its absolute dBi, for calibrated
+#: only its shape; :mod:`rplearn.core.lsq.level`) or ``"prior"`` (its absolute dBi, for calibrated
 #: power and a trusted reference).
 PRIOR_LEVELS: tuple[str, ...] = ("data", "prior")
 
@@ -109,7 +110,7 @@ def link_components(n_nodes: int, links: Iterable[tuple[int, int]]) -> list[tupl
 
 #: Above this many columns the solver estimates the spectrum (:func:`spectrum_estimate`)
 #: instead of a full eigendecomposition, and factorises the regularised system by Cholesky
-#: (:mod:`rplearn.core.solver_large`) instead of inverting the KKT matrix: swarms of tens of nodes.
+#: (:mod:`rplearn.core.lsq.solver_large`) instead of inverting the KKT matrix: swarms of tens of nodes.
 #: At and below it every result is as before.
 LARGE_COLUMNS = 1500
 
@@ -195,8 +196,8 @@ def solve(
     graph (see module docstring), through the KKT system
     ``[[X^T X + ridge I + diag(penalty), C^T], [C, 0]] [p; mu] = [X^T y + (ridge + penalty) t; d]``.
     ``penalty`` (one non-negative weight per column, absolute units of ``X^T X``) is the
-    smoothness penalty of :mod:`rplearn.core.selection`. The target ``t``
-    (:func:`rplearn.core.level.shrink_target`) is never a fixed level: its shape is that of
+    smoothness penalty of :mod:`rplearn.core.lsq.selection`. The target ``t``
+    (:func:`rplearn.core.lsq.level.shrink_target`) is never a fixed level: its shape is that of
     ``penalty_target`` (one value per pattern column: a prior pattern's coefficients, whose
     per-node sphere mean is dropped) or zero, and its constant per node is the data's (the
     least-squares constants under the same gauge), so that adding a constant to every ``y``
@@ -295,43 +296,36 @@ def solve(
             "add samples over the uncovered directions, choose a smaller model, or raise the ridge"
         )
     kinv = kinv_s * full_scale[:, None] * full_scale[None, :]
-    sol = kinv @ rhs
-    coef = sol[:pcols]
-    a = kinv[:pcols, :pcols]
-    unexplained = unexplained_fraction(normal, np.diag(a)[pat:])
-    sse = max(normal.yty - 2.0 * coef @ normal.rhs + coef @ normal.gram @ coef, 0.0)
-    dof = max(normal.n_samples - min(rank, pcols), 1)
-    resid_var = sse / dof
-    # Covariance of the constrained estimate: top-left block of the inverse KKT matrix,
-    # sandwiched with X^T X when a ridge is present.
-    if penalty is not None:
-        # A smoothness penalty (or a prior), with the ridge, read as a Gaussian prior on the
-        # coefficients: the posterior covariance sigma^2 (X^T X + ridge I + P)^-1, which returns
-        # to the prior's variance where the data are absent (the sandwich form shrinks it to
-        # zero there). Given for every automatic fit, also one that chose no smoothing.
-        cov = resid_var * a
-    else:
-        cov = resid_var * (a @ normal.gram @ a.T) if shrunk else resid_var * a
-    cov = 0.5 * (cov + cov.T)
-    report = FitReport(
-        n_samples=normal.n_samples,
-        n_columns=pcols,
-        rank=rank,
-        null_dim=pcols - rank,
-        condition_number=cond,
-        expected_null_dim=k,
-        gauges=tuple(notes),
-        ridge=float(ridge),
-        rmse_db=float(np.sqrt(sse / normal.n_samples)),
-        singular_values=sv,
-        warnings=tuple(fit_warnings(normal.basis.label, pcols, rank, k, cond, ridge)),
-    )
-    return JointSolution(coef[:pat].reshape(n_nodes, normal.basis.n_coef), cov, float(resid_var), report,
-                         tuple(normal.shared), coef[pat:].copy(), unexplained)
+    coef = (kinv @ rhs)[:pcols]
+    return close_solution(normal, coef, (sv, rank, cond), notes, k,
+                          Regularisation(float(ridge), penalty is not None, shrunk),
+                          KktInverse(kinv[:pcols, :pcols], normal.gram))
+
+
+class KktInverse:
+    """The dense path's :class:`~rplearn.core.lsq.closing.SolvedSystem`: the top-left block
+    ``M`` of the inverse KKT matrix (the covariance of the constrained estimate, sandwiched with
+    ``X^T X`` when a ridge alone regularises), its covariance formed at once."""
+
+    lazy: ClassVar[bool] = False
+
+    def __init__(self, inverse: FloatArray, gram: FloatArray) -> None:
+        self.inverse, self.gram = inverse, gram
+
+    def fitted_square(self, gram: FloatArray, coef: FloatArray) -> float:
+        return float(coef @ gram @ coef)  # numpy's BLAS: a fixed-order fit imports no scipy
+
+    def inverse_diagonal(self, index: NDArray[np.intp]) -> FloatArray:
+        return np.diag(self.inverse)[index]
+
+    def covariance(self, variance: float, sandwich: bool) -> FloatArray:
+        a = self.inverse
+        cov = variance * (a @ self.gram @ a.T) if sandwich else variance * a
+        return 0.5 * (cov + cov.T)
 
 
 def _unit_shared_columns(normal: NormalEquations) -> FloatArray:
-    """See :func:`rplearn.core.solver_large.unit_shared_scaling`."""
+    """See :func:`rplearn.core.lsq.solver_large.unit_shared_scaling`."""
     return unit_shared_scaling(normal)[0]
 
 
@@ -405,7 +399,7 @@ def fit_joint(
     chunk_size : int
         Samples accumulated per step.
     smoothing : float
-        Relative weight of the smoothness penalty (:mod:`rplearn.core.selection`).
+        Relative weight of the smoothness penalty (:mod:`rplearn.core.lsq.selection`).
     penalty_power : float
         Exponent of the SH roughness weights.
     environment : array_like, optional
@@ -428,7 +422,7 @@ def fit_joint(
         normal = normal.with_shared(normal.two_way_links() if link_offsets else None)
     penalty = None
     if smoothing:
-        from rplearn.core.selection import penalty_scale, penalty_vector
+        from rplearn.core.lsq.selection import penalty_scale, penalty_vector
 
         penalty = penalty_vector(basis, n_nodes, smoothing, penalty_scale(normal.gram, normal.n_pattern_columns), penalty_power)
     return solve(normal, node_names, ridge=ridge, gauge=gauge, penalty=penalty)

@@ -1,7 +1,8 @@
 """What a joint solve returns: the solution, its report, its gauge notes and warnings.
 
-Kept apart from :mod:`rplearn.core.solver` so that the solver's paths (the KKT inverse and
-the large-system Cholesky of :mod:`rplearn.core.solver_large`) share them.
+Kept apart from :mod:`rplearn.core.lsq.solver` so that the solver's paths (the KKT inverse and
+the large-system Cholesky of :mod:`rplearn.core.lsq.solver_large`) share them; they make it
+through :func:`rplearn.core.lsq.closing.close_solution`.
 """
 
 from __future__ import annotations

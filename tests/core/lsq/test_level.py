@@ -1,4 +1,4 @@
-"""rplearn.core.level: the level a regularised solve shrinks toward is the data's own, so a
+"""rplearn.core.lsq.level: the level a regularised solve shrinks toward is the data's own, so a
 constant added to every observation shifts every prediction by it, on the small (KKT) and the
 large (Cholesky, single precision refined) paths, under every gauge (issue 24, item 3)."""
 
@@ -7,12 +7,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rplearn.core import solver, solver_large
+from rplearn.core.lsq import solver, solver_large
 from rplearn.core.bases import make_basis
 from rplearn.core.geometry import Directions
-from rplearn.core.level import constant_coefficients, pattern_shape, shrink_target
-from rplearn.core.normal_equations import NormalEquations
-from rplearn.core.selection import penalty_scale, penalty_vector
+from rplearn.core.lsq.level import constant_coefficients, pattern_shape, shrink_target
+from rplearn.core.lsq.normal_equations import NormalEquations
+from rplearn.core.lsq.selection import penalty_scale, penalty_vector
 
 
 def _samples(n_nodes, links=None, n=6000, seed=1):

@@ -7,7 +7,7 @@ P). ``lambda`` is given *relative* to the mean diagonal of the learning data's `
 value means the same shrinkage for a short and a long flight: the absolute weight added to
 ``X^T X`` is ``smoothing * mean(diag(X^T X)) * w_j``. The penalty and the ridge shrink toward
 a target whose constant per node is the learning data's own level, not zero
-(:mod:`rplearn.core.level`), so that no validation error depends on the level of the RSSI values.
+(:mod:`rplearn.core.lsq.level`), so that no validation error depends on the level of the RSSI values.
 
 Order and smoothing are chosen by **grouped cross-validation over flight units**: each unit in
 turn is held out, the pattern learned from the others, and its squared error on the held-out
@@ -52,10 +52,10 @@ from typing import Any, Callable, Mapping, Sequence, cast
 import numpy as np
 
 from rplearn.core.basis_base import Basis
-from rplearn.core.level import shrink_target
-from rplearn.core.normal_equations import EXPONENT_MIN_SPREAD_DB, NormalEquations, schur_spread_db
-from rplearn.core.selection_result import CurvePoint, Selection
-from rplearn.core.penalty import (
+from rplearn.core.lsq.level import shrink_target
+from rplearn.core.lsq.normal_equations import EXPONENT_MIN_SPREAD_DB, NormalEquations, schur_spread_db
+from rplearn.core.lsq.selection_result import CurvePoint, Selection
+from rplearn.core.lsq.penalty import (
     DEFAULT_PENALTY_POWER,
     nested_columns,
     penalty_scale,
@@ -212,7 +212,7 @@ class _Evaluator:
                                            list[np.ndarray]]:
         """Roughness weights and, per fold, the learning and held-out blocks of one order and the
         target its fit shrinks toward (the prior's shape and the learning units' own level,
-        :func:`~rplearn.core.level.shrink_target`; cached)."""
+        :func:`~rplearn.core.lsq.level.shrink_target`; cached)."""
         if order not in self._cache:
             basis = self.make_basis(order)
             pattern_idx = nested_columns(self.big, basis, self.n_nodes)
@@ -436,11 +436,11 @@ def select_order_and_smoothing(
         Prior coefficients at the largest order (one per pattern column, ``fit --prior``): the
         ridge and the penalty shrink toward their shape (each node's sphere mean dropped)
         instead of toward zero. With or without it, each fold's constant per node is its
-        learning units' own level (:func:`rplearn.core.level.shrink_target`), so a constant
+        learning units' own level (:func:`rplearn.core.lsq.level.shrink_target`), so a constant
         added to every sample changes no validation error.
     prior_level : {"data", "prior"}
         ``"prior"``: shrink toward ``target`` itself, its absolute level included (calibrated
-        power and a trusted reference; see :func:`rplearn.core.solver.solve`).
+        power and a trusted reference; see :func:`rplearn.core.lsq.solver.solve`).
 
     Raises
     ------

@@ -1,21 +1,20 @@
-"""Products of the feature blocks of links: the work inside :class:`~rplearn.core.normal_equations.NormalEquations`.
+"""Products of the feature blocks of links: the work inside :class:`~rplearn.core.lsq.normal_equations.NormalEquations`.
 
 Per link direction, ``Z^T Z`` with ``Z = [f(tx directions), y, extra..., f(rx directions)]``
 (:func:`link_statistics`), or for many short links at once (:func:`segmented_link_statistics`),
 through a float64 block buffer kept per thread, in blocks of samples that two worker threads
-compute ahead (:func:`_in_order`).
+compute ahead: both owned by :data:`~rplearn.core.lsq.runtime.DEFAULT_RUNTIME`.
 """
 
 from __future__ import annotations
 
-import os
-import threading
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from rplearn.core.bases import Basis
+from rplearn.core.lsq.runtime import DEFAULT_RUNTIME
 
 FloatArray = NDArray[np.float64]
 
@@ -26,24 +25,6 @@ BLOCK_SAMPLES = 65536
 #: block (SH-24, 1,155 rows: about 7,000), so the buffer kept between fits stays bounded
 #: (it was 0.6 GB after one SH-24 fit).
 BLOCK_MAX_VALUES = 8 * 2**20
-
-
-_BUFFERS = threading.local()
-
-
-def _block_buffer(size: int) -> FloatArray:
-    """A float64 scratch buffer of at least ``size`` values, reused by later fits in this thread.
-
-    Fresh memory is slow on first touch (one page fault per 4 KiB; measured 20-30 ms for the
-    52 MB block of an SH-10 fit on this kind of machine), so the block buffer is kept.
-    """
-    buf = getattr(_BUFFERS, "block", None)
-    if buf is None or buf.size < size:
-        _BUFFERS.block = None  # let the old one go first
-        buf = np.empty(size)
-        buf.fill(0.0)  # pay the page faults now, once, not inside the first rank-k update
-        _BUFFERS.block = buf
-    return buf[:size]
 
 
 def block_samples(rows: int) -> int:
@@ -64,7 +45,7 @@ def reserve_block_buffer(basis: Basis, n_samples: int) -> None:
     faults of the buffer (measured 0.2 s for the first SH-10 fit of the paper's 56k samples).
     """
     rows = block_rows(basis)
-    _block_buffer(rows * max(1, min(int(n_samples), block_samples(rows))))
+    DEFAULT_RUNTIME.block_buffer(rows * max(1, min(int(n_samples), block_samples(rows))))
 
 
 def _fill_features(
@@ -140,7 +121,7 @@ def link_statistics(
         moments = None
     total = np.zeros((k, k))
     per_block = block_samples(k)
-    block = _block_buffer(k * max(1, min(n, per_block)))  # grows to the largest block seen, within the cap
+    block = DEFAULT_RUNTIME.block_buffer(k * max(1, min(n, per_block)))  # grows to the largest block seen, within the cap
     for start in range(0, n, per_block):
         stop = min(n, start + per_block)
         buf = block[: k * (stop - start)].reshape(k, stop - start)
@@ -190,7 +171,7 @@ def segmented_link_statistics(
     gap = 1 + m
     k = 2 * p + gap
     n_links = bounds.size - 1
-    buf = _block_buffer(k * n)[: k * n].reshape(k, n)
+    buf = DEFAULT_RUNTIME.block_buffer(k * n)[: k * n].reshape(k, n)
     tx_bounds = bounds if tx_bounds is None else tx_bounds
     shape = basis.moment_shape
     assert shape is not None  # only bases with Gram moments come here
@@ -206,72 +187,6 @@ def segmented_link_statistics(
         rows, cols = np.r_[natural, p:p + gap], np.r_[0:gap, gap + natural]
         products = products[:, rows[:, None], cols[None, :]]
     return products, moments
-
-
-#: Blocks of samples computed ahead by the worker threads of :func:`_in_order`.
-_AHEAD = 3
-#: The worker pool (created on first use, kept with its threads' block buffers) and the lock
-#: that gives it, and the process-wide BLAS thread limit, to one caller at a time.
-_POOL: list[Any] = []
-_POOL_LOCK = threading.Lock()
-
-
-def _forget_pool_in_child() -> None:
-    """A forked child inherits the pool object but not its threads: start afresh."""
-    global _POOL_LOCK
-    _POOL.clear()
-    _POOL_LOCK = threading.Lock()
-
-
-if hasattr(os, "register_at_fork"):
-    os.register_at_fork(after_in_child=_forget_pool_in_child)
-
-
-def _in_order(work: Any, starts: Any) -> Any:
-    """``work(s)`` for every block start ``s``, yielded in order.
-
-    With two or more blocks, two worker threads compute them (a few ahead, so memory stays
-    bounded), each with one BLAS thread: computing the features is plain numpy, which uses one
-    core (and releases the interpreter lock), so two blocks at a time use both cores of a
-    2-core machine, where one block with a 2-thread BLAS leaves one idle while the features
-    are computed. The threads are kept between calls, with their block buffers.
-
-    The BLAS thread limit is process-wide, so one caller at a time has the pool: a caller that
-    finds it busy (another thread accumulating at the same time, e.g. a Dask worker's) computes
-    its blocks itself, in order, leaving the BLAS threads as they are.
-    """
-    starts = list(starts)
-    lock = _POOL_LOCK
-    if len(starts) < 2 or not lock.acquire(blocking=False):
-        yield from (work(s) for s in starts)
-        return
-    from collections import deque
-    from concurrent.futures import ThreadPoolExecutor
-
-    from rplearn.core.blas import one_blas_thread
-
-    pending: deque[Any] = deque()
-    try:
-        if not _POOL:
-            _POOL.append(ThreadPoolExecutor(max_workers=2, thread_name_prefix="rplearn-stats"))
-        pool = _POOL[0]
-        with one_blas_thread():
-            for s in starts:
-                pending.append(pool.submit(work, s))
-                if len(pending) >= _AHEAD:
-                    yield pending.popleft().result()
-            while pending:
-                yield pending.popleft().result()
-    finally:
-        for future in pending:  # an error (or a caller that stopped early): drop the rest
-            future.cancel()
-        for future in pending:
-            if not future.cancelled():
-                try:
-                    future.result()  # let a running block finish before the limit is lifted
-                except Exception:  # noqa: BLE001  (the first error is the one raised)
-                    pass
-        lock.release()
 
 
 def block_starts(bounds: NDArray[np.intp], per_block: int, max_links: int) -> list[int]:

@@ -4,7 +4,7 @@
 node) of which only the diagonal and the blocks of linked node pairs can be non-zero; shared
 columns (an exponent, link offsets) follow as full rows and columns. A swarm calibrated by
 neighbours (each drone links to a few others) leaves most blocks zero, which the solver uses
-(:meth:`rplearn.core.spectrum.ConstrainedFactor.of`): a band after reordering the nodes, or a
+(:meth:`rplearn.core.lsq.factor.ConstrainedFactor.of`): a band after reordering the nodes, or a
 general sparse matrix.
 """
 

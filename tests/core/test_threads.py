@@ -6,7 +6,7 @@ import numpy  # noqa: F401  (loads the BLAS libraries whose threads are counted)
 import scipy.linalg  # noqa: F401
 from threadpoolctl import threadpool_info
 
-from rplearn.core.blas import SMALL_FIT_FLOPS, blas_threads_for, is_small_fit
+from rplearn.core.threads import SMALL_FIT_FLOPS, blas_threads_for, is_small_fit
 
 
 def blas_threads() -> list[int]:
@@ -46,7 +46,7 @@ def test_a_fixed_order_fit_imports_no_scipy_and_order_selection_limits_scipys_bl
         fit_dataset({str(tmp_path / "m.parquet")!r}, ModelSpec.parse("sh-6"))
         assert not [m for m in sys.modules if m == "scipy" or m.startswith("scipy.")], "scipy imported"
         from threadpoolctl import threadpool_info
-        from rplearn.core.blas import blas_threads_for
+        from rplearn.core.threads import blas_threads_for
         import rplearn.models.auto  # order selection
         assert "scipy.linalg" in sys.modules
         libs = [p for p in threadpool_info() if p["user_api"] == "blas"]
@@ -66,7 +66,7 @@ def test_an_openmp_limit_leaves_a_concurrent_blas_limit_alone():
 
     import pykdtree.kdtree  # noqa: F401  (its OpenMP runtime)
 
-    from rplearn.core.blas import one_blas_thread, one_openmp_thread
+    from rplearn.core.threads import one_blas_thread, one_openmp_thread
 
     before = blas_threads()
     if max(before) < 2:
@@ -118,7 +118,7 @@ def test_overlapping_blas_limits_from_two_threads_leave_the_threads_as_they_were
     not leave numpy on one thread, or lift a limit whose work still runs (found by review)."""
     import threading
 
-    from rplearn.core.blas import numpy_blas_one_thread, one_blas_thread
+    from rplearn.core.threads import numpy_blas_one_thread, one_blas_thread
 
     before = blas_threads()
     assert max(before) > 1, "this machine's BLAS runs several threads"

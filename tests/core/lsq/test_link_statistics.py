@@ -6,10 +6,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rplearn.core import link_statistics
+from rplearn.core.lsq import link_statistics
 from rplearn.core.geometry import Directions
-from rplearn.core.link_statistics import _in_order, segmented_link_statistics
-from rplearn.core.normal_equations import NormalEquations
+from rplearn.core.lsq.link_statistics import segmented_link_statistics
+from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.core.sh import SphericalHarmonics
 
 
@@ -71,18 +71,6 @@ def test_segmented_statistics_are_each_links_products():
         assert products[j, p + 1, 1] == bounds[j + 1] - bounds[j]
         gram_tx = basis.gram_from_moments(moments[0][j])[np.ix_(np.argsort(basis.row_order), np.argsort(basis.row_order))]
         np.testing.assert_allclose(gram_tx, f_t[s].T @ f_t[s], atol=1e-9)
-
-
-def test_blocks_come_back_in_order_and_errors_reach_the_caller():
-    def work(s: int) -> int:
-        if s == 7:
-            raise ValueError("block 7")
-        return s * s
-
-    assert list(_in_order(work, range(6))) == [s * s for s in range(6)]
-    assert list(_in_order(work, [3])) == [9]
-    with pytest.raises(ValueError, match="block 7"):
-        list(_in_order(work, range(10)))
 
 
 def test_blocks_hold_a_bounded_number_of_samples_and_links():

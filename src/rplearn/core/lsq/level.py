@@ -1,7 +1,7 @@
 """The level a regularised pattern fit shrinks toward: the data's own, never a fixed value.
 
 Every pattern column of the joint solve is regularised (the ridge of
-:func:`rplearn.core.solver.solve`, the smoothness penalty of :mod:`rplearn.core.selection`; the
+:func:`rplearn.core.lsq.solver.solve`, the smoothness penalty of :mod:`rplearn.core.lsq.selection`; the
 large-swarm factorisations rely on it). Shrunk toward zero, the constant part of each pattern
 (its level) would be pulled toward 0 dBi, and with uncalibrated power (``rssi_scale``
 ``relative``) adding a constant to every RSSI value would change the fit. So the coefficients
@@ -108,7 +108,7 @@ def shrink_target(
     constraints : (matrix, values), optional
         The solve's gauge constraints on every column; the target satisfies them.
     components : sequence, optional
-        The link graph's components (:func:`rplearn.core.solver.link_components`), in the
+        The link graph's components (:func:`rplearn.core.lsq.solver.link_components`), in the
         order of the constraints.
 
     Returns

@@ -1,0 +1,104 @@
+"""rplearn.models.own_posterior (issue 24, acceptance 5): each node's own-pattern spread is read
+from the cross-validated prior continued to the largest candidate order, so that a small chosen
+order does not hide, as exact zeros, the pattern structure the flight cannot pin down per node."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from rplearn.analysis.decoupling import covered_directions, decoupling_certificate
+from rplearn.analysis.pattern_error import pattern_errors_db
+from rplearn.data.sync import SyncOptions, synchronise
+from rplearn.data.tables import link_samples
+from rplearn.models import own_posterior
+from rplearn.models.auto import fit_auto
+from rplearn.sim import simulate
+
+
+@pytest.fixture(scope="module")
+def ground():
+    """The ``ground`` preset, seed 0: a drone passing a ground station at 15 and 25 m (learning)
+    and 35 m (testing); the automatic fit chooses SH-5 of candidates up to SH-15."""
+    sim = simulate("ground", seed=0)
+    ds = synchronise(sim.pose_log, sim.signal_log, SyncOptions()).dataset
+    nodes = tuple(sorted(set(ds["tx"]) | set(ds["rx"])))
+    learn = ds[~ds["unit"].str.startswith("test")]
+    units = {u: link_samples(g, nodes=nodes) for u, g in learn.groupby("unit")}
+    fitted, _ = fit_auto(units)
+    return sim, units, fitted
+
+
+def test_the_own_posterior_continues_the_chosen_prior_to_the_largest_order(ground):
+    _, units, fitted = ground
+    model, own = fitted.model, fitted.own_posterior
+    assert own is not None and own.note == ""
+    assert own.basis.n_coef > model.basis.n_coef  # SH-15 against the chosen SH-5
+    assert own.covariance.shape == (2 * own.basis.n_coef,) * 2
+    with_own = decoupling_certificate(model, list(units.values()), posterior=own)
+    chosen_only = decoupling_certificate(model, list(units.values()))
+    for node in model.nodes:
+        # the higher orders add variance; the sphere spread is the model's (capped) either way
+        assert with_own.nodes[node].covered_std_db > 1.5 * chosen_only.nodes[node].covered_std_db
+        assert with_own.nodes[node].sphere_std_db == pytest.approx(chosen_only.nodes[node].sphere_std_db)
+
+
+def test_the_reported_own_spread_matches_the_actual_pattern_error(ground):
+    """Acceptance 5's spread criterion on ``ground`` seed 0 (benchmarks/split.py runs seeds 0-2):
+    measured 1.22 / 1.31 dB (D) and 1.25 / 1.59 dB (G); the model's own SH-5 covariance gave
+    0.58 / 1.31 and 0.58 / 1.59 (ratios 0.44 and 0.37)."""
+    sim, units, fitted = ground
+    model = fitted.model
+    covered = covered_directions(model)
+    errors = pattern_errors_db(model, sim.ground_truth, covered)
+    cert = decoupling_certificate(model, list(units.values()), posterior=fitted.own_posterior)
+    for node, err in errors.items():
+        assert 0.67 <= cert.nodes[node].covered_std_db / err <= 1.5, (node, cert.nodes[node], err)
+
+
+def test_too_many_columns_fall_back_to_the_chosen_order_and_say_so(ground, monkeypatch):
+    _, units, _ = ground
+    monkeypatch.setattr(own_posterior, "MAX_OWN_COLUMNS", 100)
+    fitted, _ = fit_auto(units)
+    own = fitted.own_posterior
+    assert own.basis == fitted.model.basis and "a lower bound" in own.note
+    cert = decoupling_certificate(fitted.model, list(units.values()), posterior=own)
+    assert any("a lower bound" in note for note in cert.notes)
+
+
+def test_the_own_posterior_is_level_free(ground):
+    """A constant added to every RSSI value changes nothing in the own-pattern posterior."""
+    _, units, fitted = ground
+    moved = {u: dataclasses.replace(s, joint_gain_db=s.joint_gain_db + 63.5) for u, s in units.items()}
+    other = fit_auto(moved)[0].own_posterior
+    scale = float(np.max(np.abs(fitted.own_posterior.covariance)))
+    np.testing.assert_allclose(other.covariance, fitted.own_posterior.covariance, rtol=0, atol=1e-6 * scale)
+
+
+def test_fit_stores_the_own_spread_map_and_plot_draws_it(ground):
+    """``certify`` stores the own-pattern std on the coverage grid; ``plot --spread`` draws that
+    map (not the chosen order's smaller covariance) when present."""
+    import copy
+
+    from rplearn.analysis.decoupling import OWN_MAP_POINTS, certify
+    from rplearn.core.bases import fibonacci_grid_nodes
+    from rplearn.viz.plot import _own_std_map
+
+    _, units, fitted = ground
+    model = copy.deepcopy(fitted.model)
+    certify(model, list(units.values()), fitted.own_posterior)
+    stored = model.training["decoupling"]["own_std_db"]
+    for node in model.nodes:
+        az, el = fibonacci_grid_nodes(OWN_MAP_POINTS)
+        assert len(stored[node]) == OWN_MAP_POINTS
+        drawn = _own_std_map(model, node, az, el)
+        np.testing.assert_allclose(drawn, stored[node], atol=1e-12)
+        near = model.coverage_deg(node, az, el) <= 10.0
+        assert near.sum() > 50
+        assert np.mean(drawn[near]) > 1.5 * np.mean(model.standard_error(node, az[near], el[near]))
+    del model.training["decoupling"]["own_std_db"]  # an older model file: the model's covariance
+    node = model.nodes[0]
+    az, el = fibonacci_grid_nodes(64)
+    np.testing.assert_allclose(_own_std_map(model, node, az, el), model.standard_error(node, az, el))
