@@ -272,7 +272,7 @@ def check_types(obj: _T, label: str | None = None) -> _T:
     if inspect.isclass(obj):
         init = obj.__dict__.get("__init__")
         if init is not None and not getattr(init, "__rplearn_checked__", False) and not issubclass(obj, BaseException):
-            setattr(obj, "__init__", _wrap(init, name, skip_first=True))
+            setattr(obj, "__init__", _wrap(init, name, skip_first=True))  # noqa: B010 (mypy: no assigning to a method)
         return obj
     if inspect.isfunction(obj) and not getattr(obj, "__rplearn_checked__", False):
         return typing.cast(_T, _wrap(obj, name, skip_first=False))  # functools.wraps: same signature
