@@ -15,12 +15,14 @@ from typing import Any
 
 import numpy as np
 
+from rplearn._argtypes import check_types
 from rplearn.errors import InputError
 
 #: The legacy text of the default gauge (model files, ``gauge=`` of the scikit-learn estimator).
 EQUAL_MEAN = "equal-mean"
 
 
+@check_types
 @dataclass(frozen=True)
 class Gauge:
     """How a fit fixes the constant a bipartite link graph cannot identify.

@@ -16,53 +16,12 @@ module           public names
 ===============  ===============================================================================
 
 Every name of ``__all__`` can be imported from here (``from rplearn.viz import plot_coverage``);
-its module, and matplotlib, are imported on first use (:mod:`rplearn._lazy`).
+its module, and matplotlib, are imported on first use (``__init__.pyi``, lazy_loader).
 """
 
 from __future__ import annotations
 
-from rplearn._lazy import lazy_exports
+import lazy_loader
 
-_NAMES: dict[str, str] = {
-    # pattern figures
-    "PatternLike": "plot",
-    "coverage_figure": "plot",
-    "pattern_3d_figure": "plot",
-    "pattern_maps_figure": "plot",
-    "plot_coverage": "plot",
-    "plot_pattern_3d": "plot",
-    "plot_pattern_maps": "plot",
-    "plot_spread_maps": "plot",
-    "spread_maps_figure": "plot",
-    "save_figure": "plot",
-    # the paper's charts and swarm links
-    "epsilon_sweep_figure": "charts",
-    "order_sweep_figure": "charts",
-    "plot_epsilon_sweep": "charts",
-    "plot_order_sweep": "charts",
-    "plot_rank_study": "charts",
-    "plot_rssi_time": "charts",
-    "plot_swarm": "charts",
-    "rank_study_figure": "charts",
-    "rssi_time_figure": "charts",
-    # 3-D images
-    "export_pattern_images": "images",
-    # interactive figures (plotly, imported on first use)
-    "InteractiveFigure": "interactive",
-    "pattern_3d_figures": "interactive",
-    "pattern_3d_html": "interactive",
-    "pattern_3d_plotly": "interactive",
-    # pattern surfaces and coverage on a grid
-    "PatternSurface": "plot",
-    "pattern_surface": "plot",
-    "uncovered_directions": "plot",
-    # the HTML report
-    "ReportSection": "report",
-    "ScreenshotError": "report",
-    "render_report_html": "report",
-    "screenshot_report": "report",
-    "write_report": "report",
-}
-
-__all__ = sorted(_NAMES)
-__getattr__, __dir__ = lazy_exports(__name__, _NAMES)
+# The public names are those of __init__.pyi, each imported on first use.
+__getattr__, __dir__, __all__ = lazy_loader.attach_stub(__name__, __file__)

@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from rplearn._argtypes import check_types
 from rplearn.errors import InputError
 
 #: Height of one 3-D figure in the report [px].
@@ -43,6 +44,7 @@ _INT_RADIUS = 30000
 _DOT_LIFT = 1.015
 
 
+@check_types
 @dataclass(frozen=True)
 class InteractiveFigure:
     """An HTML figure for :class:`rplearn.viz.report.ReportSection` (``interactive``).
@@ -113,6 +115,7 @@ def _stipple(far: np.ndarray, el_deg: np.ndarray, step_deg: float) -> tuple[np.n
     return np.concatenate(rows), np.concatenate(cols)
 
 
+@check_types
 def pattern_3d_plotly(
     pattern_like: Any,
     node: str,
@@ -219,6 +222,7 @@ def figure_html(fig: Any, caption: str, height_px: int = FIGURE_HEIGHT_PX) -> In
     return InteractiveFigure(fragment, caption, int(height_px))
 
 
+@check_types
 def pattern_3d_html(
     pattern_like: Any,
     node: str,
@@ -246,6 +250,7 @@ def pattern_3d_html(
     return figure_html(fig, caption)
 
 
+@check_types
 def pattern_3d_figures(
     models: Mapping[str, Any],
     nodes: Sequence[str] | None = None,

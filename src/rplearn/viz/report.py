@@ -36,6 +36,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from rplearn._argtypes import check_types
 from rplearn._atomic import atomic_open
 from rplearn._version import __version__
 from rplearn.errors import InputError, RplearnError
@@ -53,6 +54,7 @@ class ScreenshotError(RplearnError):
     """Chromium is installed but failed to render the report."""
 
 
+@check_types
 @dataclass
 class ReportSection:
     """One section of the report.
@@ -74,7 +76,7 @@ class ReportSection:
 
     title: str
     text: str = ""
-    images: list[str | os.PathLike[str]] = field(default_factory=list)
+    images: Sequence[str | os.PathLike[str]] = field(default_factory=list)
     captions: list[str] | None = None
     interactive: list[InteractiveFigure] = field(default_factory=list)
 
@@ -322,6 +324,7 @@ def _provenance_html(provenance: Mapping[str, Any]) -> str:
     return "<table>" + "".join(rows) + "</table>"
 
 
+@check_types
 def render_report_html(
     title: str,
     table: str | Sequence[Mapping[str, Any]] | None,
@@ -382,6 +385,7 @@ def render_report_html(
     return "\n".join(parts) + "\n"
 
 
+@check_types
 def write_report(
     out_dir: str | os.PathLike[str],
     title: str,
@@ -452,6 +456,7 @@ def estimate_page_height_px(page_html: str, width_px: int = PAGE_WIDTH_PX) -> in
     return int(min(max(h, 800), 30000))
 
 
+@check_types
 def screenshot_report(
     html_path: str | os.PathLike[str],
     png_path: str | os.PathLike[str],

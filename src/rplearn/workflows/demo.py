@@ -6,15 +6,17 @@ import json
 import os
 import time
 from dataclasses import dataclass, field
-from typing import Callable, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Sequence
 
 import numpy as np
 
+from rplearn._argtypes import check_types
 from rplearn._atomic import atomic_open
 from rplearn.core.metrics import Scores
 from rplearn.io.files import write_table
 from rplearn.models.fit import FittedModel, evaluate_models, fit_model, scores_markdown
 from rplearn.data.units import samples_of
+from rplearn.models.patterns import PatternSet
 from rplearn.models.spec import ModelSpec
 
 from rplearn.analysis.identifiability import IdentifiabilityStudy, identifiability_study
@@ -22,12 +24,19 @@ from rplearn.analysis.pattern_error import node_directions, pattern_errors_db
 from rplearn.analysis.sweep import SweepResult, no_progress, order_sweep
 from rplearn.io.files import provenance
 
+if TYPE_CHECKING:
+    import pandas as pd
+
+    from rplearn.data.tables import LinkSamples
+    from rplearn.sim.flight import SimulationResult
+
 Progress = Callable[[str], None]
 
 
 DEMO_MODELS = ("m", "nn-400", "sh-10", "p-12", "bg-7")
 
 
+@check_types
 @dataclass
 class DemoResult:
     """Everything the demo measured and wrote."""
@@ -62,6 +71,7 @@ class DemoResult:
         return "\n".join(lines)
 
 
+@check_types
 def run_demo(
     out_dir: str = "rplearn-demo",
     seed: int = 0,
@@ -120,7 +130,7 @@ def run_demo(
     for node, (az, el) in node_directions(test).items():
         covered[node] = (np.concatenate([covered[node][0], az]), np.concatenate([covered[node][1], el]))
     perr = {
-        f.label: pattern_errors_db(f.model, sim.ground_truth, covered) for f in fitted if f.model.kind == "patterns"
+        f.label: pattern_errors_db(f.model, sim.ground_truth, covered) for f in fitted if isinstance(f.model, PatternSet)
     }
     extra = {label: {f"pattern err {n}/dB": v for n, v in errs.items()} for label, errs in perr.items()}
     md = scores_markdown(table, extra)
@@ -167,7 +177,8 @@ def run_demo(
     return result
 
 
-def _demo_figures_and_report(result, sim, dataset, learn, test, fitted, prov) -> dict[str, str]:
+def _demo_figures_and_report(result: DemoResult, sim: SimulationResult, dataset: pd.DataFrame, learn: LinkSamples,
+                             test: LinkSamples, fitted: list[FittedModel], prov: dict[str, Any]) -> dict[str, str]:
     from rplearn.viz import charts, plot
     from rplearn.viz.interactive import pattern_3d_figures
     from rplearn.viz.report import ReportSection, write_report
@@ -178,7 +189,7 @@ def _demo_figures_and_report(result, sim, dataset, learn, test, fitted, prov) ->
     files: dict[str, str] = {}
     learn_dirs = node_directions(learn)
     test_dirs = node_directions(test)
-    pattern_models = {f.label: f.model for f in fitted if f.model.kind == "patterns"}
+    pattern_models = {f.label: f.model for f in fitted if isinstance(f.model, PatternSet)}
     files["fig_patterns"] = plot.plot_pattern_maps(
         pattern_models, sim.ground_truth, list(learn.nodes), learn_dirs, os.path.join(fig_dir, "patterns.png"), center=True
     )

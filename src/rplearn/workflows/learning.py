@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any, Callable, Sequence
 import numpy as np
 import pandas as pd
 
+from rplearn._argtypes import check_types
 from rplearn._atomic import atomic_open
 from rplearn.analysis.budget import check_dataset_budget
 from rplearn.analysis.decoupling import certify
@@ -38,6 +39,7 @@ from rplearn.workflows.fleet import (
 from rplearn.models.fit import FittedModel, evaluate_models, fit_model, scores_markdown, scores_of_predictions
 from rplearn.models.load import load_model, load_priors
 from rplearn.models.options import FitOptions
+from rplearn.models.patterns import PatternSet
 from rplearn.models.spec import ModelSpec, check_model_size
 from rplearn.models.robust import downweighted_notes, fit_huber
 from rplearn.models.streamed import checked, fit_patterns_accumulated, weighted_median
@@ -55,6 +57,7 @@ def no_progress(message: str) -> None:
     """The default progress callback: says nothing."""
 
 
+@check_types
 @dataclass
 class FitOutcome:
     """A model learned from a dataset file.
@@ -132,6 +135,7 @@ class FitOutcome:
         return list(self.fitted.model.training.warnings or ())
 
 
+@check_types
 def fit_dataset(
     dataset: str,
     spec: ModelSpec,
@@ -223,7 +227,7 @@ def _fit_auto(
 ) -> FitOutcome:
     """:func:`fit_dataset` with ``auto=True`` on a dataset in memory: samples per learning unit."""
     from rplearn.models.auto import fit_auto
-    learn = choice.units if choice.units is not None else (dataset_units(df) or [None])
+    learn: list[str | None] = list(choice.units) if choice.units is not None else (list(dataset_units(df)) or [None])
     part = select_units(df, choice.units, dataset)
     nodes = sorted(set(part["tx"].astype(str)) | set(part["rx"].astype(str)))
     if len(learn) == 1:  # one flight: cross-validate over contiguous stretches of it, not samples
@@ -276,12 +280,13 @@ def _fit_streamed(
     check_model_size(spec, n, len(nodes))
     t0 = time.perf_counter()
     if auto:
-        learn = choice.units or dataset_units(index) or [None]
+        learn: list[str | None] = [*(choice.units or dataset_units(index) or [])] or [None]
         stretches = Stretches.of_times(learning_times(parts, choice.units, client), TIME_UNITS, learn[0]) if len(learn) == 1 else None
         acc = checked(accumulate_parts(parts, spec, nodes, choice.units, options, stretches, client, progress), dataset)
         prov = provenance(dataset=dataset, model=f"{spec.kind}-auto", ridge=spec.ridge, units=choice.units)
         fitted, selection = fit_from_statistics(acc.stats, spec, orders, nodes, options,
                                                 frequency_hz=weighted_median(acc.freq), provenance=prov)
+        assert isinstance(fitted.model, PatternSet)  # fit_from_statistics learns patterns
         fitted.model.training = fitted.model.training.replace(coverage_deg=acc.grids or {})
         certify(fitted.model, None, fitted.own_posterior)  # the spreads alone: the pairs of directions were streamed, not kept
         if output:
@@ -299,6 +304,7 @@ def _fit_streamed(
     return FitOutcome(fitted, choice, fit.n_samples, output, fit.non_unit_quaternions, wall_s=time.perf_counter() - t0)
 
 
+@check_types
 @dataclass
 class EvaluationOutcome:
     """Table I of some models on a dataset.
@@ -322,6 +328,7 @@ class EvaluationOutcome:
         return {"provenance": self.provenance, "rows": [r.to_dict() for r in self.rows]}
 
 
+@check_types
 def evaluate_model_files(
     model_paths: Sequence[str],
     dataset: str,
@@ -385,6 +392,7 @@ def evaluate_model_files(
     return outcome
 
 
+@check_types
 def predict_file(model_path: str, dataset: str, output: str) -> DatasetPrediction:
     """Predict every row of a dataset of poses and write it with the predictions (``rplearn predict``).
 
@@ -398,6 +406,7 @@ def predict_file(model_path: str, dataset: str, output: str) -> DatasetPredictio
     return prediction
 
 
+@check_types
 def sweep_dataset(
     dataset: str,
     kind: str,
@@ -448,6 +457,7 @@ def sweep_dataset(
 REPORT_FILES: tuple[str, ...] = ("coverage.png", "patterns.png", "report.html")
 
 
+@check_types
 @dataclass
 class ReportOutcome:
     """Models learned and tested on a dataset, and the report written."""
@@ -461,6 +471,7 @@ class ReportOutcome:
     notes: list[str] = field(default_factory=list)
 
 
+@check_types
 def learn_and_report(
     dataset: str,
     models: Sequence[str],
@@ -506,7 +517,7 @@ def learn_and_report(
     for line in left_out:
         progress(line)
     md = scores_markdown(rows)
-    patterns = {f.label: f.model for f in fitted if f.model.kind == "patterns"}
+    patterns = {f.label: f.model for f in fitted if isinstance(f.model, PatternSet)}
     images = [plot.plot_coverage(node_directions(ls), node_directions(ts), os.path.join(out_dir, "coverage.png"))]
     if patterns:
         images.append(

@@ -8,6 +8,7 @@ import os
 from dataclasses import dataclass
 from typing import Mapping, Sequence
 
+from rplearn._argtypes import check_types
 from rplearn.analysis.headings import OrientationResult, best_yaw
 from rplearn.errors import InputError
 from rplearn.io.export import export_grid
@@ -26,6 +27,7 @@ PAPER_LEARNING_PSI0_DEG: tuple[float, ...] = (0.0, 24.0, 48.0)
 PAPER_TESTING_PSI0_DEG: tuple[float, ...] = (36.0,)
 
 
+@check_types
 @dataclass
 class CampaignPlan:
     """A planned campaign, what each unit asks of the drones, the references written and the
@@ -37,6 +39,7 @@ class CampaignPlan:
     check: PlanCheck | None = None
 
 
+@check_types
 def plan_campaign(
     out_dir: str,
     learning_psi0_deg: Sequence[float] = PAPER_LEARNING_PSI0_DEG,
@@ -70,6 +73,7 @@ def plan_campaign(
     return CampaignPlan(campaign, units, paths, check)
 
 
+@check_types
 def export_model_file(
     model_path: str, fmt: str, output: str, step_deg: float = 5.0, frequency_hz: float | None = None
 ) -> list[str]:
@@ -95,6 +99,7 @@ def export_model_file(
     return export_pattern_images(model, output)
 
 
+@check_types
 def orient_link(model_path: str, tx_node: str, rx_node: str, **options: object) -> OrientationResult:
     """Heading(s) that maximise one link of a model file (``rplearn orient``); ``options`` go
     to :func:`rplearn.analysis.headings.best_yaw`."""
@@ -103,6 +108,7 @@ def orient_link(model_path: str, tx_node: str, rx_node: str, **options: object) 
     return best_yaw(model, tx_node, rx_node, **options)  # type: ignore[arg-type]
 
 
+@check_types
 def reference_model_file(
     patterns: Mapping[str, str], output: str, mounts: Mapping[str, Sequence[float]] | None = None
 ) -> PatternSet:
@@ -126,6 +132,7 @@ def reference_model_file(
     return model
 
 
+@check_types
 def draw_pattern_files(
     model_paths: Sequence[str], output: str, truth: str | None = None, dataset: str | None = None,
     spread: str | None = None,
@@ -146,7 +153,7 @@ def draw_pattern_files(
     models = {}
     for path in model_paths:
         model = load_model(path)
-        if model.kind != "patterns":
+        if not isinstance(model, PatternSet):
             raise InputError(f"{path}: a {model.kind} baseline has no per-node pattern to draw", param="model_paths")
         models[model.label] = model
     gt = load_ground_truth(truth) if truth else None
