@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import os
 import time
 from dataclasses import dataclass, field
@@ -10,7 +9,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from rplearn._atomic import atomic_open
+from rplearn._atomic import atomic_open, dump_json
 from rplearn.core.metrics import Scores
 from rplearn.io.files import write_table
 from rplearn.models.fit import FittedModel, evaluate_models, fit_model, scores_markdown
@@ -135,7 +134,7 @@ def run_demo(
         fh.write(md + "\n")
     files["table_json"] = os.path.join(out_dir, "table1.json")
     with atomic_open(files["table_json"], "w", encoding="utf-8") as fh:
-        json.dump(
+        dump_json(
             {"provenance": prov, "rows": [r.to_dict() for r in table], "pattern_error_db": perr, "noise_std_db": sim.noise_std_db},
             fh,
             indent=1,
@@ -145,7 +144,7 @@ def run_demo(
     write_table(sweep.to_frame(), files["sweep_csv"])
     files["identifiability_json"] = os.path.join(out_dir, "identifiability.json")
     with atomic_open(files["identifiability_json"], "w", encoding="utf-8") as fh:
-        json.dump({"provenance": prov, **study.to_dict()}, fh, indent=1)
+        dump_json({"provenance": prov, **study.to_dict()}, fh, indent=1)
 
     result = DemoResult(
         out_dir=out_dir,
