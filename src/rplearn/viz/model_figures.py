@@ -62,6 +62,7 @@ def prediction_time_figure(
     held_out: Sequence[str],
     quantity: str = "RSSI / dBm",
     max_panels: int = MAX_TIME_PANELS,
+    links: Sequence[str] | None = None,
 ) -> Figure:
     """Measured and predicted RSSI (or joint gain) over time, one panel per unit.
 
@@ -78,12 +79,18 @@ def prediction_time_figure(
         Unit (flight or stretch of time) of each sample.
     held_out : sequence of str
         The units the model did not learn from (drawn in red, the others in blue).
+    links : sequence of str, optional
+        Link direction of each sample (``"A->B"``): one prediction line and band per direction
+        (the two directions of a link may differ by an electronics offset).
     """
     t, y, p = _arrays(t_s, measured_dbm, predicted_dbm, names=("t_s", "measured", "predicted"))
     s = None if spread_db is None else _arrays(spread_db, t_s, names=("spread", "t_s"))[0]
     u = np.asarray([str(v) for v in units])
     if u.size != t.size:
         raise InputError(f"units: expected one label per sample ({t.size}), got {u.size}")
+    link = np.asarray([""] * u.size if links is None else [str(v) for v in links])
+    if link.size != t.size:
+        raise InputError(f"links: expected one label per sample ({t.size}), got {link.size}")
     shown = panel_units(list(u), held_out, max_panels)
     test = set(map(str, held_out))
     fig = _new_figure(11.0, 2.1 * len(shown) + 0.9)
@@ -95,18 +102,23 @@ def prediction_time_figure(
         role = "held out" if unit in test else "learning"
         title = f"{unit} ({role}, {sel.size:,} samples)"
         if s is not None:
-            lo, hi = p[sel] - Z90 * s[sel], p[sel] + Z90 * s[sel]
-            ax.fill_between(t[sel], lo, hi, color="0.6", alpha=0.35, lw=0, label="90 % band of a new packet")
-            inside = float(np.mean((y[sel] >= lo) & (y[sel] <= hi)))
+            inside = float(np.mean(np.abs(y[sel] - p[sel]) <= Z90 * s[sel]))
             title += f"; {inside:.0%} of the measured values inside the 90 % band"
         pick = sel[_subsample(sel.size, 6000)]
         ax.scatter(t[pick], y[pick], s=_dot_size(pick.size, 1.0, 6.0), color=colour, alpha=0.6, lw=0,
-                   label=f"measured ({role})", rasterized=True)
-        ax.plot(t[sel], p[sel], color="k", lw=0.8, label="predicted")
+                   label=f"measured ({role})", rasterized=True, zorder=3)
+        names = link[sel]
+        for k, name in enumerate(dict.fromkeys(names.tolist())):
+            one = sel[names == name]
+            tag = f" {name}" if name else ""
+            if s is not None:
+                ax.fill_between(t[one], p[one] - Z90 * s[one], p[one] + Z90 * s[one], color=f"{0.55 + 0.15 * (k % 2):.2f}",
+                                alpha=0.3, lw=0, label=f"90 % band{tag}")
+            ax.plot(t[one], p[one], color="k", lw=0.9, ls=("-", "--", ":", "-.")[k % 4], label=f"predicted{tag}", zorder=4)
         ax.set_title(title, fontsize=9, loc="left")
         ax.set_ylabel(quantity, fontsize=8)
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=7, loc="upper right", ncols=3)
+        ax.legend(fontsize=7, loc="upper right", ncols=5)
     axes[-1].set_xlabel("time since the log start / s")
     omitted = len(set(u.tolist())) - len(shown)
     fig.suptitle("Measured and predicted over time" + (f" ({omitted} more units not drawn)" if omitted else ""))
@@ -235,7 +247,7 @@ def polar_cuts_figure(model: Any, nodes: Sequence[str] | None = None, label: str
     if not nodes:
         raise InputError("nodes: nothing to draw")
     az = np.radians(np.linspace(-180.0, 180.0, 361))
-    fig = _new_figure(4.6 * len(nodes) + 0.4, 5.2)
+    fig = _new_figure(4.6 * len(nodes) + 0.4, 6.0)
     cuts = []
     for n in nodes:
         best = best_covered_elevation_deg(model, n)
@@ -250,7 +262,7 @@ def polar_cuts_figure(model: Any, nodes: Sequence[str] | None = None, label: str
         ax.set_theta_zero_location("N")
         ax.set_theta_direction(1)
         for (el, g, s, covered), colour in zip(node_cuts, ("tab:blue", "tab:orange")):
-            name = f"el {el:+.0f} deg" + (" (best covered)" if el != 0.0 else "")
+            name = "0 deg elevation" if el == 0.0 else "best-covered elevation"
             if s is not None:
                 ax.fill_between(az, np.clip(g - Z90 * s, floor, None), np.clip(g + Z90 * s, floor, None),
                                 color=colour, alpha=0.2, lw=0)
@@ -261,10 +273,14 @@ def polar_cuts_figure(model: Any, nodes: Sequence[str] | None = None, label: str
                 ax.plot(az, np.where(covered, shown, np.nan), color=colour, lw=1.8, label=f"{name}, covered")
                 ax.plot(az, np.where(covered, np.nan, shown), color=colour, lw=1.0, ls=":", label=f"{name}, not covered")
         ax.set_rlim(floor, top)
-        ax.set_title(f"{label + ': ' if label else ''}node {n}", fontsize=10)
+        best = [el for el, *_ in node_cuts if el != 0.0]
+        ax.set_title(f"{label + ': ' if label else ''}node {n}"
+                     + (f"\nbest-covered elevation {best[0]:+.0f} deg" if best else ""), fontsize=10)
         ax.tick_params(labelsize=7)
-        ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.06), ncols=2)
-    fig.suptitle("Azimuth cuts of each pattern / dBi (band: 90 % of its own spread)")
+        if k == 0:
+            handles, labels = ax.get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncols=2, fontsize=8)
+    fig.suptitle("Azimuth cuts of each pattern / dBi (0 deg forward, 90 deg left; band: 90 % of its own spread)")
     return fig
 
 

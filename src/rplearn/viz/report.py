@@ -389,6 +389,7 @@ def write_report(
     sections: Sequence[ReportSection],
     provenance: Mapping[str, Any],
     filename: str = "report.html",
+    table_title: str = "Table I: performance of the learned models on the testing samples",
 ) -> str:
     """Write one self-contained HTML report and return its path.
 
@@ -405,13 +406,16 @@ def write_report(
     provenance : mapping
         Version, command, parameters, seed... shown in the footer (``version`` defaults to
         the library's).
+    filename : str
+    table_title : str
+        Heading of the table.
 
     Returns
     -------
     str
         Path of ``<out_dir>/<filename>``.
     """
-    page = render_report_html(title, table_markdown, sections, provenance)
+    page = render_report_html(title, table_markdown, sections, provenance, table_title)
     out = Path(os.fspath(out_dir))
     out.mkdir(parents=True, exist_ok=True)
     path = out / filename

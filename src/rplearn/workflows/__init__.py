@@ -1,7 +1,8 @@
 """Pipelines that the command line, the report and the tests share.
 
 - :mod:`~rplearn.workflows.logs`: logs -> matched dataset; a swarm's links and headings.
-- :mod:`~rplearn.workflows.learning`: fit, evaluate, predict, sweep, learn-and-report on files.
+- :mod:`~rplearn.workflows.learning`: fit, evaluate, predict, sweep on files.
+- :mod:`~rplearn.workflows.report`: the report about one model (and the paper's Table I on request).
 - :mod:`~rplearn.workflows.demo`: the paper's whole evaluation on a simulated campaign.
 """
 
@@ -15,11 +16,12 @@ _NAMES: dict[str, str] = {
     "run_demo": "demo",
     "EvaluationOutcome": "learning",
     "FitOutcome": "learning",
-    "ReportOutcome": "learning",
+    "ReportOutcome": "report",
+    "PAPER_MODELS": "report",
     "draw_pattern_files": "planning",
     "evaluate_model_files": "learning",
     "fit_dataset": "learning",
-    "learn_and_report": "learning",
+    "learn_and_report": "report",
     "predict_file": "learning",
     "sweep_dataset": "learning",
     "CampaignPlan": "planning",

@@ -1,4 +1,4 @@
-"""Learning pipelines on dataset files: fit, evaluate, predict, sweep and learn-and-report.
+"""Learning pipelines on dataset files: fit, evaluate, predict and sweep (the report: :mod:`rplearn.workflows.report`).
 
 Each reads its inputs, applies the one unit rule of :mod:`rplearn.data.units`, calls the
 library and returns a result object with the notes a user should read; the command line only
@@ -492,82 +492,3 @@ def sweep_dataset(
                          validation_rmse_db=result.validation_rmse_db,
                          chosen=None if result.selection is None else (result.selection.order, result.selection.smoothing))
     return result
-
-
-#: Files :func:`learn_and_report` writes into its folder.
-REPORT_FILES: tuple[str, ...] = ("coverage.png", "patterns.png", "report.html")
-
-
-@dataclass
-class ReportOutcome:
-    """Models learned and tested on a dataset, and the report written."""
-
-    fitted: list[FittedModel]
-    rows: list[Scores]
-    markdown: str
-    learn_units: list[str]
-    test_units: list[str]
-    report_path: str
-    notes: list[str] = field(default_factory=list)
-
-
-def learn_and_report(
-    dataset: str,
-    models: Sequence[str],
-    out_dir: str,
-    test_units: Sequence[str] | None = None,
-    progress: Progress = no_progress,
-    path_loss: PathLoss | None = None,
-    link_offsets: bool = True,
-) -> ReportOutcome:
-    """Learn models on a dataset's learning units (by time without units), test them, and write Table I,
-    coverage and pattern maps (also in 3-D) into ``out_dir/report.html`` (``rplearn report``). Pattern
-    models learn with ``path_loss`` and the link offsets (:func:`fit_dataset`), the baselines per directed
-    link in free space; a model the data cannot identify is a note, the others still go."""
-    from rplearn.viz import interactive, plot
-    from rplearn.viz.report import ReportSection, write_report
-
-    if not models:
-        raise InputError("models: give at least one model, e.g. m,sh-10", param="models")
-    specs = [ModelSpec.parse(name) for name in models]  # refuse a bad name before writing anything
-    for name in REPORT_FILES:  # the report's own files may not overwrite its dataset
-        if os.path.lexists(os.path.join(out_dir, name)):
-            check_output_path(os.path.join(out_dir, name), [dataset])
-    df, unit_note = time_units(read_dataset(dataset), source=dataset)
-    learn, test = split_units(df, None, test_units, dataset)
-    ls = samples_of(df, learn, dataset)
-    ts = samples_of(df, test, dataset, nodes=ls.nodes)
-    prov = provenance(dataset=dataset, models=",".join(models), test_units=test)
-    fitted, failed = [], []
-    for spec in specs:
-        progress(f"learning {spec.label}")
-        terms = {"path_loss": path_loss, "link_offsets": link_offsets} if spec.decouples else {}
-        try:
-            fitted.append(fit_model(ls, spec, provenance=prov, **terms))
-        except (InputError, IdentifiabilityError) as exc:  # too few samples for this model: the others still go
-            failed.append(f"{spec.label} not learned: {exc}")
-    if not fitted:
-        raise InputError(f"{dataset}: none of the models could be learned ({'; '.join(failed)})", param="models")
-    os.makedirs(out_dir, exist_ok=True)
-    notes = ([unit_note] if unit_note else []) + failed
-    left_out: list[str] = []
-    rows = evaluate_models(fitted, ts, left_out)
-    for line in left_out:
-        progress(line)
-    md = scores_markdown(rows)
-    patterns = {f.label: f.model for f in fitted if f.model.kind == "patterns"}
-    images = [plot.plot_coverage(node_directions(ls), node_directions(ts), os.path.join(out_dir, "coverage.png"))]
-    if patterns:
-        images.append(
-            plot.plot_pattern_maps(patterns, None, list(ls.nodes), node_directions(ls), os.path.join(out_dir, "patterns.png"))
-        )
-    views_3d, text_3d = interactive.pattern_3d_figures(patterns, list(ls.nodes))
-    sections = [ReportSection("Patterns and coverage", text_3d, images, interactive=views_3d)]
-    lines = [f"- {label}: {line}" for label, m in patterns.items() for line in terms_text(m.training)]
-    if lines:
-        sections.append(ReportSection("Path loss and link offsets", "\n".join(lines), []))
-    if notes:
-        sections.insert(0, ReportSection("Notes", "\n".join(f"- {line}" for line in notes), []))
-    path = write_report(out_dir, f"rplearn report: {os.path.basename(dataset)}", md, sections, prov)
-    return ReportOutcome(fitted, rows, md, learn, test, path, notes)
-
