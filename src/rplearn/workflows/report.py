@@ -41,7 +41,7 @@ LTD_REPEATS = 5
 #: Files :func:`learn_and_report` may write into its folder.
 REPORT_FILES: tuple[str, ...] = (
     "coverage.png", "patterns.png", "time.png", "residuals.png", "polar.png", "spread.png", "table1.md", "table1.json",
-    "report.html",
+    "model.json", "report.html",
 )
 
 
@@ -182,7 +182,7 @@ def learn_and_report(
         Output folder (created).
     model_path : str, optional
         The model to report on; default the cross-validated SH model learned here on the
-        learning units (as ``rplearn fit``, order ``auto``).
+        learning units (as ``rplearn fit``, order ``auto``), written to ``out_dir/model.json``.
     paper_models : sequence of str
         Also the paper's Table I of these models (``paper`` = :data:`PAPER_MODELS`, ``auto`` the
         cross-validated model), learned on the same units, each ``repeats`` times.
@@ -221,6 +221,9 @@ def learn_and_report(
     rows = evaluate_models([fitted], ts)
     os.makedirs(out_dir, exist_ok=True)
     files: dict[str, str] = {}
+    if not model_path:  # the model reported on, for predict, evaluate, plot
+        files["model"] = os.path.join(out_dir, "model.json")
+        model.save(files["model"])
     paper_rows: list[Scores] = []
     paper_md = ""
     if names:
