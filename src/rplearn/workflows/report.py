@@ -121,6 +121,21 @@ def _default_model(dataset: str, learn: Sequence[str], path_loss: PathLoss | Non
     return outcome.fitted, outcome.summary()
 
 
+def _held_out_notes(model: Any, model_path: str, test: Sequence[str]) -> list[str]:
+    """What a given model's provenance says about the held-out units: learned from them, or unknown."""
+    from rplearn.data.units import trained_units
+
+    learned = trained_units([model.provenance])
+    seen = [u for u in test if u in learned]
+    if seen:
+        return [f"{model_path} learned from {', '.join(seen)} too: its scores there are not held out (choose "
+                "--test-units among the units it did not learn from)"]
+    if not learned:
+        return [f"{model_path} does not record its learning units (learned from the whole dataset?): its scores on "
+                f"{', '.join(test)} may not be held out (fit --units ... learns without them)"]
+    return []
+
+
 def median_ltd(runs: Sequence[FittedModel]) -> FittedModel:
     """The first run with its learning time replaced by the median over ``runs`` [s]."""
     return replace(runs[0], ltd_s=float(np.median([r.ltd_s for r in runs])))
@@ -210,6 +225,7 @@ def learn_and_report(
     if model_path:
         model = load_model(model_path)
         fitted, model_text = FittedModel.from_model(model), f"{model.label} from {model_path}"
+        notes += _held_out_notes(model, model_path, test)
     else:
         progress("learning the cross-validated model (as rplearn fit does by default)")
         fitted, model_text = _default_model(dataset, learn, path_loss, link_offsets)
