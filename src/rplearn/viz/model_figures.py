@@ -214,13 +214,13 @@ def plot_residuals(path: str | os.PathLike[str], *args: Any, **kwargs: Any) -> s
     return save_figure(residuals_figure(*args, **kwargs), path, caption)
 
 
-def best_covered_elevation_deg(model: Any, node: str, candidates_deg: ArrayLike = np.arange(-60.0, 61.0, 5.0),
-                               az_deg: ArrayLike = np.arange(-180.0, 180.0, 2.0)) -> float | None:
-    """The elevation [deg] whose azimuth cut the flight covered most (within :data:`COVERED_DEG`
-    of a learning direction); None for a model that stores no coverage."""
-    az = np.radians(np.asarray(az_deg, np.float64))
+def best_covered_elevation_deg(model: Any, node: str, step_deg: float = 5.0, max_abs_deg: float = 60.0) -> float | None:
+    """The elevation [deg] (a multiple of ``step_deg`` within +-``max_abs_deg``) whose azimuth cut
+    the flight covered most (within :data:`COVERED_DEG` of a learning direction); None for a model
+    that stores no coverage."""
+    az = np.radians(np.arange(-180.0, 180.0, 2.0))
     best, share = None, -1.0
-    for el in np.asarray(candidates_deg, np.float64):
+    for el in np.arange(-max_abs_deg, max_abs_deg + step_deg / 2, step_deg):
         c = model.coverage_deg(node, az, np.full(az.shape, np.radians(el)))
         if c is None:
             return None

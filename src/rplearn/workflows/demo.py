@@ -20,6 +20,7 @@ from rplearn.analysis.identifiability import IdentifiabilityStudy, identifiabili
 from rplearn.analysis.pattern_error import node_directions, pattern_errors_db
 from rplearn.analysis.sweep import SweepResult, no_progress, order_sweep
 from rplearn.io.files import provenance
+from rplearn.workflows.report import LTD_REPEATS, median_ltd
 
 Progress = Callable[[str], None]
 
@@ -107,8 +108,8 @@ def run_demo(
     os.makedirs(models_dir, exist_ok=True)
     for name in models:
         spec = ModelSpec.parse(name)
-        progress(f"learning {spec.label} on {len(learn):,} samples")
-        f = fit_model(learn, spec, provenance=prov)
+        progress(f"learning {spec.label} on {len(learn):,} samples ({LTD_REPEATS} runs: LTD is their median)")
+        f = median_ltd([fit_model(learn, spec, provenance=prov) for _ in range(LTD_REPEATS)])
         fitted.append(f)
         path = os.path.join(models_dir, f"{spec.label}.json")
         f.model.save(path)

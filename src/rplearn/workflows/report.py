@@ -13,8 +13,9 @@ maps and the 3-D surfaces (faded where the flight never looked). The paper's fix
 from __future__ import annotations
 
 import os
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
-from typing import Any, Callable, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -208,7 +209,7 @@ def learn_and_report(
     repeats : int
         Learning runs per Table I model.
     """
-    from rplearn.viz import interactive, plot
+    from rplearn.viz import interactive
     from rplearn.viz.report import ReportSection, write_report
 
     names = paper_model_names(paper_models)  # refuse a bad name before any work
