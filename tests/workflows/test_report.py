@@ -70,6 +70,19 @@ def test_report_fits_the_cross_validated_model_fit_learns_and_draws_its_figures(
 def test_report_on_a_given_model_file_writes_no_model(no_units, sh3, tmp_path):
     out = learn_and_report(no_units, str(tmp_path / "rep"), model_path=sh3)
     assert out.fitted.label == "SH-3" and "model" not in out.files
+    assert f"model: SH-3, from {sh3}; scored on the held-out test[5/5]" in out.summary()
+    assert not any("may not be held out" in n or "not held out" in n for n in out.notes)  # sh3 records its units
+    whole = str(tmp_path / "whole.json")
+    from rplearn.models.spec import ModelSpec
+    from rplearn.workflows.learning import fit_dataset
+
+    fit_dataset(no_units, ModelSpec.parse("sh-3"), output=whole)
+    again = learn_and_report(no_units, str(tmp_path / "rep_whole"), model_path=whole)
+    assert any("does not record its learning units" in n for n in again.notes)
+    seen = str(tmp_path / "seen.json")
+    fit_dataset(no_units, ModelSpec.parse("sh-3"), units=["flight[1/5]", "test[5/5]"], output=seen)
+    assert any("learned from test[5/5] too" in n
+               for n in learn_and_report(no_units, str(tmp_path / "rep_seen"), model_path=seen).notes)
     assert not (tmp_path / "rep" / "model.json").exists()
     with pytest.raises(InputError, match="same file|input"):
         learn_and_report(no_units, str(tmp_path / "rep"), model_path=str(tmp_path / "rep" / "report.html"))

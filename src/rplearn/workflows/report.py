@@ -87,6 +87,10 @@ class ReportOutcome:
     notes : list of str
     files : dict of str
         What was written, by name.
+    model_text : str
+        How the model was learned (the fit's summary), or where it came from.
+    model_path : str or None
+        The model file reported on (None: fitted here).
     """
 
     fitted: FittedModel
@@ -101,14 +105,16 @@ class ReportOutcome:
     notes: list[str] = field(default_factory=list)
     files: dict[str, str] = field(default_factory=dict)
     model_text: str = ""
+    model_path: str | None = None
 
     def summary(self) -> str:
         """The log start (once), the model's held-out scores, Table I when asked, where the report is."""
         start = f"t = {self.log_start_s:.3f} s"
         lines = [] if any(start in n for n in self.notes) else [
             f"log start {start} (log time); times in the report are relative to it"]
-        lines += [f"model: {self.fitted.label}, learned on {', '.join(self.learn_units)}; "
-                 f"scored on the held-out {', '.join(self.test_units)}:", self.markdown]
+        origin = f"from {self.model_path}" if self.model_path else f"learned on {', '.join(self.learn_units)}"
+        lines += [f"model: {self.fitted.label}, {origin}; scored on the held-out {', '.join(self.test_units)}:",
+                  self.markdown]
         if self.paper_markdown:
             lines += ["Table I, the paper's models (learning time LTD: median of the runs):", self.paper_markdown]
         lines.append(f"wrote {self.report_path}")
@@ -262,7 +268,8 @@ def learn_and_report(
     if views_3d:
         sections.append(ReportSection("The patterns in 3-D", text_3d, [], interactive=views_3d))
     lines = [f"- {line}" for line in terms_text(model.training)] if model.kind == "patterns" else []
-    about = (f"{fitted.label}, learned on {', '.join(learn)} and scored on the held-out {', '.join(test)}. "
+    origin = f"from {model_path}" if model_path else f"learned on {', '.join(learn)}"
+    about = (f"{fitted.label}, {origin}, scored on the held-out {', '.join(test)}. "
              f"Times are seconds after the log start, t = {t0:.3f} s.\n\n```\n{model_text}\n```")
     sections.insert(0, ReportSection("The model", about + ("\n\n" + "\n".join(lines) if lines else ""), []))
     if paper_md:
@@ -276,7 +283,8 @@ def learn_and_report(
     path = write_report(out_dir, f"rplearn report: {os.path.basename(dataset)}", md, sections, prov,
                         table_title=f"{fitted.label} on the held-out samples")
     files["report"] = path
-    return ReportOutcome(fitted, rows, md, paper_rows, paper_md, learn, test, path, t0, notes, files, model_text)
+    return ReportOutcome(fitted, rows, md, paper_rows, paper_md, learn, test, path, t0, notes, files, model_text,
+                         model_path)
 
 
 def _figure_sections(df: Any, learn: Sequence[str], test: Sequence[str], model: Any, label: str, nodes: list[str],
