@@ -258,7 +258,7 @@ def polar_cuts_figure(model: Any, nodes: Sequence[str] | None = None, label: str
     top = float(np.nanmax(tops)) + 1.0
     floor = max(float(np.nanmin(values)), top - 40.0) - 1.0
     for k, (n, node_cuts) in enumerate(zip(nodes, cuts)):
-        ax = fig.add_subplot(1, len(nodes), k + 1, projection="polar")
+        ax: Any = fig.add_subplot(1, len(nodes), k + 1, projection="polar")
         ax.set_theta_zero_location("N")
         ax.set_theta_direction(1)
         for (el, g, s, covered), colour in zip(node_cuts, ("tab:blue", "tab:orange")):
@@ -273,9 +273,9 @@ def polar_cuts_figure(model: Any, nodes: Sequence[str] | None = None, label: str
                 ax.plot(az, np.where(covered, shown, np.nan), color=colour, lw=1.8, label=f"{name}, covered")
                 ax.plot(az, np.where(covered, np.nan, shown), color=colour, lw=1.0, ls=":", label=f"{name}, not covered")
         ax.set_rlim(floor, top)
-        best = [el for el, *_ in node_cuts if el != 0.0]
+        others = [el for el, *_ in node_cuts if el != 0.0]
         ax.set_title(f"{label + ': ' if label else ''}node {n}"
-                     + (f"\nbest-covered elevation {best[0]:+.0f} deg" if best else ""), fontsize=10)
+                     + (f"\nbest-covered elevation {others[0]:+.0f} deg" if others else ""), fontsize=10)
         ax.tick_params(labelsize=7)
         if k == 0:
             handles, labels = ax.get_legend_handles_labels()

@@ -312,7 +312,7 @@ def _figure_sections(df: Any, learn: Sequence[str], test: Sequence[str], model: 
         (np.degrees(d.el_tx), np.degrees(d.el_rx)), (np.degrees(d.az_tx), np.degrees(d.az_rx)), held_out)
     sections = [ReportSection("Measured and predicted", "", [files["time"], files["residuals"]])]
     files["coverage"] = plot.plot_coverage(node_directions(ls), node_directions(ts), os.path.join(out_dir, "coverage.png"))
-    images = [files["coverage"]]
+    images: list[str | os.PathLike[str]] = [files["coverage"]]
     if model.kind == "patterns":
         files["polar"] = mf.plot_polar_cuts(model, os.path.join(out_dir, "polar.png"), nodes, label)
         files["patterns"] = plot.plot_pattern_maps({label: model}, None, nodes, node_directions(ls),
