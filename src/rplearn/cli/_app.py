@@ -54,7 +54,7 @@ PARAM_FLAGS: dict[str, str] = {
     "start_yaw_deg": "--yaw DRONE=DEG", "fixed": "--fixed", "turn": "--turn", "units": "--units",
     "test_units": "--test-units", "learn_units": "--learn-units", "order": "--degree", "ridge": "--ridge",
     "sigma_rad2": "--sigma", "grid": "--grid", "gauge_node": "--gauge-node", "gauge_dbi": "--gauge-dbi", "prior": "--prior NODE=MODEL.json",
-    "models": "--models", "orders": "--orders", "n_neighbors": "--degree",
+    "models": "--models", "paper_models": "--paper-models", "repeats": "--repeats", "orders": "--orders", "n_neighbors": "--degree",
     "ground_level_m": "--ground-level", "relative_permittivity": "--permittivity",
     "path_loss": "--path-loss", "link_offsets": "--link-offsets",
     "station_geodetic": "--station LAT,LON,ALT", "station": "--station-node", "station_heading_deg": "--station-heading",

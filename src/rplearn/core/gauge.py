@@ -2,7 +2,7 @@
 
 When the links among some nodes form no odd cycle (one drone and one station, say), adding
 ``+c`` to one side's patterns and ``-c`` to the other's leaves every joint gain unchanged
-(docs/CONVENTIONS.md, "gauge"). A :class:`Gauge` says which constraint the solver adds for
+(docs/conventions.md, "gauge"). A :class:`Gauge` says which constraint the solver adds for
 each such group: equal sphere-mean gains on both sides (the default), or a known sphere-mean
 gain of one node. It is a value, checked when made; the solver reads it as is.
 """

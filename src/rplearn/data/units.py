@@ -289,7 +289,8 @@ def time_units(df: pd.DataFrame, blocks: int = TIME_UNITS, source: str = "datase
     out = df.assign(unit=stretches.label(t))
     labels = stretches.labels
     note = (f"{source} has no 'unit' column: its flight is cut into {blocks} stretches of time with about equal "
-            f"sample counts, {labels[0]}..{labels[-2]} and {labels[-1]} (from t = {t[k == blocks - 1].min():.3f} s); "
+            f"sample counts, {labels[0]}..{labels[-2]} and {labels[-1]} (from {t[k == blocks - 1].min() - t.min():.1f} s after "
+            f"the log start, t = {t.min():.3f} s); "
             "these names choose stretches (fit --units, evaluate --units, sweep --learn-units/--test-units, "
             "report --test-units)")
     return out, note

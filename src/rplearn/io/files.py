@@ -6,7 +6,6 @@ The table format is chosen by the file extension; anything else is refused rathe
 
 from __future__ import annotations
 
-import json
 import os
 import sys
 import time
@@ -15,7 +14,7 @@ from typing import Any, Iterable, Iterator, Literal, Sequence
 import pandas as pd
 
 from rplearn._argtypes import check_types
-from rplearn._atomic import atomic_open, atomic_path, check_output
+from rplearn._atomic import atomic_open, atomic_path, check_output, dump_json
 from rplearn._version import __version__
 
 from rplearn.data.tables import CSV_DTYPES, normalise_times, validate_matched
@@ -263,6 +262,7 @@ def read_dataset(path: str, require_rssi: bool = True) -> pd.DataFrame:
 
 @check_types
 def write_json(path: str, payload: Any) -> None:
-    """Write a small JSON result (Table I, chosen yaws, ...) with one-space indentation."""
+    """Write a small JSON result (Table I, chosen yaws, ...) with one-space indentation, as strict
+    JSON: a non-finite number is ``null`` (:func:`rplearn._atomic.strict_json`)."""
     with atomic_open(path, "w", encoding="utf-8") as fh:
-        json.dump(payload, fh, indent=1, default=str)
+        dump_json(payload, fh, indent=1, default=str)

@@ -37,7 +37,7 @@ from rplearn.core.geometry import (
     quat_wxyz_to_matrix,
     unit_vector,
 )
-from rplearn._atomic import atomic_open
+from rplearn._atomic import atomic_open, dump_json
 from rplearn.errors import InputError, ModelFileError
 from rplearn.sim.gain_formulas import (
     SECTORAL_IMPROVED,
@@ -374,7 +374,7 @@ class GroundTruth:
     def save(self, path: str) -> str:
         """Write the ground truth as JSON; returns the path."""
         with atomic_open(path, "w", encoding="utf-8") as fh:
-            json.dump(self.to_dict(), fh, indent=2, sort_keys=False)
+            dump_json(self.to_dict(), fh, indent=2, sort_keys=False)
             fh.write("\n")
         return str(path)
 

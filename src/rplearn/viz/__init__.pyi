@@ -16,6 +16,13 @@ from .interactive import InteractiveFigure as InteractiveFigure
 from .interactive import pattern_3d_figures as pattern_3d_figures
 from .interactive import pattern_3d_html as pattern_3d_html
 from .interactive import pattern_3d_plotly as pattern_3d_plotly
+from .interactive import supported_gain_db as supported_gain_db
+from .model_figures import plot_polar_cuts as plot_polar_cuts
+from .model_figures import plot_prediction_time as plot_prediction_time
+from .model_figures import plot_residuals as plot_residuals
+from .model_figures import polar_cuts_figure as polar_cuts_figure
+from .model_figures import prediction_time_figure as prediction_time_figure
+from .model_figures import residuals_figure as residuals_figure
 from .plot import PatternLike as PatternLike
 from .plot import PatternSurface as PatternSurface
 from .plot import coverage_figure as coverage_figure

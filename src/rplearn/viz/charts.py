@@ -156,15 +156,10 @@ def order_sweep_figure(
     ax2.set_ylabel("AIC / 1e3", color="tab:purple")
     if np.isfinite(a).any():
         k = int(np.nanargmin(a))
-        ax2.plot(
-            x[k],
-            a[k] / 1e3,
-            "*",
-            ms=14,
-            color="tab:purple",
-            mec="k",
-            label=f"min AIC: {family}-{x[k]:g}",
-        )
+        # a hollow ring, so that the best-order star drawn above it (ax over ax2) stays visible
+        ax2.plot(x[k], a[k] / 1e3, "o", ms=22, mfc="none", mec="tab:purple", mew=2.0, label=f"min AIC: {family}-{x[k]:g}")
+    ax.set_zorder(ax2.get_zorder() + 1)  # the RMSE curve and the best-order marker above the AIC's
+    ax.patch.set_visible(False)
     h1, l1 = ax.get_legend_handles_labels()
     h2, l2 = ax2.get_legend_handles_labels()
     ax.legend(h1 + h2, l1 + l2, fontsize=8, loc="upper center")
@@ -193,7 +188,7 @@ def plot_order_sweep(
 ) -> str:
     """Write the order-sweep figure (paper Fig. 10, :func:`order_sweep_figure`); return the path."""
     caption = (
-        f"Model order selection: test RMSE and AIC against the {family} order (stars mark the minima),"
+        f"Model order selection: test RMSE and AIC against the {family} order (star: lowest test RMSE; ring: lowest AIC),"
         " and the learning time LTD (paper Fig. 10)."
     )
     if validation_rmse_db is not None:

@@ -393,6 +393,7 @@ def write_report(
     sections: Sequence[ReportSection],
     provenance: Mapping[str, Any],
     filename: str = "report.html",
+    table_title: str = "Table I: performance of the learned models on the testing samples",
 ) -> str:
     """Write one self-contained HTML report and return its path.
 
@@ -409,13 +410,16 @@ def write_report(
     provenance : mapping
         Version, command, parameters, seed... shown in the footer (``version`` defaults to
         the library's).
+    filename : str
+    table_title : str
+        Heading of the table.
 
     Returns
     -------
     str
         Path of ``<out_dir>/<filename>``.
     """
-    page = render_report_html(title, table_markdown, sections, provenance)
+    page = render_report_html(title, table_markdown, sections, provenance, table_title)
     out = Path(os.fspath(out_dir))
     out.mkdir(parents=True, exist_ok=True)
     path = out / filename
@@ -454,6 +458,23 @@ def estimate_page_height_px(page_html: str, width_px: int = PAGE_WIDTH_PX) -> in
     text = re.sub(r"<[^>]+>", " ", _DATA_PNG.sub("", page_html))
     h += 24 * (len(" ".join(text.split())) // 120 + 1) + 60 * page_html.count("<h2")
     return int(min(max(h, 800), 30000))
+
+
+def chromium_command(exe: str, profile: str, width_px: int, height_px: int, flags: Sequence[str] = ()) -> list[str]:
+    """Headless Chromium without network (every host name unresolvable, a dead proxy), with
+    software WebGL (SwiftShader) and :data:`VIRTUAL_TIME_MS` for the page's scripts; the page's
+    URI is to be appended."""
+    return [
+        exe, "--headless", "--no-sandbox", "--disable-gpu",
+        # WebGL for 3-D figures on SwiftShader (software); Chromium no longer falls back to it silently
+        "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
+        # no network: the report must render from itself
+        "--proxy-server=127.0.0.1:9", "--proxy-bypass-list=<-loopback>", "--host-resolver-rules=MAP * ~NOTFOUND",
+        "--disable-quic", "--no-first-run", "--disable-background-networking", "--disable-component-update",
+        "--disable-sync", "--disable-dev-shm-usage", "--hide-scrollbars", f"--user-data-dir={profile}",
+        f"--window-size={int(width_px)},{int(height_px)}", f"--virtual-time-budget={VIRTUAL_TIME_MS}",
+        *[str(f) for f in flags],
+    ]
 
 
 @check_types
@@ -508,33 +529,8 @@ def screenshot_report(
             html_file.read_text(encoding="utf-8", errors="replace"), width_px
         )
     with tempfile.TemporaryDirectory(prefix="rplearn-chromium-") as profile:
-        cmd = [
-            exe,
-            "--headless",
-            "--no-sandbox",
-            "--disable-gpu",
-            # WebGL for 3-D figures on SwiftShader (software); Chromium no longer falls back to
-            # it silently
-            "--use-angle=swiftshader",
-            "--enable-unsafe-swiftshader",
-            # no network: the report must render from itself
-            "--proxy-server=127.0.0.1:9",
-            "--proxy-bypass-list=<-loopback>",
-            "--host-resolver-rules=MAP * ~NOTFOUND",
-            "--disable-quic",
-            "--no-first-run",
-            "--disable-background-networking",
-            "--disable-component-update",
-            "--disable-sync",
-            "--disable-dev-shm-usage",
-            "--hide-scrollbars",
-            f"--user-data-dir={profile}",
-            f"--window-size={int(width_px)},{int(height_px)}",
-            f"--virtual-time-budget={VIRTUAL_TIME_MS}",
-            f"--screenshot={png}",
-            *[str(f) for f in chromium_flags],
-            html_file.as_uri(),
-        ]
+        cmd = chromium_command(exe, profile, width_px, height_px, [f"--screenshot={png}", *chromium_flags])
+        cmd.append(html_file.as_uri())
         try:
             proc = subprocess.run(
                 cmd, capture_output=True, text=True, timeout=timeout_s, check=False

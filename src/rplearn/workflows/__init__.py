@@ -1,7 +1,8 @@
 """Pipelines that the command line, the report and the tests share.
 
 - :mod:`~rplearn.workflows.logs`: logs -> matched dataset; a swarm's links and headings.
-- :mod:`~rplearn.workflows.learning`: fit, evaluate, predict, sweep, learn-and-report on files.
+- :mod:`~rplearn.workflows.learning`: fit, evaluate, predict, sweep on files.
+- :mod:`~rplearn.workflows.report`: the report about one model (and the paper's Table I on request).
 - :mod:`~rplearn.workflows.demo`: the paper's whole evaluation on a simulated campaign.
 """
 

@@ -7,10 +7,8 @@ from .demo import DemoResult as DemoResult
 from .demo import run_demo as run_demo
 from .learning import EvaluationOutcome as EvaluationOutcome
 from .learning import FitOutcome as FitOutcome
-from .learning import ReportOutcome as ReportOutcome
 from .learning import evaluate_model_files as evaluate_model_files
 from .learning import fit_dataset as fit_dataset
-from .learning import learn_and_report as learn_and_report
 from .learning import predict_file as predict_file
 from .learning import sweep_dataset as sweep_dataset
 from .logs import LinksOutcome as LinksOutcome
@@ -25,3 +23,6 @@ from .planning import export_model_file as export_model_file
 from .planning import orient_link as orient_link
 from .planning import plan_campaign as plan_campaign
 from .planning import reference_model_file as reference_model_file
+from .report import PAPER_MODELS as PAPER_MODELS
+from .report import ReportOutcome as ReportOutcome
+from .report import learn_and_report as learn_and_report
