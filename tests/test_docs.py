@@ -4,6 +4,7 @@ parts hold what they promise: every command's --help and every public name of th
 from __future__ import annotations
 
 import importlib.util
+import re
 import os
 import subprocess
 import sys
@@ -71,3 +72,84 @@ def test_the_api_reference_has_every_public_name(site):
             if name.startswith("__"):
                 continue
             assert f'.{name}"' in anchors, f"{package}.{name} is not in the API reference"
+
+
+# ------------------------------------------------------------------ the pages' code blocks
+
+DOCS = ROOT / "docs"
+_BLOCK = re.compile(r"^```(bash|python)\n(.*?)^```", re.S | re.M)
+_SETUP = re.compile(r"<!-- docs-test: setup=(\w+) -->")
+
+
+def code_blocks(page: Path) -> list[tuple[str, str]]:
+    """The ``bash`` and ``python`` blocks of a page, in order: (language, code)."""
+    return [(m.group(1), m.group(2)) for m in _BLOCK.finditer(page.read_text(encoding="utf-8"))]
+
+
+def _pages_with_code() -> list[Path]:
+    return sorted(p for p in DOCS.rglob("*.md") if code_blocks(p))
+
+
+def _make_targets() -> set[str]:
+    text = (ROOT / "Makefile").read_text(encoding="utf-8")
+    return set(re.findall(r"^([\w-]+):", text, re.M))
+
+
+def _is_make_block(code: str) -> bool:
+    lines = [ln.split("#", 1)[0].strip() for ln in code.splitlines()]
+    return all(ln == "" or ln.startswith("make ") for ln in lines) and any(lines)
+
+
+def run_page(page: Path, cwd: Path) -> str:
+    """Run every code block of a page in ``cwd`` as a reader would, in order; return the output.
+
+    Blocks of ``make`` targets are the repository's own entry points (``make demo`` and ``make
+    test`` are what .ci/run and a fresh clone run; ``make docs`` is this module's build): they
+    are checked to be targets of the Makefile, not run inside the test suite.
+    """
+    (cwd / "tests").symlink_to(ROOT / "tests")  # the pages run from a clone's top folder
+    bindir = os.path.dirname(sys.executable)
+    env = dict(os.environ, PATH=bindir + os.pathsep + os.environ.get("PATH", ""), MPLBACKEND="Agg",
+               PYTHONPATH=str(ROOT / "src") + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    out = []
+    for lang, code in code_blocks(page):
+        if lang == "bash" and _is_make_block(code):
+            for line in code.splitlines():
+                target = line.split("#", 1)[0].split()[1:2]
+                assert not target or target[0] in _make_targets(), f"{page.name}: no make target {target}"
+            continue
+        args = ["bash", "-e", "-o", "pipefail", "-c", code] if lang == "bash" else [sys.executable, "-c", code]
+        proc = subprocess.run(args, cwd=cwd, env=env, capture_output=True, text=True, timeout=300, check=False)
+        assert proc.returncode == 0, f"{page.relative_to(ROOT)}: {lang} block failed\n{code}\n{proc.stdout}\n{proc.stderr}"
+        out.append(proc.stdout + proc.stderr)
+    return "\n".join(out)
+
+
+def _setup(page: Path, cwd: Path) -> None:
+    """Files a page's commands read that no rplearn command writes: what a user brings."""
+    found = _SETUP.search(page.read_text(encoding="utf-8"))
+    if found:
+        SETUPS[found.group(1)](cwd)
+
+
+@pytest.mark.parametrize("page", _pages_with_code(), ids=lambda p: str(p.relative_to(DOCS)))
+def test_every_code_block_of_the_docs_runs(page, tmp_path):
+    _setup(page, tmp_path)
+    out = run_page(page, tmp_path)
+    text = page.read_text(encoding="utf-8")
+    for pattern, quoted in FIGURES.get(page.name, ()):
+        found = re.search(pattern, out)
+        assert found, f"{page.name}: the output has no {pattern!r}\n{out}"
+        assert quoted.format(*found.groups()) in " ".join(text.split()), (page.name, quoted.format(*found.groups()))
+
+
+#: Figures the pages quote, each checked against what the commands printed: page -> (pattern
+#: of the output, the text the page must hold with the pattern's groups filled in).
+FIGURES: dict[str, tuple[tuple[str, str], ...]] = {
+    "ardupilot.md": (
+        (r"signal samples in: (\d+), matched: (\d+)", "matches {1} of the {0} radio samples"),
+        (r"(no calibration flight): nodes gcs and sys1", "**{0}**"),
+    ),
+}
+
+SETUPS: dict = {}
