@@ -150,6 +150,52 @@ FIGURES: dict[str, tuple[tuple[str, str], ...]] = {
         (r"signal samples in: (\d+), matched: (\d+)", "matches {1} of the {0} radio samples"),
         (r"(no calibration flight): nodes gcs and sys1", "**{0}**"),
     ),
+
+    "px4.md": (
+        (r"signal samples in: (\d+), matched: (\d+)", "matches {1} of the {0} packets"),
+    ),
+    "rosbag.md": (
+        (r"signal samples in: (\d),?(\d+), matched: (\d),?(\d+)", "{2},{3} of the {0},{1} messages"),
+    ),
 }
 
-SETUPS: dict = {}
+
+def _px4_radio(cwd: Path) -> None:
+    """A radio log along the sample ULog's flight: free-space RSSI at 2.4 GHz between the drone
+    and a station 30 m east of its take-off point (the station.csv the page writes), 20 dBm
+    transmitted, 2 dBi of antennas, 2 dB of noise, 10 Hz each way, on the log's UTC clock."""
+    import numpy as np
+    import pandas as pd
+
+    from rplearn.io import read_ulog
+
+    pose, _ = read_ulog(ROOT / "tests" / "fixtures" / "px4-ulog" / "sample_px4_events.ulg", "px4")
+    t = np.arange(np.ceil(pose["t"].min()) + 0.05, pose["t"].max(), 0.1)
+    xyz = np.column_stack([np.interp(t, pose["t"], pose[c]) for c in "xyz"])
+    d = np.linalg.norm(xyz - [30.0, 0.0, 1.5], axis=1)
+    fspl_db = 20 * np.log10(299_792_458.0 / 2.4e9 / (4 * np.pi * d))
+    rng = np.random.default_rng(0)
+    rows = [pd.DataFrame({"t": t + k * 0.01, "tx": tx, "rx": rx,
+                          "rssi_dbm": np.round(22.0 + fspl_db + rng.normal(0.0, 2.0, t.size))})
+            for k, (tx, rx) in enumerate((("px4", "gcs"), ("gcs", "px4")))]
+    pd.concat(rows).sort_values("t").to_csv(cwd / "radio.csv", index=False)
+
+
+def _ros2_bag(cwd: Path) -> None:
+    """A ROS 2 bag (MCAP) of the simulator's smoke flight on a UNIX clock, written with the
+    tests' bag writer (tests/io/flightfiles.py): odometry and pose topics, LinkQuality RSSI."""
+    sys.path.insert(0, str(ROOT / "tests" / "io"))
+    try:
+        from flightfiles import EPOCH_S, write_bag
+    finally:
+        sys.path.remove(str(ROOT / "tests" / "io"))
+    from rplearn.sim import simulate
+
+    flight = simulate("smoke", seed=0)
+    pose, signal = flight.pose_log.copy(), flight.signal_log.copy()
+    pose["t"] += EPOCH_S
+    signal["t"] += EPOCH_S
+    write_bag(cwd / "flight_bag", pose.iloc[::5], signal, "mcap")
+
+
+SETUPS = {"px4_radio": _px4_radio, "ros2_bag": _ros2_bag}
