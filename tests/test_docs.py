@@ -4,8 +4,8 @@ parts hold what they promise: every command's --help and every public name of th
 from __future__ import annotations
 
 import importlib.util
-import re
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -13,8 +13,17 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-PACKAGES = ("rplearn", "rplearn.io", "rplearn.data", "rplearn.models", "rplearn.analysis", "rplearn.sim",
-            "rplearn.viz", "rplearn.plan", "rplearn.workflows")
+PACKAGES = (
+    "rplearn",
+    "rplearn.io",
+    "rplearn.data",
+    "rplearn.models",
+    "rplearn.analysis",
+    "rplearn.sim",
+    "rplearn.viz",
+    "rplearn.plan",
+    "rplearn.workflows",
+)
 
 needs_mkdocs = pytest.mark.skipif(
     importlib.util.find_spec("mkdocs") is None and os.environ.get("CI") != "true",
@@ -26,8 +35,15 @@ needs_mkdocs = pytest.mark.skipif(
 def site(tmp_path_factory) -> Path:
     out = tmp_path_factory.mktemp("site")
     env = dict(os.environ, NO_MKDOCS_2_WARNING="1", PYTHONPATH=str(ROOT / "src"))
-    proc = subprocess.run([sys.executable, "-m", "mkdocs", "build", "--strict", "--site-dir", str(out)],
-                          cwd=ROOT, env=env, capture_output=True, text=True, timeout=300, check=False)
+    proc = subprocess.run(
+        [sys.executable, "-m", "mkdocs", "build", "--strict", "--site-dir", str(out)],
+        cwd=ROOT,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=False,
+    )
     assert proc.returncode == 0, proc.stdout + proc.stderr
     return out
 
@@ -40,7 +56,9 @@ def test_the_site_builds_strict_and_offline(site):
         text = page.read_text(encoding="utf-8")
         # nothing fetched from elsewhere when the site is read: fonts, scripts, styles are local
         assert "fonts.googleapis" not in text and "fonts.gstatic" not in text, page
-        assert '<script src="http' not in text and '<link rel="stylesheet" href="http' not in text, page
+        assert (
+            '<script src="http' not in text and '<link rel="stylesheet" href="http' not in text
+        ), page
     assert (site / "conventions" / "index.html").is_file()
 
 
@@ -66,7 +84,9 @@ def test_the_cli_reference_is_every_commands_help(site):
 def test_the_api_reference_has_every_public_name(site):
     import importlib
 
-    anchors = "".join(p.read_text(encoding="utf-8") for p in (site / "reference" / "api").rglob("index.html"))
+    anchors = "".join(
+        p.read_text(encoding="utf-8") for p in (site / "reference" / "api").rglob("index.html")
+    )
     for package in PACKAGES:
         for name in importlib.import_module(package).__all__:
             if name.startswith("__"):
@@ -109,18 +129,32 @@ def run_page(page: Path, cwd: Path) -> str:
     """
     (cwd / "tests").symlink_to(ROOT / "tests")  # the pages run from a clone's top folder
     bindir = os.path.dirname(sys.executable)
-    env = dict(os.environ, PATH=bindir + os.pathsep + os.environ.get("PATH", ""), MPLBACKEND="Agg",
-               PYTHONPATH=str(ROOT / "src") + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    env = dict(
+        os.environ,
+        PATH=bindir + os.pathsep + os.environ.get("PATH", ""),
+        MPLBACKEND="Agg",
+        PYTHONPATH=str(ROOT / "src") + os.pathsep + os.environ.get("PYTHONPATH", ""),
+    )
     out = []
     for lang, code in code_blocks(page):
         if lang == "bash" and _is_make_block(code):
             for line in code.splitlines():
                 target = line.split("#", 1)[0].split()[1:2]
-                assert not target or target[0] in _make_targets(), f"{page.name}: no make target {target}"
+                assert not target or target[0] in _make_targets(), (
+                    f"{page.name}: no make target {target}"
+                )
             continue
-        args = ["bash", "-e", "-o", "pipefail", "-c", code] if lang == "bash" else [sys.executable, "-c", code]
-        proc = subprocess.run(args, cwd=cwd, env=env, capture_output=True, text=True, timeout=300, check=False)
-        assert proc.returncode == 0, f"{page.relative_to(ROOT)}: {lang} block failed\n{code}\n{proc.stdout}\n{proc.stderr}"
+        args = (
+            ["bash", "-e", "-o", "pipefail", "-c", code]
+            if lang == "bash"
+            else [sys.executable, "-c", code]
+        )
+        proc = subprocess.run(
+            args, cwd=cwd, env=env, capture_output=True, text=True, timeout=300, check=False
+        )
+        assert proc.returncode == 0, (
+            f"{page.relative_to(ROOT)}: {lang} block failed\n{code}\n{proc.stdout}\n{proc.stderr}"
+        )
         out.append(proc.stdout + proc.stderr)
     return "\n".join(out)
 
@@ -140,7 +174,10 @@ def test_every_code_block_of_the_docs_runs(page, tmp_path):
     for pattern, quoted in FIGURES.get(page.name, ()):
         found = re.search(pattern, out)
         assert found, f"{page.name}: the output has no {pattern!r}\n{out}"
-        assert quoted.format(*found.groups()) in " ".join(text.split()), (page.name, quoted.format(*found.groups()))
+        assert quoted.format(*found.groups()) in " ".join(text.split()), (
+            page.name,
+            quoted.format(*found.groups()),
+        )
 
 
 #: Figures the pages quote, each checked against what the commands printed: page -> (pattern
@@ -150,12 +187,12 @@ FIGURES: dict[str, tuple[tuple[str, str], ...]] = {
         (r"signal samples in: (\d+), matched: (\d+)", "matches {1} of the {0} radio samples"),
         (r"(no calibration flight): nodes gcs and sys1", "**{0}**"),
     ),
-
-    "px4.md": (
-        (r"signal samples in: (\d+), matched: (\d+)", "matches {1} of the {0} packets"),
-    ),
+    "px4.md": ((r"signal samples in: (\d+), matched: (\d+)", "matches {1} of the {0} packets"),),
     "rosbag.md": (
-        (r"signal samples in: (\d),?(\d+), matched: (\d),?(\d+)", "{2},{3} of the {0},{1} messages"),
+        (
+            r"signal samples in: (\d),?(\d+), matched: (\d),?(\d+)",
+            "{2},{3} of the {0},{1} messages",
+        ),
     ),
 }
 
@@ -175,9 +212,17 @@ def _px4_radio(cwd: Path) -> None:
     d = np.linalg.norm(xyz - [30.0, 0.0, 1.5], axis=1)
     fspl_db = 20 * np.log10(299_792_458.0 / 2.4e9 / (4 * np.pi * d))
     rng = np.random.default_rng(0)
-    rows = [pd.DataFrame({"t": t + k * 0.01, "tx": tx, "rx": rx,
-                          "rssi_dbm": np.round(22.0 + fspl_db + rng.normal(0.0, 2.0, t.size))})
-            for k, (tx, rx) in enumerate((("px4", "gcs"), ("gcs", "px4")))]
+    rows = [
+        pd.DataFrame(
+            {
+                "t": t + k * 0.01,
+                "tx": tx,
+                "rx": rx,
+                "rssi_dbm": np.round(22.0 + fspl_db + rng.normal(0.0, 2.0, t.size)),
+            }
+        )
+        for k, (tx, rx) in enumerate((("px4", "gcs"), ("gcs", "px4")))
+    ]
     pd.concat(rows).sort_values("t").to_csv(cwd / "radio.csv", index=False)
 
 

@@ -24,16 +24,25 @@ from typing import Any
 ROOT = Path(__file__).resolve().parents[2]
 SRC = ROOT / "src"
 #: Packages of the API reference, in the order a name is claimed (the root last).
-PACKAGES = ("rplearn.io", "rplearn.data", "rplearn.models", "rplearn.analysis", "rplearn.sim",
-            "rplearn.viz", "rplearn.plan", "rplearn.workflows", "rplearn")
+PACKAGES = (
+    "rplearn.io",
+    "rplearn.data",
+    "rplearn.models",
+    "rplearn.analysis",
+    "rplearn.sim",
+    "rplearn.viz",
+    "rplearn.plan",
+    "rplearn.workflows",
+    "rplearn",
+)
 _API = re.compile(r"<!-- api: ([\w.]+) -->")
 _CLI = "<!-- cli-reference -->"
-_HELP_WIDTH = 100
+_HELP_WIDTH = 80
 
 
 def _import(name: str) -> Any:
-    if str(SRC) not in sys.path:
-        sys.path.insert(0, str(SRC))  # the repository's sources, whether or not rplearn is installed
+    if str(SRC) not in sys.path:  # the repository's sources, whether or not rplearn is installed
+        sys.path.insert(0, str(SRC))
     return importlib.import_module(name)
 
 
@@ -47,16 +56,32 @@ def cli_reference() -> str:
 
     app = _import("rplearn.cli").app
     group = typer.main.get_command(app)
-    root = click.Context(group, info_name="rplearn", terminal_width=_HELP_WIDTH, max_content_width=_HELP_WIDTH)
+    root = click.Context(
+        group, info_name="rplearn", terminal_width=_HELP_WIDTH, max_content_width=_HELP_WIDTH
+    )
     parts = ["## rplearn", "", "```text", group.get_help(root).rstrip(), "```", ""]
     for name in group.list_commands(root):
         command = group.get_command(root, name)
         if command is None or command.hidden:
             continue
-        ctx = click.Context(command, info_name=name, parent=root, terminal_width=_HELP_WIDTH,
-                            max_content_width=_HELP_WIDTH)
+        ctx = click.Context(
+            command,
+            info_name=name,
+            parent=root,
+            terminal_width=_HELP_WIDTH,
+            max_content_width=_HELP_WIDTH,
+        )
         summary = (command.get_short_help_str(limit=200) or "").strip()
-        parts += [f"## rplearn {name}", "", summary, "", "```text", command.get_help(ctx).rstrip(), "```", ""]
+        parts += [
+            f"## rplearn {name}",
+            "",
+            summary,
+            "",
+            "```text",
+            command.get_help(ctx).rstrip(),
+            "```",
+            "",
+        ]
     return "\n".join(parts)
 
 
@@ -69,7 +94,13 @@ def _assigning_module(package: str, name: str) -> str | None:
     for path in sorted(folder.rglob("*.py")):
         tree = ast.parse(path.read_text(encoding="utf-8"))
         for node in tree.body:
-            targets = node.targets if isinstance(node, ast.Assign) else [node.target] if isinstance(node, ast.AnnAssign) else []
+            targets = (
+                node.targets
+                if isinstance(node, ast.Assign)
+                else [node.target]
+                if isinstance(node, ast.AnnAssign)
+                else []
+            )
             if any(isinstance(t, ast.Name) and t.id == name for t in targets):
                 module = ".".join(path.relative_to(SRC).with_suffix("").parts)
                 return module.removesuffix(".__init__")
@@ -122,8 +153,16 @@ def api_reference(package: str) -> str:
         for path in by_module[module]:
             parts += [f"::: {path}", ""]
     if links:
-        parts += ["## Documented elsewhere", "", f"Public names of `{package}` documented with the package that "
-                  "defines them:", "", "| name | documented at |", "| --- | --- |", *links, ""]
+        parts += [
+            "## Documented elsewhere",
+            "",
+            f"Public names of `{package}` documented with the package that defines them:",
+            "",
+            "| name | documented at |",
+            "| --- | --- |",
+            *links,
+            "",
+        ]
     return "\n".join(parts)
 
 
