@@ -171,8 +171,11 @@ def _setup(page: Path, cwd: Path) -> None:
 @pytest.mark.parametrize("page", _pages_with_code(), ids=lambda p: str(p.relative_to(DOCS)))
 def test_every_code_block_of_the_docs_runs(page, tmp_path):
     _setup(page, tmp_path)
-    out = run_page(page, tmp_path)
     text = page.read_text(encoding="utf-8")
+    for name in SHOWN_FILES.get(page.name, ()):  # a file the page shows the head of, as it is
+        shown = re.search(r"^```text\n(.*?)^```", text, re.S | re.M).group(1)
+        assert (tmp_path / name).read_text().startswith(shown), (page.name, name)
+    out = run_page(page, tmp_path)
     for pattern, quoted in FIGURES.get(page.name, ()):
         found = re.search(pattern, out)
         assert found, f"{page.name}: the output has no {pattern!r}\n{out}"
@@ -245,4 +248,6 @@ def _ros2_bag(cwd: Path) -> None:
     write_bag(cwd / "flight_bag", pose.iloc[::5], signal, "mcap")
 
 
+#: Files the setup writes whose first lines a page shows in its first ``text`` block.
+SHOWN_FILES = {"px4.md": ("radio.csv",)}
 SETUPS = {"px4_radio": _px4_radio, "ros2_bag": _ros2_bag}
