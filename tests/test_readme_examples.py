@@ -4,6 +4,7 @@ field-guide block is run by tests/test_field_guide.py; the pages of docs/ by tes
 
 from __future__ import annotations
 
+import importlib.util
 import os
 import re
 import subprocess
@@ -47,8 +48,10 @@ def _run(args: list[str], cwd: Path, what: str) -> str:
     return proc.stdout + proc.stderr
 
 
-@pytest.mark.slow
-def test_the_readme_commands_and_library_examples_run_on_files_its_commands_write(tmp_path):
+@pytest.fixture(scope="module")
+def readme_folder(tmp_path_factory) -> Path:
+    """A folder in which the README's command block ran, line by line, as written."""
+    folder = tmp_path_factory.mktemp("readme")
     lines = _command_block()
     assert len(lines) >= 15 and set(RUN_ELSEWHERE) <= {ln.split("  #")[0].strip() for ln in lines}
     for line in lines:
@@ -56,14 +59,84 @@ def test_the_readme_commands_and_library_examples_run_on_files_its_commands_writ
         if command in RUN_ELSEWHERE:
             continue
         assert command.startswith("rplearn "), line
-        _run(["bash", "-e", "-c", command], tmp_path, command)
+        _run(["bash", "-e", "-c", command], folder, command)
+    return folder
+
+
+def _blocks(language: str | None = None) -> list[str]:
+    """The README's fenced code blocks (of one info string, e.g. ``"python"``), in order."""
+    blocks: list[tuple[str, list[str]]] = []
+    current: tuple[str, list[str]] | None = None
+    for line in _readme().splitlines():
+        if line.startswith("```"):
+            if current is None:
+                current = (line[3:].strip(), [])
+            else:
+                blocks.append(current)
+                current = None
+        elif current is not None:
+            current[1].append(line)
+    return ["\n".join(body) + "\n" for info, body in blocks if language is None or info == language]
+
+
+@pytest.mark.slow
+def test_the_readme_commands_and_library_examples_run_on_files_its_commands_write(readme_folder):
     # every file a command reads was written by an earlier command of the block
     for name in ("data.parquet", "sh10.json", "grid.csv", "msi/A.msi", "swarm/pose_log.parquet"):
-        assert (tmp_path / name).is_file(), name
-    blocks = re.findall(r"^```python\n(.*?)^```", _readme(), re.S | re.M)
+        assert (readme_folder / name).is_file(), name
+    blocks = _blocks("python")
     # one session: the second block uses the first's `learn`, the third the first's sh10.json
     assert len(blocks) >= 3 and 'read_table("data.parquet")' in blocks[0]
-    out = _run([sys.executable, "-c", "\n".join(blocks)], tmp_path, "README library examples")
+    out = _run([sys.executable, "-c", "\n".join(blocks)], readme_folder, "README library examples")
     assert "Scores(model='SH-10'" in out and "'order': " in out and "bottleneck_rssi_dbm" in out, (
         out
     )
+
+
+needs_sionna = pytest.mark.skipif(
+    importlib.util.find_spec("sionna") is None and os.environ.get("CI") != "true",
+    reason="the optional extra rplearn[sionna] is not installed; CI=true runs this test",
+)
+
+
+@pytest.mark.slow
+@needs_sionna
+def test_the_readme_sionna_example_runs_on_the_model_its_commands_learned(readme_folder):
+    (block,) = [b for b in _blocks() if "from rplearn.integrations import" in b]
+    assert 'load_model("sh10.json")' in block
+    _run([sys.executable, "-c", block], readme_folder, "README Sionna RT example")
+
+
+def test_the_readme_sionna_install_lines_are_what_ci_runs():
+    """Installing is not run inside the tests; .ci/run does it, with these packages."""
+    (block,) = [b for b in _blocks() if "pip install 'rplearn[sionna]'" in b]
+    assert "apt-get install libllvm19" in block
+    ci = (ROOT / ".ci" / "run").read_text(encoding="utf-8")
+    assert (
+        re.search(r"pip install .*-e \"\.\[[^\]]*sionna", ci) and "install -y -qq libllvm19" in ci
+    )
+
+
+def _kind(block: str) -> str | None:
+    """Which test runs or checks a README block."""
+    if all(ln.startswith("make ") for ln in block.split("\n") if ln.strip()):
+        return "make targets (below)"
+    if block.startswith("rplearn trajectory"):
+        return "the command block (test_the_readme_commands_and_library_examples_run...)"
+    if block.startswith("LOG=tests/fixtures/ardupilot/"):
+        return "the field guide (tests/test_field_guide.py)"
+    if "from rplearn.integrations import" in block:
+        return "test_the_readme_sionna_example_runs..."
+    if "pip install 'rplearn[sionna]'" in block:
+        return "test_the_readme_sionna_install_lines_are_what_ci_runs"
+    return None
+
+
+def test_every_readme_block_is_run_or_checked():
+    python = set(_blocks("python"))
+    unaccounted = [b[:60] for b in _blocks() if b not in python and _kind(b) is None]
+    assert not unaccounted, f"README blocks no test runs: {unaccounted}"
+    targets = set(re.findall(r"^([\w-]+):", (ROOT / "Makefile").read_text(encoding="utf-8"), re.M))
+    for block in _blocks():
+        if _kind(block) == "make targets (below)":
+            assert {ln.split()[1] for ln in block.split("\n") if ln.strip()} <= targets, block
