@@ -22,7 +22,7 @@ import argparse
 import tempfile
 import time
 
-from rplearn.core.normal_equations import NormalEquations
+from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.data.sync import SyncOptions
 from rplearn.data.units import samples_of, split_units
 from rplearn.io.files import read_dataset

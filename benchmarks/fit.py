@@ -36,7 +36,7 @@ from sklearn.linear_model import Ridge
 
 from rplearn.core.sh import SphericalHarmonics, real_sh_reference
 from rplearn.core.geometry import Directions
-from rplearn.core.solver import NormalEquations, fit_joint, solve
+from rplearn.core.lsq.solver import NormalEquations, fit_joint, solve
 
 N_SAMPLES = 56_164
 ORDER = 10

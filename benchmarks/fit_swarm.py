@@ -32,9 +32,9 @@ import time
 import numpy as np
 
 from rplearn.core.geometry import Directions
-from rplearn.core.normal_equations import NormalEquations
+from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.core.sh import SphericalHarmonics
-from rplearn.core.solver import solve
+from rplearn.core.lsq.solver import solve
 
 ORDER = 10
 TARGET = 2.0

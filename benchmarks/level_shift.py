@@ -33,6 +33,7 @@ from rplearn.io.reference import read_reference_pattern
 from rplearn.models import ModelSpec
 from rplearn.models.auto import fit_auto
 from rplearn.models.fit import FittedModel, evaluate_models
+from rplearn.models.options import FitOptions
 from rplearn.models.reference import reference_model
 from rplearn.sim import imperfect_reference, simulate
 from rplearn.workflows.logs import sync_logs
@@ -75,8 +76,8 @@ def main() -> None:
             per_unit = {u: shifted(s, shift) for u, s in base.items()}
             held = shifted(base_test, shift)
             row = [f"{shift:>8g}"]
-            for name, kwargs in (("auto", {}), ("prior", {"prior": {n: prior for n in nodes}})):
-                fitted, sel = fit_auto(per_unit, **kwargs)
+            for options in (FitOptions(auto=True), FitOptions(auto=True, priors={n: prior for n in nodes})):
+                fitted, sel = fit_auto(per_unit, options=options)
                 rmse = evaluate_models([FittedModel(ModelSpec("sh", sel.order), fitted.model, 0.0)], held)[0].rmse_db
                 rmses[name].append(rmse)
                 row += [f"{rmse:>9.3f}", f"{sel.order:>5d}", f"{sel.smoothing:>9.1e}"]

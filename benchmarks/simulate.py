@@ -38,7 +38,7 @@ def main() -> None:
 
     from rplearn.data.tables import link_samples
     from rplearn.models.estimators import JointKNNRegressor, MeanRegressor, PatternRegressor
-    from rplearn.plan.check import check_plan
+    from rplearn.plan.check import NominalAttitude, check_plan
     from rplearn.sim.flight import simulate
     from rplearn.data.sync import synchronise
 
@@ -95,7 +95,7 @@ def main() -> None:
     check = check_plan(res.config.campaign, ("sh", order))
     print(f"\nplan check (SH-{order}, learning units, nominal tilt, no wind):")
     print("  " + check.summary().replace("\n", "\n  "))
-    windy = check_plan(res.config.campaign, ("sh", order), wind_speed_m_s=10.0)
+    windy = check_plan(res.config.campaign, ("sh", order), attitude=NominalAttitude(wind_speed_m_s=10.0))
     print(f"  with a 10 m/s wind: rank {windy.rank}/{windy.n_columns}, condition number {windy.condition_number:.1f}")
 
 

@@ -31,7 +31,7 @@ import argparse
 import json
 import sys
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -45,6 +45,7 @@ from rplearn.data.units import stretch_samples
 from rplearn.models import ModelSpec
 from rplearn.models.auto import fit_auto
 from rplearn.models.fit import fit_model
+from rplearn.models.options import FitOptions
 from rplearn.sim import simulate
 
 #: Acceptance 5's tolerances.
@@ -120,18 +121,18 @@ def run_case(preset: str, seed: int, orders: list[int]) -> Case:
     nodes = tuple(sorted(set(ds["tx"]) | set(ds["rx"])))
     learn = ds[~ds["unit"].str.startswith("test")]
     test = link_samples(ds[ds["unit"].str.startswith("test")], nodes=nodes)
-    path_loss = PathLoss("log-distance") if preset == "pathloss" else None
+    options = FitOptions(path_loss=PathLoss("log-distance") if preset == "pathloss" else PathLoss())
     units = {u: link_samples(g, nodes=nodes) for u, g in learn.groupby("unit")}
     if len(units) == 1:  # one flight: its contiguous stretches of time, as `rplearn fit` cuts it
         units = stretch_samples(learn, str(next(iter(units))), preset, nodes)
-    fitted, sel = fit_auto(units, path_loss=path_loss)
+    fitted, sel = fit_auto(units, options=replace(options, auto=True))
     auto = fitted.model
     covered = covered_directions(auto)
     everything = link_samples(learn, nodes=nodes)
     cert = decoupling_certificate(auto, list(units.values()), posterior=fitted.own_posterior)
     fixed_rmse, fixed_err = {}, {}
     for k in orders:
-        model = fit_model(everything, ModelSpec("sh", k), path_loss=path_loss).model
+        model = fit_model(everything, ModelSpec("sh", k), options).model
         fixed_rmse[k] = _rmse(model, test)
         fixed_err[k] = pattern_errors_db(model, sim.ground_truth, covered)
     case = Case(preset, seed, fitted.spec.label, sel.smoothing, _rmse(auto, test),

@@ -1,7 +1,7 @@
 """Benchmark of small fits on a busy machine (issue 13, item 4): one BLAS thread for small problems.
 
 While another process keeps one core busy, fits SH-10 on 1,333 samples (the paper's
-two drones) 20 times with the thread limit of :mod:`rplearn.core.blas` and 20 times with
+two drones) 20 times with the thread limit of :mod:`rplearn.core.threads` and 20 times with
 every BLAS thread (the reference, what the fit did before), alternating in rounds of 5 with a
 pause of 0.3 s between rounds (the reference's spinning BLAS workers would otherwise slow the
 first fits of the next round), and prints each side's fastest and slowest LTD and their ratio. Target: slowest within 3x of the
@@ -20,7 +20,7 @@ import time
 import numpy as np
 
 from rplearn.data.tables import link_samples
-from rplearn.core import blas
+from rplearn.core import threads
 from rplearn.models.fit import fit_model
 from rplearn.models.spec import ModelSpec
 from rplearn.sim.flight import simulate
@@ -47,7 +47,7 @@ def main() -> int:
     samples = link_samples(ab.iloc[np.linspace(0, len(ab) - 1, min(N, len(ab))).astype(int)], preset)
     spec = ModelSpec.parse("sh", order=order)
     always_big = lambda n, c: False  # noqa: E731  (the reference: every BLAS thread, as before)
-    small = blas.is_small_fit
+    small = threads.is_small_fit
     times: dict[str, list[float]] = {"one thread (limit)": [], "every thread (reference)": []}
     stop = mp.Event()
     busy = mp.Process(target=spin, args=(stop,), daemon=True)
@@ -58,14 +58,14 @@ def main() -> int:
     try:
         for _ in range(repeats // 5):
             for label, rule in (("one thread (limit)", small), ("every thread (reference)", always_big)):
-                blas.is_small_fit = rule
+                threads.is_small_fit = rule
                 # OpenBLAS workers spin for ~0.1 s after a multi-threaded call: let those of the
                 # other side's round go idle, so that each side is timed as it runs on its own
                 time.sleep(pause_s)
                 for _ in range(5):
                     times[label].append(fit_model(samples, spec).ltd_s)
     finally:
-        blas.is_small_fit = small
+        threads.is_small_fit = small
         stop.set()
         busy.join()
     print("LTD [ms] per fit: " + "; ".join(f"{k}: {', '.join(f'{x * 1e3:.1f}' for x in v)}" for k, v in times.items()))

@@ -36,6 +36,7 @@ from rplearn.core.bases import make_basis
 from rplearn.core.geometry import quat_wxyz_to_matrix
 from rplearn.core.link import free_space_path_loss_db
 from rplearn.models.patterns import PatternSet
+from rplearn.models.training import TrainingSummary
 
 TIMES = 1000
 THRESHOLD_DBM = -80.0
@@ -48,7 +49,7 @@ def model_of(rng: np.random.Generator) -> PatternSet:
     p = basis.n_coef
     a = rng.normal(0, 0.03, (2 * p, 2 * p))
     return PatternSet(basis, ("A", "B"), rng.normal(size=(2, p)), covariance=a @ a.T,
-                      training={"rmse_db": 4.0, "frequency_hz": FREQUENCY_HZ})
+                      training=TrainingSummary(rmse_db=4.0, frequency_hz=FREQUENCY_HZ))
 
 
 def swarm_poses(n: int, times: int = TIMES) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -43,9 +43,9 @@ _NAMES: dict[str, str] = {
     "observed_joint_gain_db": "rplearn.core.link",
     "received_power_dbm": "rplearn.core.link",
     "make_basis": "rplearn.core.bases",
-    "FitReport": "rplearn.core.solver",
-    "fit_joint": "rplearn.core.solver",
-    "identifiability": "rplearn.core.solver",
+    "FitReport": "rplearn.core.lsq.solver",
+    "fit_joint": "rplearn.core.lsq.solver",
+    "identifiability": "rplearn.core.lsq.solver",
     "Scores": "rplearn.core.metrics",
     "score": "rplearn.core.metrics",
     # data: matched samples, matching, units

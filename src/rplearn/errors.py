@@ -47,6 +47,11 @@ class IdentifiabilityError(RplearnError):
     """The samples cannot identify the requested model (too few, or poorly spread)."""
 
 
+class NotPositiveDefinite(IdentifiabilityError):
+    """The regularised normal matrix of a joint solve is not positive definite in float64, or
+    LAPACK refused to factorise or solve with it (:mod:`rplearn.core.lsq.factor`)."""
+
+
 class ModelFileError(RplearnError):
     """A model file is missing, malformed, truncated, tampered with or of an unknown version."""
 

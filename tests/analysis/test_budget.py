@@ -13,6 +13,7 @@ from rplearn.analysis.budget import (
 from rplearn.models.load import load_model
 from rplearn.models.spec import ModelSpec
 from rplearn.workflows.learning import fit_dataset
+from rplearn.models.options import FitOptions
 
 TX_ERROR_DB = 25.0
 
@@ -28,7 +29,7 @@ def _fit(df, tmp_path, name, auto=False):
     path = tmp_path / f"{name}.parquet"
     df.to_parquet(path)
     spec = ModelSpec.parse("sh") if auto else ModelSpec.parse("sh", order=4)
-    out = fit_dataset(str(path), spec, auto=auto, output=str(tmp_path / f"{name}.json"))
+    out = fit_dataset(str(path), spec, options=FitOptions(auto=auto), output=str(tmp_path / f"{name}.json"))
     return out, load_model(str(tmp_path / f"{name}.json")).training["budget"]
 
 

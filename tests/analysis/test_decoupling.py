@@ -95,7 +95,7 @@ def test_components_add_up_to_the_whole_spread(fits):
 
 
 def _gram(model, s):
-    from rplearn.core.normal_equations import NormalEquations
+    from rplearn.core.lsq.normal_equations import NormalEquations
 
     return NormalEquations(model.basis, 2).add(s.directions, s.tx_index, s.rx_index).gram
 
@@ -122,7 +122,7 @@ def test_certificate_needs_a_covariance_and_a_coverage_grid(fits):
     with pytest.raises(InputError, match="no covariance"):
         decoupling_certificate(model)
     model = copy.copy(fits[False][0])
-    model.training = {k: v for k, v in model.training.items() if k != "coverage_deg"}
+    model.training = model.training.replace(coverage_deg=None)
     with pytest.raises(InputError, match="no coverage grid for node A"):
         decoupling_certificate(model)
 

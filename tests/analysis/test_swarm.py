@@ -11,13 +11,14 @@ from rplearn.errors import InputError
 from rplearn.core.geometry import quat_wxyz_from_yaw
 from rplearn.models.patterns import PatternSet
 from rplearn.analysis.swarm import predict_swarm
+from rplearn.models.training import TrainingSummary
 
 
 def _model(rng):
     b = SphericalHarmonics(4)
     coef = rng.normal(0, 1.5, (2, b.n_coef))
     cov = np.diag(np.full(2 * b.n_coef, 0.01))
-    return PatternSet(basis=b, nodes=("A", "B"), coef=coef, covariance=cov, training={"frequency_hz": 2.4e9, "rmse_db": 4.0})
+    return PatternSet(basis=b, nodes=("A", "B"), coef=coef, covariance=cov, training=TrainingSummary(frequency_hz=2.4e9, rmse_db=4.0))
 
 
 def _formation(n_t=121):

@@ -73,7 +73,7 @@ def workdir(tmp_path_factory):
     from rplearn.models import load_model
 
     no_rmse = load_model(d / M)
-    no_rmse.training["rmse_db"] = None
+    no_rmse.training = no_rmse.training.replace(rmse_db=None)
     no_rmse.save(str(d / "no_rmse.json"))
     (d / "folder").mkdir()
     return d

@@ -13,6 +13,7 @@ from rplearn.data.tables import validate_matched, validate_signal_log
 from rplearn.errors import InputError, RplearnError
 from rplearn.io import ReaderOptions
 from rplearn.models import ModelSpec, check_fit_options, load_model
+from rplearn.core.gauge import Gauge
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "models_v1"
 
@@ -68,7 +69,7 @@ def test_sync_drops_and_counts_packets_stronger_than_sent():
         (lambda: ReaderOptions(frequency_hz=2412.0), "looks like MHz"),
         (lambda: ReaderOptions(tx_power_dbm=1e6), "tx_power_dbm"),
         (lambda: ModelSpec("sh", 3.7), "order: expected an integer"),
-        (lambda: check_fit_options(ModelSpec.parse("sh-3"), gauge_node="A", gauge_dbi=float("nan")), "finite"),
+        (lambda: Gauge("A", float("nan")), "finite"),
         (lambda: load_model(FIXTURES / "sh5.json").evaluate("A", [0.0], [45.0]), "degrees by mistake"),
     ],
 )

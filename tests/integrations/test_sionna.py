@@ -31,6 +31,7 @@ from rplearn.integrations import (
     sionna_orientation,
 )
 from rplearn.models.patterns import PatternSet
+from rplearn.models.training import TrainingSummary
 
 FREQUENCY_HZ = 2.4e9
 #: The issue's tolerance between Sionna's path gain and rplearn's prediction [dB].
@@ -59,7 +60,7 @@ def _model(kind: str = "sh", order: int = 10, seed: int = 3) -> PatternSet:
     rng = np.random.default_rng(seed)
     scale = 8.0 / (1.0 + basis.degrees) if kind == "sh" else np.full(basis.n_coef, 2.0)
     coef = rng.normal(0.0, 1.0, (2, basis.n_coef)) * scale
-    return PatternSet(basis=basis, nodes=("A", "B"), coef=coef, training={"frequency_hz": FREQUENCY_HZ})
+    return PatternSet(basis=basis, nodes=("A", "B"), coef=coef, training=TrainingSummary(frequency_hz=FREQUENCY_HZ))
 
 
 def _geometries(n: int, tilt_rad: float, seed: int = 7) -> tuple[np.ndarray, ...]:

@@ -36,8 +36,8 @@ def test_a_wrong_altitude_until_a_step_is_invalid_whatever_its_value(wrong_alt):
     invalid, steps = _valid(t, xyz, h, np.zeros(len(t)))
     assert invalid[:60].all() and not invalid[60:].any()
     assert list(steps) == [59] and "does not explain" in steps[59]
-    periods = ph.excluded_periods(t, invalid, np.zeros(len(t), np.int64), np.array([t[-1]]), -1.0, t[-1] + 1,
-                                  steps, np.ones(len(t), bool), np.array([t[60]]), "HOME_POSITION")
+    periods = ph.excluded_periods(ph.Fixes(t, invalid, np.zeros(len(t), np.int64), np.ones(len(t), bool), steps),
+                                  ph.LogClock(-1.0, t[-1] + 1, np.array([t[-1]]), np.array([t[60]]), "HOME_POSITION"))
     (p,) = periods
     assert p["reason"] == "before_valid_position" and p["from_t"] == -1.0 and p["to_t"] == t[60]
     assert "no HOME_POSITION until 13.0 s" in p["detail"]
@@ -61,8 +61,8 @@ def test_a_glitch_that_returns_is_the_invalid_side():
     xyz[80:90, 0] += 500.0  # the position jumps away for 2 s and comes back
     invalid, steps = _valid(t, xyz, h, np.zeros(len(t)))
     assert np.flatnonzero(invalid).tolist() == list(range(80, 90))
-    (p,) = ph.excluded_periods(t, invalid, np.zeros(len(t), np.int64), np.array([t[-1]]), 0.0, t[-1],
-                               steps, np.ones(len(t), bool), np.zeros(0), "ORGN")
+    (p,) = ph.excluded_periods(ph.Fixes(t, invalid, np.zeros(len(t), np.int64), np.ones(len(t), bool), steps),
+                               ph.LogClock(0.0, t[-1], np.array([t[-1]]), np.zeros(0), "ORGN"))
     assert p["reason"] == "invalid_position" and (p["from_t"], p["to_t"]) == (t[79], t[90])
     assert "499.4 m across in 0.20 s" in p["detail"]
 
@@ -77,8 +77,8 @@ def test_no_3d_fix_and_a_reboot_are_excluded():
     xyz[150:, 0] += 30.0  # the vehicle moved while rebooting (explained by the plausible speed)
     invalid, steps = _valid(t, xyz, h, np.zeros(300), boot, fix_ok)
     assert np.flatnonzero(invalid).tolist() == [*range(20), *range(150, 170)]
-    periods = ph.excluded_periods(t, invalid, boot, np.array([t[149] + 0.05, t[-1]]), 0.0, t[-1], steps, fix_ok,
-                                  np.zeros(0), "ORGN")
+    periods = ph.excluded_periods(ph.Fixes(t, invalid, boot, fix_ok, steps),
+                                  ph.LogClock(0.0, t[-1], np.array([t[149] + 0.05, t[-1]]), np.zeros(0), "ORGN"))
     assert [p["reason"] for p in periods] == ["before_valid_position", "after_reboot"]
     assert periods[1]["from_t"] == pytest.approx(t[149] + 0.05) and periods[1]["to_t"] == t[170]
     assert "20 fix(es) with a GPS fix below 3-D" in periods[1]["detail"] and "reboot" in periods[1]["detail"]
@@ -90,8 +90,8 @@ def test_a_reboot_is_excluded_even_when_the_position_is_valid_at_once():
     boot = (np.arange(100) >= 50).astype(np.int64)
     invalid, steps = _valid(t, xyz, h, np.zeros(100), boot)
     assert not invalid.any()
-    (p,) = ph.excluded_periods(t, invalid, boot, np.array([t[49], t[-1]]), 0.0, t[-1], steps,
-                               np.ones(100, bool), np.zeros(0), "ORGN")
+    (p,) = ph.excluded_periods(ph.Fixes(t, invalid, boot, np.ones(100, bool), steps),
+                               ph.LogClock(0.0, t[-1], np.array([t[49], t[-1]]), np.zeros(0), "ORGN"))
     assert p["reason"] == "after_reboot" and (p["from_t"], p["to_t"]) == (t[49], t[50])
 
 

@@ -103,7 +103,7 @@ def test_msi_of_learned_and_true_patterns(tmp_path):
         export_msi(model, "A", tmp_path / "x.msi")
     msi = export_msi(model, "A", tmp_path / "x.msi", frequency_hz=2.4e9)
     assert "two-node fit" in msi.header["COMMENT"]
-    model.training["frequency_hz"] = 2.437e9
+    model.training = model.training.replace(frequency_hz=2.437e9)
     assert export_msi(model, "A", tmp_path / "y.msi").frequency_mhz == pytest.approx(2437.0)
     with pytest.raises(InputError, match="unknown Q"):
         export_msi(model, "Q", tmp_path / "z.msi", frequency_hz=2.4e9)

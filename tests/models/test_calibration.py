@@ -9,6 +9,7 @@ import pytest
 
 from rplearn.models.auto import fit_auto
 from rplearn.models.predict import UNCOVERED_DEG, end_coverage_deg
+from rplearn.models.options import FitOptions
 
 from test_auto import campaign
 from test_prior import ground_case
@@ -25,7 +26,7 @@ def interval_hits(model, test):
 @pytest.mark.slow
 def test_ground_with_a_prior_is_calibrated_inside_and_outside(tmp_path):
     per_unit, _, test, prior = ground_case(tmp_path, 0)
-    fitted, _ = fit_auto(per_unit, prior={n: prior for n in prior.nodes})
+    fitted, _ = fit_auto(per_unit, options=FitOptions(auto=True, priors={n: prior for n in prior.nodes}))
     hit, covered = interval_hits(fitted.model, test)
     assert covered.sum() > 100 and (~covered).sum() > 100
     for name, part in (("all", hit), ("covered", hit[covered]), ("uncovered", hit[~covered])):
@@ -102,7 +103,7 @@ def test_far_from_the_data_the_spread_is_the_reported_prior_spread(tmp_path):
     per_unit, learn, _, prior = ground_case(tmp_path, 3)
     far = Directions(np.full(50, np.pi), np.full(50, 1.2), np.full(50, np.pi), np.full(50, 1.2))
     for with_prior in (None, {n: prior for n in prior.nodes}):
-        model = fit_auto(per_unit, prior=with_prior)[0].model
+        model = fit_auto(per_unit, options=FitOptions(auto=True, priors=with_prior))[0].model
         spread = model.training["prior_std_db"]
         samples = LinkSamples(far, np.zeros(50, int), np.ones(50, int), learn.nodes, np.zeros(50), np.full(50, 40.0))
         expected = np.hypot(spread[learn.nodes[0]], spread[learn.nodes[1]])
@@ -129,8 +130,8 @@ def test_the_prior_spread_is_finite_without_smoothing_and_stated_only_for_all_no
 
     one_prior = fit_auto(units)[0].model
     with pytest.raises(InputError, match="node.s. B have no prior"):
-        fit_auto(units, prior={"A": one_prior}, prior_spread_db=10.0)
+        fit_auto(units, options=FitOptions(auto=True, priors={"A": one_prior}, prior_std_db=10.0))
     with pytest.raises(InputError, match="positive number"):
-        fit_auto(units, prior={"A": one_prior, "B": one_prior}, prior_spread_db=float("nan"))
-    stated = fit_auto(units, prior={"A": one_prior, "B": one_prior}, prior_spread_db=6.0)[0].model.training
+        FitOptions(auto=True, priors={"A": one_prior, "B": one_prior}, prior_std_db=float("nan"))
+    stated = fit_auto(units, options=FitOptions(auto=True, priors={"A": one_prior, "B": one_prior}, prior_std_db=6.0))[0].model.training
     assert stated["prior_std_db"]["A"] == pytest.approx(6.0, rel=1e-6) and stated["prior_std_source"] == "stated"

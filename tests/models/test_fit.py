@@ -23,10 +23,10 @@ def test_warm_up_is_not_timed(monkeypatch):
     original = learn._warm_up
     calls = []
 
-    def slow_warm_up(spec, n_samples=1, path_loss=None):
+    def slow_warm_up(spec, n_samples=1, options=None):
         calls.append(spec.label)
         time.sleep(0.5)
-        original(spec, n_samples, path_loss)
+        original(spec, n_samples, options)
 
     monkeypatch.setattr(learn, "_warm_up", slow_warm_up)
     for name in ("sh-4", "nn-10", "m", "bg-3"):

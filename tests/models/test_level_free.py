@@ -2,7 +2,7 @@
 values is arbitrary, so adding a constant to every one of them must shift every prediction by
 exactly that constant and change nothing else (the chosen order and smoothing, the spreads,
 the coverage), for every model kind. The regularisation shrinks toward the data's own level
-(:mod:`rplearn.core.level`), never toward 0 dB nor toward a prior's absolute dBi."""
+(:mod:`rplearn.core.lsq.level`), never toward 0 dB nor toward a prior's absolute dBi."""
 
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from rplearn.core.environment import PathLoss
-from rplearn.core.level import constant_coefficients
+from rplearn.core.lsq.level import constant_coefficients
 from rplearn.data.tables import LinkSamples
 from rplearn.data.units import samples_of, split_units
 from rplearn.errors import InputError
@@ -31,6 +31,7 @@ from rplearn.plan.trajectory import TrajectoryUnit
 from rplearn.sim import imperfect_reference, simulate
 from rplearn.sim.presets import make_preset
 from rplearn.workflows.logs import sync_logs
+from rplearn.models.options import FitOptions
 
 SHIFTS = st.floats(min_value=-100.0, max_value=100.0, allow_nan=False)
 #: few examples, each a handful of small fits: the whole file runs in well under a minute
@@ -77,8 +78,8 @@ def fits(flight, shift_db):
     units = {u: shifted(s, shift_db) for u, s in per_unit.items()}
     learn = shifted(learn, shift_db)
     auto, sel = fit_auto(units)
-    logd, sel_logd = fit_auto(units, path_loss=PathLoss("log-distance"))
-    with_prior, sel_prior = fit_auto(units, prior={n: prior for n in learn.nodes})
+    logd, sel_logd = fit_auto(units, options=FitOptions(auto=True, path_loss=PathLoss("log-distance")))
+    with_prior, sel_prior = fit_auto(units, options=FitOptions(auto=True, priors={n: prior for n in learn.nodes}))
     huber, robust = fit_huber(learn, ModelSpec("sh", 5))
     return {
         "mean": (fit_model(learn, ModelSpec("mean")).model, None),
@@ -145,9 +146,9 @@ def test_a_gaussian_grid_represents_a_constant_only_approximately(flight):
 def test_a_prior_fixes_the_shape_and_the_data_the_level(flight):
     """The prior's absolute level is not imposed: a prior moved by 30 dBi gives the same fit."""
     per_unit, _, test, prior, _ = flight
-    fitted, sel = fit_auto(per_unit, prior={n: prior for n in prior.nodes})
+    fitted, sel = fit_auto(per_unit, options=FitOptions(auto=True, priors={n: prior for n in prior.nodes}))
     raised = dataclasses.replace(prior, coef=np.asarray(prior.coef) + 30.0 * constant_coefficients(prior.basis))
-    fitted_raised, sel_raised = fit_auto(per_unit, prior={n: raised for n in prior.nodes})
+    fitted_raised, sel_raised = fit_auto(per_unit, options=FitOptions(auto=True, priors={n: raised for n in prior.nodes}))
     assert (sel.order, sel.smoothing) == (sel_raised.order, sel_raised.smoothing)
     np.testing.assert_allclose(fitted_raised.model.predict_gain(test), fitted.model.predict_gain(test), atol=1e-6)
 
@@ -157,11 +158,11 @@ def test_a_prior_level_is_imposed_only_when_asked(flight):
     prior's absolute dBi: a prior moved by 30 dBi then moves the fit; anything else is refused."""
     per_unit, _, test, prior, _ = flight
     raised = dataclasses.replace(prior, coef=np.asarray(prior.coef) + 30.0 * constant_coefficients(prior.basis))
-    kept = fit_auto(per_unit, prior={n: prior for n in prior.nodes}, prior_level="prior")[0].model.predict_gain(test)
-    moved = fit_auto(per_unit, prior={n: raised for n in prior.nodes}, prior_level="prior")[0].model.predict_gain(test)
+    kept = fit_auto(per_unit, options=FitOptions(auto=True, priors={n: prior for n in prior.nodes}, prior_level="prior"))[0].model.predict_gain(test)
+    moved = fit_auto(per_unit, options=FitOptions(auto=True, priors={n: raised for n in prior.nodes}, prior_level="prior"))[0].model.predict_gain(test)
     assert np.mean(moved - kept) > 0.1
     with pytest.raises(InputError, match="prior level"):
-        fit_auto(per_unit, prior={n: prior for n in prior.nodes}, prior_level="absolute")
+        FitOptions(auto=True, priors={n: prior for n in prior.nodes}, prior_level="absolute")
 
 
 def test_a_streamed_fit_is_level_free(flight):

@@ -12,6 +12,7 @@ from rplearn.errors import InputError, ModelFileError
 from rplearn.core.geometry import link_directions, quat_wxyz_from_yaw
 from rplearn.core.link import free_space_path_loss_db
 from rplearn.models.patterns import PatternSet
+from rplearn.models.training import TrainingSummary
 
 
 @pytest.fixture
@@ -24,7 +25,7 @@ def pattern_set():
         coef=rng.normal(0, 2, (2, 16)),
         covariance=np.eye(32) * 0.01,
         gauge=[{"rule": "equal-mean"}],
-        training={"n_samples": 10, "condition_number": 3.5},
+        training=TrainingSummary(n_samples=10, condition_number=3.5),
         provenance={"command": "test"},
     )
 

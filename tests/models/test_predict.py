@@ -11,7 +11,8 @@ import pytest
 from rplearn.data.tables import validate_matched
 from rplearn.models.load import load_model
 from rplearn.models.predict import distinct_labels, frequency_mismatch, predict_dataset
-from rplearn.models.spec import ModelSpec, check_fit_options, gauge_of
+from rplearn.core.gauge import Gauge
+from rplearn.models.spec import ModelSpec, check_fit_options
 from rplearn.errors import InputError
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "models_v1"
@@ -62,7 +63,6 @@ def test_distinct_labels_add_the_name_only_where_labels_repeat():
         ("knn", {"ridge": 5.0}, "ridge"),
         ("mean", {"order": 7}, "order"),
         ("sh", {"sigma_rad2": 3.0}, "sigma_rad2"),
-        ("sh", {"gauge_dbi": 2.0}, "gauge_dbi"),
         ("sh-10", {"order": 5}, "order"),
     ],
 )
@@ -74,5 +74,5 @@ def test_fit_options_a_model_would_ignore_are_refused(model, options, param):
 
 
 def test_fit_options_that_fit_pass_and_gauges_are_explicit():
-    check_fit_options(ModelSpec.parse("bg", order=7), order=7, sigma_rad2=0.4, grid="fibonacci", gauge_node="A", gauge_dbi=1.0)
-    assert gauge_of() == "equal-mean" and gauge_of("A") == {"node": "A", "mean_gain_dbi": 0.0}
+    check_fit_options(ModelSpec.parse("bg", order=7), order=7, sigma_rad2=0.4, grid="fibonacci")
+    assert Gauge().to_dict() == "equal-mean" and Gauge("A").to_dict() == {"node": "A", "mean_gain_dbi": 0.0}

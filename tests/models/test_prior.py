@@ -19,6 +19,7 @@ from rplearn.models.fit import FittedModel, evaluate_models, fit_model
 from rplearn.models.reference import reference_model
 from rplearn.sim import imperfect_reference, simulate
 from rplearn.workflows.logs import sync_logs
+from rplearn.models.options import FitOptions
 
 
 def ground_case(tmp_path, seed):
@@ -53,7 +54,7 @@ def test_a_reference_prior_wins_where_the_flight_saw_little(tmp_path, seed):
     # information, which prior_level="prior" keeps (the default takes only its shape: seed 1 then
     # gives 4.56 dB, behind the prior alone's 4.51 and SH-7's 4.48; seeds 0-5 average 4.45 against
     # 4.39 dB with the prior's level, benchmarks and tests/models/test_level_free.py)
-    with_prior, _ = fit_auto(per_unit, prior={n: prior for n in prior.nodes}, prior_level="prior")
+    with_prior, _ = fit_auto(per_unit, options=FitOptions(auto=True, priors={n: prior for n in prior.nodes}, prior_level="prior"))
     got = rmse(with_prior.model, test)
     others = {
         "prior alone": rmse(prior, test),

@@ -15,6 +15,7 @@ from rplearn.models.streamed import weighted_median
 from rplearn.sim import simulate
 from rplearn.workflows import fleet, learning
 from rplearn.workflows.logs import sync_logs
+from rplearn.models.options import FitOptions
 
 
 @pytest.fixture(scope="module")
@@ -84,9 +85,9 @@ def test_weighted_median():
 @pytest.mark.parametrize("name", ["m.parquet", "m.csv"])
 def test_streamed_auto_fit_equals_the_whole_auto_fit(dataset, monkeypatch, name):
     path = str(dataset / name)
-    whole = learning.fit_dataset(path, ModelSpec("sh", 3), auto=True)
+    whole = learning.fit_dataset(path, ModelSpec("sh", 3), options=FitOptions(auto=True))
     streamed(monkeypatch)
-    chunked = learning.fit_dataset(path, ModelSpec("sh", 3), auto=True)
+    chunked = learning.fit_dataset(path, ModelSpec("sh", 3), options=FitOptions(auto=True))
     a, b = whole.fitted.model, chunked.fitted.model
     assert (chunked.selection.order, chunked.selection.smoothing) == (whole.selection.order, whole.selection.smoothing)
     np.testing.assert_allclose(b.coef, a.coef, rtol=1e-7, atol=1e-7)

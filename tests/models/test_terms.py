@@ -20,6 +20,7 @@ from rplearn.models.patterns import PatternSet
 from rplearn.models.predict import predict_dataset
 from rplearn.sim import simulate
 from rplearn.sim.presets import PATHLOSS_EXPONENT, make_preset
+from rplearn.models.options import FitOptions
 
 
 def _campaign(config, seed=1, link=None):
@@ -30,7 +31,7 @@ def _campaign(config, seed=1, link=None):
 
 def _auto(learn, nodes, **kw):
     units = {u: link_samples(g, nodes=nodes) for u, g in learn.groupby("unit")}
-    return fit_auto(units, **kw)[0].model
+    return fit_auto(units, options=FitOptions(auto=True, **kw))[0].model
 
 
 def _rmse(model, part, nodes):
@@ -73,7 +74,7 @@ def test_exponent_at_constant_distance_is_refused():
     _, learn, _ = _campaign(config, link=("A", "B"))
     samples = link_samples(learn)
     with pytest.raises(IdentifiabilityError, match="path-loss exponent is not identifiable"):
-        fit_model(samples, ModelSpec.parse("sh-8"), path_loss=PathLoss("log-distance"))
+        fit_model(samples, ModelSpec.parse("sh-8"), FitOptions(path_loss=PathLoss("log-distance")))
     with pytest.raises(IdentifiabilityError, match="path-loss exponent is not identifiable"):
         _auto(learn, samples.nodes, path_loss=PathLoss("log-distance"))
 
@@ -182,7 +183,7 @@ def test_baselines_take_no_environment_term():
     sim = sim_("smoke", seed=0)
     ds = synchronise(sim.pose_log, sim.signal_log, SyncOptions(link=("A", "B"))).dataset
     with pytest.raises(InputError, match="baselines"):
-        fit_model(link_samples(ds), ModelSpec.parse("m"), path_loss=PathLoss("log-distance"))
+        fit_model(link_samples(ds), ModelSpec.parse("m"), FitOptions(path_loss=PathLoss("log-distance")))
 
 
 @pytest.mark.slow
@@ -243,7 +244,7 @@ def test_ridge_does_not_shrink_the_offsets():
 def test_two_ray_rows_below_the_ground_are_not_predicted_and_said_so():
     sim, learn, test = _campaign("tworay", link=("G", "D"))
     nodes = ("D", "G")
-    model = fit_model(link_samples(learn, nodes=nodes), ModelSpec.parse("sh-4"), path_loss=PathLoss("two-ray")).model
+    model = fit_model(link_samples(learn, nodes=nodes), ModelSpec.parse("sh-4"), FitOptions(path_loss=PathLoss("two-ray"))).model
     low = test.copy()
     low.loc[low.index[:5], "rx_z"] = 0.0
     out = predict_dataset(model, low)

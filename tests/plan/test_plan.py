@@ -8,7 +8,7 @@ import pytest
 from rplearn.core.bases import make_basis
 from rplearn.errors import PlanError
 from rplearn.plan.campaign import group_campaign, paper_campaign
-from rplearn.plan.check import check_plan, coverage_map, plan_directions
+from rplearn.plan.check import NominalAttitude, check_plan, coverage_map, plan_directions
 from rplearn.plan.trajectory import PlanLimits
 from rplearn.sim.presets import make_preset
 
@@ -35,7 +35,7 @@ def test_paper_plan_is_full_rank_minus_the_constant(paper_check) -> None:
 def test_wind_tilt_improves_conditioning() -> None:
     campaign = make_preset("paper").campaign
     calm = check_plan(campaign, ("sh", 10))
-    windy = check_plan(campaign, ("sh", 10), wind_speed_m_s=10.0)
+    windy = check_plan(campaign, ("sh", 10), attitude=NominalAttitude(wind_speed_m_s=10.0))
     assert windy.rank == calm.rank
     assert windy.condition_number < calm.condition_number
 
@@ -43,7 +43,7 @@ def test_wind_tilt_improves_conditioning() -> None:
 def test_level_drones_cannot_separate_elevation_only_components() -> None:
     """Exactly level drones see each other at opposite elevations: zonal terms move freely."""
     campaign = make_preset("paper").campaign
-    level = check_plan(campaign, ("sh", 6), tilt_into_motion=False)
+    level = check_plan(campaign, ("sh", 6), attitude=NominalAttitude(tilt_into_motion=False))
     # at least the 5 non-constant zonal harmonics of degrees 1..5 join the constant
     assert level.null_dim >= 6 and not level.decoupled
 

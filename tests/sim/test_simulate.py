@@ -251,7 +251,7 @@ def test_paper_preset_acceptance() -> None:
     assert knn_rmse > truth_rmse  # the truth is the best possible predictor
     # the flown (tilted, jittery) learning data decouple the patterns up to the one constant
     from rplearn.core.bases import make_basis
-    from rplearn.core.solver import identifiability
+    from rplearn.core.lsq.solver import identifiability
 
     rep = identifiability(sl.directions, sl.tx_index, sl.rx_index, len(sl.nodes), make_basis("sh", 10))
     assert rep.rank == rep.n_columns - 1 == 199

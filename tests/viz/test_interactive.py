@@ -50,7 +50,7 @@ def _with_upper_coverage(model: PatternSet) -> PatternSet:
     el = np.arcsin(rng.uniform(np.sin(np.radians(20)), 1.0, (2, n)))
     samples = LinkSamples(Directions(az[0], el[0], az[1], el[1]), np.zeros(n, int), np.ones(n, int), ("A", "B"),
                           np.zeros(n), np.full(n, 10.0))
-    model.training["coverage_deg"] = node_coverage_grids(samples)
+    model.training = model.training.replace(coverage_deg=node_coverage_grids(samples))
     return model
 
 

@@ -20,6 +20,7 @@ from rplearn.analysis.identifiability import identifiability_study
 from rplearn.analysis.sweep import order_sweep
 from rplearn.models.patterns import PatternSet
 from rplearn.viz.report import screenshot_report
+from rplearn.models.training import TrainingSummary
 
 
 @pytest.fixture(scope="module")
@@ -116,7 +117,7 @@ def test_best_yaw_reports_the_received_power_before_and_after():
     b = SphericalHarmonics(2)
     coef = np.zeros((2, 4))
     coef[0, sh_index(1, 1)] = 10.0
-    model = PatternSet(b, ("A", "B"), coef, training={"frequency_hz": 2.4e9})
+    model = PatternSet(b, ("A", "B"), coef, training=TrainingSummary(frequency_hz=2.4e9))
     r = best_yaw(model, "A", "B", [0, 0, 10], [0, 20, 10], turn="both", tx_yaw_deg=-90.0, tx_power_dbm=20.0)
     assert r.distance_m == pytest.approx(20.0) and r.frequency_hz == 2.4e9
     assert r.rssi_dbm == pytest.approx(float(received_power_dbm(20.0, r.gain_db, 20.0, 2.4e9)))

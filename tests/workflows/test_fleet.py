@@ -20,6 +20,7 @@ from rplearn.models.spec import ModelSpec
 from rplearn.sim.fleet import drone_ids, fleet_pairs, simulate_fleet
 from rplearn.workflows.fleet import dask_client, parse_dask
 from rplearn.workflows.learning import evaluate_model_files, fit_dataset
+from rplearn.models.options import FitOptions
 
 RPLEARN = [sys.executable, "-m", "rplearn.cli"]
 FLIGHTS = 8
@@ -84,12 +85,12 @@ def test_dask_fit_and_automatic_choice_equal_the_single_process(fleet, client, t
 
     root, _ = fleet
     spec = ModelSpec.parse("sh", order=6)
-    here = _fit_streamed(str(root), spec, None, "equal-mean", None)
-    there = _fit_streamed(str(root), spec, None, "equal-mean", None, client=client)
+    here = _fit_streamed(str(root), spec, None, FitOptions(), None)
+    there = _fit_streamed(str(root), spec, None, FitOptions(), None, client=client)
     assert there.n_samples == here.n_samples
     assert np.max(np.abs(coef(there.fitted.model) - coef(here.fitted.model))) < 1e-9
-    auto_here = _fit_streamed(str(root), ModelSpec.parse("sh"), None, "equal-mean", None, auto=True)
-    auto_there = _fit_streamed(str(root), ModelSpec.parse("sh"), None, "equal-mean", None, auto=True, client=client)
+    auto_here = _fit_streamed(str(root), ModelSpec.parse("sh"), None, FitOptions(auto=True), None)
+    auto_there = _fit_streamed(str(root), ModelSpec.parse("sh"), None, FitOptions(auto=True), None, client=client)
     assert auto_there.selection.order == auto_here.selection.order
     assert auto_there.selection.smoothing == auto_here.selection.smoothing
     assert np.max(np.abs(coef(auto_there.fitted.model) - coef(auto_here.fitted.model))) < 1e-9
@@ -106,15 +107,15 @@ def test_one_flight_cut_into_time_blocks_across_files_matches_on_dask(fleet, cli
     n = len(one)
     for i in range(8):  # the time blocks (5) straddle the files (8)
         write_table(one.iloc[i * n // 8:(i + 1) * n // 8], str(folder / f"p{i}.parquet"))
-    here = _fit_streamed(str(folder), ModelSpec.parse("sh"), None, "equal-mean", None, auto=True)
-    there = _fit_streamed(str(folder), ModelSpec.parse("sh"), None, "equal-mean", None, auto=True, client=client)
+    here = _fit_streamed(str(folder), ModelSpec.parse("sh"), None, FitOptions(auto=True), None)
+    there = _fit_streamed(str(folder), ModelSpec.parse("sh"), None, FitOptions(auto=True), None, client=client)
     assert len(here.selection.units) == 5
     assert np.max(np.abs(coef(there.fitted.model) - coef(here.fitted.model))) < 1e-9
     # the folds are the stretches of time the whole flight names (flight[1/5] .. test[5/5]), cut at instants
     assert here.selection.units == ["flight[1/5]", "flight[2/5]", "flight[3/5]", "flight[4/5]", "test[5/5]"]
     # the same files listed out of time order: the same stretches, the same model
     shuffled = ",".join(str(folder / f"p{i}.parquet") for i in (1, 0, *range(2, 8)))
-    again = _fit_streamed(shuffled, ModelSpec.parse("sh"), None, "equal-mean", None, auto=True)
+    again = _fit_streamed(shuffled, ModelSpec.parse("sh"), None, FitOptions(auto=True), None)
     assert again.selection.order == here.selection.order
     assert np.max(np.abs(coef(again.fitted.model) - coef(here.fitted.model))) < 1e-9
 
@@ -203,7 +204,7 @@ def test_a_merge_task_leaves_its_inputs_unchanged(fleet):
     root, _ = fleet
     parts = dataset_parts(str(root))[:2]
     kwargs = dict(spec=ModelSpec.parse("sh", order=4), nodes=drone_ids(4), units=None, by_unit=True, stretches=None,
-                  path_loss=None)
+                  options=None)
     a, b = (part_statistics(p, **kwargs) for p in parts)
     before = (a.n_samples, b.n_samples, a.non_unit, {k: v.gram.copy() for k, v in a.stats.items()})
     merged = _merge_accumulated(a, b)

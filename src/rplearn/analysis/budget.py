@@ -312,12 +312,12 @@ def check_fit_budget(model: Any, samples: LinkSamples, relative: bool = False) -
     if getattr(model, "kind", None) != "patterns":
         return []
     training = model.training
-    gauged = {str(n) for g in training.get("gauges", []) for n in g.get("nodes", [])}
+    gauged = {str(n) for g in training.gauges or () for n in g.get("nodes", [])}
     free = [n for n in model.nodes if n not in gauged]
     findings = budget_findings(link_summaries(samples), sphere_means_dbi(model, free) if free else None,
-                               training.get("link_offsets_db") or [], relative)
-    training["budget"] = [f.to_dict() for f in findings]
-    training.setdefault("warnings", []).extend(f.text for f in findings)
+                               training.link_offsets_db or [], relative)
+    model.training = training.replace(budget=[f.to_dict() for f in findings],
+                                      warnings=(*(training.warnings or ()), *(f.text for f in findings)))
     return findings
 
 

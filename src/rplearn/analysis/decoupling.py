@@ -36,7 +36,7 @@ import numpy as np
 from rplearn.analysis.pattern_error import gauged_nodes
 from rplearn.core.bases import fibonacci_grid_nodes
 from rplearn.core.coverage import COVERED_WITHIN_DEG
-from rplearn.core.normal_equations import NormalEquations
+from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.data.tables import LinkSamples
 from rplearn.errors import InputError
 from rplearn.models.own_posterior import OwnPosterior
@@ -175,7 +175,7 @@ def covered_directions(model: PatternSet, within_deg: float = COVERED_WITHIN_DEG
     InputError
         When the model stores no coverage grid for a node.
     """
-    grids = model.training.get("coverage_deg") or {}
+    grids = model.training.coverage_deg or {}
     out = {}
     for node in model.nodes:
         if node not in grids:
@@ -206,7 +206,7 @@ def _node_spreads(model: PatternSet, covered: Mapping[str, tuple[np.ndarray, np.
     gauged = gauged_nodes(model)
     saz, sel = fibonacci_grid_nodes(SPHERE_POINTS)
     sphere = model.basis.design(saz, sel)
-    grid_sizes = {n: len(model.training["coverage_deg"][n]) for n in model.nodes}
+    grid_sizes = {n: len((model.training.coverage_deg or {})[n]) for n in model.nodes}
     spreads, metrics = {}, []
     for k, node in enumerate(model.nodes):
         block = cov[k * p:(k + 1) * p, k * p:(k + 1) * p]
@@ -353,12 +353,12 @@ def decoupling_certificate(
         raise InputError("model: it carries no covariance; the per-node spread needs one", param="model")
     covered = covered_directions(model, within_deg)
     cov = np.asarray(model.covariance, np.float64)
-    own = posterior if "selection" in model.training else None
+    own = posterior if model.training.selection is not None else None
     spreads, metrics = _node_spreads(model, covered, cov, own)
     maps = {} if own is None else own_std_maps(model, own)
     covered_db = float(np.sqrt(np.mean([s.covered_std_db**2 for s in spreads.values()])))
     notes = [own.note] if own is not None and own.note else []
-    if "selection" not in model.training:  # a fixed order: the ridge's estimate, no posterior
+    if model.training.selection is None:  # a fixed order: the ridge's estimate, no posterior
         return DecouplingCertificate(spreads, covered_db=covered_db, notes=[
             "(a fixed-order fit's covariance leaves out what its ridge decides where the flight cannot split the "
             "patterns, so these spreads are lower bounds and the unsplit components are not computed; "
@@ -377,13 +377,13 @@ def decoupling_certificate(
 
 def certify(model: Any, samples: LinkSamples | Sequence[LinkSamples] | None = None,
             posterior: OwnPosterior | None = None) -> DecouplingCertificate | None:
-    """:func:`decoupling_certificate` of a fitted model, stored in ``model.training["decoupling"]``
+    """:func:`decoupling_certificate` of a fitted model, stored in ``model.training.decoupling``
     (with its :meth:`~DecouplingCertificate.summary` text, which ``fit`` prints); None, and
     nothing stored, for a model without patterns, covariance or coverage grid (a baseline)."""
-    if not isinstance(model, PatternSet) or model.covariance is None or not model.training.get("coverage_deg"):
+    if not isinstance(model, PatternSet) or model.covariance is None or not model.training.coverage_deg:
         return None
     cert = decoupling_certificate(model, samples, posterior=posterior)
-    model.training["decoupling"] = {**cert.to_dict(), "summary": cert.summary()}
+    model.training = model.training.replace(decoupling={**cert.to_dict(), "summary": cert.summary()})
     return cert
 
 

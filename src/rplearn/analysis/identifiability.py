@@ -9,8 +9,9 @@ import numpy as np
 
 from rplearn.core.bases import SphericalHarmonics
 from rplearn.core.geometry import Directions
-from rplearn.core.solver import fit_joint, identifiability
+from rplearn.core.lsq.solver import fit_joint, identifiability
 from rplearn.models.patterns import PatternSet
+from rplearn.models.training import TrainingSummary
 
 Progress = Callable[[str], None]
 
@@ -107,6 +108,6 @@ def identifiability_study(order: int = 8, n_samples: int = 20000, seed: int = 0)
     d3, tx3, rx3, _ = draw(np.array([[0, 1], [1, 2], [2, 0]]), names3)
     rep2 = sol.report
     rep3 = identifiability(d3, tx3, rx3, 3, basis, names3)
-    patterns = PatternSet(basis, tuple(names2), sol.coef, gauge=[g.to_dict() for g in rep2.gauges], training=rep2.to_dict())
+    patterns = PatternSet(basis, tuple(names2), sol.coef, gauge=[g.to_dict() for g in rep2.gauges], training=TrainingSummary.from_dict(rep2.to_dict()))
     cases = [("two antennas (C, S)", rep2.n_columns, rep2.rank), ("three antennas (O, S, C)", rep3.n_columns, rep3.rank)]
     return IdentifiabilityStudy(order, epsilons, rmses, cases, patterns, ants)

@@ -225,8 +225,8 @@ def predict_swarm(
             f"gaps between pose rows (max_gap_s, now {max_gap_s:g} s)",
             param="max_gap_s",
         )
-    links, connectivity = _predict_blocks(model, poses, present, drones, patterns, t, tx_power_dbm, frequency_hz,
-                                          min_rssi_dbm)
+    links, connectivity = _predict_blocks(model, poses, present, drones, patterns, t,
+                                          _Radio(tx_power_dbm, frequency_hz, min_rssi_dbm))
     notes = _swarm_notes(links, poses, frequency_hz)
     return SwarmPrediction(links, connectivity, patterns, float(min_rssi_dbm), float(tx_power_dbm), frequency_hz, notes)
 
@@ -264,13 +264,24 @@ def _block_rows(present: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray
     return np.nonzero(both)
 
 
+@dataclass(frozen=True)
+class _Radio:
+    """Every drone's radio in a swarm prediction: transmit power [dBm], carrier [Hz], and the
+    RSSI a link needs to be up [dBm]."""
+
+    tx_power_dbm: float
+    frequency_hz: float
+    min_rssi_dbm: float
+
+
 def _predict_blocks(
     model: PatternSet, poses: Poses, present: np.ndarray, drones: Sequence[str], patterns: Mapping[str, str],
-    t: np.ndarray, tx_power_dbm: float, frequency_hz: float, min_rssi_dbm: float,
+    t: np.ndarray, radio: _Radio,
 ) -> tuple[pd.DataFrame, pd.DataFrame]:
     """The links and connectivity tables of :class:`SwarmPrediction`, a block of times at a
     time: each block's links are written into the whole table's columns, already in order, so
     memory holds the table and one block's work, not copies of the table."""
+    tx_power_dbm, frequency_hz, min_rssi_dbm = radio.tx_power_dbm, radio.frequency_hz, radio.min_rssi_dbm
     n = len(drones)
     n_present = present.sum(axis=1)
     total = int(np.sum(n_present * (n_present - 1)))
@@ -280,7 +291,7 @@ def _predict_blocks(
     names = np.array(drones, dtype=object)
     pattern_names = np.array([patterns[x] for x in drones], dtype=object)
     limit_m = _far_field_limit_m(frequency_hz)
-    residual_db = float(model.training.get("rmse_db", np.nan))
+    residual_db = float(model.training.rmse_db if model.training.rmse_db is not None else np.nan)
     columns: dict[str, np.ndarray] = {}
     parts = []
     offset = 0
@@ -318,46 +329,6 @@ def _predict_blocks(
 def _far_field_limit_m(frequency_hz: float) -> float:
     """Distance below which no received power is predicted (paper Sec. III: 2 wavelengths) [m]."""
     return FAR_FIELD_WAVELENGTHS * float(wavelength_m(frequency_hz))
-
-
-def _predict_links(
-    model: PatternSet, poses: Poses, drones: Sequence[str], patterns: Mapping[str, str],
-    rows: tuple[np.ndarray, np.ndarray, np.ndarray], t: np.ndarray, tx_power_dbm: float, frequency_hz: float,
-    min_rssi_dbm: float,
-) -> pd.DataFrame:
-    """The links table of :class:`SwarmPrediction` for the (time, pair) ``rows``."""
-    ti, ia, ib = rows
-    position = np.stack([poses[d][0] for d in drones])  # (drones, times, 3)
-    quat = np.stack([poses[d][1] for d in drones])
-    pa, pb = position[ia, ti], position[ib, ti]
-    d = distance_m(pa, pb)
-    dirs = link_directions(pa, quat[ia, ti], pb, quat[ib, ti])
-    pattern_index = np.array([model.node_index(patterns[x]) for x in drones], np.intp)
-    samples = LinkSamples(dirs, pattern_index[ia], pattern_index[ib], model.nodes, np.full(d.size, np.nan), d,
-                          np.full(d.size, frequency_hz), tx_z_m=pa[:, 2], rx_z_m=pb[:, 2])
-    gain = model.predict_gain(samples)
-    limit_m = _far_field_limit_m(frequency_hz)
-    far = d > limit_m
-    rssi = np.full(d.size, np.nan)
-    rssi[far] = tx_power_dbm + gain[far] - free_space_path_loss_db(d[far], frequency_hz)
-    names = np.array(drones, dtype=object)
-    pattern_names = np.array([patterns[x] for x in drones], dtype=object)
-    columns = {
-        "t": t[ti], "tx": names[ia], "rx": names[ib], "tx_pattern": pattern_names[ia], "rx_pattern": pattern_names[ib],
-        "distance_m": d, "gain_pred_db": gain, "rssi_pred_dbm": rssi,
-    }
-    std = model.predict_gain_std(samples)
-    if std is not None:
-        residual_db = float(model.training.get("rmse_db", np.nan))
-        columns["gain_pred_std_db"] = std
-        columns["rssi_pred_std_db"] = np.sqrt(std**2 + residual_db**2)
-    ends = end_coverage_deg(model, samples)
-    if ends is not None:  # how far each end looks from where its pattern was learned [deg]
-        columns["tx_coverage_deg"], columns["rx_coverage_deg"] = ends
-    links = pd.DataFrame(columns).sort_values(["t", "tx", "rx"], kind="stable", ignore_index=True)
-    links["near_field"] = links["distance_m"] <= limit_m
-    links["up"] = (links["rssi_pred_dbm"] >= min_rssi_dbm) | links["near_field"]
-    return links
 
 
 def _swarm_notes(links: pd.DataFrame, poses: Poses, frequency_hz: float) -> list[str]:

@@ -7,10 +7,10 @@ from typing import Callable, Sequence
 
 import numpy as np
 import pandas as pd
-import scipy.linalg  # noqa: F401  (order selection solves through scipy: loaded before any BLAS limit, rplearn.core.blas)
+import scipy.linalg  # noqa: F401  (order selection solves through scipy: loaded before any BLAS limit, rplearn.core.threads)
 
-from rplearn.core.normal_equations import NormalEquations
-from rplearn.core.selection import Selection, select_order_and_smoothing, validation_rmse
+from rplearn.core.lsq.normal_equations import NormalEquations
+from rplearn.core.lsq.selection import Selection, select_order_and_smoothing, validation_rmse
 from rplearn.data.tables import LinkSamples
 from rplearn.models.fit import evaluate_models, fit_model
 from rplearn.models.spec import ModelSpec

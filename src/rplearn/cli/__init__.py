@@ -28,6 +28,11 @@ __all__ = ["app", "main"]
 
 
 def main() -> None:
-    """Entry point of the ``rplearn`` script."""
+    """Entry point of the ``rplearn`` script (and of ``python -m rplearn``): the typer app as a
+    click group, with readable metavars (:mod:`rplearn.cli._help`)."""
+    import typer
+
+    from rplearn.cli._help import apply_readable_metavars
+
     exit_on_sigterm()
-    app()
+    apply_readable_metavars(typer.main.get_command(app))(prog_name="rplearn")

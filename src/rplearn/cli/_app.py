@@ -34,7 +34,7 @@ app = typer.Typer(
         "  rplearn demo -o rplearn-demo"
     ),
     no_args_is_help=True,
-    add_completion=False,
+    add_completion=True,  # --install-completion / --show-completion for bash, zsh, fish, PowerShell
     rich_markup_mode=None,  # help texts carry units in brackets, e.g. [m/s], which markup would eat
     pretty_exceptions_enable=False,
 )
@@ -56,6 +56,7 @@ PARAM_FLAGS: dict[str, str] = {
     "sigma_rad2": "--sigma", "grid": "--grid", "gauge_node": "--gauge-node", "gauge_dbi": "--gauge-dbi", "prior": "--prior NODE=MODEL.json",
     "models": "--models", "orders": "--orders", "n_neighbors": "--degree",
     "ground_level_m": "--ground-level", "relative_permittivity": "--permittivity",
+    "path_loss": "--path-loss", "link_offsets": "--link-offsets",
     "station_geodetic": "--station LAT,LON,ALT", "station": "--station-node", "station_heading_deg": "--station-heading",
 }
 

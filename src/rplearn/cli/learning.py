@@ -34,11 +34,11 @@ def fit(
     prior_level: str = typer.Option("data", "--prior-level", help="Where the level of the --prior patterns comes from: data (default: the prior gives only its shape, so a constant added to every RSSI value only shifts the predictions) or prior (its absolute dBi: calibrated power and a trusted reference)."),
     prior_std: Optional[float] = typer.Option(None, "--prior-std", help="How far [dB RMS] the --prior patterns may be from the truth (a vendor's tolerance): the spread of predictions where the flight never looked (default: learned from their misfit where it looked)."),
     loss: str = typer.Option("ls", "--loss", help="ls (least squares) or huber: for logs with plateaus and dropouts, samples far from the pattern pull only as hard as 1.345 robust standard deviations (a pattern model of fixed order)."),
-    path_loss: str = typer.Option("free", "--path-loss", help="Environment term of pattern models: free (free space, eq. 1), log-distance (learn the path-loss exponent; refused when the distance does not vary independently of the directions) or two-ray (a ground reflection from the antenna heights)."),
+    path_loss_kind: str = typer.Option("free", "--path-loss", help="Environment term of pattern models: free (free space, eq. 1), log-distance (learn the path-loss exponent; refused when the distance does not vary independently of the directions) or two-ray (a ground reflection from the antenna heights)."),
     ground_level: float = typer.Option(0.0, "--ground-level", help="two-ray: ENU height of the ground plane [m]."),
     permittivity: float = typer.Option(15.0, "--permittivity", help="two-ray: relative permittivity of the ground (15 medium dry ground, ITU-R P.527; ~30 wet, 3-7 very dry)."),
     polarization: str = typer.Option("vertical", "--polarization", help="two-ray: vertical (upright whips) or horizontal."),
-    link_offsets: bool = typer.Option(True, "--link-offsets/--no-link-offsets", help="Pattern models: learn one electronics offset per link logged in both directions (non-reciprocal radios; the two directions' offsets sum to 0)."),
+    learn_offsets: bool = typer.Option(True, "--link-offsets/--no-link-offsets", help="Pattern models: learn one electronics offset per link logged in both directions (non-reciprocal radios; the two directions' offsets sum to 0)."),
     dask: Optional[str] = typer.Option(None, "--dask", help=DASK_HELP),
     output: str = typer.Option(..., "-o", "--out", help="Model file (.json)."),
 ) -> None:
@@ -47,21 +47,25 @@ def fit(
     Example: rplearn fit data.parquet --model sh --degree 10 --units learn_0,learn_24,learn_48 -o sh10.json
     """
     from rplearn.core.environment import PathLoss
-    from rplearn.models.spec import ModelSpec, check_fit_options, gauge_of
+    from rplearn.core.gauge import Gauge
+    from rplearn.models.options import FitOptions
+    from rplearn.models.spec import ModelSpec, check_fit_options
     from rplearn.workflows.learning import fit_dataset
 
-    two_ray_flags_note(path_loss, ground_level, permittivity, polarization)
+    two_ray_flags_note(path_loss_kind, ground_level, permittivity, polarization)
     auto, order = degree_option(degree, model)
     spec = ModelSpec.parse(model, order=order, ridge=ridge, sigma_rad2=sigma, grid=grid)
-    check_fit_options(spec, order=order, ridge=ridge, sigma_rad2=sigma, grid=grid, gauge_node=gauge_node,
-                      gauge_dbi=gauge_dbi, model=model)
+    check_fit_options(spec, order=order, ridge=ridge, sigma_rad2=sigma, grid=grid, model=model)
+    options = FitOptions(
+        gauge=Gauge(gauge_node, gauge_dbi), path_loss=PathLoss(path_loss_kind, ground_level, permittivity, polarization),
+        link_offsets=learn_offsets, loss=loss, auto=auto, priors=pairs(prior, "--prior"), prior_std_db=prior_std,
+        prior_level=prior_level,
+    )
+    options.check(spec)
     with progress_bar() as p:
         task = p.add_task("learning", total=None)
-        outcome = fit_dataset(dataset, spec, split_list(units), gauge_of(gauge_node, gauge_dbi), output, auto=auto,
-                              prior=pairs(prior, "--prior") or None, prior_std_db=prior_std, loss=loss,
-                              path_loss=PathLoss(path_loss, ground_level, permittivity, polarization),
-                              link_offsets=link_offsets, dask=dask, progress=parts_step(p, task, "statistics"),
-                              prior_level=prior_level)
+        outcome = fit_dataset(dataset, spec, split_list(units), options=options, output=output, dask=dask,
+                              progress=parts_step(p, task, "statistics"))
     for line in outcome.units.notes:
         note(f"{line} (pass --units to choose)" if outcome.units.defaulted else line)
     say(outcome.summary())
@@ -94,17 +98,18 @@ def reference(
             raise InputError(f"--mount: expected NODE=ROLL,PITCH,YAW in degrees, got {node}={text}")
     model = reference_model_file(files, output, mounts)
     say(f"reference model of {', '.join(model.nodes)} ({model.label}) -> {output}")
-    for node, info in model.training["reference"].items():
+    for node, info in (model.training.reference or {}).items():
         say(f"  {node}: {info['source']}, mount (roll, pitch, yaw) {tuple(info['mount_rpy_deg'])} deg, "
             f"expansion residual {info['expansion_rmse_db']:.3f} dB RMS")
 
 
-def two_ray_flags_note(path_loss: str, ground_level: float, permittivity: float, polarization: str) -> None:
-    """Say when two-ray flags were given without ``--path-loss two-ray`` (they change nothing then)."""
+def two_ray_flags_note(kind: str, ground_level: float, permittivity: float, polarization: str) -> None:
+    """Say when two-ray flags were given without ``--path-loss two-ray`` (``kind``: they change
+    nothing then)."""
     given = [flag for flag, value, default in (("--ground-level", ground_level, 0.0), ("--permittivity", permittivity, 15.0),
                                                 ("--polarization", polarization, "vertical")) if value != default]
-    if given and path_loss != "two-ray":
-        note(f"{', '.join(given)} set the two-ray ground reflection; with --path-loss {path_loss} they are ignored")
+    if given and kind != "two-ray":
+        note(f"{', '.join(given)} set the two-ray ground reflection; with --path-loss {kind} they are ignored")
 
 
 def degree_option(degree: Optional[str], model: str) -> tuple[bool, Optional[int]]:
@@ -220,26 +225,28 @@ def report(
     models: str = typer.Option("m,nn-400,sh-10,p-12,bg-7", "--models", help="Models to learn and compare."),
     test_units: Optional[list[str]] = typer.Option(None, "--test-units", help="Testing units (default: labels starting with 'test')."),
     out_dir: str = typer.Option("rplearn-report", "-o", "--out", help="Output directory."),
-    path_loss: str = typer.Option("free", "--path-loss", help="Environment term of the pattern models: free, log-distance or two-ray (see fit)."),
+    path_loss_kind: str = typer.Option("free", "--path-loss", help="Environment term of the pattern models: free, log-distance or two-ray (see fit)."),
     ground_level: float = typer.Option(0.0, "--ground-level", help="two-ray: ENU height of the ground plane [m]."),
     permittivity: float = typer.Option(15.0, "--permittivity", help="two-ray: relative permittivity of the ground."),
     polarization: str = typer.Option("vertical", "--polarization", help="two-ray: vertical or horizontal."),
-    link_offsets: bool = typer.Option(True, "--link-offsets/--no-link-offsets", help="Pattern models: learn one electronics offset per link logged in both directions."),
+    learn_offsets: bool = typer.Option(True, "--link-offsets/--no-link-offsets", help="Pattern models: learn one electronics offset per link logged in both directions."),
 ) -> None:
     """Learn models on a dataset, test them, and write Table I, pattern maps and report.html.
 
     Example: rplearn report data.parquet --models m,sh-10 -o report
     """
     from rplearn.core.environment import PathLoss
+    from rplearn.models.options import FitOptions
     from rplearn.workflows.learning import learn_and_report
 
     names = split_list([models]) or []
-    two_ray_flags_note(path_loss, ground_level, permittivity, polarization)
-    terms = PathLoss(path_loss, ground_level, permittivity, polarization)
+    two_ray_flags_note(path_loss_kind, ground_level, permittivity, polarization)
+    options = FitOptions(path_loss=PathLoss(path_loss_kind, ground_level, permittivity, polarization),
+                         link_offsets=learn_offsets)
     with progress_bar() as p:
         task = p.add_task("learning", total=None)
         outcome = learn_and_report(dataset, names, out_dir, split_list(test_units), progress=step(p, task),
-                                   path_loss=terms, link_offsets=link_offsets)
+                                   options=options)
     for line in outcome.notes:
         note(line)
     say(outcome.markdown)

@@ -26,6 +26,7 @@ def inspect(
     station_heading: Optional[float] = typer.Option(None, "--station-heading", help="Compass heading of the ground station's antenna (its body x axis) in MAVLink logs [deg clockwise from north] (default 90, east)."),
     frequency_hz: Optional[float] = typer.Option(None, "--frequency", help="Carrier frequency for logs without it [Hz]: the distance a calibration flight needs is 10 wavelengths (433 MHz assumed without it)."),
     markdown: bool = typer.Option(False, "--markdown", help="Print Markdown instead of text."),
+    as_json: bool = typer.Option(False, "--json", help="Print strict JSON instead of text (times from the log start)."),
 ) -> None:
     """Summarise logs: nodes, time spans (seconds from the log start), report rates, RSSI range, gaps,
     what the readers excluded, whether the log holds a calibration flight, and anything suspicious.
@@ -37,7 +38,17 @@ def inspect(
     options = reader_options(node, receiver, address, pose_topic, rssi_topic, rssi_field, msg_definition, require_valid=require_valid,
                              station_geodetic=geodetic_flag(station_geodetic, "--station"), station=station,
                              station_heading_deg=station_heading, frequency_hz=frequency_hz)
+    if markdown and as_json:
+        fail("--markdown and --json: choose one")
     report = inspect_logs(logs, options)
+    if as_json:
+        from rplearn.io.inspect_json import inspect_to_json
+
+        say(inspect_to_json(report))
+        unreadable = [f for f in report.files if f.get("error") is not None]
+        if unreadable:
+            fail(f"{len(unreadable)} of {len(report.files)} file(s) could not be read (see the JSON)")
+        return
     text = report.to_markdown() if markdown else report.to_text()
     # the report names reader options as the library knows them; here they are flags
     say("\n".join(with_flag(line, None, inspect) for line in text.splitlines()))

@@ -1,5 +1,8 @@
 """The maths of rplearn, on numpy and scipy only: frames, the link budget, bases, the solver.
 
+The least-squares engine is the subpackage :mod:`rplearn.core.lsq`, above the other modules
+(it uses them; they never use it); its public names are exported here.
+
 =====================  ==========================================================================
 module                 public names
 =====================  ==========================================================================
@@ -12,7 +15,8 @@ module                 public names
                        :func:`two_ray_excess_db`, :func:`reflection_coefficient`
 ``bases``, ``sh``      :class:`Basis`, :class:`SphericalHarmonics`, :class:`BasisGrid`,
                        :class:`Polynomial`, :func:`make_basis`, :func:`basis_from_dict`
-``solver``             :func:`fit_joint`, :func:`identifiability`, :class:`FitReport`,
+``lsq``                the least-squares engine (a subpackage): :func:`fit_joint`, :func:`solve`,
+                       :func:`identifiability`, :class:`FitReport`, :class:`JointSolution`,
                        :class:`NormalEquations` (streamed sufficient statistics)
 ``metrics``            :func:`score`, :class:`Scores`, :func:`rmse`, :func:`mae`, :func:`q95`,
                        :func:`aic`, :func:`condition_number`, :class:`Stopwatch`
@@ -82,16 +86,17 @@ _NAMES: dict[str, str] = {
     "paper_grid_nodes": "bases",
     "sh_index": "sh",
     # joint least squares
-    "DEFAULT_RIDGE": "solver",
-    "FitReport": "solver",
-    "GaugeNote": "solver",
-    "JointSolution": "solver",
-    "NormalEquations": "normal_equations",
-    "fit_joint": "solver",
-    "identifiability": "solver",
-    "link_components": "solver",
-    "independent_spread_db": "solver",
-    "solve": "solver",
+    "DEFAULT_RIDGE": "lsq.solver",
+    "Gauge": "gauge",
+    "FitReport": "lsq.solution",
+    "GaugeNote": "lsq.solution",
+    "JointSolution": "lsq.solution",
+    "NormalEquations": "lsq.normal_equations",
+    "fit_joint": "lsq.solver",
+    "identifiability": "lsq.solver",
+    "link_components": "lsq.solver",
+    "independent_spread_db": "lsq.solver",
+    "solve": "lsq.solver",
     # metrics (paper Sec. V-C)
     "Scores": "metrics",
     "Stopwatch": "metrics",

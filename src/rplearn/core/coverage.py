@@ -15,7 +15,7 @@ from numpy.typing import ArrayLike
 from pykdtree.kdtree import KDTree
 
 from rplearn.core.bases import fibonacci_grid_nodes
-from rplearn.core.blas import one_openmp_thread
+from rplearn.core.threads import one_openmp_thread
 from rplearn.core.geometry import unit_vector
 from rplearn.errors import InputError
 

@@ -38,7 +38,7 @@ from rplearn.errors import LogFormatError as LogFormatError  # re-exported
 _NAMES: dict[str, str] = {
     "Logs": "_common",
     "ReaderOptions": "options",
-    "detect_format": "read",
+    "detect_format": "sniff",
     "read_logs": "read",
     # canonical tables as files, and what made an output
     "check_table_path": "files",

@@ -23,6 +23,15 @@ from rplearn.io._common import read_parquet_lean
 from rplearn.io.partitions import Part, dataset_parts, is_partitioned, is_url, open_source, with_hive_columns
 
 
+
+def _table_error(name: str, path: Any, exc: BaseException) -> str:
+    """What the file is instead and the command that would read it, else the parser's complaint
+    (:func:`rplearn.io.sniff.table_read_error`)."""
+    from rplearn.io.sniff import table_read_error
+
+    return table_read_error(name, path, exc)
+
+
 def read_table(path: str, source: str | None = None) -> pd.DataFrame:
     """Read a CSV or Parquet table chosen by extension, with a one-line error on failure."""
     name = source or str(path)
@@ -33,9 +42,9 @@ def read_table(path: str, source: str | None = None) -> pd.DataFrame:
             return normalise_times(read_parquet_lean(path), name)
         return normalise_times(pd.read_csv(path, dtype=CSV_DTYPES), name)
     except (ValueError, OSError, pd.errors.ParserError, UnicodeDecodeError) as exc:
-        raise InputError(f"{name}: cannot read table ({type(exc).__name__}: {exc})") from None
+        raise InputError(_table_error(name, path, exc)) from None
     except Exception as exc:  # pyarrow raises its own error classes
-        raise InputError(f"{name}: cannot read table ({type(exc).__name__}: {exc})") from None
+        raise InputError(_table_error(name, path, exc)) from None
 
 
 def table_rows(path: str) -> int | None:
@@ -50,7 +59,7 @@ def table_rows(path: str) -> int | None:
                 return int(pq.ParquetFile(fh).metadata.num_rows)
         return int(pq.ParquetFile(path).metadata.num_rows)
     except Exception as exc:  # pyarrow's own errors on a corrupt footer
-        raise InputError(f"{path}: cannot read table ({type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''})") from None
+        raise InputError(_table_error(str(path), None if is_url(path) else path, exc)) from None
 
 
 def iter_table(path: str, chunk_rows: int = 500_000, columns: Iterable[str] | None = None) -> Iterator[pd.DataFrame]:
@@ -82,7 +91,7 @@ def iter_table(path: str, chunk_rows: int = 500_000, columns: Iterable[str] | No
     except InputError:
         raise
     except Exception as exc:  # parsers raise many classes on corrupt bytes
-        raise InputError(f"{name}: cannot read table ({type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''})") from None
+        raise InputError(_table_error(name, None if url else name, exc)) from None
     finally:
         if url and source is not None:
             source.close()

@@ -216,8 +216,9 @@ def _fixes(raw: Raw, source: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, l
     fix_ok = _step_state(tp, raw.fix, 1.0) > 0.5
     invalid, steps = phases.invalid_fixes(tp, enu, pos[:, 4], pos[:, 5], boot, fix_ok)
     name = "HOME_POSITION or GPS_GLOBAL_ORIGIN" if raw.fmt == "tlog" else "ORGN"
-    periods = phases.excluded_periods(tp, invalid, boot, raw.boot_last_t, float(np.nanmin(times)),
-                                      float(np.nanmax(times)), steps, fix_ok, raw.origin_t, name)
+    periods = phases.excluded_periods(
+        phases.Fixes(tp, invalid, boot, fix_ok, steps),
+        phases.LogClock(float(np.nanmin(times)), float(np.nanmax(times)), raw.boot_last_t, raw.origin_t, name))
     if (~invalid).sum() < 2:
         raise LogFormatError(f"{source}: fewer than 2 valid position fixes of the vehicle "
                              f"({int(invalid.sum())} before a valid position solution)")

@@ -44,6 +44,7 @@ One row per radio reading
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -139,15 +140,39 @@ def invalid_fixes(t: np.ndarray, xyz: np.ndarray, speed_h: np.ndarray, speed_v: 
     return invalid, steps
 
 
-def excluded_periods(t: np.ndarray, invalid: np.ndarray, boot: np.ndarray, boot_last_t: np.ndarray,
-                     log_start: float, log_end: float, steps: dict[int, str], fix_ok: np.ndarray,
-                     origin_t: np.ndarray, origin_name: str) -> list[dict[str, Any]]:
+@dataclass(frozen=True)
+class Fixes:
+    """The vehicle's position fixes, sorted by time: their times [s], which are invalid
+    (:func:`invalid_fixes`), their boot (:func:`boot_ids`), which have a 3-D GPS fix, and the
+    steps found (fix index -> what the step was)."""
+
+    t: np.ndarray
+    invalid: np.ndarray
+    boot: np.ndarray
+    fix_ok: np.ndarray
+    steps: dict[int, str]
+
+
+@dataclass(frozen=True)
+class LogClock:
+    """What a log says about time: its first and last message [s], the time of each boot's last
+    vehicle message (``boot_last_t[b]``), and the times of the origin messages (named
+    ``origin_name`` in the evidence)."""
+
+    log_start: float
+    log_end: float
+    boot_last_t: np.ndarray
+    origin_t: np.ndarray
+    origin_name: str
+
+
+def excluded_periods(fixes: Fixes, clock: LogClock) -> list[dict[str, Any]]:
     """The periods to exclude (module docstring), rows not yet counted.
 
-    ``t``, ``invalid``, ``boot``, ``fix_ok`` per fix (sorted by time); ``boot_last_t[b]`` the
-    time of boot ``b``'s last vehicle message; ``origin_t`` the times of origin messages.
     Each period carries ``lo`` and ``hi``, the open bounds rows are dropped inside.
     """
+    t, invalid, boot = fixes.t, fixes.invalid, fixes.boot
+    boot_last_t, log_start, log_end = clock.boot_last_t, clock.log_start, clock.log_end
     periods: list[dict[str, Any]] = []
     n_boots = int(boot.max()) + 1 if len(boot) else 1
     for b in range(n_boots):
@@ -176,14 +201,15 @@ def excluded_periods(t: np.ndarray, invalid: np.ndarray, boot: np.ndarray, boot_
                 hi = np.nextafter(hi, np.inf)
             periods.append({"reason": reason, "lo": lo, "hi": hi, "from_t": float(shown),
                             "to_t": float(min(hi, log_end)),
-                            "detail": _evidence(reason, t, members, steps, fix_ok, origin_t, origin_name, log_start,
+                            "detail": _evidence(reason, members, fixes, clock,
                                                 boot_last_t[b - 1] if b > 0 else None)})
     return periods
 
 
-def _evidence(reason: str, t: np.ndarray, members: np.ndarray, steps: dict[int, str], fix_ok: np.ndarray,
-              origin_t: np.ndarray, origin_name: str, log_start: float, reboot_t: float | None) -> str:
+def _evidence(reason: str, members: np.ndarray, fixes: Fixes, clock: LogClock, reboot_t: float | None) -> str:
     """One line of what the log says about a period (times from the log start [s])."""
+    t, steps, fix_ok = fixes.t, fixes.steps, fixes.fix_ok
+    origin_t, origin_name, log_start = clock.origin_t, clock.origin_name, clock.log_start
     parts = []
     if reboot_t is not None:
         parts.append(f"the boot clock went back (reboot) after {reboot_t - log_start:.1f} s")
@@ -257,6 +283,6 @@ def repeated_readings(t: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, fl
     return copy, period
 
 
-__all__ = ["DUPLICATE_FRACTION_OF_PERIOD", "MAX_HORIZONTAL_SPEED_M_S", "MAX_VERTICAL_SPEED_M_S", "REASONS",
+__all__ = ["DUPLICATE_FRACTION_OF_PERIOD", "Fixes", "LogClock", "MAX_HORIZONTAL_SPEED_M_S", "MAX_VERTICAL_SPEED_M_S", "REASONS",
            "REBOOT_STEP_S", "STEP_MARGIN_M", "STEP_SPEED_SLACK_M_S", "boot_ids", "excluded_periods",
            "in_periods", "invalid_fixes", "repeated_readings", "report_period_s", "step_allowed"]

@@ -106,6 +106,11 @@ def read_model_file(path: str | os.PathLike[str]) -> tuple[str, dict[str, Any]]:
         with open(name, encoding="utf-8") as fh:
             doc = json.load(fh, parse_constant=_no_constant)
     except ValueError as exc:  # JSONDecodeError, UnicodeDecodeError, NaN/Infinity (see _no_constant)
+        from rplearn.io.sniff import not_a_model_hint
+
+        hint = not_a_model_hint(name)
+        if hint:  # a dataset or a raw log: say what it is, not how its bytes fail to decode
+            raise ModelFileError(f"{name}: {hint}") from None
         raise ModelFileError(f"{name}: not a valid JSON model file (truncated or corrupt: {exc})") from None
     except OSError as exc:
         raise ModelFileError(f"{name}: cannot read ({exc.strerror})") from None

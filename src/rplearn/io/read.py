@@ -13,64 +13,7 @@ from rplearn.data.tables import NON_UNIT_QUATERNION_ATTR, validate_pose_log
 from rplearn.errors import InputError, RplearnError
 from rplearn.io._common import Logs
 from rplearn.io.options import ReaderOptions
-
-_MAGIC: tuple[tuple[bytes, str], ...] = (
-    (b"ULog\x01\x12\x35", "ulog"),
-    (b"#ROSBAG V2.0", "ros1"),
-    (b"\x89MCAP", "ros2"),
-    (b"SQLite format 3\x00", "ros2"),
-    (b"\x0a\x0d\x0d\x0a", "pcap"),
-    (b"\xd4\xc3\xb2\xa1", "pcap"),
-    (b"\xa1\xb2\xc3\xd4", "pcap"),
-    (b"\x4d\x3c\xb2\xa1", "pcap"),
-    (b"\xa1\xb2\x3c\x4d", "pcap"),
-    (b"PAR1", "table"),
-    (b"\xa3\x95\x80", "mavlink"),  # DataFlash: the first record is an FMT (type 128)
-    (b"FMT, ", "mavlink"),  # DataFlash as text
-)
-_EXTENSIONS: dict[str, str] = {
-    ".ulg": "ulog",
-    ".bag": "ros1",
-    ".mcap": "ros2",
-    ".db3": "ros2",
-    ".pcap": "pcap",
-    ".pcapng": "pcap",
-    ".cap": "pcap",
-    ".csv": "table",
-    ".parquet": "table",
-    ".pq": "table",
-    ".tlog": "mavlink",
-    ".bin": "mavlink",
-}
-
-
-def detect_format(path: str | os.PathLike) -> str:
-    """Format of a log: ``"ulog"``, ``"ros1"``, ``"ros2"``, ``"pcap"``, ``"mavlink"`` (a
-    ``.tlog`` or an ArduPilot DataFlash log) or ``"table"``.
-
-    A directory holding ``metadata.yaml`` is a ROS 2 bag. Files are judged by their first
-    bytes, then by extension.
-    """
-    p = str(path)
-    if not os.path.exists(p):
-        raise InputError(f"{p}: no such file or directory")
-    if os.path.isdir(p):
-        if os.path.exists(os.path.join(p, "metadata.yaml")):
-            return "ros2"
-        raise InputError(f"{p}: a directory but not a ROS 2 bag (no metadata.yaml)")
-    with open(p, "rb") as fh:
-        head = fh.read(16)
-    for magic, kind in _MAGIC:
-        if head.startswith(magic):
-            return kind
-    ext = os.path.splitext(p)[1].lower()
-    if ext in _EXTENSIONS:
-        return _EXTENSIONS[ext]
-    raise InputError(
-        f"{p}: unknown log format; expected one of {', '.join(sorted(set(_EXTENSIONS)))} "
-        "or a ROS 2 bag directory"
-    )
-
+from rplearn.io.sniff import detect_format
 
 def _bag_needs_topics(path: str, msg_definitions: Mapping[str, str] | None) -> str:
     """Message for a bag read without topics: how to name them, and the topics it has."""

@@ -70,6 +70,15 @@ def rename_columns(df: pd.DataFrame, columns: Mapping[str, str] | None = None) -
     return df
 
 
+
+def _table_error(name: str, path: Any, exc: BaseException) -> str:
+    """What the file is instead and the command that would read it, else the parser's complaint
+    (:func:`rplearn.io.sniff.table_read_error`)."""
+    from rplearn.io.sniff import table_read_error
+
+    return table_read_error(name, path, exc)
+
+
 def _read(path: str, source: str) -> pd.DataFrame:
     if not os.path.exists(path):
         raise InputError(f"{source}: no such file")
@@ -81,7 +90,7 @@ def _read(path: str, source: str) -> pd.DataFrame:
         raise LogFormatError(f"{source}: empty file, expected a header line and rows") from None
     except Exception as exc:  # parsers raise many classes on corrupt bytes
         msg = str(exc).splitlines()[0] if str(exc) else ""
-        raise LogFormatError(f"{source}: cannot read table ({type(exc).__name__}: {msg})") from None
+        raise LogFormatError(_table_error(source, path, exc)) from None
 
 
 def table_format(path: str | os.PathLike) -> str:
@@ -415,7 +424,7 @@ def iter_signal_table(
         raise
     except Exception as exc:
         msg = str(exc).splitlines()[0] if str(exc) else ""
-        raise LogFormatError(f"{source}: cannot read table ({type(exc).__name__}: {msg})") from None
+        raise LogFormatError(_table_error(source, path, exc)) from None
 
 
 def table_columns(path: str, columns: Mapping[str, str] | None = None) -> list[str]:
@@ -430,7 +439,7 @@ def table_columns(path: str, columns: Mapping[str, str] | None = None) -> list[s
             names = list(pd.read_csv(path, nrows=0, skipinitialspace=True).columns)
     except Exception as exc:
         msg = str(exc).splitlines()[0] if str(exc) else ""
-        raise LogFormatError(f"{source}: cannot read table ({type(exc).__name__}: {msg})") from None
+        raise LogFormatError(_table_error(source, path, exc)) from None
     return [str(c) for c in rename_columns(pd.DataFrame(columns=names), columns).columns]
 
 

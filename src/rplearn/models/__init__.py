@@ -6,6 +6,8 @@ module           public names
 ``base``         :class:`Model`, the protocol every model kind implements (``predict_gain``,
                  ``predict_gain_std``, ``save``, ...); :func:`model_frequency_hz`
 ``spec``         :class:`ModelSpec` (``"sh-10"``, ``"bg-7"``, ``"p-12"``, ``"nn-400"``, ``"m"``)
+``options``      :class:`FitOptions`, how a model is learned (with :class:`Gauge`); checked once
+``training``     :class:`TrainingSummary`, what a fit says about itself (``model.training``)
 ``patterns``     :class:`PatternSet`, one radiation pattern per node
 ``baselines``    :class:`MeanModel` (M), :class:`KNNModel` (NN-k)
 ``fit``          :func:`fit_model` -> :class:`FittedModel`, :func:`fit_patterns`,
@@ -36,7 +38,10 @@ _NAMES: dict[str, str] = {
     "MODEL_KINDS": "spec",
     "ModelSpec": "spec",
     "check_fit_options": "spec",
-    "gauge_of": "spec",
+    # how a model is learned (one fit request)
+    "FitOptions": "options",
+    "LOSSES": "options",
+    "TrainingSummary": "training",
     "default_ridge": "spec",
     # model kinds
     "KNNModel": "baselines",

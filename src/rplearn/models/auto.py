@@ -1,7 +1,7 @@
 """``fit --degree auto``: a regularised pattern whose order and smoothing the data choose.
 
 The statistics of every learning unit are accumulated once, at the largest candidate order;
-:func:`rplearn.core.selection.select_order_and_smoothing` chooses order and smoothing by grouped
+:func:`rplearn.core.lsq.selection.select_order_and_smoothing` chooses order and smoothing by grouped
 cross-validation over the units (GCV with one unit); the model is then solved from the sum of
 the same statistics (a sub-block for a smaller SH order), so no sample is read twice.
 """
@@ -13,14 +13,14 @@ from collections import Counter
 from typing import Any, Mapping, Sequence
 
 import numpy as np
-import scipy.linalg  # noqa: F401  (order selection solves through scipy: loaded before any BLAS limit, rplearn.core.blas)
+import scipy.linalg  # noqa: F401  (order selection solves through scipy: loaded before any BLAS limit, rplearn.core.threads)
 
 from rplearn.core.environment import PathLoss
-from rplearn.core.link_statistics import reserve_block_buffer
-from rplearn.core.normal_equations import NormalEquations
-from rplearn.core.blas import blas_threads_for, warm_up as warm_up_blas
+from rplearn.core.lsq.link_statistics import reserve_block_buffer
+from rplearn.core.lsq.normal_equations import NormalEquations
+from rplearn.core.threads import blas_threads_for, warm_up as warm_up_blas
 from rplearn.models.terms import regression_inputs, shared_fields, statistics_counts
-from rplearn.core.selection import (
+from rplearn.core.lsq.selection import (
     DEFAULT_PENALTY_POWER,
     Selection,
     nested_columns,
@@ -29,14 +29,17 @@ from rplearn.core.selection import (
     select_order_and_smoothing,
     sub_statistics,
 )
-from rplearn.core.solver import PRIOR_LEVELS, solve
+from rplearn.core.lsq.solver import solve
 from rplearn.data.tables import LinkSamples
 from rplearn.errors import InputError
 from rplearn.models.fit import FittedModel, node_coverage_grids
+from rplearn.models.load import load_priors
+from rplearn.models.options import FitOptions
 from rplearn.models.own_posterior import OwnPrior, own_pattern_posterior
 from rplearn.models.patterns import PatternSet
 from rplearn.models.spec import ModelSpec, check_model_size, default_ridge
 from rplearn.models.streamed import frequency_counts, weighted_median
+from rplearn.models.training import TrainingSummary
 
 #: Largest SH order ``--degree auto`` considers (the cost of the selection is that of one fit
 #: at this order: its statistics are accumulated once). A cost cap: on the paper's data the
@@ -193,17 +196,10 @@ def unseen_spread_cap_db(normal: NormalEquations, basis: Any) -> float:
 
 def fit_auto(
     unit_samples: Mapping[str, LinkSamples],
-    kind: str = "sh",
-    order: int | None = None,
-    ridge: float | None = None,
-    gauge: str | Mapping[str, Any] = "equal-mean",
+    spec: ModelSpec | None = None,
+    options: FitOptions | None = None,
     provenance: Mapping[str, Any] | None = None,
     power: float | None = None,
-    prior: Mapping[str, Any] | None = None,
-    prior_spread_db: float | None = None,
-    path_loss: PathLoss | None = None,
-    link_offsets: bool = True,
-    prior_level: str = "data",
 ) -> tuple[FittedModel, Selection]:
     """Learn a regularised pattern set with its order and smoothing chosen from the data.
 
@@ -211,33 +207,21 @@ def fit_auto(
     ----------
     unit_samples : mapping of unit label to LinkSamples
         The learning samples of every flight unit, all with the same node list.
-    kind : {"sh", "bg", "poly"}
-    order : int, optional
-        BG and P: the order (its smoothing is chosen); SH: ignored (chosen).
-    ridge : float, optional
-        The solver's ridge (default of the kind).
-    gauge : str or mapping
-        As :func:`rplearn.models.fit.solve_patterns`.
+    spec : ModelSpec, optional
+        The kind (sh, bg, poly; default sh) and ridge; BG and P: the order (its smoothing is
+        chosen); SH: its order is ignored (chosen).
+    options : FitOptions, optional
+        The gauge, environment term and link offsets (as :func:`rplearn.models.fit.solve_patterns`),
+        and the priors: reference patterns whose shape to shrink toward instead of toward zero
+        (``fit --prior``; their absolute level is not imposed unless ``prior_level="prior"``:
+        it is the data's, or the gauge's): where the flight looked, the data win; where it did
+        not, the pattern falls back to the prior. ``prior_std_db`` (how far each prior may be
+        from the truth, where known: a vendor's tolerance) sets the predictive spread where
+        the flight did not look (see :func:`fit_from_statistics`).
     provenance : mapping, optional
     power : float, optional
         Exponent of the SH roughness weights: :data:`DEFAULT_PENALTY_POWER` without a prior,
         :data:`PRIOR_PENALTY_POWER` (plain ridge toward the prior) with one.
-    prior : mapping of node to model, optional
-        Reference patterns whose shape to shrink toward instead of toward zero (``fit --prior``;
-        their absolute level is not imposed: it is the data's, or the gauge's): where the
-        flight looked, the data win; where it did not, the pattern falls back to the prior.
-    prior_spread_db : float, optional
-        How far [dB RMS] each prior may be from the truth, where known (a vendor's tolerance);
-        by default learned from the prior's misfit where the flight looked. Sets the predictive
-        spread where the flight did not look (see :func:`fit_from_statistics`).
-    path_loss : PathLoss, optional
-        The environment term (free space by default; :mod:`rplearn.models.terms`).
-    link_offsets : bool
-        Learn one electronics offset per link logged in both directions.
-    prior_level : {"data", "prior"}
-        Where the level of a prior's pattern comes from: the data (default: the prior gives
-        only its shape, and a constant added to every RSSI value only shifts the predictions),
-        or the prior's absolute dBi (``"prior"``: calibrated power and a trusted reference).
 
     Returns
     -------
@@ -246,8 +230,12 @@ def fit_auto(
     selection : Selection
         The choice and its validation curve (also in ``model.training["selection"]``).
     """
+    spec = spec or ModelSpec.parse("sh")
+    kind = spec.kind
     if kind not in ("sh", "bg", "poly"):
         raise InputError(f"automatic selection is for pattern models (sh, bg, poly), not {kind}", param="model")
+    options = options or FitOptions(auto=True)
+    order = spec.order if kind != "sh" else None
     units = {str(u): s for u, s in unit_samples.items() if len(s)}
     if not units:
         raise InputError("no learning samples", param="units")
@@ -255,9 +243,7 @@ def fit_auto(
     if any(s.nodes != nodes for s in units.values()):
         raise InputError("the units' samples name different node lists; build them with one nodes=", param="unit_samples")
     n = sum(len(s) for s in units.values())
-    ridge = default_ridge(kind) if ridge is None else float(ridge)
-    if power is None:
-        power = PRIOR_PENALTY_POWER if prior else DEFAULT_PENALTY_POWER
+    ridge = default_ridge(kind) if spec.ridge is None else float(spec.ridge)
     orders = auto_orders(kind, n, len(nodes), order)
     big = ModelSpec(kind, orders[-1], ridge=ridge)
     check_model_size(big, n, len(nodes))
@@ -266,41 +252,36 @@ def fit_auto(
     warm_up_blas()
     with blas_threads_for(n, basis.n_coef * len(nodes)):
         t0 = time.perf_counter()
-        path_loss = path_loss or PathLoss()
         stats = {}
         for u, s in units.items():
-            y, env = regression_inputs(s, path_loss)
+            y, env = regression_inputs(s, options)
             stats[u] = NormalEquations(basis, len(nodes), environment=env is not None).add(
                 s.directions, s.tx_index, s.rx_index, y, env)
         freq = Counter()
         for s in units.values():
             frequency_counts(s, freq)
-        fitted, choice = fit_from_statistics(stats, kind, orders, nodes, ridge, gauge, power, weighted_median(freq),
-                                             provenance, prior, prior_spread_db, path_loss, link_offsets, prior_level)
+        fitted, choice = fit_from_statistics(stats, big, orders, nodes, options, weighted_median(freq), provenance,
+                                             power)
         fitted.ltd_s = time.perf_counter() - t0
-    fitted.model.training["ltd_s"] = fitted.ltd_s
-    fitted.model.training["coverage_deg"] = node_coverage_grids(list(units.values()))
+    fitted.model.training = fitted.model.training.replace(ltd_s=fitted.ltd_s,
+                                                          coverage_deg=node_coverage_grids(list(units.values())))
     return fitted, choice
 
 
 def fit_from_statistics(
     stats: Mapping[str, NormalEquations],
-    kind: str,
+    spec: ModelSpec,
     orders: list[int],
     nodes: tuple[str, ...] | list[str],
-    ridge: float,
-    gauge: str | Mapping[str, Any] = "equal-mean",
-    power: float | None = None,
+    options: FitOptions | None = None,
     frequency_hz: float | None = None,
     provenance: Mapping[str, Any] | None = None,
-    prior: Mapping[str, Any] | None = None,
-    prior_spread_db: float | None = None,
-    path_loss: PathLoss | None = None,
-    link_offsets: bool = True,
-    prior_level: str = "data",
+    power: float | None = None,
 ) -> tuple[FittedModel, Selection]:
     """The selection and the final solve of :func:`fit_auto`, from per-unit statistics
-    accumulated at the largest of ``orders`` (in memory, or streamed from a big file).
+    accumulated at the largest of ``orders`` (in memory, or streamed from a big file), for the
+    kind and ridge of ``spec``, learned as ``options`` say (:class:`FitOptions`; prior files are
+    loaded here, :func:`rplearn.models.load.load_priors`).
 
     Statistics accumulated with an environment column (the log-distance term of
     ``path_loss``) get it as a shared column, and with ``link_offsets`` one offset per link
@@ -320,19 +301,18 @@ def fit_from_statistics(
     or the capped implied spread, whichever is larger.
     """
     t0 = time.perf_counter()
+    options = options or FitOptions(auto=True)
+    kind, ridge = spec.kind, float(spec.ridge if spec.ridge is not None else default_ridge(spec.kind))
+    gauge, path_loss, link_offsets = options.gauge, options.path_loss, options.link_offsets
+    prior, prior_spread_db, prior_level = load_priors(options).priors or None, options.prior_std_db, options.prior_level
     if power is None:
         power = PRIOR_PENALTY_POWER if prior else DEFAULT_PENALTY_POWER
-    if prior_level not in PRIOR_LEVELS:
-        raise InputError(f"prior level: expected {' or '.join(PRIOR_LEVELS)}, got {prior_level!r}", param="prior_level")
     if prior_spread_db is not None:
-        if not (isinstance(prior_spread_db, (int, float)) and np.isfinite(prior_spread_db) and prior_spread_db > 0):
-            raise InputError(f"prior spread: expected a positive number of dB, got {prior_spread_db!r}", param="prior_spread_db")
         missing = sorted(set(map(str, nodes)) - set(map(str, prior or {})))
         if missing:
             raise InputError(f"prior spread: it states how far the priors may be off, but node(s) {', '.join(missing)} "
                              "have no prior; give a prior for every node", param="prior_spread_db")
     first = next(iter(stats.values()))
-    path_loss = path_loss or PathLoss()
     if first.environment != path_loss.learns_exponent:
         raise InputError(f"path loss {path_loss.kind}: the statistics were accumulated "
                          f"{'with' if first.environment else 'without'} an environment column", param="path_loss")
@@ -347,8 +327,8 @@ def fit_from_statistics(
     target = prior_coefficients(prior, list(nodes), first.basis) if prior else None
     choice = select_order_and_smoothing(stats, lambda k: ModelSpec(kind, k, ridge=ridge).basis(), orders, ridge, power,
                                         target=target, prior_level=prior_level)
-    spec = ModelSpec(kind, choice.order, ridge=ridge, smoothing=choice.smoothing)
-    chosen = spec.basis()
+    final = ModelSpec(kind, choice.order, ridge=ridge, smoothing=choice.smoothing)
+    chosen = final.basis()
     normal = sub_statistics(total, chosen)
     penalty = penalty_vector(chosen, len(nodes), choice.smoothing, penalty_scale(normal.gram, normal.n_pattern_columns), power)
     sub_target = None
@@ -402,7 +382,7 @@ def fit_from_statistics(
                          target, prior_level)
     own = own_pattern_posterior(total, chosen, list(map(str, nodes)), own_prior, noise_var, uncapped)
     ltd = time.perf_counter() - t0
-    fields, terms = shared_fields(sol, list(nodes), path_loss, counts, rescale * inflation)
+    fields, terms = shared_fields(sol, list(nodes), options, counts, rescale * inflation)
     training = sol.report.to_dict()
     training.update(terms)
     training.update(smoothing=choice.smoothing, penalty_power=power, selection=choice.to_dict(), ltd_s=ltd,
@@ -416,9 +396,9 @@ def fit_from_statistics(
     if frequency_hz is not None:
         training["frequency_hz"] = frequency_hz
     model = PatternSet(basis=chosen, nodes=tuple(nodes), coef=sol.coef, covariance=covariance,
-                       gauge=[g.to_dict() for g in sol.report.gauges], training=training, **fields)
-    model.provenance = {**dict(provenance or {}), "model": spec.label}
-    return FittedModel(spec, model, ltd, own_posterior=own), choice
+                       gauge=[g.to_dict() for g in sol.report.gauges], training=TrainingSummary.from_dict(training), **fields)
+    model.provenance = {**dict(provenance or {}), "model": final.label}
+    return FittedModel(final, model, ltd, own_posterior=own), choice
 
 
 __all__ = ["unseen_spread_cap_db", "within_unit_noise_var", "MAX_AUTO_ORDER", "PRIOR_PENALTY_POWER", "SAMPLES_PER_COEF", "auto_orders", "fit_auto", "fit_from_statistics", "prior_coefficients", "prior_misfit_var", "prior_std_db"]

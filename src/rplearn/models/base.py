@@ -11,13 +11,14 @@ from __future__ import annotations
 
 import math
 import os
-from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Any, Mapping, Protocol, runtime_checkable
 
 import numpy as np
 from numpy.typing import NDArray
 
 from rplearn.data.tables import check_frequency_hz
 from rplearn.errors import InputError
+from rplearn.models.training import TrainingSummary
 
 if TYPE_CHECKING:  # annotations only: the protocol needs no pandas at import time
     from rplearn.data.tables import LinkSamples
@@ -37,7 +38,7 @@ class Model(Protocol):
     frequency_hz : float or None
         Carrier frequency the model learned at [Hz], from its training summary; None when
         the training data did not state it.
-    training : dict
+    training : TrainingSummary
         Training summary (samples, RMSE [dB], rank, condition number, LTD [s], ...).
     provenance : dict
         Library version, command and parameters that made the model.
@@ -58,7 +59,7 @@ class Model(Protocol):
     def frequency_hz(self) -> float | None: ...
 
     @property
-    def training(self) -> dict[str, Any]: ...
+    def training(self) -> TrainingSummary: ...
 
     @property
     def provenance(self) -> dict[str, Any]: ...
@@ -83,9 +84,9 @@ class Model(Protocol):
         ...
 
 
-def frequency_from_training(training: dict[str, Any]) -> float | None:
+def frequency_from_training(training: TrainingSummary | Mapping[str, Any]) -> float | None:
     """Carrier frequency recorded in a training summary [Hz] (None: not recorded)."""
-    f = training.get("frequency_hz")
+    f = TrainingSummary.from_dict(training).frequency_hz
     return None if f is None else float(f)
 
 

@@ -27,6 +27,7 @@ from rplearn.data.tables import LinkSamples
 from rplearn.errors import IdentifiabilityError, InputError, ModelFileError
 from rplearn.io.modelfile import read_sidecar, write_model_with_sidecar
 from rplearn.models.base import frequency_from_training, learned_frequency_hz
+from rplearn.models.training import TrainingSummary
 
 Link = tuple[str, str]
 
@@ -57,13 +58,9 @@ def _nodes_of_links(links) -> tuple[str, ...]:
     return tuple(dict.fromkeys(n for key in links for n in key))
 
 
-def _baseline_training(samples: LinkSamples) -> dict[str, Any]:
+def _baseline_training(samples: LinkSamples) -> TrainingSummary:
     """Training summary of a baseline: sample count and, when known, the carrier [Hz]."""
-    training: dict[str, Any] = {"n_samples": len(samples)}
-    frequency_hz = learned_frequency_hz(samples)
-    if frequency_hz is not None:
-        training["frequency_hz"] = frequency_hz
-    return training
+    return TrainingSummary(n_samples=len(samples), frequency_hz=learned_frequency_hz(samples))
 
 
 # -- the maths of one link, shared with the scikit-learn estimators -------------------------
@@ -129,7 +126,7 @@ class _PerLinkBaseline:
     """What both baselines share: they know the directed links they learned, and the carrier
     their training samples were at."""
 
-    training: dict[str, Any]
+    training: TrainingSummary
 
     def _known_links(self) -> Mapping[tuple[str, str], Any]:
         raise NotImplementedError
@@ -150,10 +147,13 @@ class MeanModel(_PerLinkBaseline):
     """The paper's M: mean training joint gain per directed link [dB]."""
 
     means_db: dict[Link, float]
-    training: dict[str, Any] = field(default_factory=dict)
+    training: TrainingSummary = field(default_factory=TrainingSummary)
     provenance: dict[str, Any] = field(default_factory=dict)
     kind: str = "mean"
     label: str = "M"
+
+    def __post_init__(self) -> None:
+        self.training = TrainingSummary.from_dict(self.training)
 
     @classmethod
     def fit(cls, samples: LinkSamples) -> "MeanModel":
@@ -187,7 +187,7 @@ class MeanModel(_PerLinkBaseline):
         return {
             "label": self.label,
             "links": [{"tx": t, "rx": r, "mean_db": v} for (t, r), v in self.means_db.items()],
-            "training": self.training,
+            "training": self.training.to_dict(),
             "provenance": self.provenance,
         }
 
@@ -202,7 +202,7 @@ class MeanModel(_PerLinkBaseline):
             raise ModelFileError(f"{source}: malformed mean model ({type(exc).__name__}: {exc})") from None
         if not means or not all(np.isfinite(list(means.values()))):
             raise ModelFileError(f"{source}: mean model needs finite means for at least one link")
-        return cls(means, dict(payload.get("training", {})), dict(payload.get("provenance", {})))
+        return cls(means, TrainingSummary.from_dict(payload.get("training", {})), dict(payload.get("provenance", {})))
 
 
 @dataclass
@@ -212,11 +212,12 @@ class KNNModel(_PerLinkBaseline):
     n_neighbors: int
     train_angles_rad: dict[Link, np.ndarray]
     train_gain_db: dict[Link, np.ndarray]
-    training: dict[str, Any] = field(default_factory=dict)
+    training: TrainingSummary = field(default_factory=TrainingSummary)
     provenance: dict[str, Any] = field(default_factory=dict)
     kind: str = "knn"
 
     def __post_init__(self) -> None:
+        self.training = TrainingSummary.from_dict(self.training)
         self._regressors: dict[Link, Any] = {}
 
     @property
@@ -270,7 +271,7 @@ class KNNModel(_PerLinkBaseline):
                 {"tx": t, "rx": r, "angles_rad": self.train_angles_rad[(t, r)].tolist(), "gain_db": self.train_gain_db[(t, r)].tolist()}
                 for (t, r) in self.train_gain_db
             ],
-            "training": self.training,
+            "training": self.training.to_dict(),
             "provenance": self.provenance,
         }
 
@@ -288,7 +289,7 @@ class KNNModel(_PerLinkBaseline):
             "label": self.label,
             "n_neighbors": self.n_neighbors,
             "links": [{"tx": t, "rx": r, "samples": int(self.train_gain_db[(t, r)].size)} for t, r in links],
-            "training": self.training,
+            "training": self.training.to_dict(),
             "provenance": self.provenance,
         }
         write_model_with_sidecar(path, "knn", payload, arrays)
@@ -325,4 +326,4 @@ class KNNModel(_PerLinkBaseline):
             raise ModelFileError(f"{source}: malformed k-NN model ({type(exc).__name__}: {exc})") from None
         if not angles:
             raise ModelFileError(f"{source}: k-NN model holds no link")
-        return cls(k, angles, gains, dict(payload.get("training", {})), dict(payload.get("provenance", {})))
+        return cls(k, angles, gains, TrainingSummary.from_dict(payload.get("training", {})), dict(payload.get("provenance", {})))

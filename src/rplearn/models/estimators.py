@@ -32,12 +32,14 @@ import numpy as np
 from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.utils.validation import check_is_fitted, validate_data
 
+from rplearn.core.gauge import Gauge
 from rplearn.core.geometry import Directions
-from rplearn.core.solver import DEFAULT_RIDGE
+from rplearn.core.lsq.solver import DEFAULT_RIDGE
 from rplearn.data.tables import LinkSamples
 from rplearn.errors import InputError
 from rplearn.models.baselines import knn_regressor, mean_joint_gain_db
 from rplearn.models.fit import solve_patterns
+from rplearn.models.options import FitOptions
 from rplearn.models.spec import ModelSpec
 
 ANGLE_COLUMNS = ("az_tx", "el_tx", "az_rx", "el_rx")
@@ -141,8 +143,8 @@ class PatternRegressor(RegressorMixin, BaseEstimator):
         _, tx, rx = split_features(X)
         n_nodes = self.n_nodes if self.n_nodes is not None else int(max(tx.max(), rx.max())) + 1
         names = tuple(str(i) for i in range(max(n_nodes, 2)))
-        self.patterns_, self.report_ = solve_patterns(samples_from_features(X, y, names), self._spec(), self.gauge,
-                                                      link_offsets=bool(self.link_offsets))
+        options = FitOptions(gauge=Gauge.of(self.gauge), link_offsets=bool(self.link_offsets))
+        self.patterns_, self.report_ = solve_patterns(samples_from_features(X, y, names), self._spec(), options)
         self.coef_ = self.patterns_.coef
         return self
 

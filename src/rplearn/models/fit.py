@@ -13,17 +13,18 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from rplearn.core.blas import blas_threads_for, warm_up as warm_up_blas
+from rplearn.core.threads import blas_threads_for, warm_up as warm_up_blas
 from rplearn.models.baselines import KNNModel, MeanModel
 from rplearn.data.tables import LinkSamples
 from rplearn.core.metrics import Scores, score
 from rplearn.models.patterns import PatternSet
-from rplearn.core.solver import FitReport, fit_joint
+from rplearn.core.lsq.solver import FitReport, fit_joint
 from rplearn.models.base import Model, learned_frequency_hz
+from rplearn.models.options import FitOptions
 from rplearn.models.spec import ModelSpec, check_model_size
 from rplearn.models.terms import directed_counts, regression_inputs, shared_fields
-from rplearn.core.environment import PathLoss
 from rplearn.errors import InputError
+from rplearn.models.training import TrainingSummary
 
 
 @dataclass
@@ -51,22 +52,18 @@ class FittedModel:
     @classmethod
     def from_model(cls, model: Model) -> "FittedModel":
         """Wrap a loaded model; its LTD comes from its training summary (NaN if absent)."""
-        ltd = model.training.get("ltd_s")
+        ltd = model.training.ltd_s
         spec = ModelSpec.parse(model.label)
         return cls(spec, model, float("nan") if ltd is None else float(ltd))
 
     @property
     def condition_number(self) -> float:
         """Condition number of the fit's normal equations (NaN for the baselines, which have none)."""
-        return float(self.model.training.get("condition_number") or np.nan)
+        return float(self.model.training.condition_number or np.nan)
 
 
 def solve_patterns(
-    samples: LinkSamples,
-    spec: ModelSpec,
-    gauge: str | Mapping[str, Any] = "equal-mean",
-    path_loss: PathLoss | None = None,
-    link_offsets: bool = True,
+    samples: LinkSamples, spec: ModelSpec, options: FitOptions | None = None,
 ) -> tuple[PatternSet, FitReport]:
     """Learn one pattern per node of the samples (paper Sec. IV-B, V-A), with the solver's report.
 
@@ -74,8 +71,9 @@ def solve_patterns(
     least-squares solve, the training summary (with the samples' carrier frequency, when known).
     :func:`fit_patterns` and :class:`rplearn.models.estimators.PatternRegressor` both use it.
 
-    ``path_loss`` chooses the environment term (free space by default; :mod:`rplearn.models.terms`);
-    ``link_offsets`` learns one electronics offset per link logged in both directions.
+    ``options`` (:class:`FitOptions`, default: its defaults) gives the gauge, the environment
+    term (:mod:`rplearn.models.terms`) and whether one electronics offset is learned per link
+    logged in both directions.
 
     Returns
     -------
@@ -84,9 +82,9 @@ def solve_patterns(
     report : FitReport
         Rank, null-space dimension, condition number, gauge notes.
     """
+    options = options or FitOptions()
     basis = spec.basis()
-    path_loss = path_loss or PathLoss()
-    y, env = regression_inputs(samples, path_loss)
+    y, env = regression_inputs(samples, options)
     sol = fit_joint(
         samples.directions,
         samples.tx_index,
@@ -96,12 +94,12 @@ def solve_patterns(
         basis,
         node_names=samples.nodes,
         ridge=spec.ridge,
-        gauge=gauge,
+        gauge=options.gauge,
         smoothing=spec.smoothing,
         environment=env,
-        link_offsets=link_offsets,
+        link_offsets=options.link_offsets,
     )
-    fields, terms = shared_fields(sol, samples.nodes, path_loss, directed_counts(samples))
+    fields, terms = shared_fields(sol, samples.nodes, options, directed_counts(samples))
     training = sol.report.to_dict()
     training.update(terms)
     if spec.smoothing:
@@ -115,7 +113,7 @@ def solve_patterns(
         coef=sol.coef,
         covariance=sol.covariance,
         gauge=[g.to_dict() for g in sol.report.gauges],
-        training=training,
+        training=TrainingSummary.from_dict(training),
         **fields,
     )
     return patterns, sol.report
@@ -144,24 +142,24 @@ def node_coverage_grids(
 
 
 def fit_patterns(
-    samples: LinkSamples, spec: ModelSpec, gauge: str | Mapping[str, Any] = "equal-mean",
-    provenance: Mapping[str, Any] | None = None, path_loss: PathLoss | None = None, link_offsets: bool = True,
+    samples: LinkSamples, spec: ModelSpec, options: FitOptions | None = None,
+    provenance: Mapping[str, Any] | None = None,
 ) -> PatternSet:
     """Learn one pattern per node of the samples (paper Sec. IV-B, V-A); see :func:`solve_patterns`."""
-    patterns, _ = solve_patterns(samples, spec, gauge, path_loss, link_offsets)
+    patterns, _ = solve_patterns(samples, spec, options)
     patterns.provenance = dict(provenance or {})
     return patterns
 
 
-def _warm_up(spec: ModelSpec, n_samples: int = 1, path_loss: PathLoss | None = None) -> None:
+def _warm_up(spec: ModelSpec, n_samples: int = 1, options: FitOptions | None = None) -> None:
     """Pay a model's one-off costs: imports, cached basis tables, the solver's block buffer
     (see :func:`fit_model`); the BLAS controller last, once every library a fit uses is loaded."""
     if spec.kind == "knn":
         import sklearn.neighbors  # noqa: F401  (loads scipy's BLAS too)
     elif spec.decouples:
-        from rplearn.core.link_statistics import reserve_block_buffer
+        from rplearn.core.lsq.link_statistics import reserve_block_buffer
 
-        if path_loss is not None and path_loss.learns_exponent:
+        if options is not None and options.path_loss.learns_exponent:
             import scipy.linalg.blas  # noqa: F401  (the exponent's identifiability check solves through it)
         basis = spec.basis()
         basis.evaluate(np.zeros(basis.n_coef), [0.0], [0.0])
@@ -174,25 +172,27 @@ def _warm_up(spec: ModelSpec, n_samples: int = 1, path_loss: PathLoss | None = N
 def fit_model(
     samples: LinkSamples,
     spec: ModelSpec,
-    gauge: str | Mapping[str, Any] = "equal-mean",
+    options: FitOptions | None = None,
     provenance: Mapping[str, Any] | None = None,
-    path_loss: PathLoss | None = None,
-    link_offsets: bool = True,
 ) -> FittedModel:
     """Learn a model of any kind and time it with ``time.perf_counter`` (the paper's LTD).
 
-    Pattern models take the environment term ``path_loss`` and learn link offsets
-    (:func:`solve_patterns`); the baselines, kept per directed link, need neither (a path loss
-    other than free space is refused for them).
+    Pattern models follow ``options`` (:class:`FitOptions`: gauge, environment term, link
+    offsets; :func:`solve_patterns`); the baselines, kept per directed link, need none of them
+    (:meth:`FitOptions.check` refuses what they cannot honour). The Huber loss is
+    :func:`rplearn.models.robust.fit_huber`, the automatic choice
+    :func:`rplearn.models.auto.fit_auto` (they need more than one sample set or report more).
 
     One-off costs of the process (imports, the tables of a basis) are paid before the clock
     starts, so that the LTD of a model does not depend on whether it was the first one learned.
     """
-    if path_loss is not None and path_loss.kind != "free" and not spec.decouples:
-        raise InputError(f"path loss {path_loss.kind}: the baselines ({spec.label}) learn no environment term; "
-                         "fit them in free space", param="path_loss")
+    options = options or FitOptions()
+    options.check(spec)
+    if options.loss != "ls" or options.auto:
+        raise InputError(f"fit_model: least squares of a fixed order; loss {options.loss!r} is fit_huber's and an "
+                         "automatic choice fit_auto's", param="options")
     check_model_size(spec, len(samples), len(samples.nodes))
-    _warm_up(spec, len(samples), path_loss)
+    _warm_up(spec, len(samples), options)
     columns = spec.basis().n_coef * len(samples.nodes) if spec.decouples else 0
     with blas_threads_for(len(samples), columns):
         t0 = time.perf_counter()
@@ -201,12 +201,11 @@ def fit_model(
         elif spec.kind == "knn":
             model = KNNModel.fit(samples, int(spec.order))
         else:
-            model = fit_patterns(samples, spec, gauge, path_loss=path_loss, link_offsets=link_offsets)
+            model = fit_patterns(samples, spec, options)
         ltd = time.perf_counter() - t0
-    if isinstance(model, PatternSet):
-        model.training["coverage_deg"] = node_coverage_grids(samples)
+    coverage = node_coverage_grids(samples) if isinstance(model, PatternSet) else model.training.coverage_deg
     model.provenance = {**dict(provenance or {}), "model": spec.label}
-    model.training["ltd_s"] = ltd
+    model.training = model.training.replace(ltd_s=ltd, coverage_deg=coverage)
     return FittedModel(spec, model, ltd)
 
 

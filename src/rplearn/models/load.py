@@ -3,10 +3,13 @@ is turned into the model of its type."""
 
 from __future__ import annotations
 
+import dataclasses
 import os
 
 from rplearn.io.modelfile import read_model_file
+from rplearn.models.base import require_patterns
 from rplearn.models.baselines import KNNModel, MeanModel
+from rplearn.models.options import FitOptions, is_model_file
 from rplearn.models.patterns import PatternSet
 
 
@@ -19,3 +22,19 @@ def load_model(path: str | os.PathLike[str]):
     if model_type == "mean":
         return MeanModel.from_dict(payload, source=name)
     return KNNModel.from_dict(payload, source=name)
+
+
+def load_priors(options: FitOptions) -> FitOptions:
+    """``options`` with its priors as pattern models: model files loaded, every prior checked.
+
+    Raises
+    ------
+    InputError
+        A prior that is not a pattern model (``require_patterns``).
+    """
+    if not options.priors:
+        return options
+    priors = {n: load_model(m) if is_model_file(m) else m for n, m in options.priors.items()}
+    for model in priors.values():
+        require_patterns(model, "serving as a prior")
+    return dataclasses.replace(options, priors=priors)

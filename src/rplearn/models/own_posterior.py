@@ -35,9 +35,9 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from rplearn.core.basis_base import Basis
-from rplearn.core.normal_equations import NormalEquations
-from rplearn.core.selection import penalty_vector
-from rplearn.core.solver import solve
+from rplearn.core.lsq.normal_equations import NormalEquations
+from rplearn.core.lsq.selection import penalty_vector
+from rplearn.core.lsq.solver import solve
 
 #: Pattern columns above which the own-pattern posterior is not continued to the largest order.
 MAX_OWN_COLUMNS = 1500
@@ -71,7 +71,7 @@ class OwnPrior:
     smoothing : float
         The cross-validated relative smoothing.
     scale : float
-        The penalty's unit at the chosen basis (:func:`rplearn.core.selection.penalty_scale`),
+        The penalty's unit at the chosen basis (:func:`rplearn.core.lsq.selection.penalty_scale`),
         kept so that the shared low orders get exactly the chosen fit's prior.
     power : float
         Exponent of the roughness weights.

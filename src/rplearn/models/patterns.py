@@ -26,6 +26,7 @@ from rplearn.io.modelfile import jsonable as _jsonable
 from rplearn.io.modelfile import read_model_file, read_sidecar, write_model_with_sidecar
 from rplearn.models.base import frequency_from_training
 from rplearn.models.terms import split_offset_name
+from rplearn.models.training import TrainingSummary
 
 FloatArray = NDArray[np.float64]
 
@@ -50,9 +51,10 @@ class PatternSet:
     covariance : ndarray or None
         Covariance of all coefficients (``n_nodes * n_coef`` square), for standard errors.
     gauge : list of dict
-        How unidentifiable constants were fixed (see :mod:`rplearn.core.solver`).
-    training : dict
-        Training summary (samples, RMSE, rank, condition number, ridge, ...).
+        How unidentifiable constants were fixed (see :mod:`rplearn.core.lsq.solver`).
+    training : TrainingSummary
+        Training summary (samples, RMSE, rank, condition number, ridge, ...); a mapping of
+        its entries (a model file's ``training``) is read by :meth:`TrainingSummary.from_dict`.
     provenance : dict
         Library version, command and parameters that made the model.
     path_loss : PathLoss
@@ -70,13 +72,14 @@ class PatternSet:
     coef: FloatArray
     covariance: FloatArray | None = None
     gauge: list[dict[str, Any]] = field(default_factory=list)
-    training: dict[str, Any] = field(default_factory=dict)
+    training: TrainingSummary = field(default_factory=TrainingSummary)
     provenance: dict[str, Any] = field(default_factory=dict)
     path_loss: PathLoss = field(default_factory=PathLoss)
     shared_names: tuple[str, ...] = ()
     shared_coef: FloatArray = field(default_factory=lambda: np.zeros(0))
 
     def __post_init__(self) -> None:
+        self.training = TrainingSummary.from_dict(self.training)
         self.nodes = tuple(str(n) for n in self.nodes)
         self.coef = np.asarray(self.coef, np.float64)
         if self.coef.shape != (len(self.nodes), self.basis.n_coef):
@@ -211,9 +214,9 @@ class PatternSet:
 
     def coverage_deg(self, node: str, az_rad: ArrayLike, el_rad: ArrayLike) -> FloatArray | None:
         """Angle [deg] from each direction to the nearest direction ``node`` was learned from
-        (from the coverage grid stored at fitting, ``training["coverage_deg"]``; an upper bound
+        (from the coverage grid stored at fitting, ``training.coverage_deg``; an upper bound
         within about 1 degree); None for a model without one (older files, references)."""
-        grids = self.training.get("coverage_deg") or {}
+        grids = self.training.coverage_deg or {}
         if str(node) not in grids:
             return None
         from rplearn.core.coverage import coverage_at
@@ -225,7 +228,7 @@ class PatternSet:
         """Spread [dB] of a new flight's own level about the level the model learned (the
         between-flight spread of an automatic fit over several flights, plus the uncertainty of
         the learned flights' mean level; 0 for a model that did not estimate it)."""
-        value = self.training.get("new_flight_level_std_db")
+        value = self.training.new_flight_level_std_db
         return float(value) if isinstance(value, (int, float)) and np.isfinite(value) else 0.0
 
     def predict_gain_std(self, samples: "LinkSamples", new_flight: bool = True) -> FloatArray | None:
@@ -389,7 +392,7 @@ class PatternSet:
             "nodes": list(self.nodes),
             "coefficients": {n: self.coef[i].tolist() for i, n in enumerate(self.nodes)},
             "gauge": self.gauge,
-            "training": _jsonable(self.training),
+            "training": _jsonable(self.training.to_dict()),
             "provenance": {"rplearn_version": __version__, **_jsonable(self.provenance)},
         }
         if self.covariance is not None and inline_covariance:
@@ -458,7 +461,7 @@ class PatternSet:
                 coef=coef,
                 covariance=cov_arr,
                 gauge=list(payload.get("gauge", [])),
-                training=dict(payload.get("training", {})),
+                training=TrainingSummary.from_dict(payload.get("training", {})),
                 provenance=dict(payload.get("provenance", {})),
                 path_loss=path_loss,
                 shared_names=shared_names,

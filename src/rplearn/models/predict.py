@@ -143,7 +143,8 @@ def predict_dataset(model: Model, dataset: pd.DataFrame, source: str = "dataset"
     if std is not None:
         # one packet's noise about its flight's level (an automatic fit over flights), else the
         # training residual; unknown (None) in a hand-made file: the spread is then NaN
-        rmse = model.training.get("noise_std_db", model.training.get("rmse_db"))
+        training = model.training
+        rmse = training.noise_std_db if training.noise_std_db is not None else training.rmse_db
         residual_db = float(rmse) if rmse is not None else float("nan")
         table["gain_pred_std_db"] = std
         table["rssi_pred_std_db"] = np.sqrt(std**2 + residual_db**2)
@@ -184,7 +185,7 @@ def end_coverage_deg(model: Model, samples: Any) -> tuple[np.ndarray, np.ndarray
     """Coverage [deg] of each sample's tx and rx end (see :meth:`PatternSet.coverage_deg`), or
     None when the model stores no coverage."""
     coverage = getattr(model, "coverage_deg", None)
-    if coverage is None or not model.training.get("coverage_deg"):
+    if coverage is None or not model.training.coverage_deg:
         return None
     d = samples.directions
     cols = []

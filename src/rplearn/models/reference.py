@@ -2,7 +2,7 @@
 
 Each node's reference gains (:func:`rplearn.io.reference.read_reference_pattern`, body frame
 after the mount) are expanded in spherical harmonics by penalised least squares: the smoothest
-expansion (squared-Laplacian penalty, :mod:`rplearn.core.selection`) that passes through the
+expansion (squared-Laplacian penalty, :mod:`rplearn.core.lsq.selection`) that passes through the
 measured points, so that a pattern given on a few cuts (MSI) stays smooth between them. The
 result is a :class:`~rplearn.models.patterns.PatternSet`, so that predict, links, orient, plot,
 export and the report use it as they use a learned model, and ``fit --prior`` can shrink a
@@ -19,11 +19,12 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from rplearn.core.selection import DEFAULT_PENALTY_POWER, penalty_scale
+from rplearn.core.lsq.selection import DEFAULT_PENALTY_POWER, penalty_scale
 from rplearn.core.sh import SphericalHarmonics
 from rplearn.errors import InputError
 from rplearn.io.reference import ReferenceSamples
 from rplearn.models.patterns import PatternSet
+from rplearn.models.training import TrainingSummary
 
 #: SH order of a reference model (degrees 0..19): resolves features of about 180/20 = 9 degrees.
 REFERENCE_ORDER = 20
@@ -83,7 +84,7 @@ def reference_model(
     if freqs:
         training["frequency_hz"] = float(np.median(freqs))
     model = PatternSet(basis=basis, nodes=nodes, coef=np.array(coefs), covariance=np.zeros((len(nodes) * p, len(nodes) * p)),
-                       gauge=[], training=training)
+                       gauge=[], training=TrainingSummary.from_dict(training))
     model.provenance = {**dict(provenance or {}), "model": f"reference {basis.label}"}
     return model
 

@@ -24,14 +24,14 @@ from typing import Any, Mapping
 import numpy as np
 import pandas as pd
 
-from rplearn.core.environment import PathLoss
-from rplearn.core.normal_equations import NormalEquations
+from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.models.terms import directed_counts
-from rplearn.core.selection import penalty_scale, penalty_vector
-from rplearn.core.solver import solve
+from rplearn.core.lsq.selection import penalty_scale, penalty_vector
+from rplearn.core.lsq.solver import solve
 from rplearn.data.tables import LinkSamples
 from rplearn.errors import InputError
 from rplearn.models.fit import FittedModel, node_coverage_grids, solve_patterns
+from rplearn.models.options import LOSSES, FitOptions
 from rplearn.models.spec import ModelSpec, check_model_size
 
 #: Huber's tuning constant in robust standard deviations: 95% efficiency for Gaussian noise.
@@ -41,9 +41,6 @@ MAX_ITERATIONS = 100
 TOLERANCE_DB = 0.01
 #: Smallest robust scale [dB]: far below any radio's resolution.
 MIN_SCALE_DB = 1e-3
-#: Losses ``fit --loss`` takes.
-LOSSES: tuple[str, ...] = ("ls", "huber")
-
 
 @dataclass(frozen=True)
 class RobustReport:
@@ -116,11 +113,9 @@ def robust_scale_db(residual_db: np.ndarray) -> float:
 def fit_huber(
     samples: LinkSamples,
     spec: ModelSpec,
-    gauge: str | Mapping[str, Any] = "equal-mean",
+    options: FitOptions | None = None,
     provenance: Mapping[str, Any] | None = None,
     k: float = HUBER_K,
-    path_loss: PathLoss | None = None,
-    link_offsets: bool = True,
 ) -> tuple[FittedModel, RobustReport]:
     """Learn a pattern model with the Huber loss (module docstring).
 
@@ -129,10 +124,13 @@ def fit_huber(
     samples : LinkSamples
     spec : ModelSpec
         A pattern model (sh, bg, poly) of fixed order.
+    options : FitOptions, optional
+        Gauge, environment term and link offsets, as :func:`rplearn.models.fit.solve_patterns`
+        (a term beyond free space or link offsets: each iteration then refits in full); the
+        loss is Huber whatever ``options.loss`` says.
+    provenance : mapping, optional
     k : float
         Clipping point in robust standard deviations (:data:`HUBER_K`).
-    path_loss, link_offsets
-        As :func:`rplearn.models.fit.solve_patterns` (each iteration then refits in full).
 
     Returns
     -------
@@ -140,6 +138,7 @@ def fit_huber(
         LTD covers every iteration; ``training["robust"]`` holds the report's numbers.
     report : RobustReport
     """
+    options = options or FitOptions()
     if not spec.decouples:
         raise InputError(f"loss huber: for pattern models (sh, bg, poly), not {spec.label}", param="loss")
     if not (np.isfinite(k) and k > 0):
@@ -150,9 +149,9 @@ def fit_huber(
     basis, n_nodes = spec.basis(), len(samples.nodes)
     tx, rx = np.asarray(samples.tx_index), np.asarray(samples.rx_index)
     d = samples.directions
-    path_loss = path_loss or PathLoss()
+    gauge, path_loss = options.gauge, options.path_loss
     counts = directed_counts(samples)
-    two_way = link_offsets and any((b, a) in counts for a, b in counts)
+    two_way = options.link_offsets and any((b, a) in counts for a, b in counts)
     plain = path_loss.kind == "free" and not two_way  # no shared columns: the fast pseudo-observation path
     normal = NormalEquations(basis, n_nodes).add(d, tx, rx, y)  # X^T X once: only X^T y changes
     penalty = None
@@ -163,8 +162,7 @@ def fit_huber(
     def refit(observed: np.ndarray) -> np.ndarray:
         """Least squares on ``observed`` with the same design; the new predictions."""
         if features is None:
-            model, _ = solve_patterns(dataclasses.replace(samples, joint_gain_db=observed), spec, gauge, path_loss,
-                                      link_offsets)
+            model, _ = solve_patterns(dataclasses.replace(samples, joint_gain_db=observed), spec, options)
             return model.predict_gain(samples)
         normal.rhs = features.transpose_times(observed)
         normal.yty = float(observed @ observed)
@@ -184,17 +182,16 @@ def fit_huber(
         if change < TOLERANCE_DB:
             converged = True
             break
-    model, report = solve_patterns(dataclasses.replace(samples, joint_gain_db=pseudo), spec, gauge, path_loss, link_offsets)
+    model, report = solve_patterns(dataclasses.replace(samples, joint_gain_db=pseudo), spec, options)
     fitted = model.predict_gain(samples)
     ltd = time.perf_counter() - t0
     residual = y - fitted
     scale = robust_scale_db(residual)
     robust = RobustReport(scale, float(k), np.abs(residual) > k * scale, iterations, converged)
-    model.training.update(report.to_dict())
-    model.training["robust"] = robust.to_dict()
-    model.training["rmse_db"] = float(np.sqrt(np.mean(residual**2)))
-    model.training["coverage_deg"] = node_coverage_grids(samples)
-    model.training["ltd_s"] = ltd
+    model.training = model.training.replace(**{
+        **report.to_dict(), "robust": robust.to_dict(), "rmse_db": float(np.sqrt(np.mean(residual**2))),
+        "coverage_deg": node_coverage_grids(samples), "ltd_s": ltd,
+    })
     model.provenance = {**dict(provenance or {}), "model": spec.label, "loss": "huber"}
     return FittedModel(spec, model, ltd), robust
 

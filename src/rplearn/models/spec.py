@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 
 from rplearn.core.bases import make_basis
-from rplearn.core.solver import DEFAULT_RIDGE
+from rplearn.core.lsq.solver import DEFAULT_RIDGE
 from rplearn.errors import InputError
 
 
@@ -23,7 +23,7 @@ _DEFAULT_ORDER = {"sh": 10, "bg": 7, "poly": 12, "knn": 400}
 _ALIASES = {"m": "mean", "p": "poly", "nn": "knn", "bucketized": "bg"}
 
 
-#: Default ridge per family (see :data:`rplearn.core.solver.DEFAULT_RIDGE`; the paper used 50).
+#: Default ridge per family (see :data:`rplearn.core.lsq.solver.DEFAULT_RIDGE`; the paper used 50).
 DEFAULT_RIDGE_BY_KIND = {"sh": DEFAULT_RIDGE, "poly": DEFAULT_RIDGE, "bg": DEFAULT_RIDGE, "mean": 0.0, "knn": 0.0}
 
 
@@ -48,7 +48,7 @@ class ModelSpec:
     grid : {"paper", "fibonacci"}
         BG node layout.
     smoothing : float
-        Relative weight of the smoothness penalty (:mod:`rplearn.core.selection`); 0: none.
+        Relative weight of the smoothness penalty (:mod:`rplearn.core.lsq.selection`); 0: none.
     """
 
     kind: str
@@ -111,17 +111,17 @@ def check_fit_options(
     ridge: float | None = None,
     sigma_rad2: float | None = None,
     grid: str | None = None,
-    gauge_node: str | None = None,
-    gauge_dbi: float | None = None,
     model: str | None = None,
 ) -> None:
-    """Refuse options the chosen model would silently ignore, or that contradict it.
+    """Refuse model options (flags of ``rplearn fit``) the chosen model would silently ignore,
+    or that contradict it. How the model is learned is checked by
+    :class:`rplearn.models.options.FitOptions`.
 
     Parameters
     ----------
     spec : ModelSpec
         The parsed model.
-    order, ridge, sigma_rad2, grid, gauge_node, gauge_dbi
+    order, ridge, sigma_rad2, grid
         The options as the user gave them (None: not given).
     model : str, optional
         The model text as given (e.g. ``"sh-10"``), for messages.
@@ -132,7 +132,7 @@ def check_fit_options(
         Naming the first offending parameter (``param``); messages start with the names of
         the offending parameters.
     """
-    given = {"ridge": ridge, "sigma_rad2": sigma_rad2, "grid": grid, "gauge_node": gauge_node}
+    given = {"ridge": ridge, "sigma_rad2": sigma_rad2, "grid": grid}
     if spec.kind in ("mean", "knn"):
         unused = [k for k, v in given.items() if v is not None]
         if spec.kind == "mean" and order is not None:
@@ -143,12 +143,6 @@ def check_fit_options(
         unused = [k for k in ("sigma_rad2", "grid") if given[k] is not None]
         if unused:
             raise InputError(f"{', '.join(unused)}: used by BG models only, not by {spec.label}", param=unused[0])
-    if gauge_dbi is not None and not np.isfinite(gauge_dbi):
-        raise InputError(f"gauge_dbi: expected a finite mean gain in dBi, got {gauge_dbi!r}", param="gauge_dbi")
-    if gauge_dbi is not None and gauge_node is None:
-        raise InputError(
-            "gauge_dbi needs gauge_node (which node's mean gain it fixes)", param="gauge_dbi", related=("gauge_node",)
-        )
     if order is not None and spec.order is not None and int(order) != spec.order:
         raise InputError(
             f"order {order} contradicts the model {model or spec.label}, which sets the order {spec.order}", param="order"
@@ -193,11 +187,3 @@ def check_model_size(spec: ModelSpec, n_samples: int, n_nodes: int, source: str 
             f"{why}; the largest {spec.kind} order that fits is {best}",
             param="order",
         )
-
-
-def gauge_of(gauge_node: str | None = None, gauge_dbi: float | None = None) -> str | dict[str, Any]:
-    """The gauge of a two-node fit: equal sphere-mean gains by default, or a known mean gain
-    ``gauge_dbi`` [dBi] (default 0) of ``gauge_node``."""
-    if gauge_node is None:
-        return "equal-mean"
-    return {"node": str(gauge_node), "mean_gain_dbi": 0.0 if gauge_dbi is None else float(gauge_dbi)}

@@ -1,7 +1,7 @@
 """Learning patterns from a matched dataset too big for memory, chunk by chunk.
 
 The joint least-squares problem needs only its sufficient statistics (``X^T X``, ``X^T y``,
-``y^T y`` and the sample count per link, :class:`~rplearn.core.normal_equations.NormalEquations`),
+``y^T y`` and the sample count per link, :class:`~rplearn.core.lsq.normal_equations.NormalEquations`),
 so a dataset can be read a chunk at a time: each chunk is checked, turned into link samples,
 accumulated and dropped. The solve, the training RMSE (from the statistics) and the model are
 the same as :func:`rplearn.models.fit.solve_patterns` gives on the whole dataset, to rounding.
@@ -26,11 +26,11 @@ from typing import Any, Callable, Iterable, Mapping, Sequence
 import numpy as np
 import pandas as pd
 
-from rplearn.core.environment import PathLoss
-from rplearn.core.normal_equations import NormalEquations
+from rplearn.models.options import FitOptions
+from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.models.terms import regression_inputs, shared_fields, statistics_counts
-from rplearn.core.selection import penalty_scale, penalty_vector
-from rplearn.core.solver import FitReport, solve
+from rplearn.core.lsq.selection import penalty_scale, penalty_vector
+from rplearn.core.lsq.solver import FitReport, solve
 from rplearn.data.tables import LinkSamples, link_samples, node_ids
 from rplearn.data.units import Stretches
 from rplearn.errors import InputError
@@ -39,6 +39,7 @@ from rplearn.io.partitions import Part
 from rplearn.models.fit import node_coverage_grids
 from rplearn.models.patterns import PatternSet
 from rplearn.models.spec import ModelSpec
+from rplearn.models.training import TrainingSummary
 
 
 @dataclass
@@ -165,16 +166,17 @@ class Accumulated:
 
 def accumulate(
     chunks: Iterable[pd.DataFrame], spec: ModelSpec, nodes: Sequence[str], units: Sequence[str] | None,
-    source: str, by_unit: bool, stretches: Stretches | None = None, path_loss: PathLoss | None = None,
+    source: str, by_unit: bool, stretches: Stretches | None = None, options: FitOptions | None = None,
 ) -> Accumulated:
     """Statistics of the learning rows of every chunk: one accumulator per unit (``by_unit``)
     or one for all, or per stretch of time of a single flight (``stretches``, the folds of its
-    cross-validation; rows in any order). An empty result is allowed (a part without learning
-    rows); see :func:`checked`."""
+    cross-validation; rows in any order), with the environment term of ``options`` (its
+    log-distance column accumulated, a two-ray term subtracted). An empty result is allowed (a
+    part without learning rows); see :func:`checked`."""
     if not spec.decouples:
         raise InputError(f"{spec.label}: only pattern models (sh, bg, poly) learn from a stream", param="spec")
     basis = spec.basis()
-    path_loss = path_loss or PathLoss()
+    options = options or FitOptions()
     out = Accumulated({}, Counter(), source=source)
     wanted = None if not units else {str(u) for u in units}
     first_row = 0
@@ -196,7 +198,7 @@ def accumulate(
             part = chunk[labels == label] if by_unit else chunk
             samples = link_samples(part, where, nodes=nodes)
             t0 = time.perf_counter()
-            y, env = regression_inputs(samples, path_loss)
+            y, env = regression_inputs(samples, options)
             acc = out.stats.setdefault(str(label), NormalEquations(basis, len(nodes), environment=env is not None))
             acc.add(samples.directions, samples.tx_index, samples.rx_index, y, env)
             out.learn_s += time.perf_counter() - t0
@@ -214,17 +216,17 @@ PART_CHUNK_ROWS = 500_000
 
 def part_statistics(
     part: Part, spec: ModelSpec, nodes: Sequence[str], units: Sequence[str] | None, by_unit: bool,
-    stretches: Stretches | None = None, path_loss: PathLoss | None = None,
+    stretches: Stretches | None = None, options: FitOptions | None = None,
 ) -> Accumulated:
     """:func:`accumulate` over one part of a dataset, read :data:`PART_CHUNK_ROWS` rows at a
-    time (its rows named by their place in its file)."""
+    time (its rows named by their place in its file); ``options`` as :func:`accumulate`."""
     return accumulate(iter_parts([part], PART_CHUNK_ROWS), spec, nodes, units, part.path, by_unit, stretches,
-                      path_loss)
+                      options)
 
 
 def accumulate_parts(
     parts: Sequence[Part], spec: ModelSpec, nodes: Sequence[str], units: Sequence[str] | None, by_unit: bool,
-    stretches: Stretches | None = None, path_loss: PathLoss | None = None,
+    stretches: Stretches | None = None, options: FitOptions | None = None,
     progress: Callable[[int, int], None] | None = None,
 ) -> Accumulated:
     """The statistics of every part (:func:`part_statistics`), added in the parts' order, in
@@ -233,7 +235,7 @@ def accumulate_parts(
     (see :func:`checked`)."""
     total = Accumulated({}, Counter(), source=parts[0].path if parts else "dataset")
     for k, part in enumerate(parts):
-        acc = part_statistics(part, spec, nodes, units, by_unit, stretches, path_loss)
+        acc = part_statistics(part, spec, nodes, units, by_unit, stretches, options)
         total = acc if k == 0 else total.merge(acc)
         if progress is not None:
             progress(k + 1, len(parts))
@@ -249,16 +251,15 @@ def checked(acc: Accumulated, source: str) -> Accumulated:
 
 def unit_statistics_streamed(
     chunks: Iterable[pd.DataFrame], spec: ModelSpec, nodes: Sequence[str], units: Sequence[str] | None = None,
-    source: str = "dataset", stretches: Stretches | None = None, path_loss: PathLoss | None = None,
+    source: str = "dataset", stretches: Stretches | None = None, options: FitOptions | None = None,
 ) -> tuple[dict[str, NormalEquations], float | None, int, dict[str, list[float]]]:
     """The statistics of every learning unit of a dataset given in chunks (for ``--degree auto``
     on a big file): ``(statistics by unit, median frequency [Hz], non-unit quaternions,
     coverage grids by node)``. A dataset without a ``unit`` column is one unit, ``"all"``; with
     ``stretches`` the learning rows are cut into those stretches of time instead
-    (cross-validation of a single flight, :class:`rplearn.data.units.Stretches`). ``path_loss``: the environment term (its
-    log-distance column is accumulated; a two-ray term is subtracted)."""
+    (cross-validation of a single flight, :class:`rplearn.data.units.Stretches`). ``options``: as :func:`accumulate`."""
     acc = checked(accumulate(chunks, spec, nodes, units, source, by_unit=True, stretches=stretches,
-                             path_loss=path_loss), source)
+                             options=options), source)
     return acc.stats, weighted_median(acc.freq), acc.non_unit, acc.grids or {}
 
 
@@ -267,10 +268,8 @@ def fit_patterns_streamed(
     spec: ModelSpec,
     nodes: Sequence[str],
     units: Sequence[str] | None = None,
-    gauge: str | Mapping[str, Any] = "equal-mean",
+    options: FitOptions | None = None,
     source: str = "dataset",
-    path_loss: PathLoss | None = None,
-    link_offsets: bool = True,
 ) -> StreamedFit:
     """Learn one pattern per node from a dataset given in chunks (see the module docstring).
 
@@ -286,26 +285,21 @@ def fit_patterns_streamed(
         sample count :func:`units_and_nodes` gives.
     units : sequence of str, optional
         Learning units; every row when None.
-    gauge : str or mapping
-        As :func:`rplearn.models.fit.solve_patterns`.
+    options : FitOptions, optional
+        Gauge, environment term and link offsets, as :func:`rplearn.models.fit.solve_patterns`.
     source : str
         Name of the dataset in messages (a chunk's rows are named by their place in the file).
-    path_loss : PathLoss, optional
-        The environment term (free space by default; :mod:`rplearn.models.terms`).
-    link_offsets : bool
-        Learn one electronics offset per link logged in both directions.
     """
-    acc = checked(accumulate(chunks, spec, nodes, units, source, by_unit=False, path_loss=path_loss), source)
-    return fit_patterns_accumulated(acc, spec, nodes, gauge, path_loss, link_offsets)
+    acc = checked(accumulate(chunks, spec, nodes, units, source, by_unit=False, options=options), source)
+    return fit_patterns_accumulated(acc, spec, nodes, options)
 
 
 def fit_patterns_accumulated(
-    acc: Accumulated, spec: ModelSpec, nodes: Sequence[str], gauge: str | Mapping[str, Any] = "equal-mean",
-    path_loss: PathLoss | None = None, link_offsets: bool = True,
+    acc: Accumulated, spec: ModelSpec, nodes: Sequence[str], options: FitOptions | None = None,
 ) -> StreamedFit:
     """:func:`fit_patterns_streamed` from statistics already accumulated (one label), e.g.
     merged from the parts of a dataset computed on a cluster."""
-    path_loss = path_loss or PathLoss()
+    options = options or FitOptions()
     stats, f, non_unit, learn_s, grids = acc.stats, weighted_median(acc.freq), acc.non_unit, acc.learn_s, acc.grids or {}
     if len(stats) != 1:
         raise InputError(f"expected the statistics of all learning rows together, got {len(stats)} labels", param="spec")
@@ -313,15 +307,15 @@ def fit_patterns_accumulated(
     basis = normal.basis
     t0 = time.perf_counter()
     counts = statistics_counts(normal.directed, nodes)
-    links = normal.two_way_links() if link_offsets else []
+    links = normal.two_way_links() if options.link_offsets else []
     if normal.environment or links:
         normal = normal.with_shared(links)
     penalty = None
     if spec.smoothing:
         penalty = penalty_vector(basis, len(nodes), spec.smoothing, penalty_scale(normal.gram, normal.n_pattern_columns))
-    sol = solve(normal, list(nodes), ridge=spec.ridge, gauge=gauge, penalty=penalty)
+    sol = solve(normal, list(nodes), ridge=spec.ridge, gauge=options.gauge, penalty=penalty)
     learn_s += time.perf_counter() - t0
-    fields, terms = shared_fields(sol, list(nodes), path_loss, counts)
+    fields, terms = shared_fields(sol, list(nodes), options, counts)
     training = sol.report.to_dict()
     training.update(terms)
     if spec.smoothing:
@@ -331,7 +325,7 @@ def fit_patterns_accumulated(
         training["frequency_hz"] = f
     patterns = PatternSet(
         basis=basis, nodes=tuple(nodes), coef=sol.coef, covariance=sol.covariance,
-        gauge=[g.to_dict() for g in sol.report.gauges], training=training, **fields,
+        gauge=[g.to_dict() for g in sol.report.gauges], training=TrainingSummary.from_dict(training), **fields,
     )
     return StreamedFit(patterns, sol.report, normal.n_samples, non_unit, learn_s)
 

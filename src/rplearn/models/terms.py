@@ -21,17 +21,20 @@ import numpy as np
 from rplearn.core.environment import PathLoss, log_distance_column
 from rplearn.data.tables import LinkSamples
 from rplearn.errors import InputError
+from rplearn.models.options import FitOptions
+from rplearn.models.training import TrainingSummary
 
 if TYPE_CHECKING:
-    from rplearn.core.solver import JointSolution
+    from rplearn.core.lsq.solver import JointSolution
 
 
-def regression_inputs(samples: LinkSamples, path_loss: PathLoss) -> tuple[np.ndarray, np.ndarray | None]:
+def regression_inputs(samples: LinkSamples, options: FitOptions) -> tuple[np.ndarray, np.ndarray | None]:
     """The observations the patterns are fitted to and the shared environment column.
 
-    ``y`` is the observed joint gain less the known two-ray term (when chosen); the column is
-    the log-distance regressor (when chosen), else None.
+    ``y`` is the observed joint gain less the known two-ray term (when ``options.path_loss``
+    chooses it); the column is the log-distance regressor (when chosen), else None.
     """
+    path_loss = options.path_loss
     y = np.asarray(samples.joint_gain_db, np.float64)
     known = path_loss.known_db(samples.distance_m, samples.tx_z_m, samples.rx_z_m, samples.frequency_hz)
     if known is not None:
@@ -96,11 +99,11 @@ def shared_names(shared: Sequence[tuple[Any, ...]], nodes: Sequence[str]) -> tup
 
 
 def shared_fields(
-    sol: "JointSolution", nodes: Sequence[str], path_loss: PathLoss, counts: Mapping[tuple[str, str], int],
+    sol: "JointSolution", nodes: Sequence[str], options: FitOptions, counts: Mapping[tuple[str, str], int],
     covariance_scale: float = 1.0,
 ) -> tuple[dict[str, Any], dict[str, Any]]:
     """``PatternSet`` keyword arguments (``path_loss``, ``shared_names``, ``shared_coef``) and the
-    training summary's entries for the link terms of a solution.
+    training summary's entries for the link terms of a solution fitted with ``options``.
 
     ``covariance_scale`` multiplies the variances reported (a selection's variance inflation).
     """
@@ -109,6 +112,7 @@ def shared_fields(
     pat = sol.coef.size
     var = np.diag(sol.covariance)[pat:] * covariance_scale if sol.covariance is not None else np.full(coef.size, np.nan)
     se = np.sqrt(np.maximum(var, 0.0))
+    path_loss = options.path_loss
     training: dict[str, Any] = {
         "path_loss": path_loss.to_dict(),
         "directions": [{"tx": a, "rx": b, "samples": int(n)} for (a, b), n in counts.items()],
@@ -127,9 +131,9 @@ def shared_fields(
     return {"path_loss": path_loss, "shared_names": names, "shared_coef": coef}, training
 
 
-def learned_directions(training: Mapping[str, Any]) -> set[tuple[str, str]] | None:
+def learned_directions(training: TrainingSummary | Mapping[str, Any]) -> set[tuple[str, str]] | None:
     """The directed links ``(tx, rx)`` a model learned from (None when its file does not say)."""
-    rows = training.get("directions")
+    rows = TrainingSummary.from_dict(training).directions
     if not isinstance(rows, list):
         return None
     try:
@@ -138,17 +142,18 @@ def learned_directions(training: Mapping[str, Any]) -> set[tuple[str, str]] | No
         return None
 
 
-def terms_text(training: Mapping[str, Any]) -> list[str]:
+def terms_text(training: TrainingSummary | Mapping[str, Any]) -> list[str]:
     """Summary lines of a model's link terms (environment, exponent, offsets, directions)."""
+    training = TrainingSummary.from_dict(training)
     lines = []
-    info = training.get("path_loss") or {}
+    info = training.path_loss or {}
     pl = PathLoss.from_dict(info)
     if pl.kind == "log-distance" and "exponent" in info:
         lines.append(f"path loss: log-distance, exponent {info['exponent']:.3f} +- {info['exponent_se']:.3f} "
                      f"(free space 2; d0 = 1 m)")
     elif pl.kind != "free":
         lines.append(f"path loss: {pl.describe()}")
-    offsets = training.get("link_offsets_db") or []
+    offsets = training.link_offsets_db or []
     if offsets:
         text = ", ".join(f"{o['tx']}->{o['rx']} {o['offset_db']:+.2f} +- {o['se_db']:.2f} dB" for o in offsets)
         lines.append(f"electronics offsets (each link's two directions sum to 0): {text}")

@@ -7,7 +7,8 @@ module          public names
                 :func:`summarize_unit` -> :class:`UnitSummary`
 ``campaign``    :func:`paper_campaign` -> :class:`Campaign`, :func:`pair_schedule`,
                 :func:`group_campaign`, :func:`write_references`
-``check``       :func:`check_plan` -> :class:`PlanCheck` (coverage, rank, condition number),
+``check``       :func:`check_plan` -> :class:`PlanCheck` (coverage, rank, condition number; a
+                :class:`NominalAttitude` of wind and tilt),
                 :func:`coverage_map`, :func:`plan_directions`
 ==============  ================================================================================
 
@@ -38,6 +39,7 @@ _NAMES: dict[str, str] = {
     "CoverageMap": "check",
     "PlanCheck": "check",
     "check_plan": "check",
+    "NominalAttitude": "check",
     "coverage_map": "check",
     "plan_directions": "check",
 }

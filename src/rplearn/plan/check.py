@@ -7,7 +7,7 @@ acceleration and an expected wind), and reports
 - per node, the azimuth-elevation coverage of its body sphere (a 2-D histogram and the
   area-weighted fraction of cells sampled);
 - the rank, null-space dimension and condition number of the learning problem (the design
-  matrix of paper Sec. V-A, via :func:`rplearn.core.solver.identifiability`), and the null-space
+  matrix of paper Sec. V-A, via :func:`rplearn.core.lsq.solver.identifiability`), and the null-space
   dimension expected from the link graph (one per connected part without an odd cycle: with
   two drones, the constant that moves between the patterns);
 - whether the plan decouples the patterns (null space no larger than expected) and whether it
@@ -36,7 +36,7 @@ from rplearn.plan.trajectory import PlanLimits, UnitSummary
 
 FloatArray = NDArray[np.float64]
 
-__all__ = ["CoverageMap", "PlanCheck", "check_plan", "plan_directions"]
+__all__ = ["CoverageMap", "NominalAttitude", "PlanCheck", "check_plan", "plan_directions"]
 
 
 @dataclass(frozen=True)
@@ -122,17 +122,44 @@ class PlanCheck:
         return "\n".join(lines)
 
 
+@dataclass(frozen=True)
+class NominalAttitude:
+    """How a plan check tilts the drones along their reference trajectories.
+
+    Attributes
+    ----------
+    wind_speed_m_s : float
+        Steady wind [m/s] (>= 0).
+    wind_toward_deg : float
+        Direction the wind blows toward [deg, ENU azimuth from east].
+    drag_per_m : float
+        Quadratic drag coefficient [1/m] (>= 0).
+    tilt_into_motion : bool
+        Tilt into the thrust the motion and wind need (default), or fly level.
+    """
+
+    wind_speed_m_s: float = 0.0
+    wind_toward_deg: float = 90.0
+    drag_per_m: float = 0.021
+    tilt_into_motion: bool = True
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.wind_speed_m_s) and self.wind_speed_m_s >= 0):
+            raise InputError(f"wind_speed_m_s: expected a speed >= 0 m/s, got {self.wind_speed_m_s!r}",
+                             param="wind_speed_m_s")
+        if not np.isfinite(self.wind_toward_deg):
+            raise InputError(f"wind_toward_deg: expected a finite angle, got {self.wind_toward_deg!r}",
+                             param="wind_toward_deg")
+        if not (np.isfinite(self.drag_per_m) and self.drag_per_m >= 0):
+            raise InputError(f"drag_per_m: expected a number >= 0, got {self.drag_per_m!r}", param="drag_per_m")
+
+
 def plan_directions(
-    campaign: Campaign,
-    packet_rate_hz: float = 80.0,
-    wind_speed_m_s: float = 0.0,
-    wind_toward_deg: float = 90.0,
-    drag_per_m: float = 0.021,
-    tilt_into_motion: bool = True,
+    campaign: Campaign, packet_rate_hz: float = 80.0, attitude: NominalAttitude | None = None,
 ) -> tuple[Directions, NDArray[np.intp], NDArray[np.intp], tuple[str, ...]]:
     """Directions the drones will see, one sample per packet of the first -> second direction.
 
-    With ``tilt_into_motion`` (default) attitudes follow the thrust a multirotor needs for the
+    With ``attitude.tilt_into_motion`` (default) attitudes follow the thrust a multirotor needs for the
     reference acceleration and the given wind (as in :mod:`rplearn.sim.flight`, without noise);
     otherwise they are level with the reference heading. Level attitudes are a degenerate
     idealisation: then ``el_second = -el_first`` at every sample, and any function of
@@ -146,6 +173,7 @@ def plan_directions(
     """
     if not (packet_rate_hz > 0):
         raise InputError(f"packet_rate_hz: expected > 0 Hz, got {packet_rate_hz!r}")
+    attitude = attitude or NominalAttitude()
     nodes = campaign.nodes
     lookup = {n: i for i, n in enumerate(nodes)}
     parts: list[Directions] = []
@@ -155,14 +183,14 @@ def plan_directions(
         ref = unit.sample(packet_rate_hz)
         quats = []
         for j in range(2):
-            if tilt_into_motion:
+            if attitude.tilt_into_motion:
                 from rplearn.core.geometry import attitude_from_thrust
                 from rplearn.plan.trajectory import G_M_S2
 
-                w = np.radians(wind_toward_deg)
-                wind = wind_speed_m_s * np.array([np.cos(w), np.sin(w), 0.0])
+                w = np.radians(attitude.wind_toward_deg)
+                wind = attitude.wind_speed_m_s * np.array([np.cos(w), np.sin(w), 0.0])
                 v_air = wind[None, :] - ref.velocity_enu_m_s[:, j, :]
-                a_drag = drag_per_m * np.linalg.norm(v_air, axis=1, keepdims=True) * v_air
+                a_drag = attitude.drag_per_m * np.linalg.norm(v_air, axis=1, keepdims=True) * v_air
                 thrust = ref.accel_enu_m_s2[:, j, :] - a_drag + np.array([0.0, 0.0, G_M_S2])
                 quats.append(attitude_from_thrust(thrust, ref.yaw_rad[:, j]))
             else:
@@ -196,9 +224,7 @@ def check_plan(
     packet_rate_hz: float = 80.0,
     limits: PlanLimits | None = None,
     coverage_bin_deg: float = 10.0,
-    wind_speed_m_s: float = 0.0,
-    wind_toward_deg: float = 90.0,
-    tilt_into_motion: bool = True,
+    attitude: NominalAttitude | None = None,
 ) -> PlanCheck:
     """Coverage, rank and condition number a campaign will give a model, before flying.
 
@@ -215,19 +241,17 @@ def check_plan(
         Refuse (``PlanError``) units that exceed them.
     coverage_bin_deg : float
         Cell size of the coverage maps [deg].
-    wind_speed_m_s, wind_toward_deg, tilt_into_motion
-        Nominal attitude model, see :func:`plan_directions`.
+    attitude : NominalAttitude, optional
+        Nominal attitude model (wind, drag, tilt), see :func:`plan_directions`.
     """
-    from rplearn.core.solver import identifiability
+    from rplearn.core.lsq.solver import identifiability
 
     sub = campaign.with_role(role) if role is not None else campaign
     units = sub.summarize(limits)
     if not isinstance(basis, Basis):
         kind, order = basis
         basis = make_basis(kind, int(order))
-    dirs, tx_idx, rx_idx, nodes = plan_directions(
-        sub, packet_rate_hz, wind_speed_m_s, wind_toward_deg, tilt_into_motion=tilt_into_motion
-    )
+    dirs, tx_idx, rx_idx, nodes = plan_directions(sub, packet_rate_hz, attitude)
     report = identifiability(dirs, tx_idx, rx_idx, len(nodes), basis, node_names=nodes)
     coverage: dict[str, CoverageMap] = {}
     for i, node in enumerate(nodes):

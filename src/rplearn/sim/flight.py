@@ -323,15 +323,17 @@ class _Link:
 
 
 def _environment_db(
-    truth_model: GroundTruth, tx: str, rx: str, tx_pos: FloatArray, tx_q: FloatArray, rx_pos: FloatArray,
-    rx_q: FloatArray, direct_gain_db: FloatArray, dist: FloatArray, radio: RadioConfig,
+    truth_model: GroundTruth, link: tuple[str, str], tx_pose: tuple[FloatArray, FloatArray],
+    rx_pose: tuple[FloatArray, FloatArray], direct_gain_db: FloatArray, dist: FloatArray, radio: RadioConfig,
 ) -> FloatArray:
-    """What the channel adds to free space [dB]: a log-distance exponent and a ground ray.
+    """What the channel adds to free space [dB]: a log-distance exponent and a ground ray, on
+    the link ``(tx, rx)`` whose ends have the poses ``(positions, quaternions)``.
 
     The reflected ray leaves the transmitter toward the receiver's image below the ground and
     arrives from the transmitter's image, so each antenna's true gain along it differs from
     the direct ray's: the simulator uses those gains (a two-ray fit cannot know them).
     """
+    (tx, rx), (tx_pos, tx_q), (rx_pos, rx_q) = link, tx_pose, rx_pose
     out = (radio.path_loss_exponent - 2.0) * log_distance_column(dist)
     if radio.two_ray:
         g = radio.ground_level_m
@@ -370,7 +372,7 @@ def _link_packets(
         + offsets.get(f"{tx}->{rx}", 0.0)
         + level_db
         - free_space_path_loss_db(dist, radio.frequency_hz)
-        + _environment_db(truth_model, tx, rx, tx_pos, tx_q, rx_pos, rx_q, gain, dist, radio)
+        + _environment_db(truth_model, (tx, rx), (tx_pos, tx_q), (rx_pos, rx_q), gain, dist, radio)
     )
     power = clean + radio.fading_std_db * rng.standard_normal(t.size)
     delivered = np.ones(t.size, bool)

@@ -14,6 +14,8 @@ as functions of angles in degrees measured in the antenna's own frame:
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -147,17 +149,21 @@ def _sectoral_g_vr_db(
     return np.where(x_v >= 90.0 / theta3_deg, g180_db, g)
 
 
+@dataclass(frozen=True)
+class _SideLobes:
+    """Side-lobe parameters of a sectoral pattern: ``k`` (``k_p`` peak, ``k_a`` average), ``k_h``,
+    ``k_v``, and whether the formula is the average one."""
+
+    k: float
+    k_h: float
+    k_v: float
+    average: bool
+
+
 def _sectoral_dbi(
-    az_deg: ArrayLike,
-    el_deg: ArrayLike,
-    g0_dbi: float,
-    phi3_deg: float,
-    theta3_deg: float | None,
-    k: float,
-    k_h: float,
-    k_v: float,
-    average: bool,
+    az_deg: ArrayLike, el_deg: ArrayLike, g0_dbi: float, phi3_deg: float, theta3_deg: float | None, lobes: _SideLobes,
 ) -> FloatArray:
+    k, k_h, k_v, average = lobes.k, lobes.k_h, lobes.k_v, lobes.average
     if theta3_deg is None:
         theta3_deg = itu_f1336_sectoral_theta3_deg(g0_dbi, phi3_deg)
     az = np.abs(_deg(az_deg))
@@ -220,7 +226,7 @@ def itu_f1336_sectoral_peak_dbi(
     theta3_deg : float, optional
         Elevation 3 dB beamwidth [deg]; by default :func:`itu_f1336_sectoral_theta3_deg`.
     """
-    return _sectoral_dbi(az_deg, el_deg, g0_dbi, phi3_deg, theta3_deg, k_p, k_h, k_v, average=False)
+    return _sectoral_dbi(az_deg, el_deg, g0_dbi, phi3_deg, theta3_deg, _SideLobes(k_p, k_h, k_v, average=False))
 
 
 def itu_f1336_sectoral_average_dbi(
@@ -244,7 +250,7 @@ def itu_f1336_sectoral_average_dbi(
         G_vr = G180                                x_v = 90/theta3
         C = 10 log10((180/theta3)^1.5 (4^-1.5 + k_v) / (1 + 8 k_a)) / log10(22.5/theta3)
     """
-    return _sectoral_dbi(az_deg, el_deg, g0_dbi, phi3_deg, theta3_deg, k_a, k_h, k_v, average=True)
+    return _sectoral_dbi(az_deg, el_deg, g0_dbi, phi3_deg, theta3_deg, _SideLobes(k_a, k_h, k_v, average=True))
 
 
 # ---------------------------------------------------------------------------------------------

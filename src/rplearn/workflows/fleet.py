@@ -23,13 +23,13 @@ from typing import Any, Callable, Iterator, Sequence
 import numpy as np
 import pandas as pd
 
-from rplearn.core.environment import PathLoss
 from rplearn.data.tables import link_samples
 from rplearn.data.units import Stretches
 from rplearn.errors import InputError
 from rplearn.io.files import iter_parts
 from rplearn.io.partitions import Part
 from rplearn.models.base import Model
+from rplearn.models.options import FitOptions
 from rplearn.models.predict import uncovered_rows
 from rplearn.models.spec import ModelSpec
 from rplearn.models.streamed import PART_CHUNK_ROWS, Accumulated, part_statistics, units_and_nodes
@@ -157,21 +157,21 @@ def dataset_index(parts: Sequence[Part], client: Any = None) -> tuple[pd.DataFra
 
 
 def accumulate_parts(
-    parts: Sequence[Part], spec: ModelSpec, nodes: Sequence[str], units: Sequence[str] | None, by_unit: bool,
-    stretches: Stretches | None = None, path_loss: PathLoss | None = None, client: Any = None,
-    progress: Progress | None = None,
+    parts: Sequence[Part], spec: ModelSpec, nodes: Sequence[str], units: Sequence[str] | None,
+    options: FitOptions, stretches: Stretches | None = None, client: Any = None, progress: Progress | None = None,
 ) -> Accumulated:
-    """The statistics of every part, added in order (see the module docstring): on the cluster
-    of ``client``, or without one in this process
-    (:func:`rplearn.models.streamed.accumulate_parts`).
+    """The statistics of every part, added in order (see the module docstring), with the
+    environment term of ``options``: one accumulator per unit when ``options.auto`` (the folds
+    of the automatic choice), else one for all learning rows; on the cluster of ``client``, or
+    without one in this process (:func:`rplearn.models.streamed.accumulate_parts`).
 
     ``stretches`` (of a single flight, :func:`learning_times`) label each row by its stretch of
     time wherever the part that holds it is read."""
     units = None if units is None else list(units)
     if client is None:
-        return accumulate_parts_here(parts, spec, list(nodes), units, by_unit, stretches, path_loss, progress)
-    kwargs = dict(spec=spec, nodes=list(nodes), units=units, by_unit=by_unit, stretches=stretches,
-                  path_loss=path_loss)
+        return accumulate_parts_here(parts, spec, list(nodes), units, options.auto, stretches, options, progress)
+    kwargs = dict(spec=spec, nodes=list(nodes), units=units, by_unit=options.auto, stretches=stretches,
+                  options=options)
     futures = client.map(part_statistics, list(parts), pure=False, **kwargs)
     root = _tree_reduce(client, list(futures), _merge_accumulated)
     _watch(client, futures, progress)

@@ -11,7 +11,7 @@ import os
 import time
 from contextlib import nullcontext
 from dataclasses import dataclass, field, replace
-from typing import TYPE_CHECKING, Any, Callable, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Sequence
 
 import numpy as np
 import pandas as pd
@@ -36,18 +36,17 @@ from rplearn.workflows.fleet import (
     accumulate_parts, dask_client, dataset_index, learning_times, parse_dask, predict_parts, selected_rows,
 )
 from rplearn.models.fit import FittedModel, evaluate_models, fit_model, scores_markdown, scores_of_predictions
-from rplearn.models.base import require_patterns
-from rplearn.models.load import load_model
+from rplearn.models.load import load_model, load_priors
+from rplearn.models.options import FitOptions
 from rplearn.models.spec import ModelSpec, check_model_size
-from rplearn.models.robust import LOSSES, downweighted_notes, fit_huber
+from rplearn.models.robust import downweighted_notes, fit_huber
 from rplearn.models.streamed import checked, fit_patterns_accumulated, weighted_median
 from rplearn.models.predict import UNCOVERED_DEG, DatasetPrediction, distinct_labels, predict_dataset, uncovered_rows
 from rplearn.models.terms import terms_text
-from rplearn.core.environment import PathLoss
 
 if TYPE_CHECKING:  # order selection (models.auto, analysis.sweep) loads scipy: imported when used
     from rplearn.analysis.sweep import SweepResult
-    from rplearn.core.selection import Selection
+    from rplearn.core.lsq.selection import Selection
 
 Progress = Callable[[str], None]
 
@@ -89,12 +88,12 @@ class FitOutcome:
         text = f"{self.fitted.label} learned from {self.n_samples:,} samples in {self.fitted.ltd_s:.3f} s"
         if self.output:
             text += f" -> {self.output}"
-        if "rank" in training:
+        if training.rank is not None:
             text += (
-                f"\n  rank {training['rank']} of {training['n_columns']}, condition number "
-                f"{training['condition_number']:.2f}, training RMSE {training['rmse_db']:.2f} dB"
+                f"\n  rank {training.rank} of {training.n_columns}, condition number "
+                f"{training.condition_number:.2f}, training RMSE {training.rmse_db:.2f} dB"
             )
-            text += "".join(f"\n  gauge: {g['text']}" for g in training.get("gauges", []))
+            text += "".join(f"\n  gauge: {g['text']}" for g in training.gauges or ())
         if self.selection is not None:
             sel = self.selection
             how = (f"grouped cross-validation over units {', '.join(sel.units)}" if sel.method == "grouped-cv"
@@ -102,21 +101,23 @@ class FitOutcome:
             text += (f"\n  chosen by {how}: order {sel.order}, smoothing {sel.smoothing:.1e}, "
                      f"validation RMSE {sel.rmse_db:.2f} dB; the curve:\n    "
                      + sel.curve_text().replace("\n", "\n    "))
-            if "variance_inflation" in training and sel.method == "grouped-cv":
+            if training.variance_inflation is not None and sel.method == "grouped-cv":
                 text += (f"\n  spread: within each held-out unit, the errors exceed the posterior's by "
-                         f"x{training['variance_inflation']:.2f} in variance (correlated packets, misfit); the covariance "
+                         f"x{training.variance_inflation:.2f} in variance (correlated packets, misfit); the covariance "
                          "is inflated to match")
-                if "flight_level_std_db" in training:
-                    text += (f"\n  flight-to-flight level: {training['flight_level_std_db']:.1f} dB (1 sigma) between units, "
-                             f"{training.get('new_flight_level_std_db', 0.0):.1f} dB for a new flight's predictions; "
-                             f"noise about a flight's level {training.get('noise_std_db', float('nan')):.1f} dB")
-            spread = training.get("prior_std_db") or {}
+                if training.flight_level_std_db is not None:
+                    new_level = training.new_flight_level_std_db or 0.0
+                    noise = training.noise_std_db if training.noise_std_db is not None else float("nan")
+                    text += (f"\n  flight-to-flight level: {training.flight_level_std_db:.1f} dB (1 sigma) between units, "
+                             f"{new_level:.1f} dB for a new flight's predictions; "
+                             f"noise about a flight's level {noise:.1f} dB")
+            spread = training.prior_std_db or {}
             if spread:
                 values = ", ".join(f"{n} {v:.1f} dB" for n, v in spread.items())
                 text += (f"\n  where the flight never looked each pattern may be off by (1 sigma): {values} "
-                         f"({training.get('prior_std_source', '')})")
+                         f"({training.prior_std_source or ''})")
         text += "".join(f"\n  {line}" for line in terms_text(training))
-        text += "".join(f"\n  {line}" for line in training.get("decoupling", {}).get("summary", "").splitlines())
+        text += "".join(f"\n  {line}" for line in (training.decoupling or {}).get("summary", "").splitlines())
         text += "".join(f"\n  {line}" for line in self.robust_notes)
         if self.wall_s is not None and self.wall_s > 0:
             text += (f"\n  read, accumulated and solved in {self.wall_s:.1f} s "
@@ -128,24 +129,18 @@ class FitOutcome:
 
     @property
     def warnings(self) -> list[str]:
-        return list(self.fitted.model.training.get("warnings", []))
+        return list(self.fitted.model.training.warnings or ())
 
 
 def fit_dataset(
     dataset: str,
     spec: ModelSpec,
     units: Sequence[str] | None = None,
-    gauge: str | Mapping[str, Any] = "equal-mean",
+    *,
+    options: FitOptions | None = None,
     output: str | None = None,
-    auto: bool = False,
-    prior: Mapping[str, str] | None = None,
-    prior_std_db: float | None = None,
-    loss: str = "ls",
-    path_loss: PathLoss | None = None,
-    link_offsets: bool = True,
     dask: str | None = None,
     progress: Callable[[int, int], None] | None = None,
-    prior_level: str = "data",
 ) -> FitOutcome:
     """Learn ``spec`` from a matched dataset file (``rplearn fit``).
 
@@ -156,96 +151,59 @@ def fit_dataset(
         comma-separated list or an fsspec URL (:mod:`rplearn.io.partitions`); pattern models
         learn from such a dataset part by part.
     spec : ModelSpec
+        The model; with ``options.auto`` its kind and ridge (and the order of BG, P).
     units : sequence of str, optional
         Learning units; default every unit not labelled ``test...`` (:func:`learning_units`).
-    gauge : str or mapping
-        Gauge of a two-node fit (:func:`rplearn.models.spec.gauge_of`).
+    options : FitOptions, optional
+        How to learn (:class:`rplearn.models.options.FitOptions`, checked against ``spec``
+        here): the gauge, the environment term and link offsets, the loss (Huber: a pattern
+        model of fixed order, the dataset in memory; the outcome says how many samples were
+        down-weighted, in which units and stretches), the automatic choice of order and
+        smoothing (:mod:`rplearn.models.auto`), and the priors (model files or models) with
+        their level and spread.
     output : str, optional
         Model file to write (JSON).
-    auto : bool
-        Pattern models: choose the order (SH) and the smoothing from the data
-        (:mod:`rplearn.models.auto`); ``spec`` gives the kind and ridge (and the order of BG, P).
-    prior : mapping of node to model file, optional
-        With ``auto``: shrink each named node's pattern toward this model's pattern (a
-        reference from ``rplearn reference``, or any pattern model) instead of toward zero.
-    prior_std_db : float, optional
-        How far [dB RMS] the priors may be from the truth (a vendor's tolerance): the spread of
-        predictions where the flight never looked (default: learned from the priors' misfit
-        where it looked; see :func:`rplearn.models.auto.fit_from_statistics`).
-    loss : {"ls", "huber"}
-        Least squares, or the Huber loss (:mod:`rplearn.models.robust`) for logs with
-        plateaus and dropouts: a pattern model of fixed order, the dataset in memory; the
-        outcome says how many samples were down-weighted, in which units and stretches.
-    path_loss : PathLoss, optional
-        The environment term of pattern models (:mod:`rplearn.core.environment`): free space
-        (default), a learned log-distance exponent, or a two-ray ground reflection.
-    link_offsets : bool
-        Pattern models: learn one electronics offset per link logged in both directions
-        (non-reciprocal radios); off, both directions are taken as reciprocal.
     dask : str, optional
         Run on Dask (pattern models, least squares): ``"local"``, ``"local:N"`` (a local
         cluster of N workers) or a scheduler address ``"tcp://host:8786"``
         (:mod:`rplearn.workflows.fleet`): statistics per part, tree-reduced, solved here.
     progress : callable, optional
         Called with ``(parts done, parts)`` while a dataset is read part by part.
-    prior_level : {"data", "prior"}
-        Where the level of a prior's pattern comes from: the data (default; the prior gives
-        its shape) or the prior's absolute dBi (calibrated power and a trusted reference).
     """
+    options = options or FitOptions()
+    options.check(spec)
     if output:
-        check_output_path(output, [dataset, *(prior or {}).values()])
-    if prior and not auto:
-        raise InputError("prior: a prior is weighed against the data by the automatic choice; use it with "
-                         "order 'auto' (--degree auto)", param="prior")
-    if prior_level != "data" and not prior:
-        raise InputError("prior-level: it says where a prior's level comes from; give --prior too", param="prior_level")
-    if prior_std_db is not None and not prior:
-        raise InputError("prior-std: it states how far the priors may be off; give --prior too", param="prior_std_db")
-    if prior_std_db is not None and not (np.isfinite(prior_std_db) and prior_std_db > 0):
-        raise InputError(f"prior-std: expected a positive number of dB, got {prior_std_db!r}", param="prior_std_db")
-    priors = {str(n): load_model(path) for n, path in (prior or {}).items()}
-    for model in priors.values():
-        require_patterns(model, "serving as a prior")
-    if loss not in LOSSES:
-        raise InputError(f"loss: expected {' or '.join(LOSSES)}, got {loss!r}", param="loss")
-    if loss == "huber" and (auto or not spec.decouples):
-        raise InputError("loss huber: for a pattern model of fixed order (--model sh --degree N, bg, poly), "
-                         "not an automatic choice or a baseline", param="loss")
-    if auto and not spec.decouples:
-        raise InputError(f"order: 'auto' chooses the order of pattern models (sh, bg, poly), not of {spec.label}", param="order")
-    path_loss = path_loss or PathLoss()  # a baseline with another path loss is refused by fit_model
-    terms = {"path_loss": path_loss, "link_offsets": link_offsets}
+        check_output_path(output, [dataset, *options.prior_files()])
+    options = load_priors(options)
     if dask is not None:
         parse_dask(dask)
-        if not spec.decouples or loss != "ls":
+        if not spec.decouples or options.loss != "ls":
             raise InputError(f"--dask: pattern models (sh, bg, poly) with least squares learn on a cluster, not "
-                             f"{spec.label}{' with loss ' + loss if loss != 'ls' else ''}", param="dask")
+                             f"{spec.label}{' with loss ' + options.loss if options.loss != 'ls' else ''}", param="dask")
         with dask_client(dask) as client:
-            return _fit_streamed(dataset, spec, units, gauge, output, auto, priors, prior_std_db, client=client,
-                                 progress=progress, prior_level=prior_level, **terms)
+            return _fit_streamed(dataset, spec, units, options, output, client=client, progress=progress)
     if spec.decouples and _is_big(dataset):
-        if loss == "huber":
+        if options.loss == "huber":
             raise InputError(f"{dataset}: loss huber keeps the samples in memory; this file is streamed "
                              f"(over {STREAM_FIT_ROWS:,} rows or {STREAM_FIT_BYTES // 2**20} MiB): write the "
                              "units to learn from into a smaller file", param="loss")
-        return _fit_streamed(dataset, spec, units, gauge, output, auto, priors, prior_std_db, progress=progress,
-                             prior_level=prior_level, **terms)
+        return _fit_streamed(dataset, spec, units, options, output, progress=progress)
     df, stretch_note = stretched(read_dataset(dataset), units, dataset)
     choice = learning_units(df, units, dataset)
     if stretch_note:
         choice = replace(choice, notes=[stretch_note, *choice.notes])
     elif "unit" not in df.columns:
         choice = replace(choice, notes=[whole_flight_note(dataset)])
-    if auto:
-        return _fit_auto(df, dataset, spec, choice, gauge, output, priors, prior_std_db, prior_level=prior_level, **terms)
+    if options.auto:
+        return _fit_auto(df, dataset, spec, choice, options, output)
     samples = samples_of(df, choice.units, dataset)
     prov = provenance(dataset=dataset, model=spec.label, ridge=spec.ridge, units=choice.units)
     notes: list[str] = []
-    if loss == "huber":
-        fitted, robust = fit_huber(samples, spec, gauge=gauge, provenance=prov, **terms)
+    if options.loss == "huber":
+        fitted, robust = fit_huber(samples, spec, options, provenance=prov)
         notes = downweighted_notes(select_units(df, choice.units, dataset), robust)
     else:
-        fitted = fit_model(samples, spec, gauge=gauge, provenance=prov, **terms)
+        fitted = fit_model(samples, spec, options, provenance=prov)
     check_dataset_budget(fitted.model, select_units(df, choice.units, dataset), dataset)
     certify(fitted.model, samples)
     if output:
@@ -261,9 +219,7 @@ STREAM_FIT_BYTES = 256 * 2**20
 
 
 def _fit_auto(
-    df: Any, dataset: str, spec: ModelSpec, choice: UnitChoice, gauge: str | Mapping[str, Any], output: str | None,
-    priors: Mapping[str, Any] | None = None, prior_std_db: float | None = None, path_loss: PathLoss | None = None,
-    link_offsets: bool = True, prior_level: str = "data",
+    df: Any, dataset: str, spec: ModelSpec, choice: UnitChoice, options: FitOptions, output: str | None,
 ) -> FitOutcome:
     """:func:`fit_dataset` with ``auto=True`` on a dataset in memory: samples per learning unit."""
     from rplearn.models.auto import fit_auto
@@ -275,9 +231,7 @@ def _fit_auto(
     else:
         per_unit = {str(u): samples_of(df, None if u is None else [u], dataset, nodes=nodes) for u in learn}
     prov = provenance(dataset=dataset, model=f"{spec.kind}-auto", ridge=spec.ridge, units=choice.units)
-    fitted, selection = fit_auto(per_unit, spec.kind, spec.order if spec.kind != "sh" else None, spec.ridge, gauge, prov,
-                                 prior=priors or None, prior_spread_db=prior_std_db, path_loss=path_loss,
-                                 link_offsets=link_offsets, prior_level=prior_level)
+    fitted, selection = fit_auto(per_unit, spec, options, provenance=prov)
     check_dataset_budget(fitted.model, part, dataset)
     certify(fitted.model, list(per_unit.values()), fitted.own_posterior)
     if output:
@@ -298,10 +252,8 @@ def _is_big(dataset: str) -> bool:
 
 
 def _fit_streamed(
-    dataset: str, spec: ModelSpec, units: Sequence[str] | None, gauge: str | Mapping[str, Any], output: str | None,
-    auto: bool = False, priors: Mapping[str, Any] | None = None, prior_std_db: float | None = None,
-    path_loss: PathLoss | None = None, link_offsets: bool = True, client: Any = None,
-    progress: Callable[[int, int], None] | None = None, prior_level: str = "data",
+    dataset: str, spec: ModelSpec, units: Sequence[str] | None, options: FitOptions, output: str | None,
+    client: Any = None, progress: Callable[[int, int], None] | None = None,
 ) -> FitOutcome:
     """:func:`fit_dataset` for a big file or a dataset in many files (:mod:`rplearn.io.partitions`):
     units, nodes and the model size from the id columns, then the patterns from the statistics
@@ -316,6 +268,7 @@ def _fit_streamed(
     n = int(part["n"].sum())
     if n == 0:
         raise InputError(f"{dataset}: no samples selected", param="units")
+    auto = options.auto
     if auto:
         from rplearn.models.auto import auto_orders, fit_from_statistics
         orders = auto_orders(spec.kind, n, len(nodes), spec.order if spec.kind != "sh" else None)
@@ -325,24 +278,21 @@ def _fit_streamed(
     if auto:
         learn = choice.units or dataset_units(index) or [None]
         stretches = Stretches.of_times(learning_times(parts, choice.units, client), TIME_UNITS, learn[0]) if len(learn) == 1 else None
-        acc = checked(accumulate_parts(parts, spec, nodes, choice.units, True, stretches, path_loss, client, progress),
-                      dataset)
+        acc = checked(accumulate_parts(parts, spec, nodes, choice.units, options, stretches, client, progress), dataset)
         prov = provenance(dataset=dataset, model=f"{spec.kind}-auto", ridge=spec.ridge, units=choice.units)
-        fitted, selection = fit_from_statistics(acc.stats, spec.kind, orders, nodes, spec.ridge, gauge,
-                                                frequency_hz=weighted_median(acc.freq), provenance=prov,
-                                                prior=priors or None, prior_spread_db=prior_std_db,
-                                                path_loss=path_loss, link_offsets=link_offsets, prior_level=prior_level)
-        fitted.model.training["coverage_deg"] = acc.grids or {}
+        fitted, selection = fit_from_statistics(acc.stats, spec, orders, nodes, options,
+                                                frequency_hz=weighted_median(acc.freq), provenance=prov)
+        fitted.model.training = fitted.model.training.replace(coverage_deg=acc.grids or {})
         certify(fitted.model, None, fitted.own_posterior)  # the spreads alone: the pairs of directions were streamed, not kept
         if output:
             fitted.model.save(output)
         return FitOutcome(fitted, choice, acc.n_samples, output, acc.non_unit, selection, wall_s=time.perf_counter() - t0)
-    acc = checked(accumulate_parts(parts, spec, nodes, choice.units, False, None, path_loss, client, progress), dataset)
-    fit = fit_patterns_accumulated(acc, spec, nodes, gauge, path_loss, link_offsets)
+    acc = checked(accumulate_parts(parts, spec, nodes, choice.units, options, client=client, progress=progress), dataset)
+    fit = fit_patterns_accumulated(acc, spec, nodes, options)
     model = fit.patterns
     model.provenance = {**provenance(dataset=dataset, model=spec.label, ridge=spec.ridge, units=choice.units),
                         "model": spec.label}
-    model.training["ltd_s"] = fit.learn_s
+    model.training = model.training.replace(ltd_s=fit.learn_s)
     fitted = FittedModel(spec, model, fit.learn_s)
     if output:
         model.save(output)
@@ -517,19 +467,21 @@ def learn_and_report(
     out_dir: str,
     test_units: Sequence[str] | None = None,
     progress: Progress = no_progress,
-    path_loss: PathLoss | None = None,
-    link_offsets: bool = True,
+    options: FitOptions | None = None,
 ) -> ReportOutcome:
     """Learn models on a dataset's learning units (by time without units), test them, and write Table I,
     coverage and pattern maps (also in 3-D) into ``out_dir/report.html`` (``rplearn report``). Pattern
-    models learn with ``path_loss`` and the link offsets (:func:`fit_dataset`), the baselines per directed
-    link in free space; a model the data cannot identify is a note, the others still go."""
+    models learn as ``options`` say (a fixed order, least squares: its environment term and link offsets;
+    :func:`fit_dataset`), the baselines per directed link in free space; a model the data cannot identify
+    is a note, the others still go."""
     from rplearn.viz import interactive, plot
     from rplearn.viz.report import ReportSection, write_report
 
     if not models:
         raise InputError("models: give at least one model, e.g. m,sh-10", param="models")
     specs = [ModelSpec.parse(name) for name in models]  # refuse a bad name before writing anything
+    options = options or FitOptions()
+    baseline_options = FitOptions()  # the baselines: per directed link, free space
     for name in REPORT_FILES:  # the report's own files may not overwrite its dataset
         if os.path.lexists(os.path.join(out_dir, name)):
             check_output_path(os.path.join(out_dir, name), [dataset])
@@ -541,9 +493,8 @@ def learn_and_report(
     fitted, failed = [], []
     for spec in specs:
         progress(f"learning {spec.label}")
-        terms = {"path_loss": path_loss, "link_offsets": link_offsets} if spec.decouples else {}
         try:
-            fitted.append(fit_model(ls, spec, provenance=prov, **terms))
+            fitted.append(fit_model(ls, spec, options if spec.decouples else baseline_options, provenance=prov))
         except (InputError, IdentifiabilityError) as exc:  # too few samples for this model: the others still go
             failed.append(f"{spec.label} not learned: {exc}")
     if not fitted:

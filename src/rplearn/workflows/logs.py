@@ -172,7 +172,10 @@ def sync_logs(
     sync_options = sync_options or SyncOptions()
     pose_logs, pose_meta = read_logs(pose_paths, reader_options)
     if pose_logs.pose is None:
-        raise InputError(f"{', '.join(pose_paths)}: no pose log found", param="pose_paths")
+        from rplearn.io.sniff import swapped_logs_hint
+
+        raise InputError(f"{', '.join(pose_paths)}: no pose log found{swapped_logs_hint(pose_paths, signal_paths)}",
+                         param="pose_paths")
     clock = None
     if apply_offset and estimate_offset is None:
         raise InputError("apply-offset: nothing to apply; give --estimate-offset NODE", param="estimate_offset")

@@ -18,7 +18,7 @@ from rplearn.models.load import load_model
 from rplearn.models.patterns import PatternSet
 from rplearn.models.spec import ModelSpec
 from rplearn.plan.campaign import Campaign, paper_campaign, write_references
-from rplearn.plan.check import PlanCheck, check_plan
+from rplearn.plan.check import NominalAttitude, PlanCheck, check_plan
 from rplearn.plan.trajectory import PlanLimits, UnitSummary, summarize_unit
 
 #: Headings [deg] of the paper's learning and testing units (Sec. V-C).
@@ -65,7 +65,8 @@ def plan_campaign(
     )
     units = [summarize_unit(unit, limits) for unit in campaign.units]
     paths = write_references(campaign, out_dir, rate_hz)
-    check = check_plan(campaign, spec.basis(), wind_speed_m_s=wind_speed_m_s) if spec is not None else None
+    attitude = NominalAttitude(wind_speed_m_s=wind_speed_m_s)
+    check = check_plan(campaign, spec.basis(), attitude=attitude) if spec is not None else None
     return CampaignPlan(campaign, units, paths, check)
 
 

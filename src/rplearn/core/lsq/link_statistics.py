@@ -1,0 +1,208 @@
+"""Products of the feature blocks of links: the work inside :class:`~rplearn.core.lsq.normal_equations.NormalEquations`.
+
+Per link direction, ``Z^T Z`` with ``Z = [f(tx directions), y, extra..., f(rx directions)]``
+(:func:`link_statistics`), or for many short links at once (:func:`segmented_link_statistics`),
+through a float64 block buffer kept per thread, in blocks of samples that two worker threads
+compute ahead: both owned by :data:`~rplearn.core.lsq.runtime.DEFAULT_RUNTIME`.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from rplearn.core.bases import Basis
+from rplearn.core.lsq.runtime import DEFAULT_RUNTIME
+
+FloatArray = NDArray[np.float64]
+
+#: Samples per feature sub-chunk (fits the CPU cache) and per accumulation block.
+FEATURE_CHUNK = 4096
+BLOCK_SAMPLES = 65536
+#: The block buffer holds at most this many values (64 MiB): high orders take fewer samples per
+#: block (SH-24, 1,155 rows: about 7,000), so the buffer kept between fits stays bounded
+#: (it was 0.6 GB after one SH-24 fit).
+BLOCK_MAX_VALUES = 8 * 2**20
+
+
+def block_samples(rows: int) -> int:
+    """Samples per accumulation block of ``rows`` rows (:data:`BLOCK_SAMPLES`, fewer for big bases)."""
+    return int(max(256, min(BLOCK_SAMPLES, BLOCK_MAX_VALUES // max(int(rows), 1))))
+
+
+def block_rows(basis: Basis, n_extra: int = 2) -> int:
+    """Rows of the accumulation block of :func:`link_statistics` for this basis (with the
+    ``n_extra`` rows :class:`NormalEquations` adds: a constant and the environment column)."""
+    return 2 * basis.n_coef + 1 + n_extra
+
+
+def reserve_block_buffer(basis: Basis, n_samples: int) -> None:
+    """Allocate (and touch) this thread's block buffer for a fit of ``n_samples`` samples.
+
+    Called before a timed fit so that its learning time does not include the one-off page
+    faults of the buffer (measured 0.2 s for the first SH-10 fit of the paper's 56k samples).
+    """
+    rows = block_rows(basis)
+    DEFAULT_RUNTIME.block_buffer(rows * max(1, min(int(n_samples), block_samples(rows))))
+
+
+def _fill_features(
+    basis: Basis,
+    buf: FloatArray,
+    az_tx: FloatArray,
+    el_tx: FloatArray,
+    az_rx: FloatArray,
+    el_rx: FloatArray,
+    moments: Any,
+    gap: int = 1,
+    segments: tuple[NDArray[np.intp], NDArray[np.intp]] | None = None,
+) -> None:
+    """Write tx features into rows ``0 .. p-1`` and rx features into rows ``p+gap .. 2p+gap-1`` of ``buf``.
+
+    Rows are in the basis's :attr:`~rplearn.core.bases.Basis.row_order`; rows ``p .. p+gap-1``
+    are left for the observations and extra columns. Works in cache-sized chunks; a basis that
+    accepts stacked samples computes both ends of a chunk in one pass, through a (p, 2, chunk)
+    strided view of the two row groups, and adds to ``moments[0]`` (tx) and ``moments[1]`` (rx)
+    when given: per range of samples when ``segments`` (bounds of the tx ranges, of the rx
+    ranges) are given, see :meth:`~rplearn.core.sh.SphericalHarmonics.design_rows_into`.
+    """
+    p = basis.n_coef
+    n = az_tx.size
+    if basis.stacked_samples:
+        az_both = np.stack([az_tx, az_rx])
+        el_both = np.stack([el_tx, el_rx])
+    for s in range(0, n, FEATURE_CHUNK):
+        e = min(n, s + FEATURE_CHUNK)
+        view = buf[:, s:e]
+        if basis.stacked_samples:
+            both = np.lib.stride_tricks.as_strided(
+                view, shape=(p, 2, e - s), strides=(view.strides[0], (p + gap) * view.strides[0], view.strides[1])
+            )
+            local = None if segments is None else tuple(np.clip(b - s, 0, e - s) for b in segments)
+            basis.design_rows_into(az_both[:, s:e], el_both[:, s:e], both, moments, local)
+        else:
+            basis.design_rows_into(az_tx[s:e], el_tx[s:e], view[:p])
+            basis.design_rows_into(az_rx[s:e], el_rx[s:e], view[p + gap : 2 * p + gap])
+
+
+def link_statistics(
+    basis: Basis,
+    az_tx: FloatArray,
+    el_tx: FloatArray,
+    az_rx: FloatArray,
+    el_rx: FloatArray,
+    y: FloatArray,
+    extra: FloatArray | None = None,
+) -> FloatArray:
+    """``Z^T Z`` with ``Z = [f(tx directions), y, extra..., f(rx directions)]`` over samples of one link.
+
+    A ``(2p + 1 + m, 2p + 1 + m)`` matrix (``m`` rows of ``extra``, shape ``(m, n)``: shared
+    regressors such as a constant or the log-distance column), features in the basis's row
+    order: the tx and rx blocks of ``X^T X``, ``X^T y``, ``y^T y`` and the extra columns'
+    products. Per block of :func:`block_samples` samples, written into this thread's reused
+    buffer, either one symmetric rank-k update of all rows, or, for a basis with Gram moments
+    (SH), only the product ``[f_tx; y; extra] [y; extra; f_rx]^T`` (about half the work): the
+    two diagonal feature blocks then come from the moments. (Many links at once:
+    :func:`segmented_link_statistics`.)
+    """
+    az_tx, el_tx, az_rx, el_rx, y = (np.ascontiguousarray(a, np.float64).ravel() for a in (az_tx, el_tx, az_rx, el_rx, y))
+    p = basis.n_coef
+    n = az_tx.size
+    extra = np.zeros((0, n)) if extra is None else np.asarray(extra, np.float64).reshape(-1, n)
+    m = extra.shape[0]
+    gap = 1 + m  # rows between the tx and rx feature groups: y and the extra rows
+    k = 2 * p + gap
+    use_moments = basis.moment_shape is not None and basis.stacked_samples
+    if use_moments:
+        moments = np.zeros((2, *basis.moment_shape))
+    else:
+        moments = None
+    total = np.zeros((k, k))
+    per_block = block_samples(k)
+    block = DEFAULT_RUNTIME.block_buffer(k * max(1, min(n, per_block)))  # grows to the largest block seen, within the cap
+    for start in range(0, n, per_block):
+        stop = min(n, start + per_block)
+        buf = block[: k * (stop - start)].reshape(k, stop - start)
+        part = slice(start, stop)
+        _fill_features(basis, buf, az_tx[part], el_tx[part], az_rx[part], el_rx[part], moments, gap)
+        buf[p] = y[part]
+        if m:
+            buf[p + 1 : p + gap] = extra[:, part]
+        if moments is None:
+            total += buf @ buf.T
+        else:
+            total[: p + gap, p:] += buf[: p + gap] @ buf[p:].T
+    if moments is not None:
+        total[p:, : p + gap] = total[: p + gap, p:].T
+        total[:p, :p] = basis.gram_from_moments(moments[0])
+        total[p + gap :, p + gap :] = basis.gram_from_moments(moments[1])
+    return total
+
+
+def segmented_link_statistics(
+    basis: Basis, az_tx: FloatArray, el_tx: FloatArray, az_rx: FloatArray, el_rx: FloatArray, y: FloatArray,
+    extra: FloatArray, bounds: NDArray[np.intp], natural: NDArray[np.intp] | None = None,
+    tx_bounds: NDArray[np.intp] | None = None,
+) -> tuple[FloatArray, tuple[FloatArray, FloatArray]]:
+    """:func:`link_statistics` of many links at once, for a basis with Gram moments (SH).
+
+    The samples (at most :func:`block_samples` of the rows) are sorted by link, link ``j``
+    holding samples ``bounds[j]:bounds[j + 1]``. The features of all of them are computed in
+    one pass (not one per link: a swarm's links hold a few hundred samples each, too few to
+    amortise a pass), then per link the product ``[f_tx; y; extra] [y; extra; f_rx]^T``.
+
+    Returns
+    -------
+    products : ndarray, shape (links, p + 1 + m, 1 + m + p)
+        Per link, rows ``[f_tx, y, extra]`` times columns ``[y, extra, f_rx]``, features in the
+        basis's row order (``m`` rows of ``extra``), or in natural order when ``natural`` (the
+        row of each feature) is given.
+    moments : tuple of two ndarrays
+        Gram moments of the tx directions, shape ``(runs, *basis.moment_shape)``, per range of
+        ``tx_bounds`` (by default per link: give the ranges of equal transmitters, fewer and
+        longer, when the links are sorted by it), and of each link's rx directions, shape
+        ``(links, *basis.moment_shape)``.
+    """
+    p = basis.n_coef
+    n = az_tx.size
+    m = extra.shape[0]
+    gap = 1 + m
+    k = 2 * p + gap
+    n_links = bounds.size - 1
+    buf = DEFAULT_RUNTIME.block_buffer(k * n)[: k * n].reshape(k, n)
+    tx_bounds = bounds if tx_bounds is None else tx_bounds
+    moments = (np.zeros((tx_bounds.size - 1, *basis.moment_shape)), np.zeros((n_links, *basis.moment_shape)))
+    _fill_features(basis, buf, az_tx, el_tx, az_rx, el_rx, moments, gap, (tx_bounds, bounds))
+    buf[p] = y
+    buf[p + 1 : p + gap] = extra
+    products = np.empty((n_links, p + gap, gap + p))
+    for j in range(n_links):
+        a, b = bounds[j], bounds[j + 1]
+        np.matmul(buf[: p + gap, a:b], buf[p:, a:b].T, out=products[j])
+    if natural is not None:
+        rows, cols = np.r_[natural, p:p + gap], np.r_[0:gap, gap + natural]
+        products = products[:, rows[:, None], cols[None, :]]
+    return products, moments
+
+
+def block_starts(bounds: NDArray[np.intp], per_block: int, max_links: int) -> list[int]:
+    """Starts of the blocks of samples sorted by link (link ``j`` holds samples
+    ``bounds[j]:bounds[j + 1]``): at most ``per_block`` samples and about ``max_links`` links
+    each (the per-link products of a block, ``links x (p + 1 + m)^2`` values, stay bounded
+    however short the links are)."""
+    n = int(bounds[-1])
+    cuts = set(range(0, n, per_block)) | {int(b) for b in bounds[: -1 : max(1, max_links)]}
+    return sorted(c for c in cuts if c < n)
+
+
+def max_links_per_block(basis: Basis, n_extra: int) -> int:
+    """Links per block that keep a block's products within a quarter of :data:`BLOCK_MAX_VALUES`."""
+    side = basis.n_coef + 1 + n_extra
+    return max(1, BLOCK_MAX_VALUES // (4 * side * side))
+
+
+__all__ = ["BLOCK_MAX_VALUES", "BLOCK_SAMPLES", "FEATURE_CHUNK", "block_rows", "block_samples", "block_starts", "link_statistics",
+           "max_links_per_block",
+           "reserve_block_buffer", "segmented_link_statistics"]

@@ -1,0 +1,548 @@
+"""Automatic choice of a pattern's order and smoothing from per-unit sufficient statistics.
+
+The learned coefficients are shrunk by a smoothness penalty ``lambda * sum_j w_j c_j^2`` with
+``w_j`` the basis's :meth:`~rplearn.core.basis_base.Basis.roughness` (``(l (l+1))^p`` for a
+spherical harmonic of degree ``l``, ``p`` = :data:`DEFAULT_PENALTY_POWER`; plain ridge for BG and
+P). ``lambda`` is given *relative* to the mean diagonal of the learning data's ``X^T X``, so one
+value means the same shrinkage for a short and a long flight: the absolute weight added to
+``X^T X`` is ``smoothing * mean(diag(X^T X)) * w_j``. The penalty and the ridge shrink toward
+a target whose constant per node is the learning data's own level, not zero
+(:mod:`rplearn.core.lsq.level`), so that no validation error depends on the level of the RSSI values.
+
+Order and smoothing are chosen by **grouped cross-validation over flight units**: each unit in
+turn is held out, the pattern learned from the others, and its squared error on the held-out
+unit computed from that unit's statistics alone (``y^T y - 2 c^T X^T y + c^T X^T X c``); random
+samples are never held out, because neighbouring packets of one flight leak into each other.
+With a single unit the choice is by **generalised cross-validation** (Golub, Heath and Wahba
+1979) on the whole data; ``rplearn fit`` avoids that case by cutting a single flight into
+contiguous stretches of time that play the units' part. Either way the validation error is that
+of the flown region: a test that looks where no unit looked (another altitude) is an
+extrapolation, which the coverage warnings of predict and evaluate flag. Everything comes from the :class:`NormalEquations` accumulated once per
+unit at the largest order: for spherical harmonics a lower order's statistics are a sub-block
+(degrees nest), so nothing is refitted from raw samples.
+
+The search, a coordinate descent over the validation error (every point is kept as the curve):
+
+1. the smoothing grid :data:`SMOOTHING_GRID` at a middle candidate order (every other value,
+   then the neighbours of the best): the relative smoothing means nearly the same at every
+   order, and a middle order costs a fraction of the largest;
+2. the candidate orders at that smoothing (every other order from the largest down, then the
+   neighbours of the best);
+3. at the best order, the smoothing walks along the grid while it improves; then step 2 runs
+   again at the new smoothing, and step 3 repeats while the order moves;
+4. of the points evaluated, those within noise of the best (:func:`_within_noise`: from three
+   held-out units, at most :data:`WITHIN_NOISE_SE` standard errors of the paired per-unit
+   difference and :data:`WITHIN_NOISE_FRACTION` of the mean square above it), the least
+   smoothed (then the largest order) is chosen: the joint gain validates the sum of two
+   patterns, not their split, which the penalty decides; more smoothing than the held-out
+   units can justify pulls the split toward the prior (on the ``paper`` preset, seed 1: a
+   pattern error per node of 1.48 dB at smoothing 3.2e-5 against 1.33 dB at 1e-5, for a
+   validation error no unit can tell apart; ``benchmarks/split.py``).
+
+The validation error of an order and smoothing is computed once (a Cholesky solve per held-out
+unit) and kept in the curve. The cost is dominated by the few solves at the largest orders:
+about 6 of them per held-out unit, against 12-14 for a full grid at the largest order.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Callable, Mapping, Sequence
+
+import numpy as np
+
+from rplearn.core.basis_base import Basis
+from rplearn.core.lsq.level import shrink_target
+from rplearn.core.lsq.normal_equations import EXPONENT_MIN_SPREAD_DB, NormalEquations, schur_spread_db
+from rplearn.core.lsq.selection_result import CurvePoint, Selection
+from rplearn.core.lsq.penalty import (
+    DEFAULT_PENALTY_POWER,
+    nested_columns,
+    penalty_scale,
+    penalty_vector,
+    sub_statistics,
+    with_shared_columns,
+)
+from rplearn.errors import IdentifiabilityError, InputError
+
+#: Smoothing values tried, relative to ``mean(diag(X^T X))`` (0: the plain fit with its ridge).
+#: When the best is the largest, larger values are tried (by decades, up to
+#: :data:`MAX_SMOOTHING`): with a prior, a flight that saw little may be best left at the prior.
+SMOOTHING_GRID: tuple[float, ...] = (0.0, *np.logspace(-8.0, 1.0, 19).tolist())
+MAX_SMOOTHING = 1e6
+#: Weight of the (unpenalised) constant in the cross-validation solves, relative to the
+#: roughness of degree 1: keeps them positive definite; moves only the free gauge constant.
+_CONSTANT_FLOOR = 1e-6
+#: Points within this many standard errors (of the held-out units' paired difference in squared
+#: error) of the best validation error count as equally good: the least smoothed of them is chosen.
+WITHIN_NOISE_SE = 2.0
+#: ... and by at most this fraction of the best validation mean square (a cap on what a noisy
+#: standard error from a few units may excuse: 1% is 0.5% of the RMSE, 0.02 dB at 4.4 dB).
+WITHIN_NOISE_FRACTION = 0.01
+#: Held-out units needed to estimate that standard error (with fewer the best point is chosen).
+MIN_NOISE_UNITS = 3
+#: Orders whose fold blocks are kept at once (the coordinate descent moves between neighbours).
+_CACHED_ORDERS = 3
+
+
+@dataclass
+class _Fold:
+    """Learning statistics (all units but one) and the held-out unit's."""
+
+    gram: np.ndarray
+    rhs: np.ndarray
+    held_gram: np.ndarray
+    held_rhs: np.ndarray
+    held_yty: float
+    held_n: int
+
+
+def _folds(units: Mapping[str, NormalEquations]) -> tuple[list[_Fold], np.ndarray, np.ndarray, float, int]:
+    gram = sum(u.gram for u in units.values())
+    rhs = sum(u.rhs for u in units.values())
+    yty = float(sum(u.yty for u in units.values()))
+    n = int(sum(u.n_samples for u in units.values()))
+    folds = [_Fold(gram - u.gram, rhs - u.rhs, u.gram, u.rhs, u.yty, u.n_samples) for u in units.values()]
+    return folds, gram, rhs, yty, n
+
+
+def _block(matrix: np.ndarray, idx: np.ndarray) -> np.ndarray:
+    """``matrix[idx][:, idx]``: the matrix itself (no copy) when ``idx`` is every column in order."""
+    if idx.size == matrix.shape[0] and np.array_equal(idx, np.arange(idx.size)):
+        return matrix
+    return matrix.take(idx, axis=0).take(idx, axis=1)
+
+
+def _cholesky_solve(a: np.ndarray, rhs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``a^-1 rhs`` for a symmetric positive definite ``a`` and one right-hand side, and the
+    upper Cholesky factor ``U`` (``a = U^T U``, Fortran-ordered).
+
+    numpy's Cholesky and two level-2 triangular solves, not scipy's ``cho_factor``: scipy's
+    wheels bring a second OpenBLAS whose idle threads spin for a while after each call and
+    slow numpy's next factorisation (the final solve) several-fold on a 2-core machine.
+    """
+    upper = np.linalg.cholesky(a).T  # a = U^T U; the transpose is Fortran-ordered, as BLAS wants it (no copy)
+    import scipy.linalg.blas  # here: a fixed-order fit needs no scipy (models.auto loads it before a BLAS limit)
+
+    half = scipy.linalg.blas.dtrsv(upper, rhs, lower=0, trans=1)
+    return scipy.linalg.blas.dtrsv(upper, half, lower=0, trans=0), upper
+
+
+class _Evaluator:
+    """Validation RMSE of (order, smoothing) from the statistics at the largest order."""
+
+    def __init__(self, units: Mapping[str, NormalEquations], make_basis: Callable[[int], Basis],
+                 ridge: float, power: float, target: np.ndarray | None = None, prior_level: str = "data") -> None:
+        first = next(iter(units.values()))
+        self.big, self.n_nodes = first.basis, first.n_nodes
+        self.first = first
+        self.n_shared = len(first.shared)
+        if any(u.shared != first.shared for u in units.values()):
+            raise InputError("the units' statistics have different shared columns; append them with one link list",
+                             param="units")
+        self.make_basis, self.ridge, self.power = make_basis, float(ridge), float(power)
+        self.folds, self.gram, self.rhs, self.yty, self.n = _folds(units)
+        self.sums = [u.column_sums() for u in units.values()]
+        if target is not None:
+            target = np.asarray(target, np.float64)[:first.n_pattern_columns]  # the prior's: shared columns are not pulled
+        self.target = target
+        self.prior_level = prior_level
+        self.cv = len(units) >= 2
+        self.pins: list[tuple[np.ndarray, np.ndarray] | None] = [None] * len(self.folds)
+        if self.n_shared and self.cv:
+            self.pins = self._fold_pins(units)
+        self.seen: dict[tuple[int, float], float] = {}
+        self.fold_sse: dict[tuple[int, float], np.ndarray] = {}  # per held-out unit, for within_noise()
+        self.curve: list[CurvePoint] = []
+        self._cache: dict[int, Any] = {}
+        self._best_solved: tuple[tuple[int, float], list[tuple[np.ndarray, np.ndarray | None]]] | None = None
+
+    def _fold_pins(self, units: Mapping[str, NormalEquations]) -> list[tuple[np.ndarray, np.ndarray] | None]:
+        """Per fold, the shared columns its learning units cannot identify, pinned to a
+        preliminary estimate from all units: a link's offset when a direction of it flew only
+        in the held-out unit, the exponent when the other units leave too little spread of
+        distance (:data:`EXPONENT_MIN_SPREAD_DB`). Left free, the ridge alone would split
+        them from the joint level and the held-out unit would see a made-up error; the final
+        fit, which sees every unit, identifies them."""
+        p = self.big.n_coef
+        pat = self.first.n_pattern_columns
+        names = list(units)
+        free = []
+        for held, fold in zip(names, self.folds):
+            mask = np.ones(self.n_shared, bool)
+            learn = [units[u] for u in names if u != held]
+            n_learn = sum(u.n_samples for u in learn)
+            for j, col in enumerate(self.first.shared):
+                if col[0] == "offset":
+                    a, b = col[1], col[2]
+                    count = [sum(float(u.directed[k][2 * p + 1]) for u in learn if k in u.directed) for k in ((a, b), (b, a))]
+                    mask[j] = min(count) > 0
+                else:
+                    mask[j] = schur_spread_db(fold.gram, pat + j, n_learn) >= EXPONENT_MIN_SPREAD_DB
+            free.append(mask)
+        if all(m.all() for m in free):
+            return [None] * len(self.folds)
+        w = self._weights(self.big)
+        smoothing = float(SMOOTHING_GRID[len(SMOOTHING_GRID) // 2])
+        target = self._target(self.gram, self.rhs, self.big, self.target)
+        c, _ = self._solve(self.gram, self._pulled(self.gram, self.rhs, w, smoothing, target), w, smoothing)
+        values = c[pat:]
+        pins: list[tuple[np.ndarray, np.ndarray] | None] = []
+        for mask, fold in zip(free, self.folds):
+            if mask.all():
+                pins.append(None)
+                continue
+            weight = 1e6 * (np.diag(fold.gram)[pat:] + float(np.mean(np.diag(fold.gram)[:pat])))
+            pins.append((np.where(mask, 0.0, weight), values.copy()))
+        return pins
+
+    def _target(self, gram: np.ndarray, rhs: np.ndarray, basis: Basis, prior: np.ndarray | None) -> np.ndarray:
+        """What one fit shrinks toward: the prior's shape and the data's level, or (``prior_level``
+        ``"prior"``) the prior itself."""
+        if prior is not None and self.prior_level == "prior":
+            return np.concatenate([prior, np.zeros(self.n_shared)])
+        return shrink_target(gram, rhs, basis, self.n_nodes, prior)
+
+    def _weights(self, basis: Basis) -> np.ndarray:
+        w = basis.roughness(self.power)
+        floor = _CONSTANT_FLOOR * (float(np.min(w[w > 0])) if np.any(w > 0) else 1.0)
+        return np.concatenate([np.tile(np.maximum(w, floor), self.n_nodes), np.zeros(self.n_shared)])
+
+    def _blocks(self, order: int) -> tuple[np.ndarray, list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]],
+                                           list[np.ndarray]]:
+        """Roughness weights and, per fold, the learning and held-out blocks of one order and the
+        target its fit shrinks toward (the prior's shape and the learning units' own level,
+        :func:`~rplearn.core.lsq.level.shrink_target`; cached)."""
+        if order not in self._cache:
+            basis = self.make_basis(order)
+            pattern_idx = nested_columns(self.big, basis, self.n_nodes)
+            idx = with_shared_columns(pattern_idx, self.first)
+            sub = [(_block(f.gram, idx), f.rhs[idx], _block(f.held_gram, idx), f.held_rhs[idx]) for f in self.folds]
+            if not self.cv:
+                sub = [(_block(self.gram, idx), self.rhs[idx], np.empty(0), np.empty(0))]
+            prior = None if self.target is None else self.target[pattern_idx]
+            targets = [self._target(g, r, basis, prior) for g, r, _, _ in sub]
+            while len(self._cache) >= _CACHED_ORDERS:  # a few orders at a time: bounded memory
+                self._cache.pop(next(iter(self._cache)))
+            self._cache[order] = (self._weights(basis), sub, targets)
+        return self._cache[order]
+
+    def rmse(self, order: int, smoothing: float) -> float:
+        key = (int(order), float(smoothing))
+        if key in self.seen:
+            return self.seen[key]
+        w, blocks, targets = self._blocks(int(order))
+        if self.cv:
+            per_fold = []
+            solved = []
+            for (g, r, held_g, held_r), f, pin, target in zip(blocks, self.folds, self.pins, targets):
+                c, upper = self._solve(g, self._pulled(g, r, w, smoothing, target, pin), w, smoothing, pin)
+                solved.append((c, upper))
+                per_fold.append(max(f.held_yty - 2.0 * c @ held_r + c @ held_g @ c, 0.0))
+            self.fold_sse[key] = np.asarray(per_fold)
+            value = float(np.sqrt(sum(per_fold) / self.n))
+            if not self.seen or value < min(self.seen.values()):
+                self._best_solved = (key, solved)  # the factors of the best point, for inflation()
+        else:
+            g, r, _, _ = blocks[0]
+            value = self._gcv(g, self._pulled(g, r, w, smoothing, targets[0]), w, smoothing, r)
+        self.seen[key] = value
+        self.curve.append(CurvePoint(int(order), float(smoothing), value))
+        return value
+
+    def inflation(self, order: int, smoothing: float) -> float:
+        """:func:`variance_inflation` of one (order, smoothing) (1 without held-out units)."""
+        return self.spread(order, smoothing)[0]
+
+    def spread(self, order: int, smoothing: float) -> tuple[float, float]:
+        """The within-unit variance inflation and the between-unit level variance [dB^2] of
+        one (order, smoothing) (1 and 0 without held-out units); see :func:`variance_inflation`."""
+        if not self.cv:
+            return 1.0, 0.0
+        w, blocks, targets = self._blocks(int(order))
+        idx = with_shared_columns(nested_columns(self.big, self.make_basis(int(order)), self.n_nodes), self.first)
+        sums = [(a[idx], sum_y) for a, sum_y in self.sums]
+        counts = np.array([f.held_n for f in self.folds], np.float64)
+        key = (int(order), float(smoothing))
+        solved = self._best_solved[1] if self._best_solved and self._best_solved[0] == key else None
+        excess = predicted = 0.0
+        means = []  # per held-out unit: its squared mean residual, that of noise and fit, the level's weight
+        for k, ((g, r, held_g, held_r), f, pin, target) in enumerate(zip(blocks, self.folds, self.pins, targets)):
+            c, upper = solved[k] if solved else self._solve(g, self._pulled(g, r, w, smoothing, target, pin), w,
+                                                            smoothing, pin)
+            if upper is None:
+                return 1.0, 0.0
+            # numpy's inverse, not LAPACK's potri from the Cholesky factor through scipy: a third
+            # of the work, but scipy's second OpenBLAS pool, woken up, made it slower (see _cholesky_solve)
+            inverse = np.linalg.inv(self._system(g, w, smoothing, pin))
+            learn = [j for j in range(len(self.folds)) if j != k]
+            learn_n = self.n - f.held_n
+            # the learning residual about each learning unit's own mean: noise, not the units' levels
+            unit_means = np.array([(sums[j][1] - c @ sums[j][0]) / counts[j] for j in learn])
+            learn_sse = (self.yty - f.held_yty) - 2.0 * c @ r + c @ g @ c - float(counts[learn] @ unit_means**2)
+            # less the fit's effective parameters tr(A^-1 G) and the other units' means
+            dof = learn_n - float(np.sum(inverse * g)) - (len(learn) - 1)
+            noise_var = max(learn_sse, 0.0) / max(dof, 1.0)
+            held_sse = max(f.held_yty - 2.0 * c @ held_r + c @ held_g @ c, 0.0)
+            a, sum_y = sums[k]
+            mean = (sum_y - c @ a) / f.held_n
+            quad = float(a @ inverse @ a)  # n^2 times the posterior variance of the unit's mean, over sigma^2
+            excess += held_sse - f.held_n * mean**2 - (f.held_n - 1) * noise_var
+            # sum over the held-out samples of x^T (sigma^2 A^-1) x = sigma^2 tr(A^-1 X_u^T X_u),
+            # less the part along the unit's mean (removed above)
+            predicted += noise_var * (float(np.sum(inverse * held_g)) - quad / f.held_n)  # tr(A^-1 H)
+            weights = counts[learn] / learn_n  # the fit's level: the learning units' levels, weighed by samples
+            means.append((mean**2, noise_var * (1.0 + quad / f.held_n) / f.held_n, 1.0 + float(weights @ weights)))
+        kappa = float(max(1.0, excess / predicted)) if predicted > 0 and np.isfinite(excess) else 1.0
+        square, expected, weight = (np.array(v) for v in zip(*means))
+        level_var = float(np.sum(square - kappa * expected) / np.sum(weight))
+        return kappa, max(level_var, 0.0) if np.isfinite(level_var) else 0.0
+
+    def _pulled(self, gram: np.ndarray, rhs: np.ndarray, w: np.ndarray, smoothing: float, target: np.ndarray,
+                pin: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
+        """``X^T y`` plus the pull ``(ridge + P) target`` of the ridge and the penalty toward the
+        target (the prior's shape and the data's level, never a fixed level) and the pull of
+        pinned shared columns toward their values."""
+        out = rhs.copy()
+        k = gram.shape[0] - self.n_shared
+        out[:k] += (self.ridge + smoothing * penalty_scale(gram, k) * w[:k]) * target[:k]
+        if pin is not None:
+            out[gram.shape[0] - self.n_shared:] += pin[0] * pin[1]
+        return out
+
+    def _system(self, gram: np.ndarray, w: np.ndarray, smoothing: float,
+                pin: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
+        """The penalised normal matrix: the ridge on the pattern columns (shared columns are not
+        shrunk), the smoothness penalty, and the weight of pinned shared columns."""
+        a = gram.copy()
+        k = gram.shape[0] - self.n_shared
+        a[np.arange(k), np.arange(k)] += self.ridge
+        a[np.diag_indices_from(a)] += smoothing * penalty_scale(gram, k) * w
+        if pin is not None:
+            a[np.arange(k, gram.shape[0]), np.arange(k, gram.shape[0])] += pin[0]
+        return a
+
+    def _solve(self, gram: np.ndarray, rhs: np.ndarray, w: np.ndarray, smoothing: float,
+               pin: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, np.ndarray | None]:
+        """The penalised solution and the upper Cholesky factor of its system (None when the
+        system is not positive definite: least squares then)."""
+        try:
+            return _cholesky_solve(self._system(gram, w, smoothing, pin), rhs)
+        except np.linalg.LinAlgError:
+            import scipy.linalg
+
+            return scipy.linalg.lstsq(self._system(gram, w, smoothing, pin), rhs)[0], None
+
+    def _gcv(self, g: np.ndarray, pulled: np.ndarray, w: np.ndarray, smoothing: float, r: np.ndarray) -> float:
+        a = self._system(g, w, smoothing)
+        try:
+            import scipy.linalg
+
+            factor = scipy.linalg.cho_factor(a, overwrite_a=True, check_finite=False)
+            c = scipy.linalg.cho_solve(factor, pulled)
+            trace = float(np.trace(scipy.linalg.cho_solve(factor, g)))  # tr(H) = tr((G + P)^-1 G)
+        except np.linalg.LinAlgError:
+            return float("inf")
+        sse = max(self.yty - 2.0 * c @ r + c @ g @ c, 0.0)
+        dof = self.n - trace
+        return float(np.sqrt(self.n * sse) / dof) if dof > 0 else float("inf")
+
+
+def _best_smoothing(ev: _Evaluator, order: int, grid: Sequence[float]) -> float:
+    """Best smoothing of ``grid`` at one order: every other value, then the neighbours of the best."""
+    values = sorted(float(g) for g in grid)
+    coarse = values[::2] if values[-1] in values[::2] else [*values[::2], values[-1]]
+    best = min(coarse, key=lambda s: ev.rmse(order, s))
+    while best == values[-1] and best * 10.0 <= MAX_SMOOTHING:  # the best is at the edge: go on
+        values.append(best * 10.0)
+        best = min((best, values[-1]), key=lambda s: ev.rmse(order, s))
+    i = values.index(best)
+    return min(values[max(0, i - 1): i + 2], key=lambda s: ev.rmse(order, s))
+
+
+def _best_order(ev: _Evaluator, orders: Sequence[int], smoothing: float) -> int:
+    """Best order at one smoothing: every other order from the largest down (the curve is flat
+    with small wiggles at high orders: no early stop), then the neighbours of the best."""
+    best = min(list(orders)[::-1][::2], key=lambda o: ev.rmse(o, smoothing))
+    return min([o for o in orders if abs(o - best) <= 1], key=lambda o: ev.rmse(o, smoothing))
+
+
+def _walk_smoothing(ev: _Evaluator, order: int, start: float, values: list[float]) -> tuple[float, list[float]]:
+    """From ``start``, step along the sorted smoothing ``values`` at one order while the
+    validation error falls (past the largest, by decades up to :data:`MAX_SMOOTHING`)."""
+    values = list(values)
+    best = start
+    for direction in (1, -1):
+        while True:
+            i = values.index(best) + direction
+            if i == len(values) and values[-1] * 10.0 <= MAX_SMOOTHING:
+                values.append(values[-1] * 10.0)
+            if not 0 <= i < len(values) or ev.rmse(order, values[i]) >= ev.rmse(order, best):
+                break
+            best = values[i]
+    return best, values
+
+
+def _within_noise(ev: _Evaluator, best: CurvePoint, point: CurvePoint) -> bool:
+    """Whether ``point``'s validation mean square exceeds ``best``'s by at most
+    :data:`WITHIN_NOISE_SE` standard errors of their paired difference (the held-out units'
+    differences taken as independent draws) and by at most :data:`WITHIN_NOISE_FRACTION` of it.
+    Needs :data:`MIN_NOISE_UNITS` held-out units: from two, the standard error is no estimate."""
+    if not ev.cv or len(ev.folds) < MIN_NOISE_UNITS:
+        return point == best
+    b = ev.fold_sse[(best.order, best.smoothing)]
+    d = (ev.fold_sse[(point.order, point.smoothing)] - b) / ev.n
+    se = float(np.sqrt(d.size * np.var(d, ddof=1)))
+    return float(d.sum()) <= min(WITHIN_NOISE_SE * se, WITHIN_NOISE_FRACTION * float(b.sum()) / ev.n)
+
+
+def _tightest_split(ev: _Evaluator, best: CurvePoint, points: Sequence[CurvePoint]) -> CurvePoint:
+    """Among the points within noise of the best validation error, the one that shrinks the
+    patterns least (the least smoothing, then the largest order): smoothing chosen for the joint
+    prediction alone leaves the split between the nodes' patterns (what the joint gain does not
+    see) to the penalty, so a smoothing the held-out units cannot tell from the best is no
+    reason to pull the patterns further toward the prior."""
+    close = [p for p in points if _within_noise(ev, best, p)]
+    return min(close, key=lambda p: (p.smoothing, -p.order)) if close else best
+
+
+def select_order_and_smoothing(
+    units: Mapping[str, NormalEquations],
+    make_basis: Callable[[int], Basis],
+    orders: Sequence[int],
+    ridge: float = 1.0,
+    power: float = DEFAULT_PENALTY_POWER,
+    grid: Sequence[float] = SMOOTHING_GRID,
+    target: np.ndarray | None = None,
+    prior_level: str = "data",
+) -> Selection:
+    """Choose order and smoothing by grouped cross-validation (or GCV for one unit).
+
+    Parameters
+    ----------
+    units : mapping of unit label to NormalEquations
+        Statistics of every learning unit, all accumulated with the basis of ``max(orders)``.
+    make_basis : callable
+        ``make_basis(order)`` -> the basis of that order (nested in the largest for SH).
+    orders : sequence of int
+        Candidate orders; for BG and P a single one.
+    ridge : float
+        The solver's ridge, kept in every solve.
+    power : float
+        Exponent of the SH roughness weights.
+    grid : sequence of float
+        Relative smoothing values tried.
+    target : ndarray, optional
+        Prior coefficients at the largest order (one per pattern column, ``fit --prior``): the
+        ridge and the penalty shrink toward their shape (each node's sphere mean dropped)
+        instead of toward zero. With or without it, each fold's constant per node is its
+        learning units' own level (:func:`rplearn.core.lsq.level.shrink_target`), so a constant
+        added to every sample changes no validation error.
+    prior_level : {"data", "prior"}
+        ``"prior"``: shrink toward ``target`` itself, its absolute level included (calibrated
+        power and a trusted reference; see :func:`rplearn.core.lsq.solver.solve`).
+
+    Raises
+    ------
+    IdentifiabilityError
+        When no unit holds samples, or every candidate fails.
+    """
+    units = {str(k): v for k, v in units.items() if v.n_samples > 0}
+    if not units:
+        raise IdentifiabilityError("no learning samples to choose an order from")
+    orders = sorted({int(o) for o in orders})
+    if not orders:
+        raise InputError("orders: no candidate order", param="orders")
+    ev = _Evaluator(units, make_basis, ridge, power, target, prior_level)
+    best_s = _best_smoothing(ev, orders[(len(orders) - 1) // 2], grid)
+    best_o = _best_order(ev, orders, best_s)
+    values = sorted({float(g) for g in grid} | {best_s})
+    for _ in range(len(orders) + len(values)):  # coordinate descent; each pass moves or stops
+        best_s, values = _walk_smoothing(ev, best_o, best_s, values)
+        moved = _best_order(ev, orders, best_s)
+        if moved == best_o:
+            break
+        best_o = moved
+    finite = [p for p in ev.curve if np.isfinite(p.rmse_db)]
+    if not finite:
+        raise IdentifiabilityError("no candidate order and smoothing could be fitted")
+    best = min(finite, key=lambda p: (p.rmse_db, p.order, -p.smoothing))
+    choice = _tightest_split(ev, best, finite)
+    kappa, level_var = ev.spread(choice.order, choice.smoothing)
+    return Selection("grouped-cv" if ev.cv else "gcv", choice.order, choice.smoothing, choice.rmse_db,
+                     ev.curve, sorted(units) if ev.cv else [], float(power), kappa, float(np.sqrt(level_var)))
+
+
+def variance_inflation(
+    units: Mapping[str, NormalEquations],
+    make_basis: Callable[[int], Basis],
+    order: int,
+    smoothing: float,
+    ridge: float = 1.0,
+    power: float = DEFAULT_PENALTY_POWER,
+    target: np.ndarray | None = None,
+    prior_level: str = "data",
+) -> float:
+    """How much the posterior covariance understates the error *within* held-out flight units.
+
+    For each unit ``u`` held out, the fit ``c`` of the others predicts its samples with errors
+    ``e``; their mean ``m_u`` over the unit (from :meth:`NormalEquations.column_sums`) is the unit's own level
+    against the others', which no pattern can know and which is estimated apart (below). About
+    that mean, the squared error's expectation under the Bayesian reading of the penalised
+    solve is ``(n_u - 1) sigma^2 + sigma^2 (tr(A^-1 X_u^T X_u) - a_u^T A^-1 a_u / n_u)``: new
+    noise plus the posterior variance of the fit at the held-out directions less its part
+    along the unit's mean (``A`` the penalised normal matrix, ``a_u = X_u^T 1``, ``sigma^2``
+    the fold's learning residual variance about each learning unit's own mean, over the
+    samples less the fit's effective number of parameters ``tr(A^-1 X^T X)`` and the units'
+    means, so that a correct model gives 1). The factor returned is the observed excess over
+    the noise divided by that predicted variance, summed over the folds, and at least 1. It is
+    above 1 when neighbouring packets share their errors (fading and shadowing correlated in
+    time: fewer independent samples than packets) and when the pattern misfits within units
+    (another altitude, another stretch of the sphere); multiplying the posterior covariance by
+    it makes the predictive spread honest. Everything comes from the per-unit statistics; 1 for
+    a single unit.
+
+    The between-unit level variance (:attr:`Selection.flight_level_std_db`, squared) is the
+    mean over the folds of ``m_u^2`` less its expected noise and posterior variance
+    (``kappa sigma^2 (1 + a_u^T A^-1 a_u / n_u) / n_u``), divided by ``1 + sum_v w_v^2``: the
+    fit's level is the learning units' levels weighed by their shares ``w_v`` of the samples,
+    so ``m_u`` varies by the held-out unit's level and by that average. It is 0 when the
+    units' means vary no more than noise and fit explain.
+    """
+    units = {str(k): v for k, v in units.items() if v.n_samples > 0}
+    if not units:
+        raise IdentifiabilityError("no learning samples to validate on")
+    return _Evaluator(units, make_basis, ridge, power, target, prior_level).inflation(int(order), float(smoothing))
+
+
+def validation_rmse(
+    units: Mapping[str, NormalEquations],
+    make_basis: Callable[[int], Basis],
+    orders: Sequence[int],
+    smoothing: float,
+    ridge: float = 1.0,
+    power: float = DEFAULT_PENALTY_POWER,
+) -> list[float]:
+    """Validation RMSE [dB] of every order at one smoothing (the curve a sweep plots), by
+    grouped cross-validation (GCV with one unit), from statistics at ``max(orders)``."""
+    units = {str(k): v for k, v in units.items() if v.n_samples > 0}
+    if not units:
+        raise IdentifiabilityError("no learning samples to validate on")
+    ev = _Evaluator(units, make_basis, ridge, power)
+    return [ev.rmse(int(o), float(smoothing)) for o in orders]
+
+
+__all__ = [
+    "validation_rmse",
+    "variance_inflation",
+    "DEFAULT_PENALTY_POWER",
+    "MAX_SMOOTHING",
+    "SMOOTHING_GRID",
+    "CurvePoint",
+    "Selection",
+    "nested_columns",
+    "penalty_scale",
+    "penalty_vector",
+    "select_order_and_smoothing",
+    "sub_statistics",
+]

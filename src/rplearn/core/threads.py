@@ -1,0 +1,139 @@
+"""Thread control (threadpoolctl): one BLAS thread for small fits, and the limits around work that
+runs threads of its own (the statistics' workers, scipy's BLAS in a large solve, k-d tree queries).
+
+On a busy 2-core machine OpenBLAS's second thread makes a small problem slower and its time
+erratic: a 1,333-sample SH-10 fit took 33-340 ms instead of 15 ms, and ``eigvalsh`` of a
+200x200 matrix 35-40 ms instead of 2.4 ms, as the threads wait for each other. A fit whose
+work (the Gram accumulation, ``n_samples * n_columns**2``, and the factorisations,
+``n_columns**3``) is below :data:`SMALL_FIT_FLOPS` runs with one BLAS thread; bigger ones keep
+every thread. The controller is built once (it scans the loaded libraries).
+"""
+
+from __future__ import annotations
+
+import sys
+import threading
+from contextlib import contextmanager, nullcontext
+from functools import lru_cache
+from typing import Any, Iterator
+
+#: Below this many floating-point operations (about 0.2 s on one core) a fit uses one BLAS thread.
+SMALL_FIT_FLOPS = 2e9
+
+
+def is_small_fit(n_samples: int, n_columns: int) -> bool:
+    """Whether a fit of ``n_samples`` rows and ``n_columns`` columns is small enough for one thread."""
+    return float(n_samples) * n_columns**2 + 10.0 * float(n_columns) ** 3 < SMALL_FIT_FLOPS
+
+
+#: Modules whose thread pools a limit must reach once they are loaded (scipy has its own
+#: OpenBLAS; pykdtree, for coverage, an OpenMP runtime).
+BLAS_MODULES: tuple[str, ...] = ("numpy", "scipy.linalg", "pykdtree.kdtree")
+
+
+def _controller() -> Any:
+    """The controller of the BLAS libraries loaded now: numpy's, and scipy's once a module that
+    uses it (:mod:`rplearn.models.auto`, :mod:`rplearn.analysis.sweep`) has imported it. A
+    fixed-order fit imports no scipy, which costs 0.1-0.3 s to import."""
+    import numpy  # noqa: F401  (the BLAS to control must be loaded before the scan)
+
+    return _controller_of(tuple(m for m in BLAS_MODULES if m in sys.modules))
+
+
+@lru_cache(maxsize=4)
+def _controller_of(loaded: tuple[str, ...]) -> Any:
+    from threadpoolctl import ThreadpoolController
+
+    return ThreadpoolController()
+
+
+#: Held by the thread whose BLAS limit is in force. A limit is process-wide and, when it ends,
+#: restores the counts it found: two threads whose limits overlap could leave numpy on one thread
+#: for good, or lift the other's limit while its work still runs. So one thread at a time
+#: limits; a limit asked for meanwhile by another thread is skipped (its work runs with the
+#: threads as they are), as :meth:`rplearn.core.lsq.runtime.StatisticsRuntime.in_order` does with its pool.
+_LIMIT_LOCK = threading.RLock()
+
+
+@contextmanager
+def _exclusive_limit(selection: Any, limits: int) -> Iterator[None]:
+    """``selection.limit(limits)`` inside the block, unless another thread holds a limit."""
+    if not _LIMIT_LOCK.acquire(blocking=False):
+        yield
+        return
+    try:
+        with selection.limit(limits=limits):
+            yield
+    finally:
+        _LIMIT_LOCK.release()
+
+
+@contextmanager
+def blas_threads_for(n_samples: int, n_columns: int) -> Iterator[None]:
+    """One BLAS thread inside the block when the fit is small (:func:`is_small_fit`)."""
+    if not is_small_fit(n_samples, n_columns):
+        with nullcontext():
+            yield
+        return
+    with _exclusive_limit(_controller().select(user_api="blas"), 1):
+        yield
+
+
+@contextmanager
+def one_blas_thread() -> Iterator[None]:
+    """One BLAS thread inside the block (for work that runs its own threads, one per core)."""
+    with _exclusive_limit(_controller().select(user_api="blas"), 1):
+        yield
+
+
+@contextmanager
+def one_openmp_thread() -> Iterator[None]:
+    """One OpenMP thread inside the block: pykdtree's queries are small, and OpenMP workers left
+    spinning after them slowed the next small fit on a busy 2-core machine from 5 to 13 ms."""
+    # only the OpenMP libraries: a limiter restores every library it holds when it ends, and the
+    # BLAS count is process-wide (another thread may hold its own BLAS limit meanwhile)
+    with _controller().select(user_api="openmp").limit(limits=1):
+        yield
+
+
+def _package_libraries(package: str) -> set[str]:
+    """Paths of the loaded BLAS libraries shipped inside ``package`` (its folder or the wheel's
+    ``<package>.libs`` folder beside it)."""
+    module = sys.modules.get(package)
+    if module is None or not getattr(module, "__file__", None):
+        return set()
+    import os
+
+    folder = os.path.dirname(os.path.realpath(module.__file__))
+    roots = (folder + os.sep, folder + ".libs" + os.sep)
+    return {lib.filepath for lib in _controller().select(user_api="blas").lib_controllers
+            if os.path.realpath(lib.filepath).startswith(roots)}
+
+
+@contextmanager
+def numpy_blas_one_thread() -> Iterator[None]:
+    """One thread for numpy's BLAS inside the block, when scipy has a BLAS of its own (as the
+    wheels do) that does the block's heavy work with every thread.
+
+    Two OpenBLAS thread pools on two cores fight: after each call a pool's threads spin for a
+    while, and the other pool's threads then wait for a core. In a 50-node solve (scipy's
+    Cholesky and triangular solves, numpy's small QR factorisations of 5,000 x 8 blocks
+    between them) that made each QR take 7-14 ms instead of 0.3 ms and the spectrum estimate
+    0.35-0.5 s instead of 0.25 s. Without a separate scipy BLAS (one shared library), nothing
+    is limited.
+    """
+    numpy_libs = _package_libraries("numpy") - _package_libraries("scipy")
+    if not numpy_libs or "scipy.linalg" not in sys.modules:
+        yield
+        return
+    with _exclusive_limit(_controller().select(filepath=sorted(numpy_libs)), 1):
+        yield
+
+
+def warm_up() -> None:
+    """Build the controller now (its library scan is a one-off cost, kept out of the LTD)."""
+    _controller()
+
+
+__all__ = ["BLAS_MODULES", "SMALL_FIT_FLOPS", "blas_threads_for", "is_small_fit", "numpy_blas_one_thread", "one_blas_thread", "one_openmp_thread",
+           "warm_up"]

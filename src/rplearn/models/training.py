@@ -1,0 +1,183 @@
+"""What a fit says about itself: the typed training summary every model carries.
+
+:class:`TrainingSummary` names every entry a fit, a reference expansion or a baseline writes
+(the solver's report, the environment term and link offsets, the automatic choice, the
+spreads, the coverage grids, the plausibility findings, the decoupling certificate). It is
+frozen: a later step that adds to it (the LTD, the coverage, the budget findings) makes a new
+summary with :meth:`TrainingSummary.replace` and gives it to the model.
+
+Model files store it as the JSON object ``training`` (:meth:`TrainingSummary.to_dict`);
+:meth:`TrainingSummary.from_dict` reads that of any model file written so far, keeping
+entries it does not know in ``extra`` (written back unchanged). For code written against the
+former plain dictionary, the summary also reads as a read-only mapping
+(``model.training["rank"]``, ``.get``, ``in``): the entries :meth:`to_dict` would write.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass, field, fields
+from typing import Any
+
+from rplearn.errors import InputError
+
+_TUPLES = ("gauges", "warnings")
+
+
+@dataclass(frozen=True, eq=False)
+class TrainingSummary(Mapping[str, Any]):
+    """The training summary of a model; every entry is optional (None: not written).
+
+    Attributes
+    ----------
+    n_samples : int
+        Learning samples (reference points of a reference expansion).
+    n_columns, rank, null_dim, expected_null_dim : int
+        The joint design: columns, numerical rank, free directions, and those the link
+        graph predicts (:class:`rplearn.core.lsq.solution.FitReport`).
+    condition_number : float
+    ridge : float
+    rmse_db : float
+        Training RMSE [dB] (a reference: the expansion's residual).
+    gauges : tuple of dict
+        The gauge notes (``nodes``, ``side_a``, ``side_b``, ``rule``, ``text``).
+    warnings : tuple of str
+        Everything a user should read about the fit.
+    frequency_hz : float
+        Carrier of the learning samples.
+    ltd_s : float
+        Learning wall time (the paper's LTD).
+    coverage_deg : dict of node to list of float
+        Each node's coverage grid: the angle to the nearest learning direction [deg].
+    smoothing, penalty_power : float
+        The smoothness penalty's relative weight and power.
+    selection : dict
+        The automatic choice of order and smoothing and its validation curve.
+    variance_inflation, noise_std_db, flight_level_std_db, new_flight_level_std_db : float
+        The automatic choice's spreads (:func:`rplearn.models.auto.fit_from_statistics`).
+    prior_std_db : dict of node to float
+        Each node's predictive spread where the flight never looked [dB].
+    prior_std_source : str
+    prior_level : str
+    prior : dict of node to str
+        The prior models' names.
+    path_loss : dict
+        The environment term (``kind`` ... and a learned ``exponent``).
+    directions : list of dict
+        Samples of each directed link (``tx``, ``rx``, ``samples``).
+    link_offsets_db : list of dict
+        Learned electronics offsets (``tx``, ``rx``, ``offset_db``, ``se_db``).
+    robust : dict
+        The Huber fit's numbers.
+    reference : dict of node to dict
+        A reference expansion's sources and mounts.
+    budget : list of dict
+        The plausibility findings (:mod:`rplearn.analysis.budget`).
+    decoupling : dict
+        The decoupling certificate (:mod:`rplearn.analysis.decoupling`) and its ``summary`` text.
+    extra : dict
+        Entries of a model file this version does not know, written back unchanged.
+    """
+
+    n_samples: int | None = None
+    n_columns: int | None = None
+    rank: int | None = None
+    null_dim: int | None = None
+    expected_null_dim: int | None = None
+    condition_number: float | None = None
+    ridge: float | None = None
+    rmse_db: float | None = None
+    gauges: tuple[Mapping[str, Any], ...] | None = None
+    warnings: tuple[str, ...] | None = None
+    frequency_hz: float | None = None
+    ltd_s: float | None = None
+    coverage_deg: Mapping[str, Any] | None = None
+    smoothing: float | None = None
+    penalty_power: float | None = None
+    selection: Mapping[str, Any] | None = None
+    variance_inflation: float | None = None
+    noise_std_db: float | None = None
+    flight_level_std_db: float | None = None
+    new_flight_level_std_db: float | None = None
+    prior_std_db: Mapping[str, float] | None = None
+    prior_std_source: str | None = None
+    prior_level: str | None = None
+    prior: Mapping[str, str] | None = None
+    path_loss: Mapping[str, Any] | None = None
+    directions: list[Mapping[str, Any]] | None = None
+    link_offsets_db: list[Mapping[str, Any]] | None = None
+    robust: Mapping[str, Any] | None = None
+    reference: Mapping[str, Any] | None = None
+    budget: list[Mapping[str, Any]] | None = None
+    decoupling: Mapping[str, Any] | None = None
+    extra: Mapping[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        for name in _TUPLES:
+            value = getattr(self, name)
+            if value is not None and not isinstance(value, tuple):
+                object.__setattr__(self, name, tuple(value))
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any] | TrainingSummary | None) -> TrainingSummary:
+        """The summary of a model file's ``training`` object (any version; unknown entries kept
+        in ``extra``), or of a summary itself.
+
+        Raises
+        ------
+        InputError
+            (``param="training"``) when ``data`` is not a mapping.
+        """
+        if isinstance(data, TrainingSummary):
+            return data
+        if data is None:
+            return cls()
+        if not isinstance(data, Mapping):
+            raise InputError(f"training: expected an object of named entries, got {type(data).__name__}",
+                             param="training")
+        known = {f.name for f in fields(cls)} - {"extra"}
+        values = {str(k): v for k, v in data.items()}
+        return cls(**{k: v for k, v in values.items() if k in known},
+                   extra={k: v for k, v in values.items() if k not in known})
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON object of a model file: the entries written (not None), then ``extra``."""
+        out: dict[str, Any] = {}
+        for f in fields(self):
+            if f.name == "extra":
+                continue
+            value = getattr(self, f.name)
+            if value is not None:
+                out[f.name] = list(value) if f.name in _TUPLES else value
+        out.update(self.extra)
+        return out
+
+    def replace(self, **changes: Any) -> TrainingSummary:
+        """A copy with ``changes`` (entry names as the attributes; an unknown name goes to ``extra``)."""
+        known = {f.name for f in fields(self)}
+        extra = {k: v for k, v in changes.items() if k not in known}
+        if extra:
+            changes = {k: v for k, v in changes.items() if k in known}
+            changes["extra"] = {**self.extra, **extra}
+        return dataclasses.replace(self, **changes)
+
+    # -- read-only mapping of the entries written (code written against the former dict) -------
+    def __getitem__(self, key: str) -> Any:
+        return self.to_dict()[key]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self.to_dict())
+
+    def __len__(self) -> int:
+        return len(self.to_dict())
+
+    def __eq__(self, other: object) -> bool:
+        if isinstance(other, Mapping):
+            return self.to_dict() == dict(other)
+        return NotImplemented
+
+    __hash__ = None  # type: ignore[assignment]  # holds dictionaries
+
+
+__all__ = ["TrainingSummary"]

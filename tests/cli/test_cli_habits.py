@@ -1,0 +1,165 @@
+"""The command line follows its ecosystem's habits (issue 26, item 2): ``python -m rplearn``,
+shell completion, ``inspect --json``, and messages for natural mistakes that name what the file
+is and the command that would work."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+TLOG = ROOT / "tests" / "fixtures" / "ardupilot" / "mavlink-log_2013-10-13_16-58-51.tlog"
+ENV = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT / "src"), os.environ.get("PYTHONPATH", "")])}
+
+
+def run(*args: str, cwd: Path, env: dict[str, str] | None = None) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "rplearn", *args], cwd=cwd, capture_output=True, text=True,
+                          timeout=300, env=env or ENV)
+
+
+def _no_constant(name: str) -> float:
+    raise ValueError(f"not strict JSON: {name}")
+
+
+@pytest.fixture(scope="module")
+def flight(tmp_path_factory) -> Path:
+    """A simulated flight, its matched dataset and a fitted model, made with ``python -m rplearn``."""
+    d = tmp_path_factory.mktemp("habits")
+    assert run("simulate", "--preset", "smoke", "--seed", "2", "-o", "f", cwd=d).returncode == 0
+    assert run("sync", "--poses", "f/pose_log.parquet", "--signals", "f/signal_log.parquet", "-o", "d.parquet",
+               cwd=d).returncode == 0
+    assert run("fit", "d.parquet", "--degree", "4", "-o", "m.json", cwd=d).returncode == 0
+    return d
+
+
+def test_python_dash_m_rplearn_is_the_command(flight):
+    proc = run("--help", cwd=flight)
+    assert proc.returncode == 0
+    assert "Usage: rplearn " in proc.stdout and "fit" in proc.stdout
+
+
+def test_bash_completion_script_and_a_completion(flight):
+    # the script `rplearn --show-completion` prints under bash (shell detection aside: typer's
+    # source_<shell> instruction names the shell), for bash, zsh and fish
+    for shell, marker in (("bash", "complete_bash"), ("zsh", "complete_zsh"), ("fish", "complete_fish")):
+        proc = subprocess.run([sys.executable, "-m", "rplearn"], cwd=flight, capture_output=True, text=True, timeout=120,
+                              env={**ENV, "_RPLEARN_COMPLETE": f"source_{shell}"})
+        assert proc.returncode == 0 and marker in proc.stdout, (shell, proc)
+    proc = subprocess.run([sys.executable, "-m", "rplearn"], cwd=flight, capture_output=True, text=True, timeout=120,
+                          env={**ENV, "_RPLEARN_COMPLETE": "source_bash"})
+    assert "complete" in proc.stdout and "_RPLEARN_COMPLETE=complete_bash" in proc.stdout
+    # what bash asks through that script: complete `rplearn fi` and `rplearn inspect --js`
+    env = {**ENV, "_RPLEARN_COMPLETE": "complete_bash", "COMP_WORDS": "rplearn fi", "COMP_CWORD": "1"}
+    got = subprocess.run([sys.executable, "-c", "from rplearn.cli import main; main()"], cwd=flight,
+                         capture_output=True, text=True, timeout=120, env=env)
+    assert got.stdout.split() == ["fit"], got
+    env.update(COMP_WORDS="rplearn inspect --js", COMP_CWORD="2")
+    got = subprocess.run([sys.executable, "-c", "from rplearn.cli import main; main()"], cwd=flight,
+                         capture_output=True, text=True, timeout=120, env=env)
+    assert "--json" in got.stdout.split()
+
+
+def test_inspect_json_is_strict_json_with_times_from_the_log_start(flight):
+    proc = run("inspect", "--json", "f/pose_log.parquet", "f/signal_log.parquet", cwd=flight)
+    assert proc.returncode == 0, proc.stderr
+    doc = json.loads(proc.stdout, parse_constant=_no_constant)
+    assert doc["schema"] == "rplearn.inspect" and doc["start_s"] >= 0.0
+    assert {n["node"] for n in doc["nodes"]} == {"A", "B"}
+    assert min(n["t_start_s"] for n in doc["nodes"]) == pytest.approx(0.0, abs=1.0)  # relative, not epoch
+    assert all(lk["rate_hz"] > 0 for lk in doc["links"])
+    assert run("inspect", "--json", "--markdown", "f/pose_log.parquet", cwd=flight).returncode == 1
+
+
+def test_inspect_json_of_a_real_tlog_parses_strictly(tmp_path):
+    proc = run("inspect", "--json", str(TLOG), cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    doc = json.loads(proc.stdout, parse_constant=_no_constant)
+    assert doc["files"][0]["format"] == "tlog" and doc["links"]
+
+
+@pytest.mark.parametrize("args", [("fit", "{tlog}", "-o", "x.json"), ("evaluate", "m.json", "{tlog}"),
+                                  ("predict", "m.json", "{tlog}", "-o", "p.parquet")])
+def test_a_raw_log_given_for_a_dataset_names_the_sync_command(flight, args):
+    proc = run(*[a.format(tlog=TLOG) for a in args], cwd=flight)
+    assert proc.returncode == 1
+    line = proc.stderr.strip()
+    assert len(line.splitlines()) == 1 and "Traceback" not in line
+    assert "raw MAVLink" in line and f"rplearn sync --poses {TLOG} --signals {TLOG}" in line
+    assert "UnicodeDecodeError" not in line
+
+
+def test_predict_with_its_arguments_swapped_says_so(flight):
+    proc = run("predict", "d.parquet", "m.json", "-o", "p.parquet", cwd=flight)
+    assert proc.returncode == 1
+    assert "d.parquet: a table (a dataset?), not a model file: are the arguments in the wrong order?" in proc.stderr
+    assert "utf-8" not in proc.stderr
+
+
+def test_a_model_file_given_for_a_dataset_says_what_it_is(flight):
+    proc = run("fit", "m.json", "-o", "y.json", cwd=flight)
+    assert proc.returncode == 1
+    assert "m.json: a JSON file (a model file?), not a table" in proc.stderr and "ParserError" not in proc.stderr
+
+
+def test_swapped_pose_and_signal_logs_say_swap_them(flight):
+    proc = run("sync", "--poses", "f/signal_log.parquet", "--signals", "f/pose_log.parquet", "-o", "s.parquet",
+               cwd=flight)
+    assert proc.returncode == 1
+    assert "no pose log found" in proc.stderr and "swap --poses and --signals" in proc.stderr
+    assert not (flight / "s.parquet").exists()
+
+
+def test_a_corrupt_table_still_gets_the_parsers_one_line(tmp_path):
+    """No hint applies: the parser's complaint, on one line."""
+    bad = tmp_path / "bad.csv"
+    bad.write_text('t,tx,rx\n1,"A\n')
+    proc = run("fit", str(bad), "-o", "x.json", cwd=tmp_path)
+    assert proc.returncode == 1 and len(proc.stderr.strip().splitlines()) == 1
+
+
+def _help(command: str, cwd: Path) -> str:
+    proc = run(command, "--help", cwd=cwd)
+    assert proc.returncode == 0, proc.stderr
+    return proc.stdout
+
+
+COMMANDS = ("trajectory", "simulate", "inspect", "sync", "fit", "evaluate", "predict", "sweep", "report", "links",
+            "headings", "orient", "export", "plot", "demo")
+
+
+@pytest.mark.parametrize("command", COMMANDS)
+def test_help_shows_readable_metavars_not_python_types(command, tmp_path):
+    import re
+
+    text = _help(command, tmp_path)
+    assert not re.search(r"<(str|int|float|bool|list\[[a-z]+\]|Path)>", text), text
+    assert not re.search(r"\{[a-z_]+\}", text.splitlines()[0]), text.splitlines()[0]
+
+
+def test_help_lists_choices_and_units(tmp_path):
+    assert "--turn [tx|rx|both]" in _help("orient", tmp_path)
+    fit = _help("fit", tmp_path)
+    assert "--prior-level [data|prior]" in fit and "--prior NODE=MODEL.json" in fit and "--model KIND" in fit
+    sync = _help("sync", tmp_path)
+    assert "--frequency HZ" in sync and "--max-gap SECONDS" in sync and "--poses FILE" in sync
+    assert "--rssi-scale [dbm|relative]" in sync
+    assert "Usage: rplearn predict [OPTIONS] MODEL.json DATASET" in _help("predict", tmp_path)
+
+
+def test_the_listed_choices_are_the_librarys():
+    """The words the help lists are exactly those the library accepts (the CLI may not import
+    the numeric layers, so it keeps its own list: this test keeps the two equal)."""
+    from rplearn.cli._help import CHOICES
+    from rplearn.core.environment import PATH_LOSS_KINDS
+    from rplearn.core.lsq.solver import PRIOR_LEVELS
+    from rplearn.sim.presets import PRESET_NAMES
+
+    assert set(CHOICES[("*", "--path-loss")]) == set(PATH_LOSS_KINDS)
+    assert set(CHOICES[("*", "--prior-level")]) == set(PRIOR_LEVELS)
+    assert set(CHOICES[("simulate", "--preset")]) == {*PRESET_NAMES, "fleet"}
+    assert set(CHOICES[("demo", "--preset")]) == set(PRESET_NAMES)
