@@ -223,7 +223,7 @@ def itu_f1336_sectoral_peak_dbi(
     Parameters
     ----------
     az_deg, el_deg : array_like
-        Azimuth from boresight in [-180, 180] and elevation in [-90, 90] [deg].
+        Azimuth from boresight (-180..180) and elevation (-90..90) [deg].
     g0_dbi : float
         Boresight gain [dBi].
     phi3_deg : float
