@@ -24,23 +24,27 @@ def test_sweep_says_how_it_split_a_flight_without_units(no_units):
 
 
 @pytest.mark.parametrize("baseline", ["m", "nn-5"])
-def test_a_baseline_with_an_environment_term_is_refused_once_by_fit_model(no_units, baseline, monkeypatch):
-    """The one check that baselines learn no environment term is fit_model's: fit_dataset passes
-    the terms on and says the same (issue 25: it was checked twice)."""
+def test_a_baseline_with_an_environment_term_is_refused_once_by_fit_model(no_units, baseline):
+    """The one check that baselines learn no environment term is the fit request's
+    (``FitOptions.check``, which fit_dataset and fit_model both go through): issue 25, it was
+    checked twice; the message is one, in one place of the source."""
+    from pathlib import Path
+
     from rplearn.core.environment import PathLoss
-    from rplearn.models import fit as fit_module
+    from rplearn.models.options import FitOptions
     from rplearn.models.spec import ModelSpec
     from rplearn.workflows.learning import fit_dataset
 
-    calls = []
-    real = fit_module.fit_model
-    monkeypatch.setattr("rplearn.workflows.learning.fit_model", lambda *a, **k: (calls.append(k), real(*a, **k))[1])
+    options = FitOptions(path_loss=PathLoss("log-distance"))
     with pytest.raises(InputError, match="learn no environment term") as err:
-        fit_dataset(no_units, ModelSpec.parse(baseline), path_loss=PathLoss("log-distance"))
-    assert err.value.param == "path_loss" and calls and calls[0]["path_loss"].kind == "log-distance"
+        fit_dataset(no_units, ModelSpec.parse(baseline), options=options)
+    assert err.value.param == "path_loss"
     with pytest.raises(InputError, match="learn no environment term"):
-        real(*_samples(no_units), ModelSpec.parse(baseline), path_loss=PathLoss("two-ray"))
+        FitOptions(path_loss=PathLoss("two-ray")).check(ModelSpec.parse(baseline))
     assert fit_dataset(no_units, ModelSpec.parse(baseline)).fitted.model.kind != "patterns"  # free space: learned
+    src = Path(__file__).resolve().parents[2] / "src" / "rplearn"
+    said = [p for p in src.rglob("*.py") if "learn no environment" in p.read_text(encoding="utf-8")]
+    assert [p.name for p in said] == ["options.py"], said
 
 
 def _samples(path):
