@@ -6,11 +6,11 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from rplearn.core.bases import SphericalHarmonics
-from rplearn.errors import InputError
-from rplearn.core.geometry import quat_wxyz_from_yaw
-from rplearn.models.patterns import PatternSet
 from rplearn.analysis.swarm import predict_swarm
+from rplearn.core.bases import SphericalHarmonics
+from rplearn.core.geometry import quat_wxyz_from_yaw
+from rplearn.errors import InputError
+from rplearn.models.patterns import PatternSet
 from rplearn.models.training import TrainingSummary
 
 

@@ -28,8 +28,9 @@ samples' pairs of directions (or their Gram matrix); nothing is refitted.
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Mapping, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -391,5 +392,5 @@ def certify(model: Any, samples: LinkSamples | Sequence[LinkSamples] | None = No
     return cert
 
 
-__all__ = ["MAX_COMPONENT_COLUMNS", "OWN_MAP_POINTS", "certify", "own_std_maps", "MIN_LISTED_DB", "UNSPLIT_JOINT_FRACTION", "DecouplingCertificate", "NodeSpread",
-           "SplitComponent", "covered_directions", "decoupling_certificate", "unsplit_components"]
+__all__ = ["MAX_COMPONENT_COLUMNS", "OWN_MAP_POINTS", "certify", "own_std_maps", "MIN_LISTED_DB", "UNSPLIT_JOINT_FRACTION",
+           "DecouplingCertificate", "NodeSpread", "SplitComponent", "covered_directions", "decoupling_certificate", "unsplit_components"]

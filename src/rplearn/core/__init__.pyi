@@ -17,9 +17,9 @@ from .environment import log_distance_column as log_distance_column
 from .environment import reflection_coefficient as reflection_coefficient
 from .environment import two_ray_excess_db as two_ray_excess_db
 from .gauge import Gauge as Gauge
-from .geometry import Directions as Directions
 from .geometry import R_ENU_FROM_NED as R_ENU_FROM_NED
 from .geometry import R_FRD_FROM_FLU as R_FRD_FROM_FLU
+from .geometry import Directions as Directions
 from .geometry import attitude_from_thrust as attitude_from_thrust
 from .geometry import azimuth_elevation as azimuth_elevation
 from .geometry import direction_in_body as direction_in_body

@@ -46,10 +46,10 @@ from .partitions import dataset_parts as dataset_parts
 from .partitions import is_partitioned as is_partitioned
 from .pcap import read_pcap as read_pcap
 from .pcap import write_radiotap_pcap as write_radiotap_pcap
-from .sniff import detect_format as detect_format
 from .read import read_logs as read_logs
 from .rosbag import bag_topics as bag_topics
 from .rosbag import read_rosbag as read_rosbag
+from .sniff import detect_format as detect_format
 from .tables import COLUMN_ALIASES as COLUMN_ALIASES
 from .tables import canonical_pose as canonical_pose
 from .tables import canonical_signal as canonical_signal

@@ -5,15 +5,15 @@ campaign (``rplearn trajectory``), export a model file (``rplearn export``), dra
 from __future__ import annotations
 
 import os
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Mapping, Sequence
 
 from rplearn._argtypes import check_types
 from rplearn.analysis.headings import OrientationResult, best_yaw
 from rplearn.errors import InputError
 from rplearn.io.export import export_grid
-from rplearn.io.msi import export_msi_files
 from rplearn.io.files import check_output_path, provenance
+from rplearn.io.msi import export_msi_files
 from rplearn.models.base import require_patterns
 from rplearn.models.load import load_model
 from rplearn.models.patterns import PatternSet
