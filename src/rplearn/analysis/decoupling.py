@@ -366,7 +366,7 @@ def decoupling_certificate(
         return DecouplingCertificate(spreads, covered_db=covered_db, notes=[
             "(a fixed-order fit's covariance leaves out what its ridge decides where the flight cannot split the "
             "patterns, so these spreads are lower bounds and the unsplit components are not computed; "
-            "--degree auto gives the posterior's)"])
+            "--order auto gives the posterior's)"])
     if samples is None and gram is None:
         return DecouplingCertificate(spreads, covered_db=covered_db, own_std_db=maps, notes=notes + [
             "(the components not split between nodes are not computed: the pairs of learning directions were not kept)"])

@@ -30,7 +30,7 @@ app = typer.Typer(
         "Typical session:\n\n"
         "  rplearn simulate --preset smoke -o flight\n\n"
         "  rplearn sync --poses flight/pose_log.parquet --signals flight/signal_log.parquet --link A:B -o data.parquet\n\n"
-        "  rplearn fit data.parquet --model sh --degree 10 -o sh10.json\n\n"
+        "  rplearn fit data.parquet --model sh --order 10 -o sh10.json\n\n"
         "  rplearn evaluate sh10.json data.parquet\n\n"
         "  rplearn demo -o rplearn-demo"
     ),
@@ -53,9 +53,9 @@ PARAM_FLAGS: dict[str, str] = {
     "clock_offsets_s": "--offset NODE=SECONDS", "on_unknown_node": "--on-unknown-node",
     "pattern_of": "--as DRONE=NODE", "times_s": "--at", "step_s": "--step", "positions": "--pos DRONE=X,Y,Z",
     "start_yaw_deg": "--yaw DRONE=DEG", "fixed": "--fixed", "turn": "--turn", "units": "--units",
-    "test_units": "--test-units", "learn_units": "--learn-units", "order": "--degree", "ridge": "--ridge",
+    "test_units": "--test-units", "learn_units": "--learn-units", "order": "--order", "ridge": "--ridge",
     "sigma_rad2": "--sigma", "grid": "--grid", "gauge_node": "--gauge-node", "gauge_dbi": "--gauge-dbi", "prior": "--prior NODE=MODEL.json",
-    "models": "--models", "paper_models": "--paper-models", "repeats": "--repeats", "orders": "--orders", "n_neighbors": "--degree",
+    "models": "--models", "paper_models": "--paper-models", "repeats": "--repeats", "orders": "--orders", "n_neighbors": "--order",
     "ground_level_m": "--ground-level", "relative_permittivity": "--permittivity",
     "path_loss": "--path-loss", "link_offsets": "--link-offsets",
     "station_geodetic": "--station LAT,LON,ALT", "station": "--station-node", "station_heading_deg": "--station-heading",

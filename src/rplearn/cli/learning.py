@@ -19,8 +19,9 @@ DASK_HELP = ("Run on Dask, part by part (pattern models): local (2 worker proces
 def fit(
     dataset: str = typer.Argument(..., help="Matched dataset (.parquet or .csv), or many: a directory, a glob, a comma-separated list or a URL."),
     model: str = typer.Option("sh", "--model", help="sh, bg, poly, mean or knn (also sh-10, nn-400...)."),
-    degree: str | None = typer.Option(None, "--degree", help="SH-L / BG-k / P-k order, k of knn, or 'auto': order (SH) and smoothing chosen by "
-                                                             "cross-validation over flight units (default for sh; bg, poly, knn default to 7, 12, 400)."),
+    degree: str | None = typer.Option(None, "--order", "--degree", help="SH-L / BG-k / P-k order, k of knn, or 'auto': order (SH) and smoothing "
+                                      "chosen by cross-validation over flight units (default for sh; bg, poly, knn default to 7, 12, 400). "
+                                      "--degree is the same option under its older name."),
     ridge: float | None = typer.Option(None, "--ridge", help="Pattern models: ridge weight on the diagonal of X^T X (default 1; the paper used 50)."),
     sigma: float | None = typer.Option(None, "--sigma", help="BG only: kernel variance sigma [rad^2] (default 0.5, about the paper's)."),
     grid: str | None = typer.Option(None, "--grid", help="BG only: nodes on the paper grid (default) or fibonacci."),
@@ -30,7 +31,7 @@ def fit(
     gauge_node: str | None = typer.Option(None, "--gauge-node", help="Pattern models: fix this node's mean gain instead of splitting equally."),
     gauge_dbi: float | None = typer.Option(None, "--gauge-dbi", help="Sphere-mean gain of --gauge-node [dBi] (default 0)."),
     prior: list[str] | None = typer.Option(None, "--prior", help="NODE=MODEL.json: shrink NODE's pattern toward the shape of this (reference) model instead of "
-                                                                 "toward zero (its level comes from the data, see --prior-level); with --degree auto."),
+                                                                 "toward zero (its level comes from the data, see --prior-level); with --order auto."),
     prior_level: str = typer.Option("data", "--prior-level", help="Where the level of the --prior patterns comes from: data (default: the prior gives only its "
                                                                   "shape, so a constant added to every RSSI value only shifts the predictions) or prior (its "
                                                                   "absolute dBi: calibrated power and a trusted reference)."),
@@ -54,7 +55,7 @@ def fit(
 ) -> None:
     """Learn one radiation pattern per node (or a baseline) from a matched dataset.
 
-    Example: rplearn fit data.parquet --model sh --degree 10 --units learn_0,learn_24,learn_48 -o sh10.json
+    Example: rplearn fit data.parquet --model sh --order 10 --units learn_0,learn_24,learn_48 -o sh10.json
     """
     from rplearn.core.environment import PathLoss
     from rplearn.core.gauge import Gauge
@@ -124,7 +125,7 @@ def two_ray_flags_note(kind: str, ground_level: float, permittivity: float, pola
 
 
 def degree_option(degree: str | None, model: str) -> tuple[bool, int | None]:
-    """``(auto, order)`` from ``--degree`` and ``--model``: 'auto' (the default for a bare ``sh``)
+    """``(auto, order)`` from ``--order`` and ``--model``: 'auto' (the default for a bare ``sh``)
     or a whole number."""
     text = (degree or "").strip().lower()
     bare_sh = model.strip().lower() in ("sh", "spherical", "spherical-harmonics")
@@ -135,9 +136,9 @@ def degree_option(degree: str | None, model: str) -> tuple[bool, int | None]:
     try:
         value = float(text)
     except ValueError:
-        raise InputError(f"--degree: expected a whole number or 'auto', got {degree!r}") from None
+        raise InputError(f"--order: expected a whole number or 'auto', got {degree!r}") from None
     if not value.is_integer():
-        raise InputError(f"--degree: expected a whole number or 'auto', got {degree!r}")
+        raise InputError(f"--order: expected a whole number or 'auto', got {degree!r}")
     return False, int(value)
 
 

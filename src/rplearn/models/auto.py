@@ -1,4 +1,4 @@
-"""``fit --degree auto``: a regularised pattern whose order and smoothing the data choose.
+"""``fit --order auto``: a regularised pattern whose order and smoothing the data choose.
 
 The statistics of every learning unit are accumulated once, at the largest candidate order;
 :func:`rplearn.core.lsq.selection.select_order_and_smoothing` chooses order and smoothing by grouped
@@ -42,7 +42,7 @@ from rplearn.models.streamed import frequency_counts, weighted_median
 from rplearn.models.terms import regression_inputs, shared_fields, statistics_counts
 from rplearn.models.training import TrainingSummary
 
-#: Largest SH order ``--degree auto`` considers (the cost of the selection is that of one fit
+#: Largest SH order ``--order auto`` considers (the cost of the selection is that of one fit
 #: at this order: its statistics are accumulated once). A cost cap: on the paper's data the
 #: cross-validated error still falls, by about 0.01 dB, from SH-15 to SH-16, while the
 #: selection's time grows by a third (2.5x against 3.4x one SH-10 fit; benchmarks/auto_fit.py).
@@ -69,7 +69,7 @@ def auto_orders(kind: str, n_samples: int, n_nodes: int, order: int | None = Non
     if top < 2:
         raise InputError(
             f"{n_samples:,} samples are too few to choose an SH order for {n_nodes} antennas "
-            f"(SH-2 needs {n_nodes * 4 * SAMPLES_PER_COEF:,}); give --degree", param="order")
+            f"(SH-2 needs {n_nodes * 4 * SAMPLES_PER_COEF:,}); give --order", param="order")
     return list(range(2, top + 1))
 
 

@@ -253,7 +253,7 @@ def unit_statistics_streamed(
     chunks: Iterable[pd.DataFrame], spec: ModelSpec, nodes: Sequence[str], units: Sequence[str] | None = None,
     source: str = "dataset", stretches: Stretches | None = None, options: FitOptions | None = None,
 ) -> tuple[dict[str, NormalEquations], float | None, int, dict[str, list[float]]]:
-    """The statistics of every learning unit of a dataset given in chunks (for ``--degree auto``
+    """The statistics of every learning unit of a dataset given in chunks (for ``--order auto``
     on a big file): ``(statistics by unit, median frequency [Hz], non-unit quaternions,
     coverage grids by node)``. A dataset without a ``unit`` column is one unit, ``"all"``; with
     ``stretches`` the learning rows are cut into those stretches of time instead
