@@ -109,7 +109,7 @@ USER_ERRORS = {
     "unreadable log": (["inspect", "trunc.parquet"], "could not be read"),
     "plan over a limit": (["trajectory", "-o", "plan", "--max-flight-time", "100", "--check-model", "none"], "above the limit 100 s"),
     "option of another model": (["fit", "data.parquet", "--model", "knn", "--ridge", "5", "-o", "k.json"], "--ridge: not used by NN-400"),
-    "degree of a mean": (["fit", "data.parquet", "--model", "mean", "--degree", "7", "-o", "m7.json"], "--degree"),
+    "degree of a mean": (["fit", "data.parquet", "--model", "mean", "--degree", "7", "-o", "m7.json"], "--order"),
     "BG option on SH": (["fit", "data.parquet", "--model", "sh", "--sigma", "3", "-o", "s.json"], "used by BG models only"),
     "gauge level without node": (["fit", "data.parquet", "--gauge-dbi", "2", "-o", "g.json"], "--gauge-dbi needs --gauge-node"),
     "contradicting degree": (["fit", "data.parquet", "--model", "sh-10", "--degree", "5", "-o", "c.json"], "contradicts"),

@@ -92,9 +92,9 @@ def test_concurrent_fits_to_one_file_leave_one_whole_model(workdir):
 @pytest.mark.parametrize(
     "args, flag",
     [
-        (["fit", D, "--degree", "1000", "-o", "big.json"], "--degree"),
-        (["fit", D, "--model", "bg", "--degree", "1000", "-o", "big.json"], "--degree"),
-        (["fit", D, "--model", "poly", "--degree", "1000", "-o", "big.json"], "--degree"),
+        (["fit", D, "--degree", "1000", "-o", "big.json"], "--order"),
+        (["fit", D, "--model", "bg", "--degree", "1000", "-o", "big.json"], "--order"),
+        (["fit", D, "--model", "poly", "--degree", "1000", "-o", "big.json"], "--order"),
         (["export", M, "--step-deg", "0.001", "-o", "g.csv"], "--step-deg"),
         (["links", M, P, "--tx-power", "20", "--step", "1e-9", "-o", "l.csv"], "--step"),
         (["headings", M, "--pos", "A=0,0,20", "--pos", "B=30,0,20", "--tx-power", "20", "--step", "0.000001"], "--step"),

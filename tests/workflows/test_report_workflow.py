@@ -35,6 +35,7 @@ def no_units(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def sh3(no_units, tmp_path_factory):
+    from rplearn.models.options import FitOptions
     from rplearn.models.spec import ModelSpec
     from rplearn.workflows.learning import fit_dataset
 
@@ -46,6 +47,7 @@ def sh3(no_units, tmp_path_factory):
 
 def test_report_fits_the_cross_validated_model_fit_learns_and_draws_its_figures(no_units, tmp_path):
     from rplearn.models.load import load_model
+    from rplearn.models.options import FitOptions
     from rplearn.models.spec import ModelSpec
     from rplearn.workflows.learning import fit_dataset
 
@@ -53,7 +55,7 @@ def test_report_fits_the_cross_validated_model_fit_learns_and_draws_its_figures(
     assert out.test_units == ["test[5/5]"] and len(out.learn_units) == 4
     assert "has no 'unit' column" in out.notes[0] and "after the log start" in out.notes[0]
     # the model is the one `rplearn fit --units <learning stretches>` learns by default (order auto)
-    same = fit_dataset(no_units, ModelSpec.parse("sh"), units=out.learn_units, auto=True).fitted.model
+    same = fit_dataset(no_units, ModelSpec.parse("sh"), out.learn_units, options=FitOptions(auto=True)).fitted.model
     saved = load_model(out.files["model"])
     assert saved.label == same.label == out.fitted.label and saved.label.startswith("SH-")
     np.testing.assert_allclose(saved.coef, same.coef, rtol=1e-9, atol=1e-9)
@@ -73,6 +75,7 @@ def test_report_on_a_given_model_file_writes_no_model(no_units, sh3, tmp_path):
     assert f"model: SH-3, from {sh3}; scored on the held-out test[5/5]" in out.summary()
     assert not any("may not be held out" in n or "not held out" in n for n in out.notes)  # sh3 records its units
     whole = str(tmp_path / "whole.json")
+    from rplearn.models.options import FitOptions
     from rplearn.models.spec import ModelSpec
     from rplearn.workflows.learning import fit_dataset
 
@@ -152,6 +155,7 @@ def test_paper_models_reproduce_main_s_table_i_of_the_demo_seed_0(tmp_path):
     nodes = list(sim.ground_truth.nodes)
     dataset = str(tmp_path / "dataset.parquet")
     write_table(synchronise(sim.pose_log, sim.signal_log, SyncOptions(link=(nodes[0], nodes[1]))).dataset, dataset)
+    from rplearn.models.options import FitOptions
     from rplearn.models.spec import ModelSpec
     from rplearn.workflows.learning import fit_dataset
 
