@@ -34,12 +34,6 @@ FIT_OPTION_NAMES = frozenset({"gauge", "path_loss", "link_offsets"})
 
 #: Functions (``module:qualified name``) still over the limit, to be split into option values.
 PENDING: frozenset[str] = frozenset({
-    # the least-squares engine (being moved into core/lsq/; its signatures change there)
-    "core/lsq/solver.py:fit_joint",
-    "core/lsq/solver_large.py:solve_large",
-    "core/lsq/solver_large.py:_solve_large",
-    "core/lsq/link_statistics.py:_fill_features",
-    "core/lsq/link_statistics.py:segmented_link_statistics",
     # planning and reading, with public keyword arguments
     "analysis/headings.py:best_yaw",
     "analysis/headings.py:best_swarm_headings",

@@ -18,7 +18,7 @@ from rplearn.models.baselines import KNNModel, MeanModel
 from rplearn.data.tables import LinkSamples
 from rplearn.core.metrics import Scores, score
 from rplearn.models.patterns import PatternSet
-from rplearn.core.lsq.solver import FitReport, fit_joint
+from rplearn.core.lsq.solver import FitReport, JointFitOptions, fit_joint
 from rplearn.models.base import Model, learned_frequency_hz
 from rplearn.models.options import FitOptions
 from rplearn.models.spec import ModelSpec, check_model_size
@@ -92,12 +92,9 @@ def solve_patterns(
         y,
         len(samples.nodes),
         basis,
-        node_names=samples.nodes,
-        ridge=spec.ridge,
-        gauge=options.gauge,
-        smoothing=spec.smoothing,
-        environment=env,
-        link_offsets=options.link_offsets,
+        samples.nodes,
+        JointFitOptions(ridge=spec.ridge, gauge=options.gauge, smoothing=spec.smoothing, environment=env,
+                        link_offsets=options.link_offsets),
     )
     fields, terms = shared_fields(sol, samples.nodes, options, directed_counts(samples))
     training = sol.report.to_dict()
