@@ -50,6 +50,8 @@ _NAMES: dict[str, str] = {
     "SwarmHeadings": "headings",
     "best_swarm_headings": "headings",
     "best_yaw": "headings",
+    "SwarmHeadingOptions": "heading_options",
+    "YawOptions": "heading_options",
     # clock offsets
     "ClockOffsetEstimate": "clock",
     "estimate_clock_offset": "clock",
@@ -57,6 +59,7 @@ _NAMES: dict[str, str] = {
     "heading_std_tables": "headings",
     # swarm links over time
     "DEFAULT_MIN_RSSI_DBM": "swarm",
+    "SwarmOptions": "swarm",
     "SwarmPrediction": "swarm",
     "connectivity_over_time": "swarm",
     "predict_swarm": "swarm",
