@@ -35,7 +35,7 @@ def _check_step(step_deg: Any) -> None:
 
 def _check_frequency(frequency_hz: Any) -> None:
     if frequency_hz is not None and not (_finite(frequency_hz) and frequency_hz > 0):
-        raise InputError(f"frequency_hz: expected a positive number of Hz, got {frequency_hz!r}", param="frequency_hz")
+        raise InputError(f"frequency_hz: expected a positive frequency in Hz, got {frequency_hz!r}", param="frequency_hz")
 
 
 @dataclass(frozen=True)

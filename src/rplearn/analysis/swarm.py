@@ -79,7 +79,7 @@ class SwarmOptions:
 
     def __post_init__(self) -> None:
         if self.frequency_hz is not None and not (_is_number(self.frequency_hz) and self.frequency_hz > 0):
-            raise InputError(f"frequency_hz: expected a positive number of Hz, got {self.frequency_hz!r}",
+            raise InputError(f"frequency_hz: expected a positive frequency in Hz, got {self.frequency_hz!r}",
                              param="frequency_hz")
         if self.pattern_of is not None:
             if not isinstance(self.pattern_of, Mapping):
