@@ -120,7 +120,12 @@ def test_times_gaps_and_errors():
 
 
 def test_headings_improve_the_bottleneck_and_agree_with_the_links():
-    from rplearn.analysis.headings import SwarmHeadingOptions, YawOptions, best_swarm_headings, best_yaw
+    from rplearn.analysis.headings import (
+        SwarmHeadingOptions,
+        YawOptions,
+        best_swarm_headings,
+        best_yaw,
+    )
 
     rng = np.random.default_rng(2)
     model = _model(rng)

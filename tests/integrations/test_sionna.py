@@ -237,6 +237,13 @@ def test_bad_inputs_are_refused_before_sionna_is_needed():
         add_link(None, model, "A", "B", ([0, 0, 0], [1, 0, 0]), ([9, 0, 0], [1, 0, 0, 0]))
     with pytest.raises(InputError, match="rx_quat_wxyz"):  # refused before the scene is touched
         add_link(None, model, "A", "B", ([0, 0, 0], [1, 0, 0, 0]), ([9, 0, 0], [np.nan, 0, 0, 0]))
+    with pytest.raises(InputError, match="rx_pose: expected a pair"):
+        add_link(None, model, "A", "B", ([0, 0, 0], [1, 0, 0, 0]), [9, 0, 0])
+    for bad, field in (({"frequency_hz": -1.0}, "frequency_hz"), ({"step_deg": float("nan")}, "step_deg"),
+                       ({"prefix": 3}, "prefix")):
+        with pytest.raises(InputError) as err:
+            SceneLinkOptions(**bad)
+        assert err.value.param == field and "\n" not in str(err.value)
 
 
 def test_a_scene_holds_one_link(rt):

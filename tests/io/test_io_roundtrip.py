@@ -166,3 +166,14 @@ def test_synthetic_fallback_flight_round_trips(tmp_path):
     amap = {mac: node for node, mac in MAC.items()}
     got = pd.concat([read_pcap(str(p), rx, TX_POWER_DBM, address_map=amap)[0] for rx, p in caps.items()])
     assert_same_matched(synchronise(pose, got).dataset, want)
+
+
+@pytest.mark.parametrize("bad, field", [({"tx_power_field": ""}, "tx_power_field"), ({"frequency_field": 5}, "frequency_field"),
+                                        ({"msg_definitions": "Type.msg"}, "msg_definitions"),
+                                        ({"time_source": "wall"}, "time_source")])
+def test_rosbag_options_refuse_a_bad_value_naming_it(bad, field):
+    from rplearn.errors import InputError
+
+    with pytest.raises(InputError) as err:
+        RosbagOptions(**bad)
+    assert err.value.param == field and "\n" not in str(err.value)

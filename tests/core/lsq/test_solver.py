@@ -234,3 +234,12 @@ def test_gauge_on_an_identified_node_is_refused_and_poor_coverage_warns():
     narrow = Directions(rng.uniform(-0.2, 0.2, n), rng.uniform(-0.1, 0.1, n), rng.uniform(-0.2, 0.2, n), rng.uniform(-0.1, 0.1, n))
     sol = fit_joint(narrow, np.zeros(n, int), np.ones(n, int), rng.normal(size=n), 2, SphericalHarmonics(4))
     assert any("condition number" in w for w in sol.report.warnings)
+
+
+@pytest.mark.parametrize("bad, field", [({"ridge": -1.0}, "ridge"), ({"smoothing": float("nan")}, "smoothing"),
+                                        ({"penalty_power": float("inf")}, "penalty_power"), ({"chunk_size": 0}, "chunk_size"),
+                                        ({"gauge": {"node": ""}}, "gauge_node")])
+def test_joint_fit_options_refuse_a_bad_value_naming_it(bad, field):
+    with pytest.raises(InputError) as err:
+        JointFitOptions(**bad)
+    assert err.value.param == field and "\n" not in str(err.value)
