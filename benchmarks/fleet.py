@@ -30,6 +30,7 @@ import numpy as np
 
 ONE_RUN = r"""
 import json, sys, time
+from rplearn.models.options import FitOptions
 from rplearn.models.spec import ModelSpec
 from rplearn.workflows.learning import _fit_streamed
 from rplearn.workflows.fleet import dask_client, worker_peak_rss_bytes
@@ -38,14 +39,14 @@ spec = ModelSpec.parse("sh", order=order)
 report = {}
 if dask == "none":
     t0 = time.perf_counter()
-    fit = _fit_streamed(data, spec, None, "equal-mean", out)
+    fit = _fit_streamed(data, spec, None, FitOptions(), out)
     report["fit_s"] = time.perf_counter() - t0
 else:
     t0 = time.perf_counter()
     with dask_client(dask) as client:
         report["startup_s"] = time.perf_counter() - t0
         t1 = time.perf_counter()
-        fit = _fit_streamed(data, spec, None, "equal-mean", out, client=client)
+        fit = _fit_streamed(data, spec, None, FitOptions(), out, client=client)
         report["fit_s"] = time.perf_counter() - t1
         report["workers_peak_bytes"] = worker_peak_rss_bytes(client)
 report["samples"] = fit.n_samples

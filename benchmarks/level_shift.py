@@ -76,7 +76,7 @@ def main() -> None:
             per_unit = {u: shifted(s, shift) for u, s in base.items()}
             held = shifted(base_test, shift)
             row = [f"{shift:>8g}"]
-            for options in (FitOptions(auto=True), FitOptions(auto=True, priors={n: prior for n in nodes})):
+            for name, options in (("auto", FitOptions(auto=True)), ("prior", FitOptions(auto=True, priors={n: prior for n in nodes}))):
                 fitted, sel = fit_auto(per_unit, options=options)
                 rmse = evaluate_models([FittedModel(ModelSpec("sh", sel.order), fitted.model, 0.0)], held)[0].rmse_db
                 rmses[name].append(rmse)

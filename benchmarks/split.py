@@ -28,7 +28,6 @@ Usage: ``python benchmarks/split.py [--presets paper,pathloss,ground] [--seeds 0
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import time
 from dataclasses import dataclass, field, replace
@@ -36,6 +35,7 @@ from typing import Any
 
 import numpy as np
 
+from rplearn._atomic import atomic_open, dump_json
 from rplearn.analysis.decoupling import covered_directions, decoupling_certificate
 from rplearn.analysis.pattern_error import pattern_errors_db
 from rplearn.core.environment import PathLoss
@@ -164,8 +164,8 @@ def main(argv: list[str] | None = None) -> int:
     missed = [c for c in cases if not all(c.checks.values())]
     print(f"{len(cases) - len(missed)} of {len(cases)} cases meet all three criteria")
     if args.json:
-        with open(args.json, "w", encoding="utf-8") as f:
-            json.dump([c.to_dict() for c in cases], f, indent=1)
+        with atomic_open(args.json, "w", encoding="utf-8") as f:
+            dump_json([c.to_dict() for c in cases], f, indent=1)  # strict JSON: a non-finite number is null
     return 0
 
 

@@ -22,7 +22,6 @@ LAYERS: tuple[str, ...] = (
     "rplearn._version",
     "rplearn.errors",
     "rplearn._argtypes",
-    "rplearn._lazy",
     "rplearn._atomic",
     "rplearn.core",
     # the least-squares engine, a subpackage of core: it may use the maths modules at the top of
@@ -87,17 +86,20 @@ def layer_of(module: str) -> int | None:
     return max(found, key=lambda i: len(LAYERS[i])) if found else None
 
 
-def lazy_targets(tree: ast.Module, package: str) -> list[tuple[str, int]]:
-    """Modules named in a package's ``_NAMES = {public name: module}`` (see rplearn._lazy)."""
+def lazy_targets(path: Path, package: str) -> list[tuple[str, int]]:
+    """Modules a package's ``__init__.pyi`` names: its public names, which ``lazy_loader``
+    imports from them on first use (and type checkers read)."""
+    stub = path.with_suffix(".pyi")
+    if not stub.exists():
+        return []
     found = []
-    for node in tree.body:
-        targets = node.targets if isinstance(node, ast.Assign) else [node.target] if isinstance(node, ast.AnnAssign) else []
-        if any(isinstance(t, ast.Name) and t.id == "_NAMES" for t in targets) and isinstance(node.value, ast.Dict):
-            for value in node.value.values:
-                if isinstance(value, ast.Constant) and isinstance(value.value, str):
-                    name = value.value
-                    absolute = name if name.split(".")[0] == "rplearn" else f"{package}.{name.lstrip('.')}"
-                    found.append((absolute, value.lineno))
+    for node in ast.walk(ast.parse(stub.read_text(encoding="utf-8"), filename=str(stub))):
+        if isinstance(node, ast.ImportFrom):
+            parts = package.split(".")
+            base = parts[: len(parts) - (node.level - 1)] if node.level else []
+            found.append((".".join(base + ([node.module] if node.module else [])), node.lineno))
+        elif isinstance(node, ast.Import):
+            found += [(a.name, node.lineno) for a in node.names]
     return found
 
 
@@ -125,8 +127,8 @@ def imports_of(path: Path, module: str, known: set[str]) -> list[tuple[str, int,
         for target in targets:
             if target == "rplearn" or target.startswith("rplearn."):
                 found.append((target, node.lineno, id(node) in top_level))
-    if is_package:  # names loaded lazily on first use (rplearn._lazy) depend on their modules too
-        found += [(target, line, False) for target, line in lazy_targets(tree, module)]
+    if is_package:  # names loaded lazily on first use (__init__.pyi) depend on their modules too
+        found += [(target, line, False) for target, line in lazy_targets(path, module) if target.startswith("rplearn")]
     return found
 
 
@@ -260,7 +262,7 @@ def test_no_module_is_longer_than_the_limit() -> None:
         ("cli/swarm.py", "def f():\n    import numpy as np\n", "third"),
         ("core/bases.py", "def f():\n    from rplearn.core.lsq.solver import DEFAULT_RIDGE\n", "cycle"),
         ("io/options.py", "from rplearn.io import read_logs\n", "cycle"),
-        ("core/__init__.py", "_NAMES = {'plot_coverage': 'rplearn.viz.plot'}\n", "layer"),
+        ("core/__init__.pyi", "import rplearn.viz.plot\n", "layer"),
     ],
 )
 def test_the_checks_catch_a_planted_violation(tmp_path: Path, where: str, source: str, kind: str) -> None:

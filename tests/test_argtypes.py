@@ -1,12 +1,16 @@
 """rplearn._argtypes: a wrong argument type at the public API is one ArgumentTypeError naming the
 parameter (an InputError and a TypeError), never a bare TypeError or AttributeError from deep
-inside numpy or pandas (issue 10, class 6)."""
+inside numpy or pandas (issue 10, class 6). The checks are applied where each public function or
+class is defined (``@check_types``), so they are the same whatever the import path (issue 25)."""
 
 from __future__ import annotations
 
 import importlib
 import inspect
 import os
+import subprocess
+import sys
+import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -65,29 +69,79 @@ def test_values_of_the_right_kind_pass_in_any_of_their_forms(tmp_path):
     with pytest.raises(ArgumentTypeError, match="^path: expected a string or a PathLike"):
         load_model(5)
     with pytest.raises(ArgumentTypeError, match="^x: expected True or False|^flag"):
-        from rplearn._argtypes import checked
+        from rplearn._argtypes import check_types
 
         def f(x: bool) -> bool:
             return x
 
-        checked(f, "f")("yes")
+        check_types(f, "f")("yes")
 
 
-def test_public_functions_keep_their_names_and_docstrings():
+def test_public_functions_keep_their_names_docstrings_and_signatures():
     from rplearn.models import fit_model
-    from rplearn.models.fit import fit_model as raw
+    from rplearn.models.fit import fit_model as same
 
-    assert fit_model.__name__ == "fit_model" and fit_model.__doc__ == raw.__doc__
-    assert fit_model.__wrapped__ is raw
+    assert fit_model is same  # decorated where it is defined: one object
+    raw = fit_model.__wrapped__
+    assert fit_model.__name__ == raw.__name__ == "fit_model" and fit_model.__doc__ == raw.__doc__
+    assert inspect.signature(fit_model) == inspect.signature(raw)
+
+
+def _fresh(code: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-c", textwrap.dedent(code)], capture_output=True, text=True, timeout=120, check=False)
+
+
+@pytest.mark.parametrize("module", ["rplearn.models", "rplearn.models.patterns", "rplearn"])
+def test_the_same_class_with_the_same_checks_whatever_the_import_path(module):
+    """In a fresh interpreter, whichever path is imported first: one class, one check."""
+    result = _fresh(f"""
+        from {module} import PatternSet
+        try:  # before any other look-up of the name
+            PatternSet("sh5", ("A", "B"), [[0.0]])
+        except Exception as exc:
+            print(type(exc).__name__, exc)
+        import rplearn.models, rplearn.models.patterns
+        assert PatternSet is rplearn.models.PatternSet is rplearn.models.patterns.PatternSet
+    """)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.strip() == (
+        "ArgumentTypeError basis: expected a Basis, got str 'sh5' (rplearn.models.PatternSet)"
+    )
+
+
+def _public_objects():
+    seen = {}
+    for package in PACKAGES:
+        mod = importlib.import_module(package)
+        for name in mod.__all__:
+            obj = getattr(mod, name)
+            if inspect.isfunction(obj) or inspect.isclass(obj):
+                seen[id(obj)] = (f"{package}.{name}", obj)
+    return sorted(seen.values(), key=lambda item: item[0])
+
+
+def test_every_public_function_and_class_is_checked_where_it_is_defined():
+    """``@check_types`` on each one (nothing is wrapped when it is looked up)."""
+    missing = []
+    for label, obj in _public_objects():
+        if inspect.isclass(obj):
+            init = obj.__dict__.get("__init__")
+            exempt = (issubclass(obj, BaseException) or hasattr(obj, "_get_param_names")  # scikit-learn
+                      or getattr(obj, "_is_protocol", False) or init is None)
+            if not exempt and not getattr(init, "__rplearn_checked__", False):
+                missing.append(label)
+        elif not getattr(obj, "__rplearn_checked__", False):
+            missing.append(label)
+    assert missing == [], "public names without @check_types where they are defined"
 
 
 def test_paths_become_strings_whole_floats_integers_and_a_bare_string_is_no_sequence(tmp_path):
-    from rplearn._argtypes import checked
+    from rplearn._argtypes import check_types
 
     def f(path: str, n: int, names: "list[str] | None" = None) -> tuple:
         return path, n, names
 
-    g = checked(f, "f")
+    g = check_types(f, "f")
     assert g(tmp_path / "x.csv", 2.0) == (str(tmp_path / "x.csv"), 2, None)
     assert type(g("a", 2.0)[1]) is int
     with pytest.raises(ArgumentTypeError, match="^names: expected a list"):

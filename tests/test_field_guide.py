@@ -51,9 +51,14 @@ def test_the_field_guide_runs_on_the_real_log_and_prints_what_it_says(tmp_path):
     assert (tmp_path / "patterns.png").stat().st_size > 10_000
     html = (tmp_path / "report" / "report.html").read_text(encoding="utf-8")
     assert "no &#x27;unit&#x27; column" in html or "no 'unit' column" in html
-    knn = re.search(r"NN-400 not learned: link \S+ has (\d+) samples", out["report"])
-    assert knn and "NN-400 not learned" in html and f"only {knn.group(1)} learning samples" in readme
-    assert "| SH-10 |" in out["report"] and "| BG-7 |" in out["report"]
+    # report: the cross-validated model fit learns, scored on the held-out fifth; its figures
+    held_out = re.search(r"\| (SH-\d+) \| ([\d.]+) \|", out["report"])
+    assert held_out and "scored on the held-out test[5/5]" in out["report"], out["report"]
+    assert f"{held_out.group(1)}, {float(held_out.group(2)):.1f} dB RMSE on the held-out fifth" in readme
+    training = re.search(r"training RMSE ([\d.]+) dB", html)
+    assert training and f"against the {float(training.group(1)):.1f} dB it fits where it learned" in readme
+    assert "Measured and predicted" in html and "The patterns in 3-D" in html
+    assert (tmp_path / "report" / "model.json").stat().st_size > 1_000
     gain = re.search(r"\(([+-][\d.]+) dB\), \+- ([\d.]+) dB", out["orient"])
     assert gain, out["orient"]
     assert f"{gain.group(1)} dB" in readme and f"±{gain.group(2)} dB" in readme, out["orient"]

@@ -1,8 +1,10 @@
 """The public API: every package's ``__all__``, its lazy loading, and the README's examples.
 
-Each package of rplearn (the root and the layer subpackages) lists its public names in
-``__all__`` and resolves them on first use (:mod:`rplearn._lazy`), so that ``import rplearn``
-stays light. The README's library examples import only such public names.
+Each package of rplearn (the root and the layer subpackages) declares its public names in its
+``__init__.pyi`` (``from .module import name as name``), which type checkers and IDEs read and
+``lazy_loader.attach_stub`` turns into ``__all__`` and a module ``__getattr__`` that imports a
+name's module on first use, so that ``import rplearn`` stays light. The README's library
+examples import only such public names.
 """
 
 from __future__ import annotations
@@ -165,41 +167,55 @@ def test_no_public_name_is_also_a_submodule_of_its_package() -> None:
     assert clashes == []
 
 
-def test_lazy_exports_on_a_package_of_its_own(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
-) -> None:
-    """Relative and absolute targets, caching, ``dir()`` and unknown names."""
-    from rplearn._lazy import lazy_exports
+def _stub(package: str) -> Path:
+    return Path(importlib.import_module(package).__file__).with_suffix(".pyi")
 
-    pkg = tmp_path / "lazydemo"
-    (pkg / "sub").mkdir(parents=True)
-    (pkg / "__init__.py").write_text(
-        "from rplearn._lazy import lazy_exports\n"
-        "_NAMES = {'alpha': 'one', 'beta': 'lazydemo.sub.two', 'one_more': '.one'}\n"
-        "__all__ = sorted(_NAMES)\n"
-        "__getattr__, __dir__ = lazy_exports(__name__, _NAMES)\n"
+
+@pytest.mark.parametrize("package", PACKAGES)
+def test_the_stub_declares_every_public_name_with_its_module(package: str) -> None:
+    """``__init__.pyi`` is the one list: explicit re-exports, each the object of its module.
+
+    Every public name is imported in the stub as ``from .module import name as name`` (the
+    form ``lazy_loader.attach_stub`` reads and ``mypy --strict`` takes as a re-export), and the
+    package's attribute is the very object its module defines (one object, whatever the import
+    path).
+    """
+    module = importlib.import_module(package)
+    tree = ast.parse(_stub(package).read_text(encoding="utf-8"))
+    declared: dict[str, str] = {}
+    for node in tree.body:
+        if isinstance(node, ast.ImportFrom):
+            assert node.level == 1 and node.module, f"{package}: only `from .module import ...`"
+            for alias in node.names:
+                assert alias.asname == alias.name, f"{package}: `{alias.name} as {alias.name}`"
+                declared[alias.name] = f"{package}.{node.module}"
+    extra = set(module.__all__) - set(declared)
+    assert extra <= {"LogFormatError"}, f"{package}: public names not in its stub: {sorted(extra)}"
+    for name, where in declared.items():
+        assert getattr(module, name) is getattr(importlib.import_module(where), name), name
+
+
+@pytest.mark.parametrize("package", PACKAGES)
+def test_packages_hold_no_table_of_names(package: str) -> None:
+    """The runtime takes the names from the stub (no second list to keep in step)."""
+    source = Path(importlib.import_module(package).__file__).read_text(encoding="utf-8")
+    assert "lazy_loader.attach_stub(__name__, __file__)" in source
+    assert not re.search(r"^_NAMES\b", source, re.MULTILINE)
+
+
+def test_a_name_imports_its_module_on_first_use_and_dir_lists_the_public_names() -> None:
+    result = _run(
+        """
+        import sys
+        import rplearn.models as m
+        assert "rplearn.models.fit" not in sys.modules
+        f = m.fit_model
+        assert "rplearn.models.fit" in sys.modules and m.fit_model is f
+        print(sorted(set(dir(m)) ^ set(m.__all__)))
+        """
     )
-    (pkg / "one.py").write_text("alpha = 1\none_more = 11\n")
-    (pkg / "sub" / "__init__.py").write_text("")
-    (pkg / "sub" / "two.py").write_text("beta = 2\n")
-    monkeypatch.syspath_prepend(str(tmp_path))
-    for name in [m for m in sys.modules if m == "lazydemo" or m.startswith("lazydemo.")]:
-        monkeypatch.delitem(sys.modules, name)
-    try:
-        demo = importlib.import_module("lazydemo")
-        assert "lazydemo.one" not in sys.modules
-        assert set(demo.__all__) <= set(dir(demo))
-        assert (demo.alpha, demo.beta, demo.one_more) == (1, 2, 11)
-        assert "alpha" in vars(demo)  # cached: the next look-up is a plain attribute
-        with pytest.raises(AttributeError):
-            demo.gamma  # noqa: B018
-        getattr_, dir_ = lazy_exports("lazydemo", {"delta": "one"})
-        with pytest.raises(AttributeError, match="delta"):
-            getattr_("delta")  # the module does not define it
-        assert "delta" in dir_()
-    finally:
-        for name in [m for m in sys.modules if m == "lazydemo" or m.startswith("lazydemo.")]:
-            del sys.modules[name]
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.strip() == "[]"
 
 
 # --- the README's library examples --------------------------------------------------------------

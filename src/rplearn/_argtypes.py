@@ -1,19 +1,35 @@
 """Argument types checked at the public API: a wrong type is one clear :class:`ArgumentTypeError`.
 
-Every public function of rplearn (each name a package exports, see :mod:`rplearn._lazy`) is
-wrapped by :func:`checked` when it is first looked up, and every public class gets its
-``__init__`` wrapped. The wrapper compares each argument with the parameter's annotation and
-raises :class:`~rplearn.errors.ArgumentTypeError` (an ``RplearnError`` and a ``TypeError``)
-naming the parameter, the expected and the given type and the function, before any work; instead
-of a ``TypeError`` or ``AttributeError`` from deep inside numpy or pandas.
+Every public function and class of rplearn (each name a package exports) is decorated where it
+is defined::
+
+    @check_types
+    def fit_model(samples: LinkSamples, spec: ModelSpec, ...) -> FittedModel: ...
+
+    @check_types
+    @dataclass(frozen=True)
+    class ModelSpec: ...
+
+so the checks are the same whatever the import path (``rplearn.models.fit_model`` and
+``rplearn.models.fit.fit_model`` are one object). A function is wrapped
+(``functools.wraps`` keeps its name, docstring and signature); a class keeps its identity and
+gets its own ``__init__`` wrapped once, when the class is made (outermost decorator, so that a
+dataclass's generated ``__init__`` is the one wrapped). The wrapper compares each argument with
+the parameter's annotation and raises :class:`~rplearn.errors.ArgumentTypeError` (an
+``RplearnError`` and a ``TypeError``) naming the parameter, the expected and the given type and
+the function, before any work; instead of a ``TypeError`` or ``AttributeError`` from deep inside
+numpy or pandas. The annotations are resolved on the first call, so that names defined later in
+the module (or imported only for type checkers) cost nothing at import.
 
 Only annotations that can be checked exactly are: classes (``int`` takes numpy integers and whole floats,
 converted to ``int``; ``float`` any real number but ``bool``; ``str`` also an ``os.PathLike``, converted
 to ``str``), ``None``, unions of
 these, and the abstract containers ``Mapping``, ``Sequence`` and ``Iterable`` (the container
 only, not its items; a bare string is not taken as a sequence), ``Callable``; numpy's ``ArrayLike`` and ``NDArray`` take numbers,
-arrays and sequences (not text, not complex numbers). Anything else (``Any``, ``ArrayLike``, ``NDArray``,
+arrays and sequences (not text, not complex numbers). Anything else (``Any``,
 ``Literal``, type variables, names that do not resolve) is left to the function's own checks.
+scikit-learn estimators are not decorated: by that library's convention their ``__init__`` only
+stores its arguments, which ``fit`` checks.
 
 This module is at the bottom of the layers and uses only the standard library.
 """
@@ -27,7 +43,7 @@ import numbers
 import os
 import types
 import typing
-from typing import Any, Callable
+from typing import Any, Callable, TypeVar
 
 from rplearn.errors import ArgumentTypeError
 
@@ -168,16 +184,26 @@ def _checks(func: Callable[..., Any], skip_first: bool) -> tuple[inspect.Signatu
 
 
 def _wrap(func: Callable[..., Any], label: str, skip_first: bool) -> Callable[..., Any]:
-    found = _checks(func, skip_first)
-    if found is None:
-        return func
-    sig, checks = found
-    hints = _hints(func)
-    to_str = {n for n in checks if _plain(hints.get(n)) is str}
-    to_int = {n for n in checks if _plain(hints.get(n)) is int}
+    """``func`` with its arguments checked; the checks are built on the first call."""
+    state: list[Any] = []  # [signature, checks, names to str, names to int], or [None]
+
+    def prepare() -> list[Any]:
+        found = _checks(func, skip_first)
+        if found is None:
+            return [None]
+        sig, checks = found
+        hints = _hints(func)
+        to_str = {n for n in checks if _plain(hints.get(n)) is str}
+        to_int = {n for n in checks if _plain(hints.get(n)) is int}
+        return [sig, checks, to_str, to_int]
 
     @functools.wraps(func)
     def wrapper(*args: Any, **kwargs: Any) -> Any:
+        if not state:
+            state[:] = prepare()
+        if state[0] is None:
+            return func(*args, **kwargs)
+        sig, checks, to_str, to_int = state
         try:
             bound = sig.bind(*args, **kwargs)
         except TypeError as exc:
@@ -216,25 +242,41 @@ def _short(value: Any) -> str:
     return text if len(text) <= 40 else text[:37] + "..."
 
 
-def checked(value: Any, name: str) -> Any:
-    """The public object ``value`` with its arguments checked (see the module docstring).
+_T = TypeVar("_T")
 
-    Functions are wrapped (``functools.wraps`` keeps their name and docstring); a class gets
-    its own ``__init__`` wrapped in place and is returned itself, so ``isinstance`` and
-    subclassing are unaffected. scikit-learn estimators are left alone: by that library's
-    convention their ``__init__`` only stores its arguments, which ``fit`` checks. Anything else
-    is returned as it is.
+
+def _label(obj: Any) -> str:
+    """``rplearn.<layer>.<name>``: where the public name is imported from."""
+    layer = ".".join(str(getattr(obj, "__module__", "")).split(".")[:2])
+    return f"{layer}.{obj.__qualname__}" if layer else obj.__qualname__
+
+
+def check_types(obj: _T, label: str | None = None) -> _T:
+    """Decorator: ``obj`` with its arguments checked (see the module docstring).
+
+    Parameters
+    ----------
+    obj : function or class
+        A function is returned wrapped; a class is returned itself, its own ``__init__`` wrapped
+        (exceptions, classes without an ``__init__`` of their own and anything else are returned
+        as they are).
+    label : str, optional
+        The name that error messages give; by default ``rplearn.<layer>.<name>``.
+
+    Returns
+    -------
+    function or class
+        The checked object, of the same type for static checkers.
     """
-    if inspect.isclass(value):
-        init = value.__dict__.get("__init__")
-        if hasattr(value, "_get_param_names"):  # a scikit-learn estimator
-            return value
-        if init is not None and not getattr(init, "__rplearn_checked__", False) and not issubclass(value, BaseException):
-            value.__init__ = _wrap(init, name, skip_first=True)
-        return value
-    if inspect.isfunction(value) and not getattr(value, "__rplearn_checked__", False):
-        return _wrap(value, name, skip_first=False)
-    return value
+    name = label or _label(obj)
+    if inspect.isclass(obj):
+        init = obj.__dict__.get("__init__")
+        if init is not None and not getattr(init, "__rplearn_checked__", False) and not issubclass(obj, BaseException):
+            setattr(obj, "__init__", _wrap(init, name, skip_first=True))  # noqa: B010 (mypy: no assigning to a method)
+        return obj
+    if inspect.isfunction(obj) and not getattr(obj, "__rplearn_checked__", False):
+        return typing.cast(_T, _wrap(obj, name, skip_first=False))  # functools.wraps: same signature
+    return obj
 
 
-__all__ = ["checked"]
+__all__ = ["check_types"]

@@ -15,6 +15,8 @@ writes (data, io, plan, sim, viz, workflows) writes through it.
 
 from __future__ import annotations
 
+import json
+import math
 import os
 import stat
 import tempfile
@@ -24,7 +26,7 @@ from typing import IO, Any
 
 from rplearn.errors import InputError
 
-__all__ = ["atomic_open", "atomic_path", "check_output"]
+__all__ = ["atomic_open", "atomic_path", "check_output", "dump_json", "strict_json"]
 
 PathLike = str | os.PathLike[str]
 
@@ -147,3 +149,32 @@ def atomic_open(
     with atomic_path(path, inputs, param) as tmp:
         with open(tmp, mode, **kwargs) as fh:
             yield fh
+
+
+# -- strict JSON ---------------------------------------------------------------------------
+def strict_json(value: Any) -> Any:
+    """``value`` made strict JSON: a non-finite float (NaN, +-Infinity) becomes None (``null``).
+
+    Mappings become dicts with string keys, tuples and sets lists, and array-likes with a
+    ``tolist`` method (numpy arrays and scalars) their Python values; anything else is returned
+    as it is (``json.dump`` then says what it cannot write). Every JSON file rplearn writes goes
+    through it (:func:`dump_json`), so that strict parsers (``JSON.parse``, ``json.loads`` with a
+    ``parse_constant`` that refuses) read it: JSON has no NaN.
+    """
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, (str, int, bool)) or value is None:
+        return value
+    if isinstance(value, dict) or hasattr(value, "items"):
+        return {str(k): strict_json(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple, set, frozenset)):
+        return [strict_json(v) for v in value]
+    if hasattr(value, "tolist"):
+        return strict_json(value.tolist())
+    return value
+
+
+def dump_json(value: Any, fh: IO[str], **kwargs: Any) -> None:
+    """``json.dump`` of :func:`strict_json` of ``value`` into ``fh``, refusing NaN (``allow_nan=False``);
+    ``kwargs`` as ``json.dump`` (``indent``, ``default``, ...)."""
+    json.dump(strict_json(value), fh, allow_nan=False, **kwargs)

@@ -112,7 +112,7 @@ USER_ERRORS = {
     "BG option on SH": (["fit", "data.parquet", "--model", "sh", "--sigma", "3", "-o", "s.json"], "used by BG models only"),
     "gauge level without node": (["fit", "data.parquet", "--gauge-dbi", "2", "-o", "g.json"], "--gauge-dbi needs --gauge-node"),
     "contradicting degree": (["fit", "data.parquet", "--model", "sh-10", "--degree", "5", "-o", "c.json"], "contradicts"),
-    "bad model in a report": (["report", "data.parquet", "--models", "m,foo", "-o", "rep_bad"], "unknown model"),
+    "bad model in a report": (["report", "data.parquet", "--paper-models", "m,foo", "-o", "rep_bad"], "unknown model"),
     "unknown table format": (["predict", "sh3.json", "data.parquet", "-o", "pred.txt"], "unknown table format"),
     "conflicting repeated option": (["headings", "sh3.json", "--pos", "A=0,0,20", "--pos", "A=5,0,20", "--tx-power", "20"], "given twice"),
 }
@@ -196,10 +196,11 @@ def test_sweep_plot_report_and_images(workdir):
     run(["fit", "data.parquet", "--model", "sh", "--degree", "3", "-o", "sh3p.json"], d)
     run(["plot", "sh3p.json", "--truth", "flight/ground_truth.json", "--dataset", "data.parquet", "-o", "maps.png"], d)
     run(["export", "sh3p.json", "--format", "images", "-o", "img"], d)
-    rep = run(["report", "data.parquet", "--models", "m,sh-3", "-o", "rep"], d)
-    assert "| SH-3 |" in rep.stdout
+    rep = run(["report", "data.parquet", "--model", "sh3p.json", "--paper-models", "m,sh-3", "--repeats", "1", "-o", "rep"], d)
+    assert "model: SH-3" in rep.stdout and "| M |" in rep.stdout and "median of the runs" in rep.stdout
     page = (d / "rep" / "report.html").read_text()
-    assert page.count('<img src="data:image/png;base64,') == 2  # coverage and maps (plotly.js holds the string too)
+    # time series, residuals, coverage, polar cuts, maps, spread (plotly.js holds the string too)
+    assert page.count('<img src="data:image/png;base64,') == 6
     assert page.count("Plotly.newPlot(") == 2  # one rotatable 3-D view per node
     for png in ("sweep.png", "maps.png", "img/pattern_A.png", "img/pattern_B.png"):
         assert (d / png).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", png
@@ -211,7 +212,7 @@ def test_version_needs_no_command(tmp_path):
 
 
 def test_bad_options_write_nothing(workdir):
-    run(["report", "data.parquet", "--models", "m,foo", "-o", "rep_nothing"], workdir, ok=False)
+    run(["report", "data.parquet", "--paper-models", "m,foo", "-o", "rep_nothing"], workdir, ok=False)
     assert not (workdir / "rep_nothing").exists()
     run(["trajectory", "-o", "plan_nothing", "--check-model", "foo"], workdir, ok=False)
     assert not (workdir / "plan_nothing").exists()

@@ -102,7 +102,7 @@ def test_far_from_the_data_the_spread_is_the_reported_prior_spread(tmp_path):
 
     per_unit, learn, _, prior = ground_case(tmp_path, 3)
     far = Directions(np.full(50, np.pi), np.full(50, 1.2), np.full(50, np.pi), np.full(50, 1.2))
-    for with_prior in (None, {n: prior for n in prior.nodes}):
+    for with_prior in ({}, {n: prior for n in prior.nodes}):
         model = fit_auto(per_unit, options=FitOptions(auto=True, priors=with_prior))[0].model
         spread = model.training["prior_std_db"]
         samples = LinkSamples(far, np.zeros(50, int), np.ones(50, int), learn.nodes, np.zeros(50), np.full(50, 40.0))

@@ -106,15 +106,15 @@ def test_uncovered_directions_are_dotted():
     assert x.size > 100
     assert el.max() < 14.0  # only below the flight's directions (20 deg, less the 10 deg radius)
     assert el.min() < -80.0  # down to the nadir
-    # dots sit just outside the surface
+    # dots sit just outside the drawn surface (its covered and faded parts, NaN outside each)
     s = plot.pattern_surface(model, "A")
-    surface = _traces(fig, "surface")[0]
-    scale = np.nanmax(np.sqrt(np.asarray(surface.x, float) ** 2 + np.asarray(surface.y, float) ** 2
-                              + np.asarray(surface.z, float) ** 2)) / s.radius_max
-    az = np.degrees(np.arctan2(y, x))
-    gain = np.asarray(model.evaluate("A", np.radians(az), np.radians(el)))
-    expected = (np.clip(gain - s.floor_db, 0, None) + s.offset_db) * scale
-    ratio = np.sqrt(x**2 + y**2 + z**2) / expected
+    parts = _traces(fig, "surface")
+    assert len(parts) == 2 and parts[1].opacity < 1.0
+    grid = np.fmax(*[np.sqrt(np.asarray(t.x, float) ** 2 + np.asarray(t.y, float) ** 2 + np.asarray(t.z, float) ** 2)
+                     for t in parts])
+    i = np.rint((el - s.el_deg[0]) / (s.el_deg[1] - s.el_deg[0])).astype(int)
+    j = np.rint((np.degrees(np.arctan2(y, x)) - s.az_deg[0]) / (s.az_deg[1] - s.az_deg[0])).astype(int)
+    ratio = np.sqrt(x**2 + y**2 + z**2) / grid[i, j]
     assert np.all((ratio > 1.0) & (ratio < 1.05))
     fig_html = pattern_3d_html(model, "A", "SH-3")
     assert "dark grey dots" in fig_html.caption and "10°" in fig_html.caption
@@ -251,3 +251,28 @@ def test_chromium_with_a_network_only_library_draws_nothing(tmp_path):
     png = tmp_path / "cdn.png"
     assert screenshot_report(cdn_path, png, height_px=900) is True
     assert _distinct_colours(_scene_crop(png)) < 400
+
+
+def test_uncovered_directions_are_drawn_faded_never_as_full_strength_lobes():
+    """Beyond 10 deg from every learning direction the surface fades to the covered median and never
+    rises above the largest covered gain (issue 26: SH-10 drew a star of extrapolated spikes)."""
+    from rplearn.viz.interactive import FADE_END_DEG, supported_gain_db
+
+    model = _with_upper_coverage(_forward_lobe())
+    s = plot.pattern_surface(model, "A")
+    az, el = np.meshgrid(np.radians(s.az_deg), np.radians(s.el_deg))
+    cov = np.asarray(model.coverage_deg("A", az, el)).reshape(az.shape)
+    support = supported_gain_db(s.gain_db, cov)
+    covered = cov <= 10.0
+    assert covered.any() and (~covered).any()
+    np.testing.assert_array_equal(support.drawn_db[covered], s.gain_db[covered])
+    assert support.drawn_db.max() <= s.gain_db[covered].max() + 1e-12
+    far = cov >= FADE_END_DEG
+    np.testing.assert_allclose(support.drawn_db[far], np.minimum(np.median(s.gain_db[covered]), support.support_max_db))
+    fig = pattern_3d_plotly(model, "A", "SH-3", directions=(np.radians([0.0, 5.0]), np.radians([30.0, 30.0])))
+    shown = np.concatenate([np.asarray(t.surfacecolor, float).ravel() for t in _traces(fig, "surface")])
+    assert np.nanmax(shown) <= s.gain_db[covered].max() + 1e-3
+    custom = np.asarray(_traces(fig, "surface")[0].customdata, float)
+    assert custom.shape[-1] == 5 and custom[..., 4].max() == 2  # both learning directions near some point
+    assert "learning samples within 10°" in _traces(fig, "surface")[0].hovertemplate
+    assert supported_gain_db(s.gain_db, np.full(cov.shape, 90.0)) is None

@@ -199,6 +199,26 @@ def test_order_sweep_marks_the_minima():
     assert fig.axes[1].get_yscale() == "linear"
 
 
+def test_order_sweep_best_order_marker_is_not_hidden_under_the_aic_marker():
+    """Issue 26: where the lowest test RMSE and the lowest AIC fall on one order (and one spot of the
+    figure), the best-order star is drawn on top, and the AIC's mark is a ring around it."""
+    from matplotlib.colors import to_rgb
+
+    rmse = np.array([4.0, 2.5, 2.2, 2.6])
+    fig = charts.order_sweep_figure([2, 4, 6, 8], rmse, rmse * 2e3, [0.01, 0.02, 0.05, 0.06])
+    fig.canvas.draw()
+    ax = fig.axes[0]
+    star = next(ln for ln in ax.get_lines() if ln.get_label().startswith("min RMSE"))
+    ring = next(ln for a in fig.axes for ln in a.get_lines() if ln.get_label().startswith("min AIC"))
+    xs, ys = ax.transData.transform((6.0, 2.2))
+    xr, yr = ring.axes.transData.transform((6.0, 4.4))
+    assert abs(xs - xr) < 2 and abs(ys - yr) < 2  # the two marks fall on one spot
+    img = np.asarray(fig.canvas.buffer_rgba())[..., :3] / 255.0
+    centre = img[int(round(img.shape[0] - ys)), int(round(xs))]
+    assert np.allclose(centre, to_rgb(star.get_color()), atol=0.08), centre  # the green star shows
+    assert ring.get_markerfacecolor() == "none" and ax.get_zorder() > ring.axes.get_zorder()
+
+
 def test_epsilon_sweep_axis():
     fig = charts.epsilon_sweep_figure(np.logspace(-3, 6, 19), np.full(19, 1.7))
     ax = fig.axes[0]

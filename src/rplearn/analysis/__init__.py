@@ -22,56 +22,12 @@ module               public names
 ===================  ===========================================================================
 
 Every name of ``__all__`` can be imported from here (``from rplearn.analysis import
-predict_swarm``); its module is imported on first use (:mod:`rplearn._lazy`).
+predict_swarm``); its module is imported on first use (``__init__.pyi``, lazy_loader).
 """
 
 from __future__ import annotations
 
-from rplearn._lazy import lazy_exports
+import lazy_loader
 
-_NAMES: dict[str, str] = {
-    # model order
-    "SweepResult": "sweep",
-    "order_sweep": "sweep",
-    # identifiability (paper Sec. V-A)
-    "IdentifiabilityStudy": "identifiability",
-    "identifiability_study": "identifiability",
-    "study_antennas": "identifiability",
-    # learned against true patterns
-    "gauged_nodes": "pattern_error",
-    "node_directions": "pattern_error",
-    "pattern_errors_db": "pattern_error",
-    # decoupling certificate
-    "DecouplingCertificate": "decoupling",
-    "certify": "decoupling",
-    "decoupling_certificate": "decoupling",
-    # headings
-    "OrientationResult": "headings",
-    "SwarmHeadings": "headings",
-    "best_swarm_headings": "headings",
-    "best_yaw": "headings",
-    "SwarmHeadingOptions": "heading_options",
-    "YawOptions": "heading_options",
-    # clock offsets
-    "ClockOffsetEstimate": "clock",
-    "estimate_clock_offset": "clock",
-    "heading_gain_tables": "headings",
-    "heading_std_tables": "headings",
-    # swarm links over time
-    "DEFAULT_MIN_RSSI_DBM": "swarm",
-    "SwarmOptions": "swarm",
-    "SwarmPrediction": "swarm",
-    "connectivity_over_time": "swarm",
-    "predict_swarm": "swarm",
-    "spanning_bottleneck": "swarm",
-    # plausible link budgets
-    "BudgetFinding": "budget",
-    "LinkSummary": "budget",
-    "budget_findings": "budget",
-    "check_dataset_budget": "budget",
-    "check_fit_budget": "budget",
-    "link_summaries": "budget",
-}
-
-__all__ = sorted(_NAMES)
-__getattr__, __dir__ = lazy_exports(__name__, _NAMES)
+# The public names are those of __init__.pyi, each imported on first use.
+__getattr__, __dir__, __all__ = lazy_loader.attach_stub(__name__, __file__)

@@ -37,6 +37,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 import pandas as pd
 
+from rplearn._argtypes import check_types
 from rplearn.core.bases import fibonacci_grid_nodes
 from rplearn.data.tables import LinkSamples, link_samples
 
@@ -90,6 +91,7 @@ BAND_MATCH_DB: float = 2.5
 SPHERE_NODES: int = 2000
 
 
+@check_types
 @dataclass(frozen=True)
 class BudgetFinding:
     """One implausible part of a link budget and the input most likely at fault.
@@ -127,6 +129,7 @@ class BudgetFinding:
         return out
 
 
+@check_types
 @dataclass(frozen=True)
 class LinkSummary:
     """What a link's samples say about its budget (both directions together).
@@ -165,6 +168,7 @@ class LinkSummary:
         return float(10 * np.log10(hi / lo)) if lo > 0 else 0.0
 
 
+@check_types
 def link_summaries(samples: LinkSamples, min_samples: int = 10) -> list[LinkSummary]:
     """One :class:`LinkSummary` per pair of nodes with at least ``min_samples`` samples."""
     g = np.asarray(samples.joint_gain_db, np.float64)
@@ -228,7 +232,7 @@ def _level_finding(link: LinkSummary) -> BudgetFinding | None:
             f"antennas allow: the transmit power given (--tx-power) is probably {direction} by about {abs(off):.0f} dB "
             f"(at least {min(abs(link.level_db - lo), abs(link.level_db - hi)):.0f} dB), or the RSSI is not in dBm "
             "(--rssi-scale; relative for uncalibrated radios)")
-    if band:
+    if band and link.frequency_hz:
         text += (f", or the radio is on {band}, not {link.frequency_hz / 1e6:g} MHz (--frequency: "
                  f"{abs(off):.0f} dB is the free-space loss between the two)")
     return BudgetFinding("level", link.name, link.level_db, JOINT_LEVEL_RANGE_DB, tuple(inputs), -off, text)
@@ -269,6 +273,7 @@ def _offset_findings(offsets: Sequence[Mapping[str, Any]]) -> list[BudgetFinding
     return out
 
 
+@check_types
 def budget_findings(
     links: Sequence[LinkSummary],
     sphere_means: Mapping[str, float] | None = None,
@@ -306,6 +311,7 @@ def budget_findings(
     return out
 
 
+@check_types
 def check_fit_budget(model: Any, samples: LinkSamples, relative: bool = False) -> list[BudgetFinding]:
     """The findings of a fitted pattern model on its learning samples, also stored in its training
     summary (``training["budget"]``, and each text in ``training["warnings"]``)."""
@@ -321,6 +327,7 @@ def check_fit_budget(model: Any, samples: LinkSamples, relative: bool = False) -
     return findings
 
 
+@check_types
 def check_dataset_budget(model: Any, part: pd.DataFrame, source: str = "dataset") -> list[BudgetFinding]:
     """:func:`check_fit_budget` on the learning rows of a matched dataset; their ``rssi_scale``
     column (``sync --rssi-scale relative``) says whether levels mean anything."""

@@ -25,6 +25,7 @@ from typing import Callable
 import numpy as np
 import pandas as pd
 
+from rplearn._argtypes import check_types
 from rplearn.core.geometry import distance_m, link_directions
 from rplearn.core.link import FAR_FIELD_WAVELENGTHS, observed_joint_gain_db, wavelength_m
 from rplearn.data.poses import PoseTrack, tracks_of_checked_log
@@ -47,6 +48,7 @@ OFFSET_BLOCKS = 10
 Progress = Callable[[str], None]
 
 
+@check_types
 @dataclass(frozen=True)
 class ClockOffsetEstimate:
     """The clock offset of one node's pose log that best explains the signal.
@@ -117,6 +119,7 @@ def _parabola_minimum(x: np.ndarray, y: np.ndarray) -> tuple[float, float]:
     return float(-b / (2.0 * a)), float(a)
 
 
+@check_types
 def estimate_clock_offset(
     pose_log: pd.DataFrame,
     signal_log: pd.DataFrame,

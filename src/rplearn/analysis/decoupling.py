@@ -33,6 +33,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
+from rplearn._argtypes import check_types
 from rplearn.analysis.pattern_error import gauged_nodes
 from rplearn.core.bases import fibonacci_grid_nodes
 from rplearn.core.coverage import COVERED_WITHIN_DEG
@@ -111,6 +112,7 @@ class SplitComponent:
                 "peaks": {n: list(v) for n, v in self.peaks.items()}}
 
 
+@check_types
 @dataclass(frozen=True)
 class DecouplingCertificate:
     """What a flight identifies of each node's own pattern (see the module docstring).
@@ -308,6 +310,7 @@ def unsplit_components(model: PatternSet, covered: Mapping[str, tuple[np.ndarray
     return comps, len(listed), float(np.sqrt(max(float(np.sum(node_ms[unsplit])), 0.0))), float(np.sqrt(max(total_ms, 0.0)))
 
 
+@check_types
 def decoupling_certificate(
     model: PatternSet,
     samples: LinkSamples | Sequence[LinkSamples] | None = None,
@@ -375,6 +378,7 @@ def decoupling_certificate(
     return DecouplingCertificate(spreads, tuple(comps), n_unsplit, unsplit_db, total_db, notes, maps)
 
 
+@check_types
 def certify(model: Any, samples: LinkSamples | Sequence[LinkSamples] | None = None,
             posterior: OwnPosterior | None = None) -> DecouplingCertificate | None:
     """:func:`decoupling_certificate` of a fitted model, stored in ``model.training.decoupling``

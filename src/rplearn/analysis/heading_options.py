@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from rplearn._argtypes import check_types
 from rplearn.errors import InputError
 
 #: Default of :attr:`YawOptions.caution_z`: headings are ranked by the 10% lower bound of their
@@ -38,6 +39,7 @@ def _check_frequency(frequency_hz: Any) -> None:
         raise InputError(f"frequency_hz: expected a positive frequency in Hz, got {frequency_hz!r}", param="frequency_hz")
 
 
+@check_types
 @dataclass(frozen=True)
 class YawOptions:
     """How :func:`~rplearn.analysis.headings.best_yaw` chooses the heading(s) of one link.
@@ -83,6 +85,7 @@ class YawOptions:
             raise InputError(f"caution_z: expected a non-negative number, got {self.caution_z!r}", param="caution_z")
 
 
+@check_types
 @dataclass(frozen=True)
 class SwarmHeadingOptions:
     """How :func:`~rplearn.analysis.headings.best_swarm_headings` searches a hovering swarm's yaws.

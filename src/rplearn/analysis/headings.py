@@ -27,6 +27,7 @@ import numpy as np
 import pandas as pd
 from numpy.typing import ArrayLike
 
+from rplearn._argtypes import check_types
 from rplearn.data.tables import check_tx_power_dbm
 from rplearn.core.geometry import direction_in_body, distance_m, quat_wxyz_from_yaw
 from rplearn.core.link import free_space_path_loss_db, received_power_dbm
@@ -81,6 +82,7 @@ def check_heading_tables(n_drones: int, step_deg: float) -> None:
         )
 
 
+@check_types
 def heading_gain_tables(
     model: PatternSet, positions: Mapping[str, ArrayLike], patterns: Mapping[str, str], yaw_grid_deg: np.ndarray
 ) -> dict[Pair, np.ndarray]:
@@ -120,6 +122,7 @@ def _pair_directions(positions: Mapping[str, ArrayLike], yaw_grid_deg: np.ndarra
     return out
 
 
+@check_types
 def heading_std_tables(
     model: PatternSet, positions: Mapping[str, ArrayLike], patterns: Mapping[str, str], yaw_grid_deg: np.ndarray
 ) -> dict[Pair, np.ndarray] | None:
@@ -138,6 +141,7 @@ def heading_std_tables(
 # One link
 
 
+@check_types
 @dataclass(frozen=True)
 class OrientationResult:
     """Headings that maximise a link, the predicted joint gain there and, given the transmit
@@ -200,6 +204,7 @@ class OrientationResult:
         return "\n".join(lines)
 
 
+@check_types
 def best_yaw(
     model: PatternSet,
     tx_node: str,
@@ -271,7 +276,7 @@ def best_yaw(
     if tx_power_dbm is None:
         return result
     env = float(model.link_environment_db(tx_node, rx_node, positions["tx"], positions["rx"], frequency_hz)[0])
-    return _with_received_power(result, positions, float(tx_power_dbm), float(frequency_hz), env)
+    return _with_received_power(result, positions, float(tx_power_dbm), model_frequency_hz(model, frequency_hz), env)
 
 
 def _link_coverage(
@@ -311,6 +316,7 @@ def _with_received_power(
 # A hovering swarm
 
 
+@check_types
 @dataclass(frozen=True)
 class SwarmHeadings:
     """Yaws chosen for level, hovering drones, and the link budget before and after.
@@ -427,6 +433,7 @@ class _HeadingProblem:
         return pd.DataFrame({"pair": [f"{a}-{b}" for a, b in self.pairs], "rssi_dbm": self.pair_rssi(choice)})
 
 
+@check_types
 def best_swarm_headings(
     model: PatternSet,
     positions: Mapping[str, ArrayLike],

@@ -7,6 +7,7 @@ from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 
+from rplearn._argtypes import check_types
 from rplearn.core.bases import SphericalHarmonics
 from rplearn.core.geometry import Directions
 from rplearn.core.lsq.solver import fit_joint, identifiability
@@ -16,6 +17,7 @@ from rplearn.models.training import TrainingSummary
 Progress = Callable[[str], None]
 
 
+@check_types
 @dataclass
 class IdentifiabilityStudy:
     """Epsilon sweep of a two-antenna fit and the ranks of two- and three-antenna problems."""
@@ -45,10 +47,11 @@ class _AntennaSet:
     def nodes(self) -> tuple[str, ...]:
         return tuple(self.antennas)
 
-    def evaluate(self, node: str, az_rad, el_rad) -> np.ndarray:
+    def evaluate(self, node: str, az_rad: np.ndarray, el_rad: np.ndarray) -> np.ndarray:
         return self.antennas[node].gain_dbi(az_rad, el_rad)
 
 
+@check_types
 def study_antennas() -> _AntennaSet:
     """The ITU-R F.1336-5 surrogates of the paper's Fig. 6: omni "O", sectoral "S", circular "C"."""
     from rplearn.sim.antennas import AntennaSpec, Mounting, NodeAntenna
@@ -65,6 +68,7 @@ def study_antennas() -> _AntennaSet:
     )
 
 
+@check_types
 def identifiability_study(order: int = 8, n_samples: int = 20000, seed: int = 0) -> IdentifiabilityStudy:
     """Reproduce paper Sec. V-A with SH of degrees < ``order``.
 
@@ -79,7 +83,7 @@ def identifiability_study(order: int = 8, n_samples: int = 20000, seed: int = 0)
     ants = study_antennas()
     basis = SphericalHarmonics(order)
 
-    def draw(pairs: np.ndarray, names: Sequence[str]):
+    def draw(pairs: np.ndarray, names: Sequence[str]) -> tuple[Directions, np.ndarray, np.ndarray, np.ndarray]:
         sel = pairs[rng.integers(0, len(pairs), n_samples)]
         az = rng.uniform(-np.pi, np.pi, (2, n_samples))
         el = np.arcsin(rng.uniform(-1, 1, (2, n_samples)))

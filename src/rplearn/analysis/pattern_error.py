@@ -6,12 +6,14 @@ from typing import Any, Callable, Mapping
 
 import numpy as np
 
+from rplearn._argtypes import check_types
 from rplearn.data.tables import LinkSamples
 from rplearn.models.patterns import PatternSet
 
 Progress = Callable[[str], None]
 
 
+@check_types
 def node_directions(samples: LinkSamples) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     """Directions each node saw the other in, over all samples (as tx and as rx) [rad]."""
     d = samples.directions
@@ -23,11 +25,13 @@ def node_directions(samples: LinkSamples) -> dict[str, tuple[np.ndarray, np.ndar
     return out
 
 
+@check_types
 def gauged_nodes(model: PatternSet) -> set[str]:
     """Nodes whose constant the fit could not identify (named in the model's gauge notes)."""
     return {str(n) for g in model.gauge for n in g.get("nodes", [])}
 
 
+@check_types
 def pattern_errors_db(
     model: PatternSet, truth: Any, directions: Mapping[str, tuple[np.ndarray, np.ndarray]], remove_constant: bool | None = None
 ) -> dict[str, float]:

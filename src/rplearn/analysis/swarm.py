@@ -19,7 +19,7 @@ Headings that keep a hovering swarm best connected are chosen in :mod:`rplearn.a
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, Mapping, Sequence
+from typing import Any, Mapping, Sequence, cast
 
 import numpy as np
 import pandas as pd
@@ -27,6 +27,7 @@ from numpy.typing import ArrayLike
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
 
+from rplearn._argtypes import check_types
 from rplearn.data.tables import check_tx_power_dbm
 from rplearn.data.tables import LinkSamples
 from rplearn.errors import InputError
@@ -46,6 +47,8 @@ DEFAULT_MIN_RSSI_DBM = -85.0
 DEFAULT_MAX_GAP_S = 2.0
 
 
+@check_types
+@check_types
 @dataclass(frozen=True)
 class SwarmOptions:
     """How :func:`predict_swarm` predicts a swarm's links (everything but the model, the poses
@@ -148,7 +151,7 @@ class SwarmPrediction:
             )
         per_pair = self.links.groupby(["tx", "rx"])["rssi_pred_dbm"].median().dropna()
         if len(per_pair):
-            weakest = per_pair.idxmin()
+            weakest = cast(tuple[str, str], per_pair.idxmin())  # (tx, rx): the index's two levels
             lines.append(f"weakest direction (median): {weakest[0]} -> {weakest[1]} at {per_pair.min():.1f} dBm")
         incomplete = int((c["n_missing"] > 0).sum())
         if incomplete:
@@ -230,6 +233,7 @@ def resolve_patterns(drones: Sequence[str], model_nodes: Sequence[str], pattern_
     return out
 
 
+@check_types
 def predict_swarm(
     model: PatternSet,
     pose_log: pd.DataFrame,
@@ -314,7 +318,8 @@ def _block_rows(present: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray
     known, in the order of time, then transmitter, then receiver (the drones are sorted)."""
     n = present.shape[1]
     both = present[:, :, None] & present[:, None, :] & ~np.eye(n, dtype=bool)
-    return np.nonzero(both)
+    t, i, j = np.nonzero(both)
+    return t, i, j
 
 
 @dataclass(frozen=True)
@@ -408,6 +413,7 @@ def _swarm_notes(links: pd.DataFrame, poses: Poses, frequency_hz: float) -> list
     return notes
 
 
+@check_types
 def connectivity_over_time(
     links: pd.DataFrame, times_s: np.ndarray, drones: Sequence[str], min_rssi_dbm: float
 ) -> pd.DataFrame:
@@ -518,6 +524,7 @@ def maximum_spanning_edges(weights: np.ndarray) -> tuple[np.ndarray, np.ndarray,
     return edge_w, edge_a, edge_b
 
 
+@check_types
 def spanning_bottleneck(w: np.ndarray, iu: np.ndarray, ju: np.ndarray, n: int, names: Sequence[str]) -> tuple[float, str]:
     """Weakest link of the maximum spanning tree of pair weights (see the module docstring).
 

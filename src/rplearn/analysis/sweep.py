@@ -9,6 +9,7 @@ import numpy as np
 import pandas as pd
 import scipy.linalg  # noqa: F401  (order selection solves through scipy: loaded before any BLAS limit, rplearn.core.threads)
 
+from rplearn._argtypes import check_types
 from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.core.lsq.selection import Selection, select_order_and_smoothing, validation_rmse
 from rplearn.data.tables import LinkSamples
@@ -23,6 +24,7 @@ def no_progress(_: str) -> None:
     return None
 
 
+@check_types
 @dataclass
 class SweepResult:
     """Test RMSE, AIC, LTD and condition number against the model order."""
@@ -86,10 +88,11 @@ def validation_sweep(unit_samples: dict[str, LinkSamples], orders: Sequence[int]
     if links:
         stats = {u: st.with_shared(links) for u, st in stats.items()}
     make = lambda k: ModelSpec("sh", k).basis()  # noqa: E731
-    selection = select_order_and_smoothing(stats, make, orders, spec.ridge)
-    return selection, validation_rmse(stats, make, orders, selection.smoothing, spec.ridge)
+    selection = select_order_and_smoothing(stats, make, orders, spec.ridge_weight)
+    return selection, validation_rmse(stats, make, orders, selection.smoothing, spec.ridge_weight)
 
 
+@check_types
 def order_sweep(
     learn: LinkSamples,
     test: LinkSamples,

@@ -54,7 +54,7 @@ PARAM_FLAGS: dict[str, str] = {
     "start_yaw_deg": "--yaw DRONE=DEG", "fixed": "--fixed", "turn": "--turn", "units": "--units",
     "test_units": "--test-units", "learn_units": "--learn-units", "order": "--degree", "ridge": "--ridge",
     "sigma_rad2": "--sigma", "grid": "--grid", "gauge_node": "--gauge-node", "gauge_dbi": "--gauge-dbi", "prior": "--prior NODE=MODEL.json",
-    "models": "--models", "orders": "--orders", "n_neighbors": "--degree",
+    "models": "--models", "paper_models": "--paper-models", "repeats": "--repeats", "orders": "--orders", "n_neighbors": "--degree",
     "ground_level_m": "--ground-level", "relative_permittivity": "--permittivity",
     "path_loss": "--path-loss", "link_offsets": "--link-offsets",
     "station_geodetic": "--station LAT,LON,ALT", "station": "--station-node", "station_heading_deg": "--station-heading",
@@ -91,7 +91,7 @@ def declared_flags(command: Callable | None) -> set[str] | None:
     """Every ``--flag`` the command declares (None: no command, any flag goes)."""
     if command is None:
         return None
-    found = set()
+    found: set[str] = set()
     for option in inspect.signature(command).parameters.values():
         if isinstance(option.default, typer.models.OptionInfo):
             decls = option.default.param_decls or (f"--{option.name.replace('_', '-')}",)
@@ -157,10 +157,10 @@ def with_flag(
         message = re.sub(rf"(^|\()({name})(?=[:) ]|$)", lambda m: m.group(1) + flag.split()[0], message)
         if name in related:
             message = re.sub(rf"(?<![\w.-]){name}(?![\w=])", flag.split()[0], message)
-    flag = table.get(param or "")
-    if flag is None or flag.split()[0] in message:
+    param_flag = table.get(param or "")
+    if param_flag is None or param_flag.split()[0] in message:
         return message
-    return f"{message} (set it with {flag})"
+    return f"{message} (set it with {param_flag})"
 
 
 def user_errors(fn: Callable | None = None, *, flags: Mapping[str, str] | None = None) -> Callable:
@@ -201,7 +201,7 @@ def step(progress: Progress, task: Any) -> Callable[[str], None]:
 
     def report(message: str) -> None:
         if console.is_terminal:
-            progress.update(task, description=Text(message))
+            progress.update(task, description=Text(message))  # type: ignore[arg-type]  # rich renders a Text as is (no markup)
         else:
             console.print(Text(f"... {message}"), soft_wrap=True)
 
@@ -214,7 +214,7 @@ def parts_step(progress: Progress, task: Any, what: str, noun: str = "part") -> 
 
     def report(done: int, total: int) -> None:
         if console.is_terminal:
-            progress.update(task, description=Text(f"{what}: {done:,} of {total:,} {noun}(s)"))
+            progress.update(task, description=Text(f"{what}: {done:,} of {total:,} {noun}(s)"))  # type: ignore[arg-type]  # as above
         elif total > 1 and (done == total or done % max(total // 10, 1) == 0):
             console.print(Text(f"... {what}: {done:,} of {total:,} {noun}(s)"), soft_wrap=True)
 

@@ -222,7 +222,9 @@ def sweep(
 @user_errors
 def report(
     dataset: str = typer.Argument(..., help="Matched dataset (without a 'unit' column it is cut into stretches of time flight[1/5]..test[5/5])."),
-    models: str = typer.Option("m,nn-400,sh-10,p-12,bg-7", "--models", help="Models to learn and compare."),
+    model: Optional[str] = typer.Option(None, "--model", metavar="MODEL.json", help="The model to report on (default: the cross-validated SH model, learned here on the learning units as `rplearn fit` does)."),
+    paper_models: Optional[str] = typer.Option(None, "--paper-models", metavar="LIST", help="Also the paper's Table I of these models, e.g. 'paper' (m,nn-400,sh-10,p-12,bg-7), 'paper,auto' or 'm,sh-10'; learning time the median of --repeats runs."),
+    repeats: int = typer.Option(5, "--repeats", metavar="N", help="Learning runs per Table I model (its learning time is their median)."),
     test_units: Optional[list[str]] = typer.Option(None, "--test-units", help="Testing units (default: labels starting with 'test')."),
     out_dir: str = typer.Option("rplearn-report", "-o", "--out", help="Output directory."),
     path_loss_kind: str = typer.Option("free", "--path-loss", help="Environment term of the pattern models: free, log-distance or two-ray (see fit)."),
@@ -231,23 +233,22 @@ def report(
     polarization: str = typer.Option("vertical", "--polarization", help="two-ray: vertical or horizontal."),
     learn_offsets: bool = typer.Option(True, "--link-offsets/--no-link-offsets", help="Pattern models: learn one electronics offset per link logged in both directions."),
 ) -> None:
-    """Learn models on a dataset, test them, and write Table I, pattern maps and report.html.
+    """Report one model on a dataset: held-out scores, measured vs predicted over time, residuals,
+    polar cuts, spread and 3-D patterns in report.html (and the paper's Table I on request).
 
-    Example: rplearn report data.parquet --models m,sh-10 -o report
+    Example: rplearn report data.parquet -o report; rplearn report data.parquet --model sh.json --paper-models paper,auto
     """
     from rplearn.core.environment import PathLoss
     from rplearn.models.options import FitOptions
-    from rplearn.workflows.learning import learn_and_report
+    from rplearn.workflows.report import learn_and_report
 
-    names = split_list([models]) or []
     two_ray_flags_note(path_loss_kind, ground_level, permittivity, polarization)
     options = FitOptions(path_loss=PathLoss(path_loss_kind, ground_level, permittivity, polarization),
                          link_offsets=learn_offsets)
     with progress_bar() as p:
         task = p.add_task("learning", total=None)
-        outcome = learn_and_report(dataset, names, out_dir, split_list(test_units), progress=step(p, task),
-                                   options=options)
+        outcome = learn_and_report(dataset, out_dir, model, (split_list([paper_models]) or []) if paper_models else [],
+                                   split_list(test_units), progress=step(p, task), options=options, repeats=repeats)
     for line in outcome.notes:
         note(line)
-    say(outcome.markdown)
-    say(f"wrote {outcome.report_path}")
+    say(outcome.summary())

@@ -33,6 +33,7 @@ from typing import Any
 
 import numpy as np
 
+from rplearn._argtypes import check_types
 from rplearn.core.basis_base import Basis, FloatArray
 from rplearn.core.sh import SphericalHarmonics
 from rplearn.errors import InputError, ModelFileError
@@ -55,6 +56,7 @@ __all__ = [
 # Basis grid (paper's "BG")
 
 
+@check_types
 def paper_grid_nodes(order: int) -> tuple[FloatArray, FloatArray]:
     """The paper's k x 2k azimuth-elevation grid, cell-centred (no duplicated pole nodes) [rad]."""
     k = int(order)
@@ -64,6 +66,7 @@ def paper_grid_nodes(order: int) -> tuple[FloatArray, FloatArray]:
     return azg.ravel(), elg.ravel()
 
 
+@check_types
 def fibonacci_grid_nodes(count: int) -> tuple[FloatArray, FloatArray]:
     """``count`` nearly equal-area nodes on the sphere (Fibonacci lattice) [rad]."""
     i = np.arange(count) + 0.5
@@ -73,6 +76,7 @@ def fibonacci_grid_nodes(count: int) -> tuple[FloatArray, FloatArray]:
     return az, np.arcsin(z)
 
 
+@check_types
 @dataclass(frozen=True)
 class BasisGrid(Basis):
     """Gaussian kernels on grid nodes, ``exp(-theta**2 / (2 sigma))`` (paper's BG-``order``).
@@ -146,6 +150,7 @@ def total_degree_exponents(order: int) -> list[tuple[int, int]]:
     return [(d - j, j) for d in range(order + 1) for j in range(d + 1)]
 
 
+@check_types
 @dataclass(frozen=True)
 class Polynomial(Basis):
     """Polynomials in azimuth and elevation of total degree ``<= order`` (paper's P-``order``).
@@ -207,6 +212,7 @@ class Polynomial(Basis):
 BASIS_KINDS = ("sh", "bg", "poly")
 
 
+@check_types
 def make_basis(kind: str, order: int, **options: Any) -> Basis:
     """Build a basis by name: ``"sh"``, ``"bg"`` or ``"poly"`` (also ``"p"``) of a given order.
 
@@ -232,6 +238,7 @@ def make_basis(kind: str, order: int, **options: Any) -> Basis:
     raise InputError(f"unknown basis {kind!r}; expected one of {', '.join(BASIS_KINDS)}")
 
 
+@check_types
 def basis_from_dict(spec: dict[str, Any]) -> Basis:
     """Rebuild a basis from :meth:`Basis.to_dict` output (used by model files)."""
     if not isinstance(spec, dict) or "kind" not in spec or "order" not in spec:

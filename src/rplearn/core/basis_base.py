@@ -143,7 +143,7 @@ class Basis:
 
     def design_rows_into(
         self, az_rad: FloatArray, el_rad: FloatArray, out: FloatArray, moments: FloatArray | None = None,
-        segments: NDArray[np.intp] | None = None,
+        segments: NDArray[np.intp] | tuple[NDArray[np.intp], ...] | None = None,
     ) -> None:
         """Like :meth:`design_into`, rows in :attr:`row_order` (the fastest order to compute).
 

@@ -28,6 +28,7 @@ from typing import Any, Mapping
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from rplearn._argtypes import check_types
 from rplearn.core.link import wavelength_m
 from rplearn.errors import InputError
 
@@ -47,6 +48,7 @@ POLARIZATIONS: tuple[str, ...] = ("vertical", "horizontal")
 TWO_RAY_FLOOR_DB = -40.0
 
 
+@check_types
 def log_distance_column(distance_m: ArrayLike) -> FloatArray:
     """The log-distance regressor ``-10 log10(d / d0)`` [dB per unit of exponent]: the joint
     gain changes by ``(n - 2)`` times it when the path-loss exponent is ``n`` instead of 2."""
@@ -56,6 +58,7 @@ def log_distance_column(distance_m: ArrayLike) -> FloatArray:
     return -10.0 * np.log10(d / REFERENCE_DISTANCE_M)
 
 
+@check_types
 def reflection_coefficient(sin_grazing: ArrayLike, relative_permittivity: float, polarization: str = "vertical") -> NDArray[np.complex128]:
     """Fresnel reflection coefficient of flat ground at a grazing angle (``sin psi``)."""
     s = np.asarray(sin_grazing, np.float64)
@@ -68,6 +71,7 @@ def reflection_coefficient(sin_grazing: ArrayLike, relative_permittivity: float,
     raise InputError(f"polarization: expected {' or '.join(POLARIZATIONS)}, got {polarization!r}", param="polarization")
 
 
+@check_types
 def two_ray_excess_db(
     distance_m: ArrayLike,
     tx_height_m: ArrayLike,
@@ -120,6 +124,7 @@ def two_ray_excess_db(
     return np.maximum(20.0 * np.log10(np.maximum(np.abs(field), 1e-300)), TWO_RAY_FLOOR_DB)
 
 
+@check_types
 @dataclass(frozen=True)
 class PathLoss:
     """Which environment term a fit uses, and its stated parameters.

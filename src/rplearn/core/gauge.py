@@ -2,7 +2,7 @@
 
 When the links among some nodes form no odd cycle (one drone and one station, say), adding
 ``+c`` to one side's patterns and ``-c`` to the other's leaves every joint gain unchanged
-(docs/CONVENTIONS.md, "gauge"). A :class:`Gauge` says which constraint the solver adds for
+(docs/conventions.md, "gauge"). A :class:`Gauge` says which constraint the solver adds for
 each such group: equal sphere-mean gains on both sides (the default), or a known sphere-mean
 gain of one node. It is a value, checked when made; the solver reads it as is.
 """
@@ -15,12 +15,14 @@ from typing import Any
 
 import numpy as np
 
+from rplearn._argtypes import check_types
 from rplearn.errors import InputError
 
 #: The legacy text of the default gauge (model files, ``gauge=`` of the scikit-learn estimator).
 EQUAL_MEAN = "equal-mean"
 
 
+@check_types
 @dataclass(frozen=True)
 class Gauge:
     """How a fit fixes the constant a bipartite link graph cannot identify.

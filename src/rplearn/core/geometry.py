@@ -17,6 +17,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from rplearn._argtypes import check_types
 from rplearn.errors import InputError
 
 FloatArray = NDArray[np.float64]
@@ -53,6 +54,7 @@ def _as_quat_wxyz(quat_wxyz: ArrayLike, name: str = "quaternion") -> FloatArray:
     return q / norm
 
 
+@check_types
 def rotate_world_to_body(quat_wxyz_body_to_world: ArrayLike, vec_world: ArrayLike) -> FloatArray:
     """Express world-frame vectors in the body frame, ``v_body = R(q)^T v_world``.
 
@@ -77,6 +79,7 @@ def rotate_world_to_body(quat_wxyz_body_to_world: ArrayLike, vec_world: ArrayLik
     return v + w * t + np.cross(u, t)
 
 
+@check_types
 def rotate_body_to_world(quat_wxyz_body_to_world: ArrayLike, vec_body: ArrayLike) -> FloatArray:
     """Express body-frame vectors in the world frame, ``v_world = R(q) v_body``."""
     q = _as_quat_wxyz(quat_wxyz_body_to_world)
@@ -87,6 +90,7 @@ def rotate_body_to_world(quat_wxyz_body_to_world: ArrayLike, vec_body: ArrayLike
     return v + w * t + np.cross(u, t)
 
 
+@check_types
 def azimuth_elevation(vec_body: ArrayLike) -> tuple[FloatArray, FloatArray]:
     """Azimuth and elevation of body-frame vectors (paper eq. 3) [rad].
 
@@ -99,6 +103,7 @@ def azimuth_elevation(vec_body: ArrayLike) -> tuple[FloatArray, FloatArray]:
     return az, el
 
 
+@check_types
 def direction_in_body(
     position_xyz_self: ArrayLike,
     quat_wxyz_self: ArrayLike,
@@ -122,6 +127,7 @@ def direction_in_body(
     return azimuth_elevation(rotate_world_to_body(quat_wxyz_self, delta_world))
 
 
+@check_types
 def link_directions(
     tx_position_xyz: ArrayLike,
     tx_quat_wxyz: ArrayLike,
@@ -134,12 +140,14 @@ def link_directions(
     return Directions(az_tx, el_tx, az_rx, el_rx)
 
 
+@check_types
 def distance_m(position_xyz_a: ArrayLike, position_xyz_b: ArrayLike) -> FloatArray:
     """Euclidean distance between positions [m]."""
     d = np.asarray(position_xyz_b, np.float64) - np.asarray(position_xyz_a, np.float64)
     return np.sqrt(np.einsum("...i,...i->...", d, d))
 
 
+@check_types
 def unit_vector(az_rad: ArrayLike, el_rad: ArrayLike) -> FloatArray:
     """Unit vectors (..., 3) of directions given by azimuth and elevation [rad]."""
     az = np.asarray(az_rad, np.float64)
@@ -148,6 +156,7 @@ def unit_vector(az_rad: ArrayLike, el_rad: ArrayLike) -> FloatArray:
     return np.stack([ce * np.cos(az), ce * np.sin(az), np.sin(el)], axis=-1)
 
 
+@check_types
 def great_circle_angle(az1: ArrayLike, el1: ArrayLike, az2: ArrayLike, el2: ArrayLike) -> FloatArray:
     """Great-circle angle between directions [rad], accurate at all separations (haversine form)."""
     az1, el1, az2, el2 = (np.asarray(a, np.float64) for a in (az1, el1, az2, el2))
@@ -159,6 +168,7 @@ def great_circle_angle(az1: ArrayLike, el1: ArrayLike, az2: ArrayLike, el2: Arra
 # Quaternions, rotation matrices, Euler angles
 
 
+@check_types
 def quat_wxyz_to_matrix(quat_wxyz: ArrayLike) -> FloatArray:
     """Rotation matrices (..., 3, 3) of unit quaternions (scalar first)."""
     q = _as_quat_wxyz(quat_wxyz)
@@ -176,6 +186,7 @@ def quat_wxyz_to_matrix(quat_wxyz: ArrayLike) -> FloatArray:
     return m
 
 
+@check_types
 def matrix_to_quat_wxyz(matrix: ArrayLike) -> FloatArray:
     """Unit quaternions (scalar first, qw >= 0) of rotation matrices (..., 3, 3)."""
     from scipy.spatial.transform import Rotation
@@ -188,6 +199,7 @@ def matrix_to_quat_wxyz(matrix: ArrayLike) -> FloatArray:
     return q.reshape(m.shape[:-2] + (4,))
 
 
+@check_types
 def quat_wxyz_multiply(q1: ArrayLike, q2: ArrayLike) -> FloatArray:
     """Hamilton product ``q1 * q2`` (apply q2 first, then q1), scalar first."""
     a = np.asarray(q1, np.float64)
@@ -205,6 +217,7 @@ def quat_wxyz_multiply(q1: ArrayLike, q2: ArrayLike) -> FloatArray:
     )
 
 
+@check_types
 def quat_wxyz_from_yaw(yaw_rad: ArrayLike) -> FloatArray:
     """Quaternions of pure yaw rotations about the world z axis (ENU, counter-clockwise)."""
     half = 0.5 * np.asarray(yaw_rad, np.float64)
@@ -212,6 +225,7 @@ def quat_wxyz_from_yaw(yaw_rad: ArrayLike) -> FloatArray:
     return np.stack([np.cos(half), zeros, zeros, np.sin(half)], axis=-1)
 
 
+@check_types
 def quat_wxyz_from_euler(roll_rad: ArrayLike, pitch_rad: ArrayLike, yaw_rad: ArrayLike) -> FloatArray:
     """Quaternions from aerospace yaw-pitch-roll angles in the same frame pair [rad].
 
@@ -234,6 +248,7 @@ def quat_wxyz_from_euler(roll_rad: ArrayLike, pitch_rad: ArrayLike, yaw_rad: Arr
     )
 
 
+@check_types
 def euler_from_quat_wxyz(quat_wxyz: ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray]:
     """Aerospace (roll, pitch, yaw) [rad] of quaternions, inverse of :func:`quat_wxyz_from_euler`."""
     q = _as_quat_wxyz(quat_wxyz)
@@ -244,22 +259,26 @@ def euler_from_quat_wxyz(quat_wxyz: ArrayLike) -> tuple[FloatArray, FloatArray, 
     return roll, pitch, yaw
 
 
+@check_types
 def yaw_from_quat_wxyz(quat_wxyz: ArrayLike) -> FloatArray:
     """Heading of the body x axis projected on the horizontal plane, ENU ccw from east [rad]."""
     return euler_from_quat_wxyz(quat_wxyz)[2]
 
 
+@check_types
 def ned_to_enu(position_xyz_ned: ArrayLike) -> FloatArray:
     """Convert NED positions or vectors to ENU: ``(n, e, d) -> (e, n, -d)``."""
     v = np.asarray(position_xyz_ned, np.float64)
     return np.stack([v[..., 1], v[..., 0], -v[..., 2]], axis=-1)
 
 
+@check_types
 def enu_to_ned(position_xyz_enu: ArrayLike) -> FloatArray:
     """Convert ENU positions or vectors to NED: ``(e, n, u) -> (n, e, -u)``."""
     return ned_to_enu(position_xyz_enu)
 
 
+@check_types
 def quat_ned_frd_to_enu_flu(quat_wxyz_frd_to_ned: ArrayLike) -> FloatArray:
     """Convert an attitude FRD body -> NED world (PX4) into FLU body -> ENU world.
 
@@ -275,11 +294,13 @@ def quat_ned_frd_to_enu_flu(quat_wxyz_frd_to_ned: ArrayLike) -> FloatArray:
     return np.where(out[..., :1] < 0, -out, out)
 
 
+@check_types
 def quat_enu_flu_to_ned_frd(quat_wxyz_flu_to_enu: ArrayLike) -> FloatArray:
     """Inverse of :func:`quat_ned_frd_to_enu_flu` (the same two fixed rotations, own inverses)."""
     return quat_ned_frd_to_enu_flu(quat_wxyz_flu_to_enu)
 
 
+@check_types
 def quat_wxyz_from_euler_ned_frd_deg(
     roll_ned_deg: ArrayLike, pitch_ned_deg: ArrayLike, yaw_ned_deg: ArrayLike
 ) -> FloatArray:
@@ -290,6 +311,7 @@ def quat_wxyz_from_euler_ned_frd_deg(
     return quat_ned_frd_to_enu_flu(q_ned)
 
 
+@check_types
 def quat_wxyz_from_euler_enu_flu_deg(
     roll_deg: ArrayLike, pitch_deg: ArrayLike, yaw_deg: ArrayLike
 ) -> FloatArray:
@@ -297,6 +319,7 @@ def quat_wxyz_from_euler_enu_flu_deg(
     return quat_wxyz_from_euler(np.radians(roll_deg), np.radians(pitch_deg), np.radians(yaw_deg))
 
 
+@check_types
 def wrap_angle_rad(angle_rad: ArrayLike) -> FloatArray:
     """Wrap angles into (-pi, pi] [rad]."""
     a = np.asarray(angle_rad, np.float64)
@@ -304,6 +327,7 @@ def wrap_angle_rad(angle_rad: ArrayLike) -> FloatArray:
     return np.where(w == -np.pi, np.pi, w)
 
 
+@check_types
 def slerp_wxyz(q0: np.ndarray, q1: np.ndarray, fraction: np.ndarray) -> np.ndarray:
     """Spherical linear interpolation between unit quaternions, row by row.
 
@@ -333,6 +357,7 @@ def slerp_wxyz(q0: np.ndarray, q1: np.ndarray, fraction: np.ndarray) -> np.ndarr
     return np.where(out[:, :1] < 0.0, -out, out)
 
 
+@check_types
 def attitude_from_thrust(thrust_dir_enu: FloatArray, yaw_rad: FloatArray) -> FloatArray:
     """Quaternions (FLU -> ENU) of drones whose body z axis is the thrust direction.
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from rplearn._argtypes import check_types
 from rplearn.errors import FarFieldError, InputError
 
 #: Speed of light in vacuum [m/s].
@@ -18,6 +19,7 @@ SPEED_OF_LIGHT_M_S = 299_792_458.0
 FAR_FIELD_WAVELENGTHS = 2.0
 
 
+@check_types
 def wavelength_m(frequency_hz: ArrayLike) -> NDArray[np.float64]:
     """Wavelength [m] of a carrier frequency [Hz]."""
     f = np.asarray(frequency_hz, np.float64)
@@ -26,6 +28,7 @@ def wavelength_m(frequency_hz: ArrayLike) -> NDArray[np.float64]:
     return SPEED_OF_LIGHT_M_S / f
 
 
+@check_types
 def check_far_field(distance_m: ArrayLike, frequency_hz: ArrayLike, what: str = "samples") -> None:
     """Refuse distances not beyond the far-field limit ``d > 2 lambda`` (paper Sec. III).
 
@@ -46,6 +49,7 @@ def check_far_field(distance_m: ArrayLike, frequency_hz: ArrayLike, what: str = 
         )
 
 
+@check_types
 def free_space_path_loss_db(distance_m: ArrayLike, frequency_hz: ArrayLike) -> NDArray[np.float64]:
     """Free-space path loss ``20 log10(4 pi d / lambda)`` [dB] (positive; eq. 1 adds its negative)."""
     d = np.asarray(distance_m, np.float64)
@@ -53,6 +57,7 @@ def free_space_path_loss_db(distance_m: ArrayLike, frequency_hz: ArrayLike) -> N
     return 20.0 * np.log10(4.0 * np.pi * d / wavelength_m(frequency_hz))
 
 
+@check_types
 def observed_joint_gain_db(
     rssi_dbm: ArrayLike, tx_power_dbm: ArrayLike, distance_m: ArrayLike, frequency_hz: ArrayLike
 ) -> NDArray[np.float64]:
@@ -76,6 +81,7 @@ def observed_joint_gain_db(
     )
 
 
+@check_types
 def received_power_dbm(
     tx_power_dbm: ArrayLike, joint_gain_db: ArrayLike, distance_m: ArrayLike, frequency_hz: ArrayLike
 ) -> NDArray[np.float64]:

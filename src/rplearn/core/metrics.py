@@ -10,6 +10,7 @@ from typing import Iterator
 import numpy as np
 from numpy.typing import ArrayLike
 
+from rplearn._argtypes import check_types
 from rplearn.errors import InputError
 
 
@@ -23,22 +24,26 @@ def _errors(y_true: ArrayLike, y_pred: ArrayLike) -> np.ndarray:
     return b - a
 
 
+@check_types
 def rmse(y_true: ArrayLike, y_pred: ArrayLike) -> float:
     """Root mean squared error [dB]."""
     e = _errors(y_true, y_pred)
     return float(np.sqrt(np.mean(e * e)))
 
 
+@check_types
 def mae(y_true: ArrayLike, y_pred: ArrayLike) -> float:
     """Mean absolute error [dB]."""
     return float(np.mean(np.abs(_errors(y_true, y_pred))))
 
 
+@check_types
 def q95(y_true: ArrayLike, y_pred: ArrayLike) -> float:
     """95th percentile of the absolute error [dB] (the paper's Q95)."""
     return float(np.percentile(np.abs(_errors(y_true, y_pred)), 95.0))
 
 
+@check_types
 def aic(n_samples: int, mse: float, n_params: int) -> float:
     """Akaike information criterion ``n ln(MSE) + 2k`` on the evaluation set (paper Table I).
 
@@ -50,6 +55,7 @@ def aic(n_samples: int, mse: float, n_params: int) -> float:
     return float(n_samples * np.log(mse) + 2 * n_params)
 
 
+@check_types
 def condition_number(design: ArrayLike) -> float:
     """Largest / smallest non-zero singular value of a design matrix."""
     s = np.linalg.svd(np.asarray(design, np.float64), compute_uv=False)
@@ -60,6 +66,7 @@ def condition_number(design: ArrayLike) -> float:
     return float(nz[0] / nz[-1])
 
 
+@check_types
 @dataclass
 class Stopwatch:
     """Wall time of a block, the paper's LTD (``time.perf_counter``) [s]."""
@@ -75,6 +82,7 @@ class Stopwatch:
             self.seconds = time.perf_counter() - start
 
 
+@check_types
 @dataclass(frozen=True)
 class Scores:
     """One row of the paper's Table I, plus MAE and the condition number."""
@@ -93,6 +101,7 @@ class Scores:
         return dict(self.__dict__)
 
 
+@check_types
 def score(model: str, y_true: ArrayLike, y_pred: ArrayLike, n_params: int, ltd_s: float, cond: float = float("nan")) -> Scores:
     """All Table I metrics of one model on an evaluation set."""
     e = _errors(y_true, y_pred)

@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from rplearn._argtypes import check_types
 from rplearn.core.basis_base import (
     _SLOT_DESIGN,
     Basis,
@@ -34,6 +35,7 @@ from rplearn.core.basis_base import (
 from rplearn.errors import InputError
 
 
+@check_types
 def sh_index(degree: int, order: int) -> int:
     """Column of the real SH of degree ``l`` and order ``m`` (``-l <= m <= l``).
 
@@ -131,7 +133,7 @@ def _sh_chebyshev_tables(order: int) -> tuple[FloatArray, NDArray[np.intp], NDAr
     odd = np.array([m % 2 for m in range(L) for _ in range(m, L)], bool)
     q = values[:, rows]
     q[:, odd] /= cos_el[:, None]
-    coef = np.linalg.solve(vander, q).T
+    coef = np.asarray(np.linalg.solve(vander, q).T, np.float64)
     rows += [sh_index(l, -m) for m in range(1, L) for l in range(m, L)]
     row_order = np.array(rows, np.intp)
     natural = np.argsort(row_order)
@@ -141,7 +143,7 @@ def _sh_chebyshev_tables(order: int) -> tuple[FloatArray, NDArray[np.intp], NDAr
 
 
 def _add_moments(cheb: FloatArray, trig: FloatArray, moments: FloatArray,
-                 segments: NDArray[np.intp] | None = None) -> None:
+                 segments: NDArray[np.intp] | tuple[NDArray[np.intp], ...] | None = None) -> None:
     """``moments[...] += cheb @ trig^T`` over the last (sample) axis, per leading sample index;
     with ``segments`` (bounds of consecutive sample ranges), per range: ``moments[..., j, :, :]``
     sums samples ``segments[j]:segments[j + 1]``; with a tuple of bounds, one per sample row,
@@ -252,7 +254,8 @@ def _sh_moment_tables(order: int) -> _MomentTables:
         c_pad[i, :rows] = coef[coef_row : coef_row + rows]
     j, k = np.meshgrid(np.arange(L), np.arange(L), indexing="ij")
     j_sum, j_diff = (j + k).ravel(), np.abs(j - k).ravel()
-    pair_a, pair_b, map_cols, map_vals, dest, src = [], [], [], [], [], []
+    pair_a: list[Any] = []
+    pair_b, map_cols, map_vals, dest, src = [], [], [], [], []
     for ia, (a, sine_a, first_a, rows_a, _) in enumerate(blocks):
         for ib in range(ia, len(blocks)):
             b, sine_b, first_b, rows_b, _ = blocks[ib]
@@ -305,6 +308,7 @@ def _sh_series(order: int, coef_rows: FloatArray) -> FloatArray:
     return series
 
 
+@check_types
 @dataclass(frozen=True)
 class SphericalHarmonics(Basis):
     """Real orthonormal spherical harmonics of degrees ``0 .. order-1`` (paper's SH-``order``).
@@ -362,7 +366,7 @@ class SphericalHarmonics(Basis):
 
     def design_rows_into(
         self, az_rad: FloatArray, el_rad: FloatArray, out: FloatArray, moments: FloatArray | None = None,
-        segments: NDArray[np.intp] | None = None,
+        segments: NDArray[np.intp] | tuple[NDArray[np.intp], ...] | None = None,
     ) -> None:
         """Features in :attr:`row_order`; optionally also accumulate the Gram moments.
 
@@ -434,9 +438,9 @@ class SphericalHarmonics(Basis):
         every = np.concatenate([mu.ravel(), mu_odd.ravel()])
         lam = np.einsum("ij,ij->i", every[tables.lam_cols], tables.lam_weights).reshape(-1, L, L)
         blocks = tables.coef_a @ lam @ tables.coef_b_t
-        gram = np.zeros(self.n_coef * self.n_coef)
-        gram[tables.dest] = blocks.ravel()[tables.src]
-        gram = gram.reshape(self.n_coef, self.n_coef)
+        flat = np.zeros(self.n_coef * self.n_coef)
+        flat[tables.dest] = blocks.ravel()[tables.src]
+        gram = flat.reshape(self.n_coef, self.n_coef)
         upper = np.triu(gram)
         return upper + np.triu(gram, 1).T
 

@@ -100,11 +100,12 @@ def _package_libraries(package: str) -> set[str]:
     """Paths of the loaded BLAS libraries shipped inside ``package`` (its folder or the wheel's
     ``<package>.libs`` folder beside it)."""
     module = sys.modules.get(package)
-    if module is None or not getattr(module, "__file__", None):
+    where = getattr(module, "__file__", None)
+    if not where:
         return set()
     import os
 
-    folder = os.path.dirname(os.path.realpath(module.__file__))
+    folder = os.path.dirname(os.path.realpath(where))
     roots = (folder + os.sep, folder + ".libs" + os.sep)
     return {lib.filepath for lib in _controller().select(user_api="blas").lib_controllers
             if os.path.realpath(lib.filepath).startswith(roots)}

@@ -39,6 +39,7 @@ from typing import Mapping, Sequence
 import numpy as np
 import pandas as pd
 
+from rplearn._argtypes import check_types
 from rplearn.core.link import SPEED_OF_LIGHT_M_S
 from rplearn.data.poses import PoseTrack
 from rplearn.errors import InputError
@@ -140,6 +141,7 @@ def armed_log(pose_log: pd.DataFrame, clock_offsets_s: Mapping[str, float] | Non
     return out
 
 
+@check_types
 @dataclass(frozen=True)
 class FlightPhases:
     """When each node flies: its take-off altitude [m], the highest it rose above it [m], its
@@ -192,6 +194,7 @@ class FlightPhases:
         return f"armed (where the log says) and more than {self.margin_m:g} m above the take-off altitude; vehicles: {each}"
 
 
+@check_types
 def flight_phases(pose_log: pd.DataFrame, tracks: Mapping[str, PoseTrack],
                   clock_offsets_s: Mapping[str, float] | None = None,
                   margin_m: float = AIRBORNE_MARGIN_M, source: str = "pose log") -> FlightPhases:
@@ -238,6 +241,7 @@ def advised_max_gap_s(pose_interval_s: float) -> float:
     return _nice_ceil(MAX_GAP_FACTOR * float(pose_interval_s))
 
 
+@check_types
 def max_gap_advice(tracks: Mapping[str, PoseTrack], max_gap_s: float) -> str | None:
     """What ``max_gap_s`` the slowest moving node's pose rate needs, or None when it is no slower
     than ``max_gap_s`` allows.
@@ -289,6 +293,7 @@ def largest_distance_m(a: PoseTrack, b: PoseTrack) -> float:
     return float(np.linalg.norm(at(a) - at(b), axis=1).max())
 
 
+@check_types
 def calibration_problems(phases: FlightPhases, tracks: Mapping[str, PoseTrack],
                          pairs: Sequence[tuple[str, str]] | None = None,
                          frequency_hz: float | None = None) -> list[str]:

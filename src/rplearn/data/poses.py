@@ -17,6 +17,7 @@ from typing import Mapping, Sequence
 import numpy as np
 import pandas as pd
 
+from rplearn._argtypes import check_types
 from rplearn.core.geometry import slerp_wxyz
 from rplearn.data.tables import validate_pose_log
 from rplearn.errors import InputError
@@ -29,6 +30,7 @@ SAME_POSITION_M = 1e-3
 SAME_QUATERNION = 1e-6
 
 
+@check_types
 @dataclass(frozen=True)
 class PoseTrack:
     """One node's pose log as arrays: times [s] (common clock), ENU positions [m], quaternions.
@@ -106,6 +108,7 @@ class PoseTrack:
         return pos, quat, status
 
 
+@check_types
 def pose_tracks(
     pose_log: pd.DataFrame,
     clock_offsets_s: Mapping[str, float] | None = None,
@@ -210,6 +213,7 @@ def _refuse_moved_station(
     )
 
 
+@check_types
 def interpolate_nodes(
     tracks: Mapping[str, PoseTrack], node_ids: Sequence[str], node_code: np.ndarray, t_s: np.ndarray,
     max_gap_s: float, rows: np.ndarray,

@@ -32,6 +32,8 @@ from typing import MutableMapping
 import numpy as np
 import pandas as pd
 
+from rplearn._argtypes import check_types
+
 #: Two rows of one link with equal values this close (a fraction of the link's report period)
 #: are one reading reported twice. A tenth of the period: far above the 2-6 ms between the two
 #: copies of a 1 Hz radio's reading, far below the spacing of distinct reports.
@@ -44,6 +46,7 @@ _SHORT_INTERVAL_FRACTION = 0.25
 REPEAT_MIN_SHARE: float = 0.25
 
 
+@check_types
 def report_period_s(t_s: np.ndarray) -> float:
     """The usual interval between a link's distinct reports [s], even when readings are doubled.
 
@@ -96,6 +99,7 @@ def _link_codes(signal: pd.DataFrame) -> tuple[np.ndarray, list[str]]:
     return codes, names
 
 
+@check_types
 def repeated_readings(
     signal: pd.DataFrame,
     fraction: float = REPEAT_FRACTION,
@@ -186,6 +190,7 @@ def duplicate_rows(signal: pd.DataFrame) -> np.ndarray:
     return mask
 
 
+@check_types
 def report_rate_hz(t_s: np.ndarray, repeated: np.ndarray | None = None) -> float:
     """Report rate of one link [Hz]: 1 / the median interval between its readings, copies of one
     reading (``repeated``) left out; NaN with fewer than two distinct times."""

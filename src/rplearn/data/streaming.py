@@ -21,6 +21,7 @@ from typing import Iterable, Iterator, Mapping
 import numpy as np
 import pandas as pd
 
+from rplearn._argtypes import check_types
 from rplearn._atomic import atomic_path
 from rplearn.data.sync import (
     SyncOptions,
@@ -36,6 +37,7 @@ from rplearn.data.tables import MATCHED_COLUMNS, SIGNAL_COLUMNS, non_unit_quater
 from rplearn.data.poses import tracks_of_checked_log
 
 
+@check_types
 def row_hashes(signal: pd.DataFrame) -> np.ndarray:
     """64-bit hash of every row of a signal log chunk, equal for equal rows of any chunk.
 
@@ -104,6 +106,7 @@ def _pairs(signal: pd.DataFrame) -> set[tuple[str, str]]:
     return set(zip(both["tx"], both["rx"]))
 
 
+@check_types
 def synchronise_stream(
     pose_log: pd.DataFrame,
     signal_chunks: Iterable[pd.DataFrame],
@@ -158,6 +161,7 @@ def synchronise_stream(
         yield SyncResult(pd.DataFrame(columns=list(MATCHED_COLUMNS)), SyncSummary(notes=total.notes[len(notes):]))
 
 
+@check_types
 def synchronise_to_parquet(
     pose_log: pd.DataFrame,
     signal_chunks: Iterable[pd.DataFrame],
@@ -199,7 +203,7 @@ def synchronise_to_parquet(
                 if res.dataset.empty:
                     continue
                 table = pa.Table.from_pandas(res.dataset, preserve_index=False)
-                if writer is None:
+                if writer is None or schema is None:
                     schema = table.schema
                     writer = pq.ParquetWriter(tmp, schema)
                 else:

@@ -73,16 +73,13 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 import pandas as pd
 
+from rplearn._argtypes import check_types
 from rplearn.core.link import FAR_FIELD_WAVELENGTHS, SPEED_OF_LIGHT_M_S
 from rplearn.data.phases import (
     AIRBORNE_MARGIN_M, WINDOW_CLOCKS, FlightPhases, flight_phases, max_gap_advice, phase_notes, window_mask,
 )
 from rplearn.data.poses import (
-    STATUS_OUT_OF_SPAN,
-    STATUS_POSE_GAP,
-    PoseTrack,
-    interpolate_nodes,
-    tracks_of_checked_log,
+    STATUS_OUT_OF_SPAN, STATUS_POSE_GAP, PoseTrack, interpolate_nodes, tracks_of_checked_log,
 )
 from rplearn.data.tables import (
     MATCHED_COLUMNS,
@@ -129,6 +126,7 @@ DROP_REASONS: tuple[str, ...] = (
 )
 
 
+@check_types
 @dataclass
 class SyncSummary:
     """How many signal samples came in, went out, and why each dropped one was dropped.
@@ -195,6 +193,7 @@ class SyncSummary:
         return "\n".join(lines)
 
 
+@check_types
 @dataclass
 class SyncResult:
     """Matched dataset (columns :data:`~rplearn.data.tables.MATCHED_COLUMNS` first, then any
@@ -233,6 +232,7 @@ def _checked_link(link: Any) -> tuple[str, str] | None:
     return pair[0], pair[1]
 
 
+@check_types
 @dataclass(frozen=True)
 class SyncOptions:
     """How :func:`synchronise` matches signal samples with poses.
@@ -456,7 +456,7 @@ def _match_chunk(
     if names:
         summary.unknown_nodes = names
     drop(unknown, "unknown_node")
-    poses = {end: interpolate_nodes(tracks, uniques, code, t, options.max_gap_s, keep & known[code])
+    poses = {end: interpolate_nodes(tracks, list(uniques), code, t, options.max_gap_s, keep & known[code])
              for end, code in (("tx", tx_code), ("rx", rx_code))}
     st_tx, st_rx = poses["tx"][2], poses["rx"][2]
     drop((st_tx == STATUS_OUT_OF_SPAN) | (st_rx == STATUS_OUT_OF_SPAN), "out_of_span")
@@ -467,7 +467,7 @@ def _match_chunk(
         drop(keep & ~(distance > limit), "near_field")
     off = np.zeros(len(signal), bool)
     for end, code in (("tx", tx_code), ("rx", rx_code)):
-        disarmed, ground = phases.masks(uniques, code, t, poses[end][0][:, 2], keep & known[code])
+        disarmed, ground = phases.masks(list(uniques), code, t, poses[end][0][:, 2], keep & known[code])
         if options.airborne:
             drop(disarmed, "disarmed")
             drop(ground, "on_ground")
@@ -521,6 +521,7 @@ def _options(options: SyncOptions | None) -> SyncOptions:
     return options
 
 
+@check_types
 def synchronise(
     pose_log: pd.DataFrame,
     signal_log: pd.DataFrame,

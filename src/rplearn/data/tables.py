@@ -21,6 +21,7 @@ from typing import Any, Sequence
 import numpy as np
 import pandas as pd
 
+from rplearn._argtypes import check_types
 from rplearn.errors import InputError
 from rplearn.core.geometry import Directions, distance_m, link_directions
 from rplearn.core.link import observed_joint_gain_db
@@ -45,6 +46,7 @@ QUATERNION_NORM_TOLERANCE: float = 1e-3
 NON_UNIT_QUATERNION_ATTR: str = "non_unit_quaternion_rows"
 
 
+@check_types
 def normalise_times(df: pd.DataFrame, source: str = "table") -> pd.DataFrame:
     """Turn a datetime ``t`` column into float seconds since the UNIX epoch (UTC).
 
@@ -97,6 +99,7 @@ def empty_ids(ids: np.ndarray) -> np.ndarray:
     return np.char.str_len(np.char.strip(ids.astype(str))) == 0 if ids.size else np.zeros(0, bool)
 
 
+@check_types
 def validate_pose_log(df: pd.DataFrame, source: str = "pose log") -> pd.DataFrame:
     """Check a canonical pose log and return it typed, sorted by (node, t), quaternions normalised.
 
@@ -236,6 +239,7 @@ def _check_link_columns(df: pd.DataFrame, source: str, with_rssi: bool) -> None:
             )
 
 
+@check_types
 def validate_signal_log(df: pd.DataFrame, source: str = "signal log") -> pd.DataFrame:
     """Check a canonical signal log and return it typed and sorted by time (stable).
 
@@ -266,6 +270,7 @@ def validate_signal_log(df: pd.DataFrame, source: str = "signal log") -> pd.Data
     return out.sort_values("t", kind="stable").reset_index(drop=True)
 
 
+@check_types
 def validate_matched(df: pd.DataFrame, source: str = "dataset", require_rssi: bool = True) -> pd.DataFrame:
     """Check a matched link dataset (columns of :data:`MATCHED_COLUMNS`).
 
@@ -300,6 +305,7 @@ def validate_matched(df: pd.DataFrame, source: str = "dataset", require_rssi: bo
     return out
 
 
+@check_types
 @dataclass(frozen=True)
 class LinkSamples:
     """Learning-ready samples of a matched dataset.
@@ -340,6 +346,7 @@ class LinkSamples:
         return int(self.joint_gain_db.shape[0])
 
 
+@check_types
 def link_samples(
     df: pd.DataFrame, source: str = "dataset", nodes: Sequence[str] | None = None, require_rssi: bool = True
 ) -> LinkSamples:

@@ -20,6 +20,7 @@ from typing import Sequence
 import numpy as np
 import pandas as pd
 
+from rplearn._argtypes import check_types
 from rplearn.data.tables import LinkSamples, link_samples
 from rplearn.errors import InputError
 
@@ -27,6 +28,7 @@ from rplearn.errors import InputError
 TEST_UNIT_PREFIX = "test"
 
 
+@check_types
 @dataclass(frozen=True)
 class UnitChoice:
     """Units chosen for learning or testing, and what the user should know about the choice.
@@ -49,16 +51,19 @@ class UnitChoice:
     warnings: list[str] = field(default_factory=list)
 
 
+@check_types
 def is_test_unit(unit: object) -> bool:
     """Whether a unit label is held out for testing by default (``test...``, any case)."""
     return str(unit).lower().startswith(TEST_UNIT_PREFIX)
 
 
+@check_types
 def dataset_units(df: pd.DataFrame) -> list[str]:
     """Sorted unit labels of a dataset ([] without a ``unit`` column)."""
     return sorted(df["unit"].astype(str).unique()) if "unit" in df.columns else []
 
 
+@check_types
 def learning_units(df: pd.DataFrame, units: Sequence[str] | None = None, source: str = "dataset") -> UnitChoice:
     """Units to learn from: ``units`` as given, else every unit not labelled ``test...``.
 
@@ -91,11 +96,13 @@ def unit_list(units: Sequence[str], limit: int = NOTE_UNITS) -> str:
     return f"{', '.join(units[: limit - 2])}, ..., {', '.join(units[-2:])} ({len(units):,} units)"
 
 
+@check_types
 def trained_units(provenances: Sequence[dict]) -> list[str]:
     """Units the models with these provenance records learned from (sorted, distinct)."""
     return sorted({str(u) for p in provenances for u in (p.get("parameters", {}).get("units") or [])})
 
 
+@check_types
 def evaluation_units(
     df: pd.DataFrame,
     units: Sequence[str] | None,
@@ -153,6 +160,7 @@ TIME_UNITS = 5
 _STRETCH = re.compile(r"^(?P<unit>.+)\[(?P<k>\d+)/(?P<n>\d+)\]$")
 
 
+@check_types
 def stretch_labels(blocks: int = TIME_UNITS, unit: str | None = None) -> list[str]:
     """Names of the ``blocks`` stretches of time of a flight, in time order.
 
@@ -165,12 +173,14 @@ def stretch_labels(blocks: int = TIME_UNITS, unit: str | None = None) -> list[st
     return [f"{unit}[{j}/{blocks}]" for j in range(1, blocks + 1)]
 
 
+@check_types
 def is_stretch_label(label: object) -> bool:
     """Whether a unit label names a stretch of time of a flight without units (``flight[2/5]``)."""
     m = _STRETCH.match(str(label))
-    return bool(m) and m.group("unit") in ("flight", "test") and 1 <= int(m.group("k")) <= int(m.group("n"))
+    return m is not None and m.group("unit") in ("flight", "test") and 1 <= int(m.group("k")) <= int(m.group("n"))
 
 
+@check_types
 @dataclass(frozen=True)
 class Stretches:
     """Contiguous stretches of time of one flight: where they start and what they are called.
@@ -215,6 +225,7 @@ class Stretches:
         return np.asarray(self.labels, dtype=object)[self.index(t)]
 
 
+@check_types
 def stretch_samples(
     df: pd.DataFrame, unit: str | None = None, source: str = "dataset", nodes: Sequence[str] | None = None
 ) -> dict[str, LinkSamples]:
@@ -240,6 +251,7 @@ def stretch_samples(
             for j, label in enumerate(stretches.labels) if np.any(k == j)}
 
 
+@check_types
 def time_units(df: pd.DataFrame, blocks: int = TIME_UNITS, source: str = "dataset") -> tuple[pd.DataFrame, str | None]:
     """A dataset without a ``unit`` column, labelled by contiguous stretches of time.
 
@@ -277,12 +289,14 @@ def time_units(df: pd.DataFrame, blocks: int = TIME_UNITS, source: str = "datase
     out = df.assign(unit=stretches.label(t))
     labels = stretches.labels
     note = (f"{source} has no 'unit' column: its flight is cut into {blocks} stretches of time with about equal "
-            f"sample counts, {labels[0]}..{labels[-2]} and {labels[-1]} (from t = {t[k == blocks - 1].min():.3f} s); "
+            f"sample counts, {labels[0]}..{labels[-2]} and {labels[-1]} (from {t[k == blocks - 1].min() - t.min():.1f} s after "
+            f"the log start, t = {t.min():.3f} s); "
             "these names choose stretches (fit --units, evaluate --units, sweep --learn-units/--test-units, "
             "report --test-units)")
     return out, note
 
 
+@check_types
 def stretched(df: pd.DataFrame, units: Sequence[str] | None, source: str = "dataset") -> tuple[pd.DataFrame, str | None]:
     """A dataset ready for choosing ``units``: a dataset without units, when units are chosen,
     labelled by its stretches of time (:func:`time_units`); otherwise as it is."""
@@ -291,6 +305,7 @@ def stretched(df: pd.DataFrame, units: Sequence[str] | None, source: str = "data
     return time_units(df, source=source)
 
 
+@check_types
 def whole_flight_note(source: str = "dataset") -> str:
     """The note of a fit on the whole of a flight without units: how to name its stretches."""
     names = stretch_labels()
@@ -299,6 +314,7 @@ def whole_flight_note(source: str = "dataset") -> str:
             f"for evaluate --units {names[-1]})")
 
 
+@check_types
 def refuse_streamed_stretches(index: pd.DataFrame, units: Sequence[str] | None, source: str = "dataset") -> None:
     """Refuse units chosen in a dataset without units that is read part by part (its stretches
     of time are cut only when it is read whole).
@@ -315,6 +331,7 @@ def refuse_streamed_stretches(index: pd.DataFrame, units: Sequence[str] | None, 
                          "with a 'unit' column to choose units", param="units")
 
 
+@check_types
 def split_units(
     df: pd.DataFrame,
     learn_units: Sequence[str] | None = None,
@@ -344,6 +361,7 @@ def split_units(
     return learn, test
 
 
+@check_types
 def select_units(df: pd.DataFrame, units: Sequence[str] | None, source: str = "dataset") -> pd.DataFrame:
     """Rows whose ``unit`` label is among ``units`` (all rows when ``units`` is None)."""
     if not units:
@@ -359,6 +377,7 @@ def select_units(df: pd.DataFrame, units: Sequence[str] | None, source: str = "d
     return df[df["unit"].astype(str).isin(wanted)]
 
 
+@check_types
 def samples_of(
     df: pd.DataFrame, units: Sequence[str] | None = None, source: str = "dataset", nodes: Sequence[str] | None = None
 ) -> LinkSamples:

@@ -11,24 +11,13 @@ module         public names
 =============  =================================================================================
 
 Every name of ``__all__`` can be imported from here (``from rplearn.integrations import
-register_pattern``); its module is imported on first use (:mod:`rplearn._lazy`), and the other
+register_pattern``); its module is imported on first use (``__init__.pyi``, lazy_loader), and the other
 tool's package only when a function needs it, so that a missing extra is one clear error.
 """
 
 from __future__ import annotations
 
-from rplearn._lazy import lazy_exports
+import lazy_loader
 
-_NAMES: dict[str, str] = {
-    # Sionna RT (optional extra rplearn[sionna])
-    "SionnaUnavailableError": "sionna",
-    "add_link": "sionna",
-    "import_sionna_rt": "sionna",
-    "planar_array": "sionna",
-    "polarization_mismatch_db": "sionna",
-    "register_pattern": "sionna",
-    "sionna_orientation": "sionna",
-}
-
-__all__ = sorted(_NAMES)
-__getattr__, __dir__ = lazy_exports(__name__, _NAMES)
+# The public names are those of __init__.pyi, each imported on first use.
+__getattr__, __dir__, __all__ = lazy_loader.attach_stub(__name__, __file__)

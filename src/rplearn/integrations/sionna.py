@@ -78,6 +78,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from rplearn._argtypes import check_types
 from rplearn.core.geometry import (
     azimuth_elevation,
     euler_from_quat_wxyz,
@@ -148,6 +149,7 @@ def use_debian_libllvm19() -> str | None:
 use_debian_libllvm19()  # before anyone imports Sionna: Dr.Jit reads it when its backend starts
 
 
+@check_types
 def import_sionna_rt() -> Any:
     """The ``sionna.rt`` module, with Dr.Jit's backend started.
 
@@ -192,6 +194,7 @@ def import_sionna_rt() -> Any:
 # -- frames --------------------------------------------------------------------------------------
 
 
+@check_types
 def sionna_orientation(quat_wxyz: ArrayLike) -> FloatArray:
     """Sionna's device orientation ``(alpha, beta, gamma)`` of rplearn attitudes [rad].
 
@@ -218,6 +221,7 @@ def _theta_hat_world(quat_wxyz: FloatArray, direction_world: FloatArray) -> Floa
     return rotate_body_to_world(quat_wxyz, local)
 
 
+@check_types
 def polarization_mismatch_db(
     tx_position_xyz: ArrayLike,
     tx_quat_wxyz: ArrayLike,
@@ -326,7 +330,7 @@ def _interpolating_pattern(table: FloatArray) -> Any:
         g10 = dr.gather(mi.Float, values, base + n_phi)
         g11 = dr.gather(mi.Float, values, base + n_phi + 1)
         gain_db = (1.0 - ft) * ((1.0 - fp) * g00 + fp * g01) + ft * ((1.0 - fp) * g10 + fp * g11)
-        return mi.Complex2f(dr.exp(gain_db * to_amplitude), 0.0)
+        return mi.Complex2f(dr.exp(gain_db * to_amplitude), 0.0)  # type: ignore[operator]  # mitsuba types its variant classes as object
 
     return v_pattern
 
@@ -334,6 +338,7 @@ def _interpolating_pattern(table: FloatArray) -> Any:
 # -- registration and scenes ---------------------------------------------------------------------
 
 
+@check_types
 def register_pattern(
     model: Any,
     node: str,
@@ -388,6 +393,7 @@ def register_pattern(
     return registered
 
 
+@check_types
 def planar_array(model: Any, node: str, polarization: str = "V", step_deg: float = DEFAULT_STEP_DEG) -> Any:
     """A one-element Sionna ``PlanarArray`` carrying a node's learned pattern.
 
@@ -416,6 +422,7 @@ def _poses(position_xyz: ArrayLike, quat_wxyz: ArrayLike, what: str) -> tuple[Fl
     return np.broadcast_to(p, (n, 3)), np.broadcast_to(q, (n, 4))
 
 
+@check_types
 @dataclass(frozen=True)
 class SceneLinkOptions:
     """How :func:`add_link` puts a link into a Sionna scene (besides the nodes and their poses).
@@ -455,6 +462,7 @@ def _positive(value: Any) -> bool:
             and math.isfinite(float(value)) and float(value) > 0)
 
 
+@check_types
 def add_link(
     scene: Any,
     model: Any,

@@ -18,7 +18,7 @@ carries what the readers need beyond the files. Each format library (rosbags, py
 dpkt, pymavlink, pymap3d) is imported only when a file of its format is read.
 
 The other public names of the subpackage can be imported from here too, their modules being
-imported on first use (:mod:`rplearn._lazy`): tables (:func:`~rplearn.io.files.read_table`,
+imported on first use (``__init__.pyi``, lazy_loader): tables (:func:`~rplearn.io.files.read_table`,
 :func:`~rplearn.io.files.write_table`, :func:`~rplearn.io.files.provenance`), per-format
 readers, :func:`~rplearn.io.inspect.inspect_logs`, pattern export
 (:func:`~rplearn.io.export.export_grid`), MSI antenna files (:func:`~rplearn.io.msi.read_msi`,
@@ -32,75 +32,14 @@ the inverse of the ``.tlog`` reader, for simulated flights, with the defects of 
 
 from __future__ import annotations
 
-from rplearn._lazy import lazy_exports
+import lazy_loader
+
 from rplearn.errors import LogFormatError as LogFormatError  # re-exported
 
-_NAMES: dict[str, str] = {
-    "Logs": "_common",
-    "ReaderOptions": "options",
-    "detect_format": "sniff",
-    "read_logs": "read",
-    # canonical tables as files, and what made an output
-    "check_table_path": "files",
-    "check_output_path": "files",
-    "provenance": "files",
-    "read_dataset": "files",
-    "read_table": "files",
-    "write_table": "files",
-    "write_table_chunks": "files",
-    "iter_table": "files",
-    "table_rows": "files",
-    "iter_parts": "files",
-    # datasets in many files (a directory, a glob, a list, a URL)
-    "Part": "partitions",
-    "dataset_parts": "partitions",
-    "is_partitioned": "partitions",
-    # per-format readers
-    "COLUMN_ALIASES": "tables",
-    "canonical_pose": "tables",
-    "canonical_signal": "tables",
-    "iter_signal_table": "tables",
-    "table_columns": "tables",
-    "read_pose_table": "tables",
-    "read_signal_table": "tables",
-    "bag_topics": "rosbag",
-    "read_rosbag": "rosbag",
-    "read_ulog": "ulog",
-    "read_ulogs": "ulog",
-    "read_pcap": "pcap",
-    "write_radiotap_pcap": "pcap",
-    "read_mavlink": "mavlink",
-    "sik_rssi_to_dbm": "mavlink",
-    "write_tlog": "tlog",
-    "TlogDefects": "tlog",
-    "write_dataflash": "dataflash_writer",
-    "dbm_to_sik_rssi": "tlog",
-    "NAN_POLICIES": "options",
-    "geodetic_to_enu": "geodetic",
-    # looking at logs before learning
-    "InspectReport": "inspect",
-    "LinkSummary": "inspect",
-    "NodeSummary": "inspect",
-    "inspect_logs": "inspect",
-    # pattern export
-    "GRID_COLUMNS": "export",
-    "MsiPattern": "msi",
-    "PatternLike": "export",
-    "export_grid": "export",
-    "export_msi": "msi",
-    "export_msi_files": "msi",
-    "safe_file_name": "export",
-    "node_file_names": "export",
-    "write_json": "files",
-    "msi_pattern": "msi",
-    "read_msi": "msi",
-    "write_msi": "msi",
-    # model files
-    "MODEL_SCHEMA": "modelfile",
-    "MODEL_SCHEMA_VERSION": "modelfile",
-    "read_model_file": "modelfile",
-    "write_model_file": "modelfile",
-}
+# The public names are those of __init__.pyi, each imported on first use.
+__getattr__, _dir, _all = lazy_loader.attach_stub(__name__, __file__)
+__all__ = sorted([*_all, "LogFormatError"])
 
-__all__ = sorted(["LogFormatError", *_NAMES])
-__getattr__, __dir__ = lazy_exports(__name__, _NAMES)
+
+def __dir__() -> list[str]:
+    return list(__all__)

@@ -6,7 +6,10 @@ from dataclasses import dataclass
 
 import pandas as pd
 
+from rplearn._argtypes import check_types
 
+
+@check_types
 @dataclass
 class Logs:
     """Canonical logs read from one or more files (docs/conventions.md schemas); either may be None.

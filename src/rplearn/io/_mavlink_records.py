@@ -177,7 +177,7 @@ def collect_tlog(source: str, system_id: int | None) -> Raw:
         att=np.column_stack([t_log[:n_att], att[:, 3:6], boot[:n_att]]),
         pos=np.column_stack([t_log[n_att:], gpi[:, 3:8], boot[n_att:]]),
         radio=_arr(sorted(radio), 7), vehicle_t=np.sort(np.asarray(by_sys.get(vehicle, []), np.float64)),
-        home=tuple(float(v) for v in home[0][2:]) if home else None, counts=counts,
+        home=(float(home[0][2]), float(home[0][3]), float(home[0][4])) if home else None, counts=counts,
         boot_last_t=boot_last_t, origin_t=np.sort(np.asarray(origin, np.float64)), fix=_arr(sorted(fix), 2),
         armed=_arr(sorted(beats), 2),
         notes={"system_id": vehicle, "component_id": chosen % 256, "radio_senders": radio_senders, **cut_off,
@@ -195,7 +195,8 @@ def _df_chain(boot_t: list[tuple[float, int]]) -> tuple[dict[int, float], np.nda
     for t, b in boot_t:
         last[b] = max(last.get(b, t), t)
         first[b] = min(first.get(b, t), t)
-    offsets, ends = {0: 0.0}, []
+    offsets: dict[int, float] = {0: 0.0}
+    ends: list[float] = []
     for b in range(max(last) + 1 if last else 0):
         if b > 0:
             offsets[b] = ends[-1] + REBOOT_STEP_S - first.get(b, 0.0)

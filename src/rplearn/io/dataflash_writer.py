@@ -30,6 +30,7 @@ from typing import Any
 
 import numpy as np
 
+from rplearn._argtypes import check_types
 from rplearn._atomic import atomic_open
 from rplearn.errors import InputError
 from rplearn.io._common import Logs
@@ -62,6 +63,7 @@ def _fmt_records() -> list[bytes]:
     return out
 
 
+@check_types
 def write_dataflash(
     logs: Logs,
     path: str | os.PathLike,

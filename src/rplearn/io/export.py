@@ -20,6 +20,7 @@ import numpy as np
 import pandas as pd
 from numpy.typing import ArrayLike, NDArray
 
+from rplearn._argtypes import check_types
 from rplearn._atomic import atomic_path
 from rplearn.errors import InputError
 
@@ -105,11 +106,12 @@ def grid_angles_deg(step_deg: float) -> tuple[FloatArray, FloatArray]:
         raise InputError(
             f"step_deg: {step_deg} does not divide 180 deg (try 1, 2, 2.5, 5, 10)", param="step_deg"
         )
-    az = -180.0 + step * np.arange(2 * n_half)
-    el = -90.0 + step * np.arange(n_half + 1)
+    az = np.asarray(-180.0 + step * np.arange(2 * n_half), np.float64)
+    el = np.asarray(-90.0 + step * np.arange(n_half + 1), np.float64)
     return az, el
 
 
+@check_types
 def export_grid(
     model_or_truth: Any,
     step_deg: float,
@@ -154,6 +156,7 @@ def export_grid(
 
 
 # -- file names ------------------------------------------------------------------------------
+@check_types
 def safe_file_name(name: str, fallback: str = "node") -> str:
     """A node id as a file name: characters other than letters, digits and ``_.-`` become ``_``
     (so an id never names a path outside the output folder)."""
@@ -161,6 +164,7 @@ def safe_file_name(name: str, fallback: str = "node") -> str:
     return safe or fallback
 
 
+@check_types
 def node_file_names(nodes: Sequence[str]) -> dict[str, str]:
     """Node id -> file name (:func:`safe_file_name`) for every node; two nodes whose ids give
     the same name are refused rather than one file overwriting the other."""

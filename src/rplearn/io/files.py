@@ -6,15 +6,15 @@ The table format is chosen by the file extension; anything else is refused rathe
 
 from __future__ import annotations
 
-import json
 import os
 import sys
 import time
-from typing import Any, Iterable, Iterator, Sequence
+from typing import Any, Iterable, Iterator, Literal, Sequence
 
 import pandas as pd
 
-from rplearn._atomic import atomic_open, atomic_path, check_output
+from rplearn._argtypes import check_types
+from rplearn._atomic import atomic_open, atomic_path, check_output, dump_json
 from rplearn._version import __version__
 
 from rplearn.data.tables import CSV_DTYPES, normalise_times, validate_matched
@@ -32,6 +32,7 @@ def _table_error(name: str, path: Any, exc: BaseException) -> str:
     return table_read_error(name, path, exc)
 
 
+@check_types
 def read_table(path: str, source: str | None = None) -> pd.DataFrame:
     """Read a CSV or Parquet table chosen by extension, with a one-line error on failure."""
     name = source or str(path)
@@ -47,6 +48,7 @@ def read_table(path: str, source: str | None = None) -> pd.DataFrame:
         raise InputError(_table_error(name, path, exc)) from None
 
 
+@check_types
 def table_rows(path: str) -> int | None:
     """Rows of a Parquet table from its footer (no data read); None for CSV."""
     if not str(path).lower().endswith((".parquet", ".pq")):
@@ -62,6 +64,7 @@ def table_rows(path: str) -> int | None:
         raise InputError(_table_error(str(path), None if is_url(path) else path, exc)) from None
 
 
+@check_types
 def iter_table(path: str, chunk_rows: int = 500_000, columns: Iterable[str] | None = None) -> Iterator[pd.DataFrame]:
     """A CSV or Parquet table chunk by chunk (at most ``chunk_rows`` rows each), times normalised.
 
@@ -85,7 +88,7 @@ def iter_table(path: str, chunk_rows: int = 500_000, columns: Iterable[str] | No
                 yield normalise_times(batch.to_pandas(), name)
         else:
             use = None if wanted is None else (lambda c: c in wanted)
-            gz = "gzip" if name.lower().endswith(".gz") else "infer"
+            gz: Literal["gzip", "infer"] = "gzip" if name.lower().endswith(".gz") else "infer"
             for chunk in pd.read_csv(source, dtype=CSV_DTYPES, chunksize=chunk_rows, usecols=use, compression=gz):
                 yield normalise_times(chunk, name)
     except InputError:
@@ -97,6 +100,7 @@ def iter_table(path: str, chunk_rows: int = 500_000, columns: Iterable[str] | No
             source.close()
 
 
+@check_types
 def iter_parts(parts: Sequence[Part], chunk_rows: int = 500_000, columns: Iterable[str] | None = None) -> Iterator[pd.DataFrame]:
     """Every part of a dataset (:func:`rplearn.io.partitions.dataset_parts`), a chunk at a
     time, in order, with its Hive columns (see :func:`iter_table`)."""
@@ -107,6 +111,7 @@ def iter_parts(parts: Sequence[Part], chunk_rows: int = 500_000, columns: Iterab
             yield chunk if wanted is None else chunk[[c for c in chunk.columns if c in wanted]]
 
 
+@check_types
 def write_table(df: pd.DataFrame, path: str) -> None:
     """Write a table as Parquet (``.parquet``, ``.pq``) or CSV (``.csv``, ``.csv.gz``).
 
@@ -125,6 +130,7 @@ def _empty_like(columns: Iterable[str]) -> pd.DataFrame:
     return pd.DataFrame({c: pd.Series(dtype=object if c in ("tx", "rx", "unit") else float) for c in columns})
 
 
+@check_types
 def write_table_chunks(
     chunks: Iterable[pd.DataFrame], path: str, empty_columns: Iterable[str] = ()
 ) -> int:
@@ -195,6 +201,7 @@ def _cast_like(table: Any, schema: Any, path: str) -> Any:
         ) from None
 
 
+@check_types
 def check_table_path(path: str) -> str:
     """``"parquet"`` or ``"csv"`` from a table's file name; any other extension is refused."""
     name = str(path).lower()
@@ -205,6 +212,7 @@ def check_table_path(path: str) -> str:
     raise InputError(f"{path}: unknown table format; name it .csv, .csv.gz, .parquet or .pq")
 
 
+@check_types
 def check_output_path(path: str, inputs: Iterable[str | None] = ()) -> str:
     """Refuse an output path before any work: one of the ``inputs``, not a regular file, or
     in a folder that does not exist (see :func:`rplearn._atomic.check_output`)."""
@@ -222,6 +230,7 @@ def _epoch() -> float | None:
         raise InputError(f"SOURCE_DATE_EPOCH: expected whole seconds since 1970, got {value!r}") from None
 
 
+@check_types
 def provenance(command: str | None = None, **parameters: Any) -> dict[str, Any]:
     """What made an output: library version, command line, parameters, time."""
     return {
@@ -232,6 +241,7 @@ def provenance(command: str | None = None, **parameters: Any) -> dict[str, Any]:
     }
 
 
+@check_types
 def read_dataset(path: str, require_rssi: bool = True) -> pd.DataFrame:
     """Read and check a matched dataset (docs/conventions.md schema; see :func:`validate_matched`).
 
@@ -250,7 +260,9 @@ def read_dataset(path: str, require_rssi: bool = True) -> pd.DataFrame:
     return validate_matched(read_table(path), path, require_rssi=require_rssi)
 
 
+@check_types
 def write_json(path: str, payload: Any) -> None:
-    """Write a small JSON result (Table I, chosen yaws, ...) with one-space indentation."""
+    """Write a small JSON result (Table I, chosen yaws, ...) with one-space indentation, as strict
+    JSON: a non-finite number is ``null`` (:func:`rplearn._atomic.strict_json`)."""
     with atomic_open(path, "w", encoding="utf-8") as fh:
-        json.dump(payload, fh, indent=1, default=str)
+        dump_json(payload, fh, indent=1, default=str)

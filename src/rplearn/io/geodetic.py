@@ -6,11 +6,13 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from rplearn._argtypes import check_types
 from rplearn.core.geometry import ned_to_enu
 
 FloatArray = NDArray[np.float64]
 
 
+@check_types
 def geodetic_to_enu(
     lat_deg: ArrayLike,
     lon_deg: ArrayLike,

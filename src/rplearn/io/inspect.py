@@ -39,6 +39,7 @@ from typing import Any, Iterable, Sequence
 import numpy as np
 import pandas as pd
 
+from rplearn._argtypes import check_types
 from rplearn.data.phases import advised_max_gap_s, calibration_problems, flight_phases
 from rplearn.data.poses import pose_tracks
 from rplearn.data.readings import REPEAT_FRACTION, duplicate_rows, repeated_readings, report_period_s, report_rate_hz
@@ -55,6 +56,7 @@ _POSE_VALUE_COLUMNS = ("t", "x", "y", "z", "lat", "lon", "alt", "qw", "qx", "qy"
                        "pitch_deg", "yaw_deg", "roll_ned_deg", "pitch_ned_deg", "yaw_ned_deg")
 
 
+@check_types
 @dataclass
 class NodeSummary:
     """One node's pose log.
@@ -82,6 +84,7 @@ class NodeSummary:
     longest_pause_s: float = 0.0
 
 
+@check_types
 @dataclass
 class LinkSummary:
     """One direction tx -> rx of the signal log: counts, span, report rate [Hz] (copies of one
@@ -103,6 +106,7 @@ class LinkSummary:
     period_s: float = float("nan")
 
 
+@check_types
 @dataclass
 class InspectReport:
     """What :func:`inspect_logs` found; ``problems`` lists everything suspicious, one line each;
@@ -391,6 +395,7 @@ def _frequency_hz(signal: pd.DataFrame) -> float | None:
     return float(f.min()) if f.size else None
 
 
+@check_types
 def inspect_logs(
     paths: str | os.PathLike | Iterable[str | os.PathLike],
     options: ReaderOptions | None = None,

@@ -76,6 +76,7 @@ The ground station is a static node (one pose row, level, its body x axis facing
 
 from __future__ import annotations
 
+import math
 import numbers
 import os
 from collections.abc import Mapping
@@ -85,6 +86,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from rplearn._argtypes import check_types
 from rplearn.core.geometry import quat_wxyz_from_euler_ned_frd_deg
 from rplearn.data.tables import (
     check_frequency_hz,
@@ -109,6 +111,7 @@ _DF_HEAD = b"\xa3\x95"
 _DF_FMT_TYPE = 128
 
 
+@check_types
 def sik_rssi_to_dbm(raw: Any) -> np.ndarray:
     """SiK radio RSSI units -> received power [dBm]: ``raw / 1.9 - 127`` (module docstring).
 
@@ -348,7 +351,7 @@ def _check_arguments(tx_power_dbm: Any, frequency_hz: Any, max_gap_s: Any, strea
     """Refuse arguments out of their domain (:class:`InputError` naming the parameter)."""
     if station_heading_deg is not None and not (
             isinstance(station_heading_deg, numbers.Real) and not isinstance(station_heading_deg, bool)
-            and np.isfinite(station_heading_deg)):
+            and math.isfinite(station_heading_deg)):
         raise InputError(f"station_heading_deg: expected degrees, got {station_heading_deg!r}", param="station_heading_deg")
     for name, value in (("max_gap_s", max_gap_s), ("stream_timeout_s", stream_timeout_s),
                         ("frequency_hz", frequency_hz)):
@@ -362,6 +365,7 @@ def _check_arguments(tx_power_dbm: Any, frequency_hz: Any, max_gap_s: Any, strea
             raise InputError(f"{name}: expected a node id, got {value!r}", param=name)
 
 
+@check_types
 @dataclass(frozen=True)
 class MavlinkOptions:
     """How :func:`read_mavlink` places the station and reads the streams of a MAVLink log.
@@ -413,6 +417,7 @@ class MavlinkOptions:
                 raise InputError(f"{name}: expected a positive number, got {value!r}", param=name)
 
 
+@check_types
 def read_mavlink(
     path: str | os.PathLike,
     tx_power_dbm: float | Mapping[str, float],

@@ -80,7 +80,8 @@ def step_allowed(dt: np.ndarray, speed_a: np.ndarray, speed_b: np.ndarray) -> np
     return (np.maximum(speed_a, speed_b) + STEP_SPEED_SLACK_M_S) * np.abs(dt) + STEP_MARGIN_M
 
 
-def _unexplained(ta, xa, ha, va, tb, xb, hb, vb) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _unexplained(ta: np.ndarray, xa: np.ndarray, ha: np.ndarray, va: np.ndarray, tb: np.ndarray, xb: np.ndarray,
+                 hb: np.ndarray, vb: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Whether going from fixes a to fixes b is a step the speeds do not explain, with the
     horizontal and vertical displacements [m]."""
     dt = tb - ta

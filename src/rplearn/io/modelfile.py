@@ -22,6 +22,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from rplearn._argtypes import check_types
 from rplearn._atomic import atomic_open
 from rplearn.errors import ModelFileError
 
@@ -62,6 +63,7 @@ def reproducible() -> bool:
     return bool(os.environ.get("SOURCE_DATE_EPOCH"))
 
 
+@check_types
 def write_model_file(path: str | os.PathLike[str], model_type: str, payload: Mapping[str, Any]) -> None:
     """Write a checksummed model file atomically.
 
@@ -90,6 +92,7 @@ def _no_constant(name: str) -> Any:
     raise ValueError(f"{name} is not a JSON number")
 
 
+@check_types
 def read_model_file(path: str | os.PathLike[str]) -> tuple[str, dict[str, Any]]:
     """Read and verify a model file; return ``(type, payload)``.
 

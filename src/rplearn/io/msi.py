@@ -42,6 +42,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from rplearn._argtypes import check_types
 from rplearn._atomic import atomic_open
 from rplearn._version import __version__
 from rplearn.core.geometry import wrap_angle_rad
@@ -77,6 +78,7 @@ _KNOWN_KEYS = frozenset(
 )
 
 
+@check_types
 @dataclass
 class MsiPattern:
     """Horizontal and vertical cuts of one antenna, as in an MSI Planet file.
@@ -141,6 +143,7 @@ def _parse_gain_dbi(text: str, where: str) -> float:
     return value if (m.group(2) or "").lower() == "dbi" else value + DBD_TO_DBI
 
 
+@check_types
 def read_msi(path: str | os.PathLike[str]) -> MsiPattern:
     """Read an MSI Planet antenna file (see the module docstring for the format).
 
@@ -238,6 +241,7 @@ def _fmt_loss(v: float) -> str:
     return "0.00" if s == "-0.00" else s
 
 
+@check_types
 def write_msi(msi: MsiPattern, path: str | os.PathLike[str]) -> str:
     """Write an :class:`MsiPattern` as an MSI Planet file; return the path.
 
@@ -269,6 +273,7 @@ def peak_gain_dbi(pattern_like: Any, node: str, step_deg: float = 1.0) -> float:
     return float(np.nanmax(pattern_like.evaluate(node, az_g, el_g)))
 
 
+@check_types
 def msi_pattern(
     pattern_like: Any,
     node: str,
@@ -331,6 +336,7 @@ def msi_pattern(
     )
 
 
+@check_types
 def export_msi(
     pattern_like: Any,
     node: str,
@@ -364,6 +370,7 @@ def export_msi(
     return msi
 
 
+@check_types
 def export_msi_files(
     pattern_like: Any, out_dir: str | os.PathLike[str], frequency_hz: float | None = None
 ) -> list[str]:

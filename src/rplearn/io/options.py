@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from numbers import Real
 from typing import Any, Mapping
 
+from rplearn._argtypes import check_types
 from rplearn.data.tables import check_frequency_hz, check_tx_power_dbm
 from rplearn.errors import InputError
 
@@ -97,6 +98,7 @@ def _check_rssi_topics(value: Any) -> dict[str, tuple[str, str]] | None:
     return out
 
 
+@check_types
 @dataclass(frozen=True)
 class ReaderOptions:
     """How :func:`rplearn.io.read_logs` reads logs of every format.

@@ -26,12 +26,14 @@ from typing import Any, Mapping
 
 import pandas as pd
 
+from rplearn._argtypes import check_types
 from rplearn.errors import InputError
 
 #: File endings of the tables a partitioned dataset is made of.
 TABLE_SUFFIXES: tuple[str, ...] = (".parquet", ".pq", ".csv", ".csv.gz")
 
 
+@check_types
 @dataclass(frozen=True)
 class Part:
     """One file of a dataset.
@@ -54,6 +56,7 @@ def is_url(spec: str) -> bool:
     return bool(sep) and head.replace("+", "").replace("-", "").isalnum() and len(head) > 1
 
 
+@check_types
 def is_partitioned(spec: str) -> bool:
     """Whether a dataset spec names more than a single local file: a directory, a glob, a
     comma-separated list or a URL (see the module docstring)."""
@@ -139,6 +142,7 @@ def _local_parts(spec: str) -> list[Part]:
     raise InputError(f"{spec}: no such file", param="dataset")
 
 
+@check_types
 def dataset_parts(spec: str) -> list[Part]:
     """The files of a dataset spec (see the module docstring), sorted; an error when none.
 

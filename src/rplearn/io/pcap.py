@@ -30,11 +30,12 @@ from __future__ import annotations
 import os
 import struct
 from dataclasses import dataclass
-from typing import Any, Iterator, Mapping
+from typing import Any, BinaryIO, Iterator, Mapping
 
 import numpy as np
 import pandas as pd
 
+from rplearn._argtypes import check_types
 from rplearn._atomic import atomic_open
 from rplearn.errors import InputError, LogFormatError
 
@@ -214,7 +215,7 @@ def transmitter_address(frame: bytes) -> str | None:
     return ":".join(f"{b:02x}" for b in frame[10:16])
 
 
-def _pcap_complete_frames(fh, magic: bytes) -> tuple[int, bool]:
+def _pcap_complete_frames(fh: BinaryIO, magic: bytes) -> tuple[int, bool]:
     """Walk a classic pcap's record headers: ``(complete frames, truncated)``, where
     ``truncated`` means the last record runs past the end of the file (a capture cut off
     while it was written). dpkt would hand on such a partial frame as if it were whole."""
@@ -235,7 +236,7 @@ def _pcap_complete_frames(fh, magic: bytes) -> tuple[int, bool]:
     return frames, False
 
 
-def _open_capture(path: str, fh):
+def _open_capture(path: str, fh: BinaryIO) -> Any:
     import dpkt
 
     magic = fh.read(4)
@@ -314,7 +315,7 @@ def read_radiotap_frames(path: str) -> pd.DataFrame:
     (or None), ``signal_dbm``, ``noise_dbm``, ``antenna``, ``frequency_hz``, ``tx_power_dbm``,
     ``radiotap_ok`` (False where the header is corrupt). Missing values are NaN.
     """
-    rows = []
+    rows: list[tuple[int, float, str | None, float, float, float, float, float, bool]] = []
     for ts, rt, ta, number in iter_radiotap_frames(path):
         if rt is None:
             rows.append((number, ts, None, np.nan, np.nan, np.nan, np.nan, np.nan, False))
@@ -333,6 +334,7 @@ def read_radiotap_frames(path: str) -> pd.DataFrame:
     return pd.DataFrame(rows, columns=cols)
 
 
+@check_types
 def read_pcap(
     path: str,
     receiver: str,
@@ -425,6 +427,7 @@ def read_pcap(
     return signal, meta
 
 
+@check_types
 def write_radiotap_pcap(
     path: str,
     t_s: np.ndarray,

@@ -9,6 +9,7 @@ from typing import Any, Callable, Iterable, Mapping
 
 import pandas as pd
 
+from rplearn._argtypes import check_types
 from rplearn.data.tables import NON_UNIT_QUATERNION_ATTR, validate_pose_log
 from rplearn.errors import InputError, RplearnError
 from rplearn.io._common import Logs
@@ -152,6 +153,7 @@ def _read_mavlink(path: str, options: ReaderOptions, got: _Gathered) -> dict[str
             f"a MAVLink log carries neither (ReaderOptions.{' and ReaderOptions.'.join(missing)})",
             param=missing[0], related=missing[1:],
         )
+    assert options.tx_power_dbm is not None and options.frequency_hz is not None  # refused above
     logs, meta = _mavlink.read_mavlink(
         path, options.tx_power_dbm, options.frequency_hz, (options.nodes or {}).get(path), options.station,
         _mavlink.MavlinkOptions(station_geodetic=options.station_geodetic, origin_geodetic=got.origin,
@@ -159,8 +161,10 @@ def _read_mavlink(path: str, options: ReaderOptions, got: _Gathered) -> dict[str
     )
     if got.origin is None:
         got.origin = meta["origin_geodetic"]
-    got.poses.append(logs.pose)
-    got.signals.append(logs.signal)
+    if logs.pose is not None:
+        got.poses.append(logs.pose)
+    if logs.signal is not None:
+        got.signals.append(logs.signal)
     meta["kind"] = "pose+signal"
     return meta
 
@@ -190,6 +194,7 @@ def _merge(got: _Gathered) -> tuple[Logs, dict[str, Any]]:
     return Logs(pose=pose, signal=signal), {"files": got.files, "origin_geodetic": got.origin}
 
 
+@check_types
 def read_logs(
     paths: str | os.PathLike | Iterable[str | os.PathLike],
     options: ReaderOptions | None = None,

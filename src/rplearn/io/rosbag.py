@@ -22,6 +22,7 @@ messages without a header or with a zero stamp) or the bag's receive times
 
 from __future__ import annotations
 
+import math
 import os
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -31,6 +32,7 @@ from typing import Any, Iterator, Mapping
 import numpy as np
 import pandas as pd
 
+from rplearn._argtypes import check_types
 from rplearn.data.tables import validate_pose_log
 from rplearn.errors import InputError, LogFormatError
 from rplearn.io._common import Logs
@@ -42,7 +44,7 @@ POSE_MSGTYPES: tuple[str, ...] = (
 )
 
 
-def _rosbags():
+def _rosbags() -> Any:
     try:
         from rosbags.highlevel import AnyReader
         from rosbags.typesys import Stores, get_types_from_msg, get_typestore
@@ -191,6 +193,7 @@ def _messages(reader: Any, connections: list, path: str) -> Iterator[tuple[Any, 
         yield conn, ts, msg
 
 
+@check_types
 def bag_topics(
     path: str | os.PathLike, msg_definitions: Mapping[str, str] | None = None
 ) -> dict[str, str]:
@@ -212,6 +215,7 @@ def describe_topics(topics: Mapping[str, str], limit: int = 10) -> str:
     return shown + (f" and {rest} more" if rest > 0 else "")
 
 
+@check_types
 @dataclass(frozen=True)
 class RosbagOptions:
     """How :func:`read_rosbag` reads the signal fields, message types and times of a bag.
@@ -249,6 +253,7 @@ class RosbagOptions:
             raise InputError(f"time_source: expected 'header' or 'bag', got {self.time_source!r}", param="time_source")
 
 
+@check_types
 def read_rosbag(
     path: str | os.PathLike,
     pose_topics: Mapping[str, str],
@@ -312,6 +317,8 @@ def read_rosbag(
     pose_rows: dict[str, list] = {k: [] for k in ("t", "node", "x", "y", "z", "qw", "qx", "qy", "qz")}
     sig_rows: dict[str, list] = {k: [] for k in ("t", "tx", "rx", "rssi_dbm", "tx_power_dbm", "frequency_hz")}
     frame_ids: dict[str, str] = {}
+    power_dbm = math.nan if tx_power_dbm is None else float(tx_power_dbm)  # None only with its field
+    carrier_hz = math.nan if frequency_hz is None else float(frequency_hz)
     with open_rosbag(path, msg_definitions) as reader:
         by_topic = {c.topic: c for c in reader.connections}
         wanted = list(pose_topics) + list(rssi_topics)
@@ -349,9 +356,9 @@ def read_rosbag(
                 sig_rows["rx"].append(str(rx))
                 sig_rows["rssi_dbm"].append(_float_field(msg, rssi_field, where))
                 sig_rows["tx_power_dbm"].append(
-                    _float_field(msg, tx_power_field, where) if tx_power_field else float(tx_power_dbm))
+                    _float_field(msg, tx_power_field, where) if tx_power_field else power_dbm)
                 sig_rows["frequency_hz"].append(
-                    _float_field(msg, frequency_field, where) if frequency_field else float(frequency_hz))
+                    _float_field(msg, frequency_field, where) if frequency_field else carrier_hz)
         fmt = "ros1" if not getattr(reader, "is2", True) else "ros2"
     pose = None
     if pose_topics:

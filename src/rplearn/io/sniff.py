@@ -11,6 +11,7 @@ from __future__ import annotations
 import os
 from typing import Sequence
 
+from rplearn._argtypes import check_types
 from rplearn.errors import InputError
 
 #: Raw log kinds (:func:`detect_format`) and how a message names them.
@@ -56,6 +57,7 @@ _EXTENSIONS: dict[str, str] = {
 }
 
 
+@check_types
 def detect_format(path: str | os.PathLike) -> str:
     """Format of a log: ``"ulog"``, ``"ros1"``, ``"ros2"``, ``"pcap"``, ``"mavlink"`` (a
     ``.tlog`` or an ArduPilot DataFlash log) or ``"table"``.

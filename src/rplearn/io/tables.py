@@ -21,6 +21,7 @@ from typing import Any, Iterator, Mapping
 import numpy as np
 import pandas as pd
 
+from rplearn._argtypes import check_types
 from rplearn.data.tables import CSV_DTYPES, POSE_COLUMNS, SIGNAL_COLUMNS, node_ids, normalise_times, validate_pose_log
 from rplearn.errors import InputError, LogFormatError
 from rplearn.core.geometry import quat_wxyz_from_euler_enu_flu_deg, quat_wxyz_from_euler_ned_frd_deg
@@ -253,6 +254,7 @@ def _quaternions(values: dict[str, np.ndarray], att_cols: tuple[str, ...], attit
     return quat_wxyz_from_euler_ned_frd_deg(*(values[c] for c in att_cols))
 
 
+@check_types
 def canonical_pose(
     df: pd.DataFrame,
     source: str = "pose log",
@@ -320,6 +322,7 @@ def canonical_pose(
     return validate_pose_log(out, source), meta
 
 
+@check_types
 def canonical_signal(
     df: pd.DataFrame,
     source: str = "signal log",
@@ -369,6 +372,7 @@ def canonical_signal(
     return out
 
 
+@check_types
 def read_pose_table(path: str, **options: Any) -> tuple[pd.DataFrame, dict[str, Any]]:
     """Read a pose log from CSV or Parquet (by extension); options of :func:`canonical_pose`.
 
@@ -381,6 +385,7 @@ def read_pose_table(path: str, **options: Any) -> tuple[pd.DataFrame, dict[str, 
     return pose, meta
 
 
+@check_types
 def read_signal_table(path: str, **options: Any) -> tuple[pd.DataFrame, dict[str, Any]]:
     """Read a signal log from CSV or Parquet; options of :func:`canonical_signal`.
 
@@ -392,6 +397,7 @@ def read_signal_table(path: str, **options: Any) -> tuple[pd.DataFrame, dict[str
     return signal, {"source": source, "format": table_format(source), "rows": int(len(signal))}
 
 
+@check_types
 def iter_signal_table(
     path: str, chunk_rows: int = 200_000, **options: Any
 ) -> Iterator[pd.DataFrame]:
@@ -427,6 +433,7 @@ def iter_signal_table(
         raise LogFormatError(_table_error(source, path, exc)) from None
 
 
+@check_types
 def table_columns(path: str, columns: Mapping[str, str] | None = None) -> list[str]:
     """Column names of a CSV or Parquet table after renaming (its header only is read)."""
     source = str(path)

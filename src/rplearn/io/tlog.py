@@ -41,6 +41,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from rplearn._argtypes import check_types
 from rplearn._atomic import atomic_open
 from rplearn.core.geometry import enu_to_ned, euler_from_quat_wxyz, quat_enu_flu_to_ned_frd, yaw_from_quat_wxyz
 from rplearn.errors import InputError
@@ -56,6 +57,7 @@ DEFAULT_START_UNIX_S = 1_767_225_600.0
 BOOT_LEAD_S = 1.0
 
 
+@check_types
 def dbm_to_sik_rssi(rssi_dbm: Any) -> tuple[np.ndarray, int]:
     """Received power [dBm] -> SiK RSSI units (1-254) and the count of values clipped to that range.
 
@@ -145,6 +147,7 @@ def station_pose(pose: pd.DataFrame, station: str) -> tuple[np.ndarray, float, f
     return centre, float(np.mod(90.0 - np.degrees(mean_yaw), 360.0)), spread
 
 
+@check_types
 @dataclass(frozen=True)
 class TlogDefects:
     """Defects of real ground-station logs to write into a clean simulated flight (all off by default).
@@ -253,7 +256,7 @@ def _records(pose: pd.DataFrame, signal: pd.DataFrame, vehicle: str, station: st
     second = np.floor(v["t"] - t0)
     beat = np.concatenate([[True], second[1:] != second[:-1]]) & ~silent
     counts = {"attitude": 0, "heartbeat": 0}
-    for i in np.flatnonzero(~silent):
+    for i in np.flatnonzero(~silent).tolist():
         b = int(boot_ms[i])
         if beat[i]:
             base = 128 if valid[i] else 0  # MAV_MODE_FLAG_SAFETY_ARMED once the origin is set
@@ -284,6 +287,7 @@ def _records(pose: pd.DataFrame, signal: pd.DataFrame, vehicle: str, station: st
     return out, written
 
 
+@check_types
 def write_tlog(
     logs: Logs,
     path: str | os.PathLike,

@@ -33,13 +33,14 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from rplearn._argtypes import check_types
 from rplearn.data.tables import validate_pose_log
 from rplearn.errors import InputError, LogFormatError
 from rplearn.core.geometry import quat_ned_frd_to_enu_flu
 from rplearn.io.geodetic import local_ned_to_enu, local_ned_to_geodetic
 
 
-def _pyulog():
+def _pyulog() -> Any:
     try:
         from pyulog import ULog
     except ImportError:  # pragma: no cover - pyulog is a dependency
@@ -299,6 +300,7 @@ def _seconds(ulog: Any, t_us: np.ndarray, time_reference: str, source: str) -> t
     return t_s, clock
 
 
+@check_types
 def read_ulog(
     path: str | os.PathLike,
     node: str,
@@ -377,6 +379,7 @@ def read_ulog(
     return pose, meta
 
 
+@check_types
 def read_ulogs(
     paths_to_nodes: dict[str, str],
     origin_geodetic: tuple[float, float, float] | None = None,

@@ -21,57 +21,12 @@ module           public names
 ===============  ===============================================================================
 
 Every name of ``__all__`` can be imported from here (``from rplearn.models import fit_model``);
-its module, and pandas or scikit-learn, are imported on first use (:mod:`rplearn._lazy`).
+its module, and pandas or scikit-learn, are imported on first use (``__init__.pyi``, lazy_loader).
 """
 
 from __future__ import annotations
 
-from rplearn._lazy import lazy_exports
+import lazy_loader
 
-_NAMES: dict[str, str] = {
-    # what every model offers
-    "Model": "base",
-    "model_frequency_hz": "base",
-    "require_patterns": "base",
-    # naming a model
-    "DEFAULT_RIDGE_BY_KIND": "spec",
-    "MODEL_KINDS": "spec",
-    "ModelSpec": "spec",
-    "check_fit_options": "spec",
-    # how a model is learned (one fit request)
-    "FitOptions": "options",
-    "LOSSES": "options",
-    "TrainingSummary": "training",
-    "default_ridge": "spec",
-    # model kinds
-    "KNNModel": "baselines",
-    "MeanModel": "baselines",
-    "PatternSet": "patterns",
-    # learning, evaluating, predicting, loading
-    "FittedModel": "fit",
-    "evaluate_models": "fit",
-    "fit_model": "fit",
-    "fit_huber": "robust",
-    "RobustReport": "robust",
-    "fit_patterns": "fit",
-    "scores_markdown": "fit",
-    "solve_patterns": "fit",
-    "DatasetPrediction": "predict",
-    "predict_dataset": "predict",
-    "FrequencyMismatch": "predict",
-    "frequency_mismatch": "predict",
-    "distinct_labels": "predict",
-    "unlearned_directions": "predict",
-    "directed_counts": "terms",
-    "regression_inputs": "terms",
-    "terms_text": "terms",
-    "load_model": "load",
-    # scikit-learn estimators
-    "ANGLE_COLUMNS": "estimators",
-    "JointKNNRegressor": "estimators",
-    "MeanRegressor": "estimators",
-    "PatternRegressor": "estimators",
-}
-
-__all__ = sorted(_NAMES)
-__getattr__, __dir__ = lazy_exports(__name__, _NAMES)
+# The public names are those of __init__.pyi, each imported on first use.
+__getattr__, __dir__, __all__ = lazy_loader.attach_stub(__name__, __file__)

@@ -173,7 +173,7 @@ def within_unit_noise_var(stats: Mapping[str, NormalEquations], normal: NormalEq
                                   st.n_pattern_columns + np.arange(len(st.shared))])
             sse -= (sum_y - c @ a[idx]) ** 2 / st.n_samples
     units = sum(1 for st in stats.values() if st.n_samples)
-    return float(max(sse, 0.0) / max(normal.n_samples - rank - (units - 1), 1))
+    return max(float(sse), 0.0) / max(normal.n_samples - rank - (units - 1), 1)
 
 
 def unseen_spread_cap_db(normal: NormalEquations, basis: Any) -> float:
@@ -257,14 +257,15 @@ def fit_auto(
             y, env = regression_inputs(s, options)
             stats[u] = NormalEquations(basis, len(nodes), environment=env is not None).add(
                 s.directions, s.tx_index, s.rx_index, y, env)
-        freq = Counter()
+        freq: Counter[float] = Counter()
         for s in units.values():
             frequency_counts(s, freq)
         fitted, choice = fit_from_statistics(stats, big, orders, nodes, options, weighted_median(freq), provenance,
                                              power)
         fitted.ltd_s = time.perf_counter() - t0
-    fitted.model.training = fitted.model.training.replace(ltd_s=fitted.ltd_s,
-                                                          coverage_deg=node_coverage_grids(list(units.values())))
+    model = fitted.model
+    assert isinstance(model, PatternSet)  # fit_from_statistics learns patterns
+    model.training = model.training.replace(ltd_s=fitted.ltd_s, coverage_deg=node_coverage_grids(list(units.values())))
     return fitted, choice
 
 
@@ -353,7 +354,7 @@ def fit_from_statistics(
     covariance = None if sol.covariance is None else sol.covariance * (rescale * inflation)
     cap = unseen_spread_cap_db(normal, chosen)
     wanted = {str(n): min(spread[str(n)], cap) for n in nodes}
-    if sub_target is not None and covariance is not None and set(map(str, prior)) >= set(map(str, nodes)):
+    if sub_target is not None and covariance is not None and prior is not None and set(map(str, prior)) >= set(map(str, nodes)):
         if prior_spread_db is None:
             misfit = prior_misfit_var(normal, sub_target, chosen)
             learned = float(np.sqrt(max(misfit - within_var - level_var, 0.0) / 2.0))  # two ends a sample

@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any, Mapping, Protocol, runtime_checkable
 import numpy as np
 from numpy.typing import NDArray
 
+from rplearn._argtypes import check_types
 from rplearn.data.tables import check_frequency_hz
 from rplearn.errors import InputError
 from rplearn.models.training import TrainingSummary
@@ -100,6 +101,7 @@ def learned_frequency_hz(samples: LinkSamples) -> float | None:
     return float(np.median(samples.frequency_hz))
 
 
+@check_types
 def model_frequency_hz(model: Model, frequency_hz: float | None = None) -> float:
     """The carrier frequency to use with a model: ``frequency_hz`` if given, else the model's [Hz].
 
@@ -121,6 +123,7 @@ def model_frequency_hz(model: Model, frequency_hz: float | None = None) -> float
     return float(f)
 
 
+@check_types
 def require_patterns(model: Model, purpose: str) -> None:
     """Refuse a baseline where per-node patterns are needed.
 

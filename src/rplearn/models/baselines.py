@@ -18,16 +18,20 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass, field
-from typing import Any, Mapping
+from typing import TYPE_CHECKING, Any, Iterable, Mapping
 
 import numpy as np
 from numpy.typing import ArrayLike
 
+from rplearn._argtypes import check_types
 from rplearn.data.tables import LinkSamples
 from rplearn.errors import IdentifiabilityError, InputError, ModelFileError
 from rplearn.io.modelfile import read_sidecar, write_model_with_sidecar
 from rplearn.models.base import frequency_from_training, learned_frequency_hz
 from rplearn.models.training import TrainingSummary
+
+if TYPE_CHECKING:
+    from sklearn.neighbors import KNeighborsRegressor
 
 Link = tuple[str, str]
 
@@ -48,12 +52,12 @@ def _angles(samples: LinkSamples, idx: np.ndarray | slice = slice(None)) -> np.n
     return np.column_stack([d.az_tx[idx], d.el_tx[idx], d.az_rx[idx], d.el_rx[idx]])
 
 
-def _missing_link(key: Link, known) -> InputError:
+def _missing_link(key: Link, known: Iterable[Link]) -> InputError:
     names = ", ".join(f"{a}->{b}" for a, b in known)
     return InputError(f"link {key[0]}->{key[1]} was not in the training data (the model knows {names})")
 
 
-def _nodes_of_links(links) -> tuple[str, ...]:
+def _nodes_of_links(links: Iterable[Link]) -> tuple[str, ...]:
     """Node ids of directed links, in order of first appearance."""
     return tuple(dict.fromkeys(n for key in links for n in key))
 
@@ -101,7 +105,9 @@ def check_n_neighbors(n_neighbors: Any, n_samples: int | None = None, what: str 
     return k
 
 
-def knn_regressor(angles_rad: np.ndarray, gain_db: np.ndarray, n_neighbors: int, what: str = "the training data"):
+def knn_regressor(
+    angles_rad: np.ndarray, gain_db: np.ndarray, n_neighbors: int, what: str = "the training data"
+) -> KNeighborsRegressor:
     """The paper's NN-k for one link: a fitted k-d-tree ``KNeighborsRegressor``.
 
     Parameters
@@ -142,6 +148,7 @@ class _PerLinkBaseline:
         return frequency_from_training(self.training)
 
 
+@check_types
 @dataclass
 class MeanModel(_PerLinkBaseline):
     """The paper's M: mean training joint gain per directed link [dB]."""
@@ -205,6 +212,7 @@ class MeanModel(_PerLinkBaseline):
         return cls(means, TrainingSummary.from_dict(payload.get("training", {})), dict(payload.get("provenance", {})))
 
 
+@check_types
 @dataclass
 class KNNModel(_PerLinkBaseline):
     """The paper's NN-k: k nearest neighbours in the 4-D joint-angle space, per directed link."""
@@ -236,7 +244,7 @@ class KNNModel(_PerLinkBaseline):
             model._regressor(key)
         return model
 
-    def _regressor(self, key: Link):
+    def _regressor(self, key: Link) -> KNeighborsRegressor:
         if key not in self._regressors:
             what = f"link {key[0]}->{key[1]}"
             self._regressors[key] = knn_regressor(self.train_angles_rad[key], self.train_gain_db[key], self.n_neighbors, what)

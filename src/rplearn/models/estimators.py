@@ -26,7 +26,7 @@ path.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Self
 
 import numpy as np
 from sklearn.base import BaseEstimator, RegressorMixin
@@ -138,7 +138,7 @@ class PatternRegressor(RegressorMixin, BaseEstimator):
             raise InputError(f"basis: expected one of sh, bg or poly, got {self.basis!r}", param="basis")
         return ModelSpec(kind, self.order, self.ridge, self.sigma_rad2, self.grid)
 
-    def fit(self, X, y):
+    def fit(self, X: Any, y: Any) -> Self:  # array-likes, checked by validate_data
         X, y = validate_data(self, X, y, y_numeric=True, dtype=np.float64)
         _, tx, rx = split_features(X)
         n_nodes = self.n_nodes if self.n_nodes is not None else int(max(tx.max(), rx.max())) + 1
@@ -148,7 +148,7 @@ class PatternRegressor(RegressorMixin, BaseEstimator):
         self.coef_ = self.patterns_.coef
         return self
 
-    def predict(self, X):
+    def predict(self, X: Any) -> np.ndarray:  # an array-like, checked by validate_data
         check_is_fitted(self, "coef_")
         X = validate_data(self, X, reset=False, dtype=np.float64)
         _, tx, rx = split_features(X)
@@ -172,12 +172,12 @@ class MeanRegressor(RegressorMixin, BaseEstimator):
     Any number of feature columns is accepted.
     """
 
-    def fit(self, X, y):
+    def fit(self, X: Any, y: Any) -> Self:  # array-likes, checked by validate_data
         X, y = validate_data(self, X, y, y_numeric=True, dtype=np.float64)
         self.mean_ = mean_joint_gain_db(y)
         return self
 
-    def predict(self, X):
+    def predict(self, X: Any) -> np.ndarray:  # an array-like, checked by validate_data
         check_is_fitted(self, "mean_")
         X = validate_data(self, X, reset=False, dtype=np.float64)
         return np.full(X.shape[0], self.mean_)
@@ -204,14 +204,14 @@ class JointKNNRegressor(RegressorMixin, BaseEstimator):
     def __init__(self, n_neighbors: int = 400) -> None:
         self.n_neighbors = n_neighbors
 
-    def fit(self, X, y):
+    def fit(self, X: Any, y: Any) -> Self:  # array-likes, checked by validate_data
         X, y = validate_data(self, X, y, y_numeric=True, dtype=np.float64)
         split_features(X)  # same fixed layout as PatternRegressor
         self.knn_ = knn_regressor(X[:, :4], y, self.n_neighbors)
         self.n_train_ = X.shape[0]
         return self
 
-    def predict(self, X):
+    def predict(self, X: Any) -> np.ndarray:  # an array-like, checked by validate_data
         check_is_fitted(self, "knn_")
         X = validate_data(self, X, reset=False, dtype=np.float64)
         split_features(X)

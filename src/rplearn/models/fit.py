@@ -13,6 +13,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
+from rplearn._argtypes import check_types
 from rplearn.core.threads import blas_threads_for, warm_up as warm_up_blas
 from rplearn.models.baselines import KNNModel, MeanModel
 from rplearn.data.tables import LinkSamples
@@ -27,6 +28,7 @@ from rplearn.errors import InputError
 from rplearn.models.training import TrainingSummary
 
 
+@check_types
 @dataclass
 class FittedModel:
     """A learned model, its spec and its learning wall time (LTD) [s].
@@ -62,6 +64,7 @@ class FittedModel:
         return float(self.model.training.condition_number or np.nan)
 
 
+@check_types
 def solve_patterns(
     samples: LinkSamples, spec: ModelSpec, options: FitOptions | None = None,
 ) -> tuple[PatternSet, FitReport]:
@@ -93,7 +96,7 @@ def solve_patterns(
         len(samples.nodes),
         basis,
         samples.nodes,
-        JointFitOptions(ridge=spec.ridge, gauge=options.gauge, smoothing=spec.smoothing, environment=env,
+        JointFitOptions(ridge=spec.ridge_weight, gauge=options.gauge, smoothing=spec.smoothing, environment=env,
                         link_offsets=options.link_offsets),
     )
     fields, terms = shared_fields(sol, samples.nodes, options, directed_counts(samples))
@@ -138,6 +141,7 @@ def node_coverage_grids(
     return out
 
 
+@check_types
 def fit_patterns(
     samples: LinkSamples, spec: ModelSpec, options: FitOptions | None = None,
     provenance: Mapping[str, Any] | None = None,
@@ -166,6 +170,7 @@ def _warm_up(spec: ModelSpec, n_samples: int = 1, options: FitOptions | None = N
     warm_up_blas()
 
 
+@check_types
 def fit_model(
     samples: LinkSamples,
     spec: ModelSpec,
@@ -194,9 +199,9 @@ def fit_model(
     with blas_threads_for(len(samples), columns):
         t0 = time.perf_counter()
         if spec.kind == "mean":
-            model: Model = MeanModel.fit(samples)
+            model: MeanModel | KNNModel | PatternSet = MeanModel.fit(samples)
         elif spec.kind == "knn":
-            model = KNNModel.fit(samples, int(spec.order))
+            model = KNNModel.fit(samples, int(spec.order or 0))  # ModelSpec refuses a knn without an order
         else:
             model = fit_patterns(samples, spec, options)
         ltd = time.perf_counter() - t0
@@ -206,6 +211,7 @@ def fit_model(
     return FittedModel(spec, model, ltd)
 
 
+@check_types
 def evaluate_models(fitted: Sequence[FittedModel], samples: LinkSamples, notes: list[str] | None = None) -> list[Scores]:
     """Table I: RMSE, MAE, Q95, |phi|, AIC, LTD and condition number of every model.
 
@@ -239,6 +245,7 @@ def scores_of_predictions(
     return rows
 
 
+@check_types
 def scores_markdown(rows: Sequence[Scores], extra: Mapping[str, Mapping[str, float]] | None = None) -> str:
     """Table I as Markdown (AIC in thousands, as the paper prints it)."""
     extra = extra or {}

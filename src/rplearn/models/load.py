@@ -6,14 +6,17 @@ from __future__ import annotations
 import dataclasses
 import os
 
+from rplearn._argtypes import check_types
 from rplearn.io.modelfile import read_model_file
 from rplearn.models.base import require_patterns
+from rplearn.models.base import Model
 from rplearn.models.baselines import KNNModel, MeanModel
 from rplearn.models.options import FitOptions, is_model_file
 from rplearn.models.patterns import PatternSet
 
 
-def load_model(path: str | os.PathLike[str]):
+@check_types
+def load_model(path: str | os.PathLike[str]) -> Model:
     """Load any model file: a PatternSet or a baseline model."""
     model_type, payload = read_model_file(path)
     name = os.fspath(path)

@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from rplearn._argtypes import check_types
 from rplearn.core.environment import PathLoss
 from rplearn.core.gauge import Gauge
 from rplearn.core.lsq.solver import PRIOR_LEVELS
@@ -29,6 +30,7 @@ if TYPE_CHECKING:
 LOSSES: tuple[str, ...] = ("ls", "huber")
 
 
+@check_types
 @dataclass(frozen=True)
 class FitOptions:
     """How a model is learned (everything but the model and the data).

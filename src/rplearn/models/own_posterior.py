@@ -35,6 +35,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from rplearn.core.basis_base import Basis
+from rplearn.core.gauge import Gauge
 from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.core.lsq.selection import penalty_vector
 from rplearn.core.lsq.solver import solve
@@ -86,7 +87,7 @@ class OwnPrior:
     scale: float
     power: float
     ridge: float
-    gauge: str | Mapping[str, Any]
+    gauge: Gauge | str | Mapping[str, Any]
     target: np.ndarray | None
     prior_level: str = "data"
 

@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any, Mapping, Sequence
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from rplearn._argtypes import check_types
 from rplearn._version import __version__
 from rplearn.core.bases import Basis, basis_from_dict
 from rplearn.core.basis_base import chunk_directions
@@ -39,6 +40,7 @@ if TYPE_CHECKING:
 INLINE_COVARIANCE_VALUES = 250_000
 
 
+@check_types
 @dataclass
 class PatternSet:
     """One radiation pattern per node, each ``G_n = basis(az, el) . coef[n]`` [dBi].
@@ -292,12 +294,10 @@ class PatternSet:
         """Joint gain ``G_tx(az_tx, el_tx) + G_rx(az_rx, el_rx)`` [dB] (paper eq. 1)."""
         az_tx = np.atleast_1d(np.asarray(az_tx, np.float64))
         n = az_tx.size
-        tx = np.broadcast_to(np.asarray(tx_node, dtype=object), (n,)) if not isinstance(tx_node, str) else None
-        rx = np.broadcast_to(np.asarray(rx_node, dtype=object), (n,)) if not isinstance(rx_node, str) else None
-        if tx is None and rx is None:
+        if isinstance(tx_node, str) and isinstance(rx_node, str):
             return self.evaluate(tx_node, az_tx, el_tx) + self.evaluate(rx_node, az_rx, el_rx)
-        tx_idx = np.full(n, self.node_index(tx_node)) if tx is None else np.array([self.node_index(v) for v in tx])
-        rx_idx = np.full(n, self.node_index(rx_node)) if rx is None else np.array([self.node_index(v) for v in rx])
+        tx_idx, rx_idx = (np.full(n, self.node_index(v)) if isinstance(v, str) else np.array(
+            [self.node_index(u) for u in np.broadcast_to(np.asarray(v, dtype=object), (n,))]) for v in (tx_node, rx_node))
         angles = [np.asarray(a, np.float64).ravel() for a in (az_tx, el_tx, az_rx, el_rx)]
         for name, a in zip(("az_tx", "el_tx", "az_rx", "el_rx"), angles):
             if a.size not in (1, n):
@@ -411,7 +411,7 @@ class PatternSet:
         30 drones at SH-10 was 239 MiB, 20 s to write and 7.6 s to read."""
         inline = self.covariance is None or self.covariance.size <= INLINE_COVARIANCE_VALUES
         write_model_with_sidecar(path, "patterns", self.to_dict(inline_covariance=inline),
-                                 None if inline else {"covariance": self.covariance})
+                                 None if inline or self.covariance is None else {"covariance": self.covariance})
 
     @classmethod
     def from_dict(cls, payload: Mapping[str, Any], source: str = "model") -> "PatternSet":

@@ -18,6 +18,7 @@ import numpy as np
 import pandas as pd
 from numpy.typing import ArrayLike
 
+from rplearn._argtypes import check_types
 from rplearn.core.link import received_power_dbm
 from rplearn.data.tables import link_samples
 from rplearn.models.base import Model
@@ -34,6 +35,7 @@ PREDICTION_COLUMNS: tuple[str, ...] = (
 UNCOVERED_DEG = 10.0
 
 
+@check_types
 @dataclass(frozen=True)
 class FrequencyMismatch:
     """Rows at a carrier other than the model's.
@@ -59,6 +61,7 @@ class FrequencyMismatch:
         )
 
 
+@check_types
 def frequency_mismatch(model: Model, frequency_hz: ArrayLike) -> FrequencyMismatch | None:
     """Rows whose carrier differs from the model's by more than 5 % (None: all agree, or the
     model does not state its frequency)."""
@@ -72,6 +75,7 @@ def frequency_mismatch(model: Model, frequency_hz: ArrayLike) -> FrequencyMismat
     return FrequencyMismatch(int(off.sum()), float(np.median(f[off])), float(learned))
 
 
+@check_types
 @dataclass
 class DatasetPrediction:
     """A dataset with predictions added, and how well they match any measured RSSI.
@@ -120,6 +124,7 @@ class DatasetPrediction:
                 "not their value, or fly those directions"]
 
 
+@check_types
 def predict_dataset(model: Model, dataset: pd.DataFrame, source: str = "dataset") -> DatasetPrediction:
     """Predict the joint gain, received power and their spreads for every row (paper eq. 1).
 
@@ -160,6 +165,7 @@ def predict_dataset(model: Model, dataset: pd.DataFrame, source: str = "dataset"
     return DatasetPrediction(table, int(measured.sum()), rmse, mismatch, n_uncovered, tuple(notes))
 
 
+@check_types
 def unlearned_directions(model: Model, samples: Any) -> list[str]:
     """Notes on the predicted link directions ``TX->RX`` a pattern model never learned from:
     they are predicted with an electronics offset of 0 dB, the mean level of the links it
@@ -222,6 +228,7 @@ def _add_coverage(model: Model, samples: Any, table: pd.DataFrame) -> int:
     return int(np.sum(worst > UNCOVERED_DEG))
 
 
+@check_types
 def distinct_labels(labels: Sequence[str], names: Sequence[str]) -> list[str]:
     """Labels made distinct by adding the name (e.g. file name) where two share a label."""
     counts = pd.Series(list(labels)).value_counts()

@@ -65,13 +65,15 @@ def reference_model(
     if not patterns:
         raise InputError("patterns: give at least one node's reference pattern", param="patterns")
     nodes = tuple(sorted(str(n) for n in patterns))
-    coefs, residuals, freqs = [], {}, []
+    coefs, residuals = [], {}
+    freqs: list[float] = []
     for n in nodes:
         c, r = expand_reference(patterns[n], order)
         coefs.append(c)
         residuals[n] = r
-        if patterns[n].frequency_hz is not None:
-            freqs.append(patterns[n].frequency_hz)
+        freq = patterns[n].frequency_hz
+        if freq is not None:
+            freqs.append(freq)
     basis = SphericalHarmonics(order)
     p = basis.n_coef
     training: dict[str, Any] = {

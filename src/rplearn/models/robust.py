@@ -24,6 +24,7 @@ from typing import Any, Mapping
 import numpy as np
 import pandas as pd
 
+from rplearn._argtypes import check_types
 from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.models.terms import directed_counts
 from rplearn.core.lsq.selection import penalty_scale, penalty_vector
@@ -42,6 +43,7 @@ TOLERANCE_DB = 0.01
 #: Smallest robust scale [dB]: far below any radio's resolution.
 MIN_SCALE_DB = 1e-3
 
+@check_types
 @dataclass(frozen=True)
 class RobustReport:
     """What the Huber fit did.
@@ -110,6 +112,7 @@ def robust_scale_db(residual_db: np.ndarray) -> float:
     return float(max(1.4826 * np.median(np.abs(r - np.median(r))), MIN_SCALE_DB))
 
 
+@check_types
 def fit_huber(
     samples: LinkSamples,
     spec: ModelSpec,
@@ -166,7 +169,7 @@ def fit_huber(
             return model.predict_gain(samples)
         normal.rhs = features.transpose_times(observed)
         normal.yty = float(observed @ observed)
-        coef = solve(normal, list(samples.nodes), ridge=spec.ridge, gauge=gauge, penalty=penalty).coef
+        coef = solve(normal, list(samples.nodes), ridge=spec.ridge_weight, gauge=gauge, penalty=penalty).coef
         return features.times(coef)
 
     fitted = refit(y)

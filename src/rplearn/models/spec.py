@@ -5,13 +5,17 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from rplearn._argtypes import check_types
 from rplearn.core.bases import make_basis
 from rplearn.core.lsq.solver import DEFAULT_RIDGE
 from rplearn.errors import InputError
+
+if TYPE_CHECKING:
+    from rplearn.core.basis_base import Basis
 
 
 MODEL_KINDS = ("sh", "bg", "poly", "mean", "knn")
@@ -27,11 +31,13 @@ _ALIASES = {"m": "mean", "p": "poly", "nn": "knn", "bucketized": "bg"}
 DEFAULT_RIDGE_BY_KIND = {"sh": DEFAULT_RIDGE, "poly": DEFAULT_RIDGE, "bg": DEFAULT_RIDGE, "mean": 0.0, "knn": 0.0}
 
 
+@check_types
 def default_ridge(kind: str) -> float:
     """Default ridge weight of a model family (see :data:`DEFAULT_RIDGE_BY_KIND`)."""
     return DEFAULT_RIDGE_BY_KIND.get(kind, DEFAULT_RIDGE)
 
 
+@check_types
 @dataclass(frozen=True)
 class ModelSpec:
     """A model family and its hyper-parameters.
@@ -59,9 +65,9 @@ class ModelSpec:
     smoothing: float = 0.0
 
     def __post_init__(self) -> None:
-        if self.ridge is None:
-            object.__setattr__(self, "ridge", default_ridge(self.kind))
-        if not (np.isfinite(self.ridge) and self.ridge >= 0):
+        ridge = default_ridge(self.kind) if self.ridge is None else self.ridge
+        object.__setattr__(self, "ridge", ridge)
+        if not (np.isfinite(ridge) and ridge >= 0):
             raise InputError(f"ridge must be a non-negative number, got {self.ridge!r}", param="ridge")
         if self.kind != "mean" and (self.order is None or int(self.order) != self.order or int(self.order) < 1):
             raise InputError(f"model {self.kind}: order must be a positive integer, got {self.order!r}", param="order")
@@ -98,12 +104,20 @@ class ModelSpec:
     def decouples(self) -> bool:
         return self.kind in ("sh", "bg", "poly")
 
-    def basis(self):
+    @property
+    def ridge_weight(self) -> float:
+        """The ridge weight (the kind's default when ``ridge`` was None)."""
+        return default_ridge(self.kind) if self.ridge is None else float(self.ridge)
+
+    def basis(self) -> Basis:
+        if self.order is None:
+            raise InputError(f"model {self.kind}: no basis without an order", param="order")
         if self.kind == "bg":
             return make_basis("bg", self.order, sigma_rad2=self.sigma_rad2, grid=self.grid)
         return make_basis(self.kind, self.order)
 
 
+@check_types
 def check_fit_options(
     spec: ModelSpec,
     *,

@@ -313,7 +313,7 @@ def fit_patterns_accumulated(
     penalty = None
     if spec.smoothing:
         penalty = penalty_vector(basis, len(nodes), spec.smoothing, penalty_scale(normal.gram, normal.n_pattern_columns))
-    sol = solve(normal, list(nodes), ridge=spec.ridge, gauge=options.gauge, penalty=penalty)
+    sol = solve(normal, list(nodes), ridge=spec.ridge_weight, gauge=options.gauge, penalty=penalty)
     learn_s += time.perf_counter() - t0
     fields, terms = shared_fields(sol, list(nodes), options, counts)
     training = sol.report.to_dict()

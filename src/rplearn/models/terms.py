@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any, Mapping, Sequence
 
 import numpy as np
 
+from rplearn._argtypes import check_types
 from rplearn.core.environment import PathLoss, log_distance_column
 from rplearn.data.tables import LinkSamples
 from rplearn.errors import InputError
@@ -28,6 +29,7 @@ if TYPE_CHECKING:
     from rplearn.core.lsq.solver import JointSolution
 
 
+@check_types
 def regression_inputs(samples: LinkSamples, options: FitOptions) -> tuple[np.ndarray, np.ndarray | None]:
     """The observations the patterns are fitted to and the shared environment column.
 
@@ -43,6 +45,7 @@ def regression_inputs(samples: LinkSamples, options: FitOptions) -> tuple[np.nda
     return y, env
 
 
+@check_types
 def directed_counts(samples: LinkSamples | Sequence[LinkSamples]) -> dict[tuple[str, str], int]:
     """Samples of every directed link ``(tx, rx)``, sorted."""
     parts = [samples] if isinstance(samples, LinkSamples) else list(samples)
@@ -142,6 +145,7 @@ def learned_directions(training: TrainingSummary | Mapping[str, Any]) -> set[tup
         return None
 
 
+@check_types
 def terms_text(training: TrainingSummary | Mapping[str, Any]) -> list[str]:
     """Summary lines of a model's link terms (environment, exponent, offsets, directions)."""
     training = TrainingSummary.from_dict(training)

@@ -20,11 +20,13 @@ from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field, fields
 from typing import Any
 
+from rplearn._argtypes import check_types
 from rplearn.errors import InputError
 
 _TUPLES = ("gauges", "warnings")
 
 
+@check_types
 @dataclass(frozen=True, eq=False)
 class TrainingSummary(Mapping[str, Any]):
     """The training summary of a model; every entry is optional (None: not written).

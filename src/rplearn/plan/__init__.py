@@ -13,36 +13,12 @@ module          public names
 ==============  ================================================================================
 
 Every name of ``__all__`` can be imported from here (``from rplearn.plan import check_plan``);
-its module is imported on first use (:mod:`rplearn._lazy`).
+its module is imported on first use (``__init__.pyi``, lazy_loader).
 """
 
 from __future__ import annotations
 
-from rplearn._lazy import lazy_exports
+import lazy_loader
 
-_NAMES: dict[str, str] = {
-    # trajectory units
-    "PlanLimits": "trajectory",
-    "TrajectoryUnit": "trajectory",
-    "UnitReference": "trajectory",
-    "UnitSummary": "trajectory",
-    "summarize_unit": "trajectory",
-    # campaigns
-    "Campaign": "campaign",
-    "GroundPassUnit": "ground",
-    "group_campaign": "campaign",
-    "link_graph_identifies_gains": "campaign",
-    "pair_schedule": "campaign",
-    "paper_campaign": "campaign",
-    "write_references": "campaign",
-    # the plan check
-    "CoverageMap": "check",
-    "PlanCheck": "check",
-    "check_plan": "check",
-    "NominalAttitude": "check",
-    "coverage_map": "check",
-    "plan_directions": "check",
-}
-
-__all__ = sorted(_NAMES)
-__getattr__, __dir__ = lazy_exports(__name__, _NAMES)
+# The public names are those of __init__.pyi, each imported on first use.
+__getattr__, __dir__, __all__ = lazy_loader.attach_stub(__name__, __file__)

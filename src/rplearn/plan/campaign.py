@@ -17,6 +17,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import NDArray
 
+from rplearn._argtypes import check_types
 from rplearn._atomic import atomic_path
 from rplearn.errors import InputError
 from rplearn.plan.trajectory import PlanLimits, TrajectoryUnit, UnitSummary, summarize_unit
@@ -24,6 +25,7 @@ from rplearn.plan.trajectory import PlanLimits, TrajectoryUnit, UnitSummary, sum
 FloatArray = NDArray[np.float64]
 
 
+@check_types
 @dataclass(frozen=True)
 class Campaign:
     """Trajectory units flown one after the other, with a gap (battery swap) between them.
@@ -76,6 +78,7 @@ class Campaign:
         return [summarize_unit(u, limits) for u in self.units]
 
 
+@check_types
 def paper_campaign(
     nodes: tuple[str, str] = ("A", "B"),
     learning_psi0_deg: Sequence[float] = (0.0, 24.0, 48.0),
@@ -109,6 +112,7 @@ def paper_campaign(
 # Groups of more than two drones
 
 
+@check_types
 def link_graph_identifies_gains(pairs: Iterable[tuple[str, str]]) -> bool:
     """Whether a link graph identifies absolute gains: every component has an odd cycle.
 
@@ -143,6 +147,7 @@ def link_graph_identifies_gains(pairs: Iterable[tuple[str, str]]) -> bool:
     return True
 
 
+@check_types
 def pair_schedule(nodes: Sequence[str]) -> list[tuple[str, str]]:
     """Pairs of drones to fly units with, so that the link graph identifies absolute gains.
 
@@ -160,6 +165,7 @@ def pair_schedule(nodes: Sequence[str]) -> list[tuple[str, str]]:
     return pairs
 
 
+@check_types
 def group_campaign(
     nodes: Sequence[str],
     learning_psi0_deg: Sequence[float] = (0.0, 24.0, 48.0),
@@ -183,6 +189,7 @@ def group_campaign(
     return Campaign(tuple(units))
 
 
+@check_types
 def write_references(
     campaign: Campaign | TrajectoryUnit, out_dir: str, rate_hz: float = 10.0
 ) -> list[str]:

@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from rplearn._argtypes import check_types
 from rplearn.core.bases import Basis, make_basis
 from rplearn.errors import InputError
 from rplearn.core.geometry import Directions, link_directions, quat_wxyz_from_yaw
@@ -39,6 +40,7 @@ FloatArray = NDArray[np.float64]
 __all__ = ["CoverageMap", "NominalAttitude", "PlanCheck", "check_plan", "plan_directions"]
 
 
+@check_types
 @dataclass(frozen=True)
 class CoverageMap:
     """Samples of one node's body sphere on an azimuth-elevation grid.
@@ -63,6 +65,7 @@ class CoverageMap:
     covered_fraction: float
 
 
+@check_types
 @dataclass(frozen=True)
 class PlanCheck:
     """What a campaign will let a model learn.
@@ -122,6 +125,7 @@ class PlanCheck:
         return "\n".join(lines)
 
 
+@check_types
 @dataclass(frozen=True)
 class NominalAttitude:
     """How a plan check tilts the drones along their reference trajectories.
@@ -154,6 +158,7 @@ class NominalAttitude:
             raise InputError(f"drag_per_m: expected a number >= 0, got {self.drag_per_m!r}", param="drag_per_m")
 
 
+@check_types
 def plan_directions(
     campaign: Campaign, packet_rate_hz: float = 80.0, attitude: NominalAttitude | None = None,
 ) -> tuple[Directions, NDArray[np.intp], NDArray[np.intp], tuple[str, ...]]:
@@ -205,6 +210,7 @@ def plan_directions(
     return dirs, np.concatenate(tx_idx), np.concatenate(rx_idx), nodes
 
 
+@check_types
 def coverage_map(node: str, az_rad: FloatArray, el_rad: FloatArray, bin_deg: float = 10.0) -> CoverageMap:
     """Azimuth-elevation histogram of one node's samples and the area fraction covered."""
     if not (0 < bin_deg <= 90):
@@ -217,6 +223,7 @@ def coverage_map(node: str, az_rad: FloatArray, el_rad: FloatArray, bin_deg: flo
     return CoverageMap(node, az_edges, el_edges, counts.astype(np.int_), covered)
 
 
+@check_types
 def check_plan(
     campaign: Campaign,
     basis: Basis | tuple[str, int] = ("sh", 10),

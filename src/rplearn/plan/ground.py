@@ -18,10 +18,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rplearn._argtypes import check_types
 from rplearn.errors import InputError
 from rplearn.plan.trajectory import UnitReference, check_unit_fields
 
 
+@check_types
 @dataclass(frozen=True)
 class GroundPassUnit:
     """A drone flying back and forth along an arc in front of a static ground station.
@@ -112,7 +114,7 @@ class GroundPassUnit:
         swing = np.radians(self.heading_band_deg) / 2.0 * np.sin(w * t * 0.37 + 0.5)
         facing = np.arctan2(-pos[:, 1, 1], -pos[:, 1, 0])
         yaw = np.column_stack([np.full(n, yaw0), np.angle(np.exp(1j * (facing + swing)))])
-        return UnitReference(self, t + t_offset_s, pos, vel, acc, yaw, np.zeros(n, np.int_))  # type: ignore[arg-type]
+        return UnitReference(self, t + t_offset_s, pos, vel, acc, yaw, np.zeros(n, np.int_))
 
 
 __all__ = ["GroundPassUnit"]

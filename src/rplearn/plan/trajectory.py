@@ -27,6 +27,7 @@ import numpy as np
 import pandas as pd
 from numpy.typing import NDArray
 
+from rplearn._argtypes import check_types
 from rplearn.errors import InputError, PlanError
 
 FloatArray = NDArray[np.float64]
@@ -65,6 +66,7 @@ def check_unit_fields(unit: Any, positive: tuple[str, ...]) -> None:
             raise InputError(f"{name}: expected a positive finite number, got {v!r}", param=name)
 
 
+@check_types
 @dataclass(frozen=True)
 class TrajectoryUnit:
     """One calibration trajectory unit for a pair of drones (paper Sec. IV-A).
@@ -281,6 +283,7 @@ def _turn_deg(from_deg: FloatArray, to_deg: FloatArray) -> FloatArray:
     return np.mod(np.asarray(to_deg, np.float64) - np.asarray(from_deg, np.float64), 360.0)
 
 
+@check_types
 @dataclass(frozen=True)
 class UnitReference:
     """References of a unit's two drones sampled in time.
@@ -320,6 +323,7 @@ class UnitReference:
         )
 
 
+@check_types
 @dataclass(frozen=True)
 class PlanLimits:
     """Limits a plan must respect; ``None`` means unchecked.
@@ -342,6 +346,7 @@ class PlanLimits:
     max_yaw_rate_deg_s: float | None = None
 
 
+@check_types
 @dataclass(frozen=True)
 class UnitSummary:
     """What a unit asks of the drones.
@@ -380,6 +385,7 @@ def _max_yaw_rate_deg_s(unit: TrajectoryUnit) -> float:
     return max(rates, default=0.0)
 
 
+@check_types
 def summarize_unit(unit: TrajectoryUnit, limits: PlanLimits | None = None) -> UnitSummary:
     """Duration, path length and the largest speed and acceleration a unit asks for.
 

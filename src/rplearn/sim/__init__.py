@@ -15,44 +15,12 @@ module             public names
 =================  =============================================================================
 
 Every name of ``__all__`` can be imported from here (``from rplearn.sim import simulate``); its
-module is imported on first use (:mod:`rplearn._lazy`).
+module is imported on first use (``__init__.pyi``, lazy_loader).
 """
 
 from __future__ import annotations
 
-from rplearn._lazy import lazy_exports
+import lazy_loader
 
-_NAMES: dict[str, str] = {
-    # the simulator
-    "SimulationResult": "flight",
-    "simulate": "flight",
-    "imperfect_reference": "reference",
-    "with_effects_off": "flight",
-    "write_simulation": "flight",
-    # its configuration and presets
-    "EstimatorConfig": "config",
-    "FlightConfig": "config",
-    "RadioConfig": "config",
-    "SimulationConfig": "config",
-    "PRESET_NAMES": "presets",
-    "make_preset": "presets",
-    # antennas and the ground truth
-    "AirframeLobe": "antennas",
-    "AntennaSpec": "antennas",
-    "GroundTruth": "antennas",
-    "MOUNTINGS": "antennas",
-    "Mounting": "antennas",
-    "NodeAntenna": "antennas",
-    "antenna_from_name": "antennas",
-    "load_ground_truth": "antennas",
-    # gain formulas
-    "cosine_beam_dbi": "gain_formulas",
-    "half_wave_dipole_dbi": "gain_formulas",
-    "itu_f1336_omni_average_dbi": "gain_formulas",
-    "itu_f1336_omni_peak_dbi": "gain_formulas",
-    "itu_f1336_sectoral_average_dbi": "gain_formulas",
-    "itu_f1336_sectoral_peak_dbi": "gain_formulas",
-}
-
-__all__ = sorted(_NAMES)
-__getattr__, __dir__ = lazy_exports(__name__, _NAMES)
+# The public names are those of __init__.pyi, each imported on first use.
+__getattr__, __dir__, __all__ = lazy_loader.attach_stub(__name__, __file__)

@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from rplearn._argtypes import check_types
 from rplearn.core.geometry import (
     azimuth_elevation,
     great_circle_angle,
@@ -36,7 +37,7 @@ from rplearn.core.geometry import (
     quat_wxyz_to_matrix,
     unit_vector,
 )
-from rplearn._atomic import atomic_open
+from rplearn._atomic import atomic_open, dump_json
 from rplearn.errors import InputError, ModelFileError
 from rplearn.sim.gain_formulas import (
     SECTORAL_IMPROVED,
@@ -66,6 +67,7 @@ def _check_finite(name: str, value: float) -> float:
 # Antenna specifications (serialisable)
 
 
+@check_types
 @dataclass(frozen=True)
 class AntennaSpec:
     """One antenna model with its parameters; ``gain_dbi`` works in the antenna frame.
@@ -153,6 +155,7 @@ MOUNTINGS: dict[str, tuple[float, float, float]] = {
 }
 
 
+@check_types
 @dataclass(frozen=True)
 class Mounting:
     """Orientation of the antenna frame in the body frame (FLU), aerospace Euler angles [deg].
@@ -186,6 +189,7 @@ class Mounting:
         return azimuth_elevation(v_ant)
 
 
+@check_types
 @dataclass(frozen=True)
 class AirframeLobe:
     """A smooth airframe effect: a Gaussian bump in direction on the body sphere [dB].
@@ -225,6 +229,7 @@ class AirframeLobe:
         return -self.depth_db * np.exp(-0.5 * (gamma / w) ** 2)
 
 
+@check_types
 @dataclass(frozen=True)
 class NodeAntenna:
     """A drone-with-antenna: antenna model, its mounting on the body, and airframe effects."""
@@ -266,6 +271,7 @@ def _link_key(tx: str, rx: str) -> str:
     return f"{tx}->{rx}"
 
 
+@check_types
 @dataclass(frozen=True)
 class GroundTruth:
     """The true patterns of every node of a simulated flight, plus the radio's per-link offsets.
@@ -368,11 +374,12 @@ class GroundTruth:
     def save(self, path: str) -> str:
         """Write the ground truth as JSON; returns the path."""
         with atomic_open(path, "w", encoding="utf-8") as fh:
-            json.dump(self.to_dict(), fh, indent=2, sort_keys=False)
+            dump_json(self.to_dict(), fh, indent=2, sort_keys=False)
             fh.write("\n")
         return str(path)
 
 
+@check_types
 def load_ground_truth(path: str) -> GroundTruth:
     """Read a ground-truth JSON file written by :meth:`GroundTruth.save`.
 
@@ -391,6 +398,7 @@ def load_ground_truth(path: str) -> GroundTruth:
     return GroundTruth.from_dict(spec, source=str(path))
 
 
+@check_types
 def antenna_from_name(name: str, **overrides: Any) -> AntennaSpec:
     """Ready-made antennas by name, with keyword overrides.
 

@@ -9,11 +9,13 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 
+from rplearn._argtypes import check_types
 from rplearn.errors import InputError
 from rplearn.plan.campaign import Campaign
 from rplearn.sim.antennas import GroundTruth, NodeAntenna
 
 
+@check_types
 @dataclass(frozen=True)
 class FlightConfig:
     """How the drones really fly (truth), around the references.
@@ -65,6 +67,7 @@ class FlightConfig:
     tilt_into_motion: bool = True
 
 
+@check_types
 @dataclass(frozen=True)
 class EstimatorConfig:
     """The autopilot's pose estimates written to the pose log.
@@ -98,6 +101,7 @@ class EstimatorConfig:
     tilt_noise_std_deg: float = 0.0
 
 
+@check_types
 @dataclass(frozen=True)
 class RadioConfig:
     """The radios: packets, received power (paper eq. 1) and its defects.
@@ -167,6 +171,7 @@ class RadioConfig:
         return {f"{tx}->{rx}": float(v) for (tx, rx), v in self.link_offsets_db}
 
 
+@check_types
 @dataclass(frozen=True)
 class SimulationConfig:
     """Everything that defines a simulated campaign.

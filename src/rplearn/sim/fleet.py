@@ -13,13 +13,12 @@ a flight.
 from __future__ import annotations
 
 import itertools
-import json
 import os
 import time
 from dataclasses import dataclass, field, replace
 from typing import Callable
 
-from rplearn._atomic import atomic_open
+from rplearn._atomic import atomic_open, dump_json
 from rplearn.data.sync import synchronise
 from rplearn.errors import InputError
 from rplearn.io.files import write_table
@@ -133,7 +132,7 @@ def simulate_fleet(
             progress(k + 1, int(flights))
     result.elapsed_s = time.perf_counter() - started
     with atomic_open(os.path.join(out_dir, "_fleet.json"), "w", encoding="utf-8") as fh:
-        json.dump({"flights": int(flights), "drones": int(drones), "seed": int(seed), "samples": result.samples,
+        dump_json({"flights": int(flights), "drones": int(drones), "seed": int(seed), "samples": result.samples,
                    "pairs": [list(p) for p in result.pairs]}, fh, indent=1)
     return result
 

@@ -32,6 +32,7 @@ import pandas as pd
 from numpy.typing import NDArray
 from scipy.signal import lfilter
 
+from rplearn._argtypes import check_types
 from rplearn.sim.antennas import GroundTruth, load_ground_truth
 from rplearn.data.tables import MATCHED_COLUMNS, POSE_COLUMNS, SIGNAL_COLUMNS
 from rplearn.io.files import write_table
@@ -66,6 +67,7 @@ __all__ = [
 ]
 
 
+@check_types
 @dataclass
 class SimulationResult:
     """Logs, truth and files of one simulated campaign.
@@ -459,6 +461,7 @@ def _config_of(preset_or_config: str | SimulationConfig, log_format: str) -> Sim
 # Public entry point
 
 
+@check_types
 def simulate(
     preset_or_config: str | SimulationConfig,
     seed: int = 0,
@@ -529,6 +532,7 @@ def simulate(
     return result
 
 
+@check_types
 def write_simulation(result: SimulationResult, out_dir: str, log_format: str = "parquet") -> dict[str, str]:
     """Write the logs, matched truth, ground truth and references of a simulation.
 
@@ -553,6 +557,7 @@ def write_simulation(result: SimulationResult, out_dir: str, log_format: str = "
     return paths
 
 
+@check_types
 def with_effects_off(config: SimulationConfig) -> SimulationConfig:
     """The same campaign with every random or non-ideal effect switched off.
 

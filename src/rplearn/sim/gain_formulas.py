@@ -19,6 +19,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from rplearn._argtypes import check_types
+
 FloatArray = NDArray[np.float64]
 
 #: Floor of linear gains before taking logarithms (avoids -inf at exact nulls) [dBi].
@@ -42,6 +44,7 @@ def itu_f1336_omni_theta3_deg(g0_dbi: float) -> float:
     return 107.6 * 10.0 ** (-0.1 * float(g0_dbi))
 
 
+@check_types
 def itu_f1336_omni_peak_dbi(el_deg: ArrayLike, g0_dbi: float, k: float = 0.7) -> FloatArray:
     """Omnidirectional peak side-lobe pattern, ITU-R F.1336-5 recommends 2.1 [dBi].
 
@@ -72,6 +75,7 @@ def itu_f1336_omni_peak_dbi(el_deg: ArrayLike, g0_dbi: float, k: float = 0.7) ->
     return np.where(theta < theta4, main, np.where(theta < theta3, shoulder, side))
 
 
+@check_types
 def itu_f1336_omni_average_dbi(el_deg: ArrayLike, g0_dbi: float, k: float = 0.7) -> FloatArray:
     """Omnidirectional average side-lobe pattern, ITU-R F.1336-5 recommends 2.2 [dBi].
 
@@ -184,6 +188,7 @@ SECTORAL_TYPICAL = {"k_h": 0.8, "k_v": 0.7}
 SECTORAL_IMPROVED = {"k_h": 0.7, "k_v": 0.3}
 
 
+@check_types
 def itu_f1336_sectoral_peak_dbi(
     az_deg: ArrayLike,
     el_deg: ArrayLike,
@@ -218,7 +223,7 @@ def itu_f1336_sectoral_peak_dbi(
     Parameters
     ----------
     az_deg, el_deg : array_like
-        Azimuth from boresight in [-180, 180] and elevation in [-90, 90] [deg].
+        Azimuth from boresight (-180..180) and elevation (-90..90) [deg].
     g0_dbi : float
         Boresight gain [dBi].
     phi3_deg : float
@@ -229,6 +234,7 @@ def itu_f1336_sectoral_peak_dbi(
     return _sectoral_dbi(az_deg, el_deg, g0_dbi, phi3_deg, theta3_deg, _SideLobes(k_p, k_h, k_v, average=False))
 
 
+@check_types
 def itu_f1336_sectoral_average_dbi(
     az_deg: ArrayLike,
     el_deg: ArrayLike,
@@ -257,6 +263,7 @@ def itu_f1336_sectoral_average_dbi(
 # Other antennas
 
 
+@check_types
 def half_wave_dipole_dbi(el_deg: ArrayLike) -> FloatArray:
     """Half-wave dipole, ``D = 1.641 [cos(pi/2 cos t) / sin t]^2`` with ``t`` from the axis [dBi].
 
@@ -272,6 +279,7 @@ def half_wave_dipole_dbi(el_deg: ArrayLike) -> FloatArray:
     return 10.0 * np.log10(np.maximum(lin, 10.0 ** (GAIN_FLOOR_DBI / 10.0)))
 
 
+@check_types
 def cosine_beam_dbi(off_axis_deg: ArrayLike, g0_dbi: float, hpbw_deg: float, floor_db: float) -> FloatArray:
     """Circularly symmetric cosine-power beam, ``G0 + 10 log10(cos^q t)``, floored [dBi].
 

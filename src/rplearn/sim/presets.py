@@ -40,6 +40,7 @@ from __future__ import annotations
 from dataclasses import replace
 from typing import Any, Callable
 
+from rplearn._argtypes import check_types
 from rplearn.sim.antennas import AirframeLobe, AntennaSpec, Mounting, NodeAntenna, antenna_from_name
 from rplearn.errors import InputError
 from rplearn.sim.config import EstimatorConfig, FlightConfig, RadioConfig, SimulationConfig
@@ -307,6 +308,7 @@ _PRESETS: dict[str, Callable[[], SimulationConfig]] = {"paper": _paper, "trio": 
 PRESET_NAMES: tuple[str, ...] = tuple(_PRESETS)
 
 
+@check_types
 def make_preset(name: str) -> SimulationConfig:
     """The :class:`SimulationConfig` of a named preset (``paper``, ``trio``, ``smoke``)."""
     try:

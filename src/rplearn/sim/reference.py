@@ -14,11 +14,13 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from rplearn._argtypes import check_types
 from rplearn.core.sh import SphericalHarmonics
 from rplearn.errors import InputError
 from rplearn.io.reference import mount_rotation
 
 
+@check_types
 def imperfect_reference(
     truth: Any, node: str, error_rms_db: float = 2.0, mount_error_deg: float = 10.0, seed: int = 0,
     step_deg: float = 3.0,

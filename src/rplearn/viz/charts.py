@@ -18,11 +18,13 @@ import numpy as np
 from matplotlib.figure import Figure
 from numpy.typing import ArrayLike
 
+from rplearn._argtypes import check_types
 from rplearn.errors import InputError
 from rplearn.viz.plot import FloatArray, _dot_size, _new_figure, _subsample, save_figure
 
 
 # -- Fig. 8b: RSSI over time ---------------------------------------------------------------
+@check_types
 def rssi_time_figure(
     t_s: ArrayLike,
     rssi_dbm: ArrayLike,
@@ -82,6 +84,7 @@ def rssi_time_figure(
     return fig
 
 
+@check_types
 def plot_rssi_time(
     t_s: ArrayLike,
     rssi_dbm: ArrayLike,
@@ -96,6 +99,7 @@ def plot_rssi_time(
 
 
 # -- Fig. 10: model order sweep ------------------------------------------------------------
+@check_types
 def order_sweep_figure(
     orders: ArrayLike, test_rmse_db: ArrayLike, aic: ArrayLike, ltd_s: ArrayLike, family: str = "SH",
     validation_rmse_db: ArrayLike | None = None, chosen: tuple[int, float] | None = None,
@@ -152,15 +156,10 @@ def order_sweep_figure(
     ax2.set_ylabel("AIC / 1e3", color="tab:purple")
     if np.isfinite(a).any():
         k = int(np.nanargmin(a))
-        ax2.plot(
-            x[k],
-            a[k] / 1e3,
-            "*",
-            ms=14,
-            color="tab:purple",
-            mec="k",
-            label=f"min AIC: {family}-{x[k]:g}",
-        )
+        # a hollow ring, so that the best-order star drawn above it (ax over ax2) stays visible
+        ax2.plot(x[k], a[k] / 1e3, "o", ms=22, mfc="none", mec="tab:purple", mew=2.0, label=f"min AIC: {family}-{x[k]:g}")
+    ax.set_zorder(ax2.get_zorder() + 1)  # the RMSE curve and the best-order marker above the AIC's
+    ax.patch.set_visible(False)
     h1, l1 = ax.get_legend_handles_labels()
     h2, l2 = ax2.get_legend_handles_labels()
     ax.legend(h1 + h2, l1 + l2, fontsize=8, loc="upper center")
@@ -176,6 +175,7 @@ def order_sweep_figure(
     return fig
 
 
+@check_types
 def plot_order_sweep(
     orders: ArrayLike,
     test_rmse_db: ArrayLike,
@@ -188,7 +188,7 @@ def plot_order_sweep(
 ) -> str:
     """Write the order-sweep figure (paper Fig. 10, :func:`order_sweep_figure`); return the path."""
     caption = (
-        f"Model order selection: test RMSE and AIC against the {family} order (stars mark the minima),"
+        f"Model order selection: test RMSE and AIC against the {family} order (star: lowest test RMSE; ring: lowest AIC),"
         " and the learning time LTD (paper Fig. 10)."
     )
     if validation_rmse_db is not None:
@@ -198,6 +198,7 @@ def plot_order_sweep(
 
 
 # -- Fig. 5a: epsilon sweep ----------------------------------------------------------------
+@check_types
 def epsilon_sweep_figure(eps: ArrayLike, error_db: ArrayLike) -> Figure:
     """Prediction RMSE vs a constant moved between two nodes' patterns (paper Fig. 5a).
 
@@ -234,6 +235,7 @@ def epsilon_sweep_figure(eps: ArrayLike, error_db: ArrayLike) -> Figure:
     return fig
 
 
+@check_types
 def plot_epsilon_sweep(eps: ArrayLike, error_db: ArrayLike, path: str | os.PathLike[str]) -> str:
     """Write the epsilon-sweep figure (paper Fig. 5a, :func:`epsilon_sweep_figure`); return the path."""
     caption = (
@@ -244,6 +246,7 @@ def plot_epsilon_sweep(eps: ArrayLike, error_db: ArrayLike, path: str | os.PathL
 
 
 # -- Fig. 6: rank study --------------------------------------------------------------------
+@check_types
 def rank_study_figure(cases: Sequence[tuple[str, int, int]]) -> Figure:
     """Columns vs rank of the design matrix for several problems (paper Figs. 5b, 6).
 
@@ -281,6 +284,7 @@ def rank_study_figure(cases: Sequence[tuple[str, int, int]]) -> Figure:
     return fig
 
 
+@check_types
 def plot_rank_study(cases: Sequence[tuple[str, int, int]], path: str | os.PathLike[str]) -> str:
     """Write the rank-study bar chart (paper Fig. 6, :func:`rank_study_figure`); return the path."""
     caption = "Columns and rank of the design matrix of each problem (paper Figs. 5b and 6)."
@@ -299,6 +303,7 @@ def _break_gaps(t: ArrayLike, y: ArrayLike) -> tuple[FloatArray, FloatArray]:
     return np.insert(t, gap + 1, np.nan), np.insert(y, gap + 1, np.nan)
 
 
+@check_types
 def plot_swarm(prediction: Any, path: str | os.PathLike[str]) -> str:
     """RSSI of every pair (weaker direction) over time, the threshold and the bottleneck; return the path.
 

@@ -5,10 +5,12 @@ from __future__ import annotations
 import os
 from typing import Any, Sequence
 
+from rplearn._argtypes import check_types
 from rplearn.io.export import check_pattern_like, node_file_names, select_nodes
 from rplearn.viz import plot
 
 
+@check_types
 def export_pattern_images(
     pattern_like: Any,
     out_dir: str | os.PathLike[str],

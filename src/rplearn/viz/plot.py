@@ -31,6 +31,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from numpy.typing import ArrayLike, NDArray
 
+from rplearn._argtypes import check_types
 from rplearn._atomic import atomic_path
 from rplearn._version import __version__
 from rplearn.errors import InputError
@@ -47,7 +48,8 @@ TEST_COLOR = "tab:orange"
 class PatternLike(Protocol):
     """Anything with ``nodes`` and ``evaluate(node, az_rad, el_rad) -> gain [dB]``."""
 
-    nodes: Sequence[str]
+    @property
+    def nodes(self) -> Sequence[str]: ...
 
     def evaluate(self, node: str, az_rad: ArrayLike, el_rad: ArrayLike) -> FloatArray: ...
 
@@ -59,6 +61,7 @@ def _new_figure(width_in: float, height_in: float) -> Figure:
     return fig
 
 
+@check_types
 def save_figure(fig: Figure, path: str | os.PathLike[str], caption: str | None = None) -> str:
     """Write ``fig`` as a PNG at :data:`DPI` and return the path as a string.
 
@@ -159,6 +162,7 @@ def colour_limits_db(maps_db: FloatArray, has_truth: bool) -> tuple[float, float
     return (lo, hi) if hi > lo else (lo - 0.5, hi + 0.5)
 
 
+@check_types
 def uncovered_directions(model: Any, node: str, az_deg: FloatArray, el_deg: FloatArray) -> NDArray[np.bool_] | None:
     """Which directions of the grid ``el_deg x az_deg`` lie further than ``UNCOVERED_DEG`` from
     every direction ``model`` learned ``node`` from: a boolean ``(n_el, n_az)`` array, or None
@@ -184,6 +188,7 @@ def _hatch_uncovered(ax: Any, model: Any, node: str, az_deg: np.ndarray, el_deg:
         ax.contourf(az_deg, el_deg, far, levels=[0.5, 1.5], colors="none", hatches=["////"])
 
 
+@check_types
 def pattern_maps_figure(
     models: Mapping[str, PatternLike],
     truth: PatternLike | None = None,
@@ -264,6 +269,7 @@ def pattern_maps_figure(
                 ax.scatter(saz[keep], sel[keep], s=0.6, c="k", marker=".", linewidths=0, alpha=0.6)
             _style_az_el_axes(ax, xlabel=i == len(rows) - 1, ylabel=j == 0)
             ax.set_title(f"{label}: node {n}", fontsize=9)
+        assert im is not None  # one panel per node at least
         cb = fig.colorbar(
             im, ax=axes[:, j], orientation="horizontal", fraction=0.05, aspect=30, extend="both"
         )
@@ -275,6 +281,7 @@ def pattern_maps_figure(
     return fig
 
 
+@check_types
 def plot_pattern_maps(
     models: Mapping[str, PatternLike],
     truth: PatternLike | None,
@@ -313,6 +320,7 @@ def _own_std_map(model: Any, node: str, az_rad: np.ndarray, el_rad: np.ndarray) 
     return np.asarray(model.standard_error(node, az_rad.ravel(), el_rad.ravel())).reshape(az_rad.shape)
 
 
+@check_types
 def spread_maps_figure(models: Mapping[str, Any], nodes: Sequence[str] | None = None, step_deg: float = 3.0) -> Figure:
     """Posterior std of each node's own pattern [dB] as az-el maps (rows = models, columns =
     nodes), the directions further than ``UNCOVERED_DEG`` from any learning direction hatched;
@@ -344,12 +352,14 @@ def spread_maps_figure(models: Mapping[str, Any], nodes: Sequence[str] | None = 
             extra = (f"\n{cert[n]['covered_std_db']:.2f} dB where looked, {cert[n]['sphere_std_db']:.2f} dB on the sphere"
                      if n in cert else "")
             ax.set_title(f"{label}: node {n}{extra}", fontsize=8)
+    assert im is not None  # one panel per node at least
     cb = fig.colorbar(im, ax=axes, orientation="horizontal", fraction=0.05, aspect=40, extend="max")
     cb.set_label("posterior std of the node's own gain / dB")
     fig.suptitle("Own-pattern spread (1 sigma)\nhatched: more than 10 deg from any learning direction")
     return fig
 
 
+@check_types
 def plot_spread_maps(models: Mapping[str, Any], path: str | os.PathLike[str], nodes: Sequence[str] | None = None,
                      step_deg: float = 3.0) -> str:
     """Write :func:`spread_maps_figure` as a PNG; return the path."""
@@ -359,6 +369,7 @@ def plot_spread_maps(models: Mapping[str, Any], path: str | os.PathLike[str], no
 
 
 # -- Fig. 8a: coverage ---------------------------------------------------------------------
+@check_types
 def coverage_figure(
     learn_az_el: Mapping[str, AzEl],
     test_az_el: Mapping[str, AzEl] | None = None,
@@ -409,6 +420,7 @@ def coverage_figure(
     return fig
 
 
+@check_types
 def plot_coverage(
     learn_az_el: Mapping[str, AzEl],
     test_az_el: Mapping[str, AzEl] | None,
@@ -424,6 +436,7 @@ def plot_coverage(
 
 
 # -- 3-D pattern image ---------------------------------------------------------------------
+@check_types
 @dataclass(frozen=True)
 class PatternSurface:
     """One node's pattern on a closed az-el grid, drawn as a surface whose radius is the gain.
@@ -456,6 +469,7 @@ class PatternSurface:
         return float(np.nanmax(np.sqrt(self.x**2 + self.y**2 + self.z**2)))
 
 
+@check_types
 def pattern_surface(
     pattern_like: PatternLike,
     node: str,
@@ -490,6 +504,7 @@ def pattern_surface(
     return PatternSurface(az_deg, el_deg, g, floor, g_max, offset_db, x, y, z)
 
 
+@check_types
 def pattern_3d_figure(
     pattern_like: PatternLike,
     node: str,
@@ -542,6 +557,7 @@ def pattern_3d_figure(
     return fig
 
 
+@check_types
 def plot_pattern_3d(
     pattern_like: PatternLike, node: str, path: str | os.PathLike[str], step_deg: float = 3.0
 ) -> str:

@@ -36,6 +36,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from rplearn._argtypes import check_types
 from rplearn._atomic import atomic_open
 from rplearn._version import __version__
 from rplearn.errors import InputError, RplearnError
@@ -53,6 +54,7 @@ class ScreenshotError(RplearnError):
     """Chromium is installed but failed to render the report."""
 
 
+@check_types
 @dataclass
 class ReportSection:
     """One section of the report.
@@ -74,7 +76,7 @@ class ReportSection:
 
     title: str
     text: str = ""
-    images: list[str | os.PathLike[str]] = field(default_factory=list)
+    images: Sequence[str | os.PathLike[str]] = field(default_factory=list)
     captions: list[str] | None = None
     interactive: list[InteractiveFigure] = field(default_factory=list)
 
@@ -322,6 +324,7 @@ def _provenance_html(provenance: Mapping[str, Any]) -> str:
     return "<table>" + "".join(rows) + "</table>"
 
 
+@check_types
 def render_report_html(
     title: str,
     table: str | Sequence[Mapping[str, Any]] | None,
@@ -382,6 +385,7 @@ def render_report_html(
     return "\n".join(parts) + "\n"
 
 
+@check_types
 def write_report(
     out_dir: str | os.PathLike[str],
     title: str,
@@ -389,6 +393,7 @@ def write_report(
     sections: Sequence[ReportSection],
     provenance: Mapping[str, Any],
     filename: str = "report.html",
+    table_title: str = "Table I: performance of the learned models on the testing samples",
 ) -> str:
     """Write one self-contained HTML report and return its path.
 
@@ -405,13 +410,16 @@ def write_report(
     provenance : mapping
         Version, command, parameters, seed... shown in the footer (``version`` defaults to
         the library's).
+    filename : str
+    table_title : str
+        Heading of the table.
 
     Returns
     -------
     str
         Path of ``<out_dir>/<filename>``.
     """
-    page = render_report_html(title, table_markdown, sections, provenance)
+    page = render_report_html(title, table_markdown, sections, provenance, table_title)
     out = Path(os.fspath(out_dir))
     out.mkdir(parents=True, exist_ok=True)
     path = out / filename
@@ -452,6 +460,24 @@ def estimate_page_height_px(page_html: str, width_px: int = PAGE_WIDTH_PX) -> in
     return int(min(max(h, 800), 30000))
 
 
+def chromium_command(exe: str, profile: str, width_px: int, height_px: int, flags: Sequence[str] = ()) -> list[str]:
+    """Headless Chromium without network (every host name unresolvable, a dead proxy), with
+    software WebGL (SwiftShader) and :data:`VIRTUAL_TIME_MS` for the page's scripts; the page's
+    URI is to be appended."""
+    return [
+        exe, "--headless", "--no-sandbox", "--disable-gpu",
+        # WebGL for 3-D figures on SwiftShader (software); Chromium no longer falls back to it silently
+        "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
+        # no network: the report must render from itself
+        "--proxy-server=127.0.0.1:9", "--proxy-bypass-list=<-loopback>", "--host-resolver-rules=MAP * ~NOTFOUND",
+        "--disable-quic", "--no-first-run", "--disable-background-networking", "--disable-component-update",
+        "--disable-sync", "--disable-dev-shm-usage", "--hide-scrollbars", f"--user-data-dir={profile}",
+        f"--window-size={int(width_px)},{int(height_px)}", f"--virtual-time-budget={VIRTUAL_TIME_MS}",
+        *[str(f) for f in flags],
+    ]
+
+
+@check_types
 def screenshot_report(
     html_path: str | os.PathLike[str],
     png_path: str | os.PathLike[str],
@@ -503,33 +529,8 @@ def screenshot_report(
             html_file.read_text(encoding="utf-8", errors="replace"), width_px
         )
     with tempfile.TemporaryDirectory(prefix="rplearn-chromium-") as profile:
-        cmd = [
-            exe,
-            "--headless",
-            "--no-sandbox",
-            "--disable-gpu",
-            # WebGL for 3-D figures on SwiftShader (software); Chromium no longer falls back to
-            # it silently
-            "--use-angle=swiftshader",
-            "--enable-unsafe-swiftshader",
-            # no network: the report must render from itself
-            "--proxy-server=127.0.0.1:9",
-            "--proxy-bypass-list=<-loopback>",
-            "--host-resolver-rules=MAP * ~NOTFOUND",
-            "--disable-quic",
-            "--no-first-run",
-            "--disable-background-networking",
-            "--disable-component-update",
-            "--disable-sync",
-            "--disable-dev-shm-usage",
-            "--hide-scrollbars",
-            f"--user-data-dir={profile}",
-            f"--window-size={int(width_px)},{int(height_px)}",
-            f"--virtual-time-budget={VIRTUAL_TIME_MS}",
-            f"--screenshot={png}",
-            *[str(f) for f in chromium_flags],
-            html_file.as_uri(),
-        ]
+        cmd = chromium_command(exe, profile, width_px, height_px, [f"--screenshot={png}", *chromium_flags])
+        cmd.append(html_file.as_uri())
         try:
             proc = subprocess.run(
                 cmd, capture_output=True, text=True, timeout=timeout_s, check=False

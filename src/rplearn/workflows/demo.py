@@ -2,25 +2,33 @@
 
 from __future__ import annotations
 
-import json
 import os
 import time
 from dataclasses import dataclass, field
-from typing import Callable, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Sequence
 
 import numpy as np
 
-from rplearn._atomic import atomic_open
+from rplearn._argtypes import check_types
+from rplearn._atomic import atomic_open, dump_json
 from rplearn.core.metrics import Scores
 from rplearn.io.files import write_table
 from rplearn.models.fit import FittedModel, evaluate_models, fit_model, scores_markdown
 from rplearn.data.units import samples_of
+from rplearn.models.patterns import PatternSet
 from rplearn.models.spec import ModelSpec
 
 from rplearn.analysis.identifiability import IdentifiabilityStudy, identifiability_study
 from rplearn.analysis.pattern_error import node_directions, pattern_errors_db
 from rplearn.analysis.sweep import SweepResult, no_progress, order_sweep
 from rplearn.io.files import provenance
+from rplearn.workflows.report import LTD_REPEATS, median_ltd
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+    from rplearn.data.tables import LinkSamples
+    from rplearn.sim.flight import SimulationResult
 
 Progress = Callable[[str], None]
 
@@ -28,6 +36,7 @@ Progress = Callable[[str], None]
 DEMO_MODELS = ("m", "nn-400", "sh-10", "p-12", "bg-7")
 
 
+@check_types
 @dataclass
 class DemoResult:
     """Everything the demo measured and wrote."""
@@ -62,6 +71,7 @@ class DemoResult:
         return "\n".join(lines)
 
 
+@check_types
 def run_demo(
     out_dir: str = "rplearn-demo",
     seed: int = 0,
@@ -108,8 +118,8 @@ def run_demo(
     os.makedirs(models_dir, exist_ok=True)
     for name in models:
         spec = ModelSpec.parse(name)
-        progress(f"learning {spec.label} on {len(learn):,} samples")
-        f = fit_model(learn, spec, provenance=prov)
+        progress(f"learning {spec.label} on {len(learn):,} samples ({LTD_REPEATS} runs: LTD is their median)")
+        f = median_ltd([fit_model(learn, spec, provenance=prov) for _ in range(LTD_REPEATS)])
         fitted.append(f)
         path = os.path.join(models_dir, f"{spec.label}.json")
         f.model.save(path)
@@ -120,7 +130,7 @@ def run_demo(
     for node, (az, el) in node_directions(test).items():
         covered[node] = (np.concatenate([covered[node][0], az]), np.concatenate([covered[node][1], el]))
     perr = {
-        f.label: pattern_errors_db(f.model, sim.ground_truth, covered) for f in fitted if f.model.kind == "patterns"
+        f.label: pattern_errors_db(f.model, sim.ground_truth, covered) for f in fitted if isinstance(f.model, PatternSet)
     }
     extra = {label: {f"pattern err {n}/dB": v for n, v in errs.items()} for label, errs in perr.items()}
     md = scores_markdown(table, extra)
@@ -135,7 +145,7 @@ def run_demo(
         fh.write(md + "\n")
     files["table_json"] = os.path.join(out_dir, "table1.json")
     with atomic_open(files["table_json"], "w", encoding="utf-8") as fh:
-        json.dump(
+        dump_json(
             {"provenance": prov, "rows": [r.to_dict() for r in table], "pattern_error_db": perr, "noise_std_db": sim.noise_std_db},
             fh,
             indent=1,
@@ -145,7 +155,7 @@ def run_demo(
     write_table(sweep.to_frame(), files["sweep_csv"])
     files["identifiability_json"] = os.path.join(out_dir, "identifiability.json")
     with atomic_open(files["identifiability_json"], "w", encoding="utf-8") as fh:
-        json.dump({"provenance": prov, **study.to_dict()}, fh, indent=1)
+        dump_json({"provenance": prov, **study.to_dict()}, fh, indent=1)
 
     result = DemoResult(
         out_dir=out_dir,
@@ -167,7 +177,8 @@ def run_demo(
     return result
 
 
-def _demo_figures_and_report(result, sim, dataset, learn, test, fitted, prov) -> dict[str, str]:
+def _demo_figures_and_report(result: DemoResult, sim: SimulationResult, dataset: pd.DataFrame, learn: LinkSamples,
+                             test: LinkSamples, fitted: list[FittedModel], prov: dict[str, Any]) -> dict[str, str]:
     from rplearn.viz import charts, plot
     from rplearn.viz.interactive import pattern_3d_figures
     from rplearn.viz.report import ReportSection, write_report
@@ -178,7 +189,7 @@ def _demo_figures_and_report(result, sim, dataset, learn, test, fitted, prov) ->
     files: dict[str, str] = {}
     learn_dirs = node_directions(learn)
     test_dirs = node_directions(test)
-    pattern_models = {f.label: f.model for f in fitted if f.model.kind == "patterns"}
+    pattern_models = {f.label: f.model for f in fitted if isinstance(f.model, PatternSet)}
     files["fig_patterns"] = plot.plot_pattern_maps(
         pattern_models, sim.ground_truth, list(learn.nodes), learn_dirs, os.path.join(fig_dir, "patterns.png"), center=True
     )

@@ -1,4 +1,4 @@
-"""Learning pipelines on dataset files: fit, evaluate, predict, sweep and learn-and-report.
+"""Learning pipelines on dataset files: fit, evaluate, predict and sweep (the report: :mod:`rplearn.workflows.report`).
 
 Each reads its inputs, applies the one unit rule of :mod:`rplearn.data.units`, calls the
 library and returns a result object with the notes a user should read; the command line only
@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any, Callable, Sequence
 import numpy as np
 import pandas as pd
 
+from rplearn._argtypes import check_types
 from rplearn._atomic import atomic_open
 from rplearn.analysis.budget import check_dataset_budget
 from rplearn.analysis.decoupling import certify
@@ -38,6 +39,7 @@ from rplearn.workflows.fleet import (
 from rplearn.models.fit import FittedModel, evaluate_models, fit_model, scores_markdown, scores_of_predictions
 from rplearn.models.load import load_model, load_priors
 from rplearn.models.options import FitOptions
+from rplearn.models.patterns import PatternSet
 from rplearn.models.spec import ModelSpec, check_model_size
 from rplearn.models.robust import downweighted_notes, fit_huber
 from rplearn.models.streamed import checked, fit_patterns_accumulated, weighted_median
@@ -55,6 +57,7 @@ def no_progress(message: str) -> None:
     """The default progress callback: says nothing."""
 
 
+@check_types
 @dataclass
 class FitOutcome:
     """A model learned from a dataset file.
@@ -132,6 +135,7 @@ class FitOutcome:
         return list(self.fitted.model.training.warnings or ())
 
 
+@check_types
 def fit_dataset(
     dataset: str,
     spec: ModelSpec,
@@ -223,7 +227,7 @@ def _fit_auto(
 ) -> FitOutcome:
     """:func:`fit_dataset` with ``auto=True`` on a dataset in memory: samples per learning unit."""
     from rplearn.models.auto import fit_auto
-    learn = choice.units if choice.units is not None else (dataset_units(df) or [None])
+    learn: list[str | None] = list(choice.units) if choice.units is not None else (list(dataset_units(df)) or [None])
     part = select_units(df, choice.units, dataset)
     nodes = sorted(set(part["tx"].astype(str)) | set(part["rx"].astype(str)))
     if len(learn) == 1:  # one flight: cross-validate over contiguous stretches of it, not samples
@@ -276,12 +280,13 @@ def _fit_streamed(
     check_model_size(spec, n, len(nodes))
     t0 = time.perf_counter()
     if auto:
-        learn = choice.units or dataset_units(index) or [None]
+        learn: list[str | None] = [*(choice.units or dataset_units(index) or [])] or [None]
         stretches = Stretches.of_times(learning_times(parts, choice.units, client), TIME_UNITS, learn[0]) if len(learn) == 1 else None
         acc = checked(accumulate_parts(parts, spec, nodes, choice.units, options, stretches, client, progress), dataset)
         prov = provenance(dataset=dataset, model=f"{spec.kind}-auto", ridge=spec.ridge, units=choice.units)
         fitted, selection = fit_from_statistics(acc.stats, spec, orders, nodes, options,
                                                 frequency_hz=weighted_median(acc.freq), provenance=prov)
+        assert isinstance(fitted.model, PatternSet)  # fit_from_statistics learns patterns
         fitted.model.training = fitted.model.training.replace(coverage_deg=acc.grids or {})
         certify(fitted.model, None, fitted.own_posterior)  # the spreads alone: the pairs of directions were streamed, not kept
         if output:
@@ -299,6 +304,7 @@ def _fit_streamed(
     return FitOutcome(fitted, choice, fit.n_samples, output, fit.non_unit_quaternions, wall_s=time.perf_counter() - t0)
 
 
+@check_types
 @dataclass
 class EvaluationOutcome:
     """Table I of some models on a dataset.
@@ -322,6 +328,7 @@ class EvaluationOutcome:
         return {"provenance": self.provenance, "rows": [r.to_dict() for r in self.rows]}
 
 
+@check_types
 def evaluate_model_files(
     model_paths: Sequence[str],
     dataset: str,
@@ -385,6 +392,7 @@ def evaluate_model_files(
     return outcome
 
 
+@check_types
 def predict_file(model_path: str, dataset: str, output: str) -> DatasetPrediction:
     """Predict every row of a dataset of poses and write it with the predictions (``rplearn predict``).
 
@@ -398,6 +406,7 @@ def predict_file(model_path: str, dataset: str, output: str) -> DatasetPredictio
     return prediction
 
 
+@check_types
 def sweep_dataset(
     dataset: str,
     kind: str,
@@ -442,83 +451,3 @@ def sweep_dataset(
                          validation_rmse_db=result.validation_rmse_db,
                          chosen=None if result.selection is None else (result.selection.order, result.selection.smoothing))
     return result
-
-
-#: Files :func:`learn_and_report` writes into its folder.
-REPORT_FILES: tuple[str, ...] = ("coverage.png", "patterns.png", "report.html")
-
-
-@dataclass
-class ReportOutcome:
-    """Models learned and tested on a dataset, and the report written."""
-
-    fitted: list[FittedModel]
-    rows: list[Scores]
-    markdown: str
-    learn_units: list[str]
-    test_units: list[str]
-    report_path: str
-    notes: list[str] = field(default_factory=list)
-
-
-def learn_and_report(
-    dataset: str,
-    models: Sequence[str],
-    out_dir: str,
-    test_units: Sequence[str] | None = None,
-    progress: Progress = no_progress,
-    options: FitOptions | None = None,
-) -> ReportOutcome:
-    """Learn models on a dataset's learning units (by time without units), test them, and write Table I,
-    coverage and pattern maps (also in 3-D) into ``out_dir/report.html`` (``rplearn report``). Pattern
-    models learn as ``options`` say (a fixed order, least squares: its environment term and link offsets;
-    :func:`fit_dataset`), the baselines per directed link in free space; a model the data cannot identify
-    is a note, the others still go."""
-    from rplearn.viz import interactive, plot
-    from rplearn.viz.report import ReportSection, write_report
-
-    if not models:
-        raise InputError("models: give at least one model, e.g. m,sh-10", param="models")
-    specs = [ModelSpec.parse(name) for name in models]  # refuse a bad name before writing anything
-    options = options or FitOptions()
-    baseline_options = FitOptions()  # the baselines: per directed link, free space
-    for name in REPORT_FILES:  # the report's own files may not overwrite its dataset
-        if os.path.lexists(os.path.join(out_dir, name)):
-            check_output_path(os.path.join(out_dir, name), [dataset])
-    df, unit_note = time_units(read_dataset(dataset), source=dataset)
-    learn, test = split_units(df, None, test_units, dataset)
-    ls = samples_of(df, learn, dataset)
-    ts = samples_of(df, test, dataset, nodes=ls.nodes)
-    prov = provenance(dataset=dataset, models=",".join(models), test_units=test)
-    fitted, failed = [], []
-    for spec in specs:
-        progress(f"learning {spec.label}")
-        try:
-            fitted.append(fit_model(ls, spec, options if spec.decouples else baseline_options, provenance=prov))
-        except (InputError, IdentifiabilityError) as exc:  # too few samples for this model: the others still go
-            failed.append(f"{spec.label} not learned: {exc}")
-    if not fitted:
-        raise InputError(f"{dataset}: none of the models could be learned ({'; '.join(failed)})", param="models")
-    os.makedirs(out_dir, exist_ok=True)
-    notes = ([unit_note] if unit_note else []) + failed
-    left_out: list[str] = []
-    rows = evaluate_models(fitted, ts, left_out)
-    for line in left_out:
-        progress(line)
-    md = scores_markdown(rows)
-    patterns = {f.label: f.model for f in fitted if f.model.kind == "patterns"}
-    images = [plot.plot_coverage(node_directions(ls), node_directions(ts), os.path.join(out_dir, "coverage.png"))]
-    if patterns:
-        images.append(
-            plot.plot_pattern_maps(patterns, None, list(ls.nodes), node_directions(ls), os.path.join(out_dir, "patterns.png"))
-        )
-    views_3d, text_3d = interactive.pattern_3d_figures(patterns, list(ls.nodes))
-    sections = [ReportSection("Patterns and coverage", text_3d, images, interactive=views_3d)]
-    lines = [f"- {label}: {line}" for label, m in patterns.items() for line in terms_text(m.training)]
-    if lines:
-        sections.append(ReportSection("Path loss and link offsets", "\n".join(lines), []))
-    if notes:
-        sections.insert(0, ReportSection("Notes", "\n".join(f"- {line}" for line in notes), []))
-    path = write_report(out_dir, f"rplearn report: {os.path.basename(dataset)}", md, sections, prov)
-    return ReportOutcome(fitted, rows, md, learn, test, path, notes)
-

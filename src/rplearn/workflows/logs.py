@@ -10,12 +10,13 @@ from __future__ import annotations
 import dataclasses
 
 from dataclasses import dataclass, field
-from typing import Any, Iterator, Mapping, Sequence
+from typing import Any, Iterator, Mapping, Sequence, cast
 
 import pandas as pd
 from numpy.typing import ArrayLike
 
 from rplearn.analysis.heading_options import SwarmHeadingOptions
+from rplearn._argtypes import check_types
 from rplearn.analysis.headings import SwarmHeadings, best_swarm_headings
 from rplearn.analysis.swarm import SwarmOptions, SwarmPrediction, predict_swarm
 from rplearn.data.streaming import conform_chunk, synchronise_stream
@@ -26,9 +27,11 @@ from rplearn.io import ReaderOptions, read_logs
 from rplearn.io.inspect import file_damage
 from rplearn.io.files import check_output_path, check_table_path, write_json, write_table, write_table_chunks
 from rplearn.models.load import load_model
+from rplearn.models.patterns import PatternSet
 from rplearn.models.predict import FrequencyMismatch, frequency_mismatch
 
 
+@check_types
 def reader_notes(metadata: Mapping[str, Any]) -> list[str]:
     """What the log readers dropped or assumed, file by file (from :func:`read_logs` metadata)."""
     notes = []
@@ -42,6 +45,7 @@ def reader_notes(metadata: Mapping[str, Any]) -> list[str]:
     return notes
 
 
+@check_types
 @dataclass
 class SyncOutcome:
     """A matched dataset written from logs: its counts, where it went, what the readers said.
@@ -145,6 +149,7 @@ def _signal_chunks(signal_paths: Sequence[str], options: ReaderOptions) -> Itera
             yield out
 
 
+@check_types
 def sync_logs(
     pose_paths: Sequence[str],
     signal_paths: Sequence[str],
@@ -177,6 +182,7 @@ def sync_logs(
 
         raise InputError(f"{', '.join(pose_paths)}: no pose log found{swapped_logs_hint(pose_paths, signal_paths)}",
                          param="pose_paths")
+    poses = pose_logs.pose
     clock = None
     if apply_offset and estimate_offset is None:
         raise InputError("apply-offset: nothing to apply; give --estimate-offset NODE", param="estimate_offset")
@@ -198,7 +204,7 @@ def sync_logs(
         summary = SyncSummary()
 
         def frames() -> Iterator[pd.DataFrame]:
-            for res in synchronise_stream(pose_logs.pose, _signal_chunks(signal_paths, reader_options),
+            for res in synchronise_stream(poses, _signal_chunks(signal_paths, reader_options),
                                           sync_options, source=source):
                 summary.merge(res.summary)
                 yield res.dataset
@@ -213,6 +219,7 @@ def sync_logs(
     return SyncOutcome(result.summary, output, reader_notes(pose_meta), clock=clock)
 
 
+@check_types
 @dataclass
 class LinksOutcome:
     """A swarm's predicted links, and what the user should know about the inputs."""
@@ -222,6 +229,7 @@ class LinksOutcome:
     mismatch: FrequencyMismatch | None = None
 
 
+@check_types
 def swarm_links(
     model_path: str,
     pose_paths: Sequence[str],
@@ -250,7 +258,8 @@ def swarm_links(
     if logs.pose is None:
         raise InputError(f"{', '.join(pose_paths)}: no pose log found", param="pose_paths")
     mismatch = frequency_mismatch(model, [frequency_hz]) if frequency_hz is not None else None
-    prediction = predict_swarm(model, logs.pose, tx_power_dbm, options, source=", ".join(pose_paths))
+    prediction = predict_swarm(cast(PatternSet, model), logs.pose,  # predict_swarm refuses a baseline
+                               tx_power_dbm, options, source=", ".join(pose_paths))
     write_table(prediction.links, output)
     if connectivity_out:
         write_table(prediction.connectivity, connectivity_out)
@@ -261,6 +270,7 @@ def swarm_links(
     return LinksOutcome(prediction, reader_notes(meta), mismatch)
 
 
+@check_types
 def swarm_headings(
     model_path: str,
     positions: Mapping[str, ArrayLike],
@@ -277,7 +287,8 @@ def swarm_headings(
         check_output_path(output, [model_path])
         if not output.lower().endswith(".json"):
             check_table_path(output)
-    result = best_swarm_headings(load_model(model_path), positions, tx_power_dbm, options)
+    result = best_swarm_headings(cast(PatternSet, load_model(model_path)), positions,  # refuses a baseline
+                                 tx_power_dbm, options)
     if output:
         if output.lower().endswith(".json"):
             write_json(output, result.to_dict())

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 from typing import Mapping, Sequence
 
 from rplearn.analysis.heading_options import YawOptions
+from rplearn._argtypes import check_types
 from rplearn.analysis.headings import OrientationResult, best_yaw
 from rplearn.errors import InputError
 from rplearn.io.export import export_grid
@@ -28,6 +29,7 @@ PAPER_LEARNING_PSI0_DEG: tuple[float, ...] = (0.0, 24.0, 48.0)
 PAPER_TESTING_PSI0_DEG: tuple[float, ...] = (36.0,)
 
 
+@check_types
 @dataclass
 class CampaignPlan:
     """A planned campaign, what each unit asks of the drones, the references written and the
@@ -39,6 +41,7 @@ class CampaignPlan:
     check: PlanCheck | None = None
 
 
+@check_types
 @dataclass(frozen=True)
 class CampaignOptions:
     """The units of a campaign :func:`plan_campaign` plans (the paper's, Sec. IV-A, by default).
@@ -84,6 +87,7 @@ class CampaignOptions:
                        speed_m_s=self.speed_m_s)
 
 
+@check_types
 def plan_campaign(
     out_dir: str,
     campaign: CampaignOptions | None = None,
@@ -117,6 +121,7 @@ def plan_campaign(
     return CampaignPlan(planned, units, paths, check)
 
 
+@check_types
 def export_model_file(
     model_path: str, fmt: str, output: str, step_deg: float = 5.0, frequency_hz: float | None = None
 ) -> list[str]:
@@ -142,6 +147,7 @@ def export_model_file(
     return export_pattern_images(model, output)
 
 
+@check_types
 def orient_link(
     model_path: str,
     tx_node: str,
@@ -158,6 +164,7 @@ def orient_link(
     return best_yaw(model, tx_node, rx_node, tx_position_xyz, rx_position_xyz, turn, options)
 
 
+@check_types
 def reference_model_file(
     patterns: Mapping[str, str], output: str, mounts: Mapping[str, Sequence[float]] | None = None
 ) -> PatternSet:
@@ -181,6 +188,7 @@ def reference_model_file(
     return model
 
 
+@check_types
 def draw_pattern_files(
     model_paths: Sequence[str], output: str, truth: str | None = None, dataset: str | None = None,
     spread: str | None = None,
@@ -201,7 +209,7 @@ def draw_pattern_files(
     models = {}
     for path in model_paths:
         model = load_model(path)
-        if model.kind != "patterns":
+        if not isinstance(model, PatternSet):
             raise InputError(f"{path}: a {model.kind} baseline has no per-node pattern to draw", param="model_paths")
         models[model.label] = model
     gt = load_ground_truth(truth) if truth else None

@@ -51,7 +51,7 @@ def constant_coefficients(basis: Basis) -> FloatArray:
 @lru_cache(maxsize=16)
 def _constant(basis: Basis) -> FloatArray:
     p = basis.n_coef
-    out = np.zeros(p)
+    out: FloatArray = np.zeros(p)
     if basis.kind == "sh":
         out[0] = np.sqrt(4.0 * np.pi)
     elif basis.kind == "poly":
@@ -60,7 +60,7 @@ def _constant(basis: Basis) -> FloatArray:
         from rplearn.core.bases import fibonacci_grid_nodes
 
         az, el = fibonacci_grid_nodes(max(4 * p, 400))
-        out = np.linalg.lstsq(basis.design(az, el), np.ones(az.size), rcond=None)[0]
+        out = np.asarray(np.linalg.lstsq(basis.design(az, el), np.ones(az.size), rcond=None)[0], np.float64)
     out.flags.writeable = False
     return out
 

@@ -115,7 +115,7 @@ def link_statistics(
     gap = 1 + m  # rows between the tx and rx feature groups: y and the extra rows
     k = 2 * p + gap
     use_moments = basis.moment_shape is not None and basis.stacked_samples
-    if use_moments:
+    if basis.moment_shape is not None and use_moments:
         moments = np.zeros((2, *basis.moment_shape))
     else:
         moments = None
@@ -175,7 +175,9 @@ def segmented_link_statistics(
     n_links = bounds.size - 1
     buf = DEFAULT_RUNTIME.block_buffer(k * n)[: k * n].reshape(k, n)
     tx_bounds = bounds if tx_bounds is None else tx_bounds
-    moments = (np.zeros((tx_bounds.size - 1, *basis.moment_shape)), np.zeros((n_links, *basis.moment_shape)))
+    shape = basis.moment_shape
+    assert shape is not None  # only bases with Gram moments come here
+    moments = (np.zeros((tx_bounds.size - 1, *shape)), np.zeros((n_links, *shape)))
     _fill_features(basis, buf, directions, moments, gap, (tx_bounds, bounds))
     buf[p] = y
     buf[p + 1 : p + gap] = extra

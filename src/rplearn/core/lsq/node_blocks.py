@@ -116,15 +116,15 @@ class NodeBlocks:
             rows += [r, c[:pat].T]
             cols += [c, r[:pat].T]
             data += [a[:, pat:], a[pat:, :pat]]
-        rows = np.concatenate([x.ravel() for x in rows])
-        cols = np.concatenate([x.ravel() for x in cols])
+        row = np.concatenate([x.ravel() for x in rows])
+        col = np.concatenate([x.ravel() for x in cols])
         values = np.concatenate([x.ravel() for x in data])
         if scale is not None:
-            values *= scale[rows] * scale[cols]
+            values *= scale[row] * scale[col]
         if diagonal is not None:  # duplicates are summed
-            rows, cols = np.r_[rows, np.arange(a.shape[0])], np.r_[cols, np.arange(a.shape[0])]
+            row, col = np.r_[row, np.arange(a.shape[0])], np.r_[col, np.arange(a.shape[0])]
             values = np.r_[values, diagonal]
-        return csc_matrix((values, (rows, cols)), shape=a.shape)
+        return csc_matrix((values, (row, col)), shape=a.shape)
 
 
 __all__ = ["NodeBlocks"]

@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from rplearn._argtypes import check_types
 from rplearn.core.bases import Basis
 from rplearn.core.geometry import Directions
 from rplearn.core.lsq.link_statistics import (
@@ -43,6 +44,7 @@ EXPONENT_MIN_SPREAD_DB = 0.5
 _SUM_Y, _COUNT, _SUM_E = 0, 1, 2
 
 
+@check_types
 @dataclass
 class NormalEquations:
     """Sufficient statistics of the joint least-squares problem, accumulated chunk by chunk.
@@ -194,7 +196,9 @@ class NormalEquations:
         n = az_tx.size
         m = self._n_extra
         per_block = block_samples(block_rows(self.basis, m))
-        node_moments = np.zeros((self.n_nodes, *self.basis.moment_shape))
+        shape = self.basis.moment_shape
+        assert shape is not None  # only bases with Gram moments come here
+        node_moments = np.zeros((self.n_nodes, *shape))
         touched: set[tuple[int, int]] = set()
         nodes = np.arange(self.n_nodes)[:, None]
 
@@ -324,8 +328,8 @@ class NormalEquations:
         self.n_samples += other.n_samples
         for k, v in other.link_counts.items():
             self.link_counts[k] = self.link_counts.get(k, 0) + v
-        for k, v in other.directed.items():
-            self.directed[k] = v.copy() if k not in self.directed else self.directed[k] + v
+        for k, sums in other.directed.items():
+            self.directed[k] = sums.copy() if k not in self.directed else self.directed[k] + sums
         self.env_cross += other.env_cross
         self.env_sq += other.env_sq
         self.env_y += other.env_y
@@ -410,6 +414,7 @@ class NormalEquations:
         return out
 
 
+@check_types
 def independent_spread_db(normal: NormalEquations, column: int) -> float:
     """Standard deviation [dB] of the part of a column that every other column (the patterns at
     this order, the other shared columns) cannot explain, from the statistics: ``sqrt(S / n)``

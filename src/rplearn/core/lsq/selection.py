@@ -47,7 +47,7 @@ about 6 of them per held-out unit, against 12-14 for a full grid at the largest 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Callable, Mapping, Sequence
+from typing import Any, Callable, Mapping, Sequence, cast
 
 import numpy as np
 
@@ -98,8 +98,8 @@ class _Fold:
 
 
 def _folds(units: Mapping[str, NormalEquations]) -> tuple[list[_Fold], np.ndarray, np.ndarray, float, int]:
-    gram = sum(u.gram for u in units.values())
-    rhs = sum(u.rhs for u in units.values())
+    gram = cast(np.ndarray, sum(u.gram for u in units.values()))
+    rhs = cast(np.ndarray, sum(u.rhs for u in units.values()))
     yty = float(sum(u.yty for u in units.values()))
     n = int(sum(u.n_samples for u in units.values()))
     folds = [_Fold(gram - u.gram, rhs - u.rhs, u.gram, u.rhs, u.yty, u.n_samples) for u in units.values()]

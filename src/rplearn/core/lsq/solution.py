@@ -13,12 +13,15 @@ from typing import Any, Callable
 import numpy as np
 from numpy.typing import NDArray
 
+from rplearn._argtypes import check_types
+
 FloatArray = NDArray[np.float64]
 
 #: Condition numbers above this get a warning in the fit report.
 CONDITION_WARNING = 1e4
 
 
+@check_types
 @dataclass(frozen=True)
 class GaugeNote:
     """How the free constant of one bipartite component was fixed."""
@@ -33,6 +36,7 @@ class GaugeNote:
         return {"nodes": list(self.nodes), "side_a": list(self.side_a), "side_b": list(self.side_b), "rule": self.rule, "text": self.text}
 
 
+@check_types
 @dataclass(frozen=True)
 class FitReport:
     """Numerical health of a fit (paper Sec. V-A, V-C).
@@ -91,6 +95,7 @@ class FitReport:
         }
 
 
+@check_types
 @dataclass(frozen=True)
 class JointSolution:
     """Coefficients of every node's pattern and the fit's report.

@@ -38,6 +38,7 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from rplearn._argtypes import check_types
 from rplearn.core.bases import Basis
 from rplearn.core.gauge import EQUAL_MEAN, Gauge
 from rplearn.core.geometry import Directions
@@ -68,6 +69,7 @@ PRIOR_LEVELS: tuple[str, ...] = ("data", "prior")
 # Link graph
 
 
+@check_types
 def link_components(n_nodes: int, links: Iterable[tuple[int, int]]) -> list[tuple[list[int], list[int] | None]]:
     """Connected components of the link graph and, for bipartite ones, their two sides.
 
@@ -175,6 +177,7 @@ def _gauge_constraints(
     return np.zeros((0, n_nodes * p)), np.zeros(0), notes
 
 
+@check_types
 def solve(
     normal: NormalEquations,
     node_names: Sequence[str] | None = None,
@@ -221,7 +224,7 @@ def solve(
             f"{normal.n_samples} samples cannot identify {pcols} coefficients "
             f"({n_nodes} nodes x {normal.basis.label}); fly longer or choose a smaller model"
         )
-    seen = set()
+    seen: set[int] = set()
     for a, b in normal.link_counts:
         seen.update((a, b))
     missing = [names[i] for i in range(n_nodes) if i not in seen]
@@ -356,6 +359,7 @@ def _check_exponent(normal: NormalEquations) -> None:
         )
 
 
+@check_types
 @dataclass(frozen=True, eq=False)
 class JointFitOptions:
     """How :func:`fit_joint` learns the patterns (everything but the samples and the basis).
@@ -407,6 +411,7 @@ class JointFitOptions:
                              param="chunk_size")
 
 
+@check_types
 def fit_joint(
     directions: Directions,
     tx_index: ArrayLike,
@@ -463,6 +468,7 @@ def fit_joint(
     return solve(normal, node_names, ridge=options.ridge, gauge=options.gauge, penalty=penalty)
 
 
+@check_types
 def identifiability(
     directions: Directions,
     tx_index: ArrayLike,
