@@ -48,7 +48,6 @@ DEFAULT_MAX_GAP_S = 2.0
 
 
 @check_types
-@check_types
 @dataclass(frozen=True)
 class SwarmOptions:
     """How :func:`predict_swarm` predicts a swarm's links (everything but the model, the poses
@@ -105,6 +104,7 @@ def _is_number(value: Any) -> bool:
         np.isfinite(value))
 
 
+@check_types
 @dataclass(frozen=True)
 class SwarmPrediction:
     """Predicted links of a swarm and its connectivity over time.

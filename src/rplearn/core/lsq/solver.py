@@ -390,7 +390,7 @@ class JointFitOptions:
     """
 
     ridge: float = DEFAULT_RIDGE
-    gauge: Gauge = field(default_factory=Gauge)
+    gauge: Gauge | str | Mapping[str, Any] = field(default_factory=Gauge)
     smoothing: float = 0.0
     penalty_power: float = 2.0
     environment: ArrayLike | None = None
