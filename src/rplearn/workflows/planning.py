@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 import os
 from dataclasses import dataclass
-from typing import Mapping, Sequence
+from typing import Mapping, Sequence, cast
 
 from rplearn.analysis.heading_options import YawOptions
 from rplearn._argtypes import check_types
@@ -161,7 +161,7 @@ def orient_link(
     :func:`rplearn.analysis.headings.best_yaw`."""
     model = load_model(model_path)
     require_patterns(model, f"{model_path}: telling which heading is better")
-    return best_yaw(model, tx_node, rx_node, tx_position_xyz, rx_position_xyz, turn, options)
+    return best_yaw(cast(PatternSet, model), tx_node, rx_node, tx_position_xyz, rx_position_xyz, turn, options)
 
 
 @check_types
