@@ -34,9 +34,9 @@ import tracemalloc
 import numpy as np
 from sklearn.linear_model import Ridge
 
-from rplearn.core.sh import SphericalHarmonics, real_sh_reference
 from rplearn.core.geometry import Directions
 from rplearn.core.lsq.solver import JointFitOptions, NormalEquations, fit_joint, solve
+from rplearn.core.sh import SphericalHarmonics, real_sh_reference
 
 N_SAMPLES = 56_164
 ORDER = 10
@@ -72,8 +72,8 @@ def main() -> int:
     d = random_directions(rng, n_samples)
     true = rng.normal(0, 2, (2, basis.n_coef))
 
-    # Streaming: 10 million samples in chunks, never materialised at once; first, before any other fit: the solver's reusable block buffer and the feature scratch
-    # arrays are then allocated while traced, so the peak counts them.
+    # Streaming: 10 million samples in chunks, never materialised at once; first, before any other fit: the solver's reusable block
+    # buffer and the feature scratch arrays are then allocated while traced, so the peak counts them.
     total = 50_000 if args.tiny else 2_000_000 if args.quick else 10_000_000
     chunk = 25_000 if args.tiny else 200_000
     tracemalloc.start()

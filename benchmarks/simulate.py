@@ -36,11 +36,11 @@ def main() -> None:
     if args.tiny:
         args.repeats = 1
 
+    from rplearn.data.sync import synchronise
     from rplearn.data.tables import link_samples
     from rplearn.models.estimators import JointKNNRegressor, MeanRegressor, PatternRegressor
     from rplearn.plan.check import NominalAttitude, check_plan
     from rplearn.sim.flight import simulate
-    from rplearn.data.sync import synchronise
 
     times = []
     res = None

@@ -19,8 +19,8 @@ import time
 
 import numpy as np
 
-from rplearn.data.tables import link_samples
 from rplearn.core import threads
+from rplearn.data.tables import link_samples
 from rplearn.models.fit import fit_model
 from rplearn.models.spec import ModelSpec
 from rplearn.sim.flight import simulate

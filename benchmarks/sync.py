@@ -102,9 +102,9 @@ def peak_rss_kib() -> int:
 
 
 def _stream_child(path_in: str, path_out: str, duration_s: float, chunk_rows: int) -> None:
-    from rplearn.io.tables import iter_signal_table
     from rplearn.data.poses import pose_tracks
     from rplearn.data.streaming import synchronise_to_parquet
+    from rplearn.io.tables import iter_signal_table
 
     base = peak_rss_kib()
     pose = pose_logs(duration_s)

@@ -46,7 +46,8 @@ LAYERS: tuple[str, ...] = (
 #: workflows run on a Dask cluster).
 FORBIDDEN_THIRD_PARTY: dict[str, tuple[str, ...]] = {
     "rplearn.core": ("pandas", "pyarrow", "sklearn", "matplotlib", "plotly", "typer", "rich", "rosbags", "pyulog", "dpkt", "pymap3d", "dask", "distributed"),
-    "rplearn.core.lsq": ("pandas", "pyarrow", "sklearn", "matplotlib", "plotly", "typer", "rich", "rosbags", "pyulog", "dpkt", "pymap3d", "dask", "distributed"),
+    "rplearn.core.lsq": ("pandas", "pyarrow", "sklearn", "matplotlib", "plotly", "typer", "rich", "rosbags", "pyulog", "dpkt", "pymap3d", "dask",
+                         "distributed"),
     "rplearn.data": ("matplotlib", "plotly", "typer", "rich", "dask", "distributed"),
     "rplearn.io": ("matplotlib", "plotly", "typer", "rich", "dask", "distributed"),
     "rplearn.plan": ("matplotlib", "plotly", "typer", "rich", "dask", "distributed"),

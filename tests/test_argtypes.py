@@ -138,7 +138,7 @@ def test_every_public_function_and_class_is_checked_where_it_is_defined():
 def test_paths_become_strings_whole_floats_integers_and_a_bare_string_is_no_sequence(tmp_path):
     from rplearn._argtypes import check_types
 
-    def f(path: str, n: int, names: "list[str] | None" = None) -> tuple:
+    def f(path: str, n: int, names: list[str] | None = None) -> tuple:
         return path, n, names
 
     g = check_types(f, "f")

@@ -43,7 +43,8 @@ import numbers
 import os
 import types
 import typing
-from typing import Any, Callable, TypeVar
+from collections.abc import Callable
+from typing import Any, TypeVar
 
 from rplearn.errors import ArgumentTypeError
 

@@ -7,13 +7,11 @@ import re
 import numpy as np
 import pytest
 
-from rplearn.analysis.budget import (
-    EXPONENT_RANGE, JOINT_LEVEL_RANGE_DB, JOINT_LEVEL_TYPICAL_DB, LINK_OFFSET_LIMIT_DB, LinkSummary, budget_findings,
-)
+from rplearn.analysis.budget import EXPONENT_RANGE, JOINT_LEVEL_RANGE_DB, JOINT_LEVEL_TYPICAL_DB, LINK_OFFSET_LIMIT_DB, LinkSummary, budget_findings
 from rplearn.models.load import load_model
+from rplearn.models.options import FitOptions
 from rplearn.models.spec import ModelSpec
 from rplearn.workflows.learning import fit_dataset
-from rplearn.models.options import FitOptions
 
 TX_ERROR_DB = 25.0
 

@@ -11,12 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rplearn.analysis.decoupling import (
-    UNSPLIT_JOINT_FRACTION,
-    certify,
-    covered_directions,
-    decoupling_certificate,
-)
+from rplearn.analysis.decoupling import UNSPLIT_JOINT_FRACTION, certify, covered_directions, decoupling_certificate
 from rplearn.core.geometry import Directions
 from rplearn.data.tables import LinkSamples
 from rplearn.errors import InputError
@@ -60,7 +55,7 @@ def test_mirror_geometry_leaves_the_difference_unsplit(fits):
     assert cert.n_unsplit >= 3 and cert.unsplit_db >= 0.9 * cert.covered_db > 0
     for comp in cert.components:
         assert comp.joint_db ** 2 < UNSPLIT_JOINT_FRACTION * comp.per_node_db ** 2
-        (az_a, el_a, sign_a, share_a), (az_b, el_b, sign_b, share_b) = comp.peaks["A"], comp.peaks["B"]
+        (az_a, el_a, sign_a, share_a), (az_b, el_b, sign_b, _share_b) = comp.peaks["A"], comp.peaks["B"]
         assert sign_a == -sign_b and abs(share_a - 0.5) < 0.05  # +f on A, -f on B, where both look alike
         assert abs(el_a - el_b) < 5 and (abs(el_a) > 80 or abs((az_a - az_b + 180) % 360 - 180) < 5)
     assert "not split between nodes by this flight: " in cert.summary()
@@ -130,9 +125,9 @@ def test_certificate_needs_a_covariance_and_a_coverage_grid(fits):
 def test_fit_prints_and_stores_the_certificate_and_plot_draws_it(tmp_path):
     """`rplearn fit` (automatic) prints each node's own-pattern spread and the unsplit
     components, stores them in the model file; `rplearn plot --spread` draws them."""
-    from rplearn.models import load_model
-
     import os
+
+    from rplearn.models import load_model
 
     cli = [sys.executable, "-m", "rplearn.cli"]
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT / "src"), os.environ.get("PYTHONPATH", "")])}

@@ -6,11 +6,11 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from rplearn.core.bases import SphericalHarmonics
-from rplearn.errors import InputError
-from rplearn.core.geometry import quat_wxyz_from_yaw
-from rplearn.models.patterns import PatternSet
 from rplearn.analysis.swarm import SwarmOptions, predict_swarm
+from rplearn.core.bases import SphericalHarmonics
+from rplearn.core.geometry import quat_wxyz_from_yaw
+from rplearn.errors import InputError
+from rplearn.models.patterns import PatternSet
 from rplearn.models.training import TrainingSummary
 
 
@@ -120,12 +120,7 @@ def test_times_gaps_and_errors():
 
 
 def test_headings_improve_the_bottleneck_and_agree_with_the_links():
-    from rplearn.analysis.headings import (
-        SwarmHeadingOptions,
-        YawOptions,
-        best_swarm_headings,
-        best_yaw,
-    )
+    from rplearn.analysis.headings import SwarmHeadingOptions, YawOptions, best_swarm_headings, best_yaw
 
     rng = np.random.default_rng(2)
     model = _model(rng)

@@ -2,17 +2,15 @@
 
 from __future__ import annotations
 
-from typing import Optional
-
 import typer
 
 from rplearn.cli._app import with_flag
 
 
 def fit_like(
-    gauge_node: Optional[str] = typer.Option(None, "--gauge-node"),
-    gauge_dbi: Optional[float] = typer.Option(None, "--gauge-dbi"),
-    frequency_hz: Optional[float] = typer.Option(None, "--frequency"),
+    gauge_node: str | None = typer.Option(None, "--gauge-node"),
+    gauge_dbi: float | None = typer.Option(None, "--gauge-dbi"),
+    frequency_hz: float | None = typer.Option(None, "--frequency"),
     step_deg: float = typer.Option(5.0, "--step"),
 ) -> None:
     """A command with the options the messages below name."""

@@ -163,3 +163,16 @@ def test_the_listed_choices_are_the_librarys():
     assert set(CHOICES[("*", "--prior-level")]) == set(PRIOR_LEVELS)
     assert set(CHOICES[("simulate", "--preset")]) == {*PRESET_NAMES, "fleet"}
     assert set(CHOICES[("demo", "--preset")]) == set(PRESET_NAMES)
+
+
+def test_order_is_the_model_size_and_degree_its_alias(flight):
+    """``fit --order`` names the model size (SH-L, BG-k, P-k, k of knn); ``--degree`` is kept
+    as an alias and the help says so; both give the same model."""
+    text = _help("fit", flight)
+    assert "--order, --degree ORDER|auto" in text and "--degree is the same option" in " ".join(text.split())
+    assert run("fit", "d.parquet", "--order", "3", "-o", "o3.json", cwd=flight).returncode == 0
+    assert run("fit", "d.parquet", "--degree", "3", "-o", "d3.json", cwd=flight).returncode == 0
+    a, b = (json.loads((flight / n).read_text())["model"]["coefficients"] for n in ("o3.json", "d3.json"))
+    assert a == b
+    bad = run("fit", "d.parquet", "--order", "x", "-o", "x.json", cwd=flight)
+    assert bad.returncode == 1 and "--order" in bad.stderr

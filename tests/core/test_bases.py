@@ -3,14 +3,7 @@
 import numpy as np
 import pytest
 
-from rplearn.core.bases import (
-    BasisGrid,
-    Polynomial,
-    SphericalHarmonics,
-    basis_from_dict,
-    make_basis,
-    total_degree_exponents,
-)
+from rplearn.core.bases import BasisGrid, Polynomial, SphericalHarmonics, basis_from_dict, make_basis, total_degree_exponents
 from rplearn.core.geometry import great_circle_angle
 from rplearn.core.sh import real_sh_reference, sh_index
 from rplearn.errors import InputError, ModelFileError

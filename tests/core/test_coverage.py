@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from rplearn.core.bases import fibonacci_grid_nodes
-from rplearn.core.coverage import covered_fraction, coverage_at, coverage_grid, nearest_angle_deg
+from rplearn.core.coverage import coverage_at, coverage_grid, covered_fraction, nearest_angle_deg
 from rplearn.core.geometry import great_circle_angle
 
 

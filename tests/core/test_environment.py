@@ -5,14 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rplearn.core.environment import (
-    DEFAULT_RELATIVE_PERMITTIVITY,
-    TWO_RAY_FLOOR_DB,
-    PathLoss,
-    log_distance_column,
-    reflection_coefficient,
-    two_ray_excess_db,
-)
+from rplearn.core.environment import DEFAULT_RELATIVE_PERMITTIVITY, TWO_RAY_FLOOR_DB, PathLoss, log_distance_column, reflection_coefficient, two_ray_excess_db
 from rplearn.core.link import wavelength_m
 from rplearn.errors import InputError
 

@@ -9,12 +9,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from rplearn.data.phases import (
-    calibration_problems,
-    flight_phases,
-    max_gap_advice,
-    takeoff_altitude_m,
-)
+from rplearn.data.phases import calibration_problems, flight_phases, max_gap_advice, takeoff_altitude_m
 from rplearn.data.poses import pose_tracks
 from rplearn.data.streaming import synchronise_stream
 from rplearn.data.sync import SyncOptions, SyncSummary, synchronise

@@ -8,17 +8,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from rplearn.core.geometry import quat_wxyz_from_yaw, slerp_wxyz
+from rplearn.data.streaming import synchronise_stream, synchronise_to_parquet
+from rplearn.data.sync import DROP_REASONS, SyncOptions, SyncSummary, synchronise
 from rplearn.data.tables import MATCHED_COLUMNS
 from rplearn.errors import InputError
-from rplearn.core.geometry import quat_wxyz_from_yaw
-from rplearn.data.sync import (
-    DROP_REASONS,
-    SyncOptions,
-    SyncSummary,
-    synchronise,
-)
-from rplearn.data.streaming import synchronise_stream, synchronise_to_parquet
-from rplearn.core.geometry import slerp_wxyz
 
 
 def pose_log(node: str, t, xyz, yaw_rad) -> pd.DataFrame:

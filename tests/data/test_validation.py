@@ -8,12 +8,12 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from rplearn.core.gauge import Gauge
 from rplearn.data.sync import synchronise
 from rplearn.data.tables import validate_matched, validate_signal_log
 from rplearn.errors import InputError, RplearnError
 from rplearn.io import ReaderOptions
-from rplearn.models import ModelSpec, check_fit_options, load_model
-from rplearn.core.gauge import Gauge
+from rplearn.models import ModelSpec, load_model
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "models_v1"
 

@@ -13,12 +13,12 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from rplearn.data.sync import synchronise
+from rplearn.data.tables import link_samples
 from rplearn.errors import RplearnError
-from rplearn.io.msi import export_msi_files
 from rplearn.io.files import write_table
 from rplearn.io.inspect import inspect_logs
+from rplearn.io.msi import export_msi_files
 from rplearn.models import ModelSpec, fit_model
-from rplearn.data.tables import link_samples
 
 HOSTILE = st.one_of(
     st.sampled_from(["[b]A[/b]", "[/]", ":fire:", "../../evil", "/etc/passwd", "..", ".", "a/b", "🚁", "nan", " ", ""]),

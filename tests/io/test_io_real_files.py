@@ -145,7 +145,7 @@ def test_radiotap_values_equal_tcpdump_decode(path):
         # capture time: tcpdump prints local wall clock (UTC in its test suite), microseconds
         import datetime as dt
 
-        stamp = dt.datetime.fromtimestamp(row.t, dt.timezone.utc).strftime("%H:%M:%S.%f")
+        stamp = dt.datetime.fromtimestamp(row.t, dt.UTC).strftime("%H:%M:%S.%f")
         assert stamp == clock
     signal, meta = read_pcap(str(path), "monitor", 20.0, frequency_hz=None)
     assert len(signal) + sum(meta["dropped"].values()) == len(frames)

@@ -5,18 +5,15 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 import pytest
-from flightfiles import (
-    FREQUENCY_HZ, MAC, POSE_TOPICS, RSSI_MSG, RSSI_MSGDEF, RSSI_TOPICS, TX_POWER_DBM, write_bag,
-    write_pcaps,
-)
+from flightfiles import FREQUENCY_HZ, MAC, POSE_TOPICS, RSSI_MSG, RSSI_MSGDEF, RSSI_TOPICS, TX_POWER_DBM, write_bag, write_pcaps
 
+from rplearn.data.sync import synchronise
 from rplearn.data.tables import MATCHED_COLUMNS
-from rplearn.io.files import write_table
 from rplearn.io import ReaderOptions, detect_format, read_logs
+from rplearn.io.files import write_table
 from rplearn.io.pcap import read_pcap
 from rplearn.io.rosbag import RosbagOptions, read_rosbag
 from rplearn.io.tables import read_pose_table, read_signal_table
-from rplearn.data.sync import synchronise
 
 
 def _canon(df: pd.DataFrame) -> pd.DataFrame:

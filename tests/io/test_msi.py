@@ -8,13 +8,7 @@ from lobe import Lobe
 
 from rplearn.core.bases import SphericalHarmonics
 from rplearn.errors import InputError
-from rplearn.io.msi import (
-    export_msi,
-    msi_horizontal_directions_rad,
-    msi_vertical_directions_rad,
-    read_msi,
-    write_msi,
-)
+from rplearn.io.msi import export_msi, msi_horizontal_directions_rad, msi_vertical_directions_rad, read_msi, write_msi
 from rplearn.models.patterns import PatternSet
 
 

@@ -12,8 +12,8 @@ import pytest
 from rplearn.analysis.pattern_error import node_directions, pattern_errors_db
 from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.core.lsq.selection import sub_statistics
-from rplearn.core.sh import SphericalHarmonics
 from rplearn.core.lsq.solver import solve
+from rplearn.core.sh import SphericalHarmonics
 from rplearn.data.units import samples_of, split_units
 from rplearn.io.files import read_dataset
 from rplearn.models import ModelSpec, load_model

@@ -6,13 +6,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
-from rplearn.models.auto import fit_auto
-from rplearn.models.predict import UNCOVERED_DEG, end_coverage_deg
-from rplearn.models.options import FitOptions
-
 from test_auto import campaign
 from test_prior import ground_case
+
+from rplearn.models.auto import fit_auto
+from rplearn.models.options import FitOptions
+from rplearn.models.predict import UNCOVERED_DEG, end_coverage_deg
 
 
 def interval_hits(model, test):

@@ -5,8 +5,8 @@ import time
 import numpy as np
 
 import rplearn.models.fit as learn
-from rplearn.data.tables import LinkSamples
 from rplearn.core.geometry import Directions
+from rplearn.data.tables import LinkSamples
 from rplearn.models.fit import fit_model
 from rplearn.models.spec import ModelSpec
 

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from test_auto import campaign
 
 from rplearn.core.geometry import Directions
 from rplearn.core.sh import SphericalHarmonics
@@ -16,8 +17,6 @@ from rplearn.models import load_model
 from rplearn.models.auto import fit_auto
 from rplearn.models.predict import UNCOVERED_DEG, predict_dataset
 from rplearn.sim.presets import CAMPAIGN_FLIGHTS, CAMPAIGN_LEVEL_STD_DB
-
-from test_auto import campaign
 
 
 def flights_with_levels(n_units, seed, level_db, noise_db=1.0, n=300):

@@ -24,6 +24,7 @@ from rplearn.io.reference import read_reference_pattern
 from rplearn.models import ModelSpec
 from rplearn.models.auto import fit_auto
 from rplearn.models.fit import fit_model
+from rplearn.models.options import FitOptions
 from rplearn.models.reference import reference_model
 from rplearn.models.robust import fit_huber
 from rplearn.plan.campaign import Campaign
@@ -31,7 +32,6 @@ from rplearn.plan.trajectory import TrajectoryUnit
 from rplearn.sim import imperfect_reference, simulate
 from rplearn.sim.presets import make_preset
 from rplearn.workflows.logs import sync_logs
-from rplearn.models.options import FitOptions
 
 SHIFTS = st.floats(min_value=-100.0, max_value=100.0, allow_nan=False)
 #: few examples, each a handful of small fits: the whole file runs in well under a minute

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from rplearn.core.bases import BasisGrid, SphericalHarmonics
-from rplearn.errors import InputError, ModelFileError
 from rplearn.core.geometry import link_directions, quat_wxyz_from_yaw
 from rplearn.core.link import free_space_path_loss_db
+from rplearn.errors import InputError, ModelFileError
 from rplearn.models.patterns import PatternSet
 from rplearn.models.training import TrainingSummary
 
@@ -111,8 +111,8 @@ def test_bad_model_files_are_refused(pattern_set, tmp_path):
 
 def test_prediction_standard_error_is_calibrated():
     """Joint-gain errors divided by the reported standard error are ~N(0, 1), two-node gauge or not."""
-    from rplearn.data.tables import LinkSamples
     from rplearn.core.geometry import Directions
+    from rplearn.data.tables import LinkSamples
     from rplearn.models.fit import fit_patterns
     from rplearn.models.spec import ModelSpec
 
@@ -124,7 +124,8 @@ def test_prediction_standard_error_is_calibrated():
         az = rng.uniform(-np.pi, np.pi, (2, n))
         el = np.arcsin(rng.uniform(-1, 1, (2, n)))
         y = b.design(az[0], el[0]) @ true[0] + b.design(az[1], el[1]) @ true[1]
-        return LinkSamples(Directions(az[0], el[0], az[1], el[1]), np.zeros(n, int), np.ones(n, int), ("A", "B"), y + noise * rng.normal(size=n), np.full(n, 10.0))
+        return LinkSamples(Directions(az[0], el[0], az[1], el[1]), np.zeros(n, int), np.ones(n, int), ("A", "B"),
+                           y + noise * rng.normal(size=n), np.full(n, 10.0))
 
     z = []
     probe = samples(300, 0.0)
@@ -138,8 +139,8 @@ def test_prediction_standard_error_is_calibrated():
 @pytest.mark.parametrize("basis", [SphericalHarmonics(5), BasisGrid(3, 0.3)], ids=["SH", "BG"])
 def test_joint_gain_std_equals_the_explicit_quadratic_form(basis):
     """sqrt(x^T C x) with x the sample's full design row, three nodes, both link directions."""
-    from rplearn.data.tables import LinkSamples
     from rplearn.core.geometry import Directions
+    from rplearn.data.tables import LinkSamples
 
     rng = np.random.default_rng(0)
     p = basis.n_coef

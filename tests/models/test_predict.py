@@ -8,12 +8,12 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from rplearn.core.gauge import Gauge
 from rplearn.data.tables import validate_matched
+from rplearn.errors import InputError
 from rplearn.models.load import load_model
 from rplearn.models.predict import distinct_labels, frequency_mismatch, predict_dataset
-from rplearn.core.gauge import Gauge
 from rplearn.models.spec import ModelSpec, check_fit_options
-from rplearn.errors import InputError
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "models_v1"
 

@@ -16,10 +16,10 @@ from rplearn.io.reference import read_reference_pattern
 from rplearn.models import ModelSpec
 from rplearn.models.auto import fit_auto
 from rplearn.models.fit import FittedModel, evaluate_models, fit_model
+from rplearn.models.options import FitOptions
 from rplearn.models.reference import reference_model
 from rplearn.sim import imperfect_reference, simulate
 from rplearn.workflows.logs import sync_logs
-from rplearn.models.options import FitOptions
 
 
 def ground_case(tmp_path, seed):
@@ -105,8 +105,9 @@ def test_predictions_say_where_the_flight_never_looked(tmp_path):
     """Coverage columns and a warning from predict; the Bayesian spread grows away from the data."""
     per_unit, learn, test, _ = ground_case(tmp_path, 3)
     fitted, _ = fit_auto(per_unit)
-    from rplearn.models.predict import UNCOVERED_DEG, predict_dataset
     import pandas as pd
+
+    from rplearn.models.predict import UNCOVERED_DEG, predict_dataset
 
     df = read_dataset(str(tmp_path / "m.parquet"))
     pred = predict_dataset(fitted.model, df[df["unit"].str.startswith("test")])
@@ -114,6 +115,7 @@ def test_predictions_say_where_the_flight_never_looked(tmp_path):
     assert pred.n_uncovered == int((cov > UNCOVERED_DEG).sum()) > 0 and "fly those directions" in pred.warnings[0]
     # far from every learning direction (the sky above the station, behind the drone) the spread is larger
     import numpy as np
+
     from rplearn.core.geometry import Directions
     from rplearn.data.tables import LinkSamples
 
@@ -141,6 +143,7 @@ def test_orient_cautions_when_the_best_heading_looks_where_the_flight_never_did(
 
 def test_swarm_links_carry_their_coverage(tmp_path):
     import pandas as pd
+
     from rplearn.analysis.swarm import SwarmOptions, predict_swarm
 
     per_unit, _, _, _ = ground_case(tmp_path, 5)
@@ -158,6 +161,7 @@ def test_orient_prefers_headings_the_flight_saw(tmp_path):
     """Ranked by the 10% lower bound, the chosen headings face directions nearer the flown ones
     and are surer than the headings the prediction alone picks, for little predicted gain."""
     import numpy as np
+
     from rplearn.analysis.headings import YawOptions, best_yaw
 
     per_unit, _, _, _ = ground_case(tmp_path, 4)

@@ -11,11 +11,11 @@ import pytest
 from rplearn.errors import InputError, RplearnError
 from rplearn.models import ModelSpec
 from rplearn.models import streamed as streamed_module
+from rplearn.models.options import FitOptions
 from rplearn.models.streamed import weighted_median
 from rplearn.sim import simulate
 from rplearn.workflows import fleet, learning
 from rplearn.workflows.logs import sync_logs
-from rplearn.models.options import FitOptions
 
 
 @pytest.fixture(scope="module")

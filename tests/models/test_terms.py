@@ -16,11 +16,11 @@ from rplearn.errors import IdentifiabilityError, InputError, ModelFileError
 from rplearn.models import ModelSpec
 from rplearn.models.auto import fit_auto
 from rplearn.models.fit import fit_model
+from rplearn.models.options import FitOptions
 from rplearn.models.patterns import PatternSet
 from rplearn.models.predict import predict_dataset
 from rplearn.sim import simulate
 from rplearn.sim.presets import PATHLOSS_EXPONENT, make_preset
-from rplearn.models.options import FitOptions
 
 
 def _campaign(config, seed=1, link=None):

@@ -11,14 +11,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from rplearn.errors import InputError, PlanError
-from rplearn.plan.campaign import (
-    Campaign,
-    group_campaign,
-    link_graph_identifies_gains,
-    pair_schedule,
-    paper_campaign,
-    write_references,
-)
+from rplearn.plan.campaign import Campaign, group_campaign, link_graph_identifies_gains, pair_schedule, paper_campaign, write_references
 from rplearn.plan.trajectory import PlanLimits, TrajectoryUnit, summarize_unit
 
 

@@ -8,15 +8,7 @@ import numpy as np
 import pytest
 
 from rplearn.errors import InputError, ModelFileError
-from rplearn.sim.antennas import (
-    AirframeLobe,
-    AntennaSpec,
-    GroundTruth,
-    Mounting,
-    NodeAntenna,
-    antenna_from_name,
-    load_ground_truth,
-)
+from rplearn.sim.antennas import AirframeLobe, AntennaSpec, GroundTruth, Mounting, NodeAntenna, antenna_from_name, load_ground_truth
 from rplearn.sim.gain_formulas import (
     half_wave_dipole_dbi,
     itu_f1336_omni_average_dbi,

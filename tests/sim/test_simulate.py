@@ -8,14 +8,14 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from rplearn.sim.antennas import load_ground_truth
-from rplearn.data.tables import MATCHED_COLUMNS, POSE_COLUMNS, SIGNAL_COLUMNS, link_samples, validate_pose_log, validate_signal_log
-from rplearn.io.files import read_table
-from rplearn.errors import InputError
 from rplearn.core.geometry import euler_from_quat_wxyz
-from rplearn.sim.presets import PRESET_NAMES, make_preset
-from rplearn.sim.flight import ou_process, simulate, with_effects_off
+from rplearn.data.tables import MATCHED_COLUMNS, POSE_COLUMNS, SIGNAL_COLUMNS, link_samples, validate_pose_log, validate_signal_log
+from rplearn.errors import InputError
+from rplearn.io.files import read_table
+from rplearn.sim.antennas import load_ground_truth
 from rplearn.sim.config import EstimatorConfig, FlightConfig, RadioConfig, SimulationConfig
+from rplearn.sim.flight import ou_process, simulate, with_effects_off
+from rplearn.sim.presets import PRESET_NAMES, make_preset
 
 
 @pytest.fixture(scope="module")

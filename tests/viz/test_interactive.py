@@ -17,12 +17,7 @@ from rplearn.errors import InputError
 from rplearn.models.fit import node_coverage_grids
 from rplearn.models.patterns import PatternSet
 from rplearn.viz import interactive, plot, report
-from rplearn.viz.interactive import (
-    InteractiveFigure,
-    pattern_3d_figures,
-    pattern_3d_html,
-    pattern_3d_plotly,
-)
+from rplearn.viz.interactive import InteractiveFigure, pattern_3d_figures, pattern_3d_html, pattern_3d_plotly
 from rplearn.viz.report import ReportSection, screenshot_report, write_report
 
 #: The first line of the embedded library, once per report.

@@ -281,8 +281,8 @@ def test_spread_maps_of_an_automatic_fit(tmp_path):
     sim = simulate("smoke", 0)
     s = samples_of(sim.matched_truth, sim.units("learning"))
     blocks = np.array_split(np.arange(len(s)), 3)
-    from rplearn.data.tables import LinkSamples
     from rplearn.core.geometry import Directions
+    from rplearn.data.tables import LinkSamples
 
     part = lambda b: LinkSamples(Directions(*(np.asarray(v)[b] for v in s.directions)), s.tx_index[b], s.rx_index[b],  # noqa: E731
                                  s.nodes, s.joint_gain_db[b], s.distance_m[b])

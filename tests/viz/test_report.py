@@ -12,15 +12,9 @@ import pytest
 from matplotlib.image import imread
 
 from rplearn._version import __version__
-from rplearn.viz import charts, plot, report
 from rplearn.errors import InputError
-from rplearn.viz.report import (
-    ReportSection,
-    markdown_table_to_html,
-    rows_to_html,
-    screenshot_report,
-    write_report,
-)
+from rplearn.viz import charts, plot, report
+from rplearn.viz.report import ReportSection, markdown_table_to_html, rows_to_html, screenshot_report, write_report
 
 TABLE_MD = """| Method | RMSE/dB | MAE/dB | abs(phi) |
 |---|---:|---:|:---:|

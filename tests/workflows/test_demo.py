@@ -13,14 +13,14 @@ import numpy as np
 import pytest
 from matplotlib.image import imread
 
-from rplearn.core.sh import SphericalHarmonics, sh_index
-from rplearn.workflows import run_demo
 from rplearn.analysis.headings import YawOptions, best_yaw
 from rplearn.analysis.identifiability import identifiability_study
 from rplearn.analysis.sweep import order_sweep
+from rplearn.core.sh import SphericalHarmonics, sh_index
 from rplearn.models.patterns import PatternSet
-from rplearn.viz.report import screenshot_report
 from rplearn.models.training import TrainingSummary
+from rplearn.viz.report import screenshot_report
+from rplearn.workflows import run_demo
 
 
 @pytest.fixture(scope="module")
@@ -76,8 +76,8 @@ def test_sweep_stops_after_rises():
     rng = np.random.default_rng(0)
     b = SphericalHarmonics(4)
     true = rng.normal(0, 3, (2, 16))
-    from rplearn.data.tables import LinkSamples
     from rplearn.core.geometry import Directions
+    from rplearn.data.tables import LinkSamples
 
     def samples(n):
         az = rng.uniform(-np.pi, np.pi, (2, n))

@@ -16,11 +16,11 @@ import pytest
 from rplearn.errors import InputError
 from rplearn.io.files import write_table
 from rplearn.models.load import load_model
+from rplearn.models.options import FitOptions
 from rplearn.models.spec import ModelSpec
 from rplearn.sim.fleet import drone_ids, fleet_pairs, simulate_fleet
 from rplearn.workflows.fleet import dask_client, parse_dask
 from rplearn.workflows.learning import evaluate_model_files, fit_dataset
-from rplearn.models.options import FitOptions
 
 RPLEARN = [sys.executable, "-m", "rplearn.cli"]
 FLIGHTS = 8
@@ -121,8 +121,8 @@ def test_one_flight_cut_into_time_blocks_across_files_matches_on_dask(fleet, cli
 
 
 def test_dask_evaluation_equals_the_single_process(fleet, client, tmp_path):
-    from rplearn.workflows.fleet import predict_parts
     from rplearn.io.partitions import dataset_parts
+    from rplearn.workflows.fleet import predict_parts
 
     root, _ = fleet
     model_path = str(tmp_path / "m.json")

@@ -31,8 +31,9 @@ level and sphere-mean checks are skipped, the distance trend and the offsets sti
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass
-from typing import Any, Mapping, Sequence
+from typing import Any
 
 import numpy as np
 import pandas as pd

@@ -19,8 +19,8 @@ Only the signal rows that stay inside the node's pose span for every shift are u
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 import pandas as pd

@@ -28,8 +28,9 @@ samples' pairs of directions (or their Gram matrix); nothing is refitted.
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Mapping, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -365,7 +366,7 @@ def decoupling_certificate(
         return DecouplingCertificate(spreads, covered_db=covered_db, notes=[
             "(a fixed-order fit's covariance leaves out what its ridge decides where the flight cannot split the "
             "patterns, so these spreads are lower bounds and the unsplit components are not computed; "
-            "--degree auto gives the posterior's)"])
+            "--order auto gives the posterior's)"])
     if samples is None and gram is None:
         return DecouplingCertificate(spreads, covered_db=covered_db, own_std_db=maps, notes=notes + [
             "(the components not split between nodes are not computed: the pairs of learning directions were not kept)"])
@@ -391,5 +392,5 @@ def certify(model: Any, samples: LinkSamples | Sequence[LinkSamples] | None = No
     return cert
 
 
-__all__ = ["MAX_COMPONENT_COLUMNS", "OWN_MAP_POINTS", "certify", "own_std_maps", "MIN_LISTED_DB", "UNSPLIT_JOINT_FRACTION", "DecouplingCertificate", "NodeSpread",
-           "SplitComponent", "covered_directions", "decoupling_certificate", "unsplit_components"]
+__all__ = ["MAX_COMPONENT_COLUMNS", "OWN_MAP_POINTS", "certify", "own_std_maps", "MIN_LISTED_DB", "UNSPLIT_JOINT_FRACTION",
+           "DecouplingCertificate", "NodeSpread", "SplitComponent", "covered_directions", "decoupling_certificate", "unsplit_components"]

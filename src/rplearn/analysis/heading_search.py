@@ -5,7 +5,8 @@ maximum spanning trees, no model call)."""
 
 from __future__ import annotations
 
-from typing import Any, Sequence
+from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -46,7 +47,7 @@ def coordinate_ascent(
     of equal best ones, and only when strictly better), until a sweep changes nothing."""
     best = problem.score(choice)
     sweeps = 0
-    for sweeps in range(1, max_sweeps + 1):
+    for sweeps in range(1, max_sweeps + 1):  # noqa: B007 (the count is reported after the loop)
         changed = False
         for d in free:
             bottleneck, mean = problem.yaw_scores(choice, d)

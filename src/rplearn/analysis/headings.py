@@ -20,26 +20,26 @@ Yaws are ENU, counter-clockwise from east [deg].
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Mapping, Sequence
 
 import numpy as np
 import pandas as pd
 from numpy.typing import ArrayLike
 
 from rplearn._argtypes import check_types
-from rplearn.data.tables import check_tx_power_dbm
+
+# CAUTION_Z: the default caution, documented here
+from rplearn.analysis.heading_options import CAUTION_Z, SwarmHeadingOptions, YawOptions  # noqa: F401
+from rplearn.analysis.heading_search import EXHAUSTIVE_MAX_COMBINATIONS, search  # noqa: F401 (the constant is documented here)
+from rplearn.analysis.swarm import maximum_spanning_edges, resolve_patterns
 from rplearn.core.geometry import direction_in_body, distance_m, quat_wxyz_from_yaw
 from rplearn.core.link import free_space_path_loss_db, received_power_dbm
+from rplearn.data.tables import check_tx_power_dbm
 from rplearn.errors import InputError
 from rplearn.models.base import model_frequency_hz, require_patterns
 from rplearn.models.patterns import PatternSet
 from rplearn.models.predict import UNCOVERED_DEG
-from rplearn.analysis.heading_search import EXHAUSTIVE_MAX_COMBINATIONS, search  # noqa: F401 (the constant is documented here)
-# CAUTION_Z: the default caution, documented here
-from rplearn.analysis.heading_options import CAUTION_Z, SwarmHeadingOptions, YawOptions  # noqa: F401
-from rplearn.analysis.swarm import maximum_spanning_edges, resolve_patterns
-
 
 Pair = tuple[str, str]
 Score = tuple[float, float]

@@ -18,8 +18,9 @@ Headings that keep a hovering swarm best connected are chosen in :mod:`rplearn.a
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Mapping, Sequence, cast
+from typing import Any, cast
 
 import numpy as np
 import pandas as pd
@@ -28,15 +29,14 @@ from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
 
 from rplearn._argtypes import check_types
-from rplearn.data.tables import check_tx_power_dbm
-from rplearn.data.tables import LinkSamples
-from rplearn.errors import InputError
 from rplearn.core.geometry import distance_m, link_directions
 from rplearn.core.link import FAR_FIELD_WAVELENGTHS, free_space_path_loss_db, wavelength_m
+from rplearn.data.poses import pose_tracks
+from rplearn.data.tables import LinkSamples, check_tx_power_dbm
+from rplearn.errors import InputError
 from rplearn.models.base import model_frequency_hz, require_patterns
 from rplearn.models.patterns import PatternSet
 from rplearn.models.predict import UNCOVERED_DEG, end_coverage_deg
-from rplearn.data.poses import pose_tracks
 
 #: Default spacing of the prediction times [s].
 DEFAULT_STEP_S = 1.0

@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Callable, Sequence
 
 import numpy as np
 import pandas as pd
@@ -54,7 +54,7 @@ class SweepResult:
         text = f"{self.to_frame().to_string(index=False)}\nlowest test RMSE at order {self.best_order}"
         if self.selection is not None:
             sel = self.selection
-            text += (f"\nautomatic choice (--degree auto, {sel.method} on the learning units): order {sel.order}, "
+            text += (f"\nautomatic choice (--order auto, {sel.method} on the learning units): order {sel.order}, "
                      f"smoothing {sel.smoothing:.1e}; cv_rmse_db is its validation curve at that smoothing")
         return text
 
@@ -74,7 +74,7 @@ class SweepResult:
 
 
 def validation_sweep(unit_samples: dict[str, LinkSamples], orders: Sequence[int]) -> tuple[Selection, list[float]]:
-    """The automatic choice (``fit --degree auto``) among SH ``orders`` and its validation curve
+    """The automatic choice (``fit --order auto``) among SH ``orders`` and its validation curve
     at the chosen smoothing, from per-unit statistics accumulated once at ``max(orders)``."""
     top = max(int(o) for o in orders)
     spec = ModelSpec("sh", top)

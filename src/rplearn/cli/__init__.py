@@ -14,15 +14,16 @@ parameter at fault, and exits with code 1, without a traceback.
 
 from __future__ import annotations
 
-from rplearn.cli._app import app, exit_on_sigterm
-
 # Importing a command module registers its commands; --help lists them in this order, the
 # order of a calibration campaign.
-from rplearn.cli import campaign  # noqa: E402,F401,I001
-from rplearn.cli import logs  # noqa: E402,F401
-from rplearn.cli import learning  # noqa: E402,F401
-from rplearn.cli import swarm  # noqa: E402,F401
-from rplearn.cli import outputs  # noqa: E402,F401
+from rplearn.cli import (
+    campaign,  # noqa: E402,F401,I001
+    learning,  # noqa: E402,F401
+    logs,  # noqa: E402,F401
+    outputs,  # noqa: E402,F401
+    swarm,  # noqa: E402,F401
+)
+from rplearn.cli._app import app, exit_on_sigterm
 
 __all__ = ["app", "main"]
 

@@ -12,7 +12,8 @@ import inspect
 import logging
 import re
 import signal
-from typing import Any, Callable, Iterable, Mapping, Optional
+from collections.abc import Callable, Iterable, Mapping
+from typing import Any
 
 import typer
 from rich.console import Console
@@ -29,7 +30,7 @@ app = typer.Typer(
         "Typical session:\n\n"
         "  rplearn simulate --preset smoke -o flight\n\n"
         "  rplearn sync --poses flight/pose_log.parquet --signals flight/signal_log.parquet --link A:B -o data.parquet\n\n"
-        "  rplearn fit data.parquet --model sh --degree 10 -o sh10.json\n\n"
+        "  rplearn fit data.parquet --model sh --order 10 -o sh10.json\n\n"
         "  rplearn evaluate sh10.json data.parquet\n\n"
         "  rplearn demo -o rplearn-demo"
     ),
@@ -52,9 +53,9 @@ PARAM_FLAGS: dict[str, str] = {
     "clock_offsets_s": "--offset NODE=SECONDS", "on_unknown_node": "--on-unknown-node",
     "pattern_of": "--as DRONE=NODE", "times_s": "--at", "step_s": "--step", "positions": "--pos DRONE=X,Y,Z",
     "start_yaw_deg": "--yaw DRONE=DEG", "fixed": "--fixed", "turn": "--turn", "units": "--units",
-    "test_units": "--test-units", "learn_units": "--learn-units", "order": "--degree", "ridge": "--ridge",
+    "test_units": "--test-units", "learn_units": "--learn-units", "order": "--order", "ridge": "--ridge",
     "sigma_rad2": "--sigma", "grid": "--grid", "gauge_node": "--gauge-node", "gauge_dbi": "--gauge-dbi", "prior": "--prior NODE=MODEL.json",
-    "models": "--models", "paper_models": "--paper-models", "repeats": "--repeats", "orders": "--orders", "n_neighbors": "--degree",
+    "models": "--models", "paper_models": "--paper-models", "repeats": "--repeats", "orders": "--orders", "n_neighbors": "--order",
     "ground_level_m": "--ground-level", "relative_permittivity": "--permittivity",
     "path_loss": "--path-loss", "link_offsets": "--link-offsets",
     "station_geodetic": "--station LAT,LON,ALT", "station": "--station-node", "station_heading_deg": "--station-heading",
@@ -152,9 +153,9 @@ def with_flag(
         message = ", ".join(table[n].split()[0] for n in leading) + sep + rest
     for name, flag in table.items():
         value = r"(?:=('[^']*'|\"[^\"]*\"|\{[^}]*\}|[^,)\s]+))?"
-        message = re.sub(rf"\b\w+Options\.{name}\b{value}", lambda m: _rendered(flag, m.group(1)), message)
-        message = re.sub(rf"(?<![\w.-]){name}=('[^']*'|\"[^\"]*\"|\{{[^}}]*\}}|[^,)\s]+)", lambda m: _rendered(flag, m.group(1)), message)
-        message = re.sub(rf"(^|\()({name})(?=[:) ]|$)", lambda m: m.group(1) + flag.split()[0], message)
+        message = re.sub(rf"\b\w+Options\.{name}\b{value}", lambda m: _rendered(flag, m.group(1)), message)  # noqa: B023 (used at once)
+        message = re.sub(rf"(?<![\w.-]){name}=('[^']*'|\"[^\"]*\"|\{{[^}}]*\}}|[^,)\s]+)", lambda m: _rendered(flag, m.group(1)), message)  # noqa: B023
+        message = re.sub(rf"(^|\()({name})(?=[:) ]|$)", lambda m: m.group(1) + flag.split()[0], message)  # noqa: B023
         if name in related:
             message = re.sub(rf"(?<![\w.-]){name}(?![\w=])", flag.split()[0], message)
     param_flag = table.get(param or "")
@@ -225,7 +226,7 @@ def parts_step(progress: Progress, task: Any, what: str, noun: str = "part") -> 
 # Parsing flag values
 
 
-def split_list(values: Optional[list[str]]) -> list[str] | None:
+def split_list(values: list[str] | None) -> list[str] | None:
     """Values of a repeatable, comma-separable flag (None when none given)."""
     if not values:
         return None
@@ -233,7 +234,7 @@ def split_list(values: Optional[list[str]]) -> list[str] | None:
     return items or None
 
 
-def pairs(values: Optional[list[str]], flag: str) -> dict[str, str]:
+def pairs(values: list[str] | None, flag: str) -> dict[str, str]:
     """KEY=VALUE values of a repeatable flag; a key given twice with different values is refused."""
     found: dict[str, str] = {}
     for v in values or []:
@@ -255,7 +256,7 @@ def numbers(values: Mapping[str, str], flag: str, what: str) -> dict[str, float]
         raise InputError(f"{flag}: expected {what} with a number, got {given}") from None
 
 
-def floats(values: Optional[list[str]], flag: str, what: str) -> list[float] | None:
+def floats(values: list[str] | None, flag: str, what: str) -> list[float] | None:
     """Numbers of a repeatable, comma-separable flag (None when none given)."""
     items = split_list(values)
     if items is None:
@@ -277,7 +278,7 @@ def xyz(text: str, flag: str) -> list[float]:
     return v
 
 
-def link(text: Optional[str]) -> tuple[str, str] | None:
+def link(text: str | None) -> tuple[str, str] | None:
     """``TX:RX`` of ``--link`` (None for 'all' or when not given)."""
     if text is None or text.lower() == "all":
         return None
@@ -302,7 +303,7 @@ def orders(text: str) -> list[int]:
     return found
 
 
-def geodetic_flag(text: Optional[str], flag: str) -> Optional[tuple[float, ...]]:
+def geodetic_flag(text: str | None, flag: str) -> tuple[float, ...] | None:
     """``LAT,LON,ALT`` [deg, deg, m] as three numbers (checked further by ReaderOptions), or None."""
     if text is None:
         return None
@@ -316,9 +317,9 @@ def geodetic_flag(text: Optional[str], flag: str) -> Optional[tuple[float, ...]]
 
 
 def reader_options(
-    node: Optional[list[str]] = None, receiver: Optional[list[str]] = None, address: Optional[list[str]] = None,
-    pose_topic: Optional[list[str]] = None, rssi_topic: Optional[list[str]] = None, rssi_field: Optional[str] = None,
-    msg_definition: Optional[list[str]] = None, **fields: Any,
+    node: list[str] | None = None, receiver: list[str] | None = None, address: list[str] | None = None,
+    pose_topic: list[str] | None = None, rssi_topic: list[str] | None = None, rssi_field: str | None = None,
+    msg_definition: list[str] | None = None, **fields: Any,
 ) -> Any:
     """:class:`rplearn.io.ReaderOptions` from the reader flags.
 

@@ -37,7 +37,7 @@ CHOICES: dict[tuple[str, str], tuple[str, ...]] = {
 METAVARS: dict[tuple[str, str], str] = {
     ("*", "--model"): "KIND",
     ("*", "--models"): "KIND,KIND...",
-    ("*", "--degree"): "ORDER|auto",
+    ("*", "--order"): "ORDER|auto",
     ("*", "--orders"): "ORDERS",
     ("*", "--units"): "UNIT,UNIT...",
     ("*", "--learn-units"): "UNIT,UNIT...",

@@ -3,8 +3,6 @@
 
 from __future__ import annotations
 
-from typing import Optional
-
 import typer
 from rich.table import Table
 
@@ -27,13 +25,14 @@ def trajectory(
     height_m: float = typer.Option(20.0, "--height", help="Height of the circle centre [m]."),
     loops: int = typer.Option(5, "--loops", help="Headings per drone n; heading step 360/n deg."),
     speed_m_s: float = typer.Option(2.0, "--speed", help="Cruise speed along the circle [m/s]."),
-    psi0_deg: Optional[list[str]] = typer.Option(None, "--psi0", help="Initial headings of learning units [deg] (default 0,24,48)."),
-    test_psi0_deg: Optional[list[str]] = typer.Option(None, "--test-psi0", help="Initial headings of testing units [deg] (default 36)."),
-    max_speed: Optional[float] = typer.Option(None, help="Refuse plans faster than this [m/s]."),
-    max_accel: Optional[float] = typer.Option(None, help="Refuse plans with larger accelerations [m/s^2]."),
-    max_flight_time: Optional[float] = typer.Option(None, help="Flight time per battery; each unit must fit [s]."),
+    psi0_deg: list[str] | None = typer.Option(None, "--psi0", help="Initial headings of learning units [deg] (default 0,24,48)."),
+    test_psi0_deg: list[str] | None = typer.Option(None, "--test-psi0", help="Initial headings of testing units [deg] (default 36)."),
+    max_speed: float | None = typer.Option(None, help="Refuse plans faster than this [m/s]."),
+    max_accel: float | None = typer.Option(None, help="Refuse plans with larger accelerations [m/s^2]."),
+    max_flight_time: float | None = typer.Option(None, help="Flight time per battery; each unit must fit [s]."),
     rate_hz: float = typer.Option(10.0, "--rate", help="Sample rate of the reference files [Hz]."),
-    check_model: Optional[str] = typer.Option("sh-10", "--check-model", help="Model whose rank and condition number the plan check reports (e.g. sh-10, bg-7; 'none' to skip)."),
+    check_model: str | None = typer.Option("sh-10", "--check-model", help="Model whose rank and condition number the plan check reports (e.g. sh-10, bg-7; "
+                                                                          "'none' to skip)."),
     wind_m_s: float = typer.Option(0.0, "--wind", help="Steady wind for the plan check [m/s] (tilts the drones)."),
 ) -> None:
     """Plan a calibration campaign and check it before flying.
@@ -45,9 +44,7 @@ def trajectory(
     Example: rplearn trajectory --distance 10 --height 20 --loops 5 --max-flight-time 600 -o plan
     """
     from rplearn.plan.trajectory import PlanLimits
-    from rplearn.workflows.planning import (
-        PAPER_LEARNING_PSI0_DEG, PAPER_TESTING_PSI0_DEG, CampaignOptions, plan_campaign,
-    )
+    from rplearn.workflows.planning import PAPER_LEARNING_PSI0_DEG, PAPER_TESTING_PSI0_DEG, CampaignOptions, plan_campaign
 
     campaign = CampaignOptions(
         floats(psi0_deg, "--psi0", "headings in degrees") or PAPER_LEARNING_PSI0_DEG,
@@ -62,7 +59,8 @@ def trajectory(
     for col in ("unit", "duration/s", "path/m", "max speed/(m/s)", "max accel/(m/s^2)", "max yaw rate/(deg/s)"):
         table.add_column(col)
     for s in plan.units:
-        table.add_row(s.label, f"{s.duration_s:.0f}", f"{s.path_length_m:.0f}", f"{s.max_speed_m_s:.2f}", f"{s.max_accel_m_s2:.2f}", f"{s.max_yaw_rate_deg_s:.1f}")
+        table.add_row(s.label, f"{s.duration_s:.0f}", f"{s.path_length_m:.0f}", f"{s.max_speed_m_s:.2f}", f"{s.max_accel_m_s2:.2f}",
+                      f"{s.max_yaw_rate_deg_s:.1f}")
     out.print(table)
     say(f"wrote {len(plan.paths)} reference files to {out_dir}")
     if plan.check is not None:
@@ -72,7 +70,8 @@ def trajectory(
 @app.command()
 @user_errors
 def simulate(
-    preset: str = typer.Option("paper", "--preset", help="paper, trio, smoke, ground, pathloss (log-distance exponent 3), tworay (ground reflection) or fleet (many flights of a fleet as a partitioned matched dataset, one Parquet file per flight)."),
+    preset: str = typer.Option("paper", "--preset", help="paper, trio, smoke, ground, pathloss (log-distance exponent 3), tworay (ground reflection) or fleet "
+                                                         "(many flights of a fleet as a partitioned matched dataset, one Parquet file per flight)."),
     seed: int = typer.Option(0, "--seed", help="Seed of every random effect."),
     out_dir: str = typer.Option("flight", "-o", "--out", help="Output directory."),
     log_format: str = typer.Option("parquet", "--format", help="parquet or csv."),

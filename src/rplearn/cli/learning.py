@@ -2,15 +2,11 @@
 
 from __future__ import annotations
 
-from typing import Optional
-
 import typer
 
-from rplearn.cli._app import (
-    app, note, orders as parse_orders, pairs, parts_step, progress_bar, say, split_list, step, user_errors,
-)
+from rplearn.cli._app import app, note, pairs, parts_step, progress_bar, say, split_list, step, user_errors
+from rplearn.cli._app import orders as parse_orders
 from rplearn.errors import InputError
-
 
 #: Help of ``--dask`` (fit, evaluate).
 DASK_HELP = ("Run on Dask, part by part (pattern models): local (2 worker processes), local:N, or a scheduler address "
@@ -23,28 +19,43 @@ DASK_HELP = ("Run on Dask, part by part (pattern models): local (2 worker proces
 def fit(
     dataset: str = typer.Argument(..., help="Matched dataset (.parquet or .csv), or many: a directory, a glob, a comma-separated list or a URL."),
     model: str = typer.Option("sh", "--model", help="sh, bg, poly, mean or knn (also sh-10, nn-400...)."),
-    degree: Optional[str] = typer.Option(None, "--degree", help="SH-L / BG-k / P-k order, k of knn, or 'auto': order (SH) and smoothing chosen by cross-validation over flight units (default for sh; bg, poly, knn default to 7, 12, 400)."),
-    ridge: Optional[float] = typer.Option(None, "--ridge", help="Pattern models: ridge weight on the diagonal of X^T X (default 1; the paper used 50)."),
-    sigma: Optional[float] = typer.Option(None, "--sigma", help="BG only: kernel variance sigma [rad^2] (default 0.5, about the paper's)."),
-    grid: Optional[str] = typer.Option(None, "--grid", help="BG only: nodes on the paper grid (default) or fibonacci."),
-    units: Optional[list[str]] = typer.Option(None, "--units", help="Learning units (repeat or comma-separate; default: all but units labelled test...). A dataset without units (a .tlog) names its 5 stretches of time flight[1/5]..flight[4/5], test[5/5]."),
-    gauge_node: Optional[str] = typer.Option(None, "--gauge-node", help="Pattern models: fix this node's mean gain instead of splitting equally."),
-    gauge_dbi: Optional[float] = typer.Option(None, "--gauge-dbi", help="Sphere-mean gain of --gauge-node [dBi] (default 0)."),
-    prior: Optional[list[str]] = typer.Option(None, "--prior", help="NODE=MODEL.json: shrink NODE's pattern toward the shape of this (reference) model instead of toward zero (its level comes from the data, see --prior-level); with --degree auto."),
-    prior_level: str = typer.Option("data", "--prior-level", help="Where the level of the --prior patterns comes from: data (default: the prior gives only its shape, so a constant added to every RSSI value only shifts the predictions) or prior (its absolute dBi: calibrated power and a trusted reference)."),
-    prior_std: Optional[float] = typer.Option(None, "--prior-std", help="How far [dB RMS] the --prior patterns may be from the truth (a vendor's tolerance): the spread of predictions where the flight never looked (default: learned from their misfit where it looked)."),
-    loss: str = typer.Option("ls", "--loss", help="ls (least squares) or huber: for logs with plateaus and dropouts, samples far from the pattern pull only as hard as 1.345 robust standard deviations (a pattern model of fixed order)."),
-    path_loss_kind: str = typer.Option("free", "--path-loss", help="Environment term of pattern models: free (free space, eq. 1), log-distance (learn the path-loss exponent; refused when the distance does not vary independently of the directions) or two-ray (a ground reflection from the antenna heights)."),
+    degree: str | None = typer.Option(None, "--order", "--degree", help="SH-L / BG-k / P-k order, k of knn, or 'auto': order (SH) and smoothing "
+                                      "chosen by cross-validation over flight units (default for sh; bg, poly, knn default to 7, 12, 400). "
+                                      "--degree is the same option under its older name."),
+    ridge: float | None = typer.Option(None, "--ridge", help="Pattern models: ridge weight on the diagonal of X^T X (default 1; the paper used 50)."),
+    sigma: float | None = typer.Option(None, "--sigma", help="BG only: kernel variance sigma [rad^2] (default 0.5, about the paper's)."),
+    grid: str | None = typer.Option(None, "--grid", help="BG only: nodes on the paper grid (default) or fibonacci."),
+    units: list[str] | None = typer.Option(None, "--units", help="Learning units (repeat or comma-separate; default: all but units labelled test...). A "
+                                                                 "dataset without units (a .tlog) names its 5 stretches of time flight[1/5]..flight[4/5], "
+                                                                 "test[5/5]."),
+    gauge_node: str | None = typer.Option(None, "--gauge-node", help="Pattern models: fix this node's mean gain instead of splitting equally."),
+    gauge_dbi: float | None = typer.Option(None, "--gauge-dbi", help="Sphere-mean gain of --gauge-node [dBi] (default 0)."),
+    prior: list[str] | None = typer.Option(None, "--prior", help="NODE=MODEL.json: shrink NODE's pattern toward the shape of this (reference) model instead of "
+                                                                 "toward zero (its level comes from the data, see --prior-level); with --order auto."),
+    prior_level: str = typer.Option("data", "--prior-level", help="Where the level of the --prior patterns comes from: data (default: the prior gives only its "
+                                                                  "shape, so a constant added to every RSSI value only shifts the predictions) or prior (its "
+                                                                  "absolute dBi: calibrated power and a trusted reference)."),
+    prior_std: float | None = typer.Option(None, "--prior-std", help="How far [dB RMS] the --prior patterns may be from the truth (a vendor's tolerance): the "
+                                                                     "spread of predictions where the flight never looked (default: learned from their misfit "
+                                                                     "where it looked)."),
+    loss: str = typer.Option("ls", "--loss", help="ls (least squares) or huber: for logs with plateaus and dropouts, samples far from the pattern pull only as "
+                                                  "hard as 1.345 robust standard deviations (a pattern model of fixed order)."),
+    path_loss_kind: str = typer.Option("free", "--path-loss", help="Environment term of pattern models: free (free space, eq. 1), log-distance (learn the "
+                                                                   "path-loss exponent; refused when the distance does not vary independently of the "
+                                                                   "directions) or two-ray (a ground reflection from the antenna heights)."),
     ground_level: float = typer.Option(0.0, "--ground-level", help="two-ray: ENU height of the ground plane [m]."),
-    permittivity: float = typer.Option(15.0, "--permittivity", help="two-ray: relative permittivity of the ground (15 medium dry ground, ITU-R P.527; ~30 wet, 3-7 very dry)."),
+    permittivity: float = typer.Option(15.0, "--permittivity", help="two-ray: relative permittivity of the ground (15 medium dry ground, ITU-R P.527; ~30 wet, "
+                                                                    "3-7 very dry)."),
     polarization: str = typer.Option("vertical", "--polarization", help="two-ray: vertical (upright whips) or horizontal."),
-    learn_offsets: bool = typer.Option(True, "--link-offsets/--no-link-offsets", help="Pattern models: learn one electronics offset per link logged in both directions (non-reciprocal radios; the two directions' offsets sum to 0)."),
-    dask: Optional[str] = typer.Option(None, "--dask", help=DASK_HELP),
+    learn_offsets: bool = typer.Option(True, "--link-offsets/--no-link-offsets", help="Pattern models: learn one electronics offset per link logged in both "
+                                                                                      "directions (non-reciprocal radios; the two directions' offsets sum to "
+                                                                                      "0)."),
+    dask: str | None = typer.Option(None, "--dask", help=DASK_HELP),
     output: str = typer.Option(..., "-o", "--out", help="Model file (.json)."),
 ) -> None:
     """Learn one radiation pattern per node (or a baseline) from a matched dataset.
 
-    Example: rplearn fit data.parquet --model sh --degree 10 --units learn_0,learn_24,learn_48 -o sh10.json
+    Example: rplearn fit data.parquet --model sh --order 10 --units learn_0,learn_24,learn_48 -o sh10.json
     """
     from rplearn.core.environment import PathLoss
     from rplearn.core.gauge import Gauge
@@ -77,7 +88,8 @@ def fit(
 @user_errors
 def reference(
     patterns: list[str] = typer.Argument(..., help="NODE=FILE: a reference pattern (CSV az_deg/el_deg or phi/theta + gain_dbi, or MSI Planet) per node."),
-    mount: Optional[list[str]] = typer.Option(None, "--mount", help="NODE=ROLL,PITCH,YAW: the antenna frame in the body frame [deg] (e.g. 180,0,0 hanging upside down)."),
+    mount: list[str] | None = typer.Option(None, "--mount", help="NODE=ROLL,PITCH,YAW: the antenna frame in the body frame [deg] (e.g. 180,0,0 hanging upside "
+                                                                 "down)."),
     output: str = typer.Option(..., "-o", "--out", help="Model file (.json)."),
 ) -> None:
     """Turn measured or vendor antenna patterns into a model (usable by predict, links, orient, plot, report).
@@ -112,8 +124,8 @@ def two_ray_flags_note(kind: str, ground_level: float, permittivity: float, pola
         note(f"{', '.join(given)} set the two-ray ground reflection; with --path-loss {kind} they are ignored")
 
 
-def degree_option(degree: Optional[str], model: str) -> tuple[bool, Optional[int]]:
-    """``(auto, order)`` from ``--degree`` and ``--model``: 'auto' (the default for a bare ``sh``)
+def degree_option(degree: str | None, model: str) -> tuple[bool, int | None]:
+    """``(auto, order)`` from ``--order`` and ``--model``: 'auto' (the default for a bare ``sh``)
     or a whole number."""
     text = (degree or "").strip().lower()
     bare_sh = model.strip().lower() in ("sh", "spherical", "spherical-harmonics")
@@ -124,9 +136,9 @@ def degree_option(degree: Optional[str], model: str) -> tuple[bool, Optional[int
     try:
         value = float(text)
     except ValueError:
-        raise InputError(f"--degree: expected a whole number or 'auto', got {degree!r}") from None
+        raise InputError(f"--order: expected a whole number or 'auto', got {degree!r}") from None
     if not value.is_integer():
-        raise InputError(f"--degree: expected a whole number or 'auto', got {degree!r}")
+        raise InputError(f"--order: expected a whole number or 'auto', got {degree!r}")
     return False, int(value)
 
 
@@ -134,10 +146,11 @@ def degree_option(degree: Optional[str], model: str) -> tuple[bool, Optional[int
 @user_errors
 def evaluate(
     paths: list[str] = typer.Argument(..., help="MODEL.json... DATASET (the last argument is the dataset)."),
-    units: Optional[list[str]] = typer.Option(None, "--units", help="Evaluation units (repeat or comma-separate; a dataset without units: its stretches of time flight[1/5]..test[5/5], as fit names them)."),
-    json_out: Optional[str] = typer.Option(None, "--json", help="Also write Table I as JSON here."),
-    markdown_out: Optional[str] = typer.Option(None, "--markdown", help="Also write Table I as Markdown here."),
-    dask: Optional[str] = typer.Option(None, "--dask", help=DASK_HELP),
+    units: list[str] | None = typer.Option(None, "--units", help="Evaluation units (repeat or comma-separate; a dataset without units: its stretches of time "
+                                                                 "flight[1/5]..test[5/5], as fit names them)."),
+    json_out: str | None = typer.Option(None, "--json", help="Also write Table I as JSON here."),
+    markdown_out: str | None = typer.Option(None, "--markdown", help="Also write Table I as Markdown here."),
+    dask: str | None = typer.Option(None, "--dask", help=DASK_HELP),
 ) -> None:
     """Table I (RMSE, MAE, |phi|, AIC, LTD, Q95) of models on a dataset.
 
@@ -195,10 +208,10 @@ def sweep(
     dataset: str = typer.Argument(...),
     model: str = typer.Option("sh", "--model", help="sh, bg or poly."),
     orders: str = typer.Option("3..15", "--orders", help="Range A..B or a list 3,5,8."),
-    learn_units: Optional[list[str]] = typer.Option(None, "--learn-units", help="Learning units (default: all but the test units)."),
-    test_units: Optional[list[str]] = typer.Option(None, "--test-units", help="Testing units (default: units whose label starts with 'test')."),
-    output: Optional[str] = typer.Option(None, "-o", "--out", help="The sweep as a table (.csv or .parquet)."),
-    plot_path: Optional[str] = typer.Option(None, "--plot", help="PNG of the sweep (Fig. 10)."),
+    learn_units: list[str] | None = typer.Option(None, "--learn-units", help="Learning units (default: all but the test units)."),
+    test_units: list[str] | None = typer.Option(None, "--test-units", help="Testing units (default: units whose label starts with 'test')."),
+    output: str | None = typer.Option(None, "-o", "--out", help="The sweep as a table (.csv or .parquet)."),
+    plot_path: str | None = typer.Option(None, "--plot", help="PNG of the sweep (Fig. 10)."),
 ) -> None:
     """Model-order selection: test RMSE, AIC and LTD against the order (paper Fig. 10).
 
@@ -222,16 +235,20 @@ def sweep(
 @user_errors
 def report(
     dataset: str = typer.Argument(..., help="Matched dataset (without a 'unit' column it is cut into stretches of time flight[1/5]..test[5/5])."),
-    model: Optional[str] = typer.Option(None, "--model", metavar="MODEL.json", help="The model to report on (default: the cross-validated SH model, learned here on the learning units as `rplearn fit` does)."),
-    paper_models: Optional[str] = typer.Option(None, "--paper-models", metavar="LIST", help="Also the paper's Table I of these models, e.g. 'paper' (m,nn-400,sh-10,p-12,bg-7), 'paper,auto' or 'm,sh-10'; learning time the median of --repeats runs."),
+    model: str | None = typer.Option(None, "--model", metavar="MODEL.json", help="The model to report on (default: the cross-validated SH model, learned here "
+                                                                                 "on the learning units as `rplearn fit` does)."),
+    paper_models: str | None = typer.Option(None, "--paper-models", metavar="LIST", help="Also the paper's Table I of these models, e.g. 'paper' "
+                                                                                         "(m,nn-400,sh-10,p-12,bg-7), 'paper,auto' or 'm,sh-10'; learning time "
+                                                                                         "the median of --repeats runs."),
     repeats: int = typer.Option(5, "--repeats", metavar="N", help="Learning runs per Table I model (its learning time is their median)."),
-    test_units: Optional[list[str]] = typer.Option(None, "--test-units", help="Testing units (default: labels starting with 'test')."),
+    test_units: list[str] | None = typer.Option(None, "--test-units", help="Testing units (default: labels starting with 'test')."),
     out_dir: str = typer.Option("rplearn-report", "-o", "--out", help="Output directory."),
     path_loss_kind: str = typer.Option("free", "--path-loss", help="Environment term of the pattern models: free, log-distance or two-ray (see fit)."),
     ground_level: float = typer.Option(0.0, "--ground-level", help="two-ray: ENU height of the ground plane [m]."),
     permittivity: float = typer.Option(15.0, "--permittivity", help="two-ray: relative permittivity of the ground."),
     polarization: str = typer.Option("vertical", "--polarization", help="two-ray: vertical or horizontal."),
-    learn_offsets: bool = typer.Option(True, "--link-offsets/--no-link-offsets", help="Pattern models: learn one electronics offset per link logged in both directions."),
+    learn_offsets: bool = typer.Option(True, "--link-offsets/--no-link-offsets", help="Pattern models: learn one electronics offset per link logged in both "
+                                                                                      "directions."),
 ) -> None:
     """Report one model on a dataset: held-out scores, measured vs predicted over time, residuals,
     polar cuts, spread and 3-D patterns in report.html (and the paper's Table I on request).

@@ -2,29 +2,33 @@
 
 from __future__ import annotations
 
-from typing import Optional
-
 import typer
 
-from rplearn.cli._app import app, fail, geodetic_flag, link, numbers, pairs, reader_options, note, say, user_errors, with_flag
+from rplearn.cli._app import app, fail, geodetic_flag, link, note, numbers, pairs, reader_options, say, user_errors, with_flag
 
 
 @app.command()
 @user_errors
 def inspect(
     logs: list[str] = typer.Argument(..., help="Log files: CSV/Parquet, ROS 1/2 bags, PX4 ULog, pcap, MAVLink .tlog and ArduPilot DataFlash .bin."),
-    node: Optional[list[str]] = typer.Option(None, "--node", help="FILE=NODE for ULogs and one-node tables."),
-    receiver: Optional[list[str]] = typer.Option(None, "--receiver", help="FILE=NODE: capturing node of a pcap."),
-    address: Optional[list[str]] = typer.Option(None, "--address", help="MAC=NODE: transmitter addresses of pcaps."),
-    pose_topic: Optional[list[str]] = typer.Option(None, "--pose-topic", help="TOPIC=NODE for ROS bags."),
-    rssi_topic: Optional[list[str]] = typer.Option(None, "--rssi-topic", help="TOPIC=TX:RX: RSSI topic of ROS bags, packets from TX received by RX."),
-    rssi_field: Optional[str] = typer.Option(None, "--rssi-field", help="Field of the RSSI [dBm] in --rssi-topic messages, dots for nested fields (default rssi)."),
-    msg_definition: Optional[list[str]] = typer.Option(None, "--msg-definition", help="TYPE=FILE.msg: custom message type a bag does not describe (e.g. pkg/msg/LinkQuality=LinkQuality.msg)."),
-    require_valid: bool = typer.Option(False, "--require-valid/--accept-invalid", help="Drop ULog positions the autopilot flags invalid (xy_valid or z_valid = 0), or keep them (default)."),
-    station_geodetic: Optional[str] = typer.Option(None, "--station", help="LAT,LON,ALT: ground station position of MAVLink logs (.tlog, DataFlash) [deg, deg, m AMSL] (default: the log's home position, else the vehicle's first fix)."),
-    station: Optional[str] = typer.Option(None, "--station-node", help="Node id of the ground station of MAVLink logs (default gcs)."),
-    station_heading: Optional[float] = typer.Option(None, "--station-heading", help="Compass heading of the ground station's antenna (its body x axis) in MAVLink logs [deg clockwise from north] (default 90, east)."),
-    frequency_hz: Optional[float] = typer.Option(None, "--frequency", help="Carrier frequency for logs without it [Hz]: the distance a calibration flight needs is 10 wavelengths (433 MHz assumed without it)."),
+    node: list[str] | None = typer.Option(None, "--node", help="FILE=NODE for ULogs and one-node tables."),
+    receiver: list[str] | None = typer.Option(None, "--receiver", help="FILE=NODE: capturing node of a pcap."),
+    address: list[str] | None = typer.Option(None, "--address", help="MAC=NODE: transmitter addresses of pcaps."),
+    pose_topic: list[str] | None = typer.Option(None, "--pose-topic", help="TOPIC=NODE for ROS bags."),
+    rssi_topic: list[str] | None = typer.Option(None, "--rssi-topic", help="TOPIC=TX:RX: RSSI topic of ROS bags, packets from TX received by RX."),
+    rssi_field: str | None = typer.Option(None, "--rssi-field", help="Field of the RSSI [dBm] in --rssi-topic messages, dots for nested fields (default "
+                                                                     "rssi)."),
+    msg_definition: list[str] | None = typer.Option(None, "--msg-definition", help="TYPE=FILE.msg: custom message type a bag does not describe (e.g. "
+                                                                                   "pkg/msg/LinkQuality=LinkQuality.msg)."),
+    require_valid: bool = typer.Option(False, "--require-valid/--accept-invalid", help="Drop ULog positions the autopilot flags invalid (xy_valid or z_valid = "
+                                                                                       "0), or keep them (default)."),
+    station_geodetic: str | None = typer.Option(None, "--station", help="LAT,LON,ALT: ground station position of MAVLink logs (.tlog, DataFlash) [deg, deg, m "
+                                                                        "AMSL] (default: the log's home position, else the vehicle's first fix)."),
+    station: str | None = typer.Option(None, "--station-node", help="Node id of the ground station of MAVLink logs (default gcs)."),
+    station_heading: float | None = typer.Option(None, "--station-heading", help="Compass heading of the ground station's antenna (its body x axis) in MAVLink "
+                                                                                 "logs [deg clockwise from north] (default 90, east)."),
+    frequency_hz: float | None = typer.Option(None, "--frequency", help="Carrier frequency for logs without it [Hz]: the distance a calibration flight needs "
+                                                                        "is 10 wavelengths (433 MHz assumed without it)."),
     markdown: bool = typer.Option(False, "--markdown", help="Print Markdown instead of text."),
     as_json: bool = typer.Option(False, "--json", help="Print strict JSON instead of text (times from the log start)."),
 ) -> None:
@@ -63,35 +67,49 @@ def sync(
     poses: list[str] = typer.Option(..., "--poses", help="Pose log(s): CSV/Parquet, bag, ULog, MAVLink .tlog/.bin. Repeat for several."),
     signals: list[str] = typer.Option(..., "--signals", help="Signal log(s): CSV/Parquet, bag, pcap, MAVLink .tlog/.bin. Repeat for several."),
     output: str = typer.Option(..., "-o", "--out", help="Matched dataset (.parquet or .csv)."),
-    link_text: Optional[str] = typer.Option(None, "--link", help="Keep one direction TX:RX (the paper's choice), or 'all'."),
+    link_text: str | None = typer.Option(None, "--link", help="Keep one direction TX:RX (the paper's choice), or 'all'."),
     max_gap_s: float = typer.Option(0.2, "--max-gap", help="Drop samples inside pose gaps longer than this [s]."),
-    offset: Optional[list[str]] = typer.Option(None, "--offset", help="NODE=SECONDS clock offset added to a node's pose times."),
-    node: Optional[list[str]] = typer.Option(None, "--node", help="FILE=NODE for ULogs and one-node tables."),
-    receiver: Optional[list[str]] = typer.Option(None, "--receiver", help="FILE=NODE: capturing node of a pcap."),
-    address: Optional[list[str]] = typer.Option(None, "--address", help="MAC=NODE: transmitter addresses of pcaps."),
-    pose_topic: Optional[list[str]] = typer.Option(None, "--pose-topic", help="TOPIC=NODE: pose topics of ROS bags."),
-    rssi_topic: Optional[list[str]] = typer.Option(None, "--rssi-topic", help="TOPIC=TX:RX: RSSI topic of ROS bags, packets from TX received by RX."),
-    rssi_field: Optional[str] = typer.Option(None, "--rssi-field", help="Field of the RSSI [dBm] in --rssi-topic messages, dots for nested fields (default rssi)."),
-    msg_definition: Optional[list[str]] = typer.Option(None, "--msg-definition", help="TYPE=FILE.msg: custom message type a bag does not describe (e.g. pkg/msg/LinkQuality=LinkQuality.msg)."),
-    tx_power_dbm: Optional[float] = typer.Option(None, "--tx-power", help="Transmit power for logs without it [dBm]."),
-    frequency_hz: Optional[float] = typer.Option(None, "--frequency", help="Carrier frequency for logs without it [Hz]."),
+    offset: list[str] | None = typer.Option(None, "--offset", help="NODE=SECONDS clock offset added to a node's pose times."),
+    node: list[str] | None = typer.Option(None, "--node", help="FILE=NODE for ULogs and one-node tables."),
+    receiver: list[str] | None = typer.Option(None, "--receiver", help="FILE=NODE: capturing node of a pcap."),
+    address: list[str] | None = typer.Option(None, "--address", help="MAC=NODE: transmitter addresses of pcaps."),
+    pose_topic: list[str] | None = typer.Option(None, "--pose-topic", help="TOPIC=NODE: pose topics of ROS bags."),
+    rssi_topic: list[str] | None = typer.Option(None, "--rssi-topic", help="TOPIC=TX:RX: RSSI topic of ROS bags, packets from TX received by RX."),
+    rssi_field: str | None = typer.Option(None, "--rssi-field", help="Field of the RSSI [dBm] in --rssi-topic messages, dots for nested fields (default "
+                                                                     "rssi)."),
+    msg_definition: list[str] | None = typer.Option(None, "--msg-definition", help="TYPE=FILE.msg: custom message type a bag does not describe (e.g. "
+                                                                                   "pkg/msg/LinkQuality=LinkQuality.msg)."),
+    tx_power_dbm: float | None = typer.Option(None, "--tx-power", help="Transmit power for logs without it [dBm]."),
+    frequency_hz: float | None = typer.Option(None, "--frequency", help="Carrier frequency for logs without it [Hz]."),
     nan_policy: str = typer.Option("error", "--nan-policy", help="Pose-table rows with NaN or non-numeric values: error (default) or drop (counted)."),
     allow_unsorted: bool = typer.Option(False, "--allow-unsorted", help="Accept pose tables whose times go backwards within a node (the rows are sorted)."),
-    require_valid: bool = typer.Option(False, "--require-valid/--accept-invalid", help="Drop ULog positions the autopilot flags invalid (xy_valid or z_valid = 0), or keep them (default)."),
-    station_geodetic: Optional[str] = typer.Option(None, "--station", help="LAT,LON,ALT: ground station position of MAVLink logs (.tlog, DataFlash) [deg, deg, m AMSL] (default: the log's home position, else the vehicle's first fix)."),
-    station: Optional[str] = typer.Option(None, "--station-node", help="Node id of the ground station of MAVLink logs (default gcs)."),
-    station_heading: Optional[float] = typer.Option(None, "--station-heading", help="Compass heading of the ground station's antenna (its body x axis) in MAVLink logs [deg clockwise from north] (default 90, east)."),
+    require_valid: bool = typer.Option(False, "--require-valid/--accept-invalid", help="Drop ULog positions the autopilot flags invalid (xy_valid or z_valid = "
+                                                                                       "0), or keep them (default)."),
+    station_geodetic: str | None = typer.Option(None, "--station", help="LAT,LON,ALT: ground station position of MAVLink logs (.tlog, DataFlash) [deg, deg, m "
+                                                                        "AMSL] (default: the log's home position, else the vehicle's first fix)."),
+    station: str | None = typer.Option(None, "--station-node", help="Node id of the ground station of MAVLink logs (default gcs)."),
+    station_heading: float | None = typer.Option(None, "--station-heading", help="Compass heading of the ground station's antenna (its body x axis) in MAVLink "
+                                                                                 "logs [deg clockwise from north] (default 90, east)."),
     on_unknown_node: str = typer.Option("drop", "--on-unknown-node", help="Signals naming a node without a pose log: drop (counted, default) or error."),
-    rssi_scale: str = typer.Option("dbm", "--rssi-scale", help="dbm (default: calibrated, dropped outside -150..30 dBm or above the transmit power) or relative (uncalibrated dB on the radio's own scale: no plausibility window)."),
-    estimate_offset: Optional[str] = typer.Option(None, "--estimate-offset", help="NODE: find the clock offset of NODE's poses that best explains the signal (a low-order pattern fit's residual over shifts of its pose times) and report it with its uncertainty."),
+    rssi_scale: str = typer.Option("dbm", "--rssi-scale", help="dbm (default: calibrated, dropped outside -150..30 dBm or above the transmit power) or "
+                                                               "relative (uncalibrated dB on the radio's own scale: no plausibility window)."),
+    estimate_offset: str | None = typer.Option(None, "--estimate-offset", help="NODE: find the clock offset of NODE's poses that best explains the signal (a "
+                                                                               "low-order pattern fit's residual over shifts of its pose times) and report it "
+                                                                               "with its uncertainty."),
     offset_window: float = typer.Option(1.0, "--offset-window", help="Shifts tried by --estimate-offset, +- this [s]."),
-    apply_offset: bool = typer.Option(False, "--apply-offset", help="Add the offset --estimate-offset found to NODE's pose times in the matched dataset (default: report only)."),
-    from_s: Optional[float] = typer.Option(None, "--from", help="Keep samples from this time on [s]: seconds from the log start (the origin inspect prints), or a log time with --log-time."),
-    to_s: Optional[float] = typer.Option(None, "--to", help="Keep samples up to this time [s]: seconds from the log start, or a log time with --log-time."),
+    apply_offset: bool = typer.Option(False, "--apply-offset", help="Add the offset --estimate-offset found to NODE's pose times in the matched dataset "
+                                                                    "(default: report only)."),
+    from_s: float | None = typer.Option(None, "--from", help="Keep samples from this time on [s]: seconds from the log start (the origin inspect prints), or a "
+                                                             "log time with --log-time."),
+    to_s: float | None = typer.Option(None, "--to", help="Keep samples up to this time [s]: seconds from the log start, or a log time with --log-time."),
     log_time: bool = typer.Option(False, "--log-time", help="Read --from/--to as times on the logs' own clock instead of seconds from the log start."),
-    airborne: bool = typer.Option(False, "--airborne/--all-phases", help="Keep only samples while every vehicle is armed (where the log says) and more than --airborne-margin above its take-off altitude; default: all phases (CSV/Parquet logs are usually calibration flights already), the summary counts samples taken on the ground."),
+    airborne: bool = typer.Option(False, "--airborne/--all-phases", help="Keep only samples while every vehicle is armed (where the log says) and more than "
+                                                                         "--airborne-margin above its take-off altitude; default: all phases (CSV/Parquet logs "
+                                                                         "are usually calibration flights already), the summary counts samples taken on the "
+                                                                         "ground."),
     airborne_margin_m: float = typer.Option(2.0, "--airborne-margin", help="Height above the take-off altitude from which a vehicle is airborne [m]."),
-    repeat_fraction: float = typer.Option(0.1, "--repeat-fraction", help="Rows of one link with equal values closer than this fraction of its report period are one reading logged twice, merged (0 keeps every row)."),
+    repeat_fraction: float = typer.Option(0.1, "--repeat-fraction", help="Rows of one link with equal values closer than this fraction of its report period "
+                                                                         "are one reading logged twice, merged (0 keeps every row)."),
 ) -> None:
     """Match every signal sample with the interpolated poses of both ends (paper Sec. V-B4).
 

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from typing import Optional
-
 import typer
 
 from rplearn.cli._app import app, progress_bar, say, step, user_errors
@@ -16,7 +14,8 @@ def export(
     fmt: str = typer.Option("grid", "--format", help="grid (CSV), msi (one file per node) or images (3-D PNG per node)."),
     step_deg: float = typer.Option(5.0, "--step-deg", help="Grid step [deg]."),
     output: str = typer.Option(..., "-o", "--out", help="Output file (grid) or directory (msi, images)."),
-    frequency_hz: Optional[float] = typer.Option(None, "--frequency", help="Frequency written into MSI files [Hz] (default: the frequency the model was learned at)."),
+    frequency_hz: float | None = typer.Option(None, "--frequency", help="Frequency written into MSI files [Hz] (default: the frequency the model was learned "
+                                                                        "at)."),
 ) -> None:
     """Export a learned model: grid CSV (node, az_deg, el_deg, gain_db), MSI Planet cuts, 3-D images.
 
@@ -32,10 +31,11 @@ def export(
 @user_errors
 def plot(
     model_paths: list[str] = typer.Argument(..., metavar="MODEL.json..."),
-    truth: Optional[str] = typer.Option(None, "--truth", help="ground_truth.json of a simulation, drawn beside."),
-    dataset: Optional[str] = typer.Option(None, "--dataset", help="Draw the sample directions of this dataset."),
+    truth: str | None = typer.Option(None, "--truth", help="ground_truth.json of a simulation, drawn beside."),
+    dataset: str | None = typer.Option(None, "--dataset", help="Draw the sample directions of this dataset."),
     output: str = typer.Option("patterns.png", "-o", "--out", help="PNG file."),
-    spread: Optional[str] = typer.Option(None, "--spread", help="Also draw each node's own-pattern spread (posterior std, uncovered directions hatched) to this PNG."),
+    spread: str | None = typer.Option(None, "--spread", help="Also draw each node's own-pattern spread (posterior std, uncovered directions hatched) to this "
+                                                             "PNG."),
 ) -> None:
     """Draw learned patterns in the azimuth-elevation domain (paper Fig. 9).
 

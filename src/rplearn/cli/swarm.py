@@ -3,12 +3,9 @@
 
 from __future__ import annotations
 
-from typing import Optional
-
 import typer
 
 from rplearn.cli._app import app, floats, note, numbers, pairs, reader_options, say, split_list, user_errors, xyz
-
 
 
 @app.command()
@@ -18,16 +15,16 @@ def links(
     poses: list[str] = typer.Argument(..., metavar="POSE_LOG...", help="Pose log(s) of the drones: a plan or a flight (CSV/Parquet, bag, ULog)."),
     output: str = typer.Option(..., "-o", "--out", help="Predicted links, one row per time and ordered pair (.csv or .parquet)."),
     tx_power_dbm: float = typer.Option(..., "--tx-power", help="Transmit power of every drone [dBm]."),
-    frequency_hz: Optional[float] = typer.Option(None, "--frequency", help="Carrier frequency [Hz] (default: the one the model was learned at)."),
-    pattern: Optional[list[str]] = typer.Option(None, "--as", help="DRONE=NODE: the drone carries the antenna learned as NODE (repeat)."),
+    frequency_hz: float | None = typer.Option(None, "--frequency", help="Carrier frequency [Hz] (default: the one the model was learned at)."),
+    pattern: list[str] | None = typer.Option(None, "--as", help="DRONE=NODE: the drone carries the antenna learned as NODE (repeat)."),
     step_s: float = typer.Option(1.0, "--step", help="Spacing of the prediction times over the span all logs cover [s]."),
-    at: Optional[list[str]] = typer.Option(None, "--at", help="Predict at these times instead [s] (repeat or comma-separate)."),
+    at: list[str] | None = typer.Option(None, "--at", help="Predict at these times instead [s] (repeat or comma-separate)."),
     min_rssi_dbm: float = typer.Option(-85.0, "--min-rssi", help="RSSI a link needs in each direction to be up [dBm]."),
     max_gap_s: float = typer.Option(2.0, "--max-gap", help="A drone is absent inside pose-log gaps longer than this [s]."),
-    connectivity_out: Optional[str] = typer.Option(None, "--connectivity", help="Also write the per-time connectivity table here (.csv or .parquet)."),
-    plot_out: Optional[str] = typer.Option(None, "--plot", help="Also plot RSSI, threshold and bottleneck over time here (.png)."),
-    node: Optional[list[str]] = typer.Option(None, "--node", help="FILE=NODE for ULogs and one-node tables."),
-    pose_topic: Optional[list[str]] = typer.Option(None, "--pose-topic", help="TOPIC=NODE: pose topics of ROS bags."),
+    connectivity_out: str | None = typer.Option(None, "--connectivity", help="Also write the per-time connectivity table here (.csv or .parquet)."),
+    plot_out: str | None = typer.Option(None, "--plot", help="Also plot RSSI, threshold and bottleneck over time here (.png)."),
+    node: list[str] | None = typer.Option(None, "--node", help="FILE=NODE for ULogs and one-node tables."),
+    pose_topic: list[str] | None = typer.Option(None, "--pose-topic", help="TOPIC=NODE: pose topics of ROS bags."),
     nan_policy: str = typer.Option("error", "--nan-policy", help="Pose rows with NaN or non-numeric values: error (default) or drop (counted)."),
     allow_unsorted: bool = typer.Option(False, "--allow-unsorted", help="Accept pose tables whose times go backwards within a node (the rows are sorted)."),
 ) -> None:
@@ -62,12 +59,12 @@ def headings(
     model_path: str = typer.Argument(..., metavar="MODEL.json"),
     pos: list[str] = typer.Option(..., "--pos", help="DRONE=x,y,z: hover position, ENU [m] (repeat for every drone)."),
     tx_power_dbm: float = typer.Option(..., "--tx-power", help="Transmit power of every drone [dBm]."),
-    yaw: Optional[list[str]] = typer.Option(None, "--yaw", help="DRONE=DEG: current yaw, ENU ccw from east [deg] (default 0)."),
-    fixed: Optional[list[str]] = typer.Option(None, "--fixed", help="Drones that must keep their yaw (repeat or comma-separate)."),
-    pattern: Optional[list[str]] = typer.Option(None, "--as", help="DRONE=NODE: the drone carries the antenna learned as NODE."),
-    frequency_hz: Optional[float] = typer.Option(None, "--frequency", help="Carrier frequency [Hz] (default: the one the model was learned at)."),
+    yaw: list[str] | None = typer.Option(None, "--yaw", help="DRONE=DEG: current yaw, ENU ccw from east [deg] (default 0)."),
+    fixed: list[str] | None = typer.Option(None, "--fixed", help="Drones that must keep their yaw (repeat or comma-separate)."),
+    pattern: list[str] | None = typer.Option(None, "--as", help="DRONE=NODE: the drone carries the antenna learned as NODE."),
+    frequency_hz: float | None = typer.Option(None, "--frequency", help="Carrier frequency [Hz] (default: the one the model was learned at)."),
     step_deg: float = typer.Option(5.0, "--step", help="Yaw grid [deg]."),
-    output: Optional[str] = typer.Option(None, "-o", "--out", help="Also write the chosen yaws here (.csv or .json)."),
+    output: str | None = typer.Option(None, "-o", "--out", help="Also write the chosen yaws here (.csv or .json)."),
 ) -> None:
     """Yaws for a hovering swarm that keep it best connected (maximise the bottleneck RSSI).
 
@@ -100,7 +97,7 @@ def orient(
     tx_yaw: float = typer.Option(0.0, "--tx-yaw", help="Current yaw of tx, ENU ccw from east [deg]."),
     rx_yaw: float = typer.Option(0.0, "--rx-yaw", help="Current yaw of rx [deg]."),
     tx_power_dbm: float = typer.Option(20.0, "--tx-power", help="[dBm]."),
-    frequency_hz: Optional[float] = typer.Option(None, "--frequency", help="Carrier frequency [Hz] (default: the one the model was learned at)."),
+    frequency_hz: float | None = typer.Option(None, "--frequency", help="Carrier frequency [Hz] (default: the one the model was learned at)."),
     caution: float = typer.Option(1.28, "--caution", min=0.0,  # = analysis.headings.CAUTION_Z (tested)
                                   help="Rank headings by the gain minus this many standard errors (1.28: the 10% lower bound; 0: the prediction alone)."),
 ) -> None:

@@ -15,8 +15,8 @@ from numpy.typing import ArrayLike
 from pykdtree.kdtree import KDTree
 
 from rplearn.core.bases import fibonacci_grid_nodes
-from rplearn.core.threads import one_openmp_thread
 from rplearn.core.geometry import unit_vector
+from rplearn.core.threads import one_openmp_thread
 from rplearn.errors import InputError
 
 #: Default radius within which a direction counts as covered by a learning direction [deg].

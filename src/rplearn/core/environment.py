@@ -22,8 +22,9 @@ joint gain:
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any, Mapping
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -209,7 +210,7 @@ class PathLoss:
         return out
 
     @classmethod
-    def from_dict(cls, payload: Mapping[str, Any] | None) -> "PathLoss":
+    def from_dict(cls, payload: Mapping[str, Any] | None) -> PathLoss:
         """Rebuild from :meth:`to_dict` (None or an empty mapping: free space)."""
         if payload is None or (isinstance(payload, Mapping) and not payload):
             return cls()

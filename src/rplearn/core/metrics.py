@@ -3,9 +3,9 @@
 from __future__ import annotations
 
 import time
+from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
-from typing import Iterator
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -74,7 +74,7 @@ class Stopwatch:
     seconds: float = field(default=float("nan"))
 
     @contextmanager
-    def run(self) -> Iterator["Stopwatch"]:
+    def run(self) -> Iterator[Stopwatch]:
         start = time.perf_counter()
         try:
             yield self

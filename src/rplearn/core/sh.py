@@ -21,17 +21,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from rplearn._argtypes import check_types
-from rplearn.core.basis_base import (
-    _SLOT_DESIGN,
-    Basis,
-    FloatArray,
-    _angles,
-    _checked_coef,
-    _cos_sin_half_angle,
-    _matmul_into,
-    _scratch,
-    chunk_directions,
-)
+from rplearn.core.basis_base import _SLOT_DESIGN, Basis, FloatArray, _angles, _checked_coef, _cos_sin_half_angle, _matmul_into, _scratch, chunk_directions
 from rplearn.errors import InputError
 
 

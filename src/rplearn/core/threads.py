@@ -13,9 +13,10 @@ from __future__ import annotations
 
 import sys
 import threading
+from collections.abc import Iterator
 from contextlib import contextmanager, nullcontext
 from functools import lru_cache
-from typing import Any, Iterator
+from typing import Any
 
 #: Below this many floating-point operations (about 0.2 s on one core) a fit uses one BLAS thread.
 SMALL_FIT_FLOPS = 2e9

@@ -32,9 +32,9 @@ into the far field, where eq. 1 holds) and :data:`CALIBRATION_MIN_DISTANCE_M` (b
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from itertools import combinations
-from typing import Mapping, Sequence
 
 import numpy as np
 import pandas as pd

@@ -11,8 +11,8 @@ between flights: refused, naming both positions (sync each flight with its own p
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Mapping, Sequence
 
 import numpy as np
 import pandas as pd

@@ -27,7 +27,7 @@ chunks is found).
 
 from __future__ import annotations
 
-from typing import MutableMapping
+from collections.abc import MutableMapping
 
 import numpy as np
 import pandas as pd

@@ -16,25 +16,17 @@ same order), while holding one chunk of the signal log at a time:
 
 from __future__ import annotations
 
-from typing import Iterable, Iterator, Mapping
+from collections.abc import Iterable, Iterator, Mapping
 
 import numpy as np
 import pandas as pd
 
 from rplearn._argtypes import check_types
 from rplearn._atomic import atomic_path
-from rplearn.data.sync import (
-    SyncOptions,
-    SyncResult,
-    SyncSummary,
-    _match_chunk,
-    _options,
-    check_link_nodes,
-    finish_summary,
-)
 from rplearn.data.phases import flight_phases
-from rplearn.data.tables import MATCHED_COLUMNS, SIGNAL_COLUMNS, non_unit_quaternion_rows, validate_pose_log
 from rplearn.data.poses import tracks_of_checked_log
+from rplearn.data.sync import SyncOptions, SyncResult, SyncSummary, _match_chunk, _options, check_link_nodes, finish_summary
+from rplearn.data.tables import MATCHED_COLUMNS, SIGNAL_COLUMNS, non_unit_quaternion_rows, validate_pose_log
 
 
 @check_types

@@ -66,27 +66,25 @@ from __future__ import annotations
 
 import logging
 import math
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from numbers import Real
-from typing import Any, Mapping, Sequence
+from typing import Any
 
 import numpy as np
 import pandas as pd
 
 from rplearn._argtypes import check_types
 from rplearn.core.link import FAR_FIELD_WAVELENGTHS, SPEED_OF_LIGHT_M_S
-from rplearn.data.phases import (
-    AIRBORNE_MARGIN_M, WINDOW_CLOCKS, FlightPhases, flight_phases, max_gap_advice, phase_notes, window_mask,
-)
-from rplearn.data.poses import (
-    STATUS_OUT_OF_SPAN, STATUS_POSE_GAP, PoseTrack, interpolate_nodes, tracks_of_checked_log,
-)
+from rplearn.data.phases import AIRBORNE_MARGIN_M, WINDOW_CLOCKS, FlightPhases, flight_phases, max_gap_advice, phase_notes, window_mask
+from rplearn.data.poses import STATUS_OUT_OF_SPAN, STATUS_POSE_GAP, PoseTrack, interpolate_nodes, tracks_of_checked_log
+from rplearn.data.readings import REPEAT_FRACTION, duplicate_rows, repeated_readings
 from rplearn.data.tables import (
+    FREQUENCY_BAND_HZ,
     MATCHED_COLUMNS,
     QUATERNION_NORM_TOLERANCE,
     SENTINEL_RSSI_DBM,
     SIGNAL_COLUMNS,
-    FREQUENCY_BAND_HZ,
     check_frequency_hz,
     check_tx_power_dbm,
     empty_ids,
@@ -95,7 +93,6 @@ from rplearn.data.tables import (
     normalise_times,
     validate_pose_log,
 )
-from rplearn.data.readings import REPEAT_FRACTION, duplicate_rows, repeated_readings
 from rplearn.errors import InputError
 
 logger = logging.getLogger(__name__)
@@ -162,7 +159,7 @@ class SyncSummary:
     def n_dropped(self) -> int:
         return int(sum(self.dropped.values()))
 
-    def merge(self, other: "SyncSummary") -> "SyncSummary":
+    def merge(self, other: SyncSummary) -> SyncSummary:
         """Add another summary's counts into this one (for chunked matching); returns self."""
         self.n_in += other.n_in
         self.n_out += other.n_out

@@ -15,16 +15,17 @@ Node ids are strings. Times are float seconds since an epoch the log states.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any, Sequence
+from typing import Any
 
 import numpy as np
 import pandas as pd
 
 from rplearn._argtypes import check_types
-from rplearn.errors import InputError
 from rplearn.core.geometry import Directions, distance_m, link_directions
 from rplearn.core.link import observed_joint_gain_db
+from rplearn.errors import InputError
 
 POSE_COLUMNS: tuple[str, ...] = ("t", "node", "x", "y", "z", "qw", "qx", "qy", "qz")
 SIGNAL_COLUMNS: tuple[str, ...] = ("t", "tx", "rx", "rssi_dbm", "tx_power_dbm", "frequency_hz")

@@ -14,8 +14,8 @@ from __future__ import annotations
 
 import os
 import re
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Sequence
 
 import numpy as np
 import pandas as pd
@@ -186,7 +186,7 @@ class Stretches:
     """Contiguous stretches of time of one flight: where they start and what they are called.
 
     The one cut of a flight into stretches, used alike by ``fit`` (learning units and the
-    folds of ``--degree auto``), ``evaluate``, ``sweep`` and ``report``, in memory and streamed.
+    folds of ``--order auto``), ``evaluate``, ``sweep`` and ``report``, in memory and streamed.
     Rows of one instant (both directions of a telemetry report) share a stretch: a stretch
     starts at an instant, never inside one.
 

@@ -79,12 +79,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from rplearn._argtypes import check_types
-from rplearn.core.geometry import (
-    azimuth_elevation,
-    euler_from_quat_wxyz,
-    rotate_body_to_world,
-    rotate_world_to_body,
-)
+from rplearn.core.geometry import azimuth_elevation, euler_from_quat_wxyz, rotate_body_to_world, rotate_world_to_body
 from rplearn.errors import InputError, RplearnError
 from rplearn.io.export import check_pattern_like
 

@@ -32,11 +32,11 @@ import numpy as np
 
 from rplearn._argtypes import check_types
 from rplearn._atomic import atomic_open
+from rplearn.core.geometry import enu_to_ned
 from rplearn.errors import InputError
 from rplearn.io._common import Logs
-from rplearn.io.tlog import BOOT_LEAD_S, TlogDefects, _check, dbm_to_sik_rssi, station_pose, vehicle_fields
 from rplearn.io.geodetic import local_ned_to_geodetic
-from rplearn.core.geometry import enu_to_ned
+from rplearn.io.tlog import BOOT_LEAD_S, TlogDefects, _check, dbm_to_sik_rssi, station_pose, vehicle_fields
 
 _HEAD = b"\xa3\x95"
 #: name -> (type, struct format, DataFlash format, columns)

@@ -9,19 +9,18 @@ from __future__ import annotations
 import os
 import sys
 import time
-from typing import Any, Iterable, Iterator, Literal, Sequence
+from collections.abc import Iterable, Iterator, Sequence
+from typing import Any, Literal
 
 import pandas as pd
 
 from rplearn._argtypes import check_types
 from rplearn._atomic import atomic_open, atomic_path, check_output, dump_json
 from rplearn._version import __version__
-
 from rplearn.data.tables import CSV_DTYPES, normalise_times, validate_matched
 from rplearn.errors import InputError
 from rplearn.io._common import read_parquet_lean
 from rplearn.io.partitions import Part, dataset_parts, is_partitioned, is_url, open_source, with_hive_columns
-
 
 
 def _table_error(name: str, path: Any, exc: BaseException) -> str:

@@ -33,8 +33,9 @@ few wavelengths: :func:`rplearn.data.phases.calibration_problems`) is a problem.
 from __future__ import annotations
 
 import os
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field, replace
-from typing import Any, Iterable, Sequence
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -43,9 +44,9 @@ from rplearn._argtypes import check_types
 from rplearn.data.phases import advised_max_gap_s, calibration_problems, flight_phases
 from rplearn.data.poses import pose_tracks
 from rplearn.data.readings import REPEAT_FRACTION, duplicate_rows, repeated_readings, report_period_s, report_rate_hz
+from rplearn.data.sync import DEFAULT_SENTINEL_RSSI_DBM
 from rplearn.data.tables import QUATERNION_NORM_TOLERANCE, non_unit_quaternion_rows
 from rplearn.errors import RplearnError
-from rplearn.data.sync import DEFAULT_SENTINEL_RSSI_DBM
 from rplearn.io.options import ReaderOptions
 
 #: A pose step is a pause only if it spans more than this many median signal intervals.
@@ -354,8 +355,8 @@ def _read_one(path: str, options: ReaderOptions) -> tuple[pd.DataFrame | None, p
                                                          dict[str, Any], dict[str, int], pd.DataFrame | None]:
     """A file's poses in file order, signals, facts (``frequency_hz`` [Hz] when the log or the
     options give it), NaN pose rows per node, and canonical poses."""
-    from rplearn.io.read import detect_format, read_logs
     from rplearn.io import tables as _tables
+    from rplearn.io.read import detect_format, read_logs
 
     kind = detect_format(path)
     if kind == "table":

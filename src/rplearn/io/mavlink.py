@@ -88,12 +88,7 @@ import pandas as pd
 
 from rplearn._argtypes import check_types
 from rplearn.core.geometry import quat_wxyz_from_euler_ned_frd_deg
-from rplearn.data.tables import (
-    check_frequency_hz,
-    check_tx_power_dbm,
-    validate_pose_log,
-    validate_signal_log,
-)
+from rplearn.data.tables import check_frequency_hz, check_tx_power_dbm, validate_pose_log, validate_signal_log
 from rplearn.errors import InputError, LogFormatError
 from rplearn.io import mavlink_phases as phases
 from rplearn.io._common import Logs

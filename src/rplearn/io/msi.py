@@ -47,13 +47,7 @@ from rplearn._atomic import atomic_open
 from rplearn._version import __version__
 from rplearn.core.geometry import wrap_angle_rad
 from rplearn.errors import InputError
-from rplearn.io.export import (
-    PatternLike,
-    check_pattern_like,
-    grid_angles_deg,
-    node_file_names,
-    select_nodes,
-)
+from rplearn.io.export import PatternLike, check_pattern_like, grid_angles_deg, node_file_names, select_nodes
 
 FloatArray = NDArray[np.float64]
 

@@ -11,9 +11,10 @@ from __future__ import annotations
 
 import math
 import os
+from collections.abc import Mapping
 from dataclasses import dataclass
 from numbers import Real
-from typing import Any, Mapping
+from typing import Any
 
 from rplearn._argtypes import check_types
 from rplearn.data.tables import check_frequency_hz, check_tx_power_dbm

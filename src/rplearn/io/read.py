@@ -4,8 +4,9 @@ canonical pose log and one signal log (:func:`read_logs`)."""
 from __future__ import annotations
 
 import os
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
-from typing import Any, Callable, Iterable, Mapping
+from typing import Any
 
 import pandas as pd
 
@@ -15,6 +16,7 @@ from rplearn.errors import InputError, RplearnError
 from rplearn.io._common import Logs
 from rplearn.io.options import ReaderOptions
 from rplearn.io.sniff import detect_format
+
 
 def _bag_needs_topics(path: str, msg_definitions: Mapping[str, str] | None) -> str:
     """Message for a bag read without topics: how to name them, and the topics it has."""

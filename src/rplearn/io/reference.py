@@ -24,8 +24,8 @@ body's -z axis. The mount applies to every format (identity by default).
 from __future__ import annotations
 
 import os
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Sequence
 
 import numpy as np
 import pandas as pd

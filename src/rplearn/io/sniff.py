@@ -9,7 +9,7 @@ would work, not a decoder's complaint about bytes. Everything here only reads a 
 from __future__ import annotations
 
 import os
-from typing import Sequence
+from collections.abc import Sequence
 
 from rplearn._argtypes import check_types
 from rplearn.errors import InputError

@@ -16,15 +16,16 @@ names) updated by the caller's ``columns={"their name": "canonical name"}``.
 from __future__ import annotations
 
 import os
-from typing import Any, Iterator, Mapping
+from collections.abc import Iterator, Mapping
+from typing import Any
 
 import numpy as np
 import pandas as pd
 
 from rplearn._argtypes import check_types
+from rplearn.core.geometry import quat_wxyz_from_euler_enu_flu_deg, quat_wxyz_from_euler_ned_frd_deg
 from rplearn.data.tables import CSV_DTYPES, POSE_COLUMNS, SIGNAL_COLUMNS, node_ids, normalise_times, validate_pose_log
 from rplearn.errors import InputError, LogFormatError
-from rplearn.core.geometry import quat_wxyz_from_euler_enu_flu_deg, quat_wxyz_from_euler_ned_frd_deg
 from rplearn.io._common import read_parquet_lean
 from rplearn.io.geodetic import geodetic_to_enu
 
@@ -90,7 +91,6 @@ def _read(path: str, source: str) -> pd.DataFrame:
     except pd.errors.EmptyDataError:
         raise LogFormatError(f"{source}: empty file, expected a header line and rows") from None
     except Exception as exc:  # parsers raise many classes on corrupt bytes
-        msg = str(exc).splitlines()[0] if str(exc) else ""
         raise LogFormatError(_table_error(source, path, exc)) from None
 
 
@@ -429,7 +429,6 @@ def iter_signal_table(
     except (InputError, LogFormatError):
         raise
     except Exception as exc:
-        msg = str(exc).splitlines()[0] if str(exc) else ""
         raise LogFormatError(_table_error(source, path, exc)) from None
 
 
@@ -445,7 +444,6 @@ def table_columns(path: str, columns: Mapping[str, str] | None = None) -> list[s
         else:
             names = list(pd.read_csv(path, nrows=0, skipinitialspace=True).columns)
     except Exception as exc:
-        msg = str(exc).splitlines()[0] if str(exc) else ""
         raise LogFormatError(_table_error(source, path, exc)) from None
     return [str(c) for c in rename_columns(pd.DataFrame(columns=names), columns).columns]
 

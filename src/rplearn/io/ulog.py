@@ -34,9 +34,9 @@ import numpy as np
 import pandas as pd
 
 from rplearn._argtypes import check_types
+from rplearn.core.geometry import quat_ned_frd_to_enu_flu
 from rplearn.data.tables import validate_pose_log
 from rplearn.errors import InputError, LogFormatError
-from rplearn.core.geometry import quat_ned_frd_to_enu_flu
 from rplearn.io.geodetic import local_ned_to_enu, local_ned_to_geodetic
 
 

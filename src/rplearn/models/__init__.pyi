@@ -18,8 +18,8 @@ from .fit import fit_patterns as fit_patterns
 from .fit import scores_markdown as scores_markdown
 from .fit import solve_patterns as solve_patterns
 from .load import load_model as load_model
-from .options import FitOptions as FitOptions
 from .options import LOSSES as LOSSES
+from .options import FitOptions as FitOptions
 from .patterns import PatternSet as PatternSet
 from .predict import DatasetPrediction as DatasetPrediction
 from .predict import FrequencyMismatch as FrequencyMismatch

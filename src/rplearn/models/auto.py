@@ -1,4 +1,4 @@
-"""``fit --degree auto``: a regularised pattern whose order and smoothing the data choose.
+"""``fit --order auto``: a regularised pattern whose order and smoothing the data choose.
 
 The statistics of every learning unit are accumulated once, at the largest candidate order;
 :func:`rplearn.core.lsq.selection.select_order_and_smoothing` chooses order and smoothing by grouped
@@ -10,16 +10,14 @@ from __future__ import annotations
 
 import time
 from collections import Counter
-from typing import Any, Mapping, Sequence
+from collections.abc import Mapping, Sequence
+from typing import Any
 
 import numpy as np
 import scipy.linalg  # noqa: F401  (order selection solves through scipy: loaded before any BLAS limit, rplearn.core.threads)
 
-from rplearn.core.environment import PathLoss
 from rplearn.core.lsq.link_statistics import reserve_block_buffer
 from rplearn.core.lsq.normal_equations import NormalEquations
-from rplearn.core.threads import blas_threads_for, warm_up as warm_up_blas
-from rplearn.models.terms import regression_inputs, shared_fields, statistics_counts
 from rplearn.core.lsq.selection import (
     DEFAULT_PENALTY_POWER,
     Selection,
@@ -30,6 +28,8 @@ from rplearn.core.lsq.selection import (
     sub_statistics,
 )
 from rplearn.core.lsq.solver import solve
+from rplearn.core.threads import blas_threads_for
+from rplearn.core.threads import warm_up as warm_up_blas
 from rplearn.data.tables import LinkSamples
 from rplearn.errors import InputError
 from rplearn.models.fit import FittedModel, node_coverage_grids
@@ -39,9 +39,10 @@ from rplearn.models.own_posterior import OwnPrior, own_pattern_posterior
 from rplearn.models.patterns import PatternSet
 from rplearn.models.spec import ModelSpec, check_model_size, default_ridge
 from rplearn.models.streamed import frequency_counts, weighted_median
+from rplearn.models.terms import regression_inputs, shared_fields, statistics_counts
 from rplearn.models.training import TrainingSummary
 
-#: Largest SH order ``--degree auto`` considers (the cost of the selection is that of one fit
+#: Largest SH order ``--order auto`` considers (the cost of the selection is that of one fit
 #: at this order: its statistics are accumulated once). A cost cap: on the paper's data the
 #: cross-validated error still falls, by about 0.01 dB, from SH-15 to SH-16, while the
 #: selection's time grows by a third (2.5x against 3.4x one SH-10 fit; benchmarks/auto_fit.py).
@@ -68,7 +69,7 @@ def auto_orders(kind: str, n_samples: int, n_nodes: int, order: int | None = Non
     if top < 2:
         raise InputError(
             f"{n_samples:,} samples are too few to choose an SH order for {n_nodes} antennas "
-            f"(SH-2 needs {n_nodes * 4 * SAMPLES_PER_COEF:,}); give --degree", param="order")
+            f"(SH-2 needs {n_nodes * 4 * SAMPLES_PER_COEF:,}); give --order", param="order")
     return list(range(2, top + 1))
 
 
@@ -402,4 +403,5 @@ def fit_from_statistics(
     return FittedModel(final, model, ltd, own_posterior=own), choice
 
 
-__all__ = ["unseen_spread_cap_db", "within_unit_noise_var", "MAX_AUTO_ORDER", "PRIOR_PENALTY_POWER", "SAMPLES_PER_COEF", "auto_orders", "fit_auto", "fit_from_statistics", "prior_coefficients", "prior_misfit_var", "prior_std_db"]
+__all__ = ["unseen_spread_cap_db", "within_unit_noise_var", "MAX_AUTO_ORDER", "PRIOR_PENALTY_POWER", "SAMPLES_PER_COEF", "auto_orders", "fit_auto",
+           "fit_from_statistics", "prior_coefficients", "prior_misfit_var", "prior_std_db"]

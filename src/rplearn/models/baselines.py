@@ -17,8 +17,9 @@ Both classes implement the :class:`rplearn.models.base.Model` protocol.
 from __future__ import annotations
 
 import os
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Iterable, Mapping
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -163,7 +164,7 @@ class MeanModel(_PerLinkBaseline):
         self.training = TrainingSummary.from_dict(self.training)
 
     @classmethod
-    def fit(cls, samples: LinkSamples) -> "MeanModel":
+    def fit(cls, samples: LinkSamples) -> MeanModel:
         if len(samples) == 0:
             raise IdentifiabilityError("the mean baseline needs at least one sample")
         means = {k: mean_joint_gain_db(samples.joint_gain_db[i]) for k, i in _links(samples).items()}
@@ -202,7 +203,7 @@ class MeanModel(_PerLinkBaseline):
         write_model_with_sidecar(path, "mean", self.to_dict(), None)  # (removes an earlier save's sidecar)
 
     @classmethod
-    def from_dict(cls, payload: Mapping[str, Any], source: str = "model") -> "MeanModel":
+    def from_dict(cls, payload: Mapping[str, Any], source: str = "model") -> MeanModel:
         try:
             means = {(str(e["tx"]), str(e["rx"])): float(e["mean_db"]) for e in payload["links"]}
         except (KeyError, TypeError, ValueError) as exc:
@@ -233,7 +234,7 @@ class KNNModel(_PerLinkBaseline):
         return f"NN-{self.n_neighbors}"
 
     @classmethod
-    def fit(cls, samples: LinkSamples, n_neighbors: int = 400) -> "KNNModel":
+    def fit(cls, samples: LinkSamples, n_neighbors: int = 400) -> KNNModel:
         k = check_n_neighbors(n_neighbors)
         angles, gains = {}, {}
         for key, idx in _links(samples).items():
@@ -303,7 +304,7 @@ class KNNModel(_PerLinkBaseline):
         write_model_with_sidecar(path, "knn", payload, arrays)
 
     @classmethod
-    def from_dict(cls, payload: Mapping[str, Any], source: str = "model") -> "KNNModel":
+    def from_dict(cls, payload: Mapping[str, Any], source: str = "model") -> KNNModel:
         """Rebuild from a payload: training samples inline (:meth:`to_dict`) or in the model
         file's sidecar (:meth:`save`; ``source`` is then the model file's path)."""
         arrays = read_sidecar(source, payload["sidecar"]) if isinstance(payload, Mapping) and "sidecar" in payload else None

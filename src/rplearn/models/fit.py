@@ -8,23 +8,25 @@ A model is named by a :class:`ModelSpec` (``"sh-10"``, ``"bg-7"``, ``"p-12"``, `
 from __future__ import annotations
 
 import time
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, Mapping, Sequence
+from typing import Any
 
 import numpy as np
 
 from rplearn._argtypes import check_types
-from rplearn.core.threads import blas_threads_for, warm_up as warm_up_blas
-from rplearn.models.baselines import KNNModel, MeanModel
-from rplearn.data.tables import LinkSamples
-from rplearn.core.metrics import Scores, score
-from rplearn.models.patterns import PatternSet
 from rplearn.core.lsq.solver import FitReport, JointFitOptions, fit_joint
+from rplearn.core.metrics import Scores, score
+from rplearn.core.threads import blas_threads_for
+from rplearn.core.threads import warm_up as warm_up_blas
+from rplearn.data.tables import LinkSamples
+from rplearn.errors import InputError
 from rplearn.models.base import Model, learned_frequency_hz
+from rplearn.models.baselines import KNNModel, MeanModel
 from rplearn.models.options import FitOptions
+from rplearn.models.patterns import PatternSet
 from rplearn.models.spec import ModelSpec, check_model_size
 from rplearn.models.terms import directed_counts, regression_inputs, shared_fields
-from rplearn.errors import InputError
 from rplearn.models.training import TrainingSummary
 
 
@@ -52,7 +54,7 @@ class FittedModel:
         return self.model.n_params
 
     @classmethod
-    def from_model(cls, model: Model) -> "FittedModel":
+    def from_model(cls, model: Model) -> FittedModel:
         """Wrap a loaded model; its LTD comes from its training summary (NaN if absent)."""
         ltd = model.training.ltd_s
         spec = ModelSpec.parse(model.label)

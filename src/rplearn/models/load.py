@@ -8,8 +8,7 @@ import os
 
 from rplearn._argtypes import check_types
 from rplearn.io.modelfile import read_model_file
-from rplearn.models.base import require_patterns
-from rplearn.models.base import Model
+from rplearn.models.base import Model, require_patterns
 from rplearn.models.baselines import KNNModel, MeanModel
 from rplearn.models.options import FitOptions, is_model_file
 from rplearn.models.patterns import PatternSet

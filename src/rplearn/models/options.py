@@ -87,7 +87,7 @@ class FitOptions:
                              param="prior_level")
         if self.priors and not self.auto:
             raise InputError("prior: a prior is weighed against the data by the automatic choice; use it with "
-                             "order 'auto' (--degree auto)", param="prior")
+                             "order 'auto' (--order auto)", param="prior")
         if self.prior_level != "data" and not self.priors:
             raise InputError("prior-level: it says where a prior's level comes from; give --prior too",
                              param="prior_level")
@@ -98,7 +98,7 @@ class FitOptions:
             raise InputError(f"prior-std: expected a positive number of dB, got {self.prior_std_db!r}",
                              param="prior_std_db")
         if self.loss == "huber" and self.auto:
-            raise InputError("loss huber: for a pattern model of fixed order (--model sh --degree N, bg, poly), "
+            raise InputError("loss huber: for a pattern model of fixed order (--model sh --order N, bg, poly), "
                              "not an automatic choice or a baseline", param="loss")
 
     def check(self, spec: ModelSpec) -> None:
@@ -112,7 +112,7 @@ class FitOptions:
         if spec.decouples:
             return
         if self.loss == "huber":
-            raise InputError("loss huber: for a pattern model of fixed order (--model sh --degree N, bg, poly), "
+            raise InputError("loss huber: for a pattern model of fixed order (--model sh --order N, bg, poly), "
                              "not an automatic choice or a baseline", param="loss")
         if self.auto:
             raise InputError(f"order: 'auto' chooses the order of pattern models (sh, bg, poly), not of {spec.label}",

@@ -9,8 +9,9 @@ of docs/conventions.md (versioned schema, SHA-256 checksum of the payload; no pi
 from __future__ import annotations
 
 import os
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Mapping, Sequence
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -19,10 +20,10 @@ from rplearn._argtypes import check_types
 from rplearn._version import __version__
 from rplearn.core.bases import Basis, basis_from_dict
 from rplearn.core.basis_base import chunk_directions
-from rplearn.errors import InputError, ModelFileError
 from rplearn.core.environment import PathLoss
 from rplearn.core.geometry import Directions, distance_m, link_directions
 from rplearn.core.link import received_power_dbm
+from rplearn.errors import InputError, ModelFileError
 from rplearn.io.modelfile import jsonable as _jsonable
 from rplearn.io.modelfile import read_model_file, read_sidecar, write_model_with_sidecar
 from rplearn.models.base import frequency_from_training
@@ -144,7 +145,7 @@ class PatternSet:
             out[(b, a)] = (-float(self.shared_coef[j]), float(se[j]))
         return out
 
-    def shared_regressors(self, samples: "LinkSamples") -> FloatArray:
+    def shared_regressors(self, samples: LinkSamples) -> FloatArray:
         """Values of the shared columns for every sample, shape ``(len(shared_names), n)``."""
         from rplearn.core.environment import log_distance_column
 
@@ -167,7 +168,7 @@ class PatternSet:
                 out[j] -= (tx == b) & (rx == a)
         return out
 
-    def environment_db(self, samples: "LinkSamples") -> FloatArray:
+    def environment_db(self, samples: LinkSamples) -> FloatArray:
         """What the environment term and the link offsets add to the patterns' joint gain [dB]
         for every sample (zero for a free-space model without offsets)."""
         out = np.zeros(len(samples))
@@ -233,7 +234,7 @@ class PatternSet:
         value = self.training.new_flight_level_std_db
         return float(value) if isinstance(value, (int, float)) and np.isfinite(value) else 0.0
 
-    def predict_gain_std(self, samples: "LinkSamples", new_flight: bool = True) -> FloatArray | None:
+    def predict_gain_std(self, samples: LinkSamples, new_flight: bool = True) -> FloatArray | None:
         """Standard error of :meth:`predict_gain` for a new flight [dB]: from the coefficient
         covariance and, with ``new_flight``, the spread of a new flight's level
         (:attr:`new_flight_level_std_db`).
@@ -336,7 +337,7 @@ class PatternSet:
     def _link_samples_between(
         self, tx_node: str, rx_node: str, tx_position_xyz: ArrayLike, rx_position_xyz: ArrayLike,
         frequency_hz: ArrayLike | None = None,
-    ) -> "LinkSamples":
+    ) -> LinkSamples:
         """Samples of the link ``tx_node -> rx_node`` between positions (ENU [m]), with no
         attitude: what the environment term and the offsets need (distance, heights, nodes)."""
         from rplearn.data.tables import LinkSamples
@@ -414,7 +415,7 @@ class PatternSet:
                                  None if inline or self.covariance is None else {"covariance": self.covariance})
 
     @classmethod
-    def from_dict(cls, payload: Mapping[str, Any], source: str = "model") -> "PatternSet":
+    def from_dict(cls, payload: Mapping[str, Any], source: str = "model") -> PatternSet:
         """Rebuild from :meth:`to_dict` output, checking every field."""
         try:
             basis = basis_from_dict(payload["basis"])
@@ -471,7 +472,7 @@ class PatternSet:
             raise ModelFileError(f"{source}: {exc}") from None
 
     @classmethod
-    def load(cls, path: str | os.PathLike[str]) -> "PatternSet":
+    def load(cls, path: str | os.PathLike[str]) -> PatternSet:
         """Read a JSON model file; refuse a missing, malformed, truncated or tampered one.
 
         Raises
@@ -506,7 +507,7 @@ class PatternSet:
         """Carrier frequency the patterns were learned at [Hz] (training summary; None: unknown)."""
         return frequency_from_training(self.training)
 
-    def predict_gain(self, samples: "LinkSamples") -> FloatArray:
+    def predict_gain(self, samples: LinkSamples) -> FloatArray:
         """Joint gain [dB] predicted for every sample of a :class:`~rplearn.data.tables.LinkSamples`."""
         idx = np.array([self.node_index(n) for n in samples.nodes], dtype=np.intp)
         tx = idx[samples.tx_index]

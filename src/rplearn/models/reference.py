@@ -15,7 +15,8 @@ the expansion's residual against the reference points (``training["rmse_db"]``);
 
 from __future__ import annotations
 
-from typing import Any, Mapping
+from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 

@@ -18,15 +18,15 @@ from __future__ import annotations
 
 import dataclasses
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any, Mapping
+from typing import Any
 
 import numpy as np
 import pandas as pd
 
 from rplearn._argtypes import check_types
 from rplearn.core.lsq.normal_equations import NormalEquations
-from rplearn.models.terms import directed_counts
 from rplearn.core.lsq.selection import penalty_scale, penalty_vector
 from rplearn.core.lsq.solver import solve
 from rplearn.data.tables import LinkSamples
@@ -34,6 +34,7 @@ from rplearn.errors import InputError
 from rplearn.models.fit import FittedModel, node_coverage_grids, solve_patterns
 from rplearn.models.options import LOSSES, FitOptions
 from rplearn.models.spec import ModelSpec, check_model_size
+from rplearn.models.terms import directed_counts
 
 #: Huber's tuning constant in robust standard deviations: 95% efficiency for Gaussian noise.
 HUBER_K = 1.345
@@ -175,7 +176,7 @@ def fit_huber(
     fitted = refit(y)
     pseudo = y
     scale, converged, iterations = 0.0, False, 0
-    for iterations in range(1, MAX_ITERATIONS + 1):
+    for iterations in range(1, MAX_ITERATIONS + 1):  # noqa: B007 (the count is reported after the loop)
         residual = y - fitted
         scale = robust_scale_db(residual)
         pseudo = fitted + np.clip(residual, -k * scale, k * scale)

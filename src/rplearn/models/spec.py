@@ -75,7 +75,7 @@ class ModelSpec:
             raise InputError(f"smoothing must be a non-negative number, got {self.smoothing!r}", param="smoothing")
 
     @classmethod
-    def parse(cls, text: str, **options: Any) -> "ModelSpec":
+    def parse(cls, text: str, **options: Any) -> ModelSpec:
         """Parse ``"sh-10"``, ``"SH10"``, ``"bg-7"``, ``"p-12"``, ``"nn-400"``, ``"m"``, ``"knn"``..."""
         m = re.fullmatch(r"\s*([a-zA-Z]+)[-_ ]?(\d+)?\s*", str(text))
         if not m:

@@ -20,15 +20,13 @@ from __future__ import annotations
 import copy
 import time
 from collections import Counter
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, Callable, Iterable, Mapping, Sequence
 
 import numpy as np
 import pandas as pd
 
-from rplearn.models.options import FitOptions
 from rplearn.core.lsq.normal_equations import NormalEquations
-from rplearn.models.terms import regression_inputs, shared_fields, statistics_counts
 from rplearn.core.lsq.selection import penalty_scale, penalty_vector
 from rplearn.core.lsq.solver import FitReport, solve
 from rplearn.data.tables import LinkSamples, link_samples, node_ids
@@ -37,8 +35,10 @@ from rplearn.errors import InputError
 from rplearn.io.files import iter_parts
 from rplearn.io.partitions import Part
 from rplearn.models.fit import node_coverage_grids
+from rplearn.models.options import FitOptions
 from rplearn.models.patterns import PatternSet
 from rplearn.models.spec import ModelSpec
+from rplearn.models.terms import regression_inputs, shared_fields, statistics_counts
 from rplearn.models.training import TrainingSummary
 
 
@@ -253,7 +253,7 @@ def unit_statistics_streamed(
     chunks: Iterable[pd.DataFrame], spec: ModelSpec, nodes: Sequence[str], units: Sequence[str] | None = None,
     source: str = "dataset", stretches: Stretches | None = None, options: FitOptions | None = None,
 ) -> tuple[dict[str, NormalEquations], float | None, int, dict[str, list[float]]]:
-    """The statistics of every learning unit of a dataset given in chunks (for ``--degree auto``
+    """The statistics of every learning unit of a dataset given in chunks (for ``--order auto``
     on a big file): ``(statistics by unit, median frequency [Hz], non-unit quaternions,
     coverage grids by node)``. A dataset without a ``unit`` column is one unit, ``"all"``; with
     ``stretches`` the learning rows are cut into those stretches of time instead
@@ -330,4 +330,5 @@ def fit_patterns_accumulated(
     return StreamedFit(patterns, sol.report, normal.n_samples, non_unit, learn_s)
 
 
-__all__ = ["PART_CHUNK_ROWS", "Accumulated", "StreamedFit", "accumulate", "accumulate_parts", "checked", "fit_patterns_accumulated", "frequency_counts", "fit_patterns_streamed", "part_statistics", "unit_statistics_streamed", "units_and_nodes", "weighted_median"]
+__all__ = ["PART_CHUNK_ROWS", "Accumulated", "StreamedFit", "accumulate", "accumulate_parts", "checked", "fit_patterns_accumulated",
+           "frequency_counts", "fit_patterns_streamed", "part_statistics", "unit_statistics_streamed", "units_and_nodes", "weighted_median"]

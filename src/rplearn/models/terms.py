@@ -14,7 +14,8 @@ direction learned alone, or never learned, is predicted with offset 0.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, Mapping, Sequence
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -102,7 +103,7 @@ def shared_names(shared: Sequence[tuple[Any, ...]], nodes: Sequence[str]) -> tup
 
 
 def shared_fields(
-    sol: "JointSolution", nodes: Sequence[str], options: FitOptions, counts: Mapping[tuple[str, str], int],
+    sol: JointSolution, nodes: Sequence[str], options: FitOptions, counts: Mapping[tuple[str, str], int],
     covariance_scale: float = 1.0,
 ) -> tuple[dict[str, Any], dict[str, Any]]:
     """``PatternSet`` keyword arguments (``path_loss``, ``shared_names``, ``shared_coef``) and the

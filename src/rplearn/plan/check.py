@@ -25,13 +25,14 @@ to fly the circle, and more so the tilt into the wind, removes this degeneracy (
 from __future__ import annotations
 
 from dataclasses import dataclass
+
 import numpy as np
 from numpy.typing import NDArray
 
 from rplearn._argtypes import check_types
 from rplearn.core.bases import Basis, make_basis
-from rplearn.errors import InputError
 from rplearn.core.geometry import Directions, link_directions, quat_wxyz_from_yaw
+from rplearn.errors import InputError
 from rplearn.plan.campaign import Campaign, link_graph_identifies_gains
 from rplearn.plan.trajectory import PlanLimits, UnitSummary
 

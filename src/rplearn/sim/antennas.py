@@ -30,14 +30,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from rplearn._argtypes import check_types
-from rplearn.core.geometry import (
-    azimuth_elevation,
-    great_circle_angle,
-    quat_wxyz_from_euler,
-    quat_wxyz_to_matrix,
-    unit_vector,
-)
 from rplearn._atomic import atomic_open, dump_json
+from rplearn.core.geometry import azimuth_elevation, great_circle_angle, quat_wxyz_from_euler, quat_wxyz_to_matrix, unit_vector
 from rplearn.errors import InputError, ModelFileError
 from rplearn.sim.gain_formulas import (
     SECTORAL_IMPROVED,

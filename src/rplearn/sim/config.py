@@ -8,7 +8,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-
 from rplearn._argtypes import check_types
 from rplearn.errors import InputError
 from rplearn.plan.campaign import Campaign

@@ -15,8 +15,8 @@ from __future__ import annotations
 import itertools
 import os
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
-from typing import Callable
 
 from rplearn._atomic import atomic_open, dump_json
 from rplearn.data.sync import synchronise

@@ -27,16 +27,14 @@ import logging
 import os
 import time
 from dataclasses import dataclass, field, replace
+
 import numpy as np
 import pandas as pd
 from numpy.typing import NDArray
 from scipy.signal import lfilter
 
 from rplearn._argtypes import check_types
-from rplearn.sim.antennas import GroundTruth, load_ground_truth
-from rplearn.data.tables import MATCHED_COLUMNS, POSE_COLUMNS, SIGNAL_COLUMNS
-from rplearn.io.files import write_table
-from rplearn.errors import InputError
+from rplearn.core.environment import log_distance_column, two_ray_excess_db
 from rplearn.core.geometry import (
     attitude_from_thrust,
     direction_in_body,
@@ -47,9 +45,12 @@ from rplearn.core.geometry import (
     quat_wxyz_multiply,
 )
 from rplearn.core.link import free_space_path_loss_db
-from rplearn.core.environment import log_distance_column, two_ray_excess_db
+from rplearn.data.tables import MATCHED_COLUMNS, POSE_COLUMNS, SIGNAL_COLUMNS
+from rplearn.errors import InputError
+from rplearn.io.files import write_table
 from rplearn.plan.campaign import write_references
 from rplearn.plan.trajectory import G_M_S2, TrajectoryUnit
+from rplearn.sim.antennas import GroundTruth, load_ground_truth
 from rplearn.sim.config import EstimatorConfig, FlightConfig, RadioConfig, SimulationConfig
 from rplearn.sim.presets import make_preset
 

@@ -37,17 +37,19 @@ All presets are deterministic for a given seed of :func:`rplearn.sim.flight.simu
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import replace
-from typing import Any, Callable
+from typing import Any
 
 from rplearn._argtypes import check_types
-from rplearn.sim.antennas import AirframeLobe, AntennaSpec, Mounting, NodeAntenna, antenna_from_name
 from rplearn.errors import InputError
-from rplearn.sim.config import EstimatorConfig, FlightConfig, RadioConfig, SimulationConfig
 from rplearn.plan.campaign import Campaign, group_campaign
 from rplearn.plan.trajectory import TrajectoryUnit
+from rplearn.sim.antennas import AirframeLobe, AntennaSpec, Mounting, NodeAntenna, antenna_from_name
+from rplearn.sim.config import EstimatorConfig, FlightConfig, RadioConfig, SimulationConfig
 
-__all__ = ["CAMPAIGN_FLIGHTS", "CAMPAIGN_HEIGHTS_M", "CAMPAIGN_LEVEL_STD_DB", "CAMPAIGN_TEST_ARC_DEG", "PATHLOSS_EXPONENT", "PATHLOSS_UNITS", "PRESET_NAMES", "fine_structure_lobes", "make_preset", "x500_frame_lobes"]
+__all__ = ["CAMPAIGN_FLIGHTS", "CAMPAIGN_HEIGHTS_M", "CAMPAIGN_LEVEL_STD_DB", "CAMPAIGN_TEST_ARC_DEG", "PATHLOSS_EXPONENT", "PATHLOSS_UNITS",
+           "PRESET_NAMES", "fine_structure_lobes", "make_preset", "x500_frame_lobes"]
 
 
 def x500_frame_lobes(battery_az_deg: float = 180.0, arm_depth_db: float = 3.0) -> tuple[AirframeLobe, ...]:

@@ -192,7 +192,7 @@ def plot_order_sweep(
         " and the learning time LTD (paper Fig. 10)."
     )
     if validation_rmse_db is not None:
-        caption += " Dotted: the RMSE cross-validated over the learning units, from which --degree auto chooses."
+        caption += " Dotted: the RMSE cross-validated over the learning units, from which --order auto chooses."
     return save_figure(order_sweep_figure(orders, test_rmse_db, aic, ltd_s, family, validation_rmse_db, chosen),
                        path, caption)
 

@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import os
-from typing import Any, Sequence
+from collections.abc import Sequence
+from typing import Any
 
 from rplearn._argtypes import check_types
 from rplearn.io.export import check_pattern_like, node_file_names, select_nodes

@@ -4,24 +4,23 @@ from __future__ import annotations
 
 import os
 import time
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Callable, Sequence
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from rplearn._argtypes import check_types
 from rplearn._atomic import atomic_open, dump_json
-from rplearn.core.metrics import Scores
-from rplearn.io.files import write_table
-from rplearn.models.fit import FittedModel, evaluate_models, fit_model, scores_markdown
-from rplearn.data.units import samples_of
-from rplearn.models.patterns import PatternSet
-from rplearn.models.spec import ModelSpec
-
 from rplearn.analysis.identifiability import IdentifiabilityStudy, identifiability_study
 from rplearn.analysis.pattern_error import node_directions, pattern_errors_db
 from rplearn.analysis.sweep import SweepResult, no_progress, order_sweep
-from rplearn.io.files import provenance
+from rplearn.core.metrics import Scores
+from rplearn.data.units import samples_of
+from rplearn.io.files import provenance, write_table
+from rplearn.models.fit import FittedModel, evaluate_models, fit_model, scores_markdown
+from rplearn.models.patterns import PatternSet
+from rplearn.models.spec import ModelSpec
 from rplearn.workflows.report import LTD_REPEATS, median_ltd
 
 if TYPE_CHECKING:
@@ -88,8 +87,8 @@ def run_demo(
     directions, sweep the SH order, run the identifiability study, then write figures and
     ``report.html`` into ``out_dir``.
     """
-    from rplearn.sim.flight import simulate
     from rplearn.data.sync import SyncOptions, synchronise
+    from rplearn.sim.flight import simulate
 
     t_start = time.perf_counter()
     os.makedirs(out_dir, exist_ok=True)
@@ -231,7 +230,7 @@ def _demo_figures_and_report(result: DemoResult, sim: SimulationResult, dataset:
         ReportSection(
             "Identifiability (Sec. V-A, Figs. 5 and 6)",
             "Adding epsilon to one antenna's Y00 and subtracting it from the other's changes no prediction "
-            f"with two antennas; ranks: "
+            "with two antennas; ranks: "
             + "; ".join(f"{c}: {r} of {n} columns" for c, n, r in st.rank_cases),
             [files["fig_epsilon"], files["fig_rank"]],
         ),

@@ -17,8 +17,9 @@ and see the files: object storage URLs, or a shared disk).
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
-from typing import Any, Callable, Iterator, Sequence
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -212,7 +213,10 @@ def _part_predictions(part: Part, models: Sequence[Model], units: Sequence[str] 
             n = uncovered_rows(model, samples)
             if n is not None:
                 uncovered[k] = (uncovered[k] or 0) + n
-    cat = (lambda xs: np.concatenate(xs) if xs else np.zeros(0))
+
+    def cat(xs: list[np.ndarray]) -> np.ndarray:
+        return np.concatenate(xs) if xs else np.zeros(0)
+
     return cat(observed), [cat(p) for p in predicted], uncovered
 
 

@@ -9,42 +9,48 @@ from __future__ import annotations
 
 import os
 import time
+from collections.abc import Callable, Sequence
 from contextlib import nullcontext
 from dataclasses import dataclass, field, replace
-from typing import TYPE_CHECKING, Any, Callable, Sequence
-
-import numpy as np
-import pandas as pd
+from typing import TYPE_CHECKING, Any
 
 from rplearn._argtypes import check_types
 from rplearn._atomic import atomic_open
 from rplearn.analysis.budget import check_dataset_budget
 from rplearn.analysis.decoupling import certify
-from rplearn.analysis.pattern_error import node_directions
 from rplearn.core.metrics import Scores
-from rplearn.data.units import (
-    TIME_UNITS, Stretches, UnitChoice, dataset_units, evaluation_units, is_stretch_label, learning_units,
-    refuse_streamed_stretches, samples_of, select_units, split_units, stretch_samples, stretched, time_units,
-    trained_units, whole_flight_note,
-)
-from rplearn.errors import IdentifiabilityError, InputError
 from rplearn.data.tables import QUATERNION_NORM_TOLERANCE
-from rplearn.io.files import (
-    check_output_path, check_table_path, provenance, read_dataset, table_rows, write_json, write_table,
+from rplearn.data.units import (
+    TIME_UNITS,
+    Stretches,
+    UnitChoice,
+    dataset_units,
+    evaluation_units,
+    is_stretch_label,
+    learning_units,
+    refuse_streamed_stretches,
+    samples_of,
+    select_units,
+    split_units,
+    stretch_samples,
+    stretched,
+    time_units,
+    trained_units,
+    whole_flight_note,
 )
+from rplearn.errors import InputError
+from rplearn.io.files import check_output_path, check_table_path, provenance, read_dataset, table_rows, write_json, write_table
 from rplearn.io.partitions import dataset_parts, is_partitioned
-from rplearn.workflows.fleet import (
-    accumulate_parts, dask_client, dataset_index, learning_times, parse_dask, predict_parts, selected_rows,
-)
 from rplearn.models.fit import FittedModel, evaluate_models, fit_model, scores_markdown, scores_of_predictions
 from rplearn.models.load import load_model, load_priors
 from rplearn.models.options import FitOptions
 from rplearn.models.patterns import PatternSet
-from rplearn.models.spec import ModelSpec, check_model_size
-from rplearn.models.robust import downweighted_notes, fit_huber
-from rplearn.models.streamed import checked, fit_patterns_accumulated, weighted_median
 from rplearn.models.predict import UNCOVERED_DEG, DatasetPrediction, distinct_labels, predict_dataset, uncovered_rows
+from rplearn.models.robust import downweighted_notes, fit_huber
+from rplearn.models.spec import ModelSpec, check_model_size
+from rplearn.models.streamed import checked, fit_patterns_accumulated, weighted_median
 from rplearn.models.terms import terms_text
+from rplearn.workflows.fleet import accumulate_parts, dask_client, dataset_index, learning_times, parse_dask, predict_parts, selected_rows
 
 if TYPE_CHECKING:  # order selection (models.auto, analysis.sweep) loads scipy: imported when used
     from rplearn.analysis.sweep import SweepResult

@@ -8,15 +8,15 @@ notes for the user.
 from __future__ import annotations
 
 import dataclasses
-
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Iterator, Mapping, Sequence, cast
+from typing import Any, cast
 
 import pandas as pd
 from numpy.typing import ArrayLike
 
-from rplearn.analysis.heading_options import SwarmHeadingOptions
 from rplearn._argtypes import check_types
+from rplearn.analysis.heading_options import SwarmHeadingOptions
 from rplearn.analysis.headings import SwarmHeadings, best_swarm_headings
 from rplearn.analysis.swarm import SwarmOptions, SwarmPrediction, predict_swarm
 from rplearn.data.streaming import conform_chunk, synchronise_stream
@@ -24,8 +24,8 @@ from rplearn.data.sync import SyncOptions, SyncSummary, synchronise
 from rplearn.data.tables import MATCHED_COLUMNS, SIGNAL_COLUMNS
 from rplearn.errors import InputError
 from rplearn.io import ReaderOptions, read_logs
-from rplearn.io.inspect import file_damage
 from rplearn.io.files import check_output_path, check_table_path, write_json, write_table, write_table_chunks
+from rplearn.io.inspect import file_damage
 from rplearn.models.load import load_model
 from rplearn.models.patterns import PatternSet
 from rplearn.models.predict import FrequencyMismatch, frequency_mismatch

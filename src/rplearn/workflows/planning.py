@@ -6,16 +6,17 @@ from __future__ import annotations
 
 import math
 import os
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Mapping, Sequence, cast
+from typing import cast
 
-from rplearn.analysis.heading_options import YawOptions
 from rplearn._argtypes import check_types
+from rplearn.analysis.heading_options import YawOptions
 from rplearn.analysis.headings import OrientationResult, best_yaw
 from rplearn.errors import InputError
 from rplearn.io.export import export_grid
-from rplearn.io.msi import export_msi_files
 from rplearn.io.files import check_output_path, provenance
+from rplearn.io.msi import export_msi_files
 from rplearn.models.base import require_patterns
 from rplearn.models.load import load_model
 from rplearn.models.patterns import PatternSet

@@ -7,10 +7,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rplearn.core.lsq import solver, solver_large
 from rplearn.core.bases import make_basis
 from rplearn.core.gauge import Gauge
 from rplearn.core.geometry import Directions
+from rplearn.core.lsq import solver, solver_large
 from rplearn.core.lsq.level import constant_coefficients, pattern_shape, shrink_target
 from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.core.lsq.selection import penalty_scale, penalty_vector

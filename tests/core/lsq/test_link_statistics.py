@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rplearn.core.lsq import link_statistics
 from rplearn.core.geometry import Directions
+from rplearn.core.lsq import link_statistics
 from rplearn.core.lsq.link_statistics import segmented_link_statistics
 from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.core.sh import SphericalHarmonics

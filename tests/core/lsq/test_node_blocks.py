@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rplearn.core.lsq.node_blocks import NodeBlocks
 from rplearn.core.lsq.factor import band_of
+from rplearn.core.lsq.node_blocks import NodeBlocks
 
 
 def _blocked(n_nodes, p, links, shared=0, seed=0):

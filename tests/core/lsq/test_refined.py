@@ -7,7 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rplearn.core.lsq import factor as factor_module, refined, spectrum
+from rplearn.core.lsq import factor as factor_module
+from rplearn.core.lsq import refined, spectrum
 from rplearn.core.lsq.refined import RefinedCholesky, scaled_double, scaled_single
 from rplearn.errors import NotPositiveDefinite
 

@@ -6,17 +6,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from rplearn.core.bases import make_basis
 from rplearn.core.geometry import Directions
 from rplearn.core.lsq.normal_equations import NormalEquations
-from rplearn.core.lsq.selection import (
-    nested_columns,
-    penalty_scale,
-    penalty_vector,
-    select_order_and_smoothing,
-    validation_rmse,
-    sub_statistics,
-)
-from rplearn.core.bases import make_basis
+from rplearn.core.lsq.selection import nested_columns, penalty_scale, penalty_vector, select_order_and_smoothing, sub_statistics, validation_rmse
 from rplearn.core.sh import SphericalHarmonics, sh_index
 from rplearn.errors import InputError
 

@@ -6,11 +6,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rplearn.core.lsq import solver
 from rplearn.core.bases import make_basis
 from rplearn.core.geometry import Directions
+from rplearn.core.lsq import solver, solver_large
 from rplearn.core.lsq.normal_equations import NormalEquations
-from rplearn.core.lsq import solver_large
 
 
 @pytest.fixture(autouse=True, params=["float64", "refined"])

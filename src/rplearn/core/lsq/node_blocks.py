@@ -10,9 +10,10 @@ general sparse matrix.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
 from functools import cached_property
-from typing import Any, Iterable
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -29,7 +30,7 @@ class NodeBlocks:
     pairs: tuple[tuple[int, int], ...]
 
     @classmethod
-    def of(cls, n_nodes: int, n_coef: int, links: Iterable[tuple[int, int]]) -> "NodeBlocks":
+    def of(cls, n_nodes: int, n_coef: int, links: Iterable[tuple[int, int]]) -> NodeBlocks:
         pairs = sorted({(min(a, b), max(a, b)) for a, b in links if a != b})
         return cls(int(n_nodes), int(n_coef), tuple(pairs))
 

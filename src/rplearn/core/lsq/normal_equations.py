@@ -23,9 +23,7 @@ from numpy.typing import ArrayLike, NDArray
 from rplearn._argtypes import check_types
 from rplearn.core.bases import Basis
 from rplearn.core.geometry import Directions
-from rplearn.core.lsq.link_statistics import (
-    block_rows, block_samples, block_starts, link_statistics, max_links_per_block, segmented_link_statistics,
-)
+from rplearn.core.lsq.link_statistics import block_rows, block_samples, block_starts, link_statistics, max_links_per_block, segmented_link_statistics
 from rplearn.core.lsq.runtime import DEFAULT_RUNTIME
 from rplearn.errors import InputError
 

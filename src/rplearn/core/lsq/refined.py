@@ -84,7 +84,7 @@ class RefinedCholesky:
         self.steps: list[int] = []  # corrections each solve took (for tests and diagnostics)
 
     @classmethod
-    def of(cls, gram: FloatArray, scale: FloatArray, added: FloatArray) -> "RefinedCholesky | None":
+    def of(cls, gram: FloatArray, scale: FloatArray, added: FloatArray) -> RefinedCholesky | None:
         """Factorise ``A`` in float32; None when that fails (not positive definite in single
         precision: the float64 factor may still succeed)."""
         from scipy.linalg import lapack

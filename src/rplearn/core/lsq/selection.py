@@ -46,23 +46,17 @@ about 6 of them per held-out unit, against 12-14 for a full grid at the largest 
 
 from __future__ import annotations
 
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, Callable, Mapping, Sequence, cast
+from typing import Any, cast
 
 import numpy as np
 
 from rplearn.core.basis_base import Basis
 from rplearn.core.lsq.level import shrink_target
 from rplearn.core.lsq.normal_equations import EXPONENT_MIN_SPREAD_DB, NormalEquations, schur_spread_db
+from rplearn.core.lsq.penalty import DEFAULT_PENALTY_POWER, nested_columns, penalty_scale, penalty_vector, sub_statistics, with_shared_columns
 from rplearn.core.lsq.selection_result import CurvePoint, Selection
-from rplearn.core.lsq.penalty import (
-    DEFAULT_PENALTY_POWER,
-    nested_columns,
-    penalty_scale,
-    penalty_vector,
-    sub_statistics,
-    with_shared_columns,
-)
 from rplearn.errors import IdentifiabilityError, InputError
 
 #: Smoothing values tried, relative to ``mean(diag(X^T X))`` (0: the plain fit with its ridge).

@@ -7,8 +7,9 @@ through :func:`rplearn.core.lsq.closing.close_solution`.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray

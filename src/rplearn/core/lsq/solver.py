@@ -42,12 +42,12 @@ from rplearn._argtypes import check_types
 from rplearn.core.bases import Basis
 from rplearn.core.gauge import EQUAL_MEAN, Gauge
 from rplearn.core.geometry import Directions
+from rplearn.core.lsq.closing import Regularisation, close_solution
 from rplearn.core.lsq.level import shrink_target
 from rplearn.core.lsq.normal_equations import EXPONENT_MIN_SPREAD_DB, NormalEquations, independent_spread_db
-from rplearn.core.lsq.spectrum import null_directions, spectrum_estimate, spectrum_report
-from rplearn.core.lsq.closing import Regularisation, close_solution
 from rplearn.core.lsq.solution import FitReport, GaugeNote, JointSolution
 from rplearn.core.lsq.solver_large import solve_large, unit_shared_scaling
+from rplearn.core.lsq.spectrum import null_directions, spectrum_estimate, spectrum_report
 from rplearn.errors import IdentifiabilityError, InputError
 
 FloatArray = NDArray[np.float64]

@@ -15,11 +15,11 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
+from rplearn.core.lsq.closing import Regularisation, close_solution
 from rplearn.core.lsq.factor import ConstrainedFactor, symmetric_from_lower
 from rplearn.core.lsq.node_blocks import NodeBlocks
 from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.core.lsq.products import symmetric_product
-from rplearn.core.lsq.closing import Regularisation, close_solution
 from rplearn.core.lsq.solution import GaugeNote, JointSolution
 from rplearn.core.lsq.spectrum import null_directions, spectrum_estimate, spectrum_from_factor
 from rplearn.core.threads import numpy_blas_one_thread
