@@ -35,7 +35,7 @@ import numpy as np
 from sklearn.linear_model import Ridge
 
 from rplearn.core.geometry import Directions
-from rplearn.core.lsq.solver import NormalEquations, fit_joint, solve
+from rplearn.core.lsq.solver import JointFitOptions, NormalEquations, fit_joint, solve
 from rplearn.core.sh import SphericalHarmonics, real_sh_reference
 
 N_SAMPLES = 56_164
@@ -110,13 +110,13 @@ def main() -> int:
 
     X = np.hstack([basis.design(d.az_tx, d.el_tx), basis.design(d.az_rx, d.el_rx)])
     X = np.ascontiguousarray(X)
-    fit_joint(d, tx, rx, y, 2, basis, ridge=RIDGE)  # warm-up (caches, BLAS threads)
+    fit_joint(d, tx, rx, y, 2, basis, options=JointFitOptions(ridge=RIDGE))  # warm-up (caches, BLAS threads)
     X.T @ X
     # Interleaved: this machine's speed drifts by tens of percent within a minute, so the fit
     # and its reference are timed alternately and the best of each is kept.
     t_ours = t_floor = float("inf")
     for _ in range(repeats * 2):
-        t, sol = best_of(lambda: fit_joint(d, tx, rx, y, 2, basis, ridge=RIDGE), 1)
+        t, sol = best_of(lambda: fit_joint(d, tx, rx, y, 2, basis, options=JointFitOptions(ridge=RIDGE)), 1)
         t_ours = min(t_ours, t)
         t, _ = best_of(lambda: X.T @ X, 1)
         t_floor = min(t_floor, t)
@@ -128,7 +128,7 @@ def main() -> int:
     # Also interleaved with runs of ours, so that both can meet the machine in the same mood.
     t_hand = t_ours_b = float("inf")
     for _ in range(max(2, repeats // 3)):
-        t, sol = best_of(lambda: fit_joint(d, tx, rx, y, 2, basis, ridge=RIDGE), 3)
+        t, sol = best_of(lambda: fit_joint(d, tx, rx, y, 2, basis, options=JointFitOptions(ridge=RIDGE)), 3)
         t_ours_b = min(t_ours_b, t)
         t, (ridge_model, Xs) = best_of(by_hand, 1)
         t_hand = min(t_hand, t)

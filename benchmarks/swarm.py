@@ -30,8 +30,8 @@ import tracemalloc
 import numpy as np
 import pandas as pd
 
-from rplearn.analysis.headings import best_swarm_headings
-from rplearn.analysis.swarm import predict_swarm
+from rplearn.analysis.headings import SwarmHeadingOptions, best_swarm_headings
+from rplearn.analysis.swarm import SwarmOptions, predict_swarm
 from rplearn.core.bases import make_basis
 from rplearn.core.geometry import quat_wxyz_to_matrix
 from rplearn.core.link import free_space_path_loss_db
@@ -227,8 +227,8 @@ def main() -> int:
         pattern = np.array([0 if i % 2 == 0 else 1 for i in range(n)])
         best = {"ours": (np.inf, 0), "ref": (np.inf, 0)}
         for _ in range(repeats):
-            dt, peak, ours = timed(lambda: predict_swarm(model, log, TX_POWER_DBM, FREQUENCY_HZ, pattern_of, times_s=t,
-                                                         min_rssi_dbm=THRESHOLD_DBM))
+            dt, peak, ours = timed(lambda: predict_swarm(model, log, TX_POWER_DBM, SwarmOptions(
+                FREQUENCY_HZ, pattern_of, times_s=t, min_rssi_dbm=THRESHOLD_DBM)))
             best["ours"] = (min(best["ours"][0], dt), max(best["ours"][1], peak))
             dt, peak, ref = timed(lambda: reference_swarm(model, pos, quat, pattern))
             best["ref"] = (min(best["ref"][0], dt), max(best["ref"][1], peak))
@@ -250,7 +250,7 @@ def main() -> int:
         t_ours = t_ref = np.inf
         for _ in range(repeats):
             t0 = time.perf_counter()
-            result = best_swarm_headings(model, positions, TX_POWER_DBM, FREQUENCY_HZ, pattern_of)
+            result = best_swarm_headings(model, positions, TX_POWER_DBM, SwarmHeadingOptions(FREQUENCY_HZ, pattern_of))
             t_ours = min(t_ours, time.perf_counter() - t0)
             t0 = time.perf_counter()
             ref_yaws, ref_bottleneck = reference_headings(model, positions, pattern_of)

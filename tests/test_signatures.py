@@ -16,9 +16,10 @@ Read from the sources with :mod:`ast` (nothing imported):
   documented public API); everywhere else they travel inside ``FitOptions``
   (``rplearn.models.options``).
 
-:data:`PENDING` lists the functions still over the limit, to be split into option values; the
-list may only shrink: a function not on it fails, and so does an entry that no longer exceeds
-(remove it).
+:data:`PENDING` lists the functions still over the limit, to be split into option values (none
+now: the last ones take frozen options dataclasses, ``JointFitOptions``, ``SwarmOptions``,
+``YawOptions``, ...); the list may only shrink: a function not on it fails, and so does an
+entry that no longer exceeds (remove it).
 """
 
 from __future__ import annotations
@@ -33,23 +34,7 @@ MAX_PARAMETERS = 8
 FIT_OPTION_NAMES = frozenset({"gauge", "path_loss", "link_offsets"})
 
 #: Functions (``module:qualified name``) still over the limit, to be split into option values.
-PENDING: frozenset[str] = frozenset({
-    # the least-squares engine (being moved into core/lsq/; its signatures change there)
-    "core/lsq/solver.py:fit_joint",
-    "core/lsq/solver_large.py:solve_large",
-    "core/lsq/solver_large.py:_solve_large",
-    "core/lsq/link_statistics.py:_fill_features",
-    "core/lsq/link_statistics.py:segmented_link_statistics",
-    # planning and reading, with public keyword arguments
-    "analysis/headings.py:best_yaw",
-    "analysis/headings.py:best_swarm_headings",
-    "analysis/swarm.py:predict_swarm",
-    "integrations/sionna.py:add_link",
-    "io/mavlink.py:read_mavlink",
-    "io/rosbag.py:read_rosbag",
-    "workflows/planning.py:plan_campaign",
-    "workflows/logs.py:swarm_links",  # forwards **swarm_options to predict_swarm
-})
+PENDING: frozenset[str] = frozenset()
 
 
 def _is_solver_entry(module: str) -> bool:

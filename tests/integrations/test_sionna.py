@@ -30,6 +30,7 @@ from rplearn.integrations import (
     register_pattern,
     sionna_orientation,
 )
+from rplearn.integrations.sionna import SceneLinkOptions
 from rplearn.models.patterns import PatternSet
 from rplearn.models.training import TrainingSummary
 
@@ -79,7 +80,7 @@ def _geometries(n: int, tilt_rad: float, seed: int = 7) -> tuple[np.ndarray, ...
 def _los_gain_db(rt, model, tx_node, rx_node, tx_p, tx_q, rx_p, rx_q) -> np.ndarray:
     """Sionna's line-of-sight path gain ``|a|^2`` [dB] of pose i -> i, all poses in one scene."""
     scene = rt.load_scene()  # empty: no geometry, only the drones
-    transmitters, receivers = add_link(scene, model, tx_node, rx_node, tx_p, tx_q, rx_p, rx_q)
+    transmitters, receivers = add_link(scene, model, tx_node, rx_node, (tx_p, tx_q), (rx_p, rx_q))
     assert len(transmitters) == len(receivers) == len(tx_p)
     paths = rt.PathSolver()(scene, max_depth=0, los=True, specular_reflection=False,
                             diffuse_reflection=False, refraction=False)
@@ -231,11 +232,18 @@ def test_bad_inputs_are_refused_before_sionna_is_needed():
         register_pattern(model, "A", step_deg=0.0)
     bare = PatternSet(basis=model.basis, nodes=model.nodes, coef=model.coef)
     with pytest.raises(InputError, match="frequency_hz"):
-        add_link(None, bare, "A", "B", [0, 0, 0], [1, 0, 0, 0], [9, 0, 0], [1, 0, 0, 0])
+        add_link(None, bare, "A", "B", ([0, 0, 0], [1, 0, 0, 0]), ([9, 0, 0], [1, 0, 0, 0]))
     with pytest.raises(InputError, match="tx_quat_wxyz"):
-        add_link(None, model, "A", "B", [0, 0, 0], [1, 0, 0], [9, 0, 0], [1, 0, 0, 0])
+        add_link(None, model, "A", "B", ([0, 0, 0], [1, 0, 0]), ([9, 0, 0], [1, 0, 0, 0]))
     with pytest.raises(InputError, match="rx_quat_wxyz"):  # refused before the scene is touched
-        add_link(None, model, "A", "B", [0, 0, 0], [1, 0, 0, 0], [9, 0, 0], [np.nan, 0, 0, 0])
+        add_link(None, model, "A", "B", ([0, 0, 0], [1, 0, 0, 0]), ([9, 0, 0], [np.nan, 0, 0, 0]))
+    with pytest.raises(InputError, match="rx_pose: expected a pair"):
+        add_link(None, model, "A", "B", ([0, 0, 0], [1, 0, 0, 0]), [9, 0, 0])
+    for bad, field in (({"frequency_hz": -1.0}, "frequency_hz"), ({"step_deg": float("nan")}, "step_deg"),
+                       ({"prefix": 3}, "prefix")):
+        with pytest.raises(InputError) as err:
+            SceneLinkOptions(**bad)
+        assert err.value.param == field and "\n" not in str(err.value)
 
 
 def test_a_scene_holds_one_link(rt):
@@ -243,10 +251,13 @@ def test_a_scene_holds_one_link(rt):
     the first one's transmitters its antenna, so it is refused; more poses of the same link are fine."""
     model = _model()
     scene = rt.load_scene()
-    add_link(scene, model, "A", "B", [0, 0, 20], [1, 0, 0, 0], [40, 0, 20], [1, 0, 0, 0], prefix="p1_")
-    add_link(scene, model, "A", "B", [0, 5, 20], [1, 0, 0, 0], [40, 5, 20], [1, 0, 0, 0], prefix="p2_")
+    add_link(scene, model, "A", "B", ([0, 0, 20], [1, 0, 0, 0]), ([40, 0, 20], [1, 0, 0, 0]),
+             SceneLinkOptions(prefix="p1_"))
+    add_link(scene, model, "A", "B", ([0, 5, 20], [1, 0, 0, 0]), ([40, 5, 20], [1, 0, 0, 0]),
+             SceneLinkOptions(prefix="p2_"))
     with pytest.raises(InputError, match="already holds the link A -> B") as err:
-        add_link(scene, model, "B", "A", [0, 0, 20], [1, 0, 0, 0], [40, 0, 20], [1, 0, 0, 0], prefix="l2_")
+        add_link(scene, model, "B", "A", ([0, 0, 20], [1, 0, 0, 0]), ([40, 0, 20], [1, 0, 0, 0]),
+                 SceneLinkOptions(prefix="l2_"))
     assert err.value.param == "scene"
     assert sorted(scene.transmitters) == ["p1_tx0", "p2_tx0"]
 

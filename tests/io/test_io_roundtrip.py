@@ -12,7 +12,7 @@ from rplearn.data.tables import MATCHED_COLUMNS
 from rplearn.io import ReaderOptions, detect_format, read_logs
 from rplearn.io.files import write_table
 from rplearn.io.pcap import read_pcap
-from rplearn.io.rosbag import read_rosbag
+from rplearn.io.rosbag import RosbagOptions, read_rosbag
 from rplearn.io.tables import read_pose_table, read_signal_table
 
 
@@ -58,7 +58,7 @@ def test_rosbag_round_trip(tmp_path, flight, reference, kind):
     assert detect_format(path) == ("ros1" if kind == "ros1" else "ros2")
     logs, meta = read_rosbag(
         path, POSE_TOPICS, RSSI_TOPICS, rssi_field="rssi_dbm", tx_power_dbm=TX_POWER_DBM,
-        frequency_hz=FREQUENCY_HZ, msg_definitions={RSSI_MSG: RSSI_MSGDEF},
+        frequency_hz=FREQUENCY_HZ, options=RosbagOptions(msg_definitions={RSSI_MSG: RSSI_MSGDEF}),
     )
     assert meta["format"] == ("ros1" if kind == "ros1" else "ros2")
     assert meta["topics"]["/A/odom"] == int((pose["node"] == "A").sum())
@@ -74,7 +74,7 @@ def test_rosbag_custom_type_from_definition_file(tmp_path, flight):
     msg_file.write_text(RSSI_MSGDEF)
     logs, _ = read_rosbag(path, POSE_TOPICS, RSSI_TOPICS, rssi_field="rssi_dbm",
                           tx_power_dbm=20.0, frequency_hz=2.4e9,
-                          msg_definitions={RSSI_MSG: str(msg_file)})
+                          options=RosbagOptions(msg_definitions={RSSI_MSG: str(msg_file)}))
     np.testing.assert_array_equal(np.sort(logs.signal["rssi_dbm"]), np.sort(sig.iloc[::10]["rssi_dbm"]))
     from rplearn.errors import InputError
 
@@ -146,9 +146,9 @@ def test_ros2_bag_without_embedded_definitions(tmp_path, flight):
     assert "msg_definitions=" in str(e.value) and "\n" not in str(e.value)
     with pytest.raises(InputError, match="missing.msg: no such file"):
         read_rosbag(path, POSE_TOPICS, RSSI_TOPICS, rssi_field="rssi_dbm", tx_power_dbm=20.0,
-                    frequency_hz=2.4e9, msg_definitions={RSSI_MSG: "missing.msg"})
+                    frequency_hz=2.4e9, options=RosbagOptions(msg_definitions={RSSI_MSG: "missing.msg"}))
     logs, _ = read_rosbag(path, POSE_TOPICS, RSSI_TOPICS, rssi_field="rssi_dbm", tx_power_dbm=20.0,
-                          frequency_hz=2.4e9, msg_definitions={RSSI_MSG: RSSI_MSGDEF})
+                          frequency_hz=2.4e9, options=RosbagOptions(msg_definitions={RSSI_MSG: RSSI_MSGDEF}))
     assert len(logs.signal) == len(sig.iloc[::20])
     assert len(logs.pose) == len(pose.iloc[::20])
 
@@ -163,3 +163,14 @@ def test_synthetic_fallback_flight_round_trips(tmp_path):
     amap = {mac: node for node, mac in MAC.items()}
     got = pd.concat([read_pcap(str(p), rx, TX_POWER_DBM, address_map=amap)[0] for rx, p in caps.items()])
     assert_same_matched(synchronise(pose, got).dataset, want)
+
+
+@pytest.mark.parametrize("bad, field", [({"tx_power_field": ""}, "tx_power_field"), ({"frequency_field": 5}, "frequency_field"),
+                                        ({"msg_definitions": "Type.msg"}, "msg_definitions"),
+                                        ({"time_source": "wall"}, "time_source")])
+def test_rosbag_options_refuse_a_bad_value_naming_it(bad, field):
+    from rplearn.errors import InputError
+
+    with pytest.raises(InputError) as err:
+        RosbagOptions(**bad)
+    assert err.value.param == field and "\n" not in str(err.value)

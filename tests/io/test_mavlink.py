@@ -13,7 +13,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from rplearn.core.geometry import rotate_body_to_world
 from rplearn.errors import LogFormatError, RplearnError
-from rplearn.io.mavlink import dataflash_cut_off_at, read_mavlink, sik_rssi_to_dbm
+from rplearn.io.mavlink import MavlinkOptions, dataflash_cut_off_at, read_mavlink, sik_rssi_to_dbm
 
 DATA = Path(__file__).resolve().parents[1] / "fixtures" / "ardupilot"
 TLOG_1 = DATA / "mavlink-log_2013-10-13_16-58-51.tlog"
@@ -210,7 +210,7 @@ def test_round_trip_attitude_position_and_dbm(tmp_path):
 def test_round_trip_tilts(tmp_path, roll, pitch, body_axis, world_z):
     path = _write_tlog(tmp_path / "tilt.tlog", roll=roll, pitch=pitch, yaw=0.0)
     logs, _ = read_mavlink(path, tx_power_dbm=20.0, frequency_hz=915e6, vehicle="drone",
-                           station_geodetic=(47.0, 8.0, 505.0))
+                           options=MavlinkOptions(station_geodetic=(47.0, 8.0, 505.0)))
     q = logs.pose.loc[logs.pose["node"] == "drone", ["qw", "qx", "qy", "qz"]].to_numpy()[0]
     v = rotate_body_to_world(q, np.array(body_axis, float))
     assert v[2] == pytest.approx(world_z, abs=1e-6)
@@ -272,13 +272,17 @@ def test_bad_arguments(tmp_path):
         read_mavlink(path, tx_power_dbm=20.0, frequency_hz=-1.0)
     assert exc.value.param == "frequency_hz"
     with pytest.raises(RplearnError) as exc:
-        read_mavlink(path, tx_power_dbm=20.0, frequency_hz=915e6, system_id=7)
+        read_mavlink(path, tx_power_dbm=20.0, frequency_hz=915e6, options=MavlinkOptions(system_id=7))
     assert exc.value.param == "system_id"
-    for bad in ({"frequency_hz": 915.0}, {"tx_power_dbm": 1e6}, {"station": ""},
-                {"station_geodetic": (41.0, -96.0)}, {"origin_geodetic": (100.0, 0.0, 0.0)}):
+    for bad in ({"frequency_hz": 915.0}, {"tx_power_dbm": 1e6}, {"station": ""}):
         args = {"tx_power_dbm": 20.0, "frequency_hz": 915e6, **bad}
         with pytest.raises(RplearnError) as exc:
             read_mavlink(BIN, **args)
+        assert exc.value.param == next(iter(bad)) and "\n" not in str(exc.value)
+    for bad in ({"station_geodetic": (41.0, -96.0)}, {"origin_geodetic": (100.0, 0.0, 0.0)}, {"system_id": 300},
+                {"station_heading_deg": "east"}, {"max_gap_s": 0.0}, {"stream_timeout_s": float("nan")}):
+        with pytest.raises(RplearnError) as exc:
+            MavlinkOptions(**bad)
         assert exc.value.param == next(iter(bad)) and "\n" not in str(exc.value)
 
 

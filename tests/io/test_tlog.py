@@ -18,7 +18,7 @@ from rplearn.errors import InputError
 from rplearn.io import ReaderOptions, read_logs
 from rplearn.io._common import Logs
 from rplearn.io.files import read_table, write_table
-from rplearn.io.mavlink import SIK_UNITS_PER_DB, read_mavlink
+from rplearn.io.mavlink import SIK_UNITS_PER_DB, MavlinkOptions, read_mavlink
 from rplearn.io.tlog import dbm_to_sik_rssi, write_tlog
 
 ORIGIN = (47.3977, 8.5456, 488.0)  # lat, lon [deg], alt [m AMSL] of the simulation's ENU origin
@@ -87,14 +87,13 @@ def test_simulated_flight_as_tlog_gives_the_same_matched_dataset(flight):
 
 def test_station_heading_sets_the_station_attitude(flight):
     folder, _, _ = flight
-    logs, meta = read_mavlink(folder / "flight.tlog", 20.0, 2.412e9, vehicle="D", station="G",
-                              station_heading_deg=80.0)
+    logs, meta = read_mavlink(folder / "flight.tlog", 20.0, 2.412e9, "D", "G", MavlinkOptions(station_heading_deg=80.0))
     row = logs.pose[logs.pose["node"] == "G"]
     q = quat_wxyz_from_yaw(np.radians(STATION_YAW_ENU_DEG))
     assert len(row) == 1 and _angle_deg(row[["qw", "qx", "qy", "qz"]].to_numpy(), q[None, :])[0] < 1e-9
     assert "HOME_POSITION" in meta["station_note"]
     with pytest.raises(InputError) as err:
-        read_mavlink(folder / "flight.tlog", 20.0, 2.412e9, station_heading_deg=float("nan"))
+        read_mavlink(folder / "flight.tlog", 20.0, 2.412e9, options=MavlinkOptions(station_heading_deg=float("nan")))
     assert err.value.param == "station_heading_deg"
 
 
@@ -194,8 +193,7 @@ def test_the_station_heading_and_clock_offset_are_returned_for_the_reader(tmp_pa
                          origin_geodetic=ORIGIN, system_id=np.int64(7))
     assert abs(written["station_heading_deg"] - (90.0 - STATION_YAW_ENU_DEG)) < 2.0
     assert 0.05 < written["station_spread_m"] < 2.0
-    logs, meta = read_mavlink(tmp_path / "a.tlog", 20.0, 2.412e9, vehicle="D", station="G",
-                              origin_geodetic=ORIGIN)
+    logs, meta = read_mavlink(tmp_path / "a.tlog", 20.0, 2.412e9, "D", "G", MavlinkOptions(origin_geodetic=ORIGIN))
     assert meta["system_id"] == 7
     np.testing.assert_allclose(np.sort(logs.signal["t"].to_numpy()) - written["clock_offset_s"],
                                np.sort(signal["t"].to_numpy()), atol=2e-6)

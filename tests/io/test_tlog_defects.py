@@ -20,7 +20,7 @@ from rplearn.errors import InputError
 from rplearn.io import ReaderOptions, read_logs
 from rplearn.io._common import Logs
 from rplearn.io.dataflash_writer import write_dataflash
-from rplearn.io.mavlink import read_mavlink
+from rplearn.io.mavlink import MavlinkOptions, read_mavlink
 from rplearn.io.tlog import TlogDefects, write_tlog
 from rplearn.models import ModelSpec, fit_model
 
@@ -74,7 +74,7 @@ def _sim_time(t_log, w, ground):
 def test_periods_before_the_origin_and_after_a_reboot_are_excluded_counted_and_named(ground, written):
     _, _, broken, _, w = written
     assert w["home_position"] == 2 and w["silent_rows"] > 0 and w["invalid_position_rows"] > 0
-    logs, meta = read_mavlink(broken, 20.0, 2.412e9, vehicle="D", station="G", origin_geodetic=ORIGIN)
+    logs, meta = read_mavlink(broken, 20.0, 2.412e9, "D", "G", MavlinkOptions(origin_geodetic=ORIGIN))
     periods = meta["excluded_periods"]
     assert [p["reason"] for p in periods] == ["before_valid_position", "after_reboot"]
     assert meta["reboots"] == 1
@@ -102,7 +102,7 @@ def test_periods_before_the_origin_and_after_a_reboot_are_excluded_counted_and_n
 
 def test_a_clean_simulated_tlog_has_no_excluded_period(written):
     _, clean, _, w, _ = written
-    logs, meta = read_mavlink(clean, 20.0, 2.412e9, vehicle="D", station="G", origin_geodetic=ORIGIN)
+    logs, meta = read_mavlink(clean, 20.0, 2.412e9, "D", "G", MavlinkOptions(origin_geodetic=ORIGIN))
     assert meta["excluded_periods"] == [] and meta["reboots"] == 0
     assert meta["signal"]["duplicate_reading"] == 0
     assert not any("excluded" in n or "merged" in n for n in meta["notes"])
@@ -166,7 +166,7 @@ def test_readings_written_twice_give_one_row_each(ground, tmp_path, fmt):
     path = tmp_path / ("twice.tlog" if fmt == "tlog" else "twice.bin")
     writer = write_tlog if fmt == "tlog" else write_dataflash
     writer(flight, path, vehicle="D", station="G", origin_geodetic=ORIGIN, defects=TlogDefects(radio_twice=True))
-    logs, meta = read_mavlink(path, 20.0, 2.412e9, vehicle="D", station="G", origin_geodetic=ORIGIN)
+    logs, meta = read_mavlink(path, 20.0, 2.412e9, "D", "G", MavlinkOptions(origin_geodetic=ORIGIN))
     n = len(flight.signal)
     copies = meta["messages"].get("RADIO", 0) if fmt == "tlog" else meta["messages"]["RAD"] - n
     assert copies == n and meta["signal"]["duplicate_reading"] == n
@@ -179,7 +179,7 @@ def test_readings_written_twice_give_one_row_each(ground, tmp_path, fmt):
     # written once, nothing is merged
     once = tmp_path / ("once.tlog" if fmt == "tlog" else "once.bin")
     writer(flight, once, vehicle="D", station="G", origin_geodetic=ORIGIN)
-    logs1, meta1 = read_mavlink(once, 20.0, 2.412e9, vehicle="D", station="G", origin_geodetic=ORIGIN)
+    logs1, meta1 = read_mavlink(once, 20.0, 2.412e9, "D", "G", MavlinkOptions(origin_geodetic=ORIGIN))
     assert meta1["signal"]["duplicate_reading"] == 0 and len(logs1.signal) == n
 
 
@@ -188,7 +188,7 @@ def test_dataflash_positions_before_the_origin_are_excluded(ground, tmp_path):
     path = tmp_path / "early.bin"
     w = write_dataflash(flight, path, vehicle="D", station="G", origin_geodetic=ORIGIN,
                         defects=TlogDefects(invalid_until_s=60.0))
-    logs, meta = read_mavlink(path, 20.0, 2.412e9, vehicle="D", station="G", origin_geodetic=ORIGIN)
+    logs, meta = read_mavlink(path, 20.0, 2.412e9, "D", "G", MavlinkOptions(origin_geodetic=ORIGIN))
     (period,) = meta["excluded_periods"]
     assert period["reason"] == "before_valid_position" and "no ORGN until 60.0 s" in period["detail"]
     assert period["pose_rows"] == w["invalid_position_rows"] == meta["dropped"]["before_valid_position"]
@@ -226,7 +226,7 @@ def test_a_dataflash_reboot_is_counted_and_excluded_until_the_origin_is_set_agai
         parts.append(path.read_bytes())
     both = tmp_path / "both.bin"
     both.write_bytes(parts[0] + parts[1])  # the second boot's FMT records again, as a new log would
-    logs, meta = read_mavlink(both, 20.0, 2.412e9, vehicle="D", station="G", origin_geodetic=ORIGIN)
+    logs, meta = read_mavlink(both, 20.0, 2.412e9, "D", "G", MavlinkOptions(origin_geodetic=ORIGIN))
     assert meta["reboots"] == 1
     (period,) = meta["excluded_periods"]
     assert period["reason"] == "after_reboot" and "reboot" in period["detail"] and "no ORGN until" in period["detail"]

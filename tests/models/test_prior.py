@@ -129,12 +129,12 @@ def test_predictions_say_where_the_flight_never_looked(tmp_path):
 
 
 def test_orient_cautions_when_the_best_heading_looks_where_the_flight_never_did(tmp_path):
-    from rplearn.analysis.headings import best_yaw
+    from rplearn.analysis.headings import YawOptions, best_yaw
 
     per_unit, _, _, _ = ground_case(tmp_path, 4)
     model = fit_auto(per_unit)[0].model
     # the station kept at its flown heading (10 deg), a drone on the flown arc: the station end is covered
-    seen = best_yaw(model, "G", "D", (0.0, 0.0, 1.5), (40.0, 7.0, 20.0), turn="rx", tx_yaw_deg=10.0)
+    seen = best_yaw(model, "G", "D", (0.0, 0.0, 1.5), (40.0, 7.0, 20.0), turn="rx", options=YawOptions(tx_yaw_deg=10.0))
     assert seen.coverage_deg is not None and seen.coverage_deg[0] < 10
     # a drone behind the station and high up: nothing like it was flown
     unseen = best_yaw(model, "G", "D", (0.0, 0.0, 1.5), (-40.0, 0.0, 60.0), turn="tx")
@@ -144,13 +144,13 @@ def test_orient_cautions_when_the_best_heading_looks_where_the_flight_never_did(
 def test_swarm_links_carry_their_coverage(tmp_path):
     import pandas as pd
 
-    from rplearn.analysis.swarm import predict_swarm
+    from rplearn.analysis.swarm import SwarmOptions, predict_swarm
 
     per_unit, _, _, _ = ground_case(tmp_path, 5)
     model = fit_auto(per_unit)[0].model
     poses = pd.read_parquet(tmp_path / "f" / "pose_log.parquet")
     far = poses.assign(x=poses["x"] * -1.0)  # the drone flown behind the station: never learned
-    seen, unseen = (predict_swarm(model, p, 20.0, step_s=5.0) for p in (poses, far))
+    seen, unseen = (predict_swarm(model, p, 20.0, SwarmOptions(step_s=5.0)) for p in (poses, far))
     for pred in (seen, unseen):
         assert {"tx_coverage_deg", "rx_coverage_deg"} <= set(pred.links.columns)
     assert (seen.links[["tx_coverage_deg", "rx_coverage_deg"]].max(axis=1) <= 10).mean() > 0.8
@@ -162,7 +162,7 @@ def test_orient_prefers_headings_the_flight_saw(tmp_path):
     and are surer than the headings the prediction alone picks, for little predicted gain."""
     import numpy as np
 
-    from rplearn.analysis.headings import best_yaw
+    from rplearn.analysis.headings import YawOptions, best_yaw
 
     per_unit, _, _, _ = ground_case(tmp_path, 4)
     model = fit_auto(per_unit)[0].model
@@ -171,7 +171,7 @@ def test_orient_prefers_headings_the_flight_saw(tmp_path):
     lost = []
     for _ in range(20):
         drone = (rng.uniform(-60, 60), rng.uniform(-60, 60), rng.uniform(10, 60))
-        bold = best_yaw(model, "G", "D", (0.0, 0.0, 1.5), drone, turn="tx", caution_z=0.0)
+        bold = best_yaw(model, "G", "D", (0.0, 0.0, 1.5), drone, turn="tx", options=YawOptions(caution_z=0.0))
         safe = best_yaw(model, "G", "D", (0.0, 0.0, 1.5), drone, turn="tx")
         nearer += safe.coverage_deg[0] <= bold.coverage_deg[0]
         surer += safe.gain_std_db <= bold.gain_std_db + 1e-9
@@ -179,4 +179,4 @@ def test_orient_prefers_headings_the_flight_saw(tmp_path):
     assert nearer >= 18 and surer == 20, (nearer, surer)
     assert 0 <= np.median(lost) < 1.0, lost
     with pytest.raises(Exception, match="caution_z"):
-        best_yaw(model, "G", "D", (0.0, 0.0, 1.5), (30.0, 0.0, 20.0), caution_z=-1.0)
+        best_yaw(model, "G", "D", (0.0, 0.0, 1.5), (30.0, 0.0, 20.0), options=YawOptions(caution_z=-1.0))

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from matplotlib.image import imread
 
-from rplearn.analysis.headings import best_yaw
+from rplearn.analysis.headings import YawOptions, best_yaw
 from rplearn.analysis.identifiability import identifiability_study
 from rplearn.analysis.sweep import order_sweep
 from rplearn.core.sh import SphericalHarmonics, sh_index
@@ -118,17 +118,18 @@ def test_best_yaw_reports_the_received_power_before_and_after():
     coef = np.zeros((2, 4))
     coef[0, sh_index(1, 1)] = 10.0
     model = PatternSet(b, ("A", "B"), coef, training=TrainingSummary(frequency_hz=2.4e9))
-    r = best_yaw(model, "A", "B", [0, 0, 10], [0, 20, 10], turn="both", tx_yaw_deg=-90.0, tx_power_dbm=20.0)
+    r = best_yaw(model, "A", "B", [0, 0, 10], [0, 20, 10], "both", YawOptions(tx_yaw_deg=-90.0, tx_power_dbm=20.0))
     assert r.distance_m == pytest.approx(20.0) and r.frequency_hz == 2.4e9
     assert r.rssi_dbm == pytest.approx(float(received_power_dbm(20.0, r.gain_db, 20.0, 2.4e9)))
     assert r.baseline_rssi_dbm == pytest.approx(float(received_power_dbm(20.0, r.baseline_gain_db, 20.0, 2.4e9)))
     assert r.rssi_dbm - r.baseline_rssi_dbm == pytest.approx(r.gain_db - r.baseline_gain_db)
     assert "dBm now ->" in r.summary()
     # the given frequency wins; without one and without the model's, the parameter is named
-    assert best_yaw(model, "A", "B", [0, 0, 10], [0, 20, 10], tx_power_dbm=20.0, frequency_hz=5.8e9).frequency_hz == 5.8e9
+    tuned = best_yaw(model, "A", "B", [0, 0, 10], [0, 20, 10], options=YawOptions(tx_power_dbm=20.0, frequency_hz=5.8e9))
+    assert tuned.frequency_hz == 5.8e9
     bare = PatternSet(b, ("A", "B"), coef)
     with pytest.raises(InputError, match=r"\(frequency_hz\)") as info:
-        best_yaw(bare, "A", "B", [0, 0, 10], [0, 20, 10], tx_power_dbm=20.0)
+        best_yaw(bare, "A", "B", [0, 0, 10], [0, 20, 10], options=YawOptions(tx_power_dbm=20.0))
     assert info.value.param == "frequency_hz"
 
 

@@ -13,6 +13,8 @@ from .clock import estimate_clock_offset as estimate_clock_offset
 from .decoupling import DecouplingCertificate as DecouplingCertificate
 from .decoupling import certify as certify
 from .decoupling import decoupling_certificate as decoupling_certificate
+from .heading_options import SwarmHeadingOptions as SwarmHeadingOptions
+from .heading_options import YawOptions as YawOptions
 from .headings import OrientationResult as OrientationResult
 from .headings import SwarmHeadings as SwarmHeadings
 from .headings import best_swarm_headings as best_swarm_headings
@@ -26,6 +28,7 @@ from .pattern_error import gauged_nodes as gauged_nodes
 from .pattern_error import node_directions as node_directions
 from .pattern_error import pattern_errors_db as pattern_errors_db
 from .swarm import DEFAULT_MIN_RSSI_DBM as DEFAULT_MIN_RSSI_DBM
+from .swarm import SwarmOptions as SwarmOptions
 from .swarm import SwarmPrediction as SwarmPrediction
 from .swarm import connectivity_over_time as connectivity_over_time
 from .swarm import predict_swarm as predict_swarm

@@ -28,6 +28,9 @@ import pandas as pd
 from numpy.typing import ArrayLike
 
 from rplearn._argtypes import check_types
+
+# CAUTION_Z: the default caution, documented here
+from rplearn.analysis.heading_options import CAUTION_Z, SwarmHeadingOptions, YawOptions  # noqa: F401
 from rplearn.analysis.heading_search import EXHAUSTIVE_MAX_COMBINATIONS, search  # noqa: F401 (the constant is documented here)
 from rplearn.analysis.swarm import maximum_spanning_edges, resolve_patterns
 from rplearn.core.geometry import direction_in_body, distance_m, quat_wxyz_from_yaw
@@ -132,9 +135,6 @@ def heading_std_tables(
             for (a, b), (az, el) in _pair_directions(positions, yaw_grid_deg).items()}
 
 
-#: Default of ``best_yaw(caution_z=...)``: headings are ranked by the 10% lower bound of their
-#: gain (prediction minus 1.28 standard errors of each end).
-CAUTION_Z = 1.28
 
 
 # -------------------------------------------------------------------------------------------
@@ -212,12 +212,7 @@ def best_yaw(
     tx_position_xyz: Sequence[float],
     rx_position_xyz: Sequence[float],
     turn: str = "tx",
-    tx_yaw_deg: float = 0.0,
-    rx_yaw_deg: float = 0.0,
-    step_deg: float = 1.0,
-    tx_power_dbm: float | None = None,
-    frequency_hz: float | None = None,
-    caution_z: float = CAUTION_Z,
+    options: YawOptions | None = None,
 ) -> OrientationResult:
     """Heading(s) of level drones at given ENU positions that maximise the predicted joint gain.
 
@@ -233,17 +228,18 @@ def best_yaw(
     tx_position_xyz, rx_position_xyz : sequence of float
         Positions, ENU [m].
     turn : {"tx", "rx", "both"}
-        Which drone may turn; the other keeps its given yaw (ENU, ccw from east) [deg].
-    step_deg : float
-        Yaw grid [deg].
-    tx_power_dbm : float, optional
-        Transmit power [dBm]; given, the result carries the received power before and after.
-    frequency_hz : float, optional
-        Carrier for the received power [Hz]; by default the one the model was learned at.
-    caution_z : float
-        Standard errors subtracted when ranking (:data:`CAUTION_Z`: the 10% lower bound); 0
-        ranks by the prediction alone. Ignored for a model without a covariance.
+        Which drone may turn; the other keeps its given yaw (``options.tx_yaw_deg``,
+        ``options.rx_yaw_deg``: ENU, ccw from east [deg]).
+    options : YawOptions, optional
+        Current yaws, yaw grid, transmit power, carrier and caution (default ``YawOptions()``).
+
+    Examples
+    --------
+    >>> best_yaw(model, "A", "B", [0, 0, 10], [0, 20, 10], "both", YawOptions(tx_power_dbm=20))  # doctest: +SKIP
     """
+    options = YawOptions() if options is None else options
+    tx_yaw_deg, rx_yaw_deg, step_deg = options.tx_yaw_deg, options.rx_yaw_deg, options.step_deg
+    tx_power_dbm, frequency_hz, caution_z = options.tx_power_dbm, options.frequency_hz, options.caution_z
     require_patterns(model, "choosing a heading")
     if not (np.isfinite(caution_z) and caution_z >= 0):
         raise InputError(f"caution_z: expected a non-negative number, got {caution_z!r}", param="caution_z")
@@ -442,22 +438,17 @@ def best_swarm_headings(
     model: PatternSet,
     positions: Mapping[str, ArrayLike],
     tx_power_dbm: float,
-    frequency_hz: float | None = None,
-    pattern_of: Mapping[str, str] | None = None,
-    start_yaw_deg: Mapping[str, float] | None = None,
-    fixed: Sequence[str] = (),
-    step_deg: float = 5.0,
-    max_sweeps: int = 20,
-    restarts: int = 8,
+    options: SwarmHeadingOptions | None = None,
 ) -> SwarmHeadings:
     """Yaws of hovering, level drones that maximise the swarm's bottleneck RSSI.
 
-    On a yaw grid of ``step_deg``, maximising the bottleneck and, among equal bottlenecks, the
-    mean pair RSSI. Up to three drones the search is exhaustive (the global optimum on the
-    grid) when the grid has at most :data:`EXHAUSTIVE_MAX_COMBINATIONS` combinations (72^3 at
-    the default 5 deg). Otherwise coordinate ascent (each drone in turn takes its best yaw with the others
-    held, until a sweep changes nothing) from the current yaws and from ``restarts`` seeded
-    random ones: a local optimum. Either way the result is never worse than the current yaws.
+    On a yaw grid of ``options.step_deg``, maximising the bottleneck and, among equal
+    bottlenecks, the mean pair RSSI. Up to three drones the search is exhaustive (the global
+    optimum on the grid) when the grid has at most :data:`EXHAUSTIVE_MAX_COMBINATIONS`
+    combinations (72^3 at the default 5 deg). Otherwise coordinate ascent (each drone in turn
+    takes its best yaw with the others held, until a sweep changes nothing) from the current
+    yaws and from ``options.restarts`` seeded random ones: a local optimum. Either way the
+    result is never worse than the current yaws.
 
     Parameters
     ----------
@@ -467,19 +458,17 @@ def best_swarm_headings(
         Drone -> hover position ``(x, y, z)``, ENU [m].
     tx_power_dbm : float
         Transmit power of every drone [dBm].
-    frequency_hz : float, optional
-        Carrier [Hz]; by default the one the model was learned at.
-    pattern_of : mapping, optional
-        Drone -> learned node whose antenna it carries (default: its own id).
-    start_yaw_deg : mapping, optional
-        Current yaws, ENU counter-clockwise from east [deg] (default 0).
-    fixed : sequence of str
-        Drones that keep their current yaw.
-    step_deg : float
-        Yaw grid [deg].
-    max_sweeps, restarts : int
-        Limits of the coordinate ascent (four drones or more).
+    options : SwarmHeadingOptions, optional
+        Carrier, which antenna each drone carries, current and fixed yaws, yaw grid and search
+        limits (default ``SwarmHeadingOptions()``).
+
+    Examples
+    --------
+    >>> best_swarm_headings(model, positions, 20, SwarmHeadingOptions(pattern_of={"C": "A"}))  # doctest: +SKIP
     """
+    options = SwarmHeadingOptions() if options is None else options
+    frequency_hz, pattern_of, start_yaw_deg = options.frequency_hz, options.pattern_of, options.start_yaw_deg
+    fixed, step_deg, max_sweeps, restarts = options.fixed, options.step_deg, options.max_sweeps, options.restarts
     require_patterns(model, "choosing headings")
     frequency_hz = model_frequency_hz(model, frequency_hz)
     grid = yaw_grid_deg(step_deg)

@@ -49,6 +49,63 @@ DEFAULT_MAX_GAP_S = 2.0
 
 @check_types
 @dataclass(frozen=True)
+class SwarmOptions:
+    """How :func:`predict_swarm` predicts a swarm's links (everything but the model, the poses
+    and the transmit power).
+
+    Attributes
+    ----------
+    frequency_hz : float, optional
+        Carrier [Hz]; by default the one the model was learned at.
+    pattern_of : mapping, optional
+        Drone -> learned node whose pattern it carries; drones not named use their own id.
+    min_rssi_dbm : float
+        RSSI a link needs in each direction to be up [dBm].
+    step_s, times_s
+        Prediction times: a grid of ``step_s`` [s] over the common span, or these times [s].
+    max_gap_s : float
+        Longest log gap a pose is interpolated across [s]; a drone is absent inside longer ones.
+
+    Raises
+    ------
+    InputError
+        On the first invalid option, naming it (``param``).
+    """
+
+    frequency_hz: float | None = None
+    pattern_of: Mapping[str, str] | None = None
+    min_rssi_dbm: float = DEFAULT_MIN_RSSI_DBM
+    step_s: float = DEFAULT_STEP_S
+    times_s: ArrayLike | None = None
+    max_gap_s: float = DEFAULT_MAX_GAP_S
+
+    def __post_init__(self) -> None:
+        if self.frequency_hz is not None and not (_is_number(self.frequency_hz) and self.frequency_hz > 0):
+            raise InputError(f"frequency_hz: expected a positive frequency in Hz, got {self.frequency_hz!r}",
+                             param="frequency_hz")
+        if self.pattern_of is not None:
+            if not isinstance(self.pattern_of, Mapping):
+                raise InputError(f"pattern_of: expected a mapping drone -> node, got {self.pattern_of!r}",
+                                 param="pattern_of")
+            object.__setattr__(self, "pattern_of", {str(d): str(n) for d, n in self.pattern_of.items()})
+        if not _is_number(self.min_rssi_dbm):
+            raise InputError(f"min_rssi_dbm: expected a finite number of dBm, got {self.min_rssi_dbm!r}",
+                             param="min_rssi_dbm")
+        if self.times_s is None and not (_is_number(self.step_s) and self.step_s > 0):
+            raise InputError(f"step_s: expected a positive number of seconds, got {self.step_s!r}", param="step_s")
+        if not (_is_number(self.max_gap_s) and self.max_gap_s > 0):
+            raise InputError(f"max_gap_s: expected a positive number of seconds, got {self.max_gap_s!r}",
+                             param="max_gap_s")
+
+
+def _is_number(value: Any) -> bool:
+    """A finite real number (not a bool)."""
+    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool) and bool(
+        np.isfinite(value))
+
+
+@check_types
+@dataclass(frozen=True)
 class SwarmPrediction:
     """Predicted links of a swarm and its connectivity over time.
 
@@ -181,12 +238,7 @@ def predict_swarm(
     model: PatternSet,
     pose_log: pd.DataFrame,
     tx_power_dbm: float,
-    frequency_hz: float | None = None,
-    pattern_of: Mapping[str, str] | None = None,
-    step_s: float = DEFAULT_STEP_S,
-    times_s: ArrayLike | None = None,
-    min_rssi_dbm: float = DEFAULT_MIN_RSSI_DBM,
-    max_gap_s: float = DEFAULT_MAX_GAP_S,
+    options: SwarmOptions | None = None,
     source: str = "pose log",
 ) -> SwarmPrediction:
     """Predict every ordered link of a swarm over time, and whether the swarm is connected.
@@ -199,17 +251,19 @@ def predict_swarm(
         Canonical pose log (``t, node, x, y, z, qw, qx, qy, qz``; ENU [m], FLU->ENU quaternions).
     tx_power_dbm : float
         Transmit power of every drone [dBm].
-    frequency_hz : float, optional
-        Carrier [Hz]; by default the one the model was learned at.
-    pattern_of : mapping, optional
-        Drone -> learned node whose pattern it carries; drones not named use their own id.
-    step_s, times_s
-        Prediction times: a grid of ``step_s`` [s] over the common span, or these times [s].
-    min_rssi_dbm : float
-        RSSI a link needs in each direction to be up [dBm].
-    max_gap_s : float
-        Longest log gap a pose is interpolated across [s]; a drone is absent inside longer ones.
+    options : SwarmOptions, optional
+        Carrier, which antenna each drone carries, the RSSI a link needs, the prediction times
+        and the longest pose gap (default ``SwarmOptions()``).
+    source : str
+        What the pose log is (its files), for error messages.
+
+    Examples
+    --------
+    >>> predict_swarm(model, poses, 20, SwarmOptions(pattern_of={"C": "A"}))  # doctest: +SKIP
     """
+    options = SwarmOptions() if options is None else options
+    frequency_hz, pattern_of, min_rssi_dbm = options.frequency_hz, options.pattern_of, options.min_rssi_dbm
+    step_s, times_s, max_gap_s = options.step_s, options.times_s, options.max_gap_s
     require_patterns(model, "predicting a swarm's links")
     frequency_hz = model_frequency_hz(model, frequency_hz)
     _check_link_options(tx_power_dbm, max_gap_s, min_rssi_dbm)

@@ -44,12 +44,15 @@ def trajectory(
     Example: rplearn trajectory --distance 10 --height 20 --loops 5 --max-flight-time 600 -o plan
     """
     from rplearn.plan.trajectory import PlanLimits
-    from rplearn.workflows.planning import PAPER_LEARNING_PSI0_DEG, PAPER_TESTING_PSI0_DEG, plan_campaign
+    from rplearn.workflows.planning import PAPER_LEARNING_PSI0_DEG, PAPER_TESTING_PSI0_DEG, CampaignOptions, plan_campaign
 
-    plan = plan_campaign(
-        out_dir, floats(psi0_deg, "--psi0", "headings in degrees") or PAPER_LEARNING_PSI0_DEG,
+    campaign = CampaignOptions(
+        floats(psi0_deg, "--psi0", "headings in degrees") or PAPER_LEARNING_PSI0_DEG,
         floats(test_psi0_deg, "--test-psi0", "headings in degrees") or PAPER_TESTING_PSI0_DEG,
-        distance_m, height_m, loops, speed_m_s, PlanLimits(max_speed, max_accel, max_flight_time), rate_hz,
+        distance_m, height_m, loops, speed_m_s,
+    )
+    plan = plan_campaign(
+        out_dir, campaign, PlanLimits(max_speed, max_accel, max_flight_time), rate_hz,
         None if not check_model or check_model.lower() == "none" else check_model, wind_m_s,
     )
     table = Table(title="calibration campaign")

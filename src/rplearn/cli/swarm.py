@@ -38,14 +38,13 @@ def links(
 
     Example: rplearn links sh10.json plan_poses.csv --tx-power 20 --as C=A --as D=B --plot links.png -o links.csv
     """
+    from rplearn.analysis.swarm import SwarmOptions
     from rplearn.workflows.logs import swarm_links
 
     readers = reader_options(node, pose_topic=pose_topic, nan_policy=nan_policy, allow_unsorted=allow_unsorted)
     times = floats(at, "--at", "times in seconds")
-    outcome = swarm_links(
-        model_path, poses, output, tx_power_dbm, frequency_hz, readers, connectivity_out, plot_out,
-        pattern_of=pairs(pattern, "--as"), step_s=step_s, times_s=times, min_rssi_dbm=min_rssi_dbm, max_gap_s=max_gap_s,
-    )
+    options = SwarmOptions(frequency_hz, pairs(pattern, "--as"), min_rssi_dbm, step_s, times, max_gap_s)
+    outcome = swarm_links(model_path, poses, output, tx_power_dbm, options, readers, connectivity_out, plot_out)
     for line in outcome.notes:
         say(line)
     if outcome.mismatch is not None:
@@ -74,14 +73,13 @@ def headings(
 
     Example: rplearn headings sh10.json --pos A=0,0,20 --pos B=40,0,20 --pos C=20,30,25 --as C=A --tx-power 20
     """
+    from rplearn.analysis.heading_options import SwarmHeadingOptions
     from rplearn.workflows.logs import swarm_headings
 
     positions = {drone: xyz(text, f"--pos {drone}") for drone, text in pairs(pos, "--pos").items()}
     start = numbers(pairs(yaw, "--yaw"), "--yaw", "DRONE=DEG")
-    result = swarm_headings(
-        model_path, positions, tx_power_dbm, output, frequency_hz=frequency_hz, pattern_of=pairs(pattern, "--as"),
-        start_yaw_deg=start, fixed=split_list(fixed) or (), step_deg=step_deg,
-    )
+    options = SwarmHeadingOptions(frequency_hz, pairs(pattern, "--as"), start, split_list(fixed) or (), step_deg)
+    result = swarm_headings(model_path, positions, tx_power_dbm, output, options)
     say(result.summary())
     if output:
         say(f"wrote {output}")
@@ -110,10 +108,10 @@ def orient(
 
     Example: rplearn orient sh10.json --tx A --rx B --tx-pos 0,0,20 --rx-pos 10,5,25 --turn both
     """
+    from rplearn.analysis.heading_options import YawOptions
     from rplearn.workflows.planning import orient_link
 
-    result = orient_link(
-        model_path, tx, rx, tx_position_xyz=xyz(tx_pos, "--tx-pos"), rx_position_xyz=xyz(rx_pos, "--rx-pos"), turn=turn,
-        tx_yaw_deg=tx_yaw, rx_yaw_deg=rx_yaw, tx_power_dbm=tx_power_dbm, frequency_hz=frequency_hz, caution_z=caution,
-    )
+    options = YawOptions(tx_yaw_deg=tx_yaw, rx_yaw_deg=rx_yaw, tx_power_dbm=tx_power_dbm, frequency_hz=frequency_hz,
+                         caution_z=caution)
+    result = orient_link(model_path, tx, rx, xyz(tx_pos, "--tx-pos"), xyz(rx_pos, "--rx-pos"), turn, options)
     say(result.summary())

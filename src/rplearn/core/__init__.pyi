@@ -56,6 +56,7 @@ from .lsq.solution import FitReport as FitReport
 from .lsq.solution import GaugeNote as GaugeNote
 from .lsq.solution import JointSolution as JointSolution
 from .lsq.solver import DEFAULT_RIDGE as DEFAULT_RIDGE
+from .lsq.solver import JointFitOptions as JointFitOptions
 from .lsq.solver import fit_joint as fit_joint
 from .lsq.solver import identifiability as identifiability
 from .lsq.solver import independent_spread_db as independent_spread_db

@@ -2,6 +2,7 @@
 # in __init__.py, which imports each name's module on first use. Only `from .module import name
 # as name` lines here (tests/test_public_api.py).
 
+from .sionna import SceneLinkOptions as SceneLinkOptions
 from .sionna import SionnaUnavailableError as SionnaUnavailableError
 from .sionna import add_link as add_link
 from .sionna import import_sionna_rt as import_sionna_rt

@@ -72,6 +72,7 @@ import math
 import os
 import platform
 import sysconfig
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -100,6 +101,7 @@ LLVM_FIX = (f"install LLVM 19 (apt-get install libllvm19) or set {LLVM_PATH_VARI
 DEFAULT_STEP_DEG = 0.5
 
 __all__ = [
+    "SceneLinkOptions",
     "SionnaUnavailableError",
     "add_link",
     "import_sionna_rt",
@@ -416,18 +418,54 @@ def _poses(position_xyz: ArrayLike, quat_wxyz: ArrayLike, what: str) -> tuple[Fl
 
 
 @check_types
+@dataclass(frozen=True)
+class SceneLinkOptions:
+    """How :func:`add_link` puts a link into a Sionna scene (besides the nodes and their poses).
+
+    Attributes
+    ----------
+    frequency_hz : float, optional
+        Carrier [Hz]; the model's ``frequency_hz`` by default.
+    step_deg : float
+        Grid step of the pattern tables [deg].
+    prefix : str
+        Prefix of the device names (to add more poses of the same link to a scene; another
+        link needs another scene, since a scene's transmitters share one antenna array).
+
+    Raises
+    ------
+    InputError
+        On the first invalid option, naming it (``param``).
+    """
+
+    frequency_hz: float | None = None
+    step_deg: float = DEFAULT_STEP_DEG
+    prefix: str = ""
+
+    def __post_init__(self) -> None:
+        for name in ("frequency_hz", "step_deg"):
+            value = getattr(self, name)
+            if (value is not None or name == "step_deg") and not _positive(value):
+                raise InputError(f"{name}: expected a positive finite number, got {value!r}", param=name)
+        if not isinstance(self.prefix, str):
+            raise InputError(f"prefix: expected a string, got {self.prefix!r}", param="prefix")
+
+
+def _positive(value: Any) -> bool:
+    """A positive finite real number (not a bool)."""
+    return (isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
+            and math.isfinite(float(value)) and float(value) > 0)
+
+
+@check_types
 def add_link(
     scene: Any,
     model: Any,
     tx_node: str,
     rx_node: str,
-    tx_position_xyz: ArrayLike,
-    tx_quat_wxyz: ArrayLike,
-    rx_position_xyz: ArrayLike,
-    rx_quat_wxyz: ArrayLike,
-    frequency_hz: float | None = None,
-    step_deg: float = DEFAULT_STEP_DEG,
-    prefix: str = "",
+    tx_pose: tuple[ArrayLike, ArrayLike],
+    rx_pose: tuple[ArrayLike, ArrayLike],
+    options: SceneLinkOptions | None = None,
 ) -> tuple[list[Any], list[Any]]:
     """Put the drones of a link into a Sionna scene with their learned antennas and poses.
 
@@ -446,17 +484,11 @@ def add_link(
         See :func:`register_pattern`.
     tx_node, rx_node : str
         Nodes of the model whose patterns the transmitters and receivers carry.
-    tx_position_xyz, rx_position_xyz : array_like, shape (3,) or (n, 3)
-        Positions, ENU [m] (Sionna's scene frame).
-    tx_quat_wxyz, rx_quat_wxyz : array_like, shape (4,) or (n, 4)
-        Attitudes, body (FLU) -> world (ENU) quaternions ``(qw, qx, qy, qz)``.
-    frequency_hz : float, optional
-        Carrier [Hz]; the model's ``frequency_hz`` by default.
-    step_deg : float
-        Grid step of the pattern tables [deg].
-    prefix : str
-        Prefix of the device names (to add more poses of the same link to a scene; another
-        link needs another scene, since a scene's transmitters share one antenna array).
+    tx_pose, rx_pose : (position_xyz, quat_wxyz)
+        Positions, ENU [m] (Sionna's scene frame), shape (3,) or (n, 3); attitudes, body (FLU)
+        -> world (ENU) quaternions ``(qw, qx, qy, qz)``, shape (4,) or (n, 4).
+    options : SceneLinkOptions, optional
+        Carrier, pattern grid step and device name prefix (default ``SceneLinkOptions()``).
 
     Returns
     -------
@@ -468,7 +500,15 @@ def add_link(
     InputError
         Without a frequency, for bad poses (checked before the scene is touched), or when the
         scene already holds another link.
+
+    Examples
+    --------
+    >>> add_link(scene, model, "A", "B", ([0, 0, 20], [1, 0, 0, 0]), ([40, 10, 25], [1, 0, 0, 0]))  # doctest: +SKIP
     """
+    options = SceneLinkOptions() if options is None else options
+    frequency_hz, step_deg, prefix = options.frequency_hz, options.step_deg, options.prefix
+    tx_position_xyz, tx_quat_wxyz = _pose_pair(tx_pose, "tx")
+    rx_position_xyz, rx_quat_wxyz = _pose_pair(rx_pose, "rx")
     f = getattr(model, "frequency_hz", None) if frequency_hz is None else frequency_hz
     if f is None or not (math.isfinite(float(f)) and float(f) > 0):
         raise InputError(f"frequency_hz: expected a positive carrier frequency in Hz (the model states none), got {f!r}",
@@ -488,6 +528,13 @@ def add_link(
     scene._rplearn_link = link
     return (_add(scene, rt.Transmitter, f"{prefix}tx", tx_p, tx_q),
             _add(scene, rt.Receiver, f"{prefix}rx", rx_p, rx_q))
+
+
+def _pose_pair(pose: Any, what: str) -> tuple[ArrayLike, ArrayLike]:
+    """``(position_xyz, quat_wxyz)`` of one end, or an error naming ``{what}_pose``."""
+    if isinstance(pose, (str, bytes)) or not hasattr(pose, "__len__") or len(pose) != 2:
+        raise InputError(f"{what}_pose: expected a pair (position_xyz, quat_wxyz), got {pose!r}", param=f"{what}_pose")
+    return pose[0], pose[1]
 
 
 def _add(scene: Any, kind: Any, stem: str, positions: FloatArray, quats: FloatArray) -> list[Any]:

@@ -27,6 +27,7 @@ from .inspect import InspectReport as InspectReport
 from .inspect import LinkSummary as LinkSummary
 from .inspect import NodeSummary as NodeSummary
 from .inspect import inspect_logs as inspect_logs
+from .mavlink import MavlinkOptions as MavlinkOptions
 from .mavlink import read_mavlink as read_mavlink
 from .mavlink import sik_rssi_to_dbm as sik_rssi_to_dbm
 from .modelfile import MODEL_SCHEMA as MODEL_SCHEMA
@@ -47,6 +48,7 @@ from .partitions import is_partitioned as is_partitioned
 from .pcap import read_pcap as read_pcap
 from .pcap import write_radiotap_pcap as write_radiotap_pcap
 from .read import read_logs as read_logs
+from .rosbag import RosbagOptions as RosbagOptions
 from .rosbag import bag_topics as bag_topics
 from .rosbag import read_rosbag as read_rosbag
 from .sniff import detect_format as detect_format

@@ -80,6 +80,7 @@ import math
 import numbers
 import os
 from collections.abc import Mapping
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -360,34 +361,12 @@ def _check_arguments(tx_power_dbm: Any, frequency_hz: Any, max_gap_s: Any, strea
 
 
 @check_types
-def read_mavlink(
-    path: str | os.PathLike,
-    tx_power_dbm: float | Mapping[str, float],
-    frequency_hz: float,
-    vehicle: str | None = None,
-    station: str = "gcs",
-    station_geodetic: tuple[float, float, float] | None = None,
-    origin_geodetic: tuple[float, float, float] | None = None,
-    system_id: int | None = None,
-    station_heading_deg: float | None = None,
-    max_gap_s: float = 2.0,
-    stream_timeout_s: float = 2.0,
-) -> tuple[Logs, dict[str, Any]]:
-    """Read an ArduPilot ``.tlog`` or DataFlash log into pose and signal logs (module docstring).
+@dataclass(frozen=True)
+class MavlinkOptions:
+    """How :func:`read_mavlink` places the station and reads the streams of a MAVLink log.
 
-    Parameters
+    Attributes
     ----------
-    path : str or PathLike
-        ``.tlog`` (telemetry log) or ``.bin`` / ``.log`` (DataFlash).
-    tx_power_dbm : float or mapping of node id to float
-        Transmit power of the SiK radios [dBm] (the ``TXPOWER`` setting; not logged).
-    frequency_hz : float
-        Carrier frequency [Hz] (433 or 915 MHz bands; not logged).
-    vehicle : str, optional
-        Node id of the vehicle; ``"sys<N>"`` from its MAVLink system id by default
-        (``"sys1"`` for a DataFlash log).
-    station : str
-        Node id of the ground station.
     station_geodetic : (lat_deg, lon_deg, alt_m), optional
         Ground station position (altitude AMSL, the autopilot's datum); by default the home
         position, else the vehicle's first fix.
@@ -404,6 +383,62 @@ def read_mavlink(
     stream_timeout_s : float
         A tlog's vehicle stream is absent at a radio message when none of the vehicle's
         messages lies within this many seconds [s].
+
+    Raises
+    ------
+    InputError
+        On the first invalid option, naming it (``param``).
+    """
+
+    station_geodetic: tuple[float, float, float] | None = None
+    origin_geodetic: tuple[float, float, float] | None = None
+    system_id: int | None = None
+    station_heading_deg: float | None = None
+    max_gap_s: float = 2.0
+    stream_timeout_s: float = 2.0
+
+    def __post_init__(self) -> None:
+        for name in ("station_geodetic", "origin_geodetic"):
+            object.__setattr__(self, name, _check_origin(getattr(self, name), name))
+        sid = self.system_id
+        if sid is not None and (isinstance(sid, bool) or not isinstance(sid, numbers.Integral) or not 0 <= sid <= 255):
+            raise InputError(f"system_id: expected a MAVLink system id 0-255, got {sid!r}", param="system_id")
+        h = self.station_heading_deg
+        if h is not None and not (isinstance(h, numbers.Real) and not isinstance(h, bool) and np.isfinite(h)):
+            raise InputError(f"station_heading_deg: expected degrees, got {h!r}", param="station_heading_deg")
+        for name in ("max_gap_s", "stream_timeout_s"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not (isinstance(value, (int, float)) and np.isfinite(value) and value > 0):
+                raise InputError(f"{name}: expected a positive number, got {value!r}", param=name)
+
+
+@check_types
+def read_mavlink(
+    path: str | os.PathLike,
+    tx_power_dbm: float | Mapping[str, float],
+    frequency_hz: float,
+    vehicle: str | None = None,
+    station: str = "gcs",
+    options: MavlinkOptions | None = None,
+) -> tuple[Logs, dict[str, Any]]:
+    """Read an ArduPilot ``.tlog`` or DataFlash log into pose and signal logs (module docstring).
+
+    Parameters
+    ----------
+    path : str or PathLike
+        ``.tlog`` (telemetry log) or ``.bin`` / ``.log`` (DataFlash).
+    tx_power_dbm : float or mapping of node id to float
+        Transmit power of the SiK radios [dBm] (the ``TXPOWER`` setting; not logged).
+    frequency_hz : float
+        Carrier frequency [Hz] (433 or 915 MHz bands; not logged).
+    vehicle : str, optional
+        Node id of the vehicle; ``"sys<N>"`` from its MAVLink system id by default
+        (``"sys1"`` for a DataFlash log).
+    station : str
+        Node id of the ground station.
+    options : MavlinkOptions, optional
+        Station and origin positions, station heading, the vehicle's system id, the longest
+        bridged gap and the stream timeout (default ``MavlinkOptions()``).
 
     Returns
     -------
@@ -432,6 +467,10 @@ def read_mavlink(
     InputError
         On a missing file or a bad argument (``param`` names it).
     """
+    options = MavlinkOptions() if options is None else options
+    station_geodetic, origin_geodetic, system_id = options.station_geodetic, options.origin_geodetic, options.system_id
+    station_heading_deg = options.station_heading_deg
+    max_gap_s, stream_timeout_s = options.max_gap_s, options.stream_timeout_s
     source = str(path)
     if not os.path.isfile(source):
         raise InputError(f"{source}: no such file")
@@ -493,5 +532,5 @@ def read_mavlink(
     return Logs(pose=pose, signal=signal), meta
 
 
-__all__ = ["dataflash_cut_off_at", "quat_from_ned_euler_rad", "read_mavlink", "sik_rssi_to_dbm",
+__all__ = ["MavlinkOptions", "dataflash_cut_off_at", "quat_from_ned_euler_rad", "read_mavlink", "sik_rssi_to_dbm",
            "stream_present"]

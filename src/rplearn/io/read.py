@@ -90,9 +90,8 @@ def _read_bag(path: str, options: ReaderOptions, got: _Gathered) -> dict[str, An
             param="tx_power_dbm",
         )
     logs, meta = _rosbag.read_rosbag(
-        path, options.pose_topics or {}, options.rssi_topics, rssi_field=options.rssi_field,
-        tx_power_dbm=options.tx_power_dbm, frequency_hz=options.frequency_hz,
-        msg_definitions=options.msg_definitions,
+        path, options.pose_topics or {}, options.rssi_topics, options.rssi_field, options.tx_power_dbm,
+        options.frequency_hz, _rosbag.RosbagOptions(msg_definitions=options.msg_definitions),
     )
     if logs.pose is not None:
         got.poses.append(logs.pose)
@@ -158,9 +157,9 @@ def _read_mavlink(path: str, options: ReaderOptions, got: _Gathered) -> dict[str
         )
     assert options.tx_power_dbm is not None and options.frequency_hz is not None  # refused above
     logs, meta = _mavlink.read_mavlink(
-        path, options.tx_power_dbm, options.frequency_hz, vehicle=(options.nodes or {}).get(path),
-        station=options.station, station_geodetic=options.station_geodetic, origin_geodetic=got.origin,
-        station_heading_deg=options.station_heading_deg,
+        path, options.tx_power_dbm, options.frequency_hz, (options.nodes or {}).get(path), options.station,
+        _mavlink.MavlinkOptions(station_geodetic=options.station_geodetic, origin_geodetic=got.origin,
+                                station_heading_deg=options.station_heading_deg),
     )
     if got.origin is None:
         got.origin = meta["origin_geodetic"]

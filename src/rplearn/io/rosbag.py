@@ -26,6 +26,7 @@ import math
 import os
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -216,6 +217,44 @@ def describe_topics(topics: Mapping[str, str], limit: int = 10) -> str:
 
 
 @check_types
+@dataclass(frozen=True)
+class RosbagOptions:
+    """How :func:`read_rosbag` reads the signal fields, message types and times of a bag.
+
+    Attributes
+    ----------
+    tx_power_field, frequency_field : str, optional
+        Fields of the RSSI messages carrying the tx power [dBm] and the frequency [Hz]
+        (instead of the constants ``tx_power_dbm``, ``frequency_hz``); dots for nested fields.
+    msg_definitions : mapping of type name to .msg path or text, optional
+        Custom message types to register (``"pkg/msg/Type"``).
+    time_source : {"header", "bag"}
+        Header stamps (falling back to receive time) or the bag's receive times.
+
+    Raises
+    ------
+    InputError
+        On the first invalid option, naming it (``param``).
+    """
+
+    tx_power_field: str | None = None
+    frequency_field: str | None = None
+    msg_definitions: Mapping[str, str] | None = None
+    time_source: str = "header"
+
+    def __post_init__(self) -> None:
+        for name in ("tx_power_field", "frequency_field"):
+            value = getattr(self, name)
+            if value is not None and (not isinstance(value, str) or not value.strip()):
+                raise InputError(f"{name}: expected a message field name, got {value!r}", param=name)
+        if self.msg_definitions is not None and not isinstance(self.msg_definitions, Mapping):
+            raise InputError(f"msg_definitions: expected a mapping of type name to .msg path or text, got "
+                             f"{self.msg_definitions!r}", param="msg_definitions")
+        if self.time_source not in ("header", "bag"):
+            raise InputError(f"time_source: expected 'header' or 'bag', got {self.time_source!r}", param="time_source")
+
+
+@check_types
 def read_rosbag(
     path: str | os.PathLike,
     pose_topics: Mapping[str, str],
@@ -223,10 +262,7 @@ def read_rosbag(
     rssi_field: str = "rssi",
     tx_power_dbm: float | None = None,
     frequency_hz: float | None = None,
-    tx_power_field: str | None = None,
-    frequency_field: str | None = None,
-    msg_definitions: Mapping[str, str] | None = None,
-    time_source: str = "header",
+    options: RosbagOptions | None = None,
 ) -> tuple[Logs, dict[str, Any]]:
     """Read poses and RSSI from a ROS 1 bag or a ROS 2 bag (sqlite3 or MCAP).
 
@@ -241,13 +277,10 @@ def read_rosbag(
     rssi_field : str
         Field of the RSSI [dBm] in those messages; dots for nested fields.
     tx_power_dbm, frequency_hz : float, optional
-        Constants for the signal log (required unless the matching ``*_field`` is given).
-    tx_power_field, frequency_field : str, optional
-        Message fields carrying the tx power [dBm] and frequency [Hz] instead.
-    msg_definitions : mapping of type name to .msg path or text, optional
-        Custom message types to register (``"pkg/msg/Type"``).
-    time_source : {"header", "bag"}
-        Header stamps (falling back to receive time) or the bag's receive times.
+        Constants for the signal log (required unless ``options`` names the field carrying it).
+    options : RosbagOptions, optional
+        Fields carrying the tx power and frequency, custom message types, the time source
+        (default ``RosbagOptions()``).
 
     Returns
     -------
@@ -258,21 +291,22 @@ def read_rosbag(
         ``source``, ``format`` ("ros1" or "ros2"), ``topics`` (message counts),
         ``frame_ids`` per pose topic, ``time_reference``.
     """
-    if time_source not in ("header", "bag"):
-        raise InputError(f"time_source: expected 'header' or 'bag', got {time_source!r}")
+    options = RosbagOptions() if options is None else options
+    tx_power_field, frequency_field = options.tx_power_field, options.frequency_field
+    msg_definitions, time_source = options.msg_definitions, options.time_source
     source = str(path)
     rssi_topics = dict(rssi_topics or {})
     if rssi_topics:
         if tx_power_dbm is None and tx_power_field is None:
             raise InputError(
                 f"{source}: the RSSI topics need the transmit power [dBm] "
-                "(tx_power_dbm= or tx_power_field=)",
+                "(tx_power_dbm, or RosbagOptions.tx_power_field)",
                 param="tx_power_dbm",
             )
         if frequency_hz is None and frequency_field is None:
             raise InputError(
                 f"{source}: the RSSI topics need the carrier frequency [Hz] "
-                "(frequency_hz= or frequency_field=)",
+                "(frequency_hz, or RosbagOptions.frequency_field)",
                 param="frequency_hz",
             )
     if not pose_topics and not rssi_topics:
@@ -347,4 +381,4 @@ def read_rosbag(
     return Logs(pose=pose, signal=signal), meta
 
 
-__all__ = ["POSE_MSGTYPES", "bag_topics", "describe_topics", "open_rosbag", "read_rosbag"]
+__all__ = ["POSE_MSGTYPES", "RosbagOptions", "bag_topics", "describe_topics", "open_rosbag", "read_rosbag"]

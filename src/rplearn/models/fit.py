@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from rplearn._argtypes import check_types
-from rplearn.core.lsq.solver import FitReport, fit_joint
+from rplearn.core.lsq.solver import FitReport, JointFitOptions, fit_joint
 from rplearn.core.metrics import Scores, score
 from rplearn.core.threads import blas_threads_for
 from rplearn.core.threads import warm_up as warm_up_blas
@@ -97,12 +97,9 @@ def solve_patterns(
         y,
         len(samples.nodes),
         basis,
-        node_names=samples.nodes,
-        ridge=spec.ridge_weight,
-        gauge=options.gauge,
-        smoothing=spec.smoothing,
-        environment=env,
-        link_offsets=options.link_offsets,
+        samples.nodes,
+        JointFitOptions(ridge=spec.ridge_weight, gauge=options.gauge, smoothing=spec.smoothing, environment=env,
+                        link_offsets=options.link_offsets),
     )
     fields, terms = shared_fields(sol, samples.nodes, options, directed_counts(samples))
     training = sol.report.to_dict()

@@ -17,6 +17,7 @@ from .logs import reader_notes as reader_notes
 from .logs import swarm_headings as swarm_headings
 from .logs import swarm_links as swarm_links
 from .logs import sync_logs as sync_logs
+from .planning import CampaignOptions as CampaignOptions
 from .planning import CampaignPlan as CampaignPlan
 from .planning import draw_pattern_files as draw_pattern_files
 from .planning import export_model_file as export_model_file

@@ -16,8 +16,9 @@ import pandas as pd
 from numpy.typing import ArrayLike
 
 from rplearn._argtypes import check_types
+from rplearn.analysis.heading_options import SwarmHeadingOptions
 from rplearn.analysis.headings import SwarmHeadings, best_swarm_headings
-from rplearn.analysis.swarm import SwarmPrediction, predict_swarm
+from rplearn.analysis.swarm import SwarmOptions, SwarmPrediction, predict_swarm
 from rplearn.data.streaming import conform_chunk, synchronise_stream
 from rplearn.data.sync import SyncOptions, SyncSummary, synchronise
 from rplearn.data.tables import MATCHED_COLUMNS, SIGNAL_COLUMNS
@@ -234,17 +235,19 @@ def swarm_links(
     pose_paths: Sequence[str],
     output: str,
     tx_power_dbm: float,
-    frequency_hz: float | None = None,
+    options: SwarmOptions | None = None,
     reader_options: ReaderOptions | None = None,
     connectivity_out: str | None = None,
     plot_path: str | None = None,
-    **swarm_options: Any,
 ) -> LinksOutcome:
     """Predict every link of a swarm over time from its pose logs and write the tables.
 
-    ``swarm_options`` go to :func:`rplearn.analysis.swarm.predict_swarm` (``pattern_of``,
-    ``step_s``, ``times_s``, ``min_rssi_dbm``, ``max_gap_s``).
+    ``options`` (carrier, ``pattern_of``, threshold, times, longest pose gap) go to
+    :func:`rplearn.analysis.swarm.predict_swarm`; ``reader_options`` to
+    :func:`rplearn.io.read_logs`.
     """
+    options = SwarmOptions() if options is None else options
+    frequency_hz = options.frequency_hz
     outputs = [p for p in (output, connectivity_out, plot_path) if p]
     for k, path in enumerate(outputs):
         check_output_path(path, [model_path, *pose_paths, *outputs[:k]])
@@ -256,7 +259,7 @@ def swarm_links(
         raise InputError(f"{', '.join(pose_paths)}: no pose log found", param="pose_paths")
     mismatch = frequency_mismatch(model, [frequency_hz]) if frequency_hz is not None else None
     prediction = predict_swarm(cast(PatternSet, model), logs.pose,  # predict_swarm refuses a baseline
-                                tx_power_dbm, frequency_hz, source=", ".join(pose_paths), **swarm_options)
+                               tx_power_dbm, options, source=", ".join(pose_paths))
     write_table(prediction.links, output)
     if connectivity_out:
         write_table(prediction.connectivity, connectivity_out)
@@ -273,7 +276,7 @@ def swarm_headings(
     positions: Mapping[str, ArrayLike],
     tx_power_dbm: float,
     output: str | None = None,
-    **options: Any,
+    options: SwarmHeadingOptions | None = None,
 ) -> SwarmHeadings:
     """Yaws of a hovering swarm that maximise its bottleneck RSSI; optionally written as
     JSON (``.json``) or a table (``drone, start_yaw_deg, yaw_deg``).
@@ -285,7 +288,7 @@ def swarm_headings(
         if not output.lower().endswith(".json"):
             check_table_path(output)
     result = best_swarm_headings(cast(PatternSet, load_model(model_path)), positions,  # refuses a baseline
-                                  tx_power_dbm, **options)
+                                 tx_power_dbm, options)
     if output:
         if output.lower().endswith(".json"):
             write_json(output, result.to_dict())

@@ -4,11 +4,14 @@ campaign (``rplearn trajectory``), export a model file (``rplearn export``), dra
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import cast
 
 from rplearn._argtypes import check_types
+from rplearn.analysis.heading_options import YawOptions
 from rplearn.analysis.headings import OrientationResult, best_yaw
 from rplearn.errors import InputError
 from rplearn.io.export import export_grid
@@ -20,7 +23,7 @@ from rplearn.models.patterns import PatternSet
 from rplearn.models.spec import ModelSpec
 from rplearn.plan.campaign import Campaign, paper_campaign, write_references
 from rplearn.plan.check import NominalAttitude, PlanCheck, check_plan
-from rplearn.plan.trajectory import PlanLimits, UnitSummary, summarize_unit
+from rplearn.plan.trajectory import PlanLimits, TrajectoryUnit, UnitSummary, summarize_unit
 
 #: Headings [deg] of the paper's learning and testing units (Sec. V-C).
 PAPER_LEARNING_PSI0_DEG: tuple[float, ...] = (0.0, 24.0, 48.0)
@@ -40,14 +43,55 @@ class CampaignPlan:
 
 
 @check_types
+@dataclass(frozen=True)
+class CampaignOptions:
+    """The units of a campaign :func:`plan_campaign` plans (the paper's, Sec. IV-A, by default).
+
+    Attributes
+    ----------
+    learning_psi0_deg, testing_psi0_deg : sequence of float
+        Initial headings of the learning and the testing units [deg].
+    distance_m, height_m : float
+        Distance between the drones and flight height [m].
+    n_loops : int
+        Loops per unit.
+    speed_m_s : float
+        Flight speed [m/s].
+
+    Raises
+    ------
+    InputError
+        On the first invalid option, naming it (``param``).
+    """
+
+    learning_psi0_deg: Sequence[float] = PAPER_LEARNING_PSI0_DEG
+    testing_psi0_deg: Sequence[float] = PAPER_TESTING_PSI0_DEG
+    distance_m: float = 10.0
+    height_m: float = 20.0
+    n_loops: int = 5
+    speed_m_s: float = 2.0
+
+    def __post_init__(self) -> None:
+        for name in ("learning_psi0_deg", "testing_psi0_deg"):
+            try:
+                headings = tuple(float(v) for v in getattr(self, name))
+            except (TypeError, ValueError):
+                headings = (float("nan"),)
+            if not all(math.isfinite(v) for v in headings):
+                raise InputError(f"{name}: expected finite headings in degrees, got {getattr(self, name)!r}",
+                                 param=name)
+            object.__setattr__(self, name, headings)
+        if not self.learning_psi0_deg:
+            raise InputError("learning_psi0_deg: expected at least one learning heading", param="learning_psi0_deg")
+        # the unit fields, checked as every unit will be (InputError naming the field)
+        TrajectoryUnit(distance_m=self.distance_m, height_m=self.height_m, n_loops=self.n_loops,
+                       speed_m_s=self.speed_m_s)
+
+
+@check_types
 def plan_campaign(
     out_dir: str,
-    learning_psi0_deg: Sequence[float] = PAPER_LEARNING_PSI0_DEG,
-    testing_psi0_deg: Sequence[float] = PAPER_TESTING_PSI0_DEG,
-    distance_m: float = 10.0,
-    height_m: float = 20.0,
-    n_loops: int = 5,
-    speed_m_s: float = 2.0,
+    campaign: CampaignOptions | None = None,
     limits: PlanLimits | None = None,
     rate_hz: float = 10.0,
     check_model: str | None = "sh-10",
@@ -56,21 +100,26 @@ def plan_campaign(
     """Plan the paper's campaign (Sec. IV-A), refuse units beyond ``limits``, write one
     reference file per unit and drone, and check whether the learning units will decouple the
     patterns of ``check_model`` (rank, condition number, coverage) before anyone flies.
+
+    ``campaign`` gives the units' headings and geometry (default ``CampaignOptions()``, the
+    paper's); ``rate_hz`` is the rate of the reference files [Hz] and ``wind_speed_m_s`` the
+    wind the plan check assumes [m/s].
     """
+    options = CampaignOptions() if campaign is None else campaign
     spec = None
     if check_model:  # refuse a bad model before writing files
         spec = ModelSpec.parse(check_model)
         if not spec.decouples:
             raise InputError(f"check_model: {spec.label} has no per-node pattern to check; use sh, bg or poly", param="check_model")
-    campaign = paper_campaign(
-        learning_psi0_deg=list(learning_psi0_deg), testing_psi0_deg=list(testing_psi0_deg), distance_m=distance_m,
-        height_m=height_m, n_loops=n_loops, speed_m_s=speed_m_s,
+    planned = paper_campaign(
+        learning_psi0_deg=list(options.learning_psi0_deg), testing_psi0_deg=list(options.testing_psi0_deg),
+        distance_m=options.distance_m, height_m=options.height_m, n_loops=options.n_loops, speed_m_s=options.speed_m_s,
     )
-    units = [summarize_unit(unit, limits) for unit in campaign.units]
-    paths = write_references(campaign, out_dir, rate_hz)
+    units = [summarize_unit(unit, limits) for unit in planned.units]
+    paths = write_references(planned, out_dir, rate_hz)
     attitude = NominalAttitude(wind_speed_m_s=wind_speed_m_s)
-    check = check_plan(campaign, spec.basis(), attitude=attitude) if spec is not None else None
-    return CampaignPlan(campaign, units, paths, check)
+    check = check_plan(planned, spec.basis(), attitude=attitude) if spec is not None else None
+    return CampaignPlan(planned, units, paths, check)
 
 
 @check_types
@@ -100,12 +149,20 @@ def export_model_file(
 
 
 @check_types
-def orient_link(model_path: str, tx_node: str, rx_node: str, **options: object) -> OrientationResult:
-    """Heading(s) that maximise one link of a model file (``rplearn orient``); ``options`` go
-    to :func:`rplearn.analysis.headings.best_yaw`."""
+def orient_link(
+    model_path: str,
+    tx_node: str,
+    rx_node: str,
+    tx_position_xyz: Sequence[float],
+    rx_position_xyz: Sequence[float],
+    turn: str = "tx",
+    options: YawOptions | None = None,
+) -> OrientationResult:
+    """Heading(s) that maximise one link of a model file (``rplearn orient``): the model's
+    :func:`rplearn.analysis.headings.best_yaw`."""
     model = load_model(model_path)
     require_patterns(model, f"{model_path}: telling which heading is better")
-    return best_yaw(model, tx_node, rx_node, **options)  # type: ignore[arg-type]
+    return best_yaw(cast(PatternSet, model), tx_node, rx_node, tx_position_xyz, rx_position_xyz, turn, options)
 
 
 @check_types

@@ -60,7 +60,7 @@ def test_segmented_statistics_are_each_links_products():
     el_t, el_r = np.arcsin(rng.uniform(-1, 1, (2, n)))
     y = rng.normal(size=n)
     bounds = np.array([0, 120, 120, 377, 500])  # one empty link
-    products, moments = segmented_link_statistics(basis, az_t, el_t, az_r, el_r, y, np.ones((1, n)), bounds,
+    products, moments = segmented_link_statistics(basis, Directions(az_t, el_t, az_r, el_r), y, np.ones((1, n)), bounds,
                                                   np.argsort(basis.row_order))
     f_t, f_r = basis.design(az_t, el_t), basis.design(az_r, el_r)
     for j in range(4):

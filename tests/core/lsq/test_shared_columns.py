@@ -10,7 +10,7 @@ from rplearn.core.environment import log_distance_column
 from rplearn.core.geometry import Directions
 from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.core.lsq.selection import sub_statistics
-from rplearn.core.lsq.solver import fit_joint
+from rplearn.core.lsq.solver import JointFitOptions, fit_joint
 from rplearn.errors import IdentifiabilityError, InputError
 
 
@@ -99,7 +99,7 @@ def test_exponent_and_offsets_are_recovered_from_exact_data():
     for (a, b), v in offset.items():
         y[(tx == a) & (rx == b)] += v
         y[(tx == b) & (rx == a)] -= v
-    sol = fit_joint(d, tx, rx, y, 3, basis, ridge=1e-9, environment=log_distance_column(dist), link_offsets=True)
+    sol = fit_joint(d, tx, rx, y, 3, basis, options=JointFitOptions(ridge=1e-9, environment=log_distance_column(dist), link_offsets=True))
     assert sol.shared[0] == ("exponent",)
     assert 2.0 + sol.shared_coef[0] == pytest.approx(3.1, abs=1e-6)
     np.testing.assert_allclose(sol.shared_coef[1:], [offset[(0, 1)], offset[(0, 2)], offset[(1, 2)]], atol=1e-6)
@@ -116,17 +116,17 @@ def test_constant_distance_exponent_is_not_identifiable():
     dist = 10.0 + 0.05 * rng.normal(size=tx.size)  # a flight "at 10 m", tracking error included
     y = rng.normal(size=tx.size) - 1.0 * log_distance_column(dist)
     with pytest.raises(IdentifiabilityError, match="path-loss exponent is not identifiable"):
-        fit_joint(d, tx, rx, y, 2, basis, environment=log_distance_column(dist))
+        fit_joint(d, tx, rx, y, 2, basis, options=JointFitOptions(environment=log_distance_column(dist)))
     # the distance moving with the directions (a drone at constant altitude seen from a station,
     # one direction logged) is refused too
     tx, rx = np.zeros_like(tx), np.ones_like(rx)
     d = Directions(d.az_tx, d.el_tx, d.az_rx, -d.el_tx)
     dist = 20.0 * 10 ** (0.3 * np.sin(d.el_tx))  # 10 log10 d linear in sin(el): within SH-3
     with pytest.raises(IdentifiabilityError, match="directions do not explain"):
-        fit_joint(d, tx, rx, rng.normal(size=tx.size), 2, basis, environment=log_distance_column(dist))
+        fit_joint(d, tx, rx, rng.normal(size=tx.size), 2, basis, options=JointFitOptions(environment=log_distance_column(dist)))
     # the same directions at distances of their own: identified
     dist = dist * rng.choice([1.0, 2.0], tx.size)
-    sol = fit_joint(d, tx, rx, rng.normal(size=tx.size), 2, basis, environment=log_distance_column(dist))
+    sol = fit_joint(d, tx, rx, rng.normal(size=tx.size), 2, basis, options=JointFitOptions(environment=log_distance_column(dist)))
     assert sol.shared == (("exponent",),)
 
 

@@ -7,7 +7,7 @@ import pytest
 
 from rplearn.core.bases import BasisGrid, Polynomial, SphericalHarmonics
 from rplearn.core.geometry import Directions
-from rplearn.core.lsq.solver import NormalEquations, fit_joint, identifiability, link_components, solve
+from rplearn.core.lsq.solver import JointFitOptions, NormalEquations, fit_joint, identifiability, link_components, solve
 from rplearn.errors import IdentifiabilityError, InputError
 
 
@@ -51,7 +51,7 @@ def test_two_node_recovery_of_shapes(noise_db, tol_db):
     rng = np.random.default_rng(10)
     b, true = _band_limited_patterns(rng, 2)
     d, tx, rx, y = _simulate(rng, b, true, np.array([[0, 1]]), 20000, noise_db)
-    sol = fit_joint(d, tx, rx, y, 2, b, ["A", "B"], ridge=0.0 if noise_db == 0 else 1e-6)
+    sol = fit_joint(d, tx, rx, y, 2, b, ["A", "B"], JointFitOptions(ridge=0.0 if noise_db == 0 else 1e-6))
     for k in range(2):
         err = _shape_rms_error(b, sol.coef[k], true[k], rng)
         assert err < tol_db, f"node {k}: {err} dB"
@@ -70,7 +70,7 @@ def test_triangle_recovers_absolute_patterns(noise_db, tol_db):
     b, true = _band_limited_patterns(rng, 3)
     pairs = np.array([[0, 1], [1, 2], [2, 0]])
     d, tx, rx, y = _simulate(rng, b, true, pairs, 30000, noise_db)
-    sol = fit_joint(d, tx, rx, y, 3, b, ["A", "B", "C"], ridge=0.0 if noise_db == 0 else 1e-6)
+    sol = fit_joint(d, tx, rx, y, 3, b, ["A", "B", "C"], JointFitOptions(ridge=0.0 if noise_db == 0 else 1e-6))
     assert sol.report.rank == sol.report.n_columns == 147
     assert sol.report.gauges == ()
     for k in range(3):
@@ -112,7 +112,7 @@ def test_fixed_node_gauge():
     b, true = _band_limited_patterns(rng, 2)
     d, tx, rx, y = _simulate(rng, b, true, np.array([[0, 1]]), 5000, 0.0)
     known = true[0, 0] / np.sqrt(4 * np.pi)
-    sol = fit_joint(d, tx, rx, y, 2, b, ["A", "B"], ridge=0.0, gauge={"node": "A", "mean_gain_dbi": known})
+    sol = fit_joint(d, tx, rx, y, 2, b, ["A", "B"], JointFitOptions(ridge=0.0, gauge={"node": "A", "mean_gain_dbi": known}))
     np.testing.assert_allclose(sol.coef, true, atol=1e-8)  # absolute patterns once one level is known
     assert "fixed-mean:A" in sol.report.gauges[0].rule
 
@@ -121,8 +121,8 @@ def test_streaming_equals_one_shot_and_merge():
     rng = np.random.default_rng(15)
     b, true = _band_limited_patterns(rng, 2, 4)
     d, tx, rx, y = _simulate(rng, b, true, np.array([[0, 1], [1, 0]]), 9000, 2.0)
-    one = fit_joint(d, tx, rx, y, 2, b, chunk_size=10**6)
-    many = fit_joint(d, tx, rx, y, 2, b, chunk_size=977)
+    one = fit_joint(d, tx, rx, y, 2, b, options=JointFitOptions(chunk_size=10**6))
+    many = fit_joint(d, tx, rx, y, 2, b, options=JointFitOptions(chunk_size=977))
     np.testing.assert_allclose(many.coef, one.coef, atol=1e-9)
     a, c = NormalEquations(b, 2), NormalEquations(b, 2)
     a.add(Directions(*(x[:4000] for x in d)), tx[:4000], rx[:4000], y[:4000])
@@ -202,9 +202,11 @@ def test_errors_are_clear():
     # all samples in one direction: a pattern with many coefficients is not identified
     one_dir = Directions(np.zeros(500), np.zeros(500), *_dirs(rng, 500))
     with pytest.raises(IdentifiabilityError, match="do not identify"):
-        fit_joint(one_dir, np.zeros(500, int), np.ones(500, int), np.zeros(500), 2, SphericalHarmonics(3), ridge=0.0)
+        fit_joint(one_dir, np.zeros(500, int), np.ones(500, int), np.zeros(500), 2, SphericalHarmonics(3),
+                  options=JointFitOptions(ridge=0.0))
     # ...but a ridge makes it solvable, as the paper did
-    fit_joint(one_dir, np.zeros(500, int), np.ones(500, int), np.zeros(500), 2, SphericalHarmonics(3), ridge=1.0)
+    fit_joint(one_dir, np.zeros(500, int), np.ones(500, int), np.zeros(500), 2, SphericalHarmonics(3),
+              options=JointFitOptions(ridge=1.0))
 
 
 def test_bg_and_poly_fit_smooth_patterns():
@@ -212,7 +214,7 @@ def test_bg_and_poly_fit_smooth_patterns():
     b, true = _band_limited_patterns(rng, 2, 3)
     d, tx, rx, y = _simulate(rng, b, true, np.array([[0, 1]]), 20000, 1.0)
     for basis in (BasisGrid(6, sigma_rad2=0.1, grid="fibonacci"), Polynomial(8)):
-        sol = fit_joint(d, tx, rx, y, 2, basis, ridge=1e-3)
+        sol = fit_joint(d, tx, rx, y, 2, basis, options=JointFitOptions(ridge=1e-3))
         pred = np.einsum("np,p->n", basis.design(d.az_tx, d.el_tx), sol.coef[0]) + basis.design(
             d.az_rx, d.el_rx
         ) @ sol.coef[1]
@@ -225,10 +227,19 @@ def test_gauge_on_an_identified_node_is_refused_and_poor_coverage_warns():
     pairs = np.array([[0, 1], [1, 2], [2, 0]])
     d, tx, rx, y = _simulate(rng, b, true, pairs, 3000, 1.0)
     with pytest.raises(InputError, match="already identified"):
-        fit_joint(d, tx, rx, y, 3, b, list("ABC"), gauge={"node": "A", "mean_gain_dbi": 10.0})
+        fit_joint(d, tx, rx, y, 3, b, list("ABC"), JointFitOptions(gauge={"node": "A", "mean_gain_dbi": 10.0}))
     assert fit_joint(d, tx, rx, y, 3, b, list("ABC")).report.warnings == ()
     # samples from a narrow cone only: the fit works (ridge) but says it extrapolates
     n = 2000
     narrow = Directions(rng.uniform(-0.2, 0.2, n), rng.uniform(-0.1, 0.1, n), rng.uniform(-0.2, 0.2, n), rng.uniform(-0.1, 0.1, n))
     sol = fit_joint(narrow, np.zeros(n, int), np.ones(n, int), rng.normal(size=n), 2, SphericalHarmonics(4))
     assert any("condition number" in w for w in sol.report.warnings)
+
+
+@pytest.mark.parametrize("bad, field", [({"ridge": -1.0}, "ridge"), ({"smoothing": float("nan")}, "smoothing"),
+                                        ({"penalty_power": float("inf")}, "penalty_power"), ({"chunk_size": 0}, "chunk_size"),
+                                        ({"gauge": {"node": ""}}, "gauge_node")])
+def test_joint_fit_options_refuse_a_bad_value_naming_it(bad, field):
+    with pytest.raises(InputError) as err:
+        JointFitOptions(**bad)
+    assert err.value.param == field and "\n" not in str(err.value)

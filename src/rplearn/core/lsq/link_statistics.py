@@ -14,6 +14,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rplearn.core.bases import Basis
+from rplearn.core.geometry import Directions
 from rplearn.core.lsq.runtime import DEFAULT_RUNTIME
 
 FloatArray = NDArray[np.float64]
@@ -51,15 +52,13 @@ def reserve_block_buffer(basis: Basis, n_samples: int) -> None:
 def _fill_features(
     basis: Basis,
     buf: FloatArray,
-    az_tx: FloatArray,
-    el_tx: FloatArray,
-    az_rx: FloatArray,
-    el_rx: FloatArray,
+    directions: Directions,
     moments: Any,
     gap: int = 1,
     segments: tuple[NDArray[np.intp], NDArray[np.intp]] | None = None,
 ) -> None:
-    """Write tx features into rows ``0 .. p-1`` and rx features into rows ``p+gap .. 2p+gap-1`` of ``buf``.
+    """Write tx features into rows ``0 .. p-1`` and rx features into rows ``p+gap .. 2p+gap-1`` of ``buf``
+    (the features of ``directions.az_tx, el_tx`` and of ``directions.az_rx, el_rx``).
 
     Rows are in the basis's :attr:`~rplearn.core.bases.Basis.row_order`; rows ``p .. p+gap-1``
     are left for the observations and extra columns. Works in cache-sized chunks; a basis that
@@ -68,6 +67,7 @@ def _fill_features(
     when given: per range of samples when ``segments`` (bounds of the tx ranges, of the rx
     ranges) are given, see :meth:`~rplearn.core.sh.SphericalHarmonics.design_rows_into`.
     """
+    az_tx, el_tx, az_rx, el_rx = directions
     p = basis.n_coef
     n = az_tx.size
     if basis.stacked_samples:
@@ -126,7 +126,7 @@ def link_statistics(
         stop = min(n, start + per_block)
         buf = block[: k * (stop - start)].reshape(k, stop - start)
         part = slice(start, stop)
-        _fill_features(basis, buf, az_tx[part], el_tx[part], az_rx[part], el_rx[part], moments, gap)
+        _fill_features(basis, buf, Directions(az_tx[part], el_tx[part], az_rx[part], el_rx[part]), moments, gap)
         buf[p] = y[part]
         if m:
             buf[p + 1 : p + gap] = extra[:, part]
@@ -142,11 +142,13 @@ def link_statistics(
 
 
 def segmented_link_statistics(
-    basis: Basis, az_tx: FloatArray, el_tx: FloatArray, az_rx: FloatArray, el_rx: FloatArray, y: FloatArray,
-    extra: FloatArray, bounds: NDArray[np.intp], natural: NDArray[np.intp] | None = None,
-    tx_bounds: NDArray[np.intp] | None = None,
+    basis: Basis, directions: Directions, y: FloatArray, extra: FloatArray, bounds: NDArray[np.intp],
+    natural: NDArray[np.intp] | None = None, tx_bounds: NDArray[np.intp] | None = None,
 ) -> tuple[FloatArray, tuple[FloatArray, FloatArray]]:
     """:func:`link_statistics` of many links at once, for a basis with Gram moments (SH).
+
+    ``directions`` are those of the samples (``az_tx, el_tx, az_rx, el_rx`` [rad], float64,
+    contiguous), ``y`` their observations and ``extra`` the ``m`` shared rows, shape ``(m, n)``.
 
     The samples (at most :func:`block_samples` of the rows) are sorted by link, link ``j``
     holding samples ``bounds[j]:bounds[j + 1]``. The features of all of them are computed in
@@ -166,7 +168,7 @@ def segmented_link_statistics(
         ``(links, *basis.moment_shape)``.
     """
     p = basis.n_coef
-    n = az_tx.size
+    n = directions.az_tx.size
     m = extra.shape[0]
     gap = 1 + m
     k = 2 * p + gap
@@ -176,7 +178,7 @@ def segmented_link_statistics(
     shape = basis.moment_shape
     assert shape is not None  # only bases with Gram moments come here
     moments = (np.zeros((tx_bounds.size - 1, *shape)), np.zeros((n_links, *shape)))
-    _fill_features(basis, buf, az_tx, el_tx, az_rx, el_rx, moments, gap, (tx_bounds, bounds))
+    _fill_features(basis, buf, directions, moments, gap, (tx_bounds, bounds))
     buf[p] = y
     buf[p + 1 : p + gap] = extra
     products = np.empty((n_links, p + gap, gap + p))

@@ -213,8 +213,8 @@ class NormalEquations:
             extra = np.ones((1, stop - s)) if not self.environment else np.stack([np.ones(stop - s), e[s:stop]])
             part = slice(s, stop)
             products, moments = segmented_link_statistics(
-                self.basis, az_tx[part], el_tx[part], az_rx[part], el_rx[part], y[part], extra, local, self._natural[:p],
-                local[runs])
+                self.basis, Directions(az_tx[part], el_tx[part], az_rx[part], el_rx[part]), y[part], extra, local,
+                self._natural[:p], local[runs])
             return products, moments, first, last, tx[runs[:-1]]
 
         for products, moments, first, last, run_tx in DEFAULT_RUNTIME.in_order(statistics, starts):

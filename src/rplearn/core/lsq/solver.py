@@ -32,6 +32,7 @@ from __future__ import annotations
 
 from collections import deque
 from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 import numpy as np
@@ -261,7 +262,8 @@ def solve(
                                (cmat, cval), components)
         rhs[:pcols] += weights * target
     if large:
-        solution = solve_large(normal, n_nodes, components, cmat, cval, rhs[:pcols], ridge, penalty, shrunk, notes)
+        solution = solve_large(normal, n_nodes, components, (cmat, cval), rhs[:pcols], penalty,
+                               Regularisation(float(ridge), penalty is not None, shrunk), notes)
         if solution is not None:
             return solution
         sv, rank, cond = spectrum_estimate(_unit_shared_columns(normal), null_directions(normal.basis, n_nodes, components, pcols))
@@ -358,6 +360,58 @@ def _check_exponent(normal: NormalEquations) -> None:
 
 
 @check_types
+@dataclass(frozen=True, eq=False)
+class JointFitOptions:
+    """How :func:`fit_joint` learns the patterns (everything but the samples and the basis).
+
+    Attributes
+    ----------
+    ridge : float
+        Ridge weight added to the diagonal of ``X^T X`` (default :data:`DEFAULT_RIDGE`).
+    gauge : Gauge
+        How the free constant of a two-node (bipartite) problem is fixed (also the legacy
+        ``"equal-mean"`` or ``{"node": ID, "mean_gain_dbi": V}``, read by :meth:`Gauge.of`).
+    smoothing : float
+        Relative weight of the smoothness penalty (:mod:`rplearn.core.lsq.selection`).
+    penalty_power : float
+        Exponent of the SH roughness weights.
+    environment : array_like, optional
+        A shared per-sample regressor learned with the patterns, one value per sample (the
+        log-distance column of :func:`rplearn.core.environment.log_distance_column`).
+    link_offsets : bool
+        Learn one electronics offset per link logged in both directions.
+    chunk_size : int
+        Samples accumulated per step.
+
+    Raises
+    ------
+    InputError
+        On the first invalid option, naming it (``param``).
+    """
+
+    ridge: float = DEFAULT_RIDGE
+    gauge: Gauge | str | Mapping[str, Any] = field(default_factory=Gauge)
+    smoothing: float = 0.0
+    penalty_power: float = 2.0
+    environment: ArrayLike | None = None
+    link_offsets: bool = False
+    chunk_size: int = 1_000_000
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "gauge", Gauge.of(self.gauge))
+        for name in ("ridge", "smoothing"):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float, np.number)) and np.isfinite(value) and value >= 0):
+                raise InputError(f"{name}: expected a non-negative number, got {value!r}", param=name)
+        if not (isinstance(self.penalty_power, (int, float, np.number)) and np.isfinite(self.penalty_power)):
+            raise InputError(f"penalty_power: expected a finite number, got {self.penalty_power!r}",
+                             param="penalty_power")
+        if isinstance(self.chunk_size, bool) or not isinstance(self.chunk_size, (int, np.integer)) or self.chunk_size < 1:
+            raise InputError(f"chunk_size: expected a positive number of samples, got {self.chunk_size!r}",
+                             param="chunk_size")
+
+
+@check_types
 def fit_joint(
     directions: Directions,
     tx_index: ArrayLike,
@@ -366,13 +420,7 @@ def fit_joint(
     n_nodes: int,
     basis: Basis,
     node_names: Sequence[str] | None = None,
-    ridge: float = DEFAULT_RIDGE,
-    gauge: Gauge | str | Mapping[str, Any] = EQUAL_MEAN,
-    chunk_size: int = 1_000_000,
-    smoothing: float = 0.0,
-    penalty_power: float = 2.0,
-    environment: ArrayLike | None = None,
-    link_offsets: bool = False,
+    options: JointFitOptions | None = None,
 ) -> JointSolution:
     """Fit one pattern per node from link samples (paper Sec. IV-B and V-A).
 
@@ -390,23 +438,15 @@ def fit_joint(
         Pattern basis shared by all nodes.
     node_names : sequence of str, optional
         Names used in reports and gauge notes.
-    ridge : float
-        Ridge weight added to the diagonal of ``X^T X`` (default :data:`DEFAULT_RIDGE`).
-    gauge : Gauge
-        How the free constant of a two-node (bipartite) problem is fixed (also the legacy
-        ``"equal-mean"`` or ``{"node": ID, "mean_gain_dbi": V}``, read by :meth:`Gauge.of`).
-    chunk_size : int
-        Samples accumulated per step.
-    smoothing : float
-        Relative weight of the smoothness penalty (:mod:`rplearn.core.lsq.selection`).
-    penalty_power : float
-        Exponent of the SH roughness weights.
-    environment : array_like, optional
-        A shared per-sample regressor learned with the patterns (the log-distance column of
-        :func:`rplearn.core.environment.log_distance_column`).
-    link_offsets : bool
-        Learn one electronics offset per link logged in both directions.
+    options : JointFitOptions, optional
+        Ridge, gauge, smoothing, shared columns (default ``JointFitOptions()``).
+
+    Examples
+    --------
+    >>> sol = fit_joint(d, tx, rx, y, 2, basis, ["A", "B"], JointFitOptions(ridge=1e-6))  # doctest: +SKIP
     """
+    options = JointFitOptions() if options is None else options
+    environment, chunk_size = options.environment, options.chunk_size
     normal = NormalEquations(basis, n_nodes, environment=environment is not None)
     env = None if environment is None else np.asarray(environment, np.float64).ravel()
     tx = np.asarray(tx_index)
@@ -417,14 +457,15 @@ def fit_joint(
         e = min(n, s + chunk_size)
         normal.add(Directions(*(np.asarray(d)[s:e] for d in directions)), tx[s:e], rx[s:e], y[s:e],
                    None if env is None else env[s:e])
-    if env is not None or link_offsets:
-        normal = normal.with_shared(normal.two_way_links() if link_offsets else None)
+    if env is not None or options.link_offsets:
+        normal = normal.with_shared(normal.two_way_links() if options.link_offsets else None)
     penalty = None
-    if smoothing:
+    if options.smoothing:
         from rplearn.core.lsq.selection import penalty_scale, penalty_vector
 
-        penalty = penalty_vector(basis, n_nodes, smoothing, penalty_scale(normal.gram, normal.n_pattern_columns), penalty_power)
-    return solve(normal, node_names, ridge=ridge, gauge=gauge, penalty=penalty)
+        penalty = penalty_vector(basis, n_nodes, options.smoothing,
+                                 penalty_scale(normal.gram, normal.n_pattern_columns), options.penalty_power)
+    return solve(normal, node_names, ridge=options.ridge, gauge=options.gauge, penalty=penalty)
 
 
 @check_types

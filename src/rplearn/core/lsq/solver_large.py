@@ -34,9 +34,9 @@ REFINED_COLUMNS = 2000
 
 
 def solve_large(
-    normal: NormalEquations, n_nodes: int, components: list[tuple[list[int], Any]], cmat: FloatArray,
-    cval: FloatArray, rhs: FloatArray, ridge: float, penalty: FloatArray | None, shrunk: bool,
-    notes: list[GaugeNote],
+    normal: NormalEquations, n_nodes: int, components: list[tuple[list[int], Any]],
+    constraints: tuple[FloatArray, FloatArray], rhs: FloatArray, penalty: FloatArray | None,
+    regularisation: Regularisation, notes: list[GaugeNote],
 ) -> JointSolution | None:
     """:func:`solve` above :data:`LARGE_COLUMNS` columns: one Cholesky factorisation of the
     regularised system (:class:`~rplearn.core.lsq.factor.ConstrainedFactor`) gives the
@@ -44,22 +44,28 @@ def solve_large(
     the ridge) and, on first use only, the covariance. None when the regularised matrix is not
     positive definite (the KKT path then decides).
 
+    ``constraints`` are the gauge constraints ``(C, d)`` (``C p = d``), ``penalty`` the
+    smoothness weights per column (or None), ``regularisation`` the ridge and what it implies
+    for the covariance.
+
     The heavy work runs in scipy's BLAS, with numpy's (a second library in the wheels) held to
     one thread meanwhile (:func:`~rplearn.core.threads.numpy_blas_one_thread`)."""
     import scipy.linalg  # noqa: F401  (loaded before the limit looks for scipy's BLAS)
 
     with numpy_blas_one_thread():
         try:
-            return _solve_large(normal, n_nodes, components, cmat, cval, rhs, ridge, penalty, shrunk, notes)
+            return _solve_large(normal, n_nodes, components, constraints, rhs, penalty, regularisation, notes)
         except NotPositiveDefinite:  # single precision solved what float64 cannot factorise: the KKT path decides
             return None
 
 
 def _solve_large(
-    normal: NormalEquations, n_nodes: int, components: list[tuple[list[int], Any]], cmat: FloatArray,
-    cval: FloatArray, rhs: FloatArray, ridge: float, penalty: FloatArray | None, shrunk: bool,
-    notes: list[GaugeNote],
+    normal: NormalEquations, n_nodes: int, components: list[tuple[list[int], Any]],
+    constraints: tuple[FloatArray, FloatArray], rhs: FloatArray, penalty: FloatArray | None,
+    regularisation: Regularisation, notes: list[GaugeNote],
 ) -> JointSolution | None:
+    cmat, cval = constraints
+    ridge = regularisation.ridge
     pcols, pat = normal.n_columns, normal.n_pattern_columns
     added = np.zeros(pcols)
     added[:pat] = ridge  # the shared columns are not shrunk
@@ -83,8 +89,7 @@ def _solve_large(
     # more free directions than the gauge fixes: the regularised matrix is positive definite, so
     # the ridge decides them, as on the KKT path, and the report warns (fit_warnings)
     coef = factor.solve(rhs) + factor.particular(cval)
-    return close_solution(normal, coef, (sv, rank, cond), notes, cmat.shape[0],
-                          Regularisation(float(ridge), penalty is not None, shrunk),
+    return close_solution(normal, coef, (sv, rank, cond), notes, cmat.shape[0], regularisation,
                           FactorInverse(factor, ridge, pat))
 
 
