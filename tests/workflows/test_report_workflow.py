@@ -35,7 +35,6 @@ def no_units(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def sh3(no_units, tmp_path_factory):
-    from rplearn.models.options import FitOptions
     from rplearn.models.spec import ModelSpec
     from rplearn.workflows.learning import fit_dataset
 
@@ -75,7 +74,6 @@ def test_report_on_a_given_model_file_writes_no_model(no_units, sh3, tmp_path):
     assert f"model: SH-3, from {sh3}; scored on the held-out test[5/5]" in out.summary()
     assert not any("may not be held out" in n or "not held out" in n for n in out.notes)  # sh3 records its units
     whole = str(tmp_path / "whole.json")
-    from rplearn.models.options import FitOptions
     from rplearn.models.spec import ModelSpec
     from rplearn.workflows.learning import fit_dataset
 
@@ -155,7 +153,6 @@ def test_paper_models_reproduce_main_s_table_i_of_the_demo_seed_0(tmp_path):
     nodes = list(sim.ground_truth.nodes)
     dataset = str(tmp_path / "dataset.parquet")
     write_table(synchronise(sim.pose_log, sim.signal_log, SyncOptions(link=(nodes[0], nodes[1]))).dataset, dataset)
-    from rplearn.models.options import FitOptions
     from rplearn.models.spec import ModelSpec
     from rplearn.workflows.learning import fit_dataset
 
