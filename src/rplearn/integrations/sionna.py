@@ -325,7 +325,8 @@ def _interpolating_pattern(table: FloatArray) -> Any:
         g10 = dr.gather(mi.Float, values, base + n_phi)
         g11 = dr.gather(mi.Float, values, base + n_phi + 1)
         gain_db = (1.0 - ft) * ((1.0 - fp) * g00 + fp * g01) + ft * ((1.0 - fp) * g10 + fp * g11)
-        return mi.Complex2f(dr.exp(gain_db * to_amplitude), 0.0)  # type: ignore[operator]  # mitsuba types its variant classes as object
+        # mitsuba types its variant classes as object; without the extra installed it is Any (no error to ignore)
+        return mi.Complex2f(dr.exp(gain_db * to_amplitude), 0.0)  # type: ignore[operator,unused-ignore]
 
     return v_pattern
 
