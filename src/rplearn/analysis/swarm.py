@@ -29,6 +29,8 @@ from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
 
 from rplearn._argtypes import check_types
+from rplearn.analysis.heading_options import _check_frequency
+from rplearn.analysis.heading_options import _finite as _is_number
 from rplearn.core.geometry import distance_m, link_directions
 from rplearn.core.link import FAR_FIELD_WAVELENGTHS, free_space_path_loss_db, wavelength_m
 from rplearn.data.poses import pose_tracks
@@ -80,9 +82,7 @@ class SwarmOptions:
     max_gap_s: float = DEFAULT_MAX_GAP_S
 
     def __post_init__(self) -> None:
-        if self.frequency_hz is not None and not (_is_number(self.frequency_hz) and self.frequency_hz > 0):
-            raise InputError(f"frequency_hz: expected a positive frequency in Hz, got {self.frequency_hz!r}",
-                             param="frequency_hz")
+        _check_frequency(self.frequency_hz)
         if self.pattern_of is not None:
             if not isinstance(self.pattern_of, Mapping):
                 raise InputError(f"pattern_of: expected a mapping drone -> node, got {self.pattern_of!r}",
@@ -96,12 +96,6 @@ class SwarmOptions:
         if not (_is_number(self.max_gap_s) and self.max_gap_s > 0):
             raise InputError(f"max_gap_s: expected a positive number of seconds, got {self.max_gap_s!r}",
                              param="max_gap_s")
-
-
-def _is_number(value: Any) -> bool:
-    """A finite real number (not a bool)."""
-    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool) and bool(
-        np.isfinite(value))
 
 
 @check_types
