@@ -2,6 +2,7 @@
 # in __init__.py, which imports each name's module on first use. Only `from .module import name
 # as name` lines here (tests/test_public_api.py).
 
+from .availability import link_availability as link_availability
 from .bases import BASIS_KINDS as BASIS_KINDS
 from .bases import BasisGrid as BasisGrid
 from .bases import Polynomial as Polynomial
