@@ -2,7 +2,7 @@
 
 For each simulator preset (``paper``: two drones; ``ground``: a static station and a drone) three
 flights are simulated with the preset's antennas, wind, pose estimator and radio, synchronised
-as real logs are, and their statistics accumulated at a fixed SH order in 5-s steps of flight
+as real logs are, and their statistics accumulated at a fixed SH order in 2-s steps of flight
 time:
 
 - **reference**: the preset's learning units (``paper``: the paper's three units; ``ground``:
@@ -65,7 +65,7 @@ from rplearn.sim.presets import make_preset
 
 TARGET_DB = 2.0
 TIME_RATIO = 0.6
-STEP_S = 5.0
+STEP_S = 2.0
 START_S = 20.0
 PRIOR_STD_DB = 6.0
 FIXED = {"ground": ("G",)}
@@ -174,19 +174,44 @@ def _targets(setup: Setup, parts: list[Any]) -> dict[str, tuple[np.ndarray, np.n
     return out
 
 
+def _learned_prior(parts: list[Any], nodes: tuple[str, ...], power: float) -> tuple[float, float]:
+    """The smoothing ``fit --degree auto`` chooses on the complete reference flight (its units' own
+    folds), as an absolute weight (times the penalty's scale at the chosen order, as
+    :mod:`rplearn.models.own_posterior` continues it), and the fit's noise (times its inflation)."""
+    from rplearn.core.lsq.penalty import penalty_scale
+    from rplearn.models.auto import fit_auto
+
+    units = {f"u{k}": samples for k, (samples, _, _) in enumerate(parts)}
+    fitted, _ = fit_auto(units, power=power)
+    model = fitted.model if hasattr(fitted, "model") else fitted
+    training = model.training
+    chosen = NormalEquations(model.basis, len(nodes))
+    for samples, _, _ in parts:
+        chosen.add(samples.directions, samples.tx_index, samples.rx_index, samples.joint_gain_db)
+    scale = penalty_scale(chosen.gram, chosen.n_pattern_columns)
+    smoothing = float(training.smoothing if hasattr(training, "smoothing") else training["smoothing"])
+    noise = float(training.noise_std_db) * float(np.sqrt(training.variance_inflation or 1.0))
+    print(f"  learned prior: {model.basis.label}, smoothing {smoothing:.3g} x scale {scale:.3g}, noise {noise:.2f} dB")
+    return smoothing * scale, noise
+
+
 def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, prior_std_db: float = PRIOR_STD_DB) -> dict[str, Flight]:
     config = _config(preset)
     learning = config.campaign.with_role("learning").units
     nodes = tuple(sorted(config.node_antennas))
     noise = float(np.sqrt(config.radio.fading_std_db**2 + (1.0 / 12.0 if config.radio.quantize else 0.0)))
     spec = ModelSpec("sh", order)
-    weight = prior_penalty_weight(spec.basis(), prior_std_db, noise, spec.ridge_weight, power)
+    weight = prior_penalty_weight(spec.basis(), prior_std_db, noise, spec.ridge_weight, power) if prior_std_db > 0 else 0.0
     speed = float(getattr(learning[0], "speed_m_s", 1.5))
     cands = CandidateOptions(fixed_nodes=FIXED.get(preset, ()), speed_m_s=speed)
     opts = ManoeuvreOptions(noise_std_db=noise, packet_rate_hz=config.radio.packet_rate_hz * (1 - config.radio.loss_probability),
                             penalty_weight=weight, candidates=cands, power=power)
     setup = Setup(preset, config, spec, nodes, opts, weight, seed=seed)
     ref_parts, _ = fly(setup, learning)
+    if prior_std_db <= 0:  # the prior the project learns from the complete reference flight
+        weight, noise = _learned_prior(ref_parts, nodes, power)
+        setup.weight = weight
+        opts = replace(opts, penalty_weight=weight, noise_std_db=noise)
     setup.options = opts = replace(opts, targets=_targets(setup, ref_parts))
     ref = Flight("reference", NormalEquations(spec.basis(), len(nodes)))
     accumulate(setup, ref, ref_parts)
@@ -226,7 +251,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--presets", default="paper,ground")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--order", type=int, default=10)
-    ap.add_argument("--prior-std", type=float, default=PRIOR_STD_DB, help="the prior's pattern spread over the sphere [dB]")
+    ap.add_argument("--prior-std", type=float, default=PRIOR_STD_DB, help="the prior's pattern spread over the sphere [dB]; 0: the smoothing fit --degree auto "
+                                                                                  "learns from the reference flight")
     ap.add_argument("--power", type=float, default=2.0, help="exponent of the smoothness prior's roughness weights")
     ap.add_argument("--tiny", action="store_true", help="the smoke preset at SH-4 (seconds; criteria not enforced)")
     args = ap.parse_args(argv)

@@ -281,16 +281,20 @@ def _poses(poses: pd.DataFrame | Mapping[str, Any], nodes: Sequence[str]) -> dic
         if miss:
             raise InputError(f"poses: missing column(s) {', '.join(miss)}", param="poses")
         last = poses.sort_values("t").groupby(poses["node"].astype(str)).tail(1)
-        out = {}
-        for row in last.itertuples(index=False):
-            q = np.array([[row.qw, row.qx, row.qy, row.qz]], np.float64)
-            out[str(row.node)] = ((float(row.x), float(row.y), float(row.z)), float(np.degrees(yaw_from_quat_wxyz(q)[0])))
+        out: dict[str, tuple[tuple[float, float, float], float]] = {}
+        xyz = last[["x", "y", "z"]].to_numpy(np.float64)
+        yaw = np.degrees(yaw_from_quat_wxyz(last[["qw", "qx", "qy", "qz"]].to_numpy(np.float64)))
+        for k, node in enumerate(last["node"].astype(str)):
+            out[node] = ((float(xyz[k, 0]), float(xyz[k, 1]), float(xyz[k, 2])), float(yaw[k]))
     else:
-        out = {str(n): (tuple(float(v) for v in p), float(y)) for n, (p, y) in poses.items()}
+        out = {}
+        for n, (p, y) in poses.items():
+            x0, y0, z0 = (float(v) for v in p)
+            out[str(n)] = ((x0, y0, z0), float(y))
     missing = [n for n in nodes if n not in out]
     if missing:
         raise InputError(f"poses: no pose for node(s) {', '.join(missing)}", param="poses")
-    return {n: out[n] for n in nodes}  # type: ignore[misc]
+    return {n: out[n] for n in nodes}
 
 
 def _check_nodes(normal: NormalEquations, nodes: Sequence[str]) -> None:

@@ -360,17 +360,17 @@ def _library(poses: Mapping[str, tuple[FloatArray, float]], a: str, b: str, opts
         dist = float(np.hypot(*(pd_ - ps)[:2]))
         if dist < 5.0:
             return out
-        bearing = float(np.degrees(np.arctan2(pd_[1] - ps[1], pd_[0] - ps[0])))
+        facing = float(poses[station][1])  # the passes are flown in front of the station, which never turns
         for dh in (0.0, -10.0, 10.0):
             h = float(pd_[2]) + dh
             if not opts.min_height_m <= h <= opts.max_height_m:
                 continue
-            unit = GroundPassUnit(nodes=(station, drone), distance_m=dist, height_m=h, station_height_m=max(float(ps[2]), 0.1),
-                                  speed_m_s=opts.speed_m_s, n_passes=2, station_yaw_deg=bearing, label=f"passes_{drone}_{h:.0f}m")
-            ref = unit.evaluate(np.array([0.0, unit.duration_s]))
+            passes = GroundPassUnit(nodes=(station, drone), distance_m=dist, height_m=h, station_height_m=max(float(ps[2]), 0.1),
+                                  speed_m_s=opts.speed_m_s, n_passes=2, station_yaw_deg=facing, label=f"passes_{drone}_{h:.0f}m")
+            ref = passes.evaluate(np.array([0.0, passes.duration_s]))
             lead = _lead_s([float(np.linalg.norm(ref.position_enu_m[0, 1] - pd_))], opts)
             ends = {drone: (tuple(float(v) for v in ref.position_enu_m[1, 1]), float(np.degrees(ref.yaw_rad[1, 1])))}
-            out.append(Candidate(f"ground passes at {h:.0f} m ({drone} about {station})", unit, lead, ends))  # type: ignore[arg-type]
+            out.append(Candidate(f"ground passes at {h:.0f} m ({drone} about {station})", passes, lead, ends))  # type: ignore[arg-type]
     return out
 
 

@@ -156,7 +156,7 @@ def optimize_plan(out_dir: str, options: OptimizeOptions | None = None, rate_hz:
         return OptimizedPlan(steps, start_spread, None, [])
     units = tuple(replace(s.manoeuvre.candidate.unit, label=f"{k + 1:02d}_{s.manoeuvre.candidate.unit.label}")
                   for k, s in enumerate(steps))
-    campaign = Campaign(units, gap_s=0.0)  # type: ignore[arg-type]
+    campaign = Campaign(units, gap_s=0.0)
     paths = write_references(campaign, out_dir, rate_hz)
     return OptimizedPlan(steps, start_spread, campaign, paths)
 
