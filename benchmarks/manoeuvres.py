@@ -7,7 +7,7 @@ time:
 
 - **reference**: the preset's learning units (``paper``: the paper's three units; ``ground``:
   its passes, since a static station cannot fly the paper's vertical circle);
-- **suggested**: the reference's first :data:`START_S` seconds, then, one after another, the
+- **suggested**: the reference's first :data:`START_S` seconds (10 s), then, one after another, the
   manoeuvre :func:`rplearn.analysis.manoeuvres.rank_manoeuvres` ranks first from the statistics
   and the latest poses so far (each flown in the simulator from where the last one ended);
 - **optimized**: the plan of ``rplearn trajectory --optimize``
@@ -16,9 +16,13 @@ time:
 
 The spread is each node's posterior pattern spread over the *target directions* (the points of a
 1,024-point Fibonacci grid within 10 deg of a direction the complete reference flight saw: about
-the whole sphere for ``paper``, a few percent for ``ground``), the node's mean removed, under the
-same smoothness prior (a 6 dB prior spread, :func:`~rplearn.analysis.manoeuvres.prior_penalty_weight`)
-and the simulator's nominal noise; at the point where each flight first reaches 2 dB it is
+the whole sphere for ``paper``, a few percent for ``ground``), the node's mean removed, under one
+prior for all three flights: by default the one ``fit --degree auto`` learns from the complete
+reference flight (its cross-validated smoothing times the penalty's scale at the chosen order, and
+its noise times its variance inflation: what :mod:`rplearn.models.own_posterior` continues to the
+largest order); ``--prior-std DB`` instead states a smoothness prior of that spread over the sphere
+(:func:`~rplearn.analysis.manoeuvres.prior_penalty_weight`) with the simulator's nominal noise. The
+ranking uses the same prior and noise. At the point where each flight first reaches 2 dB it is
 recomputed through :func:`rplearn.models.own_posterior.own_pattern_posterior` (the fit's own
 posterior, under the solver's gauge) and the two are printed. The pattern error at that point is
 :func:`rplearn.analysis.pattern_error.pattern_errors_db` of the fit from the same statistics and
@@ -31,7 +35,7 @@ all three flights alike (one flight's unit cannot carry a dropout drawn for the 
 Criteria per preset: time to 2 dB of suggested and of optimized <= 60 % of the reference's, and
 their worst per-node pattern error <= the reference's (+0.05 dB of rounding).
 
-Usage: ``python benchmarks/manoeuvres.py [--presets paper,ground] [--seed 0] [--tiny]``
+Usage: ``python benchmarks/manoeuvres.py [--presets paper,ground] [--seed 0] [--prior-std 0] [--tiny]``
 (``--tiny``: the ``smoke`` preset at SH-4, a few seconds; its criteria are printed, not enforced).
 """
 
@@ -66,7 +70,7 @@ from rplearn.sim.presets import make_preset
 TARGET_DB = 2.0
 TIME_RATIO = 0.6
 STEP_S = 2.0
-START_S = 20.0
+START_S = 10.0
 PRIOR_STD_DB = 6.0
 FIXED = {"ground": ("G",)}
 
@@ -251,7 +255,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--presets", default="paper,ground")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--order", type=int, default=10)
-    ap.add_argument("--prior-std", type=float, default=PRIOR_STD_DB, help="the prior's pattern spread over the sphere [dB]; 0: the smoothing fit --degree auto "
+    ap.add_argument("--prior-std", type=float, default=0.0, help="the prior's pattern spread over the sphere [dB]; 0: the smoothing fit --degree auto "
                                                                                   "learns from the reference flight")
     ap.add_argument("--power", type=float, default=2.0, help="exponent of the smoothness prior's roughness weights")
     ap.add_argument("--tiny", action="store_true", help="the smoke preset at SH-4 (seconds; criteria not enforced)")

@@ -148,3 +148,31 @@ def test_the_greedy_plan_lowers_the_spread_at_every_step_and_keeps_to_its_budget
     with pytest.raises(InputError) as err:
         greedy_plan(NormalEquations(SPEC.basis(), 2), SPEC, NODES, POSES, 0.0, 1.0, _options())
     assert err.value.param == "budget_s"
+
+
+def test_the_predicted_spread_is_what_flying_the_manoeuvre_in_the_simulator_gives():
+    """The top-ranked manoeuvre, flown in the simulator (wind, tracking errors, pose noise, packet
+    loss) and synchronised as real logs: the measured spread after it is the predicted one."""
+    from rplearn.data.sync import synchronise
+    from rplearn.data.tables import link_samples
+    from rplearn.plan.campaign import Campaign
+    from rplearn.sim import simulate
+    from rplearn.sim.presets import make_preset
+
+    config = make_preset("smoke")
+    config = replace(config, radio=replace(config.radio, link_offsets_db=(), dropouts=0))
+    start = simulate(config, seed=6)
+    poses = start.pose_log[start.pose_log["t"] <= 8.0]
+    s = link_samples(synchronise(poses, start.signal_log[start.signal_log["t"] <= 8.0]).dataset, nodes=NODES)
+    normal = NormalEquations(SPEC.basis(), 2).add(s.directions, s.tx_index, s.rx_index, s.joint_gain_db)
+    rate = config.radio.packet_rate_hz * (1.0 - config.radio.loss_probability)
+    opts = replace(_options(), noise_std_db=start.noise_std_db, packet_rate_hz=rate,
+                   candidates=replace(_options().candidates, library=False))
+    best = rank_manoeuvres(normal, SPEC, NODES, poses, opts)[0]
+    flown = simulate(replace(config, campaign=Campaign((best.candidate.unit,), gap_s=0.0)), seed=7)
+    m = link_samples(synchronise(flown.pose_log, flown.signal_log).dataset, nodes=NODES)
+    normal.add(m.directions, m.tx_index, m.rx_index, m.joint_gain_db)
+    measured = pattern_spreads(normal, SPEC, NODES, opts)
+    for node in NODES:
+        assert measured[node] == pytest.approx(best.spread_after_db[node], rel=0.1), (best.name, measured, best.spread_after_db)
+        assert measured[node] < best.spread_before_db[node]

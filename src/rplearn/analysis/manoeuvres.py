@@ -9,8 +9,9 @@ absolute weight) and the noise variance. A manoeuvre adds the rows ``F`` of the 
 packets would carry (poses of the manoeuvre's references, tilted into their acceleration ->
 link directions in each body frame -> basis features of both ends, both link directions at the
 packet rate): ``Lambda' = Lambda + w F^T F / sigma^2``. The covariance after it comes from the
-Woodbury identity when the manoeuvre has fewer feature rows than there are columns, else from
-one Cholesky factor of ``Lambda'``.
+Woodbury identity (a manoeuvre with more feature rows than columns first compressed to the
+triangular factor of its ``F^T F``, the same update), of which the spreads need only the
+nodes' diagonal blocks.
 
 Each node's *spread* is read as the decoupling certificate reads it
 (:mod:`rplearn.analysis.decoupling`): the RMS over the target directions of the posterior std
@@ -224,16 +225,31 @@ class _Posterior:
         return np.sqrt(np.maximum([float(np.sum(m * c[k * p:(k + 1) * p, k * p:(k + 1) * p]))
                                    for k, m in enumerate(self.metrics)], 0.0))
 
+    def _woodbury(self, rows: np.ndarray, weight: float) -> tuple[np.ndarray, np.ndarray]:
+        """``(B, S^-1 B)`` of the update ``Sigma' = Sigma - B^T S^-1 B`` with ``B = F Sigma``; more
+        rows than columns are first compressed to the triangular factor of ``F^T F`` (same update)."""
+        if rows.shape[0] > rows.shape[1]:
+            rows = np.linalg.qr(rows, mode="r")
+        b = rows @ self.cov
+        s = b @ rows.T + np.eye(rows.shape[0]) * (self.noise_var / weight)
+        return b, np.linalg.solve(s, b)
+
     def updated(self, rows: np.ndarray, weight: float) -> np.ndarray:
         """The covariance after ``weight`` packets per feature row ``rows`` (rank-k update)."""
         if rows.shape[0] == 0:
             return self.cov
-        if rows.shape[0] < rows.shape[1]:  # Woodbury: a k x k system
-            b = rows @ self.cov
-            s = b @ rows.T + np.eye(rows.shape[0]) * (self.noise_var / weight)
-            return self.cov - b.T @ np.linalg.solve(s, b)
-        precision = _inverse(self.cov) + (weight / self.noise_var) * (rows.T @ rows)
-        return _inverse(precision)
+        b, sb = self._woodbury(rows, weight)
+        return self.cov - b.T @ sb
+
+    def spreads_after(self, rows: np.ndarray, weight: float) -> np.ndarray:
+        """:meth:`spreads` after the update, from its diagonal blocks only."""
+        if rows.shape[0] == 0:
+            return self.spreads()
+        b, sb = self._woodbury(rows, weight)
+        p = self.p
+        var = [float(np.sum(m * self.cov[k * p:(k + 1) * p, k * p:(k + 1) * p]))
+               - float(np.sum((sb[:, k * p:(k + 1) * p] @ m) * b[:, k * p:(k + 1) * p])) for k, m in enumerate(self.metrics)]
+        return np.sqrt(np.maximum(var, 0.0))
 
 
 def _inverse(matrix: np.ndarray) -> np.ndarray:
@@ -312,14 +328,19 @@ def _start(normal: NormalEquations, spec: ModelSpec, nodes: Sequence[str], optio
 
 def _score(post: _Posterior, cand: Candidate, nodes: Sequence[str], basis: Basis,
            options: ManoeuvreOptions) -> tuple[RankedManoeuvre, np.ndarray]:
+    """The candidate's effect, and its feature rows (for :meth:`_Posterior.updated` if chosen)."""
     before = post.spreads()
     rows = manoeuvre_rows(cand.unit, nodes, basis, options.sample_rate_hz)
-    cov = post.updated(rows, 2.0 * options.packet_rate_hz / options.sample_rate_hz)
-    after = post.spreads(cov)
+    after = post.spreads_after(rows, _weight(options))
     gain = _aggregate(before, options.aggregate) - _aggregate(after, options.aggregate)
     ranked = RankedManoeuvre(cand.name, cand.duration_s, dict(zip(nodes, before.tolist())), dict(zip(nodes, after.tolist())),
                              gain / max(cand.duration_s, 1e-9), cand)
-    return ranked, cov
+    return ranked, rows
+
+
+def _weight(options: ManoeuvreOptions) -> float:
+    """Packets per feature row: both link directions share a row's pair of directions."""
+    return 2.0 * options.packet_rate_hz / options.sample_rate_hz
 
 
 @check_types
@@ -430,8 +451,8 @@ def _greedy(post: _Posterior, state: dict[str, Any], names: list[str], basis: Ba
         scored = [s for s in scored if t + s[0].duration_s <= budget_s and s[0].reduction_db_per_s > 0]
         if not scored:
             break
-        best, cov = max(scored, key=lambda s: s[0].reduction_db_per_s)
-        post.cov = cov
+        best, rows = max(scored, key=lambda s: s[0].reduction_db_per_s)
+        post.cov = post.updated(rows, _weight(opts))
         t += best.duration_s
         state.update(best.candidate.ends)
         steps.append(PlanStep(best, t, dict(zip(names, post.spreads().tolist()))))

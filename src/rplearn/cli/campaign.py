@@ -114,6 +114,8 @@ def simulate(
     log_format: str = typer.Option("parquet", "--format", help="parquet or csv."),
     flights: int = typer.Option(8, "--flights", help="fleet: number of flights (about 160,000 samples each)."),
     drones: int = typer.Option(4, "--drones", help="fleet: drones in the fleet, flying in pairs taken in turn."),
+    plan: str | None = typer.Option(None, "--plan", help="Fly this folder of reference files (rplearn trajectory's output, "
+                                                        "e.g. of --optimize) with the preset's antennas, vehicles and radio."),
 ) -> None:
     """Simulate a calibration flight: raw pose and signal logs plus the true patterns.
 
@@ -135,9 +137,14 @@ def simulate(
         say(f"{len(fleet.files):,} flights of {drones} drones, {fleet.samples:,} matched samples, {fleet.elapsed_s:.1f} s "
             f"-> {out_dir} (give the folder to fit and evaluate)")
         return
+    config = None
+    if plan is not None:
+        from rplearn.workflows.calibration_plan import plan_config
+
+        config = plan_config(preset, plan)
     with progress_bar() as p:
-        p.add_task(f"simulating preset '{preset}'", total=None)
-        result = run(preset, seed=seed, out_dir=out_dir, log_format=log_format)
+        p.add_task(f"simulating preset '{preset}'" + (f" flying {plan}" if plan else ""), total=None)
+        result = run(config or preset, seed=seed, out_dir=out_dir, log_format=log_format)
     say(
         f"{len(result.pose_log):,} pose rows, {len(result.signal_log):,} packets, noise {result.noise_std_db:.2f} dB, "
         f"{result.elapsed_s:.1f} s"

@@ -19,6 +19,8 @@ from .manoeuvres import Candidate as Candidate
 from .manoeuvres import CandidateOptions as CandidateOptions
 from .manoeuvres import ManoeuvreUnit as ManoeuvreUnit
 from .manoeuvres import candidate_manoeuvres as candidate_manoeuvres
+from .references import ReferenceUnit as ReferenceUnit
+from .references import read_plan as read_plan
 from .trajectory import PlanLimits as PlanLimits
 from .trajectory import TrajectoryUnit as TrajectoryUnit
 from .trajectory import UnitReference as UnitReference

@@ -14,6 +14,7 @@ units' references in the format ``rplearn trajectory`` writes (``<label>_<node>.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 
@@ -26,6 +27,7 @@ from rplearn.models.load import load_model
 from rplearn.models.spec import ModelSpec
 from rplearn.plan.campaign import Campaign, write_references
 from rplearn.plan.manoeuvres import CandidateOptions
+from rplearn.plan.references import read_plan
 
 
 @check_types
@@ -161,4 +163,21 @@ def optimize_plan(out_dir: str, options: OptimizeOptions | None = None, rate_hz:
     return OptimizedPlan(steps, start_spread, campaign, paths)
 
 
-__all__ = ["OptimizeOptions", "OptimizedPlan", "optimize_plan"]
+@check_types
+def plan_config(preset: str, plan_dir: str) -> Any:
+    """A simulator preset flying a folder of reference files instead of its own campaign
+    (``rplearn simulate --plan``): its antennas, vehicles and radio; the plan's units
+    (:func:`rplearn.plan.references.read_plan`). Its electronics offsets and dropouts, drawn for
+    its own campaign, are kept."""
+    from rplearn.sim.presets import make_preset
+
+    config = make_preset(preset)
+    campaign = read_plan(plan_dir)
+    unknown = sorted(set(campaign.nodes) - set(config.node_antennas))
+    if unknown:
+        raise InputError(f"{plan_dir}: node(s) {', '.join(unknown)} have no antenna in preset {preset} "
+                         f"({', '.join(sorted(config.node_antennas))})", param="plan")
+    return replace(config, campaign=campaign)
+
+
+__all__ = ["OptimizeOptions", "OptimizedPlan", "optimize_plan", "plan_config"]
