@@ -229,7 +229,7 @@ class _Posterior:
         """``(B, S^-1 B)`` of the update ``Sigma' = Sigma - B^T S^-1 B`` with ``B = F Sigma``; more
         rows than columns are first compressed to the triangular factor of ``F^T F`` (same update)."""
         if rows.shape[0] > rows.shape[1]:
-            rows = np.linalg.qr(rows, mode="r")
+            rows = np.asarray(np.linalg.qr(rows, mode="r"), np.float64)
         b = rows @ self.cov
         s = b @ rows.T + np.eye(rows.shape[0]) * (self.noise_var / weight)
         return b, np.linalg.solve(s, b)
