@@ -226,7 +226,7 @@ def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, 
     poses = poses[poses["t"] <= START_S]
     k = 0
     while sug.reached_s is None and sug.t_s < limit_s:
-        best = rank_manoeuvres(sug.normal, spec, nodes, poses, opts)[0]
+        best = rank_manoeuvres(sug.normal, spec, nodes, poses, replace(opts, floor_db=TARGET_DB))[0]
         k += 1
         unit = replace(best.candidate.unit, label=f"m{k:02d}")
         sug.steps.append(f"{best.name} ({best.duration_s:.0f} s)")

@@ -176,3 +176,13 @@ def test_the_predicted_spread_is_what_flying_the_manoeuvre_in_the_simulator_give
     for node in NODES:
         assert measured[node] == pytest.approx(best.spread_after_db[node], rel=0.1), (best.name, measured, best.spread_after_db)
         assert measured[node] < best.spread_before_db[node]
+
+
+def test_a_floor_gives_no_credit_below_it():
+    normal = NormalEquations(SPEC.basis(), 2)
+    plain = rank_manoeuvres(normal, SPEC, NODES, POSES, _options())
+    floored = rank_manoeuvres(normal, SPEC, NODES, POSES, _options(floor_db=10.0))  # above every spread
+    assert plain[0].reduction_db_per_s > 0 and all(r.reduction_db_per_s == 0.0 for r in floored)
+    with pytest.raises(InputError) as err:
+        ManoeuvreOptions(floor_db=-1.0)
+    assert err.value.param == "floor_db"

@@ -26,7 +26,7 @@ Shared columns (link offsets, the environment term) are left out of the posterio
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -79,6 +79,9 @@ class ManoeuvreOptions:
         Which manoeuvres the vehicles can fly (fixed nodes, speeds, elevations, library).
     aggregate : str
         ``"rms"`` (the nodes' RMS spread) or ``"max"`` (the largest).
+    floor_db : float or None
+        Spreads below this count as this [dB] (a stop criterion's target: no reward for
+        lowering a node already below it); None: none.
     """
 
     noise_std_db: float = 4.2
@@ -91,6 +94,7 @@ class ManoeuvreOptions:
     power: float = DEFAULT_PENALTY_POWER
     candidates: CandidateOptions = field(default_factory=CandidateOptions)
     aggregate: str = "rms"
+    floor_db: float | None = None
 
     def __post_init__(self) -> None:
         for name in ("noise_std_db", "packet_rate_hz", "sample_rate_hz"):
@@ -106,6 +110,8 @@ class ManoeuvreOptions:
                              param="penalty_weight")
         if self.aggregate not in AGGREGATES:
             raise InputError(f"aggregate: expected one of {', '.join(AGGREGATES)}, got {self.aggregate!r}", param="aggregate")
+        if self.floor_db is not None and not (np.isfinite(self.floor_db) and self.floor_db >= 0):
+            raise InputError(f"floor_db: expected a non-negative spread [dB], got {self.floor_db!r}", param="floor_db")
         if int(self.target_points) < 16:
             raise InputError(f"target_points: expected at least 16, got {self.target_points!r}", param="target_points")
 
@@ -260,8 +266,10 @@ def _inverse(matrix: np.ndarray) -> np.ndarray:
     return inv_l.T @ inv_l
 
 
-def _aggregate(spreads: np.ndarray, how: str) -> float:
-    return float(np.max(spreads)) if how == "max" else float(np.sqrt(np.mean(spreads**2)))
+def _aggregate(spreads: np.ndarray, options: ManoeuvreOptions) -> float:
+    if options.floor_db is not None:
+        spreads = np.maximum(spreads, options.floor_db)
+    return float(np.max(spreads)) if options.aggregate == "max" else float(np.sqrt(np.mean(spreads**2)))
 
 
 def manoeuvre_rows(unit: Any, nodes: Sequence[str], basis: Basis, rate_hz: float) -> np.ndarray:
@@ -332,7 +340,7 @@ def _score(post: _Posterior, cand: Candidate, nodes: Sequence[str], basis: Basis
     before = post.spreads()
     rows = manoeuvre_rows(cand.unit, nodes, basis, options.sample_rate_hz)
     after = post.spreads_after(rows, _weight(options))
-    gain = _aggregate(before, options.aggregate) - _aggregate(after, options.aggregate)
+    gain = _aggregate(before, options) - _aggregate(after, options)
     ranked = RankedManoeuvre(cand.name, cand.duration_s, dict(zip(nodes, before.tolist())), dict(zip(nodes, after.tolist())),
                              gain / max(cand.duration_s, 1e-9), cand)
     return ranked, rows
@@ -427,13 +435,16 @@ def greedy_plan(
 
     Greedy: each step takes the best manoeuvre from where the last one ended, with the
     posterior it would leave; it is not the optimal sequence (which no tractable search gives),
-    but each step is the best single next step. Arguments as :func:`rank_manoeuvres`.
+    but each step is the best single next step; spreads below the target count as the target
+    (``ManoeuvreOptions.floor_db``, unless given). Arguments as :func:`rank_manoeuvres`.
     """
     if not (np.isfinite(budget_s) and budget_s > 0):
         raise InputError(f"budget_s: expected a positive flight time [s], got {budget_s!r}", param="budget_s")
     if not (np.isfinite(target_spread_db) and target_spread_db > 0):
         raise InputError(f"target_spread_db: expected a positive spread [dB], got {target_spread_db!r}", param="target_spread_db")
     opts = options or ManoeuvreOptions()
+    if opts.floor_db is None:
+        opts = replace(opts, floor_db=float(target_spread_db))
     names = [str(n) for n in nodes]
     _check_nodes(normal, names)
     state = _poses(poses, names)

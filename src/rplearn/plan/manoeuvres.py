@@ -36,6 +36,8 @@ from rplearn.plan.trajectory import TrajectoryUnit, UnitReference
 
 FloatArray = NDArray[np.float64]
 
+#: Smallest height change of a climb or descent candidate [m] (a smaller one is where the drone is).
+MIN_CLIMB_M = 2.0
 #: Manoeuvre kinds of :class:`ManoeuvreUnit`.
 MANOEUVRE_KINDS = ("yaw", "climb", "climb_turn", "spiral", "orbit")
 
@@ -416,7 +418,8 @@ def candidate_manoeuvres(poses: Mapping[str, tuple[tuple[float, float, float], f
                         for dist in (None, *opts.orbit_distances_m) if kind == "orbit" else (None,):
                             unit = ManoeuvreUnit(kind=kind, elevation_deg=float(el), distance_m=dist, **base)
                             z = unit._target_position()[2]
-                            if not opts.min_height_m <= z <= opts.max_height_m:
+                            if not opts.min_height_m <= z <= opts.max_height_m or (
+                                    kind != "orbit" and abs(z - pm[2]) < MIN_CLIMB_M):
                                 continue
                             up = "climb" if z > pm[2] else "descent"
                             what = {"climb": up, "climb_turn": f"{up} then turn", "spiral": f"{up} turning", "orbit": "orbit"}[kind]
@@ -437,4 +440,4 @@ def with_start(candidate: Candidate, label: str) -> Candidate:
     return replace(candidate, unit=replace(candidate.unit, label=label))
 
 
-__all__ = ["MANOEUVRE_KINDS", "Candidate", "CandidateOptions", "ManoeuvreUnit", "candidate_manoeuvres", "with_start"]
+__all__ = ["MANOEUVRE_KINDS", "MIN_CLIMB_M", "Candidate", "CandidateOptions", "ManoeuvreUnit", "candidate_manoeuvres", "with_start"]
