@@ -151,10 +151,15 @@ def evaluate(
     json_out: str | None = typer.Option(None, "--json", help="Also write Table I as JSON here."),
     markdown_out: str | None = typer.Option(None, "--markdown", help="Also write Table I as Markdown here."),
     dask: str | None = typer.Option(None, "--dask", help=DASK_HELP),
+    sensitivity_dbm: float | None = typer.Option(
+        None, "--sensitivity", metavar="DBM",
+        help="Also score each model's predicted availability P(RSSI >= DBM) against the observed samples "
+             "(up: RSSI >= DBM; down: below it, or an outage event): Brier score, skill against the learning "
+             "data's share up, reliability table."),
 ) -> None:
     """Table I (RMSE, MAE, |phi|, AIC, LTD, Q95) of models on a dataset.
 
-    Example: rplearn evaluate sh10.json mean.json data.parquet --units test_36
+    Example: rplearn evaluate sh10.json mean.json data.parquet --units test_36 --sensitivity -90
     """
     from rplearn.workflows.learning import evaluate_model_files
 
@@ -164,7 +169,7 @@ def evaluate(
     with progress_bar() as p:
         task = p.add_task("predicting", total=None)
         outcome = evaluate_model_files(model_paths, dataset, split_list(units), json_out, markdown_out, dask=dask,
-                                       progress=parts_step(p, task, "predictions"))
+                                       progress=parts_step(p, task, "predictions"), sensitivity_dbm=sensitivity_dbm)
     for line in outcome.units.warnings:
         note(line, "warning")
     for line in outcome.units.notes:
