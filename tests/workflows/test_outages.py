@@ -5,6 +5,8 @@ predicted availability is scored on its held-out stretch (acceptance 3)."""
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -180,3 +182,22 @@ def _sync_options():
     from rplearn.data.sync import SyncOptions
 
     return SyncOptions(max_gap_s=1.0)
+
+
+def test_report_with_a_sensitivity_draws_the_reliability_diagram_of_the_held_out_units(flight, learned):
+    from rplearn.workflows.report import ReportOptions, learn_and_report
+
+    folder = flight[0]
+    out, _, _, model = learned
+    df, _ = time_units(read_dataset(str(out)))
+    s = float(np.percentile(df.loc[~df["outage"], "rssi_dbm"], 20))
+    rep = learn_and_report(str(out), str(folder / "report"), model_path=str(model), test_units=TEST,
+                           report=ReportOptions(repeats=1, sensitivity_dbm=s))
+    score = rep.availability
+    assert score is not None and score.n_outages == int(df.loc[df["unit"].isin(TEST), "outage"].sum()) > 0
+    assert os.path.getsize(rep.files["reliability"]) > 10_000
+    html = (folder / "report" / "report.html").read_text()
+    assert f"Availability at {s:g} dBm" in html and "observed share up" in html
+    assert score.markdown() in rep.summary()
+    # the measured-vs-predicted figures leave the outage events out, and are drawn
+    assert os.path.exists(rep.files["time"]) and os.path.exists(rep.files["residuals"])

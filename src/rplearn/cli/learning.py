@@ -254,6 +254,10 @@ def report(
     polarization: str = typer.Option("vertical", "--polarization", help="two-ray: vertical or horizontal."),
     learn_offsets: bool = typer.Option(True, "--link-offsets/--no-link-offsets", help="Pattern models: learn one electronics offset per link logged in both "
                                                                                       "directions."),
+    sensitivity_dbm: float | None = typer.Option(
+        None, "--sensitivity", metavar="DBM",
+        help="Also score the model's predicted availability P(RSSI >= DBM) on the held-out units (outage events count "
+             "as down) and draw its reliability diagram."),
 ) -> None:
     """Report one model on a dataset: held-out scores, measured vs predicted over time, residuals,
     polar cuts, spread and 3-D patterns in report.html (and the paper's Table I on request).
@@ -262,7 +266,7 @@ def report(
     """
     from rplearn.core.environment import PathLoss
     from rplearn.models.options import FitOptions
-    from rplearn.workflows.report import learn_and_report
+    from rplearn.workflows.report import ReportOptions, learn_and_report
 
     two_ray_flags_note(path_loss_kind, ground_level, permittivity, polarization)
     options = FitOptions(path_loss=PathLoss(path_loss_kind, ground_level, permittivity, polarization),
@@ -270,7 +274,8 @@ def report(
     with progress_bar() as p:
         task = p.add_task("learning", total=None)
         outcome = learn_and_report(dataset, out_dir, model, (split_list([paper_models]) or []) if paper_models else [],
-                                   split_list(test_units), progress=step(p, task), options=options, repeats=repeats)
+                                   split_list(test_units), progress=step(p, task), options=options,
+                                   report=ReportOptions(repeats, sensitivity_dbm))
     for line in outcome.notes:
         note(line)
     say(outcome.summary())
