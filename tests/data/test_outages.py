@@ -96,3 +96,14 @@ def test_tables_tolerate_outage_rows_and_learning_samples_leave_them_out():
     text.loc[text.index[0], "outage"] = "maybe"
     with pytest.raises(InputError, match="outage"):
         outage_mask(text, "d.csv")
+
+
+def test_airborne_drops_outage_events_on_the_ground_as_it_drops_packets():
+    pose, signal = _logs()
+    low = pose.copy()
+    low.loc[(low["node"] == "D") & (low["t"] > 30.0), "z"] = low["z"].min()  # landed from 30 s on: held still
+    low.loc[(low["node"] == "D") & (low["t"] > 30.0), "x"] = 40.0
+    res = synchronise(low, signal, SyncOptions(max_gap_s=0.5, airborne=True))
+    kept_all = synchronise(low, signal, SyncOptions(max_gap_s=0.5))
+    assert kept_all.summary.outages["kept"] == 10
+    assert res.summary.outages["on_ground"] + res.summary.outages["disarmed"] == 10 and res.summary.outages["kept"] == 0

@@ -35,7 +35,7 @@ from rplearn.data.tables import MATCHED_COLUMNS, OUTAGE_COLUMN, node_ids, outage
 OUTAGE_MAX_GAP_S: float = 30.0
 #: Why an outage event is not kept, in the order tested.
 OUTAGE_REASONS: tuple[str, ...] = ("invalid_value", "outside_window", "tx_equals_rx", "other_link", "unknown_node",
-                                   "out_of_span", "pose_gap", "near_field")
+                                   "out_of_span", "pose_gap", "near_field", "disarmed", "on_ground")
 
 
 @check_types
@@ -59,7 +59,7 @@ def _times(signal: pd.DataFrame, rx: np.ndarray, offset_s: float | Mapping[str, 
 
 @check_types
 def match_outages(tracks: Mapping[str, PoseTrack], events: pd.DataFrame, options: Any,
-                  window: Any = None) -> tuple[pd.DataFrame, dict[str, int]]:
+                  window: Any = None, phases: Any = None) -> tuple[pd.DataFrame, dict[str, int]]:
     """Match outage events with the poses of both ends (module docstring).
 
     Parameters
@@ -73,6 +73,9 @@ def match_outages(tracks: Mapping[str, PoseTrack], events: pd.DataFrame, options
         :data:`OUTAGE_MAX_GAP_S` here) and window.
     window : callable, optional
         ``window(t)`` -> mask of the times inside the sync's time window (None: no window).
+    phases : FlightPhases, optional
+        The pose log's flight phases: with ``options.airborne``, events with a vehicle end
+        disarmed or on the ground are dropped (``disarmed``, ``on_ground``) as packets are.
 
     Returns
     -------
@@ -112,6 +115,12 @@ def match_outages(tracks: Mapping[str, PoseTrack], events: pd.DataFrame, options
     with np.errstate(invalid="ignore"):
         distance = np.linalg.norm(poses["tx"][0] - poses["rx"][0], axis=1)
         drop(~(distance > FAR_FIELD_WAVELENGTHS * SPEED_OF_LIGHT_M_S / np.where(keep, freq, 1.0)), "near_field")
+    if options.airborne and phases is not None:
+        for end, ids_ in (("tx", tx), ("rx", rx)):
+            code = np.searchsorted(ids, np.where(keep, ids_, ids[0]))
+            disarmed, ground = phases.masks(ids, code, t, poses[end][0][:, 2], keep)
+            drop(disarmed, "disarmed")
+            drop(ground, "on_ground")
     idx = np.flatnonzero(keep)
     counts["kept"] = int(idx.size)
     cols: dict[str, Any] = {"t": t[idx], "tx": tx[idx].astype(str), "rx": rx[idx].astype(str),

@@ -562,7 +562,7 @@ def synchronise(
         origin = phases.start_s if options.window_clock == "start" else 0.0
         inside = None if options.from_s is None and options.to_s is None else (
             lambda t: window_mask(t, options.from_s, options.to_s, origin))
-        matched, result.summary.outages = match_outages(tracks, events, options, inside)
+        matched, result.summary.outages = match_outages(tracks, events, options, inside, phases)
         result.dataset = with_outages(result.dataset, matched)
     return result
 
