@@ -153,7 +153,8 @@ class ReportOutcome:
         lines += [f"model: {self.fitted.label}, {origin}; scored on the held-out {', '.join(self.test_units)}:",
                   self.markdown]
         if self.availability is not None:
-            lines.append(self.availability.markdown())
+            lines += [f"predicted availability at {self.availability.sensitivity_dbm:g} dBm on the held-out units:",
+                      self.availability.markdown()]
         if self.paper_markdown:
             lines += ["Table I, the paper's models (learning time LTD: median of the runs):", self.paper_markdown]
         lines.append(f"wrote {self.report_path}")
