@@ -36,6 +36,8 @@ from .plot import plot_spread_maps as plot_spread_maps
 from .plot import save_figure as save_figure
 from .plot import spread_maps_figure as spread_maps_figure
 from .plot import uncovered_directions as uncovered_directions
+from .reliability import plot_reliability as plot_reliability
+from .reliability import reliability_figure as reliability_figure
 from .report import ReportSection as ReportSection
 from .report import ScreenshotError as ScreenshotError
 from .report import render_report_html as render_report_html

@@ -29,5 +29,7 @@ from .planning import orient_link as orient_link
 from .planning import plan_campaign as plan_campaign
 from .planning import reference_model_file as reference_model_file
 from .report import PAPER_MODELS as PAPER_MODELS
+from .report import ReportOptions as ReportOptions
 from .report import ReportOutcome as ReportOutcome
 from .report import learn_and_report as learn_and_report
+from .report_availability import availability_section as availability_section
