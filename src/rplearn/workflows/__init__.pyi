@@ -2,8 +2,8 @@
 # in __init__.py, which imports each name's module on first use. Only `from .module import name
 # as name` lines here (tests/test_public_api.py).
 
-from .calibration_plan import OptimizeOptions as OptimizeOptions
 from .calibration_plan import OptimizedPlan as OptimizedPlan
+from .calibration_plan import OptimizeOptions as OptimizeOptions
 from .calibration_plan import optimize_plan as optimize_plan
 from .calibration_plan import plan_config as plan_config
 from .demo import DEMO_MODELS as DEMO_MODELS
