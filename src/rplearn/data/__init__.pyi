@@ -2,6 +2,7 @@
 # in __init__.py, which imports each name's module on first use. Only `from .module import name
 # as name` lines here (tests/test_public_api.py).
 
+from .live_sync import LiveMatcher as LiveMatcher
 from .phases import AIRBORNE_MARGIN_M as AIRBORNE_MARGIN_M
 from .phases import FlightPhases as FlightPhases
 from .phases import calibration_problems as calibration_problems

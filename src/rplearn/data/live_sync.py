@@ -71,6 +71,8 @@ class LiveMatcher:
         self._horizon = -math.inf
         self._signal_rows = 0
         self._moving: set[str] = set()
+        #: The rows the last :meth:`match` gave (also when its end-of-stream check raised).
+        self.last_matched = pd.DataFrame(columns=list(MATCHED_COLUMNS))
 
     @property
     def horizon_s(self) -> float:
@@ -128,6 +130,7 @@ class LiveMatcher:
             chunk, rest = pending[ready], pending[~ready]
         self._pending = [rest.reset_index(drop=True)] if len(rest) else []
         result = self._match(chunk.sort_values("t", kind="stable") if "t" in chunk.columns else chunk)
+        self.last_matched = result.dataset
         if not final and len(chunk):
             self._horizon = max(self._horizon, horizon)
             self._trim()

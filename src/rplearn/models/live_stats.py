@@ -53,6 +53,7 @@ from rplearn.models.terms import regression_inputs
 MAX_SEGMENTS = 16
 
 
+@check_types
 @dataclass
 class Segment:
     """The statistics of a run of consecutive batches and where their samples are spooled."""
