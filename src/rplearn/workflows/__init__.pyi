@@ -17,6 +17,7 @@ from .live import LiveStatus as LiveStatus
 from .live import Prequential as Prequential
 from .live import open_source as open_source
 from .live import page_rows as page_rows
+from .live import replay_session as replay_session
 from .live import run_live as run_live
 from .logs import LinksOutcome as LinksOutcome
 from .logs import SyncOutcome as SyncOutcome

@@ -478,5 +478,56 @@ def run_live(
     return LiveOutcome(session.status, session.fitted, session.preq, output)
 
 
+@check_types
+def replay_session(
+    pose_log: pd.DataFrame,
+    signal_log: pd.DataFrame,
+    output: str,
+    options: LiveOptions | None = None,
+    batch_s: float = 1.0,
+) -> LiveOutcome:
+    """A live session on logs already written, fed ``batch_s`` of log time at a time with no
+    waiting: the same matching, prequential prediction, statistics and refits (every
+    ``options.refit_s`` of log time) as :func:`run_live`, deterministic (tests, benchmarks,
+    a flight log learned as it would have been in flight). Stops at ``until_*`` criteria and
+    ``duration_s`` (log time) as :func:`run_live` does; the model file is written at every refit.
+    """
+    options = options or LiveOptions()
+    if not batch_s > 0:
+        raise InputError(f"batch_s: expected a positive number of seconds, got {batch_s}", param="batch_s")
+    check_output(output, [])
+    work_dir = tempfile.mkdtemp(prefix="rplearn-live-")
+    session = _Session(options, output, work_dir)
+    try:
+        pt = pose_log["t"].to_numpy(np.float64)
+        st = signal_log["t"].to_numpy(np.float64)
+        t0 = float(min(pt.min(), st.min()))
+        end = float(max(pt.max(), st.max()))
+        last_refit = t0
+        edge = t0
+        while edge <= end:
+            nxt = edge + batch_s
+            session.feed(pose_log[(pt >= edge) & (pt < nxt)], signal_log[(st >= edge) & (st < nxt)])
+            session.learn()
+            if nxt - last_refit >= options.refit_s and session.refit():
+                last_refit = nxt
+            session.status.elapsed_s = nxt - t0
+            reason = session.stop_reason(nxt - t0)
+            edge = nxt
+            if reason:
+                session.status.stopped = reason
+                break
+        session.learn(final=True)
+        session.refit(final=True)
+        if not session.status.stopped:
+            session.status.stopped = "end of the logs"
+    finally:
+        shutil.rmtree(work_dir, ignore_errors=True)
+    if session.fitted is None:
+        raise InputError(f"the logs ended before a model could be learned ({session.status.learned} samples learned)",
+                         param="signal_log")
+    return LiveOutcome(session.status, session.fitted, session.preq, output)
+
+
 __all__ = ["BUDGET_WINDOW_ROWS", "LiveOptions", "LiveOutcome", "LiveStatus", "ManoeuvreRanker", "Prequential",
-           "open_source", "page_rows", "run_live"]
+           "open_source", "page_rows", "replay_session", "run_live"]
