@@ -206,7 +206,8 @@ class LiveStatistics:
         freq = weighted_median(self.freq)
         if not self.auto:
             acc = Accumulated({"all": self.total()}, Counter(self.freq), self.non_unit, 0.0, self.grids, "live")
-            fit = fit_patterns_accumulated(acc, self.spec, list(self.nodes), self.options)
+            with blas_threads_for(self.n_samples, self.basis.n_coef * len(self.nodes)):
+                fit = fit_patterns_accumulated(acc, self.spec, list(self.nodes), self.options)
             fit.patterns.provenance = {**dict(provenance or {}), "model": self.spec.label}
             return FittedModel(self.spec, fit.patterns, time.perf_counter() - t0)
         orders = auto_orders(self.spec.kind, self.n_samples, len(self.nodes), self.spec.order if self.spec.kind != "sh" else None)

@@ -43,7 +43,7 @@ from rplearn.analysis.budget import check_fit_budget
 from rplearn.analysis.decoupling import decoupling_certificate
 from rplearn.data.live_sync import LiveMatcher
 from rplearn.data.sync import DROP_REASONS, SyncOptions
-from rplearn.errors import InputError
+from rplearn.errors import InputError, RplearnError
 from rplearn.io.live_sources import CsvTail, MavlinkSource
 from rplearn.io.options import ReaderOptions
 from rplearn.models.live_stats import MAX_SEGMENTS, LiveStatistics
@@ -307,7 +307,7 @@ class _Session:
         t0 = time.perf_counter()
         try:
             fitted = self.stats.refit(final=final, provenance={"source": "rplearn live"})
-        except InputError as exc:
+        except RplearnError as exc:  # too few samples yet
             self.status.notes = [n for n in self.status.notes if not n.startswith("waiting: ")] + [f"waiting: {exc}"]
             return False
         self.status.refit_ms = 1e3 * (time.perf_counter() - t0)
@@ -485,12 +485,14 @@ def replay_session(
     output: str,
     options: LiveOptions | None = None,
     batch_s: float = 1.0,
+    on_update: Callable[[LiveStatus], None] | None = None,
 ) -> LiveOutcome:
     """A live session on logs already written, fed ``batch_s`` of log time at a time with no
     waiting: the same matching, prequential prediction, statistics and refits (every
     ``options.refit_s`` of log time) as :func:`run_live`, deterministic (tests, benchmarks,
     a flight log learned as it would have been in flight). Stops at ``until_*`` criteria and
-    ``duration_s`` (log time) as :func:`run_live` does; the model file is written at every refit.
+    ``duration_s`` (log time) as :func:`run_live` does; the model file is written at every refit;
+    ``on_update(status)`` after every batch.
     """
     options = options or LiveOptions()
     if not batch_s > 0:
@@ -512,6 +514,8 @@ def replay_session(
             if nxt - last_refit >= options.refit_s and session.refit():
                 last_refit = nxt
             session.status.elapsed_s = nxt - t0
+            if on_update is not None:
+                on_update(session.status)
             reason = session.stop_reason(nxt - t0)
             edge = nxt
             if reason:
