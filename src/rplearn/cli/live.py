@@ -7,7 +7,7 @@ from typing import Any
 
 import typer
 
-from rplearn.cli._app import app, geodetic_flag, say, split_list, user_errors
+from rplearn.cli._app import app, geodetic_flag, reader_options, say, split_list, user_errors
 
 
 def _view(status: Any) -> Any:
@@ -74,15 +74,14 @@ def live(
     """
     from rplearn.cli.learning import degree_option
     from rplearn.data.sync import SyncOptions
-    from rplearn.io import ReaderOptions
     from rplearn.models.options import FitOptions
     from rplearn.models.spec import ModelSpec
     from rplearn.workflows.live import LiveOptions, run_live
 
     auto, order = degree_option(degree, model)
     spec = ModelSpec.parse(model, order=order)
-    reader = ReaderOptions(tx_power_dbm=tx_power_dbm, frequency_hz=frequency_hz,
-                           station_geodetic=geodetic_flag(station_geodetic, "--station"))
+    reader = reader_options(tx_power_dbm=tx_power_dbm, frequency_hz=frequency_hz,
+                            station_geodetic=geodetic_flag(station_geodetic, "--station"))
     options = LiveOptions(spec=spec, fit=FitOptions(auto=auto), reader=reader, sync=SyncOptions(max_gap_s=max_gap_s),
                           refit_s=refit_s, duration_s=duration, until_spread_db=until_spread,
                           until_coverage_pct=until_coverage, idle_s=idle, nodes=tuple(split_list(nodes) or ()) or None)

@@ -45,6 +45,7 @@ from rplearn.errors import InputError
 from rplearn.models.auto import MAX_AUTO_ORDER, auto_orders, fit_from_statistics
 from rplearn.models.fit import FittedModel, node_coverage_grids
 from rplearn.models.options import FitOptions
+from rplearn.models.patterns import PatternSet
 from rplearn.models.spec import ModelSpec, default_ridge
 from rplearn.models.streamed import Accumulated, fit_patterns_accumulated, frequency_counts, weighted_median
 from rplearn.models.terms import regression_inputs
@@ -217,7 +218,9 @@ class LiveStatistics:
         folds = {k: sub_statistics(v, small) for k, v in folds.items()}
         with blas_threads_for(self.n_samples, small.n_coef * len(self.nodes)):
             fitted, _ = fit_from_statistics(folds, top, orders, list(self.nodes), self.options, freq, provenance)
-        fitted.model.training = fitted.model.training.replace(coverage_deg=self.grids)
+        model = fitted.model
+        assert isinstance(model, PatternSet)  # fit_from_statistics learns patterns
+        model.training = model.training.replace(coverage_deg=self.grids)
         fitted.ltd_s = time.perf_counter() - t0
         return fitted
 
