@@ -51,12 +51,12 @@ def live(
     degree: str | None = typer.Option(None, "--order", help="Order, or 'auto' (default for sh): order and smoothing chosen by cross-validation "
                                                             "over the flight's 5 stretches of time."),
     refit_s: float = typer.Option(2.0, "--refit-s", help="Seconds between refits."),
-    until_spread: float | None = typer.Option(None, "--until-spread", help="End when every node's pattern spread over its covered "
+    until_spread_db: float | None = typer.Option(None, "--until-spread", help="End when every node's pattern spread over its covered "
                                                                            "directions is below this [dB]."),
-    until_coverage: float | None = typer.Option(None, "--until-coverage", help="End when every node's covered share of the sphere "
+    until_coverage_pct: float | None = typer.Option(None, "--until-coverage", help="End when every node's covered share of the sphere "
                                                                                "reaches this [%] (with --until-spread: both)."),
-    duration: float | None = typer.Option(None, "--duration", help="End after this many seconds."),
-    idle: float = typer.Option(10.0, "--idle", help="The stream has ended when nothing arrived for this many seconds."),
+    duration_s: float | None = typer.Option(None, "--duration", help="End after this many seconds."),
+    idle_s: float = typer.Option(10.0, "--idle", help="The stream has ended when nothing arrived for this many seconds."),
     nodes: list[str] | None = typer.Option(None, "--nodes", help="Node ids (default: those of the first matched samples)."),
     tx_power_dbm: float | None = typer.Option(None, "--tx-power", help="MAVLink: the radios' transmit power [dBm]."),
     frequency_hz: float | None = typer.Option(None, "--frequency", help="MAVLink: the carrier frequency [Hz]."),
@@ -83,8 +83,8 @@ def live(
     reader = reader_options(tx_power_dbm=tx_power_dbm, frequency_hz=frequency_hz,
                             station_geodetic=geodetic_flag(station_geodetic, "--station"))
     options = LiveOptions(spec=spec, fit=FitOptions(auto=auto), reader=reader, sync=SyncOptions(max_gap_s=max_gap_s),
-                          refit_s=refit_s, duration_s=duration, until_spread_db=until_spread,
-                          until_coverage_pct=until_coverage, idle_s=idle, nodes=tuple(split_list(nodes) or ()) or None)
+                          refit_s=refit_s, duration_s=duration_s, until_spread_db=until_spread_db,
+                          until_coverage_pct=until_coverage_pct, idle_s=idle_s, nodes=tuple(split_list(nodes) or ()) or None)
     if quiet:
         outcome = run_live(source, output, options, None, record, html)
     else:
