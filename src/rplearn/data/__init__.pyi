@@ -2,6 +2,7 @@
 # in __init__.py, which imports each name's module on first use. Only `from .module import name
 # as name` lines here (tests/test_public_api.py).
 
+from .live_sync import LiveMatcher as LiveMatcher
 from .outages import OUTAGE_MAX_GAP_S as OUTAGE_MAX_GAP_S
 from .outages import OUTAGE_REASONS as OUTAGE_REASONS
 from .outages import match_outages as match_outages

@@ -23,6 +23,8 @@ from .fit import fit_model as fit_model
 from .fit import fit_patterns as fit_patterns
 from .fit import scores_markdown as scores_markdown
 from .fit import solve_patterns as solve_patterns
+from .live_stats import LiveStatistics as LiveStatistics
+from .live_stats import Segment as Segment
 from .load import load_model as load_model
 from .options import LOSSES as LOSSES
 from .options import FitOptions as FitOptions

@@ -15,6 +15,14 @@ from .learning import evaluate_model_files as evaluate_model_files
 from .learning import fit_dataset as fit_dataset
 from .learning import predict_file as predict_file
 from .learning import sweep_dataset as sweep_dataset
+from .live import LiveOptions as LiveOptions
+from .live import LiveOutcome as LiveOutcome
+from .live import LiveStatus as LiveStatus
+from .live import Prequential as Prequential
+from .live import open_source as open_source
+from .live import page_rows as page_rows
+from .live import replay_session as replay_session
+from .live import run_live as run_live
 from .logs import LinksOutcome as LinksOutcome
 from .logs import SyncOutcome as SyncOutcome
 from .logs import reader_notes as reader_notes
