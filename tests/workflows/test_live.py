@@ -164,8 +164,8 @@ def test_the_stop_criteria_and_the_manoeuvre_hook(smoke, tmp_path):
     pose, sig = smoke
     seen = []
 
-    def ranker(stats, spec, latest):
-        seen.append((stats, spec, latest))
+    def ranker(stats, fitted, latest):
+        seen.append((stats, fitted, latest))
         return [("orbit", 30.0, 1.5), ("yaw turn", 10.0, 1.2), ("climb", 20.0, 1.9), ("descent", 20.0, 2.5)]
 
     options = LiveOptions(refit_s=5.0, until_coverage_pct=20.0, manoeuvres=ranker)
@@ -173,9 +173,9 @@ def test_the_stop_criteria_and_the_manoeuvre_hook(smoke, tmp_path):
     assert "coverage at least 20%" in outcome.status.stopped
     assert outcome.status.learned < len(sig) / 2
     assert min(outcome.status.coverage_pct.values()) >= 20.0
-    stats, spec, latest = seen[-1]
+    stats, fitted, latest = seen[-1]
     assert isinstance(stats, NormalEquations) and stats.n_samples == outcome.status.learned
-    assert isinstance(spec, ModelSpec) and set(latest["node"]) == {"A", "B"}
-    assert [m[0] for m in outcome.status.manoeuvres] == ["yaw turn", "orbit", "climb"]
-    assert "next: yaw turn" in outcome.status.summary()
+    assert isinstance(fitted.spec, ModelSpec) and set(latest["node"]) == {"A", "B"}
+    assert [m[0] for m in outcome.status.manoeuvres] == ["orbit", "yaw turn", "climb"]  # the ranker's order
+    assert "next: orbit" in outcome.status.summary()
     assert load_model(str(tmp_path / "m.json")).label == outcome.fitted.model.label

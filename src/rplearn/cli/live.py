@@ -66,6 +66,11 @@ def live(
                                                          "spread maps."),
     record: str | None = typer.Option(None, "--record", help="MAVLink: keep the received stream as a .tlog (for sync and fit after)."),
     quiet: bool = typer.Option(False, "--quiet", help="No live view; print the summary at the end."),
+    fixed: list[str] | None = typer.Option(None, "--fixed", help="Nodes that cannot move (a ground station), for the next-best "
+                                                                 "manoeuvres; default for MAVLink: the station (gcs)."),
+    advice_s: float = typer.Option(15.0, "--advice-s", help="Seconds between rankings of the next-best manoeuvres (0: at every "
+                                                            "refit; a ranking takes seconds)."),
+    no_advice: bool = typer.Option(False, "--no-advice", help="Do not rank the next-best manoeuvres."),
 ) -> None:
     """Learn the patterns while the drones fly: match, predict each new batch before learning it
     (the prequential error), refit every --refit-s and show coverage, spread and plausibility.
@@ -77,14 +82,19 @@ def live(
     from rplearn.models.options import FitOptions
     from rplearn.models.spec import ModelSpec
     from rplearn.workflows.live import LiveOptions, run_live
+    from rplearn.workflows.live_advice import live_advisor
 
     auto, order = degree_option(degree, model)
     spec = ModelSpec.parse(model, order=order)
     reader = reader_options(tx_power_dbm=tx_power_dbm, frequency_hz=frequency_hz,
                             station_geodetic=geodetic_flag(station_geodetic, "--station"))
+    csv_source = "," in source and all(p.lower().endswith(".csv") for p in source.split(","))
+    still = tuple(split_list(fixed) or ()) or (() if csv_source else (reader.station,))
+    advisor = None if no_advice else live_advisor(still, advice_s, until_spread_db)
     options = LiveOptions(spec=spec, fit=FitOptions(auto=auto), reader=reader, sync=SyncOptions(max_gap_s=max_gap_s),
                           refit_s=refit_s, duration_s=duration_s, until_spread_db=until_spread_db,
-                          until_coverage_pct=until_coverage_pct, idle_s=idle_s, nodes=tuple(split_list(nodes) or ()) or None)
+                          until_coverage_pct=until_coverage_pct, idle_s=idle_s, nodes=tuple(split_list(nodes) or ()) or None,
+                          manoeuvres=advisor)
     if quiet:
         outcome = run_live(source, output, options, None, record, html)
     else:

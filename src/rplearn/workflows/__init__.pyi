@@ -23,6 +23,9 @@ from .live import open_source as open_source
 from .live import page_rows as page_rows
 from .live import replay_session as replay_session
 from .live import run_live as run_live
+from .live_advice import DEFAULT_ADVICE_EVERY_S as DEFAULT_ADVICE_EVERY_S
+from .live_advice import ManoeuvreAdvisor as ManoeuvreAdvisor
+from .live_advice import live_advisor as live_advisor
 from .logs import LinksOutcome as LinksOutcome
 from .logs import SyncOutcome as SyncOutcome
 from .logs import reader_notes as reader_notes

@@ -50,10 +50,12 @@ from rplearn.models.live_stats import MAX_SEGMENTS, LiveStatistics
 from rplearn.models.options import FitOptions
 from rplearn.models.spec import ModelSpec
 
-#: The manoeuvre hook: ``(statistics, spec, latest pose per node) -> rows (name, duration [s],
-#: predicted spread after [dB])``; the statistics are the fixed-order ``NormalEquations`` of
-#: every sample so far (at the accumulation order), the spec the current model's.
-ManoeuvreRanker = Callable[[Any, ModelSpec, pd.DataFrame], Sequence[tuple[str, float, float]]]
+#: The manoeuvre hook: ``(statistics, fitted, latest pose per node) -> rows (name, duration [s],
+#: predicted spread after [dB])``, best first; the statistics are the fixed-order
+#: ``NormalEquations`` of every sample so far (at the accumulation order), ``fitted`` the current
+#: ``FittedModel`` (its spec and model). :class:`rplearn.workflows.live_advice.ManoeuvreAdvisor`
+#: is the one ``rplearn live`` uses.
+ManoeuvreRanker = Callable[[Any, Any, pd.DataFrame], Sequence[tuple[str, float, float]]]
 #: Matched rows kept for the link budget's plausibility check (a window of the latest).
 BUDGET_WINDOW_ROWS = 2000
 
@@ -82,7 +84,7 @@ class LiveOptions:
     nodes : tuple of str or None
         The node ids (default: those of the first matched batch).
     manoeuvres : ManoeuvreRanker or None
-        Ranks the next manoeuvres at every refit (shown top three).
+        Ranks the next manoeuvres at every refit, best first (the top three are shown).
     max_segments : int
         Segments of statistics kept (:class:`rplearn.models.live_stats.LiveStatistics`).
     """
@@ -338,8 +340,8 @@ class _Session:
         if ranker is not None and self.stats is not None:
             latest = pd.DataFrame(list(self.last_pose.values())).reset_index(drop=True)
             try:
-                rows = ranker(self.stats.total(), self.fitted.spec, latest)
-                s.manoeuvres = sorted([(str(n), float(d), float(v)) for n, d, v in rows], key=lambda r: r[2])[:3]
+                rows = ranker(self.stats.total(), self.fitted, latest)
+                s.manoeuvres = [(str(n), float(d), float(v)) for n, d, v in rows][:3]
             except Exception as exc:  # the ranking is advice: its failure must not end the session
                 s.notes.append(f"manoeuvres: {type(exc).__name__}: {exc}")
 

@@ -1,0 +1,73 @@
+"""The next-best manoeuvres of a live session: :func:`rplearn.analysis.manoeuvres.rank_manoeuvres`
+on the session's statistics, as the hook of :class:`rplearn.workflows.live.LiveOptions`.
+
+The statistics the session keeps are at its accumulation order (the largest candidate order of
+``--order auto``), so the ranking reads the posterior of the chosen fit's smoothness prior
+continued to that order, as the per-node spreads of the live view are read
+(:mod:`rplearn.models.own_posterior`), with the chosen fit's noise. A ranking scores every
+candidate with a rank-k update (seconds for a hundred candidates), so it is redone at most every
+``every_s`` seconds of wall time and the last one is shown in between; rows are best first (the
+largest reduction of the nodes' spread per second of flight).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import replace
+from typing import Any
+
+import pandas as pd
+
+from rplearn._argtypes import check_types
+from rplearn.analysis.manoeuvres import ManoeuvreOptions, rank_manoeuvres
+from rplearn.errors import InputError
+from rplearn.plan.manoeuvres import CandidateOptions
+
+#: Seconds of wall time between two rankings of a live session.
+DEFAULT_ADVICE_EVERY_S = 15.0
+
+
+@check_types
+class ManoeuvreAdvisor:
+    """Callable hook ``(statistics, fitted, latest poses) -> [(name, duration [s], spread after [dB])]``.
+
+    Parameters
+    ----------
+    options : ManoeuvreOptions, optional
+        The candidates and their scoring; its noise is replaced by the fitted model's, and the
+        nodes in ``fixed_nodes`` cannot move (a ground station).
+    every_s : float
+        Seconds of wall time between rankings (the last one is returned in between).
+    """
+
+    def __init__(self, options: ManoeuvreOptions | None = None, every_s: float = DEFAULT_ADVICE_EVERY_S) -> None:
+        if not (math.isfinite(every_s) and every_s >= 0):
+            raise InputError(f"every_s: expected a non-negative number of seconds, got {every_s!r}", param="every_s")
+        self.options = options or ManoeuvreOptions()
+        self.every_s = float(every_s)
+        self._last: tuple[float, list[tuple[str, float, float]]] | None = None
+
+    def __call__(self, statistics: Any, fitted: Any, latest: pd.DataFrame) -> list[tuple[str, float, float]]:
+        now = time.monotonic()
+        if self._last is not None and now - self._last[0] < self.every_s:
+            return self._last[1]
+        model = fitted.model
+        noise = model.training.noise_std_db if model.training.noise_std_db is not None else model.training.rmse_db
+        options = self.options if noise is None or not noise > 0 else replace(self.options, noise_std_db=float(noise))
+        ranked = rank_manoeuvres(statistics, fitted.spec, list(model.nodes), latest, options)
+        rows = [(r.name, float(r.duration_s), float(max(r.spread_after_db.values()))) for r in ranked]
+        self._last = (now, rows)
+        return rows
+
+
+@check_types
+def live_advisor(fixed_nodes: tuple[str, ...] = (), every_s: float = DEFAULT_ADVICE_EVERY_S,
+                 floor_db: float | None = None) -> ManoeuvreAdvisor:
+    """The advisor ``rplearn live`` uses: the default candidates with ``fixed_nodes`` held still,
+    no reward below ``floor_db`` (the session's ``--until-spread``)."""
+    candidates = CandidateOptions(fixed_nodes=tuple(fixed_nodes))
+    return ManoeuvreAdvisor(ManoeuvreOptions(candidates=candidates, floor_db=floor_db), every_s)
+
+
+__all__ = ["DEFAULT_ADVICE_EVERY_S", "ManoeuvreAdvisor", "live_advisor"]
