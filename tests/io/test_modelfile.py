@@ -140,3 +140,16 @@ def test_concurrent_saves_of_different_models_to_one_path_leave_one_whole_model(
     assert sorted(os.listdir(tmp_path)) == sorted([*mine, "nn.json", side])  # no stray, no temporary file
     for name, data in mine.items():
         assert (tmp_path / name).read_bytes() == data
+
+
+def test_saving_the_same_arrays_again_by_a_relative_path_keeps_their_sidecar(tmp_path, monkeypatch):
+    """Two k-NN models of the same samples share the sidecar's name: the second save must not
+    remove it as the first model file's (found by tests/cli/test_hostile_paths.py)."""
+    from dataclasses import replace
+
+    monkeypatch.chdir(tmp_path)
+    model = _build("knn", 0)
+    model.save("nn.json")
+    replace(model, n_neighbors=30).save("nn.json")
+    assert load_model("nn.json").n_neighbors == 30  # its sidecar is there and verified
+    assert sorted(os.listdir(tmp_path)) == sorted(["nn.json", os.path.basename(named_sidecar("nn.json"))])

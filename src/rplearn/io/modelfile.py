@@ -277,7 +277,7 @@ def write_model_with_sidecar(path: str | os.PathLike[str], model_type: str, payl
             previous = owned_sidecar(name)
             target = None
             if tmp is not None:
-                target = sidecar_path(name, checksum)
+                target = os.path.abspath(sidecar_path(name, checksum))  # as owned_sidecar spells it
                 os.replace(tmp, target)
                 tmp = None
                 payload["sidecar"] = {"file": os.path.basename(target), "sha256": checksum}
