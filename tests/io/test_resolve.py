@@ -174,3 +174,14 @@ def test_a_glob_that_matches_nothing_is_a_one_line_error(matched):
         with pytest.raises(InputError, match="no such file"):
             read_dataset("nothing/*.parquet")
         assert pd.read_parquet("a.parquet").shape[0] == ROWS["a.parquet"]
+
+
+def test_read_logs_refuses_one_log_named_twice(matched):
+    from rplearn.io import read_logs
+
+    with _folder(matched):
+        pd.DataFrame({"t": [0.0, 1.0], "node": ["A", "A"], "x": 0.0, "y": 0.0, "z": 1.0, "qw": 1.0, "qx": 0.0,
+                      "qy": 0.0, "qz": 0.0}).to_csv("pose.csv", index=False)
+        assert len(read_logs(["pose.csv"])[0].pose) == 2
+        with pytest.raises(InputError, match=r"pose\.csv and \./pose\.csv are one file"):
+            read_logs(["pose.csv", "./pose.csv"])
