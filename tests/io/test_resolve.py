@@ -152,6 +152,7 @@ def test_every_output_is_checked_against_every_file_folder_and_glob_of_the_input
             with pytest.raises(InputError, match=words):
                 check_outputs(outputs, inputs)
         check_outputs({"output": "sub/x.json", "plot_path": "x.png"}, ["sub/*.parquet", "a.parquet"])
+        check_outputs({"output": "sub/model.json"}, ["sub/*"])  # matches the glob, but is no table: never read
         assert sorted(input_files(["sub,b.parquet"])) == ["b.parquet", "sub", "sub/c.parquet"]
 
 

@@ -10,7 +10,7 @@ and inode (:func:`rplearn.io.partitions.file_identity`), so that
   repeated flags, such as ``sync --poses``), never read twice;
 - every output (``-o``, ``--markdown``, ``--plot``, ``--connectivity``, ...) is checked
   against every file of every input (:func:`check_outputs`, through
-  :func:`rplearn._atomic.check_output`), inside every dataset folder, against every glob the
+  :func:`rplearn._atomic.check_output`), inside every dataset folder, against every glob a table
   output would match (it would join the dataset on the next run), and against the other
   outputs, with the parameter (the flag) that gave it named.
 """
@@ -25,7 +25,7 @@ from collections.abc import Iterable, Mapping, Sequence
 from rplearn._argtypes import check_types
 from rplearn._atomic import check_output
 from rplearn.errors import InputError
-from rplearn.io.partitions import dataset_parts, file_identity, is_partitioned, is_url, refuse_repeated
+from rplearn.io.partitions import TABLE_SUFFIXES, dataset_parts, file_identity, is_partitioned, is_url, refuse_repeated
 
 __all__ = ["check_outputs", "distinct_inputs", "input_files"]
 
@@ -97,7 +97,7 @@ def check_outputs(outputs: Mapping[str, str | None], inputs: Iterable[str | None
             continue
         name = os.fspath(path)
         check_output(name, files, param=param)
-        for pattern in patterns:
+        for pattern in patterns if name.lower().endswith(TABLE_SUFFIXES) else ():  # only tables join a dataset
             if fnmatch.fnmatch(os.path.abspath(name), pattern):
                 raise InputError(f"{param}: {name} matches {pattern}, a dataset this command reads (the file would join "
                                  "it); write the output elsewhere", param=param)
