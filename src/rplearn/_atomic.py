@@ -67,7 +67,8 @@ def check_output(path: PathLike, inputs: Iterable[PathLike] = (), param: str | N
     name = os.fspath(path)
     for source in inputs:
         if source is not None and _same_file(name, os.fspath(source)):
-            raise InputError(f"{name}: is also an input of this command; write the output elsewhere", param=param)
+            spelled = "" if os.fspath(source) == name else f" ({os.fspath(source)})"
+            raise InputError(f"{name}: is also an input of this command{spelled}; write the output elsewhere", param=param)
         if source is not None and os.path.isdir(os.fspath(source)) and _inside(name, os.fspath(source)):
             raise InputError(f"{name}: is inside {os.fspath(source)}, a dataset folder this command reads (the file "
                              "would join the dataset); write the output elsewhere", param=param)

@@ -241,6 +241,8 @@ def pairs(values: list[str] | None, flag: str) -> dict[str, str]:
         if "=" not in v:
             raise InputError(f"{flag}: expected KEY=VALUE, got {v!r}")
         k, val = (part.strip() for part in v.split("=", 1))
+        if not k or not val:
+            raise InputError(f"{flag}: expected KEY=VALUE, got {v!r} (no {'key' if not k else 'value'})")
         if k in found and found[k] != val:
             raise InputError(f"{flag}: {k} is given twice, as {found[k]} and as {val}")
         found[k] = val

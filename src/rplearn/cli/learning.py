@@ -15,7 +15,7 @@ DASK_HELP = ("Run on Dask, part by part (pattern models): local (2 worker proces
 
 
 @app.command()
-@user_errors
+@user_errors(flags={"priors": "--prior", "prior_std_db": "--prior-std"})
 def fit(
     dataset: str = typer.Argument(..., help="Matched dataset (.parquet or .csv), or many: a directory, a glob, a comma-separated list or a URL."),
     model: str = typer.Option("sh", "--model", help="sh, bg, poly, mean or knn (also sh-10, nn-400...)."),
@@ -85,7 +85,7 @@ def fit(
 
 
 @app.command()
-@user_errors
+@user_errors(flags={"mounts": "--mount"})
 def reference(
     patterns: list[str] = typer.Argument(..., help="NODE=FILE: a reference pattern (CSV az_deg/el_deg or phi/theta + gain_dbi, or MSI Planet) per node."),
     mount: list[str] | None = typer.Option(None, "--mount", help="NODE=ROLL,PITCH,YAW: the antenna frame in the body frame [deg] (e.g. 180,0,0 hanging upside "

@@ -51,14 +51,27 @@ def inspect(
         say(inspect_to_json(report))
         unreadable = [f for f in report.files if f.get("error") is not None]
         if unreadable:
-            fail(f"{len(unreadable)} of {len(report.files)} file(s) could not be read (see the JSON)")
+            fail(unreadable_line(unreadable, len(report.files), "(see the JSON)"))
         return
     text = report.to_markdown() if markdown else report.to_text()
     # the report names reader options as the library knows them; here they are flags
     say("\n".join(with_flag(line, None, inspect) for line in text.splitlines()))
     unreadable = [f for f in report.files if f.get("error") is not None]
     if unreadable:
-        fail(f"{len(unreadable)} of {len(report.files)} file(s) could not be read (see above)")
+        fail(unreadable_line(unreadable, len(report.files), "(see above)"))
+
+
+def unreadable_line(unreadable: list[dict], n_files: int, where: str) -> str:
+    """The last line of ``inspect`` when files could not be read: their names (the first three),
+    and each one's reason when a single file failed."""
+    names = [str(f.get("path") or f.get("file") or "?") for f in unreadable]
+    shown = ", ".join(names[:3]) + (f" and {len(names) - 3} more" if len(names) > 3 else "")
+    if len(unreadable) == 1:
+        reason = str(unreadable[0].get("error") or "").splitlines()[0] if unreadable[0].get("error") else ""
+        prefix = f"{names[0]}: "
+        reason = reason[len(prefix):] if reason.startswith(prefix) else reason
+        return f"{names[0]}: could not be read ({reason})" if reason else f"{names[0]}: could not be read {where}"
+    return f"{shown}: {len(unreadable)} of {n_files} file(s) could not be read {where}"
 
 
 @app.command()

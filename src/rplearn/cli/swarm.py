@@ -9,7 +9,7 @@ from rplearn.cli._app import app, floats, note, numbers, pairs, reader_options, 
 
 
 @app.command()
-@user_errors
+@user_errors(flags={"plot_path": "--plot"})
 def links(
     model_path: str = typer.Argument(..., metavar="MODEL.json"),
     poses: list[str] = typer.Argument(..., metavar="POSE_LOG...", help="Pose log(s) of the drones: a plan or a flight (CSV/Parquet, bag, ULog)."),

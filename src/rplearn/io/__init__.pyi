@@ -48,10 +48,14 @@ from .options import NAN_POLICIES as NAN_POLICIES
 from .options import ReaderOptions as ReaderOptions
 from .partitions import Part as Part
 from .partitions import dataset_parts as dataset_parts
+from .partitions import file_identity as file_identity
 from .partitions import is_partitioned as is_partitioned
 from .pcap import read_pcap as read_pcap
 from .pcap import write_radiotap_pcap as write_radiotap_pcap
 from .read import read_logs as read_logs
+from .resolve import check_outputs as check_outputs
+from .resolve import distinct_inputs as distinct_inputs
+from .resolve import input_files as input_files
 from .rosbag import RosbagOptions as RosbagOptions
 from .rosbag import bag_topics as bag_topics
 from .rosbag import read_rosbag as read_rosbag

@@ -15,7 +15,7 @@ from typing import Any, Literal
 import pandas as pd
 
 from rplearn._argtypes import check_types
-from rplearn._atomic import atomic_open, atomic_path, check_output, dump_json
+from rplearn._atomic import atomic_open, atomic_path, dump_json
 from rplearn._version import __version__
 from rplearn.data.tables import CSV_DTYPES, normalise_times, validate_matched
 from rplearn.errors import InputError
@@ -105,7 +105,9 @@ def iter_parts(parts: Sequence[Part], chunk_rows: int = 500_000, columns: Iterab
     time, in order, with its Hive columns (see :func:`iter_table`)."""
     wanted = None if columns is None else list(columns)
     for part in parts:
-        for chunk in iter_table(part.path, chunk_rows, wanted):
+        # the Hive keys are read too: a folder never replaces a column the file holds (with_hive_columns)
+        read = None if wanted is None else [*wanted, *(k for k in part.columns if k not in wanted)]
+        for chunk in iter_table(part.path, chunk_rows, read):
             chunk = with_hive_columns(chunk, part)
             yield chunk if wanted is None else chunk[[c for c in chunk.columns if c in wanted]]
 
@@ -212,10 +214,15 @@ def check_table_path(path: str) -> str:
 
 
 @check_types
-def check_output_path(path: str, inputs: Iterable[str | None] = ()) -> str:
-    """Refuse an output path before any work: one of the ``inputs``, not a regular file, or
-    in a folder that does not exist (see :func:`rplearn._atomic.check_output`)."""
-    return check_output(path, [i for i in inputs if i])
+def check_output_path(path: str, inputs: Iterable[str | None] = (), param: str = "output") -> str:
+    """Refuse an output path before any work: one of the files of the ``inputs`` (path specs:
+    lists, globs, folders, links; :func:`rplearn.io.resolve.check_outputs`), not a regular file,
+    or in a folder that does not exist (see :func:`rplearn._atomic.check_output`); ``param``
+    names the parameter that gave it, for the error."""
+    from rplearn.io.resolve import check_outputs
+
+    check_outputs({param: path}, inputs)
+    return path
 
 
 def _epoch() -> float | None:

@@ -18,7 +18,8 @@ import json
 import math
 import os
 import re
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
 from typing import Any
 
 import numpy as np
@@ -140,9 +141,10 @@ def read_model_file(path: str | os.PathLike[str]) -> tuple[str, dict[str, Any]]:
 
 #: A model file's binary sidecar is named after it and the start of its own SHA-256
 #: (``m.json`` -> ``m.json.<12 hex digits>.npz``), so that a new save never overwrites the
-#: sidecar the previous model file still names.
+#: sidecar the previous model file still names. A save removes no other file than the sidecar
+#: the model file it replaces names under that very name (:func:`owned_sidecar`): never a
+#: user's ``m.json.npz`` or ``m.json.0123456789ab.npz`` that no model file names.
 SIDECAR_SUFFIX = ".npz"
-_SIDECAR_NAME = re.compile(r"\.(?:[0-9a-f]{12}\.)?npz$")
 
 
 def sidecar_path(path: str | os.PathLike[str], sha256: str) -> str:
@@ -159,6 +161,23 @@ def named_sidecar(path: str | os.PathLike[str]) -> str | None:
     return os.path.join(os.path.dirname(os.path.abspath(os.fspath(path))), entry["file"])
 
 
+def owned_sidecar(path: str | os.PathLike[str]) -> str | None:
+    """The sidecar that the model file at ``path`` owns: the one its (checksummed) envelope names,
+    under the name a save gives it (``<file>.<its sha256[:12]>.npz`` beside it); None when there
+    is no such file, or ``path`` is no readable model file (then no file is anyone's to remove)."""
+    try:
+        _, payload = read_model_file(path)
+    except (ModelFileError, OSError):
+        return None
+    entry = payload.get("sidecar")
+    if not isinstance(entry, Mapping) or not isinstance(entry.get("sha256"), str) or not isinstance(entry.get("file"), str):
+        return None
+    expected = os.path.basename(sidecar_path(os.path.basename(os.fspath(path)), entry["sha256"]))
+    if entry["file"] != expected or not re.fullmatch(r"[0-9a-f]{64}", entry["sha256"]):
+        return None
+    return os.path.join(os.path.dirname(os.path.abspath(os.fspath(path))), expected)
+
+
 def _file_sha256(path: str) -> str:
     h = hashlib.sha256()
     with open(path, "rb") as fh:
@@ -167,10 +186,10 @@ def _file_sha256(path: str) -> str:
     return h.hexdigest()
 
 
-def _write_sidecar(path: str, arrays: Mapping[str, np.ndarray]) -> dict[str, str]:
-    """Write the arrays beside model file ``path`` as an uncompressed ``.npz`` of plain numeric
-    arrays (numpy's format, no pickle) under its content-addressed name; return the
-    ``{"file", "sha256"}`` entry the payload records."""
+def _write_sidecar(path: str, arrays: Mapping[str, np.ndarray]) -> tuple[str, str]:
+    """Write the arrays beside model file ``path`` into a new hidden temporary file, as an
+    uncompressed ``.npz`` of plain numeric arrays (numpy's format, no pickle); return the
+    temporary file and its SHA-256 (the name it is given: :func:`sidecar_path`)."""
     import tempfile
     import zipfile
 
@@ -190,53 +209,88 @@ def _write_sidecar(path: str, arrays: Mapping[str, np.ndarray]) -> dict[str, str
                         np.lib.format.write_array(fh, np.ascontiguousarray(value), allow_pickle=False)
             raw.flush()
             os.fsync(raw.fileno())
-        checksum = _file_sha256(tmp)
-        target = sidecar_path(path, checksum)
         os.chmod(tmp, 0o644)
-        os.replace(tmp, target)
+        return tmp, _file_sha256(tmp)
     except BaseException:
-        if os.path.exists(tmp):
-            os.remove(tmp)
+        _remove(tmp)
         raise
-    return {"file": os.path.basename(target), "sha256": checksum}
 
 
-def _remove_stale_sidecars(path: str, keep: str | None) -> None:
-    """Remove the sidecars of earlier saves of model file ``path`` (not ``keep``)."""
-    folder = os.path.dirname(os.path.abspath(path))
-    base = os.path.basename(path)
-    for name in os.listdir(folder):
-        if name != keep and name.startswith(base) and _SIDECAR_NAME.fullmatch(name[len(base):]):
-            try:
-                os.remove(os.path.join(folder, name))
-            except OSError:
-                pass
+def _remove(path: str | None) -> None:
+    """Remove a file if it is there (another save may have removed it first)."""
+    if path is None:
+        return
+    try:
+        os.remove(path)
+    except OSError:
+        pass
+
+
+@contextmanager
+def _folder_lock(folder: str) -> Iterator[None]:
+    """Hold an exclusive advisory lock (``flock``) on a folder: saves of model files into one
+    folder replace a model file and its sidecars one at a time, so that concurrent saves to
+    one path leave one whole model with its own sidecar. No lock file is created (the folder
+    itself is locked); where ``flock`` is missing (Windows) or refused, saves go unlocked."""
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover - Windows
+        yield
+        return
+    try:
+        fd = os.open(folder, os.O_RDONLY)
+    except OSError:
+        yield
+        return
+    try:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX)
+        except OSError:
+            pass
+        yield
+    finally:
+        os.close(fd)  # releases the lock
 
 
 def write_model_with_sidecar(path: str | os.PathLike[str], model_type: str, payload: Mapping[str, Any],
                              arrays: Mapping[str, np.ndarray] | None) -> None:
     """Write a model file and, when ``arrays`` are given, its binary sidecar, so that a failure
-    at any point leaves the previous model file and the sidecar it names intact: the output is
-    checked first, the sidecar is written under a new content-addressed name, then the model
-    file is replaced, and only then are earlier sidecars of this path removed."""
+    at any point leaves the previous model file and the sidecar it names intact, and a save
+    removes no file but the sidecar of the model file it replaces.
+
+    The output is checked first and the sidecar written to a temporary file (the long part);
+    then, holding the folder's lock (:func:`_folder_lock`), the sidecar the current model file
+    owns is noted (:func:`owned_sidecar`), the new sidecar gets its content-addressed name,
+    the model file naming it is replaced atomically, and only then is the noted sidecar
+    removed (unless it is the new one).
+    """
     from rplearn._atomic import check_output
 
     name = check_output(path)
+    folder = os.path.dirname(os.path.abspath(name))
     payload = dict(payload)
-    entry = None
-    if arrays:
-        entry = _write_sidecar(name, arrays)
-        payload["sidecar"] = entry
+    tmp: str | None = None
     try:
-        write_model_file(name, model_type, payload)
-    except BaseException:
-        if entry is not None:  # the new sidecar belongs to no model file
+        if arrays:
+            tmp, checksum = _write_sidecar(name, arrays)
+        with _folder_lock(folder):
+            previous = owned_sidecar(name)
+            target = None
+            if tmp is not None:
+                target = os.path.abspath(sidecar_path(name, checksum))  # as owned_sidecar spells it
+                os.replace(tmp, target)
+                tmp = None
+                payload["sidecar"] = {"file": os.path.basename(target), "sha256": checksum}
             try:
-                os.remove(os.path.join(os.path.dirname(os.path.abspath(name)), entry["file"]))
-            except OSError:
-                pass
-        raise
-    _remove_stale_sidecars(name, keep=None if entry is None else entry["file"])
+                write_model_file(name, model_type, payload)
+            except BaseException:
+                if target is not None and target != previous:  # the new sidecar belongs to no model file
+                    _remove(target)
+                raise
+            if previous is not None and previous != target:
+                _remove(previous)
+    finally:
+        _remove(tmp)
 
 
 def read_sidecar(model_path: str | os.PathLike[str], entry: Any) -> dict[str, np.ndarray]:

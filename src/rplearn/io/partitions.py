@@ -14,14 +14,24 @@ a dataset is named by one string, the *dataset spec*:
   ``s3fs``).
 
 Hive ``key=value`` folder names below the root become columns of the rows read from the files
-beneath them, unless the file has a column of that name already.
+beneath them. A folder never replaces a column the file holds: a file's ``unit`` (or ``tx``,
+``rx``, ...) column is kept over a ``unit=...`` folder name (Spark and Dask write the folder
+value out of the file, so both are present only when the file was written otherwise). A
+folder named after a measurement (``rssi_dbm``, ``t`` or a pose column:
+:data:`MEASURED_COLUMNS`) is refused naming the folder, the column and the file: it would
+either give every sample of its files one invented value, or contradict the values the files
+hold (``rssi_dbm=-50/``).
+
+Every file is identified by its device and inode (:func:`file_identity`) before any work: the
+same file named twice (``a.parquet,./a.parquet``, by relative and absolute path, or as a file
+and a symbolic link to it in one folder) is refused naming both spellings, never read twice.
 """
 
 from __future__ import annotations
 
 import glob
 import os
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -29,6 +39,11 @@ import pandas as pd
 
 from rplearn._argtypes import check_types
 from rplearn.errors import InputError
+
+#: Columns that hold one measurement per sample: a Hive folder may not set them (see the
+#: module docstring).
+MEASURED_COLUMNS: tuple[str, ...] = ("t", "rssi_dbm", *(f"{end}_{c}" for end in ("tx", "rx")
+                                                        for c in ("x", "y", "z", "qw", "qx", "qy", "qz")))
 
 #: File endings of the tables a partitioned dataset is made of.
 TABLE_SUFFIXES: tuple[str, ...] = (".parquet", ".pq", ".csv", ".csv.gz")
@@ -161,12 +176,46 @@ def dataset_parts(spec: str) -> list[Part]:
         parts += _url_parts(piece) if is_url(piece) else _local_parts(piece)
     if not parts:
         raise InputError(f"{spec}: no table files ({', '.join(TABLE_SUFFIXES)}) found", param="dataset")
-    seen: set[str] = set()
-    for p in parts:
-        if p.path in seen:
-            raise InputError(f"{spec}: file {p.path} is named twice", param="dataset")
-        seen.add(p.path)
+    refuse_repeated([p.path for p in parts], spec, param="dataset")
     return parts
+
+
+@check_types
+def file_identity(path: str) -> tuple[Any, ...]:
+    """What identifies a file whatever its spelling: ``(st_dev, st_ino)`` of a local file (after
+    symbolic links; a ``file://`` URL is a local file), else the URL without its protocol's
+    spelling (``s3://b/k`` and ``s3a://b/k`` are not merged: each store is asked as given).
+    A local file that cannot be stat-ed is identified by its real path."""
+    name = str(path)
+    if name.startswith("file://"):
+        name = name[len("file://"):]
+    elif is_url(name):
+        head, _, rest = name.partition("://")
+        return ("url", head.lower(), "/".join(p for p in rest.split("/") if p not in ("", ".")))
+    try:
+        st = os.stat(name)
+    except OSError:
+        return ("path", os.path.realpath(name))
+    return (st.st_dev, st.st_ino)
+
+
+@check_types
+def refuse_repeated(paths: Sequence[str], spec: str, param: str | None = None) -> None:
+    """Refuse a file named twice among ``paths`` (by :func:`file_identity`), naming both spellings.
+
+    Raises
+    ------
+    InputError
+        ``"<spec>: <a> and <b> are one file (named twice); give it once"``.
+    """
+    seen: dict[tuple[Any, ...], str] = {}
+    for path in paths:
+        key = file_identity(path)
+        if key in seen:
+            first = seen[key]
+            how = "named twice" if first == path else "named twice: a link or another spelling of it"
+            raise InputError(f"{spec}: {first} and {path} are one file ({how}); give it once", param=param)
+        seen[key] = path
 
 
 def open_source(path: str) -> Any:
@@ -177,13 +226,38 @@ def open_source(path: str) -> Any:
     return fs.open(inner, "rb")
 
 
+def _hive_folder(part: Part, key: str) -> str:
+    """The folder of ``part`` whose name is ``key=...`` (for messages)."""
+    pieces = part.path.replace("\\", "/").split("/")
+    for i in range(len(pieces) - 2, -1, -1):
+        if pieces[i].partition("=")[0] == key:
+            return "/".join(pieces[: i + 1])
+    return f"{key}={part.columns[key]}"
+
+
+@check_types
 def with_hive_columns(chunk: pd.DataFrame, part: Part) -> pd.DataFrame:
-    """``chunk`` with the part's Hive columns added where it lacks them (as strings)."""
+    """``chunk`` with the part's Hive columns added where it lacks them (as strings); a column
+    the file holds is kept as it is.
+
+    Raises
+    ------
+    InputError
+        Naming the folder, the column and the file, when a folder is named after a measurement
+        (:data:`MEASURED_COLUMNS`; see the module docstring).
+    """
+    for key, value in part.columns.items():
+        if key in MEASURED_COLUMNS:
+            held = (f"{part.path} holds its own {key} values" if key in chunk.columns
+                    else f"it would give every sample of {part.path} {key} = {value}")
+            raise InputError(f"{_hive_folder(part, key)}: a folder named after the measurement {key} ({held}); "
+                             "a measurement comes from the files, never from a folder name: rename the folder",
+                             param="dataset")
     extra = {k: v for k, v in part.columns.items() if k not in chunk.columns}
     if not extra:
         return chunk
     return chunk.assign(**{k: pd.Series([v] * len(chunk), index=chunk.index, dtype=object) for k, v in extra.items()})
 
 
-__all__ = ["Part", "TABLE_SUFFIXES", "dataset_parts", "hive_columns", "is_partitioned", "is_url", "open_source",
-           "with_hive_columns"]
+__all__ = ["MEASURED_COLUMNS", "Part", "TABLE_SUFFIXES", "dataset_parts", "file_identity", "hive_columns",
+           "is_partitioned", "is_url", "open_source", "refuse_repeated", "with_hive_columns"]

@@ -15,6 +15,7 @@ from rplearn.data.tables import NON_UNIT_QUATERNION_ATTR, validate_pose_log
 from rplearn.errors import InputError, RplearnError
 from rplearn.io._common import Logs
 from rplearn.io.options import ReaderOptions
+from rplearn.io.partitions import refuse_repeated
 from rplearn.io.sniff import detect_format
 
 
@@ -234,7 +235,9 @@ def read_logs(
             f"options: expected a ReaderOptions, got {type(options).__name__}", param="options"
         )
     got = _Gathered(origin=options.origin_geodetic)
-    for path in _path_list(paths):
+    files = _path_list(paths)
+    refuse_repeated(files, ", ".join(files), param="paths")  # one log named twice would count twice
+    for path in files:
         got.files.append(_READERS[detect_format(path)](path, options, got))
     return _merge(got)
 

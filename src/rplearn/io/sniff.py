@@ -12,7 +12,7 @@ import os
 from collections.abc import Sequence
 
 from rplearn._argtypes import check_types
-from rplearn.errors import InputError
+from rplearn.errors import InputError, LogFormatError
 
 #: Raw log kinds (:func:`detect_format`) and how a message names them.
 RAW_LOG_NAMES: dict[str, str] = {
@@ -57,6 +57,11 @@ _EXTENSIONS: dict[str, str] = {
 }
 
 
+#: Bytes below which a file is no binary log: a ``.tlog`` record is an 8-byte time stamp and a
+#: MAVLink frame of at least 8 bytes; a DataFlash log starts with an 89-byte FMT record.
+_SHORTEST_LOG = 16
+
+
 @check_types
 def detect_format(path: str | os.PathLike) -> str:
     """Format of a log: ``"ulog"``, ``"ros1"``, ``"ros2"``, ``"pcap"``, ``"mavlink"`` (a
@@ -74,10 +79,17 @@ def detect_format(path: str | os.PathLike) -> str:
         raise InputError(f"{p}: a directory but not a ROS 2 bag (no metadata.yaml)")
     with open(p, "rb") as fh:
         head = fh.read(16)
+    ext = os.path.splitext(p)[1].lower()
+    if not head:
+        raise LogFormatError(f"{p}: empty file (0 bytes), not a log")
     for magic, kind in _MAGIC:
         if head.startswith(magic):
+            if magic == b"PAR1" and ext not in (".parquet", ".pq"):
+                raise LogFormatError(f"{p}: a Parquet table named {ext or 'without an extension'}; tables are read by "
+                                     "their extension: rename it .parquet")
             return kind
-    ext = os.path.splitext(p)[1].lower()
+    if len(head) < _SHORTEST_LOG and _EXTENSIONS.get(ext, "table") != "table":
+        raise LogFormatError(f"{p}: {len(head)} byte(s), too short to be a {ext} log (cut off, or not a log)")
     if ext in _EXTENSIONS:
         return _EXTENSIONS[ext]
     raise InputError(

@@ -312,8 +312,8 @@ def fit_from_statistics(
     if prior_spread_db is not None:
         missing = sorted(set(map(str, nodes)) - set(map(str, prior or {})))
         if missing:
-            raise InputError(f"prior spread: it states how far the priors may be off, but node(s) {', '.join(missing)} "
-                             "have no prior; give a prior for every node", param="prior_spread_db")
+            raise InputError(f"prior_std_db: it states how far the priors may be off, but node(s) {', '.join(missing)} "
+                             "have no prior; give a prior for every node", param="prior_std_db")
     first = next(iter(stats.values()))
     if first.environment != path_loss.learns_exponent:
         raise InputError(f"path loss {path_loss.kind}: the statistics were accumulated "

@@ -7,6 +7,7 @@ import dataclasses
 import os
 
 from rplearn._argtypes import check_types
+from rplearn.errors import InputError
 from rplearn.io.modelfile import read_model_file
 from rplearn.models.base import Model, require_patterns
 from rplearn.models.baselines import KNNModel, MeanModel
@@ -37,6 +38,10 @@ def load_priors(options: FitOptions) -> FitOptions:
     if not options.priors:
         return options
     priors = {n: load_model(m) if is_model_file(m) else m for n, m in options.priors.items()}
-    for model in priors.values():
-        require_patterns(model, "serving as a prior")
+    for node, model in priors.items():
+        given = options.priors[node]
+        if model.kind != "patterns" and is_model_file(given):
+            raise InputError(f"priors: {node}={os.fspath(given)} is a {model.kind} baseline ({model.label}); a prior is a "
+                             "pattern model (sh, bg or poly)", param="priors")
+        require_patterns(model, f"the prior of node {node}")
     return dataclasses.replace(options, priors=priors)

@@ -85,17 +85,20 @@ class FitOptions:
         if self.prior_level not in PRIOR_LEVELS:
             raise InputError(f"prior level: expected {' or '.join(PRIOR_LEVELS)}, got {self.prior_level!r}",
                              param="prior_level")
+        for node, prior in self.priors.items():
+            if is_model_file(prior) and not os.fspath(prior).strip():
+                raise InputError(f"priors: {node}= names no model file; give NODE=MODEL.json", param="priors")
         if self.priors and not self.auto:
             raise InputError("prior: a prior is weighed against the data by the automatic choice; use it with "
                              "order 'auto' (--order auto)", param="prior")
         if self.prior_level != "data" and not self.priors:
-            raise InputError("prior-level: it says where a prior's level comes from; give --prior too",
-                             param="prior_level")
+            raise InputError("prior_level: it says where a prior's level comes from; give priors too",
+                             param="prior_level", related=("priors",))
         if self.prior_std_db is not None and not self.priors:
-            raise InputError("prior-std: it states how far the priors may be off; give --prior too",
-                             param="prior_std_db")
+            raise InputError("prior_std_db: it states how far the prior patterns may be off; give priors too",
+                             param="prior_std_db", related=("priors",))
         if self.prior_std_db is not None and not (np.isfinite(self.prior_std_db) and self.prior_std_db > 0):
-            raise InputError(f"prior-std: expected a positive number of dB, got {self.prior_std_db!r}",
+            raise InputError(f"prior_std_db: expected a positive number of dB, got {self.prior_std_db!r}",
                              param="prior_std_db")
         if self.loss == "huber" and self.auto:
             raise InputError("loss huber: for a pattern model of fixed order (--model sh --order N, bg, poly), "

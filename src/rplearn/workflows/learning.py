@@ -41,6 +41,7 @@ from rplearn.data.units import (
 from rplearn.errors import InputError
 from rplearn.io.files import check_output_path, check_table_path, provenance, read_dataset, table_rows, write_json, write_table
 from rplearn.io.partitions import dataset_parts, is_partitioned
+from rplearn.io.resolve import check_outputs
 from rplearn.models.fit import FittedModel, evaluate_models, fit_model, scores_markdown, scores_of_predictions
 from rplearn.models.load import load_model, load_priors
 from rplearn.models.options import FitOptions
@@ -368,11 +369,7 @@ def evaluate_model_files(
     """
     if not model_paths:
         raise InputError("evaluate: give at least one model file and a dataset", param="model_paths")
-    for path in (json_out, markdown_out):
-        if path:
-            check_output_path(path, [*model_paths, dataset])
-    if json_out and markdown_out:
-        check_output_path(markdown_out, [json_out])
+    check_outputs({"json_out": json_out, "markdown_out": markdown_out}, [*model_paths, dataset])
     models = [load_model(p) for p in model_paths]
     fitted = [FittedModel.from_model(m) for m in models]
     if sensitivity_dbm is not None and (dask is not None or is_partitioned(dataset)):
@@ -453,11 +450,7 @@ def sweep_dataset(
     from rplearn.analysis.sweep import order_sweep, validation_sweep
     if not orders or min(int(o) for o in orders) < 1:
         raise InputError(f"orders: expected positive orders, got {list(orders)!r}", param="orders")
-    for path in (output, plot_path):
-        if path:
-            check_output_path(path, [dataset])
-    if output and plot_path:
-        check_output_path(plot_path, [output])
+    check_outputs({"output": output, "plot_path": plot_path}, [dataset])
     if output:
         check_table_path(output)
     df, unit_note = time_units(read_dataset(dataset), source=dataset)

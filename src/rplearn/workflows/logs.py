@@ -26,6 +26,7 @@ from rplearn.errors import InputError
 from rplearn.io import ReaderOptions, read_logs
 from rplearn.io.files import check_output_path, check_table_path, write_json, write_table, write_table_chunks
 from rplearn.io.inspect import file_damage
+from rplearn.io.resolve import check_outputs, distinct_inputs
 from rplearn.models.load import load_model
 from rplearn.models.patterns import PatternSet
 from rplearn.models.predict import FrequencyMismatch, frequency_mismatch
@@ -174,6 +175,8 @@ def sync_logs(
     the signal logs are then read whole once) and reported in the outcome; it is added to the
     node's offset only with ``apply_offset``.
     """
+    distinct_inputs(pose_paths, param="pose_paths")
+    distinct_inputs(signal_paths, param="signal_paths")
     check_output_path(output, [*pose_paths, *signal_paths])
     check_table_path(output)
     reader_options = reader_options or ReaderOptions()
@@ -250,10 +253,11 @@ def swarm_links(
     """
     options = SwarmOptions() if options is None else options
     frequency_hz = options.frequency_hz
-    outputs = [p for p in (output, connectivity_out, plot_path) if p]
-    for k, path in enumerate(outputs):
-        check_output_path(path, [model_path, *pose_paths, *outputs[:k]])
-        if path != plot_path:
+    distinct_inputs(pose_paths, param="pose_paths")
+    check_outputs({"output": output, "connectivity_out": connectivity_out, "plot_path": plot_path},
+                  [model_path, *pose_paths])
+    for path in (output, connectivity_out):
+        if path:
             check_table_path(path)
     model = load_model(model_path)
     logs, meta = read_logs(pose_paths, reader_options)

@@ -201,12 +201,11 @@ def draw_pattern_files(
     from rplearn.analysis.pattern_error import node_directions
     from rplearn.data.tables import link_samples
     from rplearn.io.files import read_dataset
+    from rplearn.io.resolve import check_outputs
     from rplearn.sim.antennas import load_ground_truth
     from rplearn.viz.plot import plot_pattern_maps
 
-    check_output_path(output, [*model_paths, truth, dataset])
-    if spread:
-        check_output_path(spread, [*model_paths, truth, dataset, output])
+    check_outputs({"output": output, "spread": spread}, [*model_paths, truth, dataset])
     models = {}
     for path in model_paths:
         model = load_model(path)
