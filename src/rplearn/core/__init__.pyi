@@ -71,5 +71,17 @@ from .metrics import mae as mae
 from .metrics import q95 as q95
 from .metrics import rmse as rmse
 from .metrics import score as score
+from .plausible import BAND_SPAN as BAND_SPAN
+from .plausible import FREQUENCY_BAND_HZ as FREQUENCY_BAND_HZ
+from .plausible import PLAUSIBLE as PLAUSIBLE
+from .plausible import Plausible as Plausible
+from .plausible import check_covariance as check_covariance
+from .plausible import check_frequency_hz as check_frequency_hz
+from .plausible import check_one_band as check_one_band
+from .plausible import check_plausible as check_plausible
+from .plausible import check_same_band as check_same_band
+from .plausible import describe_band as describe_band
+from .plausible import frequency_bands as frequency_bands
+from .plausible import same_band as same_band
 from .sh import SphericalHarmonics as SphericalHarmonics
 from .sh import sh_index as sh_index

@@ -29,6 +29,7 @@ import pandas as pd
 from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.core.lsq.selection import penalty_scale, penalty_vector
 from rplearn.core.lsq.solver import FitReport, solve
+from rplearn.core.plausible import check_one_band
 from rplearn.data.tables import LinkSamples, link_samples, node_ids
 from rplearn.data.units import Stretches
 from rplearn.errors import InputError
@@ -66,9 +67,11 @@ class StreamedFit:
 
 
 def weighted_median(counts: Mapping[float, int]) -> float | None:
-    """Median of values given with their counts (the carrier frequencies of a dataset) [Hz]."""
+    """Median of values given with their counts (the carrier frequencies of a dataset) [Hz]; the
+    carriers must be of one band (:func:`~rplearn.core.plausible.check_one_band`)."""
     if not counts:
         return None
+    check_one_band(counts, "the dataset")
     values = np.array(sorted(counts), np.float64)
     weights = np.array([counts[v] for v in sorted(counts)], np.float64)
     cum = np.cumsum(weights)
@@ -246,6 +249,7 @@ def checked(acc: Accumulated, source: str) -> Accumulated:
     """``acc``, or an error when it holds no sample."""
     if not acc.stats or acc.n_samples == 0:
         raise InputError(f"{source}: no samples selected", param="units")
+    check_one_band(acc.freq, source)  # every part of one band
     return acc
 
 

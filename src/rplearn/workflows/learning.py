@@ -19,6 +19,7 @@ from rplearn._atomic import atomic_open
 from rplearn.analysis.budget import check_dataset_budget
 from rplearn.analysis.decoupling import certify
 from rplearn.core.metrics import Scores
+from rplearn.core.plausible import check_one_band
 from rplearn.data.tables import QUATERNION_NORM_TOLERANCE
 from rplearn.data.units import (
     TIME_UNITS,
@@ -45,7 +46,7 @@ from rplearn.models.fit import FittedModel, evaluate_models, fit_model, scores_m
 from rplearn.models.load import load_model, load_priors
 from rplearn.models.options import FitOptions
 from rplearn.models.patterns import PatternSet
-from rplearn.models.predict import UNCOVERED_DEG, DatasetPrediction, distinct_labels, predict_dataset, uncovered_rows
+from rplearn.models.predict import UNCOVERED_DEG, DatasetPrediction, check_model_band, distinct_labels, predict_dataset, uncovered_rows
 from rplearn.models.robust import downweighted_notes, fit_huber
 from rplearn.models.spec import ModelSpec, check_model_size
 from rplearn.models.streamed import checked, fit_patterns_accumulated, weighted_median
@@ -200,6 +201,8 @@ def fit_dataset(
         return _fit_streamed(dataset, spec, units, options, output, progress=progress)
     df, stretch_note = stretched(read_dataset(dataset), units, dataset)
     choice = learning_units(df, units, dataset)
+    if "frequency_hz" in df.columns:
+        check_one_band(select_units(df, choice.units, dataset)["frequency_hz"].to_numpy("float64"), dataset)
     if stretch_note:
         choice = replace(choice, notes=[stretch_note, *choice.notes])
     elif "unit" not in df.columns:
@@ -378,6 +381,9 @@ def evaluate_model_files(
         df, _ = stretched(read_dataset(dataset), units or [u for u in trained_units(provs) if is_stretch_label(u)], dataset)
         choice = evaluation_units(df, units, provs, dataset)
         samples = samples_of(df, choice.units, dataset)
+        for model, path in zip(models, model_paths, strict=True):
+            if samples.frequency_hz is not None:
+                check_model_band(model, samples.frequency_hz, dataset, path)
         rows = evaluate_models(fitted, samples, choice.warnings)
         uncovered = [uncovered_rows(m, samples) for m in models]
         n_eval = len(samples)
