@@ -88,6 +88,7 @@ import pandas as pd
 
 from rplearn._argtypes import check_types
 from rplearn.core.geometry import quat_wxyz_from_euler_ned_frd_deg
+from rplearn.core.plausible import check_plausible
 from rplearn.data.tables import check_frequency_hz, check_tx_power_dbm, validate_pose_log, validate_signal_log
 from rplearn.errors import InputError, LogFormatError
 from rplearn.io import mavlink_phases as phases
@@ -492,8 +493,13 @@ def read_mavlink(
     station_geo, station_note = _station(raw, station_geodetic, fixes[1][fixes[2]][0])
     origin = station_geo if origin_geodetic is None else tuple(float(v) for v in origin_geodetic)
     dropped: dict[str, int] = {}
-    pose = _vehicle_pose(raw, fixes, origin, float(max_gap_s), vehicle, dropped)  # type: ignore[arg-type]
-    s_xyz = geodetic_to_enu(*station_geo, origin)  # type: ignore[arg-type]
+    try:  # positions, home and station against the plausibility table (core/plausible.py)
+        pose = _vehicle_pose(raw, fixes, origin, float(max_gap_s), vehicle, dropped)  # type: ignore[arg-type]
+        s_xyz = geodetic_to_enu(*station_geo, origin, where="the station")  # type: ignore[arg-type]
+        far = np.linalg.norm(pose[["x", "y", "z"]].to_numpy(np.float64) - np.asarray(s_xyz, np.float64), axis=1)
+        check_plausible("link_distance_m", np.nan_to_num(far), "the vehicle", field="distance from the station [m]")
+    except InputError as exc:
+        raise InputError(f"{source}: {exc} ({station_note})", param=exc.param) from None
     t0 = float(min(raw.radio[0, 0], pose["t"].iloc[0] if len(pose) else np.inf))
     heading = 90.0 if station_heading_deg is None else float(station_heading_deg)
     sq = quat_wxyz_from_euler_ned_frd_deg(0.0, 0.0, heading)

@@ -11,7 +11,7 @@ a carrier other than the one the model learned at.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -65,16 +65,17 @@ class FrequencyMismatch:
 
 
 @check_types
-def check_model_band(model: Model, frequency_hz: ArrayLike, where: str, model_name: str | None = None) -> None:
+def check_model_band(model: Model, frequency_hz: ArrayLike | Mapping[float, int], where: str, model_name: str | None = None) -> None:
     """Refuse rows whose carriers are of another band than the one ``model`` learned at.
 
-    Each band of the rows (:func:`~rplearn.core.plausible.frequency_bands`) is compared with the
-    model's carrier; a model that does not state its carrier is not checked.
+    Each band of the rows (:func:`~rplearn.core.plausible.frequency_bands`: the rows' carriers,
+    or carrier -> row count) is compared with the model's carrier; a model that does not state
+    its carrier is not checked.
     """
     if model.frequency_hz is None:
         return
     learned = float(model.frequency_hz)
-    for lo, hi, n in frequency_bands(np.asarray(frequency_hz, np.float64)):
+    for lo, hi, n in frequency_bands(frequency_hz if isinstance(frequency_hz, Mapping) else np.asarray(frequency_hz, np.float64)):
         far = lo if abs(lo - learned) > abs(hi - learned) else hi
         if not same_band(far, learned):
             raise InputError(f"{where}: {n:,} row(s) at {describe_band(lo, hi)}, but {model_name or f'the {model.label} model'} "

@@ -92,7 +92,7 @@ def frequency_counts(samples: LinkSamples, counts: Counter[float] | None = None)
 
 
 def units_and_nodes(chunks: Iterable[pd.DataFrame]) -> pd.DataFrame:
-    """Rows per distinct ``(unit, tx, rx)`` of a dataset read in chunks of those columns only.
+    """Rows per distinct ``(unit, tx, rx, frequency_hz)`` of a dataset read in chunks of those columns only.
 
     A small table (one row per unit and link direction, column ``n`` the rows) from which
     units, nodes and the model size are checked before the data are read in full.
@@ -102,6 +102,8 @@ def units_and_nodes(chunks: Iterable[pd.DataFrame]) -> pd.DataFrame:
         cols = {c: node_ids(chunk[c]) for c in ("tx", "rx") if c in chunk.columns}
         if "unit" in chunk.columns:
             cols["unit"] = chunk["unit"].astype(str).to_numpy(dtype=object)
+        if "frequency_hz" in chunk.columns:  # the bands, checked before any statistics
+            cols["frequency_hz"] = pd.to_numeric(chunk["frequency_hz"], errors="coerce").to_numpy(np.float64)
         frame = pd.DataFrame(cols)
         parts.append(frame.groupby(list(frame.columns), sort=False, dropna=False).size().rename("n").reset_index())
     if not parts:

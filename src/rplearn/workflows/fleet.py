@@ -139,8 +139,8 @@ def map_parts(function: Callable[..., Any], parts: Sequence[Part], client: Any =
 
 
 def part_index(part: Part) -> pd.DataFrame:
-    """Rows per ``(unit, tx, rx)`` of one part (:func:`rplearn.models.streamed.units_and_nodes`)."""
-    return units_and_nodes(iter_parts([part], PART_CHUNK_ROWS, columns=("tx", "rx", "unit")))
+    """Rows per ``(unit, tx, rx, frequency_hz)`` of one part (:func:`rplearn.models.streamed.units_and_nodes`)."""
+    return units_and_nodes(iter_parts([part], PART_CHUNK_ROWS, columns=("tx", "rx", "unit", "frequency_hz")))
 
 
 def dataset_index(parts: Sequence[Part], client: Any = None) -> tuple[pd.DataFrame, list[pd.DataFrame]]:

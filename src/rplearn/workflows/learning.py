@@ -218,6 +218,7 @@ def fit_dataset(
     else:
         fitted = fit_model(samples, spec, options, provenance=prov)
     check_dataset_budget(fitted.model, select_units(df, choice.units, dataset), dataset)
+    _record_scale(fitted.model, select_units(df, choice.units, dataset))
     certify(fitted.model, samples)
     if output:
         fitted.model.save(output)
@@ -246,11 +247,25 @@ def _fit_auto(
     prov = provenance(dataset=dataset, model=f"{spec.kind}-auto", ridge=spec.ridge, units=choice.units)
     fitted, selection = fit_auto(per_unit, spec, options, provenance=prov)
     check_dataset_budget(fitted.model, part, dataset)
+    _record_scale(fitted.model, part)
     certify(fitted.model, list(per_unit.values()), fitted.own_posterior)
     if output:
         fitted.model.save(output)
     n = sum(len(s) for s in per_unit.values())
     return FitOutcome(fitted, choice, n, output, sum(s.non_unit_quaternions for s in per_unit.values()), selection)
+
+
+def _band_counts(index: Any) -> dict[float, int]:
+    """Rows per carrier [Hz] of a dataset's index (:func:`rplearn.workflows.fleet.dataset_index`)."""
+    sums = index.groupby("frequency_hz")["n"].sum()
+    return {float(f): int(n) for f, n in zip(sums.index.to_numpy("float64"), sums.to_numpy("int64"), strict=True)}
+
+
+def _record_scale(model: Any, rows: Any) -> None:
+    """Record ``training["rssi_scale"] = "relative"`` when the learning rows are relative RSSI
+    (``sync --rssi-scale relative``): nothing downstream then prints their levels as dBm."""
+    if "rssi_scale" in rows.columns and bool((rows["rssi_scale"].astype(str).str.lower() == "relative").any()):
+        model.training = model.training.replace(rssi_scale="relative")
 
 
 def _is_big(dataset: str) -> bool:
@@ -277,6 +292,8 @@ def _fit_streamed(
     choice = learning_units(index, units, dataset)
     refuse_streamed_stretches(index, units, dataset)
     part = select_units(index, choice.units, dataset)
+    if "frequency_hz" in part.columns:  # one band over every part, before any statistics
+        check_one_band(_band_counts(part), dataset)
     nodes = sorted(set(part["tx"]) | set(part["rx"]))
     n = int(part["n"].sum())
     if n == 0:
@@ -373,6 +390,10 @@ def evaluate_model_files(
             choice = evaluation_units(index, units, [m.provenance for m in models], dataset)
             if selected_rows(index, choice.units) == 0:
                 raise InputError(f"{dataset}: no samples selected", param="units")
+            if "frequency_hz" in index.columns:  # each model at its band, before any prediction
+                carriers = select_units(index, choice.units, dataset)
+                for model, path in zip(models, model_paths, strict=True):
+                    check_model_band(model, _band_counts(carriers), dataset, path)
             observed, predictions, uncovered = predict_parts(parts, models, choice.units, client, progress)
         rows = scores_of_predictions(fitted, observed, predictions, choice.warnings)
         n_eval = observed.size
