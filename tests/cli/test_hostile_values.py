@@ -83,6 +83,38 @@ def _bad_files(d: Path) -> None:
         write_model_file(d / name, kind, payload)
 
 
+ORIGIN = (47.3977, 8.5456, 488.0)  # lat, lon [deg], alt [m AMSL] of the tlog's ENU origin
+
+
+def _tlogs(d: Path) -> None:
+    """The ``ground`` preset's flight as .tlog files: as flown, and with the station (the
+    HOME_POSITION written) moved 111 km and 3,000 km north of the flight."""
+    from rplearn.core.geometry import quat_wxyz_from_yaw
+    from rplearn.io._common import Logs
+    from rplearn.io.tlog import write_tlog
+    from rplearn.sim.flight import simulate
+
+    sim = simulate("ground", seed=1)
+    pose, signal = sim.pose_log, sim.signal_log
+    g = pose[pose["node"] == "G"]
+    q = quat_wxyz_from_yaw(0.0)
+    for name, north_m in {"flight.tlog": 0.0, "home111km.tlog": 111_000.0, "home3000km.tlog": 3_000_000.0}.items():
+        station = pd.DataFrame({"t": [g["t"].min()], "node": ["G"], "x": [g["x"].median()], "y": [g["y"].median() + north_m],
+                                "z": [g["z"].median()], "qw": [q[0]], "qx": [q[1]], "qy": [q[2]], "qz": [q[3]]})
+        logs = Logs(pd.concat([pose[pose["node"] == "D"], station], ignore_index=True), signal)
+        write_tlog(logs, d / name, vehicle="D", station="G", origin_geodetic=ORIGIN)
+
+
+def _below_ground(d: Path) -> None:
+    """A two-ray model, a pose log with drone A 5 m below the ground, a relative-RSSI model."""
+    assert run(["fit", D, "--degree", "3", "--path-loss", "two-ray", "-o", "tworay.json"], d).returncode == 0
+    pose = pd.read_parquet(d / P)
+    pose.assign(z=np.where(pose["node"] == "A", -5.0, pose["z"])).to_parquet(d / "below.parquet")
+    assert run(["sync", "--poses", P, "--signals", S, "--link", "all", "--rssi-scale", "relative", "-o", "rel.parquet"],
+               d).returncode == 0
+    assert run(["fit", "rel.parquet", "--degree", "3", "-o", "rel.json"], d).returncode == 0
+
+
 @pytest.fixture(scope="module")
 def workdir(tmp_path_factory):
     d = tmp_path_factory.mktemp("values")
@@ -94,6 +126,8 @@ def workdir(tmp_path_factory):
         proc = run(args, d)
         assert proc.returncode == 0, proc.stderr
     _bad_files(d)
+    _tlogs(d)
+    _below_ground(d)
     return d
 
 
@@ -137,6 +171,16 @@ REFUSED = {
     "covariance holding null (NaN)": (["predict", "cov_null.json", D, "-o", "p.csv"], "cov_null.json: covariance: entry (0, 0) is nan"),
     "two-ray ground 1,000 km below": (["fit", D, "--degree", "3", "--path-loss", "two-ray", "--ground-level", "-1e6",
                                        "-o", "x.json"], "--ground-level"),
+    "latitude 95 (--station)": (["inspect", "flight.tlog", "--station", "95,8.5,488"], "--station: latitude must lie in [-90, 90]"),
+    "latitude 200 (--station)": (["inspect", "flight.tlog", "--station", "200,8.5,488"], "--station: latitude must lie in [-90, 90]"),
+    "drone below a two-ray ground in links": (["links", "tworay.json", "below.parquet", "--tx-power", "20", "-o", "l.csv"],
+                                              "below.parquet: drone A: z [m] above the two-ray ground at 0 m -5"),
+    "drone below a two-ray ground in orient": (["orient", "tworay.json", "--tx", "A", "--rx", "B", "--tx-pos", "0,0,-5",
+                                                "--rx-pos", "30,0,20", "--tx-power", "20"], "above the two-ray ground at 0 m -5"),
+    "orient 1,000 km apart": (["orient", M, "--tx", "A", "--rx", "B", "--tx-pos", "0,0,20", "--rx-pos", "1e6,0,20"],
+                              "tx to rx: distance [m] 1e+06 is outside 0 to 100000 m"),
+    "relative RSSI printed as dBm by links": (["links", "rel.json", P, "--tx-power", "20", "-o", "l.csv"],
+                                              "learned from relative RSSI"),
 }
 
 
@@ -150,3 +194,40 @@ def test_refused_in_one_line_and_nothing_written(workdir, case):
     assert needle in lines[0], (case, lines[0])
     assert "Traceback" not in proc.stderr
     assert sorted(p.name for p in workdir.rglob("*")) == before  # nothing written, no temporary file left
+
+
+#: A log refused as a whole (exit 1; the line naming it may come before the count of unread files).
+LOG_REFUSED = {
+    "altitude 2,000 km (--station)": (["inspect", "flight.tlog", "--station", "47.3977,8.5456,2e6"],
+                                      "altitude [m] 2e+06 is outside -1000 to 50000 m"),
+    "station 1,000 km away (--station)": (["inspect", "flight.tlog", "--station", "56.4,8.5456,488"],
+                                          "flight.tlog: the vehicle: distance from the station [m] 1"),
+    "home 111 km from the flight": (["inspect", "home111km.tlog"], "home111km.tlog: the vehicle: distance from the station [m] 1.1"),
+    "home 3,000 km from the flight": (["inspect", "home3000km.tlog"], "home3000km.tlog: the vehicle: distance from the station [m] 3"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(LOG_REFUSED))
+def test_implausible_places_refuse_the_log(workdir, case):
+    args, needle = LOG_REFUSED[case]
+    proc = run(args, workdir)
+    out = proc.stdout + proc.stderr
+    assert proc.returncode == 1 and needle in out and "Traceback" not in out, (case, out)
+
+
+def test_orient_on_a_relative_model_says_db_not_dbm(workdir):
+    """A relative-RSSI model still ranks headings by joint gain, printed in dB, never dBm."""
+    proc = run(["orient", "rel.json", "--tx", "A", "--rx", "B", "--tx-pos", "0,0,20", "--rx-pos", "30,0,20", "--tx-power", "20"],
+               workdir)
+    assert proc.returncode == 0 and "dBm" not in proc.stdout and "predicted joint gain" in proc.stdout, proc.stdout + proc.stderr
+
+
+def test_the_real_flight_still_reads(workdir):
+    """The unmoved .tlog reads as before: the checks refuse only what is implausible."""
+    proc = run(["inspect", "flight.tlog"], workdir)
+    assert proc.returncode == 0, proc.stderr
+
+
+# Shown elsewhere:
+# - MHz in a signal log, 1e30 Hz, orient --frequency 2412 / 0: tests/cli/test_hostile_examples.py
+# - Sionna SceneLinkOptions(frequency_hz=2412), the table and the checks: tests/core/test_plausible.py

@@ -55,7 +55,8 @@ class YawOptions:
     step_deg : float
         Yaw grid [deg].
     tx_power_dbm : float, optional
-        Transmit power [dBm]; given, the result carries the received power before and after.
+        Transmit power [dBm]; given, the result carries the received power before and after
+        (not for a model learned from relative RSSI, whose levels are not dBm: the joint gain).
     frequency_hz : float, optional
         Carrier for the received power [Hz]; by default the one the model was learned at.
     caution_z : float

@@ -38,7 +38,7 @@ from rplearn.core.link import free_space_path_loss_db, received_power_dbm
 from rplearn.core.plausible import check_plausible
 from rplearn.data.tables import check_tx_power_dbm
 from rplearn.errors import InputError
-from rplearn.models.base import model_frequency_hz, require_calibrated, require_patterns
+from rplearn.models.base import model_frequency_hz, relative_levels, require_calibrated, require_patterns
 from rplearn.models.patterns import PatternSet
 from rplearn.models.predict import UNCOVERED_DEG
 
@@ -249,7 +249,8 @@ def best_yaw(
     grid = yaw_grid_deg(step_deg)
     if tx_power_dbm is not None:
         check_tx_power_dbm(tx_power_dbm, "transmit power")
-        require_calibrated(model, "orienting by received power")
+        if relative_levels(model):  # levels not in dBm: the joint gain [dB] alone is ranked and printed
+            tx_power_dbm = None
     if tx_power_dbm is not None or frequency_hz is not None:  # a stated carrier of the model's band
         frequency_hz = model_frequency_hz(model, frequency_hz)
     n = grid.size

@@ -4,6 +4,7 @@
 
 from .base import Model as Model
 from .base import model_frequency_hz as model_frequency_hz
+from .base import relative_levels as relative_levels
 from .base import require_calibrated as require_calibrated
 from .base import require_patterns as require_patterns
 from .baselines import KNNModel as KNNModel

@@ -129,10 +129,17 @@ def model_frequency_hz(model: Model, frequency_hz: float | None = None) -> float
 
 
 @check_types
+def relative_levels(model: Model) -> bool:
+    """Whether ``model`` learned from relative RSSI (``sync --rssi-scale relative``, recorded as
+    ``training["rssi_scale"]``): its levels are not dBm."""
+    return bool(model.training.get("rssi_scale") == "relative")
+
+
+@check_types
 def require_calibrated(model: Model, purpose: str) -> None:
-    """Refuse a model learned from relative RSSI (``sync --rssi-scale relative``, recorded as
-    ``training["rssi_scale"]``) where absolute received powers [dBm] are asked for."""
-    if model.training.get("rssi_scale") == "relative":
+    """Refuse a model learned from relative RSSI (:func:`relative_levels`) where absolute
+    received powers [dBm] are asked for."""
+    if relative_levels(model):
         raise InputError(f"tx_power_dbm: the {model.label} model learned from relative RSSI (sync --rssi-scale relative): "
                          f"its levels are not dBm, so {purpose} cannot give received powers; learn from calibrated RSSI",
                          param="tx_power_dbm")
