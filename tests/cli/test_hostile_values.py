@@ -103,6 +103,26 @@ def _tlogs(d: Path) -> None:
                                 "z": [g["z"].median()], "qw": [q[0]], "qx": [q[1]], "qy": [q[2]], "qz": [q[3]]})
         logs = Logs(pd.concat([pose[pose["node"] == "D"], station], ignore_index=True), signal)
         write_tlog(logs, d / name, vehicle="D", station="G", origin_geodetic=ORIGIN)
+    write_tlog(logs, d / "sys2.tlog", vehicle="D", station="G", origin_geodetic=ORIGIN, system_id=2)
+    _merge_second_vehicle(d / "flight.tlog", d / "sys2.tlog", d / "two_vehicles.tlog")
+    (d / "sys2.tlog").unlink()
+
+
+def _merge_second_vehicle(first: Path, second: Path, out: Path) -> None:
+    """One .tlog with both vehicles' messages in time order, and the radio reports of the first only."""
+    import struct
+
+    from pymavlink import mavutil
+
+    records = []
+    for path, keep_radio in ((first, True), (second, False)):
+        conn = mavutil.mavlink_connection(str(path), dialect="ardupilotmega")
+        while (msg := conn.recv_msg()) is not None:
+            if msg.get_type() == "BAD_DATA" or (not keep_radio and msg.get_type() in ("RADIO_STATUS", "RADIO")):
+                continue
+            records.append((round(msg._timestamp * 1e6), bytes(msg.get_msgbuf())))
+    records.sort(key=lambda r: r[0])
+    out.write_bytes(b"".join(struct.pack(">Q", t) + buf for t, buf in records))
 
 
 def _below_ground(d: Path) -> None:
@@ -202,8 +222,9 @@ LOG_REFUSED = {
                                       "altitude [m] 2e+06 is outside -1000 to 50000 m"),
     "station 1,000 km away (--station)": (["inspect", "flight.tlog", "--station", "56.4,8.5456,488"],
                                           "flight.tlog: the vehicle: distance from the station [m] 1"),
-    "home 111 km from the flight": (["inspect", "home111km.tlog"], "home111km.tlog: the vehicle: distance from the station [m] 1.1"),
-    "home 3,000 km from the flight": (["inspect", "home3000km.tlog"], "home3000km.tlog: the vehicle: distance from the station [m] 3"),
+    "home 111 km from the flight": (["inspect", "home111km.tlog"],
+                                    "home111km.tlog: the vehicle: distance from the station [m] 111004 at row 0 is outside 0 to 100000 m"),
+    "home 3,000 km from the flight": (["inspect", "home3000km.tlog"], "home3000km.tlog: geodetic position: origin altitude [m] 670674 is outside"),
 }
 
 
@@ -220,6 +241,15 @@ def test_orient_on_a_relative_model_says_db_not_dbm(workdir):
     proc = run(["orient", "rel.json", "--tx", "A", "--rx", "B", "--tx-pos", "0,0,20", "--rx-pos", "30,0,20", "--tx-power", "20"],
                workdir)
     assert proc.returncode == 0 and "dBm" not in proc.stdout and "predicted joint gain" in proc.stdout, proc.stdout + proc.stderr
+
+
+def test_a_second_vehicle_is_counted_and_named(workdir):
+    """Two vehicles (system ids 1 and 2) in one .tlog with one radio: the second is named, not dropped silently."""
+    proc = run(["inspect", "two_vehicles.tlog"], workdir)
+    out = proc.stdout + proc.stderr
+    assert proc.returncode == 0, out
+    assert "2 vehicles in one log: read system id" in out and "not read: system id" in out, out
+    assert "ATTITUDE message(s)" in out
 
 
 def test_the_real_flight_still_reads(workdir):

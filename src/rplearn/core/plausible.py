@@ -180,7 +180,12 @@ def frequency_bands(frequency_hz: ArrayLike | Mapping[float, int]) -> tuple[tupl
         values = np.array(sorted(frequency_hz), np.float64)
         counts = np.array([frequency_hz[k] for k in sorted(frequency_hz)], np.int64)
     else:
-        values, counts = np.unique(np.asarray(frequency_hz, np.float64).ravel(), return_counts=True)
+        try:
+            carriers = np.asarray(frequency_hz, np.float64).ravel()
+        except (TypeError, ValueError):
+            raise InputError(f"frequency_hz: expected carrier frequencies in Hz, got {type(frequency_hz).__name__}",
+                             param="frequency_hz") from None
+        values, counts = np.unique(carriers, return_counts=True)
     keep = np.isfinite(values)
     values, counts = values[keep], counts[keep]
     bands: list[tuple[float, float, int]] = []

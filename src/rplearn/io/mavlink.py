@@ -522,6 +522,12 @@ def read_mavlink(
              (f"{source}: {lost:,} radio message(s) with a zero RSSI while the vehicle was silent "
               "(link lost) dropped, both directions")]
     notes += _hygiene_notes(source, periods, sig_counts, raw)
+    others = raw.notes.get("other_vehicles") or {}
+    if others:  # more vehicles than one in the log: counted and named, not read
+        listed = ", ".join(f"system id {k} ({n:,} ATTITUDE message(s))" for k, n in sorted(others.items()))
+        notes.append(f"{source}: {len(others) + 1} vehicles in one log: read system id {raw.notes.get('system_id')} "
+                     f"(the most ATTITUDE messages) as {vehicle!r}; not read: {listed}; the radio reports are "
+                     "not split between vehicles (MavlinkOptions.system_id reads another)")
     if cut is not None:
         notes.append(f"{source}: the file is cut off inside {'a ' + cut_name if cut_name else 'a'} record at byte "
                      f"{cut:,}: that message is lost, the complete ones before it are read")
