@@ -246,11 +246,13 @@ def test_predict_links_never_flown_and_honest_spreads(workdir):
     sent.loc[:10, "rssi_dbm"] = -128.0
     sent.to_csv(d / "sentinel_rows.csv", index=False)
     run(["predict", "sh4.json", "sentinel_rows.csv", "-o", "sent_pred.csv"], d)
-    # another carrier frequency: predicted, with a warning
-    other = data.drop(columns=["rssi_dbm"]).assign(frequency_hz=5.8e9)
-    other.to_csv(d / "other_band.csv", index=False)
-    warned = run(["predict", "sh4.json", "other_band.csv", "-o", "other_pred.csv"], d)
-    assert "warning:" in warned.stderr and "5.800 GHz" in warned.stderr
+    # another carrier of the band: predicted, with a warning; another band: refused (issue 29, class 4)
+    data.drop(columns=["rssi_dbm"]).assign(frequency_hz=2.6e9).to_csv(d / "other_channel.csv", index=False)
+    warned = run(["predict", "sh4.json", "other_channel.csv", "-o", "other_pred.csv"], d)
+    assert "warning:" in warned.stderr and "2.600 GHz" in warned.stderr
+    data.drop(columns=["rssi_dbm"]).assign(frequency_hz=5.8e9).to_csv(d / "other_band.csv", index=False)
+    refused = run(["predict", "sh4.json", "other_band.csv", "-o", "band_pred.csv"], d, ok=False)
+    assert refused.returncode == 1 and "at 5.8 GHz, but the" in refused.stderr and not (d / "band_pred.csv").exists()
 
 
 def test_evaluate_scores_unseen_units_by_default(workdir):

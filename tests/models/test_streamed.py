@@ -63,7 +63,7 @@ def test_streamed_fit_checks_the_size_before_reading_the_data(dataset, monkeypat
         monkeypatch.setattr(module, "iter_parts", lambda *a, **k: (read.append(k.get("columns")), real(*a, **k))[1])
     with pytest.raises(RplearnError, match="the largest sh order that fits is"):
         learning.fit_dataset(str(dataset / "m.csv"), ModelSpec("sh", 1000))
-    assert read == [("tx", "rx", "unit")]  # only the id columns were read
+    assert read == [("tx", "rx", "unit", "frequency_hz")]  # only the id columns and the carrier (its band) were read
 
 
 def test_a_bad_row_is_named_by_its_place_in_the_file(dataset, monkeypatch, tmp_path):
@@ -78,8 +78,10 @@ def test_a_bad_row_is_named_by_its_place_in_the_file(dataset, monkeypatch, tmp_p
 def test_weighted_median():
     assert weighted_median({}) is None
     assert weighted_median({2.412e9: 3, 2.437e9: 1}) == 2.412e9
-    assert weighted_median({1.0: 1, 3.0: 1}) == 2.0
-    assert weighted_median({1.0: 1, 2.0: 1, 3.0: 1}) == np.median([1.0, 2.0, 3.0])
+    assert weighted_median({2.40e9: 1, 2.42e9: 1}) == 2.41e9
+    assert weighted_median({2.40e9: 1, 2.41e9: 1, 2.42e9: 1}) == np.median([2.40e9, 2.41e9, 2.42e9])
+    with pytest.raises(InputError, match=r"carriers of 2 bands: 2.412 GHz \(3 samples\), 5.8 GHz \(1 samples\)"):
+        weighted_median({2.412e9: 3, 5.8e9: 1})  # one band per model
 
 
 @pytest.mark.parametrize("name", ["m.parquet", "m.csv"])

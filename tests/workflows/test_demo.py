@@ -124,9 +124,12 @@ def test_best_yaw_reports_the_received_power_before_and_after():
     assert r.baseline_rssi_dbm == pytest.approx(float(received_power_dbm(20.0, r.baseline_gain_db, 20.0, 2.4e9)))
     assert r.rssi_dbm - r.baseline_rssi_dbm == pytest.approx(r.gain_db - r.baseline_gain_db)
     assert "dBm now ->" in r.summary()
-    # the given frequency wins; without one and without the model's, the parameter is named
-    tuned = best_yaw(model, "A", "B", [0, 0, 10], [0, 20, 10], options=YawOptions(tx_power_dbm=20.0, frequency_hz=5.8e9))
-    assert tuned.frequency_hz == 5.8e9
+    # the given frequency of the model's band wins, another band is refused (issue 29, class 4);
+    # without one and without the model's, the parameter is named
+    tuned = best_yaw(model, "A", "B", [0, 0, 10], [0, 20, 10], options=YawOptions(tx_power_dbm=20.0, frequency_hz=2.437e9))
+    assert tuned.frequency_hz == 2.437e9
+    with pytest.raises(InputError, match="5.8 GHz, but the SH-2 model learned at 2.4 GHz"):
+        best_yaw(model, "A", "B", [0, 0, 10], [0, 20, 10], options=YawOptions(tx_power_dbm=20.0, frequency_hz=5.8e9))
     bare = PatternSet(b, ("A", "B"), coef)
     with pytest.raises(InputError, match=r"\(frequency_hz\)") as info:
         best_yaw(bare, "A", "B", [0, 0, 10], [0, 20, 10], options=YawOptions(tx_power_dbm=20.0))

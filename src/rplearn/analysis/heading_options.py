@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from rplearn._argtypes import check_types
+from rplearn.core.plausible import check_frequency_hz
 from rplearn.errors import InputError
 
 #: Default of :attr:`YawOptions.caution_z`: headings are ranked by the 10% lower bound of their
@@ -35,8 +36,11 @@ def _check_step(step_deg: Any) -> None:
 
 
 def _check_frequency(frequency_hz: Any) -> None:
-    if frequency_hz is not None and not (_finite(frequency_hz) and frequency_hz > 0):
-        raise InputError(f"frequency_hz: expected a positive frequency in Hz, got {frequency_hz!r}", param="frequency_hz")
+    """The one frequency check (:func:`~rplearn.core.plausible.check_frequency_hz`), None allowed."""
+    if frequency_hz is not None:
+        if not _finite(frequency_hz):
+            raise InputError(f"frequency_hz: expected a positive frequency in Hz, got {frequency_hz!r}", param="frequency_hz")
+        check_frequency_hz(float(frequency_hz), "frequency_hz")
 
 
 @check_types
@@ -51,7 +55,8 @@ class YawOptions:
     step_deg : float
         Yaw grid [deg].
     tx_power_dbm : float, optional
-        Transmit power [dBm]; given, the result carries the received power before and after.
+        Transmit power [dBm]; given, the result carries the received power before and after
+        (not for a model learned from relative RSSI, whose levels are not dBm: the joint gain).
     frequency_hz : float, optional
         Carrier for the received power [Hz]; by default the one the model was learned at.
     caution_z : float

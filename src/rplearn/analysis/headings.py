@@ -35,9 +35,10 @@ from rplearn.analysis.heading_search import EXHAUSTIVE_MAX_COMBINATIONS, search 
 from rplearn.analysis.swarm import maximum_spanning_edges, resolve_patterns
 from rplearn.core.geometry import direction_in_body, distance_m, quat_wxyz_from_yaw
 from rplearn.core.link import free_space_path_loss_db, received_power_dbm
+from rplearn.core.plausible import check_plausible
 from rplearn.data.tables import check_tx_power_dbm
 from rplearn.errors import InputError
-from rplearn.models.base import model_frequency_hz, require_patterns
+from rplearn.models.base import model_frequency_hz, relative_levels, require_calibrated, require_patterns
 from rplearn.models.patterns import PatternSet
 from rplearn.models.predict import UNCOVERED_DEG
 
@@ -248,10 +249,14 @@ def best_yaw(
     grid = yaw_grid_deg(step_deg)
     if tx_power_dbm is not None:
         check_tx_power_dbm(tx_power_dbm, "transmit power")
+        if relative_levels(model):  # levels not in dBm: the joint gain [dB] alone is ranked and printed
+            tx_power_dbm = None
+    if tx_power_dbm is not None or frequency_hz is not None:  # a stated carrier of the model's band
         frequency_hz = model_frequency_hz(model, frequency_hz)
     n = grid.size
     yaws = np.concatenate([grid, [float(tx_yaw_deg), float(rx_yaw_deg)]])  # the given yaws follow the grid
     positions = {"tx": tx_position_xyz, "rx": rx_position_xyz}
+    _check_places(model, positions)
     tables = heading_gain_tables(model, positions, {"tx": tx_node, "rx": rx_node}, yaws)
     g_tx, g_rx = tables[("tx", "rx")], tables[("rx", "tx")]
     spread = heading_std_tables(model, positions, {"tx": tx_node, "rx": rx_node}, yaws)
@@ -277,6 +282,19 @@ def best_yaw(
         return result
     env = float(model.link_environment_db(tx_node, rx_node, positions["tx"], positions["rx"], frequency_hz)[0])
     return _with_received_power(result, positions, float(tx_power_dbm), model_frequency_hz(model, frequency_hz), env)
+
+
+def _check_places(model: PatternSet, positions: Mapping[str, ArrayLike]) -> None:
+    """Plausible places: every drone above a two-ray model's ground, every pair within a radio
+    link's reach (:data:`rplearn.core.plausible.PLAUSIBLE`)."""
+    xyz = {k: np.asarray(v, np.float64).ravel() for k, v in positions.items()}
+    for name, p in xyz.items():
+        if p.size == 3:
+            model.path_loss.check_heights(p[2], f"{name} position", "z [m]")
+    names = [k for k, p in xyz.items() if p.size == 3]
+    for i, a in enumerate(names):
+        for b in names[i + 1:]:
+            check_plausible("link_distance_m", float(np.linalg.norm(xyz[a] - xyz[b])), f"{a} to {b}", field="distance [m]")
 
 
 def _link_coverage(
@@ -474,6 +492,8 @@ def best_swarm_headings(
     grid = yaw_grid_deg(step_deg)
     drones = sorted(positions)
     _check_swarm(drones, positions, tx_power_dbm, start_yaw_deg or {}, fixed)
+    _check_places(model, {d: positions[d] for d in drones})
+    require_calibrated(model, "choosing headings by RSSI")
     check_heading_tables(len(drones), step_deg)
     patterns = resolve_patterns(drones, model.nodes, pattern_of)
     start = {d: float((start_yaw_deg or {}).get(d, 0.0)) for d in drones}

@@ -36,7 +36,7 @@ from rplearn.core.link import FAR_FIELD_WAVELENGTHS, free_space_path_loss_db, wa
 from rplearn.data.poses import pose_tracks
 from rplearn.data.tables import LinkSamples, check_tx_power_dbm
 from rplearn.errors import InputError
-from rplearn.models.base import model_frequency_hz, require_patterns
+from rplearn.models.base import model_frequency_hz, require_calibrated, require_patterns
 from rplearn.models.patterns import PatternSet
 from rplearn.models.predict import UNCOVERED_DEG, end_coverage_deg
 
@@ -259,6 +259,7 @@ def predict_swarm(
     frequency_hz, pattern_of, min_rssi_dbm = options.frequency_hz, options.pattern_of, options.min_rssi_dbm
     step_s, times_s, max_gap_s = options.step_s, options.times_s, options.max_gap_s
     require_patterns(model, "predicting a swarm's links")
+    require_calibrated(model, "predicting a swarm's links")
     frequency_hz = model_frequency_hz(model, frequency_hz)
     _check_link_options(tx_power_dbm, max_gap_s, min_rssi_dbm)
     tracks = pose_tracks(pose_log, source=source)
@@ -269,6 +270,8 @@ def predict_swarm(
     t = prediction_times(tracks, step_s, times_s)
     poses = {d: tracks[d].interpolate(t, max_gap_s) for d in drones}
     present = np.stack([poses[d][2] == 0 for d in drones], axis=1)  # (times, drones)
+    for k, d in enumerate(drones):  # a two-ray model predicts nothing at or below its ground
+        model.path_loss.check_heights(poses[d][0][present[:, k], 2], f"{source}: drone {d}", "z [m]")
     n_present = present.sum(axis=1)
     if not np.any(n_present >= 2):
         raise InputError(

@@ -31,6 +31,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from rplearn._argtypes import check_types
 from rplearn.core.link import wavelength_m
+from rplearn.core.plausible import check_plausible
 from rplearn.errors import InputError
 
 FloatArray = NDArray[np.float64]
@@ -152,6 +153,7 @@ class PathLoss:
         if not np.isfinite(self.ground_level_m):
             raise InputError(f"ground level: expected a finite height in metres, got {self.ground_level_m!r}",
                              param="ground_level_m")
+        check_plausible("position_m", self.ground_level_m, "ground_level_m", param="ground_level_m")
         if not (np.isfinite(self.relative_permittivity) and self.relative_permittivity >= 1.0):
             raise InputError(f"relative permittivity: expected a number >= 1, got {self.relative_permittivity!r}",
                              param="relative_permittivity")
@@ -190,6 +192,14 @@ class PathLoss:
             out[above] = two_ray_excess_db(d[above], ht[above], hr[above], f[above], self.relative_permittivity,
                                            self.polarization)
         return out
+
+    def check_heights(self, z_m: ArrayLike, where: str, field: str = "z") -> None:
+        """Refuse antennas at or below the two-ray ground (or more than 50 km above it): a
+        prediction there would be NaN. Nothing to check for the other kinds."""
+        if self.kind != "two-ray":
+            return
+        h = np.asarray(z_m, np.float64) - self.ground_level_m
+        check_plausible("height_above_ground_m", h, where, field=f"{field} above the two-ray ground at {self.ground_level_m:g} m")
 
     def describe(self) -> str:
         """One line for summaries."""

@@ -79,17 +79,16 @@ import pandas as pd
 
 from rplearn._argtypes import check_types
 from rplearn.core.link import FAR_FIELD_WAVELENGTHS, SPEED_OF_LIGHT_M_S
+from rplearn.core.plausible import FREQUENCY_BAND_HZ, check_frequency_hz
 from rplearn.data.outages import match_outages, outage_text, split_outages, with_outages
 from rplearn.data.phases import AIRBORNE_MARGIN_M, WINDOW_CLOCKS, FlightPhases, flight_phases, max_gap_advice, phase_notes, window_mask
 from rplearn.data.poses import STATUS_OUT_OF_SPAN, STATUS_POSE_GAP, PoseTrack, interpolate_nodes, tracks_of_checked_log
 from rplearn.data.readings import REPEAT_FRACTION, duplicate_rows, repeated_readings
 from rplearn.data.tables import (
-    FREQUENCY_BAND_HZ,
     MATCHED_COLUMNS,
     QUATERNION_NORM_TOLERANCE,
     SENTINEL_RSSI_DBM,
     SIGNAL_COLUMNS,
-    check_frequency_hz,
     check_tx_power_dbm,
     empty_ids,
     node_ids,

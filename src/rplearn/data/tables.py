@@ -31,6 +31,7 @@ import pandas as pd
 from rplearn._argtypes import check_types
 from rplearn.core.geometry import Directions, distance_m, link_directions
 from rplearn.core.link import observed_joint_gain_db
+from rplearn.core.plausible import PLAUSIBLE, check_frequency_hz
 from rplearn.errors import InputError
 
 POSE_COLUMNS: tuple[str, ...] = ("t", "node", "x", "y", "z", "qw", "qx", "qy", "qz")
@@ -216,23 +217,8 @@ def non_unit_quaternion_rows(pose_log: pd.DataFrame) -> int:
     return int(pose_log.attrs.get(NON_UNIT_QUATERNION_ATTR, 0)) + count_non_unit_quaternions(norm[np.isfinite(norm)])
 
 
-#: Plausible carrier frequencies [Hz] (1 MHz to 300 GHz) and transmit powers [dBm].
-FREQUENCY_BAND_HZ: tuple[float, float] = (1e6, 3e11)
-TX_POWER_BAND_DBM: tuple[float, float] = (-40.0, 60.0)
-
-
-def check_frequency_hz(values: Any, where: str, param: str | None = "frequency_hz", row_offset: int = 0) -> None:
-    """Refuse carrier frequencies outside :data:`FREQUENCY_BAND_HZ`, saying when a value looks
-    like MHz (2412 for 2.412 GHz); rows are numbered from ``row_offset``."""
-    f = np.atleast_1d(np.asarray(values, np.float64))
-    lo, hi = FREQUENCY_BAND_HZ
-    bad = ~((f >= lo) & (f <= hi))
-    if np.any(bad):
-        row = int(np.flatnonzero(bad)[0])
-        v = float(f[row])
-        hint = f"; {v:g} looks like MHz ({v * 1e6:g} Hz)" if lo <= v * 1e6 <= hi else ""
-        at = f" at row {row + row_offset}" if f.size > 1 or row_offset else ""
-        raise InputError(f"{where}: frequency_hz {v:g}{at} is not a radio carrier in Hz (expected {lo:g} to {hi:g}){hint}", param=param)
+#: Plausible transmit powers [dBm] (the row ``tx_power_dbm`` of :data:`rplearn.core.plausible.PLAUSIBLE`).
+TX_POWER_BAND_DBM: tuple[float, float] = (PLAUSIBLE["tx_power_dbm"].low, PLAUSIBLE["tx_power_dbm"].high)
 
 
 def check_tx_power_dbm(values: Any, where: str, param: str | None = "tx_power_dbm", row_offset: int = 0) -> None:

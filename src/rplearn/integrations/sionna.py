@@ -80,6 +80,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from rplearn._argtypes import check_types
 from rplearn.core.geometry import azimuth_elevation, euler_from_quat_wxyz, rotate_body_to_world, rotate_world_to_body
+from rplearn.core.plausible import check_frequency_hz, check_same_band
 from rplearn.errors import InputError, RplearnError
 from rplearn.io.export import check_pattern_like
 
@@ -448,6 +449,8 @@ class SceneLinkOptions:
             value = getattr(self, name)
             if (value is not None or name == "step_deg") and not _positive(value):
                 raise InputError(f"{name}: expected a positive finite number, got {value!r}", param=name)
+        if self.frequency_hz is not None:
+            check_frequency_hz(float(self.frequency_hz), "frequency_hz")
         if not isinstance(self.prefix, str):
             raise InputError(f"prefix: expected a string, got {self.prefix!r}", param="prefix")
 
@@ -514,6 +517,10 @@ def add_link(
     if f is None or not (math.isfinite(float(f)) and float(f) > 0):
         raise InputError(f"frequency_hz: expected a positive carrier frequency in Hz (the model states none), got {f!r}",
                          param="frequency_hz")
+    check_frequency_hz(float(f), "frequency_hz")
+    learned = getattr(model, "frequency_hz", None)
+    if frequency_hz is not None and learned is not None:
+        check_same_band(float(frequency_hz), float(learned), "frequency_hz", f"the {getattr(model, 'label', 'pattern')} model")
     tx_p, tx_q = _poses(tx_position_xyz, tx_quat_wxyz, "tx")
     rx_p, rx_q = _poses(rx_position_xyz, rx_quat_wxyz, "rx")
     link = (id(model), str(tx_node), str(rx_node), float(f), float(step_deg))

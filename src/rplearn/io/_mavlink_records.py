@@ -155,6 +155,8 @@ def collect_tlog(source: str, system_id: int | None) -> Raw:
         srcs, n = srcs[srcs // 256 == int(system_id)], n[srcs // 256 == int(system_id)]
     chosen = int(srcs[np.argmax(n)])  # the (system, component) sending most ATTITUDE
     vehicle = chosen // 256
+    every = np.unique(att[:, 0].astype(int), return_counts=True)
+    others = {int(s): int(k) for s, k in zip(every[0] // 256, every[1], strict=True) if int(s) != vehicle}
     att = att[att[:, 0] == chosen]
     gpi = _arr(rows["GLOBAL_POSITION_INT"], 8)
     gpi = gpi[(gpi[:, 0] == chosen) & ((gpi[:, 3] != 0) | (gpi[:, 4] != 0))]
@@ -181,6 +183,7 @@ def collect_tlog(source: str, system_id: int | None) -> Raw:
         boot_last_t=boot_last_t, origin_t=np.sort(np.asarray(origin, np.float64)), fix=_arr(sorted(fix), 2),
         armed=_arr(sorted(beats), 2),
         notes={"system_id": vehicle, "component_id": chosen % 256, "radio_senders": radio_senders, **cut_off,
+               "other_vehicles": others,
                "clock_offset_s": float(np.median(offset)) if len(offset) and boot_clock else None,
                "time_reference": "ground station receive time, seconds since the UNIX epoch"
                                  + (" (vehicle messages through time_boot_ms + median offset)" if boot_clock else "")},

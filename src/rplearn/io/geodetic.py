@@ -8,6 +8,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from rplearn._argtypes import check_types
 from rplearn.core.geometry import ned_to_enu
+from rplearn.core.plausible import PLAUSIBLE, check_plausible
 
 FloatArray = NDArray[np.float64]
 
@@ -18,18 +19,32 @@ def geodetic_to_enu(
     lon_deg: ArrayLike,
     alt_m: ArrayLike,
     origin_geodetic: tuple[float, float, float],
+    where: str = "geodetic position",
 ) -> FloatArray:
     """Geodetic positions (WGS-84 latitude, longitude [deg], ellipsoidal or AMSL altitude [m],
     the same datum as the origin) -> local ENU positions (..., 3) [m] around ``origin_geodetic``
-    = (lat0 [deg], lon0 [deg], alt0 [m])."""
+    = (lat0 [deg], lon0 [deg], alt0 [m]).
+
+    The positions and the origin are checked against the plausibility table
+    (:data:`rplearn.core.plausible.PLAUSIBLE`: latitude, longitude, altitude); ``where`` starts
+    the message. (Logs of several places may share one origin: distances from it are the
+    readers' to check, e.g. a vehicle's from its station.)
+    """
     import pymap3d
 
+    lat, lon, alt = (np.asarray(v, np.float64) for v in (lat_deg, lon_deg, alt_m))
+    for quantity, field, values in (("latitude_deg", "latitude", lat), ("longitude_deg", "longitude", lon),
+                                    ("altitude_m", "altitude", alt)):
+        # a missing value (NaN) is the reader's to count; a wrong one is refused here
+        check_plausible(quantity, np.where(np.isnan(values), PLAUSIBLE[quantity].low, values), where,
+                        field=f"{field} [{PLAUSIBLE[quantity].unit}]")
     lat0, lon0, alt0 = (float(v) for v in origin_geodetic)
-    e, n, u = pymap3d.geodetic2enu(
-        np.asarray(lat_deg, np.float64), np.asarray(lon_deg, np.float64),
-        np.asarray(alt_m, np.float64), lat0, lon0, alt0,
-    )
-    return np.stack([np.asarray(e, np.float64), np.asarray(n, np.float64), np.asarray(u, np.float64)], axis=-1)
+    for quantity, field, value in (("latitude_deg", "latitude", lat0), ("longitude_deg", "longitude", lon0),
+                                   ("altitude_m", "altitude", alt0)):
+        check_plausible(quantity, value, where, field=f"origin {field} [{PLAUSIBLE[quantity].unit}]")
+    e, n, u = pymap3d.geodetic2enu(lat, lon, alt, lat0, lon0, alt0)
+    enu = np.stack([np.asarray(e, np.float64), np.asarray(n, np.float64), np.asarray(u, np.float64)], axis=-1)
+    return enu
 
 
 def local_ned_to_geodetic(

@@ -89,6 +89,7 @@ import pandas as pd
 
 from rplearn._argtypes import check_types
 from rplearn.core.geometry import quat_wxyz_from_euler_ned_frd_deg
+from rplearn.core.plausible import check_plausible
 from rplearn.data.tables import check_frequency_hz, check_tx_power_dbm, validate_pose_log, validate_signal_log
 from rplearn.errors import InputError, LogFormatError
 from rplearn.io import mavlink_phases as phases
@@ -495,8 +496,13 @@ def read_mavlink(
     station_geo, station_note = _station(raw, station_geodetic, fixes[1][fixes[2]][0])
     origin = station_geo if origin_geodetic is None else tuple(float(v) for v in origin_geodetic)
     dropped: dict[str, int] = {}
-    pose = _vehicle_pose(raw, fixes, origin, float(max_gap_s), vehicle, dropped)  # type: ignore[arg-type]
-    s_xyz = geodetic_to_enu(*station_geo, origin)  # type: ignore[arg-type]
+    try:  # positions, home and station against the plausibility table (core/plausible.py)
+        pose = _vehicle_pose(raw, fixes, origin, float(max_gap_s), vehicle, dropped)  # type: ignore[arg-type]
+        s_xyz = geodetic_to_enu(*station_geo, origin, where="the station")  # type: ignore[arg-type]
+        far = np.linalg.norm(pose[["x", "y", "z"]].to_numpy(np.float64) - np.asarray(s_xyz, np.float64), axis=1)
+        check_plausible("link_distance_m", np.nan_to_num(far), "the vehicle", field="distance from the station [m]")
+    except InputError as exc:
+        raise InputError(f"{source}: {exc} ({station_note})", param=exc.param) from None
     t0 = float(min(raw.radio[0, 0], pose["t"].iloc[0] if len(pose) else np.inf))
     heading = 90.0 if station_heading_deg is None else float(station_heading_deg)
     sq = quat_wxyz_from_euler_ned_frd_deg(0.0, 0.0, heading)
@@ -519,6 +525,12 @@ def read_mavlink(
              (f"{source}: {lost:,} radio message(s) with a zero RSSI while the vehicle was silent "
               "(link lost): kept as outage events (column outage, no RSSI), both directions")]
     notes += _hygiene_notes(source, periods, sig_counts, raw)
+    others = raw.notes.get("other_vehicles") or {}
+    if others:  # more vehicles than one in the log: counted and named, not read
+        listed = ", ".join(f"system id {k} ({n:,} ATTITUDE message(s))" for k, n in sorted(others.items()))
+        notes.append(f"{source}: {len(others) + 1} vehicles in one log: read system id {raw.notes.get('system_id')} "
+                     f"(the most ATTITUDE messages) as {vehicle!r}; not read: {listed}; the radio reports are "
+                     "not split between vehicles (MavlinkOptions.system_id reads another)")
     if cut is not None:
         notes.append(f"{source}: the file is cut off inside {'a ' + cut_name if cut_name else 'a'} record at byte "
                      f"{cut:,}: that message is lost, the complete ones before it are read")

@@ -46,6 +46,7 @@ from rplearn._argtypes import check_types
 from rplearn._atomic import atomic_open
 from rplearn._version import __version__
 from rplearn.core.geometry import wrap_angle_rad
+from rplearn.core.plausible import check_frequency_hz, check_plausible, check_same_band
 from rplearn.errors import InputError
 from rplearn.io.export import PatternLike, check_pattern_like, grid_angles_deg, node_file_names, select_nodes
 
@@ -126,7 +127,9 @@ def _parse_frequency_mhz(text: str, where: str) -> float:
     scale = {None: 1.0, "hz": 1e-6, "khz": 1e-3, "mhz": 1.0, "ghz": 1e3}[
         m.group(2).lower() if m.group(2) else None
     ]
-    return float(m.group(1)) * scale
+    value = float(m.group(1)) * scale
+    check_frequency_hz(value, where, None, unit="MHz", field="FREQUENCY")
+    return value
 
 
 def _parse_gain_dbi(text: str, where: str) -> float:
@@ -134,7 +137,9 @@ def _parse_gain_dbi(text: str, where: str) -> float:
     if not m:
         raise InputError(f"{where}: GAIN: expected a number with optional dBi/dBd, got {text!r}")
     value = float(m.group(1))
-    return value if (m.group(2) or "").lower() == "dbi" else value + DBD_TO_DBI
+    value = value if (m.group(2) or "").lower() == "dbi" else value + DBD_TO_DBI
+    check_plausible("gain_dbi", value, where, field="GAIN")
+    return value
 
 
 @check_types
@@ -290,11 +295,7 @@ def msi_pattern(
     """
     check_pattern_like(pattern_like)
     node = select_nodes(pattern_like, [node])[0]
-    if frequency_hz is None or not math.isfinite(float(frequency_hz)) or float(frequency_hz) <= 0:
-        raise InputError(
-            f"frequency_hz: expected a positive frequency [Hz], got {frequency_hz}",
-            param="frequency_hz",
-        )
+    check_frequency_hz(frequency_hz, "frequency_hz")
     angles = np.arange(MSI_N_ANGLES, dtype=np.float64)
     g_h = np.asarray(
         pattern_like.evaluate(node, *msi_horizontal_directions_rad(angles)), np.float64
@@ -387,11 +388,12 @@ def export_msi_files(
     check_pattern_like(pattern_like)
     if frequency_hz is None:
         frequency_hz = _frequency_of(pattern_like)
-    if not (math.isfinite(float(frequency_hz)) and float(frequency_hz) > 0):
-        raise InputError(
-            f"frequency_hz: expected a positive frequency in Hz, got {frequency_hz!r}",
-            param="frequency_hz",
-        )
+    else:
+        check_frequency_hz(frequency_hz, "frequency_hz")
+        learned = getattr(pattern_like, "frequency_hz", None)
+        check_same_band(float(frequency_hz), None if learned is None else float(learned), "frequency_hz",
+                        f"the {getattr(pattern_like, 'label', 'pattern')} model")
+    check_frequency_hz(frequency_hz, "frequency_hz")
     os.makedirs(out_dir, exist_ok=True)
     label = getattr(pattern_like, "label", "pattern")
     paths = []

@@ -242,7 +242,7 @@ def _enu_positions(
         i0 = int(np.argmin(values["t"]))
         origin_geodetic = (float(lat[i0]), float(lon[i0]), float(alt[i0]))
     origin = tuple(float(v) for v in origin_geodetic)
-    return geodetic_to_enu(lat, lon, alt, origin_geodetic), origin  # type: ignore[return-value]
+    return geodetic_to_enu(lat, lon, alt, origin_geodetic, source), origin  # type: ignore[return-value]
 
 
 def _quaternions(values: dict[str, np.ndarray], att_cols: tuple[str, ...], attitude: str) -> np.ndarray:

@@ -10,6 +10,8 @@ from .availability_score import score_availability as score_availability
 from .availability_score import score_models_availability as score_models_availability
 from .base import Model as Model
 from .base import model_frequency_hz as model_frequency_hz
+from .base import relative_levels as relative_levels
+from .base import require_calibrated as require_calibrated
 from .base import require_patterns as require_patterns
 from .baselines import KNNModel as KNNModel
 from .baselines import MeanModel as MeanModel
@@ -31,6 +33,7 @@ from .options import FitOptions as FitOptions
 from .patterns import PatternSet as PatternSet
 from .predict import DatasetPrediction as DatasetPrediction
 from .predict import FrequencyMismatch as FrequencyMismatch
+from .predict import check_model_band as check_model_band
 from .predict import distinct_labels as distinct_labels
 from .predict import frequency_mismatch as frequency_mismatch
 from .predict import predict_dataset as predict_dataset

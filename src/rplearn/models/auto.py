@@ -28,6 +28,7 @@ from rplearn.core.lsq.selection import (
     sub_statistics,
 )
 from rplearn.core.lsq.solver import solve
+from rplearn.core.plausible import check_same_band
 from rplearn.core.threads import blas_threads_for
 from rplearn.core.threads import warm_up as warm_up_blas
 from rplearn.data.tables import LinkSamples
@@ -94,6 +95,9 @@ def prior_coefficients(prior: Mapping[str, Any], nodes: Sequence[str], basis: An
             raise InputError(f"prior: node {node} is not in the learning data (nodes {', '.join(nodes)})", param="prior")
         names = [str(n) for n in getattr(model, "nodes", ())]
         source = str(node) if str(node) in names else (names[0] if len(names) == 1 else None)
+        if source is not None and source != str(node) and source in nodes:
+            raise InputError(f"prior: the prior model for {node} holds only node {source}, another node of the learning "
+                             f"data; give {source}'s prior to {source} (--prior {source}=...) or a model of {node}", param="prior")
         if source is None:
             raise InputError(f"prior: the prior model for {node} holds {', '.join(names)}, not {node}", param="prior")
         k = list(nodes).index(str(node))
@@ -309,6 +313,10 @@ def fit_from_statistics(
     prior, prior_spread_db, prior_level = load_priors(options).priors or None, options.prior_std_db, options.prior_level
     if power is None:
         power = PRIOR_PENALTY_POWER if prior else DEFAULT_PENALTY_POWER
+    for node, model in (prior or {}).items():  # a prior of another band is another antenna
+        if frequency_hz is not None:
+            check_same_band(frequency_hz, getattr(model, "frequency_hz", None), "the learning data",
+                            f"the prior of {node}", param="prior")
     if prior_spread_db is not None:
         missing = sorted(set(map(str, nodes)) - set(map(str, prior or {})))
         if missing:

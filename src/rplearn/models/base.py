@@ -18,7 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rplearn._argtypes import check_types
-from rplearn.data.tables import check_frequency_hz
+from rplearn.core.plausible import check_frequency_hz, check_one_band, check_same_band
 from rplearn.errors import InputError
 from rplearn.models.training import TrainingSummary
 
@@ -99,6 +99,7 @@ def learned_frequency_hz(samples: LinkSamples) -> float | None:
     """
     if samples.frequency_hz is None or len(samples.frequency_hz) == 0:
         return None
+    check_one_band(samples.frequency_hz, "the samples")
     return float(np.median(samples.frequency_hz))
 
 
@@ -109,8 +110,9 @@ def model_frequency_hz(model: Model, frequency_hz: float | None = None) -> float
     Raises
     ------
     InputError
-        (``param="frequency_hz"``) when neither is known, or the frequency is not a positive
-        finite number.
+        (``param="frequency_hz"``) when neither is known, the frequency is not a radio carrier
+        (:func:`~rplearn.core.plausible.check_frequency_hz`), or ``frequency_hz`` is of another
+        band than the model's (:func:`~rplearn.core.plausible.check_same_band`).
     """
     f = model.frequency_hz if frequency_hz is None else frequency_hz
     if f is None:
@@ -121,7 +123,26 @@ def model_frequency_hz(model: Model, frequency_hz: float | None = None) -> float
     if not (math.isfinite(float(f)) and float(f) > 0):
         raise InputError(f"frequency_hz: expected a positive frequency in Hz, got {f!r}", param="frequency_hz")
     check_frequency_hz(float(f), "frequency_hz")
+    if frequency_hz is not None and model.frequency_hz is not None:
+        check_same_band(float(frequency_hz), float(model.frequency_hz), "frequency_hz", f"the {model.label} model")
     return float(f)
+
+
+@check_types
+def relative_levels(model: Model) -> bool:
+    """Whether ``model`` learned from relative RSSI (``sync --rssi-scale relative``, recorded as
+    ``training["rssi_scale"]``): its levels are not dBm."""
+    return bool(model.training.get("rssi_scale") == "relative")
+
+
+@check_types
+def require_calibrated(model: Model, purpose: str) -> None:
+    """Refuse a model learned from relative RSSI (:func:`relative_levels`) where absolute
+    received powers [dBm] are asked for."""
+    if relative_levels(model):
+        raise InputError(f"tx_power_dbm: the {model.label} model learned from relative RSSI (sync --rssi-scale relative): "
+                         f"its levels are not dBm, so {purpose} cannot give received powers; learn from calibrated RSSI",
+                         param="tx_power_dbm")
 
 
 @check_types

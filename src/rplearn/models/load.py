@@ -7,6 +7,7 @@ import dataclasses
 import os
 
 from rplearn._argtypes import check_types
+from rplearn.core.plausible import check_frequency_hz
 from rplearn.errors import InputError
 from rplearn.io.modelfile import read_model_file
 from rplearn.models.base import Model, require_patterns
@@ -17,14 +18,21 @@ from rplearn.models.patterns import PatternSet
 
 @check_types
 def load_model(path: str | os.PathLike[str]) -> Model:
-    """Load any model file: a PatternSet or a baseline model."""
+    """Load any model file: a PatternSet or a baseline model; its carrier frequency is checked
+    (:func:`~rplearn.core.plausible.check_frequency_hz`), and a pattern model's covariance
+    (:func:`~rplearn.core.plausible.check_covariance`)."""
     model_type, payload = read_model_file(path)
     name = os.fspath(path)
+    model: Model
     if model_type == "patterns":
-        return PatternSet.from_dict(payload, source=name)
-    if model_type == "mean":
-        return MeanModel.from_dict(payload, source=name)
-    return KNNModel.from_dict(payload, source=name)
+        model = PatternSet.from_dict(payload, source=name)
+    elif model_type == "mean":
+        model = MeanModel.from_dict(payload, source=name)
+    else:
+        model = KNNModel.from_dict(payload, source=name)
+    if model.frequency_hz is not None:  # the one frequency check, as for every carrier read
+        check_frequency_hz(float(model.frequency_hz), name, None, field="training.frequency_hz")
+    return model
 
 
 def load_priors(options: FitOptions) -> FitOptions:

@@ -23,6 +23,7 @@ from rplearn.core.basis_base import chunk_directions
 from rplearn.core.environment import PathLoss
 from rplearn.core.geometry import Directions, distance_m, link_directions
 from rplearn.core.link import received_power_dbm
+from rplearn.core.plausible import check_covariance
 from rplearn.errors import InputError, ModelFileError
 from rplearn.io.modelfile import jsonable as _jsonable
 from rplearn.io.modelfile import read_model_file, read_sidecar, write_model_with_sidecar
@@ -455,6 +456,11 @@ class PatternSet:
         p = len(nodes) * basis.n_coef + len(shared_names)
         if cov_arr is not None and cov_arr.shape != (p, p):
             raise ModelFileError(f"{source}: covariance must be {p} x {p}")
+        if cov_arr is not None:
+            try:
+                check_covariance(cov_arr, source)
+            except InputError as exc:
+                raise ModelFileError(str(exc)) from None
         try:
             return cls(
                 basis=basis,

@@ -11,7 +11,7 @@ a carrier other than the one the model learned at.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -21,7 +21,9 @@ from numpy.typing import ArrayLike
 
 from rplearn._argtypes import check_types
 from rplearn.core.link import received_power_dbm
+from rplearn.core.plausible import describe_band, frequency_bands, same_band
 from rplearn.data.tables import link_samples
+from rplearn.errors import InputError
 from rplearn.models.base import Model
 
 #: Relative difference of carrier frequencies above which a warning is given.
@@ -60,6 +62,25 @@ class FrequencyMismatch:
             f"{where}: {self.n_rows:,} row(s) at {self.median_hz / 1e9:.3f} GHz, but {model_name} learned at "
             f"{self.learned_hz / 1e9:.3f} GHz; antenna patterns change with frequency"
         )
+
+
+@check_types
+def check_model_band(model: Model, frequency_hz: ArrayLike | Mapping[float, int], where: str, model_name: str | None = None) -> None:
+    """Refuse rows whose carriers are of another band than the one ``model`` learned at.
+
+    Each band of the rows (:func:`~rplearn.core.plausible.frequency_bands`: the rows' carriers,
+    or carrier -> row count) is compared with the model's carrier; a model that does not state
+    its carrier is not checked.
+    """
+    if model.frequency_hz is None:
+        return
+    learned = float(model.frequency_hz)
+    for lo, hi, n in frequency_bands(frequency_hz if isinstance(frequency_hz, Mapping) else np.asarray(frequency_hz, np.float64)):
+        far = lo if abs(lo - learned) > abs(hi - learned) else hi
+        if not same_band(far, learned):
+            raise InputError(f"{where}: {n:,} row(s) at {describe_band(lo, hi)}, but {model_name or f'the {model.label} model'} "
+                             f"learned at {describe_band(learned, learned)}; antenna patterns change with frequency "
+                             "(evaluate a model of this band, or the rows of its band)")
 
 
 @check_types
@@ -139,6 +160,8 @@ def predict_dataset(model: Model, dataset: pd.DataFrame, source: str = "dataset"
         File name for messages.
     """
     samples = link_samples(dataset, source, require_rssi=False)
+    if samples.frequency_hz is not None:
+        check_model_band(model, samples.frequency_hz, source)
     gain = model.predict_gain(samples)
     table = dataset.drop(columns=[c for c in PREDICTION_COLUMNS if c in dataset.columns])  # no stale predictions
     table["gain_pred_db"] = gain

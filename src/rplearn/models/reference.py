@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from rplearn.core.lsq.selection import DEFAULT_PENALTY_POWER, penalty_scale
+from rplearn.core.plausible import describe_band, frequency_bands
 from rplearn.core.sh import SphericalHarmonics
 from rplearn.errors import InputError
 from rplearn.io.reference import ReferenceSamples
@@ -85,6 +86,12 @@ def reference_model(
         "warnings": [],
     }
     if freqs:
+        bands = frequency_bands(freqs)
+        if len(bands) > 1:
+            stated = {n: float(f) for n in nodes if (f := patterns[n].frequency_hz) is not None}
+            listed = ", ".join(f"{n} ({patterns[n].source}) at {describe_band(f, f)}" for n, f in stated.items())
+            raise InputError(f"patterns: the antennas are of {len(bands)} bands ({listed}); one model holds one band, "
+                             "so make one reference model per band", param="patterns")
         training["frequency_hz"] = float(np.median(freqs))
     model = PatternSet(basis=basis, nodes=nodes, coef=np.array(coefs), covariance=np.zeros((len(nodes) * p, len(nodes) * p)),
                        gauge=[], training=TrainingSummary.from_dict(training))

@@ -29,6 +29,7 @@ import pandas as pd
 from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.core.lsq.selection import penalty_scale, penalty_vector
 from rplearn.core.lsq.solver import FitReport, solve
+from rplearn.core.plausible import check_one_band
 from rplearn.data.tables import LinkSamples, link_samples, node_ids
 from rplearn.data.units import Stretches
 from rplearn.errors import InputError
@@ -66,9 +67,11 @@ class StreamedFit:
 
 
 def weighted_median(counts: Mapping[float, int]) -> float | None:
-    """Median of values given with their counts (the carrier frequencies of a dataset) [Hz]."""
+    """Median of values given with their counts (the carrier frequencies of a dataset) [Hz]; the
+    carriers must be of one band (:func:`~rplearn.core.plausible.check_one_band`)."""
     if not counts:
         return None
+    check_one_band(counts, "the dataset")
     values = np.array(sorted(counts), np.float64)
     weights = np.array([counts[v] for v in sorted(counts)], np.float64)
     cum = np.cumsum(weights)
@@ -89,7 +92,7 @@ def frequency_counts(samples: LinkSamples, counts: Counter[float] | None = None)
 
 
 def units_and_nodes(chunks: Iterable[pd.DataFrame]) -> pd.DataFrame:
-    """Rows per distinct ``(unit, tx, rx)`` of a dataset read in chunks of those columns only.
+    """Rows per distinct ``(unit, tx, rx, frequency_hz)`` of a dataset read in chunks of those columns only.
 
     A small table (one row per unit and link direction, column ``n`` the rows) from which
     units, nodes and the model size are checked before the data are read in full.
@@ -99,6 +102,8 @@ def units_and_nodes(chunks: Iterable[pd.DataFrame]) -> pd.DataFrame:
         cols = {c: node_ids(chunk[c]) for c in ("tx", "rx") if c in chunk.columns}
         if "unit" in chunk.columns:
             cols["unit"] = chunk["unit"].astype(str).to_numpy(dtype=object)
+        if "frequency_hz" in chunk.columns:  # the bands, checked before any statistics
+            cols["frequency_hz"] = pd.to_numeric(chunk["frequency_hz"], errors="coerce").to_numpy(np.float64)
         frame = pd.DataFrame(cols)
         parts.append(frame.groupby(list(frame.columns), sort=False, dropna=False).size().rename("n").reset_index())
     if not parts:
@@ -246,6 +251,7 @@ def checked(acc: Accumulated, source: str) -> Accumulated:
     """``acc``, or an error when it holds no sample."""
     if not acc.stats or acc.n_samples == 0:
         raise InputError(f"{source}: no samples selected", param="units")
+    check_one_band(acc.freq, source)  # every part of one band
     return acc
 
 

@@ -31,7 +31,7 @@ from rplearn.io.files import iter_parts
 from rplearn.io.partitions import Part
 from rplearn.models.base import Model
 from rplearn.models.options import FitOptions
-from rplearn.models.predict import uncovered_rows
+from rplearn.models.predict import check_model_band, uncovered_rows
 from rplearn.models.spec import ModelSpec
 from rplearn.models.streamed import PART_CHUNK_ROWS, Accumulated, part_statistics, units_and_nodes
 from rplearn.models.streamed import accumulate_parts as accumulate_parts_here
@@ -139,8 +139,8 @@ def map_parts(function: Callable[..., Any], parts: Sequence[Part], client: Any =
 
 
 def part_index(part: Part) -> pd.DataFrame:
-    """Rows per ``(unit, tx, rx)`` of one part (:func:`rplearn.models.streamed.units_and_nodes`)."""
-    return units_and_nodes(iter_parts([part], PART_CHUNK_ROWS, columns=("tx", "rx", "unit")))
+    """Rows per ``(unit, tx, rx, frequency_hz)`` of one part (:func:`rplearn.models.streamed.units_and_nodes`)."""
+    return units_and_nodes(iter_parts([part], PART_CHUNK_ROWS, columns=("tx", "rx", "unit", "frequency_hz")))
 
 
 def dataset_index(parts: Sequence[Part], client: Any = None) -> tuple[pd.DataFrame, list[pd.DataFrame]]:
@@ -209,6 +209,8 @@ def _part_predictions(part: Part, models: Sequence[Model], units: Sequence[str] 
         samples = link_samples(chunk, part.path)
         observed.append(np.asarray(samples.joint_gain_db, np.float64))
         for k, model in enumerate(models):
+            if samples.frequency_hz is not None:
+                check_model_band(model, samples.frequency_hz, part.path)
             predicted[k].append(np.asarray(model.predict_gain(samples), np.float64))
             n = uncovered_rows(model, samples)
             if n is not None:

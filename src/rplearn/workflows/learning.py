@@ -19,6 +19,7 @@ from rplearn._atomic import atomic_open
 from rplearn.analysis.budget import check_dataset_budget
 from rplearn.analysis.decoupling import certify
 from rplearn.core.metrics import Scores
+from rplearn.core.plausible import check_one_band
 from rplearn.data.tables import QUATERNION_NORM_TOLERANCE
 from rplearn.data.units import (
     TIME_UNITS,
@@ -46,7 +47,7 @@ from rplearn.models.fit import FittedModel, evaluate_models, fit_model, scores_m
 from rplearn.models.load import load_model, load_priors
 from rplearn.models.options import FitOptions
 from rplearn.models.patterns import PatternSet
-from rplearn.models.predict import UNCOVERED_DEG, DatasetPrediction, distinct_labels, predict_dataset, uncovered_rows
+from rplearn.models.predict import UNCOVERED_DEG, DatasetPrediction, check_model_band, distinct_labels, predict_dataset, uncovered_rows
 from rplearn.models.robust import downweighted_notes, fit_huber
 from rplearn.models.spec import ModelSpec, check_model_size
 from rplearn.models.streamed import checked, fit_patterns_accumulated, weighted_median
@@ -206,6 +207,8 @@ def fit_dataset(
         return _fit_streamed(dataset, spec, units, options, output, progress=progress)
     df, stretch_note = stretched(read_dataset(dataset), units, dataset)
     choice = learning_units(df, units, dataset)
+    if "frequency_hz" in df.columns:
+        check_one_band(select_units(df, choice.units, dataset)["frequency_hz"].to_numpy("float64"), dataset)
     if stretch_note:
         choice = replace(choice, notes=[stretch_note, *choice.notes])
     elif "unit" not in df.columns:
@@ -221,6 +224,7 @@ def fit_dataset(
     else:
         fitted = fit_model(samples, spec, options, provenance=prov)
     check_dataset_budget(fitted.model, select_units(df, choice.units, dataset), dataset)
+    _record_scale(fitted.model, select_units(df, choice.units, dataset))
     certify(fitted.model, samples)
     if output:
         fitted.model.save(output)
@@ -250,12 +254,26 @@ def _fit_auto(
     prov = provenance(dataset=dataset, model=f"{spec.kind}-auto", ridge=spec.ridge, units=choice.units)
     fitted, selection = fit_auto(per_unit, spec, options, provenance=prov)
     check_dataset_budget(fitted.model, part, dataset)
+    _record_scale(fitted.model, part)
     certify(fitted.model, list(per_unit.values()), fitted.own_posterior)
     if output:
         fitted.model.save(output)
     n = sum(len(s) for s in per_unit.values())
     return FitOutcome(fitted, choice, n, output, sum(s.non_unit_quaternions for s in per_unit.values()), selection,
                       outages=sum(s.outages for s in per_unit.values()))
+
+
+def _band_counts(index: Any) -> dict[float, int]:
+    """Rows per carrier [Hz] of a dataset's index (:func:`rplearn.workflows.fleet.dataset_index`)."""
+    sums = index.groupby("frequency_hz")["n"].sum()
+    return {float(f): int(n) for f, n in zip(sums.index.to_numpy("float64"), sums.to_numpy("int64"), strict=True)}
+
+
+def _record_scale(model: Any, rows: Any) -> None:
+    """Record ``training["rssi_scale"] = "relative"`` when the learning rows are relative RSSI
+    (``sync --rssi-scale relative``): nothing downstream then prints their levels as dBm."""
+    if "rssi_scale" in rows.columns and bool((rows["rssi_scale"].astype(str).str.lower() == "relative").any()):
+        model.training = model.training.replace(rssi_scale="relative")
 
 
 def _is_big(dataset: str) -> bool:
@@ -282,6 +300,8 @@ def _fit_streamed(
     choice = learning_units(index, units, dataset)
     refuse_streamed_stretches(index, units, dataset)
     part = select_units(index, choice.units, dataset)
+    if "frequency_hz" in part.columns:  # one band over every part, before any statistics
+        check_one_band(_band_counts(part), dataset)
     nodes = sorted(set(part["tx"]) | set(part["rx"]))
     n = int(part["n"].sum())
     if n == 0:
@@ -385,6 +405,10 @@ def evaluate_model_files(
             choice = evaluation_units(index, units, [m.provenance for m in models], dataset)
             if selected_rows(index, choice.units) == 0:
                 raise InputError(f"{dataset}: no samples selected", param="units")
+            if "frequency_hz" in index.columns:  # each model at its band, before any prediction
+                carriers = select_units(index, choice.units, dataset)
+                for model, path in zip(models, model_paths, strict=True):
+                    check_model_band(model, _band_counts(carriers), dataset, path)
             observed, predictions, uncovered = predict_parts(parts, models, choice.units, client, progress)
         rows = scores_of_predictions(fitted, observed, predictions, choice.warnings)
         n_eval = observed.size
@@ -393,6 +417,9 @@ def evaluate_model_files(
         df, _ = stretched(read_dataset(dataset), units or [u for u in trained_units(provs) if is_stretch_label(u)], dataset)
         choice = evaluation_units(df, units, provs, dataset)
         samples = samples_of(df, choice.units, dataset)
+        for model, path in zip(models, model_paths, strict=True):
+            if samples.frequency_hz is not None:
+                check_model_band(model, samples.frequency_hz, dataset, path)
         rows = evaluate_models(fitted, samples, choice.warnings)
         uncovered = [uncovered_rows(m, samples) for m in models]
         n_eval = len(samples)
