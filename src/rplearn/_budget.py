@@ -257,12 +257,10 @@ def check_work(
 
     if falling:
         best = _smallest(float(value), fits, float(bounds[1]))
-        hint = (f"use a step of at least {_number(best, integer, up=True)} {what}" if best is not None
-                else f"no value of {param} fits")
+        hint = f"use a step of at least {_number(best, integer, up=True)} {what}" if best is not None else f"no value of {param} fits"
     else:
         best = _largest(float(value), fits, integer, float(bounds[0]))
-        hint = (f"the largest that fits is {_number(best, integer, up=False)} {what}" if best is not None
-                else f"no value of {param} fits")
+        hint = f"the largest that fits is {_number(best, integer, up=False)} {what}" if best is not None else f"no value of {param} fits"
     shown = f"{int(value):,}" if integer else f"{value:g}"
     raise InputError(f"{param}: {shown} {what} would take {over}; {hint}", param=param)
 

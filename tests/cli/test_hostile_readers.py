@@ -36,8 +36,7 @@ P, S, D, M = "flight/pose_log.parquet", "flight/signal_log.parquet", "data.parqu
 
 
 def run(args, cwd, env=None, timeout=600):
-    return subprocess.run(RPLEARN + list(args), cwd=cwd, capture_output=True, text=True, timeout=timeout,
-                          env=None if env is None else {**os.environ, **env})
+    return subprocess.run(RPLEARN + list(args), cwd=cwd, capture_output=True, text=True, timeout=timeout, env=None if env is None else {**os.environ, **env})
 
 
 def need_dask():
@@ -55,7 +54,7 @@ def _fmt_offset(data: bytes, name: bytes) -> int:
     """Byte offset of the binary ``FMT`` record (type 128, 89 bytes) declaring message ``name``."""
     pos = 0
     while (at := data.find(b"\xa3\x95\x80", pos)) >= 0:
-        if data[at + 5:at + 9].rstrip(b"\0") == name:
+        if data[at + 5 : at + 9].rstrip(b"\0") == name:
             return at
         pos = at + 1
     raise AssertionError(f"no FMT of {name!r}")
@@ -65,9 +64,9 @@ def _renamed(data: bytes, name: bytes, old: bytes, new: bytes) -> bytes:
     """The log with one column of ``name``'s FMT renamed (same length: the records stay framed)."""
     out = bytearray(data)
     at = _fmt_offset(data, name)
-    columns = bytes(out[at + 25:at + 89])
+    columns = bytes(out[at + 25 : at + 89])
     assert old in columns and len(old) == len(new)
-    out[at + 25:at + 89] = columns.replace(old, new, 1)
+    out[at + 25 : at + 89] = columns.replace(old, new, 1)
     return bytes(out)
 
 
@@ -88,8 +87,9 @@ def _text_log(binary: Path, edit=lambda line: line) -> str:
             lines.append(f"FMT, {msg.Type}, {msg.Length}, {msg.Name}, {msg.Format}, {msg.Columns}")
             continue
         values = [getattr(msg, c) for c in msg.get_fieldnames()]
-        lines.append(", ".join([msg.get_type(), *(v.decode(errors="replace") if isinstance(v, bytes) else repr(v)
-                                                   if isinstance(v, float) else str(v) for v in values)]))
+        lines.append(
+            ", ".join([msg.get_type(), *(v.decode(errors="replace") if isinstance(v, bytes) else repr(v) if isinstance(v, float) else str(v) for v in values)])
+        )
     return "\n".join(edit(line) for line in lines) + "\n"
 
 
@@ -117,8 +117,7 @@ def _simulated_dataflash(d: Path) -> Path:
     sim = simulate("smoke", seed=3)
     pose, signal = sim.pose_log, sim.signal_log
     station = pose[pose["node"] == "B"].iloc[[0]]
-    logs = Logs(pd.concat([pose[pose["node"] == "A"], station], ignore_index=True),
-                signal[["t", "tx", "rx", "rssi_dbm", "tx_power_dbm", "frequency_hz"]])
+    logs = Logs(pd.concat([pose[pose["node"] == "A"], station], ignore_index=True), signal[["t", "tx", "rx", "rssi_dbm", "tx_power_dbm", "frequency_hz"]])
     path = d / "sim.bin"
     write_dataflash(logs, path, vehicle="A", station="B", origin_geodetic=(47.3977, 8.5456, 90.0))
     return path
@@ -158,9 +157,8 @@ def _forged_sidecar(d: Path) -> None:
             if k == 0:
                 array = np.lib.format.read_array(io.BytesIO(data))
                 header = io.BytesIO()
-                np.lib.format.write_array_header_1_0(header, {"descr": "<f8", "fortran_order": False,
-                                                              "shape": (800_000_000,)})
-                data = header.getvalue() + data[len(data) - array.nbytes:]
+                np.lib.format.write_array_header_1_0(header, {"descr": "<f8", "fortran_order": False, "shape": (800_000_000,)})
+                data = header.getvalue() + data[len(data) - array.nbytes :]
             out.writestr(name, data)
     sha = hashlib.sha256(buf.getvalue()).hexdigest()
     side = Path(sidecar_path(str(d / "forged.json"), sha))
@@ -175,8 +173,7 @@ def _swarm_poses(d: Path, drones: int = 20, span_s: float = 520.0) -> None:
     rows = []
     for k in range(drones):
         for t in (0.0, span_s):
-            rows.append({"t": t, "node": f"D{k:02d}", "x": 10.0 * k + 0.01 * t, "y": 0.0, "z": 20.0,
-                         "qw": 1.0, "qx": 0.0, "qy": 0.0, "qz": 0.0})
+            rows.append({"t": t, "node": f"D{k:02d}", "x": 10.0 * k + 0.01 * t, "y": 0.0, "z": 20.0, "qw": 1.0, "qx": 0.0, "qy": 0.0, "qz": 0.0})
     pd.DataFrame(rows).to_parquet(d / "swarm.parquet")
 
 
@@ -216,22 +213,19 @@ def workdir(tmp_path_factory):
 
 
 def _sync(path: str, *extra: str) -> list[str]:
-    return ["sync", "--poses", path, "--signals", path, "--tx-power", "20", "--frequency", "433e6", *extra,
-            "-o", "out.parquet"]
+    return ["sync", "--poses", path, "--signals", path, "--tx-power", "20", "--frequency", "433e6", *extra, "-o", "out.parquet"]
 
 
 #: Class 3: readers and addresses. (command line, environment, texts the one error line must hold)
 READERS = {
     # DataFlash, binary: the real log and a simulated one (rplearn.io.dataflash_writer)
-    **{f"{tag} ATT without Roll": (_sync(f"{tag}_att_no_roll.bin"), None, [f"{tag}_att_no_roll.bin", "ATT", "Roll"])
-       for tag in ("real", "sim")},
-    **{f"{tag} RAD without RemRSSI": (_sync(f"{tag}_rad_no_remrssi.bin"), None,
-                                      [f"{tag}_rad_no_remrssi.bin", "RAD", "RemRSSI"]) for tag in ("real", "sim")},
-    **{f"{tag} ATT without TimeUS": (_sync(f"{tag}_att_no_timeus.bin"), None, [f"{tag}_att_no_timeus.bin", "ATT", "TimeUS"])
-       for tag in ("real", "sim")},
-    **{f"{tag} FMT of ATT with a wrong length": (_sync(f"{tag}_fmt_length.bin"), None,
-                                                 [f"{tag}_fmt_length.bin", "FMT of ATT", "length of 30 bytes"])
-       for tag in ("real", "sim")},
+    **{f"{tag} ATT without Roll": (_sync(f"{tag}_att_no_roll.bin"), None, [f"{tag}_att_no_roll.bin", "ATT", "Roll"]) for tag in ("real", "sim")},
+    **{f"{tag} RAD without RemRSSI": (_sync(f"{tag}_rad_no_remrssi.bin"), None, [f"{tag}_rad_no_remrssi.bin", "RAD", "RemRSSI"]) for tag in ("real", "sim")},
+    **{f"{tag} ATT without TimeUS": (_sync(f"{tag}_att_no_timeus.bin"), None, [f"{tag}_att_no_timeus.bin", "ATT", "TimeUS"]) for tag in ("real", "sim")},
+    **{
+        f"{tag} FMT of ATT with a wrong length": (_sync(f"{tag}_fmt_length.bin"), None, [f"{tag}_fmt_length.bin", "FMT of ATT", "length of 30 bytes"])
+        for tag in ("real", "sim")
+    },
     "GPS without Status": (_sync("real_gps_no_status.bin"), None, ["real_gps_no_status.bin", "GPS", "Status"]),
     "FMT of RAD with a wrong length": (_sync("real_rad_fmt_length.bin"), None, ["real_rad_fmt_length.bin", "FMT of RAD"]),
     # DataFlash, text
@@ -241,39 +235,83 @@ READERS = {
     "text RAD without RemRSSI": (_sync("rad_no_remrssi.log"), None, ["rad_no_remrssi.log", "RAD", "RemRSSI"]),
     "text RAD without TimeUS": (_sync("rad_no_timeus.log"), None, ["rad_no_timeus.log", "RAD", "TimeUS"]),
     # --dask addresses
-    **{f"--dask {a}": (["fit", D, "--degree", "3", "--dask", a, "-o", "x.json"], None, ["--dask", a, hint])
-       for a, hint in (("foo://bar", "unknown scheme"), ("tcp://[::1", "not a scheduler address"),
-                       ("inproc://x", "in-process"), ("tls://10.0.0.1:8786", "certificates"),
-                       ("ucx://10.0.0.1:8786", "UCX"), ("tcp://10.0.0.1:99999", "Port out of range"))},
+    **{
+        f"--dask {a}": (["fit", D, "--degree", "3", "--dask", a, "-o", "x.json"], None, ["--dask", a, hint])
+        for a, hint in (
+            ("foo://bar", "unknown scheme"),
+            ("tcp://[::1", "not a scheduler address"),
+            ("inproc://x", "in-process"),
+            ("tls://10.0.0.1:8786", "certificates"),
+            ("ucx://10.0.0.1:8786", "UCX"),
+            ("tcp://10.0.0.1:99999", "Port out of range"),
+        )
+    },
     # a wide --offset-window on a real .tlog (was ZeroDivisionError)
-    **{f"sync --estimate-offset --offset-window {w} on a real tlog": (
-        ["sync", "--poses", "real.tlog", "--signals", "real.tlog", "--tx-power", "20", "--frequency", "915e6",
-         "--estimate-offset", "sys1", "--offset-window", w, "-o", "out.parquet"], None, ["--offset-window", f"+-{w} s"])
-       for w in ("100", "600")},
-    "SOURCE_DATE_EPOCH out of range": (["fit", D, "--degree", "3", "-o", "x.json"],
-                                       {"SOURCE_DATE_EPOCH": "99999999999999999999"}, ["SOURCE_DATE_EPOCH", "253402300799"]),
-    "sidecar declaring 6.4 GB": (["predict", "forged.json", D, "-o", "p.csv"], None,
-                                 ["forged.json.", ".npz", "declares 6,400,000,000 bytes"]),
+    **{
+        f"sync --estimate-offset --offset-window {w} on a real tlog": (
+            [
+                "sync",
+                "--poses",
+                "real.tlog",
+                "--signals",
+                "real.tlog",
+                "--tx-power",
+                "20",
+                "--frequency",
+                "915e6",
+                "--estimate-offset",
+                "sys1",
+                "--offset-window",
+                w,
+                "-o",
+                "out.parquet",
+            ],
+            None,
+            ["--offset-window", f"+-{w} s"],
+        )
+        for w in ("100", "600")
+    },
+    "SOURCE_DATE_EPOCH out of range": (
+        ["fit", D, "--degree", "3", "-o", "x.json"],
+        {"SOURCE_DATE_EPOCH": "99999999999999999999"},
+        ["SOURCE_DATE_EPOCH", "253402300799"],
+    ),
+    "sidecar declaring 6.4 GB": (["predict", "forged.json", D, "-o", "p.csv"], None, ["forged.json.", ".npz", "declares 6,400,000,000 bytes"]),
 }
 
 #: Class 6: sizes beyond the work budget, each the issue's example (acceptance 4 adds every other size option).
 UNBOUNDED = {
-    "simulate --flights 100000": (["simulate", "--preset", "fleet", "--flights", "100000", "-o", "fleet"], None,
-                                  ["--flights", "the largest that fits is"]),
-    "trajectory --loops 1000000": (["trajectory", "--loops", "1000000", "-o", "plan"], None,
-                                   ["--loops", "the largest that fits is"]),
+    "simulate --flights 100000": (["simulate", "--preset", "fleet", "--flights", "100000", "-o", "fleet"], None, ["--flights", "the largest that fits is"]),
+    "trajectory --loops 1000000": (["trajectory", "--loops", "1000000", "-o", "plan"], None, ["--loops", "the largest that fits is"]),
     "trajectory --rate 1e9": (["trajectory", "--rate", "1e9", "-o", "plan"], None, ["--rate", "the largest that fits is"]),
-    "links 20 drones x 52,001 times": (["links", M, "swarm.parquet", "--tx-power", "20", "--step", "0.01",
-                                        *(a for k in range(20) for a in ("--as", f"D{k:02d}={'AB'[k % 2]}")),
-                                        "-o", "l.csv"], None, ["--step", "use a step of at least"]),
-    "reference, 0.2 deg chamber grid": (["reference", "A=chamber.csv", "-o", "r.json"], None,
-                                        ["chamber.csv", "1,621,800 directions", "the largest that fits is"]),
+    "links 20 drones x 52,001 times": (
+        [
+            "links",
+            M,
+            "swarm.parquet",
+            "--tx-power",
+            "20",
+            "--step",
+            "0.01",
+            *(a for k in range(20) for a in ("--as", f"D{k:02d}={'AB'[k % 2]}")),
+            "-o",
+            "l.csv",
+        ],
+        None,
+        ["--step", "use a step of at least"],
+    ),
+    "reference, 0.2 deg chamber grid": (
+        ["reference", "A=chamber.csv", "-o", "r.json"],
+        None,
+        ["chamber.csv", "1,621,800 directions", "the largest that fits is"],
+    ),
     "sync --offset-window 600 on a 1,500 s log": (
-        ["sync", "--poses", "long_pose.parquet", "--signals", "long_signal.parquet", "--estimate-offset", "A",
-         "--offset-window", "600", "-o", "out.parquet"], None, ["--offset-window", "the largest that fits is"]),
+        ["sync", "--poses", "long_pose.parquet", "--signals", "long_signal.parquet", "--estimate-offset", "A", "--offset-window", "600", "-o", "out.parquet"],
+        None,
+        ["--offset-window", "the largest that fits is"],
+    ),
     "sweep --orders 1..100000": (["sweep", D, "--orders", "1..100000"], None, ["--orders", "the largest sh order that fits is"]),
-    "--dask local:256": (["fit", D, "--degree", "3", "--dask", "local:256", "-o", "x.json"], None,
-                         ["--dask", "256 local workers", "the largest that fits is"]),
+    "--dask local:256": (["fit", D, "--degree", "3", "--dask", "local:256", "-o", "x.json"], None, ["--dask", "256 local workers", "the largest that fits is"]),
 }
 
 
@@ -306,8 +344,7 @@ def test_class_6_unbounded_work_is_refused_before_it_starts(workdir, case):
 
 def test_real_dataflash_and_tlogs_still_read(workdir):
     """The checks pass the real logs as they are (their counts: tests/io/test_mavlink.py)."""
-    proc = run(["sync", "--poses", str(TLOG), "--signals", str(TLOG), "--tx-power", "20", "--frequency", "915e6",
-                "-o", "ok.parquet"], workdir)
+    proc = run(["sync", "--poses", str(TLOG), "--signals", str(TLOG), "--tx-power", "20", "--frequency", "915e6", "-o", "ok.parquet"], workdir)
     assert proc.returncode == 0, proc.stderr
     (workdir / "ok.parquet").unlink()
     proc = run(["inspect", str(BIN)], workdir)  # its one radio reading is in the near field: not a dataset
@@ -329,25 +366,41 @@ def test_pymavlink_noise_never_reaches_the_terminal(workdir):
 #: need inputs too large for a test; the mechanism is the same.
 SIZE_OPTIONS = {
     **UNBOUNDED,
-    "simulate --flights (smaller time budget)": (["simulate", "--preset", "fleet", "--flights", "8", "-o", "fleet"],
-                                                 {"RPLEARN_MAX_SECONDS": "30"}, ["--flights", "the largest that fits is 2 flights"]),
-    "links --at (times)": (["links", M, "swarm.parquet", "--tx-power", "20",
-                            *(a for k in range(20) for a in ("--as", f"D{k:02d}={'AB'[k % 2]}")),
-                            "--at", ",".join(str(t) for t in range(0, 520)), "-o", "l.csv"], {"RPLEARN_MAX_MEMORY": "210M"},
-                           ["--at", "the largest that fits is"]),
-    "headings --step (swarm tables)": (["headings", M, "--pos", "A=0,0,20", "--pos", "B=30,0,20", "--pos", "C=0,30,20",
-                                        "--as", "C=A", "--tx-power", "20", "--step", "0.01"], None,
-                                       ["--step", "use a step of at least"]),
-    "sweep --orders (time budget)": (["sweep", D, "--orders", "1..20"], {"RPLEARN_MAX_SECONDS": "1"},
-                                     ["--orders", "the largest that fits is"]),
+    "simulate --flights (smaller time budget)": (
+        ["simulate", "--preset", "fleet", "--flights", "8", "-o", "fleet"],
+        {"RPLEARN_MAX_SECONDS": "30"},
+        ["--flights", "the largest that fits is 2 flights"],
+    ),
+    "links --at (times)": (
+        [
+            "links",
+            M,
+            "swarm.parquet",
+            "--tx-power",
+            "20",
+            *(a for k in range(20) for a in ("--as", f"D{k:02d}={'AB'[k % 2]}")),
+            "--at",
+            ",".join(str(t) for t in range(0, 520)),
+            "-o",
+            "l.csv",
+        ],
+        {"RPLEARN_MAX_MEMORY": "210M"},
+        ["--at", "the largest that fits is"],
+    ),
+    "headings --step (swarm tables)": (
+        ["headings", M, "--pos", "A=0,0,20", "--pos", "B=30,0,20", "--pos", "C=0,30,20", "--as", "C=A", "--tx-power", "20", "--step", "0.01"],
+        None,
+        ["--step", "use a step of at least"],
+    ),
+    "sweep --orders (time budget)": (["sweep", D, "--orders", "1..20"], {"RPLEARN_MAX_SECONDS": "1"}, ["--orders", "the largest that fits is"]),
     "sync --offset-window (time budget)": (
         ["sync", "--poses", P, "--signals", S, "--estimate-offset", "A", "--offset-window", "20", "-o", "out.parquet"],
-        {"RPLEARN_MAX_SECONDS": "5"}, ["--offset-window", "the largest that fits is"]),
+        {"RPLEARN_MAX_SECONDS": "5"},
+        ["--offset-window", "the largest that fits is"],
+    ),
     "fit --degree": (["fit", D, "--degree", "1000", "-o", "x.json"], None, ["the largest sh order that fits is"]),
-    "evaluate --dask local:N": (["evaluate", M, D, "--dask", "local:64"], {"RPLEARN_MAX_MEMORY": "2G"},
-                                ["--dask", "the largest that fits is 4 local workers"]),
-    "model sidecar declared size": (["predict", "knn.json", D, "-o", "p.csv"], {"RPLEARN_MAX_MEMORY": "1K"},
-                                    ["knn.json.", "bytes of arrays"]),
+    "evaluate --dask local:N": (["evaluate", M, D, "--dask", "local:64"], {"RPLEARN_MAX_MEMORY": "2G"}, ["--dask", "the largest that fits is 4 local workers"]),
+    "model sidecar declared size": (["predict", "knn.json", D, "-o", "p.csv"], {"RPLEARN_MAX_MEMORY": "1K"}, ["knn.json.", "bytes of arrays"]),
 }
 
 
@@ -388,9 +441,14 @@ def parts(tmp_path_factory):
 def test_ctrl_c_during_a_dask_fit_prints_one_line(parts, tmp_path, after_s):
     """Ctrl-C reaches the whole process group (as from a terminal): one line, no asyncio traceback."""
     need_dask()
-    proc = subprocess.Popen(RPLEARN + ["fit", str(parts), "--degree", "6", "--dask", "local:2", "-o", "m.json"],
-                            cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            start_new_session=True)
+    proc = subprocess.Popen(
+        RPLEARN + ["fit", str(parts), "--degree", "6", "--dask", "local:2", "-o", "m.json"],
+        cwd=tmp_path,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+    )
     time.sleep(after_s)
     os.killpg(proc.pid, signal.SIGINT)
     out, err = proc.communicate(timeout=300)

@@ -87,11 +87,11 @@ def check_dataflash_lengths(conn: Any, source: str) -> None:
         try:
             need = 3 + struct.calcsize(fmt.msg_struct)
         except (struct.error, AttributeError, TypeError):
-            raise LogFormatError(f"{source}: the FMT of {fmt.name} declares an unreadable format "
-                                 f"{getattr(fmt, 'format', '?')!r}") from None
+            raise LogFormatError(f"{source}: the FMT of {fmt.name} declares an unreadable format {getattr(fmt, 'format', '?')!r}") from None
         if int(fmt.len) != need:
-            raise LogFormatError(f"{source}: the FMT of {fmt.name} declares a length of {int(fmt.len)} bytes, its "
-                                 f"format {fmt.format!r} takes {need}: its records cannot be read")
+            raise LogFormatError(
+                f"{source}: the FMT of {fmt.name} declares a length of {int(fmt.len)} bytes, its format {fmt.format!r} takes {need}: its records cannot be read"
+            )
 
 
 def dataflash_time_field(msg: Any, kind: str, source: str) -> tuple[str, float]:
@@ -101,12 +101,14 @@ def dataflash_time_field(msg: Any, kind: str, source: str) -> tuple[str, float]:
     columns = list(getattr(getattr(msg, "fmt", None), "columns", None) or msg.get_fieldnames())
     time = next(((name, unit) for name, unit in TIME_FIELDS if name in columns), None)
     if time is None:
-        raise LogFormatError(f"{source}: {kind} messages have no TimeUS (nor TimeMS) field (its FMT declares "
-                             f"{','.join(columns) or 'no fields'}): their time is unknown")
+        raise LogFormatError(
+            f"{source}: {kind} messages have no TimeUS (nor TimeMS) field (its FMT declares {','.join(columns) or 'no fields'}): their time is unknown"
+        )
     for name in DATAFLASH_FIELDS.get(kind, ()):
         if name not in columns:
-            raise LogFormatError(f"{source}: {kind} messages have no {name} field (its FMT declares "
-                                 f"{','.join(columns)}): the reader needs {', '.join(DATAFLASH_FIELDS[kind])}")
+            raise LogFormatError(
+                f"{source}: {kind} messages have no {name} field (its FMT declares {','.join(columns)}): the reader needs {', '.join(DATAFLASH_FIELDS[kind])}"
+            )
     return time
 
 
@@ -130,5 +132,4 @@ def number(msg: Any, kind: str, name: str, source: str, default: float | None = 
     return out
 
 
-__all__ = ["DATAFLASH_FIELDS", "TIME_FIELDS", "check_dataflash_lengths", "dataflash_time_field", "library_quiet",
-           "number"]
+__all__ = ["DATAFLASH_FIELDS", "TIME_FIELDS", "check_dataflash_lengths", "dataflash_time_field", "library_quiet", "number"]

@@ -41,8 +41,10 @@ def declared_bytes(side: str) -> dict[str, int]:
                     raise ModelFileError(f"{side}: array {key!r} is not numeric")
                 need = math.prod(int(n) for n in shape) * dtype.itemsize
                 if need > info.file_size - header:
-                    raise ModelFileError(f"{side}: array {key!r} declares {need:,} bytes of shape {tuple(shape)} but holds "
-                                         f"{max(info.file_size - header, 0):,}: the sidecar is corrupt or was altered")
+                    raise ModelFileError(
+                        f"{side}: array {key!r} declares {need:,} bytes of shape {tuple(shape)} but holds "
+                        f"{max(info.file_size - header, 0):,}: the sidecar is corrupt or was altered"
+                    )
                 out[key] = need
     except (zipfile.BadZipFile, ValueError, OSError, EOFError) as exc:
         raise ModelFileError(f"{side}: not a readable sidecar ({exc})") from None
@@ -53,8 +55,7 @@ def check_sidecar_size(side: str) -> None:
     """Refuse a sidecar whose arrays declare more than they hold or than the work budget allows."""
     total = sum(declared_bytes(side).values())
     try:
-        check_work(side, total, lambda n: Cost(memory_bytes=LOAD_BYTES_PER_BYTE * n, seconds=LOAD_S_PER_BYTE * n),
-                   "bytes of arrays", bounds=(0, total))
+        check_work(side, total, lambda n: Cost(memory_bytes=LOAD_BYTES_PER_BYTE * n, seconds=LOAD_S_PER_BYTE * n), "bytes of arrays", bounds=(0, total))
     except InputError as exc:
         raise ModelFileError(str(exc)) from None
 

@@ -75,7 +75,7 @@ def _scheduler_address(address: str, text: str) -> str:
                          "address tcp://host:port", param="dask")
     try:
         parts = urllib.parse.urlsplit(f"{scheme}://{rest}")
-        host, port = parts.hostname, parts.port
+        host, _ = parts.hostname, parts.port  # .port raises on a port out of range
     except ValueError as exc:
         raise InputError(f"--dask {address}: not a scheduler address ({exc}); expected tcp://host:port", param="dask") from None
     if not host or parts.path not in ("", "/") or parts.query or parts.fragment or parts.username or parts.password:
