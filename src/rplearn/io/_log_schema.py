@@ -17,12 +17,10 @@ file, the message and the field.
 from __future__ import annotations
 
 import contextlib
-import io
 import math
 import os
 import struct
 import sys
-import tempfile
 import threading
 from collections.abc import Iterator
 from typing import Any
@@ -58,8 +56,8 @@ def _flush_c_stdio() -> None:
 @contextlib.contextmanager
 def library_quiet() -> Iterator[None]:
     """Send what a library prints (Python ``print`` and C ``printf``, to stdout or stderr) to
-    a discarded temporary file while the block runs."""
-    with _QUIET, tempfile.TemporaryFile() as sink:
+    the null device while the block runs (a corrupt log makes pymavlink print a line per byte)."""
+    with _QUIET, open(os.devnull, "wb") as sink, open(os.devnull, "w", encoding="utf-8") as text:
         for stream in (sys.stdout, sys.stderr):
             with contextlib.suppress(AttributeError, OSError, ValueError):
                 stream.flush()
@@ -69,7 +67,7 @@ def library_quiet() -> Iterator[None]:
                 with contextlib.suppress(OSError):
                     saved.append((fd, os.dup(fd)))
                     os.dup2(sink.fileno(), fd)
-            with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+            with contextlib.redirect_stdout(text), contextlib.redirect_stderr(text):
                 yield
         finally:
             _flush_c_stdio()
