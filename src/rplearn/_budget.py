@@ -195,13 +195,16 @@ def _smallest(value: float, fits: Callable[[float], bool], largest: float) -> fl
     return hi
 
 
-def _number(v: float, integer: bool, up: bool) -> str:
+def _number(v: float, integer: bool, up: bool, fits: Callable[[float], bool]) -> str:
+    """``v`` as the user types it: whole, or 3 significant digits, rounded toward the side that
+    fits (the rounder neighbour when it fits too: 1 rather than 1.01 for a bisection's 1.00005)."""
     if integer:
         return f"{int(v):,}"
-    digits = 3
-    scale = 10 ** (digits - 1 - math.floor(math.log10(abs(v)))) if v else 1
-    rounded = (math.ceil(v * scale) if up else math.floor(v * scale)) / scale
-    return f"{rounded:g}"
+    scale = 10 ** (2 - math.floor(math.log10(abs(v)))) if v else 1
+    near, safe = (math.floor(v * scale) / scale, math.ceil(v * scale) / scale)
+    if not up:
+        near, safe = safe, near
+    return f"{near:g}" if near > 0 and fits(near) else f"{safe:g}"
 
 
 @check_types
@@ -257,10 +260,10 @@ def check_work(
 
     if falling:
         best = _smallest(float(value), fits, float(bounds[1]))
-        hint = f"use a step of at least {_number(best, integer, up=True)} {what}" if best is not None else f"no value of {param} fits"
+        hint = f"use a step of at least {_number(best, integer, True, fits)} {what}" if best is not None else f"no value of {param} fits"
     else:
         best = _largest(float(value), fits, integer, float(bounds[0]))
-        hint = f"the largest that fits is {_number(best, integer, up=False)} {what}" if best is not None else f"no value of {param} fits"
+        hint = f"the largest that fits is {_number(best, integer, False, fits)} {what}" if best is not None else f"no value of {param} fits"
     shown = f"{int(value):,}" if integer else f"{value:g}"
     raise InputError(f"{param}: {shown} {what} would take {over}; {hint}", param=param)
 
