@@ -130,13 +130,13 @@ def plan_campaign(
     options = CampaignOptions() if campaign is None else campaign
     if not (isinstance(rate_hz, (int, float)) and math.isfinite(rate_hz) and rate_hz > 0):
         raise InputError(f"rate_hz: expected a positive sample rate, got {rate_hz!r}", param="rate_hz")
-    limits = budget(out_dir)
+    work = budget(out_dir)
     # each alone (the other at most its default), then both: the rate is named for what they need together
     n_loops, usual_rate = options.n_loops, min(rate_hz, 10.0)
-    check_work("n_loops", n_loops, lambda n: campaign_cost(options, n, usual_rate), "loops", limits=limits)
+    check_work("n_loops", n_loops, lambda n: campaign_cost(options, n, usual_rate), "loops", limits=work)
     for loops in (min(n_loops, 5), n_loops):
         check_work("rate_hz", rate_hz, lambda r: campaign_cost(options, loops, r), "Hz",  # noqa: B023 (used at once)
-                   integer=False, bounds=(1e-3, math.inf), limits=limits)
+                   integer=False, bounds=(1e-3, math.inf), limits=work)
     spec = None
     if check_model:  # refuse a bad model before writing files
         spec = ModelSpec.parse(check_model)
