@@ -8,8 +8,8 @@ from the sizes the work allocates and per-unit times measured on a modest machin
 module that does the work). The budget (:func:`budget`) is
 
 - memory: ``RPLEARN_MAX_MEMORY`` (bytes, or with a ``K``/``M``/``G``/``T`` suffix, powers of
-  1024) if set, else half of the memory the system has available now
-  (``MemAvailable`` of ``/proc/meminfo``, else half of physical memory);
+  1024) if set, else 80 % of the memory the system has available now
+  (``MemAvailable`` of ``/proc/meminfo``, else of physical memory);
 - time: ``RPLEARN_MAX_SECONDS`` if set, else :data:`DEFAULT_MAX_SECONDS`;
 - disk (for work that writes, ``Cost.disk_bytes``): the free space of the output's folder.
 
@@ -32,6 +32,8 @@ from rplearn.errors import InputError
 
 #: Time budget [s] of one step of work whose size a parameter sets, unless ``RPLEARN_MAX_SECONDS`` says otherwise.
 DEFAULT_MAX_SECONDS = 300.0
+#: Share of the memory available now that one step of work may take, unless ``RPLEARN_MAX_MEMORY`` says otherwise.
+AVAILABLE_SHARE = 0.8
 _UNITS = {"": 1, "K": 1 << 10, "M": 1 << 20, "G": 1 << 30, "T": 1 << 40}
 
 
@@ -148,7 +150,7 @@ def budget(disk_folder: str | None = None) -> Budget:
     """The work budget now (module docstring), with ``disk_folder`` the output's folder."""
     memory = os.environ.get("RPLEARN_MAX_MEMORY")
     seconds = os.environ.get("RPLEARN_MAX_SECONDS")
-    mem = _parse_size(memory) if memory else 0.5 * _available_memory()
+    mem = _parse_size(memory) if memory else AVAILABLE_SHARE * _available_memory()
     if seconds:
         try:
             secs = float(seconds)
@@ -268,4 +270,4 @@ def check_work(
     raise InputError(f"{param}: {shown} {what} would take {over}; {hint}", param=param)
 
 
-__all__ = ["DEFAULT_MAX_SECONDS", "Budget", "Cost", "budget", "check_work", "size_text", "time_text"]
+__all__ = ["AVAILABLE_SHARE", "DEFAULT_MAX_SECONDS", "Budget", "Cost", "budget", "check_work", "size_text", "time_text"]

@@ -31,9 +31,9 @@ from rplearn.sim.presets import make_preset
 #: Drones of the default fleet.
 FLEET_DRONES = 4
 #: What one flight of each preset takes (measured: ``simulate --preset fleet --flights 2`` on a
-#: loaded 2-core machine, 9.5 s and 22.5 MB of Parquet a paper flight): seconds, bytes written,
+#: loaded 2-core machine, 9.5 to 20 s, 22.5 MB of Parquet and 443 MB peak a paper flight): seconds, bytes written,
 #: peak memory (one flight at a time).
-FLIGHT_COST: dict[str, tuple[float, float, float]] = {"paper": (12.0, 24e6, 1.5e9), "smoke": (1.0, 1.5e6, 3e8)}
+FLIGHT_COST: dict[str, tuple[float, float, float]] = {"paper": (12.0, 24e6, 6e8), "smoke": (1.0, 1.5e6, 3e8)}
 
 
 def fleet_cost(flights: float, preset: str = "paper") -> Cost:
