@@ -453,7 +453,7 @@ def test_ctrl_c_during_a_dask_fit_prints_one_line(parts, tmp_path, after_s):
     time.sleep(after_s)
     os.killpg(proc.pid, signal.SIGINT)
     out, err = proc.communicate(timeout=300)
-    lines = [line for line in err.splitlines() if line.strip()]
+    lines = [line for line in err.splitlines() if line.strip() and not line.startswith("... ")]  # not progress
     if proc.returncode == 0:  # finished before the interrupt on a fast machine: nothing to show
         return
     assert proc.returncode == 130 and lines == ["error: interrupted (Ctrl-C); nothing was written"], err
