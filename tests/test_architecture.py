@@ -23,6 +23,7 @@ LAYERS: tuple[str, ...] = (
     "rplearn.errors",
     "rplearn._argtypes",
     "rplearn._atomic",
+    "rplearn._budget",
     "rplearn.core",
     # the least-squares engine, a subpackage of core: it may use the maths modules at the top of
     # core (geometry, bases, links, ...), which never import it

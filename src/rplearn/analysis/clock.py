@@ -26,6 +26,7 @@ import numpy as np
 import pandas as pd
 
 from rplearn._argtypes import check_types
+from rplearn._budget import Cost, check_work
 from rplearn.core.geometry import distance_m, link_directions
 from rplearn.core.link import FAR_FIELD_WAVELENGTHS, observed_joint_gain_db, wavelength_m
 from rplearn.data.poses import PoseTrack, tracks_of_checked_log
@@ -45,7 +46,24 @@ COARSE_STEP_S = 0.1
 #: Contiguous stretches of the flight whose own minima give the spread of the estimate.
 OFFSET_BLOCKS = 10
 
+#: Measured cost of one shift tried (``estimate_clock_offset`` on the smoke flight on a loaded
+#: 2-core machine: 46-60 ms a shift for 2,500 packets at SH-4): fixed seconds, and seconds and
+#: bytes per packet and model column.
+SHIFT_S, SHIFT_S_PER_VALUE, SHIFT_BYTES_PER_VALUE = 0.03, 2e-8, 40.0
+
 Progress = Callable[[str], None]
+
+
+def offset_search_cost(window_s: float, step_s: float | None, packets: int) -> Cost:
+    """What :func:`estimate_clock_offset` takes over ``+-window_s`` [s] with ``packets`` packets:
+    every coarse shift and about 21 fine ones, each a fit of the largest order those packets allow
+    (two nodes)."""
+    step = float(step_s) if step_s is not None else min(window_s / 5.0, COARSE_STEP_S)
+    shifts = 2.0 * window_s / step + 22.0
+    order = max(2, min(MAX_OFFSET_FIT_ORDER, int(np.sqrt(max(packets, 1) / (2 * OFFSET_SAMPLES_PER_COEF))) - 1))
+    values = float(packets) * 2 * (order + 1) ** 2
+    return Cost(memory_bytes=SHIFT_BYTES_PER_VALUE * values + 2e8,
+                seconds=shifts * (SHIFT_S + SHIFT_S_PER_VALUE * values))
 
 
 @check_types
@@ -174,6 +192,13 @@ def estimate_clock_offset(
     involved = ((sig["tx"].astype(str) == node) | (sig["rx"].astype(str) == node)).to_numpy()
     t = sig["t"].to_numpy(np.float64)
     rows = np.flatnonzero(involved & (t >= start) & (t <= stop))
+    if rows.size == 0:
+        span = float(mine["t"].max() - mine["t"].min())
+        raise InputError(f"offset_window: shifts of +-{window_s:g} s leave no packet of node {node} inside its pose "
+                         f"span ({span:.1f} s): use a window well under half of it", param="offset_window")
+    packets = min(int(np.count_nonzero(involved)), MAX_SAMPLES)
+    check_work("offset_window", float(window_s), lambda w: offset_search_cost(w, step_s, packets), "s", integer=False,
+               bounds=(1e-3, 600.0))
     if rows.size > MAX_SAMPLES:
         rows = rows[np.linspace(0, rows.size - 1, MAX_SAMPLES).astype(int)]
     sig = sig.iloc[rows].reset_index(drop=True)
@@ -198,6 +223,9 @@ def estimate_clock_offset(
     matched = matched[usable].reset_index(drop=True)
     t_sig = t_sig[usable]
     n_nodes = len(set(matched["tx"].astype(str)) | set(matched["rx"].astype(str)))
+    if n_nodes == 0:
+        raise InputError(f"offset_window: no packet of node {node} matches inside its pose span at every shift of "
+                         f"+-{window_s:g} s: use a narrower window", param="offset_window")
     order = min(MAX_OFFSET_FIT_ORDER, int(np.sqrt(len(matched) / (n_nodes * OFFSET_SAMPLES_PER_COEF))) - 1)
     if order < 2:
         raise InputError(f"estimate-offset: {len(matched)} packets of node {node} match inside its pose span; "

@@ -28,6 +28,7 @@ import pandas as pd
 from numpy.typing import ArrayLike
 
 from rplearn._argtypes import check_types
+from rplearn._budget import Budget, Cost, budget, check_work
 
 # CAUTION_Z: the default caution, documented here
 from rplearn.analysis.heading_options import CAUTION_Z, SwarmHeadingOptions, YawOptions  # noqa: F401
@@ -68,19 +69,21 @@ def yaw_grid_deg(step_deg: float) -> np.ndarray:
     return np.arange(-180.0, 180.0, step_deg)
 
 
-def check_heading_tables(n_drones: int, step_deg: float) -> None:
-    """Refuse a swarm heading search whose yaw-pair tables would not fit in
-    :data:`MAX_HEADING_TABLE_BYTES`, naming the finest yaw step that does."""
+def heading_tables_cost(n_drones: int, step_deg: float) -> Cost:
+    """What the swarm search's yaw-pair tables take: 8 bytes a value, and a few passes over them
+    (about 5 ns a value each)."""
     n_pairs = n_drones * (n_drones - 1) // 2
-    n_yaw = 360.0 / step_deg + n_drones
-    need = n_pairs * n_yaw**2 * 8
-    if need > MAX_HEADING_TABLE_BYTES:
-        finest = 360.0 / (np.sqrt(MAX_HEADING_TABLE_BYTES / (8 * max(n_pairs, 1))) - n_drones)
-        raise InputError(
-            f"step_deg: a {step_deg} deg yaw grid for {n_drones} drones needs {need / 2**30:.1f} GiB of tables "
-            f"(limit {MAX_HEADING_TABLE_BYTES / 2**30:.0f} GiB); use a step of at least {np.ceil(finest * 100) / 100:g} deg",
-            param="step_deg",
-        )
+    values = n_pairs * (360.0 / step_deg + n_drones) ** 2
+    return Cost(memory_bytes=8.0 * values, seconds=20 * 5e-9 * values)
+
+
+def check_heading_tables(n_drones: int, step_deg: float) -> None:
+    """Refuse a swarm heading search whose yaw-pair tables would not fit in the work budget
+    (:mod:`rplearn._budget`; at most :data:`MAX_HEADING_TABLE_BYTES`), naming the finest yaw step that does."""
+    limits = budget()
+    limits = Budget(min(limits.memory_bytes, MAX_HEADING_TABLE_BYTES), limits.seconds)
+    check_work("step_deg", float(step_deg), lambda s: heading_tables_cost(n_drones, s), "deg", integer=False,
+               bounds=(MIN_YAW_STEP_DEG, 90.0), falling=True, limits=limits)
 
 
 @check_types

@@ -29,6 +29,7 @@ from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
 
 from rplearn._argtypes import check_types
+from rplearn._budget import Cost, check_work
 from rplearn.analysis.heading_options import _check_frequency
 from rplearn.analysis.heading_options import _finite as _is_number
 from rplearn.core.geometry import distance_m, link_directions
@@ -178,20 +179,27 @@ def prediction_times(tracks: Mapping[str, Any], step_s: float, times_s: ArrayLik
     return np.arange(start, stop + 1e-9 * max(1.0, abs(stop)), step_s)
 
 
-#: Most (time, ordered pair) rows one prediction may hold (each row is a few hundred bytes).
-MAX_LINK_ROWS = 20_000_000
+#: Measured cost of one predicted link (a time and an ordered pair: ``links`` on the smoke flight at
+#: --step 0.01 and 0.001, 14,048 and 140,480 rows, on a loaded 2-core machine: about 60 us and
+#: 700 bytes a row, 160 bytes of CSV).
+LINK_ROW_S, LINK_ROW_BYTES = 60e-6, 700.0
+
+
+def link_rows_cost(n_times: float, n_drones: int) -> Cost:
+    """What predicting ``n_times`` times of ``n_drones`` drones' ordered pairs takes."""
+    rows = float(n_times) * n_drones * (n_drones - 1)
+    return Cost(memory_bytes=2e8 + LINK_ROW_BYTES * rows, seconds=2.0 + LINK_ROW_S * rows)
 
 
 def check_link_rows(n_times: int, n_drones: int, step_s: float | None = None) -> None:
-    """Refuse a prediction of more than :data:`MAX_LINK_ROWS` links before any work."""
-    rows = n_times * n_drones * (n_drones - 1)
-    if rows > MAX_LINK_ROWS:
-        hint = f"; use a step of at least {step_s * rows / MAX_LINK_ROWS:.3g} s" if step_s else "; give fewer times"
-        raise InputError(
-            f"{n_times:,} times x {n_drones * (n_drones - 1):,} ordered pairs = {rows:,} links, more than "
-            f"{MAX_LINK_ROWS:,} fit in memory{hint}",
-            param="step_s" if step_s else "times_s",
-        )
+    """Refuse a prediction of more links (times x ordered pairs) than the work budget
+    (:mod:`rplearn._budget`) allows, before any work: the largest step or number of times that fits named."""
+    if step_s:
+        span = (n_times - 1) * step_s
+        check_work("step_s", float(step_s), lambda s: link_rows_cost(span / s + 1, n_drones), "s", integer=False,
+                   bounds=(0.0, max(span, step_s)), falling=True)
+    else:
+        check_work("times_s", n_times, lambda n: link_rows_cost(n, n_drones), "times")
 
 
 def resolve_patterns(drones: Sequence[str], model_nodes: Sequence[str], pattern_of: Mapping[str, str] | None) -> dict[str, str]:

@@ -10,6 +10,7 @@ from __future__ import annotations
 import functools
 import inspect
 import logging
+import os
 import re
 import signal
 from collections.abc import Callable, Iterable, Mapping
@@ -183,6 +184,10 @@ def user_errors(fn: Callable | None = None, *, flags: Mapping[str, str] | None =
                 fail(f"{exc.filename}: no such file or directory" if exc.filename else str(exc))
             except OSError as exc:
                 fail(f"{exc.filename}: {exc.strerror or exc}" if exc.filename else str(exc))
+            except KeyboardInterrupt:  # Ctrl-C: outputs were removed on the way out (rplearn._atomic)
+                console.print(Text.assemble(("error:", "bold red"), " interrupted (Ctrl-C); nothing was written"),
+                              soft_wrap=True)
+                raise typer.Exit(130) from None
 
         return wrapper
 
@@ -379,3 +384,10 @@ def main_callback(
     ),
 ) -> None:
     logging.basicConfig(level=logging.INFO if verbose else logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
+    if os.environ.get("SOURCE_DATE_EPOCH"):  # checked once for every output (model files, figures' metadata)
+        from rplearn.io.files import source_date_epoch
+
+        try:
+            source_date_epoch()
+        except RplearnError as exc:
+            fail(str(exc))

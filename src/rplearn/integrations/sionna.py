@@ -79,6 +79,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from rplearn._argtypes import check_types
+from rplearn._budget import Cost, check_work
 from rplearn.core.geometry import azimuth_elevation, euler_from_quat_wxyz, rotate_body_to_world, rotate_world_to_body
 from rplearn.core.plausible import check_frequency_hz, check_same_band
 from rplearn.errors import InputError, RplearnError
@@ -269,6 +270,18 @@ def _grid(step_deg: float) -> tuple[int, int]:
     return n_theta, n_phi
 
 
+#: What one value of a pattern table takes: its angles, the gain and Sionna's float32 copy
+#: [bytes], and the evaluation of a learned pattern [s].
+TABLE_VALUE_BYTES, TABLE_VALUE_S = 48.0, 3e-7
+
+
+def pattern_table_cost(step_deg: float) -> Cost:
+    """What :func:`pattern_table` takes at ``step_deg`` [deg]."""
+    n_theta = math.ceil(180.0 / step_deg) + 1
+    values = float(n_theta) * (2 * (n_theta - 1) + 1)
+    return Cost(memory_bytes=TABLE_VALUE_BYTES * values, seconds=TABLE_VALUE_S * values)
+
+
 def pattern_table(model: Any, node: str, step_deg: float = DEFAULT_STEP_DEG) -> FloatArray:
     """A node's gain on Sionna's angle grid [dBi]: ``table[i, j]`` at ``theta_i``, ``phi_j``.
 
@@ -293,6 +306,7 @@ def pattern_table(model: Any, node: str, step_deg: float = DEFAULT_STEP_DEG) -> 
         raise InputError(f"node: unknown node {str(node)!r}; the model knows {', '.join(map(str, model.nodes))}",
                          param="node")
     n_theta, n_phi = _grid(float(step_deg))
+    check_work("step_deg", float(step_deg), pattern_table_cost, "deg", integer=False, bounds=(0.01, 10.0), falling=True)
     theta = np.linspace(0.0, np.pi, n_theta)
     phi = np.linspace(-np.pi, np.pi, n_phi)
     az, el = np.meshgrid(phi, np.pi / 2 - theta)

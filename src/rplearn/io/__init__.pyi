@@ -18,6 +18,7 @@ from .files import iter_table as iter_table
 from .files import provenance as provenance
 from .files import read_dataset as read_dataset
 from .files import read_table as read_table
+from .files import source_date_epoch as source_date_epoch
 from .files import table_rows as table_rows
 from .files import write_json as write_json
 from .files import write_table as write_table

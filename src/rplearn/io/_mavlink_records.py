@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from rplearn.errors import InputError, LogFormatError
+from rplearn.io._log_schema import check_dataflash_lengths, dataflash_time_field, library_quiet, number
 from rplearn.io.mavlink_phases import REBOOT_STEP_S
 
 _RADIO_TYPES = ("RADIO_STATUS", "RADIO")
@@ -115,35 +116,41 @@ def _tlog_row(kind: str, msg: Any, src: int, t: float) -> tuple[Any, ...]:
 
 def collect_tlog(source: str, system_id: int | None) -> Raw:
     """One pass over a ``.tlog``: attitude, position, origin, fix, armed state, radio."""
-    conn = _open(source)
     rows: dict[str, list[tuple[Any, ...]]] = {k: [] for k in _TLOG_TYPES}
     by_sys: dict[int, list[float]] = {}
     counts: dict[str, int] = {}
     radio_senders: dict[str, int] = {}
-    whole_to = 0
-    while True:
-        try:
-            msg = conn.recv_msg()
-        except Exception as exc:
-            raise LogFormatError(f"{source}: corrupt MAVLink data ({type(exc).__name__}: {exc})") from None
-        if msg is None:
-            break
-        whole_to = conn.f.tell() - conn.mav.buf_len()  # where the records read so far end
-        kind = msg.get_type()
-        if kind == "BAD_DATA":
-            counts["BAD_DATA"] = counts.get("BAD_DATA", 0) + 1
-            continue
-        t, sysid = float(msg._timestamp), int(msg.get_srcSystem())
-        by_sys.setdefault(sysid, []).append(t)
-        if kind not in rows:
-            continue
-        counts[kind] = counts.get(kind, 0) + 1
-        src = sysid * 256 + int(msg.get_srcComponent())  # a gimbal may send ATTITUDE too
-        rows[kind].append(_tlog_row(kind, msg, src, t))
-        if kind in _RADIO_TYPES:
-            key = f"{sysid}/{msg.get_srcComponent()}"
-            radio_senders[key] = radio_senders.get(key, 0) + 1
-    cut_off = _tlog_cut_off(conn, source, whole_to)
+    with library_quiet():  # pymavlink prints what it cannot parse
+        conn = _open(source)
+        whole_to = 0
+        while True:
+            try:
+                msg = conn.recv_msg()
+            except Exception as exc:
+                raise LogFormatError(f"{source}: corrupt MAVLink data ({type(exc).__name__}: {exc})") from None
+            if msg is None:
+                break
+            whole_to = conn.f.tell() - conn.mav.buf_len()  # where the records read so far end
+            kind = msg.get_type()
+            if kind == "BAD_DATA":
+                counts["BAD_DATA"] = counts.get("BAD_DATA", 0) + 1
+                continue
+            t, sysid = float(msg._timestamp), int(msg.get_srcSystem())
+            by_sys.setdefault(sysid, []).append(t)
+            if kind not in rows:
+                continue
+            counts[kind] = counts.get(kind, 0) + 1
+            src = sysid * 256 + int(msg.get_srcComponent())  # a gimbal may send ATTITUDE too
+            try:
+                rows[kind].append(_tlog_row(kind, msg, src, t))
+            except (AttributeError, TypeError, ValueError) as exc:  # a field the dialect of the file lacks
+                name = getattr(exc, "name", None)
+                raise LogFormatError(f"{source}: a {kind} message has no {name} field" if name else
+                                     f"{source}: a {kind} message has a field that is not a number ({exc})") from None
+            if kind in _RADIO_TYPES:
+                key = f"{sysid}/{msg.get_srcComponent()}"
+                radio_senders[key] = radio_senders.get(key, 0) + 1
+        cut_off = _tlog_cut_off(conn, source, whole_to)
     att = _arr(rows["ATTITUDE"], 6)
     if not len(att):
         raise LogFormatError(f"{source}: no ATTITUDE messages (the vehicle's attitude)")
@@ -207,48 +214,77 @@ def _df_chain(boot_t: list[tuple[float, int]]) -> tuple[dict[int, float], np.nda
     return offsets, np.asarray(ends, np.float64)
 
 
+@dataclass(frozen=True)
+class _DfMessage:
+    """One DataFlash message whose fields are read as numbers (:func:`rplearn.io._log_schema.number`)."""
+
+    msg: Any
+    kind: str
+    source: str
+
+    def __call__(self, name: str, default: float | None = None) -> float:
+        return number(self.msg, self.kind, name, self.source, default)
+
+
+def _df_record(get: _DfMessage, t: float, boot: int, out: tuple[dict[str, list[tuple[float, ...]]], list[tuple[float, ...]],
+               list[tuple[float, ...]], list[float]], home: tuple[float, float, float] | None
+               ) -> tuple[float, float, float] | None:
+    """Add one DataFlash message's row to ``out`` (rows per kind, fix rows, armed rows, UTC
+    offsets); the home position (the first ORGN of type 1) returned."""
+    rows, fix_rows, arm_rows, utc = out
+    kind = get.kind
+    if kind == "ATT":
+        rows[kind].append((t, *np.radians([get("Roll"), get("Pitch"), get("Yaw")]), boot))
+    elif kind == "POS":
+        rows[kind].append((t, get("Lat"), get("Lng"), get("Alt"), np.nan, np.nan, boot))
+    elif kind == "GPS" and get("I", 0.0) == 0:
+        status = get("Status")
+        fix_rows.append((t, float(status >= 3), boot))
+        if status >= 3:
+            rows[kind].append((t, get("Lat"), get("Lng"), get("Alt"), get("Spd", np.nan), abs(get("VZ", np.nan)), boot))
+            utc.append(float(get.msg._timestamp) - t)
+    elif kind == "RAD":
+        rows[kind].append((t, *(get(f) for f in ("RSSI", "RemRSSI", "Noise", "RemNoise", "RxErrors", "Fixed")), boot))
+    elif kind == "ORGN":
+        rows[kind].append((t, boot))
+        if get("Type") == 1 and home is None:
+            return (get("Lat"), get("Lng"), get("Alt"))
+    elif kind == "ARM":
+        arm_rows.append((t, float(get("ArmState") != 0), boot))
+    elif kind == "EV" and get("Id") in (_EV_ARMED, _EV_DISARMED):
+        arm_rows.append((t, float(get("Id") == _EV_ARMED), boot))
+    return home
+
+
 def collect_dataflash(source: str) -> Raw:
-    """One pass over a DataFlash log: ATT, POS (else GPS), RAD, ORGN, GPS status, ARM and EV."""
-    conn = _open(source)
+    """One pass over a DataFlash log: ATT, POS (else GPS), RAD, ORGN, GPS status, ARM and EV
+    (each message type's fields checked on its first record: :mod:`rplearn.io._log_schema`)."""
     rows: dict[str, list[tuple[float, ...]]] = {k: [] for k in _DF_TYPES}
     home = None
     utc: list[float] = []
     boot, last_t, boot_t = 0, -np.inf, []
     fix_rows: list[tuple[float, ...]] = []
     arm_rows: list[tuple[float, ...]] = []
-    while True:
-        try:
-            msg = conn.recv_match(type=_DF_TYPES)
-        except Exception as exc:
-            raise LogFormatError(f"{source}: corrupt DataFlash data ({type(exc).__name__}: {exc})") from None
-        if msg is None:
-            break
-        kind = msg.get_type()
-        t = msg.TimeUS * 1e-6 if hasattr(msg, "TimeUS") else msg.TimeMS * 1e-3  # older logs: TimeMS
-        if t < last_t - REBOOT_STEP_S:
-            boot += 1
-        last_t = t
-        boot_t.append((t, boot))
-        if kind == "ATT":
-            rows[kind].append((t, *np.radians([msg.Roll, msg.Pitch, msg.Yaw]), boot))
-        elif kind == "POS":
-            rows[kind].append((t, msg.Lat, msg.Lng, msg.Alt, np.nan, np.nan, boot))
-        elif kind == "GPS" and getattr(msg, "I", 0) == 0:
-            fix_rows.append((t, float(msg.Status >= 3), boot))
-            if msg.Status >= 3:
-                rows[kind].append((t, msg.Lat, msg.Lng, msg.Alt, getattr(msg, "Spd", np.nan),
-                                   abs(getattr(msg, "VZ", np.nan)), boot))
-                utc.append(float(msg._timestamp) - t)
-        elif kind == "RAD":
-            rows[kind].append((t, msg.RSSI, msg.RemRSSI, msg.Noise, msg.RemNoise, msg.RxErrors, msg.Fixed, boot))
-        elif kind == "ORGN":
-            rows[kind].append((t, boot))
-            if msg.Type == 1 and home is None:
-                home = (float(msg.Lat), float(msg.Lng), float(msg.Alt))
-        elif kind == "ARM":
-            arm_rows.append((t, float(msg.ArmState != 0), boot))
-        elif kind == "EV" and msg.Id in (_EV_ARMED, _EV_DISARMED):
-            arm_rows.append((t, float(msg.Id == _EV_ARMED), boot))
+    times: dict[str, tuple[str, float]] = {}
+    with library_quiet():  # pymavlink prints what it cannot parse
+        conn = _open(source)
+        check_dataflash_lengths(conn, source)
+        while True:
+            try:
+                msg = conn.recv_match(type=_DF_TYPES)
+            except Exception as exc:
+                raise LogFormatError(f"{source}: corrupt DataFlash data ({type(exc).__name__}: {exc})") from None
+            if msg is None:
+                break
+            kind = msg.get_type()
+            if kind not in times:
+                times[kind] = dataflash_time_field(msg, kind, source)
+            t = number(msg, kind, times[kind][0], source) * times[kind][1]
+            if t < last_t - REBOOT_STEP_S:
+                boot += 1
+            last_t = t
+            boot_t.append((t, boot))
+            home = _df_record(_DfMessage(msg, kind, source), t, boot, (rows, fix_rows, arm_rows, utc), home)
     offsets, ends = _df_chain(boot_t)
 
     def chained(a: np.ndarray, tcol: int, bcol: int) -> np.ndarray:

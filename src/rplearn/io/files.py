@@ -225,15 +225,30 @@ def check_output_path(path: str, inputs: Iterable[str | None] = (), param: str =
     return path
 
 
-def _epoch() -> float | None:
-    """``SOURCE_DATE_EPOCH`` [s] when set (reproducible outputs), else None (now)."""
+#: The last second of 9999 (UTC): the latest time stamp that time.gmtime and datetime format.
+MAX_SOURCE_DATE_EPOCH = 253402300799
+
+
+@check_types
+def source_date_epoch() -> float | None:
+    """``SOURCE_DATE_EPOCH`` [s] when set (reproducible outputs), else None (now).
+
+    Raises
+    ------
+    InputError
+        Unless it is whole seconds from 0 to :data:`MAX_SOURCE_DATE_EPOCH`.
+    """
     value = os.environ.get("SOURCE_DATE_EPOCH")
     if not value:
         return None
     try:
-        return float(int(value))
+        seconds = int(value)
     except ValueError:
         raise InputError(f"SOURCE_DATE_EPOCH: expected whole seconds since 1970, got {value!r}") from None
+    if not 0 <= seconds <= MAX_SOURCE_DATE_EPOCH:
+        raise InputError(f"SOURCE_DATE_EPOCH: expected whole seconds from 0 to {MAX_SOURCE_DATE_EPOCH} (1970 to the "
+                         f"end of 9999), got {value!r}")
+    return float(seconds)
 
 
 @check_types
@@ -243,7 +258,7 @@ def provenance(command: str | None = None, **parameters: Any) -> dict[str, Any]:
         "rplearn_version": __version__,
         "command": command if command is not None else " ".join(["rplearn", *sys.argv[1:]]),
         "parameters": parameters,
-        "created_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime(_epoch())),
+        "created_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime(source_date_epoch())),
     }
 
 

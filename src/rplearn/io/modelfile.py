@@ -27,6 +27,7 @@ import numpy as np
 from rplearn._argtypes import check_types
 from rplearn._atomic import atomic_open
 from rplearn.errors import ModelFileError
+from rplearn.io._npz import check_sidecar_size
 
 MODEL_SCHEMA = "rplearn.model"
 MODEL_SCHEMA_VERSION = 1
@@ -316,6 +317,7 @@ def read_sidecar(model_path: str | os.PathLike[str], entry: Any) -> dict[str, np
         raise ModelFileError(f"{side}: the model file's sidecar is missing (keep {file} beside {os.path.basename(name)})")
     if _file_sha256(side) != entry["sha256"]:
         raise ModelFileError(f"{side}: checksum mismatch: the sidecar was modified or does not belong to {name}")
+    check_sidecar_size(side)  # what its arrays declare, before numpy allocates it
     try:
         with np.load(side, allow_pickle=False) as data:
             arrays = {k: data[k] for k in data.files}

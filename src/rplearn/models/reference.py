@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from rplearn._budget import Cost, check_work
 from rplearn.core.lsq.selection import DEFAULT_PENALTY_POWER, penalty_scale
 from rplearn.core.plausible import describe_band, frequency_bands
 from rplearn.core.sh import SphericalHarmonics
@@ -34,9 +35,18 @@ REFERENCE_ORDER = 20
 REFERENCE_SMOOTHING = 1e-7
 
 
+def expansion_cost(n_directions: float, order: int = REFERENCE_ORDER) -> Cost:
+    """What :func:`expand_reference` takes for ``n_directions`` directions: the design matrix
+    and two products of its size (8 bytes a value), and its Gram (about 2 ns a multiply-add)."""
+    cols = order * order
+    return Cost(memory_bytes=24.0 * n_directions * cols + 1e8, seconds=1.0 + 2e-9 * n_directions * cols * cols)
+
+
 def expand_reference(samples: ReferenceSamples, order: int = REFERENCE_ORDER,
                      smoothing: float = REFERENCE_SMOOTHING) -> tuple[np.ndarray, float]:
     """SH coefficients of one reference pattern and the RMS residual at its points [dB]."""
+    check_work(samples.source, len(samples), lambda n: expansion_cost(n, order), "directions (a coarser grid fits)",
+               bounds=(1, len(samples)))
     basis = SphericalHarmonics(order)
     x = basis.design(samples.az_rad, samples.el_rad)
     g = x.T @ x

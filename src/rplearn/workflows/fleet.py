@@ -17,6 +17,9 @@ and see the files: object storage URLs, or a shared disk).
 
 from __future__ import annotations
 
+import signal
+import threading
+import urllib.parse
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from typing import Any
@@ -24,6 +27,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from rplearn._budget import Cost, check_work
 from rplearn.data.tables import link_samples
 from rplearn.data.units import Stretches
 from rplearn.errors import InputError
@@ -42,16 +46,71 @@ DASK_INSTALL = "pip install 'rplearn[dask]'"
 Progress = Callable[[int, int], None]
 
 
+#: Peak memory of one single-threaded local worker [bytes] (measured: 1.9 GB for ``--dask local:4``
+#: fitting the fleet preset) and the seconds to start one.
+LOCAL_WORKER_BYTES, LOCAL_WORKER_START_S = 475e6, 2.0
+#: Schemes of scheduler addresses rplearn joins, and why the others are refused.
+_SCHEMES = {
+    "inproc": "an in-process address (inproc://) lives inside one Python process and cannot be reached from this command",
+    "ucx": "ucx:// needs the UCX communication backend (pip install distributed-ucxx) and a UCX network",
+    "tls": "tls:// needs certificates in dask's configuration (distributed.comm.tls.ca-file, .client.cert, .client.key)",
+}
+
+
+def local_workers_cost(workers: float) -> Cost:
+    """What ``--dask local:N`` takes: :data:`LOCAL_WORKER_BYTES` and :data:`LOCAL_WORKER_START_S` a worker."""
+    return Cost(memory_bytes=LOCAL_WORKER_BYTES * workers, seconds=LOCAL_WORKER_START_S * workers)
+
+
+def _scheduler_address(address: str, text: str) -> str:
+    """``scheme://host:port`` of a scheduler, checked without contacting it (one line naming --dask)."""
+    scheme, _, rest = text.partition("://")
+    scheme = scheme.lower()
+    if scheme in ("inproc", "ucx", "tls"):
+        ready = scheme == "tls" and _tls_configured() or scheme == "ucx" and _has_ucx()
+        if not ready:
+            raise InputError(f"--dask {address}: {_SCHEMES[scheme]}; give tcp://host:port", param="dask")
+    elif scheme not in ("tcp", "ws", "wss"):
+        raise InputError(f"--dask {address}: unknown scheme {scheme + '://'!r}; expected local, local:N or a scheduler "
+                         "address tcp://host:port", param="dask")
+    try:
+        parts = urllib.parse.urlsplit(f"{scheme}://{rest}")
+        host, _ = parts.hostname, parts.port  # .port raises on a port out of range
+    except ValueError as exc:
+        raise InputError(f"--dask {address}: not a scheduler address ({exc}); expected tcp://host:port", param="dask") from None
+    if not host or parts.path not in ("", "/") or parts.query or parts.fragment or parts.username or parts.password:
+        raise InputError(f"--dask {address}: not a scheduler address; expected {scheme}://host:port", param="dask")
+    return f"{scheme}://{parts.netloc}"
+
+
+def _tls_configured() -> bool:
+    try:
+        import dask
+
+        return bool(dask.config.get("distributed.comm.tls.ca-file", None))
+    except ImportError:
+        return False
+
+
+def _has_ucx() -> bool:
+    import importlib.util
+
+    return importlib.util.find_spec("distributed_ucxx") is not None or importlib.util.find_spec("ucp") is not None
+
+
 def parse_dask(address: str) -> tuple[str, int | str]:
-    """``("local", workers)`` or ``("remote", address)`` from a ``--dask`` value."""
+    """``("local", workers)`` or ``("remote", address)`` from a ``--dask`` value: a local
+    cluster within the work budget (:func:`local_workers_cost`, :mod:`rplearn._budget`), or a
+    scheduler address whose scheme rplearn can use, checked before any work."""
     text = str(address).strip()
     if text == "local" or text.startswith("local:"):
         count = text.partition(":")[2] or "2"
         if not count.isdigit() or not 1 <= int(count) <= 256:
             raise InputError(f"--dask: expected local or local:N with N workers (1 to 256), got {address!r}", param="dask")
+        check_work("dask", int(count), local_workers_cost, "local workers", bounds=(1, 256))
         return "local", int(count)
     if "://" in text and text.partition("://")[2]:
-        return "remote", text
+        return "remote", _scheduler_address(address, text)
     raise InputError(f"--dask: expected local, local:N or a scheduler address such as tcp://host:8786, got {address!r}",
                      param="dask")
 
@@ -64,10 +123,48 @@ def _distributed() -> Any:
     return distributed
 
 
+#: Loggers of the cluster's machinery, silenced once the command's work is done: a connection
+#: closed while the cluster stops is normal then, not an error to show (``CommClosedError``).
+_SHUTDOWN_LOGGERS = ("distributed", "tornado", "asyncio")
+
+
+@contextmanager
+def _children_ignore_sigint() -> Iterator[None]:
+    """Start processes that ignore SIGINT (the disposition survives their exec): Ctrl-C in a
+    terminal reaches the whole process group, and the workers would each print a traceback;
+    this process stops them itself."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def _close_quietly(thing: Any) -> None:
+    """Close a client or cluster, its shutdown chatter (closed connections, pending tasks) unlogged."""
+    import logging
+
+    for name in _SHUTDOWN_LOGGERS:
+        logging.getLogger(name).setLevel(logging.CRITICAL)
+    try:
+        thing.close()
+    except Exception:  # noqa: BLE001 - a connection already closed: the cluster is gone either way
+        pass
+
+
+def _one_line(exc: BaseException) -> str:
+    text = str(exc).strip().splitlines()
+    return f"{type(exc).__name__}: {text[0]}" if text else type(exc).__name__
+
+
 @contextmanager
 def dask_client(address: str) -> Iterator[Any]:
     """A :class:`distributed.Client` for a ``--dask`` value, closed (and its local cluster
-    stopped) on exit."""
+    stopped) on exit, quietly (also on Ctrl-C: the local workers ignore SIGINT, this process
+    stops them)."""
     kind, where = parse_dask(address)
     distributed = _distributed()
     import logging
@@ -81,23 +178,29 @@ def dask_client(address: str) -> Iterator[Any]:
     env = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
     with dask.config.set({"distributed.nanny.pre-spawn-environ": env}):
         if kind == "local":
-            cluster = distributed.LocalCluster(n_workers=int(where), threads_per_worker=1, processes=True,
-                                               dashboard_address=":0", silence_logs=40)
             try:
-                with distributed.Client(cluster) as client:
+                with _children_ignore_sigint():
+                    cluster = distributed.LocalCluster(n_workers=int(where), threads_per_worker=1, processes=True,
+                                                       dashboard_address=":0", silence_logs=logging.CRITICAL)
+            except Exception as exc:  # noqa: BLE001 - anything distributed raises: one line
+                raise InputError(f"--dask {address}: cannot start a local cluster ({_one_line(exc)})", param="dask") from None
+            try:
+                client = distributed.Client(cluster)
+                try:
                     yield client
+                finally:
+                    _close_quietly(client)
             finally:
-                cluster.close()
+                _close_quietly(cluster)
         else:
             try:
                 client = distributed.Client(str(where), timeout="20s")
-            except (OSError, TimeoutError) as exc:
-                raise InputError(f"--dask {where}: cannot reach the scheduler ({type(exc).__name__}: {exc})",
-                                 param="dask") from None
+            except Exception as exc:  # noqa: BLE001 - OSError, TimeoutError, ValueError, CommClosedError...: one line
+                raise InputError(f"--dask {where}: cannot reach the scheduler ({_one_line(exc)})", param="dask") from None
             try:
                 yield client
             finally:
-                client.close()
+                _close_quietly(client)
 
 
 def _tree_reduce(client: Any, futures: list[Any], merge: Callable[[Any, Any], Any]) -> Any:

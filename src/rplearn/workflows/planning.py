@@ -11,6 +11,7 @@ from dataclasses import dataclass
 from typing import cast
 
 from rplearn._argtypes import check_types
+from rplearn._budget import Cost, budget, check_work
 from rplearn.analysis.heading_options import YawOptions
 from rplearn.analysis.headings import OrientationResult, best_yaw
 from rplearn.errors import InputError
@@ -88,6 +89,27 @@ class CampaignOptions:
                        speed_m_s=self.speed_m_s)
 
 
+#: Measured costs of planning (``trajectory`` at --loops 5 and 50, --rate 10 and 1000 on a loaded
+#: 2-core machine): the plan check's seconds and bytes per loop of the learning units, and per
+#: reference row (one drone at one instant) its seconds, bytes in memory and on disk.
+PLAN_CHECK_S_PER_LOOP, PLAN_CHECK_BYTES_PER_LOOP = 0.4, 1e6
+REFERENCE_ROW_S, REFERENCE_ROW_BYTES, REFERENCE_ROW_DISK = 15e-6, 320.0, 40.0
+
+
+def campaign_cost(options: CampaignOptions, n_loops: float, rate_hz: float) -> Cost:
+    """What :func:`plan_campaign` takes for ``n_loops`` loops per unit at ``rate_hz`` [Hz]
+    (each unit's flight time from one loop's: ``2 n`` loops and turns of at least 1 s)."""
+    one = TrajectoryUnit(distance_m=options.distance_m, height_m=options.height_m, n_loops=1,
+                         speed_m_s=options.speed_m_s)
+    duration_s = 2.0 * n_loops * (one.duration_s / 2.0 + 1.0)
+    n_units = len(options.learning_psi0_deg) + len(options.testing_psi0_deg)
+    rows = n_units * 2.0 * duration_s * rate_hz
+    learning_loops = len(options.learning_psi0_deg) * n_loops
+    return Cost(memory_bytes=3e8 + PLAN_CHECK_BYTES_PER_LOOP * learning_loops + REFERENCE_ROW_BYTES * 2 * duration_s * rate_hz,
+                seconds=3.0 + PLAN_CHECK_S_PER_LOOP * learning_loops + REFERENCE_ROW_S * rows,
+                disk_bytes=REFERENCE_ROW_DISK * rows)
+
+
 @check_types
 def plan_campaign(
     out_dir: str,
@@ -106,6 +128,15 @@ def plan_campaign(
     wind the plan check assumes [m/s].
     """
     options = CampaignOptions() if campaign is None else campaign
+    if not (isinstance(rate_hz, (int, float)) and math.isfinite(rate_hz) and rate_hz > 0):
+        raise InputError(f"rate_hz: expected a positive sample rate, got {rate_hz!r}", param="rate_hz")
+    work = budget(out_dir)
+    # each alone (the other at most its default), then both: the rate is named for what they need together
+    n_loops, usual_rate = options.n_loops, min(rate_hz, 10.0)
+    check_work("n_loops", n_loops, lambda n: campaign_cost(options, n, usual_rate), "loops", limits=work)
+    for loops in (min(n_loops, 5), n_loops):
+        check_work("rate_hz", rate_hz, lambda r: campaign_cost(options, loops, r), "Hz",  # noqa: B023 (used at once)
+                   integer=False, bounds=(1e-3, math.inf), limits=work)
     spec = None
     if check_model:  # refuse a bad model before writing files
         spec = ModelSpec.parse(check_model)
