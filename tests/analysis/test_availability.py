@@ -10,13 +10,7 @@ import pytest
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import connected_components
 
-from rplearn.analysis.availability import (
-    AvailabilityOptions,
-    connected_draws,
-    link_availability_column,
-    residual_std_db,
-    swarm_availability,
-)
+from rplearn.analysis.availability import AvailabilityOptions, connected_draws, link_availability_column, residual_std_db, swarm_availability
 from rplearn.analysis.radios import RADIO_PRESETS, sensitivity_dbm
 from rplearn.analysis.swarm import SwarmOptions, connectivity_over_time, predict_swarm
 from rplearn.core.bases import SphericalHarmonics

@@ -29,12 +29,7 @@ import pandas as pd
 
 from rplearn._argtypes import check_types
 from rplearn.analysis.heading_options import _finite
-from rplearn.analysis.swarm import (
-    SwarmOptions,
-    maximum_spanning_edges,
-    prediction_times,
-    resolve_patterns,
-)
+from rplearn.analysis.swarm import SwarmOptions, maximum_spanning_edges, prediction_times, resolve_patterns
 from rplearn.core.availability import link_availability
 from rplearn.core.geometry import distance_m, link_directions
 from rplearn.core.link import FAR_FIELD_WAVELENGTHS, free_space_path_loss_db, wavelength_m
@@ -254,9 +249,9 @@ def connected_draws(
     path : ndarray of bool (n_pairs, draws, times)
     """
     n_draws, n_times, n = shape
-    w = np.full((n_draws, n_times, n, n), -np.inf, np.float32)
-    w[:, k, a, b] = margin.T
-    w = np.fmin(w, w.transpose(0, 1, 3, 2)).reshape(n_draws * n_times, n, n)  # a pair: its weaker direction
+    directed = np.full((n_draws, n_times, n, n), -np.inf, np.float32)
+    directed[:, k, a, b] = margin.T
+    w = np.fmin(directed, directed.transpose(0, 1, 3, 2)).reshape(n_draws * n_times, n, n)  # a pair: its weaker way
     edge_w, edge_a, edge_b = maximum_spanning_edges(w)
     rows = np.arange(edge_w.shape[0])
     weakest = np.argmin(edge_w, axis=1)
@@ -369,7 +364,8 @@ def swarm_availability(
         ok, wa, wb, path = connected_draws(margin, k, a, b, (n_draws, s1 - s0, n), pairs)
         connected[:, s0:s1] = ok
         paths[:, :, s0:s1] = path
-        failed = ~ok & swarm.present[s0:s1].all(axis=1)[None, :]  # a missing drone is unknown, not a failure
+        complete = np.asarray(np.all(swarm.present[s0:s1], axis=1), bool)
+        failed = ~ok & complete[None, :]  # a missing drone is unknown, not a failure  # a missing drone is unknown, not a failure
         np.add.at(culprits, (np.minimum(wa, wb)[failed], np.maximum(wa, wb)[failed]), 1)
     return _result(swarm, connected, paths, culprits, availability)
 
