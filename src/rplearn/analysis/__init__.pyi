@@ -2,6 +2,13 @@
 # in __init__.py, which imports each name's module on first use. Only `from .module import name
 # as name` lines here (tests/test_public_api.py).
 
+from .availability import AvailabilityOptions as AvailabilityOptions
+from .availability import DEFAULT_DRAWS as DEFAULT_DRAWS
+from .availability import SwarmAvailability as SwarmAvailability
+from .availability import connected_draws as connected_draws
+from .availability import link_availability_column as link_availability_column
+from .availability import residual_std_db as residual_std_db
+from .availability import swarm_availability as swarm_availability
 from .budget import BudgetFinding as BudgetFinding
 from .budget import LinkSummary as LinkSummary
 from .budget import budget_findings as budget_findings
@@ -34,6 +41,9 @@ from .manoeuvres import rank_manoeuvres as rank_manoeuvres
 from .pattern_error import gauged_nodes as gauged_nodes
 from .pattern_error import node_directions as node_directions
 from .pattern_error import pattern_errors_db as pattern_errors_db
+from .radios import RADIO_PRESETS as RADIO_PRESETS
+from .radios import RadioPreset as RadioPreset
+from .radios import sensitivity_dbm as sensitivity_dbm
 from .swarm import DEFAULT_MIN_RSSI_DBM as DEFAULT_MIN_RSSI_DBM
 from .swarm import SwarmOptions as SwarmOptions
 from .swarm import SwarmPrediction as SwarmPrediction

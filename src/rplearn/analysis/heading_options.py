@@ -43,6 +43,20 @@ def _check_frequency(frequency_hz: Any) -> None:
         check_frequency_hz(float(frequency_hz), "frequency_hz")
 
 
+def _check_risk(sensitivity_dbm: Any, min_availability: Any) -> None:
+    """A finite sensitivity [dBm], and a required availability in (0, 1) only with one."""
+    if sensitivity_dbm is not None and not _finite(sensitivity_dbm):
+        raise InputError(f"sensitivity_dbm: expected a finite level in dBm, got {sensitivity_dbm!r}",
+                         param="sensitivity_dbm")
+    if min_availability is not None:
+        if not (_finite(min_availability) and 0 < min_availability < 1):
+            raise InputError(f"min_availability: expected a probability between 0 and 1, got {min_availability!r}",
+                             param="min_availability")
+        if sensitivity_dbm is None:
+            raise InputError("min_availability: an availability needs the radio's sensitivity (sensitivity_dbm)",
+                             param="sensitivity_dbm")
+
+
 @check_types
 @dataclass(frozen=True)
 class YawOptions:
@@ -62,6 +76,12 @@ class YawOptions:
     caution_z : float
         Standard errors subtracted when ranking (:data:`CAUTION_Z`: the 10% lower bound); 0
         ranks by the prediction alone. Ignored for a model without a covariance.
+    sensitivity_dbm : float, optional
+        Rank by the link's availability ``P(RSSI >= sensitivity_dbm)`` instead (needs
+        ``tx_power_dbm``; :mod:`rplearn.analysis.risk_headings`).
+    min_availability : float, optional
+        With ``sensitivity_dbm``: the strongest heading whose availability reaches this (the
+        most available one when none does).
 
     Raises
     ------
@@ -75,8 +95,14 @@ class YawOptions:
     tx_power_dbm: float | None = None
     frequency_hz: float | None = None
     caution_z: float = CAUTION_Z
+    sensitivity_dbm: float | None = None
+    min_availability: float | None = None
 
     def __post_init__(self) -> None:
+        _check_risk(self.sensitivity_dbm, self.min_availability)
+        if self.sensitivity_dbm is not None and self.tx_power_dbm is None:
+            raise InputError("sensitivity_dbm: ranking by availability needs the transmit power (tx_power_dbm)",
+                             param="tx_power_dbm")
         for name in ("tx_yaw_deg", "rx_yaw_deg"):
             if not _finite(getattr(self, name)):
                 raise InputError(f"{name}: expected a finite number of degrees, got {getattr(self, name)!r}",
@@ -108,7 +134,13 @@ class SwarmHeadingOptions:
     step_deg : float
         Yaw grid [deg].
     max_sweeps, restarts : int
-        Limits of the coordinate ascent (four drones or more).
+        Limits of the coordinate ascent (four drones or more; any number when ranking by
+        availability).
+    sensitivity_dbm : float, optional
+        Rank by availability: of the weakest link of the most available spanning tree
+        (:mod:`rplearn.analysis.risk_headings`), instead of the bottleneck RSSI.
+    min_availability : float, optional
+        With ``sensitivity_dbm``: the largest bottleneck RSSI whose availability reaches this.
 
     Raises
     ------
@@ -123,8 +155,11 @@ class SwarmHeadingOptions:
     step_deg: float = 5.0
     max_sweeps: int = 20
     restarts: int = 8
+    sensitivity_dbm: float | None = None
+    min_availability: float | None = None
 
     def __post_init__(self) -> None:
+        _check_risk(self.sensitivity_dbm, self.min_availability)
         _check_frequency(self.frequency_hz)
         for name in ("pattern_of", "start_yaw_deg"):
             value = getattr(self, name)

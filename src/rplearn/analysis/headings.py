@@ -171,6 +171,11 @@ class OrientationResult:
     boldest : (float, float, float) or None
         When ranking by the lower bound changed the choice: the tx yaw, rx yaw [deg] and joint
         gain [dB] that the prediction alone would have chosen.
+    availability, baseline_availability : float or None
+        ``P(RSSI >= sensitivity)`` at the best and at the given yaws (ranked by availability,
+        ``YawOptions.sensitivity_dbm``).
+    sensitivity_dbm, min_availability : float or None
+        What they were ranked against.
     """
 
     tx_yaw_deg: float
@@ -184,6 +189,10 @@ class OrientationResult:
     coverage_deg: tuple[float, float] | None = None
     gain_std_db: float | None = None
     boldest: tuple[float, float, float] | None = None
+    availability: float | None = None
+    baseline_availability: float | None = None
+    sensitivity_dbm: float | None = None
+    min_availability: float | None = None
 
     def summary(self) -> str:
         """The best yaws and the gain in received power (or joint gain) they bring, for people."""
@@ -196,6 +205,12 @@ class OrientationResult:
             lines.append(f"predicted joint gain: {before:.1f} dB now -> {after:.1f} dB ({after - before:+.1f} dB)")
         if self.gain_std_db is not None:
             lines[-1] += f", +- {self.gain_std_db:.1f} dB (1 sigma, the model's error: patterns and any learned path-loss exponent or offset)"
+        if self.availability is not None and self.baseline_availability is not None:
+            lines.append(f"availability at {self.sensitivity_dbm:g} dBm: {self.baseline_availability:.3f} now -> "
+                         f"{self.availability:.3f}" + ("" if self.min_availability is None else (
+                             f" (the strongest heading with at least {self.min_availability:g})"
+                             if self.availability >= self.min_availability else
+                             f" (none reaches {self.min_availability:g}: the most available heading)")))
         if self.boldest is not None:
             lines.append(
                 f"the prediction alone would turn to tx {self.boldest[0]:.0f} deg, rx {self.boldest[1]:.0f} deg "
@@ -272,14 +287,20 @@ def best_yaw(
 
     i_tx, i_rx = pick(g_tx - z * s_tx, g_rx - z * s_rx)
     b_tx, b_rx = pick(g_tx, g_rx)
+    env_std = float(model.link_environment_std_db(tx_node, rx_node, positions["tx"], positions["rx"])[0])
+    risk: dict[str, float | None] = {}
+    if options.sensitivity_dbm is not None:  # rank by availability
+        from rplearn.analysis.risk_headings import risk_link_choice
+
+        i_tx, i_rx, risk = risk_link_choice(model, (tx_node, rx_node), positions, ((g_tx, g_rx), (s_tx, s_rx), env_std),
+                                      n, turn, options)
     gain = float(g_tx[i_tx] + g_rx[i_rx])
     bold = float(g_tx[b_tx] + g_rx[b_rx])
-    env_std = float(model.link_environment_std_db(tx_node, rx_node, positions["tx"], positions["rx"])[0])
     result = OrientationResult(
         float(yaws[i_tx]), float(yaws[i_rx]), gain, float(g_tx[n] + g_rx[n + 1]),
         coverage_deg=_link_coverage(model, tx_node, rx_node, positions, float(yaws[i_tx]), float(yaws[i_rx])),
         gain_std_db=float(np.sqrt(s_tx[i_tx] ** 2 + s_rx[i_rx] ** 2 + env_std**2)) if spread else None,
-        boldest=(float(yaws[b_tx]), float(yaws[b_rx]), bold) if bold > gain + 0.5 else None,
+        boldest=(float(yaws[b_tx]), float(yaws[b_rx]), bold) if bold > gain + 0.5 else None, **risk,
     )
     if tx_power_dbm is None:
         return result
@@ -354,6 +375,9 @@ class SwarmHeadings:
         below it [dBm].
     sweeps : int
         Sweeps of the coordinate ascent (0 for an exhaustive search).
+    availability, start_availability, sensitivity_dbm, min_availability : float or None
+        Ranked by availability: the weakest link's of the most available spanning tree at the
+        chosen and the starting yaws, at ``sensitivity_dbm`` (:mod:`rplearn.analysis.risk_headings`).
     """
 
     yaw_deg: dict[str, float]
@@ -363,6 +387,10 @@ class SwarmHeadings:
     bottleneck_dbm: float
     start_bottleneck_dbm: float
     sweeps: int
+    availability: float | None = None
+    start_availability: float | None = None
+    sensitivity_dbm: float | None = None
+    min_availability: float | None = None
 
     def to_frame(self) -> pd.DataFrame:
         """One row per drone: ``drone, start_yaw_deg, yaw_deg``."""
@@ -380,7 +408,9 @@ class SwarmHeadings:
             "yaw_deg": dict(self.yaw_deg),
             "bottleneck_dbm": self.bottleneck_dbm,
             "start_bottleneck_dbm": self.start_bottleneck_dbm,
-        }
+            **({} if self.availability is None else {"availability": self.availability,
+                                                     "start_availability": self.start_availability,
+                                                     "sensitivity_dbm": self.sensitivity_dbm})}
 
     def summary(self) -> str:
         lines = [
@@ -391,6 +421,10 @@ class SwarmHeadings:
             "threshold below it",
             "pair RSSI now -> best [dBm]:",
         ]
+        if self.availability is not None and self.start_availability is not None:
+            lines.insert(-1, f"availability of the weakest link at {self.sensitivity_dbm:g} dBm: "
+                             f"{self.start_availability:.3f} now -> {self.availability:.3f}"
+                             + ("" if self.min_availability is None else f" (required {self.min_availability:g})"))
         before = self.start_pair_rssi_dbm.set_index("pair")["rssi_dbm"]
         for _, row in self.pair_rssi_dbm.iterrows():
             lines.append(f"  {row['pair']}: {before[row['pair']]:6.1f} -> {row['rssi_dbm']:6.1f}")
@@ -502,9 +536,17 @@ def best_swarm_headings(
     start = {d: float((start_yaw_deg or {}).get(d, 0.0)) for d in drones}
     problem = _heading_problem(model, {d: positions[d] for d in drones}, patterns, grid, start, tx_power_dbm, frequency_hz)
     free = [d for d in drones if d not in fixed]
-    choice, best, sweeps = search(problem, free, max_sweeps, restarts)
+    risk: dict[str, float | None] = {}
+    if options.sensitivity_dbm is not None:  # rank by availability (never less available than now)
+        from rplearn.analysis.risk_headings import risk_swarm_choice
+
+        stds = heading_std_tables(model, {d: positions[d] for d in drones}, patterns, problem.yaw_deg)
+        choice, risk, sweeps = risk_swarm_choice(model, problem, stds, free, options)
+        best = problem.score(choice)
+    else:
+        choice, best, sweeps = search(problem, free, max_sweeps, restarts)
     start_score = problem.score(problem.start_index)
-    if start_score > best:  # never worse than the current yaws (which may lie off the grid)
+    if start_score > best and not risk:  # never worse than the current yaws (which may lie off the grid)
         best, choice = start_score, problem.start_index
     return SwarmHeadings(
         yaw_deg={d: float(problem.yaw_deg[choice[d]]) for d in drones},
@@ -513,7 +555,7 @@ def best_swarm_headings(
         start_pair_rssi_dbm=problem.pair_table(problem.start_index),
         bottleneck_dbm=best[0],
         start_bottleneck_dbm=start_score[0],
-        sweeps=sweeps,
+        sweeps=sweeps, **risk,
     )
 
 

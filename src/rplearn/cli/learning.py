@@ -183,6 +183,8 @@ def predict(
     model_path: str = typer.Argument(..., metavar="MODEL.json"),
     dataset: str = typer.Argument(..., metavar="DATASET"),
     output: str = typer.Option(..., "-o", "--out", help="Where to write the dataset with the predictions added (.csv or .parquet)."),
+    sensitivity: str | None = typer.Option(None, "--sensitivity", metavar="DBM|RADIO",
+                                     help="Also each row's availability, P(RSSI >= this): dBm or a radio (sik, esp32-11b, wifi-6mbps, ...)."),
 ) -> None:
     """Predict the joint gain and received power for every row of a dataset of poses.
 
@@ -192,12 +194,15 @@ def predict(
     [dBm]; and for pattern models gain_pred_std_db, the standard error of gain_pred_db from
     the learned coefficients alone [dB], and rssi_pred_std_db, the spread of one new packet's
     RSSI around rssi_pred_dbm, adding the training residual (fading, noise, misfit) [dB].
+    With --sensitivity: availability, the probability that the RSSI reaches it.
 
-    Example: rplearn predict sh10.json data.parquet -o pred.csv
+    Example: rplearn predict sh10.json data.parquet -o pred.csv --sensitivity esp32-11b
     """
+    from rplearn.analysis.radios import sensitivity_dbm
     from rplearn.workflows.learning import predict_file
 
-    prediction = predict_file(model_path, dataset, output)
+    level = None if sensitivity is None else sensitivity_dbm(sensitivity)
+    prediction = predict_file(model_path, dataset, output, level)
     if prediction.mismatch is not None:
         note(prediction.mismatch.describe(dataset, model_path), "warning")
     say(prediction.summary(output))

@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import typer
 
 from rplearn.cli._app import app, floats, note, numbers, pairs, reader_options, say, split_list, user_errors, xyz
@@ -27,6 +29,10 @@ def links(
     pose_topic: list[str] | None = typer.Option(None, "--pose-topic", help="TOPIC=NODE: pose topics of ROS bags."),
     nan_policy: str = typer.Option("error", "--nan-policy", help="Pose rows with NaN or non-numeric values: error (default) or drop (counted)."),
     allow_unsorted: bool = typer.Option(False, "--allow-unsorted", help="Accept pose tables whose times go backwards within a node (the rows are sorted)."),
+    sensitivity: str | None = typer.Option(None, "--sensitivity", metavar="DBM|RADIO",
+                                     help="Also each link's availability, P(RSSI >= this), and P(swarm connected) per time: dBm or a radio (sik, ...)."),
+    draws: int = typer.Option(1000, "--draws", min=1, help="Monte Carlo draws of the patterns, the flight level and the fading (with --sensitivity)."),
+    path_pair: list[str] | None = typer.Option(None, "--pair", help="A-B: also P(a path between drones A and B, over any relays) (repeat)."),
 ) -> None:
     """Predict every link of a swarm over time and whether it stays connected.
 
@@ -44,6 +50,12 @@ def links(
     readers = reader_options(node, pose_topic=pose_topic, nan_policy=nan_policy, allow_unsorted=allow_unsorted)
     times = floats(at, "--at", "times in seconds")
     options = SwarmOptions(frequency_hz, pairs(pattern, "--as"), min_rssi_dbm, step_s, times, max_gap_s)
+    if sensitivity is not None:
+        _links_availability(model_path, poses, tx_power_dbm, (output, connectivity_out, plot_out), options, readers,
+                            (sensitivity, draws, path_pair or []))
+        return
+    if path_pair:
+        raise typer.BadParameter("--pair needs --sensitivity", param_hint="--pair")
     outcome = swarm_links(model_path, poses, output, tx_power_dbm, options, readers, connectivity_out, plot_out)
     for line in outcome.notes:
         say(line)
@@ -51,6 +63,33 @@ def links(
         note(outcome.mismatch.describe("--frequency", model_path), "warning")
     say(outcome.prediction.summary())
     say(f"wrote {len(outcome.prediction.links):,} predicted links to {output}")
+
+
+def _links_availability(
+    model_path: str, poses: list[str], tx_power_dbm: float, files: tuple[str, str | None, str | None], options: Any,
+    readers: Any, asked: tuple[str, int, list[str]],
+) -> None:
+    """``links --sensitivity``: the links with their availability and the swarm's Monte Carlo."""
+    from rplearn.analysis.availability import AvailabilityOptions
+    from rplearn.analysis.radios import sensitivity_dbm
+    from rplearn.workflows.availability import LinkFiles, swarm_links_availability
+
+    sensitivity, draws, path_pairs = asked
+    named = []
+    for text in path_pairs:
+        a, sep, b = text.partition("-")
+        if not (sep and a and b):
+            raise typer.BadParameter(f"expected A-B, got {text!r}", param_hint="--pair")
+        named.append((a, b))
+    availability = AvailabilityOptions(sensitivity_dbm(sensitivity), n_draws=draws, pairs=named)
+    outcome = swarm_links_availability(model_path, poses, tx_power_dbm, LinkFiles(*files), availability, options, readers)
+    for line in outcome.links.notes:
+        say(line)
+    if outcome.links.mismatch is not None:
+        note(outcome.links.mismatch.describe("--frequency", model_path), "warning")
+    say(outcome.links.prediction.summary())
+    say(outcome.swarm.summary())
+    say(f"wrote {len(outcome.links.prediction.links):,} predicted links (with availability) to {files[0]}")
 
 
 @app.command()
@@ -65,6 +104,10 @@ def headings(
     frequency_hz: float | None = typer.Option(None, "--frequency", help="Carrier frequency [Hz] (default: the one the model was learned at)."),
     step_deg: float = typer.Option(5.0, "--step", help="Yaw grid [deg]."),
     output: str | None = typer.Option(None, "-o", "--out", help="Also write the chosen yaws here (.csv or .json)."),
+    sensitivity: str | None = typer.Option(None, "--sensitivity", metavar="DBM|RADIO",
+                                     help="Rank by availability, P(RSSI >= this), not gain: dBm or a radio (sik, esp32-11b, wifi-6mbps, ...)."),
+    min_availability: float | None = typer.Option(None, "--min-availability", metavar="P",
+                                              help="With --sensitivity: the strongest heading(s) at least this available."),
 ) -> None:
     """Yaws for a hovering swarm that keep it best connected (maximise the bottleneck RSSI).
 
@@ -74,11 +117,14 @@ def headings(
     Example: rplearn headings sh10.json --pos A=0,0,20 --pos B=40,0,20 --pos C=20,30,25 --as C=A --tx-power 20
     """
     from rplearn.analysis.heading_options import SwarmHeadingOptions
+    from rplearn.analysis.radios import sensitivity_dbm
     from rplearn.workflows.logs import swarm_headings
 
     positions = {drone: xyz(text, f"--pos {drone}") for drone, text in pairs(pos, "--pos").items()}
     start = numbers(pairs(yaw, "--yaw"), "--yaw", "DRONE=DEG")
-    options = SwarmHeadingOptions(frequency_hz, pairs(pattern, "--as"), start, split_list(fixed) or (), step_deg)
+    level = None if sensitivity is None else sensitivity_dbm(sensitivity)
+    options = SwarmHeadingOptions(frequency_hz, pairs(pattern, "--as"), start, split_list(fixed) or (), step_deg,
+                                  sensitivity_dbm=level, min_availability=min_availability)
     result = swarm_headings(model_path, positions, tx_power_dbm, output, options)
     say(result.summary())
     if output:
@@ -100,6 +146,10 @@ def orient(
     frequency_hz: float | None = typer.Option(None, "--frequency", help="Carrier frequency [Hz] (default: the one the model was learned at)."),
     caution: float = typer.Option(1.28, "--caution", min=0.0,  # = analysis.headings.CAUTION_Z (tested)
                                   help="Rank headings by the gain minus this many standard errors (1.28: the 10% lower bound; 0: the prediction alone)."),
+    sensitivity: str | None = typer.Option(None, "--sensitivity", metavar="DBM|RADIO",
+                                     help="Rank by availability, P(RSSI >= this), not gain: dBm or a radio (sik, esp32-11b, wifi-6mbps, ...)."),
+    min_availability: float | None = typer.Option(None, "--min-availability", metavar="P",
+                                              help="With --sensitivity: the strongest heading(s) at least this available."),
 ) -> None:
     """Heading that maximises a link, and the received power before and after.
 
@@ -109,9 +159,11 @@ def orient(
     Example: rplearn orient sh10.json --tx A --rx B --tx-pos 0,0,20 --rx-pos 10,5,25 --turn both
     """
     from rplearn.analysis.heading_options import YawOptions
+    from rplearn.analysis.radios import sensitivity_dbm
     from rplearn.workflows.planning import orient_link
 
+    level = None if sensitivity is None else sensitivity_dbm(sensitivity)
     options = YawOptions(tx_yaw_deg=tx_yaw, rx_yaw_deg=rx_yaw, tx_power_dbm=tx_power_dbm, frequency_hz=frequency_hz,
-                         caution_z=caution)
+                         caution_z=caution, sensitivity_dbm=level, min_availability=min_availability)
     result = orient_link(model_path, tx, rx, xyz(tx_pos, "--tx-pos"), xyz(rx_pos, "--rx-pos"), turn, options)
     say(result.summary())

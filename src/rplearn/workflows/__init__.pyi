@@ -2,6 +2,9 @@
 # in __init__.py, which imports each name's module on first use. Only `from .module import name
 # as name` lines here (tests/test_public_api.py).
 
+from .availability import AvailabilityOutcome as AvailabilityOutcome
+from .availability import LinkFiles as LinkFiles
+from .availability import swarm_links_availability as swarm_links_availability
 from .calibration_plan import OptimizedPlan as OptimizedPlan
 from .calibration_plan import OptimizeOptions as OptimizeOptions
 from .calibration_plan import optimize_plan as optimize_plan

@@ -445,15 +445,21 @@ def evaluate_model_files(
 
 
 @check_types
-def predict_file(model_path: str, dataset: str, output: str) -> DatasetPrediction:
+def predict_file(model_path: str, dataset: str, output: str, sensitivity_dbm: float | None = None) -> DatasetPrediction:
     """Predict every row of a dataset of poses and write it with the predictions (``rplearn predict``).
 
-    See :func:`rplearn.models.predict.predict_dataset` for the added columns.
+    See :func:`rplearn.models.predict.predict_dataset` for the added columns; with
+    ``sensitivity_dbm`` also ``availability``, ``P(RSSI >= sensitivity_dbm)``
+    (:func:`rplearn.analysis.availability.link_availability_column`).
     """
     check_table_path(output)
     check_output_path(output, [model_path, dataset])
     model = load_model(model_path)
     prediction = predict_dataset(model, read_dataset(dataset, require_rssi=False), dataset)
+    if sensitivity_dbm is not None:
+        from rplearn.analysis.availability import link_availability_column
+
+        prediction.table["availability"] = link_availability_column(prediction.table, model, sensitivity_dbm)
     write_table(prediction.table, output)
     return prediction
 
