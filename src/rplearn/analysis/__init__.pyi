@@ -2,8 +2,8 @@
 # in __init__.py, which imports each name's module on first use. Only `from .module import name
 # as name` lines here (tests/test_public_api.py).
 
-from .availability import AvailabilityOptions as AvailabilityOptions
 from .availability import DEFAULT_DRAWS as DEFAULT_DRAWS
+from .availability import AvailabilityOptions as AvailabilityOptions
 from .availability import SwarmAvailability as SwarmAvailability
 from .availability import connected_draws as connected_draws
 from .availability import link_availability_column as link_availability_column
