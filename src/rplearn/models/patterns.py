@@ -23,6 +23,7 @@ from rplearn.core.basis_base import chunk_directions
 from rplearn.core.environment import PathLoss
 from rplearn.core.geometry import Directions, distance_m, link_directions
 from rplearn.core.link import received_power_dbm
+from rplearn.core.threads import blas_threads, prediction_flops
 from rplearn.errors import InputError, ModelFileError
 from rplearn.io.modelfile import jsonable as _jsonable
 from rplearn.io.modelfile import read_model_file, read_sidecar, write_model_with_sidecar
@@ -251,6 +252,12 @@ class PatternSet:
         """
         if self.covariance is None:
             return None
+        with blas_threads(prediction_flops(len(samples), self.basis.n_coef, spreads=True)):  # rplearn.core.threads
+            return self._gain_std(samples, new_flight)
+
+    def _gain_std(self, samples: LinkSamples, new_flight: bool) -> FloatArray:
+        """:meth:`predict_gain_std` of a model with a covariance."""
+        assert self.covariance is not None
         level_var = self.new_flight_level_std_db ** 2 if new_flight else 0.0
         p = self.basis.n_coef
         m = len(self.shared_names)
@@ -513,7 +520,8 @@ class PatternSet:
         tx = idx[samples.tx_index]
         rx = idx[samples.rx_index]
         d = samples.directions
-        gain = self._sum_node_gains(tx, d.az_tx, d.el_tx) + self._sum_node_gains(rx, d.az_rx, d.el_rx)
+        with blas_threads(prediction_flops(len(samples), self.basis.n_coef)):  # rplearn.core.threads
+            gain = self._sum_node_gains(tx, d.az_tx, d.el_tx) + self._sum_node_gains(rx, d.az_rx, d.el_rx)
         if self.path_loss.kind != "free" or self.shared_names:
             gain = gain + self.environment_db(samples)
         return gain

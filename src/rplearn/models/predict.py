@@ -21,6 +21,7 @@ from numpy.typing import ArrayLike
 
 from rplearn._argtypes import check_types
 from rplearn.core.link import received_power_dbm
+from rplearn.core.threads import blas_threads, prediction_flops
 from rplearn.data.tables import link_samples
 from rplearn.models.base import Model
 
@@ -139,6 +140,15 @@ def predict_dataset(model: Model, dataset: pd.DataFrame, source: str = "dataset"
         File name for messages.
     """
     samples = link_samples(dataset, source, require_rssi=False)
+    basis = getattr(model, "basis", None)
+    flops = prediction_flops(len(samples), basis.n_coef if basis is not None else 1,
+                             getattr(model, "covariance", None) is not None)
+    with blas_threads(flops):  # the thread policy (rplearn.core.threads): size and free cores
+        return _predict_dataset(model, dataset, samples)
+
+
+def _predict_dataset(model: Model, dataset: pd.DataFrame, samples: Any) -> DatasetPrediction:
+    """:func:`predict_dataset` of the dataset's checked samples."""
     gain = model.predict_gain(samples)
     table = dataset.drop(columns=[c for c in PREDICTION_COLUMNS if c in dataset.columns])  # no stale predictions
     table["gain_pred_db"] = gain
