@@ -299,7 +299,7 @@ Poses = Mapping[str, tuple[np.ndarray, np.ndarray, np.ndarray]]
 
 
 #: (time, ordered pair) rows predicted at once: bounds the geometry and features in memory.
-LINK_BLOCK_ROWS = 200_000
+LINK_BLOCK_ROWS = 50_000
 
 
 def _time_blocks(n_times: int, n_drones: int) -> list[tuple[int, int]]:
