@@ -202,7 +202,8 @@ class PatternSet:
             )
         shape = np.broadcast(az, el).shape
         az, el = np.broadcast_arrays(az, el)
-        return self.basis.evaluate(self.coef[k], az, el).reshape(shape)
+        with blas_threads(prediction_flops(az.size, self.basis.n_coef) / 2):  # one end (rplearn.core.threads)
+            return self.basis.evaluate(self.coef[k], az, el).reshape(shape)
 
     def standard_error(self, node: str, az_rad: ArrayLike, el_rad: ArrayLike) -> FloatArray:
         """Standard error of :meth:`evaluate` from the fit's coefficient covariance [dB].
@@ -214,7 +215,8 @@ class PatternSet:
         k = self.node_index(node)
         p = self.basis.n_coef
         cov = self.covariance[k * p : (k + 1) * p, k * p : (k + 1) * p]
-        return np.sqrt(np.maximum(self.basis.quadratic_form(cov, az_rad, el_rad), 0.0))
+        with blas_threads(prediction_flops(np.size(az_rad), p, spreads=True) / 2):  # one end (rplearn.core.threads)
+            return np.sqrt(np.maximum(self.basis.quadratic_form(cov, az_rad, el_rad), 0.0))
 
     def coverage_deg(self, node: str, az_rad: ArrayLike, el_rad: ArrayLike) -> FloatArray | None:
         """Angle [deg] from each direction to the nearest direction ``node`` was learned from
