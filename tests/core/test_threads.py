@@ -3,10 +3,9 @@
 from __future__ import annotations
 
 import numpy  # noqa: F401  (loads the BLAS libraries whose threads are counted)
+import pytest
 import scipy.linalg  # noqa: F401
 from threadpoolctl import threadpool_info
-
-import pytest
 
 from rplearn.core import threads
 from rplearn.core.threads import (
