@@ -244,9 +244,10 @@ def main() -> int:
     parser.add_argument("--quick", action="store_true", help="10 and 30 drones, 2 repeats")
     parser.add_argument("--drones", type=int, nargs="+", help="only these swarm sizes for predict_swarm (and no headings)")
     parser.add_argument("--tiny", action="store_true", help="4 drones x 50 times, headings of 4 drones, once (seconds)")
+    parser.add_argument("--repeats", type=int, help="best of this many (default 3; 2 with --quick)")
     args = parser.parse_args()
     sizes = args.drones or ((4,) if args.tiny else (10, 30) if args.quick else (10, 30, 100))
-    repeats = 1 if args.tiny else 2 if args.quick else 3
+    repeats = 1 if args.tiny else args.repeats or (2 if args.quick else 3)
     n_times = 50 if args.tiny else TIMES
     rng = np.random.default_rng(0)
     model = model_of(rng)
