@@ -10,7 +10,8 @@ Then ``rplearn predict`` on a Parquet dataset of 1,000,000 rows (``predict_file`
 predict gain, received power and both spreads, write) against the same done by hand with
 pandas/pyarrow and plain numpy (issue 30): ``pyarrow.parquet`` read, each end's direction from
 one rotation matrix per row, each node's gain from the basis's series evaluation, the spreads
-``f^T C f`` from one product per block of rows, Friis, and a pyarrow write; timed alternately,
+``f^T C f`` from one product per block of rows, Friis, each end's coverage from the model's
+stored grid through a k-d tree (pykdtree) of its points, and a pyarrow write; timed alternately,
 best of several. Target 2x; the predictions must agree within 1e-9 dB.
 
 Run: ``.venv/bin/python benchmarks/predict.py [--rows N]`` (``--tiny``: 20,000 directions and rows).
@@ -29,10 +30,12 @@ import numpy as np
 import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
+from pykdtree.kdtree import KDTree
 from threadpoolctl import threadpool_limits
 
-from rplearn.core.bases import SphericalHarmonics
-from rplearn.core.geometry import quat_wxyz_to_matrix
+from rplearn.core.bases import SphericalHarmonics, fibonacci_grid_nodes
+from rplearn.core.coverage import COVERAGE_GRID_POINTS, coverage_grid
+from rplearn.core.geometry import quat_wxyz_to_matrix, unit_vector
 from rplearn.core.link import free_space_path_loss_db
 from rplearn.models.patterns import PatternSet
 from rplearn.models.training import TrainingSummary
@@ -93,6 +96,17 @@ def by_hand(model: PatternSet, path_in: str, path_out: str) -> pd.DataFrame:
     df["rssi_pred_dbm"] = df["tx_power_dbm"].to_numpy() + gain - free_space_path_loss_db(dist, df["frequency_hz"].to_numpy())
     df["gain_pred_std_db"] = std = np.sqrt(np.maximum(var, 0.0))
     df["rssi_pred_std_db"] = np.sqrt(std**2 + model.training.rmse_db**2)
+    # coverage: the stored grid's value at the nearest grid point (a k-d tree) plus the angle to it
+    grid_az, grid_el = fibonacci_grid_nodes(COVERAGE_GRID_POINTS)
+    tree = KDTree(np.ascontiguousarray(unit_vector(grid_az, grid_el)))
+    for e in ("tx", "rx"):
+        cov_deg = np.empty(len(df))
+        for k, name in enumerate(("A", "B")):
+            sel = np.flatnonzero(node[e] == k)
+            chord, i = tree.query(np.ascontiguousarray(unit_vector(ang[e][0][sel], ang[e][1][sel])), k=1)
+            cov_deg[sel] = np.asarray(model.training.coverage_deg[name])[i] + np.degrees(
+                2.0 * np.arcsin(np.clip(chord / 2.0, 0.0, 1.0)))
+        df[f"{e}_coverage_deg"] = cov_deg
     pq.write_table(pa.Table.from_pandas(df, preserve_index=False), path_out)
     return df
 
@@ -103,8 +117,11 @@ def bench_predict_file(n: int, rounds: int) -> bool:
     rng = np.random.default_rng(1)
     basis = SphericalHarmonics(10)
     a = rng.normal(0, 0.03, (2 * basis.n_coef, 2 * basis.n_coef))
+    # coverage grids as a fit stores them: learned from the upper half of the sphere only
+    grids = {node: np.round(coverage_grid(rng.uniform(-np.pi, np.pi, 5000), rng.uniform(0, 1.2, 5000)), 1).tolist()
+             for node in ("A", "B")}
     model = PatternSet(basis, ("A", "B"), rng.normal(0, 2, (2, basis.n_coef)), covariance=a @ a.T,
-                       training=TrainingSummary(rmse_db=4.0, frequency_hz=2.4e9))
+                       training=TrainingSummary(rmse_db=4.0, frequency_hz=2.4e9, coverage_deg=grids))
     with tempfile.TemporaryDirectory() as d:
         model_path, path_in = os.path.join(d, "model.json"), os.path.join(d, "matched.parquet")
         model.save(model_path)
@@ -121,8 +138,9 @@ def bench_predict_file(n: int, rounds: int) -> bool:
                 t_ref = min(t_ref, time.perf_counter() - t0)
         ours = pq.read_table(out).to_pandas()
     same = all(np.allclose(ours[c].to_numpy(), ref[c].to_numpy(), rtol=0, atol=1e-9)
-               for c in ("gain_pred_db", "rssi_pred_dbm", "gain_pred_std_db", "rssi_pred_std_db"))
-    print(f"rplearn predict, {n:,} Parquet rows, SH-10 with spreads: {t_ours:.3f} s; read + compute + write by "
+               for c in ("gain_pred_db", "rssi_pred_dbm", "gain_pred_std_db", "rssi_pred_std_db", "tx_coverage_deg",
+                         "rx_coverage_deg"))
+    print(f"rplearn predict, {n:,} Parquet rows, SH-10 with spreads and coverage: {t_ours:.3f} s; read + compute + write by "
           f"pandas/pyarrow and numpy: {t_ref:.3f} s; ratio {t_ours / t_ref:.2f}x (target 2); the same predictions "
           f"(1e-9 dB): {same}")
     return same
