@@ -38,6 +38,9 @@ EXPECT = {
     ],
     "fleet.py": [r"models agree"],
     "level_shift.py": [r"auto 1\.0000, prior 1\.0000"],  # a constant shift changes no RMSE
+    # issue 27, acceptance 3: the three flights, each reaching the target spread, and the criteria scored
+    "manoeuvres.py": [r"reference +\d+ s;", r"suggested: time \[(ok|MISS)\] error \[(ok|MISS)\]",
+                      r"optimized: time \[(ok|MISS)\] error \[(ok|MISS)\]"],
 }
 
 

@@ -191,6 +191,8 @@ FIGURES: dict[str, tuple[tuple[str, str], ...]] = {
     "ardupilot.md": (
         (r"signal samples in: (\d+), matched: (\d+)", "matches {1} of the {0} radio samples"),
         (r"(no calibration flight): nodes gcs and sys1", "**{0}**"),
+        (r"outage events \(link lost, no RSSI\): (\d+) in, (\d+) kept", "{0} in, {1} kept"),
+        (r"\(the learning data's share up\) [\d.]+, skill ([\d.]+)", "a Brier skill of {0} against"),
     ),
     "px4.md": ((r"signal samples in: (\d+), matched: (\d+)", "matches {1} of the {0} packets"),),
     "rosbag.md": (

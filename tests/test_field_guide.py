@@ -35,7 +35,8 @@ def test_the_field_guide_runs_on_the_real_log_and_prints_what_it_says(tmp_path):
     # inspect: the station's placement and heading, the link-lost reports
     assert "station placed at the vehicle's first position fix (no HOME_POSITION in the log)" in out["inspect"]
     assert "assumed level and facing east" in out["inspect"]
-    assert "57 radio message(s) with a zero RSSI while the vehicle was silent (link lost) dropped" in out["inspect"]
+    assert ("57 radio message(s) with a zero RSSI while the vehicle was silent (link lost): kept as outage events"
+            in out["inspect"])
     assert "gcs: 1 rows, static" in out["inspect"] and "2735 rows" in out["inspect"]
     # sync: the counts the guide quotes
     assert "signal samples in: 1026, matched: 974" in out["sync"] and "dropped (near_field)" in out["sync"]

@@ -107,6 +107,19 @@ def test_the_readme_sionna_example_runs_on_the_model_its_commands_learned(readme
     _run([sys.executable, "-c", block], readme_folder, "README Sionna RT example")
 
 
+@pytest.mark.slow
+def test_the_readme_live_block_runs_as_written(tmp_path):
+    """The "Calibrate in flight" block: a session fed by a replay of the field guide's log."""
+    (block,) = [b for b in _blocks() if b.startswith("rplearn live ")]
+    os.symlink(ROOT / "tests", tmp_path / "tests")
+    out = _run(["bash", "-e", "-c", block], tmp_path, "README live block")
+    assert "stopped: end of stream" in out and "prequential RMSE" in out, out
+    from rplearn.models.load import load_model
+
+    assert load_model(str(tmp_path / "live.json")).label.startswith("SH-")
+    assert (tmp_path / "flight.tlog").stat().st_size > 100_000
+
+
 def test_the_readme_sionna_install_lines_are_what_ci_runs():
     """Installing is not run inside the tests; .ci/run does it, with these packages."""
     (block,) = [b for b in _blocks() if "pip install 'rplearn[sionna]'" in b]
@@ -125,6 +138,8 @@ def _kind(block: str) -> str | None:
         return "the command block (test_the_readme_commands_and_library_examples_run...)"
     if block.startswith("LOG=tests/fixtures/ardupilot/"):
         return "the field guide (tests/test_field_guide.py)"
+    if block.startswith("rplearn live "):
+        return "test_the_readme_live_block_runs_as_written"
     if "from rplearn.integrations import" in block:
         return "test_the_readme_sionna_example_runs..."
     if "pip install 'rplearn[sionna]'" in block:

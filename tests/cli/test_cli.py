@@ -329,3 +329,24 @@ def test_a_plan_is_a_pose_log_for_links_and_sync_reports_reader_drops(workdir):
     sync = run(["sync", "--poses", "pose_nan.csv", "--signals", "flight/signal_log.parquet", "--nan-policy", "drop", "-o", "nan_sync.parquet"], d)
     assert "dropped 3 pose row(s) (nan_pose)" in sync.stdout
 
+
+
+def test_trajectory_optimize_prints_the_expected_spread_and_writes_the_plan(tmp_path):
+    proc = run(["trajectory", "--optimize", "--check-model", "sh-5", "--target-spread", "2.5", "--budget-s", "120",
+                "--noise", "4", "--prior-std", "4", "-o", "plan"], tmp_path)
+    assert "expected per-node pattern spread over time" in proc.stdout and "(prior)" in proc.stdout
+    files = sorted(os.listdir(tmp_path / "plan"))
+    assert files and files[0].startswith("01_") and all(f.endswith(".csv") for f in files)
+    bad = run(["trajectory", "--optimize", "--budget-s", "-5", "-o", "plan2"], tmp_path, ok=False)
+    assert bad.returncode == 1 and "--budget-s" in bad.stderr and len(bad.stderr.strip().splitlines()) == 1
+
+
+def test_simulate_flies_a_written_plan(tmp_path):
+    run(["trajectory", "--optimize", "--check-model", "sh-4", "--target-spread", "3", "--budget-s", "40", "--noise", "4",
+         "--prior-std", "4", "-o", "plan"], tmp_path)
+    run(["simulate", "--preset", "paper", "--plan", "plan", "--seed", "2", "-o", "flight"], tmp_path)
+    signals = pd.read_parquet(tmp_path / "flight" / "signal_log.parquet")
+    labels = {f.rsplit("_", 1)[0] for f in os.listdir(tmp_path / "plan")}
+    assert set(signals["unit"]) == labels
+    bad = run(["simulate", "--preset", "ground", "--plan", "plan", "-o", "f2"], tmp_path, ok=False)
+    assert bad.returncode == 1 and "no antenna in preset ground" in bad.stderr

@@ -89,3 +89,17 @@ def test_no_instant_of_the_real_log_is_split_across_stretches_or_folds(matched):
     # the folds of a single unit are cut the same way
     folds = Stretches.of_times(t, 5, "u").label(t)
     assert (pd.Series(folds).groupby(t).nunique() == 1).all() and len(set(folds)) == 5
+
+
+def test_evaluate_sensitivity_scores_the_held_out_availability_in_markdown_and_json(matched, tmp_path):
+    names = [f"flight[{k}/5]" for k in range(1, 5)]
+    invoke(["fit", matched, "--units", ",".join(names), "-o", tmp_path / "m.json"])
+    out = invoke(["evaluate", tmp_path / "m.json", matched, "--units", "test[5/5]", "--sensitivity", "-70",
+                  "--json", tmp_path / "ev.json", "--markdown", tmp_path / "ev.md"]).output
+    doc = json.loads((tmp_path / "ev.json").read_text())
+    [score] = doc["availability"]
+    assert score["sensitivity_dbm"] == -70 and score["n_outages"] == 0 and score["brier_skill"] > 0
+    assert sum(b["count"] for b in score["reliability"]) == score["n_samples"]
+    assert "## Availability at -70 dBm" in out and "| predicted availability |" in (tmp_path / "ev.md").read_text()
+    bad = invoke(["evaluate", tmp_path / "m.json", matched, "--units", "test[5/5]", "--sensitivity", "nan"], ok=False)
+    assert bad.exit_code != 0 and "--sensitivity" in bad.output

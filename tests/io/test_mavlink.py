@@ -43,12 +43,18 @@ def test_real_tlog_counts_match_pymavlink(path, attitude, positions, radio, link
     assert len(vehicle) == meta["rows"]
     assert len(vehicle) + sum(meta["dropped"].values()) == attitude
     assert sum(meta["dropped"].values()) < 0.01 * attitude
-    # every RADIO message gives one row per direction unless link-lost (counted)
+    # every RADIO message gives one row per direction; a link-lost one an outage row per direction
+    # (counted, rssi_dbm NaN): the received rows are as before outages were kept
     s = meta["signal"]
     assert s["link_lost"] == link_lost
-    links = logs.signal.groupby(["tx", "rx"]).size().to_dict()
+    received = logs.signal[~logs.signal["outage"]]
+    links = received.groupby(["tx", "rx"]).size().to_dict()
     assert links == {("sys1", "gcs"): radio - link_lost, ("gcs", "sys1"): radio - link_lost}
     assert s["rows_vehicle_to_station"] == s["rows_station_to_vehicle"] == radio - link_lost
+    lost = logs.signal[logs.signal["outage"]]
+    assert lost.groupby(["tx", "rx"]).size().to_dict() == {("sys1", "gcs"): link_lost, ("gcs", "sys1"): link_lost}
+    assert s["outage_vehicle_to_station"] == s["outage_station_to_vehicle"] == link_lost
+    assert lost["rssi_dbm"].isna().all() and received["rssi_dbm"].notna().all()
     # the ground station: one static row at the first fix, said so
     station = logs.pose[logs.pose["node"] == "gcs"]
     assert len(station) == 1
@@ -73,8 +79,8 @@ def test_real_tlog_poses_are_plausible(path, top):
     for t in (pose["t"], logs.signal["t"]):
         assert 1381701000 < t.min() and t.max() < 1381709000
     assert pose.groupby("node")["t"].apply(lambda s: s.is_monotonic_increasing).all()
-    # SiK units -> dBm: every value is raw / 1.9 - 127 for a raw value in 1..254
-    raw = (logs.signal["rssi_dbm"].to_numpy() + 127.0) * 1.9
+    # SiK units -> dBm: every value is raw / 1.9 - 127 for a raw value in 1..254 (outage rows: no value)
+    raw = (logs.signal.loc[~logs.signal["outage"], "rssi_dbm"].to_numpy() + 127.0) * 1.9
     np.testing.assert_allclose(raw, np.round(raw), atol=1e-9)
     assert raw.min() >= 1 and raw.max() <= 254
 
@@ -82,10 +88,12 @@ def test_real_tlog_poses_are_plausible(path, top):
 def test_real_tlog_link_lost_rows_follow_the_vehicle_stream():
     logs, _ = read_mavlink(TLOG_1, tx_power_dbm=20.0, frequency_hz=915e6)
     last_pose = logs.pose.loc[logs.pose["node"] == "sys1", "t"].max()
-    # the 57 dropped messages came after the vehicle's last message: what is kept ends
-    # within seconds of it (the radio holds its remote statistics until the link times out)
-    assert logs.signal["t"].max() < last_pose + 5.0
-    assert logs.signal["t"].max() > last_pose - 5.0
+    # the 57 link-lost messages (outage rows) came after the vehicle's last message: the received
+    # packets end within seconds of it (the radio holds its remote statistics until the link times out)
+    received, lost = logs.signal[~logs.signal["outage"]], logs.signal[logs.signal["outage"]]
+    assert received["t"].max() < last_pose + 5.0
+    assert received["t"].max() > last_pose - 5.0
+    assert len(lost) == 2 * 57 and lost["t"].min() > last_pose + 2.0
 
 
 # ------------------------------------------------------------------------------ DataFlash
@@ -192,7 +200,7 @@ def test_round_trip_attitude_position_and_dbm(tmp_path):
     np.testing.assert_allclose(vehicle["y"], 0.0, atol=0.05)
     np.testing.assert_allclose(vehicle["t"].to_numpy(), T0 + 0.03 + 0.1 * np.arange(51), atol=1e-3)
     # SiK units -> dBm exactly; the ground radio's rssi is the station receiving
-    sig = logs.signal
+    sig = logs.signal[~logs.signal["outage"]]
     up = sig[(sig["tx"] == "sys1") & (sig["rx"] == "gcs")]
     down = sig[(sig["tx"] == "gcs") & (sig["rx"] == "sys1")]
     assert len(up) == len(down) == 10
@@ -200,6 +208,9 @@ def test_round_trip_attitude_position_and_dbm(tmp_path):
     assert up["rssi_dbm"].iloc[0] == pytest.approx(-27.0) and down["rssi_dbm"].iloc[0] == pytest.approx(-77.0)
     assert (sig["tx_power_dbm"] == 20.0).all() and (sig["frequency_hz"] == 915e6).all()
     assert meta["signal"]["link_lost"] == 3
+    # the 3 link-lost messages: one outage row per direction each, no RSSI
+    lost = logs.signal[logs.signal["outage"]]
+    assert len(lost) == 6 and lost["rssi_dbm"].isna().all()
 
 
 @pytest.mark.parametrize(

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from rplearn.errors import InputError
-from rplearn.workflows.report import PAPER_MODELS, learn_and_report, paper_model_names
+from rplearn.workflows.report import PAPER_MODELS, ReportOptions, learn_and_report, paper_model_names
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures"
 
@@ -102,7 +102,7 @@ def test_paper_models_are_a_section_on_request_with_the_median_learning_time(no_
 
     monkeypatch.setattr(report_module, "fit_model", timed)
     out = learn_and_report(no_units, str(tmp_path / "rep"), model_path=sh3, paper_models=["m", "nn-100000", "sh-3"],
-                           repeats=3)
+                           report=ReportOptions(repeats=3))
     assert [r.model for r in out.paper_rows] == ["M", "SH-3"]
     assert [r.ltd_s for r in out.paper_rows] == [0.5, 3.0]  # medians of (0.5, 9, 0.1) and (2, 7, 3)
     assert any(n.startswith("NN-100000 not learned:") for n in out.notes)
@@ -118,9 +118,9 @@ def test_paper_models_accept_auto_and_refuse_bad_names(no_units, sh3, tmp_path):
     with pytest.raises(InputError):
         paper_model_names(["sh-x"])
     with pytest.raises(InputError, match="repeats"):
-        learn_and_report(no_units, str(tmp_path / "bad"), model_path=sh3, paper_models=["m"], repeats=0)
+        learn_and_report(no_units, str(tmp_path / "bad"), model_path=sh3, paper_models=["m"], report=ReportOptions(repeats=0))
     assert not (tmp_path / "bad").exists()
-    out = learn_and_report(no_units, str(tmp_path / "rep"), model_path=sh3, paper_models=["auto"], repeats=1)
+    out = learn_and_report(no_units, str(tmp_path / "rep"), model_path=sh3, paper_models=["auto"], report=ReportOptions(repeats=1))
     assert len(out.paper_rows) == 1 and out.paper_rows[0].model.startswith("SH-")
 
 
@@ -130,7 +130,7 @@ def test_paper_models_reproduce_the_demo_table_for_the_same_seed(tmp_path):
 
     demo = run_demo(str(tmp_path / "demo"), seed=2, preset="smoke", figures=False)
     out = learn_and_report(demo.files["dataset"], str(tmp_path / "rep"), model_path=demo.files["model_M"],
-                           paper_models=["paper"], repeats=2)
+                           paper_models=["paper"], report=ReportOptions(repeats=2))
     assert [r.model for r in out.paper_rows] == [r.model for r in demo.table]
     for mine, theirs in zip(out.paper_rows, demo.table):
         for key in ("rmse_db", "aic", "q95_db", "mae_db", "n_params", "n_samples"):
@@ -163,7 +163,7 @@ def test_paper_models_reproduce_main_s_table_i_of_the_demo_seed_0(tmp_path, monk
 
     mean = str(tmp_path / "m.json")  # a model quick to report on: the Table I section is what is checked
     fit_dataset(dataset, ModelSpec.parse("m"), output=mean)
-    out = learn_and_report(dataset, str(tmp_path / "rep"), model_path=mean, paper_models=["paper"], repeats=1)
+    out = learn_and_report(dataset, str(tmp_path / "rep"), model_path=mean, paper_models=["paper"], report=ReportOptions(repeats=1))
     rows = {r.model: r for r in out.paper_rows}
     assert list(rows) == [g["model"] for g in golden["rows"]]
     for g in golden["rows"]:

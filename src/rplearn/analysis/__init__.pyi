@@ -24,6 +24,13 @@ from .headings import heading_std_tables as heading_std_tables
 from .identifiability import IdentifiabilityStudy as IdentifiabilityStudy
 from .identifiability import identifiability_study as identifiability_study
 from .identifiability import study_antennas as study_antennas
+from .manoeuvres import ManoeuvreOptions as ManoeuvreOptions
+from .manoeuvres import PlanStep as PlanStep
+from .manoeuvres import RankedManoeuvre as RankedManoeuvre
+from .manoeuvres import greedy_plan as greedy_plan
+from .manoeuvres import pattern_spreads as pattern_spreads
+from .manoeuvres import prior_penalty_weight as prior_penalty_weight
+from .manoeuvres import rank_manoeuvres as rank_manoeuvres
 from .pattern_error import gauged_nodes as gauged_nodes
 from .pattern_error import node_directions as node_directions
 from .pattern_error import pattern_errors_db as pattern_errors_db

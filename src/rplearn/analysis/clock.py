@@ -30,7 +30,7 @@ from rplearn.core.geometry import distance_m, link_directions
 from rplearn.core.link import FAR_FIELD_WAVELENGTHS, observed_joint_gain_db, wavelength_m
 from rplearn.data.poses import PoseTrack, tracks_of_checked_log
 from rplearn.data.sync import SyncOptions, synchronise
-from rplearn.data.tables import link_samples, validate_pose_log, validate_signal_log
+from rplearn.data.tables import link_samples, outage_mask, validate_pose_log, validate_signal_log
 from rplearn.errors import InputError
 
 #: Signal rows used at most (evenly spread over the flight).
@@ -179,6 +179,7 @@ def estimate_clock_offset(
     sig = sig.iloc[rows].reset_index(drop=True)
     opts = dataclasses.replace(options, min_samples=0)
     matched = synchronise(pose, sig, opts, source="signal log").dataset  # the other ends' poses, once
+    matched = matched[~outage_mask(matched)].reset_index(drop=True)  # outage events: no RSSI to fit
     track = tracks_of_checked_log(mine, {node: base.get(node, 0.0)}, "pose log")[node]
     t_sig = matched["t"].to_numpy(np.float64)
     grid = np.unique(np.concatenate([_shift_grid(0.0, window_s, step), _shift_grid(0.0, window_s, step / 10.0)]))

@@ -217,21 +217,43 @@ def _node_spreads(model: PatternSet, covered: Mapping[str, tuple[np.ndarray, np.
         m = _metric(basis.design(az, el), node in gauged)
         metrics.append(m)
         covered_var = float(np.sum(m * own_cov[k * q:(k + 1) * q, k * q:(k + 1) * q]))
+        if own is not None:
+            offset = _offset_from_mean(model, own, k)
+            covered_var += float(offset @ m @ offset)
         sphere_var = float(np.sum(_metric(sphere, node in gauged) * block))
         spreads[node] = NodeSpread(float(np.sqrt(max(covered_var, 0.0))), float(np.sqrt(max(sphere_var, 0.0))),
                                    float(az.size / grid_sizes[node]))
     return spreads, metrics
 
 
+def _offset_from_mean(model: PatternSet, own: OwnPosterior, k: int) -> np.ndarray:
+    """Node ``k``'s posterior mean at ``own.basis`` less the model's coefficients there (zero
+    without a mean). SH coefficients nest (degree ``l`` in columns ``l**2 .. (l+1)**2 - 1``), so the
+    model's lower order fills the first columns."""
+    q = own.basis.n_coef
+    if own.mean is None:
+        return np.zeros(q)
+    chosen = np.zeros(q)
+    p = min(model.basis.n_coef, q)
+    chosen[:p] = model.coef[k, :p]
+    return np.asarray(own.mean[k], np.float64) - chosen
+
+
 def own_std_maps(model: PatternSet, own: OwnPosterior) -> dict[str, np.ndarray]:
-    """Posterior std [dB] of each node's gain under ``own`` at the :data:`OWN_MAP_POINTS` points
-    of a Fibonacci grid (:func:`rplearn.core.bases.fibonacci_grid_nodes`, in its order)."""
+    """Root expected square error [dB] of each node's reported gain under ``own`` (its posterior
+    variance plus the square of the reported gain's difference from the posterior mean) at the
+    :data:`OWN_MAP_POINTS` points of a Fibonacci grid
+    (:func:`rplearn.core.bases.fibonacci_grid_nodes`, in its order)."""
     q = own.basis.n_coef
     az, el = fibonacci_grid_nodes(OWN_MAP_POINTS)
+    design = None if own.mean is None else own.basis.design(az, el)
     out = {}
     for k, node in enumerate(model.nodes):
         block = own.covariance[k * q:(k + 1) * q, k * q:(k + 1) * q]
-        out[node] = np.sqrt(np.maximum(own.basis.quadratic_form(block, az, el), 0.0))
+        var = own.basis.quadratic_form(block, az, el)
+        if design is not None:
+            var = var + (design @ _offset_from_mean(model, own, k)) ** 2
+        out[node] = np.sqrt(np.maximum(var, 0.0))
     return out
 
 

@@ -4,6 +4,7 @@ flags, calling one library function and printing the result object it returns.
 - :mod:`~rplearn.cli.campaign`: ``trajectory``, ``simulate``
 - :mod:`~rplearn.cli.logs`: ``inspect``, ``sync``
 - :mod:`~rplearn.cli.learning`: ``fit``, ``evaluate``, ``predict``, ``sweep``, ``report``
+- :mod:`~rplearn.cli.live`: ``live``, ``replay``
 - :mod:`~rplearn.cli.swarm`: ``links``, ``headings``, ``orient``
 - :mod:`~rplearn.cli.outputs`: ``export``, ``plot``, ``demo``
 
@@ -19,6 +20,7 @@ from __future__ import annotations
 from rplearn.cli import (
     campaign,  # noqa: E402,F401,I001
     learning,  # noqa: E402,F401
+    live,  # noqa: E402,F401
     logs,  # noqa: E402,F401
     outputs,  # noqa: E402,F401
     swarm,  # noqa: E402,F401

@@ -14,6 +14,8 @@ TRAJECTORY_FLAGS = {
     "check_model": "--check-model", "distance_m": "--distance", "height_m": "--height", "n_loops": "--loops", "speed_m_s": "--speed",
     "learning_psi0_deg": "--psi0", "testing_psi0_deg": "--test-psi0", "rate_hz": "--rate",
     "max_speed_m_s": "--max-speed", "max_accel_m_s2": "--max-accel", "max_flight_time_s": "--max-flight-time",
+    "target_spread_db": "--target-spread", "budget_s": "--budget-s", "noise_std_db": "--noise", "prior_std_db": "--prior-std",
+    "prior_pattern": "--prior-pattern", "model": "--check-model",
 }
 
 
@@ -34,6 +36,17 @@ def trajectory(
     check_model: str | None = typer.Option("sh-10", "--check-model", help="Model whose rank and condition number the plan check reports (e.g. sh-10, bg-7; "
                                                                           "'none' to skip)."),
     wind_m_s: float = typer.Option(0.0, "--wind", help="Steady wind for the plan check [m/s] (tilts the drones)."),
+    optimize: bool = typer.Option(False, "--optimize", help="Choose and order manoeuvres of the library for the information "
+                                                           "they gather (greedy by expected spread reduction per second) "
+                                                           "instead of the paper's campaign."),
+    target_spread: float = typer.Option(2.0, "--target-spread", help="--optimize: stop at this per-node pattern spread [dB]."),
+    budget_s: float = typer.Option(900.0, "--budget-s", help="--optimize: flight-time budget [s]."),
+    noise_db: float = typer.Option(4.2, "--noise", help="--optimize: RSSI noise about the model [dB]."),
+    prior_std: float = typer.Option(6.0, "--prior-std", help="--optimize: the prior's pattern spread over the sphere [dB]."),
+    prior_pattern: str | None = typer.Option(None, "--prior-pattern", help="--optimize: a reference pattern model file "
+                                                                           "(rplearn reference) as the prior instead of smoothness."),
+    station: bool = typer.Option(False, "--station", help="--optimize: a static ground station G and one drone D "
+                                                         "(--distance horizontal from the station)."),
 ) -> None:
     """Plan a calibration campaign and check it before flying.
 
@@ -43,6 +56,10 @@ def trajectory(
 
     Example: rplearn trajectory --distance 10 --height 20 --loops 5 --max-flight-time 600 -o plan
     """
+    if optimize:
+        _optimized(out_dir, check_model, (target_spread, budget_s, noise_db, prior_std), prior_pattern, station,
+                   (distance_m, height_m, speed_m_s), rate_hz)
+        return
     from rplearn.plan.trajectory import PlanLimits
     from rplearn.workflows.planning import PAPER_LEARNING_PSI0_DEG, PAPER_TESTING_PSI0_DEG, CampaignOptions, plan_campaign
 
@@ -67,6 +84,26 @@ def trajectory(
         say("plan check (learning units):\n" + plan.check.summary())
 
 
+def _optimized(out_dir: str, model: str | None, figures: tuple[float, float, float, float], prior_pattern: str | None,
+               station: bool, geometry: tuple[float, float, float], rate_hz: float) -> None:
+    """``trajectory --optimize``: the greedy plan, its expected spread over time, the references."""
+    from rplearn.workflows.calibration_plan import OptimizeOptions, optimize_plan
+
+    target, budget, noise, prior_std = figures
+    options = OptimizeOptions(target_spread_db=target, budget_s=budget, model=model or "sh-10", noise_std_db=noise,
+                              prior_std_db=prior_std, prior_pattern=prior_pattern, station=station, distance_m=geometry[0],
+                              height_m=geometry[1], speed_m_s=geometry[2])
+    plan = optimize_plan(out_dir, options, rate_hz)
+    say("expected per-node pattern spread over time (greedy: the largest expected reduction per second at each step):")
+    say(plan.summary())
+    if not plan.steps:
+        say(f"no manoeuvre lowers the spread within {budget:g} s; nothing written")
+        return
+    worst = max(plan.steps[-1].spread_db.values())
+    reached = "reached" if worst <= target else f"not reached within the budget (worst node {worst:.2f} dB)"
+    say(f"target {target:g} dB {reached} after {plan.duration_s:.0f} s; wrote {len(plan.paths)} reference files to {out_dir}")
+
+
 @app.command()
 @user_errors
 def simulate(
@@ -77,6 +114,8 @@ def simulate(
     log_format: str = typer.Option("parquet", "--format", help="parquet or csv."),
     flights: int = typer.Option(8, "--flights", help="fleet: number of flights (about 160,000 samples each)."),
     drones: int = typer.Option(4, "--drones", help="fleet: drones in the fleet, flying in pairs taken in turn."),
+    plan: str | None = typer.Option(None, "--plan", help="Fly this folder of reference files (rplearn trajectory's output, "
+                                                        "e.g. of --optimize) with the preset's antennas, vehicles and radio."),
 ) -> None:
     """Simulate a calibration flight: raw pose and signal logs plus the true patterns.
 
@@ -98,9 +137,14 @@ def simulate(
         say(f"{len(fleet.files):,} flights of {drones} drones, {fleet.samples:,} matched samples, {fleet.elapsed_s:.1f} s "
             f"-> {out_dir} (give the folder to fit and evaluate)")
         return
+    config = None
+    if plan is not None:
+        from rplearn.workflows.calibration_plan import plan_config
+
+        config = plan_config(preset, plan)
     with progress_bar() as p:
-        p.add_task(f"simulating preset '{preset}'", total=None)
-        result = run(preset, seed=seed, out_dir=out_dir, log_format=log_format)
+        p.add_task(f"simulating preset '{preset}'" + (f" flying {plan}" if plan else ""), total=None)
+        result = run(config or preset, seed=seed, out_dir=out_dir, log_format=log_format)
     say(
         f"{len(result.pose_log):,} pose rows, {len(result.signal_log):,} packets, noise {result.noise_std_db:.2f} dB, "
         f"{result.elapsed_s:.1f} s"

@@ -151,10 +151,15 @@ def evaluate(
     json_out: str | None = typer.Option(None, "--json", help="Also write Table I as JSON here."),
     markdown_out: str | None = typer.Option(None, "--markdown", help="Also write Table I as Markdown here."),
     dask: str | None = typer.Option(None, "--dask", help=DASK_HELP),
+    sensitivity_dbm: float | None = typer.Option(
+        None, "--sensitivity", metavar="DBM",
+        help="Also score each model's predicted availability P(RSSI >= DBM) against the observed samples "
+             "(up: RSSI >= DBM; down: below it, or an outage event): Brier score, skill against the learning "
+             "data's share up, reliability table."),
 ) -> None:
     """Table I (RMSE, MAE, |phi|, AIC, LTD, Q95) of models on a dataset.
 
-    Example: rplearn evaluate sh10.json mean.json data.parquet --units test_36
+    Example: rplearn evaluate sh10.json mean.json data.parquet --units test_36 --sensitivity -90
     """
     from rplearn.workflows.learning import evaluate_model_files
 
@@ -164,7 +169,7 @@ def evaluate(
     with progress_bar() as p:
         task = p.add_task("predicting", total=None)
         outcome = evaluate_model_files(model_paths, dataset, split_list(units), json_out, markdown_out, dask=dask,
-                                       progress=parts_step(p, task, "predictions"))
+                                       progress=parts_step(p, task, "predictions"), sensitivity_dbm=sensitivity_dbm)
     for line in outcome.units.warnings:
         note(line, "warning")
     for line in outcome.units.notes:
@@ -249,6 +254,10 @@ def report(
     polarization: str = typer.Option("vertical", "--polarization", help="two-ray: vertical or horizontal."),
     learn_offsets: bool = typer.Option(True, "--link-offsets/--no-link-offsets", help="Pattern models: learn one electronics offset per link logged in both "
                                                                                       "directions."),
+    sensitivity_dbm: float | None = typer.Option(
+        None, "--sensitivity", metavar="DBM",
+        help="Also score the model's predicted availability P(RSSI >= DBM) on the held-out units (outage events count "
+             "as down) and draw its reliability diagram."),
 ) -> None:
     """Report one model on a dataset: held-out scores, measured vs predicted over time, residuals,
     polar cuts, spread and 3-D patterns in report.html (and the paper's Table I on request).
@@ -257,7 +266,7 @@ def report(
     """
     from rplearn.core.environment import PathLoss
     from rplearn.models.options import FitOptions
-    from rplearn.workflows.report import learn_and_report
+    from rplearn.workflows.report import ReportOptions, learn_and_report
 
     two_ray_flags_note(path_loss_kind, ground_level, permittivity, polarization)
     options = FitOptions(path_loss=PathLoss(path_loss_kind, ground_level, permittivity, polarization),
@@ -265,7 +274,8 @@ def report(
     with progress_bar() as p:
         task = p.add_task("learning", total=None)
         outcome = learn_and_report(dataset, out_dir, model, (split_list([paper_models]) or []) if paper_models else [],
-                                   split_list(test_units), progress=step(p, task), options=options, repeats=repeats)
+                                   split_list(test_units), progress=step(p, task), options=options,
+                                   report=ReportOptions(repeats, sensitivity_dbm))
     for line in outcome.notes:
         note(line)
     say(outcome.summary())

@@ -71,5 +71,10 @@ from .metrics import mae as mae
 from .metrics import q95 as q95
 from .metrics import rmse as rmse
 from .metrics import score as score
+from .reliability import RELIABILITY_BINS as RELIABILITY_BINS
+from .reliability import ReliabilityTable as ReliabilityTable
+from .reliability import brier_score as brier_score
+from .reliability import brier_skill as brier_skill
+from .reliability import reliability_table as reliability_table
 from .sh import SphericalHarmonics as SphericalHarmonics
 from .sh import sh_index as sh_index

@@ -2,6 +2,13 @@
 # in __init__.py, which imports each name's module on first use. Only `from .module import name
 # as name` lines here (tests/test_public_api.py).
 
+from .live_sync import LiveMatcher as LiveMatcher
+from .outages import OUTAGE_MAX_GAP_S as OUTAGE_MAX_GAP_S
+from .outages import OUTAGE_REASONS as OUTAGE_REASONS
+from .outages import match_outages as match_outages
+from .outages import outage_text as outage_text
+from .outages import split_outages as split_outages
+from .outages import with_outages as with_outages
 from .phases import AIRBORNE_MARGIN_M as AIRBORNE_MARGIN_M
 from .phases import FlightPhases as FlightPhases
 from .phases import calibration_problems as calibration_problems
@@ -24,12 +31,14 @@ from .sync import SyncSummary as SyncSummary
 from .sync import synchronise as synchronise
 from .tables import MATCHED_COLUMNS as MATCHED_COLUMNS
 from .tables import OPTIONAL_SIGNAL_COLUMNS as OPTIONAL_SIGNAL_COLUMNS
+from .tables import OUTAGE_COLUMN as OUTAGE_COLUMN
 from .tables import POSE_COLUMNS as POSE_COLUMNS
 from .tables import SENTINEL_RSSI_DBM as SENTINEL_RSSI_DBM
 from .tables import SIGNAL_COLUMNS as SIGNAL_COLUMNS
 from .tables import LinkSamples as LinkSamples
 from .tables import link_samples as link_samples
 from .tables import normalise_times as normalise_times
+from .tables import outage_mask as outage_mask
 from .tables import validate_matched as validate_matched
 from .tables import validate_pose_log as validate_pose_log
 from .tables import validate_signal_log as validate_signal_log

@@ -53,6 +53,9 @@ after optional clock offsets. A sample is dropped, and counted by reason, when:
 When a quarter or more of the samples reaching the pose-gap test fall in pose gaps, the summary
 (or the error) names the ``max_gap_s`` the pose rate needs (:func:`~rplearn.data.phases.max_gap_advice`).
 
+Outage events (signal rows with ``outage`` True: a lost link, no RSSI) are matched apart and
+kept with ``outage`` True (:mod:`rplearn.data.outages`); ``SyncSummary.outages`` counts them.
+
 A node whose pose log has a single row is static (a ground station, a parked drone): its pose
 holds at every time and it never causes ``out_of_span`` or ``pose_gap``.
 
@@ -76,6 +79,7 @@ import pandas as pd
 
 from rplearn._argtypes import check_types
 from rplearn.core.link import FAR_FIELD_WAVELENGTHS, SPEED_OF_LIGHT_M_S
+from rplearn.data.outages import match_outages, outage_text, split_outages, with_outages
 from rplearn.data.phases import AIRBORNE_MARGIN_M, WINDOW_CLOCKS, FlightPhases, flight_phases, max_gap_advice, phase_notes, window_mask
 from rplearn.data.poses import STATUS_OUT_OF_SPAN, STATUS_POSE_GAP, PoseTrack, interpolate_nodes, tracks_of_checked_log
 from rplearn.data.readings import REPEAT_FRACTION, duplicate_rows, repeated_readings
@@ -106,20 +110,8 @@ PLAUSIBLE_RSSI_DBM: tuple[float, float] = (-150.0, 30.0)
 RSSI_SCALES: tuple[str, ...] = ("dbm", "relative")
 #: Drop reasons, in the order they are tested.
 DROP_REASONS: tuple[str, ...] = (
-    "duplicate",
-    "invalid_value",
-    "outside_window",
-    "sentinel_rssi",
-    "implausible_rssi",
-    "tx_equals_rx",
-    "other_link",
-    "duplicate_reading",
-    "unknown_node",
-    "out_of_span",
-    "pose_gap",
-    "near_field",
-    "disarmed",
-    "on_ground",
+    "duplicate", "invalid_value", "outside_window", "sentinel_rssi", "implausible_rssi", "tx_equals_rx", "other_link",
+    "duplicate_reading", "unknown_node", "out_of_span", "pose_gap", "near_field", "disarmed", "on_ground",
 )
 
 
@@ -145,6 +137,8 @@ class SyncSummary:
         Matched samples with an end on the ground or disarmed, kept (``airborne=False``).
     notes : list of str
         What was done (window, airborne filter), advice (``max_gap_s``).
+    outages : dict of str to int
+        Outage events (:mod:`rplearn.data.outages`): ``in``, ``kept`` and dropped per reason.
     """
 
     n_in: int = 0
@@ -154,6 +148,7 @@ class SyncSummary:
     non_unit_quaternions: int = 0
     ground_kept: int = 0
     notes: list[str] = field(default_factory=list)
+    outages: dict[str, int] = field(default_factory=dict)
 
     @property
     def n_dropped(self) -> int:
@@ -169,6 +164,7 @@ class SyncSummary:
         self.non_unit_quaternions += other.non_unit_quaternions
         self.ground_kept += other.ground_kept
         self.notes += [n for n in other.notes if n not in self.notes]
+        self.outages = {k: self.outages.get(k, 0) + other.outages.get(k, 0) for k in {**self.outages, **other.outages}}
         return self
 
     def to_text(self) -> str:
@@ -183,7 +179,7 @@ class SyncSummary:
                 f"  pose rows with a non-unit quaternion (|norm - 1| > {QUATERNION_NORM_TOLERANCE:g}, "
                 f"normalised): {self.non_unit_quaternions}"
             )
-        lines += [f"  {n}" for n in self.notes]
+        lines += [f"  {n}" for n in [*self.notes, outage_text(self.outages)] if n]
         if self.ground_kept:
             lines.append(f"  {self.ground_kept} matched sample(s) were taken with an end on the ground or disarmed "
                          "(kept; airborne=True drops them)")
@@ -558,9 +554,16 @@ def synchronise(
     phases = flight_phases(pose_log, tracks, options.clock_offsets_s, options.airborne_margin_m)
     if options.link is not None:
         check_link_nodes(signal_log, options.link, source)
+    signal_log, events = split_outages(signal_log, source)
     result = _match_chunk(tracks, signal_log, options, source, phases=phases, carry={})
     result.summary.non_unit_quaternions = non_unit_quaternion_rows(pose)
     finish_summary(result.summary, tracks, phases, options, source)
+    if len(events):  # outage events (a lost link): matched apart, kept, counted
+        origin = phases.start_s if options.window_clock == "start" else 0.0
+        inside = None if options.from_s is None and options.to_s is None else (
+            lambda t: window_mask(t, options.from_s, options.to_s, origin))
+        matched, result.summary.outages = match_outages(tracks, events, options, inside, phases)
+        result.dataset = with_outages(result.dataset, matched)
     return result
 
 
@@ -583,15 +586,5 @@ def finish_summary(summary: SyncSummary, tracks: Mapping[str, PoseTrack], phases
         )
 
 
-__all__ = [
-    "DEFAULT_SENTINEL_RSSI_DBM",
-    "DROP_REASONS",
-    "PLAUSIBLE_RSSI_DBM",
-    "SyncOptions",
-    "SyncResult",
-    "SyncSummary",
-    "check_link_nodes",
-    "duplicate_rows",
-    "finish_summary",
-    "synchronise",
-]
+__all__ = ["DEFAULT_SENTINEL_RSSI_DBM", "DROP_REASONS", "PLAUSIBLE_RSSI_DBM", "SyncOptions", "SyncResult", "SyncSummary",
+           "check_link_nodes", "duplicate_rows", "finish_summary", "synchronise"]

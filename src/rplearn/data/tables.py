@@ -4,9 +4,15 @@ All three are :class:`pandas.DataFrame` objects with fixed column names, so that
 the simulator and the synchroniser speak the same language:
 
 - pose log: ``t, node, x, y, z, qw, qx, qy, qz`` (ENU metres, FLU -> ENU quaternion);
-- signal log: ``t, tx, rx, rssi_dbm, tx_power_dbm, frequency_hz`` and optional ``unit``;
+- signal log: ``t, tx, rx, rssi_dbm, tx_power_dbm, frequency_hz`` and optional ``unit`` and
+  ``outage``;
 - matched dataset: every signal-log column plus ``tx_x .. tx_qz`` and ``rx_x .. rx_qz`` (and
   ``rssi_scale`` = ``relative`` for uncalibrated received power, from ``sync --rssi-scale``).
+
+A boolean ``outage`` column (from logs that mark a lost link: a MAVLink ground station's
+zero RSSI while the vehicle is silent) marks *outage events*: rows whose ``rssi_dbm`` is NaN
+because no packet arrived. Their RSSI is not checked; :func:`link_samples` leaves them out of
+the learning samples and counts them (``LinkSamples.outages``).
 
 Node ids are strings. Times are float seconds since an epoch the log states.
 :func:`link_samples` turns a matched dataset into the arrays the learning code needs
@@ -29,7 +35,9 @@ from rplearn.errors import InputError
 
 POSE_COLUMNS: tuple[str, ...] = ("t", "node", "x", "y", "z", "qw", "qx", "qy", "qz")
 SIGNAL_COLUMNS: tuple[str, ...] = ("t", "tx", "rx", "rssi_dbm", "tx_power_dbm", "frequency_hz")
-OPTIONAL_SIGNAL_COLUMNS: tuple[str, ...] = ("unit",)
+OPTIONAL_SIGNAL_COLUMNS: tuple[str, ...] = ("unit", "outage")
+#: Boolean column marking outage events (link lost, ``rssi_dbm`` NaN): module docstring.
+OUTAGE_COLUMN: str = "outage"
 POSE_FIELDS: tuple[str, ...] = ("x", "y", "z", "qw", "qx", "qy", "qz")
 MATCHED_COLUMNS: tuple[str, ...] = SIGNAL_COLUMNS + tuple(
     f"{end}_{f}" for end in ("tx", "rx") for f in POSE_FIELDS
@@ -80,6 +88,28 @@ def _require_finite(df: pd.DataFrame, columns: Sequence[str], source: str) -> No
                 f"{source}: column {c} has {int(bad.sum())} non-numeric, NaN or infinite value(s) "
                 f"(first at row {row})"
             )
+
+
+@check_types
+def outage_mask(df: pd.DataFrame, source: str = "table") -> np.ndarray:
+    """Rows of a signal log or matched dataset that are outage events (:data:`OUTAGE_COLUMN`
+    True); all False without the column, a missing cell is False.
+
+    Raises
+    ------
+    InputError
+        When the column holds something other than true/false (or 1/0).
+    """
+    if OUTAGE_COLUMN not in df.columns:
+        return np.zeros(len(df), bool)
+    col = df[OUTAGE_COLUMN]
+    try:
+        if pd.api.types.is_object_dtype(col) or pd.api.types.is_string_dtype(col):
+            col = col.map(lambda v: {"true": True, "false": False, "1": True, "0": False}.get(str(v).strip().lower(), v)
+                          if isinstance(v, str) else v)
+        return col.astype("boolean").fillna(False).to_numpy(bool)
+    except (TypeError, ValueError):
+        raise InputError(f"{source}: column {OUTAGE_COLUMN}: expected true/false (or 1/0) values") from None
 
 
 def node_ids(values: Any) -> np.ndarray:
@@ -252,10 +282,14 @@ def validate_signal_log(df: pd.DataFrame, source: str = "signal log") -> pd.Data
     """
     _require_columns(df, SIGNAL_COLUMNS, source)
     df = normalise_times(df, source)
-    _require_finite(df, ["t", "rssi_dbm", "tx_power_dbm", "frequency_hz"], source)
+    outage = outage_mask(df, source)
+    _require_finite(df, ["t", "tx_power_dbm", "frequency_hz"], source)
+    _require_finite(df[~outage], ["rssi_dbm"], source)  # an outage event has no RSSI
     _check_link_columns(df, source, with_rssi=False)
     cols = list(SIGNAL_COLUMNS) + [c for c in OPTIONAL_SIGNAL_COLUMNS if c in df.columns]
     out = df.loc[:, cols].copy()
+    if OUTAGE_COLUMN in out.columns:
+        out[OUTAGE_COLUMN] = outage
     out["tx"] = out["tx"].astype(str)
     out["rx"] = out["rx"].astype(str)
     for c in ("t", "rssi_dbm", "tx_power_dbm", "frequency_hz"):
@@ -276,14 +310,18 @@ def validate_matched(df: pd.DataFrame, source: str = "dataset", require_rssi: bo
     """Check a matched link dataset (columns of :data:`MATCHED_COLUMNS`).
 
     With ``require_rssi=False`` (poses of links to predict, not yet measured) the ``rssi_dbm``
-    column may be absent or hold NaN or sentinel values; it is neither checked nor used.
+    column may be absent or hold NaN or sentinel values; it is neither checked nor used. Outage
+    events (``outage`` True) need no RSSI either.
     """
     required = MATCHED_COLUMNS if require_rssi else tuple(c for c in MATCHED_COLUMNS if c != "rssi_dbm")
     _require_columns(df, required, source)
     df = normalise_times(df, source)
-    numeric = [c for c in required if c not in ("tx", "rx")]
+    outage = outage_mask(df, source)
+    numeric = [c for c in required if c not in ("tx", "rx", "rssi_dbm")]
     _require_finite(df, numeric, source)
-    rssi = df["rssi_dbm"].to_numpy(np.float64) if require_rssi else np.empty(0)
+    if require_rssi:
+        _require_finite(df[~outage], ["rssi_dbm"], source)  # rows counted among the up samples
+    rssi = np.where(outage, np.nan, df["rssi_dbm"].to_numpy(np.float64)) if require_rssi else np.empty(0)
     sentinel = np.isin(rssi, SENTINEL_RSSI_DBM)
     if np.any(sentinel):
         row = int(np.flatnonzero(sentinel)[0])
@@ -291,7 +329,7 @@ def validate_matched(df: pd.DataFrame, source: str = "dataset", require_rssi: bo
             f"{source}: column rssi_dbm holds {int(sentinel.sum())} sentinel value(s) meaning 'no measurement' "
             f"(first {rssi[row]:g} dBm at row {row}); synchronising the logs (synchronise) drops and counts them"
         )
-    _check_link_columns(df, source, with_rssi=require_rssi)
+    _check_link_columns(df[~outage] if outage.any() else df, source, with_rssi=require_rssi)
     if "unit" in df.columns:
         empty = empty_ids(node_ids(df["unit"]))
         if np.any(empty):
@@ -303,6 +341,8 @@ def validate_matched(df: pd.DataFrame, source: str = "dataset", require_rssi: bo
     out["rx"] = out["rx"].astype(str)
     if "unit" in out.columns:
         out["unit"] = out["unit"].astype(str)
+    if OUTAGE_COLUMN in out.columns:
+        out[OUTAGE_COLUMN] = outage
     return out
 
 
@@ -330,6 +370,8 @@ class LinkSamples:
         :data:`QUATERNION_NORM_TOLERANCE` (normalised, as in matching; reported by ``fit``).
     tx_z_m, rx_z_m : ndarray or None
         ENU heights of both ends [m] (for the two-ray environment term); None when unknown.
+    outages : int
+        Outage events of the dataset left out (``outage`` True: no RSSI to learn from).
     """
 
     directions: Directions
@@ -342,6 +384,7 @@ class LinkSamples:
     non_unit_quaternions: int = 0
     tx_z_m: np.ndarray | None = None
     rx_z_m: np.ndarray | None = None
+    outages: int = 0
 
     def __len__(self) -> int:
         return int(self.joint_gain_db.shape[0])
@@ -364,9 +407,15 @@ def link_samples(
         A sample naming a node outside this list raises :class:`InputError`.
     require_rssi : bool
         False for poses of links to predict: the observed gain is then NaN where ``rssi_dbm``
-        is absent, NaN or a sentinel value.
+        is absent, NaN or a sentinel value. True: outage events (``outage`` True) are left out
+        and counted in ``LinkSamples.outages``.
     """
     df = validate_matched(df, source, require_rssi=require_rssi)
+    n_outages = 0
+    if require_rssi and OUTAGE_COLUMN in df.columns:
+        down = df[OUTAGE_COLUMN].to_numpy(bool)
+        n_outages = int(down.sum())
+        df = df[~down] if n_outages else df
     tx = df["tx"].to_numpy(str)
     rx = df["rx"].to_numpy(str)
     if nodes is None:
@@ -411,4 +460,5 @@ def link_samples(
         df["frequency_hz"].to_numpy(np.float64),
     )
     return LinkSamples(dirs, tx_index, rx_index, nodes_t, gain, dist, df["frequency_hz"].to_numpy(np.float64),
-                       non_unit_quaternions=int(off.sum()), tx_z_m=tx_pos[:, 2].copy(), rx_z_m=rx_pos[:, 2].copy())
+                       non_unit_quaternions=int(off.sum()), tx_z_m=tx_pos[:, 2].copy(), rx_z_m=rx_pos[:, 2].copy(),
+                       outages=n_outages)

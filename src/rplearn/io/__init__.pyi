@@ -27,6 +27,10 @@ from .inspect import InspectReport as InspectReport
 from .inspect import LinkSummary as LinkSummary
 from .inspect import NodeSummary as NodeSummary
 from .inspect import inspect_logs as inspect_logs
+from .live_sources import CsvTail as CsvTail
+from .live_sources import MavlinkSource as MavlinkSource
+from .live_sources import Poll as Poll
+from .live_sources import replay_tlog as replay_tlog
 from .mavlink import MavlinkOptions as MavlinkOptions
 from .mavlink import read_mavlink as read_mavlink
 from .mavlink import sik_rssi_to_dbm as sik_rssi_to_dbm

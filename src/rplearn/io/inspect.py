@@ -45,7 +45,7 @@ from rplearn.data.phases import advised_max_gap_s, calibration_problems, flight_
 from rplearn.data.poses import pose_tracks
 from rplearn.data.readings import REPEAT_FRACTION, duplicate_rows, repeated_readings, report_period_s, report_rate_hz
 from rplearn.data.sync import DEFAULT_SENTINEL_RSSI_DBM
-from rplearn.data.tables import QUATERNION_NORM_TOLERANCE, non_unit_quaternion_rows
+from rplearn.data.tables import QUATERNION_NORM_TOLERANCE, non_unit_quaternion_rows, outage_mask
 from rplearn.errors import RplearnError
 from rplearn.io.options import ReaderOptions
 
@@ -270,8 +270,10 @@ def summarise_pose(pose: pd.DataFrame, max_gap_s: float = 0.2, clock_jump_s: flo
 
 def summarise_signal(signal: pd.DataFrame,
                      sentinel_rssi_dbm: Sequence[float] = DEFAULT_SENTINEL_RSSI_DBM) -> list[LinkSummary]:
-    """Per-direction summaries of a signal log (sentinel and non-finite RSSI counted apart; the
-    rate counts repeated readings once)."""
+    """Per-direction summaries of a signal log's received packets (sentinel and non-finite RSSI
+    counted apart; the rate counts repeated readings once; outage events, which the reader's
+    notes count, left out)."""
+    signal = signal[~outage_mask(signal)] if "outage" in signal.columns else signal
     out = []
     dup = pd.Series(duplicate_rows(signal), index=signal.index)
     repeated = pd.Series(repeated_readings(signal), index=signal.index)

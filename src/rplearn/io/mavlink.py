@@ -43,7 +43,8 @@ https://ardupilot.org/copter/docs/common-3dr-radio-advanced-configuration-and-te
 also mavros' ``3dr_radio`` plugin). SiK zeroes the remote statistics when the link drops, so a
 message with ``rssi`` or ``remrssi`` = 0 while the vehicle's own messages are absent (none
 within ``stream_timeout_s``; in a DataFlash log always) is *link-lost*: both of its rows are
-dropped and counted, never learned from. A 0 while the vehicle streams is a censored sample
+kept as outage events (column ``outage`` True, ``rssi_dbm`` NaN, counted; never learned from,
+used to score availability: :mod:`rplearn.data.outages`); every other row has ``outage`` False. A 0 while the vehicle streams is a censored sample
 (below sensitivity) and dropped for that direction only; 255 (unknown) likewise.
 
 Clock: tlog rows are on the ground station's receive clock [s, UNIX]; the vehicle's messages
@@ -276,8 +277,8 @@ def stream_present(t: np.ndarray, stream_t: np.ndarray, timeout_s: float) -> np.
 def _signal(raw: Raw, vehicle: str, station: str, tx_power_dbm: float | Mapping[str, float],
             frequency_hz: float, stream_timeout_s: float, counts: dict[str, int],
             periods: list[dict[str, Any]]) -> pd.DataFrame:
-    """Both directions of the telemetry link: one row per reading, link-lost messages, unusable
-    values and rows in excluded periods dropped."""
+    """Both directions of the telemetry link: one row per reading, link-lost messages as outage
+    rows (``rssi_dbm`` NaN, ``outage`` True), unusable values and rows in excluded periods dropped."""
     radio = raw.radio[np.argsort(raw.radio[:, 0], kind="stable")]
     copy, period = phases.repeated_readings(radio[:, 0], radio[:, 1:])
     counts["duplicate_reading"] = int(copy.sum())
@@ -298,7 +299,7 @@ def _signal(raw: Raw, vehicle: str, station: str, tx_power_dbm: float | Mapping[
                                 (station, vehicle, at_vehicle, "station_to_vehicle")):
         unknown, censored = (value == _UNKNOWN) & ~lost, (value == 0) & ~lost
         counts[f"unknown_{name}"], counts[f"zero_{name}"] = int(unknown.sum()), int(censored.sum())
-        keep = ~(lost | unknown | censored)
+        keep = ~(unknown | censored)  # link-lost rows are kept as outage events
         per_period = np.bincount(where[keep & (where >= 0)], minlength=len(periods))
         for p, n in zip(periods, per_period):
             p["signal_rows"] = p.get("signal_rows", 0) + int(n)
@@ -308,11 +309,12 @@ def _signal(raw: Raw, vehicle: str, station: str, tx_power_dbm: float | Mapping[
         if ptx is None:
             raise InputError(f"tx_power_dbm: no transmit power [dBm] for node {tx}", param="tx_power_dbm")
         parts.append(pd.DataFrame({
-            "t": t[keep], "tx": tx, "rx": rx, "rssi_dbm": sik_rssi_to_dbm(value[keep]),
+            "t": t[keep], "tx": tx, "rx": rx, "rssi_dbm": np.where(lost[keep], np.nan, sik_rssi_to_dbm(value[keep])),
             "tx_power_dbm": float(ptx), "frequency_hz": float(frequency_hz),
-            "rssi_raw": value[keep].astype(np.int64),
+            "rssi_raw": value[keep].astype(np.int64), "outage": lost[keep],
         }))
-        counts[f"rows_{name}"] = int(keep.sum())
+        counts[f"rows_{name}"] = int((keep & ~lost).sum())
+        counts[f"outage_{name}"] = int((keep & lost).sum())
     return pd.concat(parts, ignore_index=True).sort_values("t", kind="stable").reset_index(drop=True)
 
 
@@ -445,13 +447,14 @@ def read_mavlink(
     logs : Logs
         ``pose`` (the vehicle's attitude rows and one static row of the station; a boolean
         ``armed`` column when the log holds the armed state) and
-        ``signal`` (both link directions; extra column ``rssi_raw`` in SiK units).
+        ``signal`` (both link directions; ``outage`` True on the link-lost rows, whose
+        ``rssi_dbm`` is NaN).
     metadata : dict
         ``source``, ``format`` ("tlog" or "dataflash"), ``notes`` (lines for the user: where
-        the station was placed, link-lost messages dropped), ``vehicle``, ``station``,
+        the station was placed, link-lost messages kept as outage events), ``vehicle``, ``station``,
         ``station_geodetic``, ``station_note`` (where the station position came from),
         ``origin_geodetic``, ``messages`` (counts of the messages used), ``dropped`` (pose
-        rows per reason), ``signal`` (rows per direction, ``link_lost`` messages, zero and
+        rows per reason), ``signal`` (rows per direction, ``link_lost`` messages, ``outage_*`` rows per direction, zero and
         unknown values per direction, ``duplicate_reading`` copies merged, rows dropped per
         excluded period's reason), ``excluded_periods``, ``reboots``,
         ``radio_report_period_s``, ``time_reference``, ``cut_off_at_byte`` and
@@ -514,7 +517,7 @@ def read_mavlink(
                     if station_heading_deg is None else f"level, heading {heading:g} deg (given)")
     notes = [f"{source}: {station_note}", f"{source}: station {station!r} {heading_note}",
              (f"{source}: {lost:,} radio message(s) with a zero RSSI while the vehicle was silent "
-              "(link lost) dropped, both directions")]
+              "(link lost): kept as outage events (column outage, no RSSI), both directions")]
     notes += _hygiene_notes(source, periods, sig_counts, raw)
     if cut is not None:
         notes.append(f"{source}: the file is cut off inside {'a ' + cut_name if cut_name else 'a'} record at byte "

@@ -24,8 +24,9 @@ What is written (MAVLink 2 frames of the ``ardupilotmega`` dialect, each after t
 :class:`TlogDefects` writes what real logs hold into such a clean flight: positions before
 the EKF origin is set (the altitude at a fixed wrong value, no ``HOME_POSITION`` yet, the
 vehicle disarmed), a reboot (``time_boot_ms`` restarts after a silent gap, then positions
-invalid again until the origin is set anew), and every radio reading written twice (as
-``RADIO_STATUS`` and as ``RADIO``).
+invalid again until the origin is set anew), every radio reading written twice (as
+``RADIO_STATUS`` and as ``RADIO``), and lost links (the vehicle silent, each radio report a
+zero ``rssi`` and ``remrssi``, as SiK radios report a dropped link).
 
 Positions go through WGS-84 geodetic coordinates around ``origin_geodetic``; ``tx_power_dbm``
 and ``frequency_hz`` are not loggable and must be given to the reader again.
@@ -170,6 +171,10 @@ class TlogDefects:
         Every radio reading is written as ``RADIO_STATUS`` and again as ``RADIO`` (id 166).
     copy_delay_s : float
         How long after the ``RADIO_STATUS`` its ``RADIO`` copy is received [s].
+    link_lost : tuple of (from_s, to_s)
+        Windows of time since the vehicle's first row [s] in which the link is lost: none of
+        the vehicle's messages is written, and every radio report in the window (one per
+        instant) reads 0 in ``rssi`` and ``remrssi``.
     """
 
     invalid_until_s: float = 0.0
@@ -179,8 +184,17 @@ class TlogDefects:
     invalid_after_reboot_s: float = 60.0
     radio_twice: bool = False
     copy_delay_s: float = 0.004
+    link_lost: tuple[tuple[float, float], ...] = ()
 
     def __post_init__(self) -> None:
+        try:
+            windows = tuple((float(a), float(b)) for a, b in self.link_lost)
+        except (TypeError, ValueError):
+            windows = ((1.0, 0.0),)
+        if not all(np.isfinite(a) and np.isfinite(b) and a < b for a, b in windows):
+            raise InputError(f"link_lost: expected windows (from_s, to_s) with from_s < to_s, got {self.link_lost!r}",
+                             param="link_lost")
+        object.__setattr__(self, "link_lost", windows)
         for name in ("invalid_until_s", "reboot_silence_s", "invalid_after_reboot_s", "copy_delay_s", "reboot_at_s"):
             value = getattr(self, name)
             if value is None and name == "reboot_at_s":
@@ -203,7 +217,15 @@ class TlogDefects:
             silent = (rel >= self.reboot_at_s) & (rel < back)
             invalid |= (rel >= back) & (rel < back + self.invalid_after_reboot_s)
             boot = (rel >= self.reboot_at_s).astype(np.int64)
-        return silent, invalid, boot
+        return silent | self.lost(rel), invalid, boot
+
+    def lost(self, rel_s: np.ndarray) -> np.ndarray:
+        """Whether each time since the vehicle's first row [s] lies in a ``link_lost`` window."""
+        rel = np.asarray(rel_s, np.float64)
+        out = np.zeros(len(rel), bool)
+        for a, b in self.link_lost:
+            out |= (rel >= a) & (rel < b)
+        return out
 
 
 def vehicle_fields(pose: pd.DataFrame, vehicle: str, origin: tuple[float, float, float]) -> dict[str, np.ndarray]:
@@ -272,14 +294,17 @@ def _records(pose: pd.DataFrame, signal: pd.DataFrame, vehicle: str, station: st
     raw, clipped = dbm_to_sik_rssi(signal["rssi_dbm"].to_numpy(np.float64))
     to_station = (signal["rx"] == station).to_numpy()
     sig_us = np.rint((signal["t"].to_numpy(np.float64) - t0) * 1e6) + start_unix_s * 1e6
-    for i in range(len(signal)):
-        rssi, rem = (int(raw[i]), 255) if to_station[i] else (255, int(raw[i]))
+    lost = defects.lost(signal["t"].to_numpy(np.float64) - v["t"][0])
+    repeat = lost & np.concatenate([[False], sig_us[1:] == sig_us[:-1]]) & np.concatenate([[False], lost[:-1]])
+    for i in np.flatnonzero(~repeat).tolist():
+        rssi, rem = (0, 0) if lost[i] else (int(raw[i]), 255) if to_station[i] else (255, int(raw[i]))
         out.append((float(sig_us[i]), 3, radio.radio_status_encode(rssi, rem, 100, 0, 0, 0, 0).pack(radio)))
         if defects.radio_twice:
             out.append((float(sig_us[i] + round(defects.copy_delay_s * 1e6)), 3,
                         radio.radio_encode(rssi, rem, 100, 0, 0, 0, 0).pack(radio)))
-    written = {"attitude": counts["attitude"], "global_position_int": counts["attitude"], "radio_status": len(signal),
-               "radio": len(signal) if defects.radio_twice else 0, "heartbeat": counts["heartbeat"],
+    n_radio = int((~repeat).sum())
+    written = {"attitude": counts["attitude"], "global_position_int": counts["attitude"], "radio_status": n_radio,
+               "radio": n_radio if defects.radio_twice else 0, "link_lost_reports": int((lost & ~repeat).sum()), "heartbeat": counts["heartbeat"],
                "home_position": len(origin_rows), "invalid_position_rows": int((invalid & ~silent).sum()),
                "silent_rows": int(silent.sum()),
                "rssi_clipped": clipped, "station_geodetic": (slat, slon, salt), "start_unix_s": start_unix_s,
@@ -322,7 +347,7 @@ def write_tlog(
     Returns
     -------
     dict
-        Messages written per type, ``rssi_clipped`` (values outside SiK's 1-254 range),
+        Messages written per type, ``link_lost_reports`` (radio reports of a lost link), ``rssi_clipped`` (values outside SiK's 1-254 range),
         ``station_geodetic`` (the HOME_POSITION written), ``station_heading_deg`` (compass, for
         the reader's ``station_heading_deg``), ``station_spread_m`` and ``clock_offset_s`` (the
         tlog's time minus the logs' time [s]). Extra signal columns (``unit``) are not written.

@@ -2,6 +2,12 @@
 # in __init__.py, which imports each name's module on first use. Only `from .module import name
 # as name` lines here (tests/test_public_api.py).
 
+from .availability_score import AvailabilityScore as AvailabilityScore
+from .availability_score import availability_markdown as availability_markdown
+from .availability_score import base_rate_of as base_rate_of
+from .availability_score import observed_up as observed_up
+from .availability_score import score_availability as score_availability
+from .availability_score import score_models_availability as score_models_availability
 from .base import Model as Model
 from .base import model_frequency_hz as model_frequency_hz
 from .base import require_patterns as require_patterns
@@ -17,6 +23,8 @@ from .fit import fit_model as fit_model
 from .fit import fit_patterns as fit_patterns
 from .fit import scores_markdown as scores_markdown
 from .fit import solve_patterns as solve_patterns
+from .live_stats import LiveStatistics as LiveStatistics
+from .live_stats import Segment as Segment
 from .load import load_model as load_model
 from .options import LOSSES as LOSSES
 from .options import FitOptions as FitOptions

@@ -15,6 +15,12 @@ from .check import check_plan as check_plan
 from .check import coverage_map as coverage_map
 from .check import plan_directions as plan_directions
 from .ground import GroundPassUnit as GroundPassUnit
+from .manoeuvres import Candidate as Candidate
+from .manoeuvres import CandidateOptions as CandidateOptions
+from .manoeuvres import ManoeuvreUnit as ManoeuvreUnit
+from .manoeuvres import candidate_manoeuvres as candidate_manoeuvres
+from .references import ReferenceUnit as ReferenceUnit
+from .references import read_plan as read_plan
 from .trajectory import PlanLimits as PlanLimits
 from .trajectory import TrajectoryUnit as TrajectoryUnit
 from .trajectory import UnitReference as UnitReference

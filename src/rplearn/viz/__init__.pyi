@@ -17,6 +17,8 @@ from .interactive import pattern_3d_figures as pattern_3d_figures
 from .interactive import pattern_3d_html as pattern_3d_html
 from .interactive import pattern_3d_plotly as pattern_3d_plotly
 from .interactive import supported_gain_db as supported_gain_db
+from .live_page import coverage_maps_figure as coverage_maps_figure
+from .live_page import write_live_page as write_live_page
 from .model_figures import plot_polar_cuts as plot_polar_cuts
 from .model_figures import plot_prediction_time as plot_prediction_time
 from .model_figures import plot_residuals as plot_residuals
@@ -36,6 +38,8 @@ from .plot import plot_spread_maps as plot_spread_maps
 from .plot import save_figure as save_figure
 from .plot import spread_maps_figure as spread_maps_figure
 from .plot import uncovered_directions as uncovered_directions
+from .reliability import plot_reliability as plot_reliability
+from .reliability import reliability_figure as reliability_figure
 from .report import ReportSection as ReportSection
 from .report import ScreenshotError as ScreenshotError
 from .report import render_report_html as render_report_html

@@ -2,6 +2,10 @@
 # in __init__.py, which imports each name's module on first use. Only `from .module import name
 # as name` lines here (tests/test_public_api.py).
 
+from .calibration_plan import OptimizedPlan as OptimizedPlan
+from .calibration_plan import OptimizeOptions as OptimizeOptions
+from .calibration_plan import optimize_plan as optimize_plan
+from .calibration_plan import plan_config as plan_config
 from .demo import DEMO_MODELS as DEMO_MODELS
 from .demo import DemoResult as DemoResult
 from .demo import run_demo as run_demo
@@ -11,6 +15,14 @@ from .learning import evaluate_model_files as evaluate_model_files
 from .learning import fit_dataset as fit_dataset
 from .learning import predict_file as predict_file
 from .learning import sweep_dataset as sweep_dataset
+from .live import LiveOptions as LiveOptions
+from .live import LiveOutcome as LiveOutcome
+from .live import LiveStatus as LiveStatus
+from .live import Prequential as Prequential
+from .live import open_source as open_source
+from .live import page_rows as page_rows
+from .live import replay_session as replay_session
+from .live import run_live as run_live
 from .logs import LinksOutcome as LinksOutcome
 from .logs import SyncOutcome as SyncOutcome
 from .logs import reader_notes as reader_notes
@@ -25,5 +37,7 @@ from .planning import orient_link as orient_link
 from .planning import plan_campaign as plan_campaign
 from .planning import reference_model_file as reference_model_file
 from .report import PAPER_MODELS as PAPER_MODELS
+from .report import ReportOptions as ReportOptions
 from .report import ReportOutcome as ReportOutcome
 from .report import learn_and_report as learn_and_report
+from .report_availability import availability_section as availability_section

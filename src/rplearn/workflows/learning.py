@@ -80,6 +80,8 @@ class FitOutcome:
         Learning samples whose tx or rx quaternion was not of unit norm (normalised).
     selection : Selection or None
         The automatic choice of order and smoothing and its validation curve (``auto=True``).
+    outages : int
+        Outage events of the learning units skipped (no RSSI: :mod:`rplearn.data.outages`).
     """
 
     fitted: FittedModel
@@ -90,6 +92,7 @@ class FitOutcome:
     selection: Selection | None = None
     wall_s: float | None = None
     robust_notes: list[str] = field(default_factory=list)
+    outages: int = 0
 
     def summary(self) -> str:
         """What was learned, from how much, in how long; rank, conditioning and gauge."""
@@ -131,6 +134,8 @@ class FitOutcome:
         if self.wall_s is not None and self.wall_s > 0:
             text += (f"\n  read, accumulated and solved in {self.wall_s:.1f} s "
                      f"({self.n_samples / self.wall_s:,.0f} samples/s)")
+        if self.outages:
+            text += f"\n  outage events skipped (link lost, no RSSI to learn from): {self.outages:,}"
         if self.non_unit_quaternions:
             text += (f"\n  samples with a non-unit quaternion (|norm - 1| > {QUATERNION_NORM_TOLERANCE:g}, "
                      f"normalised): {self.non_unit_quaternions:,}")
@@ -218,7 +223,8 @@ def fit_dataset(
     certify(fitted.model, samples)
     if output:
         fitted.model.save(output)
-    return FitOutcome(fitted, choice, len(samples), output, samples.non_unit_quaternions, robust_notes=notes)
+    return FitOutcome(fitted, choice, len(samples), output, samples.non_unit_quaternions, robust_notes=notes,
+                      outages=samples.outages)
 
 
 #: A pattern fit streams its dataset (:mod:`rplearn.models.streamed`) from this many rows of a
@@ -247,7 +253,8 @@ def _fit_auto(
     if output:
         fitted.model.save(output)
     n = sum(len(s) for s in per_unit.values())
-    return FitOutcome(fitted, choice, n, output, sum(s.non_unit_quaternions for s in per_unit.values()), selection)
+    return FitOutcome(fitted, choice, n, output, sum(s.non_unit_quaternions for s in per_unit.values()), selection,
+                      outages=sum(s.outages for s in per_unit.values()))
 
 
 def _is_big(dataset: str) -> bool:
@@ -329,9 +336,11 @@ class EvaluationOutcome:
     markdown: str
     units: UnitChoice
     provenance: dict[str, Any] = field(default_factory=dict)
+    availability: list[Any] = field(default_factory=list)
 
     def to_dict(self) -> dict[str, Any]:
-        return {"provenance": self.provenance, "rows": [r.to_dict() for r in self.rows]}
+        out = {"provenance": self.provenance, "rows": [r.to_dict() for r in self.rows]}
+        return {**out, "availability": [a.to_dict() for a in self.availability]} if self.availability else out
 
 
 @check_types
@@ -343,8 +352,14 @@ def evaluate_model_files(
     markdown_out: str | None = None,
     dask: str | None = None,
     progress: Callable[[int, int], None] | None = None,
+    sensitivity_dbm: float | None = None,
 ) -> EvaluationOutcome:
     """Score model files on a dataset file (``rplearn evaluate``): Table I.
+
+    With ``sensitivity_dbm``, also each model's predicted availability ``P(RSSI >= s)``
+    against the observed up/down of the samples, outage events included
+    (:mod:`rplearn.models.availability_score`): Brier score, skill, reliability table (a
+    dataset read whole).
 
     Without ``units``, the models are scored on the units none of them learned from
     (:func:`rplearn.data.units.evaluation_units`). A dataset in many files
@@ -360,6 +375,9 @@ def evaluate_model_files(
         check_output_path(markdown_out, [json_out])
     models = [load_model(p) for p in model_paths]
     fitted = [FittedModel.from_model(m) for m in models]
+    if sensitivity_dbm is not None and (dask is not None or is_partitioned(dataset)):
+        raise InputError(f"{dataset}: sensitivity: availability is scored on a dataset read whole, not part by part",
+                         param="sensitivity_dbm")
     if dask is not None or is_partitioned(dataset):
         if dask is not None:
             parse_dask(dask)
@@ -390,6 +408,10 @@ def evaluate_model_files(
                 f"{UNCOVERED_DEG:g} deg from any direction the model's antennas were learned from; their errors "
                 "measure extrapolation (or the prior), not the fit: fly those directions to learn them")
     outcome = EvaluationOutcome(rows, scores_markdown(rows), choice, provenance(dataset=dataset, models=list(model_paths)))
+    if sensitivity_dbm is not None:
+        from rplearn.models.availability_score import availability_markdown, score_models_availability
+        outcome.availability = score_models_availability(models, df, choice.units, sensitivity_dbm, labels, dataset)
+        outcome.markdown += "\n\n" + availability_markdown(outcome.availability)
     if markdown_out:
         with atomic_open(markdown_out, "w", encoding="utf-8") as fh:
             fh.write(outcome.markdown + "\n")

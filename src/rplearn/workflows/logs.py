@@ -71,7 +71,9 @@ class SyncOutcome:
     clock: Any = None
 
     def summary(self) -> str:
-        text = f"{self.counts.to_text()}\nwrote {self.counts.n_out:,} matched samples to {self.output}"
+        kept = self.counts.outages.get("kept", 0)
+        text = (f"{self.counts.to_text()}\nwrote {self.counts.n_out:,} matched samples"
+                + (f" and {kept:,} outage events" if kept else "") + f" to {self.output}")
         if self.clock is not None:
             text = self.clock.summary() + "\n" + text
         return text

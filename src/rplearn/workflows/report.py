@@ -43,12 +43,43 @@ LTD_REPEATS = 5
 #: Files :func:`learn_and_report` may write into its folder.
 REPORT_FILES: tuple[str, ...] = (
     "coverage.png", "patterns.png", "time.png", "residuals.png", "polar.png", "spread.png", "table1.md", "table1.json",
-    "model.json", "report.html",
+    "model.json", "report.html", "reliability.png",
 )
 
 
 def _no_progress(message: str) -> None:
     """Say nothing."""
+
+
+@check_types
+@dataclass(frozen=True)
+class ReportOptions:
+    """What a report adds beyond the model on its held-out units.
+
+    Attributes
+    ----------
+    repeats : int
+        Learning runs per Table I model (its learning time is their median).
+    sensitivity_dbm : float, optional
+        Also score the model's predicted availability ``P(RSSI >= s)`` on the held-out units
+        (outage events count as down) and draw the reliability diagram
+        (:mod:`rplearn.models.availability_score`).
+
+    Raises
+    ------
+    InputError
+        Fewer than 1 run, or a non-finite sensitivity.
+    """
+
+    repeats: int = LTD_REPEATS
+    sensitivity_dbm: float | None = None
+
+    def __post_init__(self) -> None:
+        if isinstance(self.repeats, bool) or not isinstance(self.repeats, int) or self.repeats < 1:
+            raise InputError(f"repeats: expected at least 1 learning run per model, got {self.repeats}", param="repeats")
+        if self.sensitivity_dbm is not None and not np.isfinite(self.sensitivity_dbm):
+            raise InputError(f"sensitivity_dbm: expected a level in dBm, got {self.sensitivity_dbm!r}",
+                             param="sensitivity_dbm")
 
 
 @check_types
@@ -94,6 +125,8 @@ class ReportOutcome:
         How the model was learned (the fit's summary), or where it came from.
     model_path : str or None
         The model file reported on (None: fitted here).
+    availability : AvailabilityScore or None
+        Its predicted availability scored on the held-out units (``ReportOptions.sensitivity_dbm``).
     """
 
     fitted: FittedModel
@@ -109,6 +142,7 @@ class ReportOutcome:
     files: dict[str, str] = field(default_factory=dict)
     model_text: str = ""
     model_path: str | None = None
+    availability: Any = None
 
     def summary(self) -> str:
         """The log start (once), the model's held-out scores, Table I when asked, where the report is."""
@@ -118,6 +152,9 @@ class ReportOutcome:
         origin = f"from {self.model_path}" if self.model_path else f"learned on {', '.join(self.learn_units)}"
         lines += [f"model: {self.fitted.label}, {origin}; scored on the held-out {', '.join(self.test_units)}:",
                   self.markdown]
+        if self.availability is not None:
+            lines += [f"predicted availability at {self.availability.sensitivity_dbm:g} dBm on the held-out units:",
+                      self.availability.markdown()]
         if self.paper_markdown:
             lines += ["Table I, the paper's models (learning time LTD: median of the runs):", self.paper_markdown]
         lines.append(f"wrote {self.report_path}")
@@ -195,7 +232,7 @@ def learn_and_report(
     test_units: Sequence[str] | None = None,
     progress: Progress = _no_progress,
     options: FitOptions | None = None,
-    repeats: int = LTD_REPEATS,
+    report: ReportOptions | None = None,
 ) -> ReportOutcome:
     """Report one model on a dataset (``rplearn report``) into ``out_dir/report.html``.
 
@@ -217,15 +254,16 @@ def learn_and_report(
     options : FitOptions, optional
         How pattern models learn (gauge, environment term, link offsets;
         :func:`rplearn.workflows.learning.fit_dataset`); the baselines learn in free space.
-    repeats : int
-        Learning runs per Table I model.
+    report : ReportOptions, optional
+        Learning runs per Table I model, and the sensitivity [dBm] of the availability section
+        (its reliability diagram); ``ReportOptions()`` by default.
     """
     from rplearn.viz import interactive
     from rplearn.viz.report import ReportSection, write_report
 
     names = paper_model_names(paper_models)  # refuse a bad name before any work
-    if repeats < 1:
-        raise InputError(f"repeats: expected at least 1 learning run per model, got {repeats}", param="repeats")
+    report = report or ReportOptions()
+    repeats = report.repeats
     for name in REPORT_FILES:  # the report's own files may not overwrite its inputs
         if os.path.lexists(os.path.join(out_dir, name)):
             check_output_path(os.path.join(out_dir, name), [dataset, model_path])
@@ -267,6 +305,10 @@ def learn_and_report(
         write_json(files["table1_json"], {"provenance": prov, "ltd_runs": repeats, "rows": [r.to_dict() for r in paper_rows]})
     progress("drawing the figures")
     sections = _figure_sections(_Data(df, learn, test, ls, ts, t0, dataset), model, fitted.label, nodes, out_dir, files)
+    if report.sensitivity_dbm is not None:
+        from rplearn.workflows.report_availability import availability_section
+        section, availability = availability_section(model, df, test, report.sensitivity_dbm, out_dir, files)
+        sections.append(section)
     views_3d, text_3d = interactive.pattern_3d_figures({fitted.label: model}, nodes, directions=node_directions(ls)) \
         if model.kind == "patterns" else ([], "")
     if views_3d:
@@ -288,7 +330,7 @@ def learn_and_report(
                         table_title=f"{fitted.label} on the held-out samples")
     files["report"] = path
     return ReportOutcome(fitted, rows, md, paper_rows, paper_md, learn, test, path, t0, notes, files, model_text,
-                         model_path)
+                         model_path, availability if report.sensitivity_dbm is not None else None)
 
 
 @dataclass(frozen=True)
@@ -309,12 +351,13 @@ def _figure_sections(data: _Data, model: Any, label: str, nodes: list[str], out_
                      files: dict[str, str]) -> list[Any]:
     """The figures about one model, written into ``out_dir`` and grouped in report sections."""
     df, learn, test, ls, ts, t0, dataset = data.df, data.learn, data.test, data.ls, data.ts, data.t0, data.dataset
-    from rplearn.data.tables import link_samples
+    from rplearn.data.tables import link_samples, outage_mask
     from rplearn.viz import model_figures as mf
     from rplearn.viz import plot
     from rplearn.viz.report import ReportSection
 
     part = select_units(df, [*learn, *test], dataset)
+    part = part[~outage_mask(part, dataset)]  # outage events: no RSSI to draw (the availability section scores them)
     predicted = predict_dataset(model, part, dataset).table
     units = part["unit"].astype(str).to_numpy()
     held_out = np.isin(units, [str(u) for u in test])
@@ -344,5 +387,5 @@ def _figure_sections(data: _Data, model: Any, label: str, nodes: list[str], out_
     return sections
 
 
-__all__ = ["LTD_REPEATS", "PAPER_MODELS", "REPORT_FILES", "ReportOutcome", "learn_and_report", "median_ltd",
+__all__ = ["LTD_REPEATS", "PAPER_MODELS", "REPORT_FILES", "ReportOptions", "ReportOutcome", "learn_and_report", "median_ltd",
            "paper_model_names", "paper_table"]

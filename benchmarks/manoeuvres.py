@@ -1,0 +1,290 @@
+"""Benchmark: flying the suggested manoeuvres against the paper's trajectory (issue 27, acceptance 3).
+
+For each simulator preset (``paper``: two drones; ``ground``: a static station and a drone) three
+flights are simulated with the preset's antennas, wind, pose estimator and radio, synchronised
+as real logs are, and their statistics accumulated at a fixed SH order in 2-s steps of flight
+time:
+
+- **reference**: the preset's learning units (``paper``: the paper's three units; ``ground``:
+  its passes, since a static station cannot fly the paper's vertical circle);
+- **suggested**: the reference's first :data:`START_S` seconds (10 s), then, one after another, the
+  manoeuvre :func:`rplearn.analysis.manoeuvres.rank_manoeuvres` ranks first from the statistics
+  and the latest poses so far (each flown in the simulator from where the last one ended);
+- **optimized**: the plan of ``rplearn trajectory --optimize``
+  (:func:`rplearn.analysis.manoeuvres.greedy_plan` from the prior alone, before any flight),
+  flown unit after unit.
+
+The spread is each node's posterior pattern spread over the *target directions* (the points of a
+1,024-point Fibonacci grid within 10 deg of a direction the complete reference flight saw: about
+the whole sphere for ``paper``, a few percent for ``ground``), the node's mean removed, under one
+prior for all three flights: by default the one ``fit --degree auto`` learns from the complete
+reference flight (its cross-validated smoothing times the penalty's scale at the chosen order, and
+its noise times its variance inflation: what :mod:`rplearn.models.own_posterior` continues to the
+largest order); ``--prior-std DB`` instead states a smoothness prior of that spread over the sphere
+(:func:`~rplearn.analysis.manoeuvres.prior_penalty_weight`) with the simulator's nominal noise. The
+ranking uses the same prior and noise. At the point where each flight first reaches 2 dB it is
+recomputed through :func:`rplearn.models.own_posterior.own_pattern_posterior` (the fit's own
+posterior, under the solver's gauge) and the two are printed. The pattern error at that point is
+:func:`rplearn.analysis.pattern_error.pattern_errors_db` of the fit from the same statistics and
+prior against the simulator's truth over the target directions.
+
+Flight time counts the units' durations and the time to reach each manoeuvre's start, not the
+battery gaps between units. The electronics offsets and the dropouts of the presets are off in
+all three flights alike (one flight's unit cannot carry a dropout drawn for the whole campaign).
+
+Criteria per preset: time to 2 dB of suggested and of optimized <= 60 % of the reference's, and
+their worst per-node pattern error <= the reference's (+0.05 dB of rounding).
+
+Usage: ``python benchmarks/manoeuvres.py [--presets paper,ground] [--seed 0] [--prior-std 0] [--tiny]``
+(``--tiny``: the ``smoke`` preset at SH-4, a few seconds; its criteria are printed, not enforced).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+
+from rplearn.analysis.manoeuvres import ManoeuvreOptions, greedy_plan, pattern_spreads, prior_penalty_weight, rank_manoeuvres
+from rplearn.analysis.pattern_error import pattern_errors_db
+from rplearn.core.bases import fibonacci_grid_nodes
+from rplearn.core.coverage import nearest_angle_deg
+from rplearn.core.gauge import EQUAL_MEAN
+from rplearn.core.lsq.normal_equations import NormalEquations
+from rplearn.core.lsq.penalty import penalty_vector
+from rplearn.core.lsq.solver import solve
+from rplearn.data.sync import SyncOptions, synchronise
+from rplearn.data.tables import link_samples
+from rplearn.models.own_posterior import OwnPrior, own_pattern_posterior
+from rplearn.models.patterns import PatternSet
+from rplearn.models.spec import ModelSpec
+from rplearn.plan.campaign import Campaign
+from rplearn.plan.manoeuvres import CandidateOptions
+from rplearn.sim import simulate
+from rplearn.sim.presets import make_preset
+
+TARGET_DB = 2.0
+TIME_RATIO = 0.6
+STEP_S = 2.0
+START_S = 10.0
+PRIOR_STD_DB = 6.0
+FIXED = {"ground": ("G",)}
+
+
+@dataclass
+class Flight:
+    """The accumulated statistics of a flight and where it first reached the target spread."""
+
+    name: str
+    normal: NormalEquations
+    t_s: float = 0.0
+    history: list[tuple[float, float]] = field(default_factory=list)
+    reached_s: float | None = None
+    error_db: dict[str, float] = field(default_factory=dict)
+    spread_db: dict[str, float] = field(default_factory=dict)
+    own_db: dict[str, float] = field(default_factory=dict)
+    steps: list[str] = field(default_factory=list)
+
+
+@dataclass
+class Setup:
+    preset: str
+    config: Any
+    spec: ModelSpec
+    nodes: tuple[str, ...]
+    options: ManoeuvreOptions
+    weight: float
+    truth: Any = None
+    seed: int = 0
+    flown: int = 0
+
+
+def _config(preset: str) -> Any:
+    c = make_preset(preset)
+    return replace(c, radio=replace(c.radio, link_offsets_db=(), dropouts=0, unit_level_std_db=0.0))
+
+
+def fly(setup: Setup, units: tuple[Any, ...]) -> tuple[list[Any], Any]:
+    """Simulate units one after the other; per unit its samples with their time in it, and the pose log."""
+    setup.flown += 1
+    sim = simulate(replace(setup.config, campaign=Campaign(units, gap_s=10.0)), seed=setup.seed * 1000 + setup.flown)
+    setup.truth = sim.ground_truth
+    ds = synchronise(sim.pose_log, sim.signal_log, SyncOptions()).dataset
+    starts = dict(zip([u.label for u in units], sim.config.campaign.start_times_s()))
+    out = []
+    for u in units:
+        part = ds[ds["unit"] == u.label]
+        out.append((link_samples(part, nodes=setup.nodes), part["t"].to_numpy() - starts[u.label], u.duration_s))
+    return out, sim.pose_log
+
+
+def _fit_error(setup: Setup, flight: Flight) -> None:
+    basis = setup.spec.basis()
+    pen = penalty_vector(basis, len(setup.nodes), setup.weight, 1.0, setup.options.power)
+    sol = solve(flight.normal, list(setup.nodes), ridge=setup.spec.ridge_weight, gauge=EQUAL_MEAN, penalty=pen)
+    model = PatternSet(basis=basis, nodes=setup.nodes, coef=sol.coef, gauge=[g.to_dict() for g in sol.report.gauges])
+    flight.error_db = pattern_errors_db(model, setup.truth, setup.options.targets or {}, remove_constant=True)
+    small = ModelSpec("sh", 2).basis()
+    own = own_pattern_posterior(flight.normal, small, setup.nodes,
+                                OwnPrior(setup.weight, 1.0, setup.options.power, setup.spec.ridge_weight, EQUAL_MEAN, None),
+                                setup.options.noise_std_db**2, None)
+    if own is not None:
+        p = basis.n_coef
+        from rplearn.analysis.manoeuvres import target_metrics
+
+        metrics = target_metrics(basis, setup.nodes, setup.options)
+        flight.own_db = {n: float(np.sqrt(max(np.sum(m * own.covariance[k * p:(k + 1) * p, k * p:(k + 1) * p]), 0.0)))
+                         for k, (n, m) in enumerate(zip(setup.nodes, metrics))}
+
+
+def accumulate(setup: Setup, flight: Flight, parts: list[Any], lead_s: float = 0.0, until_s: float | None = None) -> None:
+    """Add each unit's samples in steps of STEP_S flight time; stop at the first 2 dB."""
+    flight.t_s += lead_s
+    for samples, t_in, dur in parts:
+        end = dur if until_s is None else min(dur, until_s)
+        edges = np.arange(0.0, end + STEP_S, STEP_S)
+        edges[-1] = end
+        for a, b in zip(edges[:-1], edges[1:]):
+            m = (t_in >= a) & ((t_in < b) if b < end else (t_in <= b))
+            d = samples.directions
+            if np.any(m):
+                flight.normal.add(type(d)(d.az_tx[m], d.el_tx[m], d.az_rx[m], d.el_rx[m]), samples.tx_index[m],
+                                  samples.rx_index[m], samples.joint_gain_db[m])
+            spreads = pattern_spreads(flight.normal, setup.spec, setup.nodes, setup.options)
+            flight.history.append((flight.t_s + b, max(spreads.values())))
+            if flight.reached_s is None and max(spreads.values()) <= TARGET_DB:
+                flight.reached_s = flight.t_s + b
+                flight.spread_db = spreads
+                _fit_error(setup, flight)
+                return
+        flight.t_s += end
+
+
+def _targets(setup: Setup, parts: list[Any]) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    az, el = fibonacci_grid_nodes(1024)
+    out = {}
+    for k, node in enumerate(setup.nodes):
+        saz, sel = [], []
+        for samples, _, _ in parts:
+            d = samples.directions
+            saz += [d.az_tx[samples.tx_index == k], d.az_rx[samples.rx_index == k]]
+            sel += [d.el_tx[samples.tx_index == k], d.el_rx[samples.rx_index == k]]
+        near = nearest_angle_deg(az, el, np.concatenate(saz), np.concatenate(sel))
+        out[node] = (az[near <= 10.0], el[near <= 10.0])
+    return out
+
+
+def _learned_prior(parts: list[Any], nodes: tuple[str, ...], power: float) -> tuple[float, float]:
+    """The smoothing ``fit --degree auto`` chooses on the complete reference flight (its units' own
+    folds), as an absolute weight (times the penalty's scale at the chosen order, as
+    :mod:`rplearn.models.own_posterior` continues it), and the fit's noise (times its inflation)."""
+    from rplearn.core.lsq.penalty import penalty_scale
+    from rplearn.models.auto import fit_auto
+
+    units = {f"u{k}": samples for k, (samples, _, _) in enumerate(parts)}
+    fitted, _ = fit_auto(units, power=power)
+    model = fitted.model if hasattr(fitted, "model") else fitted
+    training = model.training
+    chosen = NormalEquations(model.basis, len(nodes))
+    for samples, _, _ in parts:
+        chosen.add(samples.directions, samples.tx_index, samples.rx_index, samples.joint_gain_db)
+    scale = penalty_scale(chosen.gram, chosen.n_pattern_columns)
+    smoothing = float(training.smoothing if hasattr(training, "smoothing") else training["smoothing"])
+    noise = float(training.noise_std_db) * float(np.sqrt(training.variance_inflation or 1.0))
+    print(f"  learned prior: {model.basis.label}, smoothing {smoothing:.3g} x scale {scale:.3g}, noise {noise:.2f} dB")
+    return smoothing * scale, noise
+
+
+def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, prior_std_db: float = PRIOR_STD_DB) -> dict[str, Flight]:
+    config = _config(preset)
+    learning = config.campaign.with_role("learning").units
+    nodes = tuple(sorted(config.node_antennas))
+    noise = float(np.sqrt(config.radio.fading_std_db**2 + (1.0 / 12.0 if config.radio.quantize else 0.0)))
+    spec = ModelSpec("sh", order)
+    weight = prior_penalty_weight(spec.basis(), prior_std_db, noise, spec.ridge_weight, power) if prior_std_db > 0 else 0.0
+    speed = float(getattr(learning[0], "speed_m_s", 1.5))
+    cands = CandidateOptions(fixed_nodes=FIXED.get(preset, ()), speed_m_s=speed)
+    opts = ManoeuvreOptions(noise_std_db=noise, packet_rate_hz=config.radio.packet_rate_hz * (1 - config.radio.loss_probability),
+                            penalty_weight=weight, candidates=cands, power=power)
+    setup = Setup(preset, config, spec, nodes, opts, weight, seed=seed)
+    ref_parts, _ = fly(setup, learning)
+    if prior_std_db <= 0:  # the prior the project learns from the complete reference flight
+        weight, noise = _learned_prior(ref_parts, nodes, power)
+        setup.weight = weight
+        opts = replace(opts, penalty_weight=weight, noise_std_db=noise)
+    setup.options = opts = replace(opts, targets=_targets(setup, ref_parts))
+    ref = Flight("reference", NormalEquations(spec.basis(), len(nodes)))
+    accumulate(setup, ref, ref_parts)
+    # suggested: the reference's first START_S seconds, then the top-ranked manoeuvre, repeatedly
+    sug = Flight("suggested", NormalEquations(spec.basis(), len(nodes)))
+    start_parts, poses = fly(setup, (learning[0],))
+    accumulate(setup, sug, start_parts[:1], until_s=START_S)
+    poses = poses[poses["t"] <= START_S]
+    k = 0
+    while sug.reached_s is None and sug.t_s < limit_s:
+        best = rank_manoeuvres(sug.normal, spec, nodes, poses, replace(opts, floor_db=TARGET_DB))[0]
+        k += 1
+        unit = replace(best.candidate.unit, label=f"m{k:02d}")
+        sug.steps.append(f"{best.name} ({best.duration_s:.0f} s)")
+        parts, poses = fly(setup, (unit,))
+        accumulate(setup, sug, parts, lead_s=best.candidate.lead_s)
+    # optimized: the greedy plan before the flight, from the reference's start poses
+    first = learning[0].evaluate(np.array([0.0]))
+    start = {n: (tuple(first.position_enu_m[0, j]), float(np.degrees(first.yaw_rad[0, j]))) for j, n in enumerate(learning[0].nodes)}
+    plan = greedy_plan(NormalEquations(spec.basis(), len(nodes)), spec, nodes, start, limit_s, TARGET_DB, opts)
+    opt = Flight("optimized", NormalEquations(spec.basis(), len(nodes)))
+    opt.steps = [f"{s.manoeuvre.name} ({s.manoeuvre.duration_s:.0f} s)" for s in plan]
+    for k, step in enumerate(plan):
+        if opt.reached_s is not None:
+            break
+        parts, _ = fly(setup, (replace(step.manoeuvre.candidate.unit, label=f"p{k:02d}"),))
+        accumulate(setup, opt, parts, lead_s=step.manoeuvre.candidate.lead_s)
+    return {"reference": ref, "suggested": sug, "optimized": opt}
+
+
+def _fmt(d: dict[str, float]) -> str:
+    return ", ".join(f"{n} {v:.2f}" for n, v in d.items()) or "-"
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--presets", default="paper,ground")
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--order", type=int, default=10)
+    ap.add_argument("--prior-std", type=float, default=0.0, help="the prior's pattern spread over the sphere [dB]; 0: the smoothing fit --degree auto "
+                                                                                  "learns from the reference flight")
+    ap.add_argument("--power", type=float, default=2.0, help="exponent of the smoothness prior's roughness weights")
+    ap.add_argument("--tiny", action="store_true", help="the smoke preset at SH-4 (seconds; criteria not enforced)")
+    args = ap.parse_args(argv)
+    presets = ["smoke"] if args.tiny else [p.strip() for p in args.presets.split(",") if p.strip()]
+    order = 4 if args.tiny else args.order
+    failures = 0
+    for preset in presets:
+        t0 = time.perf_counter()
+        ref_total = _config(preset).campaign.with_role("learning")
+        limit = float(sum(u.duration_s for u in ref_total.units))
+        flights = run(preset, order, args.seed, limit, args.power, args.prior_std)
+        ref = flights["reference"]
+        print(f"{preset} (SH-{order}, seed {args.seed}, {time.perf_counter() - t0:.0f} s): time to {TARGET_DB:g} dB per-node spread")
+        for f in flights.values():
+            when = "not reached" if f.reached_s is None else f"{f.reached_s:.0f} s"
+            ratio = "" if f.reached_s is None or ref.reached_s is None or f is ref else f", ratio {f.reached_s / ref.reached_s:.2f}x"
+            print(f"  {f.name:10s} {when}{ratio}; spread [{_fmt(f.spread_db)}] dB (own posterior [{_fmt(f.own_db)}]); "
+                  f"pattern error [{_fmt(f.error_db)}] dB")
+            if f.steps:
+                print("    " + "; ".join(f.steps[:12]) + (" ..." if len(f.steps) > 12 else ""))
+        for name in ("suggested", "optimized"):
+            f = flights[name]
+            ok_time = f.reached_s is not None and ref.reached_s is not None and f.reached_s <= TIME_RATIO * ref.reached_s
+            ok_err = bool(f.error_db) and bool(ref.error_db) and max(f.error_db.values()) <= max(ref.error_db.values()) + 0.05
+            print(f"  {name}: time [{'ok' if ok_time else 'MISS'}] error [{'ok' if ok_err else 'MISS'}]")
+            failures += 0 if (ok_time and ok_err) or args.tiny else 1
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,474 @@
+"""Next-best manoeuvre: which flight from here shrinks the per-node pattern spread fastest.
+
+The posterior of a fixed-order pattern fit is Gaussian with precision
+``Lambda = (X^T X + diag(ridge + penalty)) / sigma^2`` over the pattern columns: the accumulated
+normal equations (:class:`~rplearn.core.lsq.normal_equations.NormalEquations`), the project's
+ridge and smoothness penalty (:func:`~rplearn.core.lsq.penalty.penalty_vector`: the relative
+smoothing of the :class:`~rplearn.models.spec.ModelSpec` times the statistics' own scale, or an
+absolute weight) and the noise variance. A manoeuvre adds the rows ``F`` of the features its
+packets would carry (poses of the manoeuvre's references, tilted into their acceleration ->
+link directions in each body frame -> basis features of both ends, both link directions at the
+packet rate): ``Lambda' = Lambda + w F^T F / sigma^2``. The covariance after it comes from the
+Woodbury identity (a manoeuvre with more feature rows than columns first compressed to the
+triangular factor of its ``F^T F``, the same update), of which the spreads need only the
+nodes' diagonal blocks.
+
+Each node's *spread* is read as the decoupling certificate reads it
+(:mod:`rplearn.analysis.decoupling`): the RMS over the target directions of the posterior std
+of the node's gain, the node's mean over them removed (the constant of a two-node link is a
+convention), ``sqrt(sum(M_k * Sigma_kk))`` with ``M_k`` the mean-removed design's second
+moment. The target directions are the whole sphere by default, an elevation band, or given
+directions per node. A manoeuvre's score is the reduction of the nodes' RMS spread (or of the
+largest, ``aggregate="max"``) per second of flight, its time to reach its start included.
+Shared columns (link offsets, the environment term) are left out of the posterior.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from rplearn._argtypes import check_types
+from rplearn.core.bases import fibonacci_grid_nodes
+from rplearn.core.basis_base import Basis
+from rplearn.core.geometry import attitude_from_thrust, link_directions, yaw_from_quat_wxyz
+from rplearn.core.lsq.normal_equations import NormalEquations
+from rplearn.core.lsq.penalty import DEFAULT_PENALTY_POWER, penalty_scale
+from rplearn.core.threads import one_blas_thread
+from rplearn.errors import InputError
+from rplearn.models.spec import ModelSpec
+from rplearn.plan.manoeuvres import Candidate, CandidateOptions, candidate_manoeuvres
+from rplearn.plan.trajectory import G_M_S2
+
+#: How the nodes' spreads are combined into one score.
+AGGREGATES = ("rms", "max")
+
+
+@check_types
+@dataclass(frozen=True)
+class ManoeuvreOptions:
+    """How :func:`rank_manoeuvres` scores manoeuvres.
+
+    Attributes
+    ----------
+    noise_std_db : float
+        Standard deviation of one RSSI reading about the model [dB] (a live fit's residual).
+    packet_rate_hz : float
+        Packets per second in each link direction.
+    sample_rate_hz : float
+        Rate at which a manoeuvre's poses are sampled for its features [Hz]; each sample stands
+        for ``packet_rate_hz / sample_rate_hz`` packets.
+    target_el_deg : (float, float)
+        The band of body-frame elevations the spread is taken over [deg] (default the sphere).
+    target_points : int
+        Points of the Fibonacci grid covering the sphere, of which the band is kept.
+    targets : mapping of node to (az, el) arrays, optional
+        Target directions per node [rad], instead of the band.
+    penalty_weight : float or None
+        Absolute weight of the smoothness penalty (``smoothing * scale`` of
+        :func:`~rplearn.core.lsq.penalty.penalty_vector`); None: the spec's relative smoothing
+        times the statistics' scale (:func:`~rplearn.core.lsq.penalty.penalty_scale`), held
+        fixed for the manoeuvres' updates.
+    power : float
+        Exponent of the roughness weights.
+    candidates : CandidateOptions
+        Which manoeuvres the vehicles can fly (fixed nodes, speeds, elevations, library).
+    aggregate : str
+        ``"rms"`` (the nodes' RMS spread) or ``"max"`` (the largest).
+    floor_db : float or None
+        Spreads below this count as this [dB] (a stop criterion's target: no reward for
+        lowering a node already below it); None: none.
+    """
+
+    noise_std_db: float = 4.2
+    packet_rate_hz: float = 80.0
+    sample_rate_hz: float = 4.0
+    target_el_deg: tuple[float, float] = (-90.0, 90.0)
+    target_points: int = 1024
+    targets: Mapping[str, tuple[Any, Any]] | None = None
+    penalty_weight: float | None = None
+    power: float = DEFAULT_PENALTY_POWER
+    candidates: CandidateOptions = field(default_factory=CandidateOptions)
+    aggregate: str = "rms"
+    floor_db: float | None = None
+
+    def __post_init__(self) -> None:
+        for name in ("noise_std_db", "packet_rate_hz", "sample_rate_hz"):
+            v = float(getattr(self, name))
+            if not (np.isfinite(v) and v > 0):
+                raise InputError(f"{name}: expected a positive finite number, got {v!r}", param=name)
+        lo, hi = (float(v) for v in self.target_el_deg)
+        if not -90.0 <= lo < hi <= 90.0:
+            raise InputError(f"target_el_deg: expected -90 <= low < high <= 90, got {self.target_el_deg!r}",
+                             param="target_el_deg")
+        if self.penalty_weight is not None and not (np.isfinite(self.penalty_weight) and self.penalty_weight >= 0):
+            raise InputError(f"penalty_weight: expected a non-negative number, got {self.penalty_weight!r}",
+                             param="penalty_weight")
+        if self.aggregate not in AGGREGATES:
+            raise InputError(f"aggregate: expected one of {', '.join(AGGREGATES)}, got {self.aggregate!r}", param="aggregate")
+        if self.floor_db is not None and not (np.isfinite(self.floor_db) and self.floor_db >= 0):
+            raise InputError(f"floor_db: expected a non-negative spread [dB], got {self.floor_db!r}", param="floor_db")
+        if int(self.target_points) < 16:
+            raise InputError(f"target_points: expected at least 16, got {self.target_points!r}", param="target_points")
+
+
+@check_types
+@dataclass(frozen=True)
+class RankedManoeuvre:
+    """A candidate manoeuvre and its predicted effect.
+
+    Attributes
+    ----------
+    name : str
+        What to fly, in words.
+    duration_s : float
+        Flight time, the way to its start included [s].
+    spread_before_db, spread_after_db : dict of str to float
+        Each node's pattern spread over the target directions now and after it [dB].
+    reduction_db_per_s : float
+        Reduction of the combined spread (``ManoeuvreOptions.aggregate``) per second [dB/s].
+    candidate : Candidate
+        The unit to fly (``candidate.unit``: references through ``sample``), its lead time and
+        the moved nodes' poses after it.
+    """
+
+    name: str
+    duration_s: float
+    spread_before_db: dict[str, float]
+    spread_after_db: dict[str, float]
+    reduction_db_per_s: float
+    candidate: Candidate
+
+    def text(self) -> str:
+        """One line: the manoeuvre, its time and the spreads it leaves."""
+        after = ", ".join(f"{n} {self.spread_before_db[n]:.2f} -> {v:.2f} dB" for n, v in self.spread_after_db.items())
+        return f"{self.name}: {self.duration_s:.0f} s, {after} ({self.reduction_db_per_s * 60:.2f} dB/min)"
+
+
+def target_metrics(basis: Basis, nodes: Sequence[str], options: ManoeuvreOptions) -> list[np.ndarray]:
+    """Per node, the second moment ``M_k`` of the mean-removed design over its target directions."""
+    out = []
+    az_all, el_all = fibonacci_grid_nodes(int(options.target_points))
+    lo, hi = np.radians(options.target_el_deg[0]), np.radians(options.target_el_deg[1])
+    band = (el_all >= lo - 1e-12) & (el_all <= hi + 1e-12)
+    for node in nodes:
+        if options.targets is not None and node in options.targets:
+            az, el = (np.asarray(v, np.float64).ravel() for v in options.targets[node])
+        else:
+            az, el = az_all[band], el_all[band]
+        if az.size == 0:
+            raise InputError(f"targets: no target direction for node {node}", param="targets")
+        x = basis.design(az, el)
+        x = x - x.mean(axis=0)
+        out.append(x.T @ x / x.shape[0])
+    return out
+
+
+def prior_weights(spec: ModelSpec, normal: NormalEquations, options: ManoeuvreOptions) -> np.ndarray:
+    """The prior's precision in the units of ``X^T X`` for every pattern column (ridge + penalty)."""
+    basis = normal.basis
+    pat = normal.n_pattern_columns
+    weight = options.penalty_weight
+    if weight is None:
+        weight = float(spec.smoothing) * penalty_scale(normal.gram, pat)
+    rough = np.tile(basis.roughness(options.power), normal.n_nodes)
+    return float(spec.ridge_weight) + float(weight) * rough
+
+
+@check_types
+def prior_penalty_weight(basis: Basis, prior_std_db: float, noise_std_db: float, ridge: float,
+                         power: float = DEFAULT_PENALTY_POWER, shape: str = "smoothness") -> float:
+    """The absolute penalty weight whose prior gives each node a spread of ``prior_std_db`` over
+    the sphere before any data (the node's mean removed), for :attr:`ManoeuvreOptions.penalty_weight`.
+
+    ``shape="smoothness"`` weighs the coefficients by the basis's roughness (``(l(l+1))^power``
+    for SH: the smoothness prior of ``fit --degree auto``); ``"reference"`` by one (a plain ridge
+    on the deviation from a reference pattern, as ``fit --prior``). The prior covariance of a
+    node's coefficients is ``noise^2 / (ridge + weight * roughness)``; a spread above what the
+    ridge alone allows at the basis's order gives 0 (no penalty: the ridge's spread).
+    """
+    for name, v in (("prior_std_db", prior_std_db), ("noise_std_db", noise_std_db)):
+        if not (np.isfinite(v) and v > 0):
+            raise InputError(f"{name}: expected a positive spread [dB], got {v!r}", param=name)
+    if shape not in ("smoothness", "reference"):
+        raise InputError(f"shape: expected 'smoothness' or 'reference', got {shape!r}", param="shape")
+    rough = basis.roughness(power) if shape == "smoothness" else np.ones(basis.n_coef)
+    az, el = fibonacci_grid_nodes(2048)
+    x = basis.design(az, el)
+    m = np.einsum("ij,ij->j", x - x.mean(axis=0), x - x.mean(axis=0)) / x.shape[0]
+
+    def spread(weight: float) -> float:
+        return float(np.sqrt(noise_std_db**2 * np.sum(m / np.maximum(ridge + weight * rough, 1e-300))))
+
+    lo, hi = 1e-9, 1e12
+    if spread(hi) > prior_std_db:
+        raise InputError(f"prior_std_db: {prior_std_db:g} dB is below what the ridge alone allows "
+                         f"({spread(hi):.3g} dB)", param="prior_std_db")
+    if spread(lo) < prior_std_db:
+        return 0.0
+    for _ in range(200):
+        mid = np.sqrt(lo * hi)
+        lo, hi = (mid, hi) if spread(mid) > prior_std_db else (lo, mid)
+    return float(np.sqrt(lo * hi))
+
+
+class _Posterior:
+    """The pattern posterior's covariance and the per-node spread read from it."""
+
+    def __init__(self, precision: np.ndarray, metrics: list[np.ndarray], noise_var: float) -> None:
+        self.noise_var = noise_var
+        self.metrics = metrics
+        self.p = metrics[0].shape[0]
+        self.cov = _inverse(precision)
+
+    def spreads(self, cov: np.ndarray | None = None) -> np.ndarray:
+        c = self.cov if cov is None else cov
+        p = self.p
+        return np.sqrt(np.maximum([float(np.sum(m * c[k * p:(k + 1) * p, k * p:(k + 1) * p]))
+                                   for k, m in enumerate(self.metrics)], 0.0))
+
+    def _woodbury(self, rows: np.ndarray, weight: float) -> tuple[np.ndarray, np.ndarray]:
+        """``(B, S^-1 B)`` of the update ``Sigma' = Sigma - B^T S^-1 B`` with ``B = F Sigma``; more
+        rows than columns are first compressed to the triangular factor of ``F^T F`` (same update)."""
+        if rows.shape[0] > rows.shape[1]:
+            rows = np.asarray(np.linalg.qr(rows, mode="r"), np.float64)
+        b = rows @ self.cov
+        s = b @ rows.T + np.eye(rows.shape[0]) * (self.noise_var / weight)
+        return b, np.linalg.solve(s, b)
+
+    def updated(self, rows: np.ndarray, weight: float) -> np.ndarray:
+        """The covariance after ``weight`` packets per feature row ``rows`` (rank-k update)."""
+        if rows.shape[0] == 0:
+            return self.cov
+        b, sb = self._woodbury(rows, weight)
+        return self.cov - b.T @ sb
+
+    def spreads_after(self, rows: np.ndarray, weight: float) -> np.ndarray:
+        """:meth:`spreads` after the update, from its diagonal blocks only."""
+        if rows.shape[0] == 0:
+            return self.spreads()
+        b, sb = self._woodbury(rows, weight)
+        p = self.p
+        var = [float(np.sum(m * self.cov[k * p:(k + 1) * p, k * p:(k + 1) * p]))
+               - float(np.sum((sb[:, k * p:(k + 1) * p] @ m) * b[:, k * p:(k + 1) * p])) for k, m in enumerate(self.metrics)]
+        return np.sqrt(np.maximum(var, 0.0))
+
+
+def _inverse(matrix: np.ndarray) -> np.ndarray:
+    """Inverse of a symmetric positive definite matrix through its Cholesky factor."""
+    sym = 0.5 * (matrix + matrix.T)
+    chol = np.linalg.cholesky(sym)
+    inv_l = np.linalg.solve(chol, np.eye(sym.shape[0]))
+    return inv_l.T @ inv_l
+
+
+def _aggregate(spreads: np.ndarray, options: ManoeuvreOptions) -> float:
+    if options.floor_db is not None:
+        spreads = np.maximum(spreads, options.floor_db)
+    return float(np.max(spreads)) if options.aggregate == "max" else float(np.sqrt(np.mean(spreads**2)))
+
+
+def manoeuvre_rows(unit: Any, nodes: Sequence[str], basis: Basis, rate_hz: float) -> np.ndarray:
+    """Feature rows (pattern columns of ``nodes``) of both link directions along a unit's references.
+
+    The drones tilt into their reference acceleration (no wind); each row is
+    ``phi(d_tx) on tx's block + phi(d_rx) on rx's block``.
+    """
+    ref = unit.sample(rate_hz)
+    n = ref.t_s.size
+    index = {node: k for k, node in enumerate(nodes)}
+    ends = [str(v) for v in unit.nodes]
+    missing = [e for e in ends if e not in index]
+    if missing:
+        raise InputError(f"manoeuvre {unit.label}: node(s) {', '.join(missing)} not in the statistics' nodes", param="nodes")
+    quats = [attitude_from_thrust(ref.accel_enu_m_s2[:, j, :] + np.array([0.0, 0.0, G_M_S2]), ref.yaw_rad[:, j]) for j in (0, 1)]
+    d = link_directions(ref.position_enu_m[:, 0, :], quats[0], ref.position_enu_m[:, 1, :], quats[1])
+    p = basis.n_coef
+    f0, f1 = basis.design(d.az_tx, d.el_tx), basis.design(d.az_rx, d.el_rx)
+    rows = np.zeros((n, len(nodes) * p))
+    k0, k1 = index[ends[0]], index[ends[1]]
+    rows[:, k0 * p:(k0 + 1) * p] += f0
+    rows[:, k1 * p:(k1 + 1) * p] += f1
+    # the other direction (1 -> 0) has the same two directions: the same row, so weight twice
+    return rows
+
+
+def _poses(poses: pd.DataFrame | Mapping[str, Any], nodes: Sequence[str]) -> dict[str, tuple[tuple[float, float, float], float]]:
+    """Latest pose per node as ((x, y, z), yaw_deg) from a pose table or a mapping."""
+    if isinstance(poses, pd.DataFrame):
+        need = ("t", "node", "x", "y", "z", "qw", "qx", "qy", "qz")
+        miss = [c for c in need if c not in poses.columns]
+        if miss:
+            raise InputError(f"poses: missing column(s) {', '.join(miss)}", param="poses")
+        last = poses.sort_values("t").groupby(poses["node"].astype(str)).tail(1)
+        out: dict[str, tuple[tuple[float, float, float], float]] = {}
+        xyz = last[["x", "y", "z"]].to_numpy(np.float64)
+        yaw = np.degrees(yaw_from_quat_wxyz(last[["qw", "qx", "qy", "qz"]].to_numpy(np.float64)))
+        for k, node in enumerate(last["node"].astype(str)):
+            out[node] = ((float(xyz[k, 0]), float(xyz[k, 1]), float(xyz[k, 2])), float(yaw[k]))
+    else:
+        out = {}
+        for n, (p, y) in poses.items():
+            x0, y0, z0 = (float(v) for v in p)
+            out[str(n)] = ((x0, y0, z0), float(y))
+    missing = [n for n in nodes if n not in out]
+    if missing:
+        raise InputError(f"poses: no pose for node(s) {', '.join(missing)}", param="poses")
+    return {n: out[n] for n in nodes}
+
+
+def _check_nodes(normal: NormalEquations, nodes: Sequence[str]) -> None:
+    if len(nodes) != normal.n_nodes or len(set(nodes)) != len(nodes):
+        raise InputError(f"nodes: {len(nodes)} names ({', '.join(nodes)}) for statistics of {normal.n_nodes} nodes", param="nodes")
+
+
+def _start(normal: NormalEquations, spec: ModelSpec, nodes: Sequence[str], options: ManoeuvreOptions) -> _Posterior:
+    _check_nodes(normal, nodes)
+    pat = normal.n_pattern_columns
+    gram = np.asarray(normal.gram, np.float64)[:pat, :pat]
+    precision = (gram + np.diag(prior_weights(spec, normal, options))) / options.noise_std_db**2
+    return _Posterior(precision, target_metrics(normal.basis, nodes, options), options.noise_std_db**2)
+
+
+def _score(post: _Posterior, cand: Candidate, nodes: Sequence[str], basis: Basis,
+           options: ManoeuvreOptions) -> tuple[RankedManoeuvre, np.ndarray]:
+    """The candidate's effect, and its feature rows (for :meth:`_Posterior.updated` if chosen)."""
+    before = post.spreads()
+    rows = manoeuvre_rows(cand.unit, nodes, basis, options.sample_rate_hz)
+    after = post.spreads_after(rows, _weight(options))
+    gain = _aggregate(before, options) - _aggregate(after, options)
+    ranked = RankedManoeuvre(cand.name, cand.duration_s, dict(zip(nodes, before.tolist())), dict(zip(nodes, after.tolist())),
+                             gain / max(cand.duration_s, 1e-9), cand)
+    return ranked, rows
+
+
+def _weight(options: ManoeuvreOptions) -> float:
+    """Packets per feature row: both link directions share a row's pair of directions."""
+    return 2.0 * options.packet_rate_hz / options.sample_rate_hz
+
+
+@check_types
+def pattern_spreads(normal: NormalEquations, spec: ModelSpec, nodes: Sequence[str],
+                    options: ManoeuvreOptions | None = None) -> dict[str, float]:
+    """Each node's pattern spread over the target directions under the current posterior [dB]
+    (module docstring; arguments as :func:`rank_manoeuvres`)."""
+    opts = options or ManoeuvreOptions()
+    names = [str(n) for n in nodes]
+    with one_blas_thread():
+        return dict(zip(names, _start(normal, spec, names, opts).spreads().tolist()))
+
+
+@check_types
+def rank_manoeuvres(
+    normal: NormalEquations,
+    spec: ModelSpec,
+    nodes: Sequence[str],
+    poses: pd.DataFrame | Mapping[str, Any],
+    options: ManoeuvreOptions | None = None,
+) -> tuple[RankedManoeuvre, ...]:
+    """Candidate manoeuvres from the current poses, best first by spread reduction per second.
+
+    Parameters
+    ----------
+    normal : NormalEquations
+        The statistics accumulated so far at the fit's fixed order (pattern columns first).
+    spec : ModelSpec
+        The fit's model (its ridge and relative smoothing).
+    nodes : sequence of str
+        Node names in the order of the statistics' blocks.
+    poses : DataFrame or mapping
+        The latest pose of every node: a pose table (``t, node, x, y, z, qw, qx, qy, qz``,
+        ENU/FLU; the last row per node is used) or ``{node: ((x, y, z), yaw_deg)}``.
+    options : ManoeuvreOptions, optional
+
+    Returns
+    -------
+    tuple of RankedManoeuvre
+        Every candidate (:func:`rplearn.plan.manoeuvres.candidate_manoeuvres`), largest
+        ``reduction_db_per_s`` first.
+    """
+    opts = options or ManoeuvreOptions()
+    names = [str(n) for n in nodes]
+    _check_nodes(normal, names)
+    cands = candidate_manoeuvres(_poses(poses, names), opts.candidates)
+    with one_blas_thread():  # many small factorisations: threads only contend
+        post = _start(normal, spec, names, opts)
+        ranked = [_score(post, c, names, normal.basis, opts)[0] for c in cands]
+    return tuple(sorted(ranked, key=lambda r: -r.reduction_db_per_s))
+
+
+@check_types
+@dataclass(frozen=True)
+class PlanStep:
+    """One manoeuvre of a greedy plan and the spread expected after it.
+
+    Attributes
+    ----------
+    manoeuvre : RankedManoeuvre
+    end_s : float
+        Flight time at its end [s].
+    spread_db : dict of str to float
+        Each node's expected spread after it [dB].
+    """
+
+    manoeuvre: RankedManoeuvre
+    end_s: float
+    spread_db: dict[str, float]
+
+
+@check_types
+def greedy_plan(
+    normal: NormalEquations,
+    spec: ModelSpec,
+    nodes: Sequence[str],
+    poses: pd.DataFrame | Mapping[str, Any],
+    budget_s: float,
+    target_spread_db: float,
+    options: ManoeuvreOptions | None = None,
+) -> tuple[PlanStep, ...]:
+    """Manoeuvres chosen one at a time by spread reduction per second, until every node's spread
+    is at most ``target_spread_db`` or the next one would exceed ``budget_s`` of flight.
+
+    Greedy: each step takes the best manoeuvre from where the last one ended, with the
+    posterior it would leave; it is not the optimal sequence (which no tractable search gives),
+    but each step is the best single next step; spreads below the target count as the target
+    (``ManoeuvreOptions.floor_db``, unless given). Arguments as :func:`rank_manoeuvres`.
+    """
+    if not (np.isfinite(budget_s) and budget_s > 0):
+        raise InputError(f"budget_s: expected a positive flight time [s], got {budget_s!r}", param="budget_s")
+    if not (np.isfinite(target_spread_db) and target_spread_db > 0):
+        raise InputError(f"target_spread_db: expected a positive spread [dB], got {target_spread_db!r}", param="target_spread_db")
+    opts = options or ManoeuvreOptions()
+    if opts.floor_db is None:
+        opts = replace(opts, floor_db=float(target_spread_db))
+    names = [str(n) for n in nodes]
+    _check_nodes(normal, names)
+    state = _poses(poses, names)
+    with one_blas_thread():  # many small factorisations: threads only contend
+        return _greedy(_start(normal, spec, names, opts), state, names, normal.basis, (budget_s, target_spread_db), opts)
+
+
+def _greedy(post: _Posterior, state: dict[str, Any], names: list[str], basis: Basis, limits: tuple[float, float],
+            opts: ManoeuvreOptions) -> tuple[PlanStep, ...]:
+    budget_s, target_spread_db = limits
+    steps: list[PlanStep] = []
+    t = 0.0
+    while float(np.max(post.spreads())) > target_spread_db:
+        scored = [_score(post, c, names, basis, opts) for c in candidate_manoeuvres(state, opts.candidates)]
+        scored = [s for s in scored if t + s[0].duration_s <= budget_s and s[0].reduction_db_per_s > 0]
+        if not scored:
+            break
+        best, rows = max(scored, key=lambda s: s[0].reduction_db_per_s)
+        post.cov = post.updated(rows, _weight(opts))
+        t += best.duration_s
+        state.update(best.candidate.ends)
+        steps.append(PlanStep(best, t, dict(zip(names, post.spreads().tolist()))))
+    return tuple(steps)
+
+
+__all__ = ["AGGREGATES", "ManoeuvreOptions", "PlanStep", "RankedManoeuvre", "greedy_plan", "manoeuvre_rows", "pattern_spreads",
+           "prior_penalty_weight", "prior_weights", "rank_manoeuvres", "target_metrics"]

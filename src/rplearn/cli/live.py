@@ -1,0 +1,115 @@
+"""``rplearn live``: learn while the drones fly, with a live view in the terminal; ``rplearn
+replay``: send a ``.tlog`` over UDP at a multiple of its pace (to try ``live`` on the ground)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import typer
+
+from rplearn.cli._app import app, geodetic_flag, reader_options, say, split_list, user_errors
+
+
+def _view(status: Any) -> Any:
+    """The live view of a :class:`rplearn.workflows.live.LiveStatus` (rich renderables)."""
+    from rich.console import Group
+    from rich.table import Table
+
+    from rplearn.workflows.live import page_rows
+
+    rows, node_rows = page_rows(status)
+    numbers = Table(show_header=False, box=None, pad_edge=False)
+    numbers.add_column(style="bold")
+    numbers.add_column()
+    for label, value in rows:
+        numbers.add_row(label, value)
+    nodes = Table(title="nodes")
+    head, *body = node_rows
+    for h in head:
+        nodes.add_column(h)
+    for r in body:
+        nodes.add_row(*r)
+    moves = Table(title="next-best manoeuvres")
+    for h in ("manoeuvre", "duration", "spread after"):
+        moves.add_column(h)
+    for name, duration_s, spread_db in status.manoeuvres[:3]:
+        moves.add_row(name, f"{duration_s:.0f} s", f"{spread_db:.2f} dB")
+    if not status.manoeuvres:
+        moves.add_row("-", "-", "-")
+    return Group(numbers, nodes, moves)
+
+
+@app.command()
+@user_errors
+def live(
+    source: str = typer.Argument(..., help="A MAVLink connection as pymavlink names it (udpin:0.0.0.0:14550, tcp:HOST:PORT, a serial device "
+                                           "such as /dev/ttyUSB0: what MAVProxy, QGroundControl and mavlink-router forward), or "
+                                           "POSE.csv,SIGNAL.csv: a canonical pose and signal CSV a robot is appending to."),
+    output: str = typer.Option(..., "-o", "--out", help="Model file (.json), rewritten atomically at every refit: an interrupted session "
+                                                        "leaves the last good model."),
+    model: str = typer.Option("sh", "--model", help="sh, bg or poly."),
+    degree: str | None = typer.Option(None, "--order", help="Order, or 'auto' (default for sh): order and smoothing chosen by cross-validation "
+                                                            "over the flight's 5 stretches of time."),
+    refit_s: float = typer.Option(2.0, "--refit-s", help="Seconds between refits."),
+    until_spread_db: float | None = typer.Option(None, "--until-spread", help="End when every node's pattern spread over its covered "
+                                                                           "directions is below this [dB]."),
+    until_coverage_pct: float | None = typer.Option(None, "--until-coverage", help="End when every node's covered share of the sphere "
+                                                                               "reaches this [%] (with --until-spread: both)."),
+    duration_s: float | None = typer.Option(None, "--duration", help="End after this many seconds."),
+    idle_s: float = typer.Option(10.0, "--idle", help="The stream has ended when nothing arrived for this many seconds."),
+    nodes: list[str] | None = typer.Option(None, "--nodes", help="Node ids (default: those of the first matched samples)."),
+    tx_power_dbm: float | None = typer.Option(None, "--tx-power", help="MAVLink: the radios' transmit power [dBm]."),
+    frequency_hz: float | None = typer.Option(None, "--frequency", help="MAVLink: the carrier frequency [Hz]."),
+    station_geodetic: str | None = typer.Option(None, "--station", help="MAVLink: LAT,LON,ALT of the ground station [deg, deg, m AMSL]."),
+    max_gap_s: float = typer.Option(0.2, "--max-gap", help="Drop samples inside pose gaps longer than this [s] (as sync)."),
+    html: str | None = typer.Option(None, "--html", help="Also write a self-refreshing page with the numbers and the coverage and "
+                                                         "spread maps."),
+    record: str | None = typer.Option(None, "--record", help="MAVLink: keep the received stream as a .tlog (for sync and fit after)."),
+    quiet: bool = typer.Option(False, "--quiet", help="No live view; print the summary at the end."),
+) -> None:
+    """Learn the patterns while the drones fly: match, predict each new batch before learning it
+    (the prequential error), refit every --refit-s and show coverage, spread and plausibility.
+
+    Example: rplearn live udpin:0.0.0.0:14550 --tx-power 20 --frequency 433e6 --until-spread 2 -o model.json
+    """
+    from rplearn.cli.learning import degree_option
+    from rplearn.data.sync import SyncOptions
+    from rplearn.models.options import FitOptions
+    from rplearn.models.spec import ModelSpec
+    from rplearn.workflows.live import LiveOptions, run_live
+
+    auto, order = degree_option(degree, model)
+    spec = ModelSpec.parse(model, order=order)
+    reader = reader_options(tx_power_dbm=tx_power_dbm, frequency_hz=frequency_hz,
+                            station_geodetic=geodetic_flag(station_geodetic, "--station"))
+    options = LiveOptions(spec=spec, fit=FitOptions(auto=auto), reader=reader, sync=SyncOptions(max_gap_s=max_gap_s),
+                          refit_s=refit_s, duration_s=duration_s, until_spread_db=until_spread_db,
+                          until_coverage_pct=until_coverage_pct, idle_s=idle_s, nodes=tuple(split_list(nodes) or ()) or None)
+    if quiet:
+        outcome = run_live(source, output, options, None, record, html)
+    else:
+        from rich.live import Live
+
+        from rplearn.cli._app import console
+
+        with Live(console=console, refresh_per_second=4, transient=False) as view:
+            outcome = run_live(source, output, options, lambda s: view.update(_view(s)), record, html)
+    say(outcome.status.summary())
+    say(f"wrote {output}")
+
+
+@app.command()
+@user_errors
+def replay(
+    log: str = typer.Argument(..., help="A MAVLink .tlog."),
+    address: str = typer.Option("127.0.0.1:14550", "--to", help="HOST:PORT to send the messages to (UDP)."),
+    speed: float = typer.Option(1.0, "--speed", help="Times the log's pace (its boot times and speeds scaled alike)."),
+) -> None:
+    """Send a .tlog's messages over UDP at --speed times their pace, as a vehicle would: to try
+    `rplearn live udpin:...` on the ground.
+
+    Example: rplearn replay flight.tlog --to 127.0.0.1:14550 --speed 20
+    """
+    from rplearn.io.live_sources import replay_tlog
+
+    say(f"sent {replay_tlog(log, address, speed)} messages to {address}")

@@ -1,0 +1,173 @@
+"""Pose-signal matching while the logs are still being written (``rplearn live``).
+
+:class:`LiveMatcher` takes pose and signal rows as they arrive and matches a signal row once
+its time is *settled*: at or before the latest pose of every moving node (a node whose poses
+are not all one identical row, :mod:`rplearn.data.poses`), so that both neighbours of its
+interpolation are known. The rows of one instant are matched together. Matching is
+:func:`rplearn.data.sync._match_chunk`, with the duplicate hashes across chunks and the carry
+of repeated readings of :func:`rplearn.data.streaming.synchronise_stream`: the same rules and
+the same drop reasons as ``sync``, so that at the end of a stream the matched rows and the
+counts are those of ``sync`` on the whole logs (:meth:`LiveMatcher.match` with
+``final=True`` matches what is still pending; rows after a node's last pose are then
+``out_of_span``).
+
+Memory: the pose rows a later match can need (per moving node, those after the matched
+horizon and the one before it; a still node's first and last row), the pending signal rows,
+and 8 bytes per signal row for duplicates across chunks (as ``synchronise_stream``).
+
+Limits against ``sync`` on the whole logs: the nodes' flight phases (``airborne``, the
+window's log start) are those of the poses kept, so :class:`LiveMatcher` refuses the
+``airborne`` filter and a time window; a node first logged after rows that name it were
+settled has those rows dropped as ``unknown_node`` (a whole-log sync would place them).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+
+from rplearn._argtypes import check_types
+from rplearn.data.phases import flight_phases
+from rplearn.data.poses import tracks_of_checked_log
+from rplearn.data.streaming import _SeenRows, row_hashes
+from rplearn.data.sync import SyncOptions, SyncResult, SyncSummary, _match_chunk, _options, finish_summary
+from rplearn.data.tables import MATCHED_COLUMNS, POSE_COLUMNS, non_unit_quaternion_rows, validate_pose_log
+from rplearn.errors import InputError
+
+
+def _still(group: pd.DataFrame) -> bool:
+    """Whether a node's (sorted) pose rows are all one pose (as :mod:`rplearn.data.poses` decides)."""
+    if len(group) < 2:
+        return True
+    tracks = tracks_of_checked_log(group, None, "pose log")
+    return bool(next(iter(tracks.values())).still)
+
+
+@check_types
+class LiveMatcher:
+    """Match pose and signal rows as they arrive (module docstring).
+
+    Parameters
+    ----------
+    options : SyncOptions, optional
+        As :func:`rplearn.data.sync.synchronise`; ``airborne`` and a time window are refused.
+    source : str
+        Name of the signal stream in messages.
+    """
+
+    def __init__(self, options: SyncOptions | None = None, source: str = "signal stream") -> None:
+        self.options = _options(options)
+        if self.options.airborne or self.options.from_s is not None or self.options.to_s is not None:
+            raise InputError("live matching: the airborne filter and a time window need the whole log; "
+                             "sync the recorded log instead", param="options")
+        self.source = source
+        self.summary = SyncSummary()
+        self._poses = pd.DataFrame(columns=list(POSE_COLUMNS))
+        self._pending: list[pd.DataFrame] = []
+        self._seen = _SeenRows()
+        self._carry: dict = {}
+        self._horizon = -math.inf
+        self._signal_rows = 0
+        self._moving: set[str] = set()
+        #: The rows the last :meth:`match` gave (also when its end-of-stream check raised).
+        self.last_matched = pd.DataFrame(columns=list(MATCHED_COLUMNS))
+
+    @property
+    def horizon_s(self) -> float:
+        """Time [s] up to which signal rows have been matched."""
+        return self._horizon
+
+    @property
+    def pending_rows(self) -> int:
+        """Signal rows received and not yet matched."""
+        return int(sum(len(p) for p in self._pending))
+
+    def add_poses(self, rows: pd.DataFrame) -> None:
+        """Append pose rows (canonical columns, any order); checked as ``sync`` checks a pose log."""
+        if rows.empty:
+            return
+        new = validate_pose_log(rows, "pose log")
+        self.summary.non_unit_quaternions += non_unit_quaternion_rows(new)
+        both = pd.concat([self._poses, new], ignore_index=True) if len(self._poses) else new
+        self._poses = validate_pose_log(both.drop(columns=[c for c in both.columns if c not in new.columns]), "pose log")
+
+    def add_signals(self, rows: pd.DataFrame) -> None:
+        """Append signal rows (canonical columns); they wait until their time is settled."""
+        if len(rows):
+            self._pending.append(rows.reset_index(drop=True))
+
+    def settled_s(self) -> float:
+        """The latest time [s] every moving node's poses reach (-inf before two poses of one)."""
+        if self._poses.empty:
+            return -math.inf
+        last = []
+        for node, group in self._poses.groupby("node", sort=False):
+            if str(node) in self._moving or not _still(group):
+                self._moving.add(str(node))
+                last.append(float(group["t"].iloc[-1]))
+        return min(last) if last else -math.inf
+
+    def match(self, final: bool = False) -> SyncResult:
+        """Match the pending rows whose time is settled (every pending row with ``final``).
+
+        Returns
+        -------
+        SyncResult
+            The matched rows (sorted by time, as ``sync`` writes a log read whole) and this
+            chunk's counts; :attr:`summary` holds the counts so far. With ``final``, the
+            whole stream's notes are added and fewer than ``min_samples`` matched raises as
+            ``sync`` does.
+        """
+        pending = pd.concat(self._pending, ignore_index=True) if self._pending else pd.DataFrame()
+        horizon = math.inf if final else self.settled_s()
+        if pending.empty or self._poses.empty and not final:
+            chunk, rest = pending.iloc[:0], pending
+        else:
+            t = pd.to_numeric(pending["t"], errors="coerce").to_numpy(np.float64)
+            ready = ~(t > horizon)  # a time that is not a number is matched (and dropped) at once
+            chunk, rest = pending[ready], pending[~ready]
+        self._pending = [rest.reset_index(drop=True)] if len(rest) else []
+        result = self._match(chunk.sort_values("t", kind="stable") if "t" in chunk.columns else chunk)
+        self.last_matched = result.dataset
+        if not final and len(chunk):
+            self._horizon = max(self._horizon, horizon)
+            self._trim()
+        if final:
+            tracks = self._tracks()
+            phases = flight_phases(self._poses, tracks, self.options.clock_offsets_s, self.options.airborne_margin_m)
+            finish_summary(self.summary, tracks, phases, self.options, self.source)
+        return result
+
+    def _tracks(self) -> dict:
+        return tracks_of_checked_log(self._poses, self.options.clock_offsets_s, "pose log", self.options.max_gap_s)
+
+    def _match(self, chunk: pd.DataFrame) -> SyncResult:
+        if chunk.empty:
+            return SyncResult(pd.DataFrame(columns=list(MATCHED_COLUMNS)), SyncSummary())
+        if self._poses.empty:
+            raise InputError(f"{self.source}: signal rows but no pose rows to match them with", param="poses")
+        tracks = self._tracks()
+        phases = flight_phases(self._poses, tracks, self.options.clock_offsets_s, self.options.airborne_margin_m)
+        repeats = self._seen.repeats(row_hashes(chunk))
+        result = _match_chunk(tracks, chunk.reset_index(drop=True), self.options, self.source, seen_before=repeats,
+                              first_row=self._signal_rows, phases=phases, carry=self._carry)
+        self._signal_rows += len(chunk)
+        self.summary.merge(result.summary)
+        return result
+
+    def _trim(self) -> None:
+        """Forget the pose rows no later match needs (module docstring)."""
+        keep = []
+        for node, group in self._poses.groupby("node", sort=False):
+            if str(node) not in self._moving and _still(group):
+                keep.append(group.iloc[[0, -1]] if len(group) > 1 else group)
+                continue
+            t = group["t"].to_numpy(np.float64)
+            first = max(int(np.searchsorted(t, self._horizon, side="right")) - 1, 0)
+            keep.append(group.iloc[first:])
+        self._poses = pd.concat(keep).sort_values(["node", "t"], kind="stable").reset_index(drop=True)
+
+
+__all__ = ["LiveMatcher"]

@@ -1,0 +1,291 @@
+"""Logs that are still being written, read as they grow (``rplearn live``), and a replay.
+
+Two sources give canonical pose and signal rows a poll at a time:
+
+- :class:`CsvTail`: a canonical pose CSV and signal CSV that a robot appends to; every poll
+  parses the complete lines added since the last (a half-written last line waits), with the
+  reader of ``sync`` (:func:`rplearn.io.tables.canonical_pose`, ``canonical_signal``);
+- :class:`MavlinkSource`: a MAVLink connection as pymavlink names them
+  (``udpin:0.0.0.0:14550``, ``tcp:host:5760``, a serial device ``/dev/ttyUSB0``, what
+  MAVProxy, QGroundControl and mavlink-router forward). Every message is appended to a
+  telemetry log (``.tlog``: the receive time then the frame, as a ground station writes it), and
+  every ``read_every_s`` that log is read again by the ``.tlog`` reader of ``sync``
+  (:func:`rplearn.io.read_logs`), of which the rows past those already given are passed on.
+  Reading the whole log again costs time in its length (about a second per 10 MB); the rows it
+  gives are those ``sync`` would read from the same file.
+
+:func:`replay_tlog` sends a ``.tlog``'s messages over UDP at a multiple of their pace, their
+boot times and speeds scaled alike, so that the stream is a consistent (faster) flight.
+"""
+
+from __future__ import annotations
+
+import io
+import math
+import os
+import socket
+import struct
+import threading
+import time
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from rplearn._argtypes import check_types
+from rplearn.data.tables import CSV_DTYPES, normalise_times
+from rplearn.errors import InputError, LogFormatError
+from rplearn.io.options import ReaderOptions
+from rplearn.io.tables import canonical_pose, canonical_signal
+
+
+@check_types
+@dataclass
+class Poll:
+    """What one poll of a source gave.
+
+    Attributes
+    ----------
+    poses, signals : DataFrame
+        New canonical pose and signal rows (empty when none).
+    received : int
+        Lines or messages received by this poll.
+    """
+
+    poses: pd.DataFrame
+    signals: pd.DataFrame
+    received: int
+
+
+class _Tail:
+    """The complete lines appended to one text file since the last call."""
+
+    def __init__(self, path: str) -> None:
+        self.path, self.offset, self.header = path, 0, b""
+
+    def lines(self) -> bytes:
+        if not os.path.exists(self.path):
+            return b""
+        with open(self.path, "rb") as fh:
+            fh.seek(self.offset)
+            data = fh.read()
+        end = data.rfind(b"\n") + 1  # a line still being written waits for its newline
+        if end == 0:
+            return b""
+        self.offset += end
+        data = data[:end]
+        if not self.header:
+            self.header, _, data = data.partition(b"\n")
+            self.header += b"\n"
+        return data
+
+
+def _table(tail: _Tail, data: bytes) -> pd.DataFrame | None:
+    if not data.strip():
+        return None
+    try:
+        df = pd.read_csv(io.BytesIO(tail.header + data), skipinitialspace=True, dtype=CSV_DTYPES)
+    except Exception as exc:  # parsers raise many classes on corrupt bytes
+        raise LogFormatError(f"{tail.path}: cannot parse the rows appended ({type(exc).__name__}: {exc})") from None
+    return normalise_times(df, tail.path)
+
+
+@check_types
+class CsvTail:
+    """A canonical pose CSV and signal CSV being appended to (module docstring).
+
+    Parameters
+    ----------
+    pose_path, signal_path : str
+        The files (they may not exist yet).
+    """
+
+    def __init__(self, pose_path: str, signal_path: str) -> None:
+        self.pose, self.signal = _Tail(pose_path), _Tail(signal_path)
+        self.name = f"{pose_path} + {signal_path}"
+
+    def poll(self) -> Poll:
+        """Rows appended since the last poll."""
+        p, s = self.pose.lines(), self.signal.lines()
+        poses = signals = pd.DataFrame()
+        pt = _table(self.pose, p)
+        if pt is not None:
+            poses, _ = canonical_pose(pt, source=self.pose.path)
+        st = _table(self.signal, s)
+        if st is not None:
+            signals = canonical_signal(st, source=self.signal.path)
+        return Poll(poses, signals, len(poses) + len(signals))
+
+    def close(self) -> None:
+        """Nothing to release."""
+
+
+@check_types
+class MavlinkSource:
+    """A MAVLink connection recorded to a ``.tlog`` and read back by ``sync``'s reader.
+
+    Parameters
+    ----------
+    connection : str
+        pymavlink connection string.
+    record_path : str
+        The telemetry log written as messages arrive (a working file of the session).
+    reader : ReaderOptions
+        As ``sync`` reads a ``.tlog`` (transmit power and frequency at least).
+    read_every_s : float
+        Seconds between readings of the log.
+    """
+
+    def __init__(self, connection: str, record_path: str, reader: ReaderOptions, read_every_s: float = 1.0) -> None:
+        from rplearn.io._mavlink_records import _mavutil
+
+        try:
+            self.conn = _mavutil().mavlink_connection(connection, dialect="ardupilotmega")
+        except Exception as exc:
+            raise InputError(f"{connection}: cannot open the MAVLink connection ({type(exc).__name__}: {exc})",
+                             param="source") from None
+        self.name, self.record_path, self.reader, self.read_every_s = connection, record_path, reader, read_every_s
+        self._fh = open(record_path, "wb")  # noqa: SIM115 (a working log, closed by close())
+        self._lock = threading.Lock()
+        self._received = 0
+        self._unread = 0
+        self._last_read = -math.inf
+        self._pose_t: dict[str, float] = {}
+        self._signal_t = -math.inf
+        self._stop = threading.Event()
+        self._error: BaseException | None = None
+        # messages are received and stamped on their own thread, so that a refit does not delay
+        # their receive times (the clock of the radio readings) nor overflow the socket's buffer
+        self._thread = threading.Thread(target=self._receive, name="rplearn-live-mavlink", daemon=True)
+        self._thread.start()
+
+    def _receive(self) -> None:
+        try:
+            while not self._stop.is_set():
+                msg = self.conn.recv_match(blocking=True, timeout=0.2)
+                if msg is None or msg.get_type() == "BAD_DATA":
+                    continue
+                usec = int(msg._timestamp * 1.0e6) & ~3
+                with self._lock:
+                    self._fh.write(struct.pack(">Q", usec) + msg.get_msgbuf())
+                    self._received += 1
+        except BaseException as exc:  # pragma: no cover - a dead link: reported by poll
+            self._error = exc
+
+    def poll(self, final: bool = False) -> Poll:
+        """What has arrived: every ``read_every_s`` (and with ``final``) the new rows."""
+        if self._error is not None:
+            raise InputError(f"{self.name}: the MAVLink connection failed ({type(self._error).__name__}: "
+                             f"{self._error})", param="source")
+        with self._lock:
+            n, self._received = self._received, 0
+            self._unread += n
+            now = time.monotonic()
+            empty = pd.DataFrame()
+            if not self._unread or (not final and now - self._last_read < self.read_every_s):
+                return Poll(empty, empty, n)
+            self._fh.flush()
+            self._last_read, self._unread = now, 0
+        poses, signals = self._read()
+        return Poll(poses, signals, n)
+
+    def _read(self) -> tuple[pd.DataFrame, pd.DataFrame]:
+        from rplearn.io.read import read_logs
+
+        try:
+            logs, _ = read_logs([self.record_path], self.reader)
+        except LogFormatError:  # too little received to read (no ATTITUDE yet)
+            return pd.DataFrame(), pd.DataFrame()
+        poses = pd.DataFrame() if logs.pose is None else logs.pose
+        new = []
+        for node, group in poses.groupby("node", sort=False):
+            last = self._pose_t.get(str(node), -math.inf)
+            fresh = group[group["t"].to_numpy(np.float64) > last]
+            if len(fresh):
+                self._pose_t[str(node)] = float(group["t"].max())
+                new.append(fresh)
+        signals = pd.DataFrame() if logs.signal is None else logs.signal
+        if len(signals):
+            t = signals["t"].to_numpy(np.float64)
+            signals = signals[t > self._signal_t]
+            self._signal_t = max(self._signal_t, float(t.max()))
+        return (pd.concat(new, ignore_index=True) if new else pd.DataFrame()), signals
+
+    def close(self) -> None:
+        """Stop receiving; close the connection and the recording."""
+        self._stop.set()
+        self._thread.join(timeout=2.0)
+        with self._lock:
+            if self._fh.closed:
+                return
+            self._fh.close()
+        try:
+            self.conn.close()
+        except Exception:  # pragma: no cover - closing a dead socket
+            pass
+
+
+#: Messages whose boot time and speeds :func:`replay_tlog` scales.
+_SPEED_FIELDS = ("vx", "vy", "vz")
+
+
+def _scaled(msg: Any, speed: float, boot0_ms: int) -> Any:
+    if hasattr(msg, "time_boot_ms"):
+        msg.time_boot_ms = int(boot0_ms + (msg.time_boot_ms - boot0_ms) / speed)
+    if msg.get_type() == "GLOBAL_POSITION_INT":
+        for f in _SPEED_FIELDS:
+            setattr(msg, f, int(np.clip(getattr(msg, f) * speed, -32768, 32767)))
+    return msg
+
+
+@check_types
+def replay_tlog(path: str, address: str, speed: float = 1.0, start_delay_s: float = 0.0) -> int:
+    """Send a ``.tlog``'s messages to ``host:port`` over UDP at ``speed`` times their pace.
+
+    Each message is re-encoded by pymavlink with its own system and component ids; its
+    ``time_boot_ms`` is scaled by ``1/speed`` from the log's first one, and the velocities of
+    ``GLOBAL_POSITION_INT`` by ``speed``, so that the stream is the same flight, faster.
+
+    Returns
+    -------
+    int
+        Messages sent.
+    """
+    from rplearn.io._mavlink_records import _mavutil
+
+    if not speed > 0:
+        raise InputError(f"speed: expected a positive factor, got {speed}", param="speed")
+    host, _, port = address.rpartition(":")
+    try:
+        target = (host or "127.0.0.1", int(port))
+    except ValueError:
+        raise InputError(f"address: expected HOST:PORT, got {address!r}", param="address") from None
+    mavutil = _mavutil()
+    log = mavutil.mavlink_connection(path, dialect="ardupilotmega")
+    enc = mavutil.mavlink.MAVLink(None)
+    sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    sent, t0, wall0, boot0 = 0, None, 0.0, None
+    try:
+        while True:
+            msg = log.recv_msg()
+            if msg is None:
+                break
+            if msg.get_type() == "BAD_DATA":
+                continue
+            if t0 is None:
+                t0, wall0 = float(msg._timestamp), time.monotonic() + start_delay_s
+            if boot0 is None and hasattr(msg, "time_boot_ms"):
+                boot0 = int(msg.time_boot_ms)
+            wait = wall0 + (float(msg._timestamp) - t0) / speed - time.monotonic()
+            if wait > 0:
+                time.sleep(wait)
+            enc.srcSystem, enc.srcComponent = msg.get_srcSystem(), msg.get_srcComponent()
+            sock.sendto(_scaled(msg, speed, boot0 or 0).pack(enc), target)
+            sent += 1
+    finally:
+        sock.close()
+    return sent
+
+
+__all__ = ["CsvTail", "MavlinkSource", "Poll", "replay_tlog"]

@@ -1,0 +1,228 @@
+"""Sufficient statistics of a flight that is still going on, and the refits from them.
+
+``rplearn live`` learns from every matched sample (the prequential error is its test score:
+each batch is predicted before it is learned from). Its fit at any moment is the offline fit
+of the samples so far with every stretch of time learned from: ``rplearn fit DATA --units
+'flight[1/5],flight[2/5],flight[3/5],flight[4/5],test[5/5]'`` (the same stretches,
+:class:`rplearn.data.units.Stretches`, as folds of ``--order auto``), or ``--order N``.
+
+The statistics are kept per *segment*, a run of consecutive batches
+(:class:`~rplearn.core.lsq.normal_equations.NormalEquations` at the largest candidate order),
+at most ``max_segments`` of them: when there are more, the two neighbours with the fewest
+samples are added into one, so memory does not grow with the flight's length. A fixed order
+needs only their sum.
+
+The folds of ``--order auto`` are stretches of equal sample counts of the *whole* flight, whose
+cuts move as samples arrive: no bounded set of statistics gives them exactly for every
+length (the first stretch of a flight of ``n`` samples is its first ``n/5``, for any ``n``).
+So a refit during the flight gives each segment whole to the stretch of its middle sample,
+and the last refit (``final=True``) is exact: it takes the cuts from the times of every
+batch (their ``t`` column, read back from the spool) and re-reads the samples of the few
+segments a cut falls inside, from the batches spooled to disk as they arrived; every other
+segment's statistics are used as they are.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from collections import Counter
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from rplearn._argtypes import check_types
+from rplearn._atomic import atomic_path
+from rplearn.core.lsq.normal_equations import NormalEquations
+from rplearn.core.lsq.penalty import sub_statistics
+from rplearn.core.threads import blas_threads_for
+from rplearn.data.tables import LinkSamples, link_samples
+from rplearn.data.units import TIME_UNITS, Stretches, stretch_labels
+from rplearn.errors import InputError
+from rplearn.models.auto import MAX_AUTO_ORDER, auto_orders, fit_from_statistics
+from rplearn.models.fit import FittedModel, node_coverage_grids
+from rplearn.models.options import FitOptions
+from rplearn.models.patterns import PatternSet
+from rplearn.models.spec import ModelSpec, default_ridge
+from rplearn.models.streamed import Accumulated, fit_patterns_accumulated, frequency_counts, weighted_median
+from rplearn.models.terms import regression_inputs
+
+#: Segments of statistics kept at most (each one ``X^T X`` at the accumulation order).
+MAX_SEGMENTS = 16
+
+
+@check_types
+@dataclass
+class Segment:
+    """The statistics of a run of consecutive batches and where their samples are spooled."""
+
+    normal: NormalEquations
+    t_min: float
+    t_max: float
+    files: list[str] = field(default_factory=list)
+
+    @property
+    def n_samples(self) -> int:
+        return int(self.normal.n_samples)
+
+
+@check_types
+class LiveStatistics:
+    """Statistics of a live session, added batch by batch, and its refits (module docstring).
+
+    Parameters
+    ----------
+    spec : ModelSpec
+        The model: a pattern model (sh, bg, poly) of fixed order, or the kind and ridge of an
+        automatic choice (``options.auto``).
+    nodes : sequence of str
+        Node ids in model order (sorted, as ``fit`` orders them).
+    options : FitOptions, optional
+        As ``fit``; ``auto=True`` chooses the order and smoothing.
+    spool_dir : str, optional
+        Folder for the batches' samples, for the exact last refit of an automatic choice
+        (none: the last refit cuts the stretches at segment boundaries).
+    max_segments : int
+    """
+
+    def __init__(self, spec: ModelSpec, nodes: Sequence[str], options: FitOptions | None = None,
+                 spool_dir: str | None = None, max_segments: int = MAX_SEGMENTS) -> None:
+        if not spec.decouples:
+            raise InputError(f"{spec.label}: live learning is for pattern models (sh, bg, poly)", param="spec")
+        self.spec, self.nodes, self.options = spec, tuple(map(str, nodes)), options or FitOptions()
+        self.auto = bool(self.options.auto)
+        top = (MAX_AUTO_ORDER if spec.kind == "sh" else auto_orders(spec.kind, 0, 1, spec.order)[-1]) if self.auto else spec.order
+        self.ridge = default_ridge(spec.kind) if spec.ridge is None else float(spec.ridge)
+        self.big = ModelSpec(spec.kind, top, ridge=self.ridge) if self.auto else spec
+        self.basis = self.big.basis()
+        self.spool_dir = spool_dir if self.auto else None
+        self.max_segments = max(int(max_segments), 1) if self.auto else 1
+        self.segments: list[Segment] = []
+        self.freq: Counter[float] = Counter()
+        self.grids: dict[str, list[float]] | None = None
+        self.non_unit = 0
+        self.learn_s = 0.0
+        self._batches = 0
+
+    @property
+    def n_samples(self) -> int:
+        return sum(s.n_samples for s in self.segments)
+
+    def samples(self, matched: pd.DataFrame, source: str = "live") -> LinkSamples:
+        """Learning-ready samples of matched rows, in this session's node order."""
+        unknown = sorted((set(map(str, matched["tx"])) | set(map(str, matched["rx"]))) - set(self.nodes))
+        if unknown:
+            raise InputError(f"{source}: node(s) {', '.join(unknown)} appeared after the session fixed its nodes "
+                             f"({', '.join(self.nodes)}); name every node at the start", param="nodes")
+        return link_samples(matched, source, nodes=self.nodes)
+
+    def add(self, matched: pd.DataFrame, samples: LinkSamples) -> None:
+        """Learn a batch: its matched rows (spooled) and their samples (:meth:`samples`)."""
+        if not len(samples):
+            return
+        t0 = time.perf_counter()
+        y, env = regression_inputs(samples, self.options)
+        normal = NormalEquations(self.basis, len(self.nodes), environment=env is not None)
+        normal.add(samples.directions, samples.tx_index, samples.rx_index, y, env)
+        t = pd.to_numeric(matched["t"]).to_numpy(np.float64)
+        seg = Segment(normal, float(t.min()), float(t.max()))
+        if self.spool_dir is not None:
+            path = os.path.join(self.spool_dir, f"batch-{self._batches:07d}.parquet")
+            with atomic_path(path) as tmp:
+                matched.to_parquet(tmp, index=False)
+            seg.files.append(path)
+        self._batches += 1
+        self.segments.append(seg)
+        self._bound()
+        self.grids = node_coverage_grids(samples, self.grids)
+        frequency_counts(samples, self.freq)
+        self.non_unit += samples.non_unit_quaternions
+        self.learn_s += time.perf_counter() - t0
+
+    def _bound(self) -> None:
+        while len(self.segments) > self.max_segments:
+            n = np.array([s.n_samples for s in self.segments])
+            k = int(np.argmin(n[:-1] + n[1:]))
+            a, b = self.segments[k], self.segments.pop(k + 1)
+            a.normal.merge(b.normal)
+            a.t_min, a.t_max = min(a.t_min, b.t_min), max(a.t_max, b.t_max)
+            a.files += b.files
+
+    def total(self) -> NormalEquations:
+        """The statistics of every sample so far."""
+        out = NormalEquations(self.basis, len(self.nodes), environment=self.segments[0].normal.environment)
+        for s in self.segments:
+            out.merge(s.normal)
+        return out
+
+    def fold_statistics(self, exact: bool) -> dict[str, NormalEquations]:
+        """Statistics per stretch of time (the folds of an automatic choice), in time order;
+        ``exact``: cut where ``fit`` cuts (re-reading the segments a cut falls inside)."""
+        labels = stretch_labels(TIME_UNITS)
+        if exact and self.spool_dir is not None:
+            return self._exact_folds(labels)
+        n = np.array([s.n_samples for s in self.segments], np.float64)
+        middle = np.cumsum(n) - n / 2.0
+        which = np.minimum((TIME_UNITS * middle / n.sum()).astype(int), TIME_UNITS - 1)
+        folds: dict[str, NormalEquations] = {}
+        for seg, j in zip(self.segments, which):
+            acc = folds.setdefault(labels[j], NormalEquations(self.basis, len(self.nodes), seg.normal.environment))
+            acc.merge(seg.normal)
+        return {lab: folds[lab] for lab in labels if lab in folds}
+
+    def _exact_folds(self, labels: list[str]) -> dict[str, NormalEquations]:
+        times = [pd.read_parquet(f, columns=["t"])["t"].to_numpy(np.float64) for s in self.segments for f in s.files]
+        stretches = Stretches.of_times(np.concatenate(times) if times else np.zeros(0))
+        folds: dict[str, NormalEquations] = {}
+        env = self.segments[0].normal.environment
+        for seg in self.segments:
+            first, last = stretches.index(np.array([seg.t_min, seg.t_max]))
+            if first == last:
+                folds.setdefault(labels[first], NormalEquations(self.basis, len(self.nodes), env)).merge(seg.normal)
+                continue
+            for path in seg.files:  # a cut falls inside: its samples, by stretch
+                rows = pd.read_parquet(path)
+                k = stretches.index(rows["t"].to_numpy(np.float64))
+                for j in np.unique(k):
+                    s = self.samples(rows[k == j], path)
+                    y, e = regression_inputs(s, self.options)
+                    folds.setdefault(labels[j], NormalEquations(self.basis, len(self.nodes), env)).add(
+                        s.directions, s.tx_index, s.rx_index, y, e)
+        return {lab: folds[lab] for lab in labels if lab in folds}
+
+    def refit(self, final: bool = False, provenance: Mapping[str, Any] | None = None) -> FittedModel:
+        """The model of every sample so far (module docstring); ``final``: the exact folds.
+
+        Raises
+        ------
+        InputError
+            With too few samples for the model (the automatic choice needs 10 per coefficient of SH-2).
+        """
+        if not self.segments:
+            raise InputError("no samples learned yet", param="samples")
+        t0 = time.perf_counter()
+        freq = weighted_median(self.freq)
+        if not self.auto:
+            acc = Accumulated({"all": self.total()}, Counter(self.freq), self.non_unit, 0.0, self.grids, "live")
+            with blas_threads_for(self.n_samples, self.basis.n_coef * len(self.nodes)):
+                fit = fit_patterns_accumulated(acc, self.spec, list(self.nodes), self.options)
+            fit.patterns.provenance = {**dict(provenance or {}), "model": self.spec.label}
+            return FittedModel(self.spec, fit.patterns, time.perf_counter() - t0)
+        orders = auto_orders(self.spec.kind, self.n_samples, len(self.nodes), self.spec.order if self.spec.kind != "sh" else None)
+        folds = self.fold_statistics(final)
+        top = ModelSpec(self.spec.kind, orders[-1], ridge=self.ridge)
+        small = top.basis()
+        folds = {k: sub_statistics(v, small) for k, v in folds.items()}
+        with blas_threads_for(self.n_samples, small.n_coef * len(self.nodes)):
+            fitted, _ = fit_from_statistics(folds, top, orders, list(self.nodes), self.options, freq, provenance)
+        model = fitted.model
+        assert isinstance(model, PatternSet)  # fit_from_statistics learns patterns
+        model.training = model.training.replace(coverage_deg=self.grids)
+        fitted.ltd_s = time.perf_counter() - t0
+        return fitted
+
+
+__all__ = ["MAX_SEGMENTS", "LiveStatistics", "Segment"]

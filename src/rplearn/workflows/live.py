@@ -1,0 +1,537 @@
+"""``rplearn live``: learn the patterns while the vehicles fly.
+
+The loop polls a source (:mod:`rplearn.io.live_sources`: a MAVLink connection, or a pose and a
+signal CSV being appended to), matches the rows with ``sync``'s rules as their times settle
+(:class:`rplearn.data.live_sync.LiveMatcher`), predicts every new batch with the current model
+*before* learning from it (the prequential error: a running test score on samples no model
+had seen), adds the batch to the statistics (:class:`rplearn.models.live_stats.LiveStatistics`)
+and every ``refit_s`` refits from them and writes the model file atomically, so that a session
+stopped at any moment (Ctrl-C, SIGTERM, a killed process) leaves the last good model. It ends
+at the end of the stream (no row for ``idle_s``), after ``duration_s``, or when every node's
+pattern spread over its covered directions is below ``until_spread_db`` and/or every node's
+covered share of the sphere reaches ``until_coverage_pct``; a last exact refit then follows.
+
+Its final model is the offline fit of the same rows with every stretch learned from
+(:mod:`rplearn.models.live_stats`): ``rplearn sync`` of the recorded logs, then ``rplearn fit
+DATA --units 'flight[1/5],flight[2/5],flight[3/5],flight[4/5],test[5/5]'`` (and ``--order N``
+for a fixed order). From a CSV source the last refit comes from the statistics alone (the
+stretches' cuts exact, :mod:`rplearn.models.live_stats`). A MAVLink stream is recorded as a
+``.tlog`` whose reader looks at the whole log (the boot clock's median offset, the periods
+before a valid position fix are found after the fact), so rows matched from a shorter read can
+differ from ``sync`` of the whole recording: the last refit of a MAVLink session learns the
+recording matched whole, once, and says so in the notes.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import shutil
+import tempfile
+import time
+from collections import deque
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from rplearn._argtypes import check_types
+from rplearn._atomic import atomic_path, check_output
+from rplearn.analysis.budget import check_fit_budget
+from rplearn.analysis.decoupling import decoupling_certificate
+from rplearn.data.live_sync import LiveMatcher
+from rplearn.data.sync import DROP_REASONS, SyncOptions
+from rplearn.errors import InputError, RplearnError
+from rplearn.io.live_sources import CsvTail, MavlinkSource
+from rplearn.io.options import ReaderOptions
+from rplearn.models.live_stats import MAX_SEGMENTS, LiveStatistics
+from rplearn.models.options import FitOptions
+from rplearn.models.spec import ModelSpec
+
+#: The manoeuvre hook: ``(statistics, spec, latest pose per node) -> rows (name, duration [s],
+#: predicted spread after [dB])``; the statistics are the fixed-order ``NormalEquations`` of
+#: every sample so far (at the accumulation order), the spec the current model's.
+ManoeuvreRanker = Callable[[Any, ModelSpec, pd.DataFrame], Sequence[tuple[str, float, float]]]
+#: Matched rows kept for the link budget's plausibility check (a window of the latest).
+BUDGET_WINDOW_ROWS = 2000
+
+
+@check_types
+@dataclass(frozen=True)
+class LiveOptions:
+    """How a live session learns and when it stops.
+
+    Attributes
+    ----------
+    spec : ModelSpec
+        Pattern model: its kind and ridge with ``fit.auto``, else its fixed order.
+    fit : FitOptions
+        As ``fit`` (gauge, path loss, link offsets, ``auto``).
+    reader : ReaderOptions
+        How a MAVLink stream is read (transmit power, frequency, station).
+    sync : SyncOptions
+        How rows are matched (as ``sync``; no time window, no airborne filter).
+    refit_s : float
+        Seconds between refits.
+    duration_s, until_spread_db, until_coverage_pct : float or None
+        Stop criteria (module docstring).
+    idle_s : float
+        The stream has ended when nothing arrived for this long [s].
+    nodes : tuple of str or None
+        The node ids (default: those of the first matched batch).
+    manoeuvres : ManoeuvreRanker or None
+        Ranks the next manoeuvres at every refit (shown top three).
+    max_segments : int
+        Segments of statistics kept (:class:`rplearn.models.live_stats.LiveStatistics`).
+    """
+
+    spec: ModelSpec = field(default_factory=lambda: ModelSpec.parse("sh"))
+    fit: FitOptions = field(default_factory=lambda: FitOptions(auto=True))
+    reader: ReaderOptions = field(default_factory=ReaderOptions)
+    sync: SyncOptions = field(default_factory=SyncOptions)
+    refit_s: float = 2.0
+    duration_s: float | None = None
+    until_spread_db: float | None = None
+    until_coverage_pct: float | None = None
+    idle_s: float = 10.0
+    nodes: tuple[str, ...] | None = None
+    manoeuvres: ManoeuvreRanker | None = None
+    max_segments: int = MAX_SEGMENTS
+
+    def __post_init__(self) -> None:
+        for name in ("refit_s", "idle_s", "duration_s", "until_spread_db"):
+            v = getattr(self, name)
+            if v is not None and not (math.isfinite(v) and v > 0):
+                raise InputError(f"{name}: expected a positive number of {'dB' if 'db' in name else 'seconds'}, got {v}",
+                                 param=name)
+        if self.until_coverage_pct is not None and not 0 < self.until_coverage_pct <= 100:
+            raise InputError(f"until_coverage_pct: expected a percentage in (0, 100], got {self.until_coverage_pct}",
+                             param="until_coverage_pct")
+
+
+@check_types
+@dataclass
+class LiveStatus:
+    """The numbers of the live view, after each refit.
+
+    Attributes
+    ----------
+    elapsed_s : float
+    received, matched, pending : int
+        Signal rows received, matched and waiting for their poses.
+    dropped : dict of str to int
+        Dropped rows by ``sync``'s reasons.
+    learned, refits : int
+    model : str
+        Label of the current model ('' before the first refit).
+    refit_ms : float
+        Wall time of the last refit [ms].
+    prequential_rmse_db : float
+        RMS error of every sample predicted before it was learned from [dB] (NaN before any).
+    prequential_n : int
+    noise_db : float
+        The current model's noise level [dB] (NaN before the first refit).
+    coverage_pct, spread_db, sphere_spread_db : dict of str to float
+        Per node: covered share of the sphere [%], pattern spread over its covered directions
+        and over the sphere [dB].
+    budget : list of str
+        The link budget's findings (empty: plausible).
+    manoeuvres : list of (str, float, float)
+        The next-best manoeuvres (name, duration [s], spread after [dB]), best first.
+    notes : list of str
+    stopped : str
+        Why the session ended ('' while it runs).
+    """
+
+    elapsed_s: float = 0.0
+    received: int = 0
+    matched: int = 0
+    pending: int = 0
+    dropped: dict[str, int] = field(default_factory=lambda: {r: 0 for r in DROP_REASONS})
+    learned: int = 0
+    refits: int = 0
+    model: str = ""
+    refit_ms: float = math.nan
+    prequential_rmse_db: float = math.nan
+    prequential_n: int = 0
+    noise_db: float = math.nan
+    coverage_pct: dict[str, float] = field(default_factory=dict)
+    spread_db: dict[str, float] = field(default_factory=dict)
+    sphere_spread_db: dict[str, float] = field(default_factory=dict)
+    budget: list[str] = field(default_factory=list)
+    manoeuvres: list[tuple[str, float, float]] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+    stopped: str = ""
+
+    def summary(self) -> str:
+        """Plain text of the numbers (printed at the end of a session)."""
+        lines = [f"{self.elapsed_s:.0f} s: {self.received} signal rows, {self.matched} matched, {self.learned} learned, "
+                 f"{self.refits} refits (last {self.refit_ms:.0f} ms), model {self.model or '-'}"]
+        lines += [f"  dropped ({r}): {n}" for r, n in self.dropped.items() if n]
+        lines.append(f"  prequential RMSE {self.prequential_rmse_db:.2f} dB over {self.prequential_n} samples, "
+                     f"noise {self.noise_db:.2f} dB")
+        for node in self.spread_db:
+            lines.append(f"  {node}: coverage {self.coverage_pct[node]:.1f}%, spread {self.spread_db[node]:.2f} dB covered, "
+                         f"{self.sphere_spread_db[node]:.2f} dB sphere")
+        lines += [f"  budget: {b}" for b in self.budget]
+        lines += [f"  next: {n} ({d:.0f} s) -> {s:.2f} dB" for n, d, s in self.manoeuvres[:3]]
+        lines += [f"  {n}" for n in self.notes]
+        if self.stopped:
+            lines.append(f"  stopped: {self.stopped}")
+        return "\n".join(lines)
+
+
+@check_types
+@dataclass
+class Prequential:
+    """Squared errors of samples predicted before they were learned from, batch by batch."""
+
+    n: list[int] = field(default_factory=list)
+    sse: list[float] = field(default_factory=list)
+
+    def add(self, residual_db: np.ndarray) -> None:
+        self.n.append(int(residual_db.size))
+        self.sse.append(float(residual_db @ residual_db))
+
+    def rmse_db(self, last_fraction: float = 1.0) -> float:
+        """RMSE over the last ``last_fraction`` of the predicted samples (whole batches) [dB]."""
+        n = np.asarray(self.n, np.float64)
+        if not n.sum():
+            return math.nan
+        keep = np.cumsum(n[::-1]) <= last_fraction * n.sum() + 0.5 * n[::-1]
+        return float(np.sqrt(np.sum(np.asarray(self.sse)[::-1][keep]) / max(n[::-1][keep].sum(), 1)))
+
+
+@check_types
+@dataclass
+class LiveOutcome:
+    """A finished session: the last status, the last fitted model, the prequential record."""
+
+    status: LiveStatus
+    fitted: Any
+    prequential: Prequential
+    output: str
+
+
+@check_types
+def open_source(source: str, work_dir: str, reader: ReaderOptions) -> CsvTail | MavlinkSource:
+    """``POSE.csv,SIGNAL.csv`` (two canonical CSVs being appended to) or a MAVLink connection."""
+    if "," in source and all(p.lower().endswith(".csv") for p in source.split(",")):
+        pose, signal = source.split(",")
+        return CsvTail(pose, signal)
+    if reader.tx_power_dbm is None or reader.frequency_hz is None:
+        raise InputError(f"{source}: give the telemetry radios' transmit power [dBm] and carrier frequency [Hz], a "
+                         "MAVLink stream carries neither", param="tx_power_dbm")
+    return MavlinkSource(source, os.path.join(work_dir, "session.tlog"), reader)
+
+
+class _Session:
+    """The state of one live session (see :func:`run_live`)."""
+
+    def __init__(self, options: LiveOptions, output: str, work_dir: str) -> None:
+        self.options, self.output, self.work_dir = options, output, work_dir
+        self.matcher = LiveMatcher(options.sync)
+        self.stats: LiveStatistics | None = None
+        self.fitted: Any = None
+        self.status = LiveStatus()
+        self.preq = Prequential()
+        self.recent: deque[pd.DataFrame] = deque()
+        self.last_pose: dict[str, pd.Series] = {}
+        self.new_samples = 0
+
+    def feed(self, poses: pd.DataFrame, signals: pd.DataFrame) -> None:
+        if len(poses):
+            self.matcher.add_poses(poses)
+            for node, group in poses.groupby("node", sort=False):
+                self.last_pose[str(node)] = group.sort_values("t").iloc[-1]
+        self.matcher.add_signals(signals)
+        self.status.received += len(signals)
+
+    def learn(self, final: bool = False) -> None:
+        try:
+            rows = self.matcher.match(final).dataset
+        except InputError as exc:  # too few matched over the whole stream: the matched rows are learned
+            rows = self.matcher.last_matched
+            self.status.notes.append(str(exc))
+        if len(rows):
+            if self.stats is None:
+                nodes = self.options.nodes or tuple(sorted(set(map(str, rows["tx"])) | set(map(str, rows["rx"]))))
+                self.stats = LiveStatistics(self.options.spec, nodes, self.options.fit,
+                                            spool_dir=self.work_dir, max_segments=self.options.max_segments)
+            samples = self.stats.samples(rows)
+            if self.fitted is not None:  # predicted before it is learned from
+                self.preq.add(samples.joint_gain_db - self.fitted.model.predict_gain(samples))
+            self.stats.add(rows, samples)
+            self.new_samples += len(samples)
+            self.recent.append(rows)
+            while sum(len(r) for r in self.recent) - len(self.recent[0]) >= BUDGET_WINDOW_ROWS:
+                self.recent.popleft()
+        s = self.status
+        s.matched, s.pending, s.dropped = self.matcher.summary.n_out, self.matcher.pending_rows, dict(self.matcher.summary.dropped)
+        s.learned = 0 if self.stats is None else self.stats.n_samples
+        s.prequential_rmse_db, s.prequential_n = self.preq.rmse_db(), int(sum(self.preq.n))
+
+    def rematch_whole(self, src: MavlinkSource) -> None:
+        """Learn the recorded MAVLink log afresh, matched whole: its reader's rules look at the
+        whole log (the boot clock's median offset, the periods before a valid position), so rows
+        matched from a shorter read may differ from ``sync`` of the whole recording."""
+        from rplearn.data.sync import synchronise
+        from rplearn.io.read import read_logs
+
+        logs, _ = read_logs([src.record_path], self.options.reader)
+        if logs.pose is None or logs.signal is None or self.stats is None:
+            return
+        try:
+            result = synchronise(logs.pose, logs.signal, self.options.sync, src.record_path)
+        except InputError as exc:
+            self.status.notes.append(str(exc))
+            return
+        rows = result.dataset.sort_values("t", kind="stable").reset_index(drop=True)
+        before = self.stats.n_samples
+        self.stats = LiveStatistics(self.options.spec, self.stats.nodes, self.options.fit, spool_dir=self.work_dir,
+                                    max_segments=self.options.max_segments)
+        if len(rows):
+            self.stats.add(rows, self.stats.samples(rows, src.record_path))
+        self.new_samples = len(rows)
+        s = self.status
+        s.received, s.matched, s.pending, s.dropped = result.summary.n_in, result.summary.n_out, 0, dict(result.summary.dropped)
+        s.learned = self.stats.n_samples
+        s.notes.append(f"last refit: the recorded log matched whole, as sync does ({len(rows)} samples; "
+                       f"{before} were learned in flight)")
+
+    def refit(self, final: bool = False) -> bool:
+        if self.stats is None or (not self.new_samples and not final):
+            return False
+        t0 = time.perf_counter()
+        try:
+            fitted = self.stats.refit(final=final, provenance={"source": "rplearn live"})
+        except RplearnError as exc:  # too few samples yet
+            self.status.notes = [n for n in self.status.notes if not n.startswith("waiting: ")] + [f"waiting: {exc}"]
+            return False
+        self.status.refit_ms = 1e3 * (time.perf_counter() - t0)
+        fitted.model.save(self.output)  # atomic: an interrupted session keeps the last good model
+        self.fitted, self.new_samples = fitted, 0
+        self.status.refits += 1
+        self.status.notes = [n for n in self.status.notes if not n.startswith("waiting: ")]
+        self._describe()
+        return True
+
+    def _describe(self) -> None:
+        s, model = self.status, self.fitted.model
+        s.model = model.label
+        noise = model.training.noise_std_db if model.training.noise_std_db is not None else model.training.rmse_db
+        s.noise_db = math.nan if noise is None else float(noise)
+        try:
+            cert = decoupling_certificate(model, posterior=self.fitted.own_posterior)
+            for node, spread in cert.nodes.items():
+                s.coverage_pct[node] = 100.0 * spread.covered_fraction
+                s.spread_db[node] = spread.covered_std_db
+                s.sphere_spread_db[node] = spread.sphere_std_db
+        except InputError as exc:
+            s.notes.append(f"spread: {exc}")
+        if self.recent and self.stats is not None:
+            window = pd.concat(list(self.recent), ignore_index=True)
+            s.budget = [f.text for f in check_fit_budget(model, self.stats.samples(window))]
+        ranker = self.options.manoeuvres
+        if ranker is not None and self.stats is not None:
+            latest = pd.DataFrame(list(self.last_pose.values())).reset_index(drop=True)
+            try:
+                rows = ranker(self.stats.total(), self.fitted.spec, latest)
+                s.manoeuvres = sorted([(str(n), float(d), float(v)) for n, d, v in rows], key=lambda r: r[2])[:3]
+            except Exception as exc:  # the ranking is advice: its failure must not end the session
+                s.notes.append(f"manoeuvres: {type(exc).__name__}: {exc}")
+
+    def write_page(self, path: str | None) -> None:
+        if path is None:
+            return
+        from rplearn.viz.live_page import write_live_page
+
+        rows, node_rows = page_rows(self.status)
+        write_live_page(path, "rplearn live", rows, node_rows, None if self.fitted is None else self.fitted.model,
+                        refresh_s=max(self.options.refit_s, 1.0))
+
+    def stop_reason(self, elapsed_s: float) -> str:
+        o, s = self.options, self.status
+        if o.duration_s is not None and elapsed_s >= o.duration_s:
+            return f"duration {o.duration_s:g} s reached"
+        if not s.spread_db or (o.until_spread_db is None and o.until_coverage_pct is None):
+            return ""
+        spread_ok = o.until_spread_db is None or max(s.spread_db.values()) < o.until_spread_db
+        cover_ok = o.until_coverage_pct is None or min(s.coverage_pct.values()) >= o.until_coverage_pct
+        if spread_ok and cover_ok:
+            what = [f"every node's spread below {o.until_spread_db:g} dB" if o.until_spread_db is not None else "",
+                    f"every node's coverage at least {o.until_coverage_pct:g}%" if o.until_coverage_pct is not None else ""]
+            return " and ".join(w for w in what if w)
+        return ""
+
+
+@check_types
+def page_rows(status: LiveStatus) -> tuple[list[tuple[str, str]], list[list[str]]]:
+    """The numbers of :class:`LiveStatus` as (label, value) rows and a node table (header first)."""
+    s = status
+    rows = [("elapsed", f"{s.elapsed_s:.0f} s"), ("signal rows received", str(s.received)),
+            ("matched", str(s.matched)), ("waiting for poses", str(s.pending)), ("learned", str(s.learned)),
+            ("model", s.model or "-"), ("refits", f"{s.refits} (last {s.refit_ms:.0f} ms)"),
+            ("prequential RMSE", f"{s.prequential_rmse_db:.2f} dB over {s.prequential_n} samples"),
+            ("noise level", f"{s.noise_db:.2f} dB")]
+    rows += [(f"dropped ({r})", str(n)) for r, n in s.dropped.items() if n]
+    rows += [("link budget", b) for b in s.budget] or [("link budget", "plausible")]
+    rows += [(f"next manoeuvre {k + 1}", f"{n} ({d:.0f} s): spread {v:.2f} dB after")
+             for k, (n, d, v) in enumerate(s.manoeuvres[:3])]
+    rows += [("note", n) for n in s.notes]
+    if s.stopped:
+        rows.append(("stopped", s.stopped))
+    nodes = [["node", "coverage", "spread where looked", "spread on the sphere"]]
+    nodes += [[n, f"{s.coverage_pct[n]:.1f}%", f"{s.spread_db[n]:.2f} dB", f"{s.sphere_spread_db[n]:.2f} dB"]
+              for n in s.spread_db]
+    return rows, nodes
+
+
+@check_types
+def run_live(
+    source: str,
+    output: str,
+    options: LiveOptions | None = None,
+    on_update: Callable[[LiveStatus], None] | None = None,
+    record: str | None = None,
+    html: str | None = None,
+) -> LiveOutcome:
+    """Learn from a live source until it ends or a stop criterion holds (module docstring).
+
+    Parameters
+    ----------
+    source : str
+        A MAVLink connection string (``udpin:0.0.0.0:14550``, ``tcp:host:port``, a serial
+        device) or ``POSE.csv,SIGNAL.csv``.
+    output : str
+        Model file (JSON), rewritten atomically at every refit.
+    options : LiveOptions, optional
+    on_update : callable, optional
+        Called with the :class:`LiveStatus` after every poll that matched rows and every refit.
+    record : str, optional
+        Where to keep the received MAVLink stream as a ``.tlog`` (written at the end).
+    html : str, optional
+        A page with the same numbers and the coverage and spread maps, rewritten at every
+        refit (the browser reloads it).
+
+    Returns
+    -------
+    LiveOutcome
+    """
+    options = options or LiveOptions()
+    check_output(output, [p for p in source.split(",") if os.path.exists(p)])
+    for extra in (record, html):
+        if extra is not None:
+            check_output(extra, [output])
+    work_dir = tempfile.mkdtemp(prefix="rplearn-live-")
+    src = open_source(source, work_dir, options.reader)
+    session = _Session(options, output, work_dir)
+    start = last_rx = last_refit = time.monotonic()
+    try:
+        while True:
+            got = src.poll()
+            now = time.monotonic()
+            session.feed(got.poses, got.signals)
+            if got.received:
+                last_rx = now
+            if len(got.signals) or len(got.poses):
+                session.learn()
+                if on_update is not None:
+                    session.status.elapsed_s = now - start
+                    on_update(session.status)
+            if now - last_refit >= options.refit_s and session.refit():
+                last_refit = now
+                session.status.elapsed_s = now - start
+                session.write_page(html)
+                if on_update is not None:
+                    on_update(session.status)
+            reason = session.stop_reason(now - start)
+            if not reason and now - last_rx >= options.idle_s:
+                reason = f"end of stream (nothing received for {options.idle_s:g} s)"
+            if reason:
+                session.status.stopped = reason
+                break
+            if not got.received:
+                time.sleep(0.05)
+        last = src.poll(final=True) if isinstance(src, MavlinkSource) else src.poll()
+        session.feed(last.poses, last.signals)
+        session.learn(final=True)
+        if isinstance(src, MavlinkSource):
+            src.close()
+            session.rematch_whole(src)
+        session.refit(final=True)
+        session.status.elapsed_s = time.monotonic() - start
+        session.write_page(html)
+        if on_update is not None:
+            on_update(session.status)
+    finally:
+        src.close()
+        if record is not None and isinstance(src, MavlinkSource) and os.path.exists(src.record_path):
+            with atomic_path(record) as tmp:
+                shutil.copyfile(src.record_path, tmp)
+        shutil.rmtree(work_dir, ignore_errors=True)
+    if session.fitted is None:
+        raise InputError(f"{source}: the session ended before a model could be learned "
+                         f"({session.status.learned} samples learned)", param="source")
+    return LiveOutcome(session.status, session.fitted, session.preq, output)
+
+
+@check_types
+def replay_session(
+    pose_log: pd.DataFrame,
+    signal_log: pd.DataFrame,
+    output: str,
+    options: LiveOptions | None = None,
+    batch_s: float = 1.0,
+    on_update: Callable[[LiveStatus], None] | None = None,
+) -> LiveOutcome:
+    """A live session on logs already written, fed ``batch_s`` of log time at a time with no
+    waiting: the same matching, prequential prediction, statistics and refits (every
+    ``options.refit_s`` of log time) as :func:`run_live`, deterministic (tests, benchmarks,
+    a flight log learned as it would have been in flight). Stops at ``until_*`` criteria and
+    ``duration_s`` (log time) as :func:`run_live` does; the model file is written at every refit;
+    ``on_update(status)`` after every batch.
+    """
+    options = options or LiveOptions()
+    if not batch_s > 0:
+        raise InputError(f"batch_s: expected a positive number of seconds, got {batch_s}", param="batch_s")
+    check_output(output, [])
+    work_dir = tempfile.mkdtemp(prefix="rplearn-live-")
+    session = _Session(options, output, work_dir)
+    try:
+        pt = pose_log["t"].to_numpy(np.float64)
+        st = signal_log["t"].to_numpy(np.float64)
+        t0 = float(min(pt.min(), st.min()))
+        end = float(max(pt.max(), st.max()))
+        last_refit = t0
+        edge = t0
+        while edge <= end:
+            nxt = edge + batch_s
+            session.feed(pose_log[(pt >= edge) & (pt < nxt)], signal_log[(st >= edge) & (st < nxt)])
+            session.learn()
+            if nxt - last_refit >= options.refit_s and session.refit():
+                last_refit = nxt
+            session.status.elapsed_s = nxt - t0
+            if on_update is not None:
+                on_update(session.status)
+            reason = session.stop_reason(nxt - t0)
+            edge = nxt
+            if reason:
+                session.status.stopped = reason
+                break
+        session.learn(final=True)
+        session.refit(final=True)
+        if not session.status.stopped:
+            session.status.stopped = "end of the logs"
+    finally:
+        shutil.rmtree(work_dir, ignore_errors=True)
+    if session.fitted is None:
+        raise InputError(f"the logs ended before a model could be learned ({session.status.learned} samples learned)",
+                         param="signal_log")
+    return LiveOutcome(session.status, session.fitted, session.preq, output)
+
+
+__all__ = ["BUDGET_WINDOW_ROWS", "LiveOptions", "LiveOutcome", "LiveStatus", "ManoeuvreRanker", "Prequential",
+           "open_source", "page_rows", "replay_session", "run_live"]

@@ -1,0 +1,70 @@
+"""LiveMatcher: rows matched as they arrive give what sync gives on the whole logs."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from rplearn.data.live_sync import LiveMatcher
+from rplearn.data.sync import SyncOptions, synchronise
+from rplearn.errors import InputError
+from rplearn.sim import simulate
+
+
+@pytest.fixture(scope="module")
+def logs() -> tuple[pd.DataFrame, pd.DataFrame]:
+    r = simulate("smoke", seed=0)
+    signal = r.signal_log.drop(columns=["unit"])
+    # a row logged twice in batches far apart, and a station logged once
+    signal = pd.concat([signal, signal.iloc[[10]]], ignore_index=True)
+    return r.pose_log, signal
+
+
+def _live(pose: pd.DataFrame, signal: pd.DataFrame, batch_s: float) -> tuple[pd.DataFrame, LiveMatcher]:
+    m = LiveMatcher()
+    out = []
+    edges = np.arange(pose["t"].min(), pose["t"].max() + batch_s, batch_s)
+    for a, b in zip(edges[:-1], edges[1:]):
+        m.add_poses(pose[(pose["t"] >= a) & (pose["t"] < b)])
+        m.add_signals(signal[(signal["t"] >= a) & (signal["t"] < b)])
+        out.append(m.match().dataset)
+    m.add_signals(signal[signal["t"] >= edges[-1]])
+    out.append(m.match(final=True).dataset)
+    return pd.concat([o for o in out if len(o)], ignore_index=True), m
+
+
+@pytest.mark.parametrize("batch_s", [0.5, 3.0])
+def test_matching_as_rows_arrive_gives_syncs_rows_and_counts(logs, batch_s):
+    pose, signal = logs
+    whole = synchronise(pose, signal)
+    live, m = _live(pose, signal, batch_s)
+    expected = whole.dataset.sort_values("t", kind="stable").reset_index(drop=True)
+    assert len(live) == len(expected) > 2000
+    num = [c for c in expected.columns if c not in ("tx", "rx")]
+    np.testing.assert_allclose(live[num].to_numpy(float), expected[num].to_numpy(float), rtol=0, atol=1e-9)
+    assert (live["tx"].astype(str).to_numpy() == expected["tx"].astype(str).to_numpy()).all()
+    assert m.summary.dropped == whole.summary.dropped
+    assert m.summary.dropped["duplicate"] == 1
+    assert m.pending_rows == 0
+
+
+def test_a_row_waits_until_every_moving_node_has_a_pose_after_it(logs):
+    pose, signal = logs
+    m = LiveMatcher()
+    m.add_poses(pose[pose["t"] < 5.0])
+    m.add_signals(signal[signal["t"] < 6.0])
+    got = m.match().dataset
+    assert len(got) and got["t"].max() <= m.settled_s() < 5.0
+    assert m.pending_rows == int(((signal["t"] > m.settled_s()) & (signal["t"] < 6.0)).sum())
+
+
+def test_the_pose_rows_kept_stay_bounded_as_the_flight_goes_on(logs):
+    pose, signal = logs
+    _, m = _live(pose, signal, 1.0)
+    assert len(m._poses) < len(pose) / 20
+
+
+def test_whole_log_options_are_refused():
+    with pytest.raises(InputError, match="airborne"):
+        LiveMatcher(SyncOptions(airborne=True))

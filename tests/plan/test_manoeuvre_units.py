@@ -1,0 +1,105 @@
+"""Manoeuvre units and the candidates flyable from the current poses (issue 27, item 3)."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from rplearn.errors import InputError
+from rplearn.plan.campaign import Campaign
+from rplearn.plan.ground import GroundPassUnit
+from rplearn.plan.manoeuvres import CandidateOptions, ManoeuvreUnit, candidate_manoeuvres
+from rplearn.plan.trajectory import TrajectoryUnit
+
+PAIR = {"A": ((-5.0, 0.0, 20.0), 0.0), "B": ((5.0, 0.0, 20.0), 0.0)}
+
+
+def _unit(kind, **kw):
+    return ManoeuvreUnit(nodes=("B", "A"), kind=kind, anchor_enu_m=(5.0, 0.0, 20.0), start_enu_m=(-5.0, 0.0, 20.0), **kw)
+
+
+def test_a_yaw_turn_stays_in_place_and_turns_once_around():
+    u = _unit("yaw")
+    # trapezoid: 360 deg at 30 deg/s with 60 deg/s^2 ramps = 12 s cruise-equivalent + 0.5 s
+    assert u.duration_s == pytest.approx(12.5)
+    ref = u.sample(20.0)
+    assert np.allclose(ref.position_enu_m[:, 1], (-5.0, 0.0, 20.0)) and np.allclose(ref.position_enu_m[:, 0], (5.0, 0.0, 20.0))
+    turned = np.unwrap(ref.yaw_rad[:, 1])
+    assert turned[-1] - turned[0] == pytest.approx(2 * np.pi, abs=1e-9) and np.all(np.diff(turned) >= -1e-12)
+    assert u.end_pose()[0] == pytest.approx((-5.0, 0.0, 20.0))
+
+
+def test_an_orbit_keeps_its_distance_and_elevation_and_its_velocity_is_the_derivative():
+    u = _unit("orbit", elevation_deg=45.0, distance_m=6.0)
+    ref = u.sample(50.0)
+    anchor = np.array([5.0, 0.0, 20.0])
+    d = ref.position_enu_m[:, 1] - anchor
+    on_circle = np.abs(np.linalg.norm(d, axis=1) - 6.0) < 1e-6
+    assert on_circle[-1] and on_circle.mean() > 0.5  # the transit, then the circle
+    el = np.degrees(np.arctan2(d[on_circle, 2], np.hypot(d[on_circle, 0], d[on_circle, 1])))
+    assert np.allclose(el, 45.0)
+    bearing = np.unwrap(np.arctan2(d[on_circle, 1], d[on_circle, 0]))
+    assert bearing.max() - bearing.min() == pytest.approx(2 * np.pi, abs=0.01)  # a full circle
+    v_num = np.gradient(ref.position_enu_m[:, 1], ref.t_s, axis=0)
+    assert np.max(np.abs(v_num - ref.velocity_enu_m_s[:, 1])[2:-2]) < 0.05
+    assert np.max(np.linalg.norm(ref.velocity_enu_m_s[:, 1], axis=1)) <= 1.5 + 1e-9
+    assert np.allclose(ref.yaw_rad[:, 1], 0.0)  # heading fixed in the world
+
+
+def test_a_spiral_climbs_and_turns_at_once():
+    spiral, then = _unit("spiral", elevation_deg=30.0), _unit("climb_turn", elevation_deg=30.0)
+    climb, turn = _unit("climb", elevation_deg=30.0), _unit("yaw")
+    assert spiral.duration_s == pytest.approx(max(climb.duration_s, turn.duration_s))
+    assert then.duration_s == pytest.approx(climb.duration_s + turn.duration_s)
+    end = spiral.end_pose()[0]
+    assert end[2] == pytest.approx(20.0 + 10.0 * np.tan(np.radians(30.0)))
+
+
+@pytest.mark.parametrize(("kw", "param"), [
+    (dict(kind="hover"), "kind"),
+    (dict(kind="orbit", elevation_deg=95.0), "elevation_deg"),
+    (dict(kind="yaw", speed_m_s=0.0), "speed_m_s"),
+    (dict(kind="orbit", elevation_deg=10.0, distance_m=0.2), "distance_m"),
+])
+def test_bad_manoeuvres_are_refused_naming_the_field(kw, param):
+    with pytest.raises(InputError) as err:
+        _unit(**kw)
+    assert err.value.param == param
+
+
+def test_candidates_never_move_a_fixed_node_and_respect_the_heights():
+    poses = {"G": ((0.0, 0.0, 1.5), 10.0), "D": ((40.0, 5.0, 15.0), 190.0)}
+    cands = candidate_manoeuvres(poses, CandidateOptions(fixed_nodes=("G",), min_height_m=5.0))
+    assert cands and all("G" not in c.ends for c in cands)
+    for c in cands:
+        ref = c.unit.sample(5.0)
+        j = list(c.unit.nodes).index("G")
+        assert np.allclose(ref.position_enu_m[:, j], (0.0, 0.0, 1.5))
+        assert ref.position_enu_m[:, 1 - j, 2].min() >= 5.0 - 1e-6
+    assert any(isinstance(c.unit, GroundPassUnit) for c in cands)
+    assert not any(isinstance(c.unit, TrajectoryUnit) for c in cands)
+
+
+def test_two_drones_get_every_kind_and_the_paper_units_where_they_are():
+    cands = candidate_manoeuvres(PAIR)
+    kinds = {getattr(c.unit, "kind", type(c.unit).__name__) for c in cands}
+    assert {"yaw", "climb", "climb_turn", "spiral", "orbit", "TrajectoryUnit"} <= kinds
+    paper = [c for c in cands if isinstance(c.unit, TrajectoryUnit) and c.unit.psi0_deg == 0.0]
+    assert paper and all(c.lead_s == pytest.approx(0.0, abs=1e-9) for c in paper)  # it starts where they are
+    assert len({c.unit.label for c in cands}) == len(cands)
+    with pytest.raises(InputError):
+        candidate_manoeuvres({"A": PAIR["A"]})
+
+
+def test_the_simulator_flies_a_sequence_of_manoeuvres():
+    from rplearn.sim import simulate
+    from rplearn.sim.presets import make_preset
+
+    units = (_unit("yaw", label="m1"), _unit("spiral", elevation_deg=20.0, label="m2"))
+    config = make_preset("smoke")
+    sim = simulate(replace(config, campaign=Campaign(units, gap_s=1.0)), seed=2)  # type: ignore[arg-type]
+    assert set(sim.signal_log["unit"]) == {"m1", "m2"}
+    b = sim.pose_log[sim.pose_log["node"] == "B"]
+    assert np.allclose(b[["x", "y"]].median().to_numpy(), (5.0, 0.0), atol=0.5)

@@ -1,0 +1,57 @@
+"""``trajectory --optimize``: the greedy information plan and its references (issue 27, item 5)."""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from rplearn.errors import InputError
+from rplearn.workflows.calibration_plan import OptimizeOptions, optimize_plan
+
+SMALL = dict(model="sh-5", target_spread_db=2.5, budget_s=150.0, noise_std_db=4.0, prior_std_db=4.0)
+
+
+def test_the_plan_lowers_the_spread_within_its_budget_and_writes_the_trajectory_format(tmp_path):
+    plan = optimize_plan(str(tmp_path / "plan"), OptimizeOptions(**SMALL))
+    assert plan.steps and plan.duration_s <= 150.0
+    worst = [max(plan.start_spread_db.values())] + [max(s.spread_db.values()) for s in plan.steps]
+    assert all(b < a for a, b in zip(worst, worst[1:]))
+    assert worst[0] == pytest.approx(4.0, rel=1e-3)  # the prior's stated spread
+    assert worst[-1] <= 2.5 or plan.duration_s + 5.0 > 150.0
+    labels = [u.label for u in plan.campaign.units]
+    assert labels[0].startswith("01_") and len(plan.paths) == 2 * len(labels)
+    for path in plan.paths:
+        ref = pd.read_csv(path)
+        assert list(ref.columns) == ["t", "x", "y", "z", "yaw_deg"] and ref["t"].iloc[0] == 0.0
+        assert ref["t"].is_monotonic_increasing and ref["z"].min() >= 3.0 - 1e-6
+    text = plan.summary()
+    assert "(prior)" in text and plan.steps[0].manoeuvre.name in text
+
+
+def test_a_station_never_moves(tmp_path):
+    plan = optimize_plan(str(tmp_path / "plan"), OptimizeOptions(**SMALL, station=True, distance_m=30.0))
+    station = [p for p in plan.paths if p.endswith("_G.csv")]
+    assert station
+    for path in station:
+        ref = pd.read_csv(path)
+        assert np.allclose(ref[["x", "y", "z"]].to_numpy(), ref[["x", "y", "z"]].to_numpy()[0])
+
+
+def test_a_prior_pattern_must_be_a_pattern_model(tmp_path):
+    bad = tmp_path / "not_a_model.json"
+    bad.write_text("{}")
+    with pytest.raises(Exception) as err:
+        optimize_plan(str(tmp_path / "plan"), OptimizeOptions(**SMALL, prior_pattern=str(bad)))
+    assert "not_a_model.json" in str(err.value)
+    assert not os.path.exists(tmp_path / "plan")
+
+
+@pytest.mark.parametrize(("kw", "param"), [(dict(budget_s=0.0), "budget_s"), (dict(target_spread_db=-1.0), "target_spread_db"),
+                                           (dict(noise_std_db=float("nan")), "noise_std_db")])
+def test_bad_options_name_their_field(kw, param):
+    with pytest.raises(InputError) as err:
+        OptimizeOptions(**{**SMALL, **kw})
+    assert err.value.param == param

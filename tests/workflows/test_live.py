@@ -1,0 +1,181 @@
+"""rplearn live: a replayed .tlog over UDP, a CSV being appended to, a killed session, the
+prequential error against a later flight, the stop criteria and the manoeuvre hook."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from rplearn.core.lsq.normal_equations import NormalEquations
+from rplearn.data.sync import synchronise
+from rplearn.data.tables import link_samples
+from rplearn.io.options import ReaderOptions
+from rplearn.models.load import load_model
+from rplearn.models.options import FitOptions
+from rplearn.models.spec import ModelSpec
+from rplearn.plan.campaign import Campaign
+from rplearn.sim import make_preset, simulate
+from rplearn.workflows.learning import fit_dataset
+from rplearn.workflows.live import LiveOptions, replay_session, run_live
+from rplearn.workflows.logs import sync_logs
+
+ROOT = Path(__file__).resolve().parents[2]
+TLOG = ROOT / "tests" / "fixtures" / "ardupilot" / "mavlink-log_2013-10-13_16-58-51.tlog"
+ALL_STRETCHES = ["flight[1/5]", "flight[2/5]", "flight[3/5]", "flight[4/5]", "test[5/5]"]
+ENV = {**os.environ, "PYTHONPATH": str(ROOT / "src")}
+
+
+def _rplearn(*args: str, **kw) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-m", "rplearn", *args], env=ENV, stdout=subprocess.PIPE,
+                            stderr=subprocess.STDOUT, text=True, **kw)
+
+
+def _offline(dataset: str, spec: ModelSpec, options: FitOptions):
+    return fit_dataset(dataset, spec, ALL_STRETCHES, options=options).fitted.model
+
+
+def _max_difference_db(a, b, dataset: str) -> float:
+    rows = pd.read_parquet(dataset)
+    s = link_samples(rows, dataset, nodes=b.nodes)
+    return float(max(np.abs(a.predict_gain(s) - b.predict_gain(s)).max(),
+                     np.abs(a.predict_gain_std(s) - b.predict_gain_std(s)).max()))
+
+
+def _free_port() -> int:
+    import socket
+
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def test_a_tlog_replayed_over_udp_at_20x_ends_with_the_offline_model(tmp_path):
+    port = _free_port()
+    model, record = str(tmp_path / "live.json"), str(tmp_path / "received.tlog")
+    live = _rplearn("live", f"udpin:127.0.0.1:{port}", "--tx-power", "20", "--frequency", "433e6", "--idle", "3",
+                    "--refit-s", "1", "--quiet", "--record", record, "-o", model)
+    time.sleep(3.0)
+    replay = _rplearn("replay", str(TLOG), "--to", f"127.0.0.1:{port}", "--speed", "20")
+    assert replay.wait(timeout=300) == 0, replay.stdout.read()
+    out, _ = live.communicate(timeout=300)
+    assert live.returncode == 0, out
+    assert "last refit: the recorded log matched whole" in out
+    data = str(tmp_path / "data.parquet")
+    sync_logs([record], [record], data, ReaderOptions(tx_power_dbm=20.0, frequency_hz=433e6))
+    offline = _offline(data, ModelSpec.parse("sh"), FitOptions(auto=True))
+    learned = load_model(model)
+    assert learned.label == offline.label
+    assert _max_difference_db(learned, offline, data) < 1e-6
+
+
+def _appender(pose: pd.DataFrame, sig: pd.DataFrame, folder: Path, speed: float) -> threading.Thread:
+    def write() -> None:
+        pose.iloc[:0].to_csv(folder / "pose.csv", index=False)
+        sig.iloc[:0].to_csv(folder / "signal.csv", index=False)
+        t0, w0 = float(pose["t"].min()), time.monotonic()
+        for a in np.arange(t0, float(pose["t"].max()) + 0.5, 0.5):
+            while time.monotonic() - w0 < (a - t0) / speed:
+                time.sleep(0.005)
+            pose[(pose["t"] >= a) & (pose["t"] < a + 0.5)].to_csv(folder / "pose.csv", mode="a", header=False, index=False)
+            sig[(sig["t"] >= a) & (sig["t"] < a + 0.5)].to_csv(folder / "signal.csv", mode="a", header=False, index=False)
+
+    th = threading.Thread(target=write)
+    th.start()
+    return th
+
+
+@pytest.fixture(scope="module")
+def smoke() -> tuple[pd.DataFrame, pd.DataFrame]:
+    r = simulate("smoke", seed=0)
+    return r.pose_log, r.signal_log.drop(columns=["unit"])
+
+
+def test_a_csv_being_appended_to_ends_with_the_offline_model(smoke, tmp_path):
+    pose, sig = smoke
+    writer = _appender(pose, sig, tmp_path, speed=40.0)
+    source = f"{tmp_path / 'pose.csv'},{tmp_path / 'signal.csv'}"
+    page = str(tmp_path / "live.html")
+    outcome = run_live(source, str(tmp_path / "live.json"), LiveOptions(refit_s=0.5, idle_s=2.0), html=page)
+    writer.join()
+    assert outcome.status.refits >= 2 and outcome.status.prequential_n > 0
+    data = str(tmp_path / "data.parquet")
+    sync_logs([str(tmp_path / "pose.csv")], [str(tmp_path / "signal.csv")], data)
+    offline = _offline(data, ModelSpec.parse("sh"), FitOptions(auto=True))
+    learned = load_model(str(tmp_path / "live.json"))
+    assert learned.label == offline.label
+    assert _max_difference_db(learned, offline, data) < 1e-6
+    text = Path(page).read_text()
+    assert "http-equiv='refresh'" in text and text.count("data:image/png;base64,") == 2
+    assert "prequential RMSE" in text
+
+
+def test_a_session_killed_mid_flight_leaves_a_valid_model(smoke, tmp_path):
+    pose, sig = smoke
+    writer = _appender(pose, sig, tmp_path, speed=4.0)
+    model = tmp_path / "live.json"
+    live = _rplearn("live", f"{tmp_path / 'pose.csv'},{tmp_path / 'signal.csv'}", "--refit-s", "0.5", "--quiet",
+                    "-o", str(model))
+    try:
+        deadline = time.monotonic() + 120
+        while not model.exists() and time.monotonic() < deadline:
+            time.sleep(0.2)
+        assert model.exists(), "no model written in time"
+        time.sleep(1.5)  # more refits: the file is being replaced while we kill
+        os.kill(live.pid, signal.SIGKILL)
+        live.wait(timeout=30)
+    finally:
+        if live.poll() is None:
+            live.kill()
+        writer.join()
+    learned = load_model(str(model))
+    rows = synchronise(pose, sig).dataset
+    s = link_samples(rows, "smoke", nodes=learned.nodes)
+    assert np.isfinite(learned.predict_gain(s)).all()
+
+
+def test_the_prequential_error_of_the_last_fifth_predicts_a_later_flights_error(tmp_path):
+    cfg = make_preset("smoke")
+    unit = replace(cfg.campaign.units[0], n_loops=4)
+    cfg = replace(cfg, campaign=Campaign((unit, replace(unit, role="testing", label="test_0")), gap_s=5.0))
+    r = simulate(cfg, seed=0)
+    sig = r.signal_log
+    first = sig[sig["unit"] == unit.label].drop(columns=["unit"])
+    later = sig[sig["unit"] == "test_0"].drop(columns=["unit"])
+    outcome = replay_session(r.pose_log, first, str(tmp_path / "m.json"), LiveOptions(refit_s=5.0))
+    model = outcome.fitted.model
+    held = link_samples(synchronise(r.pose_log, later).dataset, "later flight", nodes=model.nodes)
+    held_rmse = float(np.sqrt(np.mean((held.joint_gain_db - model.predict_gain(held)) ** 2)))
+    prequential = outcome.prequential.rmse_db(0.2)
+    print(f"prequential RMSE (last fifth) {prequential:.3f} dB, later flight {held_rmse:.3f} dB")
+    assert abs(prequential / held_rmse - 1.0) < 0.15
+
+
+def test_the_stop_criteria_and_the_manoeuvre_hook(smoke, tmp_path):
+    pose, sig = smoke
+    seen = []
+
+    def ranker(stats, spec, latest):
+        seen.append((stats, spec, latest))
+        return [("orbit", 30.0, 1.5), ("yaw turn", 10.0, 1.2), ("climb", 20.0, 1.9), ("descent", 20.0, 2.5)]
+
+    options = LiveOptions(refit_s=5.0, until_coverage_pct=20.0, manoeuvres=ranker)
+    outcome = replay_session(pose, sig, str(tmp_path / "m.json"), options)
+    assert "coverage at least 20%" in outcome.status.stopped
+    assert outcome.status.learned < len(sig) / 2
+    assert min(outcome.status.coverage_pct.values()) >= 20.0
+    stats, spec, latest = seen[-1]
+    assert isinstance(stats, NormalEquations) and stats.n_samples == outcome.status.learned
+    assert isinstance(spec, ModelSpec) and set(latest["node"]) == {"A", "B"}
+    assert [m[0] for m in outcome.status.manoeuvres] == ["yaw turn", "orbit", "climb"]
+    assert "next: yaw turn" in outcome.status.summary()
+    assert load_model(str(tmp_path / "m.json")).label == outcome.fitted.model.label
