@@ -1,21 +1,37 @@
-"""One BLAS thread for small fits (issue 13, item 4)."""
+"""One BLAS thread for small fits (issue 13, item 4); threads from the size and the free cores (issue 30)."""
 
 from __future__ import annotations
 
 import numpy  # noqa: F401  (loads the BLAS libraries whose threads are counted)
+import pytest
 import scipy.linalg  # noqa: F401
 from threadpoolctl import threadpool_info
 
-from rplearn.core.threads import SMALL_FIT_FLOPS, blas_threads_for, is_small_fit
+from rplearn.core import threads
+from rplearn.core.threads import (
+    SMALL_FIT_FLOPS,
+    THREADS_ENV,
+    blas_thread_count,
+    blas_threads_for,
+    free_cores,
+    free_cores_of,
+    is_small_fit,
+    prediction_flops,
+    thread_override,
+    usable_cores,
+)
+from rplearn.errors import InputError
 
 
 def blas_threads() -> list[int]:
     return [p["num_threads"] for p in threadpool_info() if p["user_api"] == "blas"]
 
 
-def test_small_fits_run_on_one_blas_thread_and_big_ones_keep_theirs():
+def test_small_fits_run_on_one_blas_thread_and_big_ones_keep_theirs(monkeypatch):
     before = blas_threads()
     assert before, "numpy's BLAS is visible to threadpoolctl"
+    monkeypatch.delenv(THREADS_ENV, raising=False)
+    monkeypatch.setattr(threads, "free_cores", lambda: max(before))  # an idle machine
     with blas_threads_for(1_333, 242):  # the paper's SH-10, two nodes
         assert blas_threads() == [1] * len(before)
     assert blas_threads() == before
@@ -147,3 +163,66 @@ def test_overlapping_blas_limits_from_two_threads_leave_the_threads_as_they_were
             t.join(10)
         assert min(inside_a[0]) == 1, (first.__name__, inside_a)
         assert blas_threads() == before, (first.__name__, second.__name__)
+
+
+def test_free_cores_are_the_usable_ones_less_the_others_load():
+    assert free_cores_of(2, 1.0) == 2  # only this process runs
+    assert free_cores_of(2, 2.0) == 1  # another keeps a core busy
+    assert free_cores_of(2, 9.0) == 1  # never fewer than one
+    assert free_cores_of(8, 3.0) == 6 and free_cores_of(8, 0.0) == 8
+    assert 1 <= free_cores() <= usable_cores()
+
+
+def test_big_work_gets_the_free_cores_and_small_work_one_thread(monkeypatch):
+    monkeypatch.delenv(THREADS_ENV, raising=False)
+    monkeypatch.setattr(threads, "free_cores", lambda: 1)  # a core busy elsewhere
+    assert blas_thread_count(1e12) == 1
+    monkeypatch.setattr(threads, "free_cores", lambda: 4)
+    assert blas_thread_count(1e12) == 4 and blas_thread_count(SMALL_FIT_FLOPS / 2) == 1
+    # a million links with spreads is big work, ten thousand without is not
+    assert prediction_flops(1_000_000, 100, spreads=True) >= SMALL_FIT_FLOPS
+    assert prediction_flops(10_000, 100) < SMALL_FIT_FLOPS
+
+
+def test_the_environment_overrides_the_policy_everywhere(monkeypatch):
+    monkeypatch.setenv(THREADS_ENV, "1")
+    assert thread_override() == 1 and blas_thread_count(1e15) == 1
+    before = blas_threads()
+    with blas_threads_for(2_000_000, 1_250):  # big, but the override says one thread
+        assert blas_threads() == [1] * len(before)
+    assert blas_threads() == before
+    monkeypatch.setenv(THREADS_ENV, "3")
+    assert blas_thread_count(10.0) == 3  # even small work
+    for bad in ("0", "-2", "two", "1.5"):
+        monkeypatch.setenv(THREADS_ENV, bad)
+        with pytest.raises(InputError, match=THREADS_ENV) as err:
+            thread_override()
+        assert err.value.param == THREADS_ENV
+    monkeypatch.setenv(THREADS_ENV, "")
+    assert thread_override() is None
+
+
+def test_a_prediction_runs_under_the_policy(monkeypatch):
+    import numpy as np
+
+    from rplearn.core.bases import make_basis
+    from rplearn.core.geometry import Directions
+    from rplearn.data.tables import LinkSamples
+    from rplearn.models.patterns import PatternSet
+
+    basis = make_basis("sh", 3)
+    model = PatternSet(basis, ("A", "B"), np.ones((2, basis.n_coef)), covariance=np.eye(2 * basis.n_coef))
+    z = np.zeros(4)
+    samples = LinkSamples(Directions(z, z, z, z), np.zeros(4, np.intp), np.ones(4, np.intp), ("A", "B"),
+                          np.full(4, np.nan), np.full(4, 10.0), np.full(4, 2.4e9))
+    seen = []
+    real = basis.evaluate
+
+    def spy(*args):
+        seen.append(blas_threads())
+        return real(*args)
+
+    monkeypatch.setattr(type(basis), "evaluate", lambda self, *a: spy(*a))
+    monkeypatch.delenv(THREADS_ENV, raising=False)
+    model.predict_gain(samples)
+    assert seen and all(counts == [1] * len(counts) for counts in seen)  # small work: one thread

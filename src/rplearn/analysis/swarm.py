@@ -32,8 +32,9 @@ from rplearn._argtypes import check_types
 from rplearn._budget import Cost, check_work
 from rplearn.analysis.heading_options import _check_frequency
 from rplearn.analysis.heading_options import _finite as _is_number
-from rplearn.core.geometry import distance_m, link_directions
+from rplearn.analysis.swarm_geometry import pair_directions, pose_rotations
 from rplearn.core.link import FAR_FIELD_WAVELENGTHS, free_space_path_loss_db, wavelength_m
+from rplearn.core.threads import blas_threads, prediction_flops
 from rplearn.data.poses import pose_tracks
 from rplearn.data.tables import LinkSamples, check_tx_power_dbm
 from rplearn.errors import InputError
@@ -287,8 +288,10 @@ def predict_swarm(
             f"gaps between pose rows (max_gap_s, now {max_gap_s:g} s)",
             param="max_gap_s",
         )
-    links, connectivity = _predict_blocks(model, poses, present, drones, patterns, t,
-                                          _Radio(tx_power_dbm, frequency_hz, min_rssi_dbm))
+    n_links = int(np.sum(n_present * (n_present - 1)))
+    with blas_threads(prediction_flops(n_links, model.basis.n_coef, model.covariance is not None)):
+        links, connectivity = _predict_blocks(model, poses, present, drones, patterns, t,
+                                              _Radio(tx_power_dbm, frequency_hz, min_rssi_dbm))
     notes = _swarm_notes(links, poses, frequency_hz)
     return SwarmPrediction(links, connectivity, patterns, float(min_rssi_dbm), float(tx_power_dbm), frequency_hz, notes)
 
@@ -307,7 +310,7 @@ Poses = Mapping[str, tuple[np.ndarray, np.ndarray, np.ndarray]]
 
 
 #: (time, ordered pair) rows predicted at once: bounds the geometry and features in memory.
-LINK_BLOCK_ROWS = 200_000
+LINK_BLOCK_ROWS = 50_000
 
 
 def _time_blocks(n_times: int, n_drones: int) -> list[tuple[int, int]]:
@@ -351,8 +354,9 @@ def _predict_blocks(
     position = np.stack([poses[d][0] for d in drones])  # (drones, times, 3)
     quat = np.stack([poses[d][1] for d in drones])
     pattern_index = np.array([model.node_index(patterns[x]) for x in drones], np.intp)
-    names = np.array(drones, dtype=object)
-    pattern_names = np.array([patterns[x] for x in drones], dtype=object)
+    used = sorted(set(patterns.values()))  # categories of the pattern columns
+    pattern_code = np.array([used.index(patterns[x]) for x in drones], np.int32)
+    rotations = pose_rotations(quat, present)  # once per (drone, time), not per link
     limit_m = _far_field_limit_m(frequency_hz)
     residual_db = float(model.training.rmse_db if model.training.rmse_db is not None else np.nan)
     columns: dict[str, np.ndarray] = {}
@@ -362,15 +366,16 @@ def _predict_blocks(
         k, ia, ib = _block_rows(present[s0:s1])
         ti = k + s0
         pa, pb = position[ia, ti], position[ib, ti]
-        d = distance_m(pa, pb)
-        samples = LinkSamples(link_directions(pa, quat[ia, ti], pb, quat[ib, ti]), pattern_index[ia], pattern_index[ib],
-                              model.nodes, np.full(d.size, np.nan), d, np.full(d.size, frequency_hz),
+        delta = pb - pa
+        d = np.sqrt(np.einsum("ij,ij->i", delta, delta))
+        samples = LinkSamples(pair_directions(rotations, t.size, ti, ia, ib, delta), pattern_index[ia],
+                              pattern_index[ib], model.nodes, np.full(d.size, np.nan), d, np.full(d.size, frequency_hz),
                               tx_z_m=pa[:, 2], rx_z_m=pb[:, 2])
         gain = model.predict_gain(samples)
         near = d <= limit_m
         rssi = np.where(near, np.nan, tx_power_dbm + gain - free_space_path_loss_db(np.where(near, 1.0, d), frequency_hz))
-        block = {"t": t[ti], "tx": names[ia], "rx": names[ib], "tx_pattern": pattern_names[ia],
-                 "rx_pattern": pattern_names[ib], "distance_m": d, "gain_pred_db": gain, "rssi_pred_dbm": rssi}
+        block = {"t": t[ti], "tx": ia.astype(np.int32), "rx": ib.astype(np.int32), "tx_pattern": pattern_code[ia],
+                 "rx_pattern": pattern_code[ib], "distance_m": d, "gain_pred_db": gain, "rssi_pred_dbm": rssi}
         std = model.predict_gain_std(samples)
         if std is not None:
             block["gain_pred_std_db"] = std
@@ -386,7 +391,11 @@ def _predict_blocks(
             columns[name][offset:offset + d.size] = v
         offset += d.size
         parts.append(_connectivity_block(k, ia, ib, np.where(near, np.inf, rssi), t[s0:s1], drones, min_rssi_dbm))
-    return pd.DataFrame(columns, copy=False), pd.concat(parts, ignore_index=True)
+    frame: dict[str, Any] = dict(columns)
+    for name, categories in (("tx", drones), ("rx", drones), ("tx_pattern", used), ("rx_pattern", used)):
+        if name in frame:  # categorical node columns: codes into the names, no string per row
+            frame[name] = pd.Categorical.from_codes(frame[name], dtype=pd.CategoricalDtype(list(categories)))
+    return pd.DataFrame(frame, copy=False), pd.concat(parts, ignore_index=True)
 
 
 def _far_field_limit_m(frequency_hz: float) -> float:

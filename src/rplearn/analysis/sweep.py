@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -13,6 +14,7 @@ from rplearn._argtypes import check_types
 from rplearn._budget import Cost, check_work
 from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.core.lsq.selection import Selection, select_order_and_smoothing, validation_rmse
+from rplearn.core.threads import blas_threads_for
 from rplearn.data.tables import LinkSamples
 from rplearn.errors import InputError
 from rplearn.models.fit import evaluate_models, fit_model
@@ -81,6 +83,14 @@ def validation_sweep(unit_samples: dict[str, LinkSamples], orders: Sequence[int]
     top = max(int(o) for o in orders)
     spec = ModelSpec("sh", top)
     nodes = next(iter(unit_samples.values())).nodes
+    n = sum(len(s) for s in unit_samples.values())
+    with blas_threads_for(n, spec.basis().n_coef * len(nodes)):  # the thread policy (rplearn.core.threads)
+        return _validation_sweep(unit_samples, orders, spec, nodes)
+
+
+def _validation_sweep(unit_samples: dict[str, LinkSamples], orders: Sequence[int], spec: ModelSpec,
+                      nodes: Any) -> tuple[Selection, list[float]]:
+    """:func:`validation_sweep` at the top order's ``spec``."""
     stats = {u: NormalEquations(spec.basis(), len(nodes)).add(s.directions, s.tx_index, s.rx_index, s.joint_gain_db)
              for u, s in unit_samples.items() if len(s)}
     total = NormalEquations(spec.basis(), len(nodes))

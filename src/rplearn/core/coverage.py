@@ -104,17 +104,31 @@ def coverage_at(grid_deg: ArrayLike, az_rad: ArrayLike, el_rad: ArrayLike) -> np
     """Coverage [deg] at directions, from a stored grid (:func:`coverage_grid`): the value of
     the nearest grid point plus the distance to it (an upper bound of the true nearest angle)."""
     grid = np.asarray(grid_deg, np.float64).ravel()
-    q = unit_vector(np.asarray(az_rad, np.float64).ravel(), np.asarray(el_rad, np.float64).ravel())
-    chord, idx = _query(_grid_tree(grid.size), q)
+    chord, idx = _nearest_grid_point(grid.size, az_rad, el_rad)
     return grid[idx] + np.degrees(2.0 * np.arcsin(np.clip(np.asarray(chord) / 2.0, 0.0, 1.0)))
+
+
+def _nearest_grid_point(n_points: int, az_rad: ArrayLike, el_rad: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+    """Chord to, and index of, the grid point nearest each direction: from the precomputed map
+    of the sphere (:mod:`rplearn.core.coverage_map`, the same points), or the k-d tree for
+    elevations outside [-pi/2, pi/2]."""
+    az, el = (a.ravel() for a in np.broadcast_arrays(np.asarray(az_rad, np.float64), np.asarray(el_rad, np.float64)))
+    finite = np.isfinite(az) & np.isfinite(el)
+    if not finite.all():
+        raise InputError(f"coverage: {int(np.count_nonzero(~finite))} query direction(s) are NaN or infinite")
+    if np.all(np.abs(el) <= np.pi / 2):
+        from rplearn.core.coverage_map import nearest_grid_point
+
+        return nearest_grid_point(n_points, az, el)
+    chord, idx = _query(_grid_tree(n_points), unit_vector(az, el))
+    return np.asarray(chord), np.asarray(idx)
 
 
 def grid_value_at(grid_values: ArrayLike, az_rad: ArrayLike, el_rad: ArrayLike) -> np.ndarray:
     """Values stored on a coverage grid's points (one per point, in :func:`coverage_grid`'s
     order) read at directions: the value of the nearest grid point."""
     values = np.asarray(grid_values, np.float64).ravel()
-    q = unit_vector(np.asarray(az_rad, np.float64).ravel(), np.asarray(el_rad, np.float64).ravel())
-    _, idx = _query(_grid_tree(values.size), q)
+    _, idx = _nearest_grid_point(values.size, az_rad, el_rad)
     return values[idx]
 
 

@@ -24,6 +24,7 @@ from rplearn.core.environment import PathLoss
 from rplearn.core.geometry import Directions, distance_m, link_directions
 from rplearn.core.link import received_power_dbm
 from rplearn.core.plausible import check_covariance
+from rplearn.core.threads import blas_threads, prediction_flops
 from rplearn.errors import InputError, ModelFileError
 from rplearn.io.modelfile import jsonable as _jsonable
 from rplearn.io.modelfile import read_model_file, read_sidecar, write_model_with_sidecar
@@ -202,7 +203,8 @@ class PatternSet:
             )
         shape = np.broadcast(az, el).shape
         az, el = np.broadcast_arrays(az, el)
-        return self.basis.evaluate(self.coef[k], az, el).reshape(shape)
+        with blas_threads(prediction_flops(az.size, self.basis.n_coef) / 2):  # one end (rplearn.core.threads)
+            return self.basis.evaluate(self.coef[k], az, el).reshape(shape)
 
     def standard_error(self, node: str, az_rad: ArrayLike, el_rad: ArrayLike) -> FloatArray:
         """Standard error of :meth:`evaluate` from the fit's coefficient covariance [dB].
@@ -214,7 +216,8 @@ class PatternSet:
         k = self.node_index(node)
         p = self.basis.n_coef
         cov = self.covariance[k * p : (k + 1) * p, k * p : (k + 1) * p]
-        return np.sqrt(np.maximum(self.basis.quadratic_form(cov, az_rad, el_rad), 0.0))
+        with blas_threads(prediction_flops(np.size(az_rad), p, spreads=True) / 2):  # one end (rplearn.core.threads)
+            return np.sqrt(np.maximum(self.basis.quadratic_form(cov, az_rad, el_rad), 0.0))
 
     def coverage_deg(self, node: str, az_rad: ArrayLike, el_rad: ArrayLike) -> FloatArray | None:
         """Angle [deg] from each direction to the nearest direction ``node`` was learned from
@@ -252,6 +255,12 @@ class PatternSet:
         """
         if self.covariance is None:
             return None
+        with blas_threads(prediction_flops(len(samples), self.basis.n_coef, spreads=True)):  # rplearn.core.threads
+            return self._gain_std(samples, new_flight)
+
+    def _gain_std(self, samples: LinkSamples, new_flight: bool) -> FloatArray:
+        """:meth:`predict_gain_std` of a model with a covariance."""
+        assert self.covariance is not None
         level_var = self.new_flight_level_std_db ** 2 if new_flight else 0.0
         p = self.basis.n_coef
         m = len(self.shared_names)
@@ -519,7 +528,8 @@ class PatternSet:
         tx = idx[samples.tx_index]
         rx = idx[samples.rx_index]
         d = samples.directions
-        gain = self._sum_node_gains(tx, d.az_tx, d.el_tx) + self._sum_node_gains(rx, d.az_rx, d.el_rx)
+        with blas_threads(prediction_flops(len(samples), self.basis.n_coef)):  # rplearn.core.threads
+            gain = self._sum_node_gains(tx, d.az_tx, d.el_tx) + self._sum_node_gains(rx, d.az_rx, d.el_rx)
         if self.path_loss.kind != "free" or self.shared_names:
             gain = gain + self.environment_db(samples)
         return gain

@@ -22,6 +22,7 @@ from numpy.typing import ArrayLike
 from rplearn._argtypes import check_types
 from rplearn.core.link import received_power_dbm
 from rplearn.core.plausible import describe_band, frequency_bands, same_band
+from rplearn.core.threads import blas_threads, prediction_flops
 from rplearn.data.tables import link_samples
 from rplearn.errors import InputError
 from rplearn.models.base import Model
@@ -162,6 +163,15 @@ def predict_dataset(model: Model, dataset: pd.DataFrame, source: str = "dataset"
     samples = link_samples(dataset, source, require_rssi=False)
     if samples.frequency_hz is not None:
         check_model_band(model, samples.frequency_hz, source)
+    basis = getattr(model, "basis", None)
+    flops = prediction_flops(len(samples), basis.n_coef if basis is not None else 1,
+                             getattr(model, "covariance", None) is not None)
+    with blas_threads(flops):  # the thread policy (rplearn.core.threads): size and free cores
+        return _predict_dataset(model, dataset, samples)
+
+
+def _predict_dataset(model: Model, dataset: pd.DataFrame, samples: Any) -> DatasetPrediction:
+    """:func:`predict_dataset` of the dataset's checked samples."""
     gain = model.predict_gain(samples)
     table = dataset.drop(columns=[c for c in PREDICTION_COLUMNS if c in dataset.columns])  # no stale predictions
     table["gain_pred_db"] = gain

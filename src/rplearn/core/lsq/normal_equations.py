@@ -25,6 +25,7 @@ from rplearn.core.bases import Basis
 from rplearn.core.geometry import Directions
 from rplearn.core.lsq.link_statistics import block_rows, block_samples, block_starts, link_statistics, max_links_per_block, segmented_link_statistics
 from rplearn.core.lsq.runtime import DEFAULT_RUNTIME
+from rplearn.core.threads import blas_threads_for
 from rplearn.errors import InputError
 
 FloatArray = NDArray[np.float64]
@@ -155,6 +156,13 @@ class NormalEquations:
             raise InputError(f"node index out of range 0..{self.n_nodes - 1}")
         if np.any(tx == rx):
             raise InputError("a sample has the same node as transmitter and receiver")
+        with blas_threads_for(n, 2 * self.basis.n_coef):  # the thread policy (rplearn.core.threads)
+            self._add_checked(n, tx, rx, (az_tx, el_tx, az_rx, el_rx, y, e))
+        return self
+
+    def _add_checked(self, n: int, tx: NDArray[Any], rx: NDArray[Any], arrays: tuple[FloatArray, ...]) -> None:
+        """:meth:`add` of ``n`` checked samples: ``arrays`` are ``az_tx, el_tx, az_rx, el_rx, y, e``."""
+        az_tx, el_tx, az_rx, el_rx, y, e = arrays
         self._own_gram()
         pair_code = tx.astype(np.int64) * self.n_nodes + rx
         if pair_code.min() == pair_code.max():  # one link direction: no grouping needed
@@ -180,7 +188,6 @@ class NormalEquations:
                 t, r = divmod(code, self.n_nodes)
                 self._add_pair(t, r, az_tx[sel], el_tx[sel], az_rx[sel], el_rx[sel], y[sel], e[sel])
         self.n_samples += n
-        return self
 
     def _add_links(
         self, codes: NDArray[np.int64], bounds: NDArray[np.intp], az_tx: FloatArray, el_tx: FloatArray,
