@@ -358,7 +358,10 @@ def _predict_blocks(
     pattern_code = np.array([used.index(patterns[x]) for x in drones], np.int32)
     rotations = pose_rotations(quat, present)  # once per (drone, time), not per link
     limit_m = _far_field_limit_m(frequency_hz)
-    residual_db = float(model.training.rmse_db if model.training.rmse_db is not None else np.nan)
+    # one packet's noise about its flight's level (an automatic fit over flights), else the training
+    # residual, as predict_dataset reads it
+    noise = model.training.noise_std_db if model.training.noise_std_db is not None else model.training.rmse_db
+    residual_db = float(noise if noise is not None else np.nan)
     columns: dict[str, np.ndarray] = {}
     parts = []
     offset = 0
