@@ -29,9 +29,7 @@ from numpy.typing import ArrayLike
 
 from rplearn._argtypes import check_types
 from rplearn._budget import Budget, Cost, budget, check_work
-
-# CAUTION_Z: the default caution, documented here
-from rplearn.analysis.heading_options import CAUTION_Z, SwarmHeadingOptions, YawOptions  # noqa: F401
+from rplearn.analysis.heading_options import CAUTION_Z, SwarmHeadingOptions, YawOptions  # noqa: F401 (CAUTION_Z: documented here)
 from rplearn.analysis.heading_search import EXHAUSTIVE_MAX_COMBINATIONS, search  # noqa: F401 (the constant is documented here)
 from rplearn.analysis.swarm import maximum_spanning_edges, resolve_patterns
 from rplearn.core.geometry import direction_in_body, distance_m, quat_wxyz_from_yaw
@@ -47,8 +45,7 @@ Pair = tuple[str, str]
 Score = tuple[float, float]
 
 
-# -------------------------------------------------------------------------------------------
-# The yaw grid and the gain tables both searches read
+# The yaw grid and the gain tables both searches read -------------------------------------
 
 
 #: Finest yaw step [deg] and the memory the swarm search's yaw-pair tables may take [bytes].

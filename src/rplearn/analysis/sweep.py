@@ -122,6 +122,18 @@ def sweep_cost(kind: str, orders: Sequence[int], n_samples: int, n_nodes: int, t
     return Cost(memory_bytes=memory + 2e8, seconds=seconds)
 
 
+def _identifiable(kind: str, orders: Sequence[int], n_samples: int, n_nodes: int) -> list[int]:
+    """The orders the samples can identify (all of them when none can: :func:`check_sweep` says why)."""
+    kept = []
+    for order in orders:
+        try:
+            check_model_size(ModelSpec(kind, int(order)), n_samples, n_nodes)
+        except InputError:
+            continue
+        kept.append(int(order))
+    return kept or [int(o) for o in orders]
+
+
 def check_sweep(kind: str, orders: Sequence[int], n_samples: int, n_nodes: int) -> None:
     """Refuse, before any fit, orders whose largest the samples cannot identify or that would
     not fit in the work budget (:mod:`rplearn._budget`), naming the largest order that does."""
@@ -146,10 +158,13 @@ def order_sweep(
     """Fit models of increasing order on ``learn`` and score each on ``test``.
 
     Stops early once the test error has risen above its minimum for ``stop_after_rises``
-    consecutive orders (None: run every order).
+    consecutive orders, and then leaves out the orders the samples cannot identify (None: run
+    every order, and refuse one the samples cannot identify).
     """
     if not orders or min(int(o) for o in orders) < 1:
         raise InputError(f"orders: expected positive orders, got {list(orders)!r}", param="orders")
+    if stop_after_rises is not None:  # a sweep that stops by itself ends where the samples end
+        orders = _identifiable(kind, orders, len(learn), len(learn.nodes))
     check_sweep(kind, orders, len(learn), len(learn.nodes))
     out = SweepResult(kind, [], [], [], [], [], [])
     rises = 0
