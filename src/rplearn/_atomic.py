@@ -26,7 +26,7 @@ from typing import IO, Any
 
 from rplearn.errors import InputError
 
-__all__ = ["atomic_open", "atomic_path", "check_output", "dump_json", "strict_json"]
+__all__ = ["atomic_open", "atomic_path", "check_output", "dump_json", "strict_json", "written_outputs"]
 
 PathLike = str | os.PathLike[str]
 
@@ -102,6 +102,16 @@ def _fsync_dir(folder: str) -> None:
         os.close(fd)
 
 
+#: Every output this process has written (replaced) so far, in order: what an interrupted
+#: command did leave behind (:func:`written_outputs`).
+_WRITTEN: list[str] = []
+
+
+def written_outputs() -> tuple[str, ...]:
+    """The outputs this process has written so far (each replaced whole by :func:`atomic_path`)."""
+    return tuple(dict.fromkeys(_WRITTEN))
+
+
 @contextmanager
 def atomic_path(path: PathLike, inputs: Iterable[PathLike] = (), param: str | None = None) -> Iterator[str]:
     """Yield a temporary path beside ``path`` to write; replace ``path`` with it on success.
@@ -131,6 +141,7 @@ def atomic_path(path: PathLike, inputs: Iterable[PathLike] = (), param: str | No
         mode = stat.S_IMODE(os.stat(name).st_mode) if os.path.isfile(name) else 0o666 & ~_umask()
         os.chmod(tmp, mode)
         os.replace(tmp, name)
+        _WRITTEN.append(name)
         _fsync_dir(folder)
     except BaseException:
         try:

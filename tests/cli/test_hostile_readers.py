@@ -28,6 +28,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from rplearn.models.load import load_model
+
 RPLEARN = [sys.executable, "-m", "rplearn.cli"]
 ARDUPILOT = Path(__file__).resolve().parents[1] / "fixtures" / "ardupilot"
 BIN = ARDUPILOT / "pymavlink_test.BIN"
@@ -456,8 +458,12 @@ def test_ctrl_c_during_a_dask_fit_prints_one_line(parts, tmp_path, after_s):
     lines = [line for line in err.splitlines() if line.strip() and not line.startswith("... ")]  # not progress
     if proc.returncode == 0:  # finished before the interrupt on a fast machine: nothing to show
         return
-    assert proc.returncode == 130 and lines == ["error: interrupted (Ctrl-C); nothing was written"], err
-    assert "Traceback" not in out + err and not (tmp_path / "m.json").exists()
+    if (tmp_path / "m.json").exists():  # the interrupt came after the save (the cluster shutting down)
+        assert proc.returncode == 130 and lines == ["error: interrupted (Ctrl-C); m.json written whole before it"], err
+        load_model(str(tmp_path / "m.json"))
+    else:
+        assert proc.returncode == 130 and lines == ["error: interrupted (Ctrl-C); nothing was written"], err
+    assert "Traceback" not in out + err
 
 
 def test_dask_runs_shut_down_without_a_word(parts, tmp_path):

@@ -38,4 +38,9 @@ def main() -> None:
     from rplearn.cli._help import apply_readable_metavars
 
     exit_on_sigterm()
-    apply_readable_metavars(typer.main.get_command(app))(prog_name="rplearn")
+    try:
+        apply_readable_metavars(typer.main.get_command(app))(prog_name="rplearn")
+    finally:  # the command is over (its outputs written or removed): a late Ctrl-C must not interrupt the shutdown
+        import signal
+
+        signal.signal(signal.SIGINT, signal.SIG_IGN)

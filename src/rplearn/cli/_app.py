@@ -184,9 +184,12 @@ def user_errors(fn: Callable | None = None, *, flags: Mapping[str, str] | None =
                 fail(f"{exc.filename}: no such file or directory" if exc.filename else str(exc))
             except OSError as exc:
                 fail(f"{exc.filename}: {exc.strerror or exc}" if exc.filename else str(exc))
-            except KeyboardInterrupt:  # Ctrl-C: outputs were removed on the way out (rplearn._atomic)
-                console.print(Text.assemble(("error:", "bold red"), " interrupted (Ctrl-C); nothing was written"),
-                              soft_wrap=True)
+            except KeyboardInterrupt:  # Ctrl-C: a partial output was removed on the way out (rplearn._atomic)
+                from rplearn._atomic import written_outputs
+
+                done = written_outputs()
+                what = f"{', '.join(done)} written whole before it" if done else "nothing was written"
+                console.print(Text.assemble(("error:", "bold red"), f" interrupted (Ctrl-C); {what}"), soft_wrap=True)
                 raise typer.Exit(130) from None
 
         return wrapper

@@ -196,6 +196,31 @@ def orient_link(
     return best_yaw(cast(PatternSet, model), tx_node, rx_node, tx_position_xyz, rx_position_xyz, turn, options)
 
 
+def _data_lines(path: str) -> int:
+    """Lines of a text file after its header, counted in 1 MiB blocks (no parsing)."""
+    lines = 0
+    with open(path, "rb") as f:
+        while block := f.read(1 << 20):
+            lines += block.count(b"\n")
+    return max(lines - 1, 0)
+
+
+def _precheck_reference_rows(patterns: Mapping[str, str]) -> None:
+    """Refuse a CSV pattern grid too fine to expand before reading it: its rows (shared by the
+    nodes that name the same file) against the expansion's work budget
+    (:func:`rplearn.models.reference.expansion_cost`; checked again, exactly, after reading)."""
+    from rplearn.models.reference import expansion_cost
+
+    users: dict[str, int] = {}
+    for path in patterns.values():
+        users[path] = users.get(path, 0) + 1
+    for path, n_nodes in users.items():
+        if path.lower().endswith(".csv") and os.path.isfile(path):
+            rows = _data_lines(path) // n_nodes
+            if rows > 1:
+                check_work(path, rows, expansion_cost, "directions (a coarser grid fits)", bounds=(1, rows))
+
+
 @check_types
 def reference_model_file(
     patterns: Mapping[str, str], output: str, mounts: Mapping[str, Sequence[float]] | None = None
@@ -213,6 +238,7 @@ def reference_model_file(
         raise InputError(f"mounts: node(s) {', '.join(unknown)} have no pattern; patterns are given for "
                          f"{', '.join(sorted(patterns))}", param="mounts")
     check_output_path(output, list(patterns.values()))
+    _precheck_reference_rows(patterns)
     samples = {str(n): read_reference_pattern(path, mounts.get(str(n), (0.0, 0.0, 0.0)), node=str(n))
                for n, path in patterns.items()}
     model = reference_model(samples, mounts, provenance=provenance(patterns=dict(patterns), mounts=mounts))
