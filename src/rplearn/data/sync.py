@@ -84,6 +84,7 @@ from rplearn.data.outages import match_outages, outage_text, split_outages, with
 from rplearn.data.phases import AIRBORNE_MARGIN_M, WINDOW_CLOCKS, FlightPhases, flight_phases, max_gap_advice, phase_notes, window_mask
 from rplearn.data.poses import STATUS_OUT_OF_SPAN, STATUS_POSE_GAP, PoseTrack, interpolate_nodes, tracks_of_checked_log
 from rplearn.data.readings import REPEAT_FRACTION, duplicate_rows, repeated_readings
+from rplearn.data.sync_match import matched_frame
 from rplearn.data.tables import (
     MATCHED_COLUMNS,
     QUATERNION_NORM_TOLERANCE,
@@ -372,31 +373,6 @@ def _unknown_nodes(
     return codes[:n], codes[n:], uniques, known, unknown_mask, names
 
 
-def _matched_frame(
-    signal: pd.DataFrame, idx: np.ndarray, values: dict[str, np.ndarray],
-    poses: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]],
-) -> pd.DataFrame:
-    """The kept rows ``idx`` in :data:`MATCHED_COLUMNS` order, then the extra signal columns."""
-    cols: dict[str, np.ndarray] = {
-        "t": values["t"][idx],
-        "tx": values["tx"][idx].astype(str),
-        "rx": values["rx"][idx].astype(str),
-        "rssi_dbm": values["rssi_dbm"][idx],
-        "tx_power_dbm": values["tx_power_dbm"][idx],
-        "frequency_hz": values["frequency_hz"][idx],
-    }
-    for end in ("tx", "rx"):
-        pos, quat, _ = poses[end]
-        for j, f in enumerate(("x", "y", "z")):
-            cols[f"{end}_{f}"] = pos[idx, j]
-        for j, f in enumerate(("qw", "qx", "qy", "qz")):
-            cols[f"{end}_{f}"] = quat[idx, j]
-    out = pd.DataFrame(cols, columns=list(MATCHED_COLUMNS))
-    for c in [c for c in signal.columns if c not in MATCHED_COLUMNS]:
-        out[c] = pd.Series(signal[c].array[idx], index=out.index)  # keeps the column's dtype (text stays text)
-    return out
-
-
 def _match_chunk(
     tracks: Mapping[str, PoseTrack], signal: pd.DataFrame, options: SyncOptions, source: str,
     seen_before: np.ndarray | None = None, first_row: int = 0, phases: FlightPhases | None = None,
@@ -467,7 +443,7 @@ def _match_chunk(
     summary.ground_kept = 0 if options.airborne else int((off & keep).sum())
     idx = np.flatnonzero(keep)
     summary.n_out = int(idx.size)
-    matched = _matched_frame(signal, idx, values, poses)
+    matched = matched_frame(signal, idx, values, {"tx": tx_code, "rx": rx_code}, uniques, poses)
     if options.rssi_scale == "relative":
         matched["rssi_scale"] = pd.Series(["relative"] * len(matched), index=matched.index, dtype=object)
     return SyncResult(matched, summary)
