@@ -82,9 +82,9 @@ from rplearn.core.link import FAR_FIELD_WAVELENGTHS, SPEED_OF_LIGHT_M_S
 from rplearn.core.plausible import FREQUENCY_BAND_HZ, check_frequency_hz
 from rplearn.data.outages import match_outages, outage_text, split_outages, with_outages
 from rplearn.data.phases import AIRBORNE_MARGIN_M, WINDOW_CLOCKS, FlightPhases, flight_phases, max_gap_advice, phase_notes, window_mask
-from rplearn.data.poses import STATUS_OUT_OF_SPAN, STATUS_POSE_GAP, PoseTrack, interpolate_nodes, tracks_of_checked_log
+from rplearn.data.poses import STATUS_OUT_OF_SPAN, STATUS_POSE_GAP, PoseTrack, tracks_of_checked_log
 from rplearn.data.readings import REPEAT_FRACTION, duplicate_rows, repeated_readings
-from rplearn.data.sync_match import matched_frame
+from rplearn.data.sync_match import interpolate_end, matched_frame
 from rplearn.data.tables import (
     MATCHED_COLUMNS,
     QUATERNION_NORM_TOLERANCE,
@@ -424,18 +424,19 @@ def _match_chunk(
     if names:
         summary.unknown_nodes = names
     drop(unknown, "unknown_node")
-    poses = {end: interpolate_nodes(tracks, list(uniques), code, t, options.max_gap_s, keep & known[code])
+    poses = {end: interpolate_end(tracks, list(uniques), code, t, options.max_gap_s, keep & known[code])
              for end, code in (("tx", tx_code), ("rx", rx_code))}
-    st_tx, st_rx = poses["tx"][2], poses["rx"][2]
+    st_tx, st_rx = poses["tx"][1], poses["rx"][1]
     drop((st_tx == STATUS_OUT_OF_SPAN) | (st_rx == STATUS_OUT_OF_SPAN), "out_of_span")
     drop((st_tx == STATUS_POSE_GAP) | (st_rx == STATUS_POSE_GAP), "pose_gap")
     with np.errstate(invalid="ignore"):
-        distance = np.linalg.norm(poses["tx"][0] - poses["rx"][0], axis=1)
+        d = poses["tx"][0][:3] - poses["rx"][0][:3]
+        distance = np.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
         limit = FAR_FIELD_WAVELENGTHS * SPEED_OF_LIGHT_M_S / np.where(keep, freq, 1.0)
         drop(keep & ~(distance > limit), "near_field")
     off = np.zeros(len(signal), bool)
     for end, code in (("tx", tx_code), ("rx", rx_code)):
-        disarmed, ground = phases.masks(list(uniques), code, t, poses[end][0][:, 2], keep & known[code])
+        disarmed, ground = phases.masks(list(uniques), code, t, poses[end][0][2], keep & known[code])
         if options.airborne:
             drop(disarmed, "disarmed")
             drop(ground, "on_ground")

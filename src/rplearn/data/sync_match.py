@@ -11,6 +11,10 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from collections.abc import Mapping, Sequence
+
+from rplearn.core.geometry import slerp_wxyz
+from rplearn.data.poses import PoseTrack
 from rplearn.data.tables import MATCHED_COLUMNS, POSE_FIELDS
 
 #: Float columns of the matched dataset, in the order of the block.
@@ -23,15 +27,51 @@ def node_column(uniques: np.ndarray, codes: np.ndarray) -> pd.api.extensions.Ext
     return pd.Series(np.asarray(uniques).astype(str)).array.take(codes)
 
 
+def interpolate_end(
+    tracks: Mapping[str, PoseTrack], node_ids: Sequence[str], node_code: np.ndarray, t_s: np.ndarray,
+    max_gap_s: float, rows: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`~rplearn.data.poses.interpolate_nodes` as columns: ``(pose, status)``, ``pose``
+    of shape (7, n) holding ``x, y, z, qw, qx, qy, qz`` (NaN outside ``rows``).
+
+    One ``searchsorted`` per node; each field is written once into its own contiguous row,
+    from which the matched dataset takes its columns without a strided gather.
+    """
+    n = len(t_s)
+    pose = np.full((7, n), np.nan)
+    status = np.zeros(n, np.int8)
+    for code, node in enumerate(node_ids):
+        sel = np.flatnonzero((node_code == code) & rows)
+        if not sel.size:
+            continue
+        track = tracks[node]
+        if track.static:
+            pos, quat, status[sel] = track.interpolate(t_s[:1], max_gap_s)
+            pose[:3, sel] = pos[0][:, None]
+            pose[3:, sel] = quat[0][:, None]
+            continue
+        i, frac, status[sel] = track.brackets(t_s[sel], max_gap_s)
+        i1 = i + 1
+        for j in range(3):  # p0 + fraction * (p1 - p0), as PoseTrack.interpolate
+            column = track.position_xyz[:, j]
+            p0 = column[i]
+            p = column[i1] - p0
+            p *= frac
+            p += p0
+            pose[j, sel] = p
+        pose[3:, sel] = slerp_wxyz(track.quat_wxyz[i], track.quat_wxyz[i1], frac).T
+    return pose, status
+
+
 def matched_frame(
     signal: pd.DataFrame, idx: np.ndarray, values: dict[str, np.ndarray], node_codes: dict[str, np.ndarray],
-    uniques: np.ndarray, poses: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]],
+    uniques: np.ndarray, poses: dict[str, tuple[np.ndarray, np.ndarray]],
 ) -> pd.DataFrame:
     """The kept rows ``idx`` in :data:`MATCHED_COLUMNS` order, then the extra signal columns.
 
     ``values``: the signal's float columns (``t`` on the common clock); ``node_codes``: the
-    codes of ``tx`` and ``rx`` into ``uniques``; ``poses``: per end, positions (n, 3),
-    quaternions (n, 4) and status of every signal row.
+    codes of ``tx`` and ``rx`` into ``uniques``; ``poses``: per end, :func:`interpolate_end`
+    of every signal row.
     """
     m = idx.size
     block = np.empty((len(_FLOAT_COLUMNS), m), np.float64)
@@ -39,9 +79,8 @@ def matched_frame(
         np.take(values[c], idx, out=block[k])
     k = len(_SIGNAL_FLOATS)
     for end in ("tx", "rx"):
-        pos, quat, _ = poses[end]
-        block[k:k + 3] = pos[idx].T
-        block[k + 3:k + 7] = quat[idx].T
+        for j in range(7):
+            np.take(poses[end][0][j], idx, out=block[k + j])
         k += 7
     out = pd.DataFrame(block.T, columns=list(_FLOAT_COLUMNS), copy=False)
     for j, end in enumerate(("tx", "rx")):

@@ -128,7 +128,10 @@ def node_ids(values: Any) -> np.ndarray:
 
 def empty_ids(ids: np.ndarray) -> np.ndarray:
     """Mask of node ids that are empty or only white space."""
-    return np.char.str_len(np.char.strip(ids.astype(str))) == 0 if ids.size else np.zeros(0, bool)
+    if not ids.size:
+        return np.zeros(0, bool)
+    codes, uniques = pd.factorize(np.asarray(ids, dtype=object), use_na_sentinel=False)  # a few nodes, many rows
+    return (np.char.str_len(np.char.strip(np.asarray(uniques, dtype=object).astype(str))) == 0)[codes]
 
 
 @check_types
