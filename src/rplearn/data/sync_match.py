@@ -15,7 +15,7 @@ from collections.abc import Mapping, Sequence
 
 from rplearn.core.geometry import slerp_wxyz
 from rplearn.data.poses import PoseTrack
-from rplearn.data.tables import MATCHED_COLUMNS, POSE_FIELDS
+from rplearn.data.tables import MATCHED_COLUMNS, POSE_FIELDS, node_ids
 
 #: Float columns of the matched dataset, in the order of the block.
 _SIGNAL_FLOATS: tuple[str, ...] = ("t", "rssi_dbm", "tx_power_dbm", "frequency_hz")
@@ -25,6 +25,23 @@ _FLOAT_COLUMNS: tuple[str, ...] = _SIGNAL_FLOATS + tuple(f"{end}_{f}" for end in
 def node_column(uniques: np.ndarray, codes: np.ndarray) -> pd.api.extensions.ExtensionArray | np.ndarray:
     """The node ids ``uniques[codes]`` as the text column ``astype(str)`` would make, taken per code."""
     return pd.Series(np.asarray(uniques).astype(str)).array.take(codes)
+
+
+def node_codes(tx: pd.Series, rx: pd.Series) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Both ends' node ids as codes into one array of distinct ids: ``(tx_code, rx_code, uniques)``.
+
+    ``uniques[tx_code]`` equals :func:`~rplearn.data.tables.node_ids` of ``tx`` row by row
+    (a missing cell is ``""``), but the text of each distinct cell is made once, not per row.
+    """
+    codes, raw = [], []
+    for col in (tx, rx):
+        c, u = pd.factorize(col, use_na_sentinel=True)  # NA: -1
+        codes.append(c)
+        raw.append(np.append(node_ids(pd.Series(u)), ""))  # the last: a missing cell
+    ids = np.concatenate(raw).astype(object)
+    merged, uniques = pd.factorize(ids)  # distinct raw cells with the same text are one node
+    n_tx = len(raw[0])
+    return merged[codes[0]], merged[n_tx + codes[1]], np.asarray(uniques, dtype=object)
 
 
 def interpolate_end(
