@@ -84,7 +84,7 @@ from rplearn.data.outages import match_outages, outage_text, split_outages, with
 from rplearn.data.phases import AIRBORNE_MARGIN_M, WINDOW_CLOCKS, FlightPhases, flight_phases, max_gap_advice, phase_notes, window_mask
 from rplearn.data.poses import STATUS_OUT_OF_SPAN, STATUS_POSE_GAP, PoseTrack, tracks_of_checked_log
 from rplearn.data.readings import REPEAT_FRACTION, duplicate_rows, repeated_readings
-from rplearn.data.sync_match import interpolate_end, matched_frame, node_codes
+from rplearn.data.sync_match import block_row, float_block, interpolate_end, matched_frame, node_codes
 from rplearn.data.tables import (
     MATCHED_COLUMNS,
     QUATERNION_NORM_TOLERANCE,
@@ -392,7 +392,10 @@ def _match_chunk(
     tx_code, rx_code, uniques = node_codes(signal["tx"], signal["rx"])  # one text per node, not per row
     values = {"t": _signal_times(signal, uniques, rx_code, options.signal_clock_offset_s)}
     values.update({c: _numeric(signal, c) for c in ("rssi_dbm", "tx_power_dbm", "frequency_hz")})
-    t, rssi, ptx, freq = (values[c] for c in ("t", "rssi_dbm", "tx_power_dbm", "frequency_hz"))
+    block = float_block(len(signal))  # the matched dataset's float columns, filled in place
+    for c in ("t", "rssi_dbm", "tx_power_dbm", "frequency_hz"):
+        block[block_row(c)] = values[c]
+    t, rssi, ptx, freq = (block[block_row(c)] for c in ("t", "rssi_dbm", "tx_power_dbm", "frequency_hz"))
     keep = np.ones(len(signal), bool)
 
     def drop(mask: np.ndarray, reason: str) -> None:
@@ -422,19 +425,19 @@ def _match_chunk(
     if names:
         summary.unknown_nodes = names
     drop(unknown, "unknown_node")
-    poses = {end: interpolate_end(tracks, list(uniques), code, t, options.max_gap_s, keep & known[code])
-             for end, code in (("tx", tx_code), ("rx", rx_code))}
-    st_tx, st_rx = poses["tx"][1], poses["rx"][1]
+    poses = {end: block[block_row(f"{end}_x"):block_row(f"{end}_x") + 7] for end in ("tx", "rx")}
+    st_tx, st_rx = (interpolate_end(tracks, list(uniques), code, t, options.max_gap_s, keep & known[code], poses[end])
+                    for end, code in (("tx", tx_code), ("rx", rx_code)))
     drop((st_tx == STATUS_OUT_OF_SPAN) | (st_rx == STATUS_OUT_OF_SPAN), "out_of_span")
     drop((st_tx == STATUS_POSE_GAP) | (st_rx == STATUS_POSE_GAP), "pose_gap")
     with np.errstate(invalid="ignore"):
-        d = poses["tx"][0][:3] - poses["rx"][0][:3]
+        d = poses["tx"][:3] - poses["rx"][:3]
         distance = np.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
         limit = FAR_FIELD_WAVELENGTHS * SPEED_OF_LIGHT_M_S / np.where(keep, freq, 1.0)
         drop(keep & ~(distance > limit), "near_field")
     off = np.zeros(len(signal), bool)
     for end, code in (("tx", tx_code), ("rx", rx_code)):
-        disarmed, ground = phases.masks(list(uniques), code, t, poses[end][0][2], keep & known[code])
+        disarmed, ground = phases.masks(list(uniques), code, t, poses[end][2], keep & known[code])
         if options.airborne:
             drop(disarmed, "disarmed")
             drop(ground, "on_ground")
@@ -442,7 +445,7 @@ def _match_chunk(
     summary.ground_kept = 0 if options.airborne else int((off & keep).sum())
     idx = np.flatnonzero(keep)
     summary.n_out = int(idx.size)
-    matched = matched_frame(signal, idx, values, {"tx": tx_code, "rx": rx_code}, uniques, poses)
+    matched = matched_frame(signal, idx, block, {"tx": tx_code, "rx": rx_code}, uniques)
     if options.rssi_scale == "relative":
         matched["rssi_scale"] = pd.Series(["relative"] * len(matched), index=matched.index, dtype=object)
     return SyncResult(matched, summary)
