@@ -171,12 +171,13 @@ def tracks_of_checked_log(
     """
     offsets = dict(clock_offsets_s or {})
     tracks: dict[str, PoseTrack] = {}
-    nodes = df["node"].to_numpy()
+    nodes = df["node"].array
+    codes = pd.factorize(nodes)[0]  # equal ids, equal codes (no text object per row)
     t = df["t"].to_numpy(np.float64)
     pos = df[["x", "y", "z"]].to_numpy(np.float64)
     quat = df[["qw", "qx", "qy", "qz"]].to_numpy(np.float64)
     # df is sorted by (node, t): nodes are contiguous runs
-    starts = np.flatnonzero(np.r_[True, nodes[1:] != nodes[:-1]])
+    starts = np.flatnonzero(np.r_[True, codes[1:] != codes[:-1]])
     ends = np.r_[starts[1:], len(nodes)]
     for s, e in zip(starts, ends):
         node = str(nodes[s])

@@ -15,7 +15,7 @@ from collections.abc import Mapping, Sequence
 
 from rplearn.core.geometry import slerp_wxyz
 from rplearn.data.poses import PoseTrack
-from rplearn.data.tables import MATCHED_COLUMNS, POSE_FIELDS, node_ids
+from rplearn.data.tables import MATCHED_COLUMNS, POSE_FIELDS, node_id_codes
 
 #: Float columns of the matched dataset, in the order of the block.
 _SIGNAL_FLOATS: tuple[str, ...] = ("t", "rssi_dbm", "tx_power_dbm", "frequency_hz")
@@ -37,15 +37,10 @@ def node_codes(tx: pd.Series, rx: pd.Series) -> tuple[np.ndarray, np.ndarray, np
     ``uniques[tx_code]`` equals :func:`~rplearn.data.tables.node_ids` of ``tx`` row by row
     (a missing cell is ``""``), but the text of each distinct cell is made once, not per row.
     """
-    codes, raw = [], []
-    for col in (tx, rx):
-        c, u = pd.factorize(col, use_na_sentinel=True)  # NA: -1
-        codes.append(c)
-        raw.append(np.append(node_ids(pd.Series(u)), ""))  # the last: a missing cell
-    ids = np.concatenate(raw).astype(object)
-    merged, uniques = pd.factorize(ids)  # distinct raw cells with the same text are one node
-    n_tx = len(raw[0])
-    return merged[codes[0]], merged[n_tx + codes[1]], np.asarray(uniques, dtype=object)
+    tx_code, tx_ids = node_id_codes(tx)
+    rx_code, rx_ids = node_id_codes(rx)
+    merged, uniques = pd.factorize(np.concatenate([tx_ids, rx_ids]))  # one code per node over both ends
+    return merged[tx_code], merged[tx_ids.size + rx_code], np.asarray(uniques, dtype=object)
 
 
 def interpolate_end(
