@@ -86,7 +86,6 @@ from rplearn.data.poses import STATUS_OUT_OF_SPAN, STATUS_POSE_GAP, PoseTrack, t
 from rplearn.data.readings import REPEAT_FRACTION, duplicate_rows, repeated_readings
 from rplearn.data.sync_match import block_row, float_block, interpolate_end, matched_frame, node_codes
 from rplearn.data.tables import (
-    MATCHED_COLUMNS,
     QUATERNION_NORM_TOLERANCE,
     SENTINEL_RSSI_DBM,
     SIGNAL_COLUMNS,

@@ -8,10 +8,10 @@ per node, not one per row).
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
+
 import numpy as np
 import pandas as pd
-
-from collections.abc import Mapping, Sequence
 
 from rplearn.core.geometry import slerp_wxyz
 from rplearn.data.poses import PoseTrack
@@ -26,9 +26,9 @@ _FLOAT_COLUMNS: tuple[str, ...] = _SIGNAL_FLOATS + tuple(f"{end}_{f}" for end in
 BLOCK_ROWS = 1 << 15
 
 
-def node_column(uniques: np.ndarray, codes: np.ndarray) -> pd.api.extensions.ExtensionArray | np.ndarray:
+def node_column(uniques: np.ndarray, codes: np.ndarray, index: pd.Index) -> pd.Series:
     """The node ids ``uniques[codes]`` as the text column ``astype(str)`` would make, taken per code."""
-    return pd.Series(np.asarray(uniques).astype(str)).array.take(codes)
+    return pd.Series(pd.Series(np.asarray(uniques).astype(str)).array.take(codes), index=index)
 
 
 def node_codes(tx: pd.Series, rx: pd.Series) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -44,8 +44,13 @@ def node_codes(tx: pd.Series, rx: pd.Series) -> tuple[np.ndarray, np.ndarray, np
 
 
 def interpolate_end(
-    tracks: Mapping[str, PoseTrack], node_ids: Sequence[str], node_code: np.ndarray, t_s: np.ndarray,
-    max_gap_s: float, rows: np.ndarray, pose: np.ndarray,
+    tracks: Mapping[str, PoseTrack],
+    node_ids: Sequence[str],
+    node_code: np.ndarray,
+    t_s: np.ndarray,
+    max_gap_s: float,
+    rows: np.ndarray,
+    pose: np.ndarray,
 ) -> np.ndarray:
     """:func:`~rplearn.data.poses.interpolate_nodes` written as rows of ``pose`` (7, n):
     ``x, y, z, qw, qx, qy, qz`` (NaN outside ``rows``); returns the status of every row.
@@ -68,7 +73,7 @@ def interpolate_end(
             pose[3:, sel] = quat[0][:, None]
             continue
         for start in range(0, sel.size, BLOCK_ROWS):  # blocks: the temporaries stay in cache
-            rows_b = sel[start:start + BLOCK_ROWS]
+            rows_b = sel[start : start + BLOCK_ROWS]
             i, frac, status[rows_b] = track.brackets(t_s[rows_b], max_gap_s)
             i1 = i + 1
             for j in range(3):  # p0 + fraction * (p1 - p0), as PoseTrack.interpolate
@@ -95,7 +100,11 @@ def block_row(column: str) -> int:
 
 
 def matched_frame(
-    signal: pd.DataFrame, idx: np.ndarray, block: np.ndarray, node_codes: dict[str, np.ndarray], uniques: np.ndarray,
+    signal: pd.DataFrame,
+    idx: np.ndarray,
+    block: np.ndarray,
+    node_codes: dict[str, np.ndarray],
+    uniques: np.ndarray,
 ) -> pd.DataFrame:
     """The kept rows ``idx`` in :data:`MATCHED_COLUMNS` order, then the extra signal columns.
 
@@ -113,7 +122,7 @@ def matched_frame(
     data = block[:, :m] if 2 * m >= n else np.ascontiguousarray(block[:, :m])  # no mostly idle buffer
     out = pd.DataFrame(data.T, columns=list(_FLOAT_COLUMNS), copy=False)
     for j, end in enumerate(("tx", "rx")):
-        out.insert(1 + j, end, node_column(uniques, node_codes[end][idx]))
+        out.insert(1 + j, end, node_column(uniques, node_codes[end][idx], out.index))
     if tuple(out.columns) != MATCHED_COLUMNS:  # the block's layout must follow the table's
         out = out[list(MATCHED_COLUMNS)]
     for c in [c for c in signal.columns if c not in MATCHED_COLUMNS]:
