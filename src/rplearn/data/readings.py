@@ -60,7 +60,9 @@ def report_period_s(t_s: np.ndarray) -> float:
     t_s : ndarray
         Times of one link's rows [s], in any order.
     """
-    t = np.sort(np.asarray(t_s, np.float64)[np.isfinite(t_s)])
+    t = np.asarray(t_s, np.float64)[np.isfinite(t_s)]
+    if not np.all(t[1:] >= t[:-1]):  # a link's times come sorted from repeated_readings: no second sort
+        t = np.sort(t)
     d = np.diff(t)
     d = d[d > 0]
     if d.size == 0:
