@@ -343,18 +343,27 @@ def slerp_wxyz(q0: np.ndarray, q1: np.ndarray, fraction: np.ndarray) -> np.ndarr
         Interpolation fraction in [0, 1].
     """
     dot = np.einsum("ij,ij->i", q0, q1)
-    sign = np.where(dot < 0.0, -1.0, 1.0)
-    dot = np.abs(dot)
-    q1 = q1 * sign[:, None]
-    theta = np.arccos(np.clip(dot, -1.0, 1.0))
+    negative = dot < 0.0
+    theta = np.arccos(np.minimum(np.abs(dot), 1.0))
     sin_theta = np.sin(theta)
     near = sin_theta < 1e-6
+    fraction = np.broadcast_to(np.asarray(fraction, np.float64), dot.shape)
+    rest = 1.0 - fraction
+    w0 = np.sin(rest * theta)
+    w1 = np.sin(fraction * theta)
     safe = np.where(near, 1.0, sin_theta)
-    w0 = np.where(near, 1.0 - fraction, np.sin((1.0 - fraction) * theta) / safe)
-    w1 = np.where(near, fraction, np.sin(fraction * theta) / safe)
-    out = w0[:, None] * q0 + w1[:, None] * q1
-    out /= np.linalg.norm(out, axis=1, keepdims=True)
-    return np.where(out[:, :1] < 0.0, -out, out)
+    w0 /= safe
+    w1 /= safe
+    if near.any():  # nearly equal quaternions: normalised linear interpolation
+        w0[near] = rest[near]
+        w1[near] = fraction[near]
+    np.negative(w1, out=w1, where=negative)  # the shorter arc: q1 negated
+    out = w0[:, None] * q0
+    out += w1[:, None] * q1
+    norm = np.sqrt(np.einsum("ij,ij->i", out, out))
+    np.negative(norm, out=norm, where=out[:, 0] < 0.0)  # qw >= 0
+    out /= norm[:, None]
+    return out
 
 
 @check_types

@@ -90,22 +90,43 @@ class PoseTrack:
                 np.broadcast_to(q, (n, 4)).copy(),
                 np.zeros(n, np.int8),
             )
+        i, frac, status = self.brackets(t_s, max_gap_s)
+        i1 = i + 1
+        p0 = self.position_xyz[i]
+        pos = self.position_xyz[i1] - p0
+        pos *= frac[:, None]
+        pos += p0
+        quat = slerp_wxyz(self.quat_wxyz[i], self.quat_wxyz[i1], frac)
+        return pos, quat, status
+
+    def brackets(self, t_s: np.ndarray, max_gap_s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The logged poses around times ``t_s`` [s] of a track of two rows or more.
+
+        Returns
+        -------
+        index : ndarray (n,) of int
+            Row ``i`` of the pose before each time (the pose after is row ``i + 1``).
+        fraction : ndarray (n,)
+            Where each time lies between the two, in [0, 1].
+        status : ndarray (n,) of int8
+            As in :meth:`interpolate`.
+        """
         tk = self.t_s
-        i = np.searchsorted(tk, t_s, side="right") - 1
-        i = np.clip(i, 0, tk.shape[0] - 2)
+        i = np.searchsorted(tk, t_s, side="right")
+        i -= 1
+        np.clip(i, 0, tk.shape[0] - 2, out=i)
         t0 = tk[i]
         t1 = tk[i + 1]
-        dt = t1 - t0
-        status = np.zeros(n, np.int8)
+        status = np.zeros(t_s.shape[0], np.int8)
         on_sample = (t_s == t0) | (t_s == t1)  # a logged pose is known even at a gap's edge
+        t1 -= t0  # the step dt between the two poses
         if not self.still:
-            status[(dt > max_gap_s) & ~on_sample] = STATUS_POSE_GAP
+            status[(t1 > max_gap_s) & ~on_sample] = STATUS_POSE_GAP
         status[(t_s < tk[0]) | (t_s > tk[-1]) | ~np.isfinite(t_s)] = STATUS_OUT_OF_SPAN
-        frac = np.clip((t_s - t0) / dt, 0.0, 1.0)
-        p0 = self.position_xyz[i]
-        pos = p0 + frac[:, None] * (self.position_xyz[i + 1] - p0)
-        quat = slerp_wxyz(self.quat_wxyz[i], self.quat_wxyz[i + 1], frac)
-        return pos, quat, status
+        frac = t_s - t0
+        frac /= t1
+        np.clip(frac, 0.0, 1.0, out=frac)
+        return i, frac, status
 
 
 @check_types
@@ -150,12 +171,13 @@ def tracks_of_checked_log(
     """
     offsets = dict(clock_offsets_s or {})
     tracks: dict[str, PoseTrack] = {}
-    nodes = df["node"].to_numpy()
+    nodes = df["node"].array
+    codes = pd.factorize(nodes)[0]  # equal ids, equal codes (no text object per row)
     t = df["t"].to_numpy(np.float64)
     pos = df[["x", "y", "z"]].to_numpy(np.float64)
     quat = df[["qw", "qx", "qy", "qz"]].to_numpy(np.float64)
     # df is sorted by (node, t): nodes are contiguous runs
-    starts = np.flatnonzero(np.r_[True, nodes[1:] != nodes[:-1]])
+    starts = np.flatnonzero(np.r_[True, codes[1:] != codes[:-1]])
     ends = np.r_[starts[1:], len(nodes)]
     for s, e in zip(starts, ends):
         node = str(nodes[s])

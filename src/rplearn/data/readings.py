@@ -60,7 +60,9 @@ def report_period_s(t_s: np.ndarray) -> float:
     t_s : ndarray
         Times of one link's rows [s], in any order.
     """
-    t = np.sort(np.asarray(t_s, np.float64)[np.isfinite(t_s)])
+    t = np.asarray(t_s, np.float64)[np.isfinite(t_s)]
+    if not np.all(t[1:] >= t[:-1]):  # a link's times come sorted from repeated_readings: no second sort
+        t = np.sort(t)
     d = np.diff(t)
     d = d[d > 0]
     if d.size == 0:
@@ -80,20 +82,31 @@ def value_hashes(signal: pd.DataFrame) -> np.ndarray:
         if pd.api.types.is_numeric_dtype(col) and not pd.api.types.is_bool_dtype(col):
             h = pd.util.hash_array(col.to_numpy(np.float64, na_value=np.nan))
         else:
-            values = col.to_numpy(dtype=object, na_value="\x00missing")
-            try:
-                h = pd.util.hash_array(values)
+            try:  # each distinct cell hashed once (text columns of a long log name a few nodes)
+                codes, values = _distinct(col, "\x00missing")
+                h = pd.util.hash_array(values)[codes]
             except TypeError:  # not all text (numbers or lists in a text column): hash their text
+                values = col.to_numpy(dtype=object, na_value="\x00missing")
                 h = pd.util.hash_array(values.astype(str).astype(object))
         with np.errstate(over="ignore"):
             out = out * np.uint64(1099511628211) ^ h  # FNV-style combination, column order matters
     return out
 
 
+def _distinct(col: pd.Series, missing: str) -> tuple[np.ndarray, np.ndarray]:
+    """``(codes, values)`` with ``values[codes]`` equal to ``col.to_numpy(dtype=object, na_value=missing)``
+    and ``values`` distinct, without making one object per row."""
+    codes, uniques = pd.factorize(col, use_na_sentinel=True)
+    values = np.append(np.asarray(uniques, dtype=object), np.array([missing], dtype=object))
+    codes = np.where(codes < 0, len(values) - 1, codes)
+    merged, distinct = pd.factorize(values)  # a missing cell and the text `missing` are one value
+    return merged[codes], np.asarray(distinct, dtype=object)
+
+
 def _link_codes(signal: pd.DataFrame) -> tuple[np.ndarray, list[str]]:
     """Code of each row's directed link and the link names ``"tx\x00rx"``."""
-    tx, tx_names = pd.factorize(signal["tx"].to_numpy(dtype=object, na_value=""))
-    rx, rx_names = pd.factorize(signal["rx"].to_numpy(dtype=object, na_value=""))
+    tx, tx_names = _distinct(signal["tx"], "")
+    rx, rx_names = _distinct(signal["rx"], "")
     codes, pairs = pd.factorize(tx.astype(np.int64) * (len(rx_names) + 1) + rx)
     names = [f"{tx_names[p // (len(rx_names) + 1)]}\x00{rx_names[p % (len(rx_names) + 1)]}" for p in pairs]
     return codes, names

@@ -82,16 +82,15 @@ from rplearn.core.link import FAR_FIELD_WAVELENGTHS, SPEED_OF_LIGHT_M_S
 from rplearn.core.plausible import FREQUENCY_BAND_HZ, check_frequency_hz
 from rplearn.data.outages import match_outages, outage_text, split_outages, with_outages
 from rplearn.data.phases import AIRBORNE_MARGIN_M, WINDOW_CLOCKS, FlightPhases, flight_phases, max_gap_advice, phase_notes, window_mask
-from rplearn.data.poses import STATUS_OUT_OF_SPAN, STATUS_POSE_GAP, PoseTrack, interpolate_nodes, tracks_of_checked_log
+from rplearn.data.poses import STATUS_OUT_OF_SPAN, STATUS_POSE_GAP, PoseTrack, tracks_of_checked_log
 from rplearn.data.readings import REPEAT_FRACTION, duplicate_rows, repeated_readings
+from rplearn.data.sync_match import block_row, float_block, interpolate_end, matched_frame, node_codes
 from rplearn.data.tables import (
-    MATCHED_COLUMNS,
     QUATERNION_NORM_TOLERANCE,
     SENTINEL_RSSI_DBM,
     SIGNAL_COLUMNS,
     check_tx_power_dbm,
     empty_ids,
-    node_ids,
     non_unit_quaternion_rows,
     normalise_times,
     validate_pose_log,
@@ -334,32 +333,31 @@ def _numeric(df: pd.DataFrame, column: str) -> np.ndarray:
     return pd.to_numeric(col, errors="coerce").to_numpy(np.float64, na_value=np.nan)
 
 
-def _signal_times(signal: pd.DataFrame, rx: np.ndarray, offset_s: float | Mapping[str, float]) -> np.ndarray:
-    """Signal times [s] on the common clock: plus one offset, or one per receiver."""
+def _signal_times(
+    signal: pd.DataFrame, uniques: np.ndarray, rx_code: np.ndarray, offset_s: float | Mapping[str, float],
+) -> np.ndarray:
+    """Signal times [s] on the common clock: plus one offset, or one per receiver (``uniques[rx_code]``)."""
     t = _numeric(signal, "t")
     if isinstance(offset_s, Mapping):
-        off = pd.Series(rx).map(lambda r: float(offset_s.get(r, 0.0))).to_numpy(np.float64)
-        return t + off
+        return t + np.array([float(offset_s.get(r, 0.0)) for r in uniques], np.float64)[rx_code]
     return t + float(offset_s)
 
 
 def _unknown_nodes(
-    tx: np.ndarray, rx: np.ndarray, tracks: Mapping[str, PoseTrack], keep: np.ndarray,
+    tx_code: np.ndarray, rx_code: np.ndarray, uniques: np.ndarray, tracks: Mapping[str, PoseTrack], keep: np.ndarray,
     on_unknown_node: str, source: str, first_row: int = 0,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, list[str]]:
-    """Node codes of both ends, which codes have a pose log, rows naming a node without one.
+) -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """Which node codes (into ``uniques``) have a pose log, rows naming a node without one.
 
-    Returns ``(tx_code, rx_code, uniques, known, unknown_mask, names)`` with the unknown
-    node ids named by the kept rows; raises with ``on_unknown_node="error"``.
+    Returns ``(known, unknown_mask, names)`` with the unknown node ids named by the kept
+    rows; raises with ``on_unknown_node="error"``.
     """
-    n = len(tx)
-    codes, uniques = pd.factorize(np.concatenate([tx, rx]), use_na_sentinel=False)  # factorise once over both ends
     known = np.array([u in tracks for u in uniques], bool)
-    unknown_mask = ~known[codes[:n]] | ~known[codes[n:]]
+    unknown_mask = ~known[tx_code] | ~known[rx_code]
     names: list[str] = []
     if np.any(unknown_mask & keep):
-        names = sorted({str(u) for u, k in zip(uniques, known) if not k} & (
-            set(tx[unknown_mask & keep]) | set(rx[unknown_mask & keep])))
+        named = np.unique(np.concatenate([tx_code[unknown_mask & keep], rx_code[unknown_mask & keep]]))
+        names = sorted(str(uniques[c]) for c in named if not known[c])
         if on_unknown_node == "error":
             row = int(np.flatnonzero(unknown_mask & keep)[0]) + first_row
             raise InputError(
@@ -369,32 +367,7 @@ def _unknown_nodes(
                 param="on_unknown_node",
             )
         logger.warning("%s: signals name node(s) without a pose log: %s", source, ", ".join(names))
-    return codes[:n], codes[n:], uniques, known, unknown_mask, names
-
-
-def _matched_frame(
-    signal: pd.DataFrame, idx: np.ndarray, values: dict[str, np.ndarray],
-    poses: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]],
-) -> pd.DataFrame:
-    """The kept rows ``idx`` in :data:`MATCHED_COLUMNS` order, then the extra signal columns."""
-    cols: dict[str, np.ndarray] = {
-        "t": values["t"][idx],
-        "tx": values["tx"][idx].astype(str),
-        "rx": values["rx"][idx].astype(str),
-        "rssi_dbm": values["rssi_dbm"][idx],
-        "tx_power_dbm": values["tx_power_dbm"][idx],
-        "frequency_hz": values["frequency_hz"][idx],
-    }
-    for end in ("tx", "rx"):
-        pos, quat, _ = poses[end]
-        for j, f in enumerate(("x", "y", "z")):
-            cols[f"{end}_{f}"] = pos[idx, j]
-        for j, f in enumerate(("qw", "qx", "qy", "qz")):
-            cols[f"{end}_{f}"] = quat[idx, j]
-    out = pd.DataFrame(cols, columns=list(MATCHED_COLUMNS))
-    for c in [c for c in signal.columns if c not in MATCHED_COLUMNS]:
-        out[c] = pd.Series(signal[c].array[idx], index=out.index)  # keeps the column's dtype (text stays text)
-    return out
+    return known, unknown_mask, names
 
 
 def _match_chunk(
@@ -415,11 +388,13 @@ def _match_chunk(
             f"{source}: missing column(s) {', '.join(missing)}; expected {', '.join(SIGNAL_COLUMNS)}"
         )
     summary = SyncSummary(n_in=int(len(signal)))
-    tx = node_ids(signal["tx"])
-    rx = node_ids(signal["rx"])
-    values = {"t": _signal_times(signal, rx, options.signal_clock_offset_s), "tx": tx, "rx": rx}
+    tx_code, rx_code, uniques = node_codes(signal["tx"], signal["rx"])  # one text per node, not per row
+    values = {"t": _signal_times(signal, uniques, rx_code, options.signal_clock_offset_s)}
     values.update({c: _numeric(signal, c) for c in ("rssi_dbm", "tx_power_dbm", "frequency_hz")})
-    t, rssi, ptx, freq = (values[c] for c in ("t", "rssi_dbm", "tx_power_dbm", "frequency_hz"))
+    block = float_block(len(signal))  # the matched dataset's float columns, filled in place
+    for c in ("t", "rssi_dbm", "tx_power_dbm", "frequency_hz"):
+        block[block_row(c)] = values[c]
+    t, rssi, ptx, freq = (block[block_row(c)] for c in ("t", "rssi_dbm", "tx_power_dbm", "frequency_hz"))
     keep = np.ones(len(signal), bool)
 
     def drop(mask: np.ndarray, reason: str) -> None:
@@ -428,7 +403,8 @@ def _match_chunk(
         keep[hit] = False
 
     drop(duplicate_rows(signal) | (False if seen_before is None else seen_before), "duplicate")
-    drop(~(np.isfinite(t) & np.isfinite(ptx) & np.isfinite(freq) & (freq > 0)) | empty_ids(tx) | empty_ids(rx),
+    empty = empty_ids(uniques)
+    drop(~(np.isfinite(t) & np.isfinite(ptx) & np.isfinite(freq) & (freq > 0)) | empty[tx_code] | empty[rx_code],
          "invalid_value")
     if options.from_s is not None or options.to_s is not None:
         origin = phases.start_s if options.window_clock == "start" else 0.0
@@ -439,27 +415,28 @@ def _match_chunk(
     drop(~np.isfinite(rssi) | np.isin(rssi, np.asarray(options.sentinel_rssi_dbm, np.float64)), "sentinel_rssi")
     if options.rssi_scale == "dbm":
         drop((rssi < PLAUSIBLE_RSSI_DBM[0]) | (rssi > PLAUSIBLE_RSSI_DBM[1]) | (rssi > ptx), "implausible_rssi")
-    drop(tx == rx, "tx_equals_rx")
+    drop(tx_code == rx_code, "tx_equals_rx")
     if options.link is not None:
-        drop(~((tx == options.link[0]) & (rx == options.link[1])), "other_link")
+        drop(~((uniques == options.link[0])[tx_code] & (uniques == options.link[1])[rx_code]), "other_link")
     drop(repeated_readings(signal, options.repeat_fraction, t, carry), "duplicate_reading")
-    tx_code, rx_code, uniques, known, unknown, names = _unknown_nodes(
-        tx, rx, tracks, keep, options.on_unknown_node, source, first_row)
+    known, unknown, names = _unknown_nodes(tx_code, rx_code, uniques, tracks, keep, options.on_unknown_node, source,
+                                           first_row)
     if names:
         summary.unknown_nodes = names
     drop(unknown, "unknown_node")
-    poses = {end: interpolate_nodes(tracks, list(uniques), code, t, options.max_gap_s, keep & known[code])
-             for end, code in (("tx", tx_code), ("rx", rx_code))}
-    st_tx, st_rx = poses["tx"][2], poses["rx"][2]
+    poses = {end: block[block_row(f"{end}_x"):block_row(f"{end}_x") + 7] for end in ("tx", "rx")}
+    st_tx, st_rx = (interpolate_end(tracks, list(uniques), code, t, options.max_gap_s, keep & known[code], poses[end])
+                    for end, code in (("tx", tx_code), ("rx", rx_code)))
     drop((st_tx == STATUS_OUT_OF_SPAN) | (st_rx == STATUS_OUT_OF_SPAN), "out_of_span")
     drop((st_tx == STATUS_POSE_GAP) | (st_rx == STATUS_POSE_GAP), "pose_gap")
     with np.errstate(invalid="ignore"):
-        distance = np.linalg.norm(poses["tx"][0] - poses["rx"][0], axis=1)
+        d = poses["tx"][:3] - poses["rx"][:3]
+        distance = np.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
         limit = FAR_FIELD_WAVELENGTHS * SPEED_OF_LIGHT_M_S / np.where(keep, freq, 1.0)
         drop(keep & ~(distance > limit), "near_field")
     off = np.zeros(len(signal), bool)
     for end, code in (("tx", tx_code), ("rx", rx_code)):
-        disarmed, ground = phases.masks(list(uniques), code, t, poses[end][0][:, 2], keep & known[code])
+        disarmed, ground = phases.masks(list(uniques), code, t, poses[end][2], keep & known[code])
         if options.airborne:
             drop(disarmed, "disarmed")
             drop(ground, "on_ground")
@@ -467,7 +444,7 @@ def _match_chunk(
     summary.ground_kept = 0 if options.airborne else int((off & keep).sum())
     idx = np.flatnonzero(keep)
     summary.n_out = int(idx.size)
-    matched = _matched_frame(signal, idx, values, poses)
+    matched = matched_frame(signal, idx, block, {"tx": tx_code, "rx": rx_code}, uniques)
     if options.rssi_scale == "relative":
         matched["rssi_scale"] = pd.Series(["relative"] * len(matched), index=matched.index, dtype=object)
     return SyncResult(matched, summary)

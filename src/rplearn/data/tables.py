@@ -126,9 +126,21 @@ def node_ids(values: Any) -> np.ndarray:
     return series.astype(str).to_numpy(dtype=object)
 
 
+def node_id_codes(values: pd.Series, sort: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """``(codes, ids)``: :func:`node_ids` of ``values`` as ``ids[codes]``, ``ids`` distinct (sorted
+    with ``sort``), the text of each distinct cell made once rather than once per row."""
+    codes, uniques = pd.factorize(values, use_na_sentinel=True)  # a missing cell: -1, then ""
+    text = np.append(node_ids(pd.Series(uniques)), np.array([""], dtype=object))
+    merged, ids = pd.factorize(text, sort=sort)  # distinct cells with the same text are one node
+    return merged[np.where(codes < 0, text.size - 1, codes)], np.asarray(ids, dtype=object)
+
+
 def empty_ids(ids: np.ndarray) -> np.ndarray:
     """Mask of node ids that are empty or only white space."""
-    return np.char.str_len(np.char.strip(ids.astype(str))) == 0 if ids.size else np.zeros(0, bool)
+    if not ids.size:
+        return np.zeros(0, bool)
+    codes, uniques = pd.factorize(np.asarray(ids, dtype=object), use_na_sentinel=False)  # a few nodes, many rows
+    return (np.char.str_len(np.char.strip(np.asarray(uniques, dtype=object).astype(str))) == 0)[codes]
 
 
 @check_types
@@ -153,16 +165,16 @@ def validate_pose_log(df: pd.DataFrame, source: str = "pose log") -> pd.DataFram
     df = normalise_times(df, source)
     _require_finite(df, [c for c in POSE_COLUMNS if c != "node"], source)
     t = df["t"].to_numpy(np.float64)
-    ids = node_ids(df["node"])
-    empty = empty_ids(ids)
+    codes, names = node_id_codes(df["node"], sort=True)  # codes in the order of sorted ids
+    empty = empty_ids(names)[codes]
     if np.any(empty):
         row = int(np.flatnonzero(empty)[0])
         raise InputError(f"{source}: column node is empty at row {row} (every pose row needs its node id)")
-    codes, _ = pd.factorize(ids, sort=True)  # codes in the order of sorted ids
     order = np.lexsort((t, codes))  # stable: by node id, then time
     in_order = bool(np.all(order[1:] > order[:-1])) if order.size > 1 else True
     take = slice(None) if in_order else order
-    cols: dict[str, Any] = {"t": t[take], "node": ids[take]}
+    node = pd.Series(names.astype(str)).array.take(codes[take])  # one text per node, taken per row
+    cols: dict[str, Any] = {"t": t[take], "node": node}
     for c in ("x", "y", "z"):
         cols[c] = df[c].to_numpy(np.float64)[take]
     q = df[["qw", "qx", "qy", "qz"]].to_numpy(np.float64)[take]
