@@ -360,7 +360,7 @@ def slerp_wxyz(q0: np.ndarray, q1: np.ndarray, fraction: np.ndarray) -> np.ndarr
     np.negative(w1, out=w1, where=negative)  # the shorter arc: q1 negated
     out = w0[:, None] * q0
     out += w1[:, None] * q1
-    norm = np.sqrt(np.einsum("ij,ij->i", out, out))
+    norm = np.linalg.norm(out, axis=1)  # (not einsum: its other rounding moves results by an ulp)
     np.negative(norm, out=norm, where=out[:, 0] < 0.0)  # qw >= 0
     out /= norm[:, None]
     return out
