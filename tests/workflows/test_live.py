@@ -105,7 +105,8 @@ def test_a_csv_being_appended_to_ends_with_the_offline_model(smoke, tmp_path):
     writer = _appender(pose, sig, tmp_path, speed=40.0)
     source = f"{tmp_path / 'pose.csv'},{tmp_path / 'signal.csv'}"
     page = str(tmp_path / "live.html")
-    outcome = run_live(source, str(tmp_path / "live.json"), LiveOptions(refit_s=0.5, idle_s=2.0), html=page)
+    # the silence that ends the stream is long, so that a writer stalled by a loaded machine is waited for
+    outcome = run_live(source, str(tmp_path / "live.json"), LiveOptions(refit_s=0.5, idle_s=15.0), html=page)
     writer.join()
     assert outcome.status.refits >= 2 and outcome.status.prequential_n > 0
     data = str(tmp_path / "data.parquet")
