@@ -68,3 +68,23 @@ def test_the_pose_rows_kept_stay_bounded_as_the_flight_goes_on(logs):
 def test_whole_log_options_are_refused():
     with pytest.raises(InputError, match="airborne"):
         LiveMatcher(SyncOptions(airborne=True))
+
+
+def test_signal_rows_that_lag_the_poses_still_find_their_poses(logs):
+    """A robot's signal file written after its pose file (a poll between the two writes): each
+    batch's signal rows arrive one poll after its poses, yet match as ``sync`` matches them
+    (the poses are kept back to where the signal stream has reached)."""
+    pose, signal = logs
+    whole = synchronise(pose, signal)
+    m, out = LiveMatcher(), []
+    edges = np.arange(pose["t"].min(), pose["t"].max() + 0.5, 0.5)
+    late = signal.iloc[:0]
+    for a, b in zip(edges[:-1], edges[1:]):
+        m.add_poses(pose[(pose["t"] >= a) & (pose["t"] < b)])
+        m.add_signals(late)
+        out.append(m.match().dataset)
+        late = signal[(signal["t"] >= a) & (signal["t"] < b)]
+    m.add_signals(pd.concat([late, signal[signal["t"] >= edges[-1]]]))
+    out.append(m.match(final=True).dataset)
+    live = pd.concat([o for o in out if len(o)], ignore_index=True)
+    assert len(live) == len(whole.dataset) and m.summary.dropped == whole.summary.dropped

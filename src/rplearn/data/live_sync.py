@@ -69,6 +69,7 @@ class LiveMatcher:
         self._seen = _SeenRows()
         self._carry: dict = {}
         self._horizon = -math.inf
+        self._signal_t = -math.inf  # the latest signal time received: later rows come at or after it
         self._signal_rows = 0
         self._moving: set[str] = set()
         #: The rows the last :meth:`match` gave (also when its end-of-stream check raised).
@@ -97,6 +98,9 @@ class LiveMatcher:
         """Append signal rows (canonical columns); they wait until their time is settled."""
         if len(rows):
             self._pending.append(rows.reset_index(drop=True))
+            t = pd.to_numeric(rows["t"], errors="coerce").to_numpy(np.float64) if "t" in rows.columns else np.array([])
+            if np.isfinite(t).any():
+                self._signal_t = max(self._signal_t, float(np.nanmax(t[np.isfinite(t)])))
 
     def settled_s(self) -> float:
         """The latest time [s] every moving node's poses reach (-inf before two poses of one)."""
@@ -131,8 +135,8 @@ class LiveMatcher:
         self._pending = [rest.reset_index(drop=True)] if len(rest) else []
         result = self._match(chunk.sort_values("t", kind="stable") if "t" in chunk.columns else chunk)
         self.last_matched = result.dataset
-        if not final and len(chunk):
-            self._horizon = max(self._horizon, horizon)
+        if not final and len(chunk):  # poses are kept back to where the signal stream has reached (it may lag the poses)
+            self._horizon = max(self._horizon, min(horizon, self._signal_t))
             self._trim()
         if final:
             tracks = self._tracks()
