@@ -2,33 +2,72 @@
 
 For thresholds at the 10th and 30th percentile of the held-out RSSI, the samples are binned by
 their predicted availability ``P(RSSI >= s)`` (tenths); in every bin of at least 200 samples the
-observed share at or above ``s`` lies within 0.05 of the bin's mean prediction, and the Brier
-skill against the best constant (the held-out share itself) is reported beside an *oracle's*:
-the true patterns, the true flight level and the true fading spread. The simulator reports
-integer dBm, so the threshold lies half-way between two integers (``reported >= s`` is then
-``true >= s``, as for a radio's sensitivity).
+observed share at or above ``s`` should lie within 0.05 of the bin's mean prediction, and the
+Brier skill against the best constant (the held-out share itself) should be at least 0.3. Beside
+it, an *oracle*'s skill on the very same samples: the true patterns, link offsets, flight level
+and fading spread. The simulator reports integer dBm, so the threshold lies half-way between two
+integers (``reported >= s`` is then ``true >= s``, as for a radio's sensitivity).
 
-Measured (seed 0; threshold q10 / q30):
+Two kinds of held-out flights:
 
-- ``paper``: skill 0.455 / 0.756 (oracle 0.562 / 0.775), every bin within 0.039 / 0.035.
-- ``campaign`` (issue 24's 15 flights with levels 3 dB RMS apart): skill 0.021 / 0.036 (oracle
-  0.131 / 0.215), every bin within 0.025 / 0.034.
-- ``ground`` (one test pass at a new altitude): skill -0.001 / -0.003 (oracle 0.016 / 0.026),
-  bins within 0.023 / 0.062.
+- **the presets' own** (``paper``: the learning flights' vertical circles at another heading;
+  ``ground``: one more pass along the learned arc at a new altitude; ``campaign``: six passes
+  along a wider arc at a learned altitude). The range barely changes in any of them (10 m
+  between the drones; 40 m from the station), so on ``ground`` and ``campaign`` the held-out
+  RSSI spans a few dB under the 4.2 dB of white fading every packet carries (the paper's
+  residual, which every preset inherits).
+- **a planner's** (:func:`planner_flights`): what a planner asks availability about. Legs between
+  waypoints, out to 100-250 m and back, at 15-40 m altitude, the drone heading along its track
+  (outbound it shows the station its tail), and surveys across the station's sector at growing
+  range; in ``paper`` one drone hovers, slowly turning, while the other flies out to 100-150 m.
 
-On ``campaign`` and ``ground`` a skill of 0.3 is out of reach of any predictor of single
-packets: their held-out RSSI spans a few dB, under the 4 dB of white fading every packet
-carries, so even the oracle stays far below it; there the test checks that the availability
-is calibrated and that the oracle's ceiling is what limits the skill. ``ground``'s one test pass
-is one draw of the pattern's error at an altitude never flown, and its two top bins of the q30
-threshold are 0.06 off.
+Measured (seeds 0 / 1 / 2; each cell: q10, q30):
+
+=================  ===================================  ===================================  ===================================
+flights            rplearn's Brier skill                the oracle's skill                   rplearn's largest bin gap
+=================  ===================================  ===================================  ===================================
+paper, own         .455 .756 / .468 .740 / .499 .733    .462 .761 / .475 .746 / .505 .737    .039 .035 / .039 .021 / .031 .034
+campaign, own      .021 .036 / .018 .030 / .019 .033    .131 .215 / .129 .213 / .182 .255    .025 .034 / .041 .073 / .024 .029
+ground, own        -.001 -.003 / .006 .012 / .006 .010  .016 .026 / .016 .026 / .013 .031    .023 .062 / .011 .024 / .018 .036
+paper, planner     .172 .324 / .306 .409 / .220 .314    .201 .359 / .334 .432 / .236 .337    .091 .034 / .051 .043 / .030 .041
+campaign, planner  -3.0 -1.7 / -4.2 -1.8 / -3.4 -1.8    .452 .404 / .356 .392 / .368 .553    .87 .66 / .81 .66 / .72 .68
+ground, planner    -2.5 -1.1 / -4.4 -1.4 / -3.2 -1.4    .379 .364 / .282 .473 / .377 .533    .95 .70 / .85 .63 / .84 .61
+=================  ===================================  ===================================  ===================================
+
+What this says:
+
+- On the presets' own flights the availability is calibrated within 0.05 but for ``ground``'s
+  one pass at a new altitude (0.062 at q30, seed 0) and ``campaign`` seed 1 (0.073 at q30). The
+  skill is the oracle's on ``paper`` (within 0.01); on ``campaign`` and ``ground`` the oracle
+  itself stays far below 0.3: there the fading bounds every predictor of single packets. On
+  ``campaign`` the oracle also knows each new flight's level (3 dB RMS); without it (its mean
+  less the level, its spread widened by the level's) it reaches .039 .052 (seed 0), rplearn
+  .021 .036: the rest is the pattern's error (about 1 dB RMS). rplearn's spread is right: with
+  the true level spread (3 dB) in place of its estimate (3.8 dB) it would reach .026 .037, and
+  without the level's spread .011 .027.
+- On a planner's flights the held-out RSSI spans 15-25 dB, and the oracle reaches 0.3 on
+  ``ground`` and ``campaign`` (but for ``ground`` seed 1 at q10), on ``paper`` at q30 (at q10 on
+  seed 1 only: the far legs' RSSI changes little about the 10th percentile). rplearn is within
+  0.04 of the oracle's skill on ``paper``, whose learning flights saw the whole sphere, and
+  meets item 1 there at q30 (all three seeds). On ``ground`` and ``campaign`` it fails both
+  criteria: their learning flights saw each antenna over a few percent of the sphere (the
+  drone's nose toward the station, 20-30 deg below its horizon), and a planner's flight looks
+  elsewhere. At the samples more than 15 deg from every learning direction (76 % of
+  ``ground``'s, 84 % of ``campaign``'s, seed 0) the predicted RSSI is on average 9.5 dB
+  (``ground``) and 12.3 dB (``campaign``) below the truth, while the gain's predicted spread
+  there is 6.2 dB (median) and 3.9 dB (3.8 of which the new flight's level); the fits' stated
+  spread where they never looked (``training.prior_std_db``) is 5.0 and 0.7 dB. The learned
+  directions lie in the camera gimbal's shadow, and where the flight never looked the fit
+  predicts the level it saw. Those cases are strict xfails: item 1 is not met on them.
 """
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 from scipy.special import ndtr
 
@@ -40,27 +79,17 @@ from rplearn.data.units import samples_of, split_units
 from rplearn.io.files import read_dataset
 from rplearn.models.auto import fit_auto
 from rplearn.models.predict import predict_dataset
-from rplearn.sim import simulate
+from rplearn.plan import Campaign, ReferenceUnit
+from rplearn.sim import make_preset, simulate
 from rplearn.workflows.logs import sync_logs
 
 MIN_BIN = 200
+#: Reference rate of the planner's flights [Hz].
+RATE_HZ = 10.0
 
 
-def held_out(tmp: Path, preset: str, seed: int = 0):
-    """The held-out predictions of an automatic fit, and the oracle's clean RSSI of the same
-    flights (true patterns, offsets, flight levels) with the simulator's fading spread."""
-    sim = simulate(preset, seed=seed, out_dir=str(tmp / "f"))
-    link = ("A", "B") if preset == "paper" else None
-    sync_logs([str(tmp / "f" / "pose_log.parquet")], [str(tmp / "f" / "signal_log.parquet")], str(tmp / "m.parquet"),
-              sync_options=SyncOptions(link=link))
-    df = read_dataset(str(tmp / "m.parquet"))
-    learn, test = split_units(df, None, None)
-    nodes = sorted(set(df["tx"]) | set(df["rx"]))
-    model = fit_auto({u: samples_of(df, [u], "d", nodes=nodes) for u in learn})[0].model
-    table = predict_dataset(model, df[df["unit"].isin(test)].reset_index(drop=True)).table
-    truth = sim.matched("testing")
-    if link:
-        truth = truth[truth["tx"].isin(link) & truth["rx"].isin(link)].reset_index(drop=True)
+def _clean_rssi(sim, truth: pd.DataFrame) -> np.ndarray:
+    """RSSI without fading [dBm] of the true matched rows: true patterns, offsets, flight levels."""
     s = link_samples(truth, "truth", require_rssi=False)
     gain, d = np.zeros(len(truth)), s.directions
     for k, node in enumerate(s.nodes):
@@ -69,9 +98,32 @@ def held_out(tmp: Path, preset: str, seed: int = 0):
         gain[rx] += sim.ground_truth.evaluate(node, d.az_rx[rx], d.el_rx[rx])
     offsets = np.array([sim.ground_truth.link_offset_db(a, b) for a, b in zip(truth["tx"], truth["rx"])])
     levels = truth["unit"].map(sim.unit_levels_db).fillna(0.0).to_numpy() if sim.unit_levels_db else 0.0
-    clean = (truth["tx_power_dbm"].to_numpy() + gain + offsets + levels
-             - free_space_path_loss_db(s.distance_m, truth["frequency_hz"].to_numpy()))
-    return model, table, truth["rssi_dbm"].to_numpy(np.float64), clean, sim.config.radio.fading_std_db
+    return (truth["tx_power_dbm"].to_numpy() + gain + offsets + levels
+            - free_space_path_loss_db(s.distance_m, truth["frequency_hz"].to_numpy()))
+
+
+def held_out(tmp: Path, preset: str, seed: int = 0, flights: tuple = ()):
+    """The held-out predictions of an automatic fit on the learning flights of ``preset``, each
+    row with the oracle's clean RSSI of the same packet (``clean_dbm``); ``flights`` replace the
+    preset's own testing flights."""
+    config = make_preset(preset)
+    if flights:
+        learning = tuple(u for u in config.campaign.units if u.role == "learning")
+        config = replace(config, campaign=Campaign(learning + tuple(flights), gap_s=config.campaign.gap_s))
+    sim = simulate(config, seed=seed, out_dir=str(tmp / "f"))
+    link = ("A", "B") if preset == "paper" else None
+    sync_logs([str(tmp / "f" / "pose_log.parquet")], [str(tmp / "f" / "signal_log.parquet")], str(tmp / "m.parquet"),
+              sync_options=SyncOptions(link=link))
+    df = read_dataset(str(tmp / "m.parquet"))
+    learn, test = split_units(df, None, None)
+    nodes = sorted(set(df["tx"]) | set(df["rx"]))
+    model = fit_auto({u: samples_of(df, [u], "d", nodes=nodes) for u in learn})[0].model
+    table = predict_dataset(model, df[df["unit"].isin(test)].reset_index(drop=True)).table
+    truth = sim.matched("testing").copy()
+    truth["clean_dbm"] = _clean_rssi(sim, truth)
+    table = table.merge(truth[["t", "tx", "rx", "clean_dbm"]], on=["t", "tx", "rx"], how="left", validate="1:1")
+    assert table["clean_dbm"].notna().all()  # every held-out packet has its oracle
+    return model, table, sim.config.radio.fading_std_db
 
 
 def skill(p, observed):
@@ -79,19 +131,98 @@ def skill(p, observed):
 
 
 def scores(case, q):
-    model, table, truth_rssi, clean, fading = case
-    s = float(np.round(np.percentile(table["rssi_dbm"], q))) - 0.5
+    """(model's skill, its largest bin gap, the number of bins, the oracle's skill) at the q-th
+    percentile of the held-out RSSI."""
+    model, table, fading = case
+    rssi = table["rssi_dbm"].to_numpy(np.float64)
+    s = float(np.round(np.percentile(rssi, q))) - 0.5
     p = link_availability_column(table, model, s)
-    up = (table["rssi_dbm"] >= s).to_numpy(float)
+    up = (rssi >= s).astype(float)
     bins = np.minimum((p * 10).astype(int), 9)
     gaps = [abs(up[bins == b].mean() - p[bins == b].mean()) for b in range(10) if (bins == b).sum() >= MIN_BIN]
-    oracle = skill(ndtr((clean - s) / fading), (truth_rssi >= s).astype(float))
+    oracle = skill(ndtr((table["clean_dbm"].to_numpy(np.float64) - s) / fading), up)
     return skill(p, up), max(gaps), len(gaps), oracle
+
+
+# --- the planner's flights ---------------------------------------------------------------------
+
+
+def _legs(start, waypoints, speed_m_s: float = 4.0, yaw_rate_deg_s: float = 45.0):
+    """Times [s], positions (n, 3) [m] and headings [rad] of a drone that turns to each leg's
+    track in place, then flies it (a cosine speed profile, ``speed_m_s`` at its middle)."""
+    p = np.asarray(start, float)
+    yaw = float(np.arctan2(waypoints[0][1] - p[1], waypoints[0][0] - p[0]))
+    ts, ps, ys, t = [np.zeros(1)], [p[None]], [np.array([yaw])], 0.0
+    for w in np.asarray(waypoints, float):
+        d = w - p
+        turn = float(np.angle(np.exp(1j * (np.arctan2(d[1], d[0]) - yaw))))
+        for kind, duration in (("turn", abs(np.degrees(turn)) / yaw_rate_deg_s * np.pi / 2),
+                               ("move", np.pi * np.linalg.norm(d) / (2 * speed_m_s))):
+            if duration <= 0:
+                continue
+            tau = np.minimum(np.arange(1, int(np.ceil(duration * RATE_HZ)) + 1) / RATE_HZ, duration)
+            s = (1 - np.cos(np.pi * tau / duration)) / 2
+            ts.append(t + tau)
+            ps.append(np.repeat(p[None], tau.size, 0) if kind == "turn" else p + s[:, None] * d)
+            ys.append(yaw + turn * s if kind == "turn" else np.full(tau.size, yaw + turn))
+            t += duration
+        p, yaw = w, yaw + turn
+    return np.concatenate(ts), np.concatenate(ps), np.unwrap(np.concatenate(ys))
+
+
+def _unit(nodes, anchor, anchor_yaw_deg, start, waypoints, label, anchor_turn_deg_s=0.0) -> ReferenceUnit:
+    t, pos, yaw = _legs(start, waypoints)
+    mover = pd.DataFrame({"t": t, "x": pos[:, 0], "y": pos[:, 1], "z": pos[:, 2], "yaw_deg": np.degrees(yaw)})
+    still = pd.DataFrame({"t": t, "x": anchor[0], "y": anchor[1], "z": anchor[2],
+                          "yaw_deg": anchor_yaw_deg + anchor_turn_deg_s * t})
+    return ReferenceUnit(nodes, label, (still, mover), role="testing")
+
+
+def _polar(centre, az_deg, r, z):
+    return (centre[0] + r * np.cos(np.radians(az_deg)), centre[1] + r * np.sin(np.radians(az_deg)), z)
+
+
+def planner_flights(preset: str, seed: int) -> tuple[ReferenceUnit, ...]:
+    """Held-out flights of the kind a planner asks availability about (module docstring): for
+    ``ground`` (3) and ``campaign`` (6), alternately an outbound leg and back and a survey of
+    four rows across the station's sector; for ``paper`` (2), drone B flying three legs out to
+    100-150 m and back around drone A, which hovers at 20 m turning at 6 deg/s."""
+    rng = np.random.default_rng(1000 + seed)
+    if preset == "paper":
+        a = (0.0, 0.0, 20.0)
+        units = []
+        for k in range(2):
+            az, far, (z1, z2) = rng.uniform(0, 360), rng.uniform(100, 150), rng.uniform(15, 35, 2)
+            legs = [_polar(a, az, far, z2), _polar(a, az + 90, 0.6 * far, z1), _polar(a, az + 180, 10.0, 20.0)]
+            units.append(_unit(("A", "B"), a, 0.0, _polar(a, az, 10.0, 20.0), legs, f"test_plan_{k + 1}", 6.0))
+        return tuple(units)
+    station, units = (0.0, 0.0, 1.5), []
+    for k in range(6 if preset == "campaign" else 3):
+        az, (z1, z2), far = 10.0 + rng.uniform(-25, 25), rng.uniform(15, 40, 2), rng.uniform(150, 250)
+        if k % 2 == 0:  # out along one bearing, back along another
+            start, legs = _polar(station, az, 30.0, z1), [_polar(station, az, far, z2),
+                                                          _polar(station, az + rng.uniform(-10, 10), 30.0, z1)]
+        else:  # a survey: rows across the sector, farther each time
+            start, legs = _polar(station, az - 20, 30.0, z1), []
+            for i, r in enumerate(np.linspace(40.0, far, 4)):
+                legs += [_polar(station, az + (-20 if i % 2 == 0 else 20), r, z2),
+                         _polar(station, az + (20 if i % 2 == 0 else -20), r, z2)]
+        units.append(_unit(("G", "D"), station, 10.0, start, legs, f"test_plan_{k + 1}"))
+    return tuple(units)
+
+
+# --- the tests ---------------------------------------------------------------------------------
 
 
 @pytest.fixture(scope="module", params=["paper", "campaign", "ground"])
 def case(request, tmp_path_factory):
     return request.param, held_out(tmp_path_factory.mktemp(request.param), request.param)
+
+
+@pytest.fixture(scope="module", params=["paper", "campaign", "ground"])
+def planned(request, tmp_path_factory):
+    preset = request.param
+    return preset, held_out(tmp_path_factory.mktemp(f"plan_{preset}"), preset, flights=planner_flights(preset, 0))
 
 
 @pytest.mark.slow
@@ -105,6 +236,41 @@ def test_predicted_availability_is_calibrated_on_held_out_flights(case, q):
     else:
         assert gap <= 0.05, (preset, q, gap)
     if preset == "paper":
-        assert brier_skill >= 0.3, brier_skill
+        assert brier_skill >= 0.3 and brier_skill >= oracle - 0.02, (brier_skill, oracle)
     else:  # the fading bounds every predictor: the oracle's skill is far below 0.3, ours near or below it
         assert oracle < 0.3 and -0.01 <= brier_skill <= oracle + 0.01, (preset, q, brier_skill, oracle)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("q", [10, 30])
+def test_a_planners_flights_are_not_bound_by_the_fading(planned, q):
+    """Flights whose range changes span more than the fading: an oracle reaches item 1's skill
+    on ``ground`` and ``campaign``, and on ``paper``, whose learning flights saw the whole
+    sphere, rplearn stays within 0.05 of the oracle's skill."""
+    preset, data = planned
+    brier_skill, _, _, oracle = scores(data, q)
+    if preset == "paper":
+        assert brier_skill >= oracle - 0.05, (brier_skill, oracle)
+    else:
+        assert oracle >= 0.3, (preset, q, oracle)
+
+
+#: The cases of a planner's flights (seed 0) where item 1 is not met, and why.
+_NOT_MET = {
+    ("paper", 10): "skill 0.172, bins off by up to 0.091: the oracle itself reaches only 0.201 (the far legs' "
+                   "RSSI changes little about the 10th percentile)",
+    **{("campaign", q): "skill -3.0 (q10) / -1.7 (q30), bins off by up to 0.87: 12 dB below the truth where the "
+                        "learning flights never looked, where the fit states a spread (prior_std_db) of 0.7 dB" for q in (10, 30)},
+    **{("ground", q): "skill -2.5 (q10) / -1.1 (q30), bins off by up to 0.95: 9.5 dB below the truth where the "
+                      "learning flights never looked, where the fit states a spread (prior_std_db) of 5.0 dB" for q in (10, 30)},
+}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("q", [10, 30])
+def test_item_1_on_a_planners_flights(planned, q, request):
+    preset, data = planned
+    if (preset, q) in _NOT_MET:
+        request.applymarker(pytest.mark.xfail(strict=True, reason=f"issue 28 item 1 not met: {_NOT_MET[preset, q]}"))
+    brier_skill, gap, n_bins, _ = scores(data, q)
+    assert n_bins >= 2 and gap <= 0.05 and brier_skill >= 0.3, (preset, q, brier_skill, gap)
