@@ -8,7 +8,7 @@ it, an *oracle*'s skill on the very same samples: the true patterns, link offset
 and fading spread. The simulator reports integer dBm, so the threshold lies half-way between two
 integers (``reported >= s`` is then ``true >= s``, as for a radio's sensitivity).
 
-Two kinds of held-out flights:
+Three kinds of held-out flights:
 
 - **the presets' own** (``paper``: the learning flights' vertical circles at another heading;
   ``ground``: one more pass along the learned arc at a new altitude; ``campaign``: six passes
@@ -24,19 +24,28 @@ Two kinds of held-out flights:
   Ranges 45-205 m (5th-95th percentile, ``ground`` and ``campaign``) and 10-128 m (``paper``);
   the RSSI without fading varies by 4.1 (``ground``), 5.0 (``campaign``) and 6.6 dB RMS
   (``paper``: mostly near its horizon, where the patterns vary less), seed 0.
+- **covered** (:func:`covered_flights`, ``ground`` and ``campaign``): the range changes (25 to
+  150-200 m) but the directions stay where the learning flights looked (95 % of ``ground``'s
+  samples within 3.8 deg of a learning direction): out and back at a constant elevation seen
+  from the station, nose toward it.
 
-Measured (seeds 0 / 1 / 2; each cell: q10, q30):
+Measured (seeds 0 / 1 / 2; each cell: q10, q30; *blind*: an oracle that knows the patterns but
+not a new flight's level, its spread widened by the levels' 3 dB, as rplearn's):
 
-=================  ===================================  ===================================  ===================================
-flights            rplearn's Brier skill                the oracle's skill                   rplearn's largest bin gap
-=================  ===================================  ===================================  ===================================
-paper, own         .455 .756 / .468 .740 / .499 .733    .462 .761 / .475 .746 / .505 .737    .039 .035 / .039 .021 / .031 .034
-campaign, own      .021 .036 / .018 .030 / .019 .033    .131 .215 / .129 .213 / .182 .255    .025 .034 / .041 .073 / .024 .029
-ground, own        -.001 -.003 / .006 .012 / .006 .010  .016 .026 / .016 .026 / .013 .031    .023 .062 / .011 .024 / .018 .036
-paper, planner     .172 .324 / .306 .409 / .220 .314    .201 .359 / .334 .432 / .236 .337    .091 .034 / .051 .043 / .030 .041
-campaign, planner  -3.0 -1.7 / -4.2 -1.8 / -3.4 -1.8    .452 .404 / .356 .392 / .368 .553    .87 .66 / .81 .66 / .72 .68
-ground, planner    -2.5 -1.1 / -4.4 -1.4 / -3.2 -1.4    .379 .364 / .282 .473 / .377 .533    .95 .70 / .85 .63 / .84 .61
-=================  ===================================  ===================================  ===================================
+=================  ================================  ================================  ================================
+flights            rplearn's Brier skill             the oracle's (blind) skill        rplearn's largest bin gap
+=================  ================================  ================================  ================================
+paper, own         .455 .756 / .468 .740 / .499 .733  .462 .761 / .475 .746 / .505 .737  .039 .035 / .039 .021 / .031 .034
+campaign, own      .021 .036 / .018 .030 / .019 .033  .131 .215 / .129 .213 / .182 .255  .025 .034 / .041 .073 / .024 .029
+                                                      (.039 .052 / .042 .051 / .031 .049)
+ground, own        -.001 -.003 / .006 .012 / .006 .010  .016 .026 / .016 .026 / .013 .031  .023 .062 / .011 .024 / .018 .036
+paper, planner     .172 .324 / .306 .409 / .220 .314  .201 .359 / .334 .432 / .236 .337  .091 .034 / .051 .043 / .030 .041
+campaign, planner  -3.0 -1.7 / -4.2 -1.8 / -3.4 -1.8  .452 .404 / .356 .392 / .368 .553  .87 .66 / .81 .66 / .72 .68
+ground, planner    -2.5 -1.1 / -4.4 -1.4 / -3.2 -1.4  .379 .364 / .282 .473 / .377 .533  .95 .70 / .85 .63 / .84 .61
+campaign, covered  .152 .292 / .070 .239 / .066 .225  .285 .474 / .187 .410 / .272 .430  .179 .185 / .098 .094 / .157 .131
+                                                      (.188 .335 / .082 .255 / .126 .273)
+ground, covered    .175 .364 / .159 .359 / .136 .300  .202 .388 / .202 .392 / .171 .332  .043 .062 / .059 .077 / .080 .065
+=================  ================================  ================================  ================================
 
 What this says:
 
@@ -44,25 +53,30 @@ What this says:
   one pass at a new altitude (0.062 at q30, seed 0) and ``campaign`` seed 1 (0.073 at q30). The
   skill is the oracle's on ``paper`` (within 0.01); on ``campaign`` and ``ground`` the oracle
   itself stays far below 0.3: there the fading bounds every predictor of single packets. On
-  ``campaign`` the oracle also knows each new flight's level (3 dB RMS); without it (its mean
-  less the level, its spread widened by the level's) it reaches .039 .052 (seed 0), rplearn
-  .021 .036: the rest is the pattern's error (about 1 dB RMS). rplearn's spread is right: with
-  the true level spread (3 dB) in place of its estimate (3.8 dB) it would reach .026 .037, and
-  without the level's spread .011 .027.
-- On a planner's flights the oracle reaches 0.3 on
-  ``ground`` and ``campaign`` (but for ``ground`` seed 1 at q10), on ``paper`` at q30 (at q10 on
-  seed 1 only: the far legs' RSSI changes little about the 10th percentile). rplearn is within
-  0.04 of the oracle's skill on ``paper``, whose learning flights saw the whole sphere, and
-  meets item 1 there at q30 (all three seeds). On ``ground`` and ``campaign`` it fails both
-  criteria: their learning flights saw each antenna over a few percent of the sphere (the
-  drone's nose toward the station, 20-30 deg below its horizon), and a planner's flight looks
-  elsewhere. At the samples more than 15 deg from every learning direction (76 % of
-  ``ground``'s, 84 % of ``campaign``'s, seed 0) the predicted RSSI is on average 9.5 dB
-  (``ground``) and 12.3 dB (``campaign``) below the truth, while the gain's predicted spread
-  there is 6.2 dB (median) and 3.9 dB (3.8 of which the new flight's level); the fits' stated
-  spread where they never looked (``training.prior_std_db``) is 5.0 and 0.7 dB. The learned
-  directions lie in the camera gimbal's shadow, and where the flight never looked the fit
-  predicts the level it saw. Those cases are strict xfails: item 1 is not met on them.
+  ``campaign`` the oracle also knows each new flight's level, which no one knows before
+  flying; the blind oracle reaches .03-.05, rplearn .02-.04: the rest is the pattern's error
+  (about 1 dB RMS). rplearn's spread is right: with the true level spread (3 dB) in place of
+  its estimate (3.8 dB, seed 0) it would reach .026 .037, and without the level's spread .011
+  .027; its mean is off the truth by -0.3 to +0.1 dB (seeds 0-2).
+- Where the learning flights looked, on flights whose range changes (``paper``'s planner
+  flights, the covered ones), rplearn is within 0.06 of the blind oracle's skill and meets
+  item 1's skill at q30 on ``paper`` (all seeds) and ``ground`` (0.30-0.36); the bins are off
+  by 0.03-0.09 there, and on ``campaign`` by 0.09-0.19, as the blind oracle's own (0.12-0.19,
+  seeds 0-1): six flights are six draws of their levels. On ``ground`` the pattern's error
+  there is 1.1 dB RMS (10-s means from -0.7 to +1.8 dB) against a predicted spread of 0.2 dB.
+  At q10 the oracle itself stays below 0.3 but for ``paper`` seed 1.
+- A planner's flights on ``ground`` and ``campaign`` are not bound by the fading (the oracle
+  reaches 0.28-0.55), but rplearn fails both criteria there: their learning flights saw each
+  antenna over a few percent of the sphere (the drone's nose toward the station, 20-30 deg
+  below its horizon), and a planner's flight looks elsewhere. At the samples more than 15 deg
+  from every learning direction (76 % of ``ground``'s, 84 % of ``campaign``'s, seed 0) the
+  predicted RSSI is on average 9.5 dB (``ground``) and 12.3 dB (``campaign``) below the truth,
+  while the gain's predicted spread there is 6.2 dB (median) and 3.9 dB (3.8 of which the new
+  flight's level); the fits' stated spread where they never looked (``training.prior_std_db``)
+  is 5.0 and 0.7 dB. The learned directions lie in the camera gimbal's shadow, and where the
+  flight never looked the fit predicts the level it saw.
+
+Where item 1 is not met on seed 0, the test is a strict xfail naming why (:data:`_NOT_MET`).
 """
 
 from __future__ import annotations
@@ -125,9 +139,11 @@ def held_out(tmp: Path, preset: str, seed: int = 0, flights: tuple = ()):
     table = predict_dataset(model, df[df["unit"].isin(test)].reset_index(drop=True)).table
     truth = sim.matched("testing").copy()
     truth["clean_dbm"] = _clean_rssi(sim, truth)
-    table = table.merge(truth[["t", "tx", "rx", "clean_dbm"]], on=["t", "tx", "rx"], how="left", validate="1:1")
+    truth["level_db"] = truth["unit"].map(sim.unit_levels_db).fillna(0.0) if sim.unit_levels_db else 0.0
+    table = table.merge(truth[["t", "tx", "rx", "clean_dbm", "level_db"]], on=["t", "tx", "rx"], how="left",
+                        validate="1:1")
     assert table["clean_dbm"].notna().all()  # every held-out packet has its oracle
-    return model, table, sim.config.radio.fading_std_db
+    return model, table, sim.config.radio.fading_std_db, sim.config.radio.unit_level_std_db
 
 
 def skill(p, observed):
@@ -135,17 +151,20 @@ def skill(p, observed):
 
 
 def scores(case, q):
-    """(model's skill, its largest bin gap, the number of bins, the oracle's skill) at the q-th
-    percentile of the held-out RSSI."""
-    model, table, fading = case
+    """(model's skill, its largest bin gap, the number of bins, the oracle's skill, the skill of
+    an oracle that does not know a new flight's level) at the q-th percentile of the held-out
+    RSSI."""
+    model, table, fading, level_std = case
     rssi = table["rssi_dbm"].to_numpy(np.float64)
     s = float(np.round(np.percentile(rssi, q))) - 0.5
     p = link_availability_column(table, model, s)
     up = (rssi >= s).astype(float)
     bins = np.minimum((p * 10).astype(int), 9)
     gaps = [abs(up[bins == b].mean() - p[bins == b].mean()) for b in range(10) if (bins == b).sum() >= MIN_BIN]
-    oracle = skill(ndtr((table["clean_dbm"].to_numpy(np.float64) - s) / fading), up)
-    return skill(p, up), max(gaps), len(gaps), oracle
+    clean = table["clean_dbm"].to_numpy(np.float64)
+    oracle = skill(ndtr((clean - s) / fading), up)
+    blind = skill(ndtr((clean - table["level_db"].to_numpy(np.float64) - s) / np.hypot(fading, level_std)), up)
+    return skill(p, up), max(gaps), len(gaps), oracle, blind
 
 
 # --- the planner's flights ---------------------------------------------------------------------
@@ -215,6 +234,26 @@ def planner_flights(preset: str, seed: int) -> tuple[ReferenceUnit, ...]:
     return tuple(units)
 
 
+def covered_flights(preset: str, seed: int) -> tuple[ReferenceUnit, ...]:
+    """Held-out flights of ``ground`` (3) or ``campaign`` (6) whose range changes but whose
+    directions the learning flights saw: out from 25 m to 150-200 m and back along a bearing
+    within 12 deg of the station's heading, at a constant elevation of 20-28 deg seen from the
+    station (the learning passes: 19-30 deg), the drone's nose toward the station with a 15 deg
+    swing (theirs: 20 deg)."""
+    rng, station, units = np.random.default_rng(3000 + seed), (0.0, 0.0, 1.5), []
+    for k in range(6 if preset == "campaign" else 3):
+        bearing, el, far = np.radians(10.0 + rng.uniform(-12, 12)), np.radians(rng.uniform(20, 28)), rng.uniform(150, 200)
+        half = np.pi * (far - 25.0) / (2 * 3.0)  # out at 3 m/s at most (cosine profile), then back
+        t = np.arange(0.0, 2 * half, 1 / RATE_HZ)
+        r = 25.0 + (far - 25.0) * (1 - np.cos(np.pi * np.minimum(t, 2 * half - t) / half)) / 2
+        x, y = r * np.cos(bearing), r * np.sin(bearing)
+        yaw = np.degrees(np.arctan2(-y, -x)) + 15.0 * np.sin(2 * np.pi * t / 23.0)
+        mover = pd.DataFrame({"t": t, "x": x, "y": y, "z": station[2] + r * np.tan(el), "yaw_deg": yaw})
+        still = pd.DataFrame({"t": t, "x": station[0], "y": station[1], "z": station[2], "yaw_deg": 10.0})
+        units.append(ReferenceUnit(("G", "D"), f"test_covered_{k + 1}", (still, mover), role="testing"))
+    return tuple(units)
+
+
 # --- the tests ---------------------------------------------------------------------------------
 
 
@@ -223,17 +262,22 @@ def case(request, tmp_path_factory):
     return request.param, held_out(tmp_path_factory.mktemp(request.param), request.param)
 
 
-@pytest.fixture(scope="module", params=["paper", "campaign", "ground"])
-def planned(request, tmp_path_factory):
-    preset = request.param
-    return preset, held_out(tmp_path_factory.mktemp(f"plan_{preset}"), preset, flights=planner_flights(preset, 0))
+#: Held-out flights whose range changes: (kind, preset).
+RANGING = [("planner", "paper"), ("planner", "campaign"), ("planner", "ground"), ("covered", "campaign"), ("covered", "ground")]
+
+
+@pytest.fixture(scope="module", params=RANGING, ids=["-".join(k) for k in RANGING])
+def ranging(request, tmp_path_factory):
+    kind, preset = request.param
+    flights = (planner_flights if kind == "planner" else covered_flights)(preset, 0)
+    return kind, preset, held_out(tmp_path_factory.mktemp(f"{kind}_{preset}"), preset, flights=flights)
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("q", [10, 30])
 def test_predicted_availability_is_calibrated_on_held_out_flights(case, q):
     preset, data = case
-    brier_skill, gap, n_bins, oracle = scores(data, q)
+    brier_skill, gap, n_bins, oracle, _ = scores(data, q)
     assert n_bins >= 2
     if preset == "ground" and q == 30:  # one pass at a new altitude: one draw of the pattern's error there
         assert gap <= 0.07, gap
@@ -247,34 +291,42 @@ def test_predicted_availability_is_calibrated_on_held_out_flights(case, q):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("q", [10, 30])
-def test_a_planners_flights_are_not_bound_by_the_fading(planned, q):
-    """Flights whose range changes span more than the fading: an oracle reaches item 1's skill
-    on ``ground`` and ``campaign``, and on ``paper``, whose learning flights saw the whole
-    sphere, rplearn stays within 0.05 of the oracle's skill."""
-    preset, data = planned
-    brier_skill, _, _, oracle = scores(data, q)
-    if preset == "paper":
-        assert brier_skill >= oracle - 0.05, (brier_skill, oracle)
-    else:
-        assert oracle >= 0.3, (preset, q, oracle)
+def test_where_the_learning_flights_looked_rplearn_is_near_the_oracle(ranging, q):
+    """On flights whose range changes: where the learning flights looked (``paper``'s whole
+    sphere; the ``covered`` flights), rplearn's skill is within 0.05 of an oracle's that does not
+    know a new flight's level either; a planner's flights on ``ground`` and ``campaign`` (and
+    ``ground``'s covered ones at q30) are not bound by the fading: the oracle reaches 0.3."""
+    kind, preset, data = ranging
+    brier_skill, _, _, oracle, blind = scores(data, q)
+    if kind == "covered" or preset == "paper":
+        assert brier_skill >= blind - 0.05, (kind, preset, q, brier_skill, blind)
+    if (kind == "planner" and preset != "paper") or (kind, preset, q) == ("covered", "ground", 30):
+        assert oracle >= 0.3, (kind, preset, q, oracle)
 
 
-#: The cases of a planner's flights (seed 0) where item 1 is not met, and why.
+#: The cases of flights whose range changes (seed 0) where item 1 is not met, and why.
 _NOT_MET = {
-    ("paper", 10): "skill 0.172, bins off by up to 0.091: the oracle itself reaches only 0.201 (the far legs' "
-                   "RSSI changes little about the 10th percentile)",
-    **{("campaign", q): "skill -3.0 (q10) / -1.7 (q30), bins off by up to 0.87: 12 dB below the truth where the "
-                        "learning flights never looked, where the fit states a spread (prior_std_db) of 0.7 dB" for q in (10, 30)},
-    **{("ground", q): "skill -2.5 (q10) / -1.1 (q30), bins off by up to 0.95: 9.5 dB below the truth where the "
-                      "learning flights never looked, where the fit states a spread (prior_std_db) of 5.0 dB" for q in (10, 30)},
+    ("planner", "paper", 10): "skill 0.172, bins off by up to 0.091: the oracle itself reaches only 0.201 (the far "
+                              "legs' RSSI changes little about the 10th percentile)",
+    **{("planner", "campaign", q): "skill -3.0 (q10) / -1.7 (q30), bins off by up to 0.87: 12 dB below the truth "
+                                   "where the learning flights never looked, where the fit states a spread "
+                                   "(prior_std_db) of 0.7 dB" for q in (10, 30)},
+    **{("planner", "ground", q): "skill -2.5 (q10) / -1.1 (q30), bins off by up to 0.95: 9.5 dB below the truth "
+                                 "where the learning flights never looked, where the fit states a spread "
+                                 "(prior_std_db) of 5.0 dB" for q in (10, 30)},
+    **{("covered", "campaign", q): "bins off by 0.18 / 0.19: six flights, six draws of their levels (an oracle that "
+                                   "knows the patterns but not the levels: 0.19 / 0.12 off)" for q in (10, 30)},
+    ("covered", "ground", 10): "skill 0.175: the oracle itself reaches only 0.202",
+    ("covered", "ground", 30): "skill 0.364, but bins off by 0.062: the pattern's error there is about 1 dB in "
+                               "patches, the spread the fit states there 0.2 dB",
 }
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("q", [10, 30])
-def test_item_1_on_a_planners_flights(planned, q, request):
-    preset, data = planned
-    if (preset, q) in _NOT_MET:
-        request.applymarker(pytest.mark.xfail(strict=True, reason=f"issue 28 item 1 not met: {_NOT_MET[preset, q]}"))
-    brier_skill, gap, n_bins, _ = scores(data, q)
-    assert n_bins >= 2 and gap <= 0.05 and brier_skill >= 0.3, (preset, q, brier_skill, gap)
+def test_item_1_on_flights_whose_range_changes(ranging, q, request):
+    kind, preset, data = ranging
+    if (kind, preset, q) in _NOT_MET:
+        request.applymarker(pytest.mark.xfail(strict=True, reason=f"issue 28 item 1 not met: {_NOT_MET[kind, preset, q]}"))
+    brier_skill, gap, n_bins, _, _ = scores(data, q)
+    assert n_bins >= 2 and gap <= 0.05 and brier_skill >= 0.3, (kind, preset, q, brier_skill, gap)
