@@ -63,7 +63,10 @@ What this says:
   item 1's skill at q30 on ``paper`` (all seeds) and ``ground`` (0.30-0.36); the bins are off
   by 0.03-0.09 there, and on ``campaign`` by 0.09-0.19, as the blind oracle's own (0.12-0.19,
   seeds 0-1): six flights are six draws of their levels. On ``ground`` the pattern's error
-  there is 1.1 dB RMS (10-s means from -0.7 to +1.8 dB) against a predicted spread of 0.2 dB.
+  there is 1.1 dB RMS (10-s means from -0.7 to +1.8 dB; 1.09 dB RMS predicted at the true
+  poses, so the pattern's and not the pose estimates'), against a predicted spread of 0.2 dB:
+  the drone's fine structure (6-deg lobes of 4 dB) between the two learned elevations, which a
+  smooth fit's posterior does not count.
   At q10 the oracle itself stays below 0.3 but for ``paper`` seed 1.
 - A planner's flights on ``ground`` and ``campaign`` are not bound by the fading (the oracle
   reaches 0.28-0.55), but rplearn fails both criteria there: their learning flights saw each
