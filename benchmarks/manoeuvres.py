@@ -254,6 +254,7 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--presets", default="paper,ground")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--seeds", default="", help="several seeds, e.g. 0,1,2 (instead of --seed); a summary table follows")
     ap.add_argument("--order", type=int, default=10)
     ap.add_argument("--prior-std", type=float, default=0.0, help="the prior's pattern spread over the sphere [dB]; 0: the smoothing fit --degree auto "
                                                                                   "learns from the reference flight")
@@ -262,14 +263,16 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     presets = ["smoke"] if args.tiny else [p.strip() for p in args.presets.split(",") if p.strip()]
     order = 4 if args.tiny else args.order
+    seeds = [int(v) for v in args.seeds.split(",") if v.strip()] or [args.seed]
     failures = 0
-    for preset in presets:
+    rows: list[str] = []
+    for preset, seed in ((p, s) for p in presets for s in seeds):
         t0 = time.perf_counter()
         ref_total = _config(preset).campaign.with_role("learning")
         limit = float(sum(u.duration_s for u in ref_total.units))
-        flights = run(preset, order, args.seed, limit, args.power, args.prior_std)
+        flights = run(preset, order, seed, limit, args.power, args.prior_std)
         ref = flights["reference"]
-        print(f"{preset} (SH-{order}, seed {args.seed}, {time.perf_counter() - t0:.0f} s): time to {TARGET_DB:g} dB per-node spread")
+        print(f"{preset} (SH-{order}, seed {seed}, {time.perf_counter() - t0:.0f} s): time to {TARGET_DB:g} dB per-node spread")
         for f in flights.values():
             when = "not reached" if f.reached_s is None else f"{f.reached_s:.0f} s"
             ratio = "" if f.reached_s is None or ref.reached_s is None or f is ref else f", ratio {f.reached_s / ref.reached_s:.2f}x"
@@ -283,6 +286,15 @@ def main(argv: list[str] | None = None) -> int:
             ok_err = bool(f.error_db) and bool(ref.error_db) and max(f.error_db.values()) <= max(ref.error_db.values()) + 0.05
             print(f"  {name}: time [{'ok' if ok_time else 'MISS'}] error [{'ok' if ok_err else 'MISS'}]")
             failures += 0 if (ok_time and ok_err) or args.tiny else 1
+            when = "-" if f.reached_s is None or ref.reached_s is None else f"{f.reached_s:.0f} s ({f.reached_s / ref.reached_s:.2f}x)"
+            worst = max(f.error_db.values()) if f.error_db else float("nan")
+            rows.append(f"| {preset} | {seed} | {name} | {ref.reached_s or float('nan'):.0f} s | {when} | "
+                        f"{worst:.2f} | {max(ref.error_db.values()) if ref.error_db else float('nan'):.2f} | "
+                        f"{'ok' if ok_time else 'miss'} / {'ok' if ok_err else 'miss'} |")
+    if len(rows) > 2:
+        print("\n| preset | seed | planner | reference | time to 2 dB | worst error [dB] | reference's [dB] | time / error |")
+        print("| --- | --- | --- | --- | --- | --- | --- | --- |")
+        print("\n".join(rows))
     return 1 if failures else 0
 
 

@@ -103,3 +103,57 @@ def test_the_simulator_flies_a_sequence_of_manoeuvres():
     assert set(sim.signal_log["unit"]) == {"m1", "m2"}
     b = sim.pose_log[sim.pose_log["node"] == "B"]
     assert np.allclose(b[["x", "y"]].median().to_numpy(), (5.0, 0.0), atol=0.5)
+
+
+def _closest(unit, others=()):
+    ref = unit.sample(20.0)
+    pts = [ref.position_enu_m[:, 0], ref.position_enu_m[:, 1], *[np.broadcast_to(np.asarray(p, float), ref.position_enu_m[:, 0].shape)
+                                                                  for p in others]]
+    return min(float(np.min(np.linalg.norm(a - b, axis=1))) for i, a in enumerate(pts) for b in pts[i + 1:])
+
+
+def test_no_candidate_brings_two_nodes_nearer_than_the_separation():
+    steep = {"A": ((0.0, 0.0, 20.0), 0.0), "B": ((3.0, 0.0, 27.0), 0.0)}  # 7.6 m apart, 3 m horizontally
+    everything = candidate_manoeuvres(steep, CandidateOptions(min_separation_m=0.0))
+    assert min(_closest(c.unit) for c in everything) < 4.0  # without the limit a descent passes 3 m away
+    for limit in (5.0, 7.0):
+        kept = candidate_manoeuvres(steep, CandidateOptions(min_separation_m=limit))
+        assert kept and len(kept) < len(everything)
+        assert min(_closest(c.unit) for c in kept) >= limit - 1e-9
+
+
+def test_nodes_already_nearer_than_the_separation_may_stay_as_near_but_never_come_nearer():
+    near = {"A": ((-1.5, 0.0, 20.0), 0.0), "B": ((1.5, 0.0, 20.0), 0.0)}
+    cands = candidate_manoeuvres(near, CandidateOptions(min_separation_m=5.0))
+    assert any(getattr(c.unit, "kind", "") == "yaw" for c in cands)  # turning in place is still offered
+    assert all(_closest(c.unit) >= 3.0 - 1e-6 for c in cands)
+
+
+def test_a_hovering_anchor_turns_once_around_while_the_mover_flies():
+    climb = _unit("climb", elevation_deg=30.0)
+    both = replace(climb, anchor_turn_deg=360.0, label="")
+    assert both.label != climb.label
+    assert both.duration_s == pytest.approx(max(climb.duration_s, _unit("yaw").duration_s))
+    ref = both.sample(20.0)
+    turned = np.unwrap(ref.yaw_rad[:, 0])
+    assert turned[-1] - turned[0] == pytest.approx(2 * np.pi, abs=1e-9)
+    assert np.allclose(ref.position_enu_m[:, 0], (5.0, 0.0, 20.0))
+    assert both.end_pose()[0] == pytest.approx(climb.end_pose()[0])  # the mover holds its end meanwhile
+    held = ref.t_s >= climb.duration_s
+    assert held.any() and np.allclose(ref.accel_enu_m_s2[held, 1], 0.0) and np.allclose(ref.velocity_enu_m_s[held, 1], 0.0)
+    assert both.anchor_end_yaw_deg() == pytest.approx(0.0, abs=1e-9)
+
+
+def test_only_a_drone_anchor_turns_never_a_ground_station():
+    pair = candidate_manoeuvres(PAIR)
+    turning = [c for c in pair if getattr(c.unit, "anchor_turn_deg", 0.0) != 0.0]
+    assert turning and all(c.unit.nodes[0] in c.ends for c in turning)
+    assert not any(getattr(c.unit, "anchor_turn_deg", 0.0) for c in candidate_manoeuvres(PAIR, CandidateOptions(anchor_turns=False)))
+    poses = {"G": ((0.0, 0.0, 1.5), 10.0), "D": ((40.0, 5.0, 15.0), 190.0)}
+    assert not any(getattr(c.unit, "anchor_turn_deg", 0.0) for c in candidate_manoeuvres(poses, CandidateOptions(fixed_nodes=("G",))))
+
+
+def test_a_negative_separation_is_refused_naming_the_field():
+    with pytest.raises(InputError) as err:
+        CandidateOptions(min_separation_m=-1.0)
+    assert err.value.param == "min_separation_m"

@@ -13,7 +13,9 @@ sequence of them is a :class:`~rplearn.plan.campaign.Campaign`.
 :func:`candidate_manoeuvres` lists the candidates from the nodes' current poses: every
 manoeuvre above for every movable node and anchor, and the trajectory units of the plan
 library placed where the drones are (the paper's unit for two drones, ground passes in front
-of a static station), each with the time to reach its start.
+of a static station), each with the time to reach its start. A hovering anchor may turn in place
+meanwhile (both nodes then see the other from every body azimuth in the same seconds), and no
+candidate brings two nodes nearer than ``min_separation_m``.
 
 Moves and orbits follow a trapezoidal profile (``accel_m_s2``, cruise at ``speed_m_s``), turns
 a trapezoidal yaw profile (``yaw_accel_deg_s2``, cruise at ``yaw_rate_deg_s``). ENU [m], yaw
@@ -64,6 +66,7 @@ def _profile(tau: FloatArray, length: float, v: float, a: float) -> tuple[FloatA
                  np.where(t < tr + tc, 0.5 * acc * tr**2 + vp * (t - tr), length - 0.5 * acc * (dur - t) ** 2))
     sd = np.where(t < tr, acc * t, np.where(t < tr + tc, vp, acc * (dur - t)))
     sdd = np.where(t < tr, acc, np.where(t < tr + tc, 0.0, -acc))
+    sdd = np.where(np.asarray(tau) > dur, 0.0, sdd)  # held at the end
     return s, sd, sdd
 
 
@@ -96,6 +99,11 @@ class ManoeuvreUnit:
         Cruise speed [m/s] and acceleration [m/s^2] of moves and orbits.
     yaw_rate_deg_s, yaw_accel_deg_s2 : float
         Cruise yaw rate [deg/s] and yaw acceleration [deg/s^2] of turns.
+    anchor_turn_deg : float
+        A turn of the anchor in place during the manoeuvre [deg] (signed; 0: it holds its
+        heading): a hovering peer turning while the mover flies sees the mover from every body
+        azimuth in the same seconds (never for a ground station). The manoeuvre lasts until both
+        have finished; the mover holds its last pose meanwhile.
     label, role : str
     """
 
@@ -112,6 +120,7 @@ class ManoeuvreUnit:
     accel_m_s2: float = 1.0
     yaw_rate_deg_s: float = 30.0
     yaw_accel_deg_s2: float = 60.0
+    anchor_turn_deg: float = 0.0
     label: str = ""
     role: str = "learning"
     _segments: tuple[tuple[Any, ...], ...] = field(init=False, repr=False, compare=False, default=())
@@ -139,6 +148,7 @@ class ManoeuvreUnit:
         if not self.label:
             el = "" if self.elevation_deg is None else f"_el{self.elevation_deg:+g}"
             el += "" if self.distance_m is None else f"_{self.distance_m:g}m"
+            el += "" if self.anchor_turn_deg == 0 else f"_{self.nodes[0]}_turning"
             object.__setattr__(self, "label", f"{self.kind}_{self.nodes[1]}_about_{self.nodes[0]}{el}")
         if np.hypot(self.start_enu_m[0] - self.anchor_enu_m[0], self.start_enu_m[1] - self.anchor_enu_m[1]) < 0.5 \
                 and self.kind in ("climb", "climb_turn", "spiral", "orbit"):
@@ -189,10 +199,17 @@ class ManoeuvreUnit:
                        _trapezoid(abs(float(np.degrees(seg[4]))), self.yaw_rate_deg_s, self.yaw_accel_deg_s2)[0])
         return _trapezoid(2.0 * np.pi * seg[2], self.speed_m_s, self.accel_m_s2)[0]
 
+    def _anchor_turn_s(self) -> float:
+        return _trapezoid(abs(float(self.anchor_turn_deg)), self.yaw_rate_deg_s, self.yaw_accel_deg_s2)[0]
+
     @property
     def duration_s(self) -> float:
         """Flight time of the manoeuvre [s]."""
-        return float(sum(self._segment_duration(s) for s in self._segments))
+        return float(max(sum(self._segment_duration(s) for s in self._segments), self._anchor_turn_s()))
+
+    def anchor_end_yaw_deg(self) -> float:
+        """The anchor's heading at the end [deg]."""
+        return float(np.degrees(np.angle(np.exp(1j * np.radians(float(self.anchor_yaw_deg) + float(self.anchor_turn_deg))))))
 
     def end_pose(self) -> tuple[tuple[float, float, float], float]:
         """The mover's position [m] and heading [deg] at the end."""
@@ -214,6 +231,9 @@ class ManoeuvreUnit:
         pos[:, 0] = np.asarray(self.anchor_enu_m, float)
         yaw = np.zeros((n, 2))
         yaw[:, 0] = np.radians(float(self.anchor_yaw_deg))
+        if self.anchor_turn_deg != 0:
+            s, _, _ = _profile(t, abs(float(self.anchor_turn_deg)), self.yaw_rate_deg_s, self.yaw_accel_deg_s2)
+            yaw[:, 0] += np.sign(self.anchor_turn_deg) * np.radians(s)
         pos[:, 1] = np.asarray(self.start_enu_m, float)
         yaw[:, 1] = np.radians(float(self.start_yaw_deg))
         start = 0.0
@@ -278,6 +298,14 @@ class CandidateOptions:
     orbit_distances_m : tuple of float
         Distances from the anchor of further orbits, besides the current distance [m] (a close
         orbit at a high elevation gives both nodes a ring in a few seconds).
+    anchor_turns : bool
+        Also offer every manoeuvre with a hovering (not fixed) anchor turning a full circle in
+        place meanwhile (:attr:`ManoeuvreUnit.anchor_turn_deg`).
+    min_separation_m : float
+        Closest any two nodes may come during a manoeuvre [m]: a candidate passing nearer is
+        not offered (two drones a metre or two apart risk a collision, and a position error of
+        a fraction of a metre then turns the link direction by many degrees, so such samples
+        teach the wrong directions); nodes already nearer may stay as near; 0: no limit.
     """
 
     elevations_deg: tuple[float, ...] = (-75.0, -60.0, -45.0, -30.0, -15.0, 0.0, 15.0, 30.0, 45.0, 60.0, 75.0)
@@ -290,8 +318,13 @@ class CandidateOptions:
     library: bool = True
     library_loops: tuple[int, ...] = (1, 2, 5)
     orbit_distances_m: tuple[float, ...] = (6.0,)
+    min_separation_m: float = 5.0
+    anchor_turns: bool = True
 
     def __post_init__(self) -> None:
+        if not (np.isfinite(self.min_separation_m) and self.min_separation_m >= 0):
+            raise InputError(f"min_separation_m: expected a non-negative distance [m], got {self.min_separation_m!r}",
+                             param="min_separation_m")
         for name in ("speed_m_s", "accel_m_s2", "yaw_rate_deg_s"):
             v = float(getattr(self, name))
             if not (np.isfinite(v) and v > 0):
@@ -325,6 +358,20 @@ class Candidate:
     def duration_s(self) -> float:
         """Flight time: the lead and the unit [s]."""
         return float(self.lead_s + self.unit.duration_s)
+
+
+def _closest_m(unit: Any, state: Mapping[str, tuple[FloatArray, float]]) -> float:
+    """Closest distance between any two nodes while ``unit`` is flown (nodes not in it hold still) [m]."""
+    ref = unit.sample(4.0)
+    pos = {str(n): ref.position_enu_m[:, j, :] for j, n in enumerate(unit.nodes)}
+    for n, (p, _) in state.items():
+        pos.setdefault(n, np.broadcast_to(np.asarray(p, np.float64), (ref.t_s.size, 3)))
+    names = sorted(pos)
+    closest = np.inf
+    for i, a in enumerate(names):
+        for b in names[i + 1:]:
+            closest = min(closest, float(np.min(np.linalg.norm(pos[a] - pos[b], axis=1))))
+    return closest
 
 
 def _lead_s(moves: list[float], opts: CandidateOptions) -> float:
@@ -427,10 +474,18 @@ def candidate_manoeuvres(poses: Mapping[str, tuple[tuple[float, float, float], f
                             units.append((f"{what} of {mover} to el {el:+.0f} deg from {anchor}{at}", unit))
             for name, unit in units:
                 out.append(Candidate(name, unit, 0.0, {mover: unit.end_pose()}))
+                if anchor not in opts.fixed_nodes and opts.anchor_turns:  # the hovering peer turns meanwhile
+                    both = replace(unit, anchor_turn_deg=360.0, label="")
+                    out.append(Candidate(f"{name}, {anchor} turning", both, 0.0,
+                                         {mover: both.end_pose(), anchor: (tuple(pa), both.anchor_end_yaw_deg())}))
     if opts.library:
         for i, a in enumerate(names):
             for b in names[i + 1:]:
                 out.extend(_library(state, a, b, opts))
+    if opts.min_separation_m > 0:  # nodes already nearer may stay as near, never come nearer
+        now = min(float(np.linalg.norm(state[a][0] - state[b][0])) for i, a in enumerate(names) for b in names[i + 1:])
+        floor = min(opts.min_separation_m, now - 1e-6)
+        out = [c for c in out if _closest_m(c.unit, state) >= floor]
     return out
 
 
