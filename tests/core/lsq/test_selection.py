@@ -161,3 +161,25 @@ def test_the_choice_is_within_noise_of_the_best_validation_error():
     best = min(p.rmse_db for p in sel.curve)
     assert best <= sel.rmse_db <= best * np.sqrt(1.01)
     assert all(p.smoothing >= sel.smoothing for p in sel.curve if p.rmse_db == best)
+
+
+def test_the_search_leaves_a_coordinate_minimum_along_the_diagonal_valley():
+    """Order and smoothing trade off: a validation error whose valley runs along the diagonal
+    (a smaller order with less smoothing) has points that no step along one coordinate improves
+    on; the search steps along the diagonal to the valley's floor (ground preset, seed 0)."""
+    from rplearn.core.lsq.selection import _diagonal_steps
+
+    orders = [3, 4, 5, 6, 7]
+    grid = [1e-6, 3e-6, 1e-5, 3e-5, 1e-4]
+
+    class Valley:
+        def rmse(self, order, smoothing):
+            i, j = orders.index(order), grid.index(smoothing)
+            return 4.0 + (i - j) ** 2 + 0.1 * (i + j)  # a valley along i = j, falling toward (3, 1e-6)
+
+    ev = Valley()
+    start = (6, 3e-5)  # in the valley: each single-coordinate neighbour is worse
+    assert all(ev.rmse(*p) > ev.rmse(*start) for p in [(5, 3e-5), (7, 3e-5), (6, 1e-5), (6, 1e-4)])
+    path = _diagonal_steps(ev, orders, *start, grid)
+    assert path == [(5, 1e-5), (4, 3e-6), (3, 1e-6)]
+    assert all(ev.rmse(*b) < ev.rmse(*a) for a, b in zip([start, *path], path))

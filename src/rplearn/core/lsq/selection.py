@@ -30,7 +30,10 @@ The search, a coordinate descent over the validation error (every point is kept 
    neighbours of the best);
 3. at the best order, the smoothing walks along the grid while it improves; then step 2 runs
    again at the new smoothing, and step 3 repeats while the order moves;
-4. of the points evaluated, those within noise of the best (:func:`_within_noise`: from three
+4. from where that stops, steps to the best of the eight neighbours in (order, smoothing)
+   while one validates better (:func:`_diagonal_steps`: order and smoothing trade off, and
+   steps along one coordinate miss the valley along the diagonal);
+5. of the points evaluated, those within noise of the best (:func:`_within_noise`: from three
    held-out units, at most :data:`WITHIN_NOISE_SE` standard errors of the paired per-unit
    difference and :data:`WITHIN_NOISE_FRACTION` of the mean square above it), the least
    smoothed (then the largest order) is chosen: the joint gain validates the sum of two
@@ -377,6 +380,28 @@ def _walk_smoothing(ev: _Evaluator, order: int, start: float, values: list[float
     return best, values
 
 
+def _diagonal_steps(ev: _Evaluator, orders: Sequence[int], order: int, smoothing: float,
+                    values: Sequence[float]) -> list[tuple[int, float]]:
+    """From where the coordinate descent stopped, move to the best of the eight neighbours
+    (the next order and the next smoothing of the grid, either way, alone or together) while
+    one validates better; the points moved to, in order. Order and smoothing trade off (a
+    smaller order needs less smoothing for the same fit), so the validation error has valleys
+    along the diagonal that steps along one coordinate at a time do not enter (``ground``
+    preset, seed 0: SH-4 at 1e-5 validates better than the SH-5 at 3.2e-5 where the descent
+    stopped, and its worst per-node pattern error is 1.53 against 1.59 dB)."""
+    grid = sorted({float(v) for v in values} | {float(smoothing)})
+    path: list[tuple[int, float]] = []
+    while True:
+        i, j = orders.index(order), grid.index(smoothing)
+        steps = [(orders[i + di], grid[j + dj]) for di in (-1, 0, 1) for dj in (-1, 0, 1)
+                 if (di or dj) and 0 <= i + di < len(orders) and 0 <= j + dj < len(grid)]
+        best = min(steps, key=lambda p: ev.rmse(*p), default=(order, smoothing))
+        if not ev.rmse(*best) < ev.rmse(order, smoothing):
+            return path
+        order, smoothing = best
+        path.append(best)
+
+
 def _within_noise(ev: _Evaluator, best: CurvePoint, point: CurvePoint) -> bool:
     """Whether ``point``'s validation mean square exceeds ``best``'s by at most
     :data:`WITHIN_NOISE_SE` standard errors of their paired difference (the held-out units'
@@ -457,7 +482,12 @@ def select_order_and_smoothing(
         if moved == best_o:
             break
         best_o = moved
-    finite = [p for p in ev.curve if np.isfinite(p.rmse_db)]
+    searched = len(ev.curve)
+    path = _diagonal_steps(ev, orders, best_o, best_s, values)
+    # the neighbours it probed without moving are checks of the best's neighbourhood, not more
+    # candidates for the tie rule below: only the points it moved to join the descent's
+    candidates = ev.curve[:searched] + [p for p in ev.curve[searched:] if (p.order, p.smoothing) in path]
+    finite = [p for p in candidates if np.isfinite(p.rmse_db)]
     if not finite:
         raise IdentifiabilityError("no candidate order and smoothing could be fitted")
     best = min(finite, key=lambda p: (p.rmse_db, p.order, -p.smoothing))
