@@ -154,6 +154,10 @@ def fit_patterns(
     return patterns
 
 
+#: Bases whose one-off tables :func:`_warm_up` has built in this process.
+_WARM_BASES: set[Any] = set()
+
+
 def _warm_up(spec: ModelSpec, n_samples: int = 1, options: FitOptions | None = None) -> None:
     """Pay a model's one-off costs: imports, cached basis tables, the solver's block buffer
     (see :func:`fit_model`); the BLAS controller last, once every library a fit uses is loaded."""
@@ -165,9 +169,11 @@ def _warm_up(spec: ModelSpec, n_samples: int = 1, options: FitOptions | None = N
         if options is not None and options.path_loss.learns_exponent:
             import scipy.linalg.blas  # noqa: F401  (the exponent's identifiability check solves through it)
         basis = spec.basis()
-        basis.evaluate(np.zeros(basis.n_coef), [0.0], [0.0])
-        if basis.moment_shape is not None:
-            basis.gram_from_moments(np.zeros(basis.moment_shape))
+        if basis not in _WARM_BASES:  # once per basis and process: its tables are cached
+            basis.evaluate(np.zeros(basis.n_coef), [0.0], [0.0])
+            if basis.moment_shape is not None:
+                basis.gram_from_moments(np.zeros(basis.moment_shape))
+            _WARM_BASES.add(basis)
         reserve_block_buffer(basis, n_samples)
     warm_up_blas()
 
