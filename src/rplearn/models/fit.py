@@ -121,26 +121,44 @@ def solve_patterns(
     return patterns, sol.report
 
 
+#: Directions (all nodes together) from which the nodes' coverage grids are computed on the
+#: statistics' worker threads, one node per core (pykdtree and numpy release the interpreter lock).
+PARALLEL_COVERAGE_DIRECTIONS = 20_000
+
+
 def node_coverage_grids(
     samples: LinkSamples | Sequence[LinkSamples], previous: Mapping[str, Any] | None = None
 ) -> dict[str, list[float]]:
     """Per node, the coverage grid of its learning directions (:func:`rplearn.core.coverage.coverage_grid`),
     rounded to 0.1 degree for the model file; several sample sets (the units of one fit, same
-    nodes) are pooled, and ``previous`` grids are combined (chunked data)."""
+    nodes) are pooled, and ``previous`` grids are combined (chunked data). With many directions
+    the nodes' grids are computed on the two worker threads of
+    :data:`~rplearn.core.lsq.runtime.DEFAULT_RUNTIME` (each grid is the same as alone)."""
     from rplearn.core.coverage import coverage_grid
 
     parts = [samples] if isinstance(samples, LinkSamples) else list(samples)
-    out: dict[str, list[float]] = {}
-    for k, node in enumerate(parts[0].nodes):
+    nodes = parts[0].nodes
+    directions = []
+    for k in range(len(nodes)):
         az, el = [], []
         for part in parts:
             d = part.directions
             t, r = part.tx_index == k, part.rx_index == k
             az += [np.asarray(d.az_tx)[t], np.asarray(d.az_rx)[r]]
             el += [np.asarray(d.el_tx)[t], np.asarray(d.el_rx)[r]]
-        prev = None if previous is None else previous.get(node)
-        out[node] = np.round(coverage_grid(np.concatenate(az), np.concatenate(el), prev), 1).tolist()
-    return out
+        directions.append((np.concatenate(az), np.concatenate(el)))
+
+    def grid(k: int) -> list[float]:
+        prev = None if previous is None else previous.get(nodes[k])
+        return np.round(coverage_grid(directions[k][0], directions[k][1], prev), 1).tolist()
+
+    if len(nodes) > 1 and sum(az.size for az, _ in directions) >= PARALLEL_COVERAGE_DIRECTIONS:
+        from rplearn.core.lsq.runtime import DEFAULT_RUNTIME
+
+        grids = list(DEFAULT_RUNTIME.in_order(grid, range(len(nodes))))
+    else:
+        grids = [grid(k) for k in range(len(nodes))]
+    return dict(zip(nodes, grids))
 
 
 @check_types
