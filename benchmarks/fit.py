@@ -153,8 +153,13 @@ def main() -> int:
     parser.add_argument("--swarm", action="store_true", help="also the many-node rows (benchmarks/fit_swarm.py)")
     parser.add_argument("--tiny", action="store_true",
                         help="a smoke run (5,000 samples, SH-6, one repeat, 50,000 streamed); targets not enforced")
+    parser.add_argument("--model-only", action="store_true",
+                        help="only fit_model against dsyrk on the paper preset (issue 30)")
     args = parser.parse_args()
     repeats = 1 if args.tiny else 3 if args.quick else 7
+    if args.model_only:
+        ratio, numbers_ok = fit_model_against_dsyrk(args.tiny, repeats)
+        return 0 if numbers_ok and (args.tiny or ratio <= 1.5) else 1
     n_samples, order = (5_000, 6) if args.tiny else (N_SAMPLES, ORDER)
     rng = np.random.default_rng(0)
     basis = SphericalHarmonics(order)
