@@ -58,3 +58,21 @@ def test_non_finite_directions_are_refused():
     grid = coverage_grid(np.array([0.1]), np.array([0.2]))
     with pytest.raises(InputError):
         coverage_at(grid, [np.nan], [0.0])
+
+
+def test_the_grid_is_the_angle_to_the_nearest_occupied_cell_by_brute_force():
+    """The stored grid: each direction is replaced by its nearest grid point (its cell), and each
+    grid point gets the angle to the nearest such point; occupied points are at exactly 0."""
+    from rplearn.core.coverage import COVERAGE_GRID_POINTS
+
+    rng = np.random.default_rng(7)
+    az = np.concatenate([rng.normal(0.3, 0.4, 150), rng.uniform(-np.pi, np.pi, 50)])
+    el = np.concatenate([rng.uniform(-0.4, 0.2, 150), np.arcsin(rng.uniform(-1, 1, 50))])
+    gaz, gel = fibonacci_grid_nodes(COVERAGE_GRID_POINTS)
+    g = np.stack([np.cos(gel) * np.cos(gaz), np.cos(gel) * np.sin(gaz), np.sin(gel)], axis=1)
+    q = np.stack([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)], axis=1)
+    cells = np.unique(np.argmin(((q[:, None, :] - g[None, :, :]) ** 2).sum(axis=2), axis=1))
+    brute = np.degrees(np.min(np.arccos(np.clip(g @ g[cells].T, -1.0, 1.0)), axis=1))
+    grid = coverage_grid(az, el)
+    assert np.all(grid[cells] == 0.0) and np.count_nonzero(grid == 0.0) == cells.size
+    np.testing.assert_allclose(grid, brute, atol=1e-5)

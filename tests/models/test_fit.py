@@ -33,3 +33,23 @@ def test_warm_up_is_not_timed(monkeypatch):
         fitted = fit_model(samples, ModelSpec.parse(name))
         assert fitted.ltd_s < 0.5, (name, fitted.ltd_s)
     assert calls == ["SH-4", "NN-10", "M", "BG-3"]
+
+
+def test_coverage_grids_on_the_worker_threads_equal_each_node_alone():
+    """Many directions: the nodes' grids are computed on the runtime's workers; each is the grid of
+    that node's directions alone (tx and rx ends pooled), in node order."""
+    from rplearn.core.coverage import coverage_grid
+    from rplearn.models.fit import PARALLEL_COVERAGE_DIRECTIONS, node_coverage_grids
+
+    rng = np.random.default_rng(4)
+    n = PARALLEL_COVERAGE_DIRECTIONS
+    tx = rng.integers(0, 3, n)
+    rx = (tx + rng.integers(1, 3, n)) % 3
+    az = rng.normal(0.0, 0.7, (2, n))
+    el = rng.uniform(-0.6, 0.3, (2, n))
+    samples = LinkSamples(Directions(az[0], el[0], az[1], el[1]), tx, rx, ("A", "B", "C"), np.zeros(n), np.ones(n))
+    grids = node_coverage_grids(samples)
+    assert list(grids) == ["A", "B", "C"]
+    for k, node in enumerate(grids):
+        alone = coverage_grid(np.r_[az[0][tx == k], az[1][rx == k]], np.r_[el[0][tx == k], el[1][rx == k]])
+        assert grids[node] == np.round(alone, 1).tolist()

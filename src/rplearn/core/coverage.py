@@ -10,6 +10,8 @@ nearest neighbour by chord is the nearest by angle.
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 from numpy.typing import ArrayLike
 from pykdtree.kdtree import KDTree
@@ -67,11 +69,47 @@ COVERAGE_GRID_POINTS = 16384
 _GRID_TREE: dict[int, KDTree] = {}
 
 
+@lru_cache(maxsize=4)
+def _grid_vectors(n_points: int) -> np.ndarray:
+    """Unit vectors of the Fibonacci grid's points, shape (n_points, 3), contiguous, read-only."""
+    az, el = fibonacci_grid_nodes(n_points)
+    v = np.ascontiguousarray(unit_vector(az, el))
+    v.setflags(write=False)
+    return v
+
+
 def _grid_tree(n_points: int) -> KDTree:
     if n_points not in _GRID_TREE:
-        az, el = fibonacci_grid_nodes(n_points)
-        _GRID_TREE[n_points] = KDTree(np.ascontiguousarray(unit_vector(az, el)))
+        _GRID_TREE[n_points] = KDTree(_grid_vectors(n_points))
     return _GRID_TREE[n_points]
+
+
+def _occupied_grid_points(az_rad: ArrayLike, el_rad: ArrayLike, n_points: int = COVERAGE_GRID_POINTS) -> np.ndarray:
+    """Which points of the Fibonacci grid are the nearest of at least one of these directions
+    (a boolean mask of ``n_points``): the cells the directions fall in."""
+    v = unit_vector(np.asarray(az_rad, np.float64).ravel(), np.asarray(el_rad, np.float64).ravel())
+    occupied = np.zeros(n_points, bool)
+    if v.shape[0]:
+        _, cell = _query(_grid_tree(n_points), v)
+        occupied[cell] = True
+    return occupied
+
+
+def _grid_distance_deg(occupied: np.ndarray) -> np.ndarray:
+    """Angle [deg] from each point of a Fibonacci grid to the nearest occupied point (a boolean
+    mask over the grid, :func:`_occupied_grid_points`): 0 at an occupied point, 180 everywhere
+    when none is; the free points are looked up among the occupied ones only."""
+    occupied = np.asarray(occupied, bool).ravel()
+    out = np.zeros(occupied.size)
+    if not occupied.any():
+        out[:] = 180.0
+        return out
+    free = ~occupied
+    if free.any():
+        g = _grid_vectors(occupied.size)
+        chord, _ = _query(KDTree(np.ascontiguousarray(g[occupied])), np.ascontiguousarray(g[free]))
+        out[free] = np.degrees(2.0 * np.arcsin(np.clip(np.asarray(chord) / 2.0, 0.0, 1.0)))
+    return out
 
 
 def coverage_grid(az_rad: ArrayLike, el_rad: ArrayLike, previous: ArrayLike | None = None,
@@ -83,18 +121,12 @@ def coverage_grid(az_rad: ArrayLike, el_rad: ArrayLike, previous: ArrayLike | No
     directions are replaced by the grid points of the cells they fall in (exact within a cell's
     radius, about 1 degree), so the cost does not grow with the number of samples.
     """
-    az = np.asarray(az_rad, np.float64).ravel()
-    out = np.full(n_points, 180.0)
-    if az.size:
-        gaz, gel = fibonacci_grid_nodes(n_points)
-        # The grid points of the cells the directions fall in stand for them: a tree of at most
-        # n_points points, so that grid points far from a narrow patch of data are not answered
-        # by scanning it all, and the same set whatever the chunking (the result moves by less
-        # than a cell's radius, about 1 degree).
-        v = unit_vector(az, np.asarray(el_rad, np.float64).ravel())
-        _, cell = _query(_grid_tree(n_points), v)
-        occupied = np.unique(cell)
-        out = nearest_angle_deg(gaz, gel, gaz[occupied], gel[occupied])
+    # The grid points of the cells the directions fall in stand for them (_occupied_grid_points):
+    # a tree of at most n_points points, so that grid points far from a narrow patch of data are
+    # not answered by scanning it all, and the same set whatever the chunking (the result moves
+    # by less than a cell's radius, about 1 degree). An occupied point is at 0 degrees from
+    # itself; only the others are looked up (_grid_distance_deg).
+    out = _grid_distance_deg(_occupied_grid_points(az_rad, el_rad, n_points))
     if previous is not None:
         out = np.minimum(out, np.asarray(previous, np.float64))
     return out

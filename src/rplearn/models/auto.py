@@ -11,6 +11,7 @@ from __future__ import annotations
 import time
 from collections import Counter
 from collections.abc import Mapping, Sequence
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -139,17 +140,25 @@ def prior_std_db(basis: Any, nodes: Sequence[str], weights: np.ndarray, noise_va
     return out
 
 
+@lru_cache(maxsize=8)
+def _half_level(basis: Any) -> np.ndarray:
+    """Coefficients of the constant 0.5 dB in ``basis`` (least squares on a Fibonacci grid; once
+    per basis and process), read-only."""
+    from rplearn.core.bases import fibonacci_grid_nodes
+
+    az, el = fibonacci_grid_nodes(max(4 * basis.n_coef, 400))
+    half = np.linalg.lstsq(basis.design(az, el), np.full(az.size, 0.5), rcond=None)[0]
+    half.setflags(write=False)
+    return half
+
+
 def prior_misfit_var(normal: NormalEquations, target: np.ndarray, basis: Any) -> float:
     """Mean squared difference [dB^2] between the joint gains of the samples and those of the
     prior coefficients ``target``, after the best constant offset (a prior's absolute level is
     a convention the gauge does not share) and the best shared coefficients (a path-loss
     exponent, link offsets: the priors describe antennas, not the channel), from the
     statistics alone."""
-    from rplearn.core.bases import fibonacci_grid_nodes
-
-    az, el = fibonacci_grid_nodes(max(4 * basis.n_coef, 400))
-    half = np.linalg.lstsq(basis.design(az, el), np.full(az.size, 0.5), rcond=None)[0]
-    ones = np.tile(half, normal.n_nodes)  # X @ ones = 1 for every sample (half a dB from each end)
+    ones = np.tile(_half_level(basis), normal.n_nodes)  # X @ ones = 1 for every sample (half a dB from each end)
     pat = normal.n_pattern_columns
     g, r = normal.gram, normal.rhs
     target = np.asarray(target, np.float64)[:pat]

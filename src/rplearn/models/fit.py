@@ -121,26 +121,44 @@ def solve_patterns(
     return patterns, sol.report
 
 
+#: Directions (all nodes together) from which the nodes' coverage grids are computed on the
+#: statistics' worker threads, one node per core (pykdtree and numpy release the interpreter lock).
+PARALLEL_COVERAGE_DIRECTIONS = 20_000
+
+
 def node_coverage_grids(
     samples: LinkSamples | Sequence[LinkSamples], previous: Mapping[str, Any] | None = None
 ) -> dict[str, list[float]]:
     """Per node, the coverage grid of its learning directions (:func:`rplearn.core.coverage.coverage_grid`),
     rounded to 0.1 degree for the model file; several sample sets (the units of one fit, same
-    nodes) are pooled, and ``previous`` grids are combined (chunked data)."""
+    nodes) are pooled, and ``previous`` grids are combined (chunked data). With many directions
+    the nodes' grids are computed on the two worker threads of
+    :data:`~rplearn.core.lsq.runtime.DEFAULT_RUNTIME` (each grid is the same as alone)."""
     from rplearn.core.coverage import coverage_grid
 
     parts = [samples] if isinstance(samples, LinkSamples) else list(samples)
-    out: dict[str, list[float]] = {}
-    for k, node in enumerate(parts[0].nodes):
+    nodes = parts[0].nodes
+    directions = []
+    for k in range(len(nodes)):
         az, el = [], []
         for part in parts:
             d = part.directions
             t, r = part.tx_index == k, part.rx_index == k
             az += [np.asarray(d.az_tx)[t], np.asarray(d.az_rx)[r]]
             el += [np.asarray(d.el_tx)[t], np.asarray(d.el_rx)[r]]
-        prev = None if previous is None else previous.get(node)
-        out[node] = np.round(coverage_grid(np.concatenate(az), np.concatenate(el), prev), 1).tolist()
-    return out
+        directions.append((np.concatenate(az), np.concatenate(el)))
+
+    def grid(k: int) -> list[float]:
+        prev = None if previous is None else previous.get(nodes[k])
+        return np.round(coverage_grid(directions[k][0], directions[k][1], prev), 1).tolist()
+
+    if len(nodes) > 1 and sum(az.size for az, _ in directions) >= PARALLEL_COVERAGE_DIRECTIONS:
+        from rplearn.core.lsq.runtime import DEFAULT_RUNTIME
+
+        grids = list(DEFAULT_RUNTIME.in_order(grid, range(len(nodes))))
+    else:
+        grids = [grid(k) for k in range(len(nodes))]
+    return dict(zip(nodes, grids))
 
 
 @check_types
@@ -154,6 +172,10 @@ def fit_patterns(
     return patterns
 
 
+#: Bases whose one-off tables :func:`_warm_up` has built in this process.
+_WARM_BASES: set[Any] = set()
+
+
 def _warm_up(spec: ModelSpec, n_samples: int = 1, options: FitOptions | None = None) -> None:
     """Pay a model's one-off costs: imports, cached basis tables, the solver's block buffer
     (see :func:`fit_model`); the BLAS controller last, once every library a fit uses is loaded."""
@@ -165,9 +187,11 @@ def _warm_up(spec: ModelSpec, n_samples: int = 1, options: FitOptions | None = N
         if options is not None and options.path_loss.learns_exponent:
             import scipy.linalg.blas  # noqa: F401  (the exponent's identifiability check solves through it)
         basis = spec.basis()
-        basis.evaluate(np.zeros(basis.n_coef), [0.0], [0.0])
-        if basis.moment_shape is not None:
-            basis.gram_from_moments(np.zeros(basis.moment_shape))
+        if basis not in _WARM_BASES:  # once per basis and process: its tables are cached
+            basis.evaluate(np.zeros(basis.n_coef), [0.0], [0.0])
+            if basis.moment_shape is not None:
+                basis.gram_from_moments(np.zeros(basis.moment_shape))
+            _WARM_BASES.add(basis)
         reserve_block_buffer(basis, n_samples)
     warm_up_blas()
 

@@ -131,3 +131,23 @@ def test_a_forked_child_accumulates_after_the_parent_used_the_worker_threads():
     with multiprocessing.get_context("fork").Pool(1) as pool:
         got = pool.apply_async(_fit_in_child, (0,)).get(timeout=60)
     assert got == pytest.approx(_fit_in_child(0), rel=1e-12)
+
+
+@pytest.mark.parametrize("n", [5_000, 40_000, 70_000])
+def test_one_link_split_into_blocks_for_the_workers_equals_the_product_of_its_rows(n):
+    """A long link's samples go to the worker threads in blocks (pipelined_block_samples): the
+    blocks' products and moments, added in order, are Z^T Z of the whole link."""
+    from rplearn.core.lsq.link_statistics import PIPELINE_MIN_BLOCK, pipelined_block_samples
+    from rplearn.core.lsq.link_statistics import link_statistics as statistics
+
+    basis = SphericalHarmonics(6)
+    rng = np.random.default_rng(3)
+    az = rng.uniform(-np.pi, np.pi, (2, n))
+    el = np.arcsin(rng.uniform(-1.0, 1.0, (2, n)))
+    y = rng.normal(0.0, 3.0, n)
+    extra = np.stack([np.ones(n), rng.normal(size=n)])
+    p = basis.n_coef
+    assert (pipelined_block_samples(2 * p + 3, n) < n) == (n >= 2 * PIPELINE_MIN_BLOCK)  # blocks only when worth it
+    z = np.vstack([basis.design_t(az[0], el[0])[basis.row_order], y, extra, basis.design_t(az[1], el[1])[basis.row_order]])
+    got = statistics(basis, az[0], el[0], az[1], el[1], y, extra)
+    np.testing.assert_allclose(got, z @ z.T, rtol=1e-10, atol=1e-9 * n)

@@ -104,10 +104,29 @@ def _folds(units: Mapping[str, NormalEquations]) -> tuple[list[_Fold], np.ndarra
 
 
 def _block(matrix: np.ndarray, idx: np.ndarray) -> np.ndarray:
-    """``matrix[idx][:, idx]``: the matrix itself (no copy) when ``idx`` is every column in order."""
+    """``matrix[idx][:, idx]``: the matrix itself (no copy) when ``idx`` is every column in order;
+    copied range by range when ``idx`` is a few increasing runs of consecutive columns (a nested
+    order: the first columns of each node's block, then the shared ones), which gathers no
+    intermediate as wide as the matrix."""
     if idx.size == matrix.shape[0] and np.array_equal(idx, np.arange(idx.size)):
         return matrix
-    return matrix.take(idx, axis=0).take(idx, axis=1)
+    cuts = np.flatnonzero(np.diff(idx) != 1) + 1
+    if cuts.size > _MAX_BLOCK_RUNS or np.any(np.diff(idx) <= 0):
+        return matrix.take(idx, axis=0).take(idx, axis=1)
+    runs = [(int(r[0]), int(r[-1]) + 1) for r in np.split(idx, cuts)]
+    out = np.empty((idx.size, idx.size))
+    row = 0
+    for a, b in runs:
+        col = 0
+        for c, d in runs:
+            out[row : row + b - a, col : col + d - c] = matrix[a:b, c:d]
+            col += d - c
+        row += b - a
+    return out
+
+
+#: Runs of consecutive columns up to which :func:`_block` copies range by range.
+_MAX_BLOCK_RUNS = 8
 
 
 def _cholesky_solve(a: np.ndarray, rhs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
