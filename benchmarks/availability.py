@@ -25,8 +25,8 @@ import time
 import tracemalloc
 
 import numpy as np
-import pandas as pd
 from scipy.special import ndtr
+from swarm import as_log, swarm_poses  # the same circling swarm as benchmarks/swarm.py
 
 from rplearn.analysis.availability import AvailabilityOptions, link_availability_column, swarm_availability
 from rplearn.analysis.swarm import SwarmOptions, predict_swarm
@@ -50,24 +50,6 @@ def model_of(rng: np.random.Generator) -> PatternSet:
     return PatternSet(basis, ("A", "B"), rng.normal(size=(2, p)), covariance=a @ a.T,
                       training=TrainingSummary(rmse_db=4.5, noise_std_db=NOISE_DB, new_flight_level_std_db=LEVEL_DB,
                                                frequency_hz=FREQUENCY_HZ))
-
-
-def swarm_poses(n: int, times: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Times [s], positions (n, T, 3) [m] and quaternions (n, T, 4) of drones circling."""
-    t = np.arange(times) * 0.1
-    phase = np.arange(n)[:, None]
-    radius = 60.0 + 4.0 * n
-    pos = np.stack([radius * np.cos(0.05 * t + phase), radius * np.sin(0.05 * t + phase), 20 + phase + 0 * t], axis=-1)
-    yaw = 0.05 * t + phase + np.pi / 2
-    quat = np.stack([np.cos(yaw / 2), 0 * yaw, 0 * yaw, np.sin(yaw / 2)], axis=-1)
-    return t, pos, quat
-
-
-def as_log(t, pos, quat) -> pd.DataFrame:
-    n = pos.shape[0]
-    return pd.concat([pd.DataFrame({"t": t, "node": f"d{i:03d}", "x": pos[i, :, 0], "y": pos[i, :, 1], "z": pos[i, :, 2],
-                                    "qw": quat[i, :, 0], "qx": quat[i, :, 1], "qy": quat[i, :, 2], "qz": quat[i, :, 3]})
-                      for i in range(n)], ignore_index=True)
 
 
 def reference_connectivity(model: PatternSet, pos, quat, pattern, sensitivity: float, n_draws: int, seed: int):
@@ -126,7 +108,7 @@ def timed(fn, traced: bool = False):
 
 
 def single_link(model, n: int, n_times: int, repeats: int) -> tuple[bool, bool]:
-    t, pos, quat = swarm_poses(n, n_times)
+    t, pos, quat = swarm_poses(n, n_times, radius_m=60.0 + 4.0 * n)
     log = as_log(t, pos, quat)
     options = SwarmOptions(FREQUENCY_HZ, {f"d{i:03d}": "AB"[i % 2] for i in range(n)}, times_s=t)
     sensitivity = -85.0
@@ -151,7 +133,7 @@ def single_link(model, n: int, n_times: int, repeats: int) -> tuple[bool, bool]:
 
 
 def swarm(model, n: int, n_times: int, n_draws: int, repeats: int) -> tuple[bool, bool]:
-    t, pos, quat = swarm_poses(n, n_times)
+    t, pos, quat = swarm_poses(n, n_times, radius_m=60.0 + 4.0 * n)
     log = as_log(t, pos, quat)
     pattern_of = {f"d{i:03d}": "AB"[i % 2] for i in range(n)}
     options = SwarmOptions(FREQUENCY_HZ, pattern_of, times_s=t)

@@ -10,23 +10,16 @@ from __future__ import annotations
 
 import json
 import shutil
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
+from cli_helpers import D, M, P, S, assert_one_line_error, listing, run, smoke_flight
 
-RPLEARN = [sys.executable, "-m", "rplearn.cli"]
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures"
-P, S, D, M = "flight/pose_log.parquet", "flight/signal_log.parquet", "data.parquet", "sh3.json"
 SYNC = ["sync", "--poses", P, "--link", "all", "-o", "out.parquet", "--signals"]
 ORIENT = ["orient", M, "--tx", "A", "--rx", "B", "--tx-pos", "0,0,20", "--rx-pos", "30,0,20"]
-
-
-def run(args, cwd):
-    return subprocess.run(RPLEARN + list(args), cwd=cwd, capture_output=True, text=True, timeout=300)
 
 
 def _bad_files(d: Path) -> None:
@@ -63,12 +56,7 @@ def _bad_files(d: Path) -> None:
 @pytest.fixture(scope="module")
 def workdir(tmp_path_factory):
     d = tmp_path_factory.mktemp("hostile")
-    for args in (
-        ["simulate", "--preset", "smoke", "--seed", "2", "-o", "flight"],
-        ["sync", "--poses", P, "--signals", S, "--link", "all", "-o", D],
-        ["fit", D, "--degree", "3", "-o", M],
-    ):
-        assert run(args, d).returncode == 0
+    smoke_flight(d)
     _bad_files(d)
     from rplearn.models import load_model
 
@@ -117,13 +105,9 @@ REFUSED = {
 @pytest.mark.parametrize("case", sorted(REFUSED))
 def test_refused_in_one_line_and_nothing_written(workdir, case):
     args, needle = REFUSED[case]
-    before = sorted(p.name for p in workdir.rglob("*"))
-    proc = run(args, workdir)
-    lines = [line for line in proc.stderr.splitlines() if line.strip()]
-    assert proc.returncode == 1 and len(lines) == 1 and lines[0].startswith("error: "), (case, proc.stderr)
-    assert needle in lines[0], (case, lines[0])
-    assert "Traceback" not in proc.stderr
-    assert sorted(p.name for p in workdir.rglob("*")) == before  # nothing written, no temporary file left
+    before = listing(workdir)
+    assert_one_line_error(run(args, workdir), needle, case)
+    assert listing(workdir) == before  # nothing written, no temporary file left
 
 
 #: Results that count what they dropped or fixed: (command line, text the output must hold).

@@ -10,44 +10,24 @@ in tests/io/test_resolve.py and tests/io/test_modelfile.py.
 
 from __future__ import annotations
 
-import hashlib
 import os
 import shutil
 import subprocess
-import sys
-from pathlib import Path
 
 import pandas as pd
 import pytest
+from cli_helpers import RPLEARN, D, M, P, S, digests, run, smoke_flight
 
-RPLEARN = [sys.executable, "-m", "rplearn.cli"]
-P, S, D, M = "flight/pose_log.parquet", "flight/signal_log.parquet", "data.parquet", "sh3.json"
 FIT = ["--order", "3", "-o", "m.json"]
 SIGNALS = ["sync", "--poses", P, "--link", "all", "--tx-power", "20", "--frequency", "2.4e9", "-o", "o.parquet",
            "--signals"]
 
 
-def run(args, cwd):
-    return subprocess.run(RPLEARN + list(args), cwd=cwd, capture_output=True, text=True, timeout=300)
-
-
-def digests(folder: Path) -> dict[str, str]:
-    return {str(p.relative_to(folder)): hashlib.sha256(p.read_bytes()).hexdigest()
-            for p in sorted(folder.rglob("*")) if p.is_file()}
-
-
 @pytest.fixture(scope="module")
 def workdir(tmp_path_factory):
     d = tmp_path_factory.mktemp("hostile_paths")
-    for args in (
-        ["simulate", "--preset", "smoke", "--seed", "2", "-o", "flight"],
-        ["sync", "--poses", P, "--signals", S, "--link", "all", "-o", D],
-        ["fit", D, "--order", "3", "-o", M],
-        ["fit", D, "--model", "mean", "-o", "mean.json"],
-        ["fit", D, "--model", "knn", "--order", "20", "-o", "knn.json"],
-    ):
-        proc = run(args, d)
-        assert proc.returncode == 0, proc.stderr
+    smoke_flight(d, extra=(["fit", D, "--model", "mean", "-o", "mean.json"],
+                           ["fit", D, "--model", "knn", "--order", "20", "-o", "knn.json"]))
     data = pd.read_parquet(d / D)
     for name in ("a.parquet", "b.parquet"):
         shutil.copy(d / D, d / name)

@@ -19,7 +19,6 @@ import os
 import shutil
 import signal
 import subprocess
-import sys
 import time
 import zipfile
 from pathlib import Path
@@ -27,18 +26,13 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from cli_helpers import RPLEARN, D, M, P, S, run, smoke_flight
 
 from rplearn.models.load import load_model
 
-RPLEARN = [sys.executable, "-m", "rplearn.cli"]
 ARDUPILOT = Path(__file__).resolve().parents[1] / "fixtures" / "ardupilot"
 BIN = ARDUPILOT / "pymavlink_test.BIN"
 TLOG = ARDUPILOT / "mavlink-log_2013-10-13_16-58-51.tlog"
-P, S, D, M = "flight/pose_log.parquet", "flight/signal_log.parquet", "data.parquet", "sh3.json"
-
-
-def run(args, cwd, env=None, timeout=600):
-    return subprocess.run(RPLEARN + list(args), cwd=cwd, capture_output=True, text=True, timeout=timeout, env=None if env is None else {**os.environ, **env})
 
 
 def need_dask():
@@ -199,13 +193,7 @@ def _stretched_flight(d: Path, factor: float = 20.0) -> None:
 @pytest.fixture(scope="module")
 def workdir(tmp_path_factory):
     d = tmp_path_factory.mktemp("hostile_readers")
-    for args in (
-        ["simulate", "--preset", "smoke", "--seed", "2", "-o", "flight"],
-        ["sync", "--poses", P, "--signals", S, "--link", "all", "-o", D],
-        ["fit", D, "--degree", "3", "-o", M],
-    ):
-        proc = run(args, d)
-        assert proc.returncode == 0, proc.stderr
+    smoke_flight(d)
     _bad_logs(d)
     _forged_sidecar(d)
     _swarm_poses(d)

@@ -9,22 +9,15 @@ tests/core/test_plausible.py).
 
 from __future__ import annotations
 
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
+from cli_helpers import D, M, P, S, assert_one_line_error, listing, run, smoke_flight
 
-RPLEARN = [sys.executable, "-m", "rplearn.cli"]
-P, S, D, M = "flight/pose_log.parquet", "flight/signal_log.parquet", "data.parquet", "sh3.json"
 ORIENT = ["orient", M, "--tx", "A", "--rx", "B", "--tx-pos", "0,0,20", "--rx-pos", "30,0,20"]
 GHZ24, GHZ58 = 2.412e9, 5.8e9
-
-
-def run(args, cwd):
-    return subprocess.run(RPLEARN + list(args), cwd=cwd, capture_output=True, text=True, timeout=600)
 
 
 def _reference_csv(**edits) -> pd.DataFrame:
@@ -138,13 +131,7 @@ def _below_ground(d: Path) -> None:
 @pytest.fixture(scope="module")
 def workdir(tmp_path_factory):
     d = tmp_path_factory.mktemp("values")
-    for args in (
-        ["simulate", "--preset", "smoke", "--seed", "2", "-o", "flight"],
-        ["sync", "--poses", P, "--signals", S, "--link", "all", "-o", D],
-        ["fit", D, "--degree", "3", "-o", M],
-    ):
-        proc = run(args, d)
-        assert proc.returncode == 0, proc.stderr
+    smoke_flight(d)
     _bad_files(d)
     _tlogs(d)
     _below_ground(d)
@@ -207,13 +194,9 @@ REFUSED = {
 @pytest.mark.parametrize("case", sorted(REFUSED))
 def test_refused_in_one_line_and_nothing_written(workdir, case):
     args, needle = REFUSED[case]
-    before = sorted(p.name for p in workdir.rglob("*"))
-    proc = run(args, workdir)
-    lines = [line for line in proc.stderr.splitlines() if line.strip()]
-    assert proc.returncode == 1 and len(lines) == 1 and lines[0].startswith("error: "), (case, proc.stderr)
-    assert needle in lines[0], (case, lines[0])
-    assert "Traceback" not in proc.stderr
-    assert sorted(p.name for p in workdir.rglob("*")) == before  # nothing written, no temporary file left
+    before = listing(workdir)
+    assert_one_line_error(run(args, workdir), needle, case)
+    assert listing(workdir) == before  # nothing written, no temporary file left
 
 
 #: A log refused as a whole (exit 1; the line naming it may come before the count of unread files).

@@ -3,14 +3,11 @@ with one line and exit code 1, and every input stays byte for byte as it was (is
 
 from __future__ import annotations
 
-import hashlib
 import subprocess
-import sys
 import time
 
 import pytest
-
-RPLEARN = [sys.executable, "-m", "rplearn.cli"]
+from cli_helpers import RPLEARN, digests, run, smoke_flight
 
 P, S, D, M, T = "flight/pose_log.parquet", "flight/signal_log.parquet", "data.parquet", "sh3.json", "flight/ground_truth.json"
 
@@ -38,24 +35,10 @@ CASES = {
 }
 
 
-def run(args, cwd):
-    return subprocess.run(RPLEARN + list(args), cwd=cwd, capture_output=True, text=True, timeout=300)
-
-
 @pytest.fixture(scope="module")
 def workdir(tmp_path_factory):
     d = tmp_path_factory.mktemp("outputs")
-    for args in (
-        ["simulate", "--preset", "smoke", "--seed", "2", "-o", "flight"],
-        ["sync", "--poses", P, "--signals", S, "--link", "all", "-o", D],
-        ["fit", D, "--degree", "3", "-o", M],
-    ):
-        assert run(args, d).returncode == 0
-    return d
-
-
-def digests(folder) -> dict[str, str]:
-    return {str(p.relative_to(folder)): hashlib.sha256(p.read_bytes()).hexdigest() for p in sorted(folder.rglob("*")) if p.is_file()}
+    return smoke_flight(d)
 
 
 @pytest.mark.parametrize("case", sorted(CASES))

@@ -156,15 +156,17 @@ class SwarmPrediction:
         return "\n".join(lines)
 
 
-def prediction_times(tracks: Mapping[str, Any], step_s: float, times_s: ArrayLike | None) -> np.ndarray:
+def prediction_times(tracks: Mapping[str, Any], step_s: float, times_s: ArrayLike | None,
+                     spreads: bool = True) -> np.ndarray:
     """The given times, or a grid of ``step_s`` over the span all drones' logs cover [s]
-    (refused before it is built when the links at those times would not fit in memory)."""
+    (refused before it is built when the links at those times, with their ``spreads`` or
+    without, would not fit the work budget)."""
     if times_s is not None:
         t = np.asarray(times_s, np.float64).ravel()
         if t.size == 0 or not np.all(np.isfinite(t)):
             raise InputError("times_s: expected finite times in seconds", param="times_s")
         t = np.unique(t)
-        check_link_rows(t.size, len(tracks))
+        check_link_rows(t.size, len(tracks), spreads=spreads)
         return t
     if not (np.isfinite(step_s) and step_s > 0):
         raise InputError(f"step_s: expected a positive number of seconds, got {step_s!r}", param="step_s")
@@ -176,31 +178,34 @@ def prediction_times(tracks: Mapping[str, Any], step_s: float, times_s: ArrayLik
     if stop < start:
         spans = ", ".join(f"{tr.node} {tr.t_s[0]:.1f}..{tr.t_s[-1]:.1f} s" for tr in moving)
         raise InputError(f"pose logs share no time span ({spans}); give the times (times_s)", param="times_s")
-    check_link_rows(int((stop - start) / step_s) + 1, len(tracks), step_s)
+    check_link_rows(int((stop - start) / step_s) + 1, len(tracks), step_s, spreads)
     return np.arange(start, stop + 1e-9 * max(1.0, abs(stop)), step_s)
 
 
-#: Measured cost of one predicted link (a time and an ordered pair: ``links`` on the smoke flight at
-#: --step 0.01 and 0.001, 14,048 and 140,480 rows, on a loaded 2-core machine: about 60 us and
-#: 700 bytes a row, 160 bytes of CSV).
-LINK_ROW_S, LINK_ROW_BYTES = 60e-6, 700.0
+#: Measured cost of one predicted link (a time and an ordered pair) with its spread (``links`` on
+#: the smoke flight at --step 0.01 and 0.001, 14,048 and 140,480 rows, on a loaded 2-core machine:
+#: about 60 us and 700 bytes a row, 160 bytes of CSV) and without (``predict_swarm`` of 30 drones x
+#: 1,000 and 3,000 times, no covariance, at a load of 16 on 2 cores: 5.4-7.1 us a row).
+LINK_ROW_S, LINK_ROW_BARE_S, LINK_ROW_BYTES = 60e-6, 8e-6, 700.0
 
 
-def link_rows_cost(n_times: float, n_drones: int) -> Cost:
-    """What predicting ``n_times`` times of ``n_drones`` drones' ordered pairs takes."""
+def link_rows_cost(n_times: float, n_drones: int, spreads: bool = True) -> Cost:
+    """What predicting ``n_times`` times of ``n_drones`` drones' ordered pairs takes (``spreads``:
+    each with its standard error, ``f^T C f``)."""
     rows = float(n_times) * n_drones * (n_drones - 1)
-    return Cost(memory_bytes=2e8 + LINK_ROW_BYTES * rows, seconds=2.0 + LINK_ROW_S * rows)
+    per_row_s = LINK_ROW_S if spreads else LINK_ROW_BARE_S
+    return Cost(memory_bytes=2e8 + LINK_ROW_BYTES * rows, seconds=2.0 + per_row_s * rows)
 
 
-def check_link_rows(n_times: int, n_drones: int, step_s: float | None = None) -> None:
+def check_link_rows(n_times: int, n_drones: int, step_s: float | None = None, spreads: bool = True) -> None:
     """Refuse a prediction of more links (times x ordered pairs) than the work budget
     (:mod:`rplearn._budget`) allows, before any work: the largest step or number of times that fits named."""
     if step_s:
         span = (n_times - 1) * step_s
-        check_work("step_s", float(step_s), lambda s: link_rows_cost(span / s + 1, n_drones), "s", integer=False,
-                   bounds=(0.0, max(span, step_s)), falling=True)
+        check_work("step_s", float(step_s), lambda s: link_rows_cost(span / s + 1, n_drones, spreads), "s",
+                   integer=False, bounds=(0.0, max(span, step_s)), falling=True)
     else:
-        check_work("times_s", n_times, lambda n: link_rows_cost(n, n_drones), "times")
+        check_work("times_s", n_times, lambda n: link_rows_cost(n, n_drones, spreads), "times")
 
 
 def resolve_patterns(drones: Sequence[str], model_nodes: Sequence[str], pattern_of: Mapping[str, str] | None) -> dict[str, str]:
@@ -276,7 +281,7 @@ def predict_swarm(
     if len(drones) < 2:
         raise InputError(f"{source}: a swarm needs at least 2 drones, the pose log has {', '.join(drones) or 'none'}")
     patterns = resolve_patterns(drones, model.nodes, pattern_of)
-    t = prediction_times(tracks, step_s, times_s)
+    t = prediction_times(tracks, step_s, times_s, model.covariance is not None)
     poses = {d: tracks[d].interpolate(t, max_gap_s) for d in drones}
     present = np.stack([poses[d][2] == 0 for d in drones], axis=1)  # (times, drones)
     for k, d in enumerate(drones):  # a two-ray model predicts nothing at or below its ground

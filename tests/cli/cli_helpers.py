@@ -1,0 +1,59 @@
+"""What the command-line tests share: running ``rplearn`` as a user does, a smoke flight, and the
+check that a refused command says one line and writes nothing.
+
+Imported by the test modules of this folder (pytest puts the folder on ``sys.path``).
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from collections.abc import Iterable, Sequence
+from pathlib import Path
+
+#: The command line a user types, with this interpreter.
+RPLEARN = [sys.executable, "-m", "rplearn.cli"]
+#: The smoke flight's files, relative to the working folder.
+P, S, D, M = "flight/pose_log.parquet", "flight/signal_log.parquet", "data.parquet", "sh3.json"
+
+
+def run(args: Sequence[str], cwd: Path | str, env: dict[str, str] | None = None,
+        timeout: float = 600) -> subprocess.CompletedProcess[str]:
+    """Run ``rplearn ARGS`` in ``cwd`` (``env``: variables added to this process's)."""
+    return subprocess.run(RPLEARN + list(args), cwd=cwd, capture_output=True, text=True, timeout=timeout,
+                          env=None if env is None else {**os.environ, **env})
+
+
+def smoke_flight(d: Path, extra: Iterable[Sequence[str]] = (), seed: int = 2) -> Path:
+    """Simulate the smoke flight into ``d``, sync it to :data:`D`, fit SH-3 to :data:`M`, then run ``extra``."""
+    for args in (
+        ["simulate", "--preset", "smoke", "--seed", str(seed), "-o", "flight"],
+        ["sync", "--poses", P, "--signals", S, "--link", "all", "-o", D],
+        ["fit", D, "--degree", "3", "-o", M],
+        *extra,
+    ):
+        proc = run(args, d)
+        assert proc.returncode == 0, (args, proc.stderr)
+    return d
+
+
+def listing(folder: Path) -> list[str]:
+    """Every name below ``folder``: a refused command must leave it as it was."""
+    return sorted(p.name for p in folder.rglob("*"))
+
+
+def assert_one_line_error(proc: subprocess.CompletedProcess[str], needle: str, case: str = "") -> None:
+    """Exit 1, one ``error:`` line on stderr holding ``needle``, no traceback."""
+    lines = [line for line in proc.stderr.splitlines() if line.strip()]
+    assert proc.returncode == 1 and len(lines) == 1 and lines[0].startswith("error:"), (case, proc.stderr)
+    assert needle in lines[0], (case, lines[0])
+    assert "Traceback" not in proc.stderr
+
+
+def digests(folder: Path) -> dict[str, str]:
+    """Each file's SHA-256 below ``folder``: a refused command must leave every byte as it was."""
+    import hashlib
+
+    return {str(p.relative_to(folder)): hashlib.sha256(p.read_bytes()).hexdigest()
+            for p in sorted(folder.rglob("*")) if p.is_file()}
