@@ -129,6 +129,75 @@ class PoseTrack:
         return i, frac, status
 
 
+class TrackSet(dict[str, PoseTrack]):
+    """Pose tracks by node id (a ``dict``) whose arrays are views of one store: the times,
+    positions and quaternions of every node back to back, node after node (issue 30: many
+    nodes' poses are then interpolated in one pass, without a copy per node or per call).
+
+    Attributes
+    ----------
+    t_s : ndarray (n,)
+        Times of all tracks [s, common clock].
+    position_xyz : ndarray (n, 3)
+        ENU positions [m].
+    quat_wxyz : ndarray (n, 4)
+        Quaternions (w, x, y, z).
+    first_row : dict of str to int
+        Row of each node's first pose in the store.
+    """
+
+    __slots__ = ("first_row", "position_xyz", "quat_wxyz", "t_s")
+    t_s: np.ndarray
+    position_xyz: np.ndarray
+    quat_wxyz: np.ndarray
+    first_row: dict[str, int]
+
+    @classmethod
+    def of_rows(
+        cls,
+        names: Sequence[str],
+        rows: Sequence[np.ndarray],
+        still: Sequence[bool],
+        columns: tuple[np.ndarray, np.ndarray, np.ndarray],
+        offsets_s: Sequence[float] | None,
+    ) -> TrackSet:
+        """Tracks of nodes ``names``, each of rows ``rows[k]`` of ``columns`` = (times [s],
+        positions (n, 3) [m], quaternions (n, 4)), its times plus ``offsets_s[k]`` [s] (none added
+        when None)."""
+        t, pos, quat = columns
+        sizes = np.array([r.size for r in rows], np.intp)
+        first = np.r_[0, np.cumsum(sizes)].astype(np.intp)
+        every = np.concatenate(rows) if rows else np.zeros(0, np.intp)
+        if every.size == t.size and np.array_equal(every, np.arange(t.size)):  # no row left out: no gather
+            every = slice(None)  # type: ignore[assignment]
+        out = cls()
+        out.t_s = t[every] if offsets_s is None else t[every] + np.repeat(np.asarray(offsets_s, np.float64), sizes)
+        out.position_xyz = np.ascontiguousarray(pos[every])
+        out.quat_wxyz = np.ascontiguousarray(quat[every])
+        out.first_row = {}
+        for k, node in enumerate(names):
+            a, b = int(first[k]), int(first[k + 1])
+            out.first_row[node] = a
+            out[node] = PoseTrack(node, out.t_s[a:b], out.position_xyz[a:b], out.quat_wxyz[a:b], bool(still[k]))
+        return out
+
+    @classmethod
+    def of(cls, tracks: Mapping[str, PoseTrack]) -> TrackSet:
+        """``tracks`` itself when it is a :class:`TrackSet`, else one with the same tracks (copied)."""
+        if isinstance(tracks, TrackSet):
+            return tracks
+        items = list(tracks.items())
+        columns = tuple(np.concatenate([getattr(tr, f) for _, tr in items]) if items else np.zeros((0, w))
+                        for f, w in (("t_s", 0), ("position_xyz", 3), ("quat_wxyz", 4)))
+        columns = (columns[0].reshape(-1), columns[1].reshape(-1, 3), columns[2].reshape(-1, 4))
+        sizes = np.cumsum([0] + [tr.t_s.shape[0] for _, tr in items])
+        rows = [np.arange(sizes[k], sizes[k + 1]) for k in range(len(items))]
+        out = cls.of_rows([n for n, _ in items], rows, [tr.still for _, tr in items], columns, None)
+        for node, tr in items:  # the given objects themselves
+            out[node] = tr
+        return out
+
+
 @check_types
 def pose_tracks(
     pose_log: pd.DataFrame,
@@ -154,7 +223,7 @@ def pose_tracks(
 
 def tracks_of_checked_log(
     df: pd.DataFrame, clock_offsets_s: Mapping[str, float] | None, source: str, max_gap_s: float | None = None,
-) -> dict[str, PoseTrack]:
+) -> TrackSet:
     """:func:`pose_tracks` of a pose log already checked (and sorted) by :func:`validate_pose_log`.
 
     Parameters
@@ -170,31 +239,24 @@ def tracks_of_checked_log(
         or for a station moved between flights.
     """
     offsets = dict(clock_offsets_s or {})
-    tracks: dict[str, PoseTrack] = {}
     nodes = df["node"].array
     codes = pd.factorize(nodes)[0]  # equal ids, equal codes (no text object per row)
     t = df["t"].to_numpy(np.float64)
     pos = df[["x", "y", "z"]].to_numpy(np.float64)
     quat = df[["qw", "qx", "qy", "qz"]].to_numpy(np.float64)
     # df is sorted by (node, t): nodes are contiguous runs
-    starts = np.flatnonzero(np.r_[True, codes[1:] != codes[:-1]])
+    starts = np.flatnonzero(np.r_[True, codes[1:] != codes[:-1]]) if len(nodes) else np.zeros(0, np.intp)
     ends = np.r_[starts[1:], len(nodes)]
-    for s, e in zip(starts, ends):
-        node = str(nodes[s])
+    names = [str(nodes[s]) for s in starts]
+    rows: list[np.ndarray] = []
+    still: list[bool] = []
+    for node, s, e in zip(names, starts, ends):
         changes = _pose_changes(pos[s:e], quat[s:e])
-        rows = np.arange(s, e)
-        still = bool(e - s > 1 and not changes.any())
-        if still:
-            rows = np.array([s, e - 1])  # identical rows: the pose holds over the log's span
-        elif changes.any() and max_gap_s is not None:
+        still.append(bool(e - s > 1 and not changes.any()))
+        if changes.any() and max_gap_s is not None:
             _refuse_moved_station(node, t[s:e], pos[s:e], changes, float(max_gap_s), source)
-        tracks[node] = PoseTrack(
-            node,
-            t[rows] + float(offsets.get(node, 0.0)),
-            np.ascontiguousarray(pos[rows]),
-            np.ascontiguousarray(quat[rows]),
-            still,
-        )
+        rows.append(np.array([s, e - 1]) if still[-1] else np.arange(s, e))  # identical rows: the pose holds
+    tracks = TrackSet.of_rows(names, rows, still, (t, pos, quat), [float(offsets.get(n, 0.0)) for n in names])
     unknown = sorted(set(offsets) - set(tracks))
     if unknown:
         raise InputError(
@@ -271,6 +333,7 @@ __all__ = [
     "STATUS_POSE_GAP",
     "PoseTrack",
     "interpolate_nodes",
+    "TrackSet",
     "pose_tracks",
     "tracks_of_checked_log",
 ]

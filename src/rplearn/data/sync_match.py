@@ -13,8 +13,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 import pandas as pd
 
-from rplearn.core.geometry import slerp_wxyz
-from rplearn.data.poses import PoseTrack
+from rplearn.data.poses import STATUS_OUT_OF_SPAN, STATUS_POSE_GAP, PoseTrack, TrackSet
 from rplearn.data.tables import MATCHED_COLUMNS, POSE_FIELDS, node_id_codes
 
 #: Float columns of the matched dataset, in the order of the block.
@@ -55,38 +54,131 @@ def interpolate_end(
     """:func:`~rplearn.data.poses.interpolate_nodes` written as rows of ``pose`` (7, n):
     ``x, y, z, qw, qx, qy, qz`` (NaN outside ``rows``); returns the status of every row.
 
-    One ``searchsorted`` per node, in blocks of :data:`BLOCK_ROWS`; each field is written
-    once into its own contiguous row of the matched dataset's block (:func:`float_block`).
+    One ``searchsorted`` per node gives each row its pose interval in the tracks' one store
+    (:class:`~rplearn.data.poses.TrackSet`); then all rows, whatever their node, are
+    interpolated in blocks of :data:`BLOCK_ROWS`, each field written once into its own
+    contiguous row of the matched dataset's block (:func:`float_block`). The arithmetic is that
+    of :meth:`PoseTrack.interpolate <rplearn.data.poses.PoseTrack.interpolate>`, bit for bit.
     """
+    store = TrackSet.of(tracks)
     n = len(t_s)
     status = np.zeros(n, np.int8)
+    before = np.zeros(n, np.intp)  # row of the pose before each time in the store
+    which = np.full(len(node_ids), -1, np.intp)  # node code -> moving track (-1: none)
+    spans: list[tuple[float, float, bool]] = []  # each moving track's first and last time, still
     covered = np.zeros(n, bool)
+    static: list[tuple[PoseTrack, np.ndarray]] = []
     for code, node in enumerate(node_ids):
         sel = np.flatnonzero((node_code == code) & rows)
         if not sel.size:
             continue
         covered[sel] = True
-        track = tracks[node]
+        track = store[node]
         if track.static:
-            pos, quat, status[sel] = track.interpolate(t_s[:1], max_gap_s)
-            pose[:3, sel] = pos[0][:, None]
-            pose[3:, sel] = quat[0][:, None]
+            static.append((track, sel))
             continue
-        for start in range(0, sel.size, BLOCK_ROWS):  # blocks: the temporaries stay in cache
-            rows_b = sel[start : start + BLOCK_ROWS]
-            i, frac, status[rows_b] = track.brackets(t_s[rows_b], max_gap_s)
-            i1 = i + 1
-            for j in range(3):  # p0 + fraction * (p1 - p0), as PoseTrack.interpolate
-                column = track.position_xyz[:, j]
-                p0 = column[i]
-                p = column[i1] - p0
-                p *= frac
-                p += p0
-                pose[j, rows_b] = p
-            pose[3:, rows_b] = slerp_wxyz(track.quat_wxyz[i], track.quat_wxyz[i1], frac).T
+        tk = track.t_s
+        i = np.searchsorted(tk, t_s[sel], side="right")
+        i -= 1
+        np.clip(i, 0, tk.shape[0] - 2, out=i)
+        i += store.first_row[node]
+        before[sel] = i
+        which[code] = len(spans)
+        spans.append((float(tk[0]), float(tk[-1]), track.still))
+    if spans:
+        _interpolate_rows(store, before, which[node_code], spans, (t_s, max_gap_s), (pose, status))
+    for track, sel in static:  # its one pose at every time
+        pos, quat, status[sel] = track.interpolate(t_s[:1], max_gap_s)
+        pose[:3, sel] = pos[0][:, None]
+        pose[3:, sel] = quat[0][:, None]
     if not covered.all():
         pose[:, ~covered] = np.nan
+        status[~covered] = 0
     return status
+
+
+def _interpolate_rows(
+    store: TrackSet,
+    before: np.ndarray,
+    track_of_row: np.ndarray,
+    spans: list[tuple[float, float, bool]],
+    times: tuple[np.ndarray, float],
+    outputs: tuple[np.ndarray, np.ndarray],
+) -> None:
+    """Poses and statuses of every row from its store row ``before`` and its moving track
+    ``track_of_row`` (-1: none; such rows get meaningless values), in blocks."""
+    t_s, max_gap_s = times
+    pose, status = outputs
+    first = np.array([s[0] for s in spans] + [np.nan])  # [-1]: rows without a moving track
+    last = np.array([s[1] for s in spans] + [np.nan])
+    still = np.array([s[2] for s in spans] + [True])
+    tk, position, quat = store.t_s, store.position_xyz, store.quat_wxyz
+    top = tk.shape[0] - 1
+    with np.errstate(divide="ignore", invalid="ignore"):  # rows without a track: 0 / 0
+        for start in range(0, t_s.shape[0], BLOCK_ROWS):  # blocks: the temporaries stay in cache
+            block = slice(start, start + BLOCK_ROWS)
+            i = before[block]
+            i1 = i + 1
+            np.minimum(i1, top, out=i1)
+            t = t_s[block]
+            k = track_of_row[block]
+            t0 = tk.take(i)
+            t1 = tk.take(i1)  # as PoseTrack.brackets
+            on_sample = (t == t0) | (t == t1)
+            t1 -= t0
+            st = status[block]
+            st[(t1 > max_gap_s) & ~on_sample & ~still[k]] = STATUS_POSE_GAP
+            st[(t < first[k]) | (t > last[k]) | ~np.isfinite(t)] = STATUS_OUT_OF_SPAN
+            frac = t - t0
+            frac /= t1
+            np.clip(frac, 0.0, 1.0, out=frac)
+            p0 = np.take(position, i, axis=0)
+            p1 = np.take(position, i1, axis=0)
+            for j in range(3):  # p0 + fraction * (p1 - p0), as PoseTrack.interpolate
+                p = np.subtract(p1[:, j], p0[:, j], out=pose[j, block])
+                p *= frac
+                p += p0[:, j]
+            slerp_into(np.take(quat, i, axis=0), np.take(quat, i1, axis=0), frac, pose[3:, block])
+
+
+def slerp_into(q0: np.ndarray, q1: np.ndarray, fraction: np.ndarray, out: np.ndarray) -> None:
+    """:func:`~rplearn.core.geometry.slerp_wxyz` of ``q0``, ``q1`` (m, 4) written transposed into
+    ``out`` (4, m), bit for bit, one component at a time (no reduction along rows of four).
+
+    The dot product sums its products in the order of ``einsum`` (``(p0 + p2) + (p1 + p3)``),
+    the norm its squares in the order of ``numpy.linalg.norm`` (``((s0 + s1) + s2) + s3``);
+    tests/data/test_sync_match.py holds them to ``slerp_wxyz``'s bits.
+    """
+    a = [q0[:, c] for c in range(4)]
+    b = [q1[:, c] for c in range(4)]
+    dot = a[0] * b[0]
+    dot += a[2] * b[2]
+    odd = a[1] * b[1]
+    odd += a[3] * b[3]
+    dot += odd
+    negative = dot < 0.0
+    theta = np.arccos(np.minimum(np.abs(dot), 1.0))
+    sin_theta = np.sin(theta)
+    near = sin_theta < 1e-6
+    rest = 1.0 - fraction
+    w0 = np.sin(rest * theta)
+    w1 = np.sin(fraction * theta)
+    safe = np.where(near, 1.0, sin_theta)
+    w0 /= safe
+    w1 /= safe
+    if near.any():  # nearly equal quaternions: normalised linear interpolation
+        w0[near] = rest[near]
+        w1[near] = fraction[near]
+    np.negative(w1, out=w1, where=negative)  # the shorter arc: q1 negated
+    for c in range(4):
+        np.multiply(w0, a[c], out=out[c])
+        out[c] += w1 * b[c]
+    norm = out[0] * out[0]
+    for c in range(1, 4):
+        norm += out[c] * out[c]
+    np.sqrt(norm, out=norm)
+    np.negative(norm, out=norm, where=out[0] < 0.0)  # qw >= 0
+    out /= norm
 
 
 def float_block(n: int) -> np.ndarray:
