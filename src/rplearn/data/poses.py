@@ -19,7 +19,7 @@ import pandas as pd
 
 from rplearn._argtypes import check_types
 from rplearn.core.geometry import slerp_wxyz
-from rplearn.data.tables import validate_pose_log
+from rplearn.data.tables import checked_pose_arrays, count_non_unit_quaternions, quaternion_norms, validate_pose_log
 from rplearn.errors import InputError
 
 #: Status of an interpolated pose: known, outside the log's span, inside a gap of the log.
@@ -238,25 +238,53 @@ def tracks_of_checked_log(
         When ``clock_offsets_s`` names a node without a pose log (``param="clock_offsets_s"``),
         or for a station moved between flights.
     """
-    offsets = dict(clock_offsets_s or {})
-    nodes = df["node"].array
-    codes = pd.factorize(nodes)[0]  # equal ids, equal codes (no text object per row)
+    codes, uniques = pd.factorize(df["node"].array)  # equal ids, equal codes (no text object per row)
     t = df["t"].to_numpy(np.float64)
     pos = df[["x", "y", "z"]].to_numpy(np.float64)
     quat = df[["qw", "qx", "qy", "qz"]].to_numpy(np.float64)
-    # df is sorted by (node, t): nodes are contiguous runs
-    starts = np.flatnonzero(np.r_[True, codes[1:] != codes[:-1]]) if len(nodes) else np.zeros(0, np.intp)
-    ends = np.r_[starts[1:], len(nodes)]
-    names = [str(nodes[s]) for s in starts]
+    return _tracks_of_arrays(codes, [str(u) for u in uniques], (t, pos, quat), clock_offsets_s, (source, max_gap_s))
+
+
+def tracks_of_pose_log(
+    pose_log: pd.DataFrame, clock_offsets_s: Mapping[str, float] | None, source: str, max_gap_s: float | None = None,
+) -> tuple[TrackSet, int]:
+    """``tracks_of_checked_log(validate_pose_log(pose_log))`` and the
+    :func:`~rplearn.data.tables.non_unit_quaternion_rows` of the checked log, from the checked
+    arrays (:func:`~rplearn.data.tables.checked_pose_arrays`), without the checked log as a
+    DataFrame: the same tracks and count, the same errors.
+    """
+    c = checked_pose_arrays(pose_log, source)
+    tracks = _tracks_of_arrays(c.codes, [str(n) for n in c.names], (c.t, c.position_xyz, c.quat_wxyz),
+                               clock_offsets_s, (source, max_gap_s))
+    norm = quaternion_norms(c.quat_wxyz)
+    return tracks, c.non_unit + count_non_unit_quaternions(norm[np.isfinite(norm)])
+
+
+def _tracks_of_arrays(
+    codes: np.ndarray,
+    names: Sequence[str],
+    columns: tuple[np.ndarray, np.ndarray, np.ndarray],
+    clock_offsets_s: Mapping[str, float] | None,
+    where: tuple[str, float | None],
+) -> TrackSet:
+    """The tracks of a checked pose log's arrays, sorted by (node, t): node codes into ``names``,
+    (times [s], positions (n, 3) [m], quaternions (n, 4)); ``where``: (source, max_gap_s)."""
+    source, max_gap_s = where
+    offsets = dict(clock_offsets_s or {})
+    t, pos, quat = columns
+    # sorted by (node, t): nodes are contiguous runs
+    starts = np.flatnonzero(np.r_[True, codes[1:] != codes[:-1]]) if codes.size else np.zeros(0, np.intp)
+    ends = np.r_[starts[1:], codes.size]
+    run_names = [names[codes[s]] for s in starts]
     rows: list[np.ndarray] = []
     still: list[bool] = []
-    for node, s, e in zip(names, starts, ends):
+    for node, s, e in zip(run_names, starts, ends):
         changes = _pose_changes(pos[s:e], quat[s:e])
         still.append(bool(e - s > 1 and not changes.any()))
         if changes.any() and max_gap_s is not None:
             _refuse_moved_station(node, t[s:e], pos[s:e], changes, float(max_gap_s), source)
         rows.append(np.array([s, e - 1]) if still[-1] else np.arange(s, e))  # identical rows: the pose holds
-    tracks = TrackSet.of_rows(names, rows, still, (t, pos, quat), [float(offsets.get(n, 0.0)) for n in names])
+    tracks = TrackSet.of_rows(run_names, rows, still, (t, pos, quat), [float(offsets.get(n, 0.0)) for n in run_names])
     unknown = sorted(set(offsets) - set(tracks))
     if unknown:
         raise InputError(
@@ -268,11 +296,19 @@ def tracks_of_checked_log(
 
 
 def _pose_changes(position_xyz: np.ndarray, quat_wxyz: np.ndarray) -> np.ndarray:
-    """For each row after the first: whether its pose differs from the row before."""
-    moved = np.any(np.abs(np.diff(position_xyz, axis=0)) > SAME_POSITION_M, axis=1)
+    """For each row after the first: whether its pose differs from the row before (one
+    component at a time: no reduction along rows of three or four)."""
+    changed = np.abs(np.diff(position_xyz[:, 0])) > SAME_POSITION_M
+    for j in (1, 2):
+        changed |= np.abs(np.diff(position_xyz[:, j])) > SAME_POSITION_M
     q0, q1 = quat_wxyz[:-1], quat_wxyz[1:]
-    turned = np.minimum(np.abs(q1 - q0).max(axis=1), np.abs(q1 + q0).max(axis=1)) > SAME_QUATERNION
-    return moved | turned
+    minus = np.abs(q1[:, 0] - q0[:, 0])
+    plus = np.abs(q1[:, 0] + q0[:, 0])
+    for j in (1, 2, 3):  # the largest component of q1 - q0 and of q1 + q0 (sign-insensitive)
+        np.maximum(minus, np.abs(q1[:, j] - q0[:, j]), out=minus)
+        np.maximum(plus, np.abs(q1[:, j] + q0[:, j]), out=plus)
+    changed |= np.minimum(minus, plus) > SAME_QUATERNION
+    return changed
 
 
 def _refuse_moved_station(
@@ -336,4 +372,5 @@ __all__ = [
     "TrackSet",
     "pose_tracks",
     "tracks_of_checked_log",
+    "tracks_of_pose_log",
 ]

@@ -9,6 +9,7 @@ per node, not one per row).
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -30,16 +31,26 @@ def node_column(uniques: np.ndarray, codes: np.ndarray, index: pd.Index) -> pd.S
     return pd.Series(pd.Series(np.asarray(uniques).astype(str)).array.take(codes), index=index)
 
 
-def node_codes(tx: pd.Series, rx: pd.Series) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def node_codes(
+    tx: pd.Series, rx: pd.Series, cells: Mapping[str, tuple[np.ndarray, Any]] | None = None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Both ends' node ids as codes into one array of distinct ids: ``(tx_code, rx_code, uniques)``.
 
     ``uniques[tx_code]`` equals :func:`~rplearn.data.tables.node_ids` of ``tx`` row by row
-    (a missing cell is ``""``), but the text of each distinct cell is made once, not per row.
+    (a missing cell is ``""``), but the text of each distinct cell is made once, not per row;
+    ``cells``: the ``pd.factorize`` of ``tx`` and ``rx`` (:func:`factorize_ends`), when made.
     """
-    tx_code, tx_ids = node_id_codes(tx)
-    rx_code, rx_ids = node_id_codes(rx)
+    cells = cells or {}
+    tx_code, tx_ids = node_id_codes(tx, factorized=cells.get("tx"))
+    rx_code, rx_ids = node_id_codes(rx, factorized=cells.get("rx"))
     merged, uniques = pd.factorize(np.concatenate([tx_ids, rx_ids]))  # one code per node over both ends
     return merged[tx_code], merged[tx_ids.size + rx_code], np.asarray(uniques, dtype=object)
+
+
+def factorize_ends(signal: pd.DataFrame) -> dict[str, tuple[np.ndarray, Any]]:
+    """``pd.factorize(column, use_na_sentinel=True)`` of ``tx`` and ``rx``: made once per chunk,
+    read by the node codes and the link codes of :mod:`rplearn.data.readings`."""
+    return {end: pd.factorize(signal[end], use_na_sentinel=True) for end in ("tx", "rx")}
 
 
 def interpolate_end(
