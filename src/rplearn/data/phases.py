@@ -98,8 +98,9 @@ def takeoff_altitude_m(t_s: np.ndarray, position_xyz: np.ndarray) -> float:
     """
     t = np.asarray(t_s, np.float64)
     xyz = np.asarray(position_xyz, np.float64)
-    ok = np.isfinite(t) & np.isfinite(xyz).all(axis=1)
-    t, xyz = t[ok], xyz[ok]
+    if not (np.isfinite(np.sum(t)) and np.isfinite(np.sum(xyz))):  # a finite sum: every value finite
+        ok = np.isfinite(t) & np.isfinite(xyz).all(axis=1)
+        t, xyz = t[ok], xyz[ok]
     if t.size == 0:
         return float("nan")
     second = np.floor(t - t[0]).astype(np.int64)

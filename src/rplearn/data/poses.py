@@ -13,13 +13,14 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import pandas as pd
 
 from rplearn._argtypes import check_types
 from rplearn.core.geometry import slerp_wxyz
-from rplearn.data.tables import checked_pose_arrays, count_non_unit_quaternions, quaternion_norms, validate_pose_log
+from rplearn.data.tables import checked_pose_arrays, validate_pose_log
 from rplearn.errors import InputError
 
 #: Status of an interpolated pose: known, outside the log's span, inside a gap of the log.
@@ -167,11 +168,17 @@ class TrackSet(dict[str, PoseTrack]):
         t, pos, quat = columns
         sizes = np.array([r.size for r in rows], np.intp)
         first = np.r_[0, np.cumsum(sizes)].astype(np.intp)
-        every = np.concatenate(rows) if rows else np.zeros(0, np.intp)
-        if every.size == t.size and np.array_equal(every, np.arange(t.size)):  # no row left out: no gather
-            every = slice(None)  # type: ignore[assignment]
+        every: Any = slice(None)  # every row in order (the usual case): no gather
+        if int(first[-1]) != t.shape[0] or any(r.size and (r[0] != a or r[-1] != a + r.size - 1)
+                                               for r, a in zip(rows, first[:-1])):
+            every = np.concatenate(rows) if rows else np.zeros(0, np.intp)
         out = cls()
-        out.t_s = t[every] if offsets_s is None else t[every] + np.repeat(np.asarray(offsets_s, np.float64), sizes)
+        if offsets_s is None:
+            out.t_s = t[every]
+        elif len(set(offsets_s)) == 1:  # one offset (most often none, 0.0): the same sums, no array of them
+            out.t_s = t[every] + float(offsets_s[0])
+        else:
+            out.t_s = t[every] + np.repeat(np.asarray(offsets_s, np.float64), sizes)
         out.position_xyz = np.ascontiguousarray(pos[every])
         out.quat_wxyz = np.ascontiguousarray(quat[every])
         out.first_row = {}
@@ -256,8 +263,7 @@ def tracks_of_pose_log(
     c = checked_pose_arrays(pose_log, source)
     tracks = _tracks_of_arrays(c.codes, [str(n) for n in c.names], (c.t, c.position_xyz, c.quat_wxyz),
                                clock_offsets_s, (source, max_gap_s))
-    norm = quaternion_norms(c.quat_wxyz)
-    return tracks, c.non_unit + count_non_unit_quaternions(norm[np.isfinite(norm)])
+    return tracks, c.non_unit + c.still_off
 
 
 def _tracks_of_arrays(
@@ -301,13 +307,14 @@ def _pose_changes(position_xyz: np.ndarray, quat_wxyz: np.ndarray) -> np.ndarray
     changed = np.abs(np.diff(position_xyz[:, 0])) > SAME_POSITION_M
     for j in (1, 2):
         changed |= np.abs(np.diff(position_xyz[:, j])) > SAME_POSITION_M
-    q0, q1 = quat_wxyz[:-1], quat_wxyz[1:]
+    rows = np.flatnonzero(~changed)  # the attitude matters only where the position held
+    q0, q1 = quat_wxyz[rows], quat_wxyz[rows + 1]
     minus = np.abs(q1[:, 0] - q0[:, 0])
     plus = np.abs(q1[:, 0] + q0[:, 0])
     for j in (1, 2, 3):  # the largest component of q1 - q0 and of q1 + q0 (sign-insensitive)
         np.maximum(minus, np.abs(q1[:, j] - q0[:, j]), out=minus)
         np.maximum(plus, np.abs(q1[:, j] + q0[:, j]), out=plus)
-    changed |= np.minimum(minus, plus) > SAME_QUATERNION
+    changed[rows] = np.minimum(minus, plus) > SAME_QUATERNION
     return changed
 
 
@@ -319,6 +326,8 @@ def _refuse_moved_station(
     would be lost as pose gaps, or, if the gap were bridged, placed on a line the station
     never travelled)."""
     gaps = np.diff(t_s) > max_gap_s
+    if np.any(changes & ~gaps):
+        return  # the node moves while logged (a change across no gap): a track
     starts = np.r_[0, np.flatnonzero(changes) + 1]
     lengths = np.diff(np.r_[starts, t_s.size])
     if not np.all(gaps[changes]) or np.any(lengths < 2):

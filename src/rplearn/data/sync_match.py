@@ -217,12 +217,17 @@ def matched_frame(
     ``uniques``.
     """
     m, n = idx.size, block.shape[1]
-    if m < n:  # kept rows to the front, row by row through one buffer (idx is increasing)
-        buffer = np.empty(m, np.float64)
+    lo = int(idx[0]) if m else 0  # rows dropped before the first kept one: left where they are
+    moved = np.flatnonzero(idx != np.arange(lo, lo + m))  # kept rows after a hole in between
+    if moved.size:  # those to the front, row by row through one buffer (idx is increasing)
+        j = int(moved[0])
+        buffer = np.empty(m - j, np.float64)
         for row in block:
-            np.take(row, idx, out=buffer)
-            row[:m] = buffer
-    data = block[:, :m] if 2 * m >= n else np.ascontiguousarray(block[:, :m])  # no mostly idle buffer
+            np.take(row, idx[j:], out=buffer)
+            row[lo + j : lo + m] = buffer
+    data = block[:, lo : lo + m]
+    if 2 * m < n:  # no mostly idle buffer
+        data = np.ascontiguousarray(data)
     out = pd.DataFrame(data.T, columns=list(_FLOAT_COLUMNS), copy=False)
     for j, end in enumerate(("tx", "rx")):
         out.insert(1 + j, end, node_column(uniques, node_codes[end][idx], out.index))

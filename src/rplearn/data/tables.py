@@ -81,6 +81,8 @@ def _require_columns(df: pd.DataFrame, columns: Sequence[str], source: str) -> N
 
 def _require_finite(df: pd.DataFrame, columns: Sequence[str], source: str) -> None:
     for c in columns:
+        if df[c].dtype == np.float64 and np.isfinite(np.sum(df[c].to_numpy())):
+            continue  # a finite sum: no NaN and no infinity (an overflow only sends it to the full check)
         values = pd.to_numeric(df[c], errors="coerce").to_numpy(np.float64)
         bad = ~np.isfinite(values)
         if np.any(bad):
@@ -184,7 +186,9 @@ class CheckedPose:
 
     ``names``: the distinct node ids, sorted; ``codes``: each row's node as an index into
     ``names``; ``quat_wxyz`` normalised; ``non_unit``: the rows whose quaternion was not unit
-    (plus the input's count); ``armed``: the optional column as :func:`validate_pose_log` keeps it.
+    (plus the input's count); ``still_off``: those still not unit after normalisation (an
+    overflowing norm; :func:`non_unit_quaternion_rows` of the checked log adds them);
+    ``armed``: the optional column as :func:`validate_pose_log` keeps it.
     """
 
     t: np.ndarray
@@ -193,6 +197,7 @@ class CheckedPose:
     position_xyz: np.ndarray
     quat_wxyz: np.ndarray
     non_unit: int
+    still_off: int = 0
     armed: Any = None
 
 
@@ -223,7 +228,8 @@ def checked_pose_arrays(df: pd.DataFrame, source: str = "pose log") -> CheckedPo
     if np.any(empty):
         row = int(np.flatnonzero(empty)[0])
         raise InputError(f"{source}: column node is empty at row {row} (every pose row needs its node id)")
-    in_order = _in_node_time_order(codes, t)
+    step, dt = np.diff(codes), np.diff(t)  # t is finite: dt == 0 where equal, dt >= 0 where in order
+    in_order = bool(np.all((step > 0) | ((step == 0) & (dt >= 0))))  # np.lexsort((t, codes)) is the identity
     order = np.arange(0) if in_order else np.lexsort((t, codes))  # stable: by node id, then time
     take = slice(None) if in_order else order
     q = df[["qw", "qx", "qy", "qz"]].to_numpy(np.float64)[take]
@@ -233,8 +239,14 @@ def checked_pose_arrays(df: pd.DataFrame, source: str = "pose log") -> CheckedPo
         raise InputError(f"{source}: quaternion (qw, qx, qy, qz) has zero norm at row {row}")
     non_unit = count_non_unit_quaternions(norm) + int(df.attrs.get(NON_UNIT_QUATERNION_ATTR, 0))
     q = q / norm[:, None]
+    # q / norm is unit to a few ulp wherever the norm is finite (and, here, at least 1e-6): only an
+    # overflowing norm leaves rows that are not
+    still_off = 0 if np.isfinite(np.sum(norm)) else _non_unit_finite(quaternion_norms(q))
     sorted_codes, ts = codes[take], t[take]
-    dup = (sorted_codes[1:] == sorted_codes[:-1]) & (ts[1:] == ts[:-1])
+    if in_order:
+        dup = (step == 0) & (dt == 0)
+    else:
+        dup = (sorted_codes[1:] == sorted_codes[:-1]) & (ts[1:] == ts[:-1])
     if np.any(dup):
         i = int(np.flatnonzero(dup)[0]) + 1
         raise InputError(
@@ -251,16 +263,7 @@ def checked_pose_arrays(df: pd.DataFrame, source: str = "pose log") -> CheckedPo
         except (TypeError, ValueError):
             raise InputError(f"{source}: column armed: expected true/false (or 1/0) values") from None
         armed = flags.astype(bool) if not pd.isna(flags).any() else pd.array(flags, dtype="boolean")
-    return CheckedPose(ts, sorted_codes, names, position, q, non_unit, armed)
-
-
-def _in_node_time_order(codes: np.ndarray, t: np.ndarray) -> bool:
-    """Whether rows are sorted by (node code, time) already, i.e. ``np.lexsort((t, codes))`` is
-    the identity (ties of both keep their order)."""
-    if codes.size < 2:
-        return True
-    step = codes[1:] - codes[:-1]
-    return bool(np.all((step > 0) | ((step == 0) & (t[1:] >= t[:-1]))))
+    return CheckedPose(ts, sorted_codes, names, position, q, non_unit, still_off, armed)
 
 
 def count_non_unit_quaternions(norm: np.ndarray, tolerance: float = QUATERNION_NORM_TOLERANCE) -> int:
@@ -283,8 +286,12 @@ def non_unit_quaternion_rows(pose_log: pd.DataFrame) -> int:
     of ``pose_log`` itself that are still not unit (a log that was never validated).
     """
     q = pose_log[["qw", "qx", "qy", "qz"]].to_numpy(np.float64)
-    norm = quaternion_norms(q)
-    return int(pose_log.attrs.get(NON_UNIT_QUATERNION_ATTR, 0)) + count_non_unit_quaternions(norm[np.isfinite(norm)])
+    return int(pose_log.attrs.get(NON_UNIT_QUATERNION_ATTR, 0)) + _non_unit_finite(quaternion_norms(q))
+
+
+def _non_unit_finite(norm: np.ndarray) -> int:
+    """:func:`count_non_unit_quaternions` of the finite ``norm`` values."""
+    return count_non_unit_quaternions(norm[np.isfinite(norm)])
 
 
 #: Plausible transmit powers [dBm] (the row ``tx_power_dbm`` of :data:`rplearn.core.plausible.PLAUSIBLE`).
