@@ -114,7 +114,15 @@ def _link_codes(signal: pd.DataFrame, cells: Mapping[str, Factorized] | None = N
     cells = cells or {}
     tx, tx_names = _distinct(signal["tx"], "", cells.get("tx"))
     rx, rx_names = _distinct(signal["rx"], "", cells.get("rx"))
-    codes, pairs = pd.factorize(tx.astype(np.int64) * (len(rx_names) + 1) + rx)
+    key = tx.astype(np.int64) * (len(rx_names) + 1) + rx
+    size = len(tx_names) * (len(rx_names) + 1)
+    if size <= key.size + 4096:  # a table of every possible pair: links numbered by key (any numbering will do)
+        pairs = np.flatnonzero(np.bincount(key, minlength=size))
+        lookup = np.zeros(size, np.intp)
+        lookup[pairs] = np.arange(pairs.size)
+        codes = lookup[key]
+    else:
+        codes, pairs = pd.factorize(key)
     names = [f"{tx_names[p // (len(rx_names) + 1)]}\x00{rx_names[p % (len(rx_names) + 1)]}" for p in pairs]
     return codes, names
 

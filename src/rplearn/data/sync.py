@@ -391,8 +391,8 @@ def _match_chunk(
 
     def drop(mask: np.ndarray, reason: str) -> None:
         hit = mask & keep
-        summary.dropped[reason] += int(hit.sum())
-        keep[hit] = False
+        summary.dropped[reason] += int(np.count_nonzero(hit))
+        np.bitwise_xor(keep, hit, out=keep)  # hit is within keep: its rows go
 
     drop(duplicate_rows(signal) | (False if seen_before is None else seen_before), "duplicate")
     empty = empty_ids(uniques)

@@ -204,9 +204,14 @@ class CheckedPose:
 def quaternion_norms(q: np.ndarray) -> np.ndarray:
     """``numpy.linalg.norm(q, axis=1)`` of quaternions ``q`` (n, 4), bit for bit (its order of
     summation, ``((s0 + s1) + s2) + s3``), one component at a time."""
-    norm = q[:, 0] * q[:, 0]
+    return _norms_of_columns([q[:, j] for j in range(4)])
+
+
+def _norms_of_columns(q: Sequence[np.ndarray]) -> np.ndarray:
+    """:func:`quaternion_norms` of the quaternions whose components are the arrays ``q``."""
+    norm = q[0] * q[0]
     for j in range(1, 4):
-        norm += q[:, j] * q[:, j]
+        norm += q[j] * q[j]
     return np.sqrt(norm, out=norm)
 
 
@@ -232,13 +237,15 @@ def checked_pose_arrays(df: pd.DataFrame, source: str = "pose log") -> CheckedPo
     in_order = bool(np.all((step > 0) | ((step == 0) & (dt >= 0))))  # np.lexsort((t, codes)) is the identity
     order = np.arange(0) if in_order else np.lexsort((t, codes))  # stable: by node id, then time
     take = slice(None) if in_order else order
-    q = df[["qw", "qx", "qy", "qz"]].to_numpy(np.float64)[take]
-    norm = quaternion_norms(q)
+    components = [df[c].to_numpy(np.float64)[take] for c in ("qw", "qx", "qy", "qz")]  # no copy when in order
+    norm = _norms_of_columns(components)
     if np.any(norm < 1e-6):
         row = int(np.flatnonzero(norm < 1e-6)[0]) if in_order else int(order[np.flatnonzero(norm < 1e-6)[0]])
         raise InputError(f"{source}: quaternion (qw, qx, qy, qz) has zero norm at row {row}")
     non_unit = count_non_unit_quaternions(norm) + int(df.attrs.get(NON_UNIT_QUATERNION_ATTR, 0))
-    q = q / norm[:, None]
+    q = np.empty((t.size, 4))
+    for j, component in enumerate(components):
+        np.divide(component, norm, out=q[:, j])
     # q / norm is unit to a few ulp wherever the norm is finite (and, here, at least 1e-6): only an
     # overflowing norm leaves rows that are not
     still_off = 0 if np.isfinite(np.sum(norm)) else _non_unit_finite(quaternion_norms(q))
