@@ -196,6 +196,9 @@ def repeated_reading_mask(
         rows = order[s:e]
         name = names[codes[rows[0]]]
         tr = t[rows]
+        if carry is None and _too_few_close_pairs(tr, fraction):  # no period needed
+            links.append((rows, name, tr, float("nan"), None, None))
+            continue
         period = report_period_s(tr)
         before = carry.get(name) if carry is not None else None
         if before is not None:
@@ -226,6 +229,31 @@ def repeated_reading_mask(
                 h = lead[0] if lead and last == 0 else hashes[rows[last - len(lead)]]
                 carry[name] = (float(tr[last]), int(h), period)
     return mask
+
+
+def _too_few_close_pairs(t_s: np.ndarray, fraction: float) -> bool:
+    """Whether a link (times ``t_s`` in time order, NaN last) certainly has fewer than
+    :data:`REPEAT_MIN_SHARE` close pairs, without its report period's two partial sorts.
+
+    The period (:func:`report_period_s`) is the median of the intervals ``d`` from a quarter of
+    their 75th percentile up: of at least the top quarter of ``d``, so at most the value of rank
+    ``0.875 n + 1`` of ``d``. Twice the mean interval bounds it whenever 90% of ``d`` lie below
+    that; then the pairs closer than ``fraction`` times that bound are at least the close pairs.
+    """
+    t = t_s[np.isfinite(t_s)]
+    if not np.all(t[1:] >= t[:-1]):
+        t = np.sort(t)
+    d = np.diff(t)
+    d = d[d > 0]
+    if d.size == 0:
+        return True  # no period: no pair is compared
+    bound = 2.0 * float(np.mean(d))
+    if not np.count_nonzero(d <= bound) >= 0.9 * d.size + 2:
+        return False
+    with np.errstate(invalid="ignore"):
+        dt = np.diff(t_s)
+        close = np.count_nonzero((dt >= 0) & (dt <= fraction * bound))
+    return close < REPEAT_MIN_SHARE * dt.size
 
 
 def _hashes_needed(signal: pd.DataFrame, links: list, last_rows: bool) -> np.ndarray:

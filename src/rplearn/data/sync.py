@@ -522,7 +522,7 @@ def synchronise(
     if options.link is not None:
         check_link_nodes(signal_log, options.link, source)
     signal_log, events = split_outages(signal_log, source)
-    result = _match_chunk(tracks, signal_log, options, source, phases=phases, carry={})
+    result = _match_chunk(tracks, signal_log, options, source, phases=phases)  # one chunk: nothing to carry
     result.summary.non_unit_quaternions = non_unit
     finish_summary(result.summary, tracks, phases, options, source)
     if len(events):  # outage events (a lost link): matched apart, kept, counted
