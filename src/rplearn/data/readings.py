@@ -96,6 +96,9 @@ def value_hashes(signal: pd.DataFrame) -> np.ndarray:
 
 #: ``pd.factorize(column, use_na_sentinel=True)`` of a column: (codes, distinct cells).
 Factorized = tuple[np.ndarray, Any]
+#: One link in :func:`repeated_reading_mask`: its rows in time order, name, times [s] (after the
+#: carried row, if any), report period [s], carried row, close pairs (None: none to compare).
+_Link = tuple[np.ndarray, str, np.ndarray, float, "tuple[float, int, float] | None", "np.ndarray | None"]
 
 
 def _distinct(col: pd.Series, missing: str, factorized: Factorized | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -191,7 +194,7 @@ def repeated_reading_mask(
     order = _by_link_in_time_order(t, codes)
     starts = np.flatnonzero(np.r_[True, codes[order][1:] != codes[order][:-1]])
     ends = np.r_[starts[1:], n]
-    links = []
+    links: list[_Link] = []
     for s, e in zip(starts, ends):  # first pass: times, periods and close pairs
         rows = order[s:e]
         name = names[codes[rows[0]]]
@@ -215,8 +218,7 @@ def repeated_reading_mask(
         links.append((rows, name, tr, period, before, close))
     hashes = _hashes_needed(signal, links, carry is not None)
     for rows, name, tr, period, before, close in links:  # second pass: equal values
-        lead = [] if before is None else [np.uint64(before[1])]
-        hr = None
+        lead: list[np.uint64] = [] if before is None else [np.uint64(before[1])]
         if close is not None:
             hr = np.r_[lead, hashes[rows]].astype(np.uint64) if lead else hashes[rows]
             same = close & (hr[1:] == hr[:-1])
@@ -253,10 +255,10 @@ def _too_few_close_pairs(t_s: np.ndarray, fraction: float) -> bool:
     with np.errstate(invalid="ignore"):
         dt = np.diff(t_s)
         close = np.count_nonzero((dt >= 0) & (dt <= fraction * bound))
-    return close < REPEAT_MIN_SHARE * dt.size
+    return bool(close < REPEAT_MIN_SHARE * dt.size)
 
 
-def _hashes_needed(signal: pd.DataFrame, links: list, last_rows: bool) -> np.ndarray:
+def _hashes_needed(signal: pd.DataFrame, links: list[_Link], last_rows: bool) -> np.ndarray:
     """:func:`value_hashes` of the rows the links compare (those of close pairs) and, with
     ``last_rows``, each link's last row of finite time; zero elsewhere."""
     need = [rows for rows, _, _, _, _, close in links if close is not None]
