@@ -7,9 +7,9 @@ import pandas as pd
 import pytest
 
 from rplearn.core.geometry import slerp_wxyz
-from rplearn.data.poses import PoseTrack, interpolate_nodes
+from rplearn.data.poses import PoseTrack, TrackSet, interpolate_nodes
 from rplearn.data.readings import _distinct
-from rplearn.data.sync_match import float_block, interpolate_end, node_codes, slerp_into
+from rplearn.data.sync_match import float_block, interpolate_end, node_codes, pose_before, slerp_into
 from rplearn.data.tables import empty_ids, node_ids
 
 ODD_IDS = [
@@ -82,3 +82,16 @@ def test_slerp_into_equals_slerp_wxyz_bit_for_bit(m: int) -> None:
     slerp_into(q0, q1, fraction, out)
     want = slerp_wxyz(q0, q1, fraction)
     assert out.T.tobytes() == np.ascontiguousarray(want).tobytes()
+
+
+@pytest.mark.parametrize("start_s", [0.0, 1.7e9])
+def test_pose_before_is_the_clipped_searchsorted(start_s: float) -> None:
+    rng = np.random.default_rng(5)
+    tk = np.cumsum(rng.uniform(1e-3, 0.05, 3000)) + start_s  # just below a pose time, interp rounds up
+    store = TrackSet.of({"Z": PoseTrack("Z", np.array([0.0]), np.zeros((1, 3)), np.array([[1.0, 0, 0, 0]])),
+                         "A": PoseTrack("A", tk, rng.normal(size=(tk.size, 3)), np.tile([1.0, 0, 0, 0], (tk.size, 1)))})
+    t = np.r_[rng.uniform(tk[0] - 1, tk[-1] + 1, 20000), tk, np.nextafter(tk, -np.inf), np.nextafter(tk, np.inf),
+              -np.inf, np.inf]
+    for times in (t, np.sort(t)):
+        want = np.clip(np.searchsorted(tk, times, side="right") - 1, 0, tk.size - 2) + store.first_row["A"]
+        np.testing.assert_array_equal(pose_before(store, "A", times), want)

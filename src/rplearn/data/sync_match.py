@@ -89,11 +89,7 @@ def interpolate_end(
             static.append((track, sel))
             continue
         tk = track.t_s
-        i = np.searchsorted(tk, t_s[sel], side="right")
-        i -= 1
-        np.clip(i, 0, tk.shape[0] - 2, out=i)
-        i += store.first_row[node]
-        before[sel] = i
+        before[sel] = pose_before(store, node, t_s[sel])
         which[code] = len(spans)
         spans.append((float(tk[0]), float(tk[-1]), track.still))
     if spans:
@@ -106,6 +102,26 @@ def interpolate_end(
         pose[:, ~covered] = np.nan
         status[~covered] = 0
     return status
+
+
+def pose_before(store: TrackSet, node: str, t_s: np.ndarray) -> np.ndarray:
+    """Store row of the pose before each time ``t_s`` [s] of a ``node`` of two poses or more:
+    ``np.clip(np.searchsorted(tk, t_s, side="right") - 1, 0, len(tk) - 2)`` plus the node's first
+    store row, as :meth:`PoseTrack.brackets <rplearn.data.poses.PoseTrack.brackets>` finds it.
+
+    ``numpy.interp`` of the store rows at the node's times (its search starts from the last
+    interval found, so times in order cost no binary search) lands on that row or, rounded up,
+    on the next one; one comparison with the pose time puts it back.
+    """
+    track = store[node]
+    first = store.first_row[node]
+    last = first + track.t_s.shape[0] - 1
+    rows = np.interp(t_s, track.t_s, np.arange(first, last + 1, dtype=np.float64))
+    i = rows.astype(np.intp)  # rows >= first >= 0: the floor (NaN: anything, clipped)
+    np.clip(i, first, last, out=i)
+    i -= store.t_s[i] > t_s  # rounded up past the time (or before the first pose)
+    np.clip(i, first, last - 1, out=i)
+    return i
 
 
 def _interpolate_rows(
