@@ -233,8 +233,9 @@ def matched_frame(
     """
     m, n = idx.size, block.shape[1]
     lo = int(idx[0]) if m else 0  # rows dropped before the first kept one: left where they are
-    moved = np.flatnonzero(idx != np.arange(lo, lo + m))  # kept rows after a hole in between
-    if moved.size:  # those to the front, row by row through one buffer (idx is increasing)
+    holes = m > 0 and int(idx[-1]) != lo + m - 1  # idx is increasing: a hole in between, or none
+    moved = np.flatnonzero(idx != np.arange(lo, lo + m)) if holes else np.zeros(0, np.intp)
+    if moved.size:  # the kept rows after the first hole to the front, row by row through one buffer
         j = int(moved[0])
         buffer = np.empty(m - j, np.float64)
         for row in block:

@@ -137,7 +137,8 @@ def node_id_codes(
     codes, uniques = factorized if factorized is not None else pd.factorize(values, use_na_sentinel=True)  # missing: -1
     text = np.append(node_ids(pd.Series(uniques)), np.array([""], dtype=object))
     merged, ids = pd.factorize(text, sort=sort)  # distinct cells with the same text are one node
-    return merged[np.where(codes < 0, text.size - 1, codes)], np.asarray(ids, dtype=object)
+    missing = codes.size > 0 and int(codes.min()) < 0
+    return merged[np.where(codes < 0, text.size - 1, codes) if missing else codes], np.asarray(ids, dtype=object)
 
 
 def empty_ids(ids: np.ndarray) -> np.ndarray:
