@@ -105,3 +105,37 @@ def test_sync_merges_repeats_counted_by_name_and_streams_alike():
     assert total.dropped == one.summary.dropped
     kept = synchronise(pose, sig, SyncOptions(repeat_fraction=0))
     assert kept.summary.n_out == len(sig)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_links_without_close_pairs_skip_the_period_and_mark_the_same_rows(seed):
+    """Without a carry a link whose intervals bound its period by twice their mean, with too few
+    pairs closer than that, skips its report period (issue 30): the mask is the full rule's."""
+    rng = np.random.default_rng(seed)
+    parts = []
+    for k, (kind, n) in enumerate([("steady", 4000), ("doubled", 600), ("poisson", 3000), ("gappy", 2000),
+                                   ("bursts", 1500), ("tripled", 900), ("few", 3)]):
+        if kind == "steady":
+            t = np.arange(n) / 80.0 + rng.uniform(0, 0.002, n)
+        elif kind == "doubled":
+            base = np.cumsum(rng.uniform(0.9, 1.1, n // 2))
+            t = np.sort(np.r_[base, base + rng.uniform(0.002, 0.006, n // 2)])
+        elif kind == "poisson":
+            t = np.cumsum(rng.exponential(0.01, n))
+        elif kind == "gappy":  # long silences: the mean is no bound on the period
+            t = np.cumsum(np.where(rng.uniform(size=n) < 0.15, rng.uniform(5, 50, n), 0.01))
+        elif kind == "bursts":  # pairs close together, a third of them
+            t = np.cumsum(np.where(rng.uniform(size=n) < 0.33, 0.0005, rng.uniform(0.009, 0.011, n)))
+        elif kind == "tripled":  # three copies 80 ms apart: twice the mean interval is below the period
+            t = np.repeat(np.arange(n // 3, dtype=float), 3) + np.tile([0.0, 0.08, 0.16], n // 3)
+        else:
+            t = np.array([0.0, 1.0, 1.0004])
+        rssi = rng.choice([-70.0, -71.0], t.size) if seed % 2 and kind not in ("doubled", "tripled") else np.full(t.size, -70.0)
+        parts.append(pd.DataFrame({"t": t, "tx": f"T{k}", "rx": "R", "rssi_dbm": rssi, "tx_power_dbm": 20.0,
+                                   "frequency_hz": 2.4e9}))
+    sig = pd.concat(parts, ignore_index=True)
+    sig.loc[rng.choice(len(sig), 5, replace=False), "t"] = np.nan
+    for fraction in (0.1, 0.5):
+        full = repeated_readings(sig, fraction, carry={})  # with a carry: every period computed
+        assert np.array_equal(repeated_readings(sig, fraction), full)
+    assert repeated_readings(sig, 0.5).any()  # the rule does find repeats here

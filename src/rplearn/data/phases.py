@@ -98,8 +98,9 @@ def takeoff_altitude_m(t_s: np.ndarray, position_xyz: np.ndarray) -> float:
     """
     t = np.asarray(t_s, np.float64)
     xyz = np.asarray(position_xyz, np.float64)
-    ok = np.isfinite(t) & np.isfinite(xyz).all(axis=1)
-    t, xyz = t[ok], xyz[ok]
+    if not (np.isfinite(np.sum(t)) and np.isfinite(np.sum(xyz))):  # a finite sum: every value finite
+        ok = np.isfinite(t) & np.isfinite(xyz).all(axis=1)
+        t, xyz = t[ok], xyz[ok]
     if t.size == 0:
         return float("nan")
     second = np.floor(t - t[0]).astype(np.int64)
@@ -170,17 +171,23 @@ class FlightPhases:
         not airborne (every row when the log has no vehicle)."""
         n = len(t_s)
         disarmed = np.zeros(n, bool)
-        ground = np.zeros(n, bool) if self.vehicles else np.asarray(rows, bool).copy()
-        for c, node in enumerate(node_ids):
-            node = str(node)
-            if node not in self.vehicles:
-                continue
-            sel = np.flatnonzero((code == c) & rows)
-            if sel.size:
-                disarmed[sel] = ~self.armed_at(node, t_s[sel])
-                if np.isfinite(self.takeoff_m[node]):  # else never still: airborne throughout
-                    with np.errstate(invalid="ignore"):
-                        ground[sel] = ~(z_m[sel] - self.takeoff_m[node] > self.margin_m)
+        if not self.vehicles:
+            return disarmed, np.asarray(rows, bool).copy()
+        names = [str(node) for node in node_ids]
+        for c, node in enumerate(names):  # the vehicles whose log says when they were armed
+            if node in self.vehicles and node in self.armed:
+                sel = np.flatnonzero((code == c) & rows)
+                if sel.size:
+                    disarmed[sel] = ~self.armed_at(node, t_s[sel])
+        # a vehicle that never holds still has no take-off altitude (NaN): airborne throughout
+        takeoff = np.array([self.takeoff_m[node] if node in self.vehicles else np.nan for node in names], np.float64)
+        if not np.isfinite(takeoff).any():
+            return disarmed, np.zeros(n, bool)
+        at = takeoff[code]
+        with np.errstate(invalid="ignore"):
+            ground = ~(z_m - at > self.margin_m)
+        ground &= rows
+        ground &= np.isfinite(at)
         return disarmed, ground
 
     def describe(self) -> str:

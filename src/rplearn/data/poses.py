@@ -13,13 +13,14 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import pandas as pd
 
 from rplearn._argtypes import check_types
 from rplearn.core.geometry import slerp_wxyz
-from rplearn.data.tables import validate_pose_log
+from rplearn.data.tables import checked_pose_arrays, validate_pose_log
 from rplearn.errors import InputError
 
 #: Status of an interpolated pose: known, outside the log's span, inside a gap of the log.
@@ -129,6 +130,81 @@ class PoseTrack:
         return i, frac, status
 
 
+class TrackSet(dict[str, PoseTrack]):
+    """Pose tracks by node id (a ``dict``) whose arrays are views of one store: the times,
+    positions and quaternions of every node back to back, node after node (issue 30: many
+    nodes' poses are then interpolated in one pass, without a copy per node or per call).
+
+    Attributes
+    ----------
+    t_s : ndarray (n,)
+        Times of all tracks [s, common clock].
+    position_xyz : ndarray (n, 3)
+        ENU positions [m].
+    quat_wxyz : ndarray (n, 4)
+        Quaternions (w, x, y, z).
+    first_row : dict of str to int
+        Row of each node's first pose in the store.
+    """
+
+    __slots__ = ("first_row", "position_xyz", "quat_wxyz", "t_s")
+    t_s: np.ndarray
+    position_xyz: np.ndarray
+    quat_wxyz: np.ndarray
+    first_row: dict[str, int]
+
+    @classmethod
+    def of_rows(
+        cls,
+        names: Sequence[str],
+        rows: Sequence[np.ndarray],
+        still: Sequence[bool],
+        columns: tuple[np.ndarray, np.ndarray, np.ndarray],
+        offsets_s: Sequence[float] | None,
+    ) -> TrackSet:
+        """Tracks of nodes ``names``, each of rows ``rows[k]`` of ``columns`` = (times [s],
+        positions (n, 3) [m], quaternions (n, 4)), its times plus ``offsets_s[k]`` [s] (none added
+        when None)."""
+        t, pos, quat = columns
+        sizes = np.array([r.size for r in rows], np.intp)
+        first = np.r_[0, np.cumsum(sizes)].astype(np.intp)
+        every: Any = slice(None)  # every row in order (the usual case): no gather
+        if int(first[-1]) != t.shape[0] or any(r.size and (r[0] != a or r[-1] != a + r.size - 1)
+                                               for r, a in zip(rows, first[:-1])):
+            every = np.concatenate(rows) if rows else np.zeros(0, np.intp)
+        out = cls()
+        if offsets_s is None:
+            out.t_s = t[every]
+        elif len(set(offsets_s)) == 1:  # one offset (most often none, 0.0): the same sums, no array of them
+            out.t_s = t[every] + float(offsets_s[0])
+        else:
+            out.t_s = t[every] + np.repeat(np.asarray(offsets_s, np.float64), sizes)
+        out.position_xyz = np.ascontiguousarray(pos[every])
+        out.quat_wxyz = np.ascontiguousarray(quat[every])
+        out.first_row = {}
+        for k, node in enumerate(names):
+            a, b = int(first[k]), int(first[k + 1])
+            out.first_row[node] = a
+            out[node] = PoseTrack(node, out.t_s[a:b], out.position_xyz[a:b], out.quat_wxyz[a:b], bool(still[k]))
+        return out
+
+    @classmethod
+    def of(cls, tracks: Mapping[str, PoseTrack]) -> TrackSet:
+        """``tracks`` itself when it is a :class:`TrackSet`, else one with the same tracks (copied)."""
+        if isinstance(tracks, TrackSet):
+            return tracks
+        items = list(tracks.items())
+        columns = tuple(np.concatenate([getattr(tr, f) for _, tr in items]) if items else np.zeros((0, w))
+                        for f, w in (("t_s", 0), ("position_xyz", 3), ("quat_wxyz", 4)))
+        columns = (columns[0].reshape(-1), columns[1].reshape(-1, 3), columns[2].reshape(-1, 4))
+        sizes = np.cumsum([0] + [tr.t_s.shape[0] for _, tr in items])
+        rows = [np.arange(sizes[k], sizes[k + 1]) for k in range(len(items))]
+        out = cls.of_rows([n for n, _ in items], rows, [tr.still for _, tr in items], columns, None)
+        for node, tr in items:  # the given objects themselves
+            out[node] = tr
+        return out
+
+
 @check_types
 def pose_tracks(
     pose_log: pd.DataFrame,
@@ -154,7 +230,7 @@ def pose_tracks(
 
 def tracks_of_checked_log(
     df: pd.DataFrame, clock_offsets_s: Mapping[str, float] | None, source: str, max_gap_s: float | None = None,
-) -> dict[str, PoseTrack]:
+) -> TrackSet:
     """:func:`pose_tracks` of a pose log already checked (and sorted) by :func:`validate_pose_log`.
 
     Parameters
@@ -169,32 +245,52 @@ def tracks_of_checked_log(
         When ``clock_offsets_s`` names a node without a pose log (``param="clock_offsets_s"``),
         or for a station moved between flights.
     """
-    offsets = dict(clock_offsets_s or {})
-    tracks: dict[str, PoseTrack] = {}
-    nodes = df["node"].array
-    codes = pd.factorize(nodes)[0]  # equal ids, equal codes (no text object per row)
+    codes, uniques = pd.factorize(df["node"].array)  # equal ids, equal codes (no text object per row)
     t = df["t"].to_numpy(np.float64)
     pos = df[["x", "y", "z"]].to_numpy(np.float64)
     quat = df[["qw", "qx", "qy", "qz"]].to_numpy(np.float64)
-    # df is sorted by (node, t): nodes are contiguous runs
-    starts = np.flatnonzero(np.r_[True, codes[1:] != codes[:-1]])
-    ends = np.r_[starts[1:], len(nodes)]
-    for s, e in zip(starts, ends):
-        node = str(nodes[s])
+    return _tracks_of_arrays(codes, [str(u) for u in uniques], (t, pos, quat), clock_offsets_s, (source, max_gap_s))
+
+
+def tracks_of_pose_log(
+    pose_log: pd.DataFrame, clock_offsets_s: Mapping[str, float] | None, source: str, max_gap_s: float | None = None,
+) -> tuple[TrackSet, int]:
+    """``tracks_of_checked_log(validate_pose_log(pose_log))`` and the
+    :func:`~rplearn.data.tables.non_unit_quaternion_rows` of the checked log, from the checked
+    arrays (:func:`~rplearn.data.tables.checked_pose_arrays`), without the checked log as a
+    DataFrame: the same tracks and count, the same errors.
+    """
+    c = checked_pose_arrays(pose_log, source)
+    tracks = _tracks_of_arrays(c.codes, [str(n) for n in c.names], (c.t, c.position_xyz, c.quat_wxyz),
+                               clock_offsets_s, (source, max_gap_s))
+    return tracks, c.non_unit + c.still_off
+
+
+def _tracks_of_arrays(
+    codes: np.ndarray,
+    names: Sequence[str],
+    columns: tuple[np.ndarray, np.ndarray, np.ndarray],
+    clock_offsets_s: Mapping[str, float] | None,
+    where: tuple[str, float | None],
+) -> TrackSet:
+    """The tracks of a checked pose log's arrays, sorted by (node, t): node codes into ``names``,
+    (times [s], positions (n, 3) [m], quaternions (n, 4)); ``where``: (source, max_gap_s)."""
+    source, max_gap_s = where
+    offsets = dict(clock_offsets_s or {})
+    t, pos, quat = columns
+    # sorted by (node, t): nodes are contiguous runs
+    starts = np.flatnonzero(np.r_[True, codes[1:] != codes[:-1]]) if codes.size else np.zeros(0, np.intp)
+    ends = np.r_[starts[1:], codes.size]
+    run_names = [names[codes[s]] for s in starts]
+    rows: list[np.ndarray] = []
+    still: list[bool] = []
+    for node, s, e in zip(run_names, starts, ends):
         changes = _pose_changes(pos[s:e], quat[s:e])
-        rows = np.arange(s, e)
-        still = bool(e - s > 1 and not changes.any())
-        if still:
-            rows = np.array([s, e - 1])  # identical rows: the pose holds over the log's span
-        elif changes.any() and max_gap_s is not None:
+        still.append(bool(e - s > 1 and not changes.any()))
+        if changes.any() and max_gap_s is not None:
             _refuse_moved_station(node, t[s:e], pos[s:e], changes, float(max_gap_s), source)
-        tracks[node] = PoseTrack(
-            node,
-            t[rows] + float(offsets.get(node, 0.0)),
-            np.ascontiguousarray(pos[rows]),
-            np.ascontiguousarray(quat[rows]),
-            still,
-        )
+        rows.append(np.array([s, e - 1]) if still[-1] else np.arange(s, e))  # identical rows: the pose holds
+    tracks = TrackSet.of_rows(run_names, rows, still, (t, pos, quat), [float(offsets.get(n, 0.0)) for n in run_names])
     unknown = sorted(set(offsets) - set(tracks))
     if unknown:
         raise InputError(
@@ -206,11 +302,20 @@ def tracks_of_checked_log(
 
 
 def _pose_changes(position_xyz: np.ndarray, quat_wxyz: np.ndarray) -> np.ndarray:
-    """For each row after the first: whether its pose differs from the row before."""
-    moved = np.any(np.abs(np.diff(position_xyz, axis=0)) > SAME_POSITION_M, axis=1)
-    q0, q1 = quat_wxyz[:-1], quat_wxyz[1:]
-    turned = np.minimum(np.abs(q1 - q0).max(axis=1), np.abs(q1 + q0).max(axis=1)) > SAME_QUATERNION
-    return moved | turned
+    """For each row after the first: whether its pose differs from the row before (one
+    component at a time: no reduction along rows of three or four)."""
+    changed = np.abs(np.diff(position_xyz[:, 0])) > SAME_POSITION_M
+    for j in (1, 2):
+        changed |= np.abs(np.diff(position_xyz[:, j])) > SAME_POSITION_M
+    rows = np.flatnonzero(~changed)  # the attitude matters only where the position held
+    q0, q1 = quat_wxyz[rows], quat_wxyz[rows + 1]
+    minus = np.abs(q1[:, 0] - q0[:, 0])
+    plus = np.abs(q1[:, 0] + q0[:, 0])
+    for j in (1, 2, 3):  # the largest component of q1 - q0 and of q1 + q0 (sign-insensitive)
+        np.maximum(minus, np.abs(q1[:, j] - q0[:, j]), out=minus)
+        np.maximum(plus, np.abs(q1[:, j] + q0[:, j]), out=plus)
+    changed[rows] = np.minimum(minus, plus) > SAME_QUATERNION
+    return changed
 
 
 def _refuse_moved_station(
@@ -221,6 +326,8 @@ def _refuse_moved_station(
     would be lost as pose gaps, or, if the gap were bridged, placed on a line the station
     never travelled)."""
     gaps = np.diff(t_s) > max_gap_s
+    if np.any(changes & ~gaps):
+        return  # the node moves while logged (a change across no gap): a track
     starts = np.r_[0, np.flatnonzero(changes) + 1]
     lengths = np.diff(np.r_[starts, t_s.size])
     if not np.all(gaps[changes]) or np.any(lengths < 2):
@@ -271,6 +378,8 @@ __all__ = [
     "STATUS_POSE_GAP",
     "PoseTrack",
     "interpolate_nodes",
+    "TrackSet",
     "pose_tracks",
     "tracks_of_checked_log",
+    "tracks_of_pose_log",
 ]

@@ -27,7 +27,8 @@ chunks is found).
 
 from __future__ import annotations
 
-from collections.abc import MutableMapping
+from collections.abc import Mapping, MutableMapping
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -93,23 +94,51 @@ def value_hashes(signal: pd.DataFrame) -> np.ndarray:
     return out
 
 
-def _distinct(col: pd.Series, missing: str) -> tuple[np.ndarray, np.ndarray]:
+#: ``pd.factorize(column, use_na_sentinel=True)`` of a column: (codes, distinct cells).
+Factorized = tuple[np.ndarray, Any]
+#: One link in :func:`repeated_reading_mask`: its rows in time order, name, times [s] (after the
+#: carried row, if any), report period [s], carried row, close pairs (None: none to compare).
+_Link = tuple[np.ndarray, str, np.ndarray, float, "tuple[float, int, float] | None", "np.ndarray | None"]
+
+
+def _distinct(col: pd.Series, missing: str, factorized: Factorized | None = None) -> tuple[np.ndarray, np.ndarray]:
     """``(codes, values)`` with ``values[codes]`` equal to ``col.to_numpy(dtype=object, na_value=missing)``
-    and ``values`` distinct, without making one object per row."""
-    codes, uniques = pd.factorize(col, use_na_sentinel=True)
+    and ``values`` distinct, without making one object per row (``factorized``: the column's
+    ``pd.factorize``, when already made)."""
+    codes, uniques = factorized if factorized is not None else pd.factorize(col, use_na_sentinel=True)
     values = np.append(np.asarray(uniques, dtype=object), np.array([missing], dtype=object))
     codes = np.where(codes < 0, len(values) - 1, codes)
     merged, distinct = pd.factorize(values)  # a missing cell and the text `missing` are one value
     return merged[codes], np.asarray(distinct, dtype=object)
 
 
-def _link_codes(signal: pd.DataFrame) -> tuple[np.ndarray, list[str]]:
+def _link_codes(signal: pd.DataFrame, cells: Mapping[str, Factorized] | None = None) -> tuple[np.ndarray, list[str]]:
     """Code of each row's directed link and the link names ``"tx\x00rx"``."""
-    tx, tx_names = _distinct(signal["tx"], "")
-    rx, rx_names = _distinct(signal["rx"], "")
-    codes, pairs = pd.factorize(tx.astype(np.int64) * (len(rx_names) + 1) + rx)
+    cells = cells or {}
+    tx, tx_names = _distinct(signal["tx"], "", cells.get("tx"))
+    rx, rx_names = _distinct(signal["rx"], "", cells.get("rx"))
+    key = tx.astype(np.int64) * (len(rx_names) + 1) + rx
+    size = len(tx_names) * (len(rx_names) + 1)
+    if size <= key.size + 4096:  # a table of every possible pair: links numbered by key (any numbering will do)
+        pairs = np.flatnonzero(np.bincount(key, minlength=size))
+        lookup = np.zeros(size, np.intp)
+        lookup[pairs] = np.arange(pairs.size)
+        codes = lookup[key]
+    else:
+        codes, pairs = pd.factorize(key)
     names = [f"{tx_names[p // (len(rx_names) + 1)]}\x00{rx_names[p % (len(rx_names) + 1)]}" for p in pairs]
     return codes, names
+
+
+def _by_link_in_time_order(t: np.ndarray, codes: np.ndarray) -> np.ndarray:
+    """``np.lexsort((t, codes))``: the rows by link, each link's in time order (ties in row order).
+
+    A log already in time order (most are) needs only a stable sort of the small link codes.
+    """
+    if t.size > 1 and bool(np.all(t[1:] >= t[:-1])):  # False with any NaN: then the full sort
+        small = codes.astype(np.min_scalar_type(max(int(codes.max()), 0)))
+        return np.argsort(small, kind="stable")
+    return np.lexsort((t, codes))
 
 
 @check_types
@@ -140,38 +169,109 @@ def repeated_readings(
     ndarray of bool
         True for every copy after the first.
     """
+    return repeated_reading_mask(signal, fraction, t_s, carry)
+
+
+@check_types
+def repeated_reading_mask(
+    signal: pd.DataFrame,
+    fraction: float = REPEAT_FRACTION,
+    t_s: np.ndarray | None = None,
+    carry: MutableMapping[str, tuple[float, int, float]] | None = None,
+    cells: Mapping[str, Factorized] | None = None,
+) -> np.ndarray:
+    """:func:`repeated_readings`, reusing the ``pd.factorize`` of ``tx`` and ``rx`` in ``cells``.
+
+    Rows are hashed (:func:`value_hashes`) only where a link's close pairs could reach
+    :data:`REPEAT_MIN_SHARE`: a row's hash is its own, whichever rows are hashed with it.
+    """
     n = len(signal)
     mask = np.zeros(n, bool)
     if n == 0 or not fraction > 0:
         return mask
     t = np.asarray(t_s if t_s is not None else pd.to_numeric(signal["t"], errors="coerce"), np.float64)
-    codes, names = _link_codes(signal)
-    hashes = value_hashes(signal)
-    order = np.lexsort((t, codes))
+    codes, names = _link_codes(signal, cells)
+    order = _by_link_in_time_order(t, codes)
     starts = np.flatnonzero(np.r_[True, codes[order][1:] != codes[order][:-1]])
     ends = np.r_[starts[1:], n]
-    for s, e in zip(starts, ends):
+    links: list[_Link] = []
+    for s, e in zip(starts, ends):  # first pass: times, periods and close pairs
         rows = order[s:e]
         name = names[codes[rows[0]]]
-        tr, hr = t[rows], hashes[rows]
+        tr = t[rows]
+        if carry is None and _too_few_close_pairs(tr, fraction):  # no period needed
+            links.append((rows, name, tr, float("nan"), None, None))
+            continue
         period = report_period_s(tr)
         before = carry.get(name) if carry is not None else None
         if before is not None:
             if not np.isfinite(period):
                 period = before[2]
-            tr, hr = np.r_[before[0], tr], np.r_[np.uint64(before[1]), hr]
+            tr = np.r_[before[0], tr]
+        close = None
         if np.isfinite(period):
             with np.errstate(invalid="ignore"):
                 dt = np.diff(tr)
-                same = (hr[1:] == hr[:-1]) & (dt >= 0) & (dt <= fraction * period)
+                close = (dt >= 0) & (dt <= fraction * period)
+            if not close.sum() >= REPEAT_MIN_SHARE * close.size:  # fewer equal pairs still
+                close = None
+        links.append((rows, name, tr, period, before, close))
+    hashes = _hashes_needed(signal, links, carry is not None)
+    for rows, name, tr, period, before, close in links:  # second pass: equal values
+        lead: list[np.uint64] = [] if before is None else [np.uint64(before[1])]
+        if close is not None:
+            hr = np.r_[lead, hashes[rows]].astype(np.uint64) if lead else hashes[rows]
+            same = close & (hr[1:] == hr[:-1])
             if same.sum() >= REPEAT_MIN_SHARE * same.size:
                 mask[rows[rows.size - same.size:]] = same
         if carry is not None:
             finite = np.flatnonzero(np.isfinite(tr))
             if finite.size:
-                last = finite[-1]
-                carry[name] = (float(tr[last]), int(hr[last]), period)
+                last = int(finite[-1])
+                h = lead[0] if lead and last == 0 else hashes[rows[last - len(lead)]]
+                carry[name] = (float(tr[last]), int(h), period)
     return mask
+
+
+def _too_few_close_pairs(t_s: np.ndarray, fraction: float) -> bool:
+    """Whether a link (times ``t_s`` in time order, NaN last) certainly has fewer than
+    :data:`REPEAT_MIN_SHARE` close pairs, without its report period's two partial sorts.
+
+    The period (:func:`report_period_s`) is the median of the intervals ``d`` from a quarter of
+    their 75th percentile up: of at least the top quarter of ``d``, so at most the value of rank
+    ``0.875 n + 1`` of ``d``. Twice the mean interval bounds it whenever 90% of ``d`` lie below
+    that; then the pairs closer than ``fraction`` times that bound are at least the close pairs.
+    """
+    t = t_s[np.isfinite(t_s)]
+    if not np.all(t[1:] >= t[:-1]):
+        t = np.sort(t)
+    d = np.diff(t)
+    d = d[d > 0]
+    if d.size == 0:
+        return True  # no period: no pair is compared
+    bound = 2.0 * float(np.mean(d))
+    if not np.count_nonzero(d <= bound) >= 0.9 * d.size + 2:
+        return False
+    with np.errstate(invalid="ignore"):
+        dt = np.diff(t_s)
+        close = np.count_nonzero((dt >= 0) & (dt <= fraction * bound))
+    return bool(close < REPEAT_MIN_SHARE * dt.size)
+
+
+def _hashes_needed(signal: pd.DataFrame, links: list[_Link], last_rows: bool) -> np.ndarray:
+    """:func:`value_hashes` of the rows the links compare (those of close pairs) and, with
+    ``last_rows``, each link's last row of finite time; zero elsewhere."""
+    need = [rows for rows, _, _, _, _, close in links if close is not None]
+    if last_rows:
+        for rows, _, tr, _, before, _ in links:
+            finite = np.flatnonzero(np.isfinite(tr[0 if before is None else 1:]))
+            if finite.size:
+                need.append(rows[finite[-1:]])
+    out = np.zeros(len(signal), np.uint64)
+    if need:
+        rows = np.unique(np.concatenate(need))
+        out[rows] = value_hashes(signal.iloc[rows])
+    return out
 
 
 def duplicate_rows(signal: pd.DataFrame) -> np.ndarray:
@@ -216,4 +316,5 @@ def report_rate_hz(t_s: np.ndarray, repeated: np.ndarray | None = None) -> float
     return float(1.0 / np.median(d)) if d.size else float("nan")
 
 
-__all__ = ["REPEAT_FRACTION", "REPEAT_MIN_SHARE", "duplicate_rows", "repeated_readings", "report_period_s", "report_rate_hz", "value_hashes"]
+__all__ = ["REPEAT_FRACTION", "REPEAT_MIN_SHARE", "duplicate_rows", "repeated_reading_mask", "repeated_readings",
+           "report_period_s", "report_rate_hz", "value_hashes"]

@@ -82,19 +82,10 @@ from rplearn.core.link import FAR_FIELD_WAVELENGTHS, SPEED_OF_LIGHT_M_S
 from rplearn.core.plausible import FREQUENCY_BAND_HZ, check_frequency_hz
 from rplearn.data.outages import match_outages, outage_text, split_outages, with_outages
 from rplearn.data.phases import AIRBORNE_MARGIN_M, WINDOW_CLOCKS, FlightPhases, flight_phases, max_gap_advice, phase_notes, window_mask
-from rplearn.data.poses import STATUS_OUT_OF_SPAN, STATUS_POSE_GAP, PoseTrack, tracks_of_checked_log
-from rplearn.data.readings import REPEAT_FRACTION, duplicate_rows, repeated_readings
-from rplearn.data.sync_match import block_row, float_block, interpolate_end, matched_frame, node_codes
-from rplearn.data.tables import (
-    QUATERNION_NORM_TOLERANCE,
-    SENTINEL_RSSI_DBM,
-    SIGNAL_COLUMNS,
-    check_tx_power_dbm,
-    empty_ids,
-    non_unit_quaternion_rows,
-    normalise_times,
-    validate_pose_log,
-)
+from rplearn.data.poses import STATUS_OUT_OF_SPAN, STATUS_POSE_GAP, PoseTrack, tracks_of_pose_log
+from rplearn.data.readings import REPEAT_FRACTION, duplicate_rows, repeated_reading_mask
+from rplearn.data.sync_match import block_row, factorize_ends, float_block, interpolate_end, matched_frame, node_codes
+from rplearn.data.tables import QUATERNION_NORM_TOLERANCE, SENTINEL_RSSI_DBM, SIGNAL_COLUMNS, check_tx_power_dbm, empty_ids, normalise_times
 from rplearn.errors import InputError
 
 logger = logging.getLogger(__name__)
@@ -388,7 +379,8 @@ def _match_chunk(
             f"{source}: missing column(s) {', '.join(missing)}; expected {', '.join(SIGNAL_COLUMNS)}"
         )
     summary = SyncSummary(n_in=int(len(signal)))
-    tx_code, rx_code, uniques = node_codes(signal["tx"], signal["rx"])  # one text per node, not per row
+    cells = factorize_ends(signal)  # each end's cells factorised once, for the node and the link codes
+    tx_code, rx_code, uniques = node_codes(signal["tx"], signal["rx"], cells)  # one text per node, not per row
     values = {"t": _signal_times(signal, uniques, rx_code, options.signal_clock_offset_s)}
     values.update({c: _numeric(signal, c) for c in ("rssi_dbm", "tx_power_dbm", "frequency_hz")})
     block = float_block(len(signal))  # the matched dataset's float columns, filled in place
@@ -399,8 +391,8 @@ def _match_chunk(
 
     def drop(mask: np.ndarray, reason: str) -> None:
         hit = mask & keep
-        summary.dropped[reason] += int(hit.sum())
-        keep[hit] = False
+        summary.dropped[reason] += int(np.count_nonzero(hit))
+        np.bitwise_xor(keep, hit, out=keep)  # hit is within keep: its rows go
 
     drop(duplicate_rows(signal) | (False if seen_before is None else seen_before), "duplicate")
     empty = empty_ids(uniques)
@@ -418,7 +410,7 @@ def _match_chunk(
     drop(tx_code == rx_code, "tx_equals_rx")
     if options.link is not None:
         drop(~((uniques == options.link[0])[tx_code] & (uniques == options.link[1])[rx_code]), "other_link")
-    drop(repeated_readings(signal, options.repeat_fraction, t, carry), "duplicate_reading")
+    drop(repeated_reading_mask(signal, options.repeat_fraction, t, carry, cells), "duplicate_reading")
     known, unknown, names = _unknown_nodes(tx_code, rx_code, uniques, tracks, keep, options.on_unknown_node, source,
                                            first_row)
     if names:
@@ -525,14 +517,13 @@ def synchronise(
         or fewer than ``min_samples`` matched samples.
     """
     options = _options(options)
-    pose = validate_pose_log(pose_log, "pose log")
-    tracks = tracks_of_checked_log(pose, options.clock_offsets_s, "pose log", options.max_gap_s)
+    tracks, non_unit = tracks_of_pose_log(pose_log, options.clock_offsets_s, "pose log", options.max_gap_s)
     phases = flight_phases(pose_log, tracks, options.clock_offsets_s, options.airborne_margin_m)
     if options.link is not None:
         check_link_nodes(signal_log, options.link, source)
     signal_log, events = split_outages(signal_log, source)
-    result = _match_chunk(tracks, signal_log, options, source, phases=phases, carry={})
-    result.summary.non_unit_quaternions = non_unit_quaternion_rows(pose)
+    result = _match_chunk(tracks, signal_log, options, source, phases=phases)  # one chunk: nothing to carry
+    result.summary.non_unit_quaternions = non_unit
     finish_summary(result.summary, tracks, phases, options, source)
     if len(events):  # outage events (a lost link): matched apart, kept, counted
         origin = phases.start_s if options.window_clock == "start" else 0.0

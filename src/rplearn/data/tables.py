@@ -81,6 +81,8 @@ def _require_columns(df: pd.DataFrame, columns: Sequence[str], source: str) -> N
 
 def _require_finite(df: pd.DataFrame, columns: Sequence[str], source: str) -> None:
     for c in columns:
+        if df[c].dtype == np.float64 and np.isfinite(np.sum(df[c].to_numpy())):
+            continue  # a finite sum: no NaN and no infinity (an overflow only sends it to the full check)
         values = pd.to_numeric(df[c], errors="coerce").to_numpy(np.float64)
         bad = ~np.isfinite(values)
         if np.any(bad):
@@ -126,13 +128,17 @@ def node_ids(values: Any) -> np.ndarray:
     return series.astype(str).to_numpy(dtype=object)
 
 
-def node_id_codes(values: pd.Series, sort: bool = False) -> tuple[np.ndarray, np.ndarray]:
+def node_id_codes(
+    values: pd.Series, sort: bool = False, factorized: tuple[np.ndarray, Any] | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
     """``(codes, ids)``: :func:`node_ids` of ``values`` as ``ids[codes]``, ``ids`` distinct (sorted
-    with ``sort``), the text of each distinct cell made once rather than once per row."""
-    codes, uniques = pd.factorize(values, use_na_sentinel=True)  # a missing cell: -1, then ""
+    with ``sort``), the text of each distinct cell made once rather than once per row
+    (``factorized``: ``pd.factorize(values, use_na_sentinel=True)``, when already made)."""
+    codes, uniques = factorized if factorized is not None else pd.factorize(values, use_na_sentinel=True)  # missing: -1
     text = np.append(node_ids(pd.Series(uniques)), np.array([""], dtype=object))
     merged, ids = pd.factorize(text, sort=sort)  # distinct cells with the same text are one node
-    return merged[np.where(codes < 0, text.size - 1, codes)], np.asarray(ids, dtype=object)
+    missing = codes.size > 0 and int(codes.min()) < 0
+    return merged[np.where(codes < 0, text.size - 1, codes) if missing else codes], np.asarray(ids, dtype=object)
 
 
 def empty_ids(ids: np.ndarray) -> np.ndarray:
@@ -161,6 +167,64 @@ def validate_pose_log(df: pd.DataFrame, source: str = "pose log") -> pd.DataFram
         On a missing column, a NaN or infinite value, a zero quaternion, or a duplicate
         timestamp within one node (with the file/source name and the first offending row).
     """
+    c = checked_pose_arrays(df, source)
+    node = pd.Series(c.names.astype(str)).array.take(c.codes)  # one text per node, taken per row
+    cols: dict[str, Any] = {"t": c.t, "node": node}
+    for j, name in enumerate(("x", "y", "z")):
+        cols[name] = c.position_xyz[:, j]
+    for j, name in enumerate(("qw", "qx", "qy", "qz")):
+        cols[name] = c.quat_wxyz[:, j]
+    out = pd.DataFrame(cols, columns=list(POSE_COLUMNS))
+    if c.armed is not None:
+        out["armed"] = c.armed
+    out.attrs[NON_UNIT_QUATERNION_ATTR] = c.non_unit
+    return out
+
+
+@dataclass(frozen=True)
+class CheckedPose:
+    """The arrays of a pose log checked by :func:`checked_pose_arrays`, sorted by (node, t).
+
+    ``names``: the distinct node ids, sorted; ``codes``: each row's node as an index into
+    ``names``; ``quat_wxyz`` normalised; ``non_unit``: the rows whose quaternion was not unit
+    (plus the input's count); ``still_off``: those still not unit after normalisation (an
+    overflowing norm; :func:`non_unit_quaternion_rows` of the checked log adds them);
+    ``armed``: the optional column as :func:`validate_pose_log` keeps it.
+    """
+
+    t: np.ndarray
+    codes: np.ndarray
+    names: np.ndarray
+    position_xyz: np.ndarray
+    quat_wxyz: np.ndarray
+    non_unit: int
+    still_off: int = 0
+    armed: Any = None
+
+
+def quaternion_norms(q: np.ndarray) -> np.ndarray:
+    """``numpy.linalg.norm(q, axis=1)`` of quaternions ``q`` (n, 4), bit for bit (its order of
+    summation, ``((s0 + s1) + s2) + s3``), one component at a time."""
+    return _norms_of_columns([q[:, j] for j in range(4)])
+
+
+def _norms_of_columns(q: Sequence[np.ndarray]) -> np.ndarray:
+    """:func:`quaternion_norms` of the quaternions whose components are the arrays ``q``."""
+    norm = q[0] * q[0]
+    for j in range(1, 4):
+        norm += q[j] * q[j]
+    return np.sqrt(norm, out=norm)
+
+
+def checked_pose_arrays(df: pd.DataFrame, source: str = "pose log") -> CheckedPose:
+    """The checks of :func:`validate_pose_log` and its sorted, normalised arrays, without the
+    DataFrame (:func:`rplearn.data.poses.tracks_of_pose_log` makes the tracks from them).
+
+    Raises
+    ------
+    InputError
+        As :func:`validate_pose_log`.
+    """
     _require_columns(df, POSE_COLUMNS, source)
     df = normalise_times(df, source)
     _require_finite(df, [c for c in POSE_COLUMNS if c != "node"], source)
@@ -170,39 +234,44 @@ def validate_pose_log(df: pd.DataFrame, source: str = "pose log") -> pd.DataFram
     if np.any(empty):
         row = int(np.flatnonzero(empty)[0])
         raise InputError(f"{source}: column node is empty at row {row} (every pose row needs its node id)")
-    order = np.lexsort((t, codes))  # stable: by node id, then time
-    in_order = bool(np.all(order[1:] > order[:-1])) if order.size > 1 else True
+    step, dt = np.diff(codes), np.diff(t)  # t is finite: dt == 0 where equal, dt >= 0 where in order
+    in_order = bool(np.all((step > 0) | ((step == 0) & (dt >= 0))))  # np.lexsort((t, codes)) is the identity
+    order = np.arange(0) if in_order else np.lexsort((t, codes))  # stable: by node id, then time
     take = slice(None) if in_order else order
-    node = pd.Series(names.astype(str)).array.take(codes[take])  # one text per node, taken per row
-    cols: dict[str, Any] = {"t": t[take], "node": node}
-    for c in ("x", "y", "z"):
-        cols[c] = df[c].to_numpy(np.float64)[take]
-    q = df[["qw", "qx", "qy", "qz"]].to_numpy(np.float64)[take]
-    norm = np.linalg.norm(q, axis=1)
+    components = [df[c].to_numpy(np.float64)[take] for c in ("qw", "qx", "qy", "qz")]  # no copy when in order
+    norm = _norms_of_columns(components)
     if np.any(norm < 1e-6):
         row = int(np.flatnonzero(norm < 1e-6)[0]) if in_order else int(order[np.flatnonzero(norm < 1e-6)[0]])
         raise InputError(f"{source}: quaternion (qw, qx, qy, qz) has zero norm at row {row}")
     non_unit = count_non_unit_quaternions(norm) + int(df.attrs.get(NON_UNIT_QUATERNION_ATTR, 0))
-    q = q / norm[:, None]
-    for j, c in enumerate(("qw", "qx", "qy", "qz")):
-        cols[c] = q[:, j]
-    sorted_codes, ts = codes[take], cols["t"]
-    dup = (sorted_codes[1:] == sorted_codes[:-1]) & (ts[1:] == ts[:-1])
+    q = np.empty((t.size, 4))
+    for j, component in enumerate(components):
+        np.divide(component, norm, out=q[:, j])
+    # q / norm is unit to a few ulp wherever the norm is finite (and, here, at least 1e-6): only an
+    # overflowing norm leaves rows that are not
+    still_off = 0 if np.isfinite(np.sum(norm)) else _non_unit_finite(quaternion_norms(q))
+    sorted_codes, ts = codes[take], t[take]
+    if in_order:
+        dup = (step == 0) & (dt == 0)
+    else:
+        dup = (sorted_codes[1:] == sorted_codes[:-1]) & (ts[1:] == ts[:-1])
     if np.any(dup):
         i = int(np.flatnonzero(dup)[0]) + 1
         raise InputError(
             f"{source}: field t: {int(dup.sum())} duplicate timestamp(s) within a node "
-            f"(first: node {cols['node'][i]}, t = {float(ts[i])!r})"
+            f"(first: node {names.astype(str)[sorted_codes[i]]}, t = {float(ts[i])!r})"
         )
-    out = pd.DataFrame(cols, columns=list(POSE_COLUMNS))
+    position = np.empty((t.size, 3))
+    for j, c in enumerate(("x", "y", "z")):
+        position[:, j] = df[c].to_numpy(np.float64)[take]
+    armed = None
     if "armed" in df.columns:  # optional: the vehicle armed (bool; missing where a log does not say)
         try:
-            armed = df["armed"].astype("boolean").to_numpy()[take]
+            flags = df["armed"].astype("boolean").to_numpy()[take]
         except (TypeError, ValueError):
             raise InputError(f"{source}: column armed: expected true/false (or 1/0) values") from None
-        out["armed"] = armed.astype(bool) if not pd.isna(armed).any() else pd.array(armed, dtype="boolean")
-    out.attrs[NON_UNIT_QUATERNION_ATTR] = non_unit
-    return out
+        armed = flags.astype(bool) if not pd.isna(flags).any() else pd.array(flags, dtype="boolean")
+    return CheckedPose(ts, sorted_codes, names, position, q, non_unit, still_off, armed)
 
 
 def count_non_unit_quaternions(norm: np.ndarray, tolerance: float = QUATERNION_NORM_TOLERANCE) -> int:
@@ -225,8 +294,12 @@ def non_unit_quaternion_rows(pose_log: pd.DataFrame) -> int:
     of ``pose_log`` itself that are still not unit (a log that was never validated).
     """
     q = pose_log[["qw", "qx", "qy", "qz"]].to_numpy(np.float64)
-    norm = np.linalg.norm(q, axis=1)
-    return int(pose_log.attrs.get(NON_UNIT_QUATERNION_ATTR, 0)) + count_non_unit_quaternions(norm[np.isfinite(norm)])
+    return int(pose_log.attrs.get(NON_UNIT_QUATERNION_ATTR, 0)) + _non_unit_finite(quaternion_norms(q))
+
+
+def _non_unit_finite(norm: np.ndarray) -> int:
+    """:func:`count_non_unit_quaternions` of the finite ``norm`` values."""
+    return count_non_unit_quaternions(norm[np.isfinite(norm)])
 
 
 #: Plausible transmit powers [dBm] (the row ``tx_power_dbm`` of :data:`rplearn.core.plausible.PLAUSIBLE`).
