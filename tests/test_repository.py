@@ -54,9 +54,8 @@ def test_license_file_matches_the_declared_license():
     text = (ROOT / "LICENSE").read_text(encoding="utf-8")
     assert text.startswith("BSD 3-Clause License")
     assert "the rplearn authors" in text and "Neither the name of the copyright holder" in text
-    assert 'license = { text = "BSD-3-Clause" }' in (ROOT / "pyproject.toml").read_text(
-        encoding="utf-8"
-    )
+    pyproject = (ROOT / "pyproject.toml").read_text(encoding="utf-8")
+    assert 'license = "BSD-3-Clause"' in pyproject and 'license-files = ["LICENSE"]' in pyproject
 
 
 def test_readme_and_package_docstring_cite_the_paper():

@@ -120,6 +120,24 @@ def test_a_csv_being_appended_to_ends_with_the_offline_model(smoke, tmp_path):
     assert "prequential RMSE" in text
 
 
+def test_silence_before_the_first_message_does_not_end_the_session(smoke, tmp_path):
+    """`live` started before the drones are up: the idle time counts from the first message."""
+    pose, sig = smoke
+    short = pose[pose["t"] <= pose["t"].min() + 60.0], sig[sig["t"] <= sig["t"].min() + 60.0]
+
+    def late() -> None:
+        time.sleep(3.0)  # three times the idle time before anything is written
+        _appender(*short, tmp_path, speed=40.0).join()
+
+    writer = threading.Thread(target=late)
+    writer.start()
+    source = f"{tmp_path / 'pose.csv'},{tmp_path / 'signal.csv'}"
+    outcome = run_live(source, str(tmp_path / "live.json"), LiveOptions(refit_s=0.5, idle_s=1.0))
+    writer.join()
+    assert outcome.status.prequential_n > 0 and (tmp_path / "live.json").exists()
+    assert outcome.status.stopped.startswith("end of stream")
+
+
 def test_a_session_killed_mid_flight_leaves_a_valid_model(smoke, tmp_path):
     pose, sig = smoke
     writer = _appender(pose, sig, tmp_path, speed=4.0)

@@ -7,9 +7,10 @@ signal CSV being appended to), matches the rows with ``sync``'s rules as their t
 had seen), adds the batch to the statistics (:class:`rplearn.models.live_stats.LiveStatistics`)
 and every ``refit_s`` refits from them and writes the model file atomically, so that a session
 stopped at any moment (Ctrl-C, SIGTERM, a killed process) leaves the last good model. It ends
-at the end of the stream (no row for ``idle_s``), after ``duration_s``, or when every node's
-pattern spread over its covered directions is below ``until_spread_db`` and/or every node's
-covered share of the sphere reaches ``until_coverage_pct``; a last exact refit then follows.
+at the end of the stream (no row for ``idle_s`` after the first; before the first it waits),
+after ``duration_s``, or when every node's pattern spread over its covered directions is below
+``until_spread_db`` and/or every node's covered share of the sphere reaches
+``until_coverage_pct``; a last exact refit then follows.
 
 Its final model is the offline fit of the same rows with every stretch learned from
 (:mod:`rplearn.models.live_stats`): ``rplearn sync`` of the recorded logs, then ``rplearn fit
@@ -80,7 +81,8 @@ class LiveOptions:
     duration_s, until_spread_db, until_coverage_pct : float or None
         Stop criteria (module docstring).
     idle_s : float
-        The stream has ended when nothing arrived for this long [s].
+        The stream has ended when nothing arrived for this long [s] after its first message
+        (before the first, the session waits: the drones may not be up yet).
     nodes : tuple of str or None
         The node ids (default: those of the first matched batch).
     manoeuvres : ManoeuvreRanker or None
@@ -430,7 +432,8 @@ def run_live(
     work_dir = tempfile.mkdtemp(prefix="rplearn-live-")
     src = open_source(source, work_dir, options.reader)
     session = _Session(options, output, work_dir)
-    start = last_rx = last_refit = time.monotonic()
+    start = last_refit = time.monotonic()
+    last_rx: float | None = None  # the silence that ends the stream counts from its first message
     try:
         while True:
             got = src.poll()
@@ -450,7 +453,7 @@ def run_live(
                 if on_update is not None:
                     on_update(session.status)
             reason = session.stop_reason(now - start)
-            if not reason and now - last_rx >= options.idle_s:
+            if not reason and last_rx is not None and now - last_rx >= options.idle_s:
                 reason = f"end of stream (nothing received for {options.idle_s:g} s)"
             if reason:
                 session.status.stopped = reason
