@@ -66,7 +66,8 @@ What this says:
   there is 1.1 dB RMS (10-s means from -0.7 to +1.8 dB; 1.09 dB RMS predicted at the true
   poses, so the pattern's and not the pose estimates'), against a predicted spread of 0.2 dB:
   the drone's fine structure (6-deg lobes of 4 dB) between the two learned elevations, which a
-  smooth fit's posterior does not count.
+  smooth fit's posterior does not count; with the cross-validated misfit added to the
+  spread (``misfit_std_db``) it states 0.93 dB there, and the bins stay 0.04-0.06 off.
   At q10 the oracle itself stays below 0.3 but for ``paper`` seed 1.
 - A planner's flights on ``ground`` and ``campaign`` are not bound by the fading (the oracle
   reaches 0.28-0.55), but rplearn fails both criteria there: their learning flights saw each
@@ -76,8 +77,9 @@ What this says:
   predicted RSSI is on average 9.5 dB (``ground``) and 12.3 dB (``campaign``) below the truth,
   while the gain's predicted spread there is 6.2 dB (median) and 3.9 dB (3.8 of which the new
   flight's level); the fits' stated spread where they never looked (``training.prior_std_db``)
-  is 5.0 and 0.7 dB. The learned directions lie in the camera gimbal's shadow, and where the
-  flight never looked the fit predicts the level it saw.
+  is 5.0 and 5.9 dB (0.7 dB on ``campaign`` before the measured gains' spread became its
+  floor). The learned directions lie in the camera gimbal's shadow, and where the flight never
+  looked the fit predicts the level it saw.
 
 Where item 1 is not met on seed 0, the test is a strict xfail naming why (:data:`_NOT_MET`).
 """
@@ -311,17 +313,18 @@ def test_where_the_learning_flights_looked_rplearn_is_near_the_oracle(ranging, q
 _NOT_MET = {
     ("planner", "paper", 10): "skill 0.172, bins off by up to 0.091: the oracle itself reaches only 0.201 (the far "
                               "legs' RSSI changes little about the 10th percentile)",
-    **{("planner", "campaign", q): "skill -3.0 (q10) / -1.7 (q30), bins off by up to 0.87: 12 dB below the truth "
+    **{("planner", "campaign", q): "skill -2.5 (q10) / -1.2 (q30), bins off by up to 0.58: 12 dB below the truth "
                                    "where the learning flights never looked, where the fit states a spread "
-                                   "(prior_std_db) of 0.7 dB" for q in (10, 30)},
+                                   "(prior_std_db, the measured gains' spread) of 5.9 dB" for q in (10, 30)},
     **{("planner", "ground", q): "skill -2.5 (q10) / -1.1 (q30), bins off by up to 0.95: 9.5 dB below the truth "
                                  "where the learning flights never looked, where the fit states a spread "
                                  "(prior_std_db) of 5.0 dB" for q in (10, 30)},
     **{("covered", "campaign", q): "bins off by 0.18 / 0.19: six flights, six draws of their levels (an oracle that "
                                    "knows the patterns but not the levels: 0.19 / 0.12 off)" for q in (10, 30)},
     ("covered", "ground", 10): "skill 0.175: the oracle itself reaches only 0.202",
-    ("covered", "ground", 30): "skill 0.364, but bins off by 0.062: the pattern's error there is about 1 dB in "
-                               "patches, the spread the fit states there 0.2 dB",
+    ("covered", "ground", 30): "skill 0.364, but bins off by 0.064: the pattern's error there is 1.1 dB RMS in "
+                               "patches (mean +0.3 dB), the spread the fit states there 0.93 dB (its misfit "
+                               "included): one flight is one draw of it, under 4.2 dB of fading",
 }
 
 

@@ -58,6 +58,9 @@ class TrainingSummary(Mapping[str, Any]):
         The automatic choice of order and smoothing and its validation curve.
     variance_inflation, noise_std_db, flight_level_std_db, new_flight_level_std_db : float
         The automatic choice's spreads (:func:`rplearn.models.auto.fit_from_statistics`).
+    misfit_std_db : float
+        Each node's spread of the error the model cannot represent [dB], added everywhere
+        (:func:`rplearn.models.auto.held_out_misfit_var`, halved between the two ends).
     prior_std_db : dict of node to float
         Each node's predictive spread where the flight never looked [dB].
     prior_std_source : str
@@ -102,6 +105,7 @@ class TrainingSummary(Mapping[str, Any]):
     noise_std_db: float | None = None
     flight_level_std_db: float | None = None
     new_flight_level_std_db: float | None = None
+    misfit_std_db: float | None = None
     prior_std_db: Mapping[str, float] | None = None
     prior_std_source: str | None = None
     prior_level: str | None = None

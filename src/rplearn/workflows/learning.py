@@ -125,6 +125,10 @@ class FitOutcome:
                     text += (f"\n  flight-to-flight level: {training.flight_level_std_db:.1f} dB (1 sigma) between units, "
                              f"{new_level:.1f} dB for a new flight's predictions; "
                              f"noise about a flight's level {noise:.1f} dB")
+                if training.misfit_std_db:
+                    text += (f"\n  misfit: held-out units err {training.misfit_std_db:.2f} dB (1 sigma, per node) beyond "
+                             "what the posterior states, structure this order and smoothing cannot hold; added to "
+                             "each pattern's spread everywhere")
             spread = training.prior_std_db or {}
             if spread:
                 values = ", ".join(f"{n} {v:.1f} dB" for n, v in spread.items())

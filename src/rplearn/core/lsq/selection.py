@@ -169,6 +169,7 @@ class _Evaluator:
             self.pins = self._fold_pins(units)
         self.seen: dict[tuple[int, float], float] = {}
         self.fold_sse: dict[tuple[int, float], np.ndarray] = {}  # per held-out unit, for within_noise()
+        self.excess_db2: dict[tuple[int, float], float] = {}  # per held-out sample, see spread()
         self.curve: list[CurvePoint] = []
         self._cache: dict[int, Any] = {}
         self._best_solved: tuple[tuple[int, float], list[tuple[np.ndarray, np.ndarray | None]]] | None = None
@@ -310,6 +311,7 @@ class _Evaluator:
             weights = counts[learn] / learn_n  # the fit's level: the learning units' levels, weighed by samples
             means.append((mean**2, noise_var * (1.0 + quad / f.held_n) / f.held_n, 1.0 + float(weights @ weights)))
         kappa = float(max(1.0, excess / predicted)) if predicted > 0 and np.isfinite(excess) else 1.0
+        self.excess_db2[key] = float(excess / counts.sum()) if np.isfinite(excess) else 0.0
         square, expected, weight = (np.array(v) for v in zip(*means))
         level_var = float(np.sum(square - kappa * expected) / np.sum(weight))
         return kappa, max(level_var, 0.0) if np.isfinite(level_var) else 0.0
@@ -513,7 +515,8 @@ def select_order_and_smoothing(
     choice = _tightest_split(ev, best, finite)
     kappa, level_var = ev.spread(choice.order, choice.smoothing)
     return Selection("grouped-cv" if ev.cv else "gcv", choice.order, choice.smoothing, choice.rmse_db,
-                     ev.curve, sorted(units) if ev.cv else [], float(power), kappa, float(np.sqrt(level_var)))
+                     ev.curve, sorted(units) if ev.cv else [], float(power), kappa, float(np.sqrt(level_var)),
+                     ev.excess_db2.get((int(choice.order), float(choice.smoothing)), 0.0))
 
 
 def variance_inflation(

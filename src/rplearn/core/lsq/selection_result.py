@@ -47,6 +47,11 @@ class Selection:
     flight_level_std_db : float
         Standard deviation [dB] of a unit's (flight's) own level about the common level, from
         the held-out units' mean residuals (see :func:`rplearn.core.lsq.selection.variance_inflation`); 0 for GCV.
+    held_out_excess_db2 : float
+        Mean square [dB^2] per held-out sample by which the held-out units' errors about their
+        own means exceed the folds' within-unit noise (the part of the held-out error that is
+        the pattern's: the folds' posterior variance and any misfit the model cannot represent;
+        :func:`rplearn.models.auto.held_out_misfit_var`); 0 for GCV.
     """
 
     method: str
@@ -58,11 +63,13 @@ class Selection:
     power: float = DEFAULT_PENALTY_POWER
     variance_inflation: float = 1.0
     flight_level_std_db: float = 0.0
+    held_out_excess_db2: float = 0.0
 
     def to_dict(self) -> dict[str, Any]:
         return {"method": self.method, "order": self.order, "smoothing": self.smoothing, "rmse_db": self.rmse_db,
                 "power": self.power, "units": list(self.units), "variance_inflation": self.variance_inflation,
-                "flight_level_std_db": self.flight_level_std_db, "curve": [p.to_dict() for p in self.curve]}
+                "flight_level_std_db": self.flight_level_std_db,
+                "held_out_excess_db2": self.held_out_excess_db2, "curve": [p.to_dict() for p in self.curve]}
 
     def curve_text(self) -> str:
         """The validation curve as a small table (order, smoothing, RMSE), the choice marked."""
