@@ -56,7 +56,7 @@ def live(
     until_coverage_pct: float | None = typer.Option(None, "--until-coverage", help="End when every node's covered share of the sphere "
                                                                                "reaches this [%] (with --until-spread: both)."),
     duration_s: float | None = typer.Option(None, "--duration", help="End after this many seconds."),
-    idle_s: float = typer.Option(10.0, "--idle", help="The stream has ended when nothing arrived for this long [s] after its first message (live waits for it)."),
+    idle_s: float = typer.Option(10.0, "--idle", help="The stream has ended when nothing arrived for this long [s] after its first (live waits for it)."),
     nodes: list[str] | None = typer.Option(None, "--nodes", help="Node ids (default: those of the first matched samples)."),
     tx_power_dbm: float | None = typer.Option(None, "--tx-power", help="MAVLink: the radios' transmit power [dBm]."),
     frequency_hz: float | None = typer.Option(None, "--frequency", help="MAVLink: the carrier frequency [Hz]."),
