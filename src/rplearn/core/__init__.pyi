@@ -41,6 +41,7 @@ from .geometry import quat_wxyz_multiply as quat_wxyz_multiply
 from .geometry import quat_wxyz_to_matrix as quat_wxyz_to_matrix
 from .geometry import rotate_body_to_world as rotate_body_to_world
 from .geometry import rotate_world_to_body as rotate_world_to_body
+from .geometry import slerp_weights as slerp_weights
 from .geometry import slerp_wxyz as slerp_wxyz
 from .geometry import unit_vector as unit_vector
 from .geometry import wrap_angle_rad as wrap_angle_rad

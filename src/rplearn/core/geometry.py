@@ -328,6 +328,29 @@ def wrap_angle_rad(angle_rad: ArrayLike) -> FloatArray:
 
 
 @check_types
+def slerp_weights(dot: np.ndarray, fraction: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The weights ``w0, w1`` of ``q0`` and ``q1`` in a slerp, from their dot products and the
+    fractions (n,): the shorter arc (``w1`` negated where the dot is negative), a normalised
+    linear interpolation for nearly equal quaternions. Shared by :func:`slerp_wxyz` and the
+    block interpolation of ``sync``, which must agree bit for bit.
+    """
+    negative = dot < 0.0
+    theta = np.arccos(np.minimum(np.abs(dot), 1.0))
+    sin_theta = np.sin(theta)
+    near = sin_theta < 1e-6
+    rest = 1.0 - fraction
+    w0 = np.sin(rest * theta)
+    w1 = np.sin(fraction * theta)
+    safe = np.where(near, 1.0, sin_theta)
+    w0 /= safe
+    w1 /= safe
+    if near.any():  # nearly equal quaternions: normalised linear interpolation
+        w0[near] = rest[near]
+        w1[near] = fraction[near]
+    return w0, np.where(negative, -w1, w1)  # the shorter arc: q1 negated
+
+
+@check_types
 def slerp_wxyz(q0: np.ndarray, q1: np.ndarray, fraction: np.ndarray) -> np.ndarray:
     """Spherical linear interpolation between unit quaternions, row by row.
 
@@ -343,21 +366,7 @@ def slerp_wxyz(q0: np.ndarray, q1: np.ndarray, fraction: np.ndarray) -> np.ndarr
         Interpolation fraction in [0, 1].
     """
     dot = np.einsum("ij,ij->i", q0, q1)
-    negative = dot < 0.0
-    theta = np.arccos(np.minimum(np.abs(dot), 1.0))
-    sin_theta = np.sin(theta)
-    near = sin_theta < 1e-6
-    fraction = np.broadcast_to(np.asarray(fraction, np.float64), dot.shape)
-    rest = 1.0 - fraction
-    w0 = np.sin(rest * theta)
-    w1 = np.sin(fraction * theta)
-    safe = np.where(near, 1.0, sin_theta)
-    w0 /= safe
-    w1 /= safe
-    if near.any():  # nearly equal quaternions: normalised linear interpolation
-        w0[near] = rest[near]
-        w1[near] = fraction[near]
-    np.negative(w1, out=w1, where=negative)  # the shorter arc: q1 negated
+    w0, w1 = slerp_weights(dot, np.broadcast_to(np.asarray(fraction, np.float64), dot.shape))
     out = w0[:, None] * q0
     out += w1[:, None] * q1
     norm = np.linalg.norm(out, axis=1)  # (not einsum: its other rounding moves results by an ulp)

@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from rplearn.core.geometry import slerp_weights
 from rplearn.data.poses import STATUS_OUT_OF_SPAN, STATUS_POSE_GAP, PoseTrack, TrackSet
 from rplearn.data.tables import MATCHED_COLUMNS, POSE_FIELDS, node_id_codes
 
@@ -183,20 +184,7 @@ def slerp_into(q0: np.ndarray, q1: np.ndarray, fraction: np.ndarray, out: np.nda
     odd = a[1] * b[1]
     odd += a[3] * b[3]
     dot += odd
-    negative = dot < 0.0
-    theta = np.arccos(np.minimum(np.abs(dot), 1.0))
-    sin_theta = np.sin(theta)
-    near = sin_theta < 1e-6
-    rest = 1.0 - fraction
-    w0 = np.sin(rest * theta)
-    w1 = np.sin(fraction * theta)
-    safe = np.where(near, 1.0, sin_theta)
-    w0 /= safe
-    w1 /= safe
-    if near.any():  # nearly equal quaternions: normalised linear interpolation
-        w0[near] = rest[near]
-        w1[near] = fraction[near]
-    w1 = np.where(negative, -w1, w1)  # the shorter arc: q1 negated (np.negative with where= is 10x slower)
+    w0, w1 = slerp_weights(dot, fraction)
     for c in range(4):
         np.multiply(w0, a[c], out=out[c])
         out[c] += w1 * b[c]
