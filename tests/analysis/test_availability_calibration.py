@@ -40,8 +40,8 @@ campaign, own      .021 .036 / .018 .030 / .019 .033  .131 .215 / .129 .213 / .1
                                                       (.039 .052 / .042 .051 / .031 .049)
 ground, own        -.001 -.003 / .006 .012 / .006 .010  .016 .026 / .016 .026 / .013 .031  .023 .062 / .011 .024 / .018 .036
 paper, planner     .172 .324 / .306 .409 / .220 .314  .201 .359 / .334 .432 / .236 .337  .091 .034 / .051 .043 / .030 .041
-campaign, planner  -3.0 -1.7 / -4.2 -1.8 / -3.4 -1.8  .452 .404 / .356 .392 / .368 .553  .87 .66 / .81 .66 / .72 .68
-ground, planner    -2.5 -1.1 / -4.4 -1.4 / -3.2 -1.4  .379 .364 / .282 .473 / .377 .533  .95 .70 / .85 .63 / .84 .61
+campaign, planner  -2.5 -1.2 / -3.3 -1.3 / -2.7 -1.3  .452 .404 / .356 .392 / .368 .553  .58 .58 / .63 .59 / .60 .61
+ground, planner    -1.9 -0.8 / -4.4 -1.4 / -2.1 -0.9  .379 .364 / .282 .473 / .377 .533  .93 .72 / .87 .63 / .92 .65
 campaign, covered  .152 .292 / .070 .239 / .066 .225  .285 .474 / .187 .410 / .272 .430  .179 .185 / .098 .094 / .157 .131
                                                       (.188 .335 / .082 .255 / .126 .273)
 ground, covered    .175 .364 / .159 .359 / .136 .300  .202 .388 / .202 .392 / .171 .332  .043 .062 / .059 .077 / .080 .065
@@ -72,14 +72,31 @@ What this says:
 - A planner's flights on ``ground`` and ``campaign`` are not bound by the fading (the oracle
   reaches 0.28-0.55), but rplearn fails both criteria there: their learning flights saw each
   antenna over a few percent of the sphere (the drone's nose toward the station, 20-30 deg
-  below its horizon), and a planner's flight looks elsewhere. At the samples more than 15 deg
-  from every learning direction (76 % of ``ground``'s, 84 % of ``campaign``'s, seed 0) the
-  predicted RSSI is on average 9.5 dB (``ground``) and 12.3 dB (``campaign``) below the truth,
-  while the gain's predicted spread there is 6.2 dB (median) and 3.9 dB (3.8 of which the new
-  flight's level); the fits' stated spread where they never looked (``training.prior_std_db``)
-  is 5.0 and 5.9 dB (0.7 dB on ``campaign`` before the measured gains' spread became its
-  floor). The learned directions lie in the camera gimbal's shadow, and where the flight never
-  looked the fit predicts the level it saw.
+  below its horizon, in the camera gimbal's shadow), and a planner's flight looks elsewhere
+  (78-87 % of its samples have an end more than 10 deg from every learning direction). Why,
+  measured (seed 0):
+
+  * the spread the fit states where it never looked *is* applied: it is in the posterior
+    covariance (re-read with a prior whose spread over the sphere is ``prior_std_db``, 5.0 dB
+    on ``ground``, 5.9 on ``campaign``), so each end's spread there is 5.0-5.1 and 6.0 dB
+    (median, both ends), and the joint gain's 6.0 and 8.4 dB (the new flight's level, 3.8 dB on
+    ``campaign``, included); availability adds the noise (4.2-4.3 dB);
+  * the mean is off by a fixed amount, not by a shrinkage toward 0 dB: the level the fits
+    learned is that of the drone's shadowed side (true -8.5 to -8.8 dBi, 5.4-5.6 dB below its
+    mean over the rest of the sphere), and the planner looks at its sides (10-12 dB brighter)
+    and tail (7-8 dB) (``campaign``: its drone's gain -10.4 dB off at 90 deg off the nose, in
+    the gauge; its SH-9 fit stays near the level there); ``ground``'s
+    SH-4 fit also carries the seen slope around the sphere (+9.5 dB at -60 deg, -18 dB at
+    +90 deg off the nose). Samples beyond 15 deg: joint error -6.5 dB mean, 10.5 dB RMS
+    (``ground``), -11.6 and 12.4 dB (``campaign``), against a stated 7.3 and 9.4 dB;
+  * no predictor that knows only what the learning flights could teach meets item 1 there
+    (:func:`test_where_the_learning_flights_never_looked_no_predictor_from_them_meets_item_1`):
+    an oracle with the true patterns where they looked and, elsewhere, each antenna's true
+    level where they looked with the true RMS of its unseen sphere about it (7.6-7.7 dB)
+    scores -0.8 to -2.7 with bins 0.52-0.72 off (seeds 0-2). A fixed offset of one antenna is
+    not a spread: tried on seed 0, reverting the mean to the learned level beyond 10-20 deg
+    made it worse (``ground``: -6.3 -> -9.8 dB), and 1-3 times ``prior_std_db`` more spread
+    left the bins 0.43-0.90 off and the skill below -0.4.
 
 Where item 1 is not met on seed 0, the test is a strict xfail naming why (:data:`_NOT_MET`).
 """
@@ -95,6 +112,8 @@ import pytest
 from scipy.special import ndtr
 
 from rplearn.analysis.availability import link_availability_column
+from rplearn.core.bases import fibonacci_grid_nodes
+from rplearn.core.coverage import COVERED_WITHIN_DEG
 from rplearn.core.link import free_space_path_loss_db
 from rplearn.data.sync import SyncOptions
 from rplearn.data.tables import link_samples
@@ -125,6 +144,28 @@ def _clean_rssi(sim, truth: pd.DataFrame) -> np.ndarray:
             - free_space_path_loss_db(s.distance_m, truth["frequency_hz"].to_numpy()))
 
 
+def _seen_level_oracle(sim, truth: pd.DataFrame, model) -> tuple[np.ndarray, np.ndarray]:
+    """Mean [dBm] and variance [dB^2] of each true matched row's RSSI for an oracle that knows
+    what the learning flights could teach and no more: each end's true pattern within
+    ``COVERED_WITHIN_DEG`` of a learning direction (the model's coverage grid); farther, that
+    antenna's true mean over its covered directions, with the true RMS of the unseen sphere
+    about it as the spread (how far the unseen side strays, not where); the true link offsets,
+    not a new flight's level (its spread is added by :func:`seen_oracle_scores`)."""
+    s = link_samples(truth, "truth", require_rssi=False)
+    mean, var, d = truth["clean_dbm"].to_numpy(np.float64) - truth["level_db"].to_numpy(np.float64), np.zeros(len(truth)), s.directions
+    for k, node in enumerate(s.nodes):
+        grid = np.asarray(model.training.coverage_deg[node])  # on a Fibonacci grid (rplearn.core.coverage)
+        az, el = fibonacci_grid_nodes(grid.size)
+        on_grid = sim.ground_truth.evaluate(node, az, el)
+        level = float(on_grid[grid <= COVERED_WITHIN_DEG].mean())
+        rms = float(np.sqrt(np.mean((on_grid[grid > COVERED_WITHIN_DEG] - level) ** 2)))
+        for end, a, e in ((s.tx_index == k, d.az_tx, d.el_tx), (s.rx_index == k, d.az_rx, d.el_rx)):
+            far = end & (model.coverage_deg(node, a, e) > COVERED_WITHIN_DEG)
+            mean[far] += level - sim.ground_truth.evaluate(node, a[far], e[far])
+            var[far] += rms**2
+    return mean, var
+
+
 def held_out(tmp: Path, preset: str, seed: int = 0, flights: tuple = ()):
     """The held-out predictions of an automatic fit on the learning flights of ``preset``, each
     row with the oracle's clean RSSI of the same packet (``clean_dbm``); ``flights`` replace the
@@ -145,7 +186,8 @@ def held_out(tmp: Path, preset: str, seed: int = 0, flights: tuple = ()):
     truth = sim.matched("testing").copy()
     truth["clean_dbm"] = _clean_rssi(sim, truth)
     truth["level_db"] = truth["unit"].map(sim.unit_levels_db).fillna(0.0) if sim.unit_levels_db else 0.0
-    table = table.merge(truth[["t", "tx", "rx", "clean_dbm", "level_db"]], on=["t", "tx", "rx"], how="left",
+    truth["seen_dbm"], truth["seen_var_db2"] = _seen_level_oracle(sim, truth, model)
+    table = table.merge(truth[["t", "tx", "rx", "clean_dbm", "level_db", "seen_dbm", "seen_var_db2"]], on=["t", "tx", "rx"], how="left",
                         validate="1:1")
     assert table["clean_dbm"].notna().all()  # every held-out packet has its oracle
     return model, table, sim.config.radio.fading_std_db, sim.config.radio.unit_level_std_db
@@ -170,6 +212,22 @@ def scores(case, q):
     oracle = skill(ndtr((clean - s) / fading), up)
     blind = skill(ndtr((clean - table["level_db"].to_numpy(np.float64) - s) / np.hypot(fading, level_std)), up)
     return skill(p, up), max(gaps), len(gaps), oracle, blind
+
+
+def seen_oracle_scores(case, q):
+    """(skill, largest bin gap) at the q-th percentile of the held-out RSSI of the oracle that
+    knows only what the learning flights could teach (:func:`_seen_level_oracle`), blind to a
+    new flight's level as rplearn is; and the share of rows with an end beyond its coverage."""
+    _, table, fading, level_std = case
+    rssi = table["rssi_dbm"].to_numpy(np.float64)
+    s = float(np.round(np.percentile(rssi, q))) - 0.5
+    up = (rssi >= s).astype(float)
+    spread = np.sqrt(table["seen_var_db2"].to_numpy(np.float64) + fading**2 + level_std**2)
+    p = ndtr((table["seen_dbm"].to_numpy(np.float64) - s) / spread)
+    bins = np.minimum((p * 10).astype(int), 9)
+    gaps = [abs(up[bins == b].mean() - p[bins == b].mean()) for b in range(10) if (bins == b).sum() >= MIN_BIN]
+    far = float(np.mean((table["tx_coverage_deg"] > COVERED_WITHIN_DEG) | (table["rx_coverage_deg"] > COVERED_WITHIN_DEG)))
+    return skill(p, up), max(gaps), far
 
 
 # --- the planner's flights ---------------------------------------------------------------------
@@ -309,16 +367,40 @@ def test_where_the_learning_flights_looked_rplearn_is_near_the_oracle(ranging, q
         assert oracle >= 0.3, (kind, preset, q, oracle)
 
 
+@pytest.mark.slow
+@pytest.mark.parametrize("q", [10, 30])
+def test_where_the_learning_flights_never_looked_no_predictor_from_them_meets_item_1(ranging, q):
+    """An oracle that knows only what the learning flights could teach (the true patterns where
+    they looked; elsewhere each antenna's true level where they looked and how far, in RMS,
+    its unseen sphere strays from it, not where: :func:`_seen_level_oracle`) is the blind
+    oracle where the flights looked, and fails item 1 on a planner's flights on ``ground`` and
+    ``campaign``: the planner looks where the antennas are brighter than that level (the
+    drone's side and tail, the station's low elevations), a fixed offset of one antenna that
+    no spread can make calibrated. Measured (seeds 0 / 1 / 2; q10, q30): skill -1.70 -0.83 /
+    -2.72 -0.91 / -2.38 -1.01 (``ground``), -1.86 -0.90 / -2.69 -1.01 / -2.46 -1.08
+    (``campaign``); bins off by 0.52-0.72. Even knowing the unseen side's true mean as well
+    it reaches only -0.3 to -2.6, bins 0.45-0.89 off."""
+    kind, preset, data = ranging
+    seen_skill, seen_gap, far = seen_oracle_scores(data, q)
+    blind = scores(data, q)[4]
+    if kind == "planner" and preset != "paper":
+        assert far >= 0.7, (preset, far)  # the planner's samples: 78-87% beyond 10 deg (seeds 0-2)
+        assert seen_skill < 0.3 and seen_gap > 0.05, (preset, q, seen_skill, seen_gap)
+    else:  # where the flights looked (all but 1% of paper's planner samples) it is the blind oracle
+        assert far <= 0.05 and abs(seen_skill - blind) <= 0.02, (kind, preset, q, far, seen_skill, blind)
+
+
 #: The cases of flights whose range changes (seed 0) where item 1 is not met, and why.
 _NOT_MET = {
     ("planner", "paper", 10): "skill 0.172, bins off by up to 0.091: the oracle itself reaches only 0.201 (the far "
                               "legs' RSSI changes little about the 10th percentile)",
-    **{("planner", "campaign", q): "skill -2.5 (q10) / -1.2 (q30), bins off by up to 0.58: 12 dB below the truth "
-                                   "where the learning flights never looked, where the fit states a spread "
-                                   "(prior_std_db, the measured gains' spread) of 5.9 dB" for q in (10, 30)},
-    **{("planner", "ground", q): "skill -2.5 (q10) / -1.1 (q30), bins off by up to 0.95: 9.5 dB below the truth "
-                                 "where the learning flights never looked, where the fit states a spread "
-                                 "(prior_std_db) of 5.0 dB" for q in (10, 30)},
+    **{("planner", "campaign", q): "skill -2.5 (q10) / -1.2 (q30), bins off by up to 0.58: 11.6 dB below the "
+                                   "truth where the learning flights never looked (the drone's side and tail, "
+                                   "brighter than the shadowed side it learned); out of reach of any predictor "
+                                   "from the learning flights (the seen-level oracle: -1.9 / -0.9)" for q in (10, 30)},
+    **{("planner", "ground", q): "skill -1.9 (q10) / -0.8 (q30), bins off by up to 0.93: 6.5 dB below the truth "
+                                 "(10.5 dB RMS) where the learning flights never looked; out of reach of any "
+                                 "predictor from the learning flights (the seen-level oracle: -1.7 / -0.8)" for q in (10, 30)},
     **{("covered", "campaign", q): "bins off by 0.18 / 0.19: six flights, six draws of their levels (an oracle that "
                                    "knows the patterns but not the levels: 0.19 / 0.12 off)" for q in (10, 30)},
     ("covered", "ground", 10): "skill 0.175: the oracle itself reaches only 0.202",
