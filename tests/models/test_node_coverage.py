@@ -87,3 +87,40 @@ def test_a_fit_gives_the_grids_of_its_samples_with_the_jobs_riding_along(monkeyp
     fitted = fit_model(samples, ModelSpec.parse("bg-3"))  # statistics in the caller: the jobs run after
     assert started == []
     assert fitted.model.training.coverage_deg == node_coverage_grids(samples)
+
+
+def test_an_automatic_fit_accumulates_its_units_on_the_workers_and_stores_their_grids(monkeypatch):
+    """``fit_auto``: the units' statistics computed on the workers (one unit each) are the ones
+    computed one after the other, and the grids' jobs ride behind them."""
+    from rplearn.core.lsq import runtime as runtime_module
+    from rplearn.core.lsq.normal_equations import NormalEquations
+    from rplearn.models.auto import fit_auto
+    from rplearn.models.spec import ModelSpec
+
+    units = {f"u{i}": _samples(9_000, 10 + i, ("A", "B")) for i in range(3)}
+    started: list[int] = []
+    original = runtime_module.Overlapped.start
+
+    def spy(self, pool):
+        started.append(len(self._jobs))
+        return original(self, pool)
+
+    added: list[tuple[NormalEquations, np.ndarray]] = []
+    original_add = NormalEquations.add
+
+    def add(self, directions, *args, **kwargs):
+        out = original_add(self, directions, *args, **kwargs)
+        added.append((out, np.asarray(directions.az_tx)))
+        return out
+
+    monkeypatch.setattr(runtime_module.Overlapped, "start", spy)
+    monkeypatch.setattr(NormalEquations, "add", add)
+    fitted, _ = fit_auto(units, ModelSpec("sh", 4))
+    assert started == [len(CoverageWork(list(units.values())).jobs)] == [6]
+    assert fitted.model.training.coverage_deg == node_coverage_grids(list(units.values()))
+    assert len(added) == 3
+    for stats, az_tx in added:  # each unit's statistics as computed alone, in this thread
+        s = next(u for u in units.values() if u.directions.az_tx is az_tx or np.array_equal(u.directions.az_tx, az_tx))
+        alone = original_add(NormalEquations(stats.basis, 2), s.directions, s.tx_index, s.rx_index, s.joint_gain_db)
+        np.testing.assert_array_equal(stats.gram, alone.gram)
+        np.testing.assert_array_equal(stats.rhs, alone.rhs)
