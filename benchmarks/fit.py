@@ -14,7 +14,8 @@ measured in the same run:
 Targets: at most 1.5x (a), at least 30x faster than (b), predictions equal within 1e-6 dB.
 
 Then the figure issue 30 asks for: ``fit_model`` (what ``rplearn fit`` runs: the features, the
-Gram, the solve, the standard errors and the coverage grid every pattern model stores) of SH-10
+Gram, the solve, the standard errors and the coverage grid every pattern model stores, whose
+jobs run on the statistics' workers behind the last block of samples) of SH-10
 on the paper preset's learning samples (seed 0, 56,005 samples, ``smoke`` with ``--tiny``)
 against ``dsyrk`` of the float64 design matrix of the same samples (56,005 x 200), timed
 alternately (wall clock, best of each; ``dsyrk`` with one BLAS thread and the default alternately)

@@ -84,9 +84,10 @@ def _grid_tree(n_points: int) -> KDTree:
     return _GRID_TREE[n_points]
 
 
-def _occupied_grid_points(az_rad: ArrayLike, el_rad: ArrayLike, n_points: int = COVERAGE_GRID_POINTS) -> np.ndarray:
+def occupied_grid_points(az_rad: ArrayLike, el_rad: ArrayLike, n_points: int = COVERAGE_GRID_POINTS) -> np.ndarray:
     """Which points of the Fibonacci grid are the nearest of at least one of these directions
-    (a boolean mask of ``n_points``): the cells the directions fall in."""
+    (a boolean mask of ``n_points``): the cells the directions fall in. The mask of a set of
+    directions is the union (``|``) of the masks of any partition of it."""
     v = unit_vector(np.asarray(az_rad, np.float64).ravel(), np.asarray(el_rad, np.float64).ravel())
     occupied = np.zeros(n_points, bool)
     if v.shape[0]:
@@ -95,10 +96,19 @@ def _occupied_grid_points(az_rad: ArrayLike, el_rad: ArrayLike, n_points: int = 
     return occupied
 
 
-def _grid_distance_deg(occupied: np.ndarray) -> np.ndarray:
+def grid_distance_deg(occupied: ArrayLike, previous: ArrayLike | None = None) -> np.ndarray:
     """Angle [deg] from each point of a Fibonacci grid to the nearest occupied point (a boolean
-    mask over the grid, :func:`_occupied_grid_points`): 0 at an occupied point, 180 everywhere
-    when none is; the free points are looked up among the occupied ones only."""
+    mask over the grid, :func:`occupied_grid_points`): 0 at an occupied point, 180 everywhere
+    when none is; the free points are looked up among the occupied ones only. ``previous`` (an
+    earlier grid) is combined by the minimum."""
+    out = _grid_distance_deg(occupied)
+    if previous is not None:
+        out = np.minimum(out, np.asarray(previous, np.float64))
+    return out
+
+
+def _grid_distance_deg(occupied: ArrayLike) -> np.ndarray:
+    """:func:`grid_distance_deg` without an earlier grid."""
     occupied = np.asarray(occupied, bool).ravel()
     out = np.zeros(occupied.size)
     if not occupied.any():
@@ -121,15 +131,12 @@ def coverage_grid(az_rad: ArrayLike, el_rad: ArrayLike, previous: ArrayLike | No
     directions are replaced by the grid points of the cells they fall in (exact within a cell's
     radius, about 1 degree), so the cost does not grow with the number of samples.
     """
-    # The grid points of the cells the directions fall in stand for them (_occupied_grid_points):
+    # The grid points of the cells the directions fall in stand for them (occupied_grid_points):
     # a tree of at most n_points points, so that grid points far from a narrow patch of data are
     # not answered by scanning it all, and the same set whatever the chunking (the result moves
     # by less than a cell's radius, about 1 degree). An occupied point is at 0 degrees from
-    # itself; only the others are looked up (_grid_distance_deg).
-    out = _grid_distance_deg(_occupied_grid_points(az_rad, el_rad, n_points))
-    if previous is not None:
-        out = np.minimum(out, np.asarray(previous, np.float64))
-    return out
+    # itself; only the others are looked up (grid_distance_deg).
+    return grid_distance_deg(occupied_grid_points(az_rad, el_rad, n_points), previous)
 
 
 def coverage_at(grid_deg: ArrayLike, az_rad: ArrayLike, el_rad: ArrayLike) -> np.ndarray:
@@ -164,4 +171,5 @@ def grid_value_at(grid_values: ArrayLike, az_rad: ArrayLike, el_rad: ArrayLike) 
     return values[idx]
 
 
-__all__ += ["COVERAGE_GRID_POINTS", "coverage_at", "coverage_grid", "grid_value_at"]
+__all__ += ["COVERAGE_GRID_POINTS", "coverage_at", "coverage_grid", "grid_distance_deg", "grid_value_at",
+            "occupied_grid_points"]

@@ -19,6 +19,7 @@ import scipy.linalg  # noqa: F401  (order selection solves through scipy: loaded
 
 from rplearn.core.lsq.link_statistics import reserve_block_buffer
 from rplearn.core.lsq.normal_equations import NormalEquations
+from rplearn.core.lsq.runtime import DEFAULT_RUNTIME
 from rplearn.core.lsq.selection import (
     DEFAULT_PENALTY_POWER,
     Selection,
@@ -34,8 +35,9 @@ from rplearn.core.threads import blas_threads_for
 from rplearn.core.threads import warm_up as warm_up_blas
 from rplearn.data.tables import LinkSamples
 from rplearn.errors import InputError
-from rplearn.models.fit import FittedModel, node_coverage_grids
+from rplearn.models.fit import FittedModel
 from rplearn.models.load import load_priors
+from rplearn.models.node_coverage import CoverageWork
 from rplearn.models.options import FitOptions
 from rplearn.models.own_posterior import OwnPrior, own_pattern_posterior
 from rplearn.models.patterns import PatternSet
@@ -316,13 +318,20 @@ def fit_auto(
     basis = big.basis()
     reserve_block_buffer(basis, max(len(s) for s in units.values()))
     warm_up_blas()
-    with blas_threads_for(n, basis.n_coef * len(nodes)):
+    def unit_statistics(u: str) -> NormalEquations:
+        y, env = regression_inputs(units[u], options)
+        s = units[u]
+        return NormalEquations(basis, len(nodes), environment=env is not None).add(
+            s.directions, s.tx_index, s.rx_index, y, env)
+
+    # The units' statistics on the runtime's workers, one unit each (the same sums as one at a
+    # time: a unit of a flight, about 19,000 samples, is one block of its own), and the coverage
+    # grids' jobs behind them, while this thread selects the order.
+    coverage = CoverageWork(list(units.values()))
+    with DEFAULT_RUNTIME.overlapping(coverage.jobs if coverage.parallel else []) as riding, \
+            blas_threads_for(n, basis.n_coef * len(nodes)):
         t0 = time.perf_counter()
-        stats = {}
-        for u, s in units.items():
-            y, env = regression_inputs(s, options)
-            stats[u] = NormalEquations(basis, len(nodes), environment=env is not None).add(
-                s.directions, s.tx_index, s.rx_index, y, env)
+        stats = dict(zip(units, DEFAULT_RUNTIME.in_order(unit_statistics, list(units))))
         freq: Counter[float] = Counter()
         for s in units.values():
             frequency_counts(s, freq)
@@ -331,7 +340,8 @@ def fit_auto(
         fitted.ltd_s = time.perf_counter() - t0
     model = fitted.model
     assert isinstance(model, PatternSet)  # fit_from_statistics learns patterns
-    model.training = model.training.replace(ltd_s=fitted.ltd_s, coverage_deg=node_coverage_grids(list(units.values())))
+    grids = coverage.grids(riding.results()) if coverage.parallel else coverage.run()
+    model.training = model.training.replace(ltd_s=fitted.ltd_s, coverage_deg=grids)
     return fitted, choice
 
 

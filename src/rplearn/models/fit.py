@@ -17,12 +17,13 @@ import numpy as np
 from rplearn._argtypes import check_types
 from rplearn.core.lsq.solver import FitReport, JointFitOptions, fit_joint
 from rplearn.core.metrics import Scores, score
-from rplearn.core.threads import blas_threads_for
+from rplearn.core.threads import blas_threads_for, is_small_fit, one_blas_thread, thread_override
 from rplearn.core.threads import warm_up as warm_up_blas
 from rplearn.data.tables import LinkSamples
 from rplearn.errors import InputError
 from rplearn.models.base import Model, learned_frequency_hz
 from rplearn.models.baselines import KNNModel, MeanModel
+from rplearn.models.node_coverage import PARALLEL_COVERAGE_DIRECTIONS, CoverageWork, node_coverage_grids  # noqa: F401  (their old home)
 from rplearn.models.options import FitOptions
 from rplearn.models.patterns import PatternSet
 from rplearn.models.spec import ModelSpec, check_model_size
@@ -121,46 +122,6 @@ def solve_patterns(
     return patterns, sol.report
 
 
-#: Directions (all nodes together) from which the nodes' coverage grids are computed on the
-#: statistics' worker threads, one node per core (pykdtree and numpy release the interpreter lock).
-PARALLEL_COVERAGE_DIRECTIONS = 20_000
-
-
-def node_coverage_grids(
-    samples: LinkSamples | Sequence[LinkSamples], previous: Mapping[str, Any] | None = None
-) -> dict[str, list[float]]:
-    """Per node, the coverage grid of its learning directions (:func:`rplearn.core.coverage.coverage_grid`),
-    rounded to 0.1 degree for the model file; several sample sets (the units of one fit, same
-    nodes) are pooled, and ``previous`` grids are combined (chunked data). With many directions
-    the nodes' grids are computed on the two worker threads of
-    :data:`~rplearn.core.lsq.runtime.DEFAULT_RUNTIME` (each grid is the same as alone)."""
-    from rplearn.core.coverage import coverage_grid
-
-    parts = [samples] if isinstance(samples, LinkSamples) else list(samples)
-    nodes = parts[0].nodes
-    directions = []
-    for k in range(len(nodes)):
-        az, el = [], []
-        for part in parts:
-            d = part.directions
-            t, r = part.tx_index == k, part.rx_index == k
-            az += [np.asarray(d.az_tx)[t], np.asarray(d.az_rx)[r]]
-            el += [np.asarray(d.el_tx)[t], np.asarray(d.el_rx)[r]]
-        directions.append((np.concatenate(az), np.concatenate(el)))
-
-    def grid(k: int) -> list[float]:
-        prev = None if previous is None else previous.get(nodes[k])
-        return np.round(coverage_grid(directions[k][0], directions[k][1], prev), 1).tolist()
-
-    if len(nodes) > 1 and sum(az.size for az, _ in directions) >= PARALLEL_COVERAGE_DIRECTIONS:
-        from rplearn.core.lsq.runtime import DEFAULT_RUNTIME
-
-        grids = list(DEFAULT_RUNTIME.in_order(grid, range(len(nodes))))
-    else:
-        grids = [grid(k) for k in range(len(nodes))]
-    return dict(zip(nodes, grids))
-
-
 @check_types
 def fit_patterns(
     samples: LinkSamples, spec: ModelSpec, options: FitOptions | None = None,
@@ -222,19 +183,47 @@ def fit_model(
     check_model_size(spec, len(samples), len(samples.nodes))
     _warm_up(spec, len(samples), options)
     columns = spec.basis().n_coef * len(samples.nodes) if spec.decouples else 0
-    with blas_threads_for(len(samples), columns):
-        t0 = time.perf_counter()
-        if spec.kind == "mean":
-            model: MeanModel | KNNModel | PatternSet = MeanModel.fit(samples)
-        elif spec.kind == "knn":
-            model = KNNModel.fit(samples, int(spec.order or 0))  # ModelSpec refuses a knn without an order
-        else:
-            model = fit_patterns(samples, spec, options)
-        ltd = time.perf_counter() - t0
-    coverage = node_coverage_grids(samples) if isinstance(model, PatternSet) else model.training.coverage_deg
+    if spec.kind in ("mean", "knn"):
+        with blas_threads_for(len(samples), columns):
+            t0 = time.perf_counter()
+            if spec.kind == "mean":
+                model: MeanModel | KNNModel | PatternSet = MeanModel.fit(samples)
+            else:
+                model = KNNModel.fit(samples, int(spec.order or 0))  # ModelSpec refuses a knn without an order
+            ltd = time.perf_counter() - t0
+        coverage = model.training.coverage_deg
+    else:
+        model, ltd, coverage = _fit_patterns_with_coverage(samples, spec, options, columns)
     model.provenance = {**dict(provenance or {}), "model": spec.label}
     model.training = model.training.replace(ltd_s=ltd, coverage_deg=coverage)
     return FittedModel(spec, model, ltd)
+
+
+def _fit_patterns_with_coverage(
+    samples: LinkSamples, spec: ModelSpec, options: FitOptions, columns: int
+) -> tuple[PatternSet, float, dict[str, list[float]]]:
+    """:func:`fit_patterns`, its learning time [s] and the nodes' coverage grids
+    (:func:`node_coverage_grids`).
+
+    When the statistics go through the runtime's workers (a basis with Gram moments) and the
+    solve is small (:func:`~rplearn.core.threads.is_small_fit` of the columns alone), the grids'
+    jobs ride along (:meth:`~rplearn.core.lsq.runtime.StatisticsRuntime.overlapping`): queued
+    behind the last block of samples, they run while a worker would otherwise wait for the last
+    block or for the solve, which then keeps to one BLAS thread (the workers' cores are busy;
+    ``RPLEARN_THREADS`` still decides when set). The grids are the same, whichever thread makes
+    them.
+    """
+    from rplearn.core.lsq.runtime import DEFAULT_RUNTIME
+
+    work = CoverageWork(samples)
+    basis = spec.basis()
+    ride = work.parallel and basis.moment_shape is not None and basis.stacked_samples and is_small_fit(0, columns)
+    limit = one_blas_thread() if ride and thread_override() is None else blas_threads_for(len(samples), columns)
+    with DEFAULT_RUNTIME.overlapping(work.jobs if ride else []) as riding, limit:
+        t0 = time.perf_counter()
+        model = fit_patterns(samples, spec, options)
+        ltd = time.perf_counter() - t0
+    return model, ltd, work.grids(riding.results()) if ride else work.run()
 
 
 @check_types

@@ -68,3 +68,75 @@ def test_a_forked_child_starts_with_a_fresh_pool():
     _, status = os.waitpid(pid, 0)
     assert os.waitstatus_to_exitcode(status) == 0
     assert runtime._pool is not None and list(held) == [1, 2]  # the parent keeps its own
+
+
+def test_riding_jobs_are_queued_behind_the_last_block_and_run_on_the_workers():
+    """Jobs given to ``overlapping`` are submitted to the pool after every block of the pass (the
+    pool starts its queue in order) and run on the workers; results come in the jobs' order."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    submitted: list[str] = []
+
+    class Recording(ThreadPoolExecutor):
+        def submit(self, fn, /, *args, **kwargs):  # type: ignore[override]
+            submitted.append("block" if args else "job")
+            return super().submit(fn, *args, **kwargs)
+
+    runtime = StatisticsRuntime()
+    runtime._pool = Recording(max_workers=2, thread_name_prefix="rplearn-stats")
+
+    def job(i: int):
+        return lambda: (i, threading.current_thread().name)
+
+    with runtime.overlapping([job(0), job(1), job(2)]) as riding:
+        assert not riding.started
+        assert list(runtime.in_order(lambda s: s, range(5))) == [0, 1, 2, 3, 4]
+        assert riding.started
+        assert list(runtime.in_order(lambda s: s, range(2))) == [0, 1]  # a later pass queues them no more
+        results = riding.results()
+    assert submitted == ["block"] * 5 + ["job"] * 3 + ["block"] * 2
+    assert [i for i, _ in results] == [0, 1, 2]
+    assert all(name.startswith("rplearn-stats") for _, name in results)
+
+
+def test_riding_jobs_no_pass_queued_are_computed_when_asked_and_once():
+    runtime = StatisticsRuntime()
+    calls: list[int] = []
+
+    def job(i: int):
+        return lambda: calls.append(i) or i * 10
+
+    with runtime.overlapping([job(0), job(1)]) as riding:
+        assert list(runtime.in_order(lambda s: s, [5])) == [5]  # one block: the caller's, no workers
+        assert not riding.started
+        assert riding.results() == [0, 10]  # computed now (two jobs: on the workers)
+    assert sorted(calls) == [0, 1]
+    with runtime.overlapping([]) as riding:
+        pass
+    assert riding.results() == []
+
+
+def test_an_error_inside_the_block_settles_the_riding_jobs_and_a_jobs_error_reaches_the_caller():
+    runtime = StatisticsRuntime()
+    gate = threading.Event()
+    ran: list[int] = []
+
+    def slow() -> int:
+        gate.wait(5)
+        ran.append(1)
+        return 1
+
+    with pytest.raises(ValueError, match="in the block"):
+        with runtime.overlapping([slow, slow, slow, slow]) as riding:
+            list(runtime.in_order(lambda s: s, range(2)))
+            gate.set()
+            raise ValueError("in the block")
+    assert all(f.done() for f in riding._futures or [])  # none left running behind the caller
+
+    def bad() -> int:
+        raise KeyError("job")
+
+    with runtime.overlapping([bad]) as riding:
+        list(runtime.in_order(lambda s: s, range(2)))
+    with pytest.raises(KeyError, match="job"):
+        riding.results()

@@ -6,6 +6,11 @@ ahead. :class:`StatisticsRuntime` owns them: the per-thread buffers, the pool (c
 use), the lock that gives the pool, and the process-wide BLAS thread limit that goes with it,
 to one caller at a time, and the fork hook that lets a forked child start afresh.
 :data:`DEFAULT_RUNTIME` is the one the library uses.
+
+Work that does not depend on the statistics (a fit's coverage grids) can ride along
+(:meth:`StatisticsRuntime.overlapping`): it is queued on the workers behind the statistics'
+last block, so it runs while a worker would otherwise wait (the last block of an odd count, the
+caller's solve), and otherwise when its results are asked for.
 """
 
 from __future__ import annotations
@@ -14,15 +19,61 @@ import os
 import threading
 import weakref
 from collections import deque
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from concurrent.futures import Future, ThreadPoolExecutor
-from typing import Any, TypeVar
+from contextlib import contextmanager
+from typing import Any, Generic, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
 
 FloatArray = NDArray[np.float64]
 T = TypeVar("T")
+
+
+class Overlapped(Generic[T]):
+    """Jobs that ride along with the statistics (:meth:`StatisticsRuntime.overlapping`).
+
+    Their futures once queued on the workers behind a statistics pass's last block; their
+    results (:meth:`results`) come from those futures, or from running the jobs then.
+    """
+
+    def __init__(self, runtime: StatisticsRuntime, jobs: Sequence[Callable[[], T]]) -> None:
+        self._runtime = runtime
+        self._jobs = list(jobs)
+        self._futures: list[Future[T]] | None = None
+
+    @property
+    def started(self) -> bool:
+        """Whether the jobs were queued on the workers (behind a statistics pass)."""
+        return self._futures is not None
+
+    def start(self, pool: ThreadPoolExecutor) -> None:
+        """Queue the jobs on ``pool`` (once)."""
+        if self._futures is None:
+            self._futures = [pool.submit(job) for job in self._jobs]
+
+    def results(self) -> list[T]:
+        """Every job's result, in the jobs' order (an error of a job is raised here): waited for
+        when queued, else computed now (on the workers when there are several)."""
+        if self._futures is not None:
+            return [f.result() for f in self._futures]
+        self._futures = []  # no pass may queue them now: they are computed here
+        try:
+            return list(self._runtime.in_order(lambda job: job(), self._jobs))
+        finally:
+            self._futures = None
+
+    def settle(self) -> None:
+        """Cancel the queued jobs not yet running and wait for the others (errors dropped)."""
+        for future in self._futures or ():
+            future.cancel()
+        for future in self._futures or ():
+            if not future.cancelled():
+                try:
+                    future.result()
+                except Exception:  # noqa: BLE001, S110  (the caller's own error is the one raised)
+                    pass
 
 
 class StatisticsRuntime:
@@ -41,6 +92,7 @@ class StatisticsRuntime:
         self._buffers = threading.local()
         self._pool: ThreadPoolExecutor | None = None
         self._lock = threading.Lock()
+        self._riders = threading.local()
         if hasattr(os, "register_at_fork"):
             ref = weakref.ref(self)
 
@@ -79,6 +131,34 @@ class StatisticsRuntime:
         self._pool = None
         self._lock = threading.Lock()
 
+    @contextmanager
+    def overlapping(self, jobs: Sequence[Callable[[], T]]) -> Iterator[Overlapped[T]]:
+        """Let ``jobs`` (callables without arguments, independent of the statistics) ride along
+        with the statistics computed in this thread inside the block.
+
+        The first :meth:`in_order` of this thread inside the block that hands its blocks to the
+        workers queues the jobs behind its last block; :meth:`Overlapped.results` (inside or
+        after the block) gives their results, computing them then if no pass queued them. The
+        jobs must not use this runtime's pool themselves. On an error inside the block the
+        queued jobs are cancelled or waited for.
+        """
+        riders: Overlapped[T] = Overlapped(self, jobs)
+        outer = getattr(self._riders, "pending", None)
+        self._riders.pending = riders
+        try:
+            yield riders
+        except BaseException:
+            riders.settle()
+            raise
+        finally:
+            self._riders.pending = outer
+
+    def _start_riders(self, pool: ThreadPoolExecutor) -> None:
+        """Queue this thread's riding jobs (:meth:`overlapping`) on ``pool``, once."""
+        riders = getattr(self._riders, "pending", None)
+        if riders is not None and not riders.started:
+            riders.start(pool)
+
     def in_order(self, work: Callable[[Any], T], starts: Iterable[Any]) -> Iterator[T]:
         """``work(s)`` for every block start ``s``, yielded in order.
 
@@ -110,6 +190,7 @@ class StatisticsRuntime:
                     pending.append(pool.submit(work, s))
                     if len(pending) >= self.ahead:
                         yield pending.popleft().result()
+                self._start_riders(pool)  # behind the last block (overlapping)
                 while pending:
                     yield pending.popleft().result()
         finally:
@@ -128,4 +209,4 @@ class StatisticsRuntime:
 DEFAULT_RUNTIME = StatisticsRuntime()
 
 
-__all__ = ["DEFAULT_RUNTIME", "StatisticsRuntime"]
+__all__ = ["DEFAULT_RUNTIME", "Overlapped", "StatisticsRuntime"]
