@@ -201,17 +201,20 @@ def tied_own_posterior(own: OwnPosterior | None, total: NormalEquations, nodes: 
     """
     if own is None or len(ties) < 2 or own.basis != total.basis or total.basis.n_coef * len(nodes) > MAX_OWN_COLUMNS:
         return own
-    covariances = []
+    covariances, per_unit_noise = [], {}
     for order, smoothing, inflation in ties:
         normal = sub_statistics(total, make_basis(int(order)))
         point = replace(prior, smoothing=float(smoothing), scale=penalty_scale(normal.gram, normal.n_pattern_columns))
-        if (point.smoothing, point.scale) == (prior.smoothing, prior.scale):  # the chosen point: its posterior is ``own``'s (no second solve)
-            covariances.append(np.asarray(own.covariance, np.float64))
-            continue
-        cov = _continued(total, nodes, point, within_var_db2 * float(inflation))
-        if cov is None:
-            return own
-        covariances.append(cov)
+        # continued to the largest basis, a point's prior depends on its order only through the
+        # penalty's unit (for spherical harmonics the same at every order: the addition theorem),
+        # so points of one smoothing share one solve, scaled by their inflations
+        key = (point.smoothing, point.scale)
+        if key not in per_unit_noise:
+            cov = _continued(total, nodes, point, 1.0)
+            if cov is None:
+                return own
+            per_unit_noise[key] = cov
+        covariances.append(per_unit_noise[key] * (within_var_db2 * float(inflation)))
     return OwnPosterior(own.basis, np.mean(covariances, axis=0), own.note, own.mean)
 
 
