@@ -39,7 +39,7 @@ from rplearn.models.fit import FittedModel
 from rplearn.models.load import load_priors
 from rplearn.models.node_coverage import CoverageWork
 from rplearn.models.options import FitOptions
-from rplearn.models.own_posterior import OwnPrior, own_pattern_posterior
+from rplearn.models.own_posterior import OwnPrior, own_pattern_posterior, tied_own_posterior
 from rplearn.models.patterns import PatternSet
 from rplearn.models.spec import ModelSpec, check_model_size, default_ridge
 from rplearn.models.streamed import frequency_counts, weighted_median
@@ -474,6 +474,8 @@ def fit_from_statistics(
     own_prior = OwnPrior(choice.smoothing, penalty_scale(normal.gram, normal.n_pattern_columns), power, ridge, gauge,
                          target, prior_level)
     own = own_pattern_posterior(total, chosen, list(map(str, nodes)), own_prior, noise_var, uncapped)
+    own = tied_own_posterior(own, total, list(map(str, nodes)), own_prior, choice.ties, within_var,
+                             lambda k: ModelSpec(kind, k, ridge=ridge).basis())
     ltd = time.perf_counter() - t0
     fields, terms = shared_fields(sol, list(nodes), options, counts, rescale * inflation)
     training = sol.report.to_dict()

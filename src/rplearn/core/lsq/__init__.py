@@ -23,6 +23,7 @@ factorisations
 selection
 ``selection``          order and smoothing by grouped cross-validation
 ``selection_result``   :class:`Selection`, :class:`CurvePoint`
+``ties``               the points the held-out units cannot tell apart (choice, spread)
 =====================  ==========================================================================
 
 Its public names are exported by :mod:`rplearn.core` (``from rplearn.core import fit_joint``);

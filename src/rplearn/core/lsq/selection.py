@@ -33,14 +33,16 @@ The search, a coordinate descent over the validation error (every point is kept 
 4. from where that stops, steps to the best of the eight neighbours in (order, smoothing)
    while one validates better (:func:`_diagonal_steps`: order and smoothing trade off, and
    steps along one coordinate miss the valley along the diagonal);
-5. of the points evaluated, those within noise of the best (:func:`_within_noise`: from three
+5. of the points evaluated, those within noise of the best (:func:`rplearn.core.lsq.ties.within_noise`: from three
    held-out units, at most :data:`WITHIN_NOISE_SE` standard errors of the paired per-unit
    difference and :data:`WITHIN_NOISE_FRACTION` of the mean square above it), the least
    smoothed (then the largest order) is chosen: the joint gain validates the sum of two
    patterns, not their split, which the penalty decides; more smoothing than the held-out
    units can justify pulls the split toward the prior (on the ``paper`` preset, seed 1: a
    pattern error per node of 1.48 dB at smoothing 3.2e-5 against 1.33 dB at 1e-5, for a
-   validation error no unit can tell apart; ``benchmarks/split.py``).
+   validation error no unit can tell apart; ``benchmarks/split.py``). The points the units
+   cannot tell from the best are kept with their variance inflations (:attr:`Selection.ties`,
+   :mod:`rplearn.core.lsq.ties`): the own-pattern spread averages their posteriors.
 
 The validation error of an order and smoothing is computed once (a Cholesky solve per held-out
 unit) and kept in the curve. The cost is dominated by the few solves at the largest orders:
@@ -60,6 +62,8 @@ from rplearn.core.lsq.level import shrink_target
 from rplearn.core.lsq.normal_equations import EXPONENT_MIN_SPREAD_DB, NormalEquations, schur_spread_db
 from rplearn.core.lsq.penalty import DEFAULT_PENALTY_POWER, nested_columns, penalty_scale, penalty_vector, sub_statistics, with_shared_columns
 from rplearn.core.lsq.selection_result import CurvePoint, Selection
+from rplearn.core.lsq.ties import tied_points
+from rplearn.core.lsq.ties import tightest_split as _tightest_split
 from rplearn.errors import IdentifiabilityError, InputError
 
 #: Smoothing values tried, relative to ``mean(diag(X^T X))`` (0: the plain fit with its ridge).
@@ -70,14 +74,6 @@ MAX_SMOOTHING = 1e6
 #: Weight of the (unpenalised) constant in the cross-validation solves, relative to the
 #: roughness of degree 1: keeps them positive definite; moves only the free gauge constant.
 _CONSTANT_FLOOR = 1e-6
-#: Points within this many standard errors (of the held-out units' paired difference in squared
-#: error) of the best validation error count as equally good: the least smoothed of them is chosen.
-WITHIN_NOISE_SE = 2.0
-#: ... and by at most this fraction of the best validation mean square (a cap on what a noisy
-#: standard error from a few units may excuse: 1% is 0.5% of the RMSE, 0.02 dB at 4.4 dB).
-WITHIN_NOISE_FRACTION = 0.01
-#: Held-out units needed to estimate that standard error (with fewer the best point is chosen).
-MIN_NOISE_UNITS = 3
 #: Orders whose fold blocks are kept at once (the coordinate descent moves between neighbours).
 _CACHED_ORDERS = 3
 
@@ -168,8 +164,9 @@ class _Evaluator:
         if self.n_shared and self.cv:
             self.pins = self._fold_pins(units)
         self.seen: dict[tuple[int, float], float] = {}
-        self.fold_sse: dict[tuple[int, float], np.ndarray] = {}  # per held-out unit, for within_noise()
+        self.fold_sse: dict[tuple[int, float], np.ndarray] = {}  # per held-out unit, for ties.within_noise()
         self.excess_db2: dict[tuple[int, float], float] = {}  # per held-out sample, see spread()
+        self._spreads: dict[tuple[int, float], tuple[float, float]] = {}  # spread() of each point asked
         self.curve: list[CurvePoint] = []
         self._cache: dict[int, Any] = {}
         self._best_solved: tuple[tuple[int, float], list[tuple[np.ndarray, np.ndarray | None]]] | None = None
@@ -276,6 +273,11 @@ class _Evaluator:
         one (order, smoothing) (1 and 0 without held-out units); see :func:`variance_inflation`."""
         if not self.cv:
             return 1.0, 0.0
+        if (int(order), float(smoothing)) not in self._spreads:
+            self._spreads[(int(order), float(smoothing))] = self._spread(int(order), float(smoothing))
+        return self._spreads[(int(order), float(smoothing))]
+
+    def _spread(self, order: int, smoothing: float) -> tuple[float, float]:
         w, blocks, targets = self._blocks(int(order))
         idx = with_shared_columns(nested_columns(self.big, self.make_basis(int(order)), self.n_nodes), self.first)
         sums = [(a[idx], sum_y) for a, sum_y in self.sums]
@@ -423,29 +425,6 @@ def _diagonal_steps(ev: _Evaluator, orders: Sequence[int], order: int, smoothing
         path.append(best)
 
 
-def _within_noise(ev: _Evaluator, best: CurvePoint, point: CurvePoint) -> bool:
-    """Whether ``point``'s validation mean square exceeds ``best``'s by at most
-    :data:`WITHIN_NOISE_SE` standard errors of their paired difference (the held-out units'
-    differences taken as independent draws) and by at most :data:`WITHIN_NOISE_FRACTION` of it.
-    Needs :data:`MIN_NOISE_UNITS` held-out units: from two, the standard error is no estimate."""
-    if not ev.cv or len(ev.folds) < MIN_NOISE_UNITS:
-        return point == best
-    b = ev.fold_sse[(best.order, best.smoothing)]
-    d = (ev.fold_sse[(point.order, point.smoothing)] - b) / ev.n
-    se = float(np.sqrt(d.size * np.var(d, ddof=1)))
-    return float(d.sum()) <= min(WITHIN_NOISE_SE * se, WITHIN_NOISE_FRACTION * float(b.sum()) / ev.n)
-
-
-def _tightest_split(ev: _Evaluator, best: CurvePoint, points: Sequence[CurvePoint]) -> CurvePoint:
-    """Among the points within noise of the best validation error, the one that shrinks the
-    patterns least (the least smoothing, then the largest order): smoothing chosen for the joint
-    prediction alone leaves the split between the nodes' patterns (what the joint gain does not
-    see) to the penalty, so a smoothing the held-out units cannot tell from the best is no
-    reason to pull the patterns further toward the prior."""
-    close = [p for p in points if _within_noise(ev, best, p)]
-    return min(close, key=lambda p: (p.smoothing, -p.order)) if close else best
-
-
 def select_order_and_smoothing(
     units: Mapping[str, NormalEquations],
     make_basis: Callable[[int], Basis],
@@ -506,7 +485,8 @@ def select_order_and_smoothing(
     searched = len(ev.curve)
     path = _diagonal_steps(ev, orders, best_o, best_s, values)
     # the neighbours it probed without moving are checks of the best's neighbourhood, not more
-    # candidates for the tie rule below: only the points it moved to join the descent's
+    # candidates for the tie rule below: only the points it moved to join the descent's (the
+    # spread's ties take every point evaluated: none of them is a prior the units can exclude)
     candidates = ev.curve[:searched] + [p for p in ev.curve[searched:] if (p.order, p.smoothing) in path]
     finite = [p for p in candidates if np.isfinite(p.rmse_db)]
     if not finite:
@@ -516,7 +496,8 @@ def select_order_and_smoothing(
     kappa, level_var = ev.spread(choice.order, choice.smoothing)
     return Selection("grouped-cv" if ev.cv else "gcv", choice.order, choice.smoothing, choice.rmse_db,
                      ev.curve, sorted(units) if ev.cv else [], float(power), kappa, float(np.sqrt(level_var)),
-                     ev.excess_db2.get((int(choice.order), float(choice.smoothing)), 0.0))
+                     ev.excess_db2.get((int(choice.order), float(choice.smoothing)), 0.0),
+                     tied_points(ev, best, [p for p in ev.curve if np.isfinite(p.rmse_db)]))
 
 
 def variance_inflation(

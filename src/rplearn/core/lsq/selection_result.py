@@ -52,6 +52,10 @@ class Selection:
         own means exceed the folds' within-unit noise (the part of the held-out error that is
         the pattern's: the folds' posterior variance and any misfit the model cannot represent;
         :func:`rplearn.models.auto.held_out_misfit_var`); 0 for GCV.
+    ties : list of (int, float, float)
+        ``(order, smoothing, variance_inflation)`` of every evaluated point the held-out units
+        cannot tell from the best (:func:`rplearn.core.lsq.ties.tied_points`), the best first;
+        the own-pattern spread averages their posteriors. Empty for GCV.
     """
 
     method: str
@@ -64,12 +68,14 @@ class Selection:
     variance_inflation: float = 1.0
     flight_level_std_db: float = 0.0
     held_out_excess_db2: float = 0.0
+    ties: list[tuple[int, float, float]] = field(default_factory=list)
 
     def to_dict(self) -> dict[str, Any]:
         return {"method": self.method, "order": self.order, "smoothing": self.smoothing, "rmse_db": self.rmse_db,
                 "power": self.power, "units": list(self.units), "variance_inflation": self.variance_inflation,
                 "flight_level_std_db": self.flight_level_std_db,
-                "held_out_excess_db2": self.held_out_excess_db2, "curve": [p.to_dict() for p in self.curve]}
+                "held_out_excess_db2": self.held_out_excess_db2, "curve": [p.to_dict() for p in self.curve],
+                "ties": [list(t) for t in self.ties]}
 
     def curve_text(self) -> str:
         """The validation curve as a small table (order, smoothing, RMSE), the choice marked."""
