@@ -57,14 +57,7 @@ from typing import Any
 
 import numpy as np
 
-from rplearn.analysis.manoeuvres import (
-    ManoeuvreOptions,
-    correlated_error_std_db,
-    greedy_plan,
-    pattern_spreads,
-    prior_penalty_weight,
-    rank_manoeuvres,
-)
+from rplearn.analysis.manoeuvres import ManoeuvreOptions, correlated_error_std_db, greedy_plan, pattern_spreads, prior_penalty_weight, rank_manoeuvres
 from rplearn.analysis.pattern_error import pattern_errors_db
 from rplearn.core.bases import fibonacci_grid_nodes
 from rplearn.core.coverage import nearest_angle_deg
