@@ -112,10 +112,11 @@ class Setup:
     seed: int = 0
     flown: int = 0
     correlated: str = "reference"
+    block_s: float = DEFAULT_BLOCK_S
 
     def flight(self, name: str) -> Flight:
         basis = self.spec.basis()
-        blocks = None if self.correlated == "off" else BlockSums(len(self.nodes), basis.n_coef, DEFAULT_BLOCK_S)
+        blocks = None if self.correlated == "off" else BlockSums(len(self.nodes), basis.n_coef, self.block_s)
         return Flight(name, NormalEquations(basis, len(self.nodes)), blocks)
 
 
@@ -229,7 +230,7 @@ def _reference_drift(setup: Setup, parts: list[Any]) -> float:
 
 
 def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, prior_std_db: float = PRIOR_STD_DB,
-        correlated: str = "reference") -> dict[str, Flight]:
+        correlated: str = "reference", block_s: float = DEFAULT_BLOCK_S) -> dict[str, Flight]:
     config = _config(preset)
     learning = config.campaign.with_role("learning").units
     nodes = tuple(sorted(config.node_antennas))
@@ -239,8 +240,8 @@ def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, 
     speed = float(getattr(learning[0], "speed_m_s", 1.5))
     cands = CandidateOptions(fixed_nodes=FIXED.get(preset, ()), speed_m_s=speed)
     opts = ManoeuvreOptions(noise_std_db=noise, packet_rate_hz=config.radio.packet_rate_hz * (1 - config.radio.loss_probability),
-                            penalty_weight=weight, candidates=cands, power=power)
-    setup = Setup(preset, config, spec, nodes, opts, weight, seed=seed, correlated=correlated)
+                            penalty_weight=weight, candidates=cands, power=power, correlation_s=block_s)
+    setup = Setup(preset, config, spec, nodes, opts, weight, seed=seed, correlated=correlated, block_s=block_s)
     ref_parts, _ = fly(setup, learning)
     if prior_std_db <= 0:  # the prior the project learns from the complete reference flight
         weight, noise = _learned_prior(ref_parts, nodes, power)
@@ -250,7 +251,7 @@ def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, 
     if correlated == "reference":
         drift = _reference_drift(setup, ref_parts)
         setup.options = opts = replace(opts, correlated_std_db=drift)
-        print(f"  drifting error (from the reference flight's {DEFAULT_BLOCK_S:g}-s blocks): {drift:.3f} dB per block")
+        print(f"  drifting error (from the reference flight's {block_s:g}-s blocks): {drift:.3f} dB per block")
     ref = setup.flight("reference")
     accumulate(setup, ref, ref_parts)
     # suggested: the reference's first START_S seconds, then the top-ranked manoeuvre, repeatedly
@@ -295,6 +296,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--power", type=float, default=2.0, help="exponent of the smoothness prior's roughness weights")
     ap.add_argument("--correlated", choices=("reference", "own", "off"), default="reference",
                     help="the drifting error's size: from the complete reference flight, each flight's own blocks, or none")
+    ap.add_argument("--block-s", type=float, default=DEFAULT_BLOCK_S, help="length of a time block of the drifting error [s]")
     ap.add_argument("--tiny", action="store_true", help="the smoke preset at SH-4 (seconds; criteria not enforced)")
     args = ap.parse_args(argv)
     presets = ["smoke"] if args.tiny else [p.strip() for p in args.presets.split(",") if p.strip()]
@@ -306,7 +308,7 @@ def main(argv: list[str] | None = None) -> int:
         t0 = time.perf_counter()
         ref_total = _config(preset).campaign.with_role("learning")
         limit = float(sum(u.duration_s for u in ref_total.units))
-        flights = run(preset, order, seed, limit, args.power, args.prior_std, args.correlated)
+        flights = run(preset, order, seed, limit, args.power, args.prior_std, args.correlated, args.block_s)
         ref = flights["reference"]
         print(f"{preset} (SH-{order}, seed {seed}, {time.perf_counter() - t0:.0f} s): time to {TARGET_DB:g} dB per-node spread")
         for f in flights.values():
