@@ -82,7 +82,7 @@ def test_the_session_keeps_time_block_sums_and_a_whole_log_is_split_into_them(ma
     batched = _learn(matched, spec, FitOptions(), None)
     whole = LiveStatistics(spec, ["A", "B"], FitOptions())
     whole.add(matched, whole.samples(matched))
-    a, b = batched.total().blocks, whole.total().blocks
+    a, b = batched.total().blocks.closed(), whole.total().blocks.closed()
     assert a.n_blocks == b.n_blocks > 3 and a.sum_n == b.sum_n == len(matched)
     assert np.allclose(a.cross, b.cross, rtol=1e-9, atol=1e-6) and a.sum_yy == pytest.approx(b.sum_yy, rel=1e-9)
     assert batched.blocks is not None and batched.blocks.cross.shape == (2 * spec.basis().n_coef,) * 2

@@ -182,7 +182,7 @@ class LiveStatistics:
         out = NormalEquations(self.basis, len(self.nodes), environment=self.segments[0].normal.environment)
         for s in self.segments:
             out.merge(s.normal)
-        out.blocks = None if self.blocks is None else self.blocks.closed()
+        out.blocks = self.blocks  # not copied: whoever reads it closes a copy (BlockSums.closed)
         return out
 
     def fold_statistics(self, exact: bool) -> dict[str, NormalEquations]:
