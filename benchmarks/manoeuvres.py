@@ -32,6 +32,14 @@ Flight time counts the units' durations and the time to reach each manoeuvre's s
 battery gaps between units. The electronics offsets and the dropouts of the presets are off in
 all three flights alike (one flight's unit cannot carry a dropout drawn for the whole campaign).
 
+**The drifting error** (``--correlated``, :mod:`rplearn.core.lsq.block_sums`): each flight also
+keeps its sums per 5-s time block, and every spread and ranking carries an error drifting over
+seconds (the simulator's heading error wanders over about 5 s): ``reference`` (default) takes its
+size, like the noise, from the complete reference flight
+(:func:`~rplearn.analysis.manoeuvres.correlated_error_std_db`); ``own`` estimates it from each
+flight's own blocks so far, as ``rplearn live`` does; ``off`` is the white-noise posterior
+(the benchmark as it was).
+
 Criteria per preset: time to 2 dB of suggested and of optimized <= 60 % of the reference's, and
 their worst per-node pattern error <= the reference's (+0.05 dB of rounding).
 
@@ -49,11 +57,12 @@ from typing import Any
 
 import numpy as np
 
-from rplearn.analysis.manoeuvres import ManoeuvreOptions, greedy_plan, pattern_spreads, prior_penalty_weight, rank_manoeuvres
+from rplearn.analysis.manoeuvres import ManoeuvreOptions, correlated_error_std_db, greedy_plan, pattern_spreads, prior_penalty_weight, rank_manoeuvres
 from rplearn.analysis.pattern_error import pattern_errors_db
 from rplearn.core.bases import fibonacci_grid_nodes
 from rplearn.core.coverage import nearest_angle_deg
 from rplearn.core.gauge import EQUAL_MEAN
+from rplearn.core.lsq.block_sums import DEFAULT_BLOCK_S, BlockSums
 from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.core.lsq.penalty import penalty_vector
 from rplearn.core.lsq.solver import solve
@@ -81,6 +90,7 @@ class Flight:
 
     name: str
     normal: NormalEquations
+    blocks: BlockSums | None = None
     t_s: float = 0.0
     history: list[tuple[float, float]] = field(default_factory=list)
     reached_s: float | None = None
@@ -101,6 +111,13 @@ class Setup:
     truth: Any = None
     seed: int = 0
     flown: int = 0
+    correlated: str = "reference"
+    block_s: float = DEFAULT_BLOCK_S
+
+    def flight(self, name: str) -> Flight:
+        basis = self.spec.basis()
+        blocks = None if self.correlated == "off" else BlockSums(len(self.nodes), basis.n_coef, self.block_s)
+        return Flight(name, NormalEquations(basis, len(self.nodes)), blocks)
 
 
 def _config(preset: str) -> Any:
@@ -141,7 +158,8 @@ def _fit_error(setup: Setup, flight: Flight) -> None:
                          for k, (n, m) in enumerate(zip(setup.nodes, metrics))}
 
 
-def accumulate(setup: Setup, flight: Flight, parts: list[Any], lead_s: float = 0.0, until_s: float | None = None) -> None:
+def accumulate(setup: Setup, flight: Flight, parts: list[Any], lead_s: float = 0.0, until_s: float | None = None,
+               stop: bool = True) -> None:
     """Add each unit's samples in steps of STEP_S flight time; stop at the first 2 dB."""
     flight.t_s += lead_s
     for samples, t_in, dur in parts:
@@ -154,7 +172,11 @@ def accumulate(setup: Setup, flight: Flight, parts: list[Any], lead_s: float = 0
             if np.any(m):
                 flight.normal.add(type(d)(d.az_tx[m], d.el_tx[m], d.az_rx[m], d.el_rx[m]), samples.tx_index[m],
                                   samples.rx_index[m], samples.joint_gain_db[m])
-            spreads = pattern_spreads(flight.normal, setup.spec, setup.nodes, setup.options)
+                if flight.blocks is not None:
+                    flight.blocks.follow(flight.normal, flight.t_s + 0.5 * (a + b))
+            if stop is False:
+                continue
+            spreads = pattern_spreads(flight.normal, setup.spec, setup.nodes, setup.options, flight.blocks)
             flight.history.append((flight.t_s + b, max(spreads.values())))
             if flight.reached_s is None and max(spreads.values()) <= TARGET_DB:
                 flight.reached_s = flight.t_s + b
@@ -199,7 +221,16 @@ def _learned_prior(parts: list[Any], nodes: tuple[str, ...], power: float) -> tu
     return smoothing * scale, noise
 
 
-def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, prior_std_db: float = PRIOR_STD_DB) -> dict[str, Flight]:
+def _reference_drift(setup: Setup, parts: list[Any]) -> float:
+    """The drifting error's spread the complete reference flight shows [dB]."""
+    whole = setup.flight("whole")
+    accumulate(setup, whole, parts, stop=False)
+    assert whole.blocks is not None
+    return correlated_error_std_db(whole.normal, setup.spec, whole.blocks, setup.options)
+
+
+def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, prior_std_db: float = PRIOR_STD_DB,
+        correlated: str = "reference", block_s: float = DEFAULT_BLOCK_S) -> dict[str, Flight]:
     config = _config(preset)
     learning = config.campaign.with_role("learning").units
     nodes = tuple(sorted(config.node_antennas))
@@ -209,24 +240,28 @@ def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, 
     speed = float(getattr(learning[0], "speed_m_s", 1.5))
     cands = CandidateOptions(fixed_nodes=FIXED.get(preset, ()), speed_m_s=speed)
     opts = ManoeuvreOptions(noise_std_db=noise, packet_rate_hz=config.radio.packet_rate_hz * (1 - config.radio.loss_probability),
-                            penalty_weight=weight, candidates=cands, power=power)
-    setup = Setup(preset, config, spec, nodes, opts, weight, seed=seed)
+                            penalty_weight=weight, candidates=cands, power=power, correlation_s=block_s)
+    setup = Setup(preset, config, spec, nodes, opts, weight, seed=seed, correlated=correlated, block_s=block_s)
     ref_parts, _ = fly(setup, learning)
     if prior_std_db <= 0:  # the prior the project learns from the complete reference flight
         weight, noise = _learned_prior(ref_parts, nodes, power)
         setup.weight = weight
         opts = replace(opts, penalty_weight=weight, noise_std_db=noise)
     setup.options = opts = replace(opts, targets=_targets(setup, ref_parts))
-    ref = Flight("reference", NormalEquations(spec.basis(), len(nodes)))
+    if correlated == "reference":
+        drift = _reference_drift(setup, ref_parts)
+        setup.options = opts = replace(opts, correlated_std_db=drift)
+        print(f"  drifting error (from the reference flight's {block_s:g}-s blocks): {drift:.3f} dB per block")
+    ref = setup.flight("reference")
     accumulate(setup, ref, ref_parts)
     # suggested: the reference's first START_S seconds, then the top-ranked manoeuvre, repeatedly
-    sug = Flight("suggested", NormalEquations(spec.basis(), len(nodes)))
+    sug = setup.flight("suggested")
     start_parts, poses = fly(setup, (learning[0],))
     accumulate(setup, sug, start_parts[:1], until_s=START_S)
     poses = poses[poses["t"] <= START_S]
     k = 0
     while sug.reached_s is None and sug.t_s < limit_s:
-        best = rank_manoeuvres(sug.normal, spec, nodes, poses, replace(opts, floor_db=TARGET_DB))[0]
+        best = rank_manoeuvres(sug.normal, spec, nodes, poses, replace(opts, floor_db=TARGET_DB), sug.blocks)[0]
         k += 1
         unit = replace(best.candidate.unit, label=f"m{k:02d}")
         sug.steps.append(f"{best.name} ({best.duration_s:.0f} s)")
@@ -236,7 +271,7 @@ def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, 
     first = learning[0].evaluate(np.array([0.0]))
     start = {n: (tuple(first.position_enu_m[0, j]), float(np.degrees(first.yaw_rad[0, j]))) for j, n in enumerate(learning[0].nodes)}
     plan = greedy_plan(NormalEquations(spec.basis(), len(nodes)), spec, nodes, start, limit_s, TARGET_DB, opts)
-    opt = Flight("optimized", NormalEquations(spec.basis(), len(nodes)))
+    opt = setup.flight("optimized")
     opt.steps = [f"{s.manoeuvre.name} ({s.manoeuvre.duration_s:.0f} s)" for s in plan]
     for k, step in enumerate(plan):
         if opt.reached_s is not None:
@@ -259,6 +294,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--prior-std", type=float, default=0.0, help="the prior's pattern spread over the sphere [dB]; 0: the smoothing fit --degree auto "
                                                                                   "learns from the reference flight")
     ap.add_argument("--power", type=float, default=2.0, help="exponent of the smoothness prior's roughness weights")
+    ap.add_argument("--correlated", choices=("reference", "own", "off"), default="reference",
+                    help="the drifting error's size: from the complete reference flight, each flight's own blocks, or none")
+    ap.add_argument("--block-s", type=float, default=DEFAULT_BLOCK_S, help="length of a time block of the drifting error [s]")
     ap.add_argument("--tiny", action="store_true", help="the smoke preset at SH-4 (seconds; criteria not enforced)")
     args = ap.parse_args(argv)
     presets = ["smoke"] if args.tiny else [p.strip() for p in args.presets.split(",") if p.strip()]
@@ -270,7 +308,7 @@ def main(argv: list[str] | None = None) -> int:
         t0 = time.perf_counter()
         ref_total = _config(preset).campaign.with_role("learning")
         limit = float(sum(u.duration_s for u in ref_total.units))
-        flights = run(preset, order, seed, limit, args.power, args.prior_std)
+        flights = run(preset, order, seed, limit, args.power, args.prior_std, args.correlated, args.block_s)
         ref = flights["reference"]
         print(f"{preset} (SH-{order}, seed {seed}, {time.perf_counter() - t0:.0f} s): time to {TARGET_DB:g} dB per-node spread")
         for f in flights.values():

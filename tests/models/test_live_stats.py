@@ -73,3 +73,16 @@ def test_a_node_appearing_later_is_named(matched):
     st = LiveStatistics(ModelSpec.parse("sh", order=4), ["A"], FitOptions())
     with pytest.raises(Exception, match="node.*B"):
         st.samples(matched.iloc[:10])
+
+
+def test_the_session_keeps_time_block_sums_and_a_whole_log_is_split_into_them(matched):
+    """Batches of 1 s and the whole log in one batch give the same block sums (memory flat:
+    two matrices, whatever the length); the total hands them on to the manoeuvre ranking."""
+    spec = ModelSpec.parse("sh", order=4)
+    batched = _learn(matched, spec, FitOptions(), None)
+    whole = LiveStatistics(spec, ["A", "B"], FitOptions())
+    whole.add(matched, whole.samples(matched))
+    a, b = batched.total().blocks.closed(), whole.total().blocks.closed()
+    assert a.n_blocks == b.n_blocks > 3 and a.sum_n == b.sum_n == len(matched)
+    assert np.allclose(a.cross, b.cross, rtol=1e-9, atol=1e-6) and a.sum_yy == pytest.approx(b.sum_yy, rel=1e-9)
+    assert batched.blocks is not None and batched.blocks.cross.shape == (2 * spec.basis().n_coef,) * 2

@@ -157,3 +157,30 @@ def test_a_negative_separation_is_refused_naming_the_field():
     with pytest.raises(InputError) as err:
         CandidateOptions(min_separation_m=-1.0)
     assert err.value.param == "min_separation_m"
+
+
+def test_revisit_candidates_see_their_directions_again_a_pass_later():
+    """A 720-degree turn and a two-lap orbit fly the same headings (and ring) twice, and take
+    twice as long at cruise; revisits=1 offers none of them."""
+    cands = candidate_manoeuvres(PAIR)
+    twice = [c for c in cands if "by 720 deg" in c.name or "2 laps" in c.name]
+    assert any(c.unit.kind == "yaw" for c in twice) and any(c.unit.kind == "orbit" for c in twice)
+    assert len({c.unit.label for c in cands}) == len(cands)
+    for c in twice:
+        once = next(o for o in cands if o.name == c.name.replace(" by 720 deg", "").replace(", 2 laps", ""))
+        assert once.unit.duration_s < c.unit.duration_s < 2.0 * once.unit.duration_s + 1e-6
+        ref = c.unit.sample(10.0)
+        half = ref.t_s.size // 2
+        if c.unit.kind == "yaw":  # the second turn repeats the first turn's headings
+            spread = np.degrees(np.abs(np.angle(np.exp(1j * (ref.yaw_rad[:, 1]))))).max()
+            assert spread > 170.0
+        else:  # the orbit ends where it began its circles, having passed every point twice
+            xy = ref.position_enu_m[half:, 1, :2]
+            assert np.ptp(xy[:, 0]) > 1.0 and np.ptp(xy[:, 1]) > 1.0
+        if c.unit.anchor_turn_deg:
+            assert c.unit.anchor_turn_deg == pytest.approx(720.0)
+    assert not [c for c in candidate_manoeuvres(PAIR, CandidateOptions(revisits=1)) if "720" in c.name or "laps" in c.name]
+    with pytest.raises(InputError):
+        CandidateOptions(revisits=0)
+    with pytest.raises(InputError):
+        _unit("orbit", laps=0)

@@ -50,8 +50,19 @@ def test_a_prior_pattern_must_be_a_pattern_model(tmp_path):
 
 
 @pytest.mark.parametrize(("kw", "param"), [(dict(budget_s=0.0), "budget_s"), (dict(target_spread_db=-1.0), "target_spread_db"),
-                                           (dict(noise_std_db=float("nan")), "noise_std_db")])
+                                           (dict(noise_std_db=float("nan")), "noise_std_db"),
+                                           (dict(drift_std_db=-0.5), "drift_std_db")])
 def test_bad_options_name_their_field(kw, param):
     with pytest.raises(InputError) as err:
         OptimizeOptions(**{**SMALL, **kw})
     assert err.value.param == param
+
+
+def test_a_drifting_error_counts_a_manoeuvre_for_less(tmp_path):
+    """With an error drifting over seconds, a manoeuvre that sees its directions once leaves a
+    larger expected spread than white noise says."""
+    white = optimize_plan(str(tmp_path / "white"), OptimizeOptions(**SMALL))
+    drift = optimize_plan(str(tmp_path / "drift"), OptimizeOptions(**SMALL, drift_std_db=0.8))
+    assert drift.start_spread_db == white.start_spread_db  # before any flight nothing drifted
+    assert drift.steps[0].manoeuvre.name == white.steps[0].manoeuvre.name
+    assert all(drift.steps[0].spread_db[n] > white.steps[0].spread_db[n] for n in white.start_spread_db)

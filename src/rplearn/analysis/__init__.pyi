@@ -34,6 +34,7 @@ from .identifiability import study_antennas as study_antennas
 from .manoeuvres import ManoeuvreOptions as ManoeuvreOptions
 from .manoeuvres import PlanStep as PlanStep
 from .manoeuvres import RankedManoeuvre as RankedManoeuvre
+from .manoeuvres import correlated_error_std_db as correlated_error_std_db
 from .manoeuvres import greedy_plan as greedy_plan
 from .manoeuvres import pattern_spreads as pattern_spreads
 from .manoeuvres import prior_penalty_weight as prior_penalty_weight

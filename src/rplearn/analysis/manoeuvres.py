@@ -33,9 +33,11 @@ import numpy as np
 import pandas as pd
 
 from rplearn._argtypes import check_types
+from rplearn.analysis.manoeuvre_posterior import _Posterior
 from rplearn.core.bases import fibonacci_grid_nodes
 from rplearn.core.basis_base import Basis
 from rplearn.core.geometry import attitude_from_thrust, link_directions, yaw_from_quat_wxyz
+from rplearn.core.lsq.block_sums import DEFAULT_BLOCK_S, BlockSums, correlated_ratio
 from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.core.lsq.penalty import DEFAULT_PENALTY_POWER, penalty_scale
 from rplearn.core.threads import one_blas_thread
@@ -82,6 +84,15 @@ class ManoeuvreOptions:
     floor_db : float or None
         Spreads below this count as this [dB] (a stop criterion's target: no reward for
         lowering a node already below it); None: none.
+    correlated_std_db : float or None
+        Standard deviation of an error that drifts over ``correlation_s`` (a heading estimate's
+        wander), as one offset per link and time block [dB], carried into the posterior
+        (:mod:`rplearn.analysis.manoeuvre_posterior`): a manoeuvre that sees a direction once
+        then learns it less than white noise says, and one that sees it again later more. None:
+        estimated from the block sums given to the ranking (:func:`correlated_error_std_db`),
+        or 0 without them (the white-noise posterior).
+    correlation_s : float
+        Length of a time block of the drifting error [s] (the manoeuvres' own blocks).
     """
 
     noise_std_db: float = 4.2
@@ -95,9 +106,11 @@ class ManoeuvreOptions:
     candidates: CandidateOptions = field(default_factory=CandidateOptions)
     aggregate: str = "rms"
     floor_db: float | None = None
+    correlated_std_db: float | None = None
+    correlation_s: float = DEFAULT_BLOCK_S
 
     def __post_init__(self) -> None:
-        for name in ("noise_std_db", "packet_rate_hz", "sample_rate_hz"):
+        for name in ("noise_std_db", "packet_rate_hz", "sample_rate_hz", "correlation_s"):
             v = float(getattr(self, name))
             if not (np.isfinite(v) and v > 0):
                 raise InputError(f"{name}: expected a positive finite number, got {v!r}", param=name)
@@ -112,6 +125,9 @@ class ManoeuvreOptions:
             raise InputError(f"aggregate: expected one of {', '.join(AGGREGATES)}, got {self.aggregate!r}", param="aggregate")
         if self.floor_db is not None and not (np.isfinite(self.floor_db) and self.floor_db >= 0):
             raise InputError(f"floor_db: expected a non-negative spread [dB], got {self.floor_db!r}", param="floor_db")
+        if self.correlated_std_db is not None and not (np.isfinite(self.correlated_std_db) and self.correlated_std_db >= 0):
+            raise InputError(f"correlated_std_db: expected a non-negative spread [dB], got {self.correlated_std_db!r}",
+                             param="correlated_std_db")
         if int(self.target_points) < 16:
             raise InputError(f"target_points: expected at least 16, got {self.target_points!r}", param="target_points")
 
@@ -216,56 +232,6 @@ def prior_penalty_weight(basis: Basis, prior_std_db: float, noise_std_db: float,
     return float(np.sqrt(lo * hi))
 
 
-class _Posterior:
-    """The pattern posterior's covariance and the per-node spread read from it."""
-
-    def __init__(self, precision: np.ndarray, metrics: list[np.ndarray], noise_var: float) -> None:
-        self.noise_var = noise_var
-        self.metrics = metrics
-        self.p = metrics[0].shape[0]
-        self.cov = _inverse(precision)
-
-    def spreads(self, cov: np.ndarray | None = None) -> np.ndarray:
-        c = self.cov if cov is None else cov
-        p = self.p
-        return np.sqrt(np.maximum([float(np.sum(m * c[k * p:(k + 1) * p, k * p:(k + 1) * p]))
-                                   for k, m in enumerate(self.metrics)], 0.0))
-
-    def _woodbury(self, rows: np.ndarray, weight: float) -> tuple[np.ndarray, np.ndarray]:
-        """``(B, S^-1 B)`` of the update ``Sigma' = Sigma - B^T S^-1 B`` with ``B = F Sigma``; more
-        rows than columns are first compressed to the triangular factor of ``F^T F`` (same update)."""
-        if rows.shape[0] > rows.shape[1]:
-            rows = np.asarray(np.linalg.qr(rows, mode="r"), np.float64)
-        b = rows @ self.cov
-        s = b @ rows.T + np.eye(rows.shape[0]) * (self.noise_var / weight)
-        return b, np.linalg.solve(s, b)
-
-    def updated(self, rows: np.ndarray, weight: float) -> np.ndarray:
-        """The covariance after ``weight`` packets per feature row ``rows`` (rank-k update)."""
-        if rows.shape[0] == 0:
-            return self.cov
-        b, sb = self._woodbury(rows, weight)
-        return self.cov - b.T @ sb
-
-    def spreads_after(self, rows: np.ndarray, weight: float) -> np.ndarray:
-        """:meth:`spreads` after the update, from its diagonal blocks only."""
-        if rows.shape[0] == 0:
-            return self.spreads()
-        b, sb = self._woodbury(rows, weight)
-        p = self.p
-        var = [float(np.sum(m * self.cov[k * p:(k + 1) * p, k * p:(k + 1) * p]))
-               - float(np.sum((sb[:, k * p:(k + 1) * p] @ m) * b[:, k * p:(k + 1) * p])) for k, m in enumerate(self.metrics)]
-        return np.sqrt(np.maximum(var, 0.0))
-
-
-def _inverse(matrix: np.ndarray) -> np.ndarray:
-    """Inverse of a symmetric positive definite matrix through its Cholesky factor."""
-    sym = 0.5 * (matrix + matrix.T)
-    chol = np.linalg.cholesky(sym)
-    inv_l = np.linalg.solve(chol, np.eye(sym.shape[0]))
-    return inv_l.T @ inv_l
-
-
 def _aggregate(spreads: np.ndarray, options: ManoeuvreOptions) -> float:
     if options.floor_db is not None:
         spreads = np.maximum(spreads, options.floor_db)
@@ -326,12 +292,32 @@ def _check_nodes(normal: NormalEquations, nodes: Sequence[str]) -> None:
         raise InputError(f"nodes: {len(nodes)} names ({', '.join(nodes)}) for statistics of {normal.n_nodes} nodes", param="nodes")
 
 
-def _start(normal: NormalEquations, spec: ModelSpec, nodes: Sequence[str], options: ManoeuvreOptions) -> _Posterior:
+def _start(normal: NormalEquations, spec: ModelSpec, nodes: Sequence[str], options: ManoeuvreOptions,
+           blocks: BlockSums | None = None) -> _Posterior:
     _check_nodes(normal, nodes)
     pat = normal.n_pattern_columns
     gram = np.asarray(normal.gram, np.float64)[:pat, :pat]
-    precision = (gram + np.diag(prior_weights(spec, normal, options))) / options.noise_std_db**2
-    return _Posterior(precision, target_metrics(normal.basis, nodes, options), options.noise_std_db**2)
+    prior = prior_weights(spec, normal, options)
+    precision = (gram + np.diag(prior)) / options.noise_std_db**2
+    post = _Posterior(precision, target_metrics(normal.basis, nodes, options), options.noise_std_db**2)
+    closed = None if blocks is None else blocks.closed()
+    sc = options.correlated_std_db
+    if sc is None:
+        sc = 0.0 if closed is None else float(np.sqrt(correlated_ratio(normal, closed, prior))) * options.noise_std_db
+    rows = int(round(options.correlation_s * options.sample_rate_hz))
+    return post.with_drift(float(sc) ** 2, None if closed is None else closed.cross, rows)
+
+
+@check_types
+def correlated_error_std_db(normal: NormalEquations, spec: ModelSpec, blocks: BlockSums,
+                            options: ManoeuvreOptions | None = None) -> float:
+    """The drifting error's block-offset spread [dB] the statistics show: ``sqrt(kappa)`` times
+    the options' noise, ``kappa`` of :func:`rplearn.core.lsq.block_sums.correlated_ratio` under
+    the options' prior (for :attr:`ManoeuvreOptions.correlated_std_db` of a plan made before a
+    flight, from an earlier flight's statistics and block sums)."""
+    opts = options or ManoeuvreOptions()
+    kappa = correlated_ratio(normal, blocks.closed(), prior_weights(spec, normal, opts))
+    return float(np.sqrt(kappa)) * opts.noise_std_db
 
 
 def _score(post: _Posterior, cand: Candidate, nodes: Sequence[str], basis: Basis,
@@ -353,13 +339,13 @@ def _weight(options: ManoeuvreOptions) -> float:
 
 @check_types
 def pattern_spreads(normal: NormalEquations, spec: ModelSpec, nodes: Sequence[str],
-                    options: ManoeuvreOptions | None = None) -> dict[str, float]:
+                    options: ManoeuvreOptions | None = None, blocks: BlockSums | None = None) -> dict[str, float]:
     """Each node's pattern spread over the target directions under the current posterior [dB]
     (module docstring; arguments as :func:`rank_manoeuvres`)."""
     opts = options or ManoeuvreOptions()
     names = [str(n) for n in nodes]
     with one_blas_thread():
-        return dict(zip(names, _start(normal, spec, names, opts).spreads().tolist()))
+        return dict(zip(names, _start(normal, spec, names, opts, blocks).spreads().tolist()))
 
 
 @check_types
@@ -369,6 +355,7 @@ def rank_manoeuvres(
     nodes: Sequence[str],
     poses: pd.DataFrame | Mapping[str, Any],
     options: ManoeuvreOptions | None = None,
+    blocks: BlockSums | None = None,
 ) -> tuple[RankedManoeuvre, ...]:
     """Candidate manoeuvres from the current poses, best first by spread reduction per second.
 
@@ -384,6 +371,10 @@ def rank_manoeuvres(
         The latest pose of every node: a pose table (``t, node, x, y, z, qw, qx, qy, qz``,
         ENU/FLU; the last row per node is used) or ``{node: ((x, y, z), yaw_deg)}``.
     options : ManoeuvreOptions, optional
+    blocks : BlockSums, optional
+        The statistics' sums per time block (:mod:`rplearn.core.lsq.block_sums`): the drifting
+        error of the samples so far enters the posterior (and, unless
+        :attr:`ManoeuvreOptions.correlated_std_db` gives it, its size is estimated from them).
 
     Returns
     -------
@@ -396,7 +387,7 @@ def rank_manoeuvres(
     _check_nodes(normal, names)
     cands = candidate_manoeuvres(_poses(poses, names), opts.candidates)
     with one_blas_thread():  # many small factorisations: threads only contend
-        post = _start(normal, spec, names, opts)
+        post = _start(normal, spec, names, opts, blocks)
         ranked = [_score(post, c, names, normal.basis, opts)[0] for c in cands]
     return tuple(sorted(ranked, key=lambda r: -r.reduction_db_per_s))
 
@@ -429,6 +420,7 @@ def greedy_plan(
     budget_s: float,
     target_spread_db: float,
     options: ManoeuvreOptions | None = None,
+    blocks: BlockSums | None = None,
 ) -> tuple[PlanStep, ...]:
     """Manoeuvres chosen one at a time by spread reduction per second, until every node's spread
     is at most ``target_spread_db`` or the next one would exceed ``budget_s`` of flight.
@@ -449,7 +441,7 @@ def greedy_plan(
     _check_nodes(normal, names)
     state = _poses(poses, names)
     with one_blas_thread():  # many small factorisations: threads only contend
-        return _greedy(_start(normal, spec, names, opts), state, names, normal.basis, (budget_s, target_spread_db), opts)
+        return _greedy(_start(normal, spec, names, opts, blocks), state, names, normal.basis, (budget_s, target_spread_db), opts)
 
 
 def _greedy(post: _Posterior, state: dict[str, Any], names: list[str], basis: Basis, limits: tuple[float, float],
@@ -463,12 +455,12 @@ def _greedy(post: _Posterior, state: dict[str, Any], names: list[str], basis: Ba
         if not scored:
             break
         best, rows = max(scored, key=lambda s: s[0].reduction_db_per_s)
-        post.cov = post.updated(rows, _weight(opts))
+        post.update(rows, _weight(opts))
         t += best.duration_s
         state.update(best.candidate.ends)
         steps.append(PlanStep(best, t, dict(zip(names, post.spreads().tolist()))))
     return tuple(steps)
 
 
-__all__ = ["AGGREGATES", "ManoeuvreOptions", "PlanStep", "RankedManoeuvre", "greedy_plan", "manoeuvre_rows", "pattern_spreads",
+__all__ = ["AGGREGATES", "ManoeuvreOptions", "PlanStep", "RankedManoeuvre", "correlated_error_std_db", "greedy_plan", "manoeuvre_rows", "pattern_spreads",
            "prior_penalty_weight", "prior_weights", "rank_manoeuvres", "target_metrics"]

@@ -17,7 +17,8 @@ module                 public names
                        :class:`Polynomial`, :func:`make_basis`, :func:`basis_from_dict`
 ``lsq``                the least-squares engine (a subpackage): :func:`fit_joint`, :func:`solve`,
                        :func:`identifiability`, :class:`FitReport`, :class:`JointSolution`,
-                       :class:`NormalEquations` (streamed sufficient statistics)
+                       :class:`NormalEquations` (streamed sufficient statistics),
+                       :class:`BlockSums`, :func:`correlated_ratio` (an error drifting over seconds)
 ``metrics``            :func:`score`, :class:`Scores`, :func:`rmse`, :func:`mae`, :func:`q95`,
                        :func:`aic`, :func:`condition_number`, :class:`Stopwatch`
 =====================  ==========================================================================

@@ -53,6 +53,10 @@ from .link import free_space_path_loss_db as free_space_path_loss_db
 from .link import observed_joint_gain_db as observed_joint_gain_db
 from .link import received_power_dbm as received_power_dbm
 from .link import wavelength_m as wavelength_m
+from .lsq.block_sums import DEFAULT_BLOCK_S as DEFAULT_BLOCK_S
+from .lsq.block_sums import MIN_BLOCKS as MIN_BLOCKS
+from .lsq.block_sums import BlockSums as BlockSums
+from .lsq.block_sums import correlated_ratio as correlated_ratio
 from .lsq.normal_equations import NormalEquations as NormalEquations
 from .lsq.solution import FitReport as FitReport
 from .lsq.solution import GaugeNote as GaugeNote

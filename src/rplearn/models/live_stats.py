@@ -20,6 +20,12 @@ and the last refit (``final=True``) is exact: it takes the cuts from the times o
 batch (their ``t`` column, read back from the spool) and re-reads the samples of the few
 segments a cut falls inside, from the batches spooled to disk as they arrived; every other
 segment's statistics are used as they are.
+
+Each batch's per-link sums also go into :class:`~rplearn.core.lsq.block_sums.BlockSums` (time
+blocks of ``DEFAULT_BLOCK_S``; memory flat), which :meth:`LiveStatistics.total` hands on as the
+statistics' ``blocks``: the next-best manoeuvre ranking reads from them an error that drifts over
+seconds (a heading estimate's). A batch spanning several blocks (a whole log matched at the end)
+is split into them.
 """
 
 from __future__ import annotations
@@ -36,6 +42,7 @@ import pandas as pd
 
 from rplearn._argtypes import check_types
 from rplearn._atomic import atomic_path
+from rplearn.core.lsq.block_sums import BlockSums
 from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.core.lsq.penalty import sub_statistics
 from rplearn.core.threads import blas_threads_for
@@ -104,6 +111,7 @@ class LiveStatistics:
         self.freq: Counter[float] = Counter()
         self.grids: dict[str, list[float]] | None = None
         self.non_unit = 0
+        self.blocks: BlockSums | None = None  # made with the first batch
         self.learn_s = 0.0
         self._batches = 0
 
@@ -128,6 +136,7 @@ class LiveStatistics:
         normal = NormalEquations(self.basis, len(self.nodes), environment=env is not None)
         normal.add(samples.directions, samples.tx_index, samples.rx_index, y, env)
         t = pd.to_numeric(matched["t"]).to_numpy(np.float64)
+        self._add_blocks(normal, samples, t, (y, env))
         seg = Segment(normal, float(t.min()), float(t.max()))
         if self.spool_dir is not None:
             path = os.path.join(self.spool_dir, f"batch-{self._batches:07d}.parquet")
@@ -141,6 +150,23 @@ class LiveStatistics:
         frequency_counts(samples, self.freq)
         self.non_unit += samples.non_unit_quaternions
         self.learn_s += time.perf_counter() - t0
+
+    def _add_blocks(self, normal: NormalEquations, samples: LinkSamples, t: np.ndarray, inputs: tuple[Any, Any]) -> None:
+        """The batch into the time blocks (split when it spans several; ``inputs``: its y and environment)."""
+        if self.blocks is None:
+            self.blocks = BlockSums(len(self.nodes), self.basis.n_coef)
+        index = np.floor(t / self.blocks.block_s).astype(np.int64)
+        if index.min() == index.max():
+            self.blocks.add_batch(normal, float(np.median(t)))
+            return
+        y, env = inputs
+        d = samples.directions
+        for k in np.unique(index):
+            m = index == k
+            part = NormalEquations(self.basis, len(self.nodes), environment=env is not None)
+            part.add(type(d)(d.az_tx[m], d.el_tx[m], d.az_rx[m], d.el_rx[m]), samples.tx_index[m], samples.rx_index[m], y[m],
+                     None if env is None else env[m])
+            self.blocks.add_batch(part, float(np.median(t[m])))
 
     def _bound(self) -> None:
         while len(self.segments) > self.max_segments:
@@ -156,6 +182,7 @@ class LiveStatistics:
         out = NormalEquations(self.basis, len(self.nodes), environment=self.segments[0].normal.environment)
         for s in self.segments:
             out.merge(s.normal)
+        out.blocks = self.blocks  # not copied: whoever reads it closes a copy (BlockSums.closed)
         return out
 
     def fold_statistics(self, exact: bool) -> dict[str, NormalEquations]:

@@ -83,8 +83,8 @@ class ManoeuvreUnit:
         ``"yaw"`` (turn in place by ``turn_deg``), ``"climb"`` (to ``elevation_deg`` seen from
         the anchor, horizontal distance kept), ``"climb_turn"`` (the climb, then a turn by
         ``turn_deg``), ``"spiral"`` (the climb and the turn at once) or ``"orbit"`` (to
-        ``elevation_deg`` at the same distance, then a full
-        circle around the anchor's vertical, the heading fixed in the world).
+        ``elevation_deg`` at the same distance, then ``laps`` full
+        circles around the anchor's vertical, the heading fixed in the world).
     anchor_enu_m, start_enu_m : (float, float, float)
         Positions of the anchor and of the mover at the start [m].
     anchor_yaw_deg, start_yaw_deg : float
@@ -95,6 +95,8 @@ class ManoeuvreUnit:
         Yaw turn of ``yaw``, ``climb_turn`` and ``spiral`` [deg] (signed).
     distance_m : float or None
         Distance from the anchor of an orbit [m]; None keeps the current one.
+    laps : int
+        Circles of an orbit (2: every direction of the ring seen again a lap later).
     speed_m_s, accel_m_s2 : float
         Cruise speed [m/s] and acceleration [m/s^2] of moves and orbits.
     yaw_rate_deg_s, yaw_accel_deg_s2 : float
@@ -116,6 +118,7 @@ class ManoeuvreUnit:
     elevation_deg: float | None = None
     turn_deg: float = 360.0
     distance_m: float | None = None
+    laps: int = 1
     speed_m_s: float = 1.5
     accel_m_s2: float = 1.0
     yaw_rate_deg_s: float = 30.0
@@ -141,6 +144,8 @@ class ManoeuvreUnit:
                 raise InputError(f"{name}: expected three finite coordinates [m], got {getattr(self, name)!r}", param=name)
         if self.distance_m is not None and not (np.isfinite(self.distance_m) and self.distance_m >= 1.0):
             raise InputError(f"distance_m: expected at least 1 m, got {self.distance_m!r}", param="distance_m")
+        if int(self.laps) != self.laps or self.laps < 1:
+            raise InputError(f"laps: expected a whole number of circles, at least 1, got {self.laps!r}", param="laps")
         if self.elevation_deg is not None and not -89.0 <= float(self.elevation_deg) <= 89.0:
             raise InputError(f"elevation_deg: expected -89..89 deg, got {self.elevation_deg!r}", param="elevation_deg")
         if self.role not in ("learning", "testing"):
@@ -148,6 +153,8 @@ class ManoeuvreUnit:
         if not self.label:
             el = "" if self.elevation_deg is None else f"_el{self.elevation_deg:+g}"
             el += "" if self.distance_m is None else f"_{self.distance_m:g}m"
+            el += "" if self.laps == 1 else f"_x{self.laps}"
+            el += "" if self.turn_deg == 360.0 or self.kind not in ("yaw", "climb_turn", "spiral") else f"_turn{self.turn_deg:g}"
             el += "" if self.anchor_turn_deg == 0 else f"_{self.nodes[0]}_turning"
             object.__setattr__(self, "label", f"{self.kind}_{self.nodes[1]}_about_{self.nodes[0]}{el}")
         if np.hypot(self.start_enu_m[0] - self.anchor_enu_m[0], self.start_enu_m[1] - self.anchor_enu_m[1]) < 0.5 \
@@ -186,7 +193,8 @@ class ManoeuvreUnit:
         elif self.kind == "orbit":
             a = np.asarray(self.anchor_enu_m, float)
             d = p1 - a
-            segs.append(("arc", np.array([a[0], a[1], p1[2]]), float(np.hypot(d[0], d[1])), float(np.arctan2(d[1], d[0])), yaw0))
+            segs.append(("arc", np.array([a[0], a[1], p1[2]]), float(np.hypot(d[0], d[1])), float(np.arctan2(d[1], d[0])), yaw0,
+                         int(self.laps)))
         return tuple(segs)
 
     def _segment_duration(self, seg: tuple[Any, ...]) -> float:
@@ -197,7 +205,7 @@ class ManoeuvreUnit:
         if seg[0] == "spiral":
             return max(_trapezoid(float(np.linalg.norm(seg[2] - seg[1])), self.speed_m_s, self.accel_m_s2)[0],
                        _trapezoid(abs(float(np.degrees(seg[4]))), self.yaw_rate_deg_s, self.yaw_accel_deg_s2)[0])
-        return _trapezoid(2.0 * np.pi * seg[2], self.speed_m_s, self.accel_m_s2)[0]
+        return _trapezoid(2.0 * np.pi * seg[2] * seg[5], self.speed_m_s, self.accel_m_s2)[0]
 
     def _anchor_turn_s(self) -> float:
         return _trapezoid(abs(float(self.anchor_turn_deg)), self.yaw_rate_deg_s, self.yaw_accel_deg_s2)[0]
@@ -264,7 +272,7 @@ class ManoeuvreUnit:
                 yaw[m, 1] = seg[2] + np.sign(seg[3]) * np.radians(s)
             else:
                 centre, r, a0, y = seg[1], seg[2], seg[3], seg[4]
-                s, sd, sdd = _profile(tau, 2.0 * np.pi * r, self.speed_m_s, self.accel_m_s2)
+                s, sd, sdd = _profile(tau, 2.0 * np.pi * r * seg[5], self.speed_m_s, self.accel_m_s2)
                 ang, w, wd = a0 + s / r, sd / r, sdd / r
                 c, sn = np.cos(ang), np.sin(ang)
                 pos[m, 1] = centre + r * np.column_stack([c, sn, np.zeros_like(c)])
@@ -301,6 +309,11 @@ class CandidateOptions:
     anchor_turns : bool
         Also offer every manoeuvre with a hovering (not fixed) anchor turning a full circle in
         place meanwhile (:attr:`ManoeuvreUnit.anchor_turn_deg`).
+    revisits : int
+        Also offer manoeuvres that see their directions this many times over, each pass after
+        the last (a yaw turn of ``revisits * 360`` deg, an orbit of ``revisits`` laps, the
+        turning anchor as many circles): an error that drifts over seconds (a heading
+        estimate's) is then averaged over passes seconds apart; 1: none.
     min_separation_m : float
         Closest any two nodes may come during a manoeuvre [m]: a candidate passing nearer is
         not offered (two drones a metre or two apart risk a collision, and a position error of
@@ -320,8 +333,11 @@ class CandidateOptions:
     orbit_distances_m: tuple[float, ...] = (6.0,)
     min_separation_m: float = 5.0
     anchor_turns: bool = True
+    revisits: int = 2
 
     def __post_init__(self) -> None:
+        if int(self.revisits) != self.revisits or self.revisits < 1:
+            raise InputError(f"revisits: expected a whole number of passes, at least 1, got {self.revisits!r}", param="revisits")
         if not (np.isfinite(self.min_separation_m) and self.min_separation_m >= 0):
             raise InputError(f"min_separation_m: expected a non-negative distance [m], got {self.min_separation_m!r}",
                              param="min_separation_m")
@@ -451,9 +467,13 @@ def candidate_manoeuvres(poses: Mapping[str, tuple[tuple[float, float, float], f
             pa, ya = state[anchor]
             base = dict(nodes=(anchor, mover), anchor_enu_m=tuple(pa), start_enu_m=tuple(pm), anchor_yaw_deg=ya,
                         start_yaw_deg=ym, **kw)
-            units: list[tuple[str, ManoeuvreUnit]] = []
+            units: list[tuple[str, ManoeuvreUnit, int]] = []
+            again = int(opts.revisits)
             if anchor == names[0] or mover == names[0]:  # a turn in place does not depend on the anchor: list it once
-                units.append((f"yaw turn of {mover}", ManoeuvreUnit(kind="yaw", label=f"yaw_{mover}", **base)))
+                units.append((f"yaw turn of {mover}", ManoeuvreUnit(kind="yaw", label=f"yaw_{mover}", **base), 1))
+                if again > 1:
+                    units.append((f"yaw turn of {mover} by {360 * again} deg",
+                                  ManoeuvreUnit(kind="yaw", turn_deg=360.0 * again, label=f"yaw_{mover}_x{again}", **base), again))
             d = pm - pa
             horiz = float(np.hypot(d[0], d[1]))
             if horiz >= 1.0:
@@ -471,11 +491,14 @@ def candidate_manoeuvres(poses: Mapping[str, tuple[tuple[float, float, float], f
                             up = "climb" if z > pm[2] else "descent"
                             what = {"climb": up, "climb_turn": f"{up} then turn", "spiral": f"{up} turning", "orbit": "orbit"}[kind]
                             at = "" if dist is None else f" at {dist:g} m"
-                            units.append((f"{what} of {mover} to el {el:+.0f} deg from {anchor}{at}", unit))
-            for name, unit in units:
+                            units.append((f"{what} of {mover} to el {el:+.0f} deg from {anchor}{at}", unit, 1))
+                            if kind == "orbit" and again > 1:
+                                units.append((f"{what} of {mover} to el {el:+.0f} deg from {anchor}{at}, {again} laps",
+                                              replace(unit, laps=again, label=""), again))
+            for name, unit, times in units:
                 out.append(Candidate(name, unit, 0.0, {mover: unit.end_pose()}))
                 if anchor not in opts.fixed_nodes and opts.anchor_turns:  # the hovering peer turns meanwhile
-                    both = replace(unit, anchor_turn_deg=360.0, label="")
+                    both = replace(unit, anchor_turn_deg=360.0 * times, label="")
                     out.append(Candidate(f"{name}, {anchor} turning", both, 0.0,
                                          {mover: both.end_pose(), anchor: (tuple(pa), both.anchor_end_yaw_deg())}))
     if opts.library:

@@ -60,6 +60,12 @@ class OptimizeOptions:
         Packets per second in each link direction.
     target_el_deg : (float, float)
         Band of body-frame elevations the spread is taken over [deg].
+    drift_std_db : float
+        An error drifting over seconds (a heading estimate's wander), as one offset per link and
+        5-s block [dB] (:attr:`rplearn.analysis.manoeuvres.ManoeuvreOptions.correlated_std_db`;
+        what :func:`rplearn.analysis.manoeuvres.correlated_error_std_db` finds in an earlier
+        flight): the plan then counts a direction seen once as less learned than white noise
+        says; 0: white noise only.
     """
 
     target_spread_db: float = 2.0
@@ -74,8 +80,11 @@ class OptimizeOptions:
     speed_m_s: float = 1.5
     packet_rate_hz: float = 80.0
     target_el_deg: tuple[float, float] = (-90.0, 90.0)
+    drift_std_db: float = 0.0
 
     def __post_init__(self) -> None:
+        if not (np.isfinite(self.drift_std_db) and self.drift_std_db >= 0):
+            raise InputError(f"drift_std_db: expected a non-negative spread [dB], got {self.drift_std_db!r}", param="drift_std_db")
         for name in ("target_spread_db", "budget_s", "noise_std_db", "prior_std_db", "distance_m", "height_m", "speed_m_s",
                      "packet_rate_hz"):
             v = float(getattr(self, name))
@@ -148,7 +157,8 @@ def optimize_plan(out_dir: str, options: OptimizeOptions | None = None, rate_hz:
         shape = "reference"
     weight = prior_penalty_weight(spec.basis(), opts.prior_std_db, opts.noise_std_db, spec.ridge_weight, shape=shape)
     mopts = ManoeuvreOptions(noise_std_db=opts.noise_std_db, packet_rate_hz=opts.packet_rate_hz, penalty_weight=weight,
-                             target_el_deg=opts.target_el_deg, candidates=CandidateOptions(fixed_nodes=fixed, speed_m_s=opts.speed_m_s))
+                             target_el_deg=opts.target_el_deg, candidates=CandidateOptions(fixed_nodes=fixed, speed_m_s=opts.speed_m_s),
+                             correlated_std_db=float(opts.drift_std_db))
     if shape == "reference":
         mopts = replace(mopts, power=0.0)
     empty = NormalEquations(spec.basis(), len(nodes))

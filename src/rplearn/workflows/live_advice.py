@@ -7,7 +7,9 @@ continued to that order, as the per-node spreads of the live view are read
 (:mod:`rplearn.models.own_posterior`), with the chosen fit's noise. A ranking scores every
 candidate with a rank-k update (seconds for a hundred candidates), so it is redone at most every
 ``every_s`` seconds of wall time and the last one is shown in between; rows are best first (the
-largest reduction of the nodes' spread per second of flight).
+largest reduction of the nodes' spread per second of flight). The session's sums per time block
+(the statistics' ``blocks``) carry an error drifting over seconds into the ranking's posterior,
+its size estimated from them (:mod:`rplearn.core.lsq.block_sums`).
 """
 
 from __future__ import annotations
@@ -55,7 +57,7 @@ class ManoeuvreAdvisor:
         model = fitted.model
         noise = model.training.noise_std_db if model.training.noise_std_db is not None else model.training.rmse_db
         options = self.options if noise is None or not noise > 0 else replace(self.options, noise_std_db=float(noise))
-        ranked = rank_manoeuvres(statistics, fitted.spec, list(model.nodes), latest, options)
+        ranked = rank_manoeuvres(statistics, fitted.spec, list(model.nodes), latest, options, getattr(statistics, "blocks", None))
         rows = [(r.name, float(r.duration_s), float(max(r.spread_after_db.values()))) for r in ranked]
         self._last = (now, rows)
         return rows

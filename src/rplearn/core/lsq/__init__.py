@@ -8,6 +8,7 @@ statistics
 ``link_statistics``    the products of links' feature blocks that fill them
 ``runtime``            :class:`StatisticsRuntime`: their worker pool, block buffers, fork hook
 ``node_blocks``        which node blocks of ``X^T X`` can be non-zero
+``block_sums``         :class:`BlockSums`: sums per time block, an error drifting over seconds
 solve
 ``solver``             :func:`solve`, :func:`fit_joint`, :func:`identifiability`: gauge, KKT path
 ``solver_large``       the path above ``LARGE_COLUMNS`` columns: one factor, lazy covariance

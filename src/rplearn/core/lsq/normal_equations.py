@@ -81,6 +81,9 @@ class NormalEquations:
     #: shared columns appended after the pattern columns (set by :meth:`with_shared`):
     #: ``("exponent",)`` or ``("offset", a, b)`` (+1 on a -> b samples, -1 on b -> a)
     shared: tuple[tuple[Any, ...], ...] = field(init=False, default=())
+    #: sums per time block of these samples (:class:`~rplearn.core.lsq.block_sums.BlockSums`), set
+    #: by code that keeps them (a live session's total); None: not kept. Not merged or copied.
+    blocks: Any = field(init=False, default=None, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         if self.n_nodes < 2:

@@ -1,0 +1,143 @@
+"""The posterior the next-best manoeuvre ranking reads, and its rank-k update by a manoeuvre.
+
+The pattern covariance is ``Sigma = sigma^2 A^-1 + D D^T``: the white-noise posterior
+(``A = X^T X + P`` in the units of ``X^T X``) and the part an error drifting over seconds
+leaves (:mod:`rplearn.core.lsq.block_sums`: ``s_c^2 A^-1 C A^-1``, ``C = sum_b v_b v_b^T`` over
+time blocks), kept as a factor ``D = (s_c / sigma^2) Sigma_w C^1/2`` (``Sigma_w = sigma^2
+A^-1``); without a drifting error ``D`` has no columns and the posterior is the white one.
+
+A manoeuvre adds the feature rows ``F`` (``weight`` packets each). Its white part is the
+Woodbury update ``Sigma_w' = Sigma_w - B^T S^-1 B`` (``B = F Sigma_w``; more rows than columns
+first compressed to the triangular factor of ``F^T F``). Its drifting part keeps the old blocks'
+columns, mapped through the new ``A'^-1`` (``D' = D - B^T S^-1 F D``), and appends one column per
+time block of the manoeuvre (``correlation rows`` consecutive rows): ``(s_c / sigma^2)
+Sigma_w' u_j`` with ``u_j = weight * sum of the block's rows``. Each node's spread is
+``sqrt(sum(M_k * Sigma_kk))``, from the diagonal blocks only.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def _inverse(matrix: np.ndarray) -> np.ndarray:
+    """Inverse of a symmetric positive definite matrix through its Cholesky factor."""
+    sym = 0.5 * (matrix + matrix.T)
+    chol = np.linalg.cholesky(sym)
+    inv_l = np.linalg.solve(chol, np.eye(sym.shape[0]))
+    return inv_l.T @ inv_l
+
+
+def psd_factor(matrix: np.ndarray, rtol: float = 1e-12) -> np.ndarray:
+    """``F`` with ``F F^T = matrix`` (symmetric positive semi-definite), columns of the
+    eigenvalues above ``rtol`` times the largest only."""
+    values, vectors = np.linalg.eigh(0.5 * (matrix + matrix.T))
+    top = float(values[-1]) if values.size else 0.0
+    keep = values > rtol * max(top, 0.0) if top > 0 else np.zeros(values.size, bool)
+    return np.asarray(vectors[:, keep] * np.sqrt(values[keep]), np.float64)
+
+
+class _Posterior:
+    """The pattern posterior's covariance and the per-node spread read from it (module docstring).
+
+    Parameters
+    ----------
+    precision : ndarray
+        ``A / sigma^2`` over the pattern columns.
+    metrics : list of ndarray
+        Per node, the second moment of the mean-removed design over its target directions.
+    noise_var : float
+        ``sigma^2`` [dB^2].
+    """
+
+    def __init__(self, precision: np.ndarray, metrics: list[np.ndarray], noise_var: float) -> None:
+        self.noise_var = noise_var
+        self.metrics = metrics
+        self.p = metrics[0].shape[0]
+        self.cov = _inverse(precision)
+        self.drift = np.zeros((self.cov.shape[0], 0))
+        self.drift_scale = 0.0
+        self.block_rows = 0
+
+    def with_drift(self, correlated_var: float, cross: np.ndarray | None, block_rows: int) -> _Posterior:
+        """Add the drifting error: block-offset variance ``s_c^2`` [dB^2], the blocks' ``C`` so
+        far (None: none yet) and the feature rows per time block of a manoeuvre."""
+        if correlated_var > 0:
+            self.drift_scale = float(np.sqrt(correlated_var)) / self.noise_var
+            self.block_rows = max(int(block_rows), 1)
+            if cross is not None and np.any(cross):
+                self.drift = self.drift_scale * (self.cov @ psd_factor(cross))
+        return self
+
+    def _node_vars(self, cov: np.ndarray, drift: np.ndarray) -> np.ndarray:
+        p = self.p
+        out = []
+        for k, m in enumerate(self.metrics):
+            var = float(np.sum(m * cov[k * p:(k + 1) * p, k * p:(k + 1) * p]))
+            if drift.shape[1]:
+                g = drift[k * p:(k + 1) * p]
+                var += float(np.sum((m @ g) * g))
+            out.append(var)
+        return np.array(out)
+
+    def spreads(self, cov: np.ndarray | None = None) -> np.ndarray:
+        """Each node's spread now (``cov``: of that white covariance instead, no drift)."""
+        if cov is not None:
+            return np.sqrt(np.maximum(self._node_vars(cov, np.zeros((cov.shape[0], 0))), 0.0))
+        return np.sqrt(np.maximum(self._node_vars(self.cov, self.drift), 0.0))
+
+    def _woodbury(self, rows: np.ndarray, weight: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(F, B, S^-1 B)`` of the update ``Sigma' = Sigma - B^T S^-1 B`` with ``B = F Sigma``; more
+        rows than columns are first compressed to the triangular factor of ``F^T F`` (same update)."""
+        if rows.shape[0] > rows.shape[1]:
+            rows = np.asarray(np.linalg.qr(rows, mode="r"), np.float64)
+        b = rows @ self.cov
+        s = b @ rows.T + np.eye(rows.shape[0]) * (self.noise_var / weight)
+        return rows, b, np.linalg.solve(s, b)
+
+    def _drift_after(self, rows: np.ndarray, weight: float, parts: tuple[np.ndarray, np.ndarray, np.ndarray]) -> np.ndarray:
+        """``D'`` after the update (module docstring); ``rows`` uncompressed, ``parts`` of :meth:`_woodbury`."""
+        if self.drift_scale <= 0:
+            return self.drift
+        small, b, sb = parts
+        old = self.drift - sb.T @ (small @ self.drift) if self.drift.shape[1] else self.drift
+        starts = np.arange(0, rows.shape[0], self.block_rows)
+        u = weight * np.add.reduceat(rows, starts, axis=0).T  # (columns, blocks)
+        new = self.drift_scale * (self.cov @ u - sb.T @ (b @ u))
+        return np.hstack([old, new])
+
+    def updated(self, rows: np.ndarray, weight: float) -> np.ndarray:
+        """The white covariance after ``weight`` packets per feature row ``rows`` (rank-k update)."""
+        if rows.shape[0] == 0:
+            return self.cov
+        _, b, sb = self._woodbury(rows, weight)
+        return self.cov - b.T @ sb
+
+    def update(self, rows: np.ndarray, weight: float) -> None:
+        """Take the manoeuvre's rows into the posterior (white part and drift)."""
+        if rows.shape[0] == 0:
+            return
+        parts = self._woodbury(rows, weight)
+        drift = self._drift_after(rows, weight, parts)
+        self.cov = self.cov - parts[1].T @ parts[2]
+        if drift.shape[1] > drift.shape[0]:  # keep it at most square: the same D D^T
+            drift = psd_factor(drift @ drift.T)
+        self.drift = drift
+
+    def spreads_after(self, rows: np.ndarray, weight: float) -> np.ndarray:
+        """:meth:`spreads` after the update, from its diagonal blocks only."""
+        if rows.shape[0] == 0:
+            return self.spreads()
+        parts = self._woodbury(rows, weight)
+        _, b, sb = parts
+        drift = self._drift_after(rows, weight, parts)
+        p = self.p
+        var = []
+        for k, m in enumerate(self.metrics):
+            blk = slice(k * p, (k + 1) * p)
+            v = float(np.sum(m * self.cov[blk, blk])) - float(np.sum((sb[:, blk] @ m) * b[:, blk]))
+            if drift.shape[1]:
+                g = drift[blk]
+                v += float(np.sum((m @ g) * g))
+            var.append(v)
+        return np.sqrt(np.maximum(var, 0.0))

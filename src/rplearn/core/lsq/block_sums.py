@@ -1,0 +1,209 @@
+"""Per-time-block sums of the statistics: an error that drifts over seconds, in the posterior.
+
+The white-noise posterior of a fit says each sample's error is independent. An error that
+drifts (a heading estimate wandering by a few degrees over seconds, a slow level drift, a
+multipath lobe) is shared by the samples of a few seconds: a flight that sees a direction once
+learns its gain plus that stretch's error, and repeating the direction at once teaches nothing
+new, while seeing it again later averages the error out. The model here: the error of sample
+``i`` of link ``{a, b}`` in time block ``b(i)`` (blocks of :attr:`BlockSums.block_s` seconds)
+is ``w_i + c_{link, b(i)}``, white ``w`` of variance ``sigma^2`` plus an offset shared by the
+link's samples in the block, of variance ``s_c^2``. The penalised least-squares estimate
+``beta = A^-1 X^T y`` (``A = X^T X + P``, the fit's ridge and smoothness penalty in the units of
+``X^T X``) then has the covariance
+
+    ``sigma^2 A^-1 + s_c^2 A^-1 C A^-1``,   ``C = sum_b v_b v_b^T``,  ``v_b = X_b^T 1``
+
+(the first term is the white-noise posterior, its prior included; the second the drifting part:
+``v_b`` is the sum of the features of the block's samples). Nothing in the fit changes.
+
+:class:`BlockSums` keeps, with memory that does not grow with the flight's length, ``C``,
+``C_n = sum_b n_b v_b v_b^T``, ``sum_b s_b v_b``, ``sum_b s_b^2``, ``sum_b n_b^2`` (``s_b =
+1^T y_b``, ``n_b`` the block's samples), from the cumulative statistics' per-link sums
+(:attr:`NormalEquations.directed`) at block boundaries: nothing is re-read.
+:func:`correlated_ratio` estimates ``kappa = s_c^2 / sigma^2`` from them by moments: the
+residual sum of squares and the sum of the blocks' squared residual sums of a penalised fit,
+against their expectations under the model (each a linear function of ``sigma^2`` and
+``s_c^2`` through traces of ``A^-1 X^T X``, ``A^-1 C`` and ``A^-1 C_n``; the fit's absorption of
+the errors included), solved for the two.
+"""
+
+from __future__ import annotations
+
+import copy
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from rplearn._argtypes import check_types
+from rplearn.core.lsq.normal_equations import NormalEquations
+from rplearn.errors import InputError
+
+FloatArray = NDArray[np.float64]
+
+#: Default length of a time block [s]: about the correlation time of a drone's heading error.
+DEFAULT_BLOCK_S = 5.0
+#: Fewest closed blocks from which :func:`correlated_ratio` estimates anything (else 0).
+MIN_BLOCKS = 4
+
+
+@check_types
+@dataclass
+class BlockSums:
+    """Sums over time blocks of each link's samples (module docstring).
+
+    Parameters
+    ----------
+    n_nodes, n_coef : int
+        Nodes and basis coefficients per node of the statistics followed.
+    block_s : float
+        Length of a time block [s] (about the correlation time of the drifting error).
+
+    Feed it the cumulative statistics after every batch (:meth:`follow`) or each batch's own
+    statistics (:meth:`add_batch`) with a time of the batch (its samples' last, or middle, time):
+    block ``k`` holds the batches whose time is in ``[k, k + 1) * block_s``, and closes when a
+    batch of another block comes. :meth:`closed` is a copy with the open block closed (what the
+    posterior reads).
+    """
+
+    n_nodes: int
+    n_coef: int
+    block_s: float = DEFAULT_BLOCK_S
+    cross: FloatArray = field(init=False)
+    cross_n: FloatArray = field(init=False)
+    sum_yv: FloatArray = field(init=False)
+    sum_yy: float = field(init=False, default=0.0)
+    sum_n: float = field(init=False, default=0.0)
+    sum_nn: float = field(init=False, default=0.0)
+    n_blocks: int = field(init=False, default=0)
+    _open: dict[tuple[int, int], FloatArray] = field(init=False, default_factory=dict, repr=False)
+    _open_index: int | None = field(init=False, default=None, repr=False)
+    _seen: dict[tuple[int, int], FloatArray] = field(init=False, default_factory=dict, repr=False)
+
+    def __post_init__(self) -> None:
+        if int(self.n_nodes) < 2 or int(self.n_coef) < 1:
+            raise InputError(f"block sums: expected 2+ nodes and 1+ coefficients, got {self.n_nodes!r}, {self.n_coef!r}")
+        if not (np.isfinite(self.block_s) and self.block_s > 0):
+            raise InputError(f"block_s: expected a positive block length [s], got {self.block_s!r}", param="block_s")
+        size = int(self.n_nodes) * int(self.n_coef)
+        self.cross = np.zeros((size, size))
+        self.cross_n = np.zeros((size, size))
+        self.sum_yv = np.zeros(size)
+
+    def _check(self, normal: NormalEquations) -> None:
+        if normal.n_nodes != self.n_nodes or normal.basis.n_coef != self.n_coef:
+            raise InputError(f"statistics of {normal.n_nodes} nodes x {normal.basis.n_coef} coefficients for block sums of "
+                             f"{self.n_nodes} x {self.n_coef}", param="normal")
+
+    def follow(self, normal: NormalEquations, t_s: float) -> BlockSums:
+        """Take the samples added to the cumulative ``normal`` since the last call, the last of
+        them at ``t_s`` [s]."""
+        self._check(normal)
+        fresh = {}
+        for key, sums in normal.directed.items():
+            prev = self._seen.get(key)
+            fresh[key] = sums if prev is None else sums - prev
+            self._seen[key] = sums.copy()
+        self._take(fresh, float(t_s))
+        return self
+
+    def add_batch(self, batch: NormalEquations, t_s: float) -> BlockSums:
+        """Take one batch's own statistics, its last sample at ``t_s`` [s]."""
+        self._check(batch)
+        self._take(batch.directed, float(t_s))
+        return self
+
+    def _take(self, directed: dict[tuple[int, int], FloatArray], t_s: float) -> None:
+        if not np.isfinite(t_s):
+            raise InputError(f"t_s: expected a finite time [s], got {t_s!r}", param="t_s")
+        index = int(np.floor(t_s / self.block_s))
+        if self._open_index is not None and index != self._open_index:
+            self._close()
+        self._open_index = index
+        for key, sums in directed.items():
+            pair = (min(key), max(key))
+            vec = self._vector(key, sums)
+            prev = self._open.get(pair)
+            self._open[pair] = vec if prev is None else prev + vec
+
+    def _vector(self, key: tuple[int, int], sums: FloatArray) -> FloatArray:
+        """A directed link's sums as ``[X^T 1 over all pattern columns, 1^T y, n]``."""
+        p, (t, r) = self.n_coef, key
+        out = np.zeros(self.n_nodes * p + 2)
+        out[t * p:(t + 1) * p] += sums[:p]
+        out[r * p:(r + 1) * p] += sums[p:2 * p]
+        out[-2] = sums[2 * p]  # sum y
+        out[-1] = sums[2 * p + 1]  # count
+        return out
+
+    def _close(self) -> None:
+        for vec in self._open.values():
+            n = float(vec[-1])
+            if n <= 0:
+                continue
+            v, s = vec[:-2], float(vec[-2])
+            outer = np.outer(v, v)
+            self.cross += outer
+            self.cross_n += n * outer
+            self.sum_yv += s * v
+            self.sum_yy += s * s
+            self.sum_n += n
+            self.sum_nn += n * n
+            self.n_blocks += 1
+        self._open = {}
+        self._open_index = None
+
+    def closed(self) -> BlockSums:
+        """A copy with the open block closed (the sums of every sample so far)."""
+        out = copy.deepcopy(self)
+        out._close()
+        return out
+
+
+@check_types
+def correlated_ratio(normal: NormalEquations, blocks: BlockSums, prior_diag: Any) -> float:
+    """``kappa = s_c^2 / sigma^2``: the drifting error's block-offset variance over the white
+    noise's, estimated by moments (module docstring); 0 with fewer than :data:`MIN_BLOCKS`
+    blocks or when the blocks' residuals scatter no more than white noise allows.
+
+    Parameters
+    ----------
+    normal : NormalEquations
+        The statistics of the same samples as ``blocks`` (pattern columns first).
+    blocks : BlockSums
+        Their block sums, every sample in a closed block (:meth:`BlockSums.closed`).
+    prior_diag : array_like
+        The fit's prior precision per pattern column in the units of ``X^T X`` (ridge + penalty).
+    """
+    if blocks.n_blocks < MIN_BLOCKS:
+        return 0.0
+    pc = normal.n_pattern_columns
+    if blocks.cross.shape[0] != pc:
+        raise InputError(f"block sums of {blocks.cross.shape[0]} columns for statistics of {pc} pattern columns", param="blocks")
+    gram = np.asarray(normal.gram, np.float64)[:pc, :pc]
+    a = gram + np.diag(np.asarray(prior_diag, np.float64).ravel())
+    chol = np.linalg.cholesky(0.5 * (a + a.T))
+    inv_l = np.linalg.solve(chol, np.eye(pc))
+    a_inv = inv_l.T @ inv_l
+    beta = a_inv @ normal.rhs[:pc]
+    rss = float(normal.yty - 2.0 * beta @ normal.rhs[:pc] + beta @ gram @ beta)
+    block_rss = float(blocks.sum_yy - 2.0 * beta @ blocks.sum_yv + beta @ blocks.cross @ beta)
+    k_g, k_c = a_inv @ gram, a_inv @ blocks.cross
+    n = float(normal.n_samples)
+    t_g, t_c, t_gc = float(np.trace(k_g)), float(np.trace(k_c)), float(np.sum(k_g * k_c.T))
+    # E[rss] = sigma^2 tr((I-H)^2) + s_c^2 tr(J (I-H)^2);  E[block rss] = sigma^2 tr(J (I-H)^2) + s_c^2 tr(J (I-H) J (I-H))
+    white_rss = n - 2.0 * t_g + float(np.sum(k_g * k_g.T))
+    mixed = blocks.sum_n - 2.0 * t_c + t_gc
+    block_block = blocks.sum_nn - 2.0 * float(np.sum(a_inv * blocks.cross_n)) + float(np.sum(k_c * k_c.T))
+    system = np.array([[white_rss, mixed], [mixed, block_block]])
+    try:
+        sigma2, sc2 = np.linalg.solve(system, np.array([rss, block_rss]))
+    except np.linalg.LinAlgError:
+        return 0.0
+    if not (np.isfinite(sigma2) and np.isfinite(sc2)) or sigma2 <= 0 or sc2 <= 0:
+        return 0.0
+    return float(sc2 / sigma2)
+
+
+__all__ = ["DEFAULT_BLOCK_S", "MIN_BLOCKS", "BlockSums", "correlated_ratio"]
