@@ -3,9 +3,11 @@
 ``predict_swarm`` for 10, 30 (and, without ``--quick``, 100) drones x 1000 times, with and
 without spreads, against the strongest plain numpy reference of the same numbers written here
 (issue 30): the drones' poses at the prediction times as arrays (no log to interpolate), one
-rotation matrix per pose and every ordered pair's directions in both body frames by columns,
-each pattern's gain from the basis's series evaluation over all rows that carry it, the
-standard error ``f^T C f`` from one product per block of rows of one pattern pair, the received
+rotation matrix per pose, every drone's direction toward every other drone in its body frame by
+columns on a (times, drones, drones) grid, each drone's gain toward each other drone once (the
+basis's series evaluation over all cells of drones carrying one pattern) and a link's gain as
+the sum of its two ends' (the receiver end of a -> b is the transmitter end of b -> a), the
+standard error ``f^T C f`` from one product per block of cells of one pattern pair, the received
 power, and per time the pairs up, the groups and the bottleneck from a maximum spanning tree
 (Prim on every time at once). The reference runs with one BLAS thread and with the default
 alternately, and its best is kept; ours runs alternately with it. Best of several, with the
@@ -21,7 +23,8 @@ maximum spanning tree, then the mean pair RSSI), scoring one candidate yaw at a 
 within 3x its time, with the same yaws and bottleneck.
 
 Run: ``.venv/bin/python benchmarks/swarm.py [--quick]`` (``--tiny``: 4 drones x 50 times, headings
-of 4 drones, once; the numbers must agree, the time targets are not enforced).
+of 4 drones, once; the numbers must agree, the time targets are not enforced). To iterate on
+one case: ``--drones 50 --times 300 --spreads without --repeats 2``.
 """
 
 from __future__ import annotations
