@@ -92,6 +92,8 @@ def test_cells_take_the_links_in_order_and_put_them_back():
         k, a, b = np.nonzero(present[:, :, None] & present[:, None, :] & ~np.eye(5, dtype=bool))
         np.testing.assert_array_equal(cells.take(grid), grid[k, a, b])
         np.testing.assert_array_equal(cells.take(np.arange(5)[None, :, None]), a)  # a broadcast grid
+        np.testing.assert_array_equal(cells.take(np.arange(5)[None, None, :]), b)
+        np.testing.assert_array_equal(cells.take(np.arange(3.0)[:, None, None]), k)  # one value a time
         back = np.full((3, 5, 5), np.nan)
         cells.put(back, grid[k, a, b])
         np.testing.assert_array_equal(back[k, a, b], grid[k, a, b])

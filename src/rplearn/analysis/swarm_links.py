@@ -106,8 +106,13 @@ class _Cells:
         out = np.empty(self.size, grid.dtype) if out is None else out
         if self.mask is None:
             m, n, _ = self.shape
-            full = np.ascontiguousarray(np.broadcast_to(grid, self.shape))
-            np.copyto(out.reshape(m, n - 1, n), _off_diagonal(full))
+            links = out.reshape(m, n * (n - 1))
+            if grid.shape[1:] == (1, 1):  # one value a time
+                links[...] = grid.reshape(-1, 1)
+            elif grid.shape[0] == 1:  # the same links every time: one time's, repeated
+                links[...] = _off_diagonal(np.ascontiguousarray(np.broadcast_to(grid, (1, n, n)))).reshape(1, -1)
+            else:
+                np.copyto(out.reshape(m, n - 1, n), _off_diagonal(np.ascontiguousarray(np.broadcast_to(grid, self.shape))))
         else:
             out[...] = np.broadcast_to(grid, self.shape)[self.mask]
         return out
