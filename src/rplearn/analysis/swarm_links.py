@@ -36,7 +36,7 @@ LINK_BLOCK_ROWS = 50_000
 #: Grid cells whose connectivity is computed at once (a few arrays of this many values) ...
 SWARM_CONNECTIVITY_VALUES = 1_000_000
 #: ... and at most the links over this number (a few arrays of them stay small beside the table).
-CONNECTIVITY_SHARE = 32
+CONNECTIVITY_SHARE = 64
 
 
 @dataclass(frozen=True)
@@ -232,9 +232,11 @@ def _samples(model: PatternSet, cells: _Cells, angles: tuple[np.ndarray, np.ndar
     az, el = angles
     back = (0, 2, 1)
     directions = Directions(cells.take(az), cells.take(el), cells.take(az.transpose(back)), cells.take(el.transpose(back)))
+    heights = model.path_loss.kind == "two-ray"  # the only term that reads them
     return LinkSamples(directions, cells.take(node_of[None, :, None]), cells.take(node_of[None, None, :]), model.nodes,
-                       np.full(d.size, np.nan), d, np.full(d.size, frequency_hz), tx_z_m=cells.take(z[:, :, None]),
-                       rx_z_m=cells.take(z[:, None, :]))
+                       np.broadcast_to(np.nan, d.shape), d, np.broadcast_to(float(frequency_hz), d.shape),
+                       tx_z_m=cells.take(z[:, :, None]) if heights else None,
+                       rx_z_m=cells.take(z[:, None, :]) if heights else None)
 
 
 class _LinkColumns:
