@@ -32,7 +32,7 @@ from rplearn._argtypes import check_types
 from rplearn._budget import Cost, check_work
 from rplearn.analysis.heading_options import _check_frequency
 from rplearn.analysis.heading_options import _finite as _is_number
-from rplearn.analysis.swarm_connectivity import connectivity_of_weights
+from rplearn.analysis.swarm_connectivity import connectivity_of_weights, connectivity_table
 from rplearn.analysis.swarm_connectivity import maximum_spanning_edges as maximum_spanning_edges  # re-exported
 from rplearn.analysis.swarm_links import Radio, SwarmPoses, predict_links
 from rplearn.core.link import FAR_FIELD_WAVELENGTHS, wavelength_m
@@ -381,7 +381,7 @@ def connectivity_over_time(
         sel = (t_index >= s0) & (t_index < s1)
         parts.append(_connectivity_block(t_index[sel] - s0, tx[sel], rx[sel], rssi_all[sel], times_s[s0:s1], drones,
                                          min_rssi_dbm))
-    return pd.concat(parts, ignore_index=True)
+    return connectivity_table(parts)
 
 
 #: Weights held at once by :func:`connectivity_over_time` (times x drones x drones).
@@ -391,7 +391,7 @@ CONNECTIVITY_BLOCK_VALUES = 4_000_000
 def _connectivity_block(
     k: np.ndarray, tx: np.ndarray, rx: np.ndarray, rssi_dbm: np.ndarray, times_s: np.ndarray,
     drones: Sequence[str], min_rssi_dbm: float,
-) -> pd.DataFrame:
+) -> dict[str, np.ndarray]:
     """Rows of :func:`connectivity_over_time` for the times ``times_s`` of one block, from its
     links: time index ``k`` within the block, drone indices, RSSI (+inf near field) [dBm]."""
     n, m = len(drones), times_s.size

@@ -16,8 +16,9 @@ import pandas as pd
 
 def connectivity_of_weights(
     rssi_dbm: np.ndarray, present: np.ndarray, times_s: np.ndarray, drones: Sequence[str], min_rssi_dbm: float,
-) -> pd.DataFrame:
-    """Rows of :func:`rplearn.analysis.swarm.connectivity_over_time` for the times of one block.
+) -> dict[str, np.ndarray]:
+    """Columns of :func:`rplearn.analysis.swarm.connectivity_over_time` for the times of one
+    block (:func:`connectivity_table` joins the blocks' into the table).
 
     Parameters
     ----------
@@ -51,13 +52,18 @@ def connectivity_of_weights(
     missing = np.full(m, "", dtype=object)
     for r in np.flatnonzero(n_missing):
         missing[r] = ",".join(str(d) for d, p in zip(drones, present[r]) if not p)
-    return pd.DataFrame({
+    return {
         "t": times_s, "n_drones": present.sum(axis=1).astype(int), "n_missing": n_missing.astype(int),
         "missing": missing, "n_pairs_up": pairs_up.astype(int), "n_components": (n_groups - n_missing).astype(int),
         "connected": (n_missing == 0) & (n_groups == 1),
         "bottleneck_rssi_dbm": np.where(spans, edge_w[rows, weakest], np.nan).astype(float),
         "bottleneck_pair": np.where(spans, names[a] + "-" + names[b], ""),
-    })
+    }
+
+
+def connectivity_table(parts: Sequence[dict[str, np.ndarray]]) -> pd.DataFrame:
+    """The connectivity table of the blocks' columns (:func:`connectivity_of_weights`), in order."""
+    return pd.DataFrame({name: np.concatenate([part[name] for part in parts]) for name in parts[0]})
 
 
 def maximum_spanning_edges(weights: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -101,4 +107,4 @@ def maximum_spanning_edges(weights: np.ndarray) -> tuple[np.ndarray, np.ndarray,
     return edge_w, edge_a, edge_b
 
 
-__all__ = ["connectivity_of_weights", "maximum_spanning_edges"]
+__all__ = ["connectivity_of_weights", "connectivity_table", "maximum_spanning_edges"]

@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from rplearn.analysis.swarm_connectivity import connectivity_of_weights
+from rplearn.analysis.swarm_connectivity import connectivity_of_weights, connectivity_table
 from rplearn.analysis.swarm_geometry import pose_rotations
 from rplearn.core.geometry import Directions
 from rplearn.core.link import FAR_FIELD_WAVELENGTHS, free_space_path_loss_db, wavelength_m
@@ -37,6 +37,8 @@ LINK_BLOCK_ROWS = 50_000
 SWARM_CONNECTIVITY_VALUES = 1_000_000
 #: ... and at most the links over this number (a few arrays of them stay small beside the table).
 CONNECTIVITY_SHARE = 64
+#: ... but at least this many (fewer blocks: Prim's steps cost the same on few times as on many).
+CONNECTIVITY_MIN_VALUES = 100_000
 
 
 @dataclass(frozen=True)
@@ -188,7 +190,7 @@ def predict_links(
     limit_m = FAR_FIELD_WAVELENGTHS * float(wavelength_m(radio.frequency_hz))
     link_step = max(1, LINK_BLOCK_ROWS // (n * n))
     # the connectivity's few (times, n, n) arrays stay small beside the table
-    conn_cells = min(SWARM_CONNECTIVITY_VALUES, total // CONNECTIVITY_SHARE)
+    conn_cells = min(SWARM_CONNECTIVITY_VALUES, max(CONNECTIVITY_MIN_VALUES, total // CONNECTIVITY_SHARE))
     conn_step = link_step * max(1, conn_cells // (n * n * link_step))
     parts = []
     for c0 in range(0, t.size, conn_step):
@@ -222,7 +224,7 @@ def predict_links(
         seen = present[c0:c1] & (n_present[c0:c1, None] >= 2)  # a drone in at least one link
         parts.append(connectivity_of_weights(rssi_grid, seen, t[c0:c1], drones, radio.min_rssi_dbm))
         del rssi_grid
-    return columns.frame(drones, used), pd.concat(parts, ignore_index=True)
+    return columns.frame(drones, used), connectivity_table(parts)
 
 
 def _samples(model: PatternSet, cells: _Cells, angles: tuple[np.ndarray, np.ndarray], z: np.ndarray,
