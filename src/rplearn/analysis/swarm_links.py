@@ -31,8 +31,11 @@ from rplearn.data.tables import LinkSamples
 from rplearn.models.patterns import PatternSet
 from rplearn.models.predict import end_coverage_deg
 
-#: Grid cells (time x drone x drone) predicted at once: bounds the geometry and features in memory.
+#: Grid cells (time x drone x drone) predicted at once: bounds the geometry and features in memory ...
 LINK_BLOCK_ROWS = 50_000
+#: ... and at least this many, else at most the links over :data:`CONNECTIVITY_SHARE` (small swarms: the
+#: block's arrays stay small beside the table).
+LINK_BLOCK_MIN_ROWS = 20_000
 #: Grid cells whose connectivity is computed at once (a few arrays of this many values) ...
 SWARM_CONNECTIVITY_VALUES = 1_000_000
 #: ... and at most the links over this number (a few arrays of them stay small beside the table).
@@ -188,7 +191,7 @@ def predict_links(
     drone_code: np.ndarray = np.arange(n, dtype=code_dtype(n))
     columns = _LinkColumns(model, total, n, len(used))
     limit_m = FAR_FIELD_WAVELENGTHS * float(wavelength_m(radio.frequency_hz))
-    link_step = max(1, LINK_BLOCK_ROWS // (n * n))
+    link_step = max(1, min(LINK_BLOCK_ROWS, max(LINK_BLOCK_MIN_ROWS, total // CONNECTIVITY_SHARE)) // (n * n))
     # the connectivity's few (times, n, n) arrays stay small beside the table
     conn_cells = min(SWARM_CONNECTIVITY_VALUES, max(CONNECTIVITY_MIN_VALUES, total // CONNECTIVITY_SHARE))
     conn_step = link_step * max(1, conn_cells // (n * n * link_step))
