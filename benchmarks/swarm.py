@@ -3,9 +3,11 @@
 ``predict_swarm`` for 10, 30 (and, without ``--quick``, 100) drones x 1000 times, with and
 without spreads, against the strongest plain numpy reference of the same numbers written here
 (issue 30): the drones' poses at the prediction times as arrays (no log to interpolate), one
-rotation matrix per pose and every ordered pair's directions in both body frames by columns,
-each pattern's gain from the basis's series evaluation over all rows that carry it, the
-standard error ``f^T C f`` from one product per block of rows of one pattern pair, the received
+rotation matrix per pose, every drone's direction toward every other drone in its body frame by
+columns on a (times, drones, drones) grid, each drone's gain toward each other drone once (the
+basis's series evaluation over all cells of drones carrying one pattern) and a link's gain as
+the sum of its two ends' (the receiver end of a -> b is the transmitter end of b -> a), the
+standard error ``f^T C f`` from one product per block of cells of one pattern pair, the received
 power, and per time the pairs up, the groups and the bottleneck from a maximum spanning tree
 (Prim on every time at once). The reference runs with one BLAS thread and with the default
 alternately, and its best is kept; ours runs alternately with it. Best of several, with the
@@ -21,7 +23,8 @@ maximum spanning tree, then the mean pair RSSI), scoring one candidate yaw at a 
 within 3x its time, with the same yaws and bottleneck.
 
 Run: ``.venv/bin/python benchmarks/swarm.py [--quick]`` (``--tiny``: 4 drones x 50 times, headings
-of 4 drones, once; the numbers must agree, the time targets are not enforced).
+of 4 drones, once; the numbers must agree, the time targets are not enforced). To iterate on
+one case: ``--drones 50 --times 300 --spreads without --repeats 2``.
 """
 
 from __future__ import annotations
@@ -40,7 +43,7 @@ from rplearn.analysis.headings import SwarmHeadingOptions, best_swarm_headings
 from rplearn.analysis.swarm import SwarmOptions, predict_swarm
 from rplearn.core.bases import make_basis
 from rplearn.core.geometry import quat_wxyz_to_matrix
-from rplearn.core.link import free_space_path_loss_db
+from rplearn.core.link import free_space_path_loss_db, wavelength_m
 from rplearn.models.patterns import PatternSet
 from rplearn.models.training import TrainingSummary
 
@@ -76,70 +79,72 @@ def as_log(t, pos, quat) -> pd.DataFrame:
                       for i in range(n)], ignore_index=True)
 
 
-def _reference_block(model: PatternSet, pos, rot, ia, ib, pattern: np.ndarray, spreads: bool):
-    """Gain, spread (or None) and distance of the pairs ``ia -> ib`` at every time."""
-    T = pos.shape[1]
-    d = (pos[ib] - pos[ia]).reshape(-1, 3)  # (pairs * T, 3): a -> b in ENU
-    dist = np.sqrt(np.einsum("ij,ij->i", d, d))
+def _reference_grid(model: PatternSet, p, r, pattern: np.ndarray, spreads: bool):
+    """Gain, spread (or None) and distance of every (time, drone a, drone b) of a block of times.
 
-    def angles(r, sign):
-        r = r.reshape(-1, 9)
-        x = sign * (d[:, 0] * r[:, 0] + d[:, 1] * r[:, 3] + d[:, 2] * r[:, 6])
-        y = sign * (d[:, 0] * r[:, 1] + d[:, 1] * r[:, 4] + d[:, 2] * r[:, 7])
-        z = sign * (d[:, 0] * r[:, 2] + d[:, 1] * r[:, 5] + d[:, 2] * r[:, 8])
-        az = np.arctan2(y, x)
-        return np.where(az == -np.pi, np.pi, az), np.arctan2(z, np.hypot(x, y))
-
-    az_a, el_a = angles(rot[ia], 1.0)
-    az_b, el_b = angles(rot[ib], -1.0)
-    basis, p = model.basis, model.basis.n_coef
-    ta, tb = np.repeat(pattern[ia], T), np.repeat(pattern[ib], T)
-    g = np.zeros(d.shape[0])
-    for end, az, el in ((ta, az_a, el_a), (tb, az_b, el_b)):
-        for k in (0, 1):
-            sel = np.flatnonzero(end == k)
-            g[sel] += basis.evaluate(model.coef[k], az[sel], el[sel])
+    ``p`` (m, n, 3) positions, ``r`` (m, n, 9) rotations body -> ENU. Cell ``[t, a, b]`` of the
+    gain is ``G_a(b seen from a) + G_b(a seen from b)``: each drone's gain toward each other
+    drone is evaluated once, and each link is the sum of its two ends (the diagonal is no link)."""
+    m, n, _ = p.shape
+    d = p[:, None, :, :] - p[:, :, None, :]  # (m, n, n, 3): a -> b in ENU
+    dist = np.sqrt(np.einsum("tabk,tabk->tab", d, d))
+    x = d[..., 0] * r[:, :, None, 0] + d[..., 1] * r[:, :, None, 3] + d[..., 2] * r[:, :, None, 6]
+    y = d[..., 0] * r[:, :, None, 1] + d[..., 1] * r[:, :, None, 4] + d[..., 2] * r[:, :, None, 7]
+    z = d[..., 0] * r[:, :, None, 2] + d[..., 1] * r[:, :, None, 5] + d[..., 2] * r[:, :, None, 8]
+    az = np.arctan2(y, x)
+    az = np.where(az == -np.pi, np.pi, az)
+    el = np.arctan2(z, np.hypot(x, y))
+    basis, nc = model.basis, model.basis.n_coef
+    g = np.empty((m, n, n))  # g[t, a, b]: a's gain toward b
+    for k in (0, 1):
+        rows = pattern == k
+        g[:, rows] = basis.evaluate(model.coef[k], az[:, rows], el[:, rows]).reshape(m, -1, n)
+    gain = g + g.transpose(0, 2, 1)
     if not spreads:
-        return g, None, dist
-    v = np.empty(d.shape[0])
-    code = ta * 2 + tb
+        return gain, None, dist
+    az_a, el_a = az.ravel(), el.ravel()  # the transmitter end of every cell
+    az_b, el_b = az.transpose(0, 2, 1).ravel(), el.transpose(0, 2, 1).ravel()  # the receiver end
+    code = np.broadcast_to(pattern[:, None] * 2 + pattern[None, :], (m, n, n)).ravel()
+    off = np.broadcast_to(~np.eye(n, dtype=bool), (m, n, n)).ravel()
+    v = np.zeros(m * n * n)
     for c in range(4):
-        rows = np.flatnonzero(code == c)
+        cells = np.flatnonzero((code == c) & off)
         a, b = divmod(c, 2)
-        idx = np.r_[a * p:(a + 1) * p, b * p:(b + 1) * p]
+        idx = np.r_[a * nc:(a + 1) * nc, b * nc:(b + 1) * nc]
         cov = model.covariance[np.ix_(idx, idx)]
-        for s in range(0, rows.size, 4096):  # a block of rows: features (2p, 4096) stay in the cache
-            r = rows[s:s + 4096]
-            f = np.vstack([basis.design_t(az_a[r], el_a[r]), basis.design_t(az_b[r], el_b[r])])
-            v[r] = np.einsum("in,in->n", cov @ f, f)
-    return g, np.sqrt(v), dist
+        for s in range(0, cells.size, 4096):  # a block of cells: features (2p, 4096) stay in the cache
+            e = cells[s:s + 4096]
+            f = np.vstack([basis.design_t(az_a[e], el_a[e]), basis.design_t(az_b[e], el_b[e])])
+            v[e] = np.einsum("in,in->n", cov @ f, f)
+    return gain, np.sqrt(v).reshape(m, n, n), dist
 
 
 def reference_swarm(model: PatternSet, pos, quat, pattern: np.ndarray, spreads: bool = True):
-    """Plain numpy: gains, spreads, RSSI of every (time, ordered pair); connectivity per time.
+    """Plain numpy: gains, spreads, RSSI of every (time, drone, drone); connectivity per time.
 
-    The strongest simple way to the same numbers: one rotation matrix per pose, each end's
-    direction as ``R^T d`` by columns, each pattern's gain by the basis's own evaluation (a
-    Chebyshev series per azimuth factor, no design matrix) over all the rows that carry it, and
-    the spreads ``f^T C f`` from one product per block of rows of one (tx, rx) pattern pair;
-    50,000 links at a time (as ``predict_swarm``), so that memory does not hold every link's
-    geometry at once."""
+    The strongest simple way to the same numbers: one rotation matrix per pose, every drone's
+    direction toward every other drone as ``R^T d`` by columns on a (times, drones, drones)
+    grid, each drone's gain toward each other drone once by its pattern's own evaluation (a
+    Chebyshev series per azimuth factor, no design matrix) and a link's gain as the sum of its
+    two ends, the spreads ``f^T C f`` from one product per block of cells of one (tx, rx)
+    pattern pair; 50,000 cells at a time (as ``predict_swarm``), so that memory does not hold
+    every link's geometry at once. Gains and spreads come back as (times, drones, drones) grids."""
     n, T, _ = pos.shape
-    ia, ib = np.nonzero(~np.eye(n, dtype=bool))
-    rot = quat_wxyz_to_matrix(quat.reshape(-1, 4)).reshape(n, T, 9)  # body -> ENU, row by row
-    gain, dist = np.empty((ia.size, T)), np.empty((ia.size, T))
-    std = np.empty((ia.size, T)) if spreads else None
-    block = max(1, 50_000 // T)
-    for k0 in range(0, ia.size, block):
-        k = slice(k0, k0 + block)
-        g, v, dd = _reference_block(model, pos, rot, ia[k], ib[k], pattern, spreads)
-        gain[k], dist[k] = g.reshape(-1, T), dd.reshape(-1, T)
+    rot = quat_wxyz_to_matrix(quat.reshape(-1, 4)).reshape(n, T, 9).transpose(1, 0, 2)  # body -> ENU, row by row
+    p = pos.transpose(1, 0, 2)
+    gain, rssi = np.empty((T, n, n)), np.empty((T, n, n))
+    std = np.empty((T, n, n)) if spreads else None
+    block = max(1, 50_000 // (n * n))
+    lam = float(wavelength_m(FREQUENCY_HZ))
+    for s0 in range(0, T, block):
+        k = slice(s0, s0 + block)
+        gain[k], v, dist = _reference_grid(model, p[k], rot[k], pattern, spreads)
+        with np.errstate(divide="ignore"):  # the diagonal's zero distance: no link
+            rssi[k] = TX_POWER_DBM + gain[k] - 20.0 * np.log10(4.0 * np.pi * dist / lam)
         if std is not None:
-            std[k] = v.reshape(-1, T)
-    rssi = TX_POWER_DBM + gain - free_space_path_loss_db(dist, FREQUENCY_HZ)
-    w = np.full((T, n, n), -np.inf)
-    w[:, ia, ib] = rssi.T
-    w = np.minimum(w, w.transpose(0, 2, 1))
+            std[k] = v
+    w = np.minimum(rssi, rssi.transpose(0, 2, 1))
+    w[:, np.arange(n), np.arange(n)] = -np.inf
     iu, ju = np.triu_indices(n, 1)
     pairs_up = np.sum(w[:, iu, ju] >= THRESHOLD_DBM, axis=1)
     in_tree = np.zeros((T, n), bool)
@@ -247,13 +252,16 @@ def main() -> int:
     parser.add_argument("--drones", type=int, nargs="+", help="only these swarm sizes for predict_swarm (and no headings)")
     parser.add_argument("--tiny", action="store_true", help="4 drones x 50 times, headings of 4 drones, once (seconds)")
     parser.add_argument("--repeats", type=int, help="best of this many (default 3; 2 with --quick)")
+    parser.add_argument("--times", type=int, help=f"prediction times (default {TIMES}; fewer to iterate quickly)")
+    parser.add_argument("--spreads", choices=("both", "with", "without"), default="both",
+                        help="predict_swarm with spreads, without, or both (default)")
     args = parser.parse_args()
     # 100 drones x 1,000 times is 9.9M links: more than the work budget lets a user start by
     # accident (rplearn._budget); a benchmark asks for it on purpose, as a user would.
     os.environ.setdefault("RPLEARN_MAX_SECONDS", "3600")
     sizes = args.drones or ((4,) if args.tiny else (10, 30) if args.quick else (10, 30, 100))
     repeats = 1 if args.tiny else args.repeats or (2 if args.quick else 3)
-    n_times = 50 if args.tiny else TIMES
+    n_times = 50 if args.tiny else args.times or TIMES
     rng = np.random.default_rng(0)
     model = model_of(rng)
     bare = PatternSet(model.basis, model.nodes, model.coef, training=model.training)  # no covariance: no spreads
@@ -265,6 +273,8 @@ def main() -> int:
         pattern_of = {d: ("A" if i % 2 == 0 else "B") for i, d in enumerate(drones)}
         pattern = np.array([0 if i % 2 == 0 else 1 for i in range(n)])
         for spreads, m in ((False, bare), (True, model)):
+            if args.spreads != "both" and spreads != (args.spreads == "with"):
+                continue
             best = {"ours": (np.inf, 0), "ref": (np.inf, 0)}
             for r in range(repeats):
                 dt, peak, ours = timed(lambda: predict_swarm(m, log, TX_POWER_DBM, SwarmOptions(
@@ -274,14 +284,15 @@ def main() -> int:
                 with threadpool_limits(1) if r % 2 == 0 else nullcontext():
                     dt, peak, ref = timed(lambda: reference_swarm(m, pos, quat, pattern, spreads))
                 best["ref"] = (min(best["ref"][0], dt), max(best["ref"][1], peak))
-            # the same numbers (links sorted by time, then tx, then rx: the reference's pair order per time)
-            gain = ours.links["gain_pred_db"].to_numpy().reshape(n_times, n * (n - 1)).T
-            same = np.allclose(gain, ref[0], rtol=0, atol=1e-9) and np.array_equal(
+            # the same numbers (links sorted by time, then tx, then rx: the grid's off-diagonal cells in order)
+            off = ~np.eye(n, dtype=bool)  # a grid's links, in the order of tx, then rx
+            gain = ours.links["gain_pred_db"].to_numpy().reshape(n_times, n * (n - 1))
+            same = np.allclose(gain, ref[0][:, off], rtol=0, atol=1e-9) and np.array_equal(
                 ours.connectivity["n_pairs_up"].to_numpy(), ref[2])
             same &= np.allclose(ours.connectivity["bottleneck_rssi_dbm"].to_numpy(), ref[4], rtol=0, atol=1e-9)
             if spreads:
-                std = ours.links["gain_pred_std_db"].to_numpy().reshape(n_times, n * (n - 1)).T
-                same &= np.allclose(std, ref[1], rtol=0, atol=1e-9)
+                std = ours.links["gain_pred_std_db"].to_numpy().reshape(n_times, n * (n - 1))
+                same &= np.allclose(std, ref[1][:, off], rtol=0, atol=1e-9)
             ratio_t = best["ours"][0] / best["ref"][0]
             ratio_m = best["ours"][1] / max(best["ref"][1], 1)
             ok &= ratio_t <= 2.0 and ratio_m <= 1.5 and same

@@ -32,15 +32,17 @@ from rplearn._argtypes import check_types
 from rplearn._budget import Cost, check_work
 from rplearn.analysis.heading_options import _check_frequency
 from rplearn.analysis.heading_options import _finite as _is_number
-from rplearn.analysis.swarm_geometry import pair_directions, pose_rotations
-from rplearn.core.link import FAR_FIELD_WAVELENGTHS, free_space_path_loss_db, wavelength_m
+from rplearn.analysis.swarm_connectivity import connectivity_of_weights, connectivity_table
+from rplearn.analysis.swarm_connectivity import maximum_spanning_edges as maximum_spanning_edges  # re-exported
+from rplearn.analysis.swarm_links import Radio, SwarmPoses, predict_links
+from rplearn.core.link import FAR_FIELD_WAVELENGTHS, wavelength_m
 from rplearn.core.threads import blas_threads, prediction_flops
 from rplearn.data.poses import pose_tracks
-from rplearn.data.tables import LinkSamples, check_tx_power_dbm
+from rplearn.data.tables import check_tx_power_dbm
 from rplearn.errors import InputError
 from rplearn.models.base import model_frequency_hz, require_calibrated, require_patterns
 from rplearn.models.patterns import PatternSet
-from rplearn.models.predict import UNCOVERED_DEG, end_coverage_deg
+from rplearn.models.predict import UNCOVERED_DEG
 
 #: Default spacing of the prediction times [s].
 DEFAULT_STEP_S = 1.0
@@ -282,10 +284,11 @@ def predict_swarm(
         raise InputError(f"{source}: a swarm needs at least 2 drones, the pose log has {', '.join(drones) or 'none'}")
     patterns = resolve_patterns(drones, model.nodes, pattern_of)
     t = prediction_times(tracks, step_s, times_s, model.covariance is not None)
-    poses = {d: tracks[d].interpolate(t, max_gap_s) for d in drones}
-    present = np.stack([poses[d][2] == 0 for d in drones], axis=1)  # (times, drones)
+    swarm = _swarm_poses(tracks, drones, t, max_gap_s)
+    del tracks  # memory: the poses at the prediction times are all that is needed now
+    present = swarm.present
     for k, d in enumerate(drones):  # a two-ray model predicts nothing at or below its ground
-        model.path_loss.check_heights(poses[d][0][present[:, k], 2], f"{source}: drone {d}", "z [m]")
+        model.path_loss.check_heights(swarm.position_m[k][present[:, k], 2], f"{source}: drone {d}", "z [m]")
     n_present = present.sum(axis=1)
     if not np.any(n_present >= 2):
         raise InputError(
@@ -295,9 +298,8 @@ def predict_swarm(
         )
     n_links = int(np.sum(n_present * (n_present - 1)))
     with blas_threads(prediction_flops(n_links, model.basis.n_coef, model.covariance is not None)):
-        links, connectivity = _predict_blocks(model, poses, present, drones, patterns, t,
-                                              _Radio(tx_power_dbm, frequency_hz, min_rssi_dbm))
-    notes = _swarm_notes(links, poses, frequency_hz)
+        links, connectivity = predict_links(model, swarm, patterns, Radio(tx_power_dbm, frequency_hz, min_rssi_dbm))
+    notes = _swarm_notes(links, swarm, frequency_hz)
     return SwarmPrediction(links, connectivity, patterns, float(min_rssi_dbm), float(tx_power_dbm), frequency_hz, notes)
 
 
@@ -311,99 +313,16 @@ def _check_link_options(tx_power_dbm: float, max_gap_s: float, min_rssi_dbm: flo
         raise InputError(f"max_gap_s: expected a positive number of seconds, got {max_gap_s!r}", param="max_gap_s")
 
 
-Poses = Mapping[str, tuple[np.ndarray, np.ndarray, np.ndarray]]
-
-
-#: (time, ordered pair) rows predicted at once: bounds the geometry and features in memory.
-LINK_BLOCK_ROWS = 50_000
-
-
-def _time_blocks(n_times: int, n_drones: int) -> list[tuple[int, int]]:
-    """Consecutive time ranges ``[s0, s1)`` predicted together: at most
-    :data:`LINK_BLOCK_ROWS` links and :data:`CONNECTIVITY_BLOCK_VALUES` pair weights each."""
-    pairs = max(n_drones * (n_drones - 1), 1)
-    step = max(1, min(LINK_BLOCK_ROWS // pairs, CONNECTIVITY_BLOCK_VALUES // max(n_drones * n_drones, 1)))
-    return [(s0, min(n_times, s0 + step)) for s0 in range(0, n_times, step)]
-
-
-def _block_rows(present: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Time index (within the block) and drone indices of every ordered pair with both poses
-    known, in the order of time, then transmitter, then receiver (the drones are sorted)."""
-    n = present.shape[1]
-    both = present[:, :, None] & present[:, None, :] & ~np.eye(n, dtype=bool)
-    t, i, j = np.nonzero(both)
-    return t, i, j
-
-
-@dataclass(frozen=True)
-class _Radio:
-    """Every drone's radio in a swarm prediction: transmit power [dBm], carrier [Hz], and the
-    RSSI a link needs to be up [dBm]."""
-
-    tx_power_dbm: float
-    frequency_hz: float
-    min_rssi_dbm: float
-
-
-def _predict_blocks(
-    model: PatternSet, poses: Poses, present: np.ndarray, drones: Sequence[str], patterns: Mapping[str, str],
-    t: np.ndarray, radio: _Radio,
-) -> tuple[pd.DataFrame, pd.DataFrame]:
-    """The links and connectivity tables of :class:`SwarmPrediction`, a block of times at a
-    time: each block's links are written into the whole table's columns, already in order, so
-    memory holds the table and one block's work, not copies of the table."""
-    tx_power_dbm, frequency_hz, min_rssi_dbm = radio.tx_power_dbm, radio.frequency_hz, radio.min_rssi_dbm
+def _swarm_poses(tracks: Mapping[str, Any], drones: Sequence[str], t: np.ndarray, max_gap_s: float) -> SwarmPoses:
+    """Every drone's pose at the times ``t`` [s], interpolated across log gaps up to ``max_gap_s``,
+    straight into one array per quantity."""
     n = len(drones)
-    n_present = present.sum(axis=1)
-    total = int(np.sum(n_present * (n_present - 1)))
-    position = np.stack([poses[d][0] for d in drones])  # (drones, times, 3)
-    quat = np.stack([poses[d][1] for d in drones])
-    pattern_index = np.array([model.node_index(patterns[x]) for x in drones], np.intp)
-    used = sorted(set(patterns.values()))  # categories of the pattern columns
-    pattern_code = np.array([used.index(patterns[x]) for x in drones], np.int32)
-    rotations = pose_rotations(quat, present)  # once per (drone, time), not per link
-    limit_m = _far_field_limit_m(frequency_hz)
-    # one packet's noise about its flight's level (an automatic fit over flights), else the training
-    # residual, as predict_dataset reads it
-    noise = model.training.noise_std_db if model.training.noise_std_db is not None else model.training.rmse_db
-    residual_db = float(noise if noise is not None else np.nan)
-    columns: dict[str, np.ndarray] = {}
-    parts = []
-    offset = 0
-    for s0, s1 in _time_blocks(t.size, n):
-        k, ia, ib = _block_rows(present[s0:s1])
-        ti = k + s0
-        pa, pb = position[ia, ti], position[ib, ti]
-        delta = pb - pa
-        d = np.sqrt(np.einsum("ij,ij->i", delta, delta))
-        samples = LinkSamples(pair_directions(rotations, t.size, ti, ia, ib, delta), pattern_index[ia],
-                              pattern_index[ib], model.nodes, np.full(d.size, np.nan), d, np.full(d.size, frequency_hz),
-                              tx_z_m=pa[:, 2], rx_z_m=pb[:, 2])
-        gain = model.predict_gain(samples)
-        near = d <= limit_m
-        rssi = np.where(near, np.nan, tx_power_dbm + gain - free_space_path_loss_db(np.where(near, 1.0, d), frequency_hz))
-        block = {"t": t[ti], "tx": ia.astype(np.int32), "rx": ib.astype(np.int32), "tx_pattern": pattern_code[ia],
-                 "rx_pattern": pattern_code[ib], "distance_m": d, "gain_pred_db": gain, "rssi_pred_dbm": rssi}
-        std = model.predict_gain_std(samples)
-        if std is not None:
-            block["gain_pred_std_db"] = std
-            block["rssi_pred_std_db"] = np.sqrt(std**2 + residual_db**2)
-        ends = end_coverage_deg(model, samples)
-        if ends is not None:  # how far each end looks from where its pattern was learned [deg]
-            block["tx_coverage_deg"], block["rx_coverage_deg"] = ends
-        block["near_field"] = near
-        block["up"] = (rssi >= min_rssi_dbm) | near
-        if not columns:
-            columns = {name: np.empty(total, dtype=v.dtype) for name, v in block.items()}
-        for name, v in block.items():
-            columns[name][offset:offset + d.size] = v
-        offset += d.size
-        parts.append(_connectivity_block(k, ia, ib, np.where(near, np.inf, rssi), t[s0:s1], drones, min_rssi_dbm))
-    frame: dict[str, Any] = dict(columns)
-    for name, categories in (("tx", drones), ("rx", drones), ("tx_pattern", used), ("rx_pattern", used)):
-        if name in frame:  # categorical node columns: codes into the names, no string per row
-            frame[name] = pd.Categorical.from_codes(frame[name], dtype=pd.CategoricalDtype(list(categories)))
-    return pd.DataFrame(frame, copy=False), pd.concat(parts, ignore_index=True)
+    position, quat = np.empty((n, t.size, 3)), np.empty((n, t.size, 4))
+    present = np.empty((t.size, n), bool)
+    for k, d in enumerate(drones):
+        position[k], quat[k], status = tracks[d].interpolate(t, max_gap_s)
+        present[:, k] = status == 0
+    return SwarmPoses(position, quat, present, t, tuple(drones))
 
 
 def _far_field_limit_m(frequency_hz: float) -> float:
@@ -411,7 +330,7 @@ def _far_field_limit_m(frequency_hz: float) -> float:
     return FAR_FIELD_WAVELENGTHS * float(wavelength_m(frequency_hz))
 
 
-def _swarm_notes(links: pd.DataFrame, poses: Poses, frequency_hz: float) -> list[str]:
+def _swarm_notes(links: pd.DataFrame, poses: SwarmPoses, frequency_hz: float) -> list[str]:
     """Notes for people: pairs too close for the far field, drones without a pose at some times."""
     notes = []
     too_close = int(links["near_field"].sum())
@@ -428,7 +347,7 @@ def _swarm_notes(links: pd.DataFrame, poses: Poses, frequency_hz: float) -> list
                 "the antennas were learned from (columns tx_coverage_deg, rx_coverage_deg): there the gain is an "
                 "extrapolation (or the prior's), with its spread"
             )
-    absent = {d: int(np.sum(p[2] != 0)) for d, p in poses.items()}
+    absent = {d: int(np.sum(~poses.present[:, k])) for k, d in enumerate(poses.drones)}
     if any(absent.values()):
         notes.append("note: drone(s) without a pose at some times (outside their log or in a gap): "
                      + ", ".join(f"{d} {n}" for d, n in absent.items() if n))
@@ -462,7 +381,7 @@ def connectivity_over_time(
         sel = (t_index >= s0) & (t_index < s1)
         parts.append(_connectivity_block(t_index[sel] - s0, tx[sel], rx[sel], rssi_all[sel], times_s[s0:s1], drones,
                                          min_rssi_dbm))
-    return pd.concat(parts, ignore_index=True)
+    return connectivity_table(parts)
 
 
 #: Weights held at once by :func:`connectivity_over_time` (times x drones x drones).
@@ -472,78 +391,16 @@ CONNECTIVITY_BLOCK_VALUES = 4_000_000
 def _connectivity_block(
     k: np.ndarray, tx: np.ndarray, rx: np.ndarray, rssi_dbm: np.ndarray, times_s: np.ndarray,
     drones: Sequence[str], min_rssi_dbm: float,
-) -> pd.DataFrame:
+) -> dict[str, np.ndarray]:
     """Rows of :func:`connectivity_over_time` for the times ``times_s`` of one block, from its
     links: time index ``k`` within the block, drone indices, RSSI (+inf near field) [dBm]."""
     n, m = len(drones), times_s.size
-    names = np.asarray(list(drones), dtype=object)
-    iu, ju = np.triu_indices(n, 1)
     rssi = np.full((m, n, n), np.nan)
     rssi[k, tx, rx] = rssi_dbm
     present = np.zeros((m, n), bool)
     present[k, tx] = True
     present[k, rx] = True
-    w = np.fmin(rssi, rssi.transpose(0, 2, 1))  # a pair's weight: its weaker direction (NaN: unknown)
-    pairs_up = np.sum(w[:, iu, ju] >= min_rssi_dbm, axis=1)
-    edge_w, edge_a, edge_b = maximum_spanning_edges(np.where(np.isnan(w), -np.inf, w))
-    n_missing = n - present.sum(axis=1)
-    n_groups = n - np.sum(edge_w >= min_rssi_dbm, axis=1)
-    spans = (n_missing == 0) & ~np.any(np.isneginf(edge_w), axis=1)
-    rows = np.arange(m)
-    weakest = np.argmin(edge_w, axis=1)
-    a = np.minimum(edge_a[rows, weakest], edge_b[rows, weakest])
-    b = np.maximum(edge_a[rows, weakest], edge_b[rows, weakest])
-    missing = np.full(m, "", dtype=object)
-    for r in np.flatnonzero(n_missing):
-        missing[r] = ",".join(str(d) for d, p in zip(drones, present[r]) if not p)
-    return pd.DataFrame({
-        "t": times_s, "n_drones": present.sum(axis=1).astype(int), "n_missing": n_missing.astype(int),
-        "missing": missing, "n_pairs_up": pairs_up.astype(int), "n_components": (n_groups - n_missing).astype(int),
-        "connected": (n_missing == 0) & (n_groups == 1),
-        "bottleneck_rssi_dbm": np.where(spans, edge_w[rows, weakest], np.nan).astype(float),
-        "bottleneck_pair": np.where(spans, names[a] + "-" + names[b], ""),
-    })
-
-
-def maximum_spanning_edges(weights: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Maximum spanning trees of many complete graphs at once (Prim's algorithm, vectorised
-    over the first axis).
-
-    Parameters
-    ----------
-    weights : ndarray, shape (m, n, n)
-        Symmetric pair weights; ``-inf`` for a pair with no edge, ``+inf`` for one stronger
-        than any.
-
-    Returns
-    -------
-    edge_w, edge_a, edge_b : ndarray, shape (m, n - 1)
-        Each tree's edges in the order Prim adds them: weight and the two nodes. A graph that
-        is not connected gets ``-inf`` edges (its spanning forest, joined arbitrarily).
-    """
-    m, n, _ = weights.shape
-    rows = np.arange(m)
-    in_tree = np.zeros((m, n), bool)
-    in_tree[:, 0] = True
-    best = weights[:, 0, :].copy()
-    parent = np.zeros((m, n), np.intp)
-    edge_w = np.full((m, max(n - 1, 0)), np.inf)
-    edge_a = np.zeros((m, max(n - 1, 0)), np.intp)
-    edge_b = np.zeros((m, max(n - 1, 0)), np.intp)
-    for step in range(n - 1):
-        cand = np.where(in_tree, -np.inf, best)
-        j = np.argmax(cand, axis=1)
-        stuck = np.isneginf(cand[rows, j])  # nothing reachable: take any node not yet in the tree
-        j = np.where(stuck, np.argmax(~in_tree, axis=1), j)
-        edge_w[:, step] = np.where(stuck, -np.inf, best[rows, j])
-        edge_a[:, step] = parent[rows, j]
-        edge_b[:, step] = j
-        in_tree[rows, j] = True
-        row = weights[rows, j, :]
-        better = row > best
-        best = np.where(better, row, best)
-        parent = np.where(better, j[:, None], parent)
-    return edge_w, edge_a, edge_b
+    return connectivity_of_weights(rssi, present, times_s, drones, min_rssi_dbm)
 
 
 @check_types

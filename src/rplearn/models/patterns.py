@@ -276,7 +276,7 @@ class PatternSet:
         var = np.empty(len(samples))
         code = tx.astype(np.int64) * len(self.nodes) + rx
         rows = np.arange(p) if self.basis.row_order is None else np.asarray(self.basis.row_order)
-        step = chunk_directions(2 * p)  # a step's features of both ends stay in the cache
+        step = chunk_directions(8 * p)  # a step's features of both ends and their product: a few MB (issue 30)
         for c in np.unique(code):
             t, r = divmod(int(c), len(self.nodes))
             sel = np.flatnonzero(code == c)
