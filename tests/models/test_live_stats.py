@@ -86,3 +86,26 @@ def test_the_session_keeps_time_block_sums_and_a_whole_log_is_split_into_them(ma
     assert a.n_blocks == b.n_blocks > 3 and a.sum_n == b.sum_n == len(matched)
     assert np.allclose(a.cross, b.cross, rtol=1e-9, atol=1e-6) and a.sum_yy == pytest.approx(b.sum_yy, rel=1e-9)
     assert batched.blocks is not None and batched.blocks.cross.shape == (2 * spec.basis().n_coef,) * 2
+
+
+def test_outage_rows_in_a_batch_over_several_blocks_are_left_out_of_the_blocks(matched):
+    """Outage rows have no sample: a batch spanning several time blocks (a whole log matched at
+    the end) with lost-link rows is split by the kept samples' times (it raised IndexError)."""
+    spec = ModelSpec.parse("sh", order=4)
+    rows = matched.copy()
+    rows["outage"] = False
+    down = rows.index[[5, len(rows) // 2, len(rows) - 3]]
+    rows.loc[down, "outage"] = True
+    rows.loc[down, "rssi_dbm"] = np.nan
+    st = LiveStatistics(spec, ["A", "B"], FitOptions())
+    samples = st.samples(rows)
+    assert len(samples) == len(rows) - 3 and samples.outages == 3
+    st.add(rows, samples)
+    assert st.blocks is not None and st.blocks.closed().sum_n == len(rows) - 3
+
+
+def test_a_session_without_a_ranking_keeps_no_block_sums(matched):
+    spec = ModelSpec.parse("sh", order=4)
+    st = LiveStatistics(spec, ["A", "B"], FitOptions(), keep_blocks=False)
+    st.add(matched, st.samples(matched))
+    assert st.blocks is None and st.total().blocks is None and st.n_samples == len(matched)

@@ -91,7 +91,12 @@ def _off_diagonal(grid: np.ndarray) -> np.ndarray:
     """View ``(m, n - 1, n)`` of the off-diagonal entries of a C-contiguous ``(m, n, n)`` grid,
     in row-major order (entry ``[t, i, j]`` with ``j`` skipping ``i``)."""
     m, n, _ = grid.shape
-    return np.reshape(grid.reshape(m, n * n)[:, 1:], (m, n - 1, n + 1), copy=False)[:, :, :n]
+    # rows of n * n - 1 = (n - 1)(n + 1) entries, each contiguous: reshape gives a view
+    # (numpy's reshape(copy=False), which would say so, needs numpy 2.1)
+    view = grid.reshape(m, n * n)[:, 1:].reshape(m, n - 1, n + 1)
+    if not np.may_share_memory(view, grid):
+        raise AssertionError("off-diagonal cells: reshape copied the grid")
+    return view[:, :, :n]
 
 
 class _Cells:

@@ -331,7 +331,7 @@ def fit_auto(
     with DEFAULT_RUNTIME.overlapping(coverage.jobs if coverage.parallel else []) as riding, \
             blas_threads_for(n, basis.n_coef * len(nodes)):
         t0 = time.perf_counter()
-        stats = dict(zip(units, DEFAULT_RUNTIME.in_order(unit_statistics, list(units))))
+        stats = dict(zip(units, list(DEFAULT_RUNTIME.in_order(unit_statistics, list(units))), strict=True))
         freq: Counter[float] = Counter()
         for s in units.values():
             frequency_counts(s, freq)

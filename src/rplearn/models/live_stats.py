@@ -46,7 +46,7 @@ from rplearn.core.lsq.block_sums import BlockSums
 from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.core.lsq.penalty import sub_statistics
 from rplearn.core.threads import blas_threads_for
-from rplearn.data.tables import LinkSamples, link_samples
+from rplearn.data.tables import OUTAGE_COLUMN, LinkSamples, link_samples
 from rplearn.data.units import TIME_UNITS, Stretches, stretch_labels
 from rplearn.errors import InputError
 from rplearn.models.auto import MAX_AUTO_ORDER, auto_orders, fit_from_statistics
@@ -93,10 +93,13 @@ class LiveStatistics:
         Folder for the batches' samples, for the exact last refit of an automatic choice
         (none: the last refit cuts the stretches at segment boundaries).
     max_segments : int
+    keep_blocks : bool
+        Keep the time-block sums (:class:`BlockSums`, two square matrices of the accumulation
+        order's columns) for a manoeuvre ranking; False when nothing reads them.
     """
 
     def __init__(self, spec: ModelSpec, nodes: Sequence[str], options: FitOptions | None = None,
-                 spool_dir: str | None = None, max_segments: int = MAX_SEGMENTS) -> None:
+                 spool_dir: str | None = None, max_segments: int = MAX_SEGMENTS, keep_blocks: bool = True) -> None:
         if not spec.decouples:
             raise InputError(f"{spec.label}: live learning is for pattern models (sh, bg, poly)", param="spec")
         self.spec, self.nodes, self.options = spec, tuple(map(str, nodes)), options or FitOptions()
@@ -112,6 +115,7 @@ class LiveStatistics:
         self.grids: dict[str, list[float]] | None = None
         self.non_unit = 0
         self.blocks: BlockSums | None = None  # made with the first batch
+        self.keep_blocks = bool(keep_blocks)
         self.learn_s = 0.0
         self._batches = 0
 
@@ -135,9 +139,9 @@ class LiveStatistics:
         y, env = regression_inputs(samples, self.options)
         normal = NormalEquations(self.basis, len(self.nodes), environment=env is not None)
         normal.add(samples.directions, samples.tx_index, samples.rx_index, y, env)
-        t = pd.to_numeric(matched["t"]).to_numpy(np.float64)
-        self._add_blocks(normal, samples, t, (y, env))
-        seg = Segment(normal, float(t.min()), float(t.max()))
+        t_all = pd.to_numeric(matched["t"]).to_numpy(np.float64)
+        self._add_blocks(normal, samples, _sample_times(matched, t_all), (y, env))
+        seg = Segment(normal, float(t_all.min()), float(t_all.max()))
         if self.spool_dir is not None:
             path = os.path.join(self.spool_dir, f"batch-{self._batches:07d}.parquet")
             with atomic_path(path) as tmp:
@@ -153,6 +157,8 @@ class LiveStatistics:
 
     def _add_blocks(self, normal: NormalEquations, samples: LinkSamples, t: np.ndarray, inputs: tuple[Any, Any]) -> None:
         """The batch into the time blocks (split when it spans several; ``inputs``: its y and environment)."""
+        if not self.keep_blocks or not len(t):
+            return
         if self.blocks is None:
             self.blocks = BlockSums(len(self.nodes), self.basis.n_coef)
         index = np.floor(t / self.blocks.block_s).astype(np.int64)
@@ -253,3 +259,10 @@ class LiveStatistics:
 
 
 __all__ = ["MAX_SEGMENTS", "LiveStatistics", "Segment"]
+
+
+def _sample_times(matched: pd.DataFrame, t_s: np.ndarray) -> np.ndarray:
+    """The times [s] of the rows :func:`link_samples` keeps (outage rows have no sample)."""
+    if OUTAGE_COLUMN in matched.columns:
+        return t_s[~matched[OUTAGE_COLUMN].to_numpy(bool)]
+    return t_s

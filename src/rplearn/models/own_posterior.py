@@ -201,7 +201,8 @@ def tied_own_posterior(own: OwnPosterior | None, total: NormalEquations, nodes: 
     """
     if own is None or len(ties) < 2 or own.basis != total.basis or total.basis.n_coef * len(nodes) > MAX_OWN_COLUMNS:
         return own
-    covariances, per_unit_noise = [], {}
+    total_cov: np.ndarray | None = None  # running sum: one matrix per smoothing held, not one per point
+    per_unit_noise: dict[tuple[float, float], np.ndarray] = {}
     for order, smoothing, inflation in ties:
         normal = sub_statistics(total, make_basis(int(order)))
         point = replace(prior, smoothing=float(smoothing), scale=penalty_scale(normal.gram, normal.n_pattern_columns))
@@ -213,9 +214,11 @@ def tied_own_posterior(own: OwnPosterior | None, total: NormalEquations, nodes: 
             cov = _continued(total, nodes, point, 1.0)
             if cov is None:
                 return own
-            per_unit_noise[key] = cov
-        covariances.append(per_unit_noise[key] * (within_var_db2 * float(inflation)))
-    return OwnPosterior(own.basis, np.mean(covariances, axis=0), own.note, own.mean)
+            per_unit_noise = {key: cov}  # the last smoothing only (one met again is solved again)
+        term = per_unit_noise[key] * (within_var_db2 * float(inflation))
+        total_cov = term if total_cov is None else np.add(total_cov, term, out=total_cov)
+    assert total_cov is not None
+    return OwnPosterior(own.basis, total_cov / len(ties), own.note, own.mean)
 
 
 __all__ = ["MAX_OWN_COLUMNS", "OwnPosterior", "OwnPrior", "own_pattern_posterior", "tied_own_posterior"]

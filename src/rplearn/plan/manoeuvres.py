@@ -177,7 +177,7 @@ class ManoeuvreUnit:
         return np.array([p[0], p[1], a[2] + horiz * np.tan(el)])
 
     def _plan(self) -> tuple[tuple[Any, ...], ...]:
-        """Segments: ("move", p0, p1, yaw), ("turn", p, yaw0, dyaw), ("arc", centre, r, a0, yaw)."""
+        """Segments: ("move", p0, p1, yaw), ("turn", p, yaw0, dyaw), ("arc", centre, r, a0, yaw, laps)."""
         p0 = np.asarray(self.start_enu_m, float)
         yaw0 = np.radians(float(self.start_yaw_deg))
         segs: list[tuple[Any, ...]] = []

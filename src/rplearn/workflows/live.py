@@ -263,7 +263,8 @@ class _Session:
             if self.stats is None:
                 nodes = self.options.nodes or tuple(sorted(set(map(str, rows["tx"])) | set(map(str, rows["rx"]))))
                 self.stats = LiveStatistics(self.options.spec, nodes, self.options.fit,
-                                            spool_dir=self.work_dir, max_segments=self.options.max_segments)
+                                            spool_dir=self.work_dir, max_segments=self.options.max_segments,
+                                            keep_blocks=self.options.manoeuvres is not None)
             samples = self.stats.samples(rows)
             if self.fitted is not None:  # predicted before it is learned from
                 self.preq.add(samples.joint_gain_db - self.fitted.model.predict_gain(samples))
@@ -295,7 +296,8 @@ class _Session:
         rows = result.dataset.sort_values("t", kind="stable").reset_index(drop=True)
         before = self.stats.n_samples
         self.stats = LiveStatistics(self.options.spec, self.stats.nodes, self.options.fit, spool_dir=self.work_dir,
-                                    max_segments=self.options.max_segments)
+                                    max_segments=self.options.max_segments,
+                                    keep_blocks=self.options.manoeuvres is not None)
         if len(rows):
             self.stats.add(rows, self.stats.samples(rows, src.record_path))
         self.new_samples = len(rows)

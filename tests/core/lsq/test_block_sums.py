@@ -97,3 +97,20 @@ def test_bad_block_lengths_and_mismatched_statistics_are_refused() -> None:
         BlockSums(2, 4, 0.0)
     with pytest.raises(InputError, match="block sums"):
         BlockSums(2, 4).follow(NormalEquations(make_basis("sh", 3), 2), 1.0)
+
+
+def test_a_late_batch_joins_the_open_block_and_never_reopens_a_closed_one() -> None:
+    """Batches out of time order: a block is closed once (it was closed again as a new block,
+    so the sums hung on how rows were batched)."""
+    basis = make_basis("sh", 2)
+    t, d, tx = _flight(30.0, 1)
+    y = np.random.default_rng(1).normal(0.0, 1.0, t.size)
+    blocks = BlockSums(2, basis.n_coef, 5.0)
+    order = [s for s in range(30) if s != 3]
+    order.insert(order.index(8), 3)  # the batch of 3-4 s arrives after the one of 7-8 s
+    for s in order:
+        m = (t >= s) & (t < s + 1)
+        rows = (Directions(d.az_tx[m], d.el_tx[m], d.az_rx[m], d.el_rx[m]), tx[m], 1 - tx[m], y[m])
+        blocks.add_batch(NormalEquations(basis, 2).add(*rows), s + 0.5)
+    closed = blocks.closed()
+    assert closed.n_blocks == 6 and closed.sum_n == pytest.approx(t.size)

@@ -118,9 +118,12 @@ class BlockSums:
         if not np.isfinite(t_s):
             raise InputError(f"t_s: expected a finite time [s], got {t_s!r}", param="t_s")
         index = int(np.floor(t_s / self.block_s))
-        if self._open_index is not None and index != self._open_index:
-            self._close()
-        self._open_index = index
+        if self._open_index is None or index > self._open_index:
+            if self._open_index is not None:
+                self._close()
+            self._open_index = index
+        # a batch that arrives late (its time in a block already closed) joins the open block:
+        # a block is never closed twice, so C does not hang on how rows were batched
         for key, sums in directed.items():
             pair = (min(key), max(key))
             vec = self._vector(key, sums)

@@ -34,8 +34,8 @@ The search, a coordinate descent over the validation error (every point is kept 
    while one validates better (:func:`_diagonal_steps`: order and smoothing trade off, and
    steps along one coordinate miss the valley along the diagonal);
 5. of the points evaluated, those within noise of the best (:func:`rplearn.core.lsq.ties.within_noise`: from three
-   held-out units, at most :data:`WITHIN_NOISE_SE` standard errors of the paired per-unit
-   difference and :data:`WITHIN_NOISE_FRACTION` of the mean square above it), the least
+   held-out units, at most :data:`rplearn.core.lsq.ties.WITHIN_NOISE_SE` standard errors of the paired per-unit
+   difference and :data:`rplearn.core.lsq.ties.WITHIN_NOISE_FRACTION` of the mean square above it), the least
    smoothed (then the largest order) is chosen: the joint gain validates the sum of two
    patterns, not their split, which the penalty decides; more smoothing than the held-out
    units can justify pulls the split toward the prior (on the ``paper`` preset, seed 1: a
