@@ -178,6 +178,13 @@ def correlated_ratio(normal: NormalEquations, blocks: BlockSums, prior_diag: Any
         Their block sums, every sample in a closed block (:meth:`BlockSums.closed`).
     prior_diag : array_like
         The fit's prior precision per pattern column in the units of ``X^T X`` (ridge + penalty).
+
+    Notes
+    -----
+    The moments fit the pattern columns alone (the block sums hold no others): with a
+    path-loss or link-offset term its effect stays in the residuals, and a term that drifts
+    with distance over time is counted as drifting error (``kappa`` too large, revisits
+    favoured more than they should be).
     """
     if blocks.n_blocks < MIN_BLOCKS:
         return 0.0
