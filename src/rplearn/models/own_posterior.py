@@ -201,22 +201,22 @@ def tied_own_posterior(own: OwnPosterior | None, total: NormalEquations, nodes: 
     """
     if own is None or len(ties) < 2 or own.basis != total.basis or total.basis.n_coef * len(nodes) > MAX_OWN_COLUMNS:
         return own
-    total_cov: np.ndarray | None = None  # running sum: one matrix per smoothing held, not one per point
-    per_unit_noise: dict[tuple[float, float], np.ndarray] = {}
+    # continued to the largest basis, a point's prior depends on its order only through the
+    # penalty's unit (for spherical harmonics the same at every order: the addition theorem),
+    # so points of one (smoothing, unit) share one solve, scaled by the sum of their inflations
+    groups: dict[tuple[float, float], tuple[OwnPrior, float]] = {}
     for order, smoothing, inflation in ties:
         normal = sub_statistics(total, make_basis(int(order)))
         point = replace(prior, smoothing=float(smoothing), scale=penalty_scale(normal.gram, normal.n_pattern_columns))
-        # continued to the largest basis, a point's prior depends on its order only through the
-        # penalty's unit (for spherical harmonics the same at every order: the addition theorem),
-        # so points of one smoothing share one solve, scaled by their inflations
         key = (point.smoothing, point.scale)
-        if key not in per_unit_noise:
-            cov = _continued(total, nodes, point, 1.0)
-            if cov is None:
-                return own
-            per_unit_noise = {key: cov}  # the last smoothing only (one met again is solved again)
-        term = per_unit_noise[key] * (within_var_db2 * float(inflation))
-        total_cov = term if total_cov is None else np.add(total_cov, term, out=total_cov)
+        groups[key] = (groups[key][0], groups[key][1] + float(inflation)) if key in groups else (point, float(inflation))
+    total_cov: np.ndarray | None = None  # running sum: one solve's matrix held at a time
+    for point, inflations in groups.values():
+        cov = _continued(total, nodes, point, 1.0)
+        if cov is None:
+            return own
+        cov *= within_var_db2 * inflations
+        total_cov = cov if total_cov is None else np.add(total_cov, cov, out=total_cov)
     assert total_cov is not None
     return OwnPosterior(own.basis, total_cov / len(ties), own.note, own.mean)
 
