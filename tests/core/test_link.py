@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from rplearn.core import link
-from rplearn.errors import FarFieldError
+from rplearn.errors import FarFieldError, InputError
 
 
 def test_wavelength_at_2_4_ghz():
@@ -29,3 +29,11 @@ def test_near_field_samples_are_refused():
         link.free_space_path_loss_db([10.0, 1.5 * lam], 2.4e9)
     with pytest.raises(FarFieldError):
         link.observed_joint_gain_db(-50, 20, 2 * lam, 2.4e9)  # d must exceed 2 lambda strictly
+
+
+def test_the_far_field_limit_is_two_wavelengths_and_refuses_what_wavelength_refuses():
+    from rplearn.core import far_field_limit_m
+
+    np.testing.assert_allclose(far_field_limit_m([2.4e9, 5.8e9]), 2.0 * 299_792_458.0 / np.array([2.4e9, 5.8e9]), rtol=0)
+    with pytest.raises(InputError, match="frequency_hz"):
+        far_field_limit_m(0.0)

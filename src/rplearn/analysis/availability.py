@@ -32,7 +32,7 @@ from rplearn.analysis.heading_options import _finite
 from rplearn.analysis.swarm import SwarmOptions, maximum_spanning_edges, prediction_times, resolve_patterns
 from rplearn.core.availability import link_availability
 from rplearn.core.geometry import distance_m, link_directions
-from rplearn.core.link import FAR_FIELD_WAVELENGTHS, free_space_path_loss_db, wavelength_m
+from rplearn.core.link import far_field_limit_m, free_space_path_loss_db
 from rplearn.data.poses import pose_tracks
 from rplearn.data.tables import LinkSamples, check_tx_power_dbm
 from rplearn.errors import InputError
@@ -346,7 +346,7 @@ def swarm_availability(
     paths = np.zeros((len(pairs), n_draws, m), bool)
     culprits = np.zeros((n, n), np.int64)
     step = max(1, DRAW_BLOCK_VALUES // max(n_draws * n * n, 1))
-    limit_m = FAR_FIELD_WAVELENGTHS * float(wavelength_m(frequency_hz))
+    limit_m = float(far_field_limit_m(frequency_hz))
     for s0 in range(0, m, step):
         s1 = min(m, s0 + step)
         both = swarm.present[s0:s1, :, None] & swarm.present[s0:s1, None, :] & ~np.eye(n, dtype=bool)

@@ -28,7 +28,7 @@ import pandas as pd
 from rplearn._argtypes import check_types
 from rplearn._budget import Cost, check_work
 from rplearn.core.geometry import distance_m, link_directions
-from rplearn.core.link import FAR_FIELD_WAVELENGTHS, observed_joint_gain_db, wavelength_m
+from rplearn.core.link import far_field_limit_m, observed_joint_gain_db
 from rplearn.data.poses import PoseTrack, tracks_of_checked_log
 from rplearn.data.sync import SyncOptions, synchronise
 from rplearn.data.tables import link_samples, outage_mask, validate_pose_log, validate_signal_log
@@ -214,7 +214,7 @@ def estimate_clock_offset(
     usable = np.ones(len(matched), bool)  # rows whose node pose is known, in the far field, at every shift tried
     other = {end: matched[[f"{end}_x", f"{end}_y", f"{end}_z"]].to_numpy(np.float64) for end in ("tx", "rx")}
     node_end = {end: matched[end].astype(str).to_numpy() == node for end in ("tx", "rx")}
-    near_m = FAR_FIELD_WAVELENGTHS * wavelength_m(matched["frequency_hz"].to_numpy(np.float64))
+    near_m = far_field_limit_m(matched["frequency_hz"].to_numpy(np.float64))
     for shift in grid:
         pos, _, status = track_at(track, t_sig, shift, options.max_gap_s)
         tx_pos = np.where(node_end["tx"][:, None], pos, other["tx"])

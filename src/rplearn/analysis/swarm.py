@@ -35,7 +35,7 @@ from rplearn.analysis.heading_options import _finite as _is_number
 from rplearn.analysis.swarm_connectivity import connectivity_of_weights, connectivity_table
 from rplearn.analysis.swarm_connectivity import maximum_spanning_edges as maximum_spanning_edges  # re-exported
 from rplearn.analysis.swarm_links import Radio, SwarmPoses, predict_links
-from rplearn.core.link import FAR_FIELD_WAVELENGTHS, wavelength_m
+from rplearn.core.link import far_field_limit_m
 from rplearn.core.threads import blas_threads, prediction_flops
 from rplearn.data.poses import pose_tracks
 from rplearn.data.tables import check_tx_power_dbm
@@ -327,7 +327,7 @@ def _swarm_poses(tracks: Mapping[str, Any], drones: Sequence[str], t: np.ndarray
 
 def _far_field_limit_m(frequency_hz: float) -> float:
     """Distance below which no received power is predicted (paper Sec. III: 2 wavelengths) [m]."""
-    return FAR_FIELD_WAVELENGTHS * float(wavelength_m(frequency_hz))
+    return float(far_field_limit_m(frequency_hz))
 
 
 def _swarm_notes(links: pd.DataFrame, poses: SwarmPoses, frequency_hz: float) -> list[str]:

@@ -26,7 +26,7 @@ import pandas as pd
 from rplearn.analysis.swarm_connectivity import connectivity_of_weights, connectivity_table
 from rplearn.analysis.swarm_geometry import pose_rotations
 from rplearn.core.geometry import Directions
-from rplearn.core.link import FAR_FIELD_WAVELENGTHS, free_space_path_loss_db, wavelength_m
+from rplearn.core.link import far_field_limit_m, free_space_path_loss_db
 from rplearn.data.tables import LinkSamples
 from rplearn.models.patterns import PatternSet
 from rplearn.models.predict import end_coverage_deg
@@ -195,7 +195,7 @@ def predict_links(
     pattern_code: np.ndarray = np.array([used.index(pattern_of[x]) for x in drones], code_dtype(len(used)))
     drone_code: np.ndarray = np.arange(n, dtype=code_dtype(n))
     columns = _LinkColumns(model, total, n, len(used))
-    limit_m = FAR_FIELD_WAVELENGTHS * float(wavelength_m(radio.frequency_hz))
+    limit_m = float(far_field_limit_m(radio.frequency_hz))
     link_step = max(1, min(LINK_BLOCK_ROWS, max(LINK_BLOCK_MIN_ROWS, total // CONNECTIVITY_SHARE)) // (n * n))
     # the connectivity's few (times, n, n) arrays stay small beside the table
     conn_cells = min(SWARM_CONNECTIVITY_VALUES, max(CONNECTIVITY_MIN_VALUES, total // CONNECTIVITY_SHARE))

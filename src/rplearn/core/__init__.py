@@ -10,7 +10,7 @@ module                 public names
                        :func:`azimuth_elevation`, :func:`distance_m`, quaternion, Euler angle and
                        NED/ENU conversions
 ``link``               :func:`received_power_dbm` (paper eq. 1), :func:`free_space_path_loss_db`,
-                       :func:`wavelength_m`, :func:`observed_joint_gain_db` (eq. 5)
+                       :func:`wavelength_m`, :func:`far_field_limit_m`, :func:`observed_joint_gain_db` (eq. 5)
 ``environment``        :class:`PathLoss` (``fit --path-loss``), :func:`log_distance_column`,
                        :func:`two_ray_excess_db`, :func:`reflection_coefficient`
 ``bases``, ``sh``      :class:`Basis`, :class:`SphericalHarmonics`, :class:`BasisGrid`,

@@ -49,6 +49,7 @@ from .geometry import yaw_from_quat_wxyz as yaw_from_quat_wxyz
 from .link import FAR_FIELD_WAVELENGTHS as FAR_FIELD_WAVELENGTHS
 from .link import SPEED_OF_LIGHT_M_S as SPEED_OF_LIGHT_M_S
 from .link import check_far_field as check_far_field
+from .link import far_field_limit_m as far_field_limit_m
 from .link import free_space_path_loss_db as free_space_path_loss_db
 from .link import observed_joint_gain_db as observed_joint_gain_db
 from .link import received_power_dbm as received_power_dbm

@@ -29,6 +29,13 @@ def wavelength_m(frequency_hz: ArrayLike) -> NDArray[np.float64]:
 
 
 @check_types
+def far_field_limit_m(frequency_hz: ArrayLike) -> NDArray[np.float64]:
+    """The far-field limit ``2 lambda`` [m] of a carrier frequency [Hz] (paper Sec. III): no
+    received power is predicted, and no sample learned, at or below this distance."""
+    return FAR_FIELD_WAVELENGTHS * wavelength_m(frequency_hz)
+
+
+@check_types
 def check_far_field(distance_m: ArrayLike, frequency_hz: ArrayLike, what: str = "samples") -> None:
     """Refuse distances not beyond the far-field limit ``d > 2 lambda`` (paper Sec. III).
 
@@ -38,7 +45,7 @@ def check_far_field(distance_m: ArrayLike, frequency_hz: ArrayLike, what: str = 
         Naming how many samples are too close and the closest distance.
     """
     d = np.asarray(distance_m, np.float64)
-    limit = FAR_FIELD_WAVELENGTHS * wavelength_m(frequency_hz)
+    limit = far_field_limit_m(frequency_hz)
     bad = ~(d > limit)
     if np.any(bad):
         n_bad = int(np.sum(bad))
