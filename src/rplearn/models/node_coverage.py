@@ -84,13 +84,15 @@ class CoverageWork:
         for k, mask in zip(self.node_of_job, masks):
             occupied[k] |= mask
         finish = [partial(self._finish, k, occupied[k]) for k in range(len(self.nodes))]
+        return dict(zip(self.nodes, self._call(finish)))
+
+    def _call(self, jobs: Sequence[Callable[[], Any]]) -> list[Any]:
+        """The jobs' results in order: on the workers when :attr:`parallel`, else here."""
         if self.parallel:
             from rplearn.core.lsq.runtime import DEFAULT_RUNTIME
 
-            grids = list(DEFAULT_RUNTIME.in_order(lambda job: job(), finish))
-        else:
-            grids = [job() for job in finish]
-        return dict(zip(self.nodes, grids))
+            return list(DEFAULT_RUNTIME.in_order(lambda job: job(), jobs))
+        return [job() for job in jobs]
 
     def _finish(self, k: int, occupied: np.ndarray) -> list[float]:
         from rplearn.core.coverage import grid_distance_deg
@@ -100,11 +102,7 @@ class CoverageWork:
 
     def run(self) -> dict[str, list[float]]:
         """The grids, the jobs run here (on the workers when :attr:`parallel`)."""
-        if self.parallel:
-            from rplearn.core.lsq.runtime import DEFAULT_RUNTIME
-
-            return self.grids(list(DEFAULT_RUNTIME.in_order(lambda job: job(), self.jobs)))
-        return self.grids([job() for job in self.jobs])
+        return self.grids(self._call(self.jobs))
 
 
 def node_coverage_grids(
