@@ -19,13 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-
-def _inverse(matrix: np.ndarray) -> np.ndarray:
-    """Inverse of a symmetric positive definite matrix through its Cholesky factor."""
-    sym = 0.5 * (matrix + matrix.T)
-    chol = np.linalg.cholesky(sym)
-    inv_l = np.linalg.solve(chol, np.eye(sym.shape[0]))
-    return inv_l.T @ inv_l
+from rplearn.core.lsq.products import spd_inverse
 
 
 def psd_factor(matrix: np.ndarray, rtol: float = 1e-12) -> np.ndarray:
@@ -54,7 +48,7 @@ class _Posterior:
         self.noise_var = noise_var
         self.metrics = metrics
         self.p = metrics[0].shape[0]
-        self.cov = _inverse(precision)
+        self.cov = spd_inverse(precision)
         self.drift = np.zeros((self.cov.shape[0], 0))
         self.drift_scale = 0.0
         self.block_rows = 0

@@ -20,7 +20,7 @@ factorisations
 ``factor``             :class:`ConstrainedFactor` over the :class:`Factor` variants
 ``refined``            a float32 Cholesky factor with solves refined to float64
 ``spectrum``           rank and condition number, exact or estimated
-``products``           products with the normal matrix in scipy's BLAS
+``products``           products with the normal matrix in scipy's BLAS; an SPD inverse by Cholesky
 selection
 ``selection``          order and smoothing by grouped cross-validation
 ``selection_result``   :class:`Selection`, :class:`CurvePoint`

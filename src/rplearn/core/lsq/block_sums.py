@@ -38,6 +38,7 @@ from numpy.typing import NDArray
 
 from rplearn._argtypes import check_types
 from rplearn.core.lsq.normal_equations import NormalEquations
+from rplearn.core.lsq.products import spd_inverse
 from rplearn.errors import InputError
 
 FloatArray = NDArray[np.float64]
@@ -193,9 +194,7 @@ def correlated_ratio(normal: NormalEquations, blocks: BlockSums, prior_diag: Any
         raise InputError(f"block sums of {blocks.cross.shape[0]} columns for statistics of {pc} pattern columns", param="blocks")
     gram = np.asarray(normal.gram, np.float64)[:pc, :pc]
     a = gram + np.diag(np.asarray(prior_diag, np.float64).ravel())
-    chol = np.linalg.cholesky(0.5 * (a + a.T))
-    inv_l = np.linalg.solve(chol, np.eye(pc))
-    a_inv = inv_l.T @ inv_l
+    a_inv = spd_inverse(a)
     beta = a_inv @ normal.rhs[:pc]
     rss = float(normal.yty - 2.0 * beta @ normal.rhs[:pc] + beta @ gram @ beta)
     block_rss = float(blocks.sum_yy - 2.0 * beta @ blocks.sum_yv + beta @ blocks.cross @ beta)

@@ -31,4 +31,19 @@ def symmetric_product(matrix: Any) -> Any:
     return product
 
 
-__all__ = ["symmetric_product"]
+def spd_inverse(matrix: np.ndarray) -> np.ndarray:
+    """Inverse of a symmetric positive definite matrix (its symmetric part) through its Cholesky
+    factor ``L``: ``L^-T L^-1``, symmetric to the last bit.
+
+    Raises
+    ------
+    numpy.linalg.LinAlgError
+        When the matrix is not positive definite.
+    """
+    sym = 0.5 * (matrix + matrix.T)
+    chol = np.linalg.cholesky(sym)
+    inv_l = np.linalg.solve(chol, np.eye(sym.shape[0]))
+    return np.asarray(inv_l.T @ inv_l, np.float64)
+
+
+__all__ = ["spd_inverse", "symmetric_product"]
