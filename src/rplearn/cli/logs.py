@@ -6,27 +6,39 @@ import typer
 
 from rplearn.cli._app import app, fail, geodetic_flag, link, note, numbers, pairs, reader_options, say, user_errors, with_flag
 
+# The reader options inspect and sync declare alike (typer copies a declaration for each command).
+_NODE = typer.Option(None, "--node", help="FILE=NODE for ULogs and one-node tables.")
+_RECEIVER = typer.Option(None, "--receiver", help="FILE=NODE: capturing node of a pcap.")
+_ADDRESS = typer.Option(None, "--address", help="MAC=NODE: transmitter addresses of pcaps.")
+_RSSI_TOPIC = typer.Option(None, "--rssi-topic", help="TOPIC=TX:RX: RSSI topic of ROS bags, packets from TX received by RX.")
+_RSSI_FIELD = typer.Option(None, "--rssi-field", help="Field of the RSSI [dBm] in --rssi-topic messages, dots for nested fields (default "
+                                                      "rssi).")
+_MSG_DEFINITION = typer.Option(None, "--msg-definition", help="TYPE=FILE.msg: custom message type a bag does not describe (e.g. "
+                                                              "pkg/msg/LinkQuality=LinkQuality.msg).")
+_REQUIRE_VALID = typer.Option(False, "--require-valid/--accept-invalid", help="Drop ULog positions the autopilot flags invalid (xy_valid or z_valid = "
+                                                                              "0), or keep them (default).")
+_STATION_GEODETIC = typer.Option(None, "--station", help="LAT,LON,ALT: ground station position of MAVLink logs (.tlog, DataFlash) [deg, deg, m "
+                                                         "AMSL] (default: the log's home position, else the vehicle's first fix).")
+_STATION = typer.Option(None, "--station-node", help="Node id of the ground station of MAVLink logs (default gcs).")
+_STATION_HEADING = typer.Option(None, "--station-heading", help="Compass heading of the ground station's antenna (its body x axis) in MAVLink "
+                                                                "logs [deg clockwise from north] (default 90, east).")
+
 
 @app.command()
 @user_errors
 def inspect(
     logs: list[str] = typer.Argument(..., help="Log files: CSV/Parquet, ROS 1/2 bags, PX4 ULog, pcap, MAVLink .tlog and ArduPilot DataFlash .bin."),
-    node: list[str] | None = typer.Option(None, "--node", help="FILE=NODE for ULogs and one-node tables."),
-    receiver: list[str] | None = typer.Option(None, "--receiver", help="FILE=NODE: capturing node of a pcap."),
-    address: list[str] | None = typer.Option(None, "--address", help="MAC=NODE: transmitter addresses of pcaps."),
+    node: list[str] | None = _NODE,
+    receiver: list[str] | None = _RECEIVER,
+    address: list[str] | None = _ADDRESS,
     pose_topic: list[str] | None = typer.Option(None, "--pose-topic", help="TOPIC=NODE for ROS bags."),
-    rssi_topic: list[str] | None = typer.Option(None, "--rssi-topic", help="TOPIC=TX:RX: RSSI topic of ROS bags, packets from TX received by RX."),
-    rssi_field: str | None = typer.Option(None, "--rssi-field", help="Field of the RSSI [dBm] in --rssi-topic messages, dots for nested fields (default "
-                                                                     "rssi)."),
-    msg_definition: list[str] | None = typer.Option(None, "--msg-definition", help="TYPE=FILE.msg: custom message type a bag does not describe (e.g. "
-                                                                                   "pkg/msg/LinkQuality=LinkQuality.msg)."),
-    require_valid: bool = typer.Option(False, "--require-valid/--accept-invalid", help="Drop ULog positions the autopilot flags invalid (xy_valid or z_valid = "
-                                                                                       "0), or keep them (default)."),
-    station_geodetic: str | None = typer.Option(None, "--station", help="LAT,LON,ALT: ground station position of MAVLink logs (.tlog, DataFlash) [deg, deg, m "
-                                                                        "AMSL] (default: the log's home position, else the vehicle's first fix)."),
-    station: str | None = typer.Option(None, "--station-node", help="Node id of the ground station of MAVLink logs (default gcs)."),
-    station_heading: float | None = typer.Option(None, "--station-heading", help="Compass heading of the ground station's antenna (its body x axis) in MAVLink "
-                                                                                 "logs [deg clockwise from north] (default 90, east)."),
+    rssi_topic: list[str] | None = _RSSI_TOPIC,
+    rssi_field: str | None = _RSSI_FIELD,
+    msg_definition: list[str] | None = _MSG_DEFINITION,
+    require_valid: bool = _REQUIRE_VALID,
+    station_geodetic: str | None = _STATION_GEODETIC,
+    station: str | None = _STATION,
+    station_heading: float | None = _STATION_HEADING,
     frequency_hz: float | None = typer.Option(None, "--frequency", help="Carrier frequency for logs without it [Hz]: the distance a calibration flight needs "
                                                                         "is 10 wavelengths (433 MHz assumed without it)."),
     markdown: bool = typer.Option(False, "--markdown", help="Print Markdown instead of text."),
@@ -83,26 +95,21 @@ def sync(
     link_text: str | None = typer.Option(None, "--link", help="Keep one direction TX:RX (the paper's choice), or 'all'."),
     max_gap_s: float = typer.Option(0.2, "--max-gap", help="Drop samples inside pose gaps longer than this [s]."),
     offset: list[str] | None = typer.Option(None, "--offset", help="NODE=SECONDS clock offset added to a node's pose times."),
-    node: list[str] | None = typer.Option(None, "--node", help="FILE=NODE for ULogs and one-node tables."),
-    receiver: list[str] | None = typer.Option(None, "--receiver", help="FILE=NODE: capturing node of a pcap."),
-    address: list[str] | None = typer.Option(None, "--address", help="MAC=NODE: transmitter addresses of pcaps."),
+    node: list[str] | None = _NODE,
+    receiver: list[str] | None = _RECEIVER,
+    address: list[str] | None = _ADDRESS,
     pose_topic: list[str] | None = typer.Option(None, "--pose-topic", help="TOPIC=NODE: pose topics of ROS bags."),
-    rssi_topic: list[str] | None = typer.Option(None, "--rssi-topic", help="TOPIC=TX:RX: RSSI topic of ROS bags, packets from TX received by RX."),
-    rssi_field: str | None = typer.Option(None, "--rssi-field", help="Field of the RSSI [dBm] in --rssi-topic messages, dots for nested fields (default "
-                                                                     "rssi)."),
-    msg_definition: list[str] | None = typer.Option(None, "--msg-definition", help="TYPE=FILE.msg: custom message type a bag does not describe (e.g. "
-                                                                                   "pkg/msg/LinkQuality=LinkQuality.msg)."),
+    rssi_topic: list[str] | None = _RSSI_TOPIC,
+    rssi_field: str | None = _RSSI_FIELD,
+    msg_definition: list[str] | None = _MSG_DEFINITION,
     tx_power_dbm: float | None = typer.Option(None, "--tx-power", help="Transmit power for logs without it [dBm]."),
     frequency_hz: float | None = typer.Option(None, "--frequency", help="Carrier frequency for logs without it [Hz]."),
     nan_policy: str = typer.Option("error", "--nan-policy", help="Pose-table rows with NaN or non-numeric values: error (default) or drop (counted)."),
     allow_unsorted: bool = typer.Option(False, "--allow-unsorted", help="Accept pose tables whose times go backwards within a node (the rows are sorted)."),
-    require_valid: bool = typer.Option(False, "--require-valid/--accept-invalid", help="Drop ULog positions the autopilot flags invalid (xy_valid or z_valid = "
-                                                                                       "0), or keep them (default)."),
-    station_geodetic: str | None = typer.Option(None, "--station", help="LAT,LON,ALT: ground station position of MAVLink logs (.tlog, DataFlash) [deg, deg, m "
-                                                                        "AMSL] (default: the log's home position, else the vehicle's first fix)."),
-    station: str | None = typer.Option(None, "--station-node", help="Node id of the ground station of MAVLink logs (default gcs)."),
-    station_heading: float | None = typer.Option(None, "--station-heading", help="Compass heading of the ground station's antenna (its body x axis) in MAVLink "
-                                                                                 "logs [deg clockwise from north] (default 90, east)."),
+    require_valid: bool = _REQUIRE_VALID,
+    station_geodetic: str | None = _STATION_GEODETIC,
+    station: str | None = _STATION,
+    station_heading: float | None = _STATION_HEADING,
     on_unknown_node: str = typer.Option("drop", "--on-unknown-node", help="Signals naming a node without a pose log: drop (counted, default) or error."),
     rssi_scale: str = typer.Option("dbm", "--rssi-scale", help="dbm (default: calibrated, dropped outside -150..30 dBm or above the transmit power) or "
                                                                "relative (uncalibrated dB on the radio's own scale: no plausibility window)."),
