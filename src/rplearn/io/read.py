@@ -43,6 +43,13 @@ class _Gathered:
     signals: list[pd.DataFrame] = field(default_factory=list)
     files: list[dict[str, Any]] = field(default_factory=list)
 
+    def add(self, logs: Logs) -> None:
+        """Keep the pose and the signal log a reader gave (either may be None)."""
+        if logs.pose is not None:
+            self.poses.append(logs.pose)
+        if logs.signal is not None:
+            self.signals.append(logs.signal)
+
 
 def _path_list(paths: str | os.PathLike | Iterable[str | os.PathLike]) -> list[str]:
     """The paths as a non-empty list of strings."""
@@ -94,10 +101,7 @@ def _read_bag(path: str, options: ReaderOptions, got: _Gathered) -> dict[str, An
         path, options.pose_topics or {}, options.rssi_topics, options.rssi_field, options.tx_power_dbm,
         options.frequency_hz, _rosbag.RosbagOptions(msg_definitions=options.msg_definitions),
     )
-    if logs.pose is not None:
-        got.poses.append(logs.pose)
-    if logs.signal is not None:
-        got.signals.append(logs.signal)
+    got.add(logs)
     meta["kind"] = "pose+signal"
     return meta
 
@@ -164,10 +168,7 @@ def _read_mavlink(path: str, options: ReaderOptions, got: _Gathered) -> dict[str
     )
     if got.origin is None:
         got.origin = meta["origin_geodetic"]
-    if logs.pose is not None:
-        got.poses.append(logs.pose)
-    if logs.signal is not None:
-        got.signals.append(logs.signal)
+    got.add(logs)
     meta["kind"] = "pose+signal"
     return meta
 
