@@ -17,7 +17,7 @@ Both classes implement the :class:`rplearn.models.base.Model` protocol.
 from __future__ import annotations
 
 import os
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -148,6 +148,21 @@ class _PerLinkBaseline:
         """Carrier frequency of the training samples [Hz] (None: unknown)."""
         return frequency_from_training(self.training)
 
+    def _per_link(self, samples: LinkSamples, value: Callable[[Link, np.ndarray], Any]) -> np.ndarray:
+        """``value(link, indices)`` for the samples of each directed link [dB]; a link the model
+        does not know is refused, naming the ones it knows."""
+        known = self._known_links()
+        out = np.empty(len(samples))
+        for key, idx in _links(samples).items():
+            if key not in known:
+                raise _missing_link(key, known)
+            out[idx] = value(key, idx)
+        return out
+
+    def predict_gain_std(self, samples: LinkSamples) -> None:
+        """None: the baseline has no coefficient covariance."""
+        return None
+
 
 @check_types
 @dataclass
@@ -180,16 +195,7 @@ class MeanModel(_PerLinkBaseline):
 
     def predict_gain(self, samples: LinkSamples) -> np.ndarray:
         """The training mean of each sample's link [dB]."""
-        out = np.empty(len(samples))
-        for key, idx in _links(samples).items():
-            if key not in self.means_db:
-                raise _missing_link(key, self.means_db)
-            out[idx] = self.means_db[key]
-        return out
-
-    def predict_gain_std(self, samples: LinkSamples) -> None:
-        """None: the baseline has no coefficient covariance."""
-        return None
+        return self._per_link(samples, lambda key, idx: self.means_db[key])
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -261,16 +267,7 @@ class KNNModel(_PerLinkBaseline):
 
     def predict_gain(self, samples: LinkSamples) -> np.ndarray:
         """Mean joint gain of the k nearest training samples of each sample's link [dB]."""
-        out = np.empty(len(samples))
-        for key, idx in _links(samples).items():
-            if key not in self.train_gain_db:
-                raise _missing_link(key, self.train_gain_db)
-            out[idx] = self._regressor(key).predict(_angles(samples, idx))
-        return out
-
-    def predict_gain_std(self, samples: LinkSamples) -> None:
-        """None: the baseline has no coefficient covariance."""
-        return None
+        return self._per_link(samples, lambda key, idx: self._regressor(key).predict(_angles(samples, idx)))
 
     def to_dict(self) -> dict[str, Any]:
         return {
