@@ -11,6 +11,7 @@ which grows as the cube of the columns with a large constant (3,000 columns: 3.3
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -107,6 +108,23 @@ def _largest_eigenvalue(product: Any, n: int, iterations: int, block: int, rng: 
     return float(_krylov_ritz(product, start, min(iterations, LARGEST_STEPS), product, apply_is_gram=True)[-1])
 
 
+def _projector(null: FloatArray) -> Callable[[FloatArray], FloatArray]:
+    """``x -> x`` with its components along the orthonormal columns of ``null`` removed."""
+    def project(x: FloatArray) -> FloatArray:
+        return x - null @ (null.T @ x) if null.size else x
+
+    return project
+
+
+def _from_extremes(gram: FloatArray, null: FloatArray, lam_max: float, lam_min: float, tol: float) -> tuple[FloatArray, int, float]:
+    """``(sv, rank, cond)`` from the largest and the smallest non-zero eigenvalue found; the
+    pivoted-Cholesky rank (:func:`_rank_deficient`) when the smallest is not above ``tol``."""
+    if not lam_min > tol:
+        return _rank_deficient(gram, lam_max, tol)
+    sv = np.sqrt(np.array([lam_max, lam_min]))
+    return sv, gram.shape[0] - null.shape[1], float(sv[0] / sv[1])
+
+
 def _rank_deficient(gram: FloatArray, lam_max: float, tol: float) -> tuple[FloatArray, int, float]:
     """More free directions than the gauge: the rank from a pivoted Cholesky (``dpstrf``)."""
     from scipy.linalg import lapack
@@ -155,9 +173,7 @@ def spectrum_from_factor(
         return np.zeros(1), 0, float("inf")
     tol = lam_max * n * np.finfo(np.float64).eps
     b = min(block, n)
-
-    def project(x: FloatArray) -> FloatArray:
-        return x - null @ (null.T @ x) if null.size else x
+    project = _projector(null)
 
     def inverse(x: FloatArray) -> FloatArray:
         return factor.approximate_a(x * scale[:, None]) * scale[:, None]
@@ -174,10 +190,7 @@ def spectrum_from_factor(
         # eps32 times the condition number, which can lift a free direction's Ritz value above
         # the rank tolerance): again with refined solves
         lam_min = float(_krylov_ritz(refined_inverse, start, iterations, product, project)[0])
-    if not lam_min > tol:
-        return _rank_deficient(gram, lam_max, tol)
-    sv = np.sqrt(np.array([lam_max, lam_min]))
-    return sv, n - null.shape[1], float(sv[0] / sv[1])
+    return _from_extremes(gram, null, lam_max, lam_min, tol)
 
 
 def spectrum_estimate(
@@ -221,14 +234,8 @@ def spectrum_estimate(
             z = solve_triangular(lower, x, lower=True, check_finite=False)
             return solve_triangular(lower, z, lower=True, trans="T", check_finite=False)
 
-        def project(x: FloatArray) -> FloatArray:
-            return x - null @ (null.T @ x) if null.size else x
-
-        lam_min = float(_krylov_ritz(inverse, rng.standard_normal((n, b)), iterations, product, project)[0])
-    if not lam_min > tol:
-        return _rank_deficient(gram, lam_max, tol)
-    sv = np.sqrt(np.array([lam_max, lam_min]))
-    return sv, n - null.shape[1], float(sv[0] / sv[1])
+        lam_min = float(_krylov_ritz(inverse, rng.standard_normal((n, b)), iterations, product, _projector(null))[0])
+    return _from_extremes(gram, null, lam_max, lam_min, tol)
 
 
 __all__ = ["RIDGE_RESOLVES", "SINGLE_RESOLVES", "null_directions", "spectrum_estimate", "spectrum_from_factor", "spectrum_report"]
