@@ -15,7 +15,8 @@ from typing import Any
 import numpy as np
 
 from rplearn._argtypes import check_types
-from rplearn.core.lsq.solver import FitReport, JointFitOptions, fit_joint
+from rplearn.core.basis_base import Basis
+from rplearn.core.lsq.solver import FitReport, JointFitOptions, JointSolution, fit_joint
 from rplearn.core.metrics import Scores, score
 from rplearn.core.threads import blas_threads_for, is_small_fit, one_blas_thread, thread_override
 from rplearn.core.threads import warm_up as warm_up_blas
@@ -102,24 +103,51 @@ def solve_patterns(
         JointFitOptions(ridge=spec.ridge_weight, gauge=options.gauge, smoothing=spec.smoothing, environment=env,
                         link_offsets=options.link_offsets),
     )
-    fields, terms = shared_fields(sol, samples.nodes, options, directed_counts(samples))
+    frequency_hz = learned_frequency_hz(samples)
+    entries = {} if frequency_hz is None else {"frequency_hz": frequency_hz}
+    patterns = pattern_set_of_solution(sol, spec, basis, samples.nodes, options, directed_counts(samples), entries)
+    return patterns, sol.report
+
+
+def pattern_set_of_solution(
+    sol: JointSolution, spec: ModelSpec, basis: Basis, nodes: Sequence[str], options: FitOptions,
+    counts: Mapping[tuple[str, str], int], entries: Mapping[str, Any],
+) -> PatternSet:
+    """The patterns a joint solution gives (:func:`solve_patterns`, and the same from streamed
+    statistics).
+
+    Parameters
+    ----------
+    sol : JointSolution
+        The solver's result for ``nodes`` in ``basis``, fitted with ``options``.
+    spec : ModelSpec
+        Its smoothing is recorded in the training summary when not 0.
+    basis : Basis
+    nodes : sequence of str
+    options : FitOptions
+        The link terms learned beside the patterns (:func:`~rplearn.models.terms.shared_fields`).
+    counts : mapping of (tx, rx) to int
+        Samples per directed link.
+    entries : mapping
+        Further training-summary entries, written last in their order (``coverage_deg``,
+        ``frequency_hz``).
+
+    Returns
+    -------
+    PatternSet
+        Coefficients, covariance and gauge of ``sol``; a training summary of the solver's report,
+        the link terms, the smoothing and ``entries``; no provenance.
+    """
+    fields, terms = shared_fields(sol, nodes, options, counts)
     training = sol.report.to_dict()
     training.update(terms)
     if spec.smoothing:
         training["smoothing"] = spec.smoothing
-    frequency_hz = learned_frequency_hz(samples)
-    if frequency_hz is not None:
-        training["frequency_hz"] = frequency_hz
-    patterns = PatternSet(
-        basis=basis,
-        nodes=samples.nodes,
-        coef=sol.coef,
-        covariance=sol.covariance,
-        gauge=[g.to_dict() for g in sol.report.gauges],
-        training=TrainingSummary.from_dict(training),
-        **fields,
+    training.update(entries)
+    return PatternSet(
+        basis=basis, nodes=tuple(nodes), coef=sol.coef, covariance=sol.covariance,
+        gauge=[g.to_dict() for g in sol.report.gauges], training=TrainingSummary.from_dict(training), **fields,
     )
-    return patterns, sol.report
 
 
 @check_types

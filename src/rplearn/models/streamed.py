@@ -35,12 +35,11 @@ from rplearn.data.units import Stretches
 from rplearn.errors import InputError
 from rplearn.io.files import iter_parts
 from rplearn.io.partitions import Part
-from rplearn.models.fit import node_coverage_grids
+from rplearn.models.fit import node_coverage_grids, pattern_set_of_solution
 from rplearn.models.options import FitOptions
 from rplearn.models.patterns import PatternSet
 from rplearn.models.spec import ModelSpec
-from rplearn.models.terms import regression_inputs, shared_fields, statistics_counts
-from rplearn.models.training import TrainingSummary
+from rplearn.models.terms import regression_inputs, statistics_counts
 
 
 @dataclass
@@ -321,18 +320,8 @@ def fit_patterns_accumulated(
         penalty = penalty_vector(basis, len(nodes), spec.smoothing, penalty_scale(normal.gram, normal.n_pattern_columns))
     sol = solve(normal, list(nodes), ridge=spec.ridge_weight, gauge=options.gauge, penalty=penalty)
     learn_s += time.perf_counter() - t0
-    fields, terms = shared_fields(sol, list(nodes), options, counts)
-    training = sol.report.to_dict()
-    training.update(terms)
-    if spec.smoothing:
-        training["smoothing"] = spec.smoothing
-    training["coverage_deg"] = grids
-    if f is not None:
-        training["frequency_hz"] = f
-    patterns = PatternSet(
-        basis=basis, nodes=tuple(nodes), coef=sol.coef, covariance=sol.covariance,
-        gauge=[g.to_dict() for g in sol.report.gauges], training=TrainingSummary.from_dict(training), **fields,
-    )
+    entries = {"coverage_deg": grids, **({} if f is None else {"frequency_hz": f})}
+    patterns = pattern_set_of_solution(sol, spec, basis, list(nodes), options, counts, entries)
     return StreamedFit(patterns, sol.report, normal.n_samples, non_unit, learn_s)
 
 
