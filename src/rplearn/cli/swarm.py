@@ -9,6 +9,13 @@ import typer
 
 from rplearn.cli._app import app, floats, note, numbers, pairs, reader_options, say, split_list, user_errors, xyz
 
+# Options two or three of these commands declare alike (typer copies a declaration for each command).
+_FREQUENCY = typer.Option(None, "--frequency", help="Carrier frequency [Hz] (default: the one the model was learned at).")
+_RANK_SENSITIVITY = typer.Option(None, "--sensitivity", metavar="DBM|RADIO",
+                                help="Rank by availability, P(RSSI >= this), not gain: dBm or a radio (sik, esp32-11b, wifi-6mbps, ...).")
+_MIN_AVAILABILITY = typer.Option(None, "--min-availability", metavar="P",
+                                help="With --sensitivity: the strongest heading(s) at least this available.")
+
 
 @app.command()
 @user_errors(flags={"plot_path": "--plot"})
@@ -17,7 +24,7 @@ def links(
     poses: list[str] = typer.Argument(..., metavar="POSE_LOG...", help="Pose log(s) of the drones: a plan or a flight (CSV/Parquet, bag, ULog)."),
     output: str = typer.Option(..., "-o", "--out", help="Predicted links, one row per time and ordered pair (.csv or .parquet)."),
     tx_power_dbm: float = typer.Option(..., "--tx-power", help="Transmit power of every drone [dBm]."),
-    frequency_hz: float | None = typer.Option(None, "--frequency", help="Carrier frequency [Hz] (default: the one the model was learned at)."),
+    frequency_hz: float | None = _FREQUENCY,
     pattern: list[str] | None = typer.Option(None, "--as", help="DRONE=NODE: the drone carries the antenna learned as NODE (repeat)."),
     step_s: float = typer.Option(1.0, "--step", help="Spacing of the prediction times over the span all logs cover [s]."),
     at: list[str] | None = typer.Option(None, "--at", help="Predict at these times instead [s] (repeat or comma-separate)."),
@@ -101,13 +108,11 @@ def headings(
     yaw: list[str] | None = typer.Option(None, "--yaw", help="DRONE=DEG: current yaw, ENU ccw from east [deg] (default 0)."),
     fixed: list[str] | None = typer.Option(None, "--fixed", help="Drones that must keep their yaw (repeat or comma-separate)."),
     pattern: list[str] | None = typer.Option(None, "--as", help="DRONE=NODE: the drone carries the antenna learned as NODE."),
-    frequency_hz: float | None = typer.Option(None, "--frequency", help="Carrier frequency [Hz] (default: the one the model was learned at)."),
+    frequency_hz: float | None = _FREQUENCY,
     step_deg: float = typer.Option(5.0, "--step", help="Yaw grid [deg]."),
     output: str | None = typer.Option(None, "-o", "--out", help="Also write the chosen yaws here (.csv or .json)."),
-    sensitivity: str | None = typer.Option(None, "--sensitivity", metavar="DBM|RADIO",
-                                     help="Rank by availability, P(RSSI >= this), not gain: dBm or a radio (sik, esp32-11b, wifi-6mbps, ...)."),
-    min_availability: float | None = typer.Option(None, "--min-availability", metavar="P",
-                                              help="With --sensitivity: the strongest heading(s) at least this available."),
+    sensitivity: str | None = _RANK_SENSITIVITY,
+    min_availability: float | None = _MIN_AVAILABILITY,
 ) -> None:
     """Yaws for a hovering swarm that keep it best connected (maximise the bottleneck RSSI).
 
@@ -143,13 +148,11 @@ def orient(
     tx_yaw: float = typer.Option(0.0, "--tx-yaw", help="Current yaw of tx, ENU ccw from east [deg]."),
     rx_yaw: float = typer.Option(0.0, "--rx-yaw", help="Current yaw of rx [deg]."),
     tx_power_dbm: float = typer.Option(20.0, "--tx-power", help="[dBm]."),
-    frequency_hz: float | None = typer.Option(None, "--frequency", help="Carrier frequency [Hz] (default: the one the model was learned at)."),
+    frequency_hz: float | None = _FREQUENCY,
     caution: float = typer.Option(1.28, "--caution", min=0.0,  # = analysis.headings.CAUTION_Z (tested)
                                   help="Rank headings by the gain minus this many standard errors (1.28: the 10% lower bound; 0: the prediction alone)."),
-    sensitivity: str | None = typer.Option(None, "--sensitivity", metavar="DBM|RADIO",
-                                     help="Rank by availability, P(RSSI >= this), not gain: dBm or a radio (sik, esp32-11b, wifi-6mbps, ...)."),
-    min_availability: float | None = typer.Option(None, "--min-availability", metavar="P",
-                                              help="With --sensitivity: the strongest heading(s) at least this available."),
+    sensitivity: str | None = _RANK_SENSITIVITY,
+    min_availability: float | None = _MIN_AVAILABILITY,
 ) -> None:
     """Heading that maximises a link, and the received power before and after.
 
