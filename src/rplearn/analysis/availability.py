@@ -207,10 +207,9 @@ def _draw_link_rssi(
     """
     n_draws = deltas.shape[1]
     out = np.repeat(np.asarray(mean_dbm, np.float32)[:, None], n_draws, axis=1)
-    idx = np.array([model.node_index(n) for n in samples.nodes], np.intp)
+    tx, rx = model.end_indices(samples)
     d = samples.directions
-    for end_index, az, el in ((samples.tx_index, d.az_tx, d.el_tx), (samples.rx_index, d.az_rx, d.el_rx)):
-        node = idx[np.asarray(end_index)]
+    for node, az, el in ((tx, d.az_tx, d.el_tx), (rx, d.az_rx, d.el_rx)):
         for k in np.unique(node):
             sel = np.flatnonzero(node == k)
             f = model.basis.design(np.asarray(az)[sel], np.asarray(el)[sel])

@@ -190,6 +190,12 @@ class PatternSet:
         except ValueError:
             raise InputError(f"unknown node {str(node)!r}; the model knows {', '.join(self.nodes)}") from None
 
+    def end_indices(self, samples: LinkSamples) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+        """Each sample's transmitter and receiver as indices into :attr:`nodes` (a node the
+        model does not know is refused, as by :meth:`node_index`)."""
+        idx = np.array([self.node_index(n) for n in samples.nodes], dtype=np.intp)
+        return idx[samples.tx_index], idx[samples.rx_index]
+
     def evaluate(self, node: str, az_rad: ArrayLike, el_rad: ArrayLike) -> FloatArray:
         """Gain of ``node`` toward body-frame directions [dBi]."""
         az = np.asarray(az_rad, np.float64)
@@ -268,9 +274,7 @@ class PatternSet:
             m = 0  # an older covariance of the patterns alone
         shared = self.shared_regressors(samples)[:m] if m else np.zeros((0, len(samples)))
         shared_idx = self.n_pattern_columns + np.arange(m)
-        idx = np.array([self.node_index(n) for n in samples.nodes], dtype=np.intp)
-        tx = idx[samples.tx_index]
-        rx = idx[samples.rx_index]
+        tx, rx = self.end_indices(samples)
         d = samples.directions
         az_tx, el_tx, az_rx, el_rx = (np.asarray(a, np.float64) for a in d)
         var = np.empty(len(samples))
@@ -524,9 +528,7 @@ class PatternSet:
 
     def predict_gain(self, samples: LinkSamples) -> FloatArray:
         """Joint gain [dB] predicted for every sample of a :class:`~rplearn.data.tables.LinkSamples`."""
-        idx = np.array([self.node_index(n) for n in samples.nodes], dtype=np.intp)
-        tx = idx[samples.tx_index]
-        rx = idx[samples.rx_index]
+        tx, rx = self.end_indices(samples)
         d = samples.directions
         with blas_threads(prediction_flops(len(samples), self.basis.n_coef)):  # rplearn.core.threads
             gain = self._sum_node_gains(tx, d.az_tx, d.el_tx) + self._sum_node_gains(rx, d.az_rx, d.el_rx)
