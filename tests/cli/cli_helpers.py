@@ -11,6 +11,7 @@ import subprocess
 import sys
 from collections.abc import Iterable, Sequence
 from pathlib import Path
+from typing import Any
 
 #: The command line a user types, with this interpreter.
 RPLEARN = [sys.executable, "-m", "rplearn.cli"]
@@ -23,6 +24,27 @@ def run(args: Sequence[str], cwd: Path | str, env: dict[str, str] | None = None,
     """Run ``rplearn ARGS`` in ``cwd`` (``env``: variables added to this process's)."""
     return subprocess.run(RPLEARN + list(args), cwd=cwd, capture_output=True, text=True, timeout=timeout,
                           env=None if env is None else {**os.environ, **env})
+
+
+def run_ok(args: Sequence[str], cwd: Path | str, ok: bool = True) -> subprocess.CompletedProcess[str]:
+    """:func:`run` within 5 minutes; with ``ok``, assert that it succeeded (naming the arguments)."""
+    proc = run(args, cwd, timeout=300)
+    if ok:
+        assert proc.returncode == 0, f"{args}: {proc.stderr}"
+    return proc
+
+
+def invoke(args: Sequence[object], ok: bool = True) -> Any:
+    """``rplearn ARGS`` in this process (typer's ``CliRunner``, 400 columns); with ``ok``, assert
+    that it succeeded (naming the arguments)."""
+    from typer.testing import CliRunner
+
+    from rplearn.cli import app
+
+    res = CliRunner().invoke(app, [str(a) for a in args], env={"COLUMNS": "400"})
+    if ok:
+        assert res.exit_code == 0, f"{args}: {res.output}"
+    return res
 
 
 def smoke_flight(d: Path, extra: Iterable[Sequence[str]] = (), seed: int = 2) -> Path:

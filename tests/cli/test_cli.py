@@ -4,23 +4,13 @@ from __future__ import annotations
 
 import json
 import os
-import subprocess
-import sys
 
 import numpy as np
 import pandas as pd
 import pytest
+from cli_helpers import run_ok as run
 
 from rplearn.data.tables import MATCHED_COLUMNS
-
-RPLEARN = [sys.executable, "-m", "rplearn.cli"]
-
-
-def run(args, cwd, ok=True):
-    proc = subprocess.run(RPLEARN + list(args), cwd=cwd, capture_output=True, text=True, timeout=300)
-    if ok:
-        assert proc.returncode == 0, f"{args}: {proc.stderr}"
-    return proc
 
 
 @pytest.fixture(scope="module")
@@ -330,7 +320,6 @@ def test_a_plan_is_a_pose_log_for_links_and_sync_reports_reader_drops(workdir):
     poses.to_csv(d / "pose_nan.csv", index=False)
     sync = run(["sync", "--poses", "pose_nan.csv", "--signals", "flight/signal_log.parquet", "--nan-policy", "drop", "-o", "nan_sync.parquet"], d)
     assert "dropped 3 pose row(s) (nan_pose)" in sync.stdout
-
 
 
 def test_trajectory_optimize_prints_the_expected_spread_and_writes_the_plan(tmp_path):

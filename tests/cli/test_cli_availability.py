@@ -7,19 +7,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from cli_helpers import invoke
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "models_main"
-
-
-def invoke(args, ok=True):
-    from typer.testing import CliRunner
-
-    from rplearn.cli import app
-
-    res = CliRunner().invoke(app, [str(a) for a in args], env={"COLUMNS": "400"})
-    if ok:
-        assert res.exit_code == 0, f"{args}: {res.output}"
-    return res
 
 
 def test_predict_writes_the_availability_of_a_preset_radio(tmp_path):

@@ -10,19 +10,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from cli_helpers import invoke
 
 LOG = Path(__file__).resolve().parents[1] / "fixtures" / "ardupilot" / "mavlink-log_2013-10-13_16-58-51.tlog"
-
-
-def invoke(args, ok=True):
-    from typer.testing import CliRunner
-
-    from rplearn.cli import app
-
-    res = CliRunner().invoke(app, [str(a) for a in args], env={"COLUMNS": "400"})
-    if ok:
-        assert res.exit_code == 0, f"{args}: {res.output}"
-    return res
 
 
 @pytest.fixture(scope="module")

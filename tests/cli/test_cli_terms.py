@@ -3,19 +3,9 @@
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 
 import pytest
-
-RPLEARN = [sys.executable, "-m", "rplearn.cli"]
-
-
-def run(args, cwd, ok=True):
-    proc = subprocess.run(RPLEARN + list(args), cwd=cwd, capture_output=True, text=True, timeout=300)
-    if ok:
-        assert proc.returncode == 0, f"{args}: {proc.stderr}"
-    return proc
+from cli_helpers import run_ok as run
 
 
 @pytest.fixture(scope="module")
