@@ -20,6 +20,22 @@ TX_POWER_DBM = 20.0
 FREQUENCY_HZ = 2.412e9
 
 
+def ground_flight(station_yaw_enu_deg: float) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """The ``ground`` preset's flight (seed 1), its station one static row as a tlog holds it (a
+    tlog cannot log the station's pose): its median position at its first time, facing
+    ``station_yaw_enu_deg`` (ENU, its true heading). Returns the pose and the signal log."""
+    from rplearn.core.geometry import quat_wxyz_from_yaw
+    from rplearn.sim.flight import simulate
+
+    sim = simulate("ground", seed=1)
+    pose, signal = sim.pose_log, sim.signal_log
+    g = pose[pose["node"] == "G"]
+    q = quat_wxyz_from_yaw(np.radians(station_yaw_enu_deg))
+    station = pd.DataFrame({"t": [g["t"].min()], "node": ["G"], "x": [g["x"].median()], "y": [g["y"].median()],
+                            "z": [g["z"].median()], "qw": [q[0]], "qx": [q[1]], "qy": [q[2]], "qz": [q[3]]})
+    return pd.concat([pose[pose["node"] == "D"], station], ignore_index=True), signal
+
+
 def _synthetic_flight() -> tuple[pd.DataFrame, pd.DataFrame]:
     """Two drones circling, poses at 100 Hz, packets at 80 Hz each way, integer RSSI."""
     t = np.arange(0.0, 6.0, 0.01)

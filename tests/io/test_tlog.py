@@ -10,6 +10,7 @@ import sys
 import numpy as np
 import pandas as pd
 import pytest
+from flightfiles import ground_flight
 from pymavlink.dialects.v10 import ardupilotmega as mavlink1
 
 from rplearn.core.geometry import quat_wxyz_from_yaw
@@ -31,15 +32,7 @@ HALF_STEP_DB = 0.5 / SIK_UNITS_PER_DB
 def flight(tmp_path_factory):
     """The ``ground`` preset's flight with its station static (a tlog cannot log the station's
     pose: one row, its median position and true heading), as Parquet logs and as a .tlog."""
-    from rplearn.sim.flight import simulate
-
-    sim = simulate("ground", seed=1)
-    pose, signal = sim.pose_log, sim.signal_log
-    g = pose[pose["node"] == "G"]
-    q = quat_wxyz_from_yaw(np.radians(STATION_YAW_ENU_DEG))
-    station = pd.DataFrame({"t": [g["t"].min()], "node": ["G"], "x": [g["x"].median()], "y": [g["y"].median()],
-                            "z": [g["z"].median()], "qw": [q[0]], "qx": [q[1]], "qy": [q[2]], "qz": [q[3]]})
-    pose = pd.concat([pose[pose["node"] == "D"], station], ignore_index=True)
+    pose, signal = ground_flight(STATION_YAW_ENU_DEG)
     folder = tmp_path_factory.mktemp("tlog")
     write_table(pose, str(folder / "pose.parquet"))
     write_table(signal, str(folder / "signal.parquet"))

@@ -9,11 +9,10 @@ import subprocess
 import sys
 
 import numpy as np
-import pandas as pd
 import pytest
+from flightfiles import ground_flight
 
 from rplearn.analysis.pattern_error import node_directions, pattern_errors_db
-from rplearn.core.geometry import quat_wxyz_from_yaw
 from rplearn.data.sync import synchronise
 from rplearn.data.tables import link_samples
 from rplearn.errors import InputError
@@ -39,15 +38,7 @@ TRUE_WINDOWS = ((-np.inf, 15.0), (200.0, 215.0))
 @pytest.fixture(scope="module")
 def ground():
     """The ``ground`` preset's flight, its station one static row (as a tlog holds it)."""
-    from rplearn.sim.flight import simulate
-
-    sim = simulate("ground", seed=1)
-    pose, signal = sim.pose_log, sim.signal_log
-    g = pose[pose["node"] == "G"]
-    q = quat_wxyz_from_yaw(np.radians(STATION_YAW_ENU_DEG))
-    station = pd.DataFrame({"t": [g["t"].min()], "node": ["G"], "x": [g["x"].median()], "y": [g["y"].median()],
-                            "z": [g["z"].median()], "qw": [q[0]], "qx": [q[1]], "qy": [q[2]], "qz": [q[3]]})
-    pose = pd.concat([pose[pose["node"] == "D"], station], ignore_index=True)
+    pose, signal = ground_flight(STATION_YAW_ENU_DEG)
     return Logs(pose, signal[["t", "tx", "rx", "rssi_dbm", "tx_power_dbm", "frequency_hz"]])
 
 
