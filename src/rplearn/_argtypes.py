@@ -39,6 +39,7 @@ from __future__ import annotations
 import collections.abc as cabc
 import functools
 import inspect
+import math
 import numbers
 import os
 import types
@@ -66,6 +67,21 @@ _ABSTRACT: dict[Any, tuple[type, str]] = {
 
 def _is_real(v: Any) -> bool:
     return isinstance(v, numbers.Real) and not isinstance(v, bool)
+
+
+def is_finite_real(value: Any) -> bool:
+    """Whether ``value`` is a finite real number (any :class:`numbers.Real`, numpy's included;
+    not a bool).
+
+    Parameters
+    ----------
+    value : object
+
+    Returns
+    -------
+    bool
+    """
+    return _is_real(value) and math.isfinite(float(value))
 
 
 def _is_int(v: Any) -> bool:
@@ -280,4 +296,4 @@ def check_types(obj: _T, label: str | None = None) -> _T:
     return obj
 
 
-__all__ = ["check_types"]
+__all__ = ["check_types", "is_finite_real"]

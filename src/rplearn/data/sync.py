@@ -68,16 +68,14 @@ time to put it on the common clock. All options are fields of :class:`SyncOption
 from __future__ import annotations
 
 import logging
-import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from numbers import Real
 from typing import Any
 
 import numpy as np
 import pandas as pd
 
-from rplearn._argtypes import check_types
+from rplearn._argtypes import check_types, is_finite_real
 from rplearn.core.link import FAR_FIELD_WAVELENGTHS, SPEED_OF_LIGHT_M_S
 from rplearn.core.plausible import FREQUENCY_BAND_HZ, check_frequency_hz
 from rplearn.data.outages import match_outages, outage_text, split_outages, with_outages
@@ -185,10 +183,6 @@ class SyncResult:
     summary: SyncSummary
 
 
-def _finite(value: Any) -> bool:
-    return isinstance(value, Real) and not isinstance(value, bool) and math.isfinite(float(value))
-
-
 def _check(ok: bool, name: str, expected: str, value: Any) -> None:
     """Raise :class:`InputError` naming option ``name`` (``param=name``) unless ``ok``."""
     if not ok:
@@ -197,7 +191,7 @@ def _check(ok: bool, name: str, expected: str, value: Any) -> None:
 
 def _seconds_by_node(value: Any, name: str) -> dict[str, float]:
     """A mapping of node id to a finite number of seconds, checked."""
-    ok = isinstance(value, Mapping) and all(_finite(v) for v in value.values())
+    ok = isinstance(value, Mapping) and all(is_finite_real(v) for v in value.values())
     _check(ok, name, "a mapping of node id to a finite number of seconds", value)
     return {str(k): float(v) for k, v in value.items()}
 
@@ -281,13 +275,13 @@ class SyncOptions:
     def __post_init__(self) -> None:
         set_ = object.__setattr__
         set_(self, "link", _checked_link(self.link))
-        _check(_finite(self.max_gap_s) and self.max_gap_s > 0, "max_gap_s", "a positive number of seconds",
+        _check(is_finite_real(self.max_gap_s) and self.max_gap_s > 0, "max_gap_s", "a positive number of seconds",
                self.max_gap_s)
         if self.clock_offsets_s is not None:
             set_(self, "clock_offsets_s", _seconds_by_node(self.clock_offsets_s, "clock_offsets_s"))
         if isinstance(self.signal_clock_offset_s, Mapping):
             set_(self, "signal_clock_offset_s", _seconds_by_node(self.signal_clock_offset_s, "signal_clock_offset_s"))
-        _check(isinstance(self.signal_clock_offset_s, Mapping) or _finite(self.signal_clock_offset_s),
+        _check(isinstance(self.signal_clock_offset_s, Mapping) or is_finite_real(self.signal_clock_offset_s),
                "signal_clock_offset_s", "a finite number of seconds, or one per receiver id", self.signal_clock_offset_s)
         try:
             sentinel: tuple[float, ...] | None = tuple(float(v) for v in self.sentinel_rssi_dbm)
@@ -300,14 +294,14 @@ class SyncOptions:
         _check(isinstance(self.min_samples, (int, np.integer)) and not isinstance(self.min_samples, bool)
                and self.min_samples >= 0, "min_samples", "a non-negative integer", self.min_samples)
         for name, value in (("from_s", self.from_s), ("to_s", self.to_s)):
-            _check(value is None or _finite(value), name, "a finite number of seconds, or None", value)
+            _check(value is None or is_finite_real(value), name, "a finite number of seconds, or None", value)
         _check(self.from_s is None or self.to_s is None or self.from_s < self.to_s, "to_s",
                f"a time after from_s={self.from_s!r}", self.to_s)
         _check(self.window_clock in WINDOW_CLOCKS, "window_clock", "'start' or 'log'", self.window_clock)
         _check(isinstance(self.airborne, (bool, np.bool_)), "airborne", "True or False", self.airborne)
-        _check(_finite(self.airborne_margin_m) and self.airborne_margin_m >= 0, "airborne_margin_m",
+        _check(is_finite_real(self.airborne_margin_m) and self.airborne_margin_m >= 0, "airborne_margin_m",
                "a non-negative number of metres", self.airborne_margin_m)
-        _check(_finite(self.repeat_fraction) and 0 <= self.repeat_fraction <= 0.5, "repeat_fraction",
+        _check(is_finite_real(self.repeat_fraction) and 0 <= self.repeat_fraction <= 0.5, "repeat_fraction",
                "a number from 0 to 0.5", self.repeat_fraction)
 
 

@@ -9,14 +9,12 @@ with NaN, unsorted or flagged pose rows. Every field has a default, so
 
 from __future__ import annotations
 
-import math
 import os
 from collections.abc import Mapping
 from dataclasses import dataclass
-from numbers import Real
 from typing import Any
 
-from rplearn._argtypes import check_types
+from rplearn._argtypes import check_types, is_finite_real
 from rplearn.data.tables import check_frequency_hz, check_tx_power_dbm
 from rplearn.errors import InputError
 
@@ -35,10 +33,6 @@ def _mapping(value: Any, name: str, key_is_path: bool = False) -> dict[Any, Any]
     return dict(value)
 
 
-def _finite(value: Any) -> bool:
-    return isinstance(value, Real) and not isinstance(value, bool) and math.isfinite(float(value))
-
-
 def _check_origin(origin: Any, name: str = "origin_geodetic") -> tuple[float, float, float] | None:
     """A geodetic position as three floats (lat [deg], lon [deg], alt [m]), or None."""
     if origin is None:
@@ -47,7 +41,7 @@ def _check_origin(origin: Any, name: str = "origin_geodetic") -> tuple[float, fl
         values = tuple(origin)
     except TypeError:
         values = ()
-    if len(values) != 3 or not all(_finite(v) for v in values):
+    if len(values) != 3 or not all(is_finite_real(v) for v in values):
         raise InputError(
             f"{name}: expected (lat_deg, lon_deg, alt_m), three finite numbers, got {origin!r}",
             param=name,
@@ -67,14 +61,14 @@ def _check_tx_power(value: Any) -> Any:
     if value is None:
         return None
     if isinstance(value, Mapping):
-        bad = [str(k) for k, v in value.items() if not _finite(v)]
+        bad = [str(k) for k, v in value.items() if not is_finite_real(v)]
         if bad:
             raise InputError(
                 f"tx_power_dbm: expected finite numbers [dBm], node(s) {', '.join(bad)} have none",
                 param="tx_power_dbm",
             )
         return {str(k): float(v) for k, v in value.items()}
-    if not _finite(value):
+    if not is_finite_real(value):
         raise InputError(
             f"tx_power_dbm: expected a finite number [dBm] or a mapping of node id to one, got {value!r}",
             param="tx_power_dbm",
@@ -185,11 +179,11 @@ class ReaderOptions:
         set_(self, "station_geodetic", _check_origin(self.station_geodetic, "station_geodetic"))
         if not isinstance(self.station, str) or not self.station.strip():
             raise InputError(f"station: expected a node id, got {self.station!r}", param="station")
-        if self.station_heading_deg is not None and not _finite(self.station_heading_deg):
+        if self.station_heading_deg is not None and not is_finite_real(self.station_heading_deg):
             raise InputError(f"station_heading_deg: expected degrees, got {self.station_heading_deg!r}",
                              param="station_heading_deg")
         set_(self, "tx_power_dbm", _check_tx_power(self.tx_power_dbm))
-        if self.frequency_hz is not None and not (_finite(self.frequency_hz) and self.frequency_hz > 0):
+        if self.frequency_hz is not None and not (is_finite_real(self.frequency_hz) and self.frequency_hz > 0):
             raise InputError(
                 f"frequency_hz: expected a positive number of hertz, got {self.frequency_hz!r}",
                 param="frequency_hz",
