@@ -21,7 +21,7 @@ import pandas as pd
 from rplearn._argtypes import check_types
 from rplearn.errors import InputError
 from rplearn.plan.campaign import Campaign
-from rplearn.plan.trajectory import UnitReference
+from rplearn.plan.trajectory import UnitReference, sample_times_s
 
 _NAME = re.compile(r"^(?P<label>.+)_(?P<node>[^_]+)\.csv$")
 _COLUMNS = ("t", "x", "y", "z", "yaw_deg")
@@ -52,10 +52,7 @@ class ReferenceUnit:
 
     def sample(self, rate_hz: float, t_offset_s: float = 0.0) -> UnitReference:
         """References of both drones at ``rate_hz`` [Hz]."""
-        if not rate_hz > 0:
-            raise InputError(f"rate_hz: expected a positive sample rate, got {rate_hz!r}", param="rate_hz")
-        t = np.arange(0.0, self.duration_s + 0.5 / rate_hz, 1.0 / rate_hz)
-        return self.evaluate(t[t <= self.duration_s + 1e-9], t_offset_s)
+        return self.evaluate(sample_times_s(self.duration_s, rate_hz), t_offset_s)
 
     def evaluate(self, t_rel_s: np.ndarray, t_offset_s: float = 0.0) -> UnitReference:
         """References at unit times ``t_rel_s`` [s]."""

@@ -53,6 +53,21 @@ _REMEDIES: dict[str, str] = {
 
 
 
+def sample_times_s(duration_s: float, rate_hz: float) -> NDArray[np.float64]:
+    """Times of a unit's references sampled at ``rate_hz`` [Hz]: from 0 every ``1 / rate_hz``
+    up to its end ``duration_s`` [s] (included when on the grid).
+
+    Raises
+    ------
+    InputError
+        When ``rate_hz`` is not positive (``param="rate_hz"``).
+    """
+    if not rate_hz > 0:
+        raise InputError(f"rate_hz: expected a positive sample rate, got {rate_hz!r}", param="rate_hz")
+    t = np.arange(0.0, duration_s + 0.5 / rate_hz, 1.0 / rate_hz)
+    return t[t <= duration_s + 1e-9]
+
+
 def check_unit_fields(unit: Any, positive: tuple[str, ...]) -> None:
     """Checks every kind of unit shares: two different node ids (stored as ``str``) and the
     named fields positive and finite."""
@@ -197,11 +212,7 @@ class TrajectoryUnit:
         t_offset_s : float
             Time of the unit's start [s].
         """
-        if not (rate_hz > 0):
-            raise InputError(f"rate_hz: expected a positive sample rate, got {rate_hz!r}", param="rate_hz")
-        t = np.arange(0.0, self.duration_s + 0.5 / rate_hz, 1.0 / rate_hz)
-        t = t[t <= self.duration_s + 1e-9]
-        return self.evaluate(t, t_offset_s)
+        return self.evaluate(sample_times_s(self.duration_s, rate_hz), t_offset_s)
 
     def evaluate(self, t_rel_s: NDArray[np.float64], t_offset_s: float = 0.0) -> UnitReference:
         """References of both drones at times ``t_rel_s`` since the unit's start [s]."""
