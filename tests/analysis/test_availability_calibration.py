@@ -98,7 +98,75 @@ What this says:
     made it worse (``ground``: -6.3 -> -9.8 dB), and 1-3 times ``prior_std_db`` more spread
     left the bins 0.43-0.90 off and the skill below -0.4.
 
-Where item 1 is not met on seed 0, the test is a strict xfail naming why (:data:`_NOT_MET`).
+With a reference pattern as prior (the planner's flights; what a user with a vendor's sheet or a
+chamber's pattern runs: ``rplearn reference``, ``fit --order auto --prior NODE=ref.json``, then
+``predict --sensitivity``). The reference is :func:`rplearn.sim.imperfect_reference`'s default:
+the antenna turned 10 deg on its mount plus a smooth 2-dB error, 2.6-3.0 dB RMS per antenna over
+the sphere (never the installed truth). *learned*: the spread where the flights never looked
+learned from the prior's misfit (it took the capped spread, 5.0 dB ``ground``, 5.9-6.4
+``campaign``); *stated*: ``--prior-std 2`` (the smooth error sim.reference states; its mounting
+error is not in it); *level*: ``--prior-level prior``; *reference alone*: the reference's gains
+with the true link offsets and level, its true RMS as each end's spread, no flight; *near-exact*:
+a 0.5-dB reference without mounting error, ``--prior-std 0.5``; *SH-15*: the prior kept to the
+largest candidate order (scratch code, not in rplearn). Seeds 0 / 1 / 2, each cell q10 q30:
+
+===================  =====================================  =====================================
+ground, planner      Brier skill                            largest bin gap
+===================  =====================================  =====================================
+no prior             -1.86 -0.81 / -4.36 -1.40 / -2.14 -0.94  .930 .719 / .872 .629 / .922 .645
+prior, learned       .131 .107 / -.474 .178 / -.040 .240    .305 .397 / .592 .296 / .473 .433
+prior, stated 2 dB   .152 .084 / -.487 .176 / -.029 .252    .302 .412 / .592 .328 / .469 .448
+prior, level         .151 .135 / -.703 .092 / -.361 .132    .275 .318 / .617 .369 / .664 .477
+prior at SH-15       .217 .173 / -.140 .275 / -.055 .252    .172 .280 / .392 .257 / .520 .360
+reference alone      .299 .198 / -.300 .253 / .106 .349     .233 .228 / .451 .246 / .327 .163
+near-exact           .137 .061 / -.313 .132 / .163 .255     .312 .369 / .499 .295 / .304 .393
+near-exact, SH-15    .369 .344 / .257 .459 / .355 .517      .078 .041 / .176 .030 / .082 .093
+oracle               .379 .364 / .282 .473 / .377 .533
+campaign, planner
+no prior             -2.50 -1.23 / -3.34 -1.33 / -2.71 -1.27  .577 .576 / .633 .593 / .602 .614
+prior, learned       .200 .127 / -.059 .059 / .100 .131     .253 .345 / .430 .443 / .431 .311
+prior, stated 2 dB   .239 .111 / -.041 .030 / .102 .105     .250 .348 / .432 .431 / .438 .349
+prior, level         .275 .169 / -.162 .025 / .059 .104     .122 .288 / .483 .381 / .489 .324
+reference alone      .279 .150 / -.054 .036 / -.012 .083    .360 .236 / .396 .303 / .310 .232
+oracle (blind)       .452 .404 / .356 .392 / .368 .553  (.352 .305 / .283 .274 / .293 .410)
+paper, planner
+no prior             .171 .324 / .305 .408 / .219 .314      .088 .040 / .055 .047 / .033 .053
+prior, learned       .157 .302 / .288 .394 / .204 .300      .095 .057 / .061 .037 / .097 .042
+prior, stated 2 dB   .157 .302 / .288 .394 / .204 .300      .092 .056 / .063 .035 / .096 .042
+reference alone      -.069 .124 / -.050 .237 / -.433 .124   .289 .260 / .512 .248 / .474 .269
+oracle               .201 .359 / .334 .432 / .236 .337
+===================  =====================================  =====================================
+
+What this says:
+
+- The prior lifts the planner's flights on ``ground`` and ``campaign`` from a skill of -0.8 to
+  -4.4 to -0.7 to +0.28, but item 1 is far: bins 0.12-0.66 off. Met only on ``paper`` at q30,
+  seed 1 (seed 2: skill 0.2999; its flights look where the learning flights did, and there the
+  prior adds nothing). The vendor's tolerance (``--prior-std 2``) or the prior's level changes
+  little.
+- The reference's error is larger, where it matters, than any spread it states: 2.6-3.0 dB RMS
+  per antenna over the sphere, but on the planner's rows 4.3-7.5 dB RMS joint (mean +5.9 dB on
+  ``ground`` seed 0, +0.2/+0.5 on seeds 1/2). Its 10-deg mounting error moves the drone's
+  gimbal shadow, its steepest feature, exactly where the learning flights looked: there the
+  drone's reference is 3.7 dB (seed 0) and 5.7 dB (seed 1) too low and the station's 4.4 dB too
+  high; the flights see only their sum, so the level is matched where the reference is worst.
+  Even the reference alone, knowing the true level and its own true RMS, fails (bins 0.16-0.51).
+- Where the error goes (default prior, seeds 0-2): beyond 45 deg from every learning direction
+  (66-72 % of ``ground``'s rows) the fit is 0.6-2.5 dB above the truth (``ground``; ``campaign`` 1.6-2.2)
+  with a spread about right (z 0.78-0.93 sd); at 3-20 deg (the low elevations just beside the
+  learned band, 18-24 %) it is 3.3-9.4 dB below the truth against a stated gain spread of 1.3-3.1 dB: the
+  deviation from the prior fitted on the narrow band extrapolates with its slope.
+- A second cause, in rplearn: the fit keeps the prior only up to the order it chooses (SH-4 to
+  SH-9 here: the cross-validation between passes over one band cannot see what a higher order of
+  the prior gives elsewhere). An exact pattern cut to SH-4 is 2.5 dB RMS off on ``ground``'s
+  planner rows (SH-15: 0.56 dB), so a near-exact reference scores no better than the imperfect
+  one (-0.31 to 0.26); kept to SH-15 it reaches the oracle's skill within 0.03 (bins 0.03-0.18
+  off). Seed 3 (``ground``) alike: oracle .161 .225, no prior -5.81 -1.90, prior -.646 -.117,
+  near-exact -.522 -.192 (SH-5 chosen; 2.98 dB low on average), kept to SH-15 .134 .206.
+  Not fixed here (``models/auto.py``, ``prior_coefficients``): a strict xfail,
+  :func:`test_a_near_exact_reference_prior_gives_near_the_oracles_skill`, names it.
+
+Where item 1 is not met on seed 0, the test is a strict xfail naming why (:data:`_NOT_MET`, :data:`_PRIOR_NOT_MET`).
 """
 
 from __future__ import annotations
@@ -128,6 +196,10 @@ from rplearn.workflows.logs import sync_logs
 MIN_BIN = 200
 #: Reference rate of the planner's flights [Hz].
 RATE_HZ = 10.0
+#: The folder, simulation and result of every :func:`held_out` run, by (preset, seed, held-out
+#: flights' labels): the prior's tests reuse them (a user's reference pattern is made from the simulator's
+#: antennas, :func:`rplearn.sim.imperfect_reference`).
+_RUNS: dict[tuple, tuple] = {}
 
 
 def _clean_rssi(sim, truth: pd.DataFrame) -> np.ndarray:
@@ -190,7 +262,9 @@ def held_out(tmp: Path, preset: str, seed: int = 0, flights: tuple = ()):
     table = table.merge(truth[["t", "tx", "rx", "clean_dbm", "level_db", "seen_dbm", "seen_var_db2"]], on=["t", "tx", "rx"], how="left",
                         validate="1:1")
     assert table["clean_dbm"].notna().all()  # every held-out packet has its oracle
-    return model, table, sim.config.radio.fading_std_db, sim.config.radio.unit_level_std_db
+    case = (model, table, sim.config.radio.fading_std_db, sim.config.radio.unit_level_std_db)
+    _RUNS[preset, seed, tuple(u.label for u in flights)] = (tmp, sim, case)
+    return case
 
 
 def skill(p, observed):
@@ -418,3 +492,161 @@ def test_item_1_on_flights_whose_range_changes(ranging, q, request):
         request.applymarker(pytest.mark.xfail(strict=True, reason=f"issue 28 item 1 not met: {_NOT_MET[kind, preset, q]}"))
     brier_skill, gap, n_bins, _, _ = scores(data, q)
     assert n_bins >= 2 and gap <= 0.05 and brier_skill >= 0.3, (kind, preset, q, brier_skill, gap)
+
+
+# --- a reference pattern as prior: `fit --prior`, then `predict --sensitivity` ------------------
+
+#: (preset, how the prior's spread is set) on the planner's flights: learned from the prior's
+#: misfit to the learning flights (the default), or stated as the smooth error's RMS that
+#: :func:`rplearn.sim.imperfect_reference` gives the reference (2 dB, a vendor's tolerance,
+#: ``--prior-std 2``; its 10-deg mounting error is not in it, as a vendor's sheet would not say;
+#: on ``ground`` only: on ``campaign`` it changes the figures by at most 0.04, module docstring).
+PRIOR_CASES = [("paper", "learned"), ("campaign", "learned"), ("ground", "learned"), ("ground", "stated")]
+#: The reference's smooth error [dB RMS] that ``--prior-std`` states (sim.reference's default).
+STATED_PRIOR_STD_DB = 2.0
+#: A near-exact reference's smooth error [dB RMS] (no mounting error), stated as ``--prior-std``.
+EXACT_ERROR_DB = 0.5
+
+
+def _invoke(args, cwd: Path) -> str:
+    from typer.testing import CliRunner
+
+    from rplearn.cli import app
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.chdir(cwd)
+        res = CliRunner().invoke(app, [str(a) for a in args], env={"COLUMNS": "400"})
+    assert res.exit_code == 0, f"{args}: {res.output}"
+    return res.output
+
+
+_PRIOR_RUNS: dict[str, tuple] = {}
+_PRIOR_SCORES: dict[tuple, tuple[float, float, int]] = {}
+
+
+def prior_run(preset: str, tmp_path_factory) -> tuple:
+    """The planner's case of ``preset`` (seed 0; the simulation of :func:`held_out` reused when
+    ``ranging`` ran it) with what a user with a reference pattern runs: the simulator's imperfect
+    reference of each antenna (a vendor's sheet or a chamber's: the true antenna turned 10 deg on
+    its mount, plus a smooth 2-dB error; never the installed truth), ``rplearn reference``, then
+    ``rplearn fit --order auto --prior NODE=ref.json`` with the spread learned (and, on
+    ``ground``, stated: ``--prior-std 2``, and a near-exact reference). Returns
+    (preset, folder, simulation, the fits' files by setting, the no-prior case of
+    :func:`held_out`), once per preset and session."""
+    from rplearn.sim import imperfect_reference
+
+    if preset in _PRIOR_RUNS:
+        return _PRIOR_RUNS[preset]
+    flights = planner_flights(preset, 0)
+    key = (preset, 0, tuple(u.label for u in flights))
+    if key not in _RUNS:
+        held_out(tmp_path_factory.mktemp(f"planner_{preset}"), preset, flights=flights)
+    tmp, sim, _ = _RUNS[key]
+    df = read_dataset(str(tmp / "m.parquet"))
+    nodes = sorted(set(df["tx"]) | set(df["rx"]))
+    _, test = split_units(df, None, None)
+    df[df["unit"].isin(test)].reset_index(drop=True).to_parquet(tmp / "held_out.parquet")
+    for n in nodes:
+        imperfect_reference(sim.ground_truth, n, seed=0).to_csv(tmp / f"ref_{n}.csv", index=False)
+    _invoke(["reference", *[f"{n}=ref_{n}.csv" for n in nodes], "-o", "ref.json"], tmp)
+    priors = [a for n in nodes for a in ("--prior", f"{n}=ref.json")]
+    fits = {"learned": "prior.json"}
+    _invoke(["fit", "m.parquet", "--order", "auto", *priors, "-o", fits["learned"]], tmp)
+    if preset == "ground":
+        fits["stated"] = "stated.json"
+        _invoke(["fit", "m.parquet", "--order", "auto", *priors, "--prior-std", STATED_PRIOR_STD_DB, "-o", fits["stated"]],
+                tmp)
+    if preset == "ground":  # a near-exact reference (0.5 dB smooth error, no mounting error), stated as such
+        for n in nodes:
+            imperfect_reference(sim.ground_truth, n, EXACT_ERROR_DB, 0.0, seed=0).to_csv(tmp / f"exact_{n}.csv", index=False)
+        _invoke(["reference", *[f"{n}=exact_{n}.csv" for n in nodes], "-o", "exact_ref.json"], tmp)
+        fits["exact"] = "exact.json"
+        _invoke(["fit", "m.parquet", "--order", "auto", *[a for n in nodes for a in ("--prior", f"{n}=exact_ref.json")],
+                 "--prior-std", EXACT_ERROR_DB, "-o", fits["exact"]], tmp)
+    _PRIOR_RUNS[preset] = (preset, tmp, sim, fits, _RUNS[key][2])
+    return _PRIOR_RUNS[preset]
+
+
+def prior_scores(run, setting: str, q: int) -> tuple[float, float, int]:
+    """(Brier skill, largest bin gap, number of bins) of ``predict --sensitivity`` with the
+    prior fit of ``setting`` on the planner's flights, at the q-th percentile of their RSSI."""
+    preset, tmp, _, fits, _ = run
+    if (preset, setting, q) in _PRIOR_SCORES:
+        return _PRIOR_SCORES[preset, setting, q]
+    rssi = pd.read_parquet(tmp / "held_out.parquet", columns=["rssi_dbm"])["rssi_dbm"].to_numpy(np.float64)
+    s = float(np.round(np.percentile(rssi, q))) - 0.5
+    out = f"pred_{setting}_{q}.parquet"
+    _invoke(["predict", fits[setting], "held_out.parquet", "-o", out, "--sensitivity", s], tmp)
+    table = pd.read_parquet(tmp / out)
+    p, up = table["availability"].to_numpy(np.float64), (table["rssi_dbm"].to_numpy(np.float64) >= s).astype(float)
+    bins = np.minimum((p * 10).astype(int), 9)
+    gaps = [abs(up[bins == b].mean() - p[bins == b].mean()) for b in range(10) if (bins == b).sum() >= MIN_BIN]
+    _PRIOR_SCORES[preset, setting, q] = (skill(p, up), max(gaps), len(gaps))
+    return _PRIOR_SCORES[preset, setting, q]
+
+
+_REFERENCE_OFF = ("the reference, 2.7 dB RMS per antenna over the sphere, is off by {rms} dB RMS (joint, mean {mean}) "
+                  "on these rows: its 10-deg mounting error moves the gimbal's shadow, where the learning flights looked "
+                  "(the drone's end {d_band} dB there, the station's {g_band}; only their sum is seen), so the level is "
+                  "matched where it is worst; and the fit keeps the reference only to its chosen order ({order}). "
+                  "A reference alone with its true RMS as spread scores {alone}")
+#: The prior's cases (seed 0) where item 1 is not met, and why (measured; module docstring).
+_PRIOR_NOT_MET: dict[tuple, str] = {
+    ("paper", "learned", 10): "skill 0.157, bins off by 0.095 (without the prior 0.171, 0.088): the oracle itself "
+                              "reaches only 0.201",
+    ("paper", "learned", 30): "skill 0.302 but bins off by 0.057 (without the prior 0.324, 0.040): where the flights "
+                              "looked the prior only adds its error (SH-14 chosen, SH-15 without it)",
+    **{("campaign", setting, q): f"skill {sk}, bins off by {gap}: " + _REFERENCE_OFF.format(
+        rms=7.05, mean="+5.3", d_band=-3.6, g_band="+4.1", order="SH-6", alone="0.279 / 0.150, bins 0.36 / 0.24")
+       for (setting, q), (sk, gap) in {("learned", 10): (0.200, 0.253), ("learned", 30): (0.127, 0.345)}.items()},
+    **{("ground", setting, q): f"skill {sk}, bins off by {gap}: " + _REFERENCE_OFF.format(
+        rms=7.47, mean="+5.9", d_band=-3.7, g_band="+4.4", order="SH-5", alone="0.299 / 0.198, bins 0.23 / 0.23")
+       for (setting, q), (sk, gap) in {("learned", 10): (0.131, 0.305), ("learned", 30): (0.107, 0.397),
+                                       ("stated", 10): (0.152, 0.302), ("stated", 30): (0.084, 0.412)}.items()},
+}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("q", [10, 30])
+@pytest.mark.parametrize(("preset", "setting"), PRIOR_CASES, ids=["-".join(c) for c in PRIOR_CASES])
+def test_item_1_on_the_planners_flights_with_a_reference_prior(preset, setting, q, request, tmp_path_factory):
+    """Item 1 on the planner's flights (seed 0) of availability that ``predict --sensitivity``
+    writes with a model that ``fit --prior`` learned from the learning flights and the
+    simulator's imperfect reference patterns (:func:`prior_run`)."""
+    if (preset, setting, q) in _PRIOR_NOT_MET:
+        request.applymarker(pytest.mark.xfail(strict=True, raises=AssertionError,
+                                              reason=f"issue 28 item 1 not met: {_PRIOR_NOT_MET[preset, setting, q]}"))
+    brier_skill, gap, n_bins = prior_scores(prior_run(preset, tmp_path_factory), setting, q)
+    assert n_bins >= 2 and gap <= 0.05 and brier_skill >= 0.3, (preset, setting, q, brier_skill, gap)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("q", [10, 30])
+@pytest.mark.parametrize("preset", ["campaign", "ground"])
+def test_a_reference_prior_corrects_most_of_what_the_learning_flights_never_saw(preset, q, tmp_path_factory):
+    """Where item 1 is far without a prior (the planner's flights on ``ground`` and
+    ``campaign``), the imperfect reference lifts the skill by at least 0.5 and brings the worst
+    bin at least 0.1 closer. Measured, seeds 0 / 1 / 2 (q10, q30): skill +2.0 +0.9 / +3.9 +1.6 /
+    +2.1 +1.2 (``ground``), +2.7 +1.4 / +3.3 +1.4 / +2.8 +1.4 (``campaign``); the worst bin
+    0.15-0.63 closer."""
+    run = prior_run(preset, tmp_path_factory)
+    own_skill, own_gap = scores(run[4], q)[:2]
+    prior_skill, prior_gap, _ = prior_scores(run, "learned", q)
+    assert prior_skill >= own_skill + 0.5 and prior_gap <= own_gap - 0.1, (preset, q, own_skill, prior_skill, own_gap, prior_gap)
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, raises=AssertionError, reason=(
+    "the fit keeps a prior only up to the order it chooses (SH-4 here; models/auto.py prior_coefficients truncates "
+    "it): the exact pattern cut to SH-4 is 2.5 dB RMS off on these rows (SH-15: 0.56 dB), and the level matched "
+    "where the flights looked (the gimbal's shadow, which SH-4 blurs) leaves the predictions 2.8 dB low on "
+    "average. Skill 0.137 / 0.061, bins off by 0.31 / 0.37 (seed 0); with the prior kept to SH-15 (the largest candidate order, tried in "
+    "scratch) 0.369 / 0.344, bins 0.078 / 0.041, against the oracle's 0.379 / 0.364"))
+def test_a_near_exact_reference_prior_gives_near_the_oracles_skill(tmp_path_factory):
+    """With a reference 0.5 dB RMS from the truth (no mounting error) and that stated as its
+    tolerance, availability on ``ground``'s planner flights (seed 0) should reach item 1's
+    skill at q10 and q30 (the oracle: 0.379, 0.364): the reference is what a planner flying
+    where the learning flights never looked needs."""
+    run = prior_run("ground", tmp_path_factory)
+    got = [prior_scores(run, "exact", q)[0] for q in (10, 30)]
+    assert min(got) >= 0.3, got
