@@ -29,7 +29,7 @@ from rplearn.core.lsq.selection import (
     select_order_and_smoothing,
     sub_statistics,
 )
-from rplearn.core.lsq.solver import solve
+from rplearn.core.lsq.solver import penalised_inverse, solve
 from rplearn.core.plausible import check_same_band
 from rplearn.core.threads import blas_threads_for
 from rplearn.core.threads import warm_up as warm_up_blas
@@ -462,9 +462,13 @@ def fit_from_statistics(
         # the same posterior, read with a prior of the wanted spread: the penalty per node
         # scaled so that its implied prior spread is the wanted one (the mean is the CV's)
         weights = (ridge + penalty) * np.repeat(factor, chosen.n_coef)
-        wide = solve(normal, list(nodes), ridge=0.0, gauge=gauge, penalty=weights, penalty_target=sub_target,
-                     prior_level=prior_level)
-        covariance = wide.covariance * (within_var / wide.residual_variance_db2) * inflation
+        inverse = penalised_inverse(normal, list(nodes), 0.0, gauge, weights)  # the covariance alone: no solve
+        if inverse is not None:
+            covariance = inverse * (within_var * inflation)
+        else:
+            wide = solve(normal, list(nodes), ridge=0.0, gauge=gauge, penalty=weights, penalty_target=sub_target,
+                         prior_level=prior_level)
+            covariance = wide.covariance * (within_var / wide.residual_variance_db2) * inflation
         spread = prior_std_db(chosen, list(nodes), weights, noise_var, power)
     misfit_var = held_out_misfit_var(choice.held_out_excess_db2, uncapped, normal) if choice.method == "grouped-cv" else 0.0
     if covariance is not None and misfit_var > 0:

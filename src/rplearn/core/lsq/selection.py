@@ -62,6 +62,7 @@ from rplearn.core.lsq.level import shrink_target
 from rplearn.core.lsq.normal_equations import EXPONENT_MIN_SPREAD_DB, NormalEquations, schur_spread_db
 from rplearn.core.lsq.penalty import DEFAULT_PENALTY_POWER, nested_columns, penalty_scale, penalty_vector, sub_statistics, with_shared_columns
 from rplearn.core.lsq.selection_result import CurvePoint, Selection
+from rplearn.core.lsq.solver_cholesky import factor_inverse, factor_solve, spd_factor
 from rplearn.core.lsq.ties import tied_points
 from rplearn.core.lsq.ties import tightest_split as _tightest_split
 from rplearn.errors import IdentifiabilityError, InputError
@@ -123,21 +124,6 @@ def _block(matrix: np.ndarray, idx: np.ndarray) -> np.ndarray:
 
 #: Runs of consecutive columns up to which :func:`_block` copies range by range.
 _MAX_BLOCK_RUNS = 8
-
-
-def _cholesky_solve(a: np.ndarray, rhs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``a^-1 rhs`` for a symmetric positive definite ``a`` and one right-hand side, and the
-    upper Cholesky factor ``U`` (``a = U^T U``, Fortran-ordered).
-
-    numpy's Cholesky and two level-2 triangular solves, not scipy's ``cho_factor``: scipy's
-    wheels bring a second OpenBLAS whose idle threads spin for a while after each call and
-    slow numpy's next factorisation (the final solve) several-fold on a 2-core machine.
-    """
-    upper = np.linalg.cholesky(a).T  # a = U^T U; the transpose is Fortran-ordered, as BLAS wants it (no copy)
-    import scipy.linalg.blas  # here: a fixed-order fit needs no scipy (models.auto loads it before a BLAS limit)
-
-    half = scipy.linalg.blas.dtrsv(upper, rhs, lower=0, trans=1)
-    return scipy.linalg.blas.dtrsv(upper, half, lower=0, trans=0), upper
 
 
 class _Evaluator:
@@ -291,9 +277,7 @@ class _Evaluator:
                                                             smoothing, pin)
             if upper is None:
                 return 1.0, 0.0
-            # numpy's inverse, not LAPACK's potri from the Cholesky factor through scipy: a third
-            # of the work, but scipy's second OpenBLAS pool, woken up, made it slower (see _cholesky_solve)
-            inverse = np.linalg.inv(self._system(g, w, smoothing, pin))
+            inverse = factor_inverse(upper)  # from the solve's factor: a third of the work of an LU inverse
             learn = [j for j in range(len(self.folds)) if j != k]
             learn_n = self.n - f.held_n
             # the learning residual about each learning unit's own mean: noise, not the units' levels
@@ -346,12 +330,12 @@ class _Evaluator:
                pin: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, np.ndarray | None]:
         """The penalised solution and the upper Cholesky factor of its system (None when the
         system is not positive definite: least squares then)."""
-        try:
-            return _cholesky_solve(self._system(gram, w, smoothing, pin), rhs)
-        except np.linalg.LinAlgError:
-            import scipy.linalg
+        upper = spd_factor(self._system(gram, w, smoothing, pin), overwrite=True)
+        if upper is not None:
+            return factor_solve(upper, rhs), upper
+        import scipy.linalg
 
-            return scipy.linalg.lstsq(self._system(gram, w, smoothing, pin), rhs)[0], None
+        return scipy.linalg.lstsq(self._system(gram, w, smoothing, pin), rhs)[0], None
 
     def _gcv(self, g: np.ndarray, pulled: np.ndarray, w: np.ndarray, smoothing: float, r: np.ndarray) -> float:
         a = self._system(g, w, smoothing)
