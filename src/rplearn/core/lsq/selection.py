@@ -185,7 +185,8 @@ class _Evaluator:
         w = self._weights(self.big)
         smoothing = float(SMOOTHING_GRID[len(SMOOTHING_GRID) // 2])
         target = self._target(self.gram, self.rhs, self.big, self.target)
-        c, _ = self._solve(self.gram, self._pulled(self.gram, self.rhs, w, smoothing, target), w, smoothing)
+        weight = smoothing * penalty_scale(self.gram, self.gram.shape[0] - self.n_shared)
+        c, _ = self._solve(self.gram, self._pulled(self.gram, self.rhs, w, weight, target), w, weight)
         values = c[pat:]
         pins: list[tuple[np.ndarray, np.ndarray] | None] = []
         for mask, fold in zip(free, self.folds):
@@ -209,10 +210,10 @@ class _Evaluator:
         return np.concatenate([np.tile(np.maximum(w, floor), self.n_nodes), np.zeros(self.n_shared)])
 
     def _blocks(self, order: int) -> tuple[np.ndarray, list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]],
-                                           list[np.ndarray]]:
-        """Roughness weights and, per fold, the learning and held-out blocks of one order and the
+                                           list[np.ndarray], list[float]]:
+        """Roughness weights and, per fold, the learning and held-out blocks of one order, the
         target its fit shrinks toward (the prior's shape and the learning units' own level,
-        :func:`~rplearn.core.lsq.level.shrink_target`; cached)."""
+        :func:`~rplearn.core.lsq.level.shrink_target`) and the penalty's unit (cached)."""
         if order not in self._cache:
             basis = self.make_basis(order)
             pattern_idx = nested_columns(self.big, basis, self.n_nodes)
@@ -222,21 +223,22 @@ class _Evaluator:
                 sub = [(_block(self.gram, idx), self.rhs[idx], np.empty(0), np.empty(0))]
             prior = None if self.target is None else self.target[pattern_idx]
             targets = [self._target(g, r, basis, prior) for g, r, _, _ in sub]
+            scales = [penalty_scale(g, g.shape[0] - self.n_shared) for g, _, _, _ in sub]  # the penalty's unit per fold
             while len(self._cache) >= _CACHED_ORDERS:  # a few orders at a time: bounded memory
                 self._cache.pop(next(iter(self._cache)))
-            self._cache[order] = (self._weights(basis), sub, targets)
+            self._cache[order] = (self._weights(basis), sub, targets, scales)
         return self._cache[order]
 
     def rmse(self, order: int, smoothing: float) -> float:
         key = (int(order), float(smoothing))
         if key in self.seen:
             return self.seen[key]
-        w, blocks, targets = self._blocks(int(order))
+        w, blocks, targets, scales = self._blocks(int(order))
         if self.cv:
             per_fold = []
             solved = []
-            for (g, r, held_g, held_r), f, pin, target in zip(blocks, self.folds, self.pins, targets):
-                c, upper = self._solve(g, self._pulled(g, r, w, smoothing, target, pin), w, smoothing, pin)
+            for (g, r, held_g, held_r), f, pin, target, scale in zip(blocks, self.folds, self.pins, targets, scales):
+                c, upper = self._solve(g, self._pulled(g, r, w, smoothing * scale, target, pin), w, smoothing * scale, pin)
                 solved.append((c, upper))
                 per_fold.append(max(f.held_yty - 2.0 * c @ held_r + c @ held_g @ c, 0.0))
             self.fold_sse[key] = np.asarray(per_fold)
@@ -245,7 +247,8 @@ class _Evaluator:
                 self._best_solved = (key, solved)  # the factors of the best point, for inflation()
         else:
             g, r, _, _ = blocks[0]
-            value = self._gcv(g, self._pulled(g, r, w, smoothing, targets[0]), w, smoothing, r)
+            weight = smoothing * scales[0]
+            value = self._gcv(g, self._pulled(g, r, w, weight, targets[0]), w, weight, r)
         self.seen[key] = value
         self.curve.append(CurvePoint(int(order), float(smoothing), value))
         return value
@@ -264,7 +267,7 @@ class _Evaluator:
         return self._spreads[(int(order), float(smoothing))]
 
     def _spread(self, order: int, smoothing: float) -> tuple[float, float]:
-        w, blocks, targets = self._blocks(int(order))
+        w, blocks, targets, scales = self._blocks(int(order))
         idx = with_shared_columns(nested_columns(self.big, self.make_basis(int(order)), self.n_nodes), self.first)
         sums = [(a[idx], sum_y) for a, sum_y in self.sums]
         counts = np.array([f.held_n for f in self.folds], np.float64)
@@ -273,8 +276,8 @@ class _Evaluator:
         excess = predicted = 0.0
         means = []  # per held-out unit: its squared mean residual, that of noise and fit, the level's weight
         for k, ((g, r, held_g, held_r), f, pin, target) in enumerate(zip(blocks, self.folds, self.pins, targets)):
-            c, upper = solved[k] if solved else self._solve(g, self._pulled(g, r, w, smoothing, target, pin), w,
-                                                            smoothing, pin)
+            weight = smoothing * scales[k]
+            c, upper = solved[k] if solved else self._solve(g, self._pulled(g, r, w, weight, target, pin), w, weight, pin)
             if upper is None:
                 return 1.0, 0.0
             inverse = factor_inverse(upper)  # from the solve's factor: a third of the work of an LU inverse
@@ -302,43 +305,46 @@ class _Evaluator:
         level_var = float(np.sum(square - kappa * expected) / np.sum(weight))
         return kappa, max(level_var, 0.0) if np.isfinite(level_var) else 0.0
 
-    def _pulled(self, gram: np.ndarray, rhs: np.ndarray, w: np.ndarray, smoothing: float, target: np.ndarray,
+    def _pulled(self, gram: np.ndarray, rhs: np.ndarray, w: np.ndarray, weight: float, target: np.ndarray,
                 pin: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
         """``X^T y`` plus the pull ``(ridge + P) target`` of the ridge and the penalty toward the
         target (the prior's shape and the data's level, never a fixed level) and the pull of
-        pinned shared columns toward their values."""
+        pinned shared columns toward their values. ``weight``: the smoothing times the
+        penalty's unit (:func:`penalty_scale` of ``gram``)."""
         out = rhs.copy()
         k = gram.shape[0] - self.n_shared
-        out[:k] += (self.ridge + smoothing * penalty_scale(gram, k) * w[:k]) * target[:k]
+        out[:k] += (self.ridge + weight * w[:k]) * target[:k]
         if pin is not None:
             out[gram.shape[0] - self.n_shared:] += pin[0] * pin[1]
         return out
 
-    def _system(self, gram: np.ndarray, w: np.ndarray, smoothing: float,
+    def _system(self, gram: np.ndarray, w: np.ndarray, weight: float,
                 pin: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
         """The penalised normal matrix: the ridge on the pattern columns (shared columns are not
-        shrunk), the smoothness penalty, and the weight of pinned shared columns."""
+        shrunk), the smoothness penalty (``weight``: the smoothing times the penalty's unit),
+        and the weight of pinned shared columns."""
         a = gram.copy()
         k = gram.shape[0] - self.n_shared
-        a[np.arange(k), np.arange(k)] += self.ridge
-        a[np.diag_indices_from(a)] += smoothing * penalty_scale(gram, k) * w
+        diagonal = a.reshape(-1)[:: a.shape[0] + 1]  # a view of the diagonal
+        diagonal[:k] += self.ridge
+        diagonal += weight * w
         if pin is not None:
-            a[np.arange(k, gram.shape[0]), np.arange(k, gram.shape[0])] += pin[0]
+            diagonal[k:] += pin[0]
         return a
 
-    def _solve(self, gram: np.ndarray, rhs: np.ndarray, w: np.ndarray, smoothing: float,
+    def _solve(self, gram: np.ndarray, rhs: np.ndarray, w: np.ndarray, weight: float,
                pin: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, np.ndarray | None]:
         """The penalised solution and the upper Cholesky factor of its system (None when the
         system is not positive definite: least squares then)."""
-        upper = spd_factor(self._system(gram, w, smoothing, pin), overwrite=True)
+        upper = spd_factor(self._system(gram, w, weight, pin), overwrite=True)
         if upper is not None:
             return factor_solve(upper, rhs), upper
         import scipy.linalg
 
-        return scipy.linalg.lstsq(self._system(gram, w, smoothing, pin), rhs)[0], None
+        return scipy.linalg.lstsq(self._system(gram, w, weight, pin), rhs)[0], None
 
-    def _gcv(self, g: np.ndarray, pulled: np.ndarray, w: np.ndarray, smoothing: float, r: np.ndarray) -> float:
-        a = self._system(g, w, smoothing)
+    def _gcv(self, g: np.ndarray, pulled: np.ndarray, w: np.ndarray, weight: float, r: np.ndarray) -> float:
+        a = self._system(g, w, weight)
         try:
             import scipy.linalg
 

@@ -60,9 +60,10 @@ def factor_inverse(factor: FloatArray) -> FloatArray:
     upper, info = lapack.dpotri(factor, lower=0)
     if info != 0:
         raise np.linalg.LinAlgError(f"dpotri: the factor is singular (info {info})")
-    inverse = np.triu(upper)  # Fortran-ordered: the upper triangle of A^-1
-    inverse += np.triu(upper, 1).T
-    return np.ascontiguousarray(inverse)
+    inverse = np.triu(upper)  # the upper triangle of A^-1 (the rest of ``upper`` is the factor's)
+    inverse += inverse.T  # the diagonal twice (exactly: a power of two) ...
+    inverse[np.diag_indices_from(inverse)] *= 0.5  # ... and back
+    return inverse
 
 
 def constrained_inverse(matrix: FloatArray, constraints: FloatArray) -> FloatArray | None:
