@@ -66,6 +66,7 @@ from rplearn.core.basis_base import Basis
 from rplearn.core.gauge import Gauge
 from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.core.lsq.penalty import nested_columns
+from rplearn.core.lsq.runtime import DEFAULT_RUNTIME
 from rplearn.core.lsq.selection import penalty_vector
 from rplearn.core.lsq.solver import penalised_inverse, solve
 
@@ -217,9 +218,11 @@ def tied_own_posterior(own: OwnPosterior | None, total: NormalEquations, nodes: 
         point = replace(prior, smoothing=float(smoothing), scale=float(np.mean(d)) if d.size and np.mean(d) > 0 else 1.0)
         key = (point.smoothing, point.scale)
         groups[key] = (groups[key][0], groups[key][1] + float(inflation)) if key in groups else (point, float(inflation))
-    total_cov: np.ndarray | None = None  # running sum: one solve's matrix held at a time
-    for point, inflations in groups.values():
-        cov = _continued(total, nodes, point, 1.0)
+    total_cov: np.ndarray | None = None  # running sum: a few solves' matrices held at a time
+    points = list(groups.values())
+    # on the statistics' workers, a few at a time (the runtime keeps at most its ``ahead`` pending)
+    for (point, inflations), cov in zip(points, DEFAULT_RUNTIME.in_order(lambda g: _continued(total, nodes, g[0], 1.0),
+                                                                           points), strict=True):
         if cov is None:
             return own
         cov *= within_var_db2 * inflations

@@ -13,20 +13,68 @@ definite matrix and then:
   ``[[A, C^T], [C, 0]]`` (linear equality constraints, the gauge), ``A^-1 - Z (C Z)^-1 Z^T`` with
   ``Z = A^-1 C^T``: what :func:`rplearn.core.lsq.solver.solve` inverts the whole KKT matrix for.
 
-They run in scipy's LAPACK (numpy has no triangular solves), whose calls hold the interpreter
-lock; callers keep them on one BLAS thread (:func:`rplearn.core.threads.one_blas_thread`): an
-OpenBLAS pool of scipy's left spinning after a call slows numpy's next factorisation on a 2-core
-machine. ``numpy.linalg.cholesky`` was also slower on the sizes of these problems (measured on
-this kind of machine with one thread: 4.4 ms against 2.1 ms at 512 columns, where the leading
-dimension is a power of two, 1.2 against 1.0 ms at 450).
+They call scipy's LAPACK (numpy has no triangular solves) through the function pointers of
+``scipy.linalg.cython_lapack`` with ``ctypes``, which lets go of the interpreter lock during the
+call, so that the selection's folds are factorised on the statistics' two workers at once
+(scipy's Python wrappers hold the lock: two threads then take turns). Where those pointers
+cannot be had, scipy's wrappers do the same work. Callers keep them on one BLAS thread
+(:func:`rplearn.core.threads.one_blas_thread`): an OpenBLAS pool of scipy's left spinning after a
+call slows numpy's next factorisation on a 2-core machine. ``numpy.linalg.cholesky`` was also
+slower on the sizes of these problems (measured on this kind of machine with one thread: 4.4 ms
+against 2.1 ms at 512 columns, where the leading dimension is a power of two, 1.2 against 1.0 ms
+at 450).
 """
 
 from __future__ import annotations
+
+import ctypes
+from functools import lru_cache
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 FloatArray = NDArray[np.float64]
+
+_INT = ctypes.POINTER(ctypes.c_int)
+#: Argument types of the LAPACK routines used (Fortran calling convention: every argument by reference).
+_SIGNATURES: dict[str, tuple[Any, ...]] = {
+    "dpotrf": (ctypes.c_char_p, _INT, ctypes.c_void_p, _INT, _INT),
+    "dpotri": (ctypes.c_char_p, _INT, ctypes.c_void_p, _INT, _INT),
+    "dpotrs": (ctypes.c_char_p, _INT, _INT, ctypes.c_void_p, _INT, ctypes.c_void_p, _INT, _INT),
+}
+
+
+@lru_cache(maxsize=None)
+def _routine(name: str) -> Any:
+    """The LAPACK routine ``name`` of scipy's ``cython_lapack`` as a ctypes function that releases
+    the interpreter lock while it runs, or None when it cannot be had."""
+    try:
+        from scipy.linalg import cython_lapack
+
+        capsule = cython_lapack.__pyx_capi__[name]
+        get_name = ctypes.pythonapi.PyCapsule_GetName
+        get_name.restype, get_name.argtypes = ctypes.c_char_p, [ctypes.py_object]
+        get_pointer = ctypes.pythonapi.PyCapsule_GetPointer
+        get_pointer.restype, get_pointer.argtypes = ctypes.c_void_p, [ctypes.py_object, ctypes.c_char_p]
+        address = get_pointer(capsule, get_name(capsule))
+    except (ImportError, AttributeError, KeyError, ValueError):  # pragma: no cover - another scipy build
+        return None
+    return ctypes.CFUNCTYPE(None, *_SIGNATURES[name])(address) if address else None
+
+
+def _int(value: int) -> Any:
+    return ctypes.byref(ctypes.c_int(int(value)))
+
+
+def _fortran_owned(matrix: FloatArray, overwrite: bool) -> FloatArray:
+    """``matrix`` (square, symmetric: a C-ordered one is its own transpose) as a writable
+    Fortran-ordered float64 array: itself when ``overwrite`` allows and its memory serves, else a copy."""
+    a = np.asarray(matrix, np.float64)
+    fortran = a.T if a.flags.c_contiguous else a
+    if overwrite and fortran.flags.f_contiguous and fortran.flags.writeable:
+        return fortran
+    return np.array(fortran, np.float64, order="F")
 
 
 def spd_factor(matrix: FloatArray, overwrite: bool = False) -> FloatArray | None:
@@ -35,31 +83,55 @@ def spd_factor(matrix: FloatArray, overwrite: bool = False) -> FloatArray | None
     not positive definite. Only one triangle of ``matrix`` is read. ``overwrite``: the factor
     may take ``matrix``'s memory (a C- or Fortran-contiguous float64 matrix the caller no longer needs).
     """
-    from scipy.linalg import lapack
+    potrf = _routine("dpotrf")
+    if potrf is None:  # pragma: no cover - scipy's wrapper (holds the interpreter lock)
+        from scipy.linalg import lapack
 
-    a = np.asarray(matrix, np.float64)
-    fortran = a.T if a.flags.c_contiguous else a  # symmetric: a C-ordered matrix is its transpose in Fortran order
-    factor, info = lapack.dpotrf(fortran, lower=0, clean=0, overwrite_a=int(bool(overwrite)))
-    return factor if info == 0 else None
+        a = np.asarray(matrix, np.float64)
+        factor, info = lapack.dpotrf(a.T if a.flags.c_contiguous else a, lower=0, clean=0, overwrite_a=int(bool(overwrite)))
+        return factor if info == 0 else None
+    factor = _fortran_owned(matrix, overwrite)
+    n = factor.shape[0]
+    info = ctypes.c_int(0)
+    potrf(b"U", _int(n), factor.ctypes.data, _int(max(n, 1)), ctypes.byref(info))
+    return factor if info.value == 0 else None
 
 
 def factor_solve(factor: FloatArray, rhs: FloatArray) -> FloatArray:
     """``A^-1 rhs`` from the factor of :func:`spd_factor` (one vector or the columns of a matrix)."""
-    from scipy.linalg import lapack
+    potrs = _routine("dpotrs")
+    if potrs is None:  # pragma: no cover - scipy's wrapper
+        from scipy.linalg import lapack
 
-    out, info = lapack.dpotrs(factor, rhs, lower=0)
-    if info != 0:  # pragma: no cover - only on an argument error
-        raise ValueError(f"dpotrs: argument {-info} is invalid")
-    return np.asarray(out, np.float64)
+        return np.asarray(lapack.dpotrs(factor, rhs, lower=0)[0], np.float64)
+    f = np.asarray(factor, np.float64)
+    if not f.flags.f_contiguous:
+        f = np.asfortranarray(f)
+    out = np.array(rhs, np.float64, order="F", ndmin=1)
+    n = f.shape[0]
+    nrhs = 1 if out.ndim == 1 else out.shape[1]
+    info = ctypes.c_int(0)
+    potrs(b"U", _int(n), _int(nrhs), f.ctypes.data, _int(max(n, 1)), out.ctypes.data, _int(max(n, 1)), ctypes.byref(info))
+    if info.value != 0:  # pragma: no cover - only on an argument error
+        raise ValueError(f"dpotrs: argument {-info.value} is invalid")
+    return out
 
 
 def factor_inverse(factor: FloatArray) -> FloatArray:
     """The whole ``A^-1`` (symmetric to the last bit) from the factor of :func:`spd_factor`."""
-    from scipy.linalg import lapack
+    potri = _routine("dpotri")
+    if potri is None:  # pragma: no cover - scipy's wrapper
+        from scipy.linalg import lapack
 
-    upper, info = lapack.dpotri(factor, lower=0)
-    if info != 0:
-        raise np.linalg.LinAlgError(f"dpotri: the factor is singular (info {info})")
+        upper, code = lapack.dpotri(factor, lower=0)
+    else:
+        upper = np.array(factor, np.float64, order="F")
+        n = upper.shape[0]
+        info = ctypes.c_int(0)
+        potri(b"U", _int(n), upper.ctypes.data, _int(max(n, 1)), ctypes.byref(info))
+        code = info.value
+    if code != 0:
+        raise np.linalg.LinAlgError(f"dpotri: the factor is singular (info {code})")
     inverse = np.triu(upper)  # the upper triangle of A^-1 (the rest of ``upper`` is the factor's)
     inverse += inverse.T  # the diagonal twice (exactly: a power of two) ...
     inverse[np.diag_indices_from(inverse)] *= 0.5  # ... and back
