@@ -221,7 +221,7 @@ def tied_own_posterior(own: OwnPosterior | None, total: NormalEquations, nodes: 
     total_cov: np.ndarray | None = None  # running sum: a few solves' matrices held at a time
     points = list(groups.values())
     # on the statistics' workers, a few at a time (the runtime keeps at most its ``ahead`` pending)
-    for (point, inflations), cov in zip(points, DEFAULT_RUNTIME.in_order(lambda g: _continued(total, nodes, g[0], 1.0),
+    for (_, inflations), cov in zip(points, DEFAULT_RUNTIME.in_order(lambda g: _continued(total, nodes, g[0], 1.0),
                                                                            points), strict=True):
         if cov is None:
             return own

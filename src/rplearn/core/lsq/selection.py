@@ -61,8 +61,8 @@ from rplearn.core.lsq.level import shrink_target
 from rplearn.core.lsq.normal_equations import EXPONENT_MIN_SPREAD_DB, NormalEquations, schur_spread_db
 from rplearn.core.lsq.penalty import DEFAULT_PENALTY_POWER, nested_columns, penalty_scale, penalty_vector, sub_statistics, with_shared_columns
 from rplearn.core.lsq.runtime import DEFAULT_RUNTIME
-from rplearn.core.lsq.selection_result import CurvePoint, Selection
 from rplearn.core.lsq.selection_folds import Fold, FoldData, fold_spread_terms, sub_block, unit_folds
+from rplearn.core.lsq.selection_result import CurvePoint, Selection
 from rplearn.core.lsq.solver_cholesky import factor_solve, spd_factor
 from rplearn.core.lsq.ties import tied_keys, tied_points
 from rplearn.core.lsq.ties import tightest_split as _tightest_split
@@ -140,8 +140,8 @@ class _Evaluator:
         w = self._weights(self.big)
         smoothing = float(SMOOTHING_GRID[len(SMOOTHING_GRID) // 2])
         target = self._target(self.gram, self.rhs, self.big, self.target)
-        weight = smoothing * penalty_scale(self.gram, self.gram.shape[0] - self.n_shared)
-        c, _ = self._solve(self.gram, self._pulled(self.gram, self.rhs, w, weight, target), w, weight)
+        unit = smoothing * penalty_scale(self.gram, self.gram.shape[0] - self.n_shared)
+        c, _ = self._solve(self.gram, self._pulled(self.gram, self.rhs, w, unit, target), w, unit)
         values = c[pat:]
         pins: list[tuple[np.ndarray, np.ndarray] | None] = []
         for mask, fold in zip(free, self.folds):
@@ -188,7 +188,7 @@ class _Evaluator:
         """Per fold, the work of one point: its penalised solution, the factor of its system and
         the held-out unit's squared error (independent of the other folds: any thread)."""
         w, blocks, targets, scales = self._blocks(int(order))
-        tasks = []
+        tasks: list[Callable[[], tuple[np.ndarray, np.ndarray | None, float]]] = []
         for (g, r, held_g, held_r), f, pin, target, scale in zip(blocks, self.folds, self.pins, targets, scales):
             def task(g: np.ndarray = g, r: np.ndarray = r, held_g: np.ndarray = held_g, held_r: np.ndarray = held_r,
                      f: Fold = f, pin: Any = pin, target: np.ndarray = target,
@@ -272,7 +272,7 @@ class _Evaluator:
         counts = np.array([f.held_n for f in self.folds], np.float64)
         key = (int(order), float(smoothing))
         solved = self._best_solved[1] if self._best_solved and self._best_solved[0] == key else None
-        jobs = []
+        jobs: list[Callable[[], Any]] = []
         for k, ((g, r, held_g, held_r), f, pin, target) in enumerate(zip(blocks, self.folds, self.pins, targets)):
             fold = FoldData(g, r, held_g, held_r, f.held_yty, f.held_n, k)
 
@@ -353,26 +353,33 @@ class _Evaluator:
         return float(np.sqrt(self.n * sse) / dof) if dof > 0 else float("inf")
 
 
+def _prefetch(ev: Any, points: Sequence[tuple[int, float]]) -> None:
+    """:meth:`_Evaluator.prefetch` of the points the search is about to compare (any evaluator
+    with ``rmse`` alone is asked one point at a time)."""
+    if hasattr(ev, "prefetch"):
+        ev.prefetch(points)
+
+
 def _best_smoothing(ev: _Evaluator, order: int, grid: Sequence[float]) -> float:
     """Best smoothing of ``grid`` at one order: every other value, then the neighbours of the best."""
     values = sorted(float(g) for g in grid)
     coarse = values[::2] if values[-1] in values[::2] else [*values[::2], values[-1]]
-    ev.prefetch([(order, s) for s in coarse])
+    _prefetch(ev, [(order, s) for s in coarse])
     best = min(coarse, key=lambda s: ev.rmse(order, s))
     while best == values[-1] and best * 10.0 <= MAX_SMOOTHING:  # the best is at the edge: go on
         values.append(best * 10.0)
         best = min((best, values[-1]), key=lambda s: ev.rmse(order, s))
     i = values.index(best)
-    ev.prefetch([(order, s) for s in values[max(0, i - 1): i + 2]])
+    _prefetch(ev, [(order, s) for s in values[max(0, i - 1): i + 2]])
     return min(values[max(0, i - 1): i + 2], key=lambda s: ev.rmse(order, s))
 
 
 def _best_order(ev: _Evaluator, orders: Sequence[int], smoothing: float) -> int:
     """Best order at one smoothing: every other order from the largest down (the curve is flat
     with small wiggles at high orders: no early stop), then the neighbours of the best."""
-    ev.prefetch([(o, smoothing) for o in list(orders)[::-1][::2]])
+    _prefetch(ev, [(o, smoothing) for o in list(orders)[::-1][::2]])
     best = min(list(orders)[::-1][::2], key=lambda o: ev.rmse(o, smoothing))
-    ev.prefetch([(o, smoothing) for o in orders if abs(o - best) <= 1])
+    _prefetch(ev, [(o, smoothing) for o in orders if abs(o - best) <= 1])
     return min([o for o in orders if abs(o - best) <= 1], key=lambda o: ev.rmse(o, smoothing))
 
 
@@ -407,7 +414,7 @@ def _diagonal_steps(ev: _Evaluator, orders: Sequence[int], order: int, smoothing
         i, j = orders.index(order), grid.index(smoothing)
         steps = [(orders[i + di], grid[j + dj]) for di in (-1, 0, 1) for dj in (-1, 0, 1)
                  if (di or dj) and 0 <= i + di < len(orders) and 0 <= j + dj < len(grid)]
-        ev.prefetch(steps)
+        _prefetch(ev, steps)
         best = min(steps, key=lambda p: ev.rmse(*p), default=(order, smoothing))
         if not ev.rmse(*best) < ev.rmse(order, smoothing):
             return path

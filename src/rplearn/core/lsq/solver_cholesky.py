@@ -28,7 +28,7 @@ at 450).
 from __future__ import annotations
 
 import ctypes
-from functools import lru_cache
+from functools import cache
 from typing import Any
 
 import numpy as np
@@ -45,7 +45,7 @@ _SIGNATURES: dict[str, tuple[Any, ...]] = {
 }
 
 
-@lru_cache(maxsize=None)
+@cache
 def _routine(name: str) -> Any:
     """The LAPACK routine ``name`` of scipy's ``cython_lapack`` as a ctypes function that releases
     the interpreter lock while it runs, or None when it cannot be had."""
