@@ -32,7 +32,7 @@ from rplearn.core.lsq.selection import (
 )
 from rplearn.core.lsq.solver import penalised_inverse, solve
 from rplearn.core.plausible import check_same_band
-from rplearn.core.threads import blas_threads_for
+from rplearn.core.threads import blas_threads_for, one_blas_thread
 from rplearn.core.threads import warm_up as warm_up_blas
 from rplearn.data.tables import LinkSamples
 from rplearn.errors import InputError
@@ -490,7 +490,8 @@ def fit_from_statistics(
         # the same posterior, read with a prior of the wanted spread: the penalty per node
         # scaled so that its implied prior spread is the wanted one (the mean is the CV's)
         weights = (ridge + penalty) * np.repeat(factor, chosen.n_coef)
-        inverse = penalised_inverse(normal, list(nodes), 0.0, gauge, weights)  # the covariance alone: no solve
+        with one_blas_thread():  # scipy's LAPACK: no pool of its own left spinning beside numpy's
+            inverse = penalised_inverse(normal, list(nodes), 0.0, gauge, weights)  # the covariance alone: no solve
         if inverse is not None:
             covariance = inverse * (within_var * inflation)
         else:
@@ -505,7 +506,8 @@ def fit_from_statistics(
         covariance[:pat, :pat] += misfit_covariance(chosen, len(nodes), misfit_var / 2.0)  # two ends a sample
     own_prior = OwnPrior(choice.smoothing, penalty_scale(normal.gram, normal.n_pattern_columns), power, ridge, gauge,
                          target, prior_level)
-    own = own_pattern_posterior(total, chosen, list(map(str, nodes)), own_prior, noise_var, uncapped)
+    with one_blas_thread():
+        own = own_pattern_posterior(total, chosen, list(map(str, nodes)), own_prior, noise_var, uncapped)
     own = tied_own_posterior(own, total, list(map(str, nodes)), own_prior, choice.ties, within_var,
                              lambda k: ModelSpec(kind, k, ridge=ridge).basis())
     ltd = time.perf_counter() - t0

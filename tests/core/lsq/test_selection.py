@@ -218,3 +218,19 @@ def test_folds_solved_on_the_workers_give_the_search_of_one_thread(monkeypatch):
     assert parallel.variance_inflation == pytest.approx(alone.variance_inflation, rel=1e-10)
     assert [t[:2] for t in parallel.ties] == [t[:2] for t in alone.ties]
     np.testing.assert_allclose([t[2] for t in parallel.ties], [t[2] for t in alone.ties], rtol=1e-10)
+
+
+def test_without_room_for_the_factors_the_inflation_solves_again(monkeypatch):
+    """Past ``_PENDING_FACTOR_BYTES`` a batch keeps only its solutions (a swarm's factors are
+    large): the best point's inflation then factorises again, to the same figures."""
+    from rplearn.core.lsq import selection as selection_module
+
+    monkeypatch.setenv("RPLEARN_THREADS", "1")
+    units = stats_of(synthetic_units(n_units=3, n_per_unit=600, truth_order=3, seed=9), SphericalHarmonics(6))
+    kept = select_order_and_smoothing(units, SphericalHarmonics, range(2, 7), RIDGE)
+    monkeypatch.setattr(selection_module, "_PENDING_FACTOR_BYTES", 0)
+    dropped = select_order_and_smoothing(units, SphericalHarmonics, range(2, 7), RIDGE)
+    assert [(p.order, p.smoothing) for p in kept.curve] == [(p.order, p.smoothing) for p in dropped.curve]
+    assert (kept.order, kept.smoothing) == (dropped.order, dropped.smoothing)
+    assert dropped.variance_inflation == pytest.approx(kept.variance_inflation, rel=1e-12)
+    assert dropped.flight_level_std_db == pytest.approx(kept.flight_level_std_db, rel=1e-9, abs=1e-12)

@@ -78,6 +78,12 @@ MAX_SMOOTHING = 1e6
 _CONSTANT_FLOOR = 1e-6
 #: Orders whose fold blocks are kept at once (the coordinate descent moves between neighbours).
 _CACHED_ORDERS = 3
+#: Bytes of Cholesky factors a batch of points solved at once keeps for :meth:`_Evaluator.spread`
+#: (a swarm's factors are large: past this only the solutions are kept, and the best point's
+#: inflation solves again).
+_PENDING_FACTOR_BYTES = 128 * 2**20
+#: Stands for a factor not kept.
+_DROPPED = np.empty((0, 0))
 
 
 class _Evaluator:
@@ -202,7 +208,8 @@ class _Evaluator:
         """Solve every fold of the points not validated yet, on the statistics' workers at once
         (:meth:`~rplearn.core.lsq.runtime.StatisticsRuntime.in_order`: one core each, or here when
         the workers are busy); :meth:`rmse` then records them, in the order it is asked. Nothing
-        depends on which thread solved what."""
+        depends on which thread solved what. The factors are kept (for :meth:`spread` of the best
+        point) up to :data:`_PENDING_FACTOR_BYTES` a batch; past it only the solutions."""
         if not self.cv:
             return
         keys = list(dict.fromkeys((int(o), float(s)) for o, s in points if (int(o), float(s)) not in self.seen))
@@ -210,7 +217,11 @@ class _Evaluator:
         if not keys:
             return
         tasks = [task for key in keys for task in self._fold_tasks(*key)]
-        results = list(DEFAULT_RUNTIME.in_order(lambda task: task(), tasks))
+        results: list[tuple[np.ndarray, Any, float]] = []
+        held = 0
+        for c, upper, sse in DEFAULT_RUNTIME.in_order(lambda task: task(), tasks):
+            held += 0 if upper is None else upper.size * 8
+            results.append((c, upper if upper is None or held <= _PENDING_FACTOR_BYTES else _DROPPED, sse))
         folds = len(self.folds)
         for i, key in enumerate(keys):
             self._pending[key] = results[i * folds:(i + 1) * folds]
@@ -226,8 +237,8 @@ class _Evaluator:
             solved = [(c, upper) for c, upper, _ in results]
             self.fold_sse[key] = np.asarray(per_fold)
             value = float(np.sqrt(sum(per_fold) / self.n))
-            if not self.seen or value < min(self.seen.values()):
-                self._best_solved = (key, solved)  # the factors of the best point, for inflation()
+            if not self.seen or value < min(self.seen.values()):  # the factors of the best point, for inflation()
+                self._best_solved = None if any(u is _DROPPED for _, u in solved) else (key, solved)
         else:
             w, blocks, targets, scales = self._blocks(int(order))
             g, r, _, _ = blocks[0]
