@@ -56,9 +56,9 @@ joint residuals, 0.66 from the folds' per-node patterns, which push seed 0's D t
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Generator, Mapping, Sequence
 from dataclasses import dataclass, replace
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -220,13 +220,18 @@ def tied_own_posterior(own: OwnPosterior | None, total: NormalEquations, nodes: 
         groups[key] = (groups[key][0], groups[key][1] + float(inflation)) if key in groups else (point, float(inflation))
     total_cov: np.ndarray | None = None  # running sum: a few solves' matrices held at a time
     points = list(groups.values())
-    # on the statistics' workers, a few at a time (the runtime keeps at most its ``ahead`` pending)
-    for (_, inflations), cov in zip(points, DEFAULT_RUNTIME.in_order(lambda g: _continued(total, nodes, g[0], 1.0),
-                                                                           points), strict=True):
-        if cov is None:
-            return own
-        cov *= within_var_db2 * inflations
-        total_cov = cov if total_cov is None else np.add(total_cov, cov, out=total_cov)
+    # on the statistics' workers, a few at a time (the runtime keeps at most its ``ahead`` pending);
+    # closed here so that the pool is given back at once, also when a point has no posterior
+    matrices = cast(Generator[np.ndarray | None, None, None],  # in_order is a generator
+                    DEFAULT_RUNTIME.in_order(lambda g: _continued(total, nodes, g[0], 1.0), points))
+    try:
+        for (_, inflations), cov in zip(points, matrices, strict=True):
+            if cov is None:
+                return own
+            cov *= within_var_db2 * inflations
+            total_cov = cov if total_cov is None else np.add(total_cov, cov, out=total_cov)
+    finally:
+        matrices.close()
     assert total_cov is not None
     return OwnPosterior(own.basis, total_cov / len(ties), own.note, own.mean)
 
