@@ -104,3 +104,20 @@ def test_paper_auto_fit_beats_the_best_fixed_order(tmp_path_factory):
     err_auto = np.mean(list(pattern_errors_db(fitted.model, sim.ground_truth, covered).values()))
     err_10 = np.mean(list(pattern_errors_db(sh10, sim.ground_truth, covered).values()))
     assert err_auto <= 0.9 * err_10, (err_auto, err_10)
+
+
+def test_the_units_are_cut_into_pieces_that_keep_every_worker_busy():
+    from rplearn.models.auto import MIN_PIECE_SAMPLES, unit_pieces
+
+    pieces = unit_pieces({"a": 18_699, "b": 18_742, "c": 18_564}, 2)
+    assert sorted(pieces) == [("a", 0, 18_699), ("b", 0, 9_371), ("b", 9_371, 18_742), ("c", 0, 18_564)]
+    assert [b - a for _, a, b in pieces] == sorted((b - a for _, a, b in pieces), reverse=True)  # largest first
+    assert unit_pieces({"a": 10_000, "b": 20_000}, 2) == [("b", 0, 20_000), ("a", 0, 10_000)]  # already even
+    assert unit_pieces({"a": 2 * MIN_PIECE_SAMPLES - 1}, 2) == [("a", 0, 2 * MIN_PIECE_SAMPLES - 1)]  # too short to halve
+    assert unit_pieces({"a": 5, "b": 0}, 1) == [("a", 0, 5)]  # one worker: whole units; an empty unit has none
+    for sizes in ({"a": 30_000, "b": 9_000, "c": 9_000}, {"a": 9_000}, {f"u{i}": 9_000 + i for i in range(5)}):
+        cut = unit_pieces(sizes, 2)
+        assert len(cut) % 2 == 0
+        for unit, n in sizes.items():  # each unit's samples exactly once, in contiguous ranges
+            ranges = sorted((a, b) for u, a, b in cut if u == unit)
+            assert ranges[0][0] == 0 and ranges[-1][1] == n and all(x[1] == y[0] for x, y in zip(ranges, ranges[1:]))

@@ -90,8 +90,10 @@ def test_a_fit_gives_the_grids_of_its_samples_with_the_jobs_riding_along(monkeyp
 
 
 def test_an_automatic_fit_accumulates_its_units_on_the_workers_and_stores_their_grids(monkeypatch):
-    """``fit_auto``: the units' statistics computed on the workers (one unit each) are the ones
-    computed one after the other, and the grids' jobs ride behind them."""
+    """``fit_auto``: the units' statistics computed on the workers (a unit each, the first of three
+    halved so that both workers stay busy to the end) are the ones computed one after the other
+    (the halved unit's up to the rounding of its two halves' sum), and the grids' jobs ride
+    behind them."""
     from rplearn.core.lsq import runtime as runtime_module
     from rplearn.core.lsq.normal_equations import NormalEquations
     from rplearn.models.auto import fit_auto
@@ -116,14 +118,29 @@ def test_an_automatic_fit_accumulates_its_units_on_the_workers_and_stores_their_
         added.append((out, np.asarray(directions.az_tx)))
         return out
 
+    from rplearn.models import auto as auto_module
+
+    given: dict[str, NormalEquations] = {}
+    original_fit = auto_module.fit_from_statistics
+
+    def fit_from_statistics(stats, *args, **kwargs):
+        given.update(stats)
+        return original_fit(stats, *args, **kwargs)
+
     monkeypatch.setattr(runtime_module.Overlapped, "start", spy)
     monkeypatch.setattr(NormalEquations, "add", add)
+    monkeypatch.setattr(auto_module, "fit_from_statistics", fit_from_statistics)
     fitted, _ = fit_auto(units, ModelSpec("sh", 4))
     assert started == [len(CoverageWork(list(units.values())).jobs)] == [6]
     assert fitted.model.training.coverage_deg == node_coverage_grids(list(units.values()))
-    assert len(added) == 3
-    for stats, az_tx in added:  # each unit's statistics as computed alone, in this thread
-        s = next(u for u in units.values() if u.directions.az_tx is az_tx or np.array_equal(u.directions.az_tx, az_tx))
-        alone = original_add(NormalEquations(stats.basis, 2), s.directions, s.tx_index, s.rx_index, s.joint_gain_db)
-        np.testing.assert_array_equal(stats.gram, alone.gram)
-        np.testing.assert_array_equal(stats.rhs, alone.rhs)
+    assert sorted(len(az) for _, az in added) == [4_500, 4_500, 9_000, 9_000]  # u0 in halves
+    assert list(given) == list(units)
+    for name, s in units.items():  # each unit's statistics as computed alone, in this thread
+        alone = original_add(NormalEquations(given[name].basis, 2), s.directions, s.tx_index, s.rx_index, s.joint_gain_db)
+        if name == "u0":  # the sum of its halves
+            np.testing.assert_allclose(given[name].gram, alone.gram, rtol=1e-13, atol=1e-13 * np.abs(alone.gram).max())
+            np.testing.assert_allclose(given[name].rhs, alone.rhs, rtol=1e-13, atol=1e-13 * np.abs(alone.rhs).max())
+            assert given[name].n_samples == alone.n_samples and given[name].yty == pytest.approx(alone.yty, rel=1e-14)
+        else:
+            np.testing.assert_array_equal(given[name].gram, alone.gram)
+            np.testing.assert_array_equal(given[name].rhs, alone.rhs)

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 import scipy.linalg  # noqa: F401  (order selection solves through scipy: loaded before any BLAS limit, rplearn.core.threads)
 
+from rplearn.core.geometry import Directions
 from rplearn.core.lsq.link_statistics import reserve_block_buffer
 from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.core.lsq.runtime import DEFAULT_RUNTIME
@@ -29,9 +30,9 @@ from rplearn.core.lsq.selection import (
     select_order_and_smoothing,
     sub_statistics,
 )
-from rplearn.core.lsq.solver import solve
+from rplearn.core.lsq.solver import penalised_inverse, solve
 from rplearn.core.plausible import check_same_band
-from rplearn.core.threads import blas_threads_for
+from rplearn.core.threads import blas_threads_for, one_blas_thread
 from rplearn.core.threads import warm_up as warm_up_blas
 from rplearn.data.tables import LinkSamples
 from rplearn.errors import InputError
@@ -318,20 +319,27 @@ def fit_auto(
     basis = big.basis()
     reserve_block_buffer(basis, max(len(s) for s in units.values()))
     warm_up_blas()
-    def unit_statistics(u: str) -> NormalEquations:
-        y, env = regression_inputs(units[u], options)
-        s = units[u]
-        return NormalEquations(basis, len(nodes), environment=env is not None).add(
-            s.directions, s.tx_index, s.rx_index, y, env)
+    inputs = {u: regression_inputs(s, options) for u, s in units.items()}
 
-    # The units' statistics on the runtime's workers, one unit each (the same sums as one at a
-    # time: a unit of a flight, about 19,000 samples, is one block of its own), and the coverage
+    def piece_statistics(piece: tuple[str, int, int]) -> NormalEquations:
+        u, a, b = piece
+        s, (y, env) = units[u], inputs[u]
+        return NormalEquations(basis, len(nodes), environment=env is not None).add(
+            Directions(*(np.asarray(d)[a:b] for d in s.directions)), np.asarray(s.tx_index)[a:b],
+            np.asarray(s.rx_index)[a:b], y[a:b], None if env is None else env[a:b])
+
+    # The units' statistics on the runtime's workers, a unit (or half of one, so that the pieces
+    # keep both workers busy to the end) each, the halves added up in order, and the coverage
     # grids' jobs behind them, while this thread selects the order.
     coverage = CoverageWork(list(units.values()))
     with DEFAULT_RUNTIME.overlapping(coverage.jobs if coverage.parallel else []) as riding, \
             blas_threads_for(n, basis.n_coef * len(nodes)):
         t0 = time.perf_counter()
-        stats = dict(zip(units, list(DEFAULT_RUNTIME.in_order(unit_statistics, list(units))), strict=True))
+        pieces = unit_pieces({u: len(s) for u, s in units.items()}, DEFAULT_RUNTIME.workers)
+        stats: dict[str, NormalEquations] = {}
+        for (u, _, _), part in sorted(zip(pieces, list(DEFAULT_RUNTIME.in_order(piece_statistics, pieces)), strict=True),
+                                      key=lambda item: (list(units).index(item[0][0]), item[0][1])):
+            stats[u] = stats[u].merge(part) if u in stats else part
         freq: Counter[float] = Counter()
         for s in units.values():
             frequency_counts(s, freq)
@@ -343,6 +351,26 @@ def fit_auto(
     grids = coverage.grids(riding.results()) if coverage.parallel else coverage.run()
     model.training = model.training.replace(ltd_s=fitted.ltd_s, coverage_deg=grids)
     return fitted, choice
+
+
+#: Fewest samples in half a unit :func:`unit_pieces` splits (shorter blocks cost more per sample).
+MIN_PIECE_SAMPLES = 4096
+
+
+def unit_pieces(sizes: Mapping[str, int], workers: int) -> list[tuple[str, int, int]]:
+    """The ranges of samples ``(unit, start, stop)`` whose statistics :func:`fit_auto` accumulates
+    on the ``workers`` threads, largest first: every unit whole, then the largest halved (down to
+    :data:`MIN_PIECE_SAMPLES`) until the pieces are a multiple of the workers, so that no worker
+    idles while the last unit is summed (three units of a flight on two workers: 1.5 units'
+    time, not 2)."""
+    pieces = [(str(u), 0, int(n)) for u, n in sizes.items() if n > 0]
+    while workers > 1 and len(pieces) % workers:
+        largest = max(range(len(pieces)), key=lambda i: pieces[i][2] - pieces[i][1])
+        u, a, b = pieces[largest]
+        if b - a < 2 * MIN_PIECE_SAMPLES:
+            break
+        pieces[largest: largest + 1] = [(u, a, (a + b) // 2), (u, (a + b) // 2, b)]
+    return sorted(pieces, key=lambda piece: piece[1] - piece[2])
 
 
 def fit_from_statistics(
@@ -462,9 +490,14 @@ def fit_from_statistics(
         # the same posterior, read with a prior of the wanted spread: the penalty per node
         # scaled so that its implied prior spread is the wanted one (the mean is the CV's)
         weights = (ridge + penalty) * np.repeat(factor, chosen.n_coef)
-        wide = solve(normal, list(nodes), ridge=0.0, gauge=gauge, penalty=weights, penalty_target=sub_target,
-                     prior_level=prior_level)
-        covariance = wide.covariance * (within_var / wide.residual_variance_db2) * inflation
+        with one_blas_thread():  # scipy's LAPACK: no pool of its own left spinning beside numpy's
+            inverse = penalised_inverse(normal, list(nodes), 0.0, gauge, weights)  # the covariance alone: no solve
+        if inverse is not None:
+            covariance = inverse * (within_var * inflation)
+        else:
+            wide = solve(normal, list(nodes), ridge=0.0, gauge=gauge, penalty=weights, penalty_target=sub_target,
+                         prior_level=prior_level)
+            covariance = wide.covariance * (within_var / wide.residual_variance_db2) * inflation
         spread = prior_std_db(chosen, list(nodes), weights, noise_var, power)
     misfit_var = held_out_misfit_var(choice.held_out_excess_db2, uncapped, normal) if choice.method == "grouped-cv" else 0.0
     if covariance is not None and misfit_var > 0:
@@ -473,7 +506,8 @@ def fit_from_statistics(
         covariance[:pat, :pat] += misfit_covariance(chosen, len(nodes), misfit_var / 2.0)  # two ends a sample
     own_prior = OwnPrior(choice.smoothing, penalty_scale(normal.gram, normal.n_pattern_columns), power, ridge, gauge,
                          target, prior_level)
-    own = own_pattern_posterior(total, chosen, list(map(str, nodes)), own_prior, noise_var, uncapped)
+    with one_blas_thread():
+        own = own_pattern_posterior(total, chosen, list(map(str, nodes)), own_prior, noise_var, uncapped)
     own = tied_own_posterior(own, total, list(map(str, nodes)), own_prior, choice.ties, within_var,
                              lambda k: ModelSpec(kind, k, ridge=ridge).basis())
     ltd = time.perf_counter() - t0
@@ -496,6 +530,6 @@ def fit_from_statistics(
     return FittedModel(final, model, ltd, own_posterior=own), choice
 
 
-__all__ = ["held_out_misfit_var", "misfit_covariance",
+__all__ = ["MIN_PIECE_SAMPLES", "held_out_misfit_var", "misfit_covariance", "unit_pieces",
            "unseen_spread_cap_db", "within_unit_noise_var", "MAX_AUTO_ORDER", "PRIOR_PENALTY_POWER", "SAMPLES_PER_COEF", "auto_orders", "fit_auto",
            "fit_from_statistics", "prior_coefficients", "prior_misfit_var", "prior_std_db"]

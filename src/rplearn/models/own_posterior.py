@@ -56,18 +56,19 @@ joint residuals, 0.66 from the folds' per-node patterns, which push seed 0's D t
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Generator, Mapping, Sequence
 from dataclasses import dataclass, replace
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
 from rplearn.core.basis_base import Basis
 from rplearn.core.gauge import Gauge
 from rplearn.core.lsq.normal_equations import NormalEquations
-from rplearn.core.lsq.penalty import penalty_scale, sub_statistics
+from rplearn.core.lsq.penalty import nested_columns
+from rplearn.core.lsq.runtime import DEFAULT_RUNTIME
 from rplearn.core.lsq.selection import penalty_vector
-from rplearn.core.lsq.solver import solve
+from rplearn.core.lsq.solver import penalised_inverse, solve
 
 #: Pattern columns above which the own-pattern posterior is not continued to the largest order.
 MAX_OWN_COLUMNS = 1500
@@ -163,13 +164,18 @@ def own_pattern_posterior(total: NormalEquations, chosen: Basis, nodes: Sequence
 
 def _continued(total: NormalEquations, nodes: Sequence[str], prior: OwnPrior, noise_var_db2: float) -> np.ndarray | None:
     """The pattern block of the posterior covariance of ``prior`` at ``total``'s basis, read
-    with the noise ``noise_var_db2`` (None when the solve gives none)."""
+    with the noise ``noise_var_db2`` (None when the solve gives none): the constrained inverse
+    of the penalised normal matrix (:func:`rplearn.core.lsq.solver.penalised_inverse`: one
+    Cholesky factor, no solve), or a whole solve when that matrix is not positive definite."""
     penalty = penalty_vector(total.basis, len(nodes), prior.smoothing, prior.scale, prior.power)
+    pat = total.basis.n_coef * len(nodes)
+    inverse = penalised_inverse(total, list(nodes), prior.ridge, prior.gauge, penalty)
+    if inverse is not None:
+        return inverse[:pat, :pat] * noise_var_db2
     wide = solve(total, list(nodes), ridge=prior.ridge, gauge=prior.gauge, penalty=penalty, penalty_target=prior.target,
                  prior_level=prior.prior_level)
     if wide.covariance is None or not wide.residual_variance_db2 > 0:
         return None
-    pat = total.basis.n_coef * len(nodes)
     return np.asarray(wide.covariance, np.float64)[:pat, :pat] * (noise_var_db2 / wide.residual_variance_db2)
 
 
@@ -205,18 +211,27 @@ def tied_own_posterior(own: OwnPosterior | None, total: NormalEquations, nodes: 
     # penalty's unit (for spherical harmonics the same at every order: the addition theorem),
     # so points of one (smoothing, unit) share one solve, scaled by the sum of their inflations
     groups: dict[tuple[float, float], tuple[OwnPrior, float]] = {}
+    diagonal = np.diag(total.gram)
     for order, smoothing, inflation in ties:
-        normal = sub_statistics(total, make_basis(int(order)))
-        point = replace(prior, smoothing=float(smoothing), scale=penalty_scale(normal.gram, normal.n_pattern_columns))
+        # the penalty's unit at that order (penalty_scale of its sub-block, read off the diagonal)
+        d = diagonal[nested_columns(total.basis, make_basis(int(order)), total.n_nodes)]
+        point = replace(prior, smoothing=float(smoothing), scale=float(np.mean(d)) if d.size and np.mean(d) > 0 else 1.0)
         key = (point.smoothing, point.scale)
         groups[key] = (groups[key][0], groups[key][1] + float(inflation)) if key in groups else (point, float(inflation))
-    total_cov: np.ndarray | None = None  # running sum: one solve's matrix held at a time
-    for point, inflations in groups.values():
-        cov = _continued(total, nodes, point, 1.0)
-        if cov is None:
-            return own
-        cov *= within_var_db2 * inflations
-        total_cov = cov if total_cov is None else np.add(total_cov, cov, out=total_cov)
+    total_cov: np.ndarray | None = None  # running sum: a few solves' matrices held at a time
+    points = list(groups.values())
+    # on the statistics' workers, a few at a time (the runtime keeps at most its ``ahead`` pending);
+    # closed here so that the pool is given back at once, also when a point has no posterior
+    matrices = cast(Generator[np.ndarray | None, None, None],  # in_order is a generator
+                    DEFAULT_RUNTIME.in_order(lambda g: _continued(total, nodes, g[0], 1.0), points))
+    try:
+        for (_, inflations), cov in zip(points, matrices, strict=True):
+            if cov is None:
+                return own
+            cov *= within_var_db2 * inflations
+            total_cov = cov if total_cov is None else np.add(total_cov, cov, out=total_cov)
+    finally:
+        matrices.close()
     assert total_cov is not None
     return OwnPosterior(own.basis, total_cov / len(ties), own.note, own.mean)
 

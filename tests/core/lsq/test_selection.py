@@ -183,3 +183,54 @@ def test_the_search_leaves_a_coordinate_minimum_along_the_diagonal_valley():
     path = _diagonal_steps(ev, orders, *start, grid)
     assert path == [(5, 1e-5), (4, 3e-6), (3, 1e-6)]
     assert all(ev.rmse(*b) < ev.rmse(*a) for a, b in zip([start, *path], path))
+
+
+def test_folds_solved_on_the_workers_give_the_search_of_one_thread(monkeypatch):
+    """The folds of each batch of points are solved on the statistics' workers at once
+    (``_Evaluator.prefetch``); with the workers busy (their lock held) the same search runs in
+    this thread, point by point: the same points in the same order, the same errors, choice,
+    inflation and ties (up to the rounding of one BLAS thread against the policy's)."""
+    from rplearn.core.lsq import runtime as runtime_module
+
+    monkeypatch.setenv("RPLEARN_THREADS", "1")
+    units = stats_of(synthetic_units(n_units=3, n_per_unit=700, truth_order=4, seed=8), SphericalHarmonics(7))
+    basis = lambda k: SphericalHarmonics(k)  # noqa: E731
+    calls: list[int] = []
+    original = runtime_module.StatisticsRuntime.in_order
+
+    def counted(self, work, starts):
+        starts = list(starts)
+        calls.append(len(starts))
+        return original(self, work, starts)
+
+    monkeypatch.setattr(runtime_module.StatisticsRuntime, "in_order", counted)
+    parallel = select_order_and_smoothing(units, basis, range(2, 8), RIDGE)
+    assert max(calls) > 3  # batches of several points' folds
+    lock = runtime_module.DEFAULT_RUNTIME._lock
+    assert lock.acquire(blocking=False)
+    try:
+        alone = select_order_and_smoothing(units, basis, range(2, 8), RIDGE)
+    finally:
+        lock.release()
+    assert [(p.order, p.smoothing) for p in parallel.curve] == [(p.order, p.smoothing) for p in alone.curve]
+    np.testing.assert_allclose([p.rmse_db for p in parallel.curve], [p.rmse_db for p in alone.curve], rtol=1e-12)
+    assert (parallel.order, parallel.smoothing) == (alone.order, alone.smoothing)
+    assert parallel.variance_inflation == pytest.approx(alone.variance_inflation, rel=1e-10)
+    assert [t[:2] for t in parallel.ties] == [t[:2] for t in alone.ties]
+    np.testing.assert_allclose([t[2] for t in parallel.ties], [t[2] for t in alone.ties], rtol=1e-10)
+
+
+def test_without_room_for_the_factors_the_inflation_solves_again(monkeypatch):
+    """Past ``_PENDING_FACTOR_BYTES`` a batch keeps only its solutions (a swarm's factors are
+    large): the best point's inflation then factorises again, to the same figures."""
+    from rplearn.core.lsq import selection as selection_module
+
+    monkeypatch.setenv("RPLEARN_THREADS", "1")
+    units = stats_of(synthetic_units(n_units=3, n_per_unit=600, truth_order=3, seed=9), SphericalHarmonics(6))
+    kept = select_order_and_smoothing(units, SphericalHarmonics, range(2, 7), RIDGE)
+    monkeypatch.setattr(selection_module, "_PENDING_FACTOR_BYTES", 0)
+    dropped = select_order_and_smoothing(units, SphericalHarmonics, range(2, 7), RIDGE)
+    assert [(p.order, p.smoothing) for p in kept.curve] == [(p.order, p.smoothing) for p in dropped.curve]
+    assert (kept.order, kept.smoothing) == (dropped.order, dropped.smoothing)
+    assert dropped.variance_inflation == pytest.approx(kept.variance_inflation, rel=1e-12)
+    assert dropped.flight_level_std_db == pytest.approx(kept.flight_level_std_db, rel=1e-9, abs=1e-12)

@@ -243,3 +243,26 @@ def test_joint_fit_options_refuse_a_bad_value_naming_it(bad, field):
     with pytest.raises(InputError) as err:
         JointFitOptions(**bad)
     assert err.value.param == field and "\n" not in str(err.value)
+
+
+@pytest.mark.parametrize("offsets", [False, True])
+def test_the_penalised_inverse_is_the_solves_covariance_over_its_residual_variance(offsets):
+    """``penalised_inverse`` (one Cholesky factor, the gauge by a Schur complement) gives the
+    same constrained inverse as the KKT inverse of :func:`solve`, with and without shared
+    (unpenalised) columns."""
+    from rplearn.core.lsq.selection import penalty_scale, penalty_vector
+    from rplearn.core.lsq.solver import penalised_inverse
+
+    rng = np.random.default_rng(21)
+    b, coef = _band_limited_patterns(rng, 2, degree_max=4)
+    d, tx, rx, y = _simulate(rng, b, coef, np.array([[0, 1], [1, 0]]), 4000, 1.0)
+    normal = NormalEquations(b, 2).add(d, tx, rx, y)
+    if offsets:
+        normal = normal.with_shared(normal.two_way_links())
+        assert normal.n_columns > normal.n_pattern_columns
+    penalty = penalty_vector(b, 2, 1e-4, penalty_scale(normal.gram, normal.n_pattern_columns))
+    sol = solve(normal, ["A", "B"], ridge=0.5, penalty=penalty)
+    got = penalised_inverse(normal, ["A", "B"], 0.5, "equal-mean", penalty)
+    expected = sol.covariance / sol.residual_variance_db2
+    assert got.shape == expected.shape
+    np.testing.assert_allclose(got, expected, rtol=0, atol=1e-9 * np.abs(expected).max())

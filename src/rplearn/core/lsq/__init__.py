@@ -21,8 +21,10 @@ factorisations
 ``refined``            a float32 Cholesky factor with solves refined to float64
 ``spectrum``           rank and condition number, exact or estimated
 ``products``           products with the normal matrix in scipy's BLAS; an SPD inverse by Cholesky
+``solver_cholesky``    one Cholesky factor: solves, inverse, gauge-constrained inverse (lock released)
 selection
 ``selection``          order and smoothing by grouped cross-validation
+``selection_folds``    the folds of the selection, and each one's share of the variance inflation
 ``selection_result``   :class:`Selection`, :class:`CurvePoint`
 ``ties``               the points the held-out units cannot tell apart (choice, spread)
 =====================  ==========================================================================

@@ -52,8 +52,7 @@ about 6 of them per held-out unit, against 12-14 for a full grid at the largest 
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
-from typing import Any, cast
+from typing import Any
 
 import numpy as np
 
@@ -61,8 +60,11 @@ from rplearn.core.basis_base import Basis
 from rplearn.core.lsq.level import shrink_target
 from rplearn.core.lsq.normal_equations import EXPONENT_MIN_SPREAD_DB, NormalEquations, schur_spread_db
 from rplearn.core.lsq.penalty import DEFAULT_PENALTY_POWER, nested_columns, penalty_scale, penalty_vector, sub_statistics, with_shared_columns
+from rplearn.core.lsq.runtime import DEFAULT_RUNTIME
+from rplearn.core.lsq.selection_folds import Fold, FoldData, fold_spread_terms, sub_block, unit_folds
 from rplearn.core.lsq.selection_result import CurvePoint, Selection
-from rplearn.core.lsq.ties import tied_points
+from rplearn.core.lsq.solver_cholesky import factor_solve, spd_factor
+from rplearn.core.lsq.ties import tied_keys, tied_points
 from rplearn.core.lsq.ties import tightest_split as _tightest_split
 from rplearn.errors import IdentifiabilityError, InputError
 
@@ -76,68 +78,12 @@ MAX_SMOOTHING = 1e6
 _CONSTANT_FLOOR = 1e-6
 #: Orders whose fold blocks are kept at once (the coordinate descent moves between neighbours).
 _CACHED_ORDERS = 3
-
-
-@dataclass
-class _Fold:
-    """Learning statistics (all units but one) and the held-out unit's."""
-
-    gram: np.ndarray
-    rhs: np.ndarray
-    held_gram: np.ndarray
-    held_rhs: np.ndarray
-    held_yty: float
-    held_n: int
-
-
-def _folds(units: Mapping[str, NormalEquations]) -> tuple[list[_Fold], np.ndarray, np.ndarray, float, int]:
-    gram = cast(np.ndarray, sum(u.gram for u in units.values()))
-    rhs = cast(np.ndarray, sum(u.rhs for u in units.values()))
-    yty = float(sum(u.yty for u in units.values()))
-    n = int(sum(u.n_samples for u in units.values()))
-    folds = [_Fold(gram - u.gram, rhs - u.rhs, u.gram, u.rhs, u.yty, u.n_samples) for u in units.values()]
-    return folds, gram, rhs, yty, n
-
-
-def _block(matrix: np.ndarray, idx: np.ndarray) -> np.ndarray:
-    """``matrix[idx][:, idx]``: the matrix itself (no copy) when ``idx`` is every column in order;
-    copied range by range when ``idx`` is a few increasing runs of consecutive columns (a nested
-    order: the first columns of each node's block, then the shared ones), which gathers no
-    intermediate as wide as the matrix."""
-    if idx.size == matrix.shape[0] and np.array_equal(idx, np.arange(idx.size)):
-        return matrix
-    cuts = np.flatnonzero(np.diff(idx) != 1) + 1
-    if cuts.size > _MAX_BLOCK_RUNS or np.any(np.diff(idx) <= 0):
-        return matrix.take(idx, axis=0).take(idx, axis=1)
-    runs = [(int(r[0]), int(r[-1]) + 1) for r in np.split(idx, cuts)]
-    out = np.empty((idx.size, idx.size))
-    row = 0
-    for a, b in runs:
-        col = 0
-        for c, d in runs:
-            out[row : row + b - a, col : col + d - c] = matrix[a:b, c:d]
-            col += d - c
-        row += b - a
-    return out
-
-
-#: Runs of consecutive columns up to which :func:`_block` copies range by range.
-_MAX_BLOCK_RUNS = 8
-
-
-def _cholesky_solve(a: np.ndarray, rhs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``a^-1 rhs`` for a symmetric positive definite ``a`` and one right-hand side, and the
-    upper Cholesky factor ``U`` (``a = U^T U``, Fortran-ordered).
-
-    numpy's Cholesky and two level-2 triangular solves, not scipy's ``cho_factor``: scipy's
-    wheels bring a second OpenBLAS whose idle threads spin for a while after each call and
-    slow numpy's next factorisation (the final solve) several-fold on a 2-core machine.
-    """
-    upper = np.linalg.cholesky(a).T  # a = U^T U; the transpose is Fortran-ordered, as BLAS wants it (no copy)
-    import scipy.linalg.blas  # here: a fixed-order fit needs no scipy (models.auto loads it before a BLAS limit)
-
-    half = scipy.linalg.blas.dtrsv(upper, rhs, lower=0, trans=1)
-    return scipy.linalg.blas.dtrsv(upper, half, lower=0, trans=0), upper
+#: Bytes of Cholesky factors a batch of points solved at once keeps for :meth:`_Evaluator.spread`
+#: (a swarm's factors are large: past this only the solutions are kept, and the best point's
+#: inflation solves again).
+_PENDING_FACTOR_BYTES = 128 * 2**20
+#: Stands for a factor not kept.
+_DROPPED = np.empty((0, 0))
 
 
 class _Evaluator:
@@ -153,7 +99,7 @@ class _Evaluator:
             raise InputError("the units' statistics have different shared columns; append them with one link list",
                              param="units")
         self.make_basis, self.ridge, self.power = make_basis, float(ridge), float(power)
-        self.folds, self.gram, self.rhs, self.yty, self.n = _folds(units)
+        self.folds, self.gram, self.rhs, self.yty, self.n = unit_folds(units)
         self.sums = [u.column_sums() for u in units.values()]
         if target is not None:
             target = np.asarray(target, np.float64)[:first.n_pattern_columns]  # the prior's: shared columns are not pulled
@@ -170,6 +116,7 @@ class _Evaluator:
         self.curve: list[CurvePoint] = []
         self._cache: dict[int, Any] = {}
         self._best_solved: tuple[tuple[int, float], list[tuple[np.ndarray, np.ndarray | None]]] | None = None
+        self._pending: dict[tuple[int, float], list[tuple[np.ndarray, np.ndarray | None, float]]] = {}  # prefetch()
 
     def _fold_pins(self, units: Mapping[str, NormalEquations]) -> list[tuple[np.ndarray, np.ndarray] | None]:
         """Per fold, the shared columns its learning units cannot identify, pinned to a
@@ -199,7 +146,8 @@ class _Evaluator:
         w = self._weights(self.big)
         smoothing = float(SMOOTHING_GRID[len(SMOOTHING_GRID) // 2])
         target = self._target(self.gram, self.rhs, self.big, self.target)
-        c, _ = self._solve(self.gram, self._pulled(self.gram, self.rhs, w, smoothing, target), w, smoothing)
+        unit = smoothing * penalty_scale(self.gram, self.gram.shape[0] - self.n_shared)
+        c, _ = self._solve(self.gram, self._pulled(self.gram, self.rhs, w, unit, target), w, unit)
         values = c[pat:]
         pins: list[tuple[np.ndarray, np.ndarray] | None] = []
         for mask, fold in zip(free, self.folds):
@@ -223,43 +171,79 @@ class _Evaluator:
         return np.concatenate([np.tile(np.maximum(w, floor), self.n_nodes), np.zeros(self.n_shared)])
 
     def _blocks(self, order: int) -> tuple[np.ndarray, list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]],
-                                           list[np.ndarray]]:
-        """Roughness weights and, per fold, the learning and held-out blocks of one order and the
+                                           list[np.ndarray], list[float]]:
+        """Roughness weights and, per fold, the learning and held-out blocks of one order, the
         target its fit shrinks toward (the prior's shape and the learning units' own level,
-        :func:`~rplearn.core.lsq.level.shrink_target`; cached)."""
+        :func:`~rplearn.core.lsq.level.shrink_target`) and the penalty's unit (cached)."""
         if order not in self._cache:
             basis = self.make_basis(order)
             pattern_idx = nested_columns(self.big, basis, self.n_nodes)
             idx = with_shared_columns(pattern_idx, self.first)
-            sub = [(_block(f.gram, idx), f.rhs[idx], _block(f.held_gram, idx), f.held_rhs[idx]) for f in self.folds]
+            sub = [(sub_block(f.gram, idx), f.rhs[idx], sub_block(f.held_gram, idx), f.held_rhs[idx]) for f in self.folds]
             if not self.cv:
-                sub = [(_block(self.gram, idx), self.rhs[idx], np.empty(0), np.empty(0))]
+                sub = [(sub_block(self.gram, idx), self.rhs[idx], np.empty(0), np.empty(0))]
             prior = None if self.target is None else self.target[pattern_idx]
             targets = [self._target(g, r, basis, prior) for g, r, _, _ in sub]
+            scales = [penalty_scale(g, g.shape[0] - self.n_shared) for g, _, _, _ in sub]  # the penalty's unit per fold
             while len(self._cache) >= _CACHED_ORDERS:  # a few orders at a time: bounded memory
                 self._cache.pop(next(iter(self._cache)))
-            self._cache[order] = (self._weights(basis), sub, targets)
+            self._cache[order] = (self._weights(basis), sub, targets, scales)
         return self._cache[order]
+
+    def _fold_tasks(self, order: int, smoothing: float) -> list[Callable[[], tuple[np.ndarray, np.ndarray | None, float]]]:
+        """Per fold, the work of one point: its penalised solution, the factor of its system and
+        the held-out unit's squared error (independent of the other folds: any thread)."""
+        w, blocks, targets, scales = self._blocks(int(order))
+        tasks: list[Callable[[], tuple[np.ndarray, np.ndarray | None, float]]] = []
+        for (g, r, held_g, held_r), f, pin, target, scale in zip(blocks, self.folds, self.pins, targets, scales):
+            def task(g: np.ndarray = g, r: np.ndarray = r, held_g: np.ndarray = held_g, held_r: np.ndarray = held_r,
+                     f: Fold = f, pin: Any = pin, target: np.ndarray = target,
+                     weight: float = smoothing * scale) -> tuple[np.ndarray, np.ndarray | None, float]:
+                c, upper = self._solve(g, self._pulled(g, r, w, weight, target, pin), w, weight, pin)
+                return c, upper, max(f.held_yty - 2.0 * c @ held_r + c @ held_g @ c, 0.0)
+            tasks.append(task)
+        return tasks
+
+    def prefetch(self, points: Sequence[tuple[int, float]]) -> None:
+        """Solve every fold of the points not validated yet, on the statistics' workers at once
+        (:meth:`~rplearn.core.lsq.runtime.StatisticsRuntime.in_order`: one core each, or here when
+        the workers are busy); :meth:`rmse` then records them, in the order it is asked. Nothing
+        depends on which thread solved what. The factors are kept (for :meth:`spread` of the best
+        point) up to :data:`_PENDING_FACTOR_BYTES` a batch; past it only the solutions."""
+        if not self.cv:
+            return
+        keys = list(dict.fromkeys((int(o), float(s)) for o, s in points if (int(o), float(s)) not in self.seen))
+        keys = [k for k in keys if k not in self._pending]
+        if not keys:
+            return
+        tasks = [task for key in keys for task in self._fold_tasks(*key)]
+        results: list[tuple[np.ndarray, Any, float]] = []
+        held = 0
+        for c, upper, sse in DEFAULT_RUNTIME.in_order(lambda task: task(), tasks):
+            held += 0 if upper is None else upper.size * 8
+            results.append((c, upper if upper is None or held <= _PENDING_FACTOR_BYTES else _DROPPED, sse))
+        folds = len(self.folds)
+        for i, key in enumerate(keys):
+            self._pending[key] = results[i * folds:(i + 1) * folds]
 
     def rmse(self, order: int, smoothing: float) -> float:
         key = (int(order), float(smoothing))
         if key in self.seen:
             return self.seen[key]
-        w, blocks, targets = self._blocks(int(order))
         if self.cv:
-            per_fold = []
-            solved = []
-            for (g, r, held_g, held_r), f, pin, target in zip(blocks, self.folds, self.pins, targets):
-                c, upper = self._solve(g, self._pulled(g, r, w, smoothing, target, pin), w, smoothing, pin)
-                solved.append((c, upper))
-                per_fold.append(max(f.held_yty - 2.0 * c @ held_r + c @ held_g @ c, 0.0))
+            self.prefetch([key])
+            results = self._pending.pop(key)
+            per_fold = [sse for _, _, sse in results]
+            solved = [(c, upper) for c, upper, _ in results]
             self.fold_sse[key] = np.asarray(per_fold)
             value = float(np.sqrt(sum(per_fold) / self.n))
-            if not self.seen or value < min(self.seen.values()):
-                self._best_solved = (key, solved)  # the factors of the best point, for inflation()
+            if not self.seen or value < min(self.seen.values()):  # the factors of the best point, for inflation()
+                self._best_solved = None if any(u is _DROPPED for _, u in solved) else (key, solved)
         else:
+            w, blocks, targets, scales = self._blocks(int(order))
             g, r, _, _ = blocks[0]
-            value = self._gcv(g, self._pulled(g, r, w, smoothing, targets[0]), w, smoothing, r)
+            weight = smoothing * scales[0]
+            value = self._gcv(g, self._pulled(g, r, w, weight, targets[0]), w, weight, r)
         self.seen[key] = value
         self.curve.append(CurvePoint(int(order), float(smoothing), value))
         return value
@@ -273,88 +257,100 @@ class _Evaluator:
         one (order, smoothing) (1 and 0 without held-out units); see :func:`variance_inflation`."""
         if not self.cv:
             return 1.0, 0.0
-        if (int(order), float(smoothing)) not in self._spreads:
-            self._spreads[(int(order), float(smoothing))] = self._spread(int(order), float(smoothing))
+        self.prefetch_spreads([(order, smoothing)])
         return self._spreads[(int(order), float(smoothing))]
 
-    def _spread(self, order: int, smoothing: float) -> tuple[float, float]:
-        w, blocks, targets = self._blocks(int(order))
+    def prefetch_spreads(self, points: Sequence[tuple[int, float]]) -> None:
+        """:meth:`spread` of every point not computed yet, the folds of all of them on the
+        statistics' workers at once (:mod:`rplearn.core.lsq.selection_spread`)."""
+        if not self.cv:
+            return
+        keys = [k for k in dict.fromkeys((int(o), float(s)) for o, s in points) if k not in self._spreads]
+        if not keys:
+            return
+        jobs = [job for key in keys for job in self._spread_jobs(*key)]
+        results = list(DEFAULT_RUNTIME.in_order(lambda job: job(), jobs))
+        folds = len(self.folds)
+        for i, key in enumerate(keys):
+            self._spreads[key] = self._combine_spread(key, results[i * folds:(i + 1) * folds])
+
+    def _spread_jobs(self, order: int, smoothing: float) -> list[Callable[[], Any]]:
+        """Per fold, the work of :func:`~rplearn.core.lsq.selection_spread.fold_spread_terms` (None
+        when its system is not positive definite), solving again unless the point is the best's."""
+        w, blocks, targets, scales = self._blocks(int(order))
         idx = with_shared_columns(nested_columns(self.big, self.make_basis(int(order)), self.n_nodes), self.first)
         sums = [(a[idx], sum_y) for a, sum_y in self.sums]
         counts = np.array([f.held_n for f in self.folds], np.float64)
         key = (int(order), float(smoothing))
         solved = self._best_solved[1] if self._best_solved and self._best_solved[0] == key else None
-        excess = predicted = 0.0
-        means = []  # per held-out unit: its squared mean residual, that of noise and fit, the level's weight
+        jobs: list[Callable[[], Any]] = []
         for k, ((g, r, held_g, held_r), f, pin, target) in enumerate(zip(blocks, self.folds, self.pins, targets)):
-            c, upper = solved[k] if solved else self._solve(g, self._pulled(g, r, w, smoothing, target, pin), w,
-                                                            smoothing, pin)
-            if upper is None:
-                return 1.0, 0.0
-            # numpy's inverse, not LAPACK's potri from the Cholesky factor through scipy: a third
-            # of the work, but scipy's second OpenBLAS pool, woken up, made it slower (see _cholesky_solve)
-            inverse = np.linalg.inv(self._system(g, w, smoothing, pin))
-            learn = [j for j in range(len(self.folds)) if j != k]
-            learn_n = self.n - f.held_n
-            # the learning residual about each learning unit's own mean: noise, not the units' levels
-            unit_means = np.array([(sums[j][1] - c @ sums[j][0]) / counts[j] for j in learn])
-            learn_sse = (self.yty - f.held_yty) - 2.0 * c @ r + c @ g @ c - float(counts[learn] @ unit_means**2)
-            # less the fit's effective parameters tr(A^-1 G) and the other units' means
-            dof = learn_n - float(np.sum(inverse * g)) - (len(learn) - 1)
-            noise_var = max(learn_sse, 0.0) / max(dof, 1.0)
-            held_sse = max(f.held_yty - 2.0 * c @ held_r + c @ held_g @ c, 0.0)
-            a, sum_y = sums[k]
-            mean = (sum_y - c @ a) / f.held_n
-            quad = float(a @ inverse @ a)  # n^2 times the posterior variance of the unit's mean, over sigma^2
-            excess += held_sse - f.held_n * mean**2 - (f.held_n - 1) * noise_var
-            # sum over the held-out samples of x^T (sigma^2 A^-1) x = sigma^2 tr(A^-1 X_u^T X_u),
-            # less the part along the unit's mean (removed above)
-            predicted += noise_var * (float(np.sum(inverse * held_g)) - quad / f.held_n)  # tr(A^-1 H)
-            weights = counts[learn] / learn_n  # the fit's level: the learning units' levels, weighed by samples
-            means.append((mean**2, noise_var * (1.0 + quad / f.held_n) / f.held_n, 1.0 + float(weights @ weights)))
+            fold = FoldData(g, r, held_g, held_r, f.held_yty, f.held_n, k)
+
+            def job(fold: FoldData = fold, pin: Any = pin, target: np.ndarray = target, weight: float = smoothing * scales[k],
+                    known: Any = None if solved is None else solved[k]) -> Any:
+                c, upper = known if known is not None else self._solve(
+                    fold.gram, self._pulled(fold.gram, fold.rhs, w, weight, target, pin), w, weight, pin)
+                return None if upper is None else fold_spread_terms(c, upper, fold, sums, counts, (self.n, self.yty))
+            jobs.append(job)
+        return jobs
+
+    def _combine_spread(self, key: tuple[int, float], terms: list[Any]) -> tuple[float, float]:
+        """The inflation and level variance of one point from its folds' terms, summed in fold order."""
+        if any(t is None for t in terms):
+            return 1.0, 0.0
+        counts = np.array([f.held_n for f in self.folds], np.float64)
+        excess = predicted = 0.0
+        for fold_excess, fold_predicted, _ in terms:
+            excess += fold_excess
+            predicted += fold_predicted
+        means = [m for _, _, m in terms]  # per held-out unit: its squared mean residual, that of noise and fit, the level's weight
         kappa = float(max(1.0, excess / predicted)) if predicted > 0 and np.isfinite(excess) else 1.0
         self.excess_db2[key] = float(excess / counts.sum()) if np.isfinite(excess) else 0.0
         square, expected, weight = (np.array(v) for v in zip(*means))
         level_var = float(np.sum(square - kappa * expected) / np.sum(weight))
         return kappa, max(level_var, 0.0) if np.isfinite(level_var) else 0.0
 
-    def _pulled(self, gram: np.ndarray, rhs: np.ndarray, w: np.ndarray, smoothing: float, target: np.ndarray,
+    def _pulled(self, gram: np.ndarray, rhs: np.ndarray, w: np.ndarray, weight: float, target: np.ndarray,
                 pin: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
         """``X^T y`` plus the pull ``(ridge + P) target`` of the ridge and the penalty toward the
         target (the prior's shape and the data's level, never a fixed level) and the pull of
-        pinned shared columns toward their values."""
+        pinned shared columns toward their values. ``weight``: the smoothing times the
+        penalty's unit (:func:`penalty_scale` of ``gram``)."""
         out = rhs.copy()
         k = gram.shape[0] - self.n_shared
-        out[:k] += (self.ridge + smoothing * penalty_scale(gram, k) * w[:k]) * target[:k]
+        out[:k] += (self.ridge + weight * w[:k]) * target[:k]
         if pin is not None:
             out[gram.shape[0] - self.n_shared:] += pin[0] * pin[1]
         return out
 
-    def _system(self, gram: np.ndarray, w: np.ndarray, smoothing: float,
+    def _system(self, gram: np.ndarray, w: np.ndarray, weight: float,
                 pin: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
         """The penalised normal matrix: the ridge on the pattern columns (shared columns are not
-        shrunk), the smoothness penalty, and the weight of pinned shared columns."""
+        shrunk), the smoothness penalty (``weight``: the smoothing times the penalty's unit),
+        and the weight of pinned shared columns."""
         a = gram.copy()
         k = gram.shape[0] - self.n_shared
-        a[np.arange(k), np.arange(k)] += self.ridge
-        a[np.diag_indices_from(a)] += smoothing * penalty_scale(gram, k) * w
+        diagonal = a.reshape(-1)[:: a.shape[0] + 1]  # a view of the diagonal
+        diagonal[:k] += self.ridge
+        diagonal += weight * w
         if pin is not None:
-            a[np.arange(k, gram.shape[0]), np.arange(k, gram.shape[0])] += pin[0]
+            diagonal[k:] += pin[0]
         return a
 
-    def _solve(self, gram: np.ndarray, rhs: np.ndarray, w: np.ndarray, smoothing: float,
+    def _solve(self, gram: np.ndarray, rhs: np.ndarray, w: np.ndarray, weight: float,
                pin: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, np.ndarray | None]:
         """The penalised solution and the upper Cholesky factor of its system (None when the
         system is not positive definite: least squares then)."""
-        try:
-            return _cholesky_solve(self._system(gram, w, smoothing, pin), rhs)
-        except np.linalg.LinAlgError:
-            import scipy.linalg
+        upper = spd_factor(self._system(gram, w, weight, pin), overwrite=True)
+        if upper is not None:
+            return factor_solve(upper, rhs), upper
+        import scipy.linalg
 
-            return scipy.linalg.lstsq(self._system(gram, w, smoothing, pin), rhs)[0], None
+        return scipy.linalg.lstsq(self._system(gram, w, weight, pin), rhs)[0], None
 
-    def _gcv(self, g: np.ndarray, pulled: np.ndarray, w: np.ndarray, smoothing: float, r: np.ndarray) -> float:
-        a = self._system(g, w, smoothing)
+    def _gcv(self, g: np.ndarray, pulled: np.ndarray, w: np.ndarray, weight: float, r: np.ndarray) -> float:
+        a = self._system(g, w, weight)
         try:
             import scipy.linalg
 
@@ -368,22 +364,33 @@ class _Evaluator:
         return float(np.sqrt(self.n * sse) / dof) if dof > 0 else float("inf")
 
 
+def _prefetch(ev: Any, points: Sequence[tuple[int, float]]) -> None:
+    """:meth:`_Evaluator.prefetch` of the points the search is about to compare (any evaluator
+    with ``rmse`` alone is asked one point at a time)."""
+    if hasattr(ev, "prefetch"):
+        ev.prefetch(points)
+
+
 def _best_smoothing(ev: _Evaluator, order: int, grid: Sequence[float]) -> float:
     """Best smoothing of ``grid`` at one order: every other value, then the neighbours of the best."""
     values = sorted(float(g) for g in grid)
     coarse = values[::2] if values[-1] in values[::2] else [*values[::2], values[-1]]
+    _prefetch(ev, [(order, s) for s in coarse])
     best = min(coarse, key=lambda s: ev.rmse(order, s))
     while best == values[-1] and best * 10.0 <= MAX_SMOOTHING:  # the best is at the edge: go on
         values.append(best * 10.0)
         best = min((best, values[-1]), key=lambda s: ev.rmse(order, s))
     i = values.index(best)
+    _prefetch(ev, [(order, s) for s in values[max(0, i - 1): i + 2]])
     return min(values[max(0, i - 1): i + 2], key=lambda s: ev.rmse(order, s))
 
 
 def _best_order(ev: _Evaluator, orders: Sequence[int], smoothing: float) -> int:
     """Best order at one smoothing: every other order from the largest down (the curve is flat
     with small wiggles at high orders: no early stop), then the neighbours of the best."""
+    _prefetch(ev, [(o, smoothing) for o in list(orders)[::-1][::2]])
     best = min(list(orders)[::-1][::2], key=lambda o: ev.rmse(o, smoothing))
+    _prefetch(ev, [(o, smoothing) for o in orders if abs(o - best) <= 1])
     return min([o for o in orders if abs(o - best) <= 1], key=lambda o: ev.rmse(o, smoothing))
 
 
@@ -418,6 +425,7 @@ def _diagonal_steps(ev: _Evaluator, orders: Sequence[int], order: int, smoothing
         i, j = orders.index(order), grid.index(smoothing)
         steps = [(orders[i + di], grid[j + dj]) for di in (-1, 0, 1) for dj in (-1, 0, 1)
                  if (di or dj) and 0 <= i + di < len(orders) and 0 <= j + dj < len(grid)]
+        _prefetch(ev, steps)
         best = min(steps, key=lambda p: ev.rmse(*p), default=(order, smoothing))
         if not ev.rmse(*best) < ev.rmse(order, smoothing):
             return path
@@ -493,11 +501,13 @@ def select_order_and_smoothing(
         raise IdentifiabilityError("no candidate order and smoothing could be fitted")
     best = min(finite, key=lambda p: (p.rmse_db, p.order, -p.smoothing))
     choice = _tightest_split(ev, best, finite)
+    evaluated = [p for p in ev.curve if np.isfinite(p.rmse_db)]
+    ev.prefetch_spreads([(choice.order, choice.smoothing), *tied_keys(ev, best, evaluated)])  # all at once
     kappa, level_var = ev.spread(choice.order, choice.smoothing)
     return Selection("grouped-cv" if ev.cv else "gcv", choice.order, choice.smoothing, choice.rmse_db,
                      ev.curve, sorted(units) if ev.cv else [], float(power), kappa, float(np.sqrt(level_var)),
                      ev.excess_db2.get((int(choice.order), float(choice.smoothing)), 0.0),
-                     tied_points(ev, best, [p for p in ev.curve if np.isfinite(p.rmse_db)]))
+                     tied_points(ev, best, evaluated))
 
 
 def variance_inflation(

@@ -324,6 +324,34 @@ class KktInverse:
         return 0.5 * (cov + cov.T)
 
 
+def penalised_inverse(
+    normal: NormalEquations,
+    node_names: Sequence[str],
+    ridge: float,
+    gauge: Gauge | str | Mapping[str, Any],
+    penalty: FloatArray,
+) -> FloatArray | None:
+    """The top-left block ``M`` of the inverse KKT matrix :func:`solve` forms with this ridge,
+    penalty and gauge (its covariance is ``s^2 M``, ``s^2`` the residual variance: a
+    posterior's, the penalty read as a prior), through one Cholesky factor
+    (:func:`rplearn.core.lsq.solver_cholesky.constrained_inverse`), without the coefficients,
+    the spectrum and the report of a solve: for the automatic fit's posteriors at other
+    smoothings, which read nothing else. None when the regularised matrix is not positive
+    definite (:func:`solve` then tells why).
+    """
+    from rplearn.core.lsq.solver_cholesky import constrained_inverse
+
+    pcols, pat = normal.n_columns, normal.n_pattern_columns
+    names = list(node_names)
+    components = link_components(normal.n_nodes, normal.link_counts.keys())
+    cmat = _gauge_constraints(normal.basis, normal.n_nodes, names, components, Gauge.of(gauge))[0]
+    cmat = np.pad(cmat, ((0, 0), (0, pcols - pat)))
+    a = np.array(normal.gram, np.float64)
+    a[np.arange(pat), np.arange(pat)] += float(ridge)
+    a[np.arange(pcols), np.arange(pcols)] += _pad_shared(np.asarray(penalty, np.float64), pat, pcols)
+    return constrained_inverse(a, cmat)
+
+
 def _unit_shared_columns(normal: NormalEquations) -> FloatArray:
     """See :func:`rplearn.core.lsq.solver_large.unit_shared_scaling`."""
     return unit_shared_scaling(normal)[0]

@@ -72,6 +72,14 @@ def tied_points(ev: Any, best: CurvePoint, points: Sequence[CurvePoint]) -> list
     variance inflation: ``(order, smoothing, inflation)``, the best first. With at least
     :data:`MIN_NOISE_UNITS` units, those :func:`within_noise`; with two, those within
     :data:`WITHIN_NOISE_FRACTION` of the best mean square; none without held-out units."""
+    keys = tied_keys(ev, best, points)
+    if keys and hasattr(ev, "prefetch_spreads"):
+        ev.prefetch_spreads(keys)  # every point's folds at once
+    return [(o, s, float(ev.inflation(o, s))) for o, s in keys]
+
+
+def tied_keys(ev: Any, best: CurvePoint, points: Sequence[CurvePoint]) -> list[tuple[int, float]]:
+    """The ``(order, smoothing)`` of :func:`tied_points`, the best first (none without held-out units)."""
     if not ev.cv:
         return []
     if len(ev.folds) >= MIN_NOISE_UNITS:
@@ -79,9 +87,8 @@ def tied_points(ev: Any, best: CurvePoint, points: Sequence[CurvePoint]) -> list
     else:
         close = [p for p in points if p.rmse_db**2 <= (1.0 + WITHIN_NOISE_FRACTION) * best.rmse_db**2]
     first = (int(best.order), float(best.smoothing))
-    keys: list[tuple[int, float]] = sorted({(int(p.order), float(p.smoothing)) for p in close} | {first},
-                                           key=lambda k: (k != first, k))
-    return [(o, s, float(ev.inflation(o, s))) for o, s in keys]
+    return sorted({(int(p.order), float(p.smoothing)) for p in close} | {first}, key=lambda k: (k != first, k))
 
 
-__all__ = ["MIN_NOISE_UNITS", "WITHIN_NOISE_FRACTION", "WITHIN_NOISE_SE", "tied_points", "tightest_split", "within_noise"]
+__all__ = ["MIN_NOISE_UNITS", "WITHIN_NOISE_FRACTION", "WITHIN_NOISE_SE", "tied_keys", "tied_points", "tightest_split",
+           "within_noise"]

@@ -1,0 +1,134 @@
+"""The folds of the order selection: their statistics, sub-blocks, and each one's share of the
+variance inflation and level spread.
+
+Split from :mod:`rplearn.core.lsq.selection`. A fold is the learning units' statistics (all but
+one) and the held-out unit's (:func:`unit_folds`); :func:`sub_block` takes a smaller order's
+block. :func:`fold_spread_terms` (:func:`~rplearn.core.lsq.selection.variance_inflation` states
+the model): for one fold, from its penalised solution ``c`` and the Cholesky factor of its
+system, the observed excess of the held-out unit's squared error over the noise, the part of it
+the posterior predicts, and the unit's squared mean residual with its expectation. The folds are
+independent, so the selection computes them on the statistics' workers at once
+(:meth:`rplearn.core.lsq.runtime.StatisticsRuntime.in_order`); the sums over the folds are taken
+in fold order afterwards, as one loop did.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import cast
+
+import numpy as np
+
+from rplearn.core.lsq.normal_equations import NormalEquations
+from rplearn.core.lsq.solver_cholesky import factor_inverse
+
+
+@dataclass
+class Fold:
+    """Learning statistics (all units but one) and the held-out unit's."""
+
+    gram: np.ndarray
+    rhs: np.ndarray
+    held_gram: np.ndarray
+    held_rhs: np.ndarray
+    held_yty: float
+    held_n: int
+
+
+def unit_folds(units: Mapping[str, NormalEquations]) -> tuple[list[Fold], np.ndarray, np.ndarray, float, int]:
+    """One fold per unit held out, and the sums over every unit: ``X^T X``, ``X^T y``, ``y^T y``, samples."""
+    gram = cast(np.ndarray, sum(u.gram for u in units.values()))
+    rhs = cast(np.ndarray, sum(u.rhs for u in units.values()))
+    yty = float(sum(u.yty for u in units.values()))
+    n = int(sum(u.n_samples for u in units.values()))
+    folds = [Fold(gram - u.gram, rhs - u.rhs, u.gram, u.rhs, u.yty, u.n_samples) for u in units.values()]
+    return folds, gram, rhs, yty, n
+
+
+def sub_block(matrix: np.ndarray, idx: np.ndarray) -> np.ndarray:
+    """``matrix[idx][:, idx]``: the matrix itself (no copy) when ``idx`` is every column in order;
+    copied range by range when ``idx`` is a few increasing runs of consecutive columns (a nested
+    order: the first columns of each node's block, then the shared ones), which gathers no
+    intermediate as wide as the matrix."""
+    if idx.size == matrix.shape[0] and np.array_equal(idx, np.arange(idx.size)):
+        return matrix
+    cuts = np.flatnonzero(np.diff(idx) != 1) + 1
+    if cuts.size > _MAX_BLOCK_RUNS or np.any(np.diff(idx) <= 0):
+        return matrix.take(idx, axis=0).take(idx, axis=1)
+    runs = [(int(r[0]), int(r[-1]) + 1) for r in np.split(idx, cuts)]
+    out = np.empty((idx.size, idx.size))
+    row = 0
+    for a, b in runs:
+        col = 0
+        for c, d in runs:
+            out[row : row + b - a, col : col + d - c] = matrix[a:b, c:d]
+            col += d - c
+        row += b - a
+    return out
+
+
+#: Runs of consecutive columns up to which :func:`sub_block` copies range by range.
+_MAX_BLOCK_RUNS = 8
+
+
+@dataclass(frozen=True)
+class FoldData:
+    """What one fold's share reads besides its solution.
+
+    Attributes
+    ----------
+    gram, rhs : ndarray
+        The learning units' ``X^T X`` and ``X^T y`` at the order (shared columns appended).
+    held_gram, held_rhs : ndarray
+        The held-out unit's.
+    held_yty : float
+    held_n : int
+    index : int
+        The held-out unit's position among the units.
+    """
+
+    gram: np.ndarray
+    rhs: np.ndarray
+    held_gram: np.ndarray
+    held_rhs: np.ndarray
+    held_yty: float
+    held_n: int
+    index: int
+
+
+def fold_spread_terms(c: np.ndarray, upper: np.ndarray, fold: FoldData, sums: list[tuple[np.ndarray, float]],
+                      counts: np.ndarray, total: tuple[int, float]) -> tuple[float, float, tuple[float, float, float]]:
+    """One fold's ``(excess, predicted, (mean^2, its expectation, the level's weight))``.
+
+    ``c``: the fold's penalised solution; ``upper``: the Cholesky factor of its system
+    (:func:`rplearn.core.lsq.solver_cholesky.spd_factor`); ``sums``: per unit, its column sums
+    ``X_u^T 1`` at the order and ``sum y``; ``counts``: per unit, its samples; ``total``: the
+    samples and ``y^T y`` of all units.
+    """
+    n, yty = total
+    k = fold.index
+    g, held_g = fold.gram, fold.held_gram
+    inverse = factor_inverse(upper)  # from the solve's factor: a third of the work of an LU inverse
+    learn = [j for j in range(len(sums)) if j != k]
+    learn_n = n - fold.held_n
+    # the learning residual about each learning unit's own mean: noise, not the units' levels
+    unit_means = np.array([(sums[j][1] - c @ sums[j][0]) / counts[j] for j in learn])
+    learn_sse = (yty - fold.held_yty) - 2.0 * c @ fold.rhs + c @ g @ c - float(counts[learn] @ unit_means**2)
+    # less the fit's effective parameters tr(A^-1 G) and the other units' means
+    dof = learn_n - float(np.sum(inverse * g)) - (len(learn) - 1)
+    noise_var = max(learn_sse, 0.0) / max(dof, 1.0)
+    held_sse = max(fold.held_yty - 2.0 * c @ fold.held_rhs + c @ held_g @ c, 0.0)
+    a, sum_y = sums[k]
+    mean = (sum_y - c @ a) / fold.held_n
+    quad = float(a @ inverse @ a)  # n^2 times the posterior variance of the unit's mean, over sigma^2
+    excess = held_sse - fold.held_n * mean**2 - (fold.held_n - 1) * noise_var
+    # sum over the held-out samples of x^T (sigma^2 A^-1) x = sigma^2 tr(A^-1 X_u^T X_u),
+    # less the part along the unit's mean (removed above)
+    predicted = noise_var * (float(np.sum(inverse * held_g)) - quad / fold.held_n)  # tr(A^-1 H)
+    weights = counts[learn] / learn_n  # the fit's level: the learning units' levels, weighed by samples
+    return float(excess), float(predicted), (float(mean**2), float(noise_var * (1.0 + quad / fold.held_n) / fold.held_n),
+                                             1.0 + float(weights @ weights))
+
+
+__all__ = ["Fold", "FoldData", "fold_spread_terms", "sub_block", "unit_folds"]

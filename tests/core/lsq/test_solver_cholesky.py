@@ -1,0 +1,104 @@
+"""Cholesky factors of the selection and the posteriors: the same numbers as numpy's solves and
+inverses, at sizes whose leading dimension would alias (multiples of 64) and others, and the
+interpreter lock let go during the LAPACK calls."""
+
+from __future__ import annotations
+
+import threading
+import time
+
+import numpy as np
+import pytest
+
+from rplearn.core.lsq.solver_cholesky import constrained_inverse, factor_inverse, factor_solve, spd_factor
+
+
+def _spd(rng, p, condition=1e6):
+    q, _ = np.linalg.qr(rng.standard_normal((p, p)))
+    a = (q * np.geomspace(1.0, condition, p)) @ q.T
+    return 0.5 * (a + a.T)
+
+
+def _relative(a, b):
+    return float(np.max(np.abs(a - b)) / np.max(np.abs(b)))
+
+
+@pytest.mark.parametrize("p", [1, 7, 64, 130, 256, 301])
+def test_solves_and_inverses_equal_numpys(p):
+    rng = np.random.default_rng(p)
+    a = _spd(rng, p)
+    factor = spd_factor(a)
+    assert factor is not None
+    np.testing.assert_allclose(np.triu(factor).T @ np.triu(factor), a, rtol=0, atol=1e-12 * np.abs(a).max())
+    b, many = rng.standard_normal(p), rng.standard_normal((p, 3))
+    # condition 1e6: 1e-10 of the solution's size leaves room for rounding
+    assert _relative(factor_solve(factor, b), np.linalg.solve(a, b)) < 1e-9
+    assert _relative(factor_solve(factor, many), np.linalg.solve(a, many)) < 1e-9
+    inverse = factor_inverse(factor)
+    assert np.array_equal(inverse, inverse.T)
+    assert _relative(inverse, np.linalg.inv(a)) < 1e-9
+
+
+def test_a_well_conditioned_system_agrees_to_1e_10():
+    rng = np.random.default_rng(3)
+    a = _spd(rng, 512, condition=1e3)  # 512: factorised in a padded buffer
+    b = rng.standard_normal(512)
+    factor = spd_factor(a.copy(), overwrite=True)
+    assert _relative(factor_solve(factor, b), np.linalg.solve(a, b)) < 1e-10
+    assert _relative(factor_inverse(factor), np.linalg.inv(a)) < 1e-10
+
+
+def test_the_matrix_is_left_alone_unless_it_may_be_overwritten():
+    a = _spd(np.random.default_rng(4), 20)
+    kept = a.copy()
+    spd_factor(a)
+    assert np.array_equal(a, kept)
+
+
+def test_a_matrix_that_is_not_positive_definite_has_no_factor():
+    a = np.diag([1.0, -1.0, 2.0])
+    assert spd_factor(a) is None
+    assert constrained_inverse(a, np.ones((1, 3))) is None
+
+
+@pytest.mark.parametrize("k", [0, 1, 3])
+def test_the_constrained_inverse_is_the_kkt_inverse_block(k):
+    rng = np.random.default_rng(10 + k)
+    p = 40
+    a = _spd(rng, p, condition=1e4)
+    c = rng.standard_normal((k, p))
+    kkt = np.block([[a, c.T], [c, np.zeros((k, k))]])
+    expected = np.linalg.inv(kkt)[:p, :p]
+    got = constrained_inverse(a, c)
+    assert np.array_equal(got, got.T)
+    assert _relative(got, expected) < 1e-10
+    if k:
+        np.testing.assert_allclose(c @ got, 0.0, atol=1e-10 * np.abs(got).max())  # the constraints hold
+
+
+def test_the_factorisation_lets_other_threads_run():
+    """The LAPACK call releases the interpreter lock (the selection factorises its folds on two
+    workers at once): a thread counting meanwhile is not stopped for the call (scipy's own
+    wrapper holds the lock: its largest gap is the whole call)."""
+    from threadpoolctl import threadpool_limits
+
+    a = _spd(np.random.default_rng(5), 2000, condition=1e3)
+    stamps: list[float] = []
+    done = threading.Event()
+
+    def count():
+        while not done.is_set():
+            stamps.append(time.perf_counter())
+            time.sleep(0)
+
+    thread = threading.Thread(target=count)
+    thread.start()
+    time.sleep(0.02)
+    with threadpool_limits(1, user_api="blas"):
+        t0 = time.perf_counter()
+        spd_factor(a)
+        t1 = time.perf_counter()
+    done.set()
+    thread.join()
+    inside = np.array([t0, *(s for s in stamps if t0 < s < t1), t1])
+    assert np.diff(inside).max() < 0.5 * (t1 - t0)
