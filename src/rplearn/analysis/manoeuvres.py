@@ -28,8 +28,9 @@ variance exceeds what the penalty implies (``prior_variance_factor``: the fit ke
 so where the data are thin its error is the larger prior's) and the pattern structure the fixed
 order cannot represent, fixed per direction cell (``misfit_std_db``,
 :mod:`rplearn.analysis.manoeuvre_cells`). The last two are off by default: measured on the
-simulator (``benchmarks/manoeuvres.py --posterior honest``) they made the ranking about twice as
-slow without bringing the plans' actual errors nearer the reference flight's.
+simulator (``benchmarks/manoeuvres.py --posterior honest``, 20 cells) they narrowed the plans'
+excess error over the reference flight's from +0.23 to +0.13 dB on average, within the cells'
+scatter, and made a ranking about 2.2 times as slow.
 """
 
 from __future__ import annotations
