@@ -120,3 +120,41 @@ def test_the_ranking_reads_the_drift_the_blocks_show_and_is_unchanged_without_it
     assert ranked and all(r.spread_before_db == drifting for r in ranked)
     assert [r.name for r in rank_manoeuvres(normal, SPEC, NODES, poses, replace(opts, correlated_std_db=0.0), blocks)] == \
         [r.name for r in rank_manoeuvres(normal, SPEC, NODES, poses, opts)]
+
+
+def test_the_prior_excess_is_a_monte_carlo_over_truths_from_the_larger_prior_and_updates_like_the_whole() -> None:
+    """Truth drawn from a prior ``factor`` times what the penalty implies, white noise as stated:
+    the fit's error over the targets has the spread of ``sigma^2 A^-1 + sigma^2 (factor - 1) A^-1 P A^-1``,
+    and a manoeuvre's rank-k update gives the sandwich formed whole."""
+    rng, p, metrics, _, _ = _setup(7)
+    x = rng.standard_normal((10, 2 * p))
+    prior = np.linspace(0.5, 3.0, 2 * p)
+    a = x.T @ x + np.diag(prior)
+    factor = 4.0
+    post = _Posterior(a / NOISE_VAR, metrics, NOISE_VAR).with_prior_excess(factor - 1.0, prior)
+    draws = 6000
+    beta = rng.standard_normal((draws, 2 * p)) * np.sqrt(factor * NOISE_VAR / prior)
+    y = beta @ x.T + rng.standard_normal((draws, x.shape[0])) * np.sqrt(NOISE_VAR)
+    err = np.linalg.solve(a, x.T @ y.T).T - beta
+    mc = np.sqrt([np.mean(np.einsum("ij,jk,ik->i", err[:, k * p:(k + 1) * p], m, err[:, k * p:(k + 1) * p]))
+                  for k, m in enumerate(metrics)])
+    assert np.all(post.spreads() > 1.3 * _Posterior(a / NOISE_VAR, metrics, NOISE_VAR).spreads())
+    assert np.allclose(post.spreads(), mc, rtol=0.05)
+    rows, weight = rng.standard_normal((50, 2 * p)), 1.5
+    inv = np.linalg.inv(a + weight * rows.T @ rows)
+    cov = NOISE_VAR * inv + NOISE_VAR * (factor - 1.0) * inv @ np.diag(prior) @ inv
+    want = np.sqrt([np.sum(m * cov[k * p:(k + 1) * p, k * p:(k + 1) * p]) for k, m in enumerate(metrics)])
+    assert np.allclose(post.spreads_after(rows, weight), want, rtol=1e-8)
+
+
+def test_psd_factor_falls_back_to_the_svd_when_the_eigensolver_fails(monkeypatch: pytest.MonkeyPatch) -> None:
+    rng = np.random.default_rng(8)
+    v = rng.standard_normal((12, 5))
+    m = v @ v.T
+
+    def fail(*args: object, **kwargs: object) -> None:
+        raise np.linalg.LinAlgError("Eigenvalues did not converge")
+
+    monkeypatch.setattr(np.linalg, "eigh", fail)
+    f = psd_factor(m)
+    assert f.shape == (12, 5) and np.allclose(f @ f.T, m)

@@ -31,6 +31,8 @@ from .headings import heading_std_tables as heading_std_tables
 from .identifiability import IdentifiabilityStudy as IdentifiabilityStudy
 from .identifiability import identifiability_study as identifiability_study
 from .identifiability import study_antennas as study_antennas
+from .manoeuvre_cells import DirectionCells as DirectionCells
+from .manoeuvre_cells import cell_grid as cell_grid
 from .manoeuvres import ManoeuvreOptions as ManoeuvreOptions
 from .manoeuvres import PlanStep as PlanStep
 from .manoeuvres import RankedManoeuvre as RankedManoeuvre

@@ -13,19 +13,33 @@ columns, mapped through the new ``A'^-1`` (``D' = D - B^T S^-1 F D``), and appen
 time block of the manoeuvre (``correlation rows`` consecutive rows): ``(s_c / sigma^2)
 Sigma_w' u_j`` with ``u_j = weight * sum of the block's rows``. Each node's spread is
 ``sqrt(sum(M_k * Sigma_kk))``, from the diagonal blocks only.
+
+The pattern misfit a fixed order cannot represent (:mod:`rplearn.analysis.manoeuvre_cells`:
+an offset per node and direction cell, of variance ``s_m^2``) enters the same factor: the
+flight's cells ``s_m A^-1 V`` (:meth:`_Posterior.with_misfit`), and a manoeuvre's own cells
+(``weight`` times its rows summed per node and cell) appended like its time blocks.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from rplearn.analysis.manoeuvre_cells import cell_sums
 from rplearn.core.lsq.products import spd_inverse
+
+#: Per link end of a manoeuvre's rows: (node index per row, az [rad], el [rad]); None: not given.
+Ends = tuple[tuple[np.ndarray, np.ndarray, np.ndarray], ...] | None
 
 
 def psd_factor(matrix: np.ndarray, rtol: float = 1e-12) -> np.ndarray:
     """``F`` with ``F F^T = matrix`` (symmetric positive semi-definite), columns of the
     eigenvalues above ``rtol`` times the largest only."""
-    values, vectors = np.linalg.eigh(0.5 * (matrix + matrix.T))
+    sym = 0.5 * (matrix + matrix.T)
+    try:
+        values, vectors = np.linalg.eigh(sym)
+    except np.linalg.LinAlgError:  # LAPACK's eigensolver can fail to converge; for a PSD matrix the SVD is the same
+        vectors, values, _ = np.linalg.svd(sym)
+        values, vectors = values[::-1], vectors[:, ::-1]
     top = float(values[-1]) if values.size else 0.0
     keep = values > rtol * max(top, 0.0) if top > 0 else np.zeros(values.size, bool)
     return np.asarray(vectors[:, keep] * np.sqrt(values[keep]), np.float64)
@@ -52,6 +66,8 @@ class _Posterior:
         self.drift = np.zeros((self.cov.shape[0], 0))
         self.drift_scale = 0.0
         self.block_rows = 0
+        self.misfit_scale = 0.0
+        self.grid: np.ndarray | None = None
 
     def with_drift(self, correlated_var: float, cross: np.ndarray | None, block_rows: int) -> _Posterior:
         """Add the drifting error: block-offset variance ``s_c^2`` [dB^2], the blocks' ``C`` so
@@ -60,7 +76,33 @@ class _Posterior:
             self.drift_scale = float(np.sqrt(correlated_var)) / self.noise_var
             self.block_rows = max(int(block_rows), 1)
             if cross is not None and np.any(cross):
-                self.drift = self.drift_scale * (self.cov @ psd_factor(cross))
+                self.drift = np.hstack([self.drift, self.drift_scale * (self.cov @ psd_factor(cross))])
+                if self.drift.shape[1] > self.drift.shape[0]:
+                    self.drift = psd_factor(self.drift @ self.drift.T)
+        return self
+
+    def with_prior_excess(self, excess: float, prior_diag: np.ndarray) -> _Posterior:
+        """Add ``sigma^2 * excess * A^-1 P A^-1``: the prior's variance taken ``1 + excess`` times
+        what the penalty ``P`` (diagonal, units of ``X^T X``) and the noise imply, the noise part
+        left as it is (the fit keeps its penalty; the error it leaves where the data are thin is
+        the larger prior's)."""
+        if excess > 0:
+            cols = (float(np.sqrt(excess)) / float(np.sqrt(self.noise_var))) * (self.cov * np.sqrt(np.asarray(prior_diag, np.float64))[None, :])
+            self.drift = np.hstack([self.drift, cols])
+            if self.drift.shape[1] > self.drift.shape[0]:
+                self.drift = psd_factor(self.drift @ self.drift.T)
+        return self
+
+    def with_misfit(self, misfit_var: float, cells: np.ndarray | None, grid: np.ndarray) -> _Posterior:
+        """Add the misfit fixed per direction cell: its variance ``s_m^2`` [dB^2] per node and
+        cell, the flight's cell sums ``V`` so far (None: none yet) and the cells' grid."""
+        if misfit_var > 0:
+            self.misfit_scale = float(np.sqrt(misfit_var)) / self.noise_var
+            self.grid = grid
+            if cells is not None and cells.shape[1]:
+                self.drift = np.hstack([self.drift, self.misfit_scale * (self.cov @ cells)])
+                if self.drift.shape[1] > self.drift.shape[0]:
+                    self.drift = psd_factor(self.drift @ self.drift.T)
         return self
 
     def _node_vars(self, cov: np.ndarray, drift: np.ndarray) -> np.ndarray:
@@ -89,16 +131,24 @@ class _Posterior:
         s = b @ rows.T + np.eye(rows.shape[0]) * (self.noise_var / weight)
         return rows, b, np.linalg.solve(s, b)
 
-    def _drift_after(self, rows: np.ndarray, weight: float, parts: tuple[np.ndarray, np.ndarray, np.ndarray]) -> np.ndarray:
-        """``D'`` after the update (module docstring); ``rows`` uncompressed, ``parts`` of :meth:`_woodbury`."""
-        if self.drift_scale <= 0:
+    def _drift_after(self, rows: np.ndarray, weight: float, parts: tuple[np.ndarray, np.ndarray, np.ndarray],
+                     ends: Ends = None) -> np.ndarray:
+        """``D'`` after the update (module docstring); ``rows`` uncompressed, ``parts`` of
+        :meth:`_woodbury`, ``ends`` the rows' (node index, az, el) of each link end (for the misfit)."""
+        cols = []
+        if self.drift_scale > 0:
+            starts = np.arange(0, rows.shape[0], self.block_rows)
+            cols.append(self.drift_scale * (weight * np.add.reduceat(rows, starts, axis=0).T))  # (columns, blocks)
+        if self.misfit_scale > 0 and ends is not None and self.grid is not None:
+            cols.append(self.misfit_scale * cell_sums(rows, ends, self.grid, weight))
+        if not cols and not self.drift.shape[1]:
             return self.drift
         small, b, sb = parts
         old = self.drift - sb.T @ (small @ self.drift) if self.drift.shape[1] else self.drift
-        starts = np.arange(0, rows.shape[0], self.block_rows)
-        u = weight * np.add.reduceat(rows, starts, axis=0).T  # (columns, blocks)
-        new = self.drift_scale * (self.cov @ u - sb.T @ (b @ u))
-        return np.hstack([old, new])
+        if not cols:
+            return old
+        u = np.hstack(cols)
+        return np.hstack([old, self.cov @ u - sb.T @ (b @ u)])
 
     def updated(self, rows: np.ndarray, weight: float) -> np.ndarray:
         """The white covariance after ``weight`` packets per feature row ``rows`` (rank-k update)."""
@@ -107,24 +157,24 @@ class _Posterior:
         _, b, sb = self._woodbury(rows, weight)
         return self.cov - b.T @ sb
 
-    def update(self, rows: np.ndarray, weight: float) -> None:
-        """Take the manoeuvre's rows into the posterior (white part and drift)."""
+    def update(self, rows: np.ndarray, weight: float, ends: Ends = None) -> None:
+        """Take the manoeuvre's rows into the posterior (white part, drift and misfit)."""
         if rows.shape[0] == 0:
             return
         parts = self._woodbury(rows, weight)
-        drift = self._drift_after(rows, weight, parts)
+        drift = self._drift_after(rows, weight, parts, ends)
         self.cov = self.cov - parts[1].T @ parts[2]
         if drift.shape[1] > drift.shape[0]:  # keep it at most square: the same D D^T
             drift = psd_factor(drift @ drift.T)
         self.drift = drift
 
-    def spreads_after(self, rows: np.ndarray, weight: float) -> np.ndarray:
+    def spreads_after(self, rows: np.ndarray, weight: float, ends: Ends = None) -> np.ndarray:
         """:meth:`spreads` after the update, from its diagonal blocks only."""
         if rows.shape[0] == 0:
             return self.spreads()
         parts = self._woodbury(rows, weight)
         _, b, sb = parts
-        drift = self._drift_after(rows, weight, parts)
+        drift = self._drift_after(rows, weight, parts, ends)
         p = self.p
         var = []
         for k, m in enumerate(self.metrics):
