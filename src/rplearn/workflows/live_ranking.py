@@ -15,6 +15,12 @@ A stop (the end of the stream, a stop criterion, Ctrl-C, an error) closes the wo
 running ranking is not waited for (a thread cannot be interrupted inside numpy; the thread is a
 daemon, so the process exits without it) and its result is dropped. ``beside=False`` ranks in
 the caller's thread at once, as the loop did before (the reference of the tests).
+
+The ranking holds the process's BLAS limit of one thread while it runs
+(:func:`rplearn.core.threads.one_blas_thread`); a refit meanwhile runs with the threads as they
+are, so a refit large enough for two BLAS threads gets one then: slower, and equal to the
+policy's result to rounding only. A small refit (the live case: a few hundred columns) uses one
+thread anyway, and its result is the same bits.
 """
 
 from __future__ import annotations
