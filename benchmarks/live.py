@@ -28,6 +28,7 @@ target not enforced).
 from __future__ import annotations
 
 import argparse
+import ctypes
 import gc
 import math
 import os
@@ -81,6 +82,24 @@ def flight(minutes: float, rate_hz: float, seed: int = 0) -> tuple[pd.DataFrame,
 def rss_mib() -> float:
     with open("/proc/self/statm") as fh:
         return int(fh.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 2**20
+
+
+class _MallInfo(ctypes.Structure):
+    _fields_ = [(n, ctypes.c_size_t) for n in ("arena", "ordblks", "smblks", "hblks", "hblkhd", "usmblks", "fsmblks",
+                                               "uordblks", "fordblks", "keepcost")]
+
+
+def malloc_mib() -> tuple[str, float]:
+    """glibc's allocator over all its arenas: in use (heap and mmapped) and held free [MiB] as
+    text, and the MiB in use (NaN where it cannot be read)."""
+    try:
+        libc = ctypes.CDLL("libc.so.6")
+        libc.mallinfo2.restype = _MallInfo
+        m = libc.mallinfo2()
+    except (OSError, AttributeError):  # not glibc 2.33+
+        return "malloc: n/a", math.nan
+    used = (m.uordblks + m.hblkhd) / 2**20
+    return f"malloc in use {used:.1f} MiB (mmapped {m.hblkhd / 2**20:.1f}), held free {m.fordblks / 2**20:.1f} MiB", used
 
 
 def load() -> str:
@@ -154,11 +173,12 @@ def _snapshot(live: LiveStatistics, fitted, latest: pd.DataFrame):
     return total, fitted, latest
 
 
-def memory(minutes: float, rate_hz: float, order: int, marks: list[float]) -> list[tuple[float, float, int, str]]:
-    """(minutes, RSS [MiB], Python allocator blocks, the session's bounded records) at each mark."""
+def memory(minutes: float, rate_hz: float, order: int, marks: list[float]) -> list[tuple[float, float, int, float, str]]:
+    """(minutes, RSS [MiB], Python allocator blocks, malloc in use [MiB], the session's bounded
+    records) at each mark."""
     pose, signal = flight(minutes, rate_hz, seed=2)
     spec = ModelSpec.parse("sh", order=order)
-    out: list[tuple[float, float, int, str]] = []
+    out: list[tuple[float, float, int, float, str]] = []
     left = sorted(marks)
     sessions = []
     original = live_module._Session.__init__
@@ -173,7 +193,8 @@ def memory(minutes: float, rate_hz: float, order: int, marks: list[float]) -> li
             s = sessions[0]
             kept = (f"prequential bins {s.preq.bins}, row hashes {len(s.matcher._seen)}, "
                     f"segments {len(s.stats.segments) if s.stats else 0}")
-            out.append((left.pop(0), rss_mib(), sys.getallocatedblocks(), kept))
+            text, used = malloc_mib()
+            out.append((left.pop(0), rss_mib(), sys.getallocatedblocks(), used, f"{kept}; {text}"))
 
     def hook(stats, fitted, latest):  # a ranking's inputs, without its seconds of work
         return [("hold", 1.0, float(stats.n_samples))]
@@ -220,11 +241,13 @@ def main() -> int:
           f"ratio refit / reference {statistics.median(costs.alone) / ref:.1f}x alone, {beside / ref:.1f}x beside a ranking")
     marks = [long_minutes * f for f in (1 / 12, 1 / 6, 1 / 3, 1 / 2, 3 / 4, 1)]
     mem = memory(long_minutes, rate, order, marks)
-    for m, r, blocks, kept in mem:
+    for m, r, blocks, _, kept in mem:
         print(f"memory at {m:g} min: RSS {r:.1f} MiB, Python blocks {blocks:,}; {kept}")
-    late = [(m, r) for m, r, _, _ in mem if m >= marks[1]]
-    print(f"memory over a long session: growth from {late[0][0]:g} to {late[-1][0]:g} min {late[-1][1] - late[0][1]:+.1f} MiB; "
-          f"slope {slope_mib_per_hour(late):+.1f} MiB/hour (from {marks[1]:g} min on); {load()}")
+    late = [row for row in mem if row[0] >= marks[1]]
+    rss, used = [(row[0], row[1]) for row in late], [(row[0], row[3]) for row in late]
+    print(f"memory over a long session, from {late[0][0]:g} to {late[-1][0]:g} min: RSS {rss[-1][1] - rss[0][1]:+.1f} MiB, "
+          f"slope {slope_mib_per_hour(rss):+.1f} MiB/hour; malloc in use slope {slope_mib_per_hour(used):+.2f} MiB/hour; "
+          f"Python blocks {late[-1][2] - late[0][2]:+,}; {load()}")
     met = float(np.percentile(costs.alone, 95)) < TARGET_MS
     print(f"target (95th percentile under {TARGET_MS:g} ms): {'met' if met else 'MISSED'}")
     return 0 if met or args.tiny else 1
