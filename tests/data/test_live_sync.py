@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from rplearn.data.live_sync import LiveMatcher
+from rplearn.data.live_sync import DUPLICATE_MEMORY_S, LiveMatcher
 from rplearn.data.sync import SyncOptions, synchronise
 from rplearn.errors import InputError
 from rplearn.sim import simulate
@@ -88,3 +88,27 @@ def test_signal_rows_that_lag_the_poses_still_find_their_poses(logs):
     out.append(m.match(final=True).dataset)
     live = pd.concat([o for o in out if len(o)], ignore_index=True)
     assert len(live) == len(whole.dataset) and m.summary.dropped == whole.summary.dropped
+
+
+def test_the_duplicate_hashes_kept_stay_bounded_and_a_copy_sent_again_later_is_still_found(logs):
+    """A row sent again 5 s later (a later batch) is a duplicate, as ``sync`` says; the hashes
+    kept are those of the last :data:`DUPLICATE_MEMORY_S` or so, not of every row."""
+    pose, signal = logs
+    row = signal.iloc[[len(signal) // 2]]
+    again = float(row["t"].iloc[0]) + 5.0
+    whole = synchronise(pose, pd.concat([signal, row], ignore_index=True))
+    m = LiveMatcher()
+    edges = np.arange(pose["t"].min(), pose["t"].max() + 1.0, 1.0)
+    for a, b in zip(edges[:-1], edges[1:]):
+        m.add_poses(pose[(pose["t"] >= a) & (pose["t"] < b)])
+        m.add_signals(signal[(signal["t"] >= a) & (signal["t"] < b)])
+        if a <= again < b:
+            m.add_signals(row)  # arrives with a later batch, its time already matched
+        m.match()
+    m.add_signals(signal[signal["t"] >= edges[-1]])
+    m.match(final=True)
+    assert m.summary.dropped == whole.summary.dropped and m.summary.dropped["duplicate"] == 2
+    span_s = float(signal["t"].max() - signal["t"].min())
+    per_s = len(signal) / span_s
+    assert span_s > 2 * DUPLICATE_MEMORY_S
+    assert len(m._seen) < (DUPLICATE_MEMORY_S + 5.0) * per_s < 0.6 * len(signal)

@@ -15,7 +15,7 @@ def _view(status: Any) -> Any:
     from rich.console import Group
     from rich.table import Table
 
-    from rplearn.workflows.live import page_rows
+    from rplearn.workflows.live_status import page_rows, ranking_text
 
     rows, node_rows = page_rows(status)
     numbers = Table(show_header=False, box=None, pad_edge=False)
@@ -29,7 +29,7 @@ def _view(status: Any) -> Any:
         nodes.add_column(h)
     for r in body:
         nodes.add_row(*r)
-    moves = Table(title="next-best manoeuvres")
+    moves = Table(title="next-best manoeuvres", caption=ranking_text(status) or None)
     for h in ("manoeuvre", "duration", "spread after"):
         moves.add_column(h)
     for name, duration_s, spread_db in status.manoeuvres[:3]:
@@ -40,7 +40,7 @@ def _view(status: Any) -> Any:
 
 
 @app.command()
-@user_errors
+@user_errors(flags={"ranking_every_s": "--advice-s"})
 def live(
     source: str = typer.Argument(..., help="A MAVLink connection as pymavlink names it (udpin:0.0.0.0:14550, tcp:HOST:PORT, a serial device "
                                            "such as /dev/ttyUSB0: what MAVProxy, QGroundControl and mavlink-router forward), or "
@@ -68,8 +68,9 @@ def live(
     quiet: bool = typer.Option(False, "--quiet", help="No live view; print the summary at the end."),
     fixed: list[str] | None = typer.Option(None, "--fixed", help="Nodes that cannot move (a ground station), for the next-best "
                                                                  "manoeuvres; default for MAVLink: the station (gcs)."),
-    advice_s: float = typer.Option(15.0, "--advice-s", help="Seconds between rankings of the next-best manoeuvres (0: at every "
-                                                            "refit; a ranking takes seconds)."),
+    advice_s: float = typer.Option(15.0, "--advice-s", help="Seconds at least between the starts of two rankings of the next-best "
+                                                            "manoeuvres (0: after every refit once the last has finished; a ranking "
+                                                            "takes seconds and runs beside the refits)."),
     no_advice: bool = typer.Option(False, "--no-advice", help="Do not rank the next-best manoeuvres."),
 ) -> None:
     """Learn the patterns while the drones fly: match, predict each new batch before learning it
@@ -90,11 +91,11 @@ def live(
                             station_geodetic=geodetic_flag(station_geodetic, "--station"))
     csv_source = "," in source and all(p.lower().endswith(".csv") for p in source.split(","))
     still = tuple(split_list(fixed) or ()) or (() if csv_source else (reader.station,))
-    advisor = None if no_advice else live_advisor(still, advice_s, until_spread_db)
+    advisor = None if no_advice else live_advisor(still, 0.0, until_spread_db)  # paced by ranking_every_s
     options = LiveOptions(spec=spec, fit=FitOptions(auto=auto), reader=reader, sync=SyncOptions(max_gap_s=max_gap_s),
                           refit_s=refit_s, duration_s=duration_s, until_spread_db=until_spread_db,
                           until_coverage_pct=until_coverage_pct, idle_s=idle_s, nodes=tuple(split_list(nodes) or ()) or None,
-                          manoeuvres=advisor)
+                          manoeuvres=advisor, ranking_every_s=advice_s)
     if quiet:
         outcome = run_live(source, output, options, None, record, html)
     else:

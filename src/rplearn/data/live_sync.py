@@ -13,7 +13,12 @@ counts are those of ``sync`` on the whole logs (:meth:`LiveMatcher.match` with
 
 Memory: the pose rows a later match can need (per moving node, those after the matched
 horizon and the one before it; a still node's first and last row), the pending signal rows,
-and 8 bytes per signal row for duplicates across chunks (as ``synchronise_stream``).
+and for duplicates across chunks the hashes of the signal rows at most
+:data:`DUPLICATE_MEMORY_S` older than those poses (16 bytes a row): it does not grow with the
+stream's length. A row older than every pose kept can no longer be matched (it is
+``out_of_span``), so its hash is forgotten some time after them; a copy of it arriving later
+still is dropped as ``out_of_span`` where ``sync`` of the whole log says ``duplicate`` (a row
+without a valid time is forgotten at once: ``invalid_value`` for ``duplicate``).
 
 Limits against ``sync`` on the whole logs: the nodes' flight phases (``airborne``, the
 window's log start) are those of the poses kept, so :class:`LiveMatcher` refuses the
@@ -24,6 +29,7 @@ settled has those rows dropped as ``unknown_node`` (a whole-log sync would place
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 
 import numpy as np
 import pandas as pd
@@ -31,10 +37,52 @@ import pandas as pd
 from rplearn._argtypes import check_types
 from rplearn.data.phases import flight_phases
 from rplearn.data.poses import tracks_of_checked_log
-from rplearn.data.streaming import _SeenRows, row_hashes
+from rplearn.data.streaming import row_hashes
 from rplearn.data.sync import SyncOptions, SyncResult, SyncSummary, _match_chunk, _options, finish_summary
 from rplearn.data.tables import MATCHED_COLUMNS, POSE_COLUMNS, non_unit_quaternion_rows, validate_pose_log
 from rplearn.errors import InputError
+
+
+class _RecentRows:
+    """Hashes of the signal rows of earlier chunks, with their times, sorted for look-up; those
+    of rows before a time are forgotten (:meth:`forget`)."""
+
+    def __init__(self) -> None:
+        self.sorted = np.empty(0, np.uint64)
+        self.t_s = np.empty(0, np.float64)
+
+    def repeats(self, hashes: np.ndarray, t_s: np.ndarray) -> np.ndarray:
+        """Mask of hashes seen in an earlier chunk; then remember these with their times."""
+        if self.sorted.size:
+            pos = np.searchsorted(self.sorted, hashes).clip(max=self.sorted.size - 1)
+            seen = self.sorted[pos] == hashes
+        else:
+            seen = np.zeros(hashes.size, bool)
+        both = np.concatenate([self.sorted, hashes])
+        order = np.argsort(both, kind="stable")
+        self.sorted, self.t_s = both[order], np.concatenate([self.t_s, t_s])[order]
+        return seen
+
+    def forget(self, before_s: float) -> None:
+        """Forget the rows before ``before_s`` [s] (and those without a valid time)."""
+        keep = self.t_s >= before_s
+        if not keep.all():
+            self.sorted, self.t_s = self.sorted[keep], self.t_s[keep]
+
+    def __len__(self) -> int:
+        return int(self.sorted.size)
+
+
+#: Seconds of signal time before the oldest pose kept for which row hashes are remembered.
+DUPLICATE_MEMORY_S = 30.0
+
+
+def _offset_slack_s(options: SyncOptions) -> float:
+    """The largest shift [s] the clock offsets make between a signal time and a pose time."""
+    pose = max((abs(float(v)) for v in (options.clock_offsets_s or {}).values()), default=0.0)
+    sig = options.signal_clock_offset_s
+    signal = max((abs(float(v)) for v in sig.values()), default=0.0) if isinstance(sig, Mapping) else abs(float(sig))
+    return pose + signal
 
 
 def _still(group: pd.DataFrame) -> bool:
@@ -66,7 +114,7 @@ class LiveMatcher:
         self.summary = SyncSummary()
         self._poses = pd.DataFrame(columns=list(POSE_COLUMNS))
         self._pending: list[pd.DataFrame] = []
-        self._seen = _SeenRows()
+        self._seen = _RecentRows()
         self._carry: dict = {}
         self._horizon = -math.inf
         self._signal_t = -math.inf  # the latest signal time received: later rows come at or after it
@@ -154,7 +202,8 @@ class LiveMatcher:
             raise InputError(f"{self.source}: signal rows but no pose rows to match them with", param="poses")
         tracks = self._tracks()
         phases = flight_phases(self._poses, tracks, self.options.clock_offsets_s, self.options.airborne_margin_m)
-        repeats = self._seen.repeats(row_hashes(chunk))
+        t = pd.to_numeric(chunk["t"], errors="coerce").to_numpy(np.float64) if "t" in chunk.columns else np.full(len(chunk), np.nan)
+        repeats = self._seen.repeats(row_hashes(chunk), t)
         result = _match_chunk(tracks, chunk.reset_index(drop=True), self.options, self.source, seen_before=repeats,
                               first_row=self._signal_rows, phases=phases, carry=self._carry)
         self._signal_rows += len(chunk)
@@ -164,6 +213,7 @@ class LiveMatcher:
     def _trim(self) -> None:
         """Forget the pose rows no later match needs (module docstring)."""
         keep = []
+        oldest = math.inf  # the earliest pose a moving node keeps
         for node, group in self._poses.groupby("node", sort=False):
             if str(node) not in self._moving and _still(group):
                 keep.append(group.iloc[[0, -1]] if len(group) > 1 else group)
@@ -171,7 +221,10 @@ class LiveMatcher:
             t = group["t"].to_numpy(np.float64)
             first = max(int(np.searchsorted(t, self._horizon, side="right")) - 1, 0)
             keep.append(group.iloc[first:])
+            oldest = min(oldest, float(t[first]))
         self._poses = pd.concat(keep).sort_values(["node", "t"], kind="stable").reset_index(drop=True)
+        if math.isfinite(oldest):  # rows before every pose kept can no longer be matched
+            self._seen.forget(oldest - _offset_slack_s(self.options) - DUPLICATE_MEMORY_S)
 
 
-__all__ = ["LiveMatcher"]
+__all__ = ["DUPLICATE_MEMORY_S", "LiveMatcher"]

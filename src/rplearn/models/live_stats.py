@@ -34,7 +34,7 @@ import os
 import time
 from collections import Counter
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -64,16 +64,35 @@ MAX_SEGMENTS = 16
 @check_types
 @dataclass
 class Segment:
-    """The statistics of a run of consecutive batches and where their samples are spooled."""
+    """The statistics of a run of consecutive batches and where their samples are spooled.
+
+    The batches are numbered in order; a segment holds ``n_batches`` of them from
+    ``first_batch``, spooled (when ``spool_dir`` is set) named by their number, so
+    that what a segment keeps does not grow with its batches.
+    """
 
     normal: NormalEquations
     t_min: float
     t_max: float
-    files: list[str] = field(default_factory=list)
+    first_batch: int = 0
+    n_batches: int = 1
+    spool_dir: str | None = None
 
     @property
     def n_samples(self) -> int:
         return int(self.normal.n_samples)
+
+    @property
+    def files(self) -> list[str]:
+        """The spooled files of its batches, in order (none without a spool)."""
+        if self.spool_dir is None:
+            return []
+        return [_batch_path(self.spool_dir, k) for k in range(self.first_batch, self.first_batch + self.n_batches)]
+
+
+def _batch_path(spool_dir: str, batch: int) -> str:
+    """The spooled file of batch number ``batch``."""
+    return os.path.join(spool_dir, f"batch-{batch:07d}.parquet")
 
 
 @check_types
@@ -141,12 +160,10 @@ class LiveStatistics:
         normal.add(samples.directions, samples.tx_index, samples.rx_index, y, env)
         t_all = pd.to_numeric(matched["t"]).to_numpy(np.float64)
         self._add_blocks(normal, samples, _sample_times(matched, t_all), (y, env))
-        seg = Segment(normal, float(t_all.min()), float(t_all.max()))
+        seg = Segment(normal, float(t_all.min()), float(t_all.max()), self._batches, 1, self.spool_dir)
         if self.spool_dir is not None:
-            path = os.path.join(self.spool_dir, f"batch-{self._batches:07d}.parquet")
-            with atomic_path(path) as tmp:
+            with atomic_path(_batch_path(self.spool_dir, self._batches)) as tmp:
                 matched.to_parquet(tmp, index=False)
-            seg.files.append(path)
         self._batches += 1
         self.segments.append(seg)
         self._bound()
@@ -181,7 +198,7 @@ class LiveStatistics:
             a, b = self.segments[k], self.segments.pop(k + 1)
             a.normal.merge(b.normal)
             a.t_min, a.t_max = min(a.t_min, b.t_min), max(a.t_max, b.t_max)
-            a.files += b.files
+            a.n_batches += b.n_batches  # neighbours: b's batches follow a's
 
     def total(self) -> NormalEquations:
         """The statistics of every sample so far."""

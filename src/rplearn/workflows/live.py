@@ -10,7 +10,11 @@ stopped at any moment (Ctrl-C, SIGTERM, a killed process) leaves the last good m
 at the end of the stream (no row for ``idle_s`` after the first; before the first it waits),
 after ``duration_s``, or when every node's pattern spread over its covered directions is below
 ``until_spread_db`` and/or every node's covered share of the sphere reaches
-``until_coverage_pct``; a last exact refit then follows.
+``until_coverage_pct``; a last exact refit then follows. The next-best manoeuvres are ranked
+beside the loop (:mod:`rplearn.workflows.live_ranking`), so that a ranking of seconds does not
+stop the refits; what the loop keeps does not grow with the session's length (the prequential
+record in a bounded number of bins, the notes one per kind, the matched rows of the budget
+check a window).
 
 Its final model is the offline fit of the same rows with every stretch learned from
 (:mod:`rplearn.models.live_stats`): ``rplearn sync`` of the recorded logs, then ``rplearn fit
@@ -43,13 +47,15 @@ from rplearn._atomic import atomic_path, check_output
 from rplearn.analysis.budget import check_fit_budget
 from rplearn.analysis.decoupling import decoupling_certificate
 from rplearn.data.live_sync import LiveMatcher
-from rplearn.data.sync import DROP_REASONS, SyncOptions
+from rplearn.data.sync import SyncOptions
 from rplearn.errors import InputError, RplearnError
 from rplearn.io.live_sources import CsvTail, MavlinkSource
 from rplearn.io.options import ReaderOptions
 from rplearn.models.live_stats import MAX_SEGMENTS, LiveStatistics
 from rplearn.models.options import FitOptions
 from rplearn.models.spec import ModelSpec
+from rplearn.workflows.live_ranking import Ranking, RankingWorker
+from rplearn.workflows.live_status import LiveStatus, Prequential, page_rows
 
 #: The manoeuvre hook: ``(statistics, fitted, latest pose per node) -> rows (name, duration [s],
 #: predicted spread after [dB])``, best first; the statistics are the fixed-order
@@ -86,7 +92,13 @@ class LiveOptions:
     nodes : tuple of str or None
         The node ids (default: those of the first matched batch).
     manoeuvres : ManoeuvreRanker or None
-        Ranks the next manoeuvres at every refit, best first (the top three are shown).
+        Ranks the next manoeuvres after a refit, best first (the top three are shown).
+    rank_beside : bool
+        Rank on a thread beside the loop (:mod:`rplearn.workflows.live_ranking`), so that refits
+        go on meanwhile; False: in the loop, after the refit, which waits for it.
+    ranking_every_s : float
+        Seconds of wall time at least between the starts of two rankings (0: after any refit
+        once the last ranking has finished).
     max_segments : int
         Segments of statistics kept (:class:`rplearn.models.live_stats.LiveStatistics`).
     """
@@ -103,8 +115,13 @@ class LiveOptions:
     nodes: tuple[str, ...] | None = None
     manoeuvres: ManoeuvreRanker | None = None
     max_segments: int = MAX_SEGMENTS
+    rank_beside: bool = True
+    ranking_every_s: float = 0.0
 
     def __post_init__(self) -> None:
+        if not (math.isfinite(self.ranking_every_s) and self.ranking_every_s >= 0):
+            raise InputError(f"ranking_every_s: expected a non-negative number of seconds, got {self.ranking_every_s}",
+                             param="ranking_every_s")
         for name in ("refit_s", "idle_s", "duration_s", "until_spread_db"):
             v = getattr(self, name)
             if v is not None and not (math.isfinite(v) and v > 0):
@@ -113,99 +130,6 @@ class LiveOptions:
         if self.until_coverage_pct is not None and not 0 < self.until_coverage_pct <= 100:
             raise InputError(f"until_coverage_pct: expected a percentage in (0, 100], got {self.until_coverage_pct}",
                              param="until_coverage_pct")
-
-
-@check_types
-@dataclass
-class LiveStatus:
-    """The numbers of the live view, after each refit.
-
-    Attributes
-    ----------
-    elapsed_s : float
-    received, matched, pending : int
-        Signal rows received, matched and waiting for their poses.
-    dropped : dict of str to int
-        Dropped rows by ``sync``'s reasons.
-    learned, refits : int
-    model : str
-        Label of the current model ('' before the first refit).
-    refit_ms : float
-        Wall time of the last refit [ms].
-    prequential_rmse_db : float
-        RMS error of every sample predicted before it was learned from [dB] (NaN before any).
-    prequential_n : int
-    noise_db : float
-        The current model's noise level [dB] (NaN before the first refit).
-    coverage_pct, spread_db, sphere_spread_db : dict of str to float
-        Per node: covered share of the sphere [%], pattern spread over its covered directions
-        and over the sphere [dB].
-    budget : list of str
-        The link budget's findings (empty: plausible).
-    manoeuvres : list of (str, float, float)
-        The next-best manoeuvres (name, duration [s], spread after [dB]), best first.
-    notes : list of str
-    stopped : str
-        Why the session ended ('' while it runs).
-    """
-
-    elapsed_s: float = 0.0
-    received: int = 0
-    matched: int = 0
-    pending: int = 0
-    dropped: dict[str, int] = field(default_factory=lambda: {r: 0 for r in DROP_REASONS})
-    learned: int = 0
-    refits: int = 0
-    model: str = ""
-    refit_ms: float = math.nan
-    prequential_rmse_db: float = math.nan
-    prequential_n: int = 0
-    noise_db: float = math.nan
-    coverage_pct: dict[str, float] = field(default_factory=dict)
-    spread_db: dict[str, float] = field(default_factory=dict)
-    sphere_spread_db: dict[str, float] = field(default_factory=dict)
-    budget: list[str] = field(default_factory=list)
-    manoeuvres: list[tuple[str, float, float]] = field(default_factory=list)
-    notes: list[str] = field(default_factory=list)
-    stopped: str = ""
-
-    def summary(self) -> str:
-        """Plain text of the numbers (printed at the end of a session)."""
-        lines = [f"{self.elapsed_s:.0f} s: {self.received} signal rows, {self.matched} matched, {self.learned} learned, "
-                 f"{self.refits} refits (last {self.refit_ms:.0f} ms), model {self.model or '-'}"]
-        lines += [f"  dropped ({r}): {n}" for r, n in self.dropped.items() if n]
-        lines.append(f"  prequential RMSE {self.prequential_rmse_db:.2f} dB over {self.prequential_n} samples, "
-                     f"noise {self.noise_db:.2f} dB")
-        for node in self.spread_db:
-            lines.append(f"  {node}: coverage {self.coverage_pct[node]:.1f}%, spread {self.spread_db[node]:.2f} dB covered, "
-                         f"{self.sphere_spread_db[node]:.2f} dB sphere")
-        lines += [f"  budget: {b}" for b in self.budget]
-        lines += [f"  next: {n} ({d:.0f} s) -> {s:.2f} dB" for n, d, s in self.manoeuvres[:3]]
-        lines += [f"  {n}" for n in self.notes]
-        if self.stopped:
-            lines.append(f"  stopped: {self.stopped}")
-        return "\n".join(lines)
-
-
-@check_types
-@dataclass
-class Prequential:
-    """Squared errors of samples predicted before they were learned from, batch by batch."""
-
-    n: list[int] = field(default_factory=list)
-    sse: list[float] = field(default_factory=list)
-
-    def add(self, residual_db: np.ndarray) -> None:
-        self.n.append(int(residual_db.size))
-        self.sse.append(float(residual_db @ residual_db))
-
-    def rmse_db(self, last_fraction: float = 1.0) -> float:
-        """RMSE over the last ``last_fraction`` of the predicted samples (whole batches) [dB]."""
-        n = np.asarray(self.n, np.float64)
-        if not n.sum():
-            return math.nan
-        keep = np.cumsum(n[::-1]) <= last_fraction * n.sum() + 0.5 * n[::-1]
-        return float(np.sqrt(np.sum(np.asarray(self.sse)[::-1][keep]) / max(n[::-1][keep].sum(), 1)))
 
 
 @check_types
@@ -244,6 +168,15 @@ class _Session:
         self.recent: deque[pd.DataFrame] = deque()
         self.last_pose: dict[str, pd.Series] = {}
         self.new_samples = 0
+        self.ranking = None if options.manoeuvres is None else RankingWorker(
+            options.manoeuvres, options.rank_beside, options.ranking_every_s)
+        self.shown: Ranking | None = None  # the ranking on view
+
+    def note(self, prefix: str, text: str | None = None) -> None:
+        """Set (or, with no text, remove) the one note that starts with ``prefix``: a note
+        repeated at every refit replaces the last, so the notes do not grow with the session."""
+        kept = [n for n in self.status.notes if not n.startswith(prefix)]
+        self.status.notes = kept + ([] if text is None else [prefix + text])
 
     def feed(self, poses: pd.DataFrame, signals: pd.DataFrame) -> None:
         if len(poses):
@@ -276,7 +209,7 @@ class _Session:
         s = self.status
         s.matched, s.pending, s.dropped = self.matcher.summary.n_out, self.matcher.pending_rows, dict(self.matcher.summary.dropped)
         s.learned = 0 if self.stats is None else self.stats.n_samples
-        s.prequential_rmse_db, s.prequential_n = self.preq.rmse_db(), int(sum(self.preq.n))
+        s.prequential_rmse_db, s.prequential_n = self.preq.rmse_db(), self.preq.n_samples
 
     def rematch_whole(self, src: MavlinkSource) -> None:
         """Learn the recorded MAVLink log afresh, matched whole: its reader's rules look at the
@@ -314,15 +247,56 @@ class _Session:
         try:
             fitted = self.stats.refit(final=final, provenance={"source": "rplearn live"})
         except RplearnError as exc:  # too few samples yet
-            self.status.notes = [n for n in self.status.notes if not n.startswith("waiting: ")] + [f"waiting: {exc}"]
+            self.note("waiting: ", str(exc))
             return False
         self.status.refit_ms = 1e3 * (time.perf_counter() - t0)
         fitted.model.save(self.output)  # atomic: an interrupted session keeps the last good model
         self.fitted, self.new_samples = fitted, 0
         self.status.refits += 1
-        self.status.notes = [n for n in self.status.notes if not n.startswith("waiting: ")]
+        self.note("waiting: ")
         self._describe()
+        if self.ranking is not None and self.stats is not None:
+            self.ranking.submit(self._snapshot, self.status.refits)
+            self.show_ranking()
         return True
+
+    def _snapshot(self) -> tuple[Any, Any, pd.DataFrame]:
+        """What a ranking reads, none of it touched by the loop after: the sum of the statistics
+        (a new object) with a closed copy of the time-block sums, this refit's model (never
+        changed after it is made), the latest pose of every node."""
+        assert self.stats is not None
+        total = self.stats.total()
+        if total.blocks is not None:
+            total.blocks = total.blocks.closed()
+        return total, self.fitted, pd.DataFrame(list(self.last_pose.values())).reset_index(drop=True)
+
+    def show_ranking(self) -> bool:
+        """Take a ranking finished since the last call into the status; its age. Whether one was taken."""
+        if self.ranking is None:
+            return False
+        done, s = self.ranking.collect(), self.status
+        if done is not None:
+            if done.error:
+                self.note("manoeuvres: ", done.error)
+            else:
+                self.note("manoeuvres: ")
+                self.shown = done
+                s.manoeuvres = list(done.rows[:3])
+                s.manoeuvres_refit, s.ranking_s = done.refit, done.took_s
+        if self.shown is not None:
+            s.manoeuvres_age_s = self.ranking.clock() - self.shown.finished_s
+        s.ranking_running = self.ranking.running
+        return done is not None
+
+    def close_ranking(self, wait: bool) -> None:
+        """No more rankings: with ``wait``, the running one is waited for and shown; else dropped."""
+        if self.ranking is None:
+            return
+        if wait:
+            self.ranking.wait()
+            self.show_ranking()
+        self.ranking.close()
+        self.status.ranking_running = False
 
     def _describe(self) -> None:
         s, model = self.status, self.fitted.model
@@ -335,19 +309,12 @@ class _Session:
                 s.coverage_pct[node] = 100.0 * spread.covered_fraction
                 s.spread_db[node] = spread.covered_std_db
                 s.sphere_spread_db[node] = spread.sphere_std_db
+            self.note("spread: ")
         except InputError as exc:
-            s.notes.append(f"spread: {exc}")
+            self.note("spread: ", str(exc))
         if self.recent and self.stats is not None:
             window = pd.concat(list(self.recent), ignore_index=True)
             s.budget = [f.text for f in check_fit_budget(model, self.stats.samples(window))]
-        ranker = self.options.manoeuvres
-        if ranker is not None and self.stats is not None:
-            latest = pd.DataFrame(list(self.last_pose.values())).reset_index(drop=True)
-            try:
-                rows = ranker(self.stats.total(), self.fitted, latest)
-                s.manoeuvres = [(str(n), float(d), float(v)) for n, d, v in rows][:3]
-            except Exception as exc:  # the ranking is advice: its failure must not end the session
-                s.notes.append(f"manoeuvres: {type(exc).__name__}: {exc}")
 
     def write_page(self, path: str | None) -> None:
         if path is None:
@@ -371,28 +338,6 @@ class _Session:
                     f"every node's coverage at least {o.until_coverage_pct:g}%" if o.until_coverage_pct is not None else ""]
             return " and ".join(w for w in what if w)
         return ""
-
-
-@check_types
-def page_rows(status: LiveStatus) -> tuple[list[tuple[str, str]], list[list[str]]]:
-    """The numbers of :class:`LiveStatus` as (label, value) rows and a node table (header first)."""
-    s = status
-    rows = [("elapsed", f"{s.elapsed_s:.0f} s"), ("signal rows received", str(s.received)),
-            ("matched", str(s.matched)), ("waiting for poses", str(s.pending)), ("learned", str(s.learned)),
-            ("model", s.model or "-"), ("refits", f"{s.refits} (last {s.refit_ms:.0f} ms)"),
-            ("prequential RMSE", f"{s.prequential_rmse_db:.2f} dB over {s.prequential_n} samples"),
-            ("noise level", f"{s.noise_db:.2f} dB")]
-    rows += [(f"dropped ({r})", str(n)) for r, n in s.dropped.items() if n]
-    rows += [("link budget", b) for b in s.budget] or [("link budget", "plausible")]
-    rows += [(f"next manoeuvre {k + 1}", f"{n} ({d:.0f} s): spread {v:.2f} dB after")
-             for k, (n, d, v) in enumerate(s.manoeuvres[:3])]
-    rows += [("note", n) for n in s.notes]
-    if s.stopped:
-        rows.append(("stopped", s.stopped))
-    nodes = [["node", "coverage", "spread where looked", "spread on the sphere"]]
-    nodes += [[n, f"{s.coverage_pct[n]:.1f}%", f"{s.spread_db[n]:.2f} dB", f"{s.sphere_spread_db[n]:.2f} dB"]
-              for n in s.spread_db]
-    return rows, nodes
 
 
 @check_types
@@ -454,6 +399,10 @@ def run_live(
                 session.write_page(html)
                 if on_update is not None:
                     on_update(session.status)
+            elif session.show_ranking():  # a ranking beside the loop finished
+                session.status.elapsed_s = now - start
+                if on_update is not None:
+                    on_update(session.status)
             reason = session.stop_reason(now - start)
             if not reason and last_rx is not None and now - last_rx >= options.idle_s:
                 reason = f"end of stream (nothing received for {options.idle_s:g} s)"
@@ -462,6 +411,7 @@ def run_live(
                 break
             if not got.received:
                 time.sleep(0.05)
+        session.close_ranking(wait=False)  # a ranking still running is dropped, not waited for
         last = src.poll(final=True) if isinstance(src, MavlinkSource) else src.poll()
         session.feed(last.poses, last.signals)
         session.learn(final=True)
@@ -474,6 +424,7 @@ def run_live(
         if on_update is not None:
             on_update(session.status)
     finally:
+        session.close_ranking(wait=False)
         src.close()
         if record is not None and isinstance(src, MavlinkSource) and os.path.exists(src.record_path):
             with atomic_path(record) as tmp:
@@ -499,7 +450,10 @@ def replay_session(
     ``options.refit_s`` of log time) as :func:`run_live`, deterministic (tests, benchmarks,
     a flight log learned as it would have been in flight). Stops at ``until_*`` criteria and
     ``duration_s`` (log time) as :func:`run_live` does; the model file is written at every refit;
-    ``on_update(status)`` after every batch.
+    ``on_update(status)`` after every batch. A manoeuvre ranking beside the loop
+    (``options.rank_beside``) is not deterministic in which refits it ranks (a refit while one
+    runs starts none); at the end the running one is waited for, then the last model is ranked
+    (when ``ranking_every_s`` allows) and waited for, as the loop would show it.
     """
     options = options or LiveOptions()
     if not batch_s > 0:
@@ -520,6 +474,8 @@ def replay_session(
             session.learn()
             if nxt - last_refit >= options.refit_s and session.refit():
                 last_refit = nxt
+            else:
+                session.show_ranking()
             session.status.elapsed_s = nxt - t0
             if on_update is not None:
                 on_update(session.status)
@@ -529,10 +485,14 @@ def replay_session(
                 session.status.stopped = reason
                 break
         session.learn(final=True)
+        if session.ranking is not None:  # deterministic: the last model is ranked as in the loop
+            session.ranking.wait()
         session.refit(final=True)
+        session.close_ranking(wait=True)
         if not session.status.stopped:
             session.status.stopped = "end of the logs"
     finally:
+        session.close_ranking(wait=False)
         shutil.rmtree(work_dir, ignore_errors=True)
     if session.fitted is None:
         raise InputError(f"the logs ended before a model could be learned ({session.status.learned} samples learned)",
@@ -540,5 +500,4 @@ def replay_session(
     return LiveOutcome(session.status, session.fitted, session.preq, output)
 
 
-__all__ = ["BUDGET_WINDOW_ROWS", "LiveOptions", "LiveOutcome", "LiveStatus", "ManoeuvreRanker", "Prequential",
-           "open_source", "page_rows", "replay_session", "run_live"]
+__all__ = ["BUDGET_WINDOW_ROWS", "LiveOptions", "LiveOutcome", "ManoeuvreRanker", "open_source", "replay_session", "run_live"]
