@@ -262,7 +262,7 @@ class _Evaluator:
 
     def prefetch_spreads(self, points: Sequence[tuple[int, float]]) -> None:
         """:meth:`spread` of every point not computed yet, the folds of all of them on the
-        statistics' workers at once (:mod:`rplearn.core.lsq.selection_spread`)."""
+        statistics' workers at once (:mod:`rplearn.core.lsq.selection_folds`)."""
         if not self.cv:
             return
         keys = [k for k in dict.fromkeys((int(o), float(s)) for o, s in points) if k not in self._spreads]
@@ -275,7 +275,7 @@ class _Evaluator:
             self._spreads[key] = self._combine_spread(key, results[i * folds:(i + 1) * folds])
 
     def _spread_jobs(self, order: int, smoothing: float) -> list[Callable[[], Any]]:
-        """Per fold, the work of :func:`~rplearn.core.lsq.selection_spread.fold_spread_terms` (None
+        """Per fold, the work of :func:`~rplearn.core.lsq.selection_folds.fold_spread_terms` (None
         when its system is not positive definite), solving again unless the point is the best's."""
         w, blocks, targets, scales = self._blocks(int(order))
         idx = with_shared_columns(nested_columns(self.big, self.make_basis(int(order)), self.n_nodes), self.first)
