@@ -102,3 +102,25 @@ def test_the_factorisation_lets_other_threads_run():
     thread.join()
     inside = np.array([t0, *(s for s in stamps if t0 < s < t1), t1])
     assert np.diff(inside).max() < 0.5 * (t1 - t0)
+
+
+def test_a_capsule_of_another_signature_gives_no_routine(monkeypatch):
+    """An ILP64 build (64-bit integers) or any other signature: scipy's wrappers instead."""
+    from rplearn.core.lsq import solver_cholesky as sc
+
+    assert sc._routine.__wrapped__("dpotrf") is not None  # this build's signature is the expected one
+    monkeypatch.setattr(sc, "_capsule_name", lambda capsule: b"void (char *, int64_t *, double *, int64_t *, int64_t *)")
+    assert sc._routine.__wrapped__("dpotrf") is None
+
+
+def test_the_process_wide_c_api_prototypes_are_left_alone(monkeypatch):
+    import ctypes
+
+    from rplearn.core.lsq import solver_cholesky as sc
+
+    for fn in (ctypes.pythonapi.PyCapsule_GetName, ctypes.pythonapi.PyCapsule_GetPointer):
+        monkeypatch.setattr(fn, "restype", ctypes.c_int)
+        monkeypatch.setattr(fn, "argtypes", None)
+    assert sc._routine.__wrapped__("dpotrs") is not None
+    for fn in (ctypes.pythonapi.PyCapsule_GetName, ctypes.pythonapi.PyCapsule_GetPointer):
+        assert fn.restype is ctypes.c_int and fn.argtypes is None

@@ -28,6 +28,7 @@ at 450).
 from __future__ import annotations
 
 import ctypes
+import re
 from functools import cache
 from typing import Any
 
@@ -37,33 +38,71 @@ from numpy.typing import NDArray
 FloatArray = NDArray[np.float64]
 
 _INT = ctypes.POINTER(ctypes.c_int)
-#: Argument types of the LAPACK routines used (Fortran calling convention: every argument by reference).
-_SIGNATURES: dict[str, tuple[Any, ...]] = {
-    "dpotrf": (ctypes.c_char_p, _INT, ctypes.c_void_p, _INT, _INT),
-    "dpotri": (ctypes.c_char_p, _INT, ctypes.c_void_p, _INT, _INT),
-    "dpotrs": (ctypes.c_char_p, _INT, _INT, ctypes.c_void_p, _INT, ctypes.c_void_p, _INT, _INT),
+_DOUBLES = ctypes.c_void_p  # a double array's address
+#: Argument types of the LAPACK routines used (Fortran calling convention: every argument by
+#: reference) and their C signatures as scipy's capsules name them (``d``: double).
+_SIGNATURES: dict[str, tuple[tuple[Any, ...], bytes]] = {
+    "dpotrf": ((ctypes.c_char_p, _INT, _DOUBLES, _INT, _INT), b"void (char *, int *, d *, int *, int *)"),
+    "dpotri": ((ctypes.c_char_p, _INT, _DOUBLES, _INT, _INT), b"void (char *, int *, d *, int *, int *)"),
+    "dpotrs": ((ctypes.c_char_p, _INT, _INT, _DOUBLES, _INT, _DOUBLES, _INT, _INT),
+               b"void (char *, int *, int *, d *, int *, d *, int *, int *)"),
 }
+#: Cython's name for scipy's ``d`` (double) type in a capsule's signature, or plain ``double``.
+_DOUBLE_NAME = re.compile(rb"(?:__pyx_t_\w*_d|double) \*")
+# local prototypes of the C API (setting restype/argtypes on ``ctypes.pythonapi``'s functions
+# would change them for the whole process)
+_capsule_name = ctypes.PYFUNCTYPE(ctypes.c_char_p, ctypes.py_object)(("PyCapsule_GetName", ctypes.pythonapi))
+_capsule_pointer = ctypes.PYFUNCTYPE(ctypes.c_void_p, ctypes.py_object, ctypes.c_char_p)(
+    ("PyCapsule_GetPointer", ctypes.pythonapi))
+
+
+def _capsule_signature(name: bytes | None) -> bytes | None:
+    """A capsule's C signature with Cython's double type written ``d`` (None stays None)."""
+    return None if name is None else _DOUBLE_NAME.sub(b"d *", name)
 
 
 @cache
 def _routine(name: str) -> Any:
     """The LAPACK routine ``name`` of scipy's ``cython_lapack`` as a ctypes function that releases
-    the interpreter lock while it runs, or None when it cannot be had."""
+    the interpreter lock while it runs, or None when it cannot be had.
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`_SIGNATURES` (``dpotrf``, ``dpotri`` or ``dpotrs``).
+
+    Returns
+    -------
+    callable or None
+        None also when the capsule's signature is not the one expected (another integer
+        width, e.g. an ILP64 build: the callers then use scipy's wrappers).
+    """
+    argtypes, expected = _SIGNATURES[name]
     try:
         from scipy.linalg import cython_lapack
 
         capsule = cython_lapack.__pyx_capi__[name]
-        get_name = ctypes.pythonapi.PyCapsule_GetName
-        get_name.restype, get_name.argtypes = ctypes.c_char_p, [ctypes.py_object]
-        get_pointer = ctypes.pythonapi.PyCapsule_GetPointer
-        get_pointer.restype, get_pointer.argtypes = ctypes.c_void_p, [ctypes.py_object, ctypes.c_char_p]
-        address = get_pointer(capsule, get_name(capsule))
+        signature = _capsule_name(capsule)
+        if _capsule_signature(signature) != expected:
+            return None
+        address = _capsule_pointer(capsule, signature)
     except (ImportError, AttributeError, KeyError, ValueError):  # pragma: no cover - another scipy build
         return None
-    return ctypes.CFUNCTYPE(None, *_SIGNATURES[name])(address) if address else None
+    return ctypes.CFUNCTYPE(None, *argtypes)(address) if address else None
 
 
 def _int(value: int) -> Any:
+    """A reference to a C ``int`` holding ``value`` (a Fortran argument, passed by reference).
+
+    Parameters
+    ----------
+    value : int
+
+    Returns
+    -------
+    ctypes reference
+        Valid for the call it is passed to.
+    """
     return ctypes.byref(ctypes.c_int(int(value)))
 
 
