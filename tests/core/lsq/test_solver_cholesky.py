@@ -124,3 +124,57 @@ def test_the_process_wide_c_api_prototypes_are_left_alone(monkeypatch):
     assert sc._routine.__wrapped__("dpotrs") is not None
     for fn in (ctypes.pythonapi.PyCapsule_GetName, ctypes.pythonapi.PyCapsule_GetPointer):
         assert fn.restype is ctypes.c_int and fn.argtypes is None
+
+
+@pytest.mark.parametrize("shape", [(3,), (3, 4), (2, 2, 2)])
+def test_a_matrix_that_is_not_square_is_refused(shape):
+    from rplearn.errors import InputError
+
+    with pytest.raises(InputError, match="matrix: expected a square matrix"):
+        spd_factor(np.ones(shape))
+    with pytest.raises(InputError, match="factor: expected a square matrix"):
+        factor_solve(np.ones(shape), np.ones(3))
+    with pytest.raises(InputError, match="factor: expected a square matrix"):
+        factor_inverse(np.ones(shape))
+
+
+@pytest.mark.parametrize("rhs_shape", [(4,), (2,), (4, 2), (3, 1, 1), ()])
+def test_a_right_hand_side_of_other_rows_is_refused(rhs_shape):
+    from rplearn.errors import InputError
+
+    factor = spd_factor(_spd(np.random.default_rng(6), 3))
+    with pytest.raises(InputError, match="rhs: expected 3 rows"):
+        factor_solve(factor, np.ones(rhs_shape))
+
+
+def test_a_factor_of_another_layout_or_type_gives_the_same_solution():
+    rng = np.random.default_rng(7)
+    a = _spd(rng, 9)
+    b = rng.standard_normal(9)
+    factor = spd_factor(a)
+    expected = factor_solve(factor, b)
+    assert np.array_equal(factor_solve(np.ascontiguousarray(factor), b), expected)  # C-ordered: copied
+    assert np.array_equal(factor_solve(np.eye(3, dtype=int) * 2, [4, 2, 8]), [1.0, 0.5, 2.0])  # integers: float64
+    assert np.array_equal(factor_solve(factor, list(b)), expected)
+
+
+@pytest.mark.parametrize("bad", [np.inf, np.nan])
+def test_a_non_finite_diagonal_has_no_factor(bad):
+    a = np.diag([1.0, 2.0, 3.0])
+    a[1, 1] = bad
+    assert spd_factor(a) is None
+    assert constrained_inverse(a, np.ones((1, 3))) is None
+
+
+def test_an_argument_error_is_raised_not_read_as_indefinite(monkeypatch):
+    from rplearn.core.lsq import solver_cholesky as sc
+
+    def invalid(*args):  # LAPACK's answer to an invalid argument: info = -(its position)
+        args[-1]._obj.value = -4
+
+    monkeypatch.setattr(sc, "_routine", lambda name: invalid)
+    a = _spd(np.random.default_rng(8), 4)
+    with pytest.raises(ValueError, match="dpotrf: argument 4 is invalid"):
+        sc.spd_factor(a)
+    with pytest.raises(ValueError, match="dpotri: argument 4 is invalid"):
+        sc.factor_inverse(np.eye(4))

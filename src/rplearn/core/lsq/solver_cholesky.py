@@ -35,6 +35,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from rplearn.errors import InputError
+
 FloatArray = NDArray[np.float64]
 
 _INT = ctypes.POINTER(ctypes.c_int)
@@ -142,60 +144,152 @@ def _fortran_copy(matrix: FloatArray) -> FloatArray:
     return np.array(matrix, np.float64, order="F")
 
 
-def spd_factor(matrix: FloatArray, overwrite: bool = False) -> FloatArray | None:
-    """The upper Cholesky factor ``U`` (``matrix = U^T U``, Fortran-ordered; the strict lower
-    triangle is left as it was) of a symmetric positive definite ``matrix``, or None when it is
-    not positive definite. Only one triangle of ``matrix`` is read. ``overwrite``: the factor
-    may take ``matrix``'s memory (a C- or Fortran-contiguous float64 matrix the caller no longer needs).
+def _square(matrix: FloatArray, param: str) -> FloatArray:
+    """``matrix`` as a float64 array, checked to be a square matrix (the LAPACK calls read
+    ``n x n`` values from its address).
+
+    Raises
+    ------
+    InputError
+        When it is not two-dimensional and square.
     """
+    a = np.asarray(matrix, np.float64)
+    if a.ndim != 2 or a.shape[0] != a.shape[1]:
+        raise InputError(f"{param}: expected a square matrix, got shape {a.shape}", param=param)
+    return a
+
+
+def _lapack_info(routine: str, info: int) -> int:
+    """``info`` of a LAPACK call, raising on an argument error (``info < 0``)."""
+    if info < 0:
+        raise ValueError(f"{routine}: argument {-info} is invalid")
+    return info
+
+
+def spd_factor(matrix: FloatArray, overwrite: bool = False) -> FloatArray | None:
+    """The upper Cholesky factor of a symmetric positive definite matrix.
+
+    Only the upper triangle of ``matrix`` is read (of its Fortran-ordered view: a C-ordered
+    matrix is read as its transpose, the same for a symmetric one).
+
+    Parameters
+    ----------
+    matrix : (n, n) float64 array
+        Symmetric; non-finite entries give None (their factor would be meaningless).
+    overwrite : bool
+        The factor may take ``matrix``'s memory (a C- or Fortran-contiguous float64 matrix
+        the caller no longer needs).
+
+    Returns
+    -------
+    (n, n) float64 array or None
+        ``U`` with ``matrix = U^T U``, Fortran-ordered (or a view of the leading rows of a
+        taller buffer); its strict lower triangle is left as it was. None when ``matrix`` is
+        not positive definite or its factor's diagonal is not finite (LAPACK reports success
+        on an infinite diagonal, and some builds on a NaN one).
+
+    Raises
+    ------
+    InputError
+        When ``matrix`` is not square.
+    """
+    a = _square(matrix, "matrix")
     potrf = _routine("dpotrf")
     if potrf is None:  # pragma: no cover - scipy's wrapper (holds the interpreter lock)
         from scipy.linalg import lapack
 
-        a = np.asarray(matrix, np.float64)
-        factor, info = lapack.dpotrf(a.T if a.flags.c_contiguous else a, lower=0, clean=0, overwrite_a=int(bool(overwrite)))
-        return factor if info == 0 else None
-    factor = _fortran_owned(matrix, overwrite)
-    n = factor.shape[0]
-    info = ctypes.c_int(0)
-    potrf(b"U", _int(n), factor.ctypes.data, _int(_lda(factor)), ctypes.byref(info))
-    return factor if info.value == 0 else None
+        factor, code = lapack.dpotrf(a.T if a.flags.c_contiguous else a, lower=0, clean=0, overwrite_a=int(bool(overwrite)))
+    else:
+        factor = _fortran_owned(a, overwrite)
+        n = factor.shape[0]
+        info = ctypes.c_int(0)
+        potrf(b"U", _int(n), factor.ctypes.data, _int(_lda(factor)), ctypes.byref(info))
+        code = info.value
+    if _lapack_info("dpotrf", code) != 0 or not np.all(np.isfinite(np.diagonal(factor))):
+        return None
+    return factor
+
+
+def _factor_view(factor: FloatArray) -> FloatArray:
+    """``factor`` (checked square) as a Fortran-ordered float64 matrix or a view of the leading
+    rows of one, copied when it is neither."""
+    f = _square(factor, "factor")
+    if f.strides[0] != f.itemsize or (f.shape[0] > 1 and f.strides[1] < f.shape[0] * f.itemsize):
+        f = np.asfortranarray(f)
+    return f
 
 
 def factor_solve(factor: FloatArray, rhs: FloatArray) -> FloatArray:
-    """``A^-1 rhs`` from the factor of :func:`spd_factor` (one vector or the columns of a matrix)."""
+    """``A^-1 rhs`` from the factor of :func:`spd_factor` (two triangular solves).
+
+    Parameters
+    ----------
+    factor : (n, n) float64 array
+        :func:`spd_factor`'s ``U`` (``A = U^T U``; only its upper triangle is read).
+    rhs : (n,) or (n, k) float64 array
+        One right-hand side or ``k`` of them as columns.
+
+    Returns
+    -------
+    float64 array of ``rhs``'s shape
+        Fortran-ordered.
+
+    Raises
+    ------
+    InputError
+        When ``factor`` is not square or ``rhs`` has not ``n`` rows (or more than two dimensions).
+    """
+    f = _factor_view(factor)
+    n = f.shape[0]
+    b = np.asarray(rhs, np.float64)
+    if b.ndim not in (1, 2) or b.shape[0] != n:
+        raise InputError(f"rhs: expected {n} rows (one or more columns), got shape {b.shape}", param="rhs")
     potrs = _routine("dpotrs")
     if potrs is None:  # pragma: no cover - scipy's wrapper
         from scipy.linalg import lapack
 
-        return np.asarray(lapack.dpotrs(factor, rhs, lower=0)[0], np.float64)
-    f = np.asarray(factor, np.float64)
-    if f.strides[0] != f.itemsize:  # not (a view of the leading rows of) a Fortran-ordered matrix
-        f = np.asfortranarray(f)
-    out = np.array(rhs, np.float64, order="F", ndmin=1)
-    n = f.shape[0]
+        return np.asarray(lapack.dpotrs(f, b, lower=0)[0], np.float64)
+    out = np.array(b, np.float64, order="F")
     nrhs = 1 if out.ndim == 1 else out.shape[1]
     info = ctypes.c_int(0)
     potrs(b"U", _int(n), _int(nrhs), f.ctypes.data, _int(_lda(f)), out.ctypes.data, _int(max(n, 1)), ctypes.byref(info))
-    if info.value != 0:  # pragma: no cover - only on an argument error
-        raise ValueError(f"dpotrs: argument {-info.value} is invalid")
+    _lapack_info("dpotrs", info.value)
     return out
 
 
 def factor_inverse(factor: FloatArray) -> FloatArray:
-    """The whole ``A^-1`` (symmetric to the last bit) from the factor of :func:`spd_factor`."""
+    """The whole ``A^-1`` from the factor of :func:`spd_factor` (LAPACK ``potri``).
+
+    Parameters
+    ----------
+    factor : (n, n) float64 array
+        :func:`spd_factor`'s ``U`` (``A = U^T U``; only its upper triangle is read).
+
+    Returns
+    -------
+    (n, n) float64 array
+        Symmetric to the last bit.
+
+    Raises
+    ------
+    numpy.linalg.LinAlgError
+        When the factor is singular (a zero on its diagonal).
+    InputError
+        When ``factor`` is not square.
+    """
+    f = _factor_view(factor)
     potri = _routine("dpotri")
     if potri is None:  # pragma: no cover - scipy's wrapper
         from scipy.linalg import lapack
 
-        upper, code = lapack.dpotri(factor, lower=0)
+        upper, code = lapack.dpotri(f, lower=0)
     else:
-        upper = _fortran_copy(np.asarray(factor, np.float64))
+        upper = _fortran_copy(f)
         n = upper.shape[0]
         info = ctypes.c_int(0)
         potri(b"U", _int(n), upper.ctypes.data, _int(_lda(upper)), ctypes.byref(info))
         code = info.value
-    if code != 0:
+    if _lapack_info("dpotri", code) != 0:
         raise np.linalg.LinAlgError(f"dpotri: the factor is singular (info {code})")
     inverse = np.triu(upper)  # the upper triangle of A^-1 (the rest of ``upper`` is the factor's)
     inverse += inverse.T  # the diagonal twice (exactly: a power of two) ...
