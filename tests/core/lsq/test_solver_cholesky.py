@@ -4,9 +4,6 @@ interpreter lock let go during the LAPACK calls."""
 
 from __future__ import annotations
 
-import threading
-import time
-
 import numpy as np
 import pytest
 
@@ -76,32 +73,40 @@ def test_the_constrained_inverse_is_the_kkt_inverse_block(k):
         np.testing.assert_allclose(c @ got, 0.0, atol=1e-10 * np.abs(got).max())  # the constraints hold
 
 
-def test_the_factorisation_lets_other_threads_run():
-    """The LAPACK call releases the interpreter lock (the selection factorises its folds on two
-    workers at once): a thread counting meanwhile is not stopped for the call (scipy's own
-    wrapper holds the lock: its largest gap is the whole call)."""
-    from threadpoolctl import threadpool_limits
+def test_the_lapack_calls_let_go_of_the_interpreter_lock():
+    """The routines are ctypes C functions (CFUNCTYPE, not PYFUNCTYPE), which release the
+    interpreter lock during the call: the selection factorises its folds on two workers at once
+    (scipy's own wrappers hold the lock)."""
+    import ctypes
 
-    a = _spd(np.random.default_rng(5), 2000, condition=1e3)
-    stamps: list[float] = []
-    done = threading.Event()
+    from rplearn.core.lsq.solver_cholesky import _routine
 
-    def count():
-        while not done.is_set():
-            stamps.append(time.perf_counter())
-            time.sleep(0)
+    for name in ("dpotrf", "dpotri", "dpotrs"):
+        routine = _routine(name)
+        assert isinstance(routine, ctypes._CFuncPtr)
+        assert not routine._flags_ & ctypes._FUNCFLAG_PYTHONAPI  # PYFUNCTYPE would hold the lock
 
-    thread = threading.Thread(target=count)
-    thread.start()
-    time.sleep(0.02)
-    with threadpool_limits(1, user_api="blas"):
-        t0 = time.perf_counter()
-        spd_factor(a)
-        t1 = time.perf_counter()
-    done.set()
-    thread.join()
-    inside = np.array([t0, *(s for s in stamps if t0 < s < t1), t1])
-    assert np.diff(inside).max() < 0.5 * (t1 - t0)
+
+@pytest.mark.parametrize("p", [5, 64, 130])
+def test_scipys_wrappers_give_the_same_numbers(monkeypatch, p):
+    """Where the capsules cannot be had, scipy's wrappers (the same LAPACK) do the work: equal."""
+    from rplearn.core.lsq import solver_cholesky as sc
+
+    rng = np.random.default_rng(20 + p)
+    a, c = _spd(rng, p), rng.standard_normal((2, p))
+    b, many = rng.standard_normal(p), rng.standard_normal((p, 3))
+
+    def run():
+        factor = sc.spd_factor(a)
+        return (np.triu(factor), sc.factor_solve(factor, b), sc.factor_solve(factor, many),
+                sc.factor_inverse(factor), sc.constrained_inverse(a, c), sc.spd_factor(np.diag([1.0, -1.0])))
+
+    through_capsules = run()
+    monkeypatch.setattr(sc, "_routine", lambda name: None)
+    through_wrappers = run()
+    for got, expected in zip(through_wrappers[:-1], through_capsules[:-1]):
+        assert np.array_equal(got, expected)
+    assert through_wrappers[-1] is None and through_capsules[-1] is None
 
 
 def test_a_capsule_of_another_signature_gives_no_routine(monkeypatch):

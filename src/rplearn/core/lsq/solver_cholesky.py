@@ -195,7 +195,7 @@ def spd_factor(matrix: FloatArray, overwrite: bool = False) -> FloatArray | None
     """
     a = _square(matrix, "matrix")
     potrf = _routine("dpotrf")
-    if potrf is None:  # pragma: no cover - scipy's wrapper (holds the interpreter lock)
+    if potrf is None:  # scipy's wrapper (holds the interpreter lock)
         from scipy.linalg import lapack
 
         factor, code = lapack.dpotrf(a.T if a.flags.c_contiguous else a, lower=0, clean=0, overwrite_a=int(bool(overwrite)))
@@ -245,7 +245,7 @@ def factor_solve(factor: FloatArray, rhs: FloatArray) -> FloatArray:
     if b.ndim not in (1, 2) or b.shape[0] != n:
         raise InputError(f"rhs: expected {n} rows (one or more columns), got shape {b.shape}", param="rhs")
     potrs = _routine("dpotrs")
-    if potrs is None:  # pragma: no cover - scipy's wrapper
+    if potrs is None:  # scipy's wrapper
         from scipy.linalg import lapack
 
         return np.asarray(lapack.dpotrs(f, b, lower=0)[0], np.float64)
@@ -279,7 +279,7 @@ def factor_inverse(factor: FloatArray) -> FloatArray:
     """
     f = _factor_view(factor)
     potri = _routine("dpotri")
-    if potri is None:  # pragma: no cover - scipy's wrapper
+    if potri is None:  # scipy's wrapper
         from scipy.linalg import lapack
 
         upper, code = lapack.dpotri(f, lower=0)
