@@ -219,7 +219,7 @@ class _Evaluator:
         tasks = [task for key in keys for task in self._fold_tasks(*key)]
         results: list[tuple[np.ndarray, Any, float]] = []
         held = 0
-        for c, upper, sse in DEFAULT_RUNTIME.in_order(lambda task: task(), tasks):
+        for c, upper, sse in DEFAULT_RUNTIME.in_order(_on_one_blas_thread, tasks):
             held += 0 if upper is None else upper.size * 8
             results.append((c, upper if upper is None or held <= _PENDING_FACTOR_BYTES else _DROPPED, sse))
         folds = len(self.folds)
@@ -269,7 +269,7 @@ class _Evaluator:
         if not keys:
             return
         jobs = [job for key in keys for job in self._spread_jobs(*key)]
-        results = list(DEFAULT_RUNTIME.in_order(lambda job: job(), jobs))
+        results = list(DEFAULT_RUNTIME.in_order(_on_one_blas_thread, jobs))
         folds = len(self.folds)
         for i, key in enumerate(keys):
             self._spreads[key] = self._combine_spread(key, results[i * folds:(i + 1) * folds])
@@ -362,6 +362,27 @@ class _Evaluator:
         sse = max(self.yty - 2.0 * c @ r + c @ g @ c, 0.0)
         dof = self.n - trace
         return float(np.sqrt(self.n * sse) / dof) if dof > 0 else float("inf")
+
+
+def _on_one_blas_thread(job: Callable[[], Any]) -> Any:
+    """``job()`` with one BLAS thread, wherever it runs: on the statistics' workers (inside their
+    own one-thread limit: the limit is re-entrant) or in the calling thread when the workers are
+    busy, which would otherwise solve with the caller's BLAS threads and round differently.
+
+    Parameters
+    ----------
+    job : callable
+        A fold's work (no arguments).
+
+    Returns
+    -------
+    object
+        What ``job`` returns.
+    """
+    from rplearn.core.threads import one_blas_thread
+
+    with one_blas_thread():
+        return job()
 
 
 def _prefetch(ev: Any, points: Sequence[tuple[int, float]]) -> None:
