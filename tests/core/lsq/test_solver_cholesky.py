@@ -183,3 +183,35 @@ def test_an_argument_error_is_raised_not_read_as_indefinite(monkeypatch):
         sc.spd_factor(a)
     with pytest.raises(ValueError, match="dpotri: argument 4 is invalid"):
         sc.factor_inverse(np.eye(4))
+
+
+@pytest.mark.parametrize("k", [0, 1, 3])
+def test_the_kkt_condition_is_the_solves(k):
+    """The 1-norm condition of the scaled KKT matrix from the blocks of its inverse: the
+    number :func:`rplearn.core.lsq.solver.solve` computes from the whole inverse."""
+    from rplearn.core.lsq.solver_cholesky import kkt_condition
+
+    rng = np.random.default_rng(30 + k)
+    p = 25
+    a = _spd(rng, p, condition=1e5) * np.geomspace(1.0, 100.0, p)[:, None] * np.geomspace(1.0, 100.0, p)[None, :]
+    c = rng.standard_normal((k, p))
+    kkt = np.block([[a, c.T], [c, np.zeros((k, k))]])
+    scale = np.concatenate([1.0 / np.sqrt(np.diag(a)), np.ones(k)])
+    kkt_s = kkt * scale[:, None] * scale[None, :]
+    expected = np.linalg.cond(kkt_s, 1)
+    inverse = np.linalg.inv(kkt)
+    s_inverse = -inverse[p:, p:]
+    assert kkt_condition(a, c, inverse[:p, :p], inverse[:p, p:], s_inverse) == pytest.approx(expected, rel=1e-6)
+
+
+def test_dependent_constraints_or_a_near_singular_matrix_give_no_inverse():
+    rng = np.random.default_rng(31)
+    a = _spd(rng, 12, condition=1e3)
+    row = rng.standard_normal(12)
+    assert constrained_inverse(a, np.vstack([row, row + 1e-15 * rng.standard_normal(12)])) is None
+    assert constrained_inverse(a, np.vstack([row, row])) is None
+    assert constrained_inverse(a, row[None, :]) is not None
+    near = np.array([[1.0, 1.0 - 1e-14], [1.0 - 1e-14, 1.0]])  # positive definite, condition 2e14
+    assert spd_factor(near) is not None
+    assert constrained_inverse(near, np.zeros((0, 2))) is None
+    assert constrained_inverse(near, np.zeros((0, 2)), max_condition=np.inf) is not None

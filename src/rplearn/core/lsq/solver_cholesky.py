@@ -297,27 +297,94 @@ def factor_inverse(factor: FloatArray) -> FloatArray:
     return inverse
 
 
-def constrained_inverse(matrix: FloatArray, constraints: FloatArray) -> FloatArray | None:
-    """The top-left block ``M`` of the inverse of ``[[matrix, C^T], [C, 0]]`` (``C`` =
-    ``constraints``, one row per constraint, of full row rank): ``A^-1 - Z (C Z)^-1 Z^T`` with
-    ``Z = A^-1 C^T``, symmetric to the last bit; None when ``matrix`` is not positive definite
-    (or the constraints are dependent on it)."""
-    factor = spd_factor(matrix)
+#: Largest 1-norm condition number of the scaled KKT matrix a solve accepts (beyond it the
+#: samples do not identify the model: :func:`rplearn.core.lsq.solver.solve` raises).
+MAX_KKT_CONDITION = 1.0 / (1e3 * np.finfo(np.float64).eps)
+
+
+def kkt_condition(matrix: FloatArray, constraints: FloatArray, inverse: FloatArray, z_over_s: FloatArray,
+                  s_inverse: FloatArray) -> float:
+    """The 1-norm condition number of the KKT matrix ``K = [[A, C^T], [C, 0]]`` scaled as
+    :func:`rplearn.core.lsq.solver.solve` scales it (rows and columns of ``A`` by
+    ``1/sqrt(|diag A|)``), from the blocks of its inverse.
+
+    Parameters
+    ----------
+    matrix : (n, n) float64 array
+        ``A``.
+    constraints : (k, n) float64 array
+        ``C``.
+    inverse : (n, n) float64 array
+        The top-left block ``M`` of ``K^-1``.
+    z_over_s : (n, k) float64 array
+        Its top-right block ``Z S^-1`` (``Z = A^-1 C^T``, ``S = C Z``).
+    s_inverse : (k, k) float64 array
+        ``S^-1`` (the bottom-right block is ``-S^-1``).
+
+    Returns
+    -------
+    float
+        ``||D K D||_1 ||(D K D)^-1||_1``; infinite when a block is not finite.
+    """
+    d = 1.0 / np.sqrt(np.maximum(np.abs(np.diag(matrix)), 1e-300))
+    cd = np.abs(constraints * d[None, :])
+    norm = max(float((np.abs(matrix * d[:, None] * d[None, :]).sum(axis=0) + cd.sum(axis=0)).max()),
+               float(cd.sum(axis=1).max()) if cd.shape[0] else 0.0)
+    zs = np.abs(z_over_s / d[:, None])
+    inverse_norm = max(float((np.abs(inverse / d[:, None] / d[None, :]).sum(axis=0) + zs.sum(axis=1)).max()),
+                       float((zs.sum(axis=0) + np.abs(s_inverse).sum(axis=0)).max()) if cd.shape[0] else 0.0)
+    condition = norm * inverse_norm
+    return condition if np.isfinite(condition) else float("inf")
+
+
+def constrained_inverse(matrix: FloatArray, constraints: FloatArray, max_condition: float = MAX_KKT_CONDITION) -> FloatArray | None:
+    """The top-left block ``M`` of the inverse of the KKT matrix ``[[matrix, C^T], [C, 0]]``.
+
+    ``M = A^-1 - Z (C Z)^-1 Z^T`` with ``Z = A^-1 C^T``, from one Cholesky factor of ``A``.
+
+    Parameters
+    ----------
+    matrix : (n, n) float64 array
+        ``A``, symmetric positive definite.
+    constraints : (k, n) float64 array
+        ``C``, one row per constraint (any shape of ``k * n`` values; ``k`` may be 0).
+    max_condition : float
+        The largest condition number of the scaled KKT matrix accepted (:func:`kkt_condition`;
+        by default the solve's, :data:`MAX_KKT_CONDITION`).
+
+    Returns
+    -------
+    (n, n) float64 array or None
+        ``M``, symmetric to the last bit. None when ``matrix`` is not positive definite, or
+        the KKT matrix is singular or conditioned worse than ``max_condition`` (constraints
+        dependent on each other or on ``A``'s null space, or ``A`` itself near singular).
+
+    Raises
+    ------
+    InputError
+        When ``matrix`` is not square.
+    """
+    a = _square(matrix, "matrix")
+    factor = spd_factor(a)
     if factor is None:
         return None
     inverse = factor_inverse(factor)
     c = np.asarray(constraints, np.float64).reshape(-1, inverse.shape[0])
     if not c.shape[0]:
-        return inverse
+        fine = kkt_condition(a, c, inverse, np.zeros((inverse.shape[0], 0)), np.zeros((0, 0))) <= max_condition
+        return inverse if fine else None
     z = inverse @ c.T
     s = c @ z
     s = 0.5 * (s + s.T)
     try:
         correction = z @ np.linalg.solve(s, z.T)
+        s_inverse = np.linalg.inv(s)
     except np.linalg.LinAlgError:
         return None
     out = inverse - 0.5 * (correction + correction.T)
-    return out if np.all(np.isfinite(out)) else None
+    if not np.all(np.isfinite(out)) or kkt_condition(a, c, out, z @ s_inverse, s_inverse) > max_condition:
+        return None
+    return out
 
 
-__all__ = ["constrained_inverse", "factor_inverse", "factor_solve", "spd_factor"]
+__all__ = ["MAX_KKT_CONDITION", "constrained_inverse", "factor_inverse", "factor_solve", "kkt_condition", "spd_factor"]
