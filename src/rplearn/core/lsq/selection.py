@@ -61,7 +61,7 @@ from rplearn.core.lsq.level import shrink_target
 from rplearn.core.lsq.normal_equations import EXPONENT_MIN_SPREAD_DB, NormalEquations, schur_spread_db
 from rplearn.core.lsq.penalty import DEFAULT_PENALTY_POWER, nested_columns, penalty_scale, penalty_vector, sub_statistics, with_shared_columns
 from rplearn.core.lsq.runtime import DEFAULT_RUNTIME
-from rplearn.core.lsq.selection_folds import Fold, FoldData, fold_spread_terms, sub_block, unit_folds
+from rplearn.core.lsq.selection_folds import Fold, FoldData, fold_spread_terms, on_one_blas_thread, sub_block, unit_folds
 from rplearn.core.lsq.selection_result import CurvePoint, Selection
 from rplearn.core.lsq.solver_cholesky import factor_solve, spd_factor
 from rplearn.core.lsq.ties import tied_keys, tied_points
@@ -219,7 +219,7 @@ class _Evaluator:
         tasks = [task for key in keys for task in self._fold_tasks(*key)]
         results: list[tuple[np.ndarray, Any, float]] = []
         held = 0
-        for c, upper, sse in DEFAULT_RUNTIME.in_order(_on_one_blas_thread, tasks):
+        for c, upper, sse in DEFAULT_RUNTIME.in_order(on_one_blas_thread, tasks):
             held += 0 if upper is None else upper.size * 8
             results.append((c, upper if upper is None or held <= _PENDING_FACTOR_BYTES else _DROPPED, sse))
         folds = len(self.folds)
@@ -269,7 +269,7 @@ class _Evaluator:
         if not keys:
             return
         jobs = [job for key in keys for job in self._spread_jobs(*key)]
-        results = list(DEFAULT_RUNTIME.in_order(_on_one_blas_thread, jobs))
+        results = list(DEFAULT_RUNTIME.in_order(on_one_blas_thread, jobs))
         folds = len(self.folds)
         for i, key in enumerate(keys):
             self._spreads[key] = self._combine_spread(key, results[i * folds:(i + 1) * folds])
@@ -362,27 +362,6 @@ class _Evaluator:
         sse = max(self.yty - 2.0 * c @ r + c @ g @ c, 0.0)
         dof = self.n - trace
         return float(np.sqrt(self.n * sse) / dof) if dof > 0 else float("inf")
-
-
-def _on_one_blas_thread(job: Callable[[], Any]) -> Any:
-    """``job()`` with one BLAS thread, wherever it runs: on the statistics' workers (inside their
-    own one-thread limit: the limit is re-entrant) or in the calling thread when the workers are
-    busy, which would otherwise solve with the caller's BLAS threads and round differently.
-
-    Parameters
-    ----------
-    job : callable
-        A fold's work (no arguments).
-
-    Returns
-    -------
-    object
-        What ``job`` returns.
-    """
-    from rplearn.core.threads import one_blas_thread
-
-    with one_blas_thread():
-        return job()
 
 
 def _prefetch(ev: Any, points: Sequence[tuple[int, float]]) -> None:

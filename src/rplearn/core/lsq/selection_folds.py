@@ -14,9 +14,9 @@ in fold order afterwards, as one loop did.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import cast
+from typing import Any, cast
 
 import numpy as np
 
@@ -181,4 +181,25 @@ def fold_spread_terms(c: np.ndarray, upper: np.ndarray, fold: FoldData, sums: li
                                              1.0 + float(weights @ weights))
 
 
-__all__ = ["Fold", "FoldData", "fold_spread_terms", "sub_block", "unit_folds"]
+def on_one_blas_thread(job: Callable[[], Any]) -> Any:
+    """``job()`` with one BLAS thread, wherever it runs: on the statistics' workers (inside their
+    own one-thread limit: the limit is re-entrant) or in the calling thread when the workers are
+    busy, which would otherwise solve with the caller's BLAS threads and round differently.
+
+    Parameters
+    ----------
+    job : callable
+        A fold's work (no arguments).
+
+    Returns
+    -------
+    object
+        What ``job`` returns.
+    """
+    from rplearn.core.threads import one_blas_thread
+
+    with one_blas_thread():
+        return job()
+
+
+__all__ = ["Fold", "FoldData", "fold_spread_terms", "on_one_blas_thread", "sub_block", "unit_folds"]
