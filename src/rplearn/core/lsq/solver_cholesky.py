@@ -378,7 +378,7 @@ def constrained_inverse(matrix: FloatArray, constraints: FloatArray, max_conditi
     s = 0.5 * (s + s.T)
     try:
         correction = z @ np.linalg.solve(s, z.T)
-        s_inverse = np.linalg.inv(s)
+        s_inverse = np.asarray(np.linalg.inv(s), np.float64)
     except np.linalg.LinAlgError:
         return None
     out = inverse - 0.5 * (correction + correction.T)
