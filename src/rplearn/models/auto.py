@@ -362,7 +362,21 @@ def unit_pieces(sizes: Mapping[str, int], workers: int) -> list[tuple[str, int, 
     on the ``workers`` threads, largest first: every unit whole, then the largest halved (down to
     :data:`MIN_PIECE_SAMPLES`) until the pieces are a multiple of the workers, so that no worker
     idles while the last unit is summed (three units of a flight on two workers: 1.5 units'
-    time, not 2)."""
+    time, not 2).
+
+    Parameters
+    ----------
+    sizes : mapping of unit label to int
+        Every unit's sample count (units of none are left out).
+    workers : int
+        The threads that accumulate the statistics.
+
+    Returns
+    -------
+    list of (str, int, int)
+        ``(unit, start, stop)``: the half-open sample range of each piece, the units in their
+        order and each unit's pieces in sample order.
+    """
     pieces = [(str(u), 0, int(n)) for u, n in sizes.items() if n > 0]
     while workers > 1 and len(pieces) % workers:
         largest = max(range(len(pieces)), key=lambda i: pieces[i][2] - pieces[i][1])

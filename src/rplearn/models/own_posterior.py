@@ -65,7 +65,7 @@ import numpy as np
 from rplearn.core.basis_base import Basis
 from rplearn.core.gauge import Gauge
 from rplearn.core.lsq.normal_equations import NormalEquations
-from rplearn.core.lsq.penalty import nested_columns
+from rplearn.core.lsq.penalty import nested_columns, penalty_scale_of_diagonal
 from rplearn.core.lsq.runtime import DEFAULT_RUNTIME
 from rplearn.core.lsq.selection import penalty_vector
 from rplearn.core.lsq.solver import penalised_inverse, solve
@@ -215,7 +215,7 @@ def tied_own_posterior(own: OwnPosterior | None, total: NormalEquations, nodes: 
     for order, smoothing, inflation in ties:
         # the penalty's unit at that order (penalty_scale of its sub-block, read off the diagonal)
         d = diagonal[nested_columns(total.basis, make_basis(int(order)), total.n_nodes)]
-        point = replace(prior, smoothing=float(smoothing), scale=float(np.mean(d)) if d.size and np.mean(d) > 0 else 1.0)
+        point = replace(prior, smoothing=float(smoothing), scale=penalty_scale_of_diagonal(d))
         key = (point.smoothing, point.scale)
         groups[key] = (groups[key][0], groups[key][1] + float(inflation)) if key in groups else (point, float(inflation))
     total_cov: np.ndarray | None = None  # running sum: a few solves' matrices held at a time

@@ -57,6 +57,18 @@ def sample_times_s(duration_s: float, rate_hz: float) -> NDArray[np.float64]:
     """Times of a unit's references sampled at ``rate_hz`` [Hz]: from 0 every ``1 / rate_hz``
     up to its end ``duration_s`` [s] (included when on the grid).
 
+    Parameters
+    ----------
+    duration_s : float
+        The unit's duration [s].
+    rate_hz : float
+        The sample rate [Hz].
+
+    Returns
+    -------
+    1-D float64 array
+        The times [s], increasing from 0.
+
     Raises
     ------
     InputError

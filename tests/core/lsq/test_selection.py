@@ -234,3 +234,41 @@ def test_without_room_for_the_factors_the_inflation_solves_again(monkeypatch):
     assert (kept.order, kept.smoothing) == (dropped.order, dropped.smoothing)
     assert dropped.variance_inflation == pytest.approx(kept.variance_inflation, rel=1e-12)
     assert dropped.flight_level_std_db == pytest.approx(kept.flight_level_std_db, rel=1e-9, abs=1e-12)
+
+
+@pytest.mark.parametrize("threads", [None, "2"])
+def test_a_fold_solved_in_the_calling_thread_is_solved_with_one_blas_thread(monkeypatch, threads):
+    """With the workers busy, the folds run in the calling thread, still with one BLAS thread
+    (whatever the caller's limit): the same bits as on the workers."""
+    from threadpoolctl import threadpool_limits
+
+    from rplearn.core.lsq import runtime as runtime_module
+    from rplearn.core.lsq import selection as selection_module
+    from rplearn.core.threads import _controller
+
+    if threads is None:
+        monkeypatch.delenv("RPLEARN_THREADS", raising=False)
+    else:
+        monkeypatch.setenv("RPLEARN_THREADS", threads)
+    units = stats_of(synthetic_units(n_units=3, n_per_unit=500, truth_order=3, seed=11), SphericalHarmonics(6))
+    seen: list[int] = []
+    factor = selection_module.spd_factor
+
+    def counted(*args, **kwargs):
+        seen.append(max(lib.num_threads for lib in _controller().select(user_api="blas").lib_controllers))
+        return factor(*args, **kwargs)
+
+    monkeypatch.setattr(selection_module, "spd_factor", counted)
+    on_workers = select_order_and_smoothing(units, SphericalHarmonics, range(2, 7), RIDGE)
+    lock = runtime_module.DEFAULT_RUNTIME._lock
+    with threadpool_limits(2, user_api="blas"):
+        assert lock.acquire(blocking=False)
+        try:
+            seen.clear()
+            here = select_order_and_smoothing(units, SphericalHarmonics, range(2, 7), RIDGE)
+        finally:
+            lock.release()
+    assert seen and set(seen) == {1}
+    assert [(p.order, p.smoothing, p.rmse_db) for p in here.curve] == [(p.order, p.smoothing, p.rmse_db) for p in on_workers.curve]
+    assert (here.order, here.smoothing, here.variance_inflation, here.ties) == (
+        on_workers.order, on_workers.smoothing, on_workers.variance_inflation, on_workers.ties)

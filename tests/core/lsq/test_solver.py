@@ -266,3 +266,46 @@ def test_the_penalised_inverse_is_the_solves_covariance_over_its_residual_varian
     expected = sol.covariance / sol.residual_variance_db2
     assert got.shape == expected.shape
     np.testing.assert_allclose(got, expected, rtol=0, atol=1e-9 * np.abs(expected).max())
+
+
+def _two_node_statistics(seed=22, n=1500):
+    rng = np.random.default_rng(seed)
+    b, coef = _band_limited_patterns(rng, 2, degree_max=3)
+    d, tx, rx, y = _simulate(rng, b, coef, np.array([[0, 1], [1, 0]]), n, 1.0)
+    return b, NormalEquations(b, 2).add(d, tx, rx, y)
+
+
+@pytest.mark.parametrize("bad", [-1.0, np.nan, np.inf])
+def test_the_penalised_inverse_refuses_a_penalty_the_solve_refuses(bad):
+    from rplearn.core.lsq.solver import penalised_inverse
+
+    b, normal = _two_node_statistics()
+    penalty = np.full(normal.n_columns, 1.0)
+    penalty[3] = bad
+    with pytest.raises(InputError, match="penalty: expected"):
+        solve(normal, ["A", "B"], ridge=0.5, penalty=penalty)
+    with pytest.raises(InputError, match="penalty: expected"):
+        penalised_inverse(normal, ["A", "B"], 0.5, "equal-mean", penalty)
+    with pytest.raises(InputError, match="penalty: expected"):
+        penalised_inverse(normal, ["A", "B"], 0.5, "equal-mean", np.ones(normal.n_columns + 1))
+
+
+@pytest.mark.parametrize("ridge", [1e-12, 1e-6])
+def test_the_penalised_inverse_gives_none_where_the_solve_finds_no_identification(ridge):
+    """Every sample of node A in one direction: with a ridge of 1e-12 the KKT matrix is
+    conditioned beyond what the solve accepts (it refuses), and the inverse by one factor gives
+    none rather than the factor's rounding; with 1e-6 both give an answer."""
+    from rplearn.core.lsq.solver import penalised_inverse
+
+    rng = np.random.default_rng(18)
+    one_dir = Directions(np.zeros(500), np.zeros(500), *_dirs(rng, 500))
+    normal = NormalEquations(SphericalHarmonics(4), 2).add(one_dir, np.zeros(500, int), np.ones(500, int),
+                                                          rng.standard_normal(500))
+    got = penalised_inverse(normal, ["A", "B"], ridge, "equal-mean", np.zeros(normal.n_columns))
+    if ridge < 1e-9:
+        with pytest.raises(IdentifiabilityError, match="do not identify"):
+            solve(normal, ["A", "B"], ridge=ridge)
+        assert got is None
+    else:
+        solve(normal, ["A", "B"], ridge=ridge)
+        assert got is not None and np.all(np.isfinite(got))

@@ -23,6 +23,24 @@ def penalty_scale(gram: np.ndarray, n_columns: int | None = None) -> float:
     d = np.diag(gram)
     if n_columns is not None:
         d = d[:n_columns]
+    return penalty_scale_of_diagonal(d)
+
+
+def penalty_scale_of_diagonal(diagonal: np.ndarray) -> float:
+    """:func:`penalty_scale` from the diagonal of ``X^T X`` over the columns it averages.
+
+    Parameters
+    ----------
+    diagonal : 1-D float64 array
+        The diagonal entries of the Gram matrix of the pattern columns in question (e.g. of
+        a nested sub-block, read off the larger problem's diagonal).
+
+    Returns
+    -------
+    float
+        Their mean, or 1 when there are none or the mean is not positive.
+    """
+    d = np.asarray(diagonal, np.float64)
     return float(np.mean(d)) if d.size and np.mean(d) > 0 else 1.0
 
 
@@ -67,5 +85,5 @@ def with_shared_columns(pattern_idx: np.ndarray, normal: NormalEquations) -> np.
     return np.concatenate([pattern_idx, normal.n_pattern_columns + np.arange(len(normal.shared))]).astype(np.intp)
 
 
-__all__ = ["DEFAULT_PENALTY_POWER", "nested_columns", "penalty_scale", "penalty_vector", "sub_statistics",
+__all__ = ["DEFAULT_PENALTY_POWER", "nested_columns", "penalty_scale", "penalty_scale_of_diagonal", "penalty_vector", "sub_statistics",
            "with_shared_columns"]

@@ -61,7 +61,7 @@ from rplearn.core.lsq.level import shrink_target
 from rplearn.core.lsq.normal_equations import EXPONENT_MIN_SPREAD_DB, NormalEquations, schur_spread_db
 from rplearn.core.lsq.penalty import DEFAULT_PENALTY_POWER, nested_columns, penalty_scale, penalty_vector, sub_statistics, with_shared_columns
 from rplearn.core.lsq.runtime import DEFAULT_RUNTIME
-from rplearn.core.lsq.selection_folds import Fold, FoldData, fold_spread_terms, sub_block, unit_folds
+from rplearn.core.lsq.selection_folds import Fold, FoldData, fold_spread_terms, on_one_blas_thread, sub_block, unit_folds
 from rplearn.core.lsq.selection_result import CurvePoint, Selection
 from rplearn.core.lsq.solver_cholesky import factor_solve, spd_factor
 from rplearn.core.lsq.ties import tied_keys, tied_points
@@ -219,7 +219,7 @@ class _Evaluator:
         tasks = [task for key in keys for task in self._fold_tasks(*key)]
         results: list[tuple[np.ndarray, Any, float]] = []
         held = 0
-        for c, upper, sse in DEFAULT_RUNTIME.in_order(lambda task: task(), tasks):
+        for c, upper, sse in DEFAULT_RUNTIME.in_order(on_one_blas_thread, tasks):
             held += 0 if upper is None else upper.size * 8
             results.append((c, upper if upper is None or held <= _PENDING_FACTOR_BYTES else _DROPPED, sse))
         folds = len(self.folds)
@@ -262,20 +262,20 @@ class _Evaluator:
 
     def prefetch_spreads(self, points: Sequence[tuple[int, float]]) -> None:
         """:meth:`spread` of every point not computed yet, the folds of all of them on the
-        statistics' workers at once (:mod:`rplearn.core.lsq.selection_spread`)."""
+        statistics' workers at once (:mod:`rplearn.core.lsq.selection_folds`)."""
         if not self.cv:
             return
         keys = [k for k in dict.fromkeys((int(o), float(s)) for o, s in points) if k not in self._spreads]
         if not keys:
             return
         jobs = [job for key in keys for job in self._spread_jobs(*key)]
-        results = list(DEFAULT_RUNTIME.in_order(lambda job: job(), jobs))
+        results = list(DEFAULT_RUNTIME.in_order(on_one_blas_thread, jobs))
         folds = len(self.folds)
         for i, key in enumerate(keys):
             self._spreads[key] = self._combine_spread(key, results[i * folds:(i + 1) * folds])
 
     def _spread_jobs(self, order: int, smoothing: float) -> list[Callable[[], Any]]:
-        """Per fold, the work of :func:`~rplearn.core.lsq.selection_spread.fold_spread_terms` (None
+        """Per fold, the work of :func:`~rplearn.core.lsq.selection_folds.fold_spread_terms` (None
         when its system is not positive definite), solving again unless the point is the best's."""
         w, blocks, targets, scales = self._blocks(int(order))
         idx = with_shared_columns(nested_columns(self.big, self.make_basis(int(order)), self.n_nodes), self.first)

@@ -14,9 +14,9 @@ in fold order afterwards, as one loop did.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import cast
+from typing import Any, cast
 
 import numpy as np
 
@@ -37,7 +37,24 @@ class Fold:
 
 
 def unit_folds(units: Mapping[str, NormalEquations]) -> tuple[list[Fold], np.ndarray, np.ndarray, float, int]:
-    """One fold per unit held out, and the sums over every unit: ``X^T X``, ``X^T y``, ``y^T y``, samples."""
+    """One fold per unit held out, and the sums over every unit.
+
+    Parameters
+    ----------
+    units : mapping of unit label to NormalEquations
+        Every unit's statistics, of one basis and node count.
+
+    Returns
+    -------
+    folds : list of Fold
+        Per unit, in ``units``' order: the statistics of the others and its own.
+    gram, rhs : numpy.ndarray
+        ``X^T X`` and ``X^T y`` of all units.
+    yty : float
+        ``y^T y`` of all units.
+    n : int
+        Their samples.
+    """
     gram = cast(np.ndarray, sum(u.gram for u in units.values()))
     rhs = cast(np.ndarray, sum(u.rhs for u in units.values()))
     yty = float(sum(u.yty for u in units.values()))
@@ -50,7 +67,19 @@ def sub_block(matrix: np.ndarray, idx: np.ndarray) -> np.ndarray:
     """``matrix[idx][:, idx]``: the matrix itself (no copy) when ``idx`` is every column in order;
     copied range by range when ``idx`` is a few increasing runs of consecutive columns (a nested
     order: the first columns of each node's block, then the shared ones), which gathers no
-    intermediate as wide as the matrix."""
+    intermediate as wide as the matrix.
+
+    Parameters
+    ----------
+    matrix : (n, n) numpy.ndarray
+    idx : 1-D integer numpy.ndarray
+        The rows and columns to keep, in the order wanted.
+
+    Returns
+    -------
+    (len(idx), len(idx)) numpy.ndarray
+        ``matrix`` itself when ``idx`` is ``0..n-1``, else a new array.
+    """
     if idx.size == matrix.shape[0] and np.array_equal(idx, np.arange(idx.size)):
         return matrix
     cuts = np.flatnonzero(np.diff(idx) != 1) + 1
@@ -99,12 +128,33 @@ class FoldData:
 
 def fold_spread_terms(c: np.ndarray, upper: np.ndarray, fold: FoldData, sums: list[tuple[np.ndarray, float]],
                       counts: np.ndarray, total: tuple[int, float]) -> tuple[float, float, tuple[float, float, float]]:
-    """One fold's ``(excess, predicted, (mean^2, its expectation, the level's weight))``.
+    """One fold's terms of the variance inflation and the between-unit level variance.
 
-    ``c``: the fold's penalised solution; ``upper``: the Cholesky factor of its system
-    (:func:`rplearn.core.lsq.solver_cholesky.spd_factor`); ``sums``: per unit, its column sums
-    ``X_u^T 1`` at the order and ``sum y``; ``counts``: per unit, its samples; ``total``: the
-    samples and ``y^T y`` of all units.
+    Parameters
+    ----------
+    c : 1-D numpy.ndarray
+        The fold's penalised solution.
+    upper : numpy.ndarray
+        The Cholesky factor of its system (:func:`rplearn.core.lsq.solver_cholesky.spd_factor`).
+    fold : FoldData
+        Its statistics and its held-out unit's.
+    sums : list of (numpy.ndarray, float)
+        Per unit: its column sums ``X_u^T 1`` at the order and ``sum y``.
+    counts : 1-D numpy.ndarray
+        Per unit: its samples.
+    total : (int, float)
+        The samples and ``y^T y`` of all units.
+
+    Returns
+    -------
+    excess : float
+        The held-out unit's squared error about its own mean level, less the noise expected in it.
+    predicted : float
+        That excess as the fold's posterior predicts it (``sigma^2 tr(A^-1 H)`` less the part
+        along the unit's mean).
+    level : (float, float, float)
+        The held-out unit's squared mean residual, its expectation from noise and the posterior,
+        and the weight of the fit's level (``1 + sum w^2`` over the learning units).
     """
     n, yty = total
     k = fold.index
@@ -131,4 +181,25 @@ def fold_spread_terms(c: np.ndarray, upper: np.ndarray, fold: FoldData, sums: li
                                              1.0 + float(weights @ weights))
 
 
-__all__ = ["Fold", "FoldData", "fold_spread_terms", "sub_block", "unit_folds"]
+def on_one_blas_thread(job: Callable[[], Any]) -> Any:
+    """``job()`` with one BLAS thread, wherever it runs: on the statistics' workers (inside their
+    own one-thread limit: the limit is re-entrant) or in the calling thread when the workers are
+    busy, which would otherwise solve with the caller's BLAS threads and round differently.
+
+    Parameters
+    ----------
+    job : callable
+        A fold's work (no arguments).
+
+    Returns
+    -------
+    object
+        What ``job`` returns.
+    """
+    from rplearn.core.threads import one_blas_thread
+
+    with one_blas_thread():
+        return job()
+
+
+__all__ = ["Fold", "FoldData", "fold_spread_terms", "on_one_blas_thread", "sub_block", "unit_folds"]

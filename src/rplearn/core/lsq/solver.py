@@ -288,8 +288,10 @@ def solve(
     except np.linalg.LinAlgError:
         kinv_s = np.full((pcols + k, pcols + k), np.nan)
     finite = bool(np.all(np.isfinite(kinv_s)))
+    from rplearn.core.lsq.solver_cholesky import MAX_KKT_CONDITION  # (ctypes: loaded where used)
+
     cond_1 = float(np.abs(kkt_s).sum(axis=0).max() * np.abs(kinv_s).sum(axis=0).max()) if finite else np.inf
-    if not finite or cond_1 > 1.0 / (1e3 * np.finfo(np.float64).eps):
+    if not finite or cond_1 > MAX_KKT_CONDITION:
         raise IdentifiabilityError(
             f"the samples do not identify {normal.basis.label} for {n_nodes} nodes: design rank {rank} of "
             f"{pcols} columns, {pcols - rank} free direction(s) but only {k} gauge constant(s); "
@@ -332,23 +334,53 @@ def penalised_inverse(
     penalty: FloatArray,
 ) -> FloatArray | None:
     """The top-left block ``M`` of the inverse KKT matrix :func:`solve` forms with this ridge,
-    penalty and gauge (its covariance is ``s^2 M``, ``s^2`` the residual variance: a
-    posterior's, the penalty read as a prior), through one Cholesky factor
-    (:func:`rplearn.core.lsq.solver_cholesky.constrained_inverse`), without the coefficients,
-    the spectrum and the report of a solve: for the automatic fit's posteriors at other
-    smoothings, which read nothing else. None when the regularised matrix is not positive
-    definite (:func:`solve` then tells why).
+    penalty and gauge, through one Cholesky factor.
+
+    Its covariance is ``s^2 M`` (``s^2`` the residual variance: a posterior's, the penalty
+    read as a prior). No coefficients, spectrum or report of a solve
+    (:func:`rplearn.core.lsq.solver_cholesky.constrained_inverse`): for the automatic fit's
+    posteriors at other smoothings, which read nothing else.
+
+    Parameters
+    ----------
+    normal : NormalEquations
+        The statistics (with their shared columns, if any).
+    node_names : sequence of str
+        One name per node, in the statistics' order (for the gauge).
+    ridge : float
+        Added to the diagonal of the pattern columns (not the shared ones).
+    gauge : Gauge, str or mapping
+        As :func:`solve`'s.
+    penalty : 1-D float64 array
+        Non-negative finite weight of every column (or of every pattern column: the shared
+        ones then get none), absolute units of ``X^T X``.
+
+    Returns
+    -------
+    (n_columns, n_columns) float64 array or None
+        ``M``. None when the regularised matrix is not positive definite or the KKT matrix is
+        conditioned worse than :func:`solve` accepts
+        (:data:`~rplearn.core.lsq.solver_cholesky.MAX_KKT_CONDITION`): :func:`solve` then
+        gives its own answer or tells why there is none.
+
+    Raises
+    ------
+    InputError
+        When ``penalty`` has not one non-negative finite weight per column.
     """
     from rplearn.core.lsq.solver_cholesky import constrained_inverse
 
     pcols, pat = normal.n_columns, normal.n_pattern_columns
+    weights = _pad_shared(np.asarray(penalty, np.float64), pat, pcols)
+    if weights.shape != (pcols,) or not np.all(np.isfinite(weights)) or np.any(weights < 0):
+        raise InputError(f"penalty: expected {pcols} non-negative finite weights, got shape {weights.shape}")
     names = list(node_names)
     components = link_components(normal.n_nodes, normal.link_counts.keys())
     cmat = _gauge_constraints(normal.basis, normal.n_nodes, names, components, Gauge.of(gauge))[0]
     cmat = np.pad(cmat, ((0, 0), (0, pcols - pat)))
     a = np.array(normal.gram, np.float64)
     a[np.arange(pat), np.arange(pat)] += float(ridge)
-    a[np.arange(pcols), np.arange(pcols)] += _pad_shared(np.asarray(penalty, np.float64), pat, pcols)
+    a[np.arange(pcols), np.arange(pcols)] += weights
     return constrained_inverse(a, cmat)
 
 

@@ -28,42 +28,83 @@ at 450).
 from __future__ import annotations
 
 import ctypes
+import re
 from functools import cache
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from rplearn.errors import InputError
+
 FloatArray = NDArray[np.float64]
 
 _INT = ctypes.POINTER(ctypes.c_int)
-#: Argument types of the LAPACK routines used (Fortran calling convention: every argument by reference).
-_SIGNATURES: dict[str, tuple[Any, ...]] = {
-    "dpotrf": (ctypes.c_char_p, _INT, ctypes.c_void_p, _INT, _INT),
-    "dpotri": (ctypes.c_char_p, _INT, ctypes.c_void_p, _INT, _INT),
-    "dpotrs": (ctypes.c_char_p, _INT, _INT, ctypes.c_void_p, _INT, ctypes.c_void_p, _INT, _INT),
+_DOUBLES = ctypes.c_void_p  # a double array's address
+#: Argument types of the LAPACK routines used (Fortran calling convention: every argument by
+#: reference) and their C signatures as scipy's capsules name them (``d``: double).
+_SIGNATURES: dict[str, tuple[tuple[Any, ...], bytes]] = {
+    "dpotrf": ((ctypes.c_char_p, _INT, _DOUBLES, _INT, _INT), b"void (char *, int *, d *, int *, int *)"),
+    "dpotri": ((ctypes.c_char_p, _INT, _DOUBLES, _INT, _INT), b"void (char *, int *, d *, int *, int *)"),
+    "dpotrs": ((ctypes.c_char_p, _INT, _INT, _DOUBLES, _INT, _DOUBLES, _INT, _INT),
+               b"void (char *, int *, int *, d *, int *, d *, int *, int *)"),
 }
+#: Cython's name for scipy's ``d`` (double) type in a capsule's signature, or plain ``double``.
+_DOUBLE_NAME = re.compile(rb"(?:__pyx_t_\w*_d|double) \*")
+# local prototypes of the C API (setting restype/argtypes on ``ctypes.pythonapi``'s functions
+# would change them for the whole process)
+_capsule_name = ctypes.PYFUNCTYPE(ctypes.c_char_p, ctypes.py_object)(("PyCapsule_GetName", ctypes.pythonapi))
+_capsule_pointer = ctypes.PYFUNCTYPE(ctypes.c_void_p, ctypes.py_object, ctypes.c_char_p)(
+    ("PyCapsule_GetPointer", ctypes.pythonapi))
+
+
+def _capsule_signature(name: bytes | None) -> bytes | None:
+    """A capsule's C signature with Cython's double type written ``d`` (None stays None)."""
+    return None if name is None else _DOUBLE_NAME.sub(b"d *", name)
 
 
 @cache
 def _routine(name: str) -> Any:
     """The LAPACK routine ``name`` of scipy's ``cython_lapack`` as a ctypes function that releases
-    the interpreter lock while it runs, or None when it cannot be had."""
+    the interpreter lock while it runs, or None when it cannot be had.
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`_SIGNATURES` (``dpotrf``, ``dpotri`` or ``dpotrs``).
+
+    Returns
+    -------
+    callable or None
+        None also when the capsule's signature is not the one expected (another integer
+        width, e.g. an ILP64 build: the callers then use scipy's wrappers).
+    """
+    argtypes, expected = _SIGNATURES[name]
     try:
         from scipy.linalg import cython_lapack
 
         capsule = cython_lapack.__pyx_capi__[name]
-        get_name = ctypes.pythonapi.PyCapsule_GetName
-        get_name.restype, get_name.argtypes = ctypes.c_char_p, [ctypes.py_object]
-        get_pointer = ctypes.pythonapi.PyCapsule_GetPointer
-        get_pointer.restype, get_pointer.argtypes = ctypes.c_void_p, [ctypes.py_object, ctypes.c_char_p]
-        address = get_pointer(capsule, get_name(capsule))
+        signature = _capsule_name(capsule)
+        if _capsule_signature(signature) != expected:
+            return None
+        address = _capsule_pointer(capsule, signature)
     except (ImportError, AttributeError, KeyError, ValueError):  # pragma: no cover - another scipy build
         return None
-    return ctypes.CFUNCTYPE(None, *_SIGNATURES[name])(address) if address else None
+    return ctypes.CFUNCTYPE(None, *argtypes)(address) if address else None
 
 
 def _int(value: int) -> Any:
+    """A reference to a C ``int`` holding ``value`` (a Fortran argument, passed by reference).
+
+    Parameters
+    ----------
+    value : int
+
+    Returns
+    -------
+    ctypes reference
+        Valid for the call it is passed to.
+    """
     return ctypes.byref(ctypes.c_int(int(value)))
 
 
@@ -103,60 +144,152 @@ def _fortran_copy(matrix: FloatArray) -> FloatArray:
     return np.array(matrix, np.float64, order="F")
 
 
-def spd_factor(matrix: FloatArray, overwrite: bool = False) -> FloatArray | None:
-    """The upper Cholesky factor ``U`` (``matrix = U^T U``, Fortran-ordered; the strict lower
-    triangle is left as it was) of a symmetric positive definite ``matrix``, or None when it is
-    not positive definite. Only one triangle of ``matrix`` is read. ``overwrite``: the factor
-    may take ``matrix``'s memory (a C- or Fortran-contiguous float64 matrix the caller no longer needs).
+def _square(matrix: FloatArray, param: str) -> FloatArray:
+    """``matrix`` as a float64 array, checked to be a square matrix (the LAPACK calls read
+    ``n x n`` values from its address).
+
+    Raises
+    ------
+    InputError
+        When it is not two-dimensional and square.
     """
+    a = np.asarray(matrix, np.float64)
+    if a.ndim != 2 or a.shape[0] != a.shape[1]:
+        raise InputError(f"{param}: expected a square matrix, got shape {a.shape}", param=param)
+    return a
+
+
+def _lapack_info(routine: str, info: int) -> int:
+    """``info`` of a LAPACK call, raising on an argument error (``info < 0``)."""
+    if info < 0:
+        raise ValueError(f"{routine}: argument {-info} is invalid")
+    return info
+
+
+def spd_factor(matrix: FloatArray, overwrite: bool = False) -> FloatArray | None:
+    """The upper Cholesky factor of a symmetric positive definite matrix.
+
+    Only the upper triangle of ``matrix`` is read (of its Fortran-ordered view: a C-ordered
+    matrix is read as its transpose, the same for a symmetric one).
+
+    Parameters
+    ----------
+    matrix : (n, n) float64 array
+        Symmetric; non-finite entries give None (their factor would be meaningless).
+    overwrite : bool
+        The factor may take ``matrix``'s memory (a C- or Fortran-contiguous float64 matrix
+        the caller no longer needs).
+
+    Returns
+    -------
+    (n, n) float64 array or None
+        ``U`` with ``matrix = U^T U``, Fortran-ordered (or a view of the leading rows of a
+        taller buffer); its strict lower triangle is left as it was. None when ``matrix`` is
+        not positive definite or its factor's diagonal is not finite (LAPACK reports success
+        on an infinite diagonal, and some builds on a NaN one).
+
+    Raises
+    ------
+    InputError
+        When ``matrix`` is not square.
+    """
+    a = _square(matrix, "matrix")
     potrf = _routine("dpotrf")
-    if potrf is None:  # pragma: no cover - scipy's wrapper (holds the interpreter lock)
+    if potrf is None:  # scipy's wrapper (holds the interpreter lock)
         from scipy.linalg import lapack
 
-        a = np.asarray(matrix, np.float64)
-        factor, info = lapack.dpotrf(a.T if a.flags.c_contiguous else a, lower=0, clean=0, overwrite_a=int(bool(overwrite)))
-        return factor if info == 0 else None
-    factor = _fortran_owned(matrix, overwrite)
-    n = factor.shape[0]
-    info = ctypes.c_int(0)
-    potrf(b"U", _int(n), factor.ctypes.data, _int(_lda(factor)), ctypes.byref(info))
-    return factor if info.value == 0 else None
+        factor, code = lapack.dpotrf(a.T if a.flags.c_contiguous else a, lower=0, clean=0, overwrite_a=int(bool(overwrite)))
+    else:
+        factor = _fortran_owned(a, overwrite)
+        n = factor.shape[0]
+        info = ctypes.c_int(0)
+        potrf(b"U", _int(n), factor.ctypes.data, _int(_lda(factor)), ctypes.byref(info))
+        code = info.value
+    if _lapack_info("dpotrf", code) != 0 or not np.all(np.isfinite(np.diagonal(factor))):
+        return None
+    return factor
+
+
+def _factor_view(factor: FloatArray) -> FloatArray:
+    """``factor`` (checked square) as a Fortran-ordered float64 matrix or a view of the leading
+    rows of one, copied when it is neither."""
+    f = _square(factor, "factor")
+    if f.strides[0] != f.itemsize or (f.shape[0] > 1 and f.strides[1] < f.shape[0] * f.itemsize):
+        f = np.asfortranarray(f)
+    return f
 
 
 def factor_solve(factor: FloatArray, rhs: FloatArray) -> FloatArray:
-    """``A^-1 rhs`` from the factor of :func:`spd_factor` (one vector or the columns of a matrix)."""
+    """``A^-1 rhs`` from the factor of :func:`spd_factor` (two triangular solves).
+
+    Parameters
+    ----------
+    factor : (n, n) float64 array
+        :func:`spd_factor`'s ``U`` (``A = U^T U``; only its upper triangle is read).
+    rhs : (n,) or (n, k) float64 array
+        One right-hand side or ``k`` of them as columns.
+
+    Returns
+    -------
+    float64 array of ``rhs``'s shape
+        Fortran-ordered.
+
+    Raises
+    ------
+    InputError
+        When ``factor`` is not square or ``rhs`` has not ``n`` rows (or more than two dimensions).
+    """
+    f = _factor_view(factor)
+    n = f.shape[0]
+    b = np.asarray(rhs, np.float64)
+    if b.ndim not in (1, 2) or b.shape[0] != n:
+        raise InputError(f"rhs: expected {n} rows (one or more columns), got shape {b.shape}", param="rhs")
     potrs = _routine("dpotrs")
-    if potrs is None:  # pragma: no cover - scipy's wrapper
+    if potrs is None:  # scipy's wrapper
         from scipy.linalg import lapack
 
-        return np.asarray(lapack.dpotrs(factor, rhs, lower=0)[0], np.float64)
-    f = np.asarray(factor, np.float64)
-    if f.strides[0] != f.itemsize:  # not (a view of the leading rows of) a Fortran-ordered matrix
-        f = np.asfortranarray(f)
-    out = np.array(rhs, np.float64, order="F", ndmin=1)
-    n = f.shape[0]
+        return np.asarray(lapack.dpotrs(f, b, lower=0)[0], np.float64)
+    out = np.array(b, np.float64, order="F")
     nrhs = 1 if out.ndim == 1 else out.shape[1]
     info = ctypes.c_int(0)
     potrs(b"U", _int(n), _int(nrhs), f.ctypes.data, _int(_lda(f)), out.ctypes.data, _int(max(n, 1)), ctypes.byref(info))
-    if info.value != 0:  # pragma: no cover - only on an argument error
-        raise ValueError(f"dpotrs: argument {-info.value} is invalid")
+    _lapack_info("dpotrs", info.value)
     return out
 
 
 def factor_inverse(factor: FloatArray) -> FloatArray:
-    """The whole ``A^-1`` (symmetric to the last bit) from the factor of :func:`spd_factor`."""
+    """The whole ``A^-1`` from the factor of :func:`spd_factor` (LAPACK ``potri``).
+
+    Parameters
+    ----------
+    factor : (n, n) float64 array
+        :func:`spd_factor`'s ``U`` (``A = U^T U``; only its upper triangle is read).
+
+    Returns
+    -------
+    (n, n) float64 array
+        Symmetric to the last bit.
+
+    Raises
+    ------
+    numpy.linalg.LinAlgError
+        When the factor is singular (a zero on its diagonal).
+    InputError
+        When ``factor`` is not square.
+    """
+    f = _factor_view(factor)
     potri = _routine("dpotri")
-    if potri is None:  # pragma: no cover - scipy's wrapper
+    if potri is None:  # scipy's wrapper
         from scipy.linalg import lapack
 
-        upper, code = lapack.dpotri(factor, lower=0)
+        upper, code = lapack.dpotri(f, lower=0)
     else:
-        upper = _fortran_copy(np.asarray(factor, np.float64))
+        upper = _fortran_copy(f)
         n = upper.shape[0]
         info = ctypes.c_int(0)
         potri(b"U", _int(n), upper.ctypes.data, _int(_lda(upper)), ctypes.byref(info))
         code = info.value
-    if code != 0:
+    if _lapack_info("dpotri", code) != 0:
         raise np.linalg.LinAlgError(f"dpotri: the factor is singular (info {code})")
     inverse = np.triu(upper)  # the upper triangle of A^-1 (the rest of ``upper`` is the factor's)
     inverse += inverse.T  # the diagonal twice (exactly: a power of two) ...
@@ -164,27 +297,94 @@ def factor_inverse(factor: FloatArray) -> FloatArray:
     return inverse
 
 
-def constrained_inverse(matrix: FloatArray, constraints: FloatArray) -> FloatArray | None:
-    """The top-left block ``M`` of the inverse of ``[[matrix, C^T], [C, 0]]`` (``C`` =
-    ``constraints``, one row per constraint, of full row rank): ``A^-1 - Z (C Z)^-1 Z^T`` with
-    ``Z = A^-1 C^T``, symmetric to the last bit; None when ``matrix`` is not positive definite
-    (or the constraints are dependent on it)."""
-    factor = spd_factor(matrix)
+#: Largest 1-norm condition number of the scaled KKT matrix a solve accepts (beyond it the
+#: samples do not identify the model: :func:`rplearn.core.lsq.solver.solve` raises).
+MAX_KKT_CONDITION = 1.0 / (1e3 * np.finfo(np.float64).eps)
+
+
+def kkt_condition(matrix: FloatArray, constraints: FloatArray, inverse: FloatArray, z_over_s: FloatArray,
+                  s_inverse: FloatArray) -> float:
+    """The 1-norm condition number of the KKT matrix ``K = [[A, C^T], [C, 0]]`` scaled as
+    :func:`rplearn.core.lsq.solver.solve` scales it (rows and columns of ``A`` by
+    ``1/sqrt(|diag A|)``), from the blocks of its inverse.
+
+    Parameters
+    ----------
+    matrix : (n, n) float64 array
+        ``A``.
+    constraints : (k, n) float64 array
+        ``C``.
+    inverse : (n, n) float64 array
+        The top-left block ``M`` of ``K^-1``.
+    z_over_s : (n, k) float64 array
+        Its top-right block ``Z S^-1`` (``Z = A^-1 C^T``, ``S = C Z``).
+    s_inverse : (k, k) float64 array
+        ``S^-1`` (the bottom-right block is ``-S^-1``).
+
+    Returns
+    -------
+    float
+        ``||D K D||_1 ||(D K D)^-1||_1``; infinite when a block is not finite.
+    """
+    d = 1.0 / np.sqrt(np.maximum(np.abs(np.diag(matrix)), 1e-300))
+    cd = np.abs(constraints * d[None, :])
+    norm = max(float((np.abs(matrix * d[:, None] * d[None, :]).sum(axis=0) + cd.sum(axis=0)).max()),
+               float(cd.sum(axis=1).max()) if cd.shape[0] else 0.0)
+    zs = np.abs(z_over_s / d[:, None])
+    inverse_norm = max(float((np.abs(inverse / d[:, None] / d[None, :]).sum(axis=0) + zs.sum(axis=1)).max()),
+                       float((zs.sum(axis=0) + np.abs(s_inverse).sum(axis=0)).max()) if cd.shape[0] else 0.0)
+    condition = norm * inverse_norm
+    return condition if np.isfinite(condition) else float("inf")
+
+
+def constrained_inverse(matrix: FloatArray, constraints: FloatArray, max_condition: float = MAX_KKT_CONDITION) -> FloatArray | None:
+    """The top-left block ``M`` of the inverse of the KKT matrix ``[[matrix, C^T], [C, 0]]``.
+
+    ``M = A^-1 - Z (C Z)^-1 Z^T`` with ``Z = A^-1 C^T``, from one Cholesky factor of ``A``.
+
+    Parameters
+    ----------
+    matrix : (n, n) float64 array
+        ``A``, symmetric positive definite.
+    constraints : (k, n) float64 array
+        ``C``, one row per constraint (any shape of ``k * n`` values; ``k`` may be 0).
+    max_condition : float
+        The largest condition number of the scaled KKT matrix accepted (:func:`kkt_condition`;
+        by default the solve's, :data:`MAX_KKT_CONDITION`).
+
+    Returns
+    -------
+    (n, n) float64 array or None
+        ``M``, symmetric to the last bit. None when ``matrix`` is not positive definite, or
+        the KKT matrix is singular or conditioned worse than ``max_condition`` (constraints
+        dependent on each other or on ``A``'s null space, or ``A`` itself near singular).
+
+    Raises
+    ------
+    InputError
+        When ``matrix`` is not square.
+    """
+    a = _square(matrix, "matrix")
+    factor = spd_factor(a)
     if factor is None:
         return None
     inverse = factor_inverse(factor)
     c = np.asarray(constraints, np.float64).reshape(-1, inverse.shape[0])
     if not c.shape[0]:
-        return inverse
+        fine = kkt_condition(a, c, inverse, np.zeros((inverse.shape[0], 0)), np.zeros((0, 0))) <= max_condition
+        return inverse if fine else None
     z = inverse @ c.T
     s = c @ z
     s = 0.5 * (s + s.T)
     try:
         correction = z @ np.linalg.solve(s, z.T)
+        s_inverse = np.asarray(np.linalg.inv(s), np.float64)
     except np.linalg.LinAlgError:
         return None
     out = inverse - 0.5 * (correction + correction.T)
-    return out if np.all(np.isfinite(out)) else None
+    if not np.all(np.isfinite(out)) or kkt_condition(a, c, out, z @ s_inverse, s_inverse) > max_condition:
+        return None
+    return out
 
 
-__all__ = ["constrained_inverse", "factor_inverse", "factor_solve", "spd_factor"]
+__all__ = ["MAX_KKT_CONDITION", "constrained_inverse", "factor_inverse", "factor_solve", "kkt_condition", "spd_factor"]

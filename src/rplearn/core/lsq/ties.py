@@ -79,7 +79,23 @@ def tied_points(ev: Any, best: CurvePoint, points: Sequence[CurvePoint]) -> list
 
 
 def tied_keys(ev: Any, best: CurvePoint, points: Sequence[CurvePoint]) -> list[tuple[int, float]]:
-    """The ``(order, smoothing)`` of :func:`tied_points`, the best first (none without held-out units)."""
+    """The ``(order, smoothing)`` of :func:`tied_points`, the best first.
+
+    Parameters
+    ----------
+    ev : selection evaluator
+        The search's (its folds, whether it cross-validates, its per-fold errors).
+    best : CurvePoint
+        The chosen point.
+    points : sequence of CurvePoint
+        The candidates (the validation curve).
+
+    Returns
+    -------
+    list of (int, float)
+        The best first, then the others within noise of it in increasing (order, smoothing);
+        empty without held-out units.
+    """
     if not ev.cv:
         return []
     if len(ev.folds) >= MIN_NOISE_UNITS:
