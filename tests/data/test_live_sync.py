@@ -112,3 +112,46 @@ def test_the_duplicate_hashes_kept_stay_bounded_and_a_copy_sent_again_later_is_s
     per_s = len(signal) / span_s
     assert span_s > 2 * DUPLICATE_MEMORY_S
     assert len(m._seen) < (DUPLICATE_MEMORY_S + 5.0) * per_s < 0.6 * len(signal)
+
+
+def _still_ends_and_a_mover(pose: pd.DataFrame) -> pd.DataFrame:
+    """A and B held at their first pose for the whole flight, C flying A's track: the A-B
+    link's poses are kept whole, while C's moving poses make the hashes be forgotten."""
+    held = []
+    for node in ("A", "B"):
+        group = pose[pose["node"] == node].copy()
+        cols = [c for c in group.columns if c not in ("t", "node")]
+        group[cols] = group[cols].iloc[0].to_numpy()
+        held.append(group)
+    mover = pose[pose["node"] == "A"].assign(node="C")
+    return pd.concat([*held, mover], ignore_index=True).sort_values("t", kind="stable").reset_index(drop=True)
+
+
+@pytest.mark.parametrize("still", [True, False], ids=["still_ends", "moving_ends"])
+def test_a_copy_sent_again_after_the_hashes_are_forgotten_is_dropped_as_late_not_learned(logs, still):
+    """A row sent again 40 s late (> DUPLICATE_MEMORY_S): ``sync`` drops it as ``duplicate``;
+    live matching no longer knows its hash, so drops it as ``late`` and learns sync's rows."""
+    pose, signal = logs
+    signal = signal.iloc[:-1]  # without the fixture's own copy
+    pose = _still_ends_and_a_mover(pose) if still else pose
+    row = signal.iloc[[len(signal) // 4]]
+    again = float(row["t"].iloc[0]) + DUPLICATE_MEMORY_S + 10.0
+    assert again < float(signal["t"].max()) - 1.0
+    whole = synchronise(pose, pd.concat([signal, row], ignore_index=True))
+    m, out = LiveMatcher(), []
+    edges = np.arange(pose["t"].min(), pose["t"].max() + 1.0, 1.0)
+    for a, b in zip(edges[:-1], edges[1:]):
+        m.add_poses(pose[(pose["t"] >= a) & (pose["t"] < b)])
+        m.add_signals(signal[(signal["t"] >= a) & (signal["t"] < b)])
+        if a <= again < b:
+            m.add_signals(row)
+        out.append(m.match().dataset)
+    m.add_signals(signal[signal["t"] >= edges[-1]])
+    out.append(m.match(final=True).dataset)
+    live = pd.concat([o for o in out if len(o)], ignore_index=True)
+    expected = whole.dataset.sort_values("t", kind="stable").reset_index(drop=True)
+    assert whole.summary.dropped["duplicate"] == 1 and len(live) == len(expected) > 2000
+    np.testing.assert_allclose(live["t"].to_numpy(float), expected["t"].to_numpy(float), rtol=0, atol=1e-9)
+    assert m.summary.dropped["late"] == 1 and m.summary.dropped["duplicate"] == 0
+    assert {**m.summary.dropped, "late": 0, "duplicate": 1} == whole.summary.dropped
+    assert m.summary.n_in == whole.summary.n_in and m.summary.n_out == whole.summary.n_out

@@ -71,7 +71,7 @@ def test_drops_are_counted_by_reason(two_nodes):
     res = synchronise(two_nodes, sig)
     s = res.summary
     assert s.n_in == len(sig) and s.n_out == 2 == len(res.dataset)
-    assert s.dropped == {"duplicate": 0, "invalid_value": 1, "outside_window": 0, "sentinel_rssi": 6,
+    assert s.dropped == {"late": 0, "duplicate": 0, "invalid_value": 1, "outside_window": 0, "sentinel_rssi": 6,
                          "implausible_rssi": 2, "tx_equals_rx": 1, "other_link": 0, "duplicate_reading": 0,
                          "unknown_node": 1, "out_of_span": 2, "pose_gap": 1, "near_field": 1, "disarmed": 0,
                          "on_ground": 0}

@@ -14,10 +14,12 @@ counts are those of ``sync`` on the whole logs (:meth:`LiveMatcher.match` with
 Memory: the pose rows a later match can need (per moving node, those after the matched
 horizon and the one before it; a still node's first and last row), the pending signal rows,
 and for duplicates across chunks the hashes of the signal rows at most
-:data:`DUPLICATE_MEMORY_S` older than those poses (16 bytes a row): it does not grow with the
-stream's length. A row older than every pose kept can no longer be matched (it is
-``out_of_span``), so its hash is forgotten some time after them; a copy of it arriving later
-still is dropped as ``out_of_span`` where ``sync`` of the whole log says ``duplicate`` (a row
+:data:`DUPLICATE_MEMORY_S` older than the oldest pose a moving node keeps (16 bytes a row): it
+does not grow with the stream's length. The hashes of older rows are forgotten, so a row whose
+time is before that threshold (more than :data:`DUPLICATE_MEMORY_S` late) is dropped as
+``late`` before any other test, whatever its link (a link of two still nodes keeps their
+poses for the whole flight, and a copy matched then would be learned twice): where ``sync``
+of the whole log says ``duplicate`` for a copy, live matching says ``late`` (and a row
 without a valid time is forgotten at once: ``invalid_value`` for ``duplicate``).
 
 Limits against ``sync`` on the whole logs: the nodes' flight phases (``airborne``, the
@@ -73,7 +75,8 @@ class _RecentRows:
         return int(self.sorted.size)
 
 
-#: Seconds of signal time before the oldest pose kept for which row hashes are remembered.
+#: Seconds of signal time before the oldest pose a moving node keeps for which row hashes are
+#: remembered; a row older than that is dropped as ``late``.
 DUPLICATE_MEMORY_S = 30.0
 
 
@@ -115,6 +118,7 @@ class LiveMatcher:
         self._poses = pd.DataFrame(columns=list(POSE_COLUMNS))
         self._pending: list[pd.DataFrame] = []
         self._seen = _RecentRows()
+        self._forgotten_s = -math.inf  # the hashes of rows before this time [s] are forgotten
         self._carry: dict = {}
         self._horizon = -math.inf
         self._signal_t = -math.inf  # the latest signal time received: later rows come at or after it
@@ -203,10 +207,16 @@ class LiveMatcher:
         tracks = self._tracks()
         phases = flight_phases(self._poses, tracks, self.options.clock_offsets_s, self.options.airborne_margin_m)
         t = pd.to_numeric(chunk["t"], errors="coerce").to_numpy(np.float64) if "t" in chunk.columns else np.full(len(chunk), np.nan)
+        late = t < self._forgotten_s  # their copies could no longer be found: never learned
+        first_row = self._signal_rows
+        self._signal_rows += len(chunk)
+        if late.any():
+            chunk, t = chunk[~late], t[~late]
         repeats = self._seen.repeats(row_hashes(chunk), t)
         result = _match_chunk(tracks, chunk.reset_index(drop=True), self.options, self.source, seen_before=repeats,
-                              first_row=self._signal_rows, phases=phases, carry=self._carry)
-        self._signal_rows += len(chunk)
+                              first_row=first_row, phases=phases, carry=self._carry)
+        result.summary.n_in += int(late.sum())
+        result.summary.dropped["late"] += int(late.sum())
         self.summary.merge(result.summary)
         return result
 
@@ -223,8 +233,9 @@ class LiveMatcher:
             keep.append(group.iloc[first:])
             oldest = min(oldest, float(t[first]))
         self._poses = pd.concat(keep).sort_values(["node", "t"], kind="stable").reset_index(drop=True)
-        if math.isfinite(oldest):  # rows before every pose kept can no longer be matched
-            self._seen.forget(oldest - _offset_slack_s(self.options) - DUPLICATE_MEMORY_S)
+        if math.isfinite(oldest):  # later rows before this are dropped as ``late`` (module docstring)
+            self._forgotten_s = max(self._forgotten_s, oldest - _offset_slack_s(self.options) - DUPLICATE_MEMORY_S)
+            self._seen.forget(self._forgotten_s)
 
 
 __all__ = ["DUPLICATE_MEMORY_S", "LiveMatcher"]

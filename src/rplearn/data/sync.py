@@ -4,6 +4,11 @@ For every signal sample, the positions of its transmitter and receiver are inter
 linearly and their attitudes by spherical linear interpolation (slerp) at the sample's time,
 after optional clock offsets. A sample is dropped, and counted by reason, when:
 
+``late``
+    only in live matching (:class:`rplearn.data.live_sync.LiveMatcher`): it arrived after
+    the hashes of rows of its time were forgotten, more than
+    :data:`~rplearn.data.live_sync.DUPLICATE_MEMORY_S` late (a copy of a row, which ``sync``
+    of the whole log drops as ``duplicate``, or a row held up that long);
 ``duplicate``
     it repeats an earlier row exactly, in every column (a logger or a merge writing the same
     packet twice); the first copy is kept. :func:`rplearn.data.streaming.synchronise_stream`
@@ -97,8 +102,8 @@ PLAUSIBLE_RSSI_DBM: tuple[float, float] = (-150.0, 30.0)
 RSSI_SCALES: tuple[str, ...] = ("dbm", "relative")
 #: Drop reasons, in the order they are tested.
 DROP_REASONS: tuple[str, ...] = (
-    "duplicate", "invalid_value", "outside_window", "sentinel_rssi", "implausible_rssi", "tx_equals_rx", "other_link",
-    "duplicate_reading", "unknown_node", "out_of_span", "pose_gap", "near_field", "disarmed", "on_ground",
+    "late", "duplicate", "invalid_value", "outside_window", "sentinel_rssi", "implausible_rssi", "tx_equals_rx",
+    "other_link", "duplicate_reading", "unknown_node", "out_of_span", "pose_gap", "near_field", "disarmed", "on_ground",
 )
 
 
