@@ -210,3 +210,38 @@ def test_ctrl_c_while_a_ranking_runs_leaves_the_last_model(smoke, tmp_path, monk
     model = load_model(str(tmp_path / "m.json"))
     s = link_samples(synchronise(pose, sig).dataset, "smoke", nodes=model.nodes)
     assert np.isfinite(model.predict_gain(s)).all()
+
+
+def _blas_threads() -> list[int]:
+    from threadpoolctl import threadpool_info
+
+    return [lib["num_threads"] for lib in threadpool_info() if lib["user_api"] == "blas"]
+
+
+def test_a_ranking_started_while_a_refit_holds_a_limit_still_ranks_on_one_blas_thread():
+    """A refit of the loop holds a 2-thread BLAS limit when the ranking starts: the ranking
+    waits for it to end, then ranks on one thread (not the whole ranking on the refit's two)."""
+    from rplearn.core.threads import _controller, _exclusive_limit
+
+    held, release = threading.Event(), threading.Event()
+    seen: list[list[int]] = []
+
+    def refit() -> None:
+        with _exclusive_limit(_controller().select(user_api="blas"), 2):
+            held.set()
+            release.wait(30.0)
+
+    def ranker(stats, fitted, latest):
+        seen.append(_blas_threads())
+        return ROWS
+
+    loop = threading.Thread(target=refit)
+    loop.start()
+    assert held.wait(30.0) and max(_blas_threads()) == 2
+    worker = RankingWorker(ranker, beside=True)
+    worker.submit(lambda: (None, None, pd.DataFrame()), 1)
+    time.sleep(0.2)
+    release.set()
+    loop.join(30.0)
+    assert worker.wait(30.0) and worker.collect().rows
+    assert seen == [[1] * len(seen[0])]

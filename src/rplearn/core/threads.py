@@ -140,14 +140,16 @@ def _controller_of(loaded: tuple[str, ...]) -> Any:
 #: restores the counts it found: two threads whose limits overlap could leave numpy on one thread
 #: for good, or lift the other's limit while its work still runs. So one thread at a time
 #: limits; a limit asked for meanwhile by another thread is skipped (its work runs with the
-#: threads as they are), as :meth:`rplearn.core.lsq.runtime.StatisticsRuntime.in_order` does with its pool.
+#: threads as they are), as :meth:`rplearn.core.lsq.runtime.StatisticsRuntime.in_order` does with its pool,
+#: or waited for (``one_blas_thread(wait=True)``: long work beside short limited work).
 _LIMIT_LOCK = threading.RLock()
 
 
 @contextmanager
-def _exclusive_limit(selection: Any, limits: int) -> Iterator[None]:
-    """``selection.limit(limits)`` inside the block, unless another thread holds a limit."""
-    if not _LIMIT_LOCK.acquire(blocking=False):
+def _exclusive_limit(selection: Any, limits: int, wait: bool = False) -> Iterator[None]:
+    """``selection.limit(limits)`` inside the block, unless another thread holds a limit (with
+    ``wait``, once that one ends)."""
+    if not _LIMIT_LOCK.acquire(blocking=wait):
         yield
         return
     try:
@@ -180,9 +182,17 @@ def blas_threads_for(n_samples: int, n_columns: int) -> Iterator[None]:
 
 
 @contextmanager
-def one_blas_thread() -> Iterator[None]:
-    """One BLAS thread inside the block (for work that runs its own threads, one per core)."""
-    with _exclusive_limit(_controller().select(user_api="blas"), 1):
+def one_blas_thread(wait: bool = False) -> Iterator[None]:
+    """One BLAS thread inside the block (for work that runs its own threads, one per core).
+
+    Parameters
+    ----------
+    wait : bool
+        When another thread holds a limit: wait for it to end, then limit (True), or run the
+        block with the threads as they are (False). Long work beside a loop whose short work
+        limits now and then waits, so that it does not run whole on the other's limit.
+    """
+    with _exclusive_limit(_controller().select(user_api="blas"), 1, wait):
         yield
 
 

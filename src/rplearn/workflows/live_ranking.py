@@ -17,7 +17,8 @@ daemon, so the process exits without it) and its result is dropped. ``beside=Fal
 the caller's thread at once, as the loop did before (the reference of the tests).
 
 The ranking holds the process's BLAS limit of one thread while it runs
-(:func:`rplearn.core.threads.one_blas_thread`); a refit meanwhile runs with the threads as they
+(:func:`rplearn.core.threads.one_blas_thread`, taken by the worker, waiting for a refit that
+holds a limit to end rather than ranking whole with that refit's threads); a refit meanwhile runs with the threads as they
 are, so a refit large enough for two BLAS threads gets one then: slower, and equal to the
 policy's result to rounding only. A small refit (the live case: a few hundred columns) uses one
 thread anyway, and its result is the same bits.
@@ -35,6 +36,7 @@ from typing import Any
 import pandas as pd
 
 from rplearn._argtypes import check_types
+from rplearn.core.threads import one_blas_thread
 
 #: The hook's rows: (name, duration [s], spread after [dB]), best first.
 Rows = tuple[tuple[str, float, float], ...]
@@ -133,7 +135,9 @@ class RankingWorker:
 
     def _run(self, args: tuple[Any, Any, pd.DataFrame], refit: int, start: float) -> None:
         try:
-            done = Ranking(_rows(self.ranker(*args)), refit, start, self.clock())
+            with one_blas_thread(wait=True):  # not the threads of a refit's limit (module docstring)
+                rows = _rows(self.ranker(*args))
+            done = Ranking(rows, refit, start, self.clock())
         except Exception as exc:  # the ranking is advice: its failure must not end the session
             done = Ranking((), refit, start, self.clock(), f"{type(exc).__name__}: {exc}")
         with self._lock:
