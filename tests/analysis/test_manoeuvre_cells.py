@@ -140,6 +140,22 @@ def test_pattern_spreads_read_the_flight_s_cells_and_refuse_cells_of_other_stati
         pattern_spreads(normal, SPEC, NODES, ManoeuvreOptions(misfit_std_db=1.0), cells=DirectionCells(ModelSpec("sh", 2).basis(), 2))
 
 
+def test_cells_of_another_basis_with_as_many_coefficients_are_refused() -> None:
+    """SH-6 and P-7 both have 36 coefficients a node: the cells' basis itself must be the statistics'."""
+    from rplearn.core.bases import Polynomial
+
+    rng = np.random.default_rng(6)
+    d, tx, rx = _samples(rng, 300)
+    sh6 = ModelSpec("sh", 6)
+    normal = NormalEquations(sh6.basis(), 2)
+    normal.add(d, tx, rx, rng.standard_normal(tx.size))
+    assert Polynomial(order=7).n_coef == sh6.basis().n_coef
+    opts = ManoeuvreOptions(penalty_weight=1e-3, misfit_std_db=1.0)
+    assert pattern_spreads(normal, sh6, NODES, opts, cells=DirectionCells(sh6.basis(), 2).add(d, tx, rx))
+    with pytest.raises(InputError, match=r"^cells: .*P-7.*SH-6"):
+        pattern_spreads(normal, sh6, NODES, opts, cells=DirectionCells(Polynomial(order=7), 2).add(d, tx, rx))
+
+
 def test_bad_input_is_refused_with_the_parameter_named() -> None:
     with pytest.raises(InputError, match="misfit_std_db"):
         ManoeuvreOptions(misfit_std_db=-1.0)

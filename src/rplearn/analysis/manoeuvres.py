@@ -345,9 +345,9 @@ def _start(normal: NormalEquations, spec: ModelSpec, nodes: Sequence[str], optio
         sc = 0.0 if closed is None else float(np.sqrt(correlated_ratio(normal, closed, prior))) * options.noise_std_db
     rows = int(round(options.correlation_s * options.sample_rate_hz))
     post = post.with_drift(float(sc) ** 2, None if closed is None else closed.cross, rows)
-    if cells is not None and (cells.basis.n_coef != normal.basis.n_coef or cells.n_nodes != normal.n_nodes):
-        raise InputError(f"cells: direction cells of {cells.n_nodes} nodes x {cells.basis.n_coef} coefficients for "
-                         f"statistics of {normal.n_nodes} x {normal.basis.n_coef}", param="cells")
+    if cells is not None and (cells.basis.to_dict() != normal.basis.to_dict() or cells.n_nodes != normal.n_nodes):
+        raise InputError(f"cells: direction cells of {cells.n_nodes} nodes x {cells.basis.label} for "
+                         f"statistics of {normal.n_nodes} x {normal.basis.label}", param="cells")
     return post.with_misfit(float(options.misfit_std_db) ** 2, None if cells is None else cells.factor(),
                             cell_grid(normal.basis.n_coef))
 
