@@ -12,6 +12,7 @@ from rplearn.analysis.manoeuvres import ManoeuvreOptions, pattern_spreads, prior
 from rplearn.core.geometry import Directions
 from rplearn.core.lsq.block_sums import BlockSums
 from rplearn.core.lsq.normal_equations import NormalEquations
+from rplearn.errors import InputError
 from rplearn.models.spec import ModelSpec
 from rplearn.plan.manoeuvres import CandidateOptions
 
@@ -158,3 +159,11 @@ def test_psd_factor_falls_back_to_the_svd_when_the_eigensolver_fails(monkeypatch
     monkeypatch.setattr(np.linalg, "eigh", fail)
     f = psd_factor(m)
     assert f.shape == (12, 5) and np.allclose(f @ f.T, m)
+
+
+@pytest.mark.parametrize("bad", [np.nan, np.inf])
+def test_psd_factor_refuses_a_matrix_that_is_not_finite(bad: float) -> None:
+    m = np.eye(4)
+    m[1, 2] = m[2, 1] = bad
+    with pytest.raises(InputError, match="^matrix: .*NaN or infinite"):
+        psd_factor(m)

@@ -26,6 +26,7 @@ import numpy as np
 
 from rplearn.analysis.manoeuvre_cells import cell_sums
 from rplearn.core.lsq.products import spd_inverse
+from rplearn.errors import InputError
 
 #: Per link end of a manoeuvre's rows: (node index per row, az [rad], el [rad]); None: not given.
 Ends = tuple[tuple[np.ndarray, np.ndarray, np.ndarray], ...] | None
@@ -33,11 +34,18 @@ Ends = tuple[tuple[np.ndarray, np.ndarray, np.ndarray], ...] | None
 
 def psd_factor(matrix: np.ndarray, rtol: float = 1e-12) -> np.ndarray:
     """``F`` with ``F F^T = matrix`` (symmetric positive semi-definite), columns of the
-    eigenvalues above ``rtol`` times the largest only."""
+    eigenvalues above ``rtol`` times the largest only; a matrix with a NaN or infinite entry
+    raises :class:`~rplearn.errors.InputError`."""
+    if not np.isfinite(matrix).all():
+        raise InputError(f"matrix: a {matrix.shape[0]}x{matrix.shape[-1]} covariance to factor has NaN or infinite "
+                         "entries (statistics with a non-finite value)", param="matrix")
     sym = 0.5 * (matrix + matrix.T)
     try:
         values, vectors = np.linalg.eigh(sym)
-    except np.linalg.LinAlgError:  # LAPACK's eigensolver can fail to converge; for a PSD matrix the SVD is the same
+    except np.linalg.LinAlgError:
+        # LAPACK's eigensolver can fail to converge on a finite matrix; the SVD then gives the singular
+        # values, which are the eigenvalues for a PSD matrix (for an indefinite one their absolute
+        # values: a negative eigenvalue is then kept as positive)
         vectors, values, _ = np.linalg.svd(sym)
         values, vectors = values[::-1], vectors[:, ::-1]
     top = float(values[-1]) if values.size else 0.0
