@@ -245,3 +245,23 @@ def test_a_ranking_started_while_a_refit_holds_a_limit_still_ranks_on_one_blas_t
     loop.join(30.0)
     assert worker.wait(30.0) and worker.collect().rows
     assert seen == [[1] * len(seen[0])]
+
+
+def test_a_ranking_finished_between_refits_is_on_the_page_at_once(smoke, tmp_path):
+    """The ``--html`` page is rewritten when a ranking arrives, not only at the next refit."""
+    pose, sig = smoke
+    page = tmp_path / "live.html"
+    seen: list[bool] = []
+
+    def on_update(status) -> None:
+        if status.manoeuvres and not seen:
+            seen.append("next manoeuvre 1" in page.read_text() and ROWS[0][0] in page.read_text())
+
+    def ranker(*args):
+        time.sleep(0.5)  # finishes after the refit that started it has written the page
+        return ROWS
+
+    options = LiveOptions(spec=ModelSpec.parse("sh", order=4), fit=FitOptions(), refit_s=5.0, idle_s=8.0,
+                          manoeuvres=ranker)
+    run_live(_csv_source(pose, sig, tmp_path), str(tmp_path / "m.json"), options, on_update=on_update, html=str(page))
+    assert seen == [True]

@@ -364,8 +364,8 @@ def run_live(
     record : str, optional
         Where to keep the received MAVLink stream as a ``.tlog`` (written at the end).
     html : str, optional
-        A page with the same numbers and the coverage and spread maps, rewritten at every
-        refit (the browser reloads it).
+        A page with the same numbers and the coverage and spread maps, rewritten atomically at
+        every refit and when a ranking of the manoeuvres finishes (the browser reloads it).
 
     Returns
     -------
@@ -399,8 +399,9 @@ def run_live(
                 session.write_page(html)
                 if on_update is not None:
                     on_update(session.status)
-            elif session.show_ranking():  # a ranking beside the loop finished
+            elif session.show_ranking():  # a ranking beside the loop finished: shown now, not at the next refit
                 session.status.elapsed_s = now - start
+                session.write_page(html)
                 if on_update is not None:
                     on_update(session.status)
             reason = session.stop_reason(now - start)
