@@ -182,6 +182,7 @@ def test_a_stop_does_not_wait_for_a_running_ranking(smoke, tmp_path, monkeypatch
         assert worker.started >= 1 and worker.running and worker.closed  # left running, its result to be dropped
         assert took < 100.0  # it returned long before the ranking could
         assert outcome.status.stopped.startswith("end of stream") and not outcome.status.ranking_running
+        assert any(n.startswith("stop: ") and "BLAS limit" in n for n in outcome.status.notes)  # waited, then said
     finally:
         gate.set()
     assert worker.wait(30.0) and worker.collect() is None and worker.finished == 0
@@ -265,3 +266,37 @@ def test_a_ranking_finished_between_refits_is_on_the_page_at_once(smoke, tmp_pat
                           manoeuvres=ranker)
     run_live(_csv_source(pose, sig, tmp_path), str(tmp_path / "m.json"), options, on_update=on_update, html=str(page))
     assert seen == [True]
+
+
+def test_the_last_refit_after_a_stop_does_not_run_under_a_rankings_blas_limit(smoke, tmp_path, monkeypatch):
+    """A ranking still running at the end of the stream holds the BLAS limit: the stop waits for
+    it (up to STOP_RANKING_WAIT_S) so the last refit finds the limit free."""
+    from rplearn.core import threads
+
+    pose, sig = smoke
+    free_at_last_refit: list[bool] = []
+    refit = live_module._Session.refit
+
+    def recording_refit(self, final=False):
+        if final:
+            got = threads._LIMIT_LOCK.acquire(blocking=False)
+            if got:
+                threads._LIMIT_LOCK.release()
+            free_at_last_refit.append(got)
+        return refit(self, final)
+
+    monkeypatch.setattr(live_module._Session, "refit", recording_refit)
+    workers = _Workers()
+    monkeypatch.setattr(live_module, "RankingWorker", workers.make)
+
+    def ranker(*args):
+        time.sleep(2.0)  # still running when the stream ends (idle_s after the only read)
+        return ROWS
+
+    options = LiveOptions(spec=ModelSpec.parse("sh", order=4), fit=FitOptions(), refit_s=0.2, idle_s=1.0,
+                          manoeuvres=ranker)
+    outcome = run_live(_csv_source(pose, sig, tmp_path), str(tmp_path / "m.json"), options)
+    assert workers[0].started == 1 and not workers[0].running and workers[0].closed
+    assert free_at_last_refit == [True]
+    assert not any(n.startswith("stop: ") for n in outcome.status.notes)
+    assert live_module.STOP_RANKING_WAIT_S > 2.0

@@ -65,6 +65,11 @@ from rplearn.workflows.live_status import LiveStatus, Prequential, page_rows
 ManoeuvreRanker = Callable[[Any, Any, pd.DataFrame], Sequence[tuple[str, float, float]]]
 #: Matched rows kept for the link budget's plausibility check (a window of the latest).
 BUDGET_WINDOW_ROWS = 2000
+#: Seconds a stop waits for a running manoeuvre ranking before the last refit: the ranking holds
+#: the process's BLAS limit (one thread) until it ends, and the last refit and a MAVLink
+#: recording's whole re-match would otherwise run under it. One still running then is dropped
+#: (a note says the last work ran under its limit).
+STOP_RANKING_WAIT_S = 5.0
 
 
 @check_types
@@ -288,6 +293,14 @@ class _Session:
         s.ranking_running = self.ranking.running
         return done is not None
 
+    def stop_ranking(self, timeout_s: float) -> None:
+        """At a stop: wait at most ``timeout_s`` for a running ranking (:data:`STOP_RANKING_WAIT_S`),
+        then no more rankings; its result is dropped."""
+        if self.ranking is not None and not self.ranking.wait(timeout_s):
+            self.note("stop: ", f"a manoeuvre ranking still running {timeout_s:g} s after the stop was dropped; "
+                                "the last refit ran under its BLAS limit of one thread")
+        self.close_ranking(wait=False)
+
     def close_ranking(self, wait: bool) -> None:
         """No more rankings: with ``wait``, the running one is waited for and shown; else dropped."""
         if self.ranking is None:
@@ -412,7 +425,7 @@ def run_live(
                 break
             if not got.received:
                 time.sleep(0.05)
-        session.close_ranking(wait=False)  # a ranking still running is dropped, not waited for
+        session.stop_ranking(STOP_RANKING_WAIT_S)  # briefly waited for (its BLAS limit), then dropped
         last = src.poll(final=True) if isinstance(src, MavlinkSource) else src.poll()
         session.feed(last.poses, last.signals)
         session.learn(final=True)
@@ -501,4 +514,4 @@ def replay_session(
     return LiveOutcome(session.status, session.fitted, session.preq, output)
 
 
-__all__ = ["BUDGET_WINDOW_ROWS", "LiveOptions", "LiveOutcome", "ManoeuvreRanker", "open_source", "replay_session", "run_live"]
+__all__ = ["BUDGET_WINDOW_ROWS", "STOP_RANKING_WAIT_S", "LiveOptions", "LiveOutcome", "ManoeuvreRanker", "open_source", "replay_session", "run_live"]

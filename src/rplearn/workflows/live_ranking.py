@@ -13,7 +13,10 @@ ranked.
 
 A stop (the end of the stream, a stop criterion, Ctrl-C, an error) closes the worker: a
 running ranking is not waited for (a thread cannot be interrupted inside numpy; the thread is a
-daemon, so the process exits without it) and its result is dropped. ``beside=False`` ranks in
+daemon, so the process exits without it) and its result is dropped. At the end of the stream or
+a stop criterion, :func:`rplearn.workflows.live.run_live` first waits for it up to
+:data:`rplearn.workflows.live.STOP_RANKING_WAIT_S`, so that the last refit does not run under
+its BLAS limit. ``beside=False`` ranks in
 the caller's thread at once, as the loop did before (the reference of the tests).
 
 The ranking holds the process's BLAS limit of one thread while it runs
