@@ -114,12 +114,42 @@ def _tlog_row(kind: str, msg: Any, src: int, t: float) -> tuple[Any, ...]:
     return (t, msg.rssi, msg.remrssi, msg.noise, msg.remnoise, msg.rxerrors, msg.fixed)
 
 
+@dataclass
+class TlogRows:
+    """The fields of the ``.tlog`` messages read so far (:func:`_tlog_row`), added one message at
+    a time, so that a growing log is read only where it grew (:mod:`rplearn.io.tlog_tail`)."""
+
+    rows: dict[str, list[tuple[Any, ...]]] = field(default_factory=lambda: {k: [] for k in _TLOG_TYPES})
+    by_sys: dict[int, list[float]] = field(default_factory=dict)
+    counts: dict[str, int] = field(default_factory=dict)
+    radio_senders: dict[str, int] = field(default_factory=dict)
+
+    def add(self, msg: Any, source: str) -> None:
+        """Add one parsed message (``BAD_DATA`` counted)."""
+        kind = msg.get_type()
+        if kind == "BAD_DATA":
+            self.counts["BAD_DATA"] = self.counts.get("BAD_DATA", 0) + 1
+            return
+        t, sysid = float(msg._timestamp), int(msg.get_srcSystem())
+        self.by_sys.setdefault(sysid, []).append(t)
+        if kind not in self.rows:
+            return
+        self.counts[kind] = self.counts.get(kind, 0) + 1
+        src = sysid * 256 + int(msg.get_srcComponent())  # a gimbal may send ATTITUDE too
+        try:
+            self.rows[kind].append(_tlog_row(kind, msg, src, t))
+        except (AttributeError, TypeError, ValueError) as exc:  # a field the dialect of the file lacks
+            name = getattr(exc, "name", None)
+            raise LogFormatError(f"{source}: a {kind} message has no {name} field" if name else
+                                 f"{source}: a {kind} message has a field that is not a number ({exc})") from None
+        if kind in _RADIO_TYPES:
+            key = f"{sysid}/{msg.get_srcComponent()}"
+            self.radio_senders[key] = self.radio_senders.get(key, 0) + 1
+
+
 def collect_tlog(source: str, system_id: int | None) -> Raw:
     """One pass over a ``.tlog``: attitude, position, origin, fix, armed state, radio."""
-    rows: dict[str, list[tuple[Any, ...]]] = {k: [] for k in _TLOG_TYPES}
-    by_sys: dict[int, list[float]] = {}
-    counts: dict[str, int] = {}
-    radio_senders: dict[str, int] = {}
+    acc = TlogRows()
     with library_quiet():  # pymavlink prints what it cannot parse
         conn = _open(source)
         whole_to = 0
@@ -131,26 +161,17 @@ def collect_tlog(source: str, system_id: int | None) -> Raw:
             if msg is None:
                 break
             whole_to = conn.f.tell() - conn.mav.buf_len()  # where the records read so far end
-            kind = msg.get_type()
-            if kind == "BAD_DATA":
-                counts["BAD_DATA"] = counts.get("BAD_DATA", 0) + 1
-                continue
-            t, sysid = float(msg._timestamp), int(msg.get_srcSystem())
-            by_sys.setdefault(sysid, []).append(t)
-            if kind not in rows:
-                continue
-            counts[kind] = counts.get(kind, 0) + 1
-            src = sysid * 256 + int(msg.get_srcComponent())  # a gimbal may send ATTITUDE too
-            try:
-                rows[kind].append(_tlog_row(kind, msg, src, t))
-            except (AttributeError, TypeError, ValueError) as exc:  # a field the dialect of the file lacks
-                name = getattr(exc, "name", None)
-                raise LogFormatError(f"{source}: a {kind} message has no {name} field" if name else
-                                     f"{source}: a {kind} message has a field that is not a number ({exc})") from None
-            if kind in _RADIO_TYPES:
-                key = f"{sysid}/{msg.get_srcComponent()}"
-                radio_senders[key] = radio_senders.get(key, 0) + 1
+            acc.add(msg, source)
         cut_off = _tlog_cut_off(conn, source, whole_to)
+    return tlog_raw(acc, source, system_id, cut_off)
+
+
+def tlog_raw(acc: TlogRows, source: str, system_id: int | None, cut_off: dict[str, Any],
+             time_base: dict[int, float] | None = None) -> Raw:
+    """The :class:`Raw` arrays of the messages in ``acc``. ``time_base`` (boot number -> receive
+    minus boot time [s]) fixes the offsets of the boots it holds; the others take their median
+    (:func:`boot_offsets`)."""
+    rows, by_sys, counts, radio_senders = acc.rows, acc.by_sys, acc.counts, acc.radio_senders
     att = _arr(rows["ATTITUDE"], 6)
     if not len(att):
         raise LogFormatError(f"{source}: no ATTITUDE messages (the vehicle's attitude)")
@@ -171,6 +192,8 @@ def collect_tlog(source: str, system_id: int | None) -> Raw:
     boot_clock = len(np.unique(att[:, 2])) >= 0.9 * len(att)  # some senders leave time_boot_ms at 0
     if boot_clock:
         offset, boot = boot_offsets(both[:, 0], both[:, 1])
+        for b, fixed in (time_base or {}).items():
+            offset[boot == b] = fixed
     else:
         offset, boot = both[:, 0] - both[:, 1], np.zeros(len(both), np.int64)
     t_log = both[:, 1] + offset
@@ -186,10 +209,10 @@ def collect_tlog(source: str, system_id: int | None) -> Raw:
         att=np.column_stack([t_log[:n_att], att[:, 3:6], boot[:n_att]]),
         pos=np.column_stack([t_log[n_att:], gpi[:, 3:8], boot[n_att:]]),
         radio=_arr(sorted(radio), 7), vehicle_t=np.sort(np.asarray(by_sys.get(vehicle, []), np.float64)),
-        home=(float(home[0][2]), float(home[0][3]), float(home[0][4])) if home else None, counts=counts,
+        home=(float(home[0][2]), float(home[0][3]), float(home[0][4])) if home else None, counts=dict(counts),
         boot_last_t=boot_last_t, origin_t=np.sort(np.asarray(origin, np.float64)), fix=_arr(sorted(fix), 2),
         armed=_arr(sorted(beats), 2),
-        notes={"system_id": vehicle, "component_id": chosen % 256, "radio_senders": radio_senders, **cut_off,
+        notes={"system_id": vehicle, "component_id": chosen % 256, "radio_senders": dict(radio_senders), **cut_off,
                "other_vehicles": others,
                "clock_offset_s": float(np.median(offset)) if len(offset) and boot_clock else None,
                "time_reference": "ground station receive time, seconds since the UNIX epoch"
@@ -310,4 +333,4 @@ def collect_dataflash(source: str) -> Raw:
     )
 
 
-__all__ = ["Raw", "boot_offsets", "collect_dataflash", "collect_tlog"]
+__all__ = ["Raw", "TlogRows", "boot_offsets", "collect_dataflash", "collect_tlog", "tlog_raw"]
