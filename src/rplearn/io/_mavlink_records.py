@@ -40,6 +40,7 @@ class Raw:
     armed: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))  # (n, 2): t, armed (1) or not (0)
     counts: dict[str, int] = field(default_factory=dict)
     notes: dict[str, Any] = field(default_factory=dict)
+    boot_offsets: dict[int, tuple[float, int]] = field(default_factory=dict)  # tlog: boot -> (offset [s], messages)
 
 
 def _arr(rows: list[tuple[float, ...]], width: int) -> np.ndarray:
@@ -197,6 +198,7 @@ def tlog_raw(acc: TlogRows, source: str, system_id: int | None, cut_off: dict[st
     else:
         offset, boot = both[:, 0] - both[:, 1], np.zeros(len(both), np.int64)
     t_log = both[:, 1] + offset
+    per_boot = {int(b): (float(offset[boot == b][0]), int((boot == b).sum())) for b in np.unique(boot)} if boot_clock else {}
     boot_last_t = np.array([t_log[boot == b].max() for b in range(int(boot.max()) + 1)]) if len(boot) else np.zeros(0)
     home = [h for h in rows["HOME_POSITION"] if h[0] // 256 == vehicle and (h[2] != 0 or h[3] != 0)]
     origin = [h[1] for k in _ORIGIN_TYPES for h in rows[k] if h[0] // 256 == vehicle and (h[2] != 0 or h[3] != 0)]
@@ -211,7 +213,7 @@ def tlog_raw(acc: TlogRows, source: str, system_id: int | None, cut_off: dict[st
         radio=_arr(sorted(radio), 7), vehicle_t=np.sort(np.asarray(by_sys.get(vehicle, []), np.float64)),
         home=(float(home[0][2]), float(home[0][3]), float(home[0][4])) if home else None, counts=dict(counts),
         boot_last_t=boot_last_t, origin_t=np.sort(np.asarray(origin, np.float64)), fix=_arr(sorted(fix), 2),
-        armed=_arr(sorted(beats), 2),
+        armed=_arr(sorted(beats), 2), boot_offsets=per_boot,
         notes={"system_id": vehicle, "component_id": chosen % 256, "radio_senders": dict(radio_senders), **cut_off,
                "other_vehicles": others,
                "clock_offset_s": float(np.median(offset)) if len(offset) and boot_clock else None,
