@@ -124,6 +124,21 @@ class TlogRows:
     by_sys: dict[int, list[float]] = field(default_factory=dict)
     counts: dict[str, int] = field(default_factory=dict)
     radio_senders: dict[str, int] = field(default_factory=dict)
+    _arrays: dict[Any, np.ndarray] = field(default_factory=dict)
+
+    def array(self, kind: str, width: int) -> np.ndarray:
+        """The rows of a message kind as an array, converting only those added since the last call."""
+        rows, done = self.rows[kind], self._arrays.get(kind, np.zeros((0, width)))
+        if len(done) < len(rows):
+            done = self._arrays[kind] = np.concatenate([done, _arr(rows[len(done):], width)])
+        return done
+
+    def times(self, sysid: int) -> np.ndarray:
+        """The receive times of a system's messages [s], as :meth:`array` converts rows."""
+        rows, done = self.by_sys.get(sysid, []), self._arrays.get(sysid, np.zeros(0))
+        if len(done) < len(rows):
+            done = self._arrays[sysid] = np.concatenate([done, np.asarray(rows[len(done):], np.float64)])
+        return done
 
     def add(self, msg: Any, source: str) -> None:
         """Add one parsed message (``BAD_DATA`` counted)."""
@@ -172,8 +187,8 @@ def tlog_raw(acc: TlogRows, source: str, system_id: int | None, cut_off: dict[st
     """The :class:`Raw` arrays of the messages in ``acc``. ``time_base`` (boot number -> receive
     minus boot time [s]) fixes the offsets of the boots it holds; the others take their median
     (:func:`boot_offsets`)."""
-    rows, by_sys, counts, radio_senders = acc.rows, acc.by_sys, acc.counts, acc.radio_senders
-    att = _arr(rows["ATTITUDE"], 6)
+    rows, counts, radio_senders = acc.rows, acc.counts, acc.radio_senders
+    att = acc.array("ATTITUDE", 6)
     if not len(att):
         raise LogFormatError(f"{source}: no ATTITUDE messages (the vehicle's attitude)")
     srcs, n = np.unique(att[:, 0].astype(int), return_counts=True)
@@ -187,7 +202,7 @@ def tlog_raw(acc: TlogRows, source: str, system_id: int | None, cut_off: dict[st
     every = np.unique(att[:, 0].astype(int), return_counts=True)
     others = {int(s): int(k) for s, k in zip(every[0] // 256, every[1], strict=True) if int(s) != vehicle}
     att = att[att[:, 0] == chosen]
-    gpi = _arr(rows["GLOBAL_POSITION_INT"], 8)
+    gpi = acc.array("GLOBAL_POSITION_INT", 8)
     gpi = gpi[(gpi[:, 0] == chosen) & ((gpi[:, 3] != 0) | (gpi[:, 4] != 0))]
     both = np.concatenate([att[:, 1:3], gpi[:, 1:3]])
     boot_clock = len(np.unique(att[:, 2])) >= 0.9 * len(att)  # some senders leave time_boot_ms at 0
@@ -204,13 +219,14 @@ def tlog_raw(acc: TlogRows, source: str, system_id: int | None, cut_off: dict[st
     origin = [h[1] for k in _ORIGIN_TYPES for h in rows[k] if h[0] // 256 == vehicle and (h[2] != 0 or h[3] != 0)]
     fix = [r[1:] for r in rows["GPS_RAW_INT"] if r[0] // 256 == vehicle]
     beats = [r[1:3] for r in rows["HEARTBEAT"] if r[0] // 256 == vehicle and r[3] != _MAV_TYPE_GCS]
-    radio = [*rows["RADIO_STATUS"], *rows["RADIO"]]
+    radio = np.concatenate([acc.array("RADIO_STATUS", 7), acc.array("RADIO", 7)])
+    radio = radio[np.lexsort(radio.T[::-1])]  # as the rows' tuples sort
     n_att = len(att)
     return Raw(
         fmt="tlog",
         att=np.column_stack([t_log[:n_att], att[:, 3:6], boot[:n_att]]),
         pos=np.column_stack([t_log[n_att:], gpi[:, 3:8], boot[n_att:]]),
-        radio=_arr(sorted(radio), 7), vehicle_t=np.sort(np.asarray(by_sys.get(vehicle, []), np.float64)),
+        radio=radio, vehicle_t=np.sort(acc.times(vehicle)),
         home=(float(home[0][2]), float(home[0][3]), float(home[0][4])) if home else None, counts=dict(counts),
         boot_last_t=boot_last_t, origin_t=np.sort(np.asarray(origin, np.float64)), fix=_arr(sorted(fix), 2),
         armed=_arr(sorted(beats), 2), boot_offsets=per_boot,

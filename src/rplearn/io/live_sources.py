@@ -191,8 +191,9 @@ class MavlinkSource:
             self._unread += n
             now = time.monotonic()
             empty = pd.DataFrame()
-            if not self._unread or (not final and now - self._last_read < self.read_every_s):
-                return Poll(empty, empty, n)
+            # rows held back by the reader (time base, station, settling) are released by the final poll
+            if not final and (not self._unread or now - self._last_read < self.read_every_s):
+                return Poll(empty, empty, n, dict(self.tail.dropped))
             self._fh.flush()
             self._last_read, self._unread = now, 0
         poses, signals = self.tail.poll(final=final)
