@@ -71,6 +71,7 @@ from .tables import table_columns as table_columns
 from .tlog import TlogDefects as TlogDefects
 from .tlog import dbm_to_sik_rssi as dbm_to_sik_rssi
 from .tlog import write_tlog as write_tlog
+from .tlog_tail import TlogTail as TlogTail
 from .ulog import read_ulog as read_ulog
 from .ulog import read_ulogs as read_ulogs
 

@@ -40,6 +40,7 @@ class Raw:
     armed: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))  # (n, 2): t, armed (1) or not (0)
     counts: dict[str, int] = field(default_factory=dict)
     notes: dict[str, Any] = field(default_factory=dict)
+    boot_offsets: dict[int, tuple[float, int]] = field(default_factory=dict)  # tlog: boot -> (offset [s], messages)
 
 
 def _arr(rows: list[tuple[float, ...]], width: int) -> np.ndarray:
@@ -114,12 +115,57 @@ def _tlog_row(kind: str, msg: Any, src: int, t: float) -> tuple[Any, ...]:
     return (t, msg.rssi, msg.remrssi, msg.noise, msg.remnoise, msg.rxerrors, msg.fixed)
 
 
+@dataclass
+class TlogRows:
+    """The fields of the ``.tlog`` messages read so far (:func:`_tlog_row`), added one message at
+    a time, so that a growing log is read only where it grew (:mod:`rplearn.io.tlog_tail`)."""
+
+    rows: dict[str, list[tuple[Any, ...]]] = field(default_factory=lambda: {k: [] for k in _TLOG_TYPES})
+    by_sys: dict[int, list[float]] = field(default_factory=dict)
+    counts: dict[str, int] = field(default_factory=dict)
+    radio_senders: dict[str, int] = field(default_factory=dict)
+    _arrays: dict[Any, np.ndarray] = field(default_factory=dict)
+
+    def array(self, kind: str, width: int) -> np.ndarray:
+        """The rows of a message kind as an array, converting only those added since the last call."""
+        rows, done = self.rows[kind], self._arrays.get(kind, np.zeros((0, width)))
+        if len(done) < len(rows):
+            done = self._arrays[kind] = np.concatenate([done, _arr(rows[len(done):], width)])
+        return done
+
+    def times(self, sysid: int) -> np.ndarray:
+        """The receive times of a system's messages [s], as :meth:`array` converts rows."""
+        rows, done = self.by_sys.get(sysid, []), self._arrays.get(sysid, np.zeros(0))
+        if len(done) < len(rows):
+            done = self._arrays[sysid] = np.concatenate([done, np.asarray(rows[len(done):], np.float64)])
+        return done
+
+    def add(self, msg: Any, source: str) -> None:
+        """Add one parsed message (``BAD_DATA`` counted)."""
+        kind = msg.get_type()
+        if kind == "BAD_DATA":
+            self.counts["BAD_DATA"] = self.counts.get("BAD_DATA", 0) + 1
+            return
+        t, sysid = float(msg._timestamp), int(msg.get_srcSystem())
+        self.by_sys.setdefault(sysid, []).append(t)
+        if kind not in self.rows:
+            return
+        self.counts[kind] = self.counts.get(kind, 0) + 1
+        src = sysid * 256 + int(msg.get_srcComponent())  # a gimbal may send ATTITUDE too
+        try:
+            self.rows[kind].append(_tlog_row(kind, msg, src, t))
+        except (AttributeError, TypeError, ValueError) as exc:  # a field the dialect of the file lacks
+            name = getattr(exc, "name", None)
+            raise LogFormatError(f"{source}: a {kind} message has no {name} field" if name else
+                                 f"{source}: a {kind} message has a field that is not a number ({exc})") from None
+        if kind in _RADIO_TYPES:
+            key = f"{sysid}/{msg.get_srcComponent()}"
+            self.radio_senders[key] = self.radio_senders.get(key, 0) + 1
+
+
 def collect_tlog(source: str, system_id: int | None) -> Raw:
     """One pass over a ``.tlog``: attitude, position, origin, fix, armed state, radio."""
-    rows: dict[str, list[tuple[Any, ...]]] = {k: [] for k in _TLOG_TYPES}
-    by_sys: dict[int, list[float]] = {}
-    counts: dict[str, int] = {}
-    radio_senders: dict[str, int] = {}
+    acc = TlogRows()
     with library_quiet():  # pymavlink prints what it cannot parse
         conn = _open(source)
         whole_to = 0
@@ -131,27 +177,18 @@ def collect_tlog(source: str, system_id: int | None) -> Raw:
             if msg is None:
                 break
             whole_to = conn.f.tell() - conn.mav.buf_len()  # where the records read so far end
-            kind = msg.get_type()
-            if kind == "BAD_DATA":
-                counts["BAD_DATA"] = counts.get("BAD_DATA", 0) + 1
-                continue
-            t, sysid = float(msg._timestamp), int(msg.get_srcSystem())
-            by_sys.setdefault(sysid, []).append(t)
-            if kind not in rows:
-                continue
-            counts[kind] = counts.get(kind, 0) + 1
-            src = sysid * 256 + int(msg.get_srcComponent())  # a gimbal may send ATTITUDE too
-            try:
-                rows[kind].append(_tlog_row(kind, msg, src, t))
-            except (AttributeError, TypeError, ValueError) as exc:  # a field the dialect of the file lacks
-                name = getattr(exc, "name", None)
-                raise LogFormatError(f"{source}: a {kind} message has no {name} field" if name else
-                                     f"{source}: a {kind} message has a field that is not a number ({exc})") from None
-            if kind in _RADIO_TYPES:
-                key = f"{sysid}/{msg.get_srcComponent()}"
-                radio_senders[key] = radio_senders.get(key, 0) + 1
+            acc.add(msg, source)
         cut_off = _tlog_cut_off(conn, source, whole_to)
-    att = _arr(rows["ATTITUDE"], 6)
+    return tlog_raw(acc, source, system_id, cut_off)
+
+
+def tlog_raw(acc: TlogRows, source: str, system_id: int | None, cut_off: dict[str, Any],
+             time_base: dict[int, float] | None = None) -> Raw:
+    """The :class:`Raw` arrays of the messages in ``acc``. ``time_base`` (boot number -> receive
+    minus boot time [s]) fixes the offsets of the boots it holds; the others take their median
+    (:func:`boot_offsets`)."""
+    rows, counts, radio_senders = acc.rows, acc.counts, acc.radio_senders
+    att = acc.array("ATTITUDE", 6)
     if not len(att):
         raise LogFormatError(f"{source}: no ATTITUDE messages (the vehicle's attitude)")
     srcs, n = np.unique(att[:, 0].astype(int), return_counts=True)
@@ -165,31 +202,35 @@ def collect_tlog(source: str, system_id: int | None) -> Raw:
     every = np.unique(att[:, 0].astype(int), return_counts=True)
     others = {int(s): int(k) for s, k in zip(every[0] // 256, every[1], strict=True) if int(s) != vehicle}
     att = att[att[:, 0] == chosen]
-    gpi = _arr(rows["GLOBAL_POSITION_INT"], 8)
+    gpi = acc.array("GLOBAL_POSITION_INT", 8)
     gpi = gpi[(gpi[:, 0] == chosen) & ((gpi[:, 3] != 0) | (gpi[:, 4] != 0))]
     both = np.concatenate([att[:, 1:3], gpi[:, 1:3]])
     boot_clock = len(np.unique(att[:, 2])) >= 0.9 * len(att)  # some senders leave time_boot_ms at 0
     if boot_clock:
         offset, boot = boot_offsets(both[:, 0], both[:, 1])
+        for b, fixed in (time_base or {}).items():
+            offset[boot == b] = fixed
     else:
         offset, boot = both[:, 0] - both[:, 1], np.zeros(len(both), np.int64)
     t_log = both[:, 1] + offset
+    per_boot = {int(b): (float(offset[boot == b][0]), int((boot == b).sum())) for b in np.unique(boot)} if boot_clock else {}
     boot_last_t = np.array([t_log[boot == b].max() for b in range(int(boot.max()) + 1)]) if len(boot) else np.zeros(0)
     home = [h for h in rows["HOME_POSITION"] if h[0] // 256 == vehicle and (h[2] != 0 or h[3] != 0)]
     origin = [h[1] for k in _ORIGIN_TYPES for h in rows[k] if h[0] // 256 == vehicle and (h[2] != 0 or h[3] != 0)]
     fix = [r[1:] for r in rows["GPS_RAW_INT"] if r[0] // 256 == vehicle]
     beats = [r[1:3] for r in rows["HEARTBEAT"] if r[0] // 256 == vehicle and r[3] != _MAV_TYPE_GCS]
-    radio = [*rows["RADIO_STATUS"], *rows["RADIO"]]
+    radio = np.concatenate([acc.array("RADIO_STATUS", 7), acc.array("RADIO", 7)])
+    radio = radio[np.lexsort(radio.T[::-1])]  # as the rows' tuples sort
     n_att = len(att)
     return Raw(
         fmt="tlog",
         att=np.column_stack([t_log[:n_att], att[:, 3:6], boot[:n_att]]),
         pos=np.column_stack([t_log[n_att:], gpi[:, 3:8], boot[n_att:]]),
-        radio=_arr(sorted(radio), 7), vehicle_t=np.sort(np.asarray(by_sys.get(vehicle, []), np.float64)),
-        home=(float(home[0][2]), float(home[0][3]), float(home[0][4])) if home else None, counts=counts,
+        radio=radio, vehicle_t=np.sort(acc.times(vehicle)),
+        home=(float(home[0][2]), float(home[0][3]), float(home[0][4])) if home else None, counts=dict(counts),
         boot_last_t=boot_last_t, origin_t=np.sort(np.asarray(origin, np.float64)), fix=_arr(sorted(fix), 2),
-        armed=_arr(sorted(beats), 2),
-        notes={"system_id": vehicle, "component_id": chosen % 256, "radio_senders": radio_senders, **cut_off,
+        armed=_arr(sorted(beats), 2), boot_offsets=per_boot,
+        notes={"system_id": vehicle, "component_id": chosen % 256, "radio_senders": dict(radio_senders), **cut_off,
                "other_vehicles": others,
                "clock_offset_s": float(np.median(offset)) if len(offset) and boot_clock else None,
                "time_reference": "ground station receive time, seconds since the UNIX epoch"
@@ -310,4 +351,4 @@ def collect_dataflash(source: str) -> Raw:
     )
 
 
-__all__ = ["Raw", "boot_offsets", "collect_dataflash", "collect_tlog"]
+__all__ = ["Raw", "TlogRows", "boot_offsets", "collect_dataflash", "collect_tlog", "tlog_raw"]

@@ -9,10 +9,10 @@ Two sources give canonical pose and signal rows a poll at a time:
   (``udpin:0.0.0.0:14550``, ``tcp:host:5760``, a serial device ``/dev/ttyUSB0``, what
   MAVProxy, QGroundControl and mavlink-router forward). Every message is appended to a
   telemetry log (``.tlog``: the receive time then the frame, as a ground station writes it), and
-  every ``read_every_s`` that log is read again by the ``.tlog`` reader of ``sync``
-  (:func:`rplearn.io.read_logs`), of which the rows past those already given are passed on.
-  Reading the whole log again costs time in its length (about a second per 10 MB); the rows it
-  gives are those ``sync`` would read from the same file.
+  every ``read_every_s`` the records appended to that log are read by :class:`rplearn.io.tlog_tail.TlogTail`
+  (only the new messages parsed, with the per-message functions and conversion of ``sync``'s
+  reader; the time base and station fixed before any row is handed out; a row the reader changes
+  its verdict on after it was handed out counted in ``Poll.dropped``).
 
 :func:`replay_tlog` sends a ``.tlog``'s messages over UDP at a multiple of their pace, their
 boot times and speeds scaled alike, so that the stream is a consistent (faster) flight.
@@ -27,7 +27,7 @@ import socket
 import struct
 import threading
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -51,11 +51,14 @@ class Poll:
         New canonical pose and signal rows (empty when none).
     received : int
         Lines or messages received by this poll.
+    dropped : dict of str to int
+        Rows not handed out, per reason, so far (a MAVLink source: :class:`rplearn.io.tlog_tail.TlogTail`).
     """
 
     poses: pd.DataFrame
     signals: pd.DataFrame
     received: int
+    dropped: dict[str, int] = field(default_factory=dict)
 
 
 class _Tail:
@@ -123,7 +126,7 @@ class CsvTail:
 
 @check_types
 class MavlinkSource:
-    """A MAVLink connection recorded to a ``.tlog`` and read back by ``sync``'s reader.
+    """A MAVLink connection recorded to a ``.tlog`` and read back where it grew by ``sync``'s reader.
 
     Parameters
     ----------
@@ -135,10 +138,16 @@ class MavlinkSource:
         As ``sync`` reads a ``.tlog`` (transmit power and frequency at least).
     read_every_s : float
         Seconds between readings of the log.
+
+    Attributes
+    ----------
+    tail : TlogTail
+        The reader of the recording (``tail.parsed``: messages parsed by the last reading).
     """
 
     def __init__(self, connection: str, record_path: str, reader: ReaderOptions, read_every_s: float = 1.0) -> None:
         from rplearn.io._mavlink_records import _mavutil
+        from rplearn.io.tlog_tail import TlogTail
 
         try:
             self.conn = _mavutil().mavlink_connection(connection, dialect="ardupilotmega")
@@ -151,8 +160,7 @@ class MavlinkSource:
         self._received = 0
         self._unread = 0
         self._last_read = -math.inf
-        self._pose_t: dict[str, float] = {}
-        self._signal_t = -math.inf
+        self.tail = TlogTail(record_path, reader)
         self._stop = threading.Event()
         self._error: BaseException | None = None
         # messages are received and stamped on their own thread, so that a refit does not delay
@@ -183,34 +191,13 @@ class MavlinkSource:
             self._unread += n
             now = time.monotonic()
             empty = pd.DataFrame()
-            if not self._unread or (not final and now - self._last_read < self.read_every_s):
-                return Poll(empty, empty, n)
+            # rows held back by the reader (time base, station, settling) are released by the final poll
+            if not final and (not self._unread or now - self._last_read < self.read_every_s):
+                return Poll(empty, empty, n, dict(self.tail.dropped))
             self._fh.flush()
             self._last_read, self._unread = now, 0
-        poses, signals = self._read()
-        return Poll(poses, signals, n)
-
-    def _read(self) -> tuple[pd.DataFrame, pd.DataFrame]:
-        from rplearn.io.read import read_logs
-
-        try:
-            logs, _ = read_logs([self.record_path], self.reader)
-        except LogFormatError:  # too little received to read (no ATTITUDE yet)
-            return pd.DataFrame(), pd.DataFrame()
-        poses = pd.DataFrame() if logs.pose is None else logs.pose
-        new = []
-        for node, group in poses.groupby("node", sort=False):
-            last = self._pose_t.get(str(node), -math.inf)
-            fresh = group[group["t"].to_numpy(np.float64) > last]
-            if len(fresh):
-                self._pose_t[str(node)] = float(group["t"].max())
-                new.append(fresh)
-        signals = pd.DataFrame() if logs.signal is None else logs.signal
-        if len(signals):
-            t = signals["t"].to_numpy(np.float64)
-            signals = signals[t > self._signal_t]
-            self._signal_t = max(self._signal_t, float(t.max()))
-        return (pd.concat(new, ignore_index=True) if new else pd.DataFrame()), signals
+        poses, signals = self.tail.poll(final=final)
+        return Poll(poses, signals, n, dict(self.tail.dropped))
 
     def close(self) -> None:
         """Stop receiving; close the connection and the recording."""
@@ -220,6 +207,7 @@ class MavlinkSource:
             if self._fh.closed:
                 return
             self._fh.close()
+        self.tail.close()
         try:
             self.conn.close()
         except Exception:  # pragma: no cover - closing a dead socket

@@ -472,17 +472,31 @@ def read_mavlink(
         On a missing file or a bad argument (``param`` names it).
     """
     options = MavlinkOptions() if options is None else options
-    station_geodetic, origin_geodetic, system_id = options.station_geodetic, options.origin_geodetic, options.system_id
-    station_heading_deg = options.station_heading_deg
-    max_gap_s, stream_timeout_s = options.max_gap_s, options.stream_timeout_s
     source = str(path)
     if not os.path.isfile(source):
         raise InputError(f"{source}: no such file")
-    _check_arguments(tx_power_dbm, frequency_hz, max_gap_s, stream_timeout_s, vehicle, station, station_heading_deg)
-    station_geodetic = _check_origin(station_geodetic, "station_geodetic")
-    origin_geodetic = _check_origin(origin_geodetic, "origin_geodetic")
+    _check_arguments(tx_power_dbm, frequency_hz, options.max_gap_s, options.stream_timeout_s, vehicle, station,
+                     options.station_heading_deg)
     fmt = _detect(source)
-    raw = collect_tlog(source, system_id) if fmt == "tlog" else collect_dataflash(source)
+    raw = collect_tlog(source, options.system_id) if fmt == "tlog" else collect_dataflash(source)
+    logs, meta = _from_raw(raw, source, (tx_power_dbm, float(frequency_hz)), vehicle, station, options)
+    cut, cut_name, corrupt = (dataflash_cut_off_at(source) if fmt == "dataflash"
+                              else (raw.notes.pop("cut_off_at_byte", None), raw.notes.pop("cut_off_record", None), 0))
+    if cut is not None:
+        meta["notes"].append(f"{source}: the file is cut off inside {'a ' + cut_name if cut_name else 'a'} record at "
+                             f"byte {cut:,}: that message is lost, the complete ones before it are read")
+    meta.update({"cut_off_at_byte": cut, "cut_off_record": cut_name, "corrupt_bytes": int(corrupt)})
+    return logs, meta
+
+
+def _from_raw(raw: Raw, source: str, radio: tuple[float | Mapping[str, float], float], vehicle: str | None,
+              station: str, options: MavlinkOptions) -> tuple[Logs, dict[str, Any]]:
+    """Pose and signal logs and the metadata (without the cut-off record) of a log's :class:`Raw`
+    arrays (:func:`read_mavlink`; also of a growing log read so far, :mod:`rplearn.io.tlog_tail`)."""
+    tx_power_dbm, frequency_hz = radio
+    station_geodetic, origin_geodetic = options.station_geodetic, options.origin_geodetic
+    station_heading_deg, max_gap_s, stream_timeout_s = options.station_heading_deg, options.max_gap_s, options.stream_timeout_s
+    fmt = raw.fmt
     if not len(raw.radio):
         what = "RADIO_STATUS (id 109) or RADIO (id 166)" if fmt == "tlog" else "RAD"
         raise LogFormatError(f"{source}: no {what} messages: the log holds no telemetry-radio RSSI")
@@ -516,8 +530,6 @@ def read_mavlink(
     signal = _signal(raw, vehicle, station, tx_power_dbm, float(frequency_hz), float(stream_timeout_s), sig_counts,
                      periods)
     signal = validate_signal_log(signal, source)
-    cut, cut_name, corrupt = (dataflash_cut_off_at(source) if fmt == "dataflash"
-                              else (raw.notes.pop("cut_off_at_byte", None), raw.notes.pop("cut_off_record", None), 0))
     lost = sig_counts["link_lost"]
     heading_note = ("assumed level and facing east (heading 90 deg): its attitude is not logged"
                     if station_heading_deg is None else f"level, heading {heading:g} deg (given)")
@@ -531,15 +543,12 @@ def read_mavlink(
         notes.append(f"{source}: {len(others) + 1} vehicles in one log: read system id {raw.notes.get('system_id')} "
                      f"(the most ATTITUDE messages) as {vehicle!r}; not read: {listed}; the radio reports are "
                      "not split between vehicles (MavlinkOptions.system_id reads another)")
-    if cut is not None:
-        notes.append(f"{source}: the file is cut off inside {'a ' + cut_name if cut_name else 'a'} record at byte "
-                     f"{cut:,}: that message is lost, the complete ones before it are read")
     meta = {
         "source": source, "format": fmt, "notes": notes, "vehicle": vehicle, "station": station,
         "station_geodetic": station_geo, "station_note": station_note,
         "origin_geodetic": origin, "messages": raw.counts, "dropped": dropped,
         "signal": sig_counts, "rows": int((pose["node"] == vehicle).sum()),
-        "cut_off_at_byte": cut, "cut_off_record": cut_name, "corrupt_bytes": int(corrupt),
+        "cut_off_at_byte": None, "cut_off_record": None, "corrupt_bytes": 0,
         "reboots": len(raw.boot_last_t) - 1 if len(raw.boot_last_t) else 0,
         "excluded_periods": [{k: p[k] for k in ("reason", "from_t", "to_t", "pose_rows", "signal_rows", "detail")}
                              for p in periods], **raw.notes,

@@ -1,0 +1,214 @@
+"""A ``.tlog`` that is still being written, read where it grew (the MAVLink source of ``rplearn live``).
+
+:class:`TlogTail` keeps one pymavlink connection on the file, with its file handle at the end of
+the last whole record read: every poll parses only the records appended since (a record still
+being written, its 8-byte time or its frame cut, waits for its end), each through the per-message
+function of the offline reader (:class:`rplearn.io._mavlink_records.TlogRows`), and converts the
+rows gathered so far by the offline reader's own steps (:func:`rplearn.io._mavlink_records.tlog_raw`,
+``read_mavlink``'s conversion), so that a row is converted exactly as ``sync`` converts it.
+
+What can still change once handed out is fixed before any row is handed out:
+
+- the time base: the vehicle's rows are placed on the receive clock by each boot's median
+  receive-minus-boot offset; a boot's offset is fixed once :data:`TIME_BASE_MESSAGES` of its
+  messages have arrived, and no row of a boot whose offset is not fixed is handed out;
+- the station (and so the ENU origin): the vehicle's ``HOME_POSITION``, or the reader's
+  ``station_geodetic``; without either for :data:`HOME_WAIT_S` of flight, the first valid fix
+  (what ``sync`` takes for a log without ``HOME_POSITION``);
+- after a reboot, in a log with origin messages (``HOME_POSITION``, ``GPS_GLOBAL_ORIGIN``), the
+  boot's rows wait for its first origin message (for up to :data:`HOME_WAIT_S`): the stretch
+  before it may be found invalid only by the first valid fix after it; likewise the radio
+  readings after the vehicle's last message wait for its next one (a reboot excludes them);
+- the rows near the end of what was read (a position fix after an attitude instant, the vehicle
+  stream around a zero RSSI, a copy of a radio report): rows are handed out only up to
+  ``settle_s`` before the newest message.
+
+A row handed out is never handed out again, and a row that appears (or disappears) behind what
+was handed out, a later message changing the reader's verdict on it (a period before a valid
+position found later), is counted in :attr:`TlogTail.dropped` (``late_pose_rows``,
+``late_signal_rows``, ``withdrawn_pose_rows``, ``withdrawn_signal_rows``), never silently.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from rplearn._argtypes import check_types
+from rplearn.errors import InputError, LogFormatError
+from rplearn.io._log_schema import library_quiet
+from rplearn.io._mavlink_records import TlogRows, _open, tlog_raw
+from rplearn.io.mavlink import MavlinkOptions, _from_raw
+from rplearn.io.options import ReaderOptions
+
+#: A boot's receive-minus-boot offset is fixed once this many of its messages have arrived.
+TIME_BASE_MESSAGES = 100
+#: Without HOME_POSITION for this long of flight [s], the station is the first valid fix.
+HOME_WAIT_S = 30.0
+#: Rows are handed out up to this long before the newest message [s], beyond the reader's
+#: longest bridged gap and stream timeout.
+SETTLE_MARGIN_S = 1.0
+
+
+def whole_records(data: bytes) -> int:
+    """The length of the whole ``.tlog`` records (8-byte time, MAVLink 1 or 2 frame) at the
+    start of ``data``; bytes that are no frame are left to pymavlink's parser (BAD_DATA)."""
+    i, n = 0, len(data)
+    while i + 10 <= n:
+        magic = data[i + 8]
+        if magic == 0xFD:
+            if i + 11 > n:
+                break
+            size = 8 + 10 + data[i + 9] + 2 + (13 if data[i + 10] & 1 else 0)
+        elif magic == 0xFE:
+            size = 8 + 6 + data[i + 9] + 2
+        else:
+            return n
+        if i + size > n:
+            break
+        i += size
+    return i
+
+
+@check_types
+class TlogTail:
+    """A growing ``.tlog`` read incrementally into canonical pose and signal rows (module docstring).
+
+    Parameters
+    ----------
+    path : str
+        The telemetry log (it may not exist yet).
+    reader : ReaderOptions
+        As ``sync`` reads a ``.tlog`` (transmit power and frequency at least).
+    """
+
+    def __init__(self, path: str, reader: ReaderOptions) -> None:
+        missing = [f for f in ("tx_power_dbm", "frequency_hz") if getattr(reader, f) is None]
+        if missing:
+            raise InputError(f"{path}: give the telemetry radios' transmit power [dBm] and carrier frequency [Hz], "
+                             f"a MAVLink log carries neither (ReaderOptions.{missing[0]})", param=missing[0])
+        self.path, self.reader = path, reader
+        self.rows = TlogRows()
+        self.parsed = 0  # messages parsed by the last poll
+        self.dropped: dict[str, int] = {k: 0 for k in ("late_pose_rows", "late_signal_rows", "withdrawn_pose_rows",
+                                                       "withdrawn_signal_rows")}
+        self._conn: Any = None
+        self._end = 0
+        self._time_base: dict[int, float] = {}
+        self._station: tuple[float, float, float] | None = reader.station_geodetic
+        self._last = {"pose": -math.inf, "signal": -math.inf}
+        self._handed = {"pose": 0, "signal": 0}
+        self._excess = {"pose": 0, "signal": 0}
+        self._station_given = False
+
+    def _parse(self) -> int:
+        if self._conn is None:
+            if not os.path.exists(self.path) or os.path.getsize(self.path) == 0:
+                return 0
+            with library_quiet():
+                self._conn = _open(self.path)
+        f = self._conn.f
+        f.seek(self._end)
+        whole = self._end + whole_records(f.read())
+        f.seek(self._end)
+        n = 0
+        with library_quiet():
+            while f.tell() < whole:
+                try:
+                    msg = self._conn.recv_msg()
+                except Exception as exc:
+                    raise LogFormatError(f"{self.path}: corrupt MAVLink data ({type(exc).__name__}: {exc})") from None
+                if msg is None:
+                    break
+                self.rows.add(msg, self.path)
+                n += 1
+        self._end = f.tell() - self._conn.mav.buf_len()
+        return n
+
+    def poll(self, final: bool = False) -> tuple[pd.DataFrame, pd.DataFrame]:
+        """The pose and signal rows that can be handed out (all of them with ``final``)."""
+        self.parsed = self._parse()
+        empty = pd.DataFrame()
+        if not self.parsed and not final:
+            return empty, empty
+        try:
+            raw = tlog_raw(self.rows, self.path, None, {}, self._time_base)
+        except LogFormatError:  # too little received to read (no ATTITUDE yet)
+            return empty, empty
+        for b, (offset, n) in raw.boot_offsets.items():
+            if b not in self._time_base and n >= TIME_BASE_MESSAGES:
+                self._time_base[b] = offset
+        newest = float(max(raw.vehicle_t[-1] if len(raw.vehicle_t) else -math.inf,
+                           raw.radio[-1, 0] if len(raw.radio) else -math.inf))
+        if self._station is None and raw.home is not None:
+            self._station = raw.home
+        flown = float(raw.att[-1, 0] - raw.att[0, 0]) if len(raw.att) else 0.0
+        options = MavlinkOptions(station_geodetic=self._station, origin_geodetic=self.reader.origin_geodetic,
+                                 station_heading_deg=self.reader.station_heading_deg)
+        try:
+            logs, meta = _from_raw(raw, self.path, (self.reader.tx_power_dbm, self.reader.frequency_hz),  # type: ignore[arg-type]
+                                   (self.reader.nodes or {}).get(self.path), self.reader.station, options)
+        except LogFormatError:  # fewer than 2 valid fixes, no radio report yet
+            return empty, empty
+        if self._station is None and (final or flown >= HOME_WAIT_S):
+            self._station = tuple(meta["station_geodetic"])  # the first valid fix, as sync takes it
+        if final:
+            hand_to = math.inf
+        elif self._station is None:
+            return empty, empty
+        else:
+            hand_to = newest - max(options.max_gap_s, options.stream_timeout_s) - SETTLE_MARGIN_S
+            hand_to = min(hand_to, self._boots_ready(raw, newest))
+        assert logs.pose is not None and logs.signal is not None
+        station_rows = logs.pose[logs.pose["node"] == meta["station"]]
+        vehicle_rows = logs.pose[logs.pose["node"] != meta["station"]]
+        poses = self._hand("pose", vehicle_rows, hand_to)
+        if len(poses) and self._handed["pose"] == len(poses):  # the first rows: the station with them
+            poses = pd.concat([station_rows, poses], ignore_index=True)
+        return poses, self._hand("signal", logs.signal, hand_to)
+
+    def _boots_ready(self, raw: Any, newest: float) -> float:
+        """The first time of the first boot whose rows must wait: its time base not fixed, or,
+        in a log with origin messages, no origin message of that boot yet (the position may be
+        invalid until then: the reader finds where only from the first valid fix) for up to
+        :data:`HOME_WAIT_S`."""
+        for b in sorted(raw.boot_offsets):
+            times = raw.att[raw.att[:, 4] == b, 0]
+            if not len(times):
+                continue
+            first = float(times.min())
+            no_origin = len(raw.origin_t) and not np.any(raw.origin_t >= first) and newest - first < HOME_WAIT_S
+            if b not in self._time_base or no_origin:  # from the previous boot's last message on
+                before = raw.att[raw.att[:, 4] < b, 0]
+                return float(before.max()) if len(before) else first
+        # readings while the vehicle is silent wait for it: a reboot would exclude them
+        return float(raw.vehicle_t[-1]) if len(raw.vehicle_t) else math.inf
+
+    def _hand(self, what: str, rows: pd.DataFrame, hand_to: float) -> pd.DataFrame:
+        """The rows in (last handed out, ``hand_to``]; rows appearing or vanishing behind counted."""
+        t = rows["t"].to_numpy(np.float64)
+        last = self._last[what]
+        excess = int(np.count_nonzero(t <= last)) - self._handed[what]
+        if excess > self._excess[what]:
+            self.dropped[f"late_{what}_rows"] += excess - self._excess[what]
+        elif excess < self._excess[what]:
+            self.dropped[f"withdrawn_{what}_rows"] += self._excess[what] - excess
+        self._excess[what] = excess
+        out = rows[(t > last) & (t <= hand_to)].reset_index(drop=True)
+        if len(out):
+            self._last[what] = float(out["t"].max())
+            self._handed[what] += len(out)
+        return out
+
+    def close(self) -> None:
+        """Close the file."""
+        if self._conn is not None:
+            self._conn.close()
+            self._conn = None
+
+
+__all__ = ["HOME_WAIT_S", "SETTLE_MARGIN_S", "TIME_BASE_MESSAGES", "TlogTail", "whole_records"]
