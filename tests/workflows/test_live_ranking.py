@@ -144,7 +144,11 @@ def test_the_final_model_is_that_of_the_ranking_in_the_loop(smoke, tmp_path):
         outcomes[beside] = (replay_session(pose, sig, str(out), options), out)
     (a, path_a), (b, path_b) = outcomes[True], outcomes[False]
     assert a.status.refits == b.status.refits and a.fitted.model.label == b.fitted.model.label
-    assert a.prequential.n_samples == b.prequential.n_samples and a.prequential.sse == b.prequential.sse
+    # a ranking beside the loop holds the process-wide BLAS limit at one thread while it runs, so the
+    # batches predicted meanwhile may be summed by another thread count: the running score agrees
+    # to rounding, the final model (refitted after the ranking ends) bit for bit
+    assert a.prequential.n_samples == b.prequential.n_samples
+    assert a.prequential.sse == pytest.approx(b.prequential.sse, rel=1e-12, abs=0.0)
     s = link_samples(synchronise(pose, sig).dataset, "smoke", nodes=a.fitted.model.nodes)
     np.testing.assert_array_equal(a.fitted.model.predict_gain(s), b.fitted.model.predict_gain(s))
     np.testing.assert_array_equal(a.fitted.model.predict_gain_std(s), b.fitted.model.predict_gain_std(s))
