@@ -34,7 +34,7 @@ from numpy.typing import NDArray
 from rplearn._argtypes import check_types
 from rplearn.errors import InputError
 from rplearn.plan.ground import GroundPassUnit
-from rplearn.plan.trajectory import TrajectoryUnit, UnitReference
+from rplearn.plan.trajectory import TrajectoryUnit, UnitReference, sample_times_s
 
 FloatArray = NDArray[np.float64]
 
@@ -226,10 +226,7 @@ class ManoeuvreUnit:
 
     def sample(self, rate_hz: float, t_offset_s: float = 0.0) -> UnitReference:
         """References of the anchor (node 0) and the mover at ``rate_hz`` [Hz]."""
-        if not rate_hz > 0:
-            raise InputError(f"rate_hz: expected a positive sample rate, got {rate_hz!r}", param="rate_hz")
-        t = np.arange(0.0, self.duration_s + 0.5 / rate_hz, 1.0 / rate_hz)
-        return self.evaluate(t[t <= self.duration_s + 1e-9], t_offset_s)
+        return self.evaluate(sample_times_s(self.duration_s, rate_hz), t_offset_s)
 
     def evaluate(self, t_rel_s: FloatArray, t_offset_s: float = 0.0) -> UnitReference:
         """References at times ``t_rel_s`` since the manoeuvre's start [s]."""
