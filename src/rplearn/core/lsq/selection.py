@@ -61,7 +61,7 @@ from rplearn.core.lsq.level import shrink_target
 from rplearn.core.lsq.normal_equations import EXPONENT_MIN_SPREAD_DB, NormalEquations, schur_spread_db
 from rplearn.core.lsq.penalty import DEFAULT_PENALTY_POWER, nested_columns, penalty_scale, penalty_vector, sub_statistics, with_shared_columns
 from rplearn.core.lsq.runtime import DEFAULT_RUNTIME
-from rplearn.core.lsq.selection_folds import Fold, FoldData, fold_spread_terms, on_one_blas_thread, sub_block, unit_folds
+from rplearn.core.lsq.selection_folds import Fold, fold_spread_terms, on_one_blas_thread, sub_block, unit_folds
 from rplearn.core.lsq.selection_result import CurvePoint, Selection
 from rplearn.core.lsq.solver_cholesky import factor_solve, spd_factor
 from rplearn.core.lsq.ties import tied_keys, tied_points
@@ -285,13 +285,13 @@ class _Evaluator:
         solved = self._best_solved[1] if self._best_solved and self._best_solved[0] == key else None
         jobs: list[Callable[[], Any]] = []
         for k, ((g, r, held_g, held_r), f, pin, target) in enumerate(zip(blocks, self.folds, self.pins, targets)):
-            fold = FoldData(g, r, held_g, held_r, f.held_yty, f.held_n, k)
+            fold = Fold(g, r, held_g, held_r, f.held_yty, f.held_n)
 
-            def job(fold: FoldData = fold, pin: Any = pin, target: np.ndarray = target, weight: float = smoothing * scales[k],
+            def job(fold: Fold = fold, k: int = k, pin: Any = pin, target: np.ndarray = target, weight: float = smoothing * scales[k],
                     known: Any = None if solved is None else solved[k]) -> Any:
                 c, upper = known if known is not None else self._solve(
                     fold.gram, self._pulled(fold.gram, fold.rhs, w, weight, target, pin), w, weight, pin)
-                return None if upper is None else fold_spread_terms(c, upper, fold, sums, counts, (self.n, self.yty))
+                return None if upper is None else fold_spread_terms(c, upper, fold, k, sums, counts, (self.n, self.yty))
             jobs.append(job)
         return jobs
 

@@ -101,32 +101,7 @@ def sub_block(matrix: np.ndarray, idx: np.ndarray) -> np.ndarray:
 _MAX_BLOCK_RUNS = 8
 
 
-@dataclass(frozen=True)
-class FoldData:
-    """What one fold's share reads besides its solution.
-
-    Attributes
-    ----------
-    gram, rhs : ndarray
-        The learning units' ``X^T X`` and ``X^T y`` at the order (shared columns appended).
-    held_gram, held_rhs : ndarray
-        The held-out unit's.
-    held_yty : float
-    held_n : int
-    index : int
-        The held-out unit's position among the units.
-    """
-
-    gram: np.ndarray
-    rhs: np.ndarray
-    held_gram: np.ndarray
-    held_rhs: np.ndarray
-    held_yty: float
-    held_n: int
-    index: int
-
-
-def fold_spread_terms(c: np.ndarray, upper: np.ndarray, fold: FoldData, sums: list[tuple[np.ndarray, float]],
+def fold_spread_terms(c: np.ndarray, upper: np.ndarray, fold: Fold, index: int, sums: list[tuple[np.ndarray, float]],
                       counts: np.ndarray, total: tuple[int, float]) -> tuple[float, float, tuple[float, float, float]]:
     """One fold's terms of the variance inflation and the between-unit level variance.
 
@@ -136,8 +111,10 @@ def fold_spread_terms(c: np.ndarray, upper: np.ndarray, fold: FoldData, sums: li
         The fold's penalised solution.
     upper : numpy.ndarray
         The Cholesky factor of its system (:func:`rplearn.core.lsq.solver_cholesky.spd_factor`).
-    fold : FoldData
-        Its statistics and its held-out unit's.
+    fold : Fold
+        Its statistics and its held-out unit's, at the order (shared columns appended).
+    index : int
+        The held-out unit's position among the units.
     sums : list of (numpy.ndarray, float)
         Per unit: its column sums ``X_u^T 1`` at the order and ``sum y``.
     counts : 1-D numpy.ndarray
@@ -157,7 +134,7 @@ def fold_spread_terms(c: np.ndarray, upper: np.ndarray, fold: FoldData, sums: li
         and the weight of the fit's level (``1 + sum w^2`` over the learning units).
     """
     n, yty = total
-    k = fold.index
+    k = index
     g, held_g = fold.gram, fold.held_gram
     inverse = factor_inverse(upper)  # from the solve's factor: a third of the work of an LU inverse
     learn = [j for j in range(len(sums)) if j != k]
@@ -202,4 +179,4 @@ def on_one_blas_thread(job: Callable[[], Any]) -> Any:
         return job()
 
 
-__all__ = ["Fold", "FoldData", "fold_spread_terms", "on_one_blas_thread", "sub_block", "unit_folds"]
+__all__ = ["Fold", "fold_spread_terms", "on_one_blas_thread", "sub_block", "unit_folds"]
