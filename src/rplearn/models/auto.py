@@ -36,6 +36,7 @@ from rplearn.core.threads import blas_threads_for, one_blas_thread
 from rplearn.core.threads import warm_up as warm_up_blas
 from rplearn.data.tables import LinkSamples
 from rplearn.errors import InputError
+from rplearn.models.auto_prior import deviation_problem, held_out_errors, keeps_prior, kept_prior_coef, kept_within_noise
 from rplearn.models.fit import FittedModel
 from rplearn.models.load import load_priors
 from rplearn.models.node_coverage import CoverageWork
@@ -450,15 +451,36 @@ def fit_from_statistics(
         stats = {u: st.with_shared(links) for u, st in stats.items()}
         total = total.with_shared(links)
     target = prior_coefficients(prior, list(nodes), first.basis) if prior else None
-    choice = select_order_and_smoothing(stats, lambda k: ModelSpec(kind, k, ridge=ridge).basis(), orders, ridge, power,
-                                        target=target, prior_level=prior_level)
-    final = ModelSpec(kind, choice.order, ridge=ridge, smoothing=choice.smoothing)
-    chosen = final.basis()
+    plain_total, search_target, shape = total, target, None
+
+    def make_basis(k: int) -> Any:
+        return ModelSpec(kind, k, ridge=ridge).basis()
+
+    choice = select_order_and_smoothing(stats, make_basis, orders, ridge, power, target=target, prior_level=prior_level)
+    keep, compared = False, None
+    if keeps_prior(kind, target, first.basis, len(nodes)):
+        # the search again on the deviation from the prior, its degrees above the chosen order
+        # kept; the held-out units choose between the two, the kept prior when they cannot tell
+        assert target is not None
+        deviation = deviation_problem(stats, total, target, prior_level)
+        kept = select_order_and_smoothing(deviation.units, make_basis, orders, ridge, power, target=deviation.target,
+                                          prior_level=prior_level)
+        kept_sse, cut_sse = (held_out_errors(u, make_basis, c, ridge, t, prior_level)
+                             for u, c, t in ((deviation.units, kept, deviation.target), (stats, choice, target)))
+        keep = kept_within_noise(kept, choice, kept_sse, cut_sse, total.n_samples)
+        compared = {"kept": keep, "kept_order": int(kept.order), "kept_rmse_db": float(kept.rmse_db),
+                    "cut_order": int(choice.order), "cut_rmse_db": float(choice.rmse_db), "model_order": int(orders[-1])}
+        if keep:
+            stats, total, shape, search_target, choice = (deviation.units, deviation.total, deviation.shape,
+                                                         deviation.target, kept)
+    final = ModelSpec(kind, orders[-1] if keep else choice.order, ridge=ridge, smoothing=choice.smoothing)
+    chosen = ModelSpec(kind, choice.order, ridge=ridge).basis()
     normal = sub_statistics(total, chosen)
-    penalty = penalty_vector(chosen, len(nodes), choice.smoothing, penalty_scale(normal.gram, normal.n_pattern_columns), power)
+    scale = penalty_scale(normal.gram, normal.n_pattern_columns)
+    penalty = penalty_vector(chosen, len(nodes), choice.smoothing, scale, power)
     sub_target = None
-    if target is not None:
-        sub_target = target[nested_columns(first.basis, chosen, len(nodes))]
+    if search_target is not None:
+        sub_target = search_target[nested_columns(first.basis, chosen, len(nodes))]
     sol = solve(normal, list(nodes), ridge=ridge, gauge=gauge, penalty=penalty, penalty_target=sub_target,
                 prior_level=prior_level)
     inflation = float(choice.variance_inflation)
@@ -473,17 +495,25 @@ def fit_from_statistics(
     new_level_var = level_var * (1.0 + float(shares @ shares)) if level_var > 0 else 0.0
     noise_var = within_var * inflation
     rescale = within_var / sol.residual_variance_db2 if sol.residual_variance_db2 > 0 else 1.0
-    spread = prior_std_db(chosen, list(nodes), ridge + penalty, noise_var, power)
+    # the covariance's basis: the chosen one, or with the prior kept the largest (auto_prior)
+    model_basis, cov_normal, cov_penalty = chosen, normal, penalty
+    if keep:
+        model_basis, cov_normal = first.basis, plain_total
+        cov_penalty = penalty_vector(model_basis, len(nodes), choice.smoothing, scale, power)
+    spread = prior_std_db(model_basis, list(nodes), ridge + cov_penalty, noise_var, power)
     spread_source = "implied by the cross-validated smoothing"
     covariance = None if sol.covariance is None else sol.covariance * (rescale * inflation)
-    cap = unseen_spread_cap_db(normal, chosen)
+    plain = normal if not keep else sub_statistics(plain_total, chosen)
+    cap = unseen_spread_cap_db(plain, chosen)
     # without a prior the unseen spread is the measured gains' (not the smoothing's): the
     # cross-validation chooses smoothing for prediction where the data are, which says nothing
     # of the unseen sphere (``campaign``: 0.7 dB implied against 12 dB off where unseen)
     wanted = {str(n): cap for n in nodes}
-    if sub_target is not None and covariance is not None and prior is not None and set(map(str, prior)) >= set(map(str, nodes)):
+    if target is not None and covariance is not None and prior is not None and set(map(str, prior)) >= set(map(str, nodes)):
         if prior_spread_db is None:
-            misfit = prior_misfit_var(normal, sub_target, chosen)
+            # the misfit of the prior the model keeps: to the chosen order, or all of it (auto_prior)
+            misfit = (prior_misfit_var(plain_total, target, first.basis) if keep else
+                      prior_misfit_var(normal, target[nested_columns(first.basis, chosen, len(nodes))], chosen))
             learned = float(np.sqrt(max(misfit - within_var - level_var, 0.0) / 2.0))  # two ends a sample
             spread_source = "learned from the prior's misfit to the flight"
             if any(learned < wanted[str(n)] for n in nodes):
@@ -500,29 +530,28 @@ def fit_from_statistics(
         spread_source = "the spread of the measured gains (the smoothing implied less)"
     uncapped = covariance
     factor = np.array([(spread[str(n)] / max(wanted[str(n)], 1e-9)) ** 2 for n in nodes])
-    if covariance is not None and np.any(np.abs(factor - 1.0) > 1e-9):
+    if covariance is not None and (keep or np.any(np.abs(factor - 1.0) > 1e-9)):
         # the same posterior, read with a prior of the wanted spread: the penalty per node
         # scaled so that its implied prior spread is the wanted one (the mean is the CV's)
-        weights = (ridge + penalty) * np.repeat(factor, chosen.n_coef)
+        weights = (ridge + cov_penalty) * np.repeat(factor, model_basis.n_coef)
         with one_blas_thread():  # scipy's LAPACK: no pool of its own left spinning beside numpy's
-            inverse = penalised_inverse(normal, list(nodes), 0.0, gauge, weights)  # the covariance alone: no solve
+            inverse = penalised_inverse(cov_normal, list(nodes), 0.0, gauge, weights)  # the covariance alone: no solve
         if inverse is not None:
             covariance = inverse * (within_var * inflation)
         else:
-            wide = solve(normal, list(nodes), ridge=0.0, gauge=gauge, penalty=weights, penalty_target=sub_target,
-                         prior_level=prior_level)
+            wide = solve(cov_normal, list(nodes), ridge=0.0, gauge=gauge, penalty=weights,
+                         penalty_target=None if keep else sub_target, prior_level=prior_level)
             covariance = wide.covariance * (within_var / wide.residual_variance_db2) * inflation
-        spread = prior_std_db(chosen, list(nodes), weights, noise_var, power)
+        spread = prior_std_db(model_basis, list(nodes), weights, noise_var, power)
     misfit_var = held_out_misfit_var(choice.held_out_excess_db2, uncapped, normal) if choice.method == "grouped-cv" else 0.0
     if covariance is not None and misfit_var > 0:
-        pat = chosen.n_coef * len(nodes)
+        pat = model_basis.n_coef * len(nodes)
         covariance = covariance.copy()
-        covariance[:pat, :pat] += misfit_covariance(chosen, len(nodes), misfit_var / 2.0)  # two ends a sample
-    own_prior = OwnPrior(choice.smoothing, penalty_scale(normal.gram, normal.n_pattern_columns), power, ridge, gauge,
-                         target, prior_level)
+        covariance[:pat, :pat] += misfit_covariance(model_basis, len(nodes), misfit_var / 2.0)  # two ends a sample
+    own_prior = OwnPrior(choice.smoothing, scale, power, ridge, gauge, target, prior_level)
     with one_blas_thread():
-        own = own_pattern_posterior(total, chosen, list(map(str, nodes)), own_prior, noise_var, uncapped)
-    own = tied_own_posterior(own, total, list(map(str, nodes)), own_prior, choice.ties, within_var,
+        own = own_pattern_posterior(plain_total, chosen, list(map(str, nodes)), own_prior, noise_var, uncapped)
+    own = tied_own_posterior(own, plain_total, list(map(str, nodes)), own_prior, choice.ties, within_var,
                              lambda k: ModelSpec(kind, k, ridge=ridge).basis())
     ltd = time.perf_counter() - t0
     fields, terms = shared_fields(sol, list(nodes), options, counts, rescale * inflation)
@@ -536,9 +565,15 @@ def fit_from_statistics(
         training["prior_level"] = prior_level
         training["prior"] = {str(n): str(getattr(m, "provenance", {}).get("model", getattr(m, "label", "?")))
                              for n, m in prior.items()}
+    coef = sol.coef
+    if compared is not None:
+        training["prior_kept"] = compared
+    if keep:
+        assert shape is not None
+        coef = kept_prior_coef(shape, sol.coef, model_basis, chosen, len(nodes))
     if frequency_hz is not None:
         training["frequency_hz"] = frequency_hz
-    model = PatternSet(basis=chosen, nodes=tuple(nodes), coef=sol.coef, covariance=covariance,
+    model = PatternSet(basis=model_basis, nodes=tuple(nodes), coef=coef, covariance=covariance,
                        gauge=[g.to_dict() for g in sol.report.gauges], training=TrainingSummary.from_dict(training), **fields)
     model.provenance = {**dict(provenance or {}), "model": final.label}
     return FittedModel(final, model, ltd, own_posterior=own), choice
