@@ -31,7 +31,9 @@ def fit(
     gauge_node: str | None = typer.Option(None, "--gauge-node", help="Pattern models: fix this node's mean gain instead of splitting equally."),
     gauge_dbi: float | None = typer.Option(None, "--gauge-dbi", help="Sphere-mean gain of --gauge-node [dBi] (default 0)."),
     prior: list[str] | None = typer.Option(None, "--prior", help="NODE=MODEL.json: shrink NODE's pattern toward the shape of this (reference) model instead of "
-                                                                 "toward zero (its level comes from the data, see --prior-level); with --order auto."),
+                                                                 "toward zero (its level comes from the data, see --prior-level); with --order auto. "
+                                                                 "Above the chosen order the model keeps the prior's own degrees (to the largest "
+                                                                 "candidate order) unless the held-out flights find them worse than the prior cut."),
     prior_level: str = typer.Option("data", "--prior-level", help="Where the level of the --prior patterns comes from: data (default: the prior gives only its "
                                                                   "shape, so a constant added to every RSSI value only shifts the predictions) or prior (its "
                                                                   "absolute dBi: calibrated power and a trusted reference)."),

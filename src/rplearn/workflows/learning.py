@@ -129,6 +129,14 @@ class FitOutcome:
                     text += (f"\n  misfit: held-out units err {training.misfit_std_db:.2f} dB (1 sigma, per node) beyond "
                              "what the posterior states, structure this order and smoothing cannot hold; added to "
                              "each pattern's spread everywhere")
+            kept = training.extra.get("prior_kept")
+            if isinstance(kept, dict) and kept.get("kept"):
+                text += (f"\n  prior: its own degrees above order {sel.order} kept, to order {kept.get('model_order')} "
+                         f"(validation RMSE {kept.get('kept_rmse_db', float('nan')):.2f} dB; cut to order "
+                         f"{kept.get('cut_order')}: {kept.get('cut_rmse_db', float('nan')):.2f} dB)")
+            elif isinstance(kept, dict):
+                text += (f"\n  prior: cut to the chosen order {sel.order} (kept to order {kept.get('model_order')} it "
+                         f"validated {kept.get('kept_rmse_db', float('nan')):.2f} dB, worse beyond noise)")
             spread = training.prior_std_db or {}
             if spread:
                 values = ", ".join(f"{n} {v:.1f} dB" for n, v in spread.items())

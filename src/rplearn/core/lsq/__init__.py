@@ -24,6 +24,7 @@ factorisations
 ``solver_cholesky``    one Cholesky factor: solves, inverse, gauge-constrained inverse (lock released)
 selection
 ``selection``          order and smoothing by grouped cross-validation
+``shifted``            the statistics of the data less a known fit (a prior's deviation)
 ``selection_folds``    the folds of the selection, and each one's share of the variance inflation
 ``selection_result``   :class:`Selection`, :class:`CurvePoint`
 ``ties``               the points the held-out units cannot tell apart (choice, spread)

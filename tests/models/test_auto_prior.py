@@ -1,0 +1,155 @@
+"""rplearn.models.auto_prior: with a reference prior the automatic fit searches the order of the
+deviation from it, keeps the prior's own degrees above the chosen order, and lets the held-out
+units choose between that and the prior cut to the chosen order (issue 28)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from rplearn.core.bases import fibonacci_grid_nodes, make_basis
+from rplearn.core.geometry import Directions
+from rplearn.core.lsq.normal_equations import NormalEquations
+from rplearn.core.lsq.selection_result import Selection
+from rplearn.models import ModelSpec
+from rplearn.models.auto import fit_from_statistics
+from rplearn.models.auto_prior import kept_within_noise
+from rplearn.models.options import FitOptions
+from rplearn.models.patterns import PatternSet
+
+BIG = 12  # largest candidate order: statistics at SH-12
+NODES = ("A", "B")
+
+
+def _truth(seed: int) -> np.ndarray:
+    """Two patterns of SH-12 whose degrees decay slowly (fine structure above SH-4)."""
+    rng = np.random.default_rng(seed)
+    degrees = make_basis("sh", BIG).degrees
+    return rng.normal(size=(2, degrees.size)) * 4.0 / (1.0 + degrees)
+
+
+def _units(truth: np.ndarray, seed: int = 0) -> dict[str, NormalEquations]:
+    """Three flights that see each antenna only in a band 10-40 deg below its horizon, at three
+    headings; 1 dB of noise."""
+    basis = make_basis("sh", BIG)
+    rng = np.random.default_rng(seed)
+    out = {}
+    for u, centre in enumerate((-1.0, 0.0, 1.0)):
+        n = 6000
+        az = centre + rng.uniform(-0.6, 0.6, (2, n))
+        el = np.radians(rng.uniform(-40.0, -10.0, (2, n)))
+        tx = rng.integers(0, 2, n)
+        rx = 1 - tx
+        d = Directions(az[0], el[0], az[1], el[1])
+        ft, fr = basis.design(d.az_tx, d.el_tx), basis.design(d.az_rx, d.el_rx)
+        y = np.einsum("ij,ij->i", ft, truth[tx]) + np.einsum("ij,ij->i", fr, truth[rx]) - 60.0 + rng.normal(size=n)
+        out[f"u{u}"] = NormalEquations(basis, 2).add(d, tx, rx, y)
+    return out
+
+
+def _prior(coef: np.ndarray) -> PatternSet:
+    return PatternSet(basis=make_basis("sh", BIG), nodes=NODES, coef=np.asarray(coef, np.float64))
+
+
+def _fit(units, prior: np.ndarray, orders, std: float | None = 1.0):
+    options = FitOptions(auto=True, priors={n: _prior(prior) for n in NODES}, prior_std_db=std)
+    return fit_from_statistics(units, ModelSpec("sh", BIG), list(orders), NODES, options)
+
+
+def _unseen_rms(model: PatternSet, truth: np.ndarray) -> float:
+    """RMS [dB] of each node's shape error (sphere means dropped) above its horizon, never flown."""
+    az, el = fibonacci_grid_nodes(2000)
+    up = el > np.radians(10.0)
+    basis = make_basis("sh", BIG)
+    errors = []
+    for k, n in enumerate(NODES):
+        got = model.evaluate(n, az[up], el[up])
+        want = basis.design(az[up], el[up]) @ truth[k]
+        errors.append((got - got.mean()) - (want - want.mean()))
+    return float(np.sqrt(np.mean(np.concatenate(errors) ** 2)))
+
+
+@pytest.fixture(scope="module")
+def exact_case():
+    truth = _truth(1)
+    units = _units(truth)
+    return truth, units, _fit(units, truth + np.random.default_rng(5).normal(size=truth.shape) * 0.02, range(2, BIG + 1))
+
+
+def test_an_exact_prior_is_kept_above_the_chosen_order(exact_case):
+    truth, _, (fitted, choice) = exact_case
+    model = fitted.model
+    kept = model.training.extra["prior_kept"]
+    assert kept["kept"] and kept["model_order"] == BIG and choice.order < BIG, kept
+    assert model.basis == make_basis("sh", BIG) and model.covariance is not None
+    assert model.covariance.shape == (2 * model.basis.n_coef + len(model.shared_names),) * 2
+    # the degrees above the chosen order are the prior's shape, exactly
+    p = make_basis("sh", choice.order).n_coef
+    prior = truth + np.random.default_rng(5).normal(size=truth.shape) * 0.02
+    assert np.array_equal(model.coef[:, p:], prior[:, p:])
+    # where the flights never looked the pattern is the truth's, within the prior's error
+    assert _unseen_rms(model, truth) < 0.3, _unseen_rms(model, truth)
+    # and the spread stated there is the prior's (stated 1 dB), all degrees together
+    assert model.training.prior_std_source == "stated"
+    assert all(v == pytest.approx(1.0, rel=1e-6) for v in model.training.prior_std_db.values())
+
+
+def test_a_prior_cut_to_the_chosen_order_loses_the_unseen_structure(exact_case):
+    """The same prior cut to the chosen order (what the fit did before): far worse where the
+    flights never looked, which no held-out unit can see."""
+    truth, units, (fitted, choice) = exact_case
+    basis = make_basis("sh", choice.order)
+    cut = np.zeros_like(truth)
+    cut[:, :basis.n_coef] = fitted.model.coef[:, :basis.n_coef]
+    assert _unseen_rms(_prior(cut), truth) > 3 * _unseen_rms(fitted.model, truth)
+
+
+def test_at_the_largest_order_alone_kept_and_cut_are_one_model():
+    """The deviation's search at one order, the largest, is the previous search (the same
+    penalised least squares): same choice, predictions within 1e-9 dB."""
+    truth = _truth(2)
+    units = _units(truth, 1)
+    prior = truth.copy()
+    prior[:, 16:] = 0.0  # a prior of SH-4 (zero above): kept or cut, the same at SH-12
+    import rplearn.models.auto_prior as auto_prior
+
+    fitted, choice = _fit(units, prior, [BIG], std=None)
+    old = auto_prior.MAX_KEPT_COLUMNS
+    try:
+        auto_prior.MAX_KEPT_COLUMNS = 0  # the prior cut: the search of before
+        plain, plain_choice = _fit(units, prior, [BIG], std=None)
+    finally:
+        auto_prior.MAX_KEPT_COLUMNS = old
+    assert (choice.order, choice.smoothing) == (plain_choice.order, plain_choice.smoothing)
+    assert abs(choice.rmse_db - plain_choice.rmse_db) < 1e-9
+    az, el = fibonacci_grid_nodes(500)
+    for n in NODES:
+        assert np.max(np.abs(fitted.model.evaluate(n, az, el) - plain.model.evaluate(n, az, el))) < 1e-9
+
+
+def test_a_prior_whose_fine_structure_is_wrong_where_the_flights_looked_is_cut():
+    """A prior right in its low degrees but with other fine structure: the held-out units see
+    the kept prior's misfit and choose the prior cut to the chosen order."""
+    truth = _truth(3)
+    units = _units(truth, 2)
+    wrong = truth.copy()
+    wrong[:, 25:] = _truth(4)[:, 25:] * 2.0
+    fitted, choice = _fit(units, wrong, range(2, BIG + 1))
+    kept = fitted.model.training.extra["prior_kept"]
+    assert not kept["kept"] and kept["kept_rmse_db"] > kept["cut_rmse_db"], kept
+    assert fitted.model.basis == make_basis("sh", choice.order)
+
+
+def test_kept_within_noise_follows_the_ties_rule():
+    def point(rmse):
+        return Selection("grouped-cv", 4, 1e-3, rmse)
+
+    sse = np.array([100.0, 110.0, 90.0])
+    assert kept_within_noise(point(1.0), point(1.0), sse, sse, 300)  # as good
+    assert not kept_within_noise(point(1.004), point(1.0), sse * 1.008, sse, 300)  # 0.8% worse in every unit: seen
+    assert not kept_within_noise(point(1.05), point(1.0), sse * 1.1, sse, 300)  # 10% worse
+    noisy = sse + np.array([2.0, -2.5, 2.6])  # 0.7% worse on average, but it varies: within 2 standard errors
+    assert kept_within_noise(point(1.005), point(1.0), noisy, sse, 300)
+    two = np.array([100.0, 100.0])  # two units: the fraction alone
+    assert kept_within_noise(point(1.004), point(1.0), two, two, 200)
+    assert not kept_within_noise(point(1.006), point(1.0), two, two, 200)
