@@ -13,7 +13,7 @@ from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.core.lsq.selection_result import Selection
 from rplearn.models import ModelSpec
 from rplearn.models.auto import fit_from_statistics
-from rplearn.models.auto_prior import kept_within_noise
+from rplearn.models.auto_prior import PRIOR_TAPER_RESOLUTION, deviation_problem, kept_within_noise
 from rplearn.models.options import FitOptions
 from rplearn.models.patterns import PatternSet
 
@@ -71,9 +71,15 @@ def _unseen_rms(model: PatternSet, truth: np.ndarray) -> float:
 
 @pytest.fixture(scope="module")
 def exact_case():
+    """A prior 0.02 dB per coefficient from a truth of SH-12 (no structure above the largest
+    order, so nothing rings: the taper of the kept prior switched off)."""
+    import rplearn.models.auto_prior as auto_prior
+
     truth = _truth(1)
     units = _units(truth)
-    return truth, units, _fit(units, truth + np.random.default_rng(5).normal(size=truth.shape) * 0.02, range(2, BIG + 1))
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(auto_prior, "PRIOR_TAPER_RESOLUTION", 0.0)
+        return truth, units, _fit(units, truth + np.random.default_rng(5).normal(size=truth.shape) * 0.02, range(2, BIG + 1))
 
 
 def test_an_exact_prior_is_kept_above_the_chosen_order(exact_case):
@@ -83,7 +89,7 @@ def test_an_exact_prior_is_kept_above_the_chosen_order(exact_case):
     assert kept["kept"] and kept["model_order"] == BIG and choice.order < BIG, kept
     assert model.basis == make_basis("sh", BIG) and model.covariance is not None
     assert model.covariance.shape == (2 * model.basis.n_coef + len(model.shared_names),) * 2
-    # the degrees above the chosen order are the prior's shape, exactly
+    # the degrees above the chosen order are the prior's (untapered here), exactly
     p = make_basis("sh", choice.order).n_coef
     prior = truth + np.random.default_rng(5).normal(size=truth.shape) * 0.02
     assert np.array_equal(model.coef[:, p:], prior[:, p:])
@@ -104,15 +110,16 @@ def test_a_prior_cut_to_the_chosen_order_loses_the_unseen_structure(exact_case):
     assert _unseen_rms(_prior(cut), truth) > 3 * _unseen_rms(fitted.model, truth)
 
 
-def test_at_the_largest_order_alone_kept_and_cut_are_one_model():
-    """The deviation's search at one order, the largest, is the previous search (the same
-    penalised least squares): same choice, predictions within 1e-9 dB."""
+def test_at_the_largest_order_alone_kept_and_cut_are_one_model(monkeypatch):
+    """Untapered, the deviation's search at one order, the largest, is the previous search (the
+    same penalised least squares): same choice, predictions within 1e-9 dB."""
     truth = _truth(2)
     units = _units(truth, 1)
     prior = truth.copy()
     prior[:, 16:] = 0.0  # a prior of SH-4 (zero above): kept or cut, the same at SH-12
     import rplearn.models.auto_prior as auto_prior
 
+    monkeypatch.setattr(auto_prior, "PRIOR_TAPER_RESOLUTION", 0.0)
     fitted, choice = _fit(units, prior, [BIG], std=None)
     old = auto_prior.MAX_KEPT_COLUMNS
     try:
@@ -153,3 +160,23 @@ def test_kept_within_noise_follows_the_ties_rule():
     two = np.array([100.0, 100.0])  # two units: the fraction alone
     assert kept_within_noise(point(1.004), point(1.0), two, two, 200)
     assert not kept_within_noise(point(1.006), point(1.0), two, two, 200)
+
+
+def test_the_kept_prior_is_tapered_against_ringing():
+    """The shape the deviation is searched from: each degree ``l`` of the prior's shape times
+    ``exp(-l (l + 1) sigma^2 / 2)``, ``sigma`` a quarter of the largest order's resolution (3 deg
+    at SH-15); the prior's level is the target of the deviation with ``prior_level="prior"``."""
+    truth = _truth(1)
+    units = _units(truth)
+    total = NormalEquations(make_basis("sh", BIG), 2)
+    for st in units.values():
+        total.merge(st)
+    problem = deviation_problem(units, total, truth.ravel(), "prior")
+    degrees = make_basis("sh", BIG).degrees
+    sigma = PRIOR_TAPER_RESOLUTION * np.pi / BIG
+    want = truth * np.exp(-0.5 * degrees * (degrees + 1.0) * sigma**2)
+    want[:, 0] = 0.0  # the shape: each node's sphere mean dropped
+    assert np.allclose(problem.shape.reshape(2, -1), want, rtol=1e-12, atol=1e-12)
+    assert problem.target is not None and np.allclose(problem.target.reshape(2, -1)[:, 1:], 0.0)
+    assert np.allclose(problem.target.reshape(2, -1)[:, 0], truth[:, 0])
+    assert deviation_problem(units, total, truth.ravel(), "data").target is None
