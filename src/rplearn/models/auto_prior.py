@@ -59,6 +59,7 @@ from rplearn.core.lsq.selection import _Evaluator
 from rplearn.core.lsq.selection_result import Selection
 from rplearn.core.lsq.shifted import shifted_statistics
 from rplearn.core.lsq.ties import MIN_NOISE_UNITS, WITHIN_NOISE_FRACTION, WITHIN_NOISE_SE
+from rplearn.core.sh import SphericalHarmonics
 
 #: Width of the Gaussian taper of the kept prior's degrees, as a fraction of the largest order's
 #: resolution (``pi / K`` rad): each degree ``l`` times ``exp(-l (l + 1) sigma^2 / 2)``, ``sigma``
@@ -113,6 +114,7 @@ def deviation_problem(units: Mapping[str, NormalEquations], total: NormalEquatio
     prior = np.asarray(target, np.float64)[:total.n_pattern_columns]
     shape = pattern_shape(prior, basis, n_nodes)
     level = prior - shape  # each node's constant: the prior's level
+    assert isinstance(basis, SphericalHarmonics)  # keeps_prior: only spherical harmonics nest
     degrees = np.asarray(basis.degrees, np.float64)
     sigma = PRIOR_TAPER_RESOLUTION * np.pi / max(float(degrees.max()) + 1.0, 1.0)
     shape = shape * np.tile(np.exp(-0.5 * degrees * (degrees + 1.0) * sigma**2), n_nodes)  # the ringing tapered
