@@ -169,7 +169,7 @@ What this says:
   prior, the prior's own degrees above it kept to SH-15 (tapered against the ringing of the
   cut), and keeps them unless the held-out units find them worse beyond noise. The imperfect
   reference kept validates far worse where the flights looked (``ground`` 5.29 / 5.04 / 4.95 dB
-  against 4.32 / 4.37 / 4.33 cut; ``campaign`` CAMPAIGN_KEPT): its mounting error misplaces its
+  against 4.32 / 4.37 / 4.33 cut; ``campaign`` 5.81 / 5.58 / 5.26 against 5.64 / 5.47 / 5.17): its mounting error misplaces its
   fine structure, so it is cut and its rows are unchanged. The near-exact reference is kept on
   seeds 0 and 1 (4.273 against 4.298 dB, 4.303 against 4.295) and reaches the oracle's skill
   within 0.04 (bins 0.04-0.18 off); on seed 2 the units find it worse (4.344 against 4.308 dB)

@@ -29,11 +29,11 @@ looked. So the search also runs as before, on the prior cut to its chosen order,
 prior is taken unless the units find it worse beyond noise (:func:`kept_within_noise`, the rule
 of :mod:`rplearn.core.lsq.ties`). Measured (seeds 0-2, the planner's tests): an imperfect
 reference (mounted 10 deg off) kept validates far worse where the flights looked (``ground``
-5.29 / 5.04 / 4.95 dB against 4.32 / 4.37 / 4.33 cut; ``campaign`` 5.86 / 5.66 / 5.28 against
+5.29 / 5.04 / 4.95 dB against 4.32 / 4.37 / 4.33 cut; ``campaign`` 5.81 / 5.58 / 5.26 against
 5.64 / 5.47 / 5.17), its fine structure misplaced, and is cut; a near-exact one (0.5 dB) is kept
 on ``ground`` seeds 0 and 1 (4.273 against 4.298, 4.303 against 4.295 dB) and cut on seed 2.
 
-The posterior covariance is that of the same prior at ``K`` (:func:`kept_prior_weights`): every
+The posterior covariance is that of the same prior at ``K`` (:func:`rplearn.models.auto.fit_from_statistics`): every
 coefficient of the deviation, up to ``K``, ``N(0, v)`` with ``v`` such that a node's gain strays
 by its unseen spread (``prior_std_db``: learned, stated, or the measured gains' spread) over the
 sphere, the data's information added (one constrained inverse at ``K``). So where the flights
@@ -64,8 +64,8 @@ from rplearn.core.sh import SphericalHarmonics
 #: Width of the Gaussian taper of the kept prior's degrees, as a fraction of the largest order's
 #: resolution (``pi / K`` rad): each degree ``l`` times ``exp(-l (l + 1) sigma^2 / 2)``, ``sigma``
 #: 3 deg at SH-15 (0.75 at its degree 14, 0.96 at degree 5). A reference cut at ``K`` rings (the
-#: Gibbs oscillation) beside its sharp features, the gimbal's shadow among them, exactly where
-#: the learning flights looked on ``ground``: there the held-out units found the near-exact
+#: Gibbs oscillation) beside its sharp features; on ``ground`` the gimbal's shadow is one, where
+#: the learning flights looked, and there the held-out units found the near-exact
 #: reference kept untapered worse than cut, beyond noise, on seeds 1 and 2 (4.361 against 4.295,
 #: 4.422 against 4.308 dB). Tapered, seed 1 is kept (4.303 against 4.295) and its planner's
 #: skill rises from -0.313 / 0.132 to 0.250 / 0.453 (the oracle's 0.282 / 0.473); seed 0 alike
