@@ -110,3 +110,76 @@ def test_whole_records_leaves_a_cut_record_for_later():
 def test_a_tail_without_transmit_power_names_it(tmp_path):
     with pytest.raises(InputError, match="tx_power_dbm"):
         TlogTail(str(tmp_path / "x.tlog"), ReaderOptions(frequency_hz=433e6))
+
+
+def _poll_in_pieces(whole, grown, piece_bytes: int = 40_000):
+    """Append ``whole`` to ``grown`` a piece at a time, polling after each: the rows handed out,
+    the tail, and its :meth:`TlogTail.sizes` after each poll with the time of the log read [s]."""
+    data = whole.read_bytes()
+    grown.write_bytes(b"")
+    tail = TlogTail(str(grown), _options(grown))
+    poses, signals, sizes = [], [], []
+    for pos in range(piece_bytes, len(data) + piece_bytes, piece_bytes):
+        with grown.open("ab") as fh:
+            fh.write(data[pos - piece_bytes:pos])
+        p, s = tail.poll()
+        poses.append(p)
+        signals.append(s)
+        sizes.append((pos / len(data), tail.sizes()))
+    p, s = tail.poll(final=True)
+    tail.close()
+    return (pd.concat([x for x in [*poses, p] if len(x)], ignore_index=True),
+            pd.concat([x for x in [*signals, s] if len(x)], ignore_index=True), tail, sizes)
+
+
+def test_the_state_kept_between_polls_does_not_grow_with_the_log(ground, tmp_path):
+    """Over 7 minutes of log, the most the tail keeps between polls in the second and third
+    quarters of the log is the same as in the last quarter (the window of the last seconds and a
+    summary): no structure grows with the flight. (The first quarter holds the start, read whole
+    until the station is known and the first rows are handed out.)"""
+    whole, grown = tmp_path / "whole.tlog", tmp_path / "grown.tlog"
+    write_tlog(ground, whole, vehicle="D", station="G", origin_geodetic=ORIGIN)
+    ref, _ = read_logs([str(whole)], _options(whole))
+    poses, signals, tail, sizes = _poll_in_pieces(whole, grown)
+
+    def most(lo, hi):
+        kept = [k for f, k in sizes if lo < f <= hi]
+        return {name: max(k[name] for k in kept) for name in kept[-1]}
+
+    middle, last = most(0.25, 0.75), most(0.75, 1.0)
+    assert "rows" not in middle and "rows" not in last  # the messages of the whole log are no longer kept
+    assert set(middle) == set(last)
+    for name, n in last.items():
+        assert n <= 1.05 * middle[name] + 8, (name, middle[name], n)
+    assert max(last.values()) < 6_000  # about 10 s of window
+    assert len(poses) == len(ref.pose) and len(signals) == len(ref.signal)
+    assert tail.dropped == dict.fromkeys(tail.dropped, 0)
+
+
+def test_a_position_jump_that_never_returns_withdraws_the_rows_handed_out_before_it(ground, tmp_path):
+    """A position that jumps 50 m mid-flight and stays (an origin set late) makes the offline
+    reader exclude everything before the jump (only the last piece of a boot is surely valid):
+    the rows handed out before it, most of them long behind the window, are counted withdrawn,
+    and the rows after it are the offline reader's."""
+    pose = ground.pose.copy()
+    jump_t = float(pose["t"].min()) + 240.0
+    moved = (pose["node"] == "D") & (pose["t"] >= jump_t)
+    pose.loc[moved, "z"] += 50.0
+    whole, grown = tmp_path / "whole.tlog", tmp_path / "grown.tlog"
+    write_tlog(Logs(pose, ground.signal), whole, vehicle="D", station="G", origin_geodetic=ORIGIN)
+    ref, meta = read_logs([str(whole)], _options(whole))
+    reasons = {p["reason"] for p in meta["files"][0]["excluded_periods"]}
+    assert reasons == {"before_valid_position"}
+    poses, signals, tail, _ = _poll_in_pieces(whole, grown)
+    vehicle = poses[poses["node"] == "D"]
+    ref_vehicle = ref.pose[ref.pose["node"] == "D"]
+    # the first row the offline reader keeps (the live time base may place it up to 2e-4 s earlier)
+    cut = float(ref_vehicle["t"].min()) - 2e-4
+    before = vehicle[vehicle["t"] < cut]
+    assert len(before) > 10_000  # handed out while they were valid
+    assert tail.dropped["withdrawn_pose_rows"] == len(before)
+    assert tail.dropped["withdrawn_signal_rows"] == int((signals["t"] < cut).sum())
+    after = vehicle[vehicle["t"] >= cut].reset_index(drop=True)
+    assert len(after) == len(ref_vehicle)
+    for c in ("x", "y", "z", "qw"):
+        np.testing.assert_allclose(after[c].to_numpy(), ref_vehicle[c].to_numpy(), rtol=0, atol=1e-12, err_msg=c)

@@ -218,8 +218,8 @@ class TlogTail:
         self.dropped["uncertain_copy_reports"] += w.trim(raw, to, stream_timeout_s, (fixes[0], fixes[2]), self._handed)
         self.dropped["changed_copy_reports"] += w.copies.reversed_behind(w.copies.rule())
         for what in ("pose", "signal"):
-            self._handed[what] = self._handed[what][self._handed[what] > w.anchor]
-            self._seen[what] = self._seen[what][self._seen[what] > w.anchor]
+            self._handed[what] = self._handed[what][self._handed[what] >= w.anchor]
+            self._seen[what] = self._seen[what][self._seen[what] >= w.anchor]
         if final:  # reports never judged
             self.dropped["uncertain_copy_reports"] += int(np.count_nonzero(w.radio[:, 8]))
 
@@ -241,18 +241,19 @@ class TlogTail:
         return float(raw.vehicle_t[-1]) if len(raw.vehicle_t) else math.inf
 
     def _hand(self, what: str, rows: pd.DataFrame, hand_to: float) -> pd.DataFrame:
-        """The rows in (last handed out, ``hand_to``]; rows appearing or vanishing after the
-        anchor and up to the last handed out (against the last conversion) counted."""
+        """The rows in (last handed out, ``hand_to``]; rows appearing or vanishing from the
+        anchor up to the last handed out (against the last conversion) counted (those before the
+        anchor by their piece: :meth:`TlogWindow.revisit`)."""
         t = rows["t"].to_numpy(np.float64)
         last = self._last[what]
         anchor = self.window.anchor if self.window is not None else -math.inf
         prev = self._seen[what]
-        delta = int(np.count_nonzero((t > anchor) & (t <= last))) - int(np.count_nonzero((prev > anchor) & (prev <= last)))
+        delta = int(np.count_nonzero((t >= anchor) & (t <= last))) - int(np.count_nonzero((prev >= anchor) & (prev <= last)))
         if delta > 0:
             self.dropped[f"late_{what}_rows"] += delta
         elif delta < 0:
             self.dropped[f"withdrawn_{what}_rows"] -= delta
-        self._seen[what] = t[t > anchor]
+        self._seen[what] = t[t >= anchor]
         out = rows[(t > last) & (t <= hand_to)].reset_index(drop=True)
         if len(out):
             self._last[what] = float(out["t"].max())
