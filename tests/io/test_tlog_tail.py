@@ -67,12 +67,18 @@ def _grow(whole, grown, seed: int = 0):
             pd.concat([x for x in signals if len(x)], ignore_index=True), tail)
 
 
-@pytest.mark.parametrize("defects", [None, DEFECTS], ids=["clean", "invalid-start-reboot-doubled"])
+#: every reading copied 0.2 ms later: copies within a quarter of the report period, merged by the reader
+COPIES = TlogDefects(radio_twice=True, copy_delay_s=0.0002)
+
+
+@pytest.mark.parametrize("defects", [None, DEFECTS, COPIES], ids=["clean", "invalid-start-reboot-doubled", "copies"])
 def test_rows_handed_out_while_the_log_grows_are_the_offline_readers_rows(ground, tmp_path, defects):
     whole, grown = tmp_path / "whole.tlog", tmp_path / "grown.tlog"
     written = write_tlog(ground, whole, vehicle="D", station="G", origin_geodetic=ORIGIN, defects=defects)
     ref, meta = read_logs([str(whole)], _options(whole))
-    if defects is not None:  # the offline reader excludes what the defects spoil
+    if defects is COPIES:  # the offline reader merges the copies
+        assert meta["files"][0]["signal"]["duplicate_reading"] >= written["radio"]
+    elif defects is not None:  # the offline reader excludes what the defects spoil
         assert meta["files"][0]["reboots"] == 1 and written["radio"] > 0
         assert {p["reason"] for p in meta["files"][0]["excluded_periods"]} >= {"before_valid_position", "after_reboot"}
     poses, signals, tail = _grow(whole, grown)

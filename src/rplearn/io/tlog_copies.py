@@ -33,8 +33,8 @@ from rplearn.io.mavlink_phases import DUPLICATE_FRACTION_OF_PERIOD
 
 #: Bins of spacings and gaps [s]: ``BIN_FLOOR_S * BIN_RATIO**k`` for k < :data:`N_BINS`.
 BIN_FLOOR_S = 1e-6
-BIN_RATIO = 1.02
-N_BINS = 1200  # up to about 2e4 s
+BIN_RATIO = 1.005
+N_BINS = 4700  # up to about 1.6e4 s
 #: A reading identical to one more than this long before it [s] has no copy gap (the offline
 #: rule needs gaps up to half the report period: a radio reporting slower than every 60 s is
 #: not judged exactly).
