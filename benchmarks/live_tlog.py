@@ -144,6 +144,11 @@ def main() -> int:
                 line += f"; whole log read again {old[mark] * 1e3:.0f} ms ({old[mark] / best[mark]:.1f}x the poll)"
             print(line)
             tail.close()
+        for mark in dict.fromkeys((10.0, 30.0, marks[-1])):  # the target's ratio, and the longest's
+            if mark in best and mark != ref:
+                ratio = best[mark] / best[ref]
+                verdict = f" (target within 1.3x: {'ok' if ratio <= 1.3 else 'MISS'})" if mark == 10.0 else ""
+                print(f"ratio {mark:g}-min / {ref:g}-min poll: {ratio:.2f}x{verdict}")
     print(f"after: {load()}")
     return 0
 

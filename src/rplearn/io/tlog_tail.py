@@ -3,9 +3,17 @@
 :class:`TlogTail` keeps one pymavlink connection on the file, with its file handle at the end of
 the last whole record read: every poll parses only the records appended since (a record still
 being written, its 8-byte time or its frame cut, waits for its end), each through the per-message
-function of the offline reader (:class:`rplearn.io._mavlink_records.TlogRows`), and converts the
-rows gathered so far by the offline reader's own steps (:func:`rplearn.io._mavlink_records.tlog_raw`,
-``read_mavlink``'s conversion), so that a row is converted exactly as ``sync`` converts it.
+function of the offline reader (:class:`rplearn.io._mavlink_records.TlogRows`), and converts them
+by the offline reader's own steps (``read_mavlink``'s conversion, :func:`rplearn.io.mavlink._from_raw`),
+so that a row is converted exactly as ``sync`` converts it.
+
+Until the first rows are handed out, the conversion runs over every message so far; from then on
+over a window only (:class:`rplearn.io.tlog_window.TlogWindow`): the messages since an *anchor*
+fix :data:`rplearn.io.tlog_window.KEEP_S` before the rows handed out, with a bounded summary of
+the past standing in for the reader's whole-log rules (the pieces of valid fixes of the boot, each
+boot's times, the last GPS fix type and armed state, the copy rule of radio reports on running
+binned counts: :mod:`rplearn.io.tlog_copies`). A poll's cost and the state kept do not grow with
+the flight.
 
 What can still change once handed out is fixed before any row is handed out:
 
@@ -15,6 +23,7 @@ What can still change once handed out is fixed before any row is handed out:
 - the station (and so the ENU origin): the vehicle's ``HOME_POSITION``, or the reader's
   ``station_geodetic``; without either for :data:`HOME_WAIT_S` of flight, the first valid fix
   (what ``sync`` takes for a log without ``HOME_POSITION``);
+- the vehicle (the sender of most ATTITUDE) and whether its boot clock is used;
 - after a reboot, in a log with origin messages (``HOME_POSITION``, ``GPS_GLOBAL_ORIGIN``), the
   boot's rows wait for its first origin message (for up to :data:`HOME_WAIT_S`): the stretch
   before it may be found invalid only by the first valid fix after it; likewise the radio
@@ -23,10 +32,15 @@ What can still change once handed out is fixed before any row is handed out:
   stream around a zero RSSI, a copy of a radio report): rows are handed out only up to
   ``settle_s`` before the newest message.
 
-A row handed out is never handed out again, and a row that appears (or disappears) behind what
+A row handed out is never handed out again, and a difference from the offline reader's rows is
+counted in :attr:`TlogTail.dropped`, never silent: a row that appears (or disappears) behind what
 was handed out, a later message changing the reader's verdict on it (a period before a valid
-position found later), is counted in :attr:`TlogTail.dropped` (``late_pose_rows``,
-``late_signal_rows``, ``withdrawn_pose_rows``, ``withdrawn_signal_rows``), never silently.
+position found later: ``late_pose_rows``, ``late_signal_rows``, ``withdrawn_pose_rows``,
+``withdrawn_signal_rows``; behind the anchor counted per piece of fixes, by the rows handed out in
+it or the messages it holds; a change of vehicle withdraws every row handed out); a radio report
+whose copy verdict depends on the report period beyond the precision of the running counts,
+dropped (``uncertain_copy_reports``); a report handed out whose verdict a later period reverses
+(``changed_copy_reports``).
 """
 
 from __future__ import annotations
@@ -145,8 +159,8 @@ class TlogTail:
         if not self.parsed and not final:
             return empty, empty
         try:
-            raw = (tlog_raw(self.rows, self.path, None, {}, self._time_base) if self.window is None
-                   else self.window.raw())
+            raw = self.window.raw() if self.window is not None else tlog_raw(
+                self.rows, self.path, None, {}, self._time_base)  # type: ignore[arg-type]
         except LogFormatError:  # too little received to read (no ATTITUDE yet)
             return empty, empty
         for b, (offset, n) in raw.boot_offsets.items():

@@ -29,7 +29,6 @@ Every array holds only the window: the state does not grow with the flight.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 
@@ -113,13 +112,13 @@ class TlogWindow:
     # --- messages in ---------------------------------------------------------------------------
     def add(self, rows: TlogRows) -> None:
         """Add the messages of ``rows`` (those parsed since the last call)."""
-        for k, n in rows.counts.items():
-            self.counts[k] = self.counts.get(k, 0) + n
-        for k, n in rows.radio_senders.items():
-            self.radio_senders[k] = self.radio_senders.get(k, 0) + n
+        for k, m in rows.counts.items():
+            self.counts[k] = self.counts.get(k, 0) + m
+        for key, m in rows.radio_senders.items():
+            self.radio_senders[key] = self.radio_senders.get(key, 0) + m
         att = rows.array("ATTITUDE", 6)
-        srcs, n = np.unique(att[:, 0].astype(int), return_counts=True)
-        for s, k in zip(srcs.tolist(), n.tolist(), strict=True):
+        srcs, per_src = np.unique(att[:, 0].astype(int), return_counts=True)
+        for s, k in zip(srcs.tolist(), per_src.tolist(), strict=True):
             self.senders[s] = self.senders.get(s, 0) + k
         att = att[att[:, 0] == self.chosen]
         gpi = rows.array("GLOBAL_POSITION_INT", 8)
@@ -195,7 +194,7 @@ class TlogWindow:
         copy, uncertain = ReportCopies.verdicts(self.radio[:, 7], rule)
         self.radio[:, 8] = uncertain
         band = self.copies.period_band()
-        others = {}
+        others: dict[int, int] = {}
         for s, k in self.senders.items():
             if s // 256 != self.vehicle:
                 others[s // 256] = others.get(s // 256, 0) + k
@@ -285,6 +284,7 @@ class TlogWindow:
         if not len(seq):
             self.prefix, self.prefix_joined, self.pieces = prefix, joined, pieces
             return
+        assert self.step_origin is not None  # fixed when the window was made
         xyz = geodetic_to_enu(seq[:, 1], seq[:, 2], seq[:, 3], self.step_origin)
         h = phases._speeds(seq[:, 4], phases.MAX_HORIZONTAL_SPEED_M_S)
         v = phases._speeds(seq[:, 5], phases.MAX_VERTICAL_SPEED_M_S)
@@ -303,18 +303,18 @@ class TlogWindow:
                 rows.append(seq[e])
                 flags.append(True)
             t0 = float(seq[s, 0])
-            at = min(int(np.searchsorted(verdict[0], t0)), len(verdict[0]) - 1)
-            new_pieces.append(old.get(t0, _Piece(t0, valid=bool(verdict[1][at]) if len(verdict[0]) else True)))
+            i0 = min(int(np.searchsorted(verdict[0], t0)), len(verdict[0]) - 1)
+            new_pieces.append(old.get(t0, _Piece(t0, valid=bool(verdict[1][i0]) if len(verdict[0]) else True)))
         firsts = np.array([p.first_t for p in new_pieces])
         for what, times in handed.items():
             t = times[times < anchor]
-            at = np.searchsorted(firsts, t, side="right") - 1
-            for i in at[at >= 0].tolist():
+            where = np.searchsorted(firsts, t, side="right") - 1
+            for i in where[where >= 0].tolist():
                 new_pieces[i].handed[what] += 1
         for what, t in (("pose", raw.att[:, 0]), ("signal", raw.radio[:, 0])):
             t = t[(t >= self.anchor) & (t < anchor)]
-            at = np.searchsorted(firsts, t, side="right") - 1
-            for i in at[at >= 0].tolist():
+            where = np.searchsorted(firsts, t, side="right") - 1
+            for i in where[where >= 0].tolist():
                 new_pieces[i].received[what] += 1
         if len(new_pieces) > MAX_PIECES:  # the oldest forgotten
             drop = len(new_pieces) - MAX_PIECES
