@@ -36,6 +36,8 @@ from rplearn.sim.flight import simulate
 ORIGIN = (47.3977, 8.5456, 90.0)
 #: The session's polls before a mark are made every this long of log [s].
 WARM_UP_EVERY_S = 10.0
+#: A mark in a silent stretch of the flight moves this long past its end [s].
+SETTLE_AFTER_SILENCE_S = 30.0
 
 
 def load() -> str:
@@ -104,6 +106,11 @@ def main() -> int:
                 continue
             grown = os.path.join(folder, f"grown{mark:g}.tlog")
             at = int(np.searchsorted(times, times[0] + mark * 60.0))
+            while times[at] - times[at - 1] > 1.0 or times[min(at + 200, len(times) - 1)] - times[at] > 5.0:
+                at += 1  # out of a silent stretch of the flight (the vehicle on the ground): a mark in the stream
+            if times[at] - times[0] > mark * 60.0 + 1.0:  # and on, to a poll like any other
+                at = int(np.searchsorted(times, times[at] + SETTLE_AFTER_SILENCE_S))
+                print(f"  {mark:g} min: in a silent stretch, moved to {(times[at] - times[0]) / 60.0:.2f} min")
             open(grown, "wb").close()
             tail = TlogTail(grown, ReaderOptions(tx_power_dbm=20.0, frequency_hz=2.412e9, station="G",
                                                  nodes={grown: "D"}))
