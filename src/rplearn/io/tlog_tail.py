@@ -37,10 +37,10 @@ counted in :attr:`TlogTail.dropped`, never silent: a row that appears (or disapp
 was handed out, a later message changing the reader's verdict on it (a period before a valid
 position found later: ``late_pose_rows``, ``late_signal_rows``, ``withdrawn_pose_rows``,
 ``withdrawn_signal_rows``; behind the anchor counted per piece of fixes, by the rows handed out in
-it or the messages it holds; a change of vehicle withdraws every row handed out); a radio report
-whose copy verdict depends on the report period beyond the precision of the running counts,
-dropped (``uncertain_copy_reports``); a report handed out whose verdict a later period reverses
-(``changed_copy_reports``).
+it or the messages it holds; a change of vehicle, or of the use of its boot clock, withdraws
+every row handed out); a radio report whose copy verdict depends on the report period beyond the
+precision of the running counts, dropped (``uncertain_copy_reports``); a report handed out whose
+verdict a later period reverses (``changed_copy_reports``).
 """
 
 from __future__ import annotations
@@ -221,8 +221,9 @@ class TlogTail:
         w = self.window
         srcs = np.array(sorted(w.senders))
         counts = np.array([w.senders[s] for s in srcs.tolist()])
-        if not self._vehicle_changed and int(srcs[np.argmax(counts)]) != w.chosen:
-            self._vehicle_changed = True  # sync would read another vehicle: every row handed out withdrawn
+        if not self._vehicle_changed and (int(srcs[np.argmax(counts)]) != w.chosen or w.clock_lost()):
+            # sync would read another vehicle, or place it by its receive times: every row handed out withdrawn
+            self._vehicle_changed = True
             for what in ("pose", "signal"):
                 self.dropped[f"withdrawn_{what}_rows"] += self._total[what]
         fixes = _fixes(raw, self.path)

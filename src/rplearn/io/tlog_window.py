@@ -8,7 +8,8 @@ The offline reader's rules that look at the whole log, and their causal forms he
 
 - the vehicle (the system sending most ATTITUDE), the boot clock's use and the station: fixed
   when the first rows are handed out (:class:`rplearn.io.tlog_tail.TlogTail`); ATTITUDE counts
-  per sender are kept, and a later change of the vehicle is counted (every row handed out withdrawn);
+  per sender and repeated boot times are kept, and a later change of the vehicle, or a boot
+  clock the reader would stop using, is counted (every row handed out withdrawn);
 - boots: a message's boot is found on arrival from the message before it (the boot clock
   stepping back); each boot's time offset is fixed from its first messages
   (``TIME_BASE_MESSAGES``); each boot's first and last times are kept;
@@ -99,6 +100,13 @@ class TlogWindow:
         self.prefix_joined = np.zeros(0, bool)
         self.pieces: list[_Piece] = []
         self.step_origin: tuple[float, float, float] | None = None
+        self.att_total, self.att_repeats, self._last_boot_ms = 0, 0, np.nan
+
+    def clock_lost(self) -> bool:
+        """Whether the offline reader would no longer use the boot clock: its ATTITUDE messages
+        with distinct ``time_boot_ms`` (at most those differing from the one before) fell below
+        90 % of them."""
+        return self.boot_clock and self.att_total - self.att_repeats < 0.9 * self.att_total
 
     def fix_step_origin(self) -> None:
         """The geodetic origin of the step test: the first fix of the log (``_fixes``'s)."""
@@ -121,6 +129,11 @@ class TlogWindow:
         for s, k in zip(srcs.tolist(), per_src.tolist(), strict=True):
             self.senders[s] = self.senders.get(s, 0) + k
         att = att[att[:, 0] == self.chosen]
+        tb = att[:, 2]
+        self.att_total += len(tb)  # a clock repeating its value (a sender leaving time_boot_ms at 0)
+        self.att_repeats += int(np.count_nonzero(np.diff(np.concatenate([[self._last_boot_ms], tb])) == 0))
+        if len(tb):
+            self._last_boot_ms = float(tb[-1])
         gpi = rows.array("GLOBAL_POSITION_INT", 8)
         gpi = gpi[(gpi[:, 0] == self.chosen) & ((gpi[:, 3] != 0) | (gpi[:, 4] != 0))]
         boot = self._boots(np.concatenate([att[:, 1:3], gpi[:, 1:3]]))
