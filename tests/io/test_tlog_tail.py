@@ -227,3 +227,29 @@ def test_a_real_log_appended_in_pieces_gives_the_offline_readers_rows(tmp_path):
     gs = pd.concat([x for x in signals if len(x)]).sort_values(["t", "tx"], kind="stable").reset_index(drop=True)
     rs = ref.signal.sort_values(["t", "tx"], kind="stable").reset_index(drop=True)
     pd.testing.assert_frame_equal(gs, rs)
+
+
+def _records(data: bytes) -> list[tuple[int, bytes]]:
+    """(receive time [us], record) of every record of a whole tlog."""
+    ends = _record_ends(data)
+    starts = np.concatenate([[0], ends[:-1]])
+    return [(int.from_bytes(data[a:a + 8], "big"), data[a:b]) for a, b in zip(starts, ends, strict=True)]
+
+
+def test_a_second_vehicle_that_overtakes_the_first_withdraws_every_row_handed_out(ground, tmp_path):
+    """The offline reader reads the system sending most ATTITUDE over the whole log; when a
+    second one, heard from a third of the way on and twice as often, overtakes the vehicle the
+    tail chose, every row handed out, before the change and after, is counted withdrawn."""
+    first, second = tmp_path / "first.tlog", tmp_path / "second.tlog"
+    write_tlog(ground, first, vehicle="D", station="G", origin_geodetic=ORIGIN, system_id=1)
+    write_tlog(ground, second, vehicle="D", station="G", origin_geodetic=ORIGIN, system_id=2)
+    ones = _records(first.read_bytes())
+    late = [r for r in _records(second.read_bytes()) if r[0] > ones[len(ones) // 3][0] and r[1][8 + 5] != 51]
+    merged = sorted(ones + late + late, key=lambda r: r[0])
+    whole, grown = tmp_path / "whole.tlog", tmp_path / "grown.tlog"
+    whole.write_bytes(b"".join(r[1] for r in merged))
+    _, meta = read_logs([str(whole)], ReaderOptions(tx_power_dbm=20.0, frequency_hz=2.412e9, station="G"))
+    assert meta["files"][0]["system_id"] == 2
+    poses, signals, tail, _ = _poll_in_pieces(whole, grown)
+    assert tail.dropped["withdrawn_pose_rows"] == len(poses[poses["node"] != "G"])  # before and after the change
+    assert tail.dropped["withdrawn_signal_rows"] == len(signals)
