@@ -3,6 +3,8 @@ polls are the offline reader's rows of the whole file, and a poll parses only th
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -67,12 +69,18 @@ def _grow(whole, grown, seed: int = 0):
             pd.concat([x for x in signals if len(x)], ignore_index=True), tail)
 
 
-@pytest.mark.parametrize("defects", [None, DEFECTS], ids=["clean", "invalid-start-reboot-doubled"])
+#: every reading copied 0.2 ms later: copies within a quarter of the report period, merged by the reader
+COPIES = TlogDefects(radio_twice=True, copy_delay_s=0.0002)
+
+
+@pytest.mark.parametrize("defects", [None, DEFECTS, COPIES], ids=["clean", "invalid-start-reboot-doubled", "copies"])
 def test_rows_handed_out_while_the_log_grows_are_the_offline_readers_rows(ground, tmp_path, defects):
     whole, grown = tmp_path / "whole.tlog", tmp_path / "grown.tlog"
     written = write_tlog(ground, whole, vehicle="D", station="G", origin_geodetic=ORIGIN, defects=defects)
     ref, meta = read_logs([str(whole)], _options(whole))
-    if defects is not None:  # the offline reader excludes what the defects spoil
+    if defects is COPIES:  # the offline reader merges the copies
+        assert meta["files"][0]["signal"]["duplicate_reading"] >= written["radio"]
+    elif defects is not None:  # the offline reader excludes what the defects spoil
         assert meta["files"][0]["reboots"] == 1 and written["radio"] > 0
         assert {p["reason"] for p in meta["files"][0]["excluded_periods"]} >= {"before_valid_position", "after_reboot"}
     poses, signals, tail = _grow(whole, grown)
@@ -110,3 +118,138 @@ def test_whole_records_leaves_a_cut_record_for_later():
 def test_a_tail_without_transmit_power_names_it(tmp_path):
     with pytest.raises(InputError, match="tx_power_dbm"):
         TlogTail(str(tmp_path / "x.tlog"), ReaderOptions(frequency_hz=433e6))
+
+
+def _poll_in_pieces(whole, grown, piece_bytes: int = 40_000):
+    """Append ``whole`` to ``grown`` a piece at a time, polling after each: the rows handed out,
+    the tail, and its :meth:`TlogTail.sizes` after each poll with the time of the log read [s]."""
+    data = whole.read_bytes()
+    grown.write_bytes(b"")
+    tail = TlogTail(str(grown), _options(grown))
+    poses, signals, sizes = [], [], []
+    for pos in range(piece_bytes, len(data) + piece_bytes, piece_bytes):
+        with grown.open("ab") as fh:
+            fh.write(data[pos - piece_bytes:pos])
+        p, s = tail.poll()
+        poses.append(p)
+        signals.append(s)
+        sizes.append((pos / len(data), tail.sizes()))
+    p, s = tail.poll(final=True)
+    tail.close()
+    return (pd.concat([x for x in [*poses, p] if len(x)], ignore_index=True),
+            pd.concat([x for x in [*signals, s] if len(x)], ignore_index=True), tail, sizes)
+
+
+def test_the_state_kept_between_polls_does_not_grow_with_the_log(ground, tmp_path):
+    """Over 7 minutes of log, the most the tail keeps between polls in the second and third
+    quarters of the log is the same as in the last quarter (the window of the last seconds and a
+    summary): no structure grows with the flight. (The first quarter holds the start, read whole
+    until the station is known and the first rows are handed out.)"""
+    whole, grown = tmp_path / "whole.tlog", tmp_path / "grown.tlog"
+    write_tlog(ground, whole, vehicle="D", station="G", origin_geodetic=ORIGIN)
+    ref, _ = read_logs([str(whole)], _options(whole))
+    poses, signals, tail, sizes = _poll_in_pieces(whole, grown)
+
+    def most(lo, hi):
+        kept = [k for f, k in sizes if lo < f <= hi]
+        return {name: max(k[name] for k in kept) for name in kept[-1]}
+
+    middle, last = most(0.25, 0.75), most(0.75, 1.0)
+    assert "rows" not in middle and "rows" not in last  # the messages of the whole log are no longer kept
+    assert set(middle) == set(last)
+    for name, n in last.items():
+        assert n <= 1.05 * middle[name] + 8, (name, middle[name], n)
+    assert max(last.values()) < 6_000  # about 10 s of window
+    assert len(poses) == len(ref.pose) and len(signals) == len(ref.signal)
+    assert tail.dropped == dict.fromkeys(tail.dropped, 0)
+
+
+def test_a_position_jump_that_never_returns_withdraws_the_rows_handed_out_before_it(ground, tmp_path):
+    """A position that jumps 50 m mid-flight and stays (an origin set late) makes the offline
+    reader exclude everything before the jump (only the last piece of a boot is surely valid):
+    the rows handed out before it, most of them long behind the window, are counted withdrawn,
+    and the rows after it are the offline reader's."""
+    pose = ground.pose.copy()
+    jump_t = float(pose["t"].min()) + 240.0
+    moved = (pose["node"] == "D") & (pose["t"] >= jump_t)
+    pose.loc[moved, "z"] += 50.0
+    whole, grown = tmp_path / "whole.tlog", tmp_path / "grown.tlog"
+    write_tlog(Logs(pose, ground.signal), whole, vehicle="D", station="G", origin_geodetic=ORIGIN)
+    ref, meta = read_logs([str(whole)], _options(whole))
+    reasons = {p["reason"] for p in meta["files"][0]["excluded_periods"]}
+    assert reasons == {"before_valid_position"}
+    poses, signals, tail, _ = _poll_in_pieces(whole, grown)
+    vehicle = poses[poses["node"] == "D"]
+    ref_vehicle = ref.pose[ref.pose["node"] == "D"]
+    # the first row the offline reader keeps (the live time base may place it up to 2e-4 s earlier)
+    cut = float(ref_vehicle["t"].min()) - 2e-4
+    before = vehicle[vehicle["t"] < cut]
+    assert len(before) > 10_000  # handed out while they were valid
+    assert tail.dropped["withdrawn_pose_rows"] == len(before)
+    assert tail.dropped["withdrawn_signal_rows"] == int((signals["t"] < cut).sum())
+    after = vehicle[vehicle["t"] >= cut].reset_index(drop=True)
+    assert len(after) == len(ref_vehicle)
+    for c in ("x", "y", "z", "qw"):
+        np.testing.assert_allclose(after[c].to_numpy(), ref_vehicle[c].to_numpy(), rtol=0, atol=1e-12, err_msg=c)
+
+
+def test_a_real_log_appended_in_pieces_gives_the_offline_readers_rows(tmp_path):
+    """The real ground-station log of the fixtures (GPS fix types, heartbeats, a lost link at the
+    end): the same rows as the offline reader, the vehicle's times shifted by one constant (its
+    boot's time base, fixed from its first messages where ``sync`` takes the whole log's median)."""
+    real = Path(__file__).resolve().parents[1] / "fixtures" / "ardupilot" / "mavlink-log_2013-10-13_16-58-51.tlog"
+    options = ReaderOptions(tx_power_dbm=20.0, frequency_hz=433e6)
+    ref, meta = read_logs([str(real)], options)
+    assert meta["files"][0]["signal"]["link_lost"] > 0
+    data = real.read_bytes()
+    grown = tmp_path / "grown.tlog"
+    grown.write_bytes(b"")
+    tail = TlogTail(str(grown), options)
+    rng = np.random.default_rng(3)
+    poses, signals, pos = [], [], 0
+    while pos < len(data):
+        pos = min(len(data), pos + int(rng.integers(2_000, 60_000)))
+        with grown.open("ab") as fh:
+            fh.write(data[len(grown.read_bytes()):pos])
+        for out, new in zip((poses, signals), tail.poll(), strict=True):
+            out.append(new)
+    for out, new in zip((poses, signals), tail.poll(final=True), strict=True):
+        out.append(new)
+    assert tail.window is not None and tail.dropped == dict.fromkeys(tail.dropped, 0)
+    gp, rp = (pd.concat([x for x in frames if len(x)]).sort_values(["node", "t"]).reset_index(drop=True)
+              for frames in (poses, [ref.pose]))
+    assert list(gp["node"]) == list(rp["node"])
+    vehicle = (rp["node"] != "gcs").to_numpy()
+    shift = gp["t"].to_numpy()[vehicle] - rp["t"].to_numpy()[vehicle]
+    assert np.ptp(shift) < 1e-6 and abs(shift[0]) < 0.2
+    for c in ("x", "y", "z", "qw", "qx", "qy", "qz"):
+        np.testing.assert_allclose(gp[c].to_numpy(), rp[c].to_numpy(), rtol=0, atol=1e-12, err_msg=c)
+    gs = pd.concat([x for x in signals if len(x)]).sort_values(["t", "tx"], kind="stable").reset_index(drop=True)
+    rs = ref.signal.sort_values(["t", "tx"], kind="stable").reset_index(drop=True)
+    pd.testing.assert_frame_equal(gs, rs)
+
+
+def _records(data: bytes) -> list[tuple[int, bytes]]:
+    """(receive time [us], record) of every record of a whole tlog."""
+    ends = _record_ends(data)
+    starts = np.concatenate([[0], ends[:-1]])
+    return [(int.from_bytes(data[a:a + 8], "big"), data[a:b]) for a, b in zip(starts, ends, strict=True)]
+
+
+def test_a_second_vehicle_that_overtakes_the_first_withdraws_every_row_handed_out(ground, tmp_path):
+    """The offline reader reads the system sending most ATTITUDE over the whole log; when a
+    second one, heard from a third of the way on and twice as often, overtakes the vehicle the
+    tail chose, every row handed out, before the change and after, is counted withdrawn."""
+    first, second = tmp_path / "first.tlog", tmp_path / "second.tlog"
+    write_tlog(ground, first, vehicle="D", station="G", origin_geodetic=ORIGIN, system_id=1)
+    write_tlog(ground, second, vehicle="D", station="G", origin_geodetic=ORIGIN, system_id=2)
+    ones = _records(first.read_bytes())
+    late = [r for r in _records(second.read_bytes()) if r[0] > ones[len(ones) // 3][0] and r[1][8 + 5] != 51]
+    merged = sorted(ones + late + late, key=lambda r: r[0])
+    whole, grown = tmp_path / "whole.tlog", tmp_path / "grown.tlog"
+    whole.write_bytes(b"".join(r[1] for r in merged))
+    _, meta = read_logs([str(whole)], ReaderOptions(tx_power_dbm=20.0, frequency_hz=2.412e9, station="G"))
+    assert meta["files"][0]["system_id"] == 2
+    poses, signals, tail, _ = _poll_in_pieces(whole, grown)
+    assert tail.dropped["withdrawn_pose_rows"] == len(poses[poses["node"] != "G"])  # before and after the change
+    assert tail.dropped["withdrawn_signal_rows"] == len(signals)

@@ -41,6 +41,15 @@ class Raw:
     counts: dict[str, int] = field(default_factory=dict)
     notes: dict[str, Any] = field(default_factory=dict)
     boot_offsets: dict[int, tuple[float, int]] = field(default_factory=dict)  # tlog: boot -> (offset [s], messages)
+    # a window of a growing log (rplearn.io.tlog_window): fixes read earlier (rows of ``pos``,
+    # the two ends of each piece of the boot, ``prefix_joined`` True at a piece's last fix), the
+    # geodetic origin of the step test (the log's first fix), and the radio reports' copy verdicts
+    # (aligned with ``radio``) with the report period they were judged by
+    prefix: np.ndarray | None = None
+    prefix_joined: np.ndarray | None = None
+    step_origin: tuple[float, float, float] | None = None
+    radio_copy: np.ndarray | None = None
+    radio_period: float | None = None
 
 
 def _arr(rows: list[tuple[float, ...]], width: int) -> np.ndarray:

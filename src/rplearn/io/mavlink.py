@@ -211,11 +211,17 @@ def _fixes(raw: Raw, source: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, l
         what = "GLOBAL_POSITION_INT" if raw.fmt == "tlog" else "POS or GPS"
         raise LogFormatError(f"{source}: fewer than 2 {what} position fixes of the vehicle")
     tp, pos = _increasing(pos[:, 0], pos)
-    enu = geodetic_to_enu(pos[:, 1], pos[:, 2], pos[:, 3], tuple(pos[0, 1:4]))  # steps only: any origin
+    fix_ok = _step_state(tp, raw.fix, 1.0) > 0.5
+    joined = None
+    if raw.prefix is not None and len(raw.prefix):  # a window: the fixes read earlier first
+        pos = np.concatenate([raw.prefix, pos])
+        tp, fix_ok = pos[:, 0], np.concatenate([np.ones(len(raw.prefix), bool), fix_ok])
+        joined = np.concatenate([np.asarray(raw.prefix_joined, bool), np.zeros(len(pos) - len(raw.prefix), bool)])
+    step_origin = raw.step_origin if raw.step_origin is not None else tuple(pos[0, 1:4])
+    enu = geodetic_to_enu(pos[:, 1], pos[:, 2], pos[:, 3], step_origin)  # steps only: any origin
     times = np.concatenate([raw.att[:, 0], tp, raw.radio[:, 0]])
     boot = pos[:, 6].astype(np.int64)
-    fix_ok = _step_state(tp, raw.fix, 1.0) > 0.5
-    invalid, steps = phases.invalid_fixes(tp, enu, pos[:, 4], pos[:, 5], boot, fix_ok)
+    invalid, steps = phases.invalid_fixes(tp, enu, pos[:, 4], pos[:, 5], boot, fix_ok, joined)
     name = "HOME_POSITION or GPS_GLOBAL_ORIGIN" if raw.fmt == "tlog" else "ORGN"
     periods = phases.excluded_periods(
         phases.Fixes(tp, invalid, boot, fix_ok, steps),
@@ -280,8 +286,12 @@ def _signal(raw: Raw, vehicle: str, station: str, tx_power_dbm: float | Mapping[
             periods: list[dict[str, Any]]) -> pd.DataFrame:
     """Both directions of the telemetry link: one row per reading, link-lost messages as outage
     rows (``rssi_dbm`` NaN, ``outage`` True), unusable values and rows in excluded periods dropped."""
-    radio = raw.radio[np.argsort(raw.radio[:, 0], kind="stable")]
-    copy, period = phases.repeated_readings(radio[:, 0], radio[:, 1:])
+    order = np.argsort(raw.radio[:, 0], kind="stable")
+    radio = raw.radio[order]
+    if raw.radio_copy is None:
+        copy, period = phases.repeated_readings(radio[:, 0], radio[:, 1:])
+    else:  # judged as the reports arrived (rplearn.io.tlog_window)
+        copy, period = np.asarray(raw.radio_copy, bool)[order], raw.radio_period
     counts["duplicate_reading"] = int(copy.sum())
     raw.notes["radio_report_period_s"] = period
     radio = radio[~copy]

@@ -92,7 +92,7 @@ def _unexplained(ta: np.ndarray, xa: np.ndarray, ha: np.ndarray, va: np.ndarray,
 
 
 def invalid_fixes(t: np.ndarray, xyz: np.ndarray, speed_h: np.ndarray, speed_v: np.ndarray,
-                  boot: np.ndarray, fix_ok: np.ndarray) -> tuple[np.ndarray, dict[int, str]]:
+                  boot: np.ndarray, fix_ok: np.ndarray, joined: np.ndarray | None = None) -> tuple[np.ndarray, dict[int, str]]:
     """Which fixes (sorted by ``t`` within each boot) are not a valid position (module docstring).
 
     Parameters
@@ -105,6 +105,9 @@ def invalid_fixes(t: np.ndarray, xyz: np.ndarray, speed_h: np.ndarray, speed_v: 
         Boot number of each fix.
     fix_ok : ndarray of bool
         False where the log says the GPS fix is below 3-D.
+    joined : ndarray of bool, optional
+        True where a fix is known to join the fix before it (the two ends of a piece whose
+        fixes between were read earlier: :mod:`rplearn.io.tlog_window`); no step is looked for there.
 
     Returns
     -------
@@ -124,6 +127,8 @@ def invalid_fixes(t: np.ndarray, xyz: np.ndarray, speed_h: np.ndarray, speed_v: 
             continue
         a, c = idx[:-1], idx[1:]
         bad, _, _ = _unexplained(t[a], xyz[a], h[a], v[a], t[c], xyz[c], h[c], v[c])
+        if joined is not None:
+            bad &= ~np.asarray(joined, bool)[c]
         cuts = np.flatnonzero(bad) + 1
         starts, ends = np.concatenate([[0], cuts]), np.concatenate([cuts, [len(idx)]])
         chain = idx[starts[-1]]  # first fix of the valid fixes after the piece

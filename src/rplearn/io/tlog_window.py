@@ -1,0 +1,373 @@
+"""The recent stretch of a growing ``.tlog`` with what its past fixed, for :class:`rplearn.io.tlog_tail.TlogTail`.
+
+A poll of ``rplearn live``'s MAVLink source converts only a window of the log: the messages
+since the *anchor*, a position fix at least :data:`KEEP_S` before the rows last handed out, plus
+a bounded summary of the past, built so that every row after the anchor is converted as the
+offline reader (:func:`rplearn.io.mavlink._from_raw` over the whole log so far) converts it.
+The offline reader's rules that look at the whole log, and their causal forms here:
+
+- the vehicle (the system sending most ATTITUDE), the boot clock's use and the station: fixed
+  when the first rows are handed out (:class:`rplearn.io.tlog_tail.TlogTail`); ATTITUDE counts
+  per sender and repeated boot times are kept, and a later change of the vehicle, or a boot
+  clock the reader would stop using, is counted (every row handed out withdrawn);
+- boots: a message's boot is found on arrival from the message before it (the boot clock
+  stepping back); each boot's time offset is fixed from its first messages
+  (``TIME_BASE_MESSAGES``); each boot's first and last times are kept;
+- the validity of position fixes (:func:`rplearn.io.mavlink_phases.invalid_fixes`: a piece of a
+  boot is valid when it joins the valid fixes after it, so a verdict depends only on later
+  fixes): the fixes of the anchor's boot before the anchor are kept as the first and last fix of
+  each of its pieces (at most :data:`MAX_PIECES`), so verdicts and excluded periods are the offline
+  reader's; a piece behind the anchor whose verdict changes counts the rows handed out in it
+  (``withdrawn_*``) or the messages it holds (``late_*``);
+- the GPS fix type and the armed state: the last report before the anchor is kept;
+- origin messages: their last time; the vehicle's stream (a link lost): its messages within
+  ``stream_timeout_s`` of the window;
+- copies of radio reports: judged on arrival (:mod:`rplearn.io.tlog_copies`).
+
+Every array holds only the window: the state does not grow with the flight.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from rplearn.io import mavlink_phases as phases
+from rplearn.io._mavlink_records import _MAV_TYPE_GCS, _ORIGIN_TYPES, Raw, TlogRows, _arr
+from rplearn.io.geodetic import geodetic_to_enu
+from rplearn.io.tlog_copies import ReportCopies
+
+#: The anchor lies at least this long before the rows last handed out [s]: rows after it are
+#: converted again at every poll, so that a verdict changed by later messages is counted.
+KEEP_S = 10.0
+#: Pieces of the anchor's boot kept behind it (older ones are forgotten: their verdicts are no
+#: longer revisited).
+MAX_PIECES = 32
+
+_ATT, _GPI, _RADIO = 6, 8, 9  # columns of the window's arrays (below)
+
+
+@dataclass
+class _Piece:
+    """A piece of fixes behind the anchor: its first fix's time, the verdict it last had, and
+    the rows handed out and messages received from its first fix to the next piece's."""
+
+    first_t: float
+    valid: bool = True
+    handed: dict[str, int] = field(default_factory=lambda: {"pose": 0, "signal": 0})
+    received: dict[str, int] = field(default_factory=lambda: {"pose": 0, "signal": 0})
+
+
+class TlogWindow:
+    """The window of a growing ``.tlog`` and the summary of what came before (module docstring).
+
+    Parameters
+    ----------
+    chosen : int
+        ``system * 256 + component`` of the vehicle's ATTITUDE sender.
+    boot_clock : bool
+        Whether the vehicle's ``time_boot_ms`` is its clock.
+    raw : Raw
+        The offline conversion of the log so far (notes, home, station-independent fields).
+    time_base : dict
+        Boot number -> its fixed receive-minus-boot offset [s] (shared with the tail, which fixes them).
+    """
+
+    def __init__(self, chosen: int, boot_clock: bool, raw: Raw, time_base: dict[int, float]) -> None:
+        self.chosen, self.vehicle, self.boot_clock = chosen, chosen // 256, boot_clock
+        self.home, self.notes = raw.home, dict(raw.notes)
+        self.counts: dict[str, int] = {}
+        self.senders: dict[int, int] = {}  # ATTITUDE messages per (system, component)
+        self.radio_senders: dict[str, int] = {}
+        self.att = np.zeros((0, _ATT))  # t_recv, t_boot, roll, pitch, yaw, boot
+        self.gpi = np.zeros((0, _GPI))  # t_recv, t_boot, lat, lon, alt, speed h, speed v, boot
+        self.radio = np.zeros((0, _RADIO))  # t, rssi, remrssi, noise, remnoise, rxerrors, fixed, gap, uncertain
+        self.vehicle_t = np.zeros(0)
+        self.origin_t = np.zeros(0)
+        self.fix = np.zeros((0, 2))
+        self.armed = np.zeros((0, 2))
+        self.copies = ReportCopies()
+        self.time_base = time_base  # the tail's: boot -> receive minus boot time [s], fixed
+        self.boot_first: dict[int, float] = {}  # first ATTITUDE per boot [s, log clock]
+        self.boot_last_att: dict[int, float] = {}
+        self.boot_last: dict[int, float] = {}  # last ATTITUDE or position per boot
+        self.last_origin = -np.inf
+        self.has_origin = False
+        self._boot_at: tuple[float, float, int] | None = None  # the last vehicle message's receive, boot time, boot
+        self.anchor = -np.inf
+        self.prefix = np.zeros((0, 7))
+        self.prefix_joined = np.zeros(0, bool)
+        self.pieces: list[_Piece] = []
+        self.step_origin: tuple[float, float, float] | None = None
+        self.att_total, self.att_repeats, self._last_boot_ms = 0, 0, np.nan
+
+    def clock_lost(self) -> bool:
+        """Whether the offline reader would no longer use the boot clock: its ATTITUDE messages
+        with distinct ``time_boot_ms`` (at most those differing from the one before) fell below
+        90 % of them."""
+        return self.boot_clock and self.att_total - self.att_repeats < 0.9 * self.att_total
+
+    def fix_step_origin(self) -> None:
+        """The geodetic origin of the step test: the first fix of the log (``_fixes``'s)."""
+        from rplearn.io.mavlink import _increasing
+
+        pos = self.raw().pos
+        pos = pos[np.all(np.isfinite(pos[:, :4]), axis=1)]
+        if len(pos):
+            self.step_origin = tuple(_increasing(pos[:, 0], pos)[1][0, 1:4])
+
+    # --- messages in ---------------------------------------------------------------------------
+    def add(self, rows: TlogRows) -> None:
+        """Add the messages of ``rows`` (those parsed since the last call)."""
+        for k, m in rows.counts.items():
+            self.counts[k] = self.counts.get(k, 0) + m
+        for key, m in rows.radio_senders.items():
+            self.radio_senders[key] = self.radio_senders.get(key, 0) + m
+        att = rows.array("ATTITUDE", 6)
+        srcs, per_src = np.unique(att[:, 0].astype(int), return_counts=True)
+        for s, k in zip(srcs.tolist(), per_src.tolist(), strict=True):
+            self.senders[s] = self.senders.get(s, 0) + k
+        att = att[att[:, 0] == self.chosen]
+        tb = att[:, 2]
+        self.att_total += len(tb)  # a clock repeating its value (a sender leaving time_boot_ms at 0)
+        self.att_repeats += int(np.count_nonzero(np.diff(np.concatenate([[self._last_boot_ms], tb])) == 0))
+        if len(tb):
+            self._last_boot_ms = float(tb[-1])
+        gpi = rows.array("GLOBAL_POSITION_INT", 8)
+        gpi = gpi[(gpi[:, 0] == self.chosen) & ((gpi[:, 3] != 0) | (gpi[:, 4] != 0))]
+        boot = self._boots(np.concatenate([att[:, 1:3], gpi[:, 1:3]]))
+        self.att = np.concatenate([self.att, np.column_stack([att[:, 1:6], boot[:len(att)]])])
+        self.gpi = np.concatenate([self.gpi, np.column_stack([gpi[:, 1:8], boot[len(att):]])])
+        radio = np.concatenate([rows.array("RADIO_STATUS", 7), rows.array("RADIO", 7)])
+        radio = radio[np.lexsort(radio.T[::-1])]
+        gaps = self.copies.add(radio)
+        self.radio = np.concatenate([self.radio, np.column_stack([radio, gaps, np.zeros(len(radio))])])
+        self.vehicle_t = np.concatenate([self.vehicle_t, np.sort(rows.times(self.vehicle))])
+        origin = [h[1] for k in _ORIGIN_TYPES for h in rows.rows[k] if h[0] // 256 == self.vehicle and (h[2] != 0 or h[3] != 0)]
+        if origin:
+            self.has_origin, self.last_origin = True, max(self.last_origin, max(origin))
+            self.origin_t = np.sort(np.concatenate([self.origin_t, origin]))
+        if self.home is None:
+            home = [h for h in rows.rows["HOME_POSITION"] if h[0] // 256 == self.vehicle and (h[2] != 0 or h[3] != 0)]
+            self.home = (float(home[0][2]), float(home[0][3]), float(home[0][4])) if home else None
+        fix = [r[1:] for r in rows.rows["GPS_RAW_INT"] if r[0] // 256 == self.vehicle]
+        beats = [r[1:3] for r in rows.rows["HEARTBEAT"] if r[0] // 256 == self.vehicle and r[3] != _MAV_TYPE_GCS]
+        if fix:
+            self.fix = _arr(sorted([tuple(r) for r in self.fix.tolist()] + fix), 2)
+        if beats:
+            self.armed = _arr(sorted([tuple(r) for r in self.armed.tolist()] + beats), 2)
+
+    def _boots(self, both: np.ndarray) -> np.ndarray:
+        """Each message's boot, as :func:`rplearn.io._mavlink_records.boot_offsets` numbers them
+        over the whole log (receive order; a new boot where the boot clock steps back)."""
+        if not self.boot_clock:
+            return np.zeros(len(both), np.int64)
+        order = np.argsort(both[:, 0], kind="stable")
+        tb = both[order, 1]
+        prev = self._boot_at
+        start = np.concatenate([[prev[1]], tb]) if prev is not None else tb
+        steps = np.cumsum(np.diff(start) < -phases.REBOOT_STEP_S)
+        base = prev[2] if prev is not None else 0
+        seg_sorted = base + (steps if prev is not None else np.concatenate([[0], steps]))
+        out = np.empty(len(both), np.int64)
+        out[order] = seg_sorted
+        if len(both):
+            self._boot_at = (float(both[order[-1], 0]), float(tb[-1]), int(seg_sorted[-1]))
+        return out
+
+    # --- the window's Raw ----------------------------------------------------------------------
+    def _t_log(self, rows: np.ndarray) -> tuple[np.ndarray, dict[int, tuple[float, int]]]:
+        """Log-clock times of ``att``/``gpi`` rows and each boot's (offset, messages) of the window."""
+        boot = rows[:, -1].astype(np.int64)
+        if not self.boot_clock:
+            return rows[:, 1] + (rows[:, 0] - rows[:, 1]), {}
+        offset = np.empty(len(rows))
+        per_boot: dict[int, tuple[float, int]] = {}
+        for b in np.unique(boot).tolist():
+            m = boot == b
+            off = self.time_base.get(b)
+            if off is None:
+                off = float(np.median(rows[m, 0] - rows[m, 1]))
+            offset[m] = off
+            per_boot[b] = (off, int(m.sum()))
+        return rows[:, 1] + offset, per_boot
+
+    def raw(self) -> Raw:
+        """The window as the offline reader's :class:`Raw` (with the summary of the past)."""
+        both = np.concatenate([self.att[:, [0, 1, 5]], self.gpi[:, [0, 1, 7]]])
+        t_log, per_boot = self._t_log(both)
+        n_att = len(self.att)
+        boot = both[:, -1]
+        last = dict(self.boot_last)
+        for b in np.unique(boot).astype(int).tolist():
+            last[b] = max(last.get(b, -np.inf), float(t_log[boot == b].max()))
+        boot_last_t = np.array([last.get(b, -np.inf) for b in range(max(last) + 1)]) if last else np.zeros(0)
+        rule = self.copies.rule()
+        copy, uncertain = ReportCopies.verdicts(self.radio[:, 7], rule)
+        self.radio[:, 8] = uncertain
+        band = self.copies.period_band()
+        others: dict[int, int] = {}
+        for s, k in self.senders.items():
+            if s // 256 != self.vehicle:
+                others[s // 256] = others.get(s // 256, 0) + k
+        notes = {**self.notes, "other_vehicles": others, "radio_senders": dict(self.radio_senders)}
+        return Raw(
+            fmt="tlog", att=np.column_stack([t_log[:n_att], self.att[:, 2:5], boot[:n_att]]),
+            pos=np.column_stack([t_log[n_att:], self.gpi[:, 2:7], boot[n_att:]]),
+            radio=self.radio[~uncertain, :7], vehicle_t=self.vehicle_t, home=self.home, counts=dict(self.counts),
+            boot_last_t=boot_last_t, origin_t=self.origin_t, fix=self.fix, armed=self.armed, boot_offsets=per_boot,
+            notes=notes, prefix=self.prefix, prefix_joined=self.prefix_joined, step_origin=self.step_origin,
+            radio_copy=copy[~uncertain], radio_period=None if band is None else 0.5 * (band[0] + band[1]),
+        )
+
+    def boots_ready(self, raw: Raw, newest: float, home_wait_s: float) -> float:
+        """``TlogTail``'s wait for boots (its ``_boots_ready``) from the kept first and last times."""
+        if not self.boot_clock:
+            return float(raw.vehicle_t[-1]) if len(raw.vehicle_t) else np.inf
+        first = dict(self.boot_first)
+        last_att = dict(self.boot_last_att)
+        for b in np.unique(raw.att[:, 4]).astype(int).tolist():
+            t = raw.att[raw.att[:, 4] == b, 0]
+            first.setdefault(b, float(t.min()))
+            last_att[b] = max(last_att.get(b, -np.inf), float(t.max()))
+        for b in sorted(set(first) | set(raw.boot_offsets)):
+            if b not in first:
+                continue
+            no_origin = self.has_origin and not self.last_origin >= first[b] and newest - first[b] < home_wait_s
+            if b not in self.time_base or no_origin:
+                before = [v for k, v in last_att.items() if k < b]
+                return max(before) if before else first[b]
+        return float(raw.vehicle_t[-1]) if len(raw.vehicle_t) else np.inf
+
+    # --- trimming ------------------------------------------------------------------------------
+    def trim(self, raw: Raw, to: float, stream_timeout_s: float, verdict: tuple[np.ndarray, np.ndarray],
+             handed: dict[str, np.ndarray]) -> int:
+        """Move the anchor to the last position fix at or before ``to`` (if later than the
+        present one), folding what lies before it into the summary. ``raw`` is :meth:`raw`'s
+        output, ``verdict`` the times of its fixes and which are valid (``_fixes``), ``handed``
+        the times of the rows handed out after the present anchor (those before the new one are
+        counted in their piece). Returns the reports left behind that could not be judged."""
+        fixes_t = raw.pos[:, 0]
+        finite = np.all(np.isfinite(raw.pos[:, :4]), axis=1)
+        cand = fixes_t[finite & (fixes_t <= to)]
+        if not len(cand) or cand.max() <= self.anchor:
+            return 0
+        anchor = float(cand.max())
+        anchor_boot = int(raw.pos[finite & (fixes_t == anchor), 6][0])
+        self._fold_pieces(raw, anchor, anchor_boot, verdict, handed)
+        both = np.concatenate([self.att[:, [0, 1, 5]], self.gpi[:, [0, 1, 7]]])
+        t_log = raw.att[:, 0], raw.pos[:, 0]
+        for b in np.unique(both[:, -1]).astype(int).tolist():
+            gone_att = t_log[0][(raw.att[:, 4] == b) & (t_log[0] < anchor)]
+            gone_pos = t_log[1][(raw.pos[:, 6] == b) & (t_log[1] < anchor)]
+            if len(gone_att):
+                self.boot_first.setdefault(b, float(gone_att.min()))
+                self.boot_last_att[b] = max(self.boot_last_att.get(b, -np.inf), float(gone_att.max()))
+            gone = np.concatenate([gone_att, gone_pos])
+            if len(gone):
+                self.boot_last[b] = max(self.boot_last.get(b, -np.inf), float(gone.max()))
+        self.att = self.att[t_log[0] >= anchor]
+        self.gpi = self.gpi[t_log[1] >= anchor]
+        keep = self.radio[:, 0] >= anchor
+        gone = self.radio[~keep & (self.radio[:, 8] == 0)]
+        uncertain = int(np.count_nonzero(~keep & (self.radio[:, 8] != 0)))
+        self.copies.behind(gone[:, 7], self.copies.rule())
+        self.radio = self.radio[keep]
+        self.vehicle_t = self.vehicle_t[self.vehicle_t >= anchor - stream_timeout_s - 1.0]
+        self.origin_t = self.origin_t[self.origin_t >= anchor]
+        self.fix, self.armed = _events_from(self.fix, anchor), _events_from(self.armed, anchor)
+        self.anchor = anchor
+        return uncertain
+
+    def _fold_pieces(self, raw: Raw, anchor: float, boot: int, verdict: tuple[np.ndarray, np.ndarray],
+                     handed: dict[str, np.ndarray]) -> None:
+        """The anchor's boot's fixes before the anchor as the ends of their pieces."""
+        from rplearn.io.mavlink import _increasing, _step_state
+
+        pos = raw.pos[np.all(np.isfinite(raw.pos[:, :4]), axis=1)]
+        tp, pos = _increasing(pos[:, 0], pos)
+        ok = (_step_state(tp, raw.fix, 1.0) > 0.5) & (pos[:, 6] == boot) & (tp < anchor)
+        gone = pos[ok]
+        same_boot = len(self.prefix) and int(self.prefix[0, 6]) == boot
+        prefix = self.prefix if same_boot else np.zeros((0, 7))
+        joined = self.prefix_joined if same_boot else np.zeros(0, bool)
+        pieces = self.pieces if same_boot else []
+        seq = np.concatenate([prefix, gone])
+        if not len(seq):
+            self.prefix, self.prefix_joined, self.pieces = prefix, joined, pieces
+            return
+        assert self.step_origin is not None  # fixed when the window was made
+        xyz = geodetic_to_enu(seq[:, 1], seq[:, 2], seq[:, 3], self.step_origin)
+        h = phases._speeds(seq[:, 4], phases.MAX_HORIZONTAL_SPEED_M_S)
+        v = phases._speeds(seq[:, 5], phases.MAX_VERTICAL_SPEED_M_S)
+        a, c = slice(0, -1), slice(1, None)
+        bad, _, _ = phases._unexplained(seq[a, 0], xyz[a], h[a], v[a], seq[c, 0], xyz[c], h[c], v[c])
+        cut = np.concatenate([[True], bad & ~np.concatenate([joined, np.zeros(len(gone), bool)])[1:]])
+        starts = np.flatnonzero(cut)
+        ends = np.concatenate([starts[1:], [len(seq)]]) - 1
+        rows, flags = [], []
+        old = {p.first_t: p for p in pieces}
+        new_pieces = []
+        for s, e in zip(starts.tolist(), ends.tolist(), strict=True):
+            rows.append(seq[s])
+            flags.append(False)
+            if e > s:
+                rows.append(seq[e])
+                flags.append(True)
+            t0 = float(seq[s, 0])
+            i0 = min(int(np.searchsorted(verdict[0], t0)), len(verdict[0]) - 1)
+            new_pieces.append(old.get(t0, _Piece(t0, valid=bool(verdict[1][i0]) if len(verdict[0]) else True)))
+        firsts = np.array([p.first_t for p in new_pieces])
+        for what, times in handed.items():
+            t = times[times < anchor]
+            where = np.searchsorted(firsts, t, side="right") - 1
+            for i in where[where >= 0].tolist():
+                new_pieces[i].handed[what] += 1
+        for what, t in (("pose", raw.att[:, 0]), ("signal", raw.radio[:, 0])):
+            t = t[(t >= self.anchor) & (t < anchor)]
+            where = np.searchsorted(firsts, t, side="right") - 1
+            for i in where[where >= 0].tolist():
+                new_pieces[i].received[what] += 1
+        if len(new_pieces) > MAX_PIECES:  # the oldest forgotten
+            drop = len(new_pieces) - MAX_PIECES
+            first_kept = new_pieces[drop].first_t
+            keep = np.array([r[0] >= first_kept for r in rows])
+            rows, flags = [r for r, k in zip(rows, keep, strict=True) if k], [f for f, k in zip(flags, keep, strict=True) if k]
+            new_pieces = new_pieces[drop:]
+        self.prefix, self.prefix_joined, self.pieces = np.asarray(rows).reshape(-1, 7), np.asarray(flags, bool), new_pieces
+
+    def revisit(self, valid: np.ndarray) -> dict[str, int]:
+        """Counts of rows whose verdict changed behind the anchor, given which fixes of the
+        conversion (``_fixes``: the prefix's rows first) are valid: a piece turned invalid
+        withdraws the rows handed out in it; one turned valid again gives them back (``late``),
+        or, if none were handed out, the messages it holds."""
+        out = {f"{k}_{w}_rows": 0 for k in ("late", "withdrawn") for w in ("pose", "signal")}
+        for p, v in zip(self.pieces, np.asarray(valid, bool)[np.flatnonzero(~self.prefix_joined)].tolist(), strict=True):
+            if p.valid and not v:
+                for w in ("pose", "signal"):
+                    out[f"withdrawn_{w}_rows"] += p.handed[w]
+            elif v and not p.valid:
+                for w in ("pose", "signal"):
+                    out[f"late_{w}_rows"] += p.handed[w] if any(p.handed.values()) else p.received[w]
+            p.valid = v
+        return out
+
+    def sizes(self) -> dict[str, int]:
+        """The length of every structure kept (for tests of bounded state)."""
+        out = {name: len(getattr(self, name)) for name in ("att", "gpi", "radio", "vehicle_t", "origin_t", "fix",
+                                                            "armed", "prefix", "pieces", "time_base", "boot_first",
+                                                            "boot_last", "senders", "counts")}
+        return {**out, **self.copies.sizes()}
+
+
+def _events_from(events: np.ndarray, t: float) -> np.ndarray:
+    """The events at or after ``t`` and the last one before it."""
+    before = np.flatnonzero(events[:, 0] < t) if len(events) else np.zeros(0, np.int64)
+    keep = events[:, 0] >= t if len(events) else np.zeros(0, bool)
+    if len(before):
+        keep[before[-1]] = True
+    return events[keep]
+
+
+__all__ = ["KEEP_S", "MAX_PIECES", "TlogWindow"]
