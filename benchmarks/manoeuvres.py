@@ -45,7 +45,7 @@ error's pointing part 0.2-1.35 dB and the fading 0.1-0.7 dB; the realisation alo
 about 0.5 dB: two plans of the same length (paper seed 0, 154 s) gave 1.59 and 2.15 dB, the same
 suggested flight to within 1 s (paper seed 1, 229/230 s) 1.67 and 2.22 dB. A single flight's
 error against a 0.05-dB tolerance is therefore close to a coin flip even for a calibrated
-posterior. One BLAS thread is pinned (``RPLEARN_THREADS=1`` unless set) so that a run repeats
+posterior, which is why the check is made on the *expected* error (below). One BLAS thread is pinned (``RPLEARN_THREADS=1`` unless set) so that a run repeats
 figure for figure: with the load-dependent thread policy the ranking's near-ties fell
 differently between runs. At the point where each flight first reaches 2 dB it is
 recomputed through :func:`rplearn.models.own_posterior.own_pattern_posterior` (the fit's own
@@ -65,12 +65,33 @@ size, like the noise, from the complete reference flight
 flight's own blocks so far, as ``rplearn live`` does; ``off`` is the white-noise posterior
 (the benchmark as it was).
 
-Criteria per preset: time to 2 dB of suggested and of optimized <= 60 % of the reference's, and
-their worst per-node pattern error <= the reference's (+0.05 dB of rounding).
+**The expected error** (``--draws N``, default 5): a flight plan is a commanded trajectory and a
+flight time, and its pattern error at its 2-dB point is a random variable of the noise, fading,
+wind and pose errors it meets, not of the plan. Each flight's plan as flown (the reference's
+units; the suggested flight's start and manoeuvres; the optimized plan's units; each with its
+lead time) is therefore flown again ``N`` times under independent draws (seeds
+``seed * 1000 + k + 100000 * draw``, never the first draw's), and each draw's statistics are cut
+at the flight time at which the first draw reached 2 dB (the spread depends on the directions
+flown, not on the noise: the draws' largest spread there is printed and stays within about
++-0.15 dB of 2). The first draw is left out of the mean: the suggested flight's choices and every
+flight's stopping time were made from it, so it is not an independent draw of its plan. The
+plans' expected worst per-node errors are compared through the mean over the draws and its
+standard error ``s.e. = std / sqrt(N)``; the draws of different plans are independent, so the
+difference of two means has the standard error ``sqrt(se_plan^2 + se_ref^2)``, and "no worse"
+is ``mean_plan <= mean_ref + 2 * sqrt(se_plan^2 + se_ref^2)`` (:data:`ERROR_SE`): a plan fails
+when its draws show it worse at about the 2-sigma one-sided level (2.3 % for a plan exactly as
+good as the reference). It is a test of "not shown worse", whose power grows with ``N``: with
+5 draws and a per-draw spread of 0.1-0.25 dB the tolerance is 0.15-0.35 dB. The single-draw
+figures and the old check (+0.05 dB) are still printed beside it.
+
+Criteria per preset and seed: time to 2 dB of suggested and of optimized <= 60 % of the
+reference's, and their expected worst per-node pattern error no worse than the reference's as
+above (``--draws 0``: the single-draw check with +0.05 dB, as before).
 
 Usage: ``python benchmarks/manoeuvres.py [--presets paper,ground] [--seeds 0,1,2] [--posterior honest|inflated]
-[--correlated reference|own|off] [--prior-std 0] [--tiny]``
-(``--tiny``: the ``smoke`` preset at SH-4 with ``--budget``, a few seconds; its criteria are printed, not enforced).
+[--correlated reference|own|off] [--prior-std 0] [--draws 5] [--tiny]``
+(``--tiny``: the ``smoke`` preset at SH-4 with ``--budget`` and at most 2 draws, a few seconds; its criteria are printed,
+not enforced).
 """
 
 from __future__ import annotations
