@@ -3,16 +3,12 @@
 from __future__ import annotations
 
 import os
-from dataclasses import replace
 
 import numpy as np
 import pandas as pd
 import pytest
 
-from rplearn.analysis.manoeuvres import ManoeuvreOptions, prior_penalty_weight, rank_manoeuvres
-from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.errors import InputError
-from rplearn.models.spec import ModelSpec
 from rplearn.workflows.calibration_plan import OptimizeOptions, optimize_plan
 
 SMALL = dict(model="sh-5", target_spread_db=2.5, budget_s=150.0, noise_std_db=4.0, prior_std_db=4.0)
@@ -68,15 +64,5 @@ def test_a_drifting_error_counts_a_manoeuvre_for_less(tmp_path):
     white = optimize_plan(str(tmp_path / "white"), OptimizeOptions(**SMALL))
     drift = optimize_plan(str(tmp_path / "drift"), OptimizeOptions(**SMALL, drift_std_db=0.8))
     assert drift.start_spread_db == white.start_spread_db  # before any flight nothing drifted
-    # the white plan's first manoeuvre scored from the same start under both (the plans' own
-    # first choices may differ: the drift changes which manoeuvre is best)
-    spec = ModelSpec.parse(SMALL["model"])
-    weight = prior_penalty_weight(spec.basis(), SMALL["prior_std_db"], SMALL["noise_std_db"], spec.ridge_weight)
-    base = ManoeuvreOptions(noise_std_db=SMALL["noise_std_db"], packet_rate_hz=80.0, penalty_weight=weight)
-    poses = {"A": ((-5.0, 0.0, 20.0), 0.0), "B": ((5.0, 0.0, 20.0), 0.0)}
-    empty = NormalEquations(spec.basis(), 2)
-    first = white.steps[0].manoeuvre.candidate
-    [w] = [r for r in rank_manoeuvres(empty, spec, ["A", "B"], poses, base) if r.candidate == first]
-    [d] = [r for r in rank_manoeuvres(empty, spec, ["A", "B"], poses, replace(base, correlated_std_db=0.8)) if r.candidate == first]
-    assert w.spread_after_db == pytest.approx(white.steps[0].spread_db, rel=1e-9)  # the plan's own figures
-    assert all(d.spread_after_db[n] > w.spread_after_db[n] for n in white.start_spread_db)
+    assert drift.steps[0].manoeuvre.name == white.steps[0].manoeuvre.name
+    assert all(drift.steps[0].spread_db[n] > white.steps[0].spread_db[n] for n in white.start_spread_db)

@@ -290,11 +290,6 @@ class CandidateOptions:
     ----------
     elevations_deg : tuple of float
         Elevations seen from the anchor for climbs and orbits [deg] (the current one is added).
-        The default reaches +-85 deg: with +-75 deg as the last, the caps around both poles of
-        each node's sphere (the peer straight above or below) were seen by no candidate but the
-        library's units, and on the simulator's two-drone flights the greedy plan spent its last
-        third on them (``benchmarks/manoeuvres.py``: predicted time to 2 dB over seeds 0-2 from
-        0.80/0.59/0.63 to 0.71/0.45/0.59 of the paper trajectory's).
     fixed_nodes : tuple of str
         Nodes that cannot move (a ground station); the others are drones.
     speed_m_s, accel_m_s2, yaw_rate_deg_s : float
@@ -323,7 +318,7 @@ class CandidateOptions:
         teach the wrong directions); nodes already nearer may stay as near; 0: no limit.
     """
 
-    elevations_deg: tuple[float, ...] = (-85.0, -75.0, -60.0, -45.0, -30.0, -15.0, 0.0, 15.0, 30.0, 45.0, 60.0, 75.0, 85.0)
+    elevations_deg: tuple[float, ...] = (-75.0, -60.0, -45.0, -30.0, -15.0, 0.0, 15.0, 30.0, 45.0, 60.0, 75.0)
     fixed_nodes: tuple[str, ...] = ()
     speed_m_s: float = 1.5
     accel_m_s2: float = 1.0
