@@ -84,6 +84,29 @@ good as the reference). It is a test of "not shown worse", whose power grows wit
 5 draws and a per-draw spread of 0.1-0.25 dB the tolerance is 0.15-0.35 dB. The single-draw
 figures and the old check (+0.05 dB) are still printed beside it.
 
+Measured (seeds 0-2, one thread, 5 draws): the expected-error check passes 11 of 12 cells (the
+single-draw check 3); plan minus reference, paper +0.14/+0.19, -0.10/+0.26, -0.38/-0.10 dB
+(suggested/optimized per seed), ground +0.24/+0.14, -0.13/+0.04, -0.03/-0.21 dB: no systematic
+excess; the one miss, ground seed 0 suggested, +0.24 dB against 0.18. The time criterion fails
+6 of 12 (paper 0.60-0.74x; ground seed 0 suggested 0.68x), so 6 of 12 cells meet both.
+
+**Why the time is missed** (the planner's own predicted spread over the commanded geometry,
+paper seed 0; not enforced): the 2-dB target lies near the floor the spread approaches (the
+reference flight's predicted spread is 1.67 dB after 740 s, 1.51 without the drifting error), so the greedy plan
+takes 110 s to 2.45 dB and 90 s more to 2.0 dB; the variance left then sits in the caps around
+each node's poles (the peer straight above or below: 3.5 dB RMS at -90..-60 deg against 1.7 dB
+at 0..30 deg). Not the transit (none for manoeuvres from where the drone is, a few seconds
+for the library's units), not the
+candidates' distances or revisits (the same plan), not myopia (a two-step lookahead over the
+top 4 gave 0.86x predicted against 0.80x). Orbits and climbs to +-85 deg cut the predicted
+ratio on seeds 0/1/2 from 0.80/0.59/0.63 to 0.71/0.45/0.59, but flown they gave 0.61/0.62,
+0.62/0.64, 0.67/0.70 (was 0.72/0.74, 0.60/0.62, 0.62/0.67): no default changed on that.
+Counting, on top, only the time until a manoeuvre reaches the target (the flight stops there)
+was as mixed (paper 0.59/0.65, 0.62/0.64, 0.66/0.66; ground seed 1 suggested 0.56x -> 0.63x).
+The prediction itself is far off for some flown flights (paper seed 1: the reference's
+predicted 2-dB time 572 s, flown 326 s; the cause, e.g. the tilt in the wind or the pose
+errors widening the directions seen, is not measured).
+
 Criteria per preset and seed: time to 2 dB of suggested and of optimized <= 60 % of the
 reference's, and their expected worst per-node pattern error no worse than the reference's as
 above (``--draws 0``: the single-draw check with +0.05 dB, as before).
