@@ -527,6 +527,7 @@ def main(argv: list[str] | None = None) -> int:
     seeds = [int(v) for v in args.seeds.split(",") if v.strip()] or [args.seed]
     failures = 0
     rows: list[str] = []
+    diffs: dict[tuple[str, str], list[tuple[float, float]]] = {}
     for preset, seed in ((p, s) for p in presets for s in seeds):
         t0 = time.perf_counter()
         ref_total = _config(preset).campaign.with_role("learning")
@@ -555,6 +556,8 @@ def main(argv: list[str] | None = None) -> int:
             ok_time = f.reached_s is not None and ref.reached_s is not None and f.reached_s <= TIME_RATIO * ref.reached_s
             ok_one = bool(f.error_db) and bool(ref.error_db) and max(f.error_db.values()) <= max(ref.error_db.values()) + 0.05
             ok_err, diff, tol = expected_no_worse(f, ref)
+            if np.isfinite(diff) and np.isfinite(tol):
+                diffs.setdefault((preset, name), []).append((diff, tol / ERROR_SE))
             judged = ok_err if draws > 0 else ok_one
             print(f"  {name}: time [{'ok' if ok_time else 'MISS'}] error [{'ok' if judged else 'MISS'}] "
                   f"(expected: {diff:+.2f} dB against a tolerance of {tol:.2f} = {ERROR_SE:g} s.e.; single draw "
@@ -573,6 +576,10 @@ def main(argv: list[str] | None = None) -> int:
         print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
         print("\n".join(rows))
         print(f"{sum(r.endswith('ok / ok |') for r in rows)} of {len(rows)} cells meet both criteria")
+        for (preset, name), v in diffs.items():  # the cells' differences pooled (independent draws: s.e. adds in quadrature)
+            d, se = np.array(v).T
+            print(f"{preset} {name}: expected error minus the reference's over {d.size} seeds {d.mean():+.2f} +- "
+                  f"{np.sqrt(np.sum(se**2)) / d.size:.2f} dB (s.e.)")
     return 1 if failures else 0
 
 
