@@ -70,7 +70,8 @@ flight time, and its pattern error at its 2-dB point is a random variable of the
 wind and pose errors it meets, not of the plan. Each flight's plan as flown (the reference's
 units; the suggested flight's start and manoeuvres; the optimized plan's units; each with its
 lead time) is therefore flown again ``N`` times under independent draws (seeds
-``seed * 1000 + k + 100000 * draw``, never the first draw's), and each draw's statistics are cut
+``seed * 1000 + 300 * plan + k + 100000 * draw``, never the first draw's, and never two plans'
+alike: the suggested flight's start is the reference's first unit), and each draw's statistics are cut
 at the flight time at which the first draw reached 2 dB (the spread depends on the directions
 flown, not on the noise: the draws' largest spread there is printed and stays within about
 +-0.15 dB of 2). The first draw is left out of the mean: the suggested flight's choices and every
@@ -162,8 +163,10 @@ DRAWS = 5
 #: "No worse" in expectation: the plan's mean worst error at most the reference's plus this many
 #: standard errors of the difference of the two means.
 ERROR_SE = 2.0
-#: Seed step between draws (a draw's flights are seeded ``seed * 1000 + k + DRAW_SEED * draw``).
+#: Seed step between draws (a draw's flights are seeded ``seed * 1000 + PLAN_SEED * plan + k + DRAW_SEED * draw``).
 DRAW_SEED = 100_000
+#: Seed step between the plans of a draw (a plan flies fewer units than this).
+PLAN_SEED = 300
 FIXED = {"ground": ("G",)}
 
 
@@ -456,20 +459,22 @@ def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, 
         opt.plan.append(((unit,), step.manoeuvre.candidate.lead_s, None))
         accumulate(setup, opt, parts, lead_s=step.manoeuvre.candidate.lead_s)
     flights = {"reference": ref, "suggested": sug, "optimized": opt}
-    for f in flights.values():
+    for k, f in enumerate(flights.values()):
         for draw in range(1, draws + 1):
-            replay(setup, f, draw)
+            replay(setup, f, draw, PLAN_SEED * k)
     return flights
 
 
-def replay(setup: Setup, flight: Flight, draw: int) -> None:
+def replay(setup: Setup, flight: Flight, draw: int, offset: int = 0) -> None:
     """Fly ``flight``'s plan again (the same commanded units, leads and cuts) under independent
-    noise, fading, wind and pose errors (draw ``draw``), up to the flight time at which the first
-    draw reached the target spread; its worst per-node error there joins ``flight.draws_db``."""
+    noise, fading, wind and pose errors (draw ``draw``; its flights seeded from ``offset``, one
+    per plan, so that two plans flying the same unit first never share its noise), up to the
+    flight time at which the first draw reached the target spread; its worst per-node error
+    there joins ``flight.draws_db``."""
     if flight.reached_s is None:
         return
     flown, budget = setup.flown, setup.budget
-    setup.flown, setup.draw, setup.budget = 0, draw, False
+    setup.flown, setup.draw, setup.budget = offset, draw, False
     try:
         again = setup.flight(flight.name)
         for units, lead_s, until_s in flight.plan:
