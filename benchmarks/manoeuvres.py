@@ -45,7 +45,7 @@ error's pointing part 0.2-1.35 dB and the fading 0.1-0.7 dB; the realisation alo
 about 0.5 dB: two plans of the same length (paper seed 0, 154 s) gave 1.59 and 2.15 dB, the same
 suggested flight to within 1 s (paper seed 1, 229/230 s) 1.67 and 2.22 dB. A single flight's
 error against a 0.05-dB tolerance is therefore close to a coin flip even for a calibrated
-posterior. One BLAS thread is pinned (``RPLEARN_THREADS=1`` unless set) so that a run repeats
+posterior, which is why the check is made on the *expected* error (below). One BLAS thread is pinned (``RPLEARN_THREADS=1`` unless set) so that a run repeats
 figure for figure: with the load-dependent thread policy the ranking's near-ties fell
 differently between runs. At the point where each flight first reaches 2 dB it is
 recomputed through :func:`rplearn.models.own_posterior.own_pattern_posterior` (the fit's own
@@ -65,12 +65,59 @@ size, like the noise, from the complete reference flight
 flight's own blocks so far, as ``rplearn live`` does; ``off`` is the white-noise posterior
 (the benchmark as it was).
 
-Criteria per preset: time to 2 dB of suggested and of optimized <= 60 % of the reference's, and
-their worst per-node pattern error <= the reference's (+0.05 dB of rounding).
+**The expected error** (``--draws N``, default 5): a flight plan is a commanded trajectory and a
+flight time, and its pattern error at its 2-dB point is a random variable of the noise, fading,
+wind and pose errors it meets, not of the plan. Each flight's plan as flown (the reference's
+units; the suggested flight's start and manoeuvres; the optimized plan's units; each with its
+lead time) is therefore flown again ``N`` times under independent draws (seeds
+``seed * 1000 + 300 * plan + k + 100000 * draw``, never the first draw's, and never two plans'
+alike: the suggested flight's start is the reference's first unit), and each draw's statistics are cut
+at the flight time at which the first draw reached 2 dB (the spread depends on the directions
+flown, not on the noise: the draws' largest spread there is printed and stays within about
++-0.15 dB of 2). The first draw is left out of the mean: the suggested flight's choices and every
+flight's stopping time were made from it, so it is not an independent draw of its plan. The
+plans' expected worst per-node errors are compared through the mean over the draws and its
+standard error ``s.e. = std / sqrt(N)``; the draws of different plans are independent, so the
+difference of two means has the standard error ``sqrt(se_plan^2 + se_ref^2)``, and "no worse"
+is ``mean_plan <= mean_ref + 2 * sqrt(se_plan^2 + se_ref^2)`` (:data:`ERROR_SE`): a plan fails
+when its draws show it worse at about the 2-sigma one-sided level (2.3 % for a plan exactly as
+good as the reference). It is a test of "not shown worse", whose power grows with ``N``: with
+5 draws and a per-draw spread of 0.1-0.25 dB the tolerance is 0.15-0.35 dB. The single-draw
+figures and the old check (+0.05 dB) are still printed beside it.
+
+Measured (seeds 0-2, one thread, 5 draws): the expected-error check passes 11 of 12 cells (the
+single-draw check 5); plan minus reference, paper +0.31/+0.35, -0.07/+0.26, -0.37/+0.20 dB
+(suggested/optimized per seed), ground +0.24/+0.32, -0.17/-0.04, -0.04/+0.02 dB; pooled over the
+seeds paper suggested -0.05 +- 0.09, optimized +0.27 +- 0.15, ground +0.01 +- 0.07 and
++0.10 +- 0.09 dB (s.e.): no excess shown, though the paper's optimized plan leans worse. The one
+miss, paper seed 0 suggested, +0.31 dB against 0.24. The time criterion fails 6 of 12 (paper
+0.60-0.74x, 5 of 6; ground seed 0 suggested 0.68x), so 6 of 12 cells meet both.
+
+**Why the time is missed** (the planner's own predicted spread over the commanded geometry,
+paper seed 0; not enforced): the 2-dB target lies near the floor the spread approaches (the
+reference flight's predicted spread is 1.67 dB after 740 s, 1.51 without the drifting error), so the greedy plan
+takes 110 s to 2.45 dB and 90 s more to 2.0 dB; the variance left then sits in the caps around
+each node's poles (the peer straight above or below: 3.5 dB RMS at -90..-60 deg against 1.7 dB
+at 0..30 deg). Not the transit (none for manoeuvres from where the drone is, a few seconds
+for the library's units), not the
+candidates' distances or revisits (the same plan), not myopia (a two-step lookahead over the
+top 4 gave 0.86x predicted against 0.80x). Orbits and climbs to +-85 deg cut the predicted
+ratio on seeds 0/1/2 from 0.80/0.59/0.63 to 0.71/0.45/0.59, but flown they gave 0.61/0.62,
+0.62/0.64, 0.67/0.70 (was 0.72/0.74, 0.60/0.62, 0.62/0.67): no default changed on that.
+Counting, on top, only the time until a manoeuvre reaches the target (the flight stops there)
+was as mixed (paper 0.59/0.65, 0.62/0.64, 0.66/0.66; ground seed 1 suggested 0.56x -> 0.63x).
+The prediction itself is far off for some flown flights (paper seed 1: the reference's
+predicted 2-dB time 572 s, flown 326 s; the cause, e.g. the tilt in the wind or the pose
+errors widening the directions seen, is not measured).
+
+Criteria per preset and seed: time to 2 dB of suggested and of optimized <= 60 % of the
+reference's, and their expected worst per-node pattern error no worse than the reference's as
+above (``--draws 0``: the single-draw check with +0.05 dB, as before).
 
 Usage: ``python benchmarks/manoeuvres.py [--presets paper,ground] [--seeds 0,1,2] [--posterior honest|inflated]
-[--correlated reference|own|off] [--prior-std 0] [--tiny]``
-(``--tiny``: the ``smoke`` preset at SH-4 with ``--budget``, a few seconds; its criteria are printed, not enforced).
+[--correlated reference|own|off] [--prior-std 0] [--draws 5] [--tiny]``
+(``--tiny``: the ``smoke`` preset at SH-4 with ``--budget`` and at most 2 draws, a few seconds; its criteria are printed,
+not enforced).
 """
 
 from __future__ import annotations
@@ -113,6 +160,15 @@ TIME_RATIO = 0.6
 STEP_S = 2.0
 START_S = 10.0
 PRIOR_STD_DB = 6.0
+#: Independent noise draws of every flight plan for the expected error (``--draws``).
+DRAWS = 5
+#: "No worse" in expectation: the plan's mean worst error at most the reference's plus this many
+#: standard errors of the difference of the two means.
+ERROR_SE = 2.0
+#: Seed step between draws (a draw's flights are seeded ``seed * 1000 + PLAN_SEED * plan + k + DRAW_SEED * draw``).
+DRAW_SEED = 100_000
+#: Seed step between the plans of a draw (a plan flies fewer units than this).
+PLAN_SEED = 300
 FIXED = {"ground": ("G",)}
 
 
@@ -133,6 +189,16 @@ class Flight:
     steps: list[str] = field(default_factory=list)
     adds: list[tuple[Any, np.ndarray]] = field(default_factory=list)
     budget_db: dict[str, tuple[float, float, float]] = field(default_factory=dict)
+    plan: list[tuple[tuple[Any, ...], float, float | None]] = field(default_factory=list)
+    draws_db: list[float] = field(default_factory=list)
+    draw_spreads_db: list[float] = field(default_factory=list)
+
+    def expected(self) -> tuple[float, float]:
+        """Mean worst per-node error over the independent draws and its standard error [dB]."""
+        v = np.asarray(self.draws_db, np.float64)
+        if v.size == 0:
+            return float("nan"), float("nan")
+        return float(v.mean()), (float(v.std(ddof=1) / np.sqrt(v.size)) if v.size > 1 else float("nan"))
 
 
 @dataclass
@@ -150,6 +216,7 @@ class Setup:
     block_s: float = DEFAULT_BLOCK_S
     budget: bool = False
     truths: dict[int, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
+    draw: int = 0
 
     def flight(self, name: str) -> Flight:
         basis = self.spec.basis()
@@ -166,7 +233,8 @@ def _config(preset: str) -> Any:
 def fly(setup: Setup, units: tuple[Any, ...]) -> tuple[list[Any], Any]:
     """Simulate units one after the other; per unit its samples with their time in it, and the pose log."""
     setup.flown += 1
-    sim = simulate(replace(setup.config, campaign=Campaign(units, gap_s=10.0)), seed=setup.seed * 1000 + setup.flown)
+    seed = setup.seed * 1000 + setup.flown + DRAW_SEED * setup.draw
+    sim = simulate(replace(setup.config, campaign=Campaign(units, gap_s=10.0)), seed=seed)
     setup.truth = sim.ground_truth
     ds = synchronise(sim.pose_log, sim.signal_log, SyncOptions()).dataset
     starts = dict(zip([u.label for u in units], sim.config.campaign.start_times_s()))
@@ -246,8 +314,9 @@ def _fit_error(setup: Setup, flight: Flight) -> None:
 
 
 def accumulate(setup: Setup, flight: Flight, parts: list[Any], lead_s: float = 0.0, until_s: float | None = None,
-               stop: bool = True) -> None:
-    """Add each unit's samples in steps of STEP_S flight time; stop at the first 2 dB."""
+               stop: bool = True, cut_s: float | None = None) -> None:
+    """Add each unit's samples in steps of STEP_S flight time; stop at the first 2 dB (``cut_s``:
+    at that flight time instead, the spread then read once)."""
     flight.t_s += lead_s
     for samples, t_in, dur in parts:
         end = dur if until_s is None else min(dur, until_s)
@@ -266,6 +335,15 @@ def accumulate(setup: Setup, flight: Flight, parts: list[Any], lead_s: float = 0
                 if flight.cells is not None:
                     flight.cells.add(type(d)(d.az_tx[m], d.el_tx[m], d.az_rx[m], d.el_rx[m]), samples.tx_index[m],
                                      samples.rx_index[m])
+            if cut_s is not None:
+                if flight.t_s + b >= cut_s - 1e-9:
+                    flight.reached_s = flight.t_s + b
+                    flight.spread_db = pattern_spreads(flight.normal, setup.spec, setup.nodes, setup.options, flight.blocks,
+                                                       flight.cells)
+                    flight.error_db = pattern_errors_db(_fitted(setup, flight.normal), setup.truth, setup.options.targets or {},
+                                                        remove_constant=True)
+                    return
+                continue
             if stop is False:
                 continue
             spreads = pattern_spreads(flight.normal, setup.spec, setup.nodes, setup.options, flight.blocks, flight.cells)
@@ -329,7 +407,7 @@ def _reference_drift(setup: Setup, parts: list[Any]) -> float:
 
 def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, prior_std_db: float = PRIOR_STD_DB,
         correlated: str = "reference", block_s: float = DEFAULT_BLOCK_S, posterior: str = "inflated",
-        budget: bool = False) -> dict[str, Flight]:
+        budget: bool = False, draws: int = DRAWS) -> dict[str, Flight]:
     config = _config(preset)
     learning = config.campaign.with_role("learning").units
     nodes = tuple(sorted(config.node_antennas))
@@ -352,11 +430,13 @@ def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, 
         setup.options = opts = replace(opts, correlated_std_db=drift)
         print(f"  drifting error (from the reference flight's {block_s:g}-s blocks): {drift:.3f} dB per block")
     ref = setup.flight("reference")
+    ref.plan = [(tuple(learning), 0.0, None)]
     accumulate(setup, ref, ref_parts)
     # suggested: the reference's first START_S seconds, then the top-ranked manoeuvre, repeatedly
     sug = setup.flight("suggested")
     start_parts, poses = fly(setup, (learning[0],))
     accumulate(setup, sug, start_parts[:1], until_s=START_S)
+    sug.plan = [((learning[0],), 0.0, START_S)]
     poses = poses[poses["t"] <= START_S]
     k = 0
     while sug.reached_s is None and sug.t_s < limit_s:
@@ -365,6 +445,7 @@ def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, 
         unit = replace(best.candidate.unit, label=f"m{k:02d}")
         sug.steps.append(f"{best.name} ({best.duration_s:.0f} s)")
         parts, poses = fly(setup, (unit,))
+        sug.plan.append(((unit,), best.candidate.lead_s, None))
         accumulate(setup, sug, parts, lead_s=best.candidate.lead_s)
     # optimized: the greedy plan before the flight, from the reference's start poses
     first = learning[0].evaluate(np.array([0.0]))
@@ -375,9 +456,51 @@ def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, 
     for k, step in enumerate(plan):
         if opt.reached_s is not None:
             break
-        parts, _ = fly(setup, (replace(step.manoeuvre.candidate.unit, label=f"p{k:02d}"),))
+        unit = replace(step.manoeuvre.candidate.unit, label=f"p{k:02d}")
+        parts, _ = fly(setup, (unit,))
+        opt.plan.append(((unit,), step.manoeuvre.candidate.lead_s, None))
         accumulate(setup, opt, parts, lead_s=step.manoeuvre.candidate.lead_s)
-    return {"reference": ref, "suggested": sug, "optimized": opt}
+    flights = {"reference": ref, "suggested": sug, "optimized": opt}
+    for k, f in enumerate(flights.values()):
+        for draw in range(1, draws + 1):
+            replay(setup, f, draw, PLAN_SEED * k)
+    return flights
+
+
+def replay(setup: Setup, flight: Flight, draw: int, offset: int = 0) -> None:
+    """Fly ``flight``'s plan again (the same commanded units, leads and cuts) under independent
+    noise, fading, wind and pose errors (draw ``draw``; its flights seeded from ``offset``, one
+    per plan, so that two plans flying the same unit first never share its noise), up to the
+    flight time at which the first draw reached the target spread; its worst per-node error
+    there joins ``flight.draws_db``."""
+    if flight.reached_s is None:
+        return
+    flown, budget = setup.flown, setup.budget
+    setup.flown, setup.draw, setup.budget = offset, draw, False
+    try:
+        again = setup.flight(flight.name)
+        for units, lead_s, until_s in flight.plan:
+            if again.reached_s is not None:
+                break
+            parts, _ = fly(setup, units)
+            accumulate(setup, again, parts[:1] if until_s is not None else parts, lead_s=lead_s, until_s=until_s,
+                       cut_s=flight.reached_s)
+    finally:
+        setup.flown, setup.draw, setup.budget = flown, 0, budget
+    if again.error_db:
+        flight.draws_db.append(max(again.error_db.values()))
+        flight.draw_spreads_db.append(max(again.spread_db.values()))
+
+
+def expected_no_worse(flight: Flight, ref: Flight) -> tuple[bool, float, float]:
+    """Whether the plan's expected worst error is no worse than the reference's: the difference of
+    the two means over their independent draws, and the tolerance ``ERROR_SE`` standard errors of
+    that difference (``sqrt(se_plan^2 + se_ref^2)``)."""
+    (m, se), (mr, ser) = flight.expected(), ref.expected()
+    if not (np.isfinite(m) and np.isfinite(mr)):
+        return False, float("nan"), float("nan")
+    tol = ERROR_SE * float(np.hypot(se, ser)) if np.isfinite(se) and np.isfinite(ser) else 0.0
+    return bool(m - mr <= tol), m - mr, tol
 
 
 def _fmt(d: dict[str, float]) -> str:
@@ -401,19 +524,23 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--budget", action="store_true",
                     help="split each flight's pattern error at its 2-dB point into bias, pointing and fading (slower)")
     ap.add_argument("--block-s", type=float, default=DEFAULT_BLOCK_S, help="length of a time block of the drifting error [s]")
+    ap.add_argument("--draws", type=int, default=DRAWS,
+                    help="independent noise draws of each flight plan for the expected error (0: the single-draw check only)")
     ap.add_argument("--tiny", action="store_true", help="the smoke preset at SH-4 (seconds; criteria not enforced)")
     args = ap.parse_args(argv)
     presets = ["smoke"] if args.tiny else [p.strip() for p in args.presets.split(",") if p.strip()]
     order = 4 if args.tiny else args.order
+    draws = min(args.draws, 2) if args.tiny else args.draws
     seeds = [int(v) for v in args.seeds.split(",") if v.strip()] or [args.seed]
     failures = 0
     rows: list[str] = []
+    diffs: dict[tuple[str, str], list[tuple[float, float]]] = {}
     for preset, seed in ((p, s) for p in presets for s in seeds):
         t0 = time.perf_counter()
         ref_total = _config(preset).campaign.with_role("learning")
         limit = float(sum(u.duration_s for u in ref_total.units))
         flights = run(preset, order, seed, limit, args.power, args.prior_std, args.correlated, args.block_s, args.posterior,
-                      args.budget or args.tiny)
+                      args.budget or args.tiny, draws)
         ref = flights["reference"]
         print(f"{preset} (SH-{order}, seed {seed}, {time.perf_counter() - t0:.0f} s): time to {TARGET_DB:g} dB per-node spread")
         for f in flights.values():
@@ -426,21 +553,40 @@ def main(argv: list[str] | None = None) -> int:
                       + ", ".join(f"{n} {b:.2f}/{p:.2f}/{w:.2f}" for n, (b, p, w) in f.budget_db.items()) + "] dB")
             if f.steps:
                 print("    " + "; ".join(f.steps[:12]) + (" ..." if len(f.steps) > 12 else ""))
+            if f.draws_db:
+                mean, se = f.expected()
+                print(f"    {len(f.draws_db)} more draws of the same plan, cut at {f.reached_s:.0f} s: worst error "
+                      f"[{', '.join(f'{v:.2f}' for v in f.draws_db)}] dB, mean {mean:.2f} +- {se:.2f} (s.e.); their largest "
+                      f"spread [{', '.join(f'{v:.2f}' for v in f.draw_spreads_db)}] dB")
         for name in ("suggested", "optimized"):
             f = flights[name]
             ok_time = f.reached_s is not None and ref.reached_s is not None and f.reached_s <= TIME_RATIO * ref.reached_s
-            ok_err = bool(f.error_db) and bool(ref.error_db) and max(f.error_db.values()) <= max(ref.error_db.values()) + 0.05
-            print(f"  {name}: time [{'ok' if ok_time else 'MISS'}] error [{'ok' if ok_err else 'MISS'}]")
-            failures += 0 if (ok_time and ok_err) or args.tiny else 1
+            ok_one = bool(f.error_db) and bool(ref.error_db) and max(f.error_db.values()) <= max(ref.error_db.values()) + 0.05
+            ok_err, diff, tol = expected_no_worse(f, ref)
+            if np.isfinite(diff) and np.isfinite(tol):
+                diffs.setdefault((preset, name), []).append((diff, tol / ERROR_SE))
+            judged = ok_err if draws > 0 else ok_one
+            print(f"  {name}: time [{'ok' if ok_time else 'MISS'}] error [{'ok' if judged else 'MISS'}] "
+                  f"(expected: {diff:+.2f} dB against a tolerance of {tol:.2f} = {ERROR_SE:g} s.e.; single draw "
+                  f"[{'ok' if ok_one else 'MISS'}] at +0.05 dB)")
+            failures += 0 if (ok_time and judged) or args.tiny else 1
             when = "-" if f.reached_s is None or ref.reached_s is None else f"{f.reached_s:.0f} s ({f.reached_s / ref.reached_s:.2f}x)"
             worst = max(f.error_db.values()) if f.error_db else float("nan")
+            (m, se), (mr, ser) = f.expected(), ref.expected()
             rows.append(f"| {preset} | {seed} | {name} | {ref.reached_s or float('nan'):.0f} s | {when} | "
-                        f"{worst:.2f} | {max(ref.error_db.values()) if ref.error_db else float('nan'):.2f} | "
-                        f"{'ok' if ok_time else 'miss'} / {'ok' if ok_err else 'miss'} |")
+                        f"{worst:.2f} / {max(ref.error_db.values()) if ref.error_db else float('nan'):.2f} | "
+                        f"{m:.2f} +- {se:.2f} / {mr:.2f} +- {ser:.2f} | {diff:+.2f} (tol {tol:.2f}) | "
+                        f"{'ok' if ok_time else 'miss'} / {'ok' if judged else 'miss'} |")
     if len(rows) > 2:
-        print("\n| preset | seed | planner | reference | time to 2 dB | worst error [dB] | reference's [dB] | time / error |")
-        print("| --- | --- | --- | --- | --- | --- | --- | --- |")
+        print("\n| preset | seed | planner | reference | time to 2 dB | one draw: worst error / reference's [dB] | "
+              f"{draws} draws: mean +- s.e. / reference's [dB] | difference | time / error |")
+        print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
         print("\n".join(rows))
+        print(f"{sum(r.endswith('ok / ok |') for r in rows)} of {len(rows)} cells meet both criteria")
+        for (preset, name), v in diffs.items():  # the cells' differences pooled (independent draws: s.e. adds in quadrature)
+            d, se = np.array(v).T
+            print(f"{preset} {name}: expected error minus the reference's over {d.size} seeds {d.mean():+.2f} +- "
+                  f"{np.sqrt(np.sum(se**2)) / d.size:.2f} dB (s.e.)")
     return 1 if failures else 0
 
 

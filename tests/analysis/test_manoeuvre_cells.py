@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from rplearn.analysis.manoeuvre_cells import DirectionCells, cell_grid, cell_index, cell_sums
-from rplearn.analysis.manoeuvre_posterior import _Posterior
+from rplearn.analysis.manoeuvre_posterior import ManoeuvrePosterior
 from rplearn.analysis.manoeuvres import ManoeuvreOptions, pattern_spreads, target_metrics
 from rplearn.core.geometry import Directions
 from rplearn.core.lsq.normal_equations import NormalEquations
@@ -67,8 +67,8 @@ def test_the_misfit_term_is_a_monte_carlo_over_offsets_drawn_per_node_and_cell()
     grid = cell_grid(p)
     ends = ((tx, d.az_tx, d.el_tx), (rx, d.az_rx, d.el_rx))
     metrics = target_metrics(basis, NODES, ManoeuvreOptions())
-    post = _Posterior(a / noise_var, metrics, noise_var).with_misfit(misfit_var, cell_sums(x, ends, grid), grid)
-    white = _Posterior(a / noise_var, metrics, noise_var).spreads()
+    post = ManoeuvrePosterior(a / noise_var, metrics, noise_var).with_misfit(misfit_var, cell_sums(x, ends, grid), grid)
+    white = ManoeuvrePosterior(a / noise_var, metrics, noise_var).spreads()
     keys = [k * grid.shape[0] + cell_index(az, el, grid) for k, az, el in ends]
     draws = 4000
     beta = rng.standard_normal((draws, 2 * p)) * np.sqrt(noise_var / prior)
@@ -93,7 +93,7 @@ def test_a_manoeuvre_s_own_cells_update_is_the_posterior_formed_whole() -> None:
     noise_var, misfit_var, weight = 9.0, 0.6, 3.0
     metrics = target_metrics(basis, NODES, ManoeuvreOptions())
     a = x1.T @ x1 + np.eye(2 * p)
-    post = _Posterior(a / noise_var, metrics, noise_var).with_misfit(misfit_var, cell_sums(x1, e1, grid), grid)
+    post = ManoeuvrePosterior(a / noise_var, metrics, noise_var).with_misfit(misfit_var, cell_sums(x1, e1, grid), grid)
     v = np.hstack([cell_sums(x1, e1, grid), cell_sums(x2, e2, grid, weight)])  # the manoeuvre's cells taken as new
     inv = np.linalg.inv(a + weight * x2.T @ x2)
     cov = noise_var * inv + misfit_var * inv @ v @ v.T @ inv
@@ -117,10 +117,10 @@ def test_the_same_packets_in_one_cell_teach_less_than_spread_over_many() -> None
     spread = np.linspace(-2.5, 2.5, 5), np.linspace(-1.0, 1.0, 5)
     rows_many = _rows(Directions(spread[0], spread[1], spread[0], spread[1]), np.zeros(5, int), np.ones(5, int))
     past = cell_sums(x, ((tx, d.az_tx, d.el_tx), (rx, d.az_rx, d.el_rx)), grid)
-    base = _Posterior(a / 9.0, metrics, 9.0).with_misfit(1.0, past, grid)
+    base = ManoeuvrePosterior(a / 9.0, metrics, 9.0).with_misfit(1.0, past, grid)
     gain_one = base.spreads() - base.spreads_after(rows_one, 2.0, ((np.zeros(5, int), *one), (np.ones(5, int), *one)))
     gain_many = base.spreads() - base.spreads_after(rows_many, 2.0, ((np.zeros(5, int), *spread), (np.ones(5, int), *spread)))
-    white = _Posterior(a / 9.0, metrics, 9.0)
+    white = ManoeuvrePosterior(a / 9.0, metrics, 9.0)
     assert np.all(white.spreads_after(rows_one, 2.0) < white.spreads())  # white noise: repeated looks still teach
     assert np.all(gain_one < gain_many) and np.all(gain_many > 0)
 

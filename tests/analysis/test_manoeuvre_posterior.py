@@ -7,7 +7,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from rplearn.analysis.manoeuvre_posterior import _Posterior, psd_factor
+from rplearn.analysis.manoeuvre_posterior import ManoeuvrePosterior, psd_factor
 from rplearn.analysis.manoeuvres import ManoeuvreOptions, pattern_spreads, prior_penalty_weight, rank_manoeuvres, target_metrics
 from rplearn.core.geometry import Directions
 from rplearn.core.lsq.block_sums import BlockSums
@@ -45,7 +45,7 @@ def _direct(a, c, rows, weight, block_rows, sc2, metrics, p):
 def test_the_rank_k_update_with_drift_is_the_sandwich_formed_whole(n_rows: int) -> None:
     rng, p, metrics, a, c = _setup()
     sc2, weight, block_rows = 0.7, 2.5, 4
-    post = _Posterior(a / NOISE_VAR, metrics, NOISE_VAR).with_drift(sc2, c, block_rows)
+    post = ManoeuvrePosterior(a / NOISE_VAR, metrics, NOISE_VAR).with_drift(sc2, c, block_rows)
     inv = np.linalg.inv(a)
     now = NOISE_VAR * inv + sc2 * inv @ c @ inv
     assert np.allclose(post.spreads(), np.sqrt([np.sum(m * now[k * p:(k + 1) * p, k * p:(k + 1) * p])
@@ -65,8 +65,8 @@ def test_the_rank_k_update_with_drift_is_the_sandwich_formed_whole(n_rows: int) 
 def test_without_drift_the_posterior_is_the_white_one_to_the_bit() -> None:
     rng, p, metrics, a, c = _setup(1)
     rows = rng.standard_normal((9, 2 * p))
-    white = _Posterior(a / NOISE_VAR, metrics, NOISE_VAR)
-    off = _Posterior(a / NOISE_VAR, metrics, NOISE_VAR).with_drift(0.0, c, 4)
+    white = ManoeuvrePosterior(a / NOISE_VAR, metrics, NOISE_VAR)
+    off = ManoeuvrePosterior(a / NOISE_VAR, metrics, NOISE_VAR).with_drift(0.0, c, 4)
     assert np.array_equal(white.spreads_after(rows, 2.0), off.spreads_after(rows, 2.0))
     assert np.array_equal(white.spreads(), off.spreads())
 
@@ -75,9 +75,9 @@ def test_one_look_in_one_block_learns_less_than_the_same_looks_in_separate_block
     """The point of the drift: repeating a direction within one block does not average its error."""
     rng, p, metrics, a, c = _setup(2)
     rows = np.tile(rng.standard_normal((4, 2 * p)), (6, 1))  # four directions, six times each
-    one = _Posterior(a / NOISE_VAR, metrics, NOISE_VAR).with_drift(1.0, None, 24)  # all in one block
-    apart = _Posterior(a / NOISE_VAR, metrics, NOISE_VAR).with_drift(1.0, None, 4)  # each visit its own block
-    white = _Posterior(a / NOISE_VAR, metrics, NOISE_VAR)
+    one = ManoeuvrePosterior(a / NOISE_VAR, metrics, NOISE_VAR).with_drift(1.0, None, 24)  # all in one block
+    apart = ManoeuvrePosterior(a / NOISE_VAR, metrics, NOISE_VAR).with_drift(1.0, None, 4)  # each visit its own block
+    white = ManoeuvrePosterior(a / NOISE_VAR, metrics, NOISE_VAR)
     s_one, s_apart, s_white = (post.spreads_after(rows, 50.0) for post in (one, apart, white))
     assert np.all(s_one > s_apart) and np.all(s_apart > s_white)
 
@@ -132,14 +132,14 @@ def test_the_prior_excess_is_a_monte_carlo_over_truths_from_the_larger_prior_and
     prior = np.linspace(0.5, 3.0, 2 * p)
     a = x.T @ x + np.diag(prior)
     factor = 4.0
-    post = _Posterior(a / NOISE_VAR, metrics, NOISE_VAR).with_prior_excess(factor - 1.0, prior)
+    post = ManoeuvrePosterior(a / NOISE_VAR, metrics, NOISE_VAR).with_prior_excess(factor - 1.0, prior)
     draws = 6000
     beta = rng.standard_normal((draws, 2 * p)) * np.sqrt(factor * NOISE_VAR / prior)
     y = beta @ x.T + rng.standard_normal((draws, x.shape[0])) * np.sqrt(NOISE_VAR)
     err = np.linalg.solve(a, x.T @ y.T).T - beta
     mc = np.sqrt([np.mean(np.einsum("ij,jk,ik->i", err[:, k * p:(k + 1) * p], m, err[:, k * p:(k + 1) * p]))
                   for k, m in enumerate(metrics)])
-    assert np.all(post.spreads() > 1.3 * _Posterior(a / NOISE_VAR, metrics, NOISE_VAR).spreads())
+    assert np.all(post.spreads() > 1.3 * ManoeuvrePosterior(a / NOISE_VAR, metrics, NOISE_VAR).spreads())
     assert np.allclose(post.spreads(), mc, rtol=0.05)
     rows, weight = rng.standard_normal((50, 2 * p)), 1.5
     inv = np.linalg.inv(a + weight * rows.T @ rows)

@@ -8,16 +8,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from rplearn.analysis.manoeuvres import (
-    ManoeuvreOptions,
-    _Posterior,
-    greedy_plan,
-    manoeuvre_rows,
-    pattern_spreads,
-    prior_penalty_weight,
-    rank_manoeuvres,
-    target_metrics,
-)
+from rplearn.analysis.manoeuvre_posterior import ManoeuvrePosterior
+from rplearn.analysis.manoeuvres import ManoeuvreOptions, greedy_plan, manoeuvre_rows, pattern_spreads, prior_penalty_weight, rank_manoeuvres, target_metrics
 from rplearn.core.gauge import EQUAL_MEAN
 from rplearn.core.geometry import Directions
 from rplearn.core.lsq.normal_equations import NormalEquations
@@ -54,7 +46,7 @@ def test_woodbury_and_the_refactored_precision_agree():
     metrics = target_metrics(SPEC.basis(), NODES, _options())
     a = rng.standard_normal((3 * 2 * p, 2 * p))
     precision = a.T @ a / 16.0 + np.eye(2 * p)
-    post = _Posterior(precision, metrics, 16.0)
+    post = ManoeuvrePosterior(precision, metrics, 16.0)
     for k in (5, 3 * 2 * p):  # fewer rows than columns (Woodbury), more (one new factor)
         rows = rng.standard_normal((k, 2 * p))
         direct = np.linalg.inv(precision + 2.5 * rows.T @ rows / 16.0)

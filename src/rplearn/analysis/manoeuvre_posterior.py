@@ -16,7 +16,7 @@ Sigma_w' u_j`` with ``u_j = weight * sum of the block's rows``. Each node's spre
 
 The pattern misfit a fixed order cannot represent (:mod:`rplearn.analysis.manoeuvre_cells`:
 an offset per node and direction cell, of variance ``s_m^2``) enters the same factor: the
-flight's cells ``s_m A^-1 V`` (:meth:`_Posterior.with_misfit`), and a manoeuvre's own cells
+flight's cells ``s_m A^-1 V`` (:meth:`ManoeuvrePosterior.with_misfit`), and a manoeuvre's own cells
 (``weight`` times its rows summed per node and cell) appended like its time blocks.
 """
 
@@ -53,7 +53,7 @@ def psd_factor(matrix: np.ndarray, rtol: float = 1e-12) -> np.ndarray:
     return np.asarray(vectors[:, keep] * np.sqrt(values[keep]), np.float64)
 
 
-class _Posterior:
+class ManoeuvrePosterior:
     """The pattern posterior's covariance and the per-node spread read from it (module docstring).
 
     Parameters
@@ -77,7 +77,7 @@ class _Posterior:
         self.misfit_scale = 0.0
         self.grid: np.ndarray | None = None
 
-    def with_drift(self, correlated_var: float, cross: np.ndarray | None, block_rows: int) -> _Posterior:
+    def with_drift(self, correlated_var: float, cross: np.ndarray | None, block_rows: int) -> ManoeuvrePosterior:
         """Add the drifting error: block-offset variance ``s_c^2`` [dB^2], the blocks' ``C`` so
         far (None: none yet) and the feature rows per time block of a manoeuvre."""
         if correlated_var > 0:
@@ -89,7 +89,7 @@ class _Posterior:
                     self.drift = psd_factor(self.drift @ self.drift.T)
         return self
 
-    def with_prior_excess(self, excess: float, prior_diag: np.ndarray) -> _Posterior:
+    def with_prior_excess(self, excess: float, prior_diag: np.ndarray) -> ManoeuvrePosterior:
         """Add ``sigma^2 * excess * A^-1 P A^-1``: the prior's variance taken ``1 + excess`` times
         what the penalty ``P`` (diagonal, units of ``X^T X``) and the noise imply, the noise part
         left as it is (the fit keeps its penalty; the error it leaves where the data are thin is
@@ -101,7 +101,7 @@ class _Posterior:
                 self.drift = psd_factor(self.drift @ self.drift.T)
         return self
 
-    def with_misfit(self, misfit_var: float, cells: np.ndarray | None, grid: np.ndarray) -> _Posterior:
+    def with_misfit(self, misfit_var: float, cells: np.ndarray | None, grid: np.ndarray) -> ManoeuvrePosterior:
         """Add the misfit fixed per direction cell: its variance ``s_m^2`` [dB^2] per node and
         cell, the flight's cell sums ``V`` so far (None: none yet) and the cells' grid."""
         if misfit_var > 0:
@@ -193,3 +193,6 @@ class _Posterior:
                 v += float(np.sum((m @ g) * g))
             var.append(v)
         return np.sqrt(np.maximum(var, 0.0))
+
+
+__all__ = ["ManoeuvrePosterior", "psd_factor"]

@@ -44,7 +44,7 @@ import pandas as pd
 
 from rplearn._argtypes import check_types
 from rplearn.analysis.manoeuvre_cells import DirectionCells, cell_grid
-from rplearn.analysis.manoeuvre_posterior import _Posterior
+from rplearn.analysis.manoeuvre_posterior import ManoeuvrePosterior
 from rplearn.core.bases import fibonacci_grid_nodes
 from rplearn.core.basis_base import Basis
 from rplearn.core.geometry import attitude_from_thrust, link_directions, yaw_from_quat_wxyz
@@ -112,7 +112,7 @@ class ManoeuvreOptions:
         training summary) is one estimate. 0: none (the white and drifting posterior alone).
     prior_variance_factor : float
         The prior's variance over the one ``noise_std_db`` and the penalty imply
-        (:meth:`~rplearn.analysis.manoeuvre_posterior._Posterior.with_prior_excess`): the fit
+        (:meth:`~rplearn.analysis.manoeuvre_posterior.ManoeuvrePosterior.with_prior_excess`): the fit
         keeps its penalty, so where the data are thin its error is that of the larger prior,
         while the noise part stays at ``noise_std_db``. The variance inflation of
         ``fit --degree auto`` (its held-out error over what its posterior states) is one
@@ -331,13 +331,13 @@ def _check_nodes(normal: NormalEquations, nodes: Sequence[str]) -> None:
 
 
 def _start(normal: NormalEquations, spec: ModelSpec, nodes: Sequence[str], options: ManoeuvreOptions,
-           blocks: BlockSums | None = None, cells: DirectionCells | None = None) -> _Posterior:
+           blocks: BlockSums | None = None, cells: DirectionCells | None = None) -> ManoeuvrePosterior:
     _check_nodes(normal, nodes)
     pat = normal.n_pattern_columns
     gram = np.asarray(normal.gram, np.float64)[:pat, :pat]
     prior = prior_weights(spec, normal, options)
     precision = (gram + np.diag(prior)) / options.noise_std_db**2
-    post = _Posterior(precision, target_metrics(normal.basis, nodes, options), options.noise_std_db**2)
+    post = ManoeuvrePosterior(precision, target_metrics(normal.basis, nodes, options), options.noise_std_db**2)
     post = post.with_prior_excess(float(options.prior_variance_factor) - 1.0, prior)
     closed = None if blocks is None else blocks.closed()
     sc = options.correlated_std_db
@@ -364,9 +364,9 @@ def correlated_error_std_db(normal: NormalEquations, spec: ModelSpec, blocks: Bl
     return float(np.sqrt(kappa)) * opts.noise_std_db
 
 
-def _score(post: _Posterior, cand: Candidate, nodes: Sequence[str], basis: Basis,
+def _score(post: ManoeuvrePosterior, cand: Candidate, nodes: Sequence[str], basis: Basis,
            options: ManoeuvreOptions) -> tuple[RankedManoeuvre, tuple[np.ndarray, Any]]:
-    """The candidate's effect, and its feature rows (for :meth:`_Posterior.updated` if chosen)."""
+    """The candidate's effect, and its feature rows (for :meth:`ManoeuvrePosterior.updated` if chosen)."""
     before = post.spreads()
     rows, ends = _rows_and_ends(cand.unit, nodes, basis, options.sample_rate_hz)
     after = post.spreads_after(rows, _weight(options), ends)
@@ -495,7 +495,7 @@ def greedy_plan(
         return _greedy(_start(normal, spec, names, opts, blocks), state, names, normal.basis, (budget_s, target_spread_db), opts)
 
 
-def _greedy(post: _Posterior, state: dict[str, Any], names: list[str], basis: Basis, limits: tuple[float, float],
+def _greedy(post: ManoeuvrePosterior, state: dict[str, Any], names: list[str], basis: Basis, limits: tuple[float, float],
             opts: ManoeuvreOptions) -> tuple[PlanStep, ...]:
     budget_s, target_spread_db = limits
     steps: list[PlanStep] = []
