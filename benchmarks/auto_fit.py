@@ -15,13 +15,27 @@ and by process CPU time (steadier on a shared machine).
 
 Usage: ``python benchmarks/auto_fit.py [--repeats 5]``; ``--tiny``: the ``smoke`` preset, one
 repeat (the smoke test of tests/test_benchmarks.py).
+
+``--record FILE`` runs a fixed set of automatic fits (presets ``paper``, ``pathloss``, ``ground``,
+``campaign`` at seeds 0-2, ``ground`` with a reference prior, the three-node ``trio``) and stores
+what each chose: order and smoothing, the validation curve's points in the order evaluated, the
+tied points, the inflation and level spread, the gains and standard errors of every node on a
+fixed grid of directions, the own-pattern spreads. ``--compare A B`` prints the largest
+differences between two records and fails when a choice, a curve point's position or a tie
+differs, or a prediction moves by more than 1e-9 dB (run with ``RPLEARN_THREADS=1`` for
+bit-comparisons). ``--record FILE --tiny``: the ``smoke`` preset alone.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
+import sys
 import tempfile
 import time
+from typing import Any
+
+import numpy as np
 
 from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.data.sync import SyncOptions
@@ -40,11 +54,125 @@ def timed(fn) -> tuple[float, float]:
     return time.perf_counter() - t0, time.process_time() - c0
 
 
+#: The fits of ``--record``: (preset, seed, with a reference prior).
+RECORD_CASES: tuple[tuple[str, int, bool], ...] = (
+    *((p, s, False) for p in ("paper", "pathloss", "ground", "campaign") for s in (0, 1, 2)),
+    ("ground", 0, True), ("ground", 1, True), ("trio", 0, False))
+#: Largest difference ``--compare`` accepts in a gain, a standard error or a spread [dB].
+COMPARE_TOL_DB = 1e-9
+
+
+def record_case(preset: str, seed: int, with_prior: bool) -> dict[str, Any]:
+    """One automatic fit of a simulated flight and what it chose and predicts (``--record``)."""
+    from rplearn.core.bases import fibonacci_grid_nodes
+    from rplearn.io.reference import read_reference_pattern
+    from rplearn.models.options import FitOptions
+    from rplearn.models.reference import reference_model
+    from rplearn.sim import imperfect_reference
+
+    with tempfile.TemporaryDirectory() as d:
+        sim = simulate(preset, seed=seed, out_dir=f"{d}/f")
+        sync_logs([f"{d}/f/pose_log.parquet"], [f"{d}/f/signal_log.parquet"], f"{d}/m.parquet",
+                  sync_options=SyncOptions(rssi_scale="relative") if with_prior else None)
+        df = read_dataset(f"{d}/m.parquet")
+        nodes = sorted(set(df["tx"]) | set(df["rx"]))
+        options = None
+        if with_prior:
+            refs = {}
+            for n in nodes:
+                imperfect_reference(sim.ground_truth, n, 2.0, 10.0, seed=seed).to_csv(f"{d}/ref_{n}.csv", index=False)
+                refs[n] = read_reference_pattern(f"{d}/ref_{n}.csv")
+            prior = reference_model(refs)
+            options = FitOptions(auto=True, priors={n: prior for n in nodes})
+    learn, _ = split_units(df, None, None)
+    per_unit = {u: samples_of(df, [u], "d", nodes=nodes) for u in learn}
+    fitted, sel = fit_auto(per_unit, options=options)
+    model = fitted.model
+    az, el = fibonacci_grid_nodes(200)
+    out: dict[str, Any] = {
+        "order": int(sel.order), "smoothing": float(sel.smoothing), "rmse_db": float(sel.rmse_db),
+        "curve": [[int(p.order), float(p.smoothing), float(p.rmse_db)] for p in sel.curve],
+        "ties": [[int(o), float(s), float(k)] for o, s, k in sel.ties],
+        "inflation": float(sel.variance_inflation), "level_std_db": float(sel.flight_level_std_db),
+        "excess_db2": float(sel.held_out_excess_db2),
+        "gain_db": {n: model.evaluate(n, az, el).tolist() for n in model.nodes},
+        "std_db": {n: (None if model.covariance is None else model.standard_error(n, az, el).tolist())
+                   for n in model.nodes},
+        "prior_std_db": {str(k): float(v) for k, v in dict(model.training.prior_std_db or {}).items()},
+    }
+    own = fitted.own_posterior
+    if own is not None:
+        out["own_std"] = np.sqrt(np.clip(np.diag(own.covariance), 0.0, None)).tolist()
+    return out
+
+
+def record(path: str, tiny: bool) -> None:
+    """``--record``: every case of :data:`RECORD_CASES` (``smoke`` alone with ``tiny``) to ``path`` (JSON)."""
+    cases = (("smoke", 0, False),) if tiny else RECORD_CASES
+    out = {}
+    for preset, seed, with_prior in cases:
+        key = f"{preset}/{seed}{'/prior' if with_prior else ''}"
+        t0 = time.perf_counter()
+        out[key] = record_case(preset, seed, with_prior)
+        print(f"{key}: SH-{out[key]['order']} at {out[key]['smoothing']:.2e}, {len(out[key]['curve'])} points, "
+              f"{len(out[key]['ties'])} ties ({time.perf_counter() - t0:.1f} s)", flush=True)
+    with open(path, "w") as f:
+        json.dump(out, f)
+
+
+def _max_diff(a: Any, b: Any) -> float:
+    """Largest absolute difference between two nested lists/dicts of numbers (inf when shapes differ)."""
+    if isinstance(a, dict):
+        if set(a) != set(b):
+            return float("inf")
+        return max((_max_diff(a[k], b[k]) for k in a), default=0.0)
+    if a is None or b is None:
+        return 0.0 if a is b else float("inf")
+    x, y = np.asarray(a, np.float64), np.asarray(b, np.float64)
+    if x.shape != y.shape:
+        return float("inf")
+    return float(np.max(np.abs(x - y), initial=0.0))
+
+
+def compare(path_a: str, path_b: str) -> bool:
+    """``--compare``: print per case the largest differences; True when every choice is the same."""
+    with open(path_a) as f:
+        a = json.load(f)
+    with open(path_b) as f:
+        b = json.load(f)
+    ok = set(a) == set(b)
+    worst: dict[str, float] = {}
+    for key in sorted(set(a) & set(b)):
+        x, y = a[key], b[key]
+        same = (x["order"] == y["order"] and x["smoothing"] == y["smoothing"]
+                and [p[:2] for p in x["curve"]] == [p[:2] for p in y["curve"]]
+                and [t[:2] for t in x["ties"]] == [t[:2] for t in y["ties"]])
+        diffs = {field: _max_diff(x.get(field), y.get(field))
+                 for field in ("rmse_db", "curve", "ties", "inflation", "level_std_db", "excess_db2", "gain_db", "std_db",
+                               "prior_std_db", "own_std")}
+        for field, v in diffs.items():
+            worst[field] = max(worst.get(field, 0.0), v)
+        close = all(diffs[f] <= COMPARE_TOL_DB for f in ("gain_db", "std_db", "prior_std_db"))
+        ok = ok and same and close
+        print(f"{key}: {'same choices' if same else 'CHOICES DIFFER'}; max diff "
+              + ", ".join(f"{k} {v:.1e}" for k, v in diffs.items()))
+    print("largest over the cases: " + ", ".join(f"{k} {v:.1e}" for k, v in worst.items()))
+    print("OK" if ok else "DIFFERENT")
+    return ok
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--tiny", action="store_true", help="the smoke preset, one repeat (seconds)")
+    ap.add_argument("--record", metavar="FILE", help="record the choices and predictions of a fixed set of fits")
+    ap.add_argument("--compare", nargs=2, metavar=("A", "B"), help="compare two records")
     args = ap.parse_args()
+    if args.record:
+        record(args.record, args.tiny)
+        return
+    if args.compare:
+        sys.exit(0 if compare(*args.compare) else 1)
     preset = "smoke" if args.tiny else "paper"
     if args.tiny:
         args.repeats = 1

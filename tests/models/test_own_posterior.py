@@ -11,10 +11,15 @@ import pytest
 
 from rplearn.analysis.decoupling import covered_directions, decoupling_certificate
 from rplearn.analysis.pattern_error import pattern_errors_db
+from rplearn.core.gauge import Gauge
+from rplearn.core.lsq.normal_equations import NormalEquations
+from rplearn.core.lsq.penalty import nested_columns, penalty_scale
+from rplearn.core.threads import one_blas_thread
 from rplearn.data.sync import SyncOptions, synchronise
 from rplearn.data.tables import link_samples
 from rplearn.models import own_posterior
 from rplearn.models.auto import fit_auto
+from rplearn.models.spec import ModelSpec
 from rplearn.sim import simulate
 
 
@@ -175,3 +180,37 @@ def test_one_tied_point_leaves_the_own_posterior_as_it_is(ground):
     assert len(sel["ties"]) >= 2  # this flight's ties (the average is what fit reports)
     same = own_posterior.tied_own_posterior(own, None, fitted.model.nodes, None, sel["ties"][:1], 1.0, None)
     assert same is own
+
+
+def test_the_continued_posteriors_computed_beforehand_are_those_computed_here(ground):
+    """``continued_jobs`` (run beside the final solve) give the own posterior and its average over
+    the tied points to the last bit of those computed by the two functions themselves (one BLAS
+    thread everywhere: another count rounds differently)."""
+    _, units, fitted = ground
+    model = fitted.model
+    sel = model.training["selection"]
+    nodes = [str(n) for n in model.nodes]
+    big = ModelSpec("sh", 15).basis()
+    total = NormalEquations(big, len(nodes))
+    for s in units.values():
+        total.add(s.directions, s.tx_index, s.rx_index, s.joint_gain_db)
+    chosen = ModelSpec("sh", int(sel["order"])).basis()
+    idx = nested_columns(big, chosen, len(nodes))
+    prior = own_posterior.OwnPrior(float(sel["smoothing"]), penalty_scale(total.gram[np.ix_(idx, idx)], idx.size), 2.0,
+                                   1e-6, Gauge(), None)
+    ties = [tuple(t) for t in sel["ties"]]
+    assert len(ties) >= 2 and chosen != big
+    make = lambda k: ModelSpec("sh", k).basis()  # noqa: E731
+    own_first, jobs = own_posterior.continued_jobs(total, chosen, nodes, prior, ties, make)
+    assert own_first and len(jobs) == 1 + len(own_posterior.tied_groups(total, prior, ties, make))
+    with one_blas_thread():  # as beside the final solve, and as tied_own_posterior's workers
+        parts = [job() for job in jobs]
+        here = own_posterior.own_pattern_posterior(total, chosen, nodes, prior, 0.7, None)
+    given = own_posterior.own_pattern_posterior(total, chosen, nodes, prior, 0.7, None, lambda: parts[0])
+    assert here is not None and given is not None and np.array_equal(here.covariance, given.covariance)
+    tied_here = own_posterior.tied_own_posterior(here, total, nodes, prior, ties, 0.5, make)
+    tied_given = own_posterior.tied_own_posterior(given, total, nodes, prior, ties, 0.5, make, parts[1:])
+    assert tied_here is not here, np.max(np.abs(tied_here.covariance - tied_given.covariance))
+    assert np.array_equal(tied_here.covariance, tied_given.covariance), np.max(np.abs(tied_here.covariance - tied_given.covariance))
+    none_first, none_jobs = own_posterior.continued_jobs(total, big, nodes, prior, ties[:1], make)
+    assert not none_first and none_jobs == []  # the largest basis chosen, one point: nothing to continue

@@ -41,7 +41,7 @@ from rplearn.models.fit import FittedModel
 from rplearn.models.load import load_priors
 from rplearn.models.node_coverage import CoverageWork
 from rplearn.models.options import FitOptions
-from rplearn.models.own_posterior import OwnPrior, own_pattern_posterior, tied_own_posterior
+from rplearn.models.own_posterior import OwnPrior, continued_jobs, own_pattern_posterior, tied_own_posterior
 from rplearn.models.patterns import PatternSet
 from rplearn.models.spec import ModelSpec, check_model_size, default_ridge
 from rplearn.models.streamed import frequency_counts, weighted_median
@@ -481,78 +481,85 @@ def fit_from_statistics(
     sub_target = None
     if search_target is not None:
         sub_target = search_target[nested_columns(first.basis, chosen, len(nodes))]
-    sol = solve(normal, list(nodes), ridge=ridge, gauge=gauge, penalty=penalty, penalty_target=sub_target,
-                prior_level=prior_level)
-    inflation = float(choice.variance_inflation)
-    # the flights' levels: apart from the noise (the residual about each flight's own level)
-    # and added to the spread of a new flight's predictions (its level about the common one)
-    level_var = float(choice.flight_level_std_db) ** 2
-    within_var = sol.residual_variance_db2
-    if choice.method == "grouped-cv":
-        within_var = within_unit_noise_var(stats, normal, np.concatenate([sol.coef.ravel(), sol.shared_coef]),
-                                           sol.report.rank)
-    shares = np.array([st.n_samples for st in stats.values()], np.float64) / max(normal.n_samples, 1)
-    new_level_var = level_var * (1.0 + float(shares @ shares)) if level_var > 0 else 0.0
-    noise_var = within_var * inflation
-    rescale = within_var / sol.residual_variance_db2 if sol.residual_variance_db2 > 0 else 1.0
-    # the covariance's basis: the chosen one, or with the prior kept the largest (auto_prior)
-    model_basis, cov_normal, cov_penalty = chosen, normal, penalty
-    if keep:
-        model_basis, cov_normal = first.basis, plain_total
-        cov_penalty = penalty_vector(model_basis, len(nodes), choice.smoothing, scale, power)
-    spread = prior_std_db(model_basis, list(nodes), ridge + cov_penalty, noise_var, power)
-    spread_source = "implied by the cross-validated smoothing"
-    covariance = None if sol.covariance is None else sol.covariance * (rescale * inflation)
-    plain = normal if not keep else sub_statistics(plain_total, chosen)
-    cap = unseen_spread_cap_db(plain, chosen)
-    # without a prior the unseen spread is the measured gains' (not the smoothing's): the
-    # cross-validation chooses smoothing for prediction where the data are, which says nothing
-    # of the unseen sphere (``campaign``: 0.7 dB implied against 12 dB off where unseen)
-    wanted = {str(n): cap for n in nodes}
-    if target is not None and covariance is not None and prior is not None and set(map(str, prior)) >= set(map(str, nodes)):
-        if prior_spread_db is None:
-            # the misfit of the prior the model keeps: to the chosen order, or all of it (auto_prior)
-            misfit = (prior_misfit_var(plain_total, target, first.basis) if keep else
-                      prior_misfit_var(normal, target[nested_columns(first.basis, chosen, len(nodes))], chosen))
-            learned = float(np.sqrt(max(misfit - within_var - level_var, 0.0) / 2.0))  # two ends a sample
-            spread_source = "learned from the prior's misfit to the flight"
-            if any(learned < wanted[str(n)] for n in nodes):
-                spread_source = "implied by the cross-validated smoothing (larger than " + spread_source + ")"
-            # never below the smoothing's (capped) spread: a prior that fits where the flight
-            # looked is not thereby known to fit everywhere
-            wanted = {str(n): max(learned, wanted[str(n)]) for n in nodes}
-        else:
-            wanted = {str(n): float(prior_spread_db) for n in nodes}  # the user's tolerance, both ways
-            spread_source = "stated"
-    elif any(wanted[str(n)] < spread[str(n)] for n in nodes):
-        spread_source = "the spread of the measured gains (the smoothing implied more)"
-    elif any(wanted[str(n)] > spread[str(n)] for n in nodes):
-        spread_source = "the spread of the measured gains (the smoothing implied less)"
-    uncapped = covariance
-    factor = np.array([(spread[str(n)] / max(wanted[str(n)], 1e-9)) ** 2 for n in nodes])
-    if covariance is not None and (keep or np.any(np.abs(factor - 1.0) > 1e-9)):
-        # the same posterior, read with a prior of the wanted spread: the penalty per node
-        # scaled so that its implied prior spread is the wanted one (the mean is the CV's)
-        weights = (ridge + cov_penalty) * np.repeat(factor, model_basis.n_coef)
-        with one_blas_thread():  # scipy's LAPACK: no pool of its own left spinning beside numpy's
-            inverse = penalised_inverse(cov_normal, list(nodes), 0.0, gauge, weights)  # the covariance alone: no solve
-        if inverse is not None:
-            covariance = inverse * (within_var * inflation)
-        else:
-            wide = solve(cov_normal, list(nodes), ridge=0.0, gauge=gauge, penalty=weights,
-                         penalty_target=None if keep else sub_target, prior_level=prior_level)
-            covariance = wide.covariance * (within_var / wide.residual_variance_db2) * inflation
-        spread = prior_std_db(model_basis, list(nodes), weights, noise_var, power)
-    misfit_var = held_out_misfit_var(choice.held_out_excess_db2, uncapped, normal) if choice.method == "grouped-cv" else 0.0
-    if covariance is not None and misfit_var > 0:
-        pat = model_basis.n_coef * len(nodes)
-        covariance = covariance.copy()
-        covariance[:pat, :pat] += misfit_covariance(model_basis, len(nodes), misfit_var / 2.0)  # two ends a sample
     own_prior = OwnPrior(choice.smoothing, scale, power, ridge, gauge, target, prior_level)
+    own_first, jobs = continued_jobs(plain_total, chosen, list(map(str, nodes)), own_prior, choice.ties,
+                                     lambda k: ModelSpec(kind, k, ridge=ridge).basis())
+    # the own-pattern posteriors' inverses on the statistics' workers while this thread solves
+    # (one BLAS thread each, this thread's too): they do not depend on the final solve
+    with DEFAULT_RUNTIME.beside(jobs) as continued:
+        sol = solve(normal, list(nodes), ridge=ridge, gauge=gauge, penalty=penalty, penalty_target=sub_target,
+                    prior_level=prior_level)
+        inflation = float(choice.variance_inflation)
+        # the flights' levels: apart from the noise (the residual about each flight's own level)
+        # and added to the spread of a new flight's predictions (its level about the common one)
+        level_var = float(choice.flight_level_std_db) ** 2
+        within_var = sol.residual_variance_db2
+        if choice.method == "grouped-cv":
+            within_var = within_unit_noise_var(stats, normal, np.concatenate([sol.coef.ravel(), sol.shared_coef]),
+                                               sol.report.rank)
+        shares = np.array([st.n_samples for st in stats.values()], np.float64) / max(normal.n_samples, 1)
+        new_level_var = level_var * (1.0 + float(shares @ shares)) if level_var > 0 else 0.0
+        noise_var = within_var * inflation
+        rescale = within_var / sol.residual_variance_db2 if sol.residual_variance_db2 > 0 else 1.0
+        # the covariance's basis: the chosen one, or with the prior kept the largest (auto_prior)
+        model_basis, cov_normal, cov_penalty = chosen, normal, penalty
+        if keep:
+            model_basis, cov_normal = first.basis, plain_total
+            cov_penalty = penalty_vector(model_basis, len(nodes), choice.smoothing, scale, power)
+        spread = prior_std_db(model_basis, list(nodes), ridge + cov_penalty, noise_var, power)
+        spread_source = "implied by the cross-validated smoothing"
+        covariance = None if sol.covariance is None else sol.covariance * (rescale * inflation)
+        plain = normal if not keep else sub_statistics(plain_total, chosen)
+        cap = unseen_spread_cap_db(plain, chosen)
+        # without a prior the unseen spread is the measured gains' (not the smoothing's): the
+        # cross-validation chooses smoothing for prediction where the data are, which says nothing
+        # of the unseen sphere (``campaign``: 0.7 dB implied against 12 dB off where unseen)
+        wanted = {str(n): cap for n in nodes}
+        if target is not None and covariance is not None and prior is not None and set(map(str, prior)) >= set(map(str, nodes)):
+            if prior_spread_db is None:
+                # the misfit of the prior the model keeps: to the chosen order, or all of it (auto_prior)
+                misfit = (prior_misfit_var(plain_total, target, first.basis) if keep else
+                          prior_misfit_var(normal, target[nested_columns(first.basis, chosen, len(nodes))], chosen))
+                learned = float(np.sqrt(max(misfit - within_var - level_var, 0.0) / 2.0))  # two ends a sample
+                spread_source = "learned from the prior's misfit to the flight"
+                if any(learned < wanted[str(n)] for n in nodes):
+                    spread_source = "implied by the cross-validated smoothing (larger than " + spread_source + ")"
+                # never below the smoothing's (capped) spread: a prior that fits where the flight
+                # looked is not thereby known to fit everywhere
+                wanted = {str(n): max(learned, wanted[str(n)]) for n in nodes}
+            else:
+                wanted = {str(n): float(prior_spread_db) for n in nodes}  # the user's tolerance, both ways
+                spread_source = "stated"
+        elif any(wanted[str(n)] < spread[str(n)] for n in nodes):
+            spread_source = "the spread of the measured gains (the smoothing implied more)"
+        elif any(wanted[str(n)] > spread[str(n)] for n in nodes):
+            spread_source = "the spread of the measured gains (the smoothing implied less)"
+        uncapped = covariance
+        factor = np.array([(spread[str(n)] / max(wanted[str(n)], 1e-9)) ** 2 for n in nodes])
+        if covariance is not None and (keep or np.any(np.abs(factor - 1.0) > 1e-9)):
+            # the same posterior, read with a prior of the wanted spread: the penalty per node
+            # scaled so that its implied prior spread is the wanted one (the mean is the CV's)
+            weights = (ridge + cov_penalty) * np.repeat(factor, model_basis.n_coef)
+            with one_blas_thread():  # scipy's LAPACK: no pool of its own left spinning beside numpy's
+                inverse = penalised_inverse(cov_normal, list(nodes), 0.0, gauge, weights)  # the covariance alone: no solve
+            if inverse is not None:
+                covariance = inverse * (within_var * inflation)
+            else:
+                wide = solve(cov_normal, list(nodes), ridge=0.0, gauge=gauge, penalty=weights,
+                             penalty_target=None if keep else sub_target, prior_level=prior_level)
+                covariance = wide.covariance * (within_var / wide.residual_variance_db2) * inflation
+            spread = prior_std_db(model_basis, list(nodes), weights, noise_var, power)
+        misfit_var = held_out_misfit_var(choice.held_out_excess_db2, uncapped, normal) if choice.method == "grouped-cv" else 0.0
+        if covariance is not None and misfit_var > 0:
+            pat = model_basis.n_coef * len(nodes)
+            covariance = covariance.copy()
+            covariance[:pat, :pat] += misfit_covariance(model_basis, len(nodes), misfit_var / 2.0)  # two ends a sample
+        parts = continued()
     with one_blas_thread():
-        own = own_pattern_posterior(plain_total, chosen, list(map(str, nodes)), own_prior, noise_var, uncapped)
+        own = own_pattern_posterior(plain_total, chosen, list(map(str, nodes)), own_prior, noise_var, uncapped,
+                                    (lambda: parts[0]) if own_first else None)
     own = tied_own_posterior(own, plain_total, list(map(str, nodes)), own_prior, choice.ties, within_var,
-                             lambda k: ModelSpec(kind, k, ridge=ridge).basis())
+                             lambda k: ModelSpec(kind, k, ridge=ridge).basis(), parts[1:] if own_first else parts or None)
     ltd = time.perf_counter() - t0
     fields, terms = shared_fields(sol, list(nodes), options, counts, rescale * inflation)
     training = sol.report.to_dict()

@@ -56,6 +56,7 @@ joint residuals, 0.66 from the folds' per-node patterns, which push seed 0's D t
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable, Generator, Mapping, Sequence
 from dataclasses import dataclass, replace
 from typing import Any, cast
@@ -128,8 +129,14 @@ class OwnPrior:
     prior_level: str = "data"
 
 
+#: The noise-free part of a continued posterior (:func:`continued_parts`): the pattern block
+#: and the residual variance it is to be divided by (None: read it with the noise as it is).
+ContinuedParts = tuple[np.ndarray, float | None] | None
+
+
 def own_pattern_posterior(total: NormalEquations, chosen: Basis, nodes: Sequence[str], prior: OwnPrior,
-                          noise_var_db2: float, fallback: np.ndarray | None) -> OwnPosterior | None:
+                          noise_var_db2: float, fallback: np.ndarray | None,
+                          parts: Callable[[], ContinuedParts] | None = None) -> OwnPosterior | None:
     """The own-pattern posterior (module docstring).
 
     Parameters
@@ -145,6 +152,9 @@ def own_pattern_posterior(total: NormalEquations, chosen: Basis, nodes: Sequence
     fallback : ndarray or None
         The chosen fit's posterior covariance (uncapped), used when the largest basis is the
         chosen one or too large; None when the fit has no covariance.
+    parts : callable, optional
+        Gives :func:`continued_parts` of ``prior`` at ``total``'s basis, computed beforehand
+        (:func:`continued_jobs`: beside the final solve); by default computed here.
     """
     big = total.basis
     pat_big = big.n_coef * len(nodes)
@@ -155,33 +165,84 @@ def own_pattern_posterior(total: NormalEquations, chosen: Basis, nodes: Sequence
                                          f"{big.label}, above {MAX_OWN_COLUMNS}; a lower bound)")
         pat = chosen.n_coef * len(nodes)
         return OwnPosterior(chosen, np.asarray(fallback, np.float64)[:pat, :pat], note)
-    cov = _continued(total, nodes, prior, noise_var_db2)
+    cov = read_continued(continued_parts(total, nodes, prior) if parts is None else parts(), noise_var_db2)
     if cov is None:
         return None if fallback is None else OwnPosterior(chosen, np.asarray(fallback, np.float64)[:chosen.n_coef * len(nodes),
                                                                                                    :chosen.n_coef * len(nodes)])
     return OwnPosterior(big, cov)  # centred on the chosen pattern (module docstring)
 
 
-def _continued(total: NormalEquations, nodes: Sequence[str], prior: OwnPrior, noise_var_db2: float) -> np.ndarray | None:
-    """The pattern block of the posterior covariance of ``prior`` at ``total``'s basis, read
-    with the noise ``noise_var_db2`` (None when the solve gives none): the constrained inverse
-    of the penalised normal matrix (:func:`rplearn.core.lsq.solver.penalised_inverse`: one
-    Cholesky factor, no solve), or a whole solve when that matrix is not positive definite."""
+def continued_parts(total: NormalEquations, nodes: Sequence[str], prior: OwnPrior) -> ContinuedParts:
+    """The pattern block of the posterior covariance of ``prior`` at ``total``'s basis before it
+    is read with a noise (:func:`read_continued`; None when the solve gives none): the
+    constrained inverse of the penalised normal matrix
+    (:func:`rplearn.core.lsq.solver.penalised_inverse`: one Cholesky factor, no solve), or a
+    whole solve's covariance and residual variance when that matrix is not positive definite.
+    Independent of the noise and of the chosen fit's solve: any thread, beside that solve."""
     penalty = penalty_vector(total.basis, len(nodes), prior.smoothing, prior.scale, prior.power)
     pat = total.basis.n_coef * len(nodes)
     inverse = penalised_inverse(total, list(nodes), prior.ridge, prior.gauge, penalty)
     if inverse is not None:
-        return inverse[:pat, :pat] * noise_var_db2
+        return inverse[:pat, :pat], None
     wide = solve(total, list(nodes), ridge=prior.ridge, gauge=prior.gauge, penalty=penalty, penalty_target=prior.target,
                  prior_level=prior.prior_level)
     if wide.covariance is None or not wide.residual_variance_db2 > 0:
         return None
-    return np.asarray(wide.covariance, np.float64)[:pat, :pat] * (noise_var_db2 / wide.residual_variance_db2)
+    return np.asarray(wide.covariance, np.float64)[:pat, :pat], float(wide.residual_variance_db2)
+
+
+def read_continued(parts: ContinuedParts, noise_var_db2: float) -> np.ndarray | None:
+    """The continued posterior covariance (:func:`continued_parts`) read with the noise
+    ``noise_var_db2`` [dB^2] (None when there is none)."""
+    if parts is None:
+        return None
+    block, residual_var = parts
+    return block * noise_var_db2 if residual_var is None else block * (noise_var_db2 / residual_var)
+
+
+def tied_groups(total: NormalEquations, prior: OwnPrior, ties: Sequence[tuple[int, float, float]],
+                make_basis: Callable[[int], Basis]) -> list[tuple[OwnPrior, float]]:
+    """The tied points (:func:`tied_own_posterior`) grouped by their prior continued to
+    ``total``'s basis, each group with the sum of its points' variance inflations, in the order
+    of the points' first appearance.
+
+    Continued to the largest basis, a point's prior depends on its order only through the
+    penalty's unit (for spherical harmonics the same at every order: the addition theorem),
+    so points of one (smoothing, unit) share one solve.
+    """
+    groups: dict[tuple[float, float], tuple[OwnPrior, float]] = {}
+    diagonal = np.diag(total.gram)
+    for order, smoothing, inflation in ties:
+        # the penalty's unit at that order (penalty_scale of its sub-block, read off the diagonal)
+        d = diagonal[nested_columns(total.basis, make_basis(int(order)), total.n_nodes)]
+        point = replace(prior, smoothing=float(smoothing), scale=penalty_scale_of_diagonal(d))
+        key = (point.smoothing, point.scale)
+        groups[key] = (groups[key][0], groups[key][1] + float(inflation)) if key in groups else (point, float(inflation))
+    return list(groups.values())
+
+
+def continued_jobs(total: NormalEquations, chosen: Basis, nodes: Sequence[str], prior: OwnPrior,
+                   ties: Sequence[tuple[int, float, float]],
+                   make_basis: Callable[[int], Basis]) -> tuple[bool, list[Callable[[], ContinuedParts]]]:
+    """The heavy work of :func:`own_pattern_posterior` and :func:`tied_own_posterior`, as jobs
+    to run beside the chosen fit's final solve (they do not depend on it): whether the first
+    job is the chosen point's (the largest basis is not the chosen one), then one job per
+    group of :func:`tied_groups` (when there are two tied points or more). No job above
+    :data:`MAX_OWN_COLUMNS` pattern columns. A job's result is :func:`continued_parts`; the
+    two functions read them with their ``parts`` arguments."""
+    if total.basis.n_coef * len(nodes) > MAX_OWN_COLUMNS:
+        return False, []
+    own = total.basis != chosen
+    points = [prior] if own else []
+    if len(ties) >= 2:
+        points += [g for g, _ in tied_groups(total, prior, ties, make_basis)]
+    return own, [functools.partial(continued_parts, total, list(nodes), g) for g in points]
 
 
 def tied_own_posterior(own: OwnPosterior | None, total: NormalEquations, nodes: Sequence[str], prior: OwnPrior,
                        ties: Sequence[tuple[int, float, float]], within_var_db2: float,
-                       make_basis: Callable[[int], Basis]) -> OwnPosterior | None:
+                       make_basis: Callable[[int], Basis], parts: Sequence[ContinuedParts] | None = None,
+                       ) -> OwnPosterior | None:
     """The own-pattern posterior averaged over the points the cross-validation cannot tell
     apart (:attr:`rplearn.core.lsq.selection.Selection.ties`; :mod:`rplearn.core.lsq.ties`
     says why): the mean of their covariances, each the prior of that order and smoothing
@@ -204,26 +265,19 @@ def tied_own_posterior(own: OwnPosterior | None, total: NormalEquations, nodes: 
         The chosen fit's noise about each flight's level [dB^2] (before inflation).
     make_basis : callable
         ``make_basis(order)`` -> the basis of that order (nested in ``total``'s).
+    parts : sequence, optional
+        :func:`continued_parts` of each group of :func:`tied_groups`, computed beforehand
+        (:func:`continued_jobs`); by default computed here, on the statistics' workers.
     """
     if own is None or len(ties) < 2 or own.basis != total.basis or total.basis.n_coef * len(nodes) > MAX_OWN_COLUMNS:
         return own
-    # continued to the largest basis, a point's prior depends on its order only through the
-    # penalty's unit (for spherical harmonics the same at every order: the addition theorem),
-    # so points of one (smoothing, unit) share one solve, scaled by the sum of their inflations
-    groups: dict[tuple[float, float], tuple[OwnPrior, float]] = {}
-    diagonal = np.diag(total.gram)
-    for order, smoothing, inflation in ties:
-        # the penalty's unit at that order (penalty_scale of its sub-block, read off the diagonal)
-        d = diagonal[nested_columns(total.basis, make_basis(int(order)), total.n_nodes)]
-        point = replace(prior, smoothing=float(smoothing), scale=penalty_scale_of_diagonal(d))
-        key = (point.smoothing, point.scale)
-        groups[key] = (groups[key][0], groups[key][1] + float(inflation)) if key in groups else (point, float(inflation))
+    points = tied_groups(total, prior, ties, make_basis)
     total_cov: np.ndarray | None = None  # running sum: a few solves' matrices held at a time
-    points = list(groups.values())
     # on the statistics' workers, a few at a time (the runtime keeps at most its ``ahead`` pending);
     # closed here so that the pool is given back at once, also when a point has no posterior
     matrices = cast(Generator[np.ndarray | None, None, None],  # in_order is a generator
-                    DEFAULT_RUNTIME.in_order(lambda g: _continued(total, nodes, g[0], 1.0), points))
+                    (read_continued(p, 1.0) for p in parts) if parts is not None else
+                    DEFAULT_RUNTIME.in_order(lambda g: read_continued(continued_parts(total, nodes, g[0]), 1.0), points))
     try:
         for (_, inflations), cov in zip(points, matrices, strict=True):
             if cov is None:
@@ -236,4 +290,5 @@ def tied_own_posterior(own: OwnPosterior | None, total: NormalEquations, nodes: 
     return OwnPosterior(own.basis, total_cov / len(ties), own.note, own.mean)
 
 
-__all__ = ["MAX_OWN_COLUMNS", "OwnPosterior", "OwnPrior", "own_pattern_posterior", "tied_own_posterior"]
+__all__ = ["MAX_OWN_COLUMNS", "ContinuedParts", "OwnPosterior", "OwnPrior", "continued_jobs", "continued_parts",
+           "own_pattern_posterior", "read_continued", "tied_groups", "tied_own_posterior"]

@@ -140,3 +140,49 @@ def test_an_error_inside_the_block_settles_the_riding_jobs_and_a_jobs_error_reac
         list(runtime.in_order(lambda s: s, range(2)))
     with pytest.raises(KeyError, match="job"):
         riding.results()
+
+
+def test_jobs_beside_the_caller_run_on_the_workers_and_come_back_in_order():
+    """``beside``: the jobs run on the workers while the caller works; their results in the
+    jobs' order; an error of a job reaches the caller; the pool is free again afterwards."""
+    runtime = StatisticsRuntime()
+    where: list[str] = []
+
+    def job(k: int):
+        def run() -> int:
+            where.append(threading.current_thread().name)
+            return k * k
+        return run
+
+    with runtime.beside([job(k) for k in range(5)]) as results:
+        mine = sum(range(100))  # the caller's own work meanwhile
+        assert results() == [0, 1, 4, 9, 16]
+        assert results() == [0, 1, 4, 9, 16]  # asked again: the same, not run again
+    assert mine == 4950 and len(where) == 5
+    assert all(name.startswith("rplearn-stats") for name in where)
+
+    def fails() -> int:
+        raise ValueError("job 1")
+
+    with pytest.raises(ValueError, match="job 1"), runtime.beside([job(0), fails]) as results:
+        results()
+    assert list(runtime.in_order(lambda s: s + 1, range(3))) == [1, 2, 3]  # the pool is free again
+
+
+def test_jobs_beside_a_busy_pool_run_in_the_caller_when_asked_and_once():
+    runtime = StatisticsRuntime()
+    runs: list[str] = []
+
+    def job() -> int:
+        runs.append(threading.current_thread().name)
+        return 7
+
+    outer = runtime.in_order(lambda s: s, range(4))
+    assert next(outer) == 0  # the pool is held by this generator
+    with runtime.beside([job, job]) as results:
+        assert runs == []  # nothing runs before it is asked for
+        assert results() == [7, 7] and results() == [7, 7]
+    assert runs == [threading.current_thread().name] * 2
+    assert list(outer) == [1, 2, 3]
+    with runtime.beside([]) as results:  # no job: nothing to hold the pool for
+        assert results() == []

@@ -272,3 +272,32 @@ def test_a_fold_solved_in_the_calling_thread_is_solved_with_one_blas_thread(monk
     assert [(p.order, p.smoothing, p.rmse_db) for p in here.curve] == [(p.order, p.smoothing, p.rmse_db) for p in on_workers.curve]
     assert (here.order, here.smoothing, here.variance_inflation, here.ties) == (
         on_workers.order, on_workers.smoothing, on_workers.variance_inflation, on_workers.ties)
+
+
+def test_fold_blocks_built_on_the_workers_and_kept_give_the_same_search(monkeypatch):
+    """The fold blocks of every order the search asks for are built on the workers at once and
+    kept within ``_CACHE_BYTES``; with room for only ``_CACHED_ORDERS`` orders (built again as
+    the search comes back) the search is the same to the last bit: the same copies."""
+    from rplearn.core.lsq import selection as selection_module
+
+    monkeypatch.setenv("RPLEARN_THREADS", "1")
+    units = stats_of(synthetic_units(n_units=3, n_per_unit=700, truth_order=4, seed=11), SphericalHarmonics(8))
+    built: list[tuple[int, int]] = []
+    original = selection_module._Evaluator._fold_block
+
+    def counted(self, order, fold):
+        built.append((order, fold))
+        return original(self, order, fold)
+
+    monkeypatch.setattr(selection_module._Evaluator, "_fold_block", counted)
+    kept = select_order_and_smoothing(units, SphericalHarmonics, range(2, 9), RIDGE)
+    assert len(built) == len(set(built))  # every (order, fold) built once
+    once = len(built)
+    built.clear()
+    monkeypatch.setattr(selection_module, "_CACHE_BYTES", 0)
+    bounded = select_order_and_smoothing(units, SphericalHarmonics, range(2, 9), RIDGE)
+    assert len(built) > once  # orders dropped and built again
+    assert [(p.order, p.smoothing, p.rmse_db) for p in kept.curve] == [(p.order, p.smoothing, p.rmse_db) for p in bounded.curve]
+    assert (kept.order, kept.smoothing, kept.variance_inflation) == (bounded.order, bounded.smoothing,
+                                                                     bounded.variance_inflation)
+    assert kept.ties == bounded.ties

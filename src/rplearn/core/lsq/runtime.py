@@ -159,6 +159,53 @@ class StatisticsRuntime:
         if riders is not None and not riders.started:
             riders.start(pool)
 
+    @contextmanager
+    def beside(self, jobs: Sequence[Callable[[], T]]) -> Iterator[Callable[[], list[T]]]:
+        """Run ``jobs`` (callables without arguments) on the workers while the caller goes on
+        with its own work inside the block; the callable yielded gives their results, in the
+        jobs' order (waiting for them; an error of a job is raised there).
+
+        The workers and the caller each have one BLAS thread inside the block (the limit is
+        process-wide: a 2-core machine runs the caller's work and a job at once, one core
+        each). When the pool is busy (another caller has it) or there is no job, the jobs run
+        in the calling thread when their results are asked for, with the threads as they are.
+        On leaving the block (an error included) the jobs not started are cancelled and the
+        running ones waited for.
+        """
+        jobs = list(jobs)
+        lock = self._lock
+        if not jobs or not lock.acquire(blocking=False):
+            done: list[list[T]] = []
+
+            def compute() -> list[T]:
+                if not done:
+                    done.append([job() for job in jobs])
+                return done[0]
+
+            yield compute
+            return
+        from rplearn.core.threads import one_blas_thread
+
+        futures: list[Future[T]] = []
+        try:
+            if self._pool is None:
+                self._pool = ThreadPoolExecutor(max_workers=self.workers, thread_name_prefix="rplearn-stats")
+            with one_blas_thread():
+                futures = [self._pool.submit(job) for job in jobs]
+                try:
+                    yield lambda: [f.result() for f in futures]
+                finally:
+                    for future in futures:
+                        future.cancel()
+                    for future in futures:
+                        if not future.cancelled():
+                            try:
+                                future.result()  # let a running job finish before the limit is lifted
+                            except Exception:  # noqa: BLE001, S110  (the caller's error, or its own, was raised)
+                                pass
+        finally:
+            lock.release()
+
     def in_order(self, work: Callable[[Any], T], starts: Iterable[Any]) -> Iterator[T]:
         """``work(s)`` for every block start ``s``, yielded in order.
 

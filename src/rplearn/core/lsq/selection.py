@@ -51,6 +51,7 @@ about 6 of them per held-out unit, against 12-14 for a full grid at the largest 
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
@@ -76,14 +77,23 @@ MAX_SMOOTHING = 1e6
 #: Weight of the (unpenalised) constant in the cross-validation solves, relative to the
 #: roughness of degree 1: keeps them positive definite; moves only the free gauge constant.
 _CONSTANT_FLOOR = 1e-6
-#: Orders whose fold blocks are kept at once (the coordinate descent moves between neighbours).
+#: Orders whose fold blocks are kept at least (the coordinate descent moves between neighbours).
 _CACHED_ORDERS = 3
+#: Bytes of fold blocks past which only :data:`_CACHED_ORDERS` orders are kept (the paper's
+#: two nodes up to SH-15: 47 MB for every order; the search comes back to most of them).
+_CACHE_BYTES = 96 * 2**20
 #: Bytes of Cholesky factors a batch of points solved at once keeps for :meth:`_Evaluator.spread`
 #: (a swarm's factors are large: past this only the solutions are kept, and the best point's
 #: inflation solves again).
 _PENDING_FACTOR_BYTES = 128 * 2**20
 #: Stands for a factor not kept.
 _DROPPED = np.empty((0, 0))
+
+
+def _cache_bytes(cache: Mapping[int, Any]) -> int:
+    """Bytes held by the cached fold blocks of :class:`_Evaluator` (views of the folds' own
+    matrices, the largest order's, counted too: a bound, not a census)."""
+    return sum(sum(a.nbytes for a in block) for _, blocks, _, _ in cache.values() for block in blocks)
 
 
 class _Evaluator:
@@ -98,7 +108,9 @@ class _Evaluator:
         if any(u.shared != first.shared for u in units.values()):
             raise InputError("the units' statistics have different shared columns; append them with one link list",
                              param="units")
-        self.make_basis, self.ridge, self.power = make_basis, float(ridge), float(power)
+        # each order's basis built once (the search asks for it at every point; a basis is immutable)
+        self.make_basis = functools.lru_cache(maxsize=None)(make_basis)
+        self.ridge, self.power = float(ridge), float(power)
         self.folds, self.gram, self.rhs, self.yty, self.n = unit_folds(units)
         self.sums = [u.column_sums() for u in units.values()]
         if target is not None:
@@ -174,21 +186,51 @@ class _Evaluator:
                                            list[np.ndarray], list[float]]:
         """Roughness weights and, per fold, the learning and held-out blocks of one order, the
         target its fit shrinks toward (the prior's shape and the learning units' own level,
-        :func:`~rplearn.core.lsq.level.shrink_target`) and the penalty's unit (cached)."""
-        if order not in self._cache:
-            basis = self.make_basis(order)
-            pattern_idx = nested_columns(self.big, basis, self.n_nodes)
-            idx = with_shared_columns(pattern_idx, self.first)
-            sub = [(sub_block(f.gram, idx), f.rhs[idx], sub_block(f.held_gram, idx), f.held_rhs[idx]) for f in self.folds]
-            if not self.cv:
-                sub = [(sub_block(self.gram, idx), self.rhs[idx], np.empty(0), np.empty(0))]
-            prior = None if self.target is None else self.target[pattern_idx]
-            targets = [self._target(g, r, basis, prior) for g, r, _, _ in sub]
-            scales = [penalty_scale(g, g.shape[0] - self.n_shared) for g, _, _, _ in sub]  # the penalty's unit per fold
-            while len(self._cache) >= _CACHED_ORDERS:  # a few orders at a time: bounded memory
-                self._cache.pop(next(iter(self._cache)))
-            self._cache[order] = (self._weights(basis), sub, targets, scales)
-        return self._cache[order]
+        :func:`~rplearn.core.lsq.level.shrink_target`) and the penalty's unit (cached,
+        :meth:`_ensure_blocks`)."""
+        self._ensure_blocks([int(order)])
+        return self._cache[int(order)]
+
+    def _fold_block(self, order: int, fold: int) -> tuple[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+                                                         np.ndarray, float]:
+        """One fold's blocks of one order (:meth:`_blocks`), its target and its penalty's unit
+        (independent of the other folds and orders: any thread)."""
+        basis = self.make_basis(order)
+        pattern_idx = nested_columns(self.big, basis, self.n_nodes)
+        idx = with_shared_columns(pattern_idx, self.first)
+        if self.cv:
+            f = self.folds[fold]
+            sub = (sub_block(f.gram, idx), f.rhs[idx], sub_block(f.held_gram, idx), f.held_rhs[idx])
+        else:
+            sub = (sub_block(self.gram, idx), self.rhs[idx], np.empty(0), np.empty(0))
+        prior = None if self.target is None else self.target[pattern_idx]
+        g, r = sub[0], sub[1]
+        return sub, self._target(g, r, basis, prior), penalty_scale(g, g.shape[0] - self.n_shared)
+
+    def _order_bytes(self, order: int) -> int:
+        """Bytes of one order's fold blocks (:meth:`_blocks`): two square matrices per fold."""
+        cols = len(nested_columns(self.big, self.make_basis(order), self.n_nodes)) + self.n_shared
+        return 2 * (len(self.folds) if self.cv else 1) * cols * cols * 8
+
+    def _ensure_blocks(self, orders: Sequence[int]) -> None:
+        """Compute the blocks of the ``orders`` not cached, every (order, fold) on the statistics'
+        workers at once, and keep every order's while they hold at most :data:`_CACHE_BYTES`
+        (at least the :data:`_CACHED_ORDERS` last asked: bounded memory for a swarm's large
+        blocks). Copies of the same numbers: which are kept changes no result."""
+        wanted = list(dict.fromkeys(int(o) for o in orders))
+        missing = [o for o in wanted if o not in self._cache]
+        if missing:
+            n_folds = len(self.folds) if self.cv else 1
+            jobs = [functools.partial(self._fold_block, o, k) for o in missing for k in range(n_folds)]
+            built = list(DEFAULT_RUNTIME.in_order(on_one_blas_thread, jobs))
+            for i, o in enumerate(missing):
+                parts = built[i * n_folds:(i + 1) * n_folds]
+                self._cache[o] = (self._weights(self.make_basis(o)), [b for b, _, _ in parts], [t for _, t, _ in parts],
+                                  [s for _, _, s in parts])
+        for o in wanted:  # the orders asked last are the newest
+            self._cache[o] = self._cache.pop(o)
+        while len(self._cache) > max(_CACHED_ORDERS, len(wanted)) and _cache_bytes(self._cache) > _CACHE_BYTES:
+            self._cache.pop(next(iter(self._cache)))
 
     def _fold_tasks(self, order: int, smoothing: float) -> list[Callable[[], tuple[np.ndarray, np.ndarray | None, float]]]:
         """Per fold, the work of one point: its penalised solution, the factor of its system and
@@ -216,6 +258,9 @@ class _Evaluator:
         keys = [k for k in keys if k not in self._pending]
         if not keys:
             return
+        orders = list(dict.fromkeys(o for o, _ in keys))
+        if sum(self._order_bytes(o) for o in orders) <= _CACHE_BYTES:  # else one order at a time (_blocks)
+            self._ensure_blocks(orders)
         tasks = [task for key in keys for task in self._fold_tasks(*key)]
         results: list[tuple[np.ndarray, Any, float]] = []
         held = 0
