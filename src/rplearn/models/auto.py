@@ -8,9 +8,10 @@ the same statistics (a sub-block for a smaller SH order), so no sample is read t
 
 from __future__ import annotations
 
+import functools
 import time
 from collections import Counter
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from functools import lru_cache
 from typing import Any
 
@@ -27,6 +28,7 @@ from rplearn.core.lsq.selection import (
     nested_columns,
     penalty_scale,
     penalty_vector,
+    select_beside,
     select_order_and_smoothing,
     sub_statistics,
 )
@@ -388,6 +390,19 @@ def unit_pieces(sizes: Mapping[str, int], workers: int) -> list[tuple[str, int, 
     return sorted(pieces, key=lambda piece: piece[1] - piece[2])
 
 
+def _final_setup(total: NormalEquations, big: Any, kind: str, ridge: float, power: float, order: int, smoothing: float,
+                 n_nodes: int, search_target: np.ndarray | None) -> tuple[Any, NormalEquations, float, np.ndarray,
+                                                                   np.ndarray | None]:
+    """The chosen basis, its statistics (a sub-block of ``total``), the penalty's unit, the
+    penalty and the target of the final solve at ``order`` and ``smoothing``."""
+    chosen = ModelSpec(kind, order, ridge=ridge).basis()
+    normal = sub_statistics(total, chosen)
+    scale = penalty_scale(normal.gram, normal.n_pattern_columns)
+    penalty = penalty_vector(chosen, n_nodes, smoothing, scale, power)
+    sub_target = None if search_target is None else search_target[nested_columns(big, chosen, n_nodes)]
+    return chosen, normal, scale, penalty, sub_target
+
+
 def fit_from_statistics(
     stats: Mapping[str, NormalEquations],
     spec: ModelSpec,
@@ -456,9 +471,26 @@ def fit_from_statistics(
     def make_basis(k: int) -> Any:
         return ModelSpec(kind, k, ridge=ridge).basis()
 
-    choice = select_order_and_smoothing(stats, make_basis, orders, ridge, power, target=target, prior_level=prior_level)
+    names = list(map(str, nodes))
+    early: dict[str, Any] = {}
+
+    def final_jobs(order: int, smoothing: float, keys: list[tuple[int, float]]) -> list[Callable[[], Any]]:
+        # the final solve and the own posteriors' inverses need only the choice (the prior is
+        # not kept on this path): on the workers with the chosen and tied points' inflations
+        setup = _final_setup(total, first.basis, kind, ridge, power, order, smoothing, len(nodes), search_target)
+        chosen_, normal_, scale_, penalty_, sub_target_ = setup
+        own_first_, jobs_ = continued_jobs(plain_total, chosen_, names,
+                                           OwnPrior(smoothing, scale_, power, ridge, gauge, target, prior_level),
+                                           [(o, s, 0.0) for o, s in keys], make_basis)  # inflations: not used by the jobs
+        early.update(setup=setup, own_first=own_first_)
+        return [functools.partial(solve, normal_, list(nodes), ridge=ridge, gauge=gauge, penalty=penalty_,
+                                  penalty_target=sub_target_, prior_level=prior_level), *jobs_]
+
+    searched_prior = keeps_prior(kind, target, first.basis, len(nodes))
+    results, choice = select_beside(stats, make_basis, orders, ridge, power, target=target, prior_level=prior_level,
+                                    beside=None if searched_prior else final_jobs)
     keep, compared = False, None
-    if keeps_prior(kind, target, first.basis, len(nodes)):
+    if searched_prior:
         # the search again on the deviation from the prior, its degrees above the chosen order
         # kept; the held-out units choose between the two, the kept prior when they cannot tell
         assert target is not None
@@ -474,21 +506,16 @@ def fit_from_statistics(
             stats, total, shape, search_target, choice = (deviation.units, deviation.total, deviation.shape,
                                                          deviation.target, kept)
     final = ModelSpec(kind, orders[-1] if keep else choice.order, ridge=ridge, smoothing=choice.smoothing)
-    chosen = ModelSpec(kind, choice.order, ridge=ridge).basis()
-    normal = sub_statistics(total, chosen)
-    scale = penalty_scale(normal.gram, normal.n_pattern_columns)
-    penalty = penalty_vector(chosen, len(nodes), choice.smoothing, scale, power)
-    sub_target = None
-    if search_target is not None:
-        sub_target = search_target[nested_columns(first.basis, chosen, len(nodes))]
+    chosen, normal, scale, penalty, sub_target = early["setup"] if early else _final_setup(
+        total, first.basis, kind, ridge, power, choice.order, choice.smoothing, len(nodes), search_target)
     own_prior = OwnPrior(choice.smoothing, scale, power, ridge, gauge, target, prior_level)
-    own_first, jobs = continued_jobs(plain_total, chosen, list(map(str, nodes)), own_prior, choice.ties,
-                                     lambda k: ModelSpec(kind, k, ridge=ridge).basis())
-    # the own-pattern posteriors' inverses on the statistics' workers while this thread solves
-    # (one BLAS thread each, this thread's too): they do not depend on the final solve
+    own_first, jobs = (early["own_first"], []) if early else continued_jobs(plain_total, chosen, names, own_prior,
+                                                                            choice.ties, make_basis)
+    # else the own-pattern posteriors' inverses on the statistics' workers while this thread
+    # solves (one BLAS thread each, this thread's too): they do not depend on the final solve
     with DEFAULT_RUNTIME.beside(jobs) as continued:
-        sol = solve(normal, list(nodes), ridge=ridge, gauge=gauge, penalty=penalty, penalty_target=sub_target,
-                    prior_level=prior_level)
+        sol = results[0] if early else solve(normal, list(nodes), ridge=ridge, gauge=gauge, penalty=penalty,
+                                             penalty_target=sub_target, prior_level=prior_level)
         inflation = float(choice.variance_inflation)
         # the flights' levels: apart from the noise (the residual about each flight's own level)
         # and added to the spread of a new flight's predictions (its level about the common one)
@@ -554,12 +581,12 @@ def fit_from_statistics(
             pat = model_basis.n_coef * len(nodes)
             covariance = covariance.copy()
             covariance[:pat, :pat] += misfit_covariance(model_basis, len(nodes), misfit_var / 2.0)  # two ends a sample
-        parts = continued()
+        parts = results[1:] if early else continued()
     with one_blas_thread():
-        own = own_pattern_posterior(plain_total, chosen, list(map(str, nodes)), own_prior, noise_var, uncapped,
+        own = own_pattern_posterior(plain_total, chosen, names, own_prior, noise_var, uncapped,
                                     (lambda: parts[0]) if own_first else None)
-    own = tied_own_posterior(own, plain_total, list(map(str, nodes)), own_prior, choice.ties, within_var,
-                             lambda k: ModelSpec(kind, k, ridge=ridge).basis(), parts[1:] if own_first else parts or None)
+    own = tied_own_posterior(own, plain_total, names, own_prior, choice.ties, within_var, make_basis,
+                             parts[1:] if own_first else parts or None)
     ltd = time.perf_counter() - t0
     fields, terms = shared_fields(sol, list(nodes), options, counts, rescale * inflation)
     training = sol.report.to_dict()

@@ -301,3 +301,27 @@ def test_fold_blocks_built_on_the_workers_and_kept_give_the_same_search(monkeypa
     assert (kept.order, kept.smoothing, kept.variance_inflation) == (bounded.order, bounded.smoothing,
                                                                      bounded.variance_inflation)
     assert kept.ties == bounded.ties
+
+
+def test_work_beside_the_last_step_gets_the_choice_and_changes_nothing():
+    """``select_beside``: the caller's jobs are built from the chosen point and the tied points'
+    keys, run with the inflations' folds, and come back in order; the selection is that of
+    ``select_order_and_smoothing`` to the last bit."""
+    from rplearn.core.lsq.selection import select_beside
+
+    units = stats_of(synthetic_units(n_units=3, n_per_unit=600, truth_order=3, seed=12), SphericalHarmonics(6))
+    asked: list[tuple[int, float, list[tuple[int, float]]]] = []
+
+    def jobs(order, smoothing, keys):
+        asked.append((order, smoothing, keys))
+        return [lambda: order * 10, lambda: len(keys)]
+
+    results, with_jobs = select_beside(units, SphericalHarmonics, range(2, 7), RIDGE, beside=jobs)
+    plain = select_order_and_smoothing(units, SphericalHarmonics, range(2, 7), RIDGE)
+    assert len(asked) == 1 and asked[0][:2] == (plain.order, plain.smoothing)
+    assert asked[0][2] == [t[:2] for t in plain.ties] or (not plain.ties and asked[0][2] == [])
+    assert results == [plain.order * 10, len(asked[0][2])]
+    assert with_jobs.to_dict() == plain.to_dict()
+    one_unit = {"u0": units["u0"]}  # GCV: no folds, the jobs run all the same
+    results, gcv = select_beside(one_unit, SphericalHarmonics, range(2, 7), RIDGE, beside=jobs)
+    assert gcv.method == "gcv" and results == [gcv.order * 10, 0]

@@ -305,19 +305,22 @@ class _Evaluator:
         self.prefetch_spreads([(order, smoothing)])
         return self._spreads[(int(order), float(smoothing))]
 
-    def prefetch_spreads(self, points: Sequence[tuple[int, float]]) -> None:
+    def prefetch_spreads(self, points: Sequence[tuple[int, float]],
+                         extra: Sequence[Callable[[], Any]] = ()) -> list[Any]:
         """:meth:`spread` of every point not computed yet, the folds of all of them on the
-        statistics' workers at once (:mod:`rplearn.core.lsq.selection_folds`)."""
-        if not self.cv:
-            return
-        keys = [k for k in dict.fromkeys((int(o), float(s)) for o, s in points) if k not in self._spreads]
-        if not keys:
-            return
-        jobs = [job for key in keys for job in self._spread_jobs(*key)]
+        statistics' workers at once (:mod:`rplearn.core.lsq.selection_folds`), with the
+        ``extra`` jobs (queued first: the caller's work that needs only the choice, e.g. its
+        final solve); their results, in order."""
+        keys = [k for k in dict.fromkeys((int(o), float(s)) for o, s in points) if k not in self._spreads] if self.cv else []
+        jobs = list(extra) + [job for key in keys for job in self._spread_jobs(*key)]
+        if not jobs:
+            return []
         results = list(DEFAULT_RUNTIME.in_order(on_one_blas_thread, jobs))
         folds = len(self.folds)
+        spreads = results[len(extra):]
         for i, key in enumerate(keys):
-            self._spreads[key] = self._combine_spread(key, results[i * folds:(i + 1) * folds])
+            self._spreads[key] = self._combine_spread(key, spreads[i * folds:(i + 1) * folds])
+        return results[:len(extra)]
 
     def _spread_jobs(self, order: int, smoothing: float) -> list[Callable[[], Any]]:
         """Per fold, the work of :func:`~rplearn.core.lsq.selection_folds.fold_spread_terms` (None
@@ -519,6 +522,40 @@ def select_order_and_smoothing(
     IdentifiabilityError
         When no unit holds samples, or every candidate fails.
     """
+    return select_beside(units, make_basis, orders, ridge, power, grid, target, prior_level)[1]
+
+
+def select_beside(
+    units: Mapping[str, NormalEquations],
+    make_basis: Callable[[int], Basis],
+    orders: Sequence[int],
+    ridge: float = 1.0,
+    power: float = DEFAULT_PENALTY_POWER,
+    grid: Sequence[float] = SMOOTHING_GRID,
+    target: np.ndarray | None = None,
+    prior_level: str = "data",
+    beside: Callable[[int, float, list[tuple[int, float]]], Sequence[Callable[[], Any]]] | None = None,
+) -> tuple[list[Any], Selection]:
+    """:func:`select_order_and_smoothing`, with work of the caller's that needs only the choice
+    run on the statistics' workers together with the variance inflations of the chosen and tied
+    points (the last step of the selection).
+
+    Parameters
+    ----------
+    units, make_basis, orders, ridge, power, grid, target, prior_level
+        As :func:`select_order_and_smoothing`.
+    beside : callable, optional
+        ``beside(order, smoothing, tied)`` with the chosen point and the ``(order, smoothing)``
+        of the tied points (:func:`rplearn.core.lsq.ties.tied_keys`, the chosen first) -> jobs
+        (callables without arguments; one BLAS thread each, any thread).
+
+    Returns
+    -------
+    results : list
+        The jobs' results, in their order (empty without ``beside``).
+    selection : Selection
+        As :func:`select_order_and_smoothing`.
+    """
     units = {str(k): v for k, v in units.items() if v.n_samples > 0}
     if not units:
         raise IdentifiabilityError("no learning samples to choose an order from")
@@ -547,12 +584,15 @@ def select_order_and_smoothing(
     best = min(finite, key=lambda p: (p.rmse_db, p.order, -p.smoothing))
     choice = _tightest_split(ev, best, finite)
     evaluated = [p for p in ev.curve if np.isfinite(p.rmse_db)]
-    ev.prefetch_spreads([(choice.order, choice.smoothing), *tied_keys(ev, best, evaluated)])  # all at once
+    keys = tied_keys(ev, best, evaluated)
+    extra = beside(int(choice.order), float(choice.smoothing), keys) if beside is not None else []
+    beside_results = ev.prefetch_spreads([(choice.order, choice.smoothing), *keys], extra)  # all at once
     kappa, level_var = ev.spread(choice.order, choice.smoothing)
-    return Selection("grouped-cv" if ev.cv else "gcv", choice.order, choice.smoothing, choice.rmse_db,
-                     ev.curve, sorted(units) if ev.cv else [], float(power), kappa, float(np.sqrt(level_var)),
-                     ev.excess_db2.get((int(choice.order), float(choice.smoothing)), 0.0),
-                     tied_points(ev, best, evaluated))
+    return beside_results, Selection("grouped-cv" if ev.cv else "gcv", choice.order, choice.smoothing, choice.rmse_db,
+                                     ev.curve, sorted(units) if ev.cv else [], float(power), kappa,
+                                     float(np.sqrt(level_var)),
+                                     ev.excess_db2.get((int(choice.order), float(choice.smoothing)), 0.0),
+                                     tied_points(ev, best, evaluated))
 
 
 def variance_inflation(
@@ -625,6 +665,7 @@ __all__ = [
     "nested_columns",
     "penalty_scale",
     "penalty_vector",
+    "select_beside",
     "select_order_and_smoothing",
     "sub_statistics",
 ]
