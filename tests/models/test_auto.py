@@ -121,3 +121,15 @@ def test_the_units_are_cut_into_pieces_that_keep_every_worker_busy():
         for unit, n in sizes.items():  # each unit's samples exactly once, in contiguous ranges
             ranges = sorted((a, b) for u, a, b in cut if u == unit)
             assert ranges[0][0] == 0 and ranges[-1][1] == n and all(x[1] == y[0] for x, y in zip(ranges, ranges[1:]))
+
+
+def test_the_sphere_average_design_is_computed_once_per_basis_and_read_only():
+    from rplearn.core.bases import fibonacci_grid_nodes
+    from rplearn.models.auto import _design_squares
+    from rplearn.models.spec import ModelSpec
+
+    basis = ModelSpec("sh", 6).basis()
+    squares = _design_squares(basis)
+    az, el = fibonacci_grid_nodes(max(4 * basis.n_coef, 400))
+    assert np.array_equal(squares, basis.design(az, el) ** 2)
+    assert _design_squares(ModelSpec("sh", 6).basis()) is squares and not squares.flags.writeable

@@ -132,11 +132,9 @@ def prior_std_db(basis: Any, nodes: Sequence[str], weights: np.ndarray, noise_va
     value; close to the data it is far smaller. With a prior pattern it is how far the truth
     may stray from the prior; without one, how far from its level (the data's) the pattern may be.
     """
-    from rplearn.core.bases import fibonacci_grid_nodes
 
     p = basis.n_coef
-    az, el = fibonacci_grid_nodes(max(4 * p, 400))
-    squares = basis.design(az, el) ** 2  # (directions, p)
+    squares = _design_squares(basis)  # (directions, p)
     keep = np.asarray(basis.roughness(power)) > 0
     out = {}
     for k, node in enumerate(nodes):
@@ -144,6 +142,19 @@ def prior_std_db(basis: Any, nodes: Sequence[str], weights: np.ndarray, noise_va
         var = noise_var * squares[:, keep] @ (1.0 / np.maximum(weight, 1e-300))
         out[str(node)] = float(np.sqrt(np.mean(var))) if keep.any() else float("inf")
     return out
+
+
+@lru_cache(maxsize=8)
+def _design_squares(basis: Any) -> np.ndarray:
+    """The squared design of ``basis`` on a Fibonacci grid of ``max(4 n_coef, 400)`` directions
+    (the sphere averages of :func:`prior_std_db` and :func:`misfit_covariance`; once per basis
+    and process), read-only."""
+    from rplearn.core.bases import fibonacci_grid_nodes
+
+    az, el = fibonacci_grid_nodes(max(4 * basis.n_coef, 400))
+    squares = basis.design(az, el) ** 2
+    squares.setflags(write=False)
+    return squares
 
 
 @lru_cache(maxsize=8)
@@ -258,11 +269,9 @@ def misfit_covariance(basis: Any, n_nodes: int, node_var_db2: float) -> np.ndarr
     """``(n_nodes * basis.n_coef)`` square diagonal: coefficients independent per node with the
     variance that gives each node's gain ``node_var_db2`` at a direction, averaged over the
     sphere (for spherical harmonics the same at every direction: the addition theorem)."""
-    from rplearn.core.bases import fibonacci_grid_nodes
 
     p = basis.n_coef
-    az, el = fibonacci_grid_nodes(max(4 * p, 400))
-    per_coef = float(node_var_db2) / max(float(np.mean(np.sum(basis.design(az, el) ** 2, axis=1))), 1e-300)
+    per_coef = float(node_var_db2) / max(float(np.mean(np.sum(_design_squares(basis), axis=1))), 1e-300)
     return np.eye(n_nodes * p) * per_coef
 
 
