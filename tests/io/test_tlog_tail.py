@@ -253,3 +253,51 @@ def test_a_second_vehicle_that_overtakes_the_first_withdraws_every_row_handed_ou
     poses, signals, tail, _ = _poll_in_pieces(whole, grown)
     assert tail.dropped["withdrawn_pose_rows"] == len(poses[poses["node"] != "G"])  # before and after the change
     assert tail.dropped["withdrawn_signal_rows"] == len(signals)
+
+
+def test_a_home_position_after_the_station_was_taken_from_a_fix_moves_the_station(ground, tmp_path):
+    """Review 37: positions invalid (no origin, altitude 0.8 m) for the first 60 s, so no
+    ``HOME_POSITION`` for longer than :data:`HOME_WAIT_S`: the tail takes its station from the
+    first fix, then ``HOME_POSITION`` arrives, which ``sync`` takes as the station of the whole
+    log. The rows handed out after it are ``sync``'s (same station, same positions), and every row
+    handed out in the other frame before it is counted withdrawn: none silently ~90 m off."""
+    whole, grown = tmp_path / "whole.tlog", tmp_path / "grown.tlog"
+    write_tlog(ground, whole, vehicle="D", station="G", origin_geodetic=ORIGIN, defects=TlogDefects(invalid_until_s=60.0))
+    ref, meta = read_logs([str(whole)], _options(whole))
+    assert {p["reason"] for p in meta["files"][0]["excluded_periods"]} == {"before_valid_position"}
+    poses, signals, tail, _ = _poll_in_pieces(whole, grown)
+    assert tail._station == pytest.approx(tuple(meta["files"][0]["station_geodetic"]), abs=1e-9)
+    vehicle = poses[poses["node"] == "D"].sort_values("t").reset_index(drop=True)
+    ref_vehicle = ref.pose[ref.pose["node"] == "D"].sort_values("t").reset_index(drop=True)
+    cut = float(ref_vehicle["t"].min()) - 2e-4
+    before, after = vehicle[vehicle["t"] < cut], vehicle[vehicle["t"] >= cut].reset_index(drop=True)
+    assert len(before) > 0 and tail.dropped["withdrawn_pose_rows"] == len(before)
+    assert tail.dropped["withdrawn_signal_rows"] == int((signals["t"] < cut).sum())
+    assert len(after) == len(ref_vehicle)
+    for c in ("x", "y", "z"):
+        np.testing.assert_allclose(after[c].to_numpy(), ref_vehicle[c].to_numpy(), rtol=0, atol=1e-9, err_msg=c)
+
+
+def test_a_station_taken_from_a_fix_found_invalid_later_moves_to_syncs_first_valid_fix(ground, tmp_path):
+    """Review 37: a log with no origin message at all (``HOME_POSITION``, ``GPS_GLOBAL_ORIGIN``
+    removed) whose first 60 s of positions are invalid (altitude 0.8 m): the tail takes the
+    first fix as its station after :data:`HOME_WAIT_S`; the step at 60 s makes ``sync`` exclude
+    those fixes and take the first valid fix after them. The rows handed out after it are
+    ``sync``'s, every row handed out before counted withdrawn."""
+    first = tmp_path / "first.tlog"
+    write_tlog(ground, first, vehicle="D", station="G", origin_geodetic=ORIGIN, defects=TlogDefects(invalid_until_s=60.0))
+    whole, grown = tmp_path / "whole.tlog", tmp_path / "grown.tlog"
+    whole.write_bytes(b"".join(r for _, r in _records(first.read_bytes()) if int.from_bytes(r[8 + 7:8 + 10], "little") not in (242, 49)))
+    ref, meta = read_logs([str(whole)], _options(whole))
+    assert "first position fix" in meta["files"][0]["station_note"]
+    poses, signals, tail, _ = _poll_in_pieces(whole, grown)
+    assert tail._station == pytest.approx(tuple(meta["files"][0]["station_geodetic"]), abs=1e-9)
+    vehicle = poses[poses["node"] == "D"].sort_values("t").reset_index(drop=True)
+    ref_vehicle = ref.pose[ref.pose["node"] == "D"].sort_values("t").reset_index(drop=True)
+    cut = float(ref_vehicle["t"].min()) - 2e-4
+    before, after = vehicle[vehicle["t"] < cut], vehicle[vehicle["t"] >= cut].reset_index(drop=True)
+    assert len(before) > 0 and tail.dropped["withdrawn_pose_rows"] == len(before)
+    assert tail.dropped["withdrawn_signal_rows"] == int((signals["t"] < cut).sum())
+    assert len(after) == len(ref_vehicle)
+    for c in ("x", "y", "z"):
+        np.testing.assert_allclose(after[c].to_numpy(), ref_vehicle[c].to_numpy(), rtol=0, atol=1e-9, err_msg=c)
