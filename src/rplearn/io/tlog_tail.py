@@ -13,7 +13,7 @@ fix :data:`rplearn.io.tlog_window.KEEP_S` before the rows handed out, with a bou
 the past standing in for the reader's whole-log rules (the pieces of valid fixes of the boot, each
 boot's times, the last GPS fix type and armed state, the copy rule of radio reports on running
 binned counts: :mod:`rplearn.io.tlog_copies`). A poll's cost and the state kept do not grow with
-the flight.
+the flight (except over a gap of position fixes, which the window, anchored at a fix, spans).
 
 What can still change once handed out is fixed before any row is handed out:
 
