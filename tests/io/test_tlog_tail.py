@@ -324,3 +324,30 @@ def test_the_state_kept_does_not_grow_with_a_long_gap_of_position_fixes(ground, 
     before = max(k["window.att"] for f, k in sizes if 0.15 < f <= 0.35)
     during = max(k["window.att"] for f, k in sizes if 0.45 < f <= 0.85)
     assert during <= 2 * before, (before, during)
+
+
+@pytest.mark.xfail(strict=True, reason="review 37: a piece's verdict flips while a short glitch is in progress "
+                   "(the glitch the last, surely valid, piece) and back when it returns; the flips are counted each way "
+                   "(rows withdrawn, then late: by rows handed out, or by messages received when none were) and do not "
+                   "cancel: ~20k rows counted withdrawn and ~21.5k late where the rows are sync's (not fixed)")
+def test_glitches_that_return_leave_the_counts_balanced(ground, tmp_path):
+    """Review 37: twenty 1-s position glitches of 60 m that return: ``sync`` excludes each
+    glitch; the tail hands out the same rows, so what it counts withdrawn and late must balance
+    (rows handed out - withdrawn + late = ``sync``'s rows)."""
+    pose = ground.pose.copy()
+    t0 = float(pose["t"].min())
+    vehicle = pose["node"] == "D"
+    for k in range(20):
+        a = t0 + 40.0 + 8.0 * k
+        pose.loc[vehicle & (pose["t"] >= a) & (pose["t"] < a + 1.0), "z"] += 60.0
+    whole, grown = tmp_path / "whole.tlog", tmp_path / "grown.tlog"
+    write_tlog(Logs(pose, ground.signal), whole, vehicle="D", station="G", origin_geodetic=ORIGIN)
+    ref, meta = read_logs([str(whole)], _options(whole))
+    assert {p["reason"] for p in meta["files"][0]["excluded_periods"]} == {"invalid_position"}
+    poses, signals, tail, _ = _poll_in_pieces(whole, grown)
+    got = np.sort(poses.loc[poses["node"] == "D", "t"].to_numpy())
+    want = np.sort(ref.pose.loc[ref.pose["node"] == "D", "t"].to_numpy())
+    assert len(got) == len(want) and np.abs(got - want).max() < 2e-4 and len(signals) == len(ref.signal)
+    d = tail.dropped
+    assert len(poses) - d["withdrawn_pose_rows"] + d["late_pose_rows"] == len(ref.pose), d
+    assert len(signals) - d["withdrawn_signal_rows"] + d["late_signal_rows"] == len(ref.signal), d
