@@ -43,7 +43,9 @@ position found later: ``late_pose_rows``, ``late_signal_rows``, ``withdrawn_pose
 it or the messages it holds; a change of vehicle, or of the use of its boot clock, withdraws
 every row handed out, before and after); a radio report whose copy verdict depends on the report
 period beyond the precision of the running counts, dropped (``uncertain_copy_reports``); a report
-handed out whose verdict a later period reverses (``changed_copy_reports``).
+handed out whose verdict a later period reverses (``changed_copy_reports``). The row counts are
+net: rows given back after being withdrawn lower the withdrawn count, so a verdict that flips and
+flips back (a short position glitch under way at a poll) leaves them where they were.
 
 Not counted: the vehicle's times differ from ``sync``'s by one constant per boot (its time base,
 from its first messages: 2e-4 s on the project's writer's logs, 0.09 s on the real fixture log);
@@ -130,6 +132,7 @@ class TlogTail:
         self._seen = {"pose": np.zeros(0), "signal": np.zeros(0)}  # times of the last conversion's rows after the anchor
         self._handed = {"pose": np.zeros(0), "signal": np.zeros(0)}  # times handed out after the anchor
         self._total = {"pose": 0, "signal": 0}
+        self._vanished = {"pose": 0, "signal": 0}  # rows after the anchor counted withdrawn, not yet back
         self._covered = -math.inf  # every row up to here was handed out
         self._vehicle_changed = False
         self._station_from_fix = False  # the station taken from the first valid fix (no HOME_POSITION yet)
@@ -282,11 +285,15 @@ class TlogTail:
         for k, n in w.revisit(fixes[2][:len(w.prefix)]).items():
             self.dropped[k] += n
         to = math.inf if final else self._covered - KEEP_S
+        anchor = w.anchor
         self.dropped["uncertain_copy_reports"] += w.trim(raw, to, stream_timeout_s, (fixes[0], fixes[2]), self._handed)
         self.dropped["changed_copy_reports"] += w.copies.reversed_behind(w.copies.rule())
         for what in ("pose", "signal"):
             self._handed[what] = self._handed[what][self._handed[what] >= w.anchor]
             self._seen[what] = self._seen[what][self._seen[what] >= w.anchor]
+            if w.anchor > anchor:  # those that vanished behind it are their pieces' (TlogWindow.revisit)
+                missing = len(self._handed[what]) - int(np.count_nonzero(self._seen[what] <= self._last[what]))
+                self._vanished[what] = min(self._vanished[what], max(missing, 0))
         if final:  # reports never judged
             self.dropped["uncertain_copy_reports"] += int(np.count_nonzero(w.radio[:, 8]))
 
@@ -318,10 +325,10 @@ class TlogTail:
         lo = self._reframed[what]  # rows up to here were counted withdrawn when the station moved
         delta = (int(np.count_nonzero((t >= anchor) & (t > lo) & (t <= last)))
                  - int(np.count_nonzero((prev >= anchor) & (prev > lo) & (prev <= last))))
-        if delta > 0:
-            self.dropped[f"late_{what}_rows"] += delta
-        elif delta < 0:
-            self.dropped[f"withdrawn_{what}_rows"] -= delta
+        back = min(max(delta, 0), self._vanished[what])  # rows that vanished and came back: no longer withdrawn
+        self._vanished[what] += max(-delta, 0) - back
+        self.dropped[f"withdrawn_{what}_rows"] += max(-delta, 0) - back
+        self.dropped[f"late_{what}_rows"] += max(delta, 0) - back
         self._seen[what] = t[t >= anchor]
         out = rows[(t > last) & (t <= hand_to)].reset_index(drop=True)
         if len(out) and self._vehicle_changed:  # not what sync reads either
