@@ -350,3 +350,28 @@ def test_glitches_that_return_leave_the_counts_balanced(ground, tmp_path):
     d = tail.dropped
     assert len(poses) - d["withdrawn_pose_rows"] + d["late_pose_rows"] == len(ref.pose), d
     assert len(signals) - d["withdrawn_signal_rows"] + d["late_signal_rows"] == len(ref.signal), d
+
+
+@pytest.mark.xfail(strict=True, reason="review 37: the signal counts are 22 rows short of balance (handed out - "
+                   "withdrawn + late = 19766 against sync's 19744; the pose rows balance); cause not traced (not from the "
+                   "pieces' counts by received messages: none turned valid without rows handed out)")
+def test_glitches_then_a_jump_that_stays_leave_the_signal_counts_balanced(ground, tmp_path):
+    """Review 37: twenty returning 1-s glitches, then a 50-m jump at 240 s that stays (``sync``
+    excludes everything before it): rows handed out - withdrawn + late = ``sync``'s rows. Before
+    the net counts (review 37) the pose rows were 3998 off and the signal rows 6055; now the pose
+    rows balance and the signal rows are 22 off."""
+    pose = ground.pose.copy()
+    t0 = float(pose["t"].min())
+    vehicle = pose["node"] == "D"
+    for k in range(20):
+        a = t0 + 20.0 + 10.0 * k
+        pose.loc[vehicle & (pose["t"] >= a) & (pose["t"] < a + 1.0), "z"] += 60.0
+    pose.loc[vehicle & (pose["t"] >= t0 + 240.0), "z"] += 50.0
+    whole, grown = tmp_path / "whole.tlog", tmp_path / "grown.tlog"
+    write_tlog(Logs(pose, ground.signal), whole, vehicle="D", station="G", origin_geodetic=ORIGIN)
+    ref, meta = read_logs([str(whole)], _options(whole))
+    assert "before_valid_position" in {p["reason"] for p in meta["files"][0]["excluded_periods"]}
+    poses, signals, tail, _ = _poll_in_pieces(whole, grown)
+    d = tail.dropped
+    assert len(poses) - d["withdrawn_pose_rows"] + d["late_pose_rows"] == len(ref.pose), d
+    assert len(signals) - d["withdrawn_signal_rows"] + d["late_signal_rows"] == len(ref.signal), d
