@@ -253,3 +253,125 @@ def test_a_second_vehicle_that_overtakes_the_first_withdraws_every_row_handed_ou
     poses, signals, tail, _ = _poll_in_pieces(whole, grown)
     assert tail.dropped["withdrawn_pose_rows"] == len(poses[poses["node"] != "G"])  # before and after the change
     assert tail.dropped["withdrawn_signal_rows"] == len(signals)
+
+
+def test_a_home_position_after_the_station_was_taken_from_a_fix_moves_the_station(ground, tmp_path):
+    """Review 37: positions invalid (no origin, altitude 0.8 m) for the first 60 s, so no
+    ``HOME_POSITION`` for longer than :data:`HOME_WAIT_S`: the tail takes its station from the
+    first fix, then ``HOME_POSITION`` arrives, which ``sync`` takes as the station of the whole
+    log. The rows handed out after it are ``sync``'s (same station, same positions), and every row
+    handed out in the other frame before it is counted withdrawn: none silently ~90 m off."""
+    whole, grown = tmp_path / "whole.tlog", tmp_path / "grown.tlog"
+    write_tlog(ground, whole, vehicle="D", station="G", origin_geodetic=ORIGIN, defects=TlogDefects(invalid_until_s=60.0))
+    ref, meta = read_logs([str(whole)], _options(whole))
+    assert {p["reason"] for p in meta["files"][0]["excluded_periods"]} == {"before_valid_position"}
+    poses, signals, tail, _ = _poll_in_pieces(whole, grown)
+    assert tail._station == pytest.approx(tuple(meta["files"][0]["station_geodetic"]), abs=1e-9)
+    vehicle = poses[poses["node"] == "D"].sort_values("t").reset_index(drop=True)
+    ref_vehicle = ref.pose[ref.pose["node"] == "D"].sort_values("t").reset_index(drop=True)
+    cut = float(ref_vehicle["t"].min()) - 2e-4
+    before, after = vehicle[vehicle["t"] < cut], vehicle[vehicle["t"] >= cut].reset_index(drop=True)
+    assert len(before) > 0 and tail.dropped["withdrawn_pose_rows"] == len(before)
+    assert tail.dropped["withdrawn_signal_rows"] == int((signals["t"] < cut).sum())
+    assert len(after) == len(ref_vehicle)
+    for c in ("x", "y", "z"):
+        np.testing.assert_allclose(after[c].to_numpy(), ref_vehicle[c].to_numpy(), rtol=0, atol=1e-9, err_msg=c)
+
+
+def test_a_station_taken_from_a_fix_found_invalid_later_moves_to_syncs_first_valid_fix(ground, tmp_path):
+    """Review 37: a log with no origin message at all (``HOME_POSITION``, ``GPS_GLOBAL_ORIGIN``
+    removed) whose first 60 s of positions are invalid (altitude 0.8 m): the tail takes the
+    first fix as its station after :data:`HOME_WAIT_S`; the step at 60 s makes ``sync`` exclude
+    those fixes and take the first valid fix after them. The rows handed out after it are
+    ``sync``'s, every row handed out before counted withdrawn."""
+    first = tmp_path / "first.tlog"
+    write_tlog(ground, first, vehicle="D", station="G", origin_geodetic=ORIGIN, defects=TlogDefects(invalid_until_s=60.0))
+    whole, grown = tmp_path / "whole.tlog", tmp_path / "grown.tlog"
+    whole.write_bytes(b"".join(r for _, r in _records(first.read_bytes()) if int.from_bytes(r[8 + 7:8 + 10], "little") not in (242, 49)))
+    ref, meta = read_logs([str(whole)], _options(whole))
+    assert "first position fix" in meta["files"][0]["station_note"]
+    poses, signals, tail, _ = _poll_in_pieces(whole, grown)
+    assert tail._station == pytest.approx(tuple(meta["files"][0]["station_geodetic"]), abs=1e-9)
+    vehicle = poses[poses["node"] == "D"].sort_values("t").reset_index(drop=True)
+    ref_vehicle = ref.pose[ref.pose["node"] == "D"].sort_values("t").reset_index(drop=True)
+    cut = float(ref_vehicle["t"].min()) - 2e-4
+    before, after = vehicle[vehicle["t"] < cut], vehicle[vehicle["t"] >= cut].reset_index(drop=True)
+    assert len(before) > 0 and tail.dropped["withdrawn_pose_rows"] == len(before)
+    assert tail.dropped["withdrawn_signal_rows"] == int((signals["t"] < cut).sum())
+    assert len(after) == len(ref_vehicle)
+    for c in ("x", "y", "z"):
+        np.testing.assert_allclose(after[c].to_numpy(), ref_vehicle[c].to_numpy(), rtol=0, atol=1e-9, err_msg=c)
+
+
+@pytest.mark.xfail(strict=True, reason="review 37: the anchor is a position fix, so while GLOBAL_POSITION_INT is "
+                   "missing the window keeps every ATTITUDE and radio report of the outage and every poll converts them "
+                   "again: the state and a poll's cost grow with the outage (not fixed: the window's rules assume a fix anchor)")
+def test_the_state_kept_does_not_grow_with_a_long_gap_of_position_fixes(ground, tmp_path):
+    """Review 37: 280 s without ``GLOBAL_POSITION_INT`` (attitude and radio reports go on): the
+    rows are still the offline reader's, but the most the tail keeps during the gap should stay
+    that of the window of the last seconds, as before it."""
+    first = tmp_path / "first.tlog"
+    write_tlog(ground, first, vehicle="D", station="G", origin_geodetic=ORIGIN)
+    records = _records(first.read_bytes())
+    t0 = records[0][0]
+    whole, grown = tmp_path / "whole.tlog", tmp_path / "grown.tlog"
+    whole.write_bytes(b"".join(r for t, r in records
+                               if not (int.from_bytes(r[8 + 7:8 + 10], "little") == 33 and 100e6 < t - t0 < 380e6)))
+    ref, _ = read_logs([str(whole)], _options(whole))
+    poses, signals, tail, sizes = _poll_in_pieces(whole, grown)
+    assert len(poses) == len(ref.pose) and len(signals) == len(ref.signal)
+    assert tail.dropped == dict.fromkeys(tail.dropped, 0)
+    before = max(k["window.att"] for f, k in sizes if 0.15 < f <= 0.35)
+    during = max(k["window.att"] for f, k in sizes if 0.45 < f <= 0.85)
+    assert during <= 2 * before, (before, during)
+
+
+def test_glitches_that_return_leave_the_counts_balanced(ground, tmp_path):
+    """Review 37: twenty 1-s position glitches of 60 m that return: ``sync`` excludes each
+    glitch; the tail hands out the same rows, so what it counts withdrawn and late must balance
+    (rows handed out - withdrawn + late = ``sync``'s rows). A poll during a glitch found every
+    piece before it invalid (the glitch the boot's last piece) and the next one valid again:
+    the flips were counted each way (~20k rows withdrawn, ~21.5k late, the glitches' own
+    messages counted late and never taken back)."""
+    pose = ground.pose.copy()
+    t0 = float(pose["t"].min())
+    vehicle = pose["node"] == "D"
+    for k in range(20):
+        a = t0 + 40.0 + 8.0 * k
+        pose.loc[vehicle & (pose["t"] >= a) & (pose["t"] < a + 1.0), "z"] += 60.0
+    whole, grown = tmp_path / "whole.tlog", tmp_path / "grown.tlog"
+    write_tlog(Logs(pose, ground.signal), whole, vehicle="D", station="G", origin_geodetic=ORIGIN)
+    ref, meta = read_logs([str(whole)], _options(whole))
+    assert {p["reason"] for p in meta["files"][0]["excluded_periods"]} == {"invalid_position"}
+    poses, signals, tail, _ = _poll_in_pieces(whole, grown)
+    got = np.sort(poses.loc[poses["node"] == "D", "t"].to_numpy())
+    want = np.sort(ref.pose.loc[ref.pose["node"] == "D", "t"].to_numpy())
+    assert len(got) == len(want) and np.abs(got - want).max() < 2e-4 and len(signals) == len(ref.signal)
+    d = tail.dropped
+    assert len(poses) - d["withdrawn_pose_rows"] + d["late_pose_rows"] == len(ref.pose), d
+    assert len(signals) - d["withdrawn_signal_rows"] + d["late_signal_rows"] == len(ref.signal), d
+
+
+@pytest.mark.xfail(strict=True, reason="review 37: the signal counts are 22 rows short of balance (handed out - "
+                   "withdrawn + late = 19766 against sync's 19744; the pose rows balance); cause not traced (not from the "
+                   "pieces' counts by received messages: none turned valid without rows handed out)")
+def test_glitches_then_a_jump_that_stays_leave_the_signal_counts_balanced(ground, tmp_path):
+    """Review 37: twenty returning 1-s glitches, then a 50-m jump at 240 s that stays (``sync``
+    excludes everything before it): rows handed out - withdrawn + late = ``sync``'s rows. Before
+    the net counts (review 37) the pose rows were 3998 off and the signal rows 6055; now the pose
+    rows balance and the signal rows are 22 off."""
+    pose = ground.pose.copy()
+    t0 = float(pose["t"].min())
+    vehicle = pose["node"] == "D"
+    for k in range(20):
+        a = t0 + 20.0 + 10.0 * k
+        pose.loc[vehicle & (pose["t"] >= a) & (pose["t"] < a + 1.0), "z"] += 60.0
+    pose.loc[vehicle & (pose["t"] >= t0 + 240.0), "z"] += 50.0
+    whole, grown = tmp_path / "whole.tlog", tmp_path / "grown.tlog"
+    write_tlog(Logs(pose, ground.signal), whole, vehicle="D", station="G", origin_geodetic=ORIGIN)
+    ref, meta = read_logs([str(whole)], _options(whole))
+    assert "before_valid_position" in {p["reason"] for p in meta["files"][0]["excluded_periods"]}
+    poses, signals, tail, _ = _poll_in_pieces(whole, grown)
+    d = tail.dropped
+    assert len(poses) - d["withdrawn_pose_rows"] + d["late_pose_rows"] == len(ref.pose), d
+    assert len(signals) - d["withdrawn_signal_rows"] + d["late_signal_rows"] == len(ref.signal), d

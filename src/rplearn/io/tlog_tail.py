@@ -13,7 +13,7 @@ fix :data:`rplearn.io.tlog_window.KEEP_S` before the rows handed out, with a bou
 the past standing in for the reader's whole-log rules (the pieces of valid fixes of the boot, each
 boot's times, the last GPS fix type and armed state, the copy rule of radio reports on running
 binned counts: :mod:`rplearn.io.tlog_copies`). A poll's cost and the state kept do not grow with
-the flight.
+the flight (except over a gap of position fixes, which the window, anchored at a fix, spans).
 
 What can still change once handed out is fixed before any row is handed out:
 
@@ -22,7 +22,10 @@ What can still change once handed out is fixed before any row is handed out:
   messages have arrived, and no row of a boot whose offset is not fixed is handed out;
 - the station (and so the ENU origin): the vehicle's ``HOME_POSITION``, or the reader's
   ``station_geodetic``; without either for :data:`HOME_WAIT_S` of flight, the first valid fix
-  (what ``sync`` takes for a log without ``HOME_POSITION``);
+  (what ``sync`` takes for a log without ``HOME_POSITION``), until a ``HOME_POSITION`` arrives
+  or a step shows that fix invalid: ``sync`` places the whole log about the home or its first
+  valid fix, so the tail moves its station there and counts every row handed out before as
+  withdrawn;
 - the vehicle (the sender of most ATTITUDE) and whether its boot clock is used;
 - after a reboot, in a log with origin messages (``HOME_POSITION``, ``GPS_GLOBAL_ORIGIN``), the
   boot's rows wait for its first origin message (for up to :data:`HOME_WAIT_S`): the stretch
@@ -40,7 +43,9 @@ position found later: ``late_pose_rows``, ``late_signal_rows``, ``withdrawn_pose
 it or the messages it holds; a change of vehicle, or of the use of its boot clock, withdraws
 every row handed out, before and after); a radio report whose copy verdict depends on the report
 period beyond the precision of the running counts, dropped (``uncertain_copy_reports``); a report
-handed out whose verdict a later period reverses (``changed_copy_reports``).
+handed out whose verdict a later period reverses (``changed_copy_reports``). The row counts are
+net: rows given back after being withdrawn lower the withdrawn count, so a verdict that flips and
+flips back (a short position glitch under way at a poll) leaves them where they were.
 
 Not counted: the vehicle's times differ from ``sync``'s by one constant per boot (its time base,
 from its first messages: 2e-4 s on the project's writer's logs, 0.09 s on the real fixture log);
@@ -127,8 +132,12 @@ class TlogTail:
         self._seen = {"pose": np.zeros(0), "signal": np.zeros(0)}  # times of the last conversion's rows after the anchor
         self._handed = {"pose": np.zeros(0), "signal": np.zeros(0)}  # times handed out after the anchor
         self._total = {"pose": 0, "signal": 0}
+        self._vanished = {"pose": 0, "signal": 0}  # rows after the anchor counted withdrawn, not yet back
         self._covered = -math.inf  # every row up to here was handed out
         self._vehicle_changed = False
+        self._station_from_fix = False  # the station taken from the first valid fix (no HOME_POSITION yet)
+        self._station_fix_t = math.inf  # that fix's time [s]
+        self._reframed = {"pose": -math.inf, "signal": -math.inf}  # rows up to here handed in another frame
 
     def _parse(self) -> int:
         if self._conn is None:
@@ -175,6 +184,8 @@ class TlogTail:
                            raw.radio[-1, 0] if len(raw.radio) else -math.inf))
         if self._station is None and raw.home is not None:
             self._station = raw.home
+        elif self._station_from_fix:
+            self._recheck_station(raw)
         flown = float(raw.att[-1, 0] - raw.att[0, 0]) if len(raw.att) else 0.0
         options = MavlinkOptions(station_geodetic=self._station, origin_geodetic=self.reader.origin_geodetic,
                                  station_heading_deg=self.reader.station_heading_deg)
@@ -185,6 +196,8 @@ class TlogTail:
             return empty, empty
         if self._station is None and (final or flown >= HOME_WAIT_S):
             self._station = tuple(meta["station_geodetic"])  # the first valid fix, as sync takes it
+            tp, _, valid, _ = _fixes(raw, self.path)
+            self._station_fix_t, self._station_from_fix = float(tp[valid][0]), True  # until sync's moves (_recheck_station)
         if final:
             hand_to = math.inf
         elif self._station is None:
@@ -207,6 +220,43 @@ class TlogTail:
         elif self.window is not None:
             self._move_anchor(raw, final, options.stream_timeout_s)
         return poses, signals
+
+    def _recheck_station(self, raw: Any) -> None:
+        """The station taken from the first valid fix, against what ``sync`` would take now: a
+        ``HOME_POSITION`` arrived, or that fix found invalid (a step after it) and so the first
+        valid fix another; then the station moves there (:meth:`_move_station`)."""
+        if raw.home is not None:
+            self._station_from_fix = False
+            self._move_station(tuple(raw.home))
+            return
+        try:
+            tp, pos, valid, _ = _fixes(raw, self.path)
+        except LogFormatError:
+            return
+        at = np.flatnonzero(tp == self._station_fix_t)
+        if len(at) and not valid[at[0]] and valid.any():  # (a fix forgotten behind the window is not revisited)
+            first = int(np.flatnonzero(valid)[0])
+            self._station_fix_t = float(tp[first])
+            lat, lon, alt = (float(v) for v in pos[first, 1:4])
+            self._move_station((lat, lon, alt))
+
+    def _move_station(self, station: tuple[float, float, float]) -> None:
+        """``sync`` places the whole log about another station than the tail took: from now on
+        the tail does too, and every row handed out so far (in the other frame) is counted
+        withdrawn, once: the counts of their pieces and of the rows behind the last handed out
+        are no longer revisited."""
+        if tuple(map(float, station)) == tuple(map(float, self._station or ())):
+            return
+        self._station = station
+        for what in ("pose", "signal"):
+            # rows of the old frame counted withdrawn already (a piece found invalid) are not counted twice
+            out = max(self._total[what] - self.dropped[f"withdrawn_{what}_rows"], 0)
+            self.dropped[f"withdrawn_{what}_rows"] += out
+            self._reframed[what] = self._last[what]
+            self._handed[what] = np.zeros(0)
+        if self.window is not None:
+            for piece in self.window.pieces:
+                piece.handed = {"pose": 0, "signal": 0}
 
     def _lock(self, raw: Any) -> None:
         """Fix the vehicle and the use of its boot clock, and from now on read a window."""
@@ -235,11 +285,15 @@ class TlogTail:
         for k, n in w.revisit(fixes[2][:len(w.prefix)]).items():
             self.dropped[k] += n
         to = math.inf if final else self._covered - KEEP_S
+        anchor = w.anchor
         self.dropped["uncertain_copy_reports"] += w.trim(raw, to, stream_timeout_s, (fixes[0], fixes[2]), self._handed)
         self.dropped["changed_copy_reports"] += w.copies.reversed_behind(w.copies.rule())
         for what in ("pose", "signal"):
             self._handed[what] = self._handed[what][self._handed[what] >= w.anchor]
             self._seen[what] = self._seen[what][self._seen[what] >= w.anchor]
+            if w.anchor > anchor:  # those that vanished behind it are their pieces' (TlogWindow.revisit)
+                missing = len(self._handed[what]) - int(np.count_nonzero(self._seen[what] <= self._last[what]))
+                self._vanished[what] = min(self._vanished[what], max(missing, 0))
         if final:  # reports never judged
             self.dropped["uncertain_copy_reports"] += int(np.count_nonzero(w.radio[:, 8]))
 
@@ -268,11 +322,13 @@ class TlogTail:
         last = self._last[what]
         anchor = self.window.anchor if self.window is not None else -math.inf
         prev = self._seen[what]
-        delta = int(np.count_nonzero((t >= anchor) & (t <= last))) - int(np.count_nonzero((prev >= anchor) & (prev <= last)))
-        if delta > 0:
-            self.dropped[f"late_{what}_rows"] += delta
-        elif delta < 0:
-            self.dropped[f"withdrawn_{what}_rows"] -= delta
+        lo = self._reframed[what]  # rows up to here were counted withdrawn when the station moved
+        delta = (int(np.count_nonzero((t >= anchor) & (t > lo) & (t <= last)))
+                 - int(np.count_nonzero((prev >= anchor) & (prev > lo) & (prev <= last))))
+        back = min(max(delta, 0), self._vanished[what])  # rows that vanished and came back: no longer withdrawn
+        self._vanished[what] += max(-delta, 0) - back
+        self.dropped[f"withdrawn_{what}_rows"] += max(-delta, 0) - back
+        self.dropped[f"late_{what}_rows"] += max(delta, 0) - back
         self._seen[what] = t[t >= anchor]
         out = rows[(t > last) & (t <= hand_to)].reset_index(drop=True)
         if len(out) and self._vehicle_changed:  # not what sync reads either

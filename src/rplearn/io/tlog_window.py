@@ -24,7 +24,9 @@ The offline reader's rules that look at the whole log, and their causal forms he
   ``stream_timeout_s`` of the window;
 - copies of radio reports: judged on arrival (:mod:`rplearn.io.tlog_copies`).
 
-Every array holds only the window: the state does not grow with the flight.
+Every array holds only the window: the state does not grow with the flight (but the anchor is a
+position fix, so while fixes are missing the window reaches back to the last one and grows with
+the gap: ``test_the_state_kept_does_not_grow_with_a_long_gap_of_position_fixes``, xfail).
 """
 
 from __future__ import annotations
@@ -57,6 +59,7 @@ class _Piece:
     valid: bool = True
     handed: dict[str, int] = field(default_factory=lambda: {"pose": 0, "signal": 0})
     received: dict[str, int] = field(default_factory=lambda: {"pose": 0, "signal": 0})
+    late: dict[str, int] = field(default_factory=lambda: {"pose": 0, "signal": 0})  # counted late, not yet taken back
 
 
 class TlogWindow:
@@ -338,18 +341,27 @@ class TlogWindow:
         self.prefix, self.prefix_joined, self.pieces = np.asarray(rows).reshape(-1, 7), np.asarray(flags, bool), new_pieces
 
     def revisit(self, valid: np.ndarray) -> dict[str, int]:
-        """Counts of rows whose verdict changed behind the anchor, given which fixes of the
-        conversion (``_fixes``: the prefix's rows first) are valid: a piece turned invalid
-        withdraws the rows handed out in it; one turned valid again gives them back (``late``),
-        or, if none were handed out, the messages it holds."""
+        """Changes of the counts of rows whose verdict changed behind the anchor, given which
+        fixes of the conversion (``_fixes``: the prefix's rows first) are valid: a piece turned
+        invalid withdraws the rows handed out in it (or, if none were, takes back the messages
+        it was counted late by); one turned valid again gives them back (the withdrawn count
+        falls by them), or, if none were handed out, counts the messages it holds late. So a
+        verdict that flips and flips back (a short position glitch under way at a poll, the
+        last piece of the boot, so the pieces before it invalid for that poll) leaves the counts
+        where they were. Values may be negative."""
         out = {f"{k}_{w}_rows": 0 for k in ("late", "withdrawn") for w in ("pose", "signal")}
         for p, v in zip(self.pieces, np.asarray(valid, bool)[np.flatnonzero(~self.prefix_joined)].tolist(), strict=True):
-            if p.valid and not v:
-                for w in ("pose", "signal"):
+            handed = any(p.handed.values())
+            for w in ("pose", "signal"):
+                if p.valid and not v:
                     out[f"withdrawn_{w}_rows"] += p.handed[w]
-            elif v and not p.valid:
-                for w in ("pose", "signal"):
-                    out[f"late_{w}_rows"] += p.handed[w] if any(p.handed.values()) else p.received[w]
+                    out[f"late_{w}_rows"] -= p.late[w]
+                    p.late[w] = 0
+                elif v and not p.valid and handed:
+                    out[f"withdrawn_{w}_rows"] -= p.handed[w]
+                elif v and not p.valid:
+                    out[f"late_{w}_rows"] += p.received[w]
+                    p.late[w] = p.received[w]
             p.valid = v
         return out
 

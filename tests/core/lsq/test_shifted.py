@@ -53,3 +53,15 @@ def test_shifted_statistics_are_those_of_the_residuals(environment):
     late = shifted_statistics(normal, t.ravel()).with_shared(links)
     early = shifted_statistics(normal.with_shared(links), t.ravel())
     assert np.allclose(late.rhs, early.rhs, rtol=1e-12, atol=1e-9 * float(np.max(np.abs(early.rhs))))
+
+
+def test_a_merge_into_the_shifted_statistics_leaves_the_originals_environment_sums():
+    """Review 37: the shifted copy shared ``env_cross`` with the statistics it came from, so a
+    merge (or add) into it wrote into the original's environment sums."""
+    basis, n_nodes, d, tx, rx, y, env, t, _ = _case(True)
+    normal = NormalEquations(basis, n_nodes, environment=True).add(d, tx, rx, y, env)
+    before = normal.env_cross.copy()
+    shifted = shifted_statistics(normal, t.ravel())
+    shifted.merge(NormalEquations(basis, n_nodes, environment=True).add(d, tx, rx, y, env))
+    shifted.add(d, tx, rx, y, env)
+    np.testing.assert_array_equal(normal.env_cross, before)

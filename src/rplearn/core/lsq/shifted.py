@@ -40,7 +40,7 @@ def shifted_statistics(normal: NormalEquations, coef: np.ndarray) -> NormalEquat
     -------
     NormalEquations
         A new object sharing ``normal``'s Gram, marked read-only (a merge into it copies it
-        first); ``normal`` is unchanged.
+        first), every other array its own; ``normal`` is unchanged.
     """
     pat = normal.n_pattern_columns
     t = np.zeros(normal.n_columns)
@@ -60,6 +60,7 @@ def shifted_statistics(normal: NormalEquations, coef: np.ndarray) -> NormalEquat
         directed[(a, b)] = w
     out.directed = directed
     out.link_counts = dict(normal.link_counts)
+    out.env_cross = normal.env_cross.copy()  # a merge or add into the copy adds into it in place
     out.env_y = float(normal.env_y - normal.env_cross @ t[:pat])
     out.blocks = None
     return out
