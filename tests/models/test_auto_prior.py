@@ -182,9 +182,6 @@ def test_the_kept_prior_is_tapered_against_ringing():
     assert deviation_problem(units, total, truth.ravel(), "data").target is None
 
 
-@pytest.mark.xfail(strict=True, reason="review 37: models/auto.py (not this helper's to edit) takes orders[-1] as the "
-                   "largest candidate order: with the orders not ascending the kept model's label and "
-                   "training['prior_kept']['model_order'] name another order than its basis")
 def test_the_kept_model_names_its_order_whatever_the_order_of_the_candidates(monkeypatch):
     import rplearn.models.auto_prior as auto_prior
 
@@ -196,3 +193,26 @@ def test_the_kept_model_names_its_order_whatever_the_order_of_the_candidates(mon
     kept = fitted.model.training.extra["prior_kept"]
     assert kept["kept"] and fitted.model.basis == make_basis("sh", BIG), kept
     assert kept["model_order"] == BIG and fitted.spec.order == BIG, (kept, fitted.spec)
+
+
+def test_the_kept_prior_target_holds_the_tapered_shape_at_the_priors_levels(monkeypatch):
+    """The misfit that sets a kept prior's unseen spread is that of the prior the model keeps:
+    the tapered shape at each node's own level (review 37: it was the untapered prior's)."""
+    from rplearn.core.lsq.level import pattern_shape
+    from rplearn.models.auto_prior import kept_prior_target
+
+    basis = make_basis("sh", BIG)
+    truth = _truth(2)
+    units = _units(truth)
+    total = NormalEquations(basis, 2)
+    for st in units.values():
+        total.merge(st)
+    prior = (truth + 3.0).ravel()
+    problem = deviation_problem(units, total, prior, "data")
+    kept = kept_prior_target(prior, problem.shape, basis, 2)
+    assert np.allclose(pattern_shape(kept, basis, 2), problem.shape, atol=1e-12)
+    assert np.allclose(kept - pattern_shape(kept, basis, 2), prior - pattern_shape(prior, basis, 2), atol=1e-12)
+    assert not np.allclose(kept, prior)  # the taper moved the high degrees
+    monkeypatch.setattr("rplearn.models.auto_prior.PRIOR_TAPER_RESOLUTION", 0.0)
+    untapered = deviation_problem(units, total, prior, "data")
+    assert np.allclose(kept_prior_target(prior, untapered.shape, basis, 2), prior, atol=1e-12)

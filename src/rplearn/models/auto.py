@@ -38,7 +38,7 @@ from rplearn.core.threads import blas_threads_for, one_blas_thread
 from rplearn.core.threads import warm_up as warm_up_blas
 from rplearn.data.tables import LinkSamples
 from rplearn.errors import InputError
-from rplearn.models.auto_prior import deviation_problem, held_out_errors, keeps_prior, kept_prior_coef, kept_within_noise
+from rplearn.models.auto_prior import deviation_problem, held_out_errors, keeps_prior, kept_prior_coef, kept_prior_target, kept_within_noise
 from rplearn.models.fit import FittedModel
 from rplearn.models.load import load_priors
 from rplearn.models.node_coverage import CoverageWork
@@ -448,6 +448,9 @@ def fit_from_statistics(
     """
     t0 = time.perf_counter()
     options = options or FitOptions(auto=True)
+    orders = sorted({int(o) for o in orders})  # the search and the kept prior read the largest last
+    if not orders:
+        raise InputError("no candidate orders to choose from", param="orders")
     kind, ridge = spec.kind, float(spec.ridge if spec.ridge is not None else default_ridge(spec.kind))
     gauge, path_loss, link_offsets = options.gauge, options.path_loss, options.link_offsets
     prior, prior_spread_db, prior_level = load_priors(options).priors or None, options.prior_std_db, options.prior_level
@@ -554,7 +557,8 @@ def fit_from_statistics(
         if target is not None and covariance is not None and prior is not None and set(map(str, prior)) >= set(map(str, nodes)):
             if prior_spread_db is None:
                 # the misfit of the prior the model keeps: to the chosen order, or all of it (auto_prior)
-                misfit = (prior_misfit_var(plain_total, target, first.basis) if keep else
+                misfit = (prior_misfit_var(plain_total, kept_prior_target(target, shape, first.basis, len(nodes)), first.basis)
+                          if keep and shape is not None else
                           prior_misfit_var(normal, target[nested_columns(first.basis, chosen, len(nodes))], chosen))
                 learned = float(np.sqrt(max(misfit - within_var - level_var, 0.0) / 2.0))  # two ends a sample
                 spread_source = "learned from the prior's misfit to the flight"

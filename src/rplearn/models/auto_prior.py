@@ -123,6 +123,13 @@ def deviation_problem(units: Mapping[str, NormalEquations], total: NormalEquatio
                             level if prior_level == "prior" else None)
 
 
+def kept_prior_target(target: np.ndarray, shape: np.ndarray, basis: Basis, n_nodes: int) -> np.ndarray:
+    """The prior a kept model holds: each node's level of ``target`` with the tapered ``shape``
+    (:func:`deviation_problem`) in place of the prior's own shape (pattern columns only)."""
+    prior = np.asarray(target, np.float64)[:n_nodes * basis.n_coef]
+    return prior - pattern_shape(prior, basis, n_nodes) + np.asarray(shape, np.float64)
+
+
 def kept_prior_coef(shape: np.ndarray, deviation: np.ndarray, big: Any, chosen: Any, n_nodes: int) -> np.ndarray:
     """``(n_nodes, big.n_coef)``: the prior's shape plus the deviation (of ``chosen``'s columns)."""
     out = np.array(shape, np.float64).reshape(n_nodes, big.n_coef)
@@ -158,4 +165,4 @@ def kept_within_noise(kept: Selection, cut: Selection, kept_sse: np.ndarray, cut
 
 
 __all__ = ["MAX_KEPT_COLUMNS", "PRIOR_TAPER_RESOLUTION", "DeviationProblem", "deviation_problem", "held_out_errors", "keeps_prior",
-           "kept_prior_coef", "kept_within_noise"]
+           "kept_prior_coef", "kept_prior_target", "kept_within_noise"]
