@@ -407,7 +407,7 @@ def _reference_drift(setup: Setup, parts: list[Any]) -> float:
 
 def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, prior_std_db: float = PRIOR_STD_DB,
         correlated: str = "reference", block_s: float = DEFAULT_BLOCK_S, posterior: str = "inflated",
-        budget: bool = False, draws: int = DRAWS) -> dict[str, Flight]:
+        budget: bool = False, draws: int = DRAWS, candidates: dict[str, Any] | None = None) -> dict[str, Flight]:
     config = _config(preset)
     learning = config.campaign.with_role("learning").units
     nodes = tuple(sorted(config.node_antennas))
@@ -415,7 +415,7 @@ def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, 
     spec = ModelSpec("sh", order)
     weight = prior_penalty_weight(spec.basis(), prior_std_db, noise, spec.ridge_weight, power) if prior_std_db > 0 else 0.0
     speed = float(getattr(learning[0], "speed_m_s", 1.5))
-    cands = CandidateOptions(fixed_nodes=FIXED.get(preset, ()), speed_m_s=speed)
+    cands = CandidateOptions(fixed_nodes=FIXED.get(preset, ()), speed_m_s=speed, **(candidates or {}))
     opts = ManoeuvreOptions(noise_std_db=noise, packet_rate_hz=config.radio.packet_rate_hz * (1 - config.radio.loss_probability),
                             penalty_weight=weight, candidates=cands, power=power, correlation_s=block_s)
     setup = Setup(preset, config, spec, nodes, opts, weight, seed=seed, correlated=correlated, block_s=block_s, budget=budget)
@@ -503,6 +503,15 @@ def expected_no_worse(flight: Flight, ref: Flight) -> tuple[bool, float, float]:
     return bool(m - mr <= tol), m - mr, tol
 
 
+def _candidate_args(args: argparse.Namespace) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    if args.yaw_rate > 0:
+        out["yaw_rate_deg_s"] = args.yaw_rate
+    if args.no_arcs:
+        out["arcs"] = False
+    return out
+
+
 def _fmt(d: dict[str, float]) -> str:
     return ", ".join(f"{n} {v:.2f}" for n, v in d.items()) or "-"
 
@@ -526,6 +535,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--block-s", type=float, default=DEFAULT_BLOCK_S, help="length of a time block of the drifting error [s]")
     ap.add_argument("--draws", type=int, default=DRAWS,
                     help="independent noise draws of each flight plan for the expected error (0: the single-draw check only)")
+    ap.add_argument("--yaw-rate", type=float, default=0.0, help="the candidates' cruise yaw rate [deg/s]; 0: CandidateOptions' default")
+    ap.add_argument("--no-arcs", action="store_true", help="no arcs over or under the anchor among the candidates")
     ap.add_argument("--tiny", action="store_true", help="the smoke preset at SH-4 (seconds; criteria not enforced)")
     args = ap.parse_args(argv)
     presets = ["smoke"] if args.tiny else [p.strip() for p in args.presets.split(",") if p.strip()]
@@ -540,7 +551,7 @@ def main(argv: list[str] | None = None) -> int:
         ref_total = _config(preset).campaign.with_role("learning")
         limit = float(sum(u.duration_s for u in ref_total.units))
         flights = run(preset, order, seed, limit, args.power, args.prior_std, args.correlated, args.block_s, args.posterior,
-                      args.budget or args.tiny, draws)
+                      args.budget or args.tiny, draws, _candidate_args(args))
         ref = flights["reference"]
         print(f"{preset} (SH-{order}, seed {seed}, {time.perf_counter() - t0:.0f} s): time to {TARGET_DB:g} dB per-node spread")
         for f in flights.values():
@@ -551,6 +562,9 @@ def main(argv: list[str] | None = None) -> int:
             if f.budget_db:
                 print("    error by source (bias / pointing / fading, each fitted alone) ["
                       + ", ".join(f"{n} {b:.2f}/{p:.2f}/{w:.2f}" for n, (b, p, w) in f.budget_db.items()) + "] dB")
+            if f.history:  # the largest spread every 20 s of flight: where it falls fast and where it stalls
+                marks = [(t, v) for t, v in f.history if int(t // 20) != int((t - STEP_S) // 20)]
+                print("    spread over time: " + ", ".join(f"{t:.0f} s {v:.2f}" for t, v in marks) + " dB")
             if f.steps:
                 print("    " + "; ".join(f.steps[:12]) + (" ..." if len(f.steps) > 12 else ""))
             if f.draws_db:
