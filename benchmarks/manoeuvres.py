@@ -507,8 +507,8 @@ def _candidate_args(args: argparse.Namespace) -> dict[str, Any]:
     out: dict[str, Any] = {}
     if args.yaw_rate > 0:
         out["yaw_rate_deg_s"] = args.yaw_rate
-    if args.no_arcs:
-        out["arcs"] = False
+    if args.arcs:
+        out["arcs"] = True
     return out
 
 
@@ -536,7 +536,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--draws", type=int, default=DRAWS,
                     help="independent noise draws of each flight plan for the expected error (0: the single-draw check only)")
     ap.add_argument("--yaw-rate", type=float, default=0.0, help="the candidates' cruise yaw rate [deg/s]; 0: CandidateOptions' default")
-    ap.add_argument("--no-arcs", action="store_true", help="no arcs over or under the anchor among the candidates")
+    ap.add_argument("--arcs", action="store_true", help="also arcs over or under the anchor among the candidates")
     ap.add_argument("--tiny", action="store_true", help="the smoke preset at SH-4 (seconds; criteria not enforced)")
     args = ap.parse_args(argv)
     presets = ["smoke"] if args.tiny else [p.strip() for p in args.presets.split(",") if p.strip()]

@@ -212,10 +212,11 @@ def test_an_arc_goes_over_the_anchor_on_its_circle_to_the_mirrored_elevation():
 
 
 def test_arcs_are_offered_only_where_the_heights_allow_and_can_be_left_out():
-    cands = candidate_manoeuvres(PAIR, CandidateOptions(min_height_m=16.0))
+    cands = candidate_manoeuvres(PAIR, CandidateOptions(min_height_m=16.0, arcs=True))
     arcs = [c for c in cands if getattr(c.unit, "kind", "") == "arc"]
     assert arcs and {c.unit.sweep_deg for c in arcs} == {180.0}  # 20 m high: 10 m or 6 m under reaches 10 or 14 m
     for c in arcs:
         assert c.unit.sample(5.0).position_enu_m[:, 1, 2].min() >= 16.0 - 1e-6
-    assert any(c.unit.sweep_deg == -180.0 for c in candidate_manoeuvres(PAIR) if getattr(c.unit, "kind", "") == "arc")
-    assert not any(getattr(c.unit, "kind", "") == "arc" for c in candidate_manoeuvres(PAIR, CandidateOptions(arcs=False)))
+    arcs = [c for c in candidate_manoeuvres(PAIR, CandidateOptions(arcs=True)) if getattr(c.unit, "kind", "") == "arc"]
+    assert any(c.unit.sweep_deg == -180.0 for c in arcs)
+    assert not any(getattr(c.unit, "kind", "") == "arc" for c in candidate_manoeuvres(PAIR))  # off by default

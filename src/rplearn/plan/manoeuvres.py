@@ -349,6 +349,9 @@ class CandidateOptions:
         Also offer arcs (:attr:`ManoeuvreUnit.kind` ``"arc"``): the mover over the anchor's
         zenith (or under its nadir, where the heights allow) to the mirrored elevation, at the
         current distance and at ``orbit_distances_m``, turning a full circle meanwhile or not.
+        Off by default: flown in the simulator (``benchmarks/manoeuvres.py``, paper seed 0, one
+        draw) they were chosen but left the time to 2 dB at 0.63/0.62x of the reference's
+        (suggested/optimized) against 0.57/0.61x without them.
     revisits : int
         Also offer manoeuvres that see their directions this many times over, each pass after
         the last (a yaw turn of ``revisits * 360`` deg, an orbit of ``revisits`` laps, the
@@ -373,7 +376,7 @@ class CandidateOptions:
     orbit_distances_m: tuple[float, ...] = (6.0,)
     min_separation_m: float = 5.0
     anchor_turns: bool = True
-    arcs: bool = True
+    arcs: bool = False
     revisits: int = 2
 
     def __post_init__(self) -> None:
