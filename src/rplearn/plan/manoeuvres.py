@@ -329,10 +329,12 @@ class CandidateOptions:
     fixed_nodes : tuple of str
         Nodes that cannot move (a ground station); the others are drones.
     speed_m_s, accel_m_s2, yaw_rate_deg_s : float
-        The vehicles' cruise speed [m/s], acceleration [m/s^2] and yaw rate [deg/s]. The yaw
-        rate's default, 45 deg/s, is the peak the paper's own units turn at (47 deg/s): the
-        posterior carries a heading error drifting over 5-s blocks, so a turn that sweeps more
-        azimuths per block learns more per second (at 30 deg/s a block saw less than half a ring).
+        The vehicles' cruise speed [m/s], acceleration [m/s^2] and yaw rate [deg/s]. A faster
+        turn sweeps more azimuths per 5-s block of the drifting heading error (45 deg/s, near
+        the paper units' 47-deg/s peak: 225 deg a block, against 150 at 30); flown in the
+        simulator (``benchmarks/manoeuvres.py --yaw-rate 45``, 12 cells) it cut the mean time
+        to 2 dB (paper 0.66 -> 0.63x of the reference's, ground 0.56 -> 0.52x) but not the
+        cells meeting both of its checks (4 of 12, against 6), so the default stays 30 deg/s.
     min_height_m, max_height_m : float
         Heights a mover may fly at [m].
     library : bool
@@ -349,9 +351,10 @@ class CandidateOptions:
         Also offer arcs (:attr:`ManoeuvreUnit.kind` ``"arc"``): the mover over the anchor's
         zenith (or under its nadir, where the heights allow) to the mirrored elevation, at the
         current distance and at ``orbit_distances_m``, turning a full circle meanwhile or not.
-        Off by default: flown in the simulator (``benchmarks/manoeuvres.py``, paper seed 0, one
-        draw) they were chosen but left the time to 2 dB at 0.63/0.62x of the reference's
-        (suggested/optimized) against 0.57/0.61x without them.
+        Off by default: flown in the simulator (``benchmarks/manoeuvres.py --arcs``) they were
+        chosen but did not pay for their time (paper seed 0, time to 2 dB over the
+        reference's, suggested/optimized: 0.71/0.68x at 30 deg/s against 0.72/0.74x without
+        them; 0.63/0.62x at 45 deg/s against 0.57/0.61x).
     revisits : int
         Also offer manoeuvres that see their directions this many times over, each pass after
         the last (a yaw turn of ``revisits * 360`` deg, an orbit of ``revisits`` laps, the
@@ -368,7 +371,7 @@ class CandidateOptions:
     fixed_nodes: tuple[str, ...] = ()
     speed_m_s: float = 1.5
     accel_m_s2: float = 1.0
-    yaw_rate_deg_s: float = 45.0
+    yaw_rate_deg_s: float = 30.0
     min_height_m: float = 3.0
     max_height_m: float = 120.0
     library: bool = True
