@@ -217,6 +217,8 @@ def test_arcs_are_offered_only_where_the_heights_allow_and_can_be_left_out():
     assert arcs and {c.unit.sweep_deg for c in arcs} == {180.0}  # 20 m high: 10 m or 6 m under reaches 10 or 14 m
     for c in arcs:
         assert c.unit.sample(5.0).position_enu_m[:, 1, 2].min() >= 16.0 - 1e-6
-    arcs = [c for c in candidate_manoeuvres(PAIR, CandidateOptions(arcs=True)) if getattr(c.unit, "kind", "") == "arc"]
+    every = candidate_manoeuvres(PAIR, CandidateOptions(arcs=True))
+    assert len({c.unit.label for c in every}) == len(every)  # labels stay unique with the arcs
+    arcs = [c for c in every if getattr(c.unit, "kind", "") == "arc"]
     assert any(c.unit.sweep_deg == -180.0 for c in arcs)
     assert not any(getattr(c.unit, "kind", "") == "arc" for c in candidate_manoeuvres(PAIR))  # off by default
