@@ -59,7 +59,7 @@ def test_the_predicted_spread_is_the_spread_after_adding_the_manoeuvre_s_samples
     opts = replace(_options(), packet_rate_hz=2.0, sample_rate_hz=4.0)  # weight 2 * 2 / 4 = 1 packet per row
     normal = NormalEquations(SPEC.basis(), 2)
     unit = ManoeuvreUnit(nodes=("B", "A"), kind="spiral", anchor_enu_m=(5.0, 0.0, 20.0), start_enu_m=(-5.0, 0.0, 20.0),
-                         elevation_deg=30.0)
+                         elevation_deg=30.0, yaw_rate_deg_s=opts.candidates.yaw_rate_deg_s)
     ranked = [r for r in rank_manoeuvres(normal, SPEC, NODES, POSES, opts) if r.candidate.unit == unit]
     assert len(ranked) == 1
     rows = manoeuvre_rows(unit, NODES, SPEC.basis(), 4.0)

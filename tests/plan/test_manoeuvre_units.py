@@ -184,3 +184,41 @@ def test_revisit_candidates_see_their_directions_again_a_pass_later():
         CandidateOptions(revisits=0)
     with pytest.raises(InputError):
         _unit("orbit", laps=0)
+
+
+def test_an_arc_goes_over_the_anchor_on_its_circle_to_the_mirrored_elevation():
+    u = _unit("arc", sweep_deg=180.0, distance_m=6.0, turn_deg=360.0)
+    ref = u.sample(50.0)
+    anchor = np.array([5.0, 0.0, 20.0])
+    d = ref.position_enu_m[:, 1] - anchor
+    on_circle = np.abs(np.linalg.norm(d, axis=1) - 6.0) < 1e-6
+    assert on_circle[-1] and on_circle.mean() > 0.5  # the transit to 6 m, then the arc
+    assert np.allclose(d[on_circle, 1], 0.0)  # in the vertical plane of anchor and mover
+    assert d[:, 2].max() == pytest.approx(6.0, abs=1e-3)  # over the anchor's zenith
+    assert np.array(u.end_pose()[0]) - anchor == pytest.approx((6.0, 0.0, 0.0), abs=1e-9)  # the other side, at the mirrored elevation (0 deg)
+    v_num = np.gradient(ref.position_enu_m[:, 1], ref.t_s, axis=0)
+    assert np.max(np.abs(v_num - ref.velocity_enu_m_s[:, 1])[2:-2]) < 0.05
+    a_num = np.gradient(ref.velocity_enu_m_s[:, 1], ref.t_s, axis=0)
+    inside = on_circle & (np.arange(on_circle.size) > np.argmax(on_circle) + 2)
+    err = np.linalg.norm(a_num - ref.accel_enu_m_s2[:, 1], axis=1)[inside][:-3]
+    assert np.quantile(err, 0.95) < 0.02  # the acceleration is the derivative (but at the profile's steps)
+    turned = np.unwrap(ref.yaw_rad[:, 1])
+    assert turned[-1] - turned[0] == pytest.approx(2 * np.pi, abs=1e-9)  # the turn meanwhile
+    under = _unit("arc", sweep_deg=-180.0, distance_m=6.0, turn_deg=0.0)
+    assert (under.sample(20.0).position_enu_m[:, 1, 2] - 20.0).min() == pytest.approx(-6.0, abs=1e-3)
+    with pytest.raises(InputError) as err:
+        _unit("arc", sweep_deg=0.0)
+    assert err.value.param == "sweep_deg"
+
+
+def test_arcs_are_offered_only_where_the_heights_allow_and_can_be_left_out():
+    cands = candidate_manoeuvres(PAIR, CandidateOptions(min_height_m=16.0, arcs=True))
+    arcs = [c for c in cands if getattr(c.unit, "kind", "") == "arc"]
+    assert arcs and {c.unit.sweep_deg for c in arcs} == {180.0}  # 20 m high: 10 m or 6 m under reaches 10 or 14 m
+    for c in arcs:
+        assert c.unit.sample(5.0).position_enu_m[:, 1, 2].min() >= 16.0 - 1e-6
+    every = candidate_manoeuvres(PAIR, CandidateOptions(arcs=True))
+    assert len({c.unit.label for c in every}) == len(every)  # labels stay unique with the arcs
+    arcs = [c for c in every if getattr(c.unit, "kind", "") == "arc"]
+    assert any(c.unit.sweep_deg == -180.0 for c in arcs)
+    assert not any(getattr(c.unit, "kind", "") == "arc" for c in candidate_manoeuvres(PAIR))  # off by default
