@@ -303,9 +303,6 @@ def test_a_station_taken_from_a_fix_found_invalid_later_moves_to_syncs_first_val
         np.testing.assert_allclose(after[c].to_numpy(), ref_vehicle[c].to_numpy(), rtol=0, atol=1e-9, err_msg=c)
 
 
-@pytest.mark.xfail(strict=True, reason="review 37: the anchor is a position fix, so while GLOBAL_POSITION_INT is "
-                   "missing the window keeps every ATTITUDE and radio report of the outage and every poll converts them "
-                   "again: the state and a poll's cost grow with the outage (not fixed: the window's rules assume a fix anchor)")
 def test_the_state_kept_does_not_grow_with_a_long_gap_of_position_fixes(ground, tmp_path):
     """Review 37: 280 s without ``GLOBAL_POSITION_INT`` (attitude and radio reports go on): the
     rows are still the offline reader's, but the most the tail keeps during the gap should stay

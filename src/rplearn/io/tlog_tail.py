@@ -13,7 +13,7 @@ fix :data:`rplearn.io.tlog_window.KEEP_S` before the rows handed out, with a bou
 the past standing in for the reader's whole-log rules (the pieces of valid fixes of the boot, each
 boot's times, the last GPS fix type and armed state, the copy rule of radio reports on running
 binned counts: :mod:`rplearn.io.tlog_copies`). A poll's cost and the state kept do not grow with
-the flight (except over a gap of position fixes, which the window, anchored at a fix, spans).
+the flight, nor with a gap of position fixes (the anchor moves into it).
 
 What can still change once handed out is fixed before any row is handed out:
 
@@ -218,7 +218,7 @@ class TlogTail:
         if self.window is None and self.rows is not None and (len(poses) or len(signals)):
             self._lock(raw)
         elif self.window is not None:
-            self._move_anchor(raw, final, options.stream_timeout_s)
+            self._move_anchor(raw, final, options.stream_timeout_s, options.max_gap_s)
         return poses, signals
 
     def _recheck_station(self, raw: Any) -> None:
@@ -270,7 +270,7 @@ class TlogTail:
         window.fix_step_origin()
         self.rows, self.window = None, window
 
-    def _move_anchor(self, raw: Any, final: bool, stream_timeout_s: float) -> None:
+    def _move_anchor(self, raw: Any, final: bool, stream_timeout_s: float, max_gap_s: float) -> None:
         """Count what changed behind the anchor, the vehicle changing, then move the anchor on."""
         assert self.window is not None
         w = self.window
@@ -286,7 +286,8 @@ class TlogTail:
             self.dropped[k] += n
         to = math.inf if final else self._covered - KEEP_S
         anchor = w.anchor
-        self.dropped["uncertain_copy_reports"] += w.trim(raw, to, stream_timeout_s, (fixes[0], fixes[2]), self._handed)
+        self.dropped["uncertain_copy_reports"] += w.trim(raw, to, stream_timeout_s, (fixes[0], fixes[2]), self._handed,
+                                                             max_gap_s)
         self.dropped["changed_copy_reports"] += w.copies.reversed_behind(w.copies.rule())
         for what in ("pose", "signal"):
             self._handed[what] = self._handed[what][self._handed[what] >= w.anchor]

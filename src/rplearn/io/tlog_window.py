@@ -24,9 +24,10 @@ The offline reader's rules that look at the whole log, and their causal forms he
   ``stream_timeout_s`` of the window;
 - copies of radio reports: judged on arrival (:mod:`rplearn.io.tlog_copies`).
 
-Every array holds only the window: the state does not grow with the flight (but the anchor is a
-position fix, so while fixes are missing the window reaches back to the last one and grows with
-the gap: ``test_the_state_kept_does_not_grow_with_a_long_gap_of_position_fixes``, xfail).
+Every array holds only the window: the state does not grow with the flight. In a gap of
+position fixes longer than the reader's ``max_gap_s`` the anchor moves into the gap (every
+attitude instant there is dropped whatever fix comes later; the rows handed out there are
+counted in the last fix's piece), the last fix kept standing in for the fixes behind it.
 """
 
 from __future__ import annotations
@@ -99,6 +100,8 @@ class TlogWindow:
         self.has_origin = False
         self._boot_at: tuple[float, float, int] | None = None  # the last vehicle message's receive, boot time, boot
         self.anchor = -np.inf
+        self.last_fix: tuple[float, int] = (-np.inf, 0)  # the last fix at or before the anchor (time [s], boot)
+        self.in_gap = False  # the anchor lies in a gap of fixes, after last_fix (trim)
         self.prefix = np.zeros((0, 7))
         self.prefix_joined = np.zeros(0, bool)
         self.pieces: list[_Piece] = []
@@ -215,11 +218,19 @@ class TlogWindow:
             if s // 256 != self.vehicle:
                 others[s // 256] = others.get(s // 256, 0) + k
         notes = {**self.notes, "other_vehicles": others, "radio_senders": dict(self.radio_senders)}
+        pos = np.column_stack([t_log[n_att:], self.gpi[:, 2:7], boot[n_att:]])
+        fix = self.fix
+        if self.in_gap and len(self.prefix):
+            # the anchor in a gap of fixes (trim): the last fix kept (valid by its fix type) again in
+            # front, twice (the reader wants two fixes; the same time: one fix, joining itself)
+            last = self.prefix[-1]
+            pos = np.concatenate([np.stack([last, last]), pos])
+            fix = np.concatenate([[[last[0], 1.0]], fix]) if len(fix) else fix
         return Raw(
             fmt="tlog", att=np.column_stack([t_log[:n_att], self.att[:, 2:5], boot[:n_att]]),
-            pos=np.column_stack([t_log[n_att:], self.gpi[:, 2:7], boot[n_att:]]),
+            pos=pos,
             radio=self.radio[~uncertain, :7], vehicle_t=self.vehicle_t, home=self.home, counts=dict(self.counts),
-            boot_last_t=boot_last_t, origin_t=self.origin_t, fix=self.fix, armed=self.armed, boot_offsets=per_boot,
+            boot_last_t=boot_last_t, origin_t=self.origin_t, fix=fix, armed=self.armed, boot_offsets=per_boot,
             notes=notes, prefix=self.prefix, prefix_joined=self.prefix_joined, step_origin=self.step_origin,
             radio_copy=copy[~uncertain], radio_period=None if band is None else 0.5 * (band[0] + band[1]),
         )
@@ -245,25 +256,33 @@ class TlogWindow:
 
     # --- trimming ------------------------------------------------------------------------------
     def trim(self, raw: Raw, to: float, stream_timeout_s: float, verdict: tuple[np.ndarray, np.ndarray],
-             handed: dict[str, np.ndarray]) -> int:
+             handed: dict[str, np.ndarray], max_gap_s: float = np.inf) -> int:
         """Move the anchor to the last position fix at or before ``to`` (if later than the
-        present one), folding what lies before it into the summary. ``raw`` is :meth:`raw`'s
-        output, ``verdict`` the times of its fixes and which are valid (``_fixes``), ``handed``
-        the times of the rows handed out after the present anchor (those before the new one are
-        counted in their piece). Returns the reports left behind that could not be judged."""
+        present one), or, in a gap of fixes longer than ``max_gap_s`` [s] (the reader's longest
+        bridged gap), into the gap (:meth:`_gap_anchor`), folding what lies before it into the
+        summary. ``raw`` is :meth:`raw`'s output, ``verdict`` the times of its fixes and which
+        are valid (``_fixes``), ``handed`` the times of the rows handed out after the present
+        anchor (those before the new one are counted in their piece). Returns the reports left
+        behind that could not be judged."""
         fixes_t = raw.pos[:, 0]
         finite = np.all(np.isfinite(raw.pos[:, :4]), axis=1)
         cand = fixes_t[finite & (fixes_t <= to)]
-        if not len(cand) or cand.max() <= self.anchor:
+        if len(cand):
+            last_fix = (float(cand.max()), int(raw.pos[finite & (fixes_t == cand.max()), 6][0]))
+        else:
+            last_fix = self.last_fix
+        gap = self._gap_anchor(raw, last_fix, to, max_gap_s)
+        anchor = max(gap, last_fix[0])
+        if not np.isfinite(anchor) or anchor <= self.anchor:
             return 0
-        anchor = float(cand.max())
-        anchor_boot = int(raw.pos[finite & (fixes_t == anchor), 6][0])
+        anchor_boot = last_fix[1]
+        self.last_fix, self.in_gap = last_fix, gap > last_fix[0]
         self._fold_pieces(raw, anchor, anchor_boot, verdict, handed)
         both = np.concatenate([self.att[:, [0, 1, 5]], self.gpi[:, [0, 1, 7]]])
-        t_log = raw.att[:, 0], raw.pos[:, 0]
+        t_log = raw.att[:, 0], raw.pos[len(raw.pos) - len(self.gpi):, 0]  # (without the fix repeated in a gap: raw)
         for b in np.unique(both[:, -1]).astype(int).tolist():
             gone_att = t_log[0][(raw.att[:, 4] == b) & (t_log[0] < anchor)]
-            gone_pos = t_log[1][(raw.pos[:, 6] == b) & (t_log[1] < anchor)]
+            gone_pos = t_log[1][(raw.pos[len(raw.pos) - len(self.gpi):, 6] == b) & (t_log[1] < anchor)]
             if len(gone_att):
                 self.boot_first.setdefault(b, float(gone_att.min()))
                 self.boot_last_att[b] = max(self.boot_last_att.get(b, -np.inf), float(gone_att.max()))
@@ -282,6 +301,22 @@ class TlogWindow:
         self.fix, self.armed = _events_from(self.fix, anchor), _events_from(self.armed, anchor)
         self.anchor = anchor
         return uncertain
+
+    def _gap_anchor(self, raw: Raw, last_fix: tuple[float, int], to: float, max_gap_s: float) -> float:
+        """Where the anchor may lie in a gap of position fixes (-inf: nowhere): ``to``, if the
+        last fix at or before it lies more than ``max_gap_s`` before it, and no message of a
+        later boot than that fix's comes before it (else up to the first such message, if still
+        more than ``max_gap_s`` after the fix). Whatever fix comes later, the reader drops every
+        attitude instant of the gap (a gap longer than ``max_gap_s``, or after the last valid
+        fix), and the only verdict a later fix can change on the rows of the gap is that of the
+        last fix's piece (its rows counted in the piece: :meth:`revisit`); the rows of a boot
+        without a fix yet stay in the window (its first fix excludes them)."""
+        t_fix, boot = last_fix
+        if not np.isfinite(t_fix):
+            return -np.inf
+        later = raw.att[(raw.att[:, 4] != boot) & (raw.att[:, 0] > t_fix), 0]
+        gap_to = min(to, float(later.min())) if len(later) else to
+        return gap_to if gap_to - t_fix > max_gap_s else -np.inf
 
     def _fold_pieces(self, raw: Raw, anchor: float, boot: int, verdict: tuple[np.ndarray, np.ndarray],
                      handed: dict[str, np.ndarray]) -> None:
