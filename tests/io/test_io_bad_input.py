@@ -147,6 +147,15 @@ def test_truncated_pcap(tmp_path):
         read_pcap(str(eth), "rx", 20.0)
 
 
+@pytest.mark.parametrize("name", ["ieee802.11_exthdr.pcap", "ieee802.11_htc.pcap"])
+def test_captures_concatenated_are_refused_naming_where_the_second_starts(tmp_path, name):
+    data = (DATA / "radiotap-pcap" / name).read_bytes()
+    twice = tmp_path / "twice.pcap"
+    twice.write_bytes(data + data)  # was "truncated capture: the file ends inside frame 28"
+    with pytest.raises(LogFormatError, match=rf"twice.pcap: another capture's file header at byte {len(data):,}"):
+        read_pcap(str(twice), "rx", 20.0)
+
+
 def test_pcap_sentinel_rssi_is_counted_by_sync(tmp_path):
     from rplearn.data.sync import synchronise
 
