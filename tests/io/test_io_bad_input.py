@@ -121,6 +121,15 @@ def test_empty_and_missing_files(tmp_path):
         read_logs(write(tmp_path, "hello", "x.txt"))
 
 
+@pytest.mark.parametrize("name", ["d.csv", "d.parquet"])
+def test_an_empty_dataset_file_is_said_empty(tmp_path, name):
+    from rplearn.io.files import read_dataset
+
+    (tmp_path / name).write_bytes(b"")  # was "cannot read table (EmptyDataError: No columns to parse from file)"
+    with pytest.raises(RplearnError, match=rf"{name}: empty file \(0 bytes\), not a table"):
+        read_dataset(str(tmp_path / name))
+
+
 def _small_pcap(path: Path) -> Path:
     write_radiotap_pcap(str(path), np.array([1.0, 1.1, 1.2]), np.array([-40, -127, -60]),
                         ["02:00:00:00:00:0a"] * 3, 2.412e9, noise_dbm=-95)
