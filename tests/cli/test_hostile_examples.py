@@ -42,6 +42,8 @@ def _bad_files(d: Path) -> None:
     data.to_parquet(d / "scaled_q.parquet")
     data.loc[4, ["rx_qw", "rx_qx", "rx_qy", "rx_qz"]] = 0.0  # no attitude at all
     data.to_parquet(d / "zero_q.parquet")
+    pd.concat([data, data], ignore_index=True).to_parquet(d / "twice.parquet")  # a dataset in the file twice
+    pose.assign(node=pose["node"].replace({"A": "C", "B": "E"})).to_csv(d / "other_nodes.csv", index=False)
     above = pd.read_parquet(d / D)
     above.loc[5, "rssi_dbm"] = above.loc[5, "tx_power_dbm"] + 3.0
     above.to_parquet(d / "above_tx.parquet")
@@ -99,6 +101,12 @@ REFUSED = {
     "-o an existing folder": (["fit", D, "--degree", "3", "-o", "folder"], "folder: is a directory"),
     "markup in a missing input's name": (["fit", "[b]no[/]:fire:.parquet", "-o", "x.json"], "[b]no[/]:fire:.parquet: no such file"),
     "markup in an output name": (["plot", M, "-o", "[/]x.png"], "[/]x.png: cannot write into a non-existent directory"),
+    # issue 38, hostile logs: a dataset learned twice; a warning line before the refusal
+    "fit on a dataset in the file twice": (["fit", "twice.parquet", "--degree", "3", "-o", "x.json"],
+                                           "twice.parquet: 2,672 row(s) repeat an earlier row in every column"),
+    "evaluate on a dataset in the file twice": (["evaluate", M, "twice.parquet"], "twice.parquet: 2,672 row(s) repeat"),
+    "signals naming only nodes without a pose log": (["sync", "--poses", "other_nodes.csv", "--signals", S, "-o", "x.parquet"],
+                                                     "nodes without a pose log: A, B"),
 }
 
 

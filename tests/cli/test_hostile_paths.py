@@ -101,6 +101,12 @@ REFUSED = {
                               ["--prior", "mean.json", "mean"]),
     "a k-NN model as prior": (["fit", D, "--order", "auto", "--prior", "A=knn.json", "-o", "m.json"],
                               ["--prior", "knn.json", "knn"]),
+    # issue 38: a folder output that is a file (report failed with "File exists" after learning)
+    "report -o its dataset": (["report", D, "-o", D], [D, "is a file, not a folder", "--out"]),
+    "simulate -o a file": (["simulate", "--preset", "smoke", "-o", M], [M, "is a file, not a folder", "--out"]),
+    "demo -o a file": (["demo", "-o", D], [D, "is a file, not a folder", "--out"]),
+    "trajectory -o a file": (["trajectory", "-o", M], [M, "is a file, not a folder", "--out"]),
+    "report -o inside a file": (["report", D, "-o", f"{M}/r"], [f"{M}/r", "which is a file", "--out"]),
 }
 
 

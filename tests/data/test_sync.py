@@ -87,6 +87,13 @@ def test_drops_are_counted_by_reason(two_nodes):
     assert synchronise(two_nodes, sig, SyncOptions(max_gap_s=1.0)).summary.dropped["pose_gap"] == 0
 
 
+def test_unknown_nodes_are_said_once_in_the_summary_not_also_as_a_log_warning(two_nodes, caplog):
+    with caplog.at_level("WARNING"):
+        res = synchronise(two_nodes, pd.concat([signal_log([0.05], "A", "B"), signal_log([0.05], "A", "C")]))
+    assert res.summary.unknown_nodes == ["C"] and "nodes without a pose log: C" in res.summary.to_text()
+    assert not caplog.records  # a refusal's one error line (min_samples) would follow a warning line
+
+
 def test_unknown_node_can_be_an_error(two_nodes):
     with pytest.raises(InputError, match=r"signal log: field tx/rx: unknown node id\(s\) C at row 0"):
         synchronise(two_nodes, signal_log([0.05], "A", "C"), SyncOptions(on_unknown_node="error"))

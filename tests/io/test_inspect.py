@@ -96,6 +96,20 @@ def test_real_pcap_links():
     assert min(lk.rssi_min_dbm for lk in rep.links) == -51.0  # tcpdump: -51dBm, -46dBm, -45dBm
 
 
+def test_a_capture_s_dropped_frames_are_signal_rows_not_pose_rows():
+    # 26 frames: 10 with a signal level and a transmitter, 8 without a signal, 8 without a transmitter
+    text = inspect_logs(DATA / "radiotap-pcap" / "ieee802.11_exthdr.pcap").to_text()
+    assert "dropped on reading: 8 signal row(s) (no_signal)" in text
+    assert "dropped on reading: 8 signal row(s) (no_transmitter)" in text
+    assert "pose row(s) (no_" not in text
+
+
+def test_link_lost_messages_kept_as_outages_are_not_called_dropped():
+    text = inspect_logs(DATA / "ardupilot" / "mavlink-log_2013-10-13_18-31-24.tlog").to_text()
+    assert "695 radio message(s) with a zero RSSI while the vehicle was silent" in text
+    assert "(link_lost)" not in text and "(outage_" not in text
+
+
 def test_ulog_node_named_after_file():
     rep = inspect_logs(DATA / "px4-ulog" / "sample_log_small.ulg")
     assert [n.node for n in rep.nodes] == ["sample_log_small"]

@@ -121,6 +121,15 @@ def test_empty_and_missing_files(tmp_path):
         read_logs(write(tmp_path, "hello", "x.txt"))
 
 
+@pytest.mark.parametrize("name", ["d.csv", "d.parquet"])
+def test_an_empty_dataset_file_is_said_empty(tmp_path, name):
+    from rplearn.io.files import read_dataset
+
+    (tmp_path / name).write_bytes(b"")  # was "cannot read table (EmptyDataError: No columns to parse from file)"
+    with pytest.raises(RplearnError, match=rf"{name}: empty file \(0 bytes\), not a table"):
+        read_dataset(str(tmp_path / name))
+
+
 def _small_pcap(path: Path) -> Path:
     write_radiotap_pcap(str(path), np.array([1.0, 1.1, 1.2]), np.array([-40, -127, -60]),
                         ["02:00:00:00:00:0a"] * 3, 2.412e9, noise_dbm=-95)
@@ -145,6 +154,15 @@ def test_truncated_pcap(tmp_path):
     eth.write_bytes(data[:20] + (1).to_bytes(4, "little") + data[24:])
     with pytest.raises(LogFormatError, match=r"eth.pcap: link type 1, expected 127"):
         read_pcap(str(eth), "rx", 20.0)
+
+
+@pytest.mark.parametrize("name", ["ieee802.11_exthdr.pcap", "ieee802.11_htc.pcap"])
+def test_captures_concatenated_are_refused_naming_where_the_second_starts(tmp_path, name):
+    data = (DATA / "radiotap-pcap" / name).read_bytes()
+    twice = tmp_path / "twice.pcap"
+    twice.write_bytes(data + data)  # was "truncated capture: the file ends inside frame 28"
+    with pytest.raises(LogFormatError, match=rf"twice.pcap: another capture's file header at byte {len(data):,}"):
+        read_pcap(str(twice), "rx", 20.0)
 
 
 def test_pcap_sentinel_rssi_is_counted_by_sync(tmp_path):

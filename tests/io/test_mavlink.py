@@ -8,11 +8,14 @@ import struct
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from rplearn.core.geometry import rotate_body_to_world
 from rplearn.errors import LogFormatError, RplearnError
+from rplearn.io._mavlink_records import merge_copied_boots
+from rplearn.io.inspect import file_damage
 from rplearn.io.mavlink import MavlinkOptions, dataflash_cut_off_at, read_mavlink, sik_rssi_to_dbm
 
 DATA = Path(__file__).resolve().parents[1] / "fixtures" / "ardupilot"
@@ -125,6 +128,86 @@ def test_dataflash_corrupt_bytes_are_counted(tmp_path):
     assert dataflash_cut_off_at(junk) == (65512 + 8, "AHR2", 8)
     _, meta = read_mavlink(junk, tx_power_dbm=20.0, frequency_hz=433e6)
     assert meta["corrupt_bytes"] == 8 and meta["messages"]["ATT"] == 24
+
+
+# ------------------------------------------------- a log in the file twice, corrupt frames, a first record cut
+
+
+def _read(path):
+    return read_mavlink(path, tx_power_dbm=20.0, frequency_hz=433e6)
+
+
+def test_a_tlog_in_the_file_twice_reads_as_once_and_says_so(tmp_path):
+    twice = tmp_path / "twice.tlog"
+    twice.write_bytes(TLOG_2.read_bytes() * 2)  # concatenated with itself
+    (once, m1), (doubled, m2) = _read(TLOG_2), _read(twice)
+    pd.testing.assert_frame_equal(once.pose, doubled.pose)
+    pd.testing.assert_frame_equal(once.signal, doubled.signal)
+    assert m1["repeated_messages"] == 0 and m2["repeated_messages"] == sum(m1["messages"].values())
+    assert m2["reboots"] == 0 and m2["dropped"] == m1["dropped"] and m2["messages"] == m1["messages"]
+    assert any("part of the log is in the file twice" in line for line in file_damage(str(twice), m2))
+
+
+def _simulated_dataflash(path):
+    from rplearn.io._common import Logs
+    from rplearn.io.dataflash_writer import write_dataflash
+    from rplearn.sim.flight import simulate
+
+    sim = simulate("smoke", seed=3)
+    pose, signal = sim.pose_log, sim.signal_log
+    station = pose[pose["node"] == "B"].iloc[[0]]
+    logs = Logs(pd.concat([pose[pose["node"] == "A"], station], ignore_index=True),
+                signal[["t", "tx", "rx", "rssi_dbm", "tx_power_dbm", "frequency_hz"]])
+    write_dataflash(logs, path, vehicle="A", station="B", origin_geodetic=(47.3977, 8.5456, 90.0))
+    return path
+
+
+def test_a_dataflash_log_in_the_file_twice_is_not_a_reboot_and_a_second_flight(tmp_path):
+    once_path = _simulated_dataflash(tmp_path / "once.bin")
+    twice = tmp_path / "twice.bin"
+    twice.write_bytes(once_path.read_bytes() * 2)  # its TimeUS steps back: read before as a reboot
+    (once, m1), (doubled, m2) = _read(once_path), _read(twice)
+    pd.testing.assert_frame_equal(once.pose, doubled.pose)
+    pd.testing.assert_frame_equal(once.signal, doubled.signal)
+    assert m2["reboots"] == 0 and m2["repeated_messages"] > 0 and m1["repeated_messages"] == 0
+    assert any("part of the log is in the file twice" in line for line in file_damage(str(twice), m2))
+
+
+def test_a_real_reboot_is_not_merged_for_a_few_equal_records():
+    # boot 1 repeats one record of boot 0 by chance (ORGN at the same TimeUS): still a reboot
+    att = [(1.0, 0.1, 0.2, 0.3, 0), (2.0, 0.1, 0.2, 0.3, 0), (1.0, 0.5, 0.2, 0.3, 1), (2.0, 0.6, 0.2, 0.3, 1)]
+    tables = {"ATT": list(att), "ORGN": [(1.5, 0), (1.5, 1)]}
+    boot_t = [(1.0, 0), (1.5, 0), (2.0, 0), (1.0, 1), (1.5, 1), (2.0, 1)]
+    assert merge_copied_boots(tables, boot_t) == 0
+    assert tables["ATT"] == att and [b for _, b in boot_t] == [0, 0, 0, 1, 1, 1]
+    # boots 0, 1 (a reboot), then both again: 2 is boot 0 again, 3 boot 1
+    att4 = att + [(r[0], *r[1:4], r[4] + 2) for r in att]
+    tables = {"ATT": list(att4)}
+    boot_t = [(r[0], r[4]) for r in att4]
+    assert merge_copied_boots(tables, boot_t) == 4
+    assert tables["ATT"] == att and [b for _, b in boot_t] == [0, 0, 1, 1, 0, 0, 1, 1]
+
+
+def test_corrupt_mavlink_frames_are_counted_and_said(tmp_path):
+    data = bytearray(TLOG_2.read_bytes())
+    at = data.index(b"\xfe", len(data) // 2)
+    data[at + 8] ^= 0xFF  # a payload byte: the frame's checksum no longer holds
+    bad = tmp_path / "flipped.tlog"
+    bad.write_bytes(bytes(data))
+    _, meta = _read(bad)
+    assert meta["corrupt_frames"] >= 1 and _read(TLOG_2)[1]["corrupt_frames"] == 0
+    assert any("corrupt MAVLink frame(s)" in line for line in file_damage(str(bad), meta))
+    from rplearn.io import inspect_logs
+
+    assert any("corrupt MAVLink frame(s)" in p for p in inspect_logs([bad]).problems)
+
+
+@pytest.mark.parametrize("size", [16, 20, 24])
+def test_a_tlog_cut_inside_its_first_record_is_refused_naming_it(tmp_path, size):
+    cut = tmp_path / "cut.tlog"
+    cut.write_bytes(TLOG_2.read_bytes()[:size])
+    with pytest.raises(LogFormatError, match=rf"cut.tlog: the file ends inside its first record \({size} byte"):
+        _read(cut)
 
 
 def test_dataflash_cut_off_detection(tmp_path):

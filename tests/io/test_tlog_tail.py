@@ -245,7 +245,10 @@ def test_a_second_vehicle_that_overtakes_the_first_withdraws_every_row_handed_ou
     write_tlog(ground, second, vehicle="D", station="G", origin_geodetic=ORIGIN, system_id=2)
     ones = _records(first.read_bytes())
     late = [r for r in _records(second.read_bytes()) if r[0] > ones[len(ones) // 3][0] and r[1][8 + 5] != 51]
-    merged = sorted(ones + late + late, key=lambda r: r[0])
+    # twice as often: each message again 1 us later (an exact copy, same receive time, is one
+    # message in the file twice, which the offline reader reads once)
+    again = [(t + 1, (t + 1).to_bytes(8, "big") + r[8:]) for t, r in late]
+    merged = sorted(ones + late + again, key=lambda r: r[0])
     whole, grown = tmp_path / "whole.tlog", tmp_path / "grown.tlog"
     whole.write_bytes(b"".join(r[1] for r in merged))
     _, meta = read_logs([str(whole)], ReaderOptions(tx_power_dbm=20.0, frequency_hz=2.412e9, station="G"))

@@ -58,6 +58,9 @@ def trajectory(
 
     Example: rplearn trajectory --distance 10 --height 20 --loops 5 --max-flight-time 600 -o plan
     """
+    from rplearn.io.files import check_output_folder
+
+    check_output_folder(out_dir)
     if optimize:
         _optimized(out_dir, check_model, (target_spread, budget_s, noise_db, prior_std, drift), prior_pattern, station,
                    (distance_m, height_m, speed_m_s), rate_hz)
@@ -127,6 +130,9 @@ def simulate(
 
     if log_format not in ("parquet", "csv"):
         raise InputError(f"--format: expected parquet or csv, got {log_format!r}")
+    from rplearn.io.files import check_output_folder
+
+    check_output_folder(out_dir)
     if preset == "fleet":
         from rplearn.sim.fleet import simulate_fleet
 

@@ -272,9 +272,11 @@ def report(
     Example: rplearn report data.parquet -o report; rplearn report data.parquet --model sh.json --paper-models paper,auto
     """
     from rplearn.core.environment import PathLoss
+    from rplearn.io.files import check_output_folder
     from rplearn.models.options import FitOptions
     from rplearn.workflows.report import ReportOptions, learn_and_report
 
+    check_output_folder(out_dir)
     two_ray_flags_note(path_loss_kind, ground_level, permittivity, polarization)
     options = FitOptions(path_loss=PathLoss(path_loss_kind, ground_level, permittivity, polarization),
                          link_offsets=learn_offsets)

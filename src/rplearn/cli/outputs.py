@@ -59,8 +59,10 @@ def demo(
 
     Example: rplearn demo -o rplearn-demo
     """
+    from rplearn.io.files import check_output_folder
     from rplearn.workflows.demo import run_demo
 
+    check_output_folder(out_dir)
     with progress_bar() as p:
         task = p.add_task("starting", total=None)
         result = run_demo(out_dir, seed=seed, preset=preset, progress=step(p, task))

@@ -72,7 +72,6 @@ time to put it on the common clock. All options are fields of :class:`SyncOption
 
 from __future__ import annotations
 
-import logging
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -90,8 +89,6 @@ from rplearn.data.readings import REPEAT_FRACTION, duplicate_rows, repeated_read
 from rplearn.data.sync_match import block_row, factorize_ends, float_block, interpolate_end, matched_frame, node_codes
 from rplearn.data.tables import QUATERNION_NORM_TOLERANCE, SENTINEL_RSSI_DBM, SIGNAL_COLUMNS, check_tx_power_dbm, empty_ids, normalise_times
 from rplearn.errors import InputError
-
-logger = logging.getLogger(__name__)
 
 #: RSSI values radios and drivers report when there is no measurement [dBm].
 DEFAULT_SENTINEL_RSSI_DBM: tuple[float, ...] = SENTINEL_RSSI_DBM
@@ -356,7 +353,6 @@ def _unknown_nodes(
                 "such samples: on_unknown_node='drop')",
                 param="on_unknown_node",
             )
-        logger.warning("%s: signals name node(s) without a pose log: %s", source, ", ".join(names))
     return known, unknown_mask, names
 
 

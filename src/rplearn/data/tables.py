@@ -377,6 +377,23 @@ def validate_signal_log(df: pd.DataFrame, source: str = "signal log") -> pd.Data
 
 
 @check_types
+def _refuse_repeated_rows(df: pd.DataFrame, source: str) -> None:
+    """Refuse a dataset whose rows repeat earlier rows in every column: one sample twice (a
+    dataset in the file twice, parts that overlap) would be learned from or scored twice,
+    weighing it double and making the spreads too narrow. ``synchronise`` never writes such
+    rows (it drops and counts exact copies of a signal row)."""
+    from rplearn.data.readings import duplicate_rows
+
+    repeated = duplicate_rows(df)
+    if np.any(repeated):
+        row = int(np.flatnonzero(repeated)[0])
+        raise InputError(
+            f"{source}: {int(repeated.sum()):,} row(s) repeat an earlier row in every column (first at row {row}): "
+            "the same samples twice (a dataset in the file twice, or parts that overlap) would count double; "
+            "drop the copies (synchronising the logs drops them)"
+        )
+
+
 def validate_matched(df: pd.DataFrame, source: str = "dataset", require_rssi: bool = True) -> pd.DataFrame:
     """Check a matched link dataset (columns of :data:`MATCHED_COLUMNS`).
 
@@ -401,6 +418,8 @@ def validate_matched(df: pd.DataFrame, source: str = "dataset", require_rssi: bo
             f"(first {rssi[row]:g} dBm at row {row}); synchronising the logs (synchronise) drops and counts them"
         )
     _check_link_columns(df[~outage] if outage.any() else df, source, with_rssi=require_rssi)
+    if require_rssi:
+        _refuse_repeated_rows(df, source)
     if "unit" in df.columns:
         empty = empty_ids(node_ids(df["unit"]))
         if np.any(empty):

@@ -11,6 +11,7 @@ from .export import PatternLike as PatternLike
 from .export import export_grid as export_grid
 from .export import node_file_names as node_file_names
 from .export import safe_file_name as safe_file_name
+from .files import check_output_folder as check_output_folder
 from .files import check_output_path as check_output_path
 from .files import check_table_path as check_table_path
 from .files import iter_parts as iter_parts

@@ -64,10 +64,31 @@ def _mavutil() -> Any:
     return mavutil
 
 
-def _open(source: str) -> Any:
+def _first_tlog_record_cut(head: bytes) -> bool:
+    """Whether a ``.tlog`` whose first bytes are ``head`` ends inside its first record (the 8-byte
+    receive time and one MAVLink 1 or 2 frame)."""
+    if len(head) < 8 + 2:
+        return True
+    magic, length = head[8], head[9]
+    if magic == 0xFE:
+        return len(head) < 8 + 6 + length + 2
+    if magic == 0xFD:
+        signed = len(head) > 10 and head[10] & 0x01
+        return len(head) < 8 + 10 + length + 2 + (13 if signed else 0)
+    return False
+
+
+def _open(source: str, tlog: bool = True) -> Any:
+    """A pymavlink connection reading the log ``source`` (a ``.tlog``, or with ``tlog`` False a
+    DataFlash log); a log pymavlink cannot open is refused naming the file."""
     try:
         return _mavutil().mavlink_connection(source, dialect="ardupilotmega")
     except Exception as exc:
+        with open(source, "rb") as fh:
+            head = fh.read(8 + 10 + 255 + 2 + 13)
+        if tlog and _first_tlog_record_cut(head):
+            raise LogFormatError(f"{source}: the file ends inside its first record ({len(head)} byte(s)): "
+                                 "no complete MAVLink message (a log cut off, or not a .tlog)") from None
         msg = str(exc).splitlines()[0] if str(exc) else ""
         raise LogFormatError(f"{source}: cannot read MAVLink log ({type(exc).__name__}: {msg})") from None
 
@@ -188,7 +209,27 @@ def collect_tlog(source: str, system_id: int | None) -> Raw:
             whole_to = conn.f.tell() - conn.mav.buf_len()  # where the records read so far end
             acc.add(msg, source)
         cut_off = _tlog_cut_off(conn, source, whole_to)
-    return tlog_raw(acc, source, system_id, cut_off)
+    repeated = drop_repeated_rows(acc)
+    raw = tlog_raw(acc, source, system_id, cut_off)
+    raw.notes.update(corrupt_frames=acc.counts.get("BAD_DATA", 0), repeated_messages=repeated)
+    return raw
+
+
+def drop_repeated_rows(acc: TlogRows) -> int:
+    """Keep the first of the messages that repeat an earlier one exactly (same kind, sender,
+    receive time [s] and fields): a copy of part of the log inside the file (logs concatenated,
+    a copy resumed from its start). Two such messages hold one reading, so dropping the copy
+    loses nothing; without it a log in the file twice would read as a reboot and a second
+    flight. Returns how many were dropped (their kinds' counts are lowered)."""
+    dropped = 0
+    for kind, rows in acc.rows.items():
+        unique = list(dict.fromkeys(rows))
+        if len(unique) < len(rows):
+            dropped += len(rows) - len(unique)
+            acc.counts[kind] -= len(rows) - len(unique)
+            acc.rows[kind] = unique
+            acc._arrays.pop(kind, None)
+    return dropped
 
 
 def tlog_raw(acc: TlogRows, source: str, system_id: int | None, cut_off: dict[str, Any],
@@ -245,6 +286,47 @@ def tlog_raw(acc: TlogRows, source: str, system_id: int | None, cut_off: dict[st
                "time_reference": "ground station receive time, seconds since the UNIX epoch"
                                  + (" (vehicle messages through time_boot_ms + median offset)" if boot_clock else "")},
     )
+
+
+#: The share of a later boot's records that must repeat an earlier boot's exactly for the boot to
+#: be a copy of it (:func:`merge_copied_boots`); a real reboot repeats none, save by chance.
+COPY_SHARE = 0.5
+
+
+def merge_copied_boots(tables: dict[str, list[tuple[float, ...]]], boot_t: list[tuple[float, int]]) -> int:
+    """Undo the boots that are copies: a later boot whose records repeat an earlier boot's
+    exactly (same kind, TimeUS and fields) runs on that boot's clock, so it is that boot again
+    (logs concatenated, a copy resumed from its start), not a reboot. Its records join that
+    boot, the repeats are dropped (two such records hold one reading) and the boots are
+    numbered again from 0. ``tables`` (rows per kind, the boot number last) and ``boot_t``
+    (time, boot per message) are changed in place; returns the repeats dropped."""
+    first: dict[tuple[Any, ...], int] = {}
+    votes: dict[int, dict[int, int]] = {}
+    size: dict[int, int] = {}
+    for kind, rows in tables.items():
+        for row in rows:
+            key, b = (kind, *row[:-1]), int(row[-1])
+            size[b] = size.get(b, 0) + 1
+            a = first.setdefault(key, b)
+            if a < b:
+                votes.setdefault(b, {}).setdefault(a, 0)
+                votes[b][a] += 1
+    into: dict[int, int] = {}
+    for b in sorted(votes):
+        a = max(votes[b], key=lambda k: (votes[b][k], -k))
+        if votes[b][a] >= max(2, COPY_SHARE * size[b]):  # not a few records equal by chance
+            into[b] = into.get(a, a)
+    if not into:
+        return 0
+    kept = sorted({into.get(b, b) for _, b in boot_t})
+    number = {b: kept.index(into.get(b, b)) for b in {b for _, b in boot_t}}
+    repeated = 0
+    for rows in tables.values():
+        renumbered = list(dict.fromkeys((*row[:-1], number[int(row[-1])]) for row in rows))
+        repeated += len(rows) - len(renumbered)
+        rows[:] = renumbered
+    boot_t[:] = [(t, number[b]) for t, b in boot_t]
+    return repeated
 
 
 def _df_chain(boot_t: list[tuple[float, int]]) -> tuple[dict[int, float], np.ndarray]:
@@ -317,7 +399,7 @@ def collect_dataflash(source: str) -> Raw:
     arm_rows: list[tuple[float, ...]] = []
     times: dict[str, tuple[str, float]] = {}
     with library_quiet():  # pymavlink prints what it cannot parse
-        conn = _open(source)
+        conn = _open(source, tlog=False)
         check_dataflash_lengths(conn, source)
         while True:
             try:
@@ -335,6 +417,10 @@ def collect_dataflash(source: str) -> Raw:
             last_t = t
             boot_t.append((t, boot))
             home = _df_record(_DfMessage(msg, kind, source), t, boot, (rows, fix_rows, arm_rows, utc), home)
+    tables = {**rows, "GPS status": fix_rows, "ARM/EV": arm_rows}
+    repeated = merge_copied_boots(tables, boot_t) if boot else 0
+    rows = {k: tables[k] for k in rows}
+    fix_rows, arm_rows = tables["GPS status"], tables["ARM/EV"]
     offsets, ends = _df_chain(boot_t)
 
     def chained(a: np.ndarray, tcol: int, bcol: int) -> np.ndarray:
@@ -353,11 +439,11 @@ def collect_dataflash(source: str) -> Raw:
         radio=chained(_arr(rows["RAD"], 8), 0, 7)[:, :7], vehicle_t=np.array([]), home=home, counts=counts,
         boot_last_t=ends, origin_t=orgn[:, 0],
         fix=chained(_arr(fix_rows, 3), 0, 2)[:, :2], armed=chained(_arr(arm_rows, 3), 0, 2)[:, :2],
-        notes={"position_message": pos_kind,
+        notes={"position_message": pos_kind, "repeated_messages": repeated,
                "time_reference": "TimeUS, seconds since the autopilot booted"
                                  + (" (later boots placed right after the previous one)" if len(ends) > 1 else ""),
                "utc_offset_s": float(np.median(utc)) if utc else None},
     )
 
 
-__all__ = ["Raw", "TlogRows", "boot_offsets", "collect_dataflash", "collect_tlog", "tlog_raw"]
+__all__ = ["Raw", "TlogRows", "boot_offsets", "collect_dataflash", "collect_tlog", "drop_repeated_rows", "merge_copied_boots", "tlog_raw"]

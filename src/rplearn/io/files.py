@@ -225,6 +225,28 @@ def check_output_path(path: str, inputs: Iterable[str | None] = (), param: str =
     return path
 
 
+@check_types
+def check_output_folder(path: str, param: str = "out_dir") -> str:
+    """Refuse an output folder before any work: a path that exists and is not a folder (a file
+    the command would fail on, after its work, or that a user meant as an input), or a folder
+    that cannot be created where a parent is a file. ``param`` names the parameter that gave it.
+
+    Raises
+    ------
+    InputError
+        Naming the path and ``param``.
+    """
+    if os.path.lexists(path) and not os.path.isdir(path):
+        raise InputError(f"{path}: is a file, not a folder: this command writes a folder of files there",
+                         param=param)
+    parent = os.path.dirname(os.path.abspath(path))
+    while not os.path.lexists(parent):
+        parent = os.path.dirname(parent)
+    if not os.path.isdir(parent):
+        raise InputError(f"{path}: cannot create a folder inside {parent}, which is a file", param=param)
+    return path
+
+
 #: The last second of 9999 (UTC): the latest time stamp that time.gmtime and datetime format.
 MAX_SOURCE_DATE_EPOCH = 253402300799
 

@@ -374,14 +374,15 @@ def _read_one(path: str, options: ReaderOptions) -> tuple[pd.DataFrame | None, p
     info = {"format": f.get("format", kind), "kind": f.get("kind")}
     if logs.signal is not None and (kind != "mavlink" or options.frequency_hz is not None):
         info["frequency_hz"] = _frequency_hz(logs.signal)
-    for key in ("excluded_periods", "dropped"):
-        if f.get(key):
-            info[key] = f[key]
-    if isinstance(f.get("signal"), dict):  # counts of signal rows dropped on reading; rows_* are kept rows
-        info["signal_dropped"] = {k: v for k, v in f["signal"].items() if not str(k).startswith("rows")}
+    if f.get("excluded_periods"):
+        info["excluded_periods"] = f["excluded_periods"]
+    if f.get("dropped"):  # a signal-only reader's (pcap's) drops are frames, not pose rows
+        info["signal_dropped" if f.get("kind") == "signal" else "dropped"] = f["dropped"]
+    if isinstance(f.get("signal"), dict):
+        info["signal_dropped"] = _signal_drops(f["signal"])
     if f.get("invalid_flag_rows"):
         info["invalid_flag_rows"] = int(f["invalid_flag_rows"])
-    for key in ("cut_off_at_byte", "cut_off_record", "corrupt", "corrupt_bytes"):
+    for key in ("cut_off_at_byte", "cut_off_record", "corrupt", "corrupt_bytes", "corrupt_frames", "repeated_messages"):
         if f.get(key):
             info[key] = f[key]
     if f.get("notes"):
@@ -389,6 +390,14 @@ def _read_one(path: str, options: ReaderOptions) -> tuple[pd.DataFrame | None, p
     if logs.pose is not None:
         info["non_unit_quaternion_rows"] = non_unit_quaternion_rows(logs.pose)
     return logs.pose, logs.signal, info, {}, logs.pose
+
+
+def _signal_drops(counts: dict[str, int]) -> dict[str, int]:
+    """The counts of signal rows a MAVLink reader dropped, from all its signal counts: ``rows_*``
+    are kept readings, and ``link_lost`` / ``outage_*`` count the link-lost messages it kept as
+    outage events (said in the file's notes), so neither is a drop."""
+    kept = ("rows_", "outage_", "link_lost")
+    return {k: v for k, v in counts.items() if not str(k).startswith(kept)}
 
 
 def _frequency_hz(signal: pd.DataFrame) -> float | None:
@@ -499,6 +508,12 @@ def file_damage(path: str, info: dict[str, Any]) -> list[str]:
     if info.get("corrupt_bytes"):
         lines.append(f"{path}: {info['corrupt_bytes']:,} corrupt byte(s) between DataFlash records were skipped; "
                      "what follows them was read")
+    if info.get("corrupt_frames"):
+        lines.append(f"{path}: {info['corrupt_frames']:,} corrupt MAVLink frame(s) (bad checksum or framing) were "
+                     "skipped: the messages in them are lost; what follows them was read")
+    if info.get("repeated_messages"):
+        lines.append(f"{path}: {info['repeated_messages']:,} message(s) repeat an earlier one exactly (same receive "
+                     "time and fields: part of the log is in the file twice); each was read once")
     return lines
 
 

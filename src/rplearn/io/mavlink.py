@@ -63,7 +63,13 @@ under the period's reason, and ``metadata["excluded_periods"]`` lists each perio
 line in ``notes``; ``metadata["reboots"]`` counts reboots. A radio reading reported twice
 (DataFlash ``RAD`` twice; ``RADIO`` and ``RADIO_STATUS``) gives one row
 (``metadata["signal"]["duplicate_reading"]`` counts the copies merged,
-``metadata["radio_report_period_s"]`` the report period).
+``metadata["radio_report_period_s"]`` the report period). A log in the file twice (files
+concatenated, a copy resumed from its start) is read once: a ``.tlog`` message that repeats an
+earlier one exactly (kind, sender, receive time, fields), and a DataFlash boot whose records
+repeat an earlier boot's (same TimeUS and fields: the same boot again, not a reboot), are
+dropped and counted in ``metadata["repeated_messages"]``. MAVLink frames whose checksum fails
+are skipped and counted in ``metadata["corrupt_frames"]`` (``.tlog``). Both are said in one line
+each (:func:`rplearn.io.inspect.file_damage`).
 
 Armed state: when the log says it (a ``.tlog``'s ``HEARTBEAT`` of the vehicle, ``base_mode &
 MAV_MODE_FLAG_SAFETY_ARMED``; DataFlash ``ARM`` records or ``EV`` armed/disarmed events), the

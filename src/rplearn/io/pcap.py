@@ -216,25 +216,31 @@ def transmitter_address(frame: bytes) -> str | None:
     return ":".join(f"{b:02x}" for b in frame[10:16])
 
 
-def _pcap_complete_frames(fh: BinaryIO, magic: bytes) -> tuple[int, bool]:
-    """Walk a classic pcap's record headers: ``(complete frames, truncated)``, where
-    ``truncated`` means the last record runs past the end of the file (a capture cut off
-    while it was written). dpkt would hand on such a partial frame as if it were whole."""
+def _pcap_complete_frames(fh: BinaryIO, magic: bytes) -> tuple[int, bool, int | None]:
+    """Walk a classic pcap's record headers: ``(complete frames, truncated, second header)``,
+    where ``truncated`` means the last record runs past the end of the file (a capture cut off
+    while it was written; dpkt would hand on such a partial frame as if it were whole) and
+    ``second header`` is the byte where another capture's file header starts instead of a
+    record (captures concatenated), else None. A record's time starting with the magic number
+    would be in 2055 (0xa1b2c3d4 s) or later: no real record does."""
     order = "<" if magic in (b"\xd4\xc3\xb2\xa1", b"\x4d\x3c\xb2\xa1") else ">"
     size = os.fstat(fh.fileno()).st_size
     offset, frames = 24, 0
     fh.seek(0)
     while offset < size:
-        if offset + 16 > size:
-            return frames, True
-        fh.seek(offset + 8)
-        (incl_len,) = struct.unpack(order + "I", fh.read(4))
+        fh.seek(offset)
+        head = fh.read(16)
+        if head[:4] == magic:
+            return frames, False, offset
+        if len(head) < 16:
+            return frames, True, None
+        (incl_len,) = struct.unpack(order + "I", head[8:12])
         offset += 16 + incl_len
         if offset > size:
-            return frames, True
+            return frames, True, None
         frames += 1
     fh.seek(0)
-    return frames, False
+    return frames, False, None
 
 
 def _open_capture(path: str, fh: BinaryIO) -> Any:
@@ -247,7 +253,10 @@ def _open_capture(path: str, fh: BinaryIO) -> Any:
     if magic == b"\x0a\x0d\x0d\x0a":
         return dpkt.pcapng.Reader(fh), "pcapng"
     if magic in (b"\xd4\xc3\xb2\xa1", b"\xa1\xb2\xc3\xd4", b"\x4d\x3c\xb2\xa1", b"\xa1\xb2\x3c\x4d"):
-        frames, truncated = _pcap_complete_frames(fh, magic)
+        frames, truncated, second = _pcap_complete_frames(fh, magic)
+        if second is not None:
+            raise LogFormatError(f"{path}: another capture's file header at byte {second:,}, after frame {frames}: "
+                                 "captures concatenated (or one in the file twice); split them (editcap, mergecap)")
         if truncated:
             raise LogFormatError(f"{path}: truncated capture: the file ends inside frame {frames + 1}")
         fh.seek(0)
