@@ -125,7 +125,7 @@ def test_the_units_are_cut_into_pieces_that_keep_every_worker_busy():
 
 def test_the_sphere_average_design_is_computed_once_per_basis_and_read_only():
     from rplearn.core.bases import fibonacci_grid_nodes
-    from rplearn.models.auto import _design_squares
+    from rplearn.models.auto_spread import _design_squares
     from rplearn.models.spec import ModelSpec
 
     basis = ModelSpec("sh", 6).basis()

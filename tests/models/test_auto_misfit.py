@@ -14,7 +14,8 @@ from rplearn.core.geometry import Directions
 from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.core.sh import SphericalHarmonics
 from rplearn.data.tables import LinkSamples
-from rplearn.models.auto import fit_auto, held_out_misfit_var, misfit_covariance, unseen_spread_cap_db
+from rplearn.models.auto import fit_auto
+from rplearn.models.auto_spread import held_out_misfit_var, misfit_covariance, unseen_spread_cap_db
 
 
 @pytest.mark.parametrize("seed", [4, 5, 6, 7])

@@ -113,7 +113,7 @@ def test_far_from_the_data_the_spread_is_the_reported_prior_spread(tmp_path):
 def test_the_prior_spread_is_finite_without_smoothing_and_stated_only_for_all_nodes():
     from rplearn.core.sh import SphericalHarmonics
     from rplearn.errors import InputError
-    from rplearn.models.auto import prior_std_db
+    from rplearn.models.auto_spread import prior_std_db
 
     basis = SphericalHarmonics(4)
     plain = prior_std_db(basis, ["A", "B"], np.ones(2 * basis.n_coef), 4.0, power=2.0)  # smoothing 0: the ridge alone

@@ -55,7 +55,7 @@ from rplearn.core.basis_base import Basis
 from rplearn.core.lsq.level import pattern_shape
 from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.core.lsq.penalty import nested_columns
-from rplearn.core.lsq.selection import _Evaluator
+from rplearn.core.lsq.selection_evaluator import _Evaluator
 from rplearn.core.lsq.selection_result import Selection
 from rplearn.core.lsq.shifted import shifted_statistics
 from rplearn.core.lsq.ties import MIN_NOISE_UNITS, WITHIN_NOISE_FRACTION, WITHIN_NOISE_SE

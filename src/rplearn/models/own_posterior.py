@@ -13,7 +13,7 @@ and no sample read), with the noise and the variance inflation of the chosen fit
 The choices, argued:
 
 - The prior is the cross-validated one, *not* capped at the spread of the measured gains
-  (:func:`rplearn.models.auto.unseen_spread_cap_db`). The cap bounds the predictive spread
+  (:func:`rplearn.models.auto_spread.unseen_spread_cap_db`). The cap bounds the predictive spread
   where the flight never looked; where it looked, the question is how loosely the data tie
   each node's share, which the cross-validated prior answers.
 - Above :data:`MAX_OWN_COLUMNS` pattern columns (large swarms) the chosen fit's own posterior

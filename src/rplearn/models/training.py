@@ -60,7 +60,7 @@ class TrainingSummary(Mapping[str, Any]):
         The automatic choice's spreads (:func:`rplearn.models.auto.fit_from_statistics`).
     misfit_std_db : float
         Each node's spread of the error the model cannot represent [dB], added everywhere
-        (:func:`rplearn.models.auto.held_out_misfit_var`, halved between the two ends).
+        (:func:`rplearn.models.auto_spread.held_out_misfit_var`, halved between the two ends).
     prior_std_db : dict of node to float
         Each node's predictive spread where the flight never looked [dB].
     prior_std_source : str

@@ -223,7 +223,7 @@ def test_folds_solved_on_the_workers_give_the_search_of_one_thread(monkeypatch):
 def test_without_room_for_the_factors_the_inflation_solves_again(monkeypatch):
     """Past ``_PENDING_FACTOR_BYTES`` a batch keeps only its solutions (a swarm's factors are
     large): the best point's inflation then factorises again, to the same figures."""
-    from rplearn.core.lsq import selection as selection_module
+    from rplearn.core.lsq import selection_evaluator as selection_module
 
     monkeypatch.setenv("RPLEARN_THREADS", "1")
     units = stats_of(synthetic_units(n_units=3, n_per_unit=600, truth_order=3, seed=9), SphericalHarmonics(6))
@@ -243,7 +243,7 @@ def test_a_fold_solved_in_the_calling_thread_is_solved_with_one_blas_thread(monk
     from threadpoolctl import threadpool_limits
 
     from rplearn.core.lsq import runtime as runtime_module
-    from rplearn.core.lsq import selection as selection_module
+    from rplearn.core.lsq import selection_evaluator as selection_module
     from rplearn.core.threads import _controller
 
     if threads is None:
@@ -278,7 +278,7 @@ def test_fold_blocks_built_on_the_workers_and_kept_give_the_same_search(monkeypa
     """The fold blocks of every order the search asks for are built on the workers at once and
     kept within ``_CACHE_BYTES``; with room for only ``_CACHED_ORDERS`` orders (built again as
     the search comes back) the search is the same to the last bit: the same copies."""
-    from rplearn.core.lsq import selection as selection_module
+    from rplearn.core.lsq import selection_evaluator as selection_module
 
     monkeypatch.setenv("RPLEARN_THREADS", "1")
     units = stats_of(synthetic_units(n_units=3, n_per_unit=700, truth_order=4, seed=11), SphericalHarmonics(8))

@@ -51,7 +51,7 @@ class Selection:
         Mean square [dB^2] per held-out sample by which the held-out units' errors about their
         own means exceed the folds' within-unit noise (the part of the held-out error that is
         the pattern's: the folds' posterior variance and any misfit the model cannot represent;
-        :func:`rplearn.models.auto.held_out_misfit_var`); 0 for GCV.
+        :func:`rplearn.models.auto_spread.held_out_misfit_var`); 0 for GCV.
     ties : list of (int, float, float)
         ``(order, smoothing, variance_inflation)`` of every evaluated point the held-out units
         cannot tell from the best (:func:`rplearn.core.lsq.ties.tied_points`), the best first;
