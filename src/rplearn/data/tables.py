@@ -376,7 +376,6 @@ def validate_signal_log(df: pd.DataFrame, source: str = "signal log") -> pd.Data
     return out.sort_values("t", kind="stable").reset_index(drop=True)
 
 
-@check_types
 def _refuse_repeated_rows(df: pd.DataFrame, source: str) -> None:
     """Refuse a dataset whose rows repeat earlier rows in every column: one sample twice (a
     dataset in the file twice, parts that overlap) would be learned from or scored twice,
@@ -394,6 +393,7 @@ def _refuse_repeated_rows(df: pd.DataFrame, source: str) -> None:
         )
 
 
+@check_types
 def validate_matched(df: pd.DataFrame, source: str = "dataset", require_rssi: bool = True) -> pd.DataFrame:
     """Check a matched link dataset (columns of :data:`MATCHED_COLUMNS`).
 
