@@ -188,6 +188,35 @@ def test_a_real_reboot_is_not_merged_for_a_few_equal_records():
     assert tables["ATT"] == att and [b for _, b in boot_t] == [0, 0, 1, 1, 0, 0, 1, 1]
 
 
+def test_a_copied_boot_drops_only_the_copies_not_distinct_records_that_read_alike():
+    # review 38: boot 0 holds two ORGN records at one TimeUS (type 0 and 1: rows (t, boot) alike);
+    # boot 1 is boot 0 again. Both records stay, only the 2 + 2 copies go (was: 3 dropped, one
+    # of boot 0's own ORGN records with them)
+    att = [(1.0, 0.1, 0.2, 0.3, 0), (2.0, 0.1, 0.2, 0.3, 0)]
+    orgn = [(1.5, 0), (1.5, 0)]
+    tables = {"ATT": att + [(*r[:-1], 1) for r in att], "ORGN": orgn + [(1.5, 1), (1.5, 1)]}
+    boot_t = [(1.0, 0), (1.5, 0), (1.5, 0), (2.0, 0), (1.0, 1), (1.5, 1), (1.5, 1), (2.0, 1)]
+    assert merge_copied_boots(tables, boot_t) == 4
+    assert tables == {"ATT": att, "ORGN": orgn}
+    # a real reboot (boot 1) between boot 0 and its copy (boot 2): boot 1's own alike records stay
+    tables = {"ATT": att + [(5.0, 0.9, 0.2, 0.3, 1)] + [(*r[:-1], 2) for r in att],
+              "ORGN": orgn + [(0.5, 1), (0.5, 1)] + [(1.5, 2), (1.5, 2)]}
+    boot_t = [(r[0], r[-1]) for k in ("ATT", "ORGN") for r in tables[k]]
+    assert merge_copied_boots(tables, boot_t) == 4
+    assert tables["ORGN"] == orgn + [(0.5, 1), (0.5, 1)]
+
+
+def test_a_dataflash_log_in_the_file_twice_counts_its_messages_once(tmp_path):
+    once_path = _simulated_dataflash(tmp_path / "once.bin")
+    twice = tmp_path / "twice.bin"
+    twice.write_bytes(once_path.read_bytes() * 2)
+    (_, m1), (_, m2) = _read(once_path), _read(twice)
+    assert m1["messages"]["ORGN"] == 2  # an EKF origin and a home, at one TimeUS
+    assert m2["messages"] == m1["messages"]  # was ORGN 1: the home's record taken for a copy
+    # each message of the copy once: those counted, and its one ARM record (was one ORGN more)
+    assert m2["repeated_messages"] == sum(m1["messages"].values()) + 1
+
+
 def test_corrupt_mavlink_frames_are_counted_and_said(tmp_path):
     data = bytearray(TLOG_2.read_bytes())
     at = data.index(b"\xfe", len(data) // 2)

@@ -322,7 +322,20 @@ def merge_copied_boots(tables: dict[str, list[tuple[float, ...]]], boot_t: list[
     number = {b: kept.index(into.get(b, b)) for b in {b for _, b in boot_t}}
     repeated = 0
     for rows in tables.values():
-        renumbered = list(dict.fromkeys((*row[:-1], number[int(row[-1])]) for row in rows))
+        # a row kept as often as the most any one boot of its merged group holds it: the copies
+        # go, not distinct records that read alike (rows hold only some fields: two ORGN at one
+        # TimeUS), nor rows of boots that are no copies
+        per_boot: dict[tuple[Any, ...], dict[int, int]] = {}
+        for row in rows:
+            held = per_boot.setdefault((*row[:-1], number[int(row[-1])]), {})
+            held[int(row[-1])] = held.get(int(row[-1]), 0) + 1
+        left = {key: max(held.values()) for key, held in per_boot.items()}
+        renumbered: list[Any] = []
+        for row in rows:
+            key = (*row[:-1], number[int(row[-1])])
+            if left[key] > 0:
+                left[key] -= 1
+                renumbered.append(key)
         repeated += len(rows) - len(renumbered)
         rows[:] = renumbered
     boot_t[:] = [(t, number[b]) for t, b in boot_t]
