@@ -217,6 +217,21 @@ def test_a_dataflash_log_in_the_file_twice_counts_its_messages_once(tmp_path):
     assert m2["repeated_messages"] == sum(m1["messages"].values()) + 1
 
 
+def test_a_dataflash_log_after_a_partial_copy_of_itself_is_read_once(tmp_path):
+    # review 38: a download cut at 30 % then the whole log, in one file: the whole log repeats
+    # all of the partial copy but only 30 % of it is repeats, so it read as a reboot and a
+    # second flight (9,118 pose rows for 7,027; 3,474 signal rows for 2,658)
+    once_path = _simulated_dataflash(tmp_path / "once.bin")
+    data = once_path.read_bytes()
+    cut = data.index(b"\xa3\x95", int(len(data) * 0.3))  # a record's start
+    resumed = tmp_path / "resumed.bin"
+    resumed.write_bytes(data[:cut] + data)
+    (once, _), (read, meta) = _read(once_path), _read(resumed)
+    pd.testing.assert_frame_equal(once.pose, read.pose)
+    pd.testing.assert_frame_equal(once.signal, read.signal)
+    assert meta["reboots"] == 0 and meta["repeated_messages"] > 0
+
+
 def test_corrupt_mavlink_frames_are_counted_and_said(tmp_path):
     data = bytearray(TLOG_2.read_bytes())
     at = data.index(b"\xfe", len(data) // 2)

@@ -288,8 +288,9 @@ def tlog_raw(acc: TlogRows, source: str, system_id: int | None, cut_off: dict[st
     )
 
 
-#: The share of a later boot's records that must repeat an earlier boot's exactly for the boot to
-#: be a copy of it (:func:`merge_copied_boots`); a real reboot repeats none, save by chance.
+#: The share of the records of the smaller of two boots that must repeat exactly for the later
+#: boot to be a copy of the earlier (:func:`merge_copied_boots`); a real reboot repeats none,
+#: save by chance.
 COPY_SHARE = 0.5
 
 
@@ -314,7 +315,9 @@ def merge_copied_boots(tables: dict[str, list[tuple[float, ...]]], boot_t: list[
     into: dict[int, int] = {}
     for b in sorted(votes):
         a = max(votes[b], key=lambda k: (votes[b][k], -k))
-        if votes[b][a] >= max(2, COPY_SHARE * size[b]):  # not a few records equal by chance
+        # a share of the smaller boot's records, not a few equal by chance (a whole log after a
+        # partial copy of it repeats all of the copy, but a small share of its own records)
+        if votes[b][a] >= max(2, COPY_SHARE * min(size[a], size[b])):
             into[b] = into.get(a, a)
     if not into:
         return 0
