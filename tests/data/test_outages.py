@@ -59,6 +59,19 @@ def test_outage_events_are_kept_bridged_across_the_silence_and_counted():
                                   plain.dataset.reset_index(drop=True), check_dtype=False)
 
 
+def test_a_signal_log_in_the_file_twice_gives_each_outage_event_once_and_fit_takes_it():
+    # review 38: sync dropped the copies of the packets but kept both copies of each outage
+    # event, and validate_matched (fit, evaluate, report) then refused sync's own output
+    pose, signal = _logs()
+    once = synchronise(pose, signal, SyncOptions(max_gap_s=0.5))
+    twice = synchronise(pose, pd.concat([signal, signal], ignore_index=True), SyncOptions(max_gap_s=0.5))
+    assert twice.summary.outages["duplicate"] == 12 and twice.summary.outages["kept"] == once.summary.outages["kept"] == 10
+    assert twice.summary.dropped["duplicate"] == len(signal) - 12
+    pd.testing.assert_frame_equal(twice.dataset, once.dataset)
+    validate_matched(twice.dataset, "twice")  # was: 10 row(s) repeat an earlier row in every column
+    assert "dropped: duplicate 12" in twice.summary.to_text()
+
+
 def test_outage_events_follow_the_link_and_window_and_a_long_silence_is_a_pose_gap():
     pose, signal = _logs()
     one = synchronise(pose, signal, SyncOptions(max_gap_s=0.5, link=("D", "G")))

@@ -161,7 +161,7 @@ def test_the_readme_tlog_keeps_its_matched_samples_and_scores_its_held_out_avail
     outcome = sync_logs([REAL_TLOG], [REAL_TLOG], str(out),
                         ReaderOptions(tx_power_dbm=20.0, frequency_hz=915e6), _sync_options())
     assert (outcome.counts.n_in, outcome.counts.n_out) == (1026, 974)
-    assert outcome.counts.outages == {"in": 114, "kept": 0, "invalid_value": 0, "outside_window": 0,
+    assert outcome.counts.outages == {"in": 114, "kept": 0, "duplicate": 0, "invalid_value": 0, "outside_window": 0,
                                       "tx_equals_rx": 0, "other_link": 0, "unknown_node": 0, "out_of_span": 114,
                                       "pose_gap": 0, "near_field": 0, "disarmed": 0, "on_ground": 0}
     fit = fit_dataset(str(out), ModelSpec.parse("sh-8"), LEARN, options=FitOptions(auto=True),

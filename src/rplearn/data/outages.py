@@ -29,12 +29,13 @@ import pandas as pd
 from rplearn._argtypes import check_types
 from rplearn.core.link import FAR_FIELD_WAVELENGTHS, SPEED_OF_LIGHT_M_S
 from rplearn.data.poses import STATUS_OUT_OF_SPAN, STATUS_POSE_GAP, PoseTrack, interpolate_nodes
+from rplearn.data.readings import duplicate_rows
 from rplearn.data.tables import MATCHED_COLUMNS, OUTAGE_COLUMN, node_ids, outage_mask
 
 #: Longest pose gap an outage event is matched across [s] (the vehicle is silent while the link is lost).
 OUTAGE_MAX_GAP_S: float = 30.0
 #: Why an outage event is not kept, in the order tested.
-OUTAGE_REASONS: tuple[str, ...] = ("invalid_value", "outside_window", "tx_equals_rx", "other_link", "unknown_node",
+OUTAGE_REASONS: tuple[str, ...] = ("duplicate", "invalid_value", "outside_window", "tx_equals_rx", "other_link", "unknown_node",
                                    "out_of_span", "pose_gap", "near_field", "disarmed", "on_ground")
 
 
@@ -97,6 +98,7 @@ def match_outages(tracks: Mapping[str, PoseTrack], events: pd.DataFrame, options
         counts[reason] += int(hit.sum())
         keep[hit] = False
 
+    drop(duplicate_rows(events), "duplicate")  # as sync drops a packet's copies (a log in the file twice)
     drop(~(np.isfinite(t) & np.isfinite(freq) & (freq > 0) & np.isfinite(ptx)) | (tx == "") | (rx == ""),
          "invalid_value")
     if window is not None:
