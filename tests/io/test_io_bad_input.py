@@ -165,6 +165,17 @@ def test_captures_concatenated_are_refused_naming_where_the_second_starts(tmp_pa
         read_pcap(str(twice), "rx", 20.0)
 
 
+def test_a_capture_of_another_kind_after_the_first_is_named_too(tmp_path):
+    # review 38: a nanosecond capture after a microsecond one was "truncated capture: the file
+    # ends inside frame 3" (its header read as a record)
+    first = (DATA / "radiotap-pcap" / "ieee802.11_htc.pcap").read_bytes()
+    second = (DATA / "radiotap-pcap" / "ieee802.11_exthdr.pcap").read_bytes()
+    both = tmp_path / "both.pcap"
+    both.write_bytes(first + b"\x4d\x3c\xb2\xa1" + second[4:])
+    with pytest.raises(LogFormatError, match=rf"both.pcap: another capture's file header at byte {len(first):,}"):
+        read_pcap(str(both), "rx", 20.0)
+
+
 def test_pcap_sentinel_rssi_is_counted_by_sync(tmp_path):
     from rplearn.data.sync import synchronise
 

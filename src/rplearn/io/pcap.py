@@ -216,13 +216,25 @@ def transmitter_address(frame: bytes) -> str | None:
     return ":".join(f"{b:02x}" for b in frame[10:16])
 
 
+def _pcap_header_at(head: bytes) -> bool:
+    """Whether ``head`` starts with a classic pcap file header of any kind (its magic number and
+    version 2.4 in that byte order)."""
+    if head[:4] in (b"\xd4\xc3\xb2\xa1", b"\x4d\x3c\xb2\xa1"):
+        return head[4:8] == b"\x02\x00\x04\x00"
+    if head[:4] in (b"\xa1\xb2\xc3\xd4", b"\xa1\xb2\x3c\x4d"):
+        return head[4:8] == b"\x00\x02\x00\x04"
+    return False
+
+
 def _pcap_complete_frames(fh: BinaryIO, magic: bytes) -> tuple[int, bool, int | None]:
     """Walk a classic pcap's record headers: ``(complete frames, truncated, second header)``,
     where ``truncated`` means the last record runs past the end of the file (a capture cut off
     while it was written; dpkt would hand on such a partial frame as if it were whole) and
     ``second header`` is the byte where another capture's file header starts instead of a
     record (captures concatenated), else None. A record's time starting with the magic number
-    would be in 2055 (0xa1b2c3d4 s) or later: no real record does."""
+    would be in 2055 (0xa1b2c3d4 s) or later: no real record does. A capture of another kind
+    (microseconds or nanoseconds, either byte order) is known by its magic number followed by
+    its version, 2.4: eight bytes no record starts with."""
     order = "<" if magic in (b"\xd4\xc3\xb2\xa1", b"\x4d\x3c\xb2\xa1") else ">"
     size = os.fstat(fh.fileno()).st_size
     offset, frames = 24, 0
@@ -230,7 +242,7 @@ def _pcap_complete_frames(fh: BinaryIO, magic: bytes) -> tuple[int, bool, int | 
     while offset < size:
         fh.seek(offset)
         head = fh.read(16)
-        if head[:4] == magic:
+        if head[:4] == magic or _pcap_header_at(head):
             return frames, False, offset
         if len(head) < 16:
             return frames, True, None
