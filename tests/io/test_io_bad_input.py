@@ -130,6 +130,14 @@ def test_an_empty_dataset_file_is_said_empty(tmp_path, name):
         read_dataset(str(tmp_path / name))
 
 
+def test_a_dataset_file_of_blank_lines_is_said_empty(tmp_path):
+    from rplearn.io.files import read_dataset
+
+    (tmp_path / "d.csv").write_bytes(b"\n  \r\n\n")  # was "cannot read table (EmptyDataError: ...)"
+    with pytest.raises(RplearnError, match=r"d.csv: empty file \(6 bytes of blank lines\), not a table"):
+        read_dataset(str(tmp_path / "d.csv"))
+
+
 def _small_pcap(path: Path) -> Path:
     write_radiotap_pcap(str(path), np.array([1.0, 1.1, 1.2]), np.array([-40, -127, -60]),
                         ["02:00:00:00:00:0a"] * 3, 2.412e9, noise_dbm=-95)

@@ -162,8 +162,13 @@ def table_read_error(name: str, path: str | os.PathLike[str] | None, exc: BaseEx
     """The one-line message for a table that could not be read: what the file is and what to run
     when :func:`not_a_table_hint` knows (``path`` None: a URL, not sniffed), else the parser's
     complaint (its first line)."""
-    if path is not None and os.path.isfile(path) and os.path.getsize(path) == 0:
-        return f"{name}: empty file (0 bytes), not a table"
+    if path is not None and os.path.isfile(path) and os.path.getsize(path) <= 4096:
+        size = os.path.getsize(path)
+        if size == 0:
+            return f"{name}: empty file (0 bytes), not a table"
+        with open(path, "rb") as fh:
+            if not fh.read().strip():
+                return f"{name}: empty file ({size} bytes of blank lines), not a table"
     hint = "" if path is None else not_a_table_hint(path)
     if hint:
         return f"{name}: {hint}"
