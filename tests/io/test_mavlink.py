@@ -145,6 +145,7 @@ def test_a_tlog_in_the_file_twice_reads_as_once_and_says_so(tmp_path):
     pd.testing.assert_frame_equal(once.signal, doubled.signal)
     assert m1["repeated_messages"] == 0 and m2["repeated_messages"] == sum(m1["messages"].values())
     assert m2["reboots"] == 0 and m2["dropped"] == m1["dropped"] and m2["messages"] == m1["messages"]
+    assert m2["radio_senders"] == m1["radio_senders"] == {"51/68": 1114}  # review 38: was 2,228 doubled
     assert any("part of the log is in the file twice" in line for line in file_damage(str(twice), m2))
 
 

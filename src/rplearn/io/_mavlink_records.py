@@ -154,6 +154,7 @@ class TlogRows:
     by_sys: dict[int, list[float]] = field(default_factory=dict)
     counts: dict[str, int] = field(default_factory=dict)
     radio_senders: dict[str, int] = field(default_factory=dict)
+    radio_from: dict[str, list[str]] = field(default_factory=lambda: {k: [] for k in _RADIO_TYPES})  # per radio row
     _arrays: dict[Any, np.ndarray] = field(default_factory=dict)
 
     def array(self, kind: str, width: int) -> np.ndarray:
@@ -191,6 +192,7 @@ class TlogRows:
         if kind in _RADIO_TYPES:
             key = f"{sysid}/{msg.get_srcComponent()}"
             self.radio_senders[key] = self.radio_senders.get(key, 0) + 1
+            self.radio_from[kind].append(key)
 
 
 def collect_tlog(source: str, system_id: int | None) -> Raw:
@@ -223,11 +225,20 @@ def drop_repeated_rows(acc: TlogRows) -> int:
     flight. Returns how many were dropped (their kinds' counts are lowered)."""
     dropped = 0
     for kind, rows in acc.rows.items():
-        unique = list(dict.fromkeys(rows))
+        senders = acc.radio_from.get(kind)  # a radio row holds no sender: compared with its sender's
+        keyed = list(zip(rows, senders, strict=True)) if senders is not None else rows
+        unique = list(dict.fromkeys(keyed))
         if len(unique) < len(rows):
             dropped += len(rows) - len(unique)
             acc.counts[kind] -= len(rows) - len(unique)
-            acc.rows[kind] = unique
+            if senders is not None:
+                for key in senders:
+                    acc.radio_senders[key] -= 1
+                acc.rows[kind], acc.radio_from[kind] = [r for r, _ in unique], [k for _, k in unique]
+                for key in acc.radio_from[kind]:
+                    acc.radio_senders[key] += 1
+            else:
+                acc.rows[kind] = unique
             acc._arrays.pop(kind, None)
     return dropped
 
