@@ -372,10 +372,12 @@ def kkt_condition(matrix: FloatArray, constraints: FloatArray, inverse: FloatArr
     """
     d = 1.0 / np.sqrt(np.maximum(np.abs(np.diag(matrix)), 1e-300))
     cd = np.abs(constraints * d[None, :])
-    norm = max(float((np.abs(matrix * d[:, None] * d[None, :]).sum(axis=0) + cd.sum(axis=0)).max()),
+    # the column sums of |D A D| and |D^-1 M D^-1| as d_j (d^T |A|)_j and (d^-1^T |M|)_j / d_j
+    # (d > 0): one product each, no scaled copy of either matrix
+    norm = max(float((d * (d @ np.abs(matrix)) + cd.sum(axis=0)).max()),
                float(cd.sum(axis=1).max()) if cd.shape[0] else 0.0)
     zs = np.abs(z_over_s / d[:, None])
-    inverse_norm = max(float((np.abs(inverse / d[:, None] / d[None, :]).sum(axis=0) + zs.sum(axis=1)).max()),
+    inverse_norm = max(float(((1.0 / d) @ np.abs(inverse) / d + zs.sum(axis=1)).max()),
                        float((zs.sum(axis=0) + np.abs(s_inverse).sum(axis=0)).max()) if cd.shape[0] else 0.0)
     condition = norm * inverse_norm
     return condition if np.isfinite(condition) else float("inf")
