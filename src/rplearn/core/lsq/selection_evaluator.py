@@ -88,8 +88,10 @@ class _Evaluator:
         self._spreads: dict[tuple[int, float], tuple[float, float]] = {}  # spread() of each point asked
         self.curve: list[CurvePoint] = []
         self._cache: dict[int, Any] = {}
+        self._cache_nbytes: dict[int, int] = {}  # _cache_bytes of each cached order
         # the folds' solutions and factors of the best points so far (within _KEPT_FACTOR_BYTES)
         self._solved: dict[tuple[int, float], list[tuple[np.ndarray, np.ndarray | None]]] = {}
+        self._solved_nbytes: dict[tuple[int, float], int] = {}
         self._pending: dict[tuple[int, float], list[tuple[np.ndarray, np.ndarray | None, float]]] = {}  # prefetch()
 
     def _fold_pins(self, units: Mapping[str, NormalEquations]) -> list[tuple[np.ndarray, np.ndarray] | None]:
@@ -189,9 +191,12 @@ class _Evaluator:
                 parts = built[i * n_folds:(i + 1) * n_folds]
                 self._cache[o] = (self._weights(self.make_basis(o)), [b for b, _, _ in parts], [t for _, t, _ in parts],
                                   [s for _, _, s in parts])
+                self._cache_nbytes[o] = _cache_bytes({o: self._cache[o]})  # counted once, not at every call
         for o in wanted:  # the orders asked last are the newest
             self._cache[o] = self._cache.pop(o)
-        while len(self._cache) > max(_CACHED_ORDERS, len(wanted)) and _cache_bytes(self._cache) > _CACHE_BYTES:
+        while (len(self._cache) > max(_CACHED_ORDERS, len(wanted))
+               and sum(self._cache_nbytes[o] for o in self._cache) > _CACHE_BYTES):
+            del self._cache_nbytes[next(iter(self._cache))]
             self._cache.pop(next(iter(self._cache)))
 
     def _fold_tasks(self, order: int, smoothing: float) -> list[Callable[[], tuple[np.ndarray, np.ndarray | None, float]]]:
@@ -262,13 +267,13 @@ class _Evaluator:
         always: its inflation is always asked), for :meth:`spread`. Which are kept changes no
         figure: a point not kept is solved again, to the same bits."""
         self._solved[key] = solved
+        self._solved_nbytes[key] = sum(0 if u is None else u.nbytes for _, u in solved)
         held = 0
         for k in sorted(self._solved, key=lambda k: (self.seen.get(k, value), k)):
-            size = sum(0 if u is None else u.nbytes for _, u in self._solved[k])
-            if held and held + size > _KEPT_FACTOR_BYTES:
-                del self._solved[k]
+            if held and held + self._solved_nbytes[k] > _KEPT_FACTOR_BYTES:
+                del self._solved[k], self._solved_nbytes[k]
             else:
-                held += size
+                held += self._solved_nbytes[k]
 
     def inflation(self, order: int, smoothing: float) -> float:
         """:func:`variance_inflation` of one (order, smoothing) (1 without held-out units)."""
