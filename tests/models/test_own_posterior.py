@@ -214,3 +214,36 @@ def test_the_continued_posteriors_computed_beforehand_are_those_computed_here(gr
     assert np.array_equal(tied_here.covariance, tied_given.covariance), np.max(np.abs(tied_here.covariance - tied_given.covariance))
     none_first, none_jobs = own_posterior.continued_jobs(total, big, nodes, prior, ties[:1], make)
     assert not none_first and none_jobs == []  # the largest basis chosen, one point: nothing to continue
+
+
+def test_the_final_solves_own_system_is_read_off_the_solve():
+    """``solved_parts``: the continued posterior of the chosen point at the largest basis is the
+    final solve's own covariance over its residual variance (the constrained inverse that
+    ``continued_parts`` forms again), to the rounding of two factorisations of a system whose
+    gauge direction is held by a ridge of 1e-6 alone (1.2e-8 of the largest entry on this
+    noise-only flight; the ``--record`` fits: own-pattern spreads within 4e-13); another point
+    is not read off it."""
+    from rplearn.core.geometry import Directions
+    from rplearn.core.lsq.selection import penalty_vector
+    from rplearn.core.lsq.solver import solve
+    from rplearn.core.sh import SphericalHarmonics
+
+    rng = np.random.default_rng(5)
+    basis, n = SphericalHarmonics(5), 3000
+    az, el = rng.uniform(-np.pi, np.pi, (2, n)), np.arcsin(rng.uniform(-1, 1, (2, n)))
+    tx = rng.integers(0, 2, n)
+    total = NormalEquations(basis, 2).add(Directions(az[0], el[0], az[1], el[1]), tx, 1 - tx, rng.normal(0.0, 2.0, n))
+    nodes = ["A", "B"]
+    prior = own_posterior.OwnPrior(1e-4, penalty_scale(total.gram, total.n_pattern_columns), 2.0, 1e-6, Gauge(), None)
+    sol = solve(total, nodes, ridge=prior.ridge, gauge=prior.gauge,
+                penalty=penalty_vector(basis, 2, prior.smoothing, prior.scale, prior.power))
+    pat = 2 * basis.n_coef
+    known = own_posterior.solved_parts(prior, prior, sol.covariance, sol.residual_variance_db2, pat)
+    assert known is not False
+    direct = own_posterior.read_continued(own_posterior.continued_parts(total, nodes, prior), 1.0)
+    read = own_posterior.read_continued(known, 1.0)
+    assert direct is not None and read is not None
+    assert np.max(np.abs(read - direct)) <= 1e-7 * np.max(np.abs(direct))
+    other = dataclasses.replace(prior, smoothing=2e-4)
+    assert own_posterior.solved_parts(prior, other, sol.covariance, sol.residual_variance_db2, pat) is False
+    assert own_posterior.solved_parts(prior, prior, None, 1.0, pat) is False

@@ -43,7 +43,7 @@ from rplearn.models.fit import FittedModel
 from rplearn.models.load import load_priors
 from rplearn.models.node_coverage import CoverageWork
 from rplearn.models.options import FitOptions
-from rplearn.models.own_posterior import OwnPrior, continued_jobs, own_pattern_posterior, tied_own_posterior
+from rplearn.models.own_posterior import OwnPrior, continued_jobs, continued_parts, continued_points, own_pattern_posterior, solved_parts, tied_own_posterior
 from rplearn.models.patterns import PatternSet
 from rplearn.models.spec import ModelSpec, check_model_size, default_ridge
 from rplearn.models.streamed import frequency_counts, weighted_median
@@ -258,6 +258,21 @@ def _final_setup(total: NormalEquations, big: Any, kind: str, ridge: float, powe
     return chosen, normal, scale, penalty, sub_target
 
 
+def _early_parts(early: Mapping[str, Any], results: Sequence[Any], total: NormalEquations, names: list[str]) -> list[Any]:
+    """The own posteriors' parts of the jobs run beside the selection (``final_jobs`` of
+    :func:`fit_from_statistics`): the jobs' results after the final solve's (``results[0]``),
+    with the point that is the final solve's own system read off it (:func:`solved_parts`; its
+    inverse is computed here should the solve give no covariance)."""
+    parts = list(results[1:])
+    for i in early["same"]:
+        sol = results[0]
+        point = early["points"][i]
+        known = solved_parts(early["prior"], point, sol.covariance, sol.residual_variance_db2,
+                             total.basis.n_coef * len(names))
+        parts.insert(i, continued_parts(total, names, point) if known is False else known)
+    return parts
+
+
 def fit_from_statistics(
     stats: Mapping[str, NormalEquations],
     spec: ModelSpec,
@@ -337,12 +352,17 @@ def fit_from_statistics(
         # not kept on this path): on the workers with the chosen and tied points' inflations
         setup = _final_setup(total, first.basis, kind, ridge, power, order, smoothing, len(nodes), search_target)
         chosen_, normal_, scale_, penalty_, sub_target_ = setup
-        own_first_, jobs_ = continued_jobs(plain_total, chosen_, names,
-                                           OwnPrior(smoothing, scale_, power, ridge, gauge, target, prior_level),
-                                           [(o, s, 0.0) for o, s in keys], make_basis)  # inflations: not used by the jobs
-        early.update(setup=setup, own_first=own_first_)
+        prior_ = OwnPrior(smoothing, scale_, power, ridge, gauge, target, prior_level)
+        own_first_, points = continued_points(plain_total, chosen_, len(nodes), prior_,
+                                              [(o, s, 0.0) for o, s in keys], make_basis)  # inflations: not used here
+        # at the largest basis the chosen point's tie group is the final solve's own system: its
+        # posterior is read off that solve (solved_parts), not inverted a second time
+        same = [i for i, g in enumerate(points) if not own_first_ and g.smoothing == smoothing and g.scale == scale_]
+        early.update(setup=setup, own_first=own_first_, points=points, same=same[:1], prior=prior_)
         return [functools.partial(solve, normal_, list(nodes), ridge=ridge, gauge=gauge, penalty=penalty_,
-                                  penalty_target=sub_target_, prior_level=prior_level), *jobs_]
+                                  penalty_target=sub_target_, prior_level=prior_level),
+                *(functools.partial(continued_parts, plain_total, names, g) for i, g in enumerate(points)
+                  if i not in same[:1])]
 
     searched_prior = keeps_prior(kind, target, first.basis, len(nodes))
     results, choice = select_beside(stats, make_basis, orders, ridge, power, target=target, prior_level=prior_level,
@@ -440,7 +460,7 @@ def fit_from_statistics(
             pat = model_basis.n_coef * len(nodes)
             covariance = covariance.copy()
             covariance[:pat, :pat] += misfit_covariance(model_basis, len(nodes), misfit_var / 2.0)  # two ends a sample
-        parts = results[1:] if early else continued()
+        parts = _early_parts(early, results, plain_total, names) if early else continued()
     with one_blas_thread():
         own = own_pattern_posterior(plain_total, chosen, names, own_prior, noise_var, uncapped,
                                     (lambda: parts[0]) if own_first else None)

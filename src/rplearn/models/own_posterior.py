@@ -230,13 +230,36 @@ def continued_jobs(total: NormalEquations, chosen: Basis, nodes: Sequence[str], 
     group of :func:`tied_groups` (when there are two tied points or more). No job above
     :data:`MAX_OWN_COLUMNS` pattern columns. A job's result is :func:`continued_parts`; the
     two functions read them with their ``parts`` arguments."""
-    if total.basis.n_coef * len(nodes) > MAX_OWN_COLUMNS:
+    own, points = continued_points(total, chosen, len(nodes), prior, ties, make_basis)
+    return own, [functools.partial(continued_parts, total, list(nodes), g) for g in points]
+
+
+def continued_points(total: NormalEquations, chosen: Basis, n_nodes: int, prior: OwnPrior,
+                     ties: Sequence[tuple[int, float, float]],
+                     make_basis: Callable[[int], Basis]) -> tuple[bool, list[OwnPrior]]:
+    """The priors whose :func:`continued_parts` :func:`continued_jobs` computes, in its order:
+    whether the first is the chosen point's, then one per group of :func:`tied_groups` (when
+    there are two tied points or more); none above :data:`MAX_OWN_COLUMNS` pattern columns."""
+    if total.basis.n_coef * n_nodes > MAX_OWN_COLUMNS:
         return False, []
     own = total.basis != chosen
     points = [prior] if own else []
     if len(ties) >= 2:
         points += [g for g, _ in tied_groups(total, prior, ties, make_basis)]
-    return own, [functools.partial(continued_parts, total, list(nodes), g) for g in points]
+    return own, points
+
+
+def solved_parts(prior: OwnPrior, point: OwnPrior, covariance: np.ndarray | None, residual_var_db2: float,
+                 n_pattern_columns: int) -> ContinuedParts | bool:
+    """:func:`continued_parts` of ``point`` read off the chosen fit's own solve (of ``prior``,
+    at the largest basis: its covariance and residual variance), when ``point`` is that very
+    system: the same smoothing and penalty unit (the other fields are the chosen fit's in
+    every point of :func:`tied_groups`); False when it is another (its inverse is needed).
+    The solve's covariance is ``residual_var_db2 M`` with ``M`` the constrained inverse
+    :func:`continued_parts` would form again (the penalty read as a prior: no sandwich)."""
+    if point.smoothing != prior.smoothing or point.scale != prior.scale or covariance is None or not residual_var_db2 > 0:
+        return False
+    return np.asarray(covariance, np.float64)[:n_pattern_columns, :n_pattern_columns], float(residual_var_db2)
 
 
 def tied_own_posterior(own: OwnPosterior | None, total: NormalEquations, nodes: Sequence[str], prior: OwnPrior,
@@ -291,4 +314,4 @@ def tied_own_posterior(own: OwnPosterior | None, total: NormalEquations, nodes: 
 
 
 __all__ = ["MAX_OWN_COLUMNS", "ContinuedParts", "OwnPosterior", "OwnPrior", "continued_jobs", "continued_parts",
-           "own_pattern_posterior", "read_continued", "tied_groups", "tied_own_posterior"]
+           "continued_points", "own_pattern_posterior", "read_continued", "solved_parts", "tied_groups", "tied_own_posterior"]

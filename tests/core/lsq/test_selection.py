@@ -236,6 +236,35 @@ def test_without_room_for_the_factors_the_inflation_solves_again(monkeypatch):
     assert dropped.flight_level_std_db == pytest.approx(kept.flight_level_std_db, rel=1e-9, abs=1e-12)
 
 
+def test_the_tied_points_inflations_reuse_the_kept_factors(monkeypatch):
+    """The folds' factors of the best points are kept (``_KEPT_FACTOR_BYTES``): the inflations of
+    the chosen and tied points factorise nothing again (one solve per fold of each curve point);
+    without room for them (the best point's alone) the tied points solve again, to the same
+    inflations."""
+    from rplearn.core.lsq import selection_evaluator as selection_module
+
+    monkeypatch.setenv("RPLEARN_THREADS", "1")
+    units = stats_of(synthetic_units(n_units=3, n_per_unit=600, truth_order=3, seed=9), SphericalHarmonics(6))
+    solves: list[int] = []
+    original = selection_module._Evaluator._solve
+
+    def counted(self, *args, **kwargs):
+        solves.append(1)
+        return original(self, *args, **kwargs)
+
+    monkeypatch.setattr(selection_module._Evaluator, "_solve", counted)
+    kept = select_order_and_smoothing(units, SphericalHarmonics, range(2, 7), RIDGE)
+    assert len(kept.ties) >= 2  # else nothing to reuse: the test would not test
+    assert len(solves) == 3 * len(kept.curve)
+    solves.clear()
+    monkeypatch.setattr(selection_module, "_KEPT_FACTOR_BYTES", 0)
+    again = select_order_and_smoothing(units, SphericalHarmonics, range(2, 7), RIDGE)
+    assert len(solves) > 3 * len(again.curve)
+    assert [t[:2] for t in again.ties] == [t[:2] for t in kept.ties]
+    np.testing.assert_array_equal([t[2] for t in again.ties], [t[2] for t in kept.ties])
+    assert again.variance_inflation == kept.variance_inflation
+
+
 @pytest.mark.parametrize("threads", [None, "2"])
 def test_a_fold_solved_in_the_calling_thread_is_solved_with_one_blas_thread(monkeypatch, threads):
     """With the workers busy, the folds run in the calling thread, still with one BLAS thread

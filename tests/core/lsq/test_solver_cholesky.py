@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rplearn.core.lsq.solver_cholesky import constrained_inverse, factor_inverse, factor_solve, spd_factor
+from rplearn.core.lsq.solver_cholesky import constrained_inverse, factor_inverse, factor_inverse_upper, factor_solve, spd_factor, symmetric_inner
 
 
 def _spd(rng, p, condition=1e6):
@@ -34,6 +34,23 @@ def test_solves_and_inverses_equal_numpys(p):
     inverse = factor_inverse(factor)
     assert np.array_equal(inverse, inverse.T)
     assert _relative(inverse, np.linalg.inv(a)) < 1e-9
+
+
+@pytest.mark.parametrize("p", [1, 7, 130, 301])
+def test_sums_over_the_inverse_are_read_off_its_upper_triangle(p):
+    """``factor_inverse_upper`` is the upper triangle of ``factor_inverse`` (zeros below), and
+    ``symmetric_inner`` of it with a symmetric matrix is ``tr(A^-1 M)`` of the whole inverse."""
+    rng = np.random.default_rng(40 + p)
+    a = _spd(rng, p, condition=1e4)
+    factor = spd_factor(a)
+    assert factor is not None
+    upper, whole = factor_inverse_upper(factor), factor_inverse(factor)
+    assert np.array_equal(upper, np.triu(whole))
+    x = rng.standard_normal((2 * p, p))
+    m = x.T @ x
+    m = 0.5 * (m + m.T)
+    assert symmetric_inner(upper, m) == pytest.approx(float(np.sum(whole * m)), rel=1e-12)
+    assert symmetric_inner(upper, m) == pytest.approx(float(np.trace(np.linalg.solve(a, m))), rel=1e-8)
 
 
 def test_a_well_conditioned_system_agrees_to_1e_10():

@@ -43,6 +43,11 @@ _CACHE_BYTES = 96 * 2**20
 _PENDING_FACTOR_BYTES = 128 * 2**20
 #: Stands for a factor not kept.
 _DROPPED = np.empty((0, 0))
+#: Bytes of the folds' Cholesky factors kept for the best points validated so far (the chosen
+#: and tied points are among the best: their inflations then factorise nothing again). The
+#: paper's SH-15 folds: 6 MB a point; the 4-6 best points are tied in the ``paper`` and
+#: ``pathloss`` records, and the factors would be recomputed to the same bits without it.
+_KEPT_FACTOR_BYTES = 64 * 2**20
 
 
 def _cache_bytes(cache: Mapping[int, Any]) -> int:
@@ -83,7 +88,10 @@ class _Evaluator:
         self._spreads: dict[tuple[int, float], tuple[float, float]] = {}  # spread() of each point asked
         self.curve: list[CurvePoint] = []
         self._cache: dict[int, Any] = {}
-        self._best_solved: tuple[tuple[int, float], list[tuple[np.ndarray, np.ndarray | None]]] | None = None
+        self._cache_nbytes: dict[int, int] = {}  # _cache_bytes of each cached order
+        # the folds' solutions and factors of the best points so far (within _KEPT_FACTOR_BYTES)
+        self._solved: dict[tuple[int, float], list[tuple[np.ndarray, np.ndarray | None]]] = {}
+        self._solved_nbytes: dict[tuple[int, float], int] = {}
         self._pending: dict[tuple[int, float], list[tuple[np.ndarray, np.ndarray | None, float]]] = {}  # prefetch()
 
     def _fold_pins(self, units: Mapping[str, NormalEquations]) -> list[tuple[np.ndarray, np.ndarray] | None]:
@@ -183,9 +191,12 @@ class _Evaluator:
                 parts = built[i * n_folds:(i + 1) * n_folds]
                 self._cache[o] = (self._weights(self.make_basis(o)), [b for b, _, _ in parts], [t for _, t, _ in parts],
                                   [s for _, _, s in parts])
+                self._cache_nbytes[o] = _cache_bytes({o: self._cache[o]})  # counted once, not at every call
         for o in wanted:  # the orders asked last are the newest
             self._cache[o] = self._cache.pop(o)
-        while len(self._cache) > max(_CACHED_ORDERS, len(wanted)) and _cache_bytes(self._cache) > _CACHE_BYTES:
+        while (len(self._cache) > max(_CACHED_ORDERS, len(wanted))
+               and sum(self._cache_nbytes[o] for o in self._cache) > _CACHE_BYTES):
+            del self._cache_nbytes[next(iter(self._cache))]
             self._cache.pop(next(iter(self._cache)))
 
     def _fold_tasks(self, order: int, smoothing: float) -> list[Callable[[], tuple[np.ndarray, np.ndarray | None, float]]]:
@@ -238,8 +249,8 @@ class _Evaluator:
             solved = [(c, upper) for c, upper, _ in results]
             self.fold_sse[key] = np.asarray(per_fold)
             value = float(np.sqrt(sum(per_fold) / self.n))
-            if not self.seen or value < min(self.seen.values()):  # the factors of the best point, for inflation()
-                self._best_solved = None if any(u is _DROPPED for _, u in solved) else (key, solved)
+            if not any(u is _DROPPED for _, u in solved):
+                self._keep_solved(key, value, solved)
         else:
             w, blocks, targets, scales = self._blocks(int(order))
             g, r, _, _ = blocks[0]
@@ -248,6 +259,21 @@ class _Evaluator:
         self.seen[key] = value
         self.curve.append(CurvePoint(int(order), float(smoothing), value))
         return value
+
+    def _keep_solved(self, key: tuple[int, float], value: float,
+                     solved: list[tuple[np.ndarray, np.ndarray | None]]) -> None:
+        """Keep the folds' solutions and factors of ``key`` (validated at ``value``) while it
+        is among the best points whose factors fit in :data:`_KEPT_FACTOR_BYTES` (the best
+        always: its inflation is always asked), for :meth:`spread`. Which are kept changes no
+        figure: a point not kept is solved again, to the same bits."""
+        self._solved[key] = solved
+        self._solved_nbytes[key] = sum(0 if u is None else u.nbytes for _, u in solved)
+        held = 0
+        for k in sorted(self._solved, key=lambda k: (self.seen.get(k, value), k)):
+            if held and held + self._solved_nbytes[k] > _KEPT_FACTOR_BYTES:
+                del self._solved[k], self._solved_nbytes[k]
+            else:
+                held += self._solved_nbytes[k]
 
     def inflation(self, order: int, smoothing: float) -> float:
         """:func:`variance_inflation` of one (order, smoothing) (1 without held-out units)."""
@@ -280,13 +306,14 @@ class _Evaluator:
 
     def _spread_jobs(self, order: int, smoothing: float) -> list[Callable[[], Any]]:
         """Per fold, the work of :func:`~rplearn.core.lsq.selection_folds.fold_spread_terms` (None
-        when its system is not positive definite), solving again unless the point is the best's."""
+        when its system is not positive definite), solving again unless the point's factors
+        were kept (:meth:`_keep_solved`)."""
         w, blocks, targets, scales = self._blocks(int(order))
         idx = with_shared_columns(nested_columns(self.big, self.make_basis(int(order)), self.n_nodes), self.first)
         sums = [(a[idx], sum_y) for a, sum_y in self.sums]
         counts = np.array([f.held_n for f in self.folds], np.float64)
         key = (int(order), float(smoothing))
-        solved = self._best_solved[1] if self._best_solved and self._best_solved[0] == key else None
+        solved = self._solved.get(key)
         jobs: list[Callable[[], Any]] = []
         for k, ((g, r, held_g, held_r), f, pin, target) in enumerate(zip(blocks, self.folds, self.pins, targets)):
             fold = Fold(g, r, held_g, held_r, f.held_yty, f.held_n)

@@ -21,7 +21,7 @@ from typing import Any, cast
 import numpy as np
 
 from rplearn.core.lsq.normal_equations import NormalEquations
-from rplearn.core.lsq.solver_cholesky import factor_inverse
+from rplearn.core.lsq.solver_cholesky import factor_inverse_upper, symmetric_inner
 
 
 @dataclass
@@ -136,23 +136,26 @@ def fold_spread_terms(c: np.ndarray, upper: np.ndarray, fold: Fold, index: int, 
     n, yty = total
     k = index
     g, held_g = fold.gram, fold.held_gram
-    inverse = factor_inverse(upper)  # from the solve's factor: a third of the work of an LU inverse
+    # the upper triangle of A^-1 from the solve's factor (a third of the work of an LU inverse);
+    # the traces and the quadratic form below are read off it, the whole inverse never formed
+    inverse = factor_inverse_upper(upper)
     learn = [j for j in range(len(sums)) if j != k]
     learn_n = n - fold.held_n
     # the learning residual about each learning unit's own mean: noise, not the units' levels
     unit_means = np.array([(sums[j][1] - c @ sums[j][0]) / counts[j] for j in learn])
     learn_sse = (yty - fold.held_yty) - 2.0 * c @ fold.rhs + c @ g @ c - float(counts[learn] @ unit_means**2)
     # less the fit's effective parameters tr(A^-1 G) and the other units' means
-    dof = learn_n - float(np.sum(inverse * g)) - (len(learn) - 1)
+    dof = learn_n - symmetric_inner(inverse, g) - (len(learn) - 1)
     noise_var = max(learn_sse, 0.0) / max(dof, 1.0)
     held_sse = max(fold.held_yty - 2.0 * c @ fold.held_rhs + c @ held_g @ c, 0.0)
     a, sum_y = sums[k]
     mean = (sum_y - c @ a) / fold.held_n
-    quad = float(a @ inverse @ a)  # n^2 times the posterior variance of the unit's mean, over sigma^2
+    # n^2 times the posterior variance of the unit's mean, over sigma^2
+    quad = 2.0 * float(a @ (inverse @ a)) - float(np.diagonal(inverse) @ a**2)
     excess = held_sse - fold.held_n * mean**2 - (fold.held_n - 1) * noise_var
     # sum over the held-out samples of x^T (sigma^2 A^-1) x = sigma^2 tr(A^-1 X_u^T X_u),
     # less the part along the unit's mean (removed above)
-    predicted = noise_var * (float(np.sum(inverse * held_g)) - quad / fold.held_n)  # tr(A^-1 H)
+    predicted = noise_var * (symmetric_inner(inverse, held_g) - quad / fold.held_n)  # tr(A^-1 H)
     weights = counts[learn] / learn_n  # the fit's level: the learning units' levels, weighed by samples
     return float(excess), float(predicted), (float(mean**2), float(noise_var * (1.0 + quad / fold.held_n) / fold.held_n),
                                              1.0 + float(weights @ weights))

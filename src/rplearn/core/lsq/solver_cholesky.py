@@ -277,6 +277,34 @@ def factor_inverse(factor: FloatArray) -> FloatArray:
     InputError
         When ``factor`` is not square.
     """
+    inverse = factor_inverse_upper(factor)
+    inverse += inverse.T  # the diagonal twice (exactly: a power of two) ...
+    inverse[np.diag_indices_from(inverse)] *= 0.5  # ... and back
+    return inverse
+
+
+def factor_inverse_upper(factor: FloatArray) -> FloatArray:
+    """The upper triangle of ``A^-1`` from the factor of :func:`spd_factor` (LAPACK ``potri``),
+    zeros below: what :func:`factor_inverse` symmetrises, for sums over the whole inverse read
+    off one triangle (:func:`symmetric_inner`) without forming it.
+
+    Parameters
+    ----------
+    factor : (n, n) float64 array
+        :func:`spd_factor`'s ``U`` (``A = U^T U``; only its upper triangle is read).
+
+    Returns
+    -------
+    (n, n) float64 array
+        ``triu(A^-1)``.
+
+    Raises
+    ------
+    numpy.linalg.LinAlgError
+        When the factor is singular (a zero on its diagonal).
+    InputError
+        When ``factor`` is not square.
+    """
     f = _factor_view(factor)
     potri = _routine("dpotri")
     if potri is None:  # scipy's wrapper
@@ -291,10 +319,26 @@ def factor_inverse(factor: FloatArray) -> FloatArray:
         code = info.value
     if _lapack_info("dpotri", code) != 0:
         raise np.linalg.LinAlgError(f"dpotri: the factor is singular (info {code})")
-    inverse = np.triu(upper)  # the upper triangle of A^-1 (the rest of ``upper`` is the factor's)
-    inverse += inverse.T  # the diagonal twice (exactly: a power of two) ...
-    inverse[np.diag_indices_from(inverse)] *= 0.5  # ... and back
-    return inverse
+    return np.triu(upper)  # the upper triangle of A^-1 (the rest of ``upper`` is the factor's)
+
+
+def symmetric_inner(upper: FloatArray, matrix: FloatArray) -> float:
+    """``sum(S * matrix)`` for the symmetric ``S`` whose upper triangle is ``upper`` (zeros below,
+    :func:`factor_inverse_upper`) and a symmetric ``matrix``: ``tr(S matrix)``, from one
+    triangle (twice the inner product with ``upper``, less the diagonal counted twice).
+
+    Parameters
+    ----------
+    upper : (n, n) float64 array
+        Upper triangular.
+    matrix : (n, n) float64 array
+        Symmetric.
+
+    Returns
+    -------
+    float
+    """
+    return 2.0 * float(np.vdot(upper, matrix)) - float(np.diagonal(upper) @ np.diagonal(matrix))
 
 
 #: Largest 1-norm condition number of the scaled KKT matrix a solve accepts (beyond it the
@@ -328,10 +372,12 @@ def kkt_condition(matrix: FloatArray, constraints: FloatArray, inverse: FloatArr
     """
     d = 1.0 / np.sqrt(np.maximum(np.abs(np.diag(matrix)), 1e-300))
     cd = np.abs(constraints * d[None, :])
-    norm = max(float((np.abs(matrix * d[:, None] * d[None, :]).sum(axis=0) + cd.sum(axis=0)).max()),
+    # the column sums of |D A D| and |D^-1 M D^-1| as d_j (d^T |A|)_j and (d^-1^T |M|)_j / d_j
+    # (d > 0): one product each, no scaled copy of either matrix
+    norm = max(float((d * (d @ np.abs(matrix)) + cd.sum(axis=0)).max()),
                float(cd.sum(axis=1).max()) if cd.shape[0] else 0.0)
     zs = np.abs(z_over_s / d[:, None])
-    inverse_norm = max(float((np.abs(inverse / d[:, None] / d[None, :]).sum(axis=0) + zs.sum(axis=1)).max()),
+    inverse_norm = max(float(((1.0 / d) @ np.abs(inverse) / d + zs.sum(axis=1)).max()),
                        float((zs.sum(axis=0) + np.abs(s_inverse).sum(axis=0)).max()) if cd.shape[0] else 0.0)
     condition = norm * inverse_norm
     return condition if np.isfinite(condition) else float("inf")
@@ -387,4 +433,5 @@ def constrained_inverse(matrix: FloatArray, constraints: FloatArray, max_conditi
     return out
 
 
-__all__ = ["MAX_KKT_CONDITION", "constrained_inverse", "factor_inverse", "factor_solve", "kkt_condition", "spd_factor"]
+__all__ = ["MAX_KKT_CONDITION", "constrained_inverse", "factor_inverse", "factor_inverse_upper", "factor_solve", "kkt_condition",
+           "spd_factor", "symmetric_inner"]
