@@ -175,7 +175,8 @@ import numpy as np
 os.environ.setdefault("RPLEARN_THREADS", "1")
 
 from rplearn.analysis.manoeuvre_cells import DirectionCells
-from rplearn.analysis.manoeuvres import ManoeuvreOptions, correlated_error_std_db, greedy_plan, pattern_spreads, prior_penalty_weight, rank_manoeuvres
+from rplearn.analysis.manoeuvres import (ManoeuvreOptions, correlated_error_std_db, greedy_plan, pattern_spreads, prior_penalty_weight,
+                                         rank_manoeuvres, steady_tilt_accel)
 from rplearn.analysis.pattern_error import pattern_errors_db
 from rplearn.core.bases import fibonacci_grid_nodes
 from rplearn.core.coverage import nearest_angle_deg
@@ -446,7 +447,7 @@ def _reference_drift(setup: Setup, parts: list[Any]) -> float:
 
 def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, prior_std_db: float = PRIOR_STD_DB,
         correlated: str = "reference", block_s: float = DEFAULT_BLOCK_S, posterior: str = "inflated",
-        budget: bool = False, draws: int = DRAWS, candidates: dict[str, Any] | None = None) -> dict[str, Flight]:
+        budget: bool = False, draws: int = DRAWS, candidates: dict[str, Any] | None = None, tilt: bool = False) -> dict[str, Flight]:
     config = _config(preset)
     learning = config.campaign.with_role("learning").units
     nodes = tuple(sorted(config.node_antennas))
@@ -477,15 +478,22 @@ def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, 
     accumulate(setup, sug, start_parts[:1], until_s=START_S)
     sug.plan = [((learning[0],), 0.0, START_S)]
     poses = poses[poses["t"] <= START_S]
+    if tilt:  # the wind's drag the drones lean against, from the start's poses (both planners)
+        accel = steady_tilt_accel(poses, FIXED.get(preset, ()))
+        setup.options = opts = replace(opts, steady_accel_enu_m_s2=accel)
+        print(f"  steady tilt from the start's poses: {np.degrees(np.arctan(np.hypot(accel[0], accel[1]) / 9.80665)):.1f} deg "
+              f"({accel[0]:+.2f}, {accel[1]:+.2f}) m/s^2")
     k = 0
     while sug.reached_s is None and sug.t_s < limit_s:
         best = rank_manoeuvres(sug.normal, spec, nodes, poses, replace(opts, floor_db=TARGET_DB), sug.blocks, sug.cells)[0]
         k += 1
         unit = replace(best.candidate.unit, label=f"m{k:02d}")
-        sug.steps.append(f"{best.name} ({best.duration_s:.0f} s)")
         parts, poses = fly(setup, (unit,))
         sug.plan.append(((unit,), best.candidate.lead_s, None))
         accumulate(setup, sug, parts, lead_s=best.candidate.lead_s)
+        flown = "" if not sug.history else f", flown {sug.history[-1][1]:.2f}"
+        sug.steps.append(f"{best.name} ({best.duration_s:.0f} s; predicted {max(best.spread_before_db.values()):.2f} -> "
+                         f"{max(best.spread_after_db.values()):.2f}{flown} dB)")
     # optimized: the greedy plan before the flight, from the reference's start poses
     first = learning[0].evaluate(np.array([0.0]))
     start = {n: (tuple(first.position_enu_m[0, j]), float(np.degrees(first.yaw_rad[0, j]))) for j, n in enumerate(learning[0].nodes)}
@@ -576,6 +584,7 @@ def main(argv: list[str] | None = None) -> int:
                     help="independent noise draws of each flight plan for the expected error (0: the single-draw check only)")
     ap.add_argument("--yaw-rate", type=float, default=0.0, help="the candidates' cruise yaw rate [deg/s]; 0: CandidateOptions' default")
     ap.add_argument("--arcs", action="store_true", help="also arcs over or under the anchor among the candidates")
+    ap.add_argument("--tilt", action="store_true", help="the planners model the drones' steady tilt in the wind (from the start's poses)")
     ap.add_argument("--tiny", action="store_true", help="the smoke preset at SH-4 (seconds; criteria not enforced)")
     args = ap.parse_args(argv)
     presets = ["smoke"] if args.tiny else [p.strip() for p in args.presets.split(",") if p.strip()]
@@ -590,7 +599,7 @@ def main(argv: list[str] | None = None) -> int:
         ref_total = _config(preset).campaign.with_role("learning")
         limit = float(sum(u.duration_s for u in ref_total.units))
         flights = run(preset, order, seed, limit, args.power, args.prior_std, args.correlated, args.block_s, args.posterior,
-                      args.budget or args.tiny, draws, _candidate_args(args))
+                      args.budget or args.tiny, draws, _candidate_args(args), args.tilt)
         ref = flights["reference"]
         print(f"{preset} (SH-{order}, seed {seed}, {time.perf_counter() - t0:.0f} s): time to {TARGET_DB:g} dB per-node spread")
         for f in flights.values():
@@ -605,7 +614,7 @@ def main(argv: list[str] | None = None) -> int:
                 marks = [(t, v) for t, v in f.history if int(t // 20) != int((t - STEP_S) // 20)]
                 print("    spread over time: " + ", ".join(f"{t:.0f} s {v:.2f}" for t, v in marks) + " dB")
             if f.steps:
-                print("    " + "; ".join(f.steps[:12]) + (" ..." if len(f.steps) > 12 else ""))
+                print("    " + "; ".join(f.steps[:16]) + (" ..." if len(f.steps) > 16 else ""))
             if f.draws_db:
                 mean, se = f.expected()
                 print(f"    {len(f.draws_db)} more draws of the same plan, cut at {f.reached_s:.0f} s: worst error "

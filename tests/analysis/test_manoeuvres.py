@@ -178,3 +178,46 @@ def test_a_floor_gives_no_credit_below_it():
     with pytest.raises(InputError) as err:
         ManoeuvreOptions(floor_db=-1.0)
     assert err.value.param == "floor_db"
+
+
+def test_the_steady_tilt_is_read_back_from_poses_leaning_against_a_wind():
+    """Drones leaning against a wind's drag (their thrust carrying ``a``) while turning give back
+    ``a`` from their attitudes alone; a ground station's level pose is left out."""
+    from rplearn.analysis.manoeuvres import steady_tilt_accel
+    from rplearn.core.geometry import attitude_from_thrust
+
+    accel = np.array([0.4, -2.1, 0.0])
+    t = np.linspace(0.0, 10.0, 41)
+    yaw = np.radians(30.0 * t)
+    q = attitude_from_thrust(np.tile(accel + [0.0, 0.0, 9.80665], (t.size, 1)), yaw)
+    drone = pd.DataFrame({"t": t, "node": "D", "qw": q[:, 0], "qx": q[:, 1], "qy": q[:, 2], "qz": q[:, 3]})
+    station = pd.DataFrame({"t": t, "node": "G", "qw": 0.9, "qx": 0.3, "qy": 0.3, "qz": 0.1})
+    poses = pd.concat([drone, station], ignore_index=True)
+    assert steady_tilt_accel(poses, ("G",)) == pytest.approx(tuple(accel), abs=1e-9)
+    assert steady_tilt_accel(poses, ("G",), last_s=2.0) == pytest.approx(tuple(accel), abs=1e-9)
+    assert steady_tilt_accel(poses, ("G",)) != pytest.approx(steady_tilt_accel(poses), abs=1e-3)  # the station's would count
+    with pytest.raises(InputError) as err:
+        steady_tilt_accel(poses.drop(columns=["qw"]))
+    assert err.value.param == "poses"
+
+
+def test_a_steady_tilt_shifts_the_peer_s_elevation_and_spares_a_fixed_node():
+    """A drone leaning 12 deg toward its peer sees it 12 deg off its body plane whatever its
+    heading (its body z axis is held by the thrust while it turns); the features of a node that
+    stands on the ground are those of the level hover."""
+    unit = ManoeuvreUnit(nodes=("B", "A"), kind="yaw", anchor_enu_m=(5.0, 0.0, 20.0), start_enu_m=(-5.0, 0.0, 20.0),
+                         turn_deg=360.0)
+    lean = (9.80665 * np.tan(np.radians(12.0)), 0.0, 0.0)
+    level = manoeuvre_rows(unit, NODES, SPEC.basis(), 4.0)
+    tilted = manoeuvre_rows(unit, NODES, SPEC.basis(), 4.0, (lean, ()))
+    spared = manoeuvre_rows(unit, NODES, SPEC.basis(), 4.0, (lean, ("A",)))
+    p = SPEC.basis().n_coef
+    assert not np.allclose(level[:, :p], tilted[:, :p]) and np.allclose(level[:, :p], spared[:, :p])  # A, the turning mover
+    from rplearn.analysis.manoeuvres import _rows_and_ends
+
+    el_a = np.degrees(_rows_and_ends(unit, NODES, SPEC.basis(), 4.0, (lean, ()))[1][1][2])  # A's end of the link
+    assert np.abs(el_a) == pytest.approx(np.full(el_a.size, 12.0), abs=0.01)
+    assert np.abs(np.degrees(_rows_and_ends(unit, NODES, SPEC.basis(), 4.0)[1][1][2])).max() < 0.01
+    with pytest.raises(InputError) as err:
+        ManoeuvreOptions(steady_accel_enu_m_s2=(12.0, 0.0, 0.0))
+    assert err.value.param == "steady_accel_enu_m_s2"
