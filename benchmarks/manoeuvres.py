@@ -175,8 +175,15 @@ import numpy as np
 os.environ.setdefault("RPLEARN_THREADS", "1")
 
 from rplearn.analysis.manoeuvre_cells import DirectionCells
-from rplearn.analysis.manoeuvres import (ManoeuvreOptions, correlated_error_std_db, greedy_plan, pattern_spreads, prior_penalty_weight,
-                                         rank_manoeuvres, steady_tilt_accel)
+from rplearn.analysis.manoeuvres import (
+    ManoeuvreOptions,
+    correlated_error_std_db,
+    greedy_plan,
+    pattern_spreads,
+    prior_penalty_weight,
+    rank_manoeuvres,
+    steady_tilt_accel,
+)
 from rplearn.analysis.pattern_error import pattern_errors_db
 from rplearn.core.bases import fibonacci_grid_nodes
 from rplearn.core.coverage import nearest_angle_deg
