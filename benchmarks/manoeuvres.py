@@ -149,12 +149,60 @@ included) but did not pay for their time (paper seed 0, one draw: 0.63/0.62x wit
 45 deg/s against 0.57/0.61x without; 0.71/0.68x at 30 deg/s against 0.72/0.74x). Neither is the
 default.
 
+**Where the time goes, and the wind's tilt** (``--tilt``; seeds 0-2, one thread; load 7-9 on 2
+cores). Each suggested step prints the ranking's predicted largest spread before and after it and
+the flown one: with the drones' steady lean in the wind modelled
+(:attr:`~rplearn.analysis.manoeuvres.ManoeuvreOptions.steady_accel_enu_m_s2`, estimated from the
+start's poses by :func:`~rplearn.analysis.manoeuvres.steady_tilt_accel`: 14.9-16.6 deg on
+``paper``, whose 10-m/s wind tilts the drones by 12-15 deg; 0.2-0.6 deg on ``ground``, which has
+none) the prediction of every paper step was within 0.08 dB of the flight (45 steps, seeds 0-4:
+flown minus predicted -0.08 to +0.04 dB; paper seed 0: 4.64 -> 4.43 predicted, 4.37 flown;
+3.17 -> 2.70, 2.65; 2.18 -> 2.03, 2.00); on ``ground`` the flights did 0.01-0.29 dB better than
+predicted (11 steps). The ranking is therefore
+not aiming at a spread the flight does not give, and the spread it ranks by is the benchmark's
+(one model for both). Nor does the target hinge on a few unreachable directions: with the
+drift's part left out (the white posterior alone), the reference flight's spread is spread over
+the elevations in proportion to their share of the targets (paper seed 0, every band of 30 deg
+holds 12-22 % of the variance after each unit), and the white part is 85 % of the total at the
+2-dB point (reference, paper seed 0: 1.59 of 1.86 dB for node B). What the curves show (spread
+over time, printed per flight) is two phases. The planned flights cover fast: paper seed 0
+suggested/optimized reach 2.48/2.33 dB at 81/101 s, where the reference stands at 3.70 dB
+(its first 140 s teach node A, 1.94 dB at 125 s, while node B stays at 3.6 dB). Then all
+flights enter a tail where the spread falls as the packets accumulate, ``1/s^2`` growing about
+linearly with time, and the planned flights' tail is the slower one where they miss: from about
+2.45 dB to 2.0, ``d(1/s^2)/dt`` was 1.09/1.01e-3 per dB^2 and s (suggested/optimized) against
+the reference's 1.77e-3 (paper seed 0: 80/65 s against 44 s), seed 2 optimized 1.39e-3 against
+1.99e-3; where the planners pass, their tail matched or beat the reference's (seed 1:
+1.18/1.07e-3 against 0.69e-3; ground 1.4-7.1e-3 against 1.0-2.6e-3). The reference's fast tail
+is its unit's second half, long full sweeps that teach node B, which the first half left at
+3.6 dB; the greedy's tail is a series of 12-34-s climbs, turns and orbits whose predicted gain
+per second, the best in the set at each step and flown as predicted, is lower. Modelling the tilt
+did not change that (it changes which of the near-tied candidates comes first):
+
+| cell | default | ``--tilt`` |
+| --- | --- | --- |
+| paper 0 suggested / optimized | 0.72* / +0.31*, 0.74* / +0.35 | 0.71* / +0.29*, 0.68* / +0.68* |
+| paper 1 suggested / optimized | 0.60 / -0.07, 0.62* / +0.26 | 0.67* / +0.04, 0.63* / -0.06 |
+| paper 2 suggested / optimized | 0.62* / -0.37, 0.67* / +0.20 | 0.65* / -0.32, 0.65* / +0.35 |
+| ground 0-2 | as the default | the same figures (5 of 6) |
+| both checks | 6 of 12 | 5 of 12 |
+| paper seeds 3-4 (not tuned on), time only | 0.75/0.68, 0.66/0.57 | 0.63/0.63, 0.58/0.68 |
+
+(time ratio / expected-error difference in dB, suggested then optimized; ``*``: a check missed;
+5 draws.) The mean paper time ratio over seeds 0-2 is 0.66 either way, 0.67 -> 0.63 on seeds
+3-4: within the +-0.05 the single flights move by from one variant to the next, so ``--tilt`` is
+not the default (``rplearn live`` and ``trajectory --optimize`` fly level references). What would
+reach 0.6x on ``paper`` is a higher information rate in the tail, not a better-aimed first
+phase; the candidates offered (30-deg/s turns, climbs, orbits, the paper's units, and, measured
+above, 45-deg/s turns and arcs) do not offer one, so the 60 % criterion stays missed in the
+cells listed.
+
 Criteria per preset and seed: time to 2 dB of suggested and of optimized <= 60 % of the
 reference's, and their expected worst per-node pattern error no worse than the reference's as
 above (``--draws 0``: the single-draw check with +0.05 dB, as before).
 
 Usage: ``python benchmarks/manoeuvres.py [--presets paper,ground] [--seeds 0,1,2] [--posterior honest|inflated]
-[--correlated reference|own|off] [--prior-std 0] [--draws 5] [--yaw-rate 45] [--arcs] [--tiny]``
+[--correlated reference|own|off] [--prior-std 0] [--draws 5] [--yaw-rate 45] [--arcs] [--tilt] [--tiny]``
 (``--tiny``: the ``smoke`` preset at SH-4 with ``--budget`` and at most 2 draws, a few seconds; its criteria are printed,
 not enforced).
 """

@@ -116,7 +116,11 @@ class ManoeuvreOptions:
         estimates it from the latest poses). A drone leaning by ``theta`` sees a peer up to
         ``theta`` off the elevation a level hover gives (by ``theta`` toward or away from the
         lean, not at all across it; its body z axis is held by the thrust as it turns), so its
-        manoeuvres cover other bands than the level references say; 0: level hover. Never applied to ``candidates.fixed_nodes``.
+        manoeuvres cover other bands than the level references say; 0: level hover. Never
+        applied to ``candidates.fixed_nodes``. It brought the predicted spread of every step
+        flown on the ``paper`` preset (10-m/s wind) within 0.08 dB of the flight, but not the
+        flights' time to 2 dB (``benchmarks/manoeuvres.py --tilt``: 5 of 12 cells against 6), so
+        it is off by default.
     prior_variance_factor : float
         The prior's variance over the one ``noise_std_db`` and the penalty imply
         (:meth:`~rplearn.analysis.manoeuvre_posterior.ManoeuvrePosterior.with_prior_excess`): the fit
