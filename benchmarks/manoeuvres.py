@@ -199,7 +199,7 @@ cells listed. Scoring by the largest node's spread (``--aggregate max``, the sto
 own combination, instead of the nodes' RMS) moved the single flights as much and the mean not
 at all (``--draws 0``, time ratios suggested/optimized: paper 0.64/0.62, 0.77/0.66, 0.68/0.63 on
 seeds 0-2, mean 0.67 against 0.66; ground 0.68/0.52, 0.80/0.78, 0.52/0.48, ground seed 1 from
-0.56/0.58; paper seeds 3-4 0.56/0.62, 0.58/0.63): the time check passes 4 of 12 cells against 6,
+0.56/0.58; paper seeds 3-4 0.56/0.62, 0.58/0.63): the time check passes 3 of 12 cells against 6,
 so the RMS stays. Across the variants measured (faster turns, arcs, the tilt, the max score) a
 single cell's ratio moves by up to +-0.2 from one to the next while the paper mean stays at
 0.63-0.67: the cells that pass or miss by a few hundredths do so by which of the near-tied
