@@ -149,12 +149,68 @@ included) but did not pay for their time (paper seed 0, one draw: 0.63/0.62x wit
 45 deg/s against 0.57/0.61x without; 0.71/0.68x at 30 deg/s against 0.72/0.74x). Neither is the
 default.
 
+**Where the time goes, and the wind's tilt** (``--tilt``; seeds 0-2, one thread; load 7-9 on 2
+cores). Each suggested step prints the ranking's predicted largest spread before and after it and
+the flown one: with the drones' steady lean in the wind modelled
+(:attr:`~rplearn.analysis.manoeuvres.ManoeuvreOptions.steady_accel_enu_m_s2`, estimated from the
+start's poses by :func:`~rplearn.analysis.manoeuvres.steady_tilt_accel`: 14.9-16.6 deg on
+``paper``, whose 10-m/s wind tilts the drones by 12-15 deg; 0.2-0.6 deg on ``ground``, which has
+none) the prediction of every paper step was within 0.08 dB of the flight (45 steps, seeds 0-4:
+flown minus predicted -0.08 to +0.04 dB; paper seed 0: 4.64 -> 4.43 predicted, 4.37 flown;
+3.17 -> 2.70, 2.65; 2.18 -> 2.03, 2.00); on ``ground`` the flights did 0.01-0.29 dB better than
+predicted (11 steps). The ranking is therefore
+not aiming at a spread the flight does not give, and the spread it ranks by is the benchmark's
+(one model for both). Nor does the target hinge on a few unreachable directions: with the
+drift's part left out (the white posterior alone), the reference flight's spread is spread over
+the elevations in proportion to their share of the targets (paper seed 0, every band of 30 deg
+holds 12-22 % of the variance after each unit), and the white part is 85 % of the total at the
+2-dB point (reference, paper seed 0: 1.59 of 1.86 dB for node B). What the curves show (spread
+over time, printed per flight) is two phases. The planned flights cover fast: paper seed 0
+suggested/optimized reach 2.48/2.33 dB at 81/101 s, where the reference stands at 3.70 dB
+(its first 140 s teach node A, 1.94 dB at 125 s, while node B stays at 3.6 dB). Then all
+flights enter a tail where the spread falls as the packets accumulate, ``1/s^2`` growing about
+linearly with time, and the planned flights' tail is the slower one where they miss: from about
+2.45 dB to 2.0, ``d(1/s^2)/dt`` was 1.09/1.01e-3 per dB^2 and s (suggested/optimized) against
+the reference's 1.77e-3 (paper seed 0: 80/65 s against 44 s), seed 2 optimized 1.39e-3 against
+1.99e-3; where the planners pass, their tail matched or beat the reference's (seed 1:
+1.18/1.07e-3 against 0.69e-3; ground 1.4-7.1e-3 against 1.0-2.6e-3). The reference's fast tail
+is its unit's second half, long full sweeps that teach node B, which the first half left at
+3.6 dB; the greedy's tail is a series of 12-34-s climbs, turns and orbits whose predicted gain
+per second, the best in the set at each step and flown as predicted, is lower. Modelling the tilt
+did not change that (it changes which of the near-tied candidates comes first):
+
+| cell | default | ``--tilt`` |
+| --- | --- | --- |
+| paper 0 suggested / optimized | 0.72* / +0.31*, 0.74* / +0.35 | 0.71* / +0.29*, 0.68* / +0.68* |
+| paper 1 suggested / optimized | 0.60 / -0.07, 0.62* / +0.26 | 0.67* / +0.04, 0.63* / -0.06 |
+| paper 2 suggested / optimized | 0.62* / -0.37, 0.67* / +0.20 | 0.65* / -0.32, 0.65* / +0.35 |
+| ground 0-2 | as the default | the same figures (5 of 6) |
+| both checks | 6 of 12 | 5 of 12 |
+| paper seeds 3-4 (not tuned on), time only | 0.75/0.68, 0.66/0.57 | 0.63/0.63, 0.58/0.68 |
+
+(time ratio / expected-error difference in dB, suggested then optimized; ``*``: a check missed;
+5 draws.) The mean paper time ratio over seeds 0-2 is 0.66 either way, 0.67 -> 0.63 on seeds
+3-4: within the +-0.05 the single flights move by from one variant to the next, so ``--tilt`` is
+not the default (``rplearn live`` and ``trajectory --optimize`` fly level references). What would
+reach 0.6x on ``paper`` is a higher information rate in the tail, not a better-aimed first
+phase; the candidates offered (30-deg/s turns, climbs, orbits, the paper's units, and, measured
+above, 45-deg/s turns and arcs) do not offer one, so the 60 % criterion stays missed in the
+cells listed. Scoring by the largest node's spread (``--aggregate max``, the stop criterion's
+own combination, instead of the nodes' RMS) moved the single flights as much and the mean not
+at all (``--draws 0``, time ratios suggested/optimized: paper 0.64/0.62, 0.77/0.66, 0.68/0.63 on
+seeds 0-2, mean 0.67 against 0.66; ground 0.68/0.52, 0.80/0.78, 0.52/0.48, ground seed 1 from
+0.56/0.58; paper seeds 3-4 0.56/0.62, 0.58/0.63): the time check passes 3 of 12 cells against 6,
+so the RMS stays. Across the variants measured (faster turns, arcs, the tilt, the max score) a
+single cell's ratio moves by up to +-0.2 from one to the next while the paper mean stays at
+0.63-0.67: the cells that pass or miss by a few hundredths do so by which of the near-tied
+candidates comes first.
+
 Criteria per preset and seed: time to 2 dB of suggested and of optimized <= 60 % of the
 reference's, and their expected worst per-node pattern error no worse than the reference's as
 above (``--draws 0``: the single-draw check with +0.05 dB, as before).
 
 Usage: ``python benchmarks/manoeuvres.py [--presets paper,ground] [--seeds 0,1,2] [--posterior honest|inflated]
-[--correlated reference|own|off] [--prior-std 0] [--draws 5] [--yaw-rate 45] [--arcs] [--tiny]``
+[--correlated reference|own|off] [--prior-std 0] [--draws 5] [--yaw-rate 45] [--arcs] [--tilt] [--tiny]``
 (``--tiny``: the ``smoke`` preset at SH-4 with ``--budget`` and at most 2 draws, a few seconds; its criteria are printed,
 not enforced).
 """
@@ -175,7 +231,15 @@ import numpy as np
 os.environ.setdefault("RPLEARN_THREADS", "1")
 
 from rplearn.analysis.manoeuvre_cells import DirectionCells
-from rplearn.analysis.manoeuvres import ManoeuvreOptions, correlated_error_std_db, greedy_plan, pattern_spreads, prior_penalty_weight, rank_manoeuvres
+from rplearn.analysis.manoeuvres import (
+    ManoeuvreOptions,
+    correlated_error_std_db,
+    greedy_plan,
+    pattern_spreads,
+    prior_penalty_weight,
+    rank_manoeuvres,
+    steady_tilt_accel,
+)
 from rplearn.analysis.pattern_error import pattern_errors_db
 from rplearn.core.bases import fibonacci_grid_nodes
 from rplearn.core.coverage import nearest_angle_deg
@@ -446,7 +510,8 @@ def _reference_drift(setup: Setup, parts: list[Any]) -> float:
 
 def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, prior_std_db: float = PRIOR_STD_DB,
         correlated: str = "reference", block_s: float = DEFAULT_BLOCK_S, posterior: str = "inflated",
-        budget: bool = False, draws: int = DRAWS, candidates: dict[str, Any] | None = None) -> dict[str, Flight]:
+        budget: bool = False, draws: int = DRAWS, candidates: dict[str, Any] | None = None, tilt: bool = False,
+        aggregate: str = "rms") -> dict[str, Flight]:
     config = _config(preset)
     learning = config.campaign.with_role("learning").units
     nodes = tuple(sorted(config.node_antennas))
@@ -456,7 +521,7 @@ def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, 
     speed = float(getattr(learning[0], "speed_m_s", 1.5))
     cands = CandidateOptions(fixed_nodes=FIXED.get(preset, ()), speed_m_s=speed, **(candidates or {}))
     opts = ManoeuvreOptions(noise_std_db=noise, packet_rate_hz=config.radio.packet_rate_hz * (1 - config.radio.loss_probability),
-                            penalty_weight=weight, candidates=cands, power=power, correlation_s=block_s)
+                            penalty_weight=weight, candidates=cands, power=power, correlation_s=block_s, aggregate=aggregate)
     setup = Setup(preset, config, spec, nodes, opts, weight, seed=seed, correlated=correlated, block_s=block_s, budget=budget)
     ref_parts, _ = fly(setup, learning)
     if prior_std_db <= 0:  # the prior the project learns from the complete reference flight
@@ -477,15 +542,22 @@ def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, 
     accumulate(setup, sug, start_parts[:1], until_s=START_S)
     sug.plan = [((learning[0],), 0.0, START_S)]
     poses = poses[poses["t"] <= START_S]
+    if tilt:  # the wind's drag the drones lean against, from the start's poses (both planners)
+        accel = steady_tilt_accel(poses, FIXED.get(preset, ()))
+        setup.options = opts = replace(opts, steady_accel_enu_m_s2=accel)
+        print(f"  steady tilt from the start's poses: {np.degrees(np.arctan(np.hypot(accel[0], accel[1]) / 9.80665)):.1f} deg "
+              f"({accel[0]:+.2f}, {accel[1]:+.2f}) m/s^2")
     k = 0
     while sug.reached_s is None and sug.t_s < limit_s:
         best = rank_manoeuvres(sug.normal, spec, nodes, poses, replace(opts, floor_db=TARGET_DB), sug.blocks, sug.cells)[0]
         k += 1
         unit = replace(best.candidate.unit, label=f"m{k:02d}")
-        sug.steps.append(f"{best.name} ({best.duration_s:.0f} s)")
         parts, poses = fly(setup, (unit,))
         sug.plan.append(((unit,), best.candidate.lead_s, None))
         accumulate(setup, sug, parts, lead_s=best.candidate.lead_s)
+        flown = "" if not sug.history else f", flown {sug.history[-1][1]:.2f}"
+        sug.steps.append(f"{best.name} ({best.duration_s:.0f} s; predicted {max(best.spread_before_db.values()):.2f} -> "
+                         f"{max(best.spread_after_db.values()):.2f}{flown} dB)")
     # optimized: the greedy plan before the flight, from the reference's start poses
     first = learning[0].evaluate(np.array([0.0]))
     start = {n: (tuple(first.position_enu_m[0, j]), float(np.degrees(first.yaw_rad[0, j]))) for j, n in enumerate(learning[0].nodes)}
@@ -576,6 +648,9 @@ def main(argv: list[str] | None = None) -> int:
                     help="independent noise draws of each flight plan for the expected error (0: the single-draw check only)")
     ap.add_argument("--yaw-rate", type=float, default=0.0, help="the candidates' cruise yaw rate [deg/s]; 0: CandidateOptions' default")
     ap.add_argument("--arcs", action="store_true", help="also arcs over or under the anchor among the candidates")
+    ap.add_argument("--tilt", action="store_true", help="the planners model the drones' steady tilt in the wind (from the start's poses)")
+    ap.add_argument("--aggregate", choices=("rms", "max"), default="rms",
+                    help="the ranking's score: the nodes' RMS spread (default) or the largest (the stop criterion's)")
     ap.add_argument("--tiny", action="store_true", help="the smoke preset at SH-4 (seconds; criteria not enforced)")
     args = ap.parse_args(argv)
     presets = ["smoke"] if args.tiny else [p.strip() for p in args.presets.split(",") if p.strip()]
@@ -590,7 +665,7 @@ def main(argv: list[str] | None = None) -> int:
         ref_total = _config(preset).campaign.with_role("learning")
         limit = float(sum(u.duration_s for u in ref_total.units))
         flights = run(preset, order, seed, limit, args.power, args.prior_std, args.correlated, args.block_s, args.posterior,
-                      args.budget or args.tiny, draws, _candidate_args(args))
+                      args.budget or args.tiny, draws, _candidate_args(args), args.tilt, args.aggregate)
         ref = flights["reference"]
         print(f"{preset} (SH-{order}, seed {seed}, {time.perf_counter() - t0:.0f} s): time to {TARGET_DB:g} dB per-node spread")
         for f in flights.values():
@@ -605,7 +680,7 @@ def main(argv: list[str] | None = None) -> int:
                 marks = [(t, v) for t, v in f.history if int(t // 20) != int((t - STEP_S) // 20)]
                 print("    spread over time: " + ", ".join(f"{t:.0f} s {v:.2f}" for t, v in marks) + " dB")
             if f.steps:
-                print("    " + "; ".join(f.steps[:12]) + (" ..." if len(f.steps) > 12 else ""))
+                print("    " + "; ".join(f.steps[:16]) + (" ..." if len(f.steps) > 16 else ""))
             if f.draws_db:
                 mean, se = f.expected()
                 print(f"    {len(f.draws_db)} more draws of the same plan, cut at {f.reached_s:.0f} s: worst error "

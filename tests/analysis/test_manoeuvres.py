@@ -178,3 +178,25 @@ def test_a_floor_gives_no_credit_below_it():
     with pytest.raises(InputError) as err:
         ManoeuvreOptions(floor_db=-1.0)
     assert err.value.param == "floor_db"
+
+
+def test_a_steady_tilt_shifts_the_peer_s_elevation_and_spares_a_fixed_node():
+    """A drone leaning 12 deg toward its peer sees it 12 deg off its body plane whatever its
+    heading (its body z axis is held by the thrust while it turns); the features of a node that
+    stands on the ground are those of the level hover."""
+    unit = ManoeuvreUnit(nodes=("B", "A"), kind="yaw", anchor_enu_m=(5.0, 0.0, 20.0), start_enu_m=(-5.0, 0.0, 20.0),
+                         turn_deg=360.0)
+    lean = (9.80665 * np.tan(np.radians(12.0)), 0.0, 0.0)
+    level = manoeuvre_rows(unit, NODES, SPEC.basis(), 4.0)
+    tilted = manoeuvre_rows(unit, NODES, SPEC.basis(), 4.0, (lean, ()))
+    spared = manoeuvre_rows(unit, NODES, SPEC.basis(), 4.0, (lean, ("A",)))
+    p = SPEC.basis().n_coef
+    assert not np.allclose(level[:, :p], tilted[:, :p]) and np.allclose(level[:, :p], spared[:, :p])  # A, the turning mover
+    from rplearn.analysis.manoeuvres import _rows_and_ends
+
+    el_a = np.degrees(_rows_and_ends(unit, NODES, SPEC.basis(), 4.0, (lean, ()))[1][1][2])  # A's end of the link
+    assert np.abs(el_a) == pytest.approx(np.full(el_a.size, 12.0), abs=0.01)
+    assert np.abs(np.degrees(_rows_and_ends(unit, NODES, SPEC.basis(), 4.0)[1][1][2])).max() < 0.01
+    with pytest.raises(InputError) as err:
+        ManoeuvreOptions(steady_accel_enu_m_s2=(12.0, 0.0, 0.0))
+    assert err.value.param == "steady_accel_enu_m_s2"

@@ -45,6 +45,7 @@ import pandas as pd
 from rplearn._argtypes import check_types
 from rplearn.analysis.manoeuvre_cells import DirectionCells, cell_grid
 from rplearn.analysis.manoeuvre_posterior import ManoeuvrePosterior
+from rplearn.analysis.manoeuvre_tilt import steady_tilt_accel
 from rplearn.core.bases import fibonacci_grid_nodes
 from rplearn.core.basis_base import Basis
 from rplearn.core.geometry import attitude_from_thrust, link_directions, yaw_from_quat_wxyz
@@ -110,6 +111,17 @@ class ManoeuvreOptions:
         so looking again at the same directions does not average it out, looking at others
         does); the held-out misfit ``fit --degree auto`` reports (``misfit_std_db`` of its
         training summary) is one estimate. 0: none (the white and drifting posterior alone).
+    steady_accel_enu_m_s2 : (float, float, float)
+        The acceleration the drones' thrust carries on top of their references' [m/s^2] (ENU):
+        the drag of a steady wind, which they tilt against (:func:`steady_tilt_accel`
+        estimates it from the latest poses). A drone leaning by ``theta`` sees a peer up to
+        ``theta`` off the elevation a level hover gives (by ``theta`` toward or away from the
+        lean, not at all across it; its body z axis is held by the thrust as it turns), so its
+        manoeuvres cover other bands than the level references say; 0: level hover. Never
+        applied to ``candidates.fixed_nodes``. It brought the predicted spread of every step
+        flown on the ``paper`` preset (10-m/s wind) within 0.08 dB of the flight, but not the
+        flights' time to 2 dB (``benchmarks/manoeuvres.py --tilt``: 5 of 12 cells against 6), so
+        it is off by default.
     prior_variance_factor : float
         The prior's variance over the one ``noise_std_db`` and the penalty imply
         (:meth:`~rplearn.analysis.manoeuvre_posterior.ManoeuvrePosterior.with_prior_excess`): the fit
@@ -134,6 +146,7 @@ class ManoeuvreOptions:
     correlation_s: float = DEFAULT_BLOCK_S
     misfit_std_db: float = 0.0
     prior_variance_factor: float = 1.0
+    steady_accel_enu_m_s2: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.prior_variance_factor) and self.prior_variance_factor >= 1.0):
@@ -160,6 +173,11 @@ class ManoeuvreOptions:
         if self.correlated_std_db is not None and not (np.isfinite(self.correlated_std_db) and self.correlated_std_db >= 0):
             raise InputError(f"correlated_std_db: expected a non-negative spread [dB], got {self.correlated_std_db!r}",
                              param="correlated_std_db")
+        accel = tuple(float(v) for v in self.steady_accel_enu_m_s2)
+        if len(accel) != 3 or not all(np.isfinite(accel)) or np.hypot(accel[0], accel[1]) >= G_M_S2 or accel[2] <= -G_M_S2:
+            raise InputError(f"steady_accel_enu_m_s2: expected three finite numbers, less than g horizontally, got "
+                             f"{self.steady_accel_enu_m_s2!r}", param="steady_accel_enu_m_s2")
+        object.__setattr__(self, "steady_accel_enu_m_s2", accel)
         if int(self.target_points) < 16:
             raise InputError(f"target_points: expected at least 16, got {self.target_points!r}", param="target_points")
 
@@ -270,16 +288,20 @@ def _aggregate(spreads: np.ndarray, options: ManoeuvreOptions) -> float:
     return float(np.max(spreads)) if options.aggregate == "max" else float(np.sqrt(np.mean(spreads**2)))
 
 
-def manoeuvre_rows(unit: Any, nodes: Sequence[str], basis: Basis, rate_hz: float) -> np.ndarray:
+def manoeuvre_rows(unit: Any, nodes: Sequence[str], basis: Basis, rate_hz: float,
+                   steady: tuple[tuple[float, float, float], tuple[str, ...]] | None = None) -> np.ndarray:
     """Feature rows (pattern columns of ``nodes``) of both link directions along a unit's references.
 
-    The drones tilt into their reference acceleration (no wind); each row is
+    The drones tilt into their reference acceleration plus ``steady[0]`` (a wind's drag,
+    :attr:`ManoeuvreOptions.steady_accel_enu_m_s2`; never the nodes of ``steady[1]``, which
+    stand on the ground; None: no wind); each row is
     ``phi(d_tx) on tx's block + phi(d_rx) on rx's block``.
     """
-    return _rows_and_ends(unit, nodes, basis, rate_hz)[0]
+    return _rows_and_ends(unit, nodes, basis, rate_hz, steady)[0]
 
 
-def _rows_and_ends(unit: Any, nodes: Sequence[str], basis: Basis, rate_hz: float) -> tuple[np.ndarray, Any]:
+def _rows_and_ends(unit: Any, nodes: Sequence[str], basis: Basis, rate_hz: float,
+                   steady: tuple[tuple[float, float, float], tuple[str, ...]] | None = None) -> tuple[np.ndarray, Any]:
     """:func:`manoeuvre_rows` and, per link end, (node index per row, az, el) [rad]."""
     ref = unit.sample(rate_hz)
     n = ref.t_s.size
@@ -288,7 +310,10 @@ def _rows_and_ends(unit: Any, nodes: Sequence[str], basis: Basis, rate_hz: float
     missing = [e for e in ends if e not in index]
     if missing:
         raise InputError(f"manoeuvre {unit.label}: node(s) {', '.join(missing)} not in the statistics' nodes", param="nodes")
-    quats = [attitude_from_thrust(ref.accel_enu_m_s2[:, j, :] + np.array([0.0, 0.0, G_M_S2]), ref.yaw_rad[:, j]) for j in (0, 1)]
+    extra = [np.array([0.0, 0.0, G_M_S2]) for _ in ends]
+    if steady is not None:
+        extra = [e + (0.0 if node in steady[1] else np.asarray(steady[0], np.float64)) for e, node in zip(extra, ends)]
+    quats = [attitude_from_thrust(ref.accel_enu_m_s2[:, j, :] + extra[j], ref.yaw_rad[:, j]) for j in (0, 1)]
     d = link_directions(ref.position_enu_m[:, 0, :], quats[0], ref.position_enu_m[:, 1, :], quats[1])
     p = basis.n_coef
     f0, f1 = basis.design(d.az_tx, d.el_tx), basis.design(d.az_rx, d.el_rx)
@@ -368,12 +393,18 @@ def _score(post: ManoeuvrePosterior, cand: Candidate, nodes: Sequence[str], basi
            options: ManoeuvreOptions) -> tuple[RankedManoeuvre, tuple[np.ndarray, Any]]:
     """The candidate's effect, and its feature rows (for :meth:`ManoeuvrePosterior.updated` if chosen)."""
     before = post.spreads()
-    rows, ends = _rows_and_ends(cand.unit, nodes, basis, options.sample_rate_hz)
+    rows, ends = _rows_and_ends(cand.unit, nodes, basis, options.sample_rate_hz, _steady(options))
     after = post.spreads_after(rows, _weight(options), ends)
     gain = _aggregate(before, options) - _aggregate(after, options)
     ranked = RankedManoeuvre(cand.name, cand.duration_s, dict(zip(nodes, before.tolist())), dict(zip(nodes, after.tolist())),
                              gain / max(cand.duration_s, 1e-9), cand)
     return ranked, (rows, ends)
+
+
+def _steady(options: ManoeuvreOptions) -> tuple[tuple[float, float, float], tuple[str, ...]] | None:
+    """The steady extra thrust and the nodes it spares, or None for a level hover."""
+    accel = options.steady_accel_enu_m_s2
+    return None if not any(accel) else (accel, tuple(options.candidates.fixed_nodes))
 
 
 def _weight(options: ManoeuvreOptions) -> float:
@@ -514,4 +545,4 @@ def _greedy(post: ManoeuvrePosterior, state: dict[str, Any], names: list[str], b
 
 
 __all__ = ["AGGREGATES", "ManoeuvreOptions", "PlanStep", "RankedManoeuvre", "correlated_error_std_db", "greedy_plan", "manoeuvre_rows", "pattern_spreads",
-           "prior_penalty_weight", "prior_weights", "rank_manoeuvres", "target_metrics"]
+           "prior_penalty_weight", "prior_weights", "rank_manoeuvres", "steady_tilt_accel", "target_metrics"]
