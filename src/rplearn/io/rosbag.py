@@ -18,10 +18,14 @@ in the message (``rssi_field="rssi"``, dots for nested fields, e.g. ``"link.rssi
 Times are the message header stamps (``time_source="header"``; the bag's receive time for
 messages without a header or with a zero stamp) or the bag's receive times
 (``time_source="bag"``), in seconds of ROS time (UNIX epoch on a real robot).
+
+A message equal to an earlier one of its topic in receive time and every byte (a recorder
+writing each message twice) is read once and counted (``metadata["repeated_messages"]``).
 """
 
 from __future__ import annotations
 
+import hashlib
 import math
 import os
 from collections.abc import Iterator, Mapping
@@ -171,8 +175,13 @@ def open_rosbag(
         reader.close()
 
 
-def _messages(reader: Any, connections: list, path: str) -> Iterator[tuple[Any, int, Any]]:
+def _messages(reader: Any, connections: list, path: str,
+              repeated: dict[str, int] | None = None) -> Iterator[tuple[Any, int, Any]]:
+    """The messages of ``connections``, deserialised; with ``repeated``, a message equal to an
+    earlier one of its topic in receive time and every byte (the bag's messages written twice)
+    is skipped and counted under its topic."""
     it = reader.messages(connections=connections)
+    seen: set[tuple[str, int, bytes]] = set()
     while True:
         try:
             conn, ts, raw = next(it)
@@ -182,6 +191,12 @@ def _messages(reader: Any, connections: list, path: str) -> Iterator[tuple[Any, 
             raise LogFormatError(
                 f"{path}: truncated or corrupt bag while reading messages ({type(exc).__name__})"
             ) from None
+        if repeated is not None:
+            key = (conn.topic, int(ts), hashlib.blake2b(bytes(raw), digest_size=16).digest())
+            if key in seen:
+                repeated[conn.topic] = repeated.get(conn.topic, 0) + 1
+                continue
+            seen.add(key)
         try:
             msg = reader.deserialize(raw, conn.msgtype)
         except Exception as exc:
@@ -288,8 +303,10 @@ def read_rosbag(
         ``pose`` (canonical pose log, sorted by node and time) and ``signal`` (canonical
         signal log, or None without ``rssi_topics``).
     metadata : dict
-        ``source``, ``format`` ("ros1" or "ros2"), ``topics`` (message counts),
-        ``frame_ids`` per pose topic, ``time_reference``.
+        ``source``, ``format`` ("ros1" or "ros2"), ``topics`` (message counts, each message
+        once), ``frame_ids`` per pose topic, ``repeated_messages`` (messages skipped because
+        they repeat an earlier one of their topic exactly: same receive time and bytes, the
+        bag's messages recorded twice) and ``repeated_by_topic``, ``time_reference``.
     """
     options = RosbagOptions() if options is None else options
     tx_power_field, frequency_field = options.tx_power_field, options.frequency_field
@@ -337,7 +354,8 @@ def read_rosbag(
                 )
         conns = [c for c in reader.connections if c.topic in wanted]
         counts = {t: 0 for t in wanted}
-        for conn, ts, msg in _messages(reader, conns, source):
+        repeated: dict[str, int] = {}
+        for conn, ts, msg in _messages(reader, conns, source, repeated):
             topic = conn.topic
             counts[topic] += 1
             t = _stamp_s(msg, ts, time_source)
@@ -376,6 +394,8 @@ def read_rosbag(
         "format": fmt,
         "topics": counts,
         "frame_ids": frame_ids,
+        "repeated_messages": sum(repeated.values()),
+        "repeated_by_topic": dict(sorted(repeated.items())),
         "time_reference": f"ROS time [s] ({'header stamps' if time_source == 'header' else 'bag receive time'})",
     }
     return Logs(pose=pose, signal=signal), meta
