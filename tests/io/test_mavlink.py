@@ -217,6 +217,11 @@ def test_dataflash_cut_off_detection(tmp_path):
     assert dataflash_cut_off_at(BIN) == (65512, "AHR2", 0)
     _, meta = read_mavlink(whole, tx_power_dbm=20.0, frequency_hz=433e6)
     assert meta["cut_off_at_byte"] is None
+    _, cut_meta = read_mavlink(BIN, tx_power_dbm=20.0, frequency_hz=433e6)
+    assert cut_meta["records_read"] == meta["records_read"] > 0  # the cut record is not counted
+    said = file_damage(str(BIN), cut_meta)
+    assert any(f"the {meta['records_read']:,} complete record(s) before it were read" in line for line in said)
+    assert not any("cut off" in n for n in cut_meta["notes"])  # said once, by file_damage (was twice in sync)
 
 
 # ------------------------------------------------------------------------------ round trip

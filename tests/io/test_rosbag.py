@@ -41,3 +41,22 @@ def test_a_doubled_bag_is_said_by_inspect(tmp_path, flight):
     assert meta["files"][0]["repeated_messages"] > 0
     problems = inspect_logs(twice, options).problems
     assert any("twice.bag" in p and "repeat an earlier one exactly" in p for p in problems)
+
+
+@pytest.mark.parametrize("fraction", [0.5, 0.999])
+def test_a_cut_ros1_bag_is_said_to_be_cut(tmp_path, flight, fraction):
+    from rplearn.errors import LogFormatError
+    from rplearn.io.rosbag import ros1_index_pos
+
+    pose, sig = flight
+    whole = write_bag(tmp_path / "whole.bag", pose.iloc[::7], sig.iloc[::7], "ros1")
+    data = whole.read_bytes()
+    index_at = ros1_index_pos(whole)
+    assert index_at is not None and len(data) // 2 < index_at < len(data)
+    cut = tmp_path / "cut.bag"
+    cut.write_bytes(data[:int(len(data) * fraction)])
+    # was "cannot open bag (AnyReaderError: Bag index looks damaged: ...)"
+    want = (rf"cut.bag: the bag is cut off at byte {int(len(data) * fraction):,} before its index" if fraction < 0.9
+            else rf"cut.bag: the bag's index \(from byte {index_at:,} of .*cut off or damaged")
+    with pytest.raises(LogFormatError, match=want):
+        _read(cut)

@@ -25,9 +25,9 @@ def test_a_ulog_in_the_file_twice_reads_as_once_and_says_so(tmp_path, extra):
     pd.testing.assert_frame_equal(once, doubled)
     assert not m2["corrupt"] and m2["cut_off_at_byte"] is None  # was: corrupt bytes skipped
     assert m2["invalid_flag_rows"] == m1["invalid_flag_rows"] and m2["dropped"] == m1["dropped"]
-    assert m1["repeated_messages"] == 0 and m2["messages_read"] == m1["messages_read"]
-    assert m2["repeated_messages"] >= m1["messages_read"]
-    assert (m2["repeated_messages"] == m1["messages_read"]) == (not extra)
+    assert m1["repeated_messages"] == 0 and m2["records_read"] == m1["records_read"]
+    assert m2["repeated_messages"] >= m1["records_read"]
+    assert (m2["repeated_messages"] == m1["records_read"]) == (not extra)
     lines = file_damage(str(twice), m2)
     assert any("part of the log is in the file twice" in line for line in lines)
     assert not any("corrupt" in line for line in lines)
@@ -56,3 +56,23 @@ def test_layout_of_a_whole_log():
     layout = ulog_layout(str(SMALL))
     assert layout["log_bytes"] == SMALL.stat().st_size and layout["repeated_messages"] == 0
     assert layout["cut_off_at_byte"] is None and layout["messages"] > 1000
+
+
+def test_a_cut_ulog_says_where_and_how_many_messages_were_read(tmp_path):
+    from rplearn.io.ulog import ulog_cut_off_at
+
+    data = SMALL.read_bytes()
+    cut = tmp_path / "cut.ulg"
+    cut.write_bytes(data[:len(data) * 2 // 3])
+    _, m_whole = read_ulog(SMALL, "A")
+    _, meta = read_ulog(cut, "A")
+    at = meta["cut_off_at_byte"]
+    assert at is not None and at == ulog_cut_off_at(str(cut)) and at < len(data) * 2 // 3
+    assert 0 < meta["records_read"] < m_whole["records_read"]
+    whole_part = tmp_path / "part.ulg"
+    whole_part.write_bytes(data[:at])  # the same bytes ending whole
+    assert read_ulog(whole_part, "A")[1]["records_read"] == meta["records_read"]
+    assert read_ulog(whole_part, "A")[1]["cut_off_at_byte"] is None
+    lines = file_damage(str(cut), meta)
+    assert any(f"cut off inside the message at byte {at:,}" in line
+               and f"the {meta['records_read']:,} complete record(s) before it were read" in line for line in lines)

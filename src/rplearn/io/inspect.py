@@ -382,7 +382,8 @@ def _read_one(path: str, options: ReaderOptions) -> tuple[pd.DataFrame | None, p
         info["signal_dropped"] = _signal_drops(f["signal"])
     if f.get("invalid_flag_rows"):
         info["invalid_flag_rows"] = int(f["invalid_flag_rows"])
-    for key in ("cut_off_at_byte", "cut_off_record", "corrupt", "corrupt_bytes", "corrupt_frames", "repeated_messages"):
+    for key in ("cut_off_at_byte", "cut_off_record", "records_read", "corrupt", "corrupt_bytes", "corrupt_frames",
+                "repeated_messages"):
         if f.get(key):
             info[key] = f[key]
     if f.get("notes"):
@@ -501,7 +502,9 @@ def file_damage(path: str, info: dict[str, Any]) -> list[str]:
         lines.append(
             f"{path}: the file is cut off inside the message at byte {info['cut_off_at_byte']:,}"
             + (f" ({info['cut_off_record']})" if info.get("cut_off_record") else "") + " "
-            "(a log that ends early: power loss or an interrupted copy); the complete messages before it were read"
+            "(a log that ends early: power loss or an interrupted copy; that record is lost); "
+            + (f"the {info['records_read']:,} complete record(s) before it were read"
+               if info.get("records_read") is not None else "the complete records before it were read")
         )
     if info.get("corrupt"):
         lines.append(f"{path}: corrupt bytes were skipped by the ULog reader (pyulog); what follows them was read")

@@ -216,13 +216,14 @@ def transmitter_address(frame: bytes) -> str | None:
     return ":".join(f"{b:02x}" for b in frame[10:16])
 
 
-def _pcap_complete_frames(fh: BinaryIO, magic: bytes) -> tuple[int, bool, int | None]:
-    """Walk a classic pcap's record headers: ``(complete frames, truncated, second header)``,
-    where ``truncated`` means the last record runs past the end of the file (a capture cut off
-    while it was written; dpkt would hand on such a partial frame as if it were whole) and
-    ``second header`` is the byte where another capture's file header starts instead of a
-    record (captures concatenated), else None. A record's time starting with the magic number
-    would be in 2055 (0xa1b2c3d4 s) or later: no real record does."""
+def _pcap_complete_frames(fh: BinaryIO, magic: bytes) -> tuple[int, int | None, int | None]:
+    """Walk a classic pcap's record headers: ``(complete frames, cut at, second header)``,
+    where ``cut at`` is the byte where the last record starts when it runs past the end of the
+    file (a capture cut off while it was written; dpkt would hand on such a partial frame as if
+    it were whole), else None, and ``second header`` is the byte where another capture's file
+    header starts instead of a record (captures concatenated), else None. A record's time
+    starting with the magic number would be in 2055 (0xa1b2c3d4 s) or later: no real record
+    does."""
     order = "<" if magic in (b"\xd4\xc3\xb2\xa1", b"\x4d\x3c\xb2\xa1") else ">"
     size = os.fstat(fh.fileno()).st_size
     offset, frames = 24, 0
@@ -231,19 +232,22 @@ def _pcap_complete_frames(fh: BinaryIO, magic: bytes) -> tuple[int, bool, int | 
         fh.seek(offset)
         head = fh.read(16)
         if head[:4] == magic:
-            return frames, False, offset
+            return frames, None, offset
         if len(head) < 16:
-            return frames, True, None
+            return frames, offset, None
         (incl_len,) = struct.unpack(order + "I", head[8:12])
+        if offset + 16 + incl_len > size:
+            return frames, offset, None
         offset += 16 + incl_len
-        if offset > size:
-            return frames, True, None
         frames += 1
     fh.seek(0)
-    return frames, False, None
+    return frames, None, None
 
 
-def _open_capture(path: str, fh: BinaryIO) -> Any:
+def _open_capture(path: str, fh: BinaryIO, cut: dict[str, Any] | None = None) -> Any:
+    """A dpkt reader of the capture and its kind. A classic pcap cut inside a frame fills
+    ``cut`` with ``cut_off_at_byte``, ``cut_off_record`` and ``records_read`` (the complete
+    frames, after which the reader must stop); without ``cut`` it is refused."""
     import dpkt
 
     magic = fh.read(4)
@@ -253,21 +257,29 @@ def _open_capture(path: str, fh: BinaryIO) -> Any:
     if magic == b"\x0a\x0d\x0d\x0a":
         return dpkt.pcapng.Reader(fh), "pcapng"
     if magic in (b"\xd4\xc3\xb2\xa1", b"\xa1\xb2\xc3\xd4", b"\x4d\x3c\xb2\xa1", b"\xa1\xb2\x3c\x4d"):
-        frames, truncated, second = _pcap_complete_frames(fh, magic)
+        frames, cut_at, second = _pcap_complete_frames(fh, magic)
         if second is not None:
             raise LogFormatError(f"{path}: another capture's file header at byte {second:,}, after frame {frames}: "
                                  "captures concatenated (or one in the file twice); split them (editcap, mergecap)")
-        if truncated:
-            raise LogFormatError(f"{path}: truncated capture: the file ends inside frame {frames + 1}")
+        if cut_at is not None:
+            if cut_at < 24 or cut is None:
+                raise LogFormatError(f"{path}: truncated capture: the file ends inside "
+                                     + ("its file header" if cut_at < 24 else f"frame {frames + 1}"))
+            cut.update(cut_off_at_byte=int(cut_at), cut_off_record=f"frame {frames + 1}", records_read=frames)
         fh.seek(0)
         return dpkt.pcap.Reader(fh), "pcap"
     raise LogFormatError(f"{path}: not a pcap or pcapng file (magic {magic.hex()})")
 
 
-def iter_radiotap_frames(path: str) -> Iterator[tuple[float, Radiotap | None, str | None, int]]:
+def iter_radiotap_frames(
+    path: str, cut: dict[str, Any] | None = None
+) -> Iterator[tuple[float, Radiotap | None, str | None, int]]:
     """Yield ``(capture_time_s, radiotap or None, transmitter or None, frame_number)`` per frame.
 
     ``radiotap`` is None for a frame whose header cannot be parsed (counted by the caller).
+    With ``cut`` (a dict), a capture cut off inside its last frame yields the complete frames
+    and fills ``cut`` (``cut_off_at_byte``, ``cut_off_record``, ``records_read``); without it
+    such a capture is refused.
 
     Raises
     ------
@@ -286,7 +298,7 @@ def iter_radiotap_frames(path: str) -> Iterator[tuple[float, Radiotap | None, st
         raise InputError(f"{source}: cannot open ({exc.strerror})") from None
     with fh:
         try:
-            reader, _kind = _open_capture(source, fh)
+            reader, _kind = _open_capture(source, fh, cut)
             linktype = reader.datalink()
         except LogFormatError:
             raise
@@ -298,8 +310,9 @@ def iter_radiotap_frames(path: str) -> Iterator[tuple[float, Radiotap | None, st
                 "capture in monitor mode)"
             )
         number = 0
+        last = (cut or {}).get("records_read")
         it = iter(reader)
-        while True:
+        while last is None or number < last:
             try:
                 ts, buf = next(it)
             except StopIteration:
@@ -318,15 +331,16 @@ def iter_radiotap_frames(path: str) -> Iterator[tuple[float, Radiotap | None, st
             yield float(ts), rt, transmitter_address(bytes(buf[rt.length:])), number
 
 
-def read_radiotap_frames(path: str) -> pd.DataFrame:
-    """All frames of a capture as a table, nothing dropped.
+def read_radiotap_frames(path: str, cut: dict[str, Any] | None = None) -> pd.DataFrame:
+    """All frames of a capture as a table, nothing dropped (``cut``: as
+    :func:`iter_radiotap_frames`).
 
     Columns: ``frame`` (1-based number), ``t`` (capture time [s], UNIX epoch), ``transmitter``
     (or None), ``signal_dbm``, ``noise_dbm``, ``antenna``, ``frequency_hz``, ``tx_power_dbm``,
     ``radiotap_ok`` (False where the header is corrupt). Missing values are NaN.
     """
     rows: list[tuple[int, float, str | None, float, float, float, float, float, bool]] = []
-    for ts, rt, ta, number in iter_radiotap_frames(path):
+    for ts, rt, ta, number in iter_radiotap_frames(path, cut):
         if rt is None:
             rows.append((number, ts, None, np.nan, np.nan, np.nan, np.nan, np.nan, False))
         else:
@@ -377,13 +391,16 @@ def read_pcap(
     metadata : dict
         ``source``, ``format``, ``frames``, ``dropped`` (per reason: ``corrupt_radiotap``,
         ``no_signal``, ``no_transmitter``, ``unmapped_address``, ``no_frequency``,
-        ``no_tx_power``), ``addresses`` (frames per transmitter address), ``time_reference``.
+        ``no_tx_power``), ``addresses`` (frames per transmitter address), ``time_reference``,
+        ``cut_off_at_byte`` and ``cut_off_record`` (where a capture cut off ends inside a frame,
+        lost; None when it ends whole), ``records_read`` (the complete frames).
     """
     source = str(path)
     if not isinstance(receiver, str) or not receiver:
         raise InputError(f"{source}: receiver must be the node id of the capturing node")
     amap = {str(k).lower(): str(v) for k, v in (address_map or {}).items()}
-    frames = read_radiotap_frames(path)
+    cut: dict[str, Any] = {}
+    frames = read_radiotap_frames(path, cut)
     dropped = dict.fromkeys(
         ["corrupt_radiotap", "no_signal", "no_transmitter", "unmapped_address", "no_frequency",
          "no_tx_power"], 0)
@@ -433,6 +450,8 @@ def read_pcap(
         "dropped": dropped,
         "addresses": {str(k): int(v) for k, v in addresses.items()},
         "time_reference": "capture time, seconds since the UNIX epoch (capturing host clock)",
+        "cut_off_at_byte": cut.get("cut_off_at_byte"), "cut_off_record": cut.get("cut_off_record"),
+        "records_read": cut.get("records_read", int(len(frames))),
     }
     return signal, meta
 

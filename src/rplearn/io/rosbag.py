@@ -135,6 +135,29 @@ def _pose_of(msg: Any, msgtype: str) -> Any:
     return msg.pose
 
 
+_ROS1_MAGIC = b"#ROSBAG V2.0\n"
+
+
+def ros1_index_pos(path: str | os.PathLike) -> int | None:
+    """Where a ROS 1 bag says its index starts (the ``index_pos`` field of its bag header
+    record, ROS bag format 2.0: ``uint32`` header length, then ``uint32``-length-prefixed
+    ``name=value`` fields); None when the file does not begin with such a header."""
+    with open(path, "rb") as fh:
+        head = fh.read(len(_ROS1_MAGIC) + 4 + 4096)
+    if not head.startswith(_ROS1_MAGIC) or len(head) < len(_ROS1_MAGIC) + 4:
+        return None
+    at = len(_ROS1_MAGIC)
+    end = min(at + 4 + int.from_bytes(head[at:at + 4], "little"), len(head))
+    pos = at + 4
+    while pos + 4 <= end:
+        n = int.from_bytes(head[pos:pos + 4], "little")
+        name, _, value = head[pos + 4:pos + 4 + n].partition(b"=")
+        if name == b"index_pos" and len(value) == 8:
+            return int.from_bytes(value, "little")
+        pos += 4 + n
+    return None
+
+
 @contextmanager
 def open_rosbag(
     path: str | os.PathLike, msg_definitions: Mapping[str, str] | None = None
@@ -164,6 +187,17 @@ def open_rosbag(
         raise
     except Exception as exc:
         msg = str(exc).splitlines()[0] if str(exc) else ""
+        index_at = ros1_index_pos(paths[0]) if is_ros1 else None
+        size = paths[0].stat().st_size
+        if index_at is not None and index_at >= size:
+            raise LogFormatError(
+                f"{path}: the bag is cut off at byte {size:,} before its index (at byte {index_at:,}): a bag that "
+                "ends early (power loss, an interrupted copy); `rosbag reindex` rebuilds the index of the "
+                "messages it holds") from None
+        if index_at is not None and "index" in msg.lower():
+            raise LogFormatError(
+                f"{path}: the bag's index (from byte {index_at:,} of {size:,}) cannot be read ({msg}): cut off "
+                "or damaged; `rosbag reindex` rebuilds it") from None
         raise LogFormatError(f"{path}: cannot open bag ({type(exc).__name__}: {msg})") from None
     try:
         if extra:

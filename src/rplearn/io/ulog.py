@@ -431,7 +431,7 @@ def read_ulog(
         ``anchor_source``, ``origin_geodetic`` (or None), ``dropped`` per reason,
         ``invalid_flag_rows`` (rows with xy_valid or z_valid = 0), ``rows``,
         ``cut_off_at_byte`` (the offset of the message a cut-off file ends inside, whose
-        data are lost, see :func:`ulog_cut_off_at`; None for a whole file), ``messages_read``
+        data are lost, see :func:`ulog_cut_off_at`; None for a whole file), ``records_read``
         (the complete messages before it), ``corrupt`` (pyulog skipped corrupt bytes) and
         ``repeated_messages`` (the messages of the log in the file again after it, not read:
         a log in the file twice, see :func:`ulog_layout`).
@@ -470,7 +470,7 @@ def read_ulog(
         "timebase": timebase, "dropped": dropped, "invalid_flag_rows": invalid_flag_rows,
         "rows": int(len(pose)),
         "cut_off_at_byte": None if ulog.file_corruption else layout["cut_off_at_byte"],
-        "messages_read": int(layout["messages"]),
+        "records_read": int(layout["messages"]),
         "corrupt": bool(ulog.file_corruption),
         "repeated_messages": int(layout["repeated_messages"]),
     }
