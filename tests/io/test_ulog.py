@@ -76,3 +76,28 @@ def test_a_cut_ulog_says_where_and_how_many_messages_were_read(tmp_path):
     lines = file_damage(str(cut), meta)
     assert any(f"cut off inside the message at byte {at:,}" in line
                and f"the {meta['records_read']:,} complete record(s) before it were read" in line for line in lines)
+
+
+def _message_offsets(data: bytes) -> list[int]:
+    pos, out = 16, []
+    while pos + 3 <= len(data):
+        out.append(pos)
+        pos += 3 + (data[pos] | (data[pos + 1] << 8))
+    return out
+
+
+@pytest.mark.parametrize("new_type", [ord("X"), 0])
+def test_a_flipped_message_type_is_said_corrupt_naming_the_byte(tmp_path, new_type):
+    data = bytearray(EVENTS.read_bytes())
+    at = _message_offsets(bytes(data))[len(_message_offsets(bytes(data))) // 2]
+    assert data[at + 2] == ord("D")
+    data[at + 2] = new_type  # a data message's type byte damaged: pyulog skipped an unknown type silently
+    bad = tmp_path / "flipped.ulg"
+    bad.write_bytes(bytes(data))
+    _, meta = read_ulog(bad, "A")
+    assert meta["corrupt"] and meta["corrupt_at_byte"] == at
+    assert meta["cut_off_at_byte"] is None and meta["records_read"] is None
+    lines = file_damage(str(bad), meta)
+    assert any(f"corrupt bytes were skipped by the ULog reader (pyulog) (the first at byte {at:,}" in line
+               for line in lines)
+    assert not read_ulog(EVENTS, "A")[1]["corrupt"]

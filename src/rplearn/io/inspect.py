@@ -382,7 +382,8 @@ def _read_one(path: str, options: ReaderOptions) -> tuple[pd.DataFrame | None, p
         info["signal_dropped"] = _signal_drops(f["signal"])
     if f.get("invalid_flag_rows"):
         info["invalid_flag_rows"] = int(f["invalid_flag_rows"])
-    for key in ("cut_off_at_byte", "cut_off_record", "records_read", "corrupt", "corrupt_bytes", "corrupt_frames",
+    for key in ("cut_off_at_byte", "cut_off_record", "records_read", "corrupt", "corrupt_at_byte", "corrupt_bytes",
+                "corrupt_frames",
                 "repeated_messages"):
         if f.get(key):
             info[key] = f[key]
@@ -507,7 +508,8 @@ def file_damage(path: str, info: dict[str, Any]) -> list[str]:
                if info.get("records_read") is not None else "the complete records before it were read")
         )
     if info.get("corrupt"):
-        lines.append(f"{path}: corrupt bytes were skipped by the ULog reader (pyulog); what follows them was read")
+        at = f" (the first at byte {info['corrupt_at_byte']:,}: a message of no ULog type)" if info.get("corrupt_at_byte") else ""
+        lines.append(f"{path}: corrupt bytes were skipped by the ULog reader (pyulog){at}; what follows them was read")
     if info.get("corrupt_bytes"):
         lines.append(f"{path}: {info['corrupt_bytes']:,} corrupt byte(s) between DataFlash records were skipped; "
                      "what follows them was read")

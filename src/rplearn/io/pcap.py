@@ -73,6 +73,10 @@ RADIOTAP_FIELDS: dict[int, tuple[int, int]] = {
     26: (1, 1),   # 0-length PSDU
     27: (2, 4),   # L-SIG
 }
+_BIT_FLAGS = 1
+#: Radiotap flags bit: the frame failed its FCS check (IEEE80211_RADIOTAP_F_BADFCS): its bytes
+#: were damaged on the air, the address read from it may be wrong.
+F_BADFCS = 0x40
 _BIT_TSFT, _BIT_CHANNEL, _BIT_SIGNAL, _BIT_NOISE, _BIT_TXPOWER, _BIT_ANTENNA, _BIT_XCHANNEL = (
     0, 3, 5, 6, 10, 11, 18)
 _BIT_RT_NS, _BIT_VENDOR_NS, _BIT_EXT = 29, 30, 31
@@ -96,6 +100,8 @@ class Radiotap:
         dBm TX power field (present on frames the capturing card sent).
     tsft_us : int or None
         MAC timestamp [us].
+    flags : int or None
+        The flags byte (:data:`F_BADFCS`: the frame failed its FCS check).
     """
 
     length: int
@@ -105,6 +111,12 @@ class Radiotap:
     frequency_hz: float | None = None
     tx_power_dbm: int | None = None
     tsft_us: int | None = None
+    flags: int | None = None
+
+    @property
+    def bad_fcs(self) -> bool:
+        """Whether the card marked the frame as failing its FCS check (damaged on the air)."""
+        return bool((self.flags or 0) & F_BADFCS)
 
 
 def parse_radiotap(buf: bytes) -> Radiotap:
@@ -184,6 +196,8 @@ def parse_radiotap(buf: bytes) -> Radiotap:
                 mhz = struct.unpack_from("<H", buf, pos + 4)[0]
                 if mhz:
                     fields["freq"] = mhz * 1e6
+            elif index == _BIT_FLAGS and "flags" not in fields:
+                fields["flags"] = buf[pos]
             elif index == _BIT_TSFT and "tsft" not in fields:
                 fields["tsft"] = struct.unpack_from("<Q", buf, pos)[0]
             pos += size
@@ -198,6 +212,7 @@ def parse_radiotap(buf: bytes) -> Radiotap:
         frequency_hz=fields.get("freq"),
         tx_power_dbm=fields.get("txpower"),
         tsft_us=fields.get("tsft"),
+        flags=fields.get("flags"),
     )
 
 
@@ -337,12 +352,13 @@ def read_radiotap_frames(path: str, cut: dict[str, Any] | None = None) -> pd.Dat
 
     Columns: ``frame`` (1-based number), ``t`` (capture time [s], UNIX epoch), ``transmitter``
     (or None), ``signal_dbm``, ``noise_dbm``, ``antenna``, ``frequency_hz``, ``tx_power_dbm``,
-    ``radiotap_ok`` (False where the header is corrupt). Missing values are NaN.
+    ``radiotap_ok`` (False where the header is corrupt), ``bad_fcs`` (the card marked the
+    frame as failing its FCS check). Missing values are NaN.
     """
-    rows: list[tuple[int, float, str | None, float, float, float, float, float, bool]] = []
+    rows: list[tuple[int, float, str | None, float, float, float, float, float, bool, bool]] = []
     for ts, rt, ta, number in iter_radiotap_frames(path, cut):
         if rt is None:
-            rows.append((number, ts, None, np.nan, np.nan, np.nan, np.nan, np.nan, False))
+            rows.append((number, ts, None, np.nan, np.nan, np.nan, np.nan, np.nan, False, False))
         else:
             rows.append((
                 number, ts, ta,
@@ -351,10 +367,10 @@ def read_radiotap_frames(path: str, cut: dict[str, Any] | None = None) -> pd.Dat
                 np.nan if rt.antenna is None else float(rt.antenna),
                 np.nan if rt.frequency_hz is None else float(rt.frequency_hz),
                 np.nan if rt.tx_power_dbm is None else float(rt.tx_power_dbm),
-                True,
+                True, rt.bad_fcs,
             ))
     cols = ["frame", "t", "transmitter", "signal_dbm", "noise_dbm", "antenna", "frequency_hz",
-            "tx_power_dbm", "radiotap_ok"]
+            "tx_power_dbm", "radiotap_ok", "bad_fcs"]
     return pd.DataFrame(rows, columns=cols)
 
 
@@ -390,6 +406,7 @@ def read_pcap(
         (NaN where absent) and ``frame`` (number in the capture).
     metadata : dict
         ``source``, ``format``, ``frames``, ``dropped`` (per reason: ``corrupt_radiotap``,
+        ``bad_fcs`` (frames the card marked as failing their FCS check: damaged on the air),
         ``no_signal``, ``no_transmitter``, ``unmapped_address``, ``no_frequency``,
         ``no_tx_power``), ``addresses`` (frames per transmitter address), ``time_reference``,
         ``cut_off_at_byte`` and ``cut_off_record`` (where a capture cut off ends inside a frame,
@@ -402,7 +419,7 @@ def read_pcap(
     cut: dict[str, Any] = {}
     frames = read_radiotap_frames(path, cut)
     dropped = dict.fromkeys(
-        ["corrupt_radiotap", "no_signal", "no_transmitter", "unmapped_address", "no_frequency",
+        ["corrupt_radiotap", "bad_fcs", "no_signal", "no_transmitter", "unmapped_address", "no_frequency",
          "no_tx_power"], 0)
     keep = np.ones(len(frames), bool)
 
@@ -412,6 +429,7 @@ def read_pcap(
         keep[hit] = False
 
     drop(~frames["radiotap_ok"].to_numpy(bool), "corrupt_radiotap")
+    drop(frames["bad_fcs"].to_numpy(bool), "bad_fcs")
     drop(~np.isfinite(frames["signal_dbm"].to_numpy(np.float64)), "no_signal")
     ta = frames["transmitter"].to_numpy(dtype=object)
     drop(pd.isna(ta), "no_transmitter")
@@ -466,11 +484,13 @@ def write_radiotap_pcap(
     noise_dbm: int | None = None,
     antenna: int | None = None,
     pcapng: bool = False,
+    bad_fcs: np.ndarray | None = None,
 ) -> None:
     """Write a radiotap pcap (or pcapng) of 802.11 data frames, one per sample (fixtures, demos).
 
     The header carries TSFT, flags, channel, dBm antenna signal, and optionally noise and
-    antenna index; RSSI values are rounded to integers (radiotap stores an s8).
+    antenna index; RSSI values are rounded to integers (radiotap stores an s8). ``bad_fcs``
+    (booleans, one per sample) marks frames as failing their FCS check (:data:`F_BADFCS`).
     """
     import dpkt
 
@@ -484,9 +504,10 @@ def write_radiotap_pcap(
             writer = dpkt.pcapng.Writer(fh, snaplen=65535, linktype=LINKTYPE_IEEE802_11_RADIOTAP)
         else:
             writer = dpkt.pcap.Writer(fh, linktype=LINKTYPE_IEEE802_11_RADIOTAP, nano=True)
+        bad = np.zeros(len(transmitter), bool) if bad_fcs is None else np.asarray(bad_fcs, bool)
         for i, (t, rssi, ta) in enumerate(zip(np.asarray(t_s, float), np.asarray(rssi_dbm), transmitter)):
             body = struct.pack("<Q", int(round(t * 1e6)) & 0xFFFFFFFFFFFFFFFF)  # TSFT at 8 (aligned)
-            body += struct.pack("<B", 0)  # flags (no FCS)
+            body += struct.pack("<B", F_BADFCS if bad[i] else 0)  # flags (no FCS in the frame)
             body += b"\x00"  # pad to 2 for channel
             body += struct.pack("<HH", int(round(frequency_hz / 1e6)), 0x00A0)
             body += struct.pack("<b", int(round(float(rssi))))
@@ -501,6 +522,7 @@ def write_radiotap_pcap(
 
 
 __all__ = [
+    "F_BADFCS",
     "Radiotap",
     "iter_radiotap_frames",
     "parse_radiotap",

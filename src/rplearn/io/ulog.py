@@ -135,16 +135,24 @@ _ULOG_MSG_HEADER_BYTES = 3
 _ULOG_MAGIC = b"ULog\x01\x12\x35"
 
 
-def _walk_messages(data: Any, start: int, end: int) -> tuple[int, int | None]:
-    """Complete ULog messages in ``data[start:end]`` and the offset of the one it ends
-    inside (None when it ends whole)."""
+#: The ULog message types (ULog file format): flag bits, format, info, info multiple,
+#: parameter, default parameter, add/remove logged, data, logging, tagged logging, sync, dropout.
+_ULOG_TYPES = frozenset(b"BFIMPQARDLCSO")
+
+
+def _walk_messages(data: Any, start: int, end: int) -> tuple[int, int | None, int | None]:
+    """Walk the ULog messages in ``data[start:end]``: ``(complete messages, offset of the one
+    it ends inside or None, offset of the first message of no ULog type or None)``; the walk
+    stops at such a message (its size cannot be trusted: the bytes are damaged)."""
     pos, n = start, 0
     while pos + _ULOG_MSG_HEADER_BYTES <= end:
+        if data[pos + 2] not in _ULOG_TYPES:
+            return n, None, pos
         nxt = pos + _ULOG_MSG_HEADER_BYTES + (data[pos] | (data[pos + 1] << 8))
         if nxt > end:
-            return n, pos
+            return n, pos, None
         pos, n = nxt, n + 1
-    return n, None if pos == end else pos
+    return n, None if pos == end else pos, None
 
 
 def ulog_cut_off_at(path: str) -> int | None:
@@ -168,8 +176,10 @@ def ulog_layout(path: str) -> dict[str, Any]:
         ``log_bytes`` (the bytes of the first log: the file up to a second file header
         :data:`_ULOG_MAGIC`, or all of it), ``repeated_messages`` (the messages after it when
         they are that log again, whole or cut: the log in the file twice), ``messages`` (the
-        complete messages of the first log), ``cut_off_at_byte`` (the offset of the message
-        the first log ends inside, or None).
+        complete messages of the first log, up to a damaged one), ``cut_off_at_byte`` (the
+        offset of the message the first log ends inside, or None), ``damaged_at_byte`` (the
+        offset of the first message of no ULog type: damaged bytes, whose size cannot be
+        trusted; ``pyulog`` skips a message of an unknown type without a word, or resyncs).
 
     Raises
     ------
@@ -181,16 +191,17 @@ def ulog_layout(path: str) -> dict[str, Any]:
     with open(path, "rb") as fh:
         size = os.fstat(fh.fileno()).st_size
         if size <= _ULOG_FILE_HEADER_BYTES:
-            return {"log_bytes": size, "repeated_messages": 0, "messages": 0,
+            return {"log_bytes": size, "repeated_messages": 0, "messages": 0, "damaged_at_byte": None,
                     "cut_off_at_byte": _ULOG_FILE_HEADER_BYTES if size < _ULOG_FILE_HEADER_BYTES else None}
         with mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ) as data:
             second = data.find(_ULOG_MAGIC, _ULOG_FILE_HEADER_BYTES)
             end = size if second < 0 else second
-            messages, cut = _walk_messages(data, _ULOG_FILE_HEADER_BYTES, end)
+            messages, cut, damaged = _walk_messages(data, _ULOG_FILE_HEADER_BYTES, end)
             repeated = 0
             if second >= 0:
                 repeated = _repeated_copies(data, end, size, path)
-    return {"log_bytes": end, "repeated_messages": repeated, "messages": messages, "cut_off_at_byte": cut}
+    return {"log_bytes": end, "repeated_messages": repeated, "messages": messages, "cut_off_at_byte": cut,
+            "damaged_at_byte": damaged}
 
 
 def _repeated_copies(data: Any, first_end: int, size: int, path: str) -> int:
@@ -432,7 +443,8 @@ def read_ulog(
         ``invalid_flag_rows`` (rows with xy_valid or z_valid = 0), ``rows``,
         ``cut_off_at_byte`` (the offset of the message a cut-off file ends inside, whose
         data are lost, see :func:`ulog_cut_off_at`; None for a whole file), ``records_read``
-        (the complete messages before it), ``corrupt`` (pyulog skipped corrupt bytes) and
+        (the complete messages before it), ``corrupt`` (pyulog skipped corrupt bytes, or a
+        message has no ULog type), ``corrupt_at_byte`` (the first message of no ULog type) and
         ``repeated_messages`` (the messages of the log in the file again after it, not read:
         a log in the file twice, see :func:`ulog_layout`).
     """
@@ -463,15 +475,17 @@ def read_ulog(
         "qw": quat[:, 0], "qx": quat[:, 1], "qy": quat[:, 2], "qz": quat[:, 3],
     })
     pose = validate_pose_log(pose, source)
+    corrupt = bool(ulog.file_corruption) or layout["damaged_at_byte"] is not None
     meta = {
         "source": source, "format": "ulog", "node": str(node), **clock,
         "anchor_geodetic": anchor, "anchor_source": anchor_source,
         "origin_geodetic": None if origin_geodetic is None else tuple(float(v) for v in origin_geodetic),
         "timebase": timebase, "dropped": dropped, "invalid_flag_rows": invalid_flag_rows,
         "rows": int(len(pose)),
-        "cut_off_at_byte": None if ulog.file_corruption else layout["cut_off_at_byte"],
-        "records_read": int(layout["messages"]),
-        "corrupt": bool(ulog.file_corruption),
+        "cut_off_at_byte": None if corrupt else layout["cut_off_at_byte"],
+        "records_read": None if corrupt else int(layout["messages"]),
+        "corrupt": corrupt,
+        "corrupt_at_byte": layout["damaged_at_byte"],
         "repeated_messages": int(layout["repeated_messages"]),
     }
     return pose, meta
