@@ -213,9 +213,11 @@ def _messages(reader: Any, connections: list, path: str,
               repeated: dict[str, int] | None = None) -> Iterator[tuple[Any, int, Any]]:
     """The messages of ``connections``, deserialised; with ``repeated``, a message equal to an
     earlier one of its topic in receive time and every byte (the bag's messages written twice)
-    is skipped and counted under its topic."""
+    is skipped and counted under its topic. The reader gives the messages in receive-time
+    order, so only those of the current receive time are remembered."""
     it = reader.messages(connections=connections)
-    seen: set[tuple[str, int, bytes]] = set()
+    seen: set[tuple[str, bytes]] = set()
+    seen_ns: int | None = None
     while True:
         try:
             conn, ts, raw = next(it)
@@ -226,7 +228,9 @@ def _messages(reader: Any, connections: list, path: str,
                 f"{path}: truncated or corrupt bag while reading messages ({type(exc).__name__})"
             ) from None
         if repeated is not None:
-            key = (conn.topic, int(ts), hashlib.blake2b(bytes(raw), digest_size=16).digest())
+            if int(ts) != seen_ns:
+                seen, seen_ns = set(), int(ts)
+            key = (conn.topic, hashlib.blake2b(bytes(raw), digest_size=16).digest())
             if key in seen:
                 repeated[conn.topic] = repeated.get(conn.topic, 0) + 1
                 continue
