@@ -125,7 +125,7 @@ COUNTED = {
     "quaternion normalised in fit": (["fit", "scaled_q.parquet", "--degree", "3", "-o", "q.json"],
                                      "samples with a non-unit quaternion (|norm - 1| > 0.001, normalised): 1"),
     "cut-off ULog": (["inspect", "cut.ulg", "--node", "cut.ulg=A"], "cut.ulg: the file is cut off inside the message at byte"),
-    "cut-off pcap": (["inspect", "cut.pcap", "--receiver", "cut.pcap=B"], "truncated capture"),
+    "cut-off pcap": (["inspect", "cut.pcap", "--receiver", "cut.pcap=B"], "cut.pcap: the file is cut off inside the message at byte"),
     "model without a training RMSE": (["predict", "no_rmse.json", D, "-o", "p_no_rmse.csv"], "wrote 2,672 predictions"),
     "markup in an output name": (["predict", M, D, "-o", "[b]x:fire:.csv"], "to [b]x:fire:.csv (RMSE"),
 }

@@ -119,8 +119,9 @@ def _pose_msg(types, row, header, msgtype: str):
 
 
 def write_bag(path: Path, pose: pd.DataFrame, sig: pd.DataFrame, kind: str,
-              pose_types: dict[str, str] = POSE_TYPES) -> Path:
-    """Write the flight as a bag with the rosbags writer: kind "sqlite3", "mcap" or "ros1"."""
+              pose_types: dict[str, str] = POSE_TYPES, copies: int = 1) -> Path:
+    """Write the flight as a bag with the rosbags writer: kind "sqlite3", "mcap" or "ros1";
+    every message ``copies`` times (a recorder writing each twice, say)."""
     from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
     ros1 = kind == "ros1"
@@ -158,7 +159,8 @@ def write_bag(path: Path, pose: pd.DataFrame, sig: pd.DataFrame, kind: str,
                 msgs.append((ns, topic, msg))
         msgs.sort(key=lambda m: m[0])
         for ns, topic, msg in msgs:
-            writer.write(conns[topic], ns, serialize(msg, msg.__msgtype__))
+            for _ in range(copies):
+                writer.write(conns[topic], ns, serialize(msg, msg.__msgtype__))
     return path
 
 

@@ -366,17 +366,22 @@ def test_library_messages_name_no_cli_flags():
     assert not found, found
 
 
-def test_a_capture_cut_off_mid_frame_is_refused_not_read_in_part(tmp_path):
-    """dpkt hands on the partial last frame as if whole; the reader says the file is truncated."""
+def test_a_capture_cut_off_mid_frame_reads_its_complete_frames_and_says_the_cut(tmp_path):
+    """dpkt hands on the partial last frame as if whole; the reader stops before it and says
+    where the file is cut and how many frames were read (was: the whole capture refused)."""
     from rplearn.io.inspect import inspect_logs
 
     whole = DATA / "radiotap-pcap" / "ieee802.11_exthdr.pcap"
     cut = tmp_path / "cut.pcap"
     cut.write_bytes(whole.read_bytes()[:300])
     options = ReaderOptions(receivers={str(cut): "B"}, tx_power_dbm=20.0)
-    with pytest.raises(LogFormatError, match="truncated capture: the file ends inside frame 2"):
-        read_logs([str(cut)], options)
-    report = inspect_logs([str(cut)], options)
-    assert "truncated capture" in report.to_text() and "none found" not in report.to_text()
-    logs, _ = read_logs([str(whole)], ReaderOptions(receivers={str(whole): "B"}, tx_power_dbm=20.0))
-    assert len(logs.signal) > 0
+    logs, meta = read_logs([str(cut)], options)
+    f = meta["files"][0]
+    assert f["cut_off_record"] == "frame 2" and f["records_read"] == 1 and f["frames"] == 1
+    assert 24 < f["cut_off_at_byte"] < 300
+    full, _ = read_logs([str(whole)], ReaderOptions(receivers={str(whole): "B"}, tx_power_dbm=20.0))
+    assert len(full.signal) > 0
+    pd.testing.assert_frame_equal(logs.signal, full.signal[full.signal["frame"] == 1].reset_index(drop=True))
+    text = inspect_logs([str(cut)], options).to_text()
+    assert (f"cut.pcap: the file is cut off inside the message at byte {f['cut_off_at_byte']:,} (frame 2)" in text
+            and "the 1 complete record(s) before it were read" in text and "none found" not in text)

@@ -262,6 +262,11 @@ def test_dataflash_cut_off_detection(tmp_path):
     assert dataflash_cut_off_at(BIN) == (65512, "AHR2", 0)
     _, meta = read_mavlink(whole, tx_power_dbm=20.0, frequency_hz=433e6)
     assert meta["cut_off_at_byte"] is None
+    _, cut_meta = read_mavlink(BIN, tx_power_dbm=20.0, frequency_hz=433e6)
+    assert cut_meta["records_read"] == meta["records_read"] > 0  # the cut record is not counted
+    said = file_damage(str(BIN), cut_meta)
+    assert any(f"the {meta['records_read']:,} complete record(s) before it were read" in line for line in said)
+    assert not any("cut off" in n for n in cut_meta["notes"])  # said once, by file_damage (was twice in sync)
 
 
 # ------------------------------------------------------------------------------ round trip
@@ -572,3 +577,16 @@ def test_fixes_without_a_3d_fix_are_excluded(tmp_path):
     assert vehicle_rows["t"].min() >= period["to_t"] and meta["dropped"]["before_valid_position"] == 20
     assert len(vehicle_rows) + sum(meta["dropped"].values()) == 51
     assert (logs.signal["t"] > period["to_t"]).all() and meta["signal"]["before_valid_position"] == 2 * 4
+
+
+def test_a_flipped_record_header_in_a_dataflash_log_is_counted_and_said(tmp_path):
+    once_path = _simulated_dataflash(tmp_path / "once.bin")
+    data = bytearray(once_path.read_bytes())
+    at = data.index(b"\xa3\x95", len(data) // 2)
+    data[at] ^= 0x5A  # the record's header damaged: its record cannot be found
+    bad = tmp_path / "flipped.bin"
+    bad.write_bytes(bytes(data))
+    (_, m_bad), (_, m_once) = _read(bad), _read(once_path)
+    assert m_bad["corrupt_bytes"] > 0 and m_once["corrupt_bytes"] == 0
+    assert m_bad["records_read"] == m_once["records_read"] - 1
+    assert any("corrupt byte(s) between DataFlash records were skipped" in line for line in file_damage(str(bad), m_bad))

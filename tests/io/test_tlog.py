@@ -19,6 +19,7 @@ from rplearn.errors import InputError
 from rplearn.io import ReaderOptions, read_logs
 from rplearn.io._common import Logs
 from rplearn.io.files import read_table, write_table
+from rplearn.io.inspect import file_damage
 from rplearn.io.mavlink import SIK_UNITS_PER_DB, MavlinkOptions, read_mavlink
 from rplearn.io.tlog import dbm_to_sik_rssi, write_tlog
 
@@ -166,7 +167,12 @@ def test_a_truncated_tlog_reads_its_complete_messages_and_reports_the_cut_off_on
     assert meta["cut_off_record"] == ("GLOBAL_POSITION_INT" if cut <= 30 else None)  # 10-byte header kept
     assert meta["messages"]["GLOBAL_POSITION_INT"] == written["global_position_int"] - 1
     assert meta["messages"]["ATTITUDE"] == written["attitude"]
-    assert any(f"cut off inside a{' GLOBAL_POSITION_INT' if cut <= 30 else ''} record at byte" in n for n in meta["notes"])
+    said = file_damage(str(cut_file), meta)
+    whole = read_mavlink(folder / "flight.tlog", 20.0, 2.412e9, vehicle="D", station="G")[1]
+    assert whole["cut_off_at_byte"] is None and meta["records_read"] == whole["records_read"] - 1
+    assert any(f"cut off inside the message at byte {len(data) - 48:,}" in n and "complete record(s) before it were read" in n
+               for n in said)
+    assert not any("cut off" in n for n in meta["notes"])  # said once, by file_damage
     assert len(logs.signal) > 0
 
 

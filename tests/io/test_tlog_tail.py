@@ -14,7 +14,7 @@ from rplearn.errors import InputError
 from rplearn.io import ReaderOptions, read_logs
 from rplearn.io._common import Logs
 from rplearn.io.tlog import TlogDefects, write_tlog
-from rplearn.io.tlog_tail import TlogTail, whole_records
+from rplearn.io.tlog_tail import DROPS, TlogTail, whole_records
 
 ORIGIN = (47.3977, 8.5456, 90.0)
 #: positions invalid for 15 s, a reboot at 200 s (10 s invalid after it), every reading twice
@@ -375,3 +375,52 @@ def test_glitches_then_a_jump_that_stays_leave_the_signal_counts_balanced(ground
     d = tail.dropped
     assert len(poses) - d["withdrawn_pose_rows"] + d["late_pose_rows"] == len(ref.pose), d
     assert len(signals) - d["withdrawn_signal_rows"] + d["late_signal_rows"] == len(ref.signal), d
+
+
+@pytest.mark.parametrize("copies", [2, 2.5])
+def test_a_log_in_the_file_twice_is_read_once_live_as_offline(tmp_path, copies):
+    """The real log 18-31-24 written into the file again (whole, or a third copy cut short):
+    the tail hands out the offline reader's rows and counts the same repeated messages (before:
+    3,596 signal rows instead of 2,228, 82 pose rows counted late)."""
+    real = Path(__file__).resolve().parents[1] / "fixtures" / "ardupilot" / "mavlink-log_2013-10-13_18-31-24.tlog"
+    data = real.read_bytes()
+    twice = tmp_path / "twice.tlog"
+    twice.write_bytes(data * 2 + (data[:len(data) // 2] if copies == 2.5 else b""))
+    options = ReaderOptions(tx_power_dbm=20.0, frequency_hz=433e6)
+    ref, meta = read_logs([str(twice)], options)
+    assert meta["files"][0]["repeated_messages"] > 0
+    grown = tmp_path / "grown.tlog"
+    grown.write_bytes(b"")
+    tail = TlogTail(str(grown), options)
+    rng = np.random.default_rng(5)
+    poses, signals, pos, whole = [], [], 0, twice.read_bytes()
+    while pos < len(whole):
+        pos = min(len(whole), pos + int(rng.integers(2_000, 60_000)))
+        with grown.open("ab") as fh:
+            fh.write(whole[len(grown.read_bytes()):pos])
+        for out, new in zip((poses, signals), tail.poll(), strict=True):
+            out.append(new)
+    for out, new in zip((poses, signals), tail.poll(final=True), strict=True):
+        out.append(new)
+    tail.close()
+    assert tail.dropped["repeated_messages"] == meta["files"][0]["repeated_messages"]
+    assert {k: n for k, n in tail.dropped.items() if k != "repeated_messages"} == dict.fromkeys(DROPS[:-1], 0)
+    gp = pd.concat([x for x in poses if len(x)]).sort_values(["node", "t"]).reset_index(drop=True)
+    rp = ref.pose.sort_values(["node", "t"]).reset_index(drop=True)
+    assert list(gp["node"]) == list(rp["node"])
+    gs = pd.concat([x for x in signals if len(x)]).sort_values(["t", "tx"], kind="stable").reset_index(drop=True)
+    rs = ref.signal.sort_values(["t", "tx"], kind="stable").reset_index(drop=True)
+    pd.testing.assert_frame_equal(gs, rs)
+
+
+def test_file_copy_finds_the_file_written_again_from_its_start(tmp_path):
+    from rplearn.io.tlog_tail import FileCopy
+
+    rec = [bytes([i]) * 10 for i in range(4)]
+    path = tmp_path / "f.bin"
+    path.write_bytes(b"".join(rec) + rec[0] + rec[1] + rec[3] + rec[0])
+    copy = FileCopy(str(path))
+    verdicts = [copy.repeats(10 * i, 10 * i + 10) for i in range(8)]
+    copy.close()
+    # rec0..3 new; rec0, rec1 repeat from the start; rec3 at 60 is not rec2: new; rec0 again: a copy
+    assert verdicts == [False, False, False, False, True, True, False, True]

@@ -213,7 +213,8 @@ def collect_tlog(source: str, system_id: int | None) -> Raw:
         cut_off = _tlog_cut_off(conn, source, whole_to)
     repeated = drop_repeated_rows(acc)
     raw = tlog_raw(acc, source, system_id, cut_off)
-    raw.notes.update(corrupt_frames=acc.counts.get("BAD_DATA", 0), repeated_messages=repeated)
+    raw.notes.update(corrupt_frames=acc.counts.get("BAD_DATA", 0), repeated_messages=repeated,
+                     records_read=sum(n for k, n in acc.counts.items() if k != "BAD_DATA"))
     return raw
 
 

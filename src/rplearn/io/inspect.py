@@ -47,6 +47,7 @@ from rplearn.data.readings import REPEAT_FRACTION, duplicate_rows, repeated_read
 from rplearn.data.sync import DEFAULT_SENTINEL_RSSI_DBM
 from rplearn.data.tables import QUATERNION_NORM_TOLERANCE, non_unit_quaternion_rows, outage_mask
 from rplearn.errors import RplearnError
+from rplearn.io.damage import across_files, file_damage
 from rplearn.io.options import ReaderOptions
 
 #: A pose step is a pause only if it spans more than this many median signal intervals.
@@ -382,7 +383,9 @@ def _read_one(path: str, options: ReaderOptions) -> tuple[pd.DataFrame | None, p
         info["signal_dropped"] = _signal_drops(f["signal"])
     if f.get("invalid_flag_rows"):
         info["invalid_flag_rows"] = int(f["invalid_flag_rows"])
-    for key in ("cut_off_at_byte", "cut_off_record", "corrupt", "corrupt_bytes", "corrupt_frames", "repeated_messages"):
+    for key in ("cut_off_at_byte", "cut_off_record", "records_read", "corrupt", "corrupt_at_byte", "corrupt_bytes",
+                "corrupt_frames",
+                "repeated_messages"):
         if f.get(key):
             info[key] = f[key]
     if f.get("notes"):
@@ -444,6 +447,7 @@ def inspect_logs(
         paths = [paths]  # type: ignore[list-item]
     report = InspectReport()
     poses, signals, canonical = [], [], []
+    owners: dict[str, list[int]] = {"pose": [], "signal": []}
     nan_rows: dict[str, int] = {}
     for p in paths:
         path = str(p)
@@ -459,10 +463,13 @@ def inspect_logs(
             nan_rows[k] = nan_rows.get(k, 0) + int(v)
         if pose is not None:
             poses.append(pose)
+            owners["pose"].append(len(report.files) - 1)
         if sig is not None:
             signals.append(sig)
+            owners["signal"].append(len(report.files) - 1)
         if full is not None:
             canonical.append(full)
+    poses, signals = across_files(report, poses, canonical, signals, owners)
     signal = pd.concat(signals, ignore_index=True) if signals else None
     if poses:
         report.nodes = summarise_pose(pd.concat(poses, ignore_index=True), max_gap_s, clock_jump_s, nan_rows,
@@ -492,29 +499,6 @@ def _calibration(poses: list[pd.DataFrame], links: list[LinkSummary], frequency_
         return []
     pairs = [(lk.tx, lk.rx) for lk in links] or None
     return calibration_problems(flight_phases(pose, tracks), tracks, pairs, frequency_hz)
-
-
-def file_damage(path: str, info: dict[str, Any]) -> list[str]:
-    """Lines saying a log file is cut off or corrupt (from its reader's metadata)."""
-    lines = []
-    if info.get("cut_off_at_byte") is not None:
-        lines.append(
-            f"{path}: the file is cut off inside the message at byte {info['cut_off_at_byte']:,}"
-            + (f" ({info['cut_off_record']})" if info.get("cut_off_record") else "") + " "
-            "(a log that ends early: power loss or an interrupted copy); the complete messages before it were read"
-        )
-    if info.get("corrupt"):
-        lines.append(f"{path}: corrupt bytes were skipped by the ULog reader (pyulog); what follows them was read")
-    if info.get("corrupt_bytes"):
-        lines.append(f"{path}: {info['corrupt_bytes']:,} corrupt byte(s) between DataFlash records were skipped; "
-                     "what follows them was read")
-    if info.get("corrupt_frames"):
-        lines.append(f"{path}: {info['corrupt_frames']:,} corrupt MAVLink frame(s) (bad checksum or framing) were "
-                     "skipped: the messages in them are lost; what follows them was read")
-    if info.get("repeated_messages"):
-        lines.append(f"{path}: {info['repeated_messages']:,} message(s) repeat an earlier one exactly (same receive "
-                     "time and fields: part of the log is in the file twice); each was read once")
-    return lines
 
 
 def _flag_file(report: InspectReport, path: str, info: dict[str, Any]) -> None:

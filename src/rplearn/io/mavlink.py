@@ -146,24 +146,31 @@ def dataflash_cut_off_at(path: str | os.PathLike) -> tuple[int | None, str | Non
     inside a record; pymavlink then stops without a word. Text logs (``FMT, ...``) and other
     files give ``(None, None, 0)``.
     """
+
+    return _dataflash_walk(path)[:3]
+
+
+def _dataflash_walk(path: str | os.PathLike) -> tuple[int | None, str | None, int, int | None]:
+    """:func:`dataflash_cut_off_at` and the complete records of the log (None: not binary)."""
     import mmap
 
     with open(path, "rb") as fh:
         if os.fstat(fh.fileno()).st_size < 3 or fh.read(2) != _DF_HEAD:
-            return None, None, 0
+            return None, None, 0, None
         with mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ) as data:
             return _walk_records(data, len(data))
 
 
-def _walk_records(data: Any, size: int) -> tuple[int | None, str | None, int]:
-    """:func:`dataflash_cut_off_at` on the bytes ``data`` (``size`` long)."""
+def _walk_records(data: Any, size: int) -> tuple[int | None, str | None, int, int]:
+    """:func:`dataflash_cut_off_at` on the bytes ``data`` (``size`` long), and the complete
+    records."""
     formats = {_DF_FMT_TYPE: (89, "FMT")}
-    pos, skipped = 0, 0
+    pos, skipped, n = 0, 0, 0
     while pos < size:
         if size - pos < 3:
             if data[pos:size] == _DF_HEAD[: size - pos]:
-                return pos, None, skipped
-            return None, None, skipped + size - pos
+                return pos, None, skipped, n
+            return None, None, skipped + size - pos, n
         known = data[pos:pos + 2] == _DF_HEAD and data[pos + 2] in formats
         if not known or formats[data[pos + 2]][0] < 3:
             nxt = data.find(_DF_HEAD, pos + 1)
@@ -173,11 +180,12 @@ def _walk_records(data: Any, size: int) -> tuple[int | None, str | None, int]:
             continue
         length, name = formats[data[pos + 2]]
         if pos + length > size:
-            return pos, name, skipped
+            return pos, name, skipped, n
         if data[pos + 2] == _DF_FMT_TYPE:
             formats[data[pos + 3]] = (data[pos + 4], bytes(data[pos + 5:pos + 9]).rstrip(b"\0").decode("ascii", "replace"))
         pos += length
-    return None, None, skipped
+        n += 1
+    return None, None, skipped, n
 
 
 def _station(
@@ -477,8 +485,10 @@ def read_mavlink(
         ``radio_report_period_s``, ``time_reference``, ``cut_off_at_byte`` and
         ``cut_off_record`` (offset and message name of the record a cut-off file ends inside,
         whose data are lost: a tlog's record is its 8-byte time and MAVLink frame, whose name is
-        unknown when the cut is before the frame's header; None when whole), ``corrupt_bytes``
-        (skipped between DataFlash records).
+        unknown when the cut is before the frame's header; None when whole), ``records_read``
+        (the complete records: a DataFlash log's records, a tlog's messages; None for a text
+        log), ``corrupt_bytes`` (skipped between DataFlash records). A cut or a corrupt stretch
+        is said by :func:`rplearn.io.inspect.file_damage`, not in ``notes``.
 
     Raises
     ------
@@ -496,12 +506,12 @@ def read_mavlink(
     fmt = _detect(source)
     raw = collect_tlog(source, options.system_id) if fmt == "tlog" else collect_dataflash(source)
     logs, meta = _from_raw(raw, source, (tx_power_dbm, float(frequency_hz)), vehicle, station, options)
-    cut, cut_name, corrupt = (dataflash_cut_off_at(source) if fmt == "dataflash"
-                              else (raw.notes.pop("cut_off_at_byte", None), raw.notes.pop("cut_off_record", None), 0))
-    if cut is not None:
-        meta["notes"].append(f"{source}: the file is cut off inside {'a ' + cut_name if cut_name else 'a'} record at "
-                             f"byte {cut:,}: that message is lost, the complete ones before it are read")
-    meta.update({"cut_off_at_byte": cut, "cut_off_record": cut_name, "corrupt_bytes": int(corrupt)})
+    cut, cut_name, corrupt, records = (
+        _dataflash_walk(source) if fmt == "dataflash"
+        else (raw.notes.pop("cut_off_at_byte", None), raw.notes.pop("cut_off_record", None), 0,
+              raw.notes.pop("records_read", None)))
+    meta.update({"cut_off_at_byte": cut, "cut_off_record": cut_name, "corrupt_bytes": int(corrupt),
+                 "records_read": records})
     return logs, meta
 
 

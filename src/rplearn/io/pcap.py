@@ -73,6 +73,10 @@ RADIOTAP_FIELDS: dict[int, tuple[int, int]] = {
     26: (1, 1),   # 0-length PSDU
     27: (2, 4),   # L-SIG
 }
+_BIT_FLAGS = 1
+#: Radiotap flags bit: the frame failed its FCS check (IEEE80211_RADIOTAP_F_BADFCS): its bytes
+#: were damaged on the air, the address read from it may be wrong.
+F_BADFCS = 0x40
 _BIT_TSFT, _BIT_CHANNEL, _BIT_SIGNAL, _BIT_NOISE, _BIT_TXPOWER, _BIT_ANTENNA, _BIT_XCHANNEL = (
     0, 3, 5, 6, 10, 11, 18)
 _BIT_RT_NS, _BIT_VENDOR_NS, _BIT_EXT = 29, 30, 31
@@ -96,6 +100,8 @@ class Radiotap:
         dBm TX power field (present on frames the capturing card sent).
     tsft_us : int or None
         MAC timestamp [us].
+    flags : int or None
+        The flags byte (:data:`F_BADFCS`: the frame failed its FCS check).
     """
 
     length: int
@@ -105,6 +111,12 @@ class Radiotap:
     frequency_hz: float | None = None
     tx_power_dbm: int | None = None
     tsft_us: int | None = None
+    flags: int | None = None
+
+    @property
+    def bad_fcs(self) -> bool:
+        """Whether the card marked the frame as failing its FCS check (damaged on the air)."""
+        return bool((self.flags or 0) & F_BADFCS)
 
 
 def parse_radiotap(buf: bytes) -> Radiotap:
@@ -184,6 +196,8 @@ def parse_radiotap(buf: bytes) -> Radiotap:
                 mhz = struct.unpack_from("<H", buf, pos + 4)[0]
                 if mhz:
                     fields["freq"] = mhz * 1e6
+            elif index == _BIT_FLAGS and "flags" not in fields:
+                fields["flags"] = buf[pos]
             elif index == _BIT_TSFT and "tsft" not in fields:
                 fields["tsft"] = struct.unpack_from("<Q", buf, pos)[0]
             pos += size
@@ -198,6 +212,7 @@ def parse_radiotap(buf: bytes) -> Radiotap:
         frequency_hz=fields.get("freq"),
         tx_power_dbm=fields.get("txpower"),
         tsft_us=fields.get("tsft"),
+        flags=fields.get("flags"),
     )
 
 
@@ -226,15 +241,15 @@ def _pcap_header_at(head: bytes) -> bool:
     return False
 
 
-def _pcap_complete_frames(fh: BinaryIO, magic: bytes) -> tuple[int, bool, int | None]:
-    """Walk a classic pcap's record headers: ``(complete frames, truncated, second header)``,
-    where ``truncated`` means the last record runs past the end of the file (a capture cut off
-    while it was written; dpkt would hand on such a partial frame as if it were whole) and
-    ``second header`` is the byte where another capture's file header starts instead of a
-    record (captures concatenated), else None. A record's time starting with the magic number
-    would be in 2055 (0xa1b2c3d4 s) or later: no real record does. A capture of another kind
-    (microseconds or nanoseconds, either byte order) is known by its magic number followed by
-    its version, 2.4: eight bytes no record starts with."""
+def _pcap_complete_frames(fh: BinaryIO, magic: bytes) -> tuple[int, int | None, int | None]:
+    """Walk a classic pcap's record headers: ``(complete frames, cut at, second header)``,
+    where ``cut at`` is the byte where the last record starts when it runs past the end of the
+    file (a capture cut off while it was written; dpkt would hand on such a partial frame as if
+    it were whole), else None, and ``second header`` is the byte where another capture's file
+    header starts instead of a record (captures concatenated), else None. A record's time
+    starting with the magic number would be in 2055 (0xa1b2c3d4 s) or later: no real record
+    does. A capture of another kind (microseconds or nanoseconds, either byte order) is known by
+    its magic number followed by its version, 2.4: eight bytes no record starts with."""
     order = "<" if magic in (b"\xd4\xc3\xb2\xa1", b"\x4d\x3c\xb2\xa1") else ">"
     size = os.fstat(fh.fileno()).st_size
     offset, frames = 24, 0
@@ -243,19 +258,22 @@ def _pcap_complete_frames(fh: BinaryIO, magic: bytes) -> tuple[int, bool, int | 
         fh.seek(offset)
         head = fh.read(16)
         if head[:4] == magic or _pcap_header_at(head):
-            return frames, False, offset
+            return frames, None, offset
         if len(head) < 16:
-            return frames, True, None
+            return frames, offset, None
         (incl_len,) = struct.unpack(order + "I", head[8:12])
+        if offset + 16 + incl_len > size:
+            return frames, offset, None
         offset += 16 + incl_len
-        if offset > size:
-            return frames, True, None
         frames += 1
     fh.seek(0)
-    return frames, False, None
+    return frames, None, None
 
 
-def _open_capture(path: str, fh: BinaryIO) -> Any:
+def _open_capture(path: str, fh: BinaryIO, cut: dict[str, Any] | None = None) -> Any:
+    """A dpkt reader of the capture and its kind. A classic pcap cut inside a frame fills
+    ``cut`` with ``cut_off_at_byte``, ``cut_off_record`` and ``records_read`` (the complete
+    frames, after which the reader must stop); without ``cut`` it is refused."""
     import dpkt
 
     magic = fh.read(4)
@@ -265,21 +283,29 @@ def _open_capture(path: str, fh: BinaryIO) -> Any:
     if magic == b"\x0a\x0d\x0d\x0a":
         return dpkt.pcapng.Reader(fh), "pcapng"
     if magic in (b"\xd4\xc3\xb2\xa1", b"\xa1\xb2\xc3\xd4", b"\x4d\x3c\xb2\xa1", b"\xa1\xb2\x3c\x4d"):
-        frames, truncated, second = _pcap_complete_frames(fh, magic)
+        frames, cut_at, second = _pcap_complete_frames(fh, magic)
         if second is not None:
             raise LogFormatError(f"{path}: another capture's file header at byte {second:,}, after frame {frames}: "
                                  "captures concatenated (or one in the file twice); split them (editcap, mergecap)")
-        if truncated:
-            raise LogFormatError(f"{path}: truncated capture: the file ends inside frame {frames + 1}")
+        if cut_at is not None:
+            if cut_at < 24 or cut is None:
+                raise LogFormatError(f"{path}: truncated capture: the file ends inside "
+                                     + ("its file header" if cut_at < 24 else f"frame {frames + 1}"))
+            cut.update(cut_off_at_byte=int(cut_at), cut_off_record=f"frame {frames + 1}", records_read=frames)
         fh.seek(0)
         return dpkt.pcap.Reader(fh), "pcap"
     raise LogFormatError(f"{path}: not a pcap or pcapng file (magic {magic.hex()})")
 
 
-def iter_radiotap_frames(path: str) -> Iterator[tuple[float, Radiotap | None, str | None, int]]:
+def iter_radiotap_frames(
+    path: str, cut: dict[str, Any] | None = None
+) -> Iterator[tuple[float, Radiotap | None, str | None, int]]:
     """Yield ``(capture_time_s, radiotap or None, transmitter or None, frame_number)`` per frame.
 
     ``radiotap`` is None for a frame whose header cannot be parsed (counted by the caller).
+    With ``cut`` (a dict), a capture cut off inside its last frame yields the complete frames
+    and fills ``cut`` (``cut_off_at_byte``, ``cut_off_record``, ``records_read``); without it
+    such a capture is refused.
 
     Raises
     ------
@@ -298,7 +324,7 @@ def iter_radiotap_frames(path: str) -> Iterator[tuple[float, Radiotap | None, st
         raise InputError(f"{source}: cannot open ({exc.strerror})") from None
     with fh:
         try:
-            reader, _kind = _open_capture(source, fh)
+            reader, _kind = _open_capture(source, fh, cut)
             linktype = reader.datalink()
         except LogFormatError:
             raise
@@ -310,8 +336,9 @@ def iter_radiotap_frames(path: str) -> Iterator[tuple[float, Radiotap | None, st
                 "capture in monitor mode)"
             )
         number = 0
+        last = (cut or {}).get("records_read")
         it = iter(reader)
-        while True:
+        while last is None or number < last:
             try:
                 ts, buf = next(it)
             except StopIteration:
@@ -330,17 +357,19 @@ def iter_radiotap_frames(path: str) -> Iterator[tuple[float, Radiotap | None, st
             yield float(ts), rt, transmitter_address(bytes(buf[rt.length:])), number
 
 
-def read_radiotap_frames(path: str) -> pd.DataFrame:
-    """All frames of a capture as a table, nothing dropped.
+def read_radiotap_frames(path: str, cut: dict[str, Any] | None = None) -> pd.DataFrame:
+    """All frames of a capture as a table, nothing dropped (``cut``: as
+    :func:`iter_radiotap_frames`).
 
     Columns: ``frame`` (1-based number), ``t`` (capture time [s], UNIX epoch), ``transmitter``
     (or None), ``signal_dbm``, ``noise_dbm``, ``antenna``, ``frequency_hz``, ``tx_power_dbm``,
-    ``radiotap_ok`` (False where the header is corrupt). Missing values are NaN.
+    ``radiotap_ok`` (False where the header is corrupt), ``bad_fcs`` (the card marked the
+    frame as failing its FCS check). Missing values are NaN.
     """
-    rows: list[tuple[int, float, str | None, float, float, float, float, float, bool]] = []
-    for ts, rt, ta, number in iter_radiotap_frames(path):
+    rows: list[tuple[int, float, str | None, float, float, float, float, float, bool, bool]] = []
+    for ts, rt, ta, number in iter_radiotap_frames(path, cut):
         if rt is None:
-            rows.append((number, ts, None, np.nan, np.nan, np.nan, np.nan, np.nan, False))
+            rows.append((number, ts, None, np.nan, np.nan, np.nan, np.nan, np.nan, False, False))
         else:
             rows.append((
                 number, ts, ta,
@@ -349,10 +378,10 @@ def read_radiotap_frames(path: str) -> pd.DataFrame:
                 np.nan if rt.antenna is None else float(rt.antenna),
                 np.nan if rt.frequency_hz is None else float(rt.frequency_hz),
                 np.nan if rt.tx_power_dbm is None else float(rt.tx_power_dbm),
-                True,
+                True, rt.bad_fcs,
             ))
     cols = ["frame", "t", "transmitter", "signal_dbm", "noise_dbm", "antenna", "frequency_hz",
-            "tx_power_dbm", "radiotap_ok"]
+            "tx_power_dbm", "radiotap_ok", "bad_fcs"]
     return pd.DataFrame(rows, columns=cols)
 
 
@@ -388,16 +417,20 @@ def read_pcap(
         (NaN where absent) and ``frame`` (number in the capture).
     metadata : dict
         ``source``, ``format``, ``frames``, ``dropped`` (per reason: ``corrupt_radiotap``,
+        ``bad_fcs`` (frames the card marked as failing their FCS check: damaged on the air),
         ``no_signal``, ``no_transmitter``, ``unmapped_address``, ``no_frequency``,
-        ``no_tx_power``), ``addresses`` (frames per transmitter address), ``time_reference``.
+        ``no_tx_power``), ``addresses`` (frames per transmitter address), ``time_reference``,
+        ``cut_off_at_byte`` and ``cut_off_record`` (where a capture cut off ends inside a frame,
+        lost; None when it ends whole), ``records_read`` (the complete frames).
     """
     source = str(path)
     if not isinstance(receiver, str) or not receiver:
         raise InputError(f"{source}: receiver must be the node id of the capturing node")
     amap = {str(k).lower(): str(v) for k, v in (address_map or {}).items()}
-    frames = read_radiotap_frames(path)
+    cut: dict[str, Any] = {}
+    frames = read_radiotap_frames(path, cut)
     dropped = dict.fromkeys(
-        ["corrupt_radiotap", "no_signal", "no_transmitter", "unmapped_address", "no_frequency",
+        ["corrupt_radiotap", "bad_fcs", "no_signal", "no_transmitter", "unmapped_address", "no_frequency",
          "no_tx_power"], 0)
     keep = np.ones(len(frames), bool)
 
@@ -407,6 +440,7 @@ def read_pcap(
         keep[hit] = False
 
     drop(~frames["radiotap_ok"].to_numpy(bool), "corrupt_radiotap")
+    drop(frames["bad_fcs"].to_numpy(bool), "bad_fcs")
     drop(~np.isfinite(frames["signal_dbm"].to_numpy(np.float64)), "no_signal")
     ta = frames["transmitter"].to_numpy(dtype=object)
     drop(pd.isna(ta), "no_transmitter")
@@ -445,6 +479,8 @@ def read_pcap(
         "dropped": dropped,
         "addresses": {str(k): int(v) for k, v in addresses.items()},
         "time_reference": "capture time, seconds since the UNIX epoch (capturing host clock)",
+        "cut_off_at_byte": cut.get("cut_off_at_byte"), "cut_off_record": cut.get("cut_off_record"),
+        "records_read": cut.get("records_read", int(len(frames))),
     }
     return signal, meta
 
@@ -459,11 +495,13 @@ def write_radiotap_pcap(
     noise_dbm: int | None = None,
     antenna: int | None = None,
     pcapng: bool = False,
+    bad_fcs: np.ndarray | None = None,
 ) -> None:
     """Write a radiotap pcap (or pcapng) of 802.11 data frames, one per sample (fixtures, demos).
 
     The header carries TSFT, flags, channel, dBm antenna signal, and optionally noise and
-    antenna index; RSSI values are rounded to integers (radiotap stores an s8).
+    antenna index; RSSI values are rounded to integers (radiotap stores an s8). ``bad_fcs``
+    (booleans, one per sample) marks frames as failing their FCS check (:data:`F_BADFCS`).
     """
     import dpkt
 
@@ -477,9 +515,10 @@ def write_radiotap_pcap(
             writer = dpkt.pcapng.Writer(fh, snaplen=65535, linktype=LINKTYPE_IEEE802_11_RADIOTAP)
         else:
             writer = dpkt.pcap.Writer(fh, linktype=LINKTYPE_IEEE802_11_RADIOTAP, nano=True)
+        bad = np.zeros(len(transmitter), bool) if bad_fcs is None else np.asarray(bad_fcs, bool)
         for i, (t, rssi, ta) in enumerate(zip(np.asarray(t_s, float), np.asarray(rssi_dbm), transmitter)):
             body = struct.pack("<Q", int(round(t * 1e6)) & 0xFFFFFFFFFFFFFFFF)  # TSFT at 8 (aligned)
-            body += struct.pack("<B", 0)  # flags (no FCS)
+            body += struct.pack("<B", F_BADFCS if bad[i] else 0)  # flags (no FCS in the frame)
             body += b"\x00"  # pad to 2 for channel
             body += struct.pack("<HH", int(round(frequency_hz / 1e6)), 0x00A0)
             body += struct.pack("<b", int(round(float(rssi))))
@@ -494,6 +533,7 @@ def write_radiotap_pcap(
 
 
 __all__ = [
+    "F_BADFCS",
     "Radiotap",
     "iter_radiotap_frames",
     "parse_radiotap",

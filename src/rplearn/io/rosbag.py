@@ -18,10 +18,14 @@ in the message (``rssi_field="rssi"``, dots for nested fields, e.g. ``"link.rssi
 Times are the message header stamps (``time_source="header"``; the bag's receive time for
 messages without a header or with a zero stamp) or the bag's receive times
 (``time_source="bag"``), in seconds of ROS time (UNIX epoch on a real robot).
+
+A message equal to an earlier one of its topic in receive time and every byte (a recorder
+writing each message twice) is read once and counted (``metadata["repeated_messages"]``).
 """
 
 from __future__ import annotations
 
+import hashlib
 import math
 import os
 from collections.abc import Iterator, Mapping
@@ -131,6 +135,29 @@ def _pose_of(msg: Any, msgtype: str) -> Any:
     return msg.pose
 
 
+_ROS1_MAGIC = b"#ROSBAG V2.0\n"
+
+
+def ros1_index_pos(path: str | os.PathLike) -> int | None:
+    """Where a ROS 1 bag says its index starts (the ``index_pos`` field of its bag header
+    record, ROS bag format 2.0: ``uint32`` header length, then ``uint32``-length-prefixed
+    ``name=value`` fields); None when the file does not begin with such a header."""
+    with open(path, "rb") as fh:
+        head = fh.read(len(_ROS1_MAGIC) + 4 + 4096)
+    if not head.startswith(_ROS1_MAGIC) or len(head) < len(_ROS1_MAGIC) + 4:
+        return None
+    at = len(_ROS1_MAGIC)
+    end = min(at + 4 + int.from_bytes(head[at:at + 4], "little"), len(head))
+    pos = at + 4
+    while pos + 4 <= end:
+        n = int.from_bytes(head[pos:pos + 4], "little")
+        name, _, value = head[pos + 4:pos + 4 + n].partition(b"=")
+        if name == b"index_pos" and len(value) == 8:
+            return int.from_bytes(value, "little")
+        pos += 4 + n
+    return None
+
+
 @contextmanager
 def open_rosbag(
     path: str | os.PathLike, msg_definitions: Mapping[str, str] | None = None
@@ -160,6 +187,17 @@ def open_rosbag(
         raise
     except Exception as exc:
         msg = str(exc).splitlines()[0] if str(exc) else ""
+        index_at = ros1_index_pos(paths[0]) if is_ros1 else None
+        size = paths[0].stat().st_size
+        if index_at is not None and index_at >= size:
+            raise LogFormatError(
+                f"{path}: the bag is cut off at byte {size:,} before its index (at byte {index_at:,}): a bag that "
+                "ends early (power loss, an interrupted copy); `rosbag reindex` rebuilds the index of the "
+                "messages it holds") from None
+        if index_at is not None and "index" in msg.lower():
+            raise LogFormatError(
+                f"{path}: the bag's index (from byte {index_at:,} of {size:,}) cannot be read ({msg}): cut off "
+                "or damaged; `rosbag reindex` rebuilds it") from None
         raise LogFormatError(f"{path}: cannot open bag ({type(exc).__name__}: {msg})") from None
     try:
         if extra:
@@ -171,8 +209,15 @@ def open_rosbag(
         reader.close()
 
 
-def _messages(reader: Any, connections: list, path: str) -> Iterator[tuple[Any, int, Any]]:
+def _messages(reader: Any, connections: list, path: str,
+              repeated: dict[str, int] | None = None) -> Iterator[tuple[Any, int, Any]]:
+    """The messages of ``connections``, deserialised; with ``repeated``, a message equal to an
+    earlier one of its topic in receive time and every byte (the bag's messages written twice)
+    is skipped and counted under its topic. The reader gives the messages in receive-time
+    order, so only those of the current receive time are remembered."""
     it = reader.messages(connections=connections)
+    seen: set[tuple[str, bytes]] = set()
+    seen_ns: int | None = None
     while True:
         try:
             conn, ts, raw = next(it)
@@ -182,6 +227,14 @@ def _messages(reader: Any, connections: list, path: str) -> Iterator[tuple[Any, 
             raise LogFormatError(
                 f"{path}: truncated or corrupt bag while reading messages ({type(exc).__name__})"
             ) from None
+        if repeated is not None:
+            if int(ts) != seen_ns:
+                seen, seen_ns = set(), int(ts)
+            key = (conn.topic, hashlib.blake2b(bytes(raw), digest_size=16).digest())
+            if key in seen:
+                repeated[conn.topic] = repeated.get(conn.topic, 0) + 1
+                continue
+            seen.add(key)
         try:
             msg = reader.deserialize(raw, conn.msgtype)
         except Exception as exc:
@@ -288,8 +341,10 @@ def read_rosbag(
         ``pose`` (canonical pose log, sorted by node and time) and ``signal`` (canonical
         signal log, or None without ``rssi_topics``).
     metadata : dict
-        ``source``, ``format`` ("ros1" or "ros2"), ``topics`` (message counts),
-        ``frame_ids`` per pose topic, ``time_reference``.
+        ``source``, ``format`` ("ros1" or "ros2"), ``topics`` (message counts, each message
+        once), ``frame_ids`` per pose topic, ``repeated_messages`` (messages skipped because
+        they repeat an earlier one of their topic exactly: same receive time and bytes, the
+        bag's messages recorded twice) and ``repeated_by_topic``, ``time_reference``.
     """
     options = RosbagOptions() if options is None else options
     tx_power_field, frequency_field = options.tx_power_field, options.frequency_field
@@ -337,7 +392,8 @@ def read_rosbag(
                 )
         conns = [c for c in reader.connections if c.topic in wanted]
         counts = {t: 0 for t in wanted}
-        for conn, ts, msg in _messages(reader, conns, source):
+        repeated: dict[str, int] = {}
+        for conn, ts, msg in _messages(reader, conns, source, repeated):
             topic = conn.topic
             counts[topic] += 1
             t = _stamp_s(msg, ts, time_source)
@@ -376,6 +432,8 @@ def read_rosbag(
         "format": fmt,
         "topics": counts,
         "frame_ids": frame_ids,
+        "repeated_messages": sum(repeated.values()),
+        "repeated_by_topic": dict(sorted(repeated.items())),
         "time_reference": f"ROS time [s] ({'header stamps' if time_source == 'header' else 'bag receive time'})",
     }
     return Logs(pose=pose, signal=signal), meta

@@ -43,7 +43,9 @@ position found later: ``late_pose_rows``, ``late_signal_rows``, ``withdrawn_pose
 it or the messages it holds; a change of vehicle, or of the use of its boot clock, withdraws
 every row handed out, before and after); a radio report whose copy verdict depends on the report
 period beyond the precision of the running counts, dropped (``uncertain_copy_reports``); a report
-handed out whose verdict a later period reverses (``changed_copy_reports``). The row counts are
+handed out whose verdict a later period reverses (``changed_copy_reports``). The log written into
+the file again from its start (a log in the file twice) is read once, its messages counted in
+``repeated_messages`` as the offline reader counts them (:class:`FileCopy`). The row counts are
 net: rows given back after being withdrawn lower the withdrawn count, so a verdict that flips and
 flips back (a short position glitch under way at a poll) leaves them where they were.
 
@@ -79,7 +81,57 @@ HOME_WAIT_S = 30.0
 SETTLE_MARGIN_S = 1.0
 #: What :attr:`TlogTail.dropped` counts (module docstring).
 DROPS = ("late_pose_rows", "late_signal_rows", "withdrawn_pose_rows", "withdrawn_signal_rows",
-         "uncertain_copy_reports", "changed_copy_reports")
+         "uncertain_copy_reports", "changed_copy_reports", "repeated_messages")
+
+
+class FileCopy:
+    """Whether the records read repeat the file's own bytes from its start: the log written into
+    the file again (a log in the file twice, a copy resumed from its start), which the offline
+    reader reads once (its exact repeated messages dropped, ``repeated_messages``).
+
+    A record equal, byte for byte (its 8-byte receive time included), to the file's first record
+    starts a copy at its offset ``L``; each record after it at ``p`` repeats the file while its
+    bytes equal those at ``p - L``. The state is the first record and ``L``: it does not grow with
+    the log. A copy of a stretch not starting at the file's first record is not found here (the
+    offline reader drops such repeats too: then the counts differ).
+
+    Parameters
+    ----------
+    path : str
+        The log, read with its own handle (``os.pread``).
+    """
+
+    def __init__(self, path: str) -> None:
+        self.path = path
+        self._fd: int | None = None
+        self._first: bytes | None = None
+        self.offset: int | None = None  # where the copy being read started
+
+    def _read(self, start: int, end: int) -> bytes:
+        if self._fd is None:
+            self._fd = os.open(self.path, os.O_RDONLY | getattr(os, "O_BINARY", 0))
+        return os.pread(self._fd, end - start, start)
+
+    def repeats(self, start: int, end: int) -> bool:
+        """Whether the record in bytes ``[start, end)`` repeats the file's bytes before it."""
+        if start == 0:
+            self._first = self._read(0, end)
+            return False
+        if self.offset is None:
+            if self._first is None or end - start != len(self._first) or self._read(start, end) != self._first:
+                return False
+            self.offset = start
+            return True
+        if self._read(start, end) == self._read(start - self.offset, end - self.offset):
+            return True
+        self.offset = None  # the copy ended: what follows is new
+        return False
+
+    def close(self) -> None:
+        """Close the handle."""
+        if self._fd is not None:
+            os.close(self._fd)
+            self._fd = None
 
 
 def whole_records(data: bytes) -> int:
@@ -125,6 +177,7 @@ class TlogTail:
         self.parsed = 0  # messages parsed by the last poll
         self.dropped: dict[str, int] = {k: 0 for k in DROPS}
         self._conn: Any = None
+        self._copy = FileCopy(path)
         self._end = 0
         self._time_base: dict[int, float] = {}
         self._station: tuple[float, float, float] | None = reader.station_geodetic
@@ -153,14 +206,19 @@ class TlogTail:
         n = 0
         with library_quiet():
             while f.tell() < whole:
+                start = f.tell() - self._conn.mav.buf_len()
                 try:
                     msg = self._conn.recv_msg()
                 except Exception as exc:
                     raise LogFormatError(f"{self.path}: corrupt MAVLink data ({type(exc).__name__}: {exc})") from None
                 if msg is None:
                     break
-                rows.add(msg, self.path)
                 n += 1
+                if msg.get_type() != "BAD_DATA" and self._copy.repeats(start, f.tell() - self._conn.mav.buf_len()):
+                    # the log in the file again: read once, as the offline reader does
+                    self.dropped["repeated_messages"] += int(msg.get_type() in rows.rows)
+                    continue
+                rows.add(msg, self.path)
         self._end = f.tell() - self._conn.mav.buf_len()
         if self.window is not None:
             self.window.add(rows)
@@ -356,6 +414,7 @@ class TlogTail:
         if self._conn is not None:
             self._conn.close()
             self._conn = None
+        self._copy.close()
 
 
-__all__ = ["DROPS", "HOME_WAIT_S", "SETTLE_MARGIN_S", "TIME_BASE_MESSAGES", "TlogTail", "whole_records"]
+__all__ = ["DROPS", "HOME_WAIT_S", "FileCopy", "SETTLE_MARGIN_S", "TIME_BASE_MESSAGES", "TlogTail", "whole_records"]

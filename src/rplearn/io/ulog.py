@@ -23,12 +23,17 @@ other topic's span, or inside a gap longer than ``max_gap_s`` of it, are dropped
 With ``origin_geodetic`` (lat [deg], lon [deg], alt [m]) the positions are expressed in ENU
 around that origin (pymap3d), which puts several drones in one frame; without it they stay
 in the log's own local frame (its origin reported as ``metadata["anchor_geodetic"]``).
+
+A file holding the log again after it (a second file header starting the same bytes) is read
+once, the messages after it counted (``metadata["repeated_messages"]``); a different log after
+it (logs concatenated) is refused naming the byte where it starts (:func:`ulog_layout`).
 """
 
 from __future__ import annotations
 
+import io
 import os
-from typing import Any
+from typing import Any, BinaryIO
 
 import numpy as np
 import pandas as pd
@@ -126,6 +131,30 @@ _ULOG_FILE_HEADER_BYTES = 16
 _ULOG_MSG_HEADER_BYTES = 3
 
 
+#: The first bytes of every ULog file (magic ``ULog`` and version byte 1, ULog file format).
+_ULOG_MAGIC = b"ULog\x01\x12\x35"
+
+
+#: The ULog message types (ULog file format): flag bits, format, info, info multiple,
+#: parameter, default parameter, add/remove logged, data, logging, tagged logging, sync, dropout.
+_ULOG_TYPES = frozenset(b"BFIMPQARDLCSO")
+
+
+def _walk_messages(data: Any, start: int, end: int) -> tuple[int, int | None, int | None]:
+    """Walk the ULog messages in ``data[start:end]``: ``(complete messages, offset of the one
+    it ends inside or None, offset of the first message of no ULog type or None)``; the walk
+    stops at such a message (its size cannot be trusted: the bytes are damaged)."""
+    pos, n = start, 0
+    while pos + _ULOG_MSG_HEADER_BYTES <= end:
+        if data[pos + 2] not in _ULOG_TYPES:
+            return n, None, pos
+        nxt = pos + _ULOG_MSG_HEADER_BYTES + (data[pos] | (data[pos + 1] << 8))
+        if nxt > end:
+            return n, pos, None
+        pos, n = nxt, n + 1
+    return n, None if pos == end else pos, None
+
+
 def ulog_cut_off_at(path: str) -> int | None:
     """Byte offset of a ULog message that the file ends inside, or None if it ends whole.
 
@@ -134,29 +163,102 @@ def ulog_cut_off_at(path: str) -> int | None:
     and "Data" sections, docs.px4.io/main/en/dev_log/ulog_file_format). A log cut off by a
     power loss or a failed copy ends inside a message; ``pyulog`` then stops without a word.
     """
+    return ulog_layout(path)["cut_off_at_byte"]
+
+
+def ulog_layout(path: str) -> dict[str, Any]:
+    """What the bytes of a ULog hold, beyond what ``pyulog`` says: where its log ends, whether
+    the file repeats it, where it is cut.
+
+    Returns
+    -------
+    dict
+        ``log_bytes`` (the bytes of the first log: the file up to a second file header
+        :data:`_ULOG_MAGIC`, or all of it), ``repeated_messages`` (the messages after it when
+        they are that log again, whole or cut: the log in the file twice), ``messages`` (the
+        complete messages of the first log, up to a damaged one), ``cut_off_at_byte`` (the
+        offset of the message the first log ends inside, or None), ``damaged_at_byte`` (the
+        offset of the first message of no ULog type: damaged bytes, whose size cannot be
+        trusted; ``pyulog`` skips a message of an unknown type without a word, or resyncs).
+
+    Raises
+    ------
+    LogFormatError
+        When a second, different log follows the first (logs concatenated), naming the byte.
+    """
     import mmap
 
     with open(path, "rb") as fh:
         size = os.fstat(fh.fileno()).st_size
         if size <= _ULOG_FILE_HEADER_BYTES:
-            return _ULOG_FILE_HEADER_BYTES if size < _ULOG_FILE_HEADER_BYTES else None
+            return {"log_bytes": size, "repeated_messages": 0, "messages": 0, "damaged_at_byte": None,
+                    "cut_off_at_byte": _ULOG_FILE_HEADER_BYTES if size < _ULOG_FILE_HEADER_BYTES else None}
         with mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ) as data:
-            pos = _ULOG_FILE_HEADER_BYTES
-            while pos + _ULOG_MSG_HEADER_BYTES <= size:
-                nxt = pos + _ULOG_MSG_HEADER_BYTES + (data[pos] | (data[pos + 1] << 8))
-                if nxt > size:
-                    return pos
-                pos = nxt
-    return None if pos == size else pos
+            second = data.find(_ULOG_MAGIC, _ULOG_FILE_HEADER_BYTES)
+            end = size if second < 0 else second
+            messages, cut, damaged = _walk_messages(data, _ULOG_FILE_HEADER_BYTES, end)
+            repeated = 0
+            if second >= 0:
+                repeated = _repeated_copies(data, end, size, path)
+    return {"log_bytes": end, "repeated_messages": repeated, "messages": messages, "cut_off_at_byte": cut,
+            "damaged_at_byte": damaged}
 
 
-def _open_ulog(source: str) -> Any:
-    """The parsed ULog (the topics rplearn uses only); :class:`LogFormatError` when unreadable."""
+def _repeated_copies(data: Any, first_end: int, size: int, path: str) -> int:
+    """Messages in ``data[first_end:]`` when they are the first log (``data[:first_end]``)
+    again, once or more, the last copy possibly cut; :class:`LogFormatError` otherwise."""
+    repeated, pos = 0, first_end
+    while pos < size:
+        n = min(first_end, size - pos)
+        if data[pos:pos + n] != data[:n]:
+            raise LogFormatError(
+                f"{path}: a second ULog starts at byte {first_end:,} and is not the first one again "
+                "(logs concatenated); give each log as its own file")
+        repeated += _walk_messages(data, pos + _ULOG_FILE_HEADER_BYTES, pos + n)[0] if n > _ULOG_FILE_HEADER_BYTES else 0
+        pos += n
+    return repeated
+
+
+class _Head(io.RawIOBase):
+    """The first ``limit`` bytes of an open binary file, as a file (for ``pyulog``)."""
+
+    def __init__(self, fh: BinaryIO, limit: int) -> None:
+        super().__init__()
+        self._fh, self._limit = fh, limit
+
+    def readable(self) -> bool:
+        return True
+
+    def seekable(self) -> bool:
+        return True
+
+    def read(self, n: int | None = -1) -> bytes:
+        left = max(self._limit - self._fh.tell(), 0)
+        return self._fh.read(left if n is None or n < 0 else min(n, left))
+
+    def seek(self, offset: int, whence: int = 0) -> int:
+        if whence == 2:
+            return self._fh.seek(self._limit + offset)
+        return self._fh.seek(offset, whence)
+
+    def tell(self) -> int:
+        return self._fh.tell()
+
+    def close(self) -> None:
+        self._fh.close()
+        super().close()
+
+
+def _open_ulog(source: str, log_bytes: int | None = None) -> Any:
+    """The parsed ULog (the topics rplearn uses only; its first ``log_bytes`` bytes when given);
+    :class:`LogFormatError` when unreadable."""
     if not os.path.exists(source):
         raise InputError(f"{source}: no such file")
     ULog = _pyulog()
     try:
-        return ULog(source, list(_TOPICS))
+        if log_bytes is None:
+            return ULog(source, list(_TOPICS))
+        return ULog(_Head(open(source, "rb"), log_bytes), list(_TOPICS))
     except Exception as exc:
         msg = str(exc).splitlines()[0] if str(exc) else ""
         raise LogFormatError(f"{source}: cannot read ULog ({type(exc).__name__}: {msg})") from None
@@ -340,8 +442,11 @@ def read_ulog(
         ``anchor_source``, ``origin_geodetic`` (or None), ``dropped`` per reason,
         ``invalid_flag_rows`` (rows with xy_valid or z_valid = 0), ``rows``,
         ``cut_off_at_byte`` (the offset of the message a cut-off file ends inside, whose
-        data are lost, see :func:`ulog_cut_off_at`; None for a whole file) and ``corrupt``
-        (pyulog skipped corrupt bytes).
+        data are lost, see :func:`ulog_cut_off_at`; None for a whole file), ``records_read``
+        (the complete messages before it), ``corrupt`` (pyulog skipped corrupt bytes, or a
+        message has no ULog type), ``corrupt_at_byte`` (the first message of no ULog type) and
+        ``repeated_messages`` (the messages of the log in the file again after it, not read:
+        a log in the file twice, see :func:`ulog_layout`).
     """
     source = str(path)
     if time_reference not in ("auto", "utc", "boot"):
@@ -349,7 +454,10 @@ def read_ulog(
                          param="time_reference")
     if timebase not in ("attitude", "position"):
         raise InputError(f"timebase must be 'attitude' or 'position', got {timebase!r}", param="timebase")
-    ulog = _open_ulog(source)
+    if not os.path.exists(source):
+        raise InputError(f"{source}: no such file")
+    layout = ulog_layout(source)
+    ulog = _open_ulog(source, layout["log_bytes"] if layout["repeated_messages"] else None)
     lp, att = _pose_topics(ulog, source)
     dropped = {"nan_position": 0, "nan_attitude": 0, "invalid_flag": 0, "out_of_span": 0, "gap": 0}
     tp, ned, invalid_flag_rows = _local_positions(lp, require_valid, dropped)
@@ -367,14 +475,18 @@ def read_ulog(
         "qw": quat[:, 0], "qx": quat[:, 1], "qy": quat[:, 2], "qz": quat[:, 3],
     })
     pose = validate_pose_log(pose, source)
+    corrupt = bool(ulog.file_corruption) or layout["damaged_at_byte"] is not None
     meta = {
         "source": source, "format": "ulog", "node": str(node), **clock,
         "anchor_geodetic": anchor, "anchor_source": anchor_source,
         "origin_geodetic": None if origin_geodetic is None else tuple(float(v) for v in origin_geodetic),
         "timebase": timebase, "dropped": dropped, "invalid_flag_rows": invalid_flag_rows,
         "rows": int(len(pose)),
-        "cut_off_at_byte": None if ulog.file_corruption else ulog_cut_off_at(source),
-        "corrupt": bool(ulog.file_corruption),
+        "cut_off_at_byte": None if corrupt else layout["cut_off_at_byte"],
+        "records_read": None if corrupt else int(layout["messages"]),
+        "corrupt": corrupt,
+        "corrupt_at_byte": layout["damaged_at_byte"],
+        "repeated_messages": int(layout["repeated_messages"]),
     }
     return pose, meta
 
@@ -408,4 +520,4 @@ def read_ulogs(
     return pose, {"origin_geodetic": origin, "logs": metas}
 
 
-__all__ = ["read_ulog", "read_ulogs", "utc_offset_us"]
+__all__ = ["read_ulog", "read_ulogs", "ulog_cut_off_at", "ulog_layout", "utc_offset_us"]

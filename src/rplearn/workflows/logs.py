@@ -38,7 +38,8 @@ def reader_notes(metadata: Mapping[str, Any]) -> list[str]:
     notes = []
     for f in metadata.get("files", []):
         source = f.get("source", "log")
-        notes += [f"{source}: dropped {n:,} pose row(s) ({why})" for why, n in (f.get("dropped") or {}).items() if n]
+        rows = "frame(s)" if f.get("kind") == "signal" else "pose row(s)"  # a capture's drops are frames
+        notes += [f"{source}: dropped {n:,} {rows} ({why})" for why, n in (f.get("dropped") or {}).items() if n]
         if f.get("level_assumed"):
             notes.append(f"{source}: yaw only, so level flight (roll = pitch = 0) is assumed")
         notes += file_damage(source, f)
