@@ -166,13 +166,13 @@ def write_bag(path: Path, pose: pd.DataFrame, sig: pd.DataFrame, kind: str,
 
 def write_pcaps(directory: Path, sig: pd.DataFrame) -> dict[str, Path]:
     """One radiotap capture per receiver, frames sent from the transmitter's MAC address."""
-    from rplearn.io.pcap import write_radiotap_pcap
+    from rplearn.io.pcap import RadiotapFields, write_radiotap_pcap
 
     out = {}
     for rx in sorted(set(sig["rx"])):
         sel = sig[sig["rx"] == rx]
         p = directory / f"capture_{rx}.pcap"
         write_radiotap_pcap(str(p), sel["t"].to_numpy(), sel["rssi_dbm"].to_numpy(),
-                            [MAC[tx] for tx in sel["tx"]], FREQUENCY_HZ, noise_dbm=-95, antenna=1)
+                            [MAC[tx] for tx in sel["tx"]], FREQUENCY_HZ, RadiotapFields(noise_dbm=-95, antenna=1))
         out[rx] = p
     return out

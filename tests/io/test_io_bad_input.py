@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 
 from rplearn.errors import InputError, LogFormatError, RplearnError
 from rplearn.io import ReaderOptions, read_logs
-from rplearn.io.pcap import read_pcap, write_radiotap_pcap
+from rplearn.io.pcap import RadiotapFields, read_pcap, write_radiotap_pcap
 from rplearn.io.rosbag import read_rosbag
 from rplearn.io.tables import read_pose_table, read_signal_table
 from rplearn.io.ulog import read_ulog
@@ -140,7 +140,7 @@ def test_a_dataset_file_of_blank_lines_is_said_empty(tmp_path):
 
 def _small_pcap(path: Path) -> Path:
     write_radiotap_pcap(str(path), np.array([1.0, 1.1, 1.2]), np.array([-40, -127, -60]),
-                        ["02:00:00:00:00:0a"] * 3, 2.412e9, noise_dbm=-95)
+                        ["02:00:00:00:00:0a"] * 3, 2.412e9, RadiotapFields(noise_dbm=-95))
     return path
 
 

@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 
 from rplearn.io import ReaderOptions, inspect_logs
-from rplearn.io.pcap import F_BADFCS, parse_radiotap, read_pcap, read_radiotap_frames, write_radiotap_pcap
+from rplearn.io.pcap import F_BADFCS, RadiotapFields, parse_radiotap, read_pcap, read_radiotap_frames, write_radiotap_pcap
 
 MACS = ["02:00:00:00:00:0a", "02:00:00:00:00:0b"]
 
@@ -14,7 +14,7 @@ MACS = ["02:00:00:00:00:0a", "02:00:00:00:00:0b"]
 def _capture(path, bad=None, n=40):
     t = 1_700_000_000.0 + 0.1 * np.arange(n)
     rssi = -60.0 - (np.arange(n) % 7)
-    write_radiotap_pcap(str(path), t, rssi, [MACS[i % 2] for i in range(n)], 2.412e9, bad_fcs=bad)
+    write_radiotap_pcap(str(path), t, rssi, [MACS[i % 2] for i in range(n)], 2.412e9, RadiotapFields(bad_fcs=bad))
     return path
 
 

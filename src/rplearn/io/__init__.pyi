@@ -52,6 +52,7 @@ from .partitions import Part as Part
 from .partitions import dataset_parts as dataset_parts
 from .partitions import file_identity as file_identity
 from .partitions import is_partitioned as is_partitioned
+from .pcap import RadiotapFields as RadiotapFields
 from .pcap import read_pcap as read_pcap
 from .pcap import write_radiotap_pcap as write_radiotap_pcap
 from .read import read_logs as read_logs

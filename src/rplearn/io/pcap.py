@@ -486,23 +486,43 @@ def read_pcap(
 
 
 @check_types
+@dataclass(frozen=True)
+class RadiotapFields:
+    """Optional radiotap fields of :func:`write_radiotap_pcap`.
+
+    Attributes
+    ----------
+    noise_dbm : int or None
+        The dBm antenna noise written in every frame (none when None).
+    antenna : int or None
+        The antenna index written in every frame (none when None).
+    bad_fcs : ndarray of bool or None
+        One per sample: frames marked as failing their FCS check (:data:`F_BADFCS`).
+    """
+
+    noise_dbm: int | None = None
+    antenna: int | None = None
+    bad_fcs: np.ndarray | None = None
+
+
+@check_types
 def write_radiotap_pcap(
     path: str,
     t_s: np.ndarray,
     rssi_dbm: np.ndarray,
     transmitter: list[str],
     frequency_hz: float,
-    noise_dbm: int | None = None,
-    antenna: int | None = None,
+    fields: RadiotapFields = RadiotapFields(),
     pcapng: bool = False,
-    bad_fcs: np.ndarray | None = None,
 ) -> None:
     """Write a radiotap pcap (or pcapng) of 802.11 data frames, one per sample (fixtures, demos).
 
     The header carries TSFT, flags, channel, dBm antenna signal, and optionally noise and
-    antenna index; RSSI values are rounded to integers (radiotap stores an s8). ``bad_fcs``
-    (booleans, one per sample) marks frames as failing their FCS check (:data:`F_BADFCS`).
+    antenna index (``fields``); RSSI values are rounded to integers (radiotap stores an s8).
+    ``fields.bad_fcs`` (booleans, one per sample) marks frames as failing their FCS check
+    (:data:`F_BADFCS`).
     """
+    noise_dbm, antenna, bad_fcs = fields.noise_dbm, fields.antenna, fields.bad_fcs
     import dpkt
 
     present = (1 << 0) | (1 << 1) | (1 << _BIT_CHANNEL) | (1 << _BIT_SIGNAL)
@@ -535,6 +555,7 @@ def write_radiotap_pcap(
 __all__ = [
     "F_BADFCS",
     "Radiotap",
+    "RadiotapFields",
     "iter_radiotap_frames",
     "parse_radiotap",
     "read_pcap",

@@ -23,6 +23,7 @@ from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.core.lsq.runtime import DEFAULT_RUNTIME
 from rplearn.core.lsq.selection import (
     DEFAULT_PENALTY_POWER,
+    SearchPrior,
     Selection,
     nested_columns,
     penalty_scale,
@@ -246,10 +247,11 @@ def unit_pieces(sizes: Mapping[str, int], workers: int) -> list[tuple[str, int, 
 
 
 def _final_setup(total: NormalEquations, big: Any, kind: str, ridge: float, power: float, order: int, smoothing: float,
-                 n_nodes: int, search_target: np.ndarray | None) -> tuple[Any, NormalEquations, float, np.ndarray,
+                 search_target: np.ndarray | None) -> tuple[Any, NormalEquations, float, np.ndarray,
                                                                    np.ndarray | None]:
     """The chosen basis, its statistics (a sub-block of ``total``), the penalty's unit, the
     penalty and the target of the final solve at ``order`` and ``smoothing``."""
+    n_nodes = total.n_nodes
     chosen = ModelSpec(kind, order, ridge=ridge).basis()
     normal = sub_statistics(total, chosen)
     scale = penalty_scale(normal.gram, normal.n_pattern_columns)
@@ -350,7 +352,7 @@ def fit_from_statistics(
     def final_jobs(order: int, smoothing: float, keys: list[tuple[int, float]]) -> list[Callable[[], Any]]:
         # the final solve and the own posteriors' inverses need only the choice (the prior is
         # not kept on this path): on the workers with the chosen and tied points' inflations
-        setup = _final_setup(total, first.basis, kind, ridge, power, order, smoothing, len(nodes), search_target)
+        setup = _final_setup(total, first.basis, kind, ridge, power, order, smoothing, search_target)
         chosen_, normal_, scale_, penalty_, sub_target_ = setup
         prior_ = OwnPrior(smoothing, scale_, power, ridge, gauge, target, prior_level)
         own_first_, points = continued_points(plain_total, chosen_, len(nodes), prior_,
@@ -365,7 +367,7 @@ def fit_from_statistics(
                   if i not in same[:1])]
 
     searched_prior = keeps_prior(kind, target, first.basis, len(nodes))
-    results, choice = select_beside(stats, make_basis, orders, ridge, power, target=target, prior_level=prior_level,
+    results, choice = select_beside(stats, make_basis, orders, ridge, power, prior=SearchPrior(target, prior_level),
                                     beside=None if searched_prior else final_jobs)
     keep, compared = False, None
     if searched_prior:
@@ -385,7 +387,7 @@ def fit_from_statistics(
                                                          deviation.target, kept)
     final = ModelSpec(kind, orders[-1] if keep else choice.order, ridge=ridge, smoothing=choice.smoothing)
     chosen, normal, scale, penalty, sub_target = early["setup"] if early else _final_setup(
-        total, first.basis, kind, ridge, power, choice.order, choice.smoothing, len(nodes), search_target)
+        total, first.basis, kind, ridge, power, choice.order, choice.smoothing, search_target)
     own_prior = OwnPrior(choice.smoothing, scale, power, ridge, gauge, target, prior_level)
     own_first, jobs = (early["own_first"], []) if early else continued_jobs(plain_total, chosen, names, own_prior,
                                                                             choice.ties, make_basis)

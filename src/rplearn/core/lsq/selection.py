@@ -52,6 +52,7 @@ about 6 of them per held-out unit, against 12-14 for a full grid at the largest 
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -176,7 +177,24 @@ def select_order_and_smoothing(
     IdentifiabilityError
         When no unit holds samples, or every candidate fails.
     """
-    return select_beside(units, make_basis, orders, ridge, power, grid, target, prior_level)[1]
+    return select_beside(units, make_basis, orders, ridge, power, grid, SearchPrior(target, prior_level))[1]
+
+
+@dataclass(frozen=True, eq=False)
+class SearchPrior:
+    """What the penalty of :func:`select_beside` shrinks toward.
+
+    Attributes
+    ----------
+    target : ndarray or None
+        Prior coefficients at the largest order (one per pattern column), as ``target`` of
+        :func:`select_order_and_smoothing`; None: toward zero (each fold's own level).
+    prior_level : {"data", "prior"}
+        As ``prior_level`` of :func:`select_order_and_smoothing`.
+    """
+
+    target: np.ndarray | None = None
+    prior_level: str = "data"
 
 
 def select_beside(
@@ -186,8 +204,7 @@ def select_beside(
     ridge: float = 1.0,
     power: float = DEFAULT_PENALTY_POWER,
     grid: Sequence[float] = SMOOTHING_GRID,
-    target: np.ndarray | None = None,
-    prior_level: str = "data",
+    prior: SearchPrior = SearchPrior(),
     beside: Callable[[int, float, list[tuple[int, float]]], Sequence[Callable[[], Any]]] | None = None,
 ) -> tuple[list[Any], Selection]:
     """:func:`select_order_and_smoothing`, with work of the caller's that needs only the choice
@@ -196,8 +213,10 @@ def select_beside(
 
     Parameters
     ----------
-    units, make_basis, orders, ridge, power, grid, target, prior_level
+    units, make_basis, orders, ridge, power, grid
         As :func:`select_order_and_smoothing`.
+    prior : SearchPrior
+        Its ``target`` and ``prior_level`` (:func:`select_order_and_smoothing`).
     beside : callable, optional
         ``beside(order, smoothing, tied)`` with the chosen point and the ``(order, smoothing)``
         of the tied points (:func:`rplearn.core.lsq.ties.tied_keys`, the chosen first) -> jobs
@@ -216,7 +235,7 @@ def select_beside(
     orders = sorted({int(o) for o in orders})
     if not orders:
         raise InputError("orders: no candidate order", param="orders")
-    ev = _Evaluator(units, make_basis, ridge, power, target, prior_level)
+    ev = _Evaluator(units, make_basis, ridge, power, prior.target, prior.prior_level)
     best_s = _best_smoothing(ev, orders[(len(orders) - 1) // 2], grid)
     best_o = _best_order(ev, orders, best_s)
     values = sorted({float(g) for g in grid} | {best_s})
@@ -315,6 +334,7 @@ __all__ = [
     "MAX_SMOOTHING",
     "SMOOTHING_GRID",
     "CurvePoint",
+    "SearchPrior",
     "Selection",
     "nested_columns",
     "penalty_scale",
