@@ -1,11 +1,13 @@
 """What is wrong with a log file as a whole, said in one line each: cut off, corrupt, in the
 file twice (:func:`file_damage`, from a reader's metadata), or its rows repeating another
-file's (:func:`across_files`, for the inspection of several files)."""
+file's (:func:`drop_repeated_across`, :func:`refuse_overlaps`: what ``read_logs`` does with
+several files; :func:`across_files`: the same said by the inspection of several files)."""
 
 from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
 import pandas as pd
 
 from rplearn.errors import InputError
@@ -40,6 +42,63 @@ def file_damage(path: str, info: dict[str, Any]) -> list[str]:
                      "time and fields: part of the log is in the file twice); each was read once")
     return lines
 
+#: The columns that make two rows of different files one reading (the canonical ones: a
+#: capture split in two numbers its frames anew).
+_SAME_ROW = {"pose": ["t", "node", "x", "y", "z", "qw", "qx", "qy", "qz"],
+             "signal": ["t", "tx", "rx", "rssi_dbm", "tx_power_dbm", "frequency_hz"]}
+_STREAM = {"pose": ["node"], "signal": ["tx", "rx"]}
+
+
+def drop_repeated_across(logs: list[pd.DataFrame], owners: list[int], files: list[dict[str, Any]],
+                          what: str) -> list[pd.DataFrame]:
+    """The logs without the rows that repeat a row of an earlier file exactly (the same log
+    given twice under two names, overlapping exports), counted in that file's metadata
+    (``repeated_rows``: ``{what: {earlier file: rows}}``). Repeats within one file are its
+    reader's business and left alone."""
+    if len(set(owners)) < 2:
+        return logs
+    cols = _SAME_ROW[what]
+    both = pd.concat([log[cols].assign(_file=i) for log, i in zip(logs, owners, strict=True)], ignore_index=True)
+    key = both.groupby(cols, dropna=False, sort=False, observed=True).ngroup().to_numpy()
+    earlier = both["_file"].groupby(key).transform("first").to_numpy()  # the file first giving each row
+    repeat = earlier != both["_file"].to_numpy()
+    out, start = [], 0
+    for log, i in zip(logs, owners, strict=True):
+        mine = repeat[start:start + len(log)]
+        if mine.any():
+            which, n_rows = np.unique(earlier[start:start + len(log)][mine].astype(np.int64), return_counts=True)
+            counts = files[i].setdefault("repeated_rows", {}).setdefault(what, {})
+            for j, n in zip(which.tolist(), n_rows.tolist(), strict=True):
+                src = str(files[j].get("source", j))
+                counts[src] = counts.get(src, 0) + int(n)
+            log = log[~mine].reset_index(drop=True)
+        out.append(log)
+        start += len(mine)
+    return out
+
+
+def refuse_overlaps(logs: list[pd.DataFrame], owners: list[int], files: list[dict[str, Any]], what: str) -> None:
+    """Refuse two files giving one node's poses (one link's readings) over overlapping times
+    with different rows: two logs of one stream, which would interleave."""
+    spans: dict[tuple[str, ...], list[tuple[float, float, int, np.ndarray]]] = {}
+    for log, i in zip(logs, owners, strict=True):
+        if not len(log):
+            continue
+        for key, grp in log.groupby(_STREAM[what], sort=True, observed=True):
+            t = np.sort(grp["t"].to_numpy(np.float64))
+            spans.setdefault(tuple(str(k) for k in key), []).append((float(t[0]), float(t[-1]), i, t))
+    for key, found in spans.items():
+        for a in range(len(found)):
+            for b in range(a + 1, len(found)):
+                (a0, a1, fa, ta), (b0, b1, fb, tb) = found[a], found[b]
+                lo, hi = max(a0, b0), min(a1, b1)
+                inside = [int(np.count_nonzero((x >= lo) & (x <= hi))) for x in (ta, tb)]
+                if fa != fb and hi > lo and min(inside) >= 2:
+                    name = f"node {key[0]}'s poses" if what == "pose" else f"the readings of {key[0]} -> {key[1]}"
+                    raise InputError(
+                        f"{files[fa].get('source')} and {files[fb].get('source')} both give {name} from t = {lo:.3f} "
+                        f"to {hi:.3f} s ({inside[0]:,} and {inside[1]:,} rows, not the same ones): two logs of one "
+                        "stream would interleave; give one of them, or give them different node ids", param="paths")
 
 
 def across_files(report: Any, poses: list[pd.DataFrame], canonical: list[pd.DataFrame],
@@ -48,27 +107,25 @@ def across_files(report: Any, poses: list[pd.DataFrame], canonical: list[pd.Data
     """The logs of several files of an :class:`~rplearn.io.inspect.InspectReport` as ``read_logs`` takes them: rows repeating another file's
     read once and said, one stream given by two files over the same times said (``read_logs``
     refuses it). ``canonical``: the canonical pose log of each of ``poses`` (in file order)."""
-    from rplearn.io.read import _drop_repeated_across, _refuse_overlaps
-
     if len(report.files) < 2:
         return poses, signals
     metas: list[dict[str, Any]] = [{"source": f["path"]} for f in report.files]
-    once = _drop_repeated_across(canonical, owners["pose"], metas, "pose")
+    once = drop_repeated_across(canonical, owners["pose"], metas, "pose")
     for k, (before, after) in enumerate(zip(canonical, once, strict=True)):
         if len(after) < len(before):  # the file-order rows of those kept
             kept = pd.MultiIndex.from_frame(after[["t", "node"]].astype({"node": str}))
             poses[k] = poses[k][pd.MultiIndex.from_frame(poses[k][["t", "node"]].astype({"node": str})).isin(kept)]
-    signals = _drop_repeated_across(signals, owners["signal"], metas, "signal")
+    signals = drop_repeated_across(signals, owners["signal"], metas, "signal")
     for f, meta in zip(report.files, metas, strict=True):
         if meta.get("repeated_rows"):
             f["repeated_rows"] = meta["repeated_rows"]
-            report.problems.extend(line for line in file_damage(f["path"], meta))
+            report.problems.extend(file_damage(f["path"], meta))
     for what, logs in (("pose", once), ("signal", signals)):
         try:
-            _refuse_overlaps(logs, owners[what], metas, what)
+            refuse_overlaps(logs, owners[what], metas, what)
         except InputError as exc:
             report.problems.append(f"{exc} (sync refuses these files)")
     return poses, signals
 
 
-__all__ = ["across_files", "file_damage"]
+__all__ = ["across_files", "drop_repeated_across", "file_damage", "refuse_overlaps"]

@@ -8,13 +8,13 @@ from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-import numpy as np
 import pandas as pd
 
 from rplearn._argtypes import check_types
 from rplearn.data.tables import NON_UNIT_QUATERNION_ATTR, validate_pose_log
 from rplearn.errors import InputError, RplearnError
 from rplearn.io._common import Logs
+from rplearn.io.damage import drop_repeated_across, refuse_overlaps
 from rplearn.io.options import ReaderOptions
 from rplearn.io.partitions import refuse_repeated
 from rplearn.io.sniff import detect_format
@@ -186,73 +186,14 @@ _READERS: dict[str, Callable[[str, ReaderOptions, _Gathered], dict[str, Any]]] =
 }
 
 
-#: The columns that make two rows of different files one reading (the canonical ones: a
-#: capture split in two numbers its frames anew).
-_SAME_ROW = {"pose": ["t", "node", "x", "y", "z", "qw", "qx", "qy", "qz"],
-             "signal": ["t", "tx", "rx", "rssi_dbm", "tx_power_dbm", "frequency_hz"]}
-_STREAM = {"pose": ["node"], "signal": ["tx", "rx"]}
-
-
-def _drop_repeated_across(logs: list[pd.DataFrame], owners: list[int], files: list[dict[str, Any]],
-                          what: str) -> list[pd.DataFrame]:
-    """The logs without the rows that repeat a row of an earlier file exactly (the same log
-    given twice under two names, overlapping exports), counted in that file's metadata
-    (``repeated_rows``: ``{what: {earlier file: rows}}``). Repeats within one file are its
-    reader's business and left alone."""
-    if len(set(owners)) < 2:
-        return logs
-    cols = _SAME_ROW[what]
-    both = pd.concat([log[cols].assign(_file=i) for log, i in zip(logs, owners, strict=True)], ignore_index=True)
-    key = both.groupby(cols, dropna=False, sort=False, observed=True).ngroup().to_numpy()
-    earlier = both["_file"].groupby(key).transform("first").to_numpy()  # the file first giving each row
-    repeat = earlier != both["_file"].to_numpy()
-    out, start = [], 0
-    for log, i in zip(logs, owners, strict=True):
-        mine = repeat[start:start + len(log)]
-        if mine.any():
-            which, n_rows = np.unique(earlier[start:start + len(log)][mine].astype(np.int64), return_counts=True)
-            counts = files[i].setdefault("repeated_rows", {}).setdefault(what, {})
-            for j, n in zip(which.tolist(), n_rows.tolist(), strict=True):
-                src = str(files[j].get("source", j))
-                counts[src] = counts.get(src, 0) + int(n)
-            log = log[~mine].reset_index(drop=True)
-        out.append(log)
-        start += len(mine)
-    return out
-
-
-def _refuse_overlaps(logs: list[pd.DataFrame], owners: list[int], files: list[dict[str, Any]], what: str) -> None:
-    """Refuse two files giving one node's poses (one link's readings) over overlapping times
-    with different rows: two logs of one stream, which would interleave."""
-    spans: dict[tuple[str, ...], list[tuple[float, float, int, np.ndarray]]] = {}
-    for log, i in zip(logs, owners, strict=True):
-        if not len(log):
-            continue
-        for key, grp in log.groupby(_STREAM[what], sort=True, observed=True):
-            t = np.sort(grp["t"].to_numpy(np.float64))
-            spans.setdefault(tuple(str(k) for k in key), []).append((float(t[0]), float(t[-1]), i, t))
-    for key, found in spans.items():
-        for a in range(len(found)):
-            for b in range(a + 1, len(found)):
-                (a0, a1, fa, ta), (b0, b1, fb, tb) = found[a], found[b]
-                lo, hi = max(a0, b0), min(a1, b1)
-                inside = [int(np.count_nonzero((x >= lo) & (x <= hi))) for x in (ta, tb)]
-                if fa != fb and hi > lo and min(inside) >= 2:
-                    name = f"node {key[0]}'s poses" if what == "pose" else f"the readings of {key[0]} -> {key[1]}"
-                    raise InputError(
-                        f"{files[fa].get('source')} and {files[fb].get('source')} both give {name} from t = {lo:.3f} "
-                        f"to {hi:.3f} s ({inside[0]:,} and {inside[1]:,} rows, not the same ones): two logs of one "
-                        "stream would interleave; give one of them, or give them different node ids", param="paths")
-
-
 def _merge(got: _Gathered) -> tuple[Logs, dict[str, Any]]:
     """One validated pose log and one time-sorted signal log from everything read; rows that
     repeat another file's are read once (counted), different rows of one stream from two files
     over the same times are refused."""
-    poses = _drop_repeated_across(got.poses, got.pose_files, got.files, "pose")
-    signals = _drop_repeated_across(got.signals, got.signal_files, got.files, "signal")
-    _refuse_overlaps(poses, got.pose_files, got.files, "pose")
-    _refuse_overlaps(signals, got.signal_files, got.files, "signal")
+    poses = drop_repeated_across(got.poses, got.pose_files, got.files, "pose")
+    signals = drop_repeated_across(got.signals, got.signal_files, got.files, "signal")
+    refuse_overlaps(poses, got.pose_files, got.files, "pose")
+    refuse_overlaps(signals, got.signal_files, got.files, "signal")
     pose = None
     if poses:
         merged = pd.concat(poses, ignore_index=True)
