@@ -105,51 +105,63 @@ def lazy_targets(path: Path, package: str) -> list[tuple[str, int]]:
     return found
 
 
+_IMPORT_NODES: dict[str, tuple[tuple[ast.Import | ast.ImportFrom, bool, bool], ...]] = {}
+
+
+def _import_nodes(source: str, filename: str) -> tuple[tuple[ast.Import | ast.ImportFrom, bool, bool], ...]:
+    """``(import node, at module level, at module level or inside a module-level if/try)`` for
+    every import statement of a source text (cached by text: the planted-violation tests check
+    copies of the package in which one file differs; ``filename`` names a file that fails to parse)."""
+    if source in _IMPORT_NODES:
+        return _IMPORT_NODES[source]
+    tree = ast.parse(source, filename=filename)
+    top_level = {id(n) for n in tree.body}
+    # imports inside `if TYPE_CHECKING:` or `try:` at module level count as module level for third parties
+    loose = set(top_level)
+    for n in tree.body:
+        if isinstance(n, (ast.If, ast.Try)):
+            loose |= {id(c) for c in ast.walk(n)}
+    found = tuple((node, id(node) in top_level, id(node) in loose) for node in ast.walk(tree)
+                  if isinstance(node, (ast.Import, ast.ImportFrom)))
+    _IMPORT_NODES[source] = found
+    return found
+
+
 def imports_of(path: Path, module: str, known: set[str]) -> list[tuple[str, int, bool]]:
     """``(imported module, line, at module level)`` for every rplearn import in a file.
 
     ``from rplearn.x import y`` counts as an import of ``rplearn.x.y`` when that is a module.
     """
-    tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
     is_package = path.name == "__init__.py"
-    top_level = {id(n) for n in tree.body}
     found: list[tuple[str, int, bool]] = []
-    for node in ast.walk(tree):
+    for node, top, _ in _import_nodes(path.read_text(encoding="utf-8"), str(path)):
         if isinstance(node, ast.Import):
             targets = [a.name for a in node.names]
-        elif isinstance(node, ast.ImportFrom):
+        else:
             base = node.module or ""
             if node.level:
                 pkg_parts = module.split(".") if is_package else module.split(".")[:-1]
                 pkg_parts = pkg_parts[: len(pkg_parts) - (node.level - 1)]
                 base = ".".join(pkg_parts + ([node.module] if node.module else []))
             targets = [f"{base}.{a.name}" if f"{base}.{a.name}" in known else base for a in node.names]
-        else:
-            continue
         for target in targets:
             if target == "rplearn" or target.startswith("rplearn."):
-                found.append((target, node.lineno, id(node) in top_level))
+                found.append((target, node.lineno, top))
     if is_package:  # names loaded lazily on first use (__init__.pyi) depend on their modules too
         found += [(target, line, False) for target, line in lazy_targets(path, module) if target.startswith("rplearn")]
     return found
 
 
 def third_party_imports(path: Path) -> list[tuple[str, int, bool]]:
-    tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
-    top_level = {id(n) for n in tree.body}
-    # imports inside `if TYPE_CHECKING:` or `try:` at module level count as module level
-    for n in tree.body:
-        if isinstance(n, (ast.If, ast.Try)):
-            top_level |= {id(c) for c in ast.walk(n)}
     out = []
-    for node in ast.walk(tree):
+    for node, _, top in _import_nodes(path.read_text(encoding="utf-8"), str(path)):
         if isinstance(node, ast.Import):
             names = [a.name for a in node.names]
-        elif isinstance(node, ast.ImportFrom) and not node.level and node.module:
+        elif not node.level and node.module:
             names = [node.module]
         else:
             continue
-        out += [(n.split(".")[0], node.lineno, id(node) in top_level) for n in names if not n.startswith("rplearn")]
+        out += [(n.split(".")[0], node.lineno, top) for n in names if not n.startswith("rplearn")]
     return out
 
 
