@@ -210,6 +210,7 @@ def _node_spreads(model: PatternSet, covered: Mapping[str, tuple[np.ndarray, np.
     saz, sel = fibonacci_grid_nodes(SPHERE_POINTS)
     sphere = model.basis.design(saz, sel)
     grid_sizes = {n: len((model.training.coverage_deg or {})[n]) for n in model.nodes}
+    sphere_metrics = {demean: _metric(sphere, demean) for demean in {node in gauged for node in model.nodes}}
     spreads, metrics = {}, []
     for k, node in enumerate(model.nodes):
         block = cov[k * p:(k + 1) * p, k * p:(k + 1) * p]
@@ -220,7 +221,7 @@ def _node_spreads(model: PatternSet, covered: Mapping[str, tuple[np.ndarray, np.
         if own is not None:
             offset = _offset_from_mean(model, own, k)
             covered_var += float(offset @ m @ offset)
-        sphere_var = float(np.sum(_metric(sphere, node in gauged) * block))
+        sphere_var = float(np.sum(sphere_metrics[node in gauged] * block))
         spreads[node] = NodeSpread(float(np.sqrt(max(covered_var, 0.0))), float(np.sqrt(max(sphere_var, 0.0))),
                                    float(az.size / grid_sizes[node]))
     return spreads, metrics

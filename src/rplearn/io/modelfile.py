@@ -47,9 +47,11 @@ def jsonable(obj: Any) -> Any:
     if isinstance(obj, Mapping):
         return {str(k): jsonable(v) for k, v in obj.items()}
     if isinstance(obj, (list, tuple)):
+        if _finite_floats(obj):
+            return list(obj)
         return [jsonable(v) for v in obj]
     if isinstance(obj, np.ndarray):
-        return jsonable(obj.tolist())
+        return _array_jsonable(obj)
     if isinstance(obj, (bool, np.bool_)):
         return bool(obj)
     if isinstance(obj, np.integer):
@@ -58,6 +60,29 @@ def jsonable(obj: Any) -> Any:
         v = float(obj)
         return v if math.isfinite(v) else None
     return obj
+
+
+def _finite_floats(values: list[Any] | tuple[Any, ...]) -> bool:
+    """Whether every element is a finite Python float (a row of a matrix already turned into a
+    list), so that :func:`jsonable` may copy it as it is rather than visit each element."""
+    return (bool(values) and all(type(v) is float for v in values)
+            and bool(np.isfinite(np.fromiter(values, np.float64, len(values))).all()))
+
+
+def _array_jsonable(values: np.ndarray) -> Any:
+    """:func:`jsonable` of an array without visiting its elements one by one in Python: nested
+    lists of plain floats, ints or bools (non-finite floats as None), the same values as the
+    element-wise conversion."""
+    if values.dtype.kind in "biu":
+        return values.tolist()
+    if values.dtype.kind == "f":
+        finite = np.isfinite(values)
+        if finite.all():
+            return values.tolist()
+        marked = values.astype(object)
+        marked[~finite] = None
+        return marked.tolist()
+    return jsonable(values.tolist())
 
 
 def reproducible() -> bool:
@@ -86,8 +111,9 @@ def write_model_file(path: str | os.PathLike[str], model_type: str, payload: Map
         "sha256": digest(payload),
         "model": payload,
     }
+    text = json.dumps(doc, indent=1, allow_nan=False)  # one write, not one per token as json.dump
     with atomic_open(path, "w", encoding="utf-8") as fh:
-        json.dump(doc, fh, indent=1, allow_nan=False)
+        fh.write(text)
 
 
 def _no_constant(name: str) -> Any:
