@@ -36,10 +36,14 @@ SIDECAR_SCHEMA_VERSION = 2
 MODEL_TYPES = ("patterns", "mean", "knn")
 
 
+def _canonical_text(payload: Mapping[str, Any]) -> str:
+    """The canonical JSON text of a payload: keys sorted, no spaces, no NaN."""
+    return json.dumps(payload, sort_keys=True, separators=(",", ":"), allow_nan=False)
+
+
 def digest(payload: Mapping[str, Any]) -> str:
     """SHA-256 of the canonical JSON text of a payload."""
-    text = json.dumps(payload, sort_keys=True, separators=(",", ":"), allow_nan=False)
-    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+    return hashlib.sha256(_canonical_text(payload).encode("utf-8")).hexdigest()
 
 
 def jsonable(obj: Any) -> Any:
@@ -104,14 +108,16 @@ def write_model_file(path: str | os.PathLike[str], model_type: str, payload: Map
     payload = jsonable(payload)
     if reproducible() and isinstance(payload.get("training"), dict):
         payload["training"].pop("ltd_s", None)
-    doc = {
+    canonical = _canonical_text(payload)
+    head = {
         "schema": MODEL_SCHEMA,
         "schema_version": SIDECAR_SCHEMA_VERSION if "sidecar" in payload else MODEL_SCHEMA_VERSION,
         "type": model_type,
-        "sha256": digest(payload),
-        "model": payload,
+        "sha256": hashlib.sha256(canonical.encode("utf-8")).hexdigest(),
     }
-    text = json.dumps(doc, indent=1, allow_nan=False)  # one write, not one per token as json.dump
+    # the payload's canonical text (the one its checksum is of) is written as it is: encoding a
+    # model of a few MB (a covariance) once more, indented, took as long again
+    text = json.dumps(head, indent=1)[:-2] + ',\n "model": ' + canonical + "\n}\n"
     with atomic_open(path, "w", encoding="utf-8") as fh:
         fh.write(text)
 
