@@ -44,41 +44,59 @@ def _text_hash(values: Sequence[str]) -> np.ndarray:
     return pd.util.hash_array(np.asarray(list(values), dtype=object)).astype(np.uint64)
 
 
-def _column_bits(col: pd.Series) -> np.ndarray:
-    """One 64-bit word per cell: a number as its float64 bits (an integer column hashes as the
-    same numbers as floats, -0.0 as 0.0, every NaN alike), any other value by its text."""
+#: Rows hashed at a time: each column's few passes then stay in the processor's cache.
+_BLOCK_ROWS = 32_768
+
+
+def _column_words(col: pd.Series) -> tuple[np.ndarray, bool]:
+    """The cells of a column as 64-bit words to hash, and whether they are float64 numbers (whose
+    bits are hashed, -0.0 as 0.0 and every NaN alike: an integer column hashes as the same
+    numbers as floats); any other value is hashed by its text."""
     if (pd.api.types.is_numeric_dtype(col) or pd.api.types.is_bool_dtype(col)) and not isinstance(col.dtype, pd.CategoricalDtype):
-        values = col.to_numpy(np.float64, na_value=np.nan) + 0.0  # a new array; -0.0 + 0.0 is 0.0
-        nan = np.isnan(values)
-        if nan.any():
-            values[nan] = np.nan
-        return values.view(np.uint64)
+        return np.ascontiguousarray(col.to_numpy(np.float64, na_value=np.nan)), True
     codes, uniques = pd.factorize(col, use_na_sentinel=True)
     words = _text_hash([str(u) for u in uniques])
     out = words[codes] if words.size else np.zeros(codes.size, np.uint64)
     if (codes < 0).any():
         out[codes < 0] = _MISSING_TEXT
-    return out
+    return out, False
 
 
 def matched_row_hashes(chunk: pd.DataFrame) -> np.ndarray:
     """64-bit hash of every row of a matched dataset chunk over all its columns (in name order,
     so the columns' order in a file does not matter), equal for rows equal in every column in any
-    chunk or file; times as :func:`~rplearn.data.tables.normalise_times` reads them."""
+    chunk or file; times as :func:`~rplearn.data.tables.normalise_times` reads them.
+
+    Each column's word is mixed in by a bijection of the words so far (xor, an odd multiply,
+    an xor-shift), a :data:`_BLOCK_ROWS` block of rows at a time, without temporaries."""
     chunk = normalise_times(chunk)
     names = sorted(str(c) for c in chunk.columns)
-    name_words = _text_hash(names)
-    h = np.full(len(chunk), _MIX, np.uint64)
-    for name, word in zip(names, name_words, strict=True):
-        np.bitwise_xor(h, _column_bits(chunk[name]), out=h)
-        np.bitwise_xor(h, word, out=h)
-        np.multiply(h, _MIX, out=h)  # each step a bijection of the words so far
-        np.bitwise_xor(h, h >> np.uint64(29), out=h)
-    np.bitwise_xor(h, h >> np.uint64(30), out=h)
-    np.multiply(h, _FINAL_1, out=h)
-    np.bitwise_xor(h, h >> np.uint64(27), out=h)
-    np.multiply(h, _FINAL_2, out=h)
-    np.bitwise_xor(h, h >> np.uint64(31), out=h)
+    columns = [_column_words(chunk[name]) for name in names]
+    seed = np.uint64(_text_hash(["\x1f".join(names)])[0])  # other columns, another hash
+    n = len(chunk)
+    h = np.full(n, seed, np.uint64)
+    number = np.empty(min(n, _BLOCK_ROWS), np.float64)
+    shifted = np.empty(number.size, np.uint64)
+    for start in range(0, n, _BLOCK_ROWS):
+        stop = min(start + _BLOCK_ROWS, n)
+        hb, num, sh = h[start:stop], number[: stop - start], shifted[: stop - start]
+        for words, is_number in columns:
+            if is_number:
+                np.add(words[start:stop], 0.0, out=num)  # -0.0 + 0.0 is 0.0
+                if not np.isfinite(np.add.reduce(num)):
+                    num[np.isnan(num)] = np.nan  # one NaN
+                np.bitwise_xor(hb, num.view(np.uint64), out=hb)
+            else:
+                np.bitwise_xor(hb, words[start:stop], out=hb)
+            np.multiply(hb, _MIX, out=hb)
+            np.right_shift(hb, np.uint64(29), out=sh)
+            np.bitwise_xor(hb, sh, out=hb)
+        for shift, factor in ((30, _FINAL_1), (27, _FINAL_2)):
+            np.right_shift(hb, np.uint64(shift), out=sh)
+            np.bitwise_xor(hb, sh, out=hb)
+            np.multiply(hb, factor, out=hb)
+        np.right_shift(hb, np.uint64(31), out=sh)
+        np.bitwise_xor(hb, sh, out=hb)
     return h
 
 
@@ -201,10 +219,11 @@ class SourceHashes:
     def add(self, chunk: pd.DataFrame) -> bool:
         """Hash a chunk's rows; whether the source has shown a copy so far (within this chunk:
         rows of earlier chunks are compared at :meth:`finish`)."""
+        chunk = normalise_times(chunk)
         hashes = matched_row_hashes(chunk)
         self.chunks.append(hashes)
         if "t" in chunk.columns and len(chunk):
-            t = pd.to_numeric(normalise_times(chunk)["t"], errors="coerce").to_numpy(np.float64)
+            t = pd.to_numeric(chunk["t"], errors="coerce").to_numpy(np.float64)
             if np.isfinite(t).any():
                 self.t_min_s = float(np.nanmin([self.t_min_s, np.nanmin(t)]))
                 self.t_max_s = float(np.nanmax([self.t_max_s, np.nanmax(t)]))
