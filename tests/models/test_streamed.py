@@ -94,3 +94,60 @@ def test_streamed_auto_fit_equals_the_whole_auto_fit(dataset, monkeypatch, name)
     assert (chunked.selection.order, chunked.selection.smoothing) == (whole.selection.order, whole.selection.smoothing)
     np.testing.assert_allclose(b.coef, a.coef, rtol=1e-7, atol=1e-7)
     assert b.training["coverage_deg"] == a.training["coverage_deg"]
+
+
+def _refusal(call) -> str:
+    with pytest.raises(InputError) as info:
+        call()
+    return str(info.value)
+
+
+@pytest.mark.parametrize("chunk_rows", [97, 1000, 500_000])
+@pytest.mark.parametrize("name", ["twice.parquet", "twice.csv"])
+def test_a_dataset_written_twice_is_refused_streamed_as_in_memory(dataset, monkeypatch, tmp_path, name, chunk_rows):
+    """The copies of a dataset written twice into one file are in different chunks: the check
+    runs over the whole file, and says what the in-memory check says (file, count, first row)."""
+    df = pd.read_parquet(dataset / "m.parquet")
+    path = str(tmp_path / name)
+    twice = pd.concat([df, df], ignore_index=True)
+    twice.to_parquet(path, index=False) if name.endswith(".parquet") else twice.to_csv(path, index=False)
+    whole = _refusal(lambda: learning.fit_dataset(path, ModelSpec("sh", 3)))
+    assert whole.startswith(f"{path}: {len(df):,} row(s) repeat an earlier row in every column (first at row {len(df)})")
+    assert "\n" not in whole
+    streamed(monkeypatch, chunk_rows)
+    assert _refusal(lambda: learning.fit_dataset(path, ModelSpec("sh", 3))) == whole
+    auto = _refusal(lambda: learning.fit_dataset(path, ModelSpec("sh", 3), options=FitOptions(auto=True)))
+    assert auto == whole
+
+
+def test_part_files_holding_the_same_rows_are_refused_naming_both(dataset, monkeypatch, tmp_path):
+    df = pd.read_parquet(dataset / "m.parquet")
+    folder = tmp_path / "parts"
+    folder.mkdir()
+    df.to_parquet(folder / "a.parquet", index=False)
+    later = df.iloc[100:].copy()  # a later file repeating part of the first, then rows of its own
+    later["t"] = later["t"].where(later.index < 500, later["t"] + 1e4)
+    later.to_csv(folder / "b.csv", index=False)
+    streamed(monkeypatch, 97)
+    message = _refusal(lambda: learning.fit_dataset(str(folder), ModelSpec("sh", 3)))
+    assert message.startswith(f"{folder / 'b.csv'}: 400 row(s) repeat an earlier row in every column "
+                              f"(first at row 0, a copy of row 100 of {folder / 'a.parquet'}")
+    assert "\n" not in message
+    streamed(monkeypatch, 500_000)  # one chunk a file: the same message
+    assert _refusal(lambda: learning.fit_dataset(str(folder), ModelSpec("sh", 3))) == message
+
+
+def test_rows_that_differ_in_one_column_are_not_copies(dataset, monkeypatch, tmp_path):
+    """Two files at the same times, their rows differing in one column only (another link, or
+    another reading), are learned from: the check compares whole rows."""
+    df = pd.read_parquet(dataset / "m.parquet")
+    folder = tmp_path / "parts"
+    folder.mkdir()
+    df.to_parquet(folder / "a.parquet", index=False)
+    other = df.copy()
+    other["rssi_dbm"] = other["rssi_dbm"] + 0.5
+    other.to_parquet(folder / "b.parquet", index=False)
+    streamed(monkeypatch, 97)
+    fit = learning.fit_dataset(str(folder), ModelSpec("sh", 3))
+    single = learning.fit_dataset(str(dataset / "m.parquet"), ModelSpec("sh", 3))
+    assert fit.n_samples == 2 * single.n_samples

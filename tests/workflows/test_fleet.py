@@ -233,3 +233,31 @@ def test_parts_add_up_in_one_process_to_one_pass_over_their_rows(fleet):
     np.testing.assert_allclose(total.stats["all"].rhs, one_pass.stats["all"].rhs, rtol=1e-12, atol=1e-9)
     assert total.non_unit == one_pass.non_unit and total.freq == one_pass.freq
     assert accumulate_parts([], **kwargs).n_samples == 0
+
+
+def test_parts_holding_the_same_rows_are_refused_alike_here_and_on_dask(fleet, client, tmp_path):
+    """Copies in other files, met only when the parts' statistics are merged (on the workers),
+    are refused with the message of the single process: one line naming both files."""
+    from rplearn.workflows.learning import _fit_streamed
+
+    _, result = fleet
+    folder = tmp_path / "copies"
+    folder.mkdir()
+    for k, f in enumerate(result.files[:5]):
+        write_table(pd.read_parquet(f), str(folder / f"p{k}.parquet"))
+    write_table(pd.read_parquet(result.files[2]).iloc[10:40], str(folder / "p5.parquet"))  # a later file repeats rows
+    spec = ModelSpec.parse("sh", order=4)
+    with pytest.raises(InputError) as here:
+        _fit_streamed(str(folder), spec, None, FitOptions(), None)
+    with pytest.raises(InputError) as there:
+        _fit_streamed(str(folder), spec, None, FitOptions(), None, client=client)
+    message = str(here.value)
+    assert message == str(there.value) and "\n" not in message
+    assert message.startswith(f"{folder / 'p5.parquet'}: 30 row(s) repeat an earlier row in every column "
+                              f"(first at row 0, a copy of row 10 of {folder / 'p2.parquet'}")
+    with pytest.raises(InputError) as auto:
+        _fit_streamed(str(folder), ModelSpec.parse("sh"), None, FitOptions(auto=True), None, client=client)
+    assert str(auto.value) == message
+    (folder / "p5.parquet").unlink()  # the clean files: learned, the same here and on the cluster
+    clean = _fit_streamed(str(folder), spec, None, FitOptions(), None, client=client)
+    assert clean.n_samples == _fit_streamed(str(folder), spec, None, FitOptions(), None).n_samples

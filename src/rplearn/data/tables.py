@@ -376,21 +376,33 @@ def validate_signal_log(df: pd.DataFrame, source: str = "signal log") -> pd.Data
     return out.sort_values("t", kind="stable").reset_index(drop=True)
 
 
+def repeated_rows_message(source: str, count: int, first_row: int, copy_of: tuple[str, int] | None = None,
+                          files: int = 1) -> str:
+    """The one-line refusal of rows that repeat earlier rows in every column: ``count`` of them,
+    the first at ``first_row`` of ``source``; ``copy_of`` the file and row it repeats when that
+    is another file, ``files`` the files holding repeated rows (when more than one)."""
+    where = f"first at row {first_row}"
+    if copy_of is not None:
+        where += f", a copy of row {copy_of[1]} of {copy_of[0]}"
+    if files > 1:
+        where += f"; {files} files hold such rows"
+    return (f"{source}: {count:,} row(s) repeat an earlier row in every column ({where}): "
+            "the same samples twice (a dataset in the file twice, or parts that overlap) would count double; "
+            "drop the copies (synchronising the logs drops them)")
+
+
 def _refuse_repeated_rows(df: pd.DataFrame, source: str) -> None:
     """Refuse a dataset whose rows repeat earlier rows in every column: one sample twice (a
     dataset in the file twice, parts that overlap) would be learned from or scored twice,
     weighing it double and making the spreads too narrow. ``synchronise`` never writes such
-    rows (it drops and counts exact copies of a signal row)."""
+    rows (it drops and counts exact copies of a signal row). A dataset read in chunks or parts
+    is checked across them by :mod:`rplearn.data.row_copies`, with the same message."""
     from rplearn.data.readings import duplicate_rows
 
     repeated = duplicate_rows(df)
     if np.any(repeated):
         row = int(np.flatnonzero(repeated)[0])
-        raise InputError(
-            f"{source}: {int(repeated.sum()):,} row(s) repeat an earlier row in every column (first at row {row}): "
-            "the same samples twice (a dataset in the file twice, or parts that overlap) would count double; "
-            "drop the copies (synchronising the logs drops them)"
-        )
+        raise InputError(repeated_rows_message(source, int(repeated.sum()), row))
 
 
 @check_types

@@ -11,6 +11,12 @@ part's statistics (:func:`part_statistics`) add up in the parts' order (:meth:`A
 :func:`accumulate_parts`) to what one pass over all of them gives; :mod:`rplearn.workflows.fleet`
 runs the same per-part work on a Dask cluster.
 
+Rows that repeat an earlier row in every column are refused as the whole-dataset check refuses
+them (:func:`rplearn.data.tables.validate_matched`: the same file, count and first row), wherever
+the copies are: in another chunk of a file, or in another part, met when the parts' statistics
+are merged (:mod:`rplearn.data.row_copies`: every row's 64-bit hash travels with
+:class:`Accumulated`, 8 bytes a row).
+
 Only pattern models (SH, BG, P) stream; the baselines need every sample (the mean model could,
 k-NN stores them).
 """
@@ -18,6 +24,7 @@ k-NN stores them).
 from __future__ import annotations
 
 import copy
+import dataclasses
 import time
 from collections import Counter
 from collections.abc import Callable, Iterable, Mapping, Sequence
@@ -30,6 +37,7 @@ from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.core.lsq.selection import penalty_scale, penalty_vector
 from rplearn.core.lsq.solver import FitReport, solve
 from rplearn.core.plausible import check_one_band
+from rplearn.data.row_copies import RowCopies, SourceHashes
 from rplearn.data.tables import LinkSamples, link_samples, node_ids
 from rplearn.data.units import Stretches
 from rplearn.errors import InputError
@@ -133,6 +141,9 @@ class Accumulated:
         Coverage grids by node (None before any sample).
     source : str
         Where the rows came from (in messages).
+    copies : RowCopies, optional
+        Every row's hash and the rows repeating earlier ones (:mod:`rplearn.data.row_copies`),
+        refused by :func:`checked`.
     """
 
     stats: dict[str, NormalEquations]
@@ -141,6 +152,7 @@ class Accumulated:
     learn_s: float = 0.0
     grids: dict[str, list[float]] | None = None
     source: str = "dataset"
+    copies: RowCopies | None = None
 
     @property
     def n_samples(self) -> int:
@@ -160,6 +172,8 @@ class Accumulated:
             self.grids = later.grids if self.grids is None else {
                 k: np.minimum(np.asarray(v), np.asarray(later.grids[k])).tolist() for k, v in self.grids.items()}
         self.source = self.source if self.source == later.source else f"{self.source}, ..."
+        if later.copies is not None:
+            self.copies = later.copies if self.copies is None else self.copies.then(later.copies)
         return self
 
     def combined(self, later: Accumulated) -> Accumulated:
@@ -176,7 +190,11 @@ def accumulate(
     or one for all, or per stretch of time of a single flight (``stretches``, the folds of its
     cross-validation; rows in any order), with the environment term of ``options`` (its
     log-distance column accumulated, a two-ray term subtracted). An empty result is allowed (a
-    part without learning rows); see :func:`checked`."""
+    part without learning rows); see :func:`checked`.
+
+    Every row of the chunks (of any unit) is hashed, and copies of earlier rows recorded in
+    :attr:`Accumulated.copies` (refused by :func:`checked` with the whole-dataset message); a
+    chunk is no longer learned from once a copy has been seen."""
     if not spec.decouples:
         raise InputError(f"{spec.label}: only pattern models (sh, bg, poly) learn from a stream", param="spec")
     basis = spec.basis()
@@ -184,9 +202,12 @@ def accumulate(
     out = Accumulated({}, Counter(), source=source)
     wanted = None if not units else {str(u) for u in units}
     first_row = 0
+    hashes = SourceHashes(source)
     for chunk in chunks:
         where = f"{source} (rows {first_row:,} to {first_row + len(chunk) - 1:,})"
         first_row += len(chunk)
+        if hashes.add(chunk):  # a copy: refused by checked with the count over the whole source
+            continue
         if wanted is not None:
             chunk = chunk[chunk["unit"].astype(str).isin(wanted).to_numpy()]
         if chunk.empty:
@@ -211,6 +232,7 @@ def accumulate(
             frequency_counts(samples, out.freq)
             if not by_unit:
                 break
+    out.copies = hashes.finish()
     return out
 
 
@@ -247,7 +269,12 @@ def accumulate_parts(
 
 
 def checked(acc: Accumulated, source: str) -> Accumulated:
-    """``acc``, or an error when it holds no sample."""
+    """``acc`` without its row hashes, or an error when rows repeat earlier rows (the message of
+    :func:`~rplearn.data.tables.validate_matched`, naming the file and row) or it holds no sample."""
+    refusal = None if acc.copies is None else acc.copies.error()
+    if refusal is not None:
+        raise refusal
+    acc = dataclasses.replace(acc, copies=None)  # 8 bytes a row, not needed by the solve
     if not acc.stats or acc.n_samples == 0:
         raise InputError(f"{source}: no samples selected", param="units")
     check_one_band(acc.freq, source)  # every part of one band
