@@ -24,6 +24,10 @@ def file_damage(path: str, info: dict[str, Any]) -> list[str]:
             + (f"the {info['records_read']:,} complete record(s) before it were read"
                if info.get("records_read") is not None else "the complete records before it were read")
         )
+    if info.get("unindexed"):
+        lines.append(f"{path}: the bag has no index (its recorder never closed it): its messages were read record "
+                     f"by record from the start" + (f" ({info['records_read']:,})" if info.get("records_read") else "")
+                     + "; `rosbag reindex` writes the index")
     if info.get("corrupt"):
         at = f" (the first at byte {info['corrupt_at_byte']:,}: a message of no ULog type)" if info.get("corrupt_at_byte") else ""
         lines.append(f"{path}: corrupt bytes were skipped by the ULog reader (pyulog){at}; what follows them was read")
