@@ -590,3 +590,60 @@ def test_a_flipped_record_header_in_a_dataflash_log_is_counted_and_said(tmp_path
     assert m_bad["corrupt_bytes"] > 0 and m_once["corrupt_bytes"] == 0
     assert m_bad["records_read"] == m_once["records_read"] - 1
     assert any("corrupt byte(s) between DataFlash records were skipped" in line for line in file_damage(str(bad), m_bad))
+
+
+def _dataflash_records(data: bytes) -> list[tuple[int, int]]:
+    """(start, type) of each record of a DataFlash log, from its FMT records' lengths."""
+    lengths, at, out = {128: 89}, 0, []
+    while at + 3 <= len(data) and data[at:at + 2] == b"\xa3\x95":
+        kind = data[at + 2]
+        if kind == 128:
+            lengths[data[at + 3]] = data[at + 4]
+        out.append((at, kind))
+        at += lengths[kind]
+    assert at == len(data)
+    return out
+
+
+@pytest.mark.parametrize("records", [1, 3, "under_1s"])
+def test_a_copy_of_the_last_records_appended_is_a_repeated_copy(tmp_path, records):
+    # was: a tail copy shorter than 1 s stepped back less than a reboot, so it was no copy and
+    # its rows reached sync as duplicates; the reader now counts the repeated messages
+    once_path = _simulated_dataflash(tmp_path / "once.bin")
+    data = once_path.read_bytes()
+    (once, m1) = _read(once_path)
+    starts = _dataflash_records(data)
+    if records == "under_1s":
+        t_end = float(once.pose["t"].max())
+        att = [s for s, k in starts if k == data[starts[-1][0] + 2]]  # records of the last one's kind
+        start = att[-min(len(att), 8)]  # 8 records of one kind: well under 1 s at the log's rates
+    else:
+        start = starts[-records][0]
+    tail = tmp_path / "tail.bin"
+    tail.write_bytes(data + data[start:])
+    read, meta = _read(tail)
+    pd.testing.assert_frame_equal(once.pose, read.pose)
+    pd.testing.assert_frame_equal(once.signal, read.signal)
+    assert meta["reboots"] == 0 and meta["messages"] == m1["messages"] and meta["repeated_messages"] >= 1
+    assert any("part of the log is in the file twice" in line for line in file_damage(str(tail), meta))
+    if records == "under_1s":
+        assert t_end - float(once.pose["t"].iloc[-1]) < 1.0
+
+
+def test_a_small_step_back_is_a_copy_only_when_its_records_repeat():
+    att = [(1.0, 0.1, 0.2, 0.3, 0), (2.0, 0.1, 0.2, 0.3, 0), (2.5, 0.4, 0.2, 0.3, 0)]
+    # stretch 1 (time back 0.5 s) repeats one record: a one-record tail copy
+    tables = {"ATT": att + [(2.5, 0.4, 0.2, 0.3, 1)]}
+    boot_t = [(r[0], r[-1]) for r in tables["ATT"]]
+    assert merge_copied_boots(tables, boot_t, frozenset({1})) == 1
+    assert tables["ATT"] == att and [b for _, b in boot_t] == [0, 0, 0, 0]
+    # stretch 1 steps back 0.5 s with its own records: out of time order, still boot 0, none dropped
+    other = [(2.2, 0.9, 0.2, 0.3, 1), (2.6, 0.9, 0.2, 0.3, 1)]
+    tables = {"ATT": att + other}
+    boot_t = [(r[0], r[-1]) for r in tables["ATT"]]
+    assert merge_copied_boots(tables, boot_t, frozenset({1})) == 0
+    assert len(tables["ATT"]) == 5 and [b for _, b in boot_t] == [0] * 5
+    # a reboot (a big step back, not minor) repeating one record by chance stays a reboot
+    tables = {"ATT": att + [(2.5, 0.4, 0.2, 0.3, 1), (3.0, 0.7, 0.2, 0.3, 1)]}
+    boot_t = [(r[0], r[-1]) for r in tables["ATT"]]
+    assert merge_copied_boots(tables, boot_t) == 0 and [b for _, b in boot_t] == [0, 0, 0, 1, 1]
