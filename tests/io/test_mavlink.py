@@ -239,14 +239,32 @@ def test_corrupt_mavlink_frames_are_counted_and_said(tmp_path):
     data[at + 8] ^= 0xFF  # a payload byte: the frame's checksum no longer holds
     bad = tmp_path / "flipped.tlog"
     bad.write_bytes(bytes(data))
-    _, meta = _read(bad)
-    assert meta["corrupt_frames"] >= 1 and _read(TLOG_2)[1]["corrupt_frames"] == 0
-    assert any("corrupt MAVLink frame(s)" in line for line in file_damage(str(bad), meta))
+    (_, whole), (_, meta) = _read(TLOG_2), _read(bad)
+    assert whole["corrupt_stretches"] == 0 and whole["corrupt_bytes"] == 0
+    # one stretch: that record's 8-byte time and its MAVLink 1 frame (6 + payload + 2 bytes)
+    assert meta["corrupt_stretches"] == 1 and meta["corrupt_bytes"] == 8 + 6 + data[at + 1] + 2
+    assert whole["records_read"] - 1 <= meta["records_read"] <= whole["records_read"]  # of the kinds read
+    assert any("1 corrupt stretch(es) of MAVLink data" in line for line in file_damage(str(bad), meta))
     from rplearn.io import inspect_logs
 
-    assert any("corrupt MAVLink frame(s)" in p for p in inspect_logs([bad]).problems)
+    assert any("corrupt stretch(es) of MAVLink data" in p for p in inspect_logs([bad]).problems)
 
 
+def test_a_damaged_frame_length_is_one_corrupt_stretch_of_several_frames(tmp_path):
+    # was "corrupt_frames": 1 (pymavlink's one BAD_DATA) for the 8 frames the bad length swallowed
+    src = TLOG_2.read_bytes()
+    at = src.index(b"\xfe", len(src) // 2)
+    data = bytearray(src)
+    data[at + 1] ^= 0xFF  # the length byte
+    other = data.index(b"\xfe", len(data) // 2 + 5000)
+    data[other + 8] ^= 0xFF  # and a checksum failure further on
+    bad = tmp_path / "length.tlog"
+    bad.write_bytes(bytes(data))
+    (_, whole), (_, meta) = _read(TLOG_2), _read(bad)
+    lost = whole["records_read"] - meta["records_read"]
+    assert lost > 2 and meta["corrupt_stretches"] == 2
+    assert meta["corrupt_bytes"] > 8 + 6 + src[at + 1] + 2 + 8 + 6 + src[other + 1] + 2
+    assert "corrupt_frames" not in meta
 @pytest.mark.parametrize("size", [16, 20, 24])
 def test_a_tlog_cut_inside_its_first_record_is_refused_naming_it(tmp_path, size):
     cut = tmp_path / "cut.tlog"

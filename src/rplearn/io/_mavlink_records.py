@@ -195,12 +195,18 @@ class TlogRows:
             self.radio_from[kind].append(key)
 
 
+#: A ``.tlog`` record's time before its MAVLink frame (big-endian microseconds) [bytes].
+_TLOG_TIME_BYTES = 8
+
+
 def collect_tlog(source: str, system_id: int | None) -> Raw:
-    """One pass over a ``.tlog``: attitude, position, origin, fix, armed state, radio."""
+    """One pass over a ``.tlog``: attitude, position, origin, fix, armed state, radio, and the
+    corrupt stretches (bytes between two whole records that are none: ``corrupt_stretches``,
+    ``corrupt_bytes`` in ``notes``)."""
     acc = TlogRows()
     with library_quiet():  # pymavlink prints what it cannot parse
         conn = _open(source)
-        whole_to = 0
+        whole_to, good_to, stretches, skipped = 0, 0, 0, 0
         while True:
             try:
                 msg = conn.recv_msg()
@@ -209,11 +215,20 @@ def collect_tlog(source: str, system_id: int | None) -> Raw:
             if msg is None:
                 break
             whole_to = conn.f.tell() - conn.mav.buf_len()  # where the records read so far end
+            if msg.get_type() != "BAD_DATA":
+                # bytes between the last whole record and this one's 8-byte time: a corrupt
+                # stretch (pymavlink says most with one BAD_DATA, however many frames it held)
+                start = whole_to - len(msg.get_msgbuf()) - _TLOG_TIME_BYTES
+                if start > good_to:
+                    stretches, skipped = stretches + 1, skipped + start - good_to
+                good_to = whole_to
             acc.add(msg, source)
         cut_off = _tlog_cut_off(conn, source, whole_to)
     repeated = drop_repeated_rows(acc)
     raw = tlog_raw(acc, source, system_id, cut_off)
-    raw.notes.update(corrupt_frames=acc.counts.get("BAD_DATA", 0), repeated_messages=repeated,
+    if whole_to > good_to:  # BAD_DATA after the last whole record
+        stretches, skipped = stretches + 1, skipped + whole_to - good_to
+    raw.notes.update(corrupt_stretches=stretches, corrupt_bytes=skipped, repeated_messages=repeated,
                      records_read=sum(n for k, n in acc.counts.items() if k != "BAD_DATA"))
     return raw
 

@@ -31,12 +31,13 @@ def file_damage(path: str, info: dict[str, Any]) -> list[str]:
     if info.get("corrupt"):
         at = f" (the first at byte {info['corrupt_at_byte']:,}: a message of no ULog type)" if info.get("corrupt_at_byte") else ""
         lines.append(f"{path}: corrupt bytes were skipped by the ULog reader (pyulog){at}; what follows them was read")
-    if info.get("corrupt_bytes"):
+    if info.get("corrupt_stretches"):
+        lines.append(f"{path}: {info['corrupt_stretches']:,} corrupt stretch(es) of MAVLink data "
+                     f"({info.get('corrupt_bytes', 0):,} byte(s): bad checksum, broken framing or junk) were skipped: "
+                     "the frames in them (one or more each) are lost; what follows them was read")
+    elif info.get("corrupt_bytes"):
         lines.append(f"{path}: {info['corrupt_bytes']:,} corrupt byte(s) between DataFlash records were skipped; "
                      "what follows them was read")
-    if info.get("corrupt_frames"):
-        lines.append(f"{path}: {info['corrupt_frames']:,} corrupt MAVLink frame(s) (bad checksum or framing) were "
-                     "skipped: the messages in them are lost; what follows them was read")
     for what, by_file in (info.get("repeated_rows") or {}).items():
         for other, n in by_file.items():
             lines.append(f"{path}: {n:,} {what} row(s) repeat rows of {other} exactly (the same log given twice, "
