@@ -119,3 +119,19 @@ def test_a_ros1_bag_never_closed_by_its_recorder_is_read_record_by_record(tmp_pa
     assert meta["unindexed"] is True and meta["cut_off_at_byte"] is None and meta["records_read"] == 3061 + 3060
     assert mw["unindexed"] is False and mw["records_read"] is None
     assert any("the bag has no index" in line for line in file_damage(str(open_bag), meta))
+
+
+@pytest.mark.parametrize("tail", ["junk", "bag"])
+def test_bytes_after_a_ros1_bags_index_are_said(tmp_path, tail):
+    # was silent: the index reader never looks past the index
+    data = REAL_BAG.read_bytes()
+    extra = data if tail == "bag" else bytes(range(256)) * 7
+    longer = tmp_path / "longer.bag"
+    longer.write_bytes(data + extra)
+    (whole, mw), (logs, meta) = read_rosbag(REAL_BAG, ODOM), read_rosbag(longer, ODOM)
+    pd.testing.assert_frame_equal(logs.pose, whole.pose)
+    assert mw["trailing_bytes"] == 0 and meta["trailing_bytes"] == len(extra)
+    assert meta["trailing_bag"] is (tail == "bag")
+    (line,) = file_damage(str(longer), meta)
+    assert f"{len(extra):,} byte(s) after the bag's index were not read" in line
+    assert ("another bag begins there" in line) is (tail == "bag")

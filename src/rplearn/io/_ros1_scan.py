@@ -17,6 +17,7 @@ lazily).
 
 from __future__ import annotations
 
+import os
 import struct
 from dataclasses import dataclass, field
 from functools import lru_cache
@@ -276,3 +277,37 @@ def scanning_reader_class() -> type:
             self.connections = [self.scan.connections[i]._replace(msgcount=len(self.indexes[i])) for i in ids]
 
     return ScanningReader
+
+
+def ros1_trailing_bytes(path: str | os.PathLike) -> tuple[int, bool]:
+    """Bytes after the index of a whole ROS 1 bag (its ``conn_count`` connection and
+    ``chunk_count`` chunk info records from ``index_pos``), which no reader reads: junk
+    appended, or another bag (the second item: they begin with a bag's ``#ROSBAG`` line).
+    ``(0, False)`` when the index cannot be walked (a cut or unindexed bag is read by
+    :func:`scan_ros1` instead)."""
+    with open(path, "rb") as fh:
+        head = fh.read(4096 + 64)
+        line = head.find(b"\n") + 1
+        rec = _record(head, line)
+        if rec is None:
+            return 0, False
+        fields = rec[0]
+        try:
+            index_pos = struct.unpack("<Q", fields["index_pos"])[0]
+            count = struct.unpack("<I", fields["conn_count"])[0] + struct.unpack("<I", fields["chunk_count"])[0]
+        except (KeyError, struct.error):
+            return 0, False
+        fh.seek(0, 2)
+        size = fh.tell()
+        if not 0 < index_pos < size:
+            return 0, False
+        fh.seek(index_pos)
+        index = fh.read()
+    at = 0
+    for _ in range(count):
+        found = _record(index, at)
+        if found is None:
+            return 0, False
+        at = found[2]
+    rest = index[at:]
+    return len(rest), rest.startswith(b"#ROSBAG")

@@ -31,6 +31,10 @@ def file_damage(path: str, info: dict[str, Any]) -> list[str]:
     if info.get("corrupt"):
         at = f" (the first at byte {info['corrupt_at_byte']:,}: a message of no ULog type)" if info.get("corrupt_at_byte") else ""
         lines.append(f"{path}: corrupt bytes were skipped by the ULog reader (pyulog){at}; what follows them was read")
+    if info.get("trailing_bytes"):
+        lines.append(f"{path}: {info['trailing_bytes']:,} byte(s) after the bag's index were not read ("
+                     + ("another bag begins there: a bag appended to this one, or this bag twice; read it on its own"
+                        if info.get("trailing_bag") else "junk appended after the bag") + ")")
     if info.get("corrupt_stretches"):
         lines.append(f"{path}: {info['corrupt_stretches']:,} corrupt stretch(es) of MAVLink data "
                      f"({info.get('corrupt_bytes', 0):,} byte(s): bad checksum, broken framing or junk) were skipped: "

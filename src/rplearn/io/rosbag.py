@@ -382,6 +382,9 @@ def read_rosbag(
         starts, and what it is; None when nothing was lost) and ``records_read`` (the
         messages read whole, every topic); these three are None for a bag read through its
         index. A bag cut off before any whole message is refused (:class:`LogFormatError`).
+        ``trailing_bytes``: bytes after a ROS 1 bag's index, which are not read (junk
+        appended, or another bag after it: ``trailing_bag``), said by
+        :func:`rplearn.io.damage.file_damage`.
     """
     options = RosbagOptions() if options is None else options
     tx_power_field, frequency_field = options.tx_power_field, options.frequency_field
@@ -455,6 +458,11 @@ def read_rosbag(
                     _float_field(msg, frequency_field, where) if frequency_field else carrier_hz)
         fmt = "ros1" if not getattr(reader, "is2", True) else "ros2"
         found = bag_scan(reader)
+    trailing, another_bag = (0, False)
+    if fmt == "ros1" and found is None:
+        from rplearn.io._ros1_scan import ros1_trailing_bytes
+
+        trailing, another_bag = ros1_trailing_bytes(_bag_paths(path)[0])
     pose = None
     if pose_topics:
         empty = [t for t in pose_topics if counts[t] == 0]
@@ -477,6 +485,8 @@ def read_rosbag(
         "cut_off_record": None if found is None else found.cut_off_record,
         "records_read": None if found is None else found.messages_read,
         "unindexed": found is not None and found.index_pos == 0,
+        "trailing_bytes": trailing,
+        "trailing_bag": another_bag,
     }
     return Logs(pose=pose, signal=signal), meta
 
