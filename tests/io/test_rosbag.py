@@ -135,3 +135,11 @@ def test_bytes_after_a_ros1_bags_index_are_said(tmp_path, tail):
     (line,) = file_damage(str(longer), meta)
     assert f"{len(extra):,} byte(s) after the bag's index were not read" in line
     assert ("another bag begins there" in line) is (tail == "bag")
+
+
+def test_inspect_says_a_cut_ros1_bag(tmp_path):
+    cut = tmp_path / "cut.bag"
+    cut.write_bytes(REAL_BAG.read_bytes()[:400_000])
+    problems = inspect_logs(cut, ReaderOptions(pose_topics=ODOM)).problems
+    assert any(p.startswith(f"{cut}: the file is cut off inside the message at byte") and "complete record(s)" in p
+               for p in problems), problems
