@@ -239,14 +239,32 @@ def test_corrupt_mavlink_frames_are_counted_and_said(tmp_path):
     data[at + 8] ^= 0xFF  # a payload byte: the frame's checksum no longer holds
     bad = tmp_path / "flipped.tlog"
     bad.write_bytes(bytes(data))
-    _, meta = _read(bad)
-    assert meta["corrupt_frames"] >= 1 and _read(TLOG_2)[1]["corrupt_frames"] == 0
-    assert any("corrupt MAVLink frame(s)" in line for line in file_damage(str(bad), meta))
+    (_, whole), (_, meta) = _read(TLOG_2), _read(bad)
+    assert whole["corrupt_stretches"] == 0 and whole["corrupt_bytes"] == 0
+    # one stretch: that record's 8-byte time and its MAVLink 1 frame (6 + payload + 2 bytes)
+    assert meta["corrupt_stretches"] == 1 and meta["corrupt_bytes"] == 8 + 6 + data[at + 1] + 2
+    assert whole["records_read"] - 1 <= meta["records_read"] <= whole["records_read"]  # of the kinds read
+    assert any("1 corrupt stretch(es) of MAVLink data" in line for line in file_damage(str(bad), meta))
     from rplearn.io import inspect_logs
 
-    assert any("corrupt MAVLink frame(s)" in p for p in inspect_logs([bad]).problems)
+    assert any("corrupt stretch(es) of MAVLink data" in p for p in inspect_logs([bad]).problems)
 
 
+def test_a_damaged_frame_length_is_one_corrupt_stretch_of_several_frames(tmp_path):
+    # was "corrupt_frames": 1 (pymavlink's one BAD_DATA) for the 8 frames the bad length swallowed
+    src = TLOG_2.read_bytes()
+    at = src.index(b"\xfe", len(src) // 2)
+    data = bytearray(src)
+    data[at + 1] ^= 0xFF  # the length byte
+    other = data.index(b"\xfe", len(data) // 2 + 5000)
+    data[other + 8] ^= 0xFF  # and a checksum failure further on
+    bad = tmp_path / "length.tlog"
+    bad.write_bytes(bytes(data))
+    (_, whole), (_, meta) = _read(TLOG_2), _read(bad)
+    lost = whole["records_read"] - meta["records_read"]
+    assert lost > 2 and meta["corrupt_stretches"] == 2
+    assert meta["corrupt_bytes"] > 8 + 6 + src[at + 1] + 2 + 8 + 6 + src[other + 1] + 2
+    assert "corrupt_frames" not in meta
 @pytest.mark.parametrize("size", [16, 20, 24])
 def test_a_tlog_cut_inside_its_first_record_is_refused_naming_it(tmp_path, size):
     cut = tmp_path / "cut.tlog"
@@ -590,3 +608,60 @@ def test_a_flipped_record_header_in_a_dataflash_log_is_counted_and_said(tmp_path
     assert m_bad["corrupt_bytes"] > 0 and m_once["corrupt_bytes"] == 0
     assert m_bad["records_read"] == m_once["records_read"] - 1
     assert any("corrupt byte(s) between DataFlash records were skipped" in line for line in file_damage(str(bad), m_bad))
+
+
+def _dataflash_records(data: bytes) -> list[tuple[int, int]]:
+    """(start, type) of each record of a DataFlash log, from its FMT records' lengths."""
+    lengths, at, out = {128: 89}, 0, []
+    while at + 3 <= len(data) and data[at:at + 2] == b"\xa3\x95":
+        kind = data[at + 2]
+        if kind == 128:
+            lengths[data[at + 3]] = data[at + 4]
+        out.append((at, kind))
+        at += lengths[kind]
+    assert at == len(data)
+    return out
+
+
+@pytest.mark.parametrize("records", [1, 3, "under_1s"])
+def test_a_copy_of_the_last_records_appended_is_a_repeated_copy(tmp_path, records):
+    # was: a tail copy shorter than 1 s stepped back less than a reboot, so it was no copy and
+    # its rows reached sync as duplicates; the reader now counts the repeated messages
+    once_path = _simulated_dataflash(tmp_path / "once.bin")
+    data = once_path.read_bytes()
+    (once, m1) = _read(once_path)
+    starts = _dataflash_records(data)
+    if records == "under_1s":
+        t_end = float(once.pose["t"].max())
+        att = [s for s, k in starts if k == data[starts[-1][0] + 2]]  # records of the last one's kind
+        start = att[-min(len(att), 8)]  # 8 records of one kind: well under 1 s at the log's rates
+    else:
+        start = starts[-records][0]
+    tail = tmp_path / "tail.bin"
+    tail.write_bytes(data + data[start:])
+    read, meta = _read(tail)
+    pd.testing.assert_frame_equal(once.pose, read.pose)
+    pd.testing.assert_frame_equal(once.signal, read.signal)
+    assert meta["reboots"] == 0 and meta["messages"] == m1["messages"] and meta["repeated_messages"] >= 1
+    assert any("part of the log is in the file twice" in line for line in file_damage(str(tail), meta))
+    if records == "under_1s":
+        assert t_end - float(once.pose["t"].iloc[-1]) < 1.0
+
+
+def test_a_small_step_back_is_a_copy_only_when_its_records_repeat():
+    att = [(1.0, 0.1, 0.2, 0.3, 0), (2.0, 0.1, 0.2, 0.3, 0), (2.5, 0.4, 0.2, 0.3, 0)]
+    # stretch 1 (time back 0.5 s) repeats one record: a one-record tail copy
+    tables = {"ATT": att + [(2.5, 0.4, 0.2, 0.3, 1)]}
+    boot_t = [(r[0], r[-1]) for r in tables["ATT"]]
+    assert merge_copied_boots(tables, boot_t, frozenset({1})) == 1
+    assert tables["ATT"] == att and [b for _, b in boot_t] == [0, 0, 0, 0]
+    # stretch 1 steps back 0.5 s with its own records: out of time order, still boot 0, none dropped
+    other = [(2.2, 0.9, 0.2, 0.3, 1), (2.6, 0.9, 0.2, 0.3, 1)]
+    tables = {"ATT": att + other}
+    boot_t = [(r[0], r[-1]) for r in tables["ATT"]]
+    assert merge_copied_boots(tables, boot_t, frozenset({1})) == 0
+    assert len(tables["ATT"]) == 5 and [b for _, b in boot_t] == [0] * 5
+    # a reboot (a big step back, not minor) repeating one record by chance stays a reboot
+    tables = {"ATT": att + [(2.5, 0.4, 0.2, 0.3, 1), (3.0, 0.7, 0.2, 0.3, 1)]}
+    boot_t = [(r[0], r[-1]) for r in tables["ATT"]]
+    assert merge_copied_boots(tables, boot_t) == 0 and [b for _, b in boot_t] == [0, 0, 0, 1, 1]

@@ -1,14 +1,17 @@
-"""ROS bags with defects: every message recorded twice."""
+"""ROS bags with defects: every message recorded twice, a ROS 1 bag cut off or never closed."""
 
 from __future__ import annotations
+
+from pathlib import Path
 
 import pandas as pd
 import pytest
 from flightfiles import FREQUENCY_HZ, POSE_TOPICS, RSSI_MSG, RSSI_MSGDEF, RSSI_TOPICS, TX_POWER_DBM, write_bag
 
+from rplearn.errors import LogFormatError
 from rplearn.io import ReaderOptions, inspect_logs, read_logs
 from rplearn.io.inspect import file_damage
-from rplearn.io.rosbag import RosbagOptions, read_rosbag
+from rplearn.io.rosbag import RosbagOptions, read_rosbag, ros1_index_pos
 
 
 def _read(path):
@@ -43,20 +46,100 @@ def test_a_doubled_bag_is_said_by_inspect(tmp_path, flight):
     assert any("twice.bag" in p and "repeat an earlier one exactly" in p for p in problems)
 
 
-@pytest.mark.parametrize("fraction", [0.5, 0.999])
-def test_a_cut_ros1_bag_is_said_to_be_cut(tmp_path, flight, fraction):
-    from rplearn.errors import LogFormatError
-    from rplearn.io.rosbag import ros1_index_pos
+REAL_BAG = Path(__file__).resolve().parents[1] / "fixtures" / "ros1-bag" / "test2.bag"
+ODOM = {"/jackal_velocity_controller/odom": "jackal"}
 
+
+def _chunk_starts(path):
+    from rosbags.rosbag1 import Reader
+
+    with Reader(path) as r:
+        return sorted(c.pos for c in r.chunk_infos)
+
+
+@pytest.mark.parametrize("where", ["just_after_header", "mid_chunk_header", "at_chunk", "mid_chunk",
+                                   "mid_last_chunk", "in_index"])
+def test_a_cut_real_ros1_bag_reads_the_messages_before_the_cut(tmp_path, where):
+    # was refused: "the bag is cut off at byte N before its index ... `rosbag reindex`"
+    data = REAL_BAG.read_bytes()
+    starts = _chunk_starts(REAL_BAG)  # 5 bz2 chunks
+    index_at = ros1_index_pos(REAL_BAG)
+    at = {"just_after_header": starts[0] + 12, "mid_chunk_header": starts[1] + 30, "at_chunk": starts[2],
+          "mid_chunk": (starts[2] + starts[3]) // 2, "mid_last_chunk": starts[4] + 1000,
+          "in_index": index_at + 40}[where]
+    cut = tmp_path / "cut.bag"
+    cut.write_bytes(data[:at])
+    whole, _ = read_rosbag(REAL_BAG, ODOM)
+    if where == "just_after_header":
+        with pytest.raises(LogFormatError, match=rf"cut.bag: the bag is cut off or damaged at byte {starts[0]:,} "
+                                                 r"\(the header of the first record after the bag header\) before any whole message"):
+            read_rosbag(cut, ODOM)
+        return
+    logs, meta = read_rosbag(cut, ODOM)
+    n = len(logs.pose)
+    assert 0 < n <= len(whole.pose)
+    pd.testing.assert_frame_equal(logs.pose, whole.pose.iloc[:n].reset_index(drop=True))
+    whole_chunks = sum(s < at for s in starts) - (where in ("mid_chunk_header", "mid_chunk", "mid_last_chunk"))
+    assert meta["cut_off_at_byte"] == (starts[whole_chunks] if whole_chunks < len(starts) else index_at)
+    assert meta["records_read"] > n and meta["unindexed"] is False
+    assert n == (len(whole.pose) if where == "in_index" else meta["topics"]["/jackal_velocity_controller/odom"])
+    line = file_damage(str(cut), meta)
+    assert len(line) == 1 and f"cut off inside the message at byte {meta['cut_off_at_byte']:,}" in line[0]
+    assert f"the {meta['records_read']:,} complete record(s) before it were read" in line[0]
+
+
+@pytest.mark.parametrize("fraction", [0.2, 0.5, 0.77, 0.999])
+def test_a_cut_written_ros1_bag_reads_a_prefix_of_each_topic(tmp_path, flight, fraction):
     pose, sig = flight
-    whole = write_bag(tmp_path / "whole.bag", pose.iloc[::7], sig.iloc[::7], "ros1")
+    whole = write_bag(tmp_path / "whole.bag", pose.iloc[::7], sig.iloc[::7], "ros1")  # uncompressed chunks
     data = whole.read_bytes()
-    index_at = ros1_index_pos(whole)
-    assert index_at is not None and len(data) // 2 < index_at < len(data)
     cut = tmp_path / "cut.bag"
     cut.write_bytes(data[:int(len(data) * fraction)])
-    # was "cannot open bag (AnyReaderError: Bag index looks damaged: ...)"
-    want = (rf"cut.bag: the bag is cut off at byte {int(len(data) * fraction):,} before its index" if fraction < 0.9
-            else rf"cut.bag: the bag's index \(from byte {index_at:,} of .*cut off or damaged")
-    with pytest.raises(LogFormatError, match=want):
-        _read(cut)
+    (lw, mw), (lc, mc) = _read(whole), _read(cut)
+    assert mc["cut_off_at_byte"] is not None and mc["cut_off_at_byte"] <= int(len(data) * fraction)
+    assert sum(mc["topics"].values()) == mc["records_read"]
+    lost = sum(mw["topics"].values()) - mc["records_read"]
+    assert (lost > 0) if fraction < 0.9 else (lost == 0)  # 0.999: a cut in the index after the one chunk
+    for node, got in lc.pose.groupby("node"):
+        want = lw.pose[lw.pose["node"] == node]
+        pd.testing.assert_frame_equal(got.reset_index(drop=True), want.iloc[:len(got)].reset_index(drop=True))
+    for (tx, rx), got in lc.signal.groupby(["tx", "rx"]):
+        want = lw.signal[(lw.signal["tx"] == tx) & (lw.signal["rx"] == rx)]
+        pd.testing.assert_frame_equal(got.reset_index(drop=True), want.iloc[:len(got)].reset_index(drop=True))
+
+
+def test_a_ros1_bag_never_closed_by_its_recorder_is_read_record_by_record(tmp_path):
+    data = bytearray(REAL_BAG.read_bytes())
+    field = data.index(b"index_pos=") + len(b"index_pos=")
+    data[field:field + 8] = bytes(8)  # what `rosbag record` leaves until it closes the bag
+    open_bag = tmp_path / "open.bag"
+    open_bag.write_bytes(bytes(data))
+    (whole, mw), (logs, meta) = read_rosbag(REAL_BAG, ODOM), read_rosbag(open_bag, ODOM)
+    pd.testing.assert_frame_equal(logs.pose, whole.pose)
+    assert meta["unindexed"] is True and meta["cut_off_at_byte"] is None and meta["records_read"] == 3061 + 3060
+    assert mw["unindexed"] is False and mw["records_read"] is None
+    assert any("the bag has no index" in line for line in file_damage(str(open_bag), meta))
+
+
+@pytest.mark.parametrize("tail", ["junk", "bag"])
+def test_bytes_after_a_ros1_bags_index_are_said(tmp_path, tail):
+    # was silent: the index reader never looks past the index
+    data = REAL_BAG.read_bytes()
+    extra = data if tail == "bag" else bytes(range(256)) * 7
+    longer = tmp_path / "longer.bag"
+    longer.write_bytes(data + extra)
+    (whole, mw), (logs, meta) = read_rosbag(REAL_BAG, ODOM), read_rosbag(longer, ODOM)
+    pd.testing.assert_frame_equal(logs.pose, whole.pose)
+    assert mw["trailing_bytes"] == 0 and meta["trailing_bytes"] == len(extra)
+    assert meta["trailing_bag"] is (tail == "bag")
+    (line,) = file_damage(str(longer), meta)
+    assert f"{len(extra):,} byte(s) after the bag's index were not read" in line
+    assert ("another bag begins there" in line) is (tail == "bag")
+
+
+def test_inspect_says_a_cut_ros1_bag(tmp_path):
+    cut = tmp_path / "cut.bag"
+    cut.write_bytes(REAL_BAG.read_bytes()[:400_000])
+    problems = inspect_logs(cut, ReaderOptions(pose_topics=ODOM)).problems
+    assert any(p.startswith(f"{cut}: the file is cut off inside the message at byte") and "complete record(s)" in p
+               for p in problems), problems

@@ -413,6 +413,54 @@ def test_a_log_in_the_file_twice_is_read_once_live_as_offline(tmp_path, copies):
     pd.testing.assert_frame_equal(gs, rs)
 
 
+def _record_starts(data: bytes) -> list[int]:
+    from rplearn.io.tlog_tail import whole_records
+
+    starts, at = [], 0
+    while at < len(data):
+        starts.append(at)
+        at += whole_records(data[at:at + 8 + 280])  # the first record of what follows
+    return starts
+
+
+@pytest.mark.parametrize("stretch", ["middle", "last_3", "last_1"])
+def test_a_later_stretch_in_the_file_again_is_read_once_live_as_offline(tmp_path, stretch):
+    """A copy of a stretch not starting at the file's first record (was: FileCopy found only a
+    copy from the start, so the tail handed out the copy's rows and counted no repeats while
+    the offline reader dropped them)."""
+    real = Path(__file__).resolve().parents[1] / "fixtures" / "ardupilot" / "mavlink-log_2013-10-13_18-31-24.tlog"
+    data = real.read_bytes()
+    starts = _record_starts(data)
+    part = {"middle": data[starts[len(starts) // 3]:starts[len(starts) // 2]], "last_3": data[starts[-3]:],
+            "last_1": data[starts[-1]:]}[stretch]
+    copied = tmp_path / "copied.tlog"
+    copied.write_bytes(data + part)
+    options = ReaderOptions(tx_power_dbm=20.0, frequency_hz=433e6)
+    ref, meta = read_logs([str(copied)], options)
+    assert meta["files"][0]["repeated_messages"] > 0 or stretch != "middle"
+    grown = tmp_path / "grown.tlog"
+    grown.write_bytes(b"")
+    tail = TlogTail(str(grown), options)
+    rng = np.random.default_rng(7)
+    poses, signals, pos, whole = [], [], 0, copied.read_bytes()
+    while pos < len(whole):
+        pos = min(len(whole), pos + int(rng.integers(2_000, 60_000)))
+        with grown.open("ab") as fh:
+            fh.write(whole[len(grown.read_bytes()):pos])
+        for out, new in zip((poses, signals), tail.poll(), strict=True):
+            out.append(new)
+    for out, new in zip((poses, signals), tail.poll(final=True), strict=True):
+        out.append(new)
+    tail.close()
+    assert tail.dropped["repeated_messages"] == meta["files"][0]["repeated_messages"]
+    assert {k: n for k, n in tail.dropped.items() if k != "repeated_messages"} == dict.fromkeys(DROPS[:-1], 0)
+    gs = pd.concat([x for x in signals if len(x)]).sort_values(["t", "tx"], kind="stable").reset_index(drop=True)
+    rs = ref.signal.sort_values(["t", "tx"], kind="stable").reset_index(drop=True)
+    pd.testing.assert_frame_equal(gs, rs)
+    gp = pd.concat([x for x in poses if len(x)])
+    assert len(gp) == len(ref.pose)
+
+
 def test_file_copy_finds_the_file_written_again_from_its_start(tmp_path):
     from rplearn.io.tlog_tail import FileCopy
 

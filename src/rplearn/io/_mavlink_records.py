@@ -195,12 +195,18 @@ class TlogRows:
             self.radio_from[kind].append(key)
 
 
+#: A ``.tlog`` record's time before its MAVLink frame (big-endian microseconds) [bytes].
+_TLOG_TIME_BYTES = 8
+
+
 def collect_tlog(source: str, system_id: int | None) -> Raw:
-    """One pass over a ``.tlog``: attitude, position, origin, fix, armed state, radio."""
+    """One pass over a ``.tlog``: attitude, position, origin, fix, armed state, radio, and the
+    corrupt stretches (bytes between two whole records that are none: ``corrupt_stretches``,
+    ``corrupt_bytes`` in ``notes``)."""
     acc = TlogRows()
     with library_quiet():  # pymavlink prints what it cannot parse
         conn = _open(source)
-        whole_to = 0
+        whole_to, good_to, stretches, skipped = 0, 0, 0, 0
         while True:
             try:
                 msg = conn.recv_msg()
@@ -209,11 +215,20 @@ def collect_tlog(source: str, system_id: int | None) -> Raw:
             if msg is None:
                 break
             whole_to = conn.f.tell() - conn.mav.buf_len()  # where the records read so far end
+            if msg.get_type() != "BAD_DATA":
+                # bytes between the last whole record and this one's 8-byte time: a corrupt
+                # stretch (pymavlink says most with one BAD_DATA, however many frames it held)
+                start = whole_to - len(msg.get_msgbuf()) - _TLOG_TIME_BYTES
+                if start > good_to:
+                    stretches, skipped = stretches + 1, skipped + start - good_to
+                good_to = whole_to
             acc.add(msg, source)
         cut_off = _tlog_cut_off(conn, source, whole_to)
     repeated = drop_repeated_rows(acc)
     raw = tlog_raw(acc, source, system_id, cut_off)
-    raw.notes.update(corrupt_frames=acc.counts.get("BAD_DATA", 0), repeated_messages=repeated,
+    if whole_to > good_to:  # BAD_DATA after the last whole record
+        stretches, skipped = stretches + 1, skipped + whole_to - good_to
+    raw.notes.update(corrupt_stretches=stretches, corrupt_bytes=skipped, repeated_messages=repeated,
                      records_read=sum(n for k, n in acc.counts.items() if k != "BAD_DATA"))
     return raw
 
@@ -306,16 +321,22 @@ def tlog_raw(acc: TlogRows, source: str, system_id: int | None, cut_off: dict[st
 COPY_SHARE = 0.5
 
 
-def merge_copied_boots(tables: dict[str, list[tuple[float, ...]]], boot_t: list[tuple[float, int]]) -> int:
-    """Undo the boots that are copies: a later boot whose records repeat an earlier boot's
-    exactly (same kind, TimeUS and fields) runs on that boot's clock, so it is that boot again
-    (logs concatenated, a copy resumed from its start), not a reboot. Its records join that
-    boot, the repeats are dropped (two such records hold one reading) and the boots are
-    numbered again from 0. ``tables`` (rows per kind, the boot number last) and ``boot_t``
-    (time, boot per message) are changed in place; returns the repeats dropped."""
+def _is_copy(votes: int, size_earlier: int, size_later: int) -> bool:
+    """Whether a later stretch repeating ``votes`` records of an earlier one is a copy of it: a
+    share (:data:`COPY_SHARE`) of the smaller's records, and either two or more of them or
+    every record of the later stretch (a copy of one record), not a few equal by chance (a
+    whole log after a partial copy of it repeats all of the copy, but a small share of its
+    own records)."""
+    return votes >= COPY_SHARE * min(size_earlier, size_later) and (votes >= 2 or votes == size_later)
+
+
+def _copy_groups(tables: dict[str, list[tuple[float, ...]]], minor: frozenset[int], stretches: set[int]
+                 ) -> tuple[dict[int, int], set[int]]:
+    """The group of each stretch (``stretches``, numbered in file order, and those of the
+    rows of ``tables``; :func:`merge_copied_boots`) and the stretches that are copies."""
     first: dict[tuple[Any, ...], int] = {}
     votes: dict[int, dict[int, int]] = {}
-    size: dict[int, int] = {}
+    size: dict[int, int] = dict.fromkeys(stretches, 0)
     for kind, rows in tables.items():
         for row in rows:
             key, b = (kind, *row[:-1]), int(row[-1])
@@ -324,26 +345,54 @@ def merge_copied_boots(tables: dict[str, list[tuple[float, ...]]], boot_t: list[
             if a < b:
                 votes.setdefault(b, {}).setdefault(a, 0)
                 votes[b][a] += 1
-    into: dict[int, int] = {}
-    for b in sorted(votes):
-        a = max(votes[b], key=lambda k: (votes[b][k], -k))
-        # a share of the smaller boot's records, not a few equal by chance (a whole log after a
-        # partial copy of it repeats all of the copy, but a small share of its own records)
-        if votes[b][a] >= max(2, COPY_SHARE * min(size[a], size[b])):
-            into[b] = into.get(a, a)
-    if not into:
+    group: dict[int, int] = {}
+    group_size: dict[int, int] = {}
+    copies: set[int] = set()
+    for b in sorted(size):
+        by_group: dict[int, int] = {}
+        for a, n in votes.get(b, {}).items():
+            by_group[group[a]] = by_group.get(group[a], 0) + n
+        g = max(by_group, key=lambda k: (by_group[k], -k)) if by_group else None
+        if g is not None and _is_copy(by_group[g], group_size[g], size[b]):
+            group[b] = g
+            copies.add(b)
+        elif b in minor and b - 1 in group:  # time stepped back a little, no copy: the same boot
+            group[b] = group[b - 1]
+            group_size[group[b]] += size[b]
+        else:
+            group[b] = b
+            group_size[b] = size[b]
+    return group, copies
+
+
+def merge_copied_boots(tables: dict[str, list[tuple[float, ...]]], boot_t: list[tuple[float, int]],
+                       minor: frozenset[int] = frozenset()) -> int:
+    """Undo the boots that are copies: a later stretch of the log (a boot, or the records after
+    a small step back of the time: ``minor``) whose records repeat an earlier one's exactly
+    (same kind, TimeUS and fields) runs on that stretch's clock, so it is that stretch again
+    (logs concatenated, a copy resumed from its start, the last records written again), not a
+    reboot. Its records join that stretch's boot, the repeats are dropped (two such records
+    hold one reading); a ``minor`` stretch that is no copy stays in the boot before it (records
+    a little out of time order), and the boots are numbered again from 0. ``tables`` (rows per
+    kind, the stretch number last) and ``boot_t`` (time, stretch per message) are changed in
+    place; returns the repeats dropped."""
+    group, copies = _copy_groups(tables, minor, {b for _, b in boot_t})
+    if not copies and len(set(group.values())) == len(group):
         return 0
-    kept = sorted({into.get(b, b) for _, b in boot_t})
-    number = {b: kept.index(into.get(b, b)) for b in {b for _, b in boot_t}}
+    kept = sorted(set(group.values()))
+    number = {b: kept.index(g) for b, g in group.items()}
+    holder = {b: (b if b in copies else group[b]) for b in group}
     repeated = 0
     for rows in tables.values():
-        # a row kept as often as the most any one boot of its merged group holds it: the copies
-        # go, not distinct records that read alike (rows hold only some fields: two ORGN at one
-        # TimeUS), nor rows of boots that are no copies
+        # a row kept as often as the most any one holder of its group holds it (a copy holds
+        # its own, a boot with the small steps back in it one): the copies go, not distinct
+        # records that read alike (rows hold only some fields: two ORGN at one TimeUS), nor
+        # rows of boots that are no copies
         per_boot: dict[tuple[Any, ...], dict[int, int]] = {}
         for row in rows:
             held = per_boot.setdefault((*row[:-1], number[int(row[-1])]), {})
-            held[int(row[-1])] = held.get(int(row[-1]), 0) + 1
+            h = holder[int(row[-1])]
+            held[h] = held.get(h, 0) + 1
         left = {key: max(held.values()) for key, held in per_boot.items()}
         renumbered: list[Any] = []
         for row in rows:
@@ -423,6 +472,8 @@ def collect_dataflash(source: str) -> Raw:
     home = None
     utc: list[float] = []
     boot, last_t, boot_t = 0, -np.inf, []
+    minor: set[int] = set()  # the stretches after a step back of the time too small for a reboot
+    last_kind = ""
     fix_rows: list[tuple[float, ...]] = []
     arm_rows: list[tuple[float, ...]] = []
     times: dict[str, tuple[str, float]] = {}
@@ -440,13 +491,15 @@ def collect_dataflash(source: str) -> Raw:
             if kind not in times:
                 times[kind] = dataflash_time_field(msg, kind, source)
             t = number(msg, kind, times[kind][0], source) * times[kind][1]
-            if t < last_t - REBOOT_STEP_S:
+            if t < last_t or (t == last_t and kind == last_kind):  # the latter: maybe a copy of the last record
                 boot += 1
-            last_t = t
+                if t >= last_t - REBOOT_STEP_S:
+                    minor.add(boot)
+            last_t, last_kind = t, kind
             boot_t.append((t, boot))
             home = _df_record(_DfMessage(msg, kind, source), t, boot, (rows, fix_rows, arm_rows, utc), home)
     tables = {**rows, "GPS status": fix_rows, "ARM/EV": arm_rows}
-    repeated = merge_copied_boots(tables, boot_t) if boot else 0
+    repeated = merge_copied_boots(tables, boot_t, frozenset(minor)) if boot else 0
     rows = {k: tables[k] for k in rows}
     fix_rows, arm_rows = tables["GPS status"], tables["ARM/EV"]
     offsets, ends = _df_chain(boot_t)

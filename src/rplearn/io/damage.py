@@ -24,15 +24,24 @@ def file_damage(path: str, info: dict[str, Any]) -> list[str]:
             + (f"the {info['records_read']:,} complete record(s) before it were read"
                if info.get("records_read") is not None else "the complete records before it were read")
         )
+    if info.get("unindexed"):
+        lines.append(f"{path}: the bag has no index (its recorder never closed it): its messages were read record "
+                     f"by record from the start" + (f" ({info['records_read']:,})" if info.get("records_read") else "")
+                     + "; `rosbag reindex` writes the index")
     if info.get("corrupt"):
         at = f" (the first at byte {info['corrupt_at_byte']:,}: a message of no ULog type)" if info.get("corrupt_at_byte") else ""
         lines.append(f"{path}: corrupt bytes were skipped by the ULog reader (pyulog){at}; what follows them was read")
-    if info.get("corrupt_bytes"):
+    if info.get("trailing_bytes"):
+        lines.append(f"{path}: {info['trailing_bytes']:,} byte(s) after the bag's index were not read ("
+                     + ("another bag begins there: a bag appended to this one, or this bag twice; read it on its own"
+                        if info.get("trailing_bag") else "junk appended after the bag") + ")")
+    if info.get("corrupt_stretches"):
+        lines.append(f"{path}: {info['corrupt_stretches']:,} corrupt stretch(es) of MAVLink data "
+                     f"({info.get('corrupt_bytes', 0):,} byte(s): bad checksum, broken framing or junk) were skipped: "
+                     "the frames in them (one or more each) are lost; what follows them was read")
+    elif info.get("corrupt_bytes"):
         lines.append(f"{path}: {info['corrupt_bytes']:,} corrupt byte(s) between DataFlash records were skipped; "
                      "what follows them was read")
-    if info.get("corrupt_frames"):
-        lines.append(f"{path}: {info['corrupt_frames']:,} corrupt MAVLink frame(s) (bad checksum or framing) were "
-                     "skipped: the messages in them are lost; what follows them was read")
     for what, by_file in (info.get("repeated_rows") or {}).items():
         for other, n in by_file.items():
             lines.append(f"{path}: {n:,} {what} row(s) repeat rows of {other} exactly (the same log given twice, "

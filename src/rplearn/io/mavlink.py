@@ -67,8 +67,11 @@ line in ``notes``; ``metadata["reboots"]`` counts reboots. A radio reading repor
 concatenated, a copy resumed from its start) is read once: a ``.tlog`` message that repeats an
 earlier one exactly (kind, sender, receive time, fields), and a DataFlash boot whose records
 repeat an earlier boot's (same TimeUS and fields: the same boot again, not a reboot), are
-dropped and counted in ``metadata["repeated_messages"]``. MAVLink frames whose checksum fails
-are skipped and counted in ``metadata["corrupt_frames"]`` (``.tlog``). Both are said in one line
+dropped and counted in ``metadata["repeated_messages"]``. Bytes of a ``.tlog`` that are no
+whole record (a frame whose checksum fails, framing broken by a damaged length byte, junk) are
+skipped: ``metadata["corrupt_stretches"]`` counts the stretches of such bytes between two whole
+records (each lost one frame or more: pymavlink's parser says most with one ``BAD_DATA``
+message, however many frames it swallowed) and ``metadata["corrupt_bytes"]`` their bytes. Both are said in one line
 each (:func:`rplearn.io.inspect.file_damage`).
 
 Armed state: when the log says it (a ``.tlog``'s ``HEARTBEAT`` of the vehicle, ``base_mode &
@@ -487,7 +490,9 @@ def read_mavlink(
         whose data are lost: a tlog's record is its 8-byte time and MAVLink frame, whose name is
         unknown when the cut is before the frame's header; None when whole), ``records_read``
         (the complete records: a DataFlash log's records, a tlog's messages; None for a text
-        log), ``corrupt_bytes`` (skipped between DataFlash records). A cut or a corrupt stretch
+        log), ``corrupt_bytes`` (skipped between DataFlash records or between whole ``.tlog``
+        records), ``corrupt_stretches`` (``.tlog``: stretches of such bytes between two whole
+        records, each one frame or more lost). A cut or a corrupt stretch
         is said by :func:`rplearn.io.inspect.file_damage`, not in ``notes``.
 
     Raises
@@ -508,8 +513,8 @@ def read_mavlink(
     logs, meta = _from_raw(raw, source, (tx_power_dbm, float(frequency_hz)), vehicle, station, options)
     cut, cut_name, corrupt, records = (
         _dataflash_walk(source) if fmt == "dataflash"
-        else (raw.notes.pop("cut_off_at_byte", None), raw.notes.pop("cut_off_record", None), 0,
-              raw.notes.pop("records_read", None)))
+        else (raw.notes.pop("cut_off_at_byte", None), raw.notes.pop("cut_off_record", None),
+              raw.notes.pop("corrupt_bytes", 0), raw.notes.pop("records_read", None)))
     meta.update({"cut_off_at_byte": cut, "cut_off_record": cut_name, "corrupt_bytes": int(corrupt),
                  "records_read": records})
     return logs, meta

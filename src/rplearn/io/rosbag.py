@@ -19,6 +19,11 @@ Times are the message header stamps (``time_source="header"``; the bag's receive
 messages without a header or with a zero stamp) or the bag's receive times
 (``time_source="bag"``), in seconds of ROS time (UNIX epoch on a real robot).
 
+A ROS 1 bag cut off before its index (an interrupted copy), or whose recorder never wrote
+it, is read record by record from the start the way ``rosbag reindex`` rebuilds an index:
+every message before the cut is read, and the cut is said (``cut_off_at_byte``,
+``records_read``; :func:`rplearn.io.damage.file_damage`).
+
 A message equal to an earlier one of its topic in receive time and every byte (a recorder
 writing each message twice) is read once and counted (``metadata["repeated_messages"]``).
 """
@@ -158,6 +163,25 @@ def ros1_index_pos(path: str | os.PathLike) -> int | None:
     return None
 
 
+def _open_reader(any_reader: Any, paths: list[Path], default: Any, scan: bool) -> Any:
+    """An open AnyReader of ``paths``; with ``scan``, the ROS 1 bag read record by record
+    (:mod:`rplearn.io._ros1_scan`) instead of through its index."""
+    reader = any_reader(paths, default_typestore=default)
+    if scan:
+        from rplearn.io._ros1_scan import scanning_reader_class
+
+        reader.readers = [scanning_reader_class()(p) for p in paths]
+    reader.open()
+    return reader
+
+
+def bag_scan(reader: Any) -> Any:
+    """What the record-by-record reading of an open bag found (a
+    :class:`rplearn.io._ros1_scan.Ros1Scan`), or None when it was read through its index."""
+    readers = getattr(reader, "readers", None) or [None]
+    return getattr(readers[0], "scan", None)
+
+
 @contextmanager
 def open_rosbag(
     path: str | os.PathLike, msg_definitions: Mapping[str, str] | None = None
@@ -180,25 +204,32 @@ def open_rosbag(
                 f"message definitions (msg_definitions): cannot register types ({type(exc).__name__}: {exc})",
                 param="msg_definitions",
             ) from None
+    index_at = ros1_index_pos(paths[0]) if is_ros1 else None
+    size = paths[0].stat().st_size
+    scan = is_ros1 and index_at is not None and (index_at == 0 or index_at >= size)
     try:
-        reader = AnyReader(paths, default_typestore=default)
-        reader.open()
+        reader = _open_reader(AnyReader, paths, default, scan)
     except (InputError, LogFormatError):
         raise
     except Exception as exc:
         msg = str(exc).splitlines()[0] if str(exc) else ""
-        index_at = ros1_index_pos(paths[0]) if is_ros1 else None
-        size = paths[0].stat().st_size
-        if index_at is not None and index_at >= size:
+        if not (index_at is not None and "index" in msg.lower()):
+            raise LogFormatError(f"{path}: cannot open bag ({type(exc).__name__}: {msg})") from None
+        try:  # a damaged index: read the bag record by record as `rosbag reindex` does
+            reader = _open_reader(AnyReader, paths, default, True)
+        except Exception as exc2:
             raise LogFormatError(
-                f"{path}: the bag is cut off at byte {size:,} before its index (at byte {index_at:,}): a bag that "
-                "ends early (power loss, an interrupted copy); `rosbag reindex` rebuilds the index of the "
-                "messages it holds") from None
-        if index_at is not None and "index" in msg.lower():
-            raise LogFormatError(
-                f"{path}: the bag's index (from byte {index_at:,} of {size:,}) cannot be read ({msg}): cut off "
-                "or damaged; `rosbag reindex` rebuilds it") from None
-        raise LogFormatError(f"{path}: cannot open bag ({type(exc).__name__}: {msg})") from None
+                f"{path}: the bag's index (from byte {index_at:,} of {size:,}) cannot be read ({msg}), nor its "
+                f"records from the start ({type(exc2).__name__}: {str(exc2).splitlines()[0] if str(exc2) else ''}); "
+                "`rosbag reindex` rebuilds it") from None
+    found = bag_scan(reader)
+    if found is not None and found.messages_read == 0 and found.cut_off_at_byte is not None:
+        reader.close()
+        raise LogFormatError(
+            f"{path}: the bag is cut off or damaged at byte {found.cut_off_at_byte:,} ({found.cut_off_record}) before "
+            f"any whole message (of {size:,} bytes; its index "
+            + ("was never written" if found.index_pos == 0 else f"was to start at byte {found.index_pos:,}")
+            + "): no message to read") from None
     try:
         if extra:
             missing = {k: v for k, v in extra.items() if k not in reader.typestore.fielddefs}
@@ -344,7 +375,16 @@ def read_rosbag(
         ``source``, ``format`` ("ros1" or "ros2"), ``topics`` (message counts, each message
         once), ``frame_ids`` per pose topic, ``repeated_messages`` (messages skipped because
         they repeat an earlier one of their topic exactly: same receive time and bytes, the
-        bag's messages recorded twice) and ``repeated_by_topic``, ``time_reference``.
+        bag's messages recorded twice) and ``repeated_by_topic``, ``time_reference``;
+        for a ROS 1 bag without a readable index (cut off, its index damaged, or never
+        closed by its recorder: ``unindexed``), read record by record from the start:
+        ``cut_off_at_byte`` and ``cut_off_record`` (where the first record not read whole
+        starts, and what it is; None when nothing was lost) and ``records_read`` (the
+        messages read whole, every topic); these three are None for a bag read through its
+        index. A bag cut off before any whole message is refused (:class:`LogFormatError`).
+        ``trailing_bytes``: bytes after a ROS 1 bag's index, which are not read (junk
+        appended, or another bag after it: ``trailing_bag``), said by
+        :func:`rplearn.io.damage.file_damage`.
     """
     options = RosbagOptions() if options is None else options
     tx_power_field, frequency_field = options.tx_power_field, options.frequency_field
@@ -417,6 +457,12 @@ def read_rosbag(
                 sig_rows["frequency_hz"].append(
                     _float_field(msg, frequency_field, where) if frequency_field else carrier_hz)
         fmt = "ros1" if not getattr(reader, "is2", True) else "ros2"
+        found = bag_scan(reader)
+    trailing, another_bag = (0, False)
+    if fmt == "ros1" and found is None:
+        from rplearn.io._ros1_scan import ros1_trailing_bytes
+
+        trailing, another_bag = ros1_trailing_bytes(_bag_paths(path)[0])
     pose = None
     if pose_topics:
         empty = [t for t in pose_topics if counts[t] == 0]
@@ -435,6 +481,12 @@ def read_rosbag(
         "repeated_messages": sum(repeated.values()),
         "repeated_by_topic": dict(sorted(repeated.items())),
         "time_reference": f"ROS time [s] ({'header stamps' if time_source == 'header' else 'bag receive time'})",
+        "cut_off_at_byte": None if found is None else found.cut_off_at_byte,
+        "cut_off_record": None if found is None else found.cut_off_record,
+        "records_read": None if found is None else found.messages_read,
+        "unindexed": found is not None and found.index_pos == 0,
+        "trailing_bytes": trailing,
+        "trailing_bag": another_bag,
     }
     return Logs(pose=pose, signal=signal), meta
 

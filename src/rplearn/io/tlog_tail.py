@@ -43,8 +43,8 @@ position found later: ``late_pose_rows``, ``late_signal_rows``, ``withdrawn_pose
 it or the messages it holds; a change of vehicle, or of the use of its boot clock, withdraws
 every row handed out, before and after); a radio report whose copy verdict depends on the report
 period beyond the precision of the running counts, dropped (``uncertain_copy_reports``); a report
-handed out whose verdict a later period reverses (``changed_copy_reports``). The log written into
-the file again from its start (a log in the file twice) is read once, its messages counted in
+handed out whose verdict a later period reverses (``changed_copy_reports``). A stretch of the log
+written into the file again (a log in the file twice, its last records again) is read once, its messages counted in
 ``repeated_messages`` as the offline reader counts them (:class:`FileCopy`). The row counts are
 net: rows given back after being withdrawn lower the withdrawn count, so a verdict that flips and
 flips back (a short position glitch under way at a poll) leaves them where they were.
@@ -85,15 +85,18 @@ DROPS = ("late_pose_rows", "late_signal_rows", "withdrawn_pose_rows", "withdrawn
 
 
 class FileCopy:
-    """Whether the records read repeat the file's own bytes from its start: the log written into
-    the file again (a log in the file twice, a copy resumed from its start), which the offline
-    reader reads once (its exact repeated messages dropped, ``repeated_messages``).
+    """Whether the records read repeat the file's own bytes before them: a stretch of the log
+    written into the file again (a log in the file twice, a copy resumed from its start, the
+    last records written again), which the offline reader reads once (its exact repeated
+    messages dropped, ``repeated_messages``).
 
-    A record equal, byte for byte (its 8-byte receive time included), to the file's first record
-    starts a copy at its offset ``L``; each record after it at ``p`` repeats the file while its
-    bytes equal those at ``p - L``. The state is the first record and ``L``: it does not grow with
-    the log. A copy of a stretch not starting at the file's first record is not found here (the
-    offline reader drops such repeats too: then the counts differ).
+    A record whose 8-byte receive time steps back from the record before it (or equals it) may
+    start a copy: the bytes before it are searched for an equal record, byte for byte (its
+    receive time included; a search only at such steps, which a log written once does not
+    take, the equal time checked against the record before only). Found at ``q``, the copy
+    starts at offset ``L = p - q``; each record after it at ``p`` repeats the file while its
+    bytes equal those at ``p - L``. The state is ``L``, the last time and the last record: it
+    does not grow with the log.
 
     Parameters
     ----------
@@ -101,10 +104,14 @@ class FileCopy:
         The log, read with its own handle (``os.pread``).
     """
 
+    #: Bytes read at once when searching the file for a record.
+    SEARCH_BLOCK = 1 << 22
+
     def __init__(self, path: str) -> None:
         self.path = path
         self._fd: int | None = None
-        self._first: bytes | None = None
+        self._last_us = -1  # the receive time of the last record [us]
+        self._last: tuple[int, int] | None = None  # its bytes' offsets
         self.offset: int | None = None  # where the copy being read started
 
     def _read(self, start: int, end: int) -> bytes:
@@ -112,20 +119,37 @@ class FileCopy:
             self._fd = os.open(self.path, os.O_RDONLY | getattr(os, "O_BINARY", 0))
         return os.pread(self._fd, end - start, start)
 
+    def _find(self, record: bytes, before: int) -> int | None:
+        """The first offset of ``record`` wholly before byte ``before``, or None."""
+        at = 0
+        while at < before:
+            block = self._read(at, min(before, at + self.SEARCH_BLOCK + len(record) - 1))
+            found = block.find(record)
+            if found >= 0 and at + found + len(record) <= before:
+                return at + found
+            at += self.SEARCH_BLOCK
+        return None
+
     def repeats(self, start: int, end: int) -> bool:
         """Whether the record in bytes ``[start, end)`` repeats the file's bytes before it."""
-        if start == 0:
-            self._first = self._read(0, end)
+        record = self._read(start, end)
+        t_us = int.from_bytes(record[:8], "big")
+        last, last_us = self._last, self._last_us
+        self._last, self._last_us = (start, end), t_us
+        if self.offset is not None:
+            if start - self.offset >= 0 and record == self._read(start - self.offset, end - self.offset):
+                return True
+            self.offset = None  # the copy ended: what follows is new, unless it starts another
+        if t_us > last_us or last is None:
             return False
-        if self.offset is None:
-            if self._first is None or end - start != len(self._first) or self._read(start, end) != self._first:
-                return False
-            self.offset = start
-            return True
-        if self._read(start, end) == self._read(start - self.offset, end - self.offset):
-            return True
-        self.offset = None  # the copy ended: what follows is new
-        return False
+        if t_us == last_us:  # the record before written again, or two messages received at once
+            found = last[0] if last[1] - last[0] == len(record) and self._read(*last) == record else None
+        else:
+            found = self._find(record, start)
+        if found is None:
+            return False
+        self.offset = start - found
+        return True
 
     def close(self) -> None:
         """Close the handle."""
