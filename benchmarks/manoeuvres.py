@@ -511,7 +511,7 @@ def _reference_drift(setup: Setup, parts: list[Any]) -> float:
 def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, prior_std_db: float = PRIOR_STD_DB,
         correlated: str = "reference", block_s: float = DEFAULT_BLOCK_S, posterior: str = "inflated",
         budget: bool = False, draws: int = DRAWS, candidates: dict[str, Any] | None = None, tilt: bool = False,
-        aggregate: str = "rms") -> dict[str, Flight]:
+        aggregate: str = "rms", rate: str = "spread") -> dict[str, Flight]:
     config = _config(preset)
     learning = config.campaign.with_role("learning").units
     nodes = tuple(sorted(config.node_antennas))
@@ -521,7 +521,8 @@ def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, 
     speed = float(getattr(learning[0], "speed_m_s", 1.5))
     cands = CandidateOptions(fixed_nodes=FIXED.get(preset, ()), speed_m_s=speed, **(candidates or {}))
     opts = ManoeuvreOptions(noise_std_db=noise, packet_rate_hz=config.radio.packet_rate_hz * (1 - config.radio.loss_probability),
-                            penalty_weight=weight, candidates=cands, power=power, correlation_s=block_s, aggregate=aggregate)
+                            penalty_weight=weight, candidates=cands, power=power, correlation_s=block_s, aggregate=aggregate,
+                            rate=rate)
     setup = Setup(preset, config, spec, nodes, opts, weight, seed=seed, correlated=correlated, block_s=block_s, budget=budget)
     ref_parts, _ = fly(setup, learning)
     if prior_std_db <= 0:  # the prior the project learns from the complete reference flight
@@ -620,6 +621,8 @@ def _candidate_args(args: argparse.Namespace) -> dict[str, Any]:
         out["yaw_rate_deg_s"] = args.yaw_rate
     if args.arcs:
         out["arcs"] = True
+    if args.sweeps:
+        out["sweeps"] = True
     return out
 
 
@@ -648,9 +651,12 @@ def main(argv: list[str] | None = None) -> int:
                     help="independent noise draws of each flight plan for the expected error (0: the single-draw check only)")
     ap.add_argument("--yaw-rate", type=float, default=0.0, help="the candidates' cruise yaw rate [deg/s]; 0: CandidateOptions' default")
     ap.add_argument("--arcs", action="store_true", help="also arcs over or under the anchor among the candidates")
+    ap.add_argument("--sweeps", action="store_true", help="also loop sweeps (the paper unit's circles, one drone or both turning)")
     ap.add_argument("--tilt", action="store_true", help="the planners model the drones' steady tilt in the wind (from the start's poses)")
     ap.add_argument("--aggregate", choices=("rms", "max"), default="rms",
                     help="the ranking's score: the nodes' RMS spread (default) or the largest (the stop criterion's)")
+    ap.add_argument("--rate", choices=("spread", "information"), default="spread",
+                    help="the ranking per second: the spread's reduction (default) or its inverse square's growth")
     ap.add_argument("--tiny", action="store_true", help="the smoke preset at SH-4 (seconds; criteria not enforced)")
     args = ap.parse_args(argv)
     presets = ["smoke"] if args.tiny else [p.strip() for p in args.presets.split(",") if p.strip()]
@@ -665,7 +671,8 @@ def main(argv: list[str] | None = None) -> int:
         ref_total = _config(preset).campaign.with_role("learning")
         limit = float(sum(u.duration_s for u in ref_total.units))
         flights = run(preset, order, seed, limit, args.power, args.prior_std, args.correlated, args.block_s, args.posterior,
-                      args.budget or args.tiny, draws, _candidate_args(args), args.tilt, args.aggregate)
+                      args.budget or args.tiny, draws, _candidate_args(args), args.tilt, args.aggregate,
+                      args.rate)
         ref = flights["reference"]
         print(f"{preset} (SH-{order}, seed {seed}, {time.perf_counter() - t0:.0f} s): time to {TARGET_DB:g} dB per-node spread")
         for f in flights.values():
