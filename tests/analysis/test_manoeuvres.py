@@ -76,7 +76,7 @@ def test_the_predicted_spread_is_the_spread_after_adding_the_manoeuvre_s_samples
 
 
 def test_ranking_a_yaw_turn_helps_the_turning_drone_most_and_the_list_is_sorted():
-    ranked = rank_manoeuvres(NormalEquations(SPEC.basis(), 2), SPEC, NODES, POSES, _options())
+    ranked = rank_manoeuvres(NormalEquations(SPEC.basis(), 2), SPEC, NODES, POSES, _options(rate="spread"))
     rates = [r.reduction_db_per_s for r in ranked]
     assert rates == sorted(rates, reverse=True) and rates[0] > 0
     yaw_a = next(r for r in ranked if r.name == "yaw turn of A")
@@ -205,8 +205,8 @@ def test_a_steady_tilt_shifts_the_peer_s_elevation_and_spares_a_fixed_node():
 
 def test_ranking_by_information_orders_by_the_inverse_square_spread_s_growth_per_second():
     normal = NormalEquations(SPEC.basis(), 2)
-    by_spread = rank_manoeuvres(normal, SPEC, NODES, POSES, _options())
-    by_info = rank_manoeuvres(normal, SPEC, NODES, POSES, _options(rate="information"))
+    by_spread = rank_manoeuvres(normal, SPEC, NODES, POSES, _options(rate="spread"))
+    by_info = rank_manoeuvres(normal, SPEC, NODES, POSES, _options())  # the default
     assert all(r.score_per_s == r.reduction_db_per_s for r in by_spread)
     for r in by_info:  # the nodes' RMS spread, before and after, as 1/s^2 per second of flight
         b, a = (float(np.sqrt(np.mean(np.square(list(d.values()))))) for d in (r.spread_before_db, r.spread_after_db))

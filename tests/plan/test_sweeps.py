@@ -46,9 +46,9 @@ def test_bad_sweeps_are_refused_naming_the_field(kw, param):
     assert e.value.param == param
 
 
-def test_sweeps_are_offered_where_the_library_units_are_only_when_asked():
-    assert not [c for c in candidate_manoeuvres(PAIR) if isinstance(c.unit, LoopSweepUnit)]
-    cands = candidate_manoeuvres(PAIR, CandidateOptions(sweeps=True, library_loops=(1, 2, 5)))
+def test_sweeps_are_offered_where_the_library_units_are_unless_left_out():
+    assert not [c for c in candidate_manoeuvres(PAIR, CandidateOptions(sweeps=False)) if isinstance(c.unit, LoopSweepUnit)]
+    cands = candidate_manoeuvres(PAIR, CandidateOptions(library_loops=(1, 2, 5)))
     sweeps = [c for c in cands if isinstance(c.unit, LoopSweepUnit)]
     # per heading psi0: one loop, 2 loops with A or B turning, 5 loops with A, B or both turning
     assert len(sweeps) == 3 * (1 + 2 + 3)

@@ -358,7 +358,9 @@ class CandidateOptions:
         them; 0.63/0.62x at 45 deg/s against 0.57/0.61x).
     sweeps : bool
         Also offer loop sweeps (:mod:`rplearn.plan.sweeps`): the paper unit's ``n`` vertical
-        circles with one drone's headings stepping, or both drones', where each library unit is.
+        circles with one drone's headings stepping, or both drones', where each library unit is
+        (with ``ManoeuvreOptions.rate="information"``, benchmarks/manoeuvres.py: 7 of 12 cells
+        against 6, both off).
     revisits : int
         Also offer manoeuvres that see their directions this many times over, each pass after
         the last (a yaw turn of ``revisits * 360`` deg, an orbit of ``revisits`` laps, the
@@ -384,7 +386,7 @@ class CandidateOptions:
     min_separation_m: float = 5.0
     anchor_turns: bool = True
     arcs: bool = False
-    sweeps: bool = False
+    sweeps: bool = True
     revisits: int = 2
 
     def __post_init__(self) -> None:
