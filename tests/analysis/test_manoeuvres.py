@@ -76,7 +76,7 @@ def test_the_predicted_spread_is_the_spread_after_adding_the_manoeuvre_s_samples
 
 
 def test_ranking_a_yaw_turn_helps_the_turning_drone_most_and_the_list_is_sorted():
-    ranked = rank_manoeuvres(NormalEquations(SPEC.basis(), 2), SPEC, NODES, POSES, _options())
+    ranked = rank_manoeuvres(NormalEquations(SPEC.basis(), 2), SPEC, NODES, POSES, _options(rate="spread"))
     rates = [r.reduction_db_per_s for r in ranked]
     assert rates == sorted(rates, reverse=True) and rates[0] > 0
     yaw_a = next(r for r in ranked if r.name == "yaw turn of A")
@@ -102,7 +102,8 @@ def test_the_poses_may_be_a_pose_table_and_its_last_row_per_node_counts():
 
 
 @pytest.mark.parametrize(("kw", "param"), [(dict(noise_std_db=0.0), "noise_std_db"), (dict(target_el_deg=(10.0, -10.0)), "target_el_deg"),
-                                           (dict(aggregate="mean"), "aggregate"), (dict(penalty_weight=-1.0), "penalty_weight")])
+                                           (dict(aggregate="mean"), "aggregate"), (dict(penalty_weight=-1.0), "penalty_weight"),
+                                           (dict(rate="bits"), "rate")])
 def test_bad_options_name_their_field(kw, param):
     with pytest.raises(InputError) as err:
         ManoeuvreOptions(**kw)
@@ -200,3 +201,21 @@ def test_a_steady_tilt_shifts_the_peer_s_elevation_and_spares_a_fixed_node():
     with pytest.raises(InputError) as err:
         ManoeuvreOptions(steady_accel_enu_m_s2=(12.0, 0.0, 0.0))
     assert err.value.param == "steady_accel_enu_m_s2"
+
+
+def test_ranking_by_information_orders_by_the_inverse_square_spread_s_growth_per_second():
+    normal = NormalEquations(SPEC.basis(), 2)
+    by_spread = rank_manoeuvres(normal, SPEC, NODES, POSES, _options(rate="spread"))
+    by_info = rank_manoeuvres(normal, SPEC, NODES, POSES, _options())  # the default
+    assert all(r.score_per_s == r.reduction_db_per_s for r in by_spread)
+    for r in by_info:  # the nodes' RMS spread, before and after, as 1/s^2 per second of flight
+        b, a = (float(np.sqrt(np.mean(np.square(list(d.values()))))) for d in (r.spread_before_db, r.spread_after_db))
+        assert r.score_per_s == pytest.approx((1 / a**2 - 1 / b**2) / r.duration_s, rel=1e-9)
+    scores = [r.score_per_s for r in by_info]
+    assert scores == sorted(scores, reverse=True)
+    assert sorted(r.name for r in by_info) == sorted(r.name for r in by_spread)
+    # the same spreads: a longer manoeuvre weighs less against a short one by its spread's
+    # reduction per second than by its information per second
+    yaw1 = next(r for r in by_info if r.name == "yaw turn of A")
+    yaw2 = next(r for r in by_info if r.name == "yaw turn of A by 720 deg")
+    assert yaw2.score_per_s / yaw1.score_per_s > yaw2.reduction_db_per_s / yaw1.reduction_db_per_s

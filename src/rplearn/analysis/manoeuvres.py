@@ -60,6 +60,8 @@ from rplearn.plan.trajectory import G_M_S2
 
 #: How the nodes' spreads are combined into one score.
 AGGREGATES = ("rms", "max")
+#: What a manoeuvre's effect per second is measured in (:attr:`ManoeuvreOptions.rate`).
+RATES = ("spread", "information")
 
 
 @check_types
@@ -93,6 +95,12 @@ class ManoeuvreOptions:
         Which manoeuvres the vehicles can fly (fixed nodes, speeds, elevations, library).
     aggregate : str
         ``"rms"`` (the nodes' RMS spread) or ``"max"`` (the largest).
+    rate : str
+        What the candidates are ranked by per second: ``"spread"`` (the combined spread's
+        reduction [dB/s]) or ``"information"`` (the growth of its inverse square [1/(dB^2 s)]:
+        under a steady information rate the spread falls as ``1/sqrt(t)``, so its reduction per
+        second favours short manoeuvres, the inverse square's growth does not; with the loop
+        sweeps it met benchmarks/manoeuvres.py's checks in 7 of 12 cells against 6).
     floor_db : float or None
         Spreads below this count as this [dB] (a stop criterion's target: no reward for
         lowering a node already below it); None: none.
@@ -141,6 +149,7 @@ class ManoeuvreOptions:
     power: float = DEFAULT_PENALTY_POWER
     candidates: CandidateOptions = field(default_factory=CandidateOptions)
     aggregate: str = "rms"
+    rate: str = "information"
     floor_db: float | None = None
     correlated_std_db: float | None = None
     correlation_s: float = DEFAULT_BLOCK_S
@@ -168,6 +177,8 @@ class ManoeuvreOptions:
                              param="penalty_weight")
         if self.aggregate not in AGGREGATES:
             raise InputError(f"aggregate: expected one of {', '.join(AGGREGATES)}, got {self.aggregate!r}", param="aggregate")
+        if self.rate not in RATES:
+            raise InputError(f"rate: expected one of {', '.join(RATES)}, got {self.rate!r}", param="rate")
         if self.floor_db is not None and not (np.isfinite(self.floor_db) and self.floor_db >= 0):
             raise InputError(f"floor_db: expected a non-negative spread [dB], got {self.floor_db!r}", param="floor_db")
         if self.correlated_std_db is not None and not (np.isfinite(self.correlated_std_db) and self.correlated_std_db >= 0):
@@ -200,6 +211,9 @@ class RankedManoeuvre:
     candidate : Candidate
         The unit to fly (``candidate.unit``: references through ``sample``), its lead time and
         the moved nodes' poses after it.
+    score_per_s : float
+        What the ranking orders by (:attr:`ManoeuvreOptions.rate`), per second (``"spread"``:
+        ``reduction_db_per_s``).
     """
 
     name: str
@@ -208,6 +222,7 @@ class RankedManoeuvre:
     spread_after_db: dict[str, float]
     reduction_db_per_s: float
     candidate: Candidate
+    score_per_s: float
 
     def text(self) -> str:
         """One line: the manoeuvre, its time and the spreads it leaves."""
@@ -395,9 +410,11 @@ def _score(post: ManoeuvrePosterior, cand: Candidate, nodes: Sequence[str], basi
     before = post.spreads()
     rows, ends = _rows_and_ends(cand.unit, nodes, basis, options.sample_rate_hz, _steady(options))
     after = post.spreads_after(rows, _weight(options), ends)
-    gain = _aggregate(before, options) - _aggregate(after, options)
+    b, a = _aggregate(before, options), _aggregate(after, options)
+    per_s = 1.0 / max(cand.duration_s, 1e-9)
+    score = (b - a) if options.rate == "spread" else 1.0 / max(a, 1e-12) ** 2 - 1.0 / max(b, 1e-12) ** 2
     ranked = RankedManoeuvre(cand.name, cand.duration_s, dict(zip(nodes, before.tolist())), dict(zip(nodes, after.tolist())),
-                             gain / max(cand.duration_s, 1e-9), cand)
+                             (b - a) * per_s, cand, score * per_s)
     return ranked, (rows, ends)
 
 
@@ -471,7 +488,7 @@ def rank_manoeuvres(
     with one_blas_thread():  # many small factorisations: threads only contend
         post = _start(normal, spec, names, opts, blocks, cells)
         ranked = [_score(post, c, names, normal.basis, opts)[0] for c in cands]
-    return tuple(sorted(ranked, key=lambda r: -r.reduction_db_per_s))
+    return tuple(sorted(ranked, key=lambda r: -r.score_per_s))
 
 
 @check_types
@@ -536,7 +553,7 @@ def _greedy(post: ManoeuvrePosterior, state: dict[str, Any], names: list[str], b
         scored = [s for s in scored if t + s[0].duration_s <= budget_s and s[0].reduction_db_per_s > 0]
         if not scored:
             break
-        best, (rows, ends) = max(scored, key=lambda s: s[0].reduction_db_per_s)
+        best, (rows, ends) = max(scored, key=lambda s: s[0].score_per_s)
         post.update(rows, _weight(opts), ends)
         t += best.duration_s
         state.update(best.candidate.ends)
@@ -544,5 +561,5 @@ def _greedy(post: ManoeuvrePosterior, state: dict[str, Any], names: list[str], b
     return tuple(steps)
 
 
-__all__ = ["AGGREGATES", "ManoeuvreOptions", "PlanStep", "RankedManoeuvre", "correlated_error_std_db", "greedy_plan", "manoeuvre_rows", "pattern_spreads",
-           "prior_penalty_weight", "prior_weights", "rank_manoeuvres", "steady_tilt_accel", "target_metrics"]
+__all__ = ["AGGREGATES", "RATES", "ManoeuvreOptions", "PlanStep", "RankedManoeuvre", "correlated_error_std_db", "greedy_plan",
+           "manoeuvre_rows", "pattern_spreads", "prior_penalty_weight", "prior_weights", "rank_manoeuvres", "steady_tilt_accel", "target_metrics"]

@@ -34,6 +34,7 @@ from numpy.typing import NDArray
 from rplearn._argtypes import check_types
 from rplearn.errors import InputError
 from rplearn.plan.ground import GroundPassUnit
+from rplearn.plan.sweeps import loop_sweeps
 from rplearn.plan.trajectory import TrajectoryUnit, UnitReference, sample_times_s
 
 FloatArray = NDArray[np.float64]
@@ -355,6 +356,11 @@ class CandidateOptions:
         chosen but did not pay for their time (paper seed 0, time to 2 dB over the
         reference's, suggested/optimized: 0.71/0.68x at 30 deg/s against 0.72/0.74x without
         them; 0.63/0.62x at 45 deg/s against 0.57/0.61x).
+    sweeps : bool
+        Also offer loop sweeps (:mod:`rplearn.plan.sweeps`): the paper unit's ``n`` vertical
+        circles with one drone's headings stepping, or both drones', where each library unit is
+        (with ``ManoeuvreOptions.rate="information"``, benchmarks/manoeuvres.py: 7 of 12 cells
+        against 6, both off).
     revisits : int
         Also offer manoeuvres that see their directions this many times over, each pass after
         the last (a yaw turn of ``revisits * 360`` deg, an orbit of ``revisits`` laps, the
@@ -380,6 +386,7 @@ class CandidateOptions:
     min_separation_m: float = 5.0
     anchor_turns: bool = True
     arcs: bool = False
+    sweeps: bool = True
     revisits: int = 2
 
     def __post_init__(self) -> None:
@@ -461,11 +468,12 @@ def _library(poses: Mapping[str, tuple[FloatArray, float]], a: str, b: str, opts
                                       speed_m_s=opts.speed_m_s, accel_m_s2=opts.accel_m_s2, yaw_rate_deg_s=opts.yaw_rate_deg_s,
                                       center_enu_m=(float(centre[0]), float(centre[1])), line_azimuth_deg=az,
                                       label=f"unit_{a}{b}_n{n}_psi{psi:g}")
-                ref = unit.evaluate(np.array([0.0, unit.duration_s]))
-                lead = _lead_s([float(np.linalg.norm(ref.position_enu_m[0, j] - p)) for j, p in enumerate((pa, pb))], opts)
-                ends = {node: (tuple(float(v) for v in ref.position_enu_m[1, j]), float(np.degrees(ref.yaw_rad[1, j])))
-                        for j, node in enumerate((a, b))}
-                out.append(Candidate(f"paper unit n={n} psi0={psi:g} ({a},{b})", unit, lead, ends))  # type: ignore[arg-type]
+                for name, u in [(f"paper unit n={n} psi0={psi:g} ({a},{b})", unit), *(loop_sweeps(unit) if opts.sweeps else [])]:
+                    ref = u.evaluate(np.array([0.0, u.duration_s]))
+                    lead = _lead_s([float(np.linalg.norm(ref.position_enu_m[0, j] - p)) for j, p in enumerate((pa, pb))], opts)
+                    ends = {node: (tuple(float(v) for v in ref.position_enu_m[1, j]), float(np.degrees(ref.yaw_rad[1, j])))
+                            for j, node in enumerate((a, b))}
+                    out.append(Candidate(name, u, lead, ends))  # type: ignore[arg-type]
     elif fixed_a != fixed_b:
         station, drone = (a, b) if fixed_a else (b, a)
         ps, pd_ = np.asarray(poses[station][0], float), np.asarray(poses[drone][0], float)
