@@ -89,3 +89,25 @@ def test_parts_at_other_times_are_not_compared(monkeypatch):
     monkeypatch.setattr(np, "sort", lambda x, *k, **kw: (sorted_calls.append(len(x)), real(x, *k, **kw))[1])
     assert a.then(b).count == 0 and sorted_calls == []  # spans apart: no look-up at all
     assert a.then(copies_of(df, "c.parquet", 50)).count == len(df)
+
+
+@pytest.mark.parametrize("column", [
+    np.array([2**60, 2**60 + 1], np.int64),  # 64-bit ids a float64 rounds alike
+    pd.array([2**62 + 1, 2**62], "Int64"),
+    np.array([2**64 - 1, 2**64 - 2], np.uint64),
+    np.array([1, "1"], object),  # a number and its text
+])
+def test_rows_the_whole_table_check_keeps_apart_hash_apart(column):
+    frame = pd.DataFrame({"t": [1.0, 1.0], "rssi_dbm": [-50.0, -50.0], "tx": column})
+    assert not duplicate_rows(frame).any()
+    hashes = matched_row_hashes(frame)
+    assert hashes[0] != hashes[1]
+    assert copies_of(frame, "a.parquet", 1).error() is None
+
+
+def test_large_integers_still_find_their_copies_and_match_floats_below_2_to_53():
+    big = pd.DataFrame({"t": [1.0, 1.0, 2.0], "id": np.array([2**60 + 1, 2**60 + 1, 7], np.int64)})
+    assert copies_of(big, "a.parquet", 1).count == 1
+    as_int = matched_row_hashes(pd.DataFrame({"t": [1.0], "id": np.array([2**53], np.int64)}))
+    as_float = matched_row_hashes(pd.DataFrame({"t": [1.0], "id": [float(2**53)]}))
+    assert as_int[0] == as_float[0]

@@ -51,15 +51,37 @@ _BLOCK_ROWS = 32_768
 def _column_words(col: pd.Series) -> tuple[np.ndarray, bool]:
     """The cells of a column as 64-bit words to hash, and whether they are float64 numbers (whose
     bits are hashed, -0.0 as 0.0 and every NaN alike: an integer column hashes as the same
-    numbers as floats); any other value is hashed by its text."""
+    numbers as floats, its values beyond 2^53 by their exact value); any other value is hashed
+    by its text (a value that is not a string marked as such)."""
     if (pd.api.types.is_numeric_dtype(col) or pd.api.types.is_bool_dtype(col)) and not isinstance(col.dtype, pd.CategoricalDtype):
-        return np.ascontiguousarray(col.to_numpy(np.float64, na_value=np.nan)), True
+        number = np.ascontiguousarray(col.to_numpy(np.float64, na_value=np.nan))
+        if pd.api.types.is_integer_dtype(col):
+            inexact = np.abs(number) > _EXACT_INTEGER  # NaN (a missing value) is not
+            if inexact.any():  # integers a float cannot hold: by their exact value, not rounded
+                return _exact_integer_words(col, number, inexact), False
+        return number, True
     codes, uniques = pd.factorize(col, use_na_sentinel=True)
-    words = _text_hash([str(u) for u in uniques])
+    # a string by its text; any other value marked, so that 1 and "1" stay two values
+    words = _text_hash([u if isinstance(u, str) else f"\x00{u}" for u in uniques])
     out = words[codes] if words.size else np.zeros(codes.size, np.uint64)
     if (codes < 0).any():
         out[codes < 0] = _MISSING_TEXT
     return out, False
+
+
+#: Integers beyond which float64 does not hold every integer (2^53).
+_EXACT_INTEGER = float(2**53)
+
+
+def _exact_integer_words(col: pd.Series, number: np.ndarray, inexact: np.ndarray) -> np.ndarray:
+    """Words of an integer column holding values beyond 2^53: the float bits of the others (as
+    in a float column; a missing value as NaN) and the text hash of each large one's exact
+    value, so that two integers a float64 would round alike hash apart."""
+    words = np.add(number, 0.0).view(np.uint64).copy()
+    words[np.isnan(number)] = np.array(np.nan).view(np.uint64)
+    big = col.to_numpy(object)[inexact]
+    words[inexact] = _text_hash([f"\x01{int(v)}" for v in big])
+    return words
 
 
 def matched_row_hashes(chunk: pd.DataFrame) -> np.ndarray:
