@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import io
 from pathlib import Path
 
 import pandas as pd
@@ -143,3 +144,26 @@ def test_inspect_says_a_cut_ros1_bag(tmp_path):
     problems = inspect_logs(cut, ReaderOptions(pose_topics=ODOM)).problems
     assert any(p.startswith(f"{cut}: the file is cut off inside the message at byte") and "complete record(s)" in p
                for p in problems), problems
+
+
+class _NoWholeRead(io.FileIO):
+    """A bag file that refuses to be read whole into memory."""
+
+    def read(self, size=-1):
+        if size is None or size < 0:
+            raise AssertionError("the whole bag read into memory")
+        return super().read(size)
+
+
+def test_a_cut_ros1_bag_is_scanned_without_reading_it_whole_into_memory(tmp_path):
+    from rplearn.io._ros1_scan import scan_ros1
+
+    cut = tmp_path / "cut.bag"
+    data = REAL_BAG.read_bytes()
+    cut.write_bytes(data[:len(data) // 2])
+    with _NoWholeRead(cut, "r") as fh:
+        mapped = scan_ros1(fh, None)
+    in_memory = scan_ros1(io.BytesIO(data[:len(data) // 2]), None)
+    assert mapped.messages_read == in_memory.messages_read > 0
+    assert mapped.cut_off_at_byte == in_memory.cut_off_at_byte is not None
+    assert list(mapped.chunks) == list(in_memory.chunks)

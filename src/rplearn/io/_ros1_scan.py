@@ -17,6 +17,8 @@ lazily).
 
 from __future__ import annotations
 
+import io
+import mmap
 import os
 import struct
 from dataclasses import dataclass, field
@@ -193,10 +195,22 @@ def scan_ros1(bio: BinaryIO, owner: Any) -> Ros1Scan:
     """Read a ROS 1 bag's records from the start, building the connections, chunks and
     per-connection index of :class:`rosbags.rosbag1.Reader` (``owner``) for every message
     read whole, and saying where the reading stopped."""
+    bio.seek(0)
+    try:  # mapped, not read: a bag may be larger than the memory
+        buf: Any = mmap.mmap(bio.fileno(), 0, access=mmap.ACCESS_READ)
+    except (AttributeError, OSError, ValueError, io.UnsupportedOperation):  # empty, or not a file
+        buf = bio.read()
+    try:
+        return _scan_buffer(buf, owner)
+    finally:
+        if isinstance(buf, mmap.mmap):
+            buf.close()
+
+
+def _scan_buffer(buf: Any, owner: Any) -> Ros1Scan:
+    """:func:`scan_ros1` of the bag's bytes ``buf`` (bytes or a read-only map)."""
     from rosbags.rosbag1.reader import Chunk, decompressors
 
-    bio.seek(0)
-    buf = bio.read()
     scan = Ros1Scan()
     line = buf.find(b"\n") + 1
     head = _record(buf, line)
@@ -301,13 +315,16 @@ def ros1_trailing_bytes(path: str | os.PathLike) -> tuple[int, bool]:
         size = fh.tell()
         if not 0 < index_pos < size:
             return 0, False
-        fh.seek(index_pos)
-        index = fh.read()
-    at = 0
-    for _ in range(count):
-        found = _record(index, at)
-        if found is None:
-            return 0, False
-        at = found[2]
-    rest = index[at:]
-    return len(rest), rest.startswith(b"#ROSBAG")
+        at = index_pos
+        for _ in range(count):  # each record's header read, its data skipped: what follows may be large
+            fh.seek(at)
+            length = fh.read(4)
+            if len(length) < 4:
+                return 0, False
+            head = length + fh.read(struct.unpack("<I", length)[0] + 4)
+            found = _header(head, 0)
+            if found is None or found[1] + found[2] > size - at:
+                return 0, False
+            at += found[1] + found[2]
+        fh.seek(at)
+        return size - at, fh.read(7).startswith(b"#ROSBAG")
