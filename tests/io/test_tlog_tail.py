@@ -389,11 +389,24 @@ def test_a_log_in_the_file_twice_is_read_once_live_as_offline(tmp_path, copies):
     options = ReaderOptions(tx_power_dbm=20.0, frequency_hz=433e6)
     ref, meta = read_logs([str(twice)], options)
     assert meta["files"][0]["repeated_messages"] > 0
-    grown = tmp_path / "grown.tlog"
+    tail, poses, signals = _tail_while_growing(twice, tmp_path / "grown.tlog", options, seed=5)
+    assert tail.dropped["repeated_messages"] == meta["files"][0]["repeated_messages"]
+    assert {k: n for k, n in tail.dropped.items() if k != "repeated_messages"} == dict.fromkeys(DROPS[:-1], 0)
+    gp = pd.concat([x for x in poses if len(x)]).sort_values(["node", "t"]).reset_index(drop=True)
+    rp = ref.pose.sort_values(["node", "t"]).reset_index(drop=True)
+    assert list(gp["node"]) == list(rp["node"])
+    gs = pd.concat([x for x in signals if len(x)]).sort_values(["t", "tx"], kind="stable").reset_index(drop=True)
+    rs = ref.signal.sort_values(["t", "tx"], kind="stable").reset_index(drop=True)
+    pd.testing.assert_frame_equal(gs, rs)
+
+
+def _tail_while_growing(source: Path, grown: Path, options: ReaderOptions, seed: int):
+    """Tail ``grown`` while ``source``'s bytes are appended to it in random pieces of 2-60 kB:
+    the closed tail and the pose and signal tables of every poll."""
     grown.write_bytes(b"")
     tail = TlogTail(str(grown), options)
-    rng = np.random.default_rng(5)
-    poses, signals, pos, whole = [], [], 0, twice.read_bytes()
+    rng = np.random.default_rng(seed)
+    poses, signals, pos, whole = [], [], 0, source.read_bytes()
     while pos < len(whole):
         pos = min(len(whole), pos + int(rng.integers(2_000, 60_000)))
         with grown.open("ab") as fh:
@@ -403,14 +416,7 @@ def test_a_log_in_the_file_twice_is_read_once_live_as_offline(tmp_path, copies):
     for out, new in zip((poses, signals), tail.poll(final=True), strict=True):
         out.append(new)
     tail.close()
-    assert tail.dropped["repeated_messages"] == meta["files"][0]["repeated_messages"]
-    assert {k: n for k, n in tail.dropped.items() if k != "repeated_messages"} == dict.fromkeys(DROPS[:-1], 0)
-    gp = pd.concat([x for x in poses if len(x)]).sort_values(["node", "t"]).reset_index(drop=True)
-    rp = ref.pose.sort_values(["node", "t"]).reset_index(drop=True)
-    assert list(gp["node"]) == list(rp["node"])
-    gs = pd.concat([x for x in signals if len(x)]).sort_values(["t", "tx"], kind="stable").reset_index(drop=True)
-    rs = ref.signal.sort_values(["t", "tx"], kind="stable").reset_index(drop=True)
-    pd.testing.assert_frame_equal(gs, rs)
+    return tail, poses, signals
 
 
 def _record_starts(data: bytes) -> list[int]:
@@ -438,20 +444,7 @@ def test_a_later_stretch_in_the_file_again_is_read_once_live_as_offline(tmp_path
     options = ReaderOptions(tx_power_dbm=20.0, frequency_hz=433e6)
     ref, meta = read_logs([str(copied)], options)
     assert meta["files"][0]["repeated_messages"] > 0 or stretch != "middle"
-    grown = tmp_path / "grown.tlog"
-    grown.write_bytes(b"")
-    tail = TlogTail(str(grown), options)
-    rng = np.random.default_rng(7)
-    poses, signals, pos, whole = [], [], 0, copied.read_bytes()
-    while pos < len(whole):
-        pos = min(len(whole), pos + int(rng.integers(2_000, 60_000)))
-        with grown.open("ab") as fh:
-            fh.write(whole[len(grown.read_bytes()):pos])
-        for out, new in zip((poses, signals), tail.poll(), strict=True):
-            out.append(new)
-    for out, new in zip((poses, signals), tail.poll(final=True), strict=True):
-        out.append(new)
-    tail.close()
+    tail, poses, signals = _tail_while_growing(copied, tmp_path / "grown.tlog", options, seed=7)
     assert tail.dropped["repeated_messages"] == meta["files"][0]["repeated_messages"]
     assert {k: n for k, n in tail.dropped.items() if k != "repeated_messages"} == dict.fromkeys(DROPS[:-1], 0)
     gs = pd.concat([x for x in signals if len(x)]).sort_values(["t", "tx"], kind="stable").reset_index(drop=True)
