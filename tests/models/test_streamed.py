@@ -9,6 +9,7 @@ import pandas as pd
 import pytest
 
 from rplearn.errors import InputError, RplearnError
+from rplearn.io.files import read_dataset
 from rplearn.models import ModelSpec
 from rplearn.models import streamed as streamed_module
 from rplearn.models.options import FitOptions
@@ -135,6 +136,32 @@ def test_part_files_holding_the_same_rows_are_refused_naming_both(dataset, monke
     assert "\n" not in message
     streamed(monkeypatch, 500_000)  # one chunk a file: the same message
     assert _refusal(lambda: learning.fit_dataset(str(folder), ModelSpec("sh", 3))) == message
+
+
+def test_part_files_holding_the_same_rows_are_not_scored_twice(dataset, monkeypatch, tmp_path):
+    """``evaluate`` of a dataset in many files predicts part by part: rows repeated in another
+    file (or later in the same file) are refused with the fit's message, not scored twice
+    (Table I's AIC doubled and every sample weighed double)."""
+    df = pd.read_parquet(dataset / "m.parquet")
+    model = str(tmp_path / "m.json")
+    learning.fit_dataset(str(dataset / "m.parquet"), ModelSpec("sh", 3), output=model)
+    folder = tmp_path / "parts"
+    folder.mkdir()
+    df.to_parquet(folder / "a.parquet", index=False)
+    df.iloc[100:600].to_csv(folder / "b.csv", index=False)  # a later file repeating rows of the first
+    streamed(monkeypatch, 97)
+    fitted = _refusal(lambda: learning.fit_dataset(str(folder), ModelSpec("sh", 3)))
+    assert _refusal(lambda: learning.evaluate_model_files([model], str(folder))) == fitted
+    assert _refusal(lambda: read_dataset(str(folder))) == fitted  # read whole (sweep, report): the same line
+    assert fitted.startswith(f"{folder / 'b.csv'}: 500 row(s) repeat an earlier row in every column "
+                             f"(first at row 0, a copy of row 100 of {folder / 'a.parquet'}")
+    (folder / "b.csv").unlink()
+    pd.concat([df.iloc[:50], df], ignore_index=True).to_csv(folder / "b.csv", index=False)  # copies within a file
+    message = _refusal(lambda: learning.evaluate_model_files([model], str(folder)))
+    assert message.startswith(f"{folder / 'b.csv'}: ") and "repeat an earlier row in every column" in message
+    (folder / "b.csv").unlink()  # one file left: scored once, as the file read whole
+    assert (learning.evaluate_model_files([model], str(folder)).rows[0].n_samples
+            == learning.evaluate_model_files([model], str(folder / "a.parquet")).rows[0].n_samples)
 
 
 def test_rows_that_differ_in_one_column_are_not_copies(dataset, monkeypatch, tmp_path):

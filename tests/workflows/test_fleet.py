@@ -258,6 +258,15 @@ def test_parts_holding_the_same_rows_are_refused_alike_here_and_on_dask(fleet, c
     with pytest.raises(InputError) as auto:
         _fit_streamed(str(folder), ModelSpec.parse("sh"), None, FitOptions(auto=True), None, client=client)
     assert str(auto.value) == message
+    copied = pd.read_parquet(folder / "p5.parquet")
     (folder / "p5.parquet").unlink()  # the clean files: learned, the same here and on the cluster
-    clean = _fit_streamed(str(folder), spec, None, FitOptions(), None, client=client)
+    model_path = str(tmp_path / "clean.json")
+    clean = _fit_streamed(str(folder), spec, None, FitOptions(), model_path, client=client)
     assert clean.n_samples == _fit_streamed(str(folder), spec, None, FitOptions(), None).n_samples
+    write_table(copied, str(folder / "p5.parquet"))  # scored part by part: refused alike, not scored twice
+    from rplearn.io.partitions import dataset_parts
+    from rplearn.workflows.fleet import predict_parts
+
+    with pytest.raises(InputError) as scored:
+        predict_parts(dataset_parts(str(folder)), [load_model(model_path)], None, client)
+    assert str(scored.value) == message

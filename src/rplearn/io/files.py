@@ -284,6 +284,24 @@ def provenance(command: str | None = None, **parameters: Any) -> dict[str, Any]:
     }
 
 
+def _refuse_copies_across(parts: Sequence[Part], frames: Sequence[Sequence[pd.DataFrame]]) -> None:
+    """Refuse rows of a dataset in many files that repeat an earlier row, in its own file or
+    another, naming the file and row (and the row copied), as the streamed check does
+    (:mod:`rplearn.data.row_copies`)."""
+    from rplearn.data.row_copies import SourceHashes
+
+    merged = None
+    for part, chunks in zip(parts, frames, strict=True):
+        hashes = SourceHashes(part.path)
+        for chunk in chunks:
+            hashes.add(chunk)
+        copies = hashes.finish()
+        merged = copies if merged is None else merged.then(copies)
+    refusal = None if merged is None else merged.error()
+    if refusal is not None:
+        raise refusal
+
+
 @check_types
 def read_dataset(path: str, require_rssi: bool = True) -> pd.DataFrame:
     """Read and check a matched dataset (docs/conventions.md schema; see :func:`validate_matched`).
@@ -297,8 +315,12 @@ def read_dataset(path: str, require_rssi: bool = True) -> pd.DataFrame:
         False for datasets of poses to predict, whose ``rssi_dbm`` may be absent.
     """
     if is_partitioned(path):
-        frames = list(iter_parts(dataset_parts(path), 2_000_000))
-        table = pd.concat(frames, ignore_index=True) if len(frames) > 1 else frames[0]
+        parts = dataset_parts(path)
+        frames = [list(iter_parts([part], 2_000_000)) for part in parts]
+        if require_rssi:  # a copy named by its file and row, as a streamed fit names it
+            _refuse_copies_across(parts, frames)
+        flat = [f for each in frames for f in each]
+        table = pd.concat(flat, ignore_index=True) if len(flat) > 1 else flat[0]
         return validate_matched(table, path, require_rssi=require_rssi)
     return validate_matched(read_table(path), path, require_rssi=require_rssi)
 

@@ -28,6 +28,7 @@ import numpy as np
 import pandas as pd
 
 from rplearn._budget import Cost, check_work
+from rplearn.data.row_copies import RowCopies, SourceHashes
 from rplearn.data.tables import link_samples
 from rplearn.data.units import Stretches
 from rplearn.errors import InputError
@@ -300,11 +301,14 @@ def learning_times(parts: Sequence[Part], units: Sequence[str] | None, client: A
 
 
 def _part_predictions(part: Part, models: Sequence[Model], units: Sequence[str] | None
-                      ) -> tuple[np.ndarray, list[np.ndarray], list[int | None]]:
+                      ) -> tuple[np.ndarray, list[np.ndarray], list[int | None], RowCopies]:
     observed: list[np.ndarray] = []
     predicted: list[list[np.ndarray]] = [[] for _ in models]
     uncovered: list[int | None] = [None] * len(models)
+    hashes = SourceHashes(part.path)
     for chunk in iter_parts([part], PART_CHUNK_ROWS):
+        if hashes.add(chunk):  # a copy: the dataset is refused (predict_parts), nothing more to score
+            continue
         if units:
             chunk = chunk[chunk["unit"].astype(str).isin(set(units)).to_numpy()] if "unit" in chunk.columns else chunk.iloc[:0]
         if chunk.empty:
@@ -322,7 +326,7 @@ def _part_predictions(part: Part, models: Sequence[Model], units: Sequence[str] 
     def cat(xs: list[np.ndarray]) -> np.ndarray:
         return np.concatenate(xs) if xs else np.zeros(0)
 
-    return cat(observed), [cat(p) for p in predicted], uncovered
+    return cat(observed), [cat(p) for p in predicted], uncovered, hashes.finish()
 
 
 def predict_parts(
@@ -330,10 +334,15 @@ def predict_parts(
     progress: Progress | None = None,
 ) -> tuple[np.ndarray, list[np.ndarray], list[int | None]]:
     """Observed joint gains [dB] of the chosen units of every part, each model's predictions
-    of them, and per model the samples outside its coverage (None without a coverage grid)."""
+    of them, and per model the samples outside its coverage (None without a coverage grid).
+
+    A row that repeats an earlier row in every column, in its own part or another (a dataset
+    written twice, parts that overlap), is refused with the message of the whole-dataset check
+    (:mod:`rplearn.data.row_copies`): scored twice, it would weigh double in every score."""
     if client is not None:
         [models] = client.scatter([list(models)], broadcast=True, hash=False)
     results = map_parts(_part_predictions, parts, client, progress, models=models, units=units)
+    refuse_copies([r[3] for r in results])
     n_models = len(results[0][1]) if results else 0
     observed = np.concatenate([r[0] for r in results])
     predictions = [np.concatenate([r[1][k] for r in results]) for k in range(n_models)]
@@ -342,6 +351,19 @@ def predict_parts(
         counts = [r[2][k] for r in results if r[2][k] is not None]
         uncovered.append(int(sum(counts)) if counts else None)
     return observed, predictions, uncovered
+
+
+def refuse_copies(each: Sequence[RowCopies]) -> None:
+    """Raise the whole-dataset refusal when a row of these parts (in order) repeats an earlier
+    row of any of them."""
+    if not each:
+        return
+    merged = each[0]
+    for later in each[1:]:
+        merged = merged.then(later)
+    refusal = merged.error()
+    if refusal is not None:
+        raise refusal
 
 
 def selected_rows(index: pd.DataFrame, units: Sequence[str] | None) -> int:
@@ -374,4 +396,4 @@ def cluster_summary(client: Any) -> str:
 
 
 __all__ = ["DASK_INSTALL", "PART_CHUNK_ROWS", "accumulate_parts", "cluster_summary", "dask_client", "dataset_index",
-           "map_parts", "parse_dask", "part_index", "predict_parts", "selected_rows", "worker_peak_rss_bytes"]
+           "map_parts", "parse_dask", "part_index", "predict_parts", "refuse_copies", "selected_rows", "worker_peak_rss_bytes"]
