@@ -556,7 +556,7 @@ def _reference_drift(setup: Setup, parts: list[Any]) -> float:
 def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, prior_std_db: float = PRIOR_STD_DB,
         correlated: str = "reference", block_s: float = DEFAULT_BLOCK_S, posterior: str = "inflated",
         budget: bool = False, draws: int = DRAWS, candidates: dict[str, Any] | None = None, tilt: bool = False,
-        aggregate: str = "rms", rate: str = "spread") -> dict[str, Flight]:
+        aggregate: str = "rms", rate: str = "spread", prefixes: int = 1) -> dict[str, Flight]:
     config = _config(preset)
     learning = config.campaign.with_role("learning").units
     nodes = tuple(sorted(config.node_antennas))
@@ -567,7 +567,7 @@ def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, 
     cands = CandidateOptions(fixed_nodes=FIXED.get(preset, ()), speed_m_s=speed, **(candidates or {}))
     opts = ManoeuvreOptions(noise_std_db=noise, packet_rate_hz=config.radio.packet_rate_hz * (1 - config.radio.loss_probability),
                             penalty_weight=weight, candidates=cands, power=power, correlation_s=block_s, aggregate=aggregate,
-                            rate=rate)
+                            rate=rate, prefixes=prefixes)
     setup = Setup(preset, config, spec, nodes, opts, weight, seed=seed, correlated=correlated, block_s=block_s, budget=budget)
     ref_parts, _ = fly(setup, learning)
     if prior_std_db <= 0:  # the prior the project learns from the complete reference flight
@@ -702,6 +702,8 @@ def main(argv: list[str] | None = None) -> int:
                     help="the ranking's score: the nodes' RMS spread (default) or the largest (the stop criterion's)")
     ap.add_argument("--rate", choices=("spread", "information"), default="information",
                     help="the ranking per second: the spread's inverse square's growth (default) or its reduction")
+    ap.add_argument("--prefixes", type=int, default=ManoeuvreOptions().prefixes,
+                    help="score each candidate's first k/N too and fly its best prefix (1: whole manoeuvres only)")
     ap.add_argument("--tiny", action="store_true", help="the smoke preset at SH-4 (seconds; criteria not enforced)")
     args = ap.parse_args(argv)
     presets = ["smoke"] if args.tiny else [p.strip() for p in args.presets.split(",") if p.strip()]
@@ -717,7 +719,7 @@ def main(argv: list[str] | None = None) -> int:
         limit = float(sum(u.duration_s for u in ref_total.units))
         flights = run(preset, order, seed, limit, args.power, args.prior_std, args.correlated, args.block_s, args.posterior,
                       args.budget or args.tiny, draws, _candidate_args(args), args.tilt, args.aggregate,
-                      args.rate)
+                      args.rate, args.prefixes)
         ref = flights["reference"]
         print(f"{preset} (SH-{order}, seed {seed}, {time.perf_counter() - t0:.0f} s): time to {TARGET_DB:g} dB per-node spread")
         for f in flights.values():

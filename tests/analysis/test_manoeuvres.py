@@ -219,3 +219,33 @@ def test_ranking_by_information_orders_by_the_inverse_square_spread_s_growth_per
     yaw1 = next(r for r in by_info if r.name == "yaw turn of A")
     yaw2 = next(r for r in by_info if r.name == "yaw turn of A by 720 deg")
     assert yaw2.score_per_s / yaw1.score_per_s > yaw2.reduction_db_per_s / yaw1.reduction_db_per_s
+
+
+def test_a_long_manoeuvre_is_ranked_by_its_best_prefix_and_flown_only_to_it():
+    """With ``prefixes``, a candidate's first quarters count too: its score is at least the whole
+    manoeuvre's, the repeated second lap of a 720-deg turn is cut, and the cut candidate's
+    predicted effect is that of its own unit scored whole (the rows it flies are the prefix's)."""
+    from rplearn.analysis.manoeuvres import _score, _start
+    from rplearn.plan.prefix import PrefixUnit
+
+    opts = _options()
+    normal = NormalEquations(SPEC.basis(), 2)
+    whole = {r.name: r for r in rank_manoeuvres(normal, SPEC, NODES, POSES, opts)}
+    cut = rank_manoeuvres(normal, SPEC, NODES, POSES, replace(opts, prefixes=4))
+    assert [r.score_per_s for r in cut] == sorted((r.score_per_s for r in cut), reverse=True)
+    prefixed = [r for r in cut if isinstance(r.candidate.unit, PrefixUnit)]
+    assert prefixed and len(cut) == len(whole)
+    for r in cut:
+        name = r.name.split(", its first ")[0]
+        assert r.score_per_s >= whole[name].score_per_s * (1 - 1e-12)
+        assert (r.score_per_s > whole[name].score_per_s) == isinstance(r.candidate.unit, PrefixUnit)
+    yaw2 = next(r for r in cut if r.name.startswith("yaw turn of A by 720 deg"))
+    assert isinstance(yaw2.candidate.unit, PrefixUnit) and yaw2.duration_s < whole["yaw turn of A by 720 deg"].duration_s
+    post = _start(normal, SPEC, list(NODES), opts)
+    for r in prefixed[:3]:
+        again, (rows, _) = _score(post, r.candidate, list(NODES), SPEC.basis(), opts)  # its unit, whole
+        assert again.duration_s == pytest.approx(r.duration_s)
+        assert again.spread_after_db == pytest.approx(r.spread_after_db, rel=1e-9)
+    with pytest.raises(InputError) as err:
+        ManoeuvreOptions(prefixes=0)
+    assert err.value.param == "prefixes"
