@@ -205,8 +205,8 @@ def test_a_steady_tilt_shifts_the_peer_s_elevation_and_spares_a_fixed_node():
 
 def test_ranking_by_information_orders_by_the_inverse_square_spread_s_growth_per_second():
     normal = NormalEquations(SPEC.basis(), 2)
-    by_spread = rank_manoeuvres(normal, SPEC, NODES, POSES, _options(rate="spread"))
-    by_info = rank_manoeuvres(normal, SPEC, NODES, POSES, _options())  # the default
+    by_spread = rank_manoeuvres(normal, SPEC, NODES, POSES, _options(rate="spread", prefixes=1))
+    by_info = rank_manoeuvres(normal, SPEC, NODES, POSES, _options(prefixes=1))  # the default rate, whole manoeuvres
     assert all(r.score_per_s == r.reduction_db_per_s for r in by_spread)
     for r in by_info:  # the nodes' RMS spread, before and after, as 1/s^2 per second of flight
         b, a = (float(np.sqrt(np.mean(np.square(list(d.values()))))) for d in (r.spread_before_db, r.spread_after_db))
@@ -228,7 +228,7 @@ def test_a_long_manoeuvre_is_ranked_by_its_best_prefix_and_flown_only_to_it():
     from rplearn.analysis.manoeuvres import _score, _start
     from rplearn.plan.prefix import PrefixUnit
 
-    opts = _options()
+    opts = _options(prefixes=1)
     normal = NormalEquations(SPEC.basis(), 2)
     whole = {r.name: r for r in rank_manoeuvres(normal, SPEC, NODES, POSES, opts)}
     cut = rank_manoeuvres(normal, SPEC, NODES, POSES, replace(opts, prefixes=4))
