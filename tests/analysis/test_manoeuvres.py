@@ -249,3 +249,35 @@ def test_a_long_manoeuvre_is_ranked_by_its_best_prefix_and_flown_only_to_it():
     with pytest.raises(InputError) as err:
         ManoeuvreOptions(prefixes=0)
     assert err.value.param == "prefixes"
+
+
+def test_a_greedy_plan_of_prefixes_starts_each_step_where_the_last_one_was_cut():
+    """A ground station and a drone: the plan's cut steps hand the next step the poses at their
+    cut (position and heading of every node the next unit flies), and the plan's clock adds
+    each step's lead and flown time (a prefix: its cut, not its whole unit's duration): the
+    poses are followed along the units flown, not taken from the candidates' ``ends``."""
+    from rplearn.plan.prefix import PrefixUnit
+
+    poses = {"D": ((20.0, 0.0, 10.0), 180.0), "G": ((0.0, 0.0, 1.5), 0.0)}
+    weight = prior_penalty_weight(SPEC.basis(), 3.0, 4.0, SPEC.ridge_weight)
+    opts = ManoeuvreOptions(noise_std_db=4.0, penalty_weight=weight, target_points=256,
+                            candidates=CandidateOptions(fixed_nodes=("G",), library=False))
+    steps = greedy_plan(NormalEquations(SPEC.basis(), 2), SPEC, ("D", "G"), poses, 60.0, 1.0, opts)
+    assert any(isinstance(s.manoeuvre.candidate.unit, PrefixUnit) for s in steps)
+    state, t = dict(poses), 0.0
+    for s in steps:
+        cand = s.manoeuvre.candidate
+        start = cand.unit.evaluate(np.array([0.0]))
+        for j, node in enumerate(cand.unit.nodes):
+            assert start.position_enu_m[0, j] == pytest.approx(state[node][0], abs=1e-9), (s.manoeuvre.name, node)
+            turn = np.angle(np.exp(1j * (start.yaw_rad[0, j] - np.radians(state[node][1]))))
+            assert abs(turn) < 1e-9, (s.manoeuvre.name, node)
+        if isinstance(cand.unit, PrefixUnit):
+            assert cand.unit.duration_s == cand.unit.cut_s < cand.unit.unit.duration_s
+        t += cand.lead_s + cand.unit.duration_s
+        assert s.end_s == pytest.approx(t)
+        end = cand.unit.evaluate(np.array([cand.unit.duration_s]))  # where the unit flown leaves its nodes
+        for j, node in enumerate(cand.unit.nodes):
+            if node in cand.ends:
+                assert cand.ends[node][0] == pytest.approx(tuple(end.position_enu_m[0, j]), abs=1e-9), (s.manoeuvre.name, node)
+            state[node] = (tuple(end.position_enu_m[0, j]), float(np.degrees(end.yaw_rad[0, j])))
