@@ -6,6 +6,12 @@ ranking (:mod:`rplearn.analysis.manoeuvres`) therefore scores a candidate's pref
 prefix that wins is flown as a :class:`PrefixUnit`: the references of the whole unit up to
 ``cut_s``, then held at the pose reached there (at rest: velocity and acceleration zero). The
 vehicle stops where the cut falls and the ranking starts again from there.
+
+The stop is a step: a cut mid-orbit or mid-turn leaves the reference at cruise speed or yaw
+rate, and the braking a real vehicle needs after it (at the default 1.5 m/s and 1 m/s^2, 1.5 s
+and about 1.1 m further along; a 30-deg/s turn, 0.5 s) is counted neither in the prefix's
+duration nor in the next manoeuvre's lead. The simulator follows the references without
+vehicle dynamics, so ``benchmarks/manoeuvres.py`` does not see that time either.
 """
 
 from __future__ import annotations
