@@ -205,8 +205,8 @@ def test_a_steady_tilt_shifts_the_peer_s_elevation_and_spares_a_fixed_node():
 
 def test_ranking_by_information_orders_by_the_inverse_square_spread_s_growth_per_second():
     normal = NormalEquations(SPEC.basis(), 2)
-    by_spread = rank_manoeuvres(normal, SPEC, NODES, POSES, _options(rate="spread"))
-    by_info = rank_manoeuvres(normal, SPEC, NODES, POSES, _options())  # the default
+    by_spread = rank_manoeuvres(normal, SPEC, NODES, POSES, _options(rate="spread", prefixes=1))
+    by_info = rank_manoeuvres(normal, SPEC, NODES, POSES, _options(prefixes=1))  # the default rate, whole manoeuvres
     assert all(r.score_per_s == r.reduction_db_per_s for r in by_spread)
     for r in by_info:  # the nodes' RMS spread, before and after, as 1/s^2 per second of flight
         b, a = (float(np.sqrt(np.mean(np.square(list(d.values()))))) for d in (r.spread_before_db, r.spread_after_db))
@@ -219,3 +219,65 @@ def test_ranking_by_information_orders_by_the_inverse_square_spread_s_growth_per
     yaw1 = next(r for r in by_info if r.name == "yaw turn of A")
     yaw2 = next(r for r in by_info if r.name == "yaw turn of A by 720 deg")
     assert yaw2.score_per_s / yaw1.score_per_s > yaw2.reduction_db_per_s / yaw1.reduction_db_per_s
+
+
+def test_a_long_manoeuvre_is_ranked_by_its_best_prefix_and_flown_only_to_it():
+    """With ``prefixes``, a candidate's first quarters count too: its score is at least the whole
+    manoeuvre's, the repeated second lap of a 720-deg turn is cut, and the cut candidate's
+    predicted effect is that of its own unit scored whole (the rows it flies are the prefix's)."""
+    from rplearn.analysis.manoeuvres import _score, _start
+    from rplearn.plan.prefix import PrefixUnit
+
+    opts = _options(prefixes=1)
+    normal = NormalEquations(SPEC.basis(), 2)
+    whole = {r.name: r for r in rank_manoeuvres(normal, SPEC, NODES, POSES, opts)}
+    cut = rank_manoeuvres(normal, SPEC, NODES, POSES, replace(opts, prefixes=4))
+    assert [r.score_per_s for r in cut] == sorted((r.score_per_s for r in cut), reverse=True)
+    prefixed = [r for r in cut if isinstance(r.candidate.unit, PrefixUnit)]
+    assert prefixed and len(cut) == len(whole)
+    for r in cut:
+        name = r.name.split(", its first ")[0]
+        assert r.score_per_s >= whole[name].score_per_s * (1 - 1e-12)
+        assert (r.score_per_s > whole[name].score_per_s) == isinstance(r.candidate.unit, PrefixUnit)
+    yaw2 = next(r for r in cut if r.name.startswith("yaw turn of A by 720 deg"))
+    assert isinstance(yaw2.candidate.unit, PrefixUnit) and yaw2.duration_s < whole["yaw turn of A by 720 deg"].duration_s
+    post = _start(normal, SPEC, list(NODES), opts)
+    for r in prefixed[:3]:
+        again, (rows, _) = _score(post, r.candidate, list(NODES), SPEC.basis(), opts)  # its unit, whole
+        assert again.duration_s == pytest.approx(r.duration_s)
+        assert again.spread_after_db == pytest.approx(r.spread_after_db, rel=1e-9)
+    with pytest.raises(InputError) as err:
+        ManoeuvreOptions(prefixes=0)
+    assert err.value.param == "prefixes"
+
+
+def test_a_greedy_plan_of_prefixes_starts_each_step_where_the_last_one_was_cut():
+    """A ground station and a drone: the plan's cut steps hand the next step the poses at their
+    cut (position and heading of every node the next unit flies), and the plan's clock adds
+    each step's lead and flown time (a prefix: its cut, not its whole unit's duration): the
+    poses are followed along the units flown, not taken from the candidates' ``ends``."""
+    from rplearn.plan.prefix import PrefixUnit
+
+    poses = {"D": ((20.0, 0.0, 10.0), 180.0), "G": ((0.0, 0.0, 1.5), 0.0)}
+    weight = prior_penalty_weight(SPEC.basis(), 3.0, 4.0, SPEC.ridge_weight)
+    opts = ManoeuvreOptions(noise_std_db=4.0, penalty_weight=weight, target_points=256,
+                            candidates=CandidateOptions(fixed_nodes=("G",), library=False))
+    steps = greedy_plan(NormalEquations(SPEC.basis(), 2), SPEC, ("D", "G"), poses, 60.0, 1.0, opts)
+    assert any(isinstance(s.manoeuvre.candidate.unit, PrefixUnit) for s in steps)
+    state, t = dict(poses), 0.0
+    for s in steps:
+        cand = s.manoeuvre.candidate
+        start = cand.unit.evaluate(np.array([0.0]))
+        for j, node in enumerate(cand.unit.nodes):
+            assert start.position_enu_m[0, j] == pytest.approx(state[node][0], abs=1e-9), (s.manoeuvre.name, node)
+            turn = np.angle(np.exp(1j * (start.yaw_rad[0, j] - np.radians(state[node][1]))))
+            assert abs(turn) < 1e-9, (s.manoeuvre.name, node)
+        if isinstance(cand.unit, PrefixUnit):
+            assert cand.unit.duration_s == cand.unit.cut_s < cand.unit.unit.duration_s
+        t += cand.lead_s + cand.unit.duration_s
+        assert s.end_s == pytest.approx(t)
+        end = cand.unit.evaluate(np.array([cand.unit.duration_s]))  # where the unit flown leaves its nodes
+        for j, node in enumerate(cand.unit.nodes):
+            if node in cand.ends:
+                assert cand.ends[node][0] == pytest.approx(tuple(end.position_enu_m[0, j]), abs=1e-9), (s.manoeuvre.name, node)
+            state[node] = (tuple(end.position_enu_m[0, j]), float(np.degrees(end.yaw_rad[0, j])))
