@@ -273,7 +273,8 @@ def test_a_greedy_plan_of_prefixes_starts_each_step_where_the_last_one_was_cut()
             turn = np.angle(np.exp(1j * (start.yaw_rad[0, j] - np.radians(state[node][1]))))
             assert abs(turn) < 1e-9, (s.manoeuvre.name, node)
         if isinstance(cand.unit, PrefixUnit):
-            assert cand.unit.duration_s == cand.unit.cut_s < cand.unit.unit.duration_s
+            assert cand.unit.cut_s < cand.unit.unit.duration_s and cand.unit.brake_s > 0.0  # cut on the move
+            assert cand.unit.duration_s == cand.unit.cut_s + cand.unit.brake_s  # the plan's clock pays the braking
         t += cand.lead_s + cand.unit.duration_s
         assert s.end_s == pytest.approx(t)
         end = cand.unit.evaluate(np.array([cand.unit.duration_s]))  # where the unit flown leaves its nodes

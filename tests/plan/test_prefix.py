@@ -10,7 +10,7 @@ import pytest
 from rplearn.errors import InputError
 from rplearn.plan.campaign import Campaign
 from rplearn.plan.manoeuvres import Candidate, ManoeuvreUnit
-from rplearn.plan.prefix import PrefixUnit, cut_candidate, prefix_cuts
+from rplearn.plan.prefix import PrefixUnit, braking_s, cut_candidate, prefix_cuts
 
 
 def _orbit():
@@ -21,7 +21,11 @@ def _orbit():
 def test_a_prefix_follows_the_unit_up_to_its_cut_then_holds_at_rest():
     whole = _orbit()
     cut = PrefixUnit(whole, 20.0)
-    assert cut.duration_s == 20.0 and cut.nodes == whole.nodes and cut.role == "learning"
+    speed = float(np.linalg.norm(whole.evaluate(np.array([20.0])).velocity_enu_m_s[0, 1]))
+    assert speed == pytest.approx(whole.speed_m_s)  # mid-orbit, at cruise: braking at accel_m_s2 counted
+    assert cut.brake_s == pytest.approx(speed / whole.accel_m_s2, rel=1e-6)
+    assert cut.duration_s == pytest.approx(20.0 + cut.brake_s) and cut.brake_s > 1.0
+    assert cut.nodes == whole.nodes and cut.role == "learning"
     assert cut.label == f"{whole.label}_first20s"
     t = np.linspace(0.0, 20.0, 81)
     a, b = whole.evaluate(t, 3.0), cut.evaluate(t, 3.0)
@@ -36,6 +40,15 @@ def test_a_prefix_follows_the_unit_up_to_its_cut_then_holds_at_rest():
         with pytest.raises(InputError) as err:
             PrefixUnit(whole, bad)
         assert err.value.param == "cut_s"
+
+
+def test_braking_after_a_cut_turn_is_its_yaw_rate_over_the_yaw_acceleration_and_none_at_the_end():
+    turn = ManoeuvreUnit(nodes=("B", "A"), kind="yaw", anchor_enu_m=(5.0, 0.0, 20.0), start_enu_m=(-5.0, 0.0, 20.0),
+                         turn_deg=360.0)
+    mid = turn.duration_s / 2.0  # at cruise yaw rate, standing still
+    assert braking_s(turn, mid) == pytest.approx(turn.yaw_rate_deg_s / turn.yaw_accel_deg_s2, rel=1e-3)
+    assert braking_s(turn, turn.duration_s) == 0.0 and braking_s(_orbit(), _orbit().duration_s) == 0.0
+    assert PrefixUnit(turn, turn.duration_s).duration_s == turn.duration_s  # the whole: ends at rest
 
 
 def test_the_cuts_are_whole_blocks_at_least_two_long_and_the_whole_comes_last():
@@ -59,7 +72,7 @@ def test_a_cut_candidate_ends_where_the_cut_falls_and_the_simulator_flies_only_t
     pos = whole.evaluate(np.array([15.0]))
     assert cut.ends["A"][0] == pytest.approx(tuple(pos.position_enu_m[0, 1]))
     assert cut.ends["A"][1] == pytest.approx(np.degrees(pos.yaw_rad[0, 1]))
-    assert set(cut.ends) == {"A"} and cut.duration_s == pytest.approx(17.0) and "first 15 of" in cut.name
+    assert set(cut.ends) == {"A"} and cut.duration_s == pytest.approx(2.0 + 15.0 + 1.5) and "first 15 of" in cut.name  # lead, prefix, braking
     config = make_preset("smoke")
     config = replace(config, radio=replace(config.radio, link_offsets_db=(), dropouts=0))
     flown = simulate(replace(config, campaign=Campaign((replace(cut.unit, label="p00"),), gap_s=0.0)), seed=3)

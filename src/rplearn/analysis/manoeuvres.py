@@ -57,7 +57,7 @@ from rplearn.core.threads import one_blas_thread
 from rplearn.errors import InputError
 from rplearn.models.spec import ModelSpec
 from rplearn.plan.manoeuvres import Candidate, CandidateOptions, candidate_manoeuvres
-from rplearn.plan.prefix import cut_candidate, prefix_cuts
+from rplearn.plan.prefix import braking_s, cut_candidate, prefix_cuts
 from rplearn.plan.trajectory import G_M_S2
 
 #: How the nodes' spreads are combined into one score.
@@ -430,7 +430,8 @@ def _score(post: ManoeuvrePosterior, cand: Candidate, nodes: Sequence[str], basi
         after = post.spreads_after(rows[:cut], _weight(options), ends if part is None else part)
         a = _aggregate(after, options)
         # a prefix of ``cut`` rows is the unit up to its last row's time (its own rows, resampled, the same)
-        took_s = cand.lead_s + (float(cand.unit.duration_s) if part is None else (cut - 1) / options.sample_rate_hz)
+        cut_s = (cut - 1) / options.sample_rate_hz  # a prefix: its rows, then braking to rest
+        took_s = cand.lead_s + (float(cand.unit.duration_s) if part is None else cut_s + braking_s(cand.unit, cut_s))
         score = ((b - a) if options.rate == "spread" else 1.0 / max(a, 1e-12) ** 2 - 1.0 / max(b, 1e-12) ** 2) / max(took_s, 1e-9)
         if best is None or score > best[0]:
             best = (score, (b - a) / max(took_s, 1e-9), cut, after)

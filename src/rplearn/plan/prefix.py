@@ -7,11 +7,15 @@ prefix that wins is flown as a :class:`PrefixUnit`: the references of the whole 
 ``cut_s``, then held at the pose reached there (at rest: velocity and acceleration zero). The
 vehicle stops where the cut falls and the ranking starts again from there.
 
-The stop is a step: a cut mid-orbit or mid-turn leaves the reference at cruise speed or yaw
-rate, and the braking a real vehicle needs after it (at the default 1.5 m/s and 1 m/s^2, 1.5 s
-and about 1.1 m further along; a 30-deg/s turn, 0.5 s) is counted neither in the prefix's
-duration nor in the next manoeuvre's lead. The simulator follows the references without
-vehicle dynamics, so ``benchmarks/manoeuvres.py`` does not see that time either.
+The stop is counted: a cut mid-orbit or mid-turn leaves the reference at cruise speed or yaw
+rate, and a real vehicle needs time to brake (at the default 1.5 m/s and 1 m/s^2, 1.5 s; a
+30-deg/s turn at 60 deg/s^2, 0.5 s). :attr:`PrefixUnit.brake_s` is that time, from the unit's
+speed and yaw rate at the cut and its acceleration limits (``accel_m_s2``,
+``yaw_accel_deg_s2``; 1 m/s^2 and 60 deg/s^2 for units without them), and it is part of the
+prefix's :attr:`~PrefixUnit.duration_s`, so that the ranking's time per manoeuvre, a plan's
+clock and the benchmark's flight time all pay it. No samples are taken while braking
+(:meth:`PrefixUnit.sample` ends at the cut): the directions seen then are near the cut's, and
+counting them would credit a prefix with data its score did not predict.
 """
 
 from __future__ import annotations
@@ -66,13 +70,20 @@ class PrefixUnit:
         return tuple(self.unit.nodes)
 
     @property
+    def brake_s(self) -> float:
+        """Time to come to rest after the cut [s] (module docstring): the largest of each
+        node's speed over the unit's acceleration limit and yaw rate over its yaw-acceleration
+        limit at the cut; 0 at the unit's end (its profile ends at rest)."""
+        return braking_s(self.unit, float(self.cut_s))
+
+    @property
     def duration_s(self) -> float:
-        """Flight time of the prefix [s]."""
-        return float(self.cut_s)
+        """Flight time of the prefix [s]: up to the cut, then braking (:attr:`brake_s`)."""
+        return float(self.cut_s) + self.brake_s
 
     def sample(self, rate_hz: float, t_offset_s: float = 0.0) -> UnitReference:
-        """References at ``rate_hz`` [Hz] over the prefix."""
-        return self.evaluate(sample_times_s(self.duration_s, rate_hz), t_offset_s)
+        """References at ``rate_hz`` [Hz] over the prefix up to its cut (none while braking)."""
+        return self.evaluate(sample_times_s(float(self.cut_s), rate_hz), t_offset_s)
 
     def evaluate(self, t_rel_s: FloatArray, t_offset_s: float = 0.0) -> UnitReference:
         """The whole unit's references at ``t_rel_s`` up to the cut, held at rest after it."""
@@ -88,6 +99,29 @@ class PrefixUnit:
         ref = self.unit.evaluate(np.array([float(self.cut_s)]))
         return {str(n): (tuple(float(v) for v in ref.position_enu_m[0, j]), float(np.degrees(ref.yaw_rad[0, j])))  # type: ignore[misc]
                 for j, n in enumerate(self.unit.nodes)}
+
+
+#: Acceleration limits [m/s^2, deg/s^2] of units that state none (those of a manoeuvre unit's defaults).
+DEFAULT_ACCEL_M_S2, DEFAULT_YAW_ACCEL_DEG_S2 = 1.0, 60.0
+#: Time step [s] of the yaw rate's finite difference at a cut.
+_YAW_STEP_S = 0.01
+
+
+def braking_s(unit: Any, t_s: float) -> float:
+    """Seconds for ``unit``'s nodes to come to rest from their reference speed and yaw rate at
+    ``t_s`` [s] into it, at the unit's acceleration limits (:data:`DEFAULT_ACCEL_M_S2`,
+    :data:`DEFAULT_YAW_ACCEL_DEG_S2` when it states none); 0 at or after its end."""
+    whole = float(unit.duration_s)
+    if t_s >= whole:
+        return 0.0
+    t0 = max(t_s - _YAW_STEP_S, 0.0)
+    ref = unit.evaluate(np.array([t0, t_s]))
+    speed_m_s = float(np.max(np.linalg.norm(ref.velocity_enu_m_s[1], axis=-1), initial=0.0))
+    turn = np.angle(np.exp(1j * (ref.yaw_rad[1] - ref.yaw_rad[0])))  # wrapped to (-pi, pi]
+    yaw_rate_deg_s = float(np.degrees(np.max(np.abs(turn), initial=0.0))) / max(t_s - t0, 1e-9)
+    accel = float(getattr(unit, "accel_m_s2", DEFAULT_ACCEL_M_S2))
+    yaw_accel = float(getattr(unit, "yaw_accel_deg_s2", DEFAULT_YAW_ACCEL_DEG_S2))
+    return max(speed_m_s / accel, yaw_rate_deg_s / yaw_accel)
 
 
 @check_types
@@ -114,4 +148,4 @@ def cut_candidate(candidate: Candidate, cut_s: float) -> Candidate:
     return replace(candidate, name=f"{candidate.name}, its first {float(cut_s):.0f} of {whole:.0f} s", unit=unit, ends=ends)
 
 
-__all__ = ["PrefixUnit", "cut_candidate", "prefix_cuts"]
+__all__ = ["DEFAULT_ACCEL_M_S2", "DEFAULT_YAW_ACCEL_DEG_S2", "PrefixUnit", "braking_s", "cut_candidate", "prefix_cuts"]
