@@ -133,3 +133,22 @@ def test_the_sphere_average_design_is_computed_once_per_basis_and_read_only():
     az, el = fibonacci_grid_nodes(max(4 * basis.n_coef, 400))
     assert np.array_equal(squares, basis.design(az, el) ** 2)
     assert _design_squares(ModelSpec("sh", 6).basis()) is squares and not squares.flags.writeable
+
+
+def test_the_prior_spread_sums_the_penalised_columns_kept_once_per_basis_and_power():
+    """``prior_std_db`` reads the penalised columns of the squared design, cut once per basis
+    and power (read-only): the same numbers as cutting them at every call."""
+    from rplearn.models.auto_spread import _design_squares, _kept_squares, prior_std_db
+    from rplearn.models.spec import ModelSpec
+
+    basis = ModelSpec("sh", 6).basis()
+    p = basis.n_coef
+    weights = np.linspace(1.0, 50.0, 2 * p)
+    spread = prior_std_db(basis, ["A", "B"], weights, 3.0, power=2.0)
+    keep = np.asarray(basis.roughness(2.0)) > 0
+    for k, node in enumerate(["A", "B"]):
+        var = 3.0 * _design_squares(basis)[:, keep] @ (1.0 / weights[k * p:(k + 1) * p][keep])
+        assert spread[node] == float(np.sqrt(np.mean(var)))
+    kept = _kept_squares(basis, 2.0)
+    assert _kept_squares(ModelSpec("sh", 6).basis(), 2.0) is kept and not kept.flags.writeable
+    assert kept.shape == (_design_squares(basis).shape[0], int(keep.sum()))

@@ -36,12 +36,12 @@ def prior_std_db(basis: Any, nodes: Sequence[str], weights: np.ndarray, noise_va
     """
 
     p = basis.n_coef
-    squares = _design_squares(basis)  # (directions, p)
     keep = np.asarray(basis.roughness(power)) > 0
+    squares = _kept_squares(basis, float(power))  # (directions, penalised columns)
     out = {}
     for k, node in enumerate(nodes):
         weight = np.asarray(weights[k * p:(k + 1) * p], np.float64)[keep]
-        var = noise_var * squares[:, keep] @ (1.0 / np.maximum(weight, 1e-300))
+        var = noise_var * squares @ (1.0 / np.maximum(weight, 1e-300))
         out[str(node)] = float(np.sqrt(np.mean(var))) if keep.any() else float("inf")
     return out
 
@@ -57,6 +57,15 @@ def _design_squares(basis: Any) -> np.ndarray:
     squares = basis.design(az, el) ** 2
     squares.setflags(write=False)
     return squares
+
+
+@lru_cache(maxsize=8)
+def _kept_squares(basis: Any, power: float) -> np.ndarray:
+    """The columns of :func:`_design_squares` that the roughness of ``power`` penalises (what
+    :func:`prior_std_db` sums; once per basis and power, not per node and call), read-only."""
+    kept = _design_squares(basis)[:, np.asarray(basis.roughness(power)) > 0]
+    kept.setflags(write=False)
+    return kept
 
 
 @lru_cache(maxsize=8)
