@@ -3,9 +3,6 @@ offset found from the signal."""
 
 from __future__ import annotations
 
-import subprocess
-import sys
-
 import pandas as pd
 import pytest
 
@@ -47,18 +44,28 @@ def test_a_short_flight_says_how_unsure_it_is_and_an_edge_is_flagged(tmp_path):
         estimate_clock_offset(pose, sig, "B", window_s=-1.0)
 
 
-def test_sync_reports_the_offset_and_applies_it_only_when_asked(tmp_path):
+def _sync(*args: str):
+    """``rplearn sync ARGS`` in this process (typer's ``CliRunner``, stdout and stderr apart): the
+    process boundary is not what these checks are about."""
+    from typer.testing import CliRunner
+
+    from rplearn.cli import app
+
+    return CliRunner().invoke(app, ["sync", *args], env={"COLUMNS": "400"})
+
+
+def test_sync_reports_the_offset_and_applies_it_only_when_asked(tmp_path, monkeypatch):
     pose, sig = late_logs(tmp_path, "smoke", 1)
     pose.to_parquet(tmp_path / "poses.parquet")
     sig.to_parquet(tmp_path / "signals.parquet")
-    base = [sys.executable, "-m", "rplearn.cli", "sync", "--poses", "poses.parquet", "--signals", "signals.parquet",
-            "--estimate-offset", "B"]
-    kept = subprocess.run(base + ["-o", "kept.parquet"], cwd=tmp_path, capture_output=True, text=True)
-    assert kept.returncode == 0 and "clock offset of B: +0.3" in kept.stdout and "not applied" in kept.stderr, kept.stderr
-    used = subprocess.run(base + ["--apply-offset", "-o", "used.parquet"], cwd=tmp_path, capture_output=True, text=True)
-    assert used.returncode == 0, used.stderr
-    plain = subprocess.run(base[:-2] + ["--offset", "B=0.35", "-o", "plain.parquet"], cwd=tmp_path, capture_output=True, text=True)
-    assert plain.returncode == 0, plain.stderr
+    monkeypatch.chdir(tmp_path)
+    base = ["--poses", "poses.parquet", "--signals", "signals.parquet", "--estimate-offset", "B"]
+    kept = _sync(*base, "-o", "kept.parquet")
+    assert kept.exit_code == 0 and "clock offset of B: +0.3" in kept.stdout and "not applied" in kept.stderr, kept.output
+    used = _sync(*base, "--apply-offset", "-o", "used.parquet")
+    assert used.exit_code == 0, used.output
+    plain = _sync(*base[:-2], "--offset", "B=0.35", "-o", "plain.parquet")
+    assert plain.exit_code == 0, plain.output
     kept, used, plain = (pd.read_parquet(tmp_path / f) for f in ("kept.parquet", "used.parquet", "plain.parquet"))
     key = ["t", "tx", "rx"]
     vs_plain = used.merge(plain, on=key, suffixes=("", "_plain"))
@@ -67,8 +74,8 @@ def test_sync_reports_the_offset_and_applies_it_only_when_asked(tmp_path):
     # applied: B's poses are (nearly) those of the true offset, and not those of no offset
     assert (vs_plain.loc[b_rx, "rx_x"] - vs_plain.loc[b_rx, "rx_x_plain"]).abs().max() < 0.3
     assert (vs_kept["rx_qz"] != vs_kept["rx_qz_kept"]).mean() > 0.3
-    no = subprocess.run(base[:-2] + ["--apply-offset", "-o", "x.parquet"], cwd=tmp_path, capture_output=True, text=True)
-    assert no.returncode == 1 and "give --estimate-offset" in no.stderr
+    no = _sync(*base[:-2], "--apply-offset", "-o", "x.parquet")
+    assert no.exit_code == 1 and "give --estimate-offset" in no.stderr
 
 
 def test_a_still_node_or_a_wide_window_is_handled(tmp_path):

@@ -308,27 +308,28 @@ def test_a_station_moved_between_flights_is_refused_with_both_positions():
 def test_relative_power_keeps_strong_samples_and_says_so(tmp_path):
     """Issue 12, item 3: an uncalibrated radio's dB above +30 are kept with --rssi-scale relative
     (dropped as implausible in dBm); the dataset says its scale, and fits from it."""
-    import subprocess
-    import sys
+    from typer.testing import CliRunner
 
+    from rplearn.cli import app
     from rplearn.io.files import read_dataset
     from rplearn.sim import simulate
+
+    def rplearn(*args: str):  # in this process: the exit codes and messages are checked, not the process boundary
+        return CliRunner().invoke(app, list(args), env={"COLUMNS": "400"})
 
     simulate("smoke", seed=2, out_dir=str(tmp_path / "f"))
     sig = pd.read_parquet(tmp_path / "f" / "signal_log.parquet")
     sig["rssi_dbm"] = sig["rssi_dbm"] + 110.0  # dB above some noise floor, not dBm
     sig.to_csv(tmp_path / "rel.csv", index=False)
-    rplearn = [sys.executable, "-m", "rplearn.cli"]
-    base = rplearn + ["sync", "--poses", str(tmp_path / "f" / "pose_log.parquet"), "--signals", str(tmp_path / "rel.csv")]
-    as_dbm = subprocess.run(base + ["-o", str(tmp_path / "dbm.parquet")], capture_output=True, text=True)
-    assert as_dbm.returncode == 1 and "implausible_rssi" in as_dbm.stdout + as_dbm.stderr, as_dbm.stdout + as_dbm.stderr
-    rel = subprocess.run(base + ["--rssi-scale", "relative", "-o", str(tmp_path / "rel.parquet")], capture_output=True, text=True)
-    assert rel.returncode == 0, rel.stderr
+    base = ["sync", "--poses", str(tmp_path / "f" / "pose_log.parquet"), "--signals", str(tmp_path / "rel.csv")]
+    as_dbm = rplearn(*base, "-o", str(tmp_path / "dbm.parquet"))
+    assert as_dbm.exit_code == 1 and "implausible_rssi" in as_dbm.output, as_dbm.output
+    rel = rplearn(*base, "--rssi-scale", "relative", "-o", str(tmp_path / "rel.parquet"))
+    assert rel.exit_code == 0, rel.output
     d = read_dataset(str(tmp_path / "rel.parquet"))
     assert len(d) > 0.9 * len(sig) and set(d["rssi_scale"]) == {"relative"} and d["rssi_dbm"].max() > 30
-    fit = subprocess.run(rplearn + ["fit", str(tmp_path / "rel.parquet"), "--degree", "3", "-o", str(tmp_path / "m.json")],
-                         capture_output=True, text=True)
-    assert fit.returncode == 0, fit.stderr
+    fit = rplearn("fit", str(tmp_path / "rel.parquet"), "--degree", "3", "-o", str(tmp_path / "m.json"))
+    assert fit.exit_code == 0, fit.output
     with pytest.raises(InputError, match="rssi_scale"):
         SyncOptions(rssi_scale="linear")
 

@@ -3,9 +3,6 @@ the `ground` preset (a static ground station and one drone at 15 and 25 m, teste
 
 from __future__ import annotations
 
-import subprocess
-import sys
-
 import pytest
 
 from rplearn.analysis.pattern_error import node_directions
@@ -68,37 +65,40 @@ def test_a_reference_prior_wins_where_the_flight_saw_little(tmp_path, seed):
     assert rmse(without_prior.model, test) <= mean
 
 
-def test_fit_cli_takes_a_prior_per_node(tmp_path):
+def _cli(*args: str):
+    """``rplearn ARGS`` in this process (typer's ``CliRunner``; the process boundary is not what
+    these checks are about): its exit code, stdout and stderr apart."""
+    from typer.testing import CliRunner
+
+    from rplearn.cli import app
+
+    return CliRunner().invoke(app, list(args), env={"COLUMNS": "400"})
+
+
+def test_fit_cli_takes_a_prior_per_node(tmp_path, monkeypatch):
     per_unit, _, _, _ = ground_case(tmp_path, 1)
-    rplearn = [sys.executable, "-m", "rplearn.cli"]
-    proc = subprocess.run(rplearn + ["reference", "G=ref_G.csv", "D=ref_D.csv", "-o", "ref.json"], cwd=tmp_path,
-                          capture_output=True, text=True)
-    assert proc.returncode == 0, proc.stderr
-    proc = subprocess.run(rplearn + ["fit", "m.parquet", "--prior", "G=ref.json", "--prior", "D=ref.json", "-o", "p.json"],
-                          cwd=tmp_path, capture_output=True, text=True)
-    assert proc.returncode == 0 and "chosen by grouped cross-validation" in proc.stdout, proc.stderr
+    monkeypatch.chdir(tmp_path)
+    proc = _cli("reference", "G=ref_G.csv", "D=ref_D.csv", "-o", "ref.json")
+    assert proc.exit_code == 0, proc.output
+    proc = _cli("fit", "m.parquet", "--prior", "G=ref.json", "--prior", "D=ref.json", "-o", "p.json")
+    assert proc.exit_code == 0 and "chosen by grouped cross-validation" in proc.stdout, proc.output
     from rplearn.models import load_model
 
     assert set(load_model(tmp_path / "p.json").training["prior"]) == {"G", "D"}
     assert "where the flight never looked each pattern may be off by" in proc.stdout and "x" in proc.stdout
-    proc = subprocess.run(rplearn + ["fit", "m.parquet", "--prior", "G=ref.json", "--prior", "D=ref.json", "--prior-std", "4",
-                                     "-o", "s.json"], cwd=tmp_path, capture_output=True, text=True)
-    assert proc.returncode == 0 and "G 4.0 dB, D 4.0 dB" in proc.stdout.replace("D 4.0 dB, G 4.0 dB", "G 4.0 dB, D 4.0 dB"), proc.stdout
+    proc = _cli("fit", "m.parquet", "--prior", "G=ref.json", "--prior", "D=ref.json", "--prior-std", "4", "-o", "s.json")
+    assert proc.exit_code == 0 and "G 4.0 dB, D 4.0 dB" in proc.stdout.replace("D 4.0 dB, G 4.0 dB", "G 4.0 dB, D 4.0 dB"), proc.stdout
     stated = load_model(tmp_path / "s.json").training
     assert stated["prior_std_source"] == "stated" and stated["prior_std_db"]["G"] == pytest.approx(4.0)
-    proc = subprocess.run(rplearn + ["fit", "m.parquet", "--prior-std", "4", "-o", "y.json"], cwd=tmp_path,
-                          capture_output=True, text=True)
-    assert proc.returncode == 1 and "give --prior too" in proc.stderr, proc.stderr
+    proc = _cli("fit", "m.parquet", "--prior-std", "4", "-o", "y.json")
+    assert proc.exit_code == 1 and "give --prior too" in proc.stderr, proc.output
     assert load_model(tmp_path / "p.json").training["prior_level"] == "data"  # the prior gives its shape
-    proc = subprocess.run(rplearn + ["fit", "m.parquet", "--prior", "G=ref.json", "--prior", "D=ref.json", "--prior-level",
-                                     "prior", "-o", "a.json"], cwd=tmp_path, capture_output=True, text=True)
-    assert proc.returncode == 0 and load_model(tmp_path / "a.json").training["prior_level"] == "prior", proc.stderr
-    proc = subprocess.run(rplearn + ["fit", "m.parquet", "--prior-level", "prior", "-o", "z.json"], cwd=tmp_path,
-                          capture_output=True, text=True)
-    assert proc.returncode == 1 and "--prior-level" in proc.stderr and "give --prior too" in proc.stderr, proc.stderr
-    proc = subprocess.run(rplearn + ["fit", "m.parquet", "--prior", "X=ref.json", "-o", "x.json"], cwd=tmp_path,
-                          capture_output=True, text=True)
-    assert proc.returncode == 1 and "prior: node X is not in the learning data" in proc.stderr, proc.stderr
+    proc = _cli("fit", "m.parquet", "--prior", "G=ref.json", "--prior", "D=ref.json", "--prior-level", "prior", "-o", "a.json")
+    assert proc.exit_code == 0 and load_model(tmp_path / "a.json").training["prior_level"] == "prior", proc.output
+    proc = _cli("fit", "m.parquet", "--prior-level", "prior", "-o", "z.json")
+    assert proc.exit_code == 1 and "--prior-level" in proc.stderr and "give --prior too" in proc.stderr, proc.output
+    proc = _cli("fit", "m.parquet", "--prior", "X=ref.json", "-o", "x.json")
+    assert proc.exit_code == 1 and "prior: node X is not in the learning data" in proc.stderr, proc.output
 
 
 def test_predictions_say_where_the_flight_never_looked(tmp_path):

@@ -4,8 +4,6 @@ hand computation says; the command line builds a model the other commands use.""
 
 from __future__ import annotations
 
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -71,14 +69,19 @@ def test_bad_pattern_files_are_refused_in_one_line(tmp_path):
             read_reference_pattern(tmp_path / name)
 
 
-def test_reference_cli_makes_a_model_the_other_commands_use(tmp_path):
+def test_reference_cli_makes_a_model_the_other_commands_use(tmp_path, monkeypatch):
+    from typer.testing import CliRunner
+
+    from rplearn.cli import app
+
+    def rplearn(*args: str):  # in this process: the outputs are checked, not the process boundary
+        return CliRunner().invoke(app, list(args), env={"COLUMNS": "400"})
+
     antenna_frame_csv(tmp_path / "ant.csv")
-    rplearn = [sys.executable, "-m", "rplearn.cli"]
-    proc = subprocess.run(rplearn + ["reference", "A=ant.csv", "B=ant.csv", "--mount", "A=180,0,0", "-o", "ref.json"],
-                          cwd=tmp_path, capture_output=True, text=True)
-    assert proc.returncode == 0 and "A: ant.csv, mount (roll, pitch, yaw) (180.0, 0.0, 0.0) deg" in proc.stdout, proc.stderr
-    proc = subprocess.run(rplearn + ["orient", "ref.json", "--tx", "A", "--rx", "B", "--tx-pos", "0,0,20",
-                                     "--rx-pos", "30,0,20", "--frequency", "2.4e9"], cwd=tmp_path, capture_output=True, text=True)
-    assert proc.returncode == 0 and "best yaw" in proc.stdout, proc.stderr
+    monkeypatch.chdir(tmp_path)
+    proc = rplearn("reference", "A=ant.csv", "B=ant.csv", "--mount", "A=180,0,0", "-o", "ref.json")
+    assert proc.exit_code == 0 and "A: ant.csv, mount (roll, pitch, yaw) (180.0, 0.0, 0.0) deg" in proc.stdout, proc.output
+    proc = rplearn("orient", "ref.json", "--tx", "A", "--rx", "B", "--tx-pos", "0,0,20", "--rx-pos", "30,0,20", "--frequency", "2.4e9")
+    assert proc.exit_code == 0 and "best yaw" in proc.stdout, proc.output
     model = load_model(tmp_path / "ref.json")
     assert model.training["reference"]["A"]["mount_rpy_deg"] == [180.0, 0.0, 0.0]

@@ -2,9 +2,6 @@
 
 from __future__ import annotations
 
-import subprocess
-import sys
-
 import numpy as np
 import pytest
 
@@ -74,13 +71,18 @@ def test_fit_loss_huber_says_where_it_down_weighted(paper, tmp_path):
     d, _, clean = paper
     bad, _ = spoiled(clean.iloc[::4].reset_index(drop=True), seed=1)
     bad.to_parquet(tmp_path / "bad.parquet")
-    rplearn = [sys.executable, "-m", "rplearn.cli", "fit", str(tmp_path / "bad.parquet")]
-    proc = subprocess.run(rplearn + ["--degree", "6", "--loss", "huber", "-o", str(tmp_path / "h.json")],
-                          capture_output=True, text=True)
-    assert proc.returncode == 0, proc.stderr
+    from typer.testing import CliRunner
+
+    from rplearn.cli import app
+
+    def fit(*args: str):  # in this process: the exit codes and messages are checked, not the process boundary
+        return CliRunner().invoke(app, ["fit", str(tmp_path / "bad.parquet"), *args], env={"COLUMNS": "400"})
+
+    proc = fit("--degree", "6", "--loss", "huber", "-o", str(tmp_path / "h.json"))
+    assert proc.exit_code == 0, proc.output
     assert "huber:" in proc.stdout and "by unit:" in proc.stdout and "longest stretches:" in proc.stdout, proc.stdout
-    auto = subprocess.run(rplearn + ["--loss", "huber", "-o", str(tmp_path / "a.json")], capture_output=True, text=True)
-    assert auto.returncode == 1 and "fixed order" in auto.stderr, auto.stderr
+    auto = fit("--loss", "huber", "-o", str(tmp_path / "a.json"))
+    assert auto.exit_code == 1 and "fixed order" in auto.stderr, auto.output
     with pytest.raises(InputError, match="pattern models"):
         fit_huber(samples_of(clean.iloc[:500], None, "d", nodes=["A", "B"]), ModelSpec("knn", 5))
 

@@ -14,8 +14,14 @@ from rplearn.workflows.calibration_plan import OptimizeOptions, optimize_plan
 SMALL = dict(model="sh-5", target_spread_db=2.5, budget_s=150.0, noise_std_db=4.0, prior_std_db=4.0)
 
 
-def test_the_plan_lowers_the_spread_within_its_budget_and_writes_the_trajectory_format(tmp_path):
-    plan = optimize_plan(str(tmp_path / "plan"), OptimizeOptions(**SMALL))
+@pytest.fixture(scope="module")
+def white_plan(tmp_path_factory):
+    """The plan of :data:`SMALL` under white noise, made once for the tests that only read it."""
+    return optimize_plan(str(tmp_path_factory.mktemp("white") / "plan"), OptimizeOptions(**SMALL))
+
+
+def test_the_plan_lowers_the_spread_within_its_budget_and_writes_the_trajectory_format(white_plan):
+    plan = white_plan
     assert plan.steps and plan.duration_s <= 150.0
     worst = [max(plan.start_spread_db.values())] + [max(s.spread_db.values()) for s in plan.steps]
     assert all(b < a for a, b in zip(worst, worst[1:]))
@@ -58,10 +64,10 @@ def test_bad_options_name_their_field(kw, param):
     assert err.value.param == param
 
 
-def test_a_drifting_error_counts_a_manoeuvre_for_less(tmp_path):
+def test_a_drifting_error_counts_a_manoeuvre_for_less(white_plan, tmp_path):
     """With an error drifting over seconds, a manoeuvre that sees its directions once leaves a
     larger expected spread than white noise says."""
-    white = optimize_plan(str(tmp_path / "white"), OptimizeOptions(**SMALL))
+    white = white_plan
     drift = optimize_plan(str(tmp_path / "drift"), OptimizeOptions(**SMALL, drift_std_db=0.8))
     assert drift.start_spread_db == white.start_spread_db  # before any flight nothing drifted
     assert drift.steps[0].manoeuvre.name == white.steps[0].manoeuvre.name

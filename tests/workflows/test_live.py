@@ -59,13 +59,14 @@ def _free_port() -> int:
         return int(s.getsockname()[1])
 
 
-def test_a_tlog_replayed_over_udp_at_20x_ends_with_the_offline_model(tmp_path):
+def test_a_tlog_replayed_over_udp_at_40x_ends_with_the_offline_model(tmp_path):
     port = _free_port()
     model, record = str(tmp_path / "live.json"), str(tmp_path / "received.tlog")
     live = _rplearn("live", f"udpin:127.0.0.1:{port}", "--tx-power", "20", "--frequency", "433e6", "--idle", "3",
                     "--refit-s", "1", "--quiet", "--record", record, "-o", model)
     time.sleep(3.0)
-    replay = _rplearn("replay", str(TLOG), "--to", f"127.0.0.1:{port}", "--speed", "20")
+    # the 571 s log in 14 s: refits at every second of it still (--refit-s 1)
+    replay = _rplearn("replay", str(TLOG), "--to", f"127.0.0.1:{port}", "--speed", "40")
     assert replay.wait(timeout=300) == 0, replay.stdout.read()
     out, _ = live.communicate(timeout=300)
     assert live.returncode == 0, out
@@ -78,7 +79,10 @@ def test_a_tlog_replayed_over_udp_at_20x_ends_with_the_offline_model(tmp_path):
     assert _max_difference_db(learned, offline, data) < 1e-6
 
 
-def _appender(pose: pd.DataFrame, sig: pd.DataFrame, folder: Path, speed: float) -> threading.Thread:
+def _appender(pose: pd.DataFrame, sig: pd.DataFrame, folder: Path, speed: float,
+              stop: threading.Event | None = None) -> threading.Thread:
+    """A thread appending the logs to two CSVs in half-seconds of log time at ``speed`` times
+    real time; it ends early once ``stop`` is set."""
     def write() -> None:
         pose.iloc[:0].to_csv(folder / "pose.csv", index=False)
         sig.iloc[:0].to_csv(folder / "signal.csv", index=False)
@@ -86,6 +90,8 @@ def _appender(pose: pd.DataFrame, sig: pd.DataFrame, folder: Path, speed: float)
         for a in np.arange(t0, float(pose["t"].max()) + 0.5, 0.5):
             while time.monotonic() - w0 < (a - t0) / speed:
                 time.sleep(0.005)
+            if stop is not None and stop.is_set():
+                return
             pose[(pose["t"] >= a) & (pose["t"] < a + 0.5)].to_csv(folder / "pose.csv", mode="a", header=False, index=False)
             sig[(sig["t"] >= a) & (sig["t"] < a + 0.5)].to_csv(folder / "signal.csv", mode="a", header=False, index=False)
 
@@ -140,7 +146,8 @@ def test_silence_before_the_first_message_does_not_end_the_session(smoke, tmp_pa
 
 def test_a_session_killed_mid_flight_leaves_a_valid_model(smoke, tmp_path):
     pose, sig = smoke
-    writer = _appender(pose, sig, tmp_path, speed=4.0)
+    stop = threading.Event()  # the writer stops once the session is killed (else it writes the 75 s flight at 4x)
+    writer = _appender(pose, sig, tmp_path, speed=4.0, stop=stop)
     model = tmp_path / "live.json"
     live = _rplearn("live", f"{tmp_path / 'pose.csv'},{tmp_path / 'signal.csv'}", "--refit-s", "0.5", "--quiet",
                     "-o", str(model))
@@ -153,6 +160,7 @@ def test_a_session_killed_mid_flight_leaves_a_valid_model(smoke, tmp_path):
         os.kill(live.pid, signal.SIGKILL)
         live.wait(timeout=30)
     finally:
+        stop.set()
         if live.poll() is None:
             live.kill()
         writer.join()

@@ -17,7 +17,8 @@ from rplearn.workflows.live_advice import ManoeuvreAdvisor, live_advisor
 
 @pytest.fixture(scope="module")
 def session(tmp_path_factory):
-    """A fixed-order SH-6 session on the smoke flight, with an advisor that ranks at every refit."""
+    """A fixed-order SH-6 session on the smoke flight (75 s), with an advisor that ranks at every
+    refit (every 25 s: a few rankings of some 300 candidates each, not one every 5 s)."""
     r = simulate("smoke", seed=0)
     calls = []
     advisor = ManoeuvreAdvisor(every_s=0.0)
@@ -27,7 +28,7 @@ def session(tmp_path_factory):
         calls.append((stats, fitted, latest, rows))
         return rows
 
-    options = LiveOptions(spec=ModelSpec.parse("sh", order=6), refit_s=5.0, manoeuvres=hook)
+    options = LiveOptions(spec=ModelSpec.parse("sh", order=6), refit_s=25.0, manoeuvres=hook)
     path = str(tmp_path_factory.mktemp("live") / "m.json")
     outcome = replay_session(r.pose_log, r.signal_log.drop(columns=["unit"]), path, options)
     return outcome, calls

@@ -22,8 +22,9 @@ from rplearn.models.spec import ModelSpec
 from rplearn.workflows.live import LiveOptions, replay_session
 from rplearn.workflows.live_status import Prequential
 
-MINUTES, RATE_HZ = 3.0, 10.0
-MARKS_S = (60.0, 120.0, 180.0)
+# 30 batches (of 1 s) and 3 refits between marks: a structure that grows per batch grows by 30
+MINUTES, RATE_HZ = 1.5, 10.0
+MARKS_S = (30.0, 60.0, 90.0)
 
 
 def _flight(minutes: float, rate_hz: float) -> tuple[pd.DataFrame, pd.DataFrame]:

@@ -37,10 +37,13 @@ def _chromium_or_skip() -> str:
     return exe
 
 
-def figure_boxes(exe: str, page: Path, height_px: int) -> list[dict]:
-    """Each ``<figure>``'s box [px] in the page as Chromium lays it out in a window of the screenshot's size."""
+def figure_boxes(exe: str, page: Path, height_px: int, png: Path | None = None) -> list[dict]:
+    """Each ``<figure>``'s box [px] in the page as Chromium lays it out in a window of the screenshot's size;
+    with ``png``, the same Chromium run (:func:`report.chromium_command`, as :func:`report.screenshot_report`
+    runs it) also writes the screenshot there."""
+    shot = [] if png is None else [f"--screenshot={png}"]
     with tempfile.TemporaryDirectory(prefix="rplearn-boxes-") as profile:
-        cmd = report.chromium_command(exe, profile, WIDTH_PX, height_px, ["--dump-dom"]) + [page.as_uri()]
+        cmd = report.chromium_command(exe, profile, WIDTH_PX, height_px, [*shot, "--dump-dom"]) + [page.as_uri()]
         dom = subprocess.run(cmd, capture_output=True, text=True, timeout=180, check=False).stdout
     found = re.search(r'<pre id="rplearn-boxes">(.*?)</pre>', dom, re.S)
     assert found, f"chromium gave no figure boxes: {dom[-300:]}"
@@ -94,9 +97,8 @@ def test_the_field_guide_report_renders_every_figure_offline(field_guide_report)
     probe.write_text(page.replace("</body>", BOXES_JS + "</body>"), encoding="utf-8")
     height = report.estimate_page_height_px(page, WIDTH_PX)
     png = d / "shot.png"
-    assert report.screenshot_report(probe, png, width_px=WIDTH_PX, height_px=height) is True
+    boxes = figure_boxes(exe, probe, height, png)  # one Chromium run for the boxes and the screenshot
     shot = imread(str(png))[..., :3]
-    boxes = figure_boxes(exe, probe, height)
     captions = " ".join(b["caption"] for b in boxes)
     # the default model's figures: time series with band, residual panels, coverage, polar cuts, maps, spread, 3-D
     for words in ("over time", "Residuals", "direction of the other end", "Polar cuts", "standard deviation",

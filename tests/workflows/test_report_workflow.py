@@ -44,6 +44,17 @@ def sh3(no_units, tmp_path_factory):
     return path
 
 
+def _leave_out_figures(monkeypatch) -> None:
+    """Reports drawn without their figures (PNG and 3-D), for tests of their notes and Table I:
+    the figures are checked by ``test_report_fits_the_cross_validated_model_fit_learns_and_draws_its_figures``
+    and the first report of ``test_report_on_a_given_model_file_writes_no_model``."""
+    from rplearn.viz import interactive
+    from rplearn.workflows import report as report_module
+
+    monkeypatch.setattr(report_module, "_figure_sections", lambda *args: [])
+    monkeypatch.setattr(interactive, "pattern_3d_figures", lambda *args, **kwargs: ([], ""))
+
+
 def test_report_fits_the_cross_validated_model_fit_learns_and_draws_its_figures(no_units, tmp_path):
     from rplearn.models.load import load_model
     from rplearn.models.options import FitOptions
@@ -68,11 +79,12 @@ def test_report_fits_the_cross_validated_model_fit_learns_and_draws_its_figures(
     assert ("\n".join(out.notes) + "\n" + out.summary()).count(f"{out.log_start_s:.3f}") == 1
 
 
-def test_report_on_a_given_model_file_writes_no_model(no_units, sh3, tmp_path):
+def test_report_on_a_given_model_file_writes_no_model(no_units, sh3, tmp_path, monkeypatch):
     out = learn_and_report(no_units, str(tmp_path / "rep"), model_path=sh3)
     assert out.fitted.label == "SH-3" and "model" not in out.files
     assert f"model: SH-3, from {sh3}; scored on the held-out test[5/5]" in out.summary()
     assert not any("may not be held out" in n or "not held out" in n for n in out.notes)  # sh3 records its units
+    _leave_out_figures(monkeypatch)  # the reports below are read for their notes only (the figures are drawn above)
     whole = str(tmp_path / "whole.json")
     from rplearn.models.spec import ModelSpec
     from rplearn.workflows.learning import fit_dataset
@@ -101,6 +113,7 @@ def test_paper_models_are_a_section_on_request_with_the_median_learning_time(no_
         return replace(real(*args, **kwargs), ltd_s=next(times))
 
     monkeypatch.setattr(report_module, "fit_model", timed)
+    _leave_out_figures(monkeypatch)
     out = learn_and_report(no_units, str(tmp_path / "rep"), model_path=sh3, paper_models=["m", "nn-100000", "sh-3"],
                            report=ReportOptions(repeats=3))
     assert [r.model for r in out.paper_rows] == ["M", "SH-3"]
@@ -113,7 +126,8 @@ def test_paper_models_are_a_section_on_request_with_the_median_learning_time(no_
     assert "NN-100000 not learned" in page and "median of 3 runs" in page
 
 
-def test_paper_models_accept_auto_and_refuse_bad_names(no_units, sh3, tmp_path):
+def test_paper_models_accept_auto_and_refuse_bad_names(no_units, sh3, tmp_path, monkeypatch):
+    _leave_out_figures(monkeypatch)
     assert paper_model_names(["paper", "auto", "m"]) == [*PAPER_MODELS, "auto"]
     with pytest.raises(InputError):
         paper_model_names(["sh-x"])
@@ -124,8 +138,9 @@ def test_paper_models_accept_auto_and_refuse_bad_names(no_units, sh3, tmp_path):
     assert len(out.paper_rows) == 1 and out.paper_rows[0].model.startswith("SH-")
 
 
-def test_paper_models_reproduce_the_demo_table_for_the_same_seed(tmp_path):
+def test_paper_models_reproduce_the_demo_table_for_the_same_seed(tmp_path, monkeypatch):
     """Table I of `report --paper-models paper` equals the demo's on the demo's own dataset (smoke preset)."""
+    _leave_out_figures(monkeypatch)
     from rplearn.workflows import run_demo
 
     demo = run_demo(str(tmp_path / "demo"), seed=2, preset="smoke", figures=False)
@@ -149,6 +164,7 @@ def test_paper_models_reproduce_main_s_table_i_of_the_demo_seed_0(tmp_path, monk
     # BG-7 Gram differs by 1e-13 and its condition number (4.6e6, of a Gram conditioned 2e13) by
     # 1.6e-5, every other figure within 1e-9. Two threads reproduce them on any machine and load.
     monkeypatch.setenv("RPLEARN_THREADS", "2")
+    _leave_out_figures(monkeypatch)
     from rplearn.data.sync import SyncOptions, synchronise
     from rplearn.io.files import write_table
     from rplearn.sim.flight import simulate
