@@ -48,18 +48,45 @@ def _run(args: list[str], cwd: Path, what: str) -> str:
     return proc.stdout + proc.stderr
 
 
+#: What makes a line more than one plain command: it runs in bash.
+_SHELL = re.compile(r"[$`|;&<>*?(){}\\]")
+
+
+def _run_in_process(command: str, cwd: Path) -> None:
+    """``rplearn ARGS`` in this process (typer's runner, the arguments split as a POSIX shell
+    splits them), in ``cwd``: what a line does, without the second of interpreter start-up and
+    imports each process would pay again."""
+    import contextlib
+    import shlex
+
+    from typer.testing import CliRunner
+
+    from rplearn.cli import app
+
+    args = shlex.split(command)
+    assert args[0] == "rplearn", command
+    with contextlib.chdir(cwd):
+        res = CliRunner().invoke(app, args[1:], env={"COLUMNS": "400", "MPLBACKEND": "Agg"})
+    assert res.exit_code == 0, f"{command}\n{res.output}\n{res.exception!r}"
+
+
 @pytest.fixture(scope="module")
 def readme_folder(tmp_path_factory) -> Path:
-    """A folder in which the README's command block ran, line by line, as written."""
+    """A folder in which the README's command block ran, line by line, as written: the first
+    line as a user's shell runs it (the ``rplearn`` script on the PATH), the others, plain
+    commands all, in this process (a line with anything a shell would interpret runs in bash)."""
     folder = tmp_path_factory.mktemp("readme")
     lines = _command_block()
     assert len(lines) >= 15 and set(RUN_ELSEWHERE) <= {ln.split("  #")[0].strip() for ln in lines}
-    for line in lines:
+    for k, line in enumerate(lines):
         command = line.split("  #", 1)[0].strip()
         if command in RUN_ELSEWHERE:
             continue
         assert command.startswith("rplearn "), line
-        _run(["bash", "-e", "-c", command], folder, command)
+        if k == 0 or _SHELL.search(command):
+            _run(["bash", "-e", "-c", command], folder, command)
+        else:
+            _run_in_process(command, folder)
     return folder
 
 

@@ -124,23 +124,32 @@ def test_certificate_needs_a_covariance_and_a_coverage_grid(fits):
 
 def test_fit_prints_and_stores_the_certificate_and_plot_draws_it(tmp_path):
     """`rplearn fit` (automatic) prints each node's own-pattern spread and the unsplit
-    components, stores them in the model file; `rplearn plot --spread` draws them."""
+    components, stores them in the model file; `rplearn plot --spread` draws them. The commands
+    run in this process (typer's runner); the refusal at the end as a user's process, whose exit
+    code and one line of standard error are the point."""
     import os
 
+    from typer.testing import CliRunner
+
+    from rplearn.cli import app
     from rplearn.models import load_model
 
-    cli = [sys.executable, "-m", "rplearn.cli"]
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT / "src"), os.environ.get("PYTHONPATH", "")])}
-    run = lambda *a: subprocess.run([*cli, *a], cwd=tmp_path, capture_output=True, text=True, timeout=300, env=env)  # noqa: E731
-    assert run("simulate", "--preset", "smoke", "--seed", "5", "-o", "f").returncode == 0
-    assert run("sync", "--poses", "f/pose_log.parquet", "--signals", "f/signal_log.parquet", "-o", "m.parquet").returncode == 0
-    proc = run("fit", "m.parquet", "-o", "a.json")
-    assert proc.returncode == 0, proc.stderr
-    assert "own-pattern spread (1 sigma" in proc.stdout and "not split between nodes by this flight" in proc.stdout
+    def invoke(*args: object):
+        res = CliRunner().invoke(app, [str(a) for a in args], env={"COLUMNS": "400"})
+        assert res.exit_code == 0, (args, res.output)
+        return res
+
+    invoke("simulate", "--preset", "smoke", "--seed", "5", "-o", tmp_path / "f")
+    invoke("sync", "--poses", tmp_path / "f/pose_log.parquet", "--signals", tmp_path / "f/signal_log.parquet",
+           "-o", tmp_path / "m.parquet")
+    out = invoke("fit", tmp_path / "m.parquet", "-o", tmp_path / "a.json").stdout
+    assert "own-pattern spread (1 sigma" in out and "not split between nodes by this flight" in out
     stored = load_model(str(tmp_path / "a.json")).training["decoupling"]
-    assert set(stored["nodes"]) == {"A", "B"} and stored["summary"].splitlines()[0] in proc.stdout
-    proc = run("plot", "a.json", "-o", "p.png", "--spread", "s.png")
-    assert proc.returncode == 0 and "wrote s.png" in proc.stdout, proc.stderr
+    assert set(stored["nodes"]) == {"A", "B"} and stored["summary"].splitlines()[0] in out
+    plotted = invoke("plot", tmp_path / "a.json", "-o", tmp_path / "p.png", "--spread", tmp_path / "s.png").stdout
+    assert f"wrote {tmp_path / 's.png'}" in " ".join(plotted.split())
     assert (tmp_path / "s.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    proc = run("plot", "a.json", "-o", "p.png", "--spread", "a.json")
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT / "src"), os.environ.get("PYTHONPATH", "")])}
+    proc = subprocess.run([sys.executable, "-m", "rplearn.cli", "plot", "a.json", "-o", "p.png", "--spread", "a.json"],
+                          cwd=tmp_path, capture_output=True, text=True, timeout=300, env=env)
     assert proc.returncode == 1 and len(proc.stderr.strip().splitlines()) == 1, proc.stderr

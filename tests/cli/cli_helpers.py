@@ -6,9 +6,12 @@ Imported by the test modules of this folder (pytest puts the folder on ``sys.pat
 
 from __future__ import annotations
 
+import atexit
 import os
+import shutil
 import subprocess
 import sys
+import tempfile
 from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any
@@ -47,17 +50,45 @@ def invoke(args: Sequence[object], ok: bool = True) -> Any:
     return res
 
 
+#: Per seed, the folder in which this process simulated, synced and fitted the smoke flight.
+_SMOKE_FLIGHTS: dict[int, Path] = {}
+
+
 def smoke_flight(d: Path, extra: Iterable[Sequence[str]] = (), seed: int = 2) -> Path:
-    """Simulate the smoke flight into ``d``, sync it to :data:`D`, fit SH-3 to :data:`M`, then run ``extra``."""
-    for args in (
-        ["simulate", "--preset", "smoke", "--seed", str(seed), "-o", "flight"],
-        ["sync", "--poses", P, "--signals", S, "--link", "all", "-o", D],
-        ["fit", D, "--degree", "3", "-o", M],
-        *extra,
-    ):
-        proc = run(args, d)
-        assert proc.returncode == 0, (args, proc.stderr)
+    """Simulate the smoke flight into ``d``, sync it to :data:`D`, fit SH-3 to :data:`M`, then run ``extra``.
+
+    The three commands run once per process (per xdist worker) and seed, in a folder of their
+    own; each caller gets a copy of the files they wrote (the same seed writes the same flight),
+    so that no test module reads what another one changed. ``extra`` runs in ``d``. All run in
+    this process (:func:`invoke_in`): the tests run their own commands as a user's processes.
+    """
+    base = _SMOKE_FLIGHTS.get(seed)
+    if base is None:
+        base = Path(tempfile.mkdtemp(prefix=f"rplearn-smoke-{seed}-"))
+        atexit.register(shutil.rmtree, base, True)
+        _run_all(base, (["simulate", "--preset", "smoke", "--seed", str(seed), "-o", "flight"],
+                        ["sync", "--poses", P, "--signals", S, "--link", "all", "-o", D],
+                        ["fit", D, "--degree", "3", "-o", M]))
+        _SMOKE_FLIGHTS[seed] = base
+    shutil.copytree(base, d, dirs_exist_ok=True)
+    _run_all(d, extra)
     return d
+
+
+def _run_all(d: Path, commands: Iterable[Sequence[str]]) -> None:
+    """Run each command in ``d`` (in this process: these make a test's inputs, and a process
+    of its own would only add a second of start-up to each); assert that each succeeds."""
+    for args in commands:
+        invoke_in(d, args)
+
+
+def invoke_in(d: Path | str, args: Sequence[object], ok: bool = True) -> Any:
+    """:func:`invoke` with ``d`` as the working folder (relative paths in ``args`` are read and
+    written there), for the commands that make a test's inputs."""
+    import contextlib
+
+    with contextlib.chdir(d):
+        return invoke(args, ok)
 
 
 def listing(folder: Path) -> list[str]:

@@ -11,6 +11,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from cli_helpers import D, smoke_flight
 
 ROOT = Path(__file__).resolve().parents[2]
 TLOG = ROOT / "tests" / "fixtures" / "ardupilot" / "mavlink-log_2013-10-13_16-58-51.tlog"
@@ -28,11 +29,13 @@ def _no_constant(name: str) -> float:
 
 @pytest.fixture(scope="module")
 def flight(tmp_path_factory) -> Path:
-    """A simulated flight, its matched dataset and a fitted model, made with ``python -m rplearn``."""
-    d = tmp_path_factory.mktemp("habits")
-    assert run("simulate", "--preset", "smoke", "--seed", "2", "-o", "f", cwd=d).returncode == 0
-    assert run("sync", "--poses", "f/pose_log.parquet", "--signals", "f/signal_log.parquet", "-o", "d.parquet",
-               cwd=d).returncode == 0
+    """A simulated flight (``f/``), its matched dataset (``d.parquet``, every link: ``sync``'s
+    default) and a model fitted with ``python -m rplearn`` (``m.json``). The flight and dataset
+    are a copy of the worker's smoke flight (:func:`cli_helpers.smoke_flight`: seed 2, the same
+    commands), which the other command-line tests share."""
+    d = smoke_flight(tmp_path_factory.mktemp("habits"))
+    (d / "flight").rename(d / "f")
+    (d / D).rename(d / "d.parquet")
     assert run("fit", "d.parquet", "--degree", "4", "-o", "m.json", cwd=d).returncode == 0
     return d
 

@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from cli_helpers import RPLEARN, D, M, P, S, run, smoke_flight
+from cli_helpers import RPLEARN, D, M, P, S, invoke_in, run, smoke_flight
 
 from rplearn.models.load import load_model
 
@@ -143,7 +143,7 @@ def _forged_sidecar(d: Path) -> None:
 
     from rplearn.io.modelfile import digest, sidecar_path
 
-    assert run(["fit", D, "--model", "nn", "-o", "knn.json"], d).returncode == 0
+    invoke_in(d, ["fit", D, "--model", "nn", "-o", "knn.json"])
     doc = json.loads((d / "knn.json").read_text())
     source = zipfile.ZipFile(d / doc["model"]["sidecar"]["file"])
     buf = io.BytesIO()
@@ -174,13 +174,18 @@ def _swarm_poses(d: Path, drones: int = 20, span_s: float = 520.0) -> None:
 
 
 def _chamber_grid(d: Path, step_deg: float = 0.2) -> None:
-    """A chamber measurement on a 0.2 deg grid: 1,800 x 901 = 1.6 M directions."""
-    az, el = np.meshgrid(np.arange(-180.0, 180.0, step_deg), np.linspace(-90.0, 90.0, int(round(180 / step_deg)) + 1))
-    gain = 2.0 + 3.0 * np.cos(np.radians(el)) ** 2
-    table = np.column_stack([az.ravel(), el.ravel(), gain.ravel()])
+    """A chamber measurement on a 0.2 deg grid: 1,800 x 901 = 1.6 M directions (written as
+    ``np.savetxt(fmt="%.1f,%.1f,%.3f")`` writes it, byte for byte, a row of elevation at a time:
+    4 s of formatting become 0.03 s)."""
+    az_deg = np.arange(-180.0, 180.0, step_deg)
+    el_deg = np.linspace(-90.0, 90.0, int(round(180 / step_deg)) + 1)
+    gain = 2.0 + 3.0 * np.cos(np.radians(el_deg)) ** 2
+    az_text = [f"{a:.1f}" for a in az_deg]
     with open(d / "chamber.csv", "w") as fh:
         fh.write("az_deg,el_deg,gain_dbi\n")
-        np.savetxt(fh, table, fmt="%.1f,%.1f,%.3f")
+        for el, g in zip(el_deg, gain, strict=True):
+            row_end = f",{el:.1f},{g:.3f}\n"
+            fh.write(row_end.join(az_text) + row_end)
 
 
 def _stretched_flight(d: Path, factor: float = 20.0) -> None:

@@ -39,6 +39,7 @@ from rplearn.analysis.pattern_error import gauged_nodes
 from rplearn.core.bases import fibonacci_grid_nodes
 from rplearn.core.coverage import COVERED_WITHIN_DEG
 from rplearn.core.lsq.normal_equations import NormalEquations
+from rplearn.core.threads import blas_threads
 from rplearn.data.tables import LinkSamples
 from rplearn.errors import InputError
 from rplearn.models.own_posterior import OwnPosterior
@@ -276,21 +277,29 @@ def _joint_metric(model: PatternSet, samples: LinkSamples | Sequence[LinkSamples
     return normal.gram[:pat, :pat] / max(normal.n_samples, 1)
 
 
-def _peaks(model: PatternSet, covered: Mapping[str, tuple[np.ndarray, np.ndarray]], vec: np.ndarray,
-           metrics: Sequence[np.ndarray], basis: Any = None) -> dict[str, tuple[float, float, int, float]]:
+def _peaks(model: PatternSet, covered: Mapping[str, tuple[np.ndarray, np.ndarray]], vecs: np.ndarray,
+           metrics: Sequence[np.ndarray], basis: Any = None) -> list[dict[str, tuple[float, float, int, float]]]:
+    """Per column of ``vecs`` (components, pattern columns at ``basis``): each node's share of its
+    per-node mean square and the covered direction where it is largest. Each node's design over
+    its covered directions is evaluated once for every component (16,384 grid points at SH-15
+    cost about 0.1 s each)."""
     basis = model.basis if basis is None else basis
     p = basis.n_coef
-    energy = [float(vec[k * p:(k + 1) * p] @ metrics[k] @ vec[k * p:(k + 1) * p]) for k in range(len(model.nodes))]
-    total = sum(energy) or 1.0
-    out = {}
+    gauged = gauged_nodes(model)
+    energy = [[float(vec[k * p:(k + 1) * p] @ metrics[k] @ vec[k * p:(k + 1) * p]) for k in range(len(model.nodes))]
+              for vec in vecs.T]
+    out: list[dict[str, tuple[float, float, int, float]]] = [{} for _ in range(vecs.shape[1])]
     for k, node in enumerate(model.nodes):
         az, el = covered[node]
-        if az.size == 0:
+        if az.size == 0 or not out:
             continue
-        values = basis.design(az, el) @ vec[k * p:(k + 1) * p]
-        values = values - values.mean() if node in gauged_nodes(model) else values
-        i = int(np.argmax(np.abs(values)))
-        out[node] = (float(np.degrees(az[i])), float(np.degrees(el[i])), int(np.sign(values[i]) or 1), energy[k] / total)
+        values = basis.design(az, el) @ vecs[k * p:(k + 1) * p]
+        if node in gauged:
+            values = values - values.mean(axis=0)
+        for j, column in enumerate(values.T):
+            i = int(np.argmax(np.abs(column)))
+            out[j][node] = (float(np.degrees(az[i])), float(np.degrees(el[i])), int(np.sign(column[i]) or 1),
+                            energy[j][k] / (sum(energy[j]) or 1.0))
     return out
 
 
@@ -317,7 +326,8 @@ def unsplit_components(model: PatternSet, covered: Mapping[str, tuple[np.ndarray
     # the generalised problem through b_reg's Cholesky factor (numpy only: a fixed-order fit imports no scipy)
     chol = np.linalg.cholesky(b_reg)
     half = np.linalg.solve(chol, a)
-    tau, w = np.linalg.eigh(0.5 * (np.linalg.solve(chol, half.T) + np.linalg.solve(chol, half.T).T))
+    whitened = np.linalg.solve(chol, half.T)  # chol^-1 a chol^-T
+    tau, w = np.linalg.eigh(0.5 * (whitened + whitened.T))
     u = np.linalg.solve(chol.T, w)  # u^T b_reg u = I, u^T a u = diag(tau)
     s = np.sum((b_reg @ u) ** 2, axis=0)  # E[a_i^2] with z = u a: ((u^T u)^-1)_ii = |b_reg u_i|^2
     node_ms = tau * s
@@ -326,11 +336,10 @@ def unsplit_components(model: PatternSet, covered: Mapping[str, tuple[np.ndarray
     unsplit = (joint_ms < UNSPLIT_JOINT_FRACTION * node_ms) & (node_ms > 0)
     order = np.argsort(-np.where(unsplit, node_ms, -1.0))
     listed = [i for i in order if unsplit[i] and node_ms[i] >= MIN_LISTED_DB**2]
-    comps = []
-    for i in listed[:MAX_LISTED]:
-        vec = root @ u[:, i]
-        comps.append(SplitComponent(float(np.sqrt(node_ms[i])), float(np.sqrt(max(joint_ms[i], 0.0))),
-                                    _peaks(model, covered, vec, metrics, basis)))
+    shown = listed[:MAX_LISTED]
+    peaks = _peaks(model, covered, root @ u[:, shown], metrics, basis)
+    comps = [SplitComponent(float(np.sqrt(node_ms[i])), float(np.sqrt(max(joint_ms[i], 0.0))), peak)
+             for i, peak in zip(shown, peaks, strict=True)]
     return comps, len(listed), float(np.sqrt(max(float(np.sum(node_ms[unsplit])), 0.0))), float(np.sqrt(max(total_ms, 0.0)))
 
 
@@ -378,9 +387,29 @@ def decoupling_certificate(
     """
     if model.covariance is None:
         raise InputError("model: it carries no covariance; the per-node spread needs one", param="model")
+    own = posterior if model.training.selection is not None else None
+    with blas_threads(_certificate_flops(model, own)):
+        return _certificate(model, samples, gram, n_samples, within_deg, own)
+
+
+def _certificate_flops(model: PatternSet, own: OwnPosterior | None) -> float:
+    """Floating-point work of a certificate: each node's design and metric over its coverage grid,
+    the sphere's, and the dense factorisations of the pattern columns (two symmetric eigenproblems,
+    a Cholesky factor, triangular solves and products, about 30 ``n**3``)."""
+    q = (model.basis if own is None else own.basis).n_coef
+    columns = q * len(model.nodes)
+    grid_points = sum(len(g) for g in (model.training.coverage_deg or {}).values())
+    dense = 30.0 * float(columns) ** 3 if model.training.selection is not None and columns <= MAX_COMPONENT_COLUMNS else 0.0
+    return float(grid_points) * q**2 + float(SPHERE_POINTS) * model.basis.n_coef**2 + dense
+
+
+def _certificate(model: PatternSet, samples: LinkSamples | Sequence[LinkSamples] | None, gram: np.ndarray | None,
+                 n_samples: int | None, within_deg: float, own: OwnPosterior | None) -> DecouplingCertificate:
+    """:func:`decoupling_certificate` of a model with a covariance (``own``: the posterior, for an
+    automatic fit only), on the BLAS threads its work is given (:mod:`rplearn.core.threads`: one on
+    a busy 2-core machine, where OpenBLAS's second thread made an SH-15 certificate 10 times slower)."""
     covered = covered_directions(model, within_deg)
     cov = np.asarray(model.covariance, np.float64)
-    own = posterior if model.training.selection is not None else None
     spreads, metrics = _node_spreads(model, covered, cov, own)
     maps = {} if own is None else own_std_maps(model, own)
     covered_db = float(np.sqrt(np.mean([s.covered_std_db**2 for s in spreads.values()])))
