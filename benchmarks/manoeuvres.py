@@ -249,7 +249,7 @@ moves by up to +-0.2 from one variant to the next) and the paper seed 0 cells an
 suggested cells still miss; ``--rate spread`` and ``CandidateOptions(sweeps=False)`` give the
 previous ranking.
 
-**Best prefixes** (default ``--prefixes 4``; ``--prefixes 1``: whole manoeuvres, as before;
+**Best prefixes** (``--prefixes 4``; the default ``--prefixes 1``: whole manoeuvres;
 seeds 0-4, one thread, 5 draws, load 8-18 on 2 cores). A candidate is also scored by its first
 quarter, half and three quarters (:attr:`~rplearn.analysis.manoeuvres.ManoeuvreOptions.prefixes`,
 whole 5-s blocks, at least 10 s) and ranked by its best; a winning prefix is flown alone
@@ -290,6 +290,34 @@ statistics at SH-10, 267 candidates, best of 3 alternately in one process, load 
 prefixes were measured once and not pursued (``--prefixes 8``, ``--draws 0``, the cut then
 rounded a row later: ground seed 0 optimized 0.52 -> 0.74x, seed 1 suggested 0.65 -> 0.61x
 against ``--prefixes 4`` in the same state).
+
+**The braking after a cut** (measured after the table above): a prefix cut mid-orbit or
+mid-turn leaves the vehicle at cruise speed or yaw rate, and the table's "best prefix" column
+counted no time to stop (1.5 s at 1.5 m/s and 1 m/s^2, 0.5 s at 30 deg/s and 60 deg/s^2). Once
+:attr:`rplearn.plan.prefix.PrefixUnit.brake_s` is part of a prefix's duration (in the ranking,
+the plan's clock and this benchmark's flight time; no samples while braking), ``--prefixes 4``
+gives (time ratio, expected-error difference; same settings, load 5-18):
+
+| cell | best prefix, braking counted |
+| --- | --- |
+| paper 0 suggested / optimized | 0.58 / +0.22, 0.65* / +0.20 |
+| paper 1 suggested / optimized | 0.54 / -0.11, 0.57 / -0.20 |
+| paper 2 suggested / optimized | 0.63* / -0.46, 0.63* / -0.40 |
+| ground 0 suggested / optimized | 0.68* / +0.24, 0.49 / -0.10 |
+| ground 1 suggested / optimized | 0.95* / -0.15, 0.46 / -0.02 |
+| ground 2 suggested / optimized | 0.50 / -0.07, 0.63* / -0.23 |
+| both checks, seeds 0-2 | 6 of 12 (whole manoeuvres: 7) |
+| paper 3 suggested / optimized | 0.54 / +0.30, 0.53 / +0.27* (tol 0.21) |
+| paper 4 suggested / optimized | 0.56 / -0.10, 0.62* / -0.14 |
+| ground 3 suggested / optimized | 0.58 / -0.06, 0.66* / +0.04 |
+| ground 4 suggested / optimized | 3.00* / -0.21, 0.50 / +0.36* (tol 0.17) |
+| both checks, seeds 3-4 | 3 of 8 (whole manoeuvres: 3) |
+
+With its stops paid for, scoring prefixes is no better than flying whole manoeuvres (6 of 12
+against 7 on the tuning seeds, 3 of 8 alike on the held-out ones): the gain of the column
+above was the uncounted braking and the near-ties it moved. So whole manoeuvres stay the default
+of ``rplearn live`` and ``trajectory --optimize`` (``ManoeuvreOptions.prefixes = 1``), and the
+default's figures are those of the "whole" column.
 
 Criteria per preset and seed: time to 2 dB of suggested and of optimized <= 60 % of the
 reference's, and their expected worst per-node pattern error no worse than the reference's as

@@ -261,7 +261,7 @@ def test_a_greedy_plan_of_prefixes_starts_each_step_where_the_last_one_was_cut()
     poses = {"D": ((20.0, 0.0, 10.0), 180.0), "G": ((0.0, 0.0, 1.5), 0.0)}
     weight = prior_penalty_weight(SPEC.basis(), 3.0, 4.0, SPEC.ridge_weight)
     opts = ManoeuvreOptions(noise_std_db=4.0, penalty_weight=weight, target_points=256,
-                            candidates=CandidateOptions(fixed_nodes=("G",), library=False))
+                            candidates=CandidateOptions(fixed_nodes=("G",), library=False), prefixes=4)
     steps = greedy_plan(NormalEquations(SPEC.basis(), 2), SPEC, ("D", "G"), poses, 60.0, 1.0, opts)
     assert any(isinstance(s.manoeuvre.candidate.unit, PrefixUnit) for s in steps)
     state, t = dict(poses), 0.0

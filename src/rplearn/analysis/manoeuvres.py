@@ -20,7 +20,8 @@ convention), ``sqrt(sum(M_k * Sigma_kk))`` with ``M_k`` the mean-removed design'
 moment. The target directions are the whole sphere by default, an elevation band, or given
 directions per node. A manoeuvre's score is the reduction of the nodes' RMS spread (or of the
 largest, ``aggregate="max"``) per second of flight, its time to reach its start included;
-a long candidate is scored by its best prefix too (``prefixes``), which is then what is flown.
+with ``prefixes`` above 1 a long candidate is scored by its best prefix too, which is then
+what is flown (its braking counted).
 Shared columns (link offsets, the environment term) are left out of the posterior.
 
 Besides the white noise the posterior may carry (:mod:`rplearn.analysis.manoeuvre_posterior`):
@@ -137,9 +138,11 @@ class ManoeuvreOptions:
         least two; :func:`rplearn.plan.prefix.prefix_cuts`) and rank it by its best prefix, which
         is then what is flown (:class:`rplearn.plan.prefix.PrefixUnit`): a long manoeuvre that
         teaches most in its first part is cut where its score per second peaks and the ranking
-        starts again from there; 1: whole manoeuvres only. Flown in the simulator
-        (``benchmarks/manoeuvres.py``) 4 met both checks in 8 of 12 cells against 7 on the
-        tuning seeds, 4 of 8 against 3 on the held-out ones, for a ranking about 1.4x as slow.
+        starts again from there, the braking from the cut's speed and yaw rate counted in its
+        time (:attr:`rplearn.plan.prefix.PrefixUnit.brake_s`); 1 (default): whole manoeuvres
+        only. Flown in the simulator (``benchmarks/manoeuvres.py``), 4 met both checks in 8 of
+        12 tuning cells (whole: 7) while the braking was not counted, and in 6 of 12 once it
+        was: so it is not the default. A ranking with 4 takes about 1.4x as long.
     prior_variance_factor : float
         The prior's variance over the one ``noise_std_db`` and the penalty imply
         (:meth:`~rplearn.analysis.manoeuvre_posterior.ManoeuvrePosterior.with_prior_excess`): the fit
@@ -166,7 +169,7 @@ class ManoeuvreOptions:
     misfit_std_db: float = 0.0
     prior_variance_factor: float = 1.0
     steady_accel_enu_m_s2: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    prefixes: int = 4
+    prefixes: int = 1
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.prior_variance_factor) and self.prior_variance_factor >= 1.0):

@@ -3,8 +3,8 @@
 A ranking (:func:`rplearn.analysis.manoeuvres.rank_manoeuvres` through the session's hook,
 :class:`rplearn.workflows.live_advice.ManoeuvreAdvisor`) scores some 300 candidates with rank-k
 posterior updates: seconds of work, about 12 s on a loaded 2-core machine (measured with whole
-manoeuvres; scoring their best prefixes too, :attr:`~rplearn.analysis.manoeuvres.ManoeuvreOptions.prefixes`,
-the default, makes a ranking about 1.4x as long). Run in the loop, it
+manoeuvres, the default; scoring their best prefixes too,
+:attr:`~rplearn.analysis.manoeuvres.ManoeuvreOptions.prefixes` 4, makes a ranking about 1.4x as long). Run in the loop, it
 stopped the refits, the prequential score and the reading of the source for that long. So
 :class:`RankingWorker` runs it on a thread of its own (the factorisations and products release
 the GIL), handed a snapshot of the statistics (their sum, a copy the loop never touches again,
