@@ -49,7 +49,7 @@ def _run(args: list[str], cwd: Path, what: str) -> str:
 
 
 #: What makes a line more than one plain command: it runs in bash.
-_SHELL = re.compile(r"[$`|;&<>*?(){}\\]")
+_SHELL = re.compile(r"[$`|;&<>*?(){}\[\]~!\\]")
 
 
 def _run_in_process(command: str, cwd: Path) -> None:

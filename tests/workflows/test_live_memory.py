@@ -22,7 +22,7 @@ from rplearn.models.spec import ModelSpec
 from rplearn.workflows.live import LiveOptions, replay_session
 from rplearn.workflows.live_status import Prequential
 
-# 30 batches (of 1 s) and 3 refits between marks: a structure that grows per batch grows by 30
+# 30 batches (of 1 s) and 6 refits (every 5 s) between marks: a structure that grows per batch grows by 30, one per refit by 6
 MINUTES, RATE_HZ = 1.5, 10.0
 MARKS_S = (30.0, 60.0, 90.0)
 
@@ -129,7 +129,7 @@ def _ranker(stats, fitted, latest):
 @pytest.mark.parametrize("auto", [False, True], ids=["fixed order, with a ranking", "automatic order"])
 def test_what_a_session_keeps_does_not_grow_with_its_batches(monkeypatch, tmp_path, auto):
     options = LiveOptions(spec=ModelSpec.parse("sh") if auto else ModelSpec.parse("sh", order=4),
-                          fit=FitOptions(auto=auto), refit_s=10.0, manoeuvres=None if auto else _ranker)
+                          fit=FitOptions(auto=auto), refit_s=5.0, manoeuvres=None if auto else _ranker)
     marks = _replay(monkeypatch, tmp_path, options)
     assert len(marks[-1]) > 20  # the walk reached the session's parts
     assert "session.preq._n" in marks[-1] and "session.matcher._seen.sorted" in marks[-1]

@@ -47,7 +47,8 @@ def sh3(no_units, tmp_path_factory):
 def _leave_out_figures(monkeypatch) -> None:
     """Reports drawn without their figures (PNG and 3-D), for tests of their notes and Table I:
     the figures are checked by ``test_report_fits_the_cross_validated_model_fit_learns_and_draws_its_figures``
-    and the first report of ``test_report_on_a_given_model_file_writes_no_model``."""
+    (a pattern model) and ``test_paper_models_reproduce_the_demo_table_for_the_same_seed`` (the
+    mean model), and drawn by the first report of ``test_report_on_a_given_model_file_writes_no_model``."""
     from rplearn.viz import interactive
     from rplearn.workflows import report as report_module
 
@@ -139,14 +140,16 @@ def test_paper_models_accept_auto_and_refuse_bad_names(no_units, sh3, tmp_path, 
 
 
 def test_paper_models_reproduce_the_demo_table_for_the_same_seed(tmp_path, monkeypatch):
-    """Table I of `report --paper-models paper` equals the demo's on the demo's own dataset (smoke preset)."""
-    _leave_out_figures(monkeypatch)
+    """Table I of `report --paper-models paper` equals the demo's on the demo's own dataset (smoke
+    preset); the report about a model that is no pattern set (the mean, M) draws the figures it
+    has and not those of patterns."""
     from rplearn.workflows import run_demo
 
     demo = run_demo(str(tmp_path / "demo"), seed=2, preset="smoke", figures=False)
     out = learn_and_report(demo.files["dataset"], str(tmp_path / "rep"), model_path=demo.files["model_M"],
                            paper_models=["paper"], report=ReportOptions(repeats=2))
     assert [r.model for r in out.paper_rows] == [r.model for r in demo.table]
+    assert {"time", "residuals", "coverage"} <= out.files.keys() and "polar" not in out.files
     for mine, theirs in zip(out.paper_rows, demo.table):
         for key in ("rmse_db", "aic", "q95_db", "mae_db", "n_params", "n_samples"):
             assert getattr(mine, key) == getattr(theirs, key), (mine.model, key)
