@@ -24,7 +24,7 @@ merged, a sorted copy of one side's hashes (8 bytes a row) and a mask (1 byte a 
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -269,4 +269,25 @@ class SourceHashes:
         return out
 
 
-__all__ = ["RowCopies", "SourceHashes", "matched_row_hashes"]
+def refuse_copies(each: Sequence[RowCopies]) -> None:
+    """Raise the whole-dataset refusal when a row of these sources (in order) repeats an earlier
+    row of any of them (:meth:`RowCopies.then`, :meth:`RowCopies.error`)."""
+    if not each:
+        return
+    merged = each[0]
+    for later in each[1:]:
+        merged = merged.then(later)
+    refusal = merged.error()
+    if refusal is not None:
+        raise refusal
+
+
+def source_copies(source: str, chunks: Iterable[pd.DataFrame]) -> RowCopies:
+    """The hashes and copies of one source's rows, given in chunks (:class:`SourceHashes`)."""
+    hashes = SourceHashes(source)
+    for chunk in chunks:
+        hashes.add(chunk)
+    return hashes.finish()
+
+
+__all__ = ["RowCopies", "SourceHashes", "matched_row_hashes", "refuse_copies", "source_copies"]

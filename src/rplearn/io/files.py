@@ -284,24 +284,6 @@ def provenance(command: str | None = None, **parameters: Any) -> dict[str, Any]:
     }
 
 
-def _refuse_copies_across(parts: Sequence[Part], frames: Sequence[Sequence[pd.DataFrame]]) -> None:
-    """Refuse rows of a dataset in many files that repeat an earlier row, in its own file or
-    another, naming the file and row (and the row copied), as the streamed check does
-    (:mod:`rplearn.data.row_copies`)."""
-    from rplearn.data.row_copies import SourceHashes
-
-    merged = None
-    for part, chunks in zip(parts, frames, strict=True):
-        hashes = SourceHashes(part.path)
-        for chunk in chunks:
-            hashes.add(chunk)
-        copies = hashes.finish()
-        merged = copies if merged is None else merged.then(copies)
-    refusal = None if merged is None else merged.error()
-    if refusal is not None:
-        raise refusal
-
-
 @check_types
 def read_dataset(path: str, require_rssi: bool = True) -> pd.DataFrame:
     """Read and check a matched dataset (docs/conventions.md schema; see :func:`validate_matched`).
@@ -318,7 +300,9 @@ def read_dataset(path: str, require_rssi: bool = True) -> pd.DataFrame:
         parts = dataset_parts(path)
         frames = [list(iter_parts([part], 2_000_000)) for part in parts]
         if require_rssi:  # a copy named by its file and row, as a streamed fit names it
-            _refuse_copies_across(parts, frames)
+            from rplearn.data.row_copies import refuse_copies, source_copies
+
+            refuse_copies([source_copies(part.path, chunks) for part, chunks in zip(parts, frames, strict=True)])
         flat = [f for each in frames for f in each]
         table = pd.concat(flat, ignore_index=True) if len(flat) > 1 else flat[0]
         return validate_matched(table, path, require_rssi=require_rssi)

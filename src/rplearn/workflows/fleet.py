@@ -28,7 +28,7 @@ import numpy as np
 import pandas as pd
 
 from rplearn._budget import Cost, check_work
-from rplearn.data.row_copies import RowCopies, SourceHashes
+from rplearn.data.row_copies import RowCopies, SourceHashes, refuse_copies
 from rplearn.data.tables import link_samples
 from rplearn.data.units import Stretches
 from rplearn.errors import InputError
@@ -353,19 +353,6 @@ def predict_parts(
     return observed, predictions, uncovered
 
 
-def refuse_copies(each: Sequence[RowCopies]) -> None:
-    """Raise the whole-dataset refusal when a row of these parts (in order) repeats an earlier
-    row of any of them."""
-    if not each:
-        return
-    merged = each[0]
-    for later in each[1:]:
-        merged = merged.then(later)
-    refusal = merged.error()
-    if refusal is not None:
-        raise refusal
-
-
 def selected_rows(index: pd.DataFrame, units: Sequence[str] | None) -> int:
     """Rows of the chosen units in an index (:func:`dataset_index`)."""
     if not len(index):
@@ -396,4 +383,4 @@ def cluster_summary(client: Any) -> str:
 
 
 __all__ = ["DASK_INSTALL", "PART_CHUNK_ROWS", "accumulate_parts", "cluster_summary", "dask_client", "dataset_index",
-           "map_parts", "parse_dask", "part_index", "predict_parts", "refuse_copies", "selected_rows", "worker_peak_rss_bytes"]
+           "map_parts", "parse_dask", "part_index", "predict_parts", "selected_rows", "worker_peak_rss_bytes"]
