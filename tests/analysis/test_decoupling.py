@@ -109,6 +109,24 @@ def test_certify_stores_the_certificate_and_skips_baselines(fits):
     assert not note.components and "fixed-order fit" in note.summary()
 
 
+def test_an_automatic_fits_kept_gram_gives_the_certificate_of_its_samples():
+    """``fit --order auto`` reads the joint metric off the X^T X its selection accumulated
+    (``FittedModel.learning_gram``) instead of a second pass over the samples: the same
+    certificate; without it or the samples, no components."""
+    import copy
+
+    us = units(True, seed=3)
+    fitted = fit_auto(us)[0]
+    assert fitted.learning_gram is not None and fitted.learning_gram.n_samples == sum(len(s) for s in us.values())
+    from_samples = certify(copy.copy(fitted.model), list(us.values()), fitted.own_posterior)
+    from_gram = certify(copy.copy(fitted.model), None, fitted.own_posterior, fitted.learning_gram)
+    assert from_samples.n_unsplit == from_gram.n_unsplit >= 3
+    assert from_gram.unsplit_db == pytest.approx(from_samples.unsplit_db, rel=1e-9)
+    assert from_gram.summary() == from_samples.summary()
+    alone = certify(copy.copy(fitted.model), None, fitted.own_posterior)
+    assert not alone.components and "were not kept" in alone.summary()
+
+
 def test_certificate_needs_a_covariance_and_a_coverage_grid(fits):
     import copy
 

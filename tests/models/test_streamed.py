@@ -95,6 +95,12 @@ def test_streamed_auto_fit_equals_the_whole_auto_fit(dataset, monkeypatch, name)
     assert (chunked.selection.order, chunked.selection.smoothing) == (whole.selection.order, whole.selection.smoothing)
     np.testing.assert_allclose(b.coef, a.coef, rtol=1e-7, atol=1e-7)
     assert b.training["coverage_deg"] == a.training["coverage_deg"]
+    # the certificate's unsplit components from the selection's X^T X: there although the pairs of
+    # directions were streamed, and the same as read from the samples in memory
+    whole_cert, chunked_cert = a.training.decoupling, b.training.decoupling
+    assert "components" in chunked_cert and chunked_cert["n_unsplit"] == whole_cert["n_unsplit"]
+    assert chunked_cert["unsplit_db"] == pytest.approx(whole_cert["unsplit_db"], rel=1e-6)
+    assert not any("not kept" in note for note in chunked_cert["notes"])
 
 
 def _refusal(call) -> str:

@@ -42,6 +42,7 @@ from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.core.threads import blas_threads
 from rplearn.data.tables import LinkSamples
 from rplearn.errors import InputError
+from rplearn.models.fit import LearningGram
 from rplearn.models.own_posterior import OwnPosterior
 from rplearn.models.patterns import PatternSet
 
@@ -433,13 +434,20 @@ def _certificate(model: PatternSet, samples: LinkSamples | Sequence[LinkSamples]
 
 @check_types
 def certify(model: Any, samples: LinkSamples | Sequence[LinkSamples] | None = None,
-            posterior: OwnPosterior | None = None) -> DecouplingCertificate | None:
+            posterior: OwnPosterior | None = None, learning_gram: LearningGram | None = None) -> DecouplingCertificate | None:
     """:func:`decoupling_certificate` of a fitted model, stored in ``model.training.decoupling``
     (with its :meth:`~DecouplingCertificate.summary` text, which ``fit`` prints); None, and
-    nothing stored, for a model without patterns, covariance or coverage grid (a baseline)."""
+    nothing stored, for a model without patterns, covariance or coverage grid (a baseline).
+    ``learning_gram`` (an automatic fit's :attr:`~rplearn.models.fit.FittedModel.learning_gram`):
+    the joint metric is read off it, not off ``samples`` (which are then not needed)."""
     if not isinstance(model, PatternSet) or model.covariance is None or not model.training.coverage_deg:
         return None
-    cert = decoupling_certificate(model, samples, posterior=posterior)
+    if learning_gram is not None:
+        own = posterior if model.training.selection is not None else None
+        gram = learning_gram.at(model.basis if own is None else own.basis)
+        cert = decoupling_certificate(model, gram=gram, n_samples=learning_gram.n_samples, posterior=posterior)
+    else:
+        cert = decoupling_certificate(model, samples, posterior=posterior)
     model.training = model.training.replace(decoupling={**cert.to_dict(), "summary": cert.summary()})
     return cert
 

@@ -40,7 +40,7 @@ from rplearn.data.tables import LinkSamples
 from rplearn.errors import InputError
 from rplearn.models.auto_prior import deviation_problem, held_out_errors, keeps_prior, kept_prior_coef, kept_prior_target, kept_within_noise
 from rplearn.models.auto_spread import held_out_misfit_var, misfit_covariance, prior_misfit_var, prior_std_db, unseen_spread_cap_db, within_unit_noise_var
-from rplearn.models.fit import FittedModel
+from rplearn.models.fit import FittedModel, LearningGram
 from rplearn.models.load import load_priors
 from rplearn.models.node_coverage import CoverageWork
 from rplearn.models.options import FitOptions
@@ -491,7 +491,8 @@ def fit_from_statistics(
     model = PatternSet(basis=model_basis, nodes=tuple(nodes), coef=coef, covariance=covariance,
                        gauge=[g.to_dict() for g in sol.report.gauges], training=TrainingSummary.from_dict(training), **fields)
     model.provenance = {**dict(provenance or {}), "model": final.label}
-    return FittedModel(final, model, ltd, own_posterior=own), choice
+    gram = LearningGram(plain_total.basis, len(nodes), plain_total.gram, int(plain_total.n_samples))
+    return FittedModel(final, model, ltd, own_posterior=own, learning_gram=gram), choice
 
 
 __all__ = ["MIN_PIECE_SAMPLES", "held_out_misfit_var", "misfit_covariance", "unit_pieces",

@@ -32,6 +32,41 @@ from rplearn.models.terms import directed_counts, regression_inputs, shared_fiel
 from rplearn.models.training import TrainingSummary
 
 
+@dataclass(frozen=True)
+class LearningGram:
+    """``X^T X`` of a fit's learning design, kept by an automatic fit (it accumulated it for the
+    selection), so that the decoupling certificate's joint metric is read off it instead of
+    the samples being read again, and is there too when they were streamed.
+
+    Attributes
+    ----------
+    basis : Basis
+        The basis of ``gram``'s pattern columns (the largest candidate order).
+    n_nodes : int
+        Node blocks of ``basis`` in ``gram``.
+    gram : ndarray
+        The pattern columns first (``n_nodes * basis.n_coef``), any shared columns after
+        (not read); not copied from the fit's statistics.
+    n_samples : int
+        Samples summed in ``gram``.
+    """
+
+    basis: Basis
+    n_nodes: int
+    gram: np.ndarray
+    n_samples: int
+
+    def at(self, basis: Basis) -> np.ndarray:
+        """The pattern columns' block of ``gram`` at ``basis`` (a nested basis of :attr:`basis`)."""
+        from rplearn.core.lsq.penalty import nested_columns
+
+        if basis == self.basis:
+            pat = basis.n_coef * self.n_nodes
+            return np.asarray(self.gram[:pat, :pat])
+        idx = nested_columns(self.basis, basis, self.n_nodes)
+        return np.asarray(self.gram[np.ix_(idx, idx)])
+
+
 @check_types
 @dataclass
 class FittedModel:
@@ -40,12 +75,15 @@ class FittedModel:
     ``own_posterior`` (automatic fits): the posterior of each node's own pattern, continued to
     the largest candidate order (:mod:`rplearn.models.own_posterior`), which the decoupling
     certificate reads; not saved with the model (the certificate it gives is).
+    ``learning_gram`` (automatic fits): the learning design's ``X^T X`` (:class:`LearningGram`),
+    for the certificate; not saved either.
     """
 
     spec: ModelSpec
     model: Model
     ltd_s: float
     own_posterior: Any = None
+    learning_gram: LearningGram | None = None
 
     @property
     def label(self) -> str:

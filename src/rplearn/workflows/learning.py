@@ -267,7 +267,7 @@ def _fit_auto(
     fitted, selection = fit_auto(per_unit, spec, options, provenance=prov)
     check_dataset_budget(fitted.model, part, dataset)
     _record_scale(fitted.model, part)
-    certify(fitted.model, list(per_unit.values()), fitted.own_posterior)
+    certify(fitted.model, None, fitted.own_posterior, fitted.learning_gram)  # the selection's X^T X: no second pass
     if output:
         fitted.model.save(output)
     n = sum(len(s) for s in per_unit.values())
@@ -334,7 +334,7 @@ def _fit_streamed(
                                                 frequency_hz=weighted_median(acc.freq), provenance=prov)
         assert isinstance(fitted.model, PatternSet)  # fit_from_statistics learns patterns
         fitted.model.training = fitted.model.training.replace(coverage_deg=acc.grids or {})
-        certify(fitted.model, None, fitted.own_posterior)  # the spreads alone: the pairs of directions were streamed, not kept
+        certify(fitted.model, None, fitted.own_posterior, fitted.learning_gram)  # the selection's X^T X: the samples were streamed
         if output:
             fitted.model.save(output)
         return FitOutcome(fitted, choice, acc.n_samples, output, acc.non_unit, selection, wall_s=time.perf_counter() - t0)
