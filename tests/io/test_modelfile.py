@@ -153,3 +153,30 @@ def test_saving_the_same_arrays_again_by_a_relative_path_keeps_their_sidecar(tmp
     replace(model, n_neighbors=30).save("nn.json")
     assert load_model("nn.json").n_neighbors == 30  # its sidecar is there and verified
     assert sorted(os.listdir(tmp_path)) == sorted(["nn.json", os.path.basename(named_sidecar("nn.json"))])
+
+
+def test_a_model_file_is_checked_from_its_written_text_or_from_its_payload(tmp_path):
+    """The checksum is verified from the payload's text as written (no second encoding), and a
+    file laid out otherwise (re-indented) still loads through its payload's canonical text; a
+    change in the written text or in the re-indented one is refused either way."""
+    import json
+
+    import pytest
+
+    from rplearn.errors import ModelFileError
+    from rplearn.io.modelfile import read_model_file, write_model_file
+
+    payload = {"coefficients": {"A": [0.1, 2.5e-3, -7.0]}, "nodes": ["A"], "note": "x"}
+    path = tmp_path / "m.json"
+    write_model_file(path, "patterns", payload)
+    assert read_model_file(path) == ("patterns", payload)
+    indented = tmp_path / "indented.json"
+    indented.write_text(json.dumps(json.loads(path.read_text()), indent=4))
+    assert read_model_file(indented) == ("patterns", payload)
+    for name, text in {"in place": path.read_text().replace("2.5e-3", "2.6e-3").replace("0.0025", "0.0026"),
+                       "re-indented": indented.read_text().replace("0.0025", "0.0026")}.items():
+        assert "0.0026" in text or "2.6e-3" in text, name
+        bad = tmp_path / f"{name.replace(' ', '_')}.json"
+        bad.write_text(text)
+        with pytest.raises(ModelFileError, match="checksum mismatch"):
+            read_model_file(bad)

@@ -176,7 +176,11 @@ def link_summaries(samples: LinkSamples, min_samples: int = 10) -> list[LinkSumm
     d = np.asarray(samples.distance_m, np.float64)
     tx, rx = np.asarray(samples.tx_index), np.asarray(samples.rx_index)
     lo, hi = np.minimum(tx, rx), np.maximum(tx, rx)
-    pairs, group = np.unique(np.stack([lo, hi], axis=1), axis=0, return_inverse=True)
+    n_nodes = max(len(samples.nodes), 1)
+    # one integer per unordered pair (np.unique of the rows of a 2-column array sorts them as
+    # opaque bytes: 20 times slower); the pairs come out in the same (lo, hi) order
+    codes, group = np.unique(lo.astype(np.int64) * n_nodes + hi, return_inverse=True)
+    pairs = np.stack([codes // n_nodes, codes % n_nodes], axis=1)
     group = np.asarray(group).ravel()
     order = np.argsort(group, kind="stable")
     bounds = np.searchsorted(group[order], np.arange(len(pairs) + 1))

@@ -222,7 +222,7 @@ def estimate_clock_offset(
         usable &= (status == 0) & (np.linalg.norm(tx_pos - rx_pos, axis=1) > near_m)
     matched = matched[usable].reset_index(drop=True)
     t_sig = t_sig[usable]
-    n_nodes = len(set(matched["tx"].astype(str)) | set(matched["rx"].astype(str)))
+    n_nodes = len(set(matched["tx"].astype(str).unique()) | set(matched["rx"].astype(str).unique()))
     if n_nodes == 0:
         raise InputError(f"offset_window: no packet of node {node} matches inside its pose span at every shift of "
                          f"+-{window_s:g} s: use a narrower window", param="offset_window")

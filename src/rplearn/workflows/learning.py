@@ -258,7 +258,7 @@ def _fit_auto(
     from rplearn.models.auto import fit_auto
     learn: list[str | None] = list(choice.units) if choice.units is not None else (list(dataset_units(df)) or [None])
     part = select_units(df, choice.units, dataset)
-    nodes = sorted(set(part["tx"].astype(str)) | set(part["rx"].astype(str)))
+    nodes = sorted(set(part["tx"].astype(str).unique()) | set(part["rx"].astype(str).unique()))  # not a set of every row
     if len(learn) == 1:  # one flight: cross-validate over contiguous stretches of it, not samples
         per_unit = stretch_samples(part, None if learn[0] is None else str(learn[0]), dataset, nodes)
     else:
