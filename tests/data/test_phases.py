@@ -116,6 +116,19 @@ def test_takeoff_altitude_is_where_the_node_holds_still():
     assert np.isnan(takeoff_altitude_m(t, circling))
 
 
+def test_takeoff_altitude_of_a_log_with_a_corrupt_time_sizes_nothing_by_its_span():
+    """A time years off (a flipped byte of a DataFlash TimeUS, a sentinel) is one more pose, not
+    a bin per second of the span (was a MemoryError of terabytes); a second without a pose still
+    breaks a window of holding still."""
+    t = np.arange(0.0, 40.0, 0.1)
+    z = np.interp(t, [0, 10, 20, 40], [5.0, 5.0, 30.0, 30.0])
+    xyz = np.c_[np.where(t < 10, 0.0, t), 0 * t, z]
+    far = np.r_[t, 4e12]
+    assert takeoff_altitude_m(far, np.r_[xyz, xyz[-1:]]) == pytest.approx(5.0)
+    holed = (t < 4) | (t >= 5)  # no pose in the 5th second: no 10 s window on the ground
+    assert np.isnan(takeoff_altitude_m(t[holed], xyz[holed]))
+
+
 def test_calibration_distance_from_the_frequency():
     t = np.arange(0.0, 60.0, 0.1)
     near = pd.DataFrame({"t": t, "node": "A", "x": 3.0 * np.cos(t / 5), "y": 3.0 * np.sin(t / 5),

@@ -16,6 +16,15 @@ def _pose(node: str, t: list[float], **extra) -> pd.DataFrame:
                          "qz": 0.0, **extra}).head(n)
 
 
+def test_a_coordinate_beyond_any_place_is_refused_naming_the_file_field_and_row():
+    """Any reader's pose log with a sentinel coordinate (1e308): refused at the check every pose log
+    passes, not matched into overflowing distances and infinite joint gains."""
+    df = _pose("D", [0.0, 1.0, 2.0])
+    df.loc[1, "z"] = 1e308
+    with pytest.raises(InputError, match=r"^flight.bag: z 1e\+308 at row 1 is outside -1e\+08 to 1e\+08 m"):
+        validate_pose_log(df, "flight.bag")
+
+
 def test_armed_is_kept_and_sorted_with_its_rows():
     df = _pose("D", [3.0, 1.0, 2.0], armed=[True, False, True])
     out = validate_pose_log(df)

@@ -68,6 +68,21 @@ def test_nan_pose_error_or_counted_drop(tmp_path):
     assert len(pose) == 3 and meta["dropped"]["nan_pose"] == 1
 
 
+@pytest.mark.parametrize("value", ["1e308", "-2e8"])
+def test_a_coordinate_beyond_any_place_is_refused_or_a_counted_drop(tmp_path, value):
+    """A sentinel (1e308) or corrupt x: no place in any frame, and the distances from it overflow to
+    infinite joint gains (it was matched, and fit refused with a line naming no file)."""
+    p = write(tmp_path, POSE_CSV.replace("0.1,A,1,0,1", f"0.1,A,{value},0,1"))
+    with pytest.raises(InputError) as e:
+        read_pose_table(p)
+    assert one_line(e.value).startswith(f"{p}: field x has 1 row(s) with NaN, infinite or non-numeric values or "
+                                        "coordinates beyond 1e8 m (first at row 1)")
+    pose, meta = read_pose_table(p, nan_policy="drop")
+    assert len(pose) == 3 and meta["dropped"]["nan_pose"] == 1
+    utm = write(tmp_path, POSE_CSV.replace("0.1,A,1,0,1", "0.1,A,4.5e5,5.2e6,1"))  # a UTM easting and northing
+    assert len(read_pose_table(utm)[0]) == 4
+
+
 def test_unsorted_and_duplicate_timestamps(tmp_path):
     lines = POSE_CSV.splitlines()
     unsorted = "\n".join([lines[0], lines[2], lines[1], lines[3], lines[4]]) + "\n"

@@ -665,3 +665,73 @@ def test_a_small_step_back_is_a_copy_only_when_its_records_repeat():
     tables = {"ATT": att + [(2.5, 0.4, 0.2, 0.3, 1), (3.0, 0.7, 0.2, 0.3, 1)]}
     boot_t = [(r[0], r[-1]) for r in tables["ATT"]]
     assert merge_copied_boots(tables, boot_t) == 0 and [b for _, b in boot_t] == [0, 0, 0, 1, 1]
+
+
+def test_a_log_is_read_as_a_file_whatever_its_path_and_name(tmp_path, monkeypatch):
+    """pymavlink's ``mavlink_connection`` runs a path holding ``/bin/`` as a program, opens a
+    socket for one starting ``tcp:``, and reads anything not ending ``.bin`` as a ``.tlog``: a
+    log under a ``bin`` folder (an SD card's files are all executable), named ``tcp:...``, or a
+    DataFlash log named ``.tlog`` reads as the log it is."""
+    import os
+
+    part = tmp_path / "part.tlog"
+    part.write_bytes(TLOG_1.read_bytes()[:150_000])  # a quarter of the flight: every kind of message it needs
+    whole_logs, whole = _read(part)
+    (tmp_path / "bin").mkdir()
+    under_bin = tmp_path / "bin" / "flight.tlog"
+    shutil.copy(part, under_bin)
+    os.chmod(under_bin, 0o755)
+    monkeypatch.chdir(tmp_path)
+    shutil.copy(part, tmp_path / "tcp:flight.tlog")
+    for path in (under_bin, "tcp:flight.tlog"):
+        logs, meta = _read(path)
+        assert meta["records_read"] == whole["records_read"]
+        pd.testing.assert_frame_equal(logs.pose, whole_logs.pose)
+    shutil.copy(BIN, tmp_path / "dataflash.tlog")
+    (bin_logs, binary), (logs, meta) = _read(BIN), _read(tmp_path / "dataflash.tlog")
+    assert meta["format"] == "dataflash" and meta["messages"] == binary["messages"]
+    pd.testing.assert_frame_equal(logs.pose, bin_logs.pose)
+
+
+def test_a_tlog_cut_inside_the_first_message_of_its_type_reads_up_to_the_cut(tmp_path):
+    """The real log cut inside its first STATUSTEXT (at byte 216,220, a third of the way): the
+    messages before the cut are read and the cut said (pymavlink's memory-mapped reader, indexing
+    the file first, failed inside itself and the whole log was refused)."""
+    cut = tmp_path / "cut.tlog"
+    cut.write_bytes(TLOG_1.read_bytes()[:216_250])
+    logs, meta = _read(cut)
+    assert meta["cut_off_at_byte"] == 216_220 and meta["cut_off_record"] == "STATUSTEXT"
+    assert len(logs.pose) > 900 and len(logs.signal) > 200
+    assert any("cut off inside the message at byte 216,220 (STATUSTEXT)" in line for line in file_damage(str(cut), meta))
+
+
+def test_a_corrupt_position_record_is_left_out_and_counted_not_the_whole_log_refused(tmp_path):
+    """One POS record of the real DataFlash log with an altitude of 7e12 m (a flipped byte): the
+    log is read without it, its poses interpolated between the other fixes, and the record
+    counted in a note naming the file (the whole log was refused in a line naming no file)."""
+    from pymavlink import DFReader
+
+    data = bytearray(BIN.read_bytes())
+    pos_type = next(f.type for f in DFReader.DFReader_binary(str(BIN)).formats.values()
+                    if f.name == "POS")  # format QLLfff: TimeUS, Lat, Lng, Alt...
+    head, starts = b"\xa3\x95" + bytes([pos_type]), []
+    at = data.find(head)
+    while at >= 0:
+        if data[at + 31:at + 33] == b"\xa3\x95":  # a whole 31-byte record follows
+            starts.append(at)
+        at = data.find(head, at + 1)
+    data[starts[10] + 19:starts[10] + 23] = struct.pack("<f", 7e12)
+    bad = tmp_path / "alt.bin"
+    bad.write_bytes(bytes(data))
+    (whole_logs, _), (logs, meta) = _read(BIN), _read(bad)
+    assert meta["impossible_fixes"] == 1
+    assert f"{bad}: 1 position fix(es) with a latitude, longitude or altitude no place has (corrupt records) were left out; " \
+           "the poses were interpolated between the others" in meta["notes"]
+    assert len(logs.pose) == len(whole_logs.pose) and np.isfinite(logs.pose[["x", "y", "z"]].to_numpy()).all()
+    assert np.abs(logs.pose["z"].to_numpy() - whole_logs.pose["z"].to_numpy()).max() < 1.0
+    everywhere = bytearray(data)  # every fix impossible (a unit error): refused, naming the file
+    for s in starts:
+        everywhere[s + 19:s + 23] = struct.pack("<f", 7e12)
+    bad.write_bytes(bytes(everywhere))
+    with pytest.raises(RplearnError, match=rf"^{bad}: .*altitude \[m\] 7e\+12"):
+        _read(bad)

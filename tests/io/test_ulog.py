@@ -101,3 +101,27 @@ def test_a_flipped_message_type_is_said_corrupt_naming_the_byte(tmp_path, new_ty
     assert any(f"corrupt bytes were skipped by the ULog reader (pyulog) (the first at byte {at:,}" in line
                for line in lines)
     assert not read_ulog(EVENTS, "A")[1]["corrupt"]
+
+
+def test_a_ulog_cut_before_its_first_position_says_it_is_cut_off(tmp_path):
+    """Cut 5 % into the file, before any vehicle_local_position message: the refusal says the file
+    is cut off and where, not only that the topic is missing."""
+    cut = tmp_path / "cut.ulg"
+    cut.write_bytes(SMALL.read_bytes()[:46_081])
+    with pytest.raises(LogFormatError, match=r"cut.ulg: topic vehicle_local_position missing or empty: the file is "
+                                             r"cut off at byte 46,080 of 46,081, before the topic's first message"):
+        read_ulog(cut, "A")
+
+
+def test_pyulog_prints_nothing_on_a_damaged_ulog(tmp_path, capfd):
+    """A block of the log repeated inside it (a damaged copy): pyulog's own lines ("File corruption
+    detected ...") stay off the terminal; the metadata says the damage (``corrupt``)."""
+    data = SMALL.read_bytes()
+    at, n = int(len(data) * 0.2), 20_000
+    bad = tmp_path / "block.ulg"
+    bad.write_bytes(data[:at + n] + data[at:at + n] + data[at + n:])
+    capfd.readouterr()
+    _, meta = read_ulog(bad, "A")
+    assert meta["corrupt"]
+    out, err = capfd.readouterr()
+    assert out == "" and err == ""

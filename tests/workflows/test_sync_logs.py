@@ -138,3 +138,28 @@ def test_streamed_window_and_doubled_readings_equal_the_whole_log(flight, monkey
     assert outcome.counts.dropped["duplicate_reading"] == inside > 0
     assert outcome.counts.dropped["outside_window"] == 2 * (len(one) - inside)
     assert "window: samples from 10 s to 60 s kept (seconds from the log start" in outcome.summary()
+
+
+def test_what_the_signal_logs_reader_says_is_reported(tmp_path):
+    """A signal log of another format than its poses (a capture cut off by power loss): its
+    reader's damage and drops reach the outcome, as the pose logs' do (they were lost)."""
+    from pathlib import Path
+
+    cap = Path(__file__).resolve().parents[1] / "fixtures" / "radiotap-pcap" / "ieee802.11_exthdr.pcap"
+    cut = tmp_path / "cut.pcap"
+    cut.write_bytes(cap.read_bytes()[:2249])  # inside frame 13
+    t = np.arange(1366203553.0, 1366203558.0, 0.01)
+    pose = pd.concat([pd.DataFrame({"t": t, "node": "T", "x": 20 * np.cos(0.3 * t), "y": 20 * np.sin(0.3 * t), "z": 5.0,
+                                    "qw": 1.0, "qx": 0.0, "qy": 0.0, "qz": 0.0}),
+                      pd.DataFrame({"t": t[[0, -1]], "node": "R", "x": 10.0, "y": 5.0, "z": 2.0,
+                                    "qw": 1.0, "qx": 0.0, "qy": 0.0, "qz": 0.0})])
+    pose.to_csv(tmp_path / "pose.csv", index=False)
+    from rplearn.io import ReaderOptions
+
+    opts = ReaderOptions(receivers={str(cut): "R"}, address_map={"90:a4:de:c0:46:11": "T"}, tx_power_dbm=20.0)
+    outcome = sync_logs([str(tmp_path / "pose.csv")], [str(cut)], str(tmp_path / "m.parquet"), opts,
+                        SyncOptions(link=None))
+    assert outcome.counts.n_out == 4
+    cut_off = [n for n in outcome.notes if "cut off inside the message at byte 2,208" in n]
+    assert len(cut_off) == 1 and cut_off[0].startswith(f"{cut}: ")
+    assert f"{cut}: dropped 4 frame(s) (no_signal)" in outcome.notes

@@ -63,6 +63,7 @@ PLAUSIBLE: Mapping[str, Plausible] = {q.name: q for q in (
     Plausible("longitude_deg", -180.0, 180.0, "deg", "a WGS-84 longitude"),
     Plausible("altitude_m", -1_000.0, 50_000.0, "m", "a drone's altitude: no place is 1 km below the sea, no drone 50 km above it"),
     Plausible("position_m", -100_000.0, 100_000.0, "m", "an ENU coordinate within 100 km of the origin (the station or home)"),
+    Plausible("coordinate_m", -1e8, 1e8, "m", "a coordinate of a place on or near the Earth in any Cartesian frame: local, UTM or ECEF"),
     Plausible("link_distance_m", 0.0, 100_000.0, "m", "a drone radio link, or a home or station, within 100 km of the flight"),
     Plausible("height_above_ground_m", 0.01, 50_000.0, "m", "an antenna above the two-ray ground, and within 50 km of it"),
     Plausible("gain_dbi", -100.0, 60.0, "dBi", "antenna gains: a 60 dBi dish is the largest, -100 dBi a deep null"),

@@ -103,16 +103,17 @@ def takeoff_altitude_m(t_s: np.ndarray, position_xyz: np.ndarray) -> float:
         t, xyz = t[ok], xyz[ok]
     if t.size == 0:
         return float("nan")
-    second = np.floor(t - t[0]).astype(np.int64)
-    count = np.bincount(second)
-    if count.size < SETTLE_S:
+    # the seconds holding a pose only: a log's span (a corrupt or sentinel time, a clock that
+    # jumps years) never sizes an array
+    seconds, second = np.unique(np.floor(t - t[0]), return_inverse=True)
+    if seconds.size < SETTLE_S:
         return float("nan")
-    with np.errstate(invalid="ignore"):
-        mean = np.column_stack([np.bincount(second, xyz[:, j]) / count for j in range(3)])
+    count = np.bincount(second)
+    mean = np.column_stack([np.bincount(second, xyz[:, j]) / count for j in range(3)])
     windows = np.lib.stride_tricks.sliding_window_view(mean, SETTLE_S, axis=0)  # (bins, 3, SETTLE_S)
     spread = windows.max(axis=2) - windows.min(axis=2)
     still = (np.hypot(spread[:, 0], spread[:, 1]) <= STILL_HORIZONTAL_M) & (spread[:, 2] <= STILL_VERTICAL_M)
-    still &= np.isfinite(spread).all(axis=1)  # every second of the window has a pose
+    still &= seconds[SETTLE_S - 1:] - seconds[:seconds.size - SETTLE_S + 1] == SETTLE_S - 1  # every second has a pose
     if not still.any():
         return float("nan")
     ground = float(np.median(windows[still, 2, :], axis=1).min())

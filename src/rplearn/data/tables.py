@@ -31,7 +31,7 @@ import pandas as pd
 from rplearn._argtypes import check_types
 from rplearn.core.geometry import Directions, distance_m, link_directions
 from rplearn.core.link import observed_joint_gain_db
-from rplearn.core.plausible import PLAUSIBLE, check_frequency_hz
+from rplearn.core.plausible import PLAUSIBLE, check_frequency_hz, check_plausible
 from rplearn.errors import InputError
 
 POSE_COLUMNS: tuple[str, ...] = ("t", "node", "x", "y", "z", "qw", "qx", "qy", "qz")
@@ -81,7 +81,9 @@ def _require_columns(df: pd.DataFrame, columns: Sequence[str], source: str) -> N
 
 def _require_finite(df: pd.DataFrame, columns: Sequence[str], source: str) -> None:
     for c in columns:
-        if df[c].dtype == np.float64 and np.isfinite(np.sum(df[c].to_numpy())):
+        with np.errstate(over="ignore"):  # huge values: their sum overflows, and the full check runs
+            whole = df[c].dtype == np.float64 and np.isfinite(np.sum(df[c].to_numpy()))
+        if whole:
             continue  # a finite sum: no NaN and no infinity (an overflow only sends it to the full check)
         values = pd.to_numeric(df[c], errors="coerce").to_numpy(np.float64)
         bad = ~np.isfinite(values)
@@ -228,6 +230,8 @@ def checked_pose_arrays(df: pd.DataFrame, source: str = "pose log") -> CheckedPo
     _require_columns(df, POSE_COLUMNS, source)
     df = normalise_times(df, source)
     _require_finite(df, [c for c in POSE_COLUMNS if c != "node"], source)
+    for c in ("x", "y", "z"):  # a sentinel (1e308) or a corrupt value: no place, and distances overflow
+        check_plausible("coordinate_m", df[c].to_numpy(np.float64), source, field=c)
     t = df["t"].to_numpy(np.float64)
     codes, names = node_id_codes(df["node"], sort=True)  # codes in the order of sorted ids
     empty = empty_ids(names)[codes]

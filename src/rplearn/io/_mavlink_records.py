@@ -79,16 +79,35 @@ def _first_tlog_record_cut(head: bytes) -> bool:
 
 
 def _open(source: str, tlog: bool = True) -> Any:
-    """A pymavlink connection reading the log ``source`` (a ``.tlog``, or with ``tlog`` False a
-    DataFlash log); a log pymavlink cannot open is refused naming the file."""
+    """A pymavlink reader of the log file ``source`` (a ``.tlog``, or with ``tlog`` False a binary
+    or text DataFlash log, told apart by its bytes); a log pymavlink cannot open is refused naming
+    the file.
+
+    The reader's class is chosen here, never by ``mavutil.mavlink_connection``, which takes its
+    argument for a connection string first: a path holding ``/bin/`` is executed as a program, one
+    starting ``tcp:`` or ``udpin:`` opens a socket, one not ending ``.bin`` is read as a ``.tlog``
+    whatever it holds, and a ``.tlog``'s memory-mapped reader indexes the whole file first and
+    fails inside pymavlink on a first message of its type cut off. The streaming ``.tlog`` reader
+    parses the same messages in the same order.
+    """
+    mavutil = _mavutil()
+    with open(source, "rb") as fh:
+        head = fh.read(8 + 10 + 255 + 2 + 13)
+    if tlog and _first_tlog_record_cut(head):
+        raise LogFormatError(f"{source}: the file ends inside its first record ({len(head)} byte(s)): "
+                             "no complete MAVLink message (a log cut off, or not a .tlog)")
     try:
-        return _mavutil().mavlink_connection(source, dialect="ardupilotmega")
-    except Exception as exc:
+        if tlog:
+            mavutil.set_dialect("ardupilotmega")
+            return mavutil.mavlogfile(source)
+        from pymavlink import DFReader
+
         with open(source, "rb") as fh:
-            head = fh.read(8 + 10 + 255 + 2 + 13)
-        if tlog and _first_tlog_record_cut(head):
-            raise LogFormatError(f"{source}: the file ends inside its first record ({len(head)} byte(s)): "
-                                 "no complete MAVLink message (a log cut off, or not a .tlog)") from None
+            head = fh.read(8000)
+        if not head.startswith(b"\xa3\x95") and b"FMT," in head:  # a text log (pymavlink's test, on bytes)
+            return DFReader.DFReader_text(source)
+        return DFReader.DFReader_binary(source)
+    except Exception as exc:
         msg = str(exc).splitlines()[0] if str(exc) else ""
         raise LogFormatError(f"{source}: cannot read MAVLink log ({type(exc).__name__}: {msg})") from None
 

@@ -240,7 +240,7 @@ def replay_tlog(path: str, address: str, speed: float = 1.0, start_delay_s: floa
     int
         Messages sent.
     """
-    from rplearn.io._mavlink_records import _mavutil
+    from rplearn.io._mavlink_records import _mavutil, _open
 
     if not speed > 0:
         raise InputError(f"speed: expected a positive factor, got {speed}", param="speed")
@@ -250,7 +250,7 @@ def replay_tlog(path: str, address: str, speed: float = 1.0, start_delay_s: floa
     except ValueError:
         raise InputError(f"address: expected HOST:PORT, got {address!r}", param="address") from None
     mavutil = _mavutil()
-    log = mavutil.mavlink_connection(path, dialect="ardupilotmega")
+    log = _open(str(path))  # a file, never a connection string
     enc = mavutil.mavlink.MAVLink(None)
     sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     sent, t0, wall0, boot0 = 0, None, 0.0, None

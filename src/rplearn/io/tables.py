@@ -24,6 +24,7 @@ import pandas as pd
 
 from rplearn._argtypes import check_types
 from rplearn.core.geometry import quat_wxyz_from_euler_enu_flu_deg, quat_wxyz_from_euler_ned_frd_deg
+from rplearn.core.plausible import PLAUSIBLE
 from rplearn.data.tables import CSV_DTYPES, POSE_COLUMNS, SIGNAL_COLUMNS, node_ids, normalise_times, validate_pose_log
 from rplearn.errors import InputError, LogFormatError
 from rplearn.io._common import read_parquet_lean
@@ -189,8 +190,10 @@ def _finite_values(
     values = {c: _float_column(df, c) for c in numeric}
     bad = np.zeros(len(df), bool)
     first_bad: tuple[int, str] | None = None
+    far = PLAUSIBLE["coordinate_m"].high
     for c in numeric:
-        b = ~np.isfinite(values[c])
+        with np.errstate(invalid="ignore"):  # an ENU coordinate beyond any place: a sentinel or corrupt value
+            b = ~np.isfinite(values[c]) | ((np.abs(values[c]) > far) if c in ("x", "y", "z") else False)
         if b.any():
             r = int(np.flatnonzero(b)[0])
             if first_bad is None or r < first_bad[0]:
@@ -201,7 +204,8 @@ def _finite_values(
     if nan_policy == "error":
         raise InputError(
             f"{source}: field {first_bad[1]} has {int(bad.sum())} row(s) with NaN, infinite or "
-            f"non-numeric values (first at row {first_bad[0]}); expected numbers, or drop those rows "
+            f"non-numeric values{' or coordinates beyond 1e8 m' if first_bad[1] in ('x', 'y', 'z') else ''} "
+            f"(first at row {first_bad[0]}); expected numbers, or drop those rows "
             "(nan_policy='drop')",
             param="nan_policy",
         )

@@ -254,11 +254,14 @@ def _open_ulog(source: str, log_bytes: int | None = None) -> Any:
     :class:`LogFormatError` when unreadable."""
     if not os.path.exists(source):
         raise InputError(f"{source}: no such file")
+    from rplearn.io._log_schema import library_quiet
+
     ULog = _pyulog()
     try:
-        if log_bytes is None:
-            return ULog(source, list(_TOPICS))
-        return ULog(_Head(open(source, "rb"), log_bytes), list(_TOPICS))
+        with library_quiet():  # pyulog prints what it finds corrupt; the metadata says it (``corrupt``)
+            if log_bytes is None:
+                return ULog(source, list(_TOPICS))
+            return ULog(_Head(open(source, "rb"), log_bytes), list(_TOPICS))
     except Exception as exc:
         msg = str(exc).splitlines()[0] if str(exc) else ""
         raise LogFormatError(f"{source}: cannot read ULog ({type(exc).__name__}: {msg})") from None
@@ -458,7 +461,15 @@ def read_ulog(
         raise InputError(f"{source}: no such file")
     layout = ulog_layout(source)
     ulog = _open_ulog(source, layout["log_bytes"] if layout["repeated_messages"] else None)
-    lp, att = _pose_topics(ulog, source)
+    try:
+        lp, att = _pose_topics(ulog, source)
+    except LogFormatError as exc:
+        cut = layout["cut_off_at_byte"] if layout["cut_off_at_byte"] is not None else layout["damaged_at_byte"]
+        if cut is None:
+            raise
+        raise LogFormatError(f"{exc}: the file is {'cut off' if layout['damaged_at_byte'] is None else 'damaged'} "
+                             f"at byte {cut:,} of {os.path.getsize(source):,}, before the topic's first message "
+                             "(a log that ended early, or a damaged copy)") from None
     dropped = {"nan_position": 0, "nan_attitude": 0, "invalid_flag": 0, "out_of_span": 0, "gap": 0}
     tp, ned, invalid_flag_rows = _local_positions(lp, require_valid, dropped)
     ta, q_ned = _attitudes(att, dropped)

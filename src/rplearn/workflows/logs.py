@@ -153,6 +153,12 @@ def _signal_chunks(signal_paths: Sequence[str], options: ReaderOptions) -> Itera
             yield out
 
 
+def _both_notes(pose_meta: Mapping[str, Any], signal_meta: Mapping[str, Any]) -> list[str]:
+    """What the readers of the pose and of the signal logs said, each line once (a log given as
+    both, a ``.tlog``, is read twice and says the same)."""
+    return list(dict.fromkeys(reader_notes(pose_meta) + reader_notes(signal_meta)))
+
+
 @check_types
 def sync_logs(
     pose_paths: Sequence[str],
@@ -217,12 +223,12 @@ def sync_logs(
 
         write_table_chunks(frames(), output, MATCHED_COLUMNS)
         return SyncOutcome(summary, output, reader_notes(pose_meta), streamed=True, clock=clock)
-    signal_logs, _ = read_logs(signal_paths, reader_options)
+    signal_logs, signal_meta = read_logs(signal_paths, reader_options)
     if signal_logs.signal is None:
         raise InputError(f"{', '.join(signal_paths)}: no signal log found", param="signal_paths")
     result = synchronise(pose_logs.pose, signal_logs.signal, sync_options, source=source)
     write_table(result.dataset, output)
-    return SyncOutcome(result.summary, output, reader_notes(pose_meta), clock=clock)
+    return SyncOutcome(result.summary, output, _both_notes(pose_meta, signal_meta), clock=clock)
 
 
 @check_types
