@@ -11,6 +11,7 @@ from __future__ import annotations
 import importlib.util
 import os
 import re
+import runpy
 import subprocess
 import sys
 from pathlib import Path
@@ -25,6 +26,18 @@ RATIO = re.compile(r"\bratios?\b|\d(?:\.\d+)?x\b", re.IGNORECASE)
 
 #: Python packages a script needs beyond rplearn's own dependencies (an optional extra).
 NEEDS = {"fleet.py": "distributed"}
+
+#: Scripts run in the test's own process (as ``python SCRIPT --tiny`` would: ``__main__``, their
+#: folder first on the path, the test's folder as working directory), which saves the start of an
+#: interpreter and its imports (1-2 s each): they measure nothing of the process, which
+#: test_in_process_scripts_measure_nothing_of_the_process checks. The others time imports, read
+#: memory, limit threads or start processes, and run as their own process.
+IN_PROCESS = frozenset({"auto_fit.py", "knn_file.py", "level_shift.py", "live_tlog.py", "simulate.py", "split.py"})
+
+#: What a script may not use to run in the test's process (its process's memory, imports, threads,
+#: environment or children).
+PROCESS_BOUND = re.compile(r"subprocess|multiprocessing|ProcessPool|execv|importtime|ru_maxrss|getrusage|statm|"
+                           r"tracemalloc|mallinfo|threadpool|blas_threads|os\.environ|sys\.modules|gc\.collect")
 
 #: Further lines a script's tiny run must print.
 EXPECT = {
@@ -46,28 +59,56 @@ EXPECT = {
 
 def test_the_benchmarks_are_found():
     assert len(SCRIPTS) >= 15 and ROOT / "benchmarks" / "fit.py" in SCRIPTS
+    assert IN_PROCESS <= {s.name for s in SCRIPTS}
+
+
+def test_in_process_scripts_measure_nothing_of_the_process():
+    bound = {name: found.group(0) for name in sorted(IN_PROCESS)
+             if (found := PROCESS_BOUND.search((ROOT / "benchmarks" / name).read_text(encoding="utf-8")))}
+    assert bound == {}, f"run these as their own process (drop them from IN_PROCESS): {bound}"
+    assert PROCESS_BOUND.search((ROOT / "benchmarks" / "live.py").read_text(encoding="utf-8"))  # the check can fail
+
+
+def _run_in_process(script: Path, cwd: Path, monkeypatch, capsys) -> tuple[int, str, str]:
+    """``python SCRIPT --tiny`` in this process: its exit code, stdout and stderr."""
+    monkeypatch.chdir(cwd)
+    monkeypatch.setattr(sys, "argv", [str(script), "--tiny"])
+    monkeypatch.syspath_prepend(str(script.parent))
+    capsys.readouterr()
+    try:
+        runpy.run_path(str(script), run_name="__main__")
+        code = 0
+    except SystemExit as stop:
+        code = stop.code if isinstance(stop.code, int) else 0 if stop.code is None else 1
+        if not isinstance(stop.code, int | None):
+            print(stop.code, file=sys.stderr)
+    out = capsys.readouterr()
+    return code, out.out, out.err
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("script", SCRIPTS, ids=[s.name for s in SCRIPTS])
-def test_benchmark_runs_tiny_and_prints_its_ratios(script, tmp_path):
+def test_benchmark_runs_tiny_and_prints_its_ratios(script, tmp_path, monkeypatch, capsys):
     need = NEEDS.get(script.name)
     if need and importlib.util.find_spec(need) is None:
         if os.environ.get("CI") == "true":
             pytest.fail(f"CI=true but {need} is not installed (.ci/run installs the extras)")
         pytest.skip(f"{script.name} needs {need}")
-    env = {
-        **os.environ,
-        "PYTHONPATH": os.pathsep.join([str(ROOT / "src"), os.environ.get("PYTHONPATH", "")]),
-    }
-    proc = subprocess.run(
-        [sys.executable, str(script), "--tiny"],
-        capture_output=True,
-        text=True,
-        cwd=tmp_path,
-        timeout=600,
-        env=env,
-    )
+    if script.name in IN_PROCESS:
+        proc = subprocess.CompletedProcess(script.name, *_run_in_process(script, tmp_path, monkeypatch, capsys))
+    else:
+        env = {
+            **os.environ,
+            "PYTHONPATH": os.pathsep.join([str(ROOT / "src"), os.environ.get("PYTHONPATH", "")]),
+        }
+        proc = subprocess.run(
+            [sys.executable, str(script), "--tiny"],
+            capture_output=True,
+            text=True,
+            cwd=tmp_path,
+            timeout=600,
+            env=env,
+        )
     assert proc.returncode == 0, (
         f"{script.name} --tiny exited {proc.returncode}:\n{proc.stdout[-3000:]}\n{proc.stderr[-3000:]}"
     )

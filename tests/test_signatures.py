@@ -25,6 +25,7 @@ entry that no longer exceeds (remove it).
 from __future__ import annotations
 
 import ast
+from functools import cache
 from pathlib import Path
 
 SRC = Path(__file__).resolve().parents[1] / "src" / "rplearn"
@@ -41,8 +42,14 @@ def _is_solver_entry(module: str) -> bool:
     return module.startswith(("core/solver", "core/lsq/"))
 
 
-def _functions():
-    """``(module, qualified name, node, is a method, is a CLI command)`` of every function."""
+@cache
+def _functions() -> tuple[tuple[str, str, ast.FunctionDef | ast.AsyncFunctionDef, bool, bool], ...]:
+    """``(module, qualified name, node, is a method, is a CLI command)`` of every function (the
+    package parsed once for both checks: neither changes the trees)."""
+    return tuple(_walk_functions())
+
+
+def _walk_functions():
     for path in sorted(SRC.rglob("*.py")):
         module = path.relative_to(SRC).as_posix()
         tree = ast.parse(path.read_text(), str(path))

@@ -88,27 +88,36 @@ def cli_reference() -> str:
 # ----------------------------------------------------------------------------------- API
 
 
+@cache
+def _top_level_assignments(path: Path) -> frozenset[str]:
+    """The names a module's top level assigns (each module parsed once per build)."""
+    names: set[str] = set()
+    for node in ast.parse(path.read_text(encoding="utf-8")).body:
+        targets = (
+            node.targets
+            if isinstance(node, ast.Assign)
+            else [node.target]
+            if isinstance(node, ast.AnnAssign)
+            else []
+        )
+        names |= {t.id for t in targets if isinstance(t, ast.Name)}
+    return frozenset(names)
+
+
 def _assigning_module(package: str, name: str) -> str | None:
     """The module of ``package`` whose top level assigns ``name`` (a constant)."""
     folder = SRC.joinpath(*package.split("."))
     for path in sorted(folder.rglob("*.py")):
-        tree = ast.parse(path.read_text(encoding="utf-8"))
-        for node in tree.body:
-            targets = (
-                node.targets
-                if isinstance(node, ast.Assign)
-                else [node.target]
-                if isinstance(node, ast.AnnAssign)
-                else []
-            )
-            if any(isinstance(t, ast.Name) and t.id == name for t in targets):
-                module = ".".join(path.relative_to(SRC).with_suffix("").parts)
-                return module.removesuffix(".__init__")
+        if name in _top_level_assignments(path):
+            module = ".".join(path.relative_to(SRC).with_suffix("").parts)
+            return module.removesuffix(".__init__")
     return None
 
 
+@cache
 def _object_path(package: str, name: str) -> str | None:
-    """Dotted path of the definition of public name ``name`` of ``package``."""
+    """Dotted path of the definition of public name ``name`` of ``package`` (asked by every page
+    that exports it, and again when that page is rendered)."""
     obj = getattr(_import(package), name)
     if inspect.isclass(obj) or inspect.isfunction(obj):
         return f"{obj.__module__}.{obj.__qualname__}"

@@ -59,6 +59,7 @@ from .lsq.block_sums import MIN_BLOCKS as MIN_BLOCKS
 from .lsq.block_sums import BlockSums as BlockSums
 from .lsq.block_sums import correlated_ratio as correlated_ratio
 from .lsq.normal_equations import NormalEquations as NormalEquations
+from .lsq.normal_equations import independent_spread_db as independent_spread_db
 from .lsq.solution import FitReport as FitReport
 from .lsq.solution import GaugeNote as GaugeNote
 from .lsq.solution import JointSolution as JointSolution
@@ -66,7 +67,6 @@ from .lsq.solver import DEFAULT_RIDGE as DEFAULT_RIDGE
 from .lsq.solver import JointFitOptions as JointFitOptions
 from .lsq.solver import fit_joint as fit_joint
 from .lsq.solver import identifiability as identifiability
-from .lsq.solver import independent_spread_db as independent_spread_db
 from .lsq.solver import link_components as link_components
 from .lsq.solver import solve as solve
 from .metrics import Scores as Scores
