@@ -325,7 +325,7 @@ above (``--draws 0``: the single-draw check with +0.05 dB, as before).
 
 Usage: ``python benchmarks/manoeuvres.py [--presets paper,ground] [--seeds 0,1,2] [--posterior honest|inflated]
 [--correlated reference|own|off] [--prior-std 0] [--draws 5] [--yaw-rate 45] [--arcs] [--tilt] [--no-sweeps]
-[--rate information|spread] [--prefixes 4] [--tiny]``
+[--rate information|spread] [--prefixes 4] [--lookahead 4] [--tiny]``
 (``--tiny``: the ``smoke`` preset at SH-4 with ``--budget`` and at most 2 draws, a few seconds; its criteria are printed,
 not enforced).
 """
@@ -626,7 +626,8 @@ def _reference_drift(setup: Setup, parts: list[Any]) -> float:
 def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, prior_std_db: float = PRIOR_STD_DB,
         correlated: str = "reference", block_s: float = DEFAULT_BLOCK_S, posterior: str = "inflated",
         budget: bool = False, draws: int = DRAWS, candidates: dict[str, Any] | None = None, tilt: bool = False,
-        aggregate: str = "rms", rate: str = "spread", prefixes: int = ManoeuvreOptions().prefixes) -> dict[str, Flight]:
+        aggregate: str = "rms", rate: str = "spread", prefixes: int = ManoeuvreOptions().prefixes,
+        lookahead: int = ManoeuvreOptions().lookahead) -> dict[str, Flight]:
     config = _config(preset)
     learning = config.campaign.with_role("learning").units
     nodes = tuple(sorted(config.node_antennas))
@@ -637,7 +638,7 @@ def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, 
     cands = CandidateOptions(fixed_nodes=FIXED.get(preset, ()), speed_m_s=speed, **(candidates or {}))
     opts = ManoeuvreOptions(noise_std_db=noise, packet_rate_hz=config.radio.packet_rate_hz * (1 - config.radio.loss_probability),
                             penalty_weight=weight, candidates=cands, power=power, correlation_s=block_s, aggregate=aggregate,
-                            rate=rate, prefixes=prefixes)
+                            rate=rate, prefixes=prefixes, lookahead=lookahead)
     setup = Setup(preset, config, spec, nodes, opts, weight, seed=seed, correlated=correlated, block_s=block_s, budget=budget)
     ref_parts, _ = fly(setup, learning)
     if prior_std_db <= 0:  # the prior the project learns from the complete reference flight
@@ -672,8 +673,9 @@ def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, 
         sug.plan.append(((unit,), best.candidate.lead_s, None))
         accumulate(setup, sug, parts, lead_s=best.candidate.lead_s)
         flown = "" if not sug.history else f", flown {sug.history[-1][1]:.2f}"
+        ahead = "" if best.time_to_target_s is None else f"; to {TARGET_DB:g} dB in {best.time_to_target_s:.0f} s"
         sug.steps.append(f"{best.name} ({best.duration_s:.0f} s; predicted {max(best.spread_before_db.values()):.2f} -> "
-                         f"{max(best.spread_after_db.values()):.2f}{flown} dB)")
+                         f"{max(best.spread_after_db.values()):.2f}{flown} dB{ahead})")
     # optimized: the greedy plan before the flight, from the reference's start poses
     first = learning[0].evaluate(np.array([0.0]))
     start = {n: (tuple(first.position_enu_m[0, j]), float(np.degrees(first.yaw_rad[0, j]))) for j, n in enumerate(learning[0].nodes)}
@@ -774,6 +776,8 @@ def main(argv: list[str] | None = None) -> int:
                     help="the ranking per second: the spread's inverse square's growth (default) or its reduction")
     ap.add_argument("--prefixes", type=int, default=ManoeuvreOptions().prefixes,
                     help="score each candidate's first k/N too and fly its best prefix (1: whole manoeuvres only)")
+    ap.add_argument("--lookahead", type=int, default=ManoeuvreOptions().lookahead,
+                    help="rank the best N candidates by rate again by their estimated time to the target (0: the rate alone)")
     ap.add_argument("--tiny", action="store_true", help="the smoke preset at SH-4 (seconds; criteria not enforced)")
     args = ap.parse_args(argv)
     presets = ["smoke"] if args.tiny else [p.strip() for p in args.presets.split(",") if p.strip()]
@@ -789,7 +793,7 @@ def main(argv: list[str] | None = None) -> int:
         limit = float(sum(u.duration_s for u in ref_total.units))
         flights = run(preset, order, seed, limit, args.power, args.prior_std, args.correlated, args.block_s, args.posterior,
                       args.budget or args.tiny, draws, _candidate_args(args), args.tilt, args.aggregate,
-                      args.rate, args.prefixes)
+                      args.rate, args.prefixes, args.lookahead)
         ref = flights["reference"]
         print(f"{preset} (SH-{order}, seed {seed}, {time.perf_counter() - t0:.0f} s): time to {TARGET_DB:g} dB per-node spread")
         for f in flights.values():
