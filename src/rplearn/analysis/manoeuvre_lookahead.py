@@ -14,7 +14,10 @@ the *information deficit* it leaves (``a_c`` the combined spread after it, each 
 floored at ``T``, so ``D_c = 0`` once every node is at the target), and ``r_c`` the best
 information rate ``(1/a'^2 - 1/a_c^2) / t'`` among the candidates flyable from where it ends, on
 the posterior it leaves (one more ranking per candidate looked at: ``k`` more rankings). A
-candidate reaching the target scores its own time. Under a constant continuation rate this is
+candidate reaching the target scores the time at which it reaches it, for the flight stops
+there (the stop criterion): its lead plus the fraction ``max_k d_k / g_k`` of its own time, with
+``d_k`` the information node ``k`` still misses and ``g_k`` the information the whole manoeuvre
+gives it (``1/s_k'^2 - 1/s_k^2``, unfloored), as if each node learned at a steady rate along it. Under a constant continuation rate this is
 the rate ranking again (minimising ``t_c + (D - g_c)/r`` is maximising ``g_c - r t_c``, whose best
 is the best ``g_c / t_c``); it differs where the manoeuvre chosen changes what the next one can
 teach, and at the end of the flight.
@@ -37,12 +40,29 @@ Scored = tuple[Any, tuple[np.ndarray, Any]]
 def information_deficit(combined_db: float, target_db: float) -> float:
     """``1/T^2 - 1/a^2`` [1/dB^2]: the information still missing to bring the combined spread
     ``a`` (each node's floored at the target) down to the target ``T``; 0 at or below it."""
-    return max(1.0 / target_db**2 - 1.0 / max(combined_db, 1e-12) ** 2, 0.0)
+    if combined_db <= target_db * (1.0 + 1e-9):  # the floored combination at the target, to rounding
+        return 0.0
+    return 1.0 / target_db**2 - 1.0 / combined_db**2
 
 
 def information_rate(before_db: float, after_db: float, duration_s: float) -> float:
     """The growth of the combined spread's inverse square per second [1/(dB^2 s)]."""
     return (1.0 / max(after_db, 1e-12) ** 2 - 1.0 / max(before_db, 1e-12) ** 2) / max(duration_s, 1e-9)
+
+
+def reach_fraction(before_db: np.ndarray, after_db: np.ndarray, target_db: float) -> float:
+    """The fraction of a manoeuvre at which every node's spread reaches the target, at a steady
+    information rate along it: ``max_k d_k / g_k`` over the nodes above the target (module
+    docstring); 0 if none is, ``inf`` if the manoeuvre leaves one above it."""
+    before, after = np.asarray(before_db, np.float64), np.asarray(after_db, np.float64)
+    need = before > target_db
+    if not np.any(need):
+        return 0.0
+    if np.any(after[need] > target_db * (1.0 + 1e-12)):
+        return float("inf")
+    d = 1.0 / target_db**2 - 1.0 / before[need] ** 2
+    g = 1.0 / np.maximum(after[need], 1e-12) ** 2 - 1.0 / before[need] ** 2
+    return float(np.clip(np.max(d / np.maximum(g, 1e-300)), 0.0, 1.0))
 
 
 def time_to_target_s(duration_s: float, deficit_after: float, best_rate_after: float) -> float:
@@ -87,7 +107,8 @@ def lookahead_order(post: ManoeuvrePosterior, scored: Sequence[Scored], width: i
         ranked, (rows, ends) = item
         after = copy.copy(post)  # update() rebinds its arrays: the copy's are its own afterwards
         after.update(rows, weight, ends)
-        deficit = information_deficit(combined(after.spreads()), target_db)
+        left = after.spreads()
+        deficit = information_deficit(combined(left), target_db)
         best = 0.0
         if deficit > 0.0:
             moved = {**state, **ranked.candidate.ends}
@@ -95,9 +116,14 @@ def lookahead_order(post: ManoeuvrePosterior, scored: Sequence[Scored], width: i
                 b = combined(np.array(list(nxt.spread_before_db.values())))
                 a = combined(np.array(list(nxt.spread_after_db.values())))
                 best = max(best, information_rate(b, a, float(nxt.duration_s)))
-        estimates.append(time_to_target_s(float(ranked.duration_s), deficit, best))
+        took = float(ranked.duration_s)
+        if deficit <= 0.0:  # it reaches the target: the flight stops where it does
+            lead = float(ranked.candidate.lead_s)
+            frac = reach_fraction(post.spreads(), left, target_db)
+            took = lead + (took - lead) * min(frac, 1.0)
+        estimates.append(time_to_target_s(took, deficit, best))
     order = sorted(range(len(head)), key=lambda k: (estimates[k], k))
     return [(head[k], estimates[k]) for k in order] + [(item, None) for item in scored[len(head):]]
 
 
-__all__ = ["information_deficit", "information_rate", "lookahead_order", "time_to_target_s"]
+__all__ = ["information_deficit", "information_rate", "lookahead_order", "reach_fraction", "time_to_target_s"]
