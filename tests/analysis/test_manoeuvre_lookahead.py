@@ -33,7 +33,7 @@ def test_the_deficit_is_the_missing_inverse_square_and_a_candidate_reaching_the_
     assert time_to_target_s(12.0, 0.0, 0.0) == 12.0
     assert time_to_target_s(12.0, 0.1, 0.01) == pytest.approx(22.0)
     assert time_to_target_s(12.0, 0.1, 0.0) == float("inf")
-    # the slower node sets the fraction: B reaches the target only at the end, A a fifth of the way
+    # the slower node sets the fraction: B reaches the target only at the end, A about a sixth of the way
     assert reach_fraction(np.array([3.0, 2.5]), np.array([1.0, 2.0]), 2.0) == pytest.approx(1.0)
     assert reach_fraction(np.array([3.0, 2.5]), np.array([1.0, 1.0]), 2.0) == pytest.approx((1 / 4 - 1 / 9) / (1 - 1 / 9))
     assert reach_fraction(np.array([1.5, 1.8]), np.array([1.4, 1.7]), 2.0) == 0.0  # already there
