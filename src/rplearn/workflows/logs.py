@@ -154,15 +154,16 @@ def _signal_chunks(signal_paths: Sequence[str], options: ReaderOptions) -> Itera
 
 
 def _signal_log(signal_paths: Sequence[str], pose_paths: Sequence[str], read_with_poses: pd.DataFrame | None,
-                reader_options: ReaderOptions) -> pd.DataFrame | None:
-    """The signal log of ``signal_paths`` (None if they hold none): ``read_with_poses``, the one
-    :func:`read_logs` gave with the poses, when both name the same files in the same order (a
-    ``.tlog`` or a bag given as both, the usual case, is then parsed once, not twice), else
-    read now with the same options."""
+                pose_meta: dict[str, Any], reader_options: ReaderOptions) -> tuple[pd.DataFrame | None, dict[str, Any]]:
+    """The signal log of ``signal_paths`` (None if they hold none) and what its reading said
+    (:func:`read_logs`'s metadata): ``read_with_poses`` and ``pose_meta``, what the reading of
+    the poses gave, when both name the same files in the same order (a ``.tlog`` or a bag
+    given as both, the usual case, is then parsed once, not twice), else read now with the
+    same options."""
     if [str(p) for p in signal_paths] == [str(p) for p in pose_paths]:
-        return read_with_poses
-    logs, _ = read_logs(signal_paths, reader_options)
-    return logs.signal
+        return read_with_poses, pose_meta
+    logs, meta = read_logs(signal_paths, reader_options)
+    return logs.signal, meta
 
 
 @check_types
@@ -207,7 +208,7 @@ def sync_logs(
     if estimate_offset is not None:
         from rplearn.analysis.clock import estimate_clock_offset
 
-        whole = _signal_log(signal_paths, pose_paths, pose_logs.signal, reader_options)
+        whole, _ = _signal_log(signal_paths, pose_paths, pose_logs.signal, pose_meta, reader_options)
         if whole is None:
             raise InputError(f"{', '.join(signal_paths)}: no signal log found", param="signal_paths")
         clock = estimate_clock_offset(pose_logs.pose, whole, estimate_offset, offset_window_s, sync_options)
@@ -229,7 +230,7 @@ def sync_logs(
 
         write_table_chunks(frames(), output, MATCHED_COLUMNS)
         return SyncOutcome(summary, output, reader_notes(pose_meta), streamed=True, clock=clock)
-    signal = _signal_log(signal_paths, pose_paths, pose_logs.signal, reader_options)
+    signal, _ = _signal_log(signal_paths, pose_paths, pose_logs.signal, pose_meta, reader_options)
     if signal is None:
         raise InputError(f"{', '.join(signal_paths)}: no signal log found", param="signal_paths")
     result = synchronise(pose_logs.pose, signal, sync_options, source=source)
