@@ -7,7 +7,6 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -151,30 +150,13 @@ def _slow_radio(ground: Logs, every: int = 40) -> Logs:
     return Logs(ground.pose, ground.signal.iloc[::every].reset_index(drop=True))
 
 
-@pytest.fixture(scope="module")
-def written_twice(ground, tmp_path_factory):
-    """``fmt`` -> the slow-radio flight written as a .tlog or a DataFlash log with every
-    reading twice (written on first use, once for the module's two tests of it, which only read it)."""
-    folder = tmp_path_factory.mktemp("twice")
-    made: dict[str, Path] = {}
-
-    def path(fmt: str):
-        if fmt not in made:
-            made[fmt] = folder / ("twice.tlog" if fmt == "tlog" else "twice.bin")
-            writer = write_tlog if fmt == "tlog" else write_dataflash
-            writer(_slow_radio(ground), made[fmt], vehicle="D", station="G", origin_geodetic=ORIGIN,
-                   defects=TlogDefects(radio_twice=True))
-        return made[fmt]
-
-    return path
-
-
 @pytest.mark.parametrize("fmt", ["tlog", "dataflash"])
-def test_readings_written_twice_give_one_row_each(ground, written_twice, tmp_path, fmt):
+def test_readings_written_twice_give_one_row_each(ground, tmp_path, fmt):
     """Issue 24, acceptance 2 (reader): RADIO_STATUS + RADIO, or RAD twice, 4 ms apart."""
     flight = _slow_radio(ground)
-    path = written_twice(fmt)
+    path = tmp_path / ("twice.tlog" if fmt == "tlog" else "twice.bin")
     writer = write_tlog if fmt == "tlog" else write_dataflash
+    writer(flight, path, vehicle="D", station="G", origin_geodetic=ORIGIN, defects=TlogDefects(radio_twice=True))
     logs, meta = read_mavlink(path, 20.0, 2.412e9, "D", "G", MavlinkOptions(origin_geodetic=ORIGIN))
     n = len(flight.signal)
     copies = meta["messages"].get("RADIO", 0) if fmt == "tlog" else meta["messages"]["RAD"] - n
@@ -262,12 +244,14 @@ def test_inspect_names_each_excluded_period_from_the_log_start(written):
 
 
 @pytest.mark.parametrize("fmt", ["tlog", "dataflash"])
-def test_inspect_reads_the_report_rate_of_readings_written_twice(ground, written_twice, fmt):
+def test_inspect_reads_the_report_rate_of_readings_written_twice(ground, tmp_path, fmt):
     """Issue 24, acceptance 2 (inspect): a link's rate within 10% of the true report rate."""
     from rplearn.io.inspect import inspect_logs
 
     flight = _slow_radio(ground)
-    path = written_twice(fmt)
+    path = tmp_path / ("twice.tlog" if fmt == "tlog" else "twice.bin")
+    writer = write_tlog if fmt == "tlog" else write_dataflash
+    writer(flight, path, vehicle="D", station="G", origin_geodetic=ORIGIN, defects=TlogDefects(radio_twice=True))
     report = inspect_logs([path], _options(path))
     for (tx, rx), rows in flight.signal.groupby(["tx", "rx"]):
         t = np.sort(rows["t"].to_numpy())
