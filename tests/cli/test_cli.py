@@ -8,7 +8,6 @@ import os
 import numpy as np
 import pandas as pd
 import pytest
-from cli_helpers import invoke_in
 from cli_helpers import run_ok as run
 
 from rplearn.data.tables import MATCHED_COLUMNS
@@ -16,12 +15,12 @@ from rplearn.data.tables import MATCHED_COLUMNS
 
 @pytest.fixture(scope="module")
 def workdir(tmp_path_factory):
-    """The smoke flight (seed 3) and its A->B link synced: the tests' inputs, made in this process
-    (:func:`cli_helpers.invoke_in`); the tests run their commands as a user's processes."""
     d = tmp_path_factory.mktemp("cli")
-    invoke_in(d, ["simulate", "--preset", "smoke", "--seed", "3", "-o", "flight"])
-    invoke_in(d, ["sync", "--poses", "flight/pose_log.parquet", "--signals", "flight/signal_log.parquet", "--link", "A:B",
-                  "-o", "data.parquet"])
+    run(["simulate", "--preset", "smoke", "--seed", "3", "-o", "flight"], d)
+    run(
+        ["sync", "--poses", "flight/pose_log.parquet", "--signals", "flight/signal_log.parquet", "--link", "A:B", "-o", "data.parquet"],
+        d,
+    )
     return d
 
 
