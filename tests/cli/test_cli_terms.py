@@ -9,17 +9,18 @@ from __future__ import annotations
 import json
 
 import pytest
-from cli_helpers import invoke
+from cli_helpers import invoke, invoke_in
 from cli_helpers import run_ok as run
 
 
 @pytest.fixture(scope="module")
 def workdir(tmp_path_factory):
+    """The pathloss flight, synced both ways and A->B only (made in this process: the test's inputs)."""
     d = tmp_path_factory.mktemp("terms")
-    run(["simulate", "--preset", "pathloss", "--seed", "2", "-o", "flight"], d)
-    run(["sync", "--poses", "flight/pose_log.parquet", "--signals", "flight/signal_log.parquet", "-o", "both.parquet"], d)
-    run(["sync", "--poses", "flight/pose_log.parquet", "--signals", "flight/signal_log.parquet", "--link", "A:B",
-         "-o", "ab.parquet"], d)
+    invoke_in(d, ["simulate", "--preset", "pathloss", "--seed", "2", "-o", "flight"])
+    invoke_in(d, ["sync", "--poses", "flight/pose_log.parquet", "--signals", "flight/signal_log.parquet", "-o", "both.parquet"])
+    invoke_in(d, ["sync", "--poses", "flight/pose_log.parquet", "--signals", "flight/signal_log.parquet", "--link", "A:B",
+                  "-o", "ab.parquet"])
     return d
 
 
@@ -34,14 +35,14 @@ def test_fit_learns_and_stores_the_exponent_and_offsets_and_names_its_flags(work
     assert payload["path_loss"]["kind"] == "log-distance"
     assert set(payload["shared"]) == {"exponent", "offset:A->B"}
     assert abs(payload["training"]["path_loss"]["exponent"] - 3.0) < 0.1
-    pred = invoke(["predict", d / "m.json", d / "ab.parquet", "-o", d / "p.csv"])
+    pred = invoke(["predict", d / "m.json", d / "ab.parquet", "-o", d / "p.parquet"])  # the note is checked, not the table
     assert "never learned" not in pred.stderr
     orient = invoke(["orient", d / "m.json", "--tx", "A", "--rx", "B", "--tx-pos", "0,0,20", "--rx-pos", "40,0,20"])
     assert "dBm" in orient.stdout
     # one direction: no offset, and predicting the other says what it assumes
     invoke(["fit", d / "ab.parquet", "--model", "sh", "--degree", "6", "-o", d / "ab.json"])
     assert "shared" not in json.loads((d / "ab.json").read_text())["model"]
-    pred = invoke(["predict", d / "ab.json", d / "both.parquet", "-o", d / "p2.csv"])  # SH-6: quick
+    pred = invoke(["predict", d / "ab.json", d / "both.parquet", "-o", d / "p2.parquet"])  # SH-6: quick
     assert "B->A were never learned" in pred.stderr
     # reciprocal on request
     out = invoke(["fit", d / "both.parquet", "--degree", "6", "--no-link-offsets", "-o", d / "r.json"])

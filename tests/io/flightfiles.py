@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 from pathlib import Path
 
 import numpy as np
@@ -20,15 +21,29 @@ TX_POWER_DBM = 20.0
 FREQUENCY_HZ = 2.412e9
 
 
+@functools.lru_cache(maxsize=1)
+def _ground_logs() -> tuple[pd.DataFrame, pd.DataFrame]:
+    from rplearn.sim.flight import simulate
+
+    sim = simulate("ground", seed=1)
+    return sim.pose_log, sim.signal_log
+
+
+def ground_simulation() -> tuple[pd.DataFrame, pd.DataFrame]:
+    """The ``ground`` preset's pose and signal log (seed 1), simulated once per process (per
+    xdist worker; the same seed gives the same flight): each caller gets its own copies, so
+    that no test reads what another one changed."""
+    pose, signal = _ground_logs()
+    return pose.copy(), signal.copy()
+
+
 def ground_flight(station_yaw_enu_deg: float) -> tuple[pd.DataFrame, pd.DataFrame]:
     """The ``ground`` preset's flight (seed 1), its station one static row as a tlog holds it (a
     tlog cannot log the station's pose): its median position at its first time, facing
     ``station_yaw_enu_deg`` (ENU, its true heading). Returns the pose and the signal log."""
     from rplearn.core.geometry import quat_wxyz_from_yaw
-    from rplearn.sim.flight import simulate
 
-    sim = simulate("ground", seed=1)
-    pose, signal = sim.pose_log, sim.signal_log
+    pose, signal = ground_simulation()
     g = pose[pose["node"] == "G"]
     q = quat_wxyz_from_yaw(np.radians(station_yaw_enu_deg))
     station = pd.DataFrame({"t": [g["t"].min()], "node": ["G"], "x": [g["x"].median()], "y": [g["y"].median()],

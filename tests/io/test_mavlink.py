@@ -32,12 +32,26 @@ def test_folder_carries_licenses_and_provenance():
 # ------------------------------------------------------------------------------ real tlogs
 
 
+@pytest.fixture(scope="module")
+def real_tlog():
+    """``path`` -> what :func:`read_mavlink` makes of a real tlog at 20 dBm and 915 MHz, each read
+    once for the module's tests of it (they only read the result)."""
+    read: dict[Path, tuple] = {}
+
+    def of(path: Path) -> tuple:
+        if path not in read:
+            read[path] = read_mavlink(path, tx_power_dbm=20.0, frequency_hz=915e6)
+        return read[path]
+
+    return of
+
+
 @pytest.mark.parametrize(
     "path, attitude, positions, radio, link_lost, heartbeat, gps",
     [(TLOG_1, 2743, 974, 570, 57, 1082, 650), (TLOG_2, 1977, 702, 1114, 695, 1529, 473)],
 )
-def test_real_tlog_counts_match_pymavlink(path, attitude, positions, radio, link_lost, heartbeat, gps):
-    logs, meta = read_mavlink(path, tx_power_dbm=20.0, frequency_hz=915e6)
+def test_real_tlog_counts_match_pymavlink(real_tlog, path, attitude, positions, radio, link_lost, heartbeat, gps):
+    logs, meta = real_tlog(path)
     assert meta["format"] == "tlog"
     assert meta["messages"] == {"ATTITUDE": attitude, "GLOBAL_POSITION_INT": positions, "RADIO": radio,
                                 "HEARTBEAT": heartbeat, "GPS_RAW_INT": gps}
@@ -68,8 +82,8 @@ def test_real_tlog_counts_match_pymavlink(path, attitude, positions, radio, link
 
 
 @pytest.mark.parametrize("path, top", [(TLOG_1, 100.8), (TLOG_2, 150.9)])
-def test_real_tlog_poses_are_plausible(path, top):
-    logs, _ = read_mavlink(path, tx_power_dbm=20.0, frequency_hz=915e6)
+def test_real_tlog_poses_are_plausible(real_tlog, path, top):
+    logs, _ = real_tlog(path)
     pose = logs.pose
     q = pose[["qw", "qx", "qy", "qz"]].to_numpy()
     assert np.isfinite(q).all()
@@ -88,8 +102,8 @@ def test_real_tlog_poses_are_plausible(path, top):
     assert raw.min() >= 1 and raw.max() <= 254
 
 
-def test_real_tlog_link_lost_rows_follow_the_vehicle_stream():
-    logs, _ = read_mavlink(TLOG_1, tx_power_dbm=20.0, frequency_hz=915e6)
+def test_real_tlog_link_lost_rows_follow_the_vehicle_stream(real_tlog):
+    logs, _ = real_tlog(TLOG_1)
     last_pose = logs.pose.loc[logs.pose["node"] == "sys1", "t"].max()
     # the 57 link-lost messages (outage rows) came after the vehicle's last message: the received
     # packets end within seconds of it (the radio holds its remote statistics until the link times out)

@@ -10,7 +10,7 @@ import sys
 import numpy as np
 import pandas as pd
 import pytest
-from flightfiles import ground_flight
+from flightfiles import ground_flight, ground_simulation
 from pymavlink.dialects.v10 import ardupilotmega as mavlink1
 
 from rplearn.core.geometry import quat_wxyz_from_yaw
@@ -39,6 +39,14 @@ def flight(tmp_path_factory):
     write_table(signal, str(folder / "signal.parquet"))
     written = write_tlog(Logs(pose, signal), folder / "flight.tlog", vehicle="D", station="G", origin_geodetic=ORIGIN)
     return folder, written, len(signal)
+
+
+@pytest.fixture(scope="module")
+def whole_meta(flight):
+    """What :func:`read_mavlink` says of the whole written .tlog (read once for the module's
+    tests that compare a changed copy with it; they only read it)."""
+    folder, _, _ = flight
+    return read_mavlink(folder / "flight.tlog", 20.0, 2.412e9, vehicle="D", station="G")[1]
 
 
 def _tlog_options(folder) -> ReaderOptions:
@@ -154,7 +162,7 @@ def test_write_tlog_rejects_other_links_and_nodes(flight, tmp_path):
 
 
 @pytest.mark.parametrize("cut", [1, 7, 33, 39, 40, 44, 47])
-def test_a_truncated_tlog_reads_its_complete_messages_and_reports_the_cut_off_one(flight, tmp_path, cut):
+def test_a_truncated_tlog_reads_its_complete_messages_and_reports_the_cut_off_one(flight, whole_meta, tmp_path, cut):
     """The last record (8-byte time, then a 40-byte GLOBAL_POSITION_INT frame: a MAVLink 2 header
     of 10 bytes, its 28-byte payload, the CRC) loses its last ``cut`` bytes: in its frame, or in
     its time (the frame's name is then unknown)."""
@@ -168,27 +176,22 @@ def test_a_truncated_tlog_reads_its_complete_messages_and_reports_the_cut_off_on
     assert meta["messages"]["GLOBAL_POSITION_INT"] == written["global_position_int"] - 1
     assert meta["messages"]["ATTITUDE"] == written["attitude"]
     said = file_damage(str(cut_file), meta)
-    whole = read_mavlink(folder / "flight.tlog", 20.0, 2.412e9, vehicle="D", station="G")[1]
-    assert whole["cut_off_at_byte"] is None and meta["records_read"] == whole["records_read"] - 1
+    assert whole_meta["cut_off_at_byte"] is None and meta["records_read"] == whole_meta["records_read"] - 1
     assert any(f"cut off inside the message at byte {len(data) - 48:,}" in n and "complete record(s) before it were read" in n
                for n in said)
     assert not any("cut off" in n for n in meta["notes"])  # said once, by file_damage
     assert len(logs.signal) > 0
 
 
-def test_a_whole_tlog_is_not_reported_cut(flight):
-    folder, _, _ = flight
-    _, whole = read_mavlink(folder / "flight.tlog", 20.0, 2.412e9, vehicle="D", station="G")
-    assert whole["cut_off_at_byte"] is None and not any("cut off" in n for n in whole["notes"])
+def test_a_whole_tlog_is_not_reported_cut(whole_meta):
+    assert whole_meta["cut_off_at_byte"] is None and not any("cut off" in n for n in whole_meta["notes"])
 
 
 def test_the_station_heading_and_clock_offset_are_returned_for_the_reader(tmp_path):
     """A simulated station's pose rows (estimator noise) give its heading; a moving one is refused."""
-    from rplearn.sim.flight import simulate
-
-    sim = simulate("ground", seed=1)
-    signal = sim.signal_log.head(200)
-    written = write_tlog(Logs(sim.pose_log, signal), tmp_path / "a.tlog", vehicle="D", station="G",
+    pose_log, signal_log = ground_simulation()
+    signal = signal_log.head(200)
+    written = write_tlog(Logs(pose_log, signal), tmp_path / "a.tlog", vehicle="D", station="G",
                          origin_geodetic=ORIGIN, system_id=np.int64(7))
     assert abs(written["station_heading_deg"] - (90.0 - STATION_YAW_ENU_DEG)) < 2.0
     assert 0.05 < written["station_spread_m"] < 2.0
@@ -196,7 +199,7 @@ def test_the_station_heading_and_clock_offset_are_returned_for_the_reader(tmp_pa
     assert meta["system_id"] == 7
     np.testing.assert_allclose(np.sort(logs.signal["t"].to_numpy()) - written["clock_offset_s"],
                                np.sort(signal["t"].to_numpy()), atol=2e-6)
-    moving = sim.pose_log.replace({"node": {"D": "G", "G": "D"}})  # the flying drone as the "station"
+    moving = pose_log.replace({"node": {"D": "G", "G": "D"}})  # the flying drone as the "station"
     with pytest.raises(InputError, match="moves") as err:
         write_tlog(Logs(moving, signal), tmp_path / "b.tlog", vehicle="D", station="G", origin_geodetic=ORIGIN)
     assert err.value.param == "station"

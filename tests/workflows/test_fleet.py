@@ -42,6 +42,16 @@ def fleet(tmp_path_factory):
 
 
 @pytest.fixture(scope="module")
+def sh6(fleet, tmp_path_factory):
+    """SH-6 learned in one process from the fleet's folder (streamed, part by part), saved: the
+    reference the Dask fits and evaluations are compared with, learned once for the module
+    (its tests only read the result and the file)."""
+    root, _ = fleet
+    path = tmp_path_factory.mktemp("sh6") / "sh6.json"
+    return fit_dataset(str(root), ModelSpec.parse("sh", order=6), output=str(path)), path
+
+
+@pytest.fixture(scope="module")
 def client():
     need_dask()
     with dask_client("local:2") as c:
@@ -68,25 +78,23 @@ def test_the_fleet_preset_writes_one_file_per_flight_and_links_every_drone(fleet
         simulate_fleet(str(root.parent / "other"), flights=1, preset="tworay")
 
 
-def test_a_folder_fit_equals_the_fit_of_the_same_rows_in_one_file(fleet, tmp_path):
-    root, result = fleet
+def test_a_folder_fit_equals_the_fit_of_the_same_rows_in_one_file(fleet, sh6, tmp_path):
+    _, result = fleet
     whole = pd.concat([pd.read_parquet(f) for f in result.files], ignore_index=True)
     write_table(whole, str(tmp_path / "all.parquet"))
-    spec = ModelSpec.parse("sh", order=6)
-    parts = fit_dataset(str(root), spec, output=str(tmp_path / "parts.json"))
-    one = fit_dataset(str(tmp_path / "all.parquet"), spec, output=str(tmp_path / "one.json"))
+    parts, _ = sh6
+    one = fit_dataset(str(tmp_path / "all.parquet"), ModelSpec.parse("sh", order=6), output=str(tmp_path / "one.json"))
     assert parts.n_samples == one.n_samples
     assert np.max(np.abs(coef(parts.fitted.model) - coef(one.fitted.model))) < 1e-9
     assert parts.wall_s is not None and "samples/s" in parts.summary()
 
 
-def test_dask_fit_and_automatic_choice_equal_the_single_process(fleet, client, tmp_path):
+def test_dask_fit_and_automatic_choice_equal_the_single_process(fleet, sh6, client, tmp_path):
     from rplearn.workflows.learning import _fit_streamed
 
     root, _ = fleet
-    spec = ModelSpec.parse("sh", order=6)
-    here = _fit_streamed(str(root), spec, None, FitOptions(), None)
-    there = _fit_streamed(str(root), spec, None, FitOptions(), None, client=client)
+    here, _ = sh6  # fit_dataset's streamed fit of the folder (_fit_streamed without a client)
+    there = _fit_streamed(str(root), ModelSpec.parse("sh", order=6), None, FitOptions(), None, client=client)
     assert there.n_samples == here.n_samples
     assert np.max(np.abs(coef(there.fitted.model) - coef(here.fitted.model))) < 1e-9
     auto_here = _fit_streamed(str(root), ModelSpec.parse("sh"), None, FitOptions(auto=True), None)
@@ -120,13 +128,12 @@ def test_one_flight_cut_into_time_blocks_across_files_matches_on_dask(fleet, cli
     assert np.max(np.abs(coef(again.fitted.model) - coef(here.fitted.model))) < 1e-9
 
 
-def test_dask_evaluation_equals_the_single_process(fleet, client, tmp_path):
+def test_dask_evaluation_equals_the_single_process(fleet, sh6, client):
     from rplearn.io.partitions import dataset_parts
     from rplearn.workflows.fleet import predict_parts
 
     root, _ = fleet
-    model_path = str(tmp_path / "m.json")
-    fit_dataset(str(root), ModelSpec.parse("sh", order=6), output=model_path)
+    model_path = str(sh6[1])
     here = evaluate_model_files([model_path], str(root))
     model = load_model(model_path)
     observed, predictions, _ = predict_parts(dataset_parts(str(root)), [model], ["test_90@f0003"], client)
@@ -141,23 +148,23 @@ def test_dask_evaluation_equals_the_single_process(fleet, client, tmp_path):
     assert here.rows[0].n_samples == observed_all.size
 
 
-def test_fit_and_evaluate_dask_local_2_from_the_command_line(fleet, tmp_path):
-    """Acceptance 3: ``fit --dask local:2`` on 8 files gives the single-process coefficients."""
+def test_fit_and_evaluate_dask_local_2_from_the_command_line(fleet, sh6, tmp_path):
+    """Acceptance 3: ``fit --dask local:2`` on 8 files gives the single-process coefficients
+    (those of ``rplearn fit FOLDER --degree 6``: fit_dataset's SH-6, the fixture ``sh6``); its
+    evaluation on the cluster the single process's scores (evaluate_model_files)."""
     need_dask()
     root, _ = fleet
     run = lambda *a: subprocess.run(RPLEARN + list(a), cwd=tmp_path, capture_output=True, text=True, timeout=300)
-    one = run("fit", str(root), "--degree", "6", "-o", "one.json")
-    assert one.returncode == 0, one.stderr
     dask = run("fit", str(root), "--degree", "6", "--dask", "local:2", "-o", "dask.json")
     assert dask.returncode == 0, dask.stderr
     assert "distributed" not in dask.stderr  # the cluster's logs stay quiet
-    a, b = load_model(str(tmp_path / "one.json")), load_model(str(tmp_path / "dask.json"))
-    assert np.max(np.abs(coef(a) - coef(b))) < 1e-9
+    a, b = load_model(str(sh6[1])), load_model(str(tmp_path / "dask.json"))
+    assert a.label == b.label == "SH-6" and np.max(np.abs(coef(a) - coef(b))) < 1e-9
     ev = run("evaluate", "dask.json", str(root), "--dask", "local:2", "--json", "t.json")
-    ev1 = run("evaluate", "dask.json", str(root), "--json", "t1.json")
-    assert ev.returncode == 0 and ev1.returncode == 0, ev.stderr + ev1.stderr
-    r, r1 = (json.loads((tmp_path / n).read_text())["rows"][0] for n in ("t.json", "t1.json"))
-    assert abs(r["rmse_db"] - r1["rmse_db"]) < 1e-9 and r["n_samples"] == r1["n_samples"]
+    assert ev.returncode == 0, ev.stderr
+    r = json.loads((tmp_path / "t.json").read_text())["rows"][0]
+    r1 = evaluate_model_files([str(tmp_path / "dask.json")], str(root)).rows[0]
+    assert abs(r["rmse_db"] - r1.rmse_db) < 1e-9 and r["n_samples"] == r1.n_samples
 
 
 def test_dask_option_errors_are_one_line():

@@ -163,3 +163,31 @@ def test_what_the_signal_logs_reader_says_is_reported(tmp_path):
     cut_off = [n for n in outcome.notes if "cut off inside the message at byte 2,208" in n]
     assert len(cut_off) == 1 and cut_off[0].startswith(f"{cut}: ")
     assert f"{cut}: dropped 4 frame(s) (no_signal)" in outcome.notes
+
+
+def test_one_log_given_as_poses_and_signals_is_read_once_with_the_same_result(tmp_path, monkeypatch):
+    """A ``.tlog`` named by both --poses and --signals is parsed once (its signal log comes with
+    its poses, as :func:`read_logs` gives them), with and without --estimate-offset (which
+    read the log three times); the dataset is the match of the logs one read gives."""
+    from rplearn.io import ReaderOptions
+    from rplearn.io import mavlink as io_mavlink
+
+    tlog = "tests/fixtures/ardupilot/mavlink-log_2013-10-13_18-31-24.tlog"
+    options = ReaderOptions(tx_power_dbm=20.0, frequency_hz=915e6)
+    sync = SyncOptions(max_gap_s=1.0)
+    logs, _ = read_logs([tlog], options)
+    expected = synchronise(logs.pose, logs.signal, sync).dataset.reset_index(drop=True)
+    assert len(expected) > 500
+    real, reads = io_mavlink.read_mavlink, []
+
+    def counted(*args, **kwargs):
+        reads.append(args[0])
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(io_mavlink, "read_mavlink", counted)
+    for k, offset in enumerate((None, "sys1")):
+        out = str(tmp_path / f"m{k}.parquet")
+        outcome = sync_logs([tlog], [tlog], out, options, sync, estimate_offset=offset)
+        assert reads == [tlog] and (offset is None) == (outcome.clock is None)
+        pd.testing.assert_frame_equal(pd.read_parquet(out), expected, check_exact=True)
+        reads.clear()

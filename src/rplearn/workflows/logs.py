@@ -155,8 +155,21 @@ def _signal_chunks(signal_paths: Sequence[str], options: ReaderOptions) -> Itera
 
 def _both_notes(pose_meta: Mapping[str, Any], signal_meta: Mapping[str, Any]) -> list[str]:
     """What the readers of the pose and of the signal logs said, each line once (a log given as
-    both, a ``.tlog``, is read twice and says the same)."""
+    both, a ``.tlog``, is read once: its notes are said once)."""
     return list(dict.fromkeys(reader_notes(pose_meta) + reader_notes(signal_meta)))
+
+
+def _signal_log(signal_paths: Sequence[str], pose_paths: Sequence[str], read_with_poses: pd.DataFrame | None,
+                pose_meta: dict[str, Any], reader_options: ReaderOptions) -> tuple[pd.DataFrame | None, dict[str, Any]]:
+    """The signal log of ``signal_paths`` (None if they hold none) and what its reading said
+    (:func:`read_logs`'s metadata): ``read_with_poses`` and ``pose_meta``, what the reading of
+    the poses gave, when both name the same files in the same order (a ``.tlog`` or a bag
+    given as both, the usual case, is then parsed once, not twice), else read now with the
+    same options."""
+    if [str(p) for p in signal_paths] == [str(p) for p in pose_paths]:
+        return read_with_poses, pose_meta
+    logs, meta = read_logs(signal_paths, reader_options)
+    return logs.signal, meta
 
 
 @check_types
@@ -201,10 +214,10 @@ def sync_logs(
     if estimate_offset is not None:
         from rplearn.analysis.clock import estimate_clock_offset
 
-        whole, _ = read_logs(signal_paths, reader_options)
-        if whole.signal is None:
+        whole, _ = _signal_log(signal_paths, pose_paths, pose_logs.signal, pose_meta, reader_options)
+        if whole is None:
             raise InputError(f"{', '.join(signal_paths)}: no signal log found", param="signal_paths")
-        clock = estimate_clock_offset(pose_logs.pose, whole.signal, estimate_offset, offset_window_s, sync_options)
+        clock = estimate_clock_offset(pose_logs.pose, whole, estimate_offset, offset_window_s, sync_options)
         if apply_offset and clock.at_edge:
             raise InputError(f"apply-offset: the minimum for {clock.node} is at the edge of the +-{offset_window_s:g} s "
                              "window; widen --offset-window before applying it", param="offset_window")
@@ -223,10 +236,10 @@ def sync_logs(
 
         write_table_chunks(frames(), output, MATCHED_COLUMNS)
         return SyncOutcome(summary, output, reader_notes(pose_meta), streamed=True, clock=clock)
-    signal_logs, signal_meta = read_logs(signal_paths, reader_options)
-    if signal_logs.signal is None:
+    signal, signal_meta = _signal_log(signal_paths, pose_paths, pose_logs.signal, pose_meta, reader_options)
+    if signal is None:
         raise InputError(f"{', '.join(signal_paths)}: no signal log found", param="signal_paths")
-    result = synchronise(pose_logs.pose, signal_logs.signal, sync_options, source=source)
+    result = synchronise(pose_logs.pose, signal, sync_options, source=source)
     write_table(result.dataset, output)
     return SyncOutcome(result.summary, output, _both_notes(pose_meta, signal_meta), clock=clock)
 
