@@ -474,3 +474,21 @@ def test_file_copy_finds_the_file_written_again_from_its_start(tmp_path):
     copy.close()
     # rec0..3 new; rec0, rec1 repeat from the start; rec3 at 60 is not rec2: new; rec0 again: a copy
     assert verdicts == [False, False, False, False, True, True, False, True]
+
+
+def test_a_corrupt_position_fix_is_refused_live_as_offline_naming_the_log(ground, tmp_path):
+    """One position fix 60 km up (a corrupt record) in the first 120 s of ``ground``: the offline
+    reader and the tail of the growing log both refuse it, in one line naming the log."""
+    end = float(ground.pose["t"].min()) + 120.0
+    pose = ground.pose[ground.pose["t"] < end].reset_index(drop=True)
+    d = pose.index[pose["node"] == "D"]
+    pose.loc[d[len(d) // 2], "z"] = 60_000.0
+    whole, grown = tmp_path / "whole.tlog", tmp_path / "grown.tlog"
+    write_tlog(Logs(pose, ground.signal[ground.signal["t"] < end].reset_index(drop=True)), whole, vehicle="D",
+               station="G", origin_geodetic=ORIGIN)
+    with pytest.raises(InputError, match=r"altitude \[m\] 60090") as offline:
+        read_logs([str(whole)], _options(whole))
+    assert str(offline.value).startswith(f"{whole}: ") and "\n" not in str(offline.value)
+    with pytest.raises(InputError, match=r"altitude \[m\] 60090") as live:
+        _grow(whole, grown)
+    assert str(live.value).startswith(f"{grown}: ") and "\n" not in str(live.value)

@@ -224,9 +224,6 @@ def _fixes(raw: Raw, source: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, l
     """The position fixes (times, rows of ``raw.pos``) sorted, which are valid, and the excluded
     periods (:mod:`rplearn.io.mavlink_phases`)."""
     pos = raw.pos[np.all(np.isfinite(raw.pos[:, :4]), axis=1)]
-    impossible = phases.impossible_fixes(pos[:, 1:4])
-    if 0 < impossible.sum() < len(pos) / 2:  # a few corrupt records left out and counted; most: refused below
-        raw.notes["impossible_fixes"], pos = int(impossible.sum()), pos[~impossible]
     if len(pos) < 2:
         what = "GLOBAL_POSITION_INT" if raw.fmt == "tlog" else "POS or GPS"
         raise LogFormatError(f"{source}: fewer than 2 {what} position fixes of the vehicle")
@@ -353,16 +350,13 @@ def _signal(raw: Raw, vehicle: str, station: str, tx_power_dbm: float | Mapping[
 
 
 def _hygiene_notes(source: str, periods: list[dict[str, Any]], counts: dict[str, int], raw: Raw) -> list[str]:
-    """One line per excluded period, one for corrupt fixes left out, one for merged copies of radio readings."""
+    """One line per excluded period and one for merged copies of radio readings."""
     notes = []
     for p in periods:
         p.setdefault("signal_rows", 0)
         notes.append(f"{source}: excluded {p['reason']} from t = {p['from_t']:.3f} to {p['to_t']:.3f} s "
                      f"({p['to_t'] - p['from_t']:.1f} s): {p['pose_rows']:,} pose row(s) and {p['signal_rows']:,} "
                      f"signal row(s) dropped ({p['detail']})")
-    if raw.notes.get("impossible_fixes"):
-        notes.append(f"{source}: {raw.notes['impossible_fixes']:,} position fix(es) with a latitude, longitude or altitude "
-                     "no place has (corrupt records) were left out; the poses were interpolated between the others")
     period = raw.notes.get("radio_report_period_s")
     if counts.get("duplicate_reading"):
         notes.append(f"{source}: {counts['duplicate_reading']:,} radio report(s) repeated the reading before them "

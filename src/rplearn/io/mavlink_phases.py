@@ -237,19 +237,6 @@ def _evidence(reason: str, members: np.ndarray, fixes: Fixes, clock: LogClock, r
     return "; ".join(parts) or "no valid position"
 
 
-def impossible_fixes(geodetic: np.ndarray) -> np.ndarray:
-    """Which fixes (rows of latitude [deg], longitude [deg], altitude [m]) hold a value no place
-    has (outside the plausibility table, :data:`rplearn.core.plausible.PLAUSIBLE`): a corrupt
-    record, or a sentinel, when a few among plausible ones; a unit error when most."""
-    from rplearn.core.plausible import PLAUSIBLE
-
-    bad = np.zeros(len(geodetic), bool)
-    for j, quantity in enumerate(("latitude_deg", "longitude_deg", "altitude_m")):
-        row = PLAUSIBLE[quantity]
-        bad |= (geodetic[:, j] < row.low) | (geodetic[:, j] > row.high)
-    return bad
-
-
 def in_periods(t: np.ndarray, periods: list[dict[str, Any]]) -> np.ndarray:
     """Index of the period each time lies in (-1: none)."""
     t = np.asarray(t, np.float64)
@@ -302,6 +289,6 @@ def repeated_readings(t: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, fl
     return copy, period
 
 
-__all__ = ["DUPLICATE_FRACTION_OF_PERIOD", "Fixes", "LogClock", "impossible_fixes", "MAX_HORIZONTAL_SPEED_M_S", "MAX_VERTICAL_SPEED_M_S", "REASONS",
+__all__ = ["DUPLICATE_FRACTION_OF_PERIOD", "Fixes", "LogClock", "MAX_HORIZONTAL_SPEED_M_S", "MAX_VERTICAL_SPEED_M_S", "REASONS",
            "REBOOT_STEP_S", "STEP_MARGIN_M", "STEP_SPEED_SLACK_M_S", "boot_ids", "excluded_periods",
            "in_periods", "invalid_fixes", "repeated_readings", "report_period_s", "step_allowed"]

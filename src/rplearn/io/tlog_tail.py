@@ -249,7 +249,17 @@ class TlogTail:
         return n
 
     def poll(self, final: bool = False) -> tuple[pd.DataFrame, pd.DataFrame]:
-        """The pose and signal rows that can be handed out (all of them with ``final``)."""
+        """The pose and signal rows that can be handed out (all of them with ``final``); a
+        refusal names the log (as the offline reader's does)."""
+        try:
+            return self._poll(final)
+        except InputError as exc:
+            if str(exc).startswith(f"{self.path}: "):
+                raise
+            raise type(exc)(f"{self.path}: {exc}", param=exc.param, related=exc.related) from None
+
+    def _poll(self, final: bool) -> tuple[pd.DataFrame, pd.DataFrame]:
+        """:meth:`poll`."""
         self.parsed = self._parse()
         empty = pd.DataFrame()
         if not self.parsed and not final:
