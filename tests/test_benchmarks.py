@@ -32,12 +32,13 @@ NEEDS = {"fleet.py": "distributed"}
 #: interpreter and its imports (1-2 s each): they measure nothing of the process, which
 #: test_in_process_scripts_measure_nothing_of_the_process checks. The others time imports, read
 #: memory, limit threads or start processes, and run as their own process.
-IN_PROCESS = frozenset({"auto_fit.py", "knn_file.py", "level_shift.py", "live_tlog.py", "simulate.py", "split.py"})
+IN_PROCESS = frozenset({"knn_file.py", "level_shift.py", "live_tlog.py", "simulate.py", "split.py"})
 
 #: What a script may not use to run in the test's process (its process's memory, imports, threads,
 #: environment or children).
 PROCESS_BOUND = re.compile(r"subprocess|multiprocessing|ProcessPool|execv|importtime|ru_maxrss|getrusage|statm|"
-                           r"tracemalloc|mallinfo|threadpool|blas_threads|os\.environ|sys\.modules|gc\.collect")
+                           r"tracemalloc|mallinfo|threadpool|blas_threads|os\.environ|sys\.modules|gc\.collect|"
+                           r"process_time|thread_time|threading|\bresource\b")
 
 #: Further lines a script's tiny run must print.
 EXPECT = {

@@ -464,10 +464,11 @@ def read_ulog(
     try:
         lp, att = _pose_topics(ulog, source)
     except LogFormatError as exc:
-        cut = layout["cut_off_at_byte"] if layout["cut_off_at_byte"] is not None else layout["damaged_at_byte"]
+        cut_off = layout["cut_off_at_byte"] is not None
+        cut = layout["cut_off_at_byte"] if cut_off else layout["damaged_at_byte"]
         if cut is None:
             raise
-        raise LogFormatError(f"{exc}: the file is {'cut off' if layout['damaged_at_byte'] is None else 'damaged'} "
+        raise LogFormatError(f"{exc}: the file is {'cut off' if cut_off else 'damaged'} "
                              f"at byte {cut:,} of {os.path.getsize(source):,}, before the topic's first message "
                              "(a log that ended early, or a damaged copy)") from None
     dropped = {"nan_position": 0, "nan_attitude": 0, "invalid_flag": 0, "out_of_span": 0, "gap": 0}

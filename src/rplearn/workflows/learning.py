@@ -268,6 +268,7 @@ def _fit_auto(
     check_dataset_budget(fitted.model, part, dataset)
     _record_scale(fitted.model, part)
     certify(fitted.model, None, fitted.own_posterior, fitted.learning_gram)  # the selection's X^T X: no second pass
+    fitted.learning_gram = None  # read: not kept (a swarm's is (nodes x coefficients)^2 values)
     if output:
         fitted.model.save(output)
     n = sum(len(s) for s in per_unit.values())
@@ -335,6 +336,7 @@ def _fit_streamed(
         assert isinstance(fitted.model, PatternSet)  # fit_from_statistics learns patterns
         fitted.model.training = fitted.model.training.replace(coverage_deg=acc.grids or {})
         certify(fitted.model, None, fitted.own_posterior, fitted.learning_gram)  # the selection's X^T X: the samples were streamed
+        fitted.learning_gram = None
         if output:
             fitted.model.save(output)
         return FitOutcome(fitted, choice, acc.n_samples, output, acc.non_unit, selection, wall_s=time.perf_counter() - t0)
