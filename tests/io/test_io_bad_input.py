@@ -432,3 +432,9 @@ def test_a_signal_log_whose_clock_restarts_is_refused_within_its_link(tmp_path):
     assert len(read_logs([str(bad)], ReaderOptions(allow_unsorted=True))[0].signal) == 2 * len(t)
     report = inspect_logs([str(bad)])
     assert any("link B -> A: time goes backwards 1 time(s)" in p for p in report.problems)
+    # doubled records, a block or the whole log written again, are copies (sync drops and counts
+    # them), not a clock that restarted: read whole and in chunks
+    doubled = tmp_path / "doubled.csv"
+    pd.concat([rows.iloc[:30], rows.iloc[25:33], rows.iloc[30:], rows], ignore_index=True).to_csv(doubled, index=False)
+    assert len(read_signal_table(str(doubled))[0]) == 4 * len(t) + 8
+    assert len(pd.concat(list(iter_signal_table(str(doubled), 7)))) == 4 * len(t) + 8

@@ -227,11 +227,22 @@ def _check_time_order(t: np.ndarray, nodes: np.ndarray, source: str) -> None:
         )
 
 
-def check_link_time_order(signal: pd.DataFrame, source: str, first_row: int = 0,
-                          last_t: dict[tuple[str, str], float] | None = None) -> None:
+class LinkTimes:
+    """What :func:`check_link_time_order` carries from chunk to chunk of one file: each link's
+    last time and the hashes of the rows seen (8 bytes a row), so that a row repeating an earlier
+    one is known for a copy wherever it stands."""
+
+    def __init__(self) -> None:
+        self.last_t: dict[tuple[str, str], float] = {}
+        self.seen = np.zeros(0, np.uint64)
+
+
+def check_link_time_order(signal: pd.DataFrame, source: str, first_row: int = 0, state: LinkTimes | None = None) -> None:
     """Raise :class:`LogFormatError` at the first row of a canonical signal table whose time [s]
     goes back within its link (``tx -> rx``), in file order: a logger that rebooted restarts its
-    clock, and its later rows, sorted by time, would be matched with poses of another moment.
+    clock, and its later rows, sorted by time, would be matched with poses of another moment. A
+    row equal in every column to an earlier one (a doubled record, a block or a whole log written
+    twice) is not a step back: ``sync`` drops and counts it as a duplicate.
 
     Parameters
     ----------
@@ -242,33 +253,39 @@ def check_link_time_order(signal: pd.DataFrame, source: str, first_row: int = 0,
         The file, for the message.
     first_row : int
         The file row of ``signal``'s first row (a chunk of a file read in chunks).
-    last_t : dict, optional
-        Each link's last time so far, carried from chunk to chunk (updated here).
+    state : LinkTimes, optional
+        Carried from chunk to chunk of one file (updated here).
     """
-    last_t = {} if last_t is None else last_t
+    from rplearn.data.streaming import row_hashes
+
+    state = LinkTimes() if state is None else state
     t = signal["t"].to_numpy(np.float64)
-    finite = np.isfinite(t)
-    if not finite.any():
-        return
+    hashes = row_hashes(signal)
+    copy = pd.Series(hashes).duplicated().to_numpy(copy=True)
+    if state.seen.size:
+        at = np.clip(np.searchsorted(state.seen, hashes), 0, state.seen.size - 1)
+        copy |= state.seen[at] == hashes
+    state.seen = np.union1d(state.seen, hashes)
+    new = np.isfinite(t) & ~copy
     codes, links = pd.factorize(signal["tx"].astype(str) + "\x00" + signal["rx"].astype(str))
     for k, link in enumerate(links):
-        rows = np.flatnonzero((codes == k) & finite)
+        rows = np.flatnonzero((codes == k) & new)
+        if not rows.size:
+            continue
         tx, rx = str(link).split("\x00", 1)
-        key = (tx, rx)
         times = t[rows]
-        before = np.concatenate([[last_t.get(key, -np.inf)], times[:-1]])
+        before = np.concatenate([[state.last_t.get((tx, rx), -np.inf)], times[:-1]])
         back = np.flatnonzero(times < before)
         if back.size:
             i = int(back[0])
-            r = first_row + int(rows[i])
             raise LogFormatError(
-                f"{source}: field t goes backwards at row {r} (link {key[0]} -> {key[1]}: {float(before[i])!r} -> "
-                f"{float(times[i])!r}; a logger that rebooted restarts its clock); expected increasing times within "
-                "each link: give each boot's rows as a file of its own on one clock, or sort them on reading "
-                "(allow_unsorted=True)",
+                f"{source}: field t goes backwards at row {first_row + int(rows[i])} (link {tx} -> {rx}: "
+                f"{float(before[i])!r} -> {float(times[i])!r}; a logger that rebooted restarts its clock); expected "
+                "increasing times within each link: give each boot's rows as a file of its own on one clock, or sort "
+                "them on reading (allow_unsorted=True)",
                 param="allow_unsorted",
             )
-        last_t[key] = float(times[-1])
+        state.last_t[(tx, rx)] = float(times[-1])
 
 
 def _enu_positions(
@@ -476,12 +493,12 @@ def iter_signal_table(
                 normalise_times(c, source)
                 for c in pd.read_csv(path, chunksize=chunk_rows, skipinitialspace=True, dtype=CSV_DTYPES)
             )
-        last_t: dict[tuple[str, str], float] = {}
+        state = LinkTimes()
         first_row = 0
         for chunk in batches:
             out = canonical_signal(chunk, source=source, **options)
             if not allow_unsorted:
-                check_link_time_order(out, source, first_row, last_t)
+                check_link_time_order(out, source, first_row, state)
             first_row += len(out)
             yield out
     except (InputError, LogFormatError):
@@ -538,6 +555,7 @@ __all__ = [
     "COLUMN_ALIASES",
     "canonical_pose",
     "canonical_signal",
+    "LinkTimes",
     "check_link_time_order",
     "iter_signal_table",
     "table_columns",
