@@ -400,3 +400,41 @@ def test_a_capture_cut_off_mid_frame_reads_its_complete_frames_and_says_the_cut(
     text = inspect_logs([str(cut)], options).to_text()
     assert (f"cut.pcap: the file is cut off inside the message at byte {f['cut_off_at_byte']:,} (frame 2)" in text
             and "the 1 complete record(s) before it were read" in text and "none found" not in text)
+
+
+def test_a_signal_log_whose_clock_restarts_is_refused_within_its_link(tmp_path):
+    """A signal table whose times go back within a link (a logger that rebooted) is refused
+    naming the file, the row and the link, read whole and read in chunks (the step across a
+    chunk boundary); links interleaved out of order are not a step back; ``allow_unsorted``
+    takes the rows (sync sorts them); ``inspect`` reports the step instead of refusing."""
+    from rplearn.io.inspect import inspect_logs
+    from rplearn.io.tables import iter_signal_table
+
+    t = np.arange(0.0, 10.0, 0.5)
+    rows = pd.DataFrame({"t": np.concatenate([t, t + 0.25]), "tx": ["A"] * len(t) + ["B"] * len(t),
+                         "rx": ["B"] * len(t) + ["A"] * len(t), "rssi_dbm": -60.0, "tx_power_dbm": 20.0,
+                         "frequency_hz": 2.4e9})  # B -> A after A -> B: time goes back across links only
+    ok = tmp_path / "ok.csv"
+    rows.to_csv(ok, index=False)
+    assert len(read_signal_table(str(ok))[0]) == 2 * len(t)
+    rebooted = rows.copy()
+    rebooted.loc[30:, "t"] -= 8.0  # B -> A's logger restarts its clock at file row 30
+    bad = tmp_path / "rebooted.csv"
+    rebooted.to_csv(bad, index=False)
+    for read in (lambda **kw: read_signal_table(str(bad), **kw)[0],
+                 lambda **kw: pd.concat(list(iter_signal_table(str(bad), 7, **kw)))):  # row 30 starts no chunk
+        with pytest.raises(LogFormatError) as e:
+            read()
+        assert str(bad) in one_line(e.value) and "field t goes backwards at row 30 (link B -> A: 4.75 -> -2.75" in str(e.value)
+        assert len(read(allow_unsorted=True)) == 2 * len(t)
+    with pytest.raises(LogFormatError, match="row 30 .*allow_unsorted"):
+        read_logs([str(bad)])
+    assert len(read_logs([str(bad)], ReaderOptions(allow_unsorted=True))[0].signal) == 2 * len(t)
+    report = inspect_logs([str(bad)])
+    assert any("link B -> A: time goes backwards 1 time(s)" in p for p in report.problems)
+    # doubled records, a block or the whole log written again, are copies (sync drops and counts
+    # them), not a clock that restarted: read whole and in chunks
+    doubled = tmp_path / "doubled.csv"
+    pd.concat([rows.iloc[:30], rows.iloc[25:33], rows.iloc[30:], rows], ignore_index=True).to_csv(doubled, index=False)
+    assert len(read_signal_table(str(doubled))[0]) == 4 * len(t) + 8
+    assert len(pd.concat(list(iter_signal_table(str(doubled), 7)))) == 4 * len(t) + 8

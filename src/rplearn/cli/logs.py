@@ -105,7 +105,8 @@ def sync(
     tx_power_dbm: float | None = typer.Option(None, "--tx-power", help="Transmit power for logs without it [dBm]."),
     frequency_hz: float | None = typer.Option(None, "--frequency", help="Carrier frequency for logs without it [Hz]."),
     nan_policy: str = typer.Option("error", "--nan-policy", help="Pose-table rows with NaN or non-numeric values: error (default) or drop (counted)."),
-    allow_unsorted: bool = typer.Option(False, "--allow-unsorted", help="Accept pose tables whose times go backwards within a node (the rows are sorted)."),
+    allow_unsorted: bool = typer.Option(False, "--allow-unsorted", help="Accept pose tables whose times go backwards within a node, "
+                                        "and signal tables within a link (the rows are sorted)."),
     require_valid: bool = _REQUIRE_VALID,
     station_geodetic: str | None = _STATION_GEODETIC,
     station: str | None = _STATION,

@@ -35,7 +35,8 @@ def links(
     node: list[str] | None = typer.Option(None, "--node", help="FILE=NODE for ULogs and one-node tables."),
     pose_topic: list[str] | None = typer.Option(None, "--pose-topic", help="TOPIC=NODE: pose topics of ROS bags."),
     nan_policy: str = typer.Option("error", "--nan-policy", help="Pose rows with NaN or non-numeric values: error (default) or drop (counted)."),
-    allow_unsorted: bool = typer.Option(False, "--allow-unsorted", help="Accept pose tables whose times go backwards within a node (the rows are sorted)."),
+    allow_unsorted: bool = typer.Option(False, "--allow-unsorted", help="Accept pose tables whose times go backwards within a node, "
+                                        "and signal tables within a link (the rows are sorted)."),
     sensitivity: str | None = typer.Option(None, "--sensitivity", metavar="DBM|RADIO",
                                      help="Also each link's availability, P(RSSI >= this), and P(swarm connected) per time: dBm or a radio (sik, ...)."),
     draws: int = typer.Option(1000, "--draws", min=1, help="Monte Carlo draws of the patterns, the flight level and the fading (with --sensitivity)."),

@@ -368,7 +368,7 @@ def _read_one(path: str, options: ReaderOptions) -> tuple[pd.DataFrame | None, p
             return pose, None, info, nan_rows, canonical
         sig, meta = _tables.read_signal_table(
             path, columns=options.columns, rx=(options.receivers or {}).get(path),
-            tx_power_dbm=0.0, frequency_hz=1.0)  # 1 Hz: a placeholder, never a real frequency
+            tx_power_dbm=0.0, frequency_hz=1.0, allow_unsorted=True)  # 1 Hz: a placeholder; backward steps reported below
         return None, sig, {"format": meta["format"], "kind": "signal", "frequency_hz": _frequency_hz(sig)}, {}, None
     logs, meta = read_logs(path, _forgiving_options(path, kind, options))
     f = meta["files"][0]

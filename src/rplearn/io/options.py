@@ -130,7 +130,9 @@ class ReaderOptions:
     nan_policy : {"error", "drop"}
         Pose-table rows with NaN or non-numeric values raise, or are dropped and counted.
     allow_unsorted : bool
-        Accept pose tables whose times go backwards within a node (the rows are sorted).
+        Accept pose tables whose times go backwards within a node, and signal tables whose
+        times go backwards within a link (the rows are sorted: rows of a logger that rebooted
+        are then matched on its restarted clock).
     require_valid : bool
         Drop ULog local-position rows flagged invalid by the autopilot (``xy_valid`` or
         ``z_valid`` = 0).

@@ -82,7 +82,7 @@ def _read_table(path: str, options: ReaderOptions, got: _Gathered) -> dict[str, 
         ptx = options.tx_power_dbm if not isinstance(options.tx_power_dbm, Mapping) else None
         signal, meta = _tables.read_signal_table(
             path, columns=options.columns, tx_power_dbm=ptx, frequency_hz=options.frequency_hz,
-            rx=(options.receivers or {}).get(path),
+            rx=(options.receivers or {}).get(path), allow_unsorted=options.allow_unsorted,
         )
         got.signals.append(signal)
     meta["kind"] = what

@@ -227,6 +227,67 @@ def _check_time_order(t: np.ndarray, nodes: np.ndarray, source: str) -> None:
         )
 
 
+class LinkTimes:
+    """What :func:`check_link_time_order` carries from chunk to chunk of one file: each link's
+    last time and the hashes of the rows seen (8 bytes a row), so that a row repeating an earlier
+    one is known for a copy wherever it stands."""
+
+    def __init__(self) -> None:
+        self.last_t: dict[tuple[str, str], float] = {}
+        self.seen = np.zeros(0, np.uint64)
+
+
+def check_link_time_order(signal: pd.DataFrame, source: str, first_row: int = 0, state: LinkTimes | None = None) -> None:
+    """Raise :class:`LogFormatError` at the first row of a canonical signal table whose time [s]
+    goes back within its link (``tx -> rx``), in file order: a logger that rebooted restarts its
+    clock, and its later rows, sorted by time, would be matched with poses of another moment. A
+    row equal in every column to an earlier one (a doubled record, a block or a whole log written
+    twice) is not a step back: ``sync`` drops and counts it as a duplicate.
+
+    Parameters
+    ----------
+    signal : DataFrame
+        Canonical signal rows (:func:`canonical_signal`) in file order; rows without a finite
+        time are skipped (``sync`` drops and counts them).
+    source : str
+        The file, for the message.
+    first_row : int
+        The file row of ``signal``'s first row (a chunk of a file read in chunks).
+    state : LinkTimes, optional
+        Carried from chunk to chunk of one file (updated here).
+    """
+    from rplearn.data.streaming import row_hashes
+
+    state = LinkTimes() if state is None else state
+    t = signal["t"].to_numpy(np.float64)
+    hashes = row_hashes(signal)
+    copy = pd.Series(hashes).duplicated().to_numpy(copy=True)
+    if state.seen.size:
+        at = np.clip(np.searchsorted(state.seen, hashes), 0, state.seen.size - 1)
+        copy |= state.seen[at] == hashes
+    state.seen = np.union1d(state.seen, hashes)
+    new = np.isfinite(t) & ~copy
+    codes, links = pd.factorize(signal["tx"].astype(str) + "\x00" + signal["rx"].astype(str))
+    for k, link in enumerate(links):
+        rows = np.flatnonzero((codes == k) & new)
+        if not rows.size:
+            continue
+        tx, rx = str(link).split("\x00", 1)
+        times = t[rows]
+        before = np.concatenate([[state.last_t.get((tx, rx), -np.inf)], times[:-1]])
+        back = np.flatnonzero(times < before)
+        if back.size:
+            i = int(back[0])
+            raise LogFormatError(
+                f"{source}: field t goes backwards at row {first_row + int(rows[i])} (link {tx} -> {rx}: "
+                f"{float(before[i])!r} -> {float(times[i])!r}; a logger that rebooted restarts its clock); expected "
+                "increasing times within each link: give each boot's rows as a file of its own on one clock, or sort "
+                "them on reading (allow_unsorted=True)",
+                param="allow_unsorted",
+            )
+        state.last_t[(tx, rx)] = float(times[-1])
+
+
 def _enu_positions(
     values: dict[str, np.ndarray],
     position: str,
@@ -390,24 +451,28 @@ def read_pose_table(path: str, **options: Any) -> tuple[pd.DataFrame, dict[str, 
 
 
 @check_types
-def read_signal_table(path: str, **options: Any) -> tuple[pd.DataFrame, dict[str, Any]]:
-    """Read a signal log from CSV or Parquet; options of :func:`canonical_signal`.
+def read_signal_table(path: str, allow_unsorted: bool = False, **options: Any) -> tuple[pd.DataFrame, dict[str, Any]]:
+    """Read a signal log from CSV or Parquet; options of :func:`canonical_signal`; times that go
+    back within a link are refused (:func:`check_link_time_order`) unless ``allow_unsorted``.
 
     Returns ``(signal, metadata)``.
     """
     source = str(path)
     df = _read(str(path), source)
     signal = canonical_signal(df, source=source, **options)
+    if not allow_unsorted:
+        check_link_time_order(signal, source)
     return signal, {"source": source, "format": table_format(source), "rows": int(len(signal))}
 
 
 @check_types
 def iter_signal_table(
-    path: str, chunk_rows: int = 200_000, **options: Any
+    path: str, chunk_rows: int = 200_000, allow_unsorted: bool = False, **options: Any
 ) -> Iterator[pd.DataFrame]:
     """Read a big CSV or Parquet signal log in chunks of at most ``chunk_rows`` rows.
 
-    Each chunk goes through :func:`canonical_signal` (options as there). Memory stays bounded
+    Each chunk goes through :func:`canonical_signal` (options as there), and, unless
+    ``allow_unsorted``, :func:`check_link_time_order` (across chunks). Memory stays bounded
     by the chunk size: CSV through pandas' chunked reader, Parquet by record batches.
     """
     source = str(path)
@@ -428,8 +493,14 @@ def iter_signal_table(
                 normalise_times(c, source)
                 for c in pd.read_csv(path, chunksize=chunk_rows, skipinitialspace=True, dtype=CSV_DTYPES)
             )
+        state = LinkTimes()
+        first_row = 0
         for chunk in batches:
-            yield canonical_signal(chunk, source=source, **options)
+            out = canonical_signal(chunk, source=source, **options)
+            if not allow_unsorted:
+                check_link_time_order(out, source, first_row, state)
+            first_row += len(out)
+            yield out
     except (InputError, LogFormatError):
         raise
     except Exception as exc:
@@ -484,6 +555,8 @@ __all__ = [
     "COLUMN_ALIASES",
     "canonical_pose",
     "canonical_signal",
+    "LinkTimes",
+    "check_link_time_order",
     "iter_signal_table",
     "table_columns",
     "read_pose_table",

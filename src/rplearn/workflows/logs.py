@@ -146,6 +146,7 @@ def _signal_chunks(signal_paths: Sequence[str], options: ReaderOptions) -> Itera
         for chunk in iter_signal_table(
             path, SYNC_CHUNK_ROWS, columns=options.columns, tx_power_dbm=ptx,
             frequency_hz=options.frequency_hz, rx=(options.receivers or {}).get(path),
+            allow_unsorted=options.allow_unsorted,
         ):
             out = conform_chunk(chunk, extras)
             out.attrs.update(source=str(path), first_row=first_row)  # messages name the file and its row
