@@ -7,23 +7,12 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from test_manoeuvres import NODES, POSES, SPEC, _options  # the same small problem as the ranking's tests
 
 from rplearn.analysis.manoeuvre_lookahead import information_deficit, information_rate, reach_fraction, time_to_target_s
-from rplearn.analysis.manoeuvres import ManoeuvreOptions, greedy_plan, prior_penalty_weight, rank_manoeuvres
+from rplearn.analysis.manoeuvres import ManoeuvreOptions, greedy_plan, rank_manoeuvres
 from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.errors import InputError
-from rplearn.models.spec import ModelSpec
-from rplearn.plan.manoeuvres import CandidateOptions
-
-SPEC = ModelSpec("sh", 4)
-NODES = ("A", "B")
-POSES = {"A": ((-5.0, 0.0, 20.0), 0.0), "B": ((5.0, 0.0, 20.0), 0.0)}
-
-
-def _options(**kw):
-    weight = prior_penalty_weight(SPEC.basis(), 3.0, 4.0, SPEC.ridge_weight)
-    cands = CandidateOptions(elevations_deg=(-30.0, 0.0, 30.0), library_loops=(1,))
-    return ManoeuvreOptions(noise_std_db=4.0, packet_rate_hz=20.0, penalty_weight=weight, candidates=cands, **kw)
 
 
 def test_the_deficit_is_the_missing_inverse_square_and_a_candidate_reaching_the_target_stops_where_it_does():
