@@ -194,7 +194,10 @@ FIGURES: dict[str, tuple[tuple[str, str], ...]] = {
         (r"outage events \(link lost, no RSSI\): (\d+) in, (\d+) kept", "{0} in, {1} kept"),
         (r"\(the learning data's share up\) [\d.]+, skill ([\d.]+)", "a Brier skill of {0} against"),
     ),
-    "px4.md": ((r"signal samples in: (\d+), matched: (\d+)", "matches {1} of the {0} packets"),),
+    "px4.md": (
+        (r"signal samples in: (\d+), matched: (\d+)", "matches {1} of the {0} packets"),
+        (r"(\d+) telemetry-radio reading\(s\) \(radio_status\) not read", "{0} telemetry-radio reading(s) (radio_status) not read"),
+    ),
     "rosbag.md": (
         (
             r"signal samples in: (\d),?(\d+), matched: (\d),?(\d+)",
@@ -231,6 +234,12 @@ def _px4_radio(cwd: Path) -> None:
         for k, (tx, rx) in enumerate((("px4", "gcs"), ("gcs", "px4")))
     ]
     pd.concat(rows).sort_values("t").to_csv(cwd / "radio.csv", index=False)
+    sys.path.insert(0, str(ROOT / "tests" / "io"))  # the sample ULog with radio_status packets
+    try:
+        from ulogfiles import radio_log
+    finally:
+        sys.path.remove(str(ROOT / "tests" / "io"))
+    radio_log(cwd / "radio.ulg")
 
 
 def _ros2_bag(cwd: Path) -> None:

@@ -59,7 +59,7 @@ PARAM_FLAGS: dict[str, str] = {
     "models": "--models", "paper_models": "--paper-models", "repeats": "--repeats", "orders": "--orders", "n_neighbors": "--order",
     "ground_level_m": "--ground-level", "relative_permittivity": "--permittivity",
     "path_loss": "--path-loss", "link_offsets": "--link-offsets",
-    "station_geodetic": "--station LAT,LON,ALT", "station": "--station-node", "station_heading_deg": "--station-heading",
+    "station_geodetic": "--station LAT,LON,ALT", "station": "--station-node", "station_heading_deg": "--station-heading", "ulog_radio": "--ulog-radio",
 }
 
 

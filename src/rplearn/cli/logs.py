@@ -17,11 +17,17 @@ _MSG_DEFINITION = typer.Option(None, "--msg-definition", help="TYPE=FILE.msg: cu
                                                               "pkg/msg/LinkQuality=LinkQuality.msg).")
 _REQUIRE_VALID = typer.Option(False, "--require-valid/--accept-invalid", help="Drop ULog positions the autopilot flags invalid (xy_valid or z_valid = "
                                                                               "0), or keep them (default).")
-_STATION_GEODETIC = typer.Option(None, "--station", help="LAT,LON,ALT: ground station position of MAVLink logs (.tlog, DataFlash) [deg, deg, m "
-                                                         "AMSL] (default: the log's home position, else the vehicle's first fix).")
-_STATION = typer.Option(None, "--station-node", help="Node id of the ground station of MAVLink logs (default gcs).")
+_STATION_GEODETIC = typer.Option(None, "--station", help="LAT,LON,ALT: ground station position of MAVLink logs (.tlog, DataFlash) and of ULogs "
+                                                         "read with --ulog-radio [deg, deg, m AMSL] (default: the log's home position, else the "
+                                                         "vehicle's first fix).")
+_STATION = typer.Option(None, "--station-node", help="Node id of the ground station of MAVLink logs and of ULogs read with --ulog-radio "
+                                                     "(default gcs).")
 _STATION_HEADING = typer.Option(None, "--station-heading", help="Compass heading of the ground station's antenna (its body x axis) in MAVLink "
-                                                                "logs [deg clockwise from north] (default 90, east).")
+                                                                "logs and ULogs read with --ulog-radio [deg clockwise from north] (default 90, "
+                                                                "east).")
+_ULOG_RADIO = typer.Option(False, "--ulog-radio", help="Read the telemetry radio of PX4 ULogs (radio_status: a SiK radio's RSSI both ways) as the "
+                                                       "links between the vehicle and the ground station (needs --tx-power and --frequency; "
+                                                       "default: poses only).")
 
 
 @app.command()
@@ -39,6 +45,7 @@ def inspect(
     station_geodetic: str | None = _STATION_GEODETIC,
     station: str | None = _STATION,
     station_heading: float | None = _STATION_HEADING,
+    ulog_radio: bool = _ULOG_RADIO,
     frequency_hz: float | None = typer.Option(None, "--frequency", help="Carrier frequency for logs without it [Hz]: the distance a calibration flight needs "
                                                                         "is 10 wavelengths (433 MHz assumed without it)."),
     markdown: bool = typer.Option(False, "--markdown", help="Print Markdown instead of text."),
@@ -53,7 +60,7 @@ def inspect(
 
     options = reader_options(node, receiver, address, pose_topic, rssi_topic, rssi_field, msg_definition, require_valid=require_valid,
                              station_geodetic=geodetic_flag(station_geodetic, "--station"), station=station,
-                             station_heading_deg=station_heading, frequency_hz=frequency_hz)
+                             station_heading_deg=station_heading, frequency_hz=frequency_hz, ulog_radio=ulog_radio)
     if markdown and as_json:
         fail("--markdown and --json: choose one")
     report = inspect_logs(logs, options)
@@ -90,7 +97,8 @@ def unreadable_line(unreadable: list[dict], n_files: int, where: str) -> str:
 @user_errors
 def sync(
     poses: list[str] = typer.Option(..., "--poses", help="Pose log(s): CSV/Parquet, bag, ULog, MAVLink .tlog/.bin. Repeat for several."),
-    signals: list[str] = typer.Option(..., "--signals", help="Signal log(s): CSV/Parquet, bag, pcap, MAVLink .tlog/.bin. Repeat for several."),
+    signals: list[str] = typer.Option(..., "--signals", help="Signal log(s): CSV/Parquet, bag, pcap, MAVLink .tlog/.bin, ULog with --ulog-radio. "
+                                                            "Repeat for several."),
     output: str = typer.Option(..., "-o", "--out", help="Matched dataset (.parquet or .csv)."),
     link_text: str | None = typer.Option(None, "--link", help="Keep one direction TX:RX (the paper's choice), or 'all'."),
     max_gap_s: float = typer.Option(0.2, "--max-gap", help="Drop samples inside pose gaps longer than this [s]."),
@@ -111,6 +119,7 @@ def sync(
     station_geodetic: str | None = _STATION_GEODETIC,
     station: str | None = _STATION,
     station_heading: float | None = _STATION_HEADING,
+    ulog_radio: bool = _ULOG_RADIO,
     on_unknown_node: str = typer.Option("drop", "--on-unknown-node", help="Signals naming a node without a pose log: drop (counted, default) or error."),
     rssi_scale: str = typer.Option("dbm", "--rssi-scale", help="dbm (default: calibrated, dropped outside -150..30 dBm or above the transmit power) or "
                                                                "relative (uncalibrated dB on the radio's own scale: no plausibility window)."),
@@ -143,7 +152,7 @@ def sync(
         node, receiver, address, pose_topic, rssi_topic, rssi_field, msg_definition, tx_power_dbm=tx_power_dbm,
         frequency_hz=frequency_hz, nan_policy=nan_policy, allow_unsorted=allow_unsorted, require_valid=require_valid,
         station_geodetic=geodetic_flag(station_geodetic, "--station"), station=station,
-                             station_heading_deg=station_heading)
+        station_heading_deg=station_heading, ulog_radio=ulog_radio)
     offsets = numbers(pairs(offset, "--offset"), "--offset", "NODE=SECONDS")
     options = SyncOptions(link=link(link_text), max_gap_s=max_gap_s, clock_offsets_s=offsets or None, on_unknown_node=on_unknown_node,
                           rssi_scale=rssi_scale, from_s=from_s, to_s=to_s, window_clock="log" if log_time else "start",

@@ -332,7 +332,10 @@ def _forgiving_options(path: str, kind: str, options: ReaderOptions) -> ReaderOp
     file name), receiver of a pcap (``capture``), tx power [dBm] and frequency [Hz]."""
     if kind == "ulog":
         nodes = {path: os.path.splitext(os.path.basename(path))[0], **(options.nodes or {})}
-        return replace(options, nodes=nodes)
+        if not options.ulog_radio:
+            return replace(options, nodes=nodes)
+        return replace(options, nodes=nodes, tx_power_dbm=0.0 if options.tx_power_dbm is None else options.tx_power_dbm,
+                       frequency_hz=1e9 if options.frequency_hz is None else options.frequency_hz)
     if kind == "pcap":
         return replace(
             options,
@@ -373,7 +376,7 @@ def _read_one(path: str, options: ReaderOptions) -> tuple[pd.DataFrame | None, p
     logs, meta = read_logs(path, _forgiving_options(path, kind, options))
     f = meta["files"][0]
     info = {"format": f.get("format", kind), "kind": f.get("kind")}
-    if logs.signal is not None and (kind != "mavlink" or options.frequency_hz is not None):
+    if logs.signal is not None and (kind not in ("mavlink", "ulog") or options.frequency_hz is not None):
         info["frequency_hz"] = _frequency_hz(logs.signal)
     if f.get("excluded_periods"):
         info["excluded_periods"] = f["excluded_periods"]

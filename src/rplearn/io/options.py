@@ -137,14 +137,19 @@ class ReaderOptions:
         Drop ULog local-position rows flagged invalid by the autopilot (``xy_valid`` or
         ``z_valid`` = 0).
     station : str
-        Node id of the ground station of MAVLink logs (``.tlog``, DataFlash); the vehicle's
-        id comes from ``nodes`` (default ``sys<system id>``).
+        Node id of the ground station of MAVLink logs (``.tlog``, DataFlash) and of ULogs read
+        with ``ulog_radio``; the vehicle's id comes from ``nodes`` (default ``sys<system id>``).
     station_geodetic : (float, float, float), optional
         Position of that ground station (lat [deg], lon [deg], alt [m] AMSL); by default the
         log's home position, else the vehicle's first fix.
     station_heading_deg : float, optional
         Compass heading of that station's body x axis [deg, clockwise from north]; by default
         90 (east, assumed), which makes its body frame the ENU world frame.
+    ulog_radio : bool
+        Read the telemetry radio's readings of PX4 ULogs (``radio_status``) as both directions
+        of the link between the vehicle and the ground station (``station``, placed as for
+        MAVLink logs), with ``tx_power_dbm`` and ``frequency_hz`` (:mod:`rplearn.io.ulog_radio`);
+        by default a ULog gives poses only (its readings are counted in a note).
 
     Raises
     ------
@@ -169,6 +174,7 @@ class ReaderOptions:
     station: str = "gcs"
     station_geodetic: tuple[float, float, float] | None = None
     station_heading_deg: float | None = None
+    ulog_radio: bool = False
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -201,7 +207,7 @@ class ReaderOptions:
             raise InputError(
                 f"nan_policy: expected 'error' or 'drop', got {self.nan_policy!r}", param="nan_policy"
             )
-        for name in ("allow_unsorted", "require_valid"):
+        for name in ("allow_unsorted", "require_valid", "ulog_radio"):
             value = getattr(self, name)
             if not isinstance(value, (bool, int)) or value not in (True, False):
                 raise InputError(f"{name}: expected True or False, got {value!r}", param=name)

@@ -110,22 +110,37 @@ def _read_bag(path: str, options: ReaderOptions, got: _Gathered) -> dict[str, An
 
 
 def _read_ulog(path: str, options: ReaderOptions, got: _Gathered) -> dict[str, Any]:
-    """Read a PX4 ULog of a named node; its geodetic anchor may fix the common origin."""
-    from rplearn.io import ulog as _ulog
+    """Read a PX4 ULog of a named node (with ``ulog_radio``, its telemetry radio too: both links
+    to the ground station, :mod:`rplearn.io.ulog_radio`); its geodetic anchor may fix the common
+    origin."""
+    from rplearn.io import ulog_radio as _radio
 
     node = (options.nodes or {}).get(path)
     if node is None:
         raise InputError(
             f"{path}: give the node id of this ULog (ReaderOptions.nodes={{path: node}})", param="nodes"
         )
-    pose, meta = _ulog.read_ulog(
-        path, node, got.origin, time_reference="auto", require_valid=options.require_valid
-    )
+    radio = None
+    if options.ulog_radio:
+        missing = [f for f in ("tx_power_dbm", "frequency_hz") if getattr(options, f) is None]
+        if missing:
+            raise InputError(
+                f"{path}: give the telemetry radios' transmit power [dBm] and carrier frequency [Hz] to read its "
+                f"radio, a ULog carries neither (ReaderOptions.{' and ReaderOptions.'.join(missing)})",
+                param=missing[0], related=missing[1:],
+            )
+        if isinstance(options.tx_power_dbm, Mapping):
+            raise InputError(f"{path}: the transmit power of a ULog's radio must be one number [dBm] "
+                             "(ReaderOptions.tx_power_dbm)", param="tx_power_dbm")
+        assert options.tx_power_dbm is not None and options.frequency_hz is not None  # refused above
+        radio = _radio.UlogRadio(float(options.tx_power_dbm), float(options.frequency_hz), options.station,
+                                 options.station_geodetic, options.station_heading_deg)
+    logs, meta = _radio.read_ulog_logs(path, node, radio, got.origin, options.require_valid)
     if got.origin is None and meta["anchor_geodetic"] is not None:
         # re-express on the anchor so that later logs share it (no-op for this one)
         got.origin = meta["anchor_geodetic"]
-    got.poses.append(pose)
-    meta["kind"] = "pose"
+    got.add(logs)
+    meta["kind"] = "pose" if logs.signal is None else "pose+signal"
     return meta
 
 

@@ -122,7 +122,8 @@ def _span_and_gaps(t_key: np.ndarray, t: np.ndarray, max_gap: float) -> tuple[np
     return out, gap & ~out
 
 
-_TOPICS: tuple[str, ...] = ("vehicle_local_position", "vehicle_attitude", "vehicle_global_position",
+_TOPICS: tuple[str, ...] = ("radio_status", "telemetry_status", "home_position",  # rplearn.io.ulog_radio
+                            "vehicle_local_position", "vehicle_attitude", "vehicle_global_position",
                             "vehicle_gps_position", "sensor_gps")
 
 
@@ -186,6 +187,19 @@ def ulog_layout(path: str) -> dict[str, Any]:
     LogFormatError
         When a second, different log follows the first (logs concatenated), naming the byte.
     """
+    key = _file_key(path, None)
+    if key not in _LAST_LAYOUT:  # the pose and radio readers of one file walk it once
+        _LAST_LAYOUT.clear()
+        _LAST_LAYOUT[key] = _walk_layout(path)
+    return dict(_LAST_LAYOUT[key])
+
+
+#: The layout of the last ULog walked (:func:`ulog_layout`), keyed as :data:`_LAST_PARSED`.
+_LAST_LAYOUT: dict[tuple[Any, ...], dict[str, Any]] = {}
+
+
+def _walk_layout(path: str) -> dict[str, Any]:
+    """:func:`ulog_layout`, walking the file."""
     import mmap
 
     with open(path, "rb") as fh:
@@ -249,11 +263,45 @@ class _Head(io.RawIOBase):
         super().close()
 
 
+#: The last ULog parsed, keyed by its file's identity and size and the bytes read: the pose
+#: reader and the radio reader (:mod:`rplearn.io.ulog_radio`) of one file parse it once.
+_LAST_PARSED: dict[tuple[Any, ...], Any] = {}
+
+
+def _file_key(source: str, log_bytes: int | None) -> tuple[Any, ...]:
+    st = os.stat(source)
+    return (os.path.realpath(source), st.st_dev, st.st_ino, st.st_size, st.st_mtime_ns, log_bytes)
+
+
+def parsed_ulog(source: str) -> Any:
+    """The parsed ULog of ``source`` as :func:`read_ulog` reads it (a log in the file twice read
+    once; the topics of the pose and radio readers only), from its last parse when the file is
+    unchanged."""
+    layout = ulog_layout(source)
+    return _open_ulog(source, layout["log_bytes"] if layout["repeated_messages"] else None)
+
+
+def release_parsed() -> None:
+    """Forget the last parsed ULog (:func:`parsed_ulog`): its topics' arrays are not kept in
+    memory once the readers of a file are done with it."""
+    _LAST_PARSED.clear()
+
+
 def _open_ulog(source: str, log_bytes: int | None = None) -> Any:
     """The parsed ULog (the topics rplearn uses only; its first ``log_bytes`` bytes when given);
-    :class:`LogFormatError` when unreadable."""
+    :class:`LogFormatError` when unreadable. The last one parsed is kept (:data:`_LAST_PARSED`)."""
     if not os.path.exists(source):
         raise InputError(f"{source}: no such file")
+    key = _file_key(source, log_bytes)
+    if key in _LAST_PARSED:
+        return _LAST_PARSED[key]
+    parsed = _parse_ulog(source, log_bytes)
+    _LAST_PARSED.clear()
+    _LAST_PARSED[key] = parsed
+    return parsed
+
+
+def _parse_ulog(source: str, log_bytes: int | None) -> Any:
     from rplearn.io._log_schema import library_quiet
 
     ULog = _pyulog()
@@ -532,4 +580,4 @@ def read_ulogs(
     return pose, {"origin_geodetic": origin, "logs": metas}
 
 
-__all__ = ["read_ulog", "read_ulogs", "ulog_cut_off_at", "ulog_layout", "utc_offset_us"]
+__all__ = ["parsed_ulog", "read_ulog", "release_parsed", "read_ulogs", "ulog_cut_off_at", "ulog_layout", "utc_offset_us"]
