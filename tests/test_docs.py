@@ -6,6 +6,7 @@ from __future__ import annotations
 import importlib.util
 import os
 import re
+import shlex
 import subprocess
 import sys
 from pathlib import Path
@@ -127,7 +128,9 @@ def run_page(page: Path, cwd: Path) -> str:
 
     Blocks of ``make`` targets are the repository's own entry points (``make demo`` and ``make
     test`` are what .ci/run and a fresh clone run; ``make docs`` is this module's build): they
-    are checked to be targets of the Makefile, not run inside the test suite.
+    are checked to be targets of the Makefile, not run inside the test suite. A block of plain
+    lines (:func:`plain_lines`) runs line by line, its ``rplearn`` commands in this process; any
+    other block runs in bash.
     """
     (cwd / "tests").symlink_to(ROOT / "tests")  # the pages run from a clone's top folder
     bindir = os.path.dirname(sys.executable)
@@ -146,18 +149,100 @@ def run_page(page: Path, cwd: Path) -> str:
                     f"{page.name}: no make target {target}"
                 )
             continue
+        lines = plain_lines(code) if lang == "bash" else None
+        if lines is not None:
+            out.append(_run_plain(lines, cwd, env, page))
+            continue
         args = (
             ["bash", "-e", "-o", "pipefail", "-c", code]
             if lang == "bash"
             else [sys.executable, "-c", code]
         )
-        proc = subprocess.run(
-            args, cwd=cwd, env=env, capture_output=True, text=True, timeout=300, check=False
-        )
-        assert proc.returncode == 0, (
-            f"{page.relative_to(ROOT)}: {lang} block failed\n{code}\n{proc.stdout}\n{proc.stderr}"
-        )
-        out.append(proc.stdout + proc.stderr)
+        out.append(_run_checked(args, cwd, env, page, code))
+    return "\n".join(out)
+
+
+def _run_checked(args: list[str], cwd: Path, env: dict[str, str], page: Path, code: str) -> str:
+    """Run ``args`` in ``cwd``; assert that it succeeded (naming the page and the code)."""
+    proc = subprocess.run(
+        args, cwd=cwd, env=env, capture_output=True, text=True, timeout=300, check=False
+    )
+    assert proc.returncode == 0, (
+        f"{page.relative_to(ROOT)}: block failed\n{code}\n{proc.stdout}\n{proc.stderr}"
+    )
+    return proc.stdout + proc.stderr
+
+
+#: A variable set by a line of its own (``LOG=path``, ``TOPICS="..."``).
+_ASSIGN = re.compile(r"^([A-Za-z_]\w*)=(.*)$")
+#: A use of a variable (``$LOG``, ``${LOG}``).
+_USE = re.compile(r"\$\{?(\w+)\}?")
+#: What makes an ``rplearn`` line more than one plain command, but for ``$NAME``: it runs in bash.
+_SHELL_CHARS = re.compile(r"[`|;&<>*?(){}\[\]~!\\\"]")
+
+
+def plain_lines(code: str) -> list[tuple[str, str]] | None:
+    """The lines of a bash block as ``("set", line)``, ``("rplearn", line)`` or ``("bash", line)``
+    when each line is a whole command: a variable set to one word, an ``rplearn`` command whose
+    only shell syntax is the quoting of words and the block's variables (each a value without
+    quotes or backslashes), or another one-line command (``head``, ``ls``); ``None`` for a block
+    that needs bash as a whole (a here-document, a continued line, a variable it did not set)."""
+    if "<<" in code or "\\\n" in code:
+        return None
+    known: dict[str, str] = {}
+    lines: list[tuple[str, str]] = []
+    for line in (ln.strip() for ln in code.splitlines()):
+        if not line or line.startswith("#"):
+            continue
+        assign = _ASSIGN.match(line)
+        if assign:
+            words = shlex.split(assign.group(2))
+            if len(words) != 1 or re.search(r"[$'\"\\`]", words[0]):
+                return None
+            known[assign.group(1)] = words[0]
+            lines.append(("set", line))
+        elif line.startswith("rplearn "):
+            used = _USE.findall(line)
+            if any(name not in known for name in used) or (used and "'" in line) or _SHELL_CHARS.search(
+                _USE.sub("", re.sub(r"'[^']*'", "", line))
+            ):
+                return None
+            lines.append(("rplearn", line))
+        elif _USE.search(line):
+            return None
+        else:
+            lines.append(("bash", line))
+    return lines
+
+
+def _run_plain(lines: list[tuple[str, str]], cwd: Path, env: dict[str, str], page: Path) -> str:
+    """Run a block's plain lines (:func:`plain_lines`) in order in ``cwd``: variables kept here,
+    ``rplearn`` commands in this process (typer's runner, the line split as a POSIX shell splits
+    it once its variables are put in: what it does, without the second of interpreter start-up
+    and imports a process of its own would pay again; tests/test_readme_examples.py runs the
+    ``rplearn`` script itself), other commands in bash. Assert that each succeeds."""
+    import contextlib
+
+    from typer.testing import CliRunner
+
+    from rplearn.cli import app
+
+    known: dict[str, str] = {}
+    out = []
+    for kind, line in lines:
+        if kind == "set":
+            name, value = _ASSIGN.match(line).groups()
+            known[name] = shlex.split(value)[0]
+        elif kind == "bash":
+            out.append(_run_checked(["bash", "-e", "-o", "pipefail", "-c", line], cwd, env, page, line))
+        else:
+            args = shlex.split(_USE.sub(lambda m: known[m.group(1)], line))
+            with contextlib.chdir(cwd):
+                res = CliRunner().invoke(app, args[1:], env={"COLUMNS": "400", "MPLBACKEND": "Agg"})
+            assert res.exit_code == 0, (
+                f"{page.relative_to(ROOT)}: {line}\n{res.output}\n{res.exception!r}"
+            )
+            out.append(res.output)
     return "\n".join(out)
 
 

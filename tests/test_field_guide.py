@@ -9,6 +9,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+from test_docs import _run_plain, plain_lines
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -24,13 +26,14 @@ def test_the_field_guide_runs_on_the_real_log_and_prints_what_it_says(tmp_path):
     assert "tests/fixtures/ardupilot/" in commands and "rplearn sync" in commands
     (tmp_path / "tests").symlink_to(ROOT / "tests")  # the guide runs from a clone's top folder
     env = dict(os.environ, PATH=os.path.dirname(sys.executable) + os.pathsep + os.environ.get("PATH", ""))
-    out = {}
-    for line in commands.strip().splitlines():
-        script = f"LOG={commands.splitlines()[0].split('=', 1)[1]}\n{line}"
-        proc = subprocess.run(["bash", "-c", script], cwd=tmp_path, env=env, capture_output=True, text=True,
-                              timeout=300, check=False)
-        assert proc.returncode == 0, f"{line}\n{proc.stdout}\n{proc.stderr}"
-        out[line.split()[1] if line.startswith("rplearn") else "LOG"] = proc.stdout + proc.stderr
+    lines = plain_lines(commands)  # LOG=...; rplearn commands in this process (tests/test_docs.py)
+    assert lines and lines[0][0] == "set" and all(kind == "rplearn" for kind, _ in lines[1:]), lines
+    out = {line.split()[1]: _run_plain([lines[0], (kind, line)], tmp_path, env, ROOT / "README.md")
+           for kind, line in lines[1:]}
+    # the guide's first command as a user's shell runs it: the rplearn script on the PATH
+    proc = subprocess.run(["bash", "-c", f"{lines[0][1]}\n{lines[1][1]}"], cwd=tmp_path, env=env, capture_output=True,
+                          text=True, timeout=300, check=False)
+    assert proc.returncode == 0 and "gcs: 1 rows, static" in proc.stdout + proc.stderr, (proc.stdout, proc.stderr)
     readme = (ROOT / "README.md").read_text(encoding="utf-8")
     # inspect: the station's placement and heading, the link-lost reports
     assert "station placed at the vehicle's first position fix (no HOME_POSITION in the log)" in out["inspect"]

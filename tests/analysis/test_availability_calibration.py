@@ -191,6 +191,7 @@ import numpy as np
 import pandas as pd
 import pytest
 from scipy.special import ndtr
+from simulated_flights import auto_fit, copy_files, synced
 
 from rplearn.analysis.availability import link_availability_column
 from rplearn.core.bases import fibonacci_grid_nodes
@@ -255,18 +256,22 @@ def held_out(tmp: Path, preset: str, seed: int = 0, flights: tuple = ()):
     """The held-out predictions of an automatic fit on the learning flights of ``preset``, each
     row with the oracle's clean RSSI of the same packet (``clean_dbm``); ``flights`` replace the
     preset's own testing flights."""
-    config = make_preset(preset)
+    link = ("A", "B") if preset == "paper" else None
     if flights:
+        config = make_preset(preset)
         learning = tuple(u for u in config.campaign.units if u.role == "learning")
         config = replace(config, campaign=Campaign(learning + tuple(flights), gap_s=config.campaign.gap_s))
-    sim = simulate(config, seed=seed, out_dir=str(tmp / "f"))
-    link = ("A", "B") if preset == "paper" else None
-    sync_logs([str(tmp / "f" / "pose_log.parquet")], [str(tmp / "f" / "signal_log.parquet")], str(tmp / "m.parquet"),
-              sync_options=SyncOptions(link=link))
+        sim = simulate(config, seed=seed, out_dir=str(tmp / "f"))
+        sync_logs([str(tmp / "f" / "pose_log.parquet")], [str(tmp / "f" / "signal_log.parquet")], str(tmp / "m.parquet"),
+                  sync_options=SyncOptions(link=link))
+    else:  # the preset's own flights: simulated, synced and fitted once per process (tests/simulated_flights.py)
+        own = synced(preset, seed, link)
+        copy_files(own, tmp)
+        sim = own.sim
     df = read_dataset(str(tmp / "m.parquet"))
     learn, test = split_units(df, None, None)
     nodes = sorted(set(df["tx"]) | set(df["rx"]))
-    model = fit_auto({u: samples_of(df, [u], "d", nodes=nodes) for u in learn})[0].model
+    model = (fit_auto({u: samples_of(df, [u], "d", nodes=nodes) for u in learn}) if flights else auto_fit(preset, seed, link))[0].model
     table = predict_dataset(model, df[df["unit"].isin(test)].reset_index(drop=True)).table
     truth = sim.matched("testing").copy()
     truth["clean_dbm"] = _clean_rssi(sim, truth)

@@ -8,35 +8,27 @@ import sys
 
 import numpy as np
 import pytest
+from simulated_flights import auto_fit, copy_files, synced
 
 from rplearn.analysis.pattern_error import node_directions, pattern_errors_db
 from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.core.lsq.selection import sub_statistics
 from rplearn.core.lsq.solver import solve
 from rplearn.core.sh import SphericalHarmonics
-from rplearn.data.units import samples_of, split_units
-from rplearn.io.files import read_dataset
 from rplearn.models import ModelSpec, load_model
 from rplearn.models.auto import MAX_AUTO_ORDER, auto_orders, fit_auto
 from rplearn.models.fit import evaluate_models, fit_model
-from rplearn.sim import simulate
-from rplearn.workflows.logs import sync_logs
 
 RPLEARN = [sys.executable, "-m", "rplearn.cli"]
 
 
 def campaign(tmp_path_factory, preset, seed, link=None):
-    from rplearn.data.sync import SyncOptions
-
-    d = tmp_path_factory.mktemp(preset)
-    sim = simulate(preset, seed=seed, out_dir=str(d / "f"))
-    sync_logs([str(d / "f" / "pose_log.parquet")], [str(d / "f" / "signal_log.parquet")], str(d / "m.parquet"),
-              sync_options=SyncOptions(link=link))
-    df = read_dataset(str(d / "m.parquet"))
-    learn, test = split_units(df, None, None)
-    nodes = sorted(set(df["tx"]) | set(df["rx"]))
-    per_unit = {u: samples_of(df, [u], "d", nodes=nodes) for u in learn}
-    return d, sim, per_unit, samples_of(df, learn, "d", nodes=nodes), samples_of(df, test, "d", nodes=nodes)
+    """``preset``'s flights of ``seed``, synced (only ``link`` when given): a new folder holding a copy
+    of their files, the simulation, the learning units' samples (each, and all) and the held-out
+    samples (simulated and synced once per process: tests/simulated_flights.py; arrays read-only)."""
+    flight = synced(preset, seed, link)
+    d = copy_files(flight, tmp_path_factory.mktemp(preset))
+    return d, flight.sim, flight.per_unit, flight.learn, flight.test
 
 
 @pytest.fixture(scope="module")
@@ -92,7 +84,7 @@ def plain_test_rmse(learn, test, orders, top):
 def test_paper_auto_fit_beats_the_best_fixed_order(tmp_path_factory):
     """Acceptance 1 of issue 11 on the `paper` preset (the A->B link, as the paper learned it)."""
     _, sim, per_unit, learn, test = campaign(tmp_path_factory, "paper", 0, link=("A", "B"))
-    fitted, sel = fit_auto(per_unit)
+    fitted, sel = auto_fit("paper", 0, ("A", "B"))  # fit_auto(per_unit), once per process
     auto_rmse = evaluate_models([fitted], test)[0].rmse_db
     sweep = plain_test_rmse(learn, test, range(3, 21), 20)
     best = min(sweep.values())

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from simulated_flights import auto_fit
 from test_auto import campaign
 from test_prior import ground_case
 
@@ -40,8 +41,8 @@ def test_paper_is_calibrated_inside_and_outside_the_flown_directions(tmp_path_fa
     are pooled; the covered ones are checked campaign by campaign."""
     pooled = []
     for seed in range(6):
-        _, _, per_unit, _, test = campaign(tmp_path_factory, "paper", seed, link=("A", "B"))
-        fitted, _ = fit_auto(per_unit)
+        _, _, _, _, test = campaign(tmp_path_factory, "paper", seed, link=("A", "B"))
+        fitted, _ = auto_fit("paper", seed, ("A", "B"))  # fit_auto of the learning units, once per process
         hit, covered = interval_hits(fitted.model, test)
         assert 0.85 <= hit.mean() <= 0.95 and 0.85 <= hit[covered].mean() <= 0.95, (seed, hit.mean(), hit[covered].mean())
         pooled.append(hit[~covered])

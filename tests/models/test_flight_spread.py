@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from simulated_flights import auto_fit
 from test_auto import campaign
 
 from rplearn.core.geometry import Directions
@@ -87,7 +88,7 @@ def test_a_new_flight_of_a_campaign_is_covered_inside_and_outside(tmp_path_facto
     at the common level is covered ~96%, one 7 dB off ~55%, under an honest spread)."""
     d, sim, per_unit, _, _ = campaign(tmp_path_factory, "campaign", seed)
     assert len(per_unit) == CAMPAIGN_FLIGHTS[0] >= 8
-    fitted, sel = fit_auto(per_unit)
+    fitted, sel = auto_fit("campaign", seed)  # fit_auto(per_unit), once per process
     learned = np.array([sim.unit_levels_db[u] for u in per_unit])
     truth = float(np.sqrt(np.mean((learned - learned.mean()) ** 2)))
     assert truth == pytest.approx(CAMPAIGN_LEVEL_STD_DB)

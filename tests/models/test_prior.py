@@ -4,10 +4,10 @@ the `ground` preset (a static ground station and one drone at 15 and 25 m, teste
 from __future__ import annotations
 
 import pytest
+from simulated_flights import auto_fit, copy_files, synced
 
 from rplearn.analysis.pattern_error import node_directions
 from rplearn.core.coverage import covered_fraction
-from rplearn.data.units import samples_of, split_units
 from rplearn.io.files import read_dataset
 from rplearn.io.reference import read_reference_pattern
 from rplearn.models import ModelSpec
@@ -15,22 +15,21 @@ from rplearn.models.auto import fit_auto
 from rplearn.models.fit import FittedModel, evaluate_models, fit_model
 from rplearn.models.options import FitOptions
 from rplearn.models.reference import reference_model
-from rplearn.sim import imperfect_reference, simulate
-from rplearn.workflows.logs import sync_logs
+from rplearn.sim import imperfect_reference
 
 
 def ground_case(tmp_path, seed):
-    sim = simulate("ground", seed=seed, out_dir=str(tmp_path / "f"))
-    sync_logs([str(tmp_path / "f" / "pose_log.parquet")], [str(tmp_path / "f" / "signal_log.parquet")], str(tmp_path / "m.parquet"))
-    df = read_dataset(str(tmp_path / "m.parquet"))
-    learn, test = split_units(df, None, None)
-    nodes = sorted(set(df["tx"]) | set(df["rx"]))
-    per_unit = {u: samples_of(df, [u], "d", nodes=nodes) for u in learn}
+    """The `ground` flights of ``seed`` synced, their files copied into ``tmp_path`` (``f/``,
+    ``m.parquet``; simulated and synced once per process: tests/simulated_flights.py), each node's
+    imperfect reference written there (``ref_NODE.csv``): the learning units' samples (each, and
+    all), the held-out samples, and the reference prior."""
+    flight = synced("ground", seed)
+    copy_files(flight, tmp_path)
     refs = {}
-    for n in nodes:  # the true pattern, 2 dB RMS smooth error, mounted 10 degrees off
-        imperfect_reference(sim.ground_truth, n, 2.0, 10.0, seed=seed).to_csv(tmp_path / f"ref_{n}.csv", index=False)
+    for n in flight.learn.nodes:  # the true pattern, 2 dB RMS smooth error, mounted 10 degrees off
+        imperfect_reference(flight.sim.ground_truth, n, 2.0, 10.0, seed=seed).to_csv(tmp_path / f"ref_{n}.csv", index=False)
         refs[n] = read_reference_pattern(tmp_path / f"ref_{n}.csv")
-    return per_unit, samples_of(df, learn, "d", nodes=nodes), samples_of(df, test, "d", nodes=nodes), reference_model(refs)
+    return flight.per_unit, flight.learn, flight.test, reference_model(refs)
 
 
 def rmse(model, test, spec=ModelSpec("sh", 3)):
@@ -60,7 +59,7 @@ def test_a_reference_prior_wins_where_the_flight_saw_little(tmp_path, seed):
         "unregularised SH-10": rmse(fit_model(learn, ModelSpec("sh", 10)).model, test),
     }
     assert all(got < v for v in others.values()), (got, others)
-    without_prior, _ = fit_auto(per_unit)
+    without_prior, _ = auto_fit("ground", seed)  # fit_auto(per_unit), once per process
     mean = rmse(fit_model(learn, ModelSpec("mean")).model, test, ModelSpec("mean"))
     assert rmse(without_prior.model, test) <= mean
 
@@ -103,8 +102,8 @@ def test_fit_cli_takes_a_prior_per_node(tmp_path, monkeypatch):
 
 def test_predictions_say_where_the_flight_never_looked(tmp_path):
     """Coverage columns and a warning from predict; the Bayesian spread grows away from the data."""
-    per_unit, learn, test, _ = ground_case(tmp_path, 3)
-    fitted, _ = fit_auto(per_unit)
+    _, learn, test, _ = ground_case(tmp_path, 3)
+    fitted, _ = auto_fit("ground", 3)  # fit_auto of the learning units, once per process
     import pandas as pd
 
     from rplearn.models.predict import UNCOVERED_DEG, predict_dataset
@@ -128,11 +127,10 @@ def test_predictions_say_where_the_flight_never_looked(tmp_path):
     assert isinstance(pred.table, pd.DataFrame)
 
 
-def test_orient_cautions_when_the_best_heading_looks_where_the_flight_never_did(tmp_path):
+def test_orient_cautions_when_the_best_heading_looks_where_the_flight_never_did():
     from rplearn.analysis.headings import YawOptions, best_yaw
 
-    per_unit, _, _, _ = ground_case(tmp_path, 4)
-    model = fit_auto(per_unit)[0].model
+    model = auto_fit("ground", 4)[0].model  # fit_auto of the learning units, once per process
     # the station kept at its flown heading (10 deg), a drone on the flown arc: the station end is covered
     seen = best_yaw(model, "G", "D", (0.0, 0.0, 1.5), (40.0, 7.0, 20.0), turn="rx", options=YawOptions(tx_yaw_deg=10.0))
     assert seen.coverage_deg is not None and seen.coverage_deg[0] < 10
@@ -146,8 +144,8 @@ def test_swarm_links_carry_their_coverage(tmp_path):
 
     from rplearn.analysis.swarm import SwarmOptions, predict_swarm
 
-    per_unit, _, _, _ = ground_case(tmp_path, 5)
-    model = fit_auto(per_unit)[0].model
+    ground_case(tmp_path, 5)
+    model = auto_fit("ground", 5)[0].model  # fit_auto of the learning units, once per process
     poses = pd.read_parquet(tmp_path / "f" / "pose_log.parquet")
     far = poses.assign(x=poses["x"] * -1.0)  # the drone flown behind the station: never learned
     seen, unseen = (predict_swarm(model, p, 20.0, SwarmOptions(step_s=5.0)) for p in (poses, far))
@@ -157,15 +155,14 @@ def test_swarm_links_carry_their_coverage(tmp_path):
     assert any("more than 10 deg from any direction" in n for n in unseen.notes)
 
 
-def test_orient_prefers_headings_the_flight_saw(tmp_path):
+def test_orient_prefers_headings_the_flight_saw():
     """Ranked by the 10% lower bound, the chosen headings face directions nearer the flown ones
     and are surer than the headings the prediction alone picks, for little predicted gain."""
     import numpy as np
 
     from rplearn.analysis.headings import YawOptions, best_yaw
 
-    per_unit, _, _, _ = ground_case(tmp_path, 4)
-    model = fit_auto(per_unit)[0].model
+    model = auto_fit("ground", 4)[0].model  # fit_auto of the learning units, once per process
     rng = np.random.default_rng(0)
     nearer = surer = 0
     lost = []

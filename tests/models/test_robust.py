@@ -4,17 +4,15 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from simulated_flights import synced
 
 from rplearn.analysis.pattern_error import node_directions, pattern_errors_db
-from rplearn.data.sync import SyncOptions
 from rplearn.data.units import samples_of, split_units
 from rplearn.errors import InputError
 from rplearn.io.files import read_dataset
 from rplearn.models import ModelSpec
 from rplearn.models.fit import fit_model
 from rplearn.models.robust import fit_huber, robust_scale_db
-from rplearn.sim import simulate
-from rplearn.workflows.logs import sync_logs
 
 
 def spoiled(clean, share=0.05, seed=0):
@@ -35,15 +33,14 @@ def spoiled(clean, share=0.05, seed=0):
 
 
 @pytest.fixture(scope="module")
-def paper(tmp_path_factory):
-    d = tmp_path_factory.mktemp("paper")
-    sim = simulate("paper", seed=0, out_dir=str(d / "f"))
-    sync_logs([str(d / "f" / "pose_log.parquet")], [str(d / "f" / "signal_log.parquet")], str(d / "m.parquet"),
-              sync_options=SyncOptions(link=("A", "B")))
-    df = read_dataset(str(d / "m.parquet"))
+def paper():
+    """The paper campaign of seed 0 (A->B; simulated and synced once per process:
+    tests/simulated_flights.py): its folder, simulation and learning rows in time order."""
+    flight = synced("paper", 0, ("A", "B"))
+    df = read_dataset(str(flight.folder / "m.parquet"))
     learn, _ = split_units(df, None, None)
     clean = df[df["unit"].isin(learn)].sort_values("t").reset_index(drop=True)
-    return d, sim, clean
+    return flight.folder, flight.sim, clean
 
 
 @pytest.mark.slow
