@@ -676,7 +676,7 @@ def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, 
         correlated: str = "reference", block_s: float = DEFAULT_BLOCK_S, posterior: str = "inflated",
         budget: bool = False, draws: int = DRAWS, candidates: dict[str, Any] | None = None, tilt: bool = False,
         aggregate: str = "rms", rate: str = "spread", prefixes: int = ManoeuvreOptions().prefixes,
-        lookahead: int = ManoeuvreOptions().lookahead) -> dict[str, Flight]:
+        lookahead: int = ManoeuvreOptions().lookahead, aimed: int = ManoeuvreOptions().aimed) -> dict[str, Flight]:
     config = _config(preset)
     learning = config.campaign.with_role("learning").units
     nodes = tuple(sorted(config.node_antennas))
@@ -687,7 +687,7 @@ def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, 
     cands = CandidateOptions(fixed_nodes=FIXED.get(preset, ()), speed_m_s=speed, **(candidates or {}))
     opts = ManoeuvreOptions(noise_std_db=noise, packet_rate_hz=config.radio.packet_rate_hz * (1 - config.radio.loss_probability),
                             penalty_weight=weight, candidates=cands, power=power, correlation_s=block_s, aggregate=aggregate,
-                            rate=rate, prefixes=prefixes, lookahead=lookahead)
+                            rate=rate, prefixes=prefixes, lookahead=lookahead, aimed=aimed)
     setup = Setup(preset, config, spec, nodes, opts, weight, seed=seed, correlated=correlated, block_s=block_s, budget=budget)
     ref_parts, _ = fly(setup, learning)
     if prior_std_db <= 0:  # the prior the project learns from the complete reference flight
@@ -827,6 +827,8 @@ def main(argv: list[str] | None = None) -> int:
                     help="score each candidate's first k/N too and fly its best prefix (1: whole manoeuvres only)")
     ap.add_argument("--lookahead", type=int, default=ManoeuvreOptions().lookahead,
                     help="rank the best N candidates by rate again by their estimated time to the target (0: the rate alone)")
+    ap.add_argument("--aimed", type=int, default=ManoeuvreOptions().aimed,
+                    help="also candidates aimed at each node's N directions of largest posterior variance (0: the fixed ones only)")
     ap.add_argument("--tiny", action="store_true", help="the smoke preset at SH-4 (seconds; criteria not enforced)")
     args = ap.parse_args(argv)
     presets = ["smoke"] if args.tiny else [p.strip() for p in args.presets.split(",") if p.strip()]
@@ -842,7 +844,7 @@ def main(argv: list[str] | None = None) -> int:
         limit = float(sum(u.duration_s for u in ref_total.units))
         flights = run(preset, order, seed, limit, args.power, args.prior_std, args.correlated, args.block_s, args.posterior,
                       args.budget or args.tiny, draws, _candidate_args(args), args.tilt, args.aggregate,
-                      args.rate, args.prefixes, args.lookahead)
+                      args.rate, args.prefixes, args.lookahead, args.aimed)
         ref = flights["reference"]
         print(f"{preset} (SH-{order}, seed {seed}, {time.perf_counter() - t0:.0f} s): time to {TARGET_DB:g} dB per-node spread")
         for f in flights.values():
