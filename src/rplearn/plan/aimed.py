@@ -86,7 +86,7 @@ def _pair(state: Mapping[str, tuple[np.ndarray, float]], mover: str, anchor: str
     if horiz < 1.0:
         return []
     current = float(np.degrees(np.arctan2(d[2], horiz)))
-    base = dict(nodes=(anchor, mover), anchor_enu_m=tuple(float(v) for v in pa), start_enu_m=tuple(float(v) for v in pm),
+    base: dict[str, Any] = dict(nodes=(anchor, mover), anchor_enu_m=tuple(float(v) for v in pa), start_enu_m=tuple(float(v) for v in pm),
                 anchor_yaw_deg=ya, start_yaw_deg=ym, speed_m_s=opts.speed_m_s, accel_m_s2=opts.accel_m_s2,
                 yaw_rate_deg_s=opts.yaw_rate_deg_s)
     units: list[tuple[str, ManoeuvreUnit, float]] = []  # (name, unit, lead time [s])
@@ -136,12 +136,12 @@ def _pair(state: Mapping[str, tuple[np.ndarray, float]], mover: str, anchor: str
         unit = ManoeuvreUnit(kind="yaw", **{**base, "start_enu_m": tuple(float(v) for v in goal)})
         units.append((f"{mover} to where {anchor} sees it along {what[6:]}, turning", unit,
                       _lead_s([float(np.linalg.norm(goal - pm))], opts)))
-    out = []
+    out: list[Candidate] = []
     for name, unit, lead in units:
         ends = {mover: unit.end_pose()}
         if unit.anchor_turn_deg:
-            ends[anchor] = (tuple(float(v) for v in pa), unit.anchor_end_yaw_deg())
-        out.append(Candidate(name, replace(unit, label=f"aim{len(out)}_{unit.label}"), float(lead), ends))  # type: ignore[arg-type]
+            ends[anchor] = ((float(pa[0]), float(pa[1]), float(pa[2])), unit.anchor_end_yaw_deg())
+        out.append(Candidate(name, replace(unit, label=f"aim{len(out)}_{unit.label}"), float(lead), ends))
     return out
 
 
