@@ -74,5 +74,5 @@ def test_the_ranking_offers_aimed_candidates_only_when_asked():
     rates = [r.score_per_s for r in aimed]
     assert rates == sorted(rates, reverse=True)
     with pytest.raises(InputError) as err:
-        replace(_options(), aimed=-1)
+        replace(_options(), aimed=1.5)
     assert err.value.param == "aimed"

@@ -164,7 +164,8 @@ class ManoeuvreOptions:
         Also offer, per node, manoeuvres aimed at its ``aimed`` target directions of largest
         posterior variance now (:func:`~rplearn.analysis.manoeuvre_aimed.widest_directions`,
         :func:`rplearn.plan.aimed.aimed_manoeuvres`: a climb, turn or orbit that makes the node
-        look along each); 0 (default): the fixed candidates only.
+        look along each; negative: ``-aimed`` directions, their elevations only, full rings); 0
+        (default): the fixed candidates only.
     """
 
     noise_std_db: float = 4.2
@@ -223,8 +224,8 @@ class ManoeuvreOptions:
         if int(self.lookahead) != self.lookahead or self.lookahead < 0:
             raise InputError(f"lookahead: expected a whole number of candidates, at least 0, got {self.lookahead!r}",
                              param="lookahead")
-        if int(self.aimed) != self.aimed or self.aimed < 0:
-            raise InputError(f"aimed: expected a whole number of directions per node, at least 0, got {self.aimed!r}", param="aimed")
+        if int(self.aimed) != self.aimed:
+            raise InputError(f"aimed: expected a whole number of directions per node, got {self.aimed!r}", param="aimed")
         if int(self.prefixes) != self.prefixes or self.prefixes < 1:
             raise InputError(f"prefixes: expected a whole number of at least 1, got {self.prefixes!r}", param="prefixes")
         if int(self.target_points) < 16:
@@ -509,8 +510,8 @@ def _scored(post: ManoeuvrePosterior, state: Mapping[str, Any], names: list[str]
     """Every candidate flyable from ``state`` scored on ``post``, best rate first."""
     cands = candidate_manoeuvres(state, opts.candidates)
     if opts.aimed:  # and those aimed at where each node's posterior is widest now
-        aims = widest_directions(post, basis, names, _directions(names, opts), int(opts.aimed))
-        cands += aimed_manoeuvres(state, aims, opts.candidates)
+        aims = widest_directions(post, basis, names, _directions(names, opts), abs(int(opts.aimed)))
+        cands += aimed_manoeuvres(state, aims, opts.candidates, rings=opts.aimed < 0)
     scored = [_score(post, c, names, basis, opts) for c in cands]
     return sorted(scored, key=lambda s: -s[0].score_per_s)
 

@@ -78,7 +78,7 @@ def _segment_clear_m(p0: np.ndarray, p1: np.ndarray, point: np.ndarray) -> float
 
 
 def _pair(state: Mapping[str, tuple[np.ndarray, float]], mover: str, anchor: str, aims: Mapping[str, Sequence[Any]],
-          opts: CandidateOptions) -> list[Candidate]:
+          opts: CandidateOptions, rings: bool) -> list[Candidate]:
     pm, ym = state[mover]
     pa, ya = state[anchor]
     d = pm - pa
@@ -103,7 +103,7 @@ def _pair(state: Mapping[str, tuple[np.ndarray, float]], mover: str, anchor: str
 
     for k, (az, el) in enumerate(aims.get(mover, ())):  # the mover looks along its aim
         want = float(np.clip(-np.degrees(el), -MAX_AIM_EL_DEG, MAX_AIM_EL_DEG))
-        turn = _turn_through(ym, _bearing_deg(pm, pa) - float(np.degrees(az)), AIM_SECTOR_DEG)
+        turn = 360.0 if rings else _turn_through(ym, _bearing_deg(pm, pa) - float(np.degrees(az)), AIM_SECTOR_DEG)
         what = f"aimed at {mover}'s direction {k + 1}"
         if abs(want - current) >= 1.0:
             climbs(want, what, kinds=("climb_turn",), turn_deg=turn)
@@ -113,7 +113,7 @@ def _pair(state: Mapping[str, tuple[np.ndarray, float]], mover: str, anchor: str
     for k, (az, el) in enumerate(aims.get(anchor, ())):  # the anchor sees the mover along its aim
         want = float(np.clip(np.degrees(el), -MAX_AIM_EL_DEG, MAX_AIM_EL_DEG))
         what = f"aimed at {anchor}'s direction {k + 1}"
-        if not fixed_anchor:
+        if not fixed_anchor and not rings:
             turn = _turn_through(ya, _bearing_deg(pa, pm) - float(np.degrees(az)), AIM_SECTOR_DEG)
             if abs(want - current) >= 1.0:
                 turn = _after_climb(ManoeuvreUnit(kind="climb", elevation_deg=want, anchor_turn_deg=turn, **base),
@@ -123,7 +123,7 @@ def _pair(state: Mapping[str, tuple[np.ndarray, float]], mover: str, anchor: str
                 units.append((f"{anchor} turning by {turn:+.0f} deg, {mover} holding, {what}",
                               ManoeuvreUnit(kind="yaw", turn_deg=0.0, anchor_turn_deg=turn, **base), 0.0))
         climbs(want, what, kinds=("orbit",))
-        if not fixed_anchor:
+        if not fixed_anchor or rings:
             continue
         bearing = np.radians(ya + float(np.degrees(az)))
         dist = float(np.linalg.norm(d))
@@ -134,7 +134,7 @@ def _pair(state: Mapping[str, tuple[np.ndarray, float]], mover: str, anchor: str
         if opts.min_separation_m > 0 and _segment_clear_m(pm, goal, pa) < min(opts.min_separation_m, dist - 1e-6):
             continue  # the way there passes too near the station
         unit = ManoeuvreUnit(kind="yaw", **{**base, "start_enu_m": tuple(float(v) for v in goal)})
-        units.append((f"{mover} to where {anchor} sees it along {what[6:]}, turning", unit,
+        units.append((f"{mover} to where {anchor} sees it along the aim, turning, {what}", unit,
                       _lead_s([float(np.linalg.norm(goal - pm))], opts)))
     out: list[Candidate] = []
     for name, unit, lead in units:
@@ -147,7 +147,7 @@ def _pair(state: Mapping[str, tuple[np.ndarray, float]], mover: str, anchor: str
 
 @check_types
 def aimed_manoeuvres(poses: Mapping[str, tuple[tuple[float, float, float], float]], aims: Mapping[str, Sequence[Any]],
-                     options: CandidateOptions | None = None) -> list[Candidate]:
+                     options: CandidateOptions | None = None, rings: bool = False) -> list[Candidate]:
     """Manoeuvres that make each node look along its aims (module docstring).
 
     Parameters
@@ -158,6 +158,9 @@ def aimed_manoeuvres(poses: Mapping[str, tuple[tuple[float, float, float], float
         Per node, body-frame directions to look along [rad] (nodes without aims: none).
     options : CandidateOptions, optional
         Speeds, heights, fixed nodes and the minimum separation, as for the fixed candidates.
+    rings : bool
+        Aim the elevation only: every turn a full circle (a hovering anchor's too, in place, with
+        the climb) and no move to a station's aim (its orbit only), instead of the sector turns.
     """
     opts = options or CandidateOptions()
     if len(poses) < 2:
@@ -173,7 +176,7 @@ def aimed_manoeuvres(poses: Mapping[str, tuple[tuple[float, float, float], float
             continue
         for anchor in names:
             if anchor != mover:
-                out.extend(_pair(state, mover, anchor, {str(n): list(v) for n, v in aims.items()}, opts))
+                out.extend(_pair(state, mover, anchor, {str(n): list(v) for n, v in aims.items()}, opts, rings))
     if opts.min_separation_m > 0:
         now = min(float(np.linalg.norm(state[a][0] - state[b][0])) for i, a in enumerate(names) for b in names[i + 1:])
         floor = min(opts.min_separation_m, now - 1e-6)
