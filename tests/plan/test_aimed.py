@@ -64,3 +64,15 @@ def test_aims_of_a_node_without_a_pose_are_refused():
     with pytest.raises(InputError) as err:
         aimed_manoeuvres(POSES, {"C": [(0.0, 0.0)]})
     assert err.value.param == "aims"
+
+
+def test_rings_aim_the_elevation_only_with_full_circles_and_no_move_to_a_station_s_aim():
+    aim = (np.radians(-120.0), np.radians(35.0))
+    for node in ("A", "B"):
+        cands = aimed_manoeuvres(POSES, {node: [aim]}, CandidateOptions(), rings=True)
+        assert cands and all(c.unit.kind in ("climb_turn", "yaw", "orbit") for c in cands)
+        assert all(abs(c.unit.turn_deg) == 360.0 and c.unit.anchor_turn_deg == 0.0 for c in cands if c.unit.kind != "orbit")
+        assert all(_closest_view_deg(c, node, aim) < 4.0 for c in cands)  # a full ring at the aim's elevation passes it
+    poses = {"G": ((0.0, 0.0, 1.5), 0.0), "D": ((20.0, 0.0, 10.0), 0.0)}
+    cands = aimed_manoeuvres(poses, {"G": [(np.radians(40.0), np.radians(20.0))]}, CandidateOptions(fixed_nodes=("G",)), rings=True)
+    assert [c.unit.kind for c in cands] == ["orbit"] and cands[0].lead_s == 0.0

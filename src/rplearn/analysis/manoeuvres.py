@@ -161,11 +161,11 @@ class ManoeuvreOptions:
         ``fit --degree auto`` (its held-out error over what its posterior states) is one
         estimate; 1: the prior the penalty implies.
     aimed : int
-        Also offer, per node, manoeuvres aimed at its ``aimed`` target directions of largest
-        posterior variance now (:func:`~rplearn.analysis.manoeuvre_aimed.widest_directions`,
-        :func:`rplearn.plan.aimed.aimed_manoeuvres`: a climb, turn or orbit that makes the node
-        look along each; negative: ``-aimed`` directions, their elevations only, full rings); 0
-        (default): the fixed candidates only.
+        Also offer manoeuvres that make each node look along its ``aimed`` target directions of
+        largest posterior variance now (:mod:`rplearn.analysis.manoeuvre_aimed`,
+        :func:`rplearn.plan.aimed.aimed_manoeuvres`; negative: ``-aimed`` directions, their
+        elevations only, full rings); 0 (default): none. Flown in the simulator
+        (``benchmarks/manoeuvres.py --aimed 3``) they met both checks in 2 of 12 tuning cells against 7.
     """
 
     noise_std_db: float = 4.2
