@@ -45,12 +45,12 @@ import numpy as np
 import pandas as pd
 
 from rplearn._argtypes import check_types
+from rplearn.analysis.manoeuvre_aimed import target_directions, widest_directions
 from rplearn.analysis.manoeuvre_cells import DirectionCells, cell_grid
 from rplearn.analysis.manoeuvre_lookahead import Scored, lookahead_order
 from rplearn.analysis.manoeuvre_posterior import ManoeuvrePosterior
 from rplearn.analysis.manoeuvre_prior import prior_penalty_weight
 from rplearn.analysis.manoeuvre_tilt import steady_tilt_accel
-from rplearn.core.bases import fibonacci_grid_nodes
 from rplearn.core.basis_base import Basis
 from rplearn.core.geometry import attitude_from_thrust, link_directions, yaw_from_quat_wxyz
 from rplearn.core.lsq.block_sums import DEFAULT_BLOCK_S, BlockSums, correlated_ratio
@@ -59,6 +59,7 @@ from rplearn.core.lsq.penalty import DEFAULT_PENALTY_POWER, penalty_scale
 from rplearn.core.threads import one_blas_thread
 from rplearn.errors import InputError
 from rplearn.models.spec import ModelSpec
+from rplearn.plan.aimed import aimed_manoeuvres
 from rplearn.plan.manoeuvres import Candidate, CandidateOptions, candidate_manoeuvres
 from rplearn.plan.prefix import braking_s, cut_candidate, prefix_cuts
 from rplearn.plan.trajectory import G_M_S2
@@ -159,6 +160,12 @@ class ManoeuvreOptions:
         while the noise part stays at ``noise_std_db``. The variance inflation of
         ``fit --degree auto`` (its held-out error over what its posterior states) is one
         estimate; 1: the prior the penalty implies.
+    aimed : int
+        Also offer manoeuvres that make each node look along its ``aimed`` target directions of
+        largest posterior variance now (:mod:`rplearn.analysis.manoeuvre_aimed`,
+        :func:`rplearn.plan.aimed.aimed_manoeuvres`; negative: ``-aimed`` directions, their
+        elevations only, full rings); 0 (default): none. Flown in the simulator
+        (``benchmarks/manoeuvres.py --aimed 3``) they met both checks in 2 of 12 tuning cells against 7.
     """
 
     noise_std_db: float = 4.2
@@ -180,6 +187,7 @@ class ManoeuvreOptions:
     steady_accel_enu_m_s2: tuple[float, float, float] = (0.0, 0.0, 0.0)
     prefixes: int = 1
     lookahead: int = 0
+    aimed: int = 0
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.prior_variance_factor) and self.prior_variance_factor >= 1.0):
@@ -216,6 +224,8 @@ class ManoeuvreOptions:
         if int(self.lookahead) != self.lookahead or self.lookahead < 0:
             raise InputError(f"lookahead: expected a whole number of candidates, at least 0, got {self.lookahead!r}",
                              param="lookahead")
+        if int(self.aimed) != self.aimed:
+            raise InputError(f"aimed: expected a whole number of directions per node, got {self.aimed!r}", param="aimed")
         if int(self.prefixes) != self.prefixes or self.prefixes < 1:
             raise InputError(f"prefixes: expected a whole number of at least 1, got {self.prefixes!r}", param="prefixes")
         if int(self.target_points) < 16:
@@ -266,20 +276,15 @@ class RankedManoeuvre:
 def target_metrics(basis: Basis, nodes: Sequence[str], options: ManoeuvreOptions) -> list[np.ndarray]:
     """Per node, the second moment ``M_k`` of the mean-removed design over its target directions."""
     out = []
-    az_all, el_all = fibonacci_grid_nodes(int(options.target_points))
-    lo, hi = np.radians(options.target_el_deg[0]), np.radians(options.target_el_deg[1])
-    band = (el_all >= lo - 1e-12) & (el_all <= hi + 1e-12)
-    for node in nodes:
-        if options.targets is not None and node in options.targets:
-            az, el = (np.asarray(v, np.float64).ravel() for v in options.targets[node])
-        else:
-            az, el = az_all[band], el_all[band]
-        if az.size == 0:
-            raise InputError(f"targets: no target direction for node {node}", param="targets")
+    for az, el in _directions(nodes, options):
         x = basis.design(az, el)
         x = x - x.mean(axis=0)
         out.append(x.T @ x / x.shape[0])
     return out
+
+
+def _directions(nodes: Sequence[str], options: ManoeuvreOptions) -> list[tuple[np.ndarray, np.ndarray]]:
+    return target_directions(nodes, int(options.target_points), options.target_el_deg, options.targets)
 
 
 def prior_weights(spec: ModelSpec, normal: NormalEquations, options: ManoeuvreOptions) -> np.ndarray:
@@ -503,7 +508,11 @@ def rank_manoeuvres(
 def _scored(post: ManoeuvrePosterior, state: Mapping[str, Any], names: list[str], basis: Basis,
             opts: ManoeuvreOptions) -> list[Scored]:
     """Every candidate flyable from ``state`` scored on ``post``, best rate first."""
-    scored = [_score(post, c, names, basis, opts) for c in candidate_manoeuvres(state, opts.candidates)]
+    cands = candidate_manoeuvres(state, opts.candidates)
+    if opts.aimed:  # and those aimed at where each node's posterior is widest now
+        aims = widest_directions(post, basis, names, _directions(names, opts), abs(int(opts.aimed)))
+        cands += aimed_manoeuvres(state, aims, opts.candidates, rings=opts.aimed < 0)
+    scored = [_score(post, c, names, basis, opts) for c in cands]
     return sorted(scored, key=lambda s: -s[0].score_per_s)
 
 
