@@ -109,6 +109,21 @@ def run_here(args: Sequence[object], cwd: Path | str, ok: bool = True) -> subpro
     return subprocess.CompletedProcess([str(a) for a in args], res.exit_code, res.stdout, stderr)
 
 
+def help_text(command: str) -> str:
+    """What ``rplearn COMMAND --help`` prints, made in this process from the command that
+    :func:`rplearn.cli.main` runs (typer's app as a click group with readable metavars, program
+    name ``rplearn``): the same text as the user's process prints; assert that it exits 0."""
+    import typer
+    from click.testing import CliRunner
+
+    from rplearn.cli import app
+    from rplearn.cli._help import apply_readable_metavars
+
+    res = CliRunner().invoke(apply_readable_metavars(typer.main.get_command(app)), [command, "--help"], prog_name="rplearn")
+    assert res.exit_code == 0, f"{command} --help: {res.output} {res.exception!r}"
+    return res.stdout
+
+
 def listing(folder: Path) -> list[str]:
     """Every name below ``folder``: a refused command must leave it as it was."""
     return sorted(p.name for p in folder.rglob("*"))
