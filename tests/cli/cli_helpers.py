@@ -91,6 +91,39 @@ def invoke_in(d: Path | str, args: Sequence[object], ok: bool = True) -> Any:
         return invoke(args, ok)
 
 
+def run_here(args: Sequence[object], cwd: Path | str, ok: bool = True) -> subprocess.CompletedProcess[str]:
+    """``rplearn ARGS`` in ``cwd``, in this process, answered as :func:`run` answers (exit code,
+    stdout and stderr apart): for the commands whose output a test reads, where a process of
+    their own would only add its second of start-up. With ``ok``, assert that it succeeded.
+    Refusals, whose exit code and stderr line are the point, stay :func:`run`. An exception that
+    escaped the command is appended to stderr as the interpreter would print it (``Traceback``),
+    so that a test's check for one holds in this process too."""
+    import traceback
+
+    res = invoke_in(cwd, args, ok=False)
+    if ok:
+        assert res.exit_code == 0, f"{args}: {res.output} {res.exception!r}"
+    stderr = res.stderr
+    if res.exception is not None and not isinstance(res.exception, SystemExit):
+        stderr += "".join(traceback.format_exception(res.exception))
+    return subprocess.CompletedProcess([str(a) for a in args], res.exit_code, res.stdout, stderr)
+
+
+def help_text(command: str) -> str:
+    """What ``rplearn COMMAND --help`` prints, made in this process from the command that
+    :func:`rplearn.cli.main` runs (typer's app as a click group with readable metavars, program
+    name ``rplearn``): the same text as the user's process prints; assert that it exits 0."""
+    import typer
+    from click.testing import CliRunner
+
+    from rplearn.cli import app
+    from rplearn.cli._help import apply_readable_metavars
+
+    res = CliRunner().invoke(apply_readable_metavars(typer.main.get_command(app)), [command, "--help"], prog_name="rplearn")
+    assert res.exit_code == 0, f"{command} --help: {res.output} {res.exception!r}"
+    return res.stdout
+
+
 def listing(folder: Path) -> list[str]:
     """Every name below ``folder``: a refused command must leave it as it was."""
     return sorted(p.name for p in folder.rglob("*"))

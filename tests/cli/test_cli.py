@@ -1,4 +1,8 @@
-"""The command line, driven through real subprocesses as a user would (issue 5)."""
+"""The command line as a user drives it (issue 5): the pipeline ``simulate -> sync -> fit ->
+evaluate -> export -> predict`` and every user error through real subprocesses (the issue's
+acceptance), the other commands whose output a test reads in this process (``run_here``: the
+same command line, exit code, stdout and stderr, without a second of start-up each); their
+refusals stay subprocesses."""
 
 from __future__ import annotations
 
@@ -8,6 +12,7 @@ import os
 import numpy as np
 import pandas as pd
 import pytest
+from cli_helpers import run_here
 from cli_helpers import run_ok as run
 
 from rplearn.data.tables import MATCHED_COLUMNS
@@ -110,7 +115,7 @@ USER_ERRORS = {
 
 
 def test_trajectory_writes_references_and_checks_the_plan(tmp_path):
-    proc = run(["trajectory", "-o", "plan", "--psi0", "0,24,48", "--test-psi0", "36"], tmp_path)
+    proc = run_here(["trajectory", "-o", "plan", "--psi0", "0,24,48", "--test-psi0", "36"], tmp_path)
     files = sorted(os.listdir(tmp_path / "plan"))
     assert len(files) == 8 and "learn_24_B.csv" in files and "test_36_A.csv" in files
     ref = pd.read_csv(tmp_path / "plan" / "learn_0_A.csv")
@@ -118,12 +123,14 @@ def test_trajectory_writes_references_and_checks_the_plan(tmp_path):
     # the paper's plan decouples SH-10 up to the one constant two drones leave free
     assert "rank 199 (null space 1, expected 1)" in proc.stdout
     # one unit alone does not: the check says so before anyone flies
-    thin = run(["trajectory", "-o", "thin", "--psi0", "0", "--loops", "2"], tmp_path)
+    thin = run_here(["trajectory", "-o", "thin", "--psi0", "0", "--loops", "2"], tmp_path)
     assert "rank 199" not in thin.stdout and "not" in thin.stdout.lower()
 
 
-@pytest.mark.parametrize("case", sorted(USER_ERRORS))
-def test_user_errors_print_one_line_and_exit_1(workdir, case):
+@pytest.fixture(scope="module")
+def user_error_inputs(workdir):
+    """``workdir`` with the bad files the user errors read, written once for all cases (no
+    case writes into them: a refusal writes nothing)."""
     d = workdir
     data = pd.read_parquet(d / "data.parquet")
     data.drop(columns=["rssi_dbm"]).to_csv(d / "nocol.csv", index=False)
@@ -136,7 +143,13 @@ def test_user_errors_print_one_line_and_exit_1(workdir, case):
     sent.to_csv(d / "sentinel.csv", index=False)
     (d / "trunc.parquet").write_bytes((d / "data.parquet").read_bytes()[:300])
     if not (d / "sh3.json").exists():
-        run(["fit", "data.parquet", "--model", "sh", "--degree", "3", "-o", "sh3.json"], d)
+        run_here(["fit", "data.parquet", "--model", "sh", "--degree", "3", "-o", "sh3.json"], d)
+    return d
+
+
+@pytest.mark.parametrize("case", sorted(USER_ERRORS))
+def test_user_errors_print_one_line_and_exit_1(user_error_inputs, case):
+    d = user_error_inputs
     args, needle = USER_ERRORS[case]
     proc = run(args, d, ok=False)
     assert proc.returncode == 1, proc.stderr
@@ -154,11 +167,11 @@ def test_node_ids_that_look_numeric_stay_text(workdir, tmp_path):
     ren = {"A": "01", "B": "02"}
     pose.assign(node=pose["node"].map(ren)).to_csv(tmp_path / "p.csv", index=False)
     sig.assign(tx=sig["tx"].map(ren), rx=sig["rx"].map(ren)).to_csv(tmp_path / "s.csv", index=False)
-    run(["sync", "--poses", "p.csv", "--signals", "s.csv", "--link", "01:02", "-o", "d.csv"], tmp_path)
+    run_here(["sync", "--poses", "p.csv", "--signals", "s.csv", "--link", "01:02", "-o", "d.csv"], tmp_path)
     data = pd.read_csv(tmp_path / "d.csv", dtype={"tx": str, "rx": str})
     assert set(data["tx"]) == {"01"} and len(data) > 500
-    run(["fit", "d.csv", "--model", "sh", "--degree", "2", "-o", "m.json"], tmp_path)
-    ev = run(["evaluate", "m.json", "d.csv"], tmp_path)
+    run_here(["fit", "d.csv", "--model", "sh", "--degree", "2", "-o", "m.json"], tmp_path)
+    ev = run_here(["evaluate", "m.json", "d.csv"], tmp_path)
     assert "| SH-2 |" in ev.stdout
 
 
@@ -169,7 +182,7 @@ def test_datetime_times_are_seconds(workdir, tmp_path):
     epoch = 1.7e9
     pose.assign(t=pd.to_datetime(pose["t"] + epoch, unit="s", utc=True)).to_parquet(tmp_path / "p.parquet")
     sig.assign(t=pd.to_datetime(sig["t"] + epoch, unit="s", utc=True)).to_parquet(tmp_path / "s.parquet")
-    run(["sync", "--poses", "p.parquet", "--signals", "s.parquet", "--link", "A:B", "-o", "d.parquet"], tmp_path)
+    run_here(["sync", "--poses", "p.parquet", "--signals", "s.parquet", "--link", "A:B", "-o", "d.parquet"], tmp_path)
     ref = pd.read_parquet(d / "data.parquet")
     got = pd.read_parquet(tmp_path / "d.parquet")
     assert len(got) == len(ref)
@@ -180,14 +193,14 @@ def test_datetime_times_are_seconds(workdir, tmp_path):
 
 def test_sweep_plot_report_and_images(workdir):
     d = workdir
-    sw = run(["sweep", "data.parquet", "--orders", "2..4", "-o", "sweep.csv", "--plot", "sweep.png"], d)
+    sw = run_here(["sweep", "data.parquet", "--orders", "2..4", "-o", "sweep.csv", "--plot", "sweep.png"], d)
     assert "lowest test RMSE at order" in sw.stdout
     frame = pd.read_csv(d / "sweep.csv")
     assert frame["order"].tolist() == [2, 3, 4] and np.isfinite(frame["test_rmse_db"]).all()
-    run(["fit", "data.parquet", "--model", "sh", "--degree", "3", "-o", "sh3p.json"], d)
-    run(["plot", "sh3p.json", "--truth", "flight/ground_truth.json", "--dataset", "data.parquet", "-o", "maps.png"], d)
-    run(["export", "sh3p.json", "--format", "images", "-o", "img"], d)
-    rep = run(["report", "data.parquet", "--model", "sh3p.json", "--paper-models", "m,sh-3", "--repeats", "1", "-o", "rep"], d)
+    run_here(["fit", "data.parquet", "--model", "sh", "--degree", "3", "-o", "sh3p.json"], d)
+    run_here(["plot", "sh3p.json", "--truth", "flight/ground_truth.json", "--dataset", "data.parquet", "-o", "maps.png"], d)
+    run_here(["export", "sh3p.json", "--format", "images", "-o", "img"], d)
+    rep = run_here(["report", "data.parquet", "--model", "sh3p.json", "--paper-models", "m,sh-3", "--repeats", "1", "-o", "rep"], d)
     assert "model: SH-3" in rep.stdout and "| M |" in rep.stdout and "median of the runs" in rep.stdout
     page = (d / "rep" / "report.html").read_text()
     # time series, residuals, coverage, polar cuts, maps, spread (plotly.js holds the string too)
@@ -213,15 +226,15 @@ def test_predict_links_never_flown_and_honest_spreads(workdir):
     """Poses without RSSI can be predicted; the predictive spread includes the training residual."""
     d = workdir
     data = pd.read_parquet(d / "data.parquet")
-    fit = run(["fit", "data.parquet", "--model", "sh", "--degree", "4", "-o", "sh4.json"], d)
+    fit = run_here(["fit", "data.parquet", "--model", "sh", "--degree", "4", "-o", "sh4.json"], d)
     assert "note: learning from units" in fit.stderr and "left out test" in fit.stderr
     model = json.loads((d / "sh4.json").read_text())["model"]
     learn_units = [u for u in sorted(data["unit"].unique()) if not u.startswith("test")]
     assert model["training"]["n_samples"] == int(data["unit"].isin(learn_units).sum())
     data.drop(columns=["rssi_dbm"]).to_csv(d / "poses_only.csv", index=False)
-    blind = run(["predict", "sh4.json", "poses_only.csv", "-o", "blind.csv"], d)
+    blind = run_here(["predict", "sh4.json", "poses_only.csv", "-o", "blind.csv"], d)
     assert "RMSE" not in blind.stdout
-    seen = run(["predict", "sh4.json", "data.parquet", "-o", "seen.csv"], d)
+    seen = run_here(["predict", "sh4.json", "data.parquet", "-o", "seen.csv"], d)
     assert "RMSE against the" in seen.stdout
     a, b = pd.read_csv(d / "blind.csv"), pd.read_csv(d / "seen.csv")
     assert "rssi_dbm" not in a.columns
@@ -235,10 +248,10 @@ def test_predict_links_never_flown_and_honest_spreads(workdir):
     sent = data.copy()
     sent.loc[:10, "rssi_dbm"] = -128.0
     sent.to_csv(d / "sentinel_rows.csv", index=False)
-    run(["predict", "sh4.json", "sentinel_rows.csv", "-o", "sent_pred.csv"], d)
+    run_here(["predict", "sh4.json", "sentinel_rows.csv", "-o", "sent_pred.csv"], d)
     # another carrier of the band: predicted, with a warning; another band: refused (issue 29, class 4)
     data.drop(columns=["rssi_dbm"]).assign(frequency_hz=2.6e9).to_csv(d / "other_channel.csv", index=False)
-    warned = run(["predict", "sh4.json", "other_channel.csv", "-o", "other_pred.csv"], d)
+    warned = run_here(["predict", "sh4.json", "other_channel.csv", "-o", "other_pred.csv"], d)
     assert "warning:" in warned.stderr and "2.600 GHz" in warned.stderr
     data.drop(columns=["rssi_dbm"]).assign(frequency_hz=5.8e9).to_csv(d / "other_band.csv", index=False)
     refused = run(["predict", "sh4.json", "other_band.csv", "-o", "band_pred.csv"], d, ok=False)
@@ -250,23 +263,23 @@ def test_evaluate_scores_unseen_units_by_default(workdir):
     data = pd.read_parquet(d / "data.parquet")
     units = sorted(data["unit"].unique())
     learn = [u for u in units if not u.startswith("test")]
-    run(["fit", "data.parquet", "--model", "sh", "--degree", "3", "--units", ",".join(learn), "-o", "sh3_units.json"], d)
-    ev = run(["evaluate", "sh3_units.json", "data.parquet", "--json", "ev_default.json"], d)
+    run_here(["fit", "data.parquet", "--model", "sh", "--degree", "3", "--units", ",".join(learn), "-o", "sh3_units.json"], d)
+    ev = run_here(["evaluate", "sh3_units.json", "data.parquet", "--json", "ev_default.json"], d)
     assert "which no model learned from" in ev.stderr
     n_test = int((~data["unit"].isin(learn)).sum())
     assert json.loads((d / "ev_default.json").read_text())["rows"][0]["n_samples"] == n_test
-    train = run(["evaluate", "sh3_units.json", "data.parquet", "--units", learn[0]], d)
+    train = run_here(["evaluate", "sh3_units.json", "data.parquet", "--units", learn[0]], d)
     assert "training scores" in train.stderr
     (d / "sh3_copy.json").write_bytes((d / "sh3_units.json").read_bytes())
-    both = run(["evaluate", "sh3_units.json", "sh3_copy.json", "data.parquet"], d)
+    both = run_here(["evaluate", "sh3_units.json", "sh3_copy.json", "data.parquet"], d)
     assert "| SH-3 (sh3_units.json) |" in both.stdout and "| SH-3 (sh3_copy.json) |" in both.stdout
 
 
 def test_links_of_a_swarm_through_the_cli(workdir):
     d = workdir
     if not (d / "sh3.json").exists():
-        run(["fit", "data.parquet", "--model", "sh", "--degree", "3", "-o", "sh3.json"], d)
-    proc = run(
+        run_here(["fit", "data.parquet", "--model", "sh", "--degree", "3", "-o", "sh3.json"], d)
+    proc = run_here(
         ["links", "sh3.json", "flight/pose_log.parquet", "--tx-power", "20", "--step", "0.5",
          "--connectivity", "conn.csv", "--plot", "links.png", "-o", "links.parquet"],
         d,
@@ -285,7 +298,7 @@ def test_links_of_a_swarm_through_the_cli(workdir):
     pd.concat([poses, third]).to_csv(d / "three.csv", index=False)
     bad = run(["links", "sh3.json", "three.csv", "--tx-power", "20", "-o", "l3.csv"], d, ok=False)
     assert bad.returncode == 1 and "--as C=NODE" in bad.stderr and "Traceback" not in bad.stderr
-    good = run(["links", "sh3.json", "three.csv", "--tx-power", "20", "--as", "C=A", "-o", "l3.csv"], d)
+    good = run_here(["links", "sh3.json", "three.csv", "--tx-power", "20", "--as", "C=A", "-o", "l3.csv"], d)
     assert "C (A)" in good.stdout
     assert len(pd.read_csv(d / "l3.csv").groupby(["tx", "rx"])) == 6
 
@@ -293,8 +306,8 @@ def test_links_of_a_swarm_through_the_cli(workdir):
 def test_headings_through_the_cli(workdir):
     d = workdir
     if not (d / "sh3.json").exists():
-        run(["fit", "data.parquet", "--model", "sh", "--degree", "3", "-o", "sh3.json"], d)
-    proc = run(
+        run_here(["fit", "data.parquet", "--model", "sh", "--degree", "3", "-o", "sh3.json"], d)
+    proc = run_here(
         ["headings", "sh3.json", "--pos", "A=0,0,20", "--pos", "B=40,0,20", "--pos", "C=20,30,25", "--as", "C=A",
          "--tx-power", "20", "--yaw", "A=90", "-o", "yaws.csv"],
         d,
@@ -308,8 +321,8 @@ def test_headings_through_the_cli(workdir):
 
 def test_a_plan_is_a_pose_log_for_links_and_sync_reports_reader_drops(workdir):
     d = workdir
-    run(["trajectory", "-o", "plan", "--check-model", "none"], d)
-    proc = run(
+    run_here(["trajectory", "-o", "plan", "--check-model", "none"], d)
+    proc = run_here(
         ["links", "sh3.json", "plan/test_36_A.csv", "plan/test_36_B.csv", "--node", "plan/test_36_A.csv=A",
          "--node", "plan/test_36_B.csv=B", "--tx-power", "20", "-o", "plan_links.csv"],
         d,
@@ -318,12 +331,12 @@ def test_a_plan_is_a_pose_log_for_links_and_sync_reports_reader_drops(workdir):
     poses = pd.read_parquet(d / "flight" / "pose_log.parquet")
     poses.loc[[3, 10, 11], "x"] = np.nan
     poses.to_csv(d / "pose_nan.csv", index=False)
-    sync = run(["sync", "--poses", "pose_nan.csv", "--signals", "flight/signal_log.parquet", "--nan-policy", "drop", "-o", "nan_sync.parquet"], d)
+    sync = run_here(["sync", "--poses", "pose_nan.csv", "--signals", "flight/signal_log.parquet", "--nan-policy", "drop", "-o", "nan_sync.parquet"], d)
     assert "dropped 3 pose row(s) (nan_pose)" in sync.stdout
 
 
 def test_trajectory_optimize_prints_the_expected_spread_and_writes_the_plan(tmp_path):
-    proc = run(["trajectory", "--optimize", "--check-model", "sh-5", "--target-spread", "2.5", "--budget-s", "120",
+    proc = run_here(["trajectory", "--optimize", "--check-model", "sh-5", "--target-spread", "2.5", "--budget-s", "120",
                 "--noise", "4", "--prior-std", "4", "-o", "plan"], tmp_path)
     assert "expected per-node pattern spread over time" in proc.stdout and "(prior)" in proc.stdout
     files = sorted(os.listdir(tmp_path / "plan"))
@@ -333,9 +346,9 @@ def test_trajectory_optimize_prints_the_expected_spread_and_writes_the_plan(tmp_
 
 
 def test_simulate_flies_a_written_plan(tmp_path):
-    run(["trajectory", "--optimize", "--check-model", "sh-4", "--target-spread", "3", "--budget-s", "40", "--noise", "4",
+    run_here(["trajectory", "--optimize", "--check-model", "sh-4", "--target-spread", "3", "--budget-s", "40", "--noise", "4",
          "--prior-std", "4", "-o", "plan"], tmp_path)
-    run(["simulate", "--preset", "paper", "--plan", "plan", "--seed", "2", "-o", "flight"], tmp_path)
+    run_here(["simulate", "--preset", "paper", "--plan", "plan", "--seed", "2", "-o", "flight"], tmp_path)
     signals = pd.read_parquet(tmp_path / "flight" / "signal_log.parquet")
     labels = {f.rsplit("_", 1)[0] for f in os.listdir(tmp_path / "plan")}
     assert set(signals["unit"]) == labels

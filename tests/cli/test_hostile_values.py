@@ -222,14 +222,18 @@ def test_implausible_places_refuse_the_log(workdir, case):
 
 def test_orient_on_a_relative_model_says_db_not_dbm(workdir):
     """A relative-RSSI model still ranks headings by joint gain, printed in dB, never dBm."""
-    proc = run(["orient", "rel.json", "--tx", "A", "--rx", "B", "--tx-pos", "0,0,20", "--rx-pos", "30,0,20", "--tx-power", "20"],
-               workdir)
+    from cli_helpers import run_here  # in this process: the text of a result is the point, not its process
+
+    proc = run_here(["orient", "rel.json", "--tx", "A", "--rx", "B", "--tx-pos", "0,0,20", "--rx-pos", "30,0,20", "--tx-power", "20"],
+                    workdir, ok=False)
     assert proc.returncode == 0 and "dBm" not in proc.stdout and "predicted joint gain" in proc.stdout, proc.stdout + proc.stderr
 
 
 def test_a_second_vehicle_is_counted_and_named(workdir):
     """Two vehicles (system ids 1 and 2) in one .tlog with one radio: the second is named, not dropped silently."""
-    proc = run(["inspect", "two_vehicles.tlog"], workdir)
+    from cli_helpers import run_here
+
+    proc = run_here(["inspect", "two_vehicles.tlog"], workdir, ok=False)
     out = proc.stdout + proc.stderr
     assert proc.returncode == 0, out
     assert "2 vehicles in one log: read system id" in out and "not read: system id" in out, out
@@ -238,7 +242,9 @@ def test_a_second_vehicle_is_counted_and_named(workdir):
 
 def test_the_real_flight_still_reads(workdir):
     """The unmoved .tlog reads as before: the checks refuse only what is implausible."""
-    proc = run(["inspect", "flight.tlog"], workdir)
+    from cli_helpers import run_here
+
+    proc = run_here(["inspect", "flight.tlog"], workdir, ok=False)
     assert proc.returncode == 0, proc.stderr
 
 
