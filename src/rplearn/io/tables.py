@@ -246,19 +246,19 @@ def _position_jumps(
 
     if len(t) < 2:
         return np.ones(len(t), bool), []
-    order = np.lexsort((t, nodes))
-    codes = np.unique(nodes[order], return_inverse=True)[1]
+    codes = pd.factorize(pd.Series(nodes, dtype=object))[0]  # a node id of any type (a hostile one)
+    order = np.lexsort((t, codes))
     nothing = np.full(len(t), np.nan)
-    invalid_sorted, steps = invalid_fixes(t[order], xyz[order], nothing, nothing, codes, np.ones(len(t), bool))
+    invalid_sorted, steps = invalid_fixes(t[order], xyz[order], nothing, nothing, codes[order], np.ones(len(t), bool))
     if not invalid_sorted.any():
         return np.ones(len(t), bool), []
     invalid = np.zeros(len(t), bool)
     invalid[order] = invalid_sorted
     notes = []
     for last_sorted, step in sorted(steps.items()):
-        node = nodes[order[last_sorted]]
-        piece = invalid & (nodes == node)
-        n_node, n_bad = int((nodes == node).sum()), int(piece.sum())
+        node, code = nodes[order[last_sorted]], codes[order[last_sorted]]
+        piece = invalid & (codes == code)
+        n_node, n_bad = int((codes == code).sum()), int(piece.sum())
         first = int(np.flatnonzero(piece)[np.argmin(rows[piece])])
         where = (f"{source}: fields x, y, z of node {node} jump: {step} after row {int(rows[order[last_sorted]])} "
                  f"(t = {float(t[order[last_sorted]])!r} s); {n_bad} of its {n_node} row(s) lie on the wrong side "
