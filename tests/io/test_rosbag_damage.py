@@ -9,7 +9,7 @@ from pathlib import Path
 from flightfiles import FREQUENCY_HZ, POSE_TOPICS, RSSI_MSG, RSSI_MSGDEF, RSSI_TOPICS, TX_POWER_DBM, write_bag
 
 from rplearn.io.damage import file_damage
-from rplearn.io.rosbag import RosbagOptions, read_rosbag
+from rplearn.io.rosbag import RosbagOptions, read_rosbag, ros1_index_pos
 
 REAL_BAG = Path(__file__).resolve().parents[1] / "fixtures" / "ros1-bag" / "test2.bag"
 ODOM = {"/jackal_velocity_controller/odom": "j"}
@@ -67,3 +67,15 @@ def test_a_flipped_record_in_an_uncompressed_chunk_loses_that_message(tmp_path, 
     [d] = mb["damaged_chunks"]
     assert d["what"] == "a damaged record" and d["lost_messages"] == 1 and d["compression"] == "none"
     assert sum(mb["topics"].values()) == sum(mw["topics"].values()) - 1
+
+
+def test_a_flipped_byte_in_the_index_reads_the_bag_record_by_record_and_says_where(tmp_path):
+    """Was refused whole ("cannot open bag (ValueError: 249 is not a valid RecordType)"), naming no byte."""
+    data = REAL_BAG.read_bytes()
+    index_at = data.index(b"op=\x06", ros1_index_pos(REAL_BAG))  # a chunk info record of the index
+    bad = _flipped(tmp_path, data, index_at + 3)  # its op: a record of no bag kind
+    logs, meta = read_rosbag(bad, ODOM)
+    assert len(logs.pose) == ODOM_MESSAGES and meta["damaged_chunks"] == []
+    assert meta["cut_off_at_byte"] is not None and meta["cut_off_at_byte"] < index_at
+    assert "a record of no bag kind" in meta["cut_off_record"]
+    assert any(f"at byte {meta['cut_off_at_byte']:,}" in line for line in file_damage(str(bad), meta))

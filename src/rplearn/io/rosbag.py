@@ -214,9 +214,9 @@ def open_rosbag(
         raise
     except Exception as exc:
         msg = str(exc).splitlines()[0] if str(exc) else ""
-        if not (index_at is not None and "index" in msg.lower()):
+        if index_at is None:
             raise LogFormatError(f"{path}: cannot open bag ({type(exc).__name__}: {msg})") from None
-        try:  # a damaged index: read the bag record by record as `rosbag reindex` does
+        try:  # a damaged index, or a chunk header it points to: read record by record as `rosbag reindex` does
             reader = _open_reader(AnyReader, paths, default, True)
         except Exception as exc2:
             raise LogFormatError(
@@ -224,10 +224,13 @@ def open_rosbag(
                 f"records from the start ({type(exc2).__name__}: {str(exc2).splitlines()[0] if str(exc2) else ''}); "
                 "`rosbag reindex` rebuilds it") from None
     found = bag_scan(reader)
-    if found is not None and found.messages_read == 0 and found.cut_off_at_byte is not None:
+    if found is not None and found.messages_read == 0 and (found.cut_off_at_byte is not None or found.damaged_chunks):
         reader.close()
+        first = found.damaged_chunks[0] if found.damaged_chunks else None
+        at, what = ((found.cut_off_at_byte, found.cut_off_record) if first is None
+                    else (first["at_byte"], f"chunk {first['chunk']} ({first['compression']}): {first['what']}"))
         raise LogFormatError(
-            f"{path}: the bag is cut off or damaged at byte {found.cut_off_at_byte:,} ({found.cut_off_record}) before "
+            f"{path}: the bag is cut off or damaged at byte {at:,} ({what}) before "
             f"any whole message (of {size:,} bytes; its index "
             + ("was never written" if found.index_pos == 0 else f"was to start at byte {found.index_pos:,}")
             + "): no message to read") from None
