@@ -71,3 +71,12 @@ def test_a_coordinate_beyond_any_place_is_counted_as_implausible_not_nan(tmp_pat
     xyz[5, 0], xyz[9, 1] = 3e9, np.nan
     pose, meta = read_pose_table(_flight_csv(tmp_path / "pose.csv", xyz), nan_policy="drop")
     assert meta["dropped"] == {"nan_pose": 1, "implausible_pose": 1, "position_jump": 0} and len(pose) == 39
+
+
+def test_inspect_says_the_jump_sync_would_drop(tmp_path):
+    from rplearn.io.inspect import inspect_logs
+
+    xyz = _track()
+    xyz[17, 2] = -1000.0
+    text = inspect_logs([_flight_csv(tmp_path / "pose.csv", xyz)]).to_text()
+    assert "dropped on reading: 1 pose row(s) (position_jump)" in text and "fields x, y, z of node D jump" in text
