@@ -56,7 +56,7 @@ def test_drops_are_counted_by_reason(two_nodes):
     sig = pd.concat([
         signal_log([0.05], "A", "B"),                       # kept
         signal_log([0.06, 0.07, 0.08, 0.09, 0.11, 0.12], "A", "B",
-                   [0.0, -127.0, -128.0, 127.0, np.nan, np.inf]),  # sentinels
+                   [0.0, -127.0, -128.0, 127.0, np.nan, np.inf]),  # sentinels, then two missing
         signal_log([0.13, 0.14], "A", "B", [274.0, -300.0]),  # no radio reports these
         signal_log([0.5], "A", "B"),                        # inside the 0.2 -> 1.0 gap
         signal_log([-0.1, 1.5], "A", "B"),                  # outside A's span
@@ -71,14 +71,14 @@ def test_drops_are_counted_by_reason(two_nodes):
     res = synchronise(two_nodes, sig)
     s = res.summary
     assert s.n_in == len(sig) and s.n_out == 2 == len(res.dataset)
-    assert s.dropped == {"late": 0, "duplicate": 0, "invalid_value": 1, "outside_window": 0, "sentinel_rssi": 6,
-                         "implausible_rssi": 2, "tx_equals_rx": 1, "other_link": 0, "duplicate_reading": 0,
+    assert s.dropped == {"late": 0, "duplicate": 0, "invalid_value": 1, "outside_window": 0, "nan_rssi": 2,
+                         "unparsable_rssi": 0, "sentinel_rssi": 4, "implausible_rssi": 2, "tx_equals_rx": 1, "other_link": 0, "duplicate_reading": 0,
                          "unknown_node": 1, "out_of_span": 2, "pose_gap": 1, "near_field": 1, "disarmed": 0,
                          "on_ground": 0}
     assert s.n_in == s.n_out + s.n_dropped
     assert s.unknown_nodes == ["C"]
     text = s.to_text()
-    assert "sentinel_rssi): 6" in text and "nodes without a pose log: C" in text
+    assert "sentinel_rssi): 4" in text and "(nan_rssi): 2" in text and "nodes without a pose log: C" in text
     # one direction only, as the paper does for non-reciprocal links
     one = synchronise(two_nodes, sig, SyncOptions(link=("B", "A")))
     assert one.summary.n_out == 1 and one.summary.dropped["other_link"] == 6  # A->B (4), A->C, A->N
@@ -346,3 +346,20 @@ def test_a_drone_resting_on_its_pad_before_a_sparse_log_is_not_a_moved_station()
     turned = pose_log("G", [0.0, 1.0, 50.0, 51.0], [[0, 0, 1]] * 4, [0.0, 0.0, 1.0, 1.0])
     with pytest.raises(InputError, match="turned: the same position, another attitude"):
         synchronise(pd.concat([drone, turned], ignore_index=True), signal_log([20.0], "A", "G"))
+
+
+def test_missing_and_text_rssi_are_counted_under_what_they_are(two_nodes):
+    """A NaN or empty RSSI is ``nan_rssi``, text that is no number ``unparsable_rssi``, never ``sentinel_rssi``."""
+    sig = signal_log([0.05, 0.06, 0.07, 0.08, 0.09, 0.11], "A", "B")
+    sig["rssi_dbm"] = pd.Series([-50.0, "n/a?", "", None, "NaN", "-127"], dtype=object)
+    s = synchronise(two_nodes, sig).summary
+    assert (s.dropped["nan_rssi"], s.dropped["unparsable_rssi"], s.dropped["sentinel_rssi"]) == (3, 1, 1)
+    assert s.n_out == 1 and "(unparsable_rssi): 1" in s.to_text()
+
+
+def test_an_empty_unit_cell_is_refused_at_sync_naming_file_column_and_row(two_nodes):
+    """A sample of no trajectory unit passed sync and was refused by fit later: refused here."""
+    sig = signal_log([0.05, 0.06, 0.07], "A", "B").assign(unit=["u1", " ", "u1"])
+    with pytest.raises(InputError, match=r"^sig.csv: column unit is empty at row 1 \(1 row\(s\)\)"):
+        synchronise(two_nodes, sig, source="sig.csv")
+    assert len(synchronise(two_nodes, sig.assign(unit="u1")).dataset) == 3

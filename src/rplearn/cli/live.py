@@ -40,7 +40,7 @@ def _view(status: Any) -> Any:
 
 
 @app.command()
-@user_errors(flags={"ranking_every_s": "--advice-s"})
+@user_errors(flags={"ranking_every_s": "--advice-s", "receivers": "--receiver NODE"})
 def live(
     source: str = typer.Argument(..., help="A MAVLink connection as pymavlink names it (udpin:0.0.0.0:14550, tcp:HOST:PORT, a serial device "
                                            "such as /dev/ttyUSB0: what MAVProxy, QGroundControl and mavlink-router forward), or "
@@ -58,9 +58,13 @@ def live(
     duration_s: float | None = typer.Option(None, "--duration", help="End after this many seconds."),
     idle_s: float = typer.Option(10.0, "--idle", help="The stream has ended when nothing arrived for this long [s] after its first (live waits for it)."),
     nodes: list[str] | None = typer.Option(None, "--nodes", help="Node ids (default: those of the first matched samples)."),
-    tx_power_dbm: float | None = typer.Option(None, "--tx-power", help="MAVLink: the radios' transmit power [dBm]."),
-    frequency_hz: float | None = typer.Option(None, "--frequency", help="MAVLink: the carrier frequency [Hz]."),
+    tx_power_dbm: float | None = typer.Option(None, "--tx-power", help="MAVLink, or a signal CSV without tx_power_dbm: the radios' transmit power [dBm]."),
+    frequency_hz: float | None = typer.Option(None, "--frequency", help="MAVLink, or a signal CSV without a frequency_hz column: the carrier frequency [Hz]."),
     station_geodetic: str | None = typer.Option(None, "--station", help="MAVLink: LAT,LON,ALT of the ground station [deg, deg, m AMSL]."),
+    nan_policy: str = typer.Option("error", "--nan-policy", help="CSV: pose rows with NaN or non-numeric values, coordinates beyond "
+                                                              "any place or on the wrong side of a position jump: error "
+                                                              "(default) or drop (counted), as sync."),
+    receiver: str | None = typer.Option(None, "--receiver", help="CSV: the receiving node of every row of a signal CSV without an rx column."),
     max_gap_s: float = typer.Option(0.2, "--max-gap", help="Drop samples inside pose gaps longer than this [s] (as sync)."),
     html: str | None = typer.Option(None, "--html", help="Also write a self-refreshing page with the numbers and the coverage and "
                                                          "spread maps."),
@@ -80,6 +84,7 @@ def live(
     """
     from rplearn.cli.learning import degree_option
     from rplearn.data.sync import SyncOptions
+    from rplearn.errors import InputError
     from rplearn.models.options import FitOptions
     from rplearn.models.spec import ModelSpec
     from rplearn.workflows.live import LiveOptions, run_live
@@ -87,9 +92,13 @@ def live(
 
     auto, order = degree_option(degree, model)
     spec = ModelSpec.parse(model, order=order)
-    reader = reader_options(tx_power_dbm=tx_power_dbm, frequency_hz=frequency_hz,
-                            station_geodetic=geodetic_flag(station_geodetic, "--station"))
     csv_source = "," in source and all(p.lower().endswith(".csv") for p in source.split(","))
+    if receiver is not None and not csv_source:
+        raise InputError(f"--receiver: names the receiver of a signal CSV's rows; {source} is a MAVLink stream, "
+                         "whose radio reports name both ends")
+    receivers = [f"{source.split(',')[-1]}={receiver}"] if receiver is not None else None
+    reader = reader_options(receiver=receivers, tx_power_dbm=tx_power_dbm, frequency_hz=frequency_hz,
+                            nan_policy=nan_policy, station_geodetic=geodetic_flag(station_geodetic, "--station"))
     still = tuple(split_list(fixed) or ()) or (() if csv_source else (reader.station,))
     advisor = None if no_advice else live_advisor(still, 0.0, until_spread_db)  # paced by ranking_every_s
     options = LiveOptions(spec=spec, fit=FitOptions(auto=auto), reader=reader, sync=SyncOptions(max_gap_s=max_gap_s),

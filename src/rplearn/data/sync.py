@@ -22,9 +22,16 @@ after optional clock offsets. A sample is dropped, and counted by reason, when:
 ``outside_window``
     its time lies outside ``[from_s, to_s]``: seconds from the log start (the origin ``inspect``
     prints, :func:`~rplearn.data.phases.log_start_s`) or log times (``window_clock="log"``);
+``nan_rssi``
+    its RSSI is missing: an empty cell, NaN or infinite (the CSV/Parquet readers,
+    :func:`rplearn.io.tables.canonical_signal`, read a cell of text that is no number as
+    missing, so a file's text RSSI is counted here);
+``unparsable_rssi``
+    its RSSI is text that is no number (``"n/a"``, ``"-7O"``) in a signal table given to
+    :func:`synchronise` as it is;
 ``sentinel_rssi``
-    its RSSI is NaN, infinite or one of the sentinel values radios report for "no
-    measurement" (default ``0, -127, -128, 127``);
+    its RSSI is one of the sentinel values radios report for "no measurement"
+    (default ``0, -127, -128, 127``);
 ``implausible_rssi``
     its RSSI lies outside the range any radio reports, :data:`PLAUSIBLE_RSSI_DBM`
     (a corrupt field or a unit mistake, e.g. mW or a percentage), or above the transmit
@@ -87,7 +94,7 @@ from rplearn.data.phases import AIRBORNE_MARGIN_M, WINDOW_CLOCKS, FlightPhases, 
 from rplearn.data.poses import STATUS_OUT_OF_SPAN, STATUS_POSE_GAP, PoseTrack, tracks_of_pose_log
 from rplearn.data.readings import REPEAT_FRACTION, duplicate_rows, repeated_reading_mask
 from rplearn.data.sync_match import block_row, factorize_ends, float_block, interpolate_end, matched_frame, node_codes
-from rplearn.data.tables import QUATERNION_NORM_TOLERANCE, SENTINEL_RSSI_DBM, SIGNAL_COLUMNS, check_tx_power_dbm, empty_ids, normalise_times
+from rplearn.data.tables import QUATERNION_NORM_TOLERANCE, SENTINEL_RSSI_DBM, SIGNAL_COLUMNS, check_tx_power_dbm, check_unit_labels, empty_ids, normalise_times
 from rplearn.errors import InputError
 
 #: RSSI values radios and drivers report when there is no measurement [dBm].
@@ -99,7 +106,8 @@ PLAUSIBLE_RSSI_DBM: tuple[float, float] = (-150.0, 30.0)
 RSSI_SCALES: tuple[str, ...] = ("dbm", "relative")
 #: Drop reasons, in the order they are tested.
 DROP_REASONS: tuple[str, ...] = (
-    "late", "duplicate", "invalid_value", "outside_window", "sentinel_rssi", "implausible_rssi", "tx_equals_rx",
+    "late", "duplicate", "invalid_value", "outside_window", "nan_rssi", "unparsable_rssi", "sentinel_rssi",
+    "implausible_rssi", "tx_equals_rx",
     "other_link", "duplicate_reading", "unknown_node", "out_of_span", "pose_gap", "near_field", "disarmed", "on_ground",
 )
 
@@ -227,8 +235,8 @@ class SyncOptions:
     signal_clock_offset_s : float or mapping of receiver id to float
         Offset added to signal times [s] (one for the log, or one per receiver).
     sentinel_rssi_dbm : sequence of float
-        RSSI values meaning "no measurement" [dBm], dropped as ``sentinel_rssi`` along with
-        NaN and infinite values.
+        RSSI values meaning "no measurement" [dBm], dropped as ``sentinel_rssi`` (a NaN or
+        infinite RSSI is dropped as ``nan_rssi``, text that is no number as ``unparsable_rssi``).
     on_unknown_node : {"drop", "error"}
         What to do with signals naming a node without a pose log.
     min_samples : int
@@ -320,6 +328,21 @@ def _numeric(df: pd.DataFrame, column: str) -> np.ndarray:
     return pd.to_numeric(col, errors="coerce").to_numpy(np.float64, na_value=np.nan)
 
 
+def _unparsable(df: pd.DataFrame, column: str, parsed: np.ndarray) -> np.ndarray:
+    """Rows whose cell of ``column`` holds text that is no number (``parsed`` NaN, the cell not empty)."""
+    col = df[column]
+    if pd.api.types.is_numeric_dtype(col) or pd.api.types.is_datetime64_any_dtype(col):
+        return np.zeros(len(df), bool)
+    candidates = np.flatnonzero(np.isnan(parsed))
+    out = np.zeros(len(df), bool)
+    if candidates.size:
+        cells = col.iloc[candidates]
+        words = cells.astype(str).str.strip().str.lower()
+        text = cells.notna().to_numpy() & ~words.isin(("", "nan", "+nan", "-nan")).to_numpy()
+        out[candidates[text]] = True
+    return out
+
+
 def _signal_times(
     signal: pd.DataFrame, uniques: np.ndarray, rx_code: np.ndarray, offset_s: float | Mapping[str, float],
 ) -> np.ndarray:
@@ -373,6 +396,7 @@ def _match_chunk(
         raise InputError(
             f"{source}: missing column(s) {', '.join(missing)}; expected {', '.join(SIGNAL_COLUMNS)}"
         )
+    check_unit_labels(signal, source, first_row)  # a sample of no unit: refused here, not by fit later
     summary = SyncSummary(n_in=int(len(signal)))
     cells = factorize_ends(signal)  # each end's cells factorised once, for the node and the link codes
     tx_code, rx_code, uniques = node_codes(signal["tx"], signal["rx"], cells)  # one text per node, not per row
@@ -399,7 +423,10 @@ def _match_chunk(
     # a unit mistake or a corrupt field: refused, naming the row (a NaN is a counted drop above)
     check_frequency_hz(np.where(keep, freq, FREQUENCY_BAND_HZ[0]), source, None, first_row)
     check_tx_power_dbm(np.where(keep, ptx, 0.0), source, None, first_row)
-    drop(~np.isfinite(rssi) | np.isin(rssi, np.asarray(options.sentinel_rssi_dbm, np.float64)), "sentinel_rssi")
+    unparsable = _unparsable(signal, "rssi_dbm", rssi)
+    drop(~np.isfinite(rssi) & ~unparsable, "nan_rssi")
+    drop(unparsable, "unparsable_rssi")
+    drop(np.isin(rssi, np.asarray(options.sentinel_rssi_dbm, np.float64)), "sentinel_rssi")
     if options.rssi_scale == "dbm":
         drop((rssi < PLAUSIBLE_RSSI_DBM[0]) | (rssi > PLAUSIBLE_RSSI_DBM[1]) | (rssi > ptx), "implausible_rssi")
     drop(tx_code == rx_code, "tx_equals_rx")

@@ -151,6 +151,26 @@ def empty_ids(ids: np.ndarray) -> np.ndarray:
     return (np.char.str_len(np.char.strip(np.asarray(uniques, dtype=object).astype(str))) == 0)[codes]
 
 
+def check_unit_labels(df: pd.DataFrame, source: str, first_row: int = 0) -> None:
+    """Refuse a ``unit`` column with an empty cell (missing, NaN or white space), naming the row.
+
+    ``first_row`` is the file row of ``df``'s first row (a chunk of a file). A table without a
+    ``unit`` column passes.
+
+    Raises
+    ------
+    InputError
+        Naming ``source``, the column and the first empty row.
+    """
+    if "unit" not in df.columns:
+        return
+    empty = empty_ids(node_ids(df["unit"]))
+    if np.any(empty):
+        row = int(np.flatnonzero(empty)[0]) + first_row
+        raise InputError(f"{source}: column unit is empty at row {row} ({int(empty.sum())} row(s)); "
+                         "label every row's trajectory unit, or drop the column")
+
+
 @check_types
 def validate_pose_log(df: pd.DataFrame, source: str = "pose log") -> pd.DataFrame:
     """Check a canonical pose log and return it typed, sorted by (node, t), quaternions normalised.
@@ -436,12 +456,7 @@ def validate_matched(df: pd.DataFrame, source: str = "dataset", require_rssi: bo
     _check_link_columns(df[~outage] if outage.any() else df, source, with_rssi=require_rssi)
     if require_rssi:
         _refuse_repeated_rows(df, source)
-    if "unit" in df.columns:
-        empty = empty_ids(node_ids(df["unit"]))
-        if np.any(empty):
-            row = int(np.flatnonzero(empty)[0])
-            raise InputError(f"{source}: column unit is empty at row {row} ({int(empty.sum())} row(s)); "
-                             "label every row's trajectory unit, or drop the column")
+    check_unit_labels(df, source)
     out = df.copy()
     out["tx"] = out["tx"].astype(str)
     out["rx"] = out["rx"].astype(str)

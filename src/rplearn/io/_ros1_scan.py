@@ -45,6 +45,11 @@ class Ros1Scan:
     index_pos : int
         Where the bag header says the index starts (0: never written, the recorder did not
         close the bag).
+    damaged_chunks : list of dict
+        Whole chunk records that cannot be read (a flipped byte: their data do not decompress,
+        or a record in them does not parse), skipped to read the chunks after them: ``chunk``
+        (number from 1), ``at_byte``, ``compression``, ``what``, ``lost_messages`` (None: not
+        known without the index).
     """
 
     messages_read: int = 0
@@ -55,6 +60,7 @@ class Ros1Scan:
     chunk_infos: list[Any] = field(default_factory=list)
     connections: dict[int, Any] = field(default_factory=dict)
     indexes: dict[int, list[Any]] = field(default_factory=dict)
+    damaged_chunks: list[dict[str, Any]] = field(default_factory=list)
 
 
 def _fields(buf: bytes, start: int, end: int) -> dict[str, bytes] | None:
@@ -242,7 +248,12 @@ def _scan_buffer(buf: Any, owner: Any) -> Ros1Scan:
             try:
                 raw = unpack(data)
             except Exception:  # the decompressor's own error: a damaged chunk
-                return _stop(scan, at, f"chunk {number} ({compression}): its data do not decompress: damaged")
+                if not whole:
+                    return _stop(scan, at, f"chunk {number} ({compression}): its data do not decompress: damaged")
+                scan.damaged_chunks.append({"chunk": number, "at_byte": int(at), "compression": compression,
+                                            "what": "its data do not decompress", "lost_messages": None})
+                at = dend  # the chunk record is whole: the records after it are read
+                continue
             scan.chunks[at] = Chunk(len(data), dstart, unpack)
             n, whole_to = _chunk_records(scan, raw, at, owner)
             scan.messages_read += n
@@ -250,7 +261,9 @@ def _scan_buffer(buf: Any, owner: Any) -> Ros1Scan:
                 lost_at = dstart + whole_to if compression == "none" else at
                 return _stop(scan, lost_at, f"chunk {number} ({compression}), after its {n:,} whole message(s)")
             if whole_to < len(raw):
-                return _stop(scan, at, f"chunk {number} ({compression}): a damaged record after its {n:,} message(s)")
+                scan.damaged_chunks.append({"chunk": number, "at_byte": int(at), "compression": compression,
+                                            "what": f"a damaged record after its {n:,} message(s)",
+                                            "lost_messages": None})
         elif dend > len(buf):
             what = "the index data" if op == _OP_IDXDATA else "the bag's index"
             return _stop(scan, at, f"{what} after chunk {number}")

@@ -31,6 +31,11 @@ def file_damage(path: str, info: dict[str, Any]) -> list[str]:
     if info.get("corrupt"):
         at = f" (the first at byte {info['corrupt_at_byte']:,}: a message of no ULog type)" if info.get("corrupt_at_byte") else ""
         lines.append(f"{path}: corrupt bytes were skipped by the ULog reader (pyulog){at}; what follows them was read")
+    for d in info.get("damaged_chunks") or []:
+        lost = ("its messages after the damage are lost" if d.get("lost_messages") is None
+                else f"its {d['lost_messages']:,} message(s) of the topics read are lost (damaged_chunk_messages)")
+        lines.append(f"{path}: chunk {d['chunk']} of the bag (at byte {d['at_byte']:,}, {d['compression']}) is damaged "
+                     f"({d['what']}: a flipped or overwritten byte): {lost}; the other chunks were read")
     if info.get("trailing_bytes"):
         lines.append(f"{path}: {info['trailing_bytes']:,} byte(s) after the bag's index were not read ("
                      + ("another bag begins there: a bag appended to this one, or this bag twice; read it on its own"

@@ -310,12 +310,16 @@ def _read_pose_table(path: str, options: ReaderOptions) -> tuple[pd.DataFrame, d
 
     node_of_file = (options.nodes or {}).get(path)
     raw = _tables._read(path, path)
-    pose, _ = _tables.canonical_pose(
+    pose, meta = _tables.canonical_pose(
         raw, source=path, columns=options.columns, node=node_of_file, nan_policy="drop",
         allow_unsorted=True, origin_geodetic=options.origin_geodetic,
     )
-    info = {"format": _tables.table_format(path), "kind": "pose",
-            "non_unit_quaternion_rows": non_unit_quaternion_rows(pose)}
+    info: dict[str, Any] = {"format": _tables.table_format(path), "kind": "pose",
+                            "non_unit_quaternion_rows": non_unit_quaternion_rows(pose)}
+    dropped = {k: int(n) for k, n in meta["dropped"].items() if n and k != "nan_pose"}  # NaN rows: nan_rows
+    if dropped:  # a coordinate beyond any place, a position jump: said, as sync would drop them
+        info["dropped"] = dropped
+        info["notes"] = [str(n).removeprefix(f"{path}: ") for n in meta.get("notes", ())]
     df = _tables.rename_columns(raw, options.columns)
     node = (df["node"].astype(str) if "node" in df.columns
             else pd.Series([node_of_file if node_of_file is not None else "?"] * len(df)))
@@ -388,7 +392,8 @@ def _read_one(path: str, options: ReaderOptions) -> tuple[pd.DataFrame | None, p
         info["invalid_flag_rows"] = int(f["invalid_flag_rows"])
     for key in ("cut_off_at_byte", "cut_off_record", "records_read", "corrupt", "corrupt_at_byte", "corrupt_bytes",
                 "corrupt_stretches",
-                "repeated_messages", "unindexed", "trailing_bytes", "trailing_bag"):
+                "repeated_messages", "unindexed", "trailing_bytes", "trailing_bag", "damaged_chunks",
+                "damaged_chunk_messages"):
         if f.get(key):
             info[key] = f[key]
     if f.get("notes"):

@@ -27,6 +27,7 @@ import socket
 import struct
 import threading
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -102,11 +103,18 @@ class CsvTail:
     ----------
     pose_path, signal_path : str
         The files (they may not exist yet).
+    reader : ReaderOptions, optional
+        As ``sync`` reads the same tables: ``nan_policy`` (pose rows with a NaN, a coordinate
+        beyond any place or on the wrong side of a position jump refused or dropped and counted
+        in :attr:`Poll.dropped`), ``receivers[signal_path]``, a constant ``tx_power_dbm`` and
+        ``frequency_hz`` for a signal table without those columns.
     """
 
-    def __init__(self, pose_path: str, signal_path: str) -> None:
+    def __init__(self, pose_path: str, signal_path: str, reader: ReaderOptions | None = None) -> None:
         self.pose, self.signal = _Tail(pose_path), _Tail(signal_path)
         self.name = f"{pose_path} + {signal_path}"
+        self.reader = reader if reader is not None else ReaderOptions()
+        self.dropped: dict[str, int] = {}
 
     def poll(self) -> Poll:
         """Rows appended since the last poll."""
@@ -114,11 +122,15 @@ class CsvTail:
         poses = signals = pd.DataFrame()
         pt = _table(self.pose, p)
         if pt is not None:
-            poses, _ = canonical_pose(pt, source=self.pose.path)
+            poses, meta = canonical_pose(pt, source=self.pose.path, nan_policy=self.reader.nan_policy)
+            for reason, n in meta["dropped"].items():
+                self.dropped[reason] = self.dropped.get(reason, 0) + int(n)
         st = _table(self.signal, s)
         if st is not None:
-            signals = canonical_signal(st, source=self.signal.path)
-        return Poll(poses, signals, len(poses) + len(signals))
+            ptx = self.reader.tx_power_dbm if not isinstance(self.reader.tx_power_dbm, Mapping) else None
+            signals = canonical_signal(st, source=self.signal.path, rx=(self.reader.receivers or {}).get(self.signal.path),
+                                       tx_power_dbm=ptx, frequency_hz=self.reader.frequency_hz)
+        return Poll(poses, signals, len(poses) + len(signals), {k: n for k, n in self.dropped.items() if n})
 
     def close(self) -> None:
         """Nothing to release."""

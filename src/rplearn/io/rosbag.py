@@ -31,6 +31,7 @@ writing each message twice) is read once and counted (``metadata["repeated_messa
 from __future__ import annotations
 
 import hashlib
+import io
 import math
 import os
 from collections.abc import Iterator, Mapping
@@ -213,9 +214,9 @@ def open_rosbag(
         raise
     except Exception as exc:
         msg = str(exc).splitlines()[0] if str(exc) else ""
-        if not (index_at is not None and "index" in msg.lower()):
+        if index_at is None:
             raise LogFormatError(f"{path}: cannot open bag ({type(exc).__name__}: {msg})") from None
-        try:  # a damaged index: read the bag record by record as `rosbag reindex` does
+        try:  # a damaged index, or a chunk header it points to: read record by record as `rosbag reindex` does
             reader = _open_reader(AnyReader, paths, default, True)
         except Exception as exc2:
             raise LogFormatError(
@@ -223,10 +224,13 @@ def open_rosbag(
                 f"records from the start ({type(exc2).__name__}: {str(exc2).splitlines()[0] if str(exc2) else ''}); "
                 "`rosbag reindex` rebuilds it") from None
     found = bag_scan(reader)
-    if found is not None and found.messages_read == 0 and found.cut_off_at_byte is not None:
+    if found is not None and found.messages_read == 0 and (found.cut_off_at_byte is not None or found.damaged_chunks):
         reader.close()
+        first = found.damaged_chunks[0] if found.damaged_chunks else None
+        at, what = ((found.cut_off_at_byte, found.cut_off_record) if first is None
+                    else (first["at_byte"], f"chunk {first['chunk']} ({first['compression']}): {first['what']}"))
         raise LogFormatError(
-            f"{path}: the bag is cut off or damaged at byte {found.cut_off_at_byte:,} ({found.cut_off_record}) before "
+            f"{path}: the bag is cut off or damaged at byte {at:,} ({what}) before "
             f"any whole message (of {size:,} bytes; its index "
             + ("was never written" if found.index_pos == 0 else f"was to start at byte {found.index_pos:,}")
             + "): no message to read") from None
@@ -240,24 +244,93 @@ def open_rosbag(
         reader.close()
 
 
-def _messages(reader: Any, connections: list, path: str,
-              repeated: dict[str, int] | None = None) -> Iterator[tuple[Any, int, Any]]:
+def _damaged_entries(reader: Any, connections: list) -> list[dict[str, Any]]:
+    """The chunks of an indexed ROS 1 bag that hold messages of ``connections`` no reader can
+    read, each a dict: ``chunk`` (its number, from 1, in file order), ``at_byte`` (where its
+    record starts), ``compression``, ``what`` (in words), ``lost_messages`` (the messages of
+    ``connections`` it held that cannot be read); those index entries are removed from the
+    reader, so that the other chunks are read. Empty for a ROS 2 bag or a bag read record by
+    record (:mod:`rplearn.io._ros1_scan`, which says where it stopped)."""
+    from rplearn.io._ros1_scan import _OP_CONNECTION, _OP_MSGDATA, _record
+
+    readers = getattr(reader, "readers", None) or []
+    one = readers[0] if len(readers) == 1 else None
+    if one is None or not hasattr(one, "chunks") or not hasattr(one, "indexes") or one.bio is None:
+        return []
+    ids = {c.id for c in connections}
+    numbers = {pos: k + 1 for k, pos in enumerate(sorted(one.chunks))}
+    damaged: list[dict[str, Any]] = []
+    for pos in sorted(one.chunks):
+        entries = [(cid, e) for cid in ids for e in one.indexes.get(cid, []) if e.chunk_pos == pos]
+        if not entries:
+            continue
+        chunk = one.chunks[pos]
+        one.bio.seek(chunk.datapos)
+        data = one.bio.read(chunk.datasize)
+        compression = getattr(chunk.decompressor, "__module__", "") or ""
+        compression = "bz2" if "bz2" in compression else "lz4" if "lz4" in compression else "none"
+        try:
+            raw = chunk.decompressor(data) if len(data) == chunk.datasize else None
+        except Exception:  # the decompressor's own error: a damaged chunk
+            raw = None
+        bad = []
+        for cid, e in entries:
+            rec = None if raw is None else _record(raw, e.offset)
+            while rec is not None and rec[0]["op"][:1] == bytes([_OP_CONNECTION]):
+                rec = _record(raw, rec[2]) if raw is not None else None
+            ok = (rec is not None and rec[0]["op"][:1] == bytes([_OP_MSGDATA])
+                  and rec[0].get("conn") == cid.to_bytes(4, "little")
+                  and len(rec[0].get("time", b"")) == 8
+                  and int.from_bytes(rec[0]["time"][:4], "little") * 10**9
+                  + int.from_bytes(rec[0]["time"][4:], "little") == e.time)
+            if not ok:
+                bad.append((cid, e))
+        if not bad:
+            continue
+        what = ("its data do not decompress" if raw is None and compression != "none"
+                else "its data are cut" if raw is None else "a damaged record")
+        gone = {(cid, e.offset) for cid, e in bad}
+        for cid in ids:
+            one.indexes[cid] = [e for e in one.indexes.get(cid, []) if not (e.chunk_pos == pos and (cid, e.offset) in gone)]
+        damaged.append({"chunk": numbers[pos], "at_byte": int(pos), "compression": compression, "what": what,
+                        "lost_messages": len(bad)})
+    return damaged
+
+
+def _messages(reader: Any, connections: list, path: str, repeated: dict[str, int] | None = None,
+              damaged: list[dict[str, Any]] | None = None) -> Iterator[tuple[Any, int, Any]]:
     """The messages of ``connections``, deserialised; with ``repeated``, a message equal to an
     earlier one of its topic in receive time and every byte (the bag's messages written twice)
     is skipped and counted under its topic. The reader gives the messages in receive-time
-    order, so only those of the current receive time are remembered."""
+    order, so only those of the current receive time are remembered.
+
+    With ``damaged`` (a list), a chunk of an indexed ROS 1 bag that cannot be read (a flipped
+    byte: its data do not decompress, or a record in it does not parse) is said there
+    (:func:`_damaged_entries`) and its unreadable messages skipped: the other chunks are read.
+    """
     it = reader.messages(connections=connections)
+    pulled = 0  # index entries read so far: those of damaged chunks are removed, these stay first
     seen: set[tuple[str, bytes]] = set()
     seen_ns: int | None = None
     while True:
         try:
             conn, ts, raw = next(it)
+            pulled += 1
         except StopIteration:
             return
         except Exception as exc:
-            raise LogFormatError(
-                f"{path}: truncated or corrupt bag while reading messages ({type(exc).__name__})"
-            ) from None
+            found = _damaged_entries(reader, connections) if damaged is not None else []
+            if not found:
+                raise LogFormatError(
+                    f"{path}: truncated or corrupt bag while reading messages ({type(exc).__name__})"
+                ) from None
+            damaged.extend(found)  # type: ignore[union-attr]
+            for one in reader.readers:  # the chunk it held open was closed when the damaged one failed
+                one.current_chunk = (-1, io.BytesIO())
+            it = reader.messages(connections=connections)
+            for _ in range(pulled):  # the entries already read: every one readable, so none was removed
+                next(it)
+            continue
         if repeated is not None:
             if int(ts) != seen_ns:
                 seen, seen_ns = set(), int(ts)
@@ -384,7 +457,13 @@ def read_rosbag(
         index. A bag cut off before any whole message is refused (:class:`LogFormatError`).
         ``trailing_bytes``: bytes after a ROS 1 bag's index, which are not read (junk
         appended, or another bag after it: ``trailing_bag``), said by
-        :func:`rplearn.io.damage.file_damage`.
+        :func:`rplearn.io.damage.file_damage`. ``damaged_chunks``: the chunks of an indexed
+        ROS 1 bag that cannot be read (a flipped byte: their data do not decompress, or a
+        record in them does not parse; ``chunk`` number, ``at_byte``, ``compression``,
+        ``what``, ``lost_messages`` of the topics read), skipped while the other chunks are
+        read, and ``damaged_chunk_messages`` their lost messages in all (``lost_messages`` is
+        None for a bag read record by record, which has no index to count them); said by
+        :func:`~rplearn.io.damage.file_damage`.
     """
     options = RosbagOptions() if options is None else options
     tx_power_field, frequency_field = options.tx_power_field, options.frequency_field
@@ -433,7 +512,8 @@ def read_rosbag(
         conns = [c for c in reader.connections if c.topic in wanted]
         counts = {t: 0 for t in wanted}
         repeated: dict[str, int] = {}
-        for conn, ts, msg in _messages(reader, conns, source, repeated):
+        damaged: list[dict[str, Any]] = []
+        for conn, ts, msg in _messages(reader, conns, source, repeated, damaged):
             topic = conn.topic
             counts[topic] += 1
             t = _stamp_s(msg, ts, time_source)
@@ -487,6 +567,8 @@ def read_rosbag(
         "unindexed": found is not None and found.index_pos == 0,
         "trailing_bytes": trailing,
         "trailing_bag": another_bag,
+        "damaged_chunks": damaged + ([] if found is None else list(found.damaged_chunks)),
+        "damaged_chunk_messages": sum(d["lost_messages"] or 0 for d in damaged),
     }
     return Logs(pose=pose, signal=signal), meta
 

@@ -25,7 +25,7 @@ import pandas as pd
 from rplearn._argtypes import check_types
 from rplearn.core.geometry import quat_wxyz_from_euler_enu_flu_deg, quat_wxyz_from_euler_ned_frd_deg
 from rplearn.core.plausible import PLAUSIBLE
-from rplearn.data.tables import CSV_DTYPES, POSE_COLUMNS, SIGNAL_COLUMNS, node_ids, normalise_times, validate_pose_log
+from rplearn.data.tables import CSV_DTYPES, POSE_COLUMNS, SIGNAL_COLUMNS, check_unit_labels, node_ids, normalise_times, validate_pose_log
 from rplearn.errors import InputError, LogFormatError
 from rplearn.io._common import read_parquet_lean
 from rplearn.io.geodetic import geodetic_to_enu
@@ -181,26 +181,34 @@ def _attitude_columns(df: pd.DataFrame, source: str) -> tuple[pd.DataFrame, tupl
 
 def _finite_values(
     df: pd.DataFrame, numeric: tuple[str, ...], nan_policy: str, source: str
-) -> tuple[pd.DataFrame, dict[str, np.ndarray], int]:
-    """The numeric columns as float arrays, rows with a NaN or non-number dropped or refused.
+) -> tuple[pd.DataFrame, dict[str, np.ndarray], dict[str, int]]:
+    """The numeric columns as float arrays, rows with a NaN, a non-number or an ENU coordinate
+    beyond any place (:data:`~rplearn.core.plausible.PLAUSIBLE` ``coordinate_m``: a sentinel or
+    a corrupt value) dropped or refused.
 
-    Returns ``(table, values, dropped)``: the table and arrays without the bad rows and
-    their count (0 unless ``nan_policy="drop"``).
+    Returns ``(table, values, dropped)``: the table and arrays without the bad rows and their
+    counts, ``nan_pose`` (NaN, infinite or no number) and ``implausible_pose`` (a finite
+    coordinate beyond 1e8 m); both 0 unless ``nan_policy="drop"``.
     """
     values = {c: _float_column(df, c) for c in numeric}
-    bad = np.zeros(len(df), bool)
+    nan = np.zeros(len(df), bool)
+    far = np.zeros(len(df), bool)
     first_bad: tuple[int, str] | None = None
-    far = PLAUSIBLE["coordinate_m"].high
+    limit = PLAUSIBLE["coordinate_m"].high
     for c in numeric:
+        b_nan = ~np.isfinite(values[c])
         with np.errstate(invalid="ignore"):  # an ENU coordinate beyond any place: a sentinel or corrupt value
-            b = ~np.isfinite(values[c]) | ((np.abs(values[c]) > far) if c in ("x", "y", "z") else False)
+            b_far = (np.abs(values[c]) > limit) & ~b_nan if c in ("x", "y", "z") else np.zeros(len(df), bool)
+        b = b_nan | b_far
         if b.any():
             r = int(np.flatnonzero(b)[0])
             if first_bad is None or r < first_bad[0]:
                 first_bad = (r, c)
-        bad |= b
+        nan |= b_nan
+        far |= b_far
     if first_bad is None:
-        return df, values, 0
+        return df, values, {"nan_pose": 0, "implausible_pose": 0}
+    bad = nan | far
     if nan_policy == "error":
         raise InputError(
             f"{source}: field {first_bad[1]} has {int(bad.sum())} row(s) with NaN, infinite or "
@@ -209,7 +217,61 @@ def _finite_values(
             "(nan_policy='drop')",
             param="nan_policy",
         )
-    return df.loc[~bad], {c: v[~bad] for c, v in values.items()}, int(bad.sum())
+    counts = {"nan_pose": int(nan.sum()), "implausible_pose": int((far & ~nan).sum())}
+    return df.loc[~bad], {c: v[~bad] for c, v in values.items()}, counts
+
+
+def _position_jumps(
+    t: np.ndarray, xyz: np.ndarray, nodes: np.ndarray, rows: np.ndarray, nan_policy: str, source: str,
+) -> tuple[np.ndarray, list[str]]:
+    """Rows on the wrong side of a position step no plausible speed explains, refused or dropped.
+
+    The rule of the MAVLink and ULog readers (:func:`rplearn.io.mavlink_phases.invalid_fixes`,
+    with the plausible top speeds, as a table carries no velocity): per node, in time order, a
+    step larger than ``(speed + slack) * dt + margin`` cuts the track into pieces; the last
+    piece is valid, an earlier one only when the step to the valid fixes after it is explained.
+    A sentinel inside the plausible range (``z = -1000``, ``x = y = z = 0`` before the fix) is
+    such a piece. ``rows`` are the file rows of the positions, for messages.
+
+    Returns ``(keep, notes)``: a mask of the rows to keep and one note per dropped piece.
+
+    Raises
+    ------
+    InputError
+        With ``nan_policy="error"``, naming the first row on the wrong side and the step; with
+        ``"drop"`` too when a node's wrong side holds half its rows or more (which side is wrong
+        is then no longer clear: no data is dropped on a guess).
+    """
+    from rplearn.io.mavlink_phases import invalid_fixes
+
+    if len(t) < 2:
+        return np.ones(len(t), bool), []
+    codes = pd.factorize(pd.Series(nodes, dtype=object))[0]  # a node id of any type (a hostile one)
+    order = np.lexsort((t, codes))
+    nothing = np.full(len(t), np.nan)
+    invalid_sorted, steps = invalid_fixes(t[order], xyz[order], nothing, nothing, codes[order], np.ones(len(t), bool))
+    if not invalid_sorted.any():
+        return np.ones(len(t), bool), []
+    invalid = np.zeros(len(t), bool)
+    invalid[order] = invalid_sorted
+    notes = []
+    for last_sorted, step in sorted(steps.items()):
+        node, code = nodes[order[last_sorted]], codes[order[last_sorted]]
+        piece = invalid & (codes == code)
+        n_node, n_bad = int((codes == code).sum()), int(piece.sum())
+        first = int(np.flatnonzero(piece)[np.argmin(rows[piece])])
+        where = (f"{source}: fields x, y, z of node {node} jump: {step} after row {int(rows[order[last_sorted]])} "
+                 f"(t = {float(t[order[last_sorted]])!r} s); {n_bad} of its {n_node} row(s) lie on the wrong side "
+                 f"of a jump, first at row {int(rows[first])} (a sentinel or a position logged before the fix "
+                 "was valid)")
+        if nan_policy == "error":
+            raise InputError(f"{where}; expected a continuous track, or drop those rows (nan_policy='drop')",
+                             param="nan_policy")
+        if 2 * n_bad >= n_node:
+            raise InputError(f"{where}; which side is valid is unclear with so many rows on the wrong side: "
+                             "expected a continuous track, cut the log to the flight", param="nan_policy")
+        notes.append(f"{where}: dropped")
+    return ~invalid, notes
 
 
 def _check_time_order(t: np.ndarray, nodes: np.ndarray, source: str) -> None:
@@ -371,7 +433,11 @@ def canonical_pose(
         ENU origin for geodetic tables; by default the log's first fix (earliest row).
     nan_policy : {"error", "drop"}
         Rows with a NaN or non-numeric pose value raise :class:`InputError` or are dropped
-        and counted in ``metadata["dropped"]["nan_pose"]``.
+        and counted in ``metadata["dropped"]["nan_pose"]``; so are rows with a coordinate
+        beyond 1e8 m (``implausible_pose``) and rows on the wrong side of a position jump no
+        plausible speed explains (``position_jump``: a sentinel such as ``z = -1000`` or
+        ``x = y = z = 0`` before the fix; :func:`_position_jumps`), each dropped piece said in
+        ``metadata["notes"]``.
     allow_unsorted : bool
         Accept times that go backwards within a node (the rows are sorted); by default
         they raise :class:`LogFormatError`.
@@ -391,13 +457,17 @@ def canonical_pose(
         df = rename_columns(df, columns)
     except InputError as exc:
         raise InputError(f"{source}: {exc}") from None
-    meta: dict[str, Any] = {"source": source, "dropped": {"nan_pose": 0}, "origin_geodetic": None}
+    meta: dict[str, Any] = {"source": source, "dropped": {"nan_pose": 0, "implausible_pose": 0, "position_jump": 0},
+                            "origin_geodetic": None}
     df = _with_node(df, node, source)
     pos_cols, meta["position"] = _position_columns(df, source)
     df, att_cols, meta["attitude"], level = _attitude_columns(df, source)
     if level:
         meta["level_assumed"] = True
-    df, values, meta["dropped"]["nan_pose"] = _finite_values(df, ("t",) + pos_cols + att_cols, nan_policy, source)
+    rows = np.arange(len(df))
+    df, values, dropped = _finite_values(df.set_axis(rows), ("t",) + pos_cols + att_cols, nan_policy, source)
+    meta["dropped"].update(dropped)
+    rows = df.index.to_numpy()
     nodes = df["node"].astype(str).to_numpy()
     if len(nodes) == 0:
         raise InputError(f"{source}: no pose rows")
@@ -405,6 +475,12 @@ def canonical_pose(
     if not allow_unsorted:
         _check_time_order(t, nodes, source)
     xyz, meta["origin_geodetic"] = _enu_positions(values, meta["position"], origin_geodetic, source)
+    keep, notes = _position_jumps(t, xyz, nodes, rows, nan_policy, source)
+    meta["dropped"]["position_jump"] = int((~keep).sum())
+    if notes:
+        meta["notes"] = notes
+        t, nodes, xyz = t[keep], nodes[keep], xyz[keep]
+        values = {c: v[keep] for c, v in values.items()}
     q = _quaternions(values, att_cols, meta["attitude"])
     out = pd.DataFrame({"t": t, "node": nodes, **dict(zip(("x", "y", "z"), xyz.T)),
                         **dict(zip(("qw", "qx", "qy", "qz"), q.T))})
@@ -419,6 +495,7 @@ def canonical_signal(
     rx: str | None = None,
     tx_power_dbm: float | None = None,
     frequency_hz: float | None = None,
+    first_row: int = 0,
 ) -> pd.DataFrame:
     """Turn a signal table into the canonical signal schema without dropping any row.
 
@@ -426,15 +503,20 @@ def canonical_signal(
     sentinel values are kept: :func:`rplearn.data.sync.synchronise` drops and counts them.
     Extra columns are kept after the canonical ones.
 
+    ``first_row`` is the file row of the table's first row (a chunk of a file), for messages.
+
     Raises
     ------
     InputError
-        On a missing column that no argument supplies.
+        On a missing column that no argument supplies, or an empty cell in a ``unit`` column
+        (:func:`~rplearn.data.tables.check_unit_labels`: a sample of no trajectory unit,
+        which every learning command refuses).
     """
     try:
         df = rename_columns(df, columns)
     except InputError as exc:
         raise InputError(f"{source}: {exc}") from None
+    check_unit_labels(df, source, first_row)
     fill = {"rx": rx, "tx_power_dbm": tx_power_dbm, "frequency_hz": frequency_hz}
     for c, v in fill.items():
         if c not in df.columns and v is not None:
@@ -520,7 +602,7 @@ def iter_signal_table(
         state = LinkTimes()
         first_row = 0
         for chunk in batches:
-            out = canonical_signal(chunk, source=source, **options)
+            out = canonical_signal(chunk, source=source, first_row=first_row, **options)
             if not allow_unsorted:
                 check_link_time_order(out, source, first_row, state)
             first_row += len(out)

@@ -153,7 +153,7 @@ def open_source(source: str, work_dir: str, reader: ReaderOptions) -> CsvTail | 
     """``POSE.csv,SIGNAL.csv`` (two canonical CSVs being appended to) or a MAVLink connection."""
     if "," in source and all(p.lower().endswith(".csv") for p in source.split(",")):
         pose, signal = source.split(",")
-        return CsvTail(pose, signal)
+        return CsvTail(pose, signal, reader)
     if reader.tx_power_dbm is None or reader.frequency_hz is None:
         raise InputError(f"{source}: give the telemetry radios' transmit power [dBm] and carrier frequency [Hz], a "
                          "MAVLink stream carries neither", param="tx_power_dbm")
@@ -176,6 +176,7 @@ class _Session:
         self.ranking = None if options.manoeuvres is None else RankingWorker(
             options.manoeuvres, options.rank_beside, options.ranking_every_s)
         self.shown: Ranking | None = None  # the ranking on view
+        self.source_dropped: dict[str, int] = {}  # rows the source's reader dropped, per reason (a CSV's pose rows)
 
     def note(self, prefix: str, text: str | None = None) -> None:
         """Set (or, with no text, remove) the one note that starts with ``prefix``: a note
@@ -212,7 +213,8 @@ class _Session:
             while sum(len(r) for r in self.recent) - len(self.recent[0]) >= BUDGET_WINDOW_ROWS:
                 self.recent.popleft()
         s = self.status
-        s.matched, s.pending, s.dropped = self.matcher.summary.n_out, self.matcher.pending_rows, dict(self.matcher.summary.dropped)
+        s.matched, s.pending = self.matcher.summary.n_out, self.matcher.pending_rows
+        s.dropped = {**self.matcher.summary.dropped, **self.source_dropped}  # the CSV reader's pose rows too
         s.learned = 0 if self.stats is None else self.stats.n_samples
         s.prequential_rmse_db, s.prequential_n = self.preq.rmse_db(), self.preq.n_samples
 
@@ -398,6 +400,7 @@ def run_live(
         while True:
             got = src.poll()
             now = time.monotonic()
+            session.source_dropped = dict(got.dropped)
             session.feed(got.poses, got.signals)
             if got.received:
                 last_rx = now
@@ -427,6 +430,7 @@ def run_live(
                 time.sleep(0.05)
         session.stop_ranking(STOP_RANKING_WAIT_S)  # briefly waited for (its BLAS limit), then dropped
         last = src.poll(final=True) if isinstance(src, MavlinkSource) else src.poll()
+        session.source_dropped = {} if isinstance(src, MavlinkSource) else dict(last.dropped)  # rematched whole below
         session.feed(last.poses, last.signals)
         session.learn(final=True)
         if isinstance(src, MavlinkSource):

@@ -86,8 +86,7 @@ class LiveStatus:
         lines = [f"{self.elapsed_s:.0f} s: {self.received} signal rows, {self.matched} matched, {self.learned} learned, "
                  f"{self.refits} refits (last {self.refit_ms:.0f} ms), model {self.model or '-'}"]
         lines += [f"  dropped ({r}): {n}" for r, n in self.dropped.items() if n]
-        lines.append(f"  prequential RMSE {self.prequential_rmse_db:.2f} dB over {self.prequential_n} samples, "
-                     f"noise {self.noise_db:.2f} dB")
+        lines.append(f"  prequential RMSE {prequential_text(self)}, noise {self.noise_db:.2f} dB")
         for node in self.spread_db:
             lines.append(f"  {node}: coverage {self.coverage_pct[node]:.1f}%, spread {self.spread_db[node]:.2f} dB covered, "
                          f"{self.sphere_spread_db[node]:.2f} dB sphere")
@@ -161,6 +160,16 @@ def ranking_text(status: LiveStatus) -> str:
     return text + ("; the next is running" if s.ranking_running else "")
 
 
+def prequential_text(status: LiveStatus) -> str:
+    """The prequential score in words: its RMSE [dB] over its samples, or why there is none yet
+    (no batch was predicted before it was learned from: the stream came in one batch, or no
+    model was fitted before the last one), never ``nan dB over 0 samples``."""
+    if status.prequential_n == 0 or not math.isfinite(status.prequential_rmse_db):
+        return ("no score yet: no batch was predicted before it was learned from "
+                "(the first batch is learned from, not scored; a stream read in one batch is never scored)")
+    return f"{status.prequential_rmse_db:.2f} dB over {status.prequential_n} samples"
+
+
 @check_types
 def page_rows(status: LiveStatus) -> tuple[list[tuple[str, str]], list[list[str]]]:
     """The numbers of :class:`LiveStatus` as (label, value) rows and a node table (header first)."""
@@ -168,7 +177,7 @@ def page_rows(status: LiveStatus) -> tuple[list[tuple[str, str]], list[list[str]
     rows = [("elapsed", f"{s.elapsed_s:.0f} s"), ("signal rows received", str(s.received)),
             ("matched", str(s.matched)), ("waiting for poses", str(s.pending)), ("learned", str(s.learned)),
             ("model", s.model or "-"), ("refits", f"{s.refits} (last {s.refit_ms:.0f} ms)"),
-            ("prequential RMSE", f"{s.prequential_rmse_db:.2f} dB over {s.prequential_n} samples"),
+            ("prequential RMSE", prequential_text(s)),
             ("noise level", f"{s.noise_db:.2f} dB")]
     rows += [(f"dropped ({r})", str(n)) for r, n in s.dropped.items() if n]
     rows += [("link budget", b) for b in s.budget] or [("link budget", "plausible")]
@@ -185,4 +194,4 @@ def page_rows(status: LiveStatus) -> tuple[list[tuple[str, str]], list[list[str]
     return rows, nodes
 
 
-__all__ = ["PREQUENTIAL_BINS", "LiveStatus", "Prequential", "page_rows", "ranking_text"]
+__all__ = ["PREQUENTIAL_BINS", "LiveStatus", "Prequential", "page_rows", "prequential_text", "ranking_text"]

@@ -1,0 +1,73 @@
+"""``rplearn live`` on damaged or incomplete CSV tables: refusals name live's own flags (never a
+library option live has no flag for), drops are counted, and a stream read in one batch says it
+has no prequential score yet (not ``nan dB over 0 samples``)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from cli_helpers import invoke
+
+
+def _tables(d: Path, n: int = 300) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """A drone circling a station at 40 m, yawing; 10 Hz poses, a packet each way per 0.1 s."""
+    t = np.arange(n) * 0.1
+    a = 2 * np.pi * t / 20.0
+    yaw = a * 3.0
+    drone = pd.DataFrame({"t": t, "node": "D", "x": 40 * np.cos(a), "y": 40 * np.sin(a), "z": 20.0 + 5 * np.sin(a * 2),
+                          "qw": np.cos(yaw / 2), "qx": 0.0, "qy": 0.0, "qz": np.sin(yaw / 2)})
+    station = pd.DataFrame({"t": [0.0], "node": ["G"], "x": [0.0], "y": [0.0], "z": [1.5], "qw": [1.0],
+                            "qx": [0.0], "qy": [0.0], "qz": [0.0]})
+    rng = np.random.default_rng(3)
+    sig = pd.DataFrame({"t": t + 0.05, "tx": "D", "rx": "G", "rssi_dbm": -60.0 + rng.normal(0, 2, n),
+                        "tx_power_dbm": 20.0, "frequency_hz": 2.4e9})
+    return pd.concat([drone, station], ignore_index=True), sig
+
+
+def _live(d: Path, pose: pd.DataFrame, sig: pd.DataFrame, *flags: str):
+    pose.to_csv(d / "pose.csv", index=False)
+    sig.to_csv(d / "signal.csv", index=False)
+    return invoke(["live", f"{d / 'pose.csv'},{d / 'signal.csv'}", "-o", d / "m.json", "--quiet", "--no-advice",
+                   "--idle", "0.2", "--order", "2", *flags], ok=False)
+
+
+def _error(res) -> str:
+    lines = [line for line in res.output.splitlines() if line.strip()]
+    assert res.exit_code == 1 and len(lines) == 1 and lines[0].startswith("error:"), res.output
+    return lines[0]
+
+
+def test_a_nan_pose_names_the_live_flag_and_drop_counts_it(tmp_path):
+    pose, sig = _tables(tmp_path)
+    pose.loc[7, "y"] = np.nan
+    line = _error(_live(tmp_path, pose, sig))
+    assert "pose.csv: field y" in line and "--nan-policy drop" in line and "nan_policy" not in line
+    assert not (tmp_path / "m.json").exists()
+    res = _live(tmp_path, pose, sig, "--nan-policy", "drop")
+    assert res.exit_code == 0, res.output
+    assert "dropped (nan_pose): 1" in res.output
+
+
+def test_a_signal_table_without_rx_names_the_live_flags(tmp_path):
+    pose, sig = _tables(tmp_path)
+    line = _error(_live(tmp_path, pose, sig.drop(columns=["rx", "frequency_hz"])))
+    assert "--receiver NODE" in line and "--frequency HZ" in line and "ReaderOptions" not in line
+    res = _live(tmp_path, pose, sig.drop(columns=["rx", "frequency_hz"]), "--receiver", "G", "--frequency", "2.4e9")
+    assert res.exit_code == 0, res.output
+
+
+def test_a_stream_read_in_one_batch_says_it_has_no_score_yet(tmp_path):
+    pose, sig = _tables(tmp_path)
+    res = _live(tmp_path, pose, sig)
+    assert res.exit_code == 0, res.output
+    assert "nan dB" not in res.output and "no score yet: no batch was predicted before it was learned from" in res.output
+
+
+@pytest.mark.parametrize("flag", [["--receiver", "G"]])
+def test_a_csv_only_flag_is_refused_for_a_mavlink_stream(tmp_path, flag):
+    res = invoke(["live", "udpin:127.0.0.1:1", "-o", tmp_path / "m.json", "--tx-power", "20", "--frequency", "433e6",
+                  *flag], ok=False)
+    assert "--receiver: names the receiver of a signal CSV's rows" in _error(res)

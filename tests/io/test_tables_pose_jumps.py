@@ -1,0 +1,82 @@
+"""rplearn.io.tables: in-range sentinels and positions before the fix in canonical pose tables
+(the rule of the MAVLink/ULog readers), and coordinates beyond any place counted as what they are."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from rplearn.errors import InputError
+from rplearn.io.tables import read_pose_table
+
+
+def _flight_csv(path: Path, xyz: np.ndarray, dt_s: float = 0.1) -> str:
+    n = len(xyz)
+    df = pd.DataFrame({"t": np.arange(n) * dt_s, "node": "D", "x": xyz[:, 0], "y": xyz[:, 1], "z": xyz[:, 2],
+                       "qw": 1.0, "qx": 0.0, "qy": 0.0, "qz": 0.0})
+    station = pd.DataFrame({"t": [0.0], "node": ["G"], "x": [0.0], "y": [0.0], "z": [1.5], "qw": [1.0],
+                            "qx": [0.0], "qy": [0.0], "qz": [0.0]})
+    pd.concat([df, station], ignore_index=True).to_csv(path, index=False)
+    return str(path)
+
+
+def _track(n: int = 40, speed_m_s: float = 10.0, dt_s: float = 0.1) -> np.ndarray:
+    """A circle of radius 200 m around (300, 0) flown at ``speed_m_s``, 30 m up."""
+    a = np.arange(n) * speed_m_s * dt_s / 200.0
+    return np.stack([300 + 200 * np.cos(a), 200 * np.sin(a), np.full(n, 30.0)], axis=-1)
+
+
+def test_an_in_range_altitude_sentinel_is_refused_naming_file_node_and_row(tmp_path):
+    xyz = _track()
+    xyz[17, 2] = -1000.0
+    p = _flight_csv(tmp_path / "pose.csv", xyz)
+    with pytest.raises(InputError) as e:
+        read_pose_table(p)
+    msg = str(e.value)
+    assert "\n" not in msg and msg.startswith(f"{p}: fields x, y, z of node D jump")
+    assert "first at row 17" in msg and "nan_policy='drop'" in msg
+    pose, meta = read_pose_table(p, nan_policy="drop")
+    assert meta["dropped"]["position_jump"] == 1 and len(pose) == 40 and pose["z"].min() > 0
+    assert "1 of its 40 row(s)" in meta["notes"][0]
+
+
+def test_zeros_before_the_fix_are_a_counted_named_drop(tmp_path):
+    xyz = _track()
+    xyz[:6] = 0.0  # the logger wrote the origin until the GPS fix was valid
+    pose, meta = read_pose_table(_flight_csv(tmp_path / "pose.csv", xyz), nan_policy="drop")
+    d = pose[pose["node"] == "D"]
+    assert meta["dropped"]["position_jump"] == 6 and len(d) == 34 and d["t"].iloc[0] == pytest.approx(0.6)
+
+
+def test_a_wrong_side_as_long_as_the_flight_is_refused_even_with_drop(tmp_path):
+    xyz = _track()
+    xyz[:20] = 0.0
+    with pytest.raises(InputError, match=r"20 of its 40 row\(s\).*which side is valid is unclear"):
+        read_pose_table(_flight_csv(tmp_path / "pose.csv", xyz), nan_policy="drop")
+
+
+@pytest.mark.parametrize(("speed_m_s", "dt_s"), [(35.0, 0.1), (35.0, 1.0), (15.0, 5.0)])
+def test_real_fast_or_sparse_flight_passes(tmp_path, speed_m_s, dt_s):
+    xyz = _track(speed_m_s=speed_m_s, dt_s=dt_s)
+    xyz[:, 2] += np.linspace(0, 10 * dt_s * 39, 40)  # climbing at 10 m/s
+    pose, meta = read_pose_table(_flight_csv(tmp_path / "pose.csv", xyz, dt_s))
+    assert len(pose) == 41 and meta["dropped"]["position_jump"] == 0
+
+
+def test_a_coordinate_beyond_any_place_is_counted_as_implausible_not_nan(tmp_path):
+    xyz = _track()
+    xyz[5, 0], xyz[9, 1] = 3e9, np.nan
+    pose, meta = read_pose_table(_flight_csv(tmp_path / "pose.csv", xyz), nan_policy="drop")
+    assert meta["dropped"] == {"nan_pose": 1, "implausible_pose": 1, "position_jump": 0} and len(pose) == 39
+
+
+def test_inspect_says_the_jump_sync_would_drop(tmp_path):
+    from rplearn.io.inspect import inspect_logs
+
+    xyz = _track()
+    xyz[17, 2] = -1000.0
+    text = inspect_logs([_flight_csv(tmp_path / "pose.csv", xyz)]).to_text()
+    assert "dropped on reading: 1 pose row(s) (position_jump)" in text and "fields x, y, z of node D jump" in text
