@@ -89,3 +89,33 @@ def test_a_still_node_or_a_wide_window_is_handled(tmp_path):
     # (it used to stop with a far-field error); the smoke flight circles, so +-5 s is ambiguous
     wide = estimate_clock_offset(pose, sig, "B", window_s=5.0)
     assert wide.offsets_s.min() == pytest.approx(-5.0) and 0 < wide.n_samples < estimate_clock_offset(pose, sig, "B").n_samples
+
+
+def test_the_usable_packet_pass_keeps_the_rows_of_full_interpolation():
+    """:func:`usable_at_every_shift` (positions only) keeps exactly the rows the full pose
+    interpolation (:func:`track_at`) keeps, shift by shift: packets falling into a pose gap, off the
+    span or within the far-field limit at some shift are dropped, on either end of the link."""
+    import numpy as np
+
+    from rplearn.analysis.clock import track_at, usable_at_every_shift
+    from rplearn.data.poses import PoseTrack
+
+    rng = np.random.default_rng(5)
+    t_pose = np.concatenate([np.arange(0.0, 20.0, 0.1), np.arange(22.0, 40.0, 0.1)])  # a 2-s gap
+    xyz = np.column_stack([10 * np.cos(t_pose / 5), 10 * np.sin(t_pose / 5), 5 + 0.1 * t_pose])
+    quat = np.tile([1.0, 0.0, 0.0, 0.0], (t_pose.size, 1))
+    track = PoseTrack("B", t_pose, xyz, quat)
+    t_sig = np.sort(rng.uniform(-1.0, 41.0, 3000))
+    far_end = rng.normal(0.0, 8.0, (t_sig.size, 3))
+    near_m = np.full(t_sig.size, 4.0)
+    node_is_tx = rng.random(t_sig.size) < 0.5
+    shifts = np.linspace(-0.5, 0.5, 21)
+    expected = np.ones(t_sig.size, bool)
+    for shift in shifts:
+        pos, _, status = track_at(track, t_sig, shift, 0.5)
+        tx = np.where(node_is_tx[:, None], pos, far_end)
+        rx = np.where(node_is_tx[:, None], far_end, pos)
+        expected &= (status == 0) & (np.linalg.norm(tx - rx, axis=1) > near_m)
+    kept = usable_at_every_shift(track, t_sig, shifts, far_end, near_m, 0.5)
+    assert np.array_equal(kept, expected)
+    assert 0.5 < expected.mean() < 0.95  # the gap, the span and the near field each drop some
