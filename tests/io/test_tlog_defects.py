@@ -56,6 +56,20 @@ def written(ground, tmp_path_factory):
     return folder, clean, broken, w_clean, w_broken
 
 
+@pytest.fixture(scope="module")
+def written_230s(ground, tmp_path_factory):
+    """The flight's first 230 s (past :data:`DEFECTS`' reboot and the 15 s after it), clean and
+    broken, for the tests that check only that each period is named (the CLI, inspect)."""
+    folder = tmp_path_factory.mktemp("defects_230s")
+    end = float(ground.pose["t"].min()) + 230.0
+    short = Logs(ground.pose[ground.pose["t"] < end].reset_index(drop=True),
+                 ground.signal[ground.signal["t"] < end].reset_index(drop=True))
+    clean, broken = folder / "clean.tlog", folder / "broken.tlog"
+    write_tlog(short, clean, vehicle="D", station="G", origin_geodetic=ORIGIN)
+    write_tlog(short, broken, vehicle="D", station="G", origin_geodetic=ORIGIN, defects=DEFECTS)
+    return clean, broken
+
+
 def _sim_time(t_log, w, ground):
     """Log time -> the simulated flight's time from the vehicle's first row [s]."""
     t0 = ground.pose.loc[ground.pose["node"] == "D", "t"].min()
@@ -130,8 +144,8 @@ def test_no_matched_row_from_the_excluded_periods_and_the_same_patterns(ground, 
     assert max(same_data.values()) < 0.05  # the rest is the data the excluded periods took away
 
 
-def test_sync_prints_each_excluded_period(written, tmp_path):
-    _, _, broken, _, _ = written
+def test_sync_prints_each_excluded_period(written_230s, tmp_path):
+    _, broken = written_230s
     rplearn = os.path.join(os.path.dirname(sys.executable), "rplearn")
     out = tmp_path / "m.parquet"
     proc = subprocess.run(
@@ -251,15 +265,15 @@ def test_a_dataflash_reboot_is_counted_and_excluded_until_the_origin_is_set_agai
     assert vehicle["z"].min() > 0.0  # no row at the wrong altitude
 
 
-def test_inspect_names_each_excluded_period_from_the_log_start(written):
+def test_inspect_names_each_excluded_period_from_the_log_start(written_230s):
     """Issue 24, acceptance 1 (inspect): the reader's periods, with their reasons and times."""
     from rplearn.io.inspect import inspect_logs
 
-    _, _, broken, _, _ = written
+    clean, broken = written_230s
     report = inspect_logs([broken], _options(broken))
     text = report.to_text()
     for reason in ("before_valid_position", "after_reboot"):
         assert reason in text, text
     assert "reboot" in text
-    clean = inspect_logs([written[1]], _options(written[1])).to_text()
-    assert "before_valid_position" not in clean and "after_reboot" not in clean
+    clean_text = inspect_logs([clean], _options(clean)).to_text()
+    assert "before_valid_position" not in clean_text and "after_reboot" not in clean_text
