@@ -41,14 +41,6 @@ def flight(tmp_path_factory):
     return folder, written, len(signal)
 
 
-@pytest.fixture(scope="module")
-def whole_meta(flight):
-    """What :func:`read_mavlink` says of the whole written .tlog (read once for the module's
-    tests that compare a changed copy with it; they only read it)."""
-    folder, _, _ = flight
-    return read_mavlink(folder / "flight.tlog", 20.0, 2.412e9, vehicle="D", station="G")[1]
-
-
 def _tlog_options(folder) -> ReaderOptions:
     return ReaderOptions(tx_power_dbm=20.0, frequency_hz=2.412e9, nodes={str(folder / "flight.tlog"): "D"},
                          station="G", station_heading_deg=90.0 - STATION_YAW_ENU_DEG, origin_geodetic=ORIGIN)
@@ -87,22 +79,22 @@ def test_simulated_flight_as_tlog_gives_the_same_matched_dataset(flight):
             assert _angle_deg(a[q].to_numpy(), b[q].to_numpy()).max() < 0.2
 
 
-def test_station_heading_sets_the_station_attitude(flight):
-    folder, _, _ = flight
-    logs, meta = read_mavlink(folder / "flight.tlog", 20.0, 2.412e9, "D", "G", MavlinkOptions(station_heading_deg=80.0))
+def test_station_heading_sets_the_station_attitude(first_minute):
+    _, _, path = first_minute
+    logs, meta = read_mavlink(path, 20.0, 2.412e9, "D", "G", MavlinkOptions(station_heading_deg=80.0))
     row = logs.pose[logs.pose["node"] == "G"]
     q = quat_wxyz_from_yaw(np.radians(STATION_YAW_ENU_DEG))
     assert len(row) == 1 and _angle_deg(row[["qw", "qx", "qy", "qz"]].to_numpy(), q[None, :])[0] < 1e-9
     assert "HOME_POSITION" in meta["station_note"]
     with pytest.raises(InputError) as err:
-        read_mavlink(folder / "flight.tlog", 20.0, 2.412e9, options=MavlinkOptions(station_heading_deg=float("nan")))
+        read_mavlink(path, 20.0, 2.412e9, options=MavlinkOptions(station_heading_deg=float("nan")))
     assert err.value.param == "station_heading_deg"
 
 
-def test_cli_sync_of_the_simulated_tlog(flight, tmp_path):
-    folder, _, _ = flight
+def test_cli_sync_of_the_simulated_tlog(first_minute, tmp_path):
+    _, _, path = first_minute
     rplearn = os.path.join(os.path.dirname(sys.executable), "rplearn")
-    tlog, out = str(folder / "flight.tlog"), tmp_path / "m.parquet"
+    tlog, out = str(path), tmp_path / "m.parquet"
     proc = subprocess.run(
         [rplearn, "sync", "--poses", tlog, "--signals", tlog, "--tx-power", "20", "--frequency", "2.412e9",
          "--link", "all", "--node", f"{tlog}=D", "--station-node", "G", "--station-heading", "80", "-o", str(out)],
@@ -115,20 +107,19 @@ def test_cli_sync_of_the_simulated_tlog(flight, tmp_path):
     assert _angle_deg(g[["rx_qw", "rx_qx", "rx_qy", "rx_qz"]].to_numpy(), q[None, :]).max() < 1e-9
 
 
-def test_a_log_that_switches_from_mavlink_1_to_2_is_read_whole(flight, tmp_path):
+def test_a_log_that_switches_from_mavlink_1_to_2_is_read_whole(first_minute, tmp_path):
     """Ground stations start in MAVLink 1 and negotiate 2: frames of both kinds are read."""
-    folder, _, n_signal = flight
+    data, whole, _ = first_minute
     v1 = mavlink1.MAVLink(None, srcSystem=51, srcComponent=68)
-    data = (folder / "flight.tlog").read_bytes()
     t_us = struct.unpack(">Q", data[:8])[0]
     head = b"".join(struct.pack(">Q", t_us - 10_000_000 * (3 - k)) + v1.radio_status_encode(0, 0, 100, 0, 0, 0, 0).pack(v1)
                     for k in range(3))  # link-lost reports 30-10 s before the vehicle appears
     mixed = tmp_path / "mixed.tlog"
     mixed.write_bytes(head + data)
     _, meta = read_mavlink(mixed, 20.0, 2.412e9, vehicle="D", station="G")
-    assert meta["messages"]["RADIO_STATUS"] == n_signal + 3
+    assert meta["messages"]["RADIO_STATUS"] == whole["messages"]["RADIO_STATUS"] + 3
     assert meta["messages"].get("BAD_DATA", 0) == 0
-    assert meta["signal"]["link_lost"] == 3
+    assert whole["signal"]["link_lost"] == 0 and meta["signal"]["link_lost"] == 3
 
 
 def test_sik_units_clip_and_count():
@@ -161,30 +152,53 @@ def test_write_tlog_rejects_other_links_and_nodes(flight, tmp_path):
     assert not (tmp_path / "a.tlog").exists()
 
 
+@pytest.fixture(scope="module")
+def first_minute(flight):
+    """The written .tlog's first records, up to the first GLOBAL_POSITION_INT after 60 s of
+    flight (a log whose last record is one, as the whole file's is): its bytes, what
+    :func:`read_mavlink` says of it (read once: the cut tests compare a cut copy with it) and
+    its path (for the tests whose point does not need the whole flight: the station's
+    attitude, MAVLink 1 frames before it)."""
+    folder, _, _ = flight
+    data = (folder / "flight.tlog").read_bytes()
+    t0, at = int.from_bytes(data[:8], "big"), 0
+    while True:  # MAVLink 2 records: 8-byte time, 10-byte header (message id at 7-9), payload, CRC
+        end = at + 8 + 10 + data[at + 9] + 2
+        if int.from_bytes(data[at:at + 8], "big") - t0 > 60e6 and int.from_bytes(data[at + 15:at + 18], "little") == 33:
+            break
+        at = end
+    short = folder / "first_minute.tlog"
+    short.write_bytes(data[:end])
+    return data[:end], read_mavlink(short, 20.0, 2.412e9, vehicle="D", station="G")[1], short
+
+
 @pytest.mark.parametrize("cut", [1, 7, 33, 39, 40, 44, 47])
-def test_a_truncated_tlog_reads_its_complete_messages_and_reports_the_cut_off_one(flight, whole_meta, tmp_path, cut):
+def test_a_truncated_tlog_reads_its_complete_messages_and_reports_the_cut_off_one(first_minute, tmp_path, cut):
     """The last record (8-byte time, then a 40-byte GLOBAL_POSITION_INT frame: a MAVLink 2 header
     of 10 bytes, its 28-byte payload, the CRC) loses its last ``cut`` bytes: in its frame, or in
-    its time (the frame's name is then unknown)."""
-    folder, written, _ = flight
-    data = (folder / "flight.tlog").read_bytes()
+    its time (the frame's name is then unknown). (The first minute of the flight: what is read
+    before the cut does not change with its length.)"""
+    data, whole, _ = first_minute
     cut_file = tmp_path / "cut.tlog"
     cut_file.write_bytes(data[:-cut])
     logs, meta = read_mavlink(cut_file, 20.0, 2.412e9, vehicle="D", station="G")
     assert meta["cut_off_at_byte"] == len(data) - 48
     assert meta["cut_off_record"] == ("GLOBAL_POSITION_INT" if cut <= 30 else None)  # 10-byte header kept
-    assert meta["messages"]["GLOBAL_POSITION_INT"] == written["global_position_int"] - 1
-    assert meta["messages"]["ATTITUDE"] == written["attitude"]
+    assert whole["cut_off_at_byte"] is None and whole["messages"]["GLOBAL_POSITION_INT"] > 5_000
+    assert meta["messages"]["GLOBAL_POSITION_INT"] == whole["messages"]["GLOBAL_POSITION_INT"] - 1
+    assert meta["messages"]["ATTITUDE"] == whole["messages"]["ATTITUDE"]
     said = file_damage(str(cut_file), meta)
-    assert whole_meta["cut_off_at_byte"] is None and meta["records_read"] == whole_meta["records_read"] - 1
+    assert meta["records_read"] == whole["records_read"] - 1
     assert any(f"cut off inside the message at byte {len(data) - 48:,}" in n and "complete record(s) before it were read" in n
                for n in said)
     assert not any("cut off" in n for n in meta["notes"])  # said once, by file_damage
     assert len(logs.signal) > 0
 
 
-def test_a_whole_tlog_is_not_reported_cut(whole_meta):
-    assert whole_meta["cut_off_at_byte"] is None and not any("cut off" in n for n in whole_meta["notes"])
+def test_a_whole_tlog_is_not_reported_cut(first_minute):
+    _, whole, _ = first_minute
+    assert whole["cut_off_at_byte"] is None and whole["cut_off_record"] is None
+    assert not any("cut off" in n for n in whole["notes"])
 
 
 def test_the_station_heading_and_clock_offset_are_returned_for_the_reader(tmp_path):

@@ -37,6 +37,15 @@ def ground_260s(ground):
                 ground.signal[ground.signal["t"] < end].reset_index(drop=True))
 
 
+@pytest.fixture(scope="module")
+def clean_260s(ground_260s, tmp_path_factory):
+    """``ground_260s`` written once as a clean tlog (per module and xdist worker): tests read it,
+    none writes to it (each grows its own copy in its own ``tmp_path``)."""
+    whole = tmp_path_factory.mktemp("clean_260s") / "whole.tlog"
+    write_tlog(ground_260s, whole, vehicle="D", station="G", origin_geodetic=ORIGIN)
+    return whole
+
+
 def _options(path) -> ReaderOptions:
     return ReaderOptions(tx_power_dbm=20.0, frequency_hz=2.412e9, nodes={str(path): "D"}, station="G")
 
@@ -82,18 +91,24 @@ def _grow(whole, grown, seed: int = 0):
 COPIES = TlogDefects(radio_twice=True, copy_delay_s=0.0002)
 
 
-@pytest.mark.parametrize("defects", [None, DEFECTS, COPIES], ids=["clean", "invalid-start-reboot-doubled", "copies"])
+@pytest.mark.parametrize("defects", [DEFECTS, COPIES], ids=["invalid-start-reboot-doubled", "copies"])
 def test_rows_handed_out_while_the_log_grows_are_the_offline_readers_rows(ground_260s, tmp_path, defects):
+    """(The clean log: :func:`test_the_state_kept_between_polls_does_not_grow_with_the_log`.)"""
     whole, grown = tmp_path / "whole.tlog", tmp_path / "grown.tlog"
     written = write_tlog(ground_260s, whole, vehicle="D", station="G", origin_geodetic=ORIGIN, defects=defects)
     ref, meta = read_logs([str(whole)], _options(whole))
     if defects is COPIES:  # the offline reader merges the copies
         assert meta["files"][0]["signal"]["duplicate_reading"] >= written["radio"]
-    elif defects is not None:  # the offline reader excludes what the defects spoil
+    else:  # the offline reader excludes what the defects spoil
         assert meta["files"][0]["reboots"] == 1 and written["radio"] > 0
         assert {p["reason"] for p in meta["files"][0]["excluded_periods"]} >= {"before_valid_position", "after_reboot"}
     poses, signals, tail = _grow(whole, grown)
     assert tail.dropped == dict.fromkeys(tail.dropped, 0)  # nothing appeared or vanished behind
+    _assert_offline_rows(poses, signals, ref)
+
+
+def _assert_offline_rows(poses: pd.DataFrame, signals: pd.DataFrame, ref: Logs) -> None:
+    """The rows handed out are the offline reader's ``ref``, all columns."""
     rp = ref.pose.sort_values(["node", "t"], kind="stable").reset_index(drop=True)
     gp = poses.sort_values(["node", "t"], kind="stable").reset_index(drop=True)
     assert list(gp["node"].astype(str)) == list(rp["node"].astype(str))
@@ -129,9 +144,16 @@ def test_a_tail_without_transmit_power_names_it(tmp_path):
         TlogTail(str(tmp_path / "x.tlog"), ReaderOptions(frequency_hz=433e6))
 
 
+#: Bytes appended between two polls where a test's point is what a late message changes about
+#: rows handed out earlier (the rows handed out before it over several polls), not the polls
+#: themselves: about 8 s of the ground flight, 31 polls over 260 s.
+LATE_PIECE_BYTES = 80_000
+
+
 def _poll_in_pieces(whole, grown, piece_bytes: int = 40_000):
-    """Append ``whole`` to ``grown`` a piece at a time, polling after each: the rows handed out,
-    the tail, and its :meth:`TlogTail.sizes` after each poll with the time of the log read [s]."""
+    """Append ``whole`` to ``grown`` a piece at a time (40 kB: about 4 s of the ground flight),
+    polling after each: the rows handed out, the tail, and its :meth:`TlogTail.sizes` after each
+    poll with the share of the log's bytes read."""
     data = whole.read_bytes()
     grown.write_bytes(b"")
     tail = TlogTail(str(grown), _options(grown))
@@ -149,15 +171,15 @@ def _poll_in_pieces(whole, grown, piece_bytes: int = 40_000):
             pd.concat([x for x in [*signals, s] if len(x)], ignore_index=True), tail, sizes)
 
 
-def test_the_state_kept_between_polls_does_not_grow_with_the_log(ground, tmp_path):
-    """Over 7 minutes of log, the most the tail keeps between polls in the second and third
-    quarters of the log is the same as in the last quarter (the window of the last seconds and a
-    summary): no structure grows with the flight. (The first quarter holds the start, read whole
-    until the station is known and the first rows are handed out.)"""
-    whole, grown = tmp_path / "whole.tlog", tmp_path / "grown.tlog"
-    write_tlog(ground, whole, vehicle="D", station="G", origin_geodetic=ORIGIN)
-    ref, _ = read_logs([str(whole)], _options(whole))
-    poses, signals, tail, sizes = _poll_in_pieces(whole, grown)
+def test_the_state_kept_between_polls_does_not_grow_with_the_log(clean_260s, tmp_path):
+    """Over the 260 s of the clean log, the rows handed out are the offline reader's, and the
+    most the tail keeps between polls in the second and third quarters of the log is the same
+    as in the last quarter (the window of the last seconds and a summary): no structure grows
+    with the flight (one growing with it would keep a third more at the end of the last quarter
+    than at the end of the middle ones, whatever the log's length). (The first quarter holds
+    the start, read whole until the station is known and the first rows are handed out.)"""
+    ref, _ = read_logs([str(clean_260s)], _options(clean_260s))
+    poses, signals, tail, sizes = _poll_in_pieces(clean_260s, tmp_path / "grown.tlog")
 
     def most(lo, hi):
         kept = [k for f, k in sizes if lo < f <= hi]
@@ -169,25 +191,25 @@ def test_the_state_kept_between_polls_does_not_grow_with_the_log(ground, tmp_pat
     for name, n in last.items():
         assert n <= 1.05 * middle[name] + 8, (name, middle[name], n)
     assert max(last.values()) < 6_000  # about 10 s of window
-    assert len(poses) == len(ref.pose) and len(signals) == len(ref.signal)
-    assert tail.dropped == dict.fromkeys(tail.dropped, 0)
+    assert tail.dropped == dict.fromkeys(tail.dropped, 0)  # nothing appeared or vanished behind
+    _assert_offline_rows(poses, signals, ref)
 
 
-def test_a_position_jump_that_never_returns_withdraws_the_rows_handed_out_before_it(ground, tmp_path):
+def test_a_position_jump_that_never_returns_withdraws_the_rows_handed_out_before_it(ground_260s, tmp_path):
     """A position that jumps 50 m mid-flight and stays (an origin set late) makes the offline
     reader exclude everything before the jump (only the last piece of a boot is surely valid):
     the rows handed out before it, most of them long behind the window, are counted withdrawn,
     and the rows after it are the offline reader's."""
-    pose = ground.pose.copy()
-    jump_t = float(pose["t"].min()) + 240.0
+    pose = ground_260s.pose.copy()
+    jump_t = float(pose["t"].min()) + 200.0
     moved = (pose["node"] == "D") & (pose["t"] >= jump_t)
     pose.loc[moved, "z"] += 50.0
     whole, grown = tmp_path / "whole.tlog", tmp_path / "grown.tlog"
-    write_tlog(Logs(pose, ground.signal), whole, vehicle="D", station="G", origin_geodetic=ORIGIN)
+    write_tlog(Logs(pose, ground_260s.signal), whole, vehicle="D", station="G", origin_geodetic=ORIGIN)
     ref, meta = read_logs([str(whole)], _options(whole))
     reasons = {p["reason"] for p in meta["files"][0]["excluded_periods"]}
     assert reasons == {"before_valid_position"}
-    poses, signals, tail, _ = _poll_in_pieces(whole, grown)
+    poses, signals, tail, _ = _poll_in_pieces(whole, grown, LATE_PIECE_BYTES)
     vehicle = poses[poses["node"] == "D"]
     ref_vehicle = ref.pose[ref.pose["node"] == "D"]
     # the first row the offline reader keeps (the live time base may place it up to 2e-4 s earlier)
@@ -245,14 +267,13 @@ def _records(data: bytes) -> list[tuple[int, bytes]]:
     return [(int.from_bytes(data[a:a + 8], "big"), data[a:b]) for a, b in zip(starts, ends, strict=True)]
 
 
-def test_a_second_vehicle_that_overtakes_the_first_withdraws_every_row_handed_out(ground, tmp_path):
+def test_a_second_vehicle_that_overtakes_the_first_withdraws_every_row_handed_out(ground_260s, clean_260s, tmp_path):
     """The offline reader reads the system sending most ATTITUDE over the whole log; when a
     second one, heard from a third of the way on and twice as often, overtakes the vehicle the
     tail chose, every row handed out, before the change and after, is counted withdrawn."""
-    first, second = tmp_path / "first.tlog", tmp_path / "second.tlog"
-    write_tlog(ground, first, vehicle="D", station="G", origin_geodetic=ORIGIN, system_id=1)
-    write_tlog(ground, second, vehicle="D", station="G", origin_geodetic=ORIGIN, system_id=2)
-    ones = _records(first.read_bytes())
+    second = tmp_path / "second.tlog"
+    write_tlog(ground_260s, second, vehicle="D", station="G", origin_geodetic=ORIGIN, system_id=2)
+    ones = _records(clean_260s.read_bytes())  # system id 1
     late = [r for r in _records(second.read_bytes()) if r[0] > ones[len(ones) // 3][0] and r[1][8 + 5] != 51]
     # twice as often: each message again 1 us later (an exact copy, same receive time, is one
     # message in the file twice, which the offline reader reads once)
@@ -262,22 +283,23 @@ def test_a_second_vehicle_that_overtakes_the_first_withdraws_every_row_handed_ou
     whole.write_bytes(b"".join(r[1] for r in merged))
     _, meta = read_logs([str(whole)], ReaderOptions(tx_power_dbm=20.0, frequency_hz=2.412e9, station="G"))
     assert meta["files"][0]["system_id"] == 2
-    poses, signals, tail, _ = _poll_in_pieces(whole, grown)
+    poses, signals, tail, _ = _poll_in_pieces(whole, grown, LATE_PIECE_BYTES)
     assert tail.dropped["withdrawn_pose_rows"] == len(poses[poses["node"] != "G"])  # before and after the change
     assert tail.dropped["withdrawn_signal_rows"] == len(signals)
 
 
-def test_a_home_position_after_the_station_was_taken_from_a_fix_moves_the_station(ground, tmp_path):
+def test_a_home_position_after_the_station_was_taken_from_a_fix_moves_the_station(ground_260s, tmp_path):
     """Review 37: positions invalid (no origin, altitude 0.8 m) for the first 60 s, so no
     ``HOME_POSITION`` for longer than :data:`HOME_WAIT_S`: the tail takes its station from the
     first fix, then ``HOME_POSITION`` arrives, which ``sync`` takes as the station of the whole
     log. The rows handed out after it are ``sync``'s (same station, same positions), and every row
     handed out in the other frame before it is counted withdrawn: none silently ~90 m off."""
     whole, grown = tmp_path / "whole.tlog", tmp_path / "grown.tlog"
-    write_tlog(ground, whole, vehicle="D", station="G", origin_geodetic=ORIGIN, defects=TlogDefects(invalid_until_s=60.0))
+    write_tlog(ground_260s, whole, vehicle="D", station="G", origin_geodetic=ORIGIN,
+               defects=TlogDefects(invalid_until_s=60.0))
     ref, meta = read_logs([str(whole)], _options(whole))
     assert {p["reason"] for p in meta["files"][0]["excluded_periods"]} == {"before_valid_position"}
-    poses, signals, tail, _ = _poll_in_pieces(whole, grown)
+    poses, signals, tail, _ = _poll_in_pieces(whole, grown, LATE_PIECE_BYTES)
     assert tail._station == pytest.approx(tuple(meta["files"][0]["station_geodetic"]), abs=1e-9)
     vehicle = poses[poses["node"] == "D"].sort_values("t").reset_index(drop=True)
     ref_vehicle = ref.pose[ref.pose["node"] == "D"].sort_values("t").reset_index(drop=True)
@@ -290,19 +312,20 @@ def test_a_home_position_after_the_station_was_taken_from_a_fix_moves_the_statio
         np.testing.assert_allclose(after[c].to_numpy(), ref_vehicle[c].to_numpy(), rtol=0, atol=1e-9, err_msg=c)
 
 
-def test_a_station_taken_from_a_fix_found_invalid_later_moves_to_syncs_first_valid_fix(ground, tmp_path):
+def test_a_station_taken_from_a_fix_found_invalid_later_moves_to_syncs_first_valid_fix(ground_260s, tmp_path):
     """Review 37: a log with no origin message at all (``HOME_POSITION``, ``GPS_GLOBAL_ORIGIN``
     removed) whose first 60 s of positions are invalid (altitude 0.8 m): the tail takes the
     first fix as its station after :data:`HOME_WAIT_S`; the step at 60 s makes ``sync`` exclude
     those fixes and take the first valid fix after them. The rows handed out after it are
     ``sync``'s, every row handed out before counted withdrawn."""
     first = tmp_path / "first.tlog"
-    write_tlog(ground, first, vehicle="D", station="G", origin_geodetic=ORIGIN, defects=TlogDefects(invalid_until_s=60.0))
+    write_tlog(ground_260s, first, vehicle="D", station="G", origin_geodetic=ORIGIN,
+               defects=TlogDefects(invalid_until_s=60.0))
     whole, grown = tmp_path / "whole.tlog", tmp_path / "grown.tlog"
     whole.write_bytes(b"".join(r for _, r in _records(first.read_bytes()) if int.from_bytes(r[8 + 7:8 + 10], "little") not in (242, 49)))
     ref, meta = read_logs([str(whole)], _options(whole))
     assert "first position fix" in meta["files"][0]["station_note"]
-    poses, signals, tail, _ = _poll_in_pieces(whole, grown)
+    poses, signals, tail, _ = _poll_in_pieces(whole, grown, LATE_PIECE_BYTES)
     assert tail._station == pytest.approx(tuple(meta["files"][0]["station_geodetic"]), abs=1e-9)
     vehicle = poses[poses["node"] == "D"].sort_values("t").reset_index(drop=True)
     ref_vehicle = ref.pose[ref.pose["node"] == "D"].sort_values("t").reset_index(drop=True)
@@ -315,41 +338,46 @@ def test_a_station_taken_from_a_fix_found_invalid_later_moves_to_syncs_first_val
         np.testing.assert_allclose(after[c].to_numpy(), ref_vehicle[c].to_numpy(), rtol=0, atol=1e-9, err_msg=c)
 
 
-def test_the_state_kept_does_not_grow_with_a_long_gap_of_position_fixes(ground, tmp_path):
-    """Review 37: 280 s without ``GLOBAL_POSITION_INT`` (attitude and radio reports go on): the
-    rows are still the offline reader's, but the most the tail keeps during the gap should stay
-    that of the window of the last seconds, as before it."""
-    first = tmp_path / "first.tlog"
-    write_tlog(ground, first, vehicle="D", station="G", origin_geodetic=ORIGIN)
-    records = _records(first.read_bytes())
+def test_the_state_kept_does_not_grow_with_a_long_gap_of_position_fixes(clean_260s, tmp_path):
+    """Review 37: 180 s without ``GLOBAL_POSITION_INT`` (attitude and radio reports go on; 18
+    times the window of the last seconds): the rows are still the offline reader's, but the most
+    the tail keeps during the gap should stay that of the window of the last seconds, as before
+    it (kept since the gap began, it was 12 times that after 280 s of gap)."""
+    records = _records(clean_260s.read_bytes())
     t0 = records[0][0]
+    kept = [(t, r) for t, r in records if not (int.from_bytes(r[8 + 7:8 + 10], "little") == 33 and 60e6 < t - t0 < 240e6)]
     whole, grown = tmp_path / "whole.tlog", tmp_path / "grown.tlog"
-    whole.write_bytes(b"".join(r for t, r in records
-                               if not (int.from_bytes(r[8 + 7:8 + 10], "little") == 33 and 100e6 < t - t0 < 380e6)))
+    whole.write_bytes(b"".join(r for _, r in kept))
+    ends = np.cumsum([len(r) for _, r in kept]) / whole.stat().st_size
+
+    def share_read(at_s: float) -> float:
+        """The share of the log's bytes written up to ``at_s`` [s] of flight."""
+        return float(ends[np.searchsorted([t - t0 for t, _ in kept], at_s * 1e6)])
+
     ref, _ = read_logs([str(whole)], _options(whole))
     poses, signals, tail, sizes = _poll_in_pieces(whole, grown)
     assert len(poses) == len(ref.pose) and len(signals) == len(ref.signal)
     assert tail.dropped == dict.fromkeys(tail.dropped, 0)
-    before = max(k["window.att"] for f, k in sizes if 0.15 < f <= 0.35)
-    during = max(k["window.att"] for f, k in sizes if 0.45 < f <= 0.85)
+    before = max(k["window.att"] for f, k in sizes if share_read(20.0) < f <= share_read(60.0))
+    during = max(k["window.att"] for f, k in sizes if share_read(90.0) < f <= share_read(240.0))
     assert during <= 2 * before, (before, during)
 
 
-def test_glitches_that_return_leave_the_counts_balanced(ground, tmp_path):
+def test_glitches_that_return_leave_the_counts_balanced(ground_260s, tmp_path):
     """Review 37: twenty 1-s position glitches of 60 m that return: ``sync`` excludes each
     glitch; the tail hands out the same rows, so what it counts withdrawn and late must balance
     (rows handed out - withdrawn + late = ``sync``'s rows). A poll during a glitch found every
     piece before it invalid (the glitch the boot's last piece) and the next one valid again:
     the flips were counted each way (~20k rows withdrawn, ~21.5k late, the glitches' own
     messages counted late and never taken back)."""
-    pose = ground.pose.copy()
+    pose = ground_260s.pose.copy()
     t0 = float(pose["t"].min())
     vehicle = pose["node"] == "D"
     for k in range(20):
         a = t0 + 40.0 + 8.0 * k
         pose.loc[vehicle & (pose["t"] >= a) & (pose["t"] < a + 1.0), "z"] += 60.0
     whole, grown = tmp_path / "whole.tlog", tmp_path / "grown.tlog"
-    write_tlog(Logs(pose, ground.signal), whole, vehicle="D", station="G", origin_geodetic=ORIGIN)
+    write_tlog(Logs(pose, ground_260s.signal), whole, vehicle="D", station="G", origin_geodetic=ORIGIN)
     ref, meta = read_logs([str(whole)], _options(whole))
     assert {p["reason"] for p in meta["files"][0]["excluded_periods"]} == {"invalid_position"}
     poses, signals, tail, _ = _poll_in_pieces(whole, grown)
