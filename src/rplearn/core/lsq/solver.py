@@ -48,7 +48,6 @@ from rplearn.core.lsq.normal_equations import EXPONENT_MIN_SPREAD_DB, NormalEqua
 from rplearn.core.lsq.solution import FitReport, GaugeNote, JointSolution
 from rplearn.core.lsq.solver_large import solve_large, unit_shared_scaling
 from rplearn.core.lsq.spectrum import null_directions, spectrum_estimate, spectrum_report
-from rplearn.core.threads import blas_threads, fit_flops
 from rplearn.errors import IdentifiabilityError, InputError
 
 FloatArray = NDArray[np.float64]
@@ -267,46 +266,42 @@ def solve(
                                Regularisation(float(ridge), penalty is not None, shrunk), notes)
         if solution is not None:
             return solution
-    # the dense path's factorisations under the thread policy, whoever calls (a small system on one
-    # BLAS thread: with the second core busy, a second thread made a 243-column inverse 20x slower)
-    with blas_threads(fit_flops(0, pcols + k)):
-        if large:
-            sv, rank, cond = spectrum_estimate(_unit_shared_columns(normal), null_directions(normal.basis, n_nodes, components, pcols))
-        else:
-            sv, rank, cond = spectrum_report(_unit_shared_columns(normal))
-        kkt = np.zeros((pcols + k, pcols + k))
-        kkt[:pcols, :pcols] = normal.gram
-        kkt[np.arange(pat), np.arange(pat)] += ridge  # the shared columns are not shrunk
-        if penalty is not None:
-            kkt[np.arange(pcols), np.arange(pcols)] += penalty
-        kkt[:pcols, pcols:] = cmat.T
-        kkt[pcols:, :pcols] = cmat
-        # the KKT inverse (every system of up to LARGE_COLUMNS columns)
-        # Scale rows/columns for a better-conditioned factorisation.
-        scale = 1.0 / np.sqrt(np.maximum(np.abs(np.diag(kkt))[:pcols], 1e-300))
-        full_scale = np.concatenate([scale, np.ones(k)])
-        kkt_s = kkt * full_scale[:, None] * full_scale[None, :]
-        # numpy's LAPACK (not scipy's): a second OpenBLAS thread pool would wait for numpy's
-        # spinning threads after the big rank-k update and make this small inverse 40x slower.
-        try:
-            kinv_s = np.linalg.inv(kkt_s)
-        except np.linalg.LinAlgError:
-            kinv_s = np.full((pcols + k, pcols + k), np.nan)
-        finite = bool(np.all(np.isfinite(kinv_s)))
-        from rplearn.core.lsq.solver_cholesky import MAX_KKT_CONDITION  # (ctypes: loaded where used)
+        sv, rank, cond = spectrum_estimate(_unit_shared_columns(normal), null_directions(normal.basis, n_nodes, components, pcols))
+    else:
+        sv, rank, cond = spectrum_report(_unit_shared_columns(normal))
+    kkt = np.zeros((pcols + k, pcols + k))
+    kkt[:pcols, :pcols] = normal.gram
+    kkt[np.arange(pat), np.arange(pat)] += ridge  # the shared columns are not shrunk
+    if penalty is not None:
+        kkt[np.arange(pcols), np.arange(pcols)] += penalty
+    kkt[:pcols, pcols:] = cmat.T
+    kkt[pcols:, :pcols] = cmat
+    # the KKT inverse (every system of up to LARGE_COLUMNS columns)
+    # Scale rows/columns for a better-conditioned factorisation.
+    scale = 1.0 / np.sqrt(np.maximum(np.abs(np.diag(kkt))[:pcols], 1e-300))
+    full_scale = np.concatenate([scale, np.ones(k)])
+    kkt_s = kkt * full_scale[:, None] * full_scale[None, :]
+    # numpy's LAPACK (not scipy's): a second OpenBLAS thread pool would wait for numpy's
+    # spinning threads after the big rank-k update and make this small inverse 40x slower.
+    try:
+        kinv_s = np.linalg.inv(kkt_s)
+    except np.linalg.LinAlgError:
+        kinv_s = np.full((pcols + k, pcols + k), np.nan)
+    finite = bool(np.all(np.isfinite(kinv_s)))
+    from rplearn.core.lsq.solver_cholesky import MAX_KKT_CONDITION  # (ctypes: loaded where used)
 
-        cond_1 = float(np.abs(kkt_s).sum(axis=0).max() * np.abs(kinv_s).sum(axis=0).max()) if finite else np.inf
-        if not finite or cond_1 > MAX_KKT_CONDITION:
-            raise IdentifiabilityError(
-                f"the samples do not identify {normal.basis.label} for {n_nodes} nodes: design rank {rank} of "
-                f"{pcols} columns, {pcols - rank} free direction(s) but only {k} gauge constant(s); "
-                "add samples over the uncovered directions, choose a smaller model, or raise the ridge"
-            )
-        kinv = kinv_s * full_scale[:, None] * full_scale[None, :]
-        coef = (kinv @ rhs)[:pcols]
-        return close_solution(normal, coef, (sv, rank, cond), notes, k,
-                              Regularisation(float(ridge), penalty is not None, shrunk),
-                              KktInverse(kinv[:pcols, :pcols], normal.gram))
+    cond_1 = float(np.abs(kkt_s).sum(axis=0).max() * np.abs(kinv_s).sum(axis=0).max()) if finite else np.inf
+    if not finite or cond_1 > MAX_KKT_CONDITION:
+        raise IdentifiabilityError(
+            f"the samples do not identify {normal.basis.label} for {n_nodes} nodes: design rank {rank} of "
+            f"{pcols} columns, {pcols - rank} free direction(s) but only {k} gauge constant(s); "
+            "add samples over the uncovered directions, choose a smaller model, or raise the ridge"
+        )
+    kinv = kinv_s * full_scale[:, None] * full_scale[None, :]
+    coef = (kinv @ rhs)[:pcols]
+    return close_solution(normal, coef, (sv, rank, cond), notes, k,
+                          Regularisation(float(ridge), penalty is not None, shrunk),
+                          KktInverse(kinv[:pcols, :pcols], normal.gram))
 
 
 class KktInverse:
