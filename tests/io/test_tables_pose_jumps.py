@@ -1,5 +1,5 @@
 """rplearn.io.tables: in-range sentinels and positions before the fix in canonical pose tables
-(the rule of the MAVLink/ULog readers), and coordinates beyond any place counted as what they are."""
+(the rule of the MAVLink readers, at each node's own top speed), and coordinates beyond any place counted as what they are."""
 
 from __future__ import annotations
 
@@ -80,3 +80,24 @@ def test_inspect_says_the_jump_sync_would_drop(tmp_path):
     xyz[17, 2] = -1000.0
     text = inspect_logs([_flight_csv(tmp_path / "pose.csv", xyz)]).to_text()
     assert "dropped on reading: 1 pose row(s) (position_jump)" in text and "fields x, y, z of node D jump" in text
+
+
+def test_a_sentinel_at_the_end_is_the_piece_dropped_not_the_flight(tmp_path):
+    xyz = _track(n=60)
+    xyz[-1] = 0.0  # a logger writing zeros at shutdown
+    p = _flight_csv(tmp_path / "pose.csv", xyz)
+    with pytest.raises(InputError, match=r"1 of its 60 row\(s\) lie on the wrong side of a jump, first at row 59"):
+        read_pose_table(p)
+    pose, meta = read_pose_table(p, nan_policy="drop")
+    d = pose[pose["node"] == "D"]
+    assert meta["dropped"]["position_jump"] == 1 and len(d) == 59 and d["z"].min() == pytest.approx(30.0)
+
+
+@pytest.mark.parametrize(("speed_m_s", "dt_s"), [(70.0, 0.2), (120.0, 0.1), (60.0, 1.0)])
+def test_a_vehicle_faster_than_a_multicopter_passes(tmp_path, speed_m_s, dt_s):
+    xyz = _track(n=80, speed_m_s=speed_m_s, dt_s=dt_s)
+    pose, meta = read_pose_table(_flight_csv(tmp_path / "pose.csv", xyz, dt_s))
+    assert len(pose) == 81 and meta["dropped"]["position_jump"] == 0
+    xyz[40, 2] = -1000.0  # and a sentinel in it is still found
+    with pytest.raises(InputError, match=r"top speed \(\d+ m/s across.*first at row 40"):
+        read_pose_table(_flight_csv(tmp_path / "pose2.csv", xyz, dt_s))

@@ -70,6 +70,7 @@ def test_a_zero_is_a_lost_link_both_ways_and_255_drops_one_direction(tmp_path):
     down = sig[(sig["tx"] == "gcs") & ~sig["outage"]]
     assert len(down) == len(t) - 2 - 1 and not np.isclose(down["rssi_dbm"], 255 / 1.9 - 127).any()
     assert any("link lost" in n for n in meta["files"][0]["notes"])
+    assert any("readings of 255 (unknown) dropped: 1 px4 -> gcs, 1 gcs -> px4" in n for n in meta["files"][0]["notes"])
 
 
 def test_a_reading_logged_twice_is_one_row(tmp_path):
@@ -78,6 +79,7 @@ def test_a_reading_logged_twice_is_one_row(tmp_path):
     a, _ = read_logs([once], _options(once))
     b, meta = read_logs([twice], _options(twice))
     assert meta["files"][0]["signal"]["duplicate_reading"] == len(t_us)
+    assert any(f"{len(t_us)} radio reading(s) logged twice: read once" in n for n in meta["files"][0]["notes"])
     pd.testing.assert_frame_equal(a.signal, b.signal)
 
 

@@ -14,7 +14,8 @@ from rplearn.errors import InputError
 from rplearn.io.files import read_table
 from rplearn.sim.antennas import load_ground_truth
 from rplearn.sim.config import EstimatorConfig, FlightConfig, RadioConfig, SimulationConfig
-from rplearn.sim.flight import AR1_BLOCK, ar1_response, ou_process, simulate, with_effects_off
+from rplearn.sim.flight import ou_process, simulate, with_effects_off
+from rplearn.sim.noise import AR1_BLOCK, ar1_response
 from rplearn.sim.presets import PRESET_NAMES, make_preset
 
 

@@ -24,10 +24,11 @@ import pandas as pd
 
 from rplearn._argtypes import check_types
 from rplearn.core.geometry import quat_wxyz_from_euler_enu_flu_deg, quat_wxyz_from_euler_ned_frd_deg
-from rplearn.core.plausible import PLAUSIBLE
 from rplearn.data.tables import CSV_DTYPES, POSE_COLUMNS, SIGNAL_COLUMNS, check_unit_labels, node_ids, normalise_times, validate_pose_log
 from rplearn.errors import InputError, LogFormatError
 from rplearn.io._common import read_parquet_lean
+from rplearn.io._pose_checks import finite_values as _finite_values
+from rplearn.io._pose_checks import position_jumps as _position_jumps
 from rplearn.io.geodetic import geodetic_to_enu
 
 #: Vendor column names -> canonical names (the one renaming mapping of rplearn.io).
@@ -177,101 +178,6 @@ def _attitude_columns(df: pd.DataFrame, source: str) -> tuple[pd.DataFrame, tupl
         f"{source}: missing attitude columns: expected qw, qx, qy, qz or "
         "roll_deg, pitch_deg, yaw_deg (ENU/FLU) or roll_ned_deg, pitch_ned_deg, yaw_ned_deg"
     )
-
-
-def _finite_values(
-    df: pd.DataFrame, numeric: tuple[str, ...], nan_policy: str, source: str
-) -> tuple[pd.DataFrame, dict[str, np.ndarray], dict[str, int]]:
-    """The numeric columns as float arrays, rows with a NaN, a non-number or an ENU coordinate
-    beyond any place (:data:`~rplearn.core.plausible.PLAUSIBLE` ``coordinate_m``: a sentinel or
-    a corrupt value) dropped or refused.
-
-    Returns ``(table, values, dropped)``: the table and arrays without the bad rows and their
-    counts, ``nan_pose`` (NaN, infinite or no number) and ``implausible_pose`` (a finite
-    coordinate beyond 1e8 m); both 0 unless ``nan_policy="drop"``.
-    """
-    values = {c: _float_column(df, c) for c in numeric}
-    nan = np.zeros(len(df), bool)
-    far = np.zeros(len(df), bool)
-    first_bad: tuple[int, str] | None = None
-    limit = PLAUSIBLE["coordinate_m"].high
-    for c in numeric:
-        b_nan = ~np.isfinite(values[c])
-        with np.errstate(invalid="ignore"):  # an ENU coordinate beyond any place: a sentinel or corrupt value
-            b_far = (np.abs(values[c]) > limit) & ~b_nan if c in ("x", "y", "z") else np.zeros(len(df), bool)
-        b = b_nan | b_far
-        if b.any():
-            r = int(np.flatnonzero(b)[0])
-            if first_bad is None or r < first_bad[0]:
-                first_bad = (r, c)
-        nan |= b_nan
-        far |= b_far
-    if first_bad is None:
-        return df, values, {"nan_pose": 0, "implausible_pose": 0}
-    bad = nan | far
-    if nan_policy == "error":
-        raise InputError(
-            f"{source}: field {first_bad[1]} has {int(bad.sum())} row(s) with NaN, infinite or "
-            f"non-numeric values{' or coordinates beyond 1e8 m' if first_bad[1] in ('x', 'y', 'z') else ''} "
-            f"(first at row {first_bad[0]}); expected numbers, or drop those rows "
-            "(nan_policy='drop')",
-            param="nan_policy",
-        )
-    counts = {"nan_pose": int(nan.sum()), "implausible_pose": int((far & ~nan).sum())}
-    return df.loc[~bad], {c: v[~bad] for c, v in values.items()}, counts
-
-
-def _position_jumps(
-    t: np.ndarray, xyz: np.ndarray, nodes: np.ndarray, rows: np.ndarray, nan_policy: str, source: str,
-) -> tuple[np.ndarray, list[str]]:
-    """Rows on the wrong side of a position step no plausible speed explains, refused or dropped.
-
-    The rule of the MAVLink and ULog readers (:func:`rplearn.io.mavlink_phases.invalid_fixes`,
-    with the plausible top speeds, as a table carries no velocity): per node, in time order, a
-    step larger than ``(speed + slack) * dt + margin`` cuts the track into pieces; the last
-    piece is valid, an earlier one only when the step to the valid fixes after it is explained.
-    A sentinel inside the plausible range (``z = -1000``, ``x = y = z = 0`` before the fix) is
-    such a piece. ``rows`` are the file rows of the positions, for messages.
-
-    Returns ``(keep, notes)``: a mask of the rows to keep and one note per dropped piece.
-
-    Raises
-    ------
-    InputError
-        With ``nan_policy="error"``, naming the first row on the wrong side and the step; with
-        ``"drop"`` too when a node's wrong side holds half its rows or more (which side is wrong
-        is then no longer clear: no data is dropped on a guess).
-    """
-    from rplearn.io.mavlink_phases import invalid_fixes
-
-    if len(t) < 2:
-        return np.ones(len(t), bool), []
-    codes = pd.factorize(pd.Series(nodes, dtype=object))[0]  # a node id of any type (a hostile one)
-    order = np.lexsort((t, codes))
-    nothing = np.full(len(t), np.nan)
-    invalid_sorted, steps = invalid_fixes(t[order], xyz[order], nothing, nothing, codes[order], np.ones(len(t), bool))
-    if not invalid_sorted.any():
-        return np.ones(len(t), bool), []
-    invalid = np.zeros(len(t), bool)
-    invalid[order] = invalid_sorted
-    notes = []
-    for last_sorted, step in sorted(steps.items()):
-        node, code = nodes[order[last_sorted]], codes[order[last_sorted]]
-        piece = invalid & (codes == code)
-        n_node, n_bad = int((codes == code).sum()), int(piece.sum())
-        first = int(np.flatnonzero(piece)[np.argmin(rows[piece])])
-        where = (f"{source}: fields x, y, z of node {node} jump: {step} after row {int(rows[order[last_sorted]])} "
-                 f"(t = {float(t[order[last_sorted]])!r} s); {n_bad} of its {n_node} row(s) lie on the wrong side "
-                 f"of a jump, first at row {int(rows[first])} (a sentinel or a position logged before the fix "
-                 "was valid)")
-        if nan_policy == "error":
-            raise InputError(f"{where}; expected a continuous track, or drop those rows (nan_policy='drop')",
-                             param="nan_policy")
-        if 2 * n_bad >= n_node:
-            raise InputError(f"{where}; which side is valid is unclear with so many rows on the wrong side: "
-                             "expected a continuous track, cut the log to the flight", param="nan_policy")
-        notes.append(f"{where}: dropped")
-    return ~invalid, notes
 
 
 def _check_time_order(t: np.ndarray, nodes: np.ndarray, source: str) -> None:
@@ -436,7 +342,7 @@ def canonical_pose(
         and counted in ``metadata["dropped"]["nan_pose"]``; so are rows with a coordinate
         beyond 1e8 m (``implausible_pose``) and rows on the wrong side of a position jump no
         plausible speed explains (``position_jump``: a sentinel such as ``z = -1000`` or
-        ``x = y = z = 0`` before the fix; :func:`_position_jumps`), each dropped piece said in
+        ``x = y = z = 0`` before the fix; :func:`rplearn.io._pose_checks.position_jumps`), each dropped piece said in
         ``metadata["notes"]``.
     allow_unsorted : bool
         Accept times that go backwards within a node (the rows are sorted); by default

@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import io
 import os
+import threading
 from typing import Any, BinaryIO
 
 import numpy as np
@@ -188,12 +189,18 @@ def ulog_layout(path: str) -> dict[str, Any]:
         When a second, different log follows the first (logs concatenated), naming the byte.
     """
     key = _file_key(path, None)
-    if key not in _LAST_LAYOUT:  # the pose and radio readers of one file walk it once
-        _LAST_LAYOUT.clear()
-        _LAST_LAYOUT[key] = _walk_layout(path)
-    return dict(_LAST_LAYOUT[key])
+    with _CACHE_LOCK:
+        layout = _LAST_LAYOUT.get(key)
+    if layout is None:  # the pose and radio readers of one file walk it once
+        layout = _walk_layout(path)
+        with _CACHE_LOCK:
+            _LAST_LAYOUT.clear()
+            _LAST_LAYOUT[key] = layout
+    return dict(layout)
 
 
+#: Guards :data:`_LAST_LAYOUT` and :data:`_LAST_PARSED` (readers in several threads).
+_CACHE_LOCK = threading.Lock()
 #: The layout of the last ULog walked (:func:`ulog_layout`), keyed as :data:`_LAST_PARSED`.
 _LAST_LAYOUT: dict[tuple[Any, ...], dict[str, Any]] = {}
 
@@ -284,7 +291,8 @@ def parsed_ulog(source: str) -> Any:
 def release_parsed() -> None:
     """Forget the last parsed ULog (:func:`parsed_ulog`): its topics' arrays are not kept in
     memory once the readers of a file are done with it."""
-    _LAST_PARSED.clear()
+    with _CACHE_LOCK:
+        _LAST_PARSED.clear()
 
 
 def _open_ulog(source: str, log_bytes: int | None = None) -> Any:
@@ -293,11 +301,13 @@ def _open_ulog(source: str, log_bytes: int | None = None) -> Any:
     if not os.path.exists(source):
         raise InputError(f"{source}: no such file")
     key = _file_key(source, log_bytes)
-    if key in _LAST_PARSED:
-        return _LAST_PARSED[key]
-    parsed = _parse_ulog(source, log_bytes)
-    _LAST_PARSED.clear()
-    _LAST_PARSED[key] = parsed
+    with _CACHE_LOCK:
+        parsed = _LAST_PARSED.get(key)
+    if parsed is None:
+        parsed = _parse_ulog(source, log_bytes)
+        with _CACHE_LOCK:
+            _LAST_PARSED.clear()
+            _LAST_PARSED[key] = parsed
     return parsed
 
 

@@ -248,6 +248,12 @@ def read_ulog_logs(path: str | os.PathLike, node: str, radio: UlogRadio | None =
     heading_note = ("assumed level and facing east (heading 90 deg): its attitude is not logged"
                     if radio.station_heading_deg is None else f"level, heading {heading:g} deg (given)")
     meta["notes"] += [f"{source}: {station_note}", f"{source}: station {radio.station!r} {heading_note}"]
+    if counts["duplicate_reading"]:
+        meta["notes"].append(f"{source}: {counts['duplicate_reading']:,} radio reading(s) logged twice: read once")
+    unknown = {name: counts[f"unknown_{name}"] for name in ("vehicle_to_station", "station_to_vehicle")}
+    if any(unknown.values()):
+        meta["notes"].append(f"{source}: radio readings of 255 (unknown) dropped: {unknown['vehicle_to_station']:,} "
+                             f"{node} -> {radio.station}, {unknown['station_to_vehicle']:,} {radio.station} -> {node}")
     if counts["link_lost"]:
         meta["notes"].append(f"{source}: {counts['link_lost']:,} radio reading(s) with a zero RSSI (link lost): kept as "
                              "outage events (column outage, no RSSI), both directions")

@@ -1,0 +1,167 @@
+"""Checks of a pose table's values before it becomes a canonical pose log
+(:func:`rplearn.io.tables.canonical_pose`): numbers, coordinates within any place, and a track
+without jumps no plausible speed explains (in-range sentinels, positions logged before the fix)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from rplearn.core.plausible import PLAUSIBLE
+from rplearn.errors import InputError
+from rplearn.io.mavlink_phases import MAX_HORIZONTAL_SPEED_M_S, MAX_VERTICAL_SPEED_M_S, invalid_fixes
+
+#: A node's top speed, horizontal and vertical, is this many times the 75th percentile of its
+#: speeds between consecutive rows, at least the plausible maxima (a vehicle faster than a
+#: multicopter, a fixed wing at 70 m/s, is not cut at 40 m/s; a sentinel's step is thousands).
+TOP_SPEED_FACTOR = 3.0
+#: Fewest steps between a node's rows from which its own speeds are read.
+MIN_SPEED_STEPS = 8
+
+
+def _float_column(df: pd.DataFrame, name: str) -> np.ndarray:
+    return pd.to_numeric(df[name], errors="coerce").to_numpy(np.float64, na_value=np.nan)
+
+
+def finite_values(
+    df: pd.DataFrame, numeric: tuple[str, ...], nan_policy: str, source: str
+) -> tuple[pd.DataFrame, dict[str, np.ndarray], dict[str, int]]:
+    """The numeric columns as float arrays, rows with a NaN, a non-number or an ENU coordinate
+    beyond any place (:data:`~rplearn.core.plausible.PLAUSIBLE` ``coordinate_m``: a sentinel or
+    a corrupt value) dropped or refused.
+
+    Returns ``(table, values, dropped)``: the table and arrays without the bad rows and their
+    counts, ``nan_pose`` (NaN, infinite or no number) and ``implausible_pose`` (a finite
+    coordinate beyond 1e8 m); both 0 unless ``nan_policy="drop"``.
+    """
+    values = {c: _float_column(df, c) for c in numeric}
+    nan = np.zeros(len(df), bool)
+    far = np.zeros(len(df), bool)
+    first_bad: tuple[int, str] | None = None
+    limit = PLAUSIBLE["coordinate_m"].high
+    for c in numeric:
+        b_nan = ~np.isfinite(values[c])
+        with np.errstate(invalid="ignore"):  # an ENU coordinate beyond any place: a sentinel or corrupt value
+            b_far = (np.abs(values[c]) > limit) & ~b_nan if c in ("x", "y", "z") else np.zeros(len(df), bool)
+        b = b_nan | b_far
+        if b.any():
+            r = int(np.flatnonzero(b)[0])
+            if first_bad is None or r < first_bad[0]:
+                first_bad = (r, c)
+        nan |= b_nan
+        far |= b_far
+    if first_bad is None:
+        return df, values, {"nan_pose": 0, "implausible_pose": 0}
+    bad = nan | far
+    if nan_policy == "error":
+        raise InputError(
+            f"{source}: field {first_bad[1]} has {int(bad.sum())} row(s) with NaN, infinite or "
+            f"non-numeric values{' or coordinates beyond 1e8 m' if first_bad[1] in ('x', 'y', 'z') else ''} "
+            f"(first at row {first_bad[0]}); expected numbers, or drop those rows "
+            "(nan_policy='drop')",
+            param="nan_policy",
+        )
+    counts = {"nan_pose": int(nan.sum()), "implausible_pose": int((far & ~nan).sum())}
+    return df.loc[~bad], {c: v[~bad] for c, v in values.items()}, counts
+
+
+def top_speeds(t: np.ndarray, xyz: np.ndarray, codes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per row, its node's top horizontal and vertical speed [m/s] (:data:`TOP_SPEED_FACTOR`);
+    rows sorted by node, then time."""
+    same = codes[1:] == codes[:-1]
+    dt = np.diff(t)
+    ok = same & (dt > 0)
+    dh = np.hypot(*np.diff(xyz[:, :2], axis=0).T)
+    dv = np.abs(np.diff(xyz[:, 2]))
+    h = np.full(len(t), MAX_HORIZONTAL_SPEED_M_S)
+    v = np.full(len(t), MAX_VERTICAL_SPEED_M_S)
+    for code in np.unique(codes):
+        steps = ok & (codes[1:] == code)
+        if steps.sum() < MIN_SPEED_STEPS:
+            continue
+        rows = codes == code
+        h[rows] = max(MAX_HORIZONTAL_SPEED_M_S, TOP_SPEED_FACTOR * float(np.quantile(dh[steps] / dt[steps], 0.75)))
+        v[rows] = max(MAX_VERTICAL_SPEED_M_S, TOP_SPEED_FACTOR * float(np.quantile(dv[steps] / dt[steps], 0.75)))
+    return h, v
+
+
+def _invalid_both_ways(t: np.ndarray, xyz: np.ndarray, codes: np.ndarray) -> tuple[np.ndarray, dict[int, str]]:
+    """:func:`~rplearn.io.mavlink_phases.invalid_fixes` of rows sorted by node and time, at each
+    node's own top speeds, read forward (the last piece of track anchors the valid ones: fixes
+    logged before the position was valid) and backward (the first piece anchors: a sentinel at
+    the end, a logger's zeros at shutdown); per node the way that leaves fewer rows invalid.
+    Returns the invalid rows and the steps (row -> what the step was)."""
+    h, v = top_speeds(t, xyz, codes)
+    ones = np.ones(len(t), bool)
+    forward, f_steps = invalid_fixes(t, xyz, h, v, codes, ones)
+    back = np.lexsort((-t, codes))
+    b_sorted, b_steps_sorted = invalid_fixes(-t[back], xyz[back], h[back], v[back], codes[back], ones)
+    backward = np.zeros(len(t), bool)
+    backward[back] = b_sorted
+    b_steps = {int(back[i]): s for i, s in b_steps_sorted.items()}
+    invalid = forward.copy()
+    steps = dict(f_steps)
+    for code in np.unique(codes):
+        rows = codes == code
+        if backward[rows].sum() < forward[rows].sum():
+            invalid[rows] = backward[rows]
+            steps = {i: s for i, s in steps.items() if codes[i] != code}
+            steps.update({i: s for i, s in b_steps.items() if codes[i] == code})
+    speeds = {int(i): (float(h[i]), float(v[i])) for i in steps}
+    return invalid, {i: s.replace("the logged speed", "the node's top speed ({:.0f} m/s across, {:.0f} m/s up/down)"
+                                  .format(*speeds[i])) for i, s in steps.items()}
+
+
+def position_jumps(
+    t: np.ndarray, xyz: np.ndarray, nodes: np.ndarray, rows: np.ndarray, nan_policy: str, source: str,
+) -> tuple[np.ndarray, list[str]]:
+    """Rows on the wrong side of a position step no plausible speed explains, refused or dropped.
+
+    The rule of the MAVLink readers (:func:`rplearn.io.mavlink_phases.invalid_fixes`), at each
+    node's own top speed (:func:`top_speeds`: a table carries no velocity): per node, in time
+    order, a step larger than ``(speed + slack) * dt + margin`` cuts the track into pieces; one
+    end piece anchors the valid track (the last, or the first when that leaves fewer rows out:
+    :func:`_invalid_both_ways`), another piece is valid when the step to the valid fixes beside
+    it is explained. A sentinel inside the plausible range (``z = -1000``, ``x = y = z = 0``
+    before the fix or at shutdown) is such a piece. ``rows`` are the file rows of the
+    positions, for messages.
+
+    Returns ``(keep, notes)``: a mask of the rows to keep and one note per dropped piece.
+
+    Raises
+    ------
+    InputError
+        With ``nan_policy="error"``, naming the first row on the wrong side and the step; with
+        ``"drop"`` too when a node's wrong side holds half its rows or more (which side is wrong
+        is then no longer clear: no data is dropped on a guess).
+    """
+    if len(t) < 2:
+        return np.ones(len(t), bool), []
+    codes = pd.factorize(pd.Series(nodes, dtype=object))[0]  # a node id of any type (a hostile one)
+    order = np.lexsort((t, codes))
+    invalid_sorted, steps = _invalid_both_ways(t[order], xyz[order], codes[order])
+    if not invalid_sorted.any():
+        return np.ones(len(t), bool), []
+    invalid = np.zeros(len(t), bool)
+    invalid[order] = invalid_sorted
+    notes = []
+    for at_sorted, step in sorted(steps.items()):
+        node, code = nodes[order[at_sorted]], codes[order[at_sorted]]
+        piece = invalid & (codes == code)
+        n_node, n_bad = int((codes == code).sum()), int(piece.sum())
+        first = int(np.flatnonzero(piece)[np.argmin(rows[piece])])
+        where = (f"{source}: fields x, y, z of node {node} jump: {step} at row {int(rows[order[at_sorted]])} "
+                 f"(t = {float(t[order[at_sorted]]):.3f} s); {n_bad} of its {n_node} row(s) lie on the wrong side "
+                 f"of a jump, first at row {int(rows[first])} (a sentinel, or a position logged before the fix "
+                 "was valid)")
+        if nan_policy == "error":
+            raise InputError(f"{where}; expected a continuous track, or drop those rows (nan_policy='drop')",
+                             param="nan_policy")
+        if 2 * n_bad >= n_node:
+            raise InputError(f"{where}; which side is valid is unclear with so many rows on the wrong side: "
+                             "expected a continuous track, cut the log to the flight", param="nan_policy")
+        notes.append(f"{where}: dropped")
+    return ~invalid, notes
+
+
+__all__ = ["MIN_SPEED_STEPS", "TOP_SPEED_FACTOR", "finite_values", "position_jumps", "top_speeds"]
