@@ -15,7 +15,7 @@ from rplearn.io.files import read_table
 from rplearn.sim.antennas import load_ground_truth
 from rplearn.sim.config import EstimatorConfig, FlightConfig, RadioConfig, SimulationConfig
 from rplearn.sim.flight import ou_process, simulate, with_effects_off
-from rplearn.sim.noise import AR1_BLOCK, ar1_response
+from rplearn.sim.noise import AR1_LOOP_MAX_SAMPLES, ar1_filter
 from rplearn.sim.presets import PRESET_NAMES, make_preset
 
 
@@ -203,43 +203,29 @@ def test_ou_process_statistics() -> None:
     assert not np.any(ou_process(rng, 10, 0.01, 0.0, 1.0))
 
 
-@pytest.mark.parametrize("a", [0.0, 0.37, 0.995, float(np.exp(-0.005 / 30.0))])
-@pytest.mark.parametrize("n", [0, 1, AR1_BLOCK - 1, AR1_BLOCK, AR1_BLOCK + 1, 20 * AR1_BLOCK + 7])
-def test_ar1_response_is_the_recursion(n: int, a: float) -> None:
-    """The blocked filter gives ``y[k] = a y[k-1] + drive[k]`` to rounding: at every length
-    about a block (one short, exact, one over, many), for no memory, short and long memories."""
-    rng = np.random.default_rng(n)
-    drive, before = rng.standard_normal((n, 3)), 5.0 * rng.standard_normal(3)
-    expected, state = np.empty((n, 3)), before.copy()
-    for k in range(n):
-        state = a * state + drive[k]
-        expected[k] = state
-    got = ar1_response(drive, a, before)
-    assert got.shape == (n, 3)
-    np.testing.assert_allclose(got, expected, rtol=0, atol=1e-12)
-
-
-def test_ar1_response_matches_lfilter_on_a_long_series() -> None:
-    """What ``ou_process`` computed with ``scipy.signal.lfilter`` before, on a series as long
-    as a preset's (40,000 samples at a correlation time of 6,000 samples)."""
+@pytest.mark.parametrize("n", [0, 1, 2, 1000, AR1_LOOP_MAX_SAMPLES // 2, AR1_LOOP_MAX_SAMPLES // 2 + 1])
+def test_ar1_filter_is_lfilter_bit_for_bit(n: int) -> None:
+    """The loop below :data:`AR1_LOOP_MAX_SAMPLES` (two columns: the last size is lfilter's)
+    gives lfilter's numbers exactly, so a flight does not depend on which one ran."""
     from scipy.signal import lfilter
 
-    rng = np.random.default_rng(11)
-    a = float(np.exp(-0.005 / 30.0))
-    drive, before = rng.standard_normal((40_000, 2)), rng.standard_normal(2)
-    ref = lfilter([1.0], [1.0, -a], drive, axis=0, zi=(a * before)[None, :])[0]
-    np.testing.assert_allclose(ar1_response(drive, a, before), ref, rtol=0, atol=1e-12 * np.max(np.abs(ref)))
+    rng = np.random.default_rng(n)
+    drive, before = rng.standard_normal((n, 2)), rng.standard_normal(2)
+    a, b = float(np.exp(-0.005 / 30.0)), 0.37
+    ref = lfilter([b], [1.0, -a], drive, axis=0, zi=(a * before)[None, :])[0]
+    assert np.array_equal(ar1_filter(drive, a, b, before), ref)
 
 
-def test_the_simulator_imports_no_signal_processing_library() -> None:
-    """``scipy.signal`` (which pulls in ``scipy.stats``) cost every ``rplearn simulate`` 0.7-0.9 s
-    of CPU for one AR(1) filter: the simulator does without it (:func:`ar1_response`)."""
+def test_a_smoke_flight_imports_no_signal_processing_library() -> None:
+    """``scipy.signal`` (which pulls in ``scipy.stats``) costs about 1 s of CPU to import: the
+    smoke flight's short series are filtered without it."""
     import subprocess
     import sys
 
-    code = "import sys, rplearn.sim.flight; print([m for m in ('scipy.signal', 'scipy.stats') if m in sys.modules])"
-    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
-    assert proc.returncode == 0 and proc.stdout.strip() == "[]", proc.stdout + proc.stderr
+    code = ("import sys; from rplearn.sim import simulate; simulate('smoke', seed=0); "
+            "print([m for m in ('scipy.signal', 'scipy.stats') if m in sys.modules])")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0 and proc.stdout.strip().splitlines()[-1] == "[]", proc.stdout + proc.stderr
 
 
 def test_bad_inputs() -> None:

@@ -51,7 +51,7 @@ from rplearn.plan.campaign import write_references
 from rplearn.plan.trajectory import G_M_S2, TrajectoryUnit
 from rplearn.sim.antennas import GroundTruth, load_ground_truth
 from rplearn.sim.config import EstimatorConfig, FlightConfig, RadioConfig, SimulationConfig
-from rplearn.sim.noise import ar1_response
+from rplearn.sim.noise import ou_process
 from rplearn.sim.presets import make_preset
 
 FloatArray = NDArray[np.float64]
@@ -131,27 +131,6 @@ class SimulationResult:
 
 # ---------------------------------------------------------------------------------------------
 # Random processes
-
-
-def ou_process(rng: np.random.Generator, n: int, dt_s: float, std: float, tau_s: float, dims: int = 1) -> FloatArray:
-    """Stationary Ornstein-Uhlenbeck samples (AR(1)), shape (n, dims).
-
-    Parameters
-    ----------
-    std : float
-        Stationary standard deviation; 0 gives zeros.
-    tau_s : float
-        Correlation time [s]; 0 gives white noise.
-    """
-    if std <= 0 or n == 0:
-        return np.zeros((n, dims))
-    eps = rng.standard_normal((n, dims))
-    if tau_s <= 0:
-        return std * eps
-    a = float(np.exp(-dt_s / tau_s))
-    b = std * np.sqrt(1.0 - a * a)
-    x0 = std * eps[0]
-    return np.vstack([x0[None, :], ar1_response(b * eps[1:], a, x0)])
 
 
 def _rotation_z_quat(angle_rad: FloatArray) -> FloatArray:
