@@ -101,3 +101,29 @@ def test_a_vehicle_faster_than_a_multicopter_passes(tmp_path, speed_m_s, dt_s):
     xyz[40, 2] = -1000.0  # and a sentinel in it is still found
     with pytest.raises(InputError, match=r"top speed \(\d+ m/s across.*first at row 40"):
         read_pose_table(_flight_csv(tmp_path / "pose2.csv", xyz, dt_s))
+
+
+def test_sentinels_at_both_ends_are_dropped_and_the_flight_kept(tmp_path):
+    xyz = _track(n=100)
+    xyz[:5] = 0.0  # before the fix
+    xyz[-3:, 2] = -1000.0  # and at shutdown
+    pose, meta = read_pose_table(_flight_csv(tmp_path / "pose.csv", xyz), nan_policy="drop")
+    d = pose[pose["node"] == "D"]
+    assert meta["dropped"]["position_jump"] == 8 and len(d) == 92 and d["z"].min() == pytest.approx(30.0)
+
+
+@pytest.mark.parametrize("every", [2, 3, 4])
+def test_frequent_sentinels_are_not_taken_for_speed(tmp_path, every):
+    xyz = _track(n=120)
+    xyz[::every, 2] = -1000.0
+    with pytest.raises(InputError, match="fields x, y, z of node D jump"):
+        read_pose_table(_flight_csv(tmp_path / "pose.csv", xyz))
+
+
+def test_a_fast_flight_after_long_ground_time_is_kept(tmp_path):
+    ground = np.tile([[300.0 + 200.0, 0.0, 0.5]], (320, 1))  # 320 s idle at the take-off point, 1 Hz
+    flight = _track(n=80, speed_m_s=70.0, dt_s=1.0)
+    flight[:, 2] = 30.0
+    xyz = np.vstack([ground, flight])
+    pose, meta = read_pose_table(_flight_csv(tmp_path / "pose.csv", xyz, dt_s=1.0))
+    assert meta["dropped"]["position_jump"] == 0 and len(pose) == 401

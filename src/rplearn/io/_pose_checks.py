@@ -9,14 +9,20 @@ import pandas as pd
 
 from rplearn.core.plausible import PLAUSIBLE
 from rplearn.errors import InputError
-from rplearn.io.mavlink_phases import MAX_HORIZONTAL_SPEED_M_S, MAX_VERTICAL_SPEED_M_S, invalid_fixes
+from rplearn.io.mavlink_phases import MAX_HORIZONTAL_SPEED_M_S, MAX_VERTICAL_SPEED_M_S, invalid_fixes, step_allowed
 
 #: A node's top speed, horizontal and vertical, is this many times the 75th percentile of its
-#: speeds between consecutive rows, at least the plausible maxima (a vehicle faster than a
-#: multicopter, a fixed wing at 70 m/s, is not cut at 40 m/s; a sentinel's step is thousands).
+#: speeds between consecutive rows while it moves (above :data:`MOVING_SPEED_M_S`), at least the
+#: plausible maxima of a multicopter (a fixed wing at 70 m/s is not cut at 40 m/s; time on the
+#: ground does not lower it) and at most :data:`TOP_SPEED_CAP_M_S` (frequent sentinels, whose
+#: steps are thousands of m/s, cannot raise it past them).
 TOP_SPEED_FACTOR = 3.0
-#: Fewest steps between a node's rows from which its own speeds are read.
+#: Fewest moving steps between a node's rows from which its own speeds are read.
 MIN_SPEED_STEPS = 8
+#: Speed [m/s] above which a step between two rows is a moving one (:data:`TOP_SPEED_FACTOR`).
+MOVING_SPEED_M_S = 1.0
+#: Largest top speed [m/s] a node's own speeds give, across and up/down: a fast fixed wing's.
+TOP_SPEED_CAP_M_S = (150.0, 50.0)
 
 
 def _float_column(df: pd.DataFrame, name: str) -> np.ndarray:
@@ -73,43 +79,46 @@ def top_speeds(t: np.ndarray, xyz: np.ndarray, codes: np.ndarray) -> tuple[np.nd
     ok = same & (dt > 0)
     dh = np.hypot(*np.diff(xyz[:, :2], axis=0).T)
     dv = np.abs(np.diff(xyz[:, 2]))
-    h = np.full(len(t), MAX_HORIZONTAL_SPEED_M_S)
-    v = np.full(len(t), MAX_VERTICAL_SPEED_M_S)
-    for code in np.unique(codes):
-        steps = ok & (codes[1:] == code)
-        if steps.sum() < MIN_SPEED_STEPS:
-            continue
-        rows = codes == code
-        h[rows] = max(MAX_HORIZONTAL_SPEED_M_S, TOP_SPEED_FACTOR * float(np.quantile(dh[steps] / dt[steps], 0.75)))
-        v[rows] = max(MAX_VERTICAL_SPEED_M_S, TOP_SPEED_FACTOR * float(np.quantile(dv[steps] / dt[steps], 0.75)))
-    return h, v
+    out = []
+    for delta, floor, cap in ((dh, MAX_HORIZONTAL_SPEED_M_S, TOP_SPEED_CAP_M_S[0]),
+                              (dv, MAX_VERTICAL_SPEED_M_S, TOP_SPEED_CAP_M_S[1])):
+        top = np.full(len(t), floor)
+        for code in np.unique(codes):
+            steps = ok & (codes[1:] == code)
+            speed = delta[steps] / dt[steps]
+            moving = speed[speed > MOVING_SPEED_M_S]
+            if len(moving) >= MIN_SPEED_STEPS:
+                top[codes == code] = min(cap, max(floor, TOP_SPEED_FACTOR * float(np.quantile(moving, 0.75))))
+        out.append(top)
+    return out[0], out[1]
 
 
-def _invalid_both_ways(t: np.ndarray, xyz: np.ndarray, codes: np.ndarray) -> tuple[np.ndarray, dict[int, str]]:
+def _around_largest_piece(t: np.ndarray, xyz: np.ndarray, codes: np.ndarray) -> tuple[np.ndarray, dict[int, str]]:
     """:func:`~rplearn.io.mavlink_phases.invalid_fixes` of rows sorted by node and time, at each
-    node's own top speeds, read forward (the last piece of track anchors the valid ones: fixes
-    logged before the position was valid) and backward (the first piece anchors: a sentinel at
-    the end, a logger's zeros at shutdown); per node the way that leaves fewer rows invalid.
+    node's own top speeds, anchored on its largest piece of track (the rows between two steps no
+    speed explains): forward over the rows up to its end (fixes logged before the position was
+    valid), backward over the rows from its start (a sentinel at the end, zeros at shutdown).
     Returns the invalid rows and the steps (row -> what the step was)."""
     h, v = top_speeds(t, xyz, codes)
-    ones = np.ones(len(t), bool)
-    forward, f_steps = invalid_fixes(t, xyz, h, v, codes, ones)
-    back = np.lexsort((-t, codes))
-    b_sorted, b_steps_sorted = invalid_fixes(-t[back], xyz[back], h[back], v[back], codes[back], ones)
-    backward = np.zeros(len(t), bool)
-    backward[back] = b_sorted
-    b_steps = {int(back[i]): s for i, s in b_steps_sorted.items()}
-    invalid = forward.copy()
-    steps = dict(f_steps)
+    invalid = np.zeros(len(t), bool)
+    steps: dict[int, str] = {}
     for code in np.unique(codes):
-        rows = codes == code
-        if backward[rows].sum() < forward[rows].sum():
-            invalid[rows] = backward[rows]
-            steps = {i: s for i, s in steps.items() if codes[i] != code}
-            steps.update({i: s for i, s in b_steps.items() if codes[i] == code})
-    speeds = {int(i): (float(h[i]), float(v[i])) for i in steps}
-    return invalid, {i: s.replace("the logged speed", "the node's top speed ({:.0f} m/s across, {:.0f} m/s up/down)"
-                                  .format(*speeds[i])) for i, s in steps.items()}
+        idx = np.flatnonzero(codes == code)
+        if len(idx) < 2:
+            continue
+        a, c = idx[:-1], idx[1:]
+        dt = t[c] - t[a]
+        cut = ((np.hypot(*(xyz[c, :2] - xyz[a, :2]).T) > step_allowed(dt, h[a], h[c]))
+               | (np.abs(xyz[c, 2] - xyz[a, 2]) > step_allowed(dt, v[a], v[c])))
+        starts = np.concatenate([[0], np.flatnonzero(cut) + 1])
+        ends = np.concatenate([starts[1:], [len(idx)]])
+        k = int(np.argmax(ends - starts))
+        for rows, times in ((idx[:ends[k]], t[idx[:ends[k]]]), (idx[starts[k]:][::-1], -t[idx[starts[k]:][::-1]])):
+            bad, found = invalid_fixes(times, xyz[rows], h[rows], v[rows], np.zeros(len(rows), int), np.ones(len(rows), bool))
+            invalid[rows] |= bad
+            steps.update({int(rows[i]): text for i, text in found.items()})
+    label = "the node's top speed ({:.0f} m/s across, {:.0f} m/s up/down)"
+    return invalid, {i: text.replace("the logged speed", label.format(h[i], v[i])) for i, text in steps.items()}
 
 
 def position_jumps(
@@ -119,10 +128,9 @@ def position_jumps(
 
     The rule of the MAVLink readers (:func:`rplearn.io.mavlink_phases.invalid_fixes`), at each
     node's own top speed (:func:`top_speeds`: a table carries no velocity): per node, in time
-    order, a step larger than ``(speed + slack) * dt + margin`` cuts the track into pieces; one
-    end piece anchors the valid track (the last, or the first when that leaves fewer rows out:
-    :func:`_invalid_both_ways`), another piece is valid when the step to the valid fixes beside
-    it is explained. A sentinel inside the plausible range (``z = -1000``, ``x = y = z = 0``
+    order, a step larger than ``(speed + slack) * dt + margin`` cuts the track into pieces; the
+    largest piece anchors the valid track (:func:`_around_largest_piece`), another piece is
+    valid when the step to the valid fixes beside it is explained. A sentinel inside the plausible range (``z = -1000``, ``x = y = z = 0``
     before the fix or at shutdown) is such a piece. ``rows`` are the file rows of the
     positions, for messages.
 
@@ -139,7 +147,7 @@ def position_jumps(
         return np.ones(len(t), bool), []
     codes = pd.factorize(pd.Series(nodes, dtype=object))[0]  # a node id of any type (a hostile one)
     order = np.lexsort((t, codes))
-    invalid_sorted, steps = _invalid_both_ways(t[order], xyz[order], codes[order])
+    invalid_sorted, steps = _around_largest_piece(t[order], xyz[order], codes[order])
     if not invalid_sorted.any():
         return np.ones(len(t), bool), []
     invalid = np.zeros(len(t), bool)
@@ -164,4 +172,5 @@ def position_jumps(
     return ~invalid, notes
 
 
-__all__ = ["MIN_SPEED_STEPS", "TOP_SPEED_FACTOR", "finite_values", "position_jumps", "top_speeds"]
+__all__ = ["MIN_SPEED_STEPS", "MOVING_SPEED_M_S", "TOP_SPEED_CAP_M_S", "TOP_SPEED_FACTOR", "finite_values", "position_jumps",
+           "top_speeds"]

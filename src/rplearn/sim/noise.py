@@ -40,7 +40,7 @@ AR1_LOOP_MAX_SAMPLES = 200_000
 def ar1_filter(drive: FloatArray, a: float, b: float, before: FloatArray) -> FloatArray:
     """``y[k] = b * drive[k] + a * y[k-1]`` from ``y[-1] = before``, per column: what
     ``scipy.signal.lfilter([b], [1, -a], drive, axis=0, zi=a * before[None, :])[0]`` gives,
-    bit for bit (the same floating-point operations in the same order), by a plain loop for
+    bit for bit for finite values (the same floating-point operations in the same order), by a plain loop for
     up to :data:`AR1_LOOP_MAX_SAMPLES` samples and by ``lfilter`` beyond.
 
     Parameters
