@@ -6,25 +6,20 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from test_manoeuvres import NODES, POSES, SPEC  # the same small problem as the ranking's tests
+from test_manoeuvres import _options as _ranking_options
 
 from rplearn.analysis.manoeuvre_aimed import AIM_SEPARATION_DEG, pointwise_variances, target_directions, widest_directions
 from rplearn.analysis.manoeuvre_posterior import ManoeuvrePosterior
-from rplearn.analysis.manoeuvres import ManoeuvreOptions, manoeuvre_rows, prior_penalty_weight, rank_manoeuvres, target_metrics
+from rplearn.analysis.manoeuvres import manoeuvre_rows, rank_manoeuvres, target_metrics
 from rplearn.core.geometry import great_circle_angle
 from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.errors import InputError
-from rplearn.models.spec import ModelSpec
-from rplearn.plan.manoeuvres import CandidateOptions, ManoeuvreUnit
-
-SPEC = ModelSpec("sh", 4)
-NODES = ("A", "B")
-POSES = {"A": ((-5.0, 0.0, 20.0), 0.0), "B": ((5.0, 0.0, 20.0), 0.0)}
+from rplearn.plan.manoeuvres import ManoeuvreUnit
 
 
 def _options(**kw):
-    weight = prior_penalty_weight(SPEC.basis(), 3.0, 4.0, SPEC.ridge_weight)
-    cands = CandidateOptions(elevations_deg=(-30.0, 0.0, 30.0), library_loops=(1,))
-    return ManoeuvreOptions(noise_std_db=4.0, packet_rate_hz=20.0, penalty_weight=weight, candidates=cands, target_points=512, **kw)
+    return _ranking_options(target_points=512, **kw)
 
 
 def _after_a_level_turn(opts):

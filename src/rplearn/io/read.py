@@ -109,6 +109,18 @@ def _read_bag(path: str, options: ReaderOptions, got: _Gathered) -> dict[str, An
     return meta
 
 
+def _require_radio_settings(path: str, options: ReaderOptions, why: str) -> None:
+    """Refuse, naming the options, a telemetry-radio log read without the radios' transmit power
+    and carrier frequency (``why``: the rest of the message after "frequency [Hz]")."""
+    missing = [f for f in ("tx_power_dbm", "frequency_hz") if getattr(options, f) is None]
+    if missing:
+        raise InputError(
+            f"{path}: give the telemetry radios' transmit power [dBm] and carrier frequency [Hz]"
+            f"{why if why.startswith(',') else ' ' + why} (ReaderOptions.{' and ReaderOptions.'.join(missing)})",
+            param=missing[0], related=missing[1:],
+        )
+
+
 def _read_ulog(path: str, options: ReaderOptions, got: _Gathered) -> dict[str, Any]:
     """Read a PX4 ULog of a named node (with ``ulog_radio``, its telemetry radio too: both links
     to the ground station, :mod:`rplearn.io.ulog_radio`); its geodetic anchor may fix the common
@@ -122,13 +134,7 @@ def _read_ulog(path: str, options: ReaderOptions, got: _Gathered) -> dict[str, A
         )
     radio = None
     if options.ulog_radio:
-        missing = [f for f in ("tx_power_dbm", "frequency_hz") if getattr(options, f) is None]
-        if missing:
-            raise InputError(
-                f"{path}: give the telemetry radios' transmit power [dBm] and carrier frequency [Hz] to read its "
-                f"radio, a ULog carries neither (ReaderOptions.{' and ReaderOptions.'.join(missing)})",
-                param=missing[0], related=missing[1:],
-            )
+        _require_radio_settings(path, options, "to read its radio, a ULog carries neither")
         if isinstance(options.tx_power_dbm, Mapping):
             raise InputError(f"{path}: the transmit power of a ULog's radio must be one number [dBm] "
                              "(ReaderOptions.tx_power_dbm)", param="tx_power_dbm")
@@ -171,13 +177,7 @@ def _read_mavlink(path: str, options: ReaderOptions, got: _Gathered) -> dict[str
     """Read an ArduPilot telemetry or DataFlash log: the vehicle's poses, the station, both links."""
     from rplearn.io import mavlink as _mavlink
 
-    missing = [f for f in ("tx_power_dbm", "frequency_hz") if getattr(options, f) is None]
-    if missing:
-        raise InputError(
-            f"{path}: give the telemetry radios' transmit power [dBm] and carrier frequency [Hz], "
-            f"a MAVLink log carries neither (ReaderOptions.{' and ReaderOptions.'.join(missing)})",
-            param=missing[0], related=missing[1:],
-        )
+    _require_radio_settings(path, options, ", a MAVLink log carries neither")
     assert options.tx_power_dbm is not None and options.frequency_hz is not None  # refused above
     logs, meta = _mavlink.read_mavlink(
         path, options.tx_power_dbm, options.frequency_hz, (options.nodes or {}).get(path), options.station,
