@@ -113,15 +113,26 @@ def help_text(command: str) -> str:
     """What ``rplearn COMMAND --help`` prints, made in this process from the command that
     :func:`rplearn.cli.main` runs (typer's app as a click group with readable metavars, program
     name ``rplearn``): the same text as the user's process prints; assert that it exits 0."""
+    import contextlib
+    import io
+
     import typer
-    from click.testing import CliRunner
 
     from rplearn.cli import app
     from rplearn.cli._help import apply_readable_metavars
 
-    res = CliRunner().invoke(apply_readable_metavars(typer.main.get_command(app)), [command, "--help"], prog_name="rplearn")
-    assert res.exit_code == 0, f"{command} --help: {res.output} {res.exception!r}"
-    return res.stdout
+    # run as main() runs it, its standard output captured (no test runner: it would force its own
+    # terminal width, and a fresh install has no click package beside typer's own)
+    cmd = apply_readable_metavars(typer.main.get_command(app))
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        try:
+            cmd.main(args=[command, "--help"], prog_name="rplearn")
+            code = 0
+        except SystemExit as exc:
+            code = exc.code
+    assert code == 0, f"{command} --help: {out.getvalue()}"
+    return out.getvalue()
 
 
 def listing(folder: Path) -> list[str]:
