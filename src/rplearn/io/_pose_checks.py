@@ -9,7 +9,7 @@ import pandas as pd
 
 from rplearn.core.plausible import PLAUSIBLE
 from rplearn.errors import InputError
-from rplearn.io.mavlink_phases import MAX_HORIZONTAL_SPEED_M_S, MAX_VERTICAL_SPEED_M_S, invalid_fixes, step_allowed
+from rplearn.io.mavlink_phases import MAX_HORIZONTAL_SPEED_M_S, MAX_VERTICAL_SPEED_M_S, invalid_fixes, unexplained_steps
 
 #: A node's top speed, horizontal and vertical, is this many times the 75th percentile of its
 #: speeds between consecutive rows while it moves (above :data:`MOVING_SPEED_M_S`), at least the
@@ -107,9 +107,7 @@ def _around_largest_piece(t: np.ndarray, xyz: np.ndarray, codes: np.ndarray) -> 
         if len(idx) < 2:
             continue
         a, c = idx[:-1], idx[1:]
-        dt = t[c] - t[a]
-        cut = ((np.hypot(*(xyz[c, :2] - xyz[a, :2]).T) > step_allowed(dt, h[a], h[c]))
-               | (np.abs(xyz[c, 2] - xyz[a, 2]) > step_allowed(dt, v[a], v[c])))
+        cut, _, _ = unexplained_steps(t[a], xyz[a], h[a], v[a], t[c], xyz[c], h[c], v[c])
         starts = np.concatenate([[0], np.flatnonzero(cut) + 1])
         ends = np.concatenate([starts[1:], [len(idx)]])
         k = int(np.argmax(ends - starts))

@@ -80,7 +80,7 @@ def step_allowed(dt: np.ndarray, speed_a: np.ndarray, speed_b: np.ndarray) -> np
     return (np.maximum(speed_a, speed_b) + STEP_SPEED_SLACK_M_S) * np.abs(dt) + STEP_MARGIN_M
 
 
-def _unexplained(ta: np.ndarray, xa: np.ndarray, ha: np.ndarray, va: np.ndarray, tb: np.ndarray, xb: np.ndarray,
+def unexplained_steps(ta: np.ndarray, xa: np.ndarray, ha: np.ndarray, va: np.ndarray, tb: np.ndarray, xb: np.ndarray,
                  hb: np.ndarray, vb: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Whether going from fixes a to fixes b is a step the speeds do not explain, with the
     horizontal and vertical displacements [m]."""
@@ -126,7 +126,7 @@ def invalid_fixes(t: np.ndarray, xyz: np.ndarray, speed_h: np.ndarray, speed_v: 
         if len(idx) < 2:
             continue
         a, c = idx[:-1], idx[1:]
-        bad, _, _ = _unexplained(t[a], xyz[a], h[a], v[a], t[c], xyz[c], h[c], v[c])
+        bad, _, _ = unexplained_steps(t[a], xyz[a], h[a], v[a], t[c], xyz[c], h[c], v[c])
         if joined is not None:
             bad &= ~np.asarray(joined, bool)[c]
         cuts = np.flatnonzero(bad) + 1
@@ -135,7 +135,7 @@ def invalid_fixes(t: np.ndarray, xyz: np.ndarray, speed_h: np.ndarray, speed_v: 
         for lo, hi in zip(starts[-2::-1], ends[-2::-1]):
             members = idx[lo:hi]
             last = members[-1]
-            jump, dh, dv = _unexplained(t[last], xyz[last], h[last], v[last], t[chain], xyz[chain], h[chain], v[chain])
+            jump, dh, dv = unexplained_steps(t[last], xyz[last], h[last], v[last], t[chain], xyz[chain], h[chain], v[chain])
             if jump:
                 invalid[members] = True
                 speed = "logged" if logged[last] and logged[chain] else "plausible maximum"
@@ -291,4 +291,4 @@ def repeated_readings(t: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, fl
 
 __all__ = ["DUPLICATE_FRACTION_OF_PERIOD", "Fixes", "LogClock", "MAX_HORIZONTAL_SPEED_M_S", "MAX_VERTICAL_SPEED_M_S", "REASONS",
            "REBOOT_STEP_S", "STEP_MARGIN_M", "STEP_SPEED_SLACK_M_S", "boot_ids", "excluded_periods",
-           "in_periods", "invalid_fixes", "repeated_readings", "report_period_s", "step_allowed"]
+           "in_periods", "invalid_fixes", "repeated_readings", "report_period_s", "step_allowed", "unexplained_steps"]

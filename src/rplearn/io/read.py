@@ -111,12 +111,12 @@ def _read_bag(path: str, options: ReaderOptions, got: _Gathered) -> dict[str, An
 
 def _require_radio_settings(path: str, options: ReaderOptions, why: str) -> None:
     """Refuse, naming the options, a telemetry-radio log read without the radios' transmit power
-    and carrier frequency (``why``: the rest of the message after "frequency [Hz]")."""
+    and carrier frequency (``why``: the words after "frequency [Hz]")."""
     missing = [f for f in ("tx_power_dbm", "frequency_hz") if getattr(options, f) is None]
     if missing:
         raise InputError(
-            f"{path}: give the telemetry radios' transmit power [dBm] and carrier frequency [Hz]"
-            f"{why if why.startswith(',') else ' ' + why} (ReaderOptions.{' and ReaderOptions.'.join(missing)})",
+            f"{path}: give the telemetry radios' transmit power [dBm] and carrier frequency [Hz]{why} "
+            f"(ReaderOptions.{' and ReaderOptions.'.join(missing)})",
             param=missing[0], related=missing[1:],
         )
 
@@ -134,7 +134,7 @@ def _read_ulog(path: str, options: ReaderOptions, got: _Gathered) -> dict[str, A
         )
     radio = None
     if options.ulog_radio:
-        _require_radio_settings(path, options, "to read its radio, a ULog carries neither")
+        _require_radio_settings(path, options, " to read its radio, a ULog carries neither")
         if isinstance(options.tx_power_dbm, Mapping):
             raise InputError(f"{path}: the transmit power of a ULog's radio must be one number [dBm] "
                              "(ReaderOptions.tx_power_dbm)", param="tx_power_dbm")

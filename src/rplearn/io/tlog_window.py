@@ -340,7 +340,7 @@ class TlogWindow:
         h = phases._speeds(seq[:, 4], phases.MAX_HORIZONTAL_SPEED_M_S)
         v = phases._speeds(seq[:, 5], phases.MAX_VERTICAL_SPEED_M_S)
         a, c = slice(0, -1), slice(1, None)
-        bad, _, _ = phases._unexplained(seq[a, 0], xyz[a], h[a], v[a], seq[c, 0], xyz[c], h[c], v[c])
+        bad, _, _ = phases.unexplained_steps(seq[a, 0], xyz[a], h[a], v[a], seq[c, 0], xyz[c], h[c], v[c])
         cut = np.concatenate([[True], bad & ~np.concatenate([joined, np.zeros(len(gone), bool)])[1:]])
         starts = np.flatnonzero(cut)
         ends = np.concatenate([starts[1:], [len(seq)]]) - 1

@@ -123,8 +123,9 @@ def _span_and_gaps(t_key: np.ndarray, t: np.ndarray, max_gap: float) -> tuple[np
     return out, gap & ~out
 
 
-_TOPICS: tuple[str, ...] = ("radio_status", "telemetry_status", "home_position",  # rplearn.io.ulog_radio
-                            "vehicle_local_position", "vehicle_attitude", "vehicle_global_position",
+#: The topics of the telemetry radio and the home position (:mod:`rplearn.io.ulog_radio`).
+RADIO_TOPICS: tuple[str, ...] = ("radio_status", "telemetry_status", "home_position")
+_TOPICS: tuple[str, ...] = (*RADIO_TOPICS, "vehicle_local_position", "vehicle_attitude", "vehicle_global_position",
                             "vehicle_gps_position", "sensor_gps")
 
 
@@ -188,19 +189,24 @@ def ulog_layout(path: str) -> dict[str, Any]:
     LogFormatError
         When a second, different log follows the first (logs concatenated), naming the byte.
     """
-    key = _file_key(path, None)
-    with _CACHE_LOCK:
-        layout = _LAST_LAYOUT.get(key)
-    if layout is None:  # the pose and radio readers of one file walk it once
-        layout = _walk_layout(path)
-        with _CACHE_LOCK:
-            _LAST_LAYOUT.clear()
-            _LAST_LAYOUT[key] = layout
-    return dict(layout)
+    # the pose and radio readers of one file walk it once
+    return dict(_kept(_LAST_LAYOUT, _file_key(path, None), lambda: _walk_layout(path)))
 
 
 #: Guards :data:`_LAST_LAYOUT` and :data:`_LAST_PARSED` (readers in several threads).
 _CACHE_LOCK = threading.Lock()
+def _kept(store: dict[tuple[Any, ...], Any], key: tuple[Any, ...], compute: Any) -> Any:
+    """``store[key]``, computed by ``compute()`` and kept alone in ``store`` when it is not there."""
+    with _CACHE_LOCK:
+        value = store.get(key)
+    if value is None:
+        value = compute()
+        with _CACHE_LOCK:
+            store.clear()
+            store[key] = value
+    return value
+
+
 #: The layout of the last ULog walked (:func:`ulog_layout`), keyed as :data:`_LAST_PARSED`.
 _LAST_LAYOUT: dict[tuple[Any, ...], dict[str, Any]] = {}
 
@@ -300,15 +306,7 @@ def _open_ulog(source: str, log_bytes: int | None = None) -> Any:
     :class:`LogFormatError` when unreadable. The last one parsed is kept (:data:`_LAST_PARSED`)."""
     if not os.path.exists(source):
         raise InputError(f"{source}: no such file")
-    key = _file_key(source, log_bytes)
-    with _CACHE_LOCK:
-        parsed = _LAST_PARSED.get(key)
-    if parsed is None:
-        parsed = _parse_ulog(source, log_bytes)
-        with _CACHE_LOCK:
-            _LAST_PARSED.clear()
-            _LAST_PARSED[key] = parsed
-    return parsed
+    return _kept(_LAST_PARSED, _file_key(source, log_bytes), lambda: _parse_ulog(source, log_bytes))
 
 
 def _parse_ulog(source: str, log_bytes: int | None) -> Any:
@@ -590,4 +588,4 @@ def read_ulogs(
     return pose, {"origin_geodetic": origin, "logs": metas}
 
 
-__all__ = ["parsed_ulog", "read_ulog", "release_parsed", "read_ulogs", "ulog_cut_off_at", "ulog_layout", "utc_offset_us"]
+__all__ = ["RADIO_TOPICS", "parsed_ulog", "read_ulog", "release_parsed", "read_ulogs", "ulog_cut_off_at", "ulog_layout", "utc_offset_us"]

@@ -45,8 +45,6 @@ from rplearn.io.mavlink_phases import repeated_readings
 SIK_UNKNOWN = 255
 #: ``telemetry_status.type`` of a 3DR/SiK radio (older PX4, ``TELEMETRY_STATUS_RADIO_TYPE_3DR_RADIO``).
 TELEMETRY_TYPE_SIK = 1
-#: The ULog topics this module reads (besides the pose topics of :mod:`rplearn.io.ulog`).
-RADIO_TOPICS: tuple[str, ...] = ("radio_status", "telemetry_status", "home_position")
 
 
 @dataclass(frozen=True)
@@ -261,5 +259,5 @@ def read_ulog_logs(path: str | os.PathLike, node: str, radio: UlogRadio | None =
     return Logs(pose=pose, signal=signal), meta
 
 
-__all__ = ["RADIO_TOPICS", "SIK_UNKNOWN", "RadioReadings", "UlogRadio", "home_local_ned", "radio_readings",
+__all__ = ["SIK_UNKNOWN", "RadioReadings", "UlogRadio", "home_local_ned", "radio_readings",
            "radio_signal_log", "read_ulog_logs"]
