@@ -302,6 +302,18 @@ def _folder_lock(folder: str) -> Iterator[None]:
         os.close(fd)  # releases the lock
 
 
+def _sidecars_beside(path: str) -> bool:
+    """Whether the folder of model file ``path`` holds a file named as a sidecar of it
+    (:func:`sidecar_path`: ``<file>.<12 hex digits>.npz``)."""
+    folder, base = os.path.split(os.path.abspath(path))
+    pattern = re.compile(re.escape(base) + r"\.[0-9a-f]{12}" + re.escape(SIDECAR_SUFFIX))
+    try:
+        with os.scandir(folder) as entries:
+            return any(pattern.fullmatch(e.name) for e in entries)
+    except OSError:
+        return True  # not listable: read the model file as before
+
+
 def write_model_with_sidecar(path: str | os.PathLike[str], model_type: str, payload: Mapping[str, Any],
                              arrays: Mapping[str, np.ndarray] | None) -> None:
     """Write a model file and, when ``arrays`` are given, its binary sidecar, so that a failure
@@ -324,7 +336,9 @@ def write_model_with_sidecar(path: str | os.PathLike[str], model_type: str, payl
         if arrays:
             tmp, checksum = _write_sidecar(name, arrays)
         with _folder_lock(folder):
-            previous = owned_sidecar(name)
+            # the current model file is read (verified whole) only where a sidecar of it may be:
+            # without a new sidecar and with none beside it, there is nothing to keep or remove
+            previous = owned_sidecar(name) if tmp is not None or _sidecars_beside(name) else None
             target = None
             if tmp is not None:
                 target = os.path.abspath(sidecar_path(name, checksum))  # as owned_sidecar spells it
