@@ -1,8 +1,11 @@
-"""Helpers of tests/io: one simulated flight, and writers putting it in every format."""
+"""Helpers of tests/io: one simulated flight, writers putting it in every format, and ``rplearn``
+run in this process."""
 
 from __future__ import annotations
 
 import functools
+import subprocess
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -191,3 +194,18 @@ def write_pcaps(directory: Path, sig: pd.DataFrame) -> dict[str, Path]:
                             [MAC[tx] for tx in sel["tx"]], FREQUENCY_HZ, RadiotapFields(noise_dbm=-95, antenna=1))
         out[rx] = p
     return out
+
+
+def rplearn_here(args: Sequence[object]) -> subprocess.CompletedProcess[str]:
+    """``rplearn ARGS`` in this process (typer's ``CliRunner``), answered as ``subprocess.run``
+    answers (exit code, stdout and stderr apart), for a command that succeeds and whose output
+    a test reads: a process of its own would only add its second of start-up. Refusals, whose
+    exit code and one stderr line are the point, stay processes."""
+    from typer.testing import CliRunner
+
+    from rplearn.cli import app
+
+    res = CliRunner().invoke(app, [str(a) for a in args], env={"COLUMNS": "400"})
+    stderr = res.stderr + ("" if res.exception is None or isinstance(res.exception, SystemExit)
+                           else f"{type(res.exception).__name__}: {res.exception}")
+    return subprocess.CompletedProcess([str(a) for a in args], res.exit_code, res.stdout, stderr)

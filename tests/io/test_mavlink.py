@@ -521,19 +521,13 @@ def test_inspect_reports_station_link_lost_and_cut_off():
 
 
 def test_cli_sync_of_a_tlog(tmp_path):
-    import os
-    import subprocess
-    import sys
+    from flightfiles import rplearn_here
 
     from rplearn.io.files import read_table
 
-    rplearn = os.path.join(os.path.dirname(sys.executable), "rplearn")
     out = tmp_path / "m.parquet"
-    proc = subprocess.run(
-        [rplearn, "sync", "--poses", str(TLOG_1), "--signals", str(TLOG_1), "--tx-power", "20",
-         "--frequency", "915e6", "--link", "all", "--max-gap", "1.0", "-o", str(out)],
-        check=False, capture_output=True, text=True, timeout=300,
-    )
+    proc = rplearn_here(["sync", "--poses", str(TLOG_1), "--signals", str(TLOG_1), "--tx-power", "20",
+                         "--frequency", "915e6", "--link", "all", "--max-gap", "1.0", "-o", str(out)])
     assert proc.returncode == 0, proc.stdout + proc.stderr
     assert "station placed at the vehicle's first position fix" in proc.stdout
     assert "57 radio message(s)" in proc.stdout
@@ -555,8 +549,9 @@ def test_cli_station_flags(tmp_path):
     out = tmp_path / "m.parquet"
     base = [rplearn, "sync", "--poses", str(TLOG_1), "--signals", str(TLOG_1), "--tx-power", "20",
             "--frequency", "915e6", "--link", "all", "--max-gap", "1.0", "-o", str(out)]
-    proc = subprocess.run(base + ["--station", "41.1855,-96.0105,330", "--station-node", "base"],
-                          check=False, capture_output=True, text=True, timeout=300)
+    from flightfiles import rplearn_here
+
+    proc = rplearn_here(base[1:] + ["--station", "41.1855,-96.0105,330", "--station-node", "base"])  # in this process
     assert proc.returncode == 0, proc.stdout + proc.stderr
     assert "station position given" in proc.stdout
     matched = read_table(str(out))

@@ -2,15 +2,12 @@
 
 from __future__ import annotations
 
-import os
 import struct
-import subprocess
-import sys
 
 import numpy as np
 import pandas as pd
 import pytest
-from flightfiles import ground_flight, ground_simulation
+from flightfiles import ground_flight, ground_simulation, rplearn_here
 from pymavlink.dialects.v10 import ardupilotmega as mavlink1
 
 from rplearn.core.geometry import quat_wxyz_from_yaw
@@ -93,13 +90,10 @@ def test_station_heading_sets_the_station_attitude(first_minute):
 
 def test_cli_sync_of_the_simulated_tlog(first_minute, tmp_path):
     _, _, path = first_minute
-    rplearn = os.path.join(os.path.dirname(sys.executable), "rplearn")
     tlog, out = str(path), tmp_path / "m.parquet"
-    proc = subprocess.run(
-        [rplearn, "sync", "--poses", tlog, "--signals", tlog, "--tx-power", "20", "--frequency", "2.412e9",
-         "--link", "all", "--node", f"{tlog}=D", "--station-node", "G", "--station-heading", "80", "-o", str(out)],
-        check=False, capture_output=True, text=True, timeout=300,
-    )
+    proc = rplearn_here(["sync", "--poses", tlog, "--signals", tlog, "--tx-power", "20", "--frequency", "2.412e9",
+                         "--link", "all", "--node", f"{tlog}=D", "--station-node", "G", "--station-heading", "80",
+                         "-o", str(out)])
     assert proc.returncode == 0, proc.stdout + proc.stderr
     matched = read_table(str(out))
     g = matched[matched["rx"] == "G"]

@@ -4,13 +4,9 @@ before the EKF origin is set, a reboot, radio readings written twice."""
 
 from __future__ import annotations
 
-import os
-import subprocess
-import sys
-
 import numpy as np
 import pytest
-from flightfiles import ground_flight
+from flightfiles import ground_flight, rplearn_here
 
 from rplearn.analysis.pattern_error import node_directions, pattern_errors_db
 from rplearn.data.sync import synchronise
@@ -146,13 +142,10 @@ def test_no_matched_row_from_the_excluded_periods_and_the_same_patterns(ground, 
 
 def test_sync_prints_each_excluded_period(written_230s, tmp_path):
     _, broken = written_230s
-    rplearn = os.path.join(os.path.dirname(sys.executable), "rplearn")
     out = tmp_path / "m.parquet"
-    proc = subprocess.run(
-        [rplearn, "sync", "--poses", str(broken), "--signals", str(broken), "--tx-power", "20",
-         "--frequency", "2.412e9", "--link", "all", "--node", f"{broken}=D", "--station-node", "G", "-o", str(out)],
-        check=False, capture_output=True, text=True, timeout=300,
-    )
+    proc = rplearn_here(["sync", "--poses", str(broken), "--signals", str(broken), "--tx-power", "20",
+                         "--frequency", "2.412e9", "--link", "all", "--node", f"{broken}=D", "--station-node", "G",
+                         "-o", str(out)])
     assert proc.returncode == 0, proc.stdout + proc.stderr
     for reason in ("before_valid_position", "after_reboot"):
         assert f"excluded {reason} from t =" in proc.stdout
