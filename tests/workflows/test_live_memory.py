@@ -126,18 +126,9 @@ def _ranker(stats, fitted, latest):
     return [("yaw turn", 10.0, 1.0)]
 
 
-@pytest.mark.parametrize("auto", [False, True], ids=["fixed order, with a ranking", "automatic order"])
-def test_what_a_session_keeps_does_not_grow_with_its_batches(monkeypatch, tmp_path, auto):
-    options = LiveOptions(spec=ModelSpec.parse("sh") if auto else ModelSpec.parse("sh", order=4),
-                          fit=FitOptions(auto=auto), refit_s=5.0, manoeuvres=None if auto else _ranker)
-    marks = _replay(monkeypatch, tmp_path, options)
-    assert len(marks[-1]) > 20  # the walk reached the session's parts
-    assert "session.preq._n" in marks[-1] and "session.matcher._seen.sorted" in marks[-1]
-    assert _growing(marks) == {}
-
-
-def test_the_footprint_finds_a_structure_that_grows_with_the_batches(monkeypatch, tmp_path):
-    """The check above can fail: a per-batch record planted in the session is found."""
+def _planting_history(monkeypatch) -> None:
+    """Plant a per-batch record in the session (``session.history``, one entry per batch): the
+    footprint must find it growing, so that a run finding nothing else proves the check can fail."""
     original = live_module._Session.learn
 
     def learn(self, final: bool = False) -> None:
@@ -145,5 +136,17 @@ def test_the_footprint_finds_a_structure_that_grows_with_the_batches(monkeypatch
         self.__dict__.setdefault("history", []).append(math.nan)
 
     monkeypatch.setattr(live_module._Session, "learn", learn)
-    marks = _replay(monkeypatch, tmp_path, LiveOptions(spec=ModelSpec.parse("sh", order=4), fit=FitOptions(), refit_s=10.0))
+
+
+@pytest.mark.parametrize("auto", [False, True], ids=["fixed order, with a ranking", "automatic order"])
+def test_what_a_session_keeps_does_not_grow_with_its_batches(monkeypatch, tmp_path, auto):
+    """Only the per-batch record planted in the session grows (:func:`_planting_history`: the
+    check finds a structure that grows with the batches, in the same replay; it was a replay of
+    its own)."""
+    _planting_history(monkeypatch)
+    options = LiveOptions(spec=ModelSpec.parse("sh") if auto else ModelSpec.parse("sh", order=4),
+                          fit=FitOptions(auto=auto), refit_s=5.0, manoeuvres=None if auto else _ranker)
+    marks = _replay(monkeypatch, tmp_path, options)
+    assert len(marks[-1]) > 20  # the walk reached the session's parts
+    assert "session.preq._n" in marks[-1] and "session.matcher._seen.sorted" in marks[-1]
     assert set(_growing(marks)) == {"session.history"}
