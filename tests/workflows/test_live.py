@@ -59,12 +59,27 @@ def _free_port() -> int:
         return int(s.getsockname()[1])
 
 
+def _wait_until_bound(port: int, process: subprocess.Popen, timeout_s: float = 60.0) -> None:
+    """Wait until a UDP socket of this machine is bound to ``port`` (Linux: /proc/net/udp), so
+    that no datagram is sent before ``live`` listens; elsewhere, 3 s."""
+    table = Path("/proc/net/udp")
+    if not table.exists():
+        time.sleep(3.0)
+        return
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline and process.poll() is None:
+        if any(line.split()[1].endswith(f":{port:04X}") for line in table.read_text().splitlines()[1:]):
+            return
+        time.sleep(0.05)
+    raise AssertionError(f"live never listened on UDP port {port}: {process.poll()=}")
+
+
 def test_a_tlog_replayed_over_udp_at_20x_ends_with_the_offline_model(tmp_path):
     port = _free_port()
     model, record = str(tmp_path / "live.json"), str(tmp_path / "received.tlog")
     live = _rplearn("live", f"udpin:127.0.0.1:{port}", "--tx-power", "20", "--frequency", "433e6", "--idle", "3",
                     "--refit-s", "1", "--quiet", "--record", record, "-o", model)
-    time.sleep(3.0)
+    _wait_until_bound(port, live)
     # issue 27's acceptance 1 names 20x: the 571-s log in 29 s, a refit every second of it
     replay = _rplearn("replay", str(TLOG), "--to", f"127.0.0.1:{port}", "--speed", "20")
     assert replay.wait(timeout=300) == 0, replay.stdout.read()
@@ -106,14 +121,30 @@ def smoke() -> tuple[pd.DataFrame, pd.DataFrame]:
     return r.pose_log, r.signal_log.drop(columns=["unit"])
 
 
+def _session_beside_appender(pose: pd.DataFrame, sig: pd.DataFrame, folder: Path, **kw):
+    """``run_live`` on two CSVs appended to at 40x, with the silence that ends the stream 3 s
+    (0.5 s of log time is written every 12.5 ms); a writer stalled longer by a loaded machine
+    is still writing when the session ends (or the session received fewer signal rows than the
+    log holds): then the session saw a cut stream and is run again in a fresh folder, waiting
+    15 s of silence. The outcome and the folder."""
+    for attempt, idle_s in enumerate((3.0, 15.0)):
+        here = folder / f"attempt{attempt}"
+        here.mkdir()
+        writer = _appender(pose, sig, here, speed=40.0)
+        source = f"{here / 'pose.csv'},{here / 'signal.csv'}"
+        outcome = run_live(source, str(here / "live.json"), LiveOptions(refit_s=0.5, idle_s=idle_s),
+                           html=str(here / "live.html"), **kw)
+        stalled = writer.is_alive() or outcome.status.received < len(sig)
+        writer.join()
+        if not stalled:
+            break
+    return outcome, here
+
+
 def test_a_csv_being_appended_to_ends_with_the_offline_model(smoke, tmp_path):
     pose, sig = smoke
-    writer = _appender(pose, sig, tmp_path, speed=40.0)
-    source = f"{tmp_path / 'pose.csv'},{tmp_path / 'signal.csv'}"
+    outcome, tmp_path = _session_beside_appender(pose, sig, tmp_path)
     page = str(tmp_path / "live.html")
-    # the silence that ends the stream is long, so that a writer stalled by a loaded machine is waited for
-    outcome = run_live(source, str(tmp_path / "live.json"), LiveOptions(refit_s=0.5, idle_s=15.0), html=page)
-    writer.join()
     assert outcome.status.refits >= 2 and outcome.status.prequential_n > 0
     data = str(tmp_path / "data.parquet")
     sync_logs([str(tmp_path / "pose.csv")], [str(tmp_path / "signal.csv")], data)

@@ -180,6 +180,9 @@ def test_a_stop_does_not_wait_for_a_running_ranking(smoke, tmp_path, monkeypatch
     gate = threading.Event()
     workers = _Workers()
     monkeypatch.setattr(live_module, "RankingWorker", workers.make)
+    # the stop's wait for the ranking, 5 s, shortened: the ranking waits 120 s, so a stop that
+    # waited for it would still take longer than the 100 s checked below
+    monkeypatch.setattr(live_module, "STOP_RANKING_WAIT_S", 0.5)
     options = LiveOptions(spec=ModelSpec.parse("sh", order=4), fit=FitOptions(), refit_s=0.2, idle_s=1.0,
                           manoeuvres=lambda *a: gate.wait(120.0) and ROWS)
     try:
@@ -270,7 +273,10 @@ def test_a_ranking_finished_between_refits_is_on_the_page_at_once(smoke, tmp_pat
         time.sleep(0.5)  # finishes after the refit that started it has written the page
         return ROWS
 
-    options = LiveOptions(spec=ModelSpec.parse("sh", order=4), fit=FitOptions(), refit_s=5.0, idle_s=8.0,
+    # the CSVs are whole at the first read: after the first refit (1 s in) no new sample comes, so
+    # no refit writes the page again; the ranking 0.5 s later is on it all the same (the silence
+    # that ends the stream leaves it 2.5 s, as 8 s did after a first refit at 5 s)
+    options = LiveOptions(spec=ModelSpec.parse("sh", order=4), fit=FitOptions(), refit_s=1.0, idle_s=4.0,
                           manoeuvres=ranker)
     run_live(_csv_source(pose, sig, tmp_path), str(tmp_path / "m.json"), options, on_update=on_update, html=str(page))
     assert seen == [True]
