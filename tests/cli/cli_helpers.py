@@ -126,6 +126,16 @@ def run_here(args: Sequence[object], cwd: Path | str, ok: bool = True, *,
     return res
 
 
+def answer(args: Sequence[object], cwd: Path | str, process: bool = False,
+           env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
+    """What ``rplearn ARGS`` answers in ``cwd`` (exit code, stdout, stderr; not asserted): from a
+    process of its own with ``process`` (:func:`run`), else from this one (:func:`run_here`, the
+    same answer without a second of start-up). Each module that runs refusals keeps one in a process."""
+    if process:
+        return run([str(a) for a in args], cwd, env)
+    return run_here(args, cwd, ok=False, env=env)
+
+
 #: The warning filters of a fresh ``python -m rplearn.cli`` (no ``-W``, no ``PYTHONWARNINGS``,
 #: no development mode), after rplearn's imports: CPython's defaults, rplearn installs none
 #: (tests/cli/test_cli_in_process.py compares them with a fresh interpreter's).
