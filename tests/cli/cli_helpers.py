@@ -7,12 +7,15 @@ Imported by the test modules of this folder (pytest puts the folder on ``sys.pat
 from __future__ import annotations
 
 import atexit
+import contextlib
+import io
 import os
 import shutil
 import subprocess
 import sys
 import tempfile
-from collections.abc import Iterable, Sequence
+import warnings
+from collections.abc import Iterable, Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -85,37 +88,208 @@ def _run_all(d: Path, commands: Iterable[Sequence[str]]) -> None:
 def invoke_in(d: Path | str, args: Sequence[object], ok: bool = True) -> Any:
     """:func:`invoke` with ``d`` as the working folder (relative paths in ``args`` are read and
     written there), for the commands that make a test's inputs."""
-    import contextlib
-
     with contextlib.chdir(d):
         return invoke(args, ok)
 
 
-def run_here(args: Sequence[object], cwd: Path | str, ok: bool = True) -> subprocess.CompletedProcess[str]:
-    """``rplearn ARGS`` in ``cwd``, in this process, answered as :func:`run` answers (exit code,
-    stdout and stderr apart): for the commands whose output a test reads, where a process of
-    their own would only add its second of start-up. With ``ok``, assert that it succeeded.
-    Refusals, whose exit code and stderr line are the point, stay :func:`run`. An exception that
-    escaped the command is appended to stderr as the interpreter would print it (``Traceback``),
-    so that a test's check for one holds in this process too."""
+def run_here(args: Sequence[object], cwd: Path | str, ok: bool = True, *,
+             env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
+    """``rplearn ARGS`` in ``cwd``, in this process, answered as :func:`run` answers: the exit
+    code, standard output and standard error of the user's process, apart. With ``ok``, assert
+    that it succeeded. ``env``: variables added to this process's for the command (``os.environ``
+    is restored after it).
+
+    It runs the command as :func:`rplearn.cli.main` does (typer's app as a click group with
+    readable metavars, program name ``rplearn``, ``sys.argv`` of ``python -m rplearn.cli``) and
+    gives it what a fresh ``python -m rplearn.cli`` has where a test can tell:
+
+    - standard output and error of its own, neither a terminal, its text decoded as
+      ``subprocess.run(text=True)`` decodes a pipe; an empty standard input;
+    - Python warnings shown on that standard error under a fresh interpreter's filters
+      (:data:`FRESH_WARNING_FILTERS`, with ``PYTHONWARNINGS`` from the environment), the
+      once-per-location registries reset (pytest's own filters and recorder set aside);
+    - the root logger without handlers, as ``logging.basicConfig`` of the command finds it in a
+      fresh process (so its warnings reach that standard error), every logger's level restored after;
+    - the outputs written so far (:func:`rplearn._atomic.written_outputs`) empty, as at start-up;
+    - an exception escaping the command printed as the interpreter prints it (``Traceback``) and
+      exit code 1, as Python exits;
+    - what C code writes to file descriptors 1 and 2 (a library's ``printf``) read too, after
+      what Python wrote.
+
+    What stays a process of its own (:func:`run`): the order of Python's and C's writes, signals
+    and Ctrl-C, kills, ``python -m``, start-up and import-time behaviour, dask clusters, several
+    processes at once.
+    """
+    res = _in_process([str(a) for a in args], Path(cwd), env or {})
+    if ok:
+        assert res.returncode == 0, f"{args}: {res.stdout} {res.stderr}"
+    return res
+
+
+def answer(args: Sequence[object], cwd: Path | str, process: bool = False,
+           env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
+    """What ``rplearn ARGS`` answers in ``cwd`` (exit code, stdout, stderr; not asserted): from a
+    process of its own with ``process`` (:func:`run`), else from this one (:func:`run_here`, the
+    same answer without a second of start-up). Each module that runs refusals keeps one in a process."""
+    if process:
+        return run([str(a) for a in args], cwd, env)
+    return run_here(args, cwd, ok=False, env=env)
+
+
+#: The warning filters of a fresh ``python -m rplearn.cli`` (no ``-W``, no ``PYTHONWARNINGS``,
+#: no development mode), after rplearn's imports: CPython's defaults, rplearn installs none
+#: (tests/cli/test_cli_in_process.py compares them with a fresh interpreter's).
+FRESH_WARNING_FILTERS: list[tuple[Any, ...]] = [
+    ("default", None, DeprecationWarning, "__main__", 0),
+    ("ignore", None, DeprecationWarning, None, 0),
+    ("ignore", None, PendingDeprecationWarning, None, 0),
+    ("ignore", None, ImportWarning, None, 0),
+    ("ignore", None, ResourceWarning, None, 0),
+]
+
+
+def _pipe() -> io.TextIOWrapper:
+    """A text stream as a process's standard output or error into a pipe (UTF-8, not a terminal)."""
+    return io.TextIOWrapper(io.BytesIO(), encoding="utf-8", errors="backslashreplace", write_through=True)
+
+
+def _piped_text(stream: io.TextIOWrapper) -> str:
+    """What ``subprocess.run(text=True)`` reads from the pipe (universal newlines)."""
+    stream.flush()
+    data = stream.buffer.getvalue()  # type: ignore[attr-defined]
+    return data.decode("utf-8", errors="replace").replace("\r\n", "\n").replace("\r", "\n")
+
+
+def _show_warning(message: Any, category: type[Warning], filename: str, lineno: int,
+                  file: Any = None, line: str | None = None) -> None:
+    """:func:`warnings.showwarning` of a fresh interpreter: the formatted warning on ``sys.stderr``."""
+    (file or sys.stderr).write(warnings.formatwarning(message, category, filename, lineno, line))
+
+
+@contextlib.contextmanager
+def _fresh_process_state(argv: list[str], cwd: Path, env: dict[str, str]) -> Iterator[tuple[io.TextIOWrapper, io.TextIOWrapper]]:
+    """This process made to look, to a command, as a fresh ``python -m rplearn.cli ARGV`` in
+    ``cwd`` with ``env`` added (see :func:`run_here`); everything put back on exit."""
+    import logging
+
+    import rplearn.cli
+    from rplearn import _atomic
+    from rplearn.cli import _app
+
+    stdout, stderr = _pipe(), _pipe()
+    stdin = io.TextIOWrapper(io.BytesIO(b""), encoding="utf-8")
+    saved_environ = dict(os.environ)
+    saved_argv = sys.argv
+    saved_written = list(_atomic._WRITTEN)
+    saved_once = dict(warnings.onceregistry)
+    root = logging.getLogger()
+    saved_root = (root.handlers[:], root.level, root.disabled)
+    loggers = [root, *(lg for lg in logging.Logger.manager.loggerDict.values() if isinstance(lg, logging.Logger))]
+    saved_levels = [(lg, lg.level) for lg in loggers]
+    consoles = [(c, c._color_system) for c in (_app.console, _app.out)]
+    with contextlib.ExitStack() as stack:
+        stack.callback(os.environ.update, saved_environ)
+        stack.callback(lambda: [os.environ.pop(k) for k in set(os.environ) - set(saved_environ)])
+        stack.enter_context(contextlib.chdir(cwd))
+        stack.enter_context(warnings.catch_warnings())
+        try:
+            os.environ.update(env)
+            sys.argv = [os.path.join(os.path.dirname(rplearn.cli.__file__), "__main__.py"), *argv]
+            _atomic._WRITTEN.clear()
+            warnings.onceregistry.clear()
+            warnings.filters[:] = FRESH_WARNING_FILTERS
+            if os.environ.get("PYTHONWARNINGS"):
+                warnings._processoptions(os.environ["PYTHONWARNINGS"].split(","))  # type: ignore[attr-defined]
+            warnings._filters_mutated()  # type: ignore[attr-defined]  # every module's once-per-location registry is stale
+            warnings.showwarning = _show_warning
+            root.handlers, root.disabled = [], False
+            root.setLevel(logging.WARNING)
+            with contextlib.redirect_stdout(stdout), contextlib.redirect_stderr(stderr):
+                saved_stdin, sys.stdin = sys.stdin, stdin
+                try:
+                    for console, _ in consoles:  # a terminal or not, colours or not: as a fresh process detects them
+                        console._color_system = console._detect_color_system()
+                    yield stdout, stderr
+                finally:
+                    sys.stdin = saved_stdin
+        finally:
+            for handler in root.handlers:
+                if handler not in saved_root[0]:
+                    handler.close()
+            root.handlers, root.disabled = saved_root[0], saved_root[2]
+            root.setLevel(saved_root[1])
+            for logger, level in saved_levels:
+                logger.setLevel(level)
+            for console, color_system in consoles:
+                console._color_system = color_system
+            _atomic._WRITTEN[:] = saved_written
+            warnings.onceregistry.clear()
+            warnings.onceregistry.update(saved_once)
+            sys.argv = saved_argv
+
+
+@contextlib.contextmanager
+def _descriptors_captured() -> Iterator[dict[int, str]]:
+    """What is written to file descriptors 1 and 2 inside the block (C libraries write there,
+    past ``sys.stdout``): yields a dict that holds, on exit, each descriptor's text as
+    ``subprocess.run(text=True)`` reads it."""
+    import ctypes
+
+    def flush_c_stdio() -> None:
+        with contextlib.suppress(OSError, AttributeError, TypeError):
+            ctypes.CDLL(None).fflush(None)
+
+    found: dict[int, str] = {}
+    with tempfile.TemporaryFile() as out, tempfile.TemporaryFile() as err:
+        flush_c_stdio()
+        saved = [(fd, os.dup(fd)) for fd in (1, 2)]
+        try:
+            os.dup2(out.fileno(), 1)
+            os.dup2(err.fileno(), 2)
+            yield found
+        finally:
+            flush_c_stdio()
+            for fd, copy in saved:
+                os.dup2(copy, fd)
+                os.close(copy)
+            for fd, sink in ((1, out), (2, err)):
+                sink.seek(0)
+                found[fd] = sink.read().decode("utf-8", errors="replace").replace("\r\n", "\n").replace("\r", "\n")
+
+
+def _in_process(argv: list[str], cwd: Path, env: dict[str, str]) -> subprocess.CompletedProcess[str]:
+    """Run ``rplearn ARGV`` as :func:`rplearn.cli.main` runs it, in :func:`_fresh_process_state`;
+    what reached the file descriptors themselves follows what Python wrote (a process would
+    interleave them: the tests read lines and counts, not that order)."""
     import traceback
 
-    res = invoke_in(cwd, args, ok=False)
-    if ok:
-        assert res.exit_code == 0, f"{args}: {res.output} {res.exception!r}"
-    stderr = res.stderr
-    if res.exception is not None and not isinstance(res.exception, SystemExit):
-        stderr += "".join(traceback.format_exception(res.exception))
-    return subprocess.CompletedProcess([str(a) for a in args], res.exit_code, res.stdout, stderr)
+    import typer
+
+    from rplearn.cli import app
+    from rplearn.cli._help import apply_readable_metavars
+
+    with _descriptors_captured() as raw, _fresh_process_state(argv, cwd, env) as (stdout, stderr):
+        try:
+            apply_readable_metavars(typer.main.get_command(app))(args=argv, prog_name="rplearn")
+            code: Any = 0
+        except SystemExit as exc:
+            code = exc.code
+        except Exception as exc:  # noqa: BLE001 - what would escape main(): the interpreter prints it, exits 1
+            sys.stderr.write("".join(traceback.format_exception(exc)))
+            code = 1
+        if code is None:
+            code = 0
+        elif not isinstance(code, int):  # sys.exit("text"): the text on stderr, exit 1
+            sys.stderr.write(f"{code}\n")
+            code = 1
+        out_text, err_text = _piped_text(stdout), _piped_text(stderr)
+    return subprocess.CompletedProcess(["rplearn", *argv], code, out_text + raw[1], err_text + raw[2])
 
 
 def help_text(command: str) -> str:
     """What ``rplearn COMMAND --help`` prints, made in this process from the command that
     :func:`rplearn.cli.main` runs (typer's app as a click group with readable metavars, program
     name ``rplearn``): the same text as the user's process prints; assert that it exits 0."""
-    import contextlib
-    import io
-
     import typer
 
     from rplearn.cli import app

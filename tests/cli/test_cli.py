@@ -1,8 +1,12 @@
 """The command line as a user drives it (issue 5): the pipeline ``simulate -> sync -> fit ->
-evaluate -> export -> predict`` and every user error through real subprocesses (the issue's
-acceptance), the other commands whose output a test reads in this process (``run_here``: the
-same command line, exit code, stdout and stderr, without a second of start-up each); their
-refusals stay subprocesses."""
+evaluate -> export -> predict``, every user error, and the other commands.
+
+The commands run in this process (:func:`cli_helpers.run_here`: the same command line, exit
+code, stdout and stderr as a user's process, without a second of start-up each;
+tests/cli/test_cli_in_process.py compares the two). Processes of their own
+(:func:`cli_helpers.run`), so that the boundary stays covered: the pipeline's SH-3 fit (its
+model file names a process's command line), one user error (``missing file``) and
+``--version``."""
 
 from __future__ import annotations
 
@@ -12,8 +16,7 @@ import os
 import numpy as np
 import pandas as pd
 import pytest
-from cli_helpers import run_here
-from cli_helpers import run_ok as run
+from cli_helpers import answer, run_here, run_ok
 
 from rplearn.data.tables import MATCHED_COLUMNS
 
@@ -21,8 +24,8 @@ from rplearn.data.tables import MATCHED_COLUMNS
 @pytest.fixture(scope="module")
 def workdir(tmp_path_factory):
     d = tmp_path_factory.mktemp("cli")
-    run(["simulate", "--preset", "smoke", "--seed", "3", "-o", "flight"], d)
-    run(
+    run_here(["simulate", "--preset", "smoke", "--seed", "3", "-o", "flight"], d)
+    run_here(
         ["sync", "--poses", "flight/pose_log.parquet", "--signals", "flight/signal_log.parquet", "--link", "A:B", "-o", "data.parquet"],
         d,
     )
@@ -40,29 +43,29 @@ def test_simulate_sync_fit_evaluate_export_predict(workdir):
     learn = [u for u in units if not u.startswith("test")]
     test = [u for u in units if u.startswith("test")]
 
-    run(["fit", "data.parquet", "--model", "sh", "--degree", "3", "--units", ",".join(learn), "-o", "sh3.json"], d)
-    run(["fit", "data.parquet", "--model", "mean", "--units", ",".join(learn), "-o", "m.json"], d)
+    run_ok(["fit", "data.parquet", "--model", "sh", "--degree", "3", "--units", ",".join(learn), "-o", "sh3.json"], d)
+    run_here(["fit", "data.parquet", "--model", "mean", "--units", ",".join(learn), "-o", "m.json"], d)
     model = json.loads((d / "sh3.json").read_text())
     assert model["schema"] == "rplearn.model" and model["type"] == "patterns"
     assert len(model["model"]["coefficients"]["A"]) == 9
     assert model["model"]["gauge"][0]["rule"] == "equal-mean"
     assert model["model"]["provenance"]["rplearn_version"] and "fit" in model["model"]["provenance"]["command"]
 
-    ev = run(["evaluate", "sh3.json", "m.json", "data.parquet", "--units", ",".join(test), "--json", "t1.json", "--markdown", "t1.md"], d)
+    ev = run_here(["evaluate", "sh3.json", "m.json", "data.parquet", "--units", ",".join(test), "--json", "t1.json", "--markdown", "t1.md"], d)
     assert "| SH-3 |" in ev.stdout and "| M |" in ev.stdout
     rows = {r["model"]: r for r in json.loads((d / "t1.json").read_text())["rows"]}
     assert rows["SH-3"]["rmse_db"] < rows["M"]["rmse_db"]
     assert rows["M"]["n_params"] == 1 and rows["SH-3"]["n_params"] == 18
     assert (d / "t1.md").read_text().startswith("| Method")
 
-    run(["export", "sh3.json", "--format", "grid", "--step-deg", "10", "-o", "grid.csv"], d)
+    run_here(["export", "sh3.json", "--format", "grid", "--step-deg", "10", "-o", "grid.csv"], d)
     grid = pd.read_csv(d / "grid.csv")
     assert list(grid.columns) == ["node", "az_deg", "el_deg", "gain_db"]
     assert set(grid["node"]) == {"A", "B"} and np.isfinite(grid["gain_db"]).all()
-    run(["export", "sh3.json", "--format", "msi", "-o", "msi"], d)
+    run_here(["export", "sh3.json", "--format", "msi", "-o", "msi"], d)
     assert (d / "msi" / "A.msi").read_text().count("\n") > 720
 
-    run(["predict", "sh3.json", "data.parquet", "-o", "pred.csv"], d)
+    run_here(["predict", "sh3.json", "data.parquet", "-o", "pred.csv"], d)
     pred = pd.read_csv(d / "pred.csv")
     assert len(pred) == len(data)
     assert {"gain_pred_db", "rssi_pred_dbm", "gain_pred_std_db"} <= set(pred.columns)
@@ -70,11 +73,11 @@ def test_simulate_sync_fit_evaluate_export_predict(workdir):
     resid = pred["rssi_pred_dbm"] - pred["rssi_dbm"]
     assert np.sqrt(np.mean(resid**2)) < 12.0
 
-    inspect = run(["inspect", "flight/pose_log.parquet", "flight/signal_log.parquet"], d)
+    inspect = run_here(["inspect", "flight/pose_log.parquet", "flight/signal_log.parquet"], d)
     assert "A -> B" in inspect.stdout
-    orient = run(["orient", "sh3.json", "--tx", "A", "--rx", "B", "--tx-pos", "0,0,20", "--rx-pos", "10,0,20"], d)
+    orient = run_here(["orient", "sh3.json", "--tx", "A", "--rx", "B", "--tx-pos", "0,0,20", "--rx-pos", "10,0,20"], d)
     assert "best yaw" in orient.stdout and "1 sigma" in orient.stdout
-    bold = run(["orient", "sh3.json", "--tx", "A", "--rx", "B", "--tx-pos", "0,0,20", "--rx-pos", "10,0,20",
+    bold = run_here(["orient", "sh3.json", "--tx", "A", "--rx", "B", "--tx-pos", "0,0,20", "--rx-pos", "10,0,20",
                 "--caution", "0"], d)
     assert "best yaw" in bold.stdout and "chosen by its lower bound" not in bold.stdout
     import inspect as _inspect
@@ -151,7 +154,7 @@ def user_error_inputs(workdir):
 def test_user_errors_print_one_line_and_exit_1(user_error_inputs, case):
     d = user_error_inputs
     args, needle = USER_ERRORS[case]
-    proc = run(args, d, ok=False)
+    proc = answer(args, d, process=case == "missing file")
     assert proc.returncode == 1, proc.stderr
     lines = [l for l in proc.stderr.strip().splitlines() if l.strip()]
     assert len(lines) == 1, proc.stderr  # (inspect prints its report on stdout first)
@@ -211,14 +214,14 @@ def test_sweep_plot_report_and_images(workdir):
 
 
 def test_version_needs_no_command(tmp_path):
-    proc = run(["--version"], tmp_path)
+    proc = run_ok(["--version"], tmp_path)
     assert proc.stdout.startswith("rplearn ")
 
 
 def test_bad_options_write_nothing(workdir):
-    run(["report", "data.parquet", "--paper-models", "m,foo", "-o", "rep_nothing"], workdir, ok=False)
+    run_here(["report", "data.parquet", "--paper-models", "m,foo", "-o", "rep_nothing"], workdir, ok=False)
     assert not (workdir / "rep_nothing").exists()
-    run(["trajectory", "-o", "plan_nothing", "--check-model", "foo"], workdir, ok=False)
+    run_here(["trajectory", "-o", "plan_nothing", "--check-model", "foo"], workdir, ok=False)
     assert not (workdir / "plan_nothing").exists()
 
 
@@ -254,7 +257,7 @@ def test_predict_links_never_flown_and_honest_spreads(workdir):
     warned = run_here(["predict", "sh4.json", "other_channel.csv", "-o", "other_pred.csv"], d)
     assert "warning:" in warned.stderr and "2.600 GHz" in warned.stderr
     data.drop(columns=["rssi_dbm"]).assign(frequency_hz=5.8e9).to_csv(d / "other_band.csv", index=False)
-    refused = run(["predict", "sh4.json", "other_band.csv", "-o", "band_pred.csv"], d, ok=False)
+    refused = run_here(["predict", "sh4.json", "other_band.csv", "-o", "band_pred.csv"], d, ok=False)
     assert refused.returncode == 1 and "at 5.8 GHz, but the" in refused.stderr and not (d / "band_pred.csv").exists()
 
 
@@ -296,7 +299,7 @@ def test_links_of_a_swarm_through_the_cli(workdir):
     poses = pd.read_parquet(d / "flight" / "pose_log.parquet")
     third = poses[poses["node"] == "A"].assign(node="C", x=lambda f: f["x"] + 15.0)
     pd.concat([poses, third]).to_csv(d / "three.csv", index=False)
-    bad = run(["links", "sh3.json", "three.csv", "--tx-power", "20", "-o", "l3.csv"], d, ok=False)
+    bad = run_here(["links", "sh3.json", "three.csv", "--tx-power", "20", "-o", "l3.csv"], d, ok=False)
     assert bad.returncode == 1 and "--as C=NODE" in bad.stderr and "Traceback" not in bad.stderr
     good = run_here(["links", "sh3.json", "three.csv", "--tx-power", "20", "--as", "C=A", "-o", "l3.csv"], d)
     assert "C (A)" in good.stdout
@@ -315,7 +318,7 @@ def test_headings_through_the_cli(workdir):
     assert "bottleneck RSSI" in proc.stdout
     yaws = pd.read_csv(d / "yaws.csv")
     assert sorted(yaws["drone"]) == ["A", "B", "C"] and yaws["yaw_deg"].between(-180, 180).all()
-    bad = run(["headings", "sh3.json", "--pos", "A=0,0", "--tx-power", "20"], d, ok=False)
+    bad = run_here(["headings", "sh3.json", "--pos", "A=0,0", "--tx-power", "20"], d, ok=False)
     assert bad.returncode == 1 and "x,y,z" in bad.stderr
 
 
@@ -341,7 +344,7 @@ def test_trajectory_optimize_prints_the_expected_spread_and_writes_the_plan(tmp_
     assert "expected per-node pattern spread over time" in proc.stdout and "(prior)" in proc.stdout
     files = sorted(os.listdir(tmp_path / "plan"))
     assert files and files[0].startswith("01_") and all(f.endswith(".csv") for f in files)
-    bad = run(["trajectory", "--optimize", "--budget-s", "-5", "-o", "plan2"], tmp_path, ok=False)
+    bad = run_here(["trajectory", "--optimize", "--budget-s", "-5", "-o", "plan2"], tmp_path, ok=False)
     assert bad.returncode == 1 and "--budget-s" in bad.stderr and len(bad.stderr.strip().splitlines()) == 1
 
 
@@ -352,5 +355,5 @@ def test_simulate_flies_a_written_plan(tmp_path):
     signals = pd.read_parquet(tmp_path / "flight" / "signal_log.parquet")
     labels = {f.rsplit("_", 1)[0] for f in os.listdir(tmp_path / "plan")}
     assert set(signals["unit"]) == labels
-    bad = run(["simulate", "--preset", "ground", "--plan", "plan", "-o", "f2"], tmp_path, ok=False)
+    bad = run_here(["simulate", "--preset", "ground", "--plan", "plan", "-o", "f2"], tmp_path, ok=False)
     assert bad.returncode == 1 and "no antenna in preset ground" in bad.stderr

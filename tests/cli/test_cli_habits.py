@@ -1,6 +1,12 @@
 """The command line follows its ecosystem's habits (issue 26, item 2): ``python -m rplearn``,
 shell completion, ``inspect --json``, and messages for natural mistakes that name what the file
-is and the command that would work."""
+is and the command that would work.
+
+The commands run in this process (:func:`here`, :func:`cli_helpers.run_here`: the exit code,
+stdout and stderr of a user's process) except where the process is the point: ``python -m
+rplearn --help``, the bash completion script of ``python -m rplearn``, ``fit --help`` of the user's
+process against the text made here, and one refusal (``fit --order x``) so that the process
+boundary stays covered."""
 
 from __future__ import annotations
 
@@ -19,8 +25,14 @@ ENV = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT / "src"), os.enviro
 
 
 def run(*args: str, cwd: Path, env: dict[str, str] | None = None) -> subprocess.CompletedProcess:
+    """``python -m rplearn ARGS`` as a process of its own."""
     return subprocess.run([sys.executable, "-m", "rplearn", *args], cwd=cwd, capture_output=True, text=True,
                           timeout=300, env=env or ENV)
+
+
+def here(*args: str, cwd: Path, env: dict[str, str] | None = None) -> subprocess.CompletedProcess:
+    """What :func:`run` answers, from this process (:func:`cli_helpers.run_here`)."""
+    return run_here(list(args), cwd, ok=False, env=env)
 
 
 def _no_constant(name: str) -> float:
@@ -49,38 +61,36 @@ def test_python_dash_m_rplearn_is_the_command(flight):
 
 def test_bash_completion_script_and_a_completion(flight):
     # the script `rplearn --show-completion` prints under bash (shell detection aside: typer's
-    # source_<shell> instruction names the shell), for bash, zsh and fish
-    for shell, marker in (("bash", "complete_bash"), ("zsh", "complete_zsh"), ("fish", "complete_fish")):
-        proc = subprocess.run([sys.executable, "-m", "rplearn"], cwd=flight, capture_output=True, text=True, timeout=120,
-                              env={**ENV, "_RPLEARN_COMPLETE": f"source_{shell}"})
-        assert proc.returncode == 0 and marker in proc.stdout, (shell, proc)
+    # source_<shell> instruction names the shell), for bash (from `python -m rplearn`), zsh and fish
     proc = subprocess.run([sys.executable, "-m", "rplearn"], cwd=flight, capture_output=True, text=True, timeout=120,
                           env={**ENV, "_RPLEARN_COMPLETE": "source_bash"})
+    assert proc.returncode == 0 and "complete_bash" in proc.stdout, proc
     assert "complete" in proc.stdout and "_RPLEARN_COMPLETE=complete_bash" in proc.stdout
+    for shell in ("zsh", "fish"):
+        proc = here(cwd=flight, env={"_RPLEARN_COMPLETE": f"source_{shell}"})
+        assert proc.returncode == 0 and f"complete_{shell}" in proc.stdout, (shell, proc)
     # what bash asks through that script: complete `rplearn fi` and `rplearn inspect --js`
-    env = {**ENV, "_RPLEARN_COMPLETE": "complete_bash", "COMP_WORDS": "rplearn fi", "COMP_CWORD": "1"}
-    got = subprocess.run([sys.executable, "-c", "from rplearn.cli import main; main()"], cwd=flight,
-                         capture_output=True, text=True, timeout=120, env=env)
+    env = {"_RPLEARN_COMPLETE": "complete_bash", "COMP_WORDS": "rplearn fi", "COMP_CWORD": "1"}
+    got = here(cwd=flight, env=env)
     assert got.stdout.split() == ["fit"], got
     env.update(COMP_WORDS="rplearn inspect --js", COMP_CWORD="2")
-    got = subprocess.run([sys.executable, "-c", "from rplearn.cli import main; main()"], cwd=flight,
-                         capture_output=True, text=True, timeout=120, env=env)
+    got = here(cwd=flight, env=env)
     assert "--json" in got.stdout.split()
 
 
 def test_inspect_json_is_strict_json_with_times_from_the_log_start(flight):
-    proc = run("inspect", "--json", "f/pose_log.parquet", "f/signal_log.parquet", cwd=flight)
+    proc = here("inspect", "--json", "f/pose_log.parquet", "f/signal_log.parquet", cwd=flight)
     assert proc.returncode == 0, proc.stderr
     doc = json.loads(proc.stdout, parse_constant=_no_constant)
     assert doc["schema"] == "rplearn.inspect" and doc["start_s"] >= 0.0
     assert {n["node"] for n in doc["nodes"]} == {"A", "B"}
     assert min(n["t_start_s"] for n in doc["nodes"]) == pytest.approx(0.0, abs=1.0)  # relative, not epoch
     assert all(lk["rate_hz"] > 0 for lk in doc["links"])
-    assert run("inspect", "--json", "--markdown", "f/pose_log.parquet", cwd=flight).returncode == 1
+    assert here("inspect", "--json", "--markdown", "f/pose_log.parquet", cwd=flight).returncode == 1
 
 
 def test_inspect_json_of_a_real_tlog_parses_strictly(tmp_path):
-    proc = run("inspect", "--json", str(TLOG), cwd=tmp_path)
+    proc = here("inspect", "--json", str(TLOG), cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr
     doc = json.loads(proc.stdout, parse_constant=_no_constant)
     assert doc["files"][0]["format"] == "tlog" and doc["links"]
@@ -89,7 +99,7 @@ def test_inspect_json_of_a_real_tlog_parses_strictly(tmp_path):
 @pytest.mark.parametrize("args", [("fit", "{tlog}", "-o", "x.json"), ("evaluate", "m.json", "{tlog}"),
                                   ("predict", "m.json", "{tlog}", "-o", "p.parquet")])
 def test_a_raw_log_given_for_a_dataset_names_the_sync_command(flight, args):
-    proc = run(*[a.format(tlog=TLOG) for a in args], cwd=flight)
+    proc = here(*[a.format(tlog=TLOG) for a in args], cwd=flight)
     assert proc.returncode == 1
     line = proc.stderr.strip()
     assert len(line.splitlines()) == 1 and "Traceback" not in line
@@ -98,21 +108,21 @@ def test_a_raw_log_given_for_a_dataset_names_the_sync_command(flight, args):
 
 
 def test_predict_with_its_arguments_swapped_says_so(flight):
-    proc = run("predict", "d.parquet", "m.json", "-o", "p.parquet", cwd=flight)
+    proc = here("predict", "d.parquet", "m.json", "-o", "p.parquet", cwd=flight)
     assert proc.returncode == 1
     assert "d.parquet: a table (a dataset?), not a model file: are the arguments in the wrong order?" in proc.stderr
     assert "utf-8" not in proc.stderr
 
 
 def test_a_model_file_given_for_a_dataset_says_what_it_is(flight):
-    proc = run("fit", "m.json", "-o", "y.json", cwd=flight)
+    proc = here("fit", "m.json", "-o", "y.json", cwd=flight)
     assert proc.returncode == 1
     assert "m.json: a JSON file (a model file?), not a table" in proc.stderr and "ParserError" not in proc.stderr
 
 
 def test_swapped_pose_and_signal_logs_say_swap_them(flight):
-    proc = run("sync", "--poses", "f/signal_log.parquet", "--signals", "f/pose_log.parquet", "-o", "s.parquet",
-               cwd=flight)
+    proc = here("sync", "--poses", "f/signal_log.parquet", "--signals", "f/pose_log.parquet", "-o", "s.parquet",
+                cwd=flight)
     assert proc.returncode == 1
     assert "no pose log found" in proc.stderr and "swap --poses and --signals" in proc.stderr
     assert not (flight / "s.parquet").exists()
@@ -122,7 +132,7 @@ def test_a_corrupt_table_still_gets_the_parsers_one_line(tmp_path):
     """No hint applies: the parser's complaint, on one line."""
     bad = tmp_path / "bad.csv"
     bad.write_text('t,tx,rx\n1,"A\n')
-    proc = run("fit", str(bad), "-o", "x.json", cwd=tmp_path)
+    proc = here("fit", str(bad), "-o", "x.json", cwd=tmp_path)
     assert proc.returncode == 1 and len(proc.stderr.strip().splitlines()) == 1
 
 

@@ -1,16 +1,16 @@
 """``fit --path-loss`` and ``--link-offsets`` from the command line (issue 12, items 1 and 2).
 
 The commands that succeed run in this process (:func:`cli_helpers.invoke`: what they print and
-store is the point); the refusals run as a user's process, whose exit code and standard error
-are the point."""
+store is the point); so do the refusals (:func:`cli_helpers.run_here`: the exit code and standard
+error of a user's process), except the first, which runs as a process of its own so that the
+process boundary stays covered."""
 
 from __future__ import annotations
 
 import json
 
 import pytest
-from cli_helpers import invoke, invoke_in
-from cli_helpers import run_ok as run
+from cli_helpers import answer, invoke, invoke_in
 
 
 @pytest.fixture(scope="module")
@@ -48,12 +48,12 @@ def test_fit_learns_and_stores_the_exponent_and_offsets_and_names_its_flags(work
     out = invoke(["fit", d / "both.parquet", "--degree", "6", "--no-link-offsets", "-o", d / "r.json"])
     assert "electronics offsets" not in out.stdout
     # errors name the flag (one test: the flight is simulated once per worker)
-    bad = run(["fit", "ab.parquet", "--path-loss", "hata", "-o", "x.json"], d, ok=False)
+    bad = answer(["fit", "ab.parquet", "--path-loss", "hata", "-o", "x.json"], d, process=True)
     assert bad.returncode == 1 and "--path-loss" in bad.stderr and "log-distance" in bad.stderr
-    bad = run(["fit", "ab.parquet", "--path-loss", "two-ray", "--ground-level", "100", "-o", "x.json"], d, ok=False)
+    bad = answer(["fit", "ab.parquet", "--path-loss", "two-ray", "--ground-level", "100", "-o", "x.json"], d)
     assert bad.returncode == 1 and "below the ground level" in bad.stderr and "--ground-level" in bad.stderr
-    bad = run(["fit", "ab.parquet", "--model", "m", "--path-loss", "log-distance", "-o", "x.json"], d, ok=False)
+    bad = answer(["fit", "ab.parquet", "--model", "m", "--path-loss", "log-distance", "-o", "x.json"], d)
     assert bad.returncode == 1 and "baselines" in bad.stderr
-    bad = run(["fit", "ab.parquet", "--path-loss", "two-ray", "--permittivity", "0.5", "-o", "x.json"], d, ok=False)
+    bad = answer(["fit", "ab.parquet", "--path-loss", "two-ray", "--permittivity", "0.5", "-o", "x.json"], d)
     assert bad.returncode == 1 and "--permittivity" in bad.stderr
     assert not (d / "x.json").exists()

@@ -4,6 +4,10 @@ Each case is a command line on a small simulated flight, or on a file made bad o
 what must come out: either a refusal (exit 1, one line ``error: ...`` naming the file, row, flag
 or value; no traceback, no file written) or a result that counts what it dropped or fixed.
 Examples shown elsewhere are named at the bottom, with the test that shows them.
+
+The commands run in this process (:func:`cli_helpers.run_here`: the exit code, stdout and stderr a
+user's process shows), except one refusal (:data:`IN_A_PROCESS`), so that the process boundary
+stays covered.
 """
 
 from __future__ import annotations
@@ -15,7 +19,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from cli_helpers import D, M, P, S, assert_one_line_error, listing, run, smoke_flight
+from cli_helpers import D, M, P, S, answer, assert_one_line_error, listing, run_here, smoke_flight
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures"
 SYNC = ["sync", "--poses", P, "--link", "all", "-o", "out.parquet", "--signals"]
@@ -110,11 +114,16 @@ REFUSED = {
 }
 
 
+#: The refusal that runs as a process of its own.
+IN_A_PROCESS = "-o /dev/full"
+assert IN_A_PROCESS in REFUSED
+
+
 @pytest.mark.parametrize("case", sorted(REFUSED))
 def test_refused_in_one_line_and_nothing_written(workdir, case):
     args, needle = REFUSED[case]
     before = listing(workdir)
-    assert_one_line_error(run(args, workdir), needle, case)
+    assert_one_line_error(answer(args, workdir, case == IN_A_PROCESS), needle, case)
     assert listing(workdir) == before  # nothing written, no temporary file left
 
 
@@ -133,8 +142,6 @@ COUNTED = {
 
 @pytest.mark.parametrize("case", sorted(COUNTED))
 def test_counted_or_said_not_hidden(workdir, case):
-    from cli_helpers import run_here  # in this process: the text of a result is the point, not its process
-
     args, needle = COUNTED[case]
     proc = run_here(args, workdir, ok=False)
     out = proc.stdout + proc.stderr
@@ -147,8 +154,6 @@ def test_counted_or_said_not_hidden(workdir, case):
 
 def test_sync_streams_a_csv_signal_log(workdir):
     """Class 4: big CSV signal logs are read in chunks (memory in benchmarks/sync_csv_memory.py)."""
-    from cli_helpers import run_here
-
     shutil.copy(workdir / "above_tx.csv", workdir / "big.csv")
     proc = run_here(SYNC + ["big.csv"], workdir, ok=False)
     assert proc.returncode == 0, proc.stderr

@@ -6,6 +6,10 @@ Each refusal is exit 1 with one line ``error: ...`` naming the file and the flag
 and no file written or removed; the saves that must succeed leave every file they did not
 write byte-identical. The library side (random path specs, concurrent saves of swarm models) is
 in tests/io/test_resolve.py and tests/io/test_modelfile.py.
+
+The commands run in this process (:func:`cli_helpers.run_here`: the exit code, stdout and stderr a
+user's process shows), except one refusal (:data:`IN_A_PROCESS`), so that the process boundary
+stays covered, and the two synchronised fits, whose being two processes is the point.
 """
 
 from __future__ import annotations
@@ -16,7 +20,7 @@ import subprocess
 
 import pandas as pd
 import pytest
-from cli_helpers import RPLEARN, D, M, P, S, digests, run, smoke_flight
+from cli_helpers import RPLEARN, D, M, P, S, answer, digests, run_here, smoke_flight
 
 FIT = ["--order", "3", "-o", "m.json"]
 SIGNALS = ["sync", "--poses", P, "--link", "all", "--tx-power", "20", "--frequency", "2.4e9", "-o", "o.parquet",
@@ -110,12 +114,17 @@ REFUSED = {
 }
 
 
+#: The refusal that runs as a process of its own.
+IN_A_PROCESS = "trajectory -o a file"
+assert IN_A_PROCESS in REFUSED
+
+
 @pytest.mark.parametrize("case", sorted(REFUSED))
 def test_refused_with_one_line_naming_the_file_and_flag_and_nothing_changes(workdir, case):
     args, words = REFUSED[case]
     args = [a.replace("{abs}", str(workdir)) for a in args]
     before = digests(workdir)
-    proc = run(args, workdir)
+    proc = answer(args, workdir, case == IN_A_PROCESS)
     lines = [line for line in proc.stderr.splitlines() if line.strip()]
     assert proc.returncode == 1 and len(lines) == 1 and lines[0].startswith("error:"), proc.stderr
     for word in words:
@@ -131,8 +140,6 @@ def test_saving_a_model_removes_no_file_it_did_not_write(workdir):
     theirs = {"nn.json.npz": b"the user's arrays", "nn.json.0123456789ab.npz": b"an old copy"}
     for name, data in theirs.items():
         (folder / name).write_bytes(data)
-    from cli_helpers import run_here  # in this process: what the save leaves is the point, not its process
-
     for k in ("20", "30"):
         proc = run_here(["fit", f"../{D}", "--model", "knn", "--order", k, "-o", "nn.json"], folder, ok=False)
         assert proc.returncode == 0, proc.stderr

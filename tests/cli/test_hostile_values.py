@@ -5,6 +5,10 @@ what must come out: a refusal (exit 1, one line ``error: ...`` naming the file, 
 no traceback, nothing written) or a result that says what it did. The checks behind them are
 one frequency check and one plausibility table (``rplearn.core.plausible``; unit tests in
 tests/core/test_plausible.py).
+
+The commands run in this process (:func:`cli_helpers.run_here`: the exit code, stdout and stderr a
+user's process shows); one case of each refusal test (:data:`IN_A_PROCESS`) runs as a process of
+its own (:func:`cli_helpers.run`), so that the process boundary stays covered.
 """
 
 from __future__ import annotations
@@ -14,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from cli_helpers import D, M, P, S, assert_one_line_error, invoke_in, listing, run, smoke_flight
+from cli_helpers import D, M, P, S, answer, assert_one_line_error, invoke_in, listing, run_here, smoke_flight
 
 ORIENT = ["orient", M, "--tx", "A", "--rx", "B", "--tx-pos", "0,0,20", "--rx-pos", "30,0,20"]
 GHZ24, GHZ58 = 2.412e9, 5.8e9
@@ -192,11 +196,15 @@ REFUSED = {
 }
 
 
+#: The cases that run as a process of their own (one per refusal test).
+IN_A_PROCESS = {"orient 1,000 km apart", "home 111 km from the flight"}
+
+
 @pytest.mark.parametrize("case", sorted(REFUSED))
 def test_refused_in_one_line_and_nothing_written(workdir, case):
     args, needle = REFUSED[case]
     before = listing(workdir)
-    assert_one_line_error(run(args, workdir), needle, case)
+    assert_one_line_error(answer(args, workdir, case in IN_A_PROCESS), needle, case)
     assert listing(workdir) == before  # nothing written, no temporary file left
 
 
@@ -212,18 +220,19 @@ LOG_REFUSED = {
 }
 
 
+assert IN_A_PROCESS <= REFUSED.keys() | LOG_REFUSED.keys()
+
+
 @pytest.mark.parametrize("case", sorted(LOG_REFUSED))
 def test_implausible_places_refuse_the_log(workdir, case):
     args, needle = LOG_REFUSED[case]
-    proc = run(args, workdir)
+    proc = answer(args, workdir, case in IN_A_PROCESS)
     out = proc.stdout + proc.stderr
     assert proc.returncode == 1 and needle in out and "Traceback" not in out, (case, out)
 
 
 def test_orient_on_a_relative_model_says_db_not_dbm(workdir):
     """A relative-RSSI model still ranks headings by joint gain, printed in dB, never dBm."""
-    from cli_helpers import run_here  # in this process: the text of a result is the point, not its process
-
     proc = run_here(["orient", "rel.json", "--tx", "A", "--rx", "B", "--tx-pos", "0,0,20", "--rx-pos", "30,0,20", "--tx-power", "20"],
                     workdir, ok=False)
     assert proc.returncode == 0 and "dBm" not in proc.stdout and "predicted joint gain" in proc.stdout, proc.stdout + proc.stderr
@@ -231,8 +240,6 @@ def test_orient_on_a_relative_model_says_db_not_dbm(workdir):
 
 def test_a_second_vehicle_is_counted_and_named(workdir):
     """Two vehicles (system ids 1 and 2) in one .tlog with one radio: the second is named, not dropped silently."""
-    from cli_helpers import run_here
-
     proc = run_here(["inspect", "two_vehicles.tlog"], workdir, ok=False)
     out = proc.stdout + proc.stderr
     assert proc.returncode == 0, out
@@ -242,8 +249,6 @@ def test_a_second_vehicle_is_counted_and_named(workdir):
 
 def test_the_real_flight_still_reads(workdir):
     """The unmoved .tlog reads as before: the checks refuse only what is implausible."""
-    from cli_helpers import run_here
-
     proc = run_here(["inspect", "flight.tlog"], workdir, ok=False)
     assert proc.returncode == 0, proc.stderr
 
