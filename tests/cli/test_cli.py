@@ -4,9 +4,9 @@ evaluate -> export -> predict``, every user error, and the other commands.
 The commands run in this process (:func:`cli_helpers.run_here`: the same command line, exit
 code, stdout and stderr as a user's process, without a second of start-up each;
 tests/cli/test_cli_in_process.py compares the two). Processes of their own
-(:func:`cli_helpers.run`), so that the boundary stays covered: the pipeline's SH-3 fit (its
-model file names a process's command line), one user error (``missing file``) and
-``--version``."""
+(:func:`cli_helpers.run`): the pipeline ``simulate -> sync -> fit -> evaluate -> export ->
+predict`` (issue 5's acceptance: through the real command line; the SH-3 model file names a
+process's command line), one user error (``missing file``) and ``--version``."""
 
 from __future__ import annotations
 
@@ -24,8 +24,8 @@ from rplearn.data.tables import MATCHED_COLUMNS
 @pytest.fixture(scope="module")
 def workdir(tmp_path_factory):
     d = tmp_path_factory.mktemp("cli")
-    run_here(["simulate", "--preset", "smoke", "--seed", "3", "-o", "flight"], d)
-    run_here(
+    run_ok(["simulate", "--preset", "smoke", "--seed", "3", "-o", "flight"], d)
+    run_ok(
         ["sync", "--poses", "flight/pose_log.parquet", "--signals", "flight/signal_log.parquet", "--link", "A:B", "-o", "data.parquet"],
         d,
     )
@@ -44,28 +44,28 @@ def test_simulate_sync_fit_evaluate_export_predict(workdir):
     test = [u for u in units if u.startswith("test")]
 
     run_ok(["fit", "data.parquet", "--model", "sh", "--degree", "3", "--units", ",".join(learn), "-o", "sh3.json"], d)
-    run_here(["fit", "data.parquet", "--model", "mean", "--units", ",".join(learn), "-o", "m.json"], d)
+    run_ok(["fit", "data.parquet", "--model", "mean", "--units", ",".join(learn), "-o", "m.json"], d)
     model = json.loads((d / "sh3.json").read_text())
     assert model["schema"] == "rplearn.model" and model["type"] == "patterns"
     assert len(model["model"]["coefficients"]["A"]) == 9
     assert model["model"]["gauge"][0]["rule"] == "equal-mean"
     assert model["model"]["provenance"]["rplearn_version"] and "fit" in model["model"]["provenance"]["command"]
 
-    ev = run_here(["evaluate", "sh3.json", "m.json", "data.parquet", "--units", ",".join(test), "--json", "t1.json", "--markdown", "t1.md"], d)
+    ev = run_ok(["evaluate", "sh3.json", "m.json", "data.parquet", "--units", ",".join(test), "--json", "t1.json", "--markdown", "t1.md"], d)
     assert "| SH-3 |" in ev.stdout and "| M |" in ev.stdout
     rows = {r["model"]: r for r in json.loads((d / "t1.json").read_text())["rows"]}
     assert rows["SH-3"]["rmse_db"] < rows["M"]["rmse_db"]
     assert rows["M"]["n_params"] == 1 and rows["SH-3"]["n_params"] == 18
     assert (d / "t1.md").read_text().startswith("| Method")
 
-    run_here(["export", "sh3.json", "--format", "grid", "--step-deg", "10", "-o", "grid.csv"], d)
+    run_ok(["export", "sh3.json", "--format", "grid", "--step-deg", "10", "-o", "grid.csv"], d)
     grid = pd.read_csv(d / "grid.csv")
     assert list(grid.columns) == ["node", "az_deg", "el_deg", "gain_db"]
     assert set(grid["node"]) == {"A", "B"} and np.isfinite(grid["gain_db"]).all()
-    run_here(["export", "sh3.json", "--format", "msi", "-o", "msi"], d)
+    run_ok(["export", "sh3.json", "--format", "msi", "-o", "msi"], d)
     assert (d / "msi" / "A.msi").read_text().count("\n") > 720
 
-    run_here(["predict", "sh3.json", "data.parquet", "-o", "pred.csv"], d)
+    run_ok(["predict", "sh3.json", "data.parquet", "-o", "pred.csv"], d)
     pred = pd.read_csv(d / "pred.csv")
     assert len(pred) == len(data)
     assert {"gain_pred_db", "rssi_pred_dbm", "gain_pred_std_db"} <= set(pred.columns)
