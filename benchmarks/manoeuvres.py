@@ -438,6 +438,7 @@ import numpy as np
 # the thread policy changes with the machine's load, and a run cannot be repeated figure for figure
 os.environ.setdefault("RPLEARN_THREADS", "1")
 
+from rplearn.analysis.manoeuvre_bound import design_bound
 from rplearn.analysis.manoeuvre_cells import DirectionCells
 from rplearn.analysis.manoeuvres import (
     ManoeuvreOptions,
@@ -720,7 +721,8 @@ def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, 
         correlated: str = "reference", block_s: float = DEFAULT_BLOCK_S, posterior: str = "inflated",
         budget: bool = False, draws: int = DRAWS, candidates: dict[str, Any] | None = None, tilt: bool = False,
         aggregate: str = "rms", rate: str = "spread", prefixes: int = ManoeuvreOptions().prefixes,
-        lookahead: int = ManoeuvreOptions().lookahead, aimed: int = ManoeuvreOptions().aimed) -> dict[str, Flight]:
+        lookahead: int = ManoeuvreOptions().lookahead, aimed: int = ManoeuvreOptions().aimed,
+        design: str = ManoeuvreOptions().design, bound: str = "") -> dict[str, Flight]:
     config = _config(preset)
     learning = config.campaign.with_role("learning").units
     nodes = tuple(sorted(config.node_antennas))
@@ -731,7 +733,7 @@ def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, 
     cands = CandidateOptions(fixed_nodes=FIXED.get(preset, ()), speed_m_s=speed, **(candidates or {}))
     opts = ManoeuvreOptions(noise_std_db=noise, packet_rate_hz=config.radio.packet_rate_hz * (1 - config.radio.loss_probability),
                             penalty_weight=weight, candidates=cands, power=power, correlation_s=block_s, aggregate=aggregate,
-                            rate=rate, prefixes=prefixes, lookahead=lookahead, aimed=aimed)
+                            rate=rate, prefixes=prefixes, lookahead=lookahead, aimed=aimed, design=design)
     setup = Setup(preset, config, spec, nodes, opts, weight, seed=seed, correlated=correlated, block_s=block_s, budget=budget)
     ref_parts, _ = fly(setup, learning)
     if prior_std_db <= 0:  # the prior the project learns from the complete reference flight
@@ -757,6 +759,12 @@ def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, 
         setup.options = opts = replace(opts, steady_accel_enu_m_s2=accel)
         print(f"  steady tilt from the start's poses: {np.degrees(np.arctan(np.hypot(accel[0], accel[1]) / 9.80665)):.1f} deg "
               f"({accel[0]:+.2f}, {accel[1]:+.2f}) m/s^2")
+    first = learning[0].evaluate(np.array([0.0]))
+    start = {n: (tuple(first.position_enu_m[0, j]), float(np.degrees(first.yaw_rad[0, j]))) for j, n in enumerate(learning[0].nodes)}
+    if bound:
+        _print_bound(setup, ref, sug, poses, start, limit_s)
+        if bound == "only":
+            return {"reference": ref}
     k = 0
     while sug.reached_s is None and sug.t_s < limit_s:
         best = rank_manoeuvres(sug.normal, spec, nodes, poses, replace(opts, floor_db=TARGET_DB), sug.blocks, sug.cells)[0]
@@ -770,8 +778,6 @@ def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, 
         sug.steps.append(f"{best.name} ({best.duration_s:.0f} s; predicted {max(best.spread_before_db.values()):.2f} -> "
                          f"{max(best.spread_after_db.values()):.2f}{flown} dB{ahead})")
     # optimized: the greedy plan before the flight, from the reference's start poses
-    first = learning[0].evaluate(np.array([0.0]))
-    start = {n: (tuple(first.position_enu_m[0, j]), float(np.degrees(first.yaw_rad[0, j]))) for j, n in enumerate(learning[0].nodes)}
     plan = greedy_plan(NormalEquations(spec.basis(), len(nodes)), spec, nodes, start, limit_s, TARGET_DB, opts)
     opt = setup.flight("optimized")
     opt.steps = [f"{s.manoeuvre.name} ({s.manoeuvre.duration_s:.0f} s)" for s in plan]
@@ -787,6 +793,35 @@ def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, 
         for draw in range(1, draws + 1):
             replay(setup, f, draw, PLAN_SEED * k)
     return flights
+
+
+def _print_bound(setup: Setup, ref: Flight, sug: Flight, poses: Any, start: dict[str, Any], limit_s: float) -> None:
+    """(A): the optimal design's time to the target over the candidates offered after the
+    suggested flight's start (and, for the optimized plan, from the prior at the start poses),
+    white-noise (a bound) and with the drift (an estimate), as ratios to the reference's flown
+    time, beside the greedy plan's predicted time from the same posterior."""
+    spec, nodes, opts = setup.spec, setup.nodes, replace(setup.options, floor_db=TARGET_DB)
+    ref_s = ref.reached_s or float("nan")
+    cases = (("suggested", sug.normal, sug.blocks, poses, sug.t_s), ("optimized", NormalEquations(spec.basis(), len(nodes)), None, start, 0.0))
+    for name, normal, blocks, where, t0 in cases:
+        t1 = time.perf_counter()
+        plan = greedy_plan(normal, spec, nodes, where, limit_s, TARGET_DB, opts, blocks)
+        reached = bool(plan) and max(plan[-1].spread_db.values()) <= TARGET_DB * (1 + 1e-9)
+        greedy_s = t0 + plan[-1].end_s if reached else float("nan")
+        t2 = time.perf_counter()
+        out = {}
+        for drift in (False, True):
+            out[drift] = design_bound(normal, spec, nodes, where, TARGET_DB, opts, blocks, drift=drift)
+        t3 = time.perf_counter()
+        white, full = out[False].design, out[True].design
+        print(f"  bound ({name}, from {t0:.0f} s, {len(out[False].names)} candidates; greedy {t2 - t1:.0f} s, designs "
+              f"{t3 - t2:.0f} s): white-noise design {t0 + white.total_s:.0f} s = {(t0 + white.total_s) / ref_s:.2f}x "
+              f"(gap {white.gap:.1e}; none below {t0 + white.certified_s:.0f} s = {(t0 + white.certified_s) / ref_s:.2f}x), "
+              f"with the drift {t0 + full.total_s:.0f} s = {(t0 + full.total_s) / ref_s:.2f}x "
+              f"(gap {full.gap:.1e}), greedy predicted {greedy_s:.0f} s = {greedy_s / ref_s:.2f}x of the reference's {ref_s:.0f} s")
+        for label, b in (("white", out[False]), ("drift", out[True])):
+            print(f"    {label} design: " + "; ".join(f"{n} {t:.0f} s" for n, t in b.support()[:10])
+                  + f" ({len(b.support())} candidates of >= 0.5 s)")
 
 
 def replay(setup: Setup, flight: Flight, draw: int, offset: int = 0) -> None:
@@ -873,6 +908,10 @@ def main(argv: list[str] | None = None) -> int:
                     help="rank the best N candidates by rate again by their estimated time to the target (0: the rate alone)")
     ap.add_argument("--aimed", type=int, default=ManoeuvreOptions().aimed,
                     help="also candidates aimed at each node's N directions of largest posterior variance (0: the fixed ones only)")
+    ap.add_argument("--design", choices=("rate", "end"), default=ManoeuvreOptions().design,
+                    help="rank by rate now (default) or by the criterion's gradient at the anticipated final posterior")
+    ap.add_argument("--bound", choices=("", "yes", "only"), default="",
+                    help="print the optimal design's bound after the start (only: and fly nothing else)")
     ap.add_argument("--tiny", action="store_true", help="the smoke preset at SH-4 (seconds; criteria not enforced)")
     args = ap.parse_args(argv)
     presets = ["smoke"] if args.tiny else [p.strip() for p in args.presets.split(",") if p.strip()]
@@ -888,8 +927,10 @@ def main(argv: list[str] | None = None) -> int:
         limit = float(sum(u.duration_s for u in ref_total.units))
         flights = run(preset, order, seed, limit, args.power, args.prior_std, args.correlated, args.block_s, args.posterior,
                       args.budget or args.tiny, draws, _candidate_args(args), args.tilt, args.aggregate,
-                      args.rate, args.prefixes, args.lookahead, args.aimed)
+                      args.rate, args.prefixes, args.lookahead, args.aimed, args.design, "yes" if args.tiny else args.bound)
         ref = flights["reference"]
+        if "suggested" not in flights:
+            continue
         print(f"{preset} (SH-{order}, seed {seed}, {time.perf_counter() - t0:.0f} s): time to {TARGET_DB:g} dB per-node spread")
         for f in flights.values():
             when = "not reached" if f.reached_s is None else f"{f.reached_s:.0f} s"
