@@ -908,7 +908,7 @@ def main(argv: list[str] | None = None) -> int:
                     help="rank the best N candidates by rate again by their estimated time to the target (0: the rate alone)")
     ap.add_argument("--aimed", type=int, default=ManoeuvreOptions().aimed,
                     help="also candidates aimed at each node's N directions of largest posterior variance (0: the fixed ones only)")
-    ap.add_argument("--design", choices=("rate", "end"), default=ManoeuvreOptions().design,
+    ap.add_argument("--design", choices=("rate", "end", "support"), default=ManoeuvreOptions().design,
                     help="rank by rate now (default) or by the criterion's gradient at the anticipated final posterior")
     ap.add_argument("--bound", choices=("", "yes", "only"), default="",
                     help="print the optimal design's bound after the start (only: and fly nothing else)")

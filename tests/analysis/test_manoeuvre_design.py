@@ -11,9 +11,11 @@ from rplearn.analysis import manoeuvres as mv
 from rplearn.analysis.manoeuvre_bound import design_bound
 from rplearn.analysis.manoeuvre_design import (
     BETA,
+    SUPPORT_FRACTION,
     DesignProblem,
     criterion,
     criterion_gradient,
+    design_order,
     design_problem,
     end_gradient_scores,
     node_variances,
@@ -119,3 +121,19 @@ def test_the_end_ranking_orders_by_the_gradient_at_the_anticipated_final_posteri
     with pytest.raises(InputError) as err:
         replace(opts, design="final")
     assert err.value.param == "design"
+
+
+def test_the_support_ranking_puts_what_the_optimal_design_flies_first_in_rate_order():
+    opts = _options(floor_db=1.5)
+    post, scored = _scored(opts)
+    problem, design = scored_design(post, scored, mv._weight(opts), 1.5, max_iter=mv.DESIGN_STEPS)
+    share = design.times_s / problem.durations_s
+    wanted = {r.name for (r, _), f in zip(scored, share) if f >= SUPPORT_FRACTION * np.max(share)}
+    assert 0 < len(wanted) < len(scored)
+    ranked = [r.name for r in mv.rank_manoeuvres(NormalEquations(SPEC.basis(), 2), SPEC, NODES, POSES, replace(opts, design="support"))]
+    assert set(ranked[:len(wanted)]) == wanted
+    rate = [r.name for r, _ in scored]
+    assert ranked[:len(wanted)] == [n for n in rate if n in wanted]
+    assert ranked[len(wanted):] == [n for n in rate if n not in wanted]
+    with pytest.raises(InputError):
+        design_order(post, scored, mv._weight(opts), 1.5, "first")

@@ -307,5 +307,29 @@ def scored_design(post: ManoeuvrePosterior, scored: Sequence[Any], weight: float
     return problem, optimal_design(problem, max_iter=max_iter, multiplicative=max_iter // 2)
 
 
-__all__ = ["BETA", "Design", "DesignProblem", "criterion", "criterion_gradient", "design_problem", "end_gradient_scores",
+#: For ``design_order(..., "support")``: the share of its duration the optimal design must fly a candidate
+#: for, as a fraction of the largest such share among the candidates.
+SUPPORT_FRACTION = 0.25
+
+
+def design_order(post: ManoeuvrePosterior, scored: Sequence[Any], weight: float, target_db: float, mode: str,
+                 max_iter: int = 30) -> list[Any]:
+    """``scored`` (best rate first) reordered by the optimal remaining design from ``post``:
+    ``"end"``, by :func:`end_gradient_scores` (the criterion's reduction per second at the
+    anticipated final posterior); ``"support"``, first the candidates the design flies for a
+    share of their duration at least ``SUPPORT_FRACTION`` times the largest share, each group in
+    rate order."""
+    problem, design = scored_design(post, scored, weight, target_db, max_iter=max_iter)
+    if mode == "end":
+        scores = end_gradient_scores(problem, design)
+        return [scored[k] for k in sorted(range(len(scored)), key=lambda k: (-scores[k], k))]
+    if mode != "support":
+        raise InputError(f"mode: expected 'end' or 'support', got {mode!r}", param="mode")
+    times = design.times_s if np.isfinite(design.total_s) else np.zeros(len(scored))
+    share = times / problem.durations_s
+    wanted = (share >= SUPPORT_FRACTION * np.max(share)) & (share > 0)
+    return [s for k, s in enumerate(scored) if wanted[k]] + [s for k, s in enumerate(scored) if not wanted[k]]
+
+
+__all__ = ["BETA", "Design", "DesignProblem", "SUPPORT_FRACTION", "criterion", "criterion_gradient", "design_order", "design_problem", "end_gradient_scores",
            "node_variances", "optimal_design", "scored_design"]

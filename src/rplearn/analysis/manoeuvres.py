@@ -44,7 +44,7 @@ import pandas as pd
 from rplearn._argtypes import check_types
 from rplearn.analysis.manoeuvre_aimed import target_directions, widest_directions
 from rplearn.analysis.manoeuvre_cells import DirectionCells, cell_grid
-from rplearn.analysis.manoeuvre_design import end_gradient_scores, scored_design
+from rplearn.analysis.manoeuvre_design import design_order
 from rplearn.analysis.manoeuvre_lookahead import Scored, lookahead_order
 from rplearn.analysis.manoeuvre_posterior import ManoeuvrePosterior
 from rplearn.analysis.manoeuvre_prior import prior_penalty_weight
@@ -67,7 +67,7 @@ AGGREGATES = ("rms", "max")
 #: What a manoeuvre's effect per second is measured in (:attr:`ManoeuvreOptions.rate`).
 RATES = ("spread", "information")
 #: How the candidates are ordered (:attr:`ManoeuvreOptions.design`), and the design's steps for ``"end"``.
-DESIGNS, DESIGN_STEPS = ("rate", "end"), 30
+DESIGNS, DESIGN_STEPS = ("rate", "end", "support"), 30
 
 
 @check_types
@@ -158,8 +158,8 @@ class ManoeuvreOptions:
         :func:`rplearn.plan.aimed.aimed_manoeuvres`; negative: ``-aimed`` directions, their
         elevations only, full rings); 0 (default): none. Flown (``--aimed 3``): 2 of 12 cells against 7.
     design : str
-        ``"rate"`` (default) or ``"end"``: by the criterion's reduction per second at the anticipated
-        final posterior, now plus the optimal design (:mod:`rplearn.analysis.manoeuvre_design`; needs ``floor_db``).
+        ``"rate"`` (default), ``"end"`` or ``"support"``: :func:`rplearn.analysis.manoeuvre_design.design_order`
+        (by the optimal remaining design: the gradient at its end, or the rate among what it flies; needs ``floor_db``).
     """
 
     noise_std_db: float = 4.2
@@ -516,10 +516,8 @@ def _ordered(post: ManoeuvrePosterior, scored: list[Scored], state: Mapping[str,
              opts: ManoeuvreOptions) -> list[Scored]:
     """``scored`` (best rate first) with :attr:`ManoeuvreOptions.lookahead`'s reordering, each
     looked-ahead candidate carrying its estimated time to the target."""
-    if opts.design == "end" and opts.floor_db is not None and scored:
-        problem, design = scored_design(post, scored, _weight(opts), float(opts.floor_db), max_iter=DESIGN_STEPS)
-        scores = end_gradient_scores(problem, design)
-        return [scored[k] for k in sorted(range(len(scored)), key=lambda k: (-scores[k], k))]
+    if opts.design != "rate" and opts.floor_db is not None and scored:
+        return design_order(post, scored, _weight(opts), float(opts.floor_db), opts.design, DESIGN_STEPS)
     if opts.lookahead == 0 or opts.floor_db is None:
         return scored
     out = lookahead_order(post, scored, opts.lookahead, float(opts.floor_db), _weight(opts), lambda v: _aggregate(v, opts),
