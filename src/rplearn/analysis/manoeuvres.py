@@ -26,13 +26,10 @@ Shared columns (link offsets, the environment term) are left out of the posterio
 
 Besides the white noise the posterior may carry (:mod:`rplearn.analysis.manoeuvre_posterior`):
 an error drifting over seconds (``correlated_std_db``, from the time-block sums), a prior whose
-variance exceeds what the penalty implies (``prior_variance_factor``: the fit keeps its penalty,
-so where the data are thin its error is the larger prior's) and the pattern structure the fixed
-order cannot represent, fixed per direction cell (``misfit_std_db``,
-:mod:`rplearn.analysis.manoeuvre_cells`). The last two are off by default: measured on the
-simulator (``benchmarks/manoeuvres.py --posterior honest``, 20 cells) they narrowed the plans'
-excess error over the reference flight's from +0.23 to +0.13 dB on average, within the cells'
-scatter, and made a ranking about 2.2 times as slow.
+variance exceeds what the penalty implies (``prior_variance_factor``) and the pattern structure
+the fixed order cannot represent, fixed per direction cell (``misfit_std_db``,
+:mod:`rplearn.analysis.manoeuvre_cells`); the last two are off by default
+(``benchmarks/manoeuvres.py --posterior honest``: within the cells' scatter, 2.2x as slow).
 """
 
 from __future__ import annotations
@@ -47,6 +44,7 @@ import pandas as pd
 from rplearn._argtypes import check_types
 from rplearn.analysis.manoeuvre_aimed import target_directions, widest_directions
 from rplearn.analysis.manoeuvre_cells import DirectionCells, cell_grid
+from rplearn.analysis.manoeuvre_design import design_order
 from rplearn.analysis.manoeuvre_lookahead import Scored, lookahead_order
 from rplearn.analysis.manoeuvre_posterior import ManoeuvrePosterior
 from rplearn.analysis.manoeuvre_prior import prior_penalty_weight
@@ -68,6 +66,8 @@ from rplearn.plan.trajectory import G_M_S2
 AGGREGATES = ("rms", "max")
 #: What a manoeuvre's effect per second is measured in (:attr:`ManoeuvreOptions.rate`).
 RATES = ("spread", "information")
+#: How the candidates are ordered (:attr:`ManoeuvreOptions.design`), and the design's steps for ``"end"``.
+DESIGNS, DESIGN_STEPS = ("rate", "end", "support"), 30
 
 
 @check_types
@@ -132,27 +132,19 @@ class ManoeuvreOptions:
         ``theta`` off the elevation a level hover gives (by ``theta`` toward or away from the
         lean, not at all across it; its body z axis is held by the thrust as it turns), so its
         manoeuvres cover other bands than the level references say; 0: level hover. Never
-        applied to ``candidates.fixed_nodes``. It brought the predicted spread of every step
-        flown on the ``paper`` preset (10-m/s wind) within 0.08 dB of the flight, but not the
-        flights' time to 2 dB (``benchmarks/manoeuvres.py --tilt``: 5 of 12 cells against 6), so
-        it is off by default.
+        applied to ``candidates.fixed_nodes``. Off (``benchmarks/manoeuvres.py --tilt``: 5 of 12 cells against 6).
     lookahead : int
         Rank the best ``lookahead`` candidates by rate again by their estimated flight time to
         the target spread ``floor_db`` (:mod:`rplearn.analysis.manoeuvre_lookahead`: the time of
         each, then its information deficit over the best rate from where it ends, one more
-        ranking each, about 6x a ranking's time at 4); 0 (default) or no ``floor_db``: the rate
-        alone. Flown in the simulator (``benchmarks/manoeuvres.py --lookahead 4``) it met both
-        checks in 5 of 12 tuning cells against 7, 3 of 8 held-out alike: not the default.
+        ranking each, about 6x a ranking's time at 4); 0 (default) or no ``floor_db``: the rate alone
+        (flown, ``benchmarks/manoeuvres.py --lookahead 4``: 5 of 12 tuning cells against 7).
     prefixes : int
         Also score each candidate's first ``k / prefixes`` (whole drifting-error blocks, at
         least two; :func:`rplearn.plan.prefix.prefix_cuts`) and rank it by its best prefix, which
-        is then what is flown (:class:`rplearn.plan.prefix.PrefixUnit`): a long manoeuvre that
-        teaches most in its first part is cut where its score per second peaks and the ranking
-        starts again from there, the braking from the cut's speed and yaw rate counted in its
-        time (:attr:`rplearn.plan.prefix.PrefixUnit.brake_s`); 1 (default): whole manoeuvres
-        only. Flown in the simulator (``benchmarks/manoeuvres.py``), 4 met both checks in 8 of
-        12 tuning cells (whole: 7) while the braking was not counted, and in 6 of 12 once it
-        was: so it is not the default. A ranking with 4 takes about 1.4x as long.
+        is then what is flown (:class:`rplearn.plan.prefix.PrefixUnit`, its braking counted:
+        :attr:`~rplearn.plan.prefix.PrefixUnit.brake_s`); 1 (default): whole manoeuvres only.
+        Flown (``benchmarks/manoeuvres.py --prefixes 4``): 6 of 12 tuning cells against 7.
     prior_variance_factor : float
         The prior's variance over the one ``noise_std_db`` and the penalty imply
         (:meth:`~rplearn.analysis.manoeuvre_posterior.ManoeuvrePosterior.with_prior_excess`): the fit
@@ -164,8 +156,11 @@ class ManoeuvreOptions:
         Also offer manoeuvres that make each node look along its ``aimed`` target directions of
         largest posterior variance now (:mod:`rplearn.analysis.manoeuvre_aimed`,
         :func:`rplearn.plan.aimed.aimed_manoeuvres`; negative: ``-aimed`` directions, their
-        elevations only, full rings); 0 (default): none. Flown in the simulator
-        (``benchmarks/manoeuvres.py --aimed 3``) they met both checks in 2 of 12 tuning cells against 7.
+        elevations only, full rings); 0 (default): none. Flown (``--aimed 3``): 2 of 12 cells against 7.
+    design : str
+        ``"rate"`` (default), ``"end"`` or ``"support"``: :func:`rplearn.analysis.manoeuvre_design.design_order`
+        (by the optimal remaining design: the gradient at its end, or the rate among what it flies; needs ``floor_db``).
+        Flown (``benchmarks/manoeuvres.py --design``, ground seeds 0-2): ``end`` slower, ``support`` faster in 1 of 6 cells.
     """
 
     noise_std_db: float = 4.2
@@ -188,6 +183,7 @@ class ManoeuvreOptions:
     prefixes: int = 1
     lookahead: int = 0
     aimed: int = 0
+    design: str = "rate"
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.prior_variance_factor) and self.prior_variance_factor >= 1.0):
@@ -209,8 +205,9 @@ class ManoeuvreOptions:
                              param="penalty_weight")
         if self.aggregate not in AGGREGATES:
             raise InputError(f"aggregate: expected one of {', '.join(AGGREGATES)}, got {self.aggregate!r}", param="aggregate")
-        if self.rate not in RATES:
-            raise InputError(f"rate: expected one of {', '.join(RATES)}, got {self.rate!r}", param="rate")
+        for name, allowed in (("rate", RATES), ("design", DESIGNS)):
+            if getattr(self, name) not in allowed:
+                raise InputError(f"{name}: expected one of {', '.join(allowed)}, got {getattr(self, name)!r}", param=name)
         if self.floor_db is not None and not (np.isfinite(self.floor_db) and self.floor_db >= 0):
             raise InputError(f"floor_db: expected a non-negative spread [dB], got {self.floor_db!r}", param="floor_db")
         if self.correlated_std_db is not None and not (np.isfinite(self.correlated_std_db) and self.correlated_std_db >= 0):
@@ -520,6 +517,8 @@ def _ordered(post: ManoeuvrePosterior, scored: list[Scored], state: Mapping[str,
              opts: ManoeuvreOptions) -> list[Scored]:
     """``scored`` (best rate first) with :attr:`ManoeuvreOptions.lookahead`'s reordering, each
     looked-ahead candidate carrying its estimated time to the target."""
+    if opts.design != "rate" and opts.floor_db is not None and scored:
+        return design_order(post, scored, _weight(opts), float(opts.floor_db), opts.design, DESIGN_STEPS)
     if opts.lookahead == 0 or opts.floor_db is None:
         return scored
     out = lookahead_order(post, scored, opts.lookahead, float(opts.floor_db), _weight(opts), lambda v: _aggregate(v, opts),
@@ -596,5 +595,5 @@ def _greedy(post: ManoeuvrePosterior, state: dict[str, Any], names: list[str], b
     return tuple(steps)
 
 
-__all__ = ["AGGREGATES", "RATES", "ManoeuvreOptions", "PlanStep", "RankedManoeuvre", "correlated_error_std_db", "greedy_plan",
+__all__ = ["AGGREGATES", "DESIGNS", "RATES", "ManoeuvreOptions", "PlanStep", "RankedManoeuvre", "correlated_error_std_db", "greedy_plan",
            "manoeuvre_rows", "pattern_spreads", "prior_penalty_weight", "prior_weights", "rank_manoeuvres", "steady_tilt_accel", "target_metrics"]
