@@ -170,5 +170,73 @@ def position_jumps(
     return ~invalid, notes
 
 
+def _same_rows(table: pd.DataFrame) -> np.ndarray:
+    """Mask of the rows of ``table`` repeating an earlier row of it in every column."""
+    try:
+        return table.duplicated(keep="first").to_numpy(bool)
+    except TypeError:  # unhashable cells: compare their text
+        return table.astype(str).duplicated(keep="first").to_numpy(bool)
+
+
+def repeated_poses(
+    df: pd.DataFrame, t: np.ndarray, nodes: np.ndarray, rows: np.ndarray, nan_policy: str, source: str,
+) -> tuple[np.ndarray, dict[str, int], list[str]]:
+    """Rows sharing their node and time with an earlier row: copies dropped, conflicts refused
+    or dropped.
+
+    A row identical in every column of ``df`` to an earlier row of the same node and time is a
+    copy (a logger writing a block twice): dropped and counted as ``duplicate_pose`` under any
+    ``nan_policy``. Rows of one node and time that differ in a value are a conflict (two poses
+    of one instant: which one is true is unknown): refused naming the rows and the first
+    differing field, or with ``nan_policy="drop"`` all rows of that node and time dropped and
+    counted as ``conflicting_pose``. ``rows`` are the file rows of ``df``'s rows, for messages.
+
+    Returns ``(keep, dropped, notes)``.
+
+    Raises
+    ------
+    InputError
+        On a conflict with ``nan_policy="error"``.
+    """
+    keep = np.ones(len(t), bool)
+    dropped = {"duplicate_pose": 0, "conflicting_pose": 0}
+    key = pd.DataFrame({"node": pd.Series(nodes, dtype=object), "t": t})
+    shared = key.duplicated(keep=False).to_numpy(bool)
+    if not shared.any():
+        return keep, dropped, []
+    cand = np.flatnonzero(shared)
+    copies = cand[_same_rows(df.iloc[cand].set_axis(range(cand.size)))]
+    keep[copies] = False
+    notes = []
+    if copies.size:
+        dropped["duplicate_pose"] = int(copies.size)
+        first = int(copies[np.argmin(rows[copies])])
+        same = np.flatnonzero(shared & (key["node"].to_numpy() == nodes[first]) & (t == t[first]))
+        original = int(rows[same[0]])
+        notes.append(f"{source}: {copies.size:,} pose row(s) repeat an earlier row of their node and time in every "
+                     f"value, first at row {int(rows[first])} (a copy of row {original}: a block written twice): "
+                     "dropped as copies (duplicate_pose)")
+    left = cand[keep[cand]]
+    conflict_in = key.iloc[left].duplicated(keep=False).to_numpy(bool)
+    if not conflict_in.any():
+        return keep, dropped, notes
+    conflict = left[conflict_in]
+    a = int(conflict[np.argmin(rows[conflict])])
+    same = conflict[(key["node"].to_numpy()[conflict] == nodes[a]) & (t[conflict] == t[a])]
+    b = int(same[same != a][0])
+    fields = [str(c) for c in df.columns
+              if not (str(df[c].iloc[a]) == str(df[c].iloc[b]))]
+    where = (f"{source}: field {fields[0] if fields else 't'}: {conflict.size:,} pose row(s) share a node and time with "
+             f"a row of other values, first node {nodes[a]} at t = {float(t[a])!r} (rows {int(rows[a])} and "
+             f"{int(rows[b])} differ in {', '.join(fields) or 'their values'}): two poses of one instant")
+    if nan_policy == "error":
+        raise InputError(f"{where}; expected one pose per node and time, or drop those rows (nan_policy='drop')",
+                         param="nan_policy")
+    keep[conflict] = False
+    dropped["conflicting_pose"] = int(conflict.size)
+    notes.append(f"{where}: all rows of those times dropped (conflicting_pose)")
+    return keep, dropped, notes
+
+
 __all__ = ["MIN_SPEED_STEPS", "MOVING_SPEED_M_S", "TOP_SPEED_CAP_M_S", "TOP_SPEED_FACTOR", "finite_values", "position_jumps",
-           "top_speeds"]
+           "repeated_poses", "top_speeds"]

@@ -29,6 +29,7 @@ from rplearn.errors import InputError, LogFormatError
 from rplearn.io._common import read_parquet_lean
 from rplearn.io._pose_checks import finite_values as _finite_values
 from rplearn.io._pose_checks import position_jumps as _position_jumps
+from rplearn.io._pose_checks import repeated_poses as _repeated_poses
 from rplearn.io.geodetic import geodetic_to_enu
 
 #: Vendor column names -> canonical names (the one renaming mapping of rplearn.io).
@@ -343,7 +344,11 @@ def canonical_pose(
         beyond 1e8 m (``implausible_pose``) and rows on the wrong side of a position jump no
         plausible speed explains (``position_jump``: a sentinel such as ``z = -1000`` or
         ``x = y = z = 0`` before the fix; :func:`rplearn.io._pose_checks.position_jumps`), each dropped piece said in
-        ``metadata["notes"]``.
+        ``metadata["notes"]``. Whatever the policy, a row identical in every value to an
+        earlier row of its node and time (a block written twice) is dropped as a copy
+        (``duplicate_pose``, said in the notes); rows of one node and time with different
+        values are refused, or with ``"drop"`` all dropped (``conflicting_pose``):
+        :func:`rplearn.io._pose_checks.repeated_poses`.
     allow_unsorted : bool
         Accept times that go backwards within a node (the rows are sorted); by default
         they raise :class:`LogFormatError`.
@@ -363,7 +368,8 @@ def canonical_pose(
         df = rename_columns(df, columns)
     except InputError as exc:
         raise InputError(f"{source}: {exc}") from None
-    meta: dict[str, Any] = {"source": source, "dropped": {"nan_pose": 0, "implausible_pose": 0, "position_jump": 0},
+    meta: dict[str, Any] = {"source": source, "dropped": {"nan_pose": 0, "implausible_pose": 0, "duplicate_pose": 0,
+                                                         "conflicting_pose": 0, "position_jump": 0},
                             "origin_geodetic": None}
     df = _with_node(df, node, source)
     pos_cols, meta["position"] = _position_columns(df, source)
@@ -377,14 +383,21 @@ def canonical_pose(
     nodes = df["node"].astype(str).to_numpy()
     if len(nodes) == 0:
         raise InputError(f"{source}: no pose rows")
+    unique, repeated, notes = _repeated_poses(df, values["t"], nodes, rows, nan_policy, source)
+    meta["dropped"].update(repeated)
+    if not unique.all():  # copies (a block written twice) are no step back in time
+        df, rows, nodes = df.loc[unique], rows[unique], nodes[unique]
+        values = {c: v[unique] for c, v in values.items()}
     t = values["t"]
     if not allow_unsorted:
         _check_time_order(t, nodes, source)
     xyz, meta["origin_geodetic"] = _enu_positions(values, meta["position"], origin_geodetic, source)
-    keep, notes = _position_jumps(t, xyz, nodes, rows, nan_policy, source)
+    keep, jumps = _position_jumps(t, xyz, nodes, rows, nan_policy, source)
     meta["dropped"]["position_jump"] = int((~keep).sum())
+    notes += jumps
     if notes:
         meta["notes"] = notes
+    if jumps:
         t, nodes, xyz = t[keep], nodes[keep], xyz[keep]
         values = {c: v[keep] for c, v in values.items()}
     q = _quaternions(values, att_cols, meta["attitude"])
