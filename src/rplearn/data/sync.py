@@ -23,12 +23,11 @@ after optional clock offsets. A sample is dropped, and counted by reason, when:
     its time lies outside ``[from_s, to_s]``: seconds from the log start (the origin ``inspect``
     prints, :func:`~rplearn.data.phases.log_start_s`) or log times (``window_clock="log"``);
 ``nan_rssi``
-    its RSSI is missing: an empty cell, NaN or infinite (the CSV/Parquet readers,
-    :func:`rplearn.io.tables.canonical_signal`, read a cell of text that is no number as
-    missing, so a file's text RSSI is counted here);
+    its RSSI is missing: an empty cell, NaN or infinite;
 ``unparsable_rssi``
-    its RSSI is text that is no number (``"n/a"``, ``"-7O"``) in a signal table given to
-    :func:`synchronise` as it is;
+    its RSSI is text that is no number (``"n/a"``, ``"-70dBm"``, ``"-7O"``), in a CSV/Parquet
+    file (:func:`rplearn.io.tables.canonical_signal` keeps such a cell's text) or a signal
+    table given to :func:`synchronise`;
 ``sentinel_rssi``
     its RSSI is one of the sentinel values radios report for "no measurement"
     (default ``0, -127, -128, 127``);

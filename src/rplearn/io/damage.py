@@ -24,6 +24,15 @@ def file_damage(path: str, info: dict[str, Any]) -> list[str]:
             + (f"the {info['records_read']:,} complete record(s) before it were read"
                if info.get("records_read") is not None else "the complete records before it were read")
         )
+    if info.get("damaged_index"):
+        d = info["damaged_index"]
+        where = f" at byte {d['at_byte']:,} ({d['what']})" if d.get("at_byte") is not None else f" ({d['error']})"
+        read = f" ({info['records_read']:,} message record(s) read)" if info.get("records_read") is not None else ""
+        lost = ("; no message was lost" if info.get("cut_off_at_byte") is None and not info.get("damaged_chunks")
+                else "")
+        lines.append(f"{path}: the bag's index (from byte {d['index_pos']:,}) is damaged{where}: its messages were "
+                     f"read record by record from the start{read}, as `rosbag reindex` does{lost}; "
+                     "`rosbag reindex` rewrites the index")
     if info.get("unindexed"):
         lines.append(f"{path}: the bag has no index (its recorder never closed it): its messages were read record "
                      f"by record from the start" + (f" ({info['records_read']:,})" if info.get("records_read") else "")

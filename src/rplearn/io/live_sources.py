@@ -37,8 +37,9 @@ import pandas as pd
 from rplearn._argtypes import check_types
 from rplearn.data.tables import CSV_DTYPES, normalise_times
 from rplearn.errors import InputError, LogFormatError
+from rplearn.io._pose_checks import TrackEnds
 from rplearn.io.options import ReaderOptions
-from rplearn.io.tables import canonical_pose, canonical_signal
+from rplearn.io.tables import canonical_pose, canonical_signal, csv_missing_values
 
 
 @check_types
@@ -89,7 +90,9 @@ def _table(tail: _Tail, data: bytes) -> pd.DataFrame | None:
     if not data.strip():
         return None
     try:
-        df = pd.read_csv(io.BytesIO(tail.header + data), skipinitialspace=True, dtype=CSV_DTYPES)
+        header = pd.read_csv(io.BytesIO(tail.header), nrows=0, skipinitialspace=True).columns
+        df = pd.read_csv(io.BytesIO(tail.header + data), skipinitialspace=True, dtype=CSV_DTYPES,
+                         **csv_missing_values(header))  # RSSI text: unparsable_rssi, as sync counts it
     except Exception as exc:  # parsers raise many classes on corrupt bytes
         raise LogFormatError(f"{tail.path}: cannot parse the rows appended ({type(exc).__name__}: {exc})") from None
     return normalise_times(df, tail.path)
@@ -115,6 +118,8 @@ class CsvTail:
         self.name = f"{pose_path} + {signal_path}"
         self.reader = reader if reader is not None else ReaderOptions()
         self.dropped: dict[str, int] = {}
+        self._pose_rows = 0  # pose rows read so far: the file row of the next one
+        self._ends = TrackEnds()  # each node's last pose kept: a poll's rows are checked against it
 
     def poll(self) -> Poll:
         """Rows appended since the last poll."""
@@ -122,7 +127,9 @@ class CsvTail:
         poses = signals = pd.DataFrame()
         pt = _table(self.pose, p)
         if pt is not None:
-            poses, meta = canonical_pose(pt, source=self.pose.path, nan_policy=self.reader.nan_policy)
+            poses, meta = canonical_pose(pt, source=self.pose.path, nan_policy=self.reader.nan_policy,
+                                         first_row=self._pose_rows, ends=self._ends)
+            self._pose_rows += len(pt)
             for reason, n in meta["dropped"].items():
                 self.dropped[reason] = self.dropped.get(reason, 0) + int(n)
         st = _table(self.signal, s)
