@@ -100,6 +100,60 @@ def drop_repeated_across(logs: list[pd.DataFrame], owners: list[int], files: lis
     return out
 
 
+def _station_at(row: pd.Series, meta: dict[str, Any]) -> str:
+    """A station row's position [m] and where its reader placed it from."""
+    note = meta.get("station_note")
+    return f"({row['x']:.2f}, {row['y']:.2f}, {row['z']:.2f}) m" + (f" ({note})" if note else "")
+
+
+def one_station(logs: list[pd.DataFrame], owners: list[int], files: list[dict[str, Any]]) -> list[pd.DataFrame]:
+    """The pose logs with a ground station that several files place (MAVLink logs, ULogs read
+    with their radio: each gives its ``station`` as one static row at its first time) given
+    once: at the same pose, the earliest file's row is kept and the station is static across
+    every file's flight (two rows at two times would make it a node logged over that span
+    only, the later flights' samples out of its span); at different poses (a station moved
+    between flights, two vehicles' homes) refused, naming both files and both positions: no
+    pose between them is known, and a line between them is no place the station stood."""
+    from rplearn.data.poses import SAME_POSITION_M
+
+    given: dict[str, list[tuple[int, int, pd.Series]]] = {}
+    for k, (log, i) in enumerate(zip(logs, owners, strict=True)):
+        station = files[i].get("station")
+        if station is None or not len(log):
+            continue
+        rows = log[log["node"].astype(str) == str(station)]
+        if len(rows) == 1:
+            given.setdefault(str(station), []).append((k, i, rows.iloc[0]))
+    out = list(logs)
+    for station, found in given.items():
+        if len({i for _, i, _ in found}) < 2:
+            continue
+        found.sort(key=lambda f: float(f[2]["t"]))
+        _, first_file, first = found[0]
+        for k, i, row in found[1:]:
+            a = first[["x", "y", "z"]].to_numpy(np.float64)
+            b = row[["x", "y", "z"]].to_numpy(np.float64)
+            qa, qb = (r[["qw", "qx", "qy", "qz"]].to_numpy(np.float64) for r in (first, row))
+            same_q = min(np.max(np.abs(qa - qb)), np.max(np.abs(qa + qb))) <= SAME_POSITION_M
+            moved = bool(np.max(np.abs(a - b)) > SAME_POSITION_M)
+            if moved or not same_q:
+                turned = "" if moved else " (the same place, another heading)"
+                raise InputError(
+                    f"{files[first_file].get('source')} and {files[i].get('source')} place the ground station "
+                    f"{station} at {_station_at(first, files[first_file])} and at {_station_at(row, files[i])}, "
+                    f"ENU{turned}: a station moved between flights, or the homes of two vehicles; give where it "
+                    "stood with --station LAT,LON,ALT (ReaderOptions.station_geodetic), or read each flight on its own",
+                    param="station_geodetic")
+            if row["t"] == first["t"]:
+                continue  # the same row: a file given twice, read once by drop_repeated_across
+            log = out[k]
+            out[k] = log[~((log["node"].astype(str) == station) & (log["t"] == row["t"]))]
+            files[i].setdefault("notes", []).append(
+                f"{files[i].get('source')}: ground station {station} at the pose {files[first_file].get('source')} "
+                "gives it: one static station for both flights")
+    return out
+
+
 def refuse_overlaps(logs: list[pd.DataFrame], owners: list[int], files: list[dict[str, Any]], what: str) -> None:
     """Refuse two files giving one node's poses (one link's readings) over overlapping times
     with different rows: two logs of one stream, which would interleave."""
