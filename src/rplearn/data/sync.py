@@ -555,6 +555,28 @@ def synchronise(
     return result
 
 
+#: Share of the samples reaching the RSSI range test dropped as ``implausible_rssi`` from which
+#: the summary asks whether the received power is uncalibrated.
+IMPLAUSIBLE_ADVICE_SHARE = 0.25
+
+
+def _implausible_note(summary: SyncSummary, options: SyncOptions) -> str | None:
+    """The question a summary asks when many samples' RSSI is out of range or above the
+    transmit power: a radio reporting in its own units or with a constant offset (uncalibrated
+    power), which ``rssi_scale="relative"`` reads."""
+    if options.rssi_scale != "dbm" or not summary.dropped["implausible_rssi"]:
+        return None
+    later = DROP_REASONS[DROP_REASONS.index("implausible_rssi"):]
+    reached = summary.n_out + sum(summary.dropped.get(r, 0) for r in later)
+    share = summary.dropped["implausible_rssi"] / reached
+    if share < IMPLAUSIBLE_ADVICE_SHARE:
+        return None
+    return (f"{100 * share:.0f}% of the samples have an RSSI outside {PLAUSIBLE_RSSI_DBM[0]:g} to "
+            f"{PLAUSIBLE_RSSI_DBM[1]:g} dBm or above the transmit power (implausible_rssi): a radio reporting its own "
+            "units or with a constant offset (uncalibrated power)? --rssi-scale relative (SyncOptions.rssi_scale="
+            "'relative') learns from it as relative power")
+
+
 def finish_summary(summary: SyncSummary, tracks: Mapping[str, PoseTrack], phases: FlightPhases,
                    options: SyncOptions, source: str) -> None:
     """Add the phase notes and any ``max_gap_s`` advice to a whole log's summary; raise when
@@ -567,6 +589,9 @@ def finish_summary(summary: SyncSummary, tracks: Mapping[str, PoseTrack], phases
     advice = max_gap_advice(tracks, options.max_gap_s) if share >= 0.25 else None
     if advice:  # in the summary (and the error below), not a log warning that would repeat it
         summary.notes.append(f"{100 * share:.0f}% of the samples fall in pose gaps: {advice}")
+    implausible = _implausible_note(summary, options)
+    if implausible and implausible not in summary.notes:
+        summary.notes.append(implausible)
     if summary.n_out < options.min_samples:
         raise InputError(
             f"{source}: only {summary.n_out} signal sample(s) matched, at least "
