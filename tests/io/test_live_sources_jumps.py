@@ -70,3 +70,22 @@ def test_a_block_written_again_in_a_later_poll_is_no_step_back(tmp_path):
     _append(pose, _row(1.0, 10.0) + _row(1.1, 11.0))  # the last row written twice, then the next
     got = tail.poll()
     assert list(got.poses["t"]) == [1.1] and got.dropped["duplicate_pose"] == 1
+
+
+def _signal_row(t: float, rssi: float = -60.0) -> str:
+    return f"{t:.2f},A,B,{rssi:g},20,2.4e9\n"
+
+
+def test_a_signal_logger_that_rebooted_between_polls_is_refused_as_sync_refuses_it(tmp_path):
+    """Was read on: its later rows matched with poses of another moment (out_of_span, pose_gap)."""
+    pose, signal = tmp_path / "pose.csv", tmp_path / "signal.csv"
+    pose.write_text(POSE_HEAD + "".join(_row(0.1 * i, float(i)) for i in range(10)))
+    signal.write_text(SIGNAL_HEAD + "".join(_signal_row(0.1 * i + 0.05) for i in range(5)))
+    tail = CsvTail(str(pose), str(signal))
+    tail.poll()
+    _append(signal, _signal_row(0.45) + _signal_row(0.55, -61.0))  # a copy of the last row: no step back
+    assert len(tail.poll().signals) == 2
+    _append(signal, _signal_row(0.02))  # the clock restarted
+    with pytest.raises(Exception, match=r"signal.csv: field t goes backwards at row 7 \(link A -> B: 0.55 -> 0.02; "
+                                        "a logger that rebooted"):
+        tail.poll()
