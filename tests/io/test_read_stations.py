@@ -68,3 +68,12 @@ def test_two_flights_an_hour_apart_from_one_home_share_one_static_station():
                                          r"\(1.00, 2.00, 0.50\) m"):
         one_station([_flight("d1", 3600.0, (1.0, 2.0, 0.5)), _flight("d0", 0.0, (1.0, 2.3, 0.5))], [0, 1],
                     [{"source": "b.ulg", "station": "gcs"}, {"source": "a.ulg", "station": "gcs"}])
+
+
+def test_inspect_says_the_two_homes_sync_refuses(two_flights):
+    from rplearn.io.inspect import inspect_logs
+
+    a, b = two_flights
+    report = inspect_logs([str(a), str(b)], _options(a, b))
+    [line] = [p for p in report.problems if "place the ground station gcs" in p]
+    assert line.startswith(f"{b} and {a} place the ground station gcs at (") and line.endswith("(sync refuses these files)")

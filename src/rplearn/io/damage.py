@@ -202,7 +202,13 @@ def across_files(report: Any, poses: list[pd.DataFrame], canonical: list[pd.Data
             refuse_overlaps(logs, owners[what], metas, what)
         except InputError as exc:
             report.problems.append(f"{exc} (sync refuses these files)")
+    stations = [{"source": f["path"], "station": f.get("station"), "station_note": f.get("station_note")}
+                for f in report.files]
+    try:
+        one_station(canonical, owners["pose"], stations)
+    except InputError as exc:
+        report.problems.append(f"{exc} (sync refuses these files)")
     return poses, signals
 
 
-__all__ = ["across_files", "drop_repeated_across", "file_damage", "refuse_overlaps"]
+__all__ = ["across_files", "drop_repeated_across", "file_damage", "one_station", "refuse_overlaps"]
