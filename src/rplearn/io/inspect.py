@@ -398,7 +398,7 @@ def _read_one(path: str, options: ReaderOptions) -> tuple[pd.DataFrame | None, p
         info["invalid_flag_rows"] = int(f["invalid_flag_rows"])
     for key in ("cut_off_at_byte", "cut_off_record", "records_read", "corrupt", "corrupt_at_byte", "corrupt_bytes",
                 "corrupt_stretches",
-                "repeated_messages", "unindexed", "trailing_bytes", "trailing_bag", "damaged_chunks",
+                "repeated_messages", "close_copies", "unindexed", "trailing_bytes", "trailing_bag", "damaged_chunks",
                 "damaged_chunk_messages", "damaged_index", "station", "station_note"):
         if f.get(key):
             info[key] = f[key]

@@ -583,9 +583,10 @@ def _scan_facts(found: Any) -> dict[str, Any]:
     if found is None:
         return {"cut_off_at_byte": None, "cut_off_record": None, "records_read": None, "damaged_index": None}
     at, what = found.cut_off_at_byte, found.cut_off_record
-    in_index = found.index_pos > 0 and at is not None and at >= found.index_pos
+    # a damaged record inside the index (not the file ending there: a cut file is said as cut)
+    in_index = found.index_pos > 0 and at is not None and at >= found.index_pos and str(what).endswith("damaged")
     damaged_index = None
-    if found.index_error is not None:
+    if found.index_error is not None and (at is None or in_index):  # a cut file: said as cut
         damaged_index = {"index_pos": int(found.index_pos), "error": found.index_error,
                          "at_byte": int(at) if in_index else None, "what": what if in_index else None}
     if in_index and damaged_index is not None:
