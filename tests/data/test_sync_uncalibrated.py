@@ -30,7 +30,7 @@ def test_uncalibrated_rssi_is_refused_with_the_question_and_the_way_out():
         synchronise(pose, signal, source="sig.csv")
     msg = str(e.value)
     assert msg.startswith("sig.csv: only 0 signal sample(s) matched") and "\n" not in msg
-    assert "100% of the samples have an RSSI outside -150 to 30 dBm" in msg and "--rssi-scale relative" in msg
+    assert "100% of the samples have an RSSI outside -150 to 30 dBm" in msg and "rssi_scale='relative'" in msg
     assert len(synchronise(pose, signal, SyncOptions(rssi_scale="relative")).dataset) == len(signal)
 
 

@@ -16,6 +16,6 @@ def test_inspect_says_rssi_above_the_transmit_power(tmp_path, flight):
     assert len(lines) == len(report.links) == 2
     n = int((signal["tx"] == report.links[0].tx).sum())
     assert lines[0].startswith(f"link {report.links[0].tx} -> {report.links[0].rx}: {n} RSSI value(s) outside -150 to 30 dBm")
-    assert "--rssi-scale relative" in lines[0] and report.links[0].implausible_rssi == n
+    assert "rssi_scale='relative'" in lines[0] and report.links[0].implausible_rssi == n
     signal.to_csv(signal_path, index=False)
     assert not any("implausible_rssi" in p for p in inspect_logs([str(pose_path), str(signal_path)]).problems)

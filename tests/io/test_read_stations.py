@@ -43,7 +43,7 @@ def test_two_flights_with_different_homes_are_refused_naming_both_files_homes_an
         read_logs([str(a), str(b)], _options(a, b))
     msg = str(e.value)
     assert msg.startswith(f"{b} and {a} place the ground station gcs at (")  # in time order: b flew first
-    assert "home_position" in msg and "first position" in msg and "--station LAT,LON,ALT" in msg
+    assert "home_position" in msg and "first position" in msg and "ReaderOptions.station_geodetic" in msg
     assert "\n" not in msg and e.value.param == "station_geodetic"
 
 

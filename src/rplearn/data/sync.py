@@ -573,8 +573,8 @@ def _implausible_note(summary: SyncSummary, options: SyncOptions) -> str | None:
         return None
     return (f"{100 * share:.0f}% of the samples have an RSSI outside {PLAUSIBLE_RSSI_DBM[0]:g} to "
             f"{PLAUSIBLE_RSSI_DBM[1]:g} dBm or above the transmit power (implausible_rssi): a radio reporting its own "
-            "units or with a constant offset (uncalibrated power)? --rssi-scale relative (SyncOptions.rssi_scale="
-            "'relative') learns from it as relative power")
+            "units or with a constant offset (uncalibrated power)? SyncOptions.rssi_scale='relative' learns from it as "
+            "relative power")
 
 
 def finish_summary(summary: SyncSummary, tracks: Mapping[str, PoseTrack], phases: FlightPhases,

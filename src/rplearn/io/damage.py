@@ -146,7 +146,7 @@ def one_station(logs: list[pd.DataFrame], owners: list[int], files: list[dict[st
                     f"{files[first_file].get('source')} and {files[i].get('source')} place the ground station "
                     f"{station} at {_station_at(first, files[first_file])} and at {_station_at(row, files[i])}, "
                     f"ENU{turned}: a station moved between flights, or the homes of two vehicles; give where it "
-                    "stood with --station LAT,LON,ALT (ReaderOptions.station_geodetic), or read each flight on its own",
+                    "stood (ReaderOptions.station_geodetic: lat, lon, alt), or read each flight on its own",
                     param="station_geodetic")
             if row["t"] == first["t"]:
                 continue  # the same row: a file given twice, read once by drop_repeated_across

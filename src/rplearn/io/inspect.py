@@ -571,7 +571,7 @@ def _flag(report: InspectReport, max_gap_s: float) -> None:
                 f"link {lk.tx} -> {lk.rx}: {lk.implausible_rssi} RSSI value(s) outside {PLAUSIBLE_RSSI_DBM[0]:g} to "
                 f"{PLAUSIBLE_RSSI_DBM[1]:g} dBm or above the transmit power (median {lk.rssi_median_dbm:.1f}); sync drops "
                 "them (implausible_rssi); a radio reporting its own units or with a constant offset? "
-                "--rssi-scale relative reads them as relative power")
+                "SyncOptions.rssi_scale='relative' reads them as relative power")
         for end in (lk.tx, lk.rx):
             if report.nodes and end not in known:
                 msg = f"node {end}: named by signals but has no pose log"
