@@ -285,20 +285,26 @@ def drop_repeated_rows(acc: TlogRows) -> int:
 CLOSE_COPY_S = 1e-3
 
 
+#: Kinds whose fields hold the sender's boot time: two of them with the same fields are one
+#: message (a radio report holds no time: two reports of equal values may come close, and
+#: copies of one are merged by ``sync``, ``duplicate_reading``).
+_BOOT_TIMED = ("ATTITUDE", "GLOBAL_POSITION_INT")
+
+
 def drop_close_copies(acc: TlogRows) -> int:
-    """Keep the first of two messages of one kind and sender with the same fields received
-    within :data:`CLOSE_COPY_S` of each other, the second right after the first among that
-    sender's messages of the kind: one message received twice (every message of a log written
-    twice a few microseconds apart). Kept, the copies would be two poses of one instant and
-    two readings of one report. Returns how many were dropped (their kinds' counts are lowered)."""
+    """Keep the first of two attitude or position messages (:data:`_BOOT_TIMED`) of one sender
+    with the same fields, boot time included, received within :data:`CLOSE_COPY_S` of each
+    other, the second right after the first among that sender's messages of the kind: one
+    message received twice (every message of a log written twice a few microseconds apart).
+    Kept, the copies would be two poses of one instant. Returns how many were dropped (their
+    kinds' counts are lowered)."""
     dropped = 0
-    for kind, rows in acc.rows.items():
-        senders = acc.radio_from.get(kind)
-        at = 0 if senders is not None else 1  # where the receive time is (:func:`_tlog_row`)
+    for kind in _BOOT_TIMED:
+        rows = acc.rows.get(kind, [])
         last: dict[Any, tuple[float, tuple[Any, ...]]] = {}
         keep = []
-        for j, row in enumerate(rows):
-            sender = senders[j] if senders is not None else row[0]
+        for row in rows:
+            sender, at = row[0], 1  # the receive time (:func:`_tlog_row`)
             fields = row[:at] + row[at + 1:]
             before = last.get(sender)
             copy = before is not None and before[1] == fields and 0.0 <= row[at] - before[0] <= CLOSE_COPY_S
@@ -310,11 +316,6 @@ def drop_close_copies(acc: TlogRows) -> int:
         dropped += n
         acc.counts[kind] -= n
         acc.rows[kind] = [r for r, k in zip(rows, keep, strict=True) if k]
-        if senders is not None:
-            for key, k in zip(senders, keep, strict=True):
-                if not k:
-                    acc.radio_senders[key] -= 1
-            acc.radio_from[kind] = [key for key, k in zip(senders, keep, strict=True) if k]
         acc._arrays.pop(kind, None)
     return dropped
 

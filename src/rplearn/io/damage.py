@@ -61,9 +61,9 @@ def file_damage(path: str, info: dict[str, Any]) -> list[str]:
             lines.append(f"{path}: {n:,} {what} row(s) repeat rows of {other} exactly (the same log given twice, "
                          "or overlapping exports); each was read once")
     if info.get("close_copies"):
-        lines.append(f"{path}: {info['close_copies']:,} message(s) repeat the one before them within 1 ms (same "
-                     "sender and fields: each message received twice, a router or two links forwarding it); "
-                     "each was read once")
+        lines.append(f"{path}: {info['close_copies']:,} attitude or position message(s) repeat the one before them "
+                     "within 1 ms (same sender, boot time and fields: each message received twice, a router or two "
+                     "links forwarding it); each was read once")
     if info.get("repeated_messages"):
         lines.append(f"{path}: {info['repeated_messages']:,} message(s) repeat an earlier one exactly (same receive "
                      "time and fields: part of the log is in the file twice); each was read once")
