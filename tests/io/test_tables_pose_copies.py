@@ -115,5 +115,7 @@ def test_sync_and_inspect_say_the_copies_of_a_real_log(tmp_path, real_logs):
     outcome = sync_logs([path], [signal], str(tmp_path / "m.csv"), opts)
     assert outcome.counts.n_out > 0
     assert f"{path}: dropped 20 pose row(s) (duplicate_pose)" in outcome.notes
-    text = inspect_logs([path], opts).to_text()
+    report = inspect_logs([path], opts)
+    text = report.to_text()
     assert "duplicate_pose" in text and "20 pose row(s) repeat" in text
+    assert not any("time goes backwards" in p for p in report.problems)  # the copies are no step back

@@ -333,7 +333,8 @@ def _read_pose_table(path: str, options: ReaderOptions) -> tuple[pd.DataFrame, d
     values = df[cols].apply(pd.to_numeric, errors="coerce").to_numpy(np.float64)
     bad = ~np.isfinite(values).all(axis=1)
     nan_rows = {str(k): int(v) for k, v in node[bad].value_counts().items()}
-    file_order = pd.DataFrame({"t": values[~bad, cols.index("t")], "node": node[~bad].to_numpy()})
+    copies = df.assign(node=node.to_numpy()).astype(str).duplicated().to_numpy()  # duplicate_pose: no step back
+    file_order = pd.DataFrame({"t": values[~bad & ~copies, cols.index("t")], "node": node[~bad & ~copies].to_numpy()})
     return file_order, info, nan_rows, pose
 
 
