@@ -78,7 +78,8 @@ def test_a_coordinate_beyond_any_place_is_refused_or_a_counted_drop(tmp_path, va
     assert one_line(e.value).startswith(f"{p}: field x has 1 row(s) with NaN, infinite or non-numeric values or "
                                         "coordinates beyond 1e8 m (first at row 1)")
     pose, meta = read_pose_table(p, nan_policy="drop")
-    assert len(pose) == 3 and meta["dropped"] == {"nan_pose": 0, "implausible_pose": 1, "position_jump": 0}
+    assert len(pose) == 3 and meta["dropped"] == {"nan_pose": 0, "implausible_pose": 1, "duplicate_pose": 0, "conflicting_pose": 0,
+                                             "position_jump": 0}
     utm = POSE_CSV.replace(",A,0,0,1", ",A,4.5e5,5.2e6,1").replace(",A,1,0,1", ",A,450001,5.2e6,1")
     utm = write(tmp_path, utm.replace(",A,2,0,1", ",A,450002,5.2e6,1"))  # UTM eastings and northings
     assert len(read_pose_table(utm)[0]) == 4
@@ -92,10 +93,13 @@ def test_unsorted_and_duplicate_timestamps(tmp_path):
         read_pose_table(p)
     assert p in one_line(e.value) and "field t goes backwards at row 1" in str(e.value)
     assert len(read_pose_table(p, allow_unsorted=True)[0]) == 4
-    dup = write(tmp_path, POSE_CSV + "0.2,A,2,0,1,1,0,0,0\n", "dup.csv")
+    dup = write(tmp_path, POSE_CSV + "0.2,A,2,0,1,1,0,0,0\n", "dup.csv")  # a copy of row 2: dropped, counted
+    pose, meta = read_pose_table(dup)
+    assert len(pose) == 4 and meta["dropped"]["duplicate_pose"] == 1
+    dup = write(tmp_path, POSE_CSV + "0.2,A,3,0,1,1,0,0,0\n", "dup.csv")  # another pose of row 2's time
     with pytest.raises(InputError) as e:
         read_pose_table(dup)
-    assert "dup.csv" in one_line(e.value) and "field t: 1 duplicate timestamp" in str(e.value)
+    assert one_line(e.value).startswith(f"{dup}: field x: 2 pose row(s) share a node and time") and "rows 2 and 4" in str(e.value)
 
 
 def test_geodetic_and_euler_variants(tmp_path):

@@ -76,6 +76,21 @@ def test_a_flipped_byte_in_the_index_reads_the_bag_record_by_record_and_says_whe
     bad = _flipped(tmp_path, data, index_at + 3)  # its op: a record of no bag kind
     logs, meta = read_rosbag(bad, ODOM)
     assert len(logs.pose) == ODOM_MESSAGES and meta["damaged_chunks"] == []
-    assert meta["cut_off_at_byte"] is not None and meta["cut_off_at_byte"] < index_at
-    assert "a record of no bag kind" in meta["cut_off_record"]
-    assert any(f"at byte {meta['cut_off_at_byte']:,}" in line for line in file_damage(str(bad), meta))
+    d = meta["damaged_index"]
+    assert d["at_byte"] is not None and ros1_index_pos(REAL_BAG) <= d["at_byte"] < index_at
+    assert "a record of no bag kind" in d["what"]
+    assert any(f"at byte {d['at_byte']:,}" in line for line in file_damage(str(bad), meta))
+
+
+def test_a_damaged_index_is_said_as_such_not_as_a_cut_off_file(tmp_path):
+    """Was said as "the file is cut off inside the message at byte ... (a log that ends early: power
+    loss ...)", though every message was read record by record."""
+    data = REAL_BAG.read_bytes()
+    index_pos = ros1_index_pos(REAL_BAG)
+    bad = _flipped(tmp_path, data, data.index(b"op=\x06", index_pos) + 3)
+    logs, meta = read_rosbag(bad, ODOM)
+    assert meta["cut_off_at_byte"] is None and meta["cut_off_record"] is None and len(logs.pose) == ODOM_MESSAGES
+    [line] = file_damage(str(bad), meta)
+    assert line.startswith(f"{bad}: the bag's index (from byte {index_pos:,}) is damaged at byte ")
+    assert f"read record by record from the start ({meta['records_read']:,} message record(s) read)" in line
+    assert "no message was lost" in line and "cut off" not in line

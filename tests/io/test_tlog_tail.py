@@ -275,9 +275,10 @@ def test_a_second_vehicle_that_overtakes_the_first_withdraws_every_row_handed_ou
     write_tlog(ground_260s, second, vehicle="D", station="G", origin_geodetic=ORIGIN, system_id=2)
     ones = _records(clean_260s.read_bytes())  # system id 1
     late = [r for r in _records(second.read_bytes()) if r[0] > ones[len(ones) // 3][0] and r[1][8 + 5] != 51]
-    # twice as often: each message again 1 us later (an exact copy, same receive time, is one
-    # message in the file twice, which the offline reader reads once)
-    again = [(t + 1, (t + 1).to_bytes(8, "big") + r[8:]) for t, r in late]
+    # twice as often: each message again 2 ms later (an exact copy, same receive time, is one
+    # message in the file twice, and one within 1 ms one message received twice: the offline
+    # reader reads both once)
+    again = [(t + 2_000, (t + 2_000).to_bytes(8, "big") + r[8:]) for t, r in late]
     merged = sorted(ones + late + again, key=lambda r: r[0])
     whole, grown = tmp_path / "whole.tlog", tmp_path / "grown.tlog"
     whole.write_bytes(b"".join(r[1] for r in merged))

@@ -23,12 +23,11 @@ after optional clock offsets. A sample is dropped, and counted by reason, when:
     its time lies outside ``[from_s, to_s]``: seconds from the log start (the origin ``inspect``
     prints, :func:`~rplearn.data.phases.log_start_s`) or log times (``window_clock="log"``);
 ``nan_rssi``
-    its RSSI is missing: an empty cell, NaN or infinite (the CSV/Parquet readers,
-    :func:`rplearn.io.tables.canonical_signal`, read a cell of text that is no number as
-    missing, so a file's text RSSI is counted here);
+    its RSSI is missing: an empty cell, NaN or infinite;
 ``unparsable_rssi``
-    its RSSI is text that is no number (``"n/a"``, ``"-7O"``) in a signal table given to
-    :func:`synchronise` as it is;
+    its RSSI is text that is no number (``"n/a"``, ``"-70dBm"``, ``"-7O"``), in a CSV/Parquet
+    file (:func:`rplearn.io.tables.canonical_signal` keeps such a cell's text) or a signal
+    table given to :func:`synchronise`;
 ``sentinel_rssi``
     its RSSI is one of the sentinel values radios report for "no measurement"
     (default ``0, -127, -128, 127``);
@@ -556,6 +555,28 @@ def synchronise(
     return result
 
 
+#: Share of the samples reaching the RSSI range test dropped as ``implausible_rssi`` from which
+#: the summary asks whether the received power is uncalibrated.
+IMPLAUSIBLE_ADVICE_SHARE = 0.25
+
+
+def _implausible_note(summary: SyncSummary, options: SyncOptions) -> str | None:
+    """The question a summary asks when many samples' RSSI is out of range or above the
+    transmit power: a radio reporting in its own units or with a constant offset (uncalibrated
+    power), which ``rssi_scale="relative"`` reads."""
+    if options.rssi_scale != "dbm" or not summary.dropped["implausible_rssi"]:
+        return None
+    later = DROP_REASONS[DROP_REASONS.index("implausible_rssi"):]
+    reached = summary.n_out + sum(summary.dropped.get(r, 0) for r in later)
+    share = summary.dropped["implausible_rssi"] / reached
+    if share < IMPLAUSIBLE_ADVICE_SHARE:
+        return None
+    return (f"{100 * share:.0f}% of the samples have an RSSI outside {PLAUSIBLE_RSSI_DBM[0]:g} to "
+            f"{PLAUSIBLE_RSSI_DBM[1]:g} dBm or above the transmit power (implausible_rssi): a radio reporting its own "
+            "units or with a constant offset (uncalibrated power)? SyncOptions.rssi_scale='relative' learns from it as "
+            "relative power")
+
+
 def finish_summary(summary: SyncSummary, tracks: Mapping[str, PoseTrack], phases: FlightPhases,
                    options: SyncOptions, source: str) -> None:
     """Add the phase notes and any ``max_gap_s`` advice to a whole log's summary; raise when
@@ -568,6 +589,9 @@ def finish_summary(summary: SyncSummary, tracks: Mapping[str, PoseTrack], phases
     advice = max_gap_advice(tracks, options.max_gap_s) if share >= 0.25 else None
     if advice:  # in the summary (and the error below), not a log warning that would repeat it
         summary.notes.append(f"{100 * share:.0f}% of the samples fall in pose gaps: {advice}")
+    implausible = _implausible_note(summary, options)
+    if implausible and implausible not in summary.notes:
+        summary.notes.append(implausible)
     if summary.n_out < options.min_samples:
         raise InputError(
             f"{source}: only {summary.n_out} signal sample(s) matched, at least "

@@ -244,10 +244,11 @@ def collect_tlog(source: str, system_id: int | None) -> Raw:
             acc.add(msg, source)
         cut_off = _tlog_cut_off(conn, source, whole_to)
     repeated = drop_repeated_rows(acc)
+    close = drop_close_copies(acc)
     raw = tlog_raw(acc, source, system_id, cut_off)
     if whole_to > good_to:  # BAD_DATA after the last whole record
         stretches, skipped = stretches + 1, skipped + whole_to - good_to
-    raw.notes.update(corrupt_stretches=stretches, corrupt_bytes=skipped, repeated_messages=repeated,
+    raw.notes.update(corrupt_stretches=stretches, corrupt_bytes=skipped, repeated_messages=repeated, close_copies=close,
                      records_read=sum(n for k, n in acc.counts.items() if k != "BAD_DATA"))
     return raw
 
@@ -275,6 +276,47 @@ def drop_repeated_rows(acc: TlogRows) -> int:
             else:
                 acc.rows[kind] = unique
             acc._arrays.pop(kind, None)
+    return dropped
+
+
+#: Largest receive-time difference [s] between a message and the same message (same kind,
+#: sender and fields) right before it for the two to be one message received twice (a router,
+#: or two links forwarding each message): far below any report period of a vehicle or a radio.
+CLOSE_COPY_S = 1e-3
+
+
+#: Kinds whose fields hold the sender's boot time: two of them with the same fields are one
+#: message (a radio report holds no time: two reports of equal values may come close, and
+#: copies of one are merged by ``sync``, ``duplicate_reading``).
+_BOOT_TIMED = ("ATTITUDE", "GLOBAL_POSITION_INT")
+
+
+def drop_close_copies(acc: TlogRows) -> int:
+    """Keep the first of two attitude or position messages (:data:`_BOOT_TIMED`) of one sender
+    with the same fields, boot time included, received within :data:`CLOSE_COPY_S` of each
+    other, the second right after the first among that sender's messages of the kind: one
+    message received twice (every message of a log written twice a few microseconds apart).
+    Kept, the copies would be two poses of one instant. Returns how many were dropped (their
+    kinds' counts are lowered)."""
+    dropped = 0
+    for kind in _BOOT_TIMED:
+        rows = acc.rows.get(kind, [])
+        last: dict[Any, tuple[float, tuple[Any, ...]]] = {}
+        keep = []
+        for row in rows:
+            sender, at = row[0], 1  # the receive time (:func:`_tlog_row`)
+            fields = row[:at] + row[at + 1:]
+            before = last.get(sender)
+            copy = before is not None and before[1] == fields and 0.0 <= row[at] - before[0] <= CLOSE_COPY_S
+            keep.append(not copy)
+            last[sender] = (row[at], fields)
+        n = len(keep) - sum(keep)
+        if not n:
+            continue
+        dropped += n
+        acc.counts[kind] -= n
+        acc.rows[kind] = [r for r, k in zip(rows, keep, strict=True) if k]
+        acc._arrays.pop(kind, None)
     return dropped
 
 
@@ -546,4 +588,5 @@ def collect_dataflash(source: str) -> Raw:
     )
 
 
-__all__ = ["Raw", "TlogRows", "boot_offsets", "collect_dataflash", "collect_tlog", "drop_repeated_rows", "merge_copied_boots", "tlog_raw"]
+__all__ = ["Raw", "TlogRows", "boot_offsets", "collect_dataflash", "collect_tlog", "drop_close_copies",
+           "drop_repeated_rows", "merge_copied_boots", "tlog_raw"]

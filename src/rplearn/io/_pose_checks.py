@@ -4,11 +4,13 @@ without jumps no plausible speed explains (in-range sentinels, positions logged 
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
+
 import numpy as np
 import pandas as pd
 
 from rplearn.core.plausible import PLAUSIBLE
-from rplearn.errors import InputError
+from rplearn.errors import InputError, LogFormatError
 from rplearn.io.mavlink_phases import MAX_HORIZONTAL_SPEED_M_S, MAX_VERTICAL_SPEED_M_S, invalid_fixes, unexplained_steps
 
 #: A node's top speed, horizontal and vertical, is this many times the 75th percentile of its
@@ -170,5 +172,204 @@ def position_jumps(
     return ~invalid, notes
 
 
-__all__ = ["MIN_SPEED_STEPS", "MOVING_SPEED_M_S", "TOP_SPEED_CAP_M_S", "TOP_SPEED_FACTOR", "finite_values", "position_jumps",
-           "top_speeds"]
+def _same_rows(table: pd.DataFrame) -> np.ndarray:
+    """Mask of the rows of ``table`` repeating an earlier row of it in every column."""
+    try:
+        return table.duplicated(keep="first").to_numpy(bool)
+    except TypeError:  # unhashable cells: compare their text
+        return table.astype(str).duplicated(keep="first").to_numpy(bool)
+
+
+def repeated_poses(
+    df: pd.DataFrame, t: np.ndarray, nodes: np.ndarray, rows: np.ndarray, nan_policy: str, source: str,
+) -> tuple[np.ndarray, dict[str, int], list[str]]:
+    """Rows sharing their node and time with an earlier row: copies dropped, conflicts refused
+    or dropped.
+
+    A row identical in every column of ``df`` to an earlier row of the same node and time is a
+    copy (a logger writing a block twice): dropped and counted as ``duplicate_pose`` under any
+    ``nan_policy``. Rows of one node and time that differ in a value are a conflict (two poses
+    of one instant: which one is true is unknown): refused naming the rows and the first
+    differing field, or with ``nan_policy="drop"`` all rows of that node and time dropped and
+    counted as ``conflicting_pose``. ``rows`` are the file rows of ``df``'s rows, for messages.
+
+    Returns ``(keep, dropped, notes)``.
+
+    Raises
+    ------
+    InputError
+        On a conflict with ``nan_policy="error"``.
+    """
+    keep = np.ones(len(t), bool)
+    dropped = {"duplicate_pose": 0, "conflicting_pose": 0}
+    key = pd.DataFrame({"node": pd.Series(nodes, dtype=object), "t": t})
+    shared = key.duplicated(keep=False).to_numpy(bool)
+    if not shared.any():
+        return keep, dropped, []
+    group = key.groupby(["node", "t"], dropna=False, sort=False).ngroup().to_numpy()  # a missing id is one node
+    cand = np.flatnonzero(shared)
+    copies = cand[_same_rows(df.iloc[cand].set_axis(range(cand.size)))]
+    keep[copies] = False
+    notes = []
+    if copies.size:
+        dropped["duplicate_pose"] = int(copies.size)
+        first = int(copies[np.argmin(rows[copies])])
+        original = int(rows[np.flatnonzero(group == group[first])[0]])
+        notes.append(f"{source}: {copies.size:,} pose row(s) repeat an earlier row of their node and time in every "
+                     f"value, first at row {int(rows[first])} (a copy of row {original}: a block written twice): "
+                     "dropped as copies (duplicate_pose)")
+    left = cand[keep[cand]]
+    conflict_in = pd.Series(group[left]).duplicated(keep=False).to_numpy(bool)
+    if not conflict_in.any():
+        return keep, dropped, notes
+    conflict = left[conflict_in]
+    a = int(conflict[np.argmin(rows[conflict])])
+    same = conflict[group[conflict] == group[a]]
+    b = int(same[same != a][0])
+    fields = [str(c) for c in df.columns
+              if not (str(df[c].iloc[a]) == str(df[c].iloc[b]))]
+    where = (f"{source}: field {fields[0] if fields else 't'}: {conflict.size:,} pose row(s) share a node and time with "
+             f"a row of other values, first node {nodes[a]} at t = {float(t[a])!r} (rows {int(rows[a])} and "
+             f"{int(rows[b])} differ in {', '.join(fields) or 'their values'}): two poses of one instant")
+    if nan_policy == "error":
+        raise InputError(f"{where}; expected one pose per node and time, or drop those rows (nan_policy='drop')",
+                         param="nan_policy")
+    keep[conflict] = False
+    dropped["conflicting_pose"] = int(conflict.size)
+    notes.append(f"{where}: all rows of those times dropped (conflicting_pose)")
+    return keep, dropped, notes
+
+
+@dataclass
+class TrackEnds:
+    """What the rows of a pose table read in parts (a file still being written, polled by
+    ``rplearn live``) carry from part to part, per node: the last row kept (its time [s] and
+    ENU position [m]), the node's top speeds [m/s] (across, up/down) and the rows kept and
+    dropped as on the wrong side of a jump so far."""
+
+    last: dict[str, tuple[float, np.ndarray]] = field(default_factory=dict)
+    speeds: dict[str, tuple[float, float]] = field(default_factory=dict)
+    kept: dict[str, int] = field(default_factory=dict)
+    dropped: dict[str, int] = field(default_factory=dict)
+    #: Per node, the values of its last :data:`REMEMBERED_ROWS` rows kept, by time: a row of
+    #: a later part repeating one of them is a copy (a block written twice).
+    recent: dict[str, dict[float, tuple[float, ...]]] = field(default_factory=dict)
+
+    def remember(self, nodes: np.ndarray, values: dict[str, np.ndarray]) -> None:
+        """Keep the values of the rows kept (of one part, in file order)."""
+        columns = list(values)
+        for i, node in enumerate(nodes):
+            seen = self.recent.setdefault(str(node), {})
+            seen[float(values["t"][i])] = tuple(float(values[c][i]) for c in columns)
+            if len(seen) > REMEMBERED_ROWS:
+                del seen[next(iter(seen))]
+
+
+#: Rows per node whose values a pose table read in parts remembers (:class:`TrackEnds`).
+REMEMBERED_ROWS = 4096
+
+
+def earlier_rows(
+    ends: TrackEnds, values: dict[str, np.ndarray], nodes: np.ndarray, rows: np.ndarray, nan_policy: str, source: str,
+) -> tuple[np.ndarray, dict[str, int], list[str]]:
+    """Rows of a part of a pose table (a file still being written) at or before their node's
+    last row kept from the parts before: a row repeating a remembered row in every value is a
+    copy (dropped, ``duplicate_pose``); another at a remembered time is a conflict (refused, or
+    with ``nan_policy="drop"`` dropped as ``conflicting_pose``: the earlier row was handed out);
+    any other is a step back in time, refused (:class:`LogFormatError`).
+
+    Returns ``(keep, dropped, notes)``.
+    """
+    keep = np.ones(len(rows), bool)
+    dropped = {"duplicate_pose": 0, "conflicting_pose": 0}
+    notes: list[str] = []
+    columns = list(values)
+    t = values["t"]
+    for i in range(len(rows)):
+        node = str(nodes[i])
+        if node not in ends.last or t[i] > ends.last[node][0]:
+            continue
+        seen = ends.recent.get(node, {}).get(float(t[i]))
+        here = tuple(float(values[c][i]) for c in columns)
+        keep[i] = False
+        if seen == here:
+            dropped["duplicate_pose"] += 1
+            continue
+        if seen is None:
+            raise LogFormatError(
+                f"{source}: field t goes backwards at row {int(rows[i])} (node {node}: {ends.last[node][0]!r} -> "
+                f"{float(t[i])!r}, before the rows read earlier); expected increasing times", param="allow_unsorted")
+        field_name = next(c for c, a, b in zip(columns, seen, here, strict=True) if a != b)
+        where = (f"{source}: field {field_name}: row {int(rows[i])} gives node {node} at t = {float(t[i])!r} other "
+                 "values than a row read earlier: two poses of one instant")
+        if nan_policy == "error":
+            raise InputError(f"{where}; expected one pose per node and time, or drop such rows (nan_policy='drop')",
+                             param="nan_policy")
+        dropped["conflicting_pose"] += 1
+        notes.append(f"{where}: dropped (conflicting_pose)")
+    if dropped["duplicate_pose"]:
+        notes.insert(0, f"{source}: {dropped['duplicate_pose']:,} pose row(s) repeat a row read earlier in every value "
+                        "(a block written twice): dropped as copies (duplicate_pose)")
+    return keep, dropped, notes
+
+
+def steps_from_last(
+    ends: TrackEnds, t: np.ndarray, xyz: np.ndarray, nodes: np.ndarray, rows: np.ndarray, nan_policy: str,
+    source: str,
+) -> tuple[np.ndarray, list[str]]:
+    """The new rows of a pose table read in parts checked against each node's last row kept
+    from the parts before (``ends``, updated here), so that every row is checked against its
+    predecessor however the parts cut the track (a part of one row included).
+
+    The rows (sorted by node, then time) are already checked among themselves
+    (:func:`position_jumps`). Per node, the first rows that the step from the last row kept
+    does not explain, at the node's top speed (:func:`top_speeds`, the highest seen so far),
+    are on the wrong side of a jump: refused with ``nan_policy="error"``, else dropped (a
+    sentinel between parts), and refused too when the dropped rows reach half the node's rows
+    (which side is valid is then unclear). ``rows`` are the file rows, for messages.
+
+    Returns ``(keep, notes)``.
+    """
+    keep = np.ones(len(t), bool)
+    notes: list[str] = []
+    codes, names = pd.factorize(pd.Series(nodes, dtype=object))
+    h_now, v_now = top_speeds(t, xyz, codes) if len(t) else (np.zeros(0), np.zeros(0))
+    for k, name in enumerate(names):
+        node = str(name)
+        idx = np.flatnonzero(codes == k)
+        idx = idx[np.argsort(t[idx], kind="stable")]
+        h, v = ends.speeds.get(node, (MAX_HORIZONTAL_SPEED_M_S, MAX_VERTICAL_SPEED_M_S))
+        h, v = max(h, float(h_now[idx[0]])), max(v, float(v_now[idx[0]]))
+        ends.speeds[node] = (h, v)
+        if node in ends.last:
+            t0, x0 = ends.last[node]
+            n = idx.size
+            bad, dh, dv = unexplained_steps(np.full(n, t0), np.broadcast_to(x0, (n, 3)), np.full(n, h), np.full(n, v),
+                                            t[idx], xyz[idx], np.full(n, h), np.full(n, v))
+            wrong = int(np.argmin(bad)) if not bad.all() else n  # the rows before the first the step explains
+            if wrong:
+                i = idx[0]
+                where = (f"{source}: fields x, y, z of node {node} jump: a step of {float(dv[0]):.1f} m up/down and "
+                         f"{float(dh[0]):.1f} m across in {float(t[i] - t0):.2f} s from its last row read before "
+                         f"(t = {t0:.3f} s) that the node's top speed ({h:.0f} m/s across, {v:.0f} m/s up/down) does "
+                         f"not explain, at row {int(rows[i])} (t = {float(t[i]):.3f} s); {wrong} row(s) lie on the "
+                         "wrong side of it (a sentinel, or a position logged before the fix was valid)")
+                if nan_policy == "error":
+                    raise InputError(f"{where}; expected a continuous track, or drop those rows (nan_policy='drop')",
+                                     param="nan_policy")
+                dropped = ends.dropped.get(node, 0) + wrong
+                if 2 * dropped >= dropped + ends.kept.get(node, 0) + n - wrong:
+                    raise InputError(f"{where}; which side is valid is unclear with so many rows on the wrong side: "
+                                     "expected a continuous track, cut the log to the flight", param="nan_policy")
+                ends.dropped[node] = dropped
+                keep[idx[:wrong]] = False
+                notes.append(f"{where}: dropped")
+        kept = idx[keep[idx]]
+        if kept.size:
+            ends.last[node] = (float(t[kept[-1]]), xyz[kept[-1]].copy())
+            ends.kept[node] = ends.kept.get(node, 0) + int(kept.size)
+    return keep, notes
+
+
+__all__ = ["MIN_SPEED_STEPS", "MOVING_SPEED_M_S", "TOP_SPEED_CAP_M_S", "TOP_SPEED_FACTOR", "TrackEnds", "earlier_rows",
+           "finite_values", "position_jumps", "repeated_poses", "steps_from_last", "top_speeds"]

@@ -50,6 +50,9 @@ class Ros1Scan:
         or a record in them does not parse), skipped to read the chunks after them: ``chunk``
         (number from 1), ``at_byte``, ``compression``, ``what``, ``lost_messages`` (None: not
         known without the index).
+    index_error : str or None
+        Why the bag's index could not be read, when it was read record by record for that
+        reason (a damaged index; None otherwise).
     """
 
     messages_read: int = 0
@@ -61,6 +64,7 @@ class Ros1Scan:
     connections: dict[int, Any] = field(default_factory=dict)
     indexes: dict[int, list[Any]] = field(default_factory=dict)
     damaged_chunks: list[dict[str, Any]] = field(default_factory=list)
+    index_error: str | None = None
 
 
 def _fields(buf: bytes, start: int, end: int) -> dict[str, bytes] | None:

@@ -24,6 +24,15 @@ def file_damage(path: str, info: dict[str, Any]) -> list[str]:
             + (f"the {info['records_read']:,} complete record(s) before it were read"
                if info.get("records_read") is not None else "the complete records before it were read")
         )
+    if info.get("damaged_index"):
+        d = info["damaged_index"]
+        where = f" at byte {d['at_byte']:,} ({d['what']})" if d.get("at_byte") is not None else f" ({d['error']})"
+        read = f" ({info['records_read']:,} message record(s) read)" if info.get("records_read") is not None else ""
+        lost = ("; no message was lost" if info.get("cut_off_at_byte") is None and not info.get("damaged_chunks")
+                else "")
+        lines.append(f"{path}: the bag's index (from byte {d['index_pos']:,}) is damaged{where}: its messages were "
+                     f"read record by record from the start{read}, as `rosbag reindex` does{lost}; "
+                     "`rosbag reindex` rewrites the index")
     if info.get("unindexed"):
         lines.append(f"{path}: the bag has no index (its recorder never closed it): its messages were read record "
                      f"by record from the start" + (f" ({info['records_read']:,})" if info.get("records_read") else "")
@@ -51,6 +60,10 @@ def file_damage(path: str, info: dict[str, Any]) -> list[str]:
         for other, n in by_file.items():
             lines.append(f"{path}: {n:,} {what} row(s) repeat rows of {other} exactly (the same log given twice, "
                          "or overlapping exports); each was read once")
+    if info.get("close_copies"):
+        lines.append(f"{path}: {info['close_copies']:,} attitude or position message(s) repeat the one before them "
+                     "within 1 ms (same sender, boot time and fields: each message received twice, a router or two "
+                     "links forwarding it); each was read once")
     if info.get("repeated_messages"):
         lines.append(f"{path}: {info['repeated_messages']:,} message(s) repeat an earlier one exactly (same receive "
                      "time and fields: part of the log is in the file twice); each was read once")
@@ -88,6 +101,60 @@ def drop_repeated_across(logs: list[pd.DataFrame], owners: list[int], files: lis
             log = log[~mine].reset_index(drop=True)
         out.append(log)
         start += len(mine)
+    return out
+
+
+def _station_at(row: pd.Series, meta: dict[str, Any]) -> str:
+    """A station row's position [m] and where its reader placed it from."""
+    note = meta.get("station_note")
+    return f"({row['x']:.2f}, {row['y']:.2f}, {row['z']:.2f}) m" + (f" ({note})" if note else "")
+
+
+def one_station(logs: list[pd.DataFrame], owners: list[int], files: list[dict[str, Any]]) -> list[pd.DataFrame]:
+    """The pose logs with a ground station that several files place (MAVLink logs, ULogs read
+    with their radio: each gives its ``station`` as one static row at its first time) given
+    once: at the same pose, the earliest file's row is kept and the station is static across
+    every file's flight (two rows at two times would make it a node logged over that span
+    only, the later flights' samples out of its span); at different poses (a station moved
+    between flights, two vehicles' homes) refused, naming both files and both positions: no
+    pose between them is known, and a line between them is no place the station stood."""
+    from rplearn.data.poses import SAME_POSITION_M
+
+    given: dict[str, list[tuple[int, int, pd.Series]]] = {}
+    for k, (log, i) in enumerate(zip(logs, owners, strict=True)):
+        station = files[i].get("station")
+        if station is None or not len(log):
+            continue
+        rows = log[log["node"].astype(str) == str(station)]
+        if len(rows) == 1:
+            given.setdefault(str(station), []).append((k, i, rows.iloc[0]))
+    out = list(logs)
+    for station, found in given.items():
+        if len({i for _, i, _ in found}) < 2:
+            continue
+        found.sort(key=lambda f: float(f[2]["t"]))
+        _, first_file, first = found[0]
+        for k, i, row in found[1:]:
+            a = first[["x", "y", "z"]].to_numpy(np.float64)
+            b = row[["x", "y", "z"]].to_numpy(np.float64)
+            qa, qb = (r[["qw", "qx", "qy", "qz"]].to_numpy(np.float64) for r in (first, row))
+            same_q = min(np.max(np.abs(qa - qb)), np.max(np.abs(qa + qb))) <= SAME_POSITION_M
+            moved = bool(np.max(np.abs(a - b)) > SAME_POSITION_M)
+            if moved or not same_q:
+                turned = "" if moved else " (the same place, another heading)"
+                raise InputError(
+                    f"{files[first_file].get('source')} and {files[i].get('source')} place the ground station "
+                    f"{station} at {_station_at(first, files[first_file])} and at {_station_at(row, files[i])}, "
+                    f"ENU{turned}: a station moved between flights, or the homes of two vehicles; give where it "
+                    "stood (ReaderOptions.station_geodetic: lat, lon, alt), or read each flight on its own",
+                    param="station_geodetic")
+            if row["t"] == first["t"]:
+                continue  # the same row: a file given twice, read once by drop_repeated_across
+            log = out[k]
+            out[k] = log[~((log["node"].astype(str) == station) & (log["t"] == row["t"]))]
+            files[i].setdefault("notes", []).append(
+                f"{files[i].get('source')}: ground station {station} at the pose {files[first_file].get('source')} "
+                "gives it: one static station for both flights")
     return out
 
 
@@ -139,7 +206,13 @@ def across_files(report: Any, poses: list[pd.DataFrame], canonical: list[pd.Data
             refuse_overlaps(logs, owners[what], metas, what)
         except InputError as exc:
             report.problems.append(f"{exc} (sync refuses these files)")
+    stations = [{"source": f["path"], "station": f.get("station"), "station_note": f.get("station_note")}
+                for f in report.files]
+    try:
+        one_station(canonical, owners["pose"], stations)
+    except InputError as exc:
+        report.problems.append(f"{exc} (sync refuses these files)")
     return poses, signals
 
 
-__all__ = ["across_files", "drop_repeated_across", "file_damage", "refuse_overlaps"]
+__all__ = ["across_files", "drop_repeated_across", "file_damage", "one_station", "refuse_overlaps"]

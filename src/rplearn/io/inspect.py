@@ -44,7 +44,7 @@ from rplearn._argtypes import check_types
 from rplearn.data.phases import advised_max_gap_s, calibration_problems, flight_phases
 from rplearn.data.poses import pose_tracks
 from rplearn.data.readings import REPEAT_FRACTION, duplicate_rows, repeated_readings, report_period_s, report_rate_hz
-from rplearn.data.sync import DEFAULT_SENTINEL_RSSI_DBM
+from rplearn.data.sync import DEFAULT_SENTINEL_RSSI_DBM, PLAUSIBLE_RSSI_DBM
 from rplearn.data.tables import QUATERNION_NORM_TOLERANCE, non_unit_quaternion_rows, outage_mask
 from rplearn.errors import RplearnError
 from rplearn.io.damage import across_files, file_damage
@@ -106,6 +106,9 @@ class LinkSummary:
     duplicates: int = 0
     repeated_readings: int = 0
     period_s: float = float("nan")
+    #: Readings whose RSSI no radio reports in dBm (outside the plausible range, or above the
+    #: transmit power): ``sync`` drops them as ``implausible_rssi``.
+    implausible_rssi: int = 0
 
 
 @check_types
@@ -283,6 +286,9 @@ def summarise_signal(signal: pd.DataFrame,
         r = pd.to_numeric(g["rssi_dbm"], errors="coerce").to_numpy(np.float64)
         bad = ~np.isfinite(r) | np.isin(r, np.asarray(sentinel_rssi_dbm, float))
         good = r[~bad]
+        ptx = pd.to_numeric(g["tx_power_dbm"], errors="coerce").to_numpy(np.float64)[~bad] \
+            if "tx_power_dbm" in g.columns else np.full(good.size, np.inf)
+        implausible = (good < PLAUSIBLE_RSSI_DBM[0]) | (good > PLAUSIBLE_RSSI_DBM[1]) | (good > ptx)
         tf = t[np.isfinite(t)]
         copies = repeated.loc[g.index].to_numpy(bool)
         out.append(LinkSummary(
@@ -293,7 +299,7 @@ def summarise_signal(signal: pd.DataFrame,
             rssi_max_dbm=float(good.max()) if good.size else np.nan,
             sentinel_rssi=int(bad.sum()), backward_steps=int((_steps(tf) < 0).sum()),
             duplicates=int(dup.loc[g.index].sum()), repeated_readings=int(copies.sum()),
-            period_s=report_period_s(t),
+            period_s=report_period_s(t), implausible_rssi=int(implausible.sum()),
         ))
     return out
 
@@ -327,7 +333,8 @@ def _read_pose_table(path: str, options: ReaderOptions) -> tuple[pd.DataFrame, d
     values = df[cols].apply(pd.to_numeric, errors="coerce").to_numpy(np.float64)
     bad = ~np.isfinite(values).all(axis=1)
     nan_rows = {str(k): int(v) for k, v in node[bad].value_counts().items()}
-    file_order = pd.DataFrame({"t": values[~bad, cols.index("t")], "node": node[~bad].to_numpy()})
+    copies = df.assign(node=node.to_numpy()).astype(str).duplicated().to_numpy()  # duplicate_pose: no step back
+    file_order = pd.DataFrame({"t": values[~bad & ~copies, cols.index("t")], "node": node[~bad & ~copies].to_numpy()})
     return file_order, info, nan_rows, pose
 
 
@@ -392,8 +399,8 @@ def _read_one(path: str, options: ReaderOptions) -> tuple[pd.DataFrame | None, p
         info["invalid_flag_rows"] = int(f["invalid_flag_rows"])
     for key in ("cut_off_at_byte", "cut_off_record", "records_read", "corrupt", "corrupt_at_byte", "corrupt_bytes",
                 "corrupt_stretches",
-                "repeated_messages", "unindexed", "trailing_bytes", "trailing_bag", "damaged_chunks",
-                "damaged_chunk_messages"):
+                "repeated_messages", "close_copies", "unindexed", "trailing_bytes", "trailing_bag", "damaged_chunks",
+                "damaged_chunk_messages", "damaged_index", "station", "station_note"):
         if f.get(key):
             info[key] = f[key]
     if f.get("notes"):
@@ -560,6 +567,12 @@ def _flag(report: InspectReport, max_gap_s: float) -> None:
                 f"{REPEAT_FRACTION:g} of the {lk.period_s:.3g} s report period); sync merges them (duplicate_reading)")
         if lk.backward_steps:
             report.problems.append(f"link {lk.tx} -> {lk.rx}: time goes backwards {lk.backward_steps} time(s)")
+        if lk.implausible_rssi:
+            report.problems.append(
+                f"link {lk.tx} -> {lk.rx}: {lk.implausible_rssi} RSSI value(s) outside {PLAUSIBLE_RSSI_DBM[0]:g} to "
+                f"{PLAUSIBLE_RSSI_DBM[1]:g} dBm or above the transmit power (median {lk.rssi_median_dbm:.1f}); sync drops "
+                "them (implausible_rssi); a radio reporting its own units or with a constant offset? "
+                "SyncOptions.rssi_scale='relative' reads them as relative power")
         for end in (lk.tx, lk.rx):
             if report.nodes and end not in known:
                 msg = f"node {end}: named by signals but has no pose log"

@@ -37,8 +37,9 @@ import pandas as pd
 from rplearn._argtypes import check_types
 from rplearn.data.tables import CSV_DTYPES, normalise_times
 from rplearn.errors import InputError, LogFormatError
+from rplearn.io._pose_checks import TrackEnds
 from rplearn.io.options import ReaderOptions
-from rplearn.io.tables import canonical_pose, canonical_signal
+from rplearn.io.tables import LinkTimes, canonical_pose, canonical_signal, check_link_time_order, csv_missing_values
 
 
 @check_types
@@ -89,10 +90,17 @@ def _table(tail: _Tail, data: bytes) -> pd.DataFrame | None:
     if not data.strip():
         return None
     try:
-        df = pd.read_csv(io.BytesIO(tail.header + data), skipinitialspace=True, dtype=CSV_DTYPES)
+        header = pd.read_csv(io.BytesIO(tail.header), nrows=0, skipinitialspace=True).columns
+        df = pd.read_csv(io.BytesIO(tail.header + data), skipinitialspace=True, dtype=CSV_DTYPES,
+                         **csv_missing_values(header))  # RSSI text: unparsable_rssi, as sync counts it
     except Exception as exc:  # parsers raise many classes on corrupt bytes
         raise LogFormatError(f"{tail.path}: cannot parse the rows appended ({type(exc).__name__}: {exc})") from None
     return normalise_times(df, tail.path)
+
+
+#: Polls of a signal CSV whose rows' hashes :class:`CsvTail` keeps: a row repeating one of them
+#: is a copy, not a step back in time (the matcher drops it); older rows are forgotten.
+LINK_MEMORY_POLLS = 16
 
 
 @check_types
@@ -115,6 +123,10 @@ class CsvTail:
         self.name = f"{pose_path} + {signal_path}"
         self.reader = reader if reader is not None else ReaderOptions()
         self.dropped: dict[str, int] = {}
+        self._pose_rows = 0  # pose rows read so far: the file row of the next one
+        self._ends = TrackEnds()  # each node's last pose kept: a poll's rows are checked against it
+        self._signal_rows = 0
+        self._links = LinkTimes()  # each link's last time: a logger that rebooted is refused, as by sync
 
     def poll(self) -> Poll:
         """Rows appended since the last poll."""
@@ -122,14 +134,21 @@ class CsvTail:
         poses = signals = pd.DataFrame()
         pt = _table(self.pose, p)
         if pt is not None:
-            poses, meta = canonical_pose(pt, source=self.pose.path, nan_policy=self.reader.nan_policy)
+            poses, meta = canonical_pose(pt, source=self.pose.path, nan_policy=self.reader.nan_policy,
+                                         first_row=self._pose_rows, ends=self._ends)
+            self._pose_rows += len(pt)
             for reason, n in meta["dropped"].items():
                 self.dropped[reason] = self.dropped.get(reason, 0) + int(n)
         st = _table(self.signal, s)
         if st is not None:
             ptx = self.reader.tx_power_dbm if not isinstance(self.reader.tx_power_dbm, Mapping) else None
             signals = canonical_signal(st, source=self.signal.path, rx=(self.reader.receivers or {}).get(self.signal.path),
-                                       tx_power_dbm=ptx, frequency_hz=self.reader.frequency_hz)
+                                       tx_power_dbm=ptx, frequency_hz=self.reader.frequency_hz,
+                                       first_row=self._signal_rows)
+            if not self.reader.allow_unsorted:
+                check_link_time_order(signals, self.signal.path, self._signal_rows, self._links)
+                del self._links.seen[:-LINK_MEMORY_POLLS]  # copies of rows of older polls: a step back
+            self._signal_rows += len(signals)
         return Poll(poses, signals, len(poses) + len(signals), {k: n for k, n in self.dropped.items() if n})
 
     def close(self) -> None:

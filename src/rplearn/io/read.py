@@ -14,7 +14,7 @@ from rplearn._argtypes import check_types
 from rplearn.data.tables import NON_UNIT_QUATERNION_ATTR, validate_pose_log
 from rplearn.errors import InputError, RplearnError
 from rplearn.io._common import Logs
-from rplearn.io.damage import drop_repeated_across, refuse_overlaps
+from rplearn.io.damage import drop_repeated_across, one_station, refuse_overlaps
 from rplearn.io.options import ReaderOptions
 from rplearn.io.partitions import refuse_repeated
 from rplearn.io.sniff import detect_format
@@ -205,7 +205,7 @@ def _merge(got: _Gathered) -> tuple[Logs, dict[str, Any]]:
     """One validated pose log and one time-sorted signal log from everything read; rows that
     repeat another file's are read once (counted), different rows of one stream from two files
     over the same times are refused."""
-    poses = drop_repeated_across(got.poses, got.pose_files, got.files, "pose")
+    poses = drop_repeated_across(one_station(got.poses, got.pose_files, got.files), got.pose_files, got.files, "pose")
     signals = drop_repeated_across(got.signals, got.signal_files, got.files, "signal")
     refuse_overlaps(poses, got.pose_files, got.files, "pose")
     refuse_overlaps(signals, got.signal_files, got.files, "signal")

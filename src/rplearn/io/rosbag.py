@@ -218,6 +218,7 @@ def open_rosbag(
             raise LogFormatError(f"{path}: cannot open bag ({type(exc).__name__}: {msg})") from None
         try:  # a damaged index, or a chunk header it points to: read record by record as `rosbag reindex` does
             reader = _open_reader(AnyReader, paths, default, True)
+            bag_scan(reader).index_error = f"{type(exc).__name__}: {msg}" if msg else type(exc).__name__
         except Exception as exc2:
             raise LogFormatError(
                 f"{path}: the bag's index (from byte {index_at:,} of {size:,}) cannot be read ({msg}), nor its "
@@ -561,9 +562,7 @@ def read_rosbag(
         "repeated_messages": sum(repeated.values()),
         "repeated_by_topic": dict(sorted(repeated.items())),
         "time_reference": f"ROS time [s] ({'header stamps' if time_source == 'header' else 'bag receive time'})",
-        "cut_off_at_byte": None if found is None else found.cut_off_at_byte,
-        "cut_off_record": None if found is None else found.cut_off_record,
-        "records_read": None if found is None else found.messages_read,
+        **_scan_facts(found),
         "unindexed": found is not None and found.index_pos == 0,
         "trailing_bytes": trailing,
         "trailing_bag": another_bag,
@@ -571,6 +570,29 @@ def read_rosbag(
         "damaged_chunk_messages": sum(d["lost_messages"] or 0 for d in damaged),
     }
     return Logs(pose=pose, signal=signal), meta
+
+
+def _scan_facts(found: Any) -> dict[str, Any]:
+    """What a record-by-record reading (a :class:`rplearn.io._ros1_scan.Ros1Scan`, None for a
+    bag read through its index) says of the file: where it is cut off (``cut_off_at_byte``,
+    ``cut_off_record``), the message records read (``records_read``), and, for a bag whose
+    index could not be read, ``damaged_index``: where the index starts (``index_pos``), the
+    reader's complaint (``error``) and the unreadable record inside the index (``at_byte``,
+    ``what``; None when none was found). A damaged record inside the index loses no message:
+    it is said there, not as a cut."""
+    if found is None:
+        return {"cut_off_at_byte": None, "cut_off_record": None, "records_read": None, "damaged_index": None}
+    at, what = found.cut_off_at_byte, found.cut_off_record
+    # a damaged record inside the index (not the file ending there: a cut file is said as cut)
+    in_index = found.index_pos > 0 and at is not None and at >= found.index_pos and str(what).endswith("damaged")
+    damaged_index = None
+    if found.index_error is not None and (at is None or in_index):  # a cut file: said as cut
+        damaged_index = {"index_pos": int(found.index_pos), "error": found.index_error,
+                         "at_byte": int(at) if in_index else None, "what": what if in_index else None}
+    if in_index and damaged_index is not None:
+        at = what = None
+    return {"cut_off_at_byte": at, "cut_off_record": what, "records_read": found.messages_read,
+            "damaged_index": damaged_index}
 
 
 __all__ = ["POSE_MSGTYPES", "RosbagOptions", "bag_topics", "describe_topics", "open_rosbag", "read_rosbag"]

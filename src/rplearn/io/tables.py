@@ -27,8 +27,12 @@ from rplearn.core.geometry import quat_wxyz_from_euler_enu_flu_deg, quat_wxyz_fr
 from rplearn.data.tables import CSV_DTYPES, POSE_COLUMNS, SIGNAL_COLUMNS, check_unit_labels, node_ids, normalise_times, validate_pose_log
 from rplearn.errors import InputError, LogFormatError
 from rplearn.io._common import read_parquet_lean
+from rplearn.io._pose_checks import TrackEnds
+from rplearn.io._pose_checks import earlier_rows as _earlier_rows
 from rplearn.io._pose_checks import finite_values as _finite_values
 from rplearn.io._pose_checks import position_jumps as _position_jumps
+from rplearn.io._pose_checks import repeated_poses as _repeated_poses
+from rplearn.io._pose_checks import steps_from_last as _steps_from_last
 from rplearn.io.geodetic import geodetic_to_enu
 
 #: Vendor column names -> canonical names (the one renaming mapping of rplearn.io).
@@ -83,13 +87,46 @@ def _table_error(name: str, path: Any, exc: BaseException) -> str:
     return table_read_error(name, path, exc)
 
 
-def _read(path: str, source: str) -> pd.DataFrame:
+#: The only cells of an RSSI column a CSV reader takes for missing (``nan_rssi``): other text
+#: ("n/a", "NULL", "-70dBm") is kept, counted by ``sync`` as ``unparsable_rssi``, as
+#: :func:`rplearn.data.sync.synchronise` counts it in a table it is given.
+RSSI_MISSING_TEXT: tuple[str, ...] = ("", "nan", "NaN", "NAN", "-nan", "-NaN", "+nan", "+NaN")
+#: The words :func:`pandas.read_csv` takes for missing by default (its documented ``na_values``).
+_PANDAS_MISSING_TEXT: tuple[str, ...] = (
+    "", "#N/A", "#N/A N/A", "#NA", "-1.#IND", "-1.#QNAN", "-NaN", "-nan", "1.#IND", "1.#QNAN", "<NA>", "N/A", "NA",
+    "NULL", "NaN", "None", "n/a", "nan", "null",
+)
+
+
+def csv_missing_values(header: Any, columns: Mapping[str, str] | None = None) -> dict[str, Any]:
+    """Options of :func:`pandas.read_csv` for a table with the column names ``header`` (as pandas
+    reads them): pandas' missing-value words in every column but the RSSI one
+    (:data:`RSSI_MISSING_TEXT` there); none for a table without an RSSI column."""
+    names = [str(c) for c in header]
+    try:
+        renamed = list(rename_columns(pd.DataFrame(columns=names), columns).columns)
+    except InputError:  # two columns of one name: refused when the table is read
+        return {}
+    rssi = {h for h, c in zip(names, renamed, strict=True) if c == "rssi_dbm"}
+    if not rssi:
+        return {}
+    return {"keep_default_na": False,
+            "na_values": {h: list(RSSI_MISSING_TEXT if h in rssi else _PANDAS_MISSING_TEXT) for h in names}}
+
+
+def _csv_options(path: Any, columns: Mapping[str, str] | None) -> dict[str, Any]:
+    """:func:`csv_missing_values` of a CSV file, from its header line."""
+    return csv_missing_values(pd.read_csv(path, nrows=0, skipinitialspace=True).columns, columns)
+
+
+def _read(path: str, source: str, columns: Mapping[str, str] | None = None) -> pd.DataFrame:
     if not os.path.exists(path):
         raise InputError(f"{source}: no such file")
     try:
         if str(path).lower().endswith(_PARQUET_EXT):
             return normalise_times(read_parquet_lean(path), source)
-        return normalise_times(pd.read_csv(path, skipinitialspace=True, dtype=CSV_DTYPES), source)
+        return normalise_times(pd.read_csv(path, skipinitialspace=True, dtype=CSV_DTYPES,
+                                           **_csv_options(path, columns)), source)
     except pd.errors.EmptyDataError:
         raise LogFormatError(f"{source}: empty file, expected a header line and rows") from None
     except Exception as exc:  # parsers raise many classes on corrupt bytes
@@ -320,6 +357,8 @@ def canonical_pose(
     origin_geodetic: tuple[float, float, float] | None = None,
     nan_policy: str = "error",
     allow_unsorted: bool = False,
+    first_row: int = 0,
+    ends: TrackEnds | None = None,
 ) -> tuple[pd.DataFrame, dict[str, Any]]:
     """Turn a table in any of the pose variants into a canonical pose log.
 
@@ -343,10 +382,20 @@ def canonical_pose(
         beyond 1e8 m (``implausible_pose``) and rows on the wrong side of a position jump no
         plausible speed explains (``position_jump``: a sentinel such as ``z = -1000`` or
         ``x = y = z = 0`` before the fix; :func:`rplearn.io._pose_checks.position_jumps`), each dropped piece said in
-        ``metadata["notes"]``.
+        ``metadata["notes"]``. Whatever the policy, a row identical in every value to an
+        earlier row of its node and time (a block written twice) is dropped as a copy
+        (``duplicate_pose``, said in the notes); rows of one node and time with different
+        values are refused, or with ``"drop"`` all dropped (``conflicting_pose``):
+        :func:`rplearn.io._pose_checks.repeated_poses`.
     allow_unsorted : bool
         Accept times that go backwards within a node (the rows are sorted); by default
         they raise :class:`LogFormatError`.
+    first_row : int
+        The file row of the table's first row (a part of a file), for messages.
+    ends : TrackEnds, optional
+        For a table read in parts (a file still being written): each node's last row kept
+        from the parts before, against which its first rows here are checked for a position
+        jump (:func:`rplearn.io._pose_checks.steps_from_last`; updated here).
 
     Returns
     -------
@@ -363,34 +412,78 @@ def canonical_pose(
         df = rename_columns(df, columns)
     except InputError as exc:
         raise InputError(f"{source}: {exc}") from None
-    meta: dict[str, Any] = {"source": source, "dropped": {"nan_pose": 0, "implausible_pose": 0, "position_jump": 0},
+    meta: dict[str, Any] = {"source": source, "dropped": {"nan_pose": 0, "implausible_pose": 0, "duplicate_pose": 0,
+                                                         "conflicting_pose": 0, "position_jump": 0},
                             "origin_geodetic": None}
     df = _with_node(df, node, source)
     pos_cols, meta["position"] = _position_columns(df, source)
     df, att_cols, meta["attitude"], level = _attitude_columns(df, source)
     if level:
         meta["level_assumed"] = True
-    rows = np.arange(len(df))
+    rows = first_row + np.arange(len(df))
     df, values, dropped = _finite_values(df.set_axis(rows), ("t",) + pos_cols + att_cols, nan_policy, source)
     meta["dropped"].update(dropped)
     rows = df.index.to_numpy()
     nodes = df["node"].astype(str).to_numpy()
     if len(nodes) == 0:
         raise InputError(f"{source}: no pose rows")
+    unique, repeated, notes = _repeated_poses(df, values["t"], nodes, rows, nan_policy, source)
+    meta["dropped"].update(repeated)
+    if ends is not None:  # a part of a table: rows at or before those read earlier (copies across parts)
+        later, repeated_before, before_notes = _earlier_rows(ends, values, nodes, rows, nan_policy, source)
+        unique &= later
+        notes += before_notes
+        for reason, n in repeated_before.items():
+            meta["dropped"][reason] += n
+    if not unique.all():  # copies (a block written twice) are no step back in time
+        df, rows, nodes = df.loc[unique], rows[unique], nodes[unique]
+        values = {c: v[unique] for c, v in values.items()}
+    if len(nodes) == 0:  # every row of this part a copy of a row read earlier
+        if notes:
+            meta["notes"] = notes
+        return pd.DataFrame({c: pd.Series(dtype=object if c == "node" else np.float64) for c in POSE_COLUMNS}), meta
     t = values["t"]
     if not allow_unsorted:
         _check_time_order(t, nodes, source)
     xyz, meta["origin_geodetic"] = _enu_positions(values, meta["position"], origin_geodetic, source)
-    keep, notes = _position_jumps(t, xyz, nodes, rows, nan_policy, source)
+    keep, jumps = _position_jumps(t, xyz, nodes, rows, nan_policy, source)
     meta["dropped"]["position_jump"] = int((~keep).sum())
+    notes += jumps
     if notes:
         meta["notes"] = notes
-        t, nodes, xyz = t[keep], nodes[keep], xyz[keep]
+    if jumps:
+        t, nodes, xyz, rows = t[keep], nodes[keep], xyz[keep], rows[keep]
         values = {c: v[keep] for c, v in values.items()}
+    if ends is not None:  # a part of a table: each node's first rows checked against its last row before
+        keep, jumps = _steps_from_last(ends, t, xyz, nodes, rows, nan_policy, source)
+        meta["dropped"]["position_jump"] += int((~keep).sum())
+        notes += jumps
+        if jumps:
+            meta["notes"] = notes
+            t, nodes, xyz, rows = t[keep], nodes[keep], xyz[keep], rows[keep]
+            values = {c: v[keep] for c, v in values.items()}
+        ends.remember(nodes, values)
     q = _quaternions(values, att_cols, meta["attitude"])
     out = pd.DataFrame({"t": t, "node": nodes, **dict(zip(("x", "y", "z"), xyz.T)),
                         **dict(zip(("qw", "qx", "qy", "qz"), q.T))})
     return validate_pose_log(out, source), meta
+
+
+def _rssi_cells(col: pd.Series) -> np.ndarray:
+    """The RSSI column as float [dBm]; where a cell holds text that is no number ("-70dBm",
+    "n/a") the column keeps that text (object dtype), so that ``sync`` counts the row as
+    ``unparsable_rssi``, not as a missing value (``nan_rssi``)."""
+    values = pd.to_numeric(col, errors="coerce").to_numpy(np.float64, na_value=np.nan)
+    if pd.api.types.is_numeric_dtype(col):
+        return values
+    missing = np.flatnonzero(np.isnan(values))
+    words = col.iloc[missing].astype(str).str.strip().str.lower()
+    text = col.iloc[missing].notna().to_numpy() & ~words.isin(("", "nan", "+nan", "-nan", "<na>")).to_numpy()
+    if not text.any():
+        return values
+    out = values.astype(object)
+    out[missing[text]] = col.iloc[missing[text]].astype(str).to_numpy()
+    return out
 
 
 @check_types
@@ -406,7 +499,9 @@ def canonical_signal(
     """Turn a signal table into the canonical signal schema without dropping any row.
 
     ``rx``, ``tx_power_dbm`` and ``frequency_hz`` fill a column the table lacks. NaN or
-    sentinel values are kept: :func:`rplearn.data.sync.synchronise` drops and counts them.
+    sentinel values are kept: :func:`rplearn.data.sync.synchronise` drops and counts them; an
+    RSSI cell of text that is no number is kept as that text (the column is then of object
+    dtype), counted as ``unparsable_rssi``, not ``nan_rssi``.
     Extra columns are kept after the canonical ones.
 
     ``first_row`` is the file row of the table's first row (a chunk of a file), for messages.
@@ -441,6 +536,8 @@ def canonical_signal(
         col = df[c].to_numpy()
         if c in ("tx", "rx"):
             out[c] = node_ids(pd.Series(col))
+        elif c == "rssi_dbm":
+            out[c] = _rssi_cells(pd.Series(col))
         else:
             out[c] = pd.to_numeric(pd.Series(col), errors="coerce").to_numpy(np.float64, na_value=np.nan)
     for c in df.columns:
@@ -470,7 +567,7 @@ def read_signal_table(path: str, allow_unsorted: bool = False, **options: Any) -
     Returns ``(signal, metadata)``.
     """
     source = str(path)
-    df = _read(str(path), source)
+    df = _read(str(path), source, options.get("columns"))
     signal = canonical_signal(df, source=source, **options)
     if not allow_unsorted:
         check_link_time_order(signal, source)
@@ -503,7 +600,8 @@ def iter_signal_table(
         else:
             batches = (
                 normalise_times(c, source)
-                for c in pd.read_csv(path, chunksize=chunk_rows, skipinitialspace=True, dtype=CSV_DTYPES)
+                for c in pd.read_csv(path, chunksize=chunk_rows, skipinitialspace=True, dtype=CSV_DTYPES,
+                                     **_csv_options(path, options.get("columns")))
             )
         state = LinkTimes()
         first_row = 0
@@ -569,6 +667,7 @@ __all__ = [
     "canonical_signal",
     "LinkTimes",
     "check_link_time_order",
+    "csv_missing_values",
     "iter_signal_table",
     "table_columns",
     "read_pose_table",
