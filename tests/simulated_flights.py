@@ -63,21 +63,31 @@ def _read_only(value: Any) -> Any:
     return value
 
 
-@functools.cache
 def simulated(preset: str, seed: int) -> tuple[Path, Any]:
     """``simulate(preset, seed=seed)`` with its files (``pose_log.parquet``, ``signal_log.parquet``,
     ``matched_truth.parquet``, ``ground_truth.json``, ``references/``) in a folder of this process's,
     once per process: (the folder, the simulation). Callers read both and change neither."""
+    return _simulated(preset, seed)  # one cache key however the caller spells the arguments
+
+
+@functools.cache
+def _simulated(preset: str, seed: int) -> tuple[Path, Any]:
+    """:func:`simulated`."""
     from rplearn.sim import simulate
 
     d = _ROOT / f"{preset}-{seed}-sim"
     return d, simulate(preset, seed=seed, out_dir=str(d))
 
 
-@functools.cache
 def synced(preset: str, seed: int, link: tuple[str, str] | None = None) -> SyncedFlight:
     """``preset``'s flights of ``seed`` simulated and synced (only ``link`` when given), once per
     process; the samples' arrays are read-only."""
+    return _synced(preset, seed, link)  # one cache key however the caller spells the arguments
+
+
+@functools.cache
+def _synced(preset: str, seed: int, link: tuple[str, str] | None) -> SyncedFlight:
+    """:func:`synced`, its arguments all given."""
     from rplearn.data.sync import SyncOptions
     from rplearn.data.units import samples_of, split_units
     from rplearn.io.files import read_dataset
@@ -96,10 +106,15 @@ def synced(preset: str, seed: int, link: tuple[str, str] | None = None) -> Synce
                         _read_only(samples_of(df, test, "d", nodes=nodes)))
 
 
-@functools.cache
 def auto_fit(preset: str, seed: int, link: tuple[str, str] | None = None) -> tuple[Any, Any]:
     """``fit_auto`` (default options) of the learning units of :func:`synced`, once per process:
     (the fitted model, the selection). Callers read it and do not change it."""
+    return _auto_fit(preset, seed, link)  # one cache key however the caller spells the arguments
+
+
+@functools.cache
+def _auto_fit(preset: str, seed: int, link: tuple[str, str] | None) -> tuple[Any, Any]:
+    """:func:`auto_fit`, its arguments all given."""
     from rplearn.models.auto import fit_auto
 
     return fit_auto(synced(preset, seed, link).per_unit)
