@@ -153,7 +153,7 @@ def main() -> int:
     parser.add_argument("--quick", action="store_true", help="fewer repeats and 2 M streamed samples")
     parser.add_argument("--swarm", action="store_true", help="also the many-node rows (benchmarks/fit_swarm.py)")
     parser.add_argument("--tiny", action="store_true",
-                        help="a smoke run (5,000 samples, SH-6, one repeat, 50,000 streamed); targets not enforced")
+                        help="a smoke run (2,000 samples, SH-6, one repeat, 20,000 streamed); targets not enforced")
     parser.add_argument("--model-only", action="store_true",
                         help="only fit_model against dsyrk on the paper preset (issue 30)")
     args = parser.parse_args()
@@ -161,7 +161,7 @@ def main() -> int:
     if args.model_only:
         ratio, numbers_ok = fit_model_against_dsyrk(args.tiny, repeats)
         return 0 if numbers_ok and (args.tiny or ratio <= 1.5) else 1
-    n_samples, order = (5_000, 6) if args.tiny else (N_SAMPLES, ORDER)
+    n_samples, order = (2_000, 6) if args.tiny else (N_SAMPLES, ORDER)
     rng = np.random.default_rng(0)
     basis = SphericalHarmonics(order)
     d = random_directions(rng, n_samples)
@@ -169,8 +169,8 @@ def main() -> int:
 
     # Streaming: 10 million samples in chunks, never materialised at once; first, before any other fit: the solver's reusable block
     # buffer and the feature scratch arrays are then allocated while traced, so the peak counts them.
-    total = 50_000 if args.tiny else 2_000_000 if args.quick else 10_000_000
-    chunk = 25_000 if args.tiny else 200_000
+    total = 20_000 if args.tiny else 2_000_000 if args.quick else 10_000_000
+    chunk = 10_000 if args.tiny else 200_000
     tracemalloc.start()
     t0 = time.perf_counter()
     normal = NormalEquations(basis, 2)

@@ -11,8 +11,8 @@ kept. Printed: ms per poll, messages parsed per poll, the ratio of each mark to 
 polls, and, once per mark up to 10 minutes, the old way (the whole log read again by ``sync``'s
 reader, :func:`rplearn.io.read_logs`).
 
-Run: ``.venv/bin/python benchmarks/live_tlog.py`` (``--tiny``: marks at 0.5, 1 and 2 minutes of a
-short flight, one repeat, the whole log read again at the 1-minute mark only).
+Run: ``.venv/bin/python benchmarks/live_tlog.py`` (``--tiny``: marks at 0.25, 0.5 and 1 minute of
+the flight's first 2 minutes, one repeat, the whole log read again at the 0.5-minute mark only).
 """
 
 from __future__ import annotations
@@ -69,10 +69,14 @@ def _there_and_back(frame: pd.DataFrame, end: float, laps: int) -> pd.DataFrame:
     return pd.concat(parts, ignore_index=True)
 
 
-def tlog(folder: str, laps: int) -> str:
-    """The ``ground`` flight flown there and back ``laps`` times (about 7 minutes each), as a .tlog."""
+def tlog(folder: str, laps: int, minutes: float | None = None) -> str:
+    """The ``ground`` flight flown there and back ``laps`` times (about 7 minutes each), as a .tlog
+    (only its first ``minutes`` when given)."""
     sim = simulate("ground", seed=1)
     pose, signal = sim.pose_log, sim.signal_log
+    if minutes is not None:
+        cut = float(min(pose["t"].min(), signal["t"].min())) + 60.0 * minutes
+        pose, signal = pose[pose["t"] <= cut], signal[signal["t"] <= cut]
     g = pose[pose["node"] == "G"]
     station = g.iloc[:1].copy()
     station[["x", "y", "z"]] = g[["x", "y", "z"]].median().to_numpy()
@@ -87,13 +91,13 @@ def tlog(folder: str, laps: int) -> str:
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--tiny", action="store_true", help="marks at 0.5, 1, 2 minutes, one repeat")
+    parser.add_argument("--tiny", action="store_true", help="marks at 0.25, 0.5, 1 minute of a 2-minute flight, one repeat")
     parser.add_argument("--repeats", type=int, default=5, help="turns of polls timed (best kept)")
     args = parser.parse_args()
-    marks, repeats, laps = ((1.0, 0.5, 2.0), 1, 1) if args.tiny else ((1.0, 5.0, 10.0, 30.0), args.repeats, 6)
+    marks, repeats, laps = ((0.5, 0.25, 1.0), 1, 1) if args.tiny else ((1.0, 5.0, 10.0, 30.0), args.repeats, 6)
     print(f"before: {load()} (uptime's 1/5/15-minute averages; 2 cores)")
     with tempfile.TemporaryDirectory() as folder:
-        whole = tlog(folder, laps)
+        whole = tlog(folder, laps, 2.0 if args.tiny else None)
         data = open(whole, "rb").read()
         ends, times = record_ends(data)
         span_min = (times[-1] - times[0]) / 60.0

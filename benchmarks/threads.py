@@ -57,16 +57,16 @@ def works(tiny: bool) -> dict:
     from rplearn.models.predict import predict_dataset
 
     rng = np.random.default_rng(0)
-    n_fit = 5_000 if tiny else 56_164
+    n_fit = 2_000 if tiny else 56_164
     learn = samples(rng, n_fit)
-    chunk = samples(rng, 20_000 if tiny else 200_000)
+    chunk = samples(rng, 5_000 if tiny else 200_000)
     units = {f"flight{i}": samples(rng, n_fit // 3) for i in range(3)}
     model = model_of(rng)
     n_drones, n_times = (4, 50) if tiny else (10, 1000)
     t, pos, quat = swarm_poses(n_drones, n_times)
     log = as_log(t, pos, quat)
     pattern_of = {f"d{i:03d}": ("A" if i % 2 == 0 else "B") for i in range(n_drones)}
-    n_rows = 20_000 if tiny else 200_000
+    n_rows = 5_000 if tiny else 200_000
     q = rng.normal(size=(2, n_rows, 4))
     data = pd.DataFrame({"t": np.arange(n_rows) * 0.01, "tx": "A", "rx": "B", "tx_power_dbm": 20.0, "frequency_hz": 2.4e9,
                          **{f"{e}_{c}": rng.uniform(-50, 50, n_rows) for e in ("tx", "rx") for c in "xyz"},

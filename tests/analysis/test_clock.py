@@ -5,35 +5,36 @@ from __future__ import annotations
 
 import pandas as pd
 import pytest
+from simulated_flights import simulated
 
 from rplearn.analysis.clock import estimate_clock_offset
 from rplearn.errors import InputError
-from rplearn.sim import simulate
 
 INJECTED_S = 0.35
 
 
-def late_logs(tmp_path, preset, seed, late_s=INJECTED_S):
+def late_logs(preset, seed, late_s=INJECTED_S):
     """A campaign whose node B logs its poses ``late_s`` early on the common clock (its clock
-    runs behind): the offset to add to B's pose times is ``+late_s``."""
-    simulate(preset, seed=seed, out_dir=str(tmp_path / "f"))
-    pose = pd.read_parquet(tmp_path / "f" / "pose_log.parquet")
-    sig = pd.read_parquet(tmp_path / "f" / "signal_log.parquet")
+    runs behind): the offset to add to B's pose times is ``+late_s``. The simulator's logs as
+    written (simulated once per process: tests/simulated_flights.py), read into new tables."""
+    files, _ = simulated(preset, seed)
+    pose = pd.read_parquet(files / "pose_log.parquet")
+    sig = pd.read_parquet(files / "signal_log.parquet")
     pose.loc[pose["node"] == "B", "t"] -= late_s
     return pose, sig
 
 
 @pytest.mark.slow
-def test_an_injected_offset_is_recovered_within_20_ms(tmp_path):
+def test_an_injected_offset_is_recovered_within_20_ms():
     """Acceptance 5 on the paper's campaign (both directions of A-B, 40,000 packets used)."""
-    pose, sig = late_logs(tmp_path, "paper", 2)
+    pose, sig = late_logs("paper", 2)
     est = estimate_clock_offset(pose, sig, "B")
     assert abs(est.offset_s - INJECTED_S) < 0.02 and abs(est.offset_s - INJECTED_S) < 3 * est.std_s, est.summary()
     assert not est.at_edge and est.rmse_db.min() < est.rmse_db[0]
 
 
-def test_a_short_flight_says_how_unsure_it_is_and_an_edge_is_flagged(tmp_path):
-    pose, sig = late_logs(tmp_path, "smoke", 2)
+def test_a_short_flight_says_how_unsure_it_is_and_an_edge_is_flagged():
+    pose, sig = late_logs("smoke", 2)
     est = estimate_clock_offset(pose, sig, "B")
     assert abs(est.offset_s - INJECTED_S) < 3 * est.std_s and est.std_s < 0.1, est.summary()
     narrow = estimate_clock_offset(pose, sig, "B", window_s=0.2)
@@ -55,7 +56,7 @@ def _sync(*args: str):
 
 
 def test_sync_reports_the_offset_and_applies_it_only_when_asked(tmp_path, monkeypatch):
-    pose, sig = late_logs(tmp_path, "smoke", 1)
+    pose, sig = late_logs("smoke", 1)
     pose.to_parquet(tmp_path / "poses.parquet")
     sig.to_parquet(tmp_path / "signals.parquet")
     monkeypatch.chdir(tmp_path)
@@ -78,8 +79,8 @@ def test_sync_reports_the_offset_and_applies_it_only_when_asked(tmp_path, monkey
     assert no.exit_code == 1 and "give --estimate-offset" in no.stderr
 
 
-def test_a_still_node_or_a_wide_window_is_handled(tmp_path):
-    pose, sig = late_logs(tmp_path, "smoke", 1)
+def test_a_still_node_or_a_wide_window_is_handled():
+    pose, sig = late_logs("smoke", 1)
     still = pose.copy()
     b = still["node"] == "B"
     still.loc[b, ["x", "y", "z", "qw", "qx", "qy", "qz"]] = still.loc[b, ["x", "y", "z", "qw", "qx", "qy", "qz"]].iloc[0].to_numpy()

@@ -57,9 +57,16 @@ def test_auto_model_is_saved_with_its_choice_and_loads(smoke, tmp_path):
 
 
 def test_fit_cli_defaults_to_auto_and_refuses_auto_for_baselines(smoke):
+    import contextlib
+
+    from typer.testing import CliRunner
+
+    from rplearn.cli import app
+
     d = smoke[0]
-    proc = subprocess.run(RPLEARN + ["fit", "m.parquet", "-o", "a.json"], cwd=d, capture_output=True, text=True)
-    assert proc.returncode == 0 and "chosen by grouped cross-validation over units learn_0[1/5]" in proc.stdout, proc.stderr
+    with contextlib.chdir(d):  # in this process (what it prints is the point); the refusals below: a user's process
+        proc = CliRunner().invoke(app, ["fit", "m.parquet", "-o", "a.json"], env={"COLUMNS": "400"})
+    assert proc.exit_code == 0 and "chosen by grouped cross-validation over units learn_0[1/5]" in proc.stdout, proc.output
     assert "<- chosen" in proc.stdout
     for args, needle in ((["--model", "knn", "--degree", "auto"], "not of NN-400"), (["--degree", "3.5"], "whole number or 'auto'")):
         proc = subprocess.run(RPLEARN + ["fit", "m.parquet", "-o", "x.json", *args], cwd=d, capture_output=True, text=True)

@@ -260,9 +260,11 @@ def test_simulated_logs_synchronise_like_real_ones(smoke) -> None:
 @pytest.mark.slow
 def test_paper_preset_acceptance() -> None:
     """Paper preset: counts, truth RMSE = noise level (2%), baselines near the paper's."""
+    from simulated_flights import simulated
+
     from rplearn.models.estimators import JointKNNRegressor, MeanRegressor
 
-    res = simulate("paper", seed=0)
+    _, res = simulated("paper", 0)  # simulate("paper", seed=0) with its files, once per process (shared)
     learn = res.matched("learning", "A", "B")
     test = res.matched("testing", "A", "B")
     assert len(learn) == pytest.approx(56_164, rel=0.03)
@@ -305,11 +307,17 @@ def test_trio_preset_flies_a_triangle_of_different_antennas() -> None:
 def test_campaign_preset_gives_every_flight_its_own_level() -> None:
     """The ``campaign`` preset: at least 8 learning flights, each role's levels at exactly the
     configured RMS about zero, drawn from the seed and stored; the levels are not noise."""
+    from simulated_flights import simulated
+
     from rplearn.sim.presets import CAMPAIGN_LEVEL_STD_DB
 
-    sim = simulate("campaign", seed=3)
-    again = simulate("campaign", seed=3)
-    assert sim.unit_levels_db == again.unit_levels_db != simulate("campaign", seed=4).unit_levels_db
+    _, sim = simulated("campaign", 0)  # simulate("campaign", seed=0), once per process (shared)
+    # the levels are the seed's, not the flights': the same flights passed once each draw them again
+    cfg = make_preset("campaign")
+    once = replace(cfg, campaign=replace(cfg.campaign, units=tuple(replace(u, n_passes=1) for u in cfg.campaign.units)))
+    again = simulate(once, seed=0)
+    assert len(again.signal_log) < len(sim.signal_log) / 2
+    assert sim.unit_levels_db == again.unit_levels_db != simulate(once, seed=4).unit_levels_db
     assert sim.ground_truth.metadata["unit_levels_db"] == sim.unit_levels_db
     for role in ("learning", "testing"):
         levels = np.array([sim.unit_levels_db[u] for u in sim.units(role)])

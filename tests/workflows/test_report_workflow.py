@@ -168,12 +168,13 @@ def test_paper_models_reproduce_main_s_table_i_of_the_demo_seed_0(tmp_path, monk
     # 1.6e-5, every other figure within 1e-9. Two threads reproduce them on any machine and load.
     monkeypatch.setenv("RPLEARN_THREADS", "2")
     _leave_out_figures(monkeypatch)
+    from simulated_flights import simulated
+
     from rplearn.data.sync import SyncOptions, synchronise
     from rplearn.io.files import write_table
-    from rplearn.sim.flight import simulate
 
     golden = json.loads((FIXTURES / "table1_paper_seed0.json").read_text(encoding="utf-8"))
-    sim = simulate(golden["preset"], seed=golden["seed"])
+    _, sim = simulated(golden["preset"], golden["seed"])  # simulate(preset, seed=seed), once per process (shared)
     nodes = list(sim.ground_truth.nodes)
     dataset = str(tmp_path / "dataset.parquet")
     write_table(synchronise(sim.pose_log, sim.signal_log, SyncOptions(link=(nodes[0], nodes[1]))).dataset, dataset)
