@@ -561,15 +561,12 @@ IMPLAUSIBLE_ADVICE_SHARE = 0.25
 
 
 def _implausible_note(summary: SyncSummary, options: SyncOptions) -> str | None:
-    """The question a summary asks when many samples' RSSI is out of range or above the
-    transmit power: a radio reporting in its own units or with a constant offset (uncalibrated
-    power), which ``rssi_scale="relative"`` reads."""
-    if options.rssi_scale != "dbm" or not summary.dropped["implausible_rssi"]:
-        return None
+    """The question a summary asks when many samples' RSSI is out of range or above the transmit
+    power: a radio's own units or a constant offset (uncalibrated), which ``rssi_scale="relative"`` reads."""
     later = DROP_REASONS[DROP_REASONS.index("implausible_rssi"):]
     reached = summary.n_out + sum(summary.dropped.get(r, 0) for r in later)
-    share = summary.dropped["implausible_rssi"] / reached
-    if share < IMPLAUSIBLE_ADVICE_SHARE:
+    share = summary.dropped["implausible_rssi"] / max(reached, 1)
+    if options.rssi_scale != "dbm" or not summary.dropped["implausible_rssi"] or share < IMPLAUSIBLE_ADVICE_SHARE:
         return None
     return (f"{100 * share:.0f}% of the samples have an RSSI outside {PLAUSIBLE_RSSI_DBM[0]:g} to "
             f"{PLAUSIBLE_RSSI_DBM[1]:g} dBm or above the transmit power (implausible_rssi): a radio reporting its own "

@@ -38,8 +38,9 @@ from rplearn._argtypes import check_types
 from rplearn.data.tables import CSV_DTYPES, normalise_times
 from rplearn.errors import InputError, LogFormatError
 from rplearn.io._pose_checks import TrackEnds
+from rplearn.io._time_order import LinkTimes, check_link_time_order
 from rplearn.io.options import ReaderOptions
-from rplearn.io.tables import LinkTimes, canonical_pose, canonical_signal, check_link_time_order, csv_missing_values
+from rplearn.io.tables import canonical_pose, canonical_signal, csv_missing_values
 
 
 @check_types
@@ -135,7 +136,7 @@ class CsvTail:
         pt = _table(self.pose, p)
         if pt is not None:
             poses, meta = canonical_pose(pt, source=self.pose.path, nan_policy=self.reader.nan_policy,
-                                         first_row=self._pose_rows, ends=self._ends)
+                                         ends=self._ends)
             self._pose_rows += len(pt)
             for reason, n in meta["dropped"].items():
                 self.dropped[reason] = self.dropped.get(reason, 0) + int(n)
