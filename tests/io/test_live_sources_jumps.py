@@ -89,3 +89,14 @@ def test_a_signal_logger_that_rebooted_between_polls_is_refused_as_sync_refuses_
     with pytest.raises(Exception, match=r"signal.csv: field t goes backwards at row 7 \(link A -> B: 0.55 -> 0.02; "
                                         "a logger that rebooted"):
         tail.poll()
+
+
+def test_a_file_that_shrinks_while_it_is_read_is_refused_naming_it(tmp_path):
+    """Review 44: a pose file truncated or rotated under the session was waited on past its end
+    for ever; its rows, row numbers and last times are those read before, so it is refused."""
+    from rplearn.errors import LogFormatError
+
+    tail, pose = _tail(tmp_path)
+    pose.write_text(POSE_HEAD + _row(0.0, 0.0))
+    with pytest.raises(LogFormatError, match=r"pose\.csv: the file shrank from .* bytes while it was read"):
+        tail.poll()

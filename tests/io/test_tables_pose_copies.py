@@ -119,3 +119,13 @@ def test_sync_and_inspect_say_the_copies_of_a_real_log(tmp_path, real_logs):
     text = report.to_text()
     assert "duplicate_pose" in text and "20 pose row(s) repeat" in text
     assert not any("time goes backwards" in p for p in report.problems)  # the copies are no step back
+
+
+def test_rows_differing_only_beside_the_pose_are_copies(tmp_path):
+    """Review 44: a column beside the pose (a satellite count) written again with another value
+    does not make two poses of one instant: the rows are copies, as the live source finds them."""
+    rows = pd.DataFrame({"t": [0.0, 0.1, 0.1, 0.2], "node": "D", "x": [0.0, 1.0, 1.0, 2.0], "y": 0.0,
+                         "z": 5.0, "qw": 1.0, "qx": 0.0, "qy": 0.0, "qz": 0.0, "sats": [9, 9, 99, 9]})
+    pose, meta = read_pose_table(str(_write(tmp_path / "sats.csv", rows)))
+    assert meta["dropped"]["duplicate_pose"] == 1 and meta["dropped"]["conflicting_pose"] == 0
+    assert pose["t"].tolist() == [0.0, 0.1, 0.2]

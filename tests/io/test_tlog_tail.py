@@ -289,6 +289,27 @@ def test_a_second_vehicle_that_overtakes_the_first_withdraws_every_row_handed_ou
     assert tail.dropped["withdrawn_signal_rows"] == len(signals)
 
 
+def test_messages_received_twice_within_a_millisecond_are_read_once_as_offline(ground_260s, clean_260s, tmp_path):
+    """Review 44: a second vehicle's messages each received twice, 1 us apart (a router, or two
+    links forwarding each): offline and the tail read each once (``close_copies``), so both keep
+    the first vehicle, which sends more distinct messages, and the tail withdraws nothing (it
+    had counted the copies, switched to the second vehicle and withdrawn every row)."""
+    second = tmp_path / "second.tlog"
+    write_tlog(ground_260s, second, vehicle="D", station="G", origin_geodetic=ORIGIN, system_id=2)
+    ones = _records(clean_260s.read_bytes())  # system id 1
+    late = [r for r in _records(second.read_bytes()) if r[0] > ones[len(ones) // 3][0] and r[1][8 + 5] != 51]
+    again = [(t + 1, (t + 1).to_bytes(8, "big") + r[8:]) for t, r in late]
+    merged = sorted(ones + late + again, key=lambda r: r[0])
+    whole, grown = tmp_path / "whole.tlog", tmp_path / "grown.tlog"
+    whole.write_bytes(b"".join(r[1] for r in merged))
+    ref, meta = read_logs([str(whole)], ReaderOptions(tx_power_dbm=20.0, frequency_hz=2.412e9, station="G"))
+    assert meta["files"][0]["system_id"] == 1 and meta["files"][0]["close_copies"] > 0
+    poses, signals, tail, _ = _poll_in_pieces(whole, grown, LATE_PIECE_BYTES)
+    assert tail.dropped["close_copies"] == meta["files"][0]["close_copies"]
+    assert tail.dropped["withdrawn_pose_rows"] == 0 and tail.dropped["withdrawn_signal_rows"] == 0
+    assert len(poses[poses["node"] != "G"]) == len(ref.pose[ref.pose["node"] != "G"])
+
+
 def test_a_home_position_after_the_station_was_taken_from_a_fix_moves_the_station(ground_260s, tmp_path):
     """Review 37: positions invalid (no origin, altitude 0.8 m) for the first 60 s, so no
     ``HOME_POSITION`` for longer than :data:`HOME_WAIT_S`: the tail takes its station from the

@@ -174,6 +174,11 @@ class TlogRows:
     counts: dict[str, int] = field(default_factory=dict)
     radio_senders: dict[str, int] = field(default_factory=dict)
     radio_from: dict[str, list[str]] = field(default_factory=lambda: {k: [] for k in _RADIO_TYPES})  # per radio row
+    #: Attitude and position messages left out as copies of the one before them (:meth:`add`).
+    close_copies: int = 0
+    #: Per kind and sender, the receive time and fields of its last message of :data:`_BOOT_TIMED`
+    #: (shared by the parts of a growing log read one after another: :mod:`rplearn.io.tlog_tail`).
+    last_of: dict[tuple[str, int], tuple[float, tuple[Any, ...]]] = field(default_factory=dict)
     _arrays: dict[Any, np.ndarray] = field(default_factory=dict)
 
     def array(self, kind: str, width: int) -> np.ndarray:
@@ -190,6 +195,17 @@ class TlogRows:
             done = self._arrays[sysid] = np.concatenate([done, np.asarray(rows[len(done):], np.float64)])
         return done
 
+    def _close_copy(self, kind: str, sender: int, row: tuple[Any, ...]) -> bool:
+        """Whether ``row`` (:func:`_tlog_row`: sender, receive time, fields) repeats the sender's
+        message of the kind right before it, boot time included, received within
+        :data:`CLOSE_COPY_S`: one message received twice (a router, or two links forwarding each;
+        every message of a log written twice a few microseconds apart). Kept, the copies would be
+        two poses of one instant."""
+        fields = row[:1] + row[2:]
+        before = self.last_of.get((kind, sender))
+        self.last_of[(kind, sender)] = (row[1], fields)
+        return before is not None and before[1] == fields and 0.0 <= row[1] - before[0] <= CLOSE_COPY_S
+
     def add(self, msg: Any, source: str) -> None:
         """Add one parsed message (``BAD_DATA`` counted)."""
         kind = msg.get_type()
@@ -200,14 +216,18 @@ class TlogRows:
         self.by_sys.setdefault(sysid, []).append(t)
         if kind not in self.rows:
             return
-        self.counts[kind] = self.counts.get(kind, 0) + 1
         src = sysid * 256 + int(msg.get_srcComponent())  # a gimbal may send ATTITUDE too
         try:
-            self.rows[kind].append(_tlog_row(kind, msg, src, t))
+            row = _tlog_row(kind, msg, src, t)
         except (AttributeError, TypeError, ValueError) as exc:  # a field the dialect of the file lacks
             name = getattr(exc, "name", None)
             raise LogFormatError(f"{source}: a {kind} message has no {name} field" if name else
                                  f"{source}: a {kind} message has a field that is not a number ({exc})") from None
+        if kind in _BOOT_TIMED and self._close_copy(kind, src, row):
+            self.close_copies += 1
+            return
+        self.counts[kind] = self.counts.get(kind, 0) + 1
+        self.rows[kind].append(row)
         if kind in _RADIO_TYPES:
             key = f"{sysid}/{msg.get_srcComponent()}"
             self.radio_senders[key] = self.radio_senders.get(key, 0) + 1
@@ -244,7 +264,7 @@ def collect_tlog(source: str, system_id: int | None) -> Raw:
             acc.add(msg, source)
         cut_off = _tlog_cut_off(conn, source, whole_to)
     repeated = drop_repeated_rows(acc)
-    close = drop_close_copies(acc)
+    close = acc.close_copies
     raw = tlog_raw(acc, source, system_id, cut_off)
     if whole_to > good_to:  # BAD_DATA after the last whole record
         stretches, skipped = stretches + 1, skipped + whole_to - good_to
@@ -289,35 +309,6 @@ CLOSE_COPY_S = 1e-3
 #: message (a radio report holds no time: two reports of equal values may come close, and
 #: copies of one are merged by ``sync``, ``duplicate_reading``).
 _BOOT_TIMED = ("ATTITUDE", "GLOBAL_POSITION_INT")
-
-
-def drop_close_copies(acc: TlogRows) -> int:
-    """Keep the first of two attitude or position messages (:data:`_BOOT_TIMED`) of one sender
-    with the same fields, boot time included, received within :data:`CLOSE_COPY_S` of each
-    other, the second right after the first among that sender's messages of the kind: one
-    message received twice (every message of a log written twice a few microseconds apart).
-    Kept, the copies would be two poses of one instant. Returns how many were dropped (their
-    kinds' counts are lowered)."""
-    dropped = 0
-    for kind in _BOOT_TIMED:
-        rows = acc.rows.get(kind, [])
-        last: dict[Any, tuple[float, tuple[Any, ...]]] = {}
-        keep = []
-        for row in rows:
-            sender, at = row[0], 1  # the receive time (:func:`_tlog_row`)
-            fields = row[:at] + row[at + 1:]
-            before = last.get(sender)
-            copy = before is not None and before[1] == fields and 0.0 <= row[at] - before[0] <= CLOSE_COPY_S
-            keep.append(not copy)
-            last[sender] = (row[at], fields)
-        n = len(keep) - sum(keep)
-        if not n:
-            continue
-        dropped += n
-        acc.counts[kind] -= n
-        acc.rows[kind] = [r for r, k in zip(rows, keep, strict=True) if k]
-        acc._arrays.pop(kind, None)
-    return dropped
 
 
 def tlog_raw(acc: TlogRows, source: str, system_id: int | None, cut_off: dict[str, Any],
@@ -588,5 +579,5 @@ def collect_dataflash(source: str) -> Raw:
     )
 
 
-__all__ = ["Raw", "TlogRows", "boot_offsets", "collect_dataflash", "collect_tlog", "drop_close_copies",
+__all__ = ["Raw", "TlogRows", "boot_offsets", "collect_dataflash", "collect_tlog",
            "drop_repeated_rows", "merge_copied_boots", "tlog_raw"]

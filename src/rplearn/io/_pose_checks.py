@@ -186,8 +186,10 @@ def repeated_poses(
     """Rows sharing their node and time with an earlier row: copies dropped, conflicts refused
     or dropped.
 
-    A row identical in every column of ``df`` to an earlier row of the same node and time is a
-    copy (a logger writing a block twice): dropped and counted as ``duplicate_pose`` under any
+    ``df`` holds the pose columns alone (node, time, position, attitude: a column beside them, a
+    satellite count or a sequence number, says nothing of the pose). A row identical in every
+    one to an earlier row of the same node and time is a copy (a logger writing a block twice,
+    as the live source finds across its polls): dropped and counted as ``duplicate_pose`` under any
     ``nan_policy``. Rows of one node and time that differ in a value are a conflict (two poses
     of one instant: which one is true is unknown): refused naming the rows and the first
     differing field, or with ``nan_policy="drop"`` all rows of that node and time dropped and

@@ -138,14 +138,15 @@ def one_station(logs: list[pd.DataFrame], owners: list[int], files: list[dict[st
             a = first[["x", "y", "z"]].to_numpy(np.float64)
             b = row[["x", "y", "z"]].to_numpy(np.float64)
             qa, qb = (r[["qw", "qx", "qy", "qz"]].to_numpy(np.float64) for r in (first, row))
-            same_q = min(np.max(np.abs(qa - qb)), np.max(np.abs(qa + qb))) <= SAME_POSITION_M
+            same_q = min(np.max(np.abs(qa - qb)), np.max(np.abs(qa + qb))) <= SAME_QUATERNION
             moved = bool(np.max(np.abs(a - b)) > SAME_POSITION_M)
             if moved or not same_q:
                 turned = "" if moved else " (the same place, another heading)"
                 raise InputError(
                     f"{files[first_file].get('source')} and {files[i].get('source')} place the ground station "
                     f"{station} at {_station_at(first, files[first_file])} and at {_station_at(row, files[i])}, "
-                    f"ENU{turned}: a station moved between flights, or the homes of two vehicles; give where it "
+                    f"ENU{turned}: a station moved between flights, two fixes of one station apart by GPS noise, or the "
+                    "homes of two vehicles; give where it "
                     "stood (ReaderOptions.station_geodetic: lat, lon, alt), or read each flight on its own",
                     param="station_geodetic")
             if row["t"] == first["t"]:
@@ -156,6 +157,11 @@ def one_station(logs: list[pd.DataFrame], owners: list[int], files: list[dict[st
                 f"{files[i].get('source')}: ground station {station} at the pose {files[first_file].get('source')} "
                 "gives it: one static station for both flights")
     return out
+
+
+#: Largest difference of the quaternion components of two rows of one static station (unitless)
+#: for them to be one attitude.
+SAME_QUATERNION = 1e-3
 
 
 def refuse_overlaps(logs: list[pd.DataFrame], owners: list[int], files: list[dict[str, Any]], what: str) -> None:

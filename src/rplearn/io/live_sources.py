@@ -74,6 +74,10 @@ class _Tail:
         if not os.path.exists(self.path):
             return b""
         with open(self.path, "rb") as fh:
+            size = os.fstat(fh.fileno()).st_size
+            if size < self.offset:  # its rows, their numbers and times are those read before: no new start
+                raise LogFormatError(f"{self.path}: the file shrank from {self.offset:,} to {size:,} bytes while it was "
+                                     "read (truncated, rotated or rewritten): give the new file as a session of its own")
             fh.seek(self.offset)
             data = fh.read()
         end = data.rfind(b"\n") + 1  # a line still being written waits for its newline
@@ -124,7 +128,6 @@ class CsvTail:
         self.name = f"{pose_path} + {signal_path}"
         self.reader = reader if reader is not None else ReaderOptions()
         self.dropped: dict[str, int] = {}
-        self._pose_rows = 0  # pose rows read so far: the file row of the next one
         self._ends = TrackEnds()  # each node's last pose kept: a poll's rows are checked against it
         self._signal_rows = 0
         self._links = LinkTimes()  # each link's last time: a logger that rebooted is refused, as by sync
@@ -136,8 +139,7 @@ class CsvTail:
         pt = _table(self.pose, p)
         if pt is not None:
             poses, meta = canonical_pose(pt, source=self.pose.path, nan_policy=self.reader.nan_policy,
-                                         ends=self._ends)
-            self._pose_rows += len(pt)
+                                         allow_unsorted=self.reader.allow_unsorted, ends=self._ends)
             for reason, n in meta["dropped"].items():
                 self.dropped[reason] = self.dropped.get(reason, 0) + int(n)
         st = _table(self.signal, s)

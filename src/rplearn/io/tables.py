@@ -330,7 +330,8 @@ def canonical_pose(
     nodes = df["node"].astype(str).to_numpy()
     if len(nodes) == 0:
         raise InputError(f"{source}: no pose rows")
-    unique, repeated, notes = _repeated_poses(df, values["t"], nodes, rows, nan_policy, source)
+    pose_part = df[[c for c in ("node", "t", *pos_cols, *att_cols) if c in df.columns]]  # other columns: not the pose
+    unique, repeated, notes = _repeated_poses(pose_part, values["t"], nodes, rows, nan_policy, source)
     meta["dropped"].update(repeated)
     if ends is not None:  # a part of a table: rows at or before those read earlier (copies across parts)
         later, repeated_before, before_notes = _earlier_rows(ends, values, nodes, rows, nan_policy, source)

@@ -45,7 +45,9 @@ every row handed out, before and after); a radio report whose copy verdict depen
 period beyond the precision of the running counts, dropped (``uncertain_copy_reports``); a report
 handed out whose verdict a later period reverses (``changed_copy_reports``). A stretch of the log
 written into the file again (a log in the file twice, its last records again) is read once, its messages counted in
-``repeated_messages`` as the offline reader counts them (:class:`FileCopy`). The row counts are
+``repeated_messages`` as the offline reader counts them (:class:`FileCopy`); an attitude or position
+message received twice within a millisecond (a router, or two links forwarding each) is read once,
+counted in ``close_copies``, as offline (:class:`~rplearn.io._mavlink_records.TlogRows`). The row counts are
 net: rows given back after being withdrawn lower the withdrawn count, so a verdict that flips and
 flips back (a short position glitch under way at a poll) leaves them where they were.
 
@@ -81,7 +83,7 @@ HOME_WAIT_S = 30.0
 SETTLE_MARGIN_S = 1.0
 #: What :attr:`TlogTail.dropped` counts (module docstring).
 DROPS = ("late_pose_rows", "late_signal_rows", "withdrawn_pose_rows", "withdrawn_signal_rows",
-         "uncertain_copy_reports", "changed_copy_reports", "repeated_messages")
+         "uncertain_copy_reports", "changed_copy_reports", "close_copies", "repeated_messages")
 
 
 class FileCopy:
@@ -196,7 +198,8 @@ class TlogTail:
             raise InputError(f"{path}: give the telemetry radios' transmit power [dBm] and carrier frequency [Hz], "
                              f"a MAVLink log carries neither (ReaderOptions.{missing[0]})", param=missing[0])
         self.path, self.reader = path, reader
-        self.rows: TlogRows | None = TlogRows()  # every message, until the first rows are handed out
+        self._last_of: dict[Any, Any] = {}  # each sender's last attitude and position message (close copies)
+        self.rows: TlogRows | None = TlogRows(last_of=self._last_of)  # every message, until the first rows are handed out
         self.window: TlogWindow | None = None  # then the window (rplearn.io.tlog_window)
         self.parsed = 0  # messages parsed by the last poll
         self.dropped: dict[str, int] = {k: 0 for k in DROPS}
@@ -222,7 +225,8 @@ class TlogTail:
                 return 0
             with library_quiet():
                 self._conn = _open(self.path)
-        rows = self.rows if self.rows is not None else TlogRows()
+        rows = self.rows if self.rows is not None else TlogRows(last_of=self._last_of)
+        copies = rows.close_copies
         f = self._conn.f
         f.seek(self._end)
         whole = self._end + whole_records(f.read())
@@ -243,6 +247,7 @@ class TlogTail:
                     self.dropped["repeated_messages"] += int(msg.get_type() in rows.rows)
                     continue
                 rows.add(msg, self.path)
+        self.dropped["close_copies"] += rows.close_copies - copies  # one message received twice, read once
         self._end = f.tell() - self._conn.mav.buf_len()
         if self.window is not None:
             self.window.add(rows)
