@@ -310,6 +310,24 @@ def test_messages_received_twice_within_a_millisecond_are_read_once_as_offline(g
     assert len(poses[poses["node"] != "G"]) == len(ref.pose[ref.pose["node"] != "G"])
 
 
+def test_a_log_with_close_copies_written_twice_is_counted_alike_by_tail_and_offline(clean_260s, tmp_path):
+    """Review 44b: the log's first minute with every message received twice 1 us apart, the whole
+    file then written again: offline drops the stretch written again first and the close copies
+    after, as the tail meets them, so both count the same ``repeated_messages`` and ``close_copies``."""
+    ones = [r for r in _records(clean_260s.read_bytes())]
+    minute = [r for r in ones if r[0] - ones[0][0] < 60_000_000]
+    doubled = sorted(minute + [(t + 1, (t + 1).to_bytes(8, "big") + r[8:]) for t, r in minute], key=lambda r: r[0])
+    once = b"".join(r[1] for r in doubled)
+    whole, grown = tmp_path / "whole.tlog", tmp_path / "grown.tlog"
+    whole.write_bytes(once + once)
+    _, meta = read_logs([str(whole)], _options(whole))
+    info = meta["files"][0]
+    assert info["close_copies"] > 0 and info["repeated_messages"] > 0
+    _, _, tail, _ = _poll_in_pieces(whole, grown, LATE_PIECE_BYTES)
+    assert (tail.dropped["close_copies"], tail.dropped["repeated_messages"]) == (info["close_copies"],
+                                                                                info["repeated_messages"])
+
+
 def test_a_home_position_after_the_station_was_taken_from_a_fix_moves_the_station(ground_260s, tmp_path):
     """Review 37: positions invalid (no origin, altitude 0.8 m) for the first 60 s, so no
     ``HOME_POSITION`` for longer than :data:`HOME_WAIT_S`: the tail takes its station from the

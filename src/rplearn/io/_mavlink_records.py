@@ -174,6 +174,9 @@ class TlogRows:
     counts: dict[str, int] = field(default_factory=dict)
     radio_senders: dict[str, int] = field(default_factory=dict)
     radio_from: dict[str, list[str]] = field(default_factory=lambda: {k: [] for k in _RADIO_TYPES})  # per radio row
+    #: Drop one message received twice as it is added (:func:`is_close_copy`: the live tail, which has
+    #: skipped a stretch written again before); offline after those stretches (:func:`drop_close_copies`).
+    close_as_added: bool = False
     #: Attitude and position messages left out as copies of the one before them (:meth:`add`).
     close_copies: int = 0
     #: Per kind and sender, the receive time and fields of its last message of :data:`_BOOT_TIMED`
@@ -195,17 +198,6 @@ class TlogRows:
             done = self._arrays[sysid] = np.concatenate([done, np.asarray(rows[len(done):], np.float64)])
         return done
 
-    def _close_copy(self, kind: str, sender: int, row: tuple[Any, ...]) -> bool:
-        """Whether ``row`` (:func:`_tlog_row`: sender, receive time, fields) repeats the sender's
-        message of the kind right before it, boot time included, received within
-        :data:`CLOSE_COPY_S`: one message received twice (a router, or two links forwarding each;
-        every message of a log written twice a few microseconds apart). Kept, the copies would be
-        two poses of one instant."""
-        fields = row[:1] + row[2:]
-        before = self.last_of.get((kind, sender))
-        self.last_of[(kind, sender)] = (row[1], fields)
-        return before is not None and before[1] == fields and 0.0 <= row[1] - before[0] <= CLOSE_COPY_S
-
     def add(self, msg: Any, source: str) -> None:
         """Add one parsed message (``BAD_DATA`` counted)."""
         kind = msg.get_type()
@@ -223,7 +215,7 @@ class TlogRows:
             name = getattr(exc, "name", None)
             raise LogFormatError(f"{source}: a {kind} message has no {name} field" if name else
                                  f"{source}: a {kind} message has a field that is not a number ({exc})") from None
-        if kind in _BOOT_TIMED and self._close_copy(kind, src, row):
+        if self.close_as_added and kind in _BOOT_TIMED and is_close_copy(self.last_of, kind, src, row):
             self.close_copies += 1
             return
         self.counts[kind] = self.counts.get(kind, 0) + 1
@@ -264,7 +256,7 @@ def collect_tlog(source: str, system_id: int | None) -> Raw:
             acc.add(msg, source)
         cut_off = _tlog_cut_off(conn, source, whole_to)
     repeated = drop_repeated_rows(acc)
-    close = acc.close_copies
+    close = drop_close_copies(acc)
     raw = tlog_raw(acc, source, system_id, cut_off)
     if whole_to > good_to:  # BAD_DATA after the last whole record
         stretches, skipped = stretches + 1, skipped + whole_to - good_to
@@ -299,16 +291,41 @@ def drop_repeated_rows(acc: TlogRows) -> int:
     return dropped
 
 
-#: Largest receive-time difference [s] between a message and the same message (same kind,
-#: sender and fields) right before it for the two to be one message received twice (a router,
-#: or two links forwarding each message): far below any report period of a vehicle or a radio.
+#: Largest receive-time difference [s] between a message and the same one (kind, sender, fields) right
+#: before it for the two to be one message received twice: far below any report period.
 CLOSE_COPY_S = 1e-3
 
 
-#: Kinds whose fields hold the sender's boot time: two of them with the same fields are one
-#: message (a radio report holds no time: two reports of equal values may come close, and
-#: copies of one are merged by ``sync``, ``duplicate_reading``).
+#: Kinds whose fields hold the sender's boot time: two with the same fields are one message (a radio
+#: report holds no time: two of equal values may come close; ``sync`` merges copies, ``duplicate_reading``).
 _BOOT_TIMED = ("ATTITUDE", "GLOBAL_POSITION_INT")
+
+
+def is_close_copy(last_of: dict[tuple[str, int], tuple[float, tuple[Any, ...]]], kind: str, sender: int,
+                  row: tuple[Any, ...]) -> bool:
+    """Whether ``row`` (:func:`_tlog_row`: sender, receive time, fields) repeats the sender's message of the
+    kind right before it (``last_of``, updated), boot time included, within :data:`CLOSE_COPY_S`: one message
+    received twice (a router, or two links forwarding each). Kept, they would be two poses of one instant."""
+    fields = row[:1] + row[2:]
+    before = last_of.get((kind, sender))
+    last_of[(kind, sender)] = (row[1], fields)
+    return before is not None and before[1] == fields and 0.0 <= row[1] - before[0] <= CLOSE_COPY_S
+
+
+def drop_close_copies(acc: TlogRows) -> int:
+    """Drop the second of two attitude or position messages that are one received twice (:func:`is_close_copy`),
+    after the stretches written again (as the live tail meets them); how many (their kinds' counts lowered)."""
+    dropped, last_of = 0, dict[tuple[str, int], tuple[float, tuple[Any, ...]]]()
+    for kind in _BOOT_TIMED:
+        rows = acc.rows.get(kind, [])
+        keep = [not is_close_copy(last_of, kind, row[0], row) for row in rows]
+        n = len(keep) - sum(keep)
+        if n:
+            dropped += n
+            acc.counts[kind] -= n
+            acc.rows[kind] = [r for r, k in zip(rows, keep, strict=True) if k]
+            acc._arrays.pop(kind, None)
+    return dropped
 
 
 def tlog_raw(acc: TlogRows, source: str, system_id: int | None, cut_off: dict[str, Any],
@@ -579,5 +596,5 @@ def collect_dataflash(source: str) -> Raw:
     )
 
 
-__all__ = ["Raw", "TlogRows", "boot_offsets", "collect_dataflash", "collect_tlog",
+__all__ = ["Raw", "TlogRows", "boot_offsets", "collect_dataflash", "collect_tlog", "drop_close_copies", "is_close_copy",
            "drop_repeated_rows", "merge_copied_boots", "tlog_raw"]

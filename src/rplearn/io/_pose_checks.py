@@ -256,7 +256,8 @@ class TrackEnds:
     #: Per node, the values of its last :data:`REMEMBERED_ROWS` rows kept, by time: a row of
     #: a later part repeating one of them is a copy (a block written twice).
     recent: dict[str, dict[float, tuple[float, ...]]] = field(default_factory=dict)
-    #: Rows of the table read so far (the file row of the next part's first row).
+    #: Rows of the table read so far (the file row of the next part's first row): advanced by every
+    #: part handed to :func:`~rplearn.io.tables.canonical_pose`, refused or not, as the file offset is.
     rows_read: int = 0
 
     def remember(self, nodes: np.ndarray, values: dict[str, np.ndarray]) -> None:

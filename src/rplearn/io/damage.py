@@ -142,11 +142,11 @@ def one_station(logs: list[pd.DataFrame], owners: list[int], files: list[dict[st
             moved = bool(np.max(np.abs(a - b)) > SAME_POSITION_M)
             if moved or not same_q:
                 turned = "" if moved else " (the same place, another heading)"
+                noise = ", two fixes of one station apart by GPS noise" if moved else ""
                 raise InputError(
                     f"{files[first_file].get('source')} and {files[i].get('source')} place the ground station "
                     f"{station} at {_station_at(first, files[first_file])} and at {_station_at(row, files[i])}, "
-                    f"ENU{turned}: a station moved between flights, two fixes of one station apart by GPS noise, or the "
-                    "homes of two vehicles; give where it "
+                    f"ENU{turned}: a station moved between flights{noise}, or the homes of two vehicles; give where it "
                     "stood (ReaderOptions.station_geodetic: lat, lon, alt), or read each flight on its own",
                     param="station_geodetic")
             if row["t"] == first["t"]:

@@ -77,7 +77,7 @@ class _Tail:
             size = os.fstat(fh.fileno()).st_size
             if size < self.offset:  # its rows, their numbers and times are those read before: no new start
                 raise LogFormatError(f"{self.path}: the file shrank from {self.offset:,} to {size:,} bytes while it was "
-                                     "read (truncated, rotated or rewritten): give the new file as a session of its own")
+                                     "read (truncated, or rewritten shorter): give the new file as a session of its own")
             fh.seek(self.offset)
             data = fh.read()
         end = data.rfind(b"\n") + 1  # a line still being written waits for its newline

@@ -199,7 +199,7 @@ class TlogTail:
                              f"a MAVLink log carries neither (ReaderOptions.{missing[0]})", param=missing[0])
         self.path, self.reader = path, reader
         self._last_of: dict[Any, Any] = {}  # each sender's last attitude and position message (close copies)
-        self.rows: TlogRows | None = TlogRows(last_of=self._last_of)  # every message, until the first rows are handed out
+        self.rows: TlogRows | None = TlogRows(close_as_added=True, last_of=self._last_of)  # every message, until the first rows are handed out
         self.window: TlogWindow | None = None  # then the window (rplearn.io.tlog_window)
         self.parsed = 0  # messages parsed by the last poll
         self.dropped: dict[str, int] = {k: 0 for k in DROPS}
@@ -225,7 +225,7 @@ class TlogTail:
                 return 0
             with library_quiet():
                 self._conn = _open(self.path)
-        rows = self.rows if self.rows is not None else TlogRows(last_of=self._last_of)
+        rows = self.rows if self.rows is not None else TlogRows(close_as_added=True, last_of=self._last_of)
         copies = rows.close_copies
         f = self._conn.f
         f.seek(self._end)
