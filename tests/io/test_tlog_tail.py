@@ -267,21 +267,27 @@ def _records(data: bytes) -> list[tuple[int, bytes]]:
     return [(int.from_bytes(data[a:a + 8], "big"), data[a:b]) for a, b in zip(starts, ends, strict=True)]
 
 
+def _second_vehicle_twice(ground_260s, clean_260s, tmp_path, again_us: int):
+    """The clean log (system 1) with a second vehicle (system 2) heard from a third of the way
+    on, each of its messages (but 51) received again ``again_us`` microseconds later."""
+    second = tmp_path / "second.tlog"
+    write_tlog(ground_260s, second, vehicle="D", station="G", origin_geodetic=ORIGIN, system_id=2)
+    ones = _records(clean_260s.read_bytes())
+    late = [r for r in _records(second.read_bytes()) if r[0] > ones[len(ones) // 3][0] and r[1][8 + 5] != 51]
+    again = [(t + again_us, (t + again_us).to_bytes(8, "big") + r[8:]) for t, r in late]
+    whole = tmp_path / "whole.tlog"
+    whole.write_bytes(b"".join(r[1] for r in sorted(ones + late + again, key=lambda r: r[0])))
+    return whole
+
+
 def test_a_second_vehicle_that_overtakes_the_first_withdraws_every_row_handed_out(ground_260s, clean_260s, tmp_path):
     """The offline reader reads the system sending most ATTITUDE over the whole log; when a
     second one, heard from a third of the way on and twice as often, overtakes the vehicle the
     tail chose, every row handed out, before the change and after, is counted withdrawn."""
-    second = tmp_path / "second.tlog"
-    write_tlog(ground_260s, second, vehicle="D", station="G", origin_geodetic=ORIGIN, system_id=2)
-    ones = _records(clean_260s.read_bytes())  # system id 1
-    late = [r for r in _records(second.read_bytes()) if r[0] > ones[len(ones) // 3][0] and r[1][8 + 5] != 51]
     # twice as often: each message again 2 ms later (an exact copy, same receive time, is one
     # message in the file twice, and one within 1 ms one message received twice: the offline
     # reader reads both once)
-    again = [(t + 2_000, (t + 2_000).to_bytes(8, "big") + r[8:]) for t, r in late]
-    merged = sorted(ones + late + again, key=lambda r: r[0])
-    whole, grown = tmp_path / "whole.tlog", tmp_path / "grown.tlog"
-    whole.write_bytes(b"".join(r[1] for r in merged))
+    whole, grown = _second_vehicle_twice(ground_260s, clean_260s, tmp_path, 2_000), tmp_path / "grown.tlog"
     _, meta = read_logs([str(whole)], ReaderOptions(tx_power_dbm=20.0, frequency_hz=2.412e9, station="G"))
     assert meta["files"][0]["system_id"] == 2
     poses, signals, tail, _ = _poll_in_pieces(whole, grown, LATE_PIECE_BYTES)
@@ -294,14 +300,7 @@ def test_messages_received_twice_within_a_millisecond_are_read_once_as_offline(g
     links forwarding each): offline and the tail read each once (``close_copies``), so both keep
     the first vehicle, which sends more distinct messages, and the tail withdraws nothing (it
     had counted the copies, switched to the second vehicle and withdrawn every row)."""
-    second = tmp_path / "second.tlog"
-    write_tlog(ground_260s, second, vehicle="D", station="G", origin_geodetic=ORIGIN, system_id=2)
-    ones = _records(clean_260s.read_bytes())  # system id 1
-    late = [r for r in _records(second.read_bytes()) if r[0] > ones[len(ones) // 3][0] and r[1][8 + 5] != 51]
-    again = [(t + 1, (t + 1).to_bytes(8, "big") + r[8:]) for t, r in late]
-    merged = sorted(ones + late + again, key=lambda r: r[0])
-    whole, grown = tmp_path / "whole.tlog", tmp_path / "grown.tlog"
-    whole.write_bytes(b"".join(r[1] for r in merged))
+    whole, grown = _second_vehicle_twice(ground_260s, clean_260s, tmp_path, 1), tmp_path / "grown.tlog"
     ref, meta = read_logs([str(whole)], ReaderOptions(tx_power_dbm=20.0, frequency_hz=2.412e9, station="G"))
     assert meta["files"][0]["system_id"] == 1 and meta["files"][0]["close_copies"] > 0
     poses, signals, tail, _ = _poll_in_pieces(whole, grown, LATE_PIECE_BYTES)
