@@ -290,10 +290,9 @@ def earlier_rows(
     notes: list[str] = []
     columns = list(values)
     t = values["t"]
-    for i in range(len(rows)):
+    last_t = np.array([ends.last[str(n)][0] if str(n) in ends.last else -np.inf for n in nodes], np.float64)
+    for i in np.flatnonzero(t <= last_t):  # the rows a part repeats or puts back in time (most: none)
         node = str(nodes[i])
-        if node not in ends.last or t[i] > ends.last[node][0]:
-            continue
         seen = ends.recent.get(node, {}).get(float(t[i]))
         here = tuple(float(values[c][i]) for c in columns)
         keep[i] = False
