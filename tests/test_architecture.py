@@ -239,6 +239,55 @@ def third_party_violations(package_dir: Path = PACKAGE_DIR) -> list[str]:
     return problems
 
 
+#: Private names (``_name``) another module still imports, per importing module: the readers'
+#: shared internals of one file format (``io/``), the matcher's chunk step that the streamed and
+#: live matchers share (``data/sync.py``), and the manoeuvre ranking's scoring helpers that the
+#: optimal design's bound reuses. A module's ``_name`` is its own: what another module needs is
+#: given a public name (and this list only shrinks).
+PRIVATE_IMPORTS_ALLOWED: dict[str, frozenset[str]] = {
+    "rplearn.analysis.manoeuvre_bound": frozenset({"_check_nodes", "_poses", "_scored", "_start", "_weight"}),
+    "rplearn.data.live_sync": frozenset({"_match_chunk", "_options"}),
+    "rplearn.data.streaming": frozenset({"_match_chunk", "_options"}),
+    "rplearn.io.dataflash_writer": frozenset({"_check"}),
+    "rplearn.io.live_sources": frozenset({"_mavutil", "_open"}),
+    "rplearn.io.mavlink": frozenset({"_check_origin"}),
+    "rplearn.io.rosbag": frozenset({"_OP_CONNECTION", "_OP_MSGDATA", "_record"}),
+    "rplearn.io.tlog_tail": frozenset({"_open", "_fixes", "_from_raw"}),
+    "rplearn.io.tlog_window": frozenset({"_MAV_TYPE_GCS", "_ORIGIN_TYPES", "_arr", "_increasing", "_step_state"}),
+}
+
+
+def _private_names_imported(package_dir: Path = PACKAGE_DIR) -> dict[str, list[tuple[str, int, str]]]:
+    """Per module, ``(name, line, from module)`` of every ``from rplearn.x import _name`` of
+    another module's private name (function-local ones included)."""
+    found: dict[str, list[tuple[str, int, str]]] = {}
+    for module, path in package_modules(package_dir).items():
+        for node, _, _ in _import_nodes(path.read_text(encoding="utf-8"), str(path)):
+            if not isinstance(node, ast.ImportFrom) or node.level or not (node.module or "").startswith("rplearn"):
+                continue
+            found.setdefault(module, []).extend((a.name, node.lineno, str(node.module)) for a in node.names
+                                                if a.name.startswith("_") and not a.name.startswith("__"))
+    return found
+
+
+def private_imports(package_dir: Path = PACKAGE_DIR) -> list[str]:
+    """Every import of another module's private name beyond :data:`PRIVATE_IMPORTS_ALLOWED`."""
+    return [f"{module}:{line} imports the private {name} of {source}"
+            for module, names in _private_names_imported(package_dir).items()
+            for name, line, source in names if name not in PRIVATE_IMPORTS_ALLOWED.get(module, frozenset())]
+
+
+def test_no_module_imports_another_modules_private_names() -> None:
+    assert private_imports() == []
+
+
+def test_the_private_imports_allowed_are_still_imported() -> None:
+    """An entry of :data:`PRIVATE_IMPORTS_ALLOWED` no longer needed is struck off (the list only shrinks)."""
+    used = {m: {name for name, _, _ in names} for m, names in _private_names_imported().items()}
+    assert {m: sorted(names - used.get(m, set())) for m, names in PRIVATE_IMPORTS_ALLOWED.items()
+            if names - used.get(m, set())} == {}
+
+
 def test_every_module_belongs_to_a_layer() -> None:
     strays = [m for m in package_modules() if m != "rplearn" and layer_of(m) is None]
     assert strays == []
@@ -277,6 +326,7 @@ def test_no_module_is_longer_than_the_limit() -> None:
         ("core/bases.py", "def f():\n    from rplearn.core.lsq.solver import DEFAULT_RIDGE\n", "cycle"),
         ("io/options.py", "from rplearn.io import read_logs\n", "cycle"),
         ("core/__init__.pyi", "import rplearn.viz.plot\n", "layer"),
+        ("viz/charts.py", "from rplearn.viz.plot import _hatch_uncovered\n", "private"),
     ],
 )
 def test_the_checks_catch_a_planted_violation(tmp_path: Path, where: str, source: str, kind: str) -> None:
@@ -285,8 +335,9 @@ def test_the_checks_catch_a_planted_violation(tmp_path: Path, where: str, source
 
     copy = tmp_path / "rplearn"
     shutil.copytree(PACKAGE_DIR, copy, ignore=shutil.ignore_patterns("__pycache__"))
-    assert layering_violations(copy) == [] and import_cycles(copy) == [] and third_party_violations(copy) == []
+    checks = {"layer": layering_violations, "third": third_party_violations, "cycle": import_cycles, "private": private_imports}
+    assert all(check(copy) == [] for check in checks.values())
     target = copy / where
     target.write_text(target.read_text(encoding="utf-8") + "\n" + source, encoding="utf-8")
-    found = {"layer": layering_violations, "third": third_party_violations, "cycle": import_cycles}[kind](copy)
+    found = checks[kind](copy)
     assert found, f"planted {source.strip()!r} in {where} was not caught"

@@ -104,12 +104,12 @@ def test_specs_round_trip_and_bad_specs():
 
 
 def test_half_angle_cos_sin_is_exact_to_rounding():
-    from rplearn.core.basis_base import _cos_sin_half_angle
+    from rplearn.core.basis_base import cos_sin_half_angle
 
     rng = np.random.default_rng(3)
     special = np.pi / 2 * np.arange(-8, 9)
     a = np.concatenate([rng.uniform(-20, 20, 200_000), special, special + 1e-12, [0.0, -0.0, 1e-300]])
-    cos, sin = _cos_sin_half_angle(a)
+    cos, sin = cos_sin_half_angle(a)
     np.testing.assert_allclose(cos, np.cos(a), rtol=0, atol=1e-15)
     np.testing.assert_allclose(sin, np.sin(a), rtol=0, atol=1e-15)
 

@@ -27,8 +27,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from rplearn._argtypes import check_types
-from rplearn.analysis.heading_options import _finite
+from rplearn._argtypes import check_types, is_finite_real
 from rplearn.analysis.swarm import SwarmOptions, maximum_spanning_edges, prediction_times, resolve_patterns
 from rplearn.core.availability import link_availability
 from rplearn.core.geometry import distance_m, link_directions
@@ -107,7 +106,7 @@ class AvailabilityOptions:
     fading: bool = True
 
     def __post_init__(self) -> None:
-        if not _finite(self.sensitivity_dbm):
+        if not is_finite_real(self.sensitivity_dbm):
             raise InputError(f"sensitivity_dbm: expected a finite level in dBm, got {self.sensitivity_dbm!r}",
                              param="sensitivity_dbm")
         if isinstance(self.n_draws, bool) or not isinstance(self.n_draws, (int, np.integer)) or self.n_draws < 1:

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from rplearn._argtypes import check_types
+from rplearn._argtypes import check_types, is_finite_real
 from rplearn.core.plausible import check_frequency_hz
 from rplearn.errors import InputError
 
@@ -23,33 +23,27 @@ from rplearn.errors import InputError
 CAUTION_Z = 1.28
 
 
-def _finite(value: Any) -> bool:
-    """A finite real number (not a bool)."""
-    return (isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
-            and bool(np.isfinite(value)))
-
-
 def _check_step(step_deg: Any) -> None:
     """A positive number (its range is checked by :func:`~rplearn.analysis.headings.yaw_grid_deg`)."""
-    if not (_finite(step_deg) and step_deg > 0):
+    if not (is_finite_real(step_deg) and step_deg > 0):
         raise InputError(f"step_deg: expected a positive number of degrees, got {step_deg!r}", param="step_deg")
 
 
-def _check_frequency(frequency_hz: Any) -> None:
+def check_optional_frequency(frequency_hz: Any) -> None:
     """The one frequency check (:func:`~rplearn.core.plausible.check_frequency_hz`), None allowed."""
     if frequency_hz is not None:
-        if not _finite(frequency_hz):
+        if not is_finite_real(frequency_hz):
             raise InputError(f"frequency_hz: expected a positive frequency in Hz, got {frequency_hz!r}", param="frequency_hz")
         check_frequency_hz(float(frequency_hz), "frequency_hz")
 
 
 def _check_risk(sensitivity_dbm: Any, min_availability: Any) -> None:
     """A finite sensitivity [dBm], and a required availability in (0, 1) only with one."""
-    if sensitivity_dbm is not None and not _finite(sensitivity_dbm):
+    if sensitivity_dbm is not None and not is_finite_real(sensitivity_dbm):
         raise InputError(f"sensitivity_dbm: expected a finite level in dBm, got {sensitivity_dbm!r}",
                          param="sensitivity_dbm")
     if min_availability is not None:
-        if not (_finite(min_availability) and 0 < min_availability < 1):
+        if not (is_finite_real(min_availability) and 0 < min_availability < 1):
             raise InputError(f"min_availability: expected a probability between 0 and 1, got {min_availability!r}",
                              param="min_availability")
         if sensitivity_dbm is None:
@@ -104,15 +98,15 @@ class YawOptions:
             raise InputError("sensitivity_dbm: ranking by availability needs the transmit power (tx_power_dbm)",
                              param="tx_power_dbm")
         for name in ("tx_yaw_deg", "rx_yaw_deg"):
-            if not _finite(getattr(self, name)):
+            if not is_finite_real(getattr(self, name)):
                 raise InputError(f"{name}: expected a finite number of degrees, got {getattr(self, name)!r}",
                                  param=name)
         _check_step(self.step_deg)
-        if self.tx_power_dbm is not None and not _finite(self.tx_power_dbm):
+        if self.tx_power_dbm is not None and not is_finite_real(self.tx_power_dbm):
             raise InputError(f"tx_power_dbm: expected a finite number of dBm, got {self.tx_power_dbm!r}",
                              param="tx_power_dbm")
-        _check_frequency(self.frequency_hz)
-        if not (_finite(self.caution_z) and self.caution_z >= 0):
+        check_optional_frequency(self.frequency_hz)
+        if not (is_finite_real(self.caution_z) and self.caution_z >= 0):
             raise InputError(f"caution_z: expected a non-negative number, got {self.caution_z!r}", param="caution_z")
 
 
@@ -160,7 +154,7 @@ class SwarmHeadingOptions:
 
     def __post_init__(self) -> None:
         _check_risk(self.sensitivity_dbm, self.min_availability)
-        _check_frequency(self.frequency_hz)
+        check_optional_frequency(self.frequency_hz)
         for name in ("pattern_of", "start_yaw_deg"):
             value = getattr(self, name)
             if value is not None and not isinstance(value, Mapping):

@@ -28,10 +28,9 @@ from numpy.typing import ArrayLike
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
 
-from rplearn._argtypes import check_types
+from rplearn._argtypes import check_types, is_finite_real
 from rplearn._budget import Cost, check_work
-from rplearn.analysis.heading_options import _check_frequency
-from rplearn.analysis.heading_options import _finite as _is_number
+from rplearn.analysis.heading_options import check_optional_frequency
 from rplearn.analysis.swarm_connectivity import connectivity_of_weights, connectivity_table
 from rplearn.analysis.swarm_connectivity import maximum_spanning_edges as maximum_spanning_edges  # re-exported
 from rplearn.analysis.swarm_links import Radio, SwarmPoses, predict_links
@@ -86,18 +85,18 @@ class SwarmOptions:
     max_gap_s: float = DEFAULT_MAX_GAP_S
 
     def __post_init__(self) -> None:
-        _check_frequency(self.frequency_hz)
+        check_optional_frequency(self.frequency_hz)
         if self.pattern_of is not None:
             if not isinstance(self.pattern_of, Mapping):
                 raise InputError(f"pattern_of: expected a mapping drone -> node, got {self.pattern_of!r}",
                                  param="pattern_of")
             object.__setattr__(self, "pattern_of", {str(d): str(n) for d, n in self.pattern_of.items()})
-        if not _is_number(self.min_rssi_dbm):
+        if not is_finite_real(self.min_rssi_dbm):
             raise InputError(f"min_rssi_dbm: expected a finite number of dBm, got {self.min_rssi_dbm!r}",
                              param="min_rssi_dbm")
-        if self.times_s is None and not (_is_number(self.step_s) and self.step_s > 0):
+        if self.times_s is None and not (is_finite_real(self.step_s) and self.step_s > 0):
             raise InputError(f"step_s: expected a positive number of seconds, got {self.step_s!r}", param="step_s")
-        if not (_is_number(self.max_gap_s) and self.max_gap_s > 0):
+        if not (is_finite_real(self.max_gap_s) and self.max_gap_s > 0):
             raise InputError(f"max_gap_s: expected a positive number of seconds, got {self.max_gap_s!r}",
                              param="max_gap_s")
 

@@ -23,7 +23,7 @@ from rplearn.errors import InputError
 FloatArray = NDArray[np.float64]
 
 
-def _angles(az_rad: ArrayLike, el_rad: ArrayLike) -> tuple[FloatArray, FloatArray]:
+def flat_angles(az_rad: ArrayLike, el_rad: ArrayLike) -> tuple[FloatArray, FloatArray]:
     """Azimuths and elevations [rad] as flat contiguous float64 arrays of equal length."""
     az = np.ascontiguousarray(az_rad, dtype=np.float64).ravel()
     el = np.ascontiguousarray(el_rad, dtype=np.float64).ravel()
@@ -32,7 +32,7 @@ def _angles(az_rad: ArrayLike, el_rad: ArrayLike) -> tuple[FloatArray, FloatArra
     return az, el
 
 
-def _cos_sin_half_angle(angle_rad: FloatArray) -> tuple[FloatArray, FloatArray]:
+def cos_sin_half_angle(angle_rad: FloatArray) -> tuple[FloatArray, FloatArray]:
     """``cos`` and ``sin`` of an angle from ``t = tan(angle / 2)``: ``(1 - t^2, 2 t) / (1 + t^2)``.
 
     numpy's float64 ``tan`` is vectorised (1 ulp here) while ``sin`` and ``cos`` are not; this
@@ -54,12 +54,12 @@ _SCRATCH = threading.local()
 #: Directions per step of :meth:`Basis.evaluate` and :meth:`Basis.quadratic_form`.
 EVAL_CHUNK = 8192
 _SLOT_EVAL = 2  # scratch slot of the evaluation features (slots 0, 1: inside design_rows_into)
-_SLOT_DESIGN = 3  # scratch slot of SphericalHarmonics.design_into
+SLOT_DESIGN = 3  # scratch slot of SphericalHarmonics.design_into
 #: Largest scratch array kept for reuse between calls [float64 values] (8 MB).
 SCRATCH_KEEP_VALUES = 1 << 20
 
 
-def _scratch(slot: int, shape: tuple[int, ...]) -> FloatArray:
+def scratch(slot: int, shape: tuple[int, ...]) -> FloatArray:
     """An uninitialised float64 array of ``shape``, reused by later calls in this thread.
 
     Fresh arrays of more than a few hundred kB come straight from the operating system and pay
@@ -86,14 +86,14 @@ def chunk_directions(n_rows: int) -> int:
     return max(256, min(EVAL_CHUNK, SCRATCH_KEEP_VALUES // max(n_rows, 1)))
 
 
-def _checked_coef(coef: ArrayLike, n_coef: int) -> FloatArray:
+def checked_coef(coef: ArrayLike, n_coef: int) -> FloatArray:
     c = np.asarray(coef, np.float64)
     if c.shape[-1] != n_coef:
         raise InputError(f"{c.shape[-1]} coefficients given for {n_coef} basis functions")
     return c
 
 
-def _matmul_into(a: FloatArray, b: FloatArray, out: FloatArray) -> None:
+def matmul_into(a: FloatArray, b: FloatArray, out: FloatArray) -> None:
     """``out[...] = a @ b`` over the trailing axes of ``b`` and ``out``, straight into ``out``.
 
     ``b`` has shape ``(k, *shape)`` and ``out`` ``(rows, *shape)``; when ``out`` is a strided
@@ -173,7 +173,7 @@ class Basis:
         step = chunk_directions(self.n_coef)
         for s in range(0, az.size, step):
             part = slice(s, min(az.size, s + step))
-            f = _scratch(slot, (self.n_coef, part.stop - s))
+            f = scratch(slot, (self.n_coef, part.stop - s))
             self.design_rows_into(az[part], el[part], f)
             yield part, f
 
@@ -194,8 +194,8 @@ class Basis:
             does not grow with the number of directions (a whole SH-10 design of a million
             directions would be 0.8 GB).
         """
-        az, el = _angles(az_rad, el_rad)
-        c = _checked_coef(coef, self.n_coef)
+        az, el = flat_angles(az_rad, el_rad)
+        c = checked_coef(coef, self.n_coef)
         rows = self.row_order
         c_rows = np.ascontiguousarray(c if rows is None else c[..., rows])
         out = np.empty((*c.shape[:-1], az.size))
@@ -208,7 +208,7 @@ class Basis:
 
         ``matrix`` is ``(n_coef, n_coef)`` in the natural column order.
         """
-        az, el = _angles(az_rad, el_rad)
+        az, el = flat_angles(az_rad, el_rad)
         m = np.asarray(matrix, np.float64)
         if m.shape != (self.n_coef, self.n_coef):
             raise InputError(f"matrix has shape {m.shape}, expected ({self.n_coef}, {self.n_coef})")
@@ -221,7 +221,7 @@ class Basis:
 
     def design_t(self, az_rad: ArrayLike, el_rad: ArrayLike) -> FloatArray:
         """Transposed design block, shape ``(n_coef, n)`` (rows are basis functions)."""
-        az, el = _angles(az_rad, el_rad)
+        az, el = flat_angles(az_rad, el_rad)
         out = np.empty((self.n_coef, az.size))
         self.design_into(az, el, out)
         return out

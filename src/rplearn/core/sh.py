@@ -21,7 +21,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from rplearn._argtypes import check_types
-from rplearn.core.basis_base import _SLOT_DESIGN, Basis, FloatArray, _angles, _checked_coef, _cos_sin_half_angle, _matmul_into, _scratch, chunk_directions
+from rplearn.core.basis_base import SLOT_DESIGN, Basis, FloatArray, checked_coef, chunk_directions, cos_sin_half_angle, flat_angles, matmul_into, scratch
 from rplearn.errors import InputError
 
 
@@ -52,7 +52,7 @@ def real_sh_reference(order: int, az_rad: ArrayLike, el_rad: ArrayLike) -> Float
     """
     from scipy.special import sph_harm_y
 
-    az, el = _angles(az_rad, el_rad)
+    az, el = flat_angles(az_rad, el_rad)
     theta = np.pi / 2 - el
     out = np.empty((az.size, order * order))
     for l in range(order):
@@ -165,11 +165,11 @@ def _sh_factors(az_rad: FloatArray, el_rad: FloatArray, n_cheb: int, n_trig: int
     Returns ``cheb`` of shape ``(n_cheb, *shape)``, ``T_j(sin el)``, and ``trig`` of shape
     ``(2 n_trig, *shape)``: ``cos(m az)`` for ``m < n_trig``, then ``sin(m az)``, each times
     ``cos(el)`` when ``m`` is odd. The sines and cosines of the angles come from one tangent
-    each (:func:`_cos_sin_half_angle`), the rest from Chebyshev recurrences.
+    each (:func:`cos_sin_half_angle`), the rest from Chebyshev recurrences.
     """
     shape = az_rad.shape  # any sample shape: (n,), or (2, n) for both ends of a link at once
-    x, cos_el = _cos_sin_half_angle(el_rad)[::-1]  # x = sin(el), cos(el) >= 0
-    cheb = _scratch(0, (n_cheb, *shape))
+    x, cos_el = cos_sin_half_angle(el_rad)[::-1]  # x = sin(el), cos(el) >= 0
+    cheb = scratch(0, (n_cheb, *shape))
     cheb[0] = 1.0
     if n_cheb > 1:
         cheb[1] = x
@@ -177,12 +177,12 @@ def _sh_factors(az_rad: FloatArray, el_rad: FloatArray, n_cheb: int, n_trig: int
         for j in range(2, n_cheb):  # T_j = 2 x T_{j-1} - T_{j-2}
             np.multiply(two_x, cheb[j - 1], out=cheb[j])
             cheb[j] -= cheb[j - 2]
-    trig = _scratch(1, (2 * n_trig, *shape))
+    trig = scratch(1, (2 * n_trig, *shape))
     cos_m, sin_m = trig[:n_trig], trig[n_trig:]
     cos_m[0] = 1.0
     sin_m[0] = 0.0
     if n_trig > 1:
-        cos_m[1], sin_m[1] = _cos_sin_half_angle(az_rad)
+        cos_m[1], sin_m[1] = cos_sin_half_angle(az_rad)
         two_cos = 2.0 * cos_m[1]
         for m in range(2, n_trig):  # Chebyshev: c_m = 2 cos(az) c_{m-1} - c_{m-2}
             np.multiply(two_cos, cos_m[m - 1], out=cos_m[m])
@@ -377,7 +377,7 @@ class SphericalHarmonics(Basis):
         n_cheb, n_trig = (L, L) if moments is None else (2 * L + 1, 2 * L - 1)
         cheb, trig = _sh_factors(az_rad, el_rad, n_cheb, n_trig)
         n_cos = coef.shape[0]
-        _matmul_into(coef, cheb[:L], out[:n_cos])
+        matmul_into(coef, cheb[:L], out[:n_cos])
         cos_m, sin_m = trig[:n_trig], trig[n_trig:]
         r, q = L, n_cos
         for m in range(1, L):
@@ -437,8 +437,8 @@ class SphericalHarmonics(Basis):
     def evaluate(self, coef: ArrayLike, az_rad: ArrayLike, el_rad: ArrayLike) -> FloatArray:
         # A pattern is sum_m [sum_l c_lm Q_lm(x)] w_m: one Chebyshev series per azimuth factor,
         # so 2 order rows per direction are computed instead of order**2 features.
-        az, el = _angles(az_rad, el_rad)
-        c = _checked_coef(coef, self.n_coef)
+        az, el = flat_angles(az_rad, el_rad)
+        c = checked_coef(coef, self.n_coef)
         L = self.order
         lead = c.shape[:-1]
         c_rows = c.reshape(-1, self.n_coef)[:, self.row_order]
@@ -463,7 +463,7 @@ class SphericalHarmonics(Basis):
             self.design_rows_into(az_rad, el_rad, rows)
             out[self.row_order] = rows
             return
-        for part, rows in self.feature_chunks(az_rad, el_rad, _SLOT_DESIGN):
+        for part, rows in self.feature_chunks(az_rad, el_rad, SLOT_DESIGN):
             out[self.row_order, part] = rows
 
     def to_dict(self) -> dict[str, Any]:

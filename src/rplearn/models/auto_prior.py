@@ -55,7 +55,7 @@ from rplearn.core.basis_base import Basis
 from rplearn.core.lsq.level import pattern_shape
 from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.core.lsq.penalty import nested_columns
-from rplearn.core.lsq.selection_evaluator import _Evaluator
+from rplearn.core.lsq.selection_evaluator import FoldEvaluator
 from rplearn.core.lsq.selection_result import Selection
 from rplearn.core.lsq.shifted import shifted_statistics
 from rplearn.core.lsq.ties import MIN_NOISE_UNITS, WITHIN_NOISE_FRACTION, WITHIN_NOISE_SE
@@ -142,7 +142,7 @@ def held_out_errors(units: Mapping[str, NormalEquations], make_basis: Callable[[
     """Each held-out unit's squared error (summed over its samples) [dB^2] of the chosen point of
     a search, as :func:`rplearn.core.lsq.selection.select_order_and_smoothing` validated it on
     ``units`` (empty without held-out units)."""
-    ev = _Evaluator({u: st for u, st in units.items() if st.n_samples}, make_basis, ridge, point.power,
+    ev = FoldEvaluator({u: st for u, st in units.items() if st.n_samples}, make_basis, ridge, point.power,
                     target, prior_level)
     ev.rmse(int(point.order), float(point.smoothing))
     return np.asarray(ev.fold_sse.get((int(point.order), float(point.smoothing)), np.empty(0)), np.float64)

@@ -37,7 +37,7 @@ import numpy as np
 
 from rplearn._argtypes import check_types
 from rplearn.errors import InputError
-from rplearn.plan.manoeuvres import Candidate, CandidateOptions, ManoeuvreUnit, _closest_m, _lead_s
+from rplearn.plan.manoeuvres import Candidate, CandidateOptions, ManoeuvreUnit, closest_approach_m, lead_time_s
 
 #: The turn past an aimed heading: it goes this far beyond it [deg] (half before, when the
 #: turn starts that far away), so the aim is seen over a sector, not at one instant.
@@ -137,7 +137,7 @@ def _pair(state: Mapping[str, tuple[np.ndarray, float]], mover: str, anchor: str
             continue  # the way there passes too near the station
         unit = ManoeuvreUnit(kind="yaw", **{**base, "start_enu_m": tuple(float(v) for v in goal)})
         units.append((f"{mover} to where {anchor} sees it along the aim, turning, {what}", unit,
-                      _lead_s([float(np.linalg.norm(goal - pm))], opts)))
+                      lead_time_s([float(np.linalg.norm(goal - pm))], opts)))
     out: list[Candidate] = []
     for name, unit, lead in units:
         ends = {mover: unit.end_pose()}
@@ -182,7 +182,7 @@ def aimed_manoeuvres(poses: Mapping[str, tuple[tuple[float, float, float], float
     if opts.min_separation_m > 0:
         now = min(float(np.linalg.norm(state[a][0] - state[b][0])) for i, a in enumerate(names) for b in names[i + 1:])
         floor = min(opts.min_separation_m, now - 1e-6)
-        out = [c for c in out if _closest_m(c.unit, state) >= floor]
+        out = [c for c in out if closest_approach_m(c.unit, state) >= floor]
     return out
 
 

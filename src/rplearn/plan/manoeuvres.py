@@ -430,7 +430,7 @@ class Candidate:
         return float(self.lead_s + self.unit.duration_s)
 
 
-def _closest_m(unit: Any, state: Mapping[str, tuple[FloatArray, float]]) -> float:
+def closest_approach_m(unit: Any, state: Mapping[str, tuple[FloatArray, float]]) -> float:
     """Closest distance between any two nodes while ``unit`` is flown (nodes not in it hold still) [m]."""
     ref = unit.sample(4.0)
     pos = {str(n): ref.position_enu_m[:, j, :] for j, n in enumerate(unit.nodes)}
@@ -444,7 +444,7 @@ def _closest_m(unit: Any, state: Mapping[str, tuple[FloatArray, float]]) -> floa
     return closest
 
 
-def _lead_s(moves: list[float], opts: CandidateOptions) -> float:
+def lead_time_s(moves: list[float], opts: CandidateOptions) -> float:
     return max((_trapezoid(d, opts.speed_m_s, opts.accel_m_s2)[0] for d in moves), default=0.0)
 
 
@@ -470,7 +470,7 @@ def _library(poses: Mapping[str, tuple[FloatArray, float]], a: str, b: str, opts
                                       label=f"unit_{a}{b}_n{n}_psi{psi:g}")
                 for name, u in [(f"paper unit n={n} psi0={psi:g} ({a},{b})", unit), *(loop_sweeps(unit) if opts.sweeps else [])]:
                     ref = u.evaluate(np.array([0.0, u.duration_s]))
-                    lead = _lead_s([float(np.linalg.norm(ref.position_enu_m[0, j] - p)) for j, p in enumerate((pa, pb))], opts)
+                    lead = lead_time_s([float(np.linalg.norm(ref.position_enu_m[0, j] - p)) for j, p in enumerate((pa, pb))], opts)
                     ends = {node: (tuple(float(v) for v in ref.position_enu_m[1, j]), float(np.degrees(ref.yaw_rad[1, j])))
                             for j, node in enumerate((a, b))}
                     out.append(Candidate(name, u, lead, ends))  # type: ignore[arg-type]
@@ -488,7 +488,7 @@ def _library(poses: Mapping[str, tuple[FloatArray, float]], a: str, b: str, opts
             passes = GroundPassUnit(nodes=(station, drone), distance_m=dist, height_m=h, station_height_m=max(float(ps[2]), 0.1),
                                   speed_m_s=opts.speed_m_s, n_passes=2, station_yaw_deg=facing, label=f"passes_{drone}_{h:.0f}m")
             ref = passes.evaluate(np.array([0.0, passes.duration_s]))
-            lead = _lead_s([float(np.linalg.norm(ref.position_enu_m[0, 1] - pd_))], opts)
+            lead = lead_time_s([float(np.linalg.norm(ref.position_enu_m[0, 1] - pd_))], opts)
             ends = {drone: (tuple(float(v) for v in ref.position_enu_m[1, 1]), float(np.degrees(ref.yaw_rad[1, 1])))}
             out.append(Candidate(f"ground passes at {h:.0f} m ({drone} about {station})", passes, lead, ends))  # type: ignore[arg-type]
     return out
@@ -584,7 +584,7 @@ def candidate_manoeuvres(poses: Mapping[str, tuple[tuple[float, float, float], f
     if opts.min_separation_m > 0:  # nodes already nearer may stay as near, never come nearer
         now = min(float(np.linalg.norm(state[a][0] - state[b][0])) for i, a in enumerate(names) for b in names[i + 1:])
         floor = min(opts.min_separation_m, now - 1e-6)
-        out = [c for c in out if _closest_m(c.unit, state) >= floor]
+        out = [c for c in out if closest_approach_m(c.unit, state) >= floor]
     return out
 
 

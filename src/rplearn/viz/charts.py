@@ -20,7 +20,7 @@ from numpy.typing import ArrayLike
 
 from rplearn._argtypes import check_types
 from rplearn.errors import InputError
-from rplearn.viz.plot import FloatArray, _dot_size, _new_figure, _subsample, save_figure
+from rplearn.viz.plot import FloatArray, dot_size, new_figure, save_figure, subsample_indices
 
 
 # -- Fig. 8b: RSSI over time ---------------------------------------------------------------
@@ -61,15 +61,15 @@ def rssi_time_figure(
     if labels.shape != t.shape:
         raise InputError(f"rssi: unit_labels has {labels.size} values, expected {t.size}")
     t0 = float(np.nanmin(t))
-    fig = _new_figure(9.0, 3.0)
+    fig = new_figure(9.0, 3.0)
     ax = fig.add_subplot()
     for k, u in enumerate(dict.fromkeys(labels.tolist())):
         idx = np.flatnonzero(labels == u)
-        idx = idx[_subsample(idx.size, max_points)]
+        idx = idx[subsample_indices(idx.size, max_points)]
         ax.scatter(
             t[idx] - t0,
             p[idx],
-            s=_dot_size(idx.size),
+            s=dot_size(idx.size),
             marker=".",
             linewidths=0,
             color=f"C{k % 10}",
@@ -129,7 +129,7 @@ def order_sweep_figure(
         raise InputError(
             f"order sweep: expected equal, non-empty arrays, got {x.size}, {r.size}, {a.size}, {t.size}"
         )
-    fig = _new_figure(7.0, 5.0)
+    fig = new_figure(7.0, 5.0)
     ax, ax_t = fig.subplots(2, 1, sharex=True, height_ratios=[2, 1])
     ax.plot(x, r, "o-", color="tab:green", label="test RMSE")
     ax.set_ylabel("test RMSE / dB", color="tab:green")
@@ -220,7 +220,7 @@ def epsilon_sweep_figure(eps: ArrayLike, error_db: ArrayLike) -> Figure:
         )
     if np.any(e <= 0):
         raise InputError("epsilon sweep: eps must be positive for a log axis")
-    fig = _new_figure(6.0, 3.3)
+    fig = new_figure(6.0, 3.3)
     ax = fig.add_subplot()
     ax.semilogx(e, y, "o-", color="tab:red", ms=3)
     ax.set_xlim(1e-3, 1e6)
@@ -262,7 +262,7 @@ def rank_study_figure(cases: Sequence[tuple[str, int, int]]) -> Figure:
     cols = np.array([int(c[1]) for c in cases])
     ranks = np.array([int(c[2]) for c in cases])
     x = np.arange(len(cases))
-    fig = _new_figure(max(5.0, 1.6 * len(cases) + 1.5), 3.6)
+    fig = new_figure(max(5.0, 1.6 * len(cases) + 1.5), 3.6)
     ax = fig.add_subplot()
     w = 0.38
     ax.bar(x - w / 2, cols, w, label="columns", color="tab:gray")
@@ -310,7 +310,7 @@ def plot_swarm(prediction: Any, path: str | os.PathLike[str]) -> str:
     ``prediction`` is a :class:`rplearn.analysis.swarm.SwarmPrediction`.
     """
     links = prediction.links
-    fig = _new_figure(9.0, 4.2)
+    fig = new_figure(9.0, 4.2)
     ax = fig.add_subplot()
     pairs = links.assign(pair=[f"{min(a, b)}-{max(a, b)}" for a, b in zip(links["tx"], links["rx"])])
     weaker = pairs.groupby(["pair", "t"])["rssi_pred_dbm"].min().reset_index()

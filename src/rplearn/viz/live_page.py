@@ -16,7 +16,7 @@ from rplearn._argtypes import check_types
 from rplearn._atomic import atomic_open
 from rplearn.core.coverage import COVERED_WITHIN_DEG, coverage_at
 from rplearn.models.patterns import PatternSet
-from rplearn.viz.plot import DPI, _new_figure, _style_az_el_axes, az_el_grid_deg, spread_maps_figure
+from rplearn.viz.plot import DPI, az_el_grid_deg, new_figure, spread_maps_figure, style_az_el_axes
 
 
 def _png(fig: Any) -> str:
@@ -33,14 +33,14 @@ def coverage_maps_figure(model: PatternSet, step_deg: float = 3.0) -> Any:
     nodes = [str(n) for n in model.nodes if str(n) in grids]
     az, el = az_el_grid_deg(step_deg)
     azg, elg = np.meshgrid(np.radians(az), np.radians(el))
-    fig = _new_figure(3.6 * max(len(nodes), 1) + 0.6, 3.2)
+    fig = new_figure(3.6 * max(len(nodes), 1) + 0.6, 3.2)
     axes = fig.subplots(1, max(len(nodes), 1), squeeze=False)[0]
     im = None
     for ax, node in zip(axes, nodes):
         angle = coverage_at(grids[node], azg.ravel(), elg.ravel()).reshape(azg.shape)
         im = ax.pcolormesh(az, el, angle, cmap="viridis_r", vmin=0.0, vmax=90.0, shading="nearest", rasterized=True)
         ax.contour(az, el, angle, levels=[COVERED_WITHIN_DEG], colors="white", linewidths=0.8)
-        _style_az_el_axes(ax)
+        style_az_el_axes(ax)
         ax.set_title(f"node {node}: {100 * np.mean(angle <= COVERED_WITHIN_DEG):.0f}% of the map within "
                      f"{COVERED_WITHIN_DEG:g} deg", fontsize=8)
     if im is not None:

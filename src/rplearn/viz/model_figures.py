@@ -24,7 +24,7 @@ from numpy.typing import ArrayLike
 
 from rplearn._argtypes import check_types
 from rplearn.errors import InputError
-from rplearn.viz.plot import _dot_size, _new_figure, _subsample, save_figure
+from rplearn.viz.plot import dot_size, new_figure, save_figure, subsample_indices
 
 #: The two-sided 90 % band of a normal spread: +- this many standard deviations.
 Z90 = 1.6448536269514722
@@ -96,7 +96,7 @@ def prediction_time_figure(
         raise InputError(f"links: expected one label per sample ({t.size}), got {link.size}")
     shown = panel_units(list(u), held_out, MAX_TIME_PANELS)
     test = set(map(str, held_out))
-    fig = _new_figure(11.0, 2.1 * len(shown) + 0.9)
+    fig = new_figure(11.0, 2.1 * len(shown) + 0.9)
     axes = fig.subplots(len(shown), 1, squeeze=False)[:, 0]
     for ax, unit in zip(axes, shown):
         sel = np.flatnonzero(u == unit)
@@ -107,8 +107,8 @@ def prediction_time_figure(
         if s is not None:
             inside = float(np.mean(np.abs(y[sel] - p[sel]) <= Z90 * s[sel]))
             title += f"; {inside:.0%} of the measured values inside the 90 % band"
-        pick = sel[_subsample(sel.size, 6000)]
-        ax.scatter(t[pick], y[pick], s=_dot_size(pick.size, 1.0, 6.0), color=colour, alpha=0.6, lw=0,
+        pick = sel[subsample_indices(sel.size, 6000)]
+        ax.scatter(t[pick], y[pick], s=dot_size(pick.size, 1.0, 6.0), color=colour, alpha=0.6, lw=0,
                    label=f"measured ({role})", rasterized=True, zorder=3)
         names = link[sel]
         for k, name in enumerate(dict.fromkeys(names.tolist())):
@@ -187,9 +187,9 @@ def residuals_figure(
     r, d = _arrays(residual_db, distance_m, names=("residual_db", "distance_m"))
     ends = [_arrays(a, r, names=("direction", "residual"))[0] for a in (*el_deg, *az_deg)]
     test = np.zeros(r.size, bool) if held_out is None else np.asarray(held_out, bool).ravel()
-    fig = _new_figure(12.0, 3.6)
+    fig = new_figure(12.0, 3.6)
     axes = fig.subplots(1, 3, sharey=True)
-    pick = _subsample(r.size, 5000)
+    pick = subsample_indices(r.size, 5000)
     panels = [("distance / m", [(d, "all samples", "tab:green")], True),
               ("elevation in the body frame / deg", [(ends[0], "tx end", "tab:blue"), (ends[1], "rx end", "tab:orange")], False),
               ("azimuth in the body frame / deg", [(ends[2], "tx end", "tab:blue"), (ends[3], "rx end", "tab:orange")], False)]
@@ -258,7 +258,7 @@ def polar_cuts_figure(model: Any, nodes: Sequence[str] | None = None, label: str
     if not nodes:
         raise InputError("nodes: nothing to draw")
     az = np.radians(np.linspace(-180.0, 180.0, 361))
-    fig = _new_figure(4.6 * len(nodes) + 0.4, 6.0)
+    fig = new_figure(4.6 * len(nodes) + 0.4, 6.0)
     cuts = []
     for n in nodes:
         best = best_covered_elevation_deg(model, n)

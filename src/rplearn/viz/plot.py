@@ -55,7 +55,7 @@ class PatternLike(Protocol):
 
 
 # -- helpers -------------------------------------------------------------------------------
-def _new_figure(width_in: float, height_in: float) -> Figure:
+def new_figure(width_in: float, height_in: float) -> Figure:
     fig = Figure(figsize=(width_in, height_in), dpi=DPI, layout="constrained")
     FigureCanvasAgg(fig)
     return fig
@@ -77,7 +77,7 @@ def save_figure(fig: Figure, path: str | os.PathLike[str], caption: str | None =
     return path
 
 
-def _dot_size(n_points: int, lo: float = 1.5, hi: float = 8.0) -> float:
+def dot_size(n_points: int, lo: float = 1.5, hi: float = 8.0) -> float:
     """Marker area [pt^2] for a scatter of ``n_points``: small for dense, larger for sparse."""
     return float(np.clip(3.0e4 / max(n_points, 1), lo, hi))
 
@@ -117,7 +117,7 @@ def sphere_mean_db(gain_db: FloatArray, el_deg: FloatArray) -> float:
     return float(np.sum(w * gain_db) / np.sum(w))
 
 
-def _subsample(n: int, max_n: int, seed: int = 0) -> NDArray[np.intp]:
+def subsample_indices(n: int, max_n: int, seed: int = 0) -> NDArray[np.intp]:
     if n <= max_n:
         return np.arange(n)
     return np.sort(np.random.default_rng(seed).choice(n, max_n, replace=False))
@@ -131,7 +131,7 @@ def _az_el_deg(pair: AzEl, name: str) -> tuple[FloatArray, FloatArray]:
     return az, el
 
 
-def _style_az_el_axes(ax: Any, xlabel: bool = True, ylabel: bool = True) -> None:
+def style_az_el_axes(ax: Any, xlabel: bool = True, ylabel: bool = True) -> None:
     ax.set_xlim(-180, 180)
     ax.set_ylim(-90, 90)
     ax.set_xticks(np.arange(-180, 181, 90))
@@ -245,7 +245,7 @@ def pattern_maps_figure(
             g = pattern_map_db(m, n, az, el)
             maps[i, j] = g - sphere_mean_db(g, el) if center else g
     unit = "dB rel. sphere mean" if center else "dBi"
-    fig = _new_figure(3.6 * len(nodes) + 0.6, 2.2 * len(rows) + 1.2)
+    fig = new_figure(3.6 * len(nodes) + 0.6, 2.2 * len(rows) + 1.2)
     axes = fig.subplots(len(rows), len(nodes), squeeze=False, sharex=True, sharey=True)
     for j, n in enumerate(nodes):
         vmin, vmax = colour_limits_db(maps[:, j], has_truth=truth is not None)
@@ -265,9 +265,9 @@ def pattern_maps_figure(
             _hatch_uncovered(ax, rows[i][1], n, az, el)
             if samples_az_el is not None and n in samples_az_el and label != "truth":
                 saz, sel = _az_el_deg(samples_az_el[n], f"samples of {n}")
-                keep = _subsample(saz.size, max_dots)
+                keep = subsample_indices(saz.size, max_dots)
                 ax.scatter(saz[keep], sel[keep], s=0.6, c="k", marker=".", linewidths=0, alpha=0.6)
-            _style_az_el_axes(ax, xlabel=i == len(rows) - 1, ylabel=j == 0)
+            style_az_el_axes(ax, xlabel=i == len(rows) - 1, ylabel=j == 0)
             ax.set_title(f"{label}: node {n}", fontsize=9)
         assert im is not None  # one panel per node at least
         cb = fig.colorbar(
@@ -338,7 +338,7 @@ def spread_maps_figure(models: Mapping[str, Any], nodes: Sequence[str] | None = 
     az, el = az_el_grid_deg(step_deg)
     azg, elg = np.meshgrid(np.radians(az), np.radians(el))
     maps = np.array([[_own_std_map(m, n, azg, elg) for n in nodes] for _, m in rows])
-    fig = _new_figure(3.6 * len(nodes) + 0.6, 2.2 * len(rows) + 1.2)
+    fig = new_figure(3.6 * len(nodes) + 0.6, 2.2 * len(rows) + 1.2)
     axes = fig.subplots(len(rows), len(nodes), squeeze=False, sharex=True, sharey=True)
     vmax = float(np.nanpercentile(maps, 99)) or 1.0
     im = None
@@ -348,7 +348,7 @@ def spread_maps_figure(models: Mapping[str, Any], nodes: Sequence[str] | None = 
             ax = axes[i, j]
             im = ax.pcolormesh(az, el, maps[i, j], cmap="magma", vmin=0.0, vmax=vmax, shading="nearest", rasterized=True)
             _hatch_uncovered(ax, m, n, az, el)
-            _style_az_el_axes(ax, xlabel=i == len(rows) - 1, ylabel=j == 0)
+            style_az_el_axes(ax, xlabel=i == len(rows) - 1, ylabel=j == 0)
             extra = (f"\n{cert[n]['covered_std_db']:.2f} dB where looked, {cert[n]['sphere_std_db']:.2f} dB on the sphere"
                      if n in cert else "")
             ax.set_title(f"{label}: node {n}{extra}", fontsize=8)
@@ -392,7 +392,7 @@ def coverage_figure(
     nodes = list(dict.fromkeys([*learn_az_el, *test_az_el]))
     if not nodes:
         raise InputError("coverage: no node given")
-    fig = _new_figure(4.0 * len(nodes) + 0.4, 3.3)
+    fig = new_figure(4.0 * len(nodes) + 0.4, 3.3)
     axes = fig.subplots(1, len(nodes), squeeze=False, sharey=True)[0]
     for j, n in enumerate(nodes):
         ax = axes[j]
@@ -403,17 +403,17 @@ def coverage_figure(
             if n not in data:
                 continue
             az, el = _az_el_deg(data[n], f"{label} samples of {n}")
-            keep = _subsample(az.size, max_points)
+            keep = subsample_indices(az.size, max_points)
             ax.scatter(
                 az[keep],
                 el[keep],
-                s=_dot_size(keep.size),
+                s=dot_size(keep.size),
                 c=color,
                 marker=".",
                 linewidths=0,
                 label=f"{label} ({az.size:,})",
             )
-        _style_az_el_axes(ax, ylabel=j == 0)
+        style_az_el_axes(ax, ylabel=j == 0)
         ax.set_title(f"node {n}: direction of the other end", fontsize=9)
         ax.legend(loc="lower right", fontsize=7, markerscale=4)
     fig.suptitle("Coverage of the az-el domain")
@@ -523,7 +523,7 @@ def pattern_3d_figure(
     from mpl_toolkits.mplot3d import Axes3D  # noqa: F401  (registers the projection)
 
     norm = Normalize(vmin=floor, vmax=g_max if g_max > floor else floor + 1.0)
-    fig = _new_figure(6.4, 5.8)
+    fig = new_figure(6.4, 5.8)
     ax = fig.add_subplot(projection="3d")
     colors = matplotlib.colormaps[CMAP](norm(g))
     ax.plot_surface(

@@ -15,14 +15,14 @@ from matplotlib.figure import Figure
 
 from rplearn._argtypes import check_types
 from rplearn.core.reliability import ReliabilityTable
-from rplearn.viz.plot import _new_figure, save_figure
+from rplearn.viz.plot import new_figure, save_figure
 
 
 @check_types
 def reliability_figure(table: ReliabilityTable, label: str, sensitivity_dbm: float, skill: float | None = None) -> Figure:
     """The reliability diagram of ``table`` (module docstring) for the model ``label`` at
     ``sensitivity_dbm`` [dBm], its Brier skill in the title when given."""
-    fig = _new_figure(5.0, 5.6)
+    fig = new_figure(5.0, 5.6)
     top, bottom = fig.subplots(2, 1, height_ratios=[3, 1], sharex=True)
     top.plot([0, 1], [0, 1], color="0.6", linestyle="--", linewidth=1, label="perfectly reliable")
     filled = table.count > 0

@@ -187,7 +187,7 @@ def test_the_search_leaves_a_coordinate_minimum_along_the_diagonal_valley():
 
 def test_folds_solved_on_the_workers_give_the_search_of_one_thread(monkeypatch):
     """The folds of each batch of points are solved on the statistics' workers at once
-    (``_Evaluator.prefetch``); with the workers busy (their lock held) the same search runs in
+    (``FoldEvaluator.prefetch``); with the workers busy (their lock held) the same search runs in
     this thread, point by point: the same points in the same order, the same errors, choice,
     inflation and ties (up to the rounding of one BLAS thread against the policy's)."""
     from rplearn.core.lsq import runtime as runtime_module
@@ -246,13 +246,13 @@ def test_the_tied_points_inflations_reuse_the_kept_factors(monkeypatch):
     monkeypatch.setenv("RPLEARN_THREADS", "1")
     units = stats_of(synthetic_units(n_units=3, n_per_unit=600, truth_order=3, seed=9), SphericalHarmonics(6))
     solves: list[int] = []
-    original = selection_module._Evaluator._solve
+    original = selection_module.FoldEvaluator._solve
 
     def counted(self, *args, **kwargs):
         solves.append(1)
         return original(self, *args, **kwargs)
 
-    monkeypatch.setattr(selection_module._Evaluator, "_solve", counted)
+    monkeypatch.setattr(selection_module.FoldEvaluator, "_solve", counted)
     kept = select_order_and_smoothing(units, SphericalHarmonics, range(2, 7), RIDGE)
     assert len(kept.ties) >= 2  # else nothing to reuse: the test would not test
     assert len(solves) == 3 * len(kept.curve)
@@ -312,13 +312,13 @@ def test_fold_blocks_built_on_the_workers_and_kept_give_the_same_search(monkeypa
     monkeypatch.setenv("RPLEARN_THREADS", "1")
     units = stats_of(synthetic_units(n_units=3, n_per_unit=700, truth_order=4, seed=11), SphericalHarmonics(8))
     built: list[tuple[int, int]] = []
-    original = selection_module._Evaluator._fold_block
+    original = selection_module.FoldEvaluator._fold_block
 
     def counted(self, order, fold):
         built.append((order, fold))
         return original(self, order, fold)
 
-    monkeypatch.setattr(selection_module._Evaluator, "_fold_block", counted)
+    monkeypatch.setattr(selection_module.FoldEvaluator, "_fold_block", counted)
     kept = select_order_and_smoothing(units, SphericalHarmonics, range(2, 9), RIDGE)
     assert len(built) == len(set(built))  # every (order, fold) built once
     once = len(built)

@@ -60,7 +60,7 @@ import numpy as np
 from rplearn.core.basis_base import Basis
 from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.core.lsq.penalty import DEFAULT_PENALTY_POWER, nested_columns, penalty_scale, penalty_vector, sub_statistics
-from rplearn.core.lsq.selection_evaluator import MAX_SMOOTHING, SMOOTHING_GRID, _Evaluator
+from rplearn.core.lsq.selection_evaluator import MAX_SMOOTHING, SMOOTHING_GRID, FoldEvaluator
 from rplearn.core.lsq.selection_result import CurvePoint, Selection
 from rplearn.core.lsq.ties import tied_keys, tied_points
 from rplearn.core.lsq.ties import tightest_split as _tightest_split
@@ -68,13 +68,13 @@ from rplearn.errors import IdentifiabilityError, InputError
 
 
 def _prefetch(ev: Any, points: Sequence[tuple[int, float]]) -> None:
-    """:meth:`_Evaluator.prefetch` of the points the search is about to compare (any evaluator
+    """:meth:`FoldEvaluator.prefetch` of the points the search is about to compare (any evaluator
     with ``rmse`` alone is asked one point at a time)."""
     if hasattr(ev, "prefetch"):
         ev.prefetch(points)
 
 
-def _best_smoothing(ev: _Evaluator, order: int, grid: Sequence[float]) -> float:
+def _best_smoothing(ev: FoldEvaluator, order: int, grid: Sequence[float]) -> float:
     """Best smoothing of ``grid`` at one order: every other value, then the neighbours of the best."""
     values = sorted(float(g) for g in grid)
     coarse = values[::2] if values[-1] in values[::2] else [*values[::2], values[-1]]
@@ -88,7 +88,7 @@ def _best_smoothing(ev: _Evaluator, order: int, grid: Sequence[float]) -> float:
     return min(values[max(0, i - 1): i + 2], key=lambda s: ev.rmse(order, s))
 
 
-def _best_order(ev: _Evaluator, orders: Sequence[int], smoothing: float) -> int:
+def _best_order(ev: FoldEvaluator, orders: Sequence[int], smoothing: float) -> int:
     """Best order at one smoothing: every other order from the largest down (the curve is flat
     with small wiggles at high orders: no early stop), then the neighbours of the best."""
     _prefetch(ev, [(o, smoothing) for o in list(orders)[::-1][::2]])
@@ -97,7 +97,7 @@ def _best_order(ev: _Evaluator, orders: Sequence[int], smoothing: float) -> int:
     return min([o for o in orders if abs(o - best) <= 1], key=lambda o: ev.rmse(o, smoothing))
 
 
-def _walk_smoothing(ev: _Evaluator, order: int, start: float, values: list[float]) -> tuple[float, list[float]]:
+def _walk_smoothing(ev: FoldEvaluator, order: int, start: float, values: list[float]) -> tuple[float, list[float]]:
     """From ``start``, step along the sorted smoothing ``values`` at one order while the
     validation error falls (past the largest, by decades up to :data:`MAX_SMOOTHING`)."""
     values = list(values)
@@ -113,7 +113,7 @@ def _walk_smoothing(ev: _Evaluator, order: int, start: float, values: list[float
     return best, values
 
 
-def _diagonal_steps(ev: _Evaluator, orders: Sequence[int], order: int, smoothing: float,
+def _diagonal_steps(ev: FoldEvaluator, orders: Sequence[int], order: int, smoothing: float,
                     values: Sequence[float]) -> list[tuple[int, float]]:
     """From where the coordinate descent stopped, move to the best of the eight neighbours
     (the next order and the next smoothing of the grid, either way, alone or together) while
@@ -235,7 +235,7 @@ def select_beside(
     orders = sorted({int(o) for o in orders})
     if not orders:
         raise InputError("orders: no candidate order", param="orders")
-    ev = _Evaluator(units, make_basis, ridge, power, prior.target, prior.prior_level)
+    ev = FoldEvaluator(units, make_basis, ridge, power, prior.target, prior.prior_level)
     best_s = _best_smoothing(ev, orders[(len(orders) - 1) // 2], grid)
     best_o = _best_order(ev, orders, best_s)
     values = sorted({float(g) for g in grid} | {best_s})
@@ -307,7 +307,7 @@ def variance_inflation(
     units = {str(k): v for k, v in units.items() if v.n_samples > 0}
     if not units:
         raise IdentifiabilityError("no learning samples to validate on")
-    return _Evaluator(units, make_basis, ridge, power, target, prior_level).inflation(int(order), float(smoothing))
+    return FoldEvaluator(units, make_basis, ridge, power, target, prior_level).inflation(int(order), float(smoothing))
 
 
 def validation_rmse(
@@ -323,7 +323,7 @@ def validation_rmse(
     units = {str(k): v for k, v in units.items() if v.n_samples > 0}
     if not units:
         raise IdentifiabilityError("no learning samples to validate on")
-    ev = _Evaluator(units, make_basis, ridge, power)
+    ev = FoldEvaluator(units, make_basis, ridge, power)
     return [ev.rmse(int(o), float(smoothing)) for o in orders]
 
 

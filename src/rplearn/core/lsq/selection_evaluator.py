@@ -1,10 +1,10 @@
 """The validation errors behind :mod:`rplearn.core.lsq.selection`: grouped cross-validation (or
 GCV) of one order and smoothing from the per-unit statistics at the largest order.
 
-:class:`_Evaluator` keeps every point it has computed (the validation curve), the folds' blocks
+:class:`FoldEvaluator` keeps every point it has computed (the validation curve), the folds' blocks
 of the orders the search visits (within :data:`_CACHE_BYTES`), and the Cholesky factors of a
 batch of points solved at once, for the variance inflations of the chosen and tied points
-(:meth:`_Evaluator.spread`). The search itself is in :mod:`rplearn.core.lsq.selection`.
+(:meth:`FoldEvaluator.spread`). The search itself is in :mod:`rplearn.core.lsq.selection`.
 """
 
 
@@ -37,7 +37,7 @@ _CACHED_ORDERS = 3
 #: Bytes of fold blocks past which only :data:`_CACHED_ORDERS` orders are kept (the paper's
 #: two nodes up to SH-15: 47 MB for every order; the search comes back to most of them).
 _CACHE_BYTES = 96 * 2**20
-#: Bytes of Cholesky factors a batch of points solved at once keeps for :meth:`_Evaluator.spread`
+#: Bytes of Cholesky factors a batch of points solved at once keeps for :meth:`FoldEvaluator.spread`
 #: (a swarm's factors are large: past this only the solutions are kept, and the best point's
 #: inflation solves again).
 _PENDING_FACTOR_BYTES = 128 * 2**20
@@ -51,13 +51,13 @@ _KEPT_FACTOR_BYTES = 64 * 2**20
 
 
 def _cache_bytes(cache: Mapping[int, Any]) -> int:
-    """Bytes held by the cached fold blocks of :class:`_Evaluator` (views of the folds' own
+    """Bytes held by the cached fold blocks of :class:`FoldEvaluator` (views of the folds' own
     matrices, the largest order's, counted too: a bound, not a census)."""
     return sum(sum(a.nbytes for a in block) for _, blocks, _, _ in cache.values() for block in blocks)
 
 
 
-class _Evaluator:
+class FoldEvaluator:
     """Validation RMSE of (order, smoothing) from the statistics at the largest order."""
 
     def __init__(self, units: Mapping[str, NormalEquations], make_basis: Callable[[int], Basis],
