@@ -240,14 +240,11 @@ def third_party_violations(package_dir: Path = PACKAGE_DIR) -> list[str]:
 
 
 #: Private names (``_name``) another module still imports, per importing module: the readers'
-#: shared internals of one file format (``io/``), the matcher's chunk step that the streamed and
-#: live matchers share (``data/sync.py``), and the manoeuvre ranking's scoring helpers that the
+#: shared internals of one file format (``io/``) and the manoeuvre ranking's scoring helpers that the
 #: optimal design's bound reuses. A module's ``_name`` is its own: what another module needs is
 #: given a public name (and this list only shrinks).
 PRIVATE_IMPORTS_ALLOWED: dict[str, frozenset[str]] = {
     "rplearn.analysis.manoeuvre_bound": frozenset({"_check_nodes", "_poses", "_scored", "_start", "_weight"}),
-    "rplearn.data.live_sync": frozenset({"_match_chunk", "_options"}),
-    "rplearn.data.streaming": frozenset({"_match_chunk", "_options"}),
     "rplearn.io.dataflash_writer": frozenset({"_check"}),
     "rplearn.io.live_sources": frozenset({"_mavutil", "_open"}),
     "rplearn.io.mavlink": frozenset({"_check_origin"}),

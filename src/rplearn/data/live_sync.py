@@ -4,7 +4,7 @@
 its time is *settled*: at or before the latest pose of every moving node (a node whose poses
 are not all one identical row, :mod:`rplearn.data.poses`), so that both neighbours of its
 interpolation are known. The rows of one instant are matched together. Matching is
-:func:`rplearn.data.sync._match_chunk`, with the duplicate hashes across chunks and the carry
+:func:`rplearn.data.sync.match_chunk`, with the duplicate hashes across chunks and the carry
 of repeated readings of :func:`rplearn.data.streaming.synchronise_stream`: the same rules and
 the same drop reasons as ``sync``, so that at the end of a stream the matched rows and the
 counts are those of ``sync`` on the whole logs (:meth:`LiveMatcher.match` with
@@ -40,7 +40,7 @@ from rplearn._argtypes import check_types
 from rplearn.data.phases import flight_phases
 from rplearn.data.poses import tracks_of_checked_log
 from rplearn.data.streaming import row_hashes
-from rplearn.data.sync import SyncOptions, SyncResult, SyncSummary, _match_chunk, _options, finish_summary
+from rplearn.data.sync import SyncOptions, SyncResult, SyncSummary, finish_summary, match_chunk, sync_options_or_default
 from rplearn.data.tables import MATCHED_COLUMNS, POSE_COLUMNS, non_unit_quaternion_rows, validate_pose_log
 from rplearn.errors import InputError
 
@@ -109,7 +109,7 @@ class LiveMatcher:
     """
 
     def __init__(self, options: SyncOptions | None = None, source: str = "signal stream") -> None:
-        self.options = _options(options)
+        self.options = sync_options_or_default(options)
         if self.options.airborne or self.options.from_s is not None or self.options.to_s is not None:
             raise InputError("live matching: the airborne filter and a time window need the whole log; "
                              "sync the recorded log instead", param="options")
@@ -213,7 +213,7 @@ class LiveMatcher:
         if late.any():
             chunk, t = chunk[~late], t[~late]
         repeats = self._seen.repeats(row_hashes(chunk), t)
-        result = _match_chunk(tracks, chunk.reset_index(drop=True), self.options, self.source, seen_before=repeats,
+        result = match_chunk(tracks, chunk.reset_index(drop=True), self.options, self.source, seen_before=repeats,
                               first_row=first_row, phases=phases, carry=self._carry)
         result.summary.n_in += int(late.sum())
         result.summary.dropped["late"] += int(late.sum())

@@ -25,7 +25,7 @@ from rplearn._argtypes import check_types
 from rplearn._atomic import atomic_path
 from rplearn.data.phases import flight_phases
 from rplearn.data.poses import tracks_of_checked_log
-from rplearn.data.sync import SyncOptions, SyncResult, SyncSummary, _match_chunk, _options, check_link_nodes, finish_summary
+from rplearn.data.sync import SyncOptions, SyncResult, SyncSummary, check_link_nodes, finish_summary, match_chunk, sync_options_or_default
 from rplearn.data.tables import MATCHED_COLUMNS, SIGNAL_COLUMNS, non_unit_quaternion_rows, validate_pose_log
 
 
@@ -123,7 +123,7 @@ def synchronise_stream(
         As :func:`~rplearn.data.sync.synchronise`; the link and ``min_samples`` checks after
         the last chunk.
     """
-    options = _options(options)
+    options = sync_options_or_default(options)
     pose = validate_pose_log(pose_log, "pose log")
     tracks = tracks_of_checked_log(pose, options.clock_offsets_s, "pose log", options.max_gap_s)
     non_unit = non_unit_quaternion_rows(pose)
@@ -139,7 +139,7 @@ def synchronise_stream(
             pairs |= _pairs(chunk)
         where = str(chunk.attrs.get("source", source))
         first_row = int(chunk.attrs.get("first_row", total.n_in))
-        result = _match_chunk(tracks, chunk, options, where, seen_before=repeats, first_row=first_row,
+        result = match_chunk(tracks, chunk, options, where, seen_before=repeats, first_row=first_row,
                               phases=phases, carry=carry)
         result.summary.non_unit_quaternions, non_unit = non_unit, 0  # counted once, in the first chunk
         n_out += result.summary.n_out

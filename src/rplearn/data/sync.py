@@ -378,7 +378,7 @@ def _unknown_nodes(
     return known, unknown_mask, names
 
 
-def _match_chunk(
+def match_chunk(
     tracks: Mapping[str, PoseTrack], signal: pd.DataFrame, options: SyncOptions, source: str,
     seen_before: np.ndarray | None = None, first_row: int = 0, phases: FlightPhases | None = None,
     carry: dict | None = None,
@@ -495,7 +495,7 @@ def check_link_nodes(signal: pd.DataFrame, link: tuple[str, str], source: str = 
         )
 
 
-def _options(options: SyncOptions | None) -> SyncOptions:
+def sync_options_or_default(options: SyncOptions | None) -> SyncOptions:
     if options is None:
         return SyncOptions()
     if not isinstance(options, SyncOptions):
@@ -537,13 +537,13 @@ def synchronise(
         On a missing column, a bad pose log, an unknown node with ``on_unknown_node="error"``,
         or fewer than ``min_samples`` matched samples.
     """
-    options = _options(options)
+    options = sync_options_or_default(options)
     tracks, non_unit = tracks_of_pose_log(pose_log, options.clock_offsets_s, "pose log", options.max_gap_s)
     phases = flight_phases(pose_log, tracks, options.clock_offsets_s, options.airborne_margin_m)
     if options.link is not None:
         check_link_nodes(signal_log, options.link, source)
     signal_log, events = split_outages(signal_log, source)
-    result = _match_chunk(tracks, signal_log, options, source, phases=phases)  # one chunk: nothing to carry
+    result = match_chunk(tracks, signal_log, options, source, phases=phases)  # one chunk: nothing to carry
     result.summary.non_unit_quaternions = non_unit
     finish_summary(result.summary, tracks, phases, options, source)
     if len(events):  # outage events (a lost link): matched apart, kept, counted
