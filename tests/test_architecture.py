@@ -240,11 +240,9 @@ def third_party_violations(package_dir: Path = PACKAGE_DIR) -> list[str]:
 
 
 #: Private names (``_name``) another module still imports, per importing module: the readers'
-#: shared internals of one file format (``io/``) and the manoeuvre ranking's scoring helpers that the
-#: optimal design's bound reuses. A module's ``_name`` is its own: what another module needs is
+#: shared internals of one file format (``io/``). A module's ``_name`` is its own: what another module needs is
 #: given a public name (and this list only shrinks).
 PRIVATE_IMPORTS_ALLOWED: dict[str, frozenset[str]] = {
-    "rplearn.analysis.manoeuvre_bound": frozenset({"_check_nodes", "_poses", "_scored", "_start", "_weight"}),
     "rplearn.io.dataflash_writer": frozenset({"_check"}),
     "rplearn.io.live_sources": frozenset({"_mavutil", "_open"}),
     "rplearn.io.mavlink": frozenset({"_check_origin"}),

@@ -77,8 +77,8 @@ def _options(**kw):
 
 
 def _scored(opts):
-    post = mv._start(NormalEquations(SPEC.basis(), 2), SPEC, NODES, opts)
-    return post, mv._scored(post, mv._poses(POSES, NODES), NODES, SPEC.basis(), opts)
+    post = mv.start_posterior(NormalEquations(SPEC.basis(), 2), SPEC, NODES, opts)
+    return post, mv.scored_candidates(post, mv.latest_poses(POSES, NODES), NODES, SPEC.basis(), opts)
 
 
 def test_a_candidate_flown_whole_gives_the_rank_k_update_s_spreads_with_the_drift():
@@ -86,14 +86,14 @@ def test_a_candidate_flown_whole_gives_the_rank_k_update_s_spreads_with_the_drif
     post, scored = _scored(opts)
     rows = [r for _, (r, _) in scored]
     problem = design_problem(post, rows, [c.candidate.unit.duration_s for c, _ in scored],
-                             [c.candidate.lead_s for c, _ in scored], mv._weight(opts), 2.0)
+                             [c.candidate.lead_s for c, _ in scored], mv.packet_weight(opts), 2.0)
     assert np.any(problem.drift_information)
     for i in (0, len(scored) // 2, len(scored) - 1):
         t = np.zeros(len(scored))
         t[i] = scored[i][0].candidate.unit.duration_s
-        after = post.spreads_after(scored[i][1][0], mv._weight(opts), scored[i][1][1])
+        after = post.spreads_after(scored[i][1][0], mv.packet_weight(opts), scored[i][1][1])
         assert np.sqrt(node_variances(problem, t)) == pytest.approx(after, rel=1e-9)
-    white = design_problem(post, rows, [1.0] * len(rows), [0.0] * len(rows), mv._weight(opts), 2.0, drift=False)
+    white = design_problem(post, rows, [1.0] * len(rows), [0.0] * len(rows), mv.packet_weight(opts), 2.0, drift=False)
     assert not np.any(white.drift_information) and not np.any(white.drift_middle)
 
 
@@ -111,7 +111,7 @@ def test_the_bound_is_below_the_greedy_plan_s_time_and_its_design_reaches_the_ta
 def test_the_end_ranking_orders_by_the_gradient_at_the_anticipated_final_posterior():
     opts = _options(floor_db=1.5)
     post, scored = _scored(opts)
-    problem, design = scored_design(post, scored, mv._weight(opts), 1.5, max_iter=mv.DESIGN_STEPS)
+    problem, design = scored_design(post, scored, mv.packet_weight(opts), 1.5, max_iter=mv.DESIGN_STEPS)
     scores = end_gradient_scores(problem, design)
     ranked = mv.rank_manoeuvres(NormalEquations(SPEC.basis(), 2), SPEC, NODES, POSES, replace(opts, design="end"))
     names = [r.name for r, _ in scored]
@@ -126,7 +126,7 @@ def test_the_end_ranking_orders_by_the_gradient_at_the_anticipated_final_posteri
 def test_the_support_ranking_puts_what_the_optimal_design_flies_first_in_rate_order():
     opts = _options(floor_db=1.5)
     post, scored = _scored(opts)
-    problem, design = scored_design(post, scored, mv._weight(opts), 1.5, max_iter=mv.DESIGN_STEPS)
+    problem, design = scored_design(post, scored, mv.packet_weight(opts), 1.5, max_iter=mv.DESIGN_STEPS)
     share = design.times_s / problem.durations_s
     wanted = {r.name for (r, _), f in zip(scored, share) if f >= SUPPORT_FRACTION * np.max(share)}
     assert 0 < len(wanted) < len(scored)
@@ -136,4 +136,4 @@ def test_the_support_ranking_puts_what_the_optimal_design_flies_first_in_rate_or
     assert ranked[:len(wanted)] == [n for n in rate if n in wanted]
     assert ranked[len(wanted):] == [n for n in rate if n not in wanted]
     with pytest.raises(InputError):
-        design_order(post, scored, mv._weight(opts), 1.5, "first")
+        design_order(post, scored, mv.packet_weight(opts), 1.5, "first")

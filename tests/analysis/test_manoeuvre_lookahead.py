@@ -41,13 +41,13 @@ def test_the_best_few_by_rate_are_reordered_by_their_time_to_the_target_and_the_
     times = [r.time_to_target_s for r in head]
     assert times == sorted(times)
     # the estimate of each: its time, then the deficit it leaves over the best rate from where it ends
-    from rplearn.analysis.manoeuvres import _aggregate, _scored, _start, _weight
+    from rplearn.analysis.manoeuvres import _aggregate, packet_weight, scored_candidates, start_posterior
 
-    post = _start(normal, SPEC, list(NODES), opts)
-    scored = {r.name: rows for r, rows in _scored(post, dict(POSES), list(NODES), SPEC.basis(), opts)}
+    post = start_posterior(normal, SPEC, list(NODES), opts)
+    scored = {r.name: rows for r, rows in scored_candidates(post, dict(POSES), list(NODES), SPEC.basis(), opts)}
     for r in head:
         after = copy.copy(post)
-        after.update(scored[r.name][0], _weight(opts), scored[r.name][1])
+        after.update(scored[r.name][0], packet_weight(opts), scored[r.name][1])
         assert _aggregate(after.spreads(), opts) == pytest.approx(_aggregate(np.array(list(r.spread_after_db.values())), opts))
         deficit = information_deficit(_aggregate(after.spreads(), opts), 1.6)
         if deficit == 0.0:  # it reaches the target: at the fraction of its own time where it does
@@ -55,7 +55,7 @@ def test_the_best_few_by_rate_are_reordered_by_their_time_to_the_target_and_the_
             assert 0.0 < frac <= 1.0
             assert r.time_to_target_s == pytest.approx(r.candidate.lead_s + frac * (r.duration_s - r.candidate.lead_s), rel=1e-6)
             continue
-        nxt = _scored(after, {**POSES, **r.candidate.ends}, list(NODES), SPEC.basis(), opts)
+        nxt = scored_candidates(after, {**POSES, **r.candidate.ends}, list(NODES), SPEC.basis(), opts)
         best = max(information_rate(_aggregate(np.array(list(n.spread_before_db.values())), opts),
                                     _aggregate(np.array(list(n.spread_after_db.values())), opts), n.duration_s) for n, _ in nxt)
         assert r.time_to_target_s == pytest.approx(time_to_target_s(r.duration_s, deficit, best), rel=1e-9)

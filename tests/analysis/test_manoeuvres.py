@@ -225,7 +225,7 @@ def test_a_long_manoeuvre_is_ranked_by_its_best_prefix_and_flown_only_to_it():
     """With ``prefixes``, a candidate's first quarters count too: its score is at least the whole
     manoeuvre's, the repeated second lap of a 720-deg turn is cut, and the cut candidate's
     predicted effect is that of its own unit scored whole (the rows it flies are the prefix's)."""
-    from rplearn.analysis.manoeuvres import _score, _start
+    from rplearn.analysis.manoeuvres import _score, start_posterior
     from rplearn.plan.prefix import PrefixUnit
 
     opts = _options(prefixes=1)
@@ -241,7 +241,7 @@ def test_a_long_manoeuvre_is_ranked_by_its_best_prefix_and_flown_only_to_it():
         assert (r.score_per_s > whole[name].score_per_s) == isinstance(r.candidate.unit, PrefixUnit)
     yaw2 = next(r for r in cut if r.name.startswith("yaw turn of A by 720 deg"))
     assert isinstance(yaw2.candidate.unit, PrefixUnit) and yaw2.duration_s < whole["yaw turn of A by 720 deg"].duration_s
-    post = _start(normal, SPEC, list(NODES), opts)
+    post = start_posterior(normal, SPEC, list(NODES), opts)
     for r in prefixed[:3]:
         again, (rows, _) = _score(post, r.candidate, list(NODES), SPEC.basis(), opts)  # its unit, whole
         assert again.duration_s == pytest.approx(r.duration_s)

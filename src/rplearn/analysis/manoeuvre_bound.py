@@ -18,7 +18,7 @@ import numpy as np
 import pandas as pd
 
 from rplearn.analysis.manoeuvre_design import Design, scored_design
-from rplearn.analysis.manoeuvres import ManoeuvreOptions, _check_nodes, _poses, _scored, _start, _weight
+from rplearn.analysis.manoeuvres import ManoeuvreOptions, check_statistics_nodes, latest_poses, packet_weight, scored_candidates, start_posterior
 from rplearn.core.lsq.block_sums import BlockSums
 from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.core.threads import one_blas_thread
@@ -58,12 +58,12 @@ def design_bound(normal: NormalEquations, spec: ModelSpec, nodes: Sequence[str],
     ``drift``: with the drifting error, an estimate rather than a bound)."""
     opts = replace(options or ManoeuvreOptions(), lookahead=0, design="rate")
     names = [str(n) for n in nodes]
-    _check_nodes(normal, names)
-    state = _poses(poses, names)
+    check_statistics_nodes(normal, names)
+    state = latest_poses(poses, names)
     with one_blas_thread():
-        post = _start(normal, spec, names, opts, blocks)
-        scored = _scored(post, state, names, normal.basis, opts)
-        _, design = scored_design(post, scored, _weight(opts), float(target_spread_db), drift)
+        post = start_posterior(normal, spec, names, opts, blocks)
+        scored = scored_candidates(post, state, names, normal.basis, opts)
+        _, design = scored_design(post, scored, packet_weight(opts), float(target_spread_db), drift)
     return DesignBound(design, tuple(r.name for r, _ in scored), dict(zip(names, post.spreads().tolist())))
 
 

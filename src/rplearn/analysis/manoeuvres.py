@@ -339,7 +339,7 @@ def _rows_and_ends(unit: Any, nodes: Sequence[str], basis: Basis, rate_hz: float
     return rows, link_ends
 
 
-def _poses(poses: pd.DataFrame | Mapping[str, Any], nodes: Sequence[str]) -> dict[str, tuple[tuple[float, float, float], float]]:
+def latest_poses(poses: pd.DataFrame | Mapping[str, Any], nodes: Sequence[str]) -> dict[str, tuple[tuple[float, float, float], float]]:
     """Latest pose per node as ((x, y, z), yaw_deg) from a pose table or a mapping."""
     if isinstance(poses, pd.DataFrame):
         need = ("t", "node", "x", "y", "z", "qw", "qx", "qy", "qz")
@@ -363,14 +363,14 @@ def _poses(poses: pd.DataFrame | Mapping[str, Any], nodes: Sequence[str]) -> dic
     return {n: out[n] for n in nodes}
 
 
-def _check_nodes(normal: NormalEquations, nodes: Sequence[str]) -> None:
+def check_statistics_nodes(normal: NormalEquations, nodes: Sequence[str]) -> None:
     if len(nodes) != normal.n_nodes or len(set(nodes)) != len(nodes):
         raise InputError(f"nodes: {len(nodes)} names ({', '.join(nodes)}) for statistics of {normal.n_nodes} nodes", param="nodes")
 
 
-def _start(normal: NormalEquations, spec: ModelSpec, nodes: Sequence[str], options: ManoeuvreOptions,
-           blocks: BlockSums | None = None, cells: DirectionCells | None = None) -> ManoeuvrePosterior:
-    _check_nodes(normal, nodes)
+def start_posterior(normal: NormalEquations, spec: ModelSpec, nodes: Sequence[str], options: ManoeuvreOptions,
+                    blocks: BlockSums | None = None, cells: DirectionCells | None = None) -> ManoeuvrePosterior:
+    check_statistics_nodes(normal, nodes)
     pat = normal.n_pattern_columns
     gram = np.asarray(normal.gram, np.float64)[:pat, :pat]
     prior = prior_weights(spec, normal, options)
@@ -412,7 +412,7 @@ def _score(post: ManoeuvrePosterior, cand: Candidate, nodes: Sequence[str], basi
     best: tuple[float, float, int, np.ndarray] | None = None
     for cut in prefix_cuts(rows.shape[0], options.sample_rate_hz, options.prefixes, options.correlation_s):
         part = None if cut == rows.shape[0] else tuple((k[:cut], az[:cut], el[:cut]) for k, az, el in ends)
-        after = post.spreads_after(rows[:cut], _weight(options), ends if part is None else part)
+        after = post.spreads_after(rows[:cut], packet_weight(options), ends if part is None else part)
         a = _aggregate(after, options)
         # a prefix of ``cut`` rows is the unit up to its last row's time (its own rows, resampled, the same)
         cut_s = (cut - 1) / options.sample_rate_hz  # a prefix: its rows, then braking to rest
@@ -436,7 +436,7 @@ def _steady(options: ManoeuvreOptions) -> tuple[tuple[float, float, float], tupl
     return None if not any(accel) else (accel, tuple(options.candidates.fixed_nodes))
 
 
-def _weight(options: ManoeuvreOptions) -> float:
+def packet_weight(options: ManoeuvreOptions) -> float:
     """Packets per feature row: both link directions share a row's pair of directions."""
     return 2.0 * options.packet_rate_hz / options.sample_rate_hz
 
@@ -450,7 +450,7 @@ def pattern_spreads(normal: NormalEquations, spec: ModelSpec, nodes: Sequence[st
     opts = options or ManoeuvreOptions()
     names = [str(n) for n in nodes]
     with one_blas_thread():
-        return dict(zip(names, _start(normal, spec, names, opts, blocks, cells).spreads().tolist()))
+        return dict(zip(names, start_posterior(normal, spec, names, opts, blocks, cells).spreads().tolist()))
 
 
 @check_types
@@ -495,15 +495,15 @@ def rank_manoeuvres(
     """
     opts = options or ManoeuvreOptions()
     names = [str(n) for n in nodes]
-    _check_nodes(normal, names)
-    state = _poses(poses, names)
+    check_statistics_nodes(normal, names)
+    state = latest_poses(poses, names)
     with one_blas_thread():  # many small factorisations: threads only contend
-        post = _start(normal, spec, names, opts, blocks, cells)
-        return tuple(r for r, _ in _ordered(post, _scored(post, state, names, normal.basis, opts), state, names, normal.basis, opts))
+        post = start_posterior(normal, spec, names, opts, blocks, cells)
+        return tuple(r for r, _ in _ordered(post, scored_candidates(post, state, names, normal.basis, opts), state, names, normal.basis, opts))
 
 
-def _scored(post: ManoeuvrePosterior, state: Mapping[str, Any], names: list[str], basis: Basis,
-            opts: ManoeuvreOptions) -> list[Scored]:
+def scored_candidates(post: ManoeuvrePosterior, state: Mapping[str, Any], names: list[str], basis: Basis,
+                      opts: ManoeuvreOptions) -> list[Scored]:
     """Every candidate flyable from ``state`` scored on ``post``, best rate first."""
     cands = candidate_manoeuvres(state, opts.candidates)
     if opts.aimed:  # and those aimed at where each node's posterior is widest now
@@ -518,11 +518,11 @@ def _ordered(post: ManoeuvrePosterior, scored: list[Scored], state: Mapping[str,
     """``scored`` (best rate first) with :attr:`ManoeuvreOptions.lookahead`'s reordering, each
     looked-ahead candidate carrying its estimated time to the target."""
     if opts.design != "rate" and opts.floor_db is not None and scored:
-        return design_order(post, scored, _weight(opts), float(opts.floor_db), opts.design, DESIGN_STEPS)
+        return design_order(post, scored, packet_weight(opts), float(opts.floor_db), opts.design, DESIGN_STEPS)
     if opts.lookahead == 0 or opts.floor_db is None:
         return scored
-    out = lookahead_order(post, scored, opts.lookahead, float(opts.floor_db), _weight(opts), lambda v: _aggregate(v, opts),
-                          lambda p, s: _scored(p, s, names, basis, opts), dict(state))
+    out = lookahead_order(post, scored, opts.lookahead, float(opts.floor_db), packet_weight(opts), lambda v: _aggregate(v, opts),
+                          lambda p, s: scored_candidates(p, s, names, basis, opts), dict(state))
     return [(r if t is None else replace(r, time_to_target_s=t), rows) for (r, rows), t in out]
 
 
@@ -572,10 +572,10 @@ def greedy_plan(
     if opts.floor_db is None:
         opts = replace(opts, floor_db=float(target_spread_db))
     names = [str(n) for n in nodes]
-    _check_nodes(normal, names)
-    state = _poses(poses, names)
+    check_statistics_nodes(normal, names)
+    state = latest_poses(poses, names)
     with one_blas_thread():  # many small factorisations: threads only contend
-        return _greedy(_start(normal, spec, names, opts, blocks), state, names, normal.basis, (budget_s, target_spread_db), opts)
+        return _greedy(start_posterior(normal, spec, names, opts, blocks), state, names, normal.basis, (budget_s, target_spread_db), opts)
 
 
 def _greedy(post: ManoeuvrePosterior, state: dict[str, Any], names: list[str], basis: Basis, limits: tuple[float, float],
@@ -584,11 +584,11 @@ def _greedy(post: ManoeuvrePosterior, state: dict[str, Any], names: list[str], b
     steps: list[PlanStep] = []
     t = 0.0
     while float(np.max(post.spreads())) > target_spread_db:
-        scored = [s for s in _scored(post, state, names, basis, opts) if t + s[0].duration_s <= budget_s and s[0].reduction_db_per_s > 0]
+        scored = [s for s in scored_candidates(post, state, names, basis, opts) if t + s[0].duration_s <= budget_s and s[0].reduction_db_per_s > 0]
         if not scored:
             break
         best, (rows, ends) = _ordered(post, scored, state, names, basis, opts)[0]
-        post.update(rows, _weight(opts), ends)
+        post.update(rows, packet_weight(opts), ends)
         t += best.duration_s
         state.update(best.candidate.ends)
         steps.append(PlanStep(best, t, dict(zip(names, post.spreads().tolist()))))
