@@ -71,3 +71,14 @@ def test_a_csv_only_flag_is_refused_for_a_mavlink_stream(tmp_path, flag):
     res = invoke(["live", "udpin:127.0.0.1:1", "-o", tmp_path / "m.json", "--tx-power", "20", "--frequency", "433e6",
                   *flag], ok=False)
     assert "--receiver: names the receiver of a signal CSV's rows" in _error(res)
+
+
+def test_the_spread_over_the_covered_directions_alone_is_refused_as_a_stop(tmp_path):
+    """It is small from the first seconds, while they are a few percent of the sphere: it ends a
+    session only with a coverage target (one line naming the flag)."""
+    pose, sig = _tables(tmp_path)
+    line = _error(_live(tmp_path, pose, sig, "--until-spread", "2", "--spread-over", "covered"))
+    assert "needs a coverage target too" in line and "--until-coverage" in line and "until_coverage_pct" not in line
+    assert not (tmp_path / "m.json").exists()
+    line = _error(_live(tmp_path, pose, sig, "--spread-over", "everywhere"))
+    assert "--spread-over" in line and "sphere or covered" in line

@@ -51,8 +51,11 @@ def live(
     degree: str | None = typer.Option(None, "--order", help="Order, or 'auto' (default for sh): order and smoothing chosen by cross-validation "
                                                             "over the flight's 5 stretches of time."),
     refit_s: float = typer.Option(2.0, "--refit-s", help="Seconds between refits."),
-    until_spread_db: float | None = typer.Option(None, "--until-spread", help="End when every node's pattern spread over its covered "
-                                                                           "directions is below this [dB]."),
+    until_spread_db: float | None = typer.Option(None, "--until-spread", help="End when every node's pattern spread is below this [dB]: "
+                                                                           "over its sphere (the directions never seen count with "
+                                                                           "the fit's spread there), or see --spread-over."),
+    spread_over: str = typer.Option("sphere", "--spread-over", help="What --until-spread is read over: sphere (default) or covered "
+                                                                   "(only the directions seen; needs --until-coverage)."),
     until_coverage_pct: float | None = typer.Option(None, "--until-coverage", help="End when every node's covered share of the sphere "
                                                                                "reaches this [%] (with --until-spread: both)."),
     duration_s: float | None = typer.Option(None, "--duration", help="End after this many seconds."),
@@ -102,7 +105,7 @@ def live(
     still = tuple(split_list(fixed) or ()) or (() if csv_source else (reader.station,))
     advisor = None if no_advice else live_advisor(still, 0.0, until_spread_db)  # paced by ranking_every_s
     options = LiveOptions(spec=spec, fit=FitOptions(auto=auto), reader=reader, sync=SyncOptions(max_gap_s=max_gap_s),
-                          refit_s=refit_s, duration_s=duration_s, until_spread_db=until_spread_db,
+                          refit_s=refit_s, duration_s=duration_s, until_spread_db=until_spread_db, spread_over=spread_over,
                           until_coverage_pct=until_coverage_pct, idle_s=idle_s, nodes=tuple(split_list(nodes) or ()) or None,
                           manoeuvres=advisor, ranking_every_s=advice_s)
     if quiet:

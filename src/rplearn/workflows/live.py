@@ -8,9 +8,11 @@ had seen), adds the batch to the statistics (:class:`rplearn.models.live_stats.L
 and every ``refit_s`` refits from them and writes the model file atomically, so that a session
 stopped at any moment (Ctrl-C, SIGTERM, a killed process) leaves the last good model. It ends
 at the end of the stream (no row for ``idle_s`` after the first; before the first it waits),
-after ``duration_s``, or when every node's pattern spread over its covered directions is below
-``until_spread_db`` and/or every node's covered share of the sphere reaches
-``until_coverage_pct``; a last exact refit then follows. The next-best manoeuvres are ranked
+after ``duration_s``, or when every node's pattern spread is below ``until_spread_db`` (over the
+sphere, the directions never seen at the spread the fit gives them; or, ``spread_over="covered"``,
+over the directions seen, with a coverage target: that spread is small from the first seconds,
+while they are a few percent of the sphere) and/or every node's covered share of the sphere
+reaches ``until_coverage_pct``; a last exact refit then follows. The next-best manoeuvres are ranked
 beside the loop (:mod:`rplearn.workflows.live_ranking`), so that a ranking of seconds does not
 stop the refits; what the loop keeps does not grow with the session's length (the prequential
 record in a bounded number of bins, the notes one per kind, the matched rows of the budget
@@ -46,6 +48,7 @@ from rplearn._argtypes import check_types
 from rplearn._atomic import atomic_path, check_output
 from rplearn.analysis.budget import check_fit_budget
 from rplearn.analysis.decoupling import decoupling_certificate
+from rplearn.core.lsq.selection import at_smoothing_cap
 from rplearn.data.live_sync import LiveMatcher
 from rplearn.data.sync import SyncOptions
 from rplearn.errors import InputError, RplearnError
@@ -70,6 +73,8 @@ BUDGET_WINDOW_ROWS = 2000
 #: recording's whole re-match would otherwise run under it. One still running then is dropped
 #: (a note says the last work ran under its limit).
 STOP_RANKING_WAIT_S = 5.0
+#: What ``until_spread_db`` is read over (:attr:`LiveOptions.spread_over`).
+SPREAD_OVER = ("sphere", "covered")
 
 
 @check_types
@@ -91,6 +96,12 @@ class LiveOptions:
         Seconds between refits.
     duration_s, until_spread_db, until_coverage_pct : float or None
         Stop criteria (module docstring).
+    spread_over : {"sphere", "covered"}
+        What ``until_spread_db`` is read over: each node's whole sphere (default; the directions
+        the flight never saw count with the spread the fit gives them there), or only the
+        directions it saw, which needs ``until_coverage_pct`` too (a ground flight replayed:
+        0.65 dB over the 1.2 % of the sphere seen after 2 s; a ``paper`` flight: below 2 dB at
+        84 s while B had seen 27 %).
     idle_s : float
         The stream has ended when nothing arrived for this long [s] after its first message
         (before the first, the session waits: the drones may not be up yet).
@@ -116,6 +127,7 @@ class LiveOptions:
     duration_s: float | None = None
     until_spread_db: float | None = None
     until_coverage_pct: float | None = None
+    spread_over: str = "sphere"
     idle_s: float = 10.0
     nodes: tuple[str, ...] | None = None
     manoeuvres: ManoeuvreRanker | None = None
@@ -132,6 +144,12 @@ class LiveOptions:
             if v is not None and not (math.isfinite(v) and v > 0):
                 raise InputError(f"{name}: expected a positive number of {'dB' if 'db' in name else 'seconds'}, got {v}",
                                  param=name)
+        if self.spread_over not in SPREAD_OVER:
+            raise InputError(f"spread_over: expected {' or '.join(SPREAD_OVER)}, got {self.spread_over!r}", param="spread_over")
+        if self.spread_over == "covered" and self.until_spread_db is not None and self.until_coverage_pct is None:
+            raise InputError("a spread target over the covered directions needs a coverage target too: that spread is small "
+                             "from the first seconds, while they are a few percent of the sphere (or read it over the "
+                             "sphere: spread_over='sphere')", param="until_coverage_pct")
         if self.until_coverage_pct is not None and not 0 < self.until_coverage_pct <= 100:
             raise InputError(f"until_coverage_pct: expected a percentage in (0, 100], got {self.until_coverage_pct}",
                              param="until_coverage_pct")
@@ -318,13 +336,17 @@ class _Session:
         s.model = model.label
         noise = model.training.noise_std_db if model.training.noise_std_db is not None else model.training.rmse_db
         s.noise_db = math.nan if noise is None else float(noise)
+        # at the search's largest smoothing the data do not identify the shape: its spread (about
+        # none) is the cap's, not a measurement, and can end no session (shown as inf)
+        capped = model.training.smoothing is not None and at_smoothing_cap(model.training.smoothing)
         try:
             cert = decoupling_certificate(model, posterior=self.fitted.own_posterior)
             for node, spread in cert.nodes.items():
                 s.coverage_pct[node] = 100.0 * spread.covered_fraction
-                s.spread_db[node] = spread.covered_std_db
-                s.sphere_spread_db[node] = spread.sphere_std_db
-            self.note("spread: ")
+                s.spread_db[node] = math.inf if capped else spread.covered_std_db
+                s.sphere_spread_db[node] = math.inf if capped else spread.sphere_std_db
+            self.note("spread: ", "not known yet: the fit took the largest smoothing the search tries (the data do not yet "
+                                  "tell the patterns' shape from flat)" if capped else None)
         except InputError as exc:
             self.note("spread: ", str(exc))
         if self.recent and self.stats is not None:
@@ -346,10 +368,12 @@ class _Session:
             return f"duration {o.duration_s:g} s reached"
         if not s.spread_db or (o.until_spread_db is None and o.until_coverage_pct is None):
             return ""
-        spread_ok = o.until_spread_db is None or max(s.spread_db.values()) < o.until_spread_db
+        spread = s.sphere_spread_db if o.spread_over == "sphere" else s.spread_db
+        spread_ok = o.until_spread_db is None or max(spread.values()) < o.until_spread_db
         cover_ok = o.until_coverage_pct is None or min(s.coverage_pct.values()) >= o.until_coverage_pct
         if spread_ok and cover_ok:
-            what = [f"every node's spread below {o.until_spread_db:g} dB" if o.until_spread_db is not None else "",
+            over = "over the sphere" if o.spread_over == "sphere" else "over the covered directions"
+            what = [f"every node's spread {over} below {o.until_spread_db:g} dB" if o.until_spread_db is not None else "",
                     f"every node's coverage at least {o.until_coverage_pct:g}%" if o.until_coverage_pct is not None else ""]
             return " and ".join(w for w in what if w)
         return ""

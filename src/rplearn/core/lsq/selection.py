@@ -67,6 +67,24 @@ from rplearn.core.lsq.ties import tightest_split as _tightest_split
 from rplearn.errors import IdentifiabilityError, InputError
 
 
+def at_smoothing_cap(smoothing: float) -> bool:
+    """Whether a chosen relative smoothing is the largest the search tries (:data:`MAX_SMOOTHING`):
+    the validation error still fell toward more smoothing there, so the data do not identify the
+    patterns' shape, and a posterior read at it has the spread the cap gives it (about none), not
+    one the data give (``rplearn live``'s first refits of a few seconds of flight).
+
+    Parameters
+    ----------
+    smoothing : float
+        A selection's relative smoothing (:attr:`Selection.smoothing`).
+
+    Returns
+    -------
+    bool
+    """
+    return 10.0 * float(smoothing) > MAX_SMOOTHING
+
+
 def _prefetch(ev: Any, points: Sequence[tuple[int, float]]) -> None:
     """:meth:`FoldEvaluator.prefetch` of the points the search is about to compare (any evaluator
     with ``rmse`` alone is asked one point at a time)."""
