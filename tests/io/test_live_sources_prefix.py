@@ -131,3 +131,30 @@ def test_a_zero_start_longer_than_the_hold_is_refused_when_it_jumps_not_read_wro
                                          r"now jumps off it at t = 61\.000 s: a logger writing before its fix") as e:
         _live(tmp_path, lines, [n_zero, n_zero + 5, 2 * n_zero + 20])
     assert "\n" not in str(e.value)
+
+
+def _geodetic_log(n_zero: int, n_real: int) -> list[str]:
+    """Node A in lat, lon, alt: ``n_zero`` rows at lat = lon = 0 (before the fix), then a track north."""
+    return [f"{0.1 * i:.2f},A,{0.0 if i < n_zero else 47.0 + 2e-6 * i:.7f},{0.0 if i < n_zero else 8.0:.7f},"
+            f"{0.0 if i < n_zero else 500.0:g},1,0,0,0\n" for i in range(n_zero + n_real)]
+
+
+@pytest.mark.parametrize("n_zero", [0, 15])
+def test_a_geodetic_table_written_in_pieces_stays_in_one_frame(tmp_path, n_zero):
+    # was: each poll put its ENU origin at its own first fix, so the track went back to y = 0 at every poll
+    lines = _geodetic_log(n_zero, 60)
+    head = "t,node,lat,lon,alt,qw,qx,qy,qz\n"
+    offline, meta = canonical_pose(pd.read_csv(io.StringIO(head + "".join(lines))), source="pose.csv",
+                                   nan_policy="drop")
+    pose, signal = tmp_path / "pose.csv", tmp_path / "signal.csv"
+    pose.write_text(head)
+    signal.write_text(SIGNAL_HEAD)
+    tail = CsvTail(str(pose), str(signal), ReaderOptions(nan_policy="drop"))
+    got = []
+    for a, b in ((0, n_zero + 10), (n_zero + 10, n_zero + 30), (n_zero + 30, len(lines))):
+        with pose.open("a") as fh:
+            fh.write("".join(lines[a:b]))
+        got.append(tail.poll().poses)
+    got.append(tail.poll(final=True).poses)
+    _same_rows(pd.concat([g for g in got if len(g)], ignore_index=True), offline)
+    assert meta["dropped"]["position_jump"] == n_zero

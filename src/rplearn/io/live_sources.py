@@ -235,7 +235,8 @@ class CsvTail:
     pose_path, signal_path : str
         The files (they may not exist yet).
     reader : ReaderOptions, optional
-        As ``sync`` reads the same tables: ``nan_policy`` (pose rows with a NaN, a coordinate
+        As ``sync`` reads the same tables: ``origin_geodetic`` (a geodetic table's ENU origin; by default
+        its first fix, kept for every later poll), ``nan_policy`` (pose rows with a NaN, a coordinate
         beyond any place or on the wrong side of a position jump refused or dropped and counted
         in :attr:`Poll.dropped`), ``receivers[signal_path]``, a constant ``tx_power_dbm`` and
         ``frequency_hz`` for a signal table without those columns.
@@ -256,6 +257,7 @@ class CsvTail:
         self._ends = TrackEnds()  # each node's last pose kept: a poll's rows are checked against it
         self._signal_rows = 0
         self._links = LinkTimes()  # each link's last time: a logger that rebooted is refused, as by sync
+        self._origin = self.reader.origin_geodetic  # as sync: given, else the first part's first fix
         self._hold = _StartHold(pose_path)  # pose rows at a node's start whose validity is not known yet
 
     def poll(self, final: bool = False) -> Poll:
@@ -267,8 +269,9 @@ class CsvTail:
         if pt is not None:
             self._ends.file_rows = pt[_FILE_ROW].to_numpy()
             poses, meta = canonical_pose(pt.drop(columns=_FILE_ROW), source=self.pose.path,
-                                         nan_policy=self.reader.nan_policy, allow_unsorted=self.reader.allow_unsorted,
-                                         ends=self._ends)
+                                         origin_geodetic=self._origin, nan_policy=self.reader.nan_policy,
+                                         allow_unsorted=self.reader.allow_unsorted, ends=self._ends)
+            self._origin = self._origin or meta["origin_geodetic"]  # a geodetic table: one frame for every part
             for reason, n in meta["dropped"].items():
                 self.dropped[reason] = self.dropped.get(reason, 0) + int(n)
         st = _table(self.signal, s)
