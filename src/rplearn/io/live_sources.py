@@ -21,6 +21,7 @@ boot times and speeds scaled alike, so that the stream is a consistent (faster) 
 
 from __future__ import annotations
 
+import hashlib
 import io
 import math
 import os
@@ -67,27 +68,65 @@ class Poll:
     dropped: dict[str, int] = field(default_factory=dict)
 
 
+#: Bytes from a tailed file's start that :class:`_Tail` keeps and compares at every poll: a file replaced
+#: under its name (logrotate, a logger restarting with a new file) begins otherwise, even on the same inode.
+FIRST_BYTES = 4096
+
+
 class _Tail:
-    """The complete lines appended to one text file since the last call."""
+    """The complete lines appended to one text file since the last call; a file that shrank, was replaced
+    (another file under its name whose bytes differ from those read: its first :data:`FIRST_BYTES` compared at
+    every poll, all of them when its device and inode changed) or went away once read is refused naming it (its
+    rows, their numbers and times are those read before: no new start)."""
 
     def __init__(self, path: str) -> None:
         self.path, self.offset, self.header = path, 0, b""
+        self.identity: tuple[int, int] | None = None  # (device, inode) of the file read
+        self.first = b""  # its first bytes read (at most FIRST_BYTES)
+        self.digest = hashlib.sha256()  # of every byte read
+
+    def _same_start(self, fh: Any) -> bool:
+        """Whether the file open as ``fh`` begins with the bytes read so far (a log rewritten whole under its name,
+        as a writer replacing it atomically does, is the same log grown)."""
+        fh.seek(0)
+        again, left = hashlib.sha256(), self.offset
+        while left > 0 and (chunk := fh.read(min(left, 1 << 20))):
+            again.update(chunk)
+            left -= len(chunk)
+        return left == 0 and again.digest() == self.digest.digest()
+
+    def _refuse(self, what: str, why: str) -> LogFormatError:
+        return LogFormatError(f"{self.path}: {what} while it was read ({why}): give the new file as a session of its own")
 
     def lines(self) -> bytes:
         if not os.path.exists(self.path):
+            if self.identity is not None:
+                raise self._refuse("the file went away", f"moved or deleted after {self.offset:,} bytes were read: rotated?")
             return b""
         with open(self.path, "rb") as fh:
-            size = os.fstat(fh.fileno()).st_size
-            if size < self.offset:  # its rows, their numbers and times are those read before: no new start
-                raise LogFormatError(f"{self.path}: the file shrank from {self.offset:,} to {size:,} bytes while it was "
-                                     "read (truncated, or rewritten shorter): give the new file as a session of its own")
+            st = os.fstat(fh.fileno())
+            size = st.st_size
+            if size < self.offset:
+                raise self._refuse(f"the file shrank from {self.offset:,} to {size:,} bytes",
+                                   "truncated, or rewritten shorter")
+            moved = self.identity is not None and (st.st_dev, st.st_ino) != self.identity
+            if moved and not self._same_start(fh):
+                raise self._refuse("the file was replaced by another under its name", "another device and inode whose "
+                                   "bytes differ from those read: rotated, or a logger that restarted with a new file")
+            if not moved and self.first and fh.read(len(self.first)) != self.first:
+                raise self._refuse("the file's first bytes changed", "rewritten in place: rotated by copy and "
+                                   "truncate, or a logger that restarted")
+            self.identity = (st.st_dev, st.st_ino)
             fh.seek(self.offset)
             data = fh.read()
         end = data.rfind(b"\n") + 1  # a line still being written waits for its newline
         if end == 0:
             return b""
+        if len(self.first) < FIRST_BYTES:
+            self.first = (self.first + data[:end])[:FIRST_BYTES] if self.offset == len(self.first) else self.first
         self.offset += end
         data = data[:end]
+        self.digest.update(data)
         if not self.header:
             self.header, _, data = data.partition(b"\n")
             self.header += b"\n"
