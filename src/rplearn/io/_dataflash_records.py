@@ -1,25 +1,26 @@
 """One pass over an ArduPilot DataFlash log (binary ``.bin`` or text ``.log``) into plain arrays, for
 :mod:`rplearn.io.mavlink` (which documents the messages and their units).
 
-A record that repeats the one of its kind (and instance) before it, every field but its time the same and its
-time at most :data:`~rplearn.io._mavlink_records.CLOSE_COPY_S` later (TimeUS the same, or within 1 ms), is that
-record written twice (a logger or a router duplicating the stream): it is read once and counted
-(``close_copies``), as a ``.tlog``'s messages received twice are
-(:func:`~rplearn.io._mavlink_records.is_close_copy`, the same rule). A later stretch that repeats an earlier one
+A record that repeats one of its kind (and instance) read shortly before it (:class:`_Recent`), every field but
+its time the same and its time at most :data:`~rplearn.io._mavlink_records.CLOSE_COPY_S` later (TimeUS the same,
+or within 1 ms), is that record written twice (a logger or a router duplicating the stream, record by record or a
+buffer at a time): it is read once and counted (``close_copies``), as a ``.tlog``'s messages received twice are
+(:func:`~rplearn.io._mavlink_records.close_in_time`, the same bound). A later stretch that repeats an earlier one
 (the log in the file twice) is undone by :func:`~rplearn.io._mavlink_records.merge_copied_boots`
 (``repeated_messages``).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections import deque
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
 from rplearn.errors import LogFormatError
 from rplearn.io._log_schema import check_dataflash_lengths, dataflash_time_field, library_quiet, number
-from rplearn.io._mavlink_records import Raw, _arr, _open, is_close_copy, merge_copied_boots
+from rplearn.io._mavlink_records import Raw, _arr, _open, close_in_time, merge_copied_boots
 from rplearn.io.mavlink_phases import REBOOT_STEP_S
 
 DF_TYPES = ["ATT", "POS", "GPS", "ORGN", "RAD", "ARM", "EV"]
@@ -27,6 +28,35 @@ DF_TYPES = ["ATT", "POS", "GPS", "ORGN", "RAD", "ARM", "EV"]
 _EV_ARMED, _EV_DISARMED = 10, 11
 #: Fields naming a message's instance (a second GPS, ...): each instance's records are compared with its own.
 _INSTANCE_FIELDS = ("I", "Instance")
+
+
+#: How many of the records read last (of the types read) a record's earlier copy is looked among: a logger
+#: writing each buffer of records twice, the copies up to 1 ms later, writes buffers up to this many records. A
+#: stretch of the log written again farther back (a download resumed from its start) is merge_copied_boots's.
+COPY_WINDOW_RECORDS = 1024
+
+
+@dataclass
+class _Recent:
+    """The last :data:`COPY_WINDOW_RECORDS` records read: per kind, instance and fields but the time, their times.
+    A record repeating one of them at most :data:`~rplearn.io._mavlink_records.CLOSE_COPY_S` after it is that record
+    written twice (:func:`~rplearn.io._mavlink_records.close_in_time`, the ``.tlog``'s bound)."""
+
+    seen: dict[tuple[Any, ...], deque[float]] = field(default_factory=dict)
+    order: deque[tuple[float, tuple[Any, ...]]] = field(default_factory=deque)
+
+    def is_copy(self, key: tuple[Any, ...], t: float) -> bool:
+        return any(close_in_time(t - before) for before in self.seen.get(key, ()))
+
+    def add(self, key: tuple[Any, ...], t: float) -> None:
+        self.seen.setdefault(key, deque()).append(t)
+        self.order.append((t, key))
+        if len(self.order) > COPY_WINDOW_RECORDS:
+            old_t, old_key = self.order.popleft()
+            times = self.seen[old_key]
+            times.popleft()  # a key's times are in the order read
+            if not times:
+                del self.seen[old_key]
 
 
 def _fields(msg: Any, time_name: str) -> tuple[Any, ...]:
@@ -121,7 +151,7 @@ def collect_dataflash(source: str) -> Raw:
     arm_rows: list[tuple[float, ...]] = []
     times: dict[str, tuple[str, float]] = {}
     instance: dict[str, tuple[str, ...]] = {}
-    last_of: dict[tuple[str, int], tuple[float, tuple[Any, ...]]] = {}  # per kind and instance, its last record
+    recent = _Recent()
     close = 0
     with library_quiet():  # pymavlink prints what it cannot parse
         conn = _open(source, tlog=False)
@@ -140,18 +170,16 @@ def collect_dataflash(source: str) -> Raw:
                                                                             or msg.get_fieldnames()))
             t = number(msg, kind, times[kind][0], source) * times[kind][1]
             which = _instance(msg, instance[kind])
-            fields = _fields(msg, times[kind][0])
-            # only a record that does not step back can be a close copy, of one in the stretch read (``boot``); one
-            # repeating a record before a step back (part of the log written again) is merge_copied_boots's
-            if t >= last_t and is_close_copy(last_of, kind, which, (which, t, boot, *fields)):
+            key = (kind, which, *_fields(msg, times[kind][0]))
+            if recent.is_copy(key, t):
                 close += 1  # the record written twice: read once
                 continue
+            recent.add(key, t)
             if t < last_t or (t == last_t and kind == last_kind):  # the latter: maybe a copy of the last record
                 boot += 1
                 if t >= last_t - REBOOT_STEP_S:
                     minor.add(boot)
             last_t, last_kind = t, kind
-            last_of[(kind, which)] = (t, (which, boot, *fields))  # as is_close_copy keeps it, in its stretch
             boot_t.append((t, boot))
             home = _df_record(_DfMessage(msg, kind, source), t, boot, (rows, fix_rows, arm_rows, utc), home)
     tables = {**rows, "GPS status": fix_rows, "ARM/EV": arm_rows}

@@ -302,6 +302,12 @@ _TIME_ROUNDING_S = 5e-7
 _BOOT_TIMED = ("ATTITUDE", "GLOBAL_POSITION_INT")
 
 
+def close_in_time(dt: float) -> bool:
+    """Whether a message ``dt`` [s] after another with the same fields is that message again (at most
+    :data:`CLOSE_COPY_S` later, times in whole microseconds)."""
+    return 0.0 <= dt <= CLOSE_COPY_S + _TIME_ROUNDING_S
+
+
 def is_close_copy(last_of: dict[tuple[str, int], tuple[float, tuple[Any, ...]]], kind: str, sender: int,
                   row: tuple[Any, ...]) -> bool:
     """Whether ``row`` (:func:`_tlog_row`: sender, receive time, fields) repeats the sender's message of the
@@ -310,7 +316,7 @@ def is_close_copy(last_of: dict[tuple[str, int], tuple[float, tuple[Any, ...]]],
     fields = row[:1] + row[2:]
     before = last_of.get((kind, sender))
     last_of[(kind, sender)] = (row[1], fields)
-    return before is not None and before[1] == fields and 0.0 <= row[1] - before[0] <= CLOSE_COPY_S + _TIME_ROUNDING_S
+    return before is not None and before[1] == fields and close_in_time(row[1] - before[0])
 
 
 def drop_close_copies(acc: TlogRows) -> int:
@@ -476,5 +482,5 @@ def merge_copied_boots(tables: dict[str, list[tuple[float, ...]]], boot_t: list[
     return repeated
 
 
-__all__ = ["CLOSE_COPY_S", "Raw", "TlogRows", "boot_offsets", "collect_tlog", "drop_close_copies",
+__all__ = ["CLOSE_COPY_S", "Raw", "TlogRows", "boot_offsets", "close_in_time", "collect_tlog", "drop_close_copies",
            "drop_repeated_rows", "is_close_copy", "merge_copied_boots", "tlog_raw"]

@@ -61,9 +61,9 @@ def file_damage(path: str, info: dict[str, Any]) -> list[str]:
             lines.append(f"{path}: {n:,} {what} row(s) repeat rows of {other} exactly (the same log given twice, "
                          "or overlapping exports); each was read once")
     if info.get("close_copies") and info.get("format") == "dataflash":
-        lines.append(f"{path}: {info['close_copies']:,} DataFlash record(s) repeat the one of their kind before them "
-                     "within 1 ms (same fields, TimeUS the same or up to 1 ms later: each record written twice, a "
-                     "logger or a router duplicating it); each was read once")
+        lines.append(f"{path}: {info['close_copies']:,} DataFlash record(s) repeat one of their kind read shortly "
+                     "before them (same fields, TimeUS the same or up to 1 ms later: records written twice, by a logger "
+                     "or a router duplicating them, or a short stretch of the log written again); each was read once")
     elif info.get("close_copies"):
         lines.append(f"{path}: {info['close_copies']:,} attitude or position message(s) repeat the one before them "
                      "within 1 ms (same sender, boot time and fields: each message received twice, a router or two "
