@@ -77,3 +77,69 @@ def test_inspect_says_the_two_homes_sync_refuses(two_flights):
     report = inspect_logs([str(a), str(b)], _options(a, b))
     [line] = [p for p in report.problems if "place the ground station gcs" in p]
     assert line.startswith(f"{b} and {a} place the ground station gcs at (") and line.endswith("(sync refuses these files)")
+
+
+# ------------------------------------------------------------------ two fixes of one unmoved station (GPS noise)
+
+FRAME = (47.3977, 8.5456, 488.0)
+
+
+def _files(acc_a, acc_b, frame_b=FRAME):
+    return [{"source": "a.ulg", "station": "gcs", "station_accuracy_m": acc_a, "origin_geodetic": FRAME},
+            {"source": "b.ulg", "station": "gcs", "station_accuracy_m": acc_b, "origin_geodetic": frame_b}]
+
+
+def test_two_fixes_of_one_station_within_their_reported_gps_noise_are_one_station():
+    # was refused for any difference over 1 mm: two homes of an unmoved station differ by the fixes' noise
+    files = _files((1.72, 1.82), (3.26, 6.98))  # eph, epv [m] of the real fixtures' fixes (events and small logs)
+    logs = one_station([_flight("d0", 0.0, (1.0, 2.0, 0.5)), _flight("d1", 3600.0, (2.5, 3.0, -3.0))], [0, 1], files)
+    station = pd.concat(logs)[lambda df: df["node"] == "gcs"]
+    assert station["t"].tolist() == [0.0] and station["x"].tolist() == [1.0]  # the earliest file's fix
+    assert files[1]["notes"] == ["b.ulg: ground station gcs at the pose a.ulg gives it: one static station for both "
+                                 "flights (its fixes 1.80 m across, 3.50 m up/down apart: within the GPS noise the logs "
+                                 "report, 10.00 m and 10.00 m)"]
+
+
+def test_a_station_moved_beyond_the_reported_gps_noise_is_still_refused():
+    files = _files((0.5, 0.8), (0.6, 0.9))  # 3 sigma: 2.34 m across, 3.61 m up/down
+    with pytest.raises(InputError) as e:
+        one_station([_flight("d0", 0.0, (1.0, 2.0, 0.5)), _flight("d1", 3600.0, (4.0, 2.0, 0.5))], [0, 1], files)
+    assert ("a station moved between flights (3.00 m across, 0.00 m up/down apart: more than the GPS noise the logs "
+            "report for their fixes allows, 2.34 m and 3.61 m)") in str(e.value)
+    # the cap: a poor fix (eph 50 m) does not make a station moved 20 m one station
+    with pytest.raises(InputError, match="more than the GPS noise"):
+        one_station([_flight("d0", 0.0, (1.0, 2.0, 0.5)), _flight("d1", 3600.0, (21.0, 2.0, 0.5))], [0, 1],
+                    _files((50.0, 50.0), (50.0, 50.0)))
+
+
+def test_without_a_reported_accuracy_or_a_common_frame_the_fixes_must_agree_to_1_mm():
+    for files in (_files(None, (0.6, 0.9)), [{**f, "origin_geodetic": None} for f in _files((0.5, 0.8), (0.6, 0.9))]):
+        with pytest.raises(InputError, match="two fixes of one station apart by GPS noise"):
+            one_station([_flight("d0", 0.0, (1.0, 2.0, 0.5)), _flight("d1", 3600.0, (1.0, 2.002, 0.5))], [0, 1], files)
+
+
+def test_fixes_of_two_logs_in_their_own_frames_are_compared_in_one():
+    # inspect reads each ULog around its own anchor: the same place has other ENU coordinates in each
+    from rplearn.core.geometry import enu_to_ned
+    from rplearn.io.geodetic import geodetic_to_enu, local_ned_to_geodetic
+
+    frame_b = (47.3978, 8.5458, 489.0)
+    lat, lon, alt = local_ned_to_geodetic(enu_to_ned(np.array([1.0, 2.0, 0.5])), FRAME)
+    b_xyz = tuple(np.asarray(geodetic_to_enu(lat, lon, alt, frame_b), np.float64).reshape(3))
+    assert np.hypot(b_xyz[0] - 1.0, b_xyz[1] - 2.0) > 10.0
+    files = _files((0.5, 0.8), (0.6, 0.9), frame_b)
+    logs = one_station([_flight("d0", 0.0, (1.0, 2.0, 0.5)), _flight("d1", 3600.0, b_xyz)], [0, 1], files)
+    assert (pd.concat(logs)["node"] == "gcs").sum() == 1
+
+
+def test_the_ulog_reader_reports_the_accuracy_of_the_fix_the_station_was_placed_at(two_flights):
+    from rplearn.io.ulog_radio import UlogRadio, read_ulog_logs
+
+    a, b = two_flights
+    radio = UlogRadio(20.0, 915e6)
+    (_, home), (_, first) = (read_ulog_logs(str(p), "d", radio) for p in (a, b))
+    assert "home_position" in home["station_note"] and "first position" in first["station_note"]
+    assert home["station_accuracy_m"] == pytest.approx((1.72, 1.82), abs=1e-3)  # vehicle_gps_position at the home
+    assert first["station_accuracy_m"] == pytest.approx((3.26, 6.984), abs=1e-3)
+    given = read_ulog_logs(str(a), "d", UlogRadio(20.0, 915e6, station_geodetic=FRAME))[1]
+    assert given["station_accuracy_m"] is None

@@ -1,5 +1,6 @@
-"""One pass over an ArduPilot ``.tlog`` or DataFlash log into plain arrays, for
-:mod:`rplearn.io.mavlink` (which documents the messages and their units)."""
+"""One pass over an ArduPilot ``.tlog`` into plain arrays, for :mod:`rplearn.io.mavlink` (which documents the
+messages and their units), and what the DataFlash pass shares with it (:class:`Raw`, the boots that are copies:
+:func:`merge_copied_boots`; :mod:`rplearn.io._dataflash_records`)."""
 
 from __future__ import annotations
 
@@ -11,17 +12,14 @@ from typing import Any
 import numpy as np
 
 from rplearn.errors import InputError, LogFormatError
-from rplearn.io._log_schema import check_dataflash_lengths, dataflash_time_field, library_quiet, number
+from rplearn.io._log_schema import library_quiet
 from rplearn.io.mavlink_phases import REBOOT_STEP_S
 
 _RADIO_TYPES = ("RADIO_STATUS", "RADIO")
 _ORIGIN_TYPES = ("HOME_POSITION", "GPS_GLOBAL_ORIGIN")
 _TLOG_TYPES = ["ATTITUDE", "GLOBAL_POSITION_INT", *_ORIGIN_TYPES, "GPS_RAW_INT", "HEARTBEAT", *_RADIO_TYPES]
-_DF_TYPES = ["ATT", "POS", "GPS", "ORGN", "RAD", "ARM", "EV"]
 #: ``base_mode`` bit of an armed vehicle (MAV_MODE_FLAG_SAFETY_ARMED) and the GCS's MAV_TYPE.
 _ARMED_FLAG, _MAV_TYPE_GCS = 128, 6
-#: DataFlash EV ids of arming and disarming (ArduPilot LogEvent ARMED = 10, DISARMED = 11).
-_EV_ARMED, _EV_DISARMED = 10, 11
 
 
 @dataclass
@@ -296,9 +294,18 @@ def drop_repeated_rows(acc: TlogRows) -> int:
 CLOSE_COPY_S = 1e-3
 
 
+#: Rounding of a difference of two times in whole microseconds held as seconds (a float of UNIX seconds: 0.24 us).
+_TIME_ROUNDING_S = 5e-7
+
 #: Kinds whose fields hold the sender's boot time: two with the same fields are one message (a radio
 #: report holds no time: two of equal values may come close; ``sync`` merges copies, ``duplicate_reading``).
 _BOOT_TIMED = ("ATTITUDE", "GLOBAL_POSITION_INT")
+
+
+def close_in_time(dt: float) -> bool:
+    """Whether a message ``dt`` [s] after another with the same fields is that message again (at most
+    :data:`CLOSE_COPY_S` later, times in whole microseconds)."""
+    return 0.0 <= dt <= CLOSE_COPY_S + _TIME_ROUNDING_S
 
 
 def is_close_copy(last_of: dict[tuple[str, int], tuple[float, tuple[Any, ...]]], kind: str, sender: int,
@@ -309,7 +316,7 @@ def is_close_copy(last_of: dict[tuple[str, int], tuple[float, tuple[Any, ...]]],
     fields = row[:1] + row[2:]
     before = last_of.get((kind, sender))
     last_of[(kind, sender)] = (row[1], fields)
-    return before is not None and before[1] == fields and 0.0 <= row[1] - before[0] <= CLOSE_COPY_S
+    return before is not None and before[1] == fields and close_in_time(row[1] - before[0])
 
 
 def drop_close_copies(acc: TlogRows) -> int:
@@ -475,126 +482,5 @@ def merge_copied_boots(tables: dict[str, list[tuple[float, ...]]], boot_t: list[
     return repeated
 
 
-def _df_chain(boot_t: list[tuple[float, int]]) -> tuple[dict[int, float], np.ndarray]:
-    """Offsets [s] that put each later boot's TimeUS right after the previous boot's last record
-    (a DataFlash log holds no clock across a reboot), and each boot's last time on that clock."""
-    last: dict[int, float] = {}
-    first: dict[int, float] = {}
-    for t, b in boot_t:
-        last[b] = max(last.get(b, t), t)
-        first[b] = min(first.get(b, t), t)
-    offsets: dict[int, float] = {0: 0.0}
-    ends: list[float] = []
-    for b in range(max(last) + 1 if last else 0):
-        if b > 0:
-            offsets[b] = ends[-1] + REBOOT_STEP_S - first.get(b, 0.0)
-        ends.append(last.get(b, first.get(b, 0.0)) + offsets[b])
-    return offsets, np.asarray(ends, np.float64)
-
-
-@dataclass(frozen=True)
-class _DfMessage:
-    """One DataFlash message whose fields are read as numbers (:func:`rplearn.io._log_schema.number`)."""
-
-    msg: Any
-    kind: str
-    source: str
-
-    def __call__(self, name: str, default: float | None = None) -> float:
-        return number(self.msg, self.kind, name, self.source, default)
-
-
-def _df_record(get: _DfMessage, t: float, boot: int, out: tuple[dict[str, list[tuple[float, ...]]], list[tuple[float, ...]],
-               list[tuple[float, ...]], list[float]], home: tuple[float, float, float] | None
-               ) -> tuple[float, float, float] | None:
-    """Add one DataFlash message's row to ``out`` (rows per kind, fix rows, armed rows, UTC
-    offsets); the home position (the first ORGN of type 1) returned."""
-    rows, fix_rows, arm_rows, utc = out
-    kind = get.kind
-    if kind == "ATT":
-        rows[kind].append((t, *np.radians([get("Roll"), get("Pitch"), get("Yaw")]), boot))
-    elif kind == "POS":
-        rows[kind].append((t, get("Lat"), get("Lng"), get("Alt"), np.nan, np.nan, boot))
-    elif kind == "GPS" and get("I", 0.0) == 0:
-        status = get("Status")
-        fix_rows.append((t, float(status >= 3), boot))
-        if status >= 3:
-            rows[kind].append((t, get("Lat"), get("Lng"), get("Alt"), get("Spd", np.nan), abs(get("VZ", np.nan)), boot))
-            utc.append(float(get.msg._timestamp) - t)
-    elif kind == "RAD":
-        rows[kind].append((t, *(get(f) for f in ("RSSI", "RemRSSI", "Noise", "RemNoise", "RxErrors", "Fixed")), boot))
-    elif kind == "ORGN":
-        rows[kind].append((t, boot))
-        if get("Type") == 1 and home is None:
-            return (get("Lat"), get("Lng"), get("Alt"))
-    elif kind == "ARM":
-        arm_rows.append((t, float(get("ArmState") != 0), boot))
-    elif kind == "EV" and get("Id") in (_EV_ARMED, _EV_DISARMED):
-        arm_rows.append((t, float(get("Id") == _EV_ARMED), boot))
-    return home
-
-
-def collect_dataflash(source: str) -> Raw:
-    """One pass over a DataFlash log: ATT, POS (else GPS), RAD, ORGN, GPS status, ARM and EV
-    (each message type's fields checked on its first record: :mod:`rplearn.io._log_schema`)."""
-    rows: dict[str, list[tuple[float, ...]]] = {k: [] for k in _DF_TYPES}
-    home = None
-    utc: list[float] = []
-    boot, last_t, boot_t = 0, -np.inf, []
-    minor: set[int] = set()  # the stretches after a step back of the time too small for a reboot
-    last_kind = ""
-    fix_rows: list[tuple[float, ...]] = []
-    arm_rows: list[tuple[float, ...]] = []
-    times: dict[str, tuple[str, float]] = {}
-    with library_quiet():  # pymavlink prints what it cannot parse
-        conn = _open(source, tlog=False)
-        check_dataflash_lengths(conn, source)
-        while True:
-            try:
-                msg = conn.recv_match(type=_DF_TYPES)
-            except Exception as exc:
-                raise LogFormatError(f"{source}: corrupt DataFlash data ({type(exc).__name__}: {exc})") from None
-            if msg is None:
-                break
-            kind = msg.get_type()
-            if kind not in times:
-                times[kind] = dataflash_time_field(msg, kind, source)
-            t = number(msg, kind, times[kind][0], source) * times[kind][1]
-            if t < last_t or (t == last_t and kind == last_kind):  # the latter: maybe a copy of the last record
-                boot += 1
-                if t >= last_t - REBOOT_STEP_S:
-                    minor.add(boot)
-            last_t, last_kind = t, kind
-            boot_t.append((t, boot))
-            home = _df_record(_DfMessage(msg, kind, source), t, boot, (rows, fix_rows, arm_rows, utc), home)
-    tables = {**rows, "GPS status": fix_rows, "ARM/EV": arm_rows}
-    repeated = merge_copied_boots(tables, boot_t, frozenset(minor)) if boot else 0
-    rows = {k: tables[k] for k in rows}
-    fix_rows, arm_rows = tables["GPS status"], tables["ARM/EV"]
-    offsets, ends = _df_chain(boot_t)
-
-    def chained(a: np.ndarray, tcol: int, bcol: int) -> np.ndarray:
-        if len(a):
-            a[:, tcol] += np.array([offsets[int(b)] for b in a[:, bcol]])
-        return a
-
-    counts = {k: len(v) for k, v in rows.items() if v}
-    if not rows["ATT"]:
-        raise LogFormatError(f"{source}: no ATT messages (the vehicle's attitude)")
-    pos_kind = "POS" if rows["POS"] else "GPS"
-    orgn = chained(_arr(rows["ORGN"], 2), 0, 1)
-    # the vehicle logs itself throughout: its stream is never absent
-    return Raw(
-        fmt="dataflash", att=chained(_arr(rows["ATT"], 5), 0, 4), pos=chained(_arr(rows[pos_kind], 7), 0, 6),
-        radio=chained(_arr(rows["RAD"], 8), 0, 7)[:, :7], vehicle_t=np.array([]), home=home, counts=counts,
-        boot_last_t=ends, origin_t=orgn[:, 0],
-        fix=chained(_arr(fix_rows, 3), 0, 2)[:, :2], armed=chained(_arr(arm_rows, 3), 0, 2)[:, :2],
-        notes={"position_message": pos_kind, "repeated_messages": repeated,
-               "time_reference": "TimeUS, seconds since the autopilot booted"
-                                 + (" (later boots placed right after the previous one)" if len(ends) > 1 else ""),
-               "utc_offset_s": float(np.median(utc)) if utc else None},
-    )
-
-
-__all__ = ["Raw", "TlogRows", "boot_offsets", "collect_dataflash", "collect_tlog", "drop_close_copies", "is_close_copy",
-           "drop_repeated_rows", "merge_copied_boots", "tlog_raw"]
+__all__ = ["CLOSE_COPY_S", "Raw", "TlogRows", "boot_offsets", "close_in_time", "collect_tlog", "drop_close_copies",
+           "drop_repeated_rows", "is_close_copy", "merge_copied_boots", "tlog_raw"]

@@ -259,6 +259,17 @@ class TrackEnds:
     #: Rows of the table read so far (the file row of the next part's first row): advanced by every
     #: part handed to :func:`~rplearn.io.tables.canonical_pose`, refused or not, as the file offset is.
     rows_read: int = 0
+    #: The file rows of the next part's rows, when they are not the rows after :attr:`rows_read` (a reader
+    #: holding some rows back hands them out later: :class:`rplearn.io.live_sources.CsvTail`); used once.
+    file_rows: np.ndarray | None = None
+
+    def part_rows(self, n: int) -> np.ndarray:
+        """The file rows of a part of ``n`` rows (:attr:`file_rows`, else those after :attr:`rows_read`);
+        :attr:`rows_read` advanced."""
+        given, self.file_rows = self.file_rows, None
+        rows = np.asarray(given, np.int64) if given is not None and len(given) == n else self.rows_read + np.arange(n)
+        self.rows_read = max(self.rows_read, int(rows.max()) + 1) if n else self.rows_read
+        return rows
 
     def remember(self, nodes: np.ndarray, values: dict[str, np.ndarray]) -> None:
         """Keep the values of the rows kept (of one part, in file order)."""

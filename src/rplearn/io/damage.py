@@ -60,7 +60,11 @@ def file_damage(path: str, info: dict[str, Any]) -> list[str]:
         for other, n in by_file.items():
             lines.append(f"{path}: {n:,} {what} row(s) repeat rows of {other} exactly (the same log given twice, "
                          "or overlapping exports); each was read once")
-    if info.get("close_copies"):
+    if info.get("close_copies") and info.get("format") == "dataflash":
+        lines.append(f"{path}: {info['close_copies']:,} DataFlash record(s) repeat one of their kind read shortly "
+                     "before them (same fields, TimeUS the same or up to 1 ms later: records written twice, by a logger "
+                     "or a router duplicating them, or a short stretch of the log written again); each was read once")
+    elif info.get("close_copies"):
         lines.append(f"{path}: {info['close_copies']:,} attitude or position message(s) repeat the one before them "
                      "within 1 ms (same sender, boot time and fields: each message received twice, a router or two "
                      "links forwarding it); each was read once")
@@ -139,29 +143,80 @@ def one_station(logs: list[pd.DataFrame], owners: list[int], files: list[dict[st
             b = row[["x", "y", "z"]].to_numpy(np.float64)
             qa, qb = (r[["qw", "qx", "qy", "qz"]].to_numpy(np.float64) for r in (first, row))
             same_q = min(np.max(np.abs(qa - qb)), np.max(np.abs(qa + qb))) <= SAME_QUATERNION
-            moved = bool(np.max(np.abs(a - b)) > SAME_POSITION_M)
+            frames = _frame(files[first_file]), _frame(files[i])
+            noise = None
+            if frames[0] is not None and frames[1] is not None:  # fixes of two logs compared in one frame only
+                noise = fix_noise_m(files[first_file].get("station_accuracy_m"), files[i].get("station_accuracy_m"))
+                b = _in_frame(b, frames[1], frames[0])
+            apart = (float(np.hypot(*(a - b)[:2])), float(abs(a[2] - b[2])))
+            moved = (bool(np.max(np.abs(a - b)) > SAME_POSITION_M) if noise is None
+                     else apart[0] > noise[0] or apart[1] > noise[1])
             if moved or not same_q:
                 turned = "" if moved else " (the same place, another heading)"
-                noise = ", two fixes of one station apart by GPS noise" if moved else ""
+                said = ("" if not moved else ", two fixes of one station apart by GPS noise" if noise is None else
+                        f" ({apart[0]:.2f} m across, {apart[1]:.2f} m up/down apart: more than the GPS noise the "
+                        f"logs report for their fixes allows, {noise[0]:.2f} m and {noise[1]:.2f} m)")
                 raise InputError(
                     f"{files[first_file].get('source')} and {files[i].get('source')} place the ground station "
                     f"{station} at {_station_at(first, files[first_file])} and at {_station_at(row, files[i])}, "
-                    f"ENU{turned}: a station moved between flights{noise}, or the homes of two vehicles; give where it "
+                    f"ENU{turned}: a station moved between flights{said}, or the homes of two vehicles; give where it "
                     "stood (ReaderOptions.station_geodetic: lat, lon, alt), or read each flight on its own",
                     param="station_geodetic")
             if row["t"] == first["t"]:
                 continue  # the same row: a file given twice, read once by drop_repeated_across
             log = out[k]
             out[k] = log[~((log["node"].astype(str) == station) & (log["t"] == row["t"]))]
+            within = (f" (its fixes {apart[0]:.2f} m across, {apart[1]:.2f} m up/down apart: within the GPS noise "
+                      f"the logs report, {noise[0]:.2f} m and {noise[1]:.2f} m)"
+                      if noise is not None and max(apart) > SAME_POSITION_M else "")
             files[i].setdefault("notes", []).append(
                 f"{files[i].get('source')}: ground station {station} at the pose {files[first_file].get('source')} "
-                "gives it: one static station for both flights")
+                f"gives it: one static station for both flights{within}")
     return out
 
 
 #: Largest difference of the quaternion components of two rows of one static station (unitless)
 #: for them to be one attitude.
 SAME_QUATERNION = 1e-3
+#: Two fixes of an unmoved station differ by up to this many standard deviations of their difference (the GPS
+#: accuracies the logs report, ``station_accuracy_m``: eph, epv [m]) ...
+FIX_SIGMAS = 3.0
+#: ... and never by more than this [m]: a worse reported accuracy does not make a station moved farther one.
+MAX_FIX_NOISE_M = 10.0
+
+
+def _frame(meta: dict[str, Any]) -> tuple[float, ...] | None:
+    """The geodetic origin of a file's ENU positions: the origin it was read around, else its log's own anchor
+    (a ULog read without one), else None (unknown: an ENU table)."""
+    frame = meta.get("origin_geodetic") or meta.get("anchor_geodetic")
+    return None if frame is None else tuple(float(v) for v in frame)
+
+
+def _in_frame(xyz: np.ndarray, frame: tuple[float, ...], to: tuple[float, ...]) -> np.ndarray:
+    """ENU position ``xyz`` [m] around ``frame`` as ENU around ``to`` (both geodetic origins)."""
+    if frame == to:
+        return xyz
+    from rplearn.core.geometry import enu_to_ned
+    from rplearn.io.geodetic import geodetic_to_enu, local_ned_to_geodetic
+
+    lat, lon, alt = local_ned_to_geodetic(enu_to_ned(xyz), frame)  # type: ignore[arg-type]
+    return np.asarray(geodetic_to_enu(lat, lon, alt, to), np.float64).reshape(3)  # type: ignore[arg-type]
+
+
+def fix_noise_m(a: Any, b: Any) -> tuple[float, float] | None:
+    """How far apart [m] (across, up/down) two fixes of one unmoved station may lie, from the GPS accuracies
+    (eph, epv: standard deviations [m]) their logs report; None when either log reports none (then the
+    positions must agree to :data:`~rplearn.data.poses.SAME_POSITION_M`)."""
+    from rplearn.data.poses import SAME_POSITION_M
+
+    try:
+        sa, sb = np.asarray(a, np.float64).reshape(2), np.asarray(b, np.float64).reshape(2)
+    except (TypeError, ValueError):
+        return None
+    if not (np.all(np.isfinite(sa)) and np.all(np.isfinite(sb)) and np.all(sa >= 0) and np.all(sb >= 0)):
+        return None
+    tol = np.clip(FIX_SIGMAS * np.hypot(sa, sb), SAME_POSITION_M, MAX_FIX_NOISE_M)
+    return float(tol[0]), float(tol[1])
 
 
 def refuse_overlaps(logs: list[pd.DataFrame], owners: list[int], files: list[dict[str, Any]], what: str) -> None:
@@ -212,7 +267,8 @@ def across_files(report: Any, poses: list[pd.DataFrame], canonical: list[pd.Data
             refuse_overlaps(logs, owners[what], metas, what)
         except InputError as exc:
             report.problems.append(f"{exc} (sync refuses these files)")
-    stations = [{"source": f["path"], "station": f.get("station"), "station_note": f.get("station_note")}
+    stations = [{"source": f["path"], **{k: f.get(k) for k in ("station", "station_note", "station_accuracy_m",
+                                                                 "origin_geodetic", "anchor_geodetic")}}
                 for f in report.files]
     try:
         one_station(canonical, owners["pose"], stations)
@@ -221,4 +277,4 @@ def across_files(report: Any, poses: list[pd.DataFrame], canonical: list[pd.Data
     return poses, signals
 
 
-__all__ = ["across_files", "drop_repeated_across", "file_damage", "one_station", "refuse_overlaps"]
+__all__ = ["across_files", "drop_repeated_across", "file_damage", "fix_noise_m", "one_station", "refuse_overlaps"]

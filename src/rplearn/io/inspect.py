@@ -400,7 +400,8 @@ def _read_one(path: str, options: ReaderOptions) -> tuple[pd.DataFrame | None, p
     for key in ("cut_off_at_byte", "cut_off_record", "records_read", "corrupt", "corrupt_at_byte", "corrupt_bytes",
                 "corrupt_stretches",
                 "repeated_messages", "close_copies", "unindexed", "trailing_bytes", "trailing_bag", "damaged_chunks",
-                "damaged_chunk_messages", "damaged_index", "station", "station_note"):
+                "damaged_chunk_messages", "damaged_index", "station", "station_note", "station_accuracy_m",
+                "anchor_geodetic", "origin_geodetic"):
         if f.get(key):
             info[key] = f[key]
     if f.get("notes"):

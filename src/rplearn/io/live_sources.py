@@ -4,7 +4,8 @@ Two sources give canonical pose and signal rows a poll at a time:
 
 - :class:`CsvTail`: a canonical pose CSV and signal CSV that a robot appends to; every poll
   parses the complete lines added since the last (a half-written last line waits), with the
-  reader of ``sync`` (:func:`rplearn.io.tables.canonical_pose`, ``canonical_signal``);
+  reader of ``sync`` (:func:`rplearn.io.tables.canonical_pose`, ``canonical_signal``; a node's
+  start at the zero position held back, bounded, until it is known whether ``sync`` keeps it);
 - :class:`MavlinkSource`: a MAVLink connection as pymavlink names them
   (``udpin:0.0.0.0:14550``, ``tcp:host:5760``, a serial device ``/dev/ttyUSB0``, what
   MAVProxy, QGroundControl and mavlink-router forward). Every message is appended to a
@@ -20,6 +21,7 @@ boot times and speeds scaled alike, so that the stream is a consistent (faster) 
 
 from __future__ import annotations
 
+import hashlib
 import io
 import math
 import os
@@ -37,8 +39,10 @@ import pandas as pd
 from rplearn._argtypes import check_types
 from rplearn.data.tables import CSV_DTYPES, normalise_times
 from rplearn.errors import InputError, LogFormatError
-from rplearn.io._pose_checks import TrackEnds
+from rplearn.io._pose_checks import TrackEnds, top_speeds
 from rplearn.io._time_order import LinkTimes, check_link_time_order
+from rplearn.io.geodetic import geodetic_to_enu
+from rplearn.io.mavlink_phases import MAX_HORIZONTAL_SPEED_M_S, MAX_VERTICAL_SPEED_M_S, unexplained_steps
 from rplearn.io.options import ReaderOptions
 from rplearn.io.tables import canonical_pose, canonical_signal, csv_missing_values
 
@@ -64,27 +68,65 @@ class Poll:
     dropped: dict[str, int] = field(default_factory=dict)
 
 
+#: Bytes from a tailed file's start that :class:`_Tail` keeps and compares at every poll: a file replaced
+#: under its name (logrotate, a logger restarting with a new file) begins otherwise, even on the same inode.
+FIRST_BYTES = 4096
+
+
 class _Tail:
-    """The complete lines appended to one text file since the last call."""
+    """The complete lines appended to one text file since the last call; a file that shrank, was replaced
+    (another file under its name whose bytes differ from those read: its first :data:`FIRST_BYTES` compared at
+    every poll, all of them when its device and inode changed) or went away once read is refused naming it (its
+    rows, their numbers and times are those read before: no new start)."""
 
     def __init__(self, path: str) -> None:
         self.path, self.offset, self.header = path, 0, b""
+        self.identity: tuple[int, int] | None = None  # (device, inode) of the file read
+        self.first = b""  # its first bytes read (at most FIRST_BYTES)
+        self.digest = hashlib.sha256()  # of every byte read
+
+    def _same_start(self, fh: Any) -> bool:
+        """Whether the file open as ``fh`` begins with the bytes read so far (a log rewritten whole under its name,
+        as a writer replacing it atomically does, is the same log grown)."""
+        fh.seek(0)
+        again, left = hashlib.sha256(), self.offset
+        while left > 0 and (chunk := fh.read(min(left, 1 << 20))):
+            again.update(chunk)
+            left -= len(chunk)
+        return left == 0 and again.digest() == self.digest.digest()
+
+    def _refuse(self, what: str, why: str) -> LogFormatError:
+        return LogFormatError(f"{self.path}: {what} while it was read ({why}): give the new file as a session of its own")
 
     def lines(self) -> bytes:
         if not os.path.exists(self.path):
+            if self.identity is not None:
+                raise self._refuse("the file went away", f"moved or deleted after {self.offset:,} bytes were read: rotated?")
             return b""
         with open(self.path, "rb") as fh:
-            size = os.fstat(fh.fileno()).st_size
-            if size < self.offset:  # its rows, their numbers and times are those read before: no new start
-                raise LogFormatError(f"{self.path}: the file shrank from {self.offset:,} to {size:,} bytes while it was "
-                                     "read (truncated, or rewritten shorter): give the new file as a session of its own")
+            st = os.fstat(fh.fileno())
+            size = st.st_size
+            if size < self.offset:
+                raise self._refuse(f"the file shrank from {self.offset:,} to {size:,} bytes",
+                                   "truncated, or rewritten shorter")
+            moved = self.identity is not None and (st.st_dev, st.st_ino) != self.identity
+            if moved and not self._same_start(fh):
+                raise self._refuse("the file was replaced by another under its name", "another device and inode whose "
+                                   "bytes differ from those read: rotated, or a logger that restarted with a new file")
+            if not moved and self.first and fh.read(len(self.first)) != self.first:
+                raise self._refuse("the file's first bytes changed", "rewritten in place: rotated by copy and "
+                                   "truncate, or a logger that restarted")
+            self.identity = (st.st_dev, st.st_ino)
             fh.seek(self.offset)
             data = fh.read()
         end = data.rfind(b"\n") + 1  # a line still being written waits for its newline
         if end == 0:
             return b""
+        if len(self.first) < FIRST_BYTES:
+            self.first = (self.first + data[:end])[:FIRST_BYTES] if self.offset == len(self.first) else self.first
         self.offset += end
         data = data[:end]
+        self.digest.update(data)
         if not self.header:
             self.header, _, data = data.partition(b"\n")
             self.header += b"\n"
@@ -103,6 +145,121 @@ def _table(tail: _Tail, data: bytes) -> pd.DataFrame | None:
     return normalise_times(df, tail.path)
 
 
+#: How long and how many rows :class:`CsvTail` holds back a node's leading rows at the zero position (a logger
+#: writing before the fix) while which side of its first jump is valid cannot be told yet: seconds of the pose
+#: table's time from the node's first row, and rows held in all.
+HOLD_S = 60.0
+HOLD_ROWS = 16384
+#: The column of a pose row's row in the file, while it is held.
+_FILE_ROW = "__file_row__"
+
+
+def _track(rows: pd.DataFrame, columns: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A node's rows with a time and a position, in time order: times [s], positions (``columns``), and which
+    stand at the zero position (x = y = z = 0, or lat = lon = 0)."""
+    t = pd.to_numeric(rows["t"], errors="coerce").to_numpy(np.float64, na_value=np.nan)
+    pos = np.column_stack([pd.to_numeric(rows[c], errors="coerce").to_numpy(np.float64, na_value=np.nan)
+                           for c in columns])
+    ok = np.isfinite(t) & np.all(np.isfinite(pos), axis=1)
+    order = np.argsort(t[ok], kind="stable")
+    t, pos = t[ok][order], pos[ok][order]
+    zero = np.all(pos[:, :2] == 0.0, axis=1) & ((pos[:, 2] == 0.0) if columns[0] == "x" else True)
+    return t, pos, zero
+
+
+def _start_known(t: np.ndarray, pos: np.ndarray, zero: np.ndarray, enu: bool) -> bool:
+    """Whether a node's rows read so far (:func:`_track`) tell which of them are valid as ``sync`` tells them from
+    the whole file (:func:`rplearn.io._pose_checks.position_jumps`: the largest piece of track between two steps
+    the node's top speeds do not explain is valid, ties to the earlier). Unknown while they begin at the zero
+    position (a logger writing before the fix, or a node standing at the origin) and that piece, still at zero,
+    is the largest."""
+    if not len(t) or not zero[0]:
+        return True
+    if zero.all():
+        return False
+    if not enu:  # geodetic: the steps in metres around the first fix off zero
+        try:
+            pos = geodetic_to_enu(pos[:, 0], pos[:, 1], pos[:, 2], tuple(pos[int(np.argmin(zero))]))
+        except InputError:  # an implausible position: the reader refuses it, naming it
+            return True
+    h, v = top_speeds(t, pos, np.zeros(len(t), np.int64))
+    cut = unexplained_steps(t[:-1], pos[:-1], h[:-1], v[:-1], t[1:], pos[1:], h[1:], v[1:])[0]
+    sizes = np.diff(np.concatenate([[0], np.flatnonzero(cut) + 1, [len(t)]]))
+    # the first piece left zero by steps the speeds explain (odometry from the origin), or another piece larger
+    return not zero[:sizes[0]].all() or int(np.argmax(sizes)) != 0
+
+
+@dataclass
+class _StartHold:
+    """The rows of a pose table being appended to that :class:`CsvTail` holds back at its nodes' starts
+    (:func:`_start_known`), with their rows in the file; ``at_zero``: the nodes handed out at the zero position
+    when the hold ran out (:data:`HOLD_S`, :data:`HOLD_ROWS`), with their last time there."""
+
+    source: str
+    held: pd.DataFrame | None = None
+    known: set[str] = field(default_factory=set)
+    at_zero: dict[str, float] = field(default_factory=dict)
+    rows_seen: int = 0
+
+    def take(self, table: pd.DataFrame | None, final: bool) -> pd.DataFrame | None:
+        """The rows to read now (held ones first, in file order; a column :data:`_FILE_ROW`); the others held."""
+        if table is not None:
+            table = table.assign(**{_FILE_ROW: self.rows_seen + np.arange(len(table))})
+            self.rows_seen += len(table)
+        parts = [p for p in (self.held, table) if p is not None and len(p)]
+        self.held = None
+        if not parts:
+            return None
+        block = pd.concat(parts, ignore_index=True) if len(parts) > 1 else parts[0]
+        columns = next((c for c in (("x", "y", "z"), ("lat", "lon", "alt")) if set(c) <= set(block.columns)), None)
+        if columns is None or "node" not in block.columns or "t" not in block.columns:
+            return block  # the reader names what is missing
+        nodes = block["node"].astype(str).to_numpy()
+        newest = float(pd.to_numeric(block["t"], errors="coerce").max())
+        hold = np.zeros(len(block), bool)
+        for node in dict.fromkeys(nodes):
+            if node in self.known and node not in self.at_zero:
+                continue
+            at = nodes == node
+            t, pos, zero = _track(block.loc[at], columns)
+            if node in self.at_zero:
+                self._left_zero(node, t, pos, zero, columns[0] == "x")
+            elif final or _start_known(t, pos, zero, columns[0] == "x"):
+                self.known.add(node)
+            elif newest - t[0] >= HOLD_S:  # bounded: handed out as it stands, watched
+                self.known.add(node)
+                self.at_zero[node] = float(t[zero][-1])
+            else:
+                hold |= at
+        if hold.sum() > HOLD_ROWS:  # bounded: handed out as they stand, watched
+            for node in dict.fromkeys(nodes[hold]):
+                self.known.add(node)
+                self.at_zero[node] = float(_track(block.loc[nodes == node], columns)[0][-1])
+            hold[:] = False
+        if hold.any():
+            self.held = block.loc[hold]
+        return block.loc[~hold] if not hold.all() else None
+
+    def _left_zero(self, node: str, t: np.ndarray, pos: np.ndarray, zero: np.ndarray, enu: bool) -> None:
+        """A node handed out at the zero position: its first row off zero is refused when the step to it is one no
+        plausible speed explains (its zero start was a logger's before the fix, which ``sync`` drops: the rows
+        handed out cannot be taken back), and it is watched no longer when the step is explained."""
+        if zero.all():
+            if len(t):
+                self.at_zero[node] = float(t[-1])
+            return
+        m = int(np.argmin(zero))
+        t0 = float(t[m - 1]) if m else self.at_zero.pop(node)
+        self.at_zero.pop(node, None)
+        h, v = np.array([MAX_HORIZONTAL_SPEED_M_S]), np.array([MAX_VERTICAL_SPEED_M_S])
+        if enu and not unexplained_steps(np.array([t0]), np.zeros((1, 3)), h, v, t[m:m + 1], pos[m:m + 1], h, v)[0][0]:
+            return
+        raise InputError(f"{self.source}: fields x, y, z of node {node}: it stood at the zero position from its first "
+                         f"row for {HOLD_S:g} s or more (rows handed out as valid) and now jumps off it at t = "
+                         f"{float(t[m]):.3f} s: a logger writing before its fix, whose zero rows sync drops; read the "
+                         "file with sync, or start the live session after the fix", param="nan_policy")
+
+
 #: Polls of a signal CSV whose rows' hashes :class:`CsvTail` keeps: a row repeating one of them
 #: is a copy, not a step back in time (the matcher drops it); older rows are forgotten.
 LINK_MEMORY_POLLS = 16
@@ -117,10 +274,18 @@ class CsvTail:
     pose_path, signal_path : str
         The files (they may not exist yet).
     reader : ReaderOptions, optional
-        As ``sync`` reads the same tables: ``nan_policy`` (pose rows with a NaN, a coordinate
+        As ``sync`` reads the same tables: ``origin_geodetic`` (a geodetic table's ENU origin; by default
+        its first fix, kept for every later poll), ``nan_policy`` (pose rows with a NaN, a coordinate
         beyond any place or on the wrong side of a position jump refused or dropped and counted
         in :attr:`Poll.dropped`), ``receivers[signal_path]``, a constant ``tx_power_dbm`` and
         ``frequency_hz`` for a signal table without those columns.
+
+    A node whose rows begin at the zero position (a logger writing before the fix, or a node at the
+    origin) is held back until its rows tell which side of its first jump ``sync`` keeps
+    (:func:`_start_known`), at most :data:`HOLD_S` of the table's time or :data:`HOLD_ROWS` rows, then
+    handed out as they stand and refused if they jump off zero later (the rows handed out cannot be taken
+    back); ``poll(final=True)`` hands out what is held. The rows kept and the drops counted are then those
+    of ``sync`` on the whole file, however it is written in pieces.
     """
 
     def __init__(self, pose_path: str, signal_path: str, reader: ReaderOptions | None = None) -> None:
@@ -131,15 +296,21 @@ class CsvTail:
         self._ends = TrackEnds()  # each node's last pose kept: a poll's rows are checked against it
         self._signal_rows = 0
         self._links = LinkTimes()  # each link's last time: a logger that rebooted is refused, as by sync
+        self._origin = self.reader.origin_geodetic  # as sync: given, else the first part's first fix
+        self._hold = _StartHold(pose_path)  # pose rows at a node's start whose validity is not known yet
 
-    def poll(self) -> Poll:
-        """Rows appended since the last poll."""
+    def poll(self, final: bool = False) -> Poll:
+        """Rows appended since the last poll; with ``final`` (the session's end) the rows held back too."""
         p, s = self.pose.lines(), self.signal.lines()
         poses = signals = pd.DataFrame()
-        pt = _table(self.pose, p)
+        new = _table(self.pose, p)
+        pt = self._hold.take(new, final)
         if pt is not None:
-            poses, meta = canonical_pose(pt, source=self.pose.path, nan_policy=self.reader.nan_policy,
+            self._ends.file_rows = pt[_FILE_ROW].to_numpy()
+            poses, meta = canonical_pose(pt.drop(columns=_FILE_ROW), source=self.pose.path,
+                                         origin_geodetic=self._origin, nan_policy=self.reader.nan_policy,
                                          allow_unsorted=self.reader.allow_unsorted, ends=self._ends)
+            self._origin = self._origin or meta["origin_geodetic"]  # a geodetic table: one frame for every part
             for reason, n in meta["dropped"].items():
                 self.dropped[reason] = self.dropped.get(reason, 0) + int(n)
         st = _table(self.signal, s)
@@ -152,7 +323,8 @@ class CsvTail:
                 check_link_time_order(signals, self.signal.path, self._signal_rows, self._links)
                 del self._links.seen[:-LINK_MEMORY_POLLS]  # copies of rows of older polls: a step back
             self._signal_rows += len(signals)
-        return Poll(poses, signals, len(poses) + len(signals), {k: n for k, n in self.dropped.items() if n})
+        received = (0 if new is None else len(new)) + len(signals)  # held rows too: the stream is not idle
+        return Poll(poses, signals, received, {k: n for k, n in self.dropped.items() if n})
 
     def close(self) -> None:
         """Nothing to release."""

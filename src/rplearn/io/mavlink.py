@@ -67,7 +67,9 @@ line in ``notes``; ``metadata["reboots"]`` counts reboots. A radio reading repor
 concatenated, a copy resumed from its start) is read once: a ``.tlog`` message that repeats an
 earlier one exactly (kind, sender, receive time, fields), and a DataFlash boot whose records
 repeat an earlier boot's (same TimeUS and fields: the same boot again, not a reboot), are
-dropped and counted in ``metadata["repeated_messages"]``. Bytes of a ``.tlog`` that are no
+dropped and counted in ``metadata["repeated_messages"]``; a record written twice (a ``.tlog``'s attitude or
+position message, a DataFlash record: the one before it again, time the same or up to 1 ms later) is read once,
+counted in ``metadata["close_copies"]``. Bytes of a ``.tlog`` that are no
 whole record (a frame whose checksum fails, framing broken by a damaged length byte, junk) are
 skipped: ``metadata["corrupt_stretches"]`` counts the stretches of such bytes between two whole
 records (each lost one frame or more: pymavlink's parser says most with one ``BAD_DATA``
@@ -103,7 +105,8 @@ from rplearn.data.tables import check_frequency_hz, check_tx_power_dbm, validate
 from rplearn.errors import InputError, LogFormatError
 from rplearn.io import mavlink_phases as phases
 from rplearn.io._common import Logs
-from rplearn.io._mavlink_records import Raw, collect_dataflash, collect_tlog
+from rplearn.io._dataflash_records import collect_dataflash
+from rplearn.io._mavlink_records import Raw, collect_tlog
 from rplearn.io.geodetic import geodetic_to_enu
 from rplearn.io.options import _check_origin
 

@@ -320,10 +320,7 @@ def canonical_pose(
     df, att_cols, meta["attitude"], level = _attitude_columns(df, source)
     if level:
         meta["level_assumed"] = True
-    first_row = 0 if ends is None else ends.rows_read
-    rows = first_row + np.arange(len(df))
-    if ends is not None:
-        ends.rows_read += len(df)
+    rows = np.arange(len(df)) if ends is None else ends.part_rows(len(df))
     df, values, dropped = _finite_values(df.set_axis(rows), ("t",) + pos_cols + att_cols, nan_policy, source)
     meta["dropped"].update(dropped)
     rows = df.index.to_numpy()

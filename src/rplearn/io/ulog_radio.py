@@ -119,6 +119,12 @@ def radio_readings(ulog: Any) -> RadioReadings | None:
 
 def home_local_ned(ulog: Any) -> np.ndarray | None:
     """The first valid home position in the vehicle's local NED frame [m], or None."""
+    home = _home(ulog)
+    return None if home is None else home[0]
+
+
+def _home(ulog: Any) -> tuple[np.ndarray, int | None] | None:
+    """The first valid home position in the local NED frame [m] and its timestamp [us since boot], or None."""
     for data in _instances(ulog, "home_position"):
         if not all(k in data for k in ("x", "y", "z")):
             continue
@@ -128,7 +134,25 @@ def home_local_ned(ulog: Any) -> np.ndarray | None:
             if flag in data:
                 ok &= np.asarray(data[flag]) != 0
         if ok.any():
-            return ned[int(np.flatnonzero(ok)[0])]
+            i = int(np.flatnonzero(ok)[0])
+            return ned[i], int(data["timestamp"][i]) if "timestamp" in data else None
+    return None
+
+
+def fix_accuracy(ulog: Any, t_us: int | None) -> tuple[float, float] | None:
+    """The GPS accuracy the log reports (``eph``, ``epv``: standard deviations [m], horizontal and vertical)
+    of its fix at or last before ``t_us`` [us since boot] (``vehicle_gps_position``, else ``sensor_gps``, the
+    first instance holding them), or None (no such fix, or not a positive finite accuracy)."""
+    if t_us is None:
+        return None
+    for name in ("vehicle_gps_position", "sensor_gps"):
+        for data in _instances(ulog, name):
+            if not all(k in data for k in ("timestamp", "eph", "epv")) or not len(data["timestamp"]):
+                continue
+            i = max(int(np.searchsorted(np.asarray(data["timestamp"], np.int64), t_us, side="right")) - 1, 0)
+            eph, epv = float(data["eph"][i]), float(data["epv"][i])
+            if np.isfinite(eph) and np.isfinite(epv) and eph > 0 and epv > 0:
+                return eph, epv
     return None
 
 
@@ -172,15 +196,27 @@ def _station_xyz(ulog: Any, pose: pd.DataFrame, meta: dict[str, Any], radio: Ulo
                              "(no EKF reference, no global position, no GPS fix)", param="station_geodetic")
         return (np.asarray(geodetic_to_enu(*radio.station_geodetic, frame, where="the station"), np.float64),
                 "station position given (station_geodetic)")
-    home = home_local_ned(ulog)
+    found = _home(ulog)
     # in the frame of the vehicle's positions (rplearn.io.ulog: the log's own, or around the origin through the anchor)
     placed = "station placed at the vehicle's home (home_position)"
-    if home is not None and origin_geodetic is None:
-        return np.asarray(ned_to_enu(home), np.float64).reshape(3), placed
-    if home is not None and anchor is not None:
-        return np.asarray(local_ned_to_enu(home[None, :], tuple(anchor), origin_geodetic), np.float64).reshape(3), placed
+    if found is not None and origin_geodetic is None:
+        return np.asarray(ned_to_enu(found[0]), np.float64).reshape(3), placed
+    if found is not None and anchor is not None:
+        return np.asarray(local_ned_to_enu(found[0][None, :], tuple(anchor), origin_geodetic), np.float64).reshape(3), placed
     first = pose[["x", "y", "z"]].to_numpy(np.float64)[0]
     return first, "station placed at the vehicle's first position (no valid home_position in the log)"
+
+
+def _station_accuracy(ulog: Any, pose: pd.DataFrame, meta: dict[str, Any], note: str) -> tuple[float, float] | None:
+    """The GPS accuracy (eph, epv [m]) of the fix the station was placed at (:func:`_station_xyz`'s ``note``): the
+    home's, else the first position's; None for a given position or a log reporting none."""
+    if "given" in note:
+        return None
+    found = _home(ulog)
+    if found is not None and note.startswith("station placed at the vehicle's home"):
+        return fix_accuracy(ulog, found[1])
+    offset = meta.get("utc_offset_us") if meta.get("time_reference") == "utc" else 0
+    return fix_accuracy(ulog, int(round(float(pose["t"].iloc[0]) * 1e6 - float(offset or 0))))
 
 
 def read_ulog_logs(path: str | os.PathLike, node: str, radio: UlogRadio | None = None,
@@ -196,7 +232,9 @@ def read_ulog_logs(path: str | os.PathLike, node: str, radio: UlogRadio | None =
     metadata : dict
         :func:`~rplearn.io.ulog.read_ulog`'s, with ``notes``, ``radio_readings`` (the readings
         the log holds, 0 when none) and ``radio_topic``; with ``radio`` also ``station``,
-        ``station_note``, ``vehicle`` and ``signal`` (the counts of :func:`radio_signal_log`).
+        ``station_note``, ``station_accuracy_m`` (the GPS accuracy, eph and epv [m], the log reports for
+        the fix the station was placed at, or None: :func:`rplearn.io.damage.one_station` takes two such fixes
+        for one station within their noise), ``vehicle`` and ``signal`` (the counts of :func:`radio_signal_log`).
 
     Raises
     ------
@@ -230,6 +268,7 @@ def read_ulog_logs(path: str | os.PathLike, node: str, radio: UlogRadio | None =
     offset = meta["utc_offset_us"] if meta["time_reference"] == "utc" else 0
     t_s = (readings.t_us + int(offset or 0)) * 1e-6
     xyz, station_note = _station_xyz(ulog, pose, meta, radio, origin_geodetic, source)
+    meta["station_accuracy_m"] = _station_accuracy(ulog, pose, meta, station_note)
     far = np.linalg.norm(pose[["x", "y", "z"]].to_numpy(np.float64) - xyz, axis=1)
     try:
         check_plausible("link_distance_m", far, "the vehicle", field="distance from the station [m]")
@@ -259,5 +298,5 @@ def read_ulog_logs(path: str | os.PathLike, node: str, radio: UlogRadio | None =
     return Logs(pose=pose, signal=signal), meta
 
 
-__all__ = ["SIK_UNKNOWN", "RadioReadings", "UlogRadio", "home_local_ned", "radio_readings",
+__all__ = ["SIK_UNKNOWN", "RadioReadings", "UlogRadio", "fix_accuracy", "home_local_ned", "radio_readings",
            "radio_signal_log", "read_ulog_logs"]

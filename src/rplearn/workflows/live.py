@@ -453,7 +453,7 @@ def run_live(
             if not got.received:
                 time.sleep(0.05)
         session.stop_ranking(STOP_RANKING_WAIT_S)  # briefly waited for (its BLAS limit), then dropped
-        last = src.poll(final=True) if isinstance(src, MavlinkSource) else src.poll()
+        last = src.poll(final=True)
         session.source_dropped = {} if isinstance(src, MavlinkSource) else dict(last.dropped)  # rematched whole below
         session.feed(last.poses, last.signals)
         session.learn(final=True)

@@ -1,0 +1,180 @@
+"""rplearn.io._dataflash_records: a DataFlash log holding every record twice (a logger or a router
+duplicating the stream: the same record again at the same TimeUS, or up to 1 ms later with the same
+fields) reads as the log written once, the copies counted (``close_copies``) and said; records repeated
+farther apart, or at the same TimeUS with other fields, are no copies."""
+
+from __future__ import annotations
+
+import struct
+from pathlib import Path
+
+import pandas as pd
+import pytest
+from flightfiles import rplearn_here
+
+from rplearn.io._common import Logs
+from rplearn.io.damage import file_damage
+from rplearn.io.dataflash_writer import _FORMATS, write_dataflash
+from rplearn.io.files import read_table
+from rplearn.io.mavlink import read_mavlink
+
+ORIGIN = (47.3977, 8.5456, 90.0)
+REAL_BIN = Path(__file__).resolve().parents[1] / "fixtures" / "ardupilot" / "pymavlink_test.BIN"
+#: the real log's whole records (it ends 24 bytes into an AHR2 record)
+REAL_WHOLE = 65512
+_FMT = 128
+
+
+def _records(data: bytes) -> list[bytes]:
+    """The records of a binary DataFlash log (every one framed by an FMT before it)."""
+    lengths, out, at = {_FMT: 89}, [], 0
+    while at < len(data):
+        assert data[at:at + 2] == b"\xa3\x95"
+        kind = data[at + 2]
+        if kind == _FMT:
+            lengths[data[at + 3]] = data[at + 4]
+        out.append(data[at:at + lengths[kind]])
+        at += lengths[kind]
+    return out
+
+
+def _later(record: bytes, apart_us: int) -> bytes:
+    """The record with its TimeUS (the first field, uint64, of every record written here) ``apart_us`` later."""
+    copy = bytearray(record)
+    struct.pack_into("<Q", copy, 3, struct.unpack_from("<Q", copy, 3)[0] + apart_us)
+    return bytes(copy)
+
+
+def _twice(data: bytes, apart_us: int = 0, batch: int = 1) -> tuple[bytes, int]:
+    """Every record but the FMTs written again ``apart_us`` later, after each ``batch`` records (1: each
+    right after itself); returns the bytes and the records copied."""
+    out: list[bytes] = []
+    pending: list[bytes] = []
+    copied = 0
+    for record in _records(data):
+        out.append(record)
+        if record[2] == _FMT:
+            continue
+        pending.append(_later(record, apart_us))
+        copied += 1
+        if len(pending) == batch:
+            out += pending
+            pending = []
+    return b"".join(out + pending), copied
+
+
+def _read(path):
+    return read_mavlink(path, tx_power_dbm=20.0, frequency_hz=433e6)
+
+
+@pytest.fixture(scope="module")
+def once(tmp_path_factory) -> Path:
+    """A simulated flight written by rplearn.io.dataflash_writer (thousands of ATT, POS and RAD)."""
+    from rplearn.sim.flight import simulate
+
+    sim = simulate("smoke", seed=3)
+    pose, signal = sim.pose_log, sim.signal_log
+    station = pose[pose["node"] == "B"].iloc[[0]]
+    logs = Logs(pd.concat([pose[pose["node"] == "A"], station], ignore_index=True),
+                signal[["t", "tx", "rx", "rssi_dbm", "tx_power_dbm", "frequency_hz"]])
+    path = tmp_path_factory.mktemp("df_copies") / "once.bin"
+    write_dataflash(logs, path, vehicle="A", station="B", origin_geodetic=ORIGIN)
+    return path
+
+
+@pytest.mark.parametrize("apart_us", [0, 500, 1000])
+def test_every_record_twice_reads_as_the_log_once(once, tmp_path, apart_us):
+    # was: the same TimeUS twice dropped the attitude copies as duplicate_time (7,026) and merged the
+    # radio copies in sync as duplicate_reading; 0.5 ms later every pose was read twice (14,053 rows)
+    twice = tmp_path / "twice.bin"
+    data, copied = _twice(once.read_bytes(), apart_us)
+    twice.write_bytes(data)
+    (logs1, m1), (logs2, m2) = _read(once), _read(twice)
+    pd.testing.assert_frame_equal(logs1.pose, logs2.pose)
+    pd.testing.assert_frame_equal(logs1.signal, logs2.signal)
+    assert m1["close_copies"] == 0 and m2["close_copies"] == copied
+    assert m2["messages"] == m1["messages"] and m2["dropped"] == m1["dropped"] and m2["signal"] == m1["signal"]
+    assert m2["repeated_messages"] == 0 and m2["reboots"] == 0
+    said = file_damage(str(twice), m2)
+    assert any(f"{copied:,} DataFlash record(s) repeat one of their kind read shortly before them" in line
+               for line in said)
+    assert not any("in the file twice" in line for line in said)
+
+
+@pytest.mark.parametrize(("apart_us", "batch"), [(0, 3), (300, 5), (0, 50), (800, 400)])
+def test_every_buffer_of_records_written_twice_reads_as_the_log_once(once, tmp_path, apart_us, batch):
+    # a logger writing each buffer twice: the copies step back in time (was: with the copies 0.3 ms later every
+    # pose twice, 14,053 rows; at the same TimeUS, buffers of 2, some as duplicate_time and the RAD counts inflated)
+    again = tmp_path / "again.bin"
+    data, copied = _twice(once.read_bytes(), apart_us, batch)
+    again.write_bytes(data)
+    (logs1, m1), (logs2, m2) = _read(once), _read(again)
+    pd.testing.assert_frame_equal(logs1.pose, logs2.pose)
+    pd.testing.assert_frame_equal(logs1.signal, logs2.signal)
+    assert m2["close_copies"] == copied and m2["repeated_messages"] == 0 and m2["messages"] == m1["messages"]
+    assert m2["reboots"] == 0 and m2["dropped"] == m1["dropped"]
+
+
+def test_records_repeated_more_than_1_ms_later_are_no_copies(once, tmp_path):
+    # the same fields 1.5 ms later: a second reading that reads alike (a vehicle at rest), kept
+    later = tmp_path / "later.bin"
+    later.write_bytes(_twice(once.read_bytes(), 1500)[0])
+    (logs1, _), (logs2, m2) = _read(once), _read(later)
+    assert m2["close_copies"] == 0
+    assert (logs2.pose["node"] == "sys1").sum() == 2 * (logs1.pose["node"] == "sys1").sum()
+
+
+def test_a_record_at_the_same_time_with_other_fields_is_no_copy(once, tmp_path):
+    # a RAD of another reading at the same TimeUS right after one: kept for the reader's other checks
+    rad = _FORMATS["RAD"][0]
+    out, changed = [], 0
+    for record in _records(once.read_bytes()):
+        out.append(record)
+        if record[2] == rad and changed < 5:
+            other = bytearray(record)
+            other[3 + 8 + 3] = 77  # Noise (after TimeUS, RSSI, RemRSSI, TxBuf): another reading's
+            out.append(bytes(other))
+            changed += 1
+    assert changed == 5
+    path = tmp_path / "other.bin"
+    path.write_bytes(b"".join(out))
+    assert _read(path)[1]["close_copies"] == 0
+
+
+def test_a_log_in_the_file_twice_is_still_a_repeated_copy_not_close_copies(once, tmp_path):
+    # the copy's records repeat the first log's at the same TimeUS, but after the time stepped back
+    # by the whole log: merge_copied_boots's business (repeated_messages), none a close copy
+    twice = tmp_path / "concatenated.bin"
+    twice.write_bytes(once.read_bytes() * 2)
+    (_, m1), (_, m2) = _read(once), _read(twice)
+    assert m2["close_copies"] == 0 and m2["repeated_messages"] == sum(m1["messages"].values()) + 1
+
+
+@pytest.mark.parametrize("apart_us", [0, 400])
+def test_the_real_log_with_every_record_twice_reads_as_once(tmp_path, apart_us):
+    whole = tmp_path / "whole.bin"
+    whole.write_bytes(REAL_BIN.read_bytes()[:REAL_WHOLE])
+    twice = tmp_path / "twice.bin"
+    data, copied = _twice(whole.read_bytes(), apart_us)
+    twice.write_bytes(data)
+    (logs1, m1), (logs2, m2) = _read(whole), _read(twice)
+    # was: 4 signal rows for 2 (its one RAD twice), and 45 pose rows for 23 with the copies 0.4 ms later
+    pd.testing.assert_frame_equal(logs1.pose, logs2.pose)
+    pd.testing.assert_frame_equal(logs1.signal, logs2.signal)
+    assert m2["messages"] == m1["messages"] == {"ATT": 24, "POS": 23, "GPS": 5, "ORGN": 2, "RAD": 1}
+    # every record of the types read (GPS: also those without a 3-D fix; ORGN; ARM, EV) read once
+    assert 0 < m2["close_copies"] <= copied and m2["repeated_messages"] == 0 and m2["dropped"] == m1["dropped"]
+
+
+def test_sync_matches_as_many_samples_as_the_log_written_once(once, tmp_path):
+    twice = tmp_path / "twice.bin"
+    twice.write_bytes(_twice(once.read_bytes(), 500)[0])
+    matched = []
+    for path in (once, twice):
+        out = tmp_path / f"{path.stem}.parquet"
+        proc = rplearn_here(["sync", "--poses", path, "--signals", path, "--tx-power", "20", "--frequency", "433e6",
+                             "--link", "all", "--max-gap", "1.0", "-o", out])
+        assert proc.returncode == 0, proc.stdout + proc.stderr
+        matched.append(read_table(str(out)))
+    pd.testing.assert_frame_equal(matched[0], matched[1])
+    assert "DataFlash record(s) repeat one of their kind read shortly before them" in proc.stdout
