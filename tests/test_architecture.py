@@ -239,19 +239,6 @@ def third_party_violations(package_dir: Path = PACKAGE_DIR) -> list[str]:
     return problems
 
 
-#: Private names (``_name``) another module still imports, per importing module: the readers'
-#: shared internals of one file format (``io/``). A module's ``_name`` is its own: what another module needs is
-#: given a public name (and this list only shrinks).
-PRIVATE_IMPORTS_ALLOWED: dict[str, frozenset[str]] = {
-    "rplearn.io.dataflash_writer": frozenset({"_check"}),
-    "rplearn.io.live_sources": frozenset({"_mavutil", "_open"}),
-    "rplearn.io.mavlink": frozenset({"_check_origin"}),
-    "rplearn.io.rosbag": frozenset({"_OP_CONNECTION", "_OP_MSGDATA", "_record"}),
-    "rplearn.io.tlog_tail": frozenset({"_open", "_fixes", "_from_raw"}),
-    "rplearn.io.tlog_window": frozenset({"_MAV_TYPE_GCS", "_ORIGIN_TYPES", "_arr", "_increasing", "_step_state"}),
-}
-
-
 def _private_names_imported(package_dir: Path = PACKAGE_DIR) -> dict[str, list[tuple[str, int, str]]]:
     """Per module, ``(name, line, from module)`` of every ``from rplearn.x import _name`` of
     another module's private name (function-local ones included)."""
@@ -266,21 +253,14 @@ def _private_names_imported(package_dir: Path = PACKAGE_DIR) -> dict[str, list[t
 
 
 def private_imports(package_dir: Path = PACKAGE_DIR) -> list[str]:
-    """Every import of another module's private name beyond :data:`PRIVATE_IMPORTS_ALLOWED`."""
+    """Every import of another module's private name: a module's ``_name`` is its own, and what
+    another module needs has a public name (in a private module, ``io/_mavlink_records.py``, too)."""
     return [f"{module}:{line} imports the private {name} of {source}"
-            for module, names in _private_names_imported(package_dir).items()
-            for name, line, source in names if name not in PRIVATE_IMPORTS_ALLOWED.get(module, frozenset())]
+            for module, names in _private_names_imported(package_dir).items() for name, line, source in names]
 
 
 def test_no_module_imports_another_modules_private_names() -> None:
     assert private_imports() == []
-
-
-def test_the_private_imports_allowed_are_still_imported() -> None:
-    """An entry of :data:`PRIVATE_IMPORTS_ALLOWED` no longer needed is struck off (the list only shrinks)."""
-    used = {m: {name for name, _, _ in names} for m, names in _private_names_imported().items()}
-    assert {m: sorted(names - used.get(m, set())) for m, names in PRIVATE_IMPORTS_ALLOWED.items()
-            if names - used.get(m, set())} == {}
 
 
 def test_every_module_belongs_to_a_layer() -> None:

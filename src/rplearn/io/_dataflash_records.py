@@ -20,7 +20,7 @@ import numpy as np
 
 from rplearn.errors import LogFormatError
 from rplearn.io._log_schema import check_dataflash_lengths, dataflash_time_field, library_quiet, number
-from rplearn.io._mavlink_records import Raw, _arr, _open, close_in_time, merge_copied_boots
+from rplearn.io._mavlink_records import Raw, close_in_time, merge_copied_boots, open_mavlink_log, rows_array
 from rplearn.io.mavlink_phases import REBOOT_STEP_S
 
 DF_TYPES = ["ATT", "POS", "GPS", "ORGN", "RAD", "ARM", "EV"]
@@ -154,7 +154,7 @@ def collect_dataflash(source: str) -> Raw:
     recent = _Recent()
     close = 0
     with library_quiet():  # pymavlink prints what it cannot parse
-        conn = _open(source, tlog=False)
+        conn = open_mavlink_log(source, tlog=False)
         check_dataflash_lengths(conn, source)
         while True:
             try:
@@ -197,13 +197,13 @@ def collect_dataflash(source: str) -> Raw:
     if not rows["ATT"]:
         raise LogFormatError(f"{source}: no ATT messages (the vehicle's attitude)")
     pos_kind = "POS" if rows["POS"] else "GPS"
-    orgn = chained(_arr(rows["ORGN"], 2), 0, 1)
+    orgn = chained(rows_array(rows["ORGN"], 2), 0, 1)
     # the vehicle logs itself throughout: its stream is never absent
     return Raw(
-        fmt="dataflash", att=chained(_arr(rows["ATT"], 5), 0, 4), pos=chained(_arr(rows[pos_kind], 7), 0, 6),
-        radio=chained(_arr(rows["RAD"], 8), 0, 7)[:, :7], vehicle_t=np.array([]), home=home, counts=counts,
+        fmt="dataflash", att=chained(rows_array(rows["ATT"], 5), 0, 4), pos=chained(rows_array(rows[pos_kind], 7), 0, 6),
+        radio=chained(rows_array(rows["RAD"], 8), 0, 7)[:, :7], vehicle_t=np.array([]), home=home, counts=counts,
         boot_last_t=ends, origin_t=orgn[:, 0],
-        fix=chained(_arr(fix_rows, 3), 0, 2)[:, :2], armed=chained(_arr(arm_rows, 3), 0, 2)[:, :2],
+        fix=chained(rows_array(fix_rows, 3), 0, 2)[:, :2], armed=chained(rows_array(arm_rows, 3), 0, 2)[:, :2],
         notes={"position_message": pos_kind, "repeated_messages": repeated, "close_copies": close,
                "time_reference": "TimeUS, seconds since the autopilot booted"
                                  + (" (later boots placed right after the previous one)" if len(ends) > 1 else ""),

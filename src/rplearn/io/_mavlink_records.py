@@ -16,10 +16,10 @@ from rplearn.io._log_schema import library_quiet
 from rplearn.io.mavlink_phases import REBOOT_STEP_S
 
 _RADIO_TYPES = ("RADIO_STATUS", "RADIO")
-_ORIGIN_TYPES = ("HOME_POSITION", "GPS_GLOBAL_ORIGIN")
-_TLOG_TYPES = ["ATTITUDE", "GLOBAL_POSITION_INT", *_ORIGIN_TYPES, "GPS_RAW_INT", "HEARTBEAT", *_RADIO_TYPES]
+ORIGIN_TYPES = ("HOME_POSITION", "GPS_GLOBAL_ORIGIN")
+_TLOG_TYPES = ["ATTITUDE", "GLOBAL_POSITION_INT", *ORIGIN_TYPES, "GPS_RAW_INT", "HEARTBEAT", *_RADIO_TYPES]
 #: ``base_mode`` bit of an armed vehicle (MAV_MODE_FLAG_SAFETY_ARMED) and the GCS's MAV_TYPE.
-_ARMED_FLAG, _MAV_TYPE_GCS = 128, 6
+_ARMED_FLAG, MAV_TYPE_GCS = 128, 6
 
 
 @dataclass
@@ -50,11 +50,11 @@ class Raw:
     radio_period: float | None = None
 
 
-def _arr(rows: list[tuple[float, ...]], width: int) -> np.ndarray:
+def rows_array(rows: list[tuple[float, ...]], width: int) -> np.ndarray:
     return np.asarray(rows, np.float64).reshape(-1, width)
 
 
-def _mavutil() -> Any:
+def mavutil_module() -> Any:
     try:
         from pymavlink import mavutil
     except ImportError:  # pragma: no cover - pymavlink is a dependency
@@ -76,7 +76,7 @@ def _first_tlog_record_cut(head: bytes) -> bool:
     return False
 
 
-def _open(source: str, tlog: bool = True) -> Any:
+def open_mavlink_log(source: str, tlog: bool = True) -> Any:
     """A pymavlink reader of the log file ``source`` (a ``.tlog``, or with ``tlog`` False a binary
     or text DataFlash log, told apart by its bytes); a log pymavlink cannot open is refused naming
     the file.
@@ -88,7 +88,7 @@ def _open(source: str, tlog: bool = True) -> Any:
     fails inside pymavlink on a first message of its type cut off. The streaming ``.tlog`` reader
     parses the same messages in the same order.
     """
-    mavutil = _mavutil()
+    mavutil = mavutil_module()
     with open(source, "rb") as fh:
         head = fh.read(8 + 10 + 255 + 2 + 13)
     if tlog and _first_tlog_record_cut(head):
@@ -186,7 +186,7 @@ class TlogRows:
         """The rows of a message kind as an array, converting only those added since the last call."""
         rows, done = self.rows[kind], self._arrays.get(kind, np.zeros((0, width)))
         if len(done) < len(rows):
-            done = self._arrays[kind] = np.concatenate([done, _arr(rows[len(done):], width)])
+            done = self._arrays[kind] = np.concatenate([done, rows_array(rows[len(done):], width)])
         return done
 
     def times(self, sysid: int) -> np.ndarray:
@@ -234,7 +234,7 @@ def collect_tlog(source: str, system_id: int | None) -> Raw:
     ``corrupt_bytes`` in ``notes``)."""
     acc = TlogRows()
     with library_quiet():  # pymavlink prints what it cannot parse
-        conn = _open(source)
+        conn = open_mavlink_log(source)
         whole_to, good_to, stretches, skipped = 0, 0, 0, 0
         while True:
             try:
@@ -369,9 +369,9 @@ def tlog_raw(acc: TlogRows, source: str, system_id: int | None, cut_off: dict[st
     per_boot = {int(b): (float(offset[boot == b][0]), int((boot == b).sum())) for b in np.unique(boot)} if boot_clock else {}
     boot_last_t = np.array([t_log[boot == b].max() for b in range(int(boot.max()) + 1)]) if len(boot) else np.zeros(0)
     home = [h for h in rows["HOME_POSITION"] if h[0] // 256 == vehicle and (h[2] != 0 or h[3] != 0)]
-    origin = [h[1] for k in _ORIGIN_TYPES for h in rows[k] if h[0] // 256 == vehicle and (h[2] != 0 or h[3] != 0)]
+    origin = [h[1] for k in ORIGIN_TYPES for h in rows[k] if h[0] // 256 == vehicle and (h[2] != 0 or h[3] != 0)]
     fix = [r[1:] for r in rows["GPS_RAW_INT"] if r[0] // 256 == vehicle]
-    beats = [r[1:3] for r in rows["HEARTBEAT"] if r[0] // 256 == vehicle and r[3] != _MAV_TYPE_GCS]
+    beats = [r[1:3] for r in rows["HEARTBEAT"] if r[0] // 256 == vehicle and r[3] != MAV_TYPE_GCS]
     radio = np.concatenate([acc.array("RADIO_STATUS", 7), acc.array("RADIO", 7)])
     radio = radio[np.lexsort(radio.T[::-1])]  # as the rows' tuples sort
     n_att = len(att)
@@ -381,8 +381,8 @@ def tlog_raw(acc: TlogRows, source: str, system_id: int | None, cut_off: dict[st
         pos=np.column_stack([t_log[n_att:], gpi[:, 3:8], boot[n_att:]]),
         radio=radio, vehicle_t=np.sort(acc.times(vehicle)),
         home=(float(home[0][2]), float(home[0][3]), float(home[0][4])) if home else None, counts=dict(counts),
-        boot_last_t=boot_last_t, origin_t=np.sort(np.asarray(origin, np.float64)), fix=_arr(sorted(fix), 2),
-        armed=_arr(sorted(beats), 2), boot_offsets=per_boot,
+        boot_last_t=boot_last_t, origin_t=np.sort(np.asarray(origin, np.float64)), fix=rows_array(sorted(fix), 2),
+        armed=rows_array(sorted(beats), 2), boot_offsets=per_boot,
         notes={"system_id": vehicle, "component_id": chosen % 256, "radio_senders": dict(radio_senders), **cut_off,
                "other_vehicles": others,
                "clock_offset_s": float(np.median(offset)) if len(offset) and boot_clock else None,

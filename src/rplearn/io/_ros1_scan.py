@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import Any, BinaryIO
 
-_OP_MSGDATA, _OP_BAGHEADER, _OP_IDXDATA, _OP_CHUNK, _OP_CHUNK_INFO, _OP_CONNECTION = 2, 3, 4, 5, 6, 7
+OP_MSGDATA, _OP_BAGHEADER, _OP_IDXDATA, _OP_CHUNK, _OP_CHUNK_INFO, OP_CONNECTION = 2, 3, 4, 5, 6, 7
 
 
 @dataclass
@@ -100,7 +100,7 @@ def _header(buf: bytes, at: int) -> tuple[dict[str, bytes], int, int] | None:
     return fields, hend + 4, struct.unpack_from("<I", buf, hend)[0]
 
 
-def _record(buf: bytes, at: int) -> tuple[dict[str, bytes], int, int] | None:
+def bag_record(buf: bytes, at: int) -> tuple[dict[str, bytes], int, int] | None:
     """The whole record starting at ``at``: ``(header fields, data start, data end)``; None
     when it runs past the end of ``buf`` or its header does not parse."""
     head = _header(buf, at)
@@ -161,18 +161,18 @@ def _chunk_records(scan: Ros1Scan, raw: bytes, chunk_pos: int, owner: Any) -> tu
     times: list[int] = []
     counts: dict[int, int] = {}
     while at < len(raw):
-        rec = _record(raw, at)
+        rec = bag_record(raw, at)
         if rec is None:
             break
         fields, dstart, dend = rec
         op = fields["op"][0]
-        if op == _OP_CONNECTION:
+        if op == OP_CONNECTION:
             try:
                 conn = _connection(fields, raw[dstart:dend], owner)
             except (KeyError, ValueError, struct.error, UnicodeDecodeError):
                 break
             scan.connections.setdefault(conn.id, conn)
-        elif op == _OP_MSGDATA:
+        elif op == OP_MSGDATA:
             try:
                 conn_id = struct.unpack("<I", fields["conn"])[0]
                 sec, nsec = struct.unpack("<II", fields["time"])
@@ -193,7 +193,7 @@ def _chunk_records(scan: Ros1Scan, raw: bytes, chunk_pos: int, owner: Any) -> tu
     return found, at
 
 
-_KNOWN_OPS = (_OP_CHUNK, _OP_IDXDATA, _OP_CONNECTION, _OP_CHUNK_INFO, _OP_BAGHEADER)
+_KNOWN_OPS = (_OP_CHUNK, _OP_IDXDATA, OP_CONNECTION, _OP_CHUNK_INFO, _OP_BAGHEADER)
 
 
 def _stop(scan: Ros1Scan, at: int, what: str) -> Ros1Scan:
@@ -223,7 +223,7 @@ def _scan_buffer(buf: Any, owner: Any) -> Ros1Scan:
 
     scan = Ros1Scan()
     line = buf.find(b"\n") + 1
-    head = _record(buf, line)
+    head = bag_record(buf, line)
     if head is None:
         return _stop(scan, line, "the bag header record")
     index_pos = struct.unpack("<Q", head[0]["index_pos"])[0] if len(head[0].get("index_pos", b"")) == 8 else 0
@@ -236,7 +236,7 @@ def _scan_buffer(buf: Any, owner: Any) -> Ros1Scan:
                          else "the header of the first record after the bag header")
         fields, dstart, dlen = found
         op, dend = fields["op"][0], dstart + dlen
-        if op == _OP_MSGDATA:
+        if op == OP_MSGDATA:
             return _stop(scan, at, f"message records outside any chunk after chunk {number} (a chunk its "
                                    "recorder never closed)")
         if op not in _KNOWN_OPS:
@@ -271,7 +271,7 @@ def _scan_buffer(buf: Any, owner: Any) -> Ros1Scan:
         elif dend > len(buf):
             what = "the index data" if op == _OP_IDXDATA else "the bag's index"
             return _stop(scan, at, f"{what} after chunk {number}")
-        elif op == _OP_CONNECTION:
+        elif op == OP_CONNECTION:
             try:
                 conn = _connection(fields, buf[dstart:dend], owner)
             except (KeyError, ValueError, struct.error, UnicodeDecodeError):
@@ -319,7 +319,7 @@ def ros1_trailing_bytes(path: str | os.PathLike) -> tuple[int, bool]:
     with open(path, "rb") as fh:
         head = fh.read(4096 + 64)
         line = head.find(b"\n") + 1
-        rec = _record(head, line)
+        rec = bag_record(head, line)
         if rec is None:
             return 0, False
         fields = rec[0]

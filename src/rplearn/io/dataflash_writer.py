@@ -36,7 +36,7 @@ from rplearn.core.geometry import enu_to_ned
 from rplearn.errors import InputError
 from rplearn.io._common import Logs
 from rplearn.io.geodetic import local_ned_to_geodetic
-from rplearn.io.tlog import BOOT_LEAD_S, TlogDefects, _check, dbm_to_sik_rssi, station_pose, vehicle_fields
+from rplearn.io.tlog import BOOT_LEAD_S, TlogDefects, checked_logs, dbm_to_sik_rssi, station_pose, vehicle_fields
 
 _HEAD = b"\xa3\x95"
 #: name -> (type, struct format, DataFlash format, columns)
@@ -104,7 +104,7 @@ def write_dataflash(
     if not isinstance(defects, TlogDefects) or defects.reboot_at_s is not None:
         raise InputError("defects: a DataFlash file holds one boot; give a TlogDefects without reboot_at_s",
                          param="defects")
-    pose, signal = _check(logs, vehicle, station, origin_geodetic)
+    pose, signal = checked_logs(logs, vehicle, station, origin_geodetic)
     origin = tuple(float(v) for v in origin_geodetic)
     v = vehicle_fields(pose, vehicle, origin)  # type: ignore[arg-type]
     t0 = float(min(v["t"][0], signal["t"].min())) - BOOT_LEAD_S

@@ -352,11 +352,11 @@ class MavlinkSource:
     """
 
     def __init__(self, connection: str, record_path: str, reader: ReaderOptions, read_every_s: float = 1.0) -> None:
-        from rplearn.io._mavlink_records import _mavutil
+        from rplearn.io._mavlink_records import mavutil_module
         from rplearn.io.tlog_tail import TlogTail
 
         try:
-            self.conn = _mavutil().mavlink_connection(connection, dialect="ardupilotmega")
+            self.conn = mavutil_module().mavlink_connection(connection, dialect="ardupilotmega")
         except Exception as exc:
             raise InputError(f"{connection}: cannot open the MAVLink connection ({type(exc).__name__}: {exc})",
                              param="source") from None
@@ -446,7 +446,7 @@ def replay_tlog(path: str, address: str, speed: float = 1.0, start_delay_s: floa
     int
         Messages sent.
     """
-    from rplearn.io._mavlink_records import _mavutil, _open
+    from rplearn.io._mavlink_records import mavutil_module, open_mavlink_log
 
     if not speed > 0:
         raise InputError(f"speed: expected a positive factor, got {speed}", param="speed")
@@ -455,8 +455,8 @@ def replay_tlog(path: str, address: str, speed: float = 1.0, start_delay_s: floa
         target = (host or "127.0.0.1", int(port))
     except ValueError:
         raise InputError(f"address: expected HOST:PORT, got {address!r}", param="address") from None
-    mavutil = _mavutil()
-    log = _open(str(path))  # a file, never a connection string
+    mavutil = mavutil_module()
+    log = open_mavlink_log(str(path))  # a file, never a connection string
     enc = mavutil.mavlink.MAVLink(None)
     sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     sent, t0, wall0, boot0 = 0, None, 0.0, None

@@ -108,7 +108,7 @@ from rplearn.io._common import Logs
 from rplearn.io._dataflash_records import collect_dataflash
 from rplearn.io._mavlink_records import Raw, collect_tlog
 from rplearn.io.geodetic import geodetic_to_enu
-from rplearn.io.options import _check_origin
+from rplearn.io.options import check_origin
 
 #: SiK RSSI units per dB and the dBm of a raw 0 (``dBm = raw / 1.9 - 127``, see the module docstring).
 SIK_UNITS_PER_DB = 1.9
@@ -207,13 +207,13 @@ def _station(
     return (lat, lon, alt), f"station placed at the vehicle's first position fix (no {home} in the log)"
 
 
-def _increasing(t: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def increasing_times(t: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Strictly increasing times with their values, the first of repeated instants kept."""
     t_u, first = np.unique(t, return_index=True)
     return t_u, values[first]
 
 
-def _step_state(t: np.ndarray, events: np.ndarray, default: float) -> np.ndarray:
+def step_state(t: np.ndarray, events: np.ndarray, default: float) -> np.ndarray:
     """The value of the latest event (rows ``t, value``) at or before each time; before the
     first event, the first event's value (``default`` without events)."""
     if not len(events):
@@ -223,15 +223,15 @@ def _step_state(t: np.ndarray, events: np.ndarray, default: float) -> np.ndarray
     return ev[np.clip(np.searchsorted(et, t, side="right") - 1, 0, len(et) - 1)]
 
 
-def _fixes(raw: Raw, source: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[dict[str, Any]]]:
+def position_fixes(raw: Raw, source: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[dict[str, Any]]]:
     """The position fixes (times, rows of ``raw.pos``) sorted, which are valid, and the excluded
     periods (:mod:`rplearn.io.mavlink_phases`)."""
     pos = raw.pos[np.all(np.isfinite(raw.pos[:, :4]), axis=1)]
     if len(pos) < 2:
         what = "GLOBAL_POSITION_INT" if raw.fmt == "tlog" else "POS or GPS"
         raise LogFormatError(f"{source}: fewer than 2 {what} position fixes of the vehicle")
-    tp, pos = _increasing(pos[:, 0], pos)
-    fix_ok = _step_state(tp, raw.fix, 1.0) > 0.5
+    tp, pos = increasing_times(pos[:, 0], pos)
+    fix_ok = step_state(tp, raw.fix, 1.0) > 0.5
     joined = None
     if raw.prefix is not None and len(raw.prefix):  # a window: the fixes read earlier first
         pos = np.concatenate([raw.prefix, pos])
@@ -266,7 +266,7 @@ def _vehicle_pose(raw: Raw, fixes: tuple[np.ndarray, np.ndarray, np.ndarray, lis
     dropped["nan_attitude"] = int((~ok).sum())
     att = att[ok]
     n_att = len(att)
-    ta, att_v = _increasing(att[:, 0], att[:, 1:4])
+    ta, att_v = increasing_times(att[:, 0], att[:, 1:4])
     dropped["duplicate_time"] = n_att - len(ta)
     where = phases.in_periods(ta, periods)
     for reason in phases.REASONS:
@@ -288,7 +288,7 @@ def _vehicle_pose(raw: Raw, fixes: tuple[np.ndarray, np.ndarray, np.ndarray, lis
     frame = pd.DataFrame({"t": t, "node": node, "x": xyz[:, 0], "y": xyz[:, 1], "z": xyz[:, 2],
                           "qw": q[:, 0], "qx": q[:, 1], "qy": q[:, 2], "qz": q[:, 3]})
     if len(raw.armed):
-        frame["armed"] = _step_state(t, raw.armed, 0.0) > 0.5
+        frame["armed"] = step_state(t, raw.armed, 0.0) > 0.5
     return frame
 
 
@@ -435,7 +435,7 @@ class MavlinkOptions:
 
     def __post_init__(self) -> None:
         for name in ("station_geodetic", "origin_geodetic"):
-            object.__setattr__(self, name, _check_origin(getattr(self, name), name))
+            object.__setattr__(self, name, check_origin(getattr(self, name), name))
         sid = self.system_id
         if sid is not None and (isinstance(sid, bool) or not isinstance(sid, numbers.Integral) or not 0 <= sid <= 255):
             raise InputError(f"system_id: expected a MAVLink system id 0-255, got {sid!r}", param="system_id")
@@ -516,7 +516,7 @@ def read_mavlink(
                      options.station_heading_deg)
     fmt = _detect(source)
     raw = collect_tlog(source, options.system_id) if fmt == "tlog" else collect_dataflash(source)
-    logs, meta = _from_raw(raw, source, (tx_power_dbm, float(frequency_hz)), vehicle, station, options)
+    logs, meta = logs_from_raw(raw, source, (tx_power_dbm, float(frequency_hz)), vehicle, station, options)
     cut, cut_name, corrupt, records = (
         _dataflash_walk(source) if fmt == "dataflash"
         else (raw.notes.pop("cut_off_at_byte", None), raw.notes.pop("cut_off_record", None),
@@ -526,7 +526,7 @@ def read_mavlink(
     return logs, meta
 
 
-def _from_raw(raw: Raw, source: str, radio: tuple[float | Mapping[str, float], float], vehicle: str | None,
+def logs_from_raw(raw: Raw, source: str, radio: tuple[float | Mapping[str, float], float], vehicle: str | None,
               station: str, options: MavlinkOptions) -> tuple[Logs, dict[str, Any]]:
     """Pose and signal logs and the metadata (without the cut-off record) of a log's :class:`Raw`
     arrays (:func:`read_mavlink`; also of a growing log read so far, :mod:`rplearn.io.tlog_tail`)."""
@@ -543,7 +543,7 @@ def _from_raw(raw: Raw, source: str, radio: tuple[float | Mapping[str, float], f
     vehicle = vehicle or f"sys{raw.notes.get('system_id', 1)}"
     if vehicle == station:
         raise InputError(f"vehicle and station must differ, both are {vehicle!r}", param="station")
-    fixes = _fixes(raw, source)
+    fixes = position_fixes(raw, source)
     station_geo, station_note = _station(raw, station_geodetic, fixes[1][fixes[2]][0])
     origin = station_geo if origin_geodetic is None else tuple(float(v) for v in origin_geodetic)
     dropped: dict[str, int] = {}

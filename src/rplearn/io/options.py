@@ -33,7 +33,7 @@ def _mapping(value: Any, name: str, key_is_path: bool = False) -> dict[Any, Any]
     return dict(value)
 
 
-def _check_origin(origin: Any, name: str = "origin_geodetic") -> tuple[float, float, float] | None:
+def check_origin(origin: Any, name: str = "origin_geodetic") -> tuple[float, float, float] | None:
     """A geodetic position as three floats (lat [deg], lon [deg], alt [m]), or None."""
     if origin is None:
         return None
@@ -183,8 +183,8 @@ class ReaderOptions:
         for name in ("nodes", "receivers"):
             set_(self, name, _mapping(getattr(self, name), name, key_is_path=True))
         set_(self, "rssi_topics", _check_rssi_topics(self.rssi_topics))
-        set_(self, "origin_geodetic", _check_origin(self.origin_geodetic))
-        set_(self, "station_geodetic", _check_origin(self.station_geodetic, "station_geodetic"))
+        set_(self, "origin_geodetic", check_origin(self.origin_geodetic))
+        set_(self, "station_geodetic", check_origin(self.station_geodetic, "station_geodetic"))
         if not isinstance(self.station, str) or not self.station.strip():
             raise InputError(f"station: expected a node id, got {self.station!r}", param="station")
         if self.station_heading_deg is not None and not is_finite_real(self.station_heading_deg):

@@ -252,7 +252,7 @@ def _damaged_entries(reader: Any, connections: list) -> list[dict[str, Any]]:
     ``connections`` it held that cannot be read); those index entries are removed from the
     reader, so that the other chunks are read. Empty for a ROS 2 bag or a bag read record by
     record (:mod:`rplearn.io._ros1_scan`, which says where it stopped)."""
-    from rplearn.io._ros1_scan import _OP_CONNECTION, _OP_MSGDATA, _record
+    from rplearn.io._ros1_scan import OP_CONNECTION, OP_MSGDATA, bag_record
 
     readers = getattr(reader, "readers", None) or []
     one = readers[0] if len(readers) == 1 else None
@@ -276,10 +276,10 @@ def _damaged_entries(reader: Any, connections: list) -> list[dict[str, Any]]:
             raw = None
         bad = []
         for cid, e in entries:
-            rec = None if raw is None else _record(raw, e.offset)
-            while rec is not None and rec[0]["op"][:1] == bytes([_OP_CONNECTION]):
-                rec = _record(raw, rec[2]) if raw is not None else None
-            ok = (rec is not None and rec[0]["op"][:1] == bytes([_OP_MSGDATA])
+            rec = None if raw is None else bag_record(raw, e.offset)
+            while rec is not None and rec[0]["op"][:1] == bytes([OP_CONNECTION]):
+                rec = bag_record(raw, rec[2]) if raw is not None else None
+            ok = (rec is not None and rec[0]["op"][:1] == bytes([OP_MSGDATA])
                   and rec[0].get("conn") == cid.to_bytes(4, "little")
                   and len(rec[0].get("time", b"")) == 8
                   and int.from_bytes(rec[0]["time"][:4], "little") * 10**9

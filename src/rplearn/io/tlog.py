@@ -88,7 +88,7 @@ def _dialect() -> Any:
     return ardupilotmega
 
 
-def _check(logs: Logs, vehicle: str, station: str, origin_geodetic: Any) -> tuple[pd.DataFrame, pd.DataFrame]:
+def checked_logs(logs: Logs, vehicle: str, station: str, origin_geodetic: Any) -> tuple[pd.DataFrame, pd.DataFrame]:
     if logs.pose is None or logs.signal is None:
         raise InputError("write_tlog: needs both a pose log and a signal log", param="logs")
     pose, signal = logs.pose, logs.signal
@@ -364,7 +364,7 @@ def write_tlog(
     if not (isinstance(start_unix_s, (int, float, np.number)) and 0 <= float(start_unix_s) < 2**63 / 1e6):
         raise InputError(f"start_unix_s: expected a time in seconds since the UNIX epoch, got {start_unix_s!r}",
                          param="start_unix_s")
-    pose, signal = _check(logs, vehicle, station, origin_geodetic)
+    pose, signal = checked_logs(logs, vehicle, station, origin_geodetic)
     origin = tuple(float(v) for v in origin_geodetic)
     if defects is not None and not isinstance(defects, TlogDefects):
         raise InputError(f"defects: expected a TlogDefects, got {type(defects).__name__}", param="defects")

@@ -4,7 +4,7 @@
 the last whole record read: every poll parses only the records appended since (a record still
 being written, its 8-byte time or its frame cut, waits for its end), each through the per-message
 function of the offline reader (:class:`rplearn.io._mavlink_records.TlogRows`), and converts them
-by the offline reader's own steps (``read_mavlink``'s conversion, :func:`rplearn.io.mavlink._from_raw`),
+by the offline reader's own steps (``read_mavlink``'s conversion, :func:`rplearn.io.mavlink.logs_from_raw`),
 so that a row is converted exactly as ``sync`` converts it.
 
 Until the first rows are handed out, the conversion runs over every message so far; from then on
@@ -69,8 +69,8 @@ import pandas as pd
 from rplearn._argtypes import check_types
 from rplearn.errors import InputError, LogFormatError
 from rplearn.io._log_schema import library_quiet
-from rplearn.io._mavlink_records import TlogRows, _open, tlog_raw
-from rplearn.io.mavlink import MavlinkOptions, _fixes, _from_raw
+from rplearn.io._mavlink_records import TlogRows, open_mavlink_log, tlog_raw
+from rplearn.io.mavlink import MavlinkOptions, logs_from_raw, position_fixes
 from rplearn.io.options import ReaderOptions
 from rplearn.io.tlog_window import KEEP_S, TlogWindow
 
@@ -224,7 +224,7 @@ class TlogTail:
             if not os.path.exists(self.path) or os.path.getsize(self.path) == 0:
                 return 0
             with library_quiet():
-                self._conn = _open(self.path)
+                self._conn = open_mavlink_log(self.path)
         rows = self.rows if self.rows is not None else TlogRows(close_as_added=True, last_of=self._last_of)
         copies = rows.close_copies
         f = self._conn.f
@@ -287,13 +287,13 @@ class TlogTail:
         options = MavlinkOptions(station_geodetic=self._station, origin_geodetic=self.reader.origin_geodetic,
                                  station_heading_deg=self.reader.station_heading_deg)
         try:
-            logs, meta = _from_raw(raw, self.path, (self.reader.tx_power_dbm, self.reader.frequency_hz),  # type: ignore[arg-type]
+            logs, meta = logs_from_raw(raw, self.path, (self.reader.tx_power_dbm, self.reader.frequency_hz),  # type: ignore[arg-type]
                                    (self.reader.nodes or {}).get(self.path), self.reader.station, options)
         except LogFormatError:  # fewer than 2 valid fixes, no radio report yet
             return empty, empty
         if self._station is None and (final or flown >= HOME_WAIT_S):
             self._station = tuple(meta["station_geodetic"])  # the first valid fix, as sync takes it
-            tp, _, valid, _ = _fixes(raw, self.path)
+            tp, _, valid, _ = position_fixes(raw, self.path)
             self._station_fix_t, self._station_from_fix = float(tp[valid][0]), True  # until sync's moves (_recheck_station)
         if final:
             hand_to = math.inf
@@ -327,7 +327,7 @@ class TlogTail:
             self._move_station(tuple(raw.home))
             return
         try:
-            tp, pos, valid, _ = _fixes(raw, self.path)
+            tp, pos, valid, _ = position_fixes(raw, self.path)
         except LogFormatError:
             return
         at = np.flatnonzero(tp == self._station_fix_t)
@@ -378,7 +378,7 @@ class TlogTail:
             self._vehicle_changed = True
             for what in ("pose", "signal"):
                 self.dropped[f"withdrawn_{what}_rows"] += self._total[what]
-        fixes = _fixes(raw, self.path)
+        fixes = position_fixes(raw, self.path)
         for k, n in w.revisit(fixes[2][:len(w.prefix)]).items():
             self.dropped[k] += n
         to = math.inf if final else self._covered - KEEP_S

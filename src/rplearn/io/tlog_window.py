@@ -3,7 +3,7 @@
 A poll of ``rplearn live``'s MAVLink source converts only a window of the log: the messages
 since the *anchor*, a position fix at least :data:`KEEP_S` before the rows last handed out, plus
 a bounded summary of the past, built so that every row after the anchor is converted as the
-offline reader (:func:`rplearn.io.mavlink._from_raw` over the whole log so far) converts it.
+offline reader (:func:`rplearn.io.mavlink.logs_from_raw` over the whole log so far) converts it.
 The offline reader's rules that look at the whole log, and their causal forms here:
 
 - the vehicle (the system sending most ATTITUDE), the boot clock's use and the station: fixed
@@ -37,7 +37,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from rplearn.io import mavlink_phases as phases
-from rplearn.io._mavlink_records import _MAV_TYPE_GCS, _ORIGIN_TYPES, Raw, TlogRows, _arr
+from rplearn.io._mavlink_records import MAV_TYPE_GCS, ORIGIN_TYPES, Raw, TlogRows, rows_array
 from rplearn.io.geodetic import geodetic_to_enu
 from rplearn.io.tlog_copies import ReportCopies
 
@@ -115,13 +115,13 @@ class TlogWindow:
         return self.boot_clock and self.att_total - self.att_repeats < 0.9 * self.att_total
 
     def fix_step_origin(self) -> None:
-        """The geodetic origin of the step test: the first fix of the log (``_fixes``'s)."""
-        from rplearn.io.mavlink import _increasing
+        """The geodetic origin of the step test: the first fix of the log (``position_fixes``'s)."""
+        from rplearn.io.mavlink import increasing_times
 
         pos = self.raw().pos
         pos = pos[np.all(np.isfinite(pos[:, :4]), axis=1)]
         if len(pos):
-            self.step_origin = tuple(_increasing(pos[:, 0], pos)[1][0, 1:4])
+            self.step_origin = tuple(increasing_times(pos[:, 0], pos)[1][0, 1:4])
 
     # --- messages in ---------------------------------------------------------------------------
     def add(self, rows: TlogRows) -> None:
@@ -150,7 +150,7 @@ class TlogWindow:
         gaps = self.copies.add(radio)
         self.radio = np.concatenate([self.radio, np.column_stack([radio, gaps, np.zeros(len(radio))])])
         self.vehicle_t = np.concatenate([self.vehicle_t, np.sort(rows.times(self.vehicle))])
-        origin = [h[1] for k in _ORIGIN_TYPES for h in rows.rows[k] if h[0] // 256 == self.vehicle and (h[2] != 0 or h[3] != 0)]
+        origin = [h[1] for k in ORIGIN_TYPES for h in rows.rows[k] if h[0] // 256 == self.vehicle and (h[2] != 0 or h[3] != 0)]
         if origin:
             self.has_origin, self.last_origin = True, max(self.last_origin, max(origin))
             self.origin_t = np.sort(np.concatenate([self.origin_t, origin]))
@@ -158,11 +158,11 @@ class TlogWindow:
             home = [h for h in rows.rows["HOME_POSITION"] if h[0] // 256 == self.vehicle and (h[2] != 0 or h[3] != 0)]
             self.home = (float(home[0][2]), float(home[0][3]), float(home[0][4])) if home else None
         fix = [r[1:] for r in rows.rows["GPS_RAW_INT"] if r[0] // 256 == self.vehicle]
-        beats = [r[1:3] for r in rows.rows["HEARTBEAT"] if r[0] // 256 == self.vehicle and r[3] != _MAV_TYPE_GCS]
+        beats = [r[1:3] for r in rows.rows["HEARTBEAT"] if r[0] // 256 == self.vehicle and r[3] != MAV_TYPE_GCS]
         if fix:
-            self.fix = _arr(sorted([tuple(r) for r in self.fix.tolist()] + fix), 2)
+            self.fix = rows_array(sorted([tuple(r) for r in self.fix.tolist()] + fix), 2)
         if beats:
-            self.armed = _arr(sorted([tuple(r) for r in self.armed.tolist()] + beats), 2)
+            self.armed = rows_array(sorted([tuple(r) for r in self.armed.tolist()] + beats), 2)
 
     def _boots(self, both: np.ndarray) -> np.ndarray:
         """Each message's boot, as :func:`rplearn.io._mavlink_records.boot_offsets` numbers them
@@ -261,7 +261,7 @@ class TlogWindow:
         present one), or, in a gap of fixes longer than ``max_gap_s`` [s] (the reader's longest
         bridged gap), into the gap (:meth:`_gap_anchor`), folding what lies before it into the
         summary. ``raw`` is :meth:`raw`'s output, ``verdict`` the times of its fixes and which
-        are valid (``_fixes``), ``handed`` the times of the rows handed out after the present
+        are valid (``position_fixes``), ``handed`` the times of the rows handed out after the present
         anchor (those before the new one are counted in their piece). Returns the reports left
         behind that could not be judged."""
         fixes_t = raw.pos[:, 0]
@@ -321,11 +321,11 @@ class TlogWindow:
     def _fold_pieces(self, raw: Raw, anchor: float, boot: int, verdict: tuple[np.ndarray, np.ndarray],
                      handed: dict[str, np.ndarray]) -> None:
         """The anchor's boot's fixes before the anchor as the ends of their pieces."""
-        from rplearn.io.mavlink import _increasing, _step_state
+        from rplearn.io.mavlink import increasing_times, step_state
 
         pos = raw.pos[np.all(np.isfinite(raw.pos[:, :4]), axis=1)]
-        tp, pos = _increasing(pos[:, 0], pos)
-        ok = (_step_state(tp, raw.fix, 1.0) > 0.5) & (pos[:, 6] == boot) & (tp < anchor)
+        tp, pos = increasing_times(pos[:, 0], pos)
+        ok = (step_state(tp, raw.fix, 1.0) > 0.5) & (pos[:, 6] == boot) & (tp < anchor)
         gone = pos[ok]
         same_boot = len(self.prefix) and int(self.prefix[0, 6]) == boot
         prefix = self.prefix if same_boot else np.zeros((0, 7))
@@ -377,7 +377,7 @@ class TlogWindow:
 
     def revisit(self, valid: np.ndarray) -> dict[str, int]:
         """Changes of the counts of rows whose verdict changed behind the anchor, given which
-        fixes of the conversion (``_fixes``: the prefix's rows first) are valid: a piece turned
+        fixes of the conversion (``position_fixes``: the prefix's rows first) are valid: a piece turned
         invalid withdraws the rows handed out in it (or, if none were, takes back the messages
         it was counted late by); one turned valid again gives them back (the withdrawn count
         falls by them), or, if none were handed out, counts the messages it holds late. So a
