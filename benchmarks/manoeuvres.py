@@ -7,7 +7,8 @@ time:
 
 - **reference**: the preset's learning units (``paper``: the paper's three units; ``ground``:
   its passes, since a static station cannot fly the paper's vertical circle);
-- **suggested**: the reference's first :data:`START_S` seconds (10 s), then, one after another, the
+- **suggested**: the reference's first seconds until ``rplearn live`` has its first suggestion
+  (:func:`live_start_s`: 2 s; 10 s before, an arbitrary choice), then, one after another, the
   manoeuvre :func:`rplearn.analysis.manoeuvres.rank_manoeuvres` ranks first from the statistics
   and the latest poses so far (each flown in the simulator from where the last one ended);
 - **optimized**: the plan of ``rplearn trajectory --optimize``
@@ -533,6 +534,7 @@ from rplearn.core.lsq.penalty import penalty_vector
 from rplearn.core.lsq.solver import solve
 from rplearn.data.sync import SyncOptions, synchronise
 from rplearn.data.tables import link_samples
+from rplearn.models.auto import SAMPLES_PER_COEF
 from rplearn.models.own_posterior import OwnPrior, own_pattern_posterior
 from rplearn.models.patterns import PatternSet
 from rplearn.models.spec import ModelSpec
@@ -540,11 +542,32 @@ from rplearn.plan.campaign import Campaign
 from rplearn.plan.manoeuvres import CandidateOptions
 from rplearn.sim import simulate
 from rplearn.sim.presets import make_preset
+from rplearn.workflows.live import LiveOptions
 
 TARGET_DB = 2.0
 TIME_RATIO = 0.6
 STEP_S = 2.0
-START_S = 10.0
+#: ``rplearn live``'s refit cadence [s] (``--refit-s``'s default): its first suggestion is ranked
+#: after its first refit, which a replay of the logs (:func:`rplearn.workflows.live.replay_session`)
+#: makes at the first multiple of it in log time at which ``--order auto`` has SH-2's samples.
+LIVE_REFIT_S = LiveOptions().refit_s
+
+
+def live_start_s(t_in: np.ndarray, n_nodes: int) -> float:
+    """The flight time at which ``rplearn live`` has its first suggestion on a flight whose samples
+    arrive at ``t_in`` [s]: its first refit, at the first multiple of :data:`LIVE_REFIT_S` with at
+    least the samples :func:`rplearn.models.auto.auto_orders` needs for SH-2 (``n_nodes * 4 *
+    SAMPLES_PER_COEF``). Measured by replaying the start's logs through ``replay_session`` with
+    ``live_advisor`` (seeds 0-1 of ``paper`` and ``ground``): the first refit and its ranking at
+    2 s of log time, 301-307 samples learned. The ranking's own computing time is not counted (as
+    for every later step of the suggested flight): one thread, load about 5 on 2 cores, it took
+    3 s on ``ground`` (39 candidates) and 9-10 s on ``paper`` (321), during which a real flight
+    flies on."""
+    need = n_nodes * 4 * SAMPLES_PER_COEF
+    t = np.sort(np.asarray(t_in, np.float64))
+    if t.size < need:
+        raise ValueError(f"the start flight has {t.size} samples, fewer than the {need} live's first refit needs")
+    return float(LIVE_REFIT_S * max(1, np.ceil(t[need - 1] / LIVE_REFIT_S)))
 PRIOR_STD_DB = 6.0
 #: Independent noise draws of every flight plan for the expected error (``--draws``).
 DRAWS = 5
@@ -822,12 +845,14 @@ def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, 
     ref = setup.flight("reference")
     ref.plan = [(tuple(learning), 0.0, None)]
     accumulate(setup, ref, ref_parts)
-    # suggested: the reference's first START_S seconds, then the top-ranked manoeuvre, repeatedly
+    # suggested: the reference's first seconds until live's first suggestion, then the top-ranked manoeuvre, repeatedly
     sug = setup.flight("suggested")
     start_parts, poses = fly(setup, (learning[0],))
-    accumulate(setup, sug, start_parts[:1], until_s=START_S)
-    sug.plan = [((learning[0],), 0.0, START_S)]
-    poses = poses[poses["t"] <= START_S]
+    start_s = live_start_s(start_parts[0][1], len(nodes))
+    print(f"  suggested flight's start: {start_s:g} s (live's first refit and suggestion)")
+    accumulate(setup, sug, start_parts[:1], until_s=start_s)
+    sug.plan = [((learning[0],), 0.0, start_s)]
+    poses = poses[poses["t"] <= start_s]
     if tilt:  # the wind's drag the drones lean against, from the start's poses (both planners)
         accel = steady_tilt_accel(poses, FIXED.get(preset, ()))
         setup.options = opts = replace(opts, steady_accel_enu_m_s2=accel)
