@@ -497,7 +497,13 @@ replaying the benchmark's own start flight through ``replay_session`` with ``liv
 (paper and ground, seeds 0-1) gave the first refit and ranking at 2 s of log time on all four.
 The start is therefore 2 s (computed by :func:`live_start_s` from the same rule); the ranking's
 computing time (first ranking: 10-15 s on paper, 1-3 s on ground, one thread, load 5) is not
-counted, as for no later step. Time ratio and expected-error difference (plan minus reference,
+counted, as for no later step. What live ranks first is weaker than what this benchmark ranks
+from: its first fit (about 300 samples) sat at an end of the smoothing grid (ground seed 0: SH-2
+at the largest smoothing, every candidate's predicted spread 0.0002 dB, below the
+``--until-spread`` floor, so all 39 score alike; paper seed 0: no smoothing, 17 dB), and a
+session with ``--until-spread 2`` alone ended at that first refit (paper and ground seed 0: the
+spread over the covered 1-2 % of the sphere 0.4-0.95 dB; not changed here). Time ratio and
+expected-error difference (plan minus reference,
 dB; ``*``: a check missed; the "10 s" column is the "whole" column above, its seeds 0-2 times
 flown again with ``--draws 0`` in this state and repeated figure for figure):
 
