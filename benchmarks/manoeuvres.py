@@ -502,7 +502,9 @@ from: its first fit (about 300 samples) sat at an end of the smoothing grid (gro
 at the largest smoothing, every candidate's predicted spread 0.0002 dB, below the
 ``--until-spread`` floor, so all 39 score alike; paper seed 0: no smoothing, 17 dB), and a
 session with ``--until-spread 2`` alone ended at that first refit (paper and ground seed 0: the
-spread over the covered 1-2 % of the sphere 0.4-0.95 dB; not changed here). Time ratio and
+spread over the covered 1-2 % of the sphere 0.4-0.95 dB; since then ``--until-spread`` reads the
+spread over the sphere, over the covered directions only with a coverage target, and a fit at
+the largest smoothing gives no spread: :mod:`rplearn.workflows.live`). Time ratio and
 expected-error difference (plan minus reference,
 dB; ``*``: a check missed; the "10 s" column is the "whole" column above, its seeds 0-4 times
 flown again with ``--draws 0`` in this state and repeated figure for figure):
