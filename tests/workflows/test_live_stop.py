@@ -12,6 +12,7 @@ from rplearn.core.lsq.selection import MAX_SMOOTHING, at_smoothing_cap
 from rplearn.errors import InputError
 from rplearn.sim import simulate
 from rplearn.workflows.live import LiveOptions, replay_session
+from rplearn.workflows.live_status import LiveStatus, page_rows, spread_text
 
 
 @pytest.fixture(scope="module")
@@ -72,3 +73,11 @@ def test_a_fit_at_the_largest_smoothing_ends_no_session(smoke, tmp_path):
 def test_at_smoothing_cap():
     assert at_smoothing_cap(MAX_SMOOTHING) and not at_smoothing_cap(MAX_SMOOTHING / 10.0)
     assert not at_smoothing_cap(0.0) and not at_smoothing_cap(10.0)
+
+
+def test_a_spread_not_known_reads_so_in_the_view():
+    assert spread_text(math.inf) == "not known yet" and spread_text(1.234) == "1.23 dB"
+    status = LiveStatus(spread_db={"A": math.inf}, sphere_spread_db={"A": math.inf}, coverage_pct={"A": 3.0})
+    _, nodes = page_rows(status)
+    assert nodes[1] == ["A", "3.0%", "not known yet", "not known yet"]
+    assert "spread not known yet covered, not known yet sphere" in status.summary()

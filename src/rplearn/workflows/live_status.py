@@ -88,8 +88,8 @@ class LiveStatus:
         lines += [f"  dropped ({r}): {n}" for r, n in self.dropped.items() if n]
         lines.append(f"  prequential RMSE {prequential_text(self)}, noise {self.noise_db:.2f} dB")
         for node in self.spread_db:
-            lines.append(f"  {node}: coverage {self.coverage_pct[node]:.1f}%, spread {self.spread_db[node]:.2f} dB covered, "
-                         f"{self.sphere_spread_db[node]:.2f} dB sphere")
+            lines.append(f"  {node}: coverage {self.coverage_pct[node]:.1f}%, spread {spread_text(self.spread_db[node])} covered, "
+                         f"{spread_text(self.sphere_spread_db[node])} sphere")
         lines += [f"  budget: {b}" for b in self.budget]
         if self.manoeuvres:
             lines.append(f"  {ranking_text(self)}")
@@ -151,6 +151,12 @@ class Prequential:
 
 
 @check_types
+def spread_text(spread_db: float) -> str:
+    """A node's spread as the view shows it: ``"1.23 dB"``, or ``"not known yet"`` when the fit
+    gives none (infinite: a fit at the search's largest smoothing, :mod:`rplearn.workflows.live`)."""
+    return f"{spread_db:.2f} dB" if math.isfinite(spread_db) else "not known yet"
+
+
 def ranking_text(status: LiveStatus) -> str:
     """When the manoeuvres shown were ranked ('' before the first ranking)."""
     s = status
@@ -189,7 +195,7 @@ def page_rows(status: LiveStatus) -> tuple[list[tuple[str, str]], list[list[str]
     if s.stopped:
         rows.append(("stopped", s.stopped))
     nodes = [["node", "coverage", "spread where looked", "spread on the sphere"]]
-    nodes += [[n, f"{s.coverage_pct[n]:.1f}%", f"{s.spread_db[n]:.2f} dB", f"{s.sphere_spread_db[n]:.2f} dB"]
+    nodes += [[n, f"{s.coverage_pct[n]:.1f}%", spread_text(s.spread_db[n]), spread_text(s.sphere_spread_db[n])]
               for n in s.spread_db]
     return rows, nodes
 
