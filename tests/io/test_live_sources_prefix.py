@@ -20,18 +20,19 @@ POSE_HEAD = "t,node,x,y,z,qw,qx,qy,qz\n"
 SIGNAL_HEAD = "t,tx,rx,rssi_dbm,tx_power_dbm,frequency_hz\n"
 
 
-def _row(t: float, node: str, x: float, y: float, z: float) -> str:
-    return f"{t:.2f},{node},{x:g},{y:g},{z:g},1,0,0,0\n"
+def _row(t: float, node: str, x: float, y: float, z: float, yaw_rad: float = 0.0) -> str:
+    return f"{t:.2f},{node},{x:g},{y:g},{z:g},{np.cos(yaw_rad / 2):.9f},0,0,{np.sin(yaw_rad / 2):.9f}\n"
 
 
 def _prefix_log(n_zero: int, n_real: int, other: bool = True, sentinel_at: int | None = None) -> list[str]:
-    """Node A: ``n_zero`` rows at 0, 0, 0 (before the fix) then ``n_real`` rows of a track 580 m away (a
-    ``z = -1000`` sentinel at real row ``sentinel_at``); node B, interleaved, a track of its own."""
+    """Node A: ``n_zero`` rows at 0, 0, 0 (before the fix; its attitude logged, turning) then ``n_real`` rows
+    of a track 580 m away (a ``z = -1000`` sentinel at real row ``sentinel_at``); node B, interleaved, a track
+    of its own."""
     lines = []
     for i in range(n_zero + n_real):
         t = 0.1 * i
         if i < n_zero:
-            lines.append(_row(t, "A", 0, 0, 0))
+            lines.append(_row(t, "A", 0, 0, 0, yaw_rad=0.01 * i))
         else:
             k = i - n_zero
             lines.append(_row(t, "A", 500 + 0.5 * k, 300, -1000 if k == sentinel_at else 50))
@@ -99,25 +100,39 @@ def test_written_in_random_pieces_the_tail_keeps_what_sync_keeps(tmp_path, seed)
     assert live_dropped == dropped == {"position_jump": n_zero + 1}
 
 
-def test_a_node_that_starts_at_the_origin_and_moves_on_is_handed_out_when_it_moves(tmp_path):
-    # odometry starting at 0, 0, 0: the first step is one the speeds explain, so the zeros are valid
-    lines = [_row(0.1 * i, "A", 0.0 if i < 5 else 0.2 * (i - 4), 0, 0) for i in range(20)]
+@pytest.mark.parametrize("still", [False, True])
+def test_a_node_that_starts_at_the_origin_and_moves_on_is_handed_out_when_it_moves(tmp_path, still):
+    # odometry starting at 0, 0, 0: the first step is one the speeds explain, so the zeros are valid; turning
+    # there they are held until it moves, standing still (one pose) they are a station's, handed out at once
+    lines = [_row(0.1 * i, "A", 0.0 if i < 5 else 0.2 * (i - 4), 0, 0, 0.0 if still else 0.01 * i) for i in range(20)]
     offline, dropped = _offline(lines)
     live, live_dropped, per_poll = _live(tmp_path, lines, [5, 8])
-    assert per_poll[:2] == [0, 8] and not dropped and not live_dropped
+    assert per_poll[:2] == ([5, 3] if still else [0, 8]) and not dropped and not live_dropped
     _same_rows(live, offline)
 
 
-def test_a_node_standing_at_the_origin_is_held_only_for_a_while(tmp_path):
-    # a station at the ENU origin looks like a logger before its fix until it stays there HOLD_S long
+def test_a_node_standing_still_at_the_origin_is_a_station_handed_out_at_once(tmp_path):
+    # the ENU origin is a station's natural place (positions measured from it): its rows are not held, so
+    # its links' rows are matched from the first poll (held, they were dropped as unknown_node for HOLD_S)
     steps = int(HOLD_S / 0.5) + 4
     lines = []
     for i in range(steps):
         lines += [_row(0.5 * i, "G", 0, 0, 0), _row(0.5 * i + 0.1, "A", 3 + 0.5 * i, 1, 10)]
-    _, _, per_poll = _live(tmp_path, lines, [2, 2 * (steps - 6), 2 * (steps - 2)])
-    assert per_poll[0] == 1  # A's row; the station's held
-    assert per_poll[1] == 2 * (steps - 6) - 2 - (steps - 7)  # A's rows; the station's still held (59 s)
-    assert per_poll[2] == 4 * 2 + (steps - 6)  # HOLD_S of the table's time passed: the station's rows handed out
+    offline, dropped = _offline(lines)
+    live, live_dropped, per_poll = _live(tmp_path, lines, [2, 2 * (steps - 6), 2 * (steps - 2)])
+    assert per_poll == [2, 2 * (steps - 6) - 2, 8, 4]  # every row as it is written
+    _same_rows(live, offline)
+    assert not dropped and not live_dropped
+
+
+def test_a_still_node_at_the_origin_that_jumps_off_it_is_refused(tmp_path):
+    # a logger before its fix that writes one pose (no attitude) looks like a station at the origin: handed out,
+    # its jump to the real track is refused (the rows matched meanwhile cannot be taken back), naming why
+    lines = [_row(0.1 * i, "A", 0, 0, 0) for i in range(10)] + [_row(1.0 + 0.1 * i, "A", 500, 300, 50) for i in range(30)]
+    with pytest.raises(InputError, match=r"node A: it stood at the zero position from its first row as one pose, taken "
+                                         r"for a station at the origin .* now jumps off it at t = 1\.000 s") as e:
+        _live(tmp_path, lines, [10, 20])
+    assert "\n" not in str(e.value)
 
 
 def test_a_zero_start_longer_than_the_hold_is_refused_when_it_jumps_not_read_wrong(tmp_path):

@@ -193,12 +193,16 @@ def _start_known(t: np.ndarray, pos: np.ndarray, zero: np.ndarray, enu: bool) ->
 class _StartHold:
     """The rows of a pose table being appended to that :class:`CsvTail` holds back at its nodes' starts
     (:func:`_start_known`), with their rows in the file; ``at_zero``: the nodes handed out at the zero position
-    when the hold ran out (:data:`HOLD_S`, :data:`HOLD_ROWS`), with their last time there."""
+    when the hold ran out (:data:`HOLD_S`, :data:`HOLD_ROWS`), with their last time there; ``stations``: those
+    of them handed out at once, standing still at the ENU origin (one pose: a station at the natural origin of
+    a frame measured from it, whose links would otherwise lose their rows as ``unknown_node`` while held; a
+    logger before its fix writes its attitude, or a lat = lon = 0 that no station has)."""
 
     source: str
     held: pd.DataFrame | None = None
     known: set[str] = field(default_factory=set)
     at_zero: dict[str, float] = field(default_factory=dict)
+    stations: set[str] = field(default_factory=set)
     rows_seen: int = 0
 
     def take(self, table: pd.DataFrame | None, final: bool) -> pd.DataFrame | None:
@@ -226,6 +230,10 @@ class _StartHold:
                 self._left_zero(node, t, pos, zero, columns[0] == "x")
             elif final or _start_known(t, pos, zero, columns[0] == "x"):
                 self.known.add(node)
+            elif columns[0] == "x" and zero.all() and len(block.loc[at].drop(columns=["t", _FILE_ROW]).drop_duplicates()) == 1:
+                self.known.add(node)  # one pose at the ENU origin: a station there, watched for a jump
+                self.stations.add(node)
+                self.at_zero[node] = float(t[-1])
             elif newest - t[0] >= HOLD_S:  # bounded: handed out as it stands, watched
                 self.known.add(node)
                 self.at_zero[node] = float(t[zero][-1])
@@ -254,8 +262,10 @@ class _StartHold:
         h, v = np.array([MAX_HORIZONTAL_SPEED_M_S]), np.array([MAX_VERTICAL_SPEED_M_S])
         if enu and not unexplained_steps(np.array([t0]), np.zeros((1, 3)), h, v, t[m:m + 1], pos[m:m + 1], h, v)[0][0]:
             return
+        how = ("as one pose, taken for a station at the origin" if node in self.stations else
+               f"for {HOLD_S:g} s or more")
         raise InputError(f"{self.source}: fields x, y, z of node {node}: it stood at the zero position from its first "
-                         f"row for {HOLD_S:g} s or more (rows handed out as valid) and now jumps off it at t = "
+                         f"row {how} (rows handed out as valid) and now jumps off it at t = "
                          f"{float(t[m]):.3f} s: a logger writing before its fix, whose zero rows sync drops; read the "
                          "file with sync, or start the live session after the fix", param="nan_policy")
 
