@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import ast
 import sys
+from collections.abc import Iterable
 from pathlib import Path
 
 import pytest
@@ -239,16 +240,40 @@ def third_party_violations(package_dir: Path = PACKAGE_DIR) -> list[str]:
     return problems
 
 
+def _private(name: str) -> bool:
+    return name.startswith("_") and not name.startswith("__")
+
+
+def _private_attributes(source: str, filename: str, modules: Iterable[str]) -> list[tuple[str, int, str]]:
+    """``(name, line, module)`` of every ``alias._name`` read off a package module imported under
+    ``alias`` (``from rplearn.io import tables as t``, ``import rplearn.io.tables as t``)."""
+    known = set(modules)
+    aliases: dict[str, str] = {}
+    for node, _, _ in _import_nodes(source, filename):
+        if isinstance(node, ast.ImportFrom) and not node.level and (node.module or "").startswith("rplearn"):
+            aliases.update({a.asname or a.name: f"{node.module}.{a.name}" for a in node.names
+                            if f"{node.module}.{a.name}" in known})
+        elif isinstance(node, ast.Import):
+            aliases.update({a.asname: a.name for a in node.names if a.asname and a.name in known})
+    return [(n.attr, n.lineno, aliases[n.value.id]) for n in ast.walk(ast.parse(source, filename=filename))
+            if isinstance(n, ast.Attribute) and isinstance(n.value, ast.Name) and n.value.id in aliases
+            and _private(n.attr)]
+
+
 def _private_names_imported(package_dir: Path = PACKAGE_DIR) -> dict[str, list[tuple[str, int, str]]]:
     """Per module, ``(name, line, from module)`` of every ``from rplearn.x import _name`` of
-    another module's private name (function-local ones included)."""
+    another module's private name (function-local ones included), and of every private name read
+    off another module imported whole (``tables._read``)."""
     found: dict[str, list[tuple[str, int, str]]] = {}
-    for module, path in package_modules(package_dir).items():
-        for node, _, _ in _import_nodes(path.read_text(encoding="utf-8"), str(path)):
+    modules = package_modules(package_dir)
+    for module, path in modules.items():
+        source = path.read_text(encoding="utf-8")
+        for node, _, _ in _import_nodes(source, str(path)):
             if not isinstance(node, ast.ImportFrom) or node.level or not (node.module or "").startswith("rplearn"):
                 continue
             found.setdefault(module, []).extend((a.name, node.lineno, str(node.module)) for a in node.names
-                                                if a.name.startswith("_") and not a.name.startswith("__"))
+                                                if _private(a.name))
+        found.setdefault(module, []).extend(_private_attributes(source, str(path), modules))
     return found
 
 
@@ -302,6 +327,8 @@ def test_no_module_is_longer_than_the_limit() -> None:
         ("io/options.py", "from rplearn.io import read_logs\n", "cycle"),
         ("core/__init__.pyi", "import rplearn.viz.plot\n", "layer"),
         ("viz/charts.py", "from rplearn.viz.plot import _hatch_uncovered\n", "private"),
+        ("viz/charts.py", "def f():\n    from rplearn.viz import plot as p\n    return p._hatch_uncovered\n", "private"),
+        ("viz/charts.py", "import rplearn.viz.plot as p\nX = p._hatch_uncovered\n", "private"),
     ],
 )
 def test_the_checks_catch_a_planted_violation(tmp_path: Path, where: str, source: str, kind: str) -> None:

@@ -146,3 +146,17 @@ def test_paths_become_strings_whole_floats_integers_and_a_bare_string_is_no_sequ
     assert type(g("a", 2.0)[1]) is int
     with pytest.raises(ArgumentTypeError, match="^names: expected a list"):
         g("a", 1, "AB")
+
+
+def test_an_integer_too_large_for_a_float_is_a_clear_option_error():
+    # review45: was OverflowError ("int too large to convert to float") out of the option checks
+    from rplearn._argtypes import is_finite_real
+    from rplearn.analysis.heading_options import YawOptions
+    from rplearn.data.sync import SyncOptions
+    from rplearn.errors import InputError
+
+    assert not is_finite_real(10**400) and is_finite_real(10**300) and is_finite_real(3)
+    with pytest.raises(InputError, match="tx_yaw_deg"):
+        YawOptions(tx_yaw_deg=10**400)
+    with pytest.raises(InputError, match="max_gap_s"):
+        SyncOptions(max_gap_s=10**400)

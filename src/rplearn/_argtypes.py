@@ -80,8 +80,12 @@ def is_finite_real(value: Any) -> bool:
     Returns
     -------
     bool
+        False too for an integer too large for a float (``10**400``: no option takes it).
     """
-    return _is_real(value) and math.isfinite(float(value))
+    try:
+        return _is_real(value) and math.isfinite(float(value))
+    except OverflowError:
+        return False
 
 
 def _is_int(v: Any) -> bool:

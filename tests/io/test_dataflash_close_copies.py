@@ -178,3 +178,33 @@ def test_sync_matches_as_many_samples_as_the_log_written_once(once, tmp_path):
         matched.append(read_table(str(out)))
     pd.testing.assert_frame_equal(matched[0], matched[1])
     assert "DataFlash record(s) repeat one of their kind read shortly before them" in proc.stdout
+
+
+def test_copies_among_many_records_of_equal_fields(tmp_path):
+    # a vehicle at rest: 3,000 ATT records with equal fields 2.5 ms apart (none a copy, every one within the
+    # 1,024-record window of many others of its key); 7 of them written again, 0-1 ms later, right after
+    # themselves or after a buffer of 200 records (the time stepping back): exactly those 7 are close copies
+    from rplearn.io.dataflash_writer import _fmt_records, _record
+
+    lat, lon = 473977000, 85456000
+    head = [*_fmt_records(), _record("ORGN", 1_000_000, 0, lat, lon, 90.0), _record("ARM", 1_000_000, 1)]
+    times = [1_000_100 + 2500 * i for i in range(3000)]
+    again = {10: 0, 500: 700, 1200: 1000, 2999: 300}  # record -> us later, written right after it
+    buffered = {1500: 0, 1600: 999, 1690: 1}  # record -> us later, written after record 1700
+    body, held = [], []
+    for i, t in enumerate(times):
+        body.append(_record("ATT", t, 0.0, 0.0, 90.0))
+        if i % 100 == 0:
+            body.append(_record("POS", t + 1, lat + i, lon, 100.0))
+            body.append(_record("RAD", t + 2, 200, 190 - i // 100, 100, 0, 0, 0, 0))
+        if i in again:
+            body.append(_record("ATT", t + again[i], 0.0, 0.0, 90.0))
+        if i in buffered:
+            held.append(_record("ATT", t + buffered[i], 0.0, 0.0, 90.0))
+        if i == 1700:
+            body += held
+    path = tmp_path / "rest.bin"
+    path.write_bytes(b"".join(head + body))
+    logs, meta = _read(path)
+    assert meta["close_copies"] == len(again) + len(buffered)
+    assert meta["messages"]["ATT"] == len(times) and meta["repeated_messages"] == 0 and meta["reboots"] == 0

@@ -12,6 +12,7 @@ buffer at a time): it is read once and counted (``close_copies``), as a ``.tlog`
 
 from __future__ import annotations
 
+from bisect import bisect_left, insort
 from collections import deque
 from dataclasses import dataclass, field
 from typing import Any
@@ -20,7 +21,7 @@ import numpy as np
 
 from rplearn.errors import LogFormatError
 from rplearn.io._log_schema import check_dataflash_lengths, dataflash_time_field, library_quiet, number
-from rplearn.io._mavlink_records import Raw, close_in_time, merge_copied_boots, open_mavlink_log, rows_array
+from rplearn.io._mavlink_records import CLOSE_COPY_S, Raw, close_in_time, merge_copied_boots, open_mavlink_log, rows_array
 from rplearn.io.mavlink_phases import REBOOT_STEP_S
 
 DF_TYPES = ["ATT", "POS", "GPS", "ORGN", "RAD", "ARM", "EV"]
@@ -38,23 +39,34 @@ COPY_WINDOW_RECORDS = 1024
 
 @dataclass
 class _Recent:
-    """The last :data:`COPY_WINDOW_RECORDS` records read: per kind, instance and fields but the time, their times.
-    A record repeating one of them at most :data:`~rplearn.io._mavlink_records.CLOSE_COPY_S` after it is that record
-    written twice (:func:`~rplearn.io._mavlink_records.close_in_time`, the ``.tlog``'s bound)."""
+    """The last :data:`COPY_WINDOW_RECORDS` records read: per kind, instance and fields but the time, their times
+    (sorted: a record whose fields repeat often, a vehicle at rest, is looked up by bisection, not against each of
+    up to :data:`COPY_WINDOW_RECORDS` times). A record repeating one of them at most
+    :data:`~rplearn.io._mavlink_records.CLOSE_COPY_S` after it is that record written twice
+    (:func:`~rplearn.io._mavlink_records.close_in_time`, the ``.tlog``'s bound)."""
 
-    seen: dict[tuple[Any, ...], deque[float]] = field(default_factory=dict)
+    seen: dict[tuple[Any, ...], list[float]] = field(default_factory=dict)
     order: deque[tuple[float, tuple[Any, ...]]] = field(default_factory=deque)
 
     def is_copy(self, key: tuple[Any, ...], t: float) -> bool:
-        return any(close_in_time(t - before) for before in self.seen.get(key, ()))
+        times = self.seen.get(key, ())
+        i = bisect_left(times, t - 2.0 * CLOSE_COPY_S)  # every time close_in_time could take, and more
+        while i < len(times) and times[i] <= t:
+            if close_in_time(t - times[i]):
+                return True
+            i += 1
+        return False
 
     def add(self, key: tuple[Any, ...], t: float) -> None:
-        self.seen.setdefault(key, deque()).append(t)
+        if t == t:  # a time that is not a number is no copy's (close_in_time) and keeps the times sorted out
+            insort(self.seen.setdefault(key, []), t)
         self.order.append((t, key))
         if len(self.order) > COPY_WINDOW_RECORDS:
             old_t, old_key = self.order.popleft()
+            if old_t != old_t:
+                return
             times = self.seen[old_key]
-            times.popleft()  # a key's times are in the order read
+            del times[bisect_left(times, old_t)]  # one of the times equal to old_t: which one does not matter
             if not times:
                 del self.seen[old_key]
 

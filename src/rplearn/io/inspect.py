@@ -315,7 +315,7 @@ def _read_pose_table(path: str, options: ReaderOptions) -> tuple[pd.DataFrame, d
     from rplearn.io import tables as _tables
 
     node_of_file = (options.nodes or {}).get(path)
-    raw = _tables._read(path, path)
+    raw = _tables.read_table_rows(path, path)
     pose, meta = _tables.canonical_pose(
         raw, source=path, columns=options.columns, node=node_of_file, nan_policy="drop",
         allow_unsorted=True, origin_geodetic=options.origin_geodetic,

@@ -70,7 +70,8 @@ def boot_ids(t_boot_s: np.ndarray) -> np.ndarray:
     return np.concatenate([[0], np.cumsum(np.diff(t) < -REBOOT_STEP_S)]).astype(np.int64) if len(t) else np.zeros(0, np.int64)
 
 
-def _speeds(speed: np.ndarray, fallback: float) -> np.ndarray:
+def logged_speeds(speed: np.ndarray, fallback: float) -> np.ndarray:
+    """The speeds [m/s] a log reports with its fixes, as magnitudes; ``fallback`` where one is not a number."""
     s = np.abs(np.asarray(speed, np.float64))
     return np.where(np.isfinite(s), s, fallback)
 
@@ -116,8 +117,8 @@ def invalid_fixes(t: np.ndarray, xyz: np.ndarray, speed_h: np.ndarray, speed_v: 
         Index of the last invalid fix before a step -> one line describing the step.
     """
     t, xyz = np.asarray(t, np.float64), np.asarray(xyz, np.float64)
-    h = _speeds(speed_h, MAX_HORIZONTAL_SPEED_M_S)
-    v = _speeds(speed_v, MAX_VERTICAL_SPEED_M_S)
+    h = logged_speeds(speed_h, MAX_HORIZONTAL_SPEED_M_S)
+    v = logged_speeds(speed_v, MAX_VERTICAL_SPEED_M_S)
     logged = np.isfinite(np.asarray(speed_v, np.float64))
     invalid = ~np.asarray(fix_ok, bool)
     steps: dict[int, str] = {}
@@ -291,4 +292,4 @@ def repeated_readings(t: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, fl
 
 __all__ = ["DUPLICATE_FRACTION_OF_PERIOD", "Fixes", "LogClock", "MAX_HORIZONTAL_SPEED_M_S", "MAX_VERTICAL_SPEED_M_S", "REASONS",
            "REBOOT_STEP_S", "STEP_MARGIN_M", "STEP_SPEED_SLACK_M_S", "boot_ids", "excluded_periods",
-           "in_periods", "invalid_fixes", "repeated_readings", "report_period_s", "step_allowed", "unexplained_steps"]
+           "in_periods", "invalid_fixes", "logged_speeds", "repeated_readings", "report_period_s", "step_allowed", "unexplained_steps"]

@@ -121,7 +121,23 @@ def _csv_options(path: Any, columns: Mapping[str, str] | None) -> dict[str, Any]
     return csv_missing_values(pd.read_csv(path, nrows=0, skipinitialspace=True).columns, columns)
 
 
-def _read(path: str, source: str, columns: Mapping[str, str] | None = None) -> pd.DataFrame:
+def read_table_rows(path: str, source: str, columns: Mapping[str, str] | None = None) -> pd.DataFrame:
+    """A CSV or Parquet table file's rows as read (times normalised, nothing checked), for the readers here and
+    for ``inspect``; a missing, empty or unreadable file is refused naming ``source``.
+
+    Parameters
+    ----------
+    path : str
+        The file (Parquet by its extension, else CSV).
+    source : str
+        The name errors give it.
+    columns : mapping of str to str, optional
+        The user's column names for the canonical ones (a CSV's missing-value markers follow them).
+
+    Returns
+    -------
+    pandas.DataFrame
+    """
     if not os.path.exists(path):
         raise InputError(f"{source}: no such file")
     try:
@@ -454,7 +470,7 @@ def read_pose_table(path: str, **options: Any) -> tuple[pd.DataFrame, dict[str, 
     Returns ``(pose, metadata)``.
     """
     source = str(path)
-    df = _read(str(path), source)
+    df = read_table_rows(str(path), source)
     pose, meta = canonical_pose(df, source=source, **options)
     meta["format"] = table_format(source)
     return pose, meta
@@ -468,7 +484,7 @@ def read_signal_table(path: str, allow_unsorted: bool = False, **options: Any) -
     Returns ``(signal, metadata)``.
     """
     source = str(path)
-    df = _read(str(path), source, options.get("columns"))
+    df = read_table_rows(str(path), source, options.get("columns"))
     signal = canonical_signal(df, source=source, **options)
     if not allow_unsorted:
         check_link_time_order(signal, source)
@@ -573,6 +589,7 @@ __all__ = [
     "table_columns",
     "read_pose_table",
     "read_signal_table",
+    "read_table_rows",
     "rename_columns",
     "table_format",
     "table_kind",

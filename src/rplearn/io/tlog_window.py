@@ -337,8 +337,8 @@ class TlogWindow:
             return
         assert self.step_origin is not None  # fixed when the window was made
         xyz = geodetic_to_enu(seq[:, 1], seq[:, 2], seq[:, 3], self.step_origin)
-        h = phases._speeds(seq[:, 4], phases.MAX_HORIZONTAL_SPEED_M_S)
-        v = phases._speeds(seq[:, 5], phases.MAX_VERTICAL_SPEED_M_S)
+        h = phases.logged_speeds(seq[:, 4], phases.MAX_HORIZONTAL_SPEED_M_S)
+        v = phases.logged_speeds(seq[:, 5], phases.MAX_VERTICAL_SPEED_M_S)
         a, c = slice(0, -1), slice(1, None)
         bad, _, _ = phases.unexplained_steps(seq[a, 0], xyz[a], h[a], v[a], seq[c, 0], xyz[c], h[c], v[c])
         cut = np.concatenate([[True], bad & ~np.concatenate([joined, np.zeros(len(gone), bool)])[1:]])
