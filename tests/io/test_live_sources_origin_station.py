@@ -8,8 +8,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import pytest
-
 from rplearn.data.live_sync import LiveMatcher
 from rplearn.io.live_sources import CsvTail
 from rplearn.io.options import ReaderOptions

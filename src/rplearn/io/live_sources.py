@@ -239,10 +239,11 @@ class _StartHold:
                 self.at_zero[node] = float(t[zero][-1])
             else:
                 hold |= at
-        if hold.sum() > HOLD_ROWS:  # bounded: handed out as they stand, watched
+        if hold.sum() > HOLD_ROWS:  # bounded: handed out as they stand, watched from their last row at zero
             for node in dict.fromkeys(nodes[hold]):
                 self.known.add(node)
-                self.at_zero[node] = float(_track(block.loc[nodes == node], columns)[0][-1])
+                t, _, zero = _track(block.loc[nodes == node], columns)
+                self.at_zero[node] = float(t[zero][-1] if zero.any() else t[-1])
             hold[:] = False
         if hold.any():
             self.held = block.loc[hold]
@@ -263,7 +264,7 @@ class _StartHold:
         if enu and not unexplained_steps(np.array([t0]), np.zeros((1, 3)), h, v, t[m:m + 1], pos[m:m + 1], h, v)[0][0]:
             return
         how = ("as one pose, taken for a station at the origin" if node in self.stations else
-               f"for {HOLD_S:g} s or more")
+               f"longer than it is held back ({HOLD_S:g} s of the table's time or {HOLD_ROWS:,} rows)")
         raise InputError(f"{self.source}: fields x, y, z of node {node}: it stood at the zero position from its first "
                          f"row {how} (rows handed out as valid) and now jumps off it at t = "
                          f"{float(t[m]):.3f} s: a logger writing before its fix, whose zero rows sync drops; read the "
