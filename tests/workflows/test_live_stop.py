@@ -68,6 +68,15 @@ def test_a_fit_at_the_largest_smoothing_ends_no_session(smoke, tmp_path):
     assert "every node's spread over the covered directions below 2 dB" in outcome.status.stopped
     assert all(math.isfinite(v) and v < 2.0 for v in outcome.status.spread_db.values())
     assert not any(n.startswith("spread: ") for n in outcome.status.notes)
+    # the page draws no spread map the table calls not known
+    from rplearn.viz.live_page import write_live_page
+
+    for known in (True, False):
+        page = (tmp_path / f"page_{known}.html")
+        write_live_page(str(page), "live", [], [], outcome.fitted.model, spread_known=known)
+        text = page.read_text()
+        assert ("alt='spread maps'" in text) is known and ("Not known yet" in text) is not known
+        assert "alt='coverage maps'" in text
 
 
 def test_at_smoothing_cap():

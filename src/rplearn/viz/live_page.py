@@ -51,7 +51,7 @@ def coverage_maps_figure(model: PatternSet, step_deg: float = 3.0) -> Any:
 
 @check_types
 def write_live_page(path: str, title: str, rows: Sequence[tuple[str, str]], node_rows: Sequence[Sequence[str]],
-                    model: PatternSet | None = None, refresh_s: float = 2.0) -> str:
+                    model: PatternSet | None = None, refresh_s: float = 2.0, spread_known: bool = True) -> str:
     """Write the page atomically and return its path.
 
     Parameters
@@ -66,6 +66,9 @@ def write_live_page(path: str, title: str, rows: Sequence[tuple[str, str]], node
         The current model, for its coverage and spread maps (none before the first refit).
     refresh_s : float
         The browser reloads the page every this many seconds.
+    spread_known : bool
+        False: the model's spread is not one the data give (a fit at the search's largest smoothing,
+        :mod:`rplearn.workflows.live`): said instead of the spread maps.
     """
     esc = html.escape
     parts = [f"<!doctype html><html><head><meta charset='utf-8'><meta http-equiv='refresh' content='{refresh_s:g}'>",
@@ -81,7 +84,9 @@ def write_live_page(path: str, title: str, rows: Sequence[tuple[str, str]], node
     if model is not None and getattr(model, "covariance", None) is not None:
         parts.append(f"<h2>Coverage</h2><img alt='coverage maps' src='data:image/png;base64,{_png(coverage_maps_figure(model))}'>")
         parts.append(f"<h2>Pattern spread</h2><img alt='spread maps' src='data:image/png;base64,"
-                     f"{_png(spread_maps_figure({'live': model}))}'>")
+                     f"{_png(spread_maps_figure({'live': model}))}'>" if spread_known else
+                     "<h2>Pattern spread</h2><p>Not known yet: the fit took the largest smoothing the search tries "
+                     "(the data do not yet tell the patterns' shape from flat).</p>")
     parts.append("</body></html>\n")
     with atomic_open(path) as fh:
         fh.write("".join(parts))

@@ -178,6 +178,11 @@ def open_source(source: str, work_dir: str, reader: ReaderOptions) -> CsvTail | 
     return MavlinkSource(source, os.path.join(work_dir, "session.tlog"), reader)
 
 
+def _capped(model: Any) -> bool:
+    """Whether a fit took the search's largest smoothing (its spread is the cap's, not the data's)."""
+    return model.training.smoothing is not None and at_smoothing_cap(model.training.smoothing)
+
+
 class _Session:
     """The state of one live session (see :func:`run_live`)."""
 
@@ -338,7 +343,7 @@ class _Session:
         s.noise_db = math.nan if noise is None else float(noise)
         # at the search's largest smoothing the data do not identify the shape: its spread (about
         # none) is the cap's, not a measurement, and can end no session (shown as inf)
-        capped = model.training.smoothing is not None and at_smoothing_cap(model.training.smoothing)
+        capped = _capped(model)
         try:
             cert = decoupling_certificate(model, posterior=self.fitted.own_posterior)
             for node, spread in cert.nodes.items():
@@ -359,8 +364,9 @@ class _Session:
         from rplearn.viz.live_page import write_live_page
 
         rows, node_rows = page_rows(self.status)
-        write_live_page(path, "rplearn live", rows, node_rows, None if self.fitted is None else self.fitted.model,
-                        refresh_s=max(self.options.refit_s, 1.0))
+        model = None if self.fitted is None else self.fitted.model
+        write_live_page(path, "rplearn live", rows, node_rows, model, refresh_s=max(self.options.refit_s, 1.0),
+                        spread_known=model is None or not _capped(model))
 
     def stop_reason(self, elapsed_s: float) -> str:
         o, s = self.options, self.status
