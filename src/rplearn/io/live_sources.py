@@ -280,6 +280,14 @@ LINK_MEMORY_POLLS = 16
 class CsvTail:
     """A canonical pose CSV and signal CSV being appended to (module docstring).
 
+    A node whose rows begin at the zero position (a logger writing before the fix) is held back until its
+    rows tell which side of its first jump ``sync`` keeps (:func:`_start_known`), at most :data:`HOLD_S` of
+    the table's time or :data:`HOLD_ROWS` rows, then handed out as they stand and refused if they jump off
+    zero later (the rows handed out cannot be taken back); a node standing still at the ENU origin (one
+    pose) is a station there, handed out at once and watched alike; ``poll(final=True)`` hands out what is
+    held. The rows kept and the drops counted are then those of ``sync`` on the whole file, however it is
+    written in pieces.
+
     Parameters
     ----------
     pose_path, signal_path : str
@@ -290,13 +298,6 @@ class CsvTail:
         beyond any place or on the wrong side of a position jump refused or dropped and counted
         in :attr:`Poll.dropped`), ``receivers[signal_path]``, a constant ``tx_power_dbm`` and
         ``frequency_hz`` for a signal table without those columns.
-
-    A node whose rows begin at the zero position (a logger writing before the fix, or a node at the
-    origin) is held back until its rows tell which side of its first jump ``sync`` keeps
-    (:func:`_start_known`), at most :data:`HOLD_S` of the table's time or :data:`HOLD_ROWS` rows, then
-    handed out as they stand and refused if they jump off zero later (the rows handed out cannot be taken
-    back); ``poll(final=True)`` hands out what is held. The rows kept and the drops counted are then those
-    of ``sync`` on the whole file, however it is written in pieces.
     """
 
     def __init__(self, pose_path: str, signal_path: str, reader: ReaderOptions | None = None) -> None:

@@ -157,6 +157,7 @@ def spread_text(spread_db: float) -> str:
     return f"{spread_db:.2f} dB" if math.isfinite(spread_db) else "not known yet"
 
 
+@check_types
 def ranking_text(status: LiveStatus) -> str:
     """When the manoeuvres shown were ranked ('' before the first ranking)."""
     s = status
