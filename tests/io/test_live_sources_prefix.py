@@ -12,7 +12,7 @@ import pandas as pd
 import pytest
 
 from rplearn.errors import InputError
-from rplearn.io.live_sources import HOLD_S, CsvTail
+from rplearn.io.live_sources import HOLD_S, STATION_SPAN_S, CsvTail
 from rplearn.io.options import ReaderOptions
 from rplearn.io.tables import canonical_pose
 
@@ -102,25 +102,27 @@ def test_written_in_random_pieces_the_tail_keeps_what_sync_keeps(tmp_path, seed)
 
 @pytest.mark.parametrize("still", [False, True])
 def test_a_node_that_starts_at_the_origin_and_moves_on_is_handed_out_when_it_moves(tmp_path, still):
-    # odometry starting at 0, 0, 0: the first step is one the speeds explain, so the zeros are valid; turning
-    # there they are held until it moves, standing still (one pose) they are a station's, handed out at once
+    # odometry starting at 0, 0, 0: the first step is one the speeds explain, so the zeros are valid; held
+    # until it moves (turning there, or standing still for less than STATION_SPAN_S: no station yet)
     lines = [_row(0.1 * i, "A", 0.0 if i < 5 else 0.2 * (i - 4), 0, 0, 0.0 if still else 0.01 * i) for i in range(20)]
     offline, dropped = _offline(lines)
     live, live_dropped, per_poll = _live(tmp_path, lines, [5, 8])
-    assert per_poll[:2] == ([5, 3] if still else [0, 8]) and not dropped and not live_dropped
+    assert per_poll[:2] == [0, 8] and not dropped and not live_dropped
     _same_rows(live, offline)
 
 
 def test_a_node_standing_still_at_the_origin_is_a_station_handed_out_at_once(tmp_path):
-    # the ENU origin is a station's natural place (positions measured from it): its rows are not held, so
-    # its links' rows are matched from the first poll (held, they were dropped as unknown_node for HOLD_S)
+    # the ENU origin is a station's natural place (positions measured from it): standing there as one pose for
+    # STATION_SPAN_S its rows are handed out, so its links' rows are matched (held, they were dropped as
+    # unknown_node for HOLD_S)
+    assert STATION_SPAN_S <= 1.0
     steps = int(HOLD_S / 0.5) + 4
     lines = []
     for i in range(steps):
         lines += [_row(0.5 * i, "G", 0, 0, 0), _row(0.5 * i + 0.1, "A", 3 + 0.5 * i, 1, 10)]
     offline, dropped = _offline(lines)
     live, live_dropped, per_poll = _live(tmp_path, lines, [2, 2 * (steps - 6), 2 * (steps - 2)])
-    assert per_poll == [2, 2 * (steps - 6) - 2, 8, 4]  # every row as it is written
+    assert per_poll == [1, 2 * (steps - 6) - 1, 8, 4]  # the station's first row waits until it stood STATION_SPAN_S
     _same_rows(live, offline)
     assert not dropped and not live_dropped
 
@@ -128,10 +130,10 @@ def test_a_node_standing_still_at_the_origin_is_a_station_handed_out_at_once(tmp
 def test_a_still_node_at_the_origin_that_jumps_off_it_is_refused(tmp_path):
     # a logger before its fix that writes one pose (no attitude) looks like a station at the origin: handed out,
     # its jump to the real track is refused (the rows matched meanwhile cannot be taken back), naming why
-    lines = [_row(0.1 * i, "A", 0, 0, 0) for i in range(10)] + [_row(1.0 + 0.1 * i, "A", 500, 300, 50) for i in range(30)]
+    lines = [_row(0.1 * i, "A", 0, 0, 0) for i in range(15)] + [_row(1.5 + 0.1 * i, "A", 500, 300, 50) for i in range(30)]
     with pytest.raises(InputError, match=r"node A: it stood at the zero position from its first row as one pose, taken "
-                                         r"for a station at the origin .* now jumps off it at t = 1\.000 s") as e:
-        _live(tmp_path, lines, [10, 20])
+                                         r"for a station at the origin .* now jumps off it at t = 1\.500 s") as e:
+        _live(tmp_path, lines, [15, 25])
     assert "\n" not in str(e.value)
 
 

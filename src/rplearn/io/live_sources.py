@@ -44,7 +44,7 @@ from rplearn.io._time_order import LinkTimes, check_link_time_order
 from rplearn.io.geodetic import geodetic_to_enu
 from rplearn.io.mavlink_phases import MAX_HORIZONTAL_SPEED_M_S, MAX_VERTICAL_SPEED_M_S, unexplained_steps
 from rplearn.io.options import ReaderOptions
-from rplearn.io.tables import canonical_pose, canonical_signal, csv_missing_values
+from rplearn.io.tables import EULER_ENU_FLU_COLUMNS, EULER_NED_FRD_COLUMNS, canonical_pose, canonical_signal, csv_missing_values
 
 
 @check_types
@@ -150,6 +150,13 @@ def _table(tail: _Tail, data: bytes) -> pd.DataFrame | None:
 #: table's time from the node's first row, and rows held in all.
 HOLD_S = 60.0
 HOLD_ROWS = 16384
+#: Seconds of the table's time a node's rows must stand as one pose at the ENU origin before it is taken
+#: for a station there (a logger before its fix that logs its attitude has changed it by then; a poll of a
+#: row or two is no evidence either way).
+STATION_SPAN_S = 1.0
+#: The attitude columns a pose table may give (a quaternion, or Euler angles in either frame): with the
+#: position, what one pose is (a sequence number or another column that varies does not move a node).
+_ATTITUDE = ("qw", "qx", "qy", "qz", *EULER_ENU_FLU_COLUMNS, *EULER_NED_FRD_COLUMNS)
 #: The column of a pose row's row in the file, while it is held.
 _FILE_ROW = "__file_row__"
 
@@ -230,7 +237,8 @@ class _StartHold:
                 self._left_zero(node, t, pos, zero, columns[0] == "x")
             elif final or _start_known(t, pos, zero, columns[0] == "x"):
                 self.known.add(node)
-            elif columns[0] == "x" and zero.all() and len(block.loc[at].drop(columns=["t", _FILE_ROW]).drop_duplicates()) == 1:
+            elif (columns[0] == "x" and zero.all() and t[-1] - t[0] >= STATION_SPAN_S
+                  and len(block.loc[at, [c for c in (*columns, *_ATTITUDE) if c in block.columns]].drop_duplicates()) == 1):
                 self.known.add(node)  # one pose at the ENU origin: a station there, watched for a jump
                 self.stations.add(node)
                 self.at_zero[node] = float(t[-1])
@@ -284,7 +292,7 @@ class CsvTail:
     rows tell which side of its first jump ``sync`` keeps (:func:`_start_known`), at most :data:`HOLD_S` of
     the table's time or :data:`HOLD_ROWS` rows, then handed out as they stand and refused if they jump off
     zero later (the rows handed out cannot be taken back); a node standing still at the ENU origin (one
-    pose) is a station there, handed out at once and watched alike; ``poll(final=True)`` hands out what is
+    pose for :data:`STATION_SPAN_S`) is a station there, handed out then and watched alike; ``poll(final=True)`` hands out what is
     held. The rows kept and the drops counted are then those of ``sync`` on the whole file, however it is
     written in pieces.
 
