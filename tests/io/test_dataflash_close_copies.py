@@ -82,16 +82,23 @@ def once(tmp_path_factory) -> Path:
     return path
 
 
-@pytest.mark.parametrize("apart_us", [0, 500, 1000])
-def test_every_record_twice_reads_as_the_log_once(once, tmp_path, apart_us):
-    # was: the same TimeUS twice dropped the attitude copies as duplicate_time (7,026) and merged the
-    # radio copies in sync as duplicate_reading; 0.5 ms later every pose was read twice (14,053 rows)
+def _read_twice(once, tmp_path, apart_us: int):
+    """The log ``once`` with every record written twice ``apart_us`` later, read; asserted to give the same
+    pose and signal tables as ``once``: its path, the copies written and both reads' metadata."""
     twice = tmp_path / "twice.bin"
     data, copied = _twice(once.read_bytes(), apart_us)
     twice.write_bytes(data)
     (logs1, m1), (logs2, m2) = _read(once), _read(twice)
     pd.testing.assert_frame_equal(logs1.pose, logs2.pose)
     pd.testing.assert_frame_equal(logs1.signal, logs2.signal)
+    return twice, copied, (m1, m2)
+
+
+@pytest.mark.parametrize("apart_us", [0, 500, 1000])
+def test_every_record_twice_reads_as_the_log_once(once, tmp_path, apart_us):
+    # was: the same TimeUS twice dropped the attitude copies as duplicate_time (7,026) and merged the
+    # radio copies in sync as duplicate_reading; 0.5 ms later every pose was read twice (14,053 rows)
+    twice, copied, (m1, m2) = _read_twice(once, tmp_path, apart_us)
     assert m1["close_copies"] == 0 and m2["close_copies"] == copied
     assert m2["messages"] == m1["messages"] and m2["dropped"] == m1["dropped"] and m2["signal"] == m1["signal"]
     assert m2["repeated_messages"] == 0 and m2["reboots"] == 0
@@ -154,13 +161,8 @@ def test_a_log_in_the_file_twice_is_still_a_repeated_copy_not_close_copies(once,
 def test_the_real_log_with_every_record_twice_reads_as_once(tmp_path, apart_us):
     whole = tmp_path / "whole.bin"
     whole.write_bytes(REAL_BIN.read_bytes()[:REAL_WHOLE])
-    twice = tmp_path / "twice.bin"
-    data, copied = _twice(whole.read_bytes(), apart_us)
-    twice.write_bytes(data)
-    (logs1, m1), (logs2, m2) = _read(whole), _read(twice)
     # was: 4 signal rows for 2 (its one RAD twice), and 45 pose rows for 23 with the copies 0.4 ms later
-    pd.testing.assert_frame_equal(logs1.pose, logs2.pose)
-    pd.testing.assert_frame_equal(logs1.signal, logs2.signal)
+    _, copied, (m1, m2) = _read_twice(whole, tmp_path, apart_us)
     assert m2["messages"] == m1["messages"] == {"ATT": 24, "POS": 23, "GPS": 5, "ORGN": 2, "RAD": 1}
     # every record of the types read (GPS: also those without a 3-D fix; ORGN; ARM, EV) read once
     assert 0 < m2["close_copies"] <= copied and m2["repeated_messages"] == 0 and m2["dropped"] == m1["dropped"]
