@@ -95,6 +95,14 @@ def top_speeds(t: np.ndarray, xyz: np.ndarray, codes: np.ndarray) -> tuple[np.nd
     return out[0], out[1]
 
 
+def track_pieces(t: np.ndarray, xyz: np.ndarray, h: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """One node's pieces of track (rows in time order; ``h``, ``v``: its top speeds, :func:`top_speeds`): the
+    rows between two steps those speeds do not explain, as the first row and the end (exclusive) of each."""
+    cut, _, _ = unexplained_steps(t[:-1], xyz[:-1], h[:-1], v[:-1], t[1:], xyz[1:], h[1:], v[1:])
+    starts = np.concatenate([[0], np.flatnonzero(cut) + 1])
+    return starts, np.concatenate([starts[1:], [len(t)]])
+
+
 def _around_largest_piece(t: np.ndarray, xyz: np.ndarray, codes: np.ndarray) -> tuple[np.ndarray, dict[int, str]]:
     """:func:`~rplearn.io.mavlink_phases.invalid_fixes` of rows sorted by node and time, at each
     node's own top speeds, anchored on its largest piece of track (the rows between two steps no
@@ -108,10 +116,7 @@ def _around_largest_piece(t: np.ndarray, xyz: np.ndarray, codes: np.ndarray) -> 
         idx = np.flatnonzero(codes == code)
         if len(idx) < 2:
             continue
-        a, c = idx[:-1], idx[1:]
-        cut, _, _ = unexplained_steps(t[a], xyz[a], h[a], v[a], t[c], xyz[c], h[c], v[c])
-        starts = np.concatenate([[0], np.flatnonzero(cut) + 1])
-        ends = np.concatenate([starts[1:], [len(idx)]])
+        starts, ends = track_pieces(t[idx], xyz[idx], h[idx], v[idx])
         k = int(np.argmax(ends - starts))
         for rows, times in ((idx[:ends[k]], t[idx[:ends[k]]]), (idx[starts[k]:][::-1], -t[idx[starts[k]:][::-1]])):
             bad, found = invalid_fixes(times, xyz[rows], h[rows], v[rows], np.zeros(len(rows), int), np.ones(len(rows), bool))

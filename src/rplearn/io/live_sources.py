@@ -39,7 +39,7 @@ import pandas as pd
 from rplearn._argtypes import check_types
 from rplearn.data.tables import CSV_DTYPES, normalise_times
 from rplearn.errors import InputError, LogFormatError
-from rplearn.io._pose_checks import TrackEnds, top_speeds
+from rplearn.io._pose_checks import TrackEnds, top_speeds, track_pieces
 from rplearn.io._time_order import LinkTimes, check_link_time_order
 from rplearn.io.geodetic import geodetic_to_enu
 from rplearn.io.mavlink_phases import MAX_HORIZONTAL_SPEED_M_S, MAX_VERTICAL_SPEED_M_S, unexplained_steps
@@ -189,9 +189,8 @@ def _start_known(t: np.ndarray, pos: np.ndarray, zero: np.ndarray, enu: bool) ->
             pos = geodetic_to_enu(pos[:, 0], pos[:, 1], pos[:, 2], tuple(pos[int(np.argmin(zero))]))
         except InputError:  # an implausible position: the reader refuses it, naming it
             return True
-    h, v = top_speeds(t, pos, np.zeros(len(t), np.int64))
-    cut = unexplained_steps(t[:-1], pos[:-1], h[:-1], v[:-1], t[1:], pos[1:], h[1:], v[1:])[0]
-    sizes = np.diff(np.concatenate([[0], np.flatnonzero(cut) + 1, [len(t)]]))
+    starts, ends = track_pieces(t, pos, *top_speeds(t, pos, np.zeros(len(t), np.int64)))
+    sizes = ends - starts
     # the first piece left zero by steps the speeds explain (odometry from the origin), or another piece larger
     return not zero[:sizes[0]].all() or int(np.argmax(sizes)) != 0
 
