@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import pytest
 
@@ -63,3 +64,59 @@ def test_the_cli_advisor_holds_the_station_still_and_checks_its_period():
     assert advisor.options.candidates.fixed_nodes == ("gcs",) and advisor.options.floor_db == 2.0
     with pytest.raises(InputError, match="every_s"):
         ManoeuvreAdvisor(every_s=float("nan"))
+
+
+@pytest.fixture(scope="module")
+def capped_refit(tmp_path_factory):
+    """The first refit of a live session on the ground preset (2 s, 300 samples): ``--order auto``
+    takes SH-2 at the search's largest smoothing."""
+    r = simulate("ground", seed=0)
+    calls = []
+
+    def hook(stats, fitted, latest):
+        calls.append((stats, fitted, latest))
+        return []
+
+    path = str(tmp_path_factory.mktemp("live") / "m.json")
+    replay_session(r.pose_log, r.signal_log.drop(columns=["unit"]), path,
+                   LiveOptions(refit_s=2.0, duration_s=2.5, manoeuvres=hook, rank_beside=False))
+    return calls[0]
+
+
+def test_a_fit_at_the_largest_smoothing_is_ranked_under_the_nominal_prior(capped_refit):
+    from rplearn.analysis.manoeuvres import NOMINAL_PRIOR_STD_DB, prior_penalty_weight
+    from rplearn.core.lsq.selection import at_smoothing_cap
+    from rplearn.plan.manoeuvres import CandidateOptions
+    from rplearn.workflows.live_advice import ranking_options
+
+    stats, fitted, latest = capped_refit
+    assert at_smoothing_cap(fitted.spec.smoothing)
+    noise = float(fitted.model.training.noise_std_db)
+    base = ManoeuvreOptions(candidates=CandidateOptions(fixed_nodes=("G",)))
+    nodes = list(fitted.model.nodes)
+    # under the fit's own posterior every candidate scores alike: its order is arbitrary
+    own = rank_manoeuvres(stats, fitted.spec, nodes, latest, replace(base, noise_std_db=noise), stats.blocks)
+    after = [max(r.spread_after_db.values()) for r in own]
+    assert max(after) - min(after) < 1e-4 and max(own[0].spread_before_db.values()) < 0.01
+    # the advisor ranks under the smoothness prior trajectory --optimize plans with, and the candidates differ
+    rows = ManoeuvreAdvisor(base, every_s=0.0)(stats, fitted, latest)
+    weight = prior_penalty_weight(stats.basis, NOMINAL_PRIOR_STD_DB, noise, float(fitted.spec.ridge_weight), base.power)
+    nominal = rank_manoeuvres(stats, fitted.spec, nodes, latest, replace(base, noise_std_db=noise, penalty_weight=weight),
+                              stats.blocks)
+    assert [r[0] for r in rows] == [r.name for r in nominal]
+    assert ranking_options(base, stats, fitted).penalty_weight == weight
+    after = [r[2] for r in rows]
+    assert max(after) - min(after) > 0.1
+    assert 3.0 < max(nominal[0].spread_before_db.values()) <= NOMINAL_PRIOR_STD_DB + 0.1
+    # a penalty the caller gives is kept
+    assert ranking_options(replace(base, penalty_weight=1.0), stats, fitted).penalty_weight == 1.0
+
+
+def test_a_fit_below_the_cap_is_ranked_under_its_own_smoothing(session):
+    from rplearn.workflows.live_advice import ranking_options
+
+    _, calls = session
+    stats, fitted, _, _ = calls[-1]
+    options = ranking_options(ManoeuvreOptions(), stats, fitted)
+    assert options.penalty_weight is None
+    assert options.noise_std_db == float(fitted.model.training.noise_std_db or fitted.model.training.rmse_db)

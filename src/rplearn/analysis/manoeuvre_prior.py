@@ -11,6 +11,11 @@ from rplearn.core.basis_base import Basis
 from rplearn.core.lsq.penalty import DEFAULT_PENALTY_POWER
 from rplearn.errors import InputError
 
+#: Each node's pattern spread over its sphere [dB] a plan assumes before any data identify the
+#: shape (``rplearn trajectory --optimize --prior-std``'s default; ``rplearn live`` ranks under it
+#: while its fit is at the search's largest smoothing).
+NOMINAL_PRIOR_STD_DB = 6.0
+
 
 @check_types
 def prior_penalty_weight(basis: Basis, prior_std_db: float, noise_std_db: float, ridge: float,
@@ -49,4 +54,4 @@ def prior_penalty_weight(basis: Basis, prior_std_db: float, noise_std_db: float,
     return float(np.sqrt(lo * hi))
 
 
-__all__ = ["prior_penalty_weight"]
+__all__ = ["NOMINAL_PRIOR_STD_DB", "prior_penalty_weight"]

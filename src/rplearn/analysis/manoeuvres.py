@@ -47,7 +47,7 @@ from rplearn.analysis.manoeuvre_cells import DirectionCells, cell_grid
 from rplearn.analysis.manoeuvre_design import design_order
 from rplearn.analysis.manoeuvre_lookahead import Scored, lookahead_order
 from rplearn.analysis.manoeuvre_posterior import ManoeuvrePosterior
-from rplearn.analysis.manoeuvre_prior import prior_penalty_weight
+from rplearn.analysis.manoeuvre_prior import NOMINAL_PRIOR_STD_DB, prior_penalty_weight
 from rplearn.analysis.manoeuvre_tilt import steady_tilt_accel
 from rplearn.core.basis_base import Basis
 from rplearn.core.geometry import attitude_from_thrust, link_directions, yaw_from_quat_wxyz
@@ -595,5 +595,6 @@ def _greedy(post: ManoeuvrePosterior, state: dict[str, Any], names: list[str], b
     return tuple(steps)
 
 
-__all__ = ["AGGREGATES", "DESIGNS", "RATES", "ManoeuvreOptions", "PlanStep", "RankedManoeuvre", "correlated_error_std_db", "greedy_plan",
-           "manoeuvre_rows", "pattern_spreads", "prior_penalty_weight", "prior_weights", "rank_manoeuvres", "steady_tilt_accel", "target_metrics"]
+__all__ = ["AGGREGATES", "DESIGNS", "NOMINAL_PRIOR_STD_DB", "RATES", "ManoeuvreOptions", "PlanStep", "RankedManoeuvre",
+           "correlated_error_std_db", "greedy_plan", "manoeuvre_rows",
+           "pattern_spreads", "prior_penalty_weight", "prior_weights", "rank_manoeuvres", "steady_tilt_accel", "target_metrics"]

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from rplearn._argtypes import check_types
-from rplearn.analysis.manoeuvres import ManoeuvreOptions, PlanStep, greedy_plan, pattern_spreads, prior_penalty_weight
+from rplearn.analysis.manoeuvres import NOMINAL_PRIOR_STD_DB, ManoeuvreOptions, PlanStep, greedy_plan, pattern_spreads, prior_penalty_weight
 from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.errors import InputError
 from rplearn.models.base import require_patterns
@@ -72,7 +72,7 @@ class OptimizeOptions:
     budget_s: float = 900.0
     model: str = "sh-10"
     noise_std_db: float = 4.2
-    prior_std_db: float = 6.0
+    prior_std_db: float = NOMINAL_PRIOR_STD_DB
     prior_pattern: str | None = None
     station: bool = False
     distance_m: float = 10.0

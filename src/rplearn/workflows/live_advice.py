@@ -10,6 +10,15 @@ candidate with a rank-k update (seconds for a hundred candidates), so it is redo
 largest reduction of the nodes' spread per second of flight). The session's sums per time block
 (the statistics' ``blocks``) carry an error drifting over seconds into the ranking's posterior,
 its size estimated from them (:mod:`rplearn.core.lsq.block_sums`).
+
+A fit at the search's largest smoothing (:func:`rplearn.core.lsq.selection.at_smoothing_cap`: a
+session's first refits, a few seconds of flight) claims a pattern known to a few hundredths of a
+dB: under it every candidate scores alike (measured on the ``ground`` preset after 2 s: all 39
+candidates' predicted spread 0.0002 dB), so its ranking's order is arbitrary. There the ranking
+reads the smoothness prior ``rplearn trajectory --optimize`` plans with before any flight
+(:data:`rplearn.analysis.manoeuvres.NOMINAL_PRIOR_STD_DB` over each node's sphere,
+:func:`rplearn.analysis.manoeuvres.prior_penalty_weight`) with the samples so far and the fit's
+noise: the manoeuvres that teach the most of what neither the prior nor the flight so far says.
 """
 
 from __future__ import annotations
@@ -22,12 +31,43 @@ from typing import Any
 import pandas as pd
 
 from rplearn._argtypes import check_types
-from rplearn.analysis.manoeuvres import ManoeuvreOptions, rank_manoeuvres
+from rplearn.analysis.manoeuvres import NOMINAL_PRIOR_STD_DB, ManoeuvreOptions, prior_penalty_weight, rank_manoeuvres
+from rplearn.core.lsq.selection import at_smoothing_cap
 from rplearn.errors import InputError
 from rplearn.plan.manoeuvres import CandidateOptions
 
 #: Seconds of wall time between two rankings of a live session.
 DEFAULT_ADVICE_EVERY_S = 15.0
+
+
+def ranking_options(options: ManoeuvreOptions, statistics: Any, fitted: Any) -> ManoeuvreOptions:
+    """The ranking's options for one refit: the fitted model's noise, and, when the fit took the
+    search's largest smoothing and ``options`` give no penalty weight, the nominal smoothness
+    prior's (module docstring).
+
+    Parameters
+    ----------
+    options : ManoeuvreOptions
+        The advisor's options.
+    statistics : NormalEquations
+        The session's statistics (their basis is the prior's).
+    fitted : FittedModel
+        The refit's model.
+
+    Returns
+    -------
+    ManoeuvreOptions
+    """
+    model = fitted.model
+    noise = model.training.noise_std_db if model.training.noise_std_db is not None else model.training.rmse_db
+    if noise is not None and noise > 0:
+        options = replace(options, noise_std_db=float(noise))
+    smoothing = fitted.spec.smoothing
+    if options.penalty_weight is None and smoothing is not None and at_smoothing_cap(smoothing):
+        weight = prior_penalty_weight(statistics.basis, NOMINAL_PRIOR_STD_DB, options.noise_std_db,
+                                      float(fitted.spec.ridge_weight), options.power)
+        options = replace(options, penalty_weight=weight)
+    return options
 
 
 @check_types
@@ -54,10 +94,9 @@ class ManoeuvreAdvisor:
         now = time.monotonic()
         if self._last is not None and now - self._last[0] < self.every_s:
             return self._last[1]
-        model = fitted.model
-        noise = model.training.noise_std_db if model.training.noise_std_db is not None else model.training.rmse_db
-        options = self.options if noise is None or not noise > 0 else replace(self.options, noise_std_db=float(noise))
-        ranked = rank_manoeuvres(statistics, fitted.spec, list(model.nodes), latest, options, getattr(statistics, "blocks", None))
+        options = ranking_options(self.options, statistics, fitted)
+        ranked = rank_manoeuvres(statistics, fitted.spec, list(fitted.model.nodes), latest, options,
+                                 getattr(statistics, "blocks", None))
         rows = [(r.name, float(r.duration_s), float(max(r.spread_after_db.values()))) for r in ranked]
         self._last = (now, rows)
         return rows
@@ -72,4 +111,4 @@ def live_advisor(fixed_nodes: tuple[str, ...] = (), every_s: float = DEFAULT_ADV
     return ManoeuvreAdvisor(ManoeuvreOptions(candidates=candidates, floor_db=floor_db), every_s)
 
 
-__all__ = ["DEFAULT_ADVICE_EVERY_S", "ManoeuvreAdvisor", "live_advisor"]
+__all__ = ["DEFAULT_ADVICE_EVERY_S", "ManoeuvreAdvisor", "live_advisor", "ranking_options"]
