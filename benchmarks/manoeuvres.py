@@ -562,6 +562,7 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
+import pandas as pd
 
 # one BLAS thread: the ranking's near-ties otherwise fall by the last bits of the statistics, which
 # the thread policy changes with the machine's load, and a run cannot be repeated figure for figure
@@ -589,6 +590,8 @@ from rplearn.core.lsq.solver import solve
 from rplearn.data.sync import SyncOptions, synchronise
 from rplearn.data.tables import link_samples
 from rplearn.models.auto import SAMPLES_PER_COEF
+from rplearn.models.live_stats import LiveStatistics
+from rplearn.models.options import FitOptions
 from rplearn.models.own_posterior import OwnPrior, own_pattern_posterior
 from rplearn.models.patterns import PatternSet
 from rplearn.models.spec import ModelSpec
@@ -597,6 +600,7 @@ from rplearn.plan.manoeuvres import CandidateOptions
 from rplearn.sim import simulate
 from rplearn.sim.presets import make_preset
 from rplearn.workflows.live import LiveOptions
+from rplearn.workflows.live_advice import ranking_options
 
 TARGET_DB = 2.0
 TIME_RATIO = 0.6
@@ -639,6 +643,45 @@ PLAN_SEED = 300
 FIXED = {"ground": ("G",)}
 
 
+def _subset(samples: Any, m: np.ndarray) -> Any:
+    """The samples ``m`` selects (a :class:`~rplearn.data.tables.LinkSamples` of them)."""
+    d = samples.directions
+
+    def cut(a: Any) -> Any:
+        return None if a is None else np.asarray(a)[m]
+
+    return replace(samples, directions=type(d)(d.az_tx[m], d.el_tx[m], d.az_rx[m], d.el_rx[m]), tx_index=samples.tx_index[m],
+                   rx_index=samples.rx_index[m], joint_gain_db=samples.joint_gain_db[m], distance_m=samples.distance_m[m],
+                   frequency_hz=cut(samples.frequency_hz), tx_z_m=cut(samples.tx_z_m), rx_z_m=cut(samples.rx_z_m))
+
+
+class LiveRanker:
+    """The ranking ``rplearn live`` makes (``--ranker live``): its statistics
+    (:class:`~rplearn.models.live_stats.LiveStatistics`, ``--order auto``, accumulated at the largest
+    candidate order with their 5-s time blocks), its refit from them, and the posterior its advisor
+    ranks with (:func:`rplearn.workflows.live_advice.ranking_options`: the refit's smoothing and
+    noise, the nominal prior while the refit is at the largest smoothing, the drift estimated from
+    the session's blocks). The candidates, the packet rate and the target directions are the
+    benchmark's (``options``)."""
+
+    def __init__(self, nodes: tuple[str, ...], options: ManoeuvreOptions) -> None:
+        self.nodes = nodes
+        self.stats = LiveStatistics(ModelSpec.parse("sh"), nodes, FitOptions(auto=True))
+        self.options = replace(options, penalty_weight=None, correlated_std_db=None, misfit_std_db=0.0,
+                               prior_variance_factor=1.0)
+
+    def add(self, samples: Any, m: np.ndarray, t_s: np.ndarray) -> None:
+        """Learn the samples ``m`` selects, flown at flight times ``t_s`` (one per selected sample)."""
+        self.stats.add(pd.DataFrame({"t": np.asarray(t_s, np.float64)}), _subset(samples, m))
+
+    def best(self, poses: Any) -> Any:
+        """The manoeuvre live ranks first from the latest ``poses``."""
+        fitted = self.stats.refit()
+        total = self.stats.total()
+        opts = ranking_options(self.options, total, fitted)
+        return rank_manoeuvres(total, fitted.spec, list(self.nodes), poses, opts, total.blocks)[0]
+
+
 @dataclass
 class Flight:
     """The accumulated statistics of a flight and where it first reached the target spread."""
@@ -659,6 +702,7 @@ class Flight:
     plan: list[tuple[tuple[Any, ...], float, float | None]] = field(default_factory=list)
     draws_db: list[float] = field(default_factory=list)
     draw_spreads_db: list[float] = field(default_factory=list)
+    live: LiveRanker | None = None
 
     def expected(self) -> tuple[float, float]:
         """Mean worst per-node error over the independent draws and its standard error [dB]."""
@@ -797,6 +841,8 @@ def accumulate(setup: Setup, flight: Flight, parts: list[Any], lead_s: float = 0
                                   samples.rx_index[m], samples.joint_gain_db[m])
                 if setup.budget:
                     flight.adds.append((samples, m))
+                if flight.live is not None:
+                    flight.live.add(samples, m, flight.t_s + t_in[m])
                 if flight.blocks is not None:
                     flight.blocks.follow(flight.normal, flight.t_s + 0.5 * (a + b))
                 if flight.cells is not None:
@@ -877,7 +923,7 @@ def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, 
         budget: bool = False, draws: int = DRAWS, candidates: dict[str, Any] | None = None, tilt: bool = False,
         aggregate: str = "rms", rate: str = "spread", prefixes: int = ManoeuvreOptions().prefixes,
         lookahead: int = ManoeuvreOptions().lookahead, aimed: int = ManoeuvreOptions().aimed,
-        design: str = ManoeuvreOptions().design, bound: str = "") -> dict[str, Flight]:
+        design: str = ManoeuvreOptions().design, bound: str = "", ranker: str = "reference") -> dict[str, Flight]:
     config = _config(preset)
     learning = config.campaign.with_role("learning").units
     nodes = tuple(sorted(config.node_antennas))
@@ -905,6 +951,8 @@ def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, 
     accumulate(setup, ref, ref_parts)
     # suggested: the reference's first seconds until live's first suggestion, then the top-ranked manoeuvre, repeatedly
     sug = setup.flight("suggested")
+    if ranker == "live":
+        sug.live = LiveRanker(nodes, replace(opts, floor_db=TARGET_DB))
     start_parts, poses = fly(setup, (learning[0],))
     start_s = live_start_s(start_parts[0][1], len(nodes))
     print(f"  suggested flight's start: {start_s:g} s (live's first refit and suggestion)")
@@ -924,7 +972,10 @@ def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, 
             return {"reference": ref}
     k = 0
     while sug.reached_s is None and sug.t_s < limit_s:
-        best = rank_manoeuvres(sug.normal, spec, nodes, poses, replace(opts, floor_db=TARGET_DB), sug.blocks, sug.cells)[0]
+        if sug.live is not None:
+            best = sug.live.best(poses)
+        else:
+            best = rank_manoeuvres(sug.normal, spec, nodes, poses, replace(opts, floor_db=TARGET_DB), sug.blocks, sug.cells)[0]
         k += 1
         unit = replace(best.candidate.unit, label=f"m{k:02d}")
         parts, poses = fly(setup, (unit,))
@@ -1069,6 +1120,9 @@ def main(argv: list[str] | None = None) -> int:
                     help="rank by rate now (default) or by the criterion's gradient at the anticipated final posterior")
     ap.add_argument("--bound", choices=("", "yes", "only"), default="",
                     help="print the optimal design's bound after the start (only: and fly nothing else)")
+    ap.add_argument("--ranker", choices=("reference", "live"), default="reference",
+                    help="the suggested flight's ranking: from the posterior learned on the complete reference flight (default), "
+                         "or as rplearn live ranks, from its own refits of the flight so far")
     ap.add_argument("--tiny", action="store_true", help="the smoke preset at SH-4 (seconds; criteria not enforced)")
     args = ap.parse_args(argv)
     presets = ["smoke"] if args.tiny else [p.strip() for p in args.presets.split(",") if p.strip()]
@@ -1084,7 +1138,8 @@ def main(argv: list[str] | None = None) -> int:
         limit = float(sum(u.duration_s for u in ref_total.units))
         flights = run(preset, order, seed, limit, args.power, args.prior_std, args.correlated, args.block_s, args.posterior,
                       args.budget or args.tiny, draws, _candidate_args(args), args.tilt, args.aggregate,
-                      args.rate, args.prefixes, args.lookahead, args.aimed, args.design, "yes" if args.tiny else args.bound)
+                      args.rate, args.prefixes, args.lookahead, args.aimed, args.design, "yes" if args.tiny else args.bound,
+                      args.ranker)
         ref = flights["reference"]
         if "suggested" not in flights:
             continue

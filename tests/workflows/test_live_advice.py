@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import copy
 import math
 from dataclasses import replace
 
@@ -40,9 +41,9 @@ def test_the_session_shows_the_rankers_best_three(session):
     outcome, calls = session
     assert len(calls) == 2, "the hook was not called at both refits"
     stats, fitted, latest, rows = calls[-1]
-    ranked = rank_manoeuvres(stats, fitted.spec, list(fitted.model.nodes), latest,
-                             ManoeuvreOptions(noise_std_db=float(fitted.model.training.noise_std_db
-                                                                  or fitted.model.training.rmse_db)))
+    training = fitted.model.training
+    noise = float(training.noise_std_db or training.rmse_db) * math.sqrt(training.variance_inflation or 1.0)
+    ranked = rank_manoeuvres(stats, fitted.spec, list(fitted.model.nodes), latest, ManoeuvreOptions(noise_std_db=noise))
     assert [r[0] for r in rows] == [r.name for r in ranked]  # best first: the largest reduction per second
     assert outcome.status.manoeuvres == rows[:3]
     for name, duration_s, spread_db in rows[:3]:
@@ -91,7 +92,7 @@ def test_a_fit_at_the_largest_smoothing_is_ranked_under_the_nominal_prior(capped
 
     stats, fitted, latest = capped_refit
     assert at_smoothing_cap(fitted.spec.smoothing)
-    noise = float(fitted.model.training.noise_std_db)
+    noise = ranking_options(ManoeuvreOptions(), stats, fitted).noise_std_db
     base = ManoeuvreOptions(candidates=CandidateOptions(fixed_nodes=("G",)))
     nodes = list(fitted.model.nodes)
     # under the fit's own posterior every candidate scores alike: its order is arbitrary
@@ -119,4 +120,10 @@ def test_a_fit_below_the_cap_is_ranked_under_its_own_smoothing(session):
     stats, fitted, _, _ = calls[-1]
     options = ranking_options(ManoeuvreOptions(), stats, fitted)
     assert options.penalty_weight is None
-    assert options.noise_std_db == float(fitted.model.training.noise_std_db or fitted.model.training.rmse_db)
+    # the noise the model's covariance is read with: the fit's, times its variance inflation
+    training = fitted.model.training
+    assert options.noise_std_db == pytest.approx(float(training.noise_std_db) * math.sqrt(training.variance_inflation or 1.0))
+    inflated = copy.copy(fitted.model)
+    inflated.training = training.replace(variance_inflation=4.0)
+    options = ranking_options(ManoeuvreOptions(), stats, replace(fitted, model=inflated))
+    assert options.noise_std_db == pytest.approx(2.0 * float(training.noise_std_db))

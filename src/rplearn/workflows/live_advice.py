@@ -28,6 +28,7 @@ import time
 from dataclasses import replace
 from typing import Any
 
+import numpy as np
 import pandas as pd
 
 from rplearn._argtypes import check_types
@@ -58,10 +59,13 @@ def ranking_options(options: ManoeuvreOptions, statistics: Any, fitted: Any) -> 
     -------
     ManoeuvreOptions
     """
-    model = fitted.model
-    noise = model.training.noise_std_db if model.training.noise_std_db is not None else model.training.rmse_db
+    training = fitted.model.training
+    noise = training.noise_std_db if training.noise_std_db is not None else training.rmse_db
     if noise is not None and noise > 0:
-        options = replace(options, noise_std_db=float(noise))
+        # the noise the fit's covariance is read with: times its variance inflation (the held-out
+        # error beyond the noise), as the session's spreads and its --until-spread read it
+        inflation = training.variance_inflation if training.variance_inflation is not None else 1.0
+        options = replace(options, noise_std_db=float(noise) * float(np.sqrt(max(float(inflation), 1.0))))
     smoothing = fitted.spec.smoothing
     if options.penalty_weight is None and smoothing is not None and at_smoothing_cap(smoothing):
         weight = prior_penalty_weight(statistics.basis, NOMINAL_PRIOR_STD_DB, options.noise_std_db,
