@@ -636,7 +636,8 @@ DRAWS = 5
 #: "No worse" in expectation: the plan's mean worst error at most the reference's plus this many
 #: standard errors of the difference of the two means.
 ERROR_SE = 2.0
-#: Seed step between draws (a draw's flights are seeded ``seed * 1000 + PLAN_SEED * plan + k + DRAW_SEED * draw``).
+#: Seed step between draws (a draw's flights are seeded ``seed * 1000 + PLAN_SEED * plan + k + DRAW_SEED * draw``;
+#: the plan 0 for the reference, 1 for the suggested flight, 2 for the optimized one; draw 0 too).
 DRAW_SEED = 100_000
 #: Seed step between the plans of a draw (a plan flies fewer units than this).
 PLAN_SEED = 300
@@ -662,13 +663,14 @@ class LiveRanker:
     ranks with (:func:`rplearn.workflows.live_advice.ranking_options`: the refit's smoothing and
     noise, the nominal prior while the refit is at the largest smoothing, the drift estimated from
     the session's blocks). The candidates, the packet rate and the target directions are the
-    benchmark's (``options``)."""
+    benchmark's (``options``); the target directions live's (each node's sphere), or with
+    ``sphere=False`` the benchmark's."""
 
-    def __init__(self, nodes: tuple[str, ...], options: ManoeuvreOptions) -> None:
+    def __init__(self, nodes: tuple[str, ...], options: ManoeuvreOptions, sphere: bool = True) -> None:
         self.nodes = nodes
         self.stats = LiveStatistics(ModelSpec.parse("sh"), nodes, FitOptions(auto=True))
         self.options = replace(options, penalty_weight=None, correlated_std_db=None, misfit_std_db=0.0,
-                               prior_variance_factor=1.0)
+                               prior_variance_factor=1.0, targets=None if sphere else options.targets)
 
     def add(self, samples: Any, m: np.ndarray, t_s: np.ndarray) -> None:
         """Learn the samples ``m`` selects, flown at flight times ``t_s`` (one per selected sample)."""
@@ -951,8 +953,9 @@ def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, 
     accumulate(setup, ref, ref_parts)
     # suggested: the reference's first seconds until live's first suggestion, then the top-ranked manoeuvre, repeatedly
     sug = setup.flight("suggested")
-    if ranker == "live":
-        sug.live = LiveRanker(nodes, replace(opts, floor_db=TARGET_DB))
+    setup.flown = PLAN_SEED  # each plan's flights seeded from its own offset, as replay() seeds them
+    if ranker.startswith("live"):
+        sug.live = LiveRanker(nodes, replace(opts, floor_db=TARGET_DB), sphere=ranker == "live")
     start_parts, poses = fly(setup, (learning[0],))
     start_s = live_start_s(start_parts[0][1], len(nodes))
     print(f"  suggested flight's start: {start_s:g} s (live's first refit and suggestion)")
@@ -988,6 +991,7 @@ def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, 
     # optimized: the greedy plan before the flight, from the reference's start poses
     plan = greedy_plan(NormalEquations(spec.basis(), len(nodes)), spec, nodes, start, limit_s, TARGET_DB, opts)
     opt = setup.flight("optimized")
+    setup.flown = 2 * PLAN_SEED  # not after however many manoeuvres the suggested flight flew
     opt.steps = [f"{s.manoeuvre.name} ({s.manoeuvre.duration_s:.0f} s)" for s in plan]
     for k, step in enumerate(plan):
         if opt.reached_s is not None:
@@ -1120,9 +1124,10 @@ def main(argv: list[str] | None = None) -> int:
                     help="rank by rate now (default) or by the criterion's gradient at the anticipated final posterior")
     ap.add_argument("--bound", choices=("", "yes", "only"), default="",
                     help="print the optimal design's bound after the start (only: and fly nothing else)")
-    ap.add_argument("--ranker", choices=("reference", "live"), default="reference",
+    ap.add_argument("--ranker", choices=("reference", "live", "live-targets"), default="reference",
                     help="the suggested flight's ranking: from the posterior learned on the complete reference flight (default), "
-                         "or as rplearn live ranks, from its own refits of the flight so far")
+                         "or as rplearn live ranks, from its own refits of the flight so far, for each node's sphere "
+                         "(live) or the benchmark's target directions (live-targets)")
     ap.add_argument("--tiny", action="store_true", help="the smoke preset at SH-4 (seconds; criteria not enforced)")
     args = ap.parse_args(argv)
     presets = ["smoke"] if args.tiny else [p.strip() for p in args.presets.split(",") if p.strip()]
