@@ -127,3 +127,11 @@ def test_a_fit_below_the_cap_is_ranked_under_its_own_smoothing(session):
     inflated.training = training.replace(variance_inflation=4.0)
     options = ranking_options(ManoeuvreOptions(), stats, replace(fitted, model=inflated))
     assert options.noise_std_db == pytest.approx(2.0 * float(training.noise_std_db))
+
+
+def test_the_view_says_a_capped_fit_is_ranked_under_the_nominal_prior():
+    from rplearn.workflows.live import _capped_note
+
+    assert "manoeuvres are ranked under a 6-dB smoothness prior meanwhile" in _capped_note(live_advisor())
+    assert "smoothness prior" not in _capped_note(lambda *a: [])  # another hook ranks as it will
+    assert _capped_note(None).startswith("not known yet: the fit took the largest smoothing")

@@ -178,6 +178,19 @@ def open_source(source: str, work_dir: str, reader: ReaderOptions) -> CsvTail | 
     return MavlinkSource(source, os.path.join(work_dir, "session.tlog"), reader)
 
 
+def _capped_note(ranker: Any) -> str:
+    """The view's note while the fit is at the search's largest smoothing (``ranker``: the
+    session's manoeuvre hook; the project's advisor then ranks under the nominal prior)."""
+    text = "not known yet: the fit took the largest smoothing the search tries (the data do not yet tell the patterns' shape from flat)"
+    from rplearn.workflows.live_advice import ManoeuvreAdvisor  # the ranking's module: only once a fit is capped
+
+    if isinstance(ranker, ManoeuvreAdvisor):
+        from rplearn.analysis.manoeuvre_prior import NOMINAL_PRIOR_STD_DB
+
+        text += f"; manoeuvres are ranked under a {NOMINAL_PRIOR_STD_DB:g}-dB smoothness prior meanwhile"
+    return text
+
+
 def _capped(model: Any) -> bool:
     """Whether a fit took the search's largest smoothing (its spread is the cap's, not the data's)."""
     return model.training.smoothing is not None and at_smoothing_cap(model.training.smoothing)
@@ -350,8 +363,7 @@ class _Session:
                 s.coverage_pct[node] = 100.0 * spread.covered_fraction
                 s.spread_db[node] = math.inf if capped else spread.covered_std_db
                 s.sphere_spread_db[node] = math.inf if capped else spread.sphere_std_db
-            self.note("spread: ", "not known yet: the fit took the largest smoothing the search tries (the data do not yet "
-                                  "tell the patterns' shape from flat)" if capped else None)
+            self.note("spread: ", _capped_note(self.options.manoeuvres) if capped else None)
         except InputError as exc:
             self.note("spread: ", str(exc))
         if self.recent and self.stats is not None:
