@@ -173,9 +173,19 @@ def test_the_predicted_spread_is_what_flying_the_manoeuvre_in_the_simulator_give
 
 def test_a_floor_gives_no_credit_below_it():
     normal = NormalEquations(SPEC.basis(), 2)
-    plain = rank_manoeuvres(normal, SPEC, NODES, POSES, _options())
-    floored = rank_manoeuvres(normal, SPEC, NODES, POSES, _options(floor_db=10.0))  # above every spread
-    assert plain[0].reduction_db_per_s > 0 and all(r.reduction_db_per_s == 0.0 for r in floored)
+    plain = rank_manoeuvres(normal, SPEC, NODES, POSES, _options(rate="spread"))
+    before = max(plain[0].spread_before_db.values())
+    floor = before - 0.05
+    floored = rank_manoeuvres(normal, SPEC, NODES, POSES, _options(rate="spread", floor_db=floor))
+    assert plain[0].reduction_db_per_s > 0.05 / plain[0].duration_s
+    for r in floored:  # no manoeuvre is credited with more than bringing the spread down to the floor
+        assert r.reduction_db_per_s * r.duration_s <= 0.05 + 1e-9
+    assert max(r.reduction_db_per_s * r.duration_s for r in floored) == pytest.approx(0.05)
+    # a floor every node is below already rewards nothing: the candidates are ranked without it
+    # (they all scored 0 and came in an arbitrary order)
+    above = rank_manoeuvres(normal, SPEC, NODES, POSES, _options(rate="spread", floor_db=10.0))
+    assert [r.name for r in above] == [r.name for r in plain]
+    assert [r.reduction_db_per_s for r in above] == [r.reduction_db_per_s for r in plain]
     with pytest.raises(InputError) as err:
         ManoeuvreOptions(floor_db=-1.0)
     assert err.value.param == "floor_db"
