@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import os
 import sys
+from bisect import bisect_left, bisect_right, insort
+from collections import deque
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -177,9 +179,9 @@ class TlogRows:
     close_as_added: bool = False
     #: Attitude and position messages left out as copies of the one before them (:meth:`add`).
     close_copies: int = 0
-    #: Per kind and sender, the receive time and fields of its last message of :data:`_BOOT_TIMED`
-    #: (shared by the parts of a growing log read one after another: :mod:`rplearn.io.tlog_tail`).
-    last_of: dict[tuple[str, int], tuple[float, tuple[Any, ...]]] = field(default_factory=dict)
+    #: Per kind of :data:`_BOOT_TIMED`, its last messages (:class:`RecentRecords`; shared by the parts of a
+    #: growing log read one after another: :mod:`rplearn.io.tlog_tail`).
+    recent: dict[str, RecentRecords] = field(default_factory=dict)
     _arrays: dict[Any, np.ndarray] = field(default_factory=dict)
 
     def array(self, kind: str, width: int) -> np.ndarray:
@@ -213,7 +215,7 @@ class TlogRows:
             name = getattr(exc, "name", None)
             raise LogFormatError(f"{source}: a {kind} message has no {name} field" if name else
                                  f"{source}: a {kind} message has a field that is not a number ({exc})") from None
-        if self.close_as_added and kind in _BOOT_TIMED and is_close_copy(self.last_of, kind, src, row):
+        if self.close_as_added and kind in _BOOT_TIMED and is_close_copy(self.recent, kind, row):
             self.close_copies += 1
             return
         self.counts[kind] = self.counts.get(kind, 0) + 1
@@ -289,8 +291,8 @@ def drop_repeated_rows(acc: TlogRows) -> int:
     return dropped
 
 
-#: Largest receive-time difference [s] between a message and the same one (kind, sender, fields) right
-#: before it for the two to be one message received twice: far below any report period.
+#: Largest receive-time difference [s] between a message and the same one (kind, sender, fields) among the
+#: last read (:class:`RecentRecords`) for the two to be one message received twice: far below any report period.
 CLOSE_COPY_S = 1e-3
 
 
@@ -308,24 +310,77 @@ def close_in_time(dt: float) -> bool:
     return 0.0 <= dt <= CLOSE_COPY_S + _TIME_ROUNDING_S
 
 
-def is_close_copy(last_of: dict[tuple[str, int], tuple[float, tuple[Any, ...]]], kind: str, sender: int,
-                  row: tuple[Any, ...]) -> bool:
-    """Whether ``row`` (:func:`_tlog_row`: sender, receive time, fields) repeats the sender's message of the
-    kind right before it (``last_of``, updated), boot time included, within :data:`CLOSE_COPY_S`: one message
-    received twice (a router, or two links forwarding each). Kept, they would be two poses of one instant."""
-    fields = row[:1] + row[2:]
-    before = last_of.get((kind, sender))
-    last_of[(kind, sender)] = (row[1], fields)
-    return before is not None and before[1] == fields and close_in_time(row[1] - before[0])
+#: How many of the records read last a record's earlier copy is looked among (:class:`RecentRecords`): a logger
+#: writing each buffer of records twice, or a burst of messages received twice, the copies up to 1 ms later,
+#: repeats up to this many records. A stretch of the log written again farther back (a download resumed from its
+#: start) is :func:`merge_copied_boots`'s (DataFlash) or :func:`drop_repeated_rows`'s (``.tlog``).
+COPY_WINDOW_RECORDS = 1024
+
+
+@dataclass
+class RecentRecords:
+    """The last :data:`COPY_WINDOW_RECORDS` records added: per key (kind, instance or sender, fields but the time)
+    their times, sorted (a record whose fields repeat often, a vehicle at rest, is looked up by bisection, not
+    against each of up to :data:`COPY_WINDOW_RECORDS` times). A record repeating one of them at most
+    :data:`CLOSE_COPY_S` after it (:func:`close_in_time`) may be that record written or received twice; the
+    DataFlash and ``.tlog`` passes share this window."""
+
+    seen: dict[tuple[Any, ...], list[float]] = field(default_factory=dict)
+    order: deque[tuple[float, tuple[Any, ...]]] = field(default_factory=deque)
+
+    def copy_gap(self, key: tuple[Any, ...], t: float) -> float | None:
+        """How long [s] after the latest record of ``key`` within :func:`close_in_time` of ``t`` a record at ``t``
+        comes (0.0: at the same time); None when none is."""
+        times = self.seen.get(key, ())
+        i = bisect_left(times, t - 2.0 * CLOSE_COPY_S)  # every time close_in_time could take, and more
+        gap = None
+        while i < len(times) and times[i] <= t:
+            if close_in_time(t - times[i]):
+                gap = t - times[i]
+            i += 1
+        return gap
+
+    def since(self, key: tuple[Any, ...], t: float) -> float | None:
+        """How long [s] before ``t`` the latest record of ``key`` at or before it was added (None: none)."""
+        times = self.seen.get(key, ())
+        i = bisect_right(times, t)
+        return t - times[i - 1] if i else None
+
+    def add(self, key: tuple[Any, ...], t: float) -> None:
+        """Add a record (the oldest of more than :data:`COPY_WINDOW_RECORDS` forgotten)."""
+        if t == t:  # a time that is not a number is no copy's (close_in_time) and keeps the times sorted out
+            insort(self.seen.setdefault(key, []), t)
+        self.order.append((t, key))
+        if len(self.order) > COPY_WINDOW_RECORDS:
+            old_t, old_key = self.order.popleft()
+            if old_t != old_t:
+                return
+            times = self.seen[old_key]
+            del times[bisect_left(times, old_t)]  # one of the times equal to old_t: which one does not matter
+            if not times:
+                del self.seen[old_key]
+
+
+def is_close_copy(recent: dict[str, RecentRecords], kind: str, row: tuple[Any, ...]) -> bool:
+    """Whether ``row`` (:func:`_tlog_row`: sender, receive time, fields) repeats one of the last
+    :data:`COPY_WINDOW_RECORDS` messages of its kind (``recent``, per kind; the row added when it does not), boot
+    time and sender included, within :data:`CLOSE_COPY_S`: one message received twice (a router, or two links
+    forwarding each, a burst of messages at a time). Kept, they would be two poses of one instant."""
+    window = recent.setdefault(kind, RecentRecords())
+    key = row[:1] + row[2:]
+    if window.copy_gap(key, row[1]) is not None:
+        return True
+    window.add(key, row[1])
+    return False
 
 
 def drop_close_copies(acc: TlogRows) -> int:
-    """Drop the second of two attitude or position messages that are one received twice (:func:`is_close_copy`),
+    """Drop the later of two attitude or position messages that are one received twice (:func:`is_close_copy`),
     after the stretches written again (as the live tail meets them); how many (their kinds' counts lowered)."""
-    dropped, last_of = 0, dict[tuple[str, int], tuple[float, tuple[Any, ...]]]()
+    dropped, recent = 0, dict[str, RecentRecords]()
     for kind in _BOOT_TIMED:
         rows = acc.rows.get(kind, [])
-        keep = [not is_close_copy(last_of, kind, row[0], row) for row in rows]
+        keep = [not is_close_copy(recent, kind, row) for row in rows]
         n = len(keep) - sum(keep)
         if n:
             dropped += n
@@ -482,5 +537,5 @@ def merge_copied_boots(tables: dict[str, list[tuple[float, ...]]], boot_t: list[
     return repeated
 
 
-__all__ = ["CLOSE_COPY_S", "Raw", "TlogRows", "boot_offsets", "close_in_time", "collect_tlog", "drop_close_copies",
-           "drop_repeated_rows", "is_close_copy", "merge_copied_boots", "tlog_raw"]
+__all__ = ["CLOSE_COPY_S", "COPY_WINDOW_RECORDS", "Raw", "RecentRecords", "TlogRows", "boot_offsets", "close_in_time",
+           "collect_tlog", "drop_close_copies", "drop_repeated_rows", "is_close_copy", "merge_copied_boots", "tlog_raw"]

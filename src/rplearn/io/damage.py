@@ -62,12 +62,13 @@ def file_damage(path: str, info: dict[str, Any]) -> list[str]:
                          "or overlapping exports); each was read once")
     if info.get("close_copies") and info.get("format") == "dataflash":
         lines.append(f"{path}: {info['close_copies']:,} DataFlash record(s) repeat one of their kind read shortly "
-                     "before them (same fields, TimeUS the same or up to 1 ms later: records written twice, by a logger "
-                     "or a router duplicating them, or a short stretch of the log written again); each was read once")
+                     "before them (same fields, TimeUS the same or up to 1 ms later, far below their kind's interval: "
+                     "records written twice, by a logger or a router duplicating them, or a short stretch of the log "
+                     "written again); each was read once")
     elif info.get("close_copies"):
-        lines.append(f"{path}: {info['close_copies']:,} attitude or position message(s) repeat the one before them "
-                     "within 1 ms (same sender, boot time and fields: each message received twice, a router or two "
-                     "links forwarding it); each was read once")
+        lines.append(f"{path}: {info['close_copies']:,} attitude or position message(s) repeat one received shortly "
+                     "before them within 1 ms (same sender, boot time and fields: each message received twice, a router "
+                     "or two links forwarding it); each was read once")
     if info.get("repeated_messages"):
         lines.append(f"{path}: {info['repeated_messages']:,} message(s) repeat an earlier one exactly (same receive "
                      "time and fields: part of the log is in the file twice); each was read once")
