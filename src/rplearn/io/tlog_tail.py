@@ -69,7 +69,7 @@ import pandas as pd
 from rplearn._argtypes import check_types
 from rplearn.errors import InputError, LogFormatError
 from rplearn.io._log_schema import library_quiet
-from rplearn.io._mavlink_records import TlogRows, open_mavlink_log, tlog_raw
+from rplearn.io._mavlink_records import RecentRecords, TlogRows, open_mavlink_log, tlog_raw
 from rplearn.io.mavlink import MavlinkOptions, logs_from_raw, position_fixes
 from rplearn.io.options import ReaderOptions
 from rplearn.io.tlog_window import KEEP_S, TlogWindow
