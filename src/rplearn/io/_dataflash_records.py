@@ -25,7 +25,7 @@ from rplearn.io._log_schema import check_dataflash_lengths, dataflash_time_field
 from rplearn.io._mavlink_records import Raw, RecentRecords, merge_copied_boots, open_mavlink_log, rows_array
 from rplearn.io.mavlink_phases import DUPLICATE_FRACTION_OF_PERIOD, REBOOT_STEP_S
 
-DF_TYPES = ["ATT", "POS", "GPS", "ORGN", "RAD", "ARM", "EV"]
+DF_TYPES = ["ATT", "POS", "GPS", "GPA", "ORGN", "RAD", "ARM", "EV"]
 #: DataFlash EV ids of arming and disarming (ArduPilot LogEvent ARMED = 10, DISARMED = 11).
 _EV_ARMED, _EV_DISARMED = 10, 11
 #: Fields naming a message's instance (a second GPS, ...): each instance's records are compared with its own.
@@ -77,16 +77,19 @@ class _DfMessage:
     kind: str
     source: str
 
+    @property
+    def columns(self) -> list[str]:
+        """The message's field names."""
+        return list(getattr(getattr(self.msg, "fmt", None), "columns", None) or self.msg.get_fieldnames())
+
     def __call__(self, name: str, default: float | None = None) -> float:
         return number(self.msg, self.kind, name, self.source, default)
 
 
-def _df_record(get: _DfMessage, t: float, boot: int, out: tuple[dict[str, list[tuple[float, ...]]], list[tuple[float, ...]],
-               list[tuple[float, ...]], list[float]], home: tuple[float, float, float] | None
-               ) -> tuple[float, float, float] | None:
-    """Add one DataFlash message's row to ``out`` (rows per kind, fix rows, armed rows, UTC
-    offsets); the home position (the first ORGN of type 1) returned."""
-    rows, fix_rows, arm_rows, utc = out
+def _df_record(get: _DfMessage, t: float, boot: int, out: _Pass) -> None:
+    """Add one DataFlash message's row to ``out`` (rows per kind, fix rows, GPS accuracy rows, armed rows, UTC
+    offsets; the home position: the first ORGN of type 1)."""
+    rows, fix_rows, arm_rows, utc = out.rows, out.fix_rows, out.arm_rows, out.utc
     kind = get.kind
     if kind == "ATT":
         rows[kind].append((t, *np.radians([get("Roll"), get("Pitch"), get("Yaw")]), boot))
@@ -98,17 +101,20 @@ def _df_record(get: _DfMessage, t: float, boot: int, out: tuple[dict[str, list[t
         if status >= 3:
             rows[kind].append((t, get("Lat"), get("Lng"), get("Alt"), get("Spd", np.nan), abs(get("VZ", np.nan)), boot))
             utc.append(float(get.msg._timestamp) - t)
+    elif kind == "GPA" and get("I", 0.0) == 0 and "HAcc" in get.columns and "VAcc" in get.columns:
+        # the GPS accuracy [m] (0: none reported, read as NaN later); VDop, the GPS record's HDop: dilutions, no metres
+        h, v = get("HAcc"), get("VAcc")
+        out.acc_rows.append((t, h if h > 0 else 0.0, v if v > 0 else 0.0, boot))
     elif kind == "RAD":
         rows[kind].append((t, *(get(f) for f in ("RSSI", "RemRSSI", "Noise", "RemNoise", "RxErrors", "Fixed")), boot))
     elif kind == "ORGN":
         rows[kind].append((t, boot))
-        if get("Type") == 1 and home is None:
-            return (get("Lat"), get("Lng"), get("Alt"))
+        if get("Type") == 1 and out.home is None:
+            out.home, out.home_at = (get("Lat"), get("Lng"), get("Alt")), (t, boot)
     elif kind == "ARM":
         arm_rows.append((t, float(get("ArmState") != 0), boot))
     elif kind == "EV" and get("Id") in (_EV_ARMED, _EV_DISARMED):
         arm_rows.append((t, float(get("Id") == _EV_ARMED), boot))
-    return home
 
 
 @dataclass
@@ -119,7 +125,9 @@ class _Pass:
     fix_rows: list[tuple[float, ...]] = field(default_factory=list)
     arm_rows: list[tuple[float, ...]] = field(default_factory=list)
     utc: list[float] = field(default_factory=list)
+    acc_rows: list[tuple[float, ...]] = field(default_factory=list)
     home: tuple[float, float, float] | None = None
+    home_at: tuple[float, int] | None = None  # the home's time and boot
     boot: int = 0
     boot_t: list[tuple[float, int]] = field(default_factory=list)
     minor: set[int] = field(default_factory=set)  # the stretches after a step back of the time too small for a reboot
@@ -182,8 +190,7 @@ def _read_pass(source: str, drop: frozenset[int] | None) -> _Pass:
                     out.minor.add(out.boot)
             last_t, last_kind = t, kind
             out.boot_t.append((t, out.boot))
-            out.home = _df_record(_DfMessage(msg, kind, source), t, out.boot, (out.rows, out.fix_rows, out.arm_rows, out.utc),
-                                  out.home)
+            _df_record(_DfMessage(msg, kind, source), t, out.boot, out)
     return out
 
 
@@ -199,7 +206,7 @@ def _judge(first: _Pass) -> set[int]:
 
 
 def collect_dataflash(source: str) -> Raw:
-    """One pass over a DataFlash log: ATT, POS (else GPS), RAD, ORGN, GPS status, ARM and EV
+    """One pass over a DataFlash log: ATT, POS (else GPS), RAD, ORGN, GPS status and accuracy (GPA), ARM and EV
     (each message type's fields checked on its first record: :mod:`rplearn.io._log_schema`); a second
     when records repeating one 1 ms before them or less are no copies (:func:`_judge`)."""
     read = _read_pass(source, None)
@@ -207,10 +214,11 @@ def collect_dataflash(source: str) -> Raw:
     if len(copies) < len(read.copies) + len(read.maybe):  # some are no copies (a fast logger at rest): read again
         read = _read_pass(source, frozenset(copies))
     close = len(copies)  # the records written twice: read once
-    rows, fix_rows, arm_rows, utc, home = read.rows, read.fix_rows, read.arm_rows, read.utc, read.home
-    boot, boot_t, minor = read.boot, read.boot_t, read.minor
-    tables = {**rows, "GPS status": fix_rows, "ARM/EV": arm_rows}
-    repeated = merge_copied_boots(tables, boot_t, frozenset(minor)) if boot else 0
+    rows, utc, home, boot, boot_t = read.rows, read.utc, read.home, read.boot, read.boot_t
+    home_rows: list[tuple[float, ...]] = [read.home_at] if read.home_at is not None else []
+    tables: dict[str, list[tuple[float, ...]]] = {**rows, "GPS status": read.fix_rows, "ARM/EV": read.arm_rows, "GPS accuracy": read.acc_rows,
+              "home": home_rows}
+    repeated = merge_copied_boots(tables, boot_t, frozenset(read.minor)) if boot else 0
     rows = {k: tables[k] for k in rows}
     fix_rows, arm_rows = tables["GPS status"], tables["ARM/EV"]
     offsets, ends = _df_chain(boot_t)
@@ -225,12 +233,14 @@ def collect_dataflash(source: str) -> Raw:
         raise LogFormatError(f"{source}: no ATT messages (the vehicle's attitude)")
     pos_kind = "POS" if rows["POS"] else "GPS"
     orgn = chained(rows_array(rows["ORGN"], 2), 0, 1)
+    home_t = chained(rows_array(tables["home"], 2), 0, 1)[:, 0]
     # the vehicle logs itself throughout: its stream is never absent
     return Raw(
         fmt="dataflash", att=chained(rows_array(rows["ATT"], 5), 0, 4), pos=chained(rows_array(rows[pos_kind], 7), 0, 6),
         radio=chained(rows_array(rows["RAD"], 8), 0, 7)[:, :7], vehicle_t=np.array([]), home=home, counts=counts,
         boot_last_t=ends, origin_t=orgn[:, 0],
         fix=chained(rows_array(fix_rows, 3), 0, 2)[:, :2], armed=chained(rows_array(arm_rows, 3), 0, 2)[:, :2],
+        accuracy=chained(rows_array(tables["GPS accuracy"], 4), 0, 3)[:, :3], home_t=float(home_t[0]) if len(home_t) else None,
         notes={"position_message": pos_kind, "repeated_messages": repeated, "close_copies": close,
                "time_reference": "TimeUS, seconds since the autopilot booted"
                                  + (" (later boots placed right after the previous one)" if len(ends) > 1 else ""),

@@ -38,6 +38,10 @@ class Raw:
     origin_t: np.ndarray = field(default_factory=lambda: np.zeros(0))  # times of origin messages [s]
     fix: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))  # (n, 2): t, 3-D fix (1) or not (0)
     armed: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))  # (n, 2): t, armed (1) or not (0)
+    # (n, 3): t, the GPS accuracy the log reports [m] (horizontal, vertical standard deviations; NaN: none), and
+    # the time of the home message (``home``'s) [s]
+    accuracy: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    home_t: float | None = None
     counts: dict[str, int] = field(default_factory=dict)
     notes: dict[str, Any] = field(default_factory=dict)
     boot_offsets: dict[int, tuple[float, int]] = field(default_factory=dict)  # tlog: boot -> (offset [s], messages)
@@ -146,6 +150,21 @@ def _tlog_cut_off(conn: Any, source: str, whole_to: int) -> dict[str, Any]:
     return {"cut_off_at_byte": int(whole_to), "cut_off_record": getattr(kind, "msgname", None) if kind is not None else None}
 
 
+#: ``h_acc``/``v_acc`` of a GPS_RAW_INT that reports no accuracy (UINT32_MAX; 0 in a MAVLink 1 frame, which lacks them).
+_UNKNOWN_ACC = 2**32 - 1
+
+
+def _gps_raw_accuracy_m(msg: Any) -> tuple[float, float]:
+    """The GPS accuracy a ``GPS_RAW_INT`` reports [m]: ``h_acc``, ``v_acc`` [mm] (MAVLink 2 extension fields;
+    0.0 when absent, 0 or unknown: a number equal to itself, so that a message in the file twice is found). Its
+    ``eph``/``epv`` are dilutions of precision (HDOP, VDOP x 100, unitless), no accuracy in metres: not used."""
+    out = []
+    for name in ("h_acc", "v_acc"):
+        value = getattr(msg, name, 0)
+        out.append(float(value) * 1e-3 if isinstance(value, int) and 0 < value < _UNKNOWN_ACC else 0.0)
+    return out[0], out[1]
+
+
 def _tlog_row(kind: str, msg: Any, src: int, t: float) -> tuple[Any, ...]:
     """The fields of one tlog message the reader uses (units: module docstring of mavlink.py)."""
     if kind == "ATTITUDE":
@@ -158,7 +177,7 @@ def _tlog_row(kind: str, msg: Any, src: int, t: float) -> tuple[Any, ...]:
     if kind == "GPS_GLOBAL_ORIGIN":
         return (src, t, msg.latitude * 1e-7, msg.longitude * 1e-7, msg.altitude * 1e-3)
     if kind == "GPS_RAW_INT":
-        return (src, t, float(msg.fix_type >= 3))
+        return (src, t, float(msg.fix_type >= 3), *_gps_raw_accuracy_m(msg))
     if kind == "HEARTBEAT":
         return (src, t, float(msg.base_mode & _ARMED_FLAG != 0), msg.type)
     return (t, msg.rssi, msg.remrssi, msg.noise, msg.remnoise, msg.rxerrors, msg.fixed)
@@ -425,7 +444,8 @@ def tlog_raw(acc: TlogRows, source: str, system_id: int | None, cut_off: dict[st
     boot_last_t = np.array([t_log[boot == b].max() for b in range(int(boot.max()) + 1)]) if len(boot) else np.zeros(0)
     home = [h for h in rows["HOME_POSITION"] if h[0] // 256 == vehicle and (h[2] != 0 or h[3] != 0)]
     origin = [h[1] for k in ORIGIN_TYPES for h in rows[k] if h[0] // 256 == vehicle and (h[2] != 0 or h[3] != 0)]
-    fix = [r[1:] for r in rows["GPS_RAW_INT"] if r[0] // 256 == vehicle]
+    fix = [r[1:3] for r in rows["GPS_RAW_INT"] if r[0] // 256 == vehicle]
+    accuracy = [(r[1], r[3], r[4]) for r in rows["GPS_RAW_INT"] if r[0] // 256 == vehicle and r[3] > 0 and r[4] > 0]
     beats = [r[1:3] for r in rows["HEARTBEAT"] if r[0] // 256 == vehicle and r[3] != MAV_TYPE_GCS]
     radio = np.concatenate([acc.array("RADIO_STATUS", 7), acc.array("RADIO", 7)])
     radio = radio[np.lexsort(radio.T[::-1])]  # as the rows' tuples sort
@@ -436,6 +456,7 @@ def tlog_raw(acc: TlogRows, source: str, system_id: int | None, cut_off: dict[st
         pos=np.column_stack([t_log[n_att:], gpi[:, 3:8], boot[n_att:]]),
         radio=radio, vehicle_t=np.sort(acc.times(vehicle)),
         home=(float(home[0][2]), float(home[0][3]), float(home[0][4])) if home else None, counts=dict(counts),
+        home_t=float(home[0][1]) if home else None, accuracy=rows_array(sorted(accuracy), 3),
         boot_last_t=boot_last_t, origin_t=np.sort(np.asarray(origin, np.float64)), fix=rows_array(sorted(fix), 2),
         armed=rows_array(sorted(beats), 2), boot_offsets=per_boot,
         notes={"system_id": vehicle, "component_id": chosen % 256, "radio_senders": dict(radio_senders), **cut_off,

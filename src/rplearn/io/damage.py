@@ -163,7 +163,7 @@ def one_station(logs: list[pd.DataFrame], owners: list[int], files: list[dict[st
                     f"ENU{turned}: a station moved between flights{said}, or the homes of two vehicles; give where it "
                     "stood (ReaderOptions.station_geodetic: lat, lon, alt), or read each flight on its own",
                     param="station_geodetic")
-            if row["t"] == first["t"]:
+            if row["t"] == first["t"] and not max(apart) > SAME_POSITION_M:
                 continue  # the same row: a file given twice, read once by drop_repeated_across
             log = out[k]
             out[k] = log[~((log["node"].astype(str) == station) & (log["t"] == row["t"]))]
