@@ -237,7 +237,7 @@ def test_a_kind_logged_every_millisecond_at_rest_is_no_copy(tmp_path, interval_u
     # was: 3,000 ATT records of equal fields 1 ms apart read as 1,500 and 1,500 close copies ("the file holds records
     # written twice"); its records' interval is the kind's own. A record written again at the same TimeUS, or
     # 0.1 ms later (a tenth of the interval), still is a copy
-    again = {40: 0, 1700: 100}
+    again = {40: 0, 41: 0, 1700: 100}  # 41: a record read 1 ms after an equal one, again at its TimeUS
     logs, meta = _read(_at_rest(tmp_path / "fast.bin", interval_us, 3000, again))
     assert meta["messages"]["ATT"] == 3000 and meta["close_copies"] == len(again)
     assert (logs.pose["node"] == "sys1").sum() == 3000 - meta["dropped"]["out_of_span"]  # after the last POS

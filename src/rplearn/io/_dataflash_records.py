@@ -148,7 +148,7 @@ def _read_pass(source: str, drop: frozenset[int] | None) -> _Pass:
     last_t, last_kind = -np.inf, ""
     times: dict[str, tuple[str, float]] = {}
     instance: dict[str, tuple[str, ...]] = {}
-    recent = RecentRecords()
+    recent, maybes = RecentRecords(), RecentRecords()  # the records read; the maybes (kept apart: steps)
     index = -1
     with library_quiet():  # pymavlink prints what it cannot parse
         conn = open_mavlink_log(source, tlog=False)
@@ -174,11 +174,12 @@ def _read_pass(source: str, drop: frozenset[int] | None) -> _Pass:
             else:
                 key = (kind, which, *_fields(msg, times[kind][0]))
                 gap = recent.copy_gap(key, t)
-                if gap == 0.0:
-                    out.copies.add(index)  # the record written twice: read once
+                if gap == 0.0 or maybes.copy_gap(key, t) == 0.0:
+                    out.copies.add(index)  # the record (or a maybe) written twice: read once
                     continue
                 if gap is not None:
                     out.maybe.append((index, (kind, which), gap))
+                    maybes.add(key, t)
                     continue
                 step = recent.since(key, t)
                 if step:
