@@ -218,3 +218,16 @@ def test_the_real_mavlink_logs_report_their_accuracy_where_they_give_it_in_metre
     assert "home" in meta["station_note"] and meta["station_accuracy_m"] == pytest.approx((1.61, 2.41))
     for tlog in sorted(real.glob("*.tlog")):
         assert read_mavlink(tlog, 20.0, 433e6)[1]["station_accuracy_m"] is None
+
+
+def test_inspect_reads_two_mavlink_flights_within_the_gps_noise_with_one_station(tmp_path):
+    # was: the second flight's station row kept in inspect's node summary, G "logged" over the hour between the
+    # flights (a clock jump, a pose gap of 3,600 s and a pose rate of 0.00 Hz said); sync reads one static row
+    from rplearn.io.inspect import inspect_logs
+
+    a = _mavlink_flight(tmp_path / "a.tlog", (0.0, 0.0, 0.0), (0.8, 1.4), 0.0)
+    b = _mavlink_flight(tmp_path / "b.tlog", (1.2, 0.0, 0.5), (0.8, 1.4), 3600.0)
+    report = inspect_logs([str(a), str(b)], _mav_options(a, b))
+    assert not [p for p in report.problems if "node G" in p or "ground station" in p]
+    [station] = [n for n in report.nodes if n.node == "G"]
+    assert station.static

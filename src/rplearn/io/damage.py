@@ -272,9 +272,14 @@ def across_files(report: Any, poses: list[pd.DataFrame], canonical: list[pd.Data
                                                                  "origin_geodetic", "anchor_geodetic")}}
                 for f in report.files]
     try:
-        one_station(canonical, owners["pose"], stations)
+        merged = one_station(canonical, owners["pose"], stations)
     except InputError as exc:
         report.problems.append(f"{exc} (sync refuses these files)")
+        return poses, signals
+    for k, (before, after) in enumerate(zip(canonical, merged, strict=True)):
+        if len(after) < len(before):  # a later flight's row of one static station: read as sync reads it
+            kept = pd.MultiIndex.from_frame(after[["t", "node"]].astype({"node": str}))
+            poses[k] = poses[k][pd.MultiIndex.from_frame(poses[k][["t", "node"]].astype({"node": str})).isin(kept)]
     return poses, signals
 
 
