@@ -6,8 +6,8 @@ A record that repeats one of its kind (and instance) read shortly before it (amo
 every field but its time the same, is that record written twice (a logger or a router duplicating the stream,
 record by record or a buffer at a time) when its TimeUS is the same, or up to
 :data:`~rplearn.io._mavlink_records.CLOSE_COPY_S` later and far below (less than
-:data:`~rplearn.io.mavlink_phases.DUPLICATE_FRACTION_OF_PERIOD` of) the median interval of its kind and instance:
-it is read once and counted (``close_copies``). A kind logged every millisecond while the vehicle rests repeats
+:data:`~rplearn.io.mavlink_phases.DUPLICATE_FRACTION_OF_PERIOD` of) the median interval between records of its kind
+and instance that repeat their fields: it is read once and counted (``close_copies``). A kind logged every millisecond while the vehicle rests repeats
 its fields 1 ms later at its own interval: those records are no copies (:func:`_judge`; the log is then read a
 second time, with them). A later stretch that repeats an earlier one (the log in the file twice) is undone by
 :func:`~rplearn.io._mavlink_records.merge_copied_boots` (``repeated_messages``).
@@ -102,7 +102,7 @@ def _df_record(get: _DfMessage, t: float, boot: int, out: _Pass) -> None:
             rows[kind].append((t, get("Lat"), get("Lng"), get("Alt"), get("Spd", np.nan), abs(get("VZ", np.nan)), boot))
             utc.append(float(get.msg._timestamp) - t)
     elif kind == "GPA" and get("I", 0.0) == 0 and "HAcc" in get.columns and "VAcc" in get.columns:
-        # the GPS accuracy [m] (0: none reported, read as NaN later); VDop, the GPS record's HDop: dilutions, no metres
+        # the GPS accuracy [m] (0: none reported); VDop, and the GPS record's HDop: dilutions, no metres
         h, v = get("HAcc"), get("VAcc")
         out.acc_rows.append((t, h if h > 0 else 0.0, v if v > 0 else 0.0, boot))
     elif kind == "RAD":

@@ -38,7 +38,7 @@ class Raw:
     origin_t: np.ndarray = field(default_factory=lambda: np.zeros(0))  # times of origin messages [s]
     fix: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))  # (n, 2): t, 3-D fix (1) or not (0)
     armed: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))  # (n, 2): t, armed (1) or not (0)
-    # (n, 3): t, the GPS accuracy the log reports [m] (horizontal, vertical standard deviations; NaN: none), and
+    # (n, 3): t, the GPS accuracy the log reports [m] (horizontal, vertical standard deviations; 0 or NaN: none), and
     # the time of the home message (``home``'s) [s]
     accuracy: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     home_t: float | None = None

@@ -201,8 +201,9 @@ class _StartHold:
     (:func:`_start_known`), with their rows in the file; ``at_zero``: the nodes handed out at the zero position
     when the hold ran out (:data:`HOLD_S`, :data:`HOLD_ROWS`), with their last time there; ``stations``: those
     of them handed out at once, standing still at the ENU origin (one pose: a station at the natural origin of
-    a frame measured from it, whose links would otherwise lose their rows as ``unknown_node`` while held; a
-    logger before its fix writes its attitude, or a lat = lon = 0 that no station has)."""
+    a frame measured from it, whose links' rows would otherwise wait in the matcher while it is held,
+    :class:`~rplearn.data.live_sync.LiveMatcher`; a logger before its fix writes its attitude, or a lat = lon = 0
+    that no station has)."""
 
     source: str
     held: pd.DataFrame | None = None
