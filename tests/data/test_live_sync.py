@@ -155,3 +155,56 @@ def test_a_copy_sent_again_after_the_hashes_are_forgotten_is_dropped_as_late_not
     assert m.summary.dropped["late"] == 1 and m.summary.dropped["duplicate"] == 0
     assert {**m.summary.dropped, "late": 0, "duplicate": 1} == whole.summary.dropped
     assert m.summary.n_in == whole.summary.n_in and m.summary.n_out == whole.summary.n_out
+
+
+def _held(pose: pd.DataFrame, signal: pd.DataFrame, node: str, until_s: float, batch_s: float = 1.0
+          ) -> tuple[pd.DataFrame, LiveMatcher]:
+    """As :func:`_live`, with ``node``'s poses before ``until_s`` held back (a source holding a node's start) and
+    handed out with the batch that reaches ``until_s``."""
+    m = LiveMatcher()
+    out = []
+    edges = np.arange(pose["t"].min(), pose["t"].max() + batch_s, batch_s)
+    for a, b in zip(edges[:-1], edges[1:]):
+        held = (pose["node"] == node) & (pose["t"] < until_s)
+        rows = pose[(pose["t"] >= a) & (pose["t"] < b) & ~held]
+        m.add_poses(pd.concat([pose[held], rows]) if a <= until_s < b else rows)  # the held rows, all at once
+        m.add_signals(signal[(signal["t"] >= a) & (signal["t"] < b)])
+        out.append(m.match().dataset)
+    m.add_signals(signal[signal["t"] >= edges[-1]])
+    out.append(m.match(final=True).dataset)
+    return pd.concat([o for o in out if len(o)], ignore_index=True), m
+
+
+@pytest.mark.parametrize("until_s", [12.0, 45.0])
+def test_rows_of_a_node_whose_first_poses_are_held_wait_for_them(logs, until_s):
+    # a source holding a node's first poses (CsvTail: a logger's start at the zero position, up to HOLD_S):
+    # the rows of its links wait for them and are matched as sync matches them (was: 458 and 1,524 of 2,659
+    # dropped as unknown_node)
+    pose, signal = logs
+    node = "B"
+    assert pose.loc[pose["node"] == node, "t"].min() < until_s < pose["t"].max()
+    whole = synchronise(pose, signal)
+    live, m = _held(pose, signal, node, until_s)
+    expected = whole.dataset.sort_values(["t", "tx", "rx"], kind="stable").reset_index(drop=True)
+    live = live.sort_values(["t", "tx", "rx"], kind="stable").reset_index(drop=True)
+    assert len(live) == len(expected)
+    num = [c for c in expected.columns if c not in ("tx", "rx")]
+    np.testing.assert_allclose(live[num].to_numpy(float), expected[num].to_numpy(float), rtol=0, atol=1e-9)
+    assert m.summary.dropped == whole.summary.dropped and m.summary.dropped["unknown_node"] == 0
+    assert m.pending_rows == 0 and m.waiting_rows == 0
+
+
+def test_rows_naming_a_node_that_never_logs_wait_no_longer_than_the_hold(logs):
+    # a link to a node without poses: its rows wait HOLD_S of pose time, then are dropped as unknown_node
+    from rplearn.data.live_sync import HOLD_S
+
+    pose, signal = logs
+    ghost = signal.iloc[:50].assign(rx="Z")
+    m = LiveMatcher()
+    m.add_poses(pose[pose["t"] < 10.0])
+    m.add_signals(pd.concat([signal[signal["t"] < 10.0], ghost], ignore_index=True))
+    m.match()
+    assert m.waiting_rows == 50 and m.summary.dropped["unknown_node"] == 0
+    m.add_poses(pose[(pose["t"] >= 10.0) & (pose["t"] < ghost["t"].max() + HOLD_S + 1.0)])
+    m.match()
+    assert m.waiting_rows == 0 and m.summary.dropped["unknown_node"] == 50

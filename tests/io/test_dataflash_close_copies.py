@@ -183,14 +183,15 @@ def test_sync_matches_as_many_samples_as_the_log_written_once(once, tmp_path):
 
 
 def test_copies_among_many_records_of_equal_fields(tmp_path):
-    # a vehicle at rest: 3,000 ATT records with equal fields 2.5 ms apart (none a copy, every one within the
+    # a vehicle at rest: 3,000 ATT records with equal fields 5 ms apart (none a copy, every one within the
     # 1,024-record window of many others of its key); 7 of them written again, 0-1 ms later, right after
     # themselves or after a buffer of 200 records (the time stepping back): exactly those 7 are close copies
+    # (at most a fifth of the interval: far below it; was 2.5 ms apart, copies up to 0.4 of the interval)
     from rplearn.io.dataflash_writer import _fmt_records, _record
 
     lat, lon = 473977000, 85456000
     head = [*_fmt_records(), _record("ORGN", 1_000_000, 0, lat, lon, 90.0), _record("ARM", 1_000_000, 1)]
-    times = [1_000_100 + 2500 * i for i in range(3000)]
+    times = [1_000_100 + 5000 * i for i in range(3000)]
     again = {10: 0, 500: 700, 1200: 1000, 2999: 300}  # record -> us later, written right after it
     buffered = {1500: 0, 1600: 999, 1690: 1}  # record -> us later, written after record 1700
     body, held = [], []
@@ -210,3 +211,41 @@ def test_copies_among_many_records_of_equal_fields(tmp_path):
     logs, meta = _read(path)
     assert meta["close_copies"] == len(again) + len(buffered)
     assert meta["messages"]["ATT"] == len(times) and meta["repeated_messages"] == 0 and meta["reboots"] == 0
+
+
+def _at_rest(path: Path, interval_us: int, n: int, again: dict[int, int]) -> Path:
+    """A vehicle at rest logging ATT every ``interval_us`` (``n`` records of equal fields; a POS and a RAD every
+    100th), the records of ``again`` written again that many microseconds later, right after themselves."""
+    from rplearn.io.dataflash_writer import _fmt_records, _record
+
+    lat, lon = 473977000, 85456000
+    out = [*_fmt_records(), _record("ORGN", 1_000_000, 1, lat, lon, 90.0), _record("ARM", 1_000_000, 1)]
+    for i in range(n):
+        t = 1_000_100 + interval_us * i
+        out.append(_record("ATT", t, 0.0, 0.0, 90.0))
+        if i % 100 == 0:
+            out.append(_record("POS", t + 1, lat + i, lon, 100.0))
+            out.append(_record("RAD", t + 2, 200, 190 - i // 100, 100, 0, 0, 0, 0))
+        if i in again:
+            out.append(_record("ATT", t + again[i], 0.0, 0.0, 90.0))
+    path.write_bytes(b"".join(out))
+    return path
+
+
+@pytest.mark.parametrize("interval_us", [1000, 999, 1001])
+def test_a_kind_logged_every_millisecond_at_rest_is_no_copy(tmp_path, interval_us):
+    # was: 3,000 ATT records of equal fields 1 ms apart read as 1,500 and 1,500 close copies ("the file holds records
+    # written twice"); its records' interval is the kind's own. A record written again at the same TimeUS, or
+    # 0.1 ms later (a tenth of the interval), still is a copy
+    again = {40: 0, 41: 0, 1700: 100}  # 41: a record read 1 ms after an equal one, again at its TimeUS
+    logs, meta = _read(_at_rest(tmp_path / "fast.bin", interval_us, 3000, again))
+    assert meta["messages"]["ATT"] == 3000 and meta["close_copies"] == len(again)
+    assert (logs.pose["node"] == "sys1").sum() == 3000 - meta["dropped"]["out_of_span"]  # after the last POS
+    assert not any("repeat one of their kind" in line and "3,0" in line for line in file_damage("fast.bin", meta))
+
+
+def test_a_slower_kind_at_rest_still_has_its_copies_1_ms_later(tmp_path):
+    # the same records 1 ms later at 10 ms apart: a tenth of the interval, copies (as before)
+    again = dict.fromkeys(range(0, 3000, 7), 1000)
+    _, meta = _read(_at_rest(tmp_path / "slow.bin", 10_000, 3000, again))
+    assert meta["messages"]["ATT"] == 3000 and meta["close_copies"] == len(again)

@@ -143,3 +143,91 @@ def test_the_ulog_reader_reports_the_accuracy_of_the_fix_the_station_was_placed_
     assert first["station_accuracy_m"] == pytest.approx((3.26, 6.984), abs=1e-3)
     given = read_ulog_logs(str(a), "d", UlogRadio(20.0, 915e6, station_geodetic=FRAME))[1]
     assert given["station_accuracy_m"] is None
+
+
+# ------------------------------------------------------- MAVLink logs: the accuracy GPS_RAW_INT and GPA report
+
+MAV_ORIGIN = (47.3977, 8.5456, 90.0)
+
+
+def _mavlink_flight(path: Path, moved_m: tuple[float, float, float], accuracy, start_s: float) -> Path:
+    """10 s of the ground flight as a .tlog (or a DataFlash .bin), its station moved ``moved_m`` (ENU) from where it
+    stood, the GPS reporting ``accuracy`` (horizontal, vertical [m]; None: none); the tlog received from
+    ``start_s`` [UNIX s]."""
+    from flightfiles import ground_flight
+
+    from rplearn.io._common import Logs
+    from rplearn.io.dataflash_writer import write_dataflash
+    from rplearn.io.tlog import DEFAULT_START_UNIX_S, TlogDefects, write_tlog
+
+    pose, signal = ground_flight(10.0)
+    end = float(pose["t"].min()) + 10.0
+    pose = pose[(pose["t"] < end) | (pose["node"] == "G")].reset_index(drop=True)
+    pose.loc[pose["node"] == "G", ["x", "y", "z"]] += np.asarray(moved_m)
+    flight = Logs(pose, signal[signal["t"] < end][["t", "tx", "rx", "rssi_dbm", "tx_power_dbm", "frequency_hz"]])
+    defects = TlogDefects(fix_accuracy_m=accuracy)
+    if path.suffix == ".bin":
+        write_dataflash(flight, path, vehicle="D", station="G", origin_geodetic=MAV_ORIGIN, defects=defects)
+    else:
+        write_tlog(flight, path, vehicle="D", station="G", origin_geodetic=MAV_ORIGIN,
+                   start_unix_s=DEFAULT_START_UNIX_S + start_s, defects=defects)
+    return path
+
+
+def _mav_options(*paths: Path) -> ReaderOptions:
+    return ReaderOptions(tx_power_dbm=20.0, frequency_hz=2.412e9, station="G",
+                         nodes={str(p): f"d{k}" for k, p in enumerate(paths)})
+
+
+@pytest.mark.parametrize("suffix", [".tlog", ".bin"])
+def test_two_mavlink_flights_within_the_reported_gps_noise_share_one_station(tmp_path, suffix):
+    """Were refused for any difference over 1 mm (a MAVLink log reported no accuracy): the stations' fixes 1.2 m
+    across and 0.5 m up/down apart, the GPS reporting 0.8 m and 1.4 m, are one station (3 sigma: 3.39 m, 5.94 m)."""
+    a = _mavlink_flight(tmp_path / f"a{suffix}", (0.0, 0.0, 0.0), (0.8, 1.4), 0.0)
+    b = _mavlink_flight(tmp_path / f"b{suffix}", (1.2, 0.0, 0.5), (0.8, 1.4), 3600.0)
+    from rplearn.io.mavlink import read_mavlink
+
+    meta = read_mavlink(a, 20.0, 2.412e9, "D", "G")[1]
+    assert meta["station_accuracy_m"] == pytest.approx((0.8, 1.4)) and "home" in meta["station_note"]
+    logs, info = read_logs([str(a), str(b)], _mav_options(a, b))
+    assert (logs.pose["node"] == "G").sum() == 1
+    [note] = [n for f in info["files"] for n in f.get("notes", []) if "one static station for both flights" in n]
+    assert "1.20 m across, 0.50 m up/down apart: within the GPS noise the logs report, 3.39 m and 5.94 m" in note
+
+
+def test_mavlink_flights_without_a_reported_accuracy_or_beyond_it_are_refused(tmp_path):
+    a = _mavlink_flight(tmp_path / "a.tlog", (0.0, 0.0, 0.0), None, 0.0)
+    b = _mavlink_flight(tmp_path / "b.tlog", (1.2, 0.0, 0.5), None, 3600.0)
+    with pytest.raises(InputError, match="two fixes of one station apart by GPS noise"):
+        read_logs([str(a), str(b)], _mav_options(a, b))
+    c = _mavlink_flight(tmp_path / "c.tlog", (0.0, 0.0, 0.0), (0.2, 0.2), 0.0)
+    d = _mavlink_flight(tmp_path / "d.tlog", (1.2, 0.0, 0.5), (0.2, 0.2), 3600.0)
+    with pytest.raises(InputError, match=r"1.20 m across, 0.50 m up/down apart: more than the GPS noise the logs "
+                                         r"report for their fixes allows, 0.85 m and 0.85 m"):
+        read_logs([str(c), str(d)], _mav_options(c, d))
+
+
+def test_the_real_mavlink_logs_report_their_accuracy_where_they_give_it_in_metres():
+    # the DataFlash log's GPA at the home (ORGN type 1): HAcc 1.61 m, VAcc 2.41 m; the MAVLink 1 .tlogs' GPS_RAW_INT
+    # give eph (HDOP x 100: 158-331) and no h_acc/v_acc: no accuracy, the 1 mm rule
+    from rplearn.io.mavlink import read_mavlink
+
+    real = Path(__file__).resolve().parents[1] / "fixtures" / "ardupilot"
+    whole = real / "pymavlink_test.BIN"
+    meta = read_mavlink(whole, 20.0, 433e6)[1]
+    assert "home" in meta["station_note"] and meta["station_accuracy_m"] == pytest.approx((1.61, 2.41))
+    for tlog in sorted(real.glob("*.tlog")):
+        assert read_mavlink(tlog, 20.0, 433e6)[1]["station_accuracy_m"] is None
+
+
+def test_inspect_reads_two_mavlink_flights_within_the_gps_noise_with_one_station(tmp_path):
+    # was: the second flight's station row kept in inspect's node summary, G "logged" over the hour between the
+    # flights (a clock jump, a pose gap of 3,600 s and a pose rate of 0.00 Hz said); sync reads one static row
+    from rplearn.io.inspect import inspect_logs
+
+    a = _mavlink_flight(tmp_path / "a.tlog", (0.0, 0.0, 0.0), (0.8, 1.4), 0.0)
+    b = _mavlink_flight(tmp_path / "b.tlog", (1.2, 0.0, 0.5), (0.8, 1.4), 3600.0)
+    report = inspect_logs([str(a), str(b)], _mav_options(a, b))
+    assert not [p for p in report.problems if "node G" in p or "ground station" in p]
+    [station] = [n for n in report.nodes if n.node == "G"]
+    assert station.static

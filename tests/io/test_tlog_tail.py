@@ -327,6 +327,26 @@ def test_a_log_with_close_copies_written_twice_is_counted_alike_by_tail_and_offl
                                                                                 info["repeated_messages"])
 
 
+def test_bursts_of_messages_received_twice_are_counted_alike_by_tail_and_offline(clean_260s, tmp_path):
+    """The log's first minute received in bursts of 8 messages (receive times 1 us apart), each burst again 4 us
+    later: the copies are found among the last messages of their kind, by the tail as offline (was: only against
+    the sender's last message of the kind, the tail and offline finding 68 of the 23,536 copies)."""
+    every = _records(clean_260s.read_bytes())
+    ones = [r for r in every if r[0] - every[0][0] < 60_000_000]
+    parts = []
+    for at in range(0, len(ones), 8):
+        burst = [(ones[at][0] + j, r[8:]) for j, (_, r) in enumerate(ones[at:at + 8])]
+        parts += [(t + d).to_bytes(8, "big") + frame for d in (0, 4) for t, frame in burst]
+    whole, grown = tmp_path / "bursts.tlog", tmp_path / "grown.tlog"
+    whole.write_bytes(b"".join(parts))
+    ref, meta = read_logs([str(whole)], _options(whole))
+    info = meta["files"][0]
+    assert info["close_copies"] == info["messages"]["ATTITUDE"] + info["messages"]["GLOBAL_POSITION_INT"]
+    poses, _, tail, _ = _poll_in_pieces(whole, grown, LATE_PIECE_BYTES)
+    assert tail.dropped["close_copies"] == info["close_copies"]
+    assert len(poses[poses["node"] != "G"]) == len(ref.pose[ref.pose["node"] != "G"])
+
+
 def test_a_home_position_after_the_station_was_taken_from_a_fix_moves_the_station(ground_260s, tmp_path):
     """Review 37: positions invalid (no origin, altitude 0.8 m) for the first 60 s, so no
     ``HOME_POSITION`` for longer than :data:`HOME_WAIT_S`: the tail takes its station from the

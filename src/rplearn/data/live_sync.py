@@ -22,10 +22,18 @@ poses for the whole flight, and a copy matched then would be learned twice): whe
 of the whole log says ``duplicate`` for a copy, live matching says ``late`` (and a row
 without a valid time is forgotten at once: ``invalid_value`` for ``duplicate``).
 
+A signal row naming a node that has no pose yet (a node whose first poses the source holds back, as
+:class:`rplearn.io.live_sources.CsvTail` holds a logger's start at the zero position, or a ground
+station at the ENU origin that logs its attitude) waits, settled or not, for that node's poses:
+bounded as the source's hold is, for :data:`HOLD_S` of the pose rows' time after it and
+:data:`HOLD_ROWS` rows waiting in all (the oldest go first), then matched as it stands
+(``unknown_node``, as ``sync`` drops a link to a node that has no poses). The pose rows and row hashes
+those rows need are kept while they wait.
+
 Limits against ``sync`` on the whole logs: the nodes' flight phases (``airborne``, the
 window's log start) are those of the poses kept, so :class:`LiveMatcher` refuses the
-``airborne`` filter and a time window; a node first logged after rows that name it were
-settled has those rows dropped as ``unknown_node`` (a whole-log sync would place them).
+``airborne`` filter and a time window; a node first logged more than :data:`HOLD_S` after rows that
+name it has those rows dropped as ``unknown_node`` (a whole-log sync would place them).
 """
 
 from __future__ import annotations
@@ -78,6 +86,11 @@ class _RecentRows:
 #: Seconds of signal time before the oldest pose a moving node keeps for which row hashes are
 #: remembered; a row older than that is dropped as ``late``.
 DUPLICATE_MEMORY_S = 30.0
+#: How long and how many rows a node's first poses may be held back by a live source (its start at the zero
+#: position: :class:`rplearn.io.live_sources.CsvTail`), and so how long a signal row naming a node without poses
+#: waits for them (:class:`LiveMatcher`): seconds of the pose rows' time after the row, and rows in all.
+HOLD_S = 60.0
+HOLD_ROWS = 16384
 
 
 def _offset_slack_s(options: SyncOptions) -> float:
@@ -122,6 +135,9 @@ class LiveMatcher:
         self._carry: dict = {}
         self._horizon = -math.inf
         self._signal_t = -math.inf  # the latest signal time received: later rows come at or after it
+        self._pose_t = -math.inf  # the latest pose time received
+        self._waiting_from = math.inf  # the earliest time of a row waiting for a node's poses [s]
+        self._n_waiting = 0
         self._signal_rows = 0
         self._moving: set[str] = set()
         #: The rows the last :meth:`match` gave (also when its end-of-stream check raised).
@@ -142,6 +158,7 @@ class LiveMatcher:
         if rows.empty:
             return
         new = validate_pose_log(rows, "pose log")
+        self._pose_t = max(self._pose_t, float(new["t"].max()))
         self.summary.non_unit_quaternions += non_unit_quaternion_rows(new)
         both = pd.concat([self._poses, new], ignore_index=True) if len(self._poses) else new
         self._poses = validate_pose_log(both.drop(columns=[c for c in both.columns if c not in new.columns]), "pose log")
@@ -178,11 +195,14 @@ class LiveMatcher:
         """
         pending = pd.concat(self._pending, ignore_index=True) if self._pending else pd.DataFrame()
         horizon = math.inf if final else self.settled_s()
+        self._waiting_from, self._n_waiting = math.inf, 0
         if pending.empty or self._poses.empty and not final:
             chunk, rest = pending.iloc[:0], pending
         else:
             t = pd.to_numeric(pending["t"], errors="coerce").to_numpy(np.float64)
             ready = ~(t > horizon)  # a time that is not a number is matched (and dropped) at once
+            if not final:
+                ready &= ~self._waiting(pending, t)
             chunk, rest = pending[ready], pending[~ready]
         self._pending = [rest.reset_index(drop=True)] if len(rest) else []
         result = self._match(chunk.sort_values("t", kind="stable") if "t" in chunk.columns else chunk)
@@ -195,6 +215,26 @@ class LiveMatcher:
             phases = flight_phases(self._poses, tracks, self.options.clock_offsets_s, self.options.airborne_margin_m)
             finish_summary(self.summary, tracks, phases, self.options, self.source)
         return result
+
+    def _waiting(self, pending: pd.DataFrame, t: np.ndarray) -> np.ndarray:
+        """Which pending rows wait for the poses of a node they name (module docstring; bounded by :data:`HOLD_S`
+        and :data:`HOLD_ROWS`), and the earliest time among them kept (:meth:`_trim`)."""
+        if not {"tx", "rx"} <= set(pending.columns):
+            return np.zeros(len(pending), bool)
+        known = set(self._poses["node"].astype(str)) if len(self._poses) else set()
+        named = pending["tx"].astype(str).isin(known).to_numpy() & pending["rx"].astype(str).isin(known).to_numpy()
+        wait = ~named & np.isfinite(t) & (t >= self._pose_t - HOLD_S - _offset_slack_s(self.options))
+        if wait.sum() > HOLD_ROWS:  # the oldest go: matched as they stand
+            wait[np.flatnonzero(wait)[np.argsort(t[wait], kind="stable")[:int(wait.sum()) - HOLD_ROWS]]] = False
+        if wait.any():
+            self._waiting_from = float(t[wait].min())
+        self._n_waiting = int(wait.sum())
+        return wait
+
+    @property
+    def waiting_rows(self) -> int:
+        """Signal rows waiting for the poses of a node they name (as of the last :meth:`match`)."""
+        return self._n_waiting
 
     def _tracks(self) -> dict:
         return tracks_of_checked_log(self._poses, self.options.clock_offsets_s, "pose log", self.options.max_gap_s)
@@ -229,7 +269,8 @@ class LiveMatcher:
                 keep.append(group.iloc[[0, -1]] if len(group) > 1 else group)
                 continue
             t = group["t"].to_numpy(np.float64)
-            first = max(int(np.searchsorted(t, self._horizon, side="right")) - 1, 0)
+            # the rows waiting for a node's poses need the poses from their time on too
+            first = max(int(np.searchsorted(t, min(self._horizon, self._waiting_from), side="right")) - 1, 0)
             keep.append(group.iloc[first:])
             oldest = min(oldest, float(t[first]))
         self._poses = pd.concat(keep).sort_values(["node", "t"], kind="stable").reset_index(drop=True)
@@ -238,4 +279,4 @@ class LiveMatcher:
             self._seen.forget(self._forgotten_s)
 
 
-__all__ = ["DUPLICATE_MEMORY_S", "LiveMatcher"]
+__all__ = ["DUPLICATE_MEMORY_S", "HOLD_ROWS", "HOLD_S", "LiveMatcher"]

@@ -1,19 +1,20 @@
 """One pass over an ArduPilot DataFlash log (binary ``.bin`` or text ``.log``) into plain arrays, for
 :mod:`rplearn.io.mavlink` (which documents the messages and their units).
 
-A record that repeats one of its kind (and instance) read shortly before it (:class:`_Recent`), every field but
-its time the same and its time at most :data:`~rplearn.io._mavlink_records.CLOSE_COPY_S` later (TimeUS the same,
-or within 1 ms), is that record written twice (a logger or a router duplicating the stream, record by record or a
-buffer at a time): it is read once and counted (``close_copies``), as a ``.tlog``'s messages received twice are
-(:func:`~rplearn.io._mavlink_records.close_in_time`, the same bound). A later stretch that repeats an earlier one
-(the log in the file twice) is undone by :func:`~rplearn.io._mavlink_records.merge_copied_boots`
-(``repeated_messages``).
+A record that repeats one of its kind (and instance) read shortly before it (among the last records read,
+:class:`~rplearn.io._mavlink_records.RecentRecords`, the window a ``.tlog``'s messages received twice are sought in),
+every field but its time the same, is that record written twice (a logger or a router duplicating the stream,
+record by record or a buffer at a time) when its TimeUS is the same, or up to
+:data:`~rplearn.io._mavlink_records.CLOSE_COPY_S` later and far below (less than
+:data:`~rplearn.io.mavlink_phases.DUPLICATE_FRACTION_OF_PERIOD` of) the median interval between records of its kind
+and instance that repeat their fields: it is read once and counted (``close_copies``). A kind logged every millisecond while the vehicle rests repeats
+its fields 1 ms later at its own interval: those records are no copies (:func:`_judge`; the log is then read a
+second time, with them). A later stretch that repeats an earlier one (the log in the file twice) is undone by
+:func:`~rplearn.io._mavlink_records.merge_copied_boots` (``repeated_messages``).
 """
 
 from __future__ import annotations
 
-from bisect import bisect_left, insort
-from collections import deque
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -21,54 +22,14 @@ import numpy as np
 
 from rplearn.errors import LogFormatError
 from rplearn.io._log_schema import check_dataflash_lengths, dataflash_time_field, library_quiet, number
-from rplearn.io._mavlink_records import CLOSE_COPY_S, Raw, close_in_time, merge_copied_boots, open_mavlink_log, rows_array
-from rplearn.io.mavlink_phases import REBOOT_STEP_S
+from rplearn.io._mavlink_records import Raw, RecentRecords, merge_copied_boots, open_mavlink_log, rows_array
+from rplearn.io.mavlink_phases import DUPLICATE_FRACTION_OF_PERIOD, REBOOT_STEP_S
 
-DF_TYPES = ["ATT", "POS", "GPS", "ORGN", "RAD", "ARM", "EV"]
+DF_TYPES = ["ATT", "POS", "GPS", "GPA", "ORGN", "RAD", "ARM", "EV"]
 #: DataFlash EV ids of arming and disarming (ArduPilot LogEvent ARMED = 10, DISARMED = 11).
 _EV_ARMED, _EV_DISARMED = 10, 11
 #: Fields naming a message's instance (a second GPS, ...): each instance's records are compared with its own.
 _INSTANCE_FIELDS = ("I", "Instance")
-
-
-#: How many of the records read last (of the types read) a record's earlier copy is looked among: a logger
-#: writing each buffer of records twice, the copies up to 1 ms later, writes buffers up to this many records. A
-#: stretch of the log written again farther back (a download resumed from its start) is merge_copied_boots's.
-COPY_WINDOW_RECORDS = 1024
-
-
-@dataclass
-class _Recent:
-    """The last :data:`COPY_WINDOW_RECORDS` records read: per kind, instance and fields but the time, their times
-    (sorted: a record whose fields repeat often, a vehicle at rest, is looked up by bisection, not against each of
-    up to :data:`COPY_WINDOW_RECORDS` times). A record repeating one of them at most
-    :data:`~rplearn.io._mavlink_records.CLOSE_COPY_S` after it is that record written twice
-    (:func:`~rplearn.io._mavlink_records.close_in_time`, the ``.tlog``'s bound)."""
-
-    seen: dict[tuple[Any, ...], list[float]] = field(default_factory=dict)
-    order: deque[tuple[float, tuple[Any, ...]]] = field(default_factory=deque)
-
-    def is_copy(self, key: tuple[Any, ...], t: float) -> bool:
-        times = self.seen.get(key, ())
-        i = bisect_left(times, t - 2.0 * CLOSE_COPY_S)  # every time close_in_time could take, and more
-        while i < len(times) and times[i] <= t:
-            if close_in_time(t - times[i]):
-                return True
-            i += 1
-        return False
-
-    def add(self, key: tuple[Any, ...], t: float) -> None:
-        if t == t:  # a time that is not a number is no copy's (close_in_time) and keeps the times sorted out
-            insort(self.seen.setdefault(key, []), t)
-        self.order.append((t, key))
-        if len(self.order) > COPY_WINDOW_RECORDS:
-            old_t, old_key = self.order.popleft()
-            if old_t != old_t:
-                return
-            times = self.seen[old_key]
-            del times[bisect_left(times, old_t)]  # one of the times equal to old_t: which one does not matter
-            if not times:
-                del self.seen[old_key]
 
 
 def _fields(msg: Any, time_name: str) -> tuple[Any, ...]:
@@ -116,16 +77,19 @@ class _DfMessage:
     kind: str
     source: str
 
+    @property
+    def columns(self) -> list[str]:
+        """The message's field names."""
+        return list(getattr(getattr(self.msg, "fmt", None), "columns", None) or self.msg.get_fieldnames())
+
     def __call__(self, name: str, default: float | None = None) -> float:
         return number(self.msg, self.kind, name, self.source, default)
 
 
-def _df_record(get: _DfMessage, t: float, boot: int, out: tuple[dict[str, list[tuple[float, ...]]], list[tuple[float, ...]],
-               list[tuple[float, ...]], list[float]], home: tuple[float, float, float] | None
-               ) -> tuple[float, float, float] | None:
-    """Add one DataFlash message's row to ``out`` (rows per kind, fix rows, armed rows, UTC
-    offsets); the home position (the first ORGN of type 1) returned."""
-    rows, fix_rows, arm_rows, utc = out
+def _df_record(get: _DfMessage, t: float, boot: int, out: _Pass) -> None:
+    """Add one DataFlash message's row to ``out`` (rows per kind, fix rows, GPS accuracy rows, armed rows, UTC
+    offsets; the home position: the first ORGN of type 1)."""
+    rows, fix_rows, arm_rows, utc = out.rows, out.fix_rows, out.arm_rows, out.utc
     kind = get.kind
     if kind == "ATT":
         rows[kind].append((t, *np.radians([get("Roll"), get("Pitch"), get("Yaw")]), boot))
@@ -137,34 +101,55 @@ def _df_record(get: _DfMessage, t: float, boot: int, out: tuple[dict[str, list[t
         if status >= 3:
             rows[kind].append((t, get("Lat"), get("Lng"), get("Alt"), get("Spd", np.nan), abs(get("VZ", np.nan)), boot))
             utc.append(float(get.msg._timestamp) - t)
+    elif kind == "GPA" and get("I", 0.0) == 0 and "HAcc" in get.columns and "VAcc" in get.columns:
+        # the GPS accuracy [m] (0: none reported); VDop, and the GPS record's HDop: dilutions, no metres
+        h, v = get("HAcc"), get("VAcc")
+        out.acc_rows.append((t, h if h > 0 else 0.0, v if v > 0 else 0.0, boot))
     elif kind == "RAD":
         rows[kind].append((t, *(get(f) for f in ("RSSI", "RemRSSI", "Noise", "RemNoise", "RxErrors", "Fixed")), boot))
     elif kind == "ORGN":
         rows[kind].append((t, boot))
-        if get("Type") == 1 and home is None:
-            return (get("Lat"), get("Lng"), get("Alt"))
+        if get("Type") == 1 and out.home is None:
+            out.home, out.home_at = (get("Lat"), get("Lng"), get("Alt")), (t, boot)
     elif kind == "ARM":
         arm_rows.append((t, float(get("ArmState") != 0), boot))
     elif kind == "EV" and get("Id") in (_EV_ARMED, _EV_DISARMED):
         arm_rows.append((t, float(get("Id") == _EV_ARMED), boot))
-    return home
 
 
-def collect_dataflash(source: str) -> Raw:
-    """One pass over a DataFlash log: ATT, POS (else GPS), RAD, ORGN, GPS status, ARM and EV
-    (each message type's fields checked on its first record: :mod:`rplearn.io._log_schema`)."""
-    rows: dict[str, list[tuple[float, ...]]] = {k: [] for k in DF_TYPES}
-    home = None
-    utc: list[float] = []
-    boot, last_t, boot_t = 0, -np.inf, []
-    minor: set[int] = set()  # the stretches after a step back of the time too small for a reboot
-    last_kind = ""
-    fix_rows: list[tuple[float, ...]] = []
-    arm_rows: list[tuple[float, ...]] = []
+@dataclass
+class _Pass:
+    """What one pass over a DataFlash log read (:func:`_read_pass`)."""
+
+    rows: dict[str, list[tuple[float, ...]]] = field(default_factory=lambda: {k: [] for k in DF_TYPES})
+    fix_rows: list[tuple[float, ...]] = field(default_factory=list)
+    arm_rows: list[tuple[float, ...]] = field(default_factory=list)
+    utc: list[float] = field(default_factory=list)
+    acc_rows: list[tuple[float, ...]] = field(default_factory=list)
+    home: tuple[float, float, float] | None = None
+    home_at: tuple[float, int] | None = None  # the home's time and boot
+    boot: int = 0
+    boot_t: list[tuple[float, int]] = field(default_factory=list)
+    minor: set[int] = field(default_factory=set)  # the stretches after a step back of the time too small for a reboot
+    #: records left out as copies (their numbers among the records of the types read): at the same TimeUS
+    copies: set[int] = field(default_factory=set)
+    #: records repeating one shortly before (0 < interval <= 1 ms): number, kind and instance, interval [s]
+    maybe: list[tuple[int, tuple[str, int], float]] = field(default_factory=list)
+    #: per kind and instance, the intervals [s] between records read with equal fields (copies and maybes left
+    #: out, the earlier among the last records read: :class:`~rplearn.io._mavlink_records.RecentRecords`)
+    steps: dict[tuple[str, int], list[float]] = field(default_factory=dict)
+
+
+def _read_pass(source: str, drop: frozenset[int] | None) -> _Pass:
+    """One pass over a DataFlash log: every record but the copies. ``drop`` None: the copies found as read
+    (:class:`~rplearn.io._mavlink_records.RecentRecords`: at the same TimeUS a copy; up to 1 ms later a maybe,
+    left out and judged after the pass, :func:`_judge`); else the records numbered in ``drop`` left out."""
+    out = _Pass()
+    last_t, last_kind = -np.inf, ""
     times: dict[str, tuple[str, float]] = {}
     instance: dict[str, tuple[str, ...]] = {}
-    recent = _Recent()
-    close = 0
+    recent, maybes = RecentRecords(), RecentRecords()  # the records read; the maybes (kept apart: steps)
+    index = -1
     with library_quiet():  # pymavlink prints what it cannot parse
         conn = open_mavlink_log(source, tlog=False)
         check_dataflash_lengths(conn, source)
@@ -175,6 +160,7 @@ def collect_dataflash(source: str) -> Raw:
                 raise LogFormatError(f"{source}: corrupt DataFlash data ({type(exc).__name__}: {exc})") from None
             if msg is None:
                 break
+            index += 1
             kind = msg.get_type()
             if kind not in times:
                 times[kind] = dataflash_time_field(msg, kind, source)
@@ -182,20 +168,58 @@ def collect_dataflash(source: str) -> Raw:
                                                                             or msg.get_fieldnames()))
             t = number(msg, kind, times[kind][0], source) * times[kind][1]
             which = _instance(msg, instance[kind])
-            key = (kind, which, *_fields(msg, times[kind][0]))
-            if recent.is_copy(key, t):
-                close += 1  # the record written twice: read once
-                continue
-            recent.add(key, t)
+            if drop is not None:
+                if index in drop:
+                    continue
+            else:
+                key = (kind, which, *_fields(msg, times[kind][0]))
+                gap = recent.copy_gap(key, t)
+                if gap == 0.0 or maybes.copy_gap(key, t) == 0.0:
+                    out.copies.add(index)  # the record (or a maybe) written twice: read once
+                    continue
+                if gap is not None:
+                    out.maybe.append((index, (kind, which), gap))
+                    maybes.add(key, t)
+                    continue
+                step = recent.since(key, t)
+                if step:
+                    out.steps.setdefault((kind, which), []).append(step)
+                recent.add(key, t)
             if t < last_t or (t == last_t and kind == last_kind):  # the latter: maybe a copy of the last record
-                boot += 1
+                out.boot += 1
                 if t >= last_t - REBOOT_STEP_S:
-                    minor.add(boot)
+                    out.minor.add(out.boot)
             last_t, last_kind = t, kind
-            boot_t.append((t, boot))
-            home = _df_record(_DfMessage(msg, kind, source), t, boot, (rows, fix_rows, arm_rows, utc), home)
-    tables = {**rows, "GPS status": fix_rows, "ARM/EV": arm_rows}
-    repeated = merge_copied_boots(tables, boot_t, frozenset(minor)) if boot else 0
+            out.boot_t.append((t, out.boot))
+            _df_record(_DfMessage(msg, kind, source), t, out.boot, out)
+    return out
+
+
+def _judge(first: _Pass) -> set[int]:
+    """The records of ``first.maybe`` that are copies: those whose interval is below
+    :data:`~rplearn.io.mavlink_phases.DUPLICATE_FRACTION_OF_PERIOD` of the median interval between records of
+    their kind and instance that repeat their fields (``first.steps``: the maybes left out; any interval when it
+    has none). A kind logged every millisecond while the vehicle rests repeats its fields 1 ms later at its own
+    interval: every other record a maybe, the records read 2 ms apart, the maybes no copies."""
+    median = {which: float(np.median(steps)) for which, steps in first.steps.items()}
+    return {index for index, which, gap in first.maybe
+            if which not in median or gap < DUPLICATE_FRACTION_OF_PERIOD * median[which]}
+
+
+def collect_dataflash(source: str) -> Raw:
+    """One pass over a DataFlash log: ATT, POS (else GPS), RAD, ORGN, GPS status and accuracy (GPA), ARM and EV
+    (each message type's fields checked on its first record: :mod:`rplearn.io._log_schema`); a second
+    when records repeating one 1 ms before them or less are no copies (:func:`_judge`)."""
+    read = _read_pass(source, None)
+    copies = read.copies | _judge(read)
+    if len(copies) < len(read.copies) + len(read.maybe):  # some are no copies (a fast logger at rest): read again
+        read = _read_pass(source, frozenset(copies))
+    close = len(copies)  # the records written twice: read once
+    rows, utc, home, boot, boot_t = read.rows, read.utc, read.home, read.boot, read.boot_t
+    home_rows: list[tuple[float, ...]] = [read.home_at] if read.home_at is not None else []
+    tables: dict[str, list[tuple[float, ...]]] = {**rows, "GPS status": read.fix_rows, "ARM/EV": read.arm_rows, "GPS accuracy": read.acc_rows,
+              "home": home_rows}
+    repeated = merge_copied_boots(tables, boot_t, frozenset(read.minor)) if boot else 0
     rows = {k: tables[k] for k in rows}
     fix_rows, arm_rows = tables["GPS status"], tables["ARM/EV"]
     offsets, ends = _df_chain(boot_t)
@@ -210,12 +234,14 @@ def collect_dataflash(source: str) -> Raw:
         raise LogFormatError(f"{source}: no ATT messages (the vehicle's attitude)")
     pos_kind = "POS" if rows["POS"] else "GPS"
     orgn = chained(rows_array(rows["ORGN"], 2), 0, 1)
+    home_t = chained(rows_array(tables["home"], 2), 0, 1)[:, 0]
     # the vehicle logs itself throughout: its stream is never absent
     return Raw(
         fmt="dataflash", att=chained(rows_array(rows["ATT"], 5), 0, 4), pos=chained(rows_array(rows[pos_kind], 7), 0, 6),
         radio=chained(rows_array(rows["RAD"], 8), 0, 7)[:, :7], vehicle_t=np.array([]), home=home, counts=counts,
         boot_last_t=ends, origin_t=orgn[:, 0],
         fix=chained(rows_array(fix_rows, 3), 0, 2)[:, :2], armed=chained(rows_array(arm_rows, 3), 0, 2)[:, :2],
+        accuracy=chained(rows_array(tables["GPS accuracy"], 4), 0, 3)[:, :3], home_t=float(home_t[0]) if len(home_t) else None,
         notes={"position_message": pos_kind, "repeated_messages": repeated, "close_copies": close,
                "time_reference": "TimeUS, seconds since the autopilot booted"
                                  + (" (later boots placed right after the previous one)" if len(ends) > 1 else ""),

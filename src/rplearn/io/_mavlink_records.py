@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import os
 import sys
+from bisect import bisect_left, bisect_right, insort
+from collections import deque
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -36,6 +38,10 @@ class Raw:
     origin_t: np.ndarray = field(default_factory=lambda: np.zeros(0))  # times of origin messages [s]
     fix: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))  # (n, 2): t, 3-D fix (1) or not (0)
     armed: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))  # (n, 2): t, armed (1) or not (0)
+    # (n, 3): t, the GPS accuracy the log reports [m] (horizontal, vertical standard deviations; 0 or NaN: none), and
+    # the time of the home message (``home``'s) [s]
+    accuracy: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    home_t: float | None = None
     counts: dict[str, int] = field(default_factory=dict)
     notes: dict[str, Any] = field(default_factory=dict)
     boot_offsets: dict[int, tuple[float, int]] = field(default_factory=dict)  # tlog: boot -> (offset [s], messages)
@@ -144,6 +150,21 @@ def _tlog_cut_off(conn: Any, source: str, whole_to: int) -> dict[str, Any]:
     return {"cut_off_at_byte": int(whole_to), "cut_off_record": getattr(kind, "msgname", None) if kind is not None else None}
 
 
+#: ``h_acc``/``v_acc`` of a GPS_RAW_INT that reports no accuracy (UINT32_MAX; 0 in a MAVLink 1 frame, which lacks them).
+_UNKNOWN_ACC = 2**32 - 1
+
+
+def _gps_raw_accuracy_m(msg: Any) -> tuple[float, float]:
+    """The GPS accuracy a ``GPS_RAW_INT`` reports [m]: ``h_acc``, ``v_acc`` [mm] (MAVLink 2 extension fields;
+    0.0 when absent, 0 or unknown: a number equal to itself, so that a message in the file twice is found). Its
+    ``eph``/``epv`` are dilutions of precision (HDOP, VDOP x 100, unitless), no accuracy in metres: not used."""
+    out = []
+    for name in ("h_acc", "v_acc"):
+        value = getattr(msg, name, 0)
+        out.append(float(value) * 1e-3 if isinstance(value, int) and 0 < value < _UNKNOWN_ACC else 0.0)
+    return out[0], out[1]
+
+
 def _tlog_row(kind: str, msg: Any, src: int, t: float) -> tuple[Any, ...]:
     """The fields of one tlog message the reader uses (units: module docstring of mavlink.py)."""
     if kind == "ATTITUDE":
@@ -156,7 +177,7 @@ def _tlog_row(kind: str, msg: Any, src: int, t: float) -> tuple[Any, ...]:
     if kind == "GPS_GLOBAL_ORIGIN":
         return (src, t, msg.latitude * 1e-7, msg.longitude * 1e-7, msg.altitude * 1e-3)
     if kind == "GPS_RAW_INT":
-        return (src, t, float(msg.fix_type >= 3))
+        return (src, t, float(msg.fix_type >= 3), *_gps_raw_accuracy_m(msg))
     if kind == "HEARTBEAT":
         return (src, t, float(msg.base_mode & _ARMED_FLAG != 0), msg.type)
     return (t, msg.rssi, msg.remrssi, msg.noise, msg.remnoise, msg.rxerrors, msg.fixed)
@@ -177,9 +198,9 @@ class TlogRows:
     close_as_added: bool = False
     #: Attitude and position messages left out as copies of the one before them (:meth:`add`).
     close_copies: int = 0
-    #: Per kind and sender, the receive time and fields of its last message of :data:`_BOOT_TIMED`
-    #: (shared by the parts of a growing log read one after another: :mod:`rplearn.io.tlog_tail`).
-    last_of: dict[tuple[str, int], tuple[float, tuple[Any, ...]]] = field(default_factory=dict)
+    #: Per kind of :data:`_BOOT_TIMED`, its last messages (:class:`RecentRecords`; shared by the parts of a
+    #: growing log read one after another: :mod:`rplearn.io.tlog_tail`).
+    recent: dict[str, RecentRecords] = field(default_factory=dict)
     _arrays: dict[Any, np.ndarray] = field(default_factory=dict)
 
     def array(self, kind: str, width: int) -> np.ndarray:
@@ -213,7 +234,7 @@ class TlogRows:
             name = getattr(exc, "name", None)
             raise LogFormatError(f"{source}: a {kind} message has no {name} field" if name else
                                  f"{source}: a {kind} message has a field that is not a number ({exc})") from None
-        if self.close_as_added and kind in _BOOT_TIMED and is_close_copy(self.last_of, kind, src, row):
+        if self.close_as_added and kind in _BOOT_TIMED and is_close_copy(self.recent, kind, row):
             self.close_copies += 1
             return
         self.counts[kind] = self.counts.get(kind, 0) + 1
@@ -289,8 +310,8 @@ def drop_repeated_rows(acc: TlogRows) -> int:
     return dropped
 
 
-#: Largest receive-time difference [s] between a message and the same one (kind, sender, fields) right
-#: before it for the two to be one message received twice: far below any report period.
+#: Largest receive-time difference [s] between a message and the same one (kind, sender, fields) among the
+#: last read (:class:`RecentRecords`) for the two to be one message received twice: far below any report period.
 CLOSE_COPY_S = 1e-3
 
 
@@ -308,24 +329,77 @@ def close_in_time(dt: float) -> bool:
     return 0.0 <= dt <= CLOSE_COPY_S + _TIME_ROUNDING_S
 
 
-def is_close_copy(last_of: dict[tuple[str, int], tuple[float, tuple[Any, ...]]], kind: str, sender: int,
-                  row: tuple[Any, ...]) -> bool:
-    """Whether ``row`` (:func:`_tlog_row`: sender, receive time, fields) repeats the sender's message of the
-    kind right before it (``last_of``, updated), boot time included, within :data:`CLOSE_COPY_S`: one message
-    received twice (a router, or two links forwarding each). Kept, they would be two poses of one instant."""
-    fields = row[:1] + row[2:]
-    before = last_of.get((kind, sender))
-    last_of[(kind, sender)] = (row[1], fields)
-    return before is not None and before[1] == fields and close_in_time(row[1] - before[0])
+#: How many of the records read last a record's earlier copy is looked among (:class:`RecentRecords`): a logger
+#: writing each buffer of records twice, or a burst of messages received twice, the copies up to 1 ms later,
+#: repeats up to this many records. A stretch of the log written again farther back (a download resumed from its
+#: start) is :func:`merge_copied_boots`'s (DataFlash) or :func:`drop_repeated_rows`'s (``.tlog``).
+COPY_WINDOW_RECORDS = 1024
+
+
+@dataclass
+class RecentRecords:
+    """The last :data:`COPY_WINDOW_RECORDS` records added: per key (kind, instance or sender, fields but the time)
+    their times, sorted (a record whose fields repeat often, a vehicle at rest, is looked up by bisection, not
+    against each of up to :data:`COPY_WINDOW_RECORDS` times). A record repeating one of them at most
+    :data:`CLOSE_COPY_S` after it (:func:`close_in_time`) may be that record written or received twice; the
+    DataFlash and ``.tlog`` passes share this window."""
+
+    seen: dict[tuple[Any, ...], list[float]] = field(default_factory=dict)
+    order: deque[tuple[float, tuple[Any, ...]]] = field(default_factory=deque)
+
+    def copy_gap(self, key: tuple[Any, ...], t: float) -> float | None:
+        """How long [s] after the latest record of ``key`` within :func:`close_in_time` of ``t`` a record at ``t``
+        comes (0.0: at the same time); None when none is."""
+        times = self.seen.get(key, ())
+        i = bisect_left(times, t - 2.0 * CLOSE_COPY_S)  # every time close_in_time could take, and more
+        gap = None
+        while i < len(times) and times[i] <= t:
+            if close_in_time(t - times[i]):
+                gap = t - times[i]
+            i += 1
+        return gap
+
+    def since(self, key: tuple[Any, ...], t: float) -> float | None:
+        """How long [s] before ``t`` the latest record of ``key`` at or before it was added (None: none)."""
+        times = self.seen.get(key, ())
+        i = bisect_right(times, t)
+        return t - times[i - 1] if i else None
+
+    def add(self, key: tuple[Any, ...], t: float) -> None:
+        """Add a record (the oldest of more than :data:`COPY_WINDOW_RECORDS` forgotten)."""
+        if t == t:  # a time that is not a number is no copy's (close_in_time) and keeps the times sorted out
+            insort(self.seen.setdefault(key, []), t)
+        self.order.append((t, key))
+        if len(self.order) > COPY_WINDOW_RECORDS:
+            old_t, old_key = self.order.popleft()
+            if old_t != old_t:
+                return
+            times = self.seen[old_key]
+            del times[bisect_left(times, old_t)]  # one of the times equal to old_t: which one does not matter
+            if not times:
+                del self.seen[old_key]
+
+
+def is_close_copy(recent: dict[str, RecentRecords], kind: str, row: tuple[Any, ...]) -> bool:
+    """Whether ``row`` (:func:`_tlog_row`: sender, receive time, fields) repeats one of the last
+    :data:`COPY_WINDOW_RECORDS` messages of its kind (``recent``, per kind; the row added when it does not), boot
+    time and sender included, within :data:`CLOSE_COPY_S`: one message received twice (a router, or two links
+    forwarding each, a burst of messages at a time). Kept, they would be two poses of one instant."""
+    window = recent.setdefault(kind, RecentRecords())
+    key = row[:1] + row[2:]
+    if window.copy_gap(key, row[1]) is not None:
+        return True
+    window.add(key, row[1])
+    return False
 
 
 def drop_close_copies(acc: TlogRows) -> int:
-    """Drop the second of two attitude or position messages that are one received twice (:func:`is_close_copy`),
+    """Drop the later of two attitude or position messages that are one received twice (:func:`is_close_copy`),
     after the stretches written again (as the live tail meets them); how many (their kinds' counts lowered)."""
-    dropped, last_of = 0, dict[tuple[str, int], tuple[float, tuple[Any, ...]]]()
+    dropped, recent = 0, dict[str, RecentRecords]()
     for kind in _BOOT_TIMED:
         rows = acc.rows.get(kind, [])
-        keep = [not is_close_copy(last_of, kind, row[0], row) for row in rows]
+        keep = [not is_close_copy(recent, kind, row) for row in rows]
         n = len(keep) - sum(keep)
         if n:
             dropped += n
@@ -370,7 +444,8 @@ def tlog_raw(acc: TlogRows, source: str, system_id: int | None, cut_off: dict[st
     boot_last_t = np.array([t_log[boot == b].max() for b in range(int(boot.max()) + 1)]) if len(boot) else np.zeros(0)
     home = [h for h in rows["HOME_POSITION"] if h[0] // 256 == vehicle and (h[2] != 0 or h[3] != 0)]
     origin = [h[1] for k in ORIGIN_TYPES for h in rows[k] if h[0] // 256 == vehicle and (h[2] != 0 or h[3] != 0)]
-    fix = [r[1:] for r in rows["GPS_RAW_INT"] if r[0] // 256 == vehicle]
+    fix = [r[1:3] for r in rows["GPS_RAW_INT"] if r[0] // 256 == vehicle]
+    accuracy = [(r[1], r[3], r[4]) for r in rows["GPS_RAW_INT"] if r[0] // 256 == vehicle and r[3] > 0 and r[4] > 0]
     beats = [r[1:3] for r in rows["HEARTBEAT"] if r[0] // 256 == vehicle and r[3] != MAV_TYPE_GCS]
     radio = np.concatenate([acc.array("RADIO_STATUS", 7), acc.array("RADIO", 7)])
     radio = radio[np.lexsort(radio.T[::-1])]  # as the rows' tuples sort
@@ -381,6 +456,7 @@ def tlog_raw(acc: TlogRows, source: str, system_id: int | None, cut_off: dict[st
         pos=np.column_stack([t_log[n_att:], gpi[:, 3:8], boot[n_att:]]),
         radio=radio, vehicle_t=np.sort(acc.times(vehicle)),
         home=(float(home[0][2]), float(home[0][3]), float(home[0][4])) if home else None, counts=dict(counts),
+        home_t=float(home[0][1]) if home else None, accuracy=rows_array(sorted(accuracy), 3),
         boot_last_t=boot_last_t, origin_t=np.sort(np.asarray(origin, np.float64)), fix=rows_array(sorted(fix), 2),
         armed=rows_array(sorted(beats), 2), boot_offsets=per_boot,
         notes={"system_id": vehicle, "component_id": chosen % 256, "radio_senders": dict(radio_senders), **cut_off,
@@ -482,5 +558,5 @@ def merge_copied_boots(tables: dict[str, list[tuple[float, ...]]], boot_t: list[
     return repeated
 
 
-__all__ = ["CLOSE_COPY_S", "Raw", "TlogRows", "boot_offsets", "close_in_time", "collect_tlog", "drop_close_copies",
-           "drop_repeated_rows", "is_close_copy", "merge_copied_boots", "tlog_raw"]
+__all__ = ["CLOSE_COPY_S", "COPY_WINDOW_RECORDS", "Raw", "RecentRecords", "TlogRows", "boot_offsets", "close_in_time",
+           "collect_tlog", "drop_close_copies", "drop_repeated_rows", "is_close_copy", "merge_copied_boots", "tlog_raw"]

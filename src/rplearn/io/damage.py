@@ -62,12 +62,13 @@ def file_damage(path: str, info: dict[str, Any]) -> list[str]:
                          "or overlapping exports); each was read once")
     if info.get("close_copies") and info.get("format") == "dataflash":
         lines.append(f"{path}: {info['close_copies']:,} DataFlash record(s) repeat one of their kind read shortly "
-                     "before them (same fields, TimeUS the same or up to 1 ms later: records written twice, by a logger "
-                     "or a router duplicating them, or a short stretch of the log written again); each was read once")
+                     "before them (same fields, TimeUS the same or up to 1 ms later, far below their kind's interval: "
+                     "records written twice, by a logger or a router duplicating them, or a short stretch of the log "
+                     "written again); each was read once")
     elif info.get("close_copies"):
-        lines.append(f"{path}: {info['close_copies']:,} attitude or position message(s) repeat the one before them "
-                     "within 1 ms (same sender, boot time and fields: each message received twice, a router or two "
-                     "links forwarding it); each was read once")
+        lines.append(f"{path}: {info['close_copies']:,} attitude or position message(s) repeat one received shortly "
+                     "before them within 1 ms (same sender, boot time and fields: each message received twice, a router "
+                     "or two links forwarding it); each was read once")
     if info.get("repeated_messages"):
         lines.append(f"{path}: {info['repeated_messages']:,} message(s) repeat an earlier one exactly (same receive "
                      "time and fields: part of the log is in the file twice); each was read once")
@@ -162,7 +163,7 @@ def one_station(logs: list[pd.DataFrame], owners: list[int], files: list[dict[st
                     f"ENU{turned}: a station moved between flights{said}, or the homes of two vehicles; give where it "
                     "stood (ReaderOptions.station_geodetic: lat, lon, alt), or read each flight on its own",
                     param="station_geodetic")
-            if row["t"] == first["t"]:
+            if row["t"] == first["t"] and not max(apart) > SAME_POSITION_M:
                 continue  # the same row: a file given twice, read once by drop_repeated_across
             log = out[k]
             out[k] = log[~((log["node"].astype(str) == station) & (log["t"] == row["t"]))]
@@ -271,9 +272,14 @@ def across_files(report: Any, poses: list[pd.DataFrame], canonical: list[pd.Data
                                                                  "origin_geodetic", "anchor_geodetic")}}
                 for f in report.files]
     try:
-        one_station(canonical, owners["pose"], stations)
+        merged = one_station(canonical, owners["pose"], stations)
     except InputError as exc:
         report.problems.append(f"{exc} (sync refuses these files)")
+        return poses, signals
+    for k, (before, after) in enumerate(zip(canonical, merged, strict=True)):
+        if len(after) < len(before):  # a later flight's row of one static station: read as sync reads it
+            kept = pd.MultiIndex.from_frame(after[["t", "node"]].astype({"node": str}))
+            poses[k] = poses[k][pd.MultiIndex.from_frame(poses[k][["t", "node"]].astype({"node": str})).isin(kept)]
     return poses, signals
 
 

@@ -13,6 +13,7 @@ What is written, with ``TimeUS`` [us] on the autopilot's boot clock (zero
   vehicle pose row;
 - ``ORGN`` type 0 (EKF origin) and type 1 (home, the station's position) when the position
   becomes valid, and ``ARM`` (ArmState 1) then; ``ARM`` 0 at the start when it is not valid yet;
+- ``GPA`` (HAcc, VAcc [m]) per vehicle pose row with ``TlogDefects.fix_accuracy_m``;
 - ``RAD`` per signal row, as the air radio reports it (``RSSI`` = the vehicle receiving,
   ``RemRSSI`` = the station receiving, the other 255), written twice (as ArduPilot does)
   with ``TlogDefects.radio_twice``, ``copy_delay_s`` apart.
@@ -47,6 +48,7 @@ _FORMATS: dict[str, tuple[int, str, str, str]] = {
     "RAD": (131, "QBBBBBHH", "QBBBBBHH", "TimeUS,RSSI,RemRSSI,TxBuf,Noise,RemNoise,RxErrors,Fixed"),
     "ORGN": (132, "QBiif", "QBLLf", "TimeUS,Type,Lat,Lng,Alt"),
     "ARM": (133, "QB", "QB", "TimeUS,ArmState"),
+    "GPA": (134, "QHH", "QCC", "TimeUS,HAcc,VAcc"),  # C: uint16 x 0.01 [m]
 }
 
 
@@ -87,7 +89,7 @@ def write_dataflash(
     origin_geodetic : (lat_deg, lon_deg, alt_m)
         Geodetic position of the logs' ENU origin (altitude AMSL).
     defects : TlogDefects, optional
-        ``invalid_until_s``, ``invalid_alt_m``, ``radio_twice`` and ``copy_delay_s``.
+        ``invalid_until_s``, ``invalid_alt_m``, ``radio_twice``, ``copy_delay_s`` and ``fix_accuracy_m``.
 
     Returns
     -------
@@ -127,6 +129,8 @@ def write_dataflash(
         records.append((int(us[i]), 1, _record("ATT", int(us[i]), roll[i], pitch[i], yaw[i])))
         records.append((int(us[i]), 2, _record("POS", int(us[i]), int(round(v["lat"][i] * 1e7)),
                                                int(round(v["lon"][i] * 1e7)), float(alt[i]))))
+        if defects.fix_accuracy_m is not None:
+            records.append((int(us[i]), 2, _record("GPA", int(us[i]), *(int(round(a * 100)) for a in defects.fix_accuracy_m))))
     raw, clipped = dbm_to_sik_rssi(signal["rssi_dbm"].to_numpy(np.float64))
     at_vehicle = (signal["rx"] == vehicle).to_numpy()
     sig_us = np.rint((signal["t"].to_numpy(np.float64) - t0) * 1e6).astype(np.int64)
@@ -141,6 +145,7 @@ def write_dataflash(
         fh.write(b"".join(_fmt_records()))
         fh.write(b"".join(r[2] for r in records))
     return {"att": len(us), "pos": len(us), "rad": copies * len(signal), "rssi_clipped": clipped,
+            "gpa": len(us) if defects.fix_accuracy_m is not None else 0,
             "invalid_position_rows": int(invalid.sum()), "station_geodetic": (slat, slon, salt),
             "station_heading_deg": heading, "clock_offset_s": -t0}
 

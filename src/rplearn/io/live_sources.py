@@ -37,6 +37,7 @@ import numpy as np
 import pandas as pd
 
 from rplearn._argtypes import check_types
+from rplearn.data.live_sync import HOLD_ROWS, HOLD_S
 from rplearn.data.tables import CSV_DTYPES, normalise_times
 from rplearn.errors import InputError, LogFormatError
 from rplearn.io._pose_checks import TrackEnds, top_speeds, track_pieces
@@ -147,9 +148,8 @@ def _table(tail: _Tail, data: bytes) -> pd.DataFrame | None:
 
 #: How long and how many rows :class:`CsvTail` holds back a node's leading rows at the zero position (a logger
 #: writing before the fix) while which side of its first jump is valid cannot be told yet: seconds of the pose
-#: table's time from the node's first row, and rows held in all.
-HOLD_S = 60.0
-HOLD_ROWS = 16384
+#: table's time from the node's first row, and rows held in all (:data:`rplearn.data.live_sync.HOLD_S`,
+#: ``HOLD_ROWS``: as long as the matcher keeps the signal rows of its links waiting for its poses).
 #: Seconds of the table's time a node's rows must stand as one pose at the ENU origin before it is taken
 #: for a station there (a logger before its fix that logs its attitude has changed it by then; a poll of a
 #: row or two is no evidence either way).
@@ -201,8 +201,9 @@ class _StartHold:
     (:func:`_start_known`), with their rows in the file; ``at_zero``: the nodes handed out at the zero position
     when the hold ran out (:data:`HOLD_S`, :data:`HOLD_ROWS`), with their last time there; ``stations``: those
     of them handed out at once, standing still at the ENU origin (one pose: a station at the natural origin of
-    a frame measured from it, whose links would otherwise lose their rows as ``unknown_node`` while held; a
-    logger before its fix writes its attitude, or a lat = lon = 0 that no station has)."""
+    a frame measured from it, whose links' rows would otherwise wait in the matcher while it is held,
+    :class:`~rplearn.data.live_sync.LiveMatcher`; a logger before its fix writes its attitude, or a lat = lon = 0
+    that no station has)."""
 
     source: str
     held: pd.DataFrame | None = None

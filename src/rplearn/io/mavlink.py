@@ -68,7 +68,8 @@ concatenated, a copy resumed from its start) is read once: a ``.tlog`` message t
 earlier one exactly (kind, sender, receive time, fields), and a DataFlash boot whose records
 repeat an earlier boot's (same TimeUS and fields: the same boot again, not a reboot), are
 dropped and counted in ``metadata["repeated_messages"]``; a record written twice (a ``.tlog``'s attitude or
-position message, a DataFlash record: the one before it again, time the same or up to 1 ms later) is read once,
+position message, a DataFlash record: one of the last read again, time the same or up to 1 ms later, a DataFlash
+record's far below its kind's interval) is read once,
 counted in ``metadata["close_copies"]``. Bytes of a ``.tlog`` that are no
 whole record (a frame whose checksum fails, framing broken by a damaged length byte, junk) are
 skipped: ``metadata["corrupt_stretches"]`` counts the stretches of such bytes between two whole
@@ -107,6 +108,7 @@ from rplearn.io import mavlink_phases as phases
 from rplearn.io._common import Logs
 from rplearn.io._dataflash_records import collect_dataflash
 from rplearn.io._mavlink_records import Raw, collect_tlog
+from rplearn.io._mavlink_station import station_fix
 from rplearn.io.geodetic import geodetic_to_enu
 from rplearn.io.options import check_origin
 
@@ -192,19 +194,6 @@ def _walk_records(data: Any, size: int) -> tuple[int | None, str | None, int, in
         pos += length
         n += 1
     return None, None, skipped, n
-
-
-def _station(
-    raw: Raw, station_geodetic: tuple[float, float, float] | None, first_fix: np.ndarray
-) -> tuple[tuple[float, float, float], str]:
-    """Geodetic position of the ground station (lat, lon [deg], alt [m]) and where it came from."""
-    if station_geodetic is not None:
-        return station_geodetic, "station position given (station_geodetic)"
-    home = "HOME_POSITION" if raw.fmt == "tlog" else "ORGN type 1 (home)"
-    if raw.home is not None:
-        return raw.home, f"station placed at the vehicle's home from {home}"
-    lat, lon, alt = (float(v) for v in first_fix[1:4])
-    return (lat, lon, alt), f"station placed at the vehicle's first position fix (no {home} in the log)"
 
 
 def increasing_times(t: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -487,7 +476,9 @@ def read_mavlink(
         ``source``, ``format`` ("tlog" or "dataflash"), ``notes`` (lines for the user: where
         the station was placed, link-lost messages kept as outage events), ``vehicle``, ``station``,
         ``station_geodetic``, ``station_note`` (where the station position came from),
-        ``origin_geodetic``, ``messages`` (counts of the messages used), ``dropped`` (pose
+        ``station_accuracy_m`` (the GPS accuracy, horizontal and vertical [m], the log reports for the fix that
+        placed the station: ``GPS_RAW_INT`` h_acc/v_acc, DataFlash ``GPA`` HAcc/VAcc; None when given or none is
+        reported: :mod:`rplearn.io._mavlink_station`), ``origin_geodetic``, ``messages`` (counts of the messages used), ``dropped`` (pose
         rows per reason), ``signal`` (rows per direction, ``link_lost`` messages, ``outage_*`` rows per direction, zero and
         unknown values per direction, ``duplicate_reading`` copies merged, rows dropped per
         excluded period's reason), ``excluded_periods``, ``reboots``,
@@ -544,7 +535,7 @@ def logs_from_raw(raw: Raw, source: str, radio: tuple[float | Mapping[str, float
     if vehicle == station:
         raise InputError(f"vehicle and station must differ, both are {vehicle!r}", param="station")
     fixes = position_fixes(raw, source)
-    station_geo, station_note = _station(raw, station_geodetic, fixes[1][fixes[2]][0])
+    station_geo, station_note, station_accuracy = station_fix(raw, station_geodetic, fixes[1][fixes[2]][0])
     origin = station_geo if origin_geodetic is None else tuple(float(v) for v in origin_geodetic)
     dropped: dict[str, int] = {}
     try:  # positions, home and station against the plausibility table (core/plausible.py)
@@ -582,7 +573,7 @@ def logs_from_raw(raw: Raw, source: str, radio: tuple[float | Mapping[str, float
                      "not split between vehicles (MavlinkOptions.system_id reads another)")
     meta = {
         "source": source, "format": fmt, "notes": notes, "vehicle": vehicle, "station": station,
-        "station_geodetic": station_geo, "station_note": station_note,
+        "station_geodetic": station_geo, "station_note": station_note, "station_accuracy_m": station_accuracy,
         "origin_geodetic": origin, "messages": raw.counts, "dropped": dropped,
         "signal": sig_counts, "rows": int((pose["node"] == vehicle).sum()),
         "cut_off_at_byte": None, "cut_off_record": None, "corrupt_bytes": 0,

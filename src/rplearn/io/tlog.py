@@ -175,6 +175,10 @@ class TlogDefects:
         Windows of time since the vehicle's first row [s] in which the link is lost: none of
         the vehicle's messages is written, and every radio report in the window (one per
         instant) reads 0 in ``rssi`` and ``remrssi``.
+    fix_accuracy_m : (float, float) or None
+        The GPS accuracy the log reports, horizontal and vertical standard deviations [m]: a ``GPS_RAW_INT``
+        (3-D fix, ``h_acc``/``v_acc`` [mm], ``eph``/``epv`` unknown) with each of the vehicle's rows (a
+        DataFlash log: a ``GPA``, ``HAcc``/``VAcc``); None (the default): none written, as in MAVLink 1 logs.
     """
 
     invalid_until_s: float = 0.0
@@ -185,8 +189,18 @@ class TlogDefects:
     radio_twice: bool = False
     copy_delay_s: float = 0.004
     link_lost: tuple[tuple[float, float], ...] = ()
+    fix_accuracy_m: tuple[float, float] | None = None
 
     def __post_init__(self) -> None:
+        if self.fix_accuracy_m is not None:
+            try:
+                acc = tuple(float(v) for v in self.fix_accuracy_m)
+            except (TypeError, ValueError):
+                acc = ()
+            if len(acc) != 2 or not all(np.isfinite(v) and 0 < v < 600 for v in acc):
+                raise InputError(f"fix_accuracy_m: expected (horizontal, vertical) standard deviations in metres "
+                                 f"(0 to 600 m), got {self.fix_accuracy_m!r}", param="fix_accuracy_m")
+            object.__setattr__(self, "fix_accuracy_m", acc)
         try:
             windows = tuple((float(a), float(b)) for a, b in self.link_lost)
         except (TypeError, ValueError):
@@ -290,6 +304,11 @@ def _records(pose: pd.DataFrame, signal: pd.DataFrame, vehicle: str, station: st
                                              int(vx[i]), int(vy[i]), int(vz[i]), 65535)
         out.append((float(recv_us[i]), 1, att.pack(air)))
         out.append((float(recv_us[i]), 2, gpi.pack(air)))
+        if defects.fix_accuracy_m is not None:
+            h_mm, v_mm = (int(round(a * 1e3)) for a in defects.fix_accuracy_m)
+            gps = air.gps_raw_int_encode(b * 1000, 3, int(round(v["lat"][i] * 1e7)), int(round(v["lon"][i] * 1e7)),
+                                         int(round(alt[i] * 1e3)), 65535, 65535, 65535, 65535, 10, h_acc=h_mm, v_acc=v_mm)
+            out.append((float(recv_us[i]), 2, gps.pack(air)))
         counts["attitude"] += 1
     raw, clipped = dbm_to_sik_rssi(signal["rssi_dbm"].to_numpy(np.float64))
     to_station = (signal["rx"] == station).to_numpy()
@@ -305,6 +324,7 @@ def _records(pose: pd.DataFrame, signal: pd.DataFrame, vehicle: str, station: st
     n_radio = int((~repeat).sum())
     written = {"attitude": counts["attitude"], "global_position_int": counts["attitude"], "radio_status": n_radio,
                "radio": n_radio if defects.radio_twice else 0, "link_lost_reports": int((lost & ~repeat).sum()), "heartbeat": counts["heartbeat"],
+               "gps_raw_int": counts["attitude"] if defects.fix_accuracy_m is not None else 0,
                "home_position": len(origin_rows), "invalid_position_rows": int((invalid & ~silent).sum()),
                "silent_rows": int(silent.sum()),
                "rssi_clipped": clipped, "station_geodetic": (slat, slon, salt), "start_unix_s": start_unix_s,

@@ -69,7 +69,7 @@ import pandas as pd
 from rplearn._argtypes import check_types
 from rplearn.errors import InputError, LogFormatError
 from rplearn.io._log_schema import library_quiet
-from rplearn.io._mavlink_records import TlogRows, open_mavlink_log, tlog_raw
+from rplearn.io._mavlink_records import RecentRecords, TlogRows, open_mavlink_log, tlog_raw
 from rplearn.io.mavlink import MavlinkOptions, logs_from_raw, position_fixes
 from rplearn.io.options import ReaderOptions
 from rplearn.io.tlog_window import KEEP_S, TlogWindow
@@ -198,8 +198,8 @@ class TlogTail:
             raise InputError(f"{path}: give the telemetry radios' transmit power [dBm] and carrier frequency [Hz], "
                              f"a MAVLink log carries neither (ReaderOptions.{missing[0]})", param=missing[0])
         self.path, self.reader = path, reader
-        self._last_of: dict[Any, Any] = {}  # each sender's last attitude and position message (close copies)
-        self.rows: TlogRows | None = TlogRows(close_as_added=True, last_of=self._last_of)  # every message, until the first rows are handed out
+        self._recent: dict[str, RecentRecords] = {}  # the last attitude and position messages (close copies)
+        self.rows: TlogRows | None = TlogRows(close_as_added=True, recent=self._recent)  # every message, until the first rows are handed out
         self.window: TlogWindow | None = None  # then the window (rplearn.io.tlog_window)
         self.parsed = 0  # messages parsed by the last poll
         self.dropped: dict[str, int] = {k: 0 for k in DROPS}
@@ -225,7 +225,7 @@ class TlogTail:
                 return 0
             with library_quiet():
                 self._conn = open_mavlink_log(self.path)
-        rows = self.rows if self.rows is not None else TlogRows(close_as_added=True, last_of=self._last_of)
+        rows = self.rows if self.rows is not None else TlogRows(close_as_added=True, recent=self._recent)
         copies = rows.close_copies
         f = self._conn.f
         f.seek(self._end)

@@ -157,7 +157,7 @@ class TlogWindow:
         if self.home is None:
             home = [h for h in rows.rows["HOME_POSITION"] if h[0] // 256 == self.vehicle and (h[2] != 0 or h[3] != 0)]
             self.home = (float(home[0][2]), float(home[0][3]), float(home[0][4])) if home else None
-        fix = [r[1:] for r in rows.rows["GPS_RAW_INT"] if r[0] // 256 == self.vehicle]
+        fix = [r[1:3] for r in rows.rows["GPS_RAW_INT"] if r[0] // 256 == self.vehicle]
         beats = [r[1:3] for r in rows.rows["HEARTBEAT"] if r[0] // 256 == self.vehicle and r[3] != MAV_TYPE_GCS]
         if fix:
             self.fix = rows_array(sorted([tuple(r) for r in self.fix.tolist()] + fix), 2)
