@@ -109,9 +109,8 @@ class ManoeuvreOptions:
         sweeps it met benchmarks/manoeuvres.py's checks in 7 of 12 cells against 6).
     floor_db : float or None
         Spreads below this count as this [dB] (a stop criterion's target: no reward for
-        lowering a node already below it); None: none. When every node is below it already,
-        :func:`rank_manoeuvres` ranks without it (a floor reached rewards no candidate, and the
-        order would be arbitrary: a session whose stop reads another spread flies on).
+        lowering a node already below it); None: none. Every node below it already: ranked
+        without it (it would reward nothing and leave the order arbitrary).
     correlated_std_db : float or None
         Standard deviation of an error that drifts over ``correlation_s`` (a heading estimate's
         wander), as one offset per link and time block [dB], carried into the posterior
@@ -501,8 +500,8 @@ def rank_manoeuvres(
     state = latest_poses(poses, names)
     with one_blas_thread():  # many small factorisations: threads only contend
         post = start_posterior(normal, spec, names, opts, blocks, cells)
-        if opts.floor_db is not None and float(np.max(post.spreads())) <= opts.floor_db:
-            opts = replace(opts, floor_db=None)  # every node below the floor: it rewards nothing (see floor_db)
+        if opts.floor_db is not None and float(np.max(post.spreads())) <= opts.floor_db:  # see floor_db
+            opts = replace(opts, floor_db=None)
         return tuple(r for r, _ in _ordered(post, scored_candidates(post, state, names, normal.basis, opts), state, names, normal.basis, opts))
 
 
@@ -600,5 +599,4 @@ def _greedy(post: ManoeuvrePosterior, state: dict[str, Any], names: list[str], b
 
 
 __all__ = ["AGGREGATES", "DESIGNS", "NOMINAL_PRIOR_STD_DB", "RATES", "ManoeuvreOptions", "PlanStep", "RankedManoeuvre",
-           "correlated_error_std_db", "greedy_plan", "manoeuvre_rows",
-           "pattern_spreads", "prior_penalty_weight", "prior_weights", "rank_manoeuvres", "steady_tilt_accel", "target_metrics"]
+           "correlated_error_std_db", "greedy_plan", "manoeuvre_rows", "pattern_spreads", "prior_penalty_weight", "prior_weights", "rank_manoeuvres", "steady_tilt_accel", "target_metrics"]
