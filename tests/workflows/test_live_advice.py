@@ -85,7 +85,7 @@ def capped_refit(tmp_path_factory):
 
 
 def test_a_fit_at_the_largest_smoothing_is_ranked_under_the_nominal_prior(capped_refit):
-    from rplearn.analysis.manoeuvres import NOMINAL_PRIOR_STD_DB, prior_penalty_weight
+    from rplearn.analysis.manoeuvre_prior import NOMINAL_PRIOR_STD_DB, prior_penalty_weight
     from rplearn.core.lsq.selection import at_smoothing_cap
     from rplearn.plan.manoeuvres import CandidateOptions
     from rplearn.workflows.live_advice import ranking_options

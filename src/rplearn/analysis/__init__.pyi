@@ -33,7 +33,7 @@ from .identifiability import identifiability_study as identifiability_study
 from .identifiability import study_antennas as study_antennas
 from .manoeuvre_cells import DirectionCells as DirectionCells
 from .manoeuvre_cells import cell_grid as cell_grid
-from .manoeuvres import NOMINAL_PRIOR_STD_DB as NOMINAL_PRIOR_STD_DB
+from .manoeuvre_prior import NOMINAL_PRIOR_STD_DB as NOMINAL_PRIOR_STD_DB
 from .manoeuvres import ManoeuvreOptions as ManoeuvreOptions
 from .manoeuvres import PlanStep as PlanStep
 from .manoeuvres import RankedManoeuvre as RankedManoeuvre

@@ -47,7 +47,7 @@ from rplearn.analysis.manoeuvre_cells import DirectionCells, cell_grid
 from rplearn.analysis.manoeuvre_design import design_order
 from rplearn.analysis.manoeuvre_lookahead import Scored, lookahead_order
 from rplearn.analysis.manoeuvre_posterior import ManoeuvrePosterior
-from rplearn.analysis.manoeuvre_prior import NOMINAL_PRIOR_STD_DB, prior_penalty_weight
+from rplearn.analysis.manoeuvre_prior import prior_penalty_weight
 from rplearn.analysis.manoeuvre_tilt import steady_tilt_accel
 from rplearn.core.basis_base import Basis
 from rplearn.core.geometry import attitude_from_thrust, link_directions, yaw_from_quat_wxyz
@@ -109,8 +109,7 @@ class ManoeuvreOptions:
         sweeps it met benchmarks/manoeuvres.py's checks in 7 of 12 cells against 6).
     floor_db : float or None
         Spreads below this count as this [dB] (a stop criterion's target: no reward for
-        lowering a node already below it); None: none. Every node below it already: ranked
-        without it (it would reward nothing and leave the order arbitrary).
+        lowering a node already below it; every node below it: none, as it would leave the order arbitrary); None: none.
     correlated_std_db : float or None
         Standard deviation of an error that drifts over ``correlation_s`` (a heading estimate's
         wander), as one offset per link and time block [dB], carried into the posterior
@@ -500,8 +499,7 @@ def rank_manoeuvres(
     state = latest_poses(poses, names)
     with one_blas_thread():  # many small factorisations: threads only contend
         post = start_posterior(normal, spec, names, opts, blocks, cells)
-        if opts.floor_db is not None and float(np.max(post.spreads())) <= opts.floor_db:  # see floor_db
-            opts = replace(opts, floor_db=None)
+        opts = replace(opts, floor_db=None) if opts.floor_db is not None and np.max(post.spreads()) <= opts.floor_db else opts  # see floor_db
         return tuple(r for r, _ in _ordered(post, scored_candidates(post, state, names, normal.basis, opts), state, names, normal.basis, opts))
 
 
@@ -598,5 +596,5 @@ def _greedy(post: ManoeuvrePosterior, state: dict[str, Any], names: list[str], b
     return tuple(steps)
 
 
-__all__ = ["AGGREGATES", "DESIGNS", "NOMINAL_PRIOR_STD_DB", "RATES", "ManoeuvreOptions", "PlanStep", "RankedManoeuvre",
-           "correlated_error_std_db", "greedy_plan", "manoeuvre_rows", "pattern_spreads", "prior_penalty_weight", "prior_weights", "rank_manoeuvres", "steady_tilt_accel", "target_metrics"]
+__all__ = ["AGGREGATES", "DESIGNS", "RATES", "ManoeuvreOptions", "PlanStep", "RankedManoeuvre", "correlated_error_std_db", "greedy_plan",
+           "manoeuvre_rows", "pattern_spreads", "prior_penalty_weight", "prior_weights", "rank_manoeuvres", "steady_tilt_accel", "target_metrics"]

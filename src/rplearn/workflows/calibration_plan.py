@@ -19,7 +19,8 @@ from typing import Any
 import numpy as np
 
 from rplearn._argtypes import check_types
-from rplearn.analysis.manoeuvres import NOMINAL_PRIOR_STD_DB, ManoeuvreOptions, PlanStep, greedy_plan, pattern_spreads, prior_penalty_weight
+from rplearn.analysis.manoeuvre_prior import NOMINAL_PRIOR_STD_DB
+from rplearn.analysis.manoeuvres import ManoeuvreOptions, PlanStep, greedy_plan, pattern_spreads, prior_penalty_weight
 from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.errors import InputError
 from rplearn.models.base import require_patterns

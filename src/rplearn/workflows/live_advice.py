@@ -16,7 +16,7 @@ session's first refits, a few seconds of flight) claims a pattern known to a few
 dB: under it every candidate scores alike (measured on the ``ground`` preset after 2 s: all 39
 candidates' predicted spread 0.0002 dB), so its ranking's order is arbitrary. There the ranking
 reads the smoothness prior ``rplearn trajectory --optimize`` plans with before any flight
-(:data:`rplearn.analysis.manoeuvres.NOMINAL_PRIOR_STD_DB` over each node's sphere,
+(:data:`rplearn.analysis.manoeuvre_prior.NOMINAL_PRIOR_STD_DB` over each node's sphere,
 :func:`rplearn.analysis.manoeuvres.prior_penalty_weight`) with the samples so far and the fit's
 noise: the manoeuvres that teach the most of what neither the prior nor the flight so far says.
 """
@@ -32,7 +32,8 @@ import numpy as np
 import pandas as pd
 
 from rplearn._argtypes import check_types
-from rplearn.analysis.manoeuvres import NOMINAL_PRIOR_STD_DB, ManoeuvreOptions, prior_penalty_weight, rank_manoeuvres
+from rplearn.analysis.manoeuvre_prior import NOMINAL_PRIOR_STD_DB
+from rplearn.analysis.manoeuvres import ManoeuvreOptions, prior_penalty_weight, rank_manoeuvres
 from rplearn.core.lsq.selection import at_smoothing_cap
 from rplearn.errors import InputError
 from rplearn.plan.manoeuvres import CandidateOptions
