@@ -138,6 +138,7 @@ class LiveMatcher:
         self._pose_t = -math.inf  # the latest pose time received
         self._waiting_from = math.inf  # the earliest time of a row waiting for a node's poses [s]
         self._n_waiting = 0
+        self._waiting_nodes: frozenset[str] = frozenset()
         self._signal_rows = 0
         self._moving: set[str] = set()
         #: The rows the last :meth:`match` gave (also when its end-of-stream check raised).
@@ -195,7 +196,7 @@ class LiveMatcher:
         """
         pending = pd.concat(self._pending, ignore_index=True) if self._pending else pd.DataFrame()
         horizon = math.inf if final else self.settled_s()
-        self._waiting_from, self._n_waiting = math.inf, 0
+        self._waiting_from, self._n_waiting, self._waiting_nodes = math.inf, 0, frozenset()
         if pending.empty or self._poses.empty and not final:
             chunk, rest = pending.iloc[:0], pending
         else:
@@ -228,6 +229,8 @@ class LiveMatcher:
             wait[np.flatnonzero(wait)[np.argsort(t[wait], kind="stable")[:int(wait.sum()) - HOLD_ROWS]]] = False
         if wait.any():
             self._waiting_from = float(t[wait].min())
+            ends = set(pending["tx"].astype(str)[wait]) | set(pending["rx"].astype(str)[wait])
+            self._waiting_nodes = frozenset(ends - known)
         self._n_waiting = int(wait.sum())
         return wait
 
@@ -235,6 +238,11 @@ class LiveMatcher:
     def waiting_rows(self) -> int:
         """Signal rows waiting for the poses of a node they name (as of the last :meth:`match`)."""
         return self._n_waiting
+
+    @property
+    def waiting_nodes(self) -> frozenset[str]:
+        """The nodes without poses that the waiting rows name (as of the last :meth:`match`)."""
+        return self._waiting_nodes
 
     def _tracks(self) -> dict:
         return tracks_of_checked_log(self._poses, self.options.clock_offsets_s, "pose log", self.options.max_gap_s)

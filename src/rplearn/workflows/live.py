@@ -207,6 +207,7 @@ class _Session:
         self.status = LiveStatus()
         self.preq = Prequential()
         self.recent: deque[pd.DataFrame] = deque()
+        self.deferred: list[pd.DataFrame] = []  # matched before the node list is fixed (see learn)
         self.last_pose: dict[str, pd.Series] = {}
         self.new_samples = 0
         self.ranking = None if options.manoeuvres is None else RankingWorker(
@@ -234,6 +235,18 @@ class _Session:
         except InputError as exc:  # too few matched over the whole stream: the matched rows are learned
             rows = self.matcher.last_matched
             self.status.notes.append(str(exc))
+        if self.stats is None and not self.options.nodes and not final and (self.deferred or len(rows)) \
+                and self.matcher.waiting_nodes:
+            # rows wait for a node's first poses (a source's hold, bounded): the node list, fixed by the
+            # first rows learned, must name it too, so the rows matched meanwhile wait with them
+            self.deferred.append(rows)
+            rows = rows.iloc[:0]
+            self.note("nodes: ", f"learning waits for the first poses of {', '.join(sorted(self.matcher.waiting_nodes))} "
+                                 "(rows name it; the source holds its start back)")
+        elif self.deferred:
+            rows = pd.concat([*self.deferred, rows], ignore_index=True)
+            self.deferred = []
+            self.note("nodes: ")
         if len(rows):
             if self.stats is None:
                 nodes = self.options.nodes or tuple(sorted(set(map(str, rows["tx"])) | set(map(str, rows["rx"]))))

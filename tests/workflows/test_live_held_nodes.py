@@ -1,0 +1,69 @@
+"""A live session without ``--nodes`` fixes its node list from the first rows it learns. A node whose
+first poses the CSV source holds back (a ground station at the ENU origin logging its attitude) has the
+rows of its links waiting in the matcher meanwhile, so the session must not fix its nodes from the other
+links before those rows are placed: the held node's rows were refused later ("appeared after the session
+fixed its nodes"), ending the session (found by hostile46)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from rplearn.data.live_sync import HOLD_S
+from rplearn.data.sync import synchronise
+from rplearn.io import read_logs
+from rplearn.io.live_sources import CsvTail
+from rplearn.io.options import ReaderOptions
+from rplearn.workflows.live import LiveOptions, _Session
+
+
+def _append(pose, signal, s: int, rng) -> None:
+    """One second at 10 Hz: G still at the origin with attitude noise, A and B flying, every link both ways."""
+    with pose.open("a") as fp, signal.open("a") as fs:
+        for k in range(10):
+            t = s + 0.1 * k
+            yaw = 0.02 * rng.standard_normal()
+            fp.write(f"{t:.2f},G,0,0,0,{np.cos(yaw / 2):.9f},0,0,{np.sin(yaw / 2):.9f}\n"
+                     f"{t + 0.03:.2f},A,{10 + 2 * t:g},5,20,1,0,0,0\n"
+                     f"{t + 0.05:.2f},B,{-10 - t:g},-5,25,1,0,0,0\n")
+            for j, (a, b) in enumerate((("A", "B"), ("B", "A"), ("A", "G"), ("G", "A"), ("B", "G"), ("G", "B"))):
+                fs.write(f"{t + 0.06 + 0.005 * j:.3f},{a},{b},{-60 - 0.1 * j - 0.01 * k:.2f},20,433000000\n")
+
+
+def test_a_held_node_is_in_the_sessions_node_list_and_its_rows_are_learned(tmp_path):
+    rng = np.random.default_rng(7)
+    pose, signal = tmp_path / "pose.csv", tmp_path / "signal.csv"
+    pose.write_text("t,node,x,y,z,qw,qx,qy,qz\n")
+    signal.write_text("t,tx,rx,rssi_dbm,tx_power_dbm,frequency_hz\n")
+    options = ReaderOptions(nan_policy="drop")
+    tail = CsvTail(str(pose), str(signal), options)
+    session = _Session(LiveOptions(spec=LiveOptions().spec, reader=options), str(tmp_path / "m.json"), str(tmp_path))
+    seconds = int(HOLD_S) + 20
+    for s in range(seconds):  # a poll a second
+        _append(pose, signal, s, rng)
+        final = s == seconds - 1
+        polled = tail.poll(final=final)
+        session.feed(polled.poses, polled.signals)
+        session.learn(final=final)
+    assert session.stats is not None and session.stats.nodes == ("A", "B", "G")
+    logs, _ = read_logs([str(pose), str(signal)], options)
+    whole = synchronise(logs.pose, logs.signal)
+    assert session.stats.n_samples == len(whole.dataset)
+    assert session.status.dropped.get("unknown_node", 0) == 0
+    assert not any(n.startswith("nodes: ") for n in session.status.notes)
+
+
+def test_while_the_node_list_waits_the_view_says_why(tmp_path):
+    rng = np.random.default_rng(8)
+    pose, signal = tmp_path / "pose.csv", tmp_path / "signal.csv"
+    pose.write_text("t,node,x,y,z,qw,qx,qy,qz\n")
+    signal.write_text("t,tx,rx,rssi_dbm,tx_power_dbm,frequency_hz\n")
+    options = ReaderOptions(nan_policy="drop")
+    tail = CsvTail(str(pose), str(signal), options)
+    session = _Session(LiveOptions(reader=options), str(tmp_path / "m.json"), str(tmp_path))
+    for s in range(5):
+        _append(pose, signal, s, rng)
+        polled = tail.poll()
+        session.feed(polled.poses, polled.signals)
+        session.learn()
+    assert session.stats is None and session.status.matched > 0  # matched, not yet learned
+    assert any(n.startswith("nodes: learning waits for the first poses of G") for n in session.status.notes)
