@@ -445,8 +445,7 @@ def tlog_raw(acc: TlogRows, source: str, system_id: int | None, cut_off: dict[st
     home = [h for h in rows["HOME_POSITION"] if h[0] // 256 == vehicle and (h[2] != 0 or h[3] != 0)]
     origin = [h[1] for k in ORIGIN_TYPES for h in rows[k] if h[0] // 256 == vehicle and (h[2] != 0 or h[3] != 0)]
     fix = [r[1:3] for r in rows["GPS_RAW_INT"] if r[0] // 256 == vehicle]
-    # the accuracy of a 3-D fix only: a receiver's before its fix (tens of metres) is no fix's that placed a station
-    accuracy = [(r[1], r[3], r[4]) for r in rows["GPS_RAW_INT"] if r[0] // 256 == vehicle and r[2] and r[3] > 0 and r[4] > 0]
+    accuracy = [(r[1], r[3], r[4]) for r in rows["GPS_RAW_INT"] if r[0] // 256 == vehicle and r[3] > 0 and r[4] > 0]
     beats = [r[1:3] for r in rows["HEARTBEAT"] if r[0] // 256 == vehicle and r[3] != MAV_TYPE_GCS]
     radio = np.concatenate([acc.array("RADIO_STATUS", 7), acc.array("RADIO", 7)])
     radio = radio[np.lexsort(radio.T[::-1])]  # as the rows' tuples sort
