@@ -249,3 +249,26 @@ def test_a_slower_kind_at_rest_still_has_its_copies_1_ms_later(tmp_path):
     again = dict.fromkeys(range(0, 3000, 7), 1000)
     _, meta = _read(_at_rest(tmp_path / "slow.bin", 10_000, 3000, again))
     assert meta["messages"]["ATT"] == 3000 and meta["close_copies"] == len(again)
+
+
+def test_a_rest_before_the_flight_does_not_hide_the_flights_copies(tmp_path):
+    # 400-Hz ATT: 1,000 records of equal fields at rest (2.5 ms apart), then 2,000 moving, each written again
+    # 0.7 ms later. A moving record's fields no other repeats: its copy is judged by itself, not by the rest's
+    # interval (was: the rest's 2.5-ms median of ATT taken for every ATT, 0 of the 2,000 copies found)
+    from rplearn.io.dataflash_writer import _fmt_records, _record
+
+    lat, lon = 473977000, 85456000
+    out = [*_fmt_records(), _record("ORGN", 1_000_000, 1, lat, lon, 90.0), _record("ARM", 1_000_000, 1)]
+    for i in range(3000):
+        t = 1_000_100 + 2500 * i
+        yaw = 90.0 if i < 1000 else 90.0 + 0.01 * (i - 999)
+        out.append(_record("ATT", t, 0.0, 0.0, yaw))
+        if i >= 1000:
+            out.append(_record("ATT", t + 700, 0.0, 0.0, yaw))
+        if i % 100 == 0:
+            out.append(_record("POS", t + 1, lat + i, lon, 100.0))
+            out.append(_record("RAD", t + 2, 200, 190 - i // 100, 100, 0, 0, 0, 0))
+    path = tmp_path / "rest_then_fly.bin"
+    path.write_bytes(b"".join(out))
+    _, meta = _read(path)
+    assert meta["close_copies"] == 2000 and meta["messages"]["ATT"] == 3000

@@ -105,3 +105,13 @@ def test_a_burst_of_messages_received_twice_reads_as_once(once, tmp_path, batch,
     assert m1["close_copies"] == 0 and m2["close_copies"] == boot_timed
     assert m2["messages"]["ATTITUDE"] == m1["messages"]["ATTITUDE"]
     pd.testing.assert_frame_equal(l1.pose, l2.pose)
+
+
+def test_a_record_whose_time_is_not_a_number_follows_none():
+    # was: nan (truthy), a DataFlash kind's intervals then nan and its 0-1 ms repeats never copies
+    from rplearn.io._mavlink_records import RecentRecords
+
+    recent = RecentRecords()
+    recent.add(("ATT", 0, 0.0), 1.0)
+    assert recent.since(("ATT", 0, 0.0), float("nan")) is None
+    assert recent.since(("ATT", 0, 0.0), 1.0025) == pytest.approx(0.0025)

@@ -135,3 +135,12 @@ def test_the_view_says_a_capped_fit_is_ranked_under_the_nominal_prior():
     assert "manoeuvres are ranked under a 6-dB smoothness prior meanwhile" in _capped_note(live_advisor())
     assert "smoothness prior" not in _capped_note(lambda *a: [])  # another hook ranks as it will
     assert _capped_note(None).startswith("not known yet: the fit took the largest smoothing")
+
+
+def test_the_capped_note_names_the_nominal_prior_only_when_the_advisor_ranks_under_it():
+    # an advisor given its own penalty weight keeps it (ranking_options): the note must not claim the 6-dB prior
+    from rplearn.workflows.live import _capped_note
+
+    assert "6-dB smoothness prior" in _capped_note(ManoeuvreAdvisor(ManoeuvreOptions()))
+    assert "prior" not in _capped_note(ManoeuvreAdvisor(ManoeuvreOptions(penalty_weight=1.0)))
+    assert "prior" not in _capped_note(lambda *a: [])

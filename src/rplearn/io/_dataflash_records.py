@@ -6,8 +6,8 @@ A record that repeats one of its kind (and instance) read shortly before it (amo
 every field but its time the same, is that record written twice (a logger or a router duplicating the stream,
 record by record or a buffer at a time) when its TimeUS is the same, or up to
 :data:`~rplearn.io._mavlink_records.CLOSE_COPY_S` later and far below (less than
-:data:`~rplearn.io.mavlink_phases.DUPLICATE_FRACTION_OF_PERIOD` of) the median interval between records of its kind
-and instance that repeat their fields: it is read once and counted (``close_copies``). A kind logged every millisecond while the vehicle rests repeats
+:data:`~rplearn.io.mavlink_phases.DUPLICATE_FRACTION_OF_PERIOD` of) the median interval between the records with its fields (kind,
+instance and fields): it is read once and counted (``close_copies``). A kind logged every millisecond while the vehicle rests repeats
 its fields 1 ms later at its own interval: those records are no copies (:func:`_judge`; the log is then read a
 second time, with them). A later stretch that repeats an earlier one (the log in the file twice) is undone by
 :func:`~rplearn.io._mavlink_records.merge_copied_boots` (``repeated_messages``).
@@ -133,11 +133,11 @@ class _Pass:
     minor: set[int] = field(default_factory=set)  # the stretches after a step back of the time too small for a reboot
     #: records left out as copies (their numbers among the records of the types read): at the same TimeUS
     copies: set[int] = field(default_factory=set)
-    #: records repeating one shortly before (0 < interval <= 1 ms): number, kind and instance, interval [s]
-    maybe: list[tuple[int, tuple[str, int], float]] = field(default_factory=list)
-    #: per kind and instance, the intervals [s] between records read with equal fields (copies and maybes left
-    #: out, the earlier among the last records read: :class:`~rplearn.io._mavlink_records.RecentRecords`)
-    steps: dict[tuple[str, int], list[float]] = field(default_factory=dict)
+    #: records repeating one shortly before (0 < interval <= 1 ms): number, key (kind, instance, fields), interval [s]
+    maybe: list[tuple[int, tuple[Any, ...], float]] = field(default_factory=list)
+    #: per key (kind, instance and fields), the intervals [s] between the records read with it (copies and maybes
+    #: left out, the earlier among the last records read: :class:`~rplearn.io._mavlink_records.RecentRecords`)
+    steps: dict[tuple[Any, ...], list[float]] = field(default_factory=dict)
 
 
 def _read_pass(source: str, drop: frozenset[int] | None) -> _Pass:
@@ -178,12 +178,12 @@ def _read_pass(source: str, drop: frozenset[int] | None) -> _Pass:
                     out.copies.add(index)  # the record (or a maybe) written twice: read once
                     continue
                 if gap is not None:
-                    out.maybe.append((index, (kind, which), gap))
+                    out.maybe.append((index, key, gap))
                     maybes.add(key, t)
                     continue
                 step = recent.since(key, t)
                 if step:
-                    out.steps.setdefault((kind, which), []).append(step)
+                    out.steps.setdefault(key, []).append(step)
                 recent.add(key, t)
             if t < last_t or (t == last_t and kind == last_kind):  # the latter: maybe a copy of the last record
                 out.boot += 1
@@ -197,13 +197,14 @@ def _read_pass(source: str, drop: frozenset[int] | None) -> _Pass:
 
 def _judge(first: _Pass) -> set[int]:
     """The records of ``first.maybe`` that are copies: those whose interval is below
-    :data:`~rplearn.io.mavlink_phases.DUPLICATE_FRACTION_OF_PERIOD` of the median interval between records of
-    their kind and instance that repeat their fields (``first.steps``: the maybes left out; any interval when it
-    has none). A kind logged every millisecond while the vehicle rests repeats its fields 1 ms later at its own
+    :data:`~rplearn.io.mavlink_phases.DUPLICATE_FRACTION_OF_PERIOD` of the median interval between the records
+    with their own fields (kind, instance and fields: ``first.steps``, the maybes left out; any interval when they
+    have none: a record whose fields no other record repeats, as a moving vehicle's, is judged by itself, not by
+    the intervals of a rest before or after it). A kind logged every millisecond while the vehicle rests repeats its fields 1 ms later at its own
     interval: every other record a maybe, the records read 2 ms apart, the maybes no copies."""
-    median = {which: float(np.median(steps)) for which, steps in first.steps.items()}
-    return {index for index, which, gap in first.maybe
-            if which not in median or gap < DUPLICATE_FRACTION_OF_PERIOD * median[which]}
+    median = {key: float(np.median(steps)) for key, steps in first.steps.items()}
+    return {index for index, key, gap in first.maybe
+            if key not in median or gap < DUPLICATE_FRACTION_OF_PERIOD * median[key]}
 
 
 def collect_dataflash(source: str) -> Raw:

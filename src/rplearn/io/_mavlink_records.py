@@ -362,7 +362,7 @@ class RecentRecords:
     def since(self, key: tuple[Any, ...], t: float) -> float | None:
         """How long [s] before ``t`` the latest record of ``key`` at or before it was added (None: none)."""
         times = self.seen.get(key, ())
-        i = bisect_right(times, t)
+        i = bisect_right(times, t) if t == t else 0  # a time that is not a number follows none
         return t - times[i - 1] if i else None
 
     def add(self, key: tuple[Any, ...], t: float) -> None:

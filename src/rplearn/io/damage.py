@@ -62,8 +62,8 @@ def file_damage(path: str, info: dict[str, Any]) -> list[str]:
                          "or overlapping exports); each was read once")
     if info.get("close_copies") and info.get("format") == "dataflash":
         lines.append(f"{path}: {info['close_copies']:,} DataFlash record(s) repeat one of their kind read shortly "
-                     "before them (same fields, TimeUS the same or up to 1 ms later, far below their kind's interval: "
-                     "records written twice, by a logger or a router duplicating them, or a short stretch of the log "
+                     "before them (same fields, TimeUS the same or up to 1 ms later, far below the interval of records with "
+                     "those fields: records written twice, by a logger or a router duplicating them, or a short stretch of the log "
                      "written again); each was read once")
     elif info.get("close_copies"):
         lines.append(f"{path}: {info['close_copies']:,} attitude or position message(s) repeat one received shortly "

@@ -69,7 +69,7 @@ earlier one exactly (kind, sender, receive time, fields), and a DataFlash boot w
 repeat an earlier boot's (same TimeUS and fields: the same boot again, not a reboot), are
 dropped and counted in ``metadata["repeated_messages"]``; a record written twice (a ``.tlog``'s attitude or
 position message, a DataFlash record: one of the last read again, time the same or up to 1 ms later, a DataFlash
-record's far below its kind's interval) is read once,
+record's far below the interval of records with its fields) is read once,
 counted in ``metadata["close_copies"]``. Bytes of a ``.tlog`` that are no
 whole record (a frame whose checksum fails, framing broken by a damaged length byte, junk) are
 skipped: ``metadata["corrupt_stretches"]`` counts the stretches of such bytes between two whole
