@@ -208,3 +208,19 @@ def test_rows_naming_a_node_that_never_logs_wait_no_longer_than_the_hold(logs):
     m.add_poses(pose[(pose["t"] >= 10.0) & (pose["t"] < ghost["t"].max() + HOLD_S + 1.0)])
     m.match()
     assert m.waiting_rows == 0 and m.summary.dropped["unknown_node"] == 50
+
+
+def test_rows_waiting_for_a_nodes_poses_are_bounded_in_number(logs, monkeypatch):
+    # at most WAIT_ROWS signal rows wait (the oldest go first, counted as unknown_node); the bound counts
+    # signal rows, not the source's held pose rows (review46: one limit for both dropped rows of a busy link)
+    import rplearn.data.live_sync as live_sync
+
+    monkeypatch.setattr(live_sync, "WAIT_ROWS", 20)
+    pose, signal = logs
+    ghost = signal.iloc[:50].assign(rx="Z")
+    m = LiveMatcher()
+    m.add_poses(pose[pose["t"] < 10.0])
+    m.add_signals(pd.concat([signal[signal["t"] < 10.0], ghost], ignore_index=True))
+    m.match()
+    assert m.waiting_rows == 20 and m.summary.dropped["unknown_node"] == 30
+    assert m.waiting_nodes == frozenset({"Z"})

@@ -25,8 +25,8 @@ without a valid time is forgotten at once: ``invalid_value`` for ``duplicate``).
 A signal row naming a node that has no pose yet (a node whose first poses the source holds back, as
 :class:`rplearn.io.live_sources.CsvTail` holds a logger's start at the zero position, or a ground
 station at the ENU origin that logs its attitude) waits, settled or not, for that node's poses:
-bounded as the source's hold is, for :data:`HOLD_S` of the pose rows' time after it and
-:data:`HOLD_ROWS` rows waiting in all (the oldest go first), then matched as it stands
+bounded as the source's hold is, for :data:`HOLD_S` of the pose rows' time after it, and
+:data:`WAIT_ROWS` signal rows waiting in all (the oldest go first), then matched as it stands
 (``unknown_node``, as ``sync`` drops a link to a node that has no poses). The pose rows and row hashes
 those rows need are kept while they wait.
 
@@ -86,11 +86,14 @@ class _RecentRows:
 #: Seconds of signal time before the oldest pose a moving node keeps for which row hashes are
 #: remembered; a row older than that is dropped as ``late``.
 DUPLICATE_MEMORY_S = 30.0
-#: How long and how many rows a node's first poses may be held back by a live source (its start at the zero
-#: position: :class:`rplearn.io.live_sources.CsvTail`), and so how long a signal row naming a node without poses
-#: waits for them (:class:`LiveMatcher`): seconds of the pose rows' time after the row, and rows in all.
+#: How long and how many pose rows a node's first poses may be held back by a live source (its start at the
+#: zero position: :class:`rplearn.io.live_sources.CsvTail`), and so how long a signal row naming a node without
+#: poses waits for them (:class:`LiveMatcher`): seconds of the pose rows' time after the row, and pose rows in all.
 HOLD_S = 60.0
 HOLD_ROWS = 16384
+#: Signal rows that may wait for a held node's poses in all (the oldest then go, as ``unknown_node``): the
+#: rows of :data:`HOLD_S` at about 1,000 readings a second over every link (some 100 bytes a row).
+WAIT_ROWS = 65536
 
 
 def _offset_slack_s(options: SyncOptions) -> float:
@@ -219,14 +222,14 @@ class LiveMatcher:
 
     def _waiting(self, pending: pd.DataFrame, t: np.ndarray) -> np.ndarray:
         """Which pending rows wait for the poses of a node they name (module docstring; bounded by :data:`HOLD_S`
-        and :data:`HOLD_ROWS`), and the earliest time among them kept (:meth:`_trim`)."""
+        and :data:`WAIT_ROWS`), and the earliest time among them kept (:meth:`_trim`)."""
         if not {"tx", "rx"} <= set(pending.columns):
             return np.zeros(len(pending), bool)
         known = set(self._poses["node"].astype(str)) if len(self._poses) else set()
         named = pending["tx"].astype(str).isin(known).to_numpy() & pending["rx"].astype(str).isin(known).to_numpy()
         wait = ~named & np.isfinite(t) & (t >= self._pose_t - HOLD_S - _offset_slack_s(self.options))
-        if wait.sum() > HOLD_ROWS:  # the oldest go: matched as they stand
-            wait[np.flatnonzero(wait)[np.argsort(t[wait], kind="stable")[:int(wait.sum()) - HOLD_ROWS]]] = False
+        if wait.sum() > WAIT_ROWS:  # the oldest go: matched as they stand
+            wait[np.flatnonzero(wait)[np.argsort(t[wait], kind="stable")[:int(wait.sum()) - WAIT_ROWS]]] = False
         if wait.any():
             self._waiting_from = float(t[wait].min())
             ends = set(pending["tx"].astype(str)[wait]) | set(pending["rx"].astype(str)[wait])
@@ -287,4 +290,4 @@ class LiveMatcher:
             self._seen.forget(self._forgotten_s)
 
 
-__all__ = ["DUPLICATE_MEMORY_S", "HOLD_ROWS", "HOLD_S", "LiveMatcher"]
+__all__ = ["DUPLICATE_MEMORY_S", "HOLD_ROWS", "HOLD_S", "WAIT_ROWS", "LiveMatcher"]

@@ -180,7 +180,7 @@ def one_station(logs: list[pd.DataFrame], owners: list[int], files: list[dict[st
 #: for them to be one attitude.
 SAME_QUATERNION = 1e-3
 #: Two fixes of an unmoved station differ by up to this many standard deviations of their difference (the GPS
-#: accuracies the logs report, ``station_accuracy_m``: eph, epv [m]) ...
+#: accuracies the logs report, ``station_accuracy_m``: a ULog's eph, epv, a MAVLink log's h_acc, v_acc or GPA HAcc, VAcc [m]) ...
 FIX_SIGMAS = 3.0
 #: ... and never by more than this [m]: a worse reported accuracy does not make a station moved farther one.
 MAX_FIX_NOISE_M = 10.0
@@ -206,7 +206,7 @@ def _in_frame(xyz: np.ndarray, frame: tuple[float, ...], to: tuple[float, ...]) 
 
 def fix_noise_m(a: Any, b: Any) -> tuple[float, float] | None:
     """How far apart [m] (across, up/down) two fixes of one unmoved station may lie, from the GPS accuracies
-    (eph, epv: standard deviations [m]) their logs report; None when either log reports none (then the
+    (horizontal, vertical: standard deviations [m]) their logs report; None when either log reports none (then the
     positions must agree to :data:`~rplearn.data.poses.SAME_POSITION_M`)."""
     from rplearn.data.poses import SAME_POSITION_M
 

@@ -149,7 +149,8 @@ def _table(tail: _Tail, data: bytes) -> pd.DataFrame | None:
 #: How long and how many rows :class:`CsvTail` holds back a node's leading rows at the zero position (a logger
 #: writing before the fix) while which side of its first jump is valid cannot be told yet: seconds of the pose
 #: table's time from the node's first row, and rows held in all (:data:`rplearn.data.live_sync.HOLD_S`,
-#: ``HOLD_ROWS``: as long as the matcher keeps the signal rows of its links waiting for its poses).
+#: ``HOLD_ROWS``; the matcher keeps the signal rows of its links waiting for its poses as long, at most
+#: :data:`rplearn.data.live_sync.WAIT_ROWS` of them).
 #: Seconds of the table's time a node's rows must stand as one pose at the ENU origin before it is taken
 #: for a station there (a logger before its fix that logs its attitude has changed it by then; a poll of a
 #: row or two is no evidence either way).
