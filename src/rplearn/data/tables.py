@@ -453,7 +453,13 @@ def validate_matched(df: pd.DataFrame, source: str = "dataset", require_rssi: bo
             f"{source}: column rssi_dbm holds {int(sentinel.sum())} sentinel value(s) meaning 'no measurement' "
             f"(first {rssi[row]:g} dBm at row {row}); synchronising the logs (synchronise) drops and counts them"
         )
+    for c in ("tx_x", "tx_y", "tx_z", "rx_x", "rx_y", "rx_z"):  # as a pose log's: no place, distances overflow
+        check_plausible("coordinate_m", df[c].to_numpy(np.float64), source, field=c)
     _check_link_columns(df[~outage] if outage.any() else df, source, with_rssi=require_rssi)
+    same = node_ids(df["tx"]) == node_ids(df["rx"])  # no link from a node to itself (sync drops them: tx_equals_rx)
+    if np.any(same):
+        row = int(np.flatnonzero(same)[0])
+        raise InputError(f"{source}: tx equals rx ({df['tx'].iloc[row]}) at row {row} ({int(same.sum())} row(s))")
     if require_rssi:
         _refuse_repeated_rows(df, source)
     check_unit_labels(df, source)

@@ -85,6 +85,20 @@ def check_model_band(model: Model, frequency_hz: ArrayLike | Mapping[float, int]
 
 
 @check_types
+def check_model_nodes(model: Model, nodes: Sequence[str], where: str, model_name: str | None = None) -> None:
+    """Refuse rows naming a node the pattern model has no pattern of (``nodes``: the rows' node
+    ids), naming ``where`` (the dataset) and the model; a model without per-node patterns (a
+    baseline) is not checked."""
+    known = getattr(model, "nodes", None)
+    if known is None:
+        return
+    unknown = sorted({str(n) for n in nodes} - {str(n) for n in known})
+    if unknown:
+        raise InputError(f"{where}: node(s) {', '.join(unknown)} in columns tx/rx, but {model_name or f'the {model.label} model'} "
+                         f"has patterns of {', '.join(map(str, known))} only")
+
+
+@check_types
 def frequency_mismatch(model: Model, frequency_hz: ArrayLike) -> FrequencyMismatch | None:
     """Rows whose carrier differs from the model's by more than 5 % (None: all agree, or the
     model does not state its frequency)."""
@@ -161,6 +175,7 @@ def predict_dataset(model: Model, dataset: pd.DataFrame, source: str = "dataset"
         File name for messages.
     """
     samples = link_samples(dataset, source, require_rssi=False)
+    check_model_nodes(model, samples.nodes, source)
     if samples.frequency_hz is not None:
         check_model_band(model, samples.frequency_hz, source)
     basis = getattr(model, "basis", None)

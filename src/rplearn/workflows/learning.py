@@ -47,7 +47,7 @@ from rplearn.models.fit import FittedModel, evaluate_models, fit_model, scores_m
 from rplearn.models.load import load_model, load_priors
 from rplearn.models.options import FitOptions
 from rplearn.models.patterns import PatternSet
-from rplearn.models.predict import UNCOVERED_DEG, DatasetPrediction, check_model_band, distinct_labels, predict_dataset, uncovered_rows
+from rplearn.models.predict import UNCOVERED_DEG, DatasetPrediction, check_model_band, check_model_nodes, distinct_labels, predict_dataset, uncovered_rows
 from rplearn.models.robust import downweighted_notes, fit_huber
 from rplearn.models.spec import ModelSpec, check_model_size
 from rplearn.models.streamed import checked, fit_patterns_accumulated, weighted_median
@@ -432,6 +432,7 @@ def evaluate_model_files(
         choice = evaluation_units(df, units, provs, dataset)
         samples = samples_of(df, choice.units, dataset)
         for model, path in zip(models, model_paths, strict=True):
+            check_model_nodes(model, samples.nodes, dataset, path)
             if samples.frequency_hz is not None:
                 check_model_band(model, samples.frequency_hz, dataset, path)
         rows = evaluate_models(fitted, samples, choice.warnings)

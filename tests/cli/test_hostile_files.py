@@ -1,0 +1,127 @@
+"""Session 46's audit of the command line on hostile files: model files with a checksum that
+matches but fields no fit writes (a writer's bug, or a hand edit whose checksum was made again),
+JSON nested past the decoder's recursion, and matched datasets whose rows no ``sync`` writes
+(positions near 1e308, a node linked to itself, nodes the model has no pattern of).
+
+Each case was a traceback, a NaN answer with exit 0 (a coefficient of 1e300, a position of
+1e308), or a refusal that named neither the file nor the field. Each must now be exit 1 with one
+line ``error: ...`` naming the file and the field, no traceback, nothing written.
+
+The commands run in this process (:func:`cli_helpers.run_here`); one refusal
+(:data:`IN_A_PROCESS`) runs as a process of its own, so that the process boundary stays covered.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+import pytest
+from cli_helpers import D, M, answer, assert_one_line_error, invoke_in, listing, smoke_flight
+
+from rplearn.io.modelfile import read_model_file, write_model_file
+
+
+def _edited(d: Path, source: str, name: str, edit: Callable[[dict[str, Any]], None]) -> None:
+    """``source`` with ``edit`` applied to its payload, written with a matching checksum as ``name``."""
+    kind, payload = read_model_file(d / source)
+    edit(payload)
+    write_model_file(d / name, kind, payload)
+
+
+def _set(path: tuple[str, ...], value: Any) -> Callable[[dict[str, Any]], None]:
+    def edit(payload: dict[str, Any]) -> None:
+        for key in path[:-1]:
+            payload = payload[key]
+        payload[path[-1]] = value
+    return edit
+
+
+@pytest.fixture(scope="module")
+def workdir(tmp_path_factory):
+    d = tmp_path_factory.mktemp("hostile_files")
+    smoke_flight(d, extra=(["fit", D, "--model", "mean", "-o", "mean.json"],))
+    edits = {
+        "gauge_null.json": _set(("gauge",), None),
+        "provenance_str.json": _set(("provenance",), "zz"),
+        "basis_xx.json": _set(("basis", "kind"), "xx"),
+        "order_neg.json": _set(("basis", "order"), -1),
+        "coef_1e300.json": lambda p: p["coefficients"]["A"].__setitem__(3, 1e300),
+        "rmse_neg.json": _set(("training", "rmse_db"), -1.0),
+        "coverage_short.json": lambda p: p["training"]["coverage_deg"]["A"].pop(),
+        "coverage_null.json": lambda p: p["training"]["coverage_deg"]["B"].__setitem__(7, None),
+    }
+    for name, edit in edits.items():
+        _edited(d, M, name, edit)
+    _edited(d, "mean.json", "mean_provenance_null.json", _set(("provenance",), None))
+    (d / "deep.json").write_text("[" * 100_000 + "]" * 100_000)
+    data = pd.read_parquet(d / D)
+    data.assign(tx_x=np.where(np.arange(len(data)) == 4, 1e308, data["tx_x"])).to_parquet(d / "far.parquet")
+    data.assign(rx=data["tx"]).to_parquet(d / "self.parquet")
+    data.assign(tx=data["tx"].replace("A", "C"), rx=data["rx"].replace("A", "C")).to_parquet(d / "node_c.parquet")
+    return d
+
+
+PREDICT = ["predict", "{model}", D, "-o", "p.csv"]
+#: (command line, text the one error line must hold); ``{model}`` is the model file of the case.
+REFUSED = {
+    # tracebacks (TypeError, ValueError, RecursionError)
+    "gauge null": (["orient", "gauge_null.json", "--tx", "A", "--rx", "B", "--tx-pos", "0,0,20", "--rx-pos", "30,0,20"],
+                   "gauge_null.json: field 'gauge' must be a list, got NoneType"),
+    "provenance a string": (["export", "provenance_str.json", "-o", "g.csv"],
+                            "provenance_str.json: field 'provenance' must be an object, got str"),
+    "mean model, provenance null": (["evaluate", "mean_provenance_null.json", D],
+                                    "mean_provenance_null.json: field 'provenance' must be an object"),
+    "JSON nested 100,000 deep": (PREDICT, "deep.json: not a valid JSON model file (nested too deeply"),
+    # refusals that did not name the file
+    "basis kind xx": (PREDICT, "basis_xx.json: basis: unknown basis 'xx'"),
+    "basis order -1": (["plot", "order_neg.json", "-o", "p.png"], "order_neg.json: basis: SH order must be a positive"),
+    "dataset node C, model of A and B": (["evaluate", M, "node_c.parquet"],
+                                         "node_c.parquet: node(s) C in columns tx/rx, but sh3.json has patterns of A, B only"),
+    "predict node C": (["predict", M, "node_c.parquet", "-o", "p.csv"], "node_c.parquet: node(s) C in columns tx/rx"),
+    "fit on a node linked to itself": (["fit", "self.parquet", "--order", "3", "-o", "m.json"],
+                                       "self.parquet: tx equals rx (B) at row 0"),
+    # exit 0 with NaN answers, or with a wrong or no answer
+    "coefficient 1e300": (PREDICT, "coef_1e300.json: a coefficient of magnitude 1e+300 dB"),
+    "evaluate, coefficient 1e300": (["evaluate", "coef_1e300.json", D], "coef_1e300.json: a coefficient of magnitude"),
+    "training RMSE -1": (PREDICT, "rmse_neg.json: training.rmse_db: expected a finite number >= 0, got -1.0"),
+    "coverage grid one short": (PREDICT, "coverage_short.json: training.coverage_deg.A: expected 16384 angles, got 16383"),
+    "coverage grid with a null": (PREDICT, "coverage_null.json: training.coverage_deg.B: entry 7 is None"),
+    "position 1e308, predict": (["predict", M, "far.parquet", "-o", "p.csv"], "far.parquet: tx_x 1e+308 at row 4 is outside"),
+    "position 1e308, evaluate": (["evaluate", M, "far.parquet"], "far.parquet: tx_x 1e+308 at row 4"),
+    "position 1e308, k-NN fit": (["fit", "far.parquet", "--model", "knn", "-o", "k.json"], "far.parquet: tx_x 1e+308"),
+    "evaluate on a node linked to itself": (["evaluate", M, "self.parquet"], "self.parquet: tx equals rx (B) at row 0"),
+    "predict a node linked to itself": (["predict", M, "self.parquet", "-o", "p.csv"], "self.parquet: tx equals rx"),
+}
+
+#: The refusal that runs as a process of its own.
+IN_A_PROCESS = "coefficient 1e300"
+assert IN_A_PROCESS in REFUSED
+
+_MODELS = {"JSON nested 100,000 deep": "deep.json", "basis kind xx": "basis_xx.json", "coefficient 1e300": "coef_1e300.json",
+           "training RMSE -1": "rmse_neg.json", "coverage grid one short": "coverage_short.json",
+           "coverage grid with a null": "coverage_null.json"}
+
+
+@pytest.mark.parametrize("case", sorted(REFUSED))
+def test_refused_in_one_line_naming_the_file_and_nothing_written(workdir, case):
+    args, needle = REFUSED[case]
+    args = [a.replace("{model}", _MODELS.get(case, M)) for a in args]
+    before = listing(workdir)
+    assert_one_line_error(answer(args, workdir, case == IN_A_PROCESS), needle, case)
+    assert listing(workdir) == before
+
+
+def test_the_files_edited_back_still_read(workdir):
+    """The checks refuse what no fit writes, not the model files fits write: the smoke model
+    written again through the same path predicts (its coverage grids, spreads and provenance
+    are as a fit writes them)."""
+    _edited(workdir, M, "same.json", lambda p: None)
+    invoke_in(workdir, ["predict", "same.json", D, "-o", "same.csv"])
+    table = pd.read_csv(workdir / "same.csv")
+    assert np.isfinite(table[["gain_pred_db", "rssi_pred_std_db", "tx_coverage_deg"]].to_numpy()).all()
+    assert json.loads((workdir / "same.json").read_text())["model"]["training"]["coverage_deg"]["A"]
