@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 import pytest
-from cli_helpers import D, M, answer, assert_one_line_error, invoke_in, listing, smoke_flight
+from cli_helpers import D, M, P, S, answer, assert_one_line_error, invoke_in, listing, smoke_flight
 
 from rplearn.io.modelfile import read_model_file, write_model_file
 
@@ -63,10 +63,16 @@ def workdir(tmp_path_factory):
     data.assign(tx_x=np.where(np.arange(len(data)) == 4, 1e308, data["tx_x"])).to_parquet(d / "far.parquet")
     data.assign(rx=data["tx"]).to_parquet(d / "self.parquet")
     data.assign(tx=data["tx"].replace("A", "C"), rx=data["rx"].replace("A", "C")).to_parquet(d / "node_c.parquet")
+    data.iloc[:0].to_csv(d / "header.csv", index=False)
+    signal = pd.read_parquet(d / S)
+    signal.assign(t=np.where(np.arange(len(signal)) == 3, np.nan, signal["t"])).to_parquet(d / "nan_t.parquet")
+    signal.iloc[:0].to_parquet(d / "no_signals.parquet")
+    signal.assign(rx=signal["tx"]).to_parquet(d / "self_signals.parquet")
     return d
 
 
 PREDICT = ["predict", "{model}", D, "-o", "p.csv"]
+ORIENT = ["orient", M, "--tx", "A", "--rx", "B", "--tx-pos", "0,0,20", "--rx-pos", "30,0,20"]
 #: (command line, text the one error line must hold); ``{model}`` is the model file of the case.
 REFUSED = {
     # tracebacks (TypeError, ValueError, RecursionError)
@@ -96,11 +102,32 @@ REFUSED = {
     "position 1e308, k-NN fit": (["fit", "far.parquet", "--model", "knn", "-o", "k.json"], "far.parquet: tx_x 1e+308"),
     "evaluate on a node linked to itself": (["evaluate", M, "self.parquet"], "self.parquet: tx equals rx (B) at row 0"),
     "predict a node linked to itself": (["predict", M, "self.parquet", "-o", "p.csv"], "self.parquet: tx equals rx"),
+    "predict a dataset of no rows": (["predict", M, "header.csv", "-o", "p.csv"], "header.csv: the dataset has no rows"),
+    "plot the directions of no rows": (["plot", M, "--dataset", "header.csv", "-o", "p.png"], "header.csv: the dataset has no rows"),
+    # options: a traceback, sizes that hung or ran out of memory, flags named wrong or not at all
+    "BG kernels of 1e-9 rad^2": (["fit", D, "--model", "bg", "--order", "3", "--sigma", "1e-9", "-o", "m.json"],
+                                 "the samples do not identify BG-3 for 2 nodes: design rank 0"),
+    "sweep --orders 1..100000000": (["sweep", D, "--orders", "1..100000000"],
+                                    "--orders: order 100000000: SH-100000000 for 2 antennas has 20,000,000,000,000,000 "
+                                    "coefficients, more than the 1,345 samples of the learning data can identify; "
+                                    "the largest sh order that fits is 25"),
+    "links --draws 100000000": (["links", M, P, "--tx-power", "20", "--sensitivity", "-90", "--draws", "100000000",
+                                 "-o", "l.csv"], "--draws: 100,000,000 draws would take"),
+    "orient --caution inf": (ORIENT + ["--caution", "inf"], "--caution: expected a finite number >= 0, got inf"),
+    "orient --tx-pos nan": (["orient", M, "--tx", "A", "--rx", "B", "--tx-pos", "nan,0,20", "--rx-pos", "30,0,20"],
+                            "--tx-pos: expected three finite numbers x,y,z in metres, got 'nan,0,20'"),
+    "links --at before the logs": (["links", M, P, "--tx-power", "20", "--at", "0", "-o", "l.csv"],
+                                   f"--at: no time asked has two drones with a pose (1 time(s), 0 .. 0 s); the pose logs of {P}"),
+    "trajectory --distance 1e-9": (["trajectory", "--distance", "1e-9", "-o", "plan"],
+                                   "--distance: expected at least 5 m between the drones, got 1e-09 m"),
+    "trajectory --speed 1e-9": (["trajectory", "--speed", "1e-9", "-o", "plan"],
+                                "--speed: at 1e-09 m/s even one loop per unit would take"),
 }
 
-#: The refusal that runs as a process of its own.
-IN_A_PROCESS = "coefficient 1e300"
-assert IN_A_PROCESS in REFUSED
+#: The refusals that run as processes of their own (a size refusal: were the check to fail, the
+#: work would run in the test process).
+IN_A_PROCESS = {"coefficient 1e300", "links --draws 100000000", "sweep --orders 1..100000000"}
+assert IN_A_PROCESS <= REFUSED.keys()
 
 _MODELS = {"JSON nested 100,000 deep": "deep.json", "basis kind xx": "basis_xx.json", "coefficient 1e300": "coef_1e300.json",
            "training RMSE -1": "rmse_neg.json", "coverage grid one short": "coverage_short.json",
@@ -112,7 +139,7 @@ def test_refused_in_one_line_naming_the_file_and_nothing_written(workdir, case):
     args, needle = REFUSED[case]
     args = [a.replace("{model}", _MODELS.get(case, M)) for a in args]
     before = listing(workdir)
-    assert_one_line_error(answer(args, workdir, case == IN_A_PROCESS), needle, case)
+    assert_one_line_error(answer(args, workdir, case in IN_A_PROCESS), needle, case)
     assert listing(workdir) == before
 
 
@@ -125,3 +152,23 @@ def test_the_files_edited_back_still_read(workdir):
     table = pd.read_csv(workdir / "same.csv")
     assert np.isfinite(table[["gain_pred_db", "rssi_pred_std_db", "tx_coverage_deg"]].to_numpy()).all()
     assert json.loads((workdir / "same.json").read_text())["model"]["training"]["coverage_deg"]["A"]
+
+
+#: Signal tables ``inspect`` said nothing wrong of ("problems: none found"; times "nan .. nan s").
+INSPECTED = {
+    "nan_t.parquet": "nan_t.parquet: column t: 1 row(s) with a non-numeric, NaN or infinite value (first at row 3); "
+                     "sync drops them (invalid_value)",
+    "no_signals.parquet": "no_signals.parquet: no signal rows (a header without samples)",
+    "self_signals.parquet": "self_signals.parquet: columns tx, rx: 2,672 row(s) from a node to itself (first at row 0); "
+                            "sync drops them (tx_equals_rx)",
+}
+
+
+@pytest.mark.parametrize("name", sorted(INSPECTED))
+def test_inspect_says_what_sync_will_drop(workdir, name):
+    proc = answer(["inspect", name], workdir)
+    assert proc.returncode == 0 and "Traceback" not in proc.stderr, proc.stderr
+    problems = proc.stdout.split("problems:", 1)[1]
+    assert f"  - {INSPECTED[name]}" in problems.splitlines(), problems
+    clean = answer(["inspect", S], workdir)
+    assert clean.stdout.rstrip().endswith("problems: none found")

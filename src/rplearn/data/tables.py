@@ -232,9 +232,10 @@ def quaternion_norms(q: np.ndarray) -> np.ndarray:
 
 def _norms_of_columns(q: Sequence[np.ndarray]) -> np.ndarray:
     """:func:`quaternion_norms` of the quaternions whose components are the arrays ``q``."""
-    norm = q[0] * q[0]
-    for j in range(1, 4):
-        norm += q[j] * q[j]
+    with np.errstate(over="ignore"):  # a corrupt component (1e200): an infinite norm, counted by the callers
+        norm = q[0] * q[0]
+        for j in range(1, 4):
+            norm += q[j] * q[j]
     return np.sqrt(norm, out=norm)
 
 

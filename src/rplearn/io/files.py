@@ -305,8 +305,12 @@ def read_dataset(path: str, require_rssi: bool = True) -> pd.DataFrame:
             refuse_copies([source_copies(part.path, chunks) for part, chunks in zip(parts, frames, strict=True)])
         flat = [f for each in frames for f in each]
         table = pd.concat(flat, ignore_index=True) if len(flat) > 1 else flat[0]
-        return validate_matched(table, path, require_rssi=require_rssi)
-    return validate_matched(read_table(path), path, require_rssi=require_rssi)
+    else:
+        table = read_table(path)
+    checked = validate_matched(table, path, require_rssi=require_rssi)
+    if checked.empty:  # a header without samples: nothing to learn, score, predict or draw
+        raise InputError(f"{path}: the dataset has no rows (its columns, no samples)")
+    return checked
 
 
 @check_types

@@ -495,8 +495,8 @@ def sweep_dataset(
     Learning and testing units default to the unit rule (:func:`split_units`); every order
     is learned and tested (no early stop).
     """
-    from rplearn.analysis.sweep import order_sweep, validation_sweep
-    if not orders or min(int(o) for o in orders) < 1:
+    from rplearn.analysis.sweep import order_bounds, order_sweep, validation_sweep
+    if not orders or order_bounds(orders)[0] < 1:
         raise InputError(f"orders: expected positive orders, got {list(orders)!r}", param="orders")
     check_outputs({"output": output, "plot_path": plot_path}, [dataset])
     if output:
@@ -505,7 +505,8 @@ def sweep_dataset(
     learn, test = split_units(df, learn_units, test_units, dataset)
     ls = samples_of(df, learn, dataset)
     ts = samples_of(df, test, dataset, nodes=ls.nodes)
-    result = order_sweep(ls, ts, kind, [int(o) for o in orders], stop_after_rises=None, progress=progress)
+    orders = orders if isinstance(orders, range) else [int(o) for o in orders]  # a range stays one (order_bounds)
+    result = order_sweep(ls, ts, kind, orders, stop_after_rises=None, progress=progress)
     result.notes = [unit_note] if unit_note else []
     if kind == "sh":
         progress("cross-validating the orders over the learning units")

@@ -14,6 +14,7 @@ from rplearn._argtypes import check_types
 from rplearn._budget import Cost, budget, check_work
 from rplearn.analysis.heading_options import YawOptions
 from rplearn.analysis.headings import OrientationResult, best_yaw
+from rplearn.data.phases import CALIBRATION_MIN_DISTANCE_M
 from rplearn.errors import InputError
 from rplearn.io.export import export_grid
 from rplearn.io.files import check_output_path, provenance
@@ -87,6 +88,10 @@ class CampaignOptions:
         # the unit fields, checked as every unit will be (InputError naming the field)
         TrajectoryUnit(distance_m=self.distance_m, height_m=self.height_m, n_loops=self.n_loops,
                        speed_m_s=self.speed_m_s)
+        if not self.distance_m >= CALIBRATION_MIN_DISTANCE_M:  # the least distance of a calibration flight
+            raise InputError(f"distance_m: expected at least {CALIBRATION_MIN_DISTANCE_M:g} m between the drones, got "
+                             f"{self.distance_m:g} m (closer, a GNSS position's 1-2 m error turns the directions between "
+                             "them by more than 10-20 deg, and the drones may touch)", param="distance_m")
 
 
 #: Measured costs of planning (``trajectory`` at --loops 5 and 50, --rate 10 and 1000 on a loaded
@@ -133,6 +138,10 @@ def plan_campaign(
     work = budget(out_dir)
     # each alone (the other at most its default), then both: the rate is named for what they need together
     n_loops, usual_rate = options.n_loops, min(rate_hz, 10.0)
+    over = work.refusal(campaign_cost(options, 1, usual_rate))
+    if over is not None:  # not the loops: one loop alone is too long, at this speed
+        raise InputError(f"speed_m_s: at {options.speed_m_s:g} m/s even one loop per unit would take {over}; fly faster",
+                         param="speed_m_s")
     check_work("n_loops", n_loops, lambda n: campaign_cost(options, n, usual_rate), "loops", limits=work)
     for loops in (min(n_loops, 5), n_loops):
         check_work("rate_hz", rate_hz, lambda r: campaign_cost(options, loops, r), "Hz",  # noqa: B023 (used at once)
