@@ -64,6 +64,7 @@ def workdir(tmp_path_factory):
     data.assign(rx=data["tx"]).to_parquet(d / "self.parquet")
     data.assign(tx=data["tx"].replace("A", "C"), rx=data["rx"].replace("A", "C")).to_parquet(d / "node_c.parquet")
     data.iloc[:0].to_csv(d / "header.csv", index=False)
+    data.assign(tx_x=data["rx_x"], tx_y=data["rx_y"], tx_z=data["rx_z"]).to_parquet(d / "samepos.parquet")
     signal = pd.read_parquet(d / S)
     signal.assign(t=np.where(np.arange(len(signal)) == 3, np.nan, signal["t"])).to_parquet(d / "nan_t.parquet")
     signal.iloc[:0].to_parquet(d / "no_signals.parquet")
@@ -102,6 +103,9 @@ REFUSED = {
     "position 1e308, k-NN fit": (["fit", "far.parquet", "--model", "knn", "-o", "k.json"], "far.parquet: tx_x 1e+308"),
     "evaluate on a node linked to itself": (["evaluate", M, "self.parquet"], "self.parquet: tx equals rx (B) at row 0"),
     "predict a node linked to itself": (["predict", M, "self.parquet", "-o", "p.csv"], "self.parquet: tx equals rx"),
+    "predict both ends at one place": (["predict", M, "samepos.parquet", "-o", "p.csv"],
+                                      "samepos.parquet: tx/rx positions: 2672 of 2672 sample(s) are not in the far field"),
+    "trajectory --rate 0.5": (["trajectory", "--rate", "0.5", "-o", "plan"], "--rate: expected at least 1 Hz, got 0.5 Hz"),
     "predict a dataset of no rows": (["predict", M, "header.csv", "-o", "p.csv"], "header.csv: the dataset has no rows"),
     "plot the directions of no rows": (["plot", M, "--dataset", "header.csv", "-o", "p.png"], "header.csv: the dataset has no rows"),
     # options: a traceback, sizes that hung or ran out of memory, flags named wrong or not at all

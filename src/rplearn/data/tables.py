@@ -30,7 +30,7 @@ import pandas as pd
 
 from rplearn._argtypes import check_types
 from rplearn.core.geometry import Directions, distance_m, link_directions
-from rplearn.core.link import observed_joint_gain_db
+from rplearn.core.link import check_far_field, observed_joint_gain_db
 from rplearn.core.plausible import PLAUSIBLE, check_frequency_hz, check_plausible
 from rplearn.errors import InputError
 
@@ -581,6 +581,7 @@ def link_samples(
         rssi = np.full(len(df), np.nan)
     if not require_rssi:
         rssi = np.where(np.isin(rssi, SENTINEL_RSSI_DBM), np.nan, rssi)
+    check_far_field(dist, df["frequency_hz"].to_numpy(np.float64), f"{source}: tx/rx positions")  # named by the file
     gain = observed_joint_gain_db(
         rssi,
         df["tx_power_dbm"].to_numpy(np.float64),

@@ -94,6 +94,10 @@ class CampaignOptions:
                              "them by more than 10-20 deg, and the drones may touch)", param="distance_m")
 
 
+#: The least rate of a reference file [Hz]: a row at least every second (a unit turns between its
+#: loops in a few seconds; sparser rows cut the turns, and a loop to a polygon of a few sides).
+MIN_REFERENCE_RATE_HZ = 1.0
+
 #: Measured costs of planning (``trajectory`` at --loops 5 and 50, --rate 10 and 1000 on a loaded
 #: 2-core machine): the plan check's seconds and bytes per loop of the learning units, and per
 #: reference row (one drone at one instant) its seconds, bytes in memory and on disk.
@@ -135,6 +139,10 @@ def plan_campaign(
     options = CampaignOptions() if campaign is None else campaign
     if not (isinstance(rate_hz, (int, float)) and math.isfinite(rate_hz) and rate_hz > 0):
         raise InputError(f"rate_hz: expected a positive sample rate, got {rate_hz!r}", param="rate_hz")
+    if rate_hz < MIN_REFERENCE_RATE_HZ:
+        raise InputError(f"rate_hz: expected at least {MIN_REFERENCE_RATE_HZ:g} Hz, got {rate_hz:g} Hz: the units turn "
+                         "between loops in a few seconds, and sparser rows cut the turns and the loops short",
+                         param="rate_hz")
     work = budget(out_dir)
     # each alone (the other at most its default), then both: the rate is named for what they need together
     n_loops, usual_rate = options.n_loops, min(rate_hz, 10.0)
