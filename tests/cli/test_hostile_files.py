@@ -52,6 +52,7 @@ def workdir(tmp_path_factory):
         "order_neg.json": _set(("basis", "order"), -1),
         "coef_1e300.json": lambda p: p["coefficients"]["A"].__setitem__(3, 1e300),
         "rmse_neg.json": _set(("training", "rmse_db"), -1.0),
+        "rmse_null.json": _set(("training", "rmse_db"), None),
         "coverage_short.json": lambda p: p["training"]["coverage_deg"]["A"].pop(),
         "coverage_null.json": lambda p: p["training"]["coverage_deg"]["B"].__setitem__(7, None),
     }
@@ -176,3 +177,14 @@ def test_inspect_says_what_sync_will_drop(workdir, name):
     assert f"  - {INSPECTED[name]}" in problems.splitlines(), problems
     clean = answer(["inspect", S], workdir)
     assert clean.stdout.rstrip().endswith("problems: none found")
+
+
+def test_a_model_without_its_residual_says_the_packet_spread_is_nan(workdir):
+    """A model file that states no training residual (a hand-made one) gives NaN in
+    rssi_pred_std_db: said, not left for the user to find in the table (it was silent)."""
+    proc = answer(["predict", "rmse_null.json", D, "-o", "nan_std.csv"], workdir)
+    assert proc.returncode == 0, proc.stderr
+    assert "note: rssi_pred_std_db is NaN in every row: the model file states no training residual" in proc.stderr
+    table = pd.read_csv(workdir / "nan_std.csv")
+    assert table["rssi_pred_std_db"].isna().all() and np.isfinite(table["gain_pred_std_db"]).all()
+    assert "rssi_pred_std_db is NaN" not in answer(["predict", M, D, "-o", "std.csv"], workdir).stderr

@@ -194,6 +194,7 @@ def _predict_dataset(model: Model, dataset: pd.DataFrame, samples: Any) -> Datas
         table["tx_power_dbm"].to_numpy(np.float64), gain, samples.distance_m, table["frequency_hz"].to_numpy(np.float64)
     )
     std = model.predict_gain_std(samples)
+    residual_db = 0.0
     if std is not None:
         # one packet's noise about its flight's level (an automatic fit over flights), else the
         # training residual; unknown (None) in a hand-made file: the spread is then NaN
@@ -208,6 +209,9 @@ def _predict_dataset(model: Model, dataset: pd.DataFrame, samples: Any) -> Datas
     rmse = float(np.sqrt(np.mean((gain[measured] - samples.joint_gain_db[measured]) ** 2))) if measured.any() else float("nan")
     mismatch = frequency_mismatch(model, table["frequency_hz"].to_numpy(np.float64))
     notes = unlearned_directions(model, samples)
+    if "rssi_pred_std_db" in table.columns and not np.isfinite(residual_db):
+        notes.append("rssi_pred_std_db is NaN in every row: the model file states no training residual "
+                     "(training.rmse_db or noise_std_db), so one packet's spread is unknown; gain_pred_std_db holds")
     if not predicted.all():
         notes.append(f"{int((~predicted).sum()):,} of {len(gain):,} rows have no prediction (NaN): an antenna at or "
                      "below the two-ray ground level of the model; they are left out of the RMSE")
