@@ -66,6 +66,8 @@ def workdir(tmp_path_factory):
     data.assign(tx=data["tx"].replace("A", "C"), rx=data["rx"].replace("A", "C")).to_parquet(d / "node_c.parquet")
     data.iloc[:0].to_csv(d / "header.csv", index=False)
     data.assign(tx_x=data["rx_x"], tx_y=data["rx_y"], tx_z=data["rx_z"]).to_parquet(d / "samepos.parquet")
+    pose = pd.read_parquet(d / P)
+    pose.assign(qw=np.where(np.arange(len(pose)) == 9, 1e200, pose["qw"])).to_parquet(d / "q1e200.parquet")
     signal = pd.read_parquet(d / S)
     signal.assign(t=np.where(np.arange(len(signal)) == 3, np.nan, signal["t"])).to_parquet(d / "nan_t.parquet")
     signal.iloc[:0].to_parquet(d / "no_signals.parquet")
@@ -107,6 +109,9 @@ REFUSED = {
     "predict both ends at one place": (["predict", M, "samepos.parquet", "-o", "p.csv"],
                                       "samepos.parquet: tx/rx positions: 2672 of 2672 sample(s) are not in the far field"),
     "trajectory --rate 0.5": (["trajectory", "--rate", "0.5", "-o", "plan"], "--rate: expected at least 1 Hz, got 0.5 Hz"),
+    "a pose whose qw is 1e200": (["sync", "--poses", "q1e200.parquet", "--signals", S, "--link", "all", "-o", "s.parquet"],
+                                 "q1e200.parquet: quaternion (qw, qx, qy, qz) has a norm beyond any float (a corrupt value) "
+                                 "at row 9"),
     "predict a dataset of no rows": (["predict", M, "header.csv", "-o", "p.csv"], "header.csv: the dataset has no rows"),
     "plot the directions of no rows": (["plot", M, "--dataset", "header.csv", "-o", "p.png"], "header.csv: the dataset has no rows"),
     # options: a traceback, sizes that hung or ran out of memory, flags named wrong or not at all

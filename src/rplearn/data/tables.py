@@ -265,9 +265,11 @@ def checked_pose_arrays(df: pd.DataFrame, source: str = "pose log") -> CheckedPo
     take = slice(None) if in_order else order
     components = [df[c].to_numpy(np.float64)[take] for c in ("qw", "qx", "qy", "qz")]  # no copy when in order
     norm = _norms_of_columns(components)
-    if np.any(norm < 1e-6):
-        row = int(np.flatnonzero(norm < 1e-6)[0]) if in_order else int(order[np.flatnonzero(norm < 1e-6)[0]])
-        raise InputError(f"{source}: quaternion (qw, qx, qy, qz) has zero norm at row {row}")
+    bad = (norm < 1e-6) | np.isinf(norm)  # no attitude: zero, or a corrupt component whose square overflows
+    if np.any(bad):
+        row = int(np.flatnonzero(bad)[0]) if in_order else int(order[np.flatnonzero(bad)[0]])
+        what = "zero norm" if norm[np.flatnonzero(bad)[0]] < 1e-6 else "a norm beyond any float (a corrupt value)"
+        raise InputError(f"{source}: quaternion (qw, qx, qy, qz) has {what} at row {row}")
     non_unit = count_non_unit_quaternions(norm) + int(df.attrs.get(NON_UNIT_QUATERNION_ATTR, 0))
     q = np.empty((t.size, 4))
     for j, component in enumerate(components):
