@@ -69,6 +69,11 @@ def workdir(tmp_path_factory):
     pose = pd.read_parquet(d / P)
     pose.assign(qw=np.where(np.arange(len(pose)) == 9, 1e200, pose["qw"])).to_parquet(d / "q1e200.parquet")
     signal = pd.read_parquet(d / S)
+    pose.to_csv(d / "pose.csv", index=False)
+    signal.to_csv(d / "signal.csv", index=False)
+    az, el = np.meshgrid(np.arange(-180.0, 180.0, 15.0), np.arange(-90.0, 91.0, 15.0))
+    pd.DataFrame({"az_deg": az.ravel(), "el_deg": el.ravel(), "gain_dbi": 2.0 * np.cos(np.radians(el.ravel()))}
+                 ).to_csv(d / "ref.csv", index=False)
     signal.assign(t=np.where(np.arange(len(signal)) == 3, np.nan, signal["t"])).to_parquet(d / "nan_t.parquet")
     signal.iloc[:0].to_parquet(d / "no_signals.parquet")
     signal.assign(rx=signal["tx"]).to_parquet(d / "self_signals.parquet")
@@ -112,6 +117,20 @@ REFUSED = {
     "a pose whose qw is 1e200": (["sync", "--poses", "q1e200.parquet", "--signals", S, "--link", "all", "-o", "s.parquet"],
                                  "q1e200.parquet: quaternion (qw, qx, qy, qz) has a norm beyond any float (a corrupt value) "
                                  "at row 9"),
+    # outputs named for another kind of file than the one written (a model as a .parquet, a PNG as a
+    # .csv: read back as what its name says), an empty name (a fit that saved nothing, exit 0), a
+    # --record a CSV session ignored
+    "fit -o a .parquet name": (["fit", D, "--order", "3", "-o", "model.parquet"],
+                               "model.parquet: a model file (JSON) is written here, but the name says otherwise; name it .json"),
+    "fit -o ''": (["fit", D, "--order", "3", "-o", ""], "--out: an empty file name"),
+    "export a grid to .json": (["export", M, "-o", "grid.json"], "grid.json: a grid CSV is written here"),
+    "plot to .csv": (["plot", M, "-o", "p.csv"], "p.csv: a PNG image is written here"),
+    "sweep --plot .pdf": (["sweep", D, "--orders", "1..2", "--plot", "s.pdf"], "s.pdf: a PNG image is written here"),
+    "reference to .parquet": (["reference", "A=ref.csv", "-o", "r.parquet"], "r.parquet: a model file (JSON)"),
+    "live --html h.json": (["live", "pose.csv,signal.csv", "-o", "l.json", "--html", "h.json", "--quiet", "--no-advice"],
+                           "h.json: an HTML page is written here"),
+    "live --record of a CSV session": (["live", "pose.csv,signal.csv", "-o", "l.json", "--record", "x.tlog", "--quiet",
+                                        "--no-advice"], "--record: x.tlog: a CSV source is recorded already"),
     "predict a dataset of no rows": (["predict", M, "header.csv", "-o", "p.csv"], "header.csv: the dataset has no rows"),
     "plot the directions of no rows": (["plot", M, "--dataset", "header.csv", "-o", "p.png"], "header.csv: the dataset has no rows"),
     # options: a traceback, sizes that hung or ran out of memory, flags named wrong or not at all

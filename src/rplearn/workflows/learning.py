@@ -40,7 +40,7 @@ from rplearn.data.units import (
     whole_flight_note,
 )
 from rplearn.errors import InputError
-from rplearn.io.files import check_output_path, check_table_path, provenance, read_dataset, table_rows, write_json, write_table
+from rplearn.io.files import check_output_kind, check_output_path, check_table_path, provenance, read_dataset, table_rows, write_json, write_table
 from rplearn.io.partitions import dataset_parts, is_partitioned
 from rplearn.io.resolve import check_outputs
 from rplearn.models.fit import FittedModel, evaluate_models, fit_model, scores_markdown, scores_of_predictions
@@ -201,8 +201,9 @@ def fit_dataset(
     """
     options = options or FitOptions()
     options.check(spec)
-    if output:
+    if output is not None:
         check_output_path(output, [dataset, *options.prior_files()])
+        check_output_kind(output, "model")
     options = load_priors(options)
     if dask is not None:
         parse_dask(dask)
@@ -501,6 +502,8 @@ def sweep_dataset(
     check_outputs({"output": output, "plot_path": plot_path}, [dataset])
     if output:
         check_table_path(output)
+    if plot_path is not None:
+        check_output_kind(plot_path, "png", "plot_path")
     df, unit_note = time_units(read_dataset(dataset), source=dataset)
     learn, test = split_units(df, learn_units, test_units, dataset)
     ls = samples_of(df, learn, dataset)

@@ -17,7 +17,7 @@ from rplearn.analysis.headings import OrientationResult, best_yaw
 from rplearn.data.phases import CALIBRATION_MIN_DISTANCE_M
 from rplearn.errors import InputError
 from rplearn.io.export import export_grid
-from rplearn.io.files import check_output_path, provenance
+from rplearn.io.files import check_output_kind, check_output_path, provenance
 from rplearn.io.msi import export_msi_files
 from rplearn.models.base import require_patterns
 from rplearn.models.load import load_model
@@ -181,6 +181,7 @@ def export_model_file(
         raise InputError(f"fmt: expected grid, msi or images, got {fmt!r}", param="fmt")
     if fmt == "grid":
         check_output_path(output, [model_path])
+        check_output_kind(output, "grid")
     elif os.path.exists(output) and not os.path.isdir(output):
         raise InputError(f"{output}: is a file; give a folder for the {fmt} files", param="output")
     model = load_model(model_path)
@@ -255,6 +256,7 @@ def reference_model_file(
         raise InputError(f"mounts: node(s) {', '.join(unknown)} have no pattern; patterns are given for "
                          f"{', '.join(sorted(patterns))}", param="mounts")
     check_output_path(output, list(patterns.values()))
+    check_output_kind(output, "model")
     _precheck_reference_rows(patterns)
     samples = {str(n): read_reference_pattern(path, mounts.get(str(n), (0.0, 0.0, 0.0)), node=str(n))
                for n, path in patterns.items()}
@@ -280,6 +282,9 @@ def draw_pattern_files(
     from rplearn.viz.plot import plot_pattern_maps
 
     check_outputs({"output": output, "spread": spread}, [*model_paths, truth, dataset])
+    for param, path in (("output", output), ("spread", spread)):
+        if path is not None:
+            check_output_kind(path, "png", param)
     models = {}
     for path in model_paths:
         model = load_model(path)
