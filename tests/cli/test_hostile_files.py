@@ -65,6 +65,7 @@ def workdir(tmp_path_factory):
     data.assign(rx=data["tx"]).to_parquet(d / "self.parquet")
     data.assign(tx=data["tx"].replace("A", "C"), rx=data["rx"].replace("A", "C")).to_parquet(d / "node_c.parquet")
     data.iloc[:0].to_csv(d / "header.csv", index=False)
+    data.iloc[:1].to_parquet(d / "one_row.parquet")
     data.assign(tx_x=data["rx_x"], tx_y=data["rx_y"], tx_z=data["rx_z"]).to_parquet(d / "samepos.parquet")
     pose = pd.read_parquet(d / P)
     pose.assign(qw=np.where(np.arange(len(pose)) == 9, 1e200, pose["qw"])).to_parquet(d / "q1e200.parquet")
@@ -131,6 +132,8 @@ REFUSED = {
                            "h.json: an HTML page is written here"),
     "live --record of a CSV session": (["live", "pose.csv,signal.csv", "-o", "l.json", "--record", "x.tlog", "--quiet",
                                         "--no-advice"], "--record: x.tlog: a CSV source is recorded already"),
+    "fit on one row": (["fit", "one_row.parquet", "--order", "3", "-o", "m.json"],
+                       "more than the 1 samples of the learning data can identify; no sh order fits (SH-1 alone needs 2)"),
     "predict a dataset of no rows": (["predict", M, "header.csv", "-o", "p.csv"], "header.csv: the dataset has no rows"),
     "plot the directions of no rows": (["plot", M, "--dataset", "header.csv", "-o", "p.png"], "header.csv: the dataset has no rows"),
     # options: a traceback, sizes that hung or ran out of memory, flags named wrong or not at all
