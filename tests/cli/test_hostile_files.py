@@ -134,6 +134,8 @@ REFUSED = {
                                         "--no-advice"], "--record: x.tlog: a CSV source is recorded already"),
     "fit on one row": (["fit", "one_row.parquet", "--order", "3", "-o", "m.json"],
                        "more than the 1 samples of the learning data can identify; no sh order fits (SH-1 alone needs 2)"),
+    "report --test-units nosuch": (["report", D, "--test-units", "nosuch", "-o", "rep"],
+                                   f"{D}: unknown unit(s) nosuch; the dataset has learn_0, test_90 (set it with --test-units)"),
     "predict a dataset of no rows": (["predict", M, "header.csv", "-o", "p.csv"], "header.csv: the dataset has no rows"),
     "plot the directions of no rows": (["plot", M, "--dataset", "header.csv", "-o", "p.png"], "header.csv: the dataset has no rows"),
     # options: a traceback, sizes that hung or ran out of memory, flags named wrong or not at all
@@ -215,3 +217,15 @@ def test_a_model_without_its_residual_says_the_packet_spread_is_nan(workdir):
     table = pd.read_csv(workdir / "nan_std.csv")
     assert table["rssi_pred_std_db"].isna().all() and np.isfinite(table["gain_pred_std_db"]).all()
     assert "rssi_pred_std_db is NaN" not in answer(["predict", M, D, "-o", "std.csv"], workdir).stderr
+
+
+def test_report_repeats_beyond_the_budget_write_no_folder(workdir):
+    """``report --repeats 100000000`` learned SH-2 until killed (past 120 s), its folder half
+    written; now the first run's time prices the rest, refused before the folder is made."""
+    before = listing(workdir)
+    proc = answer(["report", D, "--paper-models", "SH-2", "--repeats", "100000000", "-o", "rep"], workdir, process=True)
+    lines = [line for line in proc.stderr.splitlines() if line.strip()]
+    assert proc.returncode == 1 and "Traceback" not in proc.stderr, proc.stderr
+    assert lines[-1].startswith("error: --repeats: 100,000,000 runs of sh-2 would take about"), lines
+    assert all(line.startswith("... ") for line in lines[:-1]), lines  # the progress lines of a non-terminal
+    assert listing(workdir) == before
