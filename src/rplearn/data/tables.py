@@ -232,7 +232,7 @@ def quaternion_norms(q: np.ndarray) -> np.ndarray:
 
 def _norms_of_columns(q: Sequence[np.ndarray]) -> np.ndarray:
     """:func:`quaternion_norms` of the quaternions whose components are the arrays ``q``."""
-    with np.errstate(over="ignore"):  # a corrupt component (1e200): an infinite norm, counted by the callers
+    with np.errstate(over="ignore"):  # a corrupt component (1e200): an infinite norm (checked_pose_arrays refuses it)
         norm = q[0] * q[0]
         for j in range(1, 4):
             norm += q[j] * q[j]
