@@ -99,7 +99,7 @@ REFUSED = {
     "simulate --seed -1": (["simulate", "--seed", "-1", "-o", "s"], "--seed: expected a non-negative integer, got -1"),
     "zero-norm quaternion": (["fit", "zero_q.parquet", "--degree", "3", "-o", "x.json"],
                              "zero_q.parquet: quaternion (rx_qw, rx_qx, rx_qy, rx_qz) has zero norm at row 4"),
-    "-o /proc/x": (["fit", D, "--degree", "3", "-o", "/proc/x"], "/proc/x: cannot create a file in /proc"),
+    "-o /proc/x": (["fit", D, "--degree", "3", "-o", "/proc/x.json"], "/proc/x.json: cannot create a file in /proc"),
     "-o into a missing folder": (["fit", D, "--degree", "3", "-o", "nowhere/x.json"], "nowhere/x.json: cannot write into a non-existent directory"),
     "-o /dev/full": (["fit", D, "--degree", "3", "-o", "/dev/full"], "/dev/full: is not a regular file"),
     "-o an existing folder": (["fit", D, "--degree", "3", "-o", "folder"], "folder: is a directory"),

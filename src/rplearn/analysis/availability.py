@@ -28,6 +28,7 @@ import numpy as np
 import pandas as pd
 
 from rplearn._argtypes import check_types, is_finite_real
+from rplearn._budget import Cost, check_work
 from rplearn.analysis.swarm import SwarmOptions, maximum_spanning_edges, prediction_times, resolve_patterns
 from rplearn.core.availability import link_availability
 from rplearn.core.geometry import distance_m, link_directions
@@ -42,6 +43,20 @@ from rplearn.models.patterns import PatternSet
 DEFAULT_DRAWS = 1000
 #: Values (rows x draws) one block of the Monte Carlo holds at once.
 DRAW_BLOCK_VALUES = 4_000_000
+#: Measured cost of the Monte Carlo (``links --sensitivity -90`` on the smoke flight, 142 times of
+#: 2 drones, 1e4 to 4e5 draws, RPLEARN_THREADS=1, load 6 on 2 cores: 4.4 s to 19.8 s): seconds per
+#: draw of one directed link at one time, and a fixed part [s].
+DRAW_S_PER_LINK_TIME, DRAW_S_FIXED = 1.5e-7, 4.0
+
+
+def draws_cost(n_draws: float, n_coef: int, n_times: int, n_drones: int, n_pairs: int) -> Cost:
+    """What :func:`swarm_availability` takes for ``n_draws`` draws: the draws of the
+    coefficients and level (float64), the connected and path flags of every draw and time, one
+    block of rows, and the time of every directed link at every time per draw."""
+    per_draw = 8.0 * (n_coef + 1) + n_times * (1.0 + n_pairs)
+    links = n_times * n_drones * max(n_drones - 1, 1)
+    return Cost(memory_bytes=2e8 + n_draws * per_draw + 16.0 * DRAW_BLOCK_VALUES,
+                seconds=DRAW_S_FIXED + DRAW_S_PER_LINK_TIME * n_draws * links)
 
 
 @check_types
@@ -335,8 +350,9 @@ def swarm_availability(
                          param="pairs")
     pairs = np.array([[swarm.drones.index(a), swarm.drones.index(b)] for a, b in availability.pairs], np.intp)
     posterior = _posterior_factor(model, sorted(set(swarm.pattern_index.tolist())))
-    rng = np.random.default_rng(availability.seed)
     n_draws = availability.n_draws
+    check_work("n_draws", n_draws, lambda k: draws_cost(k, posterior.factor.shape[0], swarm.t.size, n, len(pairs)), "draws")
+    rng = np.random.default_rng(availability.seed)
     deltas = posterior.factor @ rng.standard_normal((posterior.factor.shape[1], n_draws))
     deltas = np.vstack([deltas, posterior.level_std_db * rng.standard_normal((1, n_draws))])
     m = swarm.t.size

@@ -107,7 +107,7 @@ class YawOptions:
                              param="tx_power_dbm")
         check_optional_frequency(self.frequency_hz)
         if not (is_finite_real(self.caution_z) and self.caution_z >= 0):
-            raise InputError(f"caution_z: expected a non-negative number, got {self.caution_z!r}", param="caution_z")
+            raise InputError(f"caution_z: expected a finite number >= 0, got {self.caution_z!r}", param="caution_z")
 
 
 @check_types

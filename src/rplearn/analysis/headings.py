@@ -258,7 +258,7 @@ def best_yaw(
     tx_power_dbm, frequency_hz, caution_z = options.tx_power_dbm, options.frequency_hz, options.caution_z
     require_patterns(model, "choosing a heading")
     if not (np.isfinite(caution_z) and caution_z >= 0):
-        raise InputError(f"caution_z: expected a non-negative number, got {caution_z!r}", param="caution_z")
+        raise InputError(f"caution_z: expected a finite number >= 0, got {caution_z!r}", param="caution_z")
     if turn not in ("tx", "rx", "both"):
         raise InputError(f"turn: expected 'tx', 'rx' or 'both', got {turn!r}", param="turn")
     grid = yaw_grid_deg(step_deg)

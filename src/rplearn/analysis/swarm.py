@@ -284,11 +284,16 @@ def predict_swarm(
     patterns = resolve_patterns(drones, model.nodes, pattern_of)
     t = prediction_times(tracks, step_s, times_s, model.covariance is not None)
     swarm = _swarm_poses(tracks, drones, t, max_gap_s)
+    span = (min(float(tr.t_s[0]) for tr in tracks.values()), max(float(tr.t_s[-1]) for tr in tracks.values()))
     del tracks  # memory: the poses at the prediction times are all that is needed now
     present = swarm.present
     for k, d in enumerate(drones):  # a two-ray model predicts nothing at or below its ground
         model.path_loss.check_heights(swarm.position_m[k][present[:, k], 2], f"{source}: drone {d}", "z [m]")
     n_present = present.sum(axis=1)
+    if not np.any(n_present >= 2) and times_s is not None:  # the times asked, not the logs or their gaps
+        raise InputError(f"times_s: no time asked has two drones with a pose ({len(t):,} time(s), {float(np.min(t)):g} .. "
+                         f"{float(np.max(t)):g} s); the pose logs of {source} span {span[0]:g} .. {span[1]:g} s",
+                         param="times_s")
     if not np.any(n_present >= 2):
         raise InputError(
             f"{source}: no time at which two drones both have a pose; check the logs' spans, or allow longer "

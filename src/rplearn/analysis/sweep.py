@@ -122,6 +122,16 @@ def sweep_cost(kind: str, orders: Sequence[int], n_samples: int, n_nodes: int, t
     return Cost(memory_bytes=memory + 2e8, seconds=seconds)
 
 
+def order_bounds(orders: Sequence[int]) -> tuple[int, int]:
+    """The smallest and largest of ``orders``: a range's at once (``sweep --orders 1..100000000``
+    is one, never made into a list: the samples refuse its largest order before any pass over
+    it), else by one pass."""
+    if isinstance(orders, range) and len(orders):
+        return (orders[0], orders[-1]) if orders.step > 0 else (orders[-1], orders[0])
+    values = [int(o) for o in orders]
+    return min(values), max(values)
+
+
 def _identifiable(kind: str, orders: Sequence[int], n_samples: int, n_nodes: int) -> list[int]:
     """The orders the samples can identify (all of them when none can: :func:`check_sweep` says why)."""
     kept = []
@@ -137,7 +147,7 @@ def _identifiable(kind: str, orders: Sequence[int], n_samples: int, n_nodes: int
 def check_sweep(kind: str, orders: Sequence[int], n_samples: int, n_nodes: int) -> None:
     """Refuse, before any fit, orders whose largest the samples cannot identify or that would
     not fit in the work budget (:mod:`rplearn._budget`), naming the largest order that does."""
-    ordered = sorted({int(o) for o in orders})
+    ordered = orders if isinstance(orders, range) and orders.step > 0 else sorted({int(o) for o in orders})
     try:
         check_model_size(ModelSpec(kind, ordered[-1]), n_samples, n_nodes)
     except InputError as exc:
@@ -161,7 +171,7 @@ def order_sweep(
     consecutive orders, and then leaves out the orders the samples cannot identify (None: run
     every order, and refuse one the samples cannot identify).
     """
-    if not orders or min(int(o) for o in orders) < 1:
+    if not orders or order_bounds(orders)[0] < 1:
         raise InputError(f"orders: expected positive orders, got {list(orders)!r}", param="orders")
     if stop_after_rises is not None:  # a sweep that stops by itself ends where the samples end
         orders = _identifiable(kind, orders, len(learn), len(learn.nodes))

@@ -10,10 +10,11 @@ from __future__ import annotations
 import functools
 import inspect
 import logging
+import math
 import os
 import re
 import signal
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import Any
 
 import typer
@@ -56,6 +57,7 @@ PARAM_FLAGS: dict[str, str] = {
     "start_yaw_deg": "--yaw DRONE=DEG", "fixed": "--fixed", "turn": "--turn", "units": "--units",
     "test_units": "--test-units", "learn_units": "--learn-units", "order": "--order", "ridge": "--ridge",
     "sigma_rad2": "--sigma", "grid": "--grid", "gauge_node": "--gauge-node", "gauge_dbi": "--gauge-dbi", "prior": "--prior NODE=MODEL.json",
+    "caution_z": "--caution", "n_draws": "--draws",
     "models": "--models", "paper_models": "--paper-models", "repeats": "--repeats", "orders": "--orders", "n_neighbors": "--order",
     "ground_level_m": "--ground-level", "relative_permittivity": "--permittivity",
     "path_loss": "--path-loss", "link_offsets": "--link-offsets",
@@ -285,6 +287,8 @@ def xyz(text: str, flag: str) -> list[float]:
         v = []
     if len(v) != 3:
         raise InputError(f"{flag}: expected x,y,z in metres, got {text!r}")
+    if not all(math.isfinite(c) for c in v):  # nan/inf parse as floats: no place
+        raise InputError(f"{flag}: expected three finite numbers x,y,z in metres, got {text!r}")
     return v
 
 
@@ -298,17 +302,18 @@ def link(text: str | None) -> tuple[str, str] | None:
     return parts[0], parts[1]
 
 
-def orders(text: str) -> list[int]:
-    """Model orders ``A..B`` or ``3,5,8`` of ``--orders``."""
+def orders(text: str) -> Sequence[int]:
+    """Model orders ``A..B`` (a ``range``, never made into a list: ``1..100000000`` is refused by
+    the samples, not by listing it) or ``3,5,8`` of ``--orders``."""
     try:
         if ".." in text:
             a, b = text.split("..", 1)
-            found = list(range(int(a), int(b) + 1))
+            found: Sequence[int] = range(int(a), int(b) + 1)
         else:
             found = [int(v) for v in text.split(",")]
     except ValueError:
         raise InputError(f"--orders: expected A..B or a comma list, got {text!r}") from None
-    if not found or min(found) < 1:
+    if not found or (found[0] if isinstance(found, range) else min(found)) < 1:
         raise InputError(f"--orders: expected positive orders, A..B with A <= B, got {text!r}")
     return found
 

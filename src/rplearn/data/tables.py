@@ -30,7 +30,7 @@ import pandas as pd
 
 from rplearn._argtypes import check_types
 from rplearn.core.geometry import Directions, distance_m, link_directions
-from rplearn.core.link import observed_joint_gain_db
+from rplearn.core.link import check_far_field, observed_joint_gain_db
 from rplearn.core.plausible import PLAUSIBLE, check_frequency_hz, check_plausible
 from rplearn.errors import InputError
 
@@ -232,9 +232,10 @@ def quaternion_norms(q: np.ndarray) -> np.ndarray:
 
 def _norms_of_columns(q: Sequence[np.ndarray]) -> np.ndarray:
     """:func:`quaternion_norms` of the quaternions whose components are the arrays ``q``."""
-    norm = q[0] * q[0]
-    for j in range(1, 4):
-        norm += q[j] * q[j]
+    with np.errstate(over="ignore"):  # a corrupt component (1e200): an infinite norm (checked_pose_arrays refuses it)
+        norm = q[0] * q[0]
+        for j in range(1, 4):
+            norm += q[j] * q[j]
     return np.sqrt(norm, out=norm)
 
 
@@ -264,9 +265,11 @@ def checked_pose_arrays(df: pd.DataFrame, source: str = "pose log") -> CheckedPo
     take = slice(None) if in_order else order
     components = [df[c].to_numpy(np.float64)[take] for c in ("qw", "qx", "qy", "qz")]  # no copy when in order
     norm = _norms_of_columns(components)
-    if np.any(norm < 1e-6):
-        row = int(np.flatnonzero(norm < 1e-6)[0]) if in_order else int(order[np.flatnonzero(norm < 1e-6)[0]])
-        raise InputError(f"{source}: quaternion (qw, qx, qy, qz) has zero norm at row {row}")
+    bad = (norm < 1e-6) | np.isinf(norm)  # no attitude: zero, or a corrupt component whose square overflows
+    if np.any(bad):
+        row = int(np.flatnonzero(bad)[0]) if in_order else int(order[np.flatnonzero(bad)[0]])
+        what = "zero norm" if norm[np.flatnonzero(bad)[0]] < 1e-6 else "a norm beyond any float (a corrupt value)"
+        raise InputError(f"{source}: quaternion (qw, qx, qy, qz) has {what} at row {row}")
     non_unit = count_non_unit_quaternions(norm) + int(df.attrs.get(NON_UNIT_QUATERNION_ATTR, 0))
     q = np.empty((t.size, 4))
     for j, component in enumerate(components):
@@ -453,7 +456,13 @@ def validate_matched(df: pd.DataFrame, source: str = "dataset", require_rssi: bo
             f"{source}: column rssi_dbm holds {int(sentinel.sum())} sentinel value(s) meaning 'no measurement' "
             f"(first {rssi[row]:g} dBm at row {row}); synchronising the logs (synchronise) drops and counts them"
         )
+    for c in ("tx_x", "tx_y", "tx_z", "rx_x", "rx_y", "rx_z"):  # as a pose log's: no place, distances overflow
+        check_plausible("coordinate_m", df[c].to_numpy(np.float64), source, field=c)
     _check_link_columns(df[~outage] if outage.any() else df, source, with_rssi=require_rssi)
+    same = node_ids(df["tx"]) == node_ids(df["rx"])  # no link from a node to itself (sync drops them: tx_equals_rx)
+    if np.any(same):
+        row = int(np.flatnonzero(same)[0])
+        raise InputError(f"{source}: tx equals rx ({df['tx'].iloc[row]}) at row {row} ({int(same.sum())} row(s))")
     if require_rssi:
         _refuse_repeated_rows(df, source)
     check_unit_labels(df, source)
@@ -574,6 +583,7 @@ def link_samples(
         rssi = np.full(len(df), np.nan)
     if not require_rssi:
         rssi = np.where(np.isin(rssi, SENTINEL_RSSI_DBM), np.nan, rssi)
+    check_far_field(dist, df["frequency_hz"].to_numpy(np.float64), f"{source}: tx/rx positions")  # named by the file
     gain = observed_joint_gain_db(
         rssi,
         df["tx_power_dbm"].to_numpy(np.float64),

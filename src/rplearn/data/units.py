@@ -351,6 +351,11 @@ def split_units(
     if "unit" not in df.columns:
         raise InputError(f"{source}: needs a 'unit' column to split learning from testing samples")
     available = dataset_units(df)
+    for param, given in (("learn_units", learn_units), ("test_units", test_units)):  # before any learning
+        unknown = [str(u) for u in given or () if str(u) not in available]
+        if unknown:
+            raise InputError(f"{source}: unknown unit(s) {unit_list(unknown)}; the dataset has {unit_list(available)}",
+                             param=param)
     test = [str(u) for u in test_units] if test_units else [u for u in available if is_test_unit(u)]
     learn = [str(u) for u in learn_units] if learn_units else [u for u in available if u not in test]
     if not test or not learn:

@@ -72,6 +72,27 @@ def file_damage(path: str, info: dict[str, Any]) -> list[str]:
     if info.get("repeated_messages"):
         lines.append(f"{path}: {info['repeated_messages']:,} message(s) repeat an earlier one exactly (same receive "
                      "time and fields: part of the log is in the file twice); each was read once")
+    lines += [f"{path}: {text}" for text in info.get("signal_row_problems") or ()]
+    return lines
+
+
+def signal_row_problems(signal: pd.DataFrame) -> list[str]:
+    """What a signal table read forgivingly (:func:`rplearn.io.inspect.inspect_logs`) holds that
+    ``sync`` cannot match, one line each: no rows; rows whose time, transmit power or carrier
+    is not a finite number (``sync`` drops them: ``invalid_value``); rows whose transmitter is
+    their receiver (``tx_equals_rx``)."""
+    if signal.empty:
+        return ["no signal rows (a header without samples)"]
+    lines = []
+    for col in ("t", "tx_power_dbm", "frequency_hz"):
+        bad = ~np.isfinite(pd.to_numeric(signal[col], errors="coerce").to_numpy(np.float64))
+        if bad.any():
+            lines.append(f"column {col}: {int(bad.sum()):,} row(s) with a non-numeric, NaN or infinite value (first at "
+                         f"row {int(np.flatnonzero(bad)[0])}); sync drops them (invalid_value)")
+    same = (signal["tx"].astype(str) == signal["rx"].astype(str)).to_numpy()
+    if same.any():
+        lines.append(f"columns tx, rx: {int(same.sum()):,} row(s) from a node to itself (first at row "
+                     f"{int(np.flatnonzero(same)[0])}); sync drops them (tx_equals_rx)")
     return lines
 
 #: The columns that make two rows of different files one reading (the canonical ones: a
@@ -283,4 +304,5 @@ def across_files(report: Any, poses: list[pd.DataFrame], canonical: list[pd.Data
     return poses, signals
 
 
-__all__ = ["across_files", "drop_repeated_across", "file_damage", "fix_noise_m", "one_station", "refuse_overlaps"]
+__all__ = ["across_files", "drop_repeated_across", "file_damage", "fix_noise_m", "one_station", "refuse_overlaps",
+           "signal_row_problems"]

@@ -213,6 +213,30 @@ def check_table_path(path: str) -> str:
     raise InputError(f"{path}: unknown table format; name it .csv, .csv.gz, .parquet or .pq")
 
 
+#: What each kind of output file is named: its suffixes, and what it is (for the refusal).
+OUTPUT_KINDS: dict[str, tuple[tuple[str, ...], str]] = {
+    "model": ((".json",), "a model file (JSON)"),
+    "png": ((".png",), "a PNG image"),
+    "grid": ((".csv",), "a grid CSV"),
+    "html": ((".html", ".htm"), "an HTML page"),
+}
+
+
+@check_types
+def check_output_kind(path: str, kind: str, param: str = "output") -> str:
+    """Refuse, before any work, an output whose name says another kind of file than the one
+    written (:data:`OUTPUT_KINDS`: a model written as ``pose_log.parquet``, a PNG as ``x.csv``:
+    a file another command would then read as what its name says), or an empty name (a fit that
+    saved nothing, with exit 0); ``param`` names the parameter that gave it."""
+    suffixes, what = OUTPUT_KINDS[kind]
+    if not str(path).strip():
+        raise InputError(f"{param}: an empty file name; give the file to write ({what})", param=param)
+    if not str(path).lower().endswith(suffixes):
+        raise InputError(f"{path}: {what} is written here, but the name says otherwise; name it "
+                         f"{' or '.join(suffixes)}", param=param)
+    return path
+
+
 @check_types
 def check_output_path(path: str, inputs: Iterable[str | None] = (), param: str = "output") -> str:
     """Refuse an output path before any work: one of the files of the ``inputs`` (path specs:
@@ -305,8 +329,12 @@ def read_dataset(path: str, require_rssi: bool = True) -> pd.DataFrame:
             refuse_copies([source_copies(part.path, chunks) for part, chunks in zip(parts, frames, strict=True)])
         flat = [f for each in frames for f in each]
         table = pd.concat(flat, ignore_index=True) if len(flat) > 1 else flat[0]
-        return validate_matched(table, path, require_rssi=require_rssi)
-    return validate_matched(read_table(path), path, require_rssi=require_rssi)
+    else:
+        table = read_table(path)
+    checked = validate_matched(table, path, require_rssi=require_rssi)
+    if checked.empty:  # a header without samples: nothing to learn, score, predict or draw
+        raise InputError(f"{path}: the dataset has no rows (its columns, no samples)")
+    return checked
 
 
 @check_types

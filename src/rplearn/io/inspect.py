@@ -47,7 +47,7 @@ from rplearn.data.readings import REPEAT_FRACTION, duplicate_rows, repeated_read
 from rplearn.data.sync import DEFAULT_SENTINEL_RSSI_DBM, PLAUSIBLE_RSSI_DBM
 from rplearn.data.tables import QUATERNION_NORM_TOLERANCE, non_unit_quaternion_rows, outage_mask
 from rplearn.errors import RplearnError
-from rplearn.io.damage import across_files, file_damage
+from rplearn.io.damage import across_files, file_damage, signal_row_problems
 from rplearn.io.options import ReaderOptions
 
 #: A pose step is a pause only if it spans more than this many median signal intervals.
@@ -383,7 +383,9 @@ def _read_one(path: str, options: ReaderOptions) -> tuple[pd.DataFrame | None, p
         sig, meta = _tables.read_signal_table(
             path, columns=options.columns, rx=(options.receivers or {}).get(path),
             tx_power_dbm=0.0, frequency_hz=1.0, allow_unsorted=True)  # 1 Hz: a placeholder; backward steps reported below
-        return None, sig, {"format": meta["format"], "kind": "signal", "frequency_hz": _frequency_hz(sig)}, {}, None
+        facts = {"format": meta["format"], "kind": "signal", "frequency_hz": _frequency_hz(sig)}
+        rows = signal_row_problems(sig)  # said only when there are some (JSON: the key only then)
+        return None, sig, {**facts, **({"signal_row_problems": rows} if rows else {})}, {}, None
     logs, meta = read_logs(path, _forgiving_options(path, kind, options))
     f = meta["files"][0]
     info = {"format": f.get("format", kind), "kind": f.get("kind")}

@@ -151,6 +151,8 @@ def read_model_file(path: str | os.PathLike[str]) -> tuple[str, dict[str, Any]]:
         if hint:  # a dataset or a raw log: say what it is, not how its bytes fail to decode
             raise ModelFileError(f"{name}: {hint}") from None
         raise ModelFileError(f"{name}: not a valid JSON model file (truncated or corrupt: {exc})") from None
+    except RecursionError:  # json's decoder recurses per nesting level: a file of many '[' is not a model
+        raise ModelFileError(f"{name}: not a valid JSON model file (nested too deeply to be one)") from None
     except OSError as exc:
         raise ModelFileError(f"{name}: cannot read ({exc.strerror})") from None
     if not isinstance(doc, dict) or doc.get("schema") != MODEL_SCHEMA:

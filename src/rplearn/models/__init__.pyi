@@ -34,6 +34,7 @@ from .patterns import PatternSet as PatternSet
 from .predict import DatasetPrediction as DatasetPrediction
 from .predict import FrequencyMismatch as FrequencyMismatch
 from .predict import check_model_band as check_model_band
+from .predict import check_model_nodes as check_model_nodes
 from .predict import distinct_labels as distinct_labels
 from .predict import frequency_mismatch as frequency_mismatch
 from .predict import predict_dataset as predict_dataset

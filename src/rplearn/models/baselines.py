@@ -29,7 +29,7 @@ from rplearn.data.tables import LinkSamples
 from rplearn.errors import IdentifiabilityError, InputError, ModelFileError
 from rplearn.io.modelfile import read_sidecar, write_model_with_sidecar
 from rplearn.models.base import frequency_from_training, learned_frequency_hz
-from rplearn.models.training import TrainingSummary
+from rplearn.models.training import TrainingSummary, training_and_provenance
 
 if TYPE_CHECKING:
     from sklearn.neighbors import KNeighborsRegressor
@@ -216,7 +216,7 @@ class MeanModel(_PerLinkBaseline):
             raise ModelFileError(f"{source}: malformed mean model ({type(exc).__name__}: {exc})") from None
         if not means or not all(np.isfinite(list(means.values()))):
             raise ModelFileError(f"{source}: mean model needs finite means for at least one link")
-        return cls(means, TrainingSummary.from_dict(payload.get("training", {})), dict(payload.get("provenance", {})))
+        return cls(means, *training_and_provenance(payload, source))
 
 
 @check_types
@@ -332,4 +332,4 @@ class KNNModel(_PerLinkBaseline):
             raise ModelFileError(f"{source}: malformed k-NN model ({type(exc).__name__}: {exc})") from None
         if not angles:
             raise ModelFileError(f"{source}: k-NN model holds no link")
-        return cls(k, angles, gains, TrainingSummary.from_dict(payload.get("training", {})), dict(payload.get("provenance", {})))
+        return cls(k, angles, gains, *training_and_provenance(payload, source))

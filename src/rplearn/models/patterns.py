@@ -30,7 +30,7 @@ from rplearn.io.modelfile import jsonable as _jsonable
 from rplearn.io.modelfile import read_model_file, read_sidecar, write_model_with_sidecar
 from rplearn.models.base import frequency_from_training
 from rplearn.models.terms import split_offset_name
-from rplearn.models.training import TrainingSummary
+from rplearn.models.training import TrainingSummary, training_and_provenance
 
 FloatArray = NDArray[np.float64]
 
@@ -41,6 +41,12 @@ if TYPE_CHECKING:
 #: A covariance of more values than this is saved in the model file's binary sidecar, not as
 #: JSON text (the paper's two drones at SH-10, 242 columns, are 58,564 values: inline).
 INLINE_COVARIANCE_VALUES = 250_000
+
+#: The largest magnitude [dB] of a coefficient a model file may hold (patterns and shared
+#: terms): plausible gains span -100..60 dBi (:data:`rplearn.core.plausible.PLAUSIBLE`), a
+#: relative RSSI scale adds a level of a few hundred dB at most, and squares of values near
+#: 1e154 overflow: a file beyond it was edited or written wrong, and is refused on reading.
+COEFFICIENT_LIMIT_DB = 1e6
 
 
 @check_types
@@ -458,14 +464,21 @@ class PatternSet:
                 raise ModelFileError(f"{source}: 'shared' must map names to numbers")
             shared_names = tuple(str(k) for k in shared)
             shared_coef = np.array([float(v) for v in shared.values()], dtype=np.float64)
-        except ModelFileError:
-            raise
+            training, provenance = training_and_provenance(payload, source)
+            gauge = payload.get("gauge", [])
+            if not isinstance(gauge, list):
+                raise ModelFileError(f"{source}: field 'gauge' must be a list, got {type(gauge).__name__}")
+        except ModelFileError as exc:  # named after the file once (the basis's own check does not know it)
+            raise exc if str(exc).startswith(f"{source}:") else ModelFileError(f"{source}: {exc}") from None
         except (KeyError, TypeError, ValueError, InputError) as exc:
             raise ModelFileError(f"{source}: malformed model ({type(exc).__name__}: {exc})") from None
         if coef.shape != (len(nodes), basis.n_coef) or not np.all(np.isfinite(coef)):
             raise ModelFileError(
                 f"{source}: coefficients must be {len(nodes)} finite vectors of {basis.n_coef} values"
             )
+        if np.max(np.abs(coef), initial=0.0) > COEFFICIENT_LIMIT_DB or not np.all(np.abs(shared_coef) <= COEFFICIENT_LIMIT_DB):
+            raise ModelFileError(f"{source}: a coefficient of magnitude {max(np.max(np.abs(coef)), *np.abs(shared_coef)):.3g} dB: "
+                                 f"no gain or level in dB comes near {COEFFICIENT_LIMIT_DB:g} (its predictions would overflow)")
         p = len(nodes) * basis.n_coef + len(shared_names)
         if cov_arr is not None and cov_arr.shape != (p, p):
             raise ModelFileError(f"{source}: covariance must be {p} x {p}")
@@ -480,9 +493,9 @@ class PatternSet:
                 nodes=tuple(nodes),
                 coef=coef,
                 covariance=cov_arr,
-                gauge=list(payload.get("gauge", [])),
-                training=TrainingSummary.from_dict(payload.get("training", {})),
-                provenance=dict(payload.get("provenance", {})),
+                gauge=list(gauge),
+                training=training,
+                provenance=provenance,
                 path_loss=path_loss,
                 shared_names=shared_names,
                 shared_coef=shared_coef,

@@ -85,6 +85,20 @@ def check_model_band(model: Model, frequency_hz: ArrayLike | Mapping[float, int]
 
 
 @check_types
+def check_model_nodes(model: Model, nodes: Sequence[str], where: str, model_name: str | None = None) -> None:
+    """Refuse rows naming a node the pattern model has no pattern of (``nodes``: the rows' node
+    ids), naming ``where`` (the dataset) and the model; a model without per-node patterns (a
+    baseline) is not checked."""
+    known = getattr(model, "nodes", None)
+    if known is None:
+        return
+    unknown = sorted({str(n) for n in nodes} - {str(n) for n in known})
+    if unknown:
+        raise InputError(f"{where}: node(s) {', '.join(unknown)} in columns tx/rx, but {model_name or f'the {model.label} model'} "
+                         f"has patterns of {', '.join(map(str, known))} only")
+
+
+@check_types
 def frequency_mismatch(model: Model, frequency_hz: ArrayLike) -> FrequencyMismatch | None:
     """Rows whose carrier differs from the model's by more than 5 % (None: all agree, or the
     model does not state its frequency)."""
@@ -161,6 +175,7 @@ def predict_dataset(model: Model, dataset: pd.DataFrame, source: str = "dataset"
         File name for messages.
     """
     samples = link_samples(dataset, source, require_rssi=False)
+    check_model_nodes(model, samples.nodes, source)
     if samples.frequency_hz is not None:
         check_model_band(model, samples.frequency_hz, source)
     basis = getattr(model, "basis", None)
@@ -179,6 +194,7 @@ def _predict_dataset(model: Model, dataset: pd.DataFrame, samples: Any) -> Datas
         table["tx_power_dbm"].to_numpy(np.float64), gain, samples.distance_m, table["frequency_hz"].to_numpy(np.float64)
     )
     std = model.predict_gain_std(samples)
+    residual_db = 0.0
     if std is not None:
         # one packet's noise about its flight's level (an automatic fit over flights), else the
         # training residual; unknown (None) in a hand-made file: the spread is then NaN
@@ -193,6 +209,9 @@ def _predict_dataset(model: Model, dataset: pd.DataFrame, samples: Any) -> Datas
     rmse = float(np.sqrt(np.mean((gain[measured] - samples.joint_gain_db[measured]) ** 2))) if measured.any() else float("nan")
     mismatch = frequency_mismatch(model, table["frequency_hz"].to_numpy(np.float64))
     notes = unlearned_directions(model, samples)
+    if "rssi_pred_std_db" in table.columns and not np.isfinite(residual_db):
+        notes.append("rssi_pred_std_db is NaN in every row: the model file states no training residual "
+                     "(training.rmse_db or noise_std_db), so one packet's spread is unknown; gain_pred_std_db holds")
     if not predicted.all():
         notes.append(f"{int((~predicted).sum()):,} of {len(gain):,} rows have no prediction (NaN): an antenna at or "
                      "below the two-ray ground level of the model; they are left out of the RMSE")

@@ -196,8 +196,11 @@ def check_model_size(spec: ModelSpec, n_samples: int, n_nodes: int, source: str 
         why = f"the {n_samples:,} samples of {source} can identify" if limit == n_samples else (
             f"the {MAX_COLUMNS:,} a fit can hold in memory")
         best = _largest_order(spec.kind, limit // max(int(n_nodes), 1))
+        least = ModelSpec(spec.kind, 1)
+        fits = (f"the largest {spec.kind} order that fits is {best}" if best >= 1 else
+                f"no {spec.kind} order fits ({least.label} alone needs {int(n_nodes) * least.n_coef:,})")
         raise InputError(
             f"order {spec.order}: {spec.label} for {n_nodes} antennas has {columns:,} coefficients, more than "
-            f"{why}; the largest {spec.kind} order that fits is {best}",
+            f"{why}; {fits}",
             param="order",
         )

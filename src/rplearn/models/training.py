@@ -21,7 +21,7 @@ from dataclasses import dataclass, field, fields
 from typing import Any
 
 from rplearn._argtypes import check_types
-from rplearn.errors import InputError
+from rplearn.errors import InputError, ModelFileError
 
 _TUPLES = ("gauges", "warnings")
 
@@ -186,4 +186,64 @@ class TrainingSummary(Mapping[str, Any]):
     __hash__ = None  # type: ignore[assignment]  # holds dictionaries
 
 
-__all__ = ["TrainingSummary"]
+#: Entries that predictions read as spreads [dB] (or a factor): when written, a finite number >= 0.
+_SPREADS = ("rmse_db", "noise_std_db", "flight_level_std_db", "new_flight_level_std_db", "misfit_std_db",
+            "variance_inflation")
+
+
+def check_training_entries(training: Any, source: str) -> None:
+    """Refuse entries of a model file's ``training`` object that predictions use and that no fit
+    writes: a spread that is not a finite number >= 0, a coverage grid that is not
+    :data:`~rplearn.core.coverage.COVERAGE_GRID_POINTS` angles in [0, 180] deg (a grid of
+    another length would be read as another grid's points, a null as no coverage).
+
+    Raises
+    ------
+    ModelFileError
+        One line naming ``source`` (the file) and the entry.
+    """
+    import math
+
+    from rplearn.core.coverage import COVERAGE_GRID_POINTS
+
+    if not isinstance(training, Mapping):
+        return  # TrainingSummary.from_dict names it
+    for name in _SPREADS:
+        v = training.get(name)
+        if v is not None and (isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0):
+            raise ModelFileError(f"{source}: training.{name}: expected a finite number >= 0, got {v!r}")
+    grids = training.get("coverage_deg")
+    if grids is not None and not isinstance(grids, Mapping):
+        raise ModelFileError(f"{source}: training.coverage_deg: expected an object of node grids, got {type(grids).__name__}")
+    for node, grid in (grids or {}).items():
+        if not isinstance(grid, list) or len(grid) != COVERAGE_GRID_POINTS:
+            n = f"{len(grid)} entries" if isinstance(grid, list) else type(grid).__name__
+            raise ModelFileError(f"{source}: training.coverage_deg.{node}: expected {COVERAGE_GRID_POINTS} angles, got {n}")
+        bad = next((i for i, a in enumerate(grid)
+                    if isinstance(a, bool) or not isinstance(a, (int, float)) or not 0.0 <= a <= 180.0), None)
+        if bad is not None:
+            raise ModelFileError(f"{source}: training.coverage_deg.{node}: entry {bad} is {grid[bad]!r}, "
+                                 "expected an angle in [0, 180] deg")
+
+
+def training_and_provenance(payload: Mapping[str, Any], source: str) -> tuple[TrainingSummary, dict[str, Any]]:
+    """A model file payload's ``training`` summary (its entries checked,
+    :func:`check_training_entries`) and ``provenance`` object, each optional.
+
+    Raises
+    ------
+    ModelFileError
+        One line naming ``source`` (the file) and the field.
+    """
+    check_training_entries(payload.get("training"), source)
+    provenance = payload.get("provenance", {})
+    if not isinstance(provenance, Mapping):
+        raise ModelFileError(f"{source}: field 'provenance' must be an object, got {type(provenance).__name__}")
+    try:
+        training = TrainingSummary.from_dict(payload.get("training", {}))
+    except InputError as exc:
+        raise ModelFileError(f"{source}: {exc}") from None
+    return training, dict(provenance)
+
+
+__all__ = ["TrainingSummary", "check_training_entries", "training_and_provenance"]

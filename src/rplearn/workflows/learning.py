@@ -40,14 +40,14 @@ from rplearn.data.units import (
     whole_flight_note,
 )
 from rplearn.errors import InputError
-from rplearn.io.files import check_output_path, check_table_path, provenance, read_dataset, table_rows, write_json, write_table
+from rplearn.io.files import check_output_kind, check_output_path, check_table_path, provenance, read_dataset, table_rows, write_json, write_table
 from rplearn.io.partitions import dataset_parts, is_partitioned
 from rplearn.io.resolve import check_outputs
 from rplearn.models.fit import FittedModel, evaluate_models, fit_model, scores_markdown, scores_of_predictions
 from rplearn.models.load import load_model, load_priors
 from rplearn.models.options import FitOptions
 from rplearn.models.patterns import PatternSet
-from rplearn.models.predict import UNCOVERED_DEG, DatasetPrediction, check_model_band, distinct_labels, predict_dataset, uncovered_rows
+from rplearn.models.predict import UNCOVERED_DEG, DatasetPrediction, check_model_band, check_model_nodes, distinct_labels, predict_dataset, uncovered_rows
 from rplearn.models.robust import downweighted_notes, fit_huber
 from rplearn.models.spec import ModelSpec, check_model_size
 from rplearn.models.streamed import checked, fit_patterns_accumulated, weighted_median
@@ -201,8 +201,9 @@ def fit_dataset(
     """
     options = options or FitOptions()
     options.check(spec)
-    if output:
+    if output is not None:
         check_output_path(output, [dataset, *options.prior_files()])
+        check_output_kind(output, "model")
     options = load_priors(options)
     if dask is not None:
         parse_dask(dask)
@@ -432,6 +433,7 @@ def evaluate_model_files(
         choice = evaluation_units(df, units, provs, dataset)
         samples = samples_of(df, choice.units, dataset)
         for model, path in zip(models, model_paths, strict=True):
+            check_model_nodes(model, samples.nodes, dataset, path)
             if samples.frequency_hz is not None:
                 check_model_band(model, samples.frequency_hz, dataset, path)
         rows = evaluate_models(fitted, samples, choice.warnings)
@@ -494,17 +496,20 @@ def sweep_dataset(
     Learning and testing units default to the unit rule (:func:`split_units`); every order
     is learned and tested (no early stop).
     """
-    from rplearn.analysis.sweep import order_sweep, validation_sweep
-    if not orders or min(int(o) for o in orders) < 1:
+    from rplearn.analysis.sweep import order_bounds, order_sweep, validation_sweep
+    if not orders or order_bounds(orders)[0] < 1:
         raise InputError(f"orders: expected positive orders, got {list(orders)!r}", param="orders")
     check_outputs({"output": output, "plot_path": plot_path}, [dataset])
     if output:
         check_table_path(output)
+    if plot_path is not None:
+        check_output_kind(plot_path, "png", "plot_path")
     df, unit_note = time_units(read_dataset(dataset), source=dataset)
     learn, test = split_units(df, learn_units, test_units, dataset)
     ls = samples_of(df, learn, dataset)
     ts = samples_of(df, test, dataset, nodes=ls.nodes)
-    result = order_sweep(ls, ts, kind, [int(o) for o in orders], stop_after_rises=None, progress=progress)
+    orders = orders if isinstance(orders, range) else [int(o) for o in orders]  # a range stays one (order_bounds)
+    result = order_sweep(ls, ts, kind, orders, stop_after_rises=None, progress=progress)
     result.notes = [unit_note] if unit_note else []
     if kind == "sh":
         progress("cross-validating the orders over the learning units")

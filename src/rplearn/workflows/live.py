@@ -52,6 +52,7 @@ from rplearn.core.lsq.selection import at_smoothing_cap
 from rplearn.data.live_sync import LiveMatcher
 from rplearn.data.sync import SyncOptions
 from rplearn.errors import InputError, RplearnError
+from rplearn.io.files import check_output_kind
 from rplearn.io.live_sources import CsvTail, MavlinkSource
 from rplearn.io.options import ReaderOptions
 from rplearn.models.live_stats import MAX_SEGMENTS, LiveStatistics
@@ -167,9 +168,14 @@ class LiveOutcome:
 
 
 @check_types
+def is_csv_source(source: str) -> bool:
+    """Whether ``source`` names a pose and a signal CSV (``POSE.csv,SIGNAL.csv``), not a MAVLink connection."""
+    return "," in source and all(p.lower().endswith(".csv") for p in source.split(","))
+
+
 def open_source(source: str, work_dir: str, reader: ReaderOptions) -> CsvTail | MavlinkSource:
     """``POSE.csv,SIGNAL.csv`` (two canonical CSVs being appended to) or a MAVLink connection."""
-    if "," in source and all(p.lower().endswith(".csv") for p in source.split(",")):
+    if is_csv_source(source):
         pose, signal = source.split(",")
         return CsvTail(pose, signal, reader)
     if reader.tx_power_dbm is None or reader.frequency_hz is None:
@@ -443,9 +449,15 @@ def run_live(
     """
     options = options or LiveOptions()
     check_output(output, [p for p in source.split(",") if os.path.exists(p)])
+    check_output_kind(output, "model")
     for extra in (record, html):
         if extra is not None:
             check_output(extra, [output])
+    if html is not None:
+        check_output_kind(html, "html", "html")
+    if record is not None and is_csv_source(source):  # it was ignored: nothing written, nothing said
+        raise InputError(f"record: {record}: a CSV source is recorded already (its two files); --record keeps a "
+                         "MAVLink stream as a .tlog", param="record")
     work_dir = tempfile.mkdtemp(prefix="rplearn-live-")
     src = open_source(source, work_dir, options.reader)
     session = _Session(options, output, work_dir)

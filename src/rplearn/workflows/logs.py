@@ -24,7 +24,7 @@ from rplearn.data.sync import SyncOptions, SyncSummary, synchronise
 from rplearn.data.tables import MATCHED_COLUMNS, SIGNAL_COLUMNS
 from rplearn.errors import InputError
 from rplearn.io import ReaderOptions, read_logs
-from rplearn.io.files import check_output_path, check_table_path, write_json, write_table, write_table_chunks
+from rplearn.io.files import check_output_kind, check_output_path, check_table_path, write_json, write_table, write_table_chunks
 from rplearn.io.inspect import file_damage
 from rplearn.io.resolve import check_outputs, distinct_inputs
 from rplearn.models.load import load_model
@@ -280,6 +280,8 @@ def swarm_links(
     for path in (output, connectivity_out):
         if path:
             check_table_path(path)
+    if plot_path is not None:
+        check_output_kind(plot_path, "png", "plot_path")
     model = load_model(model_path)
     logs, meta = read_logs(pose_paths, reader_options)
     if logs.pose is None:

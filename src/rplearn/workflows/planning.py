@@ -14,9 +14,10 @@ from rplearn._argtypes import check_types
 from rplearn._budget import Cost, budget, check_work
 from rplearn.analysis.heading_options import YawOptions
 from rplearn.analysis.headings import OrientationResult, best_yaw
+from rplearn.data.phases import CALIBRATION_MIN_DISTANCE_M
 from rplearn.errors import InputError
 from rplearn.io.export import export_grid
-from rplearn.io.files import check_output_path, provenance
+from rplearn.io.files import check_output_kind, check_output_path, provenance
 from rplearn.io.msi import export_msi_files
 from rplearn.models.base import require_patterns
 from rplearn.models.load import load_model
@@ -87,7 +88,15 @@ class CampaignOptions:
         # the unit fields, checked as every unit will be (InputError naming the field)
         TrajectoryUnit(distance_m=self.distance_m, height_m=self.height_m, n_loops=self.n_loops,
                        speed_m_s=self.speed_m_s)
+        if not self.distance_m >= CALIBRATION_MIN_DISTANCE_M:  # the least distance of a calibration flight
+            raise InputError(f"distance_m: expected at least {CALIBRATION_MIN_DISTANCE_M:g} m between the drones, got "
+                             f"{self.distance_m:g} m (closer, a GNSS position's 1-2 m error turns the directions between "
+                             "them by more than 10-20 deg, and the drones may touch)", param="distance_m")
 
+
+#: The least rate of a reference file [Hz]: a row at least every second (a unit turns between its
+#: loops in a few seconds; sparser rows cut the turns, and a loop to a polygon of a few sides).
+MIN_REFERENCE_RATE_HZ = 1.0
 
 #: Measured costs of planning (``trajectory`` at --loops 5 and 50, --rate 10 and 1000 on a loaded
 #: 2-core machine): the plan check's seconds and bytes per loop of the learning units, and per
@@ -130,9 +139,17 @@ def plan_campaign(
     options = CampaignOptions() if campaign is None else campaign
     if not (isinstance(rate_hz, (int, float)) and math.isfinite(rate_hz) and rate_hz > 0):
         raise InputError(f"rate_hz: expected a positive sample rate, got {rate_hz!r}", param="rate_hz")
+    if rate_hz < MIN_REFERENCE_RATE_HZ:
+        raise InputError(f"rate_hz: expected at least {MIN_REFERENCE_RATE_HZ:g} Hz, got {rate_hz:g} Hz: the units turn "
+                         "between loops in a few seconds, and sparser rows cut the turns and the loops short",
+                         param="rate_hz")
     work = budget(out_dir)
     # each alone (the other at most its default), then both: the rate is named for what they need together
     n_loops, usual_rate = options.n_loops, min(rate_hz, 10.0)
+    over = work.refusal(campaign_cost(options, 1, usual_rate))
+    if over is not None:  # not the loops: one loop alone is too long, at this speed
+        raise InputError(f"speed_m_s: at {options.speed_m_s:g} m/s even one loop per unit would take {over}; fly faster",
+                         param="speed_m_s")
     check_work("n_loops", n_loops, lambda n: campaign_cost(options, n, usual_rate), "loops", limits=work)
     for loops in (min(n_loops, 5), n_loops):
         check_work("rate_hz", rate_hz, lambda r: campaign_cost(options, loops, r), "Hz",  # noqa: B023 (used at once)
@@ -164,6 +181,7 @@ def export_model_file(
         raise InputError(f"fmt: expected grid, msi or images, got {fmt!r}", param="fmt")
     if fmt == "grid":
         check_output_path(output, [model_path])
+        check_output_kind(output, "grid")
     elif os.path.exists(output) and not os.path.isdir(output):
         raise InputError(f"{output}: is a file; give a folder for the {fmt} files", param="output")
     model = load_model(model_path)
@@ -238,6 +256,7 @@ def reference_model_file(
         raise InputError(f"mounts: node(s) {', '.join(unknown)} have no pattern; patterns are given for "
                          f"{', '.join(sorted(patterns))}", param="mounts")
     check_output_path(output, list(patterns.values()))
+    check_output_kind(output, "model")
     _precheck_reference_rows(patterns)
     samples = {str(n): read_reference_pattern(path, mounts.get(str(n), (0.0, 0.0, 0.0)), node=str(n))
                for n, path in patterns.items()}
@@ -263,6 +282,9 @@ def draw_pattern_files(
     from rplearn.viz.plot import plot_pattern_maps
 
     check_outputs({"output": output, "spread": spread}, [*model_paths, truth, dataset])
+    for param, path in (("output", output), ("spread", spread)):
+        if path is not None:
+            check_output_kind(path, "png", param)
     models = {}
     for path in model_paths:
         model = load_model(path)

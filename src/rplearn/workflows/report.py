@@ -12,7 +12,9 @@ maps and the 3-D surfaces (faded where the flight never looked). The paper's fix
 
 from __future__ import annotations
 
+import functools
 import os
+import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any
@@ -21,6 +23,7 @@ import numpy as np
 
 from rplearn._argtypes import check_types
 from rplearn._atomic import atomic_open
+from rplearn._budget import Cost, check_work
 from rplearn.analysis.pattern_error import node_directions
 from rplearn.core.metrics import Scores
 from rplearn.data.units import samples_of, select_units, split_units, time_units
@@ -207,12 +210,19 @@ def paper_table(
             if name == "auto":
                 if auto_fit is None:
                     raise InputError("auto: no cross-validated fit available here", param="paper_models")
-                runs = [auto_fit() for _ in range(repeats)]
+                learn_once = auto_fit
             else:
                 spec = ModelSpec.parse(name)
                 how = (options or FitOptions()) if spec.decouples else FitOptions()  # baselines: free space
-                runs = [fit_model(ls, spec, how, provenance=prov) for _ in range(repeats)]
+                learn_once = functools.partial(fit_model, ls, spec, how, provenance=prov)
+            started = time.perf_counter()
+            runs = [learn_once()]
+            once = time.perf_counter() - started  # the runs' cost, measured by the first
+            check_work("repeats", repeats, lambda n: Cost(memory_bytes=0.0, seconds=n * once), f"runs of {name}")  # noqa: B023
+            runs += [learn_once() for _ in range(repeats - 1)]
         except (InputError, IdentifiabilityError) as exc:  # too few samples for this model: the others still go
+            if exc.param == "repeats":  # the work budget refuses the runs: no model is left out for it
+                raise
             notes.append(f"{name.upper()} not learned: {exc}")
             continue
         fitted.append(median_ltd(runs))
@@ -285,19 +295,20 @@ def learn_and_report(
     ts = samples_of(df, test, dataset, nodes=ls.nodes)
     prov = provenance(dataset=dataset, model=model_path or "auto", paper_models=names, test_units=test, repeats=repeats)
     rows = evaluate_models([fitted], ts)
-    os.makedirs(out_dir, exist_ok=True)
-    files: dict[str, str] = {}
-    if not model_path:  # the model reported on, for predict, evaluate, plot
-        files["model"] = os.path.join(out_dir, "model.json")
-        model.save(files["model"])
     paper_rows: list[Scores] = []
     paper_md = ""
-    if names:
+    if names:  # before anything is written: a refusal of its runs (the work budget) leaves no folder behind
         _, paper_rows, paper_notes = paper_table(
             names, ls, ts, prov, repeats, auto_fit=lambda: _default_model(dataset, learn, options)[0],
             options=options, progress=progress)
         notes += paper_notes
         paper_md = scores_markdown(paper_rows)
+    os.makedirs(out_dir, exist_ok=True)
+    files: dict[str, str] = {}
+    if not model_path:  # the model reported on, for predict, evaluate, plot
+        files["model"] = os.path.join(out_dir, "model.json")
+        model.save(files["model"])
+    if names:
         files["table1_md"] = os.path.join(out_dir, "table1.md")
         with atomic_open(files["table1_md"], "w", encoding="utf-8") as fh:
             fh.write(paper_md + "\n")

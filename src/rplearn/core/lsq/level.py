@@ -154,9 +154,10 @@ def shrink_target(
         free = _free_constants(components or [], n_nodes)
         lhs = on_level @ free
         wanted = np.asarray(cval, np.float64) - cmat @ target - on_level @ level
-        if free.shape[1] == cmat.shape[0]:
+        if free.shape[1] == cmat.shape[0] and np.linalg.matrix_rank(lhs) == lhs.shape[0]:
             level = level + free @ np.linalg.solve(lhs, wanted)
-        else:  # not the solver's constraints: the least change of the level that meets them
+        else:  # not the solver's constraints, or ones the level does not reach (a basis that holds no
+            # constant, e.g. BG kernels far narrower than their spacing): the least change that meets them
             level = level + np.linalg.lstsq(on_level, wanted, rcond=None)[0]
     target[cols] += level[:, None] * qz[None, :]
     return target
