@@ -142,6 +142,51 @@ def test_an_error_inside_the_block_settles_the_riding_jobs_and_a_jobs_error_reac
         riding.results()
 
 
+def test_the_riders_finishing_stage_is_queued_behind_the_next_beside_block_once_they_are_done():
+    """``overlapping(jobs, then)``: ``then`` gets the riders' results in order and its jobs run
+    on the workers, queued by the caller's next ``beside`` block (behind that block's own
+    jobs) once every rider is done; ``results`` gives the finishing jobs' results."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    submitted: list[str] = []
+
+    class Recording(ThreadPoolExecutor):
+        def submit(self, fn, /, *args, **kwargs):  # type: ignore[override]
+            submitted.append(getattr(fn, "__name__", "?") if not args else "block")
+            return super().submit(fn, *args, **kwargs)
+
+    runtime = StatisticsRuntime()
+    runtime._pool = Recording(max_workers=2, thread_name_prefix="rplearn-stats")
+
+    def rider() -> int:
+        return 3
+
+    def finish(values: list[int]):
+        def finishing() -> tuple[int, str]:
+            return sum(values), threading.current_thread().name
+        return [finishing]
+
+    def own() -> int:
+        return 7
+
+    with runtime.overlapping([rider, rider], finish) as riding:
+        assert list(runtime.in_order(lambda s: s, range(2))) == [0, 1]
+        while not all(f.done() for f in riding._futures or []):
+            threading.Event().wait(0.001)
+        with runtime.beside([own]) as results:
+            assert results() == [7]
+        [(total, name)] = riding.results()
+    assert submitted == ["block", "block", "rider", "rider", "own", "finishing"]
+    assert total == 6 and name.startswith("rplearn-stats")
+    # no beside block: the finishing stage runs when its results are asked for
+    with runtime.overlapping([rider, rider], finish) as riding:
+        list(runtime.in_order(lambda s: s, range(2)))
+    assert [t for t, _ in riding.results()] == [6]
+    with runtime.overlapping([rider], finish) as riding:  # never queued: both stages computed when asked
+        pass
+    assert [t for t, _ in riding.results()] == [3]
+
+
 def test_jobs_beside_the_caller_run_on_the_workers_and_come_back_in_order():
     """``beside``: the jobs run on the workers while the caller works; their results in the
     jobs' order; an error of a job reaches the caller; the pool is free again afterwards."""
