@@ -142,6 +142,33 @@ def test_an_error_inside_the_block_settles_the_riding_jobs_and_a_jobs_error_reac
         riding.results()
 
 
+def test_a_helping_caller_computes_the_blocks_no_worker_started_from_the_last_back():
+    """``in_order(..., helping=True)``: every block is queued, and the caller computes those no
+    worker has started, from the last back, instead of waiting; the results still come in order."""
+    runtime = StatisticsRuntime()
+    gate = threading.Event()
+    started = [threading.Event(), threading.Event()]
+    order: list[int] = []
+
+    def work(s: int) -> tuple[int, str]:
+        if s < 2:  # the two workers hold the first two blocks until the caller is done with the rest
+            started[s].set()
+            assert gate.wait(5)
+        else:
+            assert all(e.wait(5) for e in started)
+        order.append(s)
+        if s == 2:
+            gate.set()
+        return s, threading.current_thread().name
+
+    out = list(runtime.in_order(work, range(5), helping=True))
+    assert [s for s, _ in out] == [0, 1, 2, 3, 4]
+    assert order[:3] == [4, 3, 2]
+    me = threading.current_thread().name
+    assert [name == me for _, name in out] == [False, False, True, True, True]
+    assert all(name.startswith("rplearn-stats") for _, name in out[:2])
+
+
 def test_the_riders_finishing_stage_is_queued_behind_the_next_beside_block_once_they_are_done():
     """``overlapping(jobs, then)``: ``then`` gets the riders' results in order and its jobs run
     on the workers, queued by the caller's next ``beside`` block (behind that block's own

@@ -244,13 +244,17 @@ class StatisticsRuntime:
         finally:
             lock.release()
 
-    def in_order(self, work: Callable[[Any], T], starts: Iterable[Any], ahead: int | None = None) -> Iterator[T]:
+    def in_order(self, work: Callable[[Any], T], starts: Iterable[Any], ahead: int | None = None,
+                 helping: bool = False) -> Iterator[T]:
         """``work(s)`` for every block start ``s``, yielded in order.
 
         With two or more blocks, the worker threads compute them (``ahead`` at most ahead, by
         default :attr:`ahead`, so memory stays bounded; a caller that keeps every result anyway
         queues them all at once with ``ahead=len(starts)``, so that no worker waits while the
-        caller waits for a long first one), each with one BLAS thread: computing the features is plain
+        caller waits for a long first one). ``helping``: every block queued at once, and the
+        caller, instead of waiting, computes the blocks no worker has started yet, from the last
+        back (three blocks on two workers take one and a half block's time, not two; an error
+        of a later block may then be raised before an earlier one's). Each with one BLAS thread: computing the features is plain
         numpy, which uses one core (and releases the interpreter lock), so two blocks at a time
         use both cores of a 2-core machine, where one block with a 2-thread BLAS leaves one idle
         while the features are computed. The threads are kept between calls, with their block
@@ -261,7 +265,7 @@ class StatisticsRuntime:
         computes its blocks itself, in order, leaving the BLAS threads as they are.
         """
         starts = list(starts)
-        limit = self.ahead if ahead is None else max(int(ahead), 1)
+        limit = len(starts) + 1 if helping else self.ahead if ahead is None else max(int(ahead), 1)  # helping: none popped
         lock = self._lock
         if len(starts) < 2 or not lock.acquire(blocking=False):
             yield from (work(s) for s in starts)
@@ -279,8 +283,15 @@ class StatisticsRuntime:
                     if len(pending) >= limit:
                         yield pending.popleft().result()
                 self._start_riders(pool)  # behind the last block (overlapping)
-                while pending:
-                    yield pending.popleft().result()
+                own: dict[int, T] = {}
+                if helping:  # every block is pending: the caller takes them from the back
+                    for i in range(len(pending) - 1, -1, -1):
+                        if not pending[i].cancel():  # a worker has it (and the ones before)
+                            break
+                        own[i] = work(starts[i])
+                for i in range(len(pending)):
+                    future = pending.popleft()
+                    yield own.pop(i) if i in own else future.result()
         finally:
             for future in pending:  # an error (or a caller that stopped early): drop the rest
                 future.cancel()

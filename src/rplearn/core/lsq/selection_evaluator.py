@@ -186,7 +186,7 @@ class FoldEvaluator:
         if missing:
             n_folds = len(self.folds) if self.cv else 1
             jobs = [functools.partial(self._fold_block, o, k) for o in missing for k in range(n_folds)]
-            built = list(DEFAULT_RUNTIME.in_order(on_one_blas_thread, jobs, ahead=len(jobs)))  # all kept
+            built = list(DEFAULT_RUNTIME.in_order(on_one_blas_thread, jobs, helping=True))  # all kept
             for i, o in enumerate(missing):
                 parts = built[i * n_folds:(i + 1) * n_folds]
                 self._cache[o] = (self._weights(self.make_basis(o)), [b for b, _, _ in parts], [t for _, t, _ in parts],
@@ -231,7 +231,7 @@ class FoldEvaluator:
         tasks = [task for key in keys for task in self._fold_tasks(*key)]
         results: list[tuple[np.ndarray, Any, float]] = []
         held = 0
-        for c, upper, sse in DEFAULT_RUNTIME.in_order(on_one_blas_thread, tasks, ahead=len(tasks)):  # all kept
+        for c, upper, sse in DEFAULT_RUNTIME.in_order(on_one_blas_thread, tasks, helping=True):  # all kept
             held += 0 if upper is None else upper.size * 8
             results.append((c, upper if upper is None or held <= _PENDING_FACTOR_BYTES else _DROPPED, sse))
         folds = len(self.folds)
@@ -297,7 +297,7 @@ class FoldEvaluator:
         jobs = list(extra) + [job for key in keys for job in self._spread_jobs(*key)]
         if not jobs:
             return []
-        results = list(DEFAULT_RUNTIME.in_order(on_one_blas_thread, jobs, ahead=len(jobs)))  # all kept
+        results = list(DEFAULT_RUNTIME.in_order(on_one_blas_thread, jobs, helping=True))  # all kept
         folds = len(self.folds)
         spreads = results[len(extra):]
         for i, key in enumerate(keys):
