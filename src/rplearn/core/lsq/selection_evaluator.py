@@ -21,7 +21,7 @@ from rplearn.core.lsq.penalty import nested_columns, penalty_scale, with_shared_
 from rplearn.core.lsq.runtime import DEFAULT_RUNTIME
 from rplearn.core.lsq.selection_folds import Fold, fold_spread_terms, on_one_blas_thread, sub_block, unit_folds
 from rplearn.core.lsq.selection_result import CurvePoint
-from rplearn.core.lsq.solver_cholesky import factor_solve, spd_factor
+from rplearn.core.lsq.solver_cholesky import factor_solve, spd_buffer, spd_factor, writable_diagonal
 from rplearn.errors import InputError
 
 #: Smoothing values tried, relative to ``mean(diag(X^T X))`` (0: the plain fit with its ridge).
@@ -356,13 +356,14 @@ class FoldEvaluator:
         return out
 
     def _system(self, gram: np.ndarray, w: np.ndarray, weight: float,
-                pin: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
+                pin: tuple[np.ndarray, np.ndarray] | None = None, factored: bool = False) -> np.ndarray:
         """The penalised normal matrix: the ridge on the pattern columns (shared columns are not
         shrunk), the smoothness penalty (``weight``: the smoothing times the penalty's unit),
-        and the weight of pinned shared columns."""
-        a = gram.copy()
+        and the weight of pinned shared columns. ``factored``: laid out for
+        :func:`spd_factor` to factorise in place (:func:`spd_buffer`: one copy, the same values)."""
+        a = spd_buffer(gram) if factored else gram.copy()
         k = gram.shape[0] - self.n_shared
-        diagonal = a.reshape(-1)[:: a.shape[0] + 1]  # a view of the diagonal
+        diagonal = writable_diagonal(a)  # a view of the diagonal
         diagonal[:k] += self.ridge
         diagonal += weight * w
         if pin is not None:
@@ -373,7 +374,7 @@ class FoldEvaluator:
                pin: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, np.ndarray | None]:
         """The penalised solution and the upper Cholesky factor of its system (None when the
         system is not positive definite: least squares then)."""
-        upper = spd_factor(self._system(gram, w, weight, pin), overwrite=True)
+        upper = spd_factor(self._system(gram, w, weight, pin, factored=True), overwrite=True)
         if upper is not None:
             return factor_solve(upper, rhs), upper
         import scipy.linalg
