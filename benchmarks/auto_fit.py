@@ -244,15 +244,18 @@ def timeline(per_unit: dict[str, Any]) -> None:
 
     submit, on_one, select, whole = ThreadPoolExecutor.submit, evaluator.on_one_blas_thread, auto.select_beside, auto.fit_from_statistics
 
+    def where() -> str:
+        return "main" if threading.current_thread() is threading.main_thread() else "w" + threading.current_thread().name[-1]
+
     def logged_submit(self: Any, fn: Any, *args: Any, **kwargs: Any) -> Any:
+        if "_helped" in getattr(fn, "__qualname__", ""):  # a worker's share of a helped pass: its jobs are logged below
+            return submit(self, fn, *args, **kwargs)
         label = "statistics" if args and isinstance(args[0], tuple) else kind(fn, args)
         job = functools.partial(fn, *args, **kwargs)
-        return submit(self, lambda: logged("w" + threading.current_thread().name[-1], label, job))
+        return submit(self, lambda: logged(where(), label, job))
 
-    def caller_job(job: Any) -> Any:
-        if threading.current_thread() is not threading.main_thread():
-            return on_one(job)
-        return logged("main", kind(job, ()), on_one, job)
+    def caller_job(job: Any) -> Any:  # the fold jobs of the evaluator's (helped) passes, on any thread
+        return logged(where(), kind(job, ()), on_one, job)
 
     ThreadPoolExecutor.submit = logged_submit  # type: ignore[method-assign]
     evaluator.on_one_blas_thread = caller_job

@@ -169,6 +169,28 @@ def test_a_helping_caller_computes_the_blocks_no_worker_started_from_the_last_ba
     assert all(name.startswith("rplearn-stats") for _, name in out[:2])
 
 
+def test_a_helped_pass_raises_the_first_failed_blocks_error_and_gives_the_pool_back():
+    """With ``helping``, a failing block's error reaches the caller (the first block's that
+    failed), no block is left running, and the next pass has the workers again."""
+    runtime = StatisticsRuntime()
+
+    def work(s: int) -> int:
+        if s in (3, 5):
+            raise ValueError(f"block {s}")
+        return s
+
+    with pytest.raises(ValueError, match="block [35]"):
+        list(runtime.in_order(work, range(8), helping=True))
+    assert runtime._lock.acquire(blocking=False)  # given back
+    runtime._lock.release()
+    def named(s: int) -> str:
+        threading.Event().wait(0.002)  # long enough for a worker to wake and take some
+        return threading.current_thread().name
+
+    names = list(runtime.in_order(named, range(40), helping=True))
+    assert len(names) == 40 and any(n.startswith("rplearn-stats") for n in names)
+
+
 def test_the_riders_finishing_stage_is_queued_behind_the_next_beside_block_once_they_are_done():
     """``overlapping(jobs, then)``: ``then`` gets the riders' results in order and its jobs run
     on the workers, queued by the caller's next ``beside`` block (behind that block's own

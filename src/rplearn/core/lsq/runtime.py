@@ -251,10 +251,12 @@ class StatisticsRuntime:
         With two or more blocks, the worker threads compute them (``ahead`` at most ahead, by
         default :attr:`ahead`, so memory stays bounded; a caller that keeps every result anyway
         queues them all at once with ``ahead=len(starts)``, so that no worker waits while the
-        caller waits for a long first one). ``helping``: every block queued at once, and the
-        caller, instead of waiting, computes the blocks no worker has started yet, from the last
-        back (three blocks on two workers take one and a half block's time, not two; an error
-        of a later block may then be raised before an earlier one's). Each with one BLAS thread: computing the features is plain
+        caller waits for a long first one). ``helping``: the blocks in one shared queue, which
+        the workers take from the front and the caller, instead of waiting, from the back (three
+        blocks on two workers take one and a half block's time, not two; one pool job per
+        worker, not one per block: a search's many small blocks cost the caller less to hand
+        out); every result is computed before the first is yielded, and the error of the first
+        block that failed is raised (the blocks not started by then are dropped). Each with one BLAS thread: computing the features is plain
         numpy, which uses one core (and releases the interpreter lock), so two blocks at a time
         use both cores of a 2-core machine, where one block with a 2-thread BLAS leaves one idle
         while the features are computed. The threads are kept between calls, with their block
@@ -265,7 +267,7 @@ class StatisticsRuntime:
         computes its blocks itself, in order, leaving the BLAS threads as they are.
         """
         starts = list(starts)
-        limit = len(starts) + 1 if helping else self.ahead if ahead is None else max(int(ahead), 1)  # helping: none popped
+        limit = self.ahead if ahead is None else max(int(ahead), 1)
         lock = self._lock
         if len(starts) < 2 or not lock.acquire(blocking=False):
             yield from (work(s) for s in starts)
@@ -278,20 +280,16 @@ class StatisticsRuntime:
                 self._pool = ThreadPoolExecutor(max_workers=self.workers, thread_name_prefix="rplearn-stats")
             pool = self._pool
             with one_blas_thread():
+                if helping:
+                    yield from self._helped(work, starts, pool)
+                    return
                 for s in starts:
                     pending.append(pool.submit(work, s))
                     if len(pending) >= limit:
                         yield pending.popleft().result()
                 self._start_riders(pool)  # behind the last block (overlapping)
-                own: dict[int, T] = {}
-                if helping:  # every block is pending: the caller takes them from the back
-                    for i in range(len(pending) - 1, -1, -1):
-                        if not pending[i].cancel():  # a worker has it (and the ones before)
-                            break
-                        own[i] = work(starts[i])
-                for i in range(len(pending)):
-                    future = pending.popleft()
-                    yield own.pop(i) if i in own else future.result()
+                while pending:
+                    yield pending.popleft().result()
         finally:
             for future in pending:  # an error (or a caller that stopped early): drop the rest
                 future.cancel()
@@ -302,6 +300,38 @@ class StatisticsRuntime:
                     except Exception:  # noqa: BLE001, S110  (the first error is the one raised)
                         pass
             lock.release()
+
+    def _helped(self, work: Callable[[Any], T], starts: list[Any], pool: ThreadPoolExecutor) -> list[T]:
+        """Every ``work(s)`` of :meth:`in_order` with ``helping``: one queue of the blocks, taken
+        from the front by one pool job per worker and from the back by the caller until it is
+        empty; then the first failed block's error is raised, or the results (in order) returned."""
+        queue: deque[tuple[int, Any]] = deque(enumerate(starts))
+        results: list[Any] = [None] * len(starts)
+        errors: dict[int, BaseException] = {}
+
+        def drain(take: Callable[[], tuple[int, Any]]) -> None:
+            while True:
+                try:
+                    i, s = take()
+                except IndexError:  # empty
+                    return
+                try:
+                    results[i] = work(s)
+                except BaseException as exc:  # noqa: BLE001  (raised below, in the caller)
+                    errors[i] = exc
+                    queue.clear()  # the others' results are not wanted: let no one start another
+
+        runners = [pool.submit(drain, queue.popleft) for _ in range(min(self.workers, len(starts)))]
+        self._start_riders(pool)  # behind the runners: once the queue is empty (overlapping)
+        try:
+            drain(queue.pop)
+        finally:
+            queue.clear()  # (an interrupt of the caller's own block) the workers stop after theirs
+            for runner in runners:
+                runner.result()  # drain catches its blocks' errors: waits for the last running block
+        if errors:
+            raise errors[min(errors)]
+        return results
 
 
 #: The runtime the library's statistics use.
