@@ -191,6 +191,25 @@ def test_a_helped_pass_raises_the_first_failed_blocks_error_and_gives_the_pool_b
     assert len(names) == 40 and any(n.startswith("rplearn-stats") for n in names)
 
 
+def test_a_helped_pass_does_not_wait_for_workers_busy_with_riders():
+    """Riders hold both workers: a helped pass is computed by its caller alone, which does not
+    wait for its workers' shares queued behind the riders (they have taken no block)."""
+    runtime = StatisticsRuntime()
+    gate = threading.Event()
+
+    def rider() -> int:
+        assert gate.wait(10)
+        return 1
+
+    with runtime.overlapping([rider, rider]) as riding:
+        assert list(runtime.in_order(lambda s: s, range(2))) == [0, 1]  # queues the riders
+        me = threading.current_thread().name
+        assert list(runtime.in_order(lambda s: (s, threading.current_thread().name), range(5), helping=True)) == \
+            [(s, me) for s in range(5)]
+        gate.set()
+        assert riding.results() == [1, 1]
+
+
 def test_the_riders_finishing_stage_is_queued_behind_the_next_beside_block_once_they_are_done():
     """``overlapping(jobs, then)``: ``then`` gets the riders' results in order and its jobs run
     on the workers, queued by the caller's next ``beside`` block (behind that block's own

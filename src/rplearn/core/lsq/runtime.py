@@ -328,7 +328,10 @@ class StatisticsRuntime:
         finally:
             queue.clear()  # (an interrupt of the caller's own block) the workers stop after theirs
             for runner in runners:
-                runner.result()  # drain catches its blocks' errors: waits for the last running block
+                # one not started (the workers were busy, e.g. with riders) has taken no block:
+                # dropped, not waited for; drain catches its blocks' errors: waits for the last running block
+                if not runner.cancel():
+                    runner.result()
         if errors:
             raise errors[min(errors)]
         return results
