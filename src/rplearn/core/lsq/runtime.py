@@ -252,10 +252,10 @@ class StatisticsRuntime:
         default :attr:`ahead`, so memory stays bounded; a caller that keeps every result anyway
         queues them all at once with ``ahead=len(starts)``, so that no worker waits while the
         caller waits for a long first one). ``helping``: the blocks in one shared queue, which
-        the workers take from the front and the caller, instead of waiting, from the back (three
-        blocks on two workers take one and a half block's time, not two; one pool job per
-        worker, not one per block: a search's many small blocks cost the caller less to hand
-        out); every result is computed before the first is yielded, and the error of the first
+        the workers take from the front and the caller, instead of only waiting, from the back
+        (:meth:`_helped`: three blocks on two workers take one and a half block's time, not two;
+        one pool job per worker, not one per block: a search's many small blocks cost the caller
+        less to hand out); every result is computed before the first is yielded, and the error of the first
         block that failed is raised (the blocks not started by then are dropped). Each with one BLAS thread: computing the features is plain
         numpy, which uses one core (and releases the interpreter lock), so two blocks at a time
         use both cores of a 2-core machine, where one block with a 2-thread BLAS leaves one idle
@@ -303,18 +303,24 @@ class StatisticsRuntime:
 
     def _helped(self, work: Callable[[Any], T], starts: list[Any], pool: ThreadPoolExecutor) -> list[T]:
         """Every ``work(s)`` of :meth:`in_order` with ``helping``: one queue of the blocks, taken
-        from the front by one pool job per worker and from the back by the caller until it is
-        empty; then the first failed block's error is raised, or the results (in order) returned."""
+        from the front by one pool job per worker; the caller takes from the back the blocks
+        past a multiple of the workers (one of three on two workers: no worker then idles
+        through the last block, and the caller's thread competes for a core for one block
+        only), and more while a worker's job has not started (the workers busy, e.g. with
+        riders). Then the first failed block's error is raised, or the results (in
+        order) returned."""
         queue: deque[tuple[int, Any]] = deque(enumerate(starts))
         results: list[Any] = [None] * len(starts)
         errors: dict[int, BaseException] = {}
 
-        def drain(take: Callable[[], tuple[int, Any]]) -> None:
-            while True:
+        def drain(take: Callable[[], tuple[int, Any]], most: int | None = None) -> None:
+            done = 0
+            while most is None or done < most:
                 try:
                     i, s = take()
                 except IndexError:  # empty
                     return
+                done += 1
                 try:
                     results[i] = work(s)
                 except BaseException as exc:  # noqa: BLE001  (raised below, in the caller)
@@ -324,14 +330,21 @@ class StatisticsRuntime:
         runners = [pool.submit(drain, queue.popleft) for _ in range(min(self.workers, len(starts)))]
         self._start_riders(pool)  # behind the runners: once the queue is empty (overlapping)
         try:
-            drain(queue.pop)
-        finally:
-            queue.clear()  # (an interrupt of the caller's own block) the workers stop after theirs
+            drain(queue.pop, len(starts) % max(self.workers, 1))
+            # while a worker's job has not started (the workers busy, e.g. with riders, or not yet
+            # awake on a loaded machine) the caller takes one more; a job never started has taken
+            # no block: dropped, not waited for
+            while queue and not all(runner.running() or runner.done() for runner in runners):
+                drain(queue.pop, 1)
             for runner in runners:
-                # one not started (the workers were busy, e.g. with riders) has taken no block:
-                # dropped, not waited for; drain catches its blocks' errors: waits for the last running block
-                if not runner.cancel():
-                    runner.result()
+                runner.cancel()
+        except BaseException:
+            queue.clear()  # (an interrupt of the caller's own block) the workers stop after theirs
+            raise
+        finally:
+            for runner in runners:
+                if not runner.cancelled():
+                    runner.result()  # drain catches its blocks' errors: waits until the queue is done
         if errors:
             raise errors[min(errors)]
         return results
