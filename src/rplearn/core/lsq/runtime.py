@@ -71,6 +71,10 @@ class Overlapped(Generic[T]):
             return
         self._then_futures = [pool.submit(job) for job in self._then([f.result() for f in futures])]
 
+    def busy(self) -> bool:
+        """Whether jobs of these riders are queued on the workers and not all done."""
+        return any(not f.done() for f in [*(self._futures or ()), *(self._then_futures or ())])
+
     def _first(self) -> list[T]:
         if self._futures is not None:
             return [f.result() for f in self._futures]
@@ -252,10 +256,10 @@ class StatisticsRuntime:
         default :attr:`ahead`, so memory stays bounded; a caller that keeps every result anyway
         queues them all at once with ``ahead=len(starts)``, so that no worker waits while the
         caller waits for a long first one). ``helping``: the blocks in one shared queue, which
-        the workers take from the front and the caller, instead of only waiting, from the back
-        (:meth:`_helped`: three blocks on two workers take one and a half block's time, not two;
-        one pool job per worker, not one per block: a search's many small blocks cost the caller
-        less to hand out); every result is computed before the first is yielded, and the error of the first
+        the workers take from the front and the caller, instead of waiting, from the back while
+        this thread's riders keep the workers busy (:meth:`_helped`; one pool job per worker,
+        not one per block: a search's many small blocks cost the caller less to hand out);
+        every result is computed before the first is yielded, and the error of the first
         block that failed is raised (the blocks not started by then are dropped). Each with one BLAS thread: computing the features is plain
         numpy, which uses one core (and releases the interpreter lock), so two blocks at a time
         use both cores of a 2-core machine, where one block with a 2-thread BLAS leaves one idle
@@ -303,41 +307,37 @@ class StatisticsRuntime:
 
     def _helped(self, work: Callable[[Any], T], starts: list[Any], pool: ThreadPoolExecutor) -> list[T]:
         """Every ``work(s)`` of :meth:`in_order` with ``helping``: one queue of the blocks, taken
-        from the front by one pool job per worker; the caller takes from the back the blocks
-        past a multiple of the workers (one of three on two workers: no worker then idles
-        through the last block, and the caller's thread competes for a core for one block
-        only), and more while a worker's job has not started (the workers busy, e.g. with
-        riders). Then the first failed block's error is raised, or the results (in
-        order) returned."""
+        from the front by one pool job per worker (not one job per block: a search's many small
+        blocks cost less to hand out); the caller takes them from the back, until none is left,
+        only while this thread's riders keep the workers busy (:meth:`overlapping`: the workers'
+        jobs wait behind them; a third thread on two cores otherwise costs more CPU time than the
+        tail of an odd count of blocks it would save). Then the first failed block's error is
+        raised, or the results (in order) returned."""
         queue: deque[tuple[int, Any]] = deque(enumerate(starts))
         results: list[Any] = [None] * len(starts)
         errors: dict[int, BaseException] = {}
 
-        def drain(take: Callable[[], tuple[int, Any]], most: int | None = None) -> None:
-            done = 0
-            while most is None or done < most:
+        def drain(take: Callable[[], tuple[int, Any]]) -> None:
+            while True:
                 try:
                     i, s = take()
                 except IndexError:  # empty
                     return
-                done += 1
                 try:
                     results[i] = work(s)
                 except BaseException as exc:  # noqa: BLE001  (raised below, in the caller)
                     errors[i] = exc
                     queue.clear()  # the others' results are not wanted: let no one start another
 
+        riders = getattr(self._riders, "pending", None)
+        busy = riders is not None and riders.busy()
         runners = [pool.submit(drain, queue.popleft) for _ in range(min(self.workers, len(starts)))]
         self._start_riders(pool)  # behind the runners: once the queue is empty (overlapping)
         try:
-            drain(queue.pop, len(starts) % max(self.workers, 1))
-            # while a worker's job has not started (the workers busy, e.g. with riders, or not yet
-            # awake on a loaded machine) the caller takes one more; a job never started has taken
-            # no block: dropped, not waited for
-            while queue and not all(runner.running() or runner.done() for runner in runners):
-                drain(queue.pop, 1)
-            for runner in runners:
-                runner.cancel()
+            if busy:
+                drain(queue.pop)
+                for runner in runners:  # one not started has taken no block: dropped, not waited for
+                    runner.cancel()
         except BaseException:
             queue.clear()  # (an interrupt of the caller's own block) the workers stop after theirs
             raise
