@@ -142,6 +142,106 @@ def test_an_error_inside_the_block_settles_the_riding_jobs_and_a_jobs_error_reac
         riding.results()
 
 
+def test_a_helped_pass_runs_on_the_workers_when_they_are_free():
+    """``in_order(..., helping=True)`` with the workers free: the blocks run on the workers (two
+    pool jobs take them from one queue), the caller only waits; the results come in order."""
+    runtime = StatisticsRuntime()
+
+    def work(s: int) -> tuple[int, str]:
+        threading.Event().wait(0.001)
+        return s, threading.current_thread().name
+
+    out = list(runtime.in_order(work, range(9), helping=True))
+    assert [s for s, _ in out] == list(range(9))
+    assert all(name.startswith("rplearn-stats") for _, name in out)
+
+
+def test_a_helped_pass_raises_the_first_failed_blocks_error_and_gives_the_pool_back():
+    """With ``helping``, a failing block's error reaches the caller (the first block's that
+    failed), no block is left running, and the next pass has the workers again."""
+    runtime = StatisticsRuntime()
+
+    def work(s: int) -> int:
+        if s in (3, 5):
+            raise ValueError(f"block {s}")
+        return s
+
+    with pytest.raises(ValueError, match="block [35]"):
+        list(runtime.in_order(work, range(8), helping=True))
+    assert runtime._lock.acquire(blocking=False)  # given back
+    runtime._lock.release()
+    def named(s: int) -> str:
+        threading.Event().wait(0.002)  # long enough for a worker to wake and take some
+        return threading.current_thread().name
+
+    names = list(runtime.in_order(named, range(40), helping=True))
+    assert len(names) == 40 and any(n.startswith("rplearn-stats") for n in names)
+
+
+def test_a_helped_pass_does_not_wait_for_workers_busy_with_riders():
+    """Riders hold both workers: a helped pass is computed by its caller alone, which does not
+    wait for its workers' shares queued behind the riders (they have taken no block)."""
+    runtime = StatisticsRuntime()
+    gate = threading.Event()
+
+    def rider() -> int:
+        assert gate.wait(10)
+        return 1
+
+    with runtime.overlapping([rider, rider]) as riding:
+        assert list(runtime.in_order(lambda s: s, range(2))) == [0, 1]  # queues the riders
+        me = threading.current_thread().name
+        assert list(runtime.in_order(lambda s: (s, threading.current_thread().name), range(5), helping=True)) == \
+            [(s, me) for s in range(5)]
+        gate.set()
+        assert riding.results() == [1, 1]
+
+
+def test_the_riders_finishing_stage_is_queued_behind_the_next_beside_block_once_they_are_done():
+    """``overlapping(jobs, then)``: ``then`` gets the riders' results in order and its jobs run
+    on the workers, queued by the caller's next ``beside`` block (behind that block's own
+    jobs) once every rider is done; ``results`` gives the finishing jobs' results."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    submitted: list[str] = []
+
+    class Recording(ThreadPoolExecutor):
+        def submit(self, fn, /, *args, **kwargs):  # type: ignore[override]
+            submitted.append(getattr(fn, "__name__", "?") if not args else "block")
+            return super().submit(fn, *args, **kwargs)
+
+    runtime = StatisticsRuntime()
+    runtime._pool = Recording(max_workers=2, thread_name_prefix="rplearn-stats")
+
+    def rider() -> int:
+        return 3
+
+    def finish(values: list[int]):
+        def finishing() -> tuple[int, str]:
+            return sum(values), threading.current_thread().name
+        return [finishing]
+
+    def own() -> int:
+        return 7
+
+    with runtime.overlapping([rider, rider], finish) as riding:
+        assert list(runtime.in_order(lambda s: s, range(2))) == [0, 1]
+        while not all(f.done() for f in riding._futures or []):
+            threading.Event().wait(0.001)
+        with runtime.beside([own]) as results:
+            assert results() == [7]
+        [(total, name)] = riding.results()
+    assert submitted == ["block", "block", "rider", "rider", "own", "finishing"]
+    assert total == 6 and name.startswith("rplearn-stats")
+    # no beside block: the finishing stage runs when its results are asked for
+    with runtime.overlapping([rider, rider], finish) as riding:
+        list(runtime.in_order(lambda s: s, range(2)))
+    assert [t for t, _ in riding.results()] == [6]
+    with runtime.overlapping([rider], finish) as riding:  # never queued: both stages computed when asked
+        pass
+    assert [t for t, _ in riding.results()] == [3]
+
+
 def test_jobs_beside_the_caller_run_on_the_workers_and_come_back_in_order():
     """``beside``: the jobs run on the workers while the caller works; their results in the
     jobs' order; an error of a job reaches the caller; the pool is free again afterwards."""
