@@ -229,3 +229,11 @@ def test_report_repeats_beyond_the_budget_write_no_folder(workdir):
     assert lines[-1].startswith("error: --repeats: 100,000,000 runs of sh-2 would take about"), lines
     assert all(line.startswith("... ") for line in lines[:-1]), lines  # the progress lines of a non-terminal
     assert listing(workdir) == before
+
+
+def test_an_output_name_without_a_suffix_says_no_kind_and_is_written(workdir):
+    """Only a suffix of another kind is refused (``model.parquet``): ``-o model`` writes the model there."""
+    proc = answer(["fit", D, "--order", "3", "-o", "plain_model"], workdir)
+    assert proc.returncode == 0, proc.stderr
+    assert read_model_file(workdir / "plain_model")[0]
+    assert answer(["predict", "plain_model", D, "-o", "plain.csv"], workdir).returncode == 0
