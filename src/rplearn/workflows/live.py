@@ -173,6 +173,7 @@ def is_csv_source(source: str) -> bool:
     return "," in source and all(p.lower().endswith(".csv") for p in source.split(","))
 
 
+@check_types
 def open_source(source: str, work_dir: str, reader: ReaderOptions) -> CsvTail | MavlinkSource:
     """``POSE.csv,SIGNAL.csv`` (two canonical CSVs being appended to) or a MAVLink connection."""
     if is_csv_source(source):
