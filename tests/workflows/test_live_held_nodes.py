@@ -42,7 +42,7 @@ def test_a_held_node_is_in_the_sessions_node_list_and_its_rows_are_learned(tmp_p
         _append(pose, signal, s, rng)
         final = s == seconds - 1
         polled = tail.poll(final=final)
-        session.feed(polled.poses, polled.signals)
+        session.feed(polled.poses, polled.signals, polled.held_nodes)
         session.learn(final=final)
     assert session.stats is not None and session.stats.nodes == ("A", "B", "G")
     logs, _ = read_logs([str(pose), str(signal)], options)
@@ -63,7 +63,31 @@ def test_while_the_node_list_waits_the_view_says_why(tmp_path):
     for s in range(5):
         _append(pose, signal, s, rng)
         polled = tail.poll()
-        session.feed(polled.poses, polled.signals)
+        session.feed(polled.poses, polled.signals, polled.held_nodes)
         session.learn()
     assert session.stats is None and session.status.matched > 0  # matched, not yet learned
     assert any(n.startswith("nodes: learning waits for the first poses of G") for n in session.status.notes)
+
+
+def test_a_radio_heard_that_logs_no_poses_does_not_hold_the_learning_back(tmp_path):
+    """Rows naming a node that no source holds (a radio of another team, heard all along) wait in the matcher and
+    are dropped as unknown_node; the session learns from the first poll as before."""
+    pose, signal = tmp_path / "pose.csv", tmp_path / "signal.csv"
+    pose.write_text("t,node,x,y,z,qw,qx,qy,qz\n")
+    signal.write_text("t,tx,rx,rssi_dbm,tx_power_dbm,frequency_hz\n")
+    options = ReaderOptions(nan_policy="drop")
+    tail = CsvTail(str(pose), str(signal), options)
+    session = _Session(LiveOptions(reader=options), str(tmp_path / "m.json"), str(tmp_path))
+    for s in range(5):
+        with pose.open("a") as fp, signal.open("a") as fs:
+            for k in range(10):
+                t = s + 0.1 * k
+                fp.write(f"{t:.2f},A,{10 + 2 * t:g},5,20,1,0,0,0\n{t + 0.05:.2f},B,{-10 - t:g},-5,25,1,0,0,0\n")
+                fs.write(f"{t + 0.06:.3f},A,B,-60,20,433000000\n{t + 0.07:.3f},Z,A,-80,20,433000000\n")
+        polled = tail.poll()
+        assert polled.held_nodes == frozenset()
+        session.feed(polled.poses, polled.signals, polled.held_nodes)
+        session.learn()
+    assert session.stats is not None and session.stats.nodes == ("A", "B")
+    assert session.matcher.waiting_nodes == frozenset({"Z"})
+    assert not any(n.startswith("nodes: ") for n in session.status.notes)

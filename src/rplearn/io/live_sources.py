@@ -61,12 +61,15 @@ class Poll:
         Lines or messages received by this poll.
     dropped : dict of str to int
         Rows not handed out, per reason, so far (a MAVLink source: :class:`rplearn.io.tlog_tail.TlogTail`).
+    held_nodes : frozenset of str
+        Nodes whose first pose rows the source holds back after this poll (:class:`CsvTail`).
     """
 
     poses: pd.DataFrame
     signals: pd.DataFrame
     received: int
     dropped: dict[str, int] = field(default_factory=dict)
+    held_nodes: frozenset[str] = frozenset()
 
 
 #: Bytes from a tailed file's start that :class:`_Tail` keeps and compares at every poll: a file replaced
@@ -345,7 +348,9 @@ class CsvTail:
                 del self._links.seen[:-LINK_MEMORY_POLLS]  # copies of rows of older polls: a step back
             self._signal_rows += len(signals)
         received = (0 if new is None else len(new)) + len(signals)  # held rows too: the stream is not idle
-        return Poll(poses, signals, received, {k: n for k, n in self.dropped.items() if n})
+        held = self._hold.held
+        held_nodes = frozenset() if held is None or "node" not in held.columns else frozenset(held["node"].astype(str))
+        return Poll(poses, signals, received, {k: n for k, n in self.dropped.items() if n}, held_nodes)
 
     def close(self) -> None:
         """Nothing to release."""

@@ -215,6 +215,7 @@ class _Session:
         self.preq = Prequential()
         self.recent: deque[pd.DataFrame] = deque()
         self.deferred: list[pd.DataFrame] = []  # matched before the node list is fixed (see learn)
+        self.held_nodes: frozenset[str] = frozenset()
         self.last_pose: dict[str, pd.Series] = {}
         self.new_samples = 0
         self.ranking = None if options.manoeuvres is None else RankingWorker(
@@ -228,7 +229,8 @@ class _Session:
         kept = [n for n in self.status.notes if not n.startswith(prefix)]
         self.status.notes = kept + ([] if text is None else [prefix + text])
 
-    def feed(self, poses: pd.DataFrame, signals: pd.DataFrame) -> None:
+    def feed(self, poses: pd.DataFrame, signals: pd.DataFrame, held_nodes: frozenset[str] = frozenset()) -> None:
+        self.held_nodes = held_nodes  # the source's: its nodes' first poses held back (Poll.held_nodes)
         if len(poses):
             self.matcher.add_poses(poses)
             for node, group in poses.groupby("node", sort=False):
@@ -242,13 +244,14 @@ class _Session:
         except InputError as exc:  # too few matched over the whole stream: the matched rows are learned
             rows = self.matcher.last_matched
             self.status.notes.append(str(exc))
-        if self.stats is None and not self.options.nodes and not final and (self.deferred or len(rows)) \
-                and self.matcher.waiting_nodes:
-            # rows wait for a node's first poses (a source's hold, bounded): the node list, fixed by the
-            # first rows learned, must name it too, so the rows matched meanwhile wait with them
+        held = self.matcher.waiting_nodes & self.held_nodes
+        if self.stats is None and not self.options.nodes and not final and (self.deferred or len(rows)) and held:
+            # rows wait for the first poses the source holds back (bounded by its hold): the node list, fixed
+            # by the first rows learned, must name that node too, so the rows matched meanwhile wait with them
+            # (a node no source holds, a radio heard that logs no poses, fixes nothing: its rows are dropped)
             self.deferred.append(rows)
             rows = rows.iloc[:0]
-            self.note("nodes: ", f"learning waits for the first poses of {', '.join(sorted(self.matcher.waiting_nodes))} "
+            self.note("nodes: ", f"learning waits for the first poses of {', '.join(sorted(held))} "
                                  "(rows name it; the source holds its start back)")
         elif self.deferred:
             rows = pd.concat([*self.deferred, rows], ignore_index=True)
@@ -469,7 +472,7 @@ def run_live(
             got = src.poll()
             now = time.monotonic()
             session.source_dropped = dict(got.dropped)
-            session.feed(got.poses, got.signals)
+            session.feed(got.poses, got.signals, got.held_nodes)
             if got.received:
                 last_rx = now
             if len(got.signals) or len(got.poses):
@@ -499,7 +502,7 @@ def run_live(
         session.stop_ranking(STOP_RANKING_WAIT_S)  # briefly waited for (its BLAS limit), then dropped
         last = src.poll(final=True)
         session.source_dropped = {} if isinstance(src, MavlinkSource) else dict(last.dropped)  # rematched whole below
-        session.feed(last.poses, last.signals)
+        session.feed(last.poses, last.signals, last.held_nodes)
         session.learn(final=True)
         if isinstance(src, MavlinkSource):
             src.close()
