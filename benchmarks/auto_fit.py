@@ -36,11 +36,6 @@ fixed grid of directions, the own-pattern spreads. ``--compare A B`` prints the 
 differences between two records and fails when a choice, a curve point's position or a tie
 differs, or a prediction moves by more than 1e-9 dB (run with ``RPLEARN_THREADS=1`` for
 bit-comparisons). ``--record FILE --tiny``: the ``smoke`` preset alone.
-
-``--timeline``: after the timings, when each job of one ``fit_auto`` (the best of five) ran on
-which thread (the runtime's two workers and the caller, which computes the queued fold jobs no
-worker has started), in runs of one kind, the caller's phases and each worker's idle time: where
-the wall clock goes beyond the CPU time.
 """
 
 from __future__ import annotations
@@ -186,7 +181,6 @@ def main() -> None:
     ap.add_argument("--tiny", action="store_true", help="the smoke preset, one repeat (seconds)")
     ap.add_argument("--record", metavar="FILE", help="record the choices and predictions of a fixed set of fits")
     ap.add_argument("--compare", nargs=2, metavar=("A", "B"), help="compare two records")
-    ap.add_argument("--timeline", action="store_true", help="also print when each job of one fit_auto ran on which thread")
     args = ap.parse_args()
     if args.record:
         record(args.record, args.tiny)
@@ -203,89 +197,6 @@ def main() -> None:
         df = read_dataset(f"{d}/m.parquet")
         library(df, preset, args)
         commands(f"{d}/m.parquet", d, args)
-        if args.timeline:
-            learn, _ = split_units(df, None, None)
-            nodes = sorted(set(df["tx"]) | set(df["rx"]))
-            timeline({u: samples_of(df, [u], "d", nodes=nodes) for u in learn})
-
-
-#: Kinds of jobs in ``--timeline``, by a part of the job's qualified name.
-JOB_KINDS = (("piece_statistics", "statistics"), ("_fold_tasks", "fold solves"), ("_spread_jobs", "fold spreads"),
-             ("_fold_block", "fold blocks"), ("_occupied", "coverage masks"), ("_finish", "coverage grids"),
-             ("continued_parts", "own posteriors"), ("solve", "final solve"))
-
-
-def timeline(per_unit: dict[str, Any]) -> None:
-    """``--timeline``: the best of five fit_auto, its jobs by thread (the runtime's workers, and the
-    caller, which computes the queued fold jobs no worker has started) in runs of one kind, the
-    caller's phases, and each worker's idle time. Patches the thread pool's ``submit`` while it runs."""
-    import functools
-    import threading
-    from concurrent.futures import ThreadPoolExecutor
-
-    import rplearn.core.lsq.selection_evaluator as evaluator
-    import rplearn.models.auto as auto
-
-    events: list[tuple[str, str, float, float]] = []
-
-    def kind(fn: Any, args: tuple[Any, ...]) -> str:
-        if args and not isinstance(args[0], (int, tuple)):
-            fn = args[0]  # in_order's work(job)
-        fn = fn.func if isinstance(fn, functools.partial) else fn
-        label = getattr(fn, "__qualname__", "?")
-        return next((k for part, k in JOB_KINDS if part in label), label)
-
-    def logged(where: str, label: str, fn: Any, *args: Any) -> Any:
-        t0 = time.perf_counter()
-        try:
-            return fn(*args)
-        finally:
-            events.append((where, label, t0, time.perf_counter()))
-
-    submit, on_one, select, whole = ThreadPoolExecutor.submit, evaluator.on_one_blas_thread, auto.select_beside, auto.fit_from_statistics
-
-    def where() -> str:
-        return "main" if threading.current_thread() is threading.main_thread() else "w" + threading.current_thread().name[-1]
-
-    def logged_submit(self: Any, fn: Any, *args: Any, **kwargs: Any) -> Any:
-        if "_helped" in getattr(fn, "__qualname__", ""):  # a worker's share of a helped pass: its jobs are logged below
-            return submit(self, fn, *args, **kwargs)
-        label = "statistics" if args and isinstance(args[0], tuple) else kind(fn, args)
-        job = functools.partial(fn, *args, **kwargs)
-        return submit(self, lambda: logged(where(), label, job))
-
-    def caller_job(job: Any) -> Any:  # the fold jobs of the evaluator's (helped) passes, on any thread
-        return logged(where(), kind(job, ()), on_one, job)
-
-    ThreadPoolExecutor.submit = logged_submit  # type: ignore[method-assign]
-    evaluator.on_one_blas_thread = caller_job
-    auto.select_beside = lambda *a, **k: logged("main", "[selection]", functools.partial(select, *a, **k))
-    auto.fit_from_statistics = lambda *a, **k: logged("main", "[fit_from_statistics]", functools.partial(whole, *a, **k))
-    try:
-        runs = []
-        for _ in range(5):
-            events.clear()
-            t0 = time.perf_counter()
-            fit_auto(per_unit)
-            runs.append((time.perf_counter() - t0, t0, list(events)))
-    finally:
-        ThreadPoolExecutor.submit = submit  # type: ignore[method-assign]
-        evaluator.on_one_blas_thread, auto.select_beside, auto.fit_from_statistics = on_one, select, whole
-    wall, t0, best = min(runs, key=lambda r: r[0])
-    print(f"timeline of the best of 5 fit_auto ({wall * 1e3:.0f} ms; ms from its start):")
-    for where in sorted({e[0] for e in best}, key=lambda w: (w != "main", w)):
-        mine = sorted((e for e in best if e[0] == where), key=lambda e: e[2])
-        groups: list[list[Any]] = []
-        for _, label, a, b in mine:
-            if groups and groups[-1][0] == label and not label.startswith("["):
-                groups[-1][2], groups[-1][3], groups[-1][4] = b, groups[-1][3] + 1, groups[-1][4] + b - a
-            else:
-                groups.append([label, a, b, 1, b - a])
-        busy = sum(b - a for _, label, a, b in mine if not label.startswith("["))
-        idle = "" if where == "main" else f", idle {(wall - busy) * 1e3:.0f} ms of the fit"
-        print(f"  {where}: busy {busy * 1e3:.0f} ms{idle}")
-        for label, a, b, count, used in groups:
-            print(f"    {(a - t0) * 1e3:6.1f} - {(b - t0) * 1e3:6.1f}  {label} x{count} ({used * 1e3:.1f} ms)")
 
 
 def commands(dataset: str, folder: str, args: argparse.Namespace) -> None:

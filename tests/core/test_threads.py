@@ -165,36 +165,6 @@ def test_overlapping_blas_limits_from_two_threads_leave_the_threads_as_they_were
         assert blas_threads() == before, (first.__name__, second.__name__)
 
 
-def test_a_one_thread_limit_inside_this_threads_own_is_not_set_again_and_others_still_are(monkeypatch):
-    """``one_blas_thread`` inside this thread's own one-thread limit (a fold job the caller of a
-    statistics pass computes) changes nothing and calls no limiter; inside another limit of
-    this thread (more threads) it limits to one again, and every count is restored after."""
-    from rplearn.core.threads import _blas, _exclusive_limit, one_blas_thread
-
-    before = blas_threads()
-    assert max(before) > 1, "this machine's BLAS runs several threads"
-    selection = _blas()
-    calls: list[int] = []
-    limit = type(selection).limit
-
-    def counted(self, *args, **kwargs):
-        calls.append(kwargs.get("limits", args[0] if args else None))
-        return limit(self, *args, **kwargs)
-
-    monkeypatch.setattr(type(selection), "limit", counted)
-    with one_blas_thread():
-        with one_blas_thread():
-            assert max(blas_threads()) == 1
-        assert calls == [1] and max(blas_threads()) == 1
-        with _exclusive_limit(selection, 2):
-            assert max(blas_threads()) == 2
-            with one_blas_thread():
-                assert max(blas_threads()) == 1
-            assert max(blas_threads()) == 2
-        assert calls == [1, 2, 1] and max(blas_threads()) == 1
-    assert blas_threads() == before
-
-
 def test_free_cores_are_the_usable_ones_less_the_others_load():
     assert free_cores_of(2, 1.0) == 2  # only this process runs
     assert free_cores_of(2, 2.0) == 1  # another keeps a core busy

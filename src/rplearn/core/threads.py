@@ -136,20 +136,6 @@ def _controller_of(loaded: tuple[str, ...]) -> Any:
     return ThreadpoolController()
 
 
-def _blas() -> Any:
-    """The BLAS libraries of :func:`_controller` (its ``select(user_api="blas")``, kept: a
-    selection reads the thread counts afresh whenever it limits, and the statistics' passes
-    and fold jobs ask for it hundreds of times a fit)."""
-    import numpy  # noqa: F401  (the BLAS to control must be loaded before the scan)
-
-    return _blas_of(tuple(m for m in BLAS_MODULES if m in sys.modules))
-
-
-@lru_cache(maxsize=4)
-def _blas_of(loaded: tuple[str, ...]) -> Any:
-    return _controller_of(loaded).select(user_api="blas")
-
-
 #: Held by the thread whose BLAS limit is in force. A limit is process-wide and, when it ends,
 #: restores the counts it found: two threads whose limits overlap could leave numpy on one thread
 #: for good, or lift the other's limit while its work still runs. So one thread at a time
@@ -157,26 +143,18 @@ def _blas_of(loaded: tuple[str, ...]) -> Any:
 #: threads as they are), as :meth:`rplearn.core.lsq.runtime.StatisticsRuntime.in_order` does with its pool,
 #: or waited for (``one_blas_thread(wait=True)``: long work beside short limited work).
 _LIMIT_LOCK = threading.RLock()
-#: ``one``: whether the innermost limit this thread holds (:func:`_exclusive_limit`) is every
-#: BLAS library on one thread (:func:`one_blas_thread`), which a nested one then leaves as it is.
-_HELD = threading.local()
 
 
 @contextmanager
-def _exclusive_limit(selection: Any, limits: int, wait: bool = False, one: bool = False) -> Iterator[None]:
+def _exclusive_limit(selection: Any, limits: int, wait: bool = False) -> Iterator[None]:
     """``selection.limit(limits)`` inside the block, unless another thread holds a limit (with
-    ``wait``, once that one ends); ``one``: the limit is :func:`one_blas_thread`'s."""
+    ``wait``, once that one ends)."""
     if not _LIMIT_LOCK.acquire(blocking=wait):
         yield
         return
-    outer = getattr(_HELD, "one", False)
     try:
         with selection.limit(limits=limits):
-            _HELD.one = one
-            try:
-                yield
-            finally:
-                _HELD.one = outer
+            yield
     finally:
         _LIMIT_LOCK.release()
 
@@ -186,7 +164,7 @@ def blas_threads(flops: float) -> Iterator[None]:
     """The BLAS threads of :func:`blas_thread_count` inside the block (no limit when that is
     every thread the libraries have and ``RPLEARN_THREADS`` is unset)."""
     count = blas_thread_count(flops)
-    selection = _blas()
+    selection = _controller().select(user_api="blas")
     if thread_override() is None and all(lib.num_threads <= count for lib in selection.lib_controllers):
         with nullcontext():
             yield
@@ -213,14 +191,8 @@ def one_blas_thread(wait: bool = False) -> Iterator[None]:
         When another thread holds a limit: wait for it to end, then limit (True), or run the
         block with the threads as they are (False). Long work beside a loop whose short work
         limits now and then waits, so that it does not run whole on the other's limit.
-
-    Inside a one-thread limit of this same thread (a pass of the statistics' runtime whose
-    fold jobs the caller computes too) nothing is limited again: the counts are already one.
     """
-    if getattr(_HELD, "one", False):
-        yield
-        return
-    with _exclusive_limit(_blas(), 1, wait, one=True):
+    with _exclusive_limit(_controller().select(user_api="blas"), 1, wait):
         yield
 
 
@@ -245,7 +217,7 @@ def _package_libraries(package: str) -> set[str]:
 
     folder = os.path.dirname(os.path.realpath(where))
     roots = (folder + os.sep, folder + ".libs" + os.sep)
-    return {lib.filepath for lib in _blas().lib_controllers
+    return {lib.filepath for lib in _controller().select(user_api="blas").lib_controllers
             if os.path.realpath(lib.filepath).startswith(roots)}
 
 

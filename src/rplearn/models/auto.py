@@ -189,10 +189,9 @@ def fit_auto(
 
     # The units' statistics on the runtime's workers, a unit (or half of one, so that the pieces
     # keep both workers busy to the end) each, the halves added up in order, and the coverage
-    # grids' jobs behind them, while this thread selects the order; the grids' finishing jobs
-    # beside the closing of fit_from_statistics (its own posteriors' block), not after it.
+    # grids' jobs behind them, while this thread selects the order.
     coverage = CoverageWork(list(units.values()))
-    with DEFAULT_RUNTIME.overlapping(coverage.jobs if coverage.parallel else [], coverage.finishing) as riding, \
+    with DEFAULT_RUNTIME.overlapping(coverage.jobs if coverage.parallel else []) as riding, \
             blas_threads_for(n, basis.n_coef * len(nodes)):
         t0 = time.perf_counter()
         pieces = unit_pieces({u: len(s) for u, s in units.items()}, DEFAULT_RUNTIME.workers)
@@ -208,7 +207,7 @@ def fit_auto(
         fitted.ltd_s = time.perf_counter() - t0
     model = fitted.model
     assert isinstance(model, PatternSet)  # fit_from_statistics learns patterns
-    grids = coverage.named(riding.results()) if coverage.parallel else coverage.run()
+    grids = coverage.grids(riding.results()) if coverage.parallel else coverage.run()
     model.training = model.training.replace(ltd_s=fitted.ltd_s, coverage_deg=grids)
     return fitted, choice
 
@@ -261,13 +260,14 @@ def _final_setup(total: NormalEquations, big: Any, kind: str, ridge: float, powe
     return chosen, normal, scale, penalty, sub_target
 
 
-def _early_parts(early: Mapping[str, Any], sol: Any, later: Sequence[Any], total: NormalEquations, names: list[str]) -> list[Any]:
-    """The own posteriors' parts of the points chosen beside the selection (``final_jobs`` of
-    :func:`fit_from_statistics`): the results of their jobs (``later``, run beside the closing),
-    with the point that is the final solve's own system read off that solve (``sol``,
-    :func:`solved_parts`; its inverse is computed here should the solve give no covariance)."""
-    parts = list(later)
+def _early_parts(early: Mapping[str, Any], results: Sequence[Any], total: NormalEquations, names: list[str]) -> list[Any]:
+    """The own posteriors' parts of the jobs run beside the selection (``final_jobs`` of
+    :func:`fit_from_statistics`): the jobs' results after the final solve's (``results[0]``),
+    with the point that is the final solve's own system read off it (:func:`solved_parts`; its
+    inverse is computed here should the solve give no covariance)."""
+    parts = list(results[1:])
     for i in early["same"]:
+        sol = results[0]
         point = early["points"][i]
         known = solved_parts(early["prior"], point, sol.covariance, sol.residual_variance_db2,
                              total.basis.n_coef * len(names))
@@ -350,9 +350,8 @@ def fit_from_statistics(
     early: dict[str, Any] = {}
 
     def final_jobs(order: int, smoothing: float, keys: list[tuple[int, float]]) -> list[Callable[[], Any]]:
-        # the final solve needs only the choice (the prior is not kept on this path): on the
-        # workers with the chosen and tied points' inflations; the own posteriors' inverses
-        # (also the choice's alone) are kept for the closing (below), which waits for neither
+        # the final solve and the own posteriors' inverses need only the choice (the prior is
+        # not kept on this path): on the workers with the chosen and tied points' inflations
         setup = _final_setup(total, first.basis, kind, ridge, power, order, smoothing, search_target)
         chosen_, normal_, scale_, penalty_, sub_target_ = setup
         prior_ = OwnPrior(smoothing, scale_, power, ridge, gauge, target, prior_level)
@@ -361,11 +360,11 @@ def fit_from_statistics(
         # at the largest basis the chosen point's tie group is the final solve's own system: its
         # posterior is read off that solve (solved_parts), not inverted a second time
         same = [i for i, g in enumerate(points) if not own_first_ and g.smoothing == smoothing and g.scale == scale_]
-        early.update(setup=setup, own_first=own_first_, points=points, same=same[:1], prior=prior_,
-                     jobs=[functools.partial(continued_parts, plain_total, names, g) for i, g in enumerate(points)
-                           if i not in same[:1]])
+        early.update(setup=setup, own_first=own_first_, points=points, same=same[:1], prior=prior_)
         return [functools.partial(solve, normal_, list(nodes), ridge=ridge, gauge=gauge, penalty=penalty_,
-                                  penalty_target=sub_target_, prior_level=prior_level)]
+                                  penalty_target=sub_target_, prior_level=prior_level),
+                *(functools.partial(continued_parts, plain_total, names, g) for i, g in enumerate(points)
+                  if i not in same[:1])]
 
     searched_prior = keeps_prior(kind, target, first.basis, len(nodes))
     results, choice = select_beside(stats, make_basis, orders, ridge, power, prior=SearchPrior(target, prior_level),
@@ -390,11 +389,10 @@ def fit_from_statistics(
     chosen, normal, scale, penalty, sub_target = early["setup"] if early else _final_setup(
         total, first.basis, kind, ridge, power, choice.order, choice.smoothing, search_target)
     own_prior = OwnPrior(choice.smoothing, scale, power, ridge, gauge, target, prior_level)
-    own_first, jobs = (early["own_first"], early["jobs"]) if early else continued_jobs(plain_total, chosen, names,
-                                                                                       own_prior, choice.ties, make_basis)
-    # the own-pattern posteriors' inverses on the statistics' workers while this thread solves
-    # (or reads the solve of the selection's last batch) and closes (one BLAS thread each, this
-    # thread's too): they do not depend on the final solve
+    own_first, jobs = (early["own_first"], []) if early else continued_jobs(plain_total, chosen, names, own_prior,
+                                                                            choice.ties, make_basis)
+    # else the own-pattern posteriors' inverses on the statistics' workers while this thread
+    # solves (one BLAS thread each, this thread's too): they do not depend on the final solve
     with DEFAULT_RUNTIME.beside(jobs) as continued:
         sol = results[0] if early else solve(normal, list(nodes), ridge=ridge, gauge=gauge, penalty=penalty,
                                              penalty_target=sub_target, prior_level=prior_level)
@@ -464,7 +462,7 @@ def fit_from_statistics(
             pat = model_basis.n_coef * len(nodes)
             covariance = covariance.copy()
             covariance[:pat, :pat] += misfit_covariance(model_basis, len(nodes), misfit_var / 2.0)  # two ends a sample
-        parts = _early_parts(early, sol, continued(), plain_total, names) if early else continued()
+        parts = _early_parts(early, results, plain_total, names) if early else continued()
     with one_blas_thread():
         own = own_pattern_posterior(plain_total, chosen, names, own_prior, noise_var, uncapped,
                                     (lambda: parts[0]) if own_first else None)

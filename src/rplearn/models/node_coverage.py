@@ -78,22 +78,13 @@ class CoverageWork:
 
     def grids(self, masks: Sequence[np.ndarray]) -> dict[str, list[float]]:
         """Per node, its grid rounded to 0.1 degree, from the jobs' masks (in the jobs' order)."""
-        return self.named(self._call(self.finishing(masks)))
-
-    def finishing(self, masks: Sequence[np.ndarray]) -> list[Callable[[], list[float]]]:
-        """The finishing jobs (one per node, in the nodes' order, any thread: its grid rounded to
-        0.1 degree) from the jobs' masks (in the jobs' order): what :meth:`grids` runs, for a
-        caller that runs them itself (:meth:`named` then names their results)."""
         from rplearn.core.coverage import COVERAGE_GRID_POINTS
 
         occupied = [np.zeros(COVERAGE_GRID_POINTS, bool) for _ in self.nodes]
         for k, mask in zip(self.node_of_job, masks):
             occupied[k] |= mask
-        return [partial(self._finish, k, occupied[k]) for k in range(len(self.nodes))]
-
-    def named(self, finished: Sequence[list[float]]) -> dict[str, list[float]]:
-        """The grids per node from the results of :meth:`finishing`'s jobs (in their order)."""
-        return dict(zip(self.nodes, finished))
+        finish = [partial(self._finish, k, occupied[k]) for k in range(len(self.nodes))]
+        return dict(zip(self.nodes, self._call(finish)))
 
     def _call(self, jobs: Sequence[Callable[[], Any]]) -> list[Any]:
         """The jobs' results in order: on the workers when :attr:`parallel`, else here."""

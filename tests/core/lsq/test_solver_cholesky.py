@@ -7,16 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rplearn.core.lsq.solver_cholesky import (
-    constrained_inverse,
-    factor_inverse,
-    factor_inverse_upper,
-    factor_solve,
-    spd_buffer,
-    spd_factor,
-    symmetric_inner,
-    writable_diagonal,
-)
+from rplearn.core.lsq.solver_cholesky import constrained_inverse, factor_inverse, factor_inverse_upper, factor_solve, spd_factor, symmetric_inner
 
 
 def _spd(rng, p, condition=1e6):
@@ -76,24 +67,6 @@ def test_the_matrix_is_left_alone_unless_it_may_be_overwritten():
     kept = a.copy()
     spd_factor(a)
     assert np.array_equal(a, kept)
-
-
-@pytest.mark.parametrize("p", [20, 128])
-def test_a_system_built_in_its_factor_buffer_is_factorised_in_place_to_the_same_bits(p):
-    """``spd_buffer``: a copy of a Gram matrix laid out for an in-place factor (a taller buffer
-    at a multiple of 64 columns); its diagonal changed through ``writable_diagonal``, the factor
-    takes its memory and equals, bit for bit, that of a C-ordered copy factorised the usual way."""
-    g = _spd(np.random.default_rng(p), p)
-    extra = np.linspace(1.0, 2.0, p)
-    usual = g.copy()
-    usual[np.diag_indices(p)] += extra
-    expected = spd_factor(usual)
-    buffer = spd_buffer(g)
-    writable_diagonal(buffer)[:] += extra
-    assert np.array_equal(np.diag(buffer), np.diag(usual)) and np.array_equal(g, _spd(np.random.default_rng(p), p))
-    factor = spd_factor(buffer, overwrite=True)
-    assert np.shares_memory(factor, buffer)
-    assert np.array_equal(np.triu(factor), np.triu(expected))
 
 
 def test_a_matrix_that_is_not_positive_definite_has_no_factor():

@@ -10,10 +10,7 @@ to one caller at a time, and the fork hook that lets a forked child start afresh
 Work that does not depend on the statistics (a fit's coverage grids) can ride along
 (:meth:`StatisticsRuntime.overlapping`): it is queued on the workers behind the statistics'
 last block, so it runs while a worker would otherwise wait (the last block of an odd count, the
-caller's solve), and otherwise when its results are asked for. Its finishing stage (``then``:
-work on all the riders' results, e.g. each node's grid from its masks) is queued beside the
-caller's work of its next :meth:`StatisticsRuntime.beside` block (an automatic fit's closing,
-while the caller reads its solve), not left for the end.
+caller's solve), and otherwise when its results are asked for.
 """
 
 from __future__ import annotations
@@ -38,19 +35,13 @@ class Overlapped(Generic[T]):
     """Jobs that ride along with the statistics (:meth:`StatisticsRuntime.overlapping`).
 
     Their futures once queued on the workers behind a statistics pass's last block; their
-    results (:meth:`results`) come from those futures, or from running the jobs then. With a
-    finishing stage ``then`` (the riders' results -> more jobs), :meth:`results` gives that
-    stage's results: queued by :meth:`start_then` (a :meth:`StatisticsRuntime.beside` block of
-    the caller, once every rider is done), or run when asked for.
+    results (:meth:`results`) come from those futures, or from running the jobs then.
     """
 
-    def __init__(self, runtime: StatisticsRuntime, jobs: Sequence[Callable[[], T]],
-                 then: Callable[[list[T]], Sequence[Callable[[], Any]]] | None = None) -> None:
+    def __init__(self, runtime: StatisticsRuntime, jobs: Sequence[Callable[[], T]]) -> None:
         self._runtime = runtime
         self._jobs = list(jobs)
         self._futures: list[Future[T]] | None = None
-        self._then = then
-        self._then_futures: list[Future[Any]] | None = None
 
     @property
     def started(self) -> bool:
@@ -62,20 +53,9 @@ class Overlapped(Generic[T]):
         if self._futures is None:
             self._futures = [pool.submit(job) for job in self._jobs]
 
-    def start_then(self, pool: ThreadPoolExecutor) -> None:
-        """Queue the finishing stage on ``pool`` (once), when the riders were queued and every
-        one is done without an error (else it runs when :meth:`results` is asked for)."""
-        futures = self._futures
-        if (self._then is None or self._then_futures is not None or not futures
-                or not all(f.done() and not f.cancelled() and f.exception() is None for f in futures)):
-            return
-        self._then_futures = [pool.submit(job) for job in self._then([f.result() for f in futures])]
-
-    def busy(self) -> bool:
-        """Whether jobs of these riders are queued on the workers and not all done."""
-        return any(not f.done() for f in [*(self._futures or ()), *(self._then_futures or ())])
-
-    def _first(self) -> list[T]:
+    def results(self) -> list[T]:
+        """Every job's result, in the jobs' order (an error of a job is raised here): waited for
+        when queued, else computed now (on the workers when there are several)."""
         if self._futures is not None:
             return [f.result() for f in self._futures]
         self._futures = []  # no pass may queue them now: they are computed here
@@ -84,21 +64,11 @@ class Overlapped(Generic[T]):
         finally:
             self._futures = None
 
-    def results(self) -> list[Any]:
-        """Every job's result, in the jobs' order (an error of a job is raised here): waited for
-        when queued, else computed now (on the workers when there are several); with a
-        finishing stage, that stage's results likewise."""
-        if self._then is None:
-            return self._first()
-        if self._then_futures is not None:
-            return [f.result() for f in self._then_futures]
-        return list(self._runtime.in_order(lambda job: job(), self._then(self._first())))
-
     def settle(self) -> None:
         """Cancel the queued jobs not yet running and wait for the others (errors dropped)."""
-        for future in [*(self._futures or ()), *(self._then_futures or ())]:
+        for future in self._futures or ():
             future.cancel()
-        for future in [*(self._futures or ()), *(self._then_futures or ())]:
+        for future in self._futures or ():
             if not future.cancelled():
                 try:
                     future.result()
@@ -162,8 +132,7 @@ class StatisticsRuntime:
         self._lock = threading.Lock()
 
     @contextmanager
-    def overlapping(self, jobs: Sequence[Callable[[], T]],
-                    then: Callable[[list[T]], Sequence[Callable[[], Any]]] | None = None) -> Iterator[Overlapped[T]]:
+    def overlapping(self, jobs: Sequence[Callable[[], T]]) -> Iterator[Overlapped[T]]:
         """Let ``jobs`` (callables without arguments, independent of the statistics) ride along
         with the statistics computed in this thread inside the block.
 
@@ -171,12 +140,9 @@ class StatisticsRuntime:
         workers queues the jobs behind its last block; :meth:`Overlapped.results` (inside or
         after the block) gives their results, computing them then if no pass queued them. The
         jobs must not use this runtime's pool themselves. On an error inside the block the
-        queued jobs are cancelled or waited for. ``then`` (optional: the jobs' results, in
-        order -> the jobs of a finishing stage, likewise without this runtime's pool) is
-        queued behind the jobs of this thread's first :meth:`beside` block inside the block
-        that finds every rider done, and :meth:`Overlapped.results` then gives its results.
+        queued jobs are cancelled or waited for.
         """
-        riders: Overlapped[T] = Overlapped(self, jobs, then)
+        riders: Overlapped[T] = Overlapped(self, jobs)
         outer = getattr(self._riders, "pending", None)
         self._riders.pending = riders
         try:
@@ -193,12 +159,6 @@ class StatisticsRuntime:
         if riders is not None and not riders.started:
             riders.start(pool)
 
-    def _start_then(self, pool: ThreadPoolExecutor) -> None:
-        """Queue the finishing stage of this thread's riders (:meth:`overlapping`) on ``pool``, once."""
-        riders = getattr(self._riders, "pending", None)
-        if riders is not None:
-            riders.start_then(pool)
-
     @contextmanager
     def beside(self, jobs: Sequence[Callable[[], T]]) -> Iterator[Callable[[], list[T]]]:
         """Run ``jobs`` (callables without arguments) on the workers while the caller goes on
@@ -210,8 +170,7 @@ class StatisticsRuntime:
         each). When the pool is busy (another caller has it) or there is no job, the jobs run
         in the calling thread when their results are asked for, with the threads as they are.
         On leaving the block (an error included) the jobs not started are cancelled and the
-        running ones waited for. The finishing stage of this thread's riders (:meth:`overlapping`)
-        is queued behind the jobs when every rider is done.
+        running ones waited for.
         """
         jobs = list(jobs)
         lock = self._lock
@@ -233,7 +192,6 @@ class StatisticsRuntime:
                 self._pool = ThreadPoolExecutor(max_workers=self.workers, thread_name_prefix="rplearn-stats")
             with one_blas_thread():
                 futures = [self._pool.submit(job) for job in jobs]
-                self._start_then(self._pool)  # behind the jobs (overlapping); left running on leaving
                 try:
                     yield lambda: [f.result() for f in futures]
                 finally:
@@ -248,19 +206,11 @@ class StatisticsRuntime:
         finally:
             lock.release()
 
-    def in_order(self, work: Callable[[Any], T], starts: Iterable[Any], ahead: int | None = None,
-                 helping: bool = False) -> Iterator[T]:
+    def in_order(self, work: Callable[[Any], T], starts: Iterable[Any]) -> Iterator[T]:
         """``work(s)`` for every block start ``s``, yielded in order.
 
-        With two or more blocks, the worker threads compute them (``ahead`` at most ahead, by
-        default :attr:`ahead`, so memory stays bounded; a caller that keeps every result anyway
-        queues them all at once with ``ahead=len(starts)``, so that no worker waits while the
-        caller waits for a long first one). ``helping``: the blocks in one shared queue, which
-        the workers take from the front and the caller, instead of waiting, from the back while
-        this thread's riders keep the workers busy (:meth:`_helped`; one pool job per worker,
-        not one per block: a search's many small blocks cost the caller less to hand out);
-        every result is computed before the first is yielded, and the error of the first
-        block that failed is raised (the blocks not started by then are dropped). Each with one BLAS thread: computing the features is plain
+        With two or more blocks, the worker threads compute them (:attr:`ahead` at most ahead,
+        so memory stays bounded), each with one BLAS thread: computing the features is plain
         numpy, which uses one core (and releases the interpreter lock), so two blocks at a time
         use both cores of a 2-core machine, where one block with a 2-thread BLAS leaves one idle
         while the features are computed. The threads are kept between calls, with their block
@@ -271,7 +221,6 @@ class StatisticsRuntime:
         computes its blocks itself, in order, leaving the BLAS threads as they are.
         """
         starts = list(starts)
-        limit = self.ahead if ahead is None else max(int(ahead), 1)
         lock = self._lock
         if len(starts) < 2 or not lock.acquire(blocking=False):
             yield from (work(s) for s in starts)
@@ -284,12 +233,9 @@ class StatisticsRuntime:
                 self._pool = ThreadPoolExecutor(max_workers=self.workers, thread_name_prefix="rplearn-stats")
             pool = self._pool
             with one_blas_thread():
-                if helping:
-                    yield from self._helped(work, starts, pool)
-                    return
                 for s in starts:
                     pending.append(pool.submit(work, s))
-                    if len(pending) >= limit:
+                    if len(pending) >= self.ahead:
                         yield pending.popleft().result()
                 self._start_riders(pool)  # behind the last block (overlapping)
                 while pending:
@@ -304,50 +250,6 @@ class StatisticsRuntime:
                     except Exception:  # noqa: BLE001, S110  (the first error is the one raised)
                         pass
             lock.release()
-
-    def _helped(self, work: Callable[[Any], T], starts: list[Any], pool: ThreadPoolExecutor) -> list[T]:
-        """Every ``work(s)`` of :meth:`in_order` with ``helping``: one queue of the blocks, taken
-        from the front by one pool job per worker (not one job per block: a search's many small
-        blocks cost less to hand out); the caller takes them from the back, until none is left,
-        only while this thread's riders keep the workers busy (:meth:`overlapping`: the workers'
-        jobs wait behind them; a third thread on two cores otherwise costs more CPU time than the
-        tail of an odd count of blocks it would save). Then the first failed block's error is
-        raised, or the results (in order) returned."""
-        queue: deque[tuple[int, Any]] = deque(enumerate(starts))
-        results: list[Any] = [None] * len(starts)
-        errors: dict[int, BaseException] = {}
-
-        def drain(take: Callable[[], tuple[int, Any]]) -> None:
-            while True:
-                try:
-                    i, s = take()
-                except IndexError:  # empty
-                    return
-                try:
-                    results[i] = work(s)
-                except BaseException as exc:  # noqa: BLE001  (raised below, in the caller)
-                    errors[i] = exc
-                    queue.clear()  # the others' results are not wanted: let no one start another
-
-        riders = getattr(self._riders, "pending", None)
-        busy = riders is not None and riders.busy()
-        runners = [pool.submit(drain, queue.popleft) for _ in range(min(self.workers, len(starts)))]
-        self._start_riders(pool)  # behind the runners: once the queue is empty (overlapping)
-        try:
-            if busy:
-                drain(queue.pop)
-                for runner in runners:  # one not started has taken no block: dropped, not waited for
-                    runner.cancel()
-        except BaseException:
-            queue.clear()  # (an interrupt of the caller's own block) the workers stop after theirs
-            raise
-        finally:
-            for runner in runners:
-                if not runner.cancelled():
-                    runner.result()  # drain catches its blocks' errors: waits until the queue is done
-        if errors:
-            raise errors[min(errors)]
-        return results
 
 
 #: The runtime the library's statistics use.

@@ -62,7 +62,7 @@ from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.core.lsq.penalty import DEFAULT_PENALTY_POWER, nested_columns, penalty_scale, penalty_vector, sub_statistics
 from rplearn.core.lsq.selection_evaluator import MAX_SMOOTHING, SMOOTHING_GRID, FoldEvaluator
 from rplearn.core.lsq.selection_result import CurvePoint, Selection
-from rplearn.core.lsq.ties import tied_keys
+from rplearn.core.lsq.ties import tied_keys, tied_points
 from rplearn.core.lsq.ties import tightest_split as _tightest_split
 from rplearn.errors import IdentifiabilityError, InputError
 
@@ -279,11 +279,11 @@ def select_beside(
     extra = beside(int(choice.order), float(choice.smoothing), keys) if beside is not None else []
     beside_results = ev.prefetch_spreads([(choice.order, choice.smoothing), *keys], extra)  # all at once
     kappa, level_var = ev.spread(choice.order, choice.smoothing)
-    ties = [(o, s, float(ev.inflation(o, s))) for o, s in keys]  # tied_points(ev, best, evaluated), its keys known
     return beside_results, Selection("grouped-cv" if ev.cv else "gcv", choice.order, choice.smoothing, choice.rmse_db,
                                      ev.curve, sorted(units) if ev.cv else [], float(power), kappa,
                                      float(np.sqrt(level_var)),
-                                     ev.excess_db2.get((int(choice.order), float(choice.smoothing)), 0.0), ties)
+                                     ev.excess_db2.get((int(choice.order), float(choice.smoothing)), 0.0),
+                                     tied_points(ev, best, evaluated))
 
 
 def variance_inflation(

@@ -21,7 +21,7 @@ from rplearn.core.lsq.penalty import nested_columns, penalty_scale, with_shared_
 from rplearn.core.lsq.runtime import DEFAULT_RUNTIME
 from rplearn.core.lsq.selection_folds import Fold, fold_spread_terms, on_one_blas_thread, sub_block, unit_folds
 from rplearn.core.lsq.selection_result import CurvePoint
-from rplearn.core.lsq.solver_cholesky import factor_solve, spd_buffer, spd_factor, writable_diagonal
+from rplearn.core.lsq.solver_cholesky import factor_solve, spd_factor
 from rplearn.errors import InputError
 
 #: Smoothing values tried, relative to ``mean(diag(X^T X))`` (0: the plain fit with its ridge).
@@ -186,7 +186,7 @@ class FoldEvaluator:
         if missing:
             n_folds = len(self.folds) if self.cv else 1
             jobs = [functools.partial(self._fold_block, o, k) for o in missing for k in range(n_folds)]
-            built = list(DEFAULT_RUNTIME.in_order(on_one_blas_thread, jobs, helping=True))  # all kept
+            built = list(DEFAULT_RUNTIME.in_order(on_one_blas_thread, jobs))
             for i, o in enumerate(missing):
                 parts = built[i * n_folds:(i + 1) * n_folds]
                 self._cache[o] = (self._weights(self.make_basis(o)), [b for b, _, _ in parts], [t for _, t, _ in parts],
@@ -231,7 +231,7 @@ class FoldEvaluator:
         tasks = [task for key in keys for task in self._fold_tasks(*key)]
         results: list[tuple[np.ndarray, Any, float]] = []
         held = 0
-        for c, upper, sse in DEFAULT_RUNTIME.in_order(on_one_blas_thread, tasks, helping=True):  # all kept
+        for c, upper, sse in DEFAULT_RUNTIME.in_order(on_one_blas_thread, tasks):
             held += 0 if upper is None else upper.size * 8
             results.append((c, upper if upper is None or held <= _PENDING_FACTOR_BYTES else _DROPPED, sse))
         folds = len(self.folds)
@@ -297,7 +297,7 @@ class FoldEvaluator:
         jobs = list(extra) + [job for key in keys for job in self._spread_jobs(*key)]
         if not jobs:
             return []
-        results = list(DEFAULT_RUNTIME.in_order(on_one_blas_thread, jobs, helping=True))  # all kept
+        results = list(DEFAULT_RUNTIME.in_order(on_one_blas_thread, jobs))
         folds = len(self.folds)
         spreads = results[len(extra):]
         for i, key in enumerate(keys):
@@ -356,14 +356,13 @@ class FoldEvaluator:
         return out
 
     def _system(self, gram: np.ndarray, w: np.ndarray, weight: float,
-                pin: tuple[np.ndarray, np.ndarray] | None = None, factored: bool = False) -> np.ndarray:
+                pin: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
         """The penalised normal matrix: the ridge on the pattern columns (shared columns are not
         shrunk), the smoothness penalty (``weight``: the smoothing times the penalty's unit),
-        and the weight of pinned shared columns. ``factored``: laid out for
-        :func:`spd_factor` to factorise in place (:func:`spd_buffer`: one copy, the same values)."""
-        a = spd_buffer(gram) if factored else gram.copy()
+        and the weight of pinned shared columns."""
+        a = gram.copy()
         k = gram.shape[0] - self.n_shared
-        diagonal = writable_diagonal(a)  # a view of the diagonal
+        diagonal = a.reshape(-1)[:: a.shape[0] + 1]  # a view of the diagonal
         diagonal[:k] += self.ridge
         diagonal += weight * w
         if pin is not None:
@@ -374,7 +373,7 @@ class FoldEvaluator:
                pin: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, np.ndarray | None]:
         """The penalised solution and the upper Cholesky factor of its system (None when the
         system is not positive definite: least squares then)."""
-        upper = spd_factor(self._system(gram, w, weight, pin, factored=True), overwrite=True)
+        upper = spd_factor(self._system(gram, w, weight, pin), overwrite=True)
         if upper is not None:
             return factor_solve(upper, rhs), upper
         import scipy.linalg

@@ -124,38 +124,13 @@ def _lda(a: FloatArray) -> int:
 def _fortran_owned(matrix: FloatArray, overwrite: bool) -> FloatArray:
     """``matrix`` (square, symmetric: a C-ordered one is its own transpose) as a writable
     Fortran-ordered float64 array (or a view of the leading rows of one, :data:`_ALIASED`):
-    itself when ``overwrite`` allows and its memory serves (a view of :func:`spd_buffer`'s
-    taller buffer too), else a copy."""
+    itself when ``overwrite`` allows and its memory serves, else a copy."""
     a = np.asarray(matrix, np.float64)
     fortran = a.T if a.flags.c_contiguous else a
     n = fortran.shape[0]
-    if overwrite and fortran.flags.writeable and fortran.strides[0] == fortran.itemsize and n > 1:
-        lda = _lda(fortran)
-        if lda >= n and not (lda >= _ALIASED and lda % _ALIASED == 0):
-            return fortran
+    if overwrite and fortran.flags.f_contiguous and fortran.flags.writeable and not (n >= _ALIASED and n % _ALIASED == 0):
+        return fortran
     return _fortran_copy(fortran)
-
-
-def spd_buffer(matrix: FloatArray) -> FloatArray:
-    """A copy of the square ``matrix`` laid out as :func:`spd_factor` with ``overwrite=True``
-    factorises it in place: C-ordered (read as its transpose), or for a size that is a multiple
-    of :data:`_ALIASED` the leading rows of a Fortran-ordered buffer :data:`_PAD` rows taller,
-    holding ``matrix.T`` (what :func:`spd_factor` would otherwise copy a C-ordered matrix into:
-    the same values, factorised alike). For a system built from a copy of a Gram matrix (its
-    diagonal changed in place, e.g. through :func:`writable_diagonal`) and factorised at once:
-    one copy, not two."""
-    a = _square(matrix, "matrix")
-    n = a.shape[0]
-    if n >= _ALIASED and n % _ALIASED == 0:
-        return _fortran_copy(a.T)
-    return np.array(a, np.float64, order="C")
-
-
-def writable_diagonal(matrix: FloatArray) -> FloatArray:
-    """A writable view of the diagonal of a square ``matrix`` of any strides (a view of
-    :func:`spd_buffer`'s taller buffer too)."""
-    a = _square(matrix, "matrix")
-    return np.lib.stride_tricks.as_strided(a, (a.shape[0],), (a.strides[0] + a.strides[1],), writeable=True)
 
 
 def _fortran_copy(matrix: FloatArray) -> FloatArray:
@@ -203,7 +178,7 @@ def spd_factor(matrix: FloatArray, overwrite: bool = False) -> FloatArray | None
         Symmetric; non-finite entries give None (their factor would be meaningless).
     overwrite : bool
         The factor may take ``matrix``'s memory (a C- or Fortran-contiguous float64 matrix
-        the caller no longer needs, or :func:`spd_buffer`'s copy).
+        the caller no longer needs).
 
     Returns
     -------
@@ -459,4 +434,4 @@ def constrained_inverse(matrix: FloatArray, constraints: FloatArray, max_conditi
 
 
 __all__ = ["MAX_KKT_CONDITION", "constrained_inverse", "factor_inverse", "factor_inverse_upper", "factor_solve", "kkt_condition",
-           "spd_buffer", "spd_factor", "symmetric_inner", "writable_diagonal"]
+           "spd_factor", "symmetric_inner"]
