@@ -15,6 +15,17 @@ from rplearn.io.live_sources import CsvTail
 from rplearn.io.options import ReaderOptions
 from rplearn.workflows.live import LiveOptions, _Session
 
+READER = ReaderOptions(nan_policy="drop")
+
+
+def _tail_and_session(folder):
+    """Empty pose and signal CSVs with their headers, a tail of them and a session reading it."""
+    pose, signal = folder / "pose.csv", folder / "signal.csv"
+    pose.write_text("t,node,x,y,z,qw,qx,qy,qz\n")
+    signal.write_text("t,tx,rx,rssi_dbm,tx_power_dbm,frequency_hz\n")
+    return pose, signal, CsvTail(str(pose), str(signal), READER), _Session(LiveOptions(reader=READER), str(folder / "m.json"),
+                                                                          str(folder))
+
 
 def _append(pose, signal, s: int, rng) -> None:
     """One second at 10 Hz: G still at the origin with attitude noise, A and B flying, every link both ways."""
@@ -31,12 +42,7 @@ def _append(pose, signal, s: int, rng) -> None:
 
 def test_a_held_node_is_in_the_sessions_node_list_and_its_rows_are_learned(tmp_path):
     rng = np.random.default_rng(7)
-    pose, signal = tmp_path / "pose.csv", tmp_path / "signal.csv"
-    pose.write_text("t,node,x,y,z,qw,qx,qy,qz\n")
-    signal.write_text("t,tx,rx,rssi_dbm,tx_power_dbm,frequency_hz\n")
-    options = ReaderOptions(nan_policy="drop")
-    tail = CsvTail(str(pose), str(signal), options)
-    session = _Session(LiveOptions(spec=LiveOptions().spec, reader=options), str(tmp_path / "m.json"), str(tmp_path))
+    pose, signal, tail, session = _tail_and_session(tmp_path)
     seconds = int(HOLD_S) + 20
     for s in range(seconds):  # a poll a second
         _append(pose, signal, s, rng)
@@ -45,7 +51,7 @@ def test_a_held_node_is_in_the_sessions_node_list_and_its_rows_are_learned(tmp_p
         session.feed(polled.poses, polled.signals, polled.held_nodes)
         session.learn(final=final)
     assert session.stats is not None and session.stats.nodes == ("A", "B", "G")
-    logs, _ = read_logs([str(pose), str(signal)], options)
+    logs, _ = read_logs([str(pose), str(signal)], READER)
     whole = synchronise(logs.pose, logs.signal)
     assert session.stats.n_samples == len(whole.dataset)
     assert session.status.dropped.get("unknown_node", 0) == 0
@@ -54,12 +60,7 @@ def test_a_held_node_is_in_the_sessions_node_list_and_its_rows_are_learned(tmp_p
 
 def test_while_the_node_list_waits_the_view_says_why(tmp_path):
     rng = np.random.default_rng(8)
-    pose, signal = tmp_path / "pose.csv", tmp_path / "signal.csv"
-    pose.write_text("t,node,x,y,z,qw,qx,qy,qz\n")
-    signal.write_text("t,tx,rx,rssi_dbm,tx_power_dbm,frequency_hz\n")
-    options = ReaderOptions(nan_policy="drop")
-    tail = CsvTail(str(pose), str(signal), options)
-    session = _Session(LiveOptions(reader=options), str(tmp_path / "m.json"), str(tmp_path))
+    pose, signal, tail, session = _tail_and_session(tmp_path)
     for s in range(5):
         _append(pose, signal, s, rng)
         polled = tail.poll()
@@ -72,12 +73,7 @@ def test_while_the_node_list_waits_the_view_says_why(tmp_path):
 def test_a_radio_heard_that_logs_no_poses_does_not_hold_the_learning_back(tmp_path):
     """Rows naming a node that no source holds (a radio of another team, heard all along) wait in the matcher and
     are dropped as unknown_node; the session learns from the first poll as before."""
-    pose, signal = tmp_path / "pose.csv", tmp_path / "signal.csv"
-    pose.write_text("t,node,x,y,z,qw,qx,qy,qz\n")
-    signal.write_text("t,tx,rx,rssi_dbm,tx_power_dbm,frequency_hz\n")
-    options = ReaderOptions(nan_policy="drop")
-    tail = CsvTail(str(pose), str(signal), options)
-    session = _Session(LiveOptions(reader=options), str(tmp_path / "m.json"), str(tmp_path))
+    pose, signal, tail, session = _tail_and_session(tmp_path)
     for s in range(5):
         with pose.open("a") as fp, signal.open("a") as fs:
             for k in range(10):
