@@ -154,6 +154,7 @@ REFUSED = {
                                    f"--at: no time asked has two drones with a pose (1 time(s), 0 .. 0 s); the pose logs of {P}"),
     "trajectory --distance 1e-9": (["trajectory", "--distance", "1e-9", "-o", "plan"],
                                    "--distance: expected at least 5 m between the drones, got 1e-09 m"),
+    "replay a dataset": (["replay", D], f"{D}: no MAVLink message in it to send"),
     "trajectory --speed 1e-9": (["trajectory", "--speed", "1e-9", "-o", "plan"],
                                 "--speed: at 1e-09 m/s even one loop per unit would take"),
 }

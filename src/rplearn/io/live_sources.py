@@ -465,12 +465,18 @@ def replay_tlog(path: str, address: str, speed: float = 1.0, start_delay_s: floa
 
     Each message is re-encoded by pymavlink with its own system and component ids; its
     ``time_boot_ms`` is scaled by ``1/speed`` from the log's first one, and the velocities of
-    ``GLOBAL_POSITION_INT`` by ``speed``, so that the stream is the same flight, faster.
+    ``GLOBAL_POSITION_INT`` by ``speed``, so that the stream is the same flight, faster. A message
+    pymavlink reads but cannot encode (an id its dialect does not know) is not sent.
 
     Returns
     -------
     int
         Messages sent.
+
+    Raises
+    ------
+    InputError
+        When the file holds no message to send (not a MAVLink log).
     """
     from rplearn.io._mavlink_records import mavutil_module, open_mavlink_log
 
@@ -501,10 +507,17 @@ def replay_tlog(path: str, address: str, speed: float = 1.0, start_delay_s: floa
             if wait > 0:
                 time.sleep(wait)
             enc.srcSystem, enc.srcComponent = msg.get_srcSystem(), msg.get_srcComponent()
-            sock.sendto(_scaled(msg, speed, boot0 or 0).pack(enc), target)
+            try:
+                packed = _scaled(msg, speed, boot0 or 0).pack(enc)
+            except NotImplementedError:  # a message pymavlink read but cannot encode (an unknown id): not sent
+                continue
+            sock.sendto(packed, target)
             sent += 1
     finally:
         sock.close()
+    if not sent:
+        raise InputError(f"{path}: no MAVLink message in it to send (a .tlog, as MAVProxy or QGroundControl record it?)",
+                         param="path")
     return sent
 
 
