@@ -7,6 +7,7 @@ fixed its nodes"), ending the session (found by hostile46)."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from rplearn.data.live_sync import HOLD_S
 from rplearn.data.sync import synchronise
@@ -27,8 +28,9 @@ def _tail_and_session(folder):
                                                                           str(folder))
 
 
-def _append(pose, signal, s: int, rng) -> None:
-    """One second at 10 Hz: G still at the origin with attitude noise, A and B flying, every link both ways."""
+def _append(pose, signal, s: int, rng, g_links_from: float = 0.0) -> None:
+    """One second at 10 Hz: G still at the origin with attitude noise, A and B flying, every link both ways
+    (G's from ``g_links_from`` [s])."""
     with pose.open("a") as fp, signal.open("a") as fs:
         for k in range(10):
             t = s + 0.1 * k
@@ -37,15 +39,20 @@ def _append(pose, signal, s: int, rng) -> None:
                      f"{t + 0.03:.2f},A,{10 + 2 * t:g},5,20,1,0,0,0\n"
                      f"{t + 0.05:.2f},B,{-10 - t:g},-5,25,1,0,0,0\n")
             for j, (a, b) in enumerate((("A", "B"), ("B", "A"), ("A", "G"), ("G", "A"), ("B", "G"), ("G", "B"))):
+                if "G" in (a, b) and t < g_links_from:
+                    continue
                 fs.write(f"{t + 0.06 + 0.005 * j:.3f},{a},{b},{-60 - 0.1 * j - 0.01 * k:.2f},20,433000000\n")
 
 
-def test_a_held_node_is_in_the_sessions_node_list_and_its_rows_are_learned(tmp_path):
+@pytest.mark.parametrize("g_links_from", [0.0, 3.0])
+def test_a_held_node_is_in_the_sessions_node_list_and_its_rows_are_learned(tmp_path, g_links_from):
+    """Also when the held node's links start later than the others' (a station's radio heard from t = 3 s: the
+    rows of A and B learned first fixed the nodes as A, B, and G's rows ended the session when its hold ran out)."""
     rng = np.random.default_rng(7)
     pose, signal, tail, session = _tail_and_session(tmp_path)
     seconds = int(HOLD_S) + 20
     for s in range(seconds):  # a poll a second
-        _append(pose, signal, s, rng)
+        _append(pose, signal, s, rng, g_links_from)
         final = s == seconds - 1
         polled = tail.poll(final=final)
         session.feed(polled.poses, polled.signals, polled.held_nodes)
