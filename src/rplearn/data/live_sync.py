@@ -215,7 +215,7 @@ class LiveMatcher:
             self._horizon = max(self._horizon, min(horizon, self._signal_t))
             self._trim()
         if final:
-            tracks = self._tracks()
+            tracks = self._tracks(final=True)
             phases = flight_phases(self._poses, tracks, self.options.clock_offsets_s, self.options.airborne_margin_m)
             finish_summary(self.summary, tracks, phases, self.options, self.source)
         return result
@@ -247,8 +247,14 @@ class LiveMatcher:
         """The nodes without poses that the waiting rows name (as of the last :meth:`match`)."""
         return self._waiting_nodes
 
-    def _tracks(self) -> dict:
-        return tracks_of_checked_log(self._poses, self.options.clock_offsets_s, "pose log", self.options.max_gap_s)
+    def _tracks(self, final: bool = False) -> dict:
+        """The tracks of the poses kept; before the stream's end, the clock offsets of the nodes with poses only (a
+        node whose poses a source holds back or that starts later: its rows wait, and its offset is checked at the end)."""
+        offsets = self.options.clock_offsets_s
+        if offsets and not final:
+            known = set(self._poses["node"].astype(str))
+            offsets = {node: dt for node, dt in offsets.items() if str(node) in known}
+        return tracks_of_checked_log(self._poses, offsets, "pose log", self.options.max_gap_s)
 
     def _match(self, chunk: pd.DataFrame) -> SyncResult:
         if chunk.empty:
