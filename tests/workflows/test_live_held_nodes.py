@@ -11,6 +11,7 @@ import pytest
 
 from rplearn.data.live_sync import HOLD_S
 from rplearn.data.sync import SyncOptions, synchronise
+from rplearn.errors import InputError
 from rplearn.io import read_logs
 from rplearn.io.live_sources import CsvTail
 from rplearn.io.options import ReaderOptions
@@ -112,3 +113,25 @@ def test_clock_offsets_naming_a_held_node_lose_no_rows_while_it_is_held(tmp_path
     logs, _ = read_logs([str(pose), str(signal)], READER)
     assert session.stats is not None and session.stats.n_samples == len(synchronise(logs.pose, logs.signal, sync).dataset)
     assert not any("clock offsets" in n for n in session.status.notes)
+
+
+def test_a_match_refused_in_flight_ends_the_session_and_learns_no_rows_twice(tmp_path):
+    """A station moved between flights (G still at one place, no poses for 20 s, still at another): ``sync`` refuses
+    it. The session caught the error at every poll and learned the previous poll's matched rows again each time
+    (learned grew by 20 a poll while matched stayed)."""
+    pose, signal, tail, session = _tail_and_session(tmp_path, LiveOptions(reader=READER, nodes=("A", "B", "G")))
+    learned = []
+    with pytest.raises(InputError, match="node G holds still"):
+        for s in range(40):
+            with pose.open("a") as fp, signal.open("a") as fs:
+                for k in range(10):
+                    t = s + 0.1 * k
+                    if t < 5 or t >= 25:
+                        fp.write(f"{t:.2f},G,{5 if t < 5 else 80},2,1,1,0,0,0\n")
+                    fp.write(f"{t + 0.03:.2f},A,{10 + 2 * t:g},5,20,1,0,0,0\n{t + 0.05:.2f},B,{-10 - t:g},-5,25,1,0,0,0\n")
+                    fs.write(f"{t + 0.06:.3f},A,B,-60,20,433000000\n{t + 0.07:.3f},B,A,-60,20,433000000\n")
+            polled = tail.poll()
+            session.feed(polled.poses, polled.signals, polled.held_nodes)
+            session.learn()
+            learned.append(session.stats.n_samples if session.stats is not None else 0)
+    assert session.stats is not None and session.stats.n_samples == session.matcher.summary.n_out == learned[-1]

@@ -209,6 +209,7 @@ class LiveMatcher:
                 ready &= ~self._waiting(pending, t)
             chunk, rest = pending[ready], pending[~ready]
         self._pending = [rest.reset_index(drop=True)] if len(rest) else []
+        self.last_matched = pd.DataFrame(columns=list(MATCHED_COLUMNS))  # not the last call's, should this one raise
         result = self._match(chunk.sort_values("t", kind="stable") if "t" in chunk.columns else chunk)
         self.last_matched = result.dataset
         if not final and len(chunk):  # poses are kept back to where the signal stream has reached (it may lag the poses)

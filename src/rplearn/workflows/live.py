@@ -242,6 +242,8 @@ class _Session:
         try:
             rows = self.matcher.match(final).dataset
         except InputError as exc:  # too few matched over the whole stream: the matched rows are learned
+            if not final:  # refused in flight (as sync refuses the whole log): the rows taken for it are not matched
+                raise
             rows = self.matcher.last_matched
             self.status.notes.append(str(exc))
         held = self.held_nodes
