@@ -238,3 +238,13 @@ def test_an_output_name_without_a_suffix_says_no_kind_and_is_written(workdir):
     assert proc.returncode == 0, proc.stderr
     assert read_model_file(workdir / "plain_model")[0]
     assert answer(["predict", "plain_model", D, "-o", "plain.csv"], workdir).returncode == 0
+
+
+@pytest.mark.parametrize("name", ["models/", "model.json/"])
+def test_an_output_name_ending_with_a_separator_names_a_folder_and_is_refused_before_the_work(workdir, name):
+    """``-o models/`` names a folder: refused at once (before the fit, which then failed to write it)."""
+    before = listing(workdir)
+    proc = answer(["fit", D, "--order", "3", "-o", name], workdir)
+    assert proc.returncode != 0
+    assert_one_line_error(proc, f"{name}: names a folder")
+    assert listing(workdir) == before

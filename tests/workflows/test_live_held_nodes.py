@@ -7,9 +7,11 @@ fixed its nodes"), ending the session (found by hostile46)."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from rplearn.data.live_sync import HOLD_S
-from rplearn.data.sync import synchronise
+from rplearn.data.sync import SyncOptions, synchronise
+from rplearn.errors import InputError
 from rplearn.io import read_logs
 from rplearn.io.live_sources import CsvTail
 from rplearn.io.options import ReaderOptions
@@ -18,17 +20,18 @@ from rplearn.workflows.live import LiveOptions, _Session
 READER = ReaderOptions(nan_policy="drop")
 
 
-def _tail_and_session(folder):
+def _tail_and_session(folder, options: LiveOptions | None = None):
     """Empty pose and signal CSVs with their headers, a tail of them and a session reading it."""
     pose, signal = folder / "pose.csv", folder / "signal.csv"
     pose.write_text("t,node,x,y,z,qw,qx,qy,qz\n")
     signal.write_text("t,tx,rx,rssi_dbm,tx_power_dbm,frequency_hz\n")
-    return pose, signal, CsvTail(str(pose), str(signal), READER), _Session(LiveOptions(reader=READER), str(folder / "m.json"),
+    return pose, signal, CsvTail(str(pose), str(signal), READER), _Session(options or LiveOptions(reader=READER), str(folder / "m.json"),
                                                                           str(folder))
 
 
-def _append(pose, signal, s: int, rng) -> None:
-    """One second at 10 Hz: G still at the origin with attitude noise, A and B flying, every link both ways."""
+def _append(pose, signal, s: int, rng, g_links_from: float = 0.0) -> None:
+    """One second at 10 Hz: G still at the origin with attitude noise, A and B flying, every link both ways
+    (G's from ``g_links_from`` [s])."""
     with pose.open("a") as fp, signal.open("a") as fs:
         for k in range(10):
             t = s + 0.1 * k
@@ -37,15 +40,20 @@ def _append(pose, signal, s: int, rng) -> None:
                      f"{t + 0.03:.2f},A,{10 + 2 * t:g},5,20,1,0,0,0\n"
                      f"{t + 0.05:.2f},B,{-10 - t:g},-5,25,1,0,0,0\n")
             for j, (a, b) in enumerate((("A", "B"), ("B", "A"), ("A", "G"), ("G", "A"), ("B", "G"), ("G", "B"))):
+                if "G" in (a, b) and t < g_links_from:
+                    continue
                 fs.write(f"{t + 0.06 + 0.005 * j:.3f},{a},{b},{-60 - 0.1 * j - 0.01 * k:.2f},20,433000000\n")
 
 
-def test_a_held_node_is_in_the_sessions_node_list_and_its_rows_are_learned(tmp_path):
+@pytest.mark.parametrize("g_links_from", [0.0, 3.0])
+def test_a_held_node_is_in_the_sessions_node_list_and_its_rows_are_learned(tmp_path, g_links_from):
+    """Also when the held node's links start later than the others' (a station's radio heard from t = 3 s: the
+    rows of A and B learned first fixed the nodes as A, B, and G's rows ended the session when its hold ran out)."""
     rng = np.random.default_rng(7)
     pose, signal, tail, session = _tail_and_session(tmp_path)
     seconds = int(HOLD_S) + 20
     for s in range(seconds):  # a poll a second
-        _append(pose, signal, s, rng)
+        _append(pose, signal, s, rng, g_links_from)
         final = s == seconds - 1
         polled = tail.poll(final=final)
         session.feed(polled.poses, polled.signals, polled.held_nodes)
@@ -87,3 +95,43 @@ def test_a_radio_heard_that_logs_no_poses_does_not_hold_the_learning_back(tmp_pa
     assert session.stats is not None and session.stats.nodes == ("A", "B")
     assert session.matcher.waiting_nodes == frozenset({"Z"})
     assert not any(n.startswith("nodes: ") for n in session.status.notes)
+
+
+def test_clock_offsets_naming_a_held_node_lose_no_rows_while_it_is_held(tmp_path):
+    """``clock_offsets_s`` naming G, whose poses the source holds back: every poll's match raised 'clock offsets name
+    node(s) G without a pose log' and the rows taken for it were lost (20 of 198 learned, a note per poll)."""
+    rng = np.random.default_rng(9)
+    sync = SyncOptions(clock_offsets_s={"G": 0.0})
+    pose, signal, tail, session = _tail_and_session(tmp_path, LiveOptions(reader=READER, sync=sync))
+    seconds = int(HOLD_S) + 20
+    for s in range(seconds):
+        _append(pose, signal, s, rng)
+        final = s == seconds - 1
+        polled = tail.poll(final=final)
+        session.feed(polled.poses, polled.signals, polled.held_nodes)
+        session.learn(final=final)
+    logs, _ = read_logs([str(pose), str(signal)], READER)
+    assert session.stats is not None and session.stats.n_samples == len(synchronise(logs.pose, logs.signal, sync).dataset)
+    assert not any("clock offsets" in n for n in session.status.notes)
+
+
+def test_a_match_refused_in_flight_ends_the_session_and_learns_no_rows_twice(tmp_path):
+    """A station moved between flights (G still at one place, no poses for 20 s, still at another): ``sync`` refuses
+    it. The session caught the error at every poll and learned the previous poll's matched rows again each time
+    (learned grew by 20 a poll while matched stayed)."""
+    pose, signal, tail, session = _tail_and_session(tmp_path, LiveOptions(reader=READER, nodes=("A", "B", "G")))
+    learned = []
+    with pytest.raises(InputError, match="node G holds still"):
+        for s in range(40):
+            with pose.open("a") as fp, signal.open("a") as fs:
+                for k in range(10):
+                    t = s + 0.1 * k
+                    if t < 5 or t >= 25:
+                        fp.write(f"{t:.2f},G,{5 if t < 5 else 80},2,1,1,0,0,0\n")
+                    fp.write(f"{t + 0.03:.2f},A,{10 + 2 * t:g},5,20,1,0,0,0\n{t + 0.05:.2f},B,{-10 - t:g},-5,25,1,0,0,0\n")
+                    fs.write(f"{t + 0.06:.3f},A,B,-60,20,433000000\n{t + 0.07:.3f},B,A,-60,20,433000000\n")
+            polled = tail.poll()
+            session.feed(polled.poses, polled.signals, polled.held_nodes)
+            session.learn()
+            learned.append(session.stats.n_samples if session.stats is not None else 0)
+    assert session.stats is not None and session.stats.n_samples == session.matcher.summary.n_out == learned[-1]

@@ -209,13 +209,14 @@ class LiveMatcher:
                 ready &= ~self._waiting(pending, t)
             chunk, rest = pending[ready], pending[~ready]
         self._pending = [rest.reset_index(drop=True)] if len(rest) else []
+        self.last_matched = pd.DataFrame(columns=list(MATCHED_COLUMNS))  # not the last call's, should this one raise
         result = self._match(chunk.sort_values("t", kind="stable") if "t" in chunk.columns else chunk)
         self.last_matched = result.dataset
         if not final and len(chunk):  # poses are kept back to where the signal stream has reached (it may lag the poses)
             self._horizon = max(self._horizon, min(horizon, self._signal_t))
             self._trim()
         if final:
-            tracks = self._tracks()
+            tracks = self._tracks(final=True)
             phases = flight_phases(self._poses, tracks, self.options.clock_offsets_s, self.options.airborne_margin_m)
             finish_summary(self.summary, tracks, phases, self.options, self.source)
         return result
@@ -247,8 +248,14 @@ class LiveMatcher:
         """The nodes without poses that the waiting rows name (as of the last :meth:`match`)."""
         return self._waiting_nodes
 
-    def _tracks(self) -> dict:
-        return tracks_of_checked_log(self._poses, self.options.clock_offsets_s, "pose log", self.options.max_gap_s)
+    def _tracks(self, final: bool = False) -> dict:
+        """The tracks of the poses kept; before the stream's end, the clock offsets of the nodes with poses only (a
+        node whose poses a source holds back or that starts later: its rows wait, and its offset is checked at the end)."""
+        offsets = self.options.clock_offsets_s
+        if offsets and not final:
+            known = set(self._poses["node"].astype(str))
+            offsets = {node: dt for node, dt in offsets.items() if str(node) in known}
+        return tracks_of_checked_log(self._poses, offsets, "pose log", self.options.max_gap_s)
 
     def _match(self, chunk: pd.DataFrame) -> SyncResult:
         if chunk.empty:

@@ -227,12 +227,15 @@ def check_output_kind(path: str, kind: str, param: str = "output") -> str:
     """Refuse, before any work, an output whose name says another kind of file than the one
     written (:data:`OUTPUT_KINDS`: a model written as ``pose_log.parquet``, a PNG as ``x.csv``:
     a file another command would then read as what its name says; a name without a suffix says no
-    kind and is taken), or an empty name (a fit that saved nothing, with exit 0); ``param`` names
+    kind and is taken), a name ending with a separator (a folder: written as a file only after the
+    work, which then failed), or an empty name (a fit that saved nothing, with exit 0); ``param`` names
     the parameter that gave it."""
     suffixes, what = OUTPUT_KINDS[kind]
     if not str(path).strip():
         raise InputError(f"{param}: an empty file name; give the file to write ({what})", param=param)
-    name = os.path.basename(str(path).rstrip("/\\"))
+    if str(path).endswith(tuple(filter(None, ("/", os.sep, os.altsep)))):  # a folder, written as a file after the work
+        raise InputError(f"{path}: names a folder; give the file to write ({what})", param=param)
+    name = os.path.basename(str(path))
     if "." in name.lstrip(".") and not name.lower().endswith(suffixes):  # a name without a suffix says no kind
         raise InputError(f"{path}: {what} is written here, but the name says otherwise; name it "
                          f"{' or '.join(suffixes)}", param=param)

@@ -242,17 +242,20 @@ class _Session:
         try:
             rows = self.matcher.match(final).dataset
         except InputError as exc:  # too few matched over the whole stream: the matched rows are learned
+            if not final:  # refused in flight (as sync refuses the whole log): the rows taken for it are not matched
+                raise
             rows = self.matcher.last_matched
             self.status.notes.append(str(exc))
-        held = self.matcher.waiting_nodes & self.held_nodes
+        held = self.held_nodes
         if self.stats is None and not self.options.nodes and not final and (self.deferred or len(rows)) and held:
-            # rows wait for the first poses the source holds back (bounded by its hold): the node list, fixed
-            # by the first rows learned, must name that node too, so the rows matched meanwhile wait with them
-            # (a node no source holds, a radio heard that logs no poses, fixes nothing: its rows are dropped)
+            # the source holds a node's first poses back (bounded by its hold): the node list, fixed by the first
+            # rows learned, must name that node too (its links may start later than the others'), so the rows
+            # matched meanwhile wait with them (a node no source holds, a radio heard that logs no poses, fixes
+            # nothing: its rows are dropped)
             self.deferred.append(rows)
             rows = rows.iloc[:0]
             self.note("nodes: ", f"learning waits for the first poses of {', '.join(sorted(held))} "
-                                 "(rows name it; the source holds its start back)")
+                                 "(the source holds its start back)")
         elif self.deferred:
             rows = pd.concat([*self.deferred, rows], ignore_index=True)
             self.deferred = []
