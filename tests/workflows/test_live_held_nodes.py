@@ -29,15 +29,15 @@ def _tail_and_session(folder, options: LiveOptions | None = None):
                                                                           str(folder))
 
 
-def _append(pose, signal, s: int, rng, g_links_from: float = 0.0) -> None:
+def _append(pose, signal, s: int, rng, g_links_from: float = 0.0, g_poses_from: float = 0.0) -> None:
     """One second at 10 Hz: G still at the origin with attitude noise, A and B flying, every link both ways
-    (G's from ``g_links_from`` [s])."""
+    (G's from ``g_links_from`` [s]; G's poses from ``g_poses_from``)."""
     with pose.open("a") as fp, signal.open("a") as fs:
         for k in range(10):
             t = s + 0.1 * k
             yaw = 0.02 * rng.standard_normal()
-            fp.write(f"{t:.2f},G,0,0,0,{np.cos(yaw / 2):.9f},0,0,{np.sin(yaw / 2):.9f}\n"
-                     f"{t + 0.03:.2f},A,{10 + 2 * t:g},5,20,1,0,0,0\n"
+            fp.write((f"{t:.2f},G,0,0,0,{np.cos(yaw / 2):.9f},0,0,{np.sin(yaw / 2):.9f}\n" if t >= g_poses_from else "")
+                     + f"{t + 0.03:.2f},A,{10 + 2 * t:g},5,20,1,0,0,0\n"
                      f"{t + 0.05:.2f},B,{-10 - t:g},-5,25,1,0,0,0\n")
             for j, (a, b) in enumerate((("A", "B"), ("B", "A"), ("A", "G"), ("G", "A"), ("B", "G"), ("G", "B"))):
                 if "G" in (a, b) and t < g_links_from:
@@ -135,3 +135,24 @@ def test_a_match_refused_in_flight_ends_the_session_and_learns_no_rows_twice(tmp
             session.learn()
             learned.append(session.stats.n_samples if session.stats is not None else 0)
     assert session.stats is not None and session.stats.n_samples == session.matcher.summary.n_out == learned[-1]
+
+
+def test_a_node_first_logged_after_the_node_list_is_fixed_is_a_counted_drop_not_the_sessions_end(tmp_path):
+    """G's pose log starts 2 s after its links: at the first poll no source holds it, the session fixes A, B, and
+    G's rows, matched once its poses come, were refused by the statistics, ending the session (review46b). Now they
+    are dropped (late_node, counted, with a note naming G and --nodes) and the session goes on learning A-B."""
+    rng = np.random.default_rng(9)
+    pose, signal, tail, session = _tail_and_session(tmp_path)
+    seconds = int(HOLD_S) + 10
+    for s in range(seconds):
+        _append(pose, signal, s, rng, g_poses_from=2.0)
+        final = s == seconds - 1
+        polled = tail.poll(final=final)
+        session.feed(polled.poses, polled.signals, polled.held_nodes)
+        session.learn(final=final)
+    assert session.stats is not None and session.stats.nodes == ("A", "B")
+    assert session.status.dropped["late_node"] > 0
+    assert any(n.startswith("late: node(s) G appeared after the session fixed its nodes (A, B)") and "--nodes" in n
+               for n in session.status.notes)
+    assert session.stats.n_samples == 2 * 10 * seconds - 2  # every A-B row but the last, after the last pose
+    assert session.status.dropped["late_node"] > 4 * 10 * (seconds - 3)  # G's four links once its poses come

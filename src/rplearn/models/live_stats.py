@@ -150,6 +150,14 @@ class LiveStatistics:
                              f"({', '.join(self.nodes)}); name every node at the start", param="nodes")
         return link_samples(matched, source, nodes=self.nodes)
 
+    def known_rows(self, matched: pd.DataFrame) -> tuple[pd.DataFrame, list[str]]:
+        """The matched rows whose two ends are this session's nodes, and the other nodes the rest name (sorted)."""
+        tx, rx = matched["tx"].astype(str), matched["rx"].astype(str)
+        known = (tx.isin(self.nodes) & rx.isin(self.nodes)).to_numpy()
+        if known.all():
+            return matched, []
+        return matched[known], sorted((set(tx[~known]) | set(rx[~known])) - set(self.nodes))
+
     def add(self, matched: pd.DataFrame, samples: LinkSamples) -> None:
         """Learn a batch: its matched rows (spooled) and their samples (:meth:`samples`)."""
         if not len(samples):

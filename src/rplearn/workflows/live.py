@@ -216,6 +216,7 @@ class _Session:
         self.recent: deque[pd.DataFrame] = deque()
         self.deferred: list[pd.DataFrame] = []  # matched before the node list is fixed (see learn)
         self.held_nodes: frozenset[str] = frozenset()
+        self.late_rows = 0  # matched rows naming a node outside the fixed node list (dropped: late_node)
         self.last_pose: dict[str, pd.Series] = {}
         self.new_samples = 0
         self.ranking = None if options.manoeuvres is None else RankingWorker(
@@ -248,10 +249,8 @@ class _Session:
             self.status.notes.append(str(exc))
         held = self.held_nodes
         if self.stats is None and not self.options.nodes and not final and (self.deferred or len(rows)) and held:
-            # the source holds a node's first poses back (bounded by its hold): the node list, fixed by the first
-            # rows learned, must name that node too (its links may start later than the others'), so the rows
-            # matched meanwhile wait with them (a node no source holds, a radio heard that logs no poses, fixes
-            # nothing: its rows are dropped)
+            # the source holds a node's first poses back (bounded by its hold): the node list, fixed by the first rows
+            # learned, must name it too, so the rows matched meanwhile wait (a radio that logs no poses fixes nothing)
             self.deferred.append(rows)
             rows = rows.iloc[:0]
             self.note("nodes: ", f"learning waits for the first poses of {', '.join(sorted(held))} "
@@ -266,6 +265,11 @@ class _Session:
                 self.stats = LiveStatistics(self.options.spec, nodes, self.options.fit,
                                             spool_dir=self.work_dir, max_segments=self.options.max_segments,
                                             keep_blocks=self.options.manoeuvres is not None)
+            n, (rows, late) = len(rows), self.stats.known_rows(rows)
+            if late:  # a node first matched after the node list was fixed: its rows are counted, the session goes on
+                self.late_rows += n - len(rows)
+                self.note("late: ", f"node(s) {', '.join(late)} appeared after the session fixed its nodes ({', '.join(self.stats.nodes)}): "
+                                    "their rows are dropped (late_node); name every node with --nodes")
             samples = self.stats.samples(rows)
             if self.fitted is not None:  # predicted before it is learned from
                 self.preq.add(samples.joint_gain_db - self.fitted.model.predict_gain(samples))
@@ -276,14 +280,13 @@ class _Session:
                 self.recent.popleft()
         s = self.status
         s.matched, s.pending = self.matcher.summary.n_out, self.matcher.pending_rows
-        s.dropped = {**self.matcher.summary.dropped, **self.source_dropped}  # the CSV reader's pose rows too
+        s.dropped = {**self.matcher.summary.dropped, **self.source_dropped, **({"late_node": self.late_rows} if self.late_rows else {})}
         s.learned = 0 if self.stats is None else self.stats.n_samples
         s.prequential_rmse_db, s.prequential_n = self.preq.rmse_db(), self.preq.n_samples
 
     def rematch_whole(self, src: MavlinkSource) -> None:
-        """Learn the recorded MAVLink log afresh, matched whole: its reader's rules look at the
-        whole log (the boot clock's median offset, the periods before a valid position), so rows
-        matched from a shorter read may differ from ``sync`` of the whole recording."""
+        """Learn the recorded MAVLink log afresh, matched whole, as ``sync`` (its reader's rules look at the whole log:
+        the boot clock's median offset, the periods before a valid position), every node it names (unless ``--nodes``)."""
         from rplearn.data.sync import synchronise
         from rplearn.io.read import read_logs
 
@@ -297,9 +300,10 @@ class _Session:
             return
         rows = result.dataset.sort_values("t", kind="stable").reset_index(drop=True)
         before = self.stats.n_samples
-        self.stats = LiveStatistics(self.options.spec, self.stats.nodes, self.options.fit, spool_dir=self.work_dir,
-                                    max_segments=self.options.max_segments,
-                                    keep_blocks=self.options.manoeuvres is not None)
+        named = tuple(sorted(set(map(str, rows["tx"])) | set(map(str, rows["rx"])))) if len(rows) else self.stats.nodes
+        self.stats = LiveStatistics(self.options.spec, self.options.nodes or named, self.options.fit, spool_dir=self.work_dir,
+                                    max_segments=self.options.max_segments, keep_blocks=self.options.manoeuvres is not None)
+        rows = self.stats.known_rows(rows)[0] if len(rows) else rows  # --nodes: the others' rows are not learned
         if len(rows):
             self.stats.add(rows, self.stats.samples(rows, src.record_path))
         self.new_samples = len(rows)
