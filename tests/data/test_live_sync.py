@@ -21,12 +21,17 @@ def logs() -> tuple[pd.DataFrame, pd.DataFrame]:
     return r.pose_log, signal
 
 
-def _live(pose: pd.DataFrame, signal: pd.DataFrame, batch_s: float) -> tuple[pd.DataFrame, LiveMatcher]:
+def _live(pose: pd.DataFrame, signal: pd.DataFrame, batch_s: float, held_node: str | None = None,
+          until_s: float = -np.inf) -> tuple[pd.DataFrame, LiveMatcher]:
+    """The logs fed to a matcher in batches of ``batch_s``, as they arrive; with ``held_node``, its poses
+    before ``until_s`` held back (a source holding a node's start) and handed out with the batch that reaches it."""
     m = LiveMatcher()
     out = []
     edges = np.arange(pose["t"].min(), pose["t"].max() + batch_s, batch_s)
     for a, b in zip(edges[:-1], edges[1:]):
-        m.add_poses(pose[(pose["t"] >= a) & (pose["t"] < b)])
+        held = (pose["node"] == held_node) & (pose["t"] < until_s)
+        rows = pose[(pose["t"] >= a) & (pose["t"] < b) & ~held]
+        m.add_poses(pd.concat([pose[held], rows]) if a <= until_s < b else rows)  # the held rows, all at once
         m.add_signals(signal[(signal["t"] >= a) & (signal["t"] < b)])
         out.append(m.match().dataset)
     m.add_signals(signal[signal["t"] >= edges[-1]])
@@ -157,24 +162,6 @@ def test_a_copy_sent_again_after_the_hashes_are_forgotten_is_dropped_as_late_not
     assert m.summary.n_in == whole.summary.n_in and m.summary.n_out == whole.summary.n_out
 
 
-def _held(pose: pd.DataFrame, signal: pd.DataFrame, node: str, until_s: float, batch_s: float = 1.0
-          ) -> tuple[pd.DataFrame, LiveMatcher]:
-    """As :func:`_live`, with ``node``'s poses before ``until_s`` held back (a source holding a node's start) and
-    handed out with the batch that reaches ``until_s``."""
-    m = LiveMatcher()
-    out = []
-    edges = np.arange(pose["t"].min(), pose["t"].max() + batch_s, batch_s)
-    for a, b in zip(edges[:-1], edges[1:]):
-        held = (pose["node"] == node) & (pose["t"] < until_s)
-        rows = pose[(pose["t"] >= a) & (pose["t"] < b) & ~held]
-        m.add_poses(pd.concat([pose[held], rows]) if a <= until_s < b else rows)  # the held rows, all at once
-        m.add_signals(signal[(signal["t"] >= a) & (signal["t"] < b)])
-        out.append(m.match().dataset)
-    m.add_signals(signal[signal["t"] >= edges[-1]])
-    out.append(m.match(final=True).dataset)
-    return pd.concat([o for o in out if len(o)], ignore_index=True), m
-
-
 @pytest.mark.parametrize("until_s", [12.0, 45.0])
 def test_rows_of_a_node_whose_first_poses_are_held_wait_for_them(logs, until_s):
     # a source holding a node's first poses (CsvTail: a logger's start at the zero position, up to HOLD_S):
@@ -184,7 +171,7 @@ def test_rows_of_a_node_whose_first_poses_are_held_wait_for_them(logs, until_s):
     node = "B"
     assert pose.loc[pose["node"] == node, "t"].min() < until_s < pose["t"].max()
     whole = synchronise(pose, signal)
-    live, m = _held(pose, signal, node, until_s)
+    live, m = _live(pose, signal, 1.0, node, until_s)
     expected = whole.dataset.sort_values(["t", "tx", "rx"], kind="stable").reset_index(drop=True)
     live = live.sort_values(["t", "tx", "rx"], kind="stable").reset_index(drop=True)
     assert len(live) == len(expected)
