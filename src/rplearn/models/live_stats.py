@@ -150,6 +150,11 @@ class LiveStatistics:
                              f"({', '.join(self.nodes)}); name every node at the start", param="nodes")
         return link_samples(matched, source, nodes=self.nodes)
 
+    @staticmethod
+    def nodes_of(matched: pd.DataFrame) -> tuple[str, ...]:
+        """The nodes matched rows name, sorted (``fit``'s model order)."""
+        return tuple(sorted(set(map(str, matched["tx"])) | set(map(str, matched["rx"]))))
+
     def known_rows(self, matched: pd.DataFrame) -> tuple[pd.DataFrame, list[str]]:
         """The matched rows whose two ends are this session's nodes, and the other nodes the rest name (sorted)."""
         tx, rx = matched["tx"].astype(str), matched["rx"].astype(str)

@@ -261,7 +261,7 @@ class _Session:
             self.note("nodes: ")
         if len(rows):
             if self.stats is None:
-                nodes = self.options.nodes or tuple(sorted(set(map(str, rows["tx"])) | set(map(str, rows["rx"]))))
+                nodes = self.options.nodes or LiveStatistics.nodes_of(rows)
                 self.stats = LiveStatistics(self.options.spec, nodes, self.options.fit,
                                             spool_dir=self.work_dir, max_segments=self.options.max_segments,
                                             keep_blocks=self.options.manoeuvres is not None)
@@ -300,7 +300,7 @@ class _Session:
             return
         rows = result.dataset.sort_values("t", kind="stable").reset_index(drop=True)
         before = self.stats.n_samples
-        named = tuple(sorted(set(map(str, rows["tx"])) | set(map(str, rows["rx"])))) if len(rows) else self.stats.nodes
+        named = LiveStatistics.nodes_of(rows) if len(rows) else self.stats.nodes
         self.stats = LiveStatistics(self.options.spec, self.options.nodes or named, self.options.fit, spool_dir=self.work_dir,
                                     max_segments=self.options.max_segments, keep_blocks=self.options.manoeuvres is not None)
         rows = self.stats.known_rows(rows)[0] if len(rows) else rows  # --nodes: the others' rows are not learned
