@@ -348,6 +348,24 @@ def test_trajectory_optimize_prints_the_expected_spread_and_writes_the_plan(tmp_
     assert bad.returncode == 1 and "--budget-s" in bad.stderr and len(bad.stderr.strip().splitlines()) == 1
 
 
+def test_trajectory_optimize_plans_for_the_given_packet_rate(tmp_path):
+    """A radio reporting 2 packets/s learns less per second than the default 80/s: the plan takes
+    longer to the target (the planner had the 80/s built in, whatever the radio)."""
+    args = ["trajectory", "--optimize", "--check-model", "sh-4", "--target-spread", "3", "--budget-s", "300", "--noise", "4",
+            "--prior-std", "4"]
+
+    def planned_s(*extra: str, out: str) -> float:
+        last = run_here([*args, *extra, "-o", out], tmp_path).stdout.strip().splitlines()[-1]
+        assert "target 3 dB reached after" in last
+        return float(last.split("reached after ")[1].split(" s")[0])
+
+    assert planned_s("--packet-rate", "2", out="slow") > 1.2 * planned_s(out="default")
+    for bad in ("0", "nan", "-1"):
+        proc = run_here([*args, "--packet-rate", bad, "-o", f"bad{bad}"], tmp_path, ok=False)
+        assert proc.returncode == 1 and "--packet-rate" in proc.stderr and len(proc.stderr.strip().splitlines()) == 1
+        assert not (tmp_path / f"bad{bad}").exists()
+
+
 def test_simulate_flies_a_written_plan(tmp_path):
     run_here(["trajectory", "--optimize", "--check-model", "sh-4", "--target-spread", "3", "--budget-s", "40", "--noise", "4",
          "--prior-std", "4", "-o", "plan"], tmp_path)
