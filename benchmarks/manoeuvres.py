@@ -36,7 +36,26 @@ within the cells' scatter, and the ranking about 2.2x slower (311 candidates), s
 default (``rplearn live`` and ``trajectory --optimize`` keep the inflated model too). ``--prior-std DB`` instead states a
 smoothness prior of that spread over the sphere
 (:func:`~rplearn.analysis.manoeuvres.prior_penalty_weight`) with the simulator's nominal noise.
-The ranking uses the same model.
+The ranking uses the same model (``--hyper reference``; see below).
+
+**What the planners know** (``--hyper``). The spreads above are always read under the error
+model of the complete reference flight's fit: it is the benchmark's yardstick, the same for all
+three flights. What the planners (the suggested flight's ranking, ``--ranker reference``, and
+the optimized plan's :func:`~rplearn.analysis.manoeuvres.greedy_plan`) are *given* is another
+matter, for a user plans before this flight's reference exists (:func:`_planning_options`):
+
+| ``--hyper`` | noise, prior (smoothing), drifting error | stands for |
+| --- | --- | --- |
+| ``reference`` (default) | the fit of this flight's reference, its blocks | an oracle: this flight's own figures |
+| ``previous`` | the fit of an earlier flight of the same antennas (the reference's units, seed :data:`PREVIOUS_SEED`) | a user with an earlier fit |
+| ``cli`` | ``trajectory --optimize``'s defaults: 4.2 dB, a 6-dB smoothness prior, no drift | a user with no fit at all |
+
+Under each the planners keep the benchmark's target directions, candidates, packet rate (the
+radio's, as ``--packet-rate`` gives it) and, with ``--tilt``, the tilt: what the user wants to
+learn and what the radio and vehicles do, not a fit's figures. ``--ranker live`` ranks with its
+own refits whatever ``--hyper`` says, and ``--bound`` is computed under the yardstick's model.
+With ``--prior-std DB`` the prior is stated, and ``previous`` differs from ``reference`` only in
+the drifting error. Measured: ``docs/guides/calibration-plan.md``, "What it buys".
 
 **What the error check can and cannot tell** (``--budget``: each flight's samples split into the
 truth at the logged directions, the pointing part and the rest, each fitted alone; seeds 0-2): at a flight's 2-dB point its worst
@@ -632,6 +651,7 @@ from rplearn.plan.campaign import Campaign
 from rplearn.plan.manoeuvres import CandidateOptions
 from rplearn.sim import simulate
 from rplearn.sim.presets import make_preset
+from rplearn.workflows.calibration_plan import OptimizeOptions
 from rplearn.workflows.live import LiveOptions
 from rplearn.workflows.live_advice import ranking_options
 
@@ -675,6 +695,10 @@ DRAW_SEED = 100_000
 #: Seed step between the plans of a draw (a plan flies fewer units than this).
 PLAN_SEED = 300
 FIXED = {"ground": ("G",)}
+#: Where the planners' hyper-parameters come from (``--hyper``; the module docstring's "What the planners know").
+HYPERS = ("reference", "previous", "cli")
+#: The seed of the earlier flight of the same antennas whose fit ``--hyper previous`` plans with.
+PREVIOUS_SEED = 7919
 
 
 def _subset(samples: Any, m: np.ndarray) -> Any:
@@ -953,12 +977,57 @@ def _reference_drift(setup: Setup, parts: list[Any]) -> float:
     return correlated_error_std_db(whole.normal, setup.spec, whole.blocks, setup.options)
 
 
+def _learned(setup: Setup, parts: list[Any], prior_std_db: float, posterior: str, source: str) -> dict[str, Any]:
+    """The hyper-parameters a fit of the flight ``parts`` gives, as :class:`ManoeuvreOptions` fields:
+    with ``prior_std_db <= 0`` the prior, noise, misfit and variance inflation ``fit --degree auto``
+    learns (:func:`_learned_prior`), and with ``--correlated reference`` the drifting error's size
+    its blocks show (:func:`_reference_drift`, under that prior and noise)."""
+    out: dict[str, Any] = {}
+    if prior_std_db <= 0:
+        print(f"  from {source}:")
+        weight, noise, misfit, inflation = _learned_prior(parts, setup.nodes, setup.options.power, posterior == "honest")
+        out = {"penalty_weight": weight, "noise_std_db": noise, "misfit_std_db": misfit, "prior_variance_factor": max(inflation, 1.0)}
+    if setup.correlated == "reference":
+        there = replace(setup, options=replace(setup.options, **out), weight=float(out.get("penalty_weight", setup.weight)))
+        out["correlated_std_db"] = drift = _reference_drift(there, parts)
+        print(f"  drifting error from {source} ({setup.block_s:g}-s blocks): {drift:.3f} dB per block")
+    return out
+
+
+def _planning_options(setup: Setup, hyper: str, stated: ManoeuvreOptions, learning: tuple[Any, ...], prior_std_db: float,
+                      posterior: str) -> ManoeuvreOptions:
+    """The options the planners (the suggested flight's ranking and the optimized plan) are given
+    (the module docstring's table "What the planners know"): ``setup.options`` with the noise,
+    prior and drift of ``hyper``. ``stated``: the options before any fit (the stated prior and the
+    simulator's nominal noise), from which ``previous`` learns its own. The target directions, the
+    candidates, the packet rate and the tilt stay ``setup.options``' (what the user wants to learn
+    and what the radio and the vehicles do, not a fit's figures)."""
+    judged = setup.options
+    if hyper == "reference":
+        return judged
+    if hyper == "previous":
+        earlier = replace(setup, seed=PREVIOUS_SEED, flown=0, draw=0, budget=False, truths={},
+                          options=replace(stated, targets=judged.targets))
+        parts, _ = fly(earlier, learning)
+        learned = _learned(earlier, parts, prior_std_db, posterior, f"the earlier flight (seed {PREVIOUS_SEED})")
+        return replace(judged, **learned)
+    if hyper == "cli":
+        cli = OptimizeOptions()
+        weight = prior_penalty_weight(setup.spec.basis(), cli.prior_std_db, cli.noise_std_db, setup.spec.ridge_weight, judged.power)
+        print(f"  the planners' hyper-parameters: the CLI's defaults (noise {cli.noise_std_db:g} dB, prior spread "
+              f"{cli.prior_std_db:g} dB, drift {cli.drift_std_db:g} dB)")
+        return replace(judged, noise_std_db=cli.noise_std_db, penalty_weight=weight, misfit_std_db=0.0, prior_variance_factor=1.0,
+                       correlated_std_db=cli.drift_std_db)
+    raise ValueError(f"hyper: expected one of {', '.join(HYPERS)}, got {hyper!r}")
+
+
 def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, prior_std_db: float = PRIOR_STD_DB,
         correlated: str = "reference", block_s: float = DEFAULT_BLOCK_S, posterior: str = "inflated",
         budget: bool = False, draws: int = DRAWS, candidates: dict[str, Any] | None = None, tilt: bool = False,
         aggregate: str = "rms", rate: str = "spread", prefixes: int = ManoeuvreOptions().prefixes,
         lookahead: int = ManoeuvreOptions().lookahead, aimed: int = ManoeuvreOptions().aimed,
-        design: str = ManoeuvreOptions().design, bound: str = "", ranker: str = "reference") -> dict[str, Flight]:
+        design: str = ManoeuvreOptions().design, bound: str = "", ranker: str = "reference",
+        hyper: str = "reference") -> dict[str, Flight]:
     config = _config(preset)
     learning = config.campaign.with_role("learning").units
     nodes = tuple(sorted(config.node_antennas))
@@ -971,16 +1040,12 @@ def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, 
                             penalty_weight=weight, candidates=cands, power=power, correlation_s=block_s, aggregate=aggregate,
                             rate=rate, prefixes=prefixes, lookahead=lookahead, aimed=aimed, design=design)
     setup = Setup(preset, config, spec, nodes, opts, weight, seed=seed, correlated=correlated, block_s=block_s, budget=budget)
+    stated = opts
     ref_parts, _ = fly(setup, learning)
-    if prior_std_db <= 0:  # the prior the project learns from the complete reference flight
-        weight, noise, misfit, inflation = _learned_prior(ref_parts, nodes, power, posterior == "honest")
-        setup.weight = weight
-        opts = replace(opts, penalty_weight=weight, noise_std_db=noise, misfit_std_db=misfit, prior_variance_factor=max(inflation, 1.0))
-    setup.options = opts = replace(opts, targets=_targets(setup, ref_parts))
-    if correlated == "reference":
-        drift = _reference_drift(setup, ref_parts)
-        setup.options = opts = replace(opts, correlated_std_db=drift)
-        print(f"  drifting error (from the reference flight's {block_s:g}-s blocks): {drift:.3f} dB per block")
+    setup.options = replace(opts, targets=_targets(setup, ref_parts))
+    # the error model every flight's spread is read under: the fit of the complete reference flight
+    setup.options = opts = replace(setup.options, **_learned(setup, ref_parts, prior_std_db, posterior, "the reference flight"))
+    setup.weight = float(opts.penalty_weight or 0.0)
     ref = setup.flight("reference")
     ref.plan = [(tuple(learning), 0.0, None)]
     accumulate(setup, ref, ref_parts)
@@ -1000,6 +1065,7 @@ def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, 
         setup.options = opts = replace(opts, steady_accel_enu_m_s2=accel)
         print(f"  steady tilt from the start's poses: {np.degrees(np.arctan(np.hypot(accel[0], accel[1]) / 9.80665)):.1f} deg "
               f"({accel[0]:+.2f}, {accel[1]:+.2f}) m/s^2")
+    opts = _planning_options(setup, hyper, stated, learning, prior_std_db, posterior)
     first = learning[0].evaluate(np.array([0.0]))
     start = {n: (tuple(first.position_enu_m[0, j]), float(np.degrees(first.yaw_rad[0, j]))) for j, n in enumerate(learning[0].nodes)}
     if bound:
@@ -1161,6 +1227,9 @@ def main(argv: list[str] | None = None) -> int:
                     help="the suggested flight's ranking: from the posterior learned on the complete reference flight (default), "
                          "or as rplearn live ranks, from its own refits of the flight so far, for each node's sphere "
                          "(live) or the benchmark's target directions (live-targets)")
+    ap.add_argument("--hyper", choices=HYPERS, default="reference",
+                    help="the planners' noise, prior and drift: from the fit of this flight's reference (default), of an earlier "
+                         f"flight of the same antennas (seed {PREVIOUS_SEED}), or the CLI's defaults (no fit)")
     ap.add_argument("--tiny", action="store_true", help="the smoke preset at SH-4 (seconds; criteria not enforced)")
     args = ap.parse_args(argv)
     presets = ["smoke"] if args.tiny else [p.strip() for p in args.presets.split(",") if p.strip()]
@@ -1177,7 +1246,7 @@ def main(argv: list[str] | None = None) -> int:
         flights = run(preset, order, seed, limit, args.power, args.prior_std, args.correlated, args.block_s, args.posterior,
                       args.budget or args.tiny, draws, _candidate_args(args), args.tilt, args.aggregate,
                       args.rate, args.prefixes, args.lookahead, args.aimed, args.design, "yes" if args.tiny else args.bound,
-                      args.ranker)
+                      args.ranker, args.hyper)
         ref = flights["reference"]
         if "suggested" not in flights:
             continue
