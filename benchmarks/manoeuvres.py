@@ -49,6 +49,7 @@ matter, for a user plans before this flight's reference exists (:func:`_planning
 | ``reference`` (default) | the fit of this flight's reference, its blocks | an oracle: this flight's own figures |
 | ``previous`` | the fit of an earlier flight of the same antennas (the reference's units, seed :data:`PREVIOUS_SEED`) | a user with an earlier fit |
 | ``cli`` | ``trajectory --optimize``'s defaults: 4.2 dB, a 6-dB smoothness prior, no drift | a user with no fit at all |
+| ``flags`` | ``previous``'s noise and drift, the CLI's 6-dB smoothness prior | a user passing them as ``--noise``, ``--drift`` |
 
 Under each the planners keep the benchmark's target directions, candidates, packet rate (the
 radio's, as ``--packet-rate`` gives it) and, with ``--tilt``, the tilt: what the user wants to
@@ -696,7 +697,7 @@ DRAW_SEED = 100_000
 PLAN_SEED = 300
 FIXED = {"ground": ("G",)}
 #: Where the planners' hyper-parameters come from (``--hyper``; the module docstring's "What the planners know").
-HYPERS = ("reference", "previous", "cli")
+HYPERS = ("reference", "previous", "cli", "flags")
 #: The seed of the earlier flight of the same antennas whose fit ``--hyper previous`` plans with.
 PREVIOUS_SEED = 7919
 
@@ -1005,19 +1006,23 @@ def _planning_options(setup: Setup, hyper: str, stated: ManoeuvreOptions, learni
     judged = setup.options
     if hyper == "reference":
         return judged
-    if hyper == "previous":
+    learned: dict[str, Any] = {}
+    if hyper in ("previous", "flags"):
         earlier = replace(setup, seed=PREVIOUS_SEED, flown=0, draw=0, budget=False, truths={},
                           options=replace(stated, targets=judged.targets))
         parts, _ = fly(earlier, learning)
         learned = _learned(earlier, parts, prior_std_db, posterior, f"the earlier flight (seed {PREVIOUS_SEED})")
-        return replace(judged, **learned)
-    if hyper == "cli":
+        if hyper == "previous":
+            return replace(judged, **learned)
+    if hyper in ("cli", "flags"):
         cli = OptimizeOptions()
-        weight = prior_penalty_weight(setup.spec.basis(), cli.prior_std_db, cli.noise_std_db, setup.spec.ridge_weight, judged.power)
-        print(f"  the planners' hyper-parameters: the CLI's defaults (noise {cli.noise_std_db:g} dB, prior spread "
-              f"{cli.prior_std_db:g} dB, drift {cli.drift_std_db:g} dB)")
-        return replace(judged, noise_std_db=cli.noise_std_db, penalty_weight=weight, misfit_std_db=0.0, prior_variance_factor=1.0,
-                       correlated_std_db=cli.drift_std_db)
+        noise = float(learned.get("noise_std_db", cli.noise_std_db))
+        drift = float(learned.get("correlated_std_db", cli.drift_std_db))
+        weight = prior_penalty_weight(setup.spec.basis(), cli.prior_std_db, noise, setup.spec.ridge_weight, judged.power)
+        print(f"  the planners' hyper-parameters: {'the CLI' + chr(39) + 's defaults' if hyper == 'cli' else 'the CLI flags'} "
+              f"(--noise {noise:.2f} dB, --prior-std {cli.prior_std_db:g} dB, --drift {drift:.2f} dB)")
+        return replace(judged, noise_std_db=noise, penalty_weight=weight, misfit_std_db=0.0, prior_variance_factor=1.0,
+                       correlated_std_db=drift)
     raise ValueError(f"hyper: expected one of {', '.join(HYPERS)}, got {hyper!r}")
 
 
@@ -1229,7 +1234,8 @@ def main(argv: list[str] | None = None) -> int:
                          "(live) or the benchmark's target directions (live-targets)")
     ap.add_argument("--hyper", choices=HYPERS, default="reference",
                     help="the planners' noise, prior and drift: from the fit of this flight's reference (default), of an earlier "
-                         f"flight of the same antennas (seed {PREVIOUS_SEED}), or the CLI's defaults (no fit)")
+                         f"flight of the same antennas (seed {PREVIOUS_SEED}), the CLI's defaults (no fit), or the CLI's "
+                         "defaults with --noise and --drift from that earlier flight (flags)")
     ap.add_argument("--tiny", action="store_true", help="the smoke preset at SH-4 (seconds; criteria not enforced)")
     args = ap.parse_args(argv)
     presets = ["smoke"] if args.tiny else [p.strip() for p in args.presets.split(",") if p.strip()]
@@ -1252,7 +1258,8 @@ def main(argv: list[str] | None = None) -> int:
             continue
         print(f"{preset} (SH-{order}, seed {seed}, {time.perf_counter() - t0:.0f} s): time to {TARGET_DB:g} dB per-node spread")
         for f in flights.values():
-            when = "not reached" if f.reached_s is None else f"{f.reached_s:.0f} s"
+            when = f"{f.reached_s:.0f} s" if f.reached_s is not None else "not reached" + (
+                f" (its plan ends at {f.history[-1][0]:.0f} s with {f.history[-1][1]:.2f} dB)" if f.history else "")
             ratio = "" if f.reached_s is None or ref.reached_s is None or f is ref else f", ratio {f.reached_s / ref.reached_s:.2f}x"
             print(f"  {f.name:10s} {when}{ratio}; spread [{_fmt(f.spread_db)}] dB (own posterior [{_fmt(f.own_db)}]); "
                   f"pattern error [{_fmt(f.error_db)}] dB")

@@ -129,7 +129,7 @@ def test_manoeuvres_plans_with_an_earlier_flights_or_the_clis_hyper_parameters(t
     ``--hyper cli`` gives them ``trajectory --optimize``'s defaults."""
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT / "src"), os.environ.get("PYTHONPATH", "")])}
     script = ROOT / "benchmarks" / "manoeuvres.py"
-    for hyper, said in (("previous", r"from the earlier flight \(seed 7919\)"), ("cli", r"the CLI's defaults \(noise 4\.2 dB")):
+    for hyper, said in (("previous", r"from the earlier flight \(seed 7919\)"), ("cli", r"the CLI's defaults \(--noise 4\.20 dB")):
         proc = subprocess.run([sys.executable, str(script), "--tiny", "--hyper", hyper], capture_output=True, text=True,
                               cwd=tmp_path, timeout=600, env=env)
         assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
