@@ -272,3 +272,45 @@ def test_a_rest_before_the_flight_does_not_hide_the_flights_copies(tmp_path):
     path.write_bytes(b"".join(out))
     _, meta = _read(path)
     assert meta["close_copies"] == 2000 and meta["messages"]["ATT"] == 3000
+
+
+def _rates(path: Path, stretches: list[tuple[int, int]], again: dict[int, int]) -> Path:
+    """A vehicle at rest logging ATT of equal fields at changing rates within one boot: ``stretches`` of (interval
+    [us], records), one after the other (a POS and a RAD every 100th record); the records numbered in ``again``
+    written again that many microseconds later, right after themselves."""
+    from rplearn.io.dataflash_writer import _fmt_records, _record
+
+    lat, lon = 473977000, 85456000
+    out = [*_fmt_records(), _record("ORGN", 1_000_000, 1, lat, lon, 90.0), _record("ARM", 1_000_000, 1)]
+    t, i = 1_000_100, 0
+    for interval_us, n in stretches:
+        for _ in range(n):
+            out.append(_record("ATT", t, 0.0, 0.0, 90.0))
+            if i % 100 == 0:
+                out.append(_record("POS", t + 1, lat + i, lon, 100.0))
+                out.append(_record("RAD", t + 2, 200, 190 - i // 100, 100, 0, 0, 0, 0))
+            if i in again:
+                out.append(_record("ATT", t + again[i], 0.0, 0.0, 90.0))
+            t += interval_us
+            i += 1
+    path.write_bytes(b"".join(out))
+    return path
+
+
+def test_a_rate_raised_within_a_boot_keeps_its_fast_records(tmp_path):
+    # ATT of equal fields at 10 Hz (2,000 records) then at 1 kHz (1,000): every other fast record is read 1 ms after
+    # an equal one. Judged by the whole log's median interval (100 ms) they were copies: 500 records dropped; by the
+    # cadence of the last records of their key (CADENCE_SPAN), 1 kHz: none. Copies written into both stretches,
+    # at the change too, are still found
+    again = {5: 500, 1999: 400, 2000: 0, 2001: 0, 2600: 0}
+    _, meta = _read(_rates(tmp_path / "faster.bin", [(100_000, 2000), (1000, 1000)], again))
+    assert meta["messages"]["ATT"] == 3000 and meta["close_copies"] == len(again)
+
+
+def test_a_rate_lowered_within_a_boot_still_has_its_copies(tmp_path):
+    # ATT of equal fields at 1 kHz (3,000) then at 10 Hz (500), every slow record written again 0.5 ms later. Judged
+    # by the whole log's median interval (2 ms: the fast records, every other one read 1 ms after an equal one) none
+    # of the 500 copies was one; by the local cadence (100 ms) every one is, and no fast record is
+    again = dict.fromkeys(range(3000, 3500), 500)
+    _, meta = _read(_rates(tmp_path / "slower.bin", [(1000, 3000), (100_000, 500)], again))
+    assert meta["messages"]["ATT"] == 3500 and meta["close_copies"] == len(again)
