@@ -11,15 +11,13 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
-from flightfiles import rplearn_here
+from flightfiles import rplearn_here, simulated_dataflash
 
-from rplearn.io._common import Logs
 from rplearn.io.damage import file_damage
-from rplearn.io.dataflash_writer import _FORMATS, write_dataflash
+from rplearn.io.dataflash_writer import _FORMATS
 from rplearn.io.files import read_table
 from rplearn.io.mavlink import read_mavlink
 
-ORIGIN = (47.3977, 8.5456, 90.0)
 REAL_BIN = Path(__file__).resolve().parents[1] / "fixtures" / "ardupilot" / "pymavlink_test.BIN"
 #: the real log's whole records (it ends 24 bytes into an AHR2 record)
 REAL_WHOLE = 65512
@@ -71,16 +69,7 @@ def _read(path):
 @pytest.fixture(scope="module")
 def once(tmp_path_factory) -> Path:
     """A simulated flight written by rplearn.io.dataflash_writer (thousands of ATT, POS and RAD)."""
-    from rplearn.sim.flight import simulate
-
-    sim = simulate("smoke", seed=3)
-    pose, signal = sim.pose_log, sim.signal_log
-    station = pose[pose["node"] == "B"].iloc[[0]]
-    logs = Logs(pd.concat([pose[pose["node"] == "A"], station], ignore_index=True),
-                signal[["t", "tx", "rx", "rssi_dbm", "tx_power_dbm", "frequency_hz"]])
-    path = tmp_path_factory.mktemp("df_copies") / "once.bin"
-    write_dataflash(logs, path, vehicle="A", station="B", origin_geodetic=ORIGIN)
-    return path
+    return simulated_dataflash(tmp_path_factory.mktemp("df_copies") / "once.bin")
 
 
 def _read_twice(once, tmp_path, apart_us: int):
