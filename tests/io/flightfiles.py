@@ -54,6 +54,25 @@ def ground_flight(station_yaw_enu_deg: float) -> tuple[pd.DataFrame, pd.DataFram
     return pd.concat([pose[pose["node"] == "D"], station], ignore_index=True), signal
 
 
+def simulated_dataflash(path: Path, seed: int = 3, station_xyz: tuple[float, float, float] | None = None) -> Path:
+    """The ``smoke`` preset's flight (``seed``) as a DataFlash log written by :mod:`rplearn.io.dataflash_writer`
+    (thousands of ATT, POS and RAD; vehicle A, station B): B one static row at its first pose, or at ``station_xyz``
+    (ENU [m]: two flights' logs from one home). Returns ``path``."""
+    from rplearn.io._common import Logs
+    from rplearn.io.dataflash_writer import write_dataflash
+    from rplearn.sim.flight import simulate
+
+    sim = simulate("smoke", seed=seed)
+    pose, signal = sim.pose_log, sim.signal_log
+    station = pose[pose["node"] == "B"].iloc[[0]]
+    if station_xyz is not None:
+        station = station.assign(x=station_xyz[0], y=station_xyz[1], z=station_xyz[2])
+    logs = Logs(pd.concat([pose[pose["node"] == "A"], station], ignore_index=True),
+                signal[["t", "tx", "rx", "rssi_dbm", "tx_power_dbm", "frequency_hz"]])
+    write_dataflash(logs, path, vehicle="A", station="B", origin_geodetic=(47.3977, 8.5456, 90.0))
+    return path
+
+
 def _synthetic_flight() -> tuple[pd.DataFrame, pd.DataFrame]:
     """Two drones circling, poses at 100 Hz, packets at 80 Hz each way, integer RSSI."""
     t = np.arange(0.0, 6.0, 0.01)

@@ -6,19 +6,18 @@ farther apart, or at the same TimeUS with other fields, are no copies."""
 from __future__ import annotations
 
 import struct
+from collections.abc import Callable
 from pathlib import Path
 
 import pandas as pd
 import pytest
-from flightfiles import rplearn_here
+from flightfiles import rplearn_here, simulated_dataflash
 
-from rplearn.io._common import Logs
 from rplearn.io.damage import file_damage
-from rplearn.io.dataflash_writer import _FORMATS, write_dataflash
+from rplearn.io.dataflash_writer import _FORMATS
 from rplearn.io.files import read_table
 from rplearn.io.mavlink import read_mavlink
 
-ORIGIN = (47.3977, 8.5456, 90.0)
 REAL_BIN = Path(__file__).resolve().parents[1] / "fixtures" / "ardupilot" / "pymavlink_test.BIN"
 #: the real log's whole records (it ends 24 bytes into an AHR2 record)
 REAL_WHOLE = 65512
@@ -70,16 +69,7 @@ def _read(path):
 @pytest.fixture(scope="module")
 def once(tmp_path_factory) -> Path:
     """A simulated flight written by rplearn.io.dataflash_writer (thousands of ATT, POS and RAD)."""
-    from rplearn.sim.flight import simulate
-
-    sim = simulate("smoke", seed=3)
-    pose, signal = sim.pose_log, sim.signal_log
-    station = pose[pose["node"] == "B"].iloc[[0]]
-    logs = Logs(pd.concat([pose[pose["node"] == "A"], station], ignore_index=True),
-                signal[["t", "tx", "rx", "rssi_dbm", "tx_power_dbm", "frequency_hz"]])
-    path = tmp_path_factory.mktemp("df_copies") / "once.bin"
-    write_dataflash(logs, path, vehicle="A", station="B", origin_geodetic=ORIGIN)
-    return path
+    return simulated_dataflash(tmp_path_factory.mktemp("df_copies") / "once.bin")
 
 
 def _read_twice(once, tmp_path, apart_us: int):
@@ -187,47 +177,43 @@ def test_copies_among_many_records_of_equal_fields(tmp_path):
     # 1,024-record window of many others of its key); 7 of them written again, 0-1 ms later, right after
     # themselves or after a buffer of 200 records (the time stepping back): exactly those 7 are close copies
     # (at most a fifth of the interval: far below it; was 2.5 ms apart, copies up to 0.4 of the interval)
-    from rplearn.io.dataflash_writer import _fmt_records, _record
-
-    lat, lon = 473977000, 85456000
-    head = [*_fmt_records(), _record("ORGN", 1_000_000, 0, lat, lon, 90.0), _record("ARM", 1_000_000, 1)]
-    times = [1_000_100 + 5000 * i for i in range(3000)]
     again = {10: 0, 500: 700, 1200: 1000, 2999: 300}  # record -> us later, written right after it
     buffered = {1500: 0, 1600: 999, 1690: 1}  # record -> us later, written after record 1700
-    body, held = [], []
-    for i, t in enumerate(times):
-        body.append(_record("ATT", t, 0.0, 0.0, 90.0))
-        if i % 100 == 0:
-            body.append(_record("POS", t + 1, lat + i, lon, 100.0))
-            body.append(_record("RAD", t + 2, 200, 190 - i // 100, 100, 0, 0, 0, 0))
-        if i in again:
-            body.append(_record("ATT", t + again[i], 0.0, 0.0, 90.0))
-        if i in buffered:
-            held.append(_record("ATT", t + buffered[i], 0.0, 0.0, 90.0))
-        if i == 1700:
-            body += held
-    path = tmp_path / "rest.bin"
-    path.write_bytes(b"".join(head + body))
+    path = _att_log(tmp_path / "rest.bin", [(5000, 3000)], again, buffered=buffered, flush_after=1700, orgn_type=0)
     logs, meta = _read(path)
     assert meta["close_copies"] == len(again) + len(buffered)
-    assert meta["messages"]["ATT"] == len(times) and meta["repeated_messages"] == 0 and meta["reboots"] == 0
+    assert meta["messages"]["ATT"] == 3000 and meta["repeated_messages"] == 0 and meta["reboots"] == 0
 
 
-def _at_rest(path: Path, interval_us: int, n: int, again: dict[int, int]) -> Path:
-    """A vehicle at rest logging ATT every ``interval_us`` (``n`` records of equal fields; a POS and a RAD every
-    100th), the records of ``again`` written again that many microseconds later, right after themselves."""
+def _att_log(path: Path, stretches: list[tuple[int, int]], again: dict[int, int] | None = None, *,
+             yaw: Callable[[int], float] | None = None, buffered: dict[int, int] | None = None,
+             flush_after: int | None = None, orgn_type: int = 1) -> Path:
+    """A vehicle logging ATT at rates changing within one boot: ``stretches`` of (interval [us], records), one after
+    the other, at rest (equal fields: yaw 90 deg) or turning (``yaw``: record number -> yaw [deg]); a POS and a RAD
+    every 100th record. The records numbered in ``again`` are written again that many microseconds later, right
+    after themselves; those in ``buffered`` that many microseconds later after record ``flush_after`` (the time
+    stepping back). ``orgn_type``: of the ORGN record at the start (1: the home)."""
     from rplearn.io.dataflash_writer import _fmt_records, _record
 
     lat, lon = 473977000, 85456000
-    out = [*_fmt_records(), _record("ORGN", 1_000_000, 1, lat, lon, 90.0), _record("ARM", 1_000_000, 1)]
-    for i in range(n):
-        t = 1_000_100 + interval_us * i
-        out.append(_record("ATT", t, 0.0, 0.0, 90.0))
-        if i % 100 == 0:
-            out.append(_record("POS", t + 1, lat + i, lon, 100.0))
-            out.append(_record("RAD", t + 2, 200, 190 - i // 100, 100, 0, 0, 0, 0))
-        if i in again:
-            out.append(_record("ATT", t + again[i], 0.0, 0.0, 90.0))
+    out = [*_fmt_records(), _record("ORGN", 1_000_000, orgn_type, lat, lon, 90.0), _record("ARM", 1_000_000, 1)]
+    again, buffered, held = again or {}, buffered or {}, []
+    t, i = 1_000_100, 0
+    for interval_us, n in stretches:
+        for _ in range(n):
+            heading = 90.0 if yaw is None else yaw(i)
+            out.append(_record("ATT", t, 0.0, 0.0, heading))
+            if i % 100 == 0:
+                out.append(_record("POS", t + 1, lat + i, lon, 100.0))
+                out.append(_record("RAD", t + 2, 200, 190 - i // 100, 100, 0, 0, 0, 0))
+            if i in again:
+                out.append(_record("ATT", t + again[i], 0.0, 0.0, heading))
+            if i in buffered:
+                held.append(_record("ATT", t + buffered[i], 0.0, 0.0, heading))
+            if i == flush_after:
+                out += held
+            t += interval_us
+            i += 1
     path.write_bytes(b"".join(out))
     return path
 
@@ -238,7 +224,7 @@ def test_a_kind_logged_every_millisecond_at_rest_is_no_copy(tmp_path, interval_u
     # written twice"); its records' interval is the kind's own. A record written again at the same TimeUS, or
     # 0.1 ms later (a tenth of the interval), still is a copy
     again = {40: 0, 41: 0, 1700: 100}  # 41: a record read 1 ms after an equal one, again at its TimeUS
-    logs, meta = _read(_at_rest(tmp_path / "fast.bin", interval_us, 3000, again))
+    logs, meta = _read(_att_log(tmp_path / "fast.bin", [(interval_us, 3000)], again))
     assert meta["messages"]["ATT"] == 3000 and meta["close_copies"] == len(again)
     assert (logs.pose["node"] == "sys1").sum() == 3000 - meta["dropped"]["out_of_span"]  # after the last POS
     assert not any("repeat one of their kind" in line and "3,0" in line for line in file_damage("fast.bin", meta))
@@ -247,7 +233,7 @@ def test_a_kind_logged_every_millisecond_at_rest_is_no_copy(tmp_path, interval_u
 def test_a_slower_kind_at_rest_still_has_its_copies_1_ms_later(tmp_path):
     # the same records 1 ms later at 10 ms apart: a tenth of the interval, copies (as before)
     again = dict.fromkeys(range(0, 3000, 7), 1000)
-    _, meta = _read(_at_rest(tmp_path / "slow.bin", 10_000, 3000, again))
+    _, meta = _read(_att_log(tmp_path / "slow.bin", [(10_000, 3000)], again))
     assert meta["messages"]["ATT"] == 3000 and meta["close_copies"] == len(again)
 
 
@@ -255,20 +241,26 @@ def test_a_rest_before_the_flight_does_not_hide_the_flights_copies(tmp_path):
     # 400-Hz ATT: 1,000 records of equal fields at rest (2.5 ms apart), then 2,000 moving, each written again
     # 0.7 ms later. A moving record's fields no other repeats: its copy is judged by itself, not by the rest's
     # interval (was: the rest's 2.5-ms median of ATT taken for every ATT, 0 of the 2,000 copies found)
-    from rplearn.io.dataflash_writer import _fmt_records, _record
-
-    lat, lon = 473977000, 85456000
-    out = [*_fmt_records(), _record("ORGN", 1_000_000, 1, lat, lon, 90.0), _record("ARM", 1_000_000, 1)]
-    for i in range(3000):
-        t = 1_000_100 + 2500 * i
-        yaw = 90.0 if i < 1000 else 90.0 + 0.01 * (i - 999)
-        out.append(_record("ATT", t, 0.0, 0.0, yaw))
-        if i >= 1000:
-            out.append(_record("ATT", t + 700, 0.0, 0.0, yaw))
-        if i % 100 == 0:
-            out.append(_record("POS", t + 1, lat + i, lon, 100.0))
-            out.append(_record("RAD", t + 2, 200, 190 - i // 100, 100, 0, 0, 0, 0))
-    path = tmp_path / "rest_then_fly.bin"
-    path.write_bytes(b"".join(out))
+    path = _att_log(tmp_path / "rest_then_fly.bin", [(2500, 3000)], dict.fromkeys(range(1000, 3000), 700),
+                    yaw=lambda i: 90.0 if i < 1000 else 90.0 + 0.01 * (i - 999))
     _, meta = _read(path)
     assert meta["close_copies"] == 2000 and meta["messages"]["ATT"] == 3000
+
+
+def test_a_rate_raised_within_a_boot_keeps_its_fast_records(tmp_path):
+    # ATT of equal fields at 10 Hz (2,000 records) then at 1 kHz (1,000): every other fast record is read 1 ms after
+    # an equal one. Judged by the whole log's median interval (100 ms) they were copies: 500 records dropped; by the
+    # cadence of the last records of their key (CADENCE_SPAN), 1 kHz: none. Copies written into both stretches,
+    # at the change too, are still found
+    again = {5: 500, 1999: 400, 2000: 0, 2001: 0, 2600: 0}
+    _, meta = _read(_att_log(tmp_path / "faster.bin", [(100_000, 2000), (1000, 1000)], again))
+    assert meta["messages"]["ATT"] == 3000 and meta["close_copies"] == len(again)
+
+
+def test_a_rate_lowered_within_a_boot_still_has_its_copies(tmp_path):
+    # ATT of equal fields at 1 kHz (3,000) then at 10 Hz (500), every slow record written again 0.5 ms later. Judged
+    # by the whole log's median interval (2 ms: the fast records, every other one read 1 ms after an equal one) none
+    # of the 500 copies was one; by the local cadence (100 ms) every one is, and no fast record is
+    again = dict.fromkeys(range(3000, 3500), 500)
+    _, meta = _read(_att_log(tmp_path / "slower.bin", [(1000, 3000), (100_000, 500)], again))
+    assert meta["messages"]["ATT"] == 3500 and meta["close_copies"] == len(again)

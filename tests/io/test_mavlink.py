@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from flightfiles import simulated_dataflash
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from rplearn.core.geometry import rotate_body_to_world
@@ -163,22 +164,8 @@ def test_a_tlog_in_the_file_twice_reads_as_once_and_says_so(tmp_path):
     assert any("part of the log is in the file twice" in line for line in file_damage(str(twice), m2))
 
 
-def _simulated_dataflash(path):
-    from rplearn.io._common import Logs
-    from rplearn.io.dataflash_writer import write_dataflash
-    from rplearn.sim.flight import simulate
-
-    sim = simulate("smoke", seed=3)
-    pose, signal = sim.pose_log, sim.signal_log
-    station = pose[pose["node"] == "B"].iloc[[0]]
-    logs = Logs(pd.concat([pose[pose["node"] == "A"], station], ignore_index=True),
-                signal[["t", "tx", "rx", "rssi_dbm", "tx_power_dbm", "frequency_hz"]])
-    write_dataflash(logs, path, vehicle="A", station="B", origin_geodetic=(47.3977, 8.5456, 90.0))
-    return path
-
-
 def test_a_dataflash_log_in_the_file_twice_is_not_a_reboot_and_a_second_flight(tmp_path):
-    once_path = _simulated_dataflash(tmp_path / "once.bin")
+    once_path = simulated_dataflash(tmp_path / "once.bin")
     twice = tmp_path / "twice.bin"
     twice.write_bytes(once_path.read_bytes() * 2)  # its TimeUS steps back: read before as a reboot
     (once, m1), (doubled, m2) = _read(once_path), _read(twice)
@@ -222,7 +209,7 @@ def test_a_copied_boot_drops_only_the_copies_not_distinct_records_that_read_alik
 
 
 def test_a_dataflash_log_in_the_file_twice_counts_its_messages_once(tmp_path):
-    once_path = _simulated_dataflash(tmp_path / "once.bin")
+    once_path = simulated_dataflash(tmp_path / "once.bin")
     twice = tmp_path / "twice.bin"
     twice.write_bytes(once_path.read_bytes() * 2)
     (_, m1), (_, m2) = _read(once_path), _read(twice)
@@ -236,7 +223,7 @@ def test_a_dataflash_log_after_a_partial_copy_of_itself_is_read_once(tmp_path):
     # review 38: a download cut at 30 % then the whole log, in one file: the whole log repeats
     # all of the partial copy but only 30 % of it is repeats, so it read as a reboot and a
     # second flight (9,118 pose rows for 7,027; 3,474 signal rows for 2,658)
-    once_path = _simulated_dataflash(tmp_path / "once.bin")
+    once_path = simulated_dataflash(tmp_path / "once.bin")
     data = once_path.read_bytes()
     cut = data.index(b"\xa3\x95", int(len(data) * 0.3))  # a record's start
     resumed = tmp_path / "resumed.bin"
@@ -607,7 +594,7 @@ def test_fixes_without_a_3d_fix_are_excluded(tmp_path):
 
 
 def test_a_flipped_record_header_in_a_dataflash_log_is_counted_and_said(tmp_path):
-    once_path = _simulated_dataflash(tmp_path / "once.bin")
+    once_path = simulated_dataflash(tmp_path / "once.bin")
     data = bytearray(once_path.read_bytes())
     at = data.index(b"\xa3\x95", len(data) // 2)
     data[at] ^= 0x5A  # the record's header damaged: its record cannot be found
@@ -636,7 +623,7 @@ def _dataflash_records(data: bytes) -> list[tuple[int, int]]:
 def test_a_copy_of_the_last_records_appended_is_read_once(tmp_path, records):
     # was: a tail copy shorter than 1 s stepped back less than a reboot, so it was no copy and
     # its rows reached sync as duplicates; the reader now counts the repeated messages
-    once_path = _simulated_dataflash(tmp_path / "once.bin")
+    once_path = simulated_dataflash(tmp_path / "once.bin")
     data = once_path.read_bytes()
     (once, m1) = _read(once_path)
     starts = _dataflash_records(data)

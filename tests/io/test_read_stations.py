@@ -231,3 +231,35 @@ def test_inspect_reads_two_mavlink_flights_within_the_gps_noise_with_one_station
     assert not [p for p in report.problems if "node G" in p or "ground station" in p]
     [station] = [n for n in report.nodes if n.node == "G"]
     assert station.static
+
+
+def test_two_dataflash_flights_from_one_home_are_no_repeated_file(tmp_path):
+    # two flights of one vehicle, each a DataFlash log with its own home at one place: both give the station as one
+    # row at the first time of their boot clock, the same row. Was said by sync's reader notes and inspect as "1 pose
+    # row(s) repeat rows of a.bin exactly (the same log given twice, or overlapping exports)"; a single static
+    # station row two flights share is one station (one_station), no evidence of a file given twice
+    from flightfiles import simulated_dataflash
+
+    from rplearn.io.damage import file_damage
+    from rplearn.io.inspect import inspect_logs
+
+    a, b = (simulated_dataflash(tmp_path / f"{name}.bin", seed, station_xyz=(0.0, 0.0, 0.0))
+            for name, seed in (("a", 3), ("b", 4)))
+    options = ReaderOptions(tx_power_dbm=20.0, frequency_hz=2.412e9, station="B",
+                            nodes={str(a): "A1", str(b): "A2"})
+    logs, meta = read_logs([str(a), str(b)], options)
+    assert (logs.pose["node"] == "B").sum() == 1 and set(logs.pose["node"]) == {"A1", "A2", "B"}
+    assert not any("repeated_rows" in f for f in meta["files"])
+    assert not [line for f in meta["files"] for line in file_damage(f["source"], f) if "repeat" in line]
+    [note] = [n for f in meta["files"] for n in f.get("notes", []) if "one static station for both flights" in n]
+    assert note.startswith(f"{b}: ground station B at the pose {a} gives it")
+    report = inspect_logs([str(a), str(b)], options)
+    assert not [p for p in report.problems if "repeat" in p or "ground station" in p]
+    [station] = [n for n in report.nodes if n.node == "B"]
+    assert station.static
+    # the same log under two names still repeats every row, the station's too
+    copy = tmp_path / "copy.bin"
+    copy.write_bytes(a.read_bytes())
+    _, meta = read_logs([str(a), str(copy)], ReaderOptions(tx_power_dbm=20.0, frequency_hz=2.412e9, station="B",
+                                                          nodes={str(a): "A1", str(copy): "A1"}))
+    assert meta["files"][1]["repeated_rows"]["pose"] == {str(a): int((logs.pose["node"] == "A1").sum()) + 1}

@@ -6,10 +6,12 @@ A record that repeats one of its kind (and instance) read shortly before it (amo
 every field but its time the same, is that record written twice (a logger or a router duplicating the stream,
 record by record or a buffer at a time) when its TimeUS is the same, or up to
 :data:`~rplearn.io._mavlink_records.CLOSE_COPY_S` later and far below (less than
-:data:`~rplearn.io.mavlink_phases.DUPLICATE_FRACTION_OF_PERIOD` of) the median interval between the records with its fields (kind,
-instance and fields): it is read once and counted (``close_copies``). A kind logged every millisecond while the vehicle rests repeats
-its fields 1 ms later at its own interval: those records are no copies (:func:`_judge`; the log is then read a
-second time, with them). A later stretch that repeats an earlier one (the log in the file twice) is undone by
+:data:`~rplearn.io.mavlink_phases.DUPLICATE_FRACTION_OF_PERIOD` of) the local interval between the records with its fields
+(kind, instance and fields): the median over a sliding span of :data:`CADENCE_SPAN` of their intervals about it, so that a
+message whose logging rate changes within a boot (ATT at 10 Hz, then at 1 kHz) is judged at its rate of the moment. It is read
+once and counted (``close_copies``). A kind logged every millisecond while the vehicle rests repeats its fields 1 ms later
+at its own interval: those records are no copies (:func:`_judge`; the log is then read a second time, with them). A
+later stretch that repeats an earlier one (the log in the file twice) is undone by
 :func:`~rplearn.io._mavlink_records.merge_copied_boots` (``repeated_messages``).
 """
 
@@ -30,6 +32,9 @@ DF_TYPES = ["ATT", "POS", "GPS", "GPA", "ORGN", "RAD", "ARM", "EV"]
 _EV_ARMED, _EV_DISARMED = 10, 11
 #: Fields naming a message's instance (a second GPS, ...): each instance's records are compared with its own.
 _INSTANCE_FIELDS = ("I", "Instance")
+#: How many intervals between the records of one key (kind, instance and fields) a record repeating one up to 1 ms
+#: before it is judged by (:func:`_judge`): the key's cadence where the record is, not over the whole log.
+CADENCE_SPAN = 16
 
 
 def _fields(msg: Any, time_name: str) -> tuple[Any, ...]:
@@ -133,10 +138,12 @@ class _Pass:
     minor: set[int] = field(default_factory=set)  # the stretches after a step back of the time too small for a reboot
     #: records left out as copies (their numbers among the records of the types read): at the same TimeUS
     copies: set[int] = field(default_factory=set)
-    #: records repeating one shortly before (0 < interval <= 1 ms): number, key (kind, instance, fields), interval [s]
-    maybe: list[tuple[int, tuple[Any, ...], float]] = field(default_factory=list)
+    #: records repeating one shortly before (0 < interval <= 1 ms): number, key (kind, instance, fields), interval [s],
+    #: and how many intervals of its key were read before it (the next one read is the interval it falls in)
+    maybe: list[tuple[int, tuple[Any, ...], float, int]] = field(default_factory=list)
     #: per key (kind, instance and fields), the intervals [s] between the records read with it (copies and maybes
-    #: left out, the earlier among the last records read: :class:`~rplearn.io._mavlink_records.RecentRecords`)
+    #: left out, the earlier among the last records read: :class:`~rplearn.io._mavlink_records.RecentRecords`), in the
+    #: order read
     steps: dict[tuple[Any, ...], list[float]] = field(default_factory=dict)
 
 
@@ -178,7 +185,7 @@ def _read_pass(source: str, drop: frozenset[int] | None) -> _Pass:
                     out.copies.add(index)  # the record (or a maybe) written twice: read once
                     continue
                 if gap is not None:
-                    out.maybe.append((index, key, gap))
+                    out.maybe.append((index, key, gap, len(out.steps.get(key, ()))))
                     maybes.add(key, t)
                     continue
                 step = recent.since(key, t)
@@ -197,14 +204,38 @@ def _read_pass(source: str, drop: frozenset[int] | None) -> _Pass:
 
 def _judge(first: _Pass) -> set[int]:
     """The records of ``first.maybe`` that are copies: those whose interval is below
-    :data:`~rplearn.io.mavlink_phases.DUPLICATE_FRACTION_OF_PERIOD` of the median interval between the records
-    with their own fields (kind, instance and fields: ``first.steps``, the maybes left out; any interval when they
-    have none: a record whose fields no other record repeats, as a moving vehicle's, is judged by itself, not by
-    the intervals of a rest before or after it). A kind logged every millisecond while the vehicle rests repeats its fields 1 ms later at its own
-    interval: every other record a maybe, the records read 2 ms apart, the maybes no copies."""
-    median = {key: float(np.median(steps)) for key, steps in first.steps.items()}
-    return {index for index, key, gap in first.maybe
-            if key not in median or gap < DUPLICATE_FRACTION_OF_PERIOD * median[key]}
+    :data:`~rplearn.io.mavlink_phases.DUPLICATE_FRACTION_OF_PERIOD` of the local interval between the records with
+    their own fields (kind, instance and fields: ``first.steps``, the maybes left out; any interval when they have
+    none: a record whose fields no other record repeats, as a moving vehicle's, is judged by itself, not by the
+    intervals of a rest before or after it). The local interval is the median of the :data:`CADENCE_SPAN` intervals
+    of its key about it, half before, half after the interval it falls in, which counts twice (the span's majority
+    is on its side of a change of rate): a message logged at 10 Hz then at 1 kHz (or the reverse) is judged at the
+    rate it had where the record is. A kind logged every millisecond while the vehicle rests repeats its fields
+    1 ms later at its own interval: every other record a maybe, the records read 2 ms apart, the maybes no copies."""
+    by_key: dict[tuple[Any, ...], list[tuple[int, float, int]]] = {}
+    for index, key, gap, i in first.maybe:
+        by_key.setdefault(key, []).append((index, gap, i))
+    copies = set()
+    for key, maybes in by_key.items():
+        index, gap, at = (np.asarray(v) for v in zip(*maybes, strict=True))
+        if key not in first.steps:
+            copies.update(index.tolist())
+            continue
+        local = _local_interval(np.asarray(first.steps[key], np.float64), at.astype(np.int64))
+        copies.update(index[gap < DUPLICATE_FRACTION_OF_PERIOD * local].tolist())
+    return copies
+
+
+def _local_interval(steps: np.ndarray, at: np.ndarray) -> np.ndarray:
+    """For records falling in the intervals numbered ``at`` of ``steps`` (a key's intervals [s], in the order
+    read; ``len(steps)``: after the last), the median of the :data:`CADENCE_SPAN` intervals about each, half before,
+    half from the one it falls in, that one counted twice (the majority on its side of a change of rate)."""
+    half = CADENCE_SPAN // 2
+    padded = np.concatenate([np.full(half, np.nan), steps, np.full(half + 1, np.nan)])
+    windows = np.lib.stride_tricks.sliding_window_view(padded, CADENCE_SPAN + 1)[at]  # steps[at - half : at + half + 1]
+    span = windows.copy()
+    span[:, -1] = padded[at + half]  # the last replaced by the interval the record falls in (NaN after the last)
+    return np.nanmedian(span, axis=1)
 
 
 def collect_dataflash(source: str) -> Raw:

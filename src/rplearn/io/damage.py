@@ -107,7 +107,10 @@ def drop_repeated_across(logs: list[pd.DataFrame], owners: list[int], files: lis
     """The logs without the rows that repeat a row of an earlier file exactly (the same log
     given twice under two names, overlapping exports), counted in that file's metadata
     (``repeated_rows``: ``{what: {earlier file: rows}}``). Repeats within one file are its
-    reader's business and left alone."""
+    reader's business and left alone. A file whose only such row is its ground station's one
+    static row (two flights from one home, each log placing the station there at the first
+    time of its boot clock: :func:`one_station`'s case) repeats no file: that row is read once
+    and said as one station for both flights, not counted."""
     if len(set(owners)) < 2:
         return logs
     cols = _SAME_ROW[what]
@@ -118,16 +121,32 @@ def drop_repeated_across(logs: list[pd.DataFrame], owners: list[int], files: lis
     out, start = [], 0
     for log, i in zip(logs, owners, strict=True):
         mine = repeat[start:start + len(log)]
-        if mine.any():
+        station = _lone_station_repeat(log, mine, files[i].get("station")) if what == "pose" else None
+        if station is not None:
+            first = str(files[int(earlier[start:start + len(log)][mine][0])].get("source"))
+            files[i].setdefault("notes", []).append(
+                f"{files[i].get('source')}: ground station {station} at the pose {first} gives it: one static station "
+                "for both flights")
+        elif mine.any():
             which, n_rows = np.unique(earlier[start:start + len(log)][mine].astype(np.int64), return_counts=True)
             counts = files[i].setdefault("repeated_rows", {}).setdefault(what, {})
             for j, n in zip(which.tolist(), n_rows.tolist(), strict=True):
                 src = str(files[j].get("source", j))
                 counts[src] = counts.get(src, 0) + int(n)
+        if mine.any():
             log = log[~mine].reset_index(drop=True)
         out.append(log)
         start += len(mine)
     return out
+
+
+def _lone_station_repeat(log: pd.DataFrame, repeat: np.ndarray, station: Any) -> str | None:
+    """The station's node id when the one row of ``log`` repeating an earlier file's (``repeat``) is the station's
+    one static row (its only row in ``log``), else None."""
+    if station is None or np.count_nonzero(repeat) != 1:
+        return None
+    rows = log["node"].astype(str).to_numpy() == str(station)
+    return str(station) if np.count_nonzero(rows) == 1 and bool(rows[repeat][0]) else None
 
 
 def _station_at(row: pd.Series, meta: dict[str, Any]) -> str:
@@ -185,7 +204,7 @@ def one_station(logs: list[pd.DataFrame], owners: list[int], files: list[dict[st
                     "stood (ReaderOptions.station_geodetic: lat, lon, alt), or read each flight on its own",
                     param="station_geodetic")
             if row["t"] == first["t"] and not max(apart) > SAME_POSITION_M:
-                continue  # the same row: a file given twice, read once by drop_repeated_across
+                continue  # the same row (a file given twice, or two flights from one home): drop_repeated_across's
             log = out[k]
             out[k] = log[~((log["node"].astype(str) == station) & (log["t"] == row["t"]))]
             within = (f" (its fixes {apart[0]:.2f} m across, {apart[1]:.2f} m up/down apart: within the GPS noise "
@@ -273,7 +292,7 @@ def across_files(report: Any, poses: list[pd.DataFrame], canonical: list[pd.Data
     refuses it). ``canonical``: the canonical pose log of each of ``poses`` (in file order)."""
     if len(report.files) < 2:
         return poses, signals
-    metas: list[dict[str, Any]] = [{"source": f["path"]} for f in report.files]
+    metas: list[dict[str, Any]] = [{"source": f["path"], "station": f.get("station")} for f in report.files]
     once = drop_repeated_across(canonical, owners["pose"], metas, "pose")
     for k, (before, after) in enumerate(zip(canonical, once, strict=True)):
         if len(after) < len(before):  # the file-order rows of those kept
