@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+import pytest
 from cli_helpers import invoke
 
 
@@ -65,3 +66,53 @@ def test_a_pose_log_that_ends_before_the_signal_log_is_out_of_span_as_sync_count
     synced = invoke(["sync", "--poses", tmp_path / "pose.csv", "--signals", tmp_path / "signal.csv", "-o", tmp_path / "s.csv"])
     assert "matched: 149" in synced.output and _counts(synced.output.replace("  dropped", "dropped")) == {"out_of_span": 151}
     assert ", 149 matched, 149 learned" in res.output and _counts(res.output) == {"out_of_span": 151}
+
+
+def test_a_fixed_node_that_no_row_names_gets_a_note_and_one_outside_nodes_is_refused(tmp_path):
+    source = _write(tmp_path, *_tables())
+    line = _error(_live(tmp_path, source, "--fixed", "X", "--nodes", "D,G"))
+    assert line.startswith("error: --fixed: X") and "--nodes" in line
+    res = invoke(["live", source, "-o", tmp_path / "m.json", "--quiet", "--idle", "0.2", "--order", "2", "--fixed", "X"], ok=False)
+    assert res.exit_code == 0, res.output
+    assert "--fixed X: no matched row names it (the session's nodes: D, G)" in res.output
+    res = invoke(["live", source, "-o", tmp_path / "m.json", "--quiet", "--idle", "0.2", "--order", "2", "--fixed", "G"], ok=False)
+    assert res.exit_code == 0 and "--fixed" not in res.output, res.output
+
+
+@pytest.mark.parametrize("flag", ["--html", "--record"])
+def test_an_output_given_twice_is_refused_before_any_work_naming_both_flags(tmp_path, flag):
+    """--html or --record equal to -o: the page or the recording overwrote the model (or was refused as 'an input')."""
+    source = _write(tmp_path, *_tables())
+    model = tmp_path / "m.json"
+    model.write_text("{}")
+    res = invoke(["live", source if flag == "--html" else "udpin:127.0.0.1:9", "-o", model, "--quiet", "--no-advice",
+                  "--tx-power", "20", "--frequency", "433e6", flag, model], ok=False)
+    line = _error(res)
+    assert f"{flag}: {model} is also given as --out" in line
+    assert model.read_text() == "{}"
+    res = invoke(["live", "udpin:127.0.0.1:9", "-o", model, "--quiet", "--tx-power", "20", "--frequency", "433e6",
+                  "--html", tmp_path / "p.html", "--record", tmp_path / "p.html"], ok=False)
+    assert "--record" in _error(res) and "--html" in _error(res)
+
+
+def _port() -> int:
+    import socket
+
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def test_a_silent_mavlink_stream_says_nothing_came_and_records_no_empty_tlog(tmp_path):
+    res = invoke(["live", f"udpin:127.0.0.1:{_port()}", "-o", tmp_path / "m.json", "--quiet", "--tx-power", "20",
+                  "--frequency", "433e6", "--duration", "1", "--record", tmp_path / "r.tlog"], ok=False)
+    line = _error(res)
+    assert "no MAVLink message received from it in 1 s" in line and "rplearn-live-" not in line
+    assert not (tmp_path / "r.tlog").exists() and not (tmp_path / "m.json").exists()
+
+
+def test_a_session_that_ends_without_a_model_says_why(tmp_path):
+    source = _write(tmp_path, *_tables(n=30))
+    line = _error(invoke(["live", source, "-o", tmp_path / "m.json", "--quiet", "--no-advice", "--idle", "0.2"], ok=False))
+    assert "30 signal rows received, 29 matched, 29 learned" in line and "too few" in line and "--order" in line
+

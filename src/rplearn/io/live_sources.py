@@ -375,6 +375,8 @@ class MavlinkSource:
     ----------
     tail : TlogTail
         The reader of the recording (``tail.parsed``: messages parsed by the last reading).
+    messages : int
+        Messages received in all.
     """
 
     def __init__(self, connection: str, record_path: str, reader: ReaderOptions, read_every_s: float = 1.0) -> None:
@@ -390,6 +392,7 @@ class MavlinkSource:
         self._fh = open(record_path, "wb")  # noqa: SIM115 (a working log, closed by close())
         self._lock = threading.Lock()
         self._received = 0
+        self.messages = 0  # received in all
         self._unread = 0
         self._last_read = -math.inf
         self.tail = TlogTail(record_path, reader)
@@ -410,6 +413,7 @@ class MavlinkSource:
                 with self._lock:
                     self._fh.write(struct.pack(">Q", usec) + msg.get_msgbuf())
                     self._received += 1
+                    self.messages += 1
         except BaseException as exc:  # pragma: no cover - a dead link: reported by poll
             self._error = exc
 
