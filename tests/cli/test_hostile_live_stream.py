@@ -116,3 +116,23 @@ def test_a_session_that_ends_without_a_model_says_why(tmp_path):
     line = _error(invoke(["live", source, "-o", tmp_path / "m.json", "--quiet", "--no-advice", "--idle", "0.2"], ok=False))
     assert "30 signal rows received, 29 matched, 29 learned" in line and "too few" in line and "--order" in line
 
+
+def _with_line(path: Path, at: int, line: str) -> None:
+    lines = path.read_text().splitlines(keepends=True)
+    path.write_text("".join(lines[:at] + [line] + lines[at:]))
+
+
+@pytest.mark.parametrize("table", ["pose", "signal"])
+def test_a_header_repeated_mid_file_is_a_counted_drop_and_another_header_is_refused(tmp_path, table):
+    """A logger restarted appending to its file writes its header again: the pose table was refused as a NaN time,
+    the signal table's line dropped as invalid_value; another header (other columns) must not be read as rows."""
+    source = _write(tmp_path, *_tables())
+    path = tmp_path / f"{table}.csv"
+    header = path.read_text().splitlines(keepends=True)[0]
+    _with_line(path, 100, header)
+    res = _live(tmp_path, source)
+    assert res.exit_code == 0, res.output
+    assert _counts(res.output) == {"repeated_header": 1, "out_of_span": 1}
+    _with_line(path, 150, ",".join(reversed(header.strip().split(","))) + "\n")
+    line = _error(_live(tmp_path, source))
+    assert f"{path}: line 151: another header in the file" in line
