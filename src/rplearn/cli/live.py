@@ -40,7 +40,8 @@ def _view(status: Any) -> Any:
 
 
 @app.command()
-@user_errors(flags={"ranking_every_s": "--advice-s", "receivers": "--receiver NODE"})
+@user_errors(flags={"ranking_every_s": "--advice-s", "receivers": "--receiver NODE", "fixed_nodes": "--fixed NODE", "nodes": "--nodes",
+                    "html": "--html PATH", "record": "--record PATH"})
 def live(
     source: str = typer.Argument(..., help="A MAVLink connection as pymavlink names it (udpin:0.0.0.0:14550, tcp:HOST:PORT, a serial device "
                                            "such as /dev/ttyUSB0: what MAVProxy, QGroundControl and mavlink-router forward), or "
@@ -102,12 +103,13 @@ def live(
     receivers = [f"{source.split(',')[-1]}={receiver}"] if receiver is not None else None
     reader = reader_options(receiver=receivers, tx_power_dbm=tx_power_dbm, frequency_hz=frequency_hz,
                             nan_policy=nan_policy, station_geodetic=geodetic_flag(station_geodetic, "--station"))
-    still = tuple(split_list(fixed) or ()) or (() if csv_source else (reader.station,))
+    named_fixed = tuple(split_list(fixed) or ())  # the user's: a note when no row names one (not the default station)
+    still = named_fixed or (() if csv_source else (reader.station,))
     advisor = None if no_advice else live_advisor(still, 0.0, until_spread_db)  # paced by ranking_every_s
     options = LiveOptions(spec=spec, fit=FitOptions(auto=auto), reader=reader, sync=SyncOptions(max_gap_s=max_gap_s),
                           refit_s=refit_s, duration_s=duration_s, until_spread_db=until_spread_db, spread_over=spread_over,
                           until_coverage_pct=until_coverage_pct, idle_s=idle_s, nodes=tuple(split_list(nodes) or ()) or None,
-                          manoeuvres=advisor, ranking_every_s=advice_s)
+                          manoeuvres=advisor, ranking_every_s=advice_s, fixed_nodes=named_fixed)
     if quiet:
         outcome = run_live(source, output, options, None, record, html)
     else:

@@ -12,7 +12,8 @@ counts are those of ``sync`` on the whole logs (:meth:`LiveMatcher.match` with
 ``out_of_span``).
 
 Memory: the pose rows a later match can need (per moving node, those after the matched
-horizon and the one before it; a still node's first and last row), the pending signal rows,
+horizon and the one before it, and never fewer than two: one row is a static track; a still
+node's first and last row), the pending signal rows,
 and for duplicates across chunks the hashes of the signal rows at most
 :data:`DUPLICATE_MEMORY_S` older than the oldest pose a moving node keeps (16 bytes a row): it
 does not grow with the stream's length. The hashes of older rows are forgotten, so a row whose
@@ -21,6 +22,13 @@ time is before that threshold (more than :data:`DUPLICATE_MEMORY_S` late) is dro
 poses for the whole flight, and a copy matched then would be learned twice): where ``sync``
 of the whole log says ``duplicate`` for a copy, live matching says ``late`` (and a row
 without a valid time is forgotten at once: ``invalid_value`` for ``duplicate``).
+
+A node with a single pose row is a node logged once, holding still (as ``sync`` holds a one-row
+log), or a node whose log has just started: until its second row, or :data:`ONE_ROW_S` of the pose
+rows' time (``max_gap_s`` if longer) without one, the rows after its pose are not settled and the
+rows naming it wait as for a node without poses (below); a node first logged once and again, at
+another pose, more than that later has the rows matched between taken at its first pose (``sync``:
+``pose_gap``).
 
 A signal row naming a node that has no pose yet (a node whose first poses the source holds back, as
 :class:`rplearn.io.live_sources.CsvTail` holds a logger's start at the zero position, or a ground
@@ -94,6 +102,10 @@ HOLD_ROWS = 16384
 #: Signal rows that may wait for a held node's poses in all (the oldest then go, as ``unknown_node``): the
 #: rows of :data:`HOLD_S` at about 1,000 readings a second over every link (some 100 bytes a row).
 WAIT_ROWS = 65536
+#: Seconds of the pose rows' time (or ``max_gap_s`` when longer) after a node's only pose row past which, no second
+#: row having come, the node is taken to hold still at it (a station logged once, as ``sync`` holds a one-row log);
+#: before then it may be a node whose log has just started (:class:`LiveMatcher`: the rows naming it wait).
+ONE_ROW_S = 1.0
 
 
 def _offset_slack_s(options: SyncOptions) -> float:
@@ -175,13 +187,29 @@ class LiveMatcher:
             if np.isfinite(t).any():
                 self._signal_t = max(self._signal_t, float(np.nanmax(t[np.isfinite(t)])))
 
+    def _one_row(self) -> dict[str, float]:
+        """The nodes with a single pose row whose next row may still come (:data:`ONE_ROW_S`), with its time [s]:
+        moving (its log just started) or holding still is not known yet."""
+        if self._poses.empty:
+            return {}
+        nodes = self._poses["node"].astype(str)
+        counts = nodes.value_counts()
+        single = self._poses[nodes.isin(counts.index[counts == 1]).to_numpy()]
+        t = single["t"].to_numpy(np.float64)
+        young = t > self._pose_t - max(float(self.options.max_gap_s), ONE_ROW_S)
+        return {str(n): float(v) for n, v in zip(single["node"][young], t[young]) if str(n) not in self._moving}
+
     def settled_s(self) -> float:
-        """The latest time [s] every moving node's poses reach (-inf before two poses of one)."""
+        """The latest time [s] every moving node's poses reach (-inf before two poses of one); a node with one
+        pose row whose next may still come counts as moving (its time)."""
         if self._poses.empty:
             return -math.inf
         last = []
+        one_row = self._one_row()
         for node, group in self._poses.groupby("node", sort=False):
-            if str(node) in self._moving or not _still(group):
+            if str(node) in one_row:
+                last.append(one_row[str(node)])
+            elif str(node) in self._moving or not _still(group):
                 self._moving.add(str(node))
                 last.append(float(group["t"].iloc[-1]))
         return min(last) if last else -math.inf
@@ -226,7 +254,8 @@ class LiveMatcher:
         and :data:`WAIT_ROWS`), and the earliest time among them kept (:meth:`_trim`)."""
         if not {"tx", "rx"} <= set(pending.columns):
             return np.zeros(len(pending), bool)
-        known = set(self._poses["node"].astype(str)) if len(self._poses) else set()
+        # a node with one pose row whose next may still come: if it moves, rows before its first pose are out of span
+        known = (set(self._poses["node"].astype(str)) if len(self._poses) else set()) - set(self._one_row())
         named = pending["tx"].astype(str).isin(known).to_numpy() & pending["rx"].astype(str).isin(known).to_numpy()
         wait = ~named & np.isfinite(t) & (t >= self._pose_t - HOLD_S - _offset_slack_s(self.options))
         if wait.sum() > WAIT_ROWS:  # the oldest go: matched as they stand
@@ -288,7 +317,9 @@ class LiveMatcher:
                 continue
             t = group["t"].to_numpy(np.float64)
             # the rows waiting for a node's poses need the poses from their time on too
-            first = max(int(np.searchsorted(t, min(self._horizon, self._waiting_from), side="right")) - 1, 0)
+            # at least two rows: one left would be a one-row track, static, its pose held at every time (sync
+            # interpolates a moving node between two rows, and a row after its last is out_of_span)
+            first = max(min(int(np.searchsorted(t, min(self._horizon, self._waiting_from), side="right")) - 1, t.size - 2), 0)
             keep.append(group.iloc[first:])
             oldest = min(oldest, float(t[first]))
         self._poses = pd.concat(keep).sort_values(["node", "t"], kind="stable").reset_index(drop=True)
@@ -297,4 +328,4 @@ class LiveMatcher:
             self._seen.forget(self._forgotten_s)
 
 
-__all__ = ["DUPLICATE_MEMORY_S", "HOLD_ROWS", "HOLD_S", "WAIT_ROWS", "LiveMatcher"]
+__all__ = ["DUPLICATE_MEMORY_S", "HOLD_ROWS", "HOLD_S", "ONE_ROW_S", "WAIT_ROWS", "LiveMatcher"]

@@ -85,6 +85,8 @@ class _Tail:
 
     def __init__(self, path: str) -> None:
         self.path, self.offset, self.header = path, 0, b""
+        self.line = 0  # lines read (the header the first)
+        self.repeated_headers = 0  # the header line again later in the file (a logger restarted appending): dropped
         self.identity: tuple[int, int] | None = None  # (device, inode) of the file read
         self.first = b""  # its first bytes read (at most FIRST_BYTES)
         self.digest = hashlib.sha256()  # of every byte read
@@ -131,10 +133,34 @@ class _Tail:
         self.offset += end
         data = data[:end]
         self.digest.update(data)
+        first_line = self.line + 1
+        self.line += data.count(b"\n")
         if not self.header:
             self.header, _, data = data.partition(b"\n")
             self.header += b"\n"
-        return data
+            first_line += 1
+        return self._without_headers(data, first_line)
+
+    def _without_headers(self, data: bytes, first_line: int) -> bytes:
+        """``data`` (lines from line ``first_line`` on) without the header lines repeated in it, counted; another
+        header (a line that begins with a column name, never a number) is refused, naming the line."""
+        header = self.header.rstrip(b"\r\n")
+        names = {n.strip().strip(b'"') for n in header.split(b",")} - {b""}
+        if not any(data.startswith(n) or b"\n" + n in data for n in names):
+            return data
+        kept = []
+        for k, line in enumerate(data.splitlines(keepends=True)):
+            text = line.rstrip(b"\r\n")
+            if text.split(b",")[0].strip().strip(b'"') not in names:
+                kept.append(line)
+            elif text == header:
+                self.repeated_headers += 1
+            else:
+                raise LogFormatError(f"{self.path}: line {first_line + k}: another header in the file "
+                                     f"({text.decode(errors='replace')[:80]!r}; the first: "
+                                     f"{header.decode(errors='replace')[:80]!r}): a logger restarted with other "
+                                     "columns; give each part as a session of its own")
+        return b"".join(kept)
 
 
 def _table(tail: _Tail, data: bytes) -> pd.DataFrame | None:
@@ -348,6 +374,7 @@ class CsvTail:
                 del self._links.seen[:-LINK_MEMORY_POLLS]  # copies of rows of older polls: a step back
             self._signal_rows += len(signals)
         received = (0 if new is None else len(new)) + len(signals)  # held rows too: the stream is not idle
+        self.dropped["repeated_header"] = self.pose.repeated_headers + self.signal.repeated_headers
         held = self._hold.held
         held_nodes = frozenset() if held is None or "node" not in held.columns else frozenset(held["node"].astype(str))
         return Poll(poses, signals, received, {k: n for k, n in self.dropped.items() if n}, held_nodes)
@@ -375,6 +402,8 @@ class MavlinkSource:
     ----------
     tail : TlogTail
         The reader of the recording (``tail.parsed``: messages parsed by the last reading).
+    messages : int
+        Messages received in all.
     """
 
     def __init__(self, connection: str, record_path: str, reader: ReaderOptions, read_every_s: float = 1.0) -> None:
@@ -390,6 +419,7 @@ class MavlinkSource:
         self._fh = open(record_path, "wb")  # noqa: SIM115 (a working log, closed by close())
         self._lock = threading.Lock()
         self._received = 0
+        self.messages = 0  # received in all
         self._unread = 0
         self._last_read = -math.inf
         self.tail = TlogTail(record_path, reader)
@@ -410,6 +440,7 @@ class MavlinkSource:
                 with self._lock:
                     self._fh.write(struct.pack(">Q", usec) + msg.get_msgbuf())
                     self._received += 1
+                    self.messages += 1
         except BaseException as exc:  # pragma: no cover - a dead link: reported by poll
             self._error = exc
 

@@ -52,12 +52,12 @@ from rplearn.core.lsq.selection import at_smoothing_cap
 from rplearn.data.live_sync import LiveMatcher
 from rplearn.data.sync import SyncOptions
 from rplearn.errors import InputError, RplearnError
-from rplearn.io.files import check_output_kind
 from rplearn.io.live_sources import CsvTail, MavlinkSource
 from rplearn.io.options import ReaderOptions
 from rplearn.models.live_stats import MAX_SEGMENTS, LiveStatistics
 from rplearn.models.options import FitOptions
 from rplearn.models.spec import ModelSpec
+from rplearn.workflows.live_checks import check_live_options, check_live_outputs, fixed_nodes_note, is_csv_source, no_model_message
 from rplearn.workflows.live_ranking import Ranking, RankingWorker
 from rplearn.workflows.live_status import LiveStatus, Prequential, page_rows
 
@@ -74,8 +74,6 @@ BUDGET_WINDOW_ROWS = 2000
 #: recording's whole re-match would otherwise run under it. One still running then is dropped
 #: (a note says the last work ran under its limit).
 STOP_RANKING_WAIT_S = 5.0
-#: What ``until_spread_db`` is read over (:attr:`LiveOptions.spread_over`).
-SPREAD_OVER = ("sphere", "covered")
 
 
 @check_types
@@ -118,6 +116,9 @@ class LiveOptions:
         once the last ranking has finished).
     max_segments : int
         Segments of statistics kept (:class:`rplearn.models.live_stats.LiveStatistics`).
+    fixed_nodes : tuple of str
+        The nodes the caller named as unable to move (``manoeuvres`` holds them still): one not
+        among ``nodes`` is refused, one no matched row names gets a note.
     """
 
     spec: ModelSpec = field(default_factory=lambda: ModelSpec.parse("sh"))
@@ -135,25 +136,10 @@ class LiveOptions:
     max_segments: int = MAX_SEGMENTS
     rank_beside: bool = True
     ranking_every_s: float = 0.0
+    fixed_nodes: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
-        if not (math.isfinite(self.ranking_every_s) and self.ranking_every_s >= 0):
-            raise InputError(f"ranking_every_s: expected a non-negative number of seconds, got {self.ranking_every_s}",
-                             param="ranking_every_s")
-        for name in ("refit_s", "idle_s", "duration_s", "until_spread_db"):
-            v = getattr(self, name)
-            if v is not None and not (math.isfinite(v) and v > 0):
-                raise InputError(f"{name}: expected a positive number of {'dB' if 'db' in name else 'seconds'}, got {v}",
-                                 param=name)
-        if self.spread_over not in SPREAD_OVER:
-            raise InputError(f"spread_over: expected {' or '.join(SPREAD_OVER)}, got {self.spread_over!r}", param="spread_over")
-        if self.spread_over == "covered" and self.until_spread_db is not None and self.until_coverage_pct is None:
-            raise InputError("a spread target over the covered directions needs a coverage target too: that spread is small "
-                             "from the first seconds, while they are a few percent of the sphere (or read it over the "
-                             "sphere: spread_over='sphere')", param="until_coverage_pct")
-        if self.until_coverage_pct is not None and not 0 < self.until_coverage_pct <= 100:
-            raise InputError(f"until_coverage_pct: expected a percentage in (0, 100], got {self.until_coverage_pct}",
-                             param="until_coverage_pct")
+        check_live_options(self)
 
 
 @check_types
@@ -165,12 +151,6 @@ class LiveOutcome:
     fitted: Any
     prequential: Prequential
     output: str
-
-
-@check_types
-def is_csv_source(source: str) -> bool:
-    """Whether ``source`` names a pose and a signal CSV (``POSE.csv,SIGNAL.csv``), not a MAVLink connection."""
-    return "," in source and all(p.lower().endswith(".csv") for p in source.split(","))
 
 
 @check_types
@@ -290,8 +270,10 @@ class _Session:
         from rplearn.data.sync import synchronise
         from rplearn.io.read import read_logs
 
+        if self.stats is None:  # nothing learned (a silent stream: an empty recording)
+            return
         logs, _ = read_logs([src.record_path], self.options.reader)
-        if logs.pose is None or logs.signal is None or self.stats is None:
+        if logs.pose is None or logs.signal is None:
             return
         try:
             result = synchronise(logs.pose, logs.signal, self.options.sync, src.record_path)
@@ -327,6 +309,7 @@ class _Session:
         self.fitted, self.new_samples = fitted, 0
         self.status.refits += 1
         self.note("waiting: ")
+        self.note("--fixed ", fixed_nodes_note(self.options.fixed_nodes, self.fitted.model.nodes))
         self._describe()
         if self.ranking is not None and self.stats is not None:
             self.ranking.submit(self._snapshot, self.status.refits)
@@ -459,16 +442,7 @@ def run_live(
     LiveOutcome
     """
     options = options or LiveOptions()
-    check_output(output, [p for p in source.split(",") if os.path.exists(p)])
-    check_output_kind(output, "model")
-    for extra in (record, html):
-        if extra is not None:
-            check_output(extra, [output])
-    if html is not None:
-        check_output_kind(html, "html", "html")
-    if record is not None and is_csv_source(source):  # it was ignored: nothing written, nothing said
-        raise InputError(f"record: {record}: a CSV source is recorded already (its two files); --record keeps a "
-                         "MAVLink stream as a .tlog", param="record")
+    check_live_outputs(source, output, record, html)
     work_dir = tempfile.mkdtemp(prefix="rplearn-live-")
     src = open_source(source, work_dir, options.reader)
     session = _Session(options, output, work_dir)
@@ -522,13 +496,13 @@ def run_live(
     finally:
         session.close_ranking(wait=False)
         src.close()
-        if record is not None and isinstance(src, MavlinkSource) and os.path.exists(src.record_path):
+        if record is not None and isinstance(src, MavlinkSource) and os.path.getsize(src.record_path):  # not when silent
             with atomic_path(record) as tmp:
                 shutil.copyfile(src.record_path, tmp)
         shutil.rmtree(work_dir, ignore_errors=True)
     if session.fitted is None:
-        raise InputError(f"{source}: the session ended before a model could be learned "
-                         f"({session.status.learned} samples learned)", param="source")
+        messages = src.messages if isinstance(src, MavlinkSource) else None
+        raise InputError(no_model_message(source, session.status, messages, time.monotonic() - start), param="source")
     return LiveOutcome(session.status, session.fitted, session.preq, output)
 
 

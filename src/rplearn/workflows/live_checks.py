@@ -1,0 +1,96 @@
+"""The checks of a live session (``rplearn live``, :mod:`rplearn.workflows.live`): its options and
+outputs before any work, the fixed nodes it was told of that no row names, and why a session
+that ended without a model has none.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Sequence
+from typing import Any
+
+from rplearn._argtypes import check_types
+from rplearn.errors import InputError
+from rplearn.io.files import check_output_kind
+from rplearn.io.resolve import check_outputs
+
+#: What ``until_spread_db`` is read over (:attr:`rplearn.workflows.live.LiveOptions.spread_over`).
+SPREAD_OVER = ("sphere", "covered")
+
+
+@check_types
+def is_csv_source(source: str) -> bool:
+    """Whether ``source`` names a pose and a signal CSV (``POSE.csv,SIGNAL.csv``), not a MAVLink connection."""
+    return "," in source and all(p.lower().endswith(".csv") for p in source.split(","))
+
+
+def check_live_options(options: Any) -> None:
+    """Refuse :class:`rplearn.workflows.live.LiveOptions` whose values contradict (one line naming the field)."""
+    o = options
+    if not (math.isfinite(o.ranking_every_s) and o.ranking_every_s >= 0):
+        raise InputError(f"ranking_every_s: expected a non-negative number of seconds, got {o.ranking_every_s}",
+                         param="ranking_every_s")
+    for name in ("refit_s", "idle_s", "duration_s", "until_spread_db"):
+        v = getattr(o, name)
+        if v is not None and not (math.isfinite(v) and v > 0):
+            raise InputError(f"{name}: expected a positive number of {'dB' if 'db' in name else 'seconds'}, got {v}",
+                             param=name)
+    if o.spread_over not in SPREAD_OVER:
+        raise InputError(f"spread_over: expected {' or '.join(SPREAD_OVER)}, got {o.spread_over!r}", param="spread_over")
+    if o.spread_over == "covered" and o.until_spread_db is not None and o.until_coverage_pct is None:
+        raise InputError("a spread target over the covered directions needs a coverage target too: that spread is small "
+                         "from the first seconds, while they are a few percent of the sphere (or read it over the "
+                         "sphere: spread_over='sphere')", param="until_coverage_pct")
+    if o.until_coverage_pct is not None and not 0 < o.until_coverage_pct <= 100:
+        raise InputError(f"until_coverage_pct: expected a percentage in (0, 100], got {o.until_coverage_pct}",
+                         param="until_coverage_pct")
+    missing = [n for n in o.fixed_nodes if o.nodes is not None and n not in o.nodes]
+    if missing:
+        raise InputError(f"fixed_nodes: {', '.join(missing)} is not among nodes ({', '.join(o.nodes)}), those "
+                         "learned: a node held still must be learned too", param="fixed_nodes", related=("nodes",))
+
+
+@check_types
+def check_live_outputs(source: str, output: str, record: str | None, html: str | None) -> None:
+    """Refuse, before any work, an output that is an input (a CSV source's files, a ``.tlog`` read as a connection)
+    or another output (the model, the page, the recording: each its own file), or whose name says another kind."""
+    inputs = source.split(",") if is_csv_source(source) else [source] if os.path.exists(source) else []
+    check_outputs({"output": output, "html": html, "record": record}, inputs)
+    check_output_kind(output, "model")
+    if html is not None:
+        check_output_kind(html, "html", "html")
+    if record is not None and is_csv_source(source):  # it was ignored: nothing written, nothing said
+        raise InputError(f"record: {record}: a CSV source is recorded already (its two files); --record keeps a "
+                         "MAVLink stream as a .tlog", param="record")
+
+
+@check_types
+def fixed_nodes_note(fixed_nodes: Sequence[str], nodes: Sequence[str]) -> str | None:
+    """The note (after ``--fixed ``) for the nodes named as unable to move that the session does not learn (a typo,
+    a station under another id): the manoeuvres are ranked with them absent; None when every one is learned."""
+    missing = [n for n in fixed_nodes if n not in nodes]
+    if not missing:
+        return None
+    return (f"{', '.join(missing)}: no matched row names it (the session's nodes: {', '.join(nodes)}); "
+            "the manoeuvres are ranked as if no node named there were held still")
+
+
+@check_types
+def no_model_message(source: str, status: Any, messages: int | None, waited_s: float) -> str:
+    """Why a session ended without a model, in one line: nothing received (``messages``: MAVLink messages received
+    in all, None for a CSV source), no row matched, or too few learned (the last refit's refusal)."""
+    s = status
+    if messages == 0:
+        return (f"{source}: no MAVLink message received from it in {waited_s:.0f} s: is the vehicle or the forwarder "
+                "sending to this address and port, and is the link up?")
+    if s.received == 0:
+        return f"{source}: the session ended ({s.stopped or 'stopped'}) before any signal row was received: no model"
+    drops = ", ".join(f"{n} {r}" for r, n in s.dropped.items() if n)
+    why = [n[len("waiting: "):] for n in s.notes if n.startswith("waiting: ")] or [n for n in s.notes if "too few" in n]
+    return (f"{source}: the session ended ({s.stopped or 'stopped'}) before a model could be learned: {s.received} signal "
+            f"rows received, {s.matched} matched, {s.learned} learned" + (f" (dropped: {drops})" if drops else "")
+            + (f"; {why[-1]}" if why else ""))
+
+
+__all__ = ["SPREAD_OVER", "check_live_options", "check_live_outputs", "fixed_nodes_note", "is_csv_source", "no_model_message"]
