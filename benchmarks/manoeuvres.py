@@ -56,7 +56,11 @@ radio's, as ``--packet-rate`` gives it) and, with ``--tilt``, the tilt: what the
 learn and what the radio and vehicles do, not a fit's figures. ``--ranker live`` ranks with its
 own refits whatever ``--hyper`` says, and ``--bound`` is computed under the yardstick's model.
 With ``--prior-std DB`` the prior is stated, and ``previous`` differs from ``reference`` only in
-the drifting error. Measured: ``docs/guides/calibration-plan.md``, "What it buys".
+the drifting error. Measured (seeds 0-4, one draw, one thread; ``docs/guides/calibration-plan.md``,
+"What it buys"): the optimized plan's time ratio on ``paper`` 0.53-0.62x (``reference``),
+0.47-0.57x (``previous``), 0.65-0.70x (``flags``), 0.94-1.03x and once short of 2 dB (``cli``: the
+paper's own unit first); on ``ground`` seeds 0 and 2 every plan but ``reference``'s ends short of
+2 dB (2.06-2.75 dB: the earlier flight's fit was less noisy than theirs).
 
 **What the error check can and cannot tell** (``--budget``: each flight's samples split into the
 truth at the logged directions, the pointing part and the rest, each fitted alone; seeds 0-2): at a flight's 2-dB point its worst
