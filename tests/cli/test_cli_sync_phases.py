@@ -6,6 +6,7 @@ interpreter start-up and imports as a process of its own)."""
 from __future__ import annotations
 
 import re
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -77,3 +78,20 @@ def test_a_slow_pose_log_names_the_max_gap_that_works(logs):
     assert "max_gap_s" not in proc.stdout + proc.stderr  # named as the flag
     ok = run(base + ["--max-gap", found.group(1)], d).stdout
     assert f"matched: {ts.size}" in ok
+
+
+def test_sync_names_the_fixed_nodes_with_the_advice_of_their_source(logs, tmp_path):
+    # the station B of a pose table (one row): fixed, and if it moved, log its poses; a MAVLink log's station: its
+    # one row is where the log places it, the flags that place and turn it named, no fault of the log's
+    d, _ = logs
+    table = run(["sync", "--poses", "pose.csv", "--signals", "signal.csv", "-o", "fixed.parquet"], d).stdout
+    assert "fixed node(s) (a pose log of one row, or of identical rows, is a node holding still at that pose): B at " \
+           "every time (one pose row)" in table
+    assert "B: its pose table (pose.csv) gives it one pose, or only identical ones: right for a station or a parked " \
+           "drone; if B moved, its motion was not logged: log its poses" in table
+    real = Path(__file__).resolve().parents[1] / "fixtures" / "ardupilot" / "mavlink-log_2013-10-13_16-58-51.tlog"
+    out = run(["sync", "--poses", real, "--signals", real, "--tx-power", "20", "--frequency", "433e6", "--link", "all",
+               "-o", "tlog.parquet"], tmp_path).stdout
+    assert "gcs is the ground station, one pose row where" in out
+    assert "--station LAT,LON,ALT places it if it stood elsewhere, --station-heading says where its antenna faced" in out
+    assert "log its poses" not in out

@@ -181,16 +181,24 @@ def test_rows_of_a_node_whose_first_poses_are_held_wait_for_them(logs, until_s):
     assert m.pending_rows == 0 and m.waiting_rows == 0
 
 
-def test_rows_naming_a_node_that_never_logs_wait_no_longer_than_the_hold(logs):
-    # a link to a node without poses: its rows wait HOLD_S of pose time, then are dropped as unknown_node
-    from rplearn.data.live_sync import HOLD_S
-
+def _rows_to_a_ghost(logs) -> tuple[LiveMatcher, pd.DataFrame]:
+    """A matcher given the first 10 s of poses and signals and 50 rows to a node Z that never logs a pose, matched;
+    returns it and those rows."""
     pose, signal = logs
     ghost = signal.iloc[:50].assign(rx="Z")
     m = LiveMatcher()
     m.add_poses(pose[pose["t"] < 10.0])
     m.add_signals(pd.concat([signal[signal["t"] < 10.0], ghost], ignore_index=True))
     m.match()
+    return m, ghost
+
+
+def test_rows_naming_a_node_that_never_logs_wait_no_longer_than_the_hold(logs):
+    # a link to a node without poses: its rows wait HOLD_S of pose time, then are dropped as unknown_node
+    from rplearn.data.live_sync import HOLD_S
+
+    pose, _ = logs
+    m, ghost = _rows_to_a_ghost(logs)
     assert m.waiting_rows == 50 and m.summary.dropped["unknown_node"] == 0
     m.add_poses(pose[(pose["t"] >= 10.0) & (pose["t"] < ghost["t"].max() + HOLD_S + 1.0)])
     m.match()
@@ -203,11 +211,6 @@ def test_rows_waiting_for_a_nodes_poses_are_bounded_in_number(logs, monkeypatch)
     import rplearn.data.live_sync as live_sync
 
     monkeypatch.setattr(live_sync, "WAIT_ROWS", 20)
-    pose, signal = logs
-    ghost = signal.iloc[:50].assign(rx="Z")
-    m = LiveMatcher()
-    m.add_poses(pose[pose["t"] < 10.0])
-    m.add_signals(pd.concat([signal[signal["t"] < 10.0], ghost], ignore_index=True))
-    m.match()
+    m, _ = _rows_to_a_ghost(logs)
     assert m.waiting_rows == 20 and m.summary.dropped["unknown_node"] == 30
     assert m.waiting_nodes == frozenset({"Z"})

@@ -237,7 +237,27 @@ def test_non_unit_quaternions_are_counted_and_normalised(two_nodes):
     assert "non-unit quaternion (|norm - 1| > 0.001, normalised): 1" in res.summary.to_text()
     np.testing.assert_allclose(np.linalg.norm(res.dataset[["tx_qw", "tx_qx", "tx_qy", "tx_qz"]], axis=1), 1.0)
     chunks = list(synchronise_stream(pose, [signal_log([0.05], "A", "B")] * 2))
-    assert [c.summary.non_unit_quaternions for c in chunks] == [1, 0]
+    assert [c.summary.non_unit_quaternions for c in chunks] == [1, 0, 0]  # the last: the notes on the whole log
+    assert chunks[-1].summary.n_in == 0 and chunks[-1].summary.fixed_nodes == ["B"]
+
+
+def test_the_nodes_taken_as_fixed_are_named_with_what_was_taken(two_nodes):
+    # a node logged with one row, or only identical rows, holds still over its log's span: was done without a word
+    still = pose_log("C", [0.0, 0.5, 1.0], [[5, 5, 0]] * 3, [0.0] * 3)  # a station logged at 2 Hz
+    pose = pd.concat([two_nodes, still], ignore_index=True)
+    signal = pd.concat([signal_log([0.05, 0.125], "A", "B"), signal_log([0.1], "C", "A")], ignore_index=True)
+    summary = synchronise(pose, signal).summary
+    assert summary.fixed_nodes == ["B", "C"]
+    [note] = [n for n in summary.notes if n.startswith("fixed node(s)")]
+    assert note.endswith(": B at every time (one pose row); C from t = 0.000 to 1.000 s (identical pose rows, "
+                         "no pose gap between them)")
+    assert note in summary.to_text()
+    streamed = SyncSummary()
+    for res in synchronise_stream(pose, [signal]):
+        streamed.merge(res.summary)
+    assert streamed.fixed_nodes == ["B", "C"] and note in streamed.notes
+    moving = synchronise(two_nodes[two_nodes["node"] == "A"], signal_log([0.05], "A", "A2"), SyncOptions(min_samples=0))
+    assert moving.summary.fixed_nodes == [] and not [n for n in moving.summary.notes if "fixed node" in n]
 
 
 def test_link_naming_a_node_in_no_signal_log(two_nodes):

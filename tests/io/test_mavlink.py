@@ -733,3 +733,10 @@ def test_a_corrupt_position_record_refuses_the_log_in_a_line_naming_the_file(tmp
     bad.write_bytes(bytes(everywhere))
     with pytest.raises(RplearnError, match=rf"^{bad}: .*altitude \[m\] 7e\+12"):
         _read(bad)
+
+
+def test_a_log_without_link_loss_says_no_outage_events(tmp_path):
+    # was: "0 radio message(s) with a zero RSSI while the vehicle was silent (link lost): kept as outage events"
+    meta = _read(simulated_dataflash(tmp_path / "f.bin"))[1]
+    assert meta["signal"]["link_lost"] == 0
+    assert not [n for n in meta["notes"] if "zero RSSI while the vehicle was silent" in n]

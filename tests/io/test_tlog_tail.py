@@ -347,17 +347,11 @@ def test_bursts_of_messages_received_twice_are_counted_alike_by_tail_and_offline
     assert len(poses[poses["node"] != "G"]) == len(ref.pose[ref.pose["node"] != "G"])
 
 
-def test_a_home_position_after_the_station_was_taken_from_a_fix_moves_the_station(ground_260s, tmp_path):
-    """Review 37: positions invalid (no origin, altitude 0.8 m) for the first 60 s, so no
-    ``HOME_POSITION`` for longer than :data:`HOME_WAIT_S`: the tail takes its station from the
-    first fix, then ``HOME_POSITION`` arrives, which ``sync`` takes as the station of the whole
-    log. The rows handed out after it are ``sync``'s (same station, same positions), and every row
-    handed out in the other frame before it is counted withdrawn: none silently ~90 m off."""
-    whole, grown = tmp_path / "whole.tlog", tmp_path / "grown.tlog"
-    write_tlog(ground_260s, whole, vehicle="D", station="G", origin_geodetic=ORIGIN,
-               defects=TlogDefects(invalid_until_s=60.0))
+def _tail_withdraws_then_gives_syncs_rows(whole: Path, grown: Path) -> dict:
+    """``whole`` read by the tail in late pieces (``grown``) against ``sync``'s reading of it: the tail ends at sync's
+    station, every vehicle row (and signal row) it handed out before sync's first vehicle row is counted withdrawn,
+    the vehicle rows after it are sync's. Returns sync's metadata of the file."""
     ref, meta = read_logs([str(whole)], _options(whole))
-    assert {p["reason"] for p in meta["files"][0]["excluded_periods"]} == {"before_valid_position"}
     poses, signals, tail, _ = _poll_in_pieces(whole, grown, LATE_PIECE_BYTES)
     assert tail._station == pytest.approx(tuple(meta["files"][0]["station_geodetic"]), abs=1e-9)
     vehicle = poses[poses["node"] == "D"].sort_values("t").reset_index(drop=True)
@@ -369,6 +363,20 @@ def test_a_home_position_after_the_station_was_taken_from_a_fix_moves_the_statio
     assert len(after) == len(ref_vehicle)
     for c in ("x", "y", "z"):
         np.testing.assert_allclose(after[c].to_numpy(), ref_vehicle[c].to_numpy(), rtol=0, atol=1e-9, err_msg=c)
+    return meta
+
+
+def test_a_home_position_after_the_station_was_taken_from_a_fix_moves_the_station(ground_260s, tmp_path):
+    """Review 37: positions invalid (no origin, altitude 0.8 m) for the first 60 s, so no
+    ``HOME_POSITION`` for longer than :data:`HOME_WAIT_S`: the tail takes its station from the
+    first fix, then ``HOME_POSITION`` arrives, which ``sync`` takes as the station of the whole
+    log. The rows handed out after it are ``sync``'s (same station, same positions), and every row
+    handed out in the other frame before it is counted withdrawn: none silently ~90 m off."""
+    whole, grown = tmp_path / "whole.tlog", tmp_path / "grown.tlog"
+    write_tlog(ground_260s, whole, vehicle="D", station="G", origin_geodetic=ORIGIN,
+               defects=TlogDefects(invalid_until_s=60.0))
+    meta = _tail_withdraws_then_gives_syncs_rows(whole, grown)
+    assert {p["reason"] for p in meta["files"][0]["excluded_periods"]} == {"before_valid_position"}
 
 
 def test_a_station_taken_from_a_fix_found_invalid_later_moves_to_syncs_first_valid_fix(ground_260s, tmp_path):
@@ -382,19 +390,8 @@ def test_a_station_taken_from_a_fix_found_invalid_later_moves_to_syncs_first_val
                defects=TlogDefects(invalid_until_s=60.0))
     whole, grown = tmp_path / "whole.tlog", tmp_path / "grown.tlog"
     whole.write_bytes(b"".join(r for _, r in _records(first.read_bytes()) if int.from_bytes(r[8 + 7:8 + 10], "little") not in (242, 49)))
-    ref, meta = read_logs([str(whole)], _options(whole))
+    meta = _tail_withdraws_then_gives_syncs_rows(whole, grown)
     assert "first position fix" in meta["files"][0]["station_note"]
-    poses, signals, tail, _ = _poll_in_pieces(whole, grown, LATE_PIECE_BYTES)
-    assert tail._station == pytest.approx(tuple(meta["files"][0]["station_geodetic"]), abs=1e-9)
-    vehicle = poses[poses["node"] == "D"].sort_values("t").reset_index(drop=True)
-    ref_vehicle = ref.pose[ref.pose["node"] == "D"].sort_values("t").reset_index(drop=True)
-    cut = float(ref_vehicle["t"].min()) - 2e-4
-    before, after = vehicle[vehicle["t"] < cut], vehicle[vehicle["t"] >= cut].reset_index(drop=True)
-    assert len(before) > 0 and tail.dropped["withdrawn_pose_rows"] == len(before)
-    assert tail.dropped["withdrawn_signal_rows"] == int((signals["t"] < cut).sum())
-    assert len(after) == len(ref_vehicle)
-    for c in ("x", "y", "z"):
-        np.testing.assert_allclose(after[c].to_numpy(), ref_vehicle[c].to_numpy(), rtol=0, atol=1e-9, err_msg=c)
 
 
 def test_the_state_kept_does_not_grow_with_a_long_gap_of_position_fixes(clean_260s, tmp_path):

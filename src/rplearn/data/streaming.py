@@ -107,7 +107,7 @@ def synchronise_stream(
 ) -> Iterator[SyncResult]:
     """Match a signal log chunk by chunk; yields one :class:`SyncResult` per chunk, and, if
     there is any, a last one without rows whose summary carries the notes on the whole log (the window, the airborne
-    filter, the ``max_gap_s`` the poses need).
+    filter, the fixed nodes, the ``max_gap_s`` the poses need).
 
     The pose log is held in memory (a 100 Hz log of an hour is 360,000 rows per node); the
     signal log is consumed lazily, so memory stays bounded by the chunk size (plus 8 bytes a
@@ -150,7 +150,8 @@ def synchronise_stream(
     notes = list(total.notes)
     finish_summary(total, tracks, phases, options, source)  # raises when too few matched
     if len(total.notes) > len(notes):
-        yield SyncResult(pd.DataFrame(columns=list(MATCHED_COLUMNS)), SyncSummary(notes=total.notes[len(notes):]))
+        yield SyncResult(pd.DataFrame(columns=list(MATCHED_COLUMNS)),
+                         SyncSummary(notes=total.notes[len(notes):], fixed_nodes=total.fixed_nodes))
 
 
 @check_types

@@ -68,7 +68,8 @@ Outage events (signal rows with ``outage`` True: a lost link, no RSSI) are match
 kept with ``outage`` True (:mod:`rplearn.data.outages`); ``SyncSummary.outages`` counts them.
 
 A node whose pose log has a single row is static (a ground station, a parked drone): its pose
-holds at every time and it never causes ``out_of_span`` or ``pose_gap``.
+holds at every time and it never causes ``out_of_span`` or ``pose_gap``; one logged with identical rows
+holds still over its log's span. Both are fixed nodes, named by ``SyncSummary.fixed_nodes`` and a note.
 
 Time convention: the output column ``t`` is the signal time on the common clock,
 ``t_signal + signal_clock_offset_s``; a pose log's times are shifted by
@@ -93,6 +94,7 @@ from rplearn.data.phases import AIRBORNE_MARGIN_M, WINDOW_CLOCKS, FlightPhases, 
 from rplearn.data.poses import STATUS_OUT_OF_SPAN, STATUS_POSE_GAP, PoseTrack, tracks_of_pose_log
 from rplearn.data.readings import REPEAT_FRACTION, duplicate_rows, repeated_reading_mask
 from rplearn.data.sync_match import block_row, factorize_ends, float_block, interpolate_end, matched_frame, node_codes
+from rplearn.data.sync_notes import fixed_nodes, fixed_note, implausible_note
 from rplearn.data.tables import QUATERNION_NORM_TOLERANCE, SENTINEL_RSSI_DBM, SIGNAL_COLUMNS, check_tx_power_dbm, check_unit_labels, empty_ids, normalise_times
 from rplearn.errors import InputError
 
@@ -135,6 +137,8 @@ class SyncSummary:
         What was done (window, airborne filter), advice (``max_gap_s``).
     outages : dict of str to int
         Outage events (:mod:`rplearn.data.outages`): ``in``, ``kept`` and dropped per reason.
+    fixed_nodes : list of str
+        Nodes taken as holding still (:mod:`rplearn.data.sync_notes`): a pose log of one row, or of identical rows.
     """
 
     n_in: int = 0
@@ -145,6 +149,7 @@ class SyncSummary:
     ground_kept: int = 0
     notes: list[str] = field(default_factory=list)
     outages: dict[str, int] = field(default_factory=dict)
+    fixed_nodes: list[str] = field(default_factory=list)
 
     @property
     def n_dropped(self) -> int:
@@ -161,6 +166,7 @@ class SyncSummary:
         self.ground_kept += other.ground_kept
         self.notes += [n for n in other.notes if n not in self.notes]
         self.outages = {k: self.outages.get(k, 0) + other.outages.get(k, 0) for k in {**self.outages, **other.outages}}
+        self.fixed_nodes = sorted(set(self.fixed_nodes) | set(other.fixed_nodes))
         return self
 
     def to_text(self) -> str:
@@ -555,28 +561,9 @@ def synchronise(
     return result
 
 
-#: Share of the samples reaching the RSSI range test dropped as ``implausible_rssi`` from which
-#: the summary asks whether the received power is uncalibrated.
-IMPLAUSIBLE_ADVICE_SHARE = 0.25
-
-
-def _implausible_note(summary: SyncSummary, options: SyncOptions) -> str | None:
-    """The question a summary asks when many samples' RSSI is out of range or above the transmit
-    power: a radio's own units or a constant offset (uncalibrated), which ``rssi_scale="relative"`` reads."""
-    later = DROP_REASONS[DROP_REASONS.index("implausible_rssi"):]
-    reached = summary.n_out + sum(summary.dropped.get(r, 0) for r in later)
-    share = summary.dropped["implausible_rssi"] / max(reached, 1)
-    if options.rssi_scale != "dbm" or not summary.dropped["implausible_rssi"] or share < IMPLAUSIBLE_ADVICE_SHARE:
-        return None
-    return (f"{100 * share:.0f}% of the samples have an RSSI outside {PLAUSIBLE_RSSI_DBM[0]:g} to "
-            f"{PLAUSIBLE_RSSI_DBM[1]:g} dBm or above the transmit power (implausible_rssi): a radio reporting its own "
-            "units or with a constant offset (uncalibrated power)? SyncOptions.rssi_scale='relative' learns from it as "
-            "relative power")
-
-
 def finish_summary(summary: SyncSummary, tracks: Mapping[str, PoseTrack], phases: FlightPhases,
                    options: SyncOptions, source: str) -> None:
-    """Add the phase notes and any ``max_gap_s`` advice to a whole log's summary; raise when
+    """Add the phase notes, the fixed nodes and any ``max_gap_s`` advice to a whole log's summary; raise when
     fewer than ``min_samples`` were matched (naming the ``max_gap_s`` the poses need)."""
     notes = phase_notes(phases, options.from_s, options.to_s, options.window_clock, options.airborne)
     summary.notes += [n for n in notes if n not in summary.notes]
@@ -586,9 +573,10 @@ def finish_summary(summary: SyncSummary, tracks: Mapping[str, PoseTrack], phases
     advice = max_gap_advice(tracks, options.max_gap_s) if share >= 0.25 else None
     if advice:  # in the summary (and the error below), not a log warning that would repeat it
         summary.notes.append(f"{100 * share:.0f}% of the samples fall in pose gaps: {advice}")
-    implausible = _implausible_note(summary, options)
-    if implausible and implausible not in summary.notes:
-        summary.notes.append(implausible)
+    summary.fixed_nodes = fixed_nodes(tracks)
+    said = [fixed_note(tracks, summary.fixed_nodes),
+            implausible_note(summary.n_out, summary.dropped, DROP_REASONS, options.rssi_scale, PLAUSIBLE_RSSI_DBM)]
+    summary.notes += [n for n in said if n and n not in summary.notes]
     if summary.n_out < options.min_samples:
         raise InputError(
             f"{source}: only {summary.n_out} signal sample(s) matched, at least "

@@ -215,14 +215,14 @@ def _judge(first: _Pass) -> set[int]:
     by_key: dict[tuple[Any, ...], list[tuple[int, float, int]]] = {}
     for index, key, gap, i in first.maybe:
         by_key.setdefault(key, []).append((index, gap, i))
-    copies = set()
+    copies: set[int] = set()
     for key, maybes in by_key.items():
-        index, gap, at = (np.asarray(v) for v in zip(*maybes, strict=True))
+        numbers, gaps, at = (np.asarray(v) for v in zip(*maybes, strict=True))
         if key not in first.steps:
-            copies.update(index.tolist())
+            copies.update(numbers.tolist())
             continue
         local = _local_interval(np.asarray(first.steps[key], np.float64), at.astype(np.int64))
-        copies.update(index[gap < DUPLICATE_FRACTION_OF_PERIOD * local].tolist())
+        copies.update(numbers[gaps < DUPLICATE_FRACTION_OF_PERIOD * local].tolist())
     return copies
 
 

@@ -561,9 +561,10 @@ def logs_from_raw(raw: Raw, source: str, radio: tuple[float | Mapping[str, float
     lost = sig_counts["link_lost"]
     heading_note = ("assumed level and facing east (heading 90 deg): its attitude is not logged"
                     if station_heading_deg is None else f"level, heading {heading:g} deg (given)")
-    notes = [f"{source}: {station_note}", f"{source}: station {station!r} {heading_note}",
-             (f"{source}: {lost:,} radio message(s) with a zero RSSI while the vehicle was silent "
-              "(link lost): kept as outage events (column outage, no RSSI), both directions")]
+    notes = [f"{source}: {station_note}", f"{source}: station {station!r} {heading_note}"]
+    if lost:
+        notes.append(f"{source}: {lost:,} radio message(s) with a zero RSSI while the vehicle was silent (link lost): "
+                     "kept as outage events (column outage, no RSSI), both directions")
     notes += _hygiene_notes(source, periods, sig_counts, raw)
     others = raw.notes.get("other_vehicles") or {}
     if others:  # more vehicles than one in the log: counted and named, not read

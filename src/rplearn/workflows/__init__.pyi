@@ -34,6 +34,7 @@ from .live_status import page_rows as page_rows
 from .live_status import ranking_text as ranking_text
 from .logs import LinksOutcome as LinksOutcome
 from .logs import SyncOutcome as SyncOutcome
+from .logs import fixed_node_advice as fixed_node_advice
 from .logs import reader_notes as reader_notes
 from .logs import swarm_headings as swarm_headings
 from .logs import swarm_links as swarm_links

@@ -47,6 +47,51 @@ def reader_notes(metadata: Mapping[str, Any]) -> list[str]:
     return notes
 
 
+#: Formats of pose tables (:func:`rplearn.io.tables.table_format`): a node's poses as the user wrote them.
+_TABLE_FORMATS = ("csv", "parquet")
+
+
+@check_types
+def fixed_node_advice(fixed_nodes: Sequence[str], metadata: Mapping[str, Any]) -> list[str]:
+    """What each node a sync took as fixed (``SyncSummary.fixed_nodes``) is, by where its poses came from
+    (:func:`read_logs` metadata), and what to do if it moved.
+
+    The ground station a MAVLink or DataFlash log, or a ULog read with its radio, places is one pose row (where the
+    log's home or first fix puts it): fixed as a station is, the log holds no motion of it, nothing wrong with it;
+    its place and heading can be given. A node of a pose table (CSV/Parquet) logged with one row or identical rows
+    may be a station or a parked drone; if it moved, its motion is missing from the table: log its poses. A vehicle
+    of another log (a ULog, a bag, a MAVLink log's vehicle) gave no motion: it stood still throughout.
+    """
+    files = list(metadata.get("files", []))
+    stations: dict[str, list[str]] = {}
+    vehicles: dict[str, list[str]] = {}
+    for f in files:
+        if f.get("station") is not None:
+            stations.setdefault(str(f["station"]), []).append(str(f.get("source")))
+        for key in ("vehicle", "node"):
+            if f.get(key) is not None:
+                vehicles.setdefault(str(f[key]), []).append(str(f.get("source")))
+    tables = [str(f.get("source")) for f in files if f.get("format") in _TABLE_FORMATS and "pose" in str(f.get("kind"))]
+    advice = []
+    for node in fixed_nodes:
+        if node in stations:
+            where = stations[node]
+            advice.append(f"{node} is the ground station, one pose row where {' and '.join(where)} "
+                          f"{'places' if len(where) == 1 else 'place'} it (at the log's home, else the vehicle's first "
+                          "fix): held fixed, as a station standing through the flight is; the log holds its place, no "
+                          "motion of it. ReaderOptions.station_geodetic places it if it stood elsewhere, "
+                          "ReaderOptions.station_heading_deg says where its antenna faced")
+        elif node in vehicles:
+            where = vehicles[node]
+            advice.append(f"{node}: {' and '.join(where)} {'gives' if len(where) == 1 else 'give'} it no motion: it "
+                          "stood still throughout the log")
+        elif tables:
+            advice.append(f"{node}: its pose table ({', '.join(tables)}) gives it one pose, or only identical ones: "
+                          f"right for a station or a parked drone; if {node} moved, its motion was not logged: log "
+                          "its poses")
+    return advice
+
+
 @check_types
 @dataclass
 class SyncOutcome:
@@ -236,11 +281,13 @@ def sync_logs(
                 yield res.dataset
 
         write_table_chunks(frames(), output, MATCHED_COLUMNS)
+        summary.notes += fixed_node_advice(summary.fixed_nodes, pose_meta)
         return SyncOutcome(summary, output, reader_notes(pose_meta), streamed=True, clock=clock)
     signal, signal_meta = _signal_log(signal_paths, pose_paths, pose_logs.signal, pose_meta, reader_options)
     if signal is None:
         raise InputError(f"{', '.join(signal_paths)}: no signal log found", param="signal_paths")
     result = synchronise(pose_logs.pose, signal, sync_options, source=source)
+    result.summary.notes += fixed_node_advice(result.summary.fixed_nodes, pose_meta)
     write_table(result.dataset, output)
     return SyncOutcome(result.summary, output, _both_notes(pose_meta, signal_meta), clock=clock)
 
