@@ -136,3 +136,46 @@ def test_a_header_repeated_mid_file_is_a_counted_drop_and_another_header_is_refu
     _with_line(path, 150, ",".join(reversed(header.strip().split(","))) + "\n")
     line = _error(_live(tmp_path, source))
     assert f"{path}: line 151: another header in the file" in line
+
+
+TLOG = Path(__file__).resolve().parents[1] / "fixtures" / "ardupilot" / "mavlink-log_2013-10-13_16-58-51.tlog"
+
+
+@pytest.mark.parametrize(("flags", "expected"), [
+    (["--to", "127.0.0.1:99999"], "--to: port 99999"),
+    (["--to", "no-such-host.invalid:14550"], "--to: cannot resolve the host"),
+    (["--speed", "inf"], "--speed: expected a positive, finite factor, got inf"),
+    (["--speed", "nan"], "--speed: expected a positive, finite factor"),
+    (["--speed", "0"], "--speed: expected a positive, finite factor"),
+    (["--speed", "-2"], "--speed: expected a positive, finite factor"),
+])
+def test_replay_refuses_a_bad_target_or_speed_in_one_line_naming_the_flag(flags, expected):
+    """--speed inf was a traceback (ValueError: cannot convert float NaN to integer); an unknown host or a port out
+    of range a bare '[Errno -2] Name or service not known'."""
+    assert expected in _error(invoke(["replay", str(TLOG), *flags], ok=False))
+
+
+def test_replay_of_a_tlog_with_a_corrupt_receive_time_does_not_wait_for_it(tmp_path):
+    """One record's receive time 30,000 years after the others: replay slept until then (a hang)."""
+    import struct
+    import subprocess
+    import sys
+
+    data = TLOG.read_bytes()[:60000]
+    bad = tmp_path / "bad.tlog"
+    far = struct.unpack(">Q", data[:8])[0] + 10**18  # [us]
+    bad.write_bytes(data[:25] + struct.pack(">Q", far) + data[8:25] + data[25:])
+    env = {"PYTHONPATH": str(Path(__file__).resolve().parents[2] / "src")}
+    done = subprocess.run([sys.executable, "-m", "rplearn", "replay", str(bad), "--to", "127.0.0.1:9", "--speed", "1e6"],
+                          capture_output=True, text=True, timeout=120, env=env)
+    assert done.returncode == 0 and "sent " in done.stdout, done.stdout + done.stderr
+
+
+def test_live_on_a_tlog_cut_inside_its_first_record_says_so_naming_the_file(tmp_path):
+    """pymavlink's connection indexed the file whole and raised AttributeError ('NoneType' object has no attribute
+    '_instance_field'); a file with no whole message then waited for a first message forever."""
+    cut = tmp_path / "cut.tlog"
+    cut.write_bytes(TLOG.read_bytes()[3:40])
+    line = _error(invoke(["live", str(cut), "-o", tmp_path / "m.json", "--quiet", "--no-advice", "--tx-power", "20",
+                          "--frequency", "433e6", "--idle", "1"], ok=False))
+    assert line == f"error: {cut}: no MAVLink message in it (a .tlog, as MAVProxy or QGroundControl record it?)"

@@ -447,7 +447,8 @@ def run_live(
     src = open_source(source, work_dir, options.reader)
     session = _Session(options, output, work_dir)
     start = last_refit = time.monotonic()
-    last_rx: float | None = None  # the silence that ends the stream counts from its first message
+    # the silence that ends the stream counts from its first message; a file (a .tlog read as a connection) from the start
+    last_rx: float | None = start if os.path.isfile(source) else None
     try:
         while True:
             got = src.poll()

@@ -81,11 +81,15 @@ def no_model_message(source: str, status: Any, messages: int | None, waited_s: f
     """Why a session ended without a model, in one line: nothing received (``messages``: MAVLink messages received
     in all, None for a CSV source), no row matched, or too few learned (the last refit's refusal)."""
     s = status
+    if messages == 0 and os.path.isfile(source):
+        return f"{source}: no MAVLink message in it (a .tlog, as MAVProxy or QGroundControl record it?)"
     if messages == 0:
         return (f"{source}: no MAVLink message received from it in {waited_s:.0f} s: is the vehicle or the forwarder "
                 "sending to this address and port, and is the link up?")
     if s.received == 0:
-        return f"{source}: the session ended ({s.stopped or 'stopped'}) before any signal row was received: no model"
+        radio = "" if messages is None else (f": {messages} MAVLink messages, none of them a radio report with both ends "
+                                             "placed (RADIO_STATUS or RADIO, with the vehicle's position)")
+        return f"{source}: the session ended ({s.stopped or 'stopped'}) before any signal row was received{radio}; no model"
     drops = ", ".join(f"{n} {r}" for r, n in s.dropped.items() if n)
     why = [n[len("waiting: "):] for n in s.notes if n.startswith("waiting: ")] or [n for n in s.notes if "too few" in n]
     return (f"{source}: the session ended ({s.stopped or 'stopped'}) before a model could be learned: {s.received} signal "
