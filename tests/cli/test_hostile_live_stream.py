@@ -179,3 +179,31 @@ def test_live_on_a_tlog_cut_inside_its_first_record_says_so_naming_the_file(tmp_
     line = _error(invoke(["live", str(cut), "-o", tmp_path / "m.json", "--quiet", "--no-advice", "--tx-power", "20",
                           "--frequency", "433e6", "--idle", "1"], ok=False))
     assert line == f"error: {cut}: no MAVLink message in it (a .tlog, as MAVProxy or QGroundControl record it?)"
+
+
+def test_refusals_name_what_lives_command_line_can_do_never_a_library_option(tmp_path):
+    """Rows out of order suggested 'allow_unsorted=True', a pose table without a node column 'ReaderOptions.nodes'
+    (and, with --nodes mapped, live's --nodes, another thing), a signal table without tx 'rx=, tx_power_dbm='."""
+    pose, sig = _tables()
+    source = _write(tmp_path, pose, sig.iloc[[*range(50), 51, 50, *range(52, 300)]])
+    line = _error(_live(tmp_path, source))
+    assert "allow_unsorted" not in line and "sync the finished file with --allow-unsorted" in line
+    source = _write(tmp_path, pose[pose["node"] == "D"].drop(columns="node"), sig)
+    line = _error(_live(tmp_path, source))
+    assert "ReaderOptions" not in line and "--nodes" not in line and "write a node column" in line
+    source = _write(tmp_path, pose, sig.drop(columns="tx"))
+    line = _error(_live(tmp_path, source))
+    assert "rx=" not in line and "--receiver NODE" in line
+
+
+def test_a_csv_source_that_is_not_two_distinct_files_is_refused(tmp_path):
+    """Three files: a traceback (ValueError: too many values to unpack); one CSV: read as a MAVLink connection
+    ('a MAVLink stream carries neither'); a file twice: read as its own signal table; a file that never appears:
+    '0 matched' without naming it."""
+    source = _write(tmp_path, *_tables())
+    pose, signal = source.split(",")
+    assert "a CSV source is two files" in _error(_live(tmp_path, f"{source},{tmp_path / 'x.csv'}"))
+    assert "a CSV source is two files" in _error(_live(tmp_path, pose))
+    assert "one file (named twice)" in _error(_live(tmp_path, f"{pose},{pose}"))
+    line = _error(_live(tmp_path, f"{tmp_path / 'later.csv'},{signal}"))
+    assert line.startswith(f"error: {tmp_path / 'later.csv'}: no such file")

@@ -57,7 +57,7 @@ from rplearn.io.options import ReaderOptions
 from rplearn.models.live_stats import MAX_SEGMENTS, LiveStatistics
 from rplearn.models.options import FitOptions
 from rplearn.models.spec import ModelSpec
-from rplearn.workflows.live_checks import check_live_options, check_live_outputs, fixed_nodes_note, is_csv_source, no_model_message
+from rplearn.workflows.live_checks import check_live_options, check_live_outputs, check_live_source, fixed_nodes_note, is_csv_source, no_model_message
 from rplearn.workflows.live_ranking import Ranking, RankingWorker
 from rplearn.workflows.live_status import LiveStatus, Prequential, page_rows
 
@@ -442,6 +442,7 @@ def run_live(
     LiveOutcome
     """
     options = options or LiveOptions()
+    check_live_source(source)
     check_live_outputs(source, output, record, html)
     work_dir = tempfile.mkdtemp(prefix="rplearn-live-")
     src = open_source(source, work_dir, options.reader)
