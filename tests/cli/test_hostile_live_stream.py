@@ -207,3 +207,15 @@ def test_a_csv_source_that_is_not_two_distinct_files_is_refused(tmp_path):
     assert "one file (named twice)" in _error(_live(tmp_path, f"{pose},{pose}"))
     line = _error(_live(tmp_path, f"{tmp_path / 'later.csv'},{signal}"))
     assert line.startswith(f"error: {tmp_path / 'later.csv'}: no such file")
+
+
+def test_a_refused_mavlink_connection_is_one_line(tmp_path):
+    """pymavlink printed its retries ('[Errno 111] Connection refused sleeping') above the error."""
+    import socket
+
+    with socket.socket() as s:  # a port nothing listens on
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    line = _error(invoke(["live", f"tcp:127.0.0.1:{port}", "-o", tmp_path / "m.json", "--quiet", "--no-advice",
+                          "--tx-power", "20", "--frequency", "433e6"], ok=False))
+    assert "cannot open the MAVLink connection" in line

@@ -10,7 +10,6 @@ import typer
 from rplearn.cli._app import app, geodetic_flag, reader_options, say, split_list, user_errors
 from rplearn.errors import RplearnError
 
-
 #: What the reader's messages suggest that ``live`` has no flag for, and what to do from its command line instead.
 _LIBRARY_ONLY = (
     (", or sort them on reading (allow_unsorted=True)",

@@ -407,13 +407,15 @@ class MavlinkSource:
     """
 
     def __init__(self, connection: str, record_path: str, reader: ReaderOptions, read_every_s: float = 1.0) -> None:
+        from rplearn.io._log_schema import library_quiet
         from rplearn.io._mavlink_records import mavutil_module, open_mavlink_log
         from rplearn.io.tlog_tail import TlogTail
 
         try:
             # a file: the streaming reader (pymavlink's connection would index it whole, and fail inside on a cut record)
-            self.conn = open_mavlink_log(connection) if os.path.isfile(connection) else \
-                mavutil_module().mavlink_connection(connection, dialect="ardupilotmega")
+            with library_quiet():  # pymavlink prints its retries ("Connection refused sleeping")
+                self.conn = open_mavlink_log(connection) if os.path.isfile(connection) else \
+                    mavutil_module().mavlink_connection(connection, dialect="ardupilotmega")
         except LogFormatError:
             raise
         except Exception as exc:
