@@ -272,13 +272,14 @@ class _Session:
 
         if self.stats is None:  # nothing learned (a silent stream: an empty recording)
             return
-        logs, _ = read_logs([src.record_path], self.options.reader)
-        if logs.pose is None or logs.signal is None:
-            return
         try:
+            logs, _ = read_logs([src.record_path], self.options.reader)
+            if logs.pose is None or logs.signal is None:
+                return
             result = synchronise(logs.pose, logs.signal, self.options.sync, src.record_path)
-        except InputError as exc:
-            self.status.notes.append(str(exc))
+        except InputError as exc:  # the rows learned in flight stay; the working recording is named as the stream
+            self.status.notes.append("last refit: the recorded stream matched whole was refused, the rows learned in flight "
+                                     f"kept: {str(exc).replace(src.record_path, f'the recording of {src.name}')}")
             return
         rows = result.dataset.sort_values("t", kind="stable").reset_index(drop=True)
         before = self.stats.n_samples
