@@ -136,3 +136,86 @@ def test_a_header_repeated_mid_file_is_a_counted_drop_and_another_header_is_refu
     _with_line(path, 150, ",".join(reversed(header.strip().split(","))) + "\n")
     line = _error(_live(tmp_path, source))
     assert f"{path}: line 151: another header in the file" in line
+
+
+TLOG = Path(__file__).resolve().parents[1] / "fixtures" / "ardupilot" / "mavlink-log_2013-10-13_16-58-51.tlog"
+
+
+@pytest.mark.parametrize(("flags", "expected"), [
+    (["--to", "127.0.0.1:99999"], "--to: port 99999"),
+    (["--to", "no-such-host.invalid:14550"], "--to: cannot resolve the host"),
+    (["--speed", "inf"], "--speed: expected a positive, finite factor, got inf"),
+    (["--speed", "nan"], "--speed: expected a positive, finite factor"),
+    (["--speed", "0"], "--speed: expected a positive, finite factor"),
+    (["--speed", "-2"], "--speed: expected a positive, finite factor"),
+])
+def test_replay_refuses_a_bad_target_or_speed_in_one_line_naming_the_flag(flags, expected):
+    """--speed inf was a traceback (ValueError: cannot convert float NaN to integer); an unknown host or a port out
+    of range a bare '[Errno -2] Name or service not known'."""
+    assert expected in _error(invoke(["replay", str(TLOG), *flags], ok=False))
+
+
+def test_replay_of_a_tlog_with_a_corrupt_receive_time_does_not_wait_for_it(tmp_path):
+    """One record's receive time 30,000 years after the others: replay slept until then (a hang)."""
+    import struct
+    import subprocess
+    import sys
+
+    data = TLOG.read_bytes()[:60000]
+    bad = tmp_path / "bad.tlog"
+    far = struct.unpack(">Q", data[:8])[0] + 10**18  # [us]
+    bad.write_bytes(data[:25] + struct.pack(">Q", far) + data[8:25] + data[25:])
+    env = {"PYTHONPATH": str(Path(__file__).resolve().parents[2] / "src")}
+    done = subprocess.run([sys.executable, "-m", "rplearn", "replay", str(bad), "--to", "127.0.0.1:9", "--speed", "1e6"],
+                          capture_output=True, text=True, timeout=120, env=env)
+    assert done.returncode == 0 and "sent " in done.stdout, done.stdout + done.stderr
+
+
+def test_live_on_a_tlog_cut_inside_its_first_record_says_so_naming_the_file(tmp_path):
+    """pymavlink's connection indexed the file whole and raised AttributeError ('NoneType' object has no attribute
+    '_instance_field'); a file with no whole message then waited for a first message forever."""
+    cut = tmp_path / "cut.tlog"
+    cut.write_bytes(TLOG.read_bytes()[3:40])
+    line = _error(invoke(["live", str(cut), "-o", tmp_path / "m.json", "--quiet", "--no-advice", "--tx-power", "20",
+                          "--frequency", "433e6", "--idle", "1"], ok=False))
+    assert line == f"error: {cut}: no MAVLink message in it (a .tlog, as MAVProxy or QGroundControl record it?)"
+
+
+def test_refusals_name_what_lives_command_line_can_do_never_a_library_option(tmp_path):
+    """Rows out of order suggested 'allow_unsorted=True', a pose table without a node column 'ReaderOptions.nodes'
+    (and, with --nodes mapped, live's --nodes, another thing), a signal table without tx 'rx=, tx_power_dbm='."""
+    pose, sig = _tables()
+    source = _write(tmp_path, pose, sig.iloc[[*range(50), 51, 50, *range(52, 300)]])
+    line = _error(_live(tmp_path, source))
+    assert "allow_unsorted" not in line and "sync the finished file with --allow-unsorted" in line
+    source = _write(tmp_path, pose[pose["node"] == "D"].drop(columns="node"), sig)
+    line = _error(_live(tmp_path, source))
+    assert "ReaderOptions" not in line and "--nodes" not in line and "write a node column" in line
+    source = _write(tmp_path, pose, sig.drop(columns="tx"))
+    line = _error(_live(tmp_path, source))
+    assert "rx=" not in line and "--receiver NODE" in line
+
+
+def test_a_csv_source_that_is_not_two_distinct_files_is_refused(tmp_path):
+    """Three files: a traceback (ValueError: too many values to unpack); one CSV: read as a MAVLink connection
+    ('a MAVLink stream carries neither'); a file twice: read as its own signal table; a file that never appears:
+    '0 matched' without naming it."""
+    source = _write(tmp_path, *_tables())
+    pose, signal = source.split(",")
+    assert "a CSV source is two files" in _error(_live(tmp_path, f"{source},{tmp_path / 'x.csv'}"))
+    assert "a CSV source is two files" in _error(_live(tmp_path, pose))
+    assert "one file (named twice)" in _error(_live(tmp_path, f"{pose},{pose}"))
+    line = _error(_live(tmp_path, f"{tmp_path / 'later.csv'},{signal}"))
+    assert line.startswith(f"error: {tmp_path / 'later.csv'}: no such file")
+
+
+def test_a_refused_mavlink_connection_is_one_line(tmp_path):
+    """pymavlink printed its retries ('[Errno 111] Connection refused sleeping') above the error."""
+    import socket
+
+    with socket.socket() as s:  # a port nothing listens on
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    line = _error(invoke(["live", f"tcp:127.0.0.1:{port}", "-o", tmp_path / "m.json", "--quiet", "--no-advice",
+                          "--tx-power", "20", "--frequency", "433e6"], ok=False))
+    assert "cannot open the MAVLink connection" in line

@@ -8,6 +8,25 @@ from typing import Any
 import typer
 
 from rplearn.cli._app import app, geodetic_flag, reader_options, say, split_list, user_errors
+from rplearn.errors import RplearnError
+
+#: What the reader's messages suggest that ``live`` has no flag for, and what to do from its command line instead.
+_LIBRARY_ONLY = (
+    (", or sort them on reading (allow_unsorted=True)",
+     "; live reads the rows in the order they are appended: sync the finished file with --allow-unsorted"),
+    ("(ReaderOptions.nodes={path: node}, or node= for one table)", "(live has no flag for it: write a node column)"),
+    ("; or rx=, tx_power_dbm=, frequency_hz=)", ")"),
+)
+
+
+def _in_live_terms(exc: RplearnError) -> RplearnError:
+    """The error with the library options live has no flag for replaced by what its command line can do."""
+    text = str(exc)
+    for old, new in _LIBRARY_ONLY:
+        text = text.replace(old, new)
+    if text == str(exc):
+        return exc
+    return type(exc)(text, param=None if exc.param in ("allow_unsorted", "nodes") else exc.param, related=exc.related)
 
 
 def _view(status: Any) -> Any:
@@ -40,8 +59,8 @@ def _view(status: Any) -> Any:
 
 
 @app.command()
-@user_errors(flags={"ranking_every_s": "--advice-s", "receivers": "--receiver NODE", "fixed_nodes": "--fixed NODE", "nodes": "--nodes",
-                    "html": "--html PATH", "record": "--record PATH"})
+@user_errors(flags={"ranking_every_s": "--advice-s", "receivers": "--receiver NODE", "fixed_nodes": "--fixed NODE", "html": "--html PATH",
+                    "record": "--record PATH"})
 def live(
     source: str = typer.Argument(..., help="A MAVLink connection as pymavlink names it (udpin:0.0.0.0:14550, tcp:HOST:PORT, a serial device "
                                            "such as /dev/ttyUSB0: what MAVProxy, QGroundControl and mavlink-router forward), or "
@@ -104,21 +123,29 @@ def live(
     reader = reader_options(receiver=receivers, tx_power_dbm=tx_power_dbm, frequency_hz=frequency_hz,
                             nan_policy=nan_policy, station_geodetic=geodetic_flag(station_geodetic, "--station"))
     named_fixed = tuple(split_list(fixed) or ())  # the user's: a note when no row names one (not the default station)
+    listed = split_list(nodes) or []
+    outside = [n for n in named_fixed if listed and n not in listed]
+    if outside:
+        raise InputError(f"--fixed: {', '.join(outside)} is not among --nodes ({', '.join(listed)}), the "
+                         "nodes learned: a node held still must be learned too")
     still = named_fixed or (() if csv_source else (reader.station,))
     advisor = None if no_advice else live_advisor(still, 0.0, until_spread_db)  # paced by ranking_every_s
     options = LiveOptions(spec=spec, fit=FitOptions(auto=auto), reader=reader, sync=SyncOptions(max_gap_s=max_gap_s),
                           refit_s=refit_s, duration_s=duration_s, until_spread_db=until_spread_db, spread_over=spread_over,
                           until_coverage_pct=until_coverage_pct, idle_s=idle_s, nodes=tuple(split_list(nodes) or ()) or None,
                           manoeuvres=advisor, ranking_every_s=advice_s, fixed_nodes=named_fixed)
-    if quiet:
-        outcome = run_live(source, output, options, None, record, html)
-    else:
-        from rich.live import Live
+    try:
+        if quiet:
+            outcome = run_live(source, output, options, None, record, html)
+        else:
+            from rich.live import Live
 
-        from rplearn.cli._app import console
+            from rplearn.cli._app import console
 
-        with Live(console=console, refresh_per_second=4, transient=False) as view:
-            outcome = run_live(source, output, options, lambda s: view.update(_view(s)), record, html)
+            with Live(console=console, refresh_per_second=4, transient=False) as view:
+                outcome = run_live(source, output, options, lambda s: view.update(_view(s)), record, html)
+    except RplearnError as exc:
+        raise _in_live_terms(exc) from None
     say(outcome.status.summary())
     say(f"wrote {output}")
 

@@ -407,11 +407,17 @@ class MavlinkSource:
     """
 
     def __init__(self, connection: str, record_path: str, reader: ReaderOptions, read_every_s: float = 1.0) -> None:
-        from rplearn.io._mavlink_records import mavutil_module
+        from rplearn.io._log_schema import library_quiet
+        from rplearn.io._mavlink_records import mavutil_module, open_mavlink_log
         from rplearn.io.tlog_tail import TlogTail
 
         try:
-            self.conn = mavutil_module().mavlink_connection(connection, dialect="ardupilotmega")
+            # a file: the streaming reader (pymavlink's connection would index it whole, and fail inside on a cut record)
+            with library_quiet():  # pymavlink prints its retries ("Connection refused sleeping")
+                self.conn = open_mavlink_log(connection) if os.path.isfile(connection) else \
+                    mavutil_module().mavlink_connection(connection, dialect="ardupilotmega")
+        except LogFormatError:
+            raise
         except Exception as exc:
             raise InputError(f"{connection}: cannot open the MAVLink connection ({type(exc).__name__}: {exc})",
                              param="source") from None
@@ -490,6 +496,37 @@ def _scaled(msg: Any, speed: float, boot0_ms: int) -> Any:
     return msg
 
 
+#: Receive-time steps between two messages that :func:`replay_tlog` waits for at most [s of the log]: a step
+#: back or a longer one (a corrupt record's time, a log of two sessions) starts the pace afresh at that message.
+MAX_REPLAY_STEP_S = 60.0
+
+
+def _udp_target(address: str) -> tuple[int, tuple[Any, ...]]:
+    """The socket family and address of ``HOST:PORT`` (``[IPv6]:PORT`` too), refused in one line naming it."""
+    host, _, port = address.rpartition(":")
+    host = host[1:-1] if host.startswith("[") and host.endswith("]") else host
+    try:
+        number = int(port)
+    except ValueError:
+        raise InputError(f"address: expected HOST:PORT, got {address!r}", param="address") from None
+    if not 0 < number < 65536:
+        raise InputError(f"address: port {number} of {address!r} is not a UDP port (1 to 65535)", param="address")
+    try:
+        family, _, _, _, target = socket.getaddrinfo(host or "127.0.0.1", number, type=socket.SOCK_DGRAM)[0]
+    except (socket.gaierror, UnicodeError) as exc:
+        raise InputError(f"address: cannot resolve the host of {address!r} ({exc})", param="address") from None
+    return int(family), tuple(target)
+
+
+def _next_message(log: Any, path: str) -> Any:
+    """The log's next message (None at its end); pymavlink failing on corrupt bytes refused naming the file."""
+    try:
+        return log.recv_msg()
+    except Exception as exc:  # pymavlink raises many classes on corrupt records
+        raise LogFormatError(f"{path}: cannot read a MAVLink message at byte {log.f.tell() if hasattr(log, 'f') else '?'} "
+                             f"({type(exc).__name__}: {exc}): a corrupt .tlog") from None
+
+
 @check_types
 def replay_tlog(path: str, address: str, speed: float = 1.0, start_delay_s: float = 0.0) -> int:
     """Send a ``.tlog``'s messages to ``host:port`` over UDP at ``speed`` times their pace.
@@ -511,30 +548,28 @@ def replay_tlog(path: str, address: str, speed: float = 1.0, start_delay_s: floa
     """
     from rplearn.io._mavlink_records import mavutil_module, open_mavlink_log
 
-    if not speed > 0:
-        raise InputError(f"speed: expected a positive factor, got {speed}", param="speed")
-    host, _, port = address.rpartition(":")
-    try:
-        target = (host or "127.0.0.1", int(port))
-    except ValueError:
-        raise InputError(f"address: expected HOST:PORT, got {address!r}", param="address") from None
+    if not (math.isfinite(speed) and speed > 0):
+        raise InputError(f"speed: expected a positive, finite factor, got {speed}", param="speed")
+    family, target = _udp_target(address)
     mavutil = mavutil_module()
     log = open_mavlink_log(str(path))  # a file, never a connection string
     enc = mavutil.mavlink.MAVLink(None)
-    sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-    sent, t0, wall0, boot0 = 0, None, 0.0, None
+    sock = socket.socket(family, socket.SOCK_DGRAM)
+    sent, t0, wall0, boot0, last = 0, None, 0.0, None, None
     try:
         while True:
-            msg = log.recv_msg()
+            msg = _next_message(log, path)
             if msg is None:
                 break
             if msg.get_type() == "BAD_DATA":
                 continue
-            if t0 is None:
-                t0, wall0 = float(msg._timestamp), time.monotonic() + start_delay_s
+            stamp = float(msg._timestamp)
+            if t0 is None or last is None or not 0.0 <= stamp - last <= MAX_REPLAY_STEP_S:  # a receive time gone wrong
+                t0, wall0 = stamp, (time.monotonic() + start_delay_s if t0 is None else time.monotonic())
+            last = stamp
             if boot0 is None and hasattr(msg, "time_boot_ms"):
                 boot0 = int(msg.time_boot_ms)
-            wait = wall0 + (float(msg._timestamp) - t0) / speed - time.monotonic()
+            wait = wall0 + (stamp - t0) / speed - time.monotonic()
             if wait > 0:
                 time.sleep(wait)
             enc.srcSystem, enc.srcComponent = msg.get_srcSystem(), msg.get_srcComponent()
@@ -542,7 +577,10 @@ def replay_tlog(path: str, address: str, speed: float = 1.0, start_delay_s: floa
                 packed = _scaled(msg, speed, boot0 or 0).pack(enc)
             except NotImplementedError:  # a message pymavlink read but cannot encode (an unknown id): not sent
                 continue
-            sock.sendto(packed, target)
+            try:
+                sock.sendto(packed, target)
+            except OSError as exc:
+                raise InputError(f"address: cannot send to {address} ({exc.strerror or exc})", param="address") from None
             sent += 1
     finally:
         sock.close()

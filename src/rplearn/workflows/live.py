@@ -57,7 +57,7 @@ from rplearn.io.options import ReaderOptions
 from rplearn.models.live_stats import MAX_SEGMENTS, LiveStatistics
 from rplearn.models.options import FitOptions
 from rplearn.models.spec import ModelSpec
-from rplearn.workflows.live_checks import check_live_options, check_live_outputs, fixed_nodes_note, is_csv_source, no_model_message
+from rplearn.workflows.live_checks import check_live_options, check_live_outputs, check_live_source, fixed_nodes_note, is_csv_source, no_model_message
 from rplearn.workflows.live_ranking import Ranking, RankingWorker
 from rplearn.workflows.live_status import LiveStatus, Prequential, page_rows
 
@@ -272,13 +272,14 @@ class _Session:
 
         if self.stats is None:  # nothing learned (a silent stream: an empty recording)
             return
-        logs, _ = read_logs([src.record_path], self.options.reader)
-        if logs.pose is None or logs.signal is None:
-            return
         try:
+            logs, _ = read_logs([src.record_path], self.options.reader)
+            if logs.pose is None or logs.signal is None:
+                return
             result = synchronise(logs.pose, logs.signal, self.options.sync, src.record_path)
-        except InputError as exc:
-            self.status.notes.append(str(exc))
+        except InputError as exc:  # the rows learned in flight stay; the working recording is named as the stream
+            self.status.notes.append("last refit: the recorded stream matched whole was refused, the rows learned in flight "
+                                     f"kept: {str(exc).replace(src.record_path, f'the recording of {src.name}')}")
             return
         rows = result.dataset.sort_values("t", kind="stable").reset_index(drop=True)
         before = self.stats.n_samples
@@ -442,12 +443,14 @@ def run_live(
     LiveOutcome
     """
     options = options or LiveOptions()
+    check_live_source(source)
     check_live_outputs(source, output, record, html)
     work_dir = tempfile.mkdtemp(prefix="rplearn-live-")
     src = open_source(source, work_dir, options.reader)
     session = _Session(options, output, work_dir)
     start = last_refit = time.monotonic()
-    last_rx: float | None = None  # the silence that ends the stream counts from its first message
+    # the silence that ends the stream counts from its first message; a file (a .tlog read as a connection) from the start
+    last_rx: float | None = start if os.path.isfile(source) else None
     try:
         while True:
             got = src.poll()

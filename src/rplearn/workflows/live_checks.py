@@ -13,7 +13,7 @@ from typing import Any
 from rplearn._argtypes import check_types
 from rplearn.errors import InputError
 from rplearn.io.files import check_output_kind
-from rplearn.io.resolve import check_outputs
+from rplearn.io.resolve import check_outputs, distinct_inputs
 
 #: What ``until_spread_db`` is read over (:attr:`rplearn.workflows.live.LiveOptions.spread_over`).
 SPREAD_OVER = ("sphere", "covered")
@@ -52,6 +52,21 @@ def check_live_options(options: Any) -> None:
 
 
 @check_types
+def check_live_source(source: str) -> None:
+    """Refuse a source that names CSV files but is not two distinct ones, ``POSE.csv,SIGNAL.csv`` (three files, one
+    alone, the same file twice: the first read as the second's pose table, or as a MAVLink connection)."""
+    parts = source.split(",")
+    tables = [p for p in parts if p.lower().endswith((".csv", ".parquet", ".pq"))]
+    if tables and (len(parts) != 2 or not is_csv_source(source)):
+        parquet = any(not p.lower().endswith(".csv") for p in tables)
+        raise InputError(f"{source}: a CSV source is two files, POSE.csv,SIGNAL.csv (canonical pose and signal CSVs being "
+                         f"appended to), given {len(parts)}" + ("; Parquet files are not appended to: sync them" if parquet else ""),
+                         param="source")
+    if tables:
+        distinct_inputs(parts, param="source")
+
+
+@check_types
 def check_live_outputs(source: str, output: str, record: str | None, html: str | None) -> None:
     """Refuse, before any work, an output that is an input (a CSV source's files, a ``.tlog`` read as a connection)
     or another output (the model, the page, the recording: each its own file), or whose name says another kind."""
@@ -81,11 +96,19 @@ def no_model_message(source: str, status: Any, messages: int | None, waited_s: f
     """Why a session ended without a model, in one line: nothing received (``messages``: MAVLink messages received
     in all, None for a CSV source), no row matched, or too few learned (the last refit's refusal)."""
     s = status
+    if messages == 0 and os.path.isfile(source):
+        return f"{source}: no MAVLink message in it (a .tlog, as MAVProxy or QGroundControl record it?)"
     if messages == 0:
         return (f"{source}: no MAVLink message received from it in {waited_s:.0f} s: is the vehicle or the forwarder "
                 "sending to this address and port, and is the link up?")
+    never = [p for p in source.split(",") if is_csv_source(source) and not os.path.exists(p)]
+    if never:
+        return (f"{', '.join(never)}: no such file: the session waited for it to appear and ended "
+                f"({s.stopped or 'stopped'}) with no model")
     if s.received == 0:
-        return f"{source}: the session ended ({s.stopped or 'stopped'}) before any signal row was received: no model"
+        radio = "" if messages is None else (f": {messages} MAVLink messages, none of them a radio report with both ends "
+                                             "placed (RADIO_STATUS or RADIO, with the vehicle's position)")
+        return f"{source}: the session ended ({s.stopped or 'stopped'}) before any signal row was received{radio}; no model"
     drops = ", ".join(f"{n} {r}" for r, n in s.dropped.items() if n)
     why = [n[len("waiting: "):] for n in s.notes if n.startswith("waiting: ")] or [n for n in s.notes if "too few" in n]
     return (f"{source}: the session ended ({s.stopped or 'stopped'}) before a model could be learned: {s.received} signal "
@@ -93,4 +116,4 @@ def no_model_message(source: str, status: Any, messages: int | None, waited_s: f
             + (f"; {why[-1]}" if why else ""))
 
 
-__all__ = ["SPREAD_OVER", "check_live_options", "check_live_outputs", "fixed_nodes_note", "is_csv_source", "no_model_message"]
+__all__ = ["SPREAD_OVER", "check_live_options", "check_live_outputs", "check_live_source", "fixed_nodes_note", "is_csv_source", "no_model_message"]
