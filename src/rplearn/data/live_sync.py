@@ -30,6 +30,14 @@ rows naming it wait as for a node without poses (below); a node first logged onc
 another pose, more than that later has the rows matched between taken at its first pose (``sync``:
 ``pose_gap``).
 
+A node logged with identical rows (a station logging its surveyed pose at a steady rate, or when something
+changes) holds still over its log's span, as in ``sync``; a row after its last row so far is in that span once
+its next row comes, so such rows wait for it, as for a moving node's next pose, for :data:`NEXT_ROW_S` of the
+pose rows' time; past that, no row having come, the node is held at its pose (as a station logged once is) and
+the rows are matched there: where its next row comes later still (a station logged at the start and again at
+the end) as ``sync`` matches them, where it never comes again as ``sync`` does not (``out_of_span``). At the
+end of the stream the rows after its last row are ``out_of_span``, as in ``sync``.
+
 A signal row naming a node that has no pose yet (a node whose first poses the source holds back, as
 :class:`rplearn.io.live_sources.CsvTail` holds a logger's start at the zero position, or a ground
 station at the ENU origin that logs its attitude) waits, settled or not, for that node's poses:
@@ -54,7 +62,7 @@ import pandas as pd
 
 from rplearn._argtypes import check_types
 from rplearn.data.phases import flight_phases
-from rplearn.data.poses import tracks_of_checked_log
+from rplearn.data.poses import PoseTrack, TrackSet, tracks_of_checked_log
 from rplearn.data.streaming import row_hashes
 from rplearn.data.sync import SyncOptions, SyncResult, SyncSummary, finish_summary, match_chunk, sync_options_or_default
 from rplearn.data.tables import MATCHED_COLUMNS, POSE_COLUMNS, non_unit_quaternion_rows, validate_pose_log
@@ -106,6 +114,10 @@ WAIT_ROWS = 65536
 #: row having come, the node is taken to hold still at it (a station logged once, as ``sync`` holds a one-row log);
 #: before then it may be a node whose log has just started (:class:`LiveMatcher`: the rows naming it wait).
 ONE_ROW_S = 1.0
+#: Seconds of the pose rows' time the rows after the last row of a node logged with identical rows wait for its
+#: next row (:class:`LiveMatcher`: within the node's span once it comes, as ``sync`` holds it still over its log's
+#: span); past that the node is held at its pose, as a station logged once is.
+NEXT_ROW_S = HOLD_S
 
 
 def _offset_slack_s(options: SyncOptions) -> float:
@@ -114,6 +126,17 @@ def _offset_slack_s(options: SyncOptions) -> float:
     sig = options.signal_clock_offset_s
     signal = max((abs(float(v)) for v in sig.values()), default=0.0) if isinstance(sig, Mapping) else abs(float(sig))
     return pose + signal
+
+
+def _common_signal_t(rows: pd.DataFrame, options: SyncOptions) -> np.ndarray:
+    """Signal rows' times on the common clock [s] (NaN where not a number): plus the signal clock offset, one for
+    the log or one per receiver (as :func:`rplearn.data.sync.match_chunk` puts them)."""
+    t = pd.to_numeric(rows["t"], errors="coerce").to_numpy(np.float64) if "t" in rows.columns else np.full(len(rows), np.nan)
+    offset = options.signal_clock_offset_s
+    if isinstance(offset, Mapping):
+        rx = rows["rx"].astype(str) if "rx" in rows.columns else pd.Series("", index=rows.index)
+        return t + rx.map(lambda r: float(offset.get(r, 0.0))).to_numpy(np.float64)
+    return t + float(offset)
 
 
 def _still(group: pd.DataFrame) -> bool:
@@ -212,6 +235,8 @@ class LiveMatcher:
             elif str(node) in self._moving or not _still(group):
                 self._moving.add(str(node))
                 last.append(float(group["t"].iloc[-1]))
+            elif len(group) > 1 and float(group["t"].iloc[-1]) > self._pose_t - NEXT_ROW_S:
+                last.append(float(group["t"].iloc[-1]))  # identical rows: the next one may come (NEXT_ROW_S)
         return min(last) if last else -math.inf
 
     def match(self, final: bool = False) -> SyncResult:
@@ -238,7 +263,7 @@ class LiveMatcher:
             chunk, rest = pending[ready], pending[~ready]
         self._pending = [rest.reset_index(drop=True)] if len(rest) else []
         self.last_matched = pd.DataFrame(columns=list(MATCHED_COLUMNS))  # not the last call's, should this one raise
-        result = self._match(chunk.sort_values("t", kind="stable") if "t" in chunk.columns else chunk)
+        result = self._match(chunk.sort_values("t", kind="stable") if "t" in chunk.columns else chunk, final)
         self.last_matched = result.dataset
         if not final and len(chunk):  # poses are kept back to where the signal stream has reached (it may lag the poses)
             self._horizon = max(self._horizon, min(horizon, self._signal_t))
@@ -277,7 +302,7 @@ class LiveMatcher:
         """The nodes without poses that the waiting rows name (as of the last :meth:`match`)."""
         return self._waiting_nodes
 
-    def _tracks(self, final: bool = False) -> dict:
+    def _tracks(self, final: bool = False) -> TrackSet:
         """The tracks of the poses kept; before the stream's end, the clock offsets of the nodes with poses only (a
         node whose poses a source holds back or that starts later: its rows wait, and its offset is checked at the end)."""
         offsets = self.options.clock_offsets_s
@@ -286,12 +311,27 @@ class LiveMatcher:
             offsets = {node: dt for node, dt in offsets.items() if str(node) in known}
         return tracks_of_checked_log(self._poses, offsets, "pose log", self.options.max_gap_s)
 
-    def _match(self, chunk: pd.DataFrame) -> SyncResult:
+    def _held(self, tracks: Mapping[str, PoseTrack], chunk: pd.DataFrame) -> dict[str, PoseTrack]:
+        """``tracks`` with the nodes of identical rows held at their pose through the chunk's latest time: the
+        rows after such a node's last row are in the chunk only once they waited :data:`NEXT_ROW_S` for its next
+        row (:meth:`settled_s`)."""
+        t = _common_signal_t(chunk, self.options)
+        through_s = float(t[np.isfinite(t)].max()) if np.isfinite(t).any() else -math.inf
+        out: dict[str, PoseTrack] = dict(tracks)
+        for node, track in tracks.items():
+            if track.still and node not in self._moving and track.t_s[-1] < through_s:
+                out[node] = PoseTrack(node, np.array([track.t_s[0], through_s]), track.position_xyz[[0, -1]],
+                                      track.quat_wxyz[[0, -1]], still=True)
+        return out
+
+    def _match(self, chunk: pd.DataFrame, final: bool = False) -> SyncResult:
         if chunk.empty:
             return SyncResult(pd.DataFrame(columns=list(MATCHED_COLUMNS)), SyncSummary())
         if self._poses.empty:
             raise InputError(f"{self.source}: signal rows but no pose rows to match them with", param="poses")
-        tracks = self._tracks()
+        tracks: Mapping[str, PoseTrack] = self._tracks(final)
+        if not final:
+            tracks = self._held(tracks, chunk)
         phases = flight_phases(self._poses, tracks, self.options.clock_offsets_s, self.options.airborne_margin_m)
         t = pd.to_numeric(chunk["t"], errors="coerce").to_numpy(np.float64) if "t" in chunk.columns else np.full(len(chunk), np.nan)
         late = t < self._forgotten_s  # their copies could no longer be found: never learned
@@ -328,4 +368,4 @@ class LiveMatcher:
             self._seen.forget(self._forgotten_s)
 
 
-__all__ = ["DUPLICATE_MEMORY_S", "HOLD_ROWS", "HOLD_S", "ONE_ROW_S", "WAIT_ROWS", "LiveMatcher"]
+__all__ = ["DUPLICATE_MEMORY_S", "HOLD_ROWS", "HOLD_S", "NEXT_ROW_S", "ONE_ROW_S", "WAIT_ROWS", "LiveMatcher"]
