@@ -37,15 +37,13 @@ def _station_rows(pose: pd.DataFrame, times_s) -> pd.DataFrame:
 
 
 def _live(pose: pd.DataFrame, sig: pd.DataFrame, options: SyncOptions | None = None,
-          shift_s: dict[str, float] | None = None, poll_s: float = 1.0) -> tuple[int, dict, int]:
-    """Matched rows, drops and rows matched before the end of the stream, fed ``poll_s`` of common-clock
-    time a poll (each log's rows arrive when their time on the common clock has come: ``shift_s`` per
-    node and ``"signal"``)."""
-    shift_s = shift_s or {}
+          common_p: pd.Series | None = None, common_s: pd.Series | None = None) -> tuple[int, dict, int]:
+    """Matched rows, drops and rows matched before the end of the stream, fed a second of common-clock
+    time a poll: each log's rows arrive when their time on the common clock (``common_p``, ``common_s``;
+    default their own) has come."""
     m, n = LiveMatcher(options), 0
-    common_p = pose["t"].to_numpy() + pose["node"].map(lambda v: shift_s.get(v, 0.0)).to_numpy(np.float64)
-    common_s = sig["t"].to_numpy() + shift_s.get("signal", 0.0)
-    kp, ks = np.floor(common_p / poll_s), np.floor(common_s / poll_s)
+    kp = np.floor((pose["t"] if common_p is None else common_p).to_numpy(np.float64))
+    ks = np.floor((sig["t"] if common_s is None else common_s).to_numpy(np.float64))
     for k in range(int(max(kp.max(), ks.max())) + 1):
         m.add_poses(pose[kp == k])
         m.add_signals(sig[ks == k])
@@ -83,5 +81,25 @@ def test_one_hertz_pose_logging_of_the_drone_and_the_station(ground):
     options = SyncOptions(max_gap_s=1.5)
     n, dropped, in_flight = _live(pose, sig, options)
     ref = _sync(pose, sig, options)
+    assert (n, dropped) == ref
+    assert ref[0] > 0.95 * len(sig) and in_flight > 0.95 * ref[0]
+
+
+@pytest.mark.parametrize("pose_offsets_s, signal_offset_s", [({"D": 0.0, "G": 300.0}, 210.0),
+                                                              ({"D": -300.0, "G": -300.0}, -210.0),
+                                                              ({"D": 0.0, "G": 300.0}, {"D": 210.0, "G": -45.0})],
+                         ids=["0_300_210", "minus_300_minus_210", "per_receiver"])
+def test_rows_are_settled_on_the_common_clock_after_the_offsets(ground, pose_offsets_s, signal_offset_s):
+    """Each log on its own clock (an offset is what puts it on the common clock), its rows arriving when their
+    common time has come: live matching compared the logs' own times, holding every row to the end (or
+    matching rows before the poses after them had come, ``out_of_span``), where sync matched them."""
+    pose, sig = ground
+    pose = pose.assign(t=pose["t"] - pose["node"].map(pose_offsets_s))
+    sig_offset = sig["rx"].map(signal_offset_s) if isinstance(signal_offset_s, dict) else signal_offset_s
+    sig = sig.assign(t=sig["t"] - sig_offset)
+    options = SyncOptions(clock_offsets_s=pose_offsets_s, signal_clock_offset_s=signal_offset_s)
+    ref = _sync(pose, sig, options)
+    n, dropped, in_flight = _live(pose, sig, options, common_s=sig["t"] + sig_offset,
+                                  common_p=pose["t"] + pose["node"].map(pose_offsets_s))
     assert (n, dropped) == ref
     assert ref[0] > 0.95 * len(sig) and in_flight > 0.95 * ref[0]

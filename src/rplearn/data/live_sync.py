@@ -1,7 +1,9 @@
 """Pose-signal matching while the logs are still being written (``rplearn live``).
 
 :class:`LiveMatcher` takes pose and signal rows as they arrive and matches a signal row once
-its time is *settled*: at or before the latest pose of every moving node (a node whose poses
+its time is *settled*: on the common clock (``SyncOptions.clock_offsets_s`` added to each node's pose times,
+``signal_clock_offset_s`` to the signal times, as ``sync`` matches them), at or before the latest pose of every
+moving node (a node whose poses
 are not all one identical row, :mod:`rplearn.data.poses`), so that both neighbours of its
 interpolation are known. The rows of one instant are matched together. Matching is
 :func:`rplearn.data.sync.match_chunk`, with the duplicate hashes across chunks and the carry
@@ -172,6 +174,7 @@ class LiveMatcher:
         self._forgotten_s = -math.inf  # the hashes of rows before this time [s] are forgotten
         self._carry: dict = {}
         self._horizon = -math.inf
+        # every time the matcher compares is on the common clock, after the clock offsets (as sync matches)
         self._signal_t = -math.inf  # the latest signal time received: later rows come at or after it
         self._pose_t = -math.inf  # the latest pose time received
         self._waiting_from = math.inf  # the earliest time of a row waiting for a node's poses [s]
@@ -184,7 +187,7 @@ class LiveMatcher:
 
     @property
     def horizon_s(self) -> float:
-        """Time [s] up to which signal rows have been matched."""
+        """Time [s, common clock] up to which signal rows have been matched."""
         return self._horizon
 
     @property
@@ -197,7 +200,7 @@ class LiveMatcher:
         if rows.empty:
             return
         new = validate_pose_log(rows, "pose log")
-        self._pose_t = max(self._pose_t, float(new["t"].max()))
+        self._pose_t = max(self._pose_t, float(self._common_pose_t(new).max()))
         self.summary.non_unit_quaternions += non_unit_quaternion_rows(new)
         both = pd.concat([self._poses, new], ignore_index=True) if len(self._poses) else new
         self._poses = validate_pose_log(both.drop(columns=[c for c in both.columns if c not in new.columns]), "pose log")
@@ -206,9 +209,19 @@ class LiveMatcher:
         """Append signal rows (canonical columns); they wait until their time is settled."""
         if len(rows):
             self._pending.append(rows.reset_index(drop=True))
-            t = pd.to_numeric(rows["t"], errors="coerce").to_numpy(np.float64) if "t" in rows.columns else np.array([])
+            t = _common_signal_t(rows, self.options)
             if np.isfinite(t).any():
                 self._signal_t = max(self._signal_t, float(np.nanmax(t[np.isfinite(t)])))
+
+    def _offset_s(self, node: str) -> float:
+        """The clock offset of a node's poses [s] (``SyncOptions.clock_offsets_s``; 0 when none)."""
+        return float((self.options.clock_offsets_s or {}).get(node, 0.0))
+
+    def _common_pose_t(self, rows: pd.DataFrame) -> np.ndarray:
+        """Pose rows' times on the common clock [s]: plus their node's clock offset."""
+        offsets = self.options.clock_offsets_s
+        t = rows["t"].to_numpy(np.float64)
+        return t + rows["node"].astype(str).map(lambda n: float(offsets.get(n, 0.0))).to_numpy(np.float64) if offsets else t
 
     def _one_row(self) -> dict[str, float]:
         """The nodes with a single pose row whose next row may still come (:data:`ONE_ROW_S`), with its time [s]:
@@ -218,25 +231,26 @@ class LiveMatcher:
         nodes = self._poses["node"].astype(str)
         counts = nodes.value_counts()
         single = self._poses[nodes.isin(counts.index[counts == 1]).to_numpy()]
-        t = single["t"].to_numpy(np.float64)
+        t = self._common_pose_t(single)
         young = t > self._pose_t - max(float(self.options.max_gap_s), ONE_ROW_S)
         return {str(n): float(v) for n, v in zip(single["node"][young], t[young]) if str(n) not in self._moving}
 
     def settled_s(self) -> float:
-        """The latest time [s] every moving node's poses reach (-inf before two poses of one); a node with one
-        pose row whose next may still come counts as moving (its time)."""
+        """The latest time [s, common clock: after the clock offsets] every moving node's poses reach (-inf before
+        two poses of one); a node with one pose row whose next may still come counts as moving (its time)."""
         if self._poses.empty:
             return -math.inf
         last = []
         one_row = self._one_row()
         for node, group in self._poses.groupby("node", sort=False):
+            t_last = float(group["t"].iloc[-1]) + self._offset_s(str(node))
             if str(node) in one_row:
                 last.append(one_row[str(node)])
             elif str(node) in self._moving or not _still(group):
                 self._moving.add(str(node))
-                last.append(float(group["t"].iloc[-1]))
-            elif len(group) > 1 and float(group["t"].iloc[-1]) > self._pose_t - NEXT_ROW_S:
-                last.append(float(group["t"].iloc[-1]))  # identical rows: the next one may come (NEXT_ROW_S)
+                last.append(t_last)
+            elif len(group) > 1 and t_last > self._pose_t - NEXT_ROW_S:
+                last.append(t_last)  # identical rows: the next one may come (NEXT_ROW_S)
         return min(last) if last else -math.inf
 
     def match(self, final: bool = False) -> SyncResult:
@@ -256,7 +270,7 @@ class LiveMatcher:
         if pending.empty or self._poses.empty and not final:
             chunk, rest = pending.iloc[:0], pending
         else:
-            t = pd.to_numeric(pending["t"], errors="coerce").to_numpy(np.float64)
+            t = _common_signal_t(pending, self.options)
             ready = ~(t > horizon)  # a time that is not a number is matched (and dropped) at once
             if not final:
                 ready &= ~self._waiting(pending, t)
@@ -333,7 +347,7 @@ class LiveMatcher:
         if not final:
             tracks = self._held(tracks, chunk)
         phases = flight_phases(self._poses, tracks, self.options.clock_offsets_s, self.options.airborne_margin_m)
-        t = pd.to_numeric(chunk["t"], errors="coerce").to_numpy(np.float64) if "t" in chunk.columns else np.full(len(chunk), np.nan)
+        t = _common_signal_t(chunk, self.options)
         late = t < self._forgotten_s  # their copies could no longer be found: never learned
         first_row = self._signal_rows
         self._signal_rows += len(chunk)
@@ -355,7 +369,7 @@ class LiveMatcher:
             if str(node) not in self._moving and _still(group):
                 keep.append(group.iloc[[0, -1]] if len(group) > 1 else group)
                 continue
-            t = group["t"].to_numpy(np.float64)
+            t = group["t"].to_numpy(np.float64) + self._offset_s(str(node))
             # the rows waiting for a node's poses need the poses from their time on too
             # at least two rows: one left would be a one-row track, static, its pose held at every time (sync
             # interpolates a moving node between two rows, and a row after its last is out_of_span)
