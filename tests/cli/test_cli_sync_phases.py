@@ -95,3 +95,10 @@ def test_sync_names_the_fixed_nodes_with_the_advice_of_their_source(logs, tmp_pa
     assert "gcs is the ground station, one pose row where" in out
     assert "--station LAT,LON,ALT places it if it stood elsewhere, --station-heading says where its antenna faced" in out
     assert "log its poses" not in out
+    # the station's position given: it stands where given, and the note does not ask for --station (was: the
+    # same note, '--station LAT,LON,ALT places it if it stood elsewhere', after the user had given it)
+    placed = run(["sync", "--poses", real, "--signals", real, "--tx-power", "20", "--frequency", "433e6", "--link", "all",
+                  "--station", "41.185700,-96.010600,305", "-o", "placed.parquet"], tmp_path).stdout
+    [line] = [x for x in placed.splitlines() if "gcs is the ground station" in x]
+    assert "at the position given for it (41.185700, -96.010600, 305.0 m)" in line
+    assert "--station LAT" not in line and "places it" not in line and "--station-heading says" in line

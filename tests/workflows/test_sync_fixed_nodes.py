@@ -28,7 +28,9 @@ def test_a_mavlink_or_dataflash_station_is_said_fixed_without_blaming_its_log(tm
     assert "fixed node(s) (a pose log of one row, or of identical rows, is a node holding still at that pose): gcs at " \
            "every time (one pose row)" in text
     [advice] = [n for n in outcome.counts.notes if n.startswith("gcs is the ground station")]
-    assert f"one pose row where {log} places it" in advice and "ReaderOptions.station_geodetic" in advice
+    [reason] = [n.removeprefix(f"{log}: ") for n in outcome.notes if n.startswith(f"{log}: station placed at")]
+    assert f'one pose row where the log placed it: "{reason}" ({log})' in advice  # the reader's words
+    assert "ReaderOptions.station_geodetic places it if it stood elsewhere" in advice
     assert "log its poses" not in text and "not logged" not in advice
 
 
@@ -49,3 +51,55 @@ def test_a_pose_table_node_of_identical_rows_is_said_fixed_and_to_log_its_poses(
     [advice] = [n for n in outcome.counts.notes if n.startswith("B: its pose table")]
     assert advice.endswith("if B moved, its motion was not logged: log its poses")
     assert "B from t = " in outcome.summary() and "ground station" not in advice
+
+
+@pytest.fixture(scope="module")
+def ground_tlog(tmp_path_factory) -> tuple[str, dict]:
+    """The ``ground`` preset's first pass as a ``.tlog`` written by :func:`rplearn.io.tlog.write_tlog` (vehicle D,
+    station G one static row; HOME_POSITION written) and what the writer says of it."""
+    from rplearn.io._common import Logs
+    from rplearn.io.tlog import write_tlog
+
+    r = simulate("ground", seed=0)
+    pose, sig = r.pose_log[r.pose_log["t"] < 85.0], r.signal_log[r.signal_log["t"] < 85.0]
+    logs = Logs(pd.concat([pose[pose["node"] == "D"], pose[pose["node"] == "G"].iloc[[0]]], ignore_index=True),
+                sig[["t", "tx", "rx", "rssi_dbm", "tx_power_dbm", "frequency_hz"]])
+    path = str(tmp_path_factory.mktemp("tlog") / "ground.tlog")
+    return path, write_tlog(logs, path, vehicle="D", station="G", origin_geodetic=(47.3977, 8.5456, 90.0))
+
+
+def _station_advice(path: str, tmp_path, reader: ReaderOptions) -> str:
+    outcome = sync_logs([path], [path], str(tmp_path / "m.parquet"), reader, SyncOptions(max_gap_s=1.0))
+    assert outcome.counts.fixed_nodes == ["G"]
+    [advice] = [n for n in outcome.counts.notes if n.startswith("G is the ground station")]
+    return advice
+
+
+def test_the_station_advice_quotes_the_logs_reason(ground_tlog, tmp_path):
+    """Where the log placed its station, in the log reader's words (was: '(at the log's home, else the vehicle's
+    first fix)', whichever it was)."""
+    path, _ = ground_tlog
+    advice = _station_advice(path, tmp_path, ReaderOptions(tx_power_dbm=20.0, frequency_hz=2.412e9, station="G"))
+    assert f'"station placed at the vehicle\'s home from HOME_POSITION" ({path})' in advice
+    assert "else the vehicle's first fix" not in advice
+    assert "ReaderOptions.station_geodetic places it if it stood elsewhere" in advice
+    assert "ReaderOptions.station_heading_deg says where its antenna faced" in advice
+
+
+@pytest.mark.parametrize("heading_deg", [None, 80.0])
+def test_a_station_the_user_placed_is_not_advised_to_be_placed(ground_tlog, tmp_path, heading_deg):
+    """With the station's position given (``--station``), the advice says it stands where it was given, never
+    that the position option places it (was: '... where ground.tlog places it (at the log's home ...)
+    ReaderOptions.station_geodetic places it if it stood elsewhere', '--station LAT,LON,ALT places it' on the
+    command line); its heading is advised only when not given."""
+    path, written = ground_tlog
+    lat, lon, alt = written["station_geodetic"]
+    reader = ReaderOptions(tx_power_dbm=20.0, frequency_hz=2.412e9, station="G", station_geodetic=(lat, lon, alt),
+                           station_heading_deg=heading_deg)
+    advice = _station_advice(path, tmp_path, reader)
+    assert f"at the position given for it ({lat:.6f}, {lon:.6f}, {alt:.1f} m)" in advice
+    assert "station_geodetic" not in advice and "places it" not in advice and "log's home" not in advice
+    if heading_deg is None:
+        assert "ReaderOptions.station_heading_deg says where its antenna faced" in advice
+    else:
+        assert "station_heading_deg" not in advice and "heading 80 deg as given" in advice

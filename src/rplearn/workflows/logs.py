@@ -51,23 +51,65 @@ def reader_notes(metadata: Mapping[str, Any]) -> list[str]:
 _TABLE_FORMATS = ("csv", "parquet")
 
 
+def _station_advice(node: str, sources: list[str], reasons: list[str], reader: ReaderOptions) -> str:
+    """What the ground station ``node`` of MAVLink/DataFlash/ULog logs ``sources`` is: where it was placed (the
+    position given in ``reader``, else the logs' own ``reasons``, quoted) and what to give if it stood elsewhere or
+    faced another way (only what ``reader`` does not give already)."""
+    logs = " and ".join(sources)
+    if reader.station_geodetic is not None:
+        lat, lon, alt = reader.station_geodetic
+        where = f"one pose row at the position given for it ({lat:.6f}, {lon:.6f}, {alt:.1f} m) in {logs}"
+    elif reasons:
+        where = "one pose row where the log placed it: " + "; ".join(
+            f'"{reason}" ({source})' for source, reason in zip(sources, reasons))
+    else:
+        where = f"one pose row where {logs} {'places' if len(sources) == 1 else 'place'} it (at the log's home, " \
+                "else the vehicle's first fix)"
+    text = f"{node} is the ground station, {where}: held fixed, as a station standing through the flight is; " \
+           "the log holds no motion of it"
+    advice = [] if reader.station_geodetic is not None else ["ReaderOptions.station_geodetic places it if it stood "
+                                                              "elsewhere"]
+    if reader.station_heading_deg is None:
+        advice.append("ReaderOptions.station_heading_deg says where its antenna faced")
+    else:
+        text += f", its antenna facing heading {reader.station_heading_deg:g} deg as given"
+    return text + (f". {', '.join(advice)}" if advice else "")
+
+
 @check_types
-def fixed_node_advice(fixed_nodes: Sequence[str], metadata: Mapping[str, Any]) -> list[str]:
+def fixed_node_advice(
+    fixed_nodes: Sequence[str], metadata: Mapping[str, Any], reader: ReaderOptions | None = None,
+) -> list[str]:
     """What each node a sync took as fixed (``SyncSummary.fixed_nodes``) is, by where its poses came from
     (:func:`read_logs` metadata), and what to do if it moved.
 
-    The ground station a MAVLink or DataFlash log, or a ULog read with its radio, places is one pose row (where the
-    log's home or first fix puts it): fixed as a station is, the log holds no motion of it, nothing wrong with it;
-    its place and heading can be given. A node of a pose table (CSV/Parquet) logged with one row or identical rows
-    may be a station or a parked drone; if it moved, its motion is missing from the table: log its poses. A vehicle
-    of another log (a ULog, a bag, a MAVLink log's vehicle) gave no motion: it stood still throughout.
+    The ground station a MAVLink or DataFlash log, or a ULog read with its radio, places is one pose row: fixed as a
+    station is, the log holds no motion of it, nothing wrong with it. Where it stands is quoted from the log's reader
+    (its ``station_note``: the vehicle's home, or its first fix), or is the position given (``reader``'s
+    ``station_geodetic``); the options that place and turn it are named only when ``reader`` does not give them
+    already. A node of a pose table (CSV/Parquet) logged with one row or identical rows may be a station or a parked
+    drone; if it moved, its motion is missing from the table: log its poses. A vehicle of another log (a ULog, a
+    bag, a MAVLink log's vehicle) gave no motion: it stood still throughout.
+
+    Parameters
+    ----------
+    fixed_nodes : sequence of str
+        The nodes the sync took as fixed.
+    metadata : mapping
+        The pose logs' :func:`read_logs` metadata.
+    reader : ReaderOptions, optional
+        The options the logs were read with (default: :class:`ReaderOptions` ``()``).
     """
+    reader = reader or ReaderOptions()
     files = list(metadata.get("files", []))
     stations: dict[str, list[str]] = {}
+    reasons: dict[str, list[str]] = {}
     vehicles: dict[str, list[str]] = {}
     for f in files:
         if f.get("station") is not None:
             stations.setdefault(str(f["station"]), []).append(str(f.get("source")))
+            if f.get("station_note"):
+                reasons.setdefault(str(f["station"]), []).append(str(f["station_note"]))
         for key in ("vehicle", "node"):
             if f.get(key) is not None:
                 vehicles.setdefault(str(f[key]), []).append(str(f.get("source")))
@@ -75,12 +117,8 @@ def fixed_node_advice(fixed_nodes: Sequence[str], metadata: Mapping[str, Any]) -
     advice = []
     for node in fixed_nodes:
         if node in stations:
-            where = stations[node]
-            advice.append(f"{node} is the ground station, one pose row where {' and '.join(where)} "
-                          f"{'places' if len(where) == 1 else 'place'} it (at the log's home, else the vehicle's first "
-                          "fix): held fixed, as a station standing through the flight is; the log holds its place, no "
-                          "motion of it. ReaderOptions.station_geodetic places it if it stood elsewhere, "
-                          "ReaderOptions.station_heading_deg says where its antenna faced")
+            said = reasons.get(node, [])
+            advice.append(_station_advice(node, stations[node], said if len(said) == len(stations[node]) else [], reader))
         elif node in vehicles:
             where = vehicles[node]
             advice.append(f"{node}: {' and '.join(where)} {'gives' if len(where) == 1 else 'give'} it no motion: it "
@@ -281,13 +319,13 @@ def sync_logs(
                 yield res.dataset
 
         write_table_chunks(frames(), output, MATCHED_COLUMNS)
-        summary.notes += fixed_node_advice(summary.fixed_nodes, pose_meta)
+        summary.notes += fixed_node_advice(summary.fixed_nodes, pose_meta, reader_options)
         return SyncOutcome(summary, output, reader_notes(pose_meta), streamed=True, clock=clock)
     signal, signal_meta = _signal_log(signal_paths, pose_paths, pose_logs.signal, pose_meta, reader_options)
     if signal is None:
         raise InputError(f"{', '.join(signal_paths)}: no signal log found", param="signal_paths")
     result = synchronise(pose_logs.pose, signal, sync_options, source=source)
-    result.summary.notes += fixed_node_advice(result.summary.fixed_nodes, pose_meta)
+    result.summary.notes += fixed_node_advice(result.summary.fixed_nodes, pose_meta, reader_options)
     write_table(result.dataset, output)
     return SyncOutcome(result.summary, output, _both_notes(pose_meta, signal_meta), clock=clock)
 
