@@ -264,3 +264,21 @@ def test_a_rate_lowered_within_a_boot_still_has_its_copies(tmp_path):
     again = dict.fromkeys(range(3000, 3500), 500)
     _, meta = _read(_att_log(tmp_path / "slower.bin", [(1000, 3000), (100_000, 500)], again))
     assert meta["messages"]["ATT"] == 3500 and meta["close_copies"] == len(again)
+
+
+@pytest.mark.parametrize("slow_us", [100_000, 10_000])
+def test_the_last_fast_record_before_a_rate_lowered_is_no_copy(tmp_path, slow_us):
+    # ATT of equal fields at 1 kHz (3,001 records: every other one read 1 ms after an equal one, the last such too),
+    # then at 10 Hz or 100 Hz (500). The last fast record came 1 ms after the one before it, as every fast record
+    # did; judged by the local cadence it falls on the slow side of the change (the interval it falls in reaches
+    # the first slow record) and was dropped as a copy: 1 false close copy, 3,500 ATT read of 3,501
+    _, meta = _read(_att_log(tmp_path / "lowered.bin", [(1000, 3001), (slow_us, 500)]))
+    assert meta["messages"]["ATT"] == 3501 and meta["close_copies"] == 0
+
+
+def test_a_copy_of_the_last_fast_record_before_a_rate_lowered_is_still_a_copy(tmp_path):
+    # as above, the last fast record read on its own (record 3,000) written again 0.3 ms later, before the last one
+    # read 1 ms after an equal one (3,001), and every slow record 0.5 ms later: all those are copies, 3,001 none
+    again = {3000: 300, **dict.fromkeys(range(3002, 3501), 500)}
+    _, meta = _read(_att_log(tmp_path / "lowered_copies.bin", [(1000, 3001), (100_000, 500)], again))
+    assert meta["messages"]["ATT"] == 3501 and meta["close_copies"] == len(again)

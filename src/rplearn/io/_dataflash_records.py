@@ -10,8 +10,8 @@ record by record or a buffer at a time) when its TimeUS is the same, or up to
 (kind, instance and fields): the median over a sliding span of :data:`CADENCE_SPAN` of their intervals about it, so that a
 message whose logging rate changes within a boot (ATT at 10 Hz, then at 1 kHz) is judged at its rate of the moment. It is read
 once and counted (``close_copies``). A kind logged every millisecond while the vehicle rests repeats its fields 1 ms later
-at its own interval: those records are no copies (:func:`_judge`; the log is then read a second time, with them). A
-later stretch that repeats an earlier one (the log in the file twice) is undone by
+at its own interval: those records are no copies, the last of them before its rate is lowered too (:func:`_judge`;
+the log is then read a second time, with them). A later stretch that repeats an earlier one (the log in the file twice) is undone by
 :func:`~rplearn.io._mavlink_records.merge_copied_boots` (``repeated_messages``).
 """
 
@@ -211,7 +211,9 @@ def _judge(first: _Pass) -> set[int]:
     of its key about it, half before, half after the interval it falls in, which counts twice (the span's majority
     is on its side of a change of rate): a message logged at 10 Hz then at 1 kHz (or the reverse) is judged at the
     rate it had where the record is. A kind logged every millisecond while the vehicle rests repeats its fields
-    1 ms later at its own interval: every other record a maybe, the records read 2 ms apart, the maybes no copies."""
+    1 ms later at its own interval: every other record a maybe, the records read 2 ms apart, the maybes no copies;
+    the last of them before the rate is lowered, whose interval reaches the slow records, too
+    (:func:`_ends_a_fast_run`)."""
     by_key: dict[tuple[Any, ...], list[tuple[int, float, int]]] = {}
     for index, key, gap, i in first.maybe:
         by_key.setdefault(key, []).append((index, gap, i))
@@ -222,8 +224,23 @@ def _judge(first: _Pass) -> set[int]:
             copies.update(numbers.tolist())
             continue
         local = _local_interval(np.asarray(first.steps[key], np.float64), at.astype(np.int64))
-        copies.update(numbers[gaps < DUPLICATE_FRACTION_OF_PERIOD * local].tolist())
+        copy = gaps < DUPLICATE_FRACTION_OF_PERIOD * local
+        copies.update(numbers[copy & ~_ends_a_fast_run(gaps, at.astype(np.int64), copy)].tolist())
     return copies
+
+
+def _ends_a_fast_run(gaps: np.ndarray, at: np.ndarray, copy: np.ndarray) -> np.ndarray:
+    """Which maybes of one key (``gaps`` [s] after the record before them, falling in the intervals numbered ``at``,
+    in the order read; ``copy``: judged copies by the local cadence) go on with the records of a fast logger at rest
+    just before them: the latest maybe of the interval before theirs was no copy, and they come at least
+    ``1 - DUPLICATE_FRACTION_OF_PERIOD`` of its gap after their record. Such a record is the last at the fast rate
+    before a rate lowered (the interval it falls in reaching the first slow record, the local cadence is the slow
+    one's); a copy of that record comes far sooner than the fast records did."""
+    before = np.searchsorted(at, at - 1, side="right") - 1  # the latest maybe of the interval before (at: sorted)
+    ok = before >= 0
+    ok[ok] &= at[before[ok]] == at[ok] - 1
+    ok[ok] &= ~copy[before[ok]] & (gaps[ok] >= (1.0 - DUPLICATE_FRACTION_OF_PERIOD) * gaps[before[ok]])
+    return ok
 
 
 def _local_interval(steps: np.ndarray, at: np.ndarray) -> np.ndarray:
