@@ -82,3 +82,23 @@ def test_the_spread_over_the_covered_directions_alone_is_refused_as_a_stop(tmp_p
     assert not (tmp_path / "m.json").exists()
     line = _error(_live(tmp_path, pose, sig, "--spread-over", "everywhere"))
     assert "--spread-over" in line and "sphere or covered" in line
+
+
+def test_the_fixed_nodes_are_said_as_sync_says_them_in_lives_flags(tmp_path):
+    """The station of a MAVLink log (a .tlog written by io.tlog, read as a connection) is named fixed as sync names
+    it, the options that place it as live's flag, the one live has no flag for as sync's (was: not a word)."""
+    from rplearn.io._common import Logs
+    from rplearn.io.tlog import write_tlog
+
+    pose, sig = _tables(tmp_path, 600)
+    write_tlog(Logs(pose, sig), tmp_path / "flight.tlog", vehicle="D", station="G", origin_geodetic=(47.3977, 8.5456, 90.0))
+    res = invoke(["live", tmp_path / "flight.tlog", "-o", tmp_path / "m.json", "--quiet", "--no-advice", "--idle", "0.5",
+                  "--order", "2", "--tx-power", "20", "--frequency", "2.4e9"])
+    [fixed] = [line.strip() for line in res.output.splitlines() if "fixed node(s)" in line]
+    assert fixed.startswith("fixed node(s) (a pose log of one row, or of identical rows, is a node holding still at that "
+                            "pose): gcs at every time (one pose row)")
+    [station] = [line.strip() for line in res.output.splitlines() if "gcs is the ground station" in line]
+    assert "station placed at the vehicle's home from HOME_POSITION" in station
+    assert station.endswith("--station LAT,LON,ALT places it if it stood elsewhere, sync --station-heading (live has no "
+                            "flag for it) says where its antenna faced")
+    assert "Options" not in res.output

@@ -7,7 +7,7 @@ from typing import Any
 
 import typer
 
-from rplearn.cli._app import app, geodetic_flag, reader_options, say, split_list, user_errors
+from rplearn.cli._app import app, geodetic_flag, reader_options, say, split_list, user_errors, with_flag
 from rplearn.errors import RplearnError
 
 #: What the reader's messages suggest that ``live`` has no flag for, and what to do from its command line instead.
@@ -17,6 +17,19 @@ _LIBRARY_ONLY = (
     ("(ReaderOptions.nodes={path: node}, or node= for one table)", "(live has no flag for it: write a node column)"),
     ("; or rx=, tx_power_dbm=, frequency_hz=)", ")"),
 )
+
+
+#: What live's notes (``sync``'s words on the fixed nodes) name that only ``sync`` has a flag for.
+_SYNC_ONLY = (("ReaderOptions.station_heading_deg says where its antenna faced",
+               "sync --station-heading (live has no flag for it) says where its antenna faced"),)
+
+
+def _summary_in_live_terms(text: str) -> str:
+    """The session's summary with the library options its notes name as live's flags (``--station``), or, for one live
+    has no flag for, as ``sync``'s."""
+    for old, new in _SYNC_ONLY:
+        text = text.replace(old, new)
+    return "\n".join(with_flag(line, None, live) if "Options." in line else line for line in text.splitlines())
 
 
 def _in_live_terms(exc: RplearnError) -> RplearnError:
@@ -146,7 +159,7 @@ def live(
                 outcome = run_live(source, output, options, lambda s: view.update(_view(s)), record, html)
     except RplearnError as exc:
         raise _in_live_terms(exc) from None
-    say(outcome.status.summary())
+    say(_summary_in_live_terms(outcome.status.summary()))
     say(f"wrote {output}")
 
 

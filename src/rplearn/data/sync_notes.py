@@ -27,6 +27,10 @@ def fixed_nodes(tracks: Mapping[str, PoseTrack]) -> list[str]:
     return sorted(str(n) for n, tr in tracks.items() if tr.static or tr.still)
 
 
+#: How the summary's line naming the fixed nodes (:func:`fixed_note`) begins.
+FIXED_NOTE_START = "fixed node(s)"
+
+
 @check_types
 def fixed_note(tracks: Mapping[str, PoseTrack], nodes: list[str]) -> str | None:
     """The summary's line naming the fixed ``nodes`` of ``tracks`` and what was taken for each; None without any."""
@@ -38,7 +42,7 @@ def fixed_note(tracks: Mapping[str, PoseTrack], nodes: list[str]) -> str | None:
         said.append(f"{node} at every time (one pose row)" if tr.static else
                     f"{node} from t = {tr.t_s[0]:.3f} to {tr.t_s[-1]:.3f} s (identical pose rows, no pose gap between "
                     "them)")
-    return (f"fixed node(s) (a pose log of one row, or of identical rows, is a node holding still at that pose): "
+    return (f"{FIXED_NOTE_START} (a pose log of one row, or of identical rows, is a node holding still at that pose): "
             f"{'; '.join(said)}")
 
 
@@ -58,4 +62,4 @@ def implausible_note(n_out: int, dropped: Mapping[str, int], drop_reasons: tuple
             "relative power")
 
 
-__all__ = ["IMPLAUSIBLE_ADVICE_SHARE", "fixed_nodes", "fixed_note", "implausible_note"]
+__all__ = ["FIXED_NOTE_START", "IMPLAUSIBLE_ADVICE_SHARE", "fixed_nodes", "fixed_note", "implausible_note"]

@@ -37,7 +37,7 @@ import shutil
 import tempfile
 import time
 from collections import deque
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -50,7 +50,8 @@ from rplearn.analysis.budget import check_fit_budget
 from rplearn.analysis.decoupling import decoupling_certificate
 from rplearn.core.lsq.selection import at_smoothing_cap
 from rplearn.data.live_sync import LiveMatcher
-from rplearn.data.sync import SyncOptions
+from rplearn.data.sync import SyncOptions, SyncSummary
+from rplearn.data.sync_notes import FIXED_NOTE_START
 from rplearn.errors import InputError, RplearnError
 from rplearn.io.live_sources import CsvTail, MavlinkSource
 from rplearn.io.options import ReaderOptions
@@ -203,6 +204,7 @@ class _Session:
             options.manoeuvres, options.rank_beside, options.ranking_every_s)
         self.shown: Ranking | None = None  # the ranking on view
         self.source_dropped: dict[str, int] = {}  # rows the source's reader dropped, per reason (a CSV's pose rows)
+        self.fixed_said: list[str] = []  # the notes on the fixed nodes (say_fixed_nodes)
 
     def note(self, prefix: str, text: str | None = None) -> None:
         """Set (or, with no text, remove) the one note that starts with ``prefix``: a note
@@ -264,6 +266,18 @@ class _Session:
         s.learned = 0 if self.stats is None else self.stats.n_samples
         s.prequential_rmse_db, s.prequential_n = self.preq.rmse_db(), self.preq.n_samples
 
+    def say_fixed_nodes(self, summary: SyncSummary, metadata: Mapping[str, Any]) -> None:
+        """The nodes the matching took as fixed, as ``sync`` says them: the summary's note and what each node is by
+        where its poses came from (:func:`rplearn.workflows.logs.fixed_node_advice`; ``metadata``: the pose logs'
+        :func:`rplearn.io.read_logs` metadata, the stream's name as their source). Said again, they replace the
+        last."""
+        from rplearn.workflows.logs import fixed_node_advice  # sync's pipeline: imported by a session that ends
+
+        self.status.notes = [n for n in self.status.notes if n not in self.fixed_said]
+        self.fixed_said = [n for n in summary.notes if n.startswith(FIXED_NOTE_START)]
+        self.fixed_said += fixed_node_advice(summary.fixed_nodes, metadata, self.options.reader)
+        self.status.notes += self.fixed_said
+
     def rematch_whole(self, src: MavlinkSource) -> None:
         """Learn the recorded MAVLink log afresh, matched whole, as ``sync`` (its reader's rules look at the whole log:
         the boot clock's median offset, the periods before a valid position), every node it names (unless ``--nodes``)."""
@@ -273,10 +287,12 @@ class _Session:
         if self.stats is None:  # nothing learned (a silent stream: an empty recording)
             return
         try:
-            logs, _ = read_logs([src.record_path], self.options.reader)
+            logs, meta = read_logs([src.record_path], self.options.reader)
             if logs.pose is None or logs.signal is None:
                 return
             result = synchronise(logs.pose, logs.signal, self.options.sync, src.record_path)
+            meta = {**meta, "files": [{**f, "source": src.name} for f in meta.get("files", [])]}  # the stream's name
+            self.say_fixed_nodes(result.summary, meta)
         except InputError as exc:  # the rows learned in flight stay; the working recording is named as the stream
             self.status.notes.append("last refit: the recorded stream matched whole was refused, the rows learned in flight "
                                      f"kept: {str(exc).replace(src.record_path, f'the recording of {src.name}')}")
@@ -488,9 +504,12 @@ def run_live(
         session.source_dropped = {} if isinstance(src, MavlinkSource) else dict(last.dropped)  # rematched whole below
         session.feed(last.poses, last.signals, last.held_nodes)
         session.learn(final=True)
+        from rplearn.workflows.live_checks import source_pose_metadata
+
+        session.say_fixed_nodes(session.matcher.summary, source_pose_metadata(source, options.reader.station))
         if isinstance(src, MavlinkSource):
             src.close()
-            session.rematch_whole(src)
+            session.rematch_whole(src)  # the whole recording's fixed nodes said instead
         session.refit(final=True)
         session.status.elapsed_s = time.monotonic() - start
         session.write_page(html)

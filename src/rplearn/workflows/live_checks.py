@@ -25,6 +25,15 @@ def is_csv_source(source: str) -> bool:
     return "," in source and all(p.lower().endswith(".csv") for p in source.split(","))
 
 
+def source_pose_metadata(source: str, station: str) -> dict[str, Any]:
+    """What :func:`rplearn.workflows.logs.fixed_node_advice` reads of a live source's pose logs, as
+    :func:`rplearn.io.read_logs` says it of the same files: a pose table (the CSV source's first file), or a MAVLink
+    stream holding the ground station ``station``."""
+    if is_csv_source(source):
+        return {"files": [{"source": source.split(",")[0], "format": "csv", "kind": "pose"}]}
+    return {"files": [{"source": source, "format": "tlog", "kind": "pose+signal", "station": station}]}
+
+
 def check_live_options(options: Any) -> None:
     """Refuse :class:`rplearn.workflows.live.LiveOptions` whose values contradict (one line naming the field)."""
     o = options
@@ -116,4 +125,5 @@ def no_model_message(source: str, status: Any, messages: int | None, waited_s: f
             + (f"; {why[-1]}" if why else ""))
 
 
-__all__ = ["SPREAD_OVER", "check_live_options", "check_live_outputs", "check_live_source", "fixed_nodes_note", "is_csv_source", "no_model_message"]
+__all__ = ["SPREAD_OVER", "check_live_options", "check_live_outputs", "check_live_source", "fixed_nodes_note", "is_csv_source",
+           "no_model_message", "source_pose_metadata"]
