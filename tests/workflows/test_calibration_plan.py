@@ -72,3 +72,22 @@ def test_a_drifting_error_counts_a_manoeuvre_for_less(white_plan, tmp_path):
     assert drift.start_spread_db == white.start_spread_db  # before any flight nothing drifted
     assert drift.steps[0].manoeuvre.name == white.steps[0].manoeuvre.name
     assert all(drift.steps[0].spread_db[n] > white.steps[0].spread_db[n] for n in white.start_spread_db)
+
+
+def test_the_guide_gives_noise_the_one_meaning_the_plan_gives_it():
+    """``--noise`` (``OptimizeOptions.noise_std_db``, ``ManoeuvreOptions.noise_std_db``) is the noise of one RSSI
+    reading about the model, each packet's error independent in the plan's posterior: the calibration-plan guide
+    said so in one place ('the RSSI's scatter about the pattern') and 'not the RSSI's scatter' in another (review49)."""
+    import re
+    from pathlib import Path
+
+    from rplearn.analysis.manoeuvres import ManoeuvreOptions
+
+    assert "one RSSI reading about the model" in " ".join((ManoeuvreOptions.__doc__ or "").split())
+    assert "one RSSI reading about the model" in " ".join((OptimizeOptions.__doc__ or "").split())
+    guide = " ".join((Path(__file__).resolve().parents[2] / "docs" / "guides" / "calibration-plan.md").read_text().split())
+    said = re.findall(r"`--noise`(?: is|:) ([^.]+)", guide)
+    assert len(said) == 2, said
+    assert all(s.startswith("the noise of one RSSI reading about the pattern, each packet's error taken as independent")
+               for s in said), said
+    assert "not the RSSI's scatter" not in guide
