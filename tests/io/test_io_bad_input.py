@@ -79,7 +79,7 @@ def test_a_coordinate_beyond_any_place_is_refused_or_a_counted_drop(tmp_path, va
                                         "coordinates beyond 1e8 m (first at row 1)")
     pose, meta = read_pose_table(p, nan_policy="drop")
     assert len(pose) == 3 and meta["dropped"] == {"nan_pose": 0, "implausible_pose": 1, "duplicate_pose": 0, "conflicting_pose": 0,
-                                             "position_jump": 0}
+                                             "position_jump": 0, "repeated_header": 0}
     utm = POSE_CSV.replace(",A,0,0,1", ",A,4.5e5,5.2e6,1").replace(",A,1,0,1", ",A,450001,5.2e6,1")
     utm = write(tmp_path, utm.replace(",A,2,0,1", ",A,450002,5.2e6,1"))  # UTM eastings and northings
     assert len(read_pose_table(utm)[0]) == 4
