@@ -121,8 +121,10 @@ def test_geodetic_and_euler_variants(tmp_path):
     pose, meta = read_pose_table(write(tmp_path, enu, "enu.csv"))
     np.testing.assert_allclose(pose[["qw", "qz"]].iloc[0], [np.sqrt(0.5), np.sqrt(0.5)], atol=1e-12)
     bad = write(tmp_path, text.replace("47.0001", "147.0"), "bad.csv")
-    with pytest.raises(InputError, match=r"bad.csv: field lat/lon out of range at row 1"):
+    with pytest.raises(InputError, match=r"bad.csv: field lat has 1 row\(s\) .* outside -90 to 90 deg .*first at row 1\)"):
         read_pose_table(bad)
+    pose, meta = read_pose_table(bad, nan_policy="drop")  # no latitude: a sentinel or corrupt value, dropped
+    assert len(pose) == 1 and meta["dropped"]["implausible_pose"] == 1
 
 
 def test_column_mapping(tmp_path):

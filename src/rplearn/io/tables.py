@@ -108,15 +108,6 @@ def table_format(path: str | os.PathLike) -> str:
     return "parquet" if str(path).lower().endswith(_PARQUET_EXT) else "csv"
 
 
-def _check_geodetic(lat: np.ndarray, lon: np.ndarray, source: str) -> None:
-    bad = np.flatnonzero((np.abs(lat) > 90) | (np.abs(lon) > 180))
-    if bad.size:
-        raise InputError(
-            f"{source}: field lat/lon out of range at row {int(bad[0])} "
-            f"(lat {float(lat[bad[0]])!r}, lon {float(lon[bad[0]])!r}); expected degrees"
-        )
-
-
 def _enu_positions(
     values: dict[str, np.ndarray],
     position: str,
@@ -131,7 +122,6 @@ def _enu_positions(
     if position != "geodetic":
         return np.stack([values["x"], values["y"], values["z"]], axis=-1), None
     lat, lon, alt = values["lat"], values["lon"], values["alt"]
-    _check_geodetic(lat, lon, source)
     if origin_geodetic is None:
         i0 = int(np.argmin(values["t"]))
         origin_geodetic = (float(lat[i0]), float(lon[i0]), float(alt[i0]))
@@ -168,8 +158,10 @@ def canonical_pose(
         ENU origin for geodetic tables; by default the log's first fix (earliest row).
     nan_policy : {"error", "drop"}
         Rows with a NaN or non-numeric pose value raise :class:`InputError` or are dropped
-        and counted in ``metadata["dropped"]["nan_pose"]``; so are rows with a coordinate
-        beyond 1e8 m (``implausible_pose``) and rows on the wrong side of a position jump no
+        and counted in ``metadata["dropped"]["nan_pose"]``; so are rows with a position
+        no place has (``implausible_pose``: an ENU coordinate beyond 1e8 m, a latitude, longitude
+        or altitude outside its plausible range, such as a 1e308 sentinel;
+        :data:`rplearn.io._pose_checks.POSITION_RANGES`) and rows on the wrong side of a position jump no
         plausible speed explains (``position_jump``: a sentinel such as ``z = -1000`` or
         ``x = y = z = 0`` before the fix; :func:`rplearn.io._pose_checks.position_jumps`), each dropped piece said in
         ``metadata["notes"]``. Whatever the policy, a row identical in every value to an
