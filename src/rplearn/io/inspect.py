@@ -42,9 +42,10 @@ import pandas as pd
 
 from rplearn._argtypes import check_types
 from rplearn.data.phases import advised_max_gap_s, calibration_problems, flight_phases
-from rplearn.data.poses import pose_tracks
+from rplearn.data.poses import PoseTrack, pose_tracks
 from rplearn.data.readings import REPEAT_FRACTION, duplicate_rows, repeated_readings, report_period_s, report_rate_hz
 from rplearn.data.sync import DEFAULT_SENTINEL_RSSI_DBM, PLAUSIBLE_RSSI_DBM
+from rplearn.data.sync_notes import fixed_nodes
 from rplearn.data.tables import QUATERNION_NORM_TOLERANCE, outage_mask
 from rplearn.errors import RplearnError
 from rplearn.io._csv_headers import REPEATED_HEADER, REPEATED_HEADER_LINES
@@ -66,7 +67,8 @@ class NodeSummary:
     longest step that is not a pause); ``pauses`` (steps where the signal log stops too, see
     the module docstring) and ``longest_pause_s``; ``backward_steps`` (times going backwards);
     ``clock_jumps`` (gaps longer than ``clock_jump_s``); ``nan_rows`` (dropped on reading);
-    ``static`` (a single row).
+    ``static`` (a single row); ``fixed`` (taken as holding still, as ``sync`` takes it: a single
+    row or only identical rows, :func:`rplearn.data.sync_notes.fixed_nodes`).
     """
 
     node: str
@@ -82,6 +84,7 @@ class NodeSummary:
     static: bool = False
     pauses: int = 0
     longest_pause_s: float = 0.0
+    fixed: bool = False
 
 
 @check_types
@@ -114,7 +117,9 @@ class LinkSummary:
 class InspectReport:
     """What :func:`inspect_logs` found; ``problems`` lists everything suspicious, one line each;
     ``start_s`` is the log start [s, log clock] that printed times count from; ``calibration``
-    lists why the logs hold no calibration flight (also in ``problems``)."""
+    lists why the logs hold no calibration flight (also in ``problems``); ``fixed_nodes`` names
+    the nodes ``sync`` holds at their pose (a pose log of one row, or of identical rows: a ground
+    station, a parked drone), and ``fixed_note`` says so (None without any)."""
 
     files: list[dict[str, Any]] = field(default_factory=list)
     nodes: list[NodeSummary] = field(default_factory=list)
@@ -122,6 +127,8 @@ class InspectReport:
     problems: list[str] = field(default_factory=list)
     start_s: float = 0.0
     calibration: list[str] = field(default_factory=list)
+    fixed_nodes: list[str] = field(default_factory=list)
+    fixed_note: str | None = None
 
     @property
     def ok(self) -> bool:
@@ -152,7 +159,8 @@ class InspectReport:
                 f"{self._rel(n.t_start_s)} .. {self._rel(n.t_end_s)} s ({n.t_end_s - n.t_start_s:.1f} s), "
                 f"{n.rate_hz:.1f} Hz, gaps > threshold: {n.gaps} (longest {n.longest_gap_s:.3f} s)"
                 + (f", pauses (signals stop too): {n.pauses} (longest {n.longest_pause_s:.1f} s)" if n.pauses else ""))
-            out.append(f"  {n.node}: {n.rows} rows, {span}")
+            out.append(f"  {n.node}: {n.rows} rows, {span}" + (", fixed" if n.fixed else ""))
+        out += [f"  {self.fixed_note}"] if self.fixed_note else []
         out.append("signal links:")
         for lk in self.links:
             out.append(
@@ -175,11 +183,13 @@ class InspectReport:
         out += ["", "## Reader findings", "", *found] if found else []
         out += ["", "## Pose logs", "",
                 "| node | rows | start [s] | end [s] | rate [Hz] | gaps | longest gap [s] | pauses | "
-                "longest pause [s] | NaN rows |",
-                "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+                "longest pause [s] | NaN rows | fixed |",
+                "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
         for n in self.nodes:
             out.append(f"| {n.node} | {n.rows} | {self._rel(n.t_start_s)} | {self._rel(n.t_end_s)} | {n.rate_hz:.1f} | "
-                       f"{n.gaps} | {n.longest_gap_s:.3f} | {n.pauses} | {n.longest_pause_s:.1f} | {n.nan_rows} |")
+                       f"{n.gaps} | {n.longest_gap_s:.3f} | {n.pauses} | {n.longest_pause_s:.1f} | {n.nan_rows} | "
+                       f"{'yes' if n.fixed else 'no'} |")
+        out += ["", self.fixed_note] if self.fixed_note else []
         out += ["", "## Signal links", "",
                 "| tx | rx | samples | start [s] | end [s] | rate [Hz] | RSSI min [dBm] | median | max | sentinels "
                 "| duplicates | repeated readings |",
@@ -375,23 +385,40 @@ def inspect_logs(
     frequencies = [f["frequency_hz"] for f in report.files if f.get("frequency_hz")]
     if not frequencies and isinstance(options.frequency_hz, (int, float)):
         frequencies = [float(options.frequency_hz)]  # the user's, for logs that do not say it
-    report.calibration = _calibration(canonical, report.links, min(frequencies) if frequencies else None)
+    pose, tracks = _tracks(canonical)
+    if pose is not None and tracks is not None:
+        pairs = [(lk.tx, lk.rx) for lk in report.links] or None
+        report.calibration = calibration_problems(flight_phases(pose, tracks), tracks, pairs,
+                                                  min(frequencies) if frequencies else None)
+        _name_fixed(report, tracks)
     _flag(report, max_gap_s)
     return report
 
 
-def _calibration(poses: list[pd.DataFrame], links: list[LinkSummary], frequency_hz: float | None) -> list[str]:
-    """Why the pose logs hold no calibration flight (:func:`~rplearn.data.phases.calibration_problems`);
-    nothing when the poses cannot be checked (no pose log, or logs that disagree)."""
+def _tracks(poses: list[pd.DataFrame]) -> tuple[pd.DataFrame | None, dict[str, PoseTrack] | None]:
+    """The canonical pose logs as one, and its nodes' tracks as ``sync`` makes them; None for both when the poses
+    cannot be checked (no pose log, or logs that disagree: said by the reading)."""
     if not poses:
-        return []
+        return None, None
     try:
         pose = pd.concat(poses, ignore_index=True)
-        tracks = pose_tracks(pose)
+        return pose, pose_tracks(pose)
     except RplearnError:
-        return []
-    pairs = [(lk.tx, lk.rx) for lk in links] or None
-    return calibration_problems(flight_phases(pose, tracks), tracks, pairs, frequency_hz)
+        return None, None
+
+
+def _name_fixed(report: InspectReport, tracks: dict[str, PoseTrack]) -> None:
+    """The nodes ``sync`` holds at their pose (:func:`~rplearn.data.sync_notes.fixed_nodes`, its own test), named
+    in the report and flagged per node."""
+    report.fixed_nodes = fixed_nodes(tracks)
+    for n in report.nodes:
+        n.fixed = n.node in report.fixed_nodes
+    if report.fixed_nodes:
+        said = [f"{node} ({'one pose row' if tracks[node].static else 'identical pose rows'})"
+                for node in report.fixed_nodes]
+        report.fixed_note = (f"fixed node(s), held at their one pose by sync (a pose log of one row, or of identical "
+                             f"rows: a ground station, a parked drone; if one moved, its motion was not logged): "
+                             f"{', '.join(said)}")
 
 
 def _flag_file(report: InspectReport, path: str, info: dict[str, Any]) -> None:
@@ -420,6 +447,8 @@ def _flag(report: InspectReport, max_gap_s: float) -> None:
             report.problems.append(f"node {n.node}: {n.nan_rows} pose row(s) with NaN or non-numeric values")
         if n.backward_steps:
             report.problems.append(f"node {n.node}: time goes backwards {n.backward_steps} time(s)")
+        if n.fixed:  # held at its one pose across any step (sync_notes.fixed_nodes): no gap drops a sample
+            continue
         if n.clock_jumps:
             report.problems.append(
                 f"node {n.node}: {n.clock_jumps} clock jump(s) or long dropout(s) (forward step longer than "
