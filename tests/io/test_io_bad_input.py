@@ -79,7 +79,7 @@ def test_a_coordinate_beyond_any_place_is_refused_or_a_counted_drop(tmp_path, va
                                         "coordinates beyond 1e8 m (first at row 1)")
     pose, meta = read_pose_table(p, nan_policy="drop")
     assert len(pose) == 3 and meta["dropped"] == {"nan_pose": 0, "implausible_pose": 1, "duplicate_pose": 0, "conflicting_pose": 0,
-                                             "position_jump": 0}
+                                             "position_jump": 0, "repeated_header": 0}
     utm = POSE_CSV.replace(",A,0,0,1", ",A,4.5e5,5.2e6,1").replace(",A,1,0,1", ",A,450001,5.2e6,1")
     utm = write(tmp_path, utm.replace(",A,2,0,1", ",A,450002,5.2e6,1"))  # UTM eastings and northings
     assert len(read_pose_table(utm)[0]) == 4
@@ -121,8 +121,10 @@ def test_geodetic_and_euler_variants(tmp_path):
     pose, meta = read_pose_table(write(tmp_path, enu, "enu.csv"))
     np.testing.assert_allclose(pose[["qw", "qz"]].iloc[0], [np.sqrt(0.5), np.sqrt(0.5)], atol=1e-12)
     bad = write(tmp_path, text.replace("47.0001", "147.0"), "bad.csv")
-    with pytest.raises(InputError, match=r"bad.csv: field lat/lon out of range at row 1"):
+    with pytest.raises(InputError, match=r"bad.csv: field lat has 1 row\(s\) .* outside -90 to 90 deg .*first at row 1\)"):
         read_pose_table(bad)
+    pose, meta = read_pose_table(bad, nan_policy="drop")  # no latitude: a sentinel or corrupt value, dropped
+    assert len(pose) == 1 and meta["dropped"]["implausible_pose"] == 1
 
 
 def test_column_mapping(tmp_path):

@@ -36,3 +36,21 @@ def test_a_header_written_again_between_polls_is_dropped_and_counted(tmp_path):
         fs.write("t,tx,rx,rssi_dbm\n")
     with pytest.raises(LogFormatError, match=r"signal.csv: line 23: another header in the file"):
         tail.poll()
+
+
+def test_the_tail_tells_headers_from_rows_as_sync_does(tmp_path):
+    """One rule with the whole-file readers (rplearn.io._csv_headers): a row whose first field is a column name (a
+    node called ``x`` in a table whose first column is the node) holds numbers and is a row (was refused as another
+    header); the header written again quoted, or with a byte-order mark (a file joined with cat), is the header."""
+    pose, signal = tmp_path / "pose.csv", tmp_path / "signal.csv"
+    head = "node,t,x,y,z,qw,qx,qy,qz\n"
+    rows = "".join(f"x,{k * 0.1:.1f},{k},0,10,1,0,0,0\nG,{k * 0.1:.1f},5,5,0,1,0,0,0\n" for k in range(10))
+    pose.write_text(head + rows)
+    signal.write_text(SIGNAL)
+    tail = CsvTail(str(pose), str(signal))
+    assert len(tail.poll().poses) == 20
+    later = "".join(f"x,{1 + k * 0.1:.1f},{10 + k},0,10,1,0,0,0\n" for k in range(5))
+    with pose.open("a") as fp:
+        fp.write('"node", "t", "x", "y", "z", "qw", "qx", "qy", "qz"\n' + later + "\ufeff" + head + later.replace("x,1.", "x,2."))
+    again = tail.poll()
+    assert len(again.poses) == 10 and again.dropped == {"repeated_header": 2}

@@ -71,7 +71,7 @@ def test_a_coordinate_beyond_any_place_is_counted_as_implausible_not_nan(tmp_pat
     xyz[5, 0], xyz[9, 1] = 3e9, np.nan
     pose, meta = read_pose_table(_flight_csv(tmp_path / "pose.csv", xyz), nan_policy="drop")
     assert meta["dropped"] == {"nan_pose": 1, "implausible_pose": 1, "duplicate_pose": 0, "conflicting_pose": 0,
-                                 "position_jump": 0} and len(pose) == 39
+                                 "position_jump": 0, "repeated_header": 0} and len(pose) == 39
 
 
 def test_inspect_says_the_jump_sync_would_drop(tmp_path):

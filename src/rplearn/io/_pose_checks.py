@@ -31,29 +31,47 @@ def _float_column(df: pd.DataFrame, name: str) -> np.ndarray:
     return pd.to_numeric(df[name], errors="coerce").to_numpy(np.float64, na_value=np.nan)
 
 
+#: The plausible range (:data:`~rplearn.core.plausible.PLAUSIBLE`) of each position column: a value beyond it is
+#: no place (a sentinel such as 1e308 or the largest float32, or a corrupt value), ``implausible_pose``.
+POSITION_RANGES: dict[str, str] = {"x": "coordinate_m", "y": "coordinate_m", "z": "coordinate_m",
+                                   "lat": "latitude_deg", "lon": "longitude_deg", "alt": "altitude_m"}
+
+
+def _beyond(column: str) -> str:
+    """How a refusal says a value of a position column no place has."""
+    q = PLAUSIBLE[POSITION_RANGES[column]]
+    if q.name == "coordinate_m":
+        return " or coordinates beyond 1e8 m"
+    return f" or values outside {q.low:g} to {q.high:g} {q.unit} (no place: a sentinel, or not in {q.unit}?)"
+
+
 def finite_values(
     df: pd.DataFrame, numeric: tuple[str, ...], nan_policy: str, source: str
 ) -> tuple[pd.DataFrame, dict[str, np.ndarray], dict[str, int]]:
-    """The numeric columns as float arrays, rows with a NaN, a non-number or an ENU coordinate
-    beyond any place (:data:`~rplearn.core.plausible.PLAUSIBLE` ``coordinate_m``: a sentinel or
-    a corrupt value) dropped or refused.
+    """The numeric columns as float arrays, rows with a NaN, a non-number or a position no place
+    has (:data:`POSITION_RANGES`: an ENU coordinate beyond 1e8 m, a latitude, longitude or
+    altitude outside its plausible range; a sentinel or a corrupt value) dropped or refused.
 
     Returns ``(table, values, dropped)``: the table and arrays without the bad rows and their
     counts, ``nan_pose`` (NaN, infinite or no number) and ``implausible_pose`` (a finite
-    coordinate beyond 1e8 m); both 0 unless ``nan_policy="drop"``.
+    position no place has); both 0 unless ``nan_policy="drop"``. With ``"error"`` the first bad
+    row is refused in one line naming ``source``, its column and its row.
     """
     values = {c: _float_column(df, c) for c in numeric}
     nan = np.zeros(len(df), bool)
     far = np.zeros(len(df), bool)
     first_bad: tuple[int, str] | None = None
-    limit = PLAUSIBLE["coordinate_m"].high
+    column_bad: dict[str, int] = {}
     for c in numeric:
         b_nan = ~np.isfinite(values[c])
-        with np.errstate(invalid="ignore"):  # an ENU coordinate beyond any place: a sentinel or corrupt value
-            b_far = (np.abs(values[c]) > limit) & ~b_nan if c in ("x", "y", "z") else np.zeros(len(df), bool)
+        b_far = np.zeros(len(df), bool)
+        if c in POSITION_RANGES:  # a position beyond any place: a sentinel or corrupt value
+            q = PLAUSIBLE[POSITION_RANGES[c]]
+            b_far = ((values[c] < q.low) | (values[c] > q.high)) & ~b_nan
         b = b_nan | b_far
         if b.any():
             r = int(np.flatnonzero(b)[0])
+            column_bad[c] = int(b.sum())
             if first_bad is None or r < first_bad[0]:
                 first_bad = (r, c)
         nan |= b_nan
@@ -62,11 +80,11 @@ def finite_values(
         return df, values, {"nan_pose": 0, "implausible_pose": 0}
     bad = nan | far
     if nan_policy == "error":
+        r, c = first_bad
         raise InputError(
-            f"{source}: field {first_bad[1]} has {int(bad.sum())} row(s) with NaN, infinite or "
-            f"non-numeric values{' or coordinates beyond 1e8 m' if first_bad[1] in ('x', 'y', 'z') else ''} "
-            f"(first at row {first_bad[0]}); expected numbers, or drop those rows "
-            "(nan_policy='drop')",
+            f"{source}: field {c} has {column_bad[c]} row(s) with NaN, infinite or non-numeric values"
+            f"{_beyond(c) if c in POSITION_RANGES else ''} (first at row {df.index[r]}); expected numbers, or drop "
+            "those rows (nan_policy='drop')",
             param="nan_policy",
         )
     counts = {"nan_pose": int(nan.sum()), "implausible_pose": int((far & ~nan).sum())}

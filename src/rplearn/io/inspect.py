@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -42,20 +42,19 @@ import pandas as pd
 
 from rplearn._argtypes import check_types
 from rplearn.data.phases import advised_max_gap_s, calibration_problems, flight_phases
-from rplearn.data.poses import pose_tracks
+from rplearn.data.poses import PoseTrack, pose_tracks
 from rplearn.data.readings import REPEAT_FRACTION, duplicate_rows, repeated_readings, report_period_s, report_rate_hz
 from rplearn.data.sync import DEFAULT_SENTINEL_RSSI_DBM, PLAUSIBLE_RSSI_DBM
-from rplearn.data.tables import QUATERNION_NORM_TOLERANCE, non_unit_quaternion_rows, outage_mask
+from rplearn.data.sync_notes import fixed_nodes
+from rplearn.data.tables import QUATERNION_NORM_TOLERANCE, outage_mask
 from rplearn.errors import RplearnError
-from rplearn.io.damage import across_files, file_damage, signal_row_problems
+from rplearn.io._csv_headers import REPEATED_HEADER, REPEATED_HEADER_LINES
+from rplearn.io.damage import across_files, file_damage
+from rplearn.io.inspect_files import read_for_inspection
 from rplearn.io.options import ReaderOptions
 
 #: A pose step is a pause only if it spans more than this many median signal intervals.
 PAUSE_MIN_SIGNAL_STEPS: float = 3.0
-
-
-_POSE_VALUE_COLUMNS = ("t", "x", "y", "z", "lat", "lon", "alt", "qw", "qx", "qy", "qz", "roll_deg",
-                       "pitch_deg", "yaw_deg", "roll_ned_deg", "pitch_ned_deg", "yaw_ned_deg")
 
 
 @check_types
@@ -68,7 +67,8 @@ class NodeSummary:
     longest step that is not a pause); ``pauses`` (steps where the signal log stops too, see
     the module docstring) and ``longest_pause_s``; ``backward_steps`` (times going backwards);
     ``clock_jumps`` (gaps longer than ``clock_jump_s``); ``nan_rows`` (dropped on reading);
-    ``static`` (a single row).
+    ``static`` (a single row); ``fixed`` (taken as holding still, as ``sync`` takes it: a single
+    row or only identical rows, :func:`rplearn.data.sync_notes.fixed_nodes`).
     """
 
     node: str
@@ -84,6 +84,7 @@ class NodeSummary:
     static: bool = False
     pauses: int = 0
     longest_pause_s: float = 0.0
+    fixed: bool = False
 
 
 @check_types
@@ -116,7 +117,9 @@ class LinkSummary:
 class InspectReport:
     """What :func:`inspect_logs` found; ``problems`` lists everything suspicious, one line each;
     ``start_s`` is the log start [s, log clock] that printed times count from; ``calibration``
-    lists why the logs hold no calibration flight (also in ``problems``)."""
+    lists why the logs hold no calibration flight (also in ``problems``); ``fixed_nodes`` names
+    the nodes ``sync`` holds at their pose (a pose log of one row, or of identical rows: a ground
+    station, a parked drone), and ``fixed_note`` says so (None without any)."""
 
     files: list[dict[str, Any]] = field(default_factory=list)
     nodes: list[NodeSummary] = field(default_factory=list)
@@ -124,6 +127,8 @@ class InspectReport:
     problems: list[str] = field(default_factory=list)
     start_s: float = 0.0
     calibration: list[str] = field(default_factory=list)
+    fixed_nodes: list[str] = field(default_factory=list)
+    fixed_note: str | None = None
 
     @property
     def ok(self) -> bool:
@@ -138,7 +143,8 @@ class InspectReport:
                f"{int(p.get('pose_rows', 0))} pose row(s), {int(p.get('signal_rows', 0))} signal row(s)"
                + (f": {p['detail']}" if p.get("detail") else "") for p in f.get("excluded_periods") or ()]
         for what, counts in (("pose", f.get("dropped")), ("signal", f.get("signal_dropped"))):
-            out += [f"dropped on reading: {n:,} {what} row(s) ({why})" for why, n in (counts or {}).items() if n]
+            out += [f"dropped on reading: {n:,} {REPEATED_HEADER_LINES if why == REPEATED_HEADER else what + ' row(s)'} "
+                    f"({why})" for why, n in (counts or {}).items() if n]
         return out
 
     def to_text(self) -> str:
@@ -153,7 +159,8 @@ class InspectReport:
                 f"{self._rel(n.t_start_s)} .. {self._rel(n.t_end_s)} s ({n.t_end_s - n.t_start_s:.1f} s), "
                 f"{n.rate_hz:.1f} Hz, gaps > threshold: {n.gaps} (longest {n.longest_gap_s:.3f} s)"
                 + (f", pauses (signals stop too): {n.pauses} (longest {n.longest_pause_s:.1f} s)" if n.pauses else ""))
-            out.append(f"  {n.node}: {n.rows} rows, {span}")
+            out.append(f"  {n.node}: {n.rows} rows, {span}" + (", fixed" if n.fixed else ""))
+        out += [f"  {self.fixed_note}"] if self.fixed_note else []
         out.append("signal links:")
         for lk in self.links:
             out.append(
@@ -176,11 +183,13 @@ class InspectReport:
         out += ["", "## Reader findings", "", *found] if found else []
         out += ["", "## Pose logs", "",
                 "| node | rows | start [s] | end [s] | rate [Hz] | gaps | longest gap [s] | pauses | "
-                "longest pause [s] | NaN rows |",
-                "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+                "longest pause [s] | NaN rows | fixed |",
+                "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
         for n in self.nodes:
             out.append(f"| {n.node} | {n.rows} | {self._rel(n.t_start_s)} | {self._rel(n.t_end_s)} | {n.rate_hz:.1f} | "
-                       f"{n.gaps} | {n.longest_gap_s:.3f} | {n.pauses} | {n.longest_pause_s:.1f} | {n.nan_rows} |")
+                       f"{n.gaps} | {n.longest_gap_s:.3f} | {n.pauses} | {n.longest_pause_s:.1f} | {n.nan_rows} | "
+                       f"{'yes' if n.fixed else 'no'} |")
+        out += ["", self.fixed_note] if self.fixed_note else []
         out += ["", "## Signal links", "",
                 "| tx | rx | samples | start [s] | end [s] | rate [Hz] | RSSI min [dBm] | median | max | sentinels "
                 "| duplicates | repeated readings |",
@@ -304,130 +313,6 @@ def summarise_signal(signal: pd.DataFrame,
     return out
 
 
-def _read_pose_table(path: str, options: ReaderOptions) -> tuple[pd.DataFrame, dict[str, Any], dict[str, int],
-                                                                 pd.DataFrame]:
-    """A pose table in file order (``t``, ``node``), its facts, its NaN rows per node, and the
-    canonical pose log (sorted, for the flight checks).
-
-    The table is read forgivingly (NaN rows dropped, unsorted times accepted) to check it,
-    then its valid rows are returned unsorted: inspection wants the file order.
-    """
-    from rplearn.io import tables as _tables
-
-    node_of_file = (options.nodes or {}).get(path)
-    raw = _tables.read_table_rows(path, path)
-    pose, meta = _tables.canonical_pose(
-        raw, source=path, columns=options.columns, node=node_of_file, nan_policy="drop",
-        allow_unsorted=True, origin_geodetic=options.origin_geodetic,
-    )
-    info: dict[str, Any] = {"format": _tables.table_format(path), "kind": "pose",
-                            "non_unit_quaternion_rows": non_unit_quaternion_rows(pose)}
-    dropped = {k: int(n) for k, n in meta["dropped"].items() if n and k != "nan_pose"}  # NaN rows: nan_rows
-    if dropped:  # a coordinate beyond any place, a position jump: said, as sync would drop them
-        info["dropped"] = dropped
-        info["notes"] = [str(n).removeprefix(f"{path}: ") for n in meta.get("notes", ())]
-    df = _tables.rename_columns(raw, options.columns)
-    node = (df["node"].astype(str) if "node" in df.columns
-            else pd.Series([node_of_file if node_of_file is not None else "?"] * len(df)))
-    cols = [c for c in _POSE_VALUE_COLUMNS if c in df.columns]
-    values = df[cols].apply(pd.to_numeric, errors="coerce").to_numpy(np.float64)
-    bad = ~np.isfinite(values).all(axis=1)
-    nan_rows = {str(k): int(v) for k, v in node[bad].value_counts().items()}
-    copies = df.assign(node=node.to_numpy()).astype(str).duplicated().to_numpy()  # duplicate_pose: no step back
-    file_order = pd.DataFrame({"t": values[~bad & ~copies, cols.index("t")], "node": node[~bad & ~copies].to_numpy()})
-    return file_order, info, nan_rows, pose
-
-
-def _forgiving_options(path: str, kind: str, options: ReaderOptions) -> ReaderOptions:
-    """Options with placeholders for what inspection does not need: node id of a ULog (its
-    file name), receiver of a pcap (``capture``), tx power [dBm] and frequency [Hz]."""
-    if kind == "ulog":
-        nodes = {path: os.path.splitext(os.path.basename(path))[0], **(options.nodes or {})}
-        if not options.ulog_radio:
-            return replace(options, nodes=nodes)
-        return replace(options, nodes=nodes, tx_power_dbm=0.0 if options.tx_power_dbm is None else options.tx_power_dbm,
-                       frequency_hz=1e9 if options.frequency_hz is None else options.frequency_hz)
-    if kind == "pcap":
-        return replace(
-            options,
-            tx_power_dbm=0.0 if options.tx_power_dbm is None else options.tx_power_dbm,
-            receivers={path: "capture"} if options.receivers is None else options.receivers,
-        )
-    if kind == "mavlink":
-        return replace(
-            options,
-            tx_power_dbm=0.0 if options.tx_power_dbm is None else options.tx_power_dbm,
-            frequency_hz=1e9 if options.frequency_hz is None else options.frequency_hz,
-        )
-    if kind in ("ros1", "ros2") and options.rssi_topics:
-        return replace(
-            options,
-            tx_power_dbm=0.0 if options.tx_power_dbm is None else options.tx_power_dbm,
-            frequency_hz=1.0 if options.frequency_hz is None else options.frequency_hz,
-        )
-    return options
-
-
-def _read_one(path: str, options: ReaderOptions) -> tuple[pd.DataFrame | None, pd.DataFrame | None,
-                                                         dict[str, Any], dict[str, int], pd.DataFrame | None]:
-    """A file's poses in file order, signals, facts (``frequency_hz`` [Hz] when the log or the
-    options give it), NaN pose rows per node, and canonical poses."""
-    from rplearn.io import tables as _tables
-    from rplearn.io.read import detect_format, read_logs
-
-    kind = detect_format(path)
-    if kind == "table":
-        if _tables.table_kind(path, options.columns) == "pose":
-            pose, info, nan_rows, canonical = _read_pose_table(path, options)
-            return pose, None, info, nan_rows, canonical
-        sig, meta = _tables.read_signal_table(
-            path, columns=options.columns, rx=(options.receivers or {}).get(path),
-            tx_power_dbm=0.0, frequency_hz=1.0, allow_unsorted=True)  # 1 Hz: a placeholder; backward steps reported below
-        facts = {"format": meta["format"], "kind": "signal", "frequency_hz": _frequency_hz(sig)}
-        rows = signal_row_problems(sig)  # said only when there are some (JSON: the key only then)
-        return None, sig, {**facts, **({"signal_row_problems": rows} if rows else {})}, {}, None
-    logs, meta = read_logs(path, _forgiving_options(path, kind, options))
-    f = meta["files"][0]
-    info = {"format": f.get("format", kind), "kind": f.get("kind")}
-    if logs.signal is not None and (kind not in ("mavlink", "ulog") or options.frequency_hz is not None):
-        info["frequency_hz"] = _frequency_hz(logs.signal)
-    if f.get("excluded_periods"):
-        info["excluded_periods"] = f["excluded_periods"]
-    if f.get("dropped"):  # a signal-only reader's (pcap's) drops are frames, not pose rows
-        info["signal_dropped" if f.get("kind") == "signal" else "dropped"] = f["dropped"]
-    if isinstance(f.get("signal"), dict):
-        info["signal_dropped"] = _signal_drops(f["signal"])
-    if f.get("invalid_flag_rows"):
-        info["invalid_flag_rows"] = int(f["invalid_flag_rows"])
-    for key in ("cut_off_at_byte", "cut_off_record", "records_read", "corrupt", "corrupt_at_byte", "corrupt_bytes",
-                "corrupt_stretches",
-                "repeated_messages", "close_copies", "unindexed", "trailing_bytes", "trailing_bag", "damaged_chunks",
-                "damaged_chunk_messages", "damaged_index", "station", "station_note", "station_accuracy_m",
-                "anchor_geodetic", "origin_geodetic"):
-        if f.get(key):
-            info[key] = f[key]
-    if f.get("notes"):
-        info["notes"] = [str(n).removeprefix(f"{path}: ") for n in f["notes"]]
-    if logs.pose is not None:
-        info["non_unit_quaternion_rows"] = non_unit_quaternion_rows(logs.pose)
-    return logs.pose, logs.signal, info, {}, logs.pose
-
-
-def _signal_drops(counts: dict[str, int]) -> dict[str, int]:
-    """The counts of signal rows a MAVLink reader dropped, from all its signal counts: ``rows_*``
-    are kept readings, and ``link_lost`` / ``outage_*`` count the link-lost messages it kept as
-    outage events (said in the file's notes), so neither is a drop."""
-    kept = ("rows_", "outage_", "link_lost")
-    return {k: v for k, v in counts.items() if not str(k).startswith(kept)}
-
-
-def _frequency_hz(signal: pd.DataFrame) -> float | None:
-    """The lowest carrier frequency a signal log gives [Hz] (None for placeholders below 1 MHz)."""
-    f = pd.to_numeric(signal["frequency_hz"], errors="coerce").to_numpy(np.float64) if len(signal) else np.zeros(0)
-    f = f[np.isfinite(f) & (f >= 1e6)]
-    return float(f.min()) if f.size else None
-
-
 @check_types
 def inspect_logs(
     paths: str | os.PathLike | Iterable[str | os.PathLike],
@@ -470,7 +355,7 @@ def inspect_logs(
     for p in paths:
         path = str(p)
         try:
-            pose, sig, info, nans, full = _read_one(path, options)
+            pose, sig, info, nans, full = read_for_inspection(path, options)
         except RplearnError as exc:
             report.files.append({"path": path, "format": "?", "kind": None, "error": str(exc)})
             report.problems.append(f"{path}: unreadable: {exc}")
@@ -500,23 +385,40 @@ def inspect_logs(
     frequencies = [f["frequency_hz"] for f in report.files if f.get("frequency_hz")]
     if not frequencies and isinstance(options.frequency_hz, (int, float)):
         frequencies = [float(options.frequency_hz)]  # the user's, for logs that do not say it
-    report.calibration = _calibration(canonical, report.links, min(frequencies) if frequencies else None)
+    pose, tracks = _tracks(canonical)
+    if pose is not None and tracks is not None:
+        pairs = [(lk.tx, lk.rx) for lk in report.links] or None
+        report.calibration = calibration_problems(flight_phases(pose, tracks), tracks, pairs,
+                                                  min(frequencies) if frequencies else None)
+        _name_fixed(report, tracks)
     _flag(report, max_gap_s)
     return report
 
 
-def _calibration(poses: list[pd.DataFrame], links: list[LinkSummary], frequency_hz: float | None) -> list[str]:
-    """Why the pose logs hold no calibration flight (:func:`~rplearn.data.phases.calibration_problems`);
-    nothing when the poses cannot be checked (no pose log, or logs that disagree)."""
+def _tracks(poses: list[pd.DataFrame]) -> tuple[pd.DataFrame | None, dict[str, PoseTrack] | None]:
+    """The canonical pose logs as one, and its nodes' tracks as ``sync`` makes them; None for both when the poses
+    cannot be checked (no pose log, or logs that disagree: said by the reading)."""
     if not poses:
-        return []
+        return None, None
     try:
         pose = pd.concat(poses, ignore_index=True)
-        tracks = pose_tracks(pose)
+        return pose, pose_tracks(pose)
     except RplearnError:
-        return []
-    pairs = [(lk.tx, lk.rx) for lk in links] or None
-    return calibration_problems(flight_phases(pose, tracks), tracks, pairs, frequency_hz)
+        return None, None
+
+
+def _name_fixed(report: InspectReport, tracks: dict[str, PoseTrack]) -> None:
+    """The nodes ``sync`` holds at their pose (:func:`~rplearn.data.sync_notes.fixed_nodes`, its own test), named
+    in the report and flagged per node."""
+    report.fixed_nodes = fixed_nodes(tracks)
+    for n in report.nodes:
+        n.fixed = n.node in report.fixed_nodes
+    if report.fixed_nodes:
+        said = [f"{node} ({'one pose row' if tracks[node].static else 'identical pose rows'})"
+                for node in report.fixed_nodes]
+        report.fixed_note = (f"fixed node(s), held at their one pose by sync (a pose log of one row, or of identical "
+                             f"rows: a ground station, a parked drone; if one moved, its motion was not logged): "
+                             f"{', '.join(said)}")
 
 
 def _flag_file(report: InspectReport, path: str, info: dict[str, Any]) -> None:
@@ -545,6 +447,8 @@ def _flag(report: InspectReport, max_gap_s: float) -> None:
             report.problems.append(f"node {n.node}: {n.nan_rows} pose row(s) with NaN or non-numeric values")
         if n.backward_steps:
             report.problems.append(f"node {n.node}: time goes backwards {n.backward_steps} time(s)")
+        if n.fixed:  # held at its one pose across any step (sync_notes.fixed_nodes): no gap drops a sample
+            continue
         if n.clock_jumps:
             report.problems.append(
                 f"node {n.node}: {n.clock_jumps} clock jump(s) or long dropout(s) (forward step longer than "

@@ -37,8 +37,10 @@ def _relative(row: dict[str, Any], start_s: float) -> dict[str, Any]:
 
 
 def inspect_to_dict(report: InspectReport) -> dict[str, Any]:
-    """The report as plain data: files (with the readers' findings as text lines), nodes and
-    links (times from the log start), problems, and the reasons for no calibration flight."""
+    """The report as plain data: files (with the readers' findings as text lines), nodes (each with
+    ``fixed``: held at its pose by ``sync``) and links (times from the log start), problems, the
+    reasons for no calibration flight, and the fixed nodes (``fixed_nodes``, sorted; ``fixed_note``,
+    the line that says them, ``null`` without any)."""
     files = [{**{k: v for k, v in f.items()}, "findings": report.findings(f)} for f in report.files]
     return _finite({
         "schema": "rplearn.inspect", "version": INSPECT_JSON_VERSION, "start_s": report.start_s,
@@ -47,6 +49,7 @@ def inspect_to_dict(report: InspectReport) -> dict[str, Any]:
         "nodes": [_relative(asdict(n), report.start_s) for n in report.nodes],
         "links": [_relative(asdict(lk), report.start_s) for lk in report.links],
         "problems": list(report.problems), "calibration": list(report.calibration), "ok": report.ok,
+        "fixed_nodes": list(report.fixed_nodes), "fixed_note": report.fixed_note,
     })
 
 

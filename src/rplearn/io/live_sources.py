@@ -40,12 +40,14 @@ from rplearn._argtypes import check_types
 from rplearn.data.live_sync import HOLD_ROWS, HOLD_S
 from rplearn.data.tables import CSV_DTYPES, normalise_times
 from rplearn.errors import InputError, LogFormatError
+from rplearn.io._columns import EULER_ENU_FLU_COLUMNS, EULER_NED_FRD_COLUMNS, csv_missing_values
+from rplearn.io._csv_headers import HeaderRule, without_repeated_headers
 from rplearn.io._pose_checks import TrackEnds, top_speeds, track_pieces
 from rplearn.io._time_order import LinkTimes, check_link_time_order
 from rplearn.io.geodetic import geodetic_to_enu
 from rplearn.io.mavlink_phases import MAX_HORIZONTAL_SPEED_M_S, MAX_VERTICAL_SPEED_M_S, unexplained_steps
 from rplearn.io.options import ReaderOptions
-from rplearn.io.tables import EULER_ENU_FLU_COLUMNS, EULER_NED_FRD_COLUMNS, canonical_pose, canonical_signal, csv_missing_values
+from rplearn.io.tables import canonical_pose, canonical_signal
 
 
 @check_types
@@ -87,6 +89,7 @@ class _Tail:
         self.path, self.offset, self.header = path, 0, b""
         self.line = 0  # lines read (the header the first)
         self.repeated_headers = 0  # the header line again later in the file (a logger restarted appending): dropped
+        self.rule: HeaderRule | None = None  # how its header lines are told from rows, once the header is read
         self.identity: tuple[int, int] | None = None  # (device, inode) of the file read
         self.first = b""  # its first bytes read (at most FIRST_BYTES)
         self.digest = hashlib.sha256()  # of every byte read
@@ -143,24 +146,16 @@ class _Tail:
 
     def _without_headers(self, data: bytes, first_line: int) -> bytes:
         """``data`` (lines from line ``first_line`` on) without the header lines repeated in it, counted; another
-        header (a line that begins with a column name, never a number) is refused, naming the line."""
-        header = self.header.rstrip(b"\r\n")
-        names = {n.strip().strip(b'"') for n in header.split(b",")} - {b""}
-        if not any(data.startswith(n) or b"\n" + n in data for n in names):
-            return data
-        kept = []
-        for k, line in enumerate(data.splitlines(keepends=True)):
-            text = line.rstrip(b"\r\n")
-            if text.split(b",")[0].strip().strip(b'"') not in names:
-                kept.append(line)
-            elif text == header:
-                self.repeated_headers += 1
-            else:
-                raise LogFormatError(f"{self.path}: line {first_line + k}: another header in the file "
-                                     f"({text.decode(errors='replace')[:80]!r}; the first: "
-                                     f"{header.decode(errors='replace')[:80]!r}): a logger restarted with other "
-                                     "columns; give each part as a session of its own")
-        return b"".join(kept)
+        header is refused, naming the line (:mod:`rplearn.io._csv_headers`)."""
+        if self.rule is None:
+            self.rule = HeaderRule.of(self.header)
+        data, repeated = without_repeated_headers(data, self.rule, first_line, self.path, _SESSION_ADVICE)
+        self.repeated_headers += repeated
+        return data
+
+
+#: What to do with a CSV being appended to that holds another header (:func:`rplearn.io._csv_headers.HeaderRule.refusal`).
+_SESSION_ADVICE = "give each part as a session of its own"
 
 
 def _table(tail: _Tail, data: bytes) -> pd.DataFrame | None:

@@ -23,10 +23,20 @@ import numpy as np
 import pandas as pd
 
 from rplearn._argtypes import check_types
-from rplearn.core.geometry import quat_wxyz_from_euler_enu_flu_deg, quat_wxyz_from_euler_ned_frd_deg
 from rplearn.data.tables import CSV_DTYPES, POSE_COLUMNS, SIGNAL_COLUMNS, check_unit_labels, node_ids, normalise_times, validate_pose_log
 from rplearn.errors import InputError, LogFormatError
+from rplearn.io._columns import (
+    COLUMN_ALIASES,
+    GEODETIC_COLUMNS,
+    attitude_columns,
+    csv_missing_values,
+    position_columns,
+    quaternions_wxyz,
+    rename_columns,
+    with_node,
+)
 from rplearn.io._common import read_parquet_lean
+from rplearn.io._csv_headers import REPEATED_HEADER, HeaderScan, csv_source, scan_csv_headers
 from rplearn.io._pose_checks import TrackEnds
 from rplearn.io._pose_checks import earlier_rows as _earlier_rows
 from rplearn.io._pose_checks import finite_values as _finite_values
@@ -37,48 +47,9 @@ from rplearn.io._time_order import LinkTimes, check_link_time_order
 from rplearn.io._time_order import check_time_order as _check_time_order
 from rplearn.io.geodetic import geodetic_to_enu
 
-#: Vendor column names -> canonical names (the one renaming mapping of rplearn.io).
-COLUMN_ALIASES: dict[str, str] = {
-    "time": "t",
-    "time_s": "t",
-    "timestamp_s": "t",
-    "node_id": "node",
-    "drone": "node",
-    "latitude": "lat",
-    "latitude_deg": "lat",
-    "longitude": "lon",
-    "longitude_deg": "lon",
-    "altitude": "alt",
-    "altitude_m": "alt",
-    "rssi": "rssi_dbm",
-    "signal_dbm": "rssi_dbm",
-    "txpower_dbm": "tx_power_dbm",
-    "freq_hz": "frequency_hz",
-    "transmitter": "tx",
-    "receiver": "rx",
-}
-
-GEODETIC_COLUMNS: tuple[str, ...] = ("lat", "lon", "alt")
-EULER_ENU_FLU_COLUMNS: tuple[str, ...] = ("roll_deg", "pitch_deg", "yaw_deg")
-EULER_NED_FRD_COLUMNS: tuple[str, ...] = ("roll_ned_deg", "pitch_ned_deg", "yaw_ned_deg")
 _PARQUET_EXT = (".parquet", ".pq")
 #: Signal columns a constant may supply -> the ReaderOptions field that gives it.
 _CONSTANT_FIELDS: dict[str, str] = {"rx": "receivers", "tx_power_dbm": "tx_power_dbm", "frequency_hz": "frequency_hz"}
-
-
-def rename_columns(df: pd.DataFrame, columns: Mapping[str, str] | None = None) -> pd.DataFrame:
-    """Rename vendor columns to canonical names: :data:`COLUMN_ALIASES`, then ``columns``.
-
-    A canonical name already present is never overwritten by an alias.
-    """
-    mapping = {k: v for k, v in COLUMN_ALIASES.items() if v not in df.columns}
-    mapping.update(dict(columns or {}))
-    df = df.rename(columns={c: mapping.get(str(c), str(c)) for c in df.columns})
-    if df.columns.duplicated().any():
-        dup = sorted({str(c) for c in df.columns[df.columns.duplicated()]})
-        raise InputError(f"column(s) {', '.join(dup)} appear twice after renaming")
-    return df
-
 
 
 def _table_error(name: str, path: Any, exc: BaseException) -> str:
@@ -89,33 +60,6 @@ def _table_error(name: str, path: Any, exc: BaseException) -> str:
     return table_read_error(name, path, exc)
 
 
-#: The only cells of an RSSI column a CSV reader takes for missing (``nan_rssi``): other text
-#: ("n/a", "NULL", "-70dBm") is kept, counted by ``sync`` as ``unparsable_rssi``, as
-#: :func:`rplearn.data.sync.synchronise` counts it in a table it is given.
-RSSI_MISSING_TEXT: tuple[str, ...] = ("", "nan", "NaN", "NAN", "-nan", "-NaN", "+nan", "+NaN")
-#: The words :func:`pandas.read_csv` takes for missing by default (its documented ``na_values``).
-_PANDAS_MISSING_TEXT: tuple[str, ...] = (
-    "", "#N/A", "#N/A N/A", "#NA", "-1.#IND", "-1.#QNAN", "-NaN", "-nan", "1.#IND", "1.#QNAN", "<NA>", "N/A", "NA",
-    "NULL", "NaN", "None", "n/a", "nan", "null",
-)
-
-
-def csv_missing_values(header: Any, columns: Mapping[str, str] | None = None) -> dict[str, Any]:
-    """Options of :func:`pandas.read_csv` for a table with the column names ``header`` (as pandas
-    reads them): pandas' missing-value words in every column but the RSSI one
-    (:data:`RSSI_MISSING_TEXT` there); none for a table without an RSSI column."""
-    names = [str(c) for c in header]
-    try:
-        renamed = list(rename_columns(pd.DataFrame(columns=names), columns).columns)
-    except InputError:  # two columns of one name: refused when the table is read
-        return {}
-    rssi = {h for h, c in zip(names, renamed, strict=True) if c == "rssi_dbm"}
-    if not rssi:
-        return {}
-    return {"keep_default_na": False,
-            "na_values": {h: list(RSSI_MISSING_TEXT if h in rssi else _PANDAS_MISSING_TEXT) for h in names}}
-
-
 def _csv_options(path: Any, columns: Mapping[str, str] | None) -> dict[str, Any]:
     """:func:`csv_missing_values` of a CSV file, from its header line."""
     return csv_missing_values(pd.read_csv(path, nrows=0, skipinitialspace=True).columns, columns)
@@ -123,7 +67,10 @@ def _csv_options(path: Any, columns: Mapping[str, str] | None) -> dict[str, Any]
 
 def read_table_rows(path: str, source: str, columns: Mapping[str, str] | None = None) -> pd.DataFrame:
     """A CSV or Parquet table file's rows as read (times normalised, nothing checked), for the readers here and
-    for ``inspect``; a missing, empty or unreadable file is refused naming ``source``.
+    for ``inspect``; a missing, empty or unreadable file is refused naming ``source``. The lines of a CSV file
+    that repeat its header (a logger restarted appending, files joined with ``cat``) are dropped, counted in
+    ``attrs["repeated_header"]``; a header of other columns mid-file is refused naming its line
+    (:mod:`rplearn.io._csv_headers`).
 
     Parameters
     ----------
@@ -140,11 +87,16 @@ def read_table_rows(path: str, source: str, columns: Mapping[str, str] | None = 
     """
     if not os.path.exists(path):
         raise InputError(f"{source}: no such file")
+    parquet = str(path).lower().endswith(_PARQUET_EXT)
+    scan = HeaderScan() if parquet else scan_csv_headers(path, source)  # another header mid-file: refused
     try:
-        if str(path).lower().endswith(_PARQUET_EXT):
+        if parquet:
             return normalise_times(read_parquet_lean(path), source)
-        return normalise_times(pd.read_csv(path, skipinitialspace=True, dtype=CSV_DTYPES,
-                                           **_csv_options(path, columns)), source)
+        with csv_source(path, scan) as handle:
+            df = pd.read_csv(handle, skipinitialspace=True, dtype=CSV_DTYPES, **_csv_options(path, columns))
+        df = normalise_times(df, source)
+        df.attrs[REPEATED_HEADER] = scan.repeated  # lines dropped: said as the drop of that name
+        return df
     except pd.errors.EmptyDataError:
         raise LogFormatError(f"{source}: empty file, expected a header line and rows") from None
     except Exception as exc:  # parsers raise many classes on corrupt bytes
@@ -154,85 +106,6 @@ def read_table_rows(path: str, source: str, columns: Mapping[str, str] | None = 
 def table_format(path: str | os.PathLike) -> str:
     """``"parquet"`` or ``"csv"``: how :func:`read_pose_table` and friends read a table file."""
     return "parquet" if str(path).lower().endswith(_PARQUET_EXT) else "csv"
-
-
-def _float_column(df: pd.DataFrame, name: str) -> np.ndarray:
-    return pd.to_numeric(df[name], errors="coerce").to_numpy(np.float64, na_value=np.nan)
-
-
-def _level_if_yaw_only(df: pd.DataFrame) -> pd.DataFrame | None:
-    """The table with zero roll and pitch added when it gives a yaw but no roll, pitch or quaternion."""
-    if _has(df, ("qw", "qx", "qy", "qz")):
-        return None
-    for yaw, roll, pitch in (("yaw_deg", "roll_deg", "pitch_deg"), ("yaw_ned_deg", "roll_ned_deg", "pitch_ned_deg")):
-        if yaw in df.columns and roll not in df.columns and pitch not in df.columns:
-            return df.assign(**{roll: 0.0, pitch: 0.0})
-    return None
-
-
-def _has(df: pd.DataFrame, names: tuple[str, ...]) -> bool:
-    return all(n in df.columns for n in names)
-
-
-def _check_geodetic(lat: np.ndarray, lon: np.ndarray, source: str) -> None:
-    bad = np.flatnonzero((np.abs(lat) > 90) | (np.abs(lon) > 180))
-    if bad.size:
-        raise InputError(
-            f"{source}: field lat/lon out of range at row {int(bad[0])} "
-            f"(lat {float(lat[bad[0]])!r}, lon {float(lon[bad[0]])!r}); expected degrees"
-        )
-
-
-def _with_node(df: pd.DataFrame, node: str | None, source: str) -> pd.DataFrame:
-    """The table with a ``node`` column (``node`` for every row when it has none) and a ``t``."""
-    if "node" not in df.columns:
-        if node is None:
-            raise InputError(
-                f"{source}: missing column node; for a one-node log give its node id "
-                "(ReaderOptions.nodes={path: node}, or node= for one table)",
-                param="nodes",
-            )
-        df = df.assign(node=str(node))
-    if "t" not in df.columns:
-        raise InputError(f"{source}: missing column t; expected {', '.join(POSE_COLUMNS)}")
-    return df
-
-
-def _position_columns(df: pd.DataFrame, source: str) -> tuple[tuple[str, ...], str]:
-    """Position columns of a pose table and their kind, ``"enu"`` or ``"geodetic"``."""
-    if _has(df, ("x", "y", "z")):
-        return ("x", "y", "z"), "enu"
-    if _has(df, GEODETIC_COLUMNS):
-        return GEODETIC_COLUMNS, "geodetic"
-    raise InputError(f"{source}: missing position columns: expected x, y, z (ENU m) or lat, lon, alt")
-
-
-def _attitude_columns(df: pd.DataFrame, source: str) -> tuple[pd.DataFrame, tuple[str, ...], str, bool]:
-    """Attitude columns of a pose table and their kind; a yaw-only table gets zero roll and pitch.
-
-    Returns ``(table, columns, kind, level_assumed)`` with kind ``"quaternion"``,
-    ``"euler_enu_flu"`` or ``"euler_ned_frd"``.
-    """
-    enu = [c for c in EULER_ENU_FLU_COLUMNS if c in df.columns]
-    ned = [c for c in EULER_NED_FRD_COLUMNS if c in df.columns]
-    if enu and ned and not _has(df, ("qw", "qx", "qy", "qz")):
-        raise InputError(
-            f"{source}: attitude columns mix frames: {', '.join(enu)} (ENU/FLU) with {', '.join(ned)} (NED/FRD); "
-            "give one complete set, roll_deg, pitch_deg, yaw_deg or roll_ned_deg, pitch_ned_deg, yaw_ned_deg"
-        )
-    level = _level_if_yaw_only(df)
-    if level is not None:  # plans (rplearn.plan) give yaw only: level flight is meant
-        df = level
-    if _has(df, ("qw", "qx", "qy", "qz")):
-        return df, ("qw", "qx", "qy", "qz"), "quaternion", level is not None
-    if _has(df, EULER_ENU_FLU_COLUMNS):
-        return df, EULER_ENU_FLU_COLUMNS, "euler_enu_flu", level is not None
-    if _has(df, EULER_NED_FRD_COLUMNS):
-        return df, EULER_NED_FRD_COLUMNS, "euler_ned_frd", level is not None
-    raise InputError(
-        f"{source}: missing attitude columns: expected qw, qx, qy, qz or "
-        "roll_deg, pitch_deg, yaw_deg (ENU/FLU) or roll_ned_deg, pitch_ned_deg, yaw_ned_deg"
-    )
 
 
 def _enu_positions(
@@ -249,21 +122,11 @@ def _enu_positions(
     if position != "geodetic":
         return np.stack([values["x"], values["y"], values["z"]], axis=-1), None
     lat, lon, alt = values["lat"], values["lon"], values["alt"]
-    _check_geodetic(lat, lon, source)
     if origin_geodetic is None:
         i0 = int(np.argmin(values["t"]))
         origin_geodetic = (float(lat[i0]), float(lon[i0]), float(alt[i0]))
     origin = tuple(float(v) for v in origin_geodetic)
     return geodetic_to_enu(lat, lon, alt, origin_geodetic, source), origin  # type: ignore[return-value]
-
-
-def _quaternions(values: dict[str, np.ndarray], att_cols: tuple[str, ...], attitude: str) -> np.ndarray:
-    """Quaternions (w, x, y, z), body FLU -> world ENU, shape (n, 4), from any attitude variant."""
-    if attitude == "quaternion":
-        return np.stack([values[c] for c in att_cols], axis=-1)
-    if attitude == "euler_enu_flu":
-        return quat_wxyz_from_euler_enu_flu_deg(*(values[c] for c in att_cols))
-    return quat_wxyz_from_euler_ned_frd_deg(*(values[c] for c in att_cols))
 
 
 @check_types
@@ -295,15 +158,19 @@ def canonical_pose(
         ENU origin for geodetic tables; by default the log's first fix (earliest row).
     nan_policy : {"error", "drop"}
         Rows with a NaN or non-numeric pose value raise :class:`InputError` or are dropped
-        and counted in ``metadata["dropped"]["nan_pose"]``; so are rows with a coordinate
-        beyond 1e8 m (``implausible_pose``) and rows on the wrong side of a position jump no
+        and counted in ``metadata["dropped"]["nan_pose"]``; so are rows with a position
+        no place has (``implausible_pose``: an ENU coordinate beyond 1e8 m, a latitude, longitude
+        or altitude outside its plausible range, such as a 1e308 sentinel;
+        :data:`rplearn.io._pose_checks.POSITION_RANGES`) and rows on the wrong side of a position jump no
         plausible speed explains (``position_jump``: a sentinel such as ``z = -1000`` or
         ``x = y = z = 0`` before the fix; :func:`rplearn.io._pose_checks.position_jumps`), each dropped piece said in
         ``metadata["notes"]``. Whatever the policy, a row identical in every value to an
         earlier row of its node and time (a block written twice) is dropped as a copy
         (``duplicate_pose``, said in the notes); rows of one node and time with different
         values are refused, or with ``"drop"`` all dropped (``conflicting_pose``):
-        :func:`rplearn.io._pose_checks.repeated_poses`.
+        :func:`rplearn.io._pose_checks.repeated_poses`. The lines of a CSV file that repeat its
+        header (:func:`read_table_rows` drops them; ``df.attrs["repeated_header"]``) are counted
+        as ``repeated_header``.
     allow_unsorted : bool
         Accept times that go backwards within a node (the rows are sorted); by default
         they raise :class:`LogFormatError`.
@@ -329,11 +196,12 @@ def canonical_pose(
     except InputError as exc:
         raise InputError(f"{source}: {exc}") from None
     meta: dict[str, Any] = {"source": source, "dropped": {"nan_pose": 0, "implausible_pose": 0, "duplicate_pose": 0,
-                                                         "conflicting_pose": 0, "position_jump": 0},
+                                                         "conflicting_pose": 0, "position_jump": 0,
+                                                         REPEATED_HEADER: int(df.attrs.get(REPEATED_HEADER, 0))},
                             "origin_geodetic": None}
-    df = _with_node(df, node, source)
-    pos_cols, meta["position"] = _position_columns(df, source)
-    df, att_cols, meta["attitude"], level = _attitude_columns(df, source)
+    df = with_node(df, node, source)
+    pos_cols, meta["position"] = position_columns(df, source)
+    df, att_cols, meta["attitude"], level = attitude_columns(df, source)
     if level:
         meta["level_assumed"] = True
     rows = np.arange(len(df)) if ends is None else ends.part_rows(len(df))
@@ -380,7 +248,7 @@ def canonical_pose(
             t, nodes, xyz, rows = t[keep], nodes[keep], xyz[keep], rows[keep]
             values = {c: v[keep] for c, v in values.items()}
         ends.remember(nodes, values)
-    q = _quaternions(values, att_cols, meta["attitude"])
+    q = quaternions_wxyz(values, att_cols, meta["attitude"])
     out = pd.DataFrame({"t": t, "node": nodes, **dict(zip(("x", "y", "z"), xyz.T)),
                         **dict(zip(("qw", "qx", "qy", "qz"), q.T))})
     return validate_pose_log(out, source), meta
@@ -481,14 +349,30 @@ def read_signal_table(path: str, allow_unsorted: bool = False, **options: Any) -
     """Read a signal log from CSV or Parquet; options of :func:`canonical_signal`; times that go
     back within a link are refused (:func:`check_link_time_order`) unless ``allow_unsorted``.
 
-    Returns ``(signal, metadata)``.
+    Returns ``(signal, metadata)``; ``metadata["dropped"]["repeated_header"]``: the lines of a CSV
+    file that repeat its header, dropped (:func:`read_table_rows`).
     """
     source = str(path)
     df = read_table_rows(str(path), source, options.get("columns"))
     signal = canonical_signal(df, source=source, **options)
     if not allow_unsorted:
         check_link_time_order(signal, source)
-    return signal, {"source": source, "format": table_format(source), "rows": int(len(signal))}
+    meta = {"source": source, "format": table_format(source), "rows": int(len(signal))}
+    return signal, {**meta, "dropped": {REPEATED_HEADER: int(df.attrs.get(REPEATED_HEADER, 0))}}
+
+
+def _signal_chunks(batches: Iterator[pd.DataFrame], source: str, allow_unsorted: bool, repeated_headers: int,
+                   options: Mapping[str, Any]) -> Iterator[pd.DataFrame]:
+    """The canonical chunks of :func:`iter_signal_table`, their links' time order checked across them."""
+    state = LinkTimes()
+    first_row = 0
+    for chunk in batches:
+        out = canonical_signal(chunk, source=source, first_row=first_row, **options)
+        if not allow_unsorted:
+            check_link_time_order(out, source, first_row, state)
+        first_row += len(out)
+        out.attrs[REPEATED_HEADER] = repeated_headers
+        yield out
 
 
 @check_types
@@ -499,7 +383,10 @@ def iter_signal_table(
 
     Each chunk goes through :func:`canonical_signal` (options as there), and, unless
     ``allow_unsorted``, :func:`check_link_time_order` (across chunks). Memory stays bounded
-    by the chunk size: CSV through pandas' chunked reader, Parquet by record batches.
+    by the chunk size: CSV through pandas' chunked reader, Parquet by record batches. The lines
+    of a CSV file that repeat its header are dropped (another header is refused naming its line:
+    :mod:`rplearn.io._csv_headers`); every chunk's ``attrs["repeated_header"]`` says how many the
+    file holds.
     """
     source = str(path)
     if not os.path.exists(path):
@@ -514,20 +401,14 @@ def iter_signal_table(
             batches: Iterator[pd.DataFrame] = (
                 normalise_times(b.to_pandas(), source) for b in pf.iter_batches(batch_size=chunk_rows)
             )
+            yield from _signal_chunks(batches, source, allow_unsorted, 0, options)
         else:
-            batches = (
-                normalise_times(c, source)
-                for c in pd.read_csv(path, chunksize=chunk_rows, skipinitialspace=True, dtype=CSV_DTYPES,
-                                     **_csv_options(path, options.get("columns")))
-            )
-        state = LinkTimes()
-        first_row = 0
-        for chunk in batches:
-            out = canonical_signal(chunk, source=source, first_row=first_row, **options)
-            if not allow_unsorted:
-                check_link_time_order(out, source, first_row, state)
-            first_row += len(out)
-            yield out
+            scan = scan_csv_headers(path, source)
+            with csv_source(path, scan) as handle:
+                batches = (normalise_times(c, source)
+                           for c in pd.read_csv(handle, chunksize=chunk_rows, skipinitialspace=True, dtype=CSV_DTYPES,
+                                                **_csv_options(path, options.get("columns"))))
+                yield from _signal_chunks(batches, source, allow_unsorted, scan.repeated, options)
     except (InputError, LogFormatError):
         raise
     except Exception as exc:

@@ -24,6 +24,7 @@ from rplearn.data.sync import SyncOptions, SyncSummary, synchronise
 from rplearn.data.tables import MATCHED_COLUMNS, SIGNAL_COLUMNS
 from rplearn.errors import InputError
 from rplearn.io import ReaderOptions, read_logs
+from rplearn.io._csv_headers import REPEATED_HEADER, REPEATED_HEADER_LINES, csv_source, scan_csv_headers
 from rplearn.io.files import check_output_kind, check_output_path, check_table_path, write_json, write_table, write_table_chunks
 from rplearn.io.inspect import file_damage
 from rplearn.io.resolve import check_outputs, distinct_inputs
@@ -39,7 +40,8 @@ def reader_notes(metadata: Mapping[str, Any]) -> list[str]:
     for f in metadata.get("files", []):
         source = f.get("source", "log")
         rows = "frame(s)" if f.get("kind") == "signal" else "pose row(s)"  # a capture's drops are frames
-        notes += [f"{source}: dropped {n:,} {rows} ({why})" for why, n in (f.get("dropped") or {}).items() if n]
+        notes += [f"{source}: dropped {n:,} {REPEATED_HEADER_LINES if why == REPEATED_HEADER else rows} ({why})"
+                  for why, n in (f.get("dropped") or {}).items() if n]
         if f.get("level_assumed"):
             notes.append(f"{source}: yaw only, so level flight (roll = pitch = 0) is assumed")
         notes += file_damage(source, f)
@@ -210,16 +212,18 @@ def _numeric_columns(path: str, names: list[str], columns: list[str]) -> dict[st
                 for c in names}
     renamed = dict(zip(columns, pd.read_csv(path, nrows=0, skipinitialspace=True).columns))
     numeric = {c: True for c in names}
-    for chunk in pd.read_csv(path, usecols=[renamed[c] for c in names], dtype=str, chunksize=SYNC_CHUNK_ROWS,
-                             skipinitialspace=True):
-        for c in names:
-            col = chunk[renamed[c]]
-            numeric[c] = numeric[c] and bool(pd.to_numeric(col, errors="coerce").notna().sum() == col.notna().sum())
+    with csv_source(path, scan_csv_headers(path, path)) as handle:  # without the header lines repeated mid-file
+        for chunk in pd.read_csv(handle, usecols=[renamed[c] for c in names], dtype=str, chunksize=SYNC_CHUNK_ROWS,
+                                 skipinitialspace=True):
+            for c in names:
+                col = chunk[renamed[c]]
+                numeric[c] = numeric[c] and bool(pd.to_numeric(col, errors="coerce").notna().sum() == col.notna().sum())
     return numeric
 
 
-def _signal_chunks(signal_paths: Sequence[str], options: ReaderOptions) -> Iterator[pd.DataFrame]:
-    """Every signal table's rows, chunk by chunk, file after file, all with the same columns."""
+def _signal_chunks(signal_paths: Sequence[str], options: ReaderOptions, files: list[dict[str, Any]]) -> Iterator[pd.DataFrame]:
+    """Every signal table's rows, chunk by chunk, file after file, all with the same columns; what each file's
+    reading dropped is added to ``files`` (as :func:`read_logs` metadata says it)."""
     from rplearn.io.tables import iter_signal_table
 
     extras = _extra_columns(signal_paths, options)
@@ -231,6 +235,9 @@ def _signal_chunks(signal_paths: Sequence[str], options: ReaderOptions) -> Itera
             frequency_hz=options.frequency_hz, rx=(options.receivers or {}).get(path),
             allow_unsorted=options.allow_unsorted,
         ):
+            if first_row == 0:
+                files.append({"source": str(path), "kind": "signal",
+                              "dropped": {REPEATED_HEADER: int(chunk.attrs.get(REPEATED_HEADER, 0))}})
             out = conform_chunk(chunk, extras)
             out.attrs.update(source=str(path), first_row=first_row)  # messages name the file and its row
             first_row += len(chunk)
@@ -311,16 +318,17 @@ def sync_logs(
     source = ", ".join(signal_paths)
     if _streamable(signal_paths, reader_options):
         summary = SyncSummary()
+        read: list[dict[str, Any]] = []
 
         def frames() -> Iterator[pd.DataFrame]:
-            for res in synchronise_stream(poses, _signal_chunks(signal_paths, reader_options),
+            for res in synchronise_stream(poses, _signal_chunks(signal_paths, reader_options, read),
                                           sync_options, source=source):
                 summary.merge(res.summary)
                 yield res.dataset
 
         write_table_chunks(frames(), output, MATCHED_COLUMNS)
         summary.notes += fixed_node_advice(summary.fixed_nodes, pose_meta, reader_options)
-        return SyncOutcome(summary, output, reader_notes(pose_meta), streamed=True, clock=clock)
+        return SyncOutcome(summary, output, _both_notes(pose_meta, {"files": read}), streamed=True, clock=clock)
     signal, signal_meta = _signal_log(signal_paths, pose_paths, pose_logs.signal, pose_meta, reader_options)
     if signal is None:
         raise InputError(f"{', '.join(signal_paths)}: no signal log found", param="signal_paths")

@@ -1,0 +1,99 @@
+"""Benchmark of the header scan of CSV logs (rplearn.io._csv_headers).
+
+Every CSV log is scanned for its header line repeated mid-file (a logger restarted appending, files joined with
+``cat``) before it is read. A signal CSV of about ``--mb`` MB (default 75; the smoke flight's packets repeated) is
+written, and three things are timed alternately (best of ``--repeats``):
+
+1. the scan alone (``scan_csv_headers``) on the clean file;
+2. the reference: ``pandas.read_csv`` of the same file (what reading it costs anyway);
+3. ``read_signal_table`` of the file with its header repeated mid-file (dropped through the skipping reader) and of
+   the clean file.
+
+Printed: the scan's seconds (target: well under 1 s for 75 MB) and its ratio to the reference; the two reads agree
+row for row (exit 1 if not).
+
+Usage: ``python benchmarks/csv_headers.py [--mb 75] [--repeats 5]`` (``--tiny``: 1 MB, 2 repeats).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import tempfile
+import time
+
+import numpy as np
+import pandas as pd
+
+
+def write_signal_csv(path: str, megabytes: float) -> int:
+    """A signal CSV of about ``megabytes`` MB (the smoke flight's packets, shifted in time, repeated); its rows."""
+    from rplearn.io.files import write_table
+    from rplearn.sim import simulate
+
+    sig = simulate("smoke", seed=0).signal_log
+    span_s = float(sig["t"].max()) + 1.0
+    one = len(sig.to_csv(index=False).encode()) - len(",".join(sig.columns)) - 1
+    copies = max(1, int(np.ceil(megabytes * 1e6 / one)))
+    table = pd.concat([sig.assign(t=sig["t"] + k * span_s) for k in range(copies)], ignore_index=True)
+    write_table(table, path)
+    return len(table)
+
+
+def with_header_again(path: str, out: str) -> None:
+    """``path`` with its header line written again at its middle line."""
+    with open(path, "rb") as fh:
+        lines = fh.read().split(b"\n")
+    mid = len(lines) // 2
+    with open(out, "wb") as fh:
+        fh.write(b"\n".join([*lines[:mid], lines[0], *lines[mid:]]))
+
+
+def _best(func, repeats: int) -> float:
+    return min(_once(func) for _ in range(repeats))
+
+
+def _once(func) -> float:
+    t0 = time.perf_counter()
+    func()
+    return time.perf_counter() - t0
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--mb", type=float, default=75.0)
+    ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--tiny", action="store_true", help="1 MB, 2 repeats (seconds)")
+    args = ap.parse_args()
+    if args.tiny:
+        args.mb, args.repeats = 1.0, 2
+    from rplearn.io._csv_headers import scan_csv_headers
+    from rplearn.io.tables import read_signal_table
+
+    with tempfile.TemporaryDirectory() as d:
+        clean, again = os.path.join(d, "signal.csv"), os.path.join(d, "again.csv")
+        rows = write_signal_csv(clean, args.mb)
+        with_header_again(clean, again)
+        scan = ref = read_clean = read_again = np.inf
+        for _ in range(args.repeats):  # alternately: the machine's speed drifts within a minute
+            scan = min(scan, _once(lambda: scan_csv_headers(clean, clean)))
+            ref = min(ref, _once(lambda: pd.read_csv(clean)))
+            read_clean = min(read_clean, _once(lambda: read_signal_table(clean)))
+            read_again = min(read_again, _once(lambda: read_signal_table(again)))
+        a, meta = read_signal_table(again)
+        b, _ = read_signal_table(clean)
+        agree = a.equals(b) and meta["dropped"]["repeated_header"] == 1
+        size_mb = os.path.getsize(clean) / 1e6
+    print(f"signal CSV: {size_mb:.1f} MB, {rows:,} rows")
+    print(f"header scan: {scan:.3f} s (best of {args.repeats}); reference pandas.read_csv of the file: {ref:.3f} s; "
+          f"ratio scan / reference = {scan / ref:.2f}x")
+    print(f"read_signal_table: clean {read_clean:.3f} s, header repeated mid-file {read_again:.3f} s "
+          f"(ratio {read_again / read_clean:.2f}x); the same rows, the header counted once: {agree}")
+    if not args.tiny:
+        print(f"target: scan well under 1 s for 75 MB: {'met' if scan * 75.0 / size_mb < 0.5 else 'NOT met'}")
+    if not agree:
+        raise SystemExit(1)
+
+
+if __name__ == "__main__":
+    main()

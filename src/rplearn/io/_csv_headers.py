@@ -1,0 +1,219 @@
+"""Header lines inside a CSV log: a logger restarted appending to its file, or two files joined with ``cat``, write
+the header again mid-file. A line that repeats the file's own header (the same column names in the same order; its
+line end, a UTF-8 byte-order mark and the spaces and quotes about a name aside) is dropped and counted
+(``repeated_header``), the rows after it read; another header-like line (its first field a column name, none of its
+fields a number: a logger restarted with other columns) is refused naming the file and the line. Shared by the
+whole-file readers (:mod:`rplearn.io.tables`) and the tail of a CSV being appended to
+(:class:`rplearn.io.live_sources.CsvTail`).
+
+Finding them is one regular-expression search for a line that begins with a column name (C speed, no Python loop
+over the lines); only the lines it finds are looked at. A file is scanned in blocks of :data:`SCAN_BYTES`, so its
+memory stays bounded, and read back without the lines dropped through :class:`SkippingReader`.
+"""
+
+from __future__ import annotations
+
+import io
+import os
+import re
+from collections import deque
+from collections.abc import Iterable, Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
+from typing import Any, BinaryIO
+
+from rplearn.data.tables import POSE_COLUMNS, SIGNAL_COLUMNS
+from rplearn.errors import LogFormatError
+from rplearn.io._columns import COLUMN_ALIASES, EULER_ENU_FLU_COLUMNS, EULER_NED_FRD_COLUMNS, GEODETIC_COLUMNS
+
+#: The drop reason of a header line repeated mid-file.
+REPEATED_HEADER = "repeated_header"
+#: What the lines dropped as :data:`REPEATED_HEADER` are called when their count is said.
+REPEATED_HEADER_LINES = "header line(s) repeated mid-file"
+#: Bytes of a file scanned at a time.
+SCAN_BYTES = 1 << 24
+#: Column names a header-like line may begin with besides the file's own: the canonical ones and their aliases.
+KNOWN_NAMES: frozenset[str] = frozenset(
+    (*POSE_COLUMNS, *SIGNAL_COLUMNS, *GEODETIC_COLUMNS, *EULER_ENU_FLU_COLUMNS, *EULER_NED_FRD_COLUMNS, "unit", "outage",
+     "armed", *COLUMN_ALIASES, *COLUMN_ALIASES.values()))
+_BOM = b"\xef\xbb\xbf"
+
+
+def _field(cell: bytes) -> bytes:
+    """A CSV cell without the spaces and quotes around it."""
+    return cell.strip().strip(b'"').strip()
+
+
+def _is_number(cell: bytes) -> bool:
+    try:
+        float(cell)
+    except ValueError:
+        return False
+    return True
+
+
+def _is_text(line: bytes) -> bool:
+    """Whether a file's first line is text (UTF-8 without NUL bytes), as a CSV header is."""
+    try:
+        line.decode()
+    except UnicodeDecodeError:
+        return False
+    return b"\0" not in line
+
+
+def bare_header(line: bytes) -> bytes:
+    """A header line without its line end and byte-order mark: what a repeated header is compared by."""
+    return line.rstrip(b"\r\n").removeprefix(_BOM)
+
+
+@dataclass(frozen=True)
+class HeaderRule:
+    """How the lines of one file are told apart: ``header`` (:func:`bare_header` of its first line), the search for
+    a line that begins with a column name (the file's own or :data:`KNOWN_NAMES`) and the header's names."""
+
+    header: bytes
+    pattern: re.Pattern[bytes]
+    #: The header's column names (spaces and quotes about them aside): a line of the same names repeats it.
+    fields: tuple[bytes, ...]
+
+    @classmethod
+    def of(cls, first_line: bytes) -> HeaderRule:
+        header = bare_header(first_line)
+        fields = tuple(_field(c) for c in header.split(b","))
+        names = set(fields) | {n.encode() for n in KNOWN_NAMES}
+        names.discard(b"")
+        alternatives = b"|".join(re.escape(n) for n in sorted(names, key=len, reverse=True))
+        starts = re.escape(bytes(sorted({n[0] for n in names} | {_BOM[0], ord(" "), ord("\t"), ord('"')})))
+        # the look-ahead turns a line away at its first byte (a number, most lines) before the names are tried
+        return cls(header, re.compile(rb"\n(?=[" + starts + rb"])(?:" + _BOM + rb')?[ \t]*"?(?:' + alternatives
+                                      + rb')"?[ \t]*(?=[,\r\n]|\Z)'), fields)
+
+    def lines(self, region: bytes) -> Iterator[tuple[int, int, bool]]:
+        """The header-like lines of ``region`` (complete lines, each after a newline: it begins with one):
+        ``(start, end, repeated)``, ``start`` the index of the line's first byte, ``end`` that of its newline (or
+        the region's end), ``repeated`` whether it repeats the header."""
+        for m in self.pattern.finditer(region):
+            start = m.start() + 1
+            end = region.find(b"\n", start)
+            end = len(region) if end < 0 else end
+            fields = tuple(_field(c) for c in bare_header(region[start:end]).split(b","))
+            if fields == self.fields:
+                yield start, end, True
+            elif not any(_is_number(c) for c in fields):
+                yield start, end, False
+
+    def refusal(self, source: str, line_number: int, line: bytes, advice: str) -> LogFormatError:
+        """The one-line error of another header at ``line_number`` (1-based) of ``source``."""
+        text = bare_header(line).decode(errors="replace")[:80]
+        return LogFormatError(f"{source}: line {line_number}: another header in the file ({text!r}; the first: "
+                              f"{self.header.decode(errors='replace')[:80]!r}): a logger restarted with other "
+                              f"columns; {advice}")
+
+
+def without_repeated_headers(data: bytes, rule: HeaderRule, first_line: int, source: str,
+                             advice: str) -> tuple[bytes, int]:
+    """``data`` (complete lines, the first numbered ``first_line``, from a line start) without the lines that repeat
+    the header, and how many there were; another header-like line is refused (:meth:`HeaderRule.refusal`)."""
+    region = b"\n" + data
+    kept, at, dropped = [], 1, 0
+    for start, end, repeated in rule.lines(region):
+        if not repeated:
+            raise rule.refusal(source, first_line + region.count(b"\n", 1, start), region[start:end], advice)
+        kept.append(region[at:start])
+        at, dropped = end + 1, dropped + 1
+    if not dropped:
+        return data, 0
+    kept.append(region[at:])
+    return b"".join(kept), dropped
+
+
+@dataclass(frozen=True)
+class HeaderScan:
+    """What :func:`scan_csv_headers` found in a file: the byte ranges ``[start, end)`` of the lines repeating its
+    header (with their line ends), in file order."""
+
+    spans: tuple[tuple[int, int], ...] = ()
+
+    @property
+    def repeated(self) -> int:
+        """Lines repeating the header (dropped)."""
+        return len(self.spans)
+
+
+#: Why a file with another header mid-file is refused, and what to do (the whole-file readers).
+FILE_ADVICE = "split the file there and give each part as a log of its own"
+
+
+def scan_csv_headers(path: str, source: str, advice: str = FILE_ADVICE) -> HeaderScan:
+    """The lines of a CSV file that repeat its header; another header-like line is refused naming ``source`` and
+    the line. Reads the file in blocks of :data:`SCAN_BYTES`."""
+    spans: list[tuple[int, int]] = []
+    with open(path, "rb") as fh:
+        first = fh.readline(SCAN_BYTES)
+        if not first.endswith(b"\n") or not _is_text(first):  # one line, or no text: the parser says what it is
+            return HeaderScan()
+        rule = HeaderRule.of(first)
+        carry, base, line = b"\n", len(first) - 1, 2  # a region begins with the newline before line `line`, at `base`
+        while True:
+            block = fh.read(SCAN_BYTES)
+            region = carry + block
+            cut = region.rfind(b"\n") if block else len(region)  # complete lines only, but at the file's end
+            if cut == 0:  # no line end in the block: the line goes on
+                carry = region
+                continue
+            body = region[:cut]
+            for start, end, repeated in rule.lines(body):
+                if not repeated:
+                    raise rule.refusal(source, line - 1 + body.count(b"\n", 0, start), body[start:end], advice)
+                spans.append((base + start, base + min(end + 1, len(region))))  # with its line end
+            if not block:
+                break
+            line += body.count(b"\n")
+            base += cut
+            carry = region[cut:]
+    return HeaderScan(tuple(spans))
+
+
+class SkippingReader(io.RawIOBase):
+    """A binary file read without the byte ranges ``spans`` (sorted, disjoint ``(start, end)``)."""
+
+    def __init__(self, fh: io.BufferedReader, spans: Iterable[tuple[int, int]]) -> None:
+        super().__init__()
+        self._fh, self._spans, self._at = fh, deque(spans), 0
+
+    def readable(self) -> bool:
+        return True
+
+    def readinto(self, buffer: Any) -> int:
+        while self._spans and self._at >= self._spans[0][0]:
+            self._at = max(self._at, self._spans.popleft()[1])
+            self._fh.seek(self._at)
+        view = memoryview(buffer).cast("B")
+        limit = len(view) if not self._spans else min(len(view), self._spans[0][0] - self._at)
+        n = self._fh.readinto(view[:limit]) or 0
+        self._at += n
+        return n
+
+    def close(self) -> None:
+        self._fh.close()
+        super().close()
+
+
+@contextmanager
+def csv_source(path: str, scan: HeaderScan) -> Iterator[str | BinaryIO]:
+    """What :func:`pandas.read_csv` reads for a scanned file: its path, or, with header lines to drop, the file
+    without them (a buffered :class:`SkippingReader`, closed on leaving)."""
+    if not scan.spans:
+        yield path
+        return
+    with io.BufferedReader(SkippingReader(open(path, "rb"), scan.spans), buffer_size=1 << 20) as reader:  # noqa: SIM115
+        yield reader
+
+
+def is_csv_file(path: str | os.PathLike[str]) -> bool:
+    """Whether a table file is read as CSV (not Parquet, by its extension)."""
+    return not str(path).lower().endswith((".parquet", ".pq"))
+
+
+__all__ = ["FILE_ADVICE", "KNOWN_NAMES", "REPEATED_HEADER", "REPEATED_HEADER_LINES", "SCAN_BYTES", "HeaderRule", "HeaderScan", "SkippingReader",
+           "bare_header", "csv_source", "is_csv_file", "scan_csv_headers", "without_repeated_headers"]

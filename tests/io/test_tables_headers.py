@@ -1,0 +1,142 @@
+"""CSV logs whose header line comes again mid-file (a logger restarted appending to its file, two files joined with
+``cat``): the line repeating the file's own header is dropped and counted (``repeated_header``) and the rows after it
+read, by ``read_logs``, ``sync`` (its signal tables streamed) and ``inspect`` alike; a header of other columns mid-file
+is refused naming the file and the line."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from rplearn.errors import LogFormatError
+from rplearn.io import read_logs
+from rplearn.io.inspect import inspect_logs
+from rplearn.io.inspect_json import inspect_to_dict
+from rplearn.io.tables import iter_signal_table, read_pose_table, read_signal_table
+from rplearn.workflows.logs import sync_logs
+
+
+@pytest.fixture(scope="module")
+def flight(tmp_path_factory) -> tuple[Path, Path]:
+    """The smoke preset's flight written as CSV by the simulator's writers (``pose_log.csv``, ``signal_log.csv``)."""
+    from rplearn.sim import simulate
+
+    out = tmp_path_factory.mktemp("smoke")
+    paths = simulate("smoke", seed=0, out_dir=str(out), log_format="csv").paths
+    return Path(paths["pose_log"]), Path(paths["signal_log"])
+
+
+def _lines(path: Path) -> list[str]:
+    return path.read_text().splitlines(keepends=True)
+
+
+def _with_lines(path: Path, out: Path, inserts: dict[int, str]) -> Path:
+    """``path`` written to ``out`` with ``inserts[k]`` put before its line ``k`` (0-based)."""
+    lines = _lines(path)
+    for at in sorted(inserts, reverse=True):
+        lines[at:at] = [inserts[at]]
+    out.write_text("".join(lines))
+    return out
+
+
+def _header_again(path: Path, out: Path, *at: int) -> Path:
+    return _with_lines(path, out, {k: _lines(path)[0] for k in at})
+
+
+def test_read_logs_drops_and_counts_the_header_repeated(flight, tmp_path):
+    pose, signal = flight
+    clean, _ = read_logs([str(pose), str(signal)])
+    logs, meta = read_logs([str(_header_again(pose, tmp_path / "pose.csv", 500)),
+                            str(_header_again(signal, tmp_path / "signal.csv", 700, 1500))])
+    pd.testing.assert_frame_equal(logs.pose, clean.pose)
+    pd.testing.assert_frame_equal(logs.signal, clean.signal)
+    assert [f["dropped"]["repeated_header"] for f in meta["files"]] == [1, 2]
+
+
+def test_sync_matches_the_same_samples_as_the_clean_file(flight, tmp_path):
+    """The signal table is streamed in chunks; the pose table read whole: both say what they dropped."""
+    pose, signal = flight
+    clean = sync_logs([str(pose)], [str(signal)], str(tmp_path / "clean.parquet"))
+    p = _header_again(pose, tmp_path / "pose.csv", 3000)
+    s = _header_again(signal, tmp_path / "signal.csv", 900)
+    out = sync_logs([str(p)], [str(s)], str(tmp_path / "rep.parquet"))
+    assert out.streamed and out.counts.n_out == clean.counts.n_out > 2000
+    assert out.counts.n_in == clean.counts.n_in and out.counts.dropped == clean.counts.dropped
+    assert f"{p}: dropped 1 header line(s) repeated mid-file (repeated_header)" in out.notes
+    assert f"{s}: dropped 1 header line(s) repeated mid-file (repeated_header)" in out.notes
+    pd.testing.assert_frame_equal(pd.read_parquet(tmp_path / "rep.parquet"), pd.read_parquet(tmp_path / "clean.parquet"))
+
+
+def test_inspect_says_the_repeated_header_and_finds_nothing_else(flight, tmp_path):
+    pose, signal = flight
+    clean = inspect_logs([str(pose), str(signal)])
+    report = inspect_logs([str(_header_again(pose, tmp_path / "pose.csv", 10)),
+                           str(_header_again(signal, tmp_path / "signal.csv", 20))])
+    assert report.problems == clean.problems
+    assert [n.rows for n in report.nodes] == [n.rows for n in clean.nodes]
+    assert [lk.samples for lk in report.links] == [lk.samples for lk in clean.links]
+    files = inspect_to_dict(report)["files"]
+    assert files[0]["dropped"] == {"repeated_header": 1}
+    assert files[1]["signal_dropped"] == {"repeated_header": 1}
+    assert "dropped on reading: 1 header line(s) repeated mid-file (repeated_header)" in files[1]["findings"]
+
+
+def test_a_header_of_other_columns_mid_file_is_refused_naming_file_and_line(flight, tmp_path):
+    pose, signal = flight
+    other = ",".join(reversed(_lines(signal)[0].strip().split(","))) + "\n"
+    s = _with_lines(signal, tmp_path / "signal.csv", {40: other})
+    with pytest.raises(LogFormatError, match=rf"^{s}: line 41: another header in the file \('unit,frequency_hz"):
+        read_logs([str(pose), str(s)])
+    with pytest.raises(LogFormatError, match=rf"^{s}: line 41: another header"):
+        sync_logs([str(pose)], [str(s)], str(tmp_path / "out.parquet"))
+    assert not (tmp_path / "out.parquet").exists()
+    p = _with_lines(pose, tmp_path / "pose.csv", {7: "t,node,lat,lon,alt,qw,qx,qy,qz\n"})
+    report = inspect_logs([str(p), str(signal)])
+    assert any(f"{p}: unreadable: {p}: line 8: another header" in line for line in report.problems)
+
+
+def test_a_row_whose_first_field_is_a_column_name_is_a_row(flight, tmp_path):
+    """A node named like a column (``x``) in a table whose first column is the node: its rows hold numbers."""
+    pose, _ = flight
+    table = pd.read_csv(pose)
+    table["node"] = table["node"].replace({"A": "x"})
+    path = tmp_path / "nodes_first.csv"
+    table[["node", *[c for c in table.columns if c != "node"]]].to_csv(path, index=False)
+    read, meta = read_pose_table(str(_header_again(path, tmp_path / "again.csv", 100)))
+    assert sorted(read["node"].unique()) == ["B", "x"] and len(read) == len(table)
+    assert meta["dropped"]["repeated_header"] == 1
+
+
+def test_chunks_and_scan_blocks_do_not_change_what_is_read(flight, tmp_path, monkeypatch):
+    """Headers at a chunk's first row and at the end of the file without its newline, CRLF line ends; the scan read
+    in blocks of 100 bytes, so that lines are cut at every place."""
+    from rplearn.io import _csv_headers
+
+    _, signal = flight
+    crlf = tmp_path / "crlf.csv"
+    crlf.write_bytes(signal.read_bytes().replace(b"\n", b"\r\n"))
+    header = _lines(crlf)[0]
+    path = _with_lines(crlf, tmp_path / "again.csv", {101: header, 250: header, len(_lines(crlf)): header.rstrip()})
+    whole, meta = read_signal_table(str(signal))
+    monkeypatch.setattr(_csv_headers, "SCAN_BYTES", 100)
+    chunks = list(iter_signal_table(str(path), chunk_rows=100))
+    assert [c.attrs["repeated_header"] for c in chunks] == [3] * len(chunks)
+    pd.testing.assert_frame_equal(pd.concat(chunks, ignore_index=True), whole)
+    again, meta = read_signal_table(str(path))
+    pd.testing.assert_frame_equal(again, whole)
+    assert meta["dropped"] == {"repeated_header": 3}
+
+
+def test_a_header_from_a_file_joined_with_cat_is_the_same_header(flight, tmp_path):
+    """A second file's header with its byte-order mark, or its names quoted and spaced, names the same columns."""
+    _, signal = flight
+    names = _lines(signal)[0].strip().split(",")
+    bom = "\ufeff" + _lines(signal)[0]
+    quoted = ", ".join(f'"{n}"' for n in names) + "\n"
+    path = _with_lines(signal, tmp_path / "joined.csv", {300: bom, 600: quoted})
+    whole, _ = read_signal_table(str(signal))
+    again, meta = read_signal_table(str(path))
+    pd.testing.assert_frame_equal(again, whole)
+    assert meta["dropped"] == {"repeated_header": 2}
