@@ -715,7 +715,8 @@ def _subset(samples: Any, m: np.ndarray) -> Any:
 
     return replace(samples, directions=type(d)(d.az_tx[m], d.el_tx[m], d.az_rx[m], d.el_rx[m]), tx_index=samples.tx_index[m],
                    rx_index=samples.rx_index[m], joint_gain_db=samples.joint_gain_db[m], distance_m=samples.distance_m[m],
-                   frequency_hz=cut(samples.frequency_hz), tx_z_m=cut(samples.tx_z_m), rx_z_m=cut(samples.rx_z_m))
+                   frequency_hz=cut(samples.frequency_hz), tx_z_m=cut(samples.tx_z_m), rx_z_m=cut(samples.rx_z_m),
+                   t_s=cut(samples.t_s))
 
 
 class LiveRanker:
