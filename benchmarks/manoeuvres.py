@@ -47,9 +47,9 @@ matter, for a user plans before this flight's reference exists (:func:`_planning
 | ``--hyper`` | noise, prior (smoothing), drifting error | stands for |
 | --- | --- | --- |
 | ``reference`` (default) | the fit of this flight's reference, its blocks | an oracle: this flight's own figures |
-| ``previous`` | the model file of ``fit --order auto`` of an earlier flight of the same antennas (the reference's units, seed :data:`PREVIOUS_SEED`), read by ``trajectory --optimize --from-model``'s code | a user with an earlier fit |
+| ``previous`` | ``--from-model``: an earlier flight's fit (the reference's units, seed :data:`PREVIOUS_SEED`) | a user with an earlier fit |
 | ``cli`` | ``trajectory --optimize``'s defaults: 4.2 dB, a 6-dB smoothness prior, no drift | a user with no fit at all |
-| ``flags`` | ``previous``'s noise and drift, the CLI's 6-dB smoothness prior (``--from-model`` with ``--prior-std 6``) | a user overriding the fit's smoothing |
+| ``flags`` | ``previous``'s noise and drift, the CLI's 6-dB prior (``--from-model --prior-std 6``) | a user overriding its smoothing |
 
 Under each the planners keep the benchmark's target directions, candidates, packet rate (the
 radio's, as ``--packet-rate`` gives it) and, with ``--tilt``, the tilt: what the user wants to
@@ -61,7 +61,7 @@ the drifting error. Measured (seeds 0-4, one draw, one thread; ``docs/guides/cal
 0.53-0.63x (``previous``), 0.50-0.57x (``flags``), 0.94-1.03x and once short of 2 dB (``cli``: the
 paper's own unit first); on ``ground`` seeds 0 and 2 every plan but ``reference``'s ends short of
 2 dB (2.02-2.75 dB: the earlier flight's fit was less noisy than theirs). ``--planners optimized``
-flies the optimized plan alone (no suggested flight: a third of the time).
+flies the optimized plan alone (no suggested flight).
 
 **What the error check can and cannot tell** (``--budget``: each flight's samples split into the
 truth at the logged directions, the pointing part and the rest, each fitted alone; seeds 0-2): at a flight's 2-dB point its worst
