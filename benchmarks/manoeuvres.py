@@ -628,8 +628,8 @@ import pandas as pd
 os.environ.setdefault("RPLEARN_THREADS", "1")
 
 from rplearn.analysis.manoeuvre_bound import design_bound
-from rplearn.analysis.manoeuvre_prior import NOMINAL_PRIOR_STD_DB
 from rplearn.analysis.manoeuvre_cells import DirectionCells
+from rplearn.analysis.manoeuvre_prior import NOMINAL_PRIOR_STD_DB
 from rplearn.analysis.manoeuvres import (
     ManoeuvreOptions,
     correlated_error_std_db,
