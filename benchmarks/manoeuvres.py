@@ -47,9 +47,9 @@ matter, for a user plans before this flight's reference exists (:func:`_planning
 | ``--hyper`` | noise, prior (smoothing), drifting error | stands for |
 | --- | --- | --- |
 | ``reference`` (default) | the fit of this flight's reference, its blocks | an oracle: this flight's own figures |
-| ``previous`` | the fit of an earlier flight of the same antennas (the reference's units, seed :data:`PREVIOUS_SEED`) | a user with an earlier fit |
+| ``previous`` | ``--from-model``: an earlier flight's fit (the reference's units, seed :data:`PREVIOUS_SEED`) | a user with an earlier fit |
 | ``cli`` | ``trajectory --optimize``'s defaults: 4.2 dB, a 6-dB smoothness prior, no drift | a user with no fit at all |
-| ``flags`` | ``previous``'s noise and drift, the CLI's 6-dB smoothness prior | a user passing them as ``--noise``, ``--drift`` |
+| ``flags`` | ``previous``'s noise and drift, the CLI's 6-dB prior (``--from-model --prior-std 6``) | a user overriding its smoothing |
 
 Under each the planners keep the benchmark's target directions, candidates, packet rate (the
 radio's, as ``--packet-rate`` gives it) and, with ``--tilt``, the tilt: what the user wants to
@@ -58,9 +58,10 @@ own refits whatever ``--hyper`` says, and ``--bound`` is computed under the yard
 With ``--prior-std DB`` the prior is stated, and ``previous`` differs from ``reference`` only in
 the drifting error. Measured (seeds 0-4, one draw, one thread; ``docs/guides/calibration-plan.md``,
 "What it buys"): the optimized plan's time ratio on ``paper`` 0.53-0.62x (``reference``),
-0.47-0.57x (``previous``), 0.65-0.70x (``flags``), 0.94-1.03x and once short of 2 dB (``cli``: the
+0.53-0.63x (``previous``), 0.50-0.57x (``flags``), 0.94-1.03x and once short of 2 dB (``cli``: the
 paper's own unit first); on ``ground`` seeds 0 and 2 every plan but ``reference``'s ends short of
-2 dB (2.06-2.75 dB: the earlier flight's fit was less noisy than theirs).
+2 dB (2.02-2.75 dB: the earlier flight's fit was less noisy than theirs). ``--planners optimized``
+flies the optimized plan alone (no suggested flight).
 
 **What the error check can and cannot tell** (``--budget``: each flight's samples split into the
 truth at the logged directions, the pointing part and the rest, each fitted alone; seeds 0-2): at a flight's 2-dB point its worst
@@ -614,6 +615,7 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+import tempfile
 import time
 from dataclasses import dataclass, field, replace
 from typing import Any
@@ -627,6 +629,7 @@ os.environ.setdefault("RPLEARN_THREADS", "1")
 
 from rplearn.analysis.manoeuvre_bound import design_bound
 from rplearn.analysis.manoeuvre_cells import DirectionCells
+from rplearn.analysis.manoeuvre_prior import NOMINAL_PRIOR_STD_DB
 from rplearn.analysis.manoeuvres import (
     ManoeuvreOptions,
     correlated_error_std_db,
@@ -656,7 +659,7 @@ from rplearn.plan.campaign import Campaign
 from rplearn.plan.manoeuvres import CandidateOptions
 from rplearn.sim import simulate
 from rplearn.sim.presets import make_preset
-from rplearn.workflows.calibration_plan import OptimizeOptions
+from rplearn.workflows.calibration_plan import DEFAULT_NOISE_STD_DB, options_from_model
 from rplearn.workflows.live import LiveOptions
 from rplearn.workflows.live_advice import ranking_options
 
@@ -715,7 +718,8 @@ def _subset(samples: Any, m: np.ndarray) -> Any:
 
     return replace(samples, directions=type(d)(d.az_tx[m], d.el_tx[m], d.az_rx[m], d.el_rx[m]), tx_index=samples.tx_index[m],
                    rx_index=samples.rx_index[m], joint_gain_db=samples.joint_gain_db[m], distance_m=samples.distance_m[m],
-                   frequency_hz=cut(samples.frequency_hz), tx_z_m=cut(samples.tx_z_m), rx_z_m=cut(samples.rx_z_m))
+                   frequency_hz=cut(samples.frequency_hz), tx_z_m=cut(samples.tx_z_m), rx_z_m=cut(samples.rx_z_m),
+                   t_s=cut(samples.t_s))
 
 
 class LiveRanker:
@@ -1004,30 +1008,49 @@ def _planning_options(setup: Setup, hyper: str, stated: ManoeuvreOptions, learni
     """The options the planners (the suggested flight's ranking and the optimized plan) are given
     (the module docstring's table "What the planners know"): ``setup.options`` with the noise,
     prior and drift of ``hyper``. ``stated``: the options before any fit (the stated prior and the
-    simulator's nominal noise), from which ``previous`` learns its own. The target directions, the
-    candidates, the packet rate and the tilt stay ``setup.options``' (what the user wants to learn
-    and what the radio and the vehicles do, not a fit's figures)."""
+    simulator's nominal noise). ``previous`` and ``flags`` fit the earlier flight as ``rplearn fit
+    --order auto`` does, write its model file and read it back through
+    :func:`rplearn.workflows.calibration_plan.options_from_model`, the code of ``trajectory
+    --optimize --from-model`` (``flags``: with ``--prior-std`` of the CLI's default; with
+    ``--prior-std DB``, ``previous`` states it and the simulator's noise, the model giving the
+    drift alone; ``--correlated off``: ``--drift 0``). The target directions, the candidates, the
+    packet rate and the tilt stay ``setup.options``' (what the user wants to learn and what the
+    radio and the vehicles do, not a fit's figures)."""
     judged = setup.options
     if hyper == "reference":
         return judged
-    learned: dict[str, Any] = {}
     if hyper in ("previous", "flags"):
         earlier = replace(setup, seed=PREVIOUS_SEED, flown=0, draw=0, budget=False, truths={},
                           options=replace(stated, targets=judged.targets))
         parts, _ = fly(earlier, learning)
-        learned = _learned(earlier, parts, prior_std_db, posterior, f"the earlier flight (seed {PREVIOUS_SEED})")
-        if hyper == "previous":
-            return replace(judged, **learned)
-    if hyper in ("cli", "flags"):
-        cli = OptimizeOptions()
-        noise = float(learned.get("noise_std_db", cli.noise_std_db))
-        drift = float(learned.get("correlated_std_db", cli.drift_std_db))
-        weight = prior_penalty_weight(setup.spec.basis(), cli.prior_std_db, noise, setup.spec.ridge_weight, judged.power)
-        print(f"  the planners' hyper-parameters: {'the CLI' + chr(39) + 's defaults' if hyper == 'cli' else 'the CLI flags'} "
-              f"(--noise {noise:.2f} dB, --prior-std {cli.prior_std_db:g} dB, --drift {drift:.2f} dB)")
+        stated_prior = NOMINAL_PRIOR_STD_DB if hyper == "flags" else (prior_std_db if prior_std_db > 0 else None)
+        with tempfile.TemporaryDirectory() as folder:
+            path = _earlier_model(parts, setup.options.power, os.path.join(folder, "previous.json"))
+            opts = options_from_model(path, judged, setup.spec,
+                                      noise_std_db=stated.noise_std_db if hyper == "previous" and prior_std_db > 0 else None,
+                                      prior_std_db=stated_prior, drift_std_db=0.0 if setup.correlated == "off" else None)
+        print(f"  the planners' hyper-parameters from the earlier flight's model (seed {PREVIOUS_SEED}, through "
+              f"options_from_model{', --prior-std ' + format(stated_prior, 'g') if stated_prior else ''}): noise "
+              f"{opts.noise_std_db:.2f} dB, penalty weight {opts.penalty_weight:.3g}, drift {opts.correlated_std_db:.3f} dB")
+        return opts
+    if hyper == "cli":
+        noise = DEFAULT_NOISE_STD_DB
+        weight = prior_penalty_weight(setup.spec.basis(), NOMINAL_PRIOR_STD_DB, noise, setup.spec.ridge_weight, judged.power)
+        print(f"  the planners' hyper-parameters: the CLI's defaults (--noise {noise:.2f} dB, --prior-std "
+              f"{NOMINAL_PRIOR_STD_DB:g} dB, --drift 0)")
         return replace(judged, noise_std_db=noise, penalty_weight=weight, misfit_std_db=0.0, prior_variance_factor=1.0,
-                       correlated_std_db=drift)
+                       correlated_std_db=0.0)
     raise ValueError(f"hyper: expected one of {', '.join(HYPERS)}, got {hyper!r}")
+
+
+def _earlier_model(parts: list[Any], power: float, path: str) -> str:
+    """``rplearn fit --order auto`` of an earlier flight's units (their samples with their times),
+    written to ``path``."""
+    from rplearn.models.auto import fit_auto
+
+    fitted, _ = fit_auto({f"u{k}": samples for k, (samples, _, _) in enumerate(parts)}, power=power)
+    fitted.model.save(path)
+    return path
 
 
 def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, prior_std_db: float = PRIOR_STD_DB,
@@ -1036,7 +1059,7 @@ def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, 
         aggregate: str = "rms", rate: str = "spread", prefixes: int = ManoeuvreOptions().prefixes,
         lookahead: int = ManoeuvreOptions().lookahead, aimed: int = ManoeuvreOptions().aimed,
         design: str = ManoeuvreOptions().design, bound: str = "", ranker: str = "reference",
-        hyper: str = "reference") -> dict[str, Flight]:
+        hyper: str = "reference", planners: str = "both") -> dict[str, Flight]:
     config = _config(preset)
     learning = config.campaign.with_role("learning").units
     nodes = tuple(sorted(config.node_antennas))
@@ -1082,7 +1105,7 @@ def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, 
         if bound == "only":
             return {"reference": ref}
     k = 0
-    while sug.reached_s is None and sug.t_s < limit_s:
+    while sug.reached_s is None and sug.t_s < limit_s and planners != "optimized":
         if sug.live is not None:
             best = sug.live.best(poses)
         else:
@@ -1109,6 +1132,8 @@ def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, 
         opt.plan.append(((unit,), step.manoeuvre.candidate.lead_s, None))
         accumulate(setup, opt, parts, lead_s=step.manoeuvre.candidate.lead_s)
     flights = {"reference": ref, "suggested": sug, "optimized": opt}
+    if planners == "optimized":  # the suggested flight not flown (its start alone)
+        del flights["suggested"]
     for k, f in enumerate(flights.values()):
         for draw in range(1, draws + 1):
             replay(setup, f, draw, PLAN_SEED * k)
@@ -1240,6 +1265,8 @@ def main(argv: list[str] | None = None) -> int:
                     help="the planners' noise, prior and drift: from the fit of this flight's reference (default), of an earlier "
                          f"flight of the same antennas (seed {PREVIOUS_SEED}), the CLI's defaults (no fit), or the CLI's "
                          "defaults with --noise and --drift from that earlier flight (flags)")
+    ap.add_argument("--planners", choices=("both", "optimized"), default="both",
+                    help="fly the suggested flight and the optimized plan (both), or the optimized plan alone (faster)")
     ap.add_argument("--tiny", action="store_true", help="the smoke preset at SH-4 (seconds; criteria not enforced)")
     args = ap.parse_args(argv)
     presets = ["smoke"] if args.tiny else [p.strip() for p in args.presets.split(",") if p.strip()]
@@ -1256,9 +1283,9 @@ def main(argv: list[str] | None = None) -> int:
         flights = run(preset, order, seed, limit, args.power, args.prior_std, args.correlated, args.block_s, args.posterior,
                       args.budget or args.tiny, draws, _candidate_args(args), args.tilt, args.aggregate,
                       args.rate, args.prefixes, args.lookahead, args.aimed, args.design, "yes" if args.tiny else args.bound,
-                      args.ranker, args.hyper)
+                      args.ranker, args.hyper, args.planners)
         ref = flights["reference"]
-        if "suggested" not in flights:
+        if "optimized" not in flights:
             continue
         print(f"{preset} (SH-{order}, seed {seed}, {time.perf_counter() - t0:.0f} s): time to {TARGET_DB:g} dB per-node spread")
         for f in flights.values():
@@ -1280,7 +1307,7 @@ def main(argv: list[str] | None = None) -> int:
                 print(f"    {len(f.draws_db)} more draws of the same plan, cut at {f.reached_s:.0f} s: worst error "
                       f"[{', '.join(f'{v:.2f}' for v in f.draws_db)}] dB, mean {mean:.2f} +- {se:.2f} (s.e.); their largest "
                       f"spread [{', '.join(f'{v:.2f}' for v in f.draw_spreads_db)}] dB")
-        for name in ("suggested", "optimized"):
+        for name in [n for n in ("suggested", "optimized") if n in flights]:
             f = flights[name]
             ok_time = f.reached_s is not None and ref.reached_s is not None and f.reached_s <= TIME_RATIO * ref.reached_s
             ok_one = bool(f.error_db) and bool(ref.error_db) and max(f.error_db.values()) <= max(ref.error_db.values()) + 0.05

@@ -125,13 +125,17 @@ def test_benchmark_runs_tiny_and_prints_its_ratios(script, tmp_path, monkeypatch
 @pytest.mark.slow
 def test_manoeuvres_plans_with_an_earlier_flights_or_the_clis_hyper_parameters(tmp_path):
     """``manoeuvres.py --hyper previous``: the planners learn their noise, prior and drift from an
-    earlier flight (its own fit printed) while the spreads are still read under the reference's;
-    ``--hyper cli`` gives them ``trajectory --optimize``'s defaults."""
+    earlier flight's model file through ``trajectory --optimize --from-model``'s code
+    (``options_from_model``), while the spreads are still read under the reference's; ``--hyper
+    cli`` gives them ``trajectory --optimize``'s defaults (the optimized plan alone flown)."""
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT / "src"), os.environ.get("PYTHONPATH", "")])}
     script = ROOT / "benchmarks" / "manoeuvres.py"
-    for hyper, said in (("previous", r"from the earlier flight \(seed 7919\)"), ("cli", r"the CLI's defaults \(--noise 4\.20 dB")):
-        proc = subprocess.run([sys.executable, str(script), "--tiny", "--hyper", hyper], capture_output=True, text=True,
-                              cwd=tmp_path, timeout=600, env=env)
+    for hyper, said, planners in (("previous", r"from the earlier flight's model \(seed 7919, through options_from_model\): "
+                                               r"noise \d+\.\d+ dB, penalty weight \S+, drift \d+\.\d+ dB", "both"),
+                                  ("cli", r"the CLI's defaults \(--noise 4\.20 dB", "optimized")):
+        proc = subprocess.run([sys.executable, str(script), "--tiny", "--hyper", hyper, "--planners", planners],
+                              capture_output=True, text=True, cwd=tmp_path, timeout=600, env=env)
         assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
         assert re.search(said, proc.stdout) and re.search(r"optimized: time \[(ok|MISS)\]", proc.stdout), proc.stdout[-3000:]
         assert "from the reference flight" in proc.stdout  # the yardstick stays the reference's fit
+        assert ("suggested: time" in proc.stdout) == (planners == "both")

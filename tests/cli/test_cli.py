@@ -366,6 +366,33 @@ def test_trajectory_optimize_plans_for_the_given_packet_rate(tmp_path):
         assert not (tmp_path / f"bad{bad}").exists()
 
 
+def test_fit_auto_says_how_to_plan_the_next_flight_and_the_plan_takes_its_prior(workdir, tmp_path):
+    """``fit --order auto`` stores the next plan's prior and drift and prints the command;
+    ``trajectory --optimize --from-model`` plans with them (explicit flags over them); a bad
+    model file or --from-model without --optimize is one line."""
+    d = workdir
+    fit = run_here(["fit", "data.parquet", "--order", "auto", "-o", "auto_plan.json"], d)
+    assert "plan the next flight: rplearn trajectory --optimize --from-model auto_plan.json -o next_plan" in fit.stdout
+    training = json.loads((d / "auto_plan.json").read_text())["model"]["training"]
+    assert training["drift_std_db"] >= 0 and training["planning_penalty_weight"] > 0
+    plan = run_here(["trajectory", "--optimize", "--from-model", "auto_plan.json", "--check-model", "sh-5", "--target-spread", "2.5",
+                     "--budget-s", "120", "-o", str(tmp_path / "next")], d)
+    assert "prior from auto_plan.json: noise" in plan.stdout and "(stated)" not in plan.stdout
+    assert f"drift {training['drift_std_db']:.2f} dB per 5-s block" in plan.stdout and os.listdir(tmp_path / "next")
+    stated = run_here(["trajectory", "--optimize", "--from-model", "auto_plan.json", "--check-model", "sh-5", "--target-spread", "2.5",
+                       "--budget-s", "120", "--noise", "7", "--drift", "0.3", "-o", str(tmp_path / "stated")], d)
+    assert "noise 7.00 dB (stated)" in stated.stdout and "drift 0.30 dB per 5-s block (stated)" in stated.stdout
+    fixed = run_here(["fit", "data.parquet", "--order", "3", "-o", "sh3_plan.json"], d)
+    assert "plan the next flight" not in fixed.stdout
+    for args, text in ((["--optimize", "--from-model", "sh3_plan.json"], "sh3_plan.json is a fixed-order fit (SH-3)"),
+                       (["--optimize", "--from-model", "nowhere.json"], "nowhere.json: no such"),
+                       (["--from-model", "auto_plan.json"], "add --optimize")):
+        bad = run_here(["trajectory", *args, "-o", str(tmp_path / "bad")], d, ok=False)
+        assert bad.returncode == 1 and len(bad.stderr.strip().splitlines()) == 1
+        assert bad.stderr.startswith("error: --from-model: ") and text in bad.stderr, bad.stderr
+        assert not (tmp_path / "bad").exists() or not os.listdir(tmp_path / "bad")
+
+
 def test_simulate_flies_a_written_plan(tmp_path):
     run_here(["trajectory", "--optimize", "--check-model", "sh-4", "--target-spread", "3", "--budget-s", "40", "--noise", "4",
          "--prior-std", "4", "-o", "plan"], tmp_path)

@@ -156,6 +156,26 @@ def test_gram_from_moments_equals_the_feature_gram(order):
     np.testing.assert_allclose(one, moments[1], rtol=1e-12, atol=1e-9)
 
 
+@pytest.mark.parametrize("order", [1, 2, 5, 10, 15])
+def test_feature_sums_from_moments_equal_the_summed_rows(order):
+    """``F 1`` from the moments (the per-block sums of the drifting error's estimate, with no pass
+    of their own), per range of samples too, poles included."""
+    b = SphericalHarmonics(order)
+    rng = np.random.default_rng(10 + order)
+    az = rng.uniform(-np.pi, np.pi, (2, 900))
+    el = np.arcsin(rng.uniform(-1, 1, (2, 900)))
+    el[0, :3] = [np.pi / 2, -np.pi / 2, 0.0]
+    rows = np.empty((b.n_coef, 2, 900))
+    bounds = np.array([0, 250, 251, 900])
+    moments = (np.zeros((3, *b.moment_shape)), np.zeros((3, *b.moment_shape)))
+    b.design_rows_into(az, el, rows, moments, (bounds, bounds))
+    for end in range(2):
+        sums = b.sums_from_moments(moments[end])
+        for j in range(3):
+            want = rows[:, end, bounds[j]:bounds[j + 1]].sum(axis=1)
+            np.testing.assert_allclose(sums[j], want, rtol=0, atol=1e-12 * max(1.0, np.abs(want).max()))
+
+
 def test_very_high_sh_orders_fall_back_to_the_plain_gram():
     from rplearn.core.sh import SH_MOMENTS_MAX_ORDER
 
@@ -164,6 +184,8 @@ def test_very_high_sh_orders_fall_back_to_the_plain_gram():
     assert high.moment_shape is None
     with pytest.raises(TypeError, match="no Gram moments"):
         high.gram_from_moments(np.zeros((3, 3)))
+    with pytest.raises(TypeError, match="no Gram moments"):
+        high.sums_from_moments(np.zeros((3, 3)))
 
 
 def test_shared_sh_tables_cannot_be_corrupted_by_a_caller():

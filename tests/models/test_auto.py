@@ -151,3 +151,53 @@ def test_the_prior_spread_sums_the_penalised_columns_kept_once_per_basis_and_pow
     kept = _kept_squares(basis, 2.0)
     assert _kept_squares(ModelSpec("sh", 6).basis(), 2.0) is kept and not kept.flags.writeable
     assert kept.shape == (_design_squares(basis).shape[0], int(keep.sum()))
+
+
+def test_auto_fit_stores_the_next_plans_prior_and_the_drift_from_its_own_pass(smoke, tmp_path):
+    """The planning prior (the smoothing as an absolute weight) and the drifting error at SH-10
+    (or the largest candidate order when smaller), from the time blocks kept while the units'
+    statistics were accumulated: the same as each 5-s block accumulated alone in a pass of its
+    own; written to the model file. Samples without times keep no blocks (no drift); a fit with
+    a prior stores neither."""
+    from dataclasses import replace
+
+    from rplearn.core.geometry import Directions
+    from rplearn.core.lsq.block_sums import DEFAULT_BLOCK_S, BlockSums, correlated_ratio
+    from rplearn.core.lsq.penalty import penalty_scale, penalty_vector
+    from rplearn.models.auto_spread import PLANNING_ORDER
+    from rplearn.models.options import FitOptions
+    from rplearn.models.spec import default_ridge
+
+    _, _, per_unit, _, _ = smoke
+    fitted, sel = fit_auto(per_unit)
+    training = fitted.model.training
+    nodes = next(iter(per_unit.values())).nodes
+    n = sum(len(s) for s in per_unit.values())
+    top = auto_orders("sh", n, len(nodes))[-1]
+    chosen, plan = SphericalHarmonics(sel.order), SphericalHarmonics(min(PLANNING_ORDER, top))
+    total, blocks = NormalEquations(plan, len(nodes)), BlockSums(len(nodes), plan.n_coef, DEFAULT_BLOCK_S)
+    whole = NormalEquations(chosen, len(nodes))
+    for s in per_unit.values():
+        assert s.t_s is not None
+        total.add(s.directions, s.tx_index, s.rx_index, s.joint_gain_db)
+        whole.add(s.directions, s.tx_index, s.rx_index, s.joint_gain_db)
+        label = np.floor(s.t_s / DEFAULT_BLOCK_S)
+        for k in np.unique(label):
+            m = label == k
+            alone = NormalEquations(plan, len(nodes)).add(Directions(*(np.asarray(a)[m] for a in s.directions)),
+                                                          s.tx_index[m], s.rx_index[m], s.joint_gain_db[m])
+            blocks.add_batch(alone, (k + 0.5) * DEFAULT_BLOCK_S)
+        blocks = blocks.closed()  # a unit's last block closed before the next unit's
+    weight = sel.smoothing * penalty_scale(whole.gram, whole.n_pattern_columns)
+    assert training.planning_penalty_weight == pytest.approx(weight, rel=1e-9)
+    prior = default_ridge("sh") + penalty_vector(plan, len(nodes), weight, 1.0, 2.0)
+    noise = training.noise_std_db * np.sqrt(training.variance_inflation)
+    want = np.sqrt(correlated_ratio(total, blocks, prior)) * noise
+    assert blocks.n_blocks >= 8 and training.drift_std_db == pytest.approx(want, rel=1e-6)
+    fitted.model.save(str(tmp_path / "auto.json"))
+    assert load_model(str(tmp_path / "auto.json")).training.drift_std_db == training.drift_std_db
+    untimed, _ = fit_auto({u: replace(s, t_s=None) for u, s in per_unit.items()})
+    assert untimed.model.training.drift_std_db is None
+    assert untimed.model.training.planning_penalty_weight == pytest.approx(weight, rel=1e-9)
+    with_prior, _ = fit_auto(per_unit, options=FitOptions(auto=True, priors={n_: fitted.model for n_ in nodes}))
+    assert with_prior.model.training.drift_std_db is None and with_prior.model.training.planning_penalty_weight is None

@@ -16,7 +16,7 @@ TRAJECTORY_FLAGS = {
     "max_speed_m_s": "--max-speed", "max_accel_m_s2": "--max-accel", "max_flight_time_s": "--max-flight-time",
     "target_spread_db": "--target-spread", "budget_s": "--budget-s", "noise_std_db": "--noise", "prior_std_db": "--prior-std",
     "prior_pattern": "--prior-pattern", "model": "--check-model", "drift_std_db": "--drift",
-    "packet_rate_hz": "--packet-rate",
+    "packet_rate_hz": "--packet-rate", "from_model": "--from-model",
 }
 
 
@@ -42,12 +42,18 @@ def trajectory(
                                                            "instead of the paper's campaign."),
     target_spread: float = typer.Option(2.0, "--target-spread", help="--optimize: stop at this per-node pattern spread [dB]."),
     budget_s: float = typer.Option(900.0, "--budget-s", help="--optimize: flight-time budget [s]."),
-    noise_db: float = typer.Option(4.2, "--noise", help="--optimize: RSSI noise about the model [dB]."),
+    noise_db: float | None = typer.Option(None, "--noise", help="--optimize: RSSI noise about the model [dB] (default 4.2; "
+                                                                "with --from-model the model's)."),
     packet_rate_hz: float = typer.Option(80.0, "--packet-rate", help="--optimize: packets per second the radio reports in each "
                                                                      "link direction [Hz] (fewer: each second teaches less)."),
-    prior_std: float = typer.Option(6.0, "--prior-std", help="--optimize: the prior's pattern spread over the sphere [dB]."),
-    drift: float = typer.Option(0.0, "--drift", help="--optimize: an error drifting over seconds (a heading estimate's), "
-                                                     "one offset per 5-s block [dB]; 0: white noise only."),
+    prior_std: float | None = typer.Option(None, "--prior-std", help="--optimize: the prior's pattern spread over the sphere "
+                                                                     "[dB] (default 6; with --from-model the model's smoothing)."),
+    drift: float | None = typer.Option(None, "--drift", help="--optimize: an error drifting over seconds (a heading "
+                                                            "estimate's), one offset per 5-s block [dB]; 0: white noise only "
+                                                            "(default 0; with --from-model the model's)."),
+    from_model: str | None = typer.Option(None, "--from-model", help="--optimize: an earlier flight's model file (rplearn fit "
+                                                                      "--order auto): its noise, smoothing and drift as the "
+                                                                      "prior; --noise, --prior-std, --drift override them."),
     prior_pattern: str | None = typer.Option(None, "--prior-pattern", help="--optimize: a reference pattern model file "
                                                                            "(rplearn reference) as the prior instead of smoothness."),
     station: bool = typer.Option(False, "--station", help="--optimize: a static ground station G and one drone D "
@@ -65,9 +71,11 @@ def trajectory(
 
     check_output_folder(out_dir)
     if optimize:
-        _optimized(out_dir, check_model, (target_spread, budget_s, noise_db, prior_std, drift, packet_rate_hz), prior_pattern,
-                   station, (distance_m, height_m, speed_m_s), rate_hz)
+        _optimized(out_dir, check_model, (target_spread, budget_s, noise_db, prior_std, drift, packet_rate_hz),
+                   (prior_pattern, from_model), station, (distance_m, height_m, speed_m_s), rate_hz)
         return
+    if from_model is not None:
+        raise InputError("--from-model: it gives the prior of --optimize's plan; add --optimize")
     from rplearn.plan.trajectory import PlanLimits
     from rplearn.workflows.planning import PAPER_LEARNING_PSI0_DEG, PAPER_TESTING_PSI0_DEG, CampaignOptions, plan_campaign
 
@@ -92,16 +100,19 @@ def trajectory(
         say("plan check (learning units):\n" + plan.check.summary())
 
 
-def _optimized(out_dir: str, model: str | None, figures: tuple[float, float, float, float, float, float], prior_pattern: str | None,
-               station: bool, geometry: tuple[float, float, float], rate_hz: float) -> None:
+def _optimized(out_dir: str, model: str | None, figures: tuple[float, float, float | None, float | None, float | None, float],
+               priors: tuple[str | None, str | None], station: bool, geometry: tuple[float, float, float], rate_hz: float) -> None:
     """``trajectory --optimize``: the greedy plan, its expected spread over time, the references."""
     from rplearn.workflows.calibration_plan import OptimizeOptions, optimize_plan
 
     target, budget, noise, prior_std, drift, packet_rate = figures
     options = OptimizeOptions(target_spread_db=target, budget_s=budget, model=model or "sh-10", noise_std_db=noise,
-                              packet_rate_hz=packet_rate, prior_std_db=prior_std, prior_pattern=prior_pattern, station=station, distance_m=geometry[0],
-                              height_m=geometry[1], speed_m_s=geometry[2], drift_std_db=drift)
+                              packet_rate_hz=packet_rate, prior_std_db=prior_std, prior_pattern=priors[0], station=station,
+                              distance_m=geometry[0], height_m=geometry[1], speed_m_s=geometry[2], drift_std_db=drift,
+                              from_model=priors[1])
     plan = optimize_plan(out_dir, options, rate_hz)
+    if plan.prior is not None:
+        say(f"prior from {priors[1]}: {plan.prior}")
     say("expected per-node pattern spread over time (greedy: the largest expected reduction per second at each step):")
     say(plan.summary())
     if not plan.steps:

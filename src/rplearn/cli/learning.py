@@ -84,6 +84,10 @@ def fit(
     say(outcome.summary())
     for line in outcome.warnings:
         note(line, "warning")
+    if output and outcome.fitted.model.training.drift_std_db is not None:
+        import shlex
+
+        say(f"plan the next flight: rplearn trajectory --optimize --from-model {shlex.quote(output)} -o next_plan")
 
 
 @app.command()

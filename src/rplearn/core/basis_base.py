@@ -157,6 +157,10 @@ class Basis:
         """Gram ``F F^T`` of the feature rows from their moments (bases with a :attr:`moment_shape`)."""
         raise TypeError(f"{type(self).__name__} has no Gram moments")
 
+    def sums_from_moments(self, moments: FloatArray) -> FloatArray:
+        """Sums ``F 1`` of the feature rows from their moments (bases with a :attr:`moment_shape`)."""
+        raise TypeError(f"{type(self).__name__} has no Gram moments")
+
     def roughness(self, power: float = 2.0) -> FloatArray:
         """Weight of each coefficient in the smoothness penalty ``sum_j w_j c_j^2``.
 

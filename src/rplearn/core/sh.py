@@ -132,6 +132,21 @@ def _sh_chebyshev_tables(order: int) -> tuple[FloatArray, NDArray[np.intp], NDAr
     return coef, row_order, natural
 
 
+@lru_cache(maxsize=32)
+def _sh_sum_tables(order: int) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+    """For every feature row of :meth:`SphericalHarmonics.design_rows_into`: the row of the
+    Chebyshev coefficients of its Legendre factor, and its moment column (``m`` for ``cos(m az)``,
+    ``2 order - 1 + m`` for ``sin(m az)``; :meth:`SphericalHarmonics.moment_shape`)."""
+    L = order
+    m_cos = np.array([m for m in range(L) for _ in range(m, L)], np.intp)
+    sine = np.flatnonzero(m_cos > 0)  # the sine rows follow, in the order of their cosine rows
+    rows = np.concatenate([np.arange(m_cos.size), sine]).astype(np.intp)
+    columns = np.concatenate([m_cos, (2 * L - 1) + m_cos[sine]]).astype(np.intp)
+    for shared in (rows, columns):
+        shared.setflags(write=False)
+    return rows, columns
+
+
 def _add_moments(cheb: FloatArray, trig: FloatArray, moments: FloatArray,
                  segments: NDArray[np.intp] | tuple[NDArray[np.intp], ...] | None = None) -> None:
     """``moments[...] += cheb @ trig^T`` over the last (sample) axis, per leading sample index;
@@ -433,6 +448,22 @@ class SphericalHarmonics(Basis):
         gram = flat.reshape(self.n_coef, self.n_coef)
         upper = np.triu(gram)
         return upper + np.triu(gram, 1).T
+
+    def sums_from_moments(self, moments: FloatArray) -> FloatArray:
+        """The sums of the features over the samples (``F 1``, rows in :attr:`row_order`) from
+        their moments, shape ``(..., n_coef)`` for moments ``(..., *moment_shape)``.
+
+        Exact: a feature is ``sum_J coef[J] T_J(sin el)`` times ``cos(m az)`` or ``sin(m az)``
+        (times ``cos(el)`` for odd ``m``), and the moments hold the sums of exactly these
+        products (``J < order``, ``M = m``), so a range of samples' feature sums come with its
+        Gram moments, from no pass of their own.
+        """
+        if self.moment_shape is None:
+            raise TypeError(f"{self.label} is above SH-{SH_MOMENTS_MAX_ORDER}: no Gram moments")
+        coef_rows, columns = _sh_sum_tables(self.order)
+        coef = self._tables[0]
+        mu = np.asarray(moments, np.float64)[..., : self.order, :][..., columns]  # (..., L, n_coef)
+        return np.einsum("...jr,rj->...r", mu, coef[coef_rows])
 
     def evaluate(self, coef: ArrayLike, az_rad: ArrayLike, el_rad: ArrayLike) -> FloatArray:
         # A pattern is sum_m [sum_l c_lm Q_lm(x)] w_m: one Chebyshev series per azimuth factor,

@@ -502,6 +502,8 @@ class LinkSamples:
         ENU heights of both ends [m] (for the two-ray environment term); None when unknown.
     outages : int
         Outage events of the dataset left out (``outage`` True: no RSSI to learn from).
+    t_s : ndarray or None
+        Time of every sample [s] (the matched dataset's ``t``); None when unknown.
     """
 
     directions: Directions
@@ -515,6 +517,7 @@ class LinkSamples:
     tx_z_m: np.ndarray | None = None
     rx_z_m: np.ndarray | None = None
     outages: int = 0
+    t_s: np.ndarray | None = None
 
     def __len__(self) -> int:
         return int(self.joint_gain_db.shape[0])
@@ -592,4 +595,4 @@ def link_samples(
     )
     return LinkSamples(dirs, tx_index, rx_index, nodes_t, gain, dist, df["frequency_hz"].to_numpy(np.float64),
                        non_unit_quaternions=int(off.sum()), tx_z_m=tx_pos[:, 2].copy(), rx_z_m=rx_pos[:, 2].copy(),
-                       outages=n_outages)
+                       outages=n_outages, t_s=df["t"].to_numpy(np.float64) if "t" in df.columns else None)

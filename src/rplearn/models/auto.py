@@ -18,6 +18,7 @@ import numpy as np
 import scipy.linalg  # noqa: F401  (order selection solves through scipy: loaded before any BLAS limit, rplearn.core.threads)
 
 from rplearn.core.geometry import Directions
+from rplearn.core.lsq.block_sums import DEFAULT_BLOCK_S
 from rplearn.core.lsq.link_statistics import reserve_block_buffer
 from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.core.lsq.runtime import DEFAULT_RUNTIME
@@ -39,7 +40,15 @@ from rplearn.core.threads import warm_up as warm_up_blas
 from rplearn.data.tables import LinkSamples
 from rplearn.errors import InputError
 from rplearn.models.auto_prior import deviation_problem, held_out_errors, keeps_prior, kept_prior_coef, kept_prior_target, kept_within_noise
-from rplearn.models.auto_spread import held_out_misfit_var, misfit_covariance, prior_misfit_var, prior_std_db, unseen_spread_cap_db, within_unit_noise_var
+from rplearn.models.auto_spread import (
+    drift_std_db,
+    held_out_misfit_var,
+    misfit_covariance,
+    prior_misfit_var,
+    prior_std_db,
+    unseen_spread_cap_db,
+    within_unit_noise_var,
+)
 from rplearn.models.fit import FittedModel, LearningGram
 from rplearn.models.load import load_priors
 from rplearn.models.node_coverage import CoverageWork
@@ -183,9 +192,11 @@ def fit_auto(
     def piece_statistics(piece: tuple[str, int, int]) -> NormalEquations:
         u, a, b = piece
         s, (y, env) = units[u], inputs[u]
+        # each sample's time block: the sums per block (for the drifting error) from the same pass
+        blocks = None if s.t_s is None else np.floor(np.asarray(s.t_s, np.float64)[a:b] / DEFAULT_BLOCK_S).astype(np.int64)
         return NormalEquations(basis, len(nodes), environment=env is not None).add(
             Directions(*(np.asarray(d)[a:b] for d in s.directions)), np.asarray(s.tx_index)[a:b],
-            np.asarray(s.rx_index)[a:b], y[a:b], None if env is None else env[a:b])
+            np.asarray(s.rx_index)[a:b], y[a:b], None if env is None else env[a:b], time_block=blocks)
 
     # The units' statistics on the runtime's workers, a unit (or half of one, so that the pieces
     # keep both workers busy to the end) each, the halves added up in order, and the coverage
@@ -336,6 +347,7 @@ def fit_from_statistics(
     for st in stats.values():
         total.merge(st)
     counts = statistics_counts(total.directed, nodes)
+    unit_stats = list(stats.values())  # with their time blocks (with_shared does not carry them)
     links = total.two_way_links() if link_offsets else []
     if first.environment or links:
         stats = {u: st.with_shared(links) for u, st in stats.items()}
@@ -407,6 +419,11 @@ def fit_from_statistics(
         shares = np.array([st.n_samples for st in stats.values()], np.float64) / max(normal.n_samples, 1)
         new_level_var = level_var * (1.0 + float(shares @ shares)) if level_var > 0 else 0.0
         noise_var = within_var * inflation
+        # the next flight's plan: the drifting error from the time blocks kept in the same pass
+        # (with a prior the penalty pulls toward it, which the moments do not model: none)
+        with one_blas_thread():  # small products: threads would only wait for each other
+            drift = None if target is not None else drift_std_db(unit_stats, total, choice.smoothing * scale, ridge, power,
+                                                                 float(np.sqrt(noise_var)))
         rescale = within_var / sol.residual_variance_db2 if sol.residual_variance_db2 > 0 else 1.0
         # the covariance's basis: the chosen one, or with the prior kept the largest (auto_prior)
         model_basis, cov_normal, cov_penalty = chosen, normal, penalty
@@ -476,6 +493,10 @@ def fit_from_statistics(
                     variance_inflation=inflation, prior_std_db=spread, prior_std_source=spread_source,
                     noise_std_db=float(np.sqrt(within_var)), flight_level_std_db=float(np.sqrt(level_var)),
                     new_flight_level_std_db=float(np.sqrt(new_level_var)), misfit_std_db=float(np.sqrt(misfit_var / 2.0)))
+    if target is None:  # a smoothness prior: its absolute weight (units of X^T X) at the chosen order
+        training["planning_penalty_weight"] = float(choice.smoothing) * float(scale)
+    if drift is not None:
+        training["drift_std_db"] = drift
     if prior:
         training["prior_level"] = prior_level
         training["prior"] = {str(n): str(getattr(m, "provenance", {}).get("model", getattr(m, "label", "?")))

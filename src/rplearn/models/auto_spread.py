@@ -7,7 +7,9 @@ never looked (the prior's spread, capped by what the data can show).
   off the data, and the cap on the unseen spread;
 - :func:`within_unit_noise_var`, :func:`held_out_misfit_var`: the noise and the misfit the held-out
   units show beyond the posterior;
-- :func:`misfit_covariance`: that misfit as a covariance of the pattern coefficients.
+- :func:`misfit_covariance`: that misfit as a covariance of the pattern coefficients;
+- :func:`drift_std_db`: the error drifting over seconds the fit's time blocks show (for the
+  next flight's plan, ``rplearn trajectory --optimize --from-model``).
 """
 
 from __future__ import annotations
@@ -18,8 +20,53 @@ from typing import Any
 
 import numpy as np
 
+from rplearn.core.lsq.block_sums import DEFAULT_BLOCK_S, correlated_ratio, time_block_sums
 from rplearn.core.lsq.normal_equations import NormalEquations
-from rplearn.core.lsq.penalty import DEFAULT_PENALTY_POWER, nested_columns
+from rplearn.core.lsq.penalty import DEFAULT_PENALTY_POWER, nested_columns, penalty_vector, sub_statistics
+from rplearn.core.sh import SphericalHarmonics
+from rplearn.models.spec import ModelSpec
+
+#: The spherical-harmonic order the drifting error is read at (:func:`drift_std_db`): the model
+#: ``rplearn trajectory --optimize`` plans in by default, so that the plan reads the drift its
+#: own posterior would show (a larger order takes more of a drift into the pattern: on the
+#: ``paper`` preset 1.02, 0.76 and 0.63 dB at SH-9, 12 and 15).
+PLANNING_ORDER = 10
+
+
+def drift_std_db(units: Sequence[NormalEquations], total: NormalEquations, weight: float, ridge: float, power: float,
+                 noise_std_db: float) -> float | None:
+    """The block-offset spread of an error drifting over seconds [dB] (a heading estimate's
+    wander: :mod:`rplearn.core.lsq.block_sums`), as
+    :func:`rplearn.analysis.manoeuvres.correlated_error_std_db` reads it: ``sqrt(kappa)``
+    times ``noise_std_db``, ``kappa`` estimated by moments from the sums per
+    :data:`~rplearn.core.lsq.block_sums.DEFAULT_BLOCK_S` time block the units' statistics kept
+    while they were accumulated (no sample re-read), at SH-:data:`PLANNING_ORDER` (or the
+    statistics' order when smaller, or their basis when not SH) under a smoothness prior of
+    absolute weight ``weight``. None when they kept none (statistics streamed, or samples
+    without times); 0 with fewer than :data:`~rplearn.core.lsq.block_sums.MIN_BLOCKS` blocks
+    or no excess scatter.
+
+    Parameters
+    ----------
+    units : sequence of NormalEquations
+        The flight units' statistics, their ``block_directed`` filled.
+    total : NormalEquations
+        Their sum (shared columns appended or not).
+    weight, ridge, power : float
+        The prior: the penalty's absolute weight (units of ``X^T X``), the ridge and the
+        roughness power.
+    noise_std_db : float
+        The noise the spread is a multiple of (the fit's noise times the square root of its
+        variance inflation: the noise a plan is made with).
+    """
+    big = total.basis
+    basis = ModelSpec("sh", min(PLANNING_ORDER, big.order)).basis() if isinstance(big, SphericalHarmonics) else big
+    blocks = time_block_sums(units, DEFAULT_BLOCK_S, basis.n_coef)
+    if blocks is None:
+        return None
+    normal = sub_statistics(total, basis)
+    prior = float(ridge) + penalty_vector(basis, total.n_nodes, float(weight), 1.0, float(power))
+    return float(np.sqrt(correlated_ratio(normal, blocks, prior))) * float(noise_std_db)
 
 
 def prior_std_db(basis: Any, nodes: Sequence[str], weights: np.ndarray, noise_var: float,

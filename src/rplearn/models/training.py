@@ -61,6 +61,14 @@ class TrainingSummary(Mapping[str, Any]):
     misfit_std_db : float
         Each node's spread of the error the model cannot represent [dB], added everywhere
         (:func:`rplearn.models.auto_spread.held_out_misfit_var`, halved between the two ends).
+    planning_penalty_weight : float
+        An automatic fit's smoothness penalty as an absolute weight (its smoothing times the
+        penalty's scale at the chosen order, in the units of ``X^T X``): the prior the next
+        flight's plan takes (``rplearn trajectory --optimize --from-model``).
+    drift_std_db : float
+        The block-offset spread of an error drifting over seconds, per 5-s block [dB]
+        (:func:`rplearn.models.auto_spread.drift_std_db`): written by an automatic fit of a
+        dataset in memory, without priors.
     prior_std_db : dict of node to float
         Each node's predictive spread where the flight never looked [dB].
     prior_std_source : str
@@ -106,6 +114,8 @@ class TrainingSummary(Mapping[str, Any]):
     flight_level_std_db: float | None = None
     new_flight_level_std_db: float | None = None
     misfit_std_db: float | None = None
+    planning_penalty_weight: float | None = None
+    drift_std_db: float | None = None
     prior_std_db: Mapping[str, float] | None = None
     prior_std_source: str | None = None
     prior_level: str | None = None
@@ -188,7 +198,7 @@ class TrainingSummary(Mapping[str, Any]):
 
 #: Entries that predictions read as spreads [dB] (or a factor): when written, a finite number >= 0.
 _SPREADS = ("rmse_db", "noise_std_db", "flight_level_std_db", "new_flight_level_std_db", "misfit_std_db",
-            "variance_inflation")
+            "variance_inflation", "drift_std_db", "planning_penalty_weight")
 
 
 def check_training_entries(training: Any, source: str) -> None:

@@ -5,9 +5,11 @@
 from .availability import AvailabilityOutcome as AvailabilityOutcome
 from .availability import LinkFiles as LinkFiles
 from .availability import swarm_links_availability as swarm_links_availability
+from .calibration_plan import DEFAULT_NOISE_STD_DB as DEFAULT_NOISE_STD_DB
 from .calibration_plan import OptimizedPlan as OptimizedPlan
 from .calibration_plan import OptimizeOptions as OptimizeOptions
 from .calibration_plan import optimize_plan as optimize_plan
+from .calibration_plan import options_from_model as options_from_model
 from .calibration_plan import plan_config as plan_config
 from .demo import DEMO_MODELS as DEMO_MODELS
 from .demo import DemoResult as DemoResult

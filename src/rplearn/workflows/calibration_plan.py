@@ -9,6 +9,14 @@ where the previous one ended (:func:`rplearn.analysis.manoeuvres.greedy_plan`), 
 node's expected spread is at most the target or the budget is spent, and writes the chosen
 units' references in the format ``rplearn trajectory`` writes (``<label>_<node>.csv``:
 ``t, x, y, z, yaw_deg``, ``t`` from 0 in each unit), their labels numbered in flying order.
+
+With an earlier flight's model file (``--from-model``, :func:`options_from_model`) the plan takes
+its prior from what that flight taught: the noise (the fit's noise times the square root of its
+variance inflation, as ``rplearn live`` reads the posterior), the smoothness prior (its
+cross-validated smoothing as an absolute penalty weight, ``training.planning_penalty_weight``)
+and the error drifting over seconds (``training.drift_std_db``), all written by
+``rplearn fit --order auto``. A value stated explicitly (``--noise``, ``--prior-std``,
+``--drift``) overrides the model's.
 """
 
 from __future__ import annotations
@@ -22,13 +30,18 @@ from rplearn._argtypes import check_types
 from rplearn.analysis.manoeuvre_prior import NOMINAL_PRIOR_STD_DB
 from rplearn.analysis.manoeuvres import ManoeuvreOptions, PlanStep, greedy_plan, pattern_spreads, prior_penalty_weight
 from rplearn.core.lsq.normal_equations import NormalEquations
-from rplearn.errors import InputError
+from rplearn.errors import InputError, RplearnError
+from rplearn.models.auto_spread import PLANNING_ORDER
 from rplearn.models.base import require_patterns
 from rplearn.models.load import load_model
+from rplearn.models.patterns import PatternSet
 from rplearn.models.spec import ModelSpec
 from rplearn.plan.campaign import Campaign, write_references
 from rplearn.plan.manoeuvres import CandidateOptions
 from rplearn.plan.references import read_plan
+
+#: The RSSI noise about the model a plan assumes without a fit or ``--noise`` [dB].
+DEFAULT_NOISE_STD_DB = 4.2
 
 
 @check_types
@@ -44,10 +57,12 @@ class OptimizeOptions:
         Flight-time budget [s].
     model : str
         The fixed-order model the spread is read at (e.g. ``sh-10``).
-    noise_std_db : float
-        Standard deviation of one RSSI reading about the model [dB].
-    prior_std_db : float
-        The prior's spread of each node's pattern over the sphere [dB].
+    noise_std_db : float or None
+        Standard deviation of one RSSI reading about the model [dB]; None: ``from_model``'s, or
+        :data:`DEFAULT_NOISE_STD_DB`.
+    prior_std_db : float or None
+        The prior's spread of each node's pattern over the sphere [dB]; None: ``from_model``'s
+        smoothness prior, or :data:`~rplearn.analysis.manoeuvre_prior.NOMINAL_PRIOR_STD_DB`.
     prior_pattern : str or None
         A reference pattern model file (``rplearn reference``): the prior is a ridge on the
         deviation from it instead of a smoothness prior.
@@ -61,19 +76,22 @@ class OptimizeOptions:
         Packets per second in each link direction.
     target_el_deg : (float, float)
         Band of body-frame elevations the spread is taken over [deg].
-    drift_std_db : float
+    drift_std_db : float or None
         An error drifting over seconds (a heading estimate's wander), as one offset per link and
         5-s block [dB] (:attr:`rplearn.analysis.manoeuvres.ManoeuvreOptions.correlated_std_db`;
         what :func:`rplearn.analysis.manoeuvres.correlated_error_std_db` finds in an earlier
         flight): the plan then counts a direction seen once as less learned than white noise
-        says; 0: white noise only.
+        says; 0: white noise only; None: ``from_model``'s, or 0.
+    from_model : str or None
+        An earlier flight's model file (``rplearn fit --order auto``) whose noise, smoothness
+        prior and drift the plan takes where the fields above are None (:func:`options_from_model`).
     """
 
     target_spread_db: float = 2.0
     budget_s: float = 900.0
-    model: str = "sh-10"
-    noise_std_db: float = 4.2
-    prior_std_db: float = NOMINAL_PRIOR_STD_DB
+    model: str = f"sh-{PLANNING_ORDER}"
+    noise_std_db: float | None = None
+    prior_std_db: float | None = None
     prior_pattern: str | None = None
     station: bool = False
     distance_m: float = 10.0
@@ -81,13 +99,16 @@ class OptimizeOptions:
     speed_m_s: float = 1.5
     packet_rate_hz: float = 80.0
     target_el_deg: tuple[float, float] = (-90.0, 90.0)
-    drift_std_db: float = 0.0
+    drift_std_db: float | None = None
+    from_model: str | None = None
 
     def __post_init__(self) -> None:
-        if not (np.isfinite(self.drift_std_db) and self.drift_std_db >= 0):
+        if self.drift_std_db is not None and not (np.isfinite(self.drift_std_db) and self.drift_std_db >= 0):
             raise InputError(f"drift_std_db: expected a non-negative spread [dB], got {self.drift_std_db!r}", param="drift_std_db")
         for name in ("target_spread_db", "budget_s", "noise_std_db", "prior_std_db", "distance_m", "height_m", "speed_m_s",
                      "packet_rate_hz"):
+            if getattr(self, name) is None:
+                continue
             v = float(getattr(self, name))
             if not (np.isfinite(v) and v > 0):
                 raise InputError(f"{name}: expected a positive finite number, got {v!r}", param=name)
@@ -106,12 +127,16 @@ class OptimizedPlan:
     campaign : Campaign or None
         The chosen units in flying order (None when no manoeuvre helps within the budget).
     paths : list of str
+    prior : str or None
+        With a model file (:attr:`OptimizeOptions.from_model`): the noise, penalty and drift
+        the plan took, and which of them were stated.
     """
 
     steps: tuple[PlanStep, ...]
     start_spread_db: dict[str, float]
     campaign: Campaign | None
     paths: list[str]
+    prior: str | None = None
 
     @property
     def duration_s(self) -> float:
@@ -156,22 +181,132 @@ def optimize_plan(out_dir: str, options: OptimizeOptions | None = None, rate_hz:
         # its shape sets the prior's mean, which does not change the spread: read to refuse a bad file early
         require_patterns(load_model(opts.prior_pattern), "prior_pattern")
         shape = "reference"
-    weight = prior_penalty_weight(spec.basis(), opts.prior_std_db, opts.noise_std_db, spec.ridge_weight, shape=shape)
-    mopts = ManoeuvreOptions(noise_std_db=opts.noise_std_db, packet_rate_hz=opts.packet_rate_hz, penalty_weight=weight,
-                             target_el_deg=opts.target_el_deg, candidates=CandidateOptions(fixed_nodes=fixed, speed_m_s=opts.speed_m_s),
-                             correlated_std_db=float(opts.drift_std_db))
+    noise = DEFAULT_NOISE_STD_DB if opts.noise_std_db is None else float(opts.noise_std_db)
+    prior_std = NOMINAL_PRIOR_STD_DB if opts.prior_std_db is None else float(opts.prior_std_db)
+    mopts = ManoeuvreOptions(noise_std_db=noise, packet_rate_hz=opts.packet_rate_hz, target_el_deg=opts.target_el_deg,
+                             candidates=CandidateOptions(fixed_nodes=fixed, speed_m_s=opts.speed_m_s),
+                             correlated_std_db=float(opts.drift_std_db or 0.0))
+    if opts.from_model is not None:
+        # a reference pattern's prior replaces the model's smoothness prior: stated, or the nominal spread
+        stated = prior_std if shape == "reference" else opts.prior_std_db
+        mopts = options_from_model(opts.from_model, mopts, spec, noise_std_db=opts.noise_std_db, prior_std_db=stated,
+                                   drift_std_db=opts.drift_std_db)
+    else:
+        mopts = replace(mopts, penalty_weight=prior_penalty_weight(spec.basis(), prior_std, noise, spec.ridge_weight))
     if shape == "reference":
-        mopts = replace(mopts, power=0.0)
+        weight = prior_penalty_weight(spec.basis(), prior_std, mopts.noise_std_db, spec.ridge_weight, shape=shape)
+        mopts = replace(mopts, penalty_weight=weight, power=0.0)
     empty = NormalEquations(spec.basis(), len(nodes))
     start_spread = pattern_spreads(empty, spec, nodes, mopts)
     steps = greedy_plan(empty, spec, nodes, poses, opts.budget_s, opts.target_spread_db, mopts)
+    prior = None if opts.from_model is None else _prior_text(mopts, opts, shape)
     if not steps:
-        return OptimizedPlan(steps, start_spread, None, [])
+        return OptimizedPlan(steps, start_spread, None, [], prior)
     units = tuple(replace(s.manoeuvre.candidate.unit, label=f"{k + 1:02d}_{s.manoeuvre.candidate.unit.label}")
                   for k, s in enumerate(steps))
     campaign = Campaign(units, gap_s=0.0)
     paths = write_references(campaign, out_dir, rate_hz)
-    return OptimizedPlan(steps, start_spread, campaign, paths)
+    return OptimizedPlan(steps, start_spread, campaign, paths, prior)
+
+
+def _prior_text(mopts: ManoeuvreOptions, opts: OptimizeOptions, shape: str) -> str:
+    """What a plan from a model file took, each value marked when it was stated instead."""
+    def source(value: float | None) -> str:
+        return " (stated)" if value is not None else ""
+
+    penalty = (f"a reference pattern's ridge for a {opts.prior_std_db or NOMINAL_PRIOR_STD_DB:g}-dB spread" if shape == "reference"
+               else f"smoothness penalty weight {mopts.penalty_weight:.3g} (power {mopts.power:g})"
+               + (f" for a {opts.prior_std_db:g}-dB spread (stated)" if opts.prior_std_db is not None else ""))
+    return (f"noise {mopts.noise_std_db:.2f} dB{source(opts.noise_std_db)}, {penalty}, drift "
+            f"{mopts.correlated_std_db:.2f} dB per {mopts.correlation_s:g}-s block{source(opts.drift_std_db)}")
+
+
+@check_types
+def options_from_model(model: str, options: ManoeuvreOptions, spec: ModelSpec, *, noise_std_db: float | None = None,
+                       prior_std_db: float | None = None, drift_std_db: float | None = None) -> ManoeuvreOptions:
+    """``options`` with the prior an earlier flight's model file gives a plan (module docstring).
+
+    Parameters
+    ----------
+    model : str
+        The model file of ``rplearn fit --order auto`` (spherical harmonics, no ``--prior``).
+    options : ManoeuvreOptions
+        What the plan is for (candidates, packet rate, target directions...); its noise,
+        penalty weight and power, drift, misfit and prior-variance factor are replaced.
+    spec : ModelSpec
+        The model the plan reads its spread at (its basis and ridge convert ``prior_std_db``).
+    noise_std_db, prior_std_db, drift_std_db : float, optional
+        Values stated explicitly, which override the model's: the noise [dB]; the prior's
+        spread over the sphere [dB] (the smoothness prior of that spread instead of the
+        model's penalty weight); the drift per block [dB].
+
+    Returns
+    -------
+    ManoeuvreOptions
+        The noise (stated, or the model's ``noise_std_db`` times the square root of its
+        ``variance_inflation``), the penalty (the model's ``planning_penalty_weight``, an
+        absolute weight in the units of ``X^T X``, and its ``penalty_power``), the drift per
+        :data:`~rplearn.core.lsq.block_sums.DEFAULT_BLOCK_S` block (``drift_std_db``), no
+        misfit term and the prior's variance as the penalty implies (the inflated posterior
+        ``trajectory --optimize`` and ``rplearn live`` plan with).
+
+    Raises
+    ------
+    InputError
+        ``param="from_model"``, one line: the file is missing, not a model file, not a pattern
+        model, a fixed-order fit, of another kind than ``spec``, fitted with priors, or lacks a
+        field that no explicit value replaces (naming it and how to get it).
+    """
+    fitted = _planning_model(model)
+    training = fitted.training
+    refit = "fit the earlier flight with rplearn fit DATASET --order auto -o MODEL.json"
+    if fitted.basis.kind != spec.kind:
+        raise InputError(f"from_model: {model} is a {fitted.basis.label} fit; the plan reads its spread at {spec.label}: "
+                         f"give a {spec.kind} model's file, or --check-model {fitted.basis.kind}-...", param="from_model")
+    if training.prior:
+        raise InputError(f"from_model: {model} was fitted with priors (--prior): its penalty is a ridge toward them, not a "
+                         "smoothness prior; plan with --prior-pattern and --noise, --drift instead", param="from_model")
+    if noise_std_db is None:
+        if training.noise_std_db is None or training.variance_inflation is None:
+            field = "noise_std_db" if training.noise_std_db is None else "variance_inflation"
+            raise InputError(f"from_model: {model} has no training.{field}; {refit}, or give --noise", param="from_model")
+        noise_std_db = float(training.noise_std_db) * float(np.sqrt(training.variance_inflation))
+    power = float(training.penalty_power if training.penalty_power is not None else options.power)
+    if prior_std_db is not None:
+        weight = prior_penalty_weight(spec.basis(), prior_std_db, noise_std_db, spec.ridge_weight, power)
+    elif training.planning_penalty_weight is None:
+        raise InputError(f"from_model: {model} has no training.planning_penalty_weight (written by rplearn fit --order auto "
+                         f"since this version); {refit}, or give --prior-std", param="from_model")
+    else:
+        weight = float(training.planning_penalty_weight)
+    if drift_std_db is None:
+        if training.drift_std_db is None:
+            raise InputError(f"from_model: {model} has no training.drift_std_db (written by rplearn fit --order auto of a "
+                             f"dataset in memory whose rows have times: not of a streamed one); {refit}, or give --drift",
+                             param="from_model")
+        drift_std_db = float(training.drift_std_db)
+    return replace(options, noise_std_db=float(noise_std_db), penalty_weight=float(weight), power=power,
+                   correlated_std_db=float(drift_std_db), misfit_std_db=0.0, prior_variance_factor=1.0)
+
+
+def _planning_model(model: str) -> PatternSet:
+    """The automatic pattern fit of a model file, or a one-line refusal naming it."""
+    try:
+        fitted = load_model(model)
+    except FileNotFoundError:
+        raise InputError(f"from_model: {model}: no such file", param="from_model") from None
+    except IsADirectoryError:
+        raise InputError(f"from_model: {model}: a folder, not a model file", param="from_model") from None
+    except RplearnError as exc:
+        first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise InputError(f"from_model: {first}", param="from_model") from None
+    if not isinstance(fitted, PatternSet):
+        raise InputError(f"from_model: {model} is a {fitted.kind} baseline ({fitted.label}), not a pattern fit; {model} must come from "
+                         "rplearn fit --order auto", param="from_model")
+    if fitted.training.selection is None:
+        raise InputError(f"from_model: {model} is a fixed-order fit ({fitted.basis.label}): it learned no smoothing, noise "
+                         f"inflation or drift; fit the earlier flight with rplearn fit DATASET --order auto", param="from_model")
+    return fitted
 
 
 @check_types
@@ -191,4 +326,4 @@ def plan_config(preset: str, plan_dir: str) -> Any:
     return replace(config, campaign=campaign)
 
 
-__all__ = ["OptimizeOptions", "OptimizedPlan", "optimize_plan", "plan_config"]
+__all__ = ["DEFAULT_NOISE_STD_DB", "OptimizeOptions", "OptimizedPlan", "optimize_plan", "options_from_model", "plan_config"]

@@ -7,8 +7,10 @@ import pytest
 
 from rplearn.core.bases import make_basis
 from rplearn.core.geometry import Directions
-from rplearn.core.lsq.block_sums import MIN_BLOCKS, BlockSums, correlated_ratio
+from rplearn.core.lsq import link_statistics
+from rplearn.core.lsq.block_sums import MIN_BLOCKS, BlockSums, correlated_ratio, time_block_sums
 from rplearn.core.lsq.normal_equations import NormalEquations
+from rplearn.core.lsq.penalty import sub_statistics
 from rplearn.errors import InputError
 
 RATE_HZ = 50.0
@@ -114,3 +116,80 @@ def test_a_late_batch_joins_the_open_block_and_never_reopens_a_closed_one() -> N
         blocks.add_batch(NormalEquations(basis, 2).add(*rows), s + 0.5)
     closed = blocks.closed()
     assert closed.n_blocks == 6 and closed.sum_n == pytest.approx(t.size)
+
+
+def _links(rng: np.random.Generator, n_nodes: int, n: int, one_link: bool) -> tuple[Directions, np.ndarray, np.ndarray]:
+    az = rng.uniform(-np.pi, np.pi, (2, n))
+    el = np.arcsin(rng.uniform(-1.0, 1.0, (2, n)))
+    tx = np.zeros(n, np.int_) if one_link else rng.integers(0, n_nodes, n)
+    rx = np.ones(n, np.int_) if one_link else (tx + rng.integers(1, n_nodes, n)) % n_nodes
+    return Directions(az[0], el[0], az[1], el[1]), tx, rx
+
+
+@pytest.mark.parametrize(("kind", "n_nodes", "one_link", "environment"),
+                         [("sh", 2, False, False), ("sh", 4, False, True), ("sh", 2, True, False), ("bg", 3, False, False),
+                          ("bg", 2, True, True)])
+def test_time_blocks_kept_in_the_pass_equal_each_blocks_own_statistics(monkeypatch, kind, n_nodes, one_link, environment):
+    """Statistics given each sample's time block keep every block's sums per directed link, the
+    same as each block accumulated alone (many links at once, one link in pipelined blocks, a
+    basis without Gram moments; runs split between blocks of samples), the rest unchanged; their
+    block sums, also at a nested smaller order, those a live session's batches give."""
+    monkeypatch.setattr(link_statistics, "BLOCK_SAMPLES", 700)
+    monkeypatch.setattr(link_statistics, "PIPELINE_MIN_BLOCK", 300)
+    rng = np.random.default_rng(n_nodes)
+    basis = make_basis(kind, 5 if kind == "sh" else 3)
+    small = make_basis("sh", 3) if kind == "sh" else basis
+    n = 4000
+    d, tx, rx = _links(rng, n_nodes, n, one_link)
+    y, e = rng.normal(0.0, 3.0, n), (rng.normal(size=n) if environment else None)
+    t = np.sort(rng.uniform(0.0, 80.0, n))
+    label = np.floor(t / BLOCK_S).astype(np.int64)
+    kept = NormalEquations(basis, n_nodes, environment).add(d, tx, rx, y, e, time_block=label)
+    plain = NormalEquations(basis, n_nodes, environment).add(d, tx, rx, y, e)
+    np.testing.assert_allclose(kept.gram, plain.gram, rtol=0, atol=1e-9 * np.abs(plain.gram).max())
+    np.testing.assert_allclose(kept.rhs, plain.rhs, atol=1e-8)
+    for k, v in plain.directed.items():
+        np.testing.assert_allclose(kept.directed[k], v, atol=1e-8)
+    assert not plain.block_directed and sorted(kept.block_directed) == sorted(np.unique(label).tolist())
+    want, want_small = BlockSums(n_nodes, basis.n_coef, BLOCK_S), BlockSums(n_nodes, small.n_coef, BLOCK_S)
+    for k in np.unique(label):
+        m = label == k
+        alone = NormalEquations(basis, n_nodes, environment).add(Directions(*(a[m] for a in d)), tx[m], rx[m], y[m],
+                                                                 None if e is None else e[m])
+        assert set(kept.block_directed[int(k)]) == set(alone.directed)
+        for key, v in alone.directed.items():
+            np.testing.assert_allclose(kept.block_directed[int(k)][key], v, atol=1e-8)
+        want.add_batch(alone, (k + 0.5) * BLOCK_S)
+        want_small.add_batch(sub_statistics(alone, small), (k + 0.5) * BLOCK_S)
+    halves = [NormalEquations(basis, n_nodes, environment) for _ in range(2)]  # merged: one unit in two pieces
+    for half, part in zip(halves, (slice(0, n // 2), slice(n // 2, n))):
+        half.add(Directions(*(a[part] for a in d)), tx[part], rx[part], y[part], None if e is None else e[part],
+                 time_block=label[part])
+    merged = halves[0].merge(halves[1])
+    for got, ref in ((time_block_sums([kept], BLOCK_S), want.closed()), (time_block_sums([merged], BLOCK_S), want.closed()),
+                     (time_block_sums([kept], BLOCK_S, small.n_coef), want_small.closed())):
+        assert got is not None and got.n_blocks == ref.n_blocks
+        for name in ("cross", "cross_n", "sum_yv"):
+            np.testing.assert_allclose(getattr(got, name), getattr(ref, name), rtol=1e-10, atol=1e-8)
+        for name in ("sum_yy", "sum_n", "sum_nn"):
+            assert getattr(got, name) == pytest.approx(getattr(ref, name), rel=1e-12)
+
+
+def test_time_blocks_of_two_units_stay_apart_and_bad_labels_are_refused() -> None:
+    basis = make_basis("sh", 3)
+    rng = np.random.default_rng(4)
+    d, tx, rx = _links(rng, 2, 600, False)
+    y = rng.normal(size=600)
+    label = np.repeat(np.arange(6), 100)
+    units = [NormalEquations(basis, 2).add(d, tx, rx, y, time_block=label) for _ in range(2)]
+    both = time_block_sums(units, BLOCK_S)
+    one = time_block_sums(units[:1], BLOCK_S)
+    assert both is not None and one is not None and both.n_blocks == 2 * one.n_blocks == 12
+    np.testing.assert_allclose(both.cross, 2.0 * one.cross)
+    assert time_block_sums([NormalEquations(basis, 2).add(d, tx, rx, y)], BLOCK_S) is None
+    with pytest.raises(InputError, match="time_block"):
+        NormalEquations(basis, 2).add(d, tx, rx, y, time_block=label.astype(float))
+    with pytest.raises(InputError, match="time_block has 5 values"):
+        NormalEquations(basis, 2).add(d, tx, rx, y, time_block=label[:5])
+    with pytest.raises(InputError, match="n_coef"):
+        time_block_sums(units, BLOCK_S, 99)

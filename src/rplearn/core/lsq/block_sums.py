@@ -30,6 +30,7 @@ the errors included), solved for the two.
 from __future__ import annotations
 
 import copy
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -166,6 +167,60 @@ class BlockSums:
 
 
 @check_types
+def time_block_sums(statistics: Sequence[NormalEquations], block_s: float = DEFAULT_BLOCK_S,
+                    n_coef: int | None = None) -> BlockSums | None:
+    """The block sums of samples whose statistics kept their time blocks
+    (:attr:`NormalEquations.block_directed`: samples added with ``time_block``), every block
+    closed: each statistics' blocks (a flight unit's) apart from the others'. None when none
+    kept any.
+
+    Parameters
+    ----------
+    statistics : sequence of NormalEquations
+        The statistics (of one basis and node count), e.g. one per flight unit.
+    block_s : float
+        The length of the blocks the labels count [s].
+    n_coef : int, optional
+        Only the first ``n_coef`` coefficients of every node (a smaller spherical-harmonic
+        order, whose coefficients lead the larger one's, as
+        :func:`rplearn.core.lsq.penalty.sub_statistics` takes them); default all.
+    """
+    kept = [st for st in statistics if st.block_directed]
+    if not kept:
+        return None
+    big = kept[0].basis.n_coef
+    p = big if n_coef is None else int(n_coef)
+    if not 1 <= p <= big:
+        raise InputError(f"n_coef: expected 1..{big}, got {n_coef!r}", param="n_coef")
+    out = BlockSums(kept[0].n_nodes, p, block_s)
+    groups: dict[tuple[int, int, tuple[int, int]], int] = {}  # (statistics, block, link) -> its vector
+    where, links, rows = [], [], []
+    for i, st in enumerate(kept):
+        if st.n_nodes != out.n_nodes or st.basis.n_coef != big:
+            raise InputError("time_block_sums: statistics of different bases or node counts", param="statistics")
+        for label in sorted(st.block_directed):
+            for key, sums in st.block_directed[label].items():
+                where.append(groups.setdefault((i, label, (min(key), max(key))), len(groups)))
+                links.append(key)
+                rows.append(sums)
+    sums_all, at, code = np.array(rows, np.float64), np.array(where, np.intp), np.array([t * out.n_nodes + r for t, r in links])
+    v = np.zeros((len(groups), out.n_nodes * p + 2))
+    for c in np.unique(code):  # each directed link's entries at once (a vector holds each at most once)
+        t, r = divmod(int(c), out.n_nodes)
+        m = code == c
+        v[at[m], t * p:(t + 1) * p] += sums_all[m, :p]
+        v[at[m], r * p:(r + 1) * p] += sums_all[m, big:big + p]
+        v[at[m], -2:] += sums_all[m, 2 * big:2 * big + 2]  # sum y, count
+    v = v[v[:, -1] > 0]
+    features, s, n = v[:, :-2], v[:, -2], v[:, -1]
+    out.cross = features.T @ features
+    out.cross_n = (features * n[:, None]).T @ features
+    out.sum_yv = s @ features
+    out.sum_yy, out.sum_n, out.sum_nn, out.n_blocks = float(s @ s), float(n.sum()), float(n @ n), int(n.size)
+    return out
+
+
+@check_types
 def correlated_ratio(normal: NormalEquations, blocks: BlockSums, prior_diag: Any) -> float:
     """``kappa = s_c^2 / sigma^2``: the drifting error's block-offset variance over the white
     noise's, estimated by moments (module docstring); 0 with fewer than :data:`MIN_BLOCKS`
@@ -215,4 +270,4 @@ def correlated_ratio(normal: NormalEquations, blocks: BlockSums, prior_diag: Any
     return float(sc2 / sigma2)
 
 
-__all__ = ["DEFAULT_BLOCK_S", "MIN_BLOCKS", "BlockSums", "correlated_ratio"]
+__all__ = ["DEFAULT_BLOCK_S", "MIN_BLOCKS", "BlockSums", "correlated_ratio", "time_block_sums"]

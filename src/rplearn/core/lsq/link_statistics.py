@@ -87,6 +87,42 @@ def _fill_features(
             basis.design_rows_into(az_rx[s:e], el_rx[s:e], view[p + gap : 2 * p + gap])
 
 
+#: Runs of samples whose rows :func:`link_statistics` and :func:`segmented_link_statistics` also
+#: sum (``(starts, sums)``: the first sample of every run, strictly ascending from 0, and a zeroed
+#: array of shape ``(runs, rows)`` the sums of each run's rows ``[f_tx, y, extra, f_rx]``, features
+#: in the basis's row order, are added to): a time block's sums of its features, observations and
+#: count (the runs of samples of one link in one block of time,
+#: :class:`~rplearn.core.lsq.block_sums.BlockSums`). With Gram moments (SH) the feature sums come
+#: from each run's moments (:meth:`~rplearn.core.sh.SphericalHarmonics.sums_from_moments`), kept
+#: per run instead of per range: no pass over the feature rows of their own.
+RunSums = tuple[NDArray[np.intp], FloatArray]
+
+
+def run_sums_in(buf: FloatArray, starts: NDArray[np.intp], start: int, stop: int) -> tuple[int, FloatArray]:
+    """The sums of the rows of ``buf`` (the samples ``start:stop`` of a link, one per column)
+    over the parts of the runs beginning at ``starts`` (strictly ascending, ``starts[0] == 0``)
+    that fall in them: the index of the first run, and the sums, shape ``(runs there, rows)``."""
+    first, local = _local_runs(starts, start, stop)
+    return first, np.add.reduceat(buf, local, axis=1).T
+
+
+def _local_runs(starts: NDArray[np.intp], start: int, stop: int) -> tuple[int, NDArray[np.intp]]:
+    """The first run of ``starts`` in the samples ``start:stop`` and the starts of the runs' parts
+    there, from 0."""
+    first = int(np.searchsorted(starts, start, side="right")) - 1
+    last = int(np.searchsorted(starts, stop, side="left"))
+    return first, (np.maximum(starts[first:last], start) - start).astype(np.intp)
+
+
+def _moment_run_sums(basis: Basis, buf: FloatArray, moments: tuple[FloatArray, FloatArray], local: NDArray[np.intp],
+                     gap: int) -> FloatArray:
+    """Each run's sums of the rows ``[f_tx, y, extra, f_rx]`` of ``buf``: the features' from the
+    runs' moments (tx, rx), the ``gap`` rows of ``y`` and the extra columns summed directly."""
+    p = basis.n_coef
+    return np.concatenate([basis.sums_from_moments(moments[0]), np.add.reduceat(buf[p:p + gap], local, axis=1).T,
+                           basis.sums_from_moments(moments[1])], axis=1)
+
+
 def link_statistics(
     basis: Basis,
     az_tx: FloatArray,
@@ -95,6 +131,7 @@ def link_statistics(
     el_rx: FloatArray,
     y: FloatArray,
     extra: FloatArray | None = None,
+    runs: RunSums | None = None,
 ) -> FloatArray:
     """``Z^T Z`` with ``Z = [f(tx directions), y, extra..., f(rx directions)]`` over samples of one link.
 
@@ -105,7 +142,8 @@ def link_statistics(
     buffer, either one symmetric rank-k update of all rows, or, for a basis with Gram moments
     (SH), only the product ``[f_tx; y; extra] [y; extra; f_rx]^T`` (about half the work): the
     two diagonal feature blocks then come from the moments. (Many links at once:
-    :func:`segmented_link_statistics`.)
+    :func:`segmented_link_statistics`.) ``runs`` (:data:`RunSums`): also each run's sums of the
+    rows ``[f_tx, y, extra, f_rx]``, from the same block buffer.
     """
     az_tx, el_tx, az_rx, el_rx, y = (np.ascontiguousarray(a, np.float64).ravel() for a in (az_tx, el_tx, az_rx, el_rx, y))
     p = basis.n_coef
@@ -128,31 +166,46 @@ def link_statistics(
             if m:
                 buf[p + 1 : p + gap] = extra[:, part]
             total += buf @ buf.T
+            if runs is not None:
+                first, sums = run_sums_in(buf, runs[0], start, stop)
+                runs[1][first:first + sums.shape[0]] += sums
         return total
     shape = basis.moment_shape
     assert shape is not None
     moments = np.zeros((2, *shape))
     per_block = pipelined_block_samples(k, n)
 
-    def statistics(start: int) -> tuple[FloatArray, FloatArray]:
-        """The cross product and the moments of the block of samples from ``start`` (in any
-        thread: its own block buffer and feature scratch)."""
+    def statistics(start: int) -> tuple[FloatArray, FloatArray, tuple[int, FloatArray] | None]:
+        """The cross product, the moments and the runs' sums of the block of samples from
+        ``start`` (in any thread: its own block buffer and feature scratch)."""
         stop = min(n, start + per_block)
         block = DEFAULT_RUNTIME.block_buffer(k * per_block)
         buf = block[: k * (stop - start)].reshape(k, stop - start)
         part = slice(start, stop)
-        own = np.zeros((2, *shape))
-        _fill_features(basis, buf, Directions(az_tx[part], el_tx[part], az_rx[part], el_rx[part]), own, gap)
+        directions = Directions(az_tx[part], el_tx[part], az_rx[part], el_rx[part])
+        if runs is None:
+            own = np.zeros((2, *shape))
+            _fill_features(basis, buf, directions, own, gap)
+        else:  # the moments per run (their sums the run's feature sums), then summed
+            first, local = _local_runs(runs[0], start, stop)
+            bounds = np.r_[local, stop - start].astype(np.intp)
+            per_run = (np.zeros((local.size, *shape)), np.zeros((local.size, *shape)))
+            _fill_features(basis, buf, directions, per_run, gap, (bounds, bounds))
+            own = np.stack([per_run[0].sum(axis=0), per_run[1].sum(axis=0)])
         buf[p] = y[part]
         if m:
             buf[p + 1 : p + gap] = extra[:, part]
-        return buf[: p + gap] @ buf[p:].T, own
+        sums = None if runs is None else (first, _moment_run_sums(basis, buf, per_run, local, gap))
+        return buf[: p + gap] @ buf[p:].T, own, sums
 
     # blocks computed ahead by the runtime's workers (features and product of a block on one
     # core each), added here in order: the sums do not depend on which thread made a block
-    for product, own in DEFAULT_RUNTIME.in_order(statistics, range(0, n, per_block)):
+    for product, own, part_sums in DEFAULT_RUNTIME.in_order(statistics, range(0, n, per_block)):
         total[: p + gap, p:] += product
         moments += own
+        if runs is not None and part_sums is not None:  # a run split between blocks: both parts added here
+            first, sums = part_sums
+            runs[1][first:first + sums.shape[0]] += sums
     total[p:, : p + gap] = total[: p + gap, p:].T
     total[:p, :p] = basis.gram_from_moments(moments[0])
     total[p + gap :, p + gap :] = basis.gram_from_moments(moments[1])
@@ -179,7 +232,7 @@ def pipelined_block_samples(rows: int, n_samples: int) -> int:
 
 def segmented_link_statistics(
     basis: Basis, directions: Directions, y: FloatArray, extra: FloatArray, bounds: NDArray[np.intp],
-    natural: NDArray[np.intp] | None = None, tx_bounds: NDArray[np.intp] | None = None,
+    natural: NDArray[np.intp] | None = None, tx_bounds: NDArray[np.intp] | None = None, runs: RunSums | None = None,
 ) -> tuple[FloatArray, tuple[FloatArray, FloatArray]]:
     """:func:`link_statistics` of many links at once, for a basis with Gram moments (SH).
 
@@ -189,7 +242,9 @@ def segmented_link_statistics(
     The samples (at most :func:`block_samples` of the rows) are sorted by link, link ``j``
     holding samples ``bounds[j]:bounds[j + 1]``. The features of all of them are computed in
     one pass (not one per link: a swarm's links hold a few hundred samples each, too few to
-    amortise a pass), then per link the product ``[f_tx; y; extra] [y; extra; f_rx]^T``.
+    amortise a pass), then per link the product ``[f_tx; y; extra] [y; extra; f_rx]^T``, and with
+    ``runs`` (:data:`RunSums`, runs that do not straddle links) each run's sums of the rows
+    ``[f_tx, y, extra, f_rx]`` in the basis's row order.
 
     Returns
     -------
@@ -213,10 +268,18 @@ def segmented_link_statistics(
     tx_bounds = bounds if tx_bounds is None else tx_bounds
     shape = basis.moment_shape
     assert shape is not None  # only bases with Gram moments come here
-    moments = (np.zeros((tx_bounds.size - 1, *shape)), np.zeros((n_links, *shape)))
-    _fill_features(basis, buf, directions, moments, gap, (tx_bounds, bounds))
+    if runs is None:
+        moments = (np.zeros((tx_bounds.size - 1, *shape)), np.zeros((n_links, *shape)))
+        _fill_features(basis, buf, directions, moments, gap, (tx_bounds, bounds))
+    else:  # the moments per run (their sums the run's feature sums), then summed per range
+        cuts = np.r_[runs[0], n].astype(np.intp)
+        per_run = (np.zeros((runs[0].size, *shape)), np.zeros((runs[0].size, *shape)))
+        _fill_features(basis, buf, directions, per_run, gap, (cuts, cuts))
+        moments = (_ranges_of_runs(per_run[0], runs[0], tx_bounds), _ranges_of_runs(per_run[1], runs[0], bounds))
     buf[p] = y
     buf[p + 1 : p + gap] = extra
+    if runs is not None:
+        runs[1][:] += _moment_run_sums(basis, buf, per_run, runs[0], gap)
     products = np.empty((n_links, p + gap, gap + p))
     for j in range(n_links):
         a, b = bounds[j], bounds[j + 1]
@@ -225,6 +288,15 @@ def segmented_link_statistics(
         rows, cols = np.r_[natural, p:p + gap], np.r_[0:gap, gap + natural]
         products = products[:, rows[:, None], cols[None, :]]
     return products, moments
+
+
+def _ranges_of_runs(per_run: FloatArray, starts: NDArray[np.intp], bounds: NDArray[np.intp]) -> FloatArray:
+    """Per-run values summed over the ranges of ``bounds`` (each run inside one range)."""
+    which = np.searchsorted(bounds, starts, side="right") - 1  # non-decreasing: the runs in order
+    out = np.zeros((bounds.size - 1, *per_run.shape[1:]))
+    ranges, first = np.unique(which, return_index=True)
+    out[ranges] = np.add.reduceat(per_run, first, axis=0)
+    return out
 
 
 def block_starts(bounds: NDArray[np.intp], per_block: int, max_links: int) -> list[int]:
@@ -243,6 +315,6 @@ def max_links_per_block(basis: Basis, n_extra: int) -> int:
     return max(1, BLOCK_MAX_VALUES // (4 * side * side))
 
 
-__all__ = ["BLOCK_MAX_VALUES", "BLOCK_SAMPLES", "FEATURE_CHUNK", "PIPELINE_MIN_BLOCK", "block_rows", "block_samples",
+__all__ = ["BLOCK_MAX_VALUES", "BLOCK_SAMPLES", "FEATURE_CHUNK", "PIPELINE_MIN_BLOCK", "RunSums", "block_rows", "block_samples",
            "block_starts", "link_statistics", "max_links_per_block", "pipelined_block_samples",
-           "reserve_block_buffer", "segmented_link_statistics"]
+           "reserve_block_buffer", "run_sums_in", "segmented_link_statistics"]

@@ -84,6 +84,12 @@ class NormalEquations:
     #: sums per time block of these samples (:class:`~rplearn.core.lsq.block_sums.BlockSums`), set
     #: by code that keeps them (a live session's total); None: not kept. Not merged or copied.
     blocks: Any = field(init=False, default=None, repr=False, compare=False)
+    #: per time block (the labels given to :meth:`add` as ``time_block``), each directed link's
+    #: sums as :attr:`directed` holds them over all samples: read off the rows the statistics
+    #: compute anyway (no sample re-read), merged by :meth:`merge`, not carried by
+    #: :meth:`with_shared`; empty when no labels were given
+    block_directed: dict[int, dict[tuple[int, int], FloatArray]] = field(init=False, default_factory=dict, repr=False,
+                                                                         compare=False)
 
     def __post_init__(self) -> None:
         if self.n_nodes < 2:
@@ -119,6 +125,7 @@ class NormalEquations:
         rx_index: ArrayLike,
         joint_gain_db: ArrayLike | None = None,
         environment: ArrayLike | None = None,
+        time_block: ArrayLike | None = None,
     ) -> NormalEquations:
         """Accumulate a chunk of samples.
 
@@ -133,6 +140,9 @@ class NormalEquations:
         environment : array_like, optional
             The shared environment regressor of every sample; required exactly when the
             statistics were made with ``environment=True``.
+        time_block : array_like of int, optional
+            The block of time of every sample (e.g. ``floor(t / 5 s)``): each block's sums per
+            directed link are kept too (:attr:`block_directed`).
         """
         if self.shared:
             raise InputError("these statistics have shared columns appended (with_shared); add samples before that")
@@ -145,8 +155,11 @@ class NormalEquations:
             raise InputError("environment: give the environment column exactly when the statistics accumulate one",
                              param="environment")
         e = np.zeros(n) if environment is None else np.ascontiguousarray(environment, np.float64).ravel()
+        blocks = None if time_block is None else np.asarray(time_block).ravel()
+        if blocks is not None and not np.issubdtype(blocks.dtype, np.integer):
+            raise InputError(f"time_block: expected an integer block per sample, got {blocks.dtype}", param="time_block")
         for name, arr in (("el_tx", el_tx), ("az_rx", az_rx), ("el_rx", el_rx), ("tx_index", tx), ("rx_index", rx),
-                          ("joint_gain_db", y), ("environment", e)):
+                          ("joint_gain_db", y), ("environment", e), ("time_block", e if blocks is None else blocks)):
             if arr.size != n:
                 raise InputError(f"{name} has {arr.size} values, az_tx has {n}")
         for name, arr in (("az_tx", az_tx), ("el_tx", el_tx), ("az_rx", az_rx), ("el_rx", el_rx), ("joint_gain_db", y),
@@ -160,16 +173,18 @@ class NormalEquations:
         if np.any(tx == rx):
             raise InputError("a sample has the same node as transmitter and receiver")
         with blas_threads_for(n, 2 * self.basis.n_coef):  # the thread policy (rplearn.core.threads)
-            self._add_checked(n, tx, rx, (az_tx, el_tx, az_rx, el_rx, y, e))
+            self._add_checked(n, tx, rx, (az_tx, el_tx, az_rx, el_rx, y, e), blocks)
         return self
 
-    def _add_checked(self, n: int, tx: NDArray[Any], rx: NDArray[Any], arrays: tuple[FloatArray, ...]) -> None:
-        """:meth:`add` of ``n`` checked samples: ``arrays`` are ``az_tx, el_tx, az_rx, el_rx, y, e``."""
+    def _add_checked(self, n: int, tx: NDArray[Any], rx: NDArray[Any], arrays: tuple[FloatArray, ...],
+                     blocks: NDArray[Any] | None = None) -> None:
+        """:meth:`add` of ``n`` checked samples: ``arrays`` are ``az_tx, el_tx, az_rx, el_rx, y, e``;
+        ``blocks`` each sample's time block, or None."""
         az_tx, el_tx, az_rx, el_rx, y, e = arrays
         self._own_gram()
         pair_code = tx.astype(np.int64) * self.n_nodes + rx
         if pair_code.min() == pair_code.max():  # one link direction: no grouping needed
-            groups = [(int(pair_code[0]), slice(None))]
+            groups = [(int(pair_code[0]), slice(0, n))]
         else:  # sorted once by link, each link a contiguous slice (no mask per link)
             # codes below 2^16 (up to 256 nodes) sort as uint16: numpy's stable sort is then a
             # radix sort (4 ms for 500,000 samples against 30 ms as int64)
@@ -177,29 +192,57 @@ class NormalEquations:
             order = np.argsort(keys, kind="stable")
             sorted_code = pair_code[order]
             az_tx, el_tx, az_rx, el_rx, y, e = (a[order] for a in (az_tx, el_tx, az_rx, el_rx, y, e))
+            blocks = None if blocks is None else blocks[order]
             starts = np.flatnonzero(np.r_[True, sorted_code[1:] != sorted_code[:-1]])
             ends = np.r_[starts[1:], n]
             groups = [(int(sorted_code[a]), slice(int(a), int(b))) for a, b in zip(starts, ends)]
+        # runs of samples of one link and one time block (each link's samples in their order)
+        runs = None
+        if blocks is not None:
+            cut = np.zeros(n, bool)
+            cut[[sel.start for _, sel in groups]] = True
+            cut[1:] |= blocks[1:] != blocks[:-1]
+            runs = np.flatnonzero(cut)
         if len(groups) > 1 and self.basis.moment_shape is not None and self.basis.stacked_samples:
             # many links: features of many links per pass, each node's diagonal block from its
             # summed moments once per call, not once per link end
             codes = np.array([c for c, _ in groups], np.int64)
             starts = np.array([sel.start for _, sel in groups], np.intp)
-            self._add_links(codes, np.r_[starts, n], az_tx, el_tx, az_rx, el_rx, y, e)
+            self._add_links(codes, np.r_[starts, n], (az_tx, el_tx, az_rx, el_rx, y, e),
+                            None if runs is None or blocks is None else (runs, blocks[runs]))
         else:
             for code, sel in groups:
                 t, r = divmod(code, self.n_nodes)
-                self._add_pair(t, r, az_tx[sel], el_tx[sel], az_rx[sel], el_rx[sel], y[sel], e[sel])
+                link_runs = None
+                if runs is not None and blocks is not None:
+                    mine = runs[(runs >= sel.start) & (runs < sel.stop)]
+                    link_runs = (mine - sel.start, blocks[mine])
+                self._add_pair(t, r, (az_tx[sel], el_tx[sel], az_rx[sel], el_rx[sel], y[sel], e[sel]), link_runs)
         self.n_samples += n
 
+    def _add_run_sums(self, t: int, r: int, labels: NDArray[Any], sums: FloatArray) -> None:
+        """Add runs' row sums (rows ``[f_tx, y, 1, e, f_rx]`` in the block's row order) of link
+        ``t -> r`` to :attr:`block_directed` under the runs' time blocks ``labels``."""
+        m = self._n_extra
+        p = self.basis.n_coef
+        natural = sums[:, self._natural]  # [f_tx, f_rx, y, 1, (e)] in natural order
+        for label, row in zip(labels.tolist(), natural):
+            per_link = self.block_directed.setdefault(int(label), {})
+            prev = per_link.get((t, r))
+            vec = np.zeros(2 * p + 3) if prev is None else prev
+            vec[: 2 * p + 1 + m] += row
+            per_link[(t, r)] = vec
+
     def _add_links(
-        self, codes: NDArray[np.int64], bounds: NDArray[np.intp], az_tx: FloatArray, el_tx: FloatArray,
-        az_rx: FloatArray, el_rx: FloatArray, y: FloatArray, e: FloatArray,
+        self, codes: NDArray[np.int64], bounds: NDArray[np.intp], arrays: tuple[FloatArray, ...],
+        runs: tuple[NDArray[np.intp], NDArray[Any]] | None = None,
     ) -> None:
         """Add samples sorted by link (link ``codes[j]`` = ``tx * n_nodes + rx`` holds samples
-        ``bounds[j]:bounds[j + 1]``) in blocks of samples (:func:`segmented_link_statistics`);
-        the diagonal blocks from the nodes' summed moments, the cross blocks into the upper
-        block triangle, then mirrored."""
+        ``bounds[j]:bounds[j + 1]``; ``arrays``: ``az_tx, el_tx, az_rx, el_rx, y, e``) in blocks
+        of samples (:func:`segmented_link_statistics`); the diagonal blocks from the nodes'
+        summed moments, the cross blocks into the upper block triangle, then mirrored. ``runs``:
+        the starts of the runs of one link and time block, and their blocks' labels."""
+        az_tx, el_tx, az_rx, el_rx, y, e = arrays
         p = self.basis.n_coef
         n = az_tx.size
         m = self._n_extra
@@ -213,27 +256,37 @@ class NormalEquations:
         starts = block_starts(bounds, per_block, max_links_per_block(self.basis, m))
         stops = dict(zip(starts, [*starts[1:], n]))
 
-        def statistics(s: int) -> tuple[FloatArray, tuple[FloatArray, FloatArray], int, int, NDArray[np.int64]]:
+        def statistics(s: int) -> tuple[FloatArray, tuple[FloatArray, FloatArray], int, int, NDArray[np.int64], Any]:
             stop = stops[s]
             first = int(np.searchsorted(bounds, s, side="right")) - 1
             last = int(np.searchsorted(bounds, stop, side="left"))
             local = np.clip(bounds[first : last + 1], s, stop) - s
             tx = codes[first:last] // self.n_nodes
-            runs = np.r_[0, np.flatnonzero(tx[1:] != tx[:-1]) + 1, tx.size]  # links sorted by tx: its runs
+            tx_runs = np.r_[0, np.flatnonzero(tx[1:] != tx[:-1]) + 1, tx.size]  # links sorted by tx: its runs
             extra = np.ones((1, stop - s)) if not self.environment else np.stack([np.ones(stop - s), e[s:stop]])
             part = slice(s, stop)
+            mine = None
+            if runs is not None:  # this block's runs of one link and time block, from its first sample
+                a, b = int(np.searchsorted(runs[0], s, side="right")) - 1, int(np.searchsorted(runs[0], stop, side="left"))
+                at = np.maximum(runs[0][a:b], s)
+                mine = (at, runs[1][a:b], np.zeros((b - a, 2 * p + 1 + m)))
             products, moments = segmented_link_statistics(
                 self.basis, Directions(az_tx[part], el_tx[part], az_rx[part], el_rx[part]), y[part], extra, local,
-                self._natural[:p], local[runs])
-            return products, moments, first, last, tx[runs[:-1]]
+                self._natural[:p], local[tx_runs], None if mine is None else (mine[0] - s, mine[2]))
+            return products, moments, first, last, tx[tx_runs[:-1]], mine
 
-        for products, moments, first, last, run_tx in DEFAULT_RUNTIME.in_order(statistics, starts):
+        for products, moments, first, last, run_tx, mine in DEFAULT_RUNTIME.in_order(statistics, starts):
             tx, rx = np.divmod(codes[first:last], self.n_nodes)
             flat = node_moments.reshape(self.n_nodes, -1)
             flat += (run_tx[None, :] == nodes).astype(np.float64) @ moments[0].reshape(run_tx.size, -1)
             flat += (rx[None, :] == nodes).astype(np.float64) @ moments[1].reshape(rx.size, -1)
             self._add_products(tx, rx, products)
             touched.update(zip(np.minimum(tx, rx).tolist(), np.maximum(tx, rx).tolist()))
+            if mine is not None:
+                link = np.searchsorted(bounds, mine[0], side="right") - 1  # each run's link
+                for j in range(link.size):
+                    t, r = divmod(int(codes[link[j]]), self.n_nodes)
+                    self._add_run_sums(t, r, mine[1][j:j + 1], mine[2][j:j + 1])
         nat = self._natural[:p]
         for k in np.flatnonzero(np.any(node_moments != 0, axis=(1, 2))):
             self.gram[k * p : (k + 1) * p, k * p : (k + 1) * p] += self.basis.gram_from_moments(node_moments[k])[
@@ -281,9 +334,11 @@ class NormalEquations:
             self.directed[(t, r)] = sums[j] if prev is None else prev + sums[j]
 
     def _add_pair(
-        self, t: int, r: int, az_tx: FloatArray, el_tx: FloatArray, az_rx: FloatArray, el_rx: FloatArray, y: FloatArray,
-        e: FloatArray,
+        self, t: int, r: int, arrays: tuple[FloatArray, ...], runs: tuple[NDArray[np.intp], NDArray[Any]] | None = None,
     ) -> None:
+        """Add the samples of link ``t -> r`` (``arrays``: ``az_tx, el_tx, az_rx, el_rx, y, e``);
+        ``runs``: the starts of its runs of one time block and their labels."""
+        az_tx, el_tx, az_rx, el_rx, y, e = arrays
         p = self.basis.n_coef
         bt = slice(t * p, (t + 1) * p)
         br = slice(r * p, (r + 1) * p)
@@ -293,7 +348,10 @@ class NormalEquations:
         # Both nodes' blocks of X^T X, X^T y and y^T y, and the sums of the directed link, from
         # one pass over the samples.
         extra = np.ones((1, n)) if not self.environment else np.stack([np.ones(n), e])
-        block = link_statistics(self.basis, az_tx, el_tx, az_rx, el_rx, y, extra)
+        run_sums = None if runs is None else (runs[0], np.zeros((runs[0].size, 2 * p + 1 + self._n_extra)))
+        block = link_statistics(self.basis, az_tx, el_tx, az_rx, el_rx, y, extra, run_sums)
+        if runs is not None and run_sums is not None:
+            self._add_run_sums(t, r, runs[1], run_sums[1])
         block = block[np.ix_(self._natural, self._natural)]
         self.gram[bt, bt] += block[:p, :p]
         self.gram[br, br] += block[p : 2 * p, p : 2 * p]
@@ -338,6 +396,10 @@ class NormalEquations:
             self.link_counts[k] = self.link_counts.get(k, 0) + v
         for k, sums in other.directed.items():
             self.directed[k] = sums.copy() if k not in self.directed else self.directed[k] + sums
+        for label, links in other.block_directed.items():
+            mine = self.block_directed.setdefault(label, {})
+            for k, sums in links.items():
+                mine[k] = sums.copy() if k not in mine else mine[k] + sums
         self.env_cross += other.env_cross
         self.env_sq += other.env_sq
         self.env_y += other.env_y

@@ -1,0 +1,107 @@
+"""``trajectory --optimize --from-model``: the plan's prior from an earlier flight's model file
+(issue 27, item 3): its noise, smoothing and drift, explicit values over them, and the refusals."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from simulated_flights import synced
+
+from rplearn.analysis.manoeuvres import ManoeuvreOptions, prior_penalty_weight
+from rplearn.core.lsq.block_sums import DEFAULT_BLOCK_S
+from rplearn.errors import InputError
+from rplearn.models import ModelSpec, load_model
+from rplearn.models.options import FitOptions
+from rplearn.workflows.calibration_plan import OptimizeOptions, optimize_plan, options_from_model
+from rplearn.workflows.learning import fit_dataset
+
+SPEC = ModelSpec.parse("sh-5")
+PLAN = dict(model="sh-5", target_spread_db=2.5, budget_s=120.0)
+
+
+@pytest.fixture(scope="module")
+def earlier(tmp_path_factory):
+    """``rplearn fit --order auto`` of a small simulated flight (smoke preset) written to a model
+    file, and that model."""
+    d = tmp_path_factory.mktemp("earlier")
+    flight = synced("smoke", 5)
+    path = str(d / "auto.json")
+    outcome = fit_dataset(str(flight.folder / "m.parquet"), ModelSpec.parse("sh"), options=FitOptions(auto=True), output=path)
+    assert outcome.fitted.model.training.drift_std_db is not None
+    return path, load_model(path)
+
+
+def test_the_options_are_the_models_noise_smoothing_and_drift(earlier):
+    path, model = earlier
+    t = model.training
+    opts = options_from_model(path, ManoeuvreOptions(misfit_std_db=0.3, prior_variance_factor=2.0), SPEC)
+    assert opts.noise_std_db == pytest.approx(t.noise_std_db * np.sqrt(t.variance_inflation), rel=1e-12)
+    assert opts.penalty_weight == t.planning_penalty_weight > 0 and opts.power == t.penalty_power
+    assert opts.correlated_std_db == t.drift_std_db and opts.correlation_s == DEFAULT_BLOCK_S
+    assert t.drift_std_db >= 0 and np.isfinite(t.drift_std_db)
+    assert opts.misfit_std_db == 0.0 and opts.prior_variance_factor == 1.0  # the inflated posterior, as live plans
+
+
+def test_explicit_values_override_the_models(earlier):
+    path, model = earlier
+    opts = options_from_model(path, ManoeuvreOptions(), SPEC, noise_std_db=3.0, drift_std_db=0.25)
+    assert opts.noise_std_db == 3.0 and opts.correlated_std_db == 0.25
+    assert opts.penalty_weight == model.training.planning_penalty_weight
+    stated = options_from_model(path, ManoeuvreOptions(), SPEC, noise_std_db=3.0, prior_std_db=5.0)
+    assert stated.penalty_weight == pytest.approx(prior_penalty_weight(SPEC.basis(), 5.0, 3.0, SPEC.ridge_weight, 2.0))
+    assert stated.correlated_std_db == model.training.drift_std_db
+
+
+def test_the_plan_from_the_model_differs_from_the_nominal_prior_and_says_what_it_took(earlier, tmp_path):
+    path, model = earlier
+    plan = optimize_plan(str(tmp_path / "from_model"), OptimizeOptions(**PLAN, from_model=path))
+    nominal = optimize_plan(str(tmp_path / "nominal"), OptimizeOptions(**PLAN))
+    assert plan.prior is not None and nominal.prior is None
+    assert f"drift {model.training.drift_std_db:.2f} dB per 5-s block" in plan.prior and "(stated)" not in plan.prior
+    assert plan.start_spread_db != nominal.start_spread_db  # the model's smoothing, not the nominal 6-dB prior
+    assert plan.paths and all(p.endswith(".csv") for p in plan.paths)
+    noisy = optimize_plan(str(tmp_path / "noisy"), OptimizeOptions(**PLAN, from_model=path, noise_std_db=8.0, drift_std_db=0.0))
+    assert "noise 8.00 dB (stated)" in noisy.prior and "drift 0.00 dB per 5-s block (stated)" in noisy.prior
+
+
+def _saved(model, path, **changes):
+    out = load_model(model)
+    out.training = out.training.replace(**changes)
+    out.save(str(path))
+    return str(path)
+
+
+def test_each_refusal_is_one_line_naming_the_file_and_what_to_do(earlier, tmp_path):
+    path, _ = earlier
+    flight = synced("smoke", 5)
+    fixed = str(tmp_path / "sh4.json")
+    fit_dataset(str(flight.folder / "m.parquet"), ModelSpec("sh", 4), output=fixed)
+    mean = str(tmp_path / "mean.json")
+    fit_dataset(str(flight.folder / "m.parquet"), ModelSpec.parse("mean"), output=mean)
+    corrupt = tmp_path / "corrupt.json"
+    corrupt.write_text("{")
+    cases = [
+        (str(tmp_path / "missing.json"), {}, "missing.json: no such"),
+        (str(corrupt), {}, "corrupt.json: not a valid JSON model file"),
+        (str(flight.folder / "m.parquet"), {}, "not a model file"),
+        (mean, {}, "mean.json is a mean baseline"),
+        (fixed, {}, "sh4.json is a fixed-order fit (SH-4)"),
+        (_saved(path, tmp_path / "no_drift.json", drift_std_db=None), {}, "has no training.drift_std_db"),
+        (_saved(path, tmp_path / "no_weight.json", planning_penalty_weight=None), {}, "has no training.planning_penalty_weight"),
+        (_saved(path, tmp_path / "no_noise.json", variance_inflation=None), {}, "has no training.variance_inflation"),
+        (_saved(path, tmp_path / "with_prior.json", prior={"A": "ref.json"}), {}, "was fitted with priors"),
+        (path, {"spec": ModelSpec.parse("bg-7")}, "plan reads its spread at BG-7"),
+    ]
+    for model, kw, text in cases:
+        with pytest.raises(InputError) as err:
+            options_from_model(model, ManoeuvreOptions(), kw.get("spec", SPEC))
+        message = str(err.value)
+        assert err.value.param == "from_model" and message.startswith("from_model: ") and "\n" not in message
+        assert text in message, (text, message)
+    # what the refusal says to do: the fit that writes the field, or the flag that replaces it
+    with pytest.raises(InputError, match=r"rplearn fit DATASET --order auto .*or give --drift"):
+        options_from_model(str(tmp_path / "no_drift.json"), ManoeuvreOptions(), SPEC)
+    # a stated value stands in for the field the model lacks
+    assert options_from_model(str(tmp_path / "no_drift.json"), ManoeuvreOptions(), SPEC, drift_std_db=0.4).correlated_std_db == 0.4
+    assert options_from_model(str(tmp_path / "no_weight.json"), ManoeuvreOptions(), SPEC, prior_std_db=6.0).penalty_weight > 0
+    assert not (tmp_path / "plan").exists()
