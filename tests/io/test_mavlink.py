@@ -477,7 +477,7 @@ def test_read_logs_reads_a_tlog_with_reader_options():
     assert meta["origin_geodetic"] == (41.1857, -96.0105, 304.0)
     f = meta["files"][0]
     assert f["kind"] == "pose+signal" and f["format"] == "tlog"
-    assert f["station_note"] == "station position given (station_geodetic)"
+    assert f["station_note"] == "station position given (ReaderOptions.station_geodetic)"
     base = logs.pose[logs.pose["node"] == "base"]
     np.testing.assert_allclose(base[["x", "y", "z"]].to_numpy(), 0.0, atol=1e-6)
 
@@ -540,9 +540,13 @@ def test_cli_station_flags(tmp_path):
 
     proc = rplearn_here(base[1:] + ["--station", "41.1855,-96.0105,330", "--station-node", "base"])  # in this process
     assert proc.returncode == 0, proc.stdout + proc.stderr
-    assert "station position given" in proc.stdout
+    assert "station position given (--station LAT,LON,ALT)" in proc.stdout  # the flag, not the option's field
+    assert "station_geodetic" not in proc.stdout + proc.stderr
     matched = read_table(str(out))
     assert set(zip(matched["tx"], matched["rx"])) == {("sys1", "base"), ("base", "sys1")}
+    far = rplearn_here(base[1:] + ["--station", "41.1855,-96.0105,1e308"])  # an altitude no place has: the flag's fault
+    assert far.returncode == 1
+    assert far.stderr.strip().startswith("error: --station: altitude 1e+308 m is outside"), far.stderr
     bad = subprocess.run(base + ["--station", "41.1855,-96.0105"], check=False, capture_output=True, text=True,
                          timeout=300)
     assert bad.returncode != 0 and "--station" in bad.stderr and "LAT,LON,ALT" in bad.stderr

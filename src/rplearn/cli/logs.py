@@ -164,6 +164,6 @@ def sync(
         say(c.curve_text())
         if not apply_offset:
             note(f"the offset was not applied; rerun with --apply-offset (or --offset {c.node}={c.offset_s:.3f}) to use it")
-    for line in outcome.notes:  # part of the data's accounting: on standard output
-        say(line)
+    for line in outcome.notes:  # part of the data's accounting: on standard output, options named by their flags
+        say(with_flag(line, None, sync) if "Options." in line else line)
     say("\n".join(with_flag(line, None, sync) for line in outcome.summary().splitlines()))

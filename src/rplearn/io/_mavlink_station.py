@@ -36,7 +36,7 @@ def station_fix(raw: Raw, station_geodetic: tuple[float, float, float] | None, f
     the log reports for the fix that placed it (None: given, or none reported). ``first_fix``: the vehicle's first
     valid position row (time [s], lat, lon, alt, ...)."""
     if station_geodetic is not None:
-        return station_geodetic, "station position given (station_geodetic)", None
+        return station_geodetic, "station position given (ReaderOptions.station_geodetic)", None
     home = "HOME_POSITION" if raw.fmt == "tlog" else "ORGN type 1 (home)"
     if raw.home is not None:
         return raw.home, f"station placed at the vehicle's home from {home}", accuracy_at(raw.accuracy, raw.home_t)

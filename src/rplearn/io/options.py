@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from rplearn._argtypes import check_types, is_finite_real
+from rplearn.core.plausible import PLAUSIBLE
 from rplearn.data.tables import check_frequency_hz, check_tx_power_dbm
 from rplearn.errors import InputError
 
@@ -51,6 +52,12 @@ def check_origin(origin: Any, name: str = "origin_geodetic") -> tuple[float, flo
         raise InputError(
             f"{name}: latitude must lie in [-90, 90] and longitude in [-180, 180] degrees, "
             f"got ({lat!r}, {lon!r})",
+            param=name,
+        )
+    band = PLAUSIBLE["altitude_m"]
+    if not band.low <= alt <= band.high:
+        raise InputError(
+            f"{name}: altitude {alt:g} m is outside {band.low:g} to {band.high:g} m ({band.why})",
             param=name,
         )
     return lat, lon, alt

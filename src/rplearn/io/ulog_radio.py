@@ -195,7 +195,7 @@ def _station_xyz(ulog: Any, pose: pd.DataFrame, meta: dict[str, Any], radio: Ulo
             raise InputError(f"{source}: a station position is given but the log has no geodetic anchor to place it "
                              "(no EKF reference, no global position, no GPS fix)", param="station_geodetic")
         return (np.asarray(geodetic_to_enu(*radio.station_geodetic, frame, where="the station"), np.float64),
-                "station position given (station_geodetic)")
+                "station position given (ReaderOptions.station_geodetic)")
     found = _home(ulog)
     # in the frame of the vehicle's positions (rplearn.io.ulog: the log's own, or around the origin through the anchor)
     placed = "station placed at the vehicle's home (home_position)"
