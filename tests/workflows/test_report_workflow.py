@@ -194,4 +194,7 @@ def test_paper_models_reproduce_main_s_table_i_of_the_demo_seed_0(tmp_path, monk
         if g["condition_number"] is None:
             assert np.isnan(r.condition_number)
         else:
-            assert r.condition_number == pytest.approx(g["condition_number"], rel=1e-7), g["model"]
+            # the condition number of an ill-conditioned design (BG-7: 4.6e6) moves with the BLAS
+            # kernel's rounding: 4562617.6 under OpenBLAS's SkylakeX kernel, 4562244.6 (8e-5 apart)
+            # under its Haswell kernel, with every error figure above equal to 1e-9
+            assert r.condition_number == pytest.approx(g["condition_number"], rel=1e-3), g["model"]
