@@ -54,7 +54,10 @@ matter, for a user plans before this flight's reference exists (:func:`_planning
 Under each the planners keep the benchmark's target directions, candidates, packet rate (the
 radio's, as ``--packet-rate`` gives it) and, with ``--tilt``, the tilt: what the user wants to
 learn and what the radio and vehicles do, not a fit's figures. ``--ranker live`` ranks with its
-own refits whatever ``--hyper`` says, and ``--bound`` is computed under the yardstick's model.
+own refits, and with ``--hyper previous`` as ``rplearn live --from-model`` ranks: the earlier
+flight's model file (:func:`rplearn.workflows.live_advice.earlier_fit`) gives the ranking's noise,
+smoothing and drift while the session has learned fewer samples than that fit (``reference``,
+``cli`` and ``flags`` leave live's ranking as it is), and ``--bound`` is computed under the yardstick's model.
 With ``--prior-std DB`` the prior is stated, and ``previous`` differs from ``reference`` only in
 the drifting error. Measured (seeds 0-4, one draw, one thread; ``docs/guides/calibration-plan.md``,
 "What it buys"): the optimized plan's time ratio on ``paper`` 0.53-0.62x (``reference``),
@@ -661,7 +664,7 @@ from rplearn.sim import simulate
 from rplearn.sim.presets import make_preset
 from rplearn.workflows.calibration_plan import DEFAULT_NOISE_STD_DB, options_from_model
 from rplearn.workflows.live import LiveOptions
-from rplearn.workflows.live_advice import ranking_options
+from rplearn.workflows.live_advice import EarlierFit, earlier_fit, ranking_options
 
 TARGET_DB = 2.0
 TIME_RATIO = 0.6
@@ -730,10 +733,13 @@ class LiveRanker:
     noise, the nominal prior while the refit is at the largest smoothing, the drift estimated from
     the session's blocks). The candidates, the packet rate and the target directions are the
     benchmark's (``options``); the target directions live's (each node's sphere), or with
-    ``sphere=False`` the benchmark's."""
+    ``sphere=False`` the benchmark's. ``earlier`` (``--hyper previous``): the earlier flight's model
+    file read as ``rplearn live --from-model`` reads it (:func:`rplearn.workflows.live_advice.earlier_fit`),
+    ranked with while the session has learned fewer samples than that fit."""
 
     def __init__(self, nodes: tuple[str, ...], options: ManoeuvreOptions, sphere: bool = True) -> None:
         self.nodes = nodes
+        self.earlier: EarlierFit | None = None
         self.stats = LiveStatistics(ModelSpec.parse("sh"), nodes, FitOptions(auto=True))
         self.options = replace(options, penalty_weight=None, correlated_std_db=None, misfit_std_db=0.0,
                                prior_variance_factor=1.0, targets=None if sphere else options.targets)
@@ -746,7 +752,7 @@ class LiveRanker:
         """The manoeuvre live ranks first from the latest ``poses``."""
         fitted = self.stats.refit()
         total = self.stats.total()
-        opts = ranking_options(self.options, total, fitted)
+        opts = ranking_options(self.options, total, fitted, self.earlier)
         return rank_manoeuvres(total, fitted.spec, list(self.nodes), poses, opts, total.blocks)[0]
 
 
@@ -1004,7 +1010,7 @@ def _learned(setup: Setup, parts: list[Any], prior_std_db: float, posterior: str
 
 
 def _planning_options(setup: Setup, hyper: str, stated: ManoeuvreOptions, learning: tuple[Any, ...], prior_std_db: float,
-                      posterior: str) -> ManoeuvreOptions:
+                      posterior: str) -> tuple[ManoeuvreOptions, EarlierFit | None]:
     """The options the planners (the suggested flight's ranking and the optimized plan) are given
     (the module docstring's table "What the planners know"): ``setup.options`` with the noise,
     prior and drift of ``hyper``. ``stated``: the options before any fit (the stated prior and the
@@ -1015,10 +1021,12 @@ def _planning_options(setup: Setup, hyper: str, stated: ManoeuvreOptions, learni
     ``--prior-std DB``, ``previous`` states it and the simulator's noise, the model giving the
     drift alone; ``--correlated off``: ``--drift 0``). The target directions, the candidates, the
     packet rate and the tilt stay ``setup.options``' (what the user wants to learn and what the
-    radio and the vehicles do, not a fit's figures)."""
+    radio and the vehicles do, not a fit's figures). With ``previous`` also the same model file as
+    ``rplearn live --from-model`` reads it (:func:`rplearn.workflows.live_advice.earlier_fit`), for
+    ``--ranker live``; else None."""
     judged = setup.options
     if hyper == "reference":
-        return judged
+        return judged, None
     if hyper in ("previous", "flags"):
         earlier = replace(setup, seed=PREVIOUS_SEED, flown=0, draw=0, budget=False, truths={},
                           options=replace(stated, targets=judged.targets))
@@ -1029,17 +1037,18 @@ def _planning_options(setup: Setup, hyper: str, stated: ManoeuvreOptions, learni
             opts = options_from_model(path, judged, setup.spec,
                                       noise_std_db=stated.noise_std_db if hyper == "previous" and prior_std_db > 0 else None,
                                       prior_std_db=stated_prior, drift_std_db=0.0 if setup.correlated == "off" else None)
+            live_prior = earlier_fit(path, ModelSpec.parse("sh")) if hyper == "previous" else None
         print(f"  the planners' hyper-parameters from the earlier flight's model (seed {PREVIOUS_SEED}, through "
               f"options_from_model{', --prior-std ' + format(stated_prior, 'g') if stated_prior else ''}): noise "
               f"{opts.noise_std_db:.2f} dB, penalty weight {opts.penalty_weight:.3g}, drift {opts.correlated_std_db:.3f} dB")
-        return opts
+        return opts, live_prior
     if hyper == "cli":
         noise = DEFAULT_NOISE_STD_DB
         weight = prior_penalty_weight(setup.spec.basis(), NOMINAL_PRIOR_STD_DB, noise, setup.spec.ridge_weight, judged.power)
         print(f"  the planners' hyper-parameters: the CLI's defaults (--noise {noise:.2f} dB, --prior-std "
               f"{NOMINAL_PRIOR_STD_DB:g} dB, --drift 0)")
         return replace(judged, noise_std_db=noise, penalty_weight=weight, misfit_std_db=0.0, prior_variance_factor=1.0,
-                       correlated_std_db=0.0)
+                       correlated_std_db=0.0), None
     raise ValueError(f"hyper: expected one of {', '.join(HYPERS)}, got {hyper!r}")
 
 
@@ -1097,7 +1106,10 @@ def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, 
         setup.options = opts = replace(opts, steady_accel_enu_m_s2=accel)
         print(f"  steady tilt from the start's poses: {np.degrees(np.arctan(np.hypot(accel[0], accel[1]) / 9.80665)):.1f} deg "
               f"({accel[0]:+.2f}, {accel[1]:+.2f}) m/s^2")
-    opts = _planning_options(setup, hyper, stated, learning, prior_std_db, posterior)
+    opts, earlier = _planning_options(setup, hyper, stated, learning, prior_std_db, posterior)
+    if sug.live is not None and earlier is not None:  # as rplearn live --from-model reads the earlier flight's model file
+        sug.live.earlier = earlier
+        print(f"  --ranker live --from-model: {earlier.text()}")
     first = learning[0].evaluate(np.array([0.0]))
     start = {n: (tuple(first.position_enu_m[0, j]), float(np.degrees(first.yaw_rad[0, j]))) for j, n in enumerate(learning[0].nodes)}
     if bound:
@@ -1260,7 +1272,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--ranker", choices=("reference", "live", "live-targets"), default="reference",
                     help="the suggested flight's ranking: from the posterior learned on the complete reference flight (default), "
                          "or as rplearn live ranks, from its own refits of the flight so far, for each node's sphere "
-                         "(live) or the benchmark's target directions (live-targets)")
+                         "(live) or the benchmark's target directions (live-targets); with --hyper previous as rplearn "
+                         "live --from-model ranks, with the earlier flight's model file while the session is young")
     ap.add_argument("--hyper", choices=HYPERS, default="reference",
                     help="the planners' noise, prior and drift: from the fit of this flight's reference (default), of an earlier "
                          f"flight of the same antennas (seed {PREVIOUS_SEED}), the CLI's defaults (no fit), or the CLI's "
