@@ -81,6 +81,10 @@ def test_the_sessions_own_take_over_from_as_many_samples_as_the_earlier_fit(sess
     assert ranking_options(advisor.options, stats, fitted, replace(grown, n_samples=stats.n_samples + 1)) != \
         ranking_options(advisor.options, stats, fitted)
     assert f"until the session has learned {advisor.earlier.n_samples} samples" in advisor.earlier.text()
+    # once it has, the view no longer says the earlier model's figures rank a capped fit
+    grown_advisor = ManoeuvreAdvisor(advisor.options, 0.0, grown)
+    grown_advisor(stats, fitted, calls[-1][2])
+    assert not grown_advisor.young and "earlier.json" not in _capped_note(grown_advisor)
 
 
 def test_the_sessions_model_is_learned_as_without_it(sessions):

@@ -203,12 +203,14 @@ class ManoeuvreAdvisor:
         self.options = options or ManoeuvreOptions()
         self.every_s = float(every_s)
         self.earlier = earlier
+        #: Whether the latest ranking (before any: the next) reads ``earlier``'s hyper-parameters.
+        self.young = earlier is not None
         self._last: tuple[float, list[tuple[str, float, float]]] | None = None
 
     def capped_note(self) -> str:
         """What the view adds while the fit is at the search's largest smoothing: the prior the
         manoeuvres are ranked under meanwhile ('' when it is the caller's penalty)."""
-        if self.earlier is not None:
+        if self.earlier is not None and self.young:
             return f"; manoeuvres are ranked with {self.earlier.path}'s noise, smoothing and drift meanwhile"
         if self.options.penalty_weight is None:
             return f"; manoeuvres are ranked under a {NOMINAL_PRIOR_STD_DB:g}-dB smoothness prior meanwhile"
@@ -218,6 +220,7 @@ class ManoeuvreAdvisor:
         now = time.monotonic()
         if self._last is not None and now - self._last[0] < self.every_s:
             return self._last[1]
+        self.young = self.earlier is not None and self.earlier.young(statistics)
         options = ranking_options(self.options, statistics, fitted, self.earlier)
         ranked = rank_manoeuvres(statistics, fitted.spec, list(fitted.model.nodes), latest, options,
                                  getattr(statistics, "blocks", None))
