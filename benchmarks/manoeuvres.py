@@ -64,7 +64,7 @@ the drifting error. Measured (seeds 0-4, one draw, one thread; ``docs/guides/cal
 0.53-0.63x (``previous``), 0.50-0.57x (``flags``), 0.94-1.03x and once short of 2 dB (``cli``: the
 paper's own unit first); on ``ground`` seeds 0 and 2 every plan but ``reference``'s ends short of
 2 dB (2.02-2.75 dB: the earlier flight's fit was less noisy than theirs). ``--planners optimized``
-flies the optimized plan alone (no suggested flight).
+flies the optimized plan alone (no suggested flight), ``--planners suggested`` the suggested flight alone.
 
 **What the error check can and cannot tell** (``--budget``: each flight's samples split into the
 truth at the logged directions, the pointing part and the rest, each fitted alone; seeds 0-2): at a flight's 2-dB point its worst
@@ -1132,7 +1132,8 @@ def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, 
         sug.steps.append(f"{best.name} ({best.duration_s:.0f} s; predicted {max(best.spread_before_db.values()):.2f} -> "
                          f"{max(best.spread_after_db.values()):.2f}{flown} dB{ahead})")
     # optimized: the greedy plan before the flight, from the reference's start poses
-    plan = greedy_plan(NormalEquations(spec.basis(), len(nodes)), spec, nodes, start, limit_s, TARGET_DB, opts)
+    plan = [] if planners == "suggested" else greedy_plan(NormalEquations(spec.basis(), len(nodes)), spec, nodes, start,
+                                                          limit_s, TARGET_DB, opts)
     opt = setup.flight("optimized")
     setup.flown = 2 * PLAN_SEED  # not after however many manoeuvres the suggested flight flew
     opt.steps = [f"{s.manoeuvre.name} ({s.manoeuvre.duration_s:.0f} s)" for s in plan]
@@ -1146,6 +1147,8 @@ def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, 
     flights = {"reference": ref, "suggested": sug, "optimized": opt}
     if planners == "optimized":  # the suggested flight not flown (its start alone)
         del flights["suggested"]
+    if planners == "suggested":  # the optimized plan not flown
+        del flights["optimized"]
     for k, f in enumerate(flights.values()):
         for draw in range(1, draws + 1):
             replay(setup, f, draw, PLAN_SEED * k)
@@ -1278,8 +1281,8 @@ def main(argv: list[str] | None = None) -> int:
                     help="the planners' noise, prior and drift: from the fit of this flight's reference (default), of an earlier "
                          f"flight of the same antennas (seed {PREVIOUS_SEED}), the CLI's defaults (no fit), or the CLI's "
                          "defaults with --noise and --drift from that earlier flight (flags)")
-    ap.add_argument("--planners", choices=("both", "optimized"), default="both",
-                    help="fly the suggested flight and the optimized plan (both), or the optimized plan alone (faster)")
+    ap.add_argument("--planners", choices=("both", "optimized", "suggested"), default="both",
+                    help="fly the suggested flight and the optimized plan (both), or either alone (faster)")
     ap.add_argument("--tiny", action="store_true", help="the smoke preset at SH-4 (seconds; criteria not enforced)")
     args = ap.parse_args(argv)
     presets = ["smoke"] if args.tiny else [p.strip() for p in args.presets.split(",") if p.strip()]
@@ -1298,7 +1301,7 @@ def main(argv: list[str] | None = None) -> int:
                       args.rate, args.prefixes, args.lookahead, args.aimed, args.design, "yes" if args.tiny else args.bound,
                       args.ranker, args.hyper, args.planners)
         ref = flights["reference"]
-        if "optimized" not in flights:
+        if len(flights) == 1:  # --bound only
             continue
         print(f"{preset} (SH-{order}, seed {seed}, {time.perf_counter() - t0:.0f} s): time to {TARGET_DB:g} dB per-node spread")
         for f in flights.values():
