@@ -139,3 +139,18 @@ def test_manoeuvres_plans_with_an_earlier_flights_or_the_clis_hyper_parameters(t
         assert re.search(said, proc.stdout) and re.search(r"optimized: time \[(ok|MISS)\]", proc.stdout), proc.stdout[-3000:]
         assert "from the reference flight" in proc.stdout  # the yardstick stays the reference's fit
         assert ("suggested: time" in proc.stdout) == (planners == "both")
+
+
+@pytest.mark.slow
+def test_manoeuvres_ranks_as_live_from_model_does(tmp_path):
+    """``manoeuvres.py --ranker live --hyper previous``: the suggested flight is ranked as ``rplearn
+    live --from-model`` ranks, the earlier flight's model file read by ``earlier_fit`` and used
+    while the session has learned fewer samples than that fit."""
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT / "src"), os.environ.get("PYTHONPATH", "")])}
+    proc = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "manoeuvres.py"), "--tiny", "--ranker", "live", "--hyper",
+                           "previous"], capture_output=True, text=True, cwd=tmp_path, timeout=600, env=env)
+    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
+    assert re.search(r"--ranker live --from-model: manoeuvres ranked with \S+previous\.json's noise \d+\.\d+ dB, smoothness "
+                     r"penalty weight \S+ and drift \d+\.\d+ dB per 5-s block until the session has learned \d+ samples",
+                     proc.stdout), proc.stdout[-3000:]
+    assert re.search(r"suggested: time \[(ok|MISS)\]", proc.stdout), proc.stdout[-3000:]

@@ -73,7 +73,7 @@ def _view(status: Any) -> Any:
 
 @app.command()
 @user_errors(flags={"ranking_every_s": "--advice-s", "receivers": "--receiver NODE", "fixed_nodes": "--fixed NODE", "html": "--html PATH",
-                    "record": "--record PATH"})
+                    "record": "--record PATH", "from_model": "--from-model"})
 def live(
     source: str = typer.Argument(..., help="A MAVLink connection as pymavlink names it (udpin:0.0.0.0:14550, tcp:HOST:PORT, a serial device "
                                            "such as /dev/ttyUSB0: what MAVProxy, QGroundControl and mavlink-router forward), or "
@@ -112,6 +112,11 @@ def live(
                                                             "manoeuvres (0: after every refit once the last has finished; a ranking "
                                                             "takes seconds and runs beside the refits)."),
     no_advice: bool = typer.Option(False, "--no-advice", help="Do not rank the next-best manoeuvres."),
+    from_model: str | None = typer.Option(None, "--from-model", help="An earlier flight's model file of the same drones (rplearn fit "
+                                                                     "--order auto; e.g. before a payload change): the next-best "
+                                                                     "manoeuvres are ranked with its noise, smoothing and drift until "
+                                                                     "the session has learned as many samples as it did. The "
+                                                                     "session's model is learned as without it."),
 ) -> None:
     """Learn the patterns while the drones fly: match, predict each new batch before learning it
     (the prequential error), refit every --refit-s and show coverage, spread and plausibility.
@@ -142,7 +147,12 @@ def live(
         raise InputError(f"--fixed: {', '.join(outside)} is not among --nodes ({', '.join(listed)}), the "
                          "nodes learned: a node held still must be learned too")
     still = named_fixed or (() if csv_source else (reader.station,))
-    advisor = None if no_advice else live_advisor(still, 0.0, until_spread_db)  # paced by ranking_every_s
+    if no_advice and from_model is not None:
+        raise InputError("--from-model: gives the ranking of the next-best manoeuvres its noise, smoothing and drift; "
+                         "drop --no-advice")
+    advisor = None if no_advice else live_advisor(still, 0.0, until_spread_db, from_model, spec)  # paced by ranking_every_s
+    if advisor is not None and advisor.earlier is not None:
+        say(advisor.earlier.text())
     options = LiveOptions(spec=spec, fit=FitOptions(auto=auto), reader=reader, sync=SyncOptions(max_gap_s=max_gap_s),
                           refit_s=refit_s, duration_s=duration_s, until_spread_db=until_spread_db, spread_over=spread_over,
                           until_coverage_pct=until_coverage_pct, idle_s=idle_s, nodes=tuple(split_list(nodes) or ()) or None,

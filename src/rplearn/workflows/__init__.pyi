@@ -26,7 +26,9 @@ from .live import open_source as open_source
 from .live import replay_session as replay_session
 from .live import run_live as run_live
 from .live_advice import DEFAULT_ADVICE_EVERY_S as DEFAULT_ADVICE_EVERY_S
+from .live_advice import EarlierFit as EarlierFit
 from .live_advice import ManoeuvreAdvisor as ManoeuvreAdvisor
+from .live_advice import earlier_fit as earlier_fit
 from .live_advice import live_advisor as live_advisor
 from .live_ranking import Ranking as Ranking
 from .live_ranking import RankingWorker as RankingWorker

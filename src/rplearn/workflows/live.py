@@ -172,11 +172,7 @@ def _capped_note(ranker: Any) -> str:
     text = "not known yet: the fit took the largest smoothing the search tries (the data do not yet tell the patterns' shape from flat)"
     from rplearn.workflows.live_advice import ManoeuvreAdvisor  # the ranking's module: only once a fit is capped
 
-    if isinstance(ranker, ManoeuvreAdvisor) and ranker.options.penalty_weight is None:  # else the caller's penalty
-        from rplearn.analysis.manoeuvre_prior import NOMINAL_PRIOR_STD_DB
-
-        text += f"; manoeuvres are ranked under a {NOMINAL_PRIOR_STD_DB:g}-dB smoothness prior meanwhile"
-    return text
+    return text + (ranker.capped_note() if isinstance(ranker, ManoeuvreAdvisor) else "")
 
 
 def _capped(model: Any) -> bool:
