@@ -185,6 +185,8 @@ REFUSED = {
                                        "-o", "x.json"], "--ground-level"),
     "latitude 95 (--station)": (["inspect", "flight.tlog", "--station", "95,8.5,488"], "--station: latitude must lie in [-90, 90]"),
     "latitude 200 (--station)": (["inspect", "flight.tlog", "--station", "200,8.5,488"], "--station: latitude must lie in [-90, 90]"),
+    "altitude 2,000 km (--station)": (["inspect", "flight.tlog", "--station", "47.3977,8.5456,2e6"],
+                                      "--station: altitude 2e+06 m is outside -1000 to 50000 m"),
     "drone below a two-ray ground in links": (["links", "tworay.json", "below.parquet", "--tx-power", "20", "-o", "l.csv"],
                                               "below.parquet: drone A: z [m] above the two-ray ground at 0 m -5"),
     "drone below a two-ray ground in orient": (["orient", "tworay.json", "--tx", "A", "--rx", "B", "--tx-pos", "0,0,-5",
@@ -210,8 +212,6 @@ def test_refused_in_one_line_and_nothing_written(workdir, case):
 
 #: A log refused as a whole (exit 1; the line naming it may come before the count of unread files).
 LOG_REFUSED = {
-    "altitude 2,000 km (--station)": (["inspect", "flight.tlog", "--station", "47.3977,8.5456,2e6"],
-                                      "altitude [m] 2e+06 is outside -1000 to 50000 m"),
     "station 1,000 km away (--station)": (["inspect", "flight.tlog", "--station", "56.4,8.5456,488"],
                                           "flight.tlog: the vehicle: distance from the station [m] 1"),
     "home 111 km from the flight": (["inspect", "home111km.tlog"],
