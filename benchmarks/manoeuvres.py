@@ -1177,6 +1177,13 @@ def run(preset: str, order: int, seed: int, limit_s: float, power: float = 2.0, 
     return flights
 
 
+def _bound_mode(args: argparse.Namespace) -> str:
+    """What ``run`` does with the bound: ``--tiny`` prints it (its smoke test) unless ``--bound no``."""
+    if args.bound == "no":
+        return ""
+    return "yes" if args.tiny and not args.bound else args.bound
+
+
 def _print_bound(setup: Setup, ref: Flight, sug: Flight, poses: Any, start: dict[str, Any], limit_s: float) -> None:
     """(A): the optimal design's time to the target over the candidates offered after the
     suggested flight's start (and, for the optimized plan, from the prior at the start poses),
@@ -1292,8 +1299,9 @@ def main(argv: list[str] | None = None) -> int:
                     help="also candidates aimed at each node's N directions of largest posterior variance (0: the fixed ones only)")
     ap.add_argument("--design", choices=("rate", "end", "support"), default=ManoeuvreOptions().design,
                     help="rank by rate now (default) or by the criterion's gradient at the anticipated final posterior")
-    ap.add_argument("--bound", choices=("", "yes", "only"), default="",
-                    help="print the optimal design's bound after the start (only: and fly nothing else)")
+    ap.add_argument("--bound", choices=("", "yes", "only", "no"), default="",
+                    help="print the optimal design's bound after the start (only: and fly nothing else; --tiny prints it "
+                         "unless no)")
     ap.add_argument("--ranker", choices=("reference", "live", "live-targets"), default="reference",
                     help="the suggested flight's ranking: from the posterior learned on the complete reference flight (default), "
                          "or as rplearn live ranks, from its own refits of the flight so far, for each node's sphere "
@@ -1320,7 +1328,7 @@ def main(argv: list[str] | None = None) -> int:
         limit = float(sum(u.duration_s for u in ref_total.units))
         flights = run(preset, order, seed, limit, args.power, args.prior_std, args.correlated, args.block_s, args.posterior,
                       args.budget or args.tiny, draws, _candidate_args(args), args.tilt, args.aggregate,
-                      args.rate, args.prefixes, args.lookahead, args.aimed, args.design, "yes" if args.tiny else args.bound,
+                      args.rate, args.prefixes, args.lookahead, args.aimed, args.design, _bound_mode(args),
                       args.ranker, args.hyper, args.planners)
         ref = flights["reference"]
         if len(flights) == 1:  # --bound only

@@ -133,7 +133,8 @@ def test_manoeuvres_plans_with_an_earlier_flights_or_the_clis_hyper_parameters(t
     for hyper, said, planners in (("previous", r"from the earlier flight's model \(seed 7919, through options_from_model\): "
                                                r"noise \d+\.\d+ dB, penalty weight \S+, drift \d+\.\d+ dB", "both"),
                                   ("cli", r"the CLI's defaults \(--noise 4\.20 dB", "optimized")):
-        proc = subprocess.run([sys.executable, str(script), "--tiny", "--hyper", hyper, "--planners", planners],
+        proc = subprocess.run([sys.executable, str(script), "--tiny", "--hyper", hyper, "--planners", planners,
+                               "--bound", "no"],
                               capture_output=True, text=True, cwd=tmp_path, timeout=600, env=env)
         assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
         assert re.search(said, proc.stdout) and re.search(r"optimized: time \[(ok|MISS)\]", proc.stdout), proc.stdout[-3000:]
@@ -148,7 +149,7 @@ def test_manoeuvres_ranks_as_live_from_model_does(tmp_path):
     while the session has learned fewer samples than that fit."""
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT / "src"), os.environ.get("PYTHONPATH", "")])}
     proc = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "manoeuvres.py"), "--tiny", "--ranker", "live", "--hyper",
-                           "previous"], capture_output=True, text=True, cwd=tmp_path, timeout=600, env=env)
+                           "previous", "--bound", "no"], capture_output=True, text=True, cwd=tmp_path, timeout=600, env=env)
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
     assert re.search(r"--ranker live --from-model: manoeuvres ranked with \S+previous\.json's noise \d+\.\d+ dB, smoothness "
                      r"penalty weight \S+ and drift \d+\.\d+ dB per 5-s block until the session has learned \d+ samples",
