@@ -191,3 +191,29 @@ def test_one_log_given_as_poses_and_signals_is_read_once_with_the_same_result(tm
         assert reads == [tlog] and (offset is None) == (outcome.clock is None)
         pd.testing.assert_frame_equal(pd.read_parquet(out), expected, check_exact=True)
         reads.clear()
+
+
+def test_a_signal_csv_with_extra_columns_is_scanned_for_header_lines_once(flight, monkeypatch):
+    """Its extra columns are read first (which are numbers), then its rows: both through one scan of the file for
+    header lines repeated mid-file (was two: a second full pass over the file); what is read is unchanged."""
+    from rplearn.io import _csv_headers, tables
+
+    d, pose, csv = flight
+    table = pd.read_csv(csv).assign(snr_db=20.0, note="x")
+    lines = table.to_csv(index=False).splitlines(keepends=True)
+    path = d / "extra_again.csv"
+    path.write_text("".join([*lines[:500], lines[0], *lines[500:]]))
+    scanned: list[str] = []
+
+    def counting(path: str, source: str, advice: str = _csv_headers.FILE_ADVICE) -> _csv_headers.HeaderScan:
+        scanned.append(str(path))
+        return _csv_headers.scan_csv_headers(path, source, advice)
+
+    monkeypatch.setattr(wlogs, "scan_csv_headers", counting)
+    monkeypatch.setattr(tables, "scan_csv_headers", counting)
+    outcome = sync_logs([pose], [str(path)], str(d / "extra.parquet"))
+    assert scanned == [str(path)]
+    assert f"{path}: dropped 1 header line(s) repeated mid-file (repeated_header)" in outcome.notes
+    back = pd.read_parquet(d / "extra.parquet")
+    assert back["snr_db"].dtype.kind == "f" and set(back["note"].dropna()) == {"x"}
+    assert outcome.counts.n_in == len(table)
