@@ -217,3 +217,21 @@ def test_a_signal_csv_with_extra_columns_is_scanned_for_header_lines_once(flight
     back = pd.read_parquet(d / "extra.parquet")
     assert back["snr_db"].dtype.kind == "f" and set(back["note"].dropna()) == {"x"}
     assert outcome.counts.n_in == len(table)
+
+
+def test_a_quote_left_open_in_a_csv_with_extra_columns_is_one_line_naming_the_files_line(flight, tmp_path):
+    """The pass over the extra columns met it first and let pandas' own error out, naming the line, from 0, of the
+    file without the header lines dropped (``EOF inside string starting at row 601``); now as the rows' reading says
+    it: the file, and its line."""
+    from rplearn.errors import LogFormatError
+
+    _, pose, csv = flight
+    lines = pd.read_csv(csv).assign(snr_db=20.0).to_csv(index=False).splitlines(keepends=True)
+    cells = lines[601].split(",")
+    cells[2] = '"' + cells[2]
+    lines[601] = ",".join(cells)
+    path = tmp_path / "quote.csv"
+    path.write_text("".join([*lines[:300], lines[0], *lines[300:]]))  # the quote on the file's line 603
+    with pytest.raises(LogFormatError, match=rf"^{path}: cannot read table \(ParserError: .*EOF inside string "
+                                             r"starting at line 603\)$"):
+        sync_logs([pose], [str(path)], str(tmp_path / "q.parquet"))

@@ -60,9 +60,10 @@ def _table_error(name: str, path: Any, exc: BaseException) -> str:
     return table_read_error(name, path, exc)
 
 
-def _read_error(source: str, path: Any, exc: BaseException, scan: HeaderScan) -> str:
-    """:func:`_table_error` with the lines the parser names said as the file's lines (``scan``: the lines repeating
-    the header, which it did not read; :func:`rplearn.io._csv_headers.in_file_lines`)."""
+def table_read_message(source: str, path: Any, exc: BaseException, scan: HeaderScan) -> str:
+    """The one-line message of a table file that could not be read (:func:`rplearn.io.sniff.table_read_error`), the
+    lines the parser names said as the file's lines (``scan``: the lines repeating the header, which it did not
+    read; :func:`rplearn.io._csv_headers.in_file_lines`)."""
     if isinstance(exc, pd.errors.ParserError):
         exc = pd.errors.ParserError(in_file_lines(str(exc), scan.file_line))
     return _table_error(source, path, exc)
@@ -108,7 +109,7 @@ def read_table_rows(path: str, source: str, columns: Mapping[str, str] | None = 
     except pd.errors.EmptyDataError:
         raise LogFormatError(f"{source}: empty file, expected a header line and rows") from None
     except Exception as exc:  # parsers raise many classes on corrupt bytes
-        raise LogFormatError(_read_error(source, path, exc, scan)) from None
+        raise LogFormatError(table_read_message(source, path, exc, scan)) from None
 
 
 def table_format(path: str | os.PathLike) -> str:
@@ -423,7 +424,7 @@ def iter_signal_table(
     except (InputError, LogFormatError):
         raise
     except Exception as exc:
-        raise LogFormatError(_read_error(source, path, exc, scan)) from None
+        raise LogFormatError(table_read_message(source, path, exc, scan)) from None
 
 
 @check_types

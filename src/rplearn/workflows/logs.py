@@ -22,7 +22,7 @@ from rplearn.analysis.swarm import SwarmOptions, SwarmPrediction, predict_swarm
 from rplearn.data.streaming import conform_chunk, synchronise_stream
 from rplearn.data.sync import SyncOptions, SyncSummary, synchronise
 from rplearn.data.tables import MATCHED_COLUMNS, SIGNAL_COLUMNS
-from rplearn.errors import InputError
+from rplearn.errors import InputError, LogFormatError
 from rplearn.io import ReaderOptions, read_logs
 from rplearn.io._csv_headers import REPEATED_HEADER, REPEATED_HEADER_LINES, HeaderScan, csv_source, scan_csv_headers
 from rplearn.io.files import check_output_kind, check_output_path, check_table_path, write_json, write_table, write_table_chunks
@@ -203,6 +203,8 @@ def _numeric_columns(path: str, names: list[str], columns: list[str], scans: dic
     """Whether each of these columns of one table holds numbers only (missing cells allowed);
     ``columns`` are the table's column names after renaming, in file order. A CSV file's header
     scan is kept in ``scans`` under its path."""
+    from rplearn.io.tables import table_read_message
+
     if not names:
         return {}
     if str(path).lower().endswith((".parquet", ".pq")):
@@ -216,12 +218,15 @@ def _numeric_columns(path: str, names: list[str], columns: list[str], scans: dic
     renamed = dict(zip(columns, pd.read_csv(path, nrows=0, skipinitialspace=True).columns))
     numeric = {c: True for c in names}
     scans[str(path)] = scan = scan_csv_headers(path, str(path))
-    with csv_source(path, scan) as handle:  # without the header lines repeated mid-file
-        for chunk in pd.read_csv(handle, usecols=[renamed[c] for c in names], dtype=str, chunksize=SYNC_CHUNK_ROWS,
-                                 skipinitialspace=True):
-            for c in names:
-                col = chunk[renamed[c]]
-                numeric[c] = numeric[c] and bool(pd.to_numeric(col, errors="coerce").notna().sum() == col.notna().sum())
+    try:
+        with csv_source(path, scan) as handle:  # without the header lines repeated mid-file
+            for chunk in pd.read_csv(handle, usecols=[renamed[c] for c in names], dtype=str, chunksize=SYNC_CHUNK_ROWS,
+                                     skipinitialspace=True):
+                for c in names:
+                    col = chunk[renamed[c]]
+                    numeric[c] = numeric[c] and bool(pd.to_numeric(col, errors="coerce").notna().sum() == col.notna().sum())
+    except Exception as exc:  # a malformed line (a quote left open): said as reading the rows says it
+        raise LogFormatError(table_read_message(str(path), path, exc, scan)) from None
     return numeric
 
 
