@@ -212,3 +212,21 @@ def test_the_parsers_complaint_names_the_files_line_after_a_repeated_header(flig
         assert any("fields in line 604, saw" in line for line in report.problems)
     quote = _header_again(_edited(signal, tmp_path / "q.csv", 601, _field(2, '"A')), tmp_path / "quote.csv", 300)
     assert "EOF inside string starting at line 603" in _message(lambda: read_signal_table(str(quote)))
+
+
+def test_the_scan_numbers_the_header_lines_it_drops_as_the_file_does(flight, tmp_path, monkeypatch):
+    """The lines the parser's are turned into (HeaderScan.lines): right in blocks of any size, CRLF line ends too."""
+    from rplearn.io import _csv_headers
+
+    _, signal = flight
+    crlf = tmp_path / "crlf.csv"
+    crlf.write_bytes(signal.read_bytes().replace(b"\n", b"\r\n"))
+    header = _lines(crlf)[0]
+    path = _with_lines(crlf, tmp_path / "again.csv", {101: header, 102: header, 250: header})
+    expected = (102, 104, 253)  # each header pushes the ones after it a line further
+    assert [_lines(path)[k - 1] for k in expected] == [header] * 3
+    assert _csv_headers.scan_csv_headers(str(path), "s").lines == expected
+    monkeypatch.setattr(_csv_headers, "SCAN_BYTES", 100)
+    scan = _csv_headers.scan_csv_headers(str(path), "s")
+    assert scan.lines == expected
+    assert [scan.file_line(k) for k in (1, 101, 102, 250, 251)] == [1, 101, 103, 252, 254]
