@@ -54,3 +54,37 @@ def test_the_tail_tells_headers_from_rows_as_sync_does(tmp_path):
         fp.write('"node", "t", "x", "y", "z", "qw", "qx", "qy", "qz"\n' + later + "\ufeff" + head + later.replace("x,1.", "x,2."))
     again = tail.poll()
     assert len(again.poses) == 10 and again.dropped == {"repeated_header": 2}
+
+
+def test_rows_and_lines_after_a_header_written_again_are_numbered_as_sync_numbers_them(tmp_path):
+    """Rows counted from 0 at the first data row without the header lines, lines as the file's (rplearn.io._csv_headers):
+    a step back in time after the header written again is the row the whole-file reader names; a line of too many
+    fields, the file's line (was the line within the poll's rows)."""
+    from rplearn.io.tables import read_signal_table
+
+    pose, signal = tmp_path / "pose.csv", tmp_path / "signal.csv"
+    p, s = _rows(0)
+    pose.write_text(POSE + p)
+    signal.write_text(SIGNAL + s)
+    tail = CsvTail(str(pose), str(signal))
+    tail.poll()
+    p, s = _rows(1)
+    with signal.open("a") as fs:
+        fs.write(SIGNAL + s.replace("1.35,", "0.37,"))  # data row 13, the file's line 16
+    with pytest.raises(LogFormatError, match=r"field t goes backwards at row 13 ") as live:
+        tail.poll()
+    with pytest.raises(LogFormatError, match=r"field t goes backwards at row 13 ") as whole:
+        read_signal_table(str(signal))
+    assert str(live.value) == str(whole.value)
+    assert signal.read_text().splitlines()[15].startswith("0.37,")
+
+    pose.write_text(POSE + p)
+    signal.write_text(SIGNAL + s)
+    tail = CsvTail(str(pose), str(signal))
+    tail.poll()
+    with signal.open("a") as fs:
+        fs.write(SIGNAL + s.replace("1.25,D,G,-60,20,2.4e9", "1.25,D,G,-60,20,2.4e9,7"))  # the file's line 15
+    with pytest.raises(LogFormatError, match=r"signal.csv: cannot parse the rows appended \(ParserError: .*Expected 6 "
+                                             r"fields in line 15, saw 7\)$"):
+        tail.poll()
+    assert signal.read_text().splitlines()[14].endswith(",7")

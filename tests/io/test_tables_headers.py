@@ -5,12 +5,13 @@ is refused naming the file and the line."""
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import pandas as pd
 import pytest
 
-from rplearn.errors import LogFormatError
+from rplearn.errors import InputError, LogFormatError
 from rplearn.io import read_logs
 from rplearn.io.inspect import inspect_logs
 from rplearn.io.inspect_json import inspect_to_dict
@@ -140,3 +141,92 @@ def test_a_header_from_a_file_joined_with_cat_is_the_same_header(flight, tmp_pat
     again, meta = read_signal_table(str(path))
     pd.testing.assert_frame_equal(again, whole)
     assert meta["dropped"] == {"repeated_header": 2}
+
+
+def _edited(path: Path, out: Path, line: int, edit) -> Path:
+    """``path`` written to ``out`` with its line ``line`` (0-based) passed through ``edit``."""
+    lines = _lines(path)
+    lines[line] = edit(lines[line])
+    out.write_text("".join(lines))
+    return out
+
+
+def _field(k: int, value: str):
+    def edit(line: str) -> str:
+        cells = line.rstrip("\n").split(",")
+        cells[k] = value
+        return ",".join(cells) + "\n"
+    return edit
+
+
+def _message(call) -> str:
+    with pytest.raises((InputError, LogFormatError)) as info:
+        call()
+    return str(info.value)
+
+
+def test_a_row_after_a_repeated_header_has_its_number_in_the_file_without_it(flight, tmp_path, monkeypatch):
+    """Rows are counted from 0 at the first data row, header lines not counted (rplearn.io._csv_headers): a bad value
+    after a header dropped mid-file is named by the row it has in the file without that line, by read_logs, the
+    table readers, sync (its signal table streamed in chunks) and the live tail's reader; that row is on the file's
+    line row + 2 + the header lines dropped before it."""
+    from rplearn.workflows import logs as wlogs
+
+    pose, signal = flight
+    bad_pose = _edited(pose, tmp_path / "bad_pose.csv", 601, _field(4, "nan"))  # data row 600: z NaN
+    bad_signal = _edited(signal, tmp_path / "bad_signal.csv", 601, _field(0, "0.001"))  # data row 600: t back
+    monkeypatch.setattr(wlogs, "SYNC_CHUNK_ROWS", 97)  # the row in the seventh chunk
+    for again in (False, True):
+        p = _header_again(bad_pose, tmp_path / "p.csv", 300, 450) if again else bad_pose
+        s = _header_again(bad_signal, tmp_path / "s.csv", 300, 450) if again else bad_signal
+        for call in (lambda: read_logs([str(p), str(signal)]), lambda: read_pose_table(str(p)),
+                     lambda: sync_logs([str(p)], [str(signal)], str(tmp_path / "o.parquet"))):
+            assert "(first at row 600)" in _message(call)
+        for call in (lambda: read_logs([str(pose), str(s)]), lambda: read_signal_table(str(s)),
+                     lambda: list(iter_signal_table(str(s), chunk_rows=97)),
+                     lambda: sync_logs([str(pose)], [str(s)], str(tmp_path / "o.parquet"))):
+            assert "field t goes backwards at row 600 " in _message(call)
+        dropped = 2 if again else 0
+        assert _field(4, "nan")(_lines(bad_pose)[601]) == _lines(p)[600 + 1 + dropped]  # row 600: line 602 + 2
+        assert _lines(s)[600 + 1 + dropped].startswith("0.001,")
+
+
+def test_the_parsers_complaint_names_the_files_line_after_a_repeated_header(flight, tmp_path, monkeypatch):
+    """A row of too many fields, or a quote left open, after header lines dropped mid-file: the line the parser
+    names is the file's (was the line in the file without them: two lines early here), whole or in chunks."""
+    from rplearn.workflows import logs as wlogs
+
+    pose, signal = flight
+    monkeypatch.setattr(wlogs, "SYNC_CHUNK_ROWS", 97)
+    for name, path in (("pose", pose), ("signal", signal)):
+        extra = _header_again(_edited(path, tmp_path / f"x_{name}.csv", 601, lambda line: line.rstrip("\n") + ",5\n"),
+                              tmp_path / f"{name}.csv", 300, 450)
+        assert _lines(extra)[603].endswith(",5\n")  # the file's line 604
+        logs = [str(extra), str(signal)] if name == "pose" else [str(pose), str(extra)]
+        calls = [lambda: read_logs(logs), lambda: sync_logs(logs[:1], logs[1:], str(tmp_path / "o.parquet"))]
+        if name == "signal":
+            calls.append(lambda: list(iter_signal_table(str(extra), chunk_rows=97)))
+        for call in calls:
+            assert re.search(r"Expected \d+ fields in line 604, saw", _message(call))
+        report = inspect_logs(logs)
+        assert any("fields in line 604, saw" in line for line in report.problems)
+    quote = _header_again(_edited(signal, tmp_path / "q.csv", 601, _field(2, '"A')), tmp_path / "quote.csv", 300)
+    assert "EOF inside string starting at line 603" in _message(lambda: read_signal_table(str(quote)))
+
+
+def test_the_scan_numbers_the_header_lines_it_drops_as_the_file_does(flight, tmp_path, monkeypatch):
+    """The lines the parser's are turned into (HeaderScan.lines): right in blocks of any size, CRLF line ends too."""
+    from rplearn.io import _csv_headers
+
+    _, signal = flight
+    crlf = tmp_path / "crlf.csv"
+    crlf.write_bytes(signal.read_bytes().replace(b"\n", b"\r\n"))
+    header = _lines(crlf)[0]
+    path = _with_lines(crlf, tmp_path / "again.csv", {101: header, 102: header, 250: header})
+    expected = (102, 104, 253)  # each header pushes the ones after it a line further
+    assert [_lines(path)[k - 1] for k in expected] == [header] * 3
+    assert _csv_headers.scan_csv_headers(str(path), "s").lines == expected
+    monkeypatch.setattr(_csv_headers, "SCAN_BYTES", 100)
+    scan = _csv_headers.scan_csv_headers(str(path), "s")
+    assert scan.lines == expected
+    assert [scan.file_line(k) for k in (1, 101, 102, 250, 251)] == [1, 101, 103, 252, 254]

@@ -129,3 +129,15 @@ def test_rows_differing_only_beside_the_pose_are_copies(tmp_path):
     pose, meta = read_pose_table(str(_write(tmp_path / "sats.csv", rows)))
     assert meta["dropped"]["duplicate_pose"] == 1 and meta["dropped"]["conflicting_pose"] == 0
     assert pose["t"].tolist() == [0.0, 0.1, 0.2]
+
+
+def test_a_step_back_after_copies_names_its_row_in_the_file(real_poses, tmp_path):
+    """Rows are the file's (from 0 at the first data row): copies dropped before a time that goes back do not move
+    the row named (was its place among the rows kept: 20 rows early here)."""
+    table = _block_twice(real_poses)
+    at = 1000
+    table.loc[at, "t"] = float(table.loc[at - 1, "t"]) - 5.0
+    path = tmp_path / "back.csv"
+    table.to_csv(path, index=False)
+    with pytest.raises(LogFormatError, match=rf"field t goes backwards at row {at} \(node "):
+        read_pose_table(str(path))

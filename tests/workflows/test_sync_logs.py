@@ -191,3 +191,47 @@ def test_one_log_given_as_poses_and_signals_is_read_once_with_the_same_result(tm
         assert reads == [tlog] and (offset is None) == (outcome.clock is None)
         pd.testing.assert_frame_equal(pd.read_parquet(out), expected, check_exact=True)
         reads.clear()
+
+
+def test_a_signal_csv_with_extra_columns_is_scanned_for_header_lines_once(flight, monkeypatch):
+    """Its extra columns are read first (which are numbers), then its rows: both through one scan of the file for
+    header lines repeated mid-file (was two: a second full pass over the file); what is read is unchanged."""
+    from rplearn.io import _csv_headers, tables
+
+    d, pose, csv = flight
+    table = pd.read_csv(csv).assign(snr_db=20.0, note="x")
+    lines = table.to_csv(index=False).splitlines(keepends=True)
+    path = d / "extra_again.csv"
+    path.write_text("".join([*lines[:500], lines[0], *lines[500:]]))
+    scanned: list[str] = []
+
+    def counting(path: str, source: str, advice: str = _csv_headers.FILE_ADVICE) -> _csv_headers.HeaderScan:
+        scanned.append(str(path))
+        return _csv_headers.scan_csv_headers(path, source, advice)
+
+    monkeypatch.setattr(wlogs, "scan_csv_headers", counting)
+    monkeypatch.setattr(tables, "scan_csv_headers", counting)
+    outcome = sync_logs([pose], [str(path)], str(d / "extra.parquet"))
+    assert scanned == [str(path)]
+    assert f"{path}: dropped 1 header line(s) repeated mid-file (repeated_header)" in outcome.notes
+    back = pd.read_parquet(d / "extra.parquet")
+    assert back["snr_db"].dtype.kind == "f" and set(back["note"].dropna()) == {"x"}
+    assert outcome.counts.n_in == len(table)
+
+
+def test_a_quote_left_open_in_a_csv_with_extra_columns_is_one_line_naming_the_files_line(flight, tmp_path):
+    """The pass over the extra columns met it first and let pandas' own error out, naming the line, from 0, of the
+    file without the header lines dropped (``EOF inside string starting at row 601``); now as the rows' reading says
+    it: the file, and its line."""
+    from rplearn.errors import LogFormatError
+
+    _, pose, csv = flight
+    lines = pd.read_csv(csv).assign(snr_db=20.0).to_csv(index=False).splitlines(keepends=True)
+    cells = lines[601].split(",")
+    cells[2] = '"' + cells[2]
+    lines[601] = ",".join(cells)
+    path = tmp_path / "quote.csv"
+    path.write_text("".join([*lines[:300], lines[0], *lines[300:]]))  # the quote on the file's line 603
+    with pytest.raises(LogFormatError, match=rf"^{path}: cannot read table \(ParserError: .*EOF inside string "
+                                             r"starting at line 603\)$"):
+        sync_logs([pose], [str(path)], str(tmp_path / "q.parquet"))

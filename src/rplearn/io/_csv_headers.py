@@ -6,6 +6,13 @@ fields a number: a logger restarted with other columns) is refused naming the fi
 whole-file readers (:mod:`rplearn.io.tables`) and the tail of a CSV being appended to
 (:class:`rplearn.io.live_sources.CsvTail`).
 
+Rows and lines: a message naming a *row* of a CSV table counts its data rows from 0 at the first data row, the
+header line and the header lines repeated mid-file not counted (a row has the number it has in the file without
+them, and in the same table written as Parquet); a message naming a *line* gives the file's own line, counted from 1
+with every line (the header and the repeated ones too), as a text editor numbers it. The parser's complaints name
+file lines too: :func:`in_file_lines` turns the lines of what it read (the file without the lines dropped) into the
+file's (:func:`file_line`).
+
 Finding them is one regular-expression search for a line that begins with a column name (C speed, no Python loop
 over the lines); only the lines it finds are looked at. A file is scanned in blocks of :data:`SCAN_BYTES`, so its
 memory stays bounded, and read back without the lines dropped through :class:`SkippingReader`.
@@ -17,7 +24,7 @@ import io
 import os
 import re
 from collections import deque
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any, BinaryIO
@@ -111,28 +118,63 @@ class HeaderRule:
 
 
 def without_repeated_headers(data: bytes, rule: HeaderRule, first_line: int, source: str,
-                             advice: str) -> tuple[bytes, int]:
+                             advice: str) -> tuple[bytes, tuple[int, ...]]:
     """``data`` (complete lines, the first numbered ``first_line``, from a line start) without the lines that repeat
-    the header, and how many there were; another header-like line is refused (:meth:`HeaderRule.refusal`)."""
+    the header, and their line numbers (in file order); another header-like line is refused
+    (:meth:`HeaderRule.refusal`)."""
     region = b"\n" + data
-    kept, at, dropped = [], 1, 0
+    kept, at, dropped = [], 1, []
+    line, counted = first_line, 1  # the number of the line that begins after `counted`
     for start, end, repeated in rule.lines(region):
+        line, counted = line + region.count(b"\n", counted, start), start
         if not repeated:
-            raise rule.refusal(source, first_line + region.count(b"\n", 1, start), region[start:end], advice)
+            raise rule.refusal(source, line, region[start:end], advice)
         kept.append(region[at:start])
-        at, dropped = end + 1, dropped + 1
+        at = end + 1
+        dropped.append(line)
     if not dropped:
-        return data, 0
+        return data, ()
     kept.append(region[at:])
-    return b"".join(kept), dropped
+    return b"".join(kept), tuple(dropped)
+
+
+def file_line(line: int, dropped: Sequence[int], first_line: int = 1) -> int:
+    """The file line of line ``line`` (from 1) of what was read of a file from its line ``first_line`` on, without
+    its lines ``dropped`` (file lines, sorted)."""
+    out = first_line + line - 1
+    for d in dropped:
+        if d > out:
+            break
+        out += 1
+    return out
+
+
+#: A line a parser's complaint names: ``line N`` (from 1), ``starting at row N`` (pandas' quoted field left open;
+#: its row is the line from 0).
+_PARSER_LINE = re.compile(r"\b(line|starting at row) (\d+)\b")
+
+
+def in_file_lines(text: str, to_file: Callable[[int], int]) -> str:
+    """A parser's complaint ``text`` about what it read with the lines it names as the file's lines (``to_file``: a
+    line of what was read, from 1, to the file's line), each said as ``line N``."""
+    def line(m: re.Match[str]) -> str:
+        n = int(m[2]) + (m[1] != "line")
+        return f"{'line' if m[1] == 'line' else 'starting at line'} {to_file(n)}"
+
+    return _PARSER_LINE.sub(line, text)
 
 
 @dataclass(frozen=True)
 class HeaderScan:
     """What :func:`scan_csv_headers` found in a file: the byte ranges ``[start, end)`` of the lines repeating its
-    header (with their line ends), in file order."""
+    header (with their line ends), in file order, and their line numbers (from 1)."""
 
     spans: tuple[tuple[int, int], ...] = ()
+    lines: tuple[int, ...] = ()
+
+    def file_line(self, line: int) -> int:
+        """The file line of line ``line`` (from 1) of the file read without the lines repeating its header."""
+        return file_line(line, self.lines)
 
     @property
     def repeated(self) -> int:
@@ -148,6 +190,7 @@ def scan_csv_headers(path: str, source: str, advice: str = FILE_ADVICE) -> Heade
     """The lines of a CSV file that repeat its header; another header-like line is refused naming ``source`` and
     the line. Reads the file in blocks of :data:`SCAN_BYTES`."""
     spans: list[tuple[int, int]] = []
+    lines: list[int] = []
     with open(path, "rb") as fh:
         first = fh.readline(SCAN_BYTES)
         if not first.endswith(b"\n") or not _is_text(first):  # one line, or no text: the parser says what it is
@@ -162,16 +205,19 @@ def scan_csv_headers(path: str, source: str, advice: str = FILE_ADVICE) -> Heade
                 carry = region
                 continue
             body = region[:cut]
+            at, counted = line - 1, 0  # line `at` begins after byte `counted` of the body
             for start, end, repeated in rule.lines(body):
+                at, counted = at + body.count(b"\n", counted, start), start
                 if not repeated:
-                    raise rule.refusal(source, line - 1 + body.count(b"\n", 0, start), body[start:end], advice)
+                    raise rule.refusal(source, at, body[start:end], advice)
                 spans.append((base + start, base + min(end + 1, len(region))))  # with its line end
+                lines.append(at)
             if not block:
                 break
             line += body.count(b"\n")
             base += cut
             carry = region[cut:]
-    return HeaderScan(tuple(spans))
+    return HeaderScan(tuple(spans), tuple(lines))
 
 
 class SkippingReader(io.RawIOBase):
@@ -216,4 +262,5 @@ def is_csv_file(path: str | os.PathLike[str]) -> bool:
 
 
 __all__ = ["FILE_ADVICE", "KNOWN_NAMES", "REPEATED_HEADER", "REPEATED_HEADER_LINES", "SCAN_BYTES", "HeaderRule", "HeaderScan", "SkippingReader",
-           "bare_header", "csv_source", "is_csv_file", "scan_csv_headers", "without_repeated_headers"]
+           "bare_header", "csv_source", "file_line", "in_file_lines", "is_csv_file", "scan_csv_headers",
+           "without_repeated_headers"]

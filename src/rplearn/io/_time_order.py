@@ -10,15 +10,17 @@ import pandas as pd
 from rplearn.errors import LogFormatError
 
 
-def check_time_order(t: np.ndarray, nodes: np.ndarray, source: str) -> None:
-    """Raise :class:`LogFormatError` at the first row whose time [s] goes back within its node."""
+def check_time_order(t: np.ndarray, nodes: np.ndarray, source: str, rows: np.ndarray | None = None) -> None:
+    """Raise :class:`LogFormatError` at the first row whose time [s] goes back within its node; ``rows``: the file
+    rows of ``t``'s rows (some dropped before), for the message (by default their positions)."""
     order_ok = np.ones(len(t), bool)
     same_node = nodes[1:] == nodes[:-1]
     order_ok[1:] = ~(same_node & (t[1:] < t[:-1]))
     if not order_ok.all():
         r = int(np.flatnonzero(~order_ok)[0])
         raise LogFormatError(
-            f"{source}: field t goes backwards at row {r} (node {nodes[r]}: {float(t[r - 1])!r} -> "
+            f"{source}: field t goes backwards at row {r if rows is None else int(rows[r])} (node {nodes[r]}: "
+            f"{float(t[r - 1])!r} -> "
             f"{float(t[r])!r}); expected increasing times, or sort them on reading "
             "(allow_unsorted=True)",
             param="allow_unsorted",

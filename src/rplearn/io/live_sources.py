@@ -41,7 +41,7 @@ from rplearn.data.live_sync import HOLD_ROWS, HOLD_S
 from rplearn.data.tables import CSV_DTYPES, normalise_times
 from rplearn.errors import InputError, LogFormatError
 from rplearn.io._columns import EULER_ENU_FLU_COLUMNS, EULER_NED_FRD_COLUMNS, csv_missing_values
-from rplearn.io._csv_headers import HeaderRule, without_repeated_headers
+from rplearn.io._csv_headers import HeaderRule, file_line, in_file_lines, without_repeated_headers
 from rplearn.io._pose_checks import TrackEnds, top_speeds, track_pieces
 from rplearn.io._time_order import LinkTimes, check_link_time_order
 from rplearn.io.geodetic import geodetic_to_enu
@@ -89,6 +89,8 @@ class _Tail:
         self.path, self.offset, self.header = path, 0, b""
         self.line = 0  # lines read (the header the first)
         self.repeated_headers = 0  # the header line again later in the file (a logger restarted appending): dropped
+        self.read_from = 1  # the file line of the first line the last call returned
+        self.read_dropped: tuple[int, ...] = ()  # the file lines of the header lines dropped from it
         self.rule: HeaderRule | None = None  # how its header lines are told from rows, once the header is read
         self.identity: tuple[int, int] | None = None  # (device, inode) of the file read
         self.first = b""  # its first bytes read (at most FIRST_BYTES)
@@ -150,8 +152,14 @@ class _Tail:
         if self.rule is None:
             self.rule = HeaderRule.of(self.header)
         data, repeated = without_repeated_headers(data, self.rule, first_line, self.path, _SESSION_ADVICE)
-        self.repeated_headers += repeated
+        self.repeated_headers += len(repeated)
+        self.read_from, self.read_dropped = first_line, repeated
         return data
+
+    def file_line(self, line: int) -> int:
+        """The file line of line ``line`` (from 1) of the header and the lines the last call returned, as the parser
+        read them."""
+        return 1 if line <= 1 else file_line(line - 1, self.read_dropped, self.read_from)
 
 
 #: What to do with a CSV being appended to that holds another header (:func:`rplearn.io._csv_headers.HeaderRule.refusal`).
@@ -165,8 +173,10 @@ def _table(tail: _Tail, data: bytes) -> pd.DataFrame | None:
         header = pd.read_csv(io.BytesIO(tail.header), nrows=0, skipinitialspace=True).columns
         df = pd.read_csv(io.BytesIO(tail.header + data), skipinitialspace=True, dtype=CSV_DTYPES,
                          **csv_missing_values(header))  # RSSI text: unparsable_rssi, as sync counts it
-    except Exception as exc:  # parsers raise many classes on corrupt bytes
-        raise LogFormatError(f"{tail.path}: cannot parse the rows appended ({type(exc).__name__}: {exc})") from None
+    except Exception as exc:  # parsers raise many classes on corrupt bytes; their lines said as the file's
+        text = (str(exc).strip().splitlines() or [""])[0]  # one line (pandas ends its complaint with a newline)
+        text = in_file_lines(text, tail.file_line) if isinstance(exc, pd.errors.ParserError) else text
+        raise LogFormatError(f"{tail.path}: cannot parse the rows appended ({type(exc).__name__}: {text})") from None
     return normalise_times(df, tail.path)
 
 

@@ -36,7 +36,7 @@ from rplearn.io._columns import (
     with_node,
 )
 from rplearn.io._common import read_parquet_lean
-from rplearn.io._csv_headers import REPEATED_HEADER, HeaderScan, csv_source, scan_csv_headers
+from rplearn.io._csv_headers import REPEATED_HEADER, HeaderScan, csv_source, in_file_lines, scan_csv_headers
 from rplearn.io._pose_checks import TrackEnds
 from rplearn.io._pose_checks import earlier_rows as _earlier_rows
 from rplearn.io._pose_checks import finite_values as _finite_values
@@ -58,6 +58,15 @@ def _table_error(name: str, path: Any, exc: BaseException) -> str:
     from rplearn.io.sniff import table_read_error
 
     return table_read_error(name, path, exc)
+
+
+def table_read_message(source: str, path: Any, exc: BaseException, scan: HeaderScan) -> str:
+    """The one-line message of a table file that could not be read (:func:`rplearn.io.sniff.table_read_error`), the
+    lines the parser names said as the file's lines (``scan``: the lines repeating the header, which it did not
+    read; :func:`rplearn.io._csv_headers.in_file_lines`)."""
+    if isinstance(exc, pd.errors.ParserError):
+        exc = pd.errors.ParserError(in_file_lines(str(exc), scan.file_line))
+    return _table_error(source, path, exc)
 
 
 def _csv_options(path: Any, columns: Mapping[str, str] | None) -> dict[str, Any]:
@@ -100,7 +109,7 @@ def read_table_rows(path: str, source: str, columns: Mapping[str, str] | None = 
     except pd.errors.EmptyDataError:
         raise LogFormatError(f"{source}: empty file, expected a header line and rows") from None
     except Exception as exc:  # parsers raise many classes on corrupt bytes
-        raise LogFormatError(_table_error(source, path, exc)) from None
+        raise LogFormatError(table_read_message(source, path, exc, scan)) from None
 
 
 def table_format(path: str | os.PathLike) -> str:
@@ -229,7 +238,7 @@ def canonical_pose(
         return pd.DataFrame({c: pd.Series(dtype=object if c == "node" else np.float64) for c in POSE_COLUMNS}), meta
     t = values["t"]
     if not allow_unsorted:
-        _check_time_order(t, nodes, source)
+        _check_time_order(t, nodes, source, rows)  # rows: the file's, some dropped before
     xyz, meta["origin_geodetic"] = _enu_positions(values, meta["position"], origin_geodetic, source)
     keep, jumps = _position_jumps(t, xyz, nodes, rows, nan_policy, source)
     meta["dropped"]["position_jump"] = int((~keep).sum())
@@ -377,7 +386,8 @@ def _signal_chunks(batches: Iterator[pd.DataFrame], source: str, allow_unsorted:
 
 @check_types
 def iter_signal_table(
-    path: str, chunk_rows: int = 200_000, allow_unsorted: bool = False, **options: Any
+    path: str, chunk_rows: int = 200_000, allow_unsorted: bool = False, header_scan: HeaderScan | None = None,
+    **options: Any,
 ) -> Iterator[pd.DataFrame]:
     """Read a big CSV or Parquet signal log in chunks of at most ``chunk_rows`` rows.
 
@@ -386,13 +396,15 @@ def iter_signal_table(
     by the chunk size: CSV through pandas' chunked reader, Parquet by record batches. The lines
     of a CSV file that repeat its header are dropped (another header is refused naming its line:
     :mod:`rplearn.io._csv_headers`); every chunk's ``attrs["repeated_header"]`` says how many the
-    file holds.
+    file holds. ``header_scan``: that scan of the CSV file (:func:`scan_csv_headers`) when the caller
+    made it already (``sync``, which reads the file's extra columns first): the file is not scanned again.
     """
     source = str(path)
     if not os.path.exists(path):
         raise InputError(f"{source}: no such file")
     if chunk_rows < 1:
         raise InputError(f"chunk_rows must be positive, got {chunk_rows}")
+    scan = HeaderScan()
     try:
         if source.lower().endswith(_PARQUET_EXT):
             import pyarrow.parquet as pq
@@ -403,7 +415,7 @@ def iter_signal_table(
             )
             yield from _signal_chunks(batches, source, allow_unsorted, 0, options)
         else:
-            scan = scan_csv_headers(path, source)
+            scan = scan_csv_headers(path, source) if header_scan is None else header_scan
             with csv_source(path, scan) as handle:
                 batches = (normalise_times(c, source)
                            for c in pd.read_csv(handle, chunksize=chunk_rows, skipinitialspace=True, dtype=CSV_DTYPES,
@@ -412,7 +424,7 @@ def iter_signal_table(
     except (InputError, LogFormatError):
         raise
     except Exception as exc:
-        raise LogFormatError(_table_error(source, path, exc)) from None
+        raise LogFormatError(table_read_message(source, path, exc, scan)) from None
 
 
 @check_types

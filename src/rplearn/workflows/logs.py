@@ -22,9 +22,9 @@ from rplearn.analysis.swarm import SwarmOptions, SwarmPrediction, predict_swarm
 from rplearn.data.streaming import conform_chunk, synchronise_stream
 from rplearn.data.sync import SyncOptions, SyncSummary, synchronise
 from rplearn.data.tables import MATCHED_COLUMNS, SIGNAL_COLUMNS
-from rplearn.errors import InputError
+from rplearn.errors import InputError, LogFormatError
 from rplearn.io import ReaderOptions, read_logs
-from rplearn.io._csv_headers import REPEATED_HEADER, REPEATED_HEADER_LINES, csv_source, scan_csv_headers
+from rplearn.io._csv_headers import REPEATED_HEADER, REPEATED_HEADER_LINES, HeaderScan, csv_source, scan_csv_headers
 from rplearn.io.files import check_output_kind, check_output_path, check_table_path, write_json, write_table, write_table_chunks
 from rplearn.io.inspect import file_damage
 from rplearn.io.resolve import check_outputs, distinct_inputs
@@ -179,27 +179,32 @@ def _streamable(signal_paths: Sequence[str], reader_options: ReaderOptions) -> b
                for p in signal_paths)
 
 
-def _extra_columns(signal_paths: Sequence[str], options: ReaderOptions) -> dict[str, str]:
+def _extra_columns(signal_paths: Sequence[str], options: ReaderOptions) -> tuple[dict[str, str], dict[str, HeaderScan]]:
     """Extra (non-canonical) columns of all signal tables, in order of first appearance, each
     ``"number"`` when every value in every file is a number, else ``"text"`` (a pass over
-    those columns only)."""
+    those columns only); and the header scans made for that pass (:func:`scan_csv_headers`, by
+    path: the CSV files with extra columns), so that reading the rows scans no file again."""
     from rplearn.io.tables import table_columns
 
     kinds: dict[str, str] = {}
+    scans: dict[str, HeaderScan] = {}
     for path in signal_paths:
         columns = table_columns(path, options.columns)
         names = [c for c in columns if c not in SIGNAL_COLUMNS]
         for c in names:
             kinds.setdefault(c, "number")
-        for c, numeric in _numeric_columns(path, names, columns).items():
+        for c, numeric in _numeric_columns(path, names, columns, scans).items():
             if not numeric:
                 kinds[c] = "text"
-    return kinds
+    return kinds, scans
 
 
-def _numeric_columns(path: str, names: list[str], columns: list[str]) -> dict[str, bool]:
+def _numeric_columns(path: str, names: list[str], columns: list[str], scans: dict[str, HeaderScan]) -> dict[str, bool]:
     """Whether each of these columns of one table holds numbers only (missing cells allowed);
-    ``columns`` are the table's column names after renaming, in file order."""
+    ``columns`` are the table's column names after renaming, in file order. A CSV file's header
+    scan is kept in ``scans`` under its path."""
+    from rplearn.io.tables import table_read_message
+
     if not names:
         return {}
     if str(path).lower().endswith((".parquet", ".pq")):
@@ -212,12 +217,16 @@ def _numeric_columns(path: str, names: list[str], columns: list[str]) -> dict[st
                 for c in names}
     renamed = dict(zip(columns, pd.read_csv(path, nrows=0, skipinitialspace=True).columns))
     numeric = {c: True for c in names}
-    with csv_source(path, scan_csv_headers(path, path)) as handle:  # without the header lines repeated mid-file
-        for chunk in pd.read_csv(handle, usecols=[renamed[c] for c in names], dtype=str, chunksize=SYNC_CHUNK_ROWS,
-                                 skipinitialspace=True):
-            for c in names:
-                col = chunk[renamed[c]]
-                numeric[c] = numeric[c] and bool(pd.to_numeric(col, errors="coerce").notna().sum() == col.notna().sum())
+    scans[str(path)] = scan = scan_csv_headers(path, str(path))
+    try:
+        with csv_source(path, scan) as handle:  # without the header lines repeated mid-file
+            for chunk in pd.read_csv(handle, usecols=[renamed[c] for c in names], dtype=str, chunksize=SYNC_CHUNK_ROWS,
+                                     skipinitialspace=True):
+                for c in names:
+                    col = chunk[renamed[c]]
+                    numeric[c] = numeric[c] and bool(pd.to_numeric(col, errors="coerce").notna().sum() == col.notna().sum())
+    except Exception as exc:  # a malformed line (a quote left open): said as reading the rows says it
+        raise LogFormatError(table_read_message(str(path), path, exc, scan)) from None
     return numeric
 
 
@@ -226,14 +235,14 @@ def _signal_chunks(signal_paths: Sequence[str], options: ReaderOptions, files: l
     reading dropped is added to ``files`` (as :func:`read_logs` metadata says it)."""
     from rplearn.io.tables import iter_signal_table
 
-    extras = _extra_columns(signal_paths, options)
+    extras, scans = _extra_columns(signal_paths, options)  # the files scanned for header lines once, there
     ptx = options.tx_power_dbm if not isinstance(options.tx_power_dbm, Mapping) else None
     for path in signal_paths:
         first_row = 0
         for chunk in iter_signal_table(
             path, SYNC_CHUNK_ROWS, columns=options.columns, tx_power_dbm=ptx,
             frequency_hz=options.frequency_hz, rx=(options.receivers or {}).get(path),
-            allow_unsorted=options.allow_unsorted,
+            allow_unsorted=options.allow_unsorted, header_scan=scans.get(str(path)),
         ):
             if first_row == 0:
                 files.append({"source": str(path), "kind": "signal",
