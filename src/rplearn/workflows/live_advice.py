@@ -185,7 +185,7 @@ def earlier_fit(model: str, spec: ModelSpec | None = None, nodes: Sequence[str] 
             if getattr(t, name) is None:
                 raise InputError(f"from_model: {model} has no training.{name} (written by rplearn fit --order auto of a "
                                  f"dataset in memory); {refit}", param="from_model")
-        if int(t.n_samples) <= 0:  # never written so: a damaged file, whose values would never be used
+        if int(t.n_samples or 0) <= 0:  # never written so: a damaged file, whose values would never be used
             raise InputError(f"from_model: {model}: training.n_samples: expected a positive count of samples, got "
                              f"{t.n_samples}", param="from_model")
     opts = options_from_model(model, ManoeuvreOptions(), spec)
