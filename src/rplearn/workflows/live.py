@@ -106,7 +106,7 @@ class LiveOptions:
         The stream has ended when nothing arrived for this long [s] after its first message
         (before the first, the session waits: the drones may not be up yet).
     nodes : tuple of str or None
-        The node ids (default: those of the first matched batch).
+        The node ids (default: those of the first matched batch), each named once.
     manoeuvres : ManoeuvreRanker or None
         Ranks the next manoeuvres after a refit, best first (the top three are shown).
     rank_beside : bool

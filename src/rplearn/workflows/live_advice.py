@@ -38,6 +38,10 @@ are this flight's (the earlier one's are of another flight), so they take over. 
 no threshold of its own: the earlier fit's sample count is the yardstick. Before that the
 earlier fit's values stand whether or not the session's fit is at the search's largest
 smoothing. The session's fitted model is unchanged: only the advice's hyper-parameters are.
+They are of the earlier fit's antennas in its band: a session learning a node that fit did not,
+or at another band (:meth:`EarlierFit.mismatch`), is refused by :func:`earlier_fit` when its nodes
+or carrier are known before it starts, and otherwise ranks with its own from the first refit that
+shows it (:meth:`ManoeuvreAdvisor.mismatch`; the session's summary says why).
 """
 
 from __future__ import annotations
