@@ -135,3 +135,20 @@ def test_live_options_refuse_a_node_named_twice_naming_the_field():
         with pytest.raises(InputError) as err:
             LiveOptions(**kw)
         assert err.value.param == name and str(err.value).startswith(f"{name}: ") and "\n" not in str(err.value)
+
+
+def test_only_a_fixed_node_the_user_named_gets_the_never_seen_note(tmp_path):
+    """A MAVLink session holds its station still by default (--fixed's default, not the user's): no note for it;
+    a --fixed node the user named that no row names gets one, naming the node, the flag and the session's nodes."""
+    from rplearn.io._common import Logs
+    from rplearn.io.tlog import write_tlog
+
+    pose, sig = _tables(tmp_path, 600)
+    write_tlog(Logs(pose, sig), tmp_path / "flight.tlog", vehicle="D", station="G", origin_geodetic=(47.3977, 8.5456, 90.0))
+    args = ["live", tmp_path / "flight.tlog", "-o", tmp_path / "m.json", "--quiet", "--idle", "0.5", "--order", "2",
+            "--tx-power", "20", "--frequency", "2.4e9"]
+    res = invoke(args)
+    assert "--fixed" not in res.output
+    res = invoke([*args, "--fixed", "X"])
+    [note] = [line.strip() for line in res.output.splitlines() if line.strip().startswith("--fixed ")]
+    assert note.startswith("--fixed X: no matched row names it (the session's nodes: gcs, sys1)")
