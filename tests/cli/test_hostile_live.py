@@ -102,3 +102,53 @@ def test_the_fixed_nodes_are_said_as_sync_says_them_in_lives_flags(tmp_path):
     assert station.endswith("--station LAT,LON,ALT places it if it stood elsewhere, sync --station-heading (live has no "
                             "flag for it) says where its antenna faced")
     assert "Options" not in res.output
+
+
+@pytest.mark.parametrize("flags, text", [
+    (["--nodes", "D,D,G"], "--nodes: D is named twice"),  # was: a traceback (ValueError from the statistics' node index)
+    (["--nodes", "D", "--nodes", "D,G"], "--nodes: D is named twice"),
+    (["--nodes", ",,"], "--nodes: no node id in ',,'"),  # was: read as not given, the nodes of the first samples learned
+    (["--fixed", "G,G"], "--fixed: G is named twice"),
+    (["--fixed", " , "], "--fixed: no node id in ' , '"),
+    (["--until-spread", "nan"], "--until-spread: expected a positive number of dB, got nan"),  # was: 'floor_db: ...'
+    (["--until-spread", "-1"], "--until-spread: expected a positive number of dB, got -1.0"),
+    (["--until-spread", "inf"], "--until-spread: expected a positive number of dB, got inf"),
+])
+def test_nonsense_node_lists_and_spread_targets_are_one_line_naming_the_flag(tmp_path, flags, text):
+    """With the ranking on (its floor is --until-spread), each refused before any work, naming live's flag."""
+    pose, sig = _tables(tmp_path)
+    pose.to_csv(tmp_path / "pose.csv", index=False)
+    sig.to_csv(tmp_path / "signal.csv", index=False)
+    res = invoke(["live", f"{tmp_path / 'pose.csv'},{tmp_path / 'signal.csv'}", "-o", tmp_path / "m.json", "--quiet",
+                  "--idle", "0.2", "--order", "2", *flags], ok=False)
+    line = _error(res)
+    assert line.startswith(f"error: {text}"), line
+    assert not (tmp_path / "m.json").exists()
+
+
+def test_live_options_refuse_a_node_named_twice_naming_the_field():
+    from rplearn.errors import InputError
+    from rplearn.workflows.live import LiveOptions
+
+    for kw, name in (({"nodes": ("D", "D")}, "nodes"), ({"nodes": ()}, "nodes"), ({"fixed_nodes": ("G", "G")}, "fixed_nodes"),
+                     ({"nodes": ("D", " ")}, "nodes")):
+        with pytest.raises(InputError) as err:
+            LiveOptions(**kw)
+        assert err.value.param == name and str(err.value).startswith(f"{name}: ") and "\n" not in str(err.value)
+
+
+def test_only_a_fixed_node_the_user_named_gets_the_never_seen_note(tmp_path):
+    """A MAVLink session holds its station still by default (--fixed's default, not the user's): no note for it;
+    a --fixed node the user named that no row names gets one, naming the node, the flag and the session's nodes."""
+    from rplearn.io._common import Logs
+    from rplearn.io.tlog import write_tlog
+
+    pose, sig = _tables(tmp_path, 600)
+    write_tlog(Logs(pose, sig), tmp_path / "flight.tlog", vehicle="D", station="G", origin_geodetic=(47.3977, 8.5456, 90.0))
+    args = ["live", tmp_path / "flight.tlog", "-o", tmp_path / "m.json", "--quiet", "--idle", "0.5", "--order", "2",
+            "--tx-power", "20", "--frequency", "2.4e9"]
+    res = invoke(args)
+    assert "--fixed" not in res.output
+    res = invoke([*args, "--fixed", "X"])
+    [note] = [line.strip() for line in res.output.splitlines() if line.strip().startswith("--fixed ")]
+    assert note.startswith("--fixed X: no matched row names it (the session's nodes: gcs, sys1)")

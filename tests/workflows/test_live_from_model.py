@@ -120,3 +120,35 @@ def test_each_refusal_is_one_line_naming_the_model_file(earlier, tmp_path):
         assert text in message, (text, message)
         assert "--drift" not in message and "--noise" not in message  # trajectory's flags: live has none
     assert ManoeuvreAdvisor().earlier is None
+
+
+def test_each_earlier_fit_of_other_nodes_or_band_is_refused_when_the_session_says_them(earlier, tmp_path):
+    """--nodes and a MAVLink --frequency are known before the session: refused then, one line naming the file and field."""
+    cases = [
+        ({"nodes": ("A", "gcs")}, "learned the nodes A, B (its model's nodes), the session learns A, gcs: gcs not among them"),
+        ({"frequency_hz": 433e6}, "learned at 2.412 GHz (training.frequency_hz), the session's rows are at 433 MHz"),
+        ({}, None),
+        ({"nodes": ("A",), "frequency_hz": 2.45e9}, None),  # a subset of its nodes, the same band
+    ]
+    for kw, text in cases:
+        if text is None:
+            assert earlier_fit(earlier, None, **kw).nodes == ("A", "B")
+            continue
+        with pytest.raises(InputError) as err:
+            earlier_fit(earlier, None, **kw)
+        assert err.value.param == "from_model" and text in str(err.value) and "\n" not in str(err.value)
+
+
+def test_a_session_of_other_nodes_or_band_ranks_with_its_own(sessions):
+    """Learned only once rows arrive: the advisor ranks with the session's own hyper-parameters and says why
+    (was: the earlier model's, of other antennas or another band, silently)."""
+    advisor, calls, _, _ = sessions
+    stats, fitted, latest, _ = calls[-1]
+    assert advisor.mismatch(fitted) is None
+    for changed, text in ((replace(advisor.earlier, nodes=("X", "Y")), "the session learns A, B: A, B not among them"),
+                          (replace(advisor.earlier, frequency_hz=433e6), "learned at 433 MHz (training.frequency_hz)")):
+        other = ManoeuvreAdvisor(advisor.options, 0.0, changed)
+        why = other.mismatch(fitted)
+        assert why is not None and text in why and why.startswith(changed.path)
+        assert other(stats, fitted, latest) == ManoeuvreAdvisor(advisor.options, 0.0)(stats, fitted, latest)
+        assert not other.young and changed.path not in _capped_note(other)

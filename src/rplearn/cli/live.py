@@ -3,12 +3,13 @@ replay``: send a ``.tlog`` over UDP at a multiple of its pace (to try ``live`` o
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
 import typer
 
 from rplearn.cli._app import app, geodetic_flag, reader_options, say, split_list, user_errors, with_flag
-from rplearn.errors import RplearnError
+from rplearn.errors import InputError, RplearnError
 
 #: What the reader's messages suggest that ``live`` has no flag for, and what to do from its command line instead.
 _LIBRARY_ONLY = (
@@ -22,6 +23,15 @@ _LIBRARY_ONLY = (
 #: What live's notes (``sync``'s words on the fixed nodes) name that only ``sync`` has a flag for.
 _SYNC_ONLY = (("ReaderOptions.station_heading_deg says where its antenna faced",
                "sync --station-heading (live has no flag for it) says where its antenna faced"),)
+
+
+def _node_ids(values: list[str] | None, flag: str) -> list[str] | None:
+    """The node ids of a repeatable, comma-separable flag (None when not given); given with none
+    (``--nodes ,``) is refused, naming the flag, not read as not given."""
+    ids = split_list(values)
+    if values and ids is None:
+        raise InputError(f"{flag}: no node id in {' '.join(repr(v) for v in values)}; name the nodes, e.g. {flag} D,G")
+    return ids
 
 
 def _summary_in_live_terms(text: str) -> str:
@@ -73,7 +83,7 @@ def _view(status: Any) -> Any:
 
 @app.command()
 @user_errors(flags={"ranking_every_s": "--advice-s", "receivers": "--receiver NODE", "fixed_nodes": "--fixed NODE", "html": "--html PATH",
-                    "record": "--record PATH", "from_model": "--from-model"})
+                    "record": "--record PATH", "from_model": "--from-model", "nodes": "--nodes"})
 def live(
     source: str = typer.Argument(..., help="A MAVLink connection as pymavlink names it (udpin:0.0.0.0:14550, tcp:HOST:PORT, a serial device "
                                            "such as /dev/ttyUSB0: what MAVProxy, QGroundControl and mavlink-router forward), or "
@@ -125,11 +135,11 @@ def live(
     """
     from rplearn.cli.learning import degree_option
     from rplearn.data.sync import SyncOptions
-    from rplearn.errors import InputError
     from rplearn.models.options import FitOptions
     from rplearn.models.spec import ModelSpec
     from rplearn.workflows.live import LiveOptions, run_live
     from rplearn.workflows.live_advice import live_advisor
+    from rplearn.workflows.live_checks import check_live_outputs, check_live_source
 
     auto, order = degree_option(degree, model)
     spec = ModelSpec.parse(model, order=order)
@@ -140,8 +150,8 @@ def live(
     receivers = [f"{source.split(',')[-1]}={receiver}"] if receiver is not None else None
     reader = reader_options(receiver=receivers, tx_power_dbm=tx_power_dbm, frequency_hz=frequency_hz,
                             nan_policy=nan_policy, station_geodetic=geodetic_flag(station_geodetic, "--station"))
-    named_fixed = tuple(split_list(fixed) or ())  # the user's: a note when no row names one (not the default station)
-    listed = split_list(nodes) or []
+    named_fixed = tuple(_node_ids(fixed, "--fixed") or ())  # the user's: a note when no row names one (not the default station)
+    listed = _node_ids(nodes, "--nodes") or []
     outside = [n for n in named_fixed if listed and n not in listed]
     if outside:
         raise InputError(f"--fixed: {', '.join(outside)} is not among --nodes ({', '.join(listed)}), the "
@@ -150,13 +160,17 @@ def live(
     if no_advice and from_model is not None:
         raise InputError("--from-model: gives the ranking of the next-best manoeuvres its noise, smoothing and drift; "
                          "drop --no-advice")
-    advisor = None if no_advice else live_advisor(still, 0.0, until_spread_db, from_model, spec)  # paced by ranking_every_s
-    if advisor is not None and advisor.earlier is not None:
-        say(advisor.earlier.text())
     options = LiveOptions(spec=spec, fit=FitOptions(auto=auto), reader=reader, sync=SyncOptions(max_gap_s=max_gap_s),
                           refit_s=refit_s, duration_s=duration_s, until_spread_db=until_spread_db, spread_over=spread_over,
-                          until_coverage_pct=until_coverage_pct, idle_s=idle_s, nodes=tuple(split_list(nodes) or ()) or None,
-                          manoeuvres=advisor, ranking_every_s=advice_s, fixed_nodes=named_fixed)
+                          until_coverage_pct=until_coverage_pct, idle_s=idle_s, nodes=tuple(listed) or None,
+                          ranking_every_s=advice_s, fixed_nodes=named_fixed)  # its values checked before the advisor's
+    check_live_source(source)
+    check_live_outputs(source, output, record, html, from_model)  # before --from-model is read and said
+    advisor = None if no_advice else live_advisor(still, 0.0, until_spread_db, from_model, spec, listed or None,
+                                                  None if csv_source else frequency_hz)  # paced by ranking_every_s
+    if advisor is not None and advisor.earlier is not None:
+        say(advisor.earlier.text())
+    options = replace(options, manoeuvres=advisor)
     try:
         if quiet:
             outcome = run_live(source, output, options, None, record, html)

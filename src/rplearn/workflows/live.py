@@ -106,7 +106,7 @@ class LiveOptions:
         The stream has ended when nothing arrived for this long [s] after its first message
         (before the first, the session waits: the drones may not be up yet).
     nodes : tuple of str or None
-        The node ids (default: those of the first matched batch).
+        The node ids (default: those of the first matched batch), each named once.
     manoeuvres : ManoeuvreRanker or None
         Ranks the next manoeuvres after a refit, best first (the top three are shown).
     rank_beside : bool
@@ -323,6 +323,9 @@ class _Session:
         self.status.refits += 1
         self.note("waiting: ")
         self.note("--fixed ", fixed_nodes_note(self.options.fixed_nodes, self.fitted.model.nodes))
+        mismatch = getattr(self.options.manoeuvres, "mismatch", None)  # ManoeuvreAdvisor's: --from-model not of this session
+        why = mismatch(fitted) if callable(mismatch) else None
+        self.note("--from-model ", None if why is None else f"{why}; the manoeuvres are ranked with the session's own instead")
         self._describe()
         if self.ranking is not None and self.stats is not None:
             self.ranking.submit(self._snapshot, self.status.refits)
@@ -456,7 +459,8 @@ def run_live(
     """
     options = options or LiveOptions()
     check_live_source(source)
-    check_live_outputs(source, output, record, html)
+    earlier = getattr(getattr(options.manoeuvres, "earlier", None), "path", None)  # ManoeuvreAdvisor's --from-model
+    check_live_outputs(source, output, record, html, earlier if isinstance(earlier, str) else None)
     work_dir = tempfile.mkdtemp(prefix="rplearn-live-")
     src = open_source(source, work_dir, options.reader)
     session = _Session(options, output, work_dir)

@@ -38,12 +38,17 @@ are this flight's (the earlier one's are of another flight), so they take over. 
 no threshold of its own: the earlier fit's sample count is the yardstick. Before that the
 earlier fit's values stand whether or not the session's fit is at the search's largest
 smoothing. The session's fitted model is unchanged: only the advice's hyper-parameters are.
+They are of the earlier fit's antennas in its band: a session learning a node that fit did not,
+or at another band (:meth:`EarlierFit.mismatch`), is refused by :func:`earlier_fit` when its nodes
+or carrier are known before it starts, and otherwise ranks with its own from the first refit that
+shows it (:meth:`ManoeuvreAdvisor.mismatch`; the session's summary says why).
 """
 
 from __future__ import annotations
 
 import math
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -54,7 +59,9 @@ from rplearn._argtypes import check_types
 from rplearn.analysis.manoeuvre_prior import NOMINAL_PRIOR_STD_DB
 from rplearn.analysis.manoeuvres import ManoeuvreOptions, prior_penalty_weight, rank_manoeuvres
 from rplearn.core.lsq.selection import at_smoothing_cap
+from rplearn.core.plausible import describe_band, same_band
 from rplearn.errors import InputError, RplearnError
+from rplearn.models.base import relative_levels
 from rplearn.models.load import load_model
 from rplearn.models.patterns import PatternSet
 from rplearn.models.spec import ModelSpec
@@ -82,6 +89,12 @@ class EarlierFit:
         Its drifting error per :data:`~rplearn.core.lsq.block_sums.DEFAULT_BLOCK_S` block [dB].
     n_samples : int
         The samples it learned from: the session's own estimates take over from as many.
+    nodes : tuple of str
+        The nodes it learned (empty: not checked): a session learning a node outside them ranks
+        with its own (:meth:`mismatch`).
+    frequency_hz : float or None
+        The carrier it learned at (None: not stated, not checked): a session of another band
+        ranks with its own.
     """
 
     path: str
@@ -90,6 +103,23 @@ class EarlierFit:
     power: float
     drift_std_db: float
     n_samples: int
+    nodes: tuple[str, ...] = ()
+    frequency_hz: float | None = None
+
+    def mismatch(self, nodes: Sequence[str] = (), frequency_hz: float | None = None) -> str | None:
+        """Why these hyper-parameters are not of a session learning ``nodes`` at ``frequency_hz``
+        (one line naming the file and its field), or None: a node the earlier fit did not learn
+        (another drone's antenna), or another band (antenna patterns change with frequency)."""
+        missing = [n for n in nodes if self.nodes and n not in self.nodes]
+        if missing:
+            return (f"{self.path} learned the nodes {', '.join(self.nodes)} (its model's nodes), the session learns "
+                    f"{', '.join(nodes)}: {', '.join(missing)} not among them (its noise, smoothing and drift are of "
+                    "other antennas)")
+        if frequency_hz is not None and self.frequency_hz is not None and not same_band(frequency_hz, self.frequency_hz):
+            return (f"{self.path} learned at {describe_band(self.frequency_hz, self.frequency_hz)} "
+                    f"(training.frequency_hz), the session's rows are at {describe_band(frequency_hz, frequency_hz)}: "
+                    "antenna patterns change with frequency")
+        return None
 
     def young(self, statistics: Any) -> bool:
         """Whether a session with these statistics has learned fewer samples than the earlier fit."""
@@ -108,23 +138,45 @@ class EarlierFit:
 
 
 @check_types
-def earlier_fit(model: str, spec: ModelSpec | None = None) -> EarlierFit:
+def earlier_fit(model: str, spec: ModelSpec | None = None, nodes: Sequence[str] | None = None,
+                frequency_hz: float | None = None) -> EarlierFit:
     """The hyper-parameters of an earlier flight's model file for a session learning ``spec``
     (default ``sh``), read as ``trajectory --optimize --from-model`` reads them
     (:func:`rplearn.workflows.calibration_plan.options_from_model`).
+
+    Parameters
+    ----------
+    model : str
+        The model file.
+    spec : ModelSpec, optional
+        The session's model.
+    nodes : sequence of str, optional
+        The session's nodes when known before it starts (``--nodes``).
+    frequency_hz : float, optional
+        The session's carrier when known before it starts (a MAVLink stream's ``--frequency``).
 
     Raises
     ------
     InputError
         ``param="from_model"``, one line: the file is missing or not an automatic pattern fit
-        (``rplearn fit --order auto``), of another kind than ``spec``, fitted with priors, or
-        lacks a field the ranking needs (naming it).
+        (``rplearn fit --order auto``; a reference-pattern model learned from no flight), of
+        another kind than ``spec``, fitted with priors, learned from relative RSSI, of nodes or a
+        band other than ``nodes`` and ``frequency_hz`` (:meth:`EarlierFit.mismatch`), or lacks a
+        field the ranking needs or holds a nonsensical one (naming it).
     """
     spec = spec or ModelSpec.parse("sh")
     try:
         loaded = load_model(model)
     except (OSError, RplearnError):
         loaded = None  # options_from_model says why, in one line
+    if isinstance(loaded, PatternSet) and loaded.training.reference is not None:
+        raise InputError(f"from_model: {model} is a reference-pattern model (training.reference: rplearn reference), learned "
+                         "from no flight: it has no noise, smoothing or drift; give an earlier flight's model of rplearn "
+                         "fit DATASET --order auto", param="from_model")
+    if isinstance(loaded, PatternSet) and relative_levels(loaded):
+        raise InputError(f"from_model: {model} learned from relative RSSI (training.rssi_scale relative, sync --rssi-scale "
+                         "relative): its noise and drift are on that radio's own scale, the session learns dBm; give a model "
+                         "of calibrated RSSI", param="from_model")
     if isinstance(loaded, PatternSet) and loaded.training.selection is not None:
         t, refit = loaded.training, "fit the earlier flight with rplearn fit DATASET --order auto -o MODEL.json"
         if loaded.basis.kind != spec.kind:
@@ -137,10 +189,19 @@ def earlier_fit(model: str, spec: ModelSpec | None = None) -> EarlierFit:
             if getattr(t, name) is None:
                 raise InputError(f"from_model: {model} has no training.{name} (written by rplearn fit --order auto of a "
                                  f"dataset in memory); {refit}", param="from_model")
+        if int(t.n_samples or 0) <= 0:  # never written so: a damaged file, whose values would never be used
+            raise InputError(f"from_model: {model}: training.n_samples: expected a positive count of samples, got "
+                             f"{t.n_samples}", param="from_model")
     opts = options_from_model(model, ManoeuvreOptions(), spec)
     assert isinstance(loaded, PatternSet) and loaded.training.n_samples is not None  # else options_from_model refused
-    return EarlierFit(model, float(opts.noise_std_db), float(opts.penalty_weight or 0.0), float(opts.power),
-                      float(opts.correlated_std_db or 0.0), int(loaded.training.n_samples))
+    frequency = loaded.frequency_hz
+    earlier = EarlierFit(model, float(opts.noise_std_db), float(opts.penalty_weight or 0.0), float(opts.power),
+                         float(opts.correlated_std_db or 0.0), int(loaded.training.n_samples), tuple(loaded.nodes),
+                         None if frequency is None else float(frequency))
+    why = earlier.mismatch(tuple(nodes or ()), frequency_hz)
+    if why is not None:
+        raise InputError(f"from_model: {why}; give a model of the session's drones and band", param="from_model")
+    return earlier
 
 
 def ranking_options(options: ManoeuvreOptions, statistics: Any, fitted: Any, earlier: EarlierFit | None = None) -> ManoeuvreOptions:
@@ -216,12 +277,22 @@ class ManoeuvreAdvisor:
             return f"; manoeuvres are ranked under a {NOMINAL_PRIOR_STD_DB:g}-dB smoothness prior meanwhile"
         return ""
 
+    def mismatch(self, fitted: Any) -> str | None:
+        """Why ``earlier`` is not of the session whose refit is ``fitted`` (its nodes, its band;
+        :meth:`EarlierFit.mismatch`): the ranking then reads the session's own hyper-parameters
+        (and the session says so); None when it is, or when there is no ``earlier``."""
+        if self.earlier is None:
+            return None
+        frequency = getattr(fitted.model, "frequency_hz", None)
+        return self.earlier.mismatch(tuple(fitted.model.nodes), None if frequency is None else float(frequency))
+
     def __call__(self, statistics: Any, fitted: Any, latest: pd.DataFrame) -> list[tuple[str, float, float]]:
         now = time.monotonic()
         if self._last is not None and now - self._last[0] < self.every_s:
             return self._last[1]
-        self.young = self.earlier is not None and self.earlier.young(statistics)
-        options = ranking_options(self.options, statistics, fitted, self.earlier)
+        earlier = self.earlier if self.earlier is not None and self.mismatch(fitted) is None else None
+        self.young = earlier is not None and earlier.young(statistics)
+        options = ranking_options(self.options, statistics, fitted, earlier)
         ranked = rank_manoeuvres(statistics, fitted.spec, list(fitted.model.nodes), latest, options,
                                  getattr(statistics, "blocks", None))
         rows = [(r.name, float(r.duration_s), float(max(r.spread_after_db.values()))) for r in ranked]
@@ -232,13 +303,15 @@ class ManoeuvreAdvisor:
 @check_types
 def live_advisor(fixed_nodes: tuple[str, ...] = (), every_s: float = DEFAULT_ADVICE_EVERY_S,
                  floor_db: float | None = None, from_model: str | None = None,
-                 spec: ModelSpec | None = None) -> ManoeuvreAdvisor:
+                 spec: ModelSpec | None = None, nodes: Sequence[str] | None = None,
+                 frequency_hz: float | None = None) -> ManoeuvreAdvisor:
     """The advisor ``rplearn live`` uses: the default candidates with ``fixed_nodes`` held still,
     no reward below ``floor_db`` (the session's ``--until-spread``); with ``from_model`` (an
     earlier flight's model file, ``--from-model``) its hyper-parameters while the session is
-    young (:func:`earlier_fit`; ``spec``: the session's model)."""
+    young (:func:`earlier_fit`; ``spec``: the session's model; ``nodes``, ``frequency_hz``: the
+    session's when known before it starts, checked against the file's)."""
     candidates = CandidateOptions(fixed_nodes=tuple(fixed_nodes))
-    earlier = None if from_model is None else earlier_fit(from_model, spec)
+    earlier = None if from_model is None else earlier_fit(from_model, spec, nodes, frequency_hz)
     return ManoeuvreAdvisor(ManoeuvreOptions(candidates=candidates, floor_db=floor_db), every_s, earlier)
 
 

@@ -13,6 +13,7 @@ from typing import Any
 from rplearn._argtypes import check_types
 from rplearn.errors import InputError
 from rplearn.io.files import check_output_kind
+from rplearn.io.partitions import file_identity
 from rplearn.io.resolve import check_outputs, distinct_inputs
 
 #: What ``until_spread_db`` is read over (:attr:`rplearn.workflows.live.LiveOptions.spread_over`).
@@ -54,6 +55,15 @@ def check_live_options(options: Any) -> None:
     if o.until_coverage_pct is not None and not 0 < o.until_coverage_pct <= 100:
         raise InputError(f"until_coverage_pct: expected a percentage in (0, 100], got {o.until_coverage_pct}",
                          param="until_coverage_pct")
+    for name in ("nodes", "fixed_nodes"):
+        ids = getattr(o, name) or ()
+        if name == "nodes" and o.nodes is not None and not ids:
+            raise InputError("nodes: no node id given (None: the nodes of the first matched samples)", param=name)
+        blank = [n for n in ids if not n.strip()]
+        twice = sorted({n for n in ids if ids.count(n) > 1})
+        if blank or twice:
+            raise InputError(f"{name}: " + (f"an empty node id in {list(ids)}" if blank else f"{', '.join(twice)} is named "
+                             "twice") + "; name each node once", param=name)
     missing = [n for n in o.fixed_nodes if o.nodes is not None and n not in o.nodes]
     if missing:
         raise InputError(f"fixed_nodes: {', '.join(missing)} is not among nodes ({', '.join(o.nodes)}), those "
@@ -76,10 +86,16 @@ def check_live_source(source: str) -> None:
 
 
 @check_types
-def check_live_outputs(source: str, output: str, record: str | None, html: str | None) -> None:
-    """Refuse, before any work, an output that is an input (a CSV source's files, a ``.tlog`` read as a connection)
-    or another output (the model, the page, the recording: each its own file), or whose name says another kind."""
+def check_live_outputs(source: str, output: str, record: str | None, html: str | None, from_model: str | None = None) -> None:
+    """Refuse, before any work, an output that is an input (a CSV source's files, a ``.tlog`` read as a connection,
+    ``from_model``: an earlier flight's model file, which the session's refits would overwrite) or another output (the
+    model, the page, the recording: each its own file), or whose name says another kind."""
     inputs = source.split(",") if is_csv_source(source) else [source] if os.path.exists(source) else []
+    earlier = file_identity(from_model) if from_model else None
+    for name, path in (("output", output), ("html", html), ("record", record)):
+        if path and earlier is not None and file_identity(path) == earlier:
+            raise InputError(f"{name}: {path} is also given as from_model, the earlier flight's model the ranking reads: "
+                             "the session would overwrite it; write to another file", param=name, related=("from_model",))
     check_outputs({"output": output, "html": html, "record": record}, inputs)
     check_output_kind(output, "model")
     if html is not None:
