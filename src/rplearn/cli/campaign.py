@@ -116,7 +116,11 @@ def _optimized(out_dir: str, model: str | None, figures: tuple[float, float, flo
     say("expected per-node pattern spread over time (greedy: the largest expected reduction per second at each step):")
     say(plan.summary())
     if not plan.steps:
-        say(f"no manoeuvre lowers the spread within {budget:g} s; nothing written")
+        if max(plan.start_spread_db.values()) <= target:
+            say(f"the prior's spread is already at most the target {target:g} dB: nothing to fly (check the prior: "
+                "--noise, --prior-std, or the --from-model file's); nothing written")
+        else:
+            say(f"no manoeuvre lowers the spread within {budget:g} s; nothing written")
         return
     worst = max(plan.steps[-1].spread_db.values())
     reached = "reached" if worst <= target else f"not reached within the budget (worst node {worst:.2f} dB)"

@@ -42,12 +42,12 @@ import pandas as pd
 
 from rplearn._argtypes import check_types
 from rplearn.data.phases import advised_max_gap_s, calibration_problems, flight_phases
-from rplearn.data.poses import PoseTrack, pose_tracks
+from rplearn.data.poses import PoseTrack, pose_tracks, tracks_of_checked_log
 from rplearn.data.readings import REPEAT_FRACTION, duplicate_rows, repeated_readings, report_period_s, report_rate_hz
 from rplearn.data.sync import DEFAULT_SENTINEL_RSSI_DBM, PLAUSIBLE_RSSI_DBM
 from rplearn.data.sync_notes import fixed_nodes
-from rplearn.data.tables import QUATERNION_NORM_TOLERANCE, outage_mask
-from rplearn.errors import RplearnError
+from rplearn.data.tables import QUATERNION_NORM_TOLERANCE, outage_mask, validate_pose_log
+from rplearn.errors import InputError, RplearnError
 from rplearn.io._csv_headers import REPEATED_HEADER, REPEATED_HEADER_LINES
 from rplearn.io.damage import across_files, file_damage
 from rplearn.io.inspect_files import read_for_inspection
@@ -387,6 +387,8 @@ def inspect_logs(
         frequencies = [float(options.frequency_hz)]  # the user's, for logs that do not say it
     pose, tracks = _tracks(canonical)
     if pose is not None and tracks is not None:
+        _flag_moved_station(report, pose, max_gap_s, [report.files[i]["path"] for i in owners["pose"]])
+    if pose is not None and tracks is not None:
         pairs = [(lk.tx, lk.rx) for lk in report.links] or None
         report.calibration = calibration_problems(flight_phases(pose, tracks), tracks, pairs,
                                                   min(frequencies) if frequencies else None)
@@ -405,6 +407,19 @@ def _tracks(poses: list[pd.DataFrame]) -> tuple[pd.DataFrame | None, dict[str, P
         return pose, pose_tracks(pose)
     except RplearnError:
         return None, None
+
+
+def _flag_moved_station(report: InspectReport, pose: pd.DataFrame, max_gap_s: float, files: list[str]) -> None:
+    """A node that holds still at one pose and later at another with no pose between (a station moved between
+    flights), which ``sync`` refuses with the same ``max_gap_s``: said as a problem (was: not a word, neither
+    fixed nor flagged, when the move fell in a pause of the signals)."""
+    source = ", ".join(files) or "pose log"
+    try:
+        tracks_of_checked_log(validate_pose_log(pose, source), None, source, max_gap_s)
+    except InputError as exc:
+        report.problems.append(f"{exc} (sync refuses these poses)")
+    except RplearnError:
+        pass  # said by the reading
 
 
 def _name_fixed(report: InspectReport, tracks: dict[str, PoseTrack]) -> None:

@@ -21,12 +21,14 @@ and the error drifting over seconds (``training.drift_std_db``), all written by
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 
 from rplearn._argtypes import check_types
+from rplearn._budget import Cost, budget, check_work
 from rplearn.analysis.manoeuvre_prior import NOMINAL_PRIOR_STD_DB
 from rplearn.analysis.manoeuvres import ManoeuvreOptions, PlanStep, greedy_plan, pattern_spreads, prior_penalty_weight
 from rplearn.core.lsq.normal_equations import NormalEquations
@@ -39,9 +41,24 @@ from rplearn.models.spec import ModelSpec
 from rplearn.plan.campaign import Campaign, write_references
 from rplearn.plan.manoeuvres import CandidateOptions
 from rplearn.plan.references import read_plan
+from rplearn.workflows.planning import MIN_REFERENCE_RATE_HZ, REFERENCE_ROW_BYTES, REFERENCE_ROW_DISK, REFERENCE_ROW_S
 
 #: The RSSI noise about the model a plan assumes without a fit or ``--noise`` [dB].
 DEFAULT_NOISE_STD_DB = 4.2
+#: The spreads a plan reads as a radio's (its noise, the drifting error) [dB]: RSSI values lie
+#: within the 180-dB plausible window (-150 to 30 dBm), so no scatter of them exceeds 90 dB,
+#: and radios report them in steps of 0.5 or 1 dB, so none is below 0.01 dB (a smaller noise
+#: underflows the plan's arithmetic: its spreads came out NaN, a larger one overflowed).
+SPREAD_RANGE_DB = (0.01, 90.0)
+#: Packets per second in one link direction a plan counts at most [Hz] (no radio reports RSSI
+#: more often; 1e300 made the posterior's matrix singular).
+MAX_PACKET_RATE_HZ = 1e5
+#: Cruise speeds a plan's drones fly [m/s] (a slower one makes each manoeuvre hours long: 1e-3
+#: m/s planned for over 10 minutes, 1e-300 failed on an array too large; a faster one no drone flies).
+SPEED_RANGE_M_S = (0.5, 50.0)
+#: Starting distance and height a plan accepts at most [m] (the plausible link distance and
+#: drone altitude of :data:`rplearn.core.plausible.PLAUSIBLE`).
+MAX_DISTANCE_M, MAX_HEIGHT_M = 100_000.0, 50_000.0
 
 
 @check_types
@@ -112,6 +129,18 @@ class OptimizeOptions:
             v = float(getattr(self, name))
             if not (np.isfinite(v) and v > 0):
                 raise InputError(f"{name}: expected a positive finite number, got {v!r}", param=name)
+        lo, hi = SPREAD_RANGE_DB
+        ranges = {"noise_std_db": (lo, hi, "dB", "a radio's RSSI scatter"),
+                  "drift_std_db": (0.0, hi, "dB", "a radio's RSSI scatter"),
+                  "packet_rate_hz": (0.0, MAX_PACKET_RATE_HZ, "Hz", "packets a radio reports per second"),
+                  "speed_m_s": (*SPEED_RANGE_M_S, "m/s", "a drone's cruise speed"),
+                  "distance_m": (0.0, MAX_DISTANCE_M, "m", "a drone radio link"),
+                  "height_m": (0.0, MAX_HEIGHT_M, "m", "a drone's height")}
+        for name, (low, high, unit, what) in ranges.items():
+            v = getattr(self, name)
+            if v is not None and not low <= float(v) <= high:
+                raise InputError(f"{name}: {float(v):g} {unit} is not {what}: expected {low:g} to {high:g} {unit}",
+                                 param=name)
 
 
 @check_types
@@ -172,6 +201,9 @@ def optimize_plan(out_dir: str, options: OptimizeOptions | None = None, rate_hz:
         Sample rate of the reference files [Hz].
     """
     opts = options or OptimizeOptions()
+    if not (np.isfinite(rate_hz) and rate_hz >= MIN_REFERENCE_RATE_HZ):
+        raise InputError(f"rate_hz: expected a sample rate of at least {MIN_REFERENCE_RATE_HZ:g} Hz, got {rate_hz!r}",
+                         param="rate_hz")
     spec = ModelSpec.parse(opts.model)
     if not spec.decouples:
         raise InputError(f"model: {spec.label} has no per-node pattern to plan for; use sh, bg or poly", param="model")
@@ -198,6 +230,11 @@ def optimize_plan(out_dir: str, options: OptimizeOptions | None = None, rate_hz:
         mopts = replace(mopts, penalty_weight=weight, power=0.0)
     empty = NormalEquations(spec.basis(), len(nodes))
     start_spread = pattern_spreads(empty, spec, nodes, mopts)
+    if not all(np.isfinite(v) for v in start_spread.values()):
+        raise InputError(f"the prior's spread is not finite (noise {mopts.noise_std_db:g} dB, penalty weight "
+                         f"{mopts.penalty_weight!r}, power {mopts.power:g}): "
+                         + ("the model's training values are out of range" if opts.from_model else "give other values"),
+                         param="from_model" if opts.from_model else "noise_std_db")
     steps = greedy_plan(empty, spec, nodes, poses, opts.budget_s, opts.target_spread_db, mopts)
     prior = None if opts.from_model is None else _prior_text(mopts, opts, shape)
     if not steps:
@@ -205,6 +242,10 @@ def optimize_plan(out_dir: str, options: OptimizeOptions | None = None, rate_hz:
     units = tuple(replace(s.manoeuvre.candidate.unit, label=f"{k + 1:02d}_{s.manoeuvre.candidate.unit.label}")
                   for k, s in enumerate(steps))
     campaign = Campaign(units, gap_s=0.0)
+    rows = 2.0 * campaign.duration_s
+    check_work("rate_hz", rate_hz, lambda r: Cost(memory_bytes=REFERENCE_ROW_BYTES * rows * r, seconds=REFERENCE_ROW_S * rows * r,
+                                                  disk_bytes=REFERENCE_ROW_DISK * rows * r),
+               "Hz", integer=False, bounds=(MIN_REFERENCE_RATE_HZ, math.inf), limits=budget(out_dir))
     paths = write_references(campaign, out_dir, rate_hz)
     return OptimizedPlan(steps, start_spread, campaign, paths, prior)
 
@@ -270,7 +311,15 @@ def options_from_model(model: str, options: ManoeuvreOptions, spec: ModelSpec, *
         if training.noise_std_db is None or training.variance_inflation is None:
             field = "noise_std_db" if training.noise_std_db is None else "variance_inflation"
             raise InputError(f"from_model: {model} has no training.{field}; {refit}, or give --noise", param="from_model")
+        _in_range(model, "noise_std_db", training.noise_std_db, SPREAD_RANGE_DB, "--noise")
+        _in_range(model, "variance_inflation", training.variance_inflation, (1.0, 1e4), "--noise")
         noise_std_db = float(training.noise_std_db) * float(np.sqrt(training.variance_inflation))
+        if not SPREAD_RANGE_DB[0] <= noise_std_db <= SPREAD_RANGE_DB[1]:
+            raise InputError(f"from_model: {model}: training.noise_std_db x sqrt(training.variance_inflation) is "
+                             f"{noise_std_db:g} dB, not a radio's RSSI scatter ({SPREAD_RANGE_DB[0]:g} to "
+                             f"{SPREAD_RANGE_DB[1]:g} dB); give --noise", param="from_model")
+    if training.penalty_power is not None:
+        _in_range(model, "penalty_power", training.penalty_power, PENALTY_POWER_RANGE, None)
     power = float(training.penalty_power if training.penalty_power is not None else options.power)
     if prior_std_db is not None:
         weight = prior_penalty_weight(spec.basis(), prior_std_db, noise_std_db, spec.ridge_weight, power)
@@ -284,9 +333,29 @@ def options_from_model(model: str, options: ManoeuvreOptions, spec: ModelSpec, *
             raise InputError(f"from_model: {model} has no training.drift_std_db (written by rplearn fit --order auto of a "
                              f"dataset in memory whose rows have times: not of a streamed one); {refit}, or give --drift",
                              param="from_model")
+        _in_range(model, "drift_std_db", training.drift_std_db, (0.0, SPREAD_RANGE_DB[1]), "--drift")
         drift_std_db = float(training.drift_std_db)
     return replace(options, noise_std_db=float(noise_std_db), penalty_weight=float(weight), power=power,
                    correlated_std_db=float(drift_std_db), misfit_std_db=0.0, prior_variance_factor=1.0)
+
+
+#: Roughness powers of a smoothness penalty a plan reads from a model file: rplearn's fits write
+#: 2 (the squared Laplacian; 0 a plain ridge); beyond these the weights of high degrees overflow.
+PENALTY_POWER_RANGE = (0.0, 4.0)
+#: What a figure a model file gives the plan is, by field.
+_WHAT = {"noise_std_db": "a radio's RSSI scatter [dB]", "drift_std_db": "a radio's drifting error [dB]",
+         "variance_inflation": "a fit's variance inflation (at least 1)",
+         "penalty_power": "a smoothness penalty's roughness power"}
+
+
+def _in_range(model: str, field: str, value: float, bounds: tuple[float, float], flag: str | None) -> None:
+    """Refuse a model file's ``training.<field>`` outside ``bounds`` in one line naming the file and the
+    field, and the flag that replaces it (the figure would otherwise overflow the plan's arithmetic,
+    or be blamed on that flag)."""
+    if not bounds[0] <= float(value) <= bounds[1]:
+        instead = f"; give {flag} instead" if flag else ""
+        raise InputError(f"from_model: {model}: training.{field} is {float(value):g}, not {_WHAT[field]}: expected "
+                         f"{bounds[0]:g} to {bounds[1]:g}{instead}", param="from_model")
 
 
 def _planning_model(model: str) -> PatternSet:
@@ -303,6 +372,10 @@ def _planning_model(model: str) -> PatternSet:
     if not isinstance(fitted, PatternSet):
         raise InputError(f"from_model: {model} is a {fitted.kind} baseline ({fitted.label}), not a pattern fit; {model} must come from "
                          "rplearn fit --order auto", param="from_model")
+    if fitted.training.reference is not None:
+        raise InputError(f"from_model: {model} is a reference pattern model (rplearn reference), not a fit of a flight: it "
+                         f"has no noise, smoothing or drift; give it as --prior-pattern {model}, with --noise and --drift",
+                         param="from_model")
     if fitted.training.selection is None:
         raise InputError(f"from_model: {model} is a fixed-order fit ({fitted.basis.label}): it learned no smoothing, noise "
                          f"inflation or drift; fit the earlier flight with rplearn fit DATASET --order auto", param="from_model")
