@@ -33,6 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from rplearn.core.lsq.block_sums import DEFAULT_BLOCK_S
 from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.core.lsq.selection import penalty_scale, penalty_vector
 from rplearn.core.lsq.solver import FitReport, solve
@@ -225,7 +226,11 @@ def accumulate(
             t0 = time.perf_counter()
             y, env = regression_inputs(samples, options)
             acc = out.stats.setdefault(str(label), NormalEquations(basis, len(nodes), environment=env is not None))
-            acc.add(samples.directions, samples.tx_index, samples.rx_index, y, env)
+            # the automatic fit's folds: each sample's time block too, as rplearn.models.auto.fit_auto
+            # keeps them (the drifting error, training.drift_std_db), merged by label across chunks
+            blocks = None if not by_unit or samples.t_s is None else np.floor(
+                np.asarray(samples.t_s, np.float64) / DEFAULT_BLOCK_S).astype(np.int64)
+            acc.add(samples.directions, samples.tx_index, samples.rx_index, y, env, time_block=blocks)
             out.learn_s += time.perf_counter() - t0
             out.non_unit += samples.non_unit_quaternions
             out.grids = node_coverage_grids(samples, out.grids)
