@@ -42,9 +42,10 @@ def drift_std_db(units: Sequence[NormalEquations], total: NormalEquations, weigh
     :data:`~rplearn.core.lsq.block_sums.DEFAULT_BLOCK_S` time block the units' statistics kept
     while they were accumulated (no sample re-read), at SH-:data:`PLANNING_ORDER` (or the
     statistics' order when smaller, or their basis when not SH) under a smoothness prior of
-    absolute weight ``weight``. None when they kept none (statistics streamed, or samples
-    without times); 0 with fewer than :data:`~rplearn.core.lsq.block_sums.MIN_BLOCKS` blocks
-    or no excess scatter.
+    absolute weight ``weight``. None when they kept none (samples without times; statistics
+    streamed chunk by chunk keep them as in memory, :func:`rplearn.models.streamed.accumulate`);
+    0 with fewer than :data:`~rplearn.core.lsq.block_sums.MIN_BLOCKS` blocks or no excess
+    scatter.
 
     Parameters
     ----------

@@ -17,6 +17,15 @@ the copies are: in another chunk of a file, or in another part, met when the par
 are merged (:mod:`rplearn.data.row_copies`: every row's 64-bit hash travels with
 :class:`Accumulated`, 8 bytes a row).
 
+The automatic fit's statistics (one per unit, ``by_unit``) keep each sample's 5-s time block
+too (:attr:`NormalEquations.block_directed`, ``floor(t / DEFAULT_BLOCK_S)`` as
+:func:`rplearn.models.auto.fit_auto` labels them), from the rows the pass computes anyway: a
+block's sums are added up by its label over chunks, parts and Dask tasks, so a block cut by a
+chunk or file boundary, or parts read out of order, give the in-memory fit's drifting error
+(``training.drift_std_db``). Their memory grows with the flight's duration, not its rows: one
+vector of ``2 n_coef + 3`` numbers per unit, block and directed link with samples in it (SH-15:
+4.1 kB; an hour of one link both ways, 1,440 vectors, 5.9 MB).
+
 Only pattern models (SH, BG, P) stream; the baselines need every sample (the mean model could,
 k-NN stores them).
 """
@@ -190,8 +199,9 @@ def accumulate(
     """Statistics of the learning rows of every chunk: one accumulator per unit (``by_unit``)
     or one for all, or per stretch of time of a single flight (``stretches``, the folds of its
     cross-validation; rows in any order), with the environment term of ``options`` (its
-    log-distance column accumulated, a two-ray term subtracted). An empty result is allowed (a
-    part without learning rows); see :func:`checked`.
+    log-distance column accumulated, a two-ray term subtracted). ``by_unit`` (the automatic
+    fit's folds) also keeps each sample's time block (module docstring). An empty result is
+    allowed (a part without learning rows); see :func:`checked`.
 
     Every row of the chunks (of any unit) is hashed, and copies of earlier rows recorded in
     :attr:`Accumulated.copies` (refused by :func:`checked` with the whole-dataset message); a
