@@ -129,11 +129,12 @@ def test_streamed_auto_fit_stores_the_in_memory_fits_drift_and_planning_weight_w
 
 def test_streamed_unit_statistics_keep_the_same_time_block_sums_whatever_the_chunks(dataset):
     """The per-block sums an automatic fit's units keep: one vector per unit, 5-s block and
-    directed link (their count set by the flight's duration, not by its rows or its chunks),
-    equal to rounding between one chunk and chunks of 97 rows; a fixed-order fit keeps none."""
+    directed link (their count set by the flight's duration, not by its rows or its chunks) of
+    SH-10's coefficients only (what the drift is read at, whatever the largest order), equal to
+    rounding between one chunk and chunks of 97 rows; a fixed-order fit keeps none."""
     df = read_dataset(str(dataset / "m.parquet"))
     nodes = sorted(set(df["tx"].astype(str)) | set(df["rx"].astype(str)))
-    spec = ModelSpec("sh", 6)
+    spec = ModelSpec("sh", 12)
     one, *_ = streamed_module.unit_statistics_streamed([df], spec, nodes)
     many, *_ = streamed_module.unit_statistics_streamed((df.iloc[i:i + 97] for i in range(0, len(df), 97)), spec, nodes)
     assert set(one) == set(many)
@@ -147,6 +148,7 @@ def test_streamed_unit_statistics_keep_the_same_time_block_sums_whatever_the_chu
         rows = df[df["unit"].astype(str) == unit]
         kept = rows.assign(b=np.floor(rows["t"] / DEFAULT_BLOCK_S)).groupby(["b", "tx", "rx"]).ngroups
         assert sum(len(links) for links in st.block_directed.values()) == kept
+        assert {v.size for links in st.block_directed.values() for v in links.values()} == {2 * 100 + 3}
     fixed = streamed_module.accumulate([df], spec, nodes, None, "d", by_unit=False)
     assert not fixed.stats["all"].block_directed
 

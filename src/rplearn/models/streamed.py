@@ -23,8 +23,10 @@ too (:attr:`NormalEquations.block_directed`, ``floor(t / DEFAULT_BLOCK_S)`` as
 block's sums are added up by its label over chunks, parts and Dask tasks, so a block cut by a
 chunk or file boundary, or parts read out of order, give the in-memory fit's drifting error
 (``training.drift_std_db``). Their memory grows with the flight's duration, not its rows: one
-vector of ``2 n_coef + 3`` numbers per unit, block and directed link with samples in it (SH-15:
-4.1 kB; an hour of one link both ways, 1,440 vectors, 5.9 MB).
+vector of ``2 q + 3`` numbers per unit, block and directed link with samples in it, ``q`` the
+coefficients the drift is read at (``NormalEquations.block_coefs``: SH-10's 100 whatever the
+largest order, 1.6 kB a vector, against 3.6 kB at SH-15; an hour of one link both ways, 1,440
+vectors, 2.3 MB).
 
 Only pattern models (SH, BG, P) stream; the baselines need every sample (the mean model could,
 k-NN stores them).
@@ -53,6 +55,7 @@ from rplearn.data.units import Stretches
 from rplearn.errors import InputError
 from rplearn.io.files import iter_parts
 from rplearn.io.partitions import Part
+from rplearn.models.auto_spread import planning_basis
 from rplearn.models.fit import node_coverage_grids, pattern_set_of_solution
 from rplearn.models.options import FitOptions
 from rplearn.models.patterns import PatternSet
@@ -209,6 +212,7 @@ def accumulate(
     if not spec.decouples:
         raise InputError(f"{spec.label}: only pattern models (sh, bg, poly) learn from a stream", param="spec")
     basis = spec.basis()
+    block_coefs = planning_basis(basis).n_coef  # the blocks' sums: only what the drift reads
     options = options or FitOptions()
     out = Accumulated({}, Counter(), source=source)
     wanted = None if not units else {str(u) for u in units}
@@ -235,7 +239,8 @@ def accumulate(
             samples = link_samples(part, where, nodes=nodes)
             t0 = time.perf_counter()
             y, env = regression_inputs(samples, options)
-            acc = out.stats.setdefault(str(label), NormalEquations(basis, len(nodes), environment=env is not None))
+            acc = out.stats.setdefault(str(label), NormalEquations(basis, len(nodes), environment=env is not None,
+                                                                   block_coefs=block_coefs))
             # the automatic fit's folds: each sample's time block too, as rplearn.models.auto.fit_auto
             # keeps them (the drifting error, training.drift_std_db), merged by label across chunks
             blocks = None if not by_unit or samples.t_s is None else np.floor(
