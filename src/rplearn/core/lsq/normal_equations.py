@@ -237,9 +237,8 @@ class NormalEquations:
         ``t -> r`` to :attr:`block_directed` under the runs' time blocks ``labels``."""
         m = self._n_extra
         p, q = self.basis.n_coef, self.n_block_coefs
-        natural = sums[:, self._natural]  # [f_tx, f_rx, y, 1, (e)] in natural order
-        if q < p:  # each node's first q coefficients only
-            natural = natural[:, np.r_[0:q, p:p + q, 2 * p:2 * p + 1 + m]]
+        # [f_tx, f_rx, y, 1, (e)] in natural order, each node's first q coefficients only
+        natural = sums[:, self._natural if q == p else self._natural[np.r_[0:q, p:p + q, 2 * p:2 * p + 1 + m]]]
         for label, row in zip(labels.tolist(), natural):
             per_link = self.block_directed.setdefault(int(label), {})
             prev = per_link.get((t, r))
