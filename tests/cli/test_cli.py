@@ -402,3 +402,23 @@ def test_simulate_flies_a_written_plan(tmp_path):
     assert set(signals["unit"]) == labels
     bad = run_here(["simulate", "--preset", "ground", "--plan", "plan", "-o", "f2"], tmp_path, ok=False)
     assert bad.returncode == 1 and "no antenna in preset ground" in bad.stderr
+
+
+def test_a_streamed_auto_fit_says_how_to_plan_and_the_plan_takes_its_file(workdir, tmp_path):
+    """``fit FOLDER --order auto`` (a dataset in many files, streamed part by part) stores the
+    drift and prints the next plan's command, and ``trajectory --optimize --from-model`` plans
+    from its file (it was refused: "has no training.drift_std_db")."""
+    d = workdir
+    rows = pd.read_parquet(d / "data.parquet")
+    folder = tmp_path / "parts"
+    folder.mkdir()
+    half = len(rows) // 2
+    rows.iloc[:half].to_parquet(folder / "a.parquet", index=False)
+    rows.iloc[half:].to_parquet(folder / "b.parquet", index=False)
+    fit = run_here(["fit", str(folder), "--order", "auto", "-o", "streamed_plan.json"], tmp_path)
+    assert "plan the next flight: rplearn trajectory --optimize --from-model streamed_plan.json -o next_plan" in fit.stdout
+    training = json.loads((tmp_path / "streamed_plan.json").read_text())["model"]["training"]
+    assert training["drift_std_db"] >= 0 and training["planning_penalty_weight"] > 0
+    plan = run_here(["trajectory", "--optimize", "--from-model", "streamed_plan.json", "--check-model", "sh-5",
+                     "--target-spread", "2.5", "--budget-s", "120", "-o", "next"], tmp_path)
+    assert f"drift {training['drift_std_db']:.2f} dB per 5-s block" in plan.stdout and os.listdir(tmp_path / "next")

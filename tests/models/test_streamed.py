@@ -8,6 +8,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from rplearn.core.lsq.block_sums import DEFAULT_BLOCK_S
 from rplearn.errors import InputError, RplearnError
 from rplearn.io.files import read_dataset
 from rplearn.models import ModelSpec
@@ -101,6 +102,55 @@ def test_streamed_auto_fit_equals_the_whole_auto_fit(dataset, monkeypatch, name)
     assert "components" in chunked_cert and chunked_cert["n_unsplit"] == whole_cert["n_unsplit"]
     assert chunked_cert["unsplit_db"] == pytest.approx(whole_cert["unsplit_db"], rel=1e-6)
     assert not any("not kept" in note for note in chunked_cert["notes"])
+
+
+def test_streamed_auto_fit_stores_the_in_memory_fits_drift_and_planning_weight_whatever_the_chunks(dataset, monkeypatch):
+    """``fit --order auto`` streamed a chunk at a time stores the drifting error
+    (``training.drift_std_db``) and the planning prior (``training.planning_penalty_weight``) of
+    the in-memory fit of the same rows, whatever the chunk size: each unit's sums per 5-s block
+    are kept in the statistics' own pass and added up by block across chunks, a block cut by a
+    chunk boundary included (streamed fits stored no drift: ``trajectory --from-model`` refused
+    their model files)."""
+    path = str(dataset / "m.parquet")
+    whole = learning.fit_dataset(path, ModelSpec.parse("sh"), options=FitOptions(auto=True)).fitted.model.training
+    assert whole.drift_std_db is not None and whole.drift_std_db > 0 and whole.planning_penalty_weight > 0
+    t = pd.read_parquet(path)["t"].to_numpy(np.float64)
+    block = np.floor(t / DEFAULT_BLOCK_S)
+    for rows in (97, 1000, 500_000):
+        straddled = np.any(block[rows::rows] == block[rows - 1:-1:rows])  # a block on both sides of a chunk boundary
+        assert straddled or rows >= len(t)
+        streamed(monkeypatch, rows)
+        for name in ("m.parquet", "m.csv") if rows == 97 else ("m.parquet",):
+            chunked = learning.fit_dataset(str(dataset / name), ModelSpec.parse("sh"), options=FitOptions(auto=True))
+            got = chunked.fitted.model.training
+            assert got.drift_std_db == pytest.approx(whole.drift_std_db, rel=1e-9), (rows, name)
+            assert got.planning_penalty_weight == pytest.approx(whole.planning_penalty_weight, rel=1e-9), (rows, name)
+
+
+def test_streamed_unit_statistics_keep_the_same_time_block_sums_whatever_the_chunks(dataset):
+    """The per-block sums an automatic fit's units keep: one vector per unit, 5-s block and
+    directed link (their count set by the flight's duration, not by its rows or its chunks) of
+    SH-10's coefficients only (what the drift is read at, whatever the largest order), equal to
+    rounding between one chunk and chunks of 97 rows; a fixed-order fit keeps none."""
+    df = read_dataset(str(dataset / "m.parquet"))
+    nodes = sorted(set(df["tx"].astype(str)) | set(df["rx"].astype(str)))
+    spec = ModelSpec("sh", 12)
+    one, *_ = streamed_module.unit_statistics_streamed([df], spec, nodes)
+    many, *_ = streamed_module.unit_statistics_streamed((df.iloc[i:i + 97] for i in range(0, len(df), 97)), spec, nodes)
+    assert set(one) == set(many)
+    for unit, st in one.items():
+        other = many[unit]
+        assert st.block_directed and set(st.block_directed) == set(other.block_directed)
+        for label, links in st.block_directed.items():
+            assert set(links) == set(other.block_directed[label])
+            for key, sums in links.items():
+                np.testing.assert_allclose(other.block_directed[label][key], sums, rtol=1e-9, atol=1e-9)
+        rows = df[df["unit"].astype(str) == unit]
+        kept = rows.assign(b=np.floor(rows["t"] / DEFAULT_BLOCK_S)).groupby(["b", "tx", "rx"]).ngroups
+        assert sum(len(links) for links in st.block_directed.values()) == kept
+        assert {v.size for links in st.block_directed.values() for v in links.values()} == {2 * 100 + 3}
+    fixed = streamed_module.accumulate([df], spec, nodes, None, "d", by_unit=False)
+    assert not fixed.stats["all"].block_directed
 
 
 def _refusal(call) -> str:

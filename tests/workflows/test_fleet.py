@@ -92,7 +92,7 @@ def test_a_folder_fit_equals_the_fit_of_the_same_rows_in_one_file(fleet, sh6, tm
 def test_dask_fit_and_automatic_choice_equal_the_single_process(fleet, sh6, client, tmp_path):
     from rplearn.workflows.learning import _fit_streamed
 
-    root, _ = fleet
+    root, result = fleet
     here, _ = sh6  # fit_dataset's streamed fit of the folder (_fit_streamed without a client)
     there = _fit_streamed(str(root), ModelSpec.parse("sh", order=6), None, FitOptions(), None, client=client)
     assert there.n_samples == here.n_samples
@@ -102,6 +102,23 @@ def test_dask_fit_and_automatic_choice_equal_the_single_process(fleet, sh6, clie
     assert auto_there.selection.order == auto_here.selection.order
     assert auto_there.selection.smoothing == auto_here.selection.smoothing
     assert np.max(np.abs(coef(auto_there.fitted.model) - coef(auto_here.fitted.model))) < 1e-9
+    # the next plan's prior and drift (trajectory --optimize --from-model): those of the in-memory
+    # fit of the same rows in one file, here and on the cluster
+    whole = pd.concat([pd.read_parquet(f) for f in result.files], ignore_index=True)
+    write_table(whole, str(tmp_path / "all.parquet"))
+    memory = fit_dataset(str(tmp_path / "all.parquet"), ModelSpec.parse("sh"), options=FitOptions(auto=True))
+    _same_plan_prior(memory, auto_here, auto_there)
+
+
+def _same_plan_prior(memory, *others):
+    """The drifting error and the planning penalty weight of ``others``' models are ``memory``'s
+    (an in-memory ``fit --order auto``), to 1e-9 relative."""
+    want = memory.fitted.model.training
+    assert want.drift_std_db is not None and want.drift_std_db > 0 and want.planning_penalty_weight > 0
+    for other in others:
+        got = other.fitted.model.training
+        assert got.drift_std_db == pytest.approx(want.drift_std_db, rel=1e-9)
+        assert got.planning_penalty_weight == pytest.approx(want.planning_penalty_weight, rel=1e-9)
 
 
 def test_one_flight_cut_into_time_blocks_across_files_matches_on_dask(fleet, client, tmp_path):
@@ -126,6 +143,13 @@ def test_one_flight_cut_into_time_blocks_across_files_matches_on_dask(fleet, cli
     again = _fit_streamed(shuffled, ModelSpec.parse("sh"), None, FitOptions(auto=True), None)
     assert again.selection.order == here.selection.order
     assert np.max(np.abs(coef(again.fitted.model) - coef(here.fitted.model))) < 1e-9
+    # the drift from 5-s blocks that straddle the files: the in-memory fit's, whatever the files' order
+    write_table(one, str(tmp_path / "one.parquet"))
+    memory = fit_dataset(str(tmp_path / "one.parquet"), ModelSpec.parse("sh"), options=FitOptions(auto=True))
+    t = one["t"].to_numpy(np.float64)
+    cuts = [i * n // 8 for i in range(1, 8)]
+    assert any(np.floor(t[c - 1] / 5.0) == np.floor(t[c] / 5.0) for c in cuts)  # a block in two files
+    _same_plan_prior(memory, here, there, again)
 
 
 def test_dask_evaluation_equals_the_single_process(fleet, sh6, client):

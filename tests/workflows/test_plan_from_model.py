@@ -64,6 +64,36 @@ def test_the_plan_from_the_model_differs_from_the_nominal_prior_and_says_what_it
     assert "noise 8.00 dB (stated)" in noisy.prior and "drift 0.00 dB per 5-s block (stated)" in noisy.prior
 
 
+def test_a_streamed_fits_model_file_plans_as_the_in_memory_fits(earlier, tmp_path):
+    """``fit --order auto`` of the same rows in many files (streamed part by part, a 5-s block
+    cut by the files) writes the drift and planning weight the in-memory fit writes, and
+    ``trajectory --optimize --from-model`` plans from its file (it was refused: "has no
+    training.drift_std_db")."""
+    import pandas as pd
+
+    from rplearn.io.files import write_table
+
+    path, model = earlier
+    rows = pd.read_parquet(synced("smoke", 5).folder / "m.parquet")
+    folder = tmp_path / "parts"
+    folder.mkdir()
+    n = len(rows)
+    for i in range(3):
+        write_table(rows.iloc[i * n // 3:(i + 1) * n // 3], str(folder / f"p{i}.parquet"))
+    block = np.floor(rows["t"].to_numpy(np.float64) / DEFAULT_BLOCK_S)
+    assert any(block[i * n // 3 - 1] == block[i * n // 3] for i in (1, 2))  # a block in two files
+    streamed = str(tmp_path / "streamed.json")
+    fit_dataset(str(folder), ModelSpec.parse("sh"), options=FitOptions(auto=True), output=streamed)
+    got = load_model(streamed).training
+    assert got.drift_std_db == pytest.approx(model.training.drift_std_db, rel=1e-9)
+    assert got.planning_penalty_weight == pytest.approx(model.training.planning_penalty_weight, rel=1e-9)
+    opts = options_from_model(streamed, ManoeuvreOptions(), SPEC)
+    assert opts.correlated_std_db == got.drift_std_db and opts.penalty_weight == got.planning_penalty_weight
+    plan = optimize_plan(str(tmp_path / "plan"), OptimizeOptions(**PLAN, from_model=streamed))
+    assert plan.prior is not None and f"drift {got.drift_std_db:.2f} dB per 5-s block" in plan.prior
+    assert plan.paths and all(p.endswith(".csv") for p in plan.paths)
+
+
 def _saved(model, path, **changes):
     out = load_model(model)
     out.training = out.training.replace(**changes)

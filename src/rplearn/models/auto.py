@@ -44,6 +44,7 @@ from rplearn.models.auto_spread import (
     drift_std_db,
     held_out_misfit_var,
     misfit_covariance,
+    planning_basis,
     prior_misfit_var,
     prior_std_db,
     unseen_spread_cap_db,
@@ -188,13 +189,14 @@ def fit_auto(
     reserve_block_buffer(basis, max(len(s) for s in units.values()))
     warm_up_blas()
     inputs = {u: regression_inputs(s, options) for u, s in units.items()}
+    block_coefs = planning_basis(basis).n_coef  # the blocks' sums: only what the drift reads
 
     def piece_statistics(piece: tuple[str, int, int]) -> NormalEquations:
         u, a, b = piece
         s, (y, env) = units[u], inputs[u]
         # each sample's time block: the sums per block (for the drifting error) from the same pass
         blocks = None if s.t_s is None else np.floor(np.asarray(s.t_s, np.float64)[a:b] / DEFAULT_BLOCK_S).astype(np.int64)
-        return NormalEquations(basis, len(nodes), environment=env is not None).add(
+        return NormalEquations(basis, len(nodes), environment=env is not None, block_coefs=block_coefs).add(
             Directions(*(np.asarray(d)[a:b] for d in s.directions)), np.asarray(s.tx_index)[a:b],
             np.asarray(s.rx_index)[a:b], y[a:b], None if env is None else env[a:b], time_block=blocks)
 

@@ -33,6 +33,16 @@ from rplearn.models.spec import ModelSpec
 PLANNING_ORDER = 10
 
 
+def planning_basis(basis: Any) -> Any:
+    """The basis :func:`drift_std_db` reads the drifting error in, for statistics of ``basis``:
+    SH-:data:`PLANNING_ORDER` (or ``basis`` when of a smaller order, or not SH). Its
+    coefficient count is what statistics need keep per time block
+    (:attr:`~rplearn.core.lsq.normal_equations.NormalEquations.block_coefs`)."""
+    if isinstance(basis, SphericalHarmonics):
+        return ModelSpec("sh", min(PLANNING_ORDER, basis.order)).basis()
+    return basis
+
+
 def drift_std_db(units: Sequence[NormalEquations], total: NormalEquations, weight: float, ridge: float, power: float,
                  noise_std_db: float) -> float | None:
     """The block-offset spread of an error drifting over seconds [dB] (a heading estimate's
@@ -42,9 +52,10 @@ def drift_std_db(units: Sequence[NormalEquations], total: NormalEquations, weigh
     :data:`~rplearn.core.lsq.block_sums.DEFAULT_BLOCK_S` time block the units' statistics kept
     while they were accumulated (no sample re-read), at SH-:data:`PLANNING_ORDER` (or the
     statistics' order when smaller, or their basis when not SH) under a smoothness prior of
-    absolute weight ``weight``. None when they kept none (statistics streamed, or samples
-    without times); 0 with fewer than :data:`~rplearn.core.lsq.block_sums.MIN_BLOCKS` blocks
-    or no excess scatter.
+    absolute weight ``weight``. None when they kept none (samples without times; statistics
+    streamed chunk by chunk keep them as in memory, :func:`rplearn.models.streamed.accumulate`);
+    0 with fewer than :data:`~rplearn.core.lsq.block_sums.MIN_BLOCKS` blocks or no excess
+    scatter.
 
     Parameters
     ----------
@@ -59,8 +70,7 @@ def drift_std_db(units: Sequence[NormalEquations], total: NormalEquations, weigh
         The noise the spread is a multiple of (the fit's noise times the square root of its
         variance inflation: the noise a plan is made with).
     """
-    big = total.basis
-    basis = ModelSpec("sh", min(PLANNING_ORDER, big.order)).basis() if isinstance(big, SphericalHarmonics) else big
+    basis = planning_basis(total.basis)
     blocks = time_block_sums(units, DEFAULT_BLOCK_S, basis.n_coef)
     if blocks is None:
         return None

@@ -17,6 +17,17 @@ the copies are: in another chunk of a file, or in another part, met when the par
 are merged (:mod:`rplearn.data.row_copies`: every row's 64-bit hash travels with
 :class:`Accumulated`, 8 bytes a row).
 
+The automatic fit's statistics (one per unit, ``by_unit``) keep each sample's 5-s time block
+too (:attr:`NormalEquations.block_directed`, ``floor(t / DEFAULT_BLOCK_S)`` as
+:func:`rplearn.models.auto.fit_auto` labels them), from the rows the pass computes anyway: a
+block's sums are added up by its label over chunks, parts and Dask tasks, so a block cut by a
+chunk or file boundary, or parts read out of order, give the in-memory fit's drifting error
+(``training.drift_std_db``). Their memory grows with the flight's duration, not its rows: one
+vector of ``2 q + 3`` numbers per unit, block and directed link with samples in it, ``q`` the
+coefficients the drift is read at (``NormalEquations.block_coefs``: SH-10's 100 whatever the
+largest order, 1.6 kB a vector, against 3.6 kB at SH-15; an hour of one link both ways, 1,440
+vectors, 2.3 MB).
+
 Only pattern models (SH, BG, P) stream; the baselines need every sample (the mean model could,
 k-NN stores them).
 """
@@ -33,6 +44,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from rplearn.core.lsq.block_sums import DEFAULT_BLOCK_S
 from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.core.lsq.selection import penalty_scale, penalty_vector
 from rplearn.core.lsq.solver import FitReport, solve
@@ -43,6 +55,7 @@ from rplearn.data.units import Stretches
 from rplearn.errors import InputError
 from rplearn.io.files import iter_parts
 from rplearn.io.partitions import Part
+from rplearn.models.auto_spread import planning_basis
 from rplearn.models.fit import node_coverage_grids, pattern_set_of_solution
 from rplearn.models.options import FitOptions
 from rplearn.models.patterns import PatternSet
@@ -189,8 +202,9 @@ def accumulate(
     """Statistics of the learning rows of every chunk: one accumulator per unit (``by_unit``)
     or one for all, or per stretch of time of a single flight (``stretches``, the folds of its
     cross-validation; rows in any order), with the environment term of ``options`` (its
-    log-distance column accumulated, a two-ray term subtracted). An empty result is allowed (a
-    part without learning rows); see :func:`checked`.
+    log-distance column accumulated, a two-ray term subtracted). ``by_unit`` (the automatic
+    fit's folds) also keeps each sample's time block (module docstring). An empty result is
+    allowed (a part without learning rows); see :func:`checked`.
 
     Every row of the chunks (of any unit) is hashed, and copies of earlier rows recorded in
     :attr:`Accumulated.copies` (refused by :func:`checked` with the whole-dataset message); a
@@ -198,6 +212,7 @@ def accumulate(
     if not spec.decouples:
         raise InputError(f"{spec.label}: only pattern models (sh, bg, poly) learn from a stream", param="spec")
     basis = spec.basis()
+    block_coefs = planning_basis(basis).n_coef  # the blocks' sums: only what the drift reads
     options = options or FitOptions()
     out = Accumulated({}, Counter(), source=source)
     wanted = None if not units else {str(u) for u in units}
@@ -224,8 +239,13 @@ def accumulate(
             samples = link_samples(part, where, nodes=nodes)
             t0 = time.perf_counter()
             y, env = regression_inputs(samples, options)
-            acc = out.stats.setdefault(str(label), NormalEquations(basis, len(nodes), environment=env is not None))
-            acc.add(samples.directions, samples.tx_index, samples.rx_index, y, env)
+            acc = out.stats.setdefault(str(label), NormalEquations(basis, len(nodes), environment=env is not None,
+                                                                   block_coefs=block_coefs))
+            # the automatic fit's folds: each sample's time block too, as rplearn.models.auto.fit_auto
+            # keeps them (the drifting error, training.drift_std_db), merged by label across chunks
+            blocks = None if not by_unit or samples.t_s is None else np.floor(
+                np.asarray(samples.t_s, np.float64) / DEFAULT_BLOCK_S).astype(np.int64)
+            acc.add(samples.directions, samples.tx_index, samples.rx_index, y, env, time_block=blocks)
             out.learn_s += time.perf_counter() - t0
             out.non_unit += samples.non_unit_quaternions
             out.grids = node_coverage_grids(samples, out.grids)

@@ -67,8 +67,8 @@ class TrainingSummary(Mapping[str, Any]):
         flight's plan takes (``rplearn trajectory --optimize --from-model``).
     drift_std_db : float
         The block-offset spread of an error drifting over seconds, per 5-s block [dB]
-        (:func:`rplearn.models.auto_spread.drift_std_db`): written by an automatic fit of a
-        dataset in memory, without priors.
+        (:func:`rplearn.models.auto_spread.drift_std_db`): written by an automatic fit without
+        priors of samples with times, in memory, streamed or on Dask alike.
     prior_std_db : dict of node to float
         Each node's predictive spread where the flight never looked [dB].
     prior_std_source : str

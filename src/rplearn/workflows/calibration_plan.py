@@ -331,7 +331,7 @@ def options_from_model(model: str, options: ManoeuvreOptions, spec: ModelSpec, *
     if drift_std_db is None:
         if training.drift_std_db is None:
             raise InputError(f"from_model: {model} has no training.drift_std_db (written by rplearn fit --order auto of a "
-                             f"dataset in memory whose rows have times: not of a streamed one); {refit}, or give --drift",
+                             f"dataset whose rows have times, by this version also when streamed); {refit}, or give --drift",
                              param="from_model")
         _in_range(model, "drift_std_db", training.drift_std_db, (0.0, SPREAD_RANGE_DB[1]), "--drift")
         drift_std_db = float(training.drift_std_db)

@@ -6,8 +6,10 @@ part of a partitioned dataset (:mod:`rplearn.io.partitions`) is turned into its 
 (:meth:`~rplearn.models.streamed.Accumulated.combined`) in a binary tree in the order of the
 parts, and the small result is solved on the client. In one process
 (:func:`rplearn.models.streamed.accumulate_parts`) the same per-part work runs one part after
-the other, so both give the same model to rounding (about 1e-12 dB). This module is the Dask
-adaptor: the cluster, mapping parts onto it, and the tree of additions.
+the other, so both give the same model to rounding (about 1e-12 dB), and an automatic fit the
+same drifting error (each unit's sums per 5-s block travel with its statistics and add up by
+block, :mod:`rplearn.models.streamed`). This module is the Dask adaptor: the cluster, mapping
+parts onto it, and the tree of additions.
 
 ``--dask local`` (``local:N`` for N workers; default 2) starts a
 :class:`distributed.LocalCluster` of single-threaded worker processes for the command;

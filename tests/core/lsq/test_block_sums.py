@@ -166,8 +166,21 @@ def test_time_blocks_kept_in_the_pass_equal_each_blocks_own_statistics(monkeypat
         half.add(Directions(*(a[part] for a in d)), tx[part], rx[part], y[part], None if e is None else e[part],
                  time_block=label[part])
     merged = halves[0].merge(halves[1])
+    # only the nested smaller order's coefficients kept per block (block_coefs): its sums, less memory
+    trimmed = NormalEquations(basis, n_nodes, environment, block_coefs=small.n_coef).add(d, tx, rx, y, e, time_block=label)
+    np.testing.assert_array_equal(trimmed.gram, kept.gram)
+    assert {v.size for links in trimmed.block_directed.values() for v in links.values()} == {2 * small.n_coef + 3}
+    if small.n_coef < basis.n_coef:  # sums of different widths do not merge
+        with pytest.raises(InputError, match="block_coefs"):
+            NormalEquations(basis, n_nodes, environment).add(d, tx, rx, y, e, time_block=label).merge(trimmed)
+    with pytest.raises(InputError, match="block_coefs"):
+        NormalEquations(basis, n_nodes, environment, block_coefs=basis.n_coef + 1)
+    with pytest.raises(InputError, match="n_coef"):
+        time_block_sums([trimmed], BLOCK_S, small.n_coef + 1)
+    assert NormalEquations(basis, n_nodes, environment).merge(trimmed).n_block_coefs == small.n_coef  # none kept: takes them
     for got, ref in ((time_block_sums([kept], BLOCK_S), want.closed()), (time_block_sums([merged], BLOCK_S), want.closed()),
-                     (time_block_sums([kept], BLOCK_S, small.n_coef), want_small.closed())):
+                     (time_block_sums([kept], BLOCK_S, small.n_coef), want_small.closed()),
+                     (time_block_sums([trimmed], BLOCK_S), want_small.closed())):
         assert got is not None and got.n_blocks == ref.n_blocks
         for name in ("cross", "cross_n", "sum_yv"):
             np.testing.assert_allclose(getattr(got, name), getattr(ref, name), rtol=1e-10, atol=1e-8)

@@ -183,12 +183,13 @@ def time_block_sums(statistics: Sequence[NormalEquations], block_s: float = DEFA
     n_coef : int, optional
         Only the first ``n_coef`` coefficients of every node (a smaller spherical-harmonic
         order, whose coefficients lead the larger one's, as
-        :func:`rplearn.core.lsq.penalty.sub_statistics` takes them); default all.
+        :func:`rplearn.core.lsq.penalty.sub_statistics` takes them); default all the statistics
+        kept per block (:attr:`NormalEquations.block_coefs`).
     """
     kept = [st for st in statistics if st.block_directed]
     if not kept:
         return None
-    big = kept[0].basis.n_coef
+    big = kept[0].n_block_coefs  # the coefficients each block's sums kept (NormalEquations.block_coefs)
     p = big if n_coef is None else int(n_coef)
     if not 1 <= p <= big:
         raise InputError(f"n_coef: expected 1..{big}, got {n_coef!r}", param="n_coef")
@@ -196,8 +197,9 @@ def time_block_sums(statistics: Sequence[NormalEquations], block_s: float = DEFA
     groups: dict[tuple[int, int, tuple[int, int]], int] = {}  # (statistics, block, link) -> its vector
     where, links, rows = [], [], []
     for i, st in enumerate(kept):
-        if st.n_nodes != out.n_nodes or st.basis.n_coef != big:
-            raise InputError("time_block_sums: statistics of different bases or node counts", param="statistics")
+        if st.n_nodes != out.n_nodes or st.basis.n_coef != kept[0].basis.n_coef or st.n_block_coefs != big:
+            raise InputError("time_block_sums: statistics of different bases, node counts or block coefficients",
+                             param="statistics")
         for label in sorted(st.block_directed):
             for key, sums in st.block_directed[label].items():
                 where.append(groups.setdefault((i, label, (min(key), max(key))), len(groups)))

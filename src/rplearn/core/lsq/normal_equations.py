@@ -57,6 +57,10 @@ class NormalEquations:
     environment : bool
         Also accumulate one shared per-sample regressor (the log-distance column of
         :mod:`rplearn.core.environment`), given to every :meth:`add`.
+    block_coefs : int, optional
+        Keep only each node's first ``block_coefs`` coefficients in the sums per time block
+        (:attr:`block_directed`: a smaller spherical-harmonic order's, whose coefficients lead;
+        what the drifting error is read at), so that they take less memory; default all.
 
     Besides ``X^T X`` and ``X^T y`` of the pattern columns, every directed link keeps the sums
     of its features, observations and environment values (:attr:`directed`), from which
@@ -67,6 +71,7 @@ class NormalEquations:
     basis: Basis
     n_nodes: int
     environment: bool = False
+    block_coefs: int | None = None
     gram: FloatArray = field(init=False)
     rhs: FloatArray = field(init=False)
     yty: float = field(init=False, default=0.0)
@@ -104,6 +109,13 @@ class NormalEquations:
         natural = np.arange(p) if rows is None else np.argsort(rows)
         m = self._n_extra
         self._natural = np.concatenate([natural, natural + p + 1 + m, np.arange(p, p + 1 + m)])
+        if self.block_coefs is not None and not 1 <= int(self.block_coefs) <= p:
+            raise InputError(f"block_coefs: expected 1..{p}, got {self.block_coefs!r}", param="block_coefs")
+
+    @property
+    def n_block_coefs(self) -> int:
+        """Coefficients per node kept in the sums per time block (:attr:`block_directed`)."""
+        return self.basis.n_coef if self.block_coefs is None else int(self.block_coefs)
 
     @property
     def _n_extra(self) -> int:
@@ -224,13 +236,14 @@ class NormalEquations:
         """Add runs' row sums (rows ``[f_tx, y, 1, e, f_rx]`` in the block's row order) of link
         ``t -> r`` to :attr:`block_directed` under the runs' time blocks ``labels``."""
         m = self._n_extra
-        p = self.basis.n_coef
-        natural = sums[:, self._natural]  # [f_tx, f_rx, y, 1, (e)] in natural order
+        p, q = self.basis.n_coef, self.n_block_coefs
+        # [f_tx, f_rx, y, 1, (e)] in natural order, each node's first q coefficients only
+        natural = sums[:, self._natural if q == p else self._natural[np.r_[0:q, p:p + q, 2 * p:2 * p + 1 + m]]]
         for label, row in zip(labels.tolist(), natural):
             per_link = self.block_directed.setdefault(int(label), {})
             prev = per_link.get((t, r))
-            vec = np.zeros(2 * p + 3) if prev is None else prev
-            vec[: 2 * p + 1 + m] += row
+            vec = np.zeros(2 * q + 3) if prev is None else prev
+            vec[: 2 * q + 1 + m] += row
             per_link[(t, r)] = vec
 
     def _add_links(
@@ -396,6 +409,10 @@ class NormalEquations:
             self.link_counts[k] = self.link_counts.get(k, 0) + v
         for k, sums in other.directed.items():
             self.directed[k] = sums.copy() if k not in self.directed else self.directed[k] + sums
+        if other.block_directed and self.n_block_coefs != other.n_block_coefs:
+            if self.block_directed:
+                raise InputError("cannot merge sums per time block of different coefficient counts (block_coefs)")
+            self.block_coefs = other.block_coefs  # none kept yet: these take the other's
         for label, links in other.block_directed.items():
             mine = self.block_directed.setdefault(label, {})
             for k, sums in links.items():
