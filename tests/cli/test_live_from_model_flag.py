@@ -149,6 +149,23 @@ def test_a_hostile_model_file_is_one_line_naming_the_file_and_field(tmp_path, ea
     assert not (tmp_path / "m.json").exists()
 
 
+def test_a_figure_out_of_range_names_no_flag_live_lacks(tmp_path, earlier):
+    """live has no --noise or --drift: a model figure out of range is refused without advising them (was: 'give
+    --noise instead')."""
+    for field, value in (("noise_std_db", 0.001), ("drift_std_db", 200.0), ("variance_inflation", 2e4)):
+        res = _live(tmp_path, "--from-model", _saved(earlier, tmp_path / f"{field}.json", **{field: value}), ok=False)
+        line = _one_line(res)
+        assert line.startswith("error: --from-model: ") and f"training.{field} is " in line, line
+        assert "--noise" not in line and "--drift" not in line, line
+
+
+def test_an_inflation_in_the_hundreds_is_an_earlier_model_live_ranks_with(tmp_path, earlier):
+    """A fast radio's errors correlated over many packets inflate the variance by hundreds: noise x sqrt(inflation)
+    above 90 dB is no refusal (was: 'not a radio's RSSI scatter')."""
+    res = _live(tmp_path, "--from-model", _saved(earlier, tmp_path / "inflated.json", variance_inflation=600.0))
+    assert "manoeuvres ranked with " in res.output and "inflated.json's noise" in res.output, res.output
+
+
 def _knn(d: Path) -> Path:
     invoke(["fit", synced("smoke", 5).folder / "m.parquet", "--model", "knn", "-o", d / "knn.json"])
     return d / "knn.json"

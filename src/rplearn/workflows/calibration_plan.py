@@ -264,7 +264,8 @@ def _prior_text(mopts: ManoeuvreOptions, opts: OptimizeOptions, shape: str) -> s
 
 @check_types
 def options_from_model(model: str, options: ManoeuvreOptions, spec: ModelSpec, *, noise_std_db: float | None = None,
-                       prior_std_db: float | None = None, drift_std_db: float | None = None) -> ManoeuvreOptions:
+                       prior_std_db: float | None = None, drift_std_db: float | None = None,
+                       overridable: bool = True) -> ManoeuvreOptions:
     """``options`` with the prior an earlier flight's model file gives a plan (module docstring).
 
     Parameters
@@ -280,6 +281,10 @@ def options_from_model(model: str, options: ManoeuvreOptions, spec: ModelSpec, *
         Values stated explicitly, which override the model's: the noise [dB]; the prior's
         spread over the sphere [dB] (the smoothness prior of that spread instead of the
         model's penalty weight); the drift per block [dB].
+    overridable : bool
+        Whether the caller has flags that replace the model's figures (``trajectory``'s
+        ``--noise``, ``--prior-std``, ``--drift``): a refusal names them only then (``rplearn
+        live --from-model`` has none).
 
     Returns
     -------
@@ -301,6 +306,12 @@ def options_from_model(model: str, options: ManoeuvreOptions, spec: ModelSpec, *
     fitted = _planning_model(model)
     training = fitted.training
     refit = "fit the earlier flight with rplearn fit DATASET --order auto -o MODEL.json"
+
+    def flag(name: str) -> str | None:
+        return name if overridable else None
+
+    def or_give(name: str) -> str:
+        return f", or give {name}" if overridable else ""
     if fitted.basis.kind != spec.kind:
         raise InputError(f"from_model: {model} is a {fitted.basis.label} fit; the plan reads its spread at {spec.label}: "
                          f"give a {spec.kind} model's file, or --check-model {fitted.basis.kind}-...", param="from_model")
@@ -310,14 +321,12 @@ def options_from_model(model: str, options: ManoeuvreOptions, spec: ModelSpec, *
     if noise_std_db is None:
         if training.noise_std_db is None or training.variance_inflation is None:
             field = "noise_std_db" if training.noise_std_db is None else "variance_inflation"
-            raise InputError(f"from_model: {model} has no training.{field}; {refit}, or give --noise", param="from_model")
-        _in_range(model, "noise_std_db", training.noise_std_db, SPREAD_RANGE_DB, "--noise")
-        _in_range(model, "variance_inflation", training.variance_inflation, (1.0, 1e4), "--noise")
+            raise InputError(f"from_model: {model} has no training.{field}; {refit}{or_give('--noise')}", param="from_model")
+        _in_range(model, "noise_std_db", training.noise_std_db, SPREAD_RANGE_DB, flag("--noise"))
+        _in_range(model, "variance_inflation", training.variance_inflation, INFLATION_RANGE, flag("--noise"))
+        # each factor in its range keeps the product finite; the product itself is no RSSI scatter (the inflation
+        # carries the errors correlated over a fast radio's packets) and is not bounded as one
         noise_std_db = float(training.noise_std_db) * float(np.sqrt(training.variance_inflation))
-        if not SPREAD_RANGE_DB[0] <= noise_std_db <= SPREAD_RANGE_DB[1]:
-            raise InputError(f"from_model: {model}: training.noise_std_db x sqrt(training.variance_inflation) is "
-                             f"{noise_std_db:g} dB, not a radio's RSSI scatter ({SPREAD_RANGE_DB[0]:g} to "
-                             f"{SPREAD_RANGE_DB[1]:g} dB); give --noise", param="from_model")
     if training.penalty_power is not None:
         _in_range(model, "penalty_power", training.penalty_power, PENALTY_POWER_RANGE, None)
     power = float(training.penalty_power if training.penalty_power is not None else options.power)
@@ -325,20 +334,23 @@ def options_from_model(model: str, options: ManoeuvreOptions, spec: ModelSpec, *
         weight = prior_penalty_weight(spec.basis(), prior_std_db, noise_std_db, spec.ridge_weight, power)
     elif training.planning_penalty_weight is None:
         raise InputError(f"from_model: {model} has no training.planning_penalty_weight (written by rplearn fit --order auto "
-                         f"since this version); {refit}, or give --prior-std", param="from_model")
+                         f"since this version); {refit}{or_give('--prior-std')}", param="from_model")
     else:
         weight = float(training.planning_penalty_weight)
     if drift_std_db is None:
         if training.drift_std_db is None:
             raise InputError(f"from_model: {model} has no training.drift_std_db (written by rplearn fit --order auto of a "
-                             f"dataset whose rows have times, by this version also when streamed); {refit}, or give --drift",
+                             f"dataset whose rows have times, by this version also when streamed); {refit}{or_give('--drift')}",
                              param="from_model")
-        _in_range(model, "drift_std_db", training.drift_std_db, (0.0, SPREAD_RANGE_DB[1]), "--drift")
+        _in_range(model, "drift_std_db", training.drift_std_db, (0.0, SPREAD_RANGE_DB[1]), flag("--drift"))
         drift_std_db = float(training.drift_std_db)
     return replace(options, noise_std_db=float(noise_std_db), penalty_weight=float(weight), power=power,
                    correlated_std_db=float(drift_std_db), misfit_std_db=0.0, prior_variance_factor=1.0)
 
 
+#: Variance inflations a plan reads from a model file (a fit's held-out error variance over its white noise's:
+#: at least 1; hundreds for a fast radio whose errors are correlated over many packets).
+INFLATION_RANGE = (1.0, 1e4)
 #: Roughness powers of a smoothness penalty a plan reads from a model file: rplearn's fits write
 #: 2 (the squared Laplacian; 0 a plain ridge); beyond these the weights of high degrees overflow.
 PENALTY_POWER_RANGE = (0.0, 4.0)

@@ -192,7 +192,7 @@ def earlier_fit(model: str, spec: ModelSpec | None = None, nodes: Sequence[str] 
         if int(t.n_samples or 0) <= 0:  # never written so: a damaged file, whose values would never be used
             raise InputError(f"from_model: {model}: training.n_samples: expected a positive count of samples, got "
                              f"{t.n_samples}", param="from_model")
-    opts = options_from_model(model, ManoeuvreOptions(), spec)
+    opts = options_from_model(model, ManoeuvreOptions(), spec, overridable=False)
     assert isinstance(loaded, PatternSet) and loaded.training.n_samples is not None  # else options_from_model refused
     frequency = loaded.frequency_hz
     earlier = EarlierFit(model, float(opts.noise_std_db), float(opts.penalty_weight or 0.0), float(opts.power),
