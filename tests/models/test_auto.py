@@ -201,3 +201,8 @@ def test_auto_fit_stores_the_next_plans_prior_and_the_drift_from_its_own_pass(sm
     assert untimed.model.training.planning_penalty_weight == pytest.approx(weight, rel=1e-9)
     with_prior, _ = fit_auto(per_unit, options=FitOptions(auto=True, priors={n_: fitted.model for n_ in nodes}))
     assert with_prior.model.training.drift_std_db is None and with_prior.model.training.planning_penalty_weight is None
+    # every sample at one time (a clock that never ran), or the flight in fewer than MIN_BLOCKS 5-s blocks: no drift
+    # measured, stored as none measured (was 0.0, 'no drift', which a plan then took without a word)
+    for t_of in (lambda s: np.zeros_like(s.t_s), lambda s: s.t_s / 1e6):
+        few, _ = fit_auto({u: replace(s, t_s=t_of(s)) for u, s in per_unit.items()})
+        assert few.model.training.drift_std_db is None and few.model.training.planning_penalty_weight is not None

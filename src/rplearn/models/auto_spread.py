@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from rplearn.core.lsq.block_sums import DEFAULT_BLOCK_S, correlated_ratio, time_block_sums
+from rplearn.core.lsq.block_sums import DEFAULT_BLOCK_S, MIN_BLOCKS, correlated_ratio, time_block_sums
 from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.core.lsq.penalty import DEFAULT_PENALTY_POWER, nested_columns, penalty_vector, sub_statistics
 from rplearn.core.sh import SphericalHarmonics
@@ -53,9 +53,10 @@ def drift_std_db(units: Sequence[NormalEquations], total: NormalEquations, weigh
     while they were accumulated (no sample re-read), at SH-:data:`PLANNING_ORDER` (or the
     statistics' order when smaller, or their basis when not SH) under a smoothness prior of
     absolute weight ``weight``. None when they kept none (samples without times; statistics
-    streamed chunk by chunk keep them as in memory, :func:`rplearn.models.streamed.accumulate`);
-    0 with fewer than :data:`~rplearn.core.lsq.block_sums.MIN_BLOCKS` blocks or no excess
-    scatter.
+    streamed chunk by chunk keep them as in memory, :func:`rplearn.models.streamed.accumulate`)
+    or fewer than :data:`~rplearn.core.lsq.block_sums.MIN_BLOCKS` blocks (a few seconds of
+    flight, or every sample at one time: no drift measured, which a model file must not state as
+    none); 0 with no excess scatter.
 
     Parameters
     ----------
@@ -72,7 +73,7 @@ def drift_std_db(units: Sequence[NormalEquations], total: NormalEquations, weigh
     """
     basis = planning_basis(total.basis)
     blocks = time_block_sums(units, DEFAULT_BLOCK_S, basis.n_coef)
-    if blocks is None:
+    if blocks is None or blocks.n_blocks < MIN_BLOCKS:
         return None
     normal = sub_statistics(total, basis)
     prior = float(ridge) + penalty_vector(basis, total.n_nodes, float(weight), 1.0, float(power))

@@ -31,6 +31,7 @@ from rplearn._argtypes import check_types
 from rplearn._budget import Cost, budget, check_work
 from rplearn.analysis.manoeuvre_prior import NOMINAL_PRIOR_STD_DB
 from rplearn.analysis.manoeuvres import ManoeuvreOptions, PlanStep, greedy_plan, pattern_spreads, prior_penalty_weight
+from rplearn.core.lsq.block_sums import DEFAULT_BLOCK_S, MIN_BLOCKS
 from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.errors import InputError, RplearnError
 from rplearn.models.auto_spread import PLANNING_ORDER
@@ -340,7 +341,8 @@ def options_from_model(model: str, options: ManoeuvreOptions, spec: ModelSpec, *
     if drift_std_db is None:
         if training.drift_std_db is None:
             raise InputError(f"from_model: {model} has no training.drift_std_db (written by rplearn fit --order auto of a "
-                             f"dataset whose rows have times, by this version also when streamed); {refit}{or_give('--drift')}",
+                             f"dataset whose rows have times over at least {MIN_BLOCKS} blocks of {DEFAULT_BLOCK_S:g} s, by this "
+                             f"version also when streamed); {refit}{or_give('--drift')}",
                              param="from_model")
         _in_range(model, "drift_std_db", training.drift_std_db, (0.0, SPREAD_RANGE_DB[1]), flag("--drift"))
         drift_std_db = float(training.drift_std_db)
