@@ -18,7 +18,7 @@ import numpy as np
 import scipy.linalg  # noqa: F401  (order selection solves through scipy: loaded before any BLAS limit, rplearn.core.threads)
 
 from rplearn.core.geometry import Directions
-from rplearn.core.lsq.block_sums import DEFAULT_BLOCK_S
+from rplearn.core.lsq.block_sums import time_block_labels
 from rplearn.core.lsq.link_statistics import reserve_block_buffer
 from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.core.lsq.runtime import DEFAULT_RUNTIME
@@ -195,7 +195,7 @@ def fit_auto(
         u, a, b = piece
         s, (y, env) = units[u], inputs[u]
         # each sample's time block: the sums per block (for the drifting error) from the same pass
-        blocks = None if s.t_s is None else np.floor(np.asarray(s.t_s, np.float64)[a:b] / DEFAULT_BLOCK_S).astype(np.int64)
+        blocks = None if s.t_s is None else time_block_labels(np.asarray(s.t_s)[a:b])
         return NormalEquations(basis, len(nodes), environment=env is not None, block_coefs=block_coefs).add(
             Directions(*(np.asarray(d)[a:b] for d in s.directions)), np.asarray(s.tx_index)[a:b],
             np.asarray(s.rx_index)[a:b], y[a:b], None if env is None else env[a:b], time_block=blocks)

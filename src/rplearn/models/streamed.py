@@ -18,7 +18,7 @@ are merged (:mod:`rplearn.data.row_copies`: every row's 64-bit hash travels with
 :class:`Accumulated`, 8 bytes a row).
 
 The automatic fit's statistics (one per unit, ``by_unit``) keep each sample's 5-s time block
-too (:attr:`NormalEquations.block_directed`, ``floor(t / DEFAULT_BLOCK_S)`` as
+too (:attr:`NormalEquations.block_directed`, :func:`~rplearn.core.lsq.block_sums.time_block_labels` as
 :func:`rplearn.models.auto.fit_auto` labels them), from the rows the pass computes anyway: a
 block's sums are added up by its label over chunks, parts and Dask tasks, so a block cut by a
 chunk or file boundary, or parts read out of order, give the in-memory fit's drifting error
@@ -44,7 +44,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from rplearn.core.lsq.block_sums import DEFAULT_BLOCK_S
+from rplearn.core.lsq.block_sums import time_block_labels
 from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.core.lsq.selection import penalty_scale, penalty_vector
 from rplearn.core.lsq.solver import FitReport, solve
@@ -243,8 +243,7 @@ def accumulate(
                                                                    block_coefs=block_coefs))
             # the automatic fit's folds: each sample's time block too, as rplearn.models.auto.fit_auto
             # keeps them (the drifting error, training.drift_std_db), merged by label across chunks
-            blocks = None if not by_unit or samples.t_s is None else np.floor(
-                np.asarray(samples.t_s, np.float64) / DEFAULT_BLOCK_S).astype(np.int64)
+            blocks = None if not by_unit or samples.t_s is None else time_block_labels(samples.t_s)
             acc.add(samples.directions, samples.tx_index, samples.rx_index, y, env, time_block=blocks)
             out.learn_s += time.perf_counter() - t0
             out.non_unit += samples.non_unit_quaternions

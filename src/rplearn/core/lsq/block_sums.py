@@ -50,6 +50,13 @@ DEFAULT_BLOCK_S = 5.0
 MIN_BLOCKS = 4
 
 
+def time_block_labels(t_s: Any) -> NDArray[np.int64]:
+    """Each sample's :data:`DEFAULT_BLOCK_S` time block, ``floor(t / DEFAULT_BLOCK_S)``: the labels the
+    statistics' sums per block are kept and merged under (:meth:`NormalEquations.add`'s ``time_block``),
+    the same in memory and streamed chunk by chunk."""
+    return np.floor(np.asarray(t_s, np.float64) / DEFAULT_BLOCK_S).astype(np.int64)
+
+
 @check_types
 @dataclass
 class BlockSums:
@@ -272,4 +279,4 @@ def correlated_ratio(normal: NormalEquations, blocks: BlockSums, prior_diag: Any
     return float(sc2 / sigma2)
 
 
-__all__ = ["DEFAULT_BLOCK_S", "MIN_BLOCKS", "BlockSums", "correlated_ratio", "time_block_sums"]
+__all__ = ["DEFAULT_BLOCK_S", "MIN_BLOCKS", "BlockSums", "correlated_ratio", "time_block_labels", "time_block_sums"]
