@@ -388,7 +388,6 @@ def inspect_logs(
     pose, tracks = _tracks(canonical)
     if pose is not None and tracks is not None:
         _flag_moved_station(report, pose, max_gap_s, [report.files[i]["path"] for i in owners["pose"]])
-    if pose is not None and tracks is not None:
         pairs = [(lk.tx, lk.rx) for lk in report.links] or None
         report.calibration = calibration_problems(flight_phases(pose, tracks), tracks, pairs,
                                                   min(frequencies) if frequencies else None)
