@@ -107,6 +107,18 @@ def test_a_raw_log_given_for_a_dataset_names_the_sync_command(flight, args):
     assert "UnicodeDecodeError" not in line
 
 
+def test_the_sync_command_a_raw_log_hint_names_runs_once_its_placeholders_are_filled(flight):
+    # the hint named `sync --poses X --signals X` alone, which a MAVLink log then refused for
+    # the radios' power and band it does not carry: the user had to ask twice
+    proc = here("fit", str(TLOG), "-o", "x.json", cwd=flight)
+    command = proc.stderr.split("`")[1].split()
+    assert command[:2] == ["rplearn", "sync"] and "DBM" in command and "HZ" in command
+    filled = [{"DBM": "20", "HZ": "433e6"}.get(a, a) for a in command[1:]]
+    ran = here(*filled, cwd=flight)
+    assert ran.returncode == 0, ran.stderr
+    assert (flight / "data.parquet").exists()
+
+
 def test_predict_with_its_arguments_swapped_says_so(flight):
     proc = here("predict", "d.parquet", "m.json", "-o", "p.parquet", cwd=flight)
     assert proc.returncode == 1

@@ -125,16 +125,25 @@ def sniff(path: str | os.PathLike[str]) -> str | None:
         return None
 
 
+#: What ``sync`` needs besides each raw log kind, so that the command a hint names runs once its
+#: placeholders are filled in: a MAVLink log carries neither the radios' power nor their band, a
+#: ULog's readings are its telemetry radio's and its vehicle needs a name, a bag's topics are named.
+_SYNC_ARGUMENTS: dict[str, str] = {
+    "mavlink": "--poses {log} --signals {log} --tx-power DBM --frequency HZ",
+    "ulog": "--poses {log} --signals {log} --node {log}=NODE --ulog-radio --tx-power DBM --frequency HZ",
+    "ros1": "--poses {log} --signals {log} --pose-topic TOPIC=NODE --rssi-topic TOPIC=TX:RX",
+    "ros2": "--poses {log} --signals {log} --pose-topic TOPIC=NODE --rssi-topic TOPIC=TX:RX",
+    "pcap": "--poses POSE_LOG --signals {log} --receiver {log}=NODE --address MAC=NODE --tx-power DBM",
+}
+
+
 def raw_log_hint(path: str | os.PathLike[str]) -> str:
     """``"a raw ... log, not a matched dataset: run ... first"``, or ``""``."""
     p = os.fspath(path)
     kind = sniff(p)
     if kind not in RAW_LOG_NAMES:
         return ""
-    if kind == "pcap":
-        run = f"rplearn sync --poses POSE_LOG --signals {p} -o data.parquet"
-    else:  # these logs can hold both the poses and the radio readings
-        run = f"rplearn sync --poses {p} --signals {p} -o data.parquet"
+    run = f"rplearn sync {_SYNC_ARGUMENTS[kind].format(log=p)} -o data.parquet"
     return (f"a raw {RAW_LOG_NAMES[kind]} log, not a matched dataset: run `{run}` first "
             f"(`rplearn inspect {p}` shows what it holds)")
 
