@@ -32,7 +32,8 @@ repeat (the smoke test of tests/test_benchmarks.py).
 ``campaign`` at seeds 0-2, ``ground`` with a reference prior, the three-node ``trio``) and stores
 what each chose: order and smoothing, the validation curve's points in the order evaluated, the
 tied points, the inflation and level spread, the gains and standard errors of every node on a
-fixed grid of directions, the own-pattern spreads. ``--compare A B`` prints the largest
+fixed grid of directions, the own-pattern spreads, the stored drift and planning penalty weight
+(printed, not judged: a change of the drift's rule changes them alone). ``--compare A B`` prints the largest
 differences between two records and fails when a choice, a curve point's position or a tie
 differs, or a prediction moves by more than 1e-9 dB (run with ``RPLEARN_THREADS=1`` for
 bit-comparisons). ``--record FILE --tiny``: the ``smoke`` preset alone.
@@ -113,6 +114,8 @@ def record_case(preset: str, seed: int, with_prior: bool) -> dict[str, Any]:
         "std_db": {n: (None if model.covariance is None else model.standard_error(n, az, el).tolist())
                    for n in model.nodes},
         "prior_std_db": {str(k): float(v) for k, v in dict(model.training.prior_std_db or {}).items()},
+        "drift_std_db": model.training.drift_std_db,
+        "planning_penalty_weight": model.training.planning_penalty_weight,
     }
     own = fitted.own_posterior
     if own is not None:
@@ -163,7 +166,7 @@ def compare(path_a: str, path_b: str) -> bool:
                 and [t[:2] for t in x["ties"]] == [t[:2] for t in y["ties"]])
         diffs = {field: _max_diff(x.get(field), y.get(field))
                  for field in ("rmse_db", "curve", "ties", "inflation", "level_std_db", "excess_db2", "gain_db", "std_db",
-                               "prior_std_db", "own_std")}
+                               "prior_std_db", "own_std", "drift_std_db", "planning_penalty_weight")}
         for field, v in diffs.items():
             worst[field] = max(worst.get(field, 0.0), v)
         close = all(diffs[f] <= COMPARE_TOL_DB for f in ("gain_db", "std_db", "prior_std_db"))

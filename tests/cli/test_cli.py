@@ -377,7 +377,7 @@ def test_fit_auto_says_how_to_plan_the_next_flight_and_the_plan_takes_its_prior(
     assert training["drift_std_db"] >= 0 and training["planning_penalty_weight"] > 0
     plan = run_here(["trajectory", "--optimize", "--from-model", "auto_plan.json", "--check-model", "sh-5", "--target-spread", "2.5",
                      "--budget-s", "120", "-o", str(tmp_path / "next")], d)
-    assert "prior from auto_plan.json: noise" in plan.stdout and "(stated)" not in plan.stdout
+    assert "prior from auto_plan.json: a fit of nodes A, B: noise" in plan.stdout and "(stated)" not in plan.stdout
     assert f"drift {training['drift_std_db']:.2f} dB per 5-s block" in plan.stdout and os.listdir(tmp_path / "next")
     stated = run_here(["trajectory", "--optimize", "--from-model", "auto_plan.json", "--check-model", "sh-5", "--target-spread", "2.5",
                        "--budget-s", "120", "--noise", "7", "--drift", "0.3", "-o", str(tmp_path / "stated")], d)

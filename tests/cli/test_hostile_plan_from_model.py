@@ -5,8 +5,9 @@ radio's (a noise of 0, 1e-300 or 1e300 dB, a variance inflation of 0, a roughnes
 a reference pattern model, and flags beyond what a radio or a drone does: each is one line
 naming the file and field, or the flag, and nothing is written. Were: an ``OverflowError``
 traceback, a plan whose spreads were NaN or 1e150 dB, a refusal blaming ``--noise`` that was
-never given, 'a fixed-order fit (SH-20)' for a reference pattern, and 'no manoeuvre lowers the
-spread' when the prior already met the target.
+never given, 'a fixed-order fit (SH-20)' for a reference pattern, 'no manoeuvre lowers the
+spread' when the prior already met the target, and a penalty weight of 1e300 planned as 'nothing
+to fly'.
 """
 
 from __future__ import annotations
@@ -31,7 +32,7 @@ def flight(tmp_path_factory) -> Path:
                                ("noise_tiny", "noise_std_db", 1e-300), ("inflation_zero", "variance_inflation", 0.0),
                                ("inflation_big", "variance_inflation", 1e300), ("drift_big", "drift_std_db", 1e300),
                                ("power_neg", "penalty_power", -1.0), ("power_big", "penalty_power", 1e300),
-                               ("weight_big", "planning_penalty_weight", 1e300)):
+                               ("weight_big", "planning_penalty_weight", 1e300), ("at_cap", "smoothing", 1e6)):
         kind, payload = read_model_file(d / "auto.json")
         payload["training"][field] = value
         write_model_file(d / f"{name}.json", kind, payload)
@@ -50,6 +51,10 @@ MODEL_CASES = [
     ("drift_big.json", "training.drift_std_db is 1e+300, not a radio's drifting error [dB]: expected 0 to 90; give --drift"),
     ("power_neg.json", "training.penalty_power is -1, not a smoothness penalty's roughness power"),
     ("power_big.json", "training.penalty_power is 1e+300"),
+    ("weight_big.json", "training.planning_penalty_weight is 1e+300, not a fit's smoothness penalty weight for its samples "
+                        "(units of X^T X): expected 0 to "),
+    ("at_cap.json", "training.smoothing is 1e+06, the largest the search tries: its flight did not tell the patterns' "
+                    "shape from flat"),
     ("ref.json", "ref.json is a reference pattern model (rplearn reference), not a fit of a flight"),
 ]
 
@@ -87,8 +92,18 @@ def test_flags_beyond_a_radio_or_a_drone_are_refused_naming_the_flag(flight, fla
 
 
 def test_a_prior_already_within_the_target_is_said_so(flight):
-    for args in (["--from-model", "weight_big.json"], ["--target-spread", "100"]):
+    for args in (["--target-spread", "100"],):
         proc = run_here([*PLAN, *args, "-o", "plan"], flight)
         assert "the prior's spread is already at most the target" in proc.stdout, proc.stdout
         assert "no manoeuvre lowers the spread" not in proc.stdout
         assert not (flight / "plan").exists() or not list((flight / "plan").iterdir())
+
+
+def test_a_stated_prior_capped_by_the_ridge_is_said_and_the_models_nodes_named(flight):
+    """--noise 1 --prior-std 6 planned with 2.81 dB, shown only on the '(prior)' line: now one
+    note line says so; a plan from a model names the nodes it was a fit of."""
+    proc = run_here([*PLAN, "--noise", "1", "--prior-std", "6", "-o", "capped"], flight)
+    notes = [line for line in proc.stdout.splitlines() if line.startswith("note: the stated prior")]
+    assert len(notes) == 1 and "6 dB is more than SH-3's ridge" in notes[0] and "1-dB noise" in notes[0], proc.stdout
+    proc = run_here([*PLAN, "--station", "--from-model", "auto.json", "-o", "station"], flight)
+    assert "prior from auto.json: a fit of nodes A, B, taken for the plan's D, G: noise" in proc.stdout, proc.stdout

@@ -206,3 +206,39 @@ def test_auto_fit_stores_the_next_plans_prior_and_the_drift_from_its_own_pass(sm
     for t_of in (lambda s: np.zeros_like(s.t_s), lambda s: s.t_s / 1e6):
         few, _ = fit_auto({u: replace(s, t_s=t_of(s)) for u, s in per_unit.items()})
         assert few.model.training.drift_std_db is None and few.model.training.planning_penalty_weight is not None
+
+
+def test_a_flight_of_a_few_seconds_stores_no_drift_however_many_pieces_it_is_summed_in(smoke):
+    """A flight's first 7 s (2 five-second blocks of its one link), cut into the 5 stretches of
+    its cross-validation as ``fit`` cuts a single unit: the sums hold a vector per stretch, block
+    and link (6 here, >= MIN_BLOCKS), but the link's samples fall in 2 distinct blocks, too few to
+    tell a drift from the pattern and level: no drift stored (was 11.7 dB on seed 2's flight, with
+    the search's largest smoothing). The same samples spread over 70 s (14 blocks) still take the
+    search's largest smoothing, whose flat pattern leaves every shape to the block offsets: none
+    either. A flight of enough blocks keeps its drift (test above)."""
+    from dataclasses import replace
+
+    from rplearn.core.lsq.block_sums import MIN_BLOCKS, link_block_count, time_block_labels, time_block_sums
+    from rplearn.core.lsq.selection import at_smoothing_cap
+    from rplearn.data.units import stretch_samples
+    from rplearn.io.files import read_dataset
+
+    d, _, per_unit, _, _ = smoke
+    nodes = next(iter(per_unit.values())).nodes
+    df = read_dataset(str(d / "m.parquet"))
+    first = df[df["unit"] == next(iter(per_unit))]
+    short = first[first["t"] < 7.0]
+    pieces = stretch_samples(short, "u", nodes=list(nodes))
+    assert len(pieces) == 5
+    stats = [NormalEquations(SphericalHarmonics(3), len(nodes), block_coefs=9).add(
+        s.directions, s.tx_index, s.rx_index, s.joint_gain_db, time_block=time_block_labels(s.t_s)) for s in pieces.values()]
+    assert time_block_sums(stats).n_blocks >= MIN_BLOCKS and link_block_count(stats) == 2
+    few, sel = fit_auto(pieces)
+    assert few.model.training.drift_std_db is None
+    assert few.model.training.planning_penalty_weight is not None  # the fit's own, stored; a plan refuses it at the cap
+    slow, sel = fit_auto({u: replace(s, t_s=s.t_s * 10.0) for u, s in pieces.items()})
+    slow_stats = [NormalEquations(SphericalHarmonics(3), len(nodes), block_coefs=9).add(
+        s.directions, s.tx_index, s.rx_index, s.joint_gain_db, time_block=time_block_labels(s.t_s * 10.0))
+        for s in pieces.values()]
+    assert link_block_count(slow_stats) >= MIN_BLOCKS and at_smoothing_cap(sel.smoothing)
+    assert slow.model.training.drift_std_db is None

@@ -111,6 +111,9 @@ def test_each_refusal_is_one_line_naming_the_model_file(earlier, tmp_path):
         (_saved(earlier, tmp_path / "no_weight.json", planning_penalty_weight=None), {}, "has no training.planning_penalty_weight"),
         (_saved(earlier, tmp_path / "with_prior.json", prior={"A": "ref.json"}), {}, "was fitted with priors"),
         (earlier, {"spec": ModelSpec.parse("bg")}, "the session learns bg"),
+        (_saved(earlier, tmp_path / "weight_big.json", planning_penalty_weight=1e300), {},
+         "training.planning_penalty_weight is 1e+300"),
+        (_saved(earlier, tmp_path / "at_cap.json", smoothing=1e6), {}, "training.smoothing is 1e+06, the largest"),
     ]
     for model, kw, text in cases:
         with pytest.raises(InputError) as err:
@@ -118,7 +121,7 @@ def test_each_refusal_is_one_line_naming_the_model_file(earlier, tmp_path):
         message = str(err.value)
         assert err.value.param == "from_model" and message.startswith("from_model: ") and "\n" not in message
         assert text in message, (text, message)
-        assert "--drift" not in message and "--noise" not in message  # trajectory's flags: live has none
+        assert "--drift" not in message and "--noise" not in message and "--prior-std" not in message  # live has none
     assert ManoeuvreAdvisor().earlier is None
 
 

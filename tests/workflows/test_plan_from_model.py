@@ -121,6 +121,11 @@ def test_each_refusal_is_one_line_naming_the_file_and_what_to_do(earlier, tmp_pa
         (_saved(path, tmp_path / "no_noise.json", variance_inflation=None), {}, "has no training.variance_inflation"),
         (_saved(path, tmp_path / "with_prior.json", prior={"A": "ref.json"}), {}, "was fitted with priors"),
         (path, {"spec": ModelSpec.parse("bg-7")}, "plan reads its spread at BG-7"),
+        # a damaged weight (planned as 'nothing to fly'), and a fit at the search's largest smoothing (a 7-s flight's
+        # 2.2e7, the same: its flight did not tell the patterns' shape from flat)
+        (_saved(path, tmp_path / "weight_big.json", planning_penalty_weight=1e300), {},
+         "weight_big.json: training.planning_penalty_weight is 1e+300, not a fit's smoothness penalty weight"),
+        (_saved(path, tmp_path / "at_cap.json", smoothing=1e6), {}, "at_cap.json: training.smoothing is 1e+06, the largest"),
     ]
     for model, kw, text in cases:
         with pytest.raises(InputError) as err:
@@ -134,4 +139,61 @@ def test_each_refusal_is_one_line_naming_the_file_and_what_to_do(earlier, tmp_pa
     # a stated value stands in for the field the model lacks
     assert options_from_model(str(tmp_path / "no_drift.json"), ManoeuvreOptions(), SPEC, drift_std_db=0.4).correlated_std_db == 0.4
     assert options_from_model(str(tmp_path / "no_weight.json"), ManoeuvreOptions(), SPEC, prior_std_db=6.0).penalty_weight > 0
+    for name in ("weight_big.json", "at_cap.json"):
+        with pytest.raises(InputError, match=r"or give --prior-std|give --prior-std instead"):
+            options_from_model(str(tmp_path / name), ManoeuvreOptions(), SPEC)
+        assert options_from_model(str(tmp_path / name), ManoeuvreOptions(), SPEC, prior_std_db=6.0).penalty_weight > 0
+    assert not (tmp_path / "plan").exists()
+
+
+def test_the_penalty_weights_range_is_what_a_fit_of_its_samples_can_write(earlier):
+    """A fit's weight is its relative smoothing (at most the search's largest) times the mean
+    diagonal of its ``X^T X`` (for spherical harmonics ``1 / (2 pi nodes)`` per sample): the
+    bound of a 2-node fit of n samples is ``1e6 n / (4 pi)``, which a fit at the cap reaches."""
+    from rplearn.core.lsq.selection import MAX_SMOOTHING
+    from rplearn.workflows.calibration_plan import penalty_weight_bound
+
+    _, model = earlier
+    bound = penalty_weight_bound(model)
+    assert bound == pytest.approx(MAX_SMOOTHING * model.training.n_samples / (4.0 * np.pi), rel=1e-6)
+    assert 0 < model.training.planning_penalty_weight < bound * 1e-6
+
+
+def test_a_plan_says_the_models_nodes_and_whose_they_are_taken_for(earlier, tmp_path):
+    """The model's nodes are named (they were not); a plan of other nodes (a station's D, G)
+    says the model's figures stand for them."""
+    path, model = earlier
+    assert tuple(model.nodes) == ("A", "B")
+    same = optimize_plan(str(tmp_path / "same"), OptimizeOptions(**PLAN, from_model=path))
+    assert same.prior.startswith("a fit of nodes A, B: noise "), same.prior
+    other = optimize_plan(str(tmp_path / "other"), OptimizeOptions(**PLAN, from_model=path, station=True))
+    assert other.prior.startswith("a fit of nodes A, B, taken for the plan's D, G: noise "), other.prior
+
+
+def test_a_stated_prior_the_ridge_caps_is_said_in_one_line(tmp_path):
+    """--noise 1 --prior-std 6: the ridge alone allows 2.81 dB at SH-10 (a coefficient's prior
+    variance is the noise's over ridge plus penalty), which the plan takes; it says so (it was
+    shown only on the '(prior)' line). A stated prior the ridge allows is taken without a note."""
+    capped = optimize_plan(str(tmp_path / "capped"), OptimizeOptions(noise_std_db=1.0, prior_std_db=6.0, budget_s=30.0))
+    assert max(capped.start_spread_db.values()) == pytest.approx(2.81, abs=0.01)
+    assert len(capped.notes) == 1 and "\n" not in capped.notes[0], capped.notes
+    assert "stated prior spread 6 dB is more than SH-10's ridge" in capped.notes[0]
+    assert "1-dB noise" in capped.notes[0] and "2.81 dB" in capped.notes[0]
+    held = optimize_plan(str(tmp_path / "held"), OptimizeOptions(noise_std_db=4.2, prior_std_db=6.0, budget_s=30.0))
+    assert held.notes == () and max(held.start_spread_db.values()) == pytest.approx(6.0, rel=0.05)
+
+
+def test_a_rate_beyond_the_budget_is_refused_before_any_planning(tmp_path, monkeypatch):
+    """The --rate work check came after the greedy search (seconds of work, then the refusal);
+    it now comes first, at the budget's longest plan."""
+    from rplearn.workflows import calibration_plan
+
+    def searched(*args, **kwargs):
+        raise AssertionError("the greedy search ran before the rate was checked")
+
+    monkeypatch.setattr(calibration_plan, "greedy_plan", searched)
+    monkeypatch.setattr(calibration_plan, "pattern_spreads", searched)
+    with pytest.raises(InputError) as err:
+        optimize_plan(str(tmp_path / "plan"), OptimizeOptions(budget_s=60.0), rate_hz=1e300)
+    assert err.value.param == "rate_hz" and "1e+300 Hz would take" in str(err.value)
     assert not (tmp_path / "plan").exists()

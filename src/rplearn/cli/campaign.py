@@ -113,6 +113,8 @@ def _optimized(out_dir: str, model: str | None, figures: tuple[float, float, flo
     plan = optimize_plan(out_dir, options, rate_hz)
     if plan.prior is not None:
         say(f"prior from {priors[1]}: {plan.prior}")
+    for note in plan.notes:
+        say(f"note: {note}")
     say("expected per-node pattern spread over time (greedy: the largest expected reduction per second at each step):")
     say(plan.summary())
     if not plan.steps:

@@ -58,6 +58,7 @@ from .lsq.block_sums import DEFAULT_BLOCK_S as DEFAULT_BLOCK_S
 from .lsq.block_sums import MIN_BLOCKS as MIN_BLOCKS
 from .lsq.block_sums import BlockSums as BlockSums
 from .lsq.block_sums import correlated_ratio as correlated_ratio
+from .lsq.block_sums import link_block_count as link_block_count
 from .lsq.block_sums import time_block_sums as time_block_sums
 from .lsq.normal_equations import NormalEquations as NormalEquations
 from .lsq.normal_equations import independent_spread_db as independent_spread_db

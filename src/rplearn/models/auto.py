@@ -26,6 +26,7 @@ from rplearn.core.lsq.selection import (
     DEFAULT_PENALTY_POWER,
     SearchPrior,
     Selection,
+    at_smoothing_cap,
     nested_columns,
     penalty_scale,
     penalty_vector,
@@ -422,10 +423,11 @@ def fit_from_statistics(
         new_level_var = level_var * (1.0 + float(shares @ shares)) if level_var > 0 else 0.0
         noise_var = within_var * inflation
         # the next flight's plan: the drifting error from the time blocks kept in the same pass
-        # (with a prior the penalty pulls toward it, which the moments do not model: none)
+        # (with a prior the penalty pulls toward it, which the moments do not model: none; at the
+        # search's largest smoothing the flat pattern leaves every shape to the offsets: none)
         with one_blas_thread():  # small products: threads would only wait for each other
-            drift = None if target is not None else drift_std_db(unit_stats, total, choice.smoothing * scale, ridge, power,
-                                                                 float(np.sqrt(noise_var)))
+            drift = None if target is not None or at_smoothing_cap(choice.smoothing) else drift_std_db(
+                unit_stats, total, choice.smoothing * scale, ridge, power, float(np.sqrt(noise_var)))
         rescale = within_var / sol.residual_variance_db2 if sol.residual_variance_db2 > 0 else 1.0
         # the covariance's basis: the chosen one, or with the prior kept the largest (auto_prior)
         model_basis, cov_normal, cov_penalty = chosen, normal, penalty

@@ -33,6 +33,7 @@ from rplearn.analysis.manoeuvre_prior import NOMINAL_PRIOR_STD_DB
 from rplearn.analysis.manoeuvres import ManoeuvreOptions, PlanStep, greedy_plan, pattern_spreads, prior_penalty_weight
 from rplearn.core.lsq.block_sums import DEFAULT_BLOCK_S, MIN_BLOCKS
 from rplearn.core.lsq.normal_equations import NormalEquations
+from rplearn.core.lsq.selection import MAX_SMOOTHING, at_smoothing_cap
 from rplearn.errors import InputError, RplearnError
 from rplearn.models.auto_spread import PLANNING_ORDER
 from rplearn.models.base import require_patterns
@@ -158,8 +159,11 @@ class OptimizedPlan:
         The chosen units in flying order (None when no manoeuvre helps within the budget).
     paths : list of str
     prior : str or None
-        With a model file (:attr:`OptimizeOptions.from_model`): the noise, penalty and drift
-        the plan took, and which of them were stated.
+        With a model file (:attr:`OptimizeOptions.from_model`): the nodes it was a fit of, the
+        noise, penalty and drift the plan took, and which of them were stated.
+    notes : tuple of str
+        What the plan took otherwise than stated, one line each (a stated prior spread above
+        what the model's ridge allows at the noise: the ridge's spread instead).
     """
 
     steps: tuple[PlanStep, ...]
@@ -167,6 +171,7 @@ class OptimizedPlan:
     campaign: Campaign | None
     paths: list[str]
     prior: str | None = None
+    notes: tuple[str, ...] = ()
 
     @property
     def duration_s(self) -> float:
@@ -205,6 +210,12 @@ def optimize_plan(out_dir: str, options: OptimizeOptions | None = None, rate_hz:
     if not (np.isfinite(rate_hz) and rate_hz >= MIN_REFERENCE_RATE_HZ):
         raise InputError(f"rate_hz: expected a sample rate of at least {MIN_REFERENCE_RATE_HZ:g} Hz, got {rate_hz!r}",
                          param="rate_hz")
+    # before any work: the references of a plan as long as the budget (no plan is longer: each
+    # manoeuvre is taken only while it ends within it), two drones' files
+    rows = 2.0 * float(opts.budget_s)
+    check_work("rate_hz", rate_hz, lambda r: Cost(memory_bytes=REFERENCE_ROW_BYTES * rows * r, seconds=REFERENCE_ROW_S * rows * r,
+                                                  disk_bytes=REFERENCE_ROW_DISK * rows * r),
+               "Hz", integer=False, bounds=(MIN_REFERENCE_RATE_HZ, math.inf), limits=budget(out_dir))
     spec = ModelSpec.parse(opts.model)
     if not spec.decouples:
         raise InputError(f"model: {spec.label} has no per-node pattern to plan for; use sh, bg or poly", param="model")
@@ -219,11 +230,12 @@ def optimize_plan(out_dir: str, options: OptimizeOptions | None = None, rate_hz:
     mopts = ManoeuvreOptions(noise_std_db=noise, packet_rate_hz=opts.packet_rate_hz, target_el_deg=opts.target_el_deg,
                              candidates=CandidateOptions(fixed_nodes=fixed, speed_m_s=opts.speed_m_s),
                              correlated_std_db=float(opts.drift_std_db or 0.0))
+    earlier = None
     if opts.from_model is not None:
         # a reference pattern's prior replaces the model's smoothness prior: stated, or the nominal spread
         stated = prior_std if shape == "reference" else opts.prior_std_db
-        mopts = options_from_model(opts.from_model, mopts, spec, noise_std_db=opts.noise_std_db, prior_std_db=stated,
-                                   drift_std_db=opts.drift_std_db)
+        earlier = _planning_model(opts.from_model)
+        mopts = _options_of(earlier, opts.from_model, mopts, spec, (opts.noise_std_db, stated, opts.drift_std_db), True)
     else:
         mopts = replace(mopts, penalty_weight=prior_penalty_weight(spec.basis(), prior_std, noise, spec.ridge_weight))
     if shape == "reference":
@@ -236,30 +248,46 @@ def optimize_plan(out_dir: str, options: OptimizeOptions | None = None, rate_hz:
                          f"{mopts.penalty_weight!r}, power {mopts.power:g}): "
                          + ("the model's training values are out of range" if opts.from_model else "give other values"),
                          param="from_model" if opts.from_model else "noise_std_db")
+    notes = _capped_note(opts, spec, mopts, start_spread)
     steps = greedy_plan(empty, spec, nodes, poses, opts.budget_s, opts.target_spread_db, mopts)
-    prior = None if opts.from_model is None else _prior_text(mopts, opts, shape)
+    prior = None if earlier is None else _prior_text(mopts, opts, shape, (tuple(map(str, earlier.nodes)), nodes))
     if not steps:
-        return OptimizedPlan(steps, start_spread, None, [], prior)
+        return OptimizedPlan(steps, start_spread, None, [], prior, notes)
     units = tuple(replace(s.manoeuvre.candidate.unit, label=f"{k + 1:02d}_{s.manoeuvre.candidate.unit.label}")
                   for k, s in enumerate(steps))
     campaign = Campaign(units, gap_s=0.0)
-    rows = 2.0 * campaign.duration_s
-    check_work("rate_hz", rate_hz, lambda r: Cost(memory_bytes=REFERENCE_ROW_BYTES * rows * r, seconds=REFERENCE_ROW_S * rows * r,
-                                                  disk_bytes=REFERENCE_ROW_DISK * rows * r),
-               "Hz", integer=False, bounds=(MIN_REFERENCE_RATE_HZ, math.inf), limits=budget(out_dir))
     paths = write_references(campaign, out_dir, rate_hz)
-    return OptimizedPlan(steps, start_spread, campaign, paths, prior)
+    return OptimizedPlan(steps, start_spread, campaign, paths, prior, notes)
 
 
-def _prior_text(mopts: ManoeuvreOptions, opts: OptimizeOptions, shape: str) -> str:
-    """What a plan from a model file took, each value marked when it was stated instead."""
+def _capped_note(opts: OptimizeOptions, spec: ModelSpec, mopts: ManoeuvreOptions, start: dict[str, float]) -> tuple[str, ...]:
+    """One line when a stated prior spread is more than the model's ridge allows at the plan's
+    noise (:func:`~rplearn.analysis.manoeuvre_prior.prior_penalty_weight` then gives no penalty:
+    the prior is the ridge's alone, the largest any fit of ``spec`` has at that noise)."""
+    stated = opts.prior_std_db
+    if stated is None or mopts.penalty_weight != 0.0:
+        return ()
+    largest = max(start.values())
+    if largest >= float(stated) * (1.0 - 1e-3):
+        return ()
+    return (f"the stated prior spread {float(stated):g} dB is more than {spec.label}'s ridge ({spec.ridge_weight:g}) allows "
+            f"with a {mopts.noise_std_db:.3g}-dB noise (a coefficient's prior variance is the noise's over ridge plus "
+            f"penalty): planned with the ridge's alone, {largest:.2f} dB, no smoothness penalty",)
+
+
+def _prior_text(mopts: ManoeuvreOptions, opts: OptimizeOptions, shape: str, nodes: tuple[tuple[str, ...], tuple[str, ...]]) -> str:
+    """What a plan from a model file took, each value marked when it was stated instead; first
+    the nodes the model was a fit of (``nodes``: the model's, the plan's), and when the plan's
+    are others, that its figures stand for them."""
     def source(value: float | None) -> str:
         return " (stated)" if value is not None else ""
+    theirs, ours = nodes
+    of = f"a fit of nodes {', '.join(theirs)}" + ("" if set(ours) <= set(theirs) else f", taken for the plan's {', '.join(ours)}")
 
     penalty = (f"a reference pattern's ridge for a {opts.prior_std_db or NOMINAL_PRIOR_STD_DB:g}-dB spread" if shape == "reference"
                else f"smoothness penalty weight {mopts.penalty_weight:.3g} (power {mopts.power:g})"
                + (f" for a {opts.prior_std_db:g}-dB spread (stated)" if opts.prior_std_db is not None else ""))
-    return (f"noise {mopts.noise_std_db:.2f} dB{source(opts.noise_std_db)}, {penalty}, drift "
+    return (f"{of}: noise {mopts.noise_std_db:.2f} dB{source(opts.noise_std_db)}, {penalty}, drift "
             f"{mopts.correlated_std_db:.2f} dB per {mopts.correlation_s:g}-s block{source(opts.drift_std_db)}")
 
 
@@ -301,10 +329,23 @@ def options_from_model(model: str, options: ManoeuvreOptions, spec: ModelSpec, *
     ------
     InputError
         ``param="from_model"``, one line: the file is missing, not a model file, not a pattern
-        model, a fixed-order fit, of another kind than ``spec``, fitted with priors, or lacks a
-        field that no explicit value replaces (naming it and how to get it).
+        model, a fixed-order fit, of another kind than ``spec``, fitted with priors, lacks a
+        field that no explicit value replaces (naming it and how to get it), holds a figure out
+        of its range (naming it: the noise, inflation, power and drift in :data:`SPREAD_RANGE_DB`,
+        :data:`INFLATION_RANGE`, :data:`PENALTY_POWER_RANGE`; the penalty weight within
+        :func:`penalty_weight_bound`), or was fitted at the search's largest smoothing
+        (:func:`~rplearn.core.lsq.selection.at_smoothing_cap`: its flight did not tell the
+        patterns' shape from flat, so its penalty weight is no prior) while no prior spread is
+        stated.
     """
-    fitted = _planning_model(model)
+    return _options_of(_planning_model(model), model, options, spec, (noise_std_db, prior_std_db, drift_std_db), overridable)
+
+
+def _options_of(fitted: PatternSet, model: str, options: ManoeuvreOptions, spec: ModelSpec,
+                stated: tuple[float | None, float | None, float | None], overridable: bool) -> ManoeuvreOptions:
+    """:func:`options_from_model` of the model ``fitted`` read from the file ``model``; ``stated``: the
+    noise, prior spread and drift stated explicitly."""
+    noise_std_db, prior_std_db, drift_std_db = stated
     training = fitted.training
     refit = "fit the earlier flight with rplearn fit DATASET --order auto -o MODEL.json"
 
@@ -337,12 +378,21 @@ def options_from_model(model: str, options: ManoeuvreOptions, spec: ModelSpec, *
         raise InputError(f"from_model: {model} has no training.planning_penalty_weight (written by rplearn fit --order auto "
                          f"since this version); {refit}{or_give('--prior-std')}", param="from_model")
     else:
+        if training.smoothing is not None and at_smoothing_cap(float(training.smoothing)):
+            raise InputError(f"from_model: {model}: training.smoothing is {float(training.smoothing):g}, the largest the "
+                             "search tries: its flight did not tell the patterns' shape from flat (too short), so its "
+                             "planning_penalty_weight is no prior; fit a longer flight with rplearn fit DATASET --order auto"
+                             f"{or_give('--prior-std')}",
+                             param="from_model")
+        _in_range(model, "planning_penalty_weight", training.planning_penalty_weight, (0.0, penalty_weight_bound(fitted)),
+                  flag("--prior-std"))
         weight = float(training.planning_penalty_weight)
     if drift_std_db is None:
         if training.drift_std_db is None:
             raise InputError(f"from_model: {model} has no training.drift_std_db (written by rplearn fit --order auto of a "
-                             f"dataset whose rows have times over at least {MIN_BLOCKS} blocks of {DEFAULT_BLOCK_S:g} s, by this "
-                             f"version also when streamed); {refit}{or_give('--drift')}",
+                             f"dataset whose rows of one link have times in at least {MIN_BLOCKS} blocks of {DEFAULT_BLOCK_S:g} s, "
+                             f"short of the search's largest smoothing; by this version also when streamed); "
+                             f"{refit}{or_give('--drift')}",
                              param="from_model")
         _in_range(model, "drift_std_db", training.drift_std_db, (0.0, SPREAD_RANGE_DB[1]), flag("--drift"))
         drift_std_db = float(training.drift_std_db)
@@ -359,7 +409,29 @@ PENALTY_POWER_RANGE = (0.0, 4.0)
 #: What a figure a model file gives the plan is, by field.
 _WHAT = {"noise_std_db": "a radio's RSSI scatter [dB]", "drift_std_db": "a radio's drifting error [dB]",
          "variance_inflation": "a fit's variance inflation (at least 1)",
-         "penalty_power": "a smoothness penalty's roughness power"}
+         "penalty_power": "a smoothness penalty's roughness power",
+         "planning_penalty_weight": "a fit's smoothness penalty weight for its samples (units of X^T X)"}
+
+
+def penalty_weight_bound(fitted: PatternSet) -> float:
+    """The largest ``training.planning_penalty_weight`` an automatic fit of ``fitted``'s basis,
+    nodes and sample count writes (``math.inf`` without a sample count): the weight is the chosen
+    relative smoothing, at most the search's :data:`~rplearn.core.lsq.selection.MAX_SMOOTHING`,
+    times the mean diagonal of ``X^T X`` over the pattern columns, which each sample adds to at
+    most ``2 max_d sum_j x_j(d)^2 / (nodes x coefficients)`` (its two ends' features; for
+    spherical harmonics ``1 / (2 pi nodes)`` at every direction). Measured: the smoke flight's
+    fits 0.0338 (1,345 samples; bound 1.07e8), its first 7 s 2.16e7 at the search's largest
+    smoothing (271 samples; bound 2.16e7)."""
+    from rplearn.core.bases import fibonacci_grid_nodes
+
+    n = fitted.training.n_samples
+    if n is None:
+        return math.inf
+    basis = fitted.basis
+    az, el = fibonacci_grid_nodes(2048)
+    per_sample = 2.0 * float(np.max(np.sum(basis.design(az, el) ** 2, axis=1))) / (len(fitted.nodes) * basis.n_coef)
+    # 1e-9 relative: the bound is the largest value itself (a fit at the cap with every direction alike)
+    return MAX_SMOOTHING * float(n) * per_sample * (1.0 + 1e-9)
 
 
 def _in_range(model: str, field: str, value: float, bounds: tuple[float, float], flag: str | None) -> None:

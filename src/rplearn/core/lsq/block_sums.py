@@ -46,7 +46,9 @@ FloatArray = NDArray[np.float64]
 
 #: Default length of a time block [s]: about the correlation time of a drone's heading error.
 DEFAULT_BLOCK_S = 5.0
-#: Fewest closed blocks from which :func:`correlated_ratio` estimates anything (else 0).
+#: Fewest closed blocks from which :func:`correlated_ratio` estimates anything (else 0); for a
+#: model file's drift (:func:`rplearn.models.auto_spread.drift_std_db`), the fewest distinct
+#: time blocks one link's samples must fall in (:func:`link_block_count`).
 MIN_BLOCKS = 4
 
 
@@ -230,6 +232,27 @@ def time_block_sums(statistics: Sequence[NormalEquations], block_s: float = DEFA
 
 
 @check_types
+def link_block_count(statistics: Sequence[NormalEquations]) -> int:
+    """The most distinct time blocks any one link's samples fall in, over ``statistics`` (their
+    :attr:`NormalEquations.block_directed` labels; a block whose samples several statistics
+    hold, e.g. the stretches a flight is cut into, counted once; both directions of a link as
+    one link); 0 when none kept any.
+
+    What a drift needs: its offsets vary over the blocks of each link, so a link seen in fewer
+    blocks shows no drift to tell from its pattern and level, however many pieces its samples
+    were summed in (:attr:`BlockSums.n_blocks` counts one vector per statistics, block and link:
+    a 7-s flight cut into 5 stretches gave 6 from 2 blocks).
+    """
+    labels: dict[tuple[int, int], set[int]] = {}
+    for st in statistics:
+        for label, per_link in st.block_directed.items():
+            for key, sums in per_link.items():
+                if sums[2 * st.n_block_coefs + 1] > 0:  # the link's samples in the block (rows [f_tx, f_rx, y, 1, e])
+                    labels.setdefault((min(key), max(key)), set()).add(int(label))
+    return max((len(v) for v in labels.values()), default=0)
+
+
+@check_types
 def correlated_ratio(normal: NormalEquations, blocks: BlockSums, prior_diag: Any) -> float:
     """``kappa = s_c^2 / sigma^2``: the drifting error's block-offset variance over the white
     noise's, estimated by moments (module docstring); 0 with fewer than :data:`MIN_BLOCKS`
@@ -279,4 +302,5 @@ def correlated_ratio(normal: NormalEquations, blocks: BlockSums, prior_diag: Any
     return float(sc2 / sigma2)
 
 
-__all__ = ["DEFAULT_BLOCK_S", "MIN_BLOCKS", "BlockSums", "correlated_ratio", "time_block_labels", "time_block_sums"]
+__all__ = ["DEFAULT_BLOCK_S", "MIN_BLOCKS", "BlockSums", "correlated_ratio", "link_block_count", "time_block_labels",
+           "time_block_sums"]
