@@ -23,7 +23,17 @@ import numpy as np
 import pandas as pd
 
 from rplearn._argtypes import check_types
-from rplearn.data.tables import CSV_DTYPES, POSE_COLUMNS, SIGNAL_COLUMNS, check_unit_labels, node_ids, normalise_times, validate_pose_log
+from rplearn.data.tables import (
+    CSV_DTYPES,
+    POSE_COLUMNS,
+    SIGNAL_COLUMNS,
+    check_attitude_norms,
+    check_unit_labels,
+    node_ids,
+    normalise_times,
+    quaternion_norms,
+    validate_pose_log,
+)
 from rplearn.errors import InputError, LogFormatError
 from rplearn.io._columns import (
     COLUMN_ALIASES,
@@ -258,6 +268,7 @@ def canonical_pose(
             values = {c: v[keep] for c, v in values.items()}
         ends.remember(nodes, values)
     q = quaternions_wxyz(values, att_cols, meta["attitude"])
+    check_attitude_norms(quaternion_norms(q), source, rows)  # named by the file's row (validate_pose_log: out's)
     out = pd.DataFrame({"t": t, "node": nodes, **dict(zip(("x", "y", "z"), xyz.T)),
                         **dict(zip(("qw", "qx", "qy", "qz"), q.T))})
     return validate_pose_log(out, source), meta
