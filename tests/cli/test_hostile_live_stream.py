@@ -53,7 +53,7 @@ def _counts(text: str) -> dict[str, int]:
         line = line.strip()
         if line.startswith("dropped ("):
             reason, n = line[len("dropped ("):].split("): ")
-            out[reason] = int(n)
+            out[reason] = int(n.split()[0])  # where some were may follow: 1 (pose.csv line 101)
     return out
 
 
@@ -133,6 +133,7 @@ def test_a_header_repeated_mid_file_is_a_counted_drop_and_another_header_is_refu
     res = _live(tmp_path, source)
     assert res.exit_code == 0, res.output
     assert _counts(res.output) == {"repeated_header": 1, "out_of_span": 1}
+    assert f"dropped (repeated_header): 1 ({path} line 101)" in res.output  # review 51: where it was (was not said)
     _with_line(path, 150, ",".join(reversed(header.strip().split(","))) + "\n")
     line = _error(_live(tmp_path, source))
     assert f"{path}: line 151: another header in the file" in line

@@ -32,6 +32,7 @@ def test_a_header_written_again_between_polls_is_dropped_and_counted(tmp_path):
         fs.write(SIGNAL + s)
     again = tail.poll()
     assert len(again.signals) == 10 and again.dropped == {"repeated_header": 2}
+    assert again.where == {"repeated_header": f"{pose} line 22; {signal} line 12"}  # review 51: where (was not said)
     with signal.open("a") as fs:
         fs.write("t,tx,rx,rssi_dbm\n")
     with pytest.raises(LogFormatError, match=r"signal.csv: line 23: another header in the file"):
@@ -88,3 +89,22 @@ def test_rows_and_lines_after_a_header_written_again_are_numbered_as_sync_number
                                              r"fields in line 15, saw 7\)$"):
         tail.poll()
     assert signal.read_text().splitlines()[14].endswith(",7")
+
+
+def test_the_tail_names_the_first_few_repeated_headers_and_counts_them_all(tmp_path):
+    """Review 51: the live summary says where the header lines were; the tail keeps the first NAMED_LINES, however
+    many come (its memory does not grow with them)."""
+    from rplearn.io._csv_headers import NAMED_LINES
+
+    pose, signal = tmp_path / "pose.csv", tmp_path / "signal.csv"
+    p, s = _rows(0)
+    pose.write_text(POSE + p)
+    signal.write_text(SIGNAL + s)
+    tail = CsvTail(str(pose), str(signal))
+    tail.poll()
+    for k in range(1, 8):  # seven restarts of the signal logger, one a poll
+        with signal.open("a") as fs:
+            fs.write(SIGNAL + _rows(k)[1])
+        got = tail.poll()
+    assert got.dropped == {"repeated_header": 7} and len(tail.signal.repeated.first) == NAMED_LINES
+    assert got.where == {"repeated_header": f"{signal} lines 12, 23, 34 and 4 more"}

@@ -65,8 +65,8 @@ def test_sync_matches_the_same_samples_as_the_clean_file(flight, tmp_path):
     out = sync_logs([str(p)], [str(s)], str(tmp_path / "rep.parquet"))
     assert out.streamed and out.counts.n_out == clean.counts.n_out > 2000
     assert out.counts.n_in == clean.counts.n_in and out.counts.dropped == clean.counts.dropped
-    assert f"{p}: dropped 1 header line(s) repeated mid-file (repeated_header)" in out.notes
-    assert f"{s}: dropped 1 header line(s) repeated mid-file (repeated_header)" in out.notes
+    assert f"{p}: dropped 1 header line(s) repeated mid-file (repeated_header: line 3001)" in out.notes  # review 51:
+    assert f"{s}: dropped 1 header line(s) repeated mid-file (repeated_header: line 901)" in out.notes  # the lines
     pd.testing.assert_frame_equal(pd.read_parquet(tmp_path / "rep.parquet"), pd.read_parquet(tmp_path / "clean.parquet"))
 
 
@@ -79,9 +79,10 @@ def test_inspect_says_the_repeated_header_and_finds_nothing_else(flight, tmp_pat
     assert [n.rows for n in report.nodes] == [n.rows for n in clean.nodes]
     assert [lk.samples for lk in report.links] == [lk.samples for lk in clean.links]
     files = inspect_to_dict(report)["files"]
-    assert files[0]["dropped"] == {"repeated_header": 1}
-    assert files[1]["signal_dropped"] == {"repeated_header": 1}
-    assert "dropped on reading: 1 header line(s) repeated mid-file (repeated_header)" in files[1]["findings"]
+    assert files[0]["dropped"] == {"repeated_header": 1} and files[0]["repeated_header_lines"] == [11]
+    assert files[1]["signal_dropped"] == {"repeated_header": 1} and files[1]["repeated_header_lines"] == [21]
+    assert "dropped on reading: 1 header line(s) repeated mid-file (repeated_header: line 21)" in files[1]["findings"]
+    assert "dropped on reading: 1 header line(s) repeated mid-file (repeated_header: line 11)" in report.to_text()
 
 
 def test_a_header_of_other_columns_mid_file_is_refused_naming_file_and_line(flight, tmp_path):
@@ -230,3 +231,25 @@ def test_the_scan_numbers_the_header_lines_it_drops_as_the_file_does(flight, tmp
     scan = _csv_headers.scan_csv_headers(str(path), "s")
     assert scan.lines == expected
     assert [scan.file_line(k) for k in (1, 101, 102, 250, 251)] == [1, 101, 103, 252, 254]
+
+
+def test_many_repeated_headers_are_counted_and_the_first_few_named(flight, tmp_path):
+    """Review 51: where the header lines were (was the count alone); the first :data:`NAMED_LINES` named whatever
+    the count, so that the report and the memory stay bounded."""
+    from rplearn.io._csv_headers import NAMED_LINES
+
+    pose, signal = flight
+    at = list(range(100, 1100, 100))  # 10 headers: file lines 101, 202, 303, ...
+    s = _header_again(signal, tmp_path / "signal.csv", *at)
+    first = [k + 1 + i for i, k in enumerate(at)][:NAMED_LINES]
+    assert [_lines(s)[n - 1] for n in first] == [_lines(signal)[0]] * NAMED_LINES
+    out = sync_logs([str(pose)], [str(s)], str(tmp_path / "d.parquet"))
+    said = f"{s}: dropped 10 header line(s) repeated mid-file (repeated_header: lines 101, 202, 303 and 7 more)"
+    assert said in out.notes
+    _, meta = read_signal_table(str(s), tx_power_dbm=20.0, frequency_hz=2.4e9)
+    assert meta["dropped"] == {"repeated_header": 10} and meta["repeated_header_lines"] == first
+    chunks = list(iter_signal_table(str(s), 500, tx_power_dbm=20.0, frequency_hz=2.4e9))
+    assert all(c.attrs["repeated_header_lines"] == first for c in chunks)
+    report = inspect_logs([str(s)])
+    assert inspect_to_dict(report)["files"][0]["repeated_header_lines"] == first
+    assert f"dropped on reading: {said.split('dropped ', 1)[1]}" in report.to_text()

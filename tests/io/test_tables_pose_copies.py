@@ -141,3 +141,29 @@ def test_a_step_back_after_copies_names_its_row_in_the_file(real_poses, tmp_path
     table.to_csv(path, index=False)
     with pytest.raises(LogFormatError, match=rf"field t goes backwards at row {at} \(node "):
         read_pose_table(str(path))
+
+
+@pytest.mark.parametrize("ext", ["csv", "parquet"])
+def test_a_zero_quaternion_after_copies_names_its_row_in_the_file(real_poses, tmp_path, ext):
+    """Review 51: the zero-norm refusal named its place among the rows kept (20 rows early here, after the copies),
+    not its row in the file as the other pose refusals do."""
+    table = _block_twice(real_poses)
+    at = 1000
+    table.loc[at, ["qw", "qx", "qy", "qz"]] = 0.0
+    path = _write(tmp_path / f"zero.{ext}", table)
+    with pytest.raises(InputError, match=rf"zero\.{ext}: quaternion \(qw, qx, qy, qz\) has zero norm at row {at}$"):
+        read_pose_table(str(path))
+
+
+def test_a_zero_quaternion_after_dropped_rows_and_a_repeated_header_names_its_row_in_the_file(tmp_path):
+    """A row dropped for a NaN (``--nan-policy drop``) and a repeated header line before it: the row is still the
+    file's (from 0 at the first data row, the header lines not counted), as docs/guides/csv.md says."""
+    path = tmp_path / "z.csv"
+    header = "t,node,x,y,z,qw,qx,qy,qz\n"
+    path.write_text(header + "0,A,0,0,5,1,0,0,0\n0.1,A,,0,5,1,0,0,0\n" + header + "0.2,A,0,0,5,1,0,0,0\n0.3,A,0,0,5,0,0,0,0\n")
+    with pytest.raises(InputError, match=r"has zero norm at row 3$"):
+        read_pose_table(str(path), nan_policy="drop")
+    copy = tmp_path / "c.csv"
+    copy.write_text(header + "0,A,0,0,5,1,0,0,0\n0,A,0,0,5,1,0,0,0\n0.1,A,0,0,5,1,0,0,0\n0.2,A,0,0,5,0,0,0,0\n")
+    with pytest.raises(InputError, match=r"has zero norm at row 3$"):
+        read_pose_table(str(copy))

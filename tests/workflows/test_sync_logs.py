@@ -213,7 +213,7 @@ def test_a_signal_csv_with_extra_columns_is_scanned_for_header_lines_once(flight
     monkeypatch.setattr(tables, "scan_csv_headers", counting)
     outcome = sync_logs([pose], [str(path)], str(d / "extra.parquet"))
     assert scanned == [str(path)]
-    assert f"{path}: dropped 1 header line(s) repeated mid-file (repeated_header)" in outcome.notes
+    assert f"{path}: dropped 1 header line(s) repeated mid-file (repeated_header: line 501)" in outcome.notes
     back = pd.read_parquet(d / "extra.parquet")
     assert back["snr_db"].dtype.kind == "f" and set(back["note"].dropna()) == {"x"}
     assert outcome.counts.n_in == len(table)

@@ -10,7 +10,9 @@ flags, calling one library function and printing the result object it returns.
 
 Every user error (a subclass of :class:`rplearn.errors.RplearnError`, a missing file) prints one
 line ``error: ...`` on standard error, naming the flag to change where the library names the
-parameter at fault, and exits with code 1, without a traceback.
+parameter at fault, and exits with code 1, without a traceback; a usage error (a bad number, an
+unknown flag, a missing argument) is one line too, naming the flag and the value, exit code 2
+(:mod:`rplearn.cli._usage`).
 """
 
 from __future__ import annotations

@@ -21,11 +21,49 @@ import typer
 from rich.console import Console
 from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
 from rich.text import Text
+from typer.core import TyperGroup
 
 from rplearn._version import __version__
+from rplearn.cli._usage import usage_message
 from rplearn.errors import InputError, RplearnError
 
+
+def _is_usage_error(exc: BaseException) -> bool:
+    """A click usage error (a bad value, an unknown flag or command, a missing argument), but not
+    the help that ``rplearn`` alone prints (exit 2 too)."""
+    names = {c.__name__ for c in type(exc).__mro__}
+    return "UsageError" in names and "NoArgsIsHelpError" not in names
+
+
+class OneLineUsageGroup(TyperGroup):
+    """The command group whose usage errors, its own and its commands', are one line on standard
+    error, ``error: --noise: 'abc' is not a number`` (:func:`rplearn.cli._usage.usage_message`),
+    with click's exit code 2 (click prints the usage, a hint and the error on three lines)."""
+
+    def make_context(self, info_name: str | None, args: list[str], parent: Any = None, **extra: Any) -> Any:
+        try:
+            return super().make_context(info_name, args, parent, **extra)
+        except Exception as exc:
+            _one_line_usage(exc)
+            raise
+
+    def invoke(self, ctx: Any) -> Any:
+        try:
+            return super().invoke(ctx)
+        except Exception as exc:
+            _one_line_usage(exc)
+            raise
+
+
+def _one_line_usage(exc: BaseException) -> None:
+    """Print a usage error as one line and exit with code 2; anything else goes on."""
+    if _is_usage_error(exc):
+        console.print(Text.assemble(("error:", "bold red"), " ", usage_message(exc)), soft_wrap=True)
+        raise typer.Exit(2) from None
+
+
 app = typer.Typer(
+    cls=OneLineUsageGroup,
     name="rplearn",
     help=(
         "Learn drone-with-antenna radiation patterns from calibration flights and predict links.\n\n"

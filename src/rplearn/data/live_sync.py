@@ -66,7 +66,7 @@ from rplearn._argtypes import check_types
 from rplearn.data.phases import flight_phases
 from rplearn.data.poses import PoseTrack, TrackSet, tracks_of_checked_log
 from rplearn.data.streaming import row_hashes
-from rplearn.data.sync import SyncOptions, SyncResult, SyncSummary, finish_summary, match_chunk, sync_options_or_default
+from rplearn.data.sync import SyncOptions, SyncResult, SyncSummary, check_receiver_offsets, finish_summary, match_chunk, sync_options_or_default
 from rplearn.data.tables import MATCHED_COLUMNS, POSE_COLUMNS, non_unit_quaternion_rows, validate_pose_log
 from rplearn.errors import InputError
 
@@ -182,6 +182,7 @@ class LiveMatcher:
         self._waiting_nodes: frozenset[str] = frozenset()
         self._signal_rows = 0
         self._moving: set[str] = set()
+        self._receivers: set[str] = set()  # with clock offsets per receiver: the receivers the rows name (checked at the end)
         #: The rows the last :meth:`match` gave (also when its end-of-stream check raised).
         self.last_matched = pd.DataFrame(columns=list(MATCHED_COLUMNS))
 
@@ -209,6 +210,8 @@ class LiveMatcher:
         """Append signal rows (canonical columns); they wait until their time is settled."""
         if len(rows):
             self._pending.append(rows.reset_index(drop=True))
+            if isinstance(self.options.signal_clock_offset_s, Mapping) and "rx" in rows.columns:
+                self._receivers.update(rows["rx"].astype(str).unique())
             t = _common_signal_t(rows, self.options)
             if np.isfinite(t).any():
                 self._signal_t = max(self._signal_t, float(np.nanmax(t[np.isfinite(t)])))
@@ -286,6 +289,8 @@ class LiveMatcher:
             tracks = self._tracks(final=True)
             phases = flight_phases(self._poses, tracks, self.options.clock_offsets_s, self.options.airborne_margin_m)
             finish_summary(self.summary, tracks, phases, self.options, self.source)
+            # a receiver may start later in a stream: its offset is checked at the end (rplearn live says it in a note)
+            check_receiver_offsets(self.options.signal_clock_offset_s, self._receivers, self.source)
         return result
 
     def _waiting(self, pending: pd.DataFrame, t: np.ndarray) -> np.ndarray:

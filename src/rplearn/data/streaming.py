@@ -25,7 +25,16 @@ from rplearn._argtypes import check_types
 from rplearn._atomic import atomic_path
 from rplearn.data.phases import flight_phases
 from rplearn.data.poses import tracks_of_checked_log
-from rplearn.data.sync import SyncOptions, SyncResult, SyncSummary, check_link_nodes, finish_summary, match_chunk, sync_options_or_default
+from rplearn.data.sync import (
+    SyncOptions,
+    SyncResult,
+    SyncSummary,
+    check_link_nodes,
+    check_receiver_offsets,
+    finish_summary,
+    match_chunk,
+    sync_options_or_default,
+)
 from rplearn.data.tables import MATCHED_COLUMNS, SIGNAL_COLUMNS, non_unit_quaternion_rows, validate_pose_log
 
 
@@ -120,8 +129,8 @@ def synchronise_stream(
     Raises
     ------
     InputError
-        As :func:`~rplearn.data.sync.synchronise`; the link and ``min_samples`` checks after
-        the last chunk.
+        As :func:`~rplearn.data.sync.synchronise`; the link, the receivers' clock offsets and ``min_samples``
+        checks after the last chunk.
     """
     options = sync_options_or_default(options)
     pose = validate_pose_log(pose_log, "pose log")
@@ -131,12 +140,16 @@ def synchronise_stream(
     carry: dict = {}  # the last reading of each link, for readings repeated across chunks
     seen = _SeenRows()
     pairs: set[tuple[str, str]] = set()
+    receivers: set[str] = set()  # with clock offsets per receiver: the receivers the rows name (a few node ids)
+    per_receiver = isinstance(options.signal_clock_offset_s, Mapping)
     n_out = 0
     total = SyncSummary()
     for chunk in signal_chunks:
         repeats = seen.repeats(row_hashes(chunk)) if len(chunk) else np.zeros(0, bool)
         if options.link is not None and len(chunk) and {"tx", "rx"} <= set(chunk.columns):
             pairs |= _pairs(chunk)
+        if per_receiver and "rx" in chunk.columns:
+            receivers.update(chunk["rx"].astype(str).unique())
         where = str(chunk.attrs.get("source", source))
         first_row = int(chunk.attrs.get("first_row", total.n_in))
         result = match_chunk(tracks, chunk, options, where, seen_before=repeats, first_row=first_row,
@@ -147,6 +160,7 @@ def synchronise_stream(
         yield result
     if options.link is not None:
         check_link_nodes(pd.DataFrame(sorted(pairs), columns=["tx", "rx"]), options.link, source)
+    check_receiver_offsets(options.signal_clock_offset_s, receivers, source)
     notes = list(total.notes)
     finish_summary(total, tracks, phases, options, source)  # raises when too few matched
     if len(total.notes) > len(notes):

@@ -79,7 +79,7 @@ time to put it on the common clock. All options are fields of :class:`SyncOption
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -238,7 +238,8 @@ class SyncOptions:
     clock_offsets_s : mapping of node id to float, optional
         Offset added to each node's pose times to put them on the common clock [s].
     signal_clock_offset_s : float or mapping of receiver id to float
-        Offset added to signal times [s] (one for the log, or one per receiver).
+        Offset added to signal times [s] (one for the log, or one per receiver: a receiver no signal row names is
+        refused, :func:`check_receiver_offsets`).
     sentinel_rssi_dbm : sequence of float
         RSSI values meaning "no measurement" [dBm], dropped as ``sentinel_rssi`` (a NaN or
         infinite RSSI is dropped as ``nan_rssi``, text that is no number as ``unparsable_rssi``).
@@ -356,6 +357,15 @@ def _signal_times(
     if isinstance(offset_s, Mapping):
         return t + np.array([float(offset_s.get(r, 0.0)) for r in uniques], np.float64)[rx_code]
     return t + float(offset_s)
+
+
+def check_receiver_offsets(offset_s: float | Mapping[str, float], receivers: Iterable[str], source: str) -> None:
+    """Refuse signal clock offsets per receiver (``SyncOptions.signal_clock_offset_s``) that name a node no signal
+    row names as its receiver (``receivers``: those the rows name): its offset would be ignored."""
+    named = {str(r) for r in receivers}
+    if isinstance(offset_s, Mapping) and (unknown := sorted(set(map(str, offset_s)) - named)):
+        raise InputError(f"{source}: signal clock offsets (signal_clock_offset_s) name receiver(s) {', '.join(unknown)} that "
+                         f"no signal row names as rx; receivers: {', '.join(sorted(named)) or 'none'}", param="signal_clock_offset_s")
 
 
 def _unknown_nodes(
@@ -548,6 +558,7 @@ def synchronise(
     phases = flight_phases(pose_log, tracks, options.clock_offsets_s, options.airborne_margin_m)
     if options.link is not None:
         check_link_nodes(signal_log, options.link, source)
+    check_receiver_offsets(options.signal_clock_offset_s, signal_log["rx"].astype(str).unique() if "rx" in signal_log else (), source)
     signal_log, events = split_outages(signal_log, source)
     result = match_chunk(tracks, signal_log, options, source, phases=phases)  # one chunk: nothing to carry
     result.summary.non_unit_quaternions = non_unit
@@ -585,4 +596,4 @@ def finish_summary(summary: SyncSummary, tracks: Mapping[str, PoseTrack], phases
 
 
 __all__ = ["DEFAULT_SENTINEL_RSSI_DBM", "DROP_REASONS", "PLAUSIBLE_RSSI_DBM", "SyncOptions", "SyncResult", "SyncSummary",
-           "check_link_nodes", "duplicate_rows", "finish_summary", "synchronise"]
+           "check_link_nodes", "check_receiver_offsets", "duplicate_rows", "finish_summary", "synchronise"]

@@ -4,8 +4,7 @@ All three are :class:`pandas.DataFrame` objects with fixed column names, so that
 the simulator and the synchroniser speak the same language:
 
 - pose log: ``t, node, x, y, z, qw, qx, qy, qz`` (ENU metres, FLU -> ENU quaternion);
-- signal log: ``t, tx, rx, rssi_dbm, tx_power_dbm, frequency_hz`` and optional ``unit`` and
-  ``outage``;
+- signal log: ``t, tx, rx, rssi_dbm, tx_power_dbm, frequency_hz`` and optional ``unit`` and ``outage``;
 - matched dataset: every signal-log column plus ``tx_x .. tx_qz`` and ``rx_x .. rx_qz`` (and
   ``rssi_scale`` = ``relative`` for uncalibrated received power, from ``sync --rssi-scale``).
 
@@ -40,9 +39,7 @@ OPTIONAL_SIGNAL_COLUMNS: tuple[str, ...] = ("unit", "outage")
 #: Boolean column marking outage events (link lost, ``rssi_dbm`` NaN): module docstring.
 OUTAGE_COLUMN: str = "outage"
 POSE_FIELDS: tuple[str, ...] = ("x", "y", "z", "qw", "qx", "qy", "qz")
-MATCHED_COLUMNS: tuple[str, ...] = SIGNAL_COLUMNS + tuple(
-    f"{end}_{f}" for end in ("tx", "rx") for f in POSE_FIELDS
-)
+MATCHED_COLUMNS: tuple[str, ...] = SIGNAL_COLUMNS + tuple(f"{end}_{f}" for end in ("tx", "rx") for f in POSE_FIELDS)
 #: Columns holding labels: read from CSV as text, so that node "01" stays "01", not 1.
 STRING_COLUMNS: tuple[str, ...] = ("node", "tx", "rx", "unit", "rssi_scale")
 CSV_DTYPES: dict[str, type] = {c: str for c in STRING_COLUMNS}
@@ -265,11 +262,7 @@ def checked_pose_arrays(df: pd.DataFrame, source: str = "pose log") -> CheckedPo
     take = slice(None) if in_order else order
     components = [df[c].to_numpy(np.float64)[take] for c in ("qw", "qx", "qy", "qz")]  # no copy when in order
     norm = _norms_of_columns(components)
-    bad = (norm < 1e-6) | np.isinf(norm)  # no attitude: zero, or a corrupt component whose square overflows
-    if np.any(bad):
-        row = int(np.flatnonzero(bad)[0]) if in_order else int(order[np.flatnonzero(bad)[0]])
-        what = "zero norm" if norm[np.flatnonzero(bad)[0]] < 1e-6 else "a norm beyond any float (a corrupt value)"
-        raise InputError(f"{source}: quaternion (qw, qx, qy, qz) has {what} at row {row}")
+    check_attitude_norms(norm, source, None if in_order else order)
     non_unit = count_non_unit_quaternions(norm) + int(df.attrs.get(NON_UNIT_QUATERNION_ATTR, 0))
     q = np.empty((t.size, 4))
     for j, component in enumerate(components):
@@ -299,6 +292,15 @@ def checked_pose_arrays(df: pd.DataFrame, source: str = "pose log") -> CheckedPo
             raise InputError(f"{source}: column armed: expected true/false (or 1/0) values") from None
         armed = flags.astype(bool) if not pd.isna(flags).any() else pd.array(flags, dtype="boolean")
     return CheckedPose(ts, sorted_codes, names, position, q, non_unit, still_off, armed)
+
+
+def check_attitude_norms(norm: np.ndarray, source: str, rows: np.ndarray | None = None) -> None:
+    """Refuse the first quaternion of norm ``norm`` zero or beyond any float (no attitude, or a corrupt component whose
+    square overflows), naming its row: ``rows[i]`` (the file's rows, some dropped before), else its position."""
+    if np.any(bad := (norm < 1e-6) | np.isinf(norm)):
+        i = int(np.flatnonzero(bad)[0])
+        what = "zero norm" if norm[i] < 1e-6 else "a norm beyond any float (a corrupt value)"
+        raise InputError(f"{source}: quaternion (qw, qx, qy, qz) has {what} at row {i if rows is None else int(rows[i])}")
 
 
 def count_non_unit_quaternions(norm: np.ndarray, tolerance: float = QUATERNION_NORM_TOLERANCE) -> int:

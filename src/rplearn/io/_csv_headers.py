@@ -37,6 +37,11 @@ from rplearn.io._columns import COLUMN_ALIASES, EULER_ENU_FLU_COLUMNS, EULER_NED
 REPEATED_HEADER = "repeated_header"
 #: What the lines dropped as :data:`REPEATED_HEADER` are called when their count is said.
 REPEATED_HEADER_LINES = "header line(s) repeated mid-file"
+#: The metadata key (and ``DataFrame.attrs`` key) of the file lines of the first header lines dropped as
+#: :data:`REPEATED_HEADER` (:data:`NAMED_LINES` at most; the count says them all).
+REPEATED_HEADER_AT = "repeated_header_lines"
+#: How many of the header lines repeated mid-file a report names (the first ones: memory bounded however many).
+NAMED_LINES = 3
 #: Bytes of a file scanned at a time.
 SCAN_BYTES = 1 << 24
 #: Column names a header-like line may begin with besides the file's own: the canonical ones and their aliases.
@@ -182,6 +187,40 @@ class HeaderScan:
         return len(self.spans)
 
 
+def lines_text(first: Sequence[int], count: int) -> str:
+    """The file lines ``first`` (the first of ``count`` lines) as said: ``line 604``, ``lines 604, 1210``,
+    ``lines 602, 1203, 1804 and 2 more`` ('' without any)."""
+    if not first:
+        return ""
+    more = f" and {count - len(first):,} more" if count > len(first) else ""
+    return f"line{'s' if count > 1 else ''} {', '.join(str(n) for n in first)}{more}"
+
+
+def repeated_header_text(count: int, first: Sequence[int] = ()) -> str:
+    """A count of header lines repeated mid-file, dropped, with where the first were:
+    ``2 header line(s) repeated mid-file (repeated_header: lines 604, 1210)``."""
+    where = lines_text(first, count)
+    return f"{count:,} {REPEATED_HEADER_LINES} ({REPEATED_HEADER}{': ' + where if where else ''})"
+
+
+@dataclass
+class HeaderDrops:
+    """The header lines repeated mid-file that a file read in parts dropped so far: how many, and the file lines of
+    the first :data:`NAMED_LINES`."""
+
+    count: int = 0
+    first: tuple[int, ...] = ()
+
+    def add(self, lines: Sequence[int]) -> None:
+        """Count the header lines dropped at file lines ``lines`` (in file order)."""
+        self.count += len(lines)
+        self.first += tuple(lines[:max(NAMED_LINES - len(self.first), 0)])
+
+    def where(self, source: str) -> str:
+        """``source lines 604, 1210`` ('' without any)."""
+        return f"{source} {lines_text(self.first, self.count)}" if self.count else ""
+
+
 #: Why a file with another header mid-file is refused, and what to do (the whole-file readers).
 FILE_ADVICE = "split the file there and give each part as a log of its own"
 
@@ -261,6 +300,6 @@ def is_csv_file(path: str | os.PathLike[str]) -> bool:
     return not str(path).lower().endswith((".parquet", ".pq"))
 
 
-__all__ = ["FILE_ADVICE", "KNOWN_NAMES", "REPEATED_HEADER", "REPEATED_HEADER_LINES", "SCAN_BYTES", "HeaderRule", "HeaderScan", "SkippingReader",
-           "bare_header", "csv_source", "file_line", "in_file_lines", "is_csv_file", "scan_csv_headers",
-           "without_repeated_headers"]
+__all__ = ["FILE_ADVICE", "KNOWN_NAMES", "NAMED_LINES", "REPEATED_HEADER", "REPEATED_HEADER_AT", "REPEATED_HEADER_LINES", "SCAN_BYTES",
+           "HeaderDrops", "HeaderRule", "HeaderScan", "SkippingReader", "bare_header", "csv_source", "file_line", "in_file_lines",
+           "is_csv_file", "lines_text", "repeated_header_text", "scan_csv_headers", "without_repeated_headers"]

@@ -48,7 +48,7 @@ from rplearn.data.sync import DEFAULT_SENTINEL_RSSI_DBM, PLAUSIBLE_RSSI_DBM
 from rplearn.data.sync_notes import fixed_nodes
 from rplearn.data.tables import QUATERNION_NORM_TOLERANCE, outage_mask, validate_pose_log
 from rplearn.errors import InputError, RplearnError
-from rplearn.io._csv_headers import REPEATED_HEADER, REPEATED_HEADER_LINES
+from rplearn.io._csv_headers import REPEATED_HEADER, REPEATED_HEADER_AT, repeated_header_text
 from rplearn.io.damage import across_files, file_damage
 from rplearn.io.inspect_files import read_for_inspection
 from rplearn.io.options import ReaderOptions
@@ -143,8 +143,8 @@ class InspectReport:
                f"{int(p.get('pose_rows', 0))} pose row(s), {int(p.get('signal_rows', 0))} signal row(s)"
                + (f": {p['detail']}" if p.get("detail") else "") for p in f.get("excluded_periods") or ()]
         for what, counts in (("pose", f.get("dropped")), ("signal", f.get("signal_dropped"))):
-            out += [f"dropped on reading: {n:,} {REPEATED_HEADER_LINES if why == REPEATED_HEADER else what + ' row(s)'} "
-                    f"({why})" for why, n in (counts or {}).items() if n]
+            out += ["dropped on reading: " + (repeated_header_text(n, f.get(REPEATED_HEADER_AT, ())) if why == REPEATED_HEADER
+                                              else f"{n:,} {what} row(s) ({why})") for why, n in (counts or {}).items() if n]
         return out
 
     def to_text(self) -> str:

@@ -12,6 +12,7 @@ import numpy as np
 import pandas as pd
 
 from rplearn.data.tables import non_unit_quaternion_rows
+from rplearn.io._csv_headers import REPEATED_HEADER_AT
 from rplearn.io.damage import signal_row_problems
 from rplearn.io.options import ReaderOptions
 
@@ -41,6 +42,7 @@ def _read_pose_table(path: str, options: ReaderOptions) -> tuple[pd.DataFrame, d
     dropped = {k: int(n) for k, n in meta["dropped"].items() if n and k != "nan_pose"}  # NaN rows: nan_rows
     if dropped:  # a coordinate beyond any place, a position jump: said, as sync would drop them
         info["dropped"] = dropped
+        info.update({k: v for k, v in meta.items() if k == REPEATED_HEADER_AT})  # where the first header lines were
         info["notes"] = [str(n).removeprefix(f"{path}: ") for n in meta.get("notes", ())]
     df = _tables.rename_columns(raw, options.columns)
     node = (df["node"].astype(str) if "node" in df.columns
@@ -100,7 +102,8 @@ def read_for_inspection(path: str, options: ReaderOptions) -> tuple[pd.DataFrame
             path, columns=options.columns, rx=(options.receivers or {}).get(path),
             tx_power_dbm=0.0, frequency_hz=1.0, allow_unsorted=True)  # 1 Hz: a placeholder; backward steps reported below
         facts = {"format": meta["format"], "kind": "signal", "frequency_hz": _frequency_hz(sig),
-                 **({"signal_dropped": meta["dropped"]} if any(meta["dropped"].values()) else {})}
+                 **({"signal_dropped": meta["dropped"]} if any(meta["dropped"].values()) else {}),
+                 **{k: v for k, v in meta.items() if k == REPEATED_HEADER_AT}}
         rows = signal_row_problems(sig)  # said only when there are some (JSON: the key only then)
         return None, sig, {**facts, **({"signal_row_problems": rows} if rows else {})}, {}, None
     logs, meta = read_logs(path, _forgiving_options(path, kind, options))

@@ -41,7 +41,7 @@ from rplearn.data.live_sync import HOLD_ROWS, HOLD_S
 from rplearn.data.tables import CSV_DTYPES, normalise_times
 from rplearn.errors import InputError, LogFormatError
 from rplearn.io._columns import EULER_ENU_FLU_COLUMNS, EULER_NED_FRD_COLUMNS, csv_missing_values
-from rplearn.io._csv_headers import HeaderRule, file_line, in_file_lines, without_repeated_headers
+from rplearn.io._csv_headers import REPEATED_HEADER, HeaderDrops, HeaderRule, file_line, in_file_lines, without_repeated_headers
 from rplearn.io._pose_checks import TrackEnds, top_speeds, track_pieces
 from rplearn.io._time_order import LinkTimes, check_link_time_order
 from rplearn.io.geodetic import geodetic_to_enu
@@ -65,6 +65,8 @@ class Poll:
         Rows not handed out, per reason, so far (a MAVLink source: :class:`rplearn.io.tlog_tail.TlogTail`).
     held_nodes : frozenset of str
         Nodes whose first pose rows the source holds back after this poll (:class:`CsvTail`).
+    where : dict of str to str
+        Where the rows of a reason were so far, as said (``repeated_header``: ``pose.csv lines 604, 1210``, the first).
     """
 
     poses: pd.DataFrame
@@ -72,6 +74,7 @@ class Poll:
     received: int
     dropped: dict[str, int] = field(default_factory=dict)
     held_nodes: frozenset[str] = frozenset()
+    where: dict[str, str] = field(default_factory=dict)
 
 
 #: Bytes from a tailed file's start that :class:`_Tail` keeps and compares at every poll: a file replaced
@@ -88,7 +91,7 @@ class _Tail:
     def __init__(self, path: str) -> None:
         self.path, self.offset, self.header = path, 0, b""
         self.line = 0  # lines read (the header the first)
-        self.repeated_headers = 0  # the header line again later in the file (a logger restarted appending): dropped
+        self.repeated = HeaderDrops()  # the header line again later in the file (a logger restarted appending): dropped
         self.read_from = 1  # the file line of the first line the last call returned
         self.read_dropped: tuple[int, ...] = ()  # the file lines of the header lines dropped from it
         self.rule: HeaderRule | None = None  # how its header lines are told from rows, once the header is read
@@ -138,8 +141,7 @@ class _Tail:
         self.offset += end
         data = data[:end]
         self.digest.update(data)
-        first_line = self.line + 1
-        self.line += data.count(b"\n")
+        first_line, self.line = self.line + 1, self.line + data.count(b"\n")
         if not self.header:
             self.header, _, data = data.partition(b"\n")
             self.header += b"\n"
@@ -149,10 +151,9 @@ class _Tail:
     def _without_headers(self, data: bytes, first_line: int) -> bytes:
         """``data`` (lines from line ``first_line`` on) without the header lines repeated in it, counted; another
         header is refused, naming the line (:mod:`rplearn.io._csv_headers`)."""
-        if self.rule is None:
-            self.rule = HeaderRule.of(self.header)
+        self.rule = self.rule or HeaderRule.of(self.header)
         data, repeated = without_repeated_headers(data, self.rule, first_line, self.path, _SESSION_ADVICE)
-        self.repeated_headers += len(repeated)
+        self.repeated.add(repeated)
         self.read_from, self.read_dropped = first_line, repeated
         return data
 
@@ -379,10 +380,11 @@ class CsvTail:
                 del self._links.seen[:-LINK_MEMORY_POLLS]  # copies of rows of older polls: a step back
             self._signal_rows += len(signals)
         received = (0 if new is None else len(new)) + len(signals)  # held rows too: the stream is not idle
-        self.dropped["repeated_header"] = self.pose.repeated_headers + self.signal.repeated_headers
+        self.dropped[REPEATED_HEADER] = self.pose.repeated.count + self.signal.repeated.count
+        where = "; ".join(w for w in (self.pose.repeated.where(self.pose.path), self.signal.repeated.where(self.signal.path)) if w)
         held = self._hold.held
         held_nodes = frozenset() if held is None or "node" not in held.columns else frozenset(held["node"].astype(str))
-        return Poll(poses, signals, received, {k: n for k, n in self.dropped.items() if n}, held_nodes)
+        return Poll(poses, signals, received, {k: n for k, n in self.dropped.items() if n}, held_nodes, {REPEATED_HEADER: where} if where else {})
 
     def close(self) -> None:
         """Nothing to release."""

@@ -23,7 +23,17 @@ import numpy as np
 import pandas as pd
 
 from rplearn._argtypes import check_types
-from rplearn.data.tables import CSV_DTYPES, POSE_COLUMNS, SIGNAL_COLUMNS, check_unit_labels, node_ids, normalise_times, validate_pose_log
+from rplearn.data.tables import (
+    CSV_DTYPES,
+    POSE_COLUMNS,
+    SIGNAL_COLUMNS,
+    check_attitude_norms,
+    check_unit_labels,
+    node_ids,
+    normalise_times,
+    quaternion_norms,
+    validate_pose_log,
+)
 from rplearn.errors import InputError, LogFormatError
 from rplearn.io._columns import (
     COLUMN_ALIASES,
@@ -36,7 +46,7 @@ from rplearn.io._columns import (
     with_node,
 )
 from rplearn.io._common import read_parquet_lean
-from rplearn.io._csv_headers import REPEATED_HEADER, HeaderScan, csv_source, in_file_lines, scan_csv_headers
+from rplearn.io._csv_headers import NAMED_LINES, REPEATED_HEADER, REPEATED_HEADER_AT, HeaderScan, csv_source, in_file_lines, scan_csv_headers
 from rplearn.io._pose_checks import TrackEnds
 from rplearn.io._pose_checks import earlier_rows as _earlier_rows
 from rplearn.io._pose_checks import finite_values as _finite_values
@@ -78,8 +88,8 @@ def read_table_rows(path: str, source: str, columns: Mapping[str, str] | None = 
     """A CSV or Parquet table file's rows as read (times normalised, nothing checked), for the readers here and
     for ``inspect``; a missing, empty or unreadable file is refused naming ``source``. The lines of a CSV file
     that repeat its header (a logger restarted appending, files joined with ``cat``) are dropped, counted in
-    ``attrs["repeated_header"]``; a header of other columns mid-file is refused naming its line
-    (:mod:`rplearn.io._csv_headers`).
+    ``attrs["repeated_header"]``, the file lines of the first few in ``attrs["repeated_header_lines"]``; a header
+    of other columns mid-file is refused naming its line (:mod:`rplearn.io._csv_headers`).
 
     Parameters
     ----------
@@ -104,7 +114,8 @@ def read_table_rows(path: str, source: str, columns: Mapping[str, str] | None = 
         with csv_source(path, scan) as handle:
             df = pd.read_csv(handle, skipinitialspace=True, dtype=CSV_DTYPES, **_csv_options(path, columns))
         df = normalise_times(df, source)
-        df.attrs[REPEATED_HEADER] = scan.repeated  # lines dropped: said as the drop of that name
+        df.attrs[REPEATED_HEADER] = scan.repeated  # lines dropped: said as the drop of that name, with the first lines
+        df.attrs[REPEATED_HEADER_AT] = list(scan.lines[:NAMED_LINES])
         return df
     except pd.errors.EmptyDataError:
         raise LogFormatError(f"{source}: empty file, expected a header line and rows") from None
@@ -179,7 +190,7 @@ def canonical_pose(
         values are refused, or with ``"drop"`` all dropped (``conflicting_pose``):
         :func:`rplearn.io._pose_checks.repeated_poses`. The lines of a CSV file that repeat its
         header (:func:`read_table_rows` drops them; ``df.attrs["repeated_header"]``) are counted
-        as ``repeated_header``.
+        as ``repeated_header``, the file lines of the first few in ``metadata["repeated_header_lines"]``.
     allow_unsorted : bool
         Accept times that go backwards within a node (the rows are sorted); by default
         they raise :class:`LogFormatError`.
@@ -207,7 +218,7 @@ def canonical_pose(
     meta: dict[str, Any] = {"source": source, "dropped": {"nan_pose": 0, "implausible_pose": 0, "duplicate_pose": 0,
                                                          "conflicting_pose": 0, "position_jump": 0,
                                                          REPEATED_HEADER: int(df.attrs.get(REPEATED_HEADER, 0))},
-                            "origin_geodetic": None}
+                            "origin_geodetic": None, **_header_lines(df)}
     df = with_node(df, node, source)
     pos_cols, meta["position"] = position_columns(df, source)
     df, att_cols, meta["attitude"], level = attitude_columns(df, source)
@@ -258,6 +269,7 @@ def canonical_pose(
             values = {c: v[keep] for c, v in values.items()}
         ends.remember(nodes, values)
     q = quaternions_wxyz(values, att_cols, meta["attitude"])
+    check_attitude_norms(quaternion_norms(q), source, rows)  # named by the file's row (validate_pose_log: out's)
     out = pd.DataFrame({"t": t, "node": nodes, **dict(zip(("x", "y", "z"), xyz.T)),
                         **dict(zip(("qw", "qx", "qy", "qz"), q.T))})
     return validate_pose_log(out, source), meta
@@ -366,11 +378,18 @@ def read_signal_table(path: str, allow_unsorted: bool = False, **options: Any) -
     signal = canonical_signal(df, source=source, **options)
     if not allow_unsorted:
         check_link_time_order(signal, source)
-    meta = {"source": source, "format": table_format(source), "rows": int(len(signal))}
+    meta = {"source": source, "format": table_format(source), "rows": int(len(signal)), **_header_lines(df)}
     return signal, {**meta, "dropped": {REPEATED_HEADER: int(df.attrs.get(REPEATED_HEADER, 0))}}
 
 
-def _signal_chunks(batches: Iterator[pd.DataFrame], source: str, allow_unsorted: bool, repeated_headers: int,
+def _header_lines(df: pd.DataFrame) -> dict[str, list[int]]:
+    """``{"repeated_header_lines": [...]}``: the file lines of the first header lines repeated mid-file that
+    :func:`read_table_rows` dropped from ``df`` (empty without any)."""
+    lines = [int(n) for n in df.attrs.get(REPEATED_HEADER_AT, ())]
+    return {REPEATED_HEADER_AT: lines} if lines else {}
+
+
+def _signal_chunks(batches: Iterator[pd.DataFrame], source: str, allow_unsorted: bool, scan: HeaderScan,
                    options: Mapping[str, Any]) -> Iterator[pd.DataFrame]:
     """The canonical chunks of :func:`iter_signal_table`, their links' time order checked across them."""
     state = LinkTimes()
@@ -380,7 +399,7 @@ def _signal_chunks(batches: Iterator[pd.DataFrame], source: str, allow_unsorted:
         if not allow_unsorted:
             check_link_time_order(out, source, first_row, state)
         first_row += len(out)
-        out.attrs[REPEATED_HEADER] = repeated_headers
+        out.attrs[REPEATED_HEADER], out.attrs[REPEATED_HEADER_AT] = scan.repeated, list(scan.lines[:NAMED_LINES])
         yield out
 
 
@@ -396,8 +415,9 @@ def iter_signal_table(
     by the chunk size: CSV through pandas' chunked reader, Parquet by record batches. The lines
     of a CSV file that repeat its header are dropped (another header is refused naming its line:
     :mod:`rplearn.io._csv_headers`); every chunk's ``attrs["repeated_header"]`` says how many the
-    file holds. ``header_scan``: that scan of the CSV file (:func:`scan_csv_headers`) when the caller
-    made it already (``sync``, which reads the file's extra columns first): the file is not scanned again.
+    file holds, ``attrs["repeated_header_lines"]`` the file lines of the first few. ``header_scan``: that scan of
+    the CSV file (:func:`scan_csv_headers`) when the caller made it already (``sync``, which reads the file's extra
+    columns first): the file is not scanned again.
     """
     source = str(path)
     if not os.path.exists(path):
@@ -413,14 +433,14 @@ def iter_signal_table(
             batches: Iterator[pd.DataFrame] = (
                 normalise_times(b.to_pandas(), source) for b in pf.iter_batches(batch_size=chunk_rows)
             )
-            yield from _signal_chunks(batches, source, allow_unsorted, 0, options)
+            yield from _signal_chunks(batches, source, allow_unsorted, scan, options)
         else:
             scan = scan_csv_headers(path, source) if header_scan is None else header_scan
             with csv_source(path, scan) as handle:
                 batches = (normalise_times(c, source)
                            for c in pd.read_csv(handle, chunksize=chunk_rows, skipinitialspace=True, dtype=CSV_DTYPES,
                                                 **_csv_options(path, options.get("columns"))))
-                yield from _signal_chunks(batches, source, allow_unsorted, scan.repeated, options)
+                yield from _signal_chunks(batches, source, allow_unsorted, scan, options)
     except (InputError, LogFormatError):
         raise
     except Exception as exc:

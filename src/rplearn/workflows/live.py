@@ -200,6 +200,7 @@ class _Session:
             options.manoeuvres, options.rank_beside, options.ranking_every_s)
         self.shown: Ranking | None = None  # the ranking on view
         self.source_dropped: dict[str, int] = {}  # rows the source's reader dropped, per reason (a CSV's pose rows)
+        self.source_where: dict[str, str] = {}  # where some of them were (Poll.where)
         self.fixed_said: list[str] = []  # the notes on the fixed nodes (say_fixed_nodes)
 
     def note(self, prefix: str, text: str | None = None) -> None:
@@ -259,6 +260,7 @@ class _Session:
         s = self.status
         s.matched, s.pending = self.matcher.summary.n_out, self.matcher.pending_rows
         s.dropped = {**self.matcher.summary.dropped, **self.source_dropped, **({"late_node": self.late_rows} if self.late_rows else {})}
+        s.dropped_where = dict(self.source_where)
         s.learned = 0 if self.stats is None else self.stats.n_samples
         s.prequential_rmse_db, s.prequential_n = self.preq.rmse_db(), self.preq.n_samples
 
@@ -471,7 +473,7 @@ def run_live(
         while True:
             got = src.poll()
             now = time.monotonic()
-            session.source_dropped = dict(got.dropped)
+            session.source_dropped, session.source_where = dict(got.dropped), dict(got.where)
             session.feed(got.poses, got.signals, got.held_nodes)
             if got.received:
                 last_rx = now
@@ -501,7 +503,8 @@ def run_live(
                 time.sleep(0.05)
         session.stop_ranking(STOP_RANKING_WAIT_S)  # briefly waited for (its BLAS limit), then dropped
         last = src.poll(final=True)
-        session.source_dropped = {} if isinstance(src, MavlinkSource) else dict(last.dropped)  # rematched whole below
+        mavlink = isinstance(src, MavlinkSource)  # its recording is rematched whole below
+        session.source_dropped, session.source_where = ({}, {}) if mavlink else (dict(last.dropped), dict(last.where))
         session.feed(last.poses, last.signals, last.held_nodes)
         session.learn(final=True)
         from rplearn.workflows.live_checks import source_pose_metadata

@@ -134,7 +134,7 @@ def no_model_message(source: str, status: Any, messages: int | None, waited_s: f
         radio = "" if messages is None else (f": {messages} MAVLink messages, none of them a radio report with both ends "
                                              "placed (RADIO_STATUS or RADIO, with the vehicle's position)")
         return f"{source}: the session ended ({s.stopped or 'stopped'}) before any signal row was received{radio}; no model"
-    drops = ", ".join(f"{n} {r}" for r, n in s.dropped.items() if n)
+    drops = ", ".join(f"{n} {r}" + (f" ({s.dropped_where[r]})" if s.dropped_where.get(r) else "") for r, n in s.dropped.items() if n)
     why = [n[len("waiting: "):] for n in s.notes if n.startswith("waiting: ")] or [n for n in s.notes if "too few" in n]
     return (f"{source}: the session ended ({s.stopped or 'stopped'}) before a model could be learned: {s.received} signal "
             f"rows received, {s.matched} matched, {s.learned} learned" + (f" (dropped: {drops})" if drops else "")

@@ -28,6 +28,8 @@ class LiveStatus:
         Signal rows received, matched and waiting for their poses.
     dropped : dict of str to int
         Dropped rows by ``sync``'s reasons.
+    dropped_where : dict of str to str
+        Where some of them were, by reason, as said (``repeated_header``: ``pose.csv lines 604, 1210``).
     learned, refits : int
     model : str
         Label of the current model ('' before the first refit).
@@ -62,6 +64,7 @@ class LiveStatus:
     matched: int = 0
     pending: int = 0
     dropped: dict[str, int] = field(default_factory=lambda: {r: 0 for r in DROP_REASONS})
+    dropped_where: dict[str, str] = field(default_factory=dict)
     learned: int = 0
     refits: int = 0
     model: str = ""
@@ -85,7 +88,7 @@ class LiveStatus:
         """Plain text of the numbers (printed at the end of a session)."""
         lines = [f"{self.elapsed_s:.0f} s: {self.received} signal rows, {self.matched} matched, {self.learned} learned, "
                  f"{self.refits} refits (last {self.refit_ms:.0f} ms), model {self.model or '-'}"]
-        lines += [f"  dropped ({r}): {n}" for r, n in self.dropped.items() if n]
+        lines += [f"  dropped ({r}): {n}{dropped_where(self, r)}" for r, n in self.dropped.items() if n]
         lines.append(f"  prequential RMSE {prequential_text(self)}, noise {self.noise_db:.2f} dB")
         for node in self.spread_db:
             lines.append(f"  {node}: coverage {self.coverage_pct[node]:.1f}%, spread {spread_text(self.spread_db[node])} covered, "
@@ -98,6 +101,13 @@ class LiveStatus:
         if self.stopped:
             lines.append(f"  stopped: {self.stopped}")
         return "\n".join(lines)
+
+
+@check_types
+def dropped_where(status: LiveStatus, reason: str) -> str:
+    """`` (pose.csv lines 604, 1210)``: where some rows dropped for ``reason`` were ('' when not said)."""
+    where = status.dropped_where.get(reason)
+    return f" ({where})" if where else ""
 
 
 #: Bins of the prequential record kept at most (its running totals are exact; the bins give the
@@ -186,7 +196,7 @@ def page_rows(status: LiveStatus) -> tuple[list[tuple[str, str]], list[list[str]
             ("model", s.model or "-"), ("refits", f"{s.refits} (last {s.refit_ms:.0f} ms)"),
             ("prequential RMSE", prequential_text(s)),
             ("noise level", f"{s.noise_db:.2f} dB")]
-    rows += [(f"dropped ({r})", str(n)) for r, n in s.dropped.items() if n]
+    rows += [(f"dropped ({r})", f"{n}{dropped_where(s, r)}") for r, n in s.dropped.items() if n]
     rows += [("link budget", b) for b in s.budget] or [("link budget", "plausible")]
     if ranking_text(s):
         rows.append(("manoeuvre ranking", ranking_text(s)))
@@ -201,4 +211,4 @@ def page_rows(status: LiveStatus) -> tuple[list[tuple[str, str]], list[list[str]
     return rows, nodes
 
 
-__all__ = ["PREQUENTIAL_BINS", "LiveStatus", "Prequential", "page_rows", "prequential_text", "ranking_text"]
+__all__ = ["PREQUENTIAL_BINS", "LiveStatus", "Prequential", "dropped_where", "page_rows", "prequential_text", "ranking_text"]

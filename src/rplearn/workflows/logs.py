@@ -24,7 +24,7 @@ from rplearn.data.sync import SyncOptions, SyncSummary, synchronise
 from rplearn.data.tables import MATCHED_COLUMNS, SIGNAL_COLUMNS
 from rplearn.errors import InputError, LogFormatError
 from rplearn.io import ReaderOptions, read_logs
-from rplearn.io._csv_headers import REPEATED_HEADER, REPEATED_HEADER_LINES, HeaderScan, csv_source, scan_csv_headers
+from rplearn.io._csv_headers import REPEATED_HEADER, REPEATED_HEADER_AT, HeaderScan, csv_source, repeated_header_text, scan_csv_headers
 from rplearn.io.files import check_output_kind, check_output_path, check_table_path, write_json, write_table, write_table_chunks
 from rplearn.io.inspect import file_damage
 from rplearn.io.resolve import check_outputs, distinct_inputs
@@ -40,8 +40,8 @@ def reader_notes(metadata: Mapping[str, Any]) -> list[str]:
     for f in metadata.get("files", []):
         source = f.get("source", "log")
         rows = "frame(s)" if f.get("kind") == "signal" else "pose row(s)"  # a capture's drops are frames
-        notes += [f"{source}: dropped {n:,} {REPEATED_HEADER_LINES if why == REPEATED_HEADER else rows} ({why})"
-                  for why, n in (f.get("dropped") or {}).items() if n]
+        notes += [f"{source}: dropped " + (repeated_header_text(n, f.get(REPEATED_HEADER_AT, ())) if why == REPEATED_HEADER
+                                           else f"{n:,} {rows} ({why})") for why, n in (f.get("dropped") or {}).items() if n]
         if f.get("level_assumed"):
             notes.append(f"{source}: yaw only, so level flight (roll = pitch = 0) is assumed")
         notes += file_damage(source, f)
@@ -245,7 +245,7 @@ def _signal_chunks(signal_paths: Sequence[str], options: ReaderOptions, files: l
             allow_unsorted=options.allow_unsorted, header_scan=scans.get(str(path)),
         ):
             if first_row == 0:
-                files.append({"source": str(path), "kind": "signal",
+                files.append({"source": str(path), "kind": "signal", REPEATED_HEADER_AT: list(chunk.attrs.get(REPEATED_HEADER_AT, ())),
                               "dropped": {REPEATED_HEADER: int(chunk.attrs.get(REPEATED_HEADER, 0))}})
             out = conform_chunk(chunk, extras)
             out.attrs.update(source=str(path), first_row=first_row)  # messages name the file and its row
