@@ -70,10 +70,10 @@ def test_in_process_scripts_measure_nothing_of_the_process():
     assert PROCESS_BOUND.search((ROOT / "benchmarks" / "live.py").read_text(encoding="utf-8"))  # the check can fail
 
 
-def _run_in_process(script: Path, cwd: Path, monkeypatch, capsys) -> tuple[int, str, str]:
-    """``python SCRIPT --tiny`` in this process: its exit code, stdout and stderr."""
+def _run_in_process(script: Path, cwd: Path, monkeypatch, capsys, args: tuple[str, ...] = ("--tiny",)) -> tuple[int, str, str]:
+    """``python SCRIPT ARGS`` (``--tiny``) in this process: its exit code, stdout and stderr."""
     monkeypatch.chdir(cwd)
-    monkeypatch.setattr(sys, "argv", [str(script), "--tiny"])
+    monkeypatch.setattr(sys, "argv", [str(script), *args])
     monkeypatch.syspath_prepend(str(script.parent))
     capsys.readouterr()
     try:
@@ -122,20 +122,26 @@ def test_benchmark_runs_tiny_and_prints_its_ratios(script, tmp_path, monkeypatch
         )
 
 
+def _manoeuvres(tmp_path: Path, monkeypatch, capsys, *args: str) -> subprocess.CompletedProcess:
+    """``python benchmarks/manoeuvres.py --tiny ARGS`` run in this process (its run as a process of
+    its own, ``--tiny`` alone: test_benchmark_runs_tiny_and_prints_its_ratios[manoeuvres.py]), with
+    the one BLAS thread it sets for its own process (``RPLEARN_THREADS``) undone after it."""
+    if "RPLEARN_THREADS" not in os.environ:  # the script's os.environ.setdefault, undone by monkeypatch
+        monkeypatch.setenv("RPLEARN_THREADS", "1")
+    script = ROOT / "benchmarks" / "manoeuvres.py"
+    return subprocess.CompletedProcess(script.name, *_run_in_process(script, tmp_path, monkeypatch, capsys, ("--tiny", *args)))
+
+
 @pytest.mark.slow
-def test_manoeuvres_plans_with_an_earlier_flights_or_the_clis_hyper_parameters(tmp_path):
+def test_manoeuvres_plans_with_an_earlier_flights_or_the_clis_hyper_parameters(tmp_path, monkeypatch, capsys):
     """``manoeuvres.py --hyper previous``: the planners learn their noise, prior and drift from an
     earlier flight's model file through ``trajectory --optimize --from-model``'s code
     (``options_from_model``), while the spreads are still read under the reference's; ``--hyper
     cli`` gives them ``trajectory --optimize``'s defaults (the optimized plan alone flown)."""
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT / "src"), os.environ.get("PYTHONPATH", "")])}
-    script = ROOT / "benchmarks" / "manoeuvres.py"
     for hyper, said, planners in (("previous", r"from the earlier flight's model \(seed 7919, through options_from_model\): "
                                                r"noise \d+\.\d+ dB, penalty weight \S+, drift \d+\.\d+ dB", "both"),
                                   ("cli", r"the CLI's defaults \(--noise 4\.20 dB", "optimized")):
-        proc = subprocess.run([sys.executable, str(script), "--tiny", "--hyper", hyper, "--planners", planners,
-                               "--bound", "no"],
-                              capture_output=True, text=True, cwd=tmp_path, timeout=600, env=env)
+        proc = _manoeuvres(tmp_path, monkeypatch, capsys, "--hyper", hyper, "--planners", planners, "--bound", "no")
         assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
         assert re.search(said, proc.stdout) and re.search(r"optimized: time \[(ok|MISS)\]", proc.stdout), proc.stdout[-3000:]
         assert "from the reference flight" in proc.stdout  # the yardstick stays the reference's fit
@@ -143,13 +149,14 @@ def test_manoeuvres_plans_with_an_earlier_flights_or_the_clis_hyper_parameters(t
 
 
 @pytest.mark.slow
-def test_manoeuvres_ranks_as_live_from_model_does(tmp_path):
+def test_manoeuvres_ranks_as_live_from_model_does(tmp_path, monkeypatch, capsys):
     """``manoeuvres.py --ranker live --hyper previous``: the suggested flight is ranked as ``rplearn
     live --from-model`` ranks, the earlier flight's model file read by ``earlier_fit`` and used
-    while the session has learned fewer samples than that fit."""
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT / "src"), os.environ.get("PYTHONPATH", "")])}
-    proc = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "manoeuvres.py"), "--tiny", "--ranker", "live", "--hyper",
-                           "previous", "--bound", "no"], capture_output=True, text=True, cwd=tmp_path, timeout=600, env=env)
+    while the session has learned fewer samples than that fit. The suggested flight alone: the
+    optimized plan under ``--hyper previous`` does not depend on the ranker (the same plan, flown
+    figure for figure, as test_manoeuvres_plans_with_an_earlier_flights_or_the_clis_hyper_parameters')."""
+    proc = _manoeuvres(tmp_path, monkeypatch, capsys, "--ranker", "live", "--hyper", "previous", "--bound", "no",
+                       "--planners", "suggested")
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
     assert re.search(r"--ranker live --from-model: manoeuvres ranked with \S+previous\.json's noise \d+\.\d+ dB, smoothness "
                      r"penalty weight \S+ and drift \d+\.\d+ dB per 5-s block until the session has learned \d+ samples",

@@ -46,6 +46,25 @@ def clean_260s(ground_260s, tmp_path_factory):
     return whole
 
 
+@pytest.fixture(scope="module")
+def second_260s(ground_260s, tmp_path_factory):
+    """``ground_260s`` written once as the tlog of a second vehicle (system 2), for
+    :func:`_second_vehicle_twice` (read only)."""
+    second = tmp_path_factory.mktemp("second_260s") / "second.tlog"
+    write_tlog(ground_260s, second, vehicle="D", station="G", origin_geodetic=ORIGIN, system_id=2)
+    return second
+
+
+@pytest.fixture(scope="module")
+def late_fix_260s(ground_260s, tmp_path_factory):
+    """``ground_260s`` written once with its first 60 s of positions invalid (no origin, altitude
+    0.8 m): the log of the two review-37 station tests (read only)."""
+    whole = tmp_path_factory.mktemp("late_fix_260s") / "whole.tlog"
+    write_tlog(ground_260s, whole, vehicle="D", station="G", origin_geodetic=ORIGIN,
+               defects=TlogDefects(invalid_until_s=60.0))
+    return whole
+
+
 def _options(path) -> ReaderOptions:
     return ReaderOptions(tx_power_dbm=20.0, frequency_hz=2.412e9, nodes={str(path): "D"}, station="G")
 
@@ -267,11 +286,9 @@ def _records(data: bytes) -> list[tuple[int, bytes]]:
     return [(int.from_bytes(data[a:a + 8], "big"), data[a:b]) for a, b in zip(starts, ends, strict=True)]
 
 
-def _second_vehicle_twice(ground_260s, clean_260s, tmp_path, again_us: int):
-    """The clean log (system 1) with a second vehicle (system 2) heard from a third of the way
-    on, each of its messages (but 51) received again ``again_us`` microseconds later."""
-    second = tmp_path / "second.tlog"
-    write_tlog(ground_260s, second, vehicle="D", station="G", origin_geodetic=ORIGIN, system_id=2)
+def _second_vehicle_twice(second, clean_260s, tmp_path, again_us: int):
+    """The clean log (system 1) with a second vehicle (system 2, the tlog ``second``) heard from
+    a third of the way on, each of its messages (but 51) received again ``again_us`` microseconds later."""
     ones = _records(clean_260s.read_bytes())
     late = [r for r in _records(second.read_bytes()) if r[0] > ones[len(ones) // 3][0] and r[1][8 + 5] != 51]
     again = [(t + again_us, (t + again_us).to_bytes(8, "big") + r[8:]) for t, r in late]
@@ -280,14 +297,14 @@ def _second_vehicle_twice(ground_260s, clean_260s, tmp_path, again_us: int):
     return whole
 
 
-def test_a_second_vehicle_that_overtakes_the_first_withdraws_every_row_handed_out(ground_260s, clean_260s, tmp_path):
+def test_a_second_vehicle_that_overtakes_the_first_withdraws_every_row_handed_out(second_260s, clean_260s, tmp_path):
     """The offline reader reads the system sending most ATTITUDE over the whole log; when a
     second one, heard from a third of the way on and twice as often, overtakes the vehicle the
     tail chose, every row handed out, before the change and after, is counted withdrawn."""
     # twice as often: each message again 2 ms later (an exact copy, same receive time, is one
     # message in the file twice, and one within 1 ms one message received twice: the offline
     # reader reads both once)
-    whole, grown = _second_vehicle_twice(ground_260s, clean_260s, tmp_path, 2_000), tmp_path / "grown.tlog"
+    whole, grown = _second_vehicle_twice(second_260s, clean_260s, tmp_path, 2_000), tmp_path / "grown.tlog"
     _, meta = read_logs([str(whole)], ReaderOptions(tx_power_dbm=20.0, frequency_hz=2.412e9, station="G"))
     assert meta["files"][0]["system_id"] == 2
     poses, signals, tail, _ = _poll_in_pieces(whole, grown, LATE_PIECE_BYTES)
@@ -295,12 +312,12 @@ def test_a_second_vehicle_that_overtakes_the_first_withdraws_every_row_handed_ou
     assert tail.dropped["withdrawn_signal_rows"] == len(signals)
 
 
-def test_messages_received_twice_within_a_millisecond_are_read_once_as_offline(ground_260s, clean_260s, tmp_path):
+def test_messages_received_twice_within_a_millisecond_are_read_once_as_offline(second_260s, clean_260s, tmp_path):
     """Review 44: a second vehicle's messages each received twice, 1 us apart (a router, or two
     links forwarding each): offline and the tail read each once (``close_copies``), so both keep
     the first vehicle, which sends more distinct messages, and the tail withdraws nothing (it
     had counted the copies, switched to the second vehicle and withdrawn every row)."""
-    whole, grown = _second_vehicle_twice(ground_260s, clean_260s, tmp_path, 1), tmp_path / "grown.tlog"
+    whole, grown = _second_vehicle_twice(second_260s, clean_260s, tmp_path, 1), tmp_path / "grown.tlog"
     ref, meta = read_logs([str(whole)], ReaderOptions(tx_power_dbm=20.0, frequency_hz=2.412e9, station="G"))
     assert meta["files"][0]["system_id"] == 1 and meta["files"][0]["close_copies"] > 0
     poses, signals, tail, _ = _poll_in_pieces(whole, grown, LATE_PIECE_BYTES)
@@ -366,30 +383,24 @@ def _tail_withdraws_then_gives_syncs_rows(whole: Path, grown: Path) -> dict:
     return meta
 
 
-def test_a_home_position_after_the_station_was_taken_from_a_fix_moves_the_station(ground_260s, tmp_path):
+def test_a_home_position_after_the_station_was_taken_from_a_fix_moves_the_station(late_fix_260s, tmp_path):
     """Review 37: positions invalid (no origin, altitude 0.8 m) for the first 60 s, so no
     ``HOME_POSITION`` for longer than :data:`HOME_WAIT_S`: the tail takes its station from the
     first fix, then ``HOME_POSITION`` arrives, which ``sync`` takes as the station of the whole
     log. The rows handed out after it are ``sync``'s (same station, same positions), and every row
     handed out in the other frame before it is counted withdrawn: none silently ~90 m off."""
-    whole, grown = tmp_path / "whole.tlog", tmp_path / "grown.tlog"
-    write_tlog(ground_260s, whole, vehicle="D", station="G", origin_geodetic=ORIGIN,
-               defects=TlogDefects(invalid_until_s=60.0))
-    meta = _tail_withdraws_then_gives_syncs_rows(whole, grown)
+    meta = _tail_withdraws_then_gives_syncs_rows(late_fix_260s, tmp_path / "grown.tlog")
     assert {p["reason"] for p in meta["files"][0]["excluded_periods"]} == {"before_valid_position"}
 
 
-def test_a_station_taken_from_a_fix_found_invalid_later_moves_to_syncs_first_valid_fix(ground_260s, tmp_path):
+def test_a_station_taken_from_a_fix_found_invalid_later_moves_to_syncs_first_valid_fix(late_fix_260s, tmp_path):
     """Review 37: a log with no origin message at all (``HOME_POSITION``, ``GPS_GLOBAL_ORIGIN``
     removed) whose first 60 s of positions are invalid (altitude 0.8 m): the tail takes the
     first fix as its station after :data:`HOME_WAIT_S`; the step at 60 s makes ``sync`` exclude
     those fixes and take the first valid fix after them. The rows handed out after it are
     ``sync``'s, every row handed out before counted withdrawn."""
-    first = tmp_path / "first.tlog"
-    write_tlog(ground_260s, first, vehicle="D", station="G", origin_geodetic=ORIGIN,
-               defects=TlogDefects(invalid_until_s=60.0))
     whole, grown = tmp_path / "whole.tlog", tmp_path / "grown.tlog"
-    whole.write_bytes(b"".join(r for _, r in _records(first.read_bytes()) if int.from_bytes(r[8 + 7:8 + 10], "little") not in (242, 49)))
+    whole.write_bytes(b"".join(r for _, r in _records(late_fix_260s.read_bytes()) if int.from_bytes(r[8 + 7:8 + 10], "little") not in (242, 49)))
     meta = _tail_withdraws_then_gives_syncs_rows(whole, grown)
     assert "first position fix" in meta["files"][0]["station_note"]
 
