@@ -37,15 +37,33 @@ def test_a_station_held_still_is_fixed_and_the_drone_is_not():
     assert fixed_nodes(_station_and_drone()) == ("G",)
 
 
-def test_a_parked_drone_whose_position_wanders_is_not_fixed():
-    # a drone on the ground logs its GPS fix's wander (centimetres to metres), not identical rows
-    assert fixed_nodes(_station_and_drone(jitter_m=0.05)) == ()
+def test_a_station_whose_logged_pose_wanders_still_holds_still():
+    # a station logged with its own GPS and attitude estimate wanders by a metre or two
+    assert fixed_nodes(_station_and_drone(jitter_m=1.0)) == ("G",)
+
+
+def test_a_drone_turning_in_place_does_not_hold_still():
+    rows = _station_and_drone()
+    drone = (rows["tx"] == "D").to_numpy()
+    yaw = np.linspace(0.0, 2.0 * np.pi, int(drone.sum()))
+    for end, mine in (("tx", drone), ("rx", ~drone)):
+        rows.loc[mine, [f"{end}_x", f"{end}_y", f"{end}_z"]] = 0.0
+        rows.loc[mine, f"{end}_qw"] = np.cos(yaw / 2.0)
+        rows.loc[mine, f"{end}_qz"] = np.sin(yaw / 2.0)
+    assert fixed_nodes(rows) == ("G",)
 
 
 def test_a_node_fixed_as_transmitter_but_elsewhere_as_receiver_is_not_fixed():
     rows = _station_and_drone()
-    rows.loc[rows["rx"] == "G", "rx_x"] += 3.0  # its rows as receiver put it 3 m away
+    rows.loc[rows["rx"] == "G", "rx_x"] += 30.0  # its rows as receiver put it 30 m away
     assert fixed_nodes(rows) == ()
+
+
+def test_a_glitch_in_a_few_rows_does_not_move_a_station():
+    rows = _station_and_drone(n=1000)
+    glitch = rows.index[(rows["tx"] == "G").to_numpy()][:3]
+    rows.loc[glitch, "tx_x"] += 500.0
+    assert fixed_nodes(rows) == ("G",)
 
 
 def test_nan_poses_are_not_a_node_held_still():
