@@ -40,12 +40,14 @@ def trajectory(
     optimize: bool = typer.Option(False, "--optimize", help="Choose and order manoeuvres of the library for the information "
                                                            "they gather (greedy by expected spread reduction per second) "
                                                            "instead of the paper's campaign."),
-    target_spread: float = typer.Option(2.0, "--target-spread", help="--optimize: stop at this per-node pattern spread [dB]."),
-    budget_s: float = typer.Option(900.0, "--budget-s", help="--optimize: flight-time budget [s]."),
+    target_spread: float | None = typer.Option(None, "--target-spread", help="--optimize: stop at this per-node pattern spread "
+                                                                            "[dB] (default 2)."),
+    budget_s: float | None = typer.Option(None, "--budget-s", help="--optimize: flight-time budget [s] (default 900)."),
     noise_db: float | None = typer.Option(None, "--noise", help="--optimize: RSSI noise about the model [dB] (default 4.2; "
                                                                 "with --from-model the model's)."),
-    packet_rate_hz: float = typer.Option(80.0, "--packet-rate", help="--optimize: packets per second the radio reports in each "
-                                                                     "link direction [Hz] (fewer: each second teaches less)."),
+    packet_rate_hz: float | None = typer.Option(None, "--packet-rate", help="--optimize: packets per second the radio reports in "
+                                                                            "each link direction [Hz] (fewer: each second teaches "
+                                                                            "less; default 80, with --from-model the earlier flight's)."),
     prior_std: float | None = typer.Option(None, "--prior-std", help="--optimize: the prior's pattern spread over the sphere "
                                                                      "[dB] (default 6; with --from-model the model's smoothing)."),
     drift: float | None = typer.Option(None, "--drift", help="--optimize: an error drifting over seconds (a heading "
@@ -56,8 +58,10 @@ def trajectory(
                                                                       "prior; --noise, --prior-std, --drift override them."),
     prior_pattern: str | None = typer.Option(None, "--prior-pattern", help="--optimize: a reference pattern model file "
                                                                            "(rplearn reference) as the prior instead of smoothness."),
-    station: bool = typer.Option(False, "--station", help="--optimize: a static ground station G and one drone D "
-                                                         "(--distance horizontal from the station)."),
+    station: bool | None = typer.Option(None, "--station/--two-drones", help="--optimize: a static ground station G and one "
+                                                                            "drone D (--distance horizontal from the station), or "
+                                                                            "two drones A, B (default; with --from-model the "
+                                                                            "earlier flight's layout and node names)."),
 ) -> None:
     """Plan a calibration campaign and check it before flying.
 
@@ -74,8 +78,12 @@ def trajectory(
         _optimized(out_dir, check_model, (target_spread, budget_s, noise_db, prior_std, drift, packet_rate_hz),
                    (prior_pattern, from_model), station, (distance_m, height_m, speed_m_s), rate_hz)
         return
-    if from_model is not None:
-        raise InputError("--from-model: it gives the prior of --optimize's plan; add --optimize")
+    given = [flag for flag, value in (("--from-model", from_model), ("--target-spread", target_spread), ("--budget-s", budget_s),
+                                      ("--noise", noise_db), ("--packet-rate", packet_rate_hz), ("--prior-std", prior_std),
+                                      ("--drift", drift), ("--prior-pattern", prior_pattern),
+                                      ("--station" if station else "--two-drones", station)) if value is not None]
+    if given:  # they were ignored without a word: the paper's campaign has no prior, noise or station
+        raise InputError(f"{given[0]}: it is an option of --optimize's plan, not of the paper's campaign; add --optimize")
     from rplearn.plan.trajectory import PlanLimits
     from rplearn.workflows.planning import PAPER_LEARNING_PSI0_DEG, PAPER_TESTING_PSI0_DEG, CampaignOptions, plan_campaign
 
@@ -100,12 +108,15 @@ def trajectory(
         say("plan check (learning units):\n" + plan.check.summary())
 
 
-def _optimized(out_dir: str, model: str | None, figures: tuple[float, float, float | None, float | None, float | None, float],
-               priors: tuple[str | None, str | None], station: bool, geometry: tuple[float, float, float], rate_hz: float) -> None:
+def _optimized(out_dir: str, model: str | None, figures: tuple[float | None, ...],
+               priors: tuple[str | None, str | None], station: bool | None, geometry: tuple[float, float, float], rate_hz: float) -> None:
     """``trajectory --optimize``: the greedy plan, its expected spread over time, the references."""
     from rplearn.workflows.calibration_plan import OptimizeOptions, optimize_plan
 
-    target, budget, noise, prior_std, drift, packet_rate = figures
+    target_given, budget_given, noise, prior_std, drift, packet_rate = figures
+    defaults = OptimizeOptions()
+    target = defaults.target_spread_db if target_given is None else target_given
+    budget = defaults.budget_s if budget_given is None else budget_given
     options = OptimizeOptions(target_spread_db=target, budget_s=budget, model=model or "sh-10", noise_std_db=noise,
                               packet_rate_hz=packet_rate, prior_std_db=prior_std, prior_pattern=priors[0], station=station,
                               distance_m=geometry[0], height_m=geometry[1], speed_m_s=geometry[2], drift_std_db=drift,

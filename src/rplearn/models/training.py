@@ -23,7 +23,7 @@ from typing import Any
 from rplearn._argtypes import check_types
 from rplearn.errors import InputError, ModelFileError
 
-_TUPLES = ("gauges", "warnings")
+_TUPLES = ("gauges", "warnings", "fixed_nodes")
 
 
 @check_types
@@ -69,6 +69,14 @@ class TrainingSummary(Mapping[str, Any]):
         The block-offset spread of an error drifting over seconds, per 5-s block [dB]
         (:func:`rplearn.models.auto_spread.drift_std_db`): written by an automatic fit without
         priors of samples with times, in memory, streamed or on Dask alike.
+    fixed_nodes : tuple of str
+        The nodes that held still in every learning row (a ground station, a parked drone:
+        :func:`rplearn.data.flight_layout.fixed_nodes`), written by a fit of a dataset in memory:
+        the next flight's plan is made for the same layout.
+    packet_rate_hz : float
+        The rate a link direction reported at in the learning rows [Hz]
+        (:func:`rplearn.data.flight_layout.packet_rate_hz`): the next flight's plan counts the
+        radio's packets at it.
     prior_std_db : dict of node to float
         Each node's predictive spread where the flight never looked [dB].
     prior_std_source : str
@@ -116,6 +124,8 @@ class TrainingSummary(Mapping[str, Any]):
     misfit_std_db: float | None = None
     planning_penalty_weight: float | None = None
     drift_std_db: float | None = None
+    fixed_nodes: tuple[str, ...] | None = None
+    packet_rate_hz: float | None = None
     prior_std_db: Mapping[str, float] | None = None
     prior_std_source: str | None = None
     prior_level: str | None = None
@@ -198,7 +208,7 @@ class TrainingSummary(Mapping[str, Any]):
 
 #: Entries that predictions read as spreads [dB] (or a factor): when written, a finite number >= 0.
 _SPREADS = ("rmse_db", "noise_std_db", "flight_level_std_db", "new_flight_level_std_db", "misfit_std_db",
-            "variance_inflation", "drift_std_db", "planning_penalty_weight")
+            "variance_inflation", "drift_std_db", "planning_penalty_weight", "packet_rate_hz")
 
 
 def check_training_entries(training: Any, source: str) -> None:

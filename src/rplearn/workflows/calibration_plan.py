@@ -43,6 +43,7 @@ from rplearn.models.spec import ModelSpec
 from rplearn.plan.campaign import Campaign, write_references
 from rplearn.plan.manoeuvres import CandidateOptions
 from rplearn.plan.references import read_plan
+from rplearn.workflows.plan_layout import PlanLayout, plan_layout
 from rplearn.workflows.planning import MIN_REFERENCE_RATE_HZ, REFERENCE_ROW_BYTES, REFERENCE_ROW_DISK, REFERENCE_ROW_S
 
 #: The RSSI noise about the model a plan assumes without a fit or ``--noise`` [dB].
@@ -85,14 +86,17 @@ class OptimizeOptions:
     prior_pattern : str or None
         A reference pattern model file (``rplearn reference``): the prior is a ridge on the
         deviation from it instead of a smoothness prior.
-    station : bool
-        One static ground station ``G`` and one drone ``D`` instead of two drones ``A``, ``B``.
+    station : bool or None
+        One static ground station ``G`` and one drone ``D`` (True) instead of two drones ``A``,
+        ``B`` (False); None: ``from_model``'s layout, its nodes' names and its station when one
+        node held still in every learning row (:mod:`rplearn.workflows.plan_layout`), else two drones.
     distance_m, height_m : float
         Starting distance between the nodes (horizontal from a station) and drone height [m].
     speed_m_s : float
         The drones' cruise speed [m/s].
-    packet_rate_hz : float
-        Packets per second in each link direction.
+    packet_rate_hz : float or None
+        Packets per second in each link direction; None: ``from_model``'s radio's
+        (``training.packet_rate_hz``), else :data:`~rplearn.workflows.plan_layout.DEFAULT_PACKET_RATE_HZ`.
     target_el_deg : (float, float)
         Band of body-frame elevations the spread is taken over [deg].
     drift_std_db : float or None
@@ -112,11 +116,11 @@ class OptimizeOptions:
     noise_std_db: float | None = None
     prior_std_db: float | None = None
     prior_pattern: str | None = None
-    station: bool = False
+    station: bool | None = None
     distance_m: float = 10.0
     height_m: float = 20.0
     speed_m_s: float = 1.5
-    packet_rate_hz: float = 80.0
+    packet_rate_hz: float | None = None
     target_el_deg: tuple[float, float] = (-90.0, 90.0)
     drift_std_db: float | None = None
     from_model: str | None = None
@@ -187,11 +191,16 @@ class OptimizedPlan:
         return "\n".join(lines)
 
 
-def _start(opts: OptimizeOptions) -> tuple[tuple[str, str], dict[str, tuple[tuple[float, float, float], float]], tuple[str, ...]]:
-    d, h = float(opts.distance_m), float(opts.height_m)
-    if opts.station:
-        return ("D", "G"), {"G": ((0.0, 0.0, 1.5), 0.0), "D": ((d, 0.0, h), 180.0)}, ("G",)
-    return ("A", "B"), {"A": ((-d / 2.0, 0.0, h), 0.0), "B": ((d / 2.0, 0.0, h), 0.0)}, ()
+def _layout(opts: OptimizeOptions, earlier: PatternSet | None) -> PlanLayout:
+    """The plan's nodes, start poses, station and packet rate: the flags', else the earlier
+    flight's (:func:`~rplearn.workflows.plan_layout.plan_layout`), its packet rate checked as the flag's."""
+    layout = plan_layout(opts.station, opts.packet_rate_hz, float(opts.distance_m), float(opts.height_m),
+                         None if earlier is None else earlier.training, () if earlier is None else tuple(map(str, earlier.nodes)))
+    if opts.packet_rate_hz is None and earlier is not None and not 0.0 < layout.packet_rate_hz <= MAX_PACKET_RATE_HZ:
+        raise InputError(f"from_model: {opts.from_model}: training.packet_rate_hz is {layout.packet_rate_hz:g}, not the packets a "
+                         f"radio reports per second: expected more than 0 and at most {MAX_PACKET_RATE_HZ:g} Hz; give --packet-rate",
+                         param="from_model")
+    return layout
 
 
 @check_types
@@ -219,7 +228,9 @@ def optimize_plan(out_dir: str, options: OptimizeOptions | None = None, rate_hz:
     spec = ModelSpec.parse(opts.model)
     if not spec.decouples:
         raise InputError(f"model: {spec.label} has no per-node pattern to plan for; use sh, bg or poly", param="model")
-    nodes, poses, fixed = _start(opts)
+    earlier = None if opts.from_model is None else _planning_model(opts.from_model)
+    layout = _layout(opts, earlier)
+    nodes, poses, fixed = layout.nodes, layout.poses, layout.fixed
     shape = "smoothness"
     if opts.prior_pattern is not None:
         # its shape sets the prior's mean, which does not change the spread: read to refuse a bad file early
@@ -227,14 +238,12 @@ def optimize_plan(out_dir: str, options: OptimizeOptions | None = None, rate_hz:
         shape = "reference"
     noise = DEFAULT_NOISE_STD_DB if opts.noise_std_db is None else float(opts.noise_std_db)
     prior_std = NOMINAL_PRIOR_STD_DB if opts.prior_std_db is None else float(opts.prior_std_db)
-    mopts = ManoeuvreOptions(noise_std_db=noise, packet_rate_hz=opts.packet_rate_hz, target_el_deg=opts.target_el_deg,
+    mopts = ManoeuvreOptions(noise_std_db=noise, packet_rate_hz=layout.packet_rate_hz, target_el_deg=opts.target_el_deg,
                              candidates=CandidateOptions(fixed_nodes=fixed, speed_m_s=opts.speed_m_s),
                              correlated_std_db=float(opts.drift_std_db or 0.0))
-    earlier = None
-    if opts.from_model is not None:
+    if earlier is not None and opts.from_model is not None:
         # a reference pattern's prior replaces the model's smoothness prior: stated, or the nominal spread
         stated = prior_std if shape == "reference" else opts.prior_std_db
-        earlier = _planning_model(opts.from_model)
         mopts = _options_of(earlier, opts.from_model, mopts, spec, (opts.noise_std_db, stated, opts.drift_std_db), True)
     else:
         mopts = replace(mopts, penalty_weight=prior_penalty_weight(spec.basis(), prior_std, noise, spec.ridge_weight))
@@ -251,6 +260,8 @@ def optimize_plan(out_dir: str, options: OptimizeOptions | None = None, rate_hz:
     notes = _capped_note(opts, spec, mopts, start_spread)
     steps = greedy_plan(empty, spec, nodes, poses, opts.budget_s, opts.target_spread_db, mopts)
     prior = None if earlier is None else _prior_text(mopts, opts, shape, (tuple(map(str, earlier.nodes)), nodes))
+    if prior is not None and layout.text:
+        prior = f"{prior}; planned for {layout.text}"
     if not steps:
         return OptimizedPlan(steps, start_spread, None, [], prior, notes)
     units = tuple(replace(s.manoeuvre.candidate.unit, label=f"{k + 1:02d}_{s.manoeuvre.candidate.unit.label}")

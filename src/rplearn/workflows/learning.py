@@ -285,9 +285,13 @@ def _band_counts(index: Any) -> dict[float, int]:
 
 def _record_scale(model: Any, rows: Any) -> None:
     """Record ``training["rssi_scale"] = "relative"`` when the learning rows are relative RSSI
-    (``sync --rssi-scale relative``): nothing downstream then prints their levels as dBm."""
+    (``sync --rssi-scale relative``): nothing downstream then prints their levels as dBm; and the
+    flight's layout, the nodes that held still and the radio's packet rate
+    (:mod:`rplearn.data.flight_layout`), which the next flight's plan is made for."""
+    from rplearn.data.flight_layout import fixed_nodes, packet_rate_hz
     if "rssi_scale" in rows.columns and bool((rows["rssi_scale"].astype(str).str.lower() == "relative").any()):
         model.training = model.training.replace(rssi_scale="relative")
+    model.training = model.training.replace(fixed_nodes=fixed_nodes(rows), packet_rate_hz=packet_rate_hz(rows))
 
 
 def _is_big(dataset: str) -> bool:

@@ -1,0 +1,93 @@
+"""The flight's layout a matched dataset shows: the nodes that held still and the radio's packet
+rate (``training.fixed_nodes``, ``training.packet_rate_hz``), which the next flight's plan is made for."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from rplearn.data.flight_layout import fixed_nodes, packet_rate_hz
+
+POSE = ("x", "y", "z", "qw", "qx", "qy", "qz")
+
+
+def _rows(t: np.ndarray, tx: list[str], rx: list[str], poses: dict[str, np.ndarray]) -> pd.DataFrame:
+    """Matched rows at times ``t``, each end at its node's pose of that row."""
+    out = {"t": t, "tx": tx, "rx": rx, "rssi_dbm": np.full(t.size, -60.0)}
+    for end, names in (("tx", tx), ("rx", rx)):
+        block = np.stack([poses[n][i] for i, n in enumerate(names)])
+        for j, c in enumerate(POSE):
+            out[f"{end}_{c}"] = block[:, j]
+    return pd.DataFrame(out)
+
+
+def _station_and_drone(n: int = 200, rate_hz: float = 10.0, jitter_m: float = 0.0, seed: int = 0) -> pd.DataFrame:
+    rng = np.random.default_rng(seed)
+    t = np.repeat(np.arange(n // 2) / rate_hz, 2)
+    station = np.tile([5.0, -2.0, 1.5, 1.0, 0.0, 0.0, 0.0], (n, 1))
+    station[:, :3] += rng.normal(0.0, jitter_m, (n, 3)) if jitter_m else 0.0
+    drone = np.column_stack([rng.uniform(-50, 50, (n, 3)), np.ones(n), np.zeros((n, 3))])
+    tx = ["D", "G"] * (n // 2)
+    rx = ["G", "D"] * (n // 2)
+    return _rows(t, tx, rx, {"G": station, "D": drone})
+
+
+def test_a_station_held_still_is_fixed_and_the_drone_is_not():
+    assert fixed_nodes(_station_and_drone()) == ("G",)
+
+
+def test_a_station_whose_logged_pose_wanders_still_holds_still():
+    # a station logged with its own GPS and attitude estimate wanders by a metre or two
+    assert fixed_nodes(_station_and_drone(jitter_m=1.0)) == ("G",)
+
+
+def test_a_drone_turning_in_place_does_not_hold_still():
+    rows = _station_and_drone()
+    drone = (rows["tx"] == "D").to_numpy()
+    yaw = np.linspace(0.0, 2.0 * np.pi, int(drone.sum()))
+    for end, mine in (("tx", drone), ("rx", ~drone)):
+        rows.loc[mine, [f"{end}_x", f"{end}_y", f"{end}_z"]] = 0.0
+        rows.loc[mine, f"{end}_qw"] = np.cos(yaw / 2.0)
+        rows.loc[mine, f"{end}_qz"] = np.sin(yaw / 2.0)
+    assert fixed_nodes(rows) == ("G",)
+
+
+def test_a_node_fixed_as_transmitter_but_elsewhere_as_receiver_is_not_fixed():
+    rows = _station_and_drone()
+    rows.loc[rows["rx"] == "G", "rx_x"] += 30.0  # its rows as receiver put it 30 m away
+    assert fixed_nodes(rows) == ()
+
+
+def test_a_glitch_in_a_few_rows_does_not_move_a_station():
+    rows = _station_and_drone(n=1000)
+    glitch = rows.index[(rows["tx"] == "G").to_numpy()][:3]
+    rows.loc[glitch, "tx_x"] += 500.0
+    assert fixed_nodes(rows) == ("G",)
+
+
+def test_nan_poses_are_not_a_node_held_still():
+    rows = _station_and_drone()
+    rows.loc[5, "tx_x" if rows.loc[5, "tx"] == "G" else "rx_x"] = np.nan
+    assert fixed_nodes(rows) == ()
+
+
+def test_rows_without_poses_say_nothing():
+    rows = _station_and_drone().drop(columns=["rx_qz"])
+    assert fixed_nodes(rows) is None and fixed_nodes(rows.iloc[:0]) is None
+
+
+@pytest.mark.parametrize("rate_hz", [1.0, 4.0, 80.0])
+def test_the_packet_rate_is_each_directions_reporting_rate_despite_gaps(rate_hz):
+    rows = _station_and_drone(n=400, rate_hz=rate_hz)
+    # a gap of 60 s (an outage, a battery swap between flights) and a dropped stretch
+    later = rows["t"] > rows["t"].median()
+    rows.loc[later, "t"] += 60.0
+    rows = rows.drop(index=rows.index[50:70])
+    assert packet_rate_hz(rows) == pytest.approx(rate_hz, rel=1e-9)
+
+
+def test_repeated_times_and_too_few_rows_give_no_rate():
+    rows = _station_and_drone(n=4)
+    rows["t"] = 1.0
+    assert packet_rate_hz(rows) is None and packet_rate_hz(rows.iloc[:1]) is None
