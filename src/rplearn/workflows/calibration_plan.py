@@ -342,7 +342,7 @@ def options_from_model(model: str, options: ManoeuvreOptions, spec: ModelSpec, *
         if training.drift_std_db is None:
             raise InputError(f"from_model: {model} has no training.drift_std_db (written by rplearn fit --order auto of a "
                              f"dataset whose rows have times over at least {MIN_BLOCKS} blocks of {DEFAULT_BLOCK_S:g} s, by this "
-                             f"version also when streamed); {refit}{or_give('--drift')}",
+                             f"version also when streamed and by an automatic rplearn live session); {refit}{or_give('--drift')}",
                              param="from_model")
         _in_range(model, "drift_std_db", training.drift_std_db, (0.0, SPREAD_RANGE_DB[1]), flag("--drift"))
         drift_std_db = float(training.drift_std_db)
