@@ -21,6 +21,15 @@ durations the process's resident memory (RSS), the Python allocator's blocks in 
 lengths of the session's bounded records (prequential bins, duplicate-row hashes, segments)
 are printed, with the slope of RSS from 10 minutes on in MiB per hour.
 
+The drifting error (``training.drift_std_db``, which an automatic refit states from the
+session's time-block sums, :class:`rplearn.models.live_drift.DriftBlocks`): the same flight
+learned by an automatic session (``--order auto``), each batch added to two statistics, one
+keeping the drift's block sums and one not, alternately; every 10th batch of the last fifth the
+automatic refit timed with the sums and without them (the same statistics), alternately. Printed:
+the medians and their ratios, and the sums' blocks kept open and folded. Then the memory run
+again as an automatic session (a refit every ``--auto-refit-s``, default 60 s: an automatic
+refit costs about a second), with the drift's blocks open and folded at each mark.
+
 Run: ``.venv/bin/python benchmarks/live.py`` (``--tiny``: 1 minute at 10 Hz for both, SH-6, the
 target not enforced; the memory run still refits 6 times and reads 6 marks).
 """
@@ -173,11 +182,64 @@ def _snapshot(live: LiveStatistics, fitted, latest: pd.DataFrame):
     return total, fitted, latest
 
 
-def memory(minutes: float, rate_hz: float, order: int, marks: list[float]) -> list[tuple[float, float, int, float, str]]:
+@dataclass
+class DriftCosts:
+    """Wall times [ms] of an automatic session's batches added and refits, with the drift's block
+    sums and without them, and the sums' blocks at the end."""
+
+    add_with: list[float] = field(default_factory=list)
+    add_without: list[float] = field(default_factory=list)
+    refit_with: list[float] = field(default_factory=list)
+    refit_without: list[float] = field(default_factory=list)
+    blocks: str = "no drift blocks (the code before them)"
+
+
+def _drift_blocks(stats: LiveStatistics | None) -> str:
+    drift = getattr(stats, "drift", None)
+    if drift is None:
+        return "no drift blocks"
+    kept = drift.folded.cross.nbytes * 2 + sum(v.nbytes for links in drift.open.values() for v in links.values())
+    return f"drift blocks open {len(drift.open)}, folded {drift.folded.n_blocks}, {kept / 2**20:.2f} MiB"
+
+
+def drift_costs(minutes: float, rate_hz: float, every: int = 10) -> DriftCosts:
+    """An automatic session's batches and refits with and without the drift's sums (module docstring)."""
+    pose, signal = flight(minutes, rate_hz)
+    matched = synchronise(pose, signal).dataset
+    spec = ModelSpec.parse("sh")
+    keeping, plain = (LiveStatistics(spec, ["D", "G"], FitOptions(auto=True), keep_blocks=False) for _ in range(2))
+    plain.drift = None  # the code before: no block sums for the drift
+    out = DriftCosts()
+    t = matched["t"].to_numpy(np.float64)
+    timed_from = 0.8 * minutes * 60.0
+    with blas_threads_for(len(matched), 2 * 16**2):
+        for i, start_s in enumerate(np.arange(0.0, minutes * 60.0, 1.0)):
+            rows = matched[(t >= start_s) & (t < start_s + 1.0)]
+            if not len(rows):
+                continue
+            for st in ((keeping, plain) if i % 2 else (plain, keeping)):
+                t0 = time.perf_counter()
+                st.add(rows, st.samples(rows))
+                (out.add_with if st is keeping else out.add_without).append(1e3 * (time.perf_counter() - t0))
+            if start_s < timed_from or i % every:
+                continue
+            kept = getattr(keeping, "drift", None)
+            for with_drift in ((True, False) if (i // every) % 2 else (False, True)):
+                keeping.drift = kept if with_drift else None
+                t0 = time.perf_counter()
+                keeping.refit()
+                (out.refit_with if with_drift else out.refit_without).append(1e3 * (time.perf_counter() - t0))
+            keeping.drift = kept
+    out.blocks = _drift_blocks(keeping)
+    return out
+
+
+def memory(minutes: float, rate_hz: float, order: int, marks: list[float], auto_refit_s: float | None = None,
+           ) -> list[tuple[float, float, int, float, str]]:
     """(minutes, RSS [MiB], Python allocator blocks, malloc in use [MiB], the session's bounded
-    records) at each mark."""
+    records) at each mark; ``auto_refit_s``: an automatic session refitted that often."""
     pose, signal = flight(minutes, rate_hz, seed=2)
-    spec = ModelSpec.parse("sh", order=order)
+    spec = ModelSpec.parse("sh", order=order) if auto_refit_s is None else ModelSpec.parse("sh")
     out: list[tuple[float, float, int, float, str]] = []
     left = sorted(marks)
     sessions = []
@@ -192,7 +254,7 @@ def memory(minutes: float, rate_hz: float, order: int, marks: list[float]) -> li
             gc.collect()
             s = sessions[0]
             kept = (f"prequential bins {s.preq.bins}, row hashes {len(s.matcher._seen)}, "
-                    f"segments {len(s.stats.segments) if s.stats else 0}")
+                    f"segments {len(s.stats.segments) if s.stats else 0}, {_drift_blocks(s.stats)}")
             text, used = malloc_mib()
             out.append((left.pop(0), rss_mib(), sys.getallocatedblocks(), used, f"{kept}; {text}"))
 
@@ -202,7 +264,8 @@ def memory(minutes: float, rate_hz: float, order: int, marks: list[float]) -> li
     live_module._Session.__init__ = init
     try:
         with tempfile.TemporaryDirectory() as d:
-            options = LiveOptions(spec=spec, fit=FitOptions(), refit_s=10.0, manoeuvres=hook)
+            fit = FitOptions() if auto_refit_s is None else FitOptions(auto=True)
+            options = LiveOptions(spec=spec, fit=fit, refit_s=10.0 if auto_refit_s is None else auto_refit_s, manoeuvres=hook)
             replay_session(pose, signal, os.path.join(d, "m.json"), options, batch_s=1.0, on_update=on_update)
     finally:
         live_module._Session.__init__ = original
@@ -225,6 +288,8 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--tiny", action="store_true", help="1 minute at 10 Hz for both runs, SH-6 (seconds)")
     parser.add_argument("--minutes", type=float, default=None, help="Length of the memory run (default 60; tiny 1).")
+    parser.add_argument("--auto-refit-s", type=float, default=None,
+                        help="The automatic memory run's refit interval [s] (default 60; tiny 10).")
     args = parser.parse_args()
     minutes, long_minutes, rate, order = (1.0, 1.0, 10.0, 6) if args.tiny else (10.0, 60.0, 50.0, 10)
     long_minutes = args.minutes or long_minutes
@@ -239,15 +304,23 @@ def main() -> int:
           f"({', '.join(f'{r:.1f}' for r in costs.rankings)} s each)")
     print(f"reference (one dense Cholesky solve, {2 * (order + 1) ** 2} columns, timed alternately): median {ref:.2f} ms; "
           f"ratio refit / reference {statistics.median(costs.alone) / ref:.1f}x alone, {beside / ref:.1f}x beside a ranking")
+    drift = drift_costs(minutes, rate)
+    ratio = statistics.median(drift.refit_with) / statistics.median(drift.refit_without)
+    print(f"automatic session ({minutes:g} min at {rate:g} Hz): batch added with the drift's block sums "
+          f"median {statistics.median(drift.add_with):.1f} ms, without {statistics.median(drift.add_without):.1f} ms "
+          f"(ratio {statistics.median(drift.add_with) / statistics.median(drift.add_without):.3f}); refit with "
+          f"{_ms(drift.refit_with)}, without {_ms(drift.refit_without)}, ratio of the medians {ratio:.3f}; {drift.blocks}; {load()}")
     marks = [long_minutes * f for f in (1 / 12, 1 / 6, 1 / 3, 1 / 2, 3 / 4, 1)]
-    mem = memory(long_minutes, rate, order, marks)
-    for m, r, blocks, _, kept in mem:
-        print(f"memory at {m:g} min: RSS {r:.1f} MiB, Python blocks {blocks:,}; {kept}")
-    late = [row for row in mem if row[0] >= marks[1]]
-    rss, used = [(row[0], row[1]) for row in late], [(row[0], row[3]) for row in late]
-    print(f"memory over a long session, from {late[0][0]:g} to {late[-1][0]:g} min: RSS {rss[-1][1] - rss[0][1]:+.1f} MiB, "
-          f"slope {slope_mib_per_hour(rss):+.1f} MiB/hour; malloc in use slope {slope_mib_per_hour(used):+.2f} MiB/hour; "
-          f"Python blocks {late[-1][2] - late[0][2]:+,}; {load()}")
+    auto_refit_s = args.auto_refit_s or (10.0 if args.tiny else 60.0)
+    for label, every in (("fixed order", None), (f"automatic, refit every {auto_refit_s:g} s", auto_refit_s)):
+        mem = memory(long_minutes, rate, order, marks, every)
+        for m, r, blocks, _, kept in mem:
+            print(f"memory ({label}) at {m:g} min: RSS {r:.1f} MiB, Python blocks {blocks:,}; {kept}")
+        late = [row for row in mem if row[0] >= marks[1]]
+        rss, used = [(row[0], row[1]) for row in late], [(row[0], row[3]) for row in late]
+        print(f"memory ({label}) over a long session, from {late[0][0]:g} to {late[-1][0]:g} min: RSS "
+              f"{rss[-1][1] - rss[0][1]:+.1f} MiB, slope {slope_mib_per_hour(rss):+.1f} MiB/hour; malloc in use slope "
+              f"{slope_mib_per_hour(used):+.2f} MiB/hour; Python blocks {late[-1][2] - late[0][2]:+,}; {load()}")
     met = float(np.percentile(costs.alone, 95)) < TARGET_MS
     print(f"target (95th percentile under {TARGET_MS:g} ms): {'met' if met else 'MISSED'}")
     return 0 if met or args.tiny else 1

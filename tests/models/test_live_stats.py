@@ -6,9 +6,12 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from rplearn.core.lsq.block_sums import time_block_labels
 from rplearn.data.sync import synchronise
 from rplearn.data.tables import link_samples
+from rplearn.data.units import Stretches
 from rplearn.io.files import write_table
+from rplearn.models.live_drift import DriftBlocks
 from rplearn.models.live_stats import LiveStatistics
 from rplearn.models.options import FitOptions
 from rplearn.models.spec import ModelSpec
@@ -24,14 +27,32 @@ def matched() -> pd.DataFrame:
     return synchronise(r.pose_log, r.signal_log.drop(columns=["unit"])).dataset.sort_values("t", kind="stable")
 
 
-def _learn(matched: pd.DataFrame, spec: ModelSpec, options: FitOptions, spool: str | None, batch_s: float = 1.0):
+def _learn(matched: pd.DataFrame, spec: ModelSpec, options: FitOptions, spool: str | None, batch_s: float = 1.0,
+           max_open: int | None = None, swap: bool = False):
+    """The rows learned in batches of ``batch_s``; ``max_open``: the drift's blocks kept open at
+    most; ``swap``: each pair of neighbouring batches given in the other order (rows 1 s late)."""
     st = LiveStatistics(spec, ["A", "B"], options, spool_dir=spool, max_segments=5)
+    if max_open is not None:
+        st.drift = DriftBlocks(st.basis, 2, max_open)
     t = matched["t"].to_numpy()
-    for a in np.arange(t.min(), t.max() + batch_s, batch_s):
+    starts = list(np.arange(t.min(), t.max() + batch_s, batch_s))
+    if swap:
+        for i in range(0, len(starts) - 1, 2):
+            starts[i], starts[i + 1] = starts[i + 1], starts[i]
+    for a in starts:
         rows = matched[(t >= a) & (t < a + batch_s)]
         if len(rows):
             st.add(rows, st.samples(rows))
+            assert max_open is None or len(st.drift.open) <= max_open
     return st
+
+
+@pytest.fixture(scope="module")
+def offline(matched, tmp_path_factory):
+    """``fit --order auto`` of the matched rows, every stretch learned (what a live session fits)."""
+    path = str(tmp_path_factory.mktemp("offline") / "data.parquet")
+    write_table(matched, path)
+    return fit_dataset(path, ModelSpec.parse("sh"), ALL_STRETCHES, options=FitOptions(auto=True)).fitted.model
 
 
 def _max_difference_db(a, b, rows: pd.DataFrame) -> float:
@@ -50,6 +71,66 @@ def test_the_last_automatic_refit_is_fit_on_every_stretch(matched, tmp_path):
     assert _max_difference_db(live, offline, matched) < 1e-6
     # a refit during the flight cuts at segment boundaries: close, not the same folds
     assert st.refit(final=False).model.label.startswith("SH-")
+
+
+def test_the_last_automatic_refit_states_the_offline_drift_and_planning_weight(matched, offline, tmp_path):
+    """The live model file has what ``trajectory --optimize --from-model`` plans with: the drift
+    (it had none: a live session kept no time blocks for it) and the planning weight, those of
+    ``fit --order auto`` of the same rows, a block the stretches' cuts fall in counted per stretch."""
+    st = _learn(matched, ModelSpec.parse("sh"), FitOptions(auto=True), str(tmp_path))
+    stretches = Stretches.of_times(matched["t"].to_numpy())
+    t, cut = matched["t"].to_numpy(), time_block_labels(np.array(stretches.starts_s))
+    assert any(((time_block_labels(t) == b) & (stretches.index(t) != stretches.index(np.array([s])))).any()
+               for b, s in zip(cut, stretches.starts_s))  # a cut inside a block with rows on both sides
+    expected, got = offline.training, st.refit(final=True).model.training
+    assert expected.drift_std_db is not None and expected.drift_std_db > 0
+    assert got.drift_std_db == pytest.approx(expected.drift_std_db, rel=1e-9)
+    assert got.planning_penalty_weight == pytest.approx(expected.planning_penalty_weight, rel=1e-9)
+    # in flight the blocks are read whole (the cuts move as samples come): a drift all the same
+    assert st.refit().model.training.drift_std_db is not None
+
+
+def test_the_drift_blocks_stay_bounded_whatever_the_batches_order(matched, offline, tmp_path):
+    """Two blocks kept open at most (the rest folded into fixed-size sums) and the batches given
+    out of order: the same drift as the offline fit, no row late."""
+    st = _learn(matched, ModelSpec.parse("sh"), FitOptions(auto=True), str(tmp_path), max_open=2, swap=True)
+    assert st.drift.folded.n_blocks > 10 and st.drift.late_rows == 0
+    got = st.refit(final=True).model.training.drift_std_db
+    assert got == pytest.approx(offline.training.drift_std_db, rel=1e-9)
+    assert st.drift.folded.cross.shape == (2 * 100,) * 2  # SH-10's coefficients, whatever the length
+
+
+def test_a_row_for_a_block_already_folded_is_counted_late(matched):
+    """One block kept open: rows of block 0 after block 2 came are counted late (the offline fit
+    would add them to block 0's first rows)."""
+    st = LiveStatistics(ModelSpec.parse("sh"), ["A", "B"], FitOptions(auto=True))
+    st.drift = DriftBlocks(st.basis, 2, max_open=1)
+    label = time_block_labels(matched["t"].to_numpy())
+    first, third = matched[label == label.min()], matched[label == label.min() + 2]
+    for rows in (first, third, first):
+        st.add(rows, st.samples(rows))
+    # the late rows are a block of their own, folded at once (the oldest of two open): block 0 counted twice
+    assert st.drift.late_rows == len(first) and list(st.drift.open) == [label.min() + 2]
+    assert st.drift.folded.n_blocks == 2 and st.drift.folded.sum_n == 2 * len(first)
+
+
+def test_a_few_seconds_session_states_no_drift_as_the_offline_fit(matched, tmp_path):
+    """A session of 7 s (one link in 2 blocks, many block vectors once cut into stretches and
+    both directions): no drift, as ``fit --order auto`` of the same rows states none (the
+    offline fit stored 11.7 dB for such a flight before it counted distinct blocks per link)."""
+    t = matched["t"].to_numpy()
+    short = matched[t < t.min() + 7.0]
+    st = _learn(short, ModelSpec.parse("sh"), FitOptions(auto=True), str(tmp_path))
+    assert st.drift.link_block_count() < 4
+    assert st.refit(final=True).model.training.drift_std_db is None
+    write_table(short, str(tmp_path / "short.parquet"))
+    offline = fit_dataset(str(tmp_path / "short.parquet"), ModelSpec.parse("sh"), ALL_STRETCHES, options=FitOptions(auto=True))
+    assert offline.fitted.model.training.drift_std_db is None
+
+
+def test_a_fixed_order_session_states_no_drift(matched):
+    st = _learn(matched, ModelSpec.parse("sh", order=4), FitOptions(), None)
+    assert st.drift is None and st.refit().model.training.drift_std_db is None
 
 
 def test_a_fixed_order_refit_is_fit_of_every_sample(matched, tmp_path):

@@ -25,6 +25,7 @@ from rplearn.models.options import FitOptions
 from rplearn.models.spec import ModelSpec
 from rplearn.plan.campaign import Campaign
 from rplearn.sim import make_preset, simulate
+from rplearn.workflows.calibration_plan import OptimizeOptions, optimize_plan
 from rplearn.workflows.learning import fit_dataset
 from rplearn.workflows.live import LiveOptions, replay_session, run_live
 from rplearn.workflows.logs import sync_logs
@@ -49,6 +50,15 @@ def _max_difference_db(a, b, dataset: str) -> float:
     s = link_samples(rows, dataset, nodes=b.nodes)
     return float(max(np.abs(a.predict_gain(s) - b.predict_gain(s)).max(),
                      np.abs(a.predict_gain_std(s) - b.predict_gain_std(s)).max()))
+
+
+def _same_planning_fields(learned, offline) -> None:
+    """What ``trajectory --optimize --from-model`` plans with: the live model file states the
+    drift (it had none) and the planning weight of ``fit --order auto`` of the same log."""
+    got, expected = learned.training, offline.training
+    assert expected.drift_std_db is not None and expected.planning_penalty_weight is not None
+    assert got.drift_std_db == pytest.approx(expected.drift_std_db, rel=1e-9)
+    assert got.planning_penalty_weight == pytest.approx(expected.planning_penalty_weight, rel=1e-9)
 
 
 def _free_port() -> int:
@@ -92,6 +102,7 @@ def test_a_tlog_replayed_over_udp_at_20x_ends_with_the_offline_model(tmp_path):
     learned = load_model(model)
     assert learned.label == offline.label
     assert _max_difference_db(learned, offline, data) < 1e-6
+    _same_planning_fields(learned, offline)
 
 
 def _appender(pose: pd.DataFrame, sig: pd.DataFrame, folder: Path, speed: float,
@@ -152,6 +163,12 @@ def test_a_csv_being_appended_to_ends_with_the_offline_model(smoke, tmp_path):
     learned = load_model(str(tmp_path / "live.json"))
     assert learned.label == offline.label
     assert _max_difference_db(learned, offline, data) < 1e-6
+    _same_planning_fields(learned, offline)
+    # the next flight is planned from the live model file (refused before: "has no training.drift_std_db")
+    plan = optimize_plan(str(tmp_path / "plan"), OptimizeOptions(model="sh-5", target_spread_db=2.5, budget_s=120.0,
+                                                                 from_model=str(tmp_path / "live.json")))
+    assert plan.prior is not None and f"drift {learned.training.drift_std_db:.2f} dB per 5-s block" in plan.prior
+    assert plan.paths
     text = Path(page).read_text()
     assert "http-equiv='refresh'" in text and text.count("data:image/png;base64,") == 2
     assert "prequential RMSE" in text

@@ -9,7 +9,8 @@ never looked (the prior's spread, capped by what the data can show).
   units show beyond the posterior;
 - :func:`misfit_covariance`: that misfit as a covariance of the pattern coefficients;
 - :func:`drift_std_db`: the error drifting over seconds the fit's time blocks show (for the
-  next flight's plan, ``rplearn trajectory --optimize --from-model``).
+  next flight's plan, ``rplearn trajectory --optimize --from-model``); :func:`block_drift_std_db`
+  from block sums already added up (a live session's).
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from rplearn.core.lsq.block_sums import DEFAULT_BLOCK_S, MIN_BLOCKS, correlated_ratio, link_block_count, time_block_sums
+from rplearn.core.lsq.block_sums import DEFAULT_BLOCK_S, MIN_BLOCKS, BlockSums, correlated_ratio, link_block_count, time_block_sums
 from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.core.lsq.penalty import DEFAULT_PENALTY_POWER, nested_columns, penalty_vector, sub_statistics
 from rplearn.core.sh import SphericalHarmonics
@@ -79,12 +80,23 @@ def drift_std_db(units: Sequence[NormalEquations], total: NormalEquations, weigh
         The noise the spread is a multiple of (the fit's noise times the square root of its
         variance inflation: the noise a plan is made with).
     """
-    basis = planning_basis(total.basis)
     if link_block_count(units) < MIN_BLOCKS:
         return None
-    blocks = time_block_sums(units, DEFAULT_BLOCK_S, basis.n_coef)
-    if blocks is None:
+    blocks = time_block_sums(units, DEFAULT_BLOCK_S, planning_basis(total.basis).n_coef)
+    return block_drift_std_db(blocks, total, weight, ridge, power, noise_std_db)
+
+
+def block_drift_std_db(blocks: BlockSums | None, total: NormalEquations, weight: float, ridge: float, power: float,
+                       noise_std_db: float) -> float | None:
+    """:func:`drift_std_db` from block sums already added up over the units (each block of
+    each unit once, every block closed, at the coefficients of ``total``'s
+    :func:`planning_basis`): a live session's, kept as its batches came
+    (:class:`rplearn.models.live_drift.DriftBlocks`, whose caller checks that one link's samples
+    fall in :data:`~rplearn.core.lsq.block_sums.MIN_BLOCKS` distinct blocks). None without them
+    or with fewer than that many block vectors."""
+    if blocks is None or blocks.n_blocks < MIN_BLOCKS:
         return None
+    basis = planning_basis(total.basis)
     normal = sub_statistics(total, basis)
     prior = float(ridge) + penalty_vector(basis, total.n_nodes, float(weight), 1.0, float(power))
     return float(np.sqrt(correlated_ratio(normal, blocks, prior))) * float(noise_std_db)

@@ -26,6 +26,12 @@ blocks of ``DEFAULT_BLOCK_S``; memory flat), which :meth:`LiveStatistics.total` 
 statistics' ``blocks``: the next-best manoeuvre ranking reads from them an error that drifts over
 seconds (a heading estimate's). A batch spanning several blocks (a whole log matched at the end)
 is split into them.
+
+An automatic choice also keeps the sums per time block its drifting error is stated from
+(``training.drift_std_db``, as ``fit --order auto`` states it, for the next flight's plan:
+:class:`~rplearn.models.live_drift.DriftBlocks`, memory bounded, at SH-10): a refit during the
+flight reads every block whole; the last, exact refit counts a block that a stretch's cut falls
+in as the offline fit does, one block per stretch (its rows re-read from the spool).
 """
 
 from __future__ import annotations
@@ -42,15 +48,18 @@ import pandas as pd
 
 from rplearn._argtypes import check_types
 from rplearn._atomic import atomic_path
-from rplearn.core.lsq.block_sums import BlockSums
+from rplearn.core.lsq.block_sums import MIN_BLOCKS, BlockSums, time_block_labels
 from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.core.lsq.penalty import sub_statistics
+from rplearn.core.lsq.selection import at_smoothing_cap
 from rplearn.core.threads import blas_threads_for
 from rplearn.data.tables import OUTAGE_COLUMN, LinkSamples, link_samples
 from rplearn.data.units import TIME_UNITS, Stretches, stretch_labels
 from rplearn.errors import InputError
 from rplearn.models.auto import MAX_AUTO_ORDER, auto_orders, fit_from_statistics
+from rplearn.models.auto_spread import block_drift_std_db, planning_basis
 from rplearn.models.fit import FittedModel, node_coverage_grids
+from rplearn.models.live_drift import DriftBlocks, LinkSums, block_link_sums
 from rplearn.models.options import FitOptions
 from rplearn.models.patterns import PatternSet
 from rplearn.models.spec import ModelSpec, default_ridge
@@ -135,6 +144,8 @@ class LiveStatistics:
         self.non_unit = 0
         self.blocks: BlockSums | None = None  # made with the first batch
         self.keep_blocks = bool(keep_blocks)
+        #: the automatic choice's drifting error: its time blocks' sums (None for a fixed order)
+        self.drift = DriftBlocks(self.basis, len(self.nodes)) if self.auto else None
         self.learn_s = 0.0
         self._batches = 0
 
@@ -173,6 +184,8 @@ class LiveStatistics:
         normal.add(samples.directions, samples.tx_index, samples.rx_index, y, env)
         t_all = pd.to_numeric(matched["t"]).to_numpy(np.float64)
         self._add_blocks(normal, samples, _sample_times(matched, t_all), (y, env))
+        if self.drift is not None:
+            self.drift.add(_sample_times(matched, t_all), samples.tx_index, samples.rx_index, samples.directions, y)
         seg = Segment(normal, float(t_all.min()), float(t_all.max()), self._batches, 1, self.spool_dir)
         if self.spool_dir is not None:
             with atomic_path(_batch_path(self.spool_dir, self._batches)) as tmp:
@@ -226,7 +239,7 @@ class LiveStatistics:
         ``exact``: cut where ``fit`` cuts (re-reading the segments a cut falls inside)."""
         labels = stretch_labels(TIME_UNITS)
         if exact and self.spool_dir is not None:
-            return self._exact_folds(labels)
+            return self._exact_folds(labels, self._spooled_stretches())
         n = np.array([s.n_samples for s in self.segments], np.float64)
         middle = np.cumsum(n) - n / 2.0
         which = np.minimum((TIME_UNITS * middle / n.sum()).astype(int), TIME_UNITS - 1)
@@ -236,9 +249,13 @@ class LiveStatistics:
             acc.merge(seg.normal)
         return {lab: folds[lab] for lab in labels if lab in folds}
 
-    def _exact_folds(self, labels: list[str]) -> dict[str, NormalEquations]:
-        times = [pd.read_parquet(f, columns=["t"])["t"].to_numpy(np.float64) for s in self.segments for f in s.files]
-        stretches = Stretches.of_times(np.concatenate(times) if times else np.zeros(0))
+    def _spooled_stretches(self) -> tuple[Stretches, list[tuple[str, np.ndarray]]]:
+        """The stretches ``fit`` cuts the spooled rows into, and every spooled file with its rows' times."""
+        files = [(f, pd.read_parquet(f, columns=["t"])["t"].to_numpy(np.float64)) for s in self.segments for f in s.files]
+        return Stretches.of_times(np.concatenate([t for _, t in files]) if files else np.zeros(0)), files
+
+    def _exact_folds(self, labels: list[str], spooled: tuple[Stretches, list[tuple[str, np.ndarray]]]) -> dict[str, NormalEquations]:
+        stretches = spooled[0]
         folds: dict[str, NormalEquations] = {}
         env = self.segments[0].normal.environment
         for seg in self.segments:
@@ -275,7 +292,8 @@ class LiveStatistics:
             fit.patterns.provenance = {**dict(provenance or {}), "model": self.spec.label}
             return FittedModel(self.spec, fit.patterns, time.perf_counter() - t0)
         orders = auto_orders(self.spec.kind, self.n_samples, len(self.nodes), self.spec.order if self.spec.kind != "sh" else None)
-        folds = self.fold_statistics(final)
+        spooled = self._spooled_stretches() if final and self.spool_dir is not None else None
+        folds = self.fold_statistics(False) if spooled is None else self._exact_folds(stretch_labels(TIME_UNITS), spooled)
         top = ModelSpec(self.spec.kind, orders[-1], ridge=self.ridge)
         small = top.basis()
         folds = {k: sub_statistics(v, small) for k, v in folds.items()}
@@ -284,8 +302,65 @@ class LiveStatistics:
         model = fitted.model
         assert isinstance(model, PatternSet)  # fit_from_statistics learns patterns
         model.training = model.training.replace(coverage_deg=self.grids)
+        drift = self.drift_std_db(folds, model.training, spooled)
+        if drift is not None:
+            model.training = model.training.replace(drift_std_db=drift)
         fitted.ltd_s = time.perf_counter() - t0
         return fitted
+
+    def drift_std_db(self, folds: Mapping[str, NormalEquations], training: Any,
+                     spooled: tuple[Stretches, list[tuple[str, np.ndarray]]] | None = None) -> float | None:
+        """The drifting error ``fit --order auto`` states of these samples
+        (:func:`~rplearn.models.auto_spread.block_drift_std_db`), read with a refit's prior and noise
+        (its ``training``: ``planning_penalty_weight``, ``penalty_power``, ``noise_std_db`` times the
+        square root of ``variance_inflation``) from the session's block sums; ``spooled``: the last
+        refit's stretches and spooled files, the blocks their cuts fall in counted per stretch. None
+        for a fixed order, a fit with a prior (no planning weight), or fewer than 4 blocks."""
+        weight = getattr(training, "planning_penalty_weight", None)
+        if self.drift is None or weight is None or training.noise_std_db is None or not folds:
+            return None
+        # fit --order auto's rules: one link's samples in MIN_BLOCKS distinct blocks, and a
+        # smoothing short of the search's largest (there a flat pattern leaves every shape to the
+        # block offsets, so no drift can be read)
+        if self.drift.link_block_count() < MIN_BLOCKS or at_smoothing_cap(getattr(training, "smoothing", None) or 0.0):
+            return None
+        plan = planning_basis(next(iter(folds.values())).basis)
+        total = NormalEquations(plan, len(self.nodes), next(iter(folds.values())).environment)
+        for fold in folds.values():
+            total.merge(sub_statistics(fold, plan))
+        sums = self.drift.closed()
+        if spooled is not None:
+            self.drift.split(sums, self._cut_blocks(*spooled))
+        noise = float(np.sqrt(float(training.noise_std_db) ** 2 * float(training.variance_inflation or 1.0)))
+        return block_drift_std_db(self.drift.at(sums, plan), total, float(weight), self.ridge,
+                                  float(training.penalty_power), noise)
+
+    def _cut_blocks(self, stretches: Stretches, files: list[tuple[str, np.ndarray]]) -> dict[int, dict[int, LinkSums]]:
+        """The sums of the time blocks the stretches' cuts fall in, per block label, stretch and
+        directed link, from their spooled rows (only the files that hold such rows are read)."""
+        cut = np.unique(time_block_labels(np.asarray(stretches.starts_s, np.float64)))
+        out: dict[int, dict[int, LinkSums]] = {}
+        if not cut.size or self.drift is None:
+            return out
+        for path, t in files:
+            if not np.isin(time_block_labels(t), cut).any():
+                continue
+            rows = pd.read_parquet(path)
+            rows = rows[np.isin(time_block_labels(rows["t"].to_numpy(np.float64)), cut)]
+            which = stretches.index(rows["t"].to_numpy(np.float64))
+            for j in np.unique(which):
+                part = rows[which == j]
+                s = self.samples(part, path)
+                if not len(s):
+                    continue
+                y, _ = regression_inputs(s, self.options)
+                t_s = _sample_times(part, part["t"].to_numpy(np.float64))
+                for label, links in block_link_sums(self.drift.basis, time_block_labels(t_s), s.tx_index, s.rx_index,
+                                                    s.directions, y).items():
+                    kept = out.setdefault(label, {}).setdefault(int(j), {})
+                    for link, vec in links.items():
+                        kept[link] = vec if link not in kept else kept[link] + vec
+        return out
 
 
 __all__ = ["MAX_SEGMENTS", "LiveStatistics", "Segment"]

@@ -402,8 +402,8 @@ def _options_of(fitted: PatternSet, model: str, options: ManoeuvreOptions, spec:
         if training.drift_std_db is None:
             raise InputError(f"from_model: {model} has no training.drift_std_db (written by rplearn fit --order auto of a "
                              f"dataset whose rows of one link have times in at least {MIN_BLOCKS} blocks of {DEFAULT_BLOCK_S:g} s, "
-                             f"short of the search's largest smoothing; by this version also when streamed); "
-                             f"{refit}{or_give('--drift')}",
+                             f"short of the search's largest smoothing; by this version also when streamed and by an automatic "
+                             f"rplearn live session); {refit}{or_give('--drift')}",
                              param="from_model")
         _in_range(model, "drift_std_db", training.drift_std_db, (0.0, SPREAD_RANGE_DB[1]), flag("--drift"))
         drift_std_db = float(training.drift_std_db)

@@ -328,6 +328,8 @@ class _Session:
         mismatch = getattr(self.options.manoeuvres, "mismatch", None)  # ManoeuvreAdvisor's: --from-model not of this session
         why = mismatch(fitted) if callable(mismatch) else None
         self.note("--from-model ", None if why is None else f"{why}; the manoeuvres are ranked with the session's own instead")
+        late = 0 if self.stats.drift is None else self.stats.drift.late_rows  # the drift's blocks: rows that came late
+        self.note("drift: ", f"{late} samples came after later 5-s blocks were folded: their blocks are counted in parts" if late else None)
         self._describe()
         if self.ranking is not None and self.stats is not None:
             self.ranking.submit(self._snapshot, self.status.refits)

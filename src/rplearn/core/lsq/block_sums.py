@@ -168,6 +168,24 @@ class BlockSums:
         self._open = {}
         self._open_index = None
 
+    def add_vectors(self, v: Any, sign: float = 1.0) -> BlockSums:
+        """Fold closed blocks in: ``v`` one row per block and link, ``[features summed over all
+        pattern columns, sum y, count]``; ``sign=-1`` takes blocks counted before out again (a
+        block to be counted as parts instead). Rows of no samples are left out."""
+        if sign not in (1.0, -1.0):
+            raise InputError(f"sign: expected 1 or -1, got {sign!r}", param="sign")
+        v = np.asarray(v, np.float64)
+        v = v[v[:, -1] > 0]
+        features, s, n = v[:, :-2], v[:, -2], v[:, -1]
+        self.cross += sign * (features.T @ features)
+        self.cross_n += sign * ((features * n[:, None]).T @ features)
+        self.sum_yv += sign * (s @ features)
+        self.sum_yy += sign * float(s @ s)
+        self.sum_n += sign * float(n.sum())
+        self.sum_nn += sign * float(n @ n)
+        self.n_blocks += int(sign) * int(n.size)
+        return self
+
     def closed(self) -> BlockSums:
         """A copy with the open block closed (the sums of every sample so far)."""
         out = copy.deepcopy(self)
@@ -222,13 +240,7 @@ def time_block_sums(statistics: Sequence[NormalEquations], block_s: float = DEFA
         v[at[m], t * p:(t + 1) * p] += sums_all[m, :p]
         v[at[m], r * p:(r + 1) * p] += sums_all[m, big:big + p]
         v[at[m], -2:] += sums_all[m, 2 * big:2 * big + 2]  # sum y, count
-    v = v[v[:, -1] > 0]
-    features, s, n = v[:, :-2], v[:, -2], v[:, -1]
-    out.cross = features.T @ features
-    out.cross_n = (features * n[:, None]).T @ features
-    out.sum_yv = s @ features
-    out.sum_yy, out.sum_n, out.sum_nn, out.n_blocks = float(s @ s), float(n.sum()), float(n @ n), int(n.size)
-    return out
+    return out.add_vectors(v)
 
 
 @check_types
