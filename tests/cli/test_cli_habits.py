@@ -119,6 +119,16 @@ def test_the_sync_command_a_raw_log_hint_names_runs_once_its_placeholders_are_fi
     assert (flight / "data.parquet").exists()
 
 
+def test_a_raw_logs_hint_quotes_a_path_with_spaces(flight, tmp_path):
+    import shlex
+    import shutil
+    spaced = tmp_path / "my log.tlog"
+    shutil.copy(TLOG, spaced)
+    proc = here("fit", str(spaced), "-o", "x.json", cwd=flight)
+    command = proc.stderr.split("`")[1]
+    assert shlex.split(command)[3] == str(spaced), command
+
+
 def test_predict_with_its_arguments_swapped_says_so(flight):
     proc = here("predict", "d.parquet", "m.json", "-o", "p.parquet", cwd=flight)
     assert proc.returncode == 1

@@ -91,3 +91,16 @@ def test_repeated_times_and_too_few_rows_give_no_rate():
     rows = _station_and_drone(n=4)
     rows["t"] = 1.0
     assert packet_rate_hz(rows) is None and packet_rate_hz(rows.iloc[:1]) is None
+
+
+def test_a_rate_no_radio_has_is_not_recorded():
+    rows = _station_and_drone(n=40)
+    rows["t"] = rows["t"] * 1e-9  # readings a nanosecond apart: a clock in the wrong unit
+    assert packet_rate_hz(rows) is None
+
+
+def test_a_large_dataset_is_read_in_an_even_sample(monkeypatch):
+    import rplearn.data.flight_layout as layout
+    monkeypatch.setattr(layout, "LAYOUT_ROWS", 50)
+    rows = _station_and_drone(n=1000, jitter_m=1.0)
+    assert layout.fixed_nodes(rows) == ("G",)

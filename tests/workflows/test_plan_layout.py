@@ -60,7 +60,7 @@ def test_flags_override_the_earlier_layout_and_rate(station_flight, tmp_path):
     assert max(slow.steps[-1].spread_db.values()) > max(fast.steps[-1].spread_db.values())
 
 
-@pytest.mark.parametrize("rate", [0.0, 1e300])
+@pytest.mark.parametrize("rate", [0.0, 1e-300, 1e300])
 def test_a_damaged_packet_rate_is_refused_naming_file_and_field(station_flight, tmp_path, rate):
     path, _ = station_flight
     kind, payload = read_model_file(path)
@@ -86,12 +86,45 @@ class _Training:
         self.fixed_nodes, self.packet_rate_hz = fixed, rate
 
 
-@pytest.mark.parametrize("names", [("uav/1", "gcs"), ("x", "x"), ("a", "b", "c")])
-def test_names_that_cannot_name_a_reference_file_or_more_than_two_nodes_keep_the_plans_names(names):
+@pytest.mark.parametrize("names", [("x", "x"), ("a", "b", "c")])
+def test_two_nodes_of_one_name_or_more_than_two_nodes_keep_the_plans_names(names):
     layout = plan_layout(None, None, 10.0, 20.0, _Training(("gcs",), 2.0), names)
     assert layout.nodes == ("A", "B") and layout.packet_rate_hz == 2.0
+
+
+@pytest.mark.parametrize("names", [("uav/1", "gcs"), ("uav_1", "gcs"), ("drone 1", "gcs")])
+def test_a_station_flight_whose_names_cannot_name_a_reference_file_is_planned_as_station_g_and_drone_d(names):
+    # read_plan parses <unit>_<node>.csv: a node named with '_' wrote files it could not read back
+    layout = plan_layout(None, None, 10.0, 20.0, _Training(("gcs",), 2.0), names)
+    assert layout.nodes == ("D", "G") and layout.fixed == ("G",)
+    assert "ground station G and a drone D, as the earlier flight's station gcs held still" in layout.text
+
+
+def test_a_model_that_does_not_record_its_layout_is_not_said_to_be_two_drones():
+    # a streamed, Dask or live fit, or an older file: nothing recorded is not "nobody held still"
+    layout = plan_layout(None, None, 10.0, 20.0, _Training(None, None), ("gcs", "sys1"))
+    assert layout.nodes == ("A", "B") and layout.fixed == ()
+    assert "the earlier flight's layout is not recorded" in layout.text and "as in the earlier flight" not in layout.text
+    assert "80 packets/s, the default: the earlier flight's rate is not recorded" in layout.text
 
 
 def test_a_model_with_both_nodes_still_is_planned_for_two_drones():
     layout = plan_layout(None, None, 10.0, 20.0, _Training(("a", "b"), None), ("a", "b"))
     assert layout.nodes == ("a", "b") and layout.fixed == () and layout.packet_rate_hz == DEFAULT_PACKET_RATE_HZ
+
+
+def test_a_packet_rate_flag_below_one_reading_in_17_minutes_is_refused():
+    with pytest.raises(InputError, match=r"packet_rate_hz: 1e-300 Hz is not packets a radio reports per second: expected 0.001"):
+        OptimizeOptions(packet_rate_hz=1e-300)
+
+
+def test_fixed_nodes_of_another_type_are_refused_naming_the_field(station_flight, tmp_path):
+    from rplearn.models import load_model
+    path, _ = station_flight
+    for value in ("G", {"G": 1}, [1]):
+        kind, payload = read_model_file(path)
+        payload["training"]["fixed_nodes"] = value
+        bad = tmp_path / "bad_fixed.json"
+        write_model_file(bad, kind, payload)
+        with pytest.raises(Exception, match=r"training\.fixed_nodes: expected a list of node ids"):
+            load_model(str(bad))

@@ -9,6 +9,7 @@ would work, not a decoder's complaint about bytes. Everything here only reads a 
 from __future__ import annotations
 
 import os
+import shlex
 from collections.abc import Sequence
 
 from rplearn._argtypes import check_types
@@ -143,9 +144,10 @@ def raw_log_hint(path: str | os.PathLike[str]) -> str:
     kind = sniff(p)
     if kind not in RAW_LOG_NAMES:
         return ""
-    run = f"rplearn sync {_SYNC_ARGUMENTS[kind].format(log=p)} -o data.parquet"
+    q = shlex.quote(p)  # a path with spaces runs as pasted
+    run = f"rplearn sync {_SYNC_ARGUMENTS[kind].format(log=q)} -o data.parquet"
     return (f"a raw {RAW_LOG_NAMES[kind]} log, not a matched dataset: run `{run}` first "
-            f"(`rplearn inspect {p}` shows what it holds)")
+            f"(`rplearn inspect {q}` shows what it holds)")
 
 
 def not_a_table_hint(path: str | os.PathLike[str]) -> str:

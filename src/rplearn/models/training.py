@@ -232,6 +232,9 @@ def check_training_entries(training: Any, source: str) -> None:
         v = training.get(name)
         if v is not None and (isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0):
             raise ModelFileError(f"{source}: training.{name}: expected a finite number >= 0, got {v!r}")
+    still = training.get("fixed_nodes")
+    if still is not None and (not isinstance(still, list) or not all(isinstance(n, str) for n in still)):
+        raise ModelFileError(f"{source}: training.fixed_nodes: expected a list of node ids, got {still!r}"[:300])
     grids = training.get("coverage_deg")
     if grids is not None and not isinstance(grids, Mapping):
         raise ModelFileError(f"{source}: training.coverage_deg: expected an object of node grids, got {type(grids).__name__}")

@@ -56,6 +56,8 @@ SPREAD_RANGE_DB = (0.01, 90.0)
 #: Packets per second in one link direction a plan counts at most [Hz] (no radio reports RSSI
 #: more often; 1e300 made the posterior's matrix singular).
 MAX_PACKET_RATE_HZ = 1e5
+#: Packets per second a plan accepts at least [Hz]: one reading in about 17 minutes.
+MIN_PACKET_RATE_HZ = 1e-3
 #: Cruise speeds a plan's drones fly [m/s] (a slower one makes each manoeuvre hours long: 1e-3
 #: m/s planned for over 10 minutes, 1e-300 failed on an array too large; a faster one no drone flies).
 SPEED_RANGE_M_S = (0.5, 50.0)
@@ -138,7 +140,7 @@ class OptimizeOptions:
         lo, hi = SPREAD_RANGE_DB
         ranges = {"noise_std_db": (lo, hi, "dB", "a radio's RSSI scatter"),
                   "drift_std_db": (0.0, hi, "dB", "a radio's RSSI scatter"),
-                  "packet_rate_hz": (0.0, MAX_PACKET_RATE_HZ, "Hz", "packets a radio reports per second"),
+                  "packet_rate_hz": (MIN_PACKET_RATE_HZ, MAX_PACKET_RATE_HZ, "Hz", "packets a radio reports per second"),
                   "speed_m_s": (*SPEED_RANGE_M_S, "m/s", "a drone's cruise speed"),
                   "distance_m": (0.0, MAX_DISTANCE_M, "m", "a drone radio link"),
                   "height_m": (0.0, MAX_HEIGHT_M, "m", "a drone's height")}
@@ -196,9 +198,9 @@ def _layout(opts: OptimizeOptions, earlier: PatternSet | None) -> PlanLayout:
     flight's (:func:`~rplearn.workflows.plan_layout.plan_layout`), its packet rate checked as the flag's."""
     layout = plan_layout(opts.station, opts.packet_rate_hz, float(opts.distance_m), float(opts.height_m),
                          None if earlier is None else earlier.training, () if earlier is None else tuple(map(str, earlier.nodes)))
-    if opts.packet_rate_hz is None and earlier is not None and not 0.0 < layout.packet_rate_hz <= MAX_PACKET_RATE_HZ:
+    if opts.packet_rate_hz is None and earlier is not None and not MIN_PACKET_RATE_HZ <= layout.packet_rate_hz <= MAX_PACKET_RATE_HZ:
         raise InputError(f"from_model: {opts.from_model}: training.packet_rate_hz is {layout.packet_rate_hz:g}, not the packets a "
-                         f"radio reports per second: expected more than 0 and at most {MAX_PACKET_RATE_HZ:g} Hz; give --packet-rate",
+                         f"radio reports per second: expected {MIN_PACKET_RATE_HZ:g} to {MAX_PACKET_RATE_HZ:g} Hz; give --packet-rate",
                          param="from_model")
     return layout
 
@@ -222,9 +224,13 @@ def optimize_plan(out_dir: str, options: OptimizeOptions | None = None, rate_hz:
     # before any work: the references of a plan as long as the budget (no plan is longer: each
     # manoeuvre is taken only while it ends within it), two drones' files
     rows = 2.0 * float(opts.budget_s)
-    check_work("rate_hz", rate_hz, lambda r: Cost(memory_bytes=REFERENCE_ROW_BYTES * rows * r, seconds=REFERENCE_ROW_S * rows * r,
-                                                  disk_bytes=REFERENCE_ROW_DISK * rows * r),
-               "Hz", integer=False, bounds=(MIN_REFERENCE_RATE_HZ, math.inf), limits=budget(out_dir))
+    try:
+        check_work("rate_hz", rate_hz, lambda r: Cost(memory_bytes=REFERENCE_ROW_BYTES * rows * r, seconds=REFERENCE_ROW_S * rows * r,
+                                                      disk_bytes=REFERENCE_ROW_DISK * rows * r),
+                   "Hz", integer=False, bounds=(MIN_REFERENCE_RATE_HZ, math.inf), limits=budget(out_dir))
+    except InputError as exc:  # the budget sets the size as much as the rate: say so
+        raise InputError(f"{exc} (reference files of a plan as long as budget_s {float(opts.budget_s):g} s; a smaller "
+                         "budget_s fits a larger rate)", param="rate_hz", related=("budget_s",)) from None
     spec = ModelSpec.parse(opts.model)
     if not spec.decouples:
         raise InputError(f"model: {spec.label} has no per-node pattern to plan for; use sh, bg or poly", param="model")

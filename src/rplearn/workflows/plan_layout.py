@@ -19,7 +19,8 @@ from typing import Any
 DEFAULT_PACKET_RATE_HZ = 80.0
 #: Height of a ground station's antenna in a plan [m].
 STATION_HEIGHT_M = 1.5
-_SAFE_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$")
+#: A node name a reference file can carry: ``read_plan`` parses ``<unit>_<node>.csv``, so no ``_``.
+_SAFE_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9.-]{0,63}$")
 
 
 @dataclass(frozen=True)
@@ -66,25 +67,33 @@ def plan_layout(station: bool | None, packet_rate_hz: float | None, distance_m: 
     model_nodes : tuple of str
         The earlier flight's nodes.
     """
-    still = tuple(str(n) for n in (getattr(training, "fixed_nodes", None) or ()))
+    recorded = getattr(training, "fixed_nodes", None)  # None: not recorded (a streamed, Dask or live fit, an older file)
+    still = tuple(str(n) for n in (recorded or ()))
     names = tuple(str(n) for n in model_nodes)
     usable = len(names) == 2 and len(set(names)) == 2 and all(_SAFE_NAME.match(n) for n in names)
-    one_still = usable and len(still) == 1 and still[0] in names
+    one_still = len(names) == 2 and len(still) == 1 and still[0] in names
     said: list[str] = []
-    if station is None:
+    if station is None and training is not None:
         station = one_still
-        if one_still:
+        if one_still and usable:
             said.append(f"a ground station {still[0]}, held still in the earlier flight, and a drone "
                         f"{next(n for n in names if n != still[0])} (--two-drones plans for two drones)")
-        elif usable and training is not None:
+        elif one_still:
+            said.append(f"a ground station G and a drone D, as the earlier flight's station {still[0]} held still (its "
+                        "names cannot name a reference file; --two-drones plans for two drones)")
+        elif recorded is None:
+            said.append("two drones A, B: the earlier flight's layout is not recorded (a streamed, Dask or live fit, or an "
+                        "older file; --station plans for a station)")
+            usable = False
+        elif usable:
             said.append(f"two drones {names[0]}, {names[1]}, as in the earlier flight (--station plans for a station)")
     if station:
-        ground, mover = (still[0], next(n for n in names if n != still[0])) if one_still else ("G", "D")
+        ground, mover = (still[0], next(n for n in names if n != still[0])) if one_still and usable else ("G", "D")
         nodes: tuple[str, str] = (mover, ground)
         poses = {ground: ((0.0, 0.0, STATION_HEIGHT_M), 0.0), mover: ((distance_m, 0.0, height_m), 180.0)}
         fixed: tuple[str, ...] = (ground,)
     else:
-        a, b = names if usable else ("A", "B")
+        a, b = names if usable and recorded is not None else ("A", "B")
         nodes = (a, b)
         poses = {a: ((-distance_m / 2.0, 0.0, height_m), 0.0), b: ((distance_m / 2.0, 0.0, height_m), 0.0)}
         fixed = ()
@@ -94,4 +103,6 @@ def plan_layout(station: bool | None, packet_rate_hz: float | None, distance_m: 
         rate = float(earlier) if earlier is not None else DEFAULT_PACKET_RATE_HZ
         if earlier is not None:
             said.append(f"{rate:.3g} packets/s in each link direction, the earlier flight's (--packet-rate states another)")
+        elif training is not None:
+            said.append(f"{rate:g} packets/s, the default: the earlier flight's rate is not recorded (--packet-rate states it)")
     return PlanLayout(nodes, poses, fixed, float(rate), "; ".join(said))
