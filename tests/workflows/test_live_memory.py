@@ -15,6 +15,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+import rplearn.models.live_drift as live_drift
 import rplearn.workflows.live as live_module
 from rplearn.core.geometry import quat_wxyz_from_euler_ned_frd_deg
 from rplearn.models.options import FitOptions
@@ -108,6 +109,7 @@ def _replay(monkeypatch, tmp_path, options: LiveOptions) -> list[dict[str, int]]
 
     monkeypatch.setattr(live_module._Session, "__init__", init)
     monkeypatch.setattr(live_module, "BUDGET_WINDOW_ROWS", 100)
+    monkeypatch.setattr(live_drift, "MAX_OPEN_BLOCKS", 4)  # the drift's open blocks (64, 320 s) full by the first mark too
     marks: list[dict[str, int]] = []
     left = list(MARKS_S)
 

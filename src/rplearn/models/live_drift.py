@@ -132,13 +132,14 @@ class DriftBlocks:
         basis (:func:`~rplearn.models.auto_spread.planning_basis`: SH-10, or the basis itself).
     n_nodes : int
         The session's nodes.
-    max_open : int
-        Blocks kept open at most (:data:`MAX_OPEN_BLOCKS`).
+    max_open : int, optional
+        Blocks kept open at most (default :data:`MAX_OPEN_BLOCKS`, read when the session starts).
     """
 
-    def __init__(self, basis: Any, n_nodes: int, max_open: int = MAX_OPEN_BLOCKS) -> None:
+    def __init__(self, basis: Any, n_nodes: int, max_open: int | None = None) -> None:
         self.basis = planning_basis(basis)
-        self.n_nodes, self.max_open = int(n_nodes), max(int(max_open), 1)
+        self.n_nodes = int(n_nodes)
+        self.max_open = max(int(MAX_OPEN_BLOCKS if max_open is None else max_open), 1)
         self.folded = BlockSums(self.n_nodes, self.basis.n_coef)
         self.open: dict[int, LinkSums] = {}
         self.folded_through: int | None = None  # the latest label folded
