@@ -237,7 +237,7 @@ def fit_dataset(
     else:
         fitted = fit_model(samples, spec, options, provenance=prov)
     check_dataset_budget(fitted.model, select_units(df, choice.units, dataset), dataset)
-    _record_scale(fitted.model, select_units(df, choice.units, dataset))
+    _record_rows(fitted.model, select_units(df, choice.units, dataset))
     certify(fitted.model, samples)
     if output:
         fitted.model.save(output)
@@ -267,7 +267,7 @@ def _fit_auto(
     prov = provenance(dataset=dataset, model=f"{spec.kind}-auto", ridge=spec.ridge, units=choice.units)
     fitted, selection = fit_auto(per_unit, spec, options, provenance=prov)
     check_dataset_budget(fitted.model, part, dataset)
-    _record_scale(fitted.model, part)
+    _record_rows(fitted.model, part)
     certify(fitted.model, None, fitted.own_posterior, fitted.learning_gram)  # the selection's X^T X: no second pass
     fitted.learning_gram = None  # read: not kept (a swarm's is (nodes x coefficients)^2 values)
     if output:
@@ -283,7 +283,7 @@ def _band_counts(index: Any) -> dict[float, int]:
     return {float(f): int(n) for f, n in zip(sums.index.to_numpy("float64"), sums.to_numpy("int64"), strict=True)}
 
 
-def _record_scale(model: Any, rows: Any) -> None:
+def _record_rows(model: Any, rows: Any) -> None:
     """Record ``training["rssi_scale"] = "relative"`` when the learning rows are relative RSSI
     (``sync --rssi-scale relative``): nothing downstream then prints their levels as dBm; and the
     flight's layout, the nodes that held still and the radio's packet rate
