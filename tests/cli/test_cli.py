@@ -401,7 +401,7 @@ def test_simulate_flies_a_written_plan(tmp_path):
     labels = {f.rsplit("_", 1)[0] for f in os.listdir(tmp_path / "plan")}
     assert set(signals["unit"]) == labels
     bad = run_here(["simulate", "--preset", "ground", "--plan", "plan", "-o", "f2"], tmp_path, ok=False)
-    assert bad.returncode == 1 and "no antenna in preset ground" in bad.stderr
+    assert bad.returncode == 1 and "the plan flies two drones A, B; preset ground flies a station G and a drone D: fly it with --preset paper" in bad.stderr
 
 
 def test_a_streamed_auto_fit_says_how_to_plan_and_the_plan_takes_its_file(workdir, tmp_path):

@@ -151,7 +151,11 @@ def simulate(
     flights: int = typer.Option(8, "--flights", help="fleet: number of flights (about 160,000 samples each)."),
     drones: int = typer.Option(4, "--drones", help="fleet: drones in the fleet, flying in pairs taken in turn."),
     plan: str | None = typer.Option(None, "--plan", help="Fly this folder of reference files (rplearn trajectory's output, "
-                                                        "e.g. of --optimize) with the preset's antennas, vehicles and radio."),
+                                                        "e.g. of --optimize) with the preset's antennas, vehicles and radio, under the "
+                                                        "plan's node names: a station it holds still flown as the preset's station, a "
+                                                        "drone as its drone."),
+    node_map: str | None = typer.Option(None, "--node-map", help="PLAN=PRESET,...: with --plan, fly each plan node as this "
+                                                                 "preset node (e.g. gcs=G,sys1=D) instead of by role."),
 ) -> None:
     """Simulate a calibration flight: raw pose and signal logs plus the true patterns.
 
@@ -161,6 +165,9 @@ def simulate(
 
     if log_format not in ("parquet", "csv"):
         raise InputError(f"--format: expected parquet or csv, got {log_format!r}")
+    mapping = _node_map(node_map) if node_map is not None else None
+    if mapping is not None and plan is None:
+        raise typer.BadParameter("needs --plan, the folder of reference files to fly", param_hint="--node-map")
     from rplearn.io.files import check_output_folder
 
     check_output_folder(out_dir)
@@ -169,6 +176,8 @@ def simulate(
 
         if log_format != "parquet":
             raise InputError("--format: the fleet preset writes Parquet")
+        if plan is not None:
+            raise InputError("--plan: the fleet preset flies its own flights, not a plan; fly a plan with another --preset")
         with progress_bar() as p:
             task = p.add_task("simulating a fleet", total=None)
             fleet = simulate_fleet(out_dir, flights=flights, drones=drones, seed=seed,
@@ -178,9 +187,12 @@ def simulate(
         return
     config = None
     if plan is not None:
-        from rplearn.workflows.calibration_plan import plan_config
+        from rplearn.workflows.plan_flight import plan_flight
 
-        config = plan_config(preset, plan)
+        flight = plan_flight(preset, plan, mapping)
+        config = flight.config
+        if flight.text:
+            say(flight.text)
     with progress_bar() as p:
         p.add_task(f"simulating preset '{preset}'" + (f" flying {plan}" if plan else ""), total=None)
         result = run(config or preset, seed=seed, out_dir=out_dir, log_format=log_format)
@@ -190,3 +202,20 @@ def simulate(
     )
     for k, v in result.paths.items():
         say(f"  {k}: {v}")
+
+
+def _node_map(text: str) -> dict[str, str]:
+    """``--node-map PLAN=PRESET,...`` as plan node -> preset node; bad syntax, a node given twice or
+    two plan nodes on one preset node: a usage error (one line, exit 2)."""
+    found: dict[str, str] = {}
+    for item in text.split(","):
+        plan, sep, ours = (part.strip() for part in item.partition("="))
+        if not (sep and plan and ours):
+            raise typer.BadParameter(f"expected PLAN=PRESET,... (e.g. gcs=G,sys1=D), got {text!r}", param_hint="--node-map")
+        if plan in found:
+            raise typer.BadParameter(f"{plan} is mapped twice in {text!r}", param_hint="--node-map")
+        if ours in found.values():
+            raise typer.BadParameter(f"two plan nodes are flown as {ours} in {text!r} (expected one to one)",
+                                     param_hint="--node-map")
+        found[plan] = ours
+    return found

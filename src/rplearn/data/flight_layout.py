@@ -45,11 +45,13 @@ def fixed_nodes(rows: pd.DataFrame) -> tuple[str, ...] | None:
     rows = rows.iloc[::-(-len(rows) // LAYOUT_ROWS)]
     poses = np.concatenate([rows[[f"{end}_{c}" for c in _POSE]].to_numpy("float64") for end in ("tx", "rx")])
     codes, names = pd.factorize(pd.concat([rows["tx"], rows["rx"]], ignore_index=True).astype(str))
-    return tuple(sorted(str(name) for k, name in enumerate(names) if _holds_still(poses[codes == k])))
+    return tuple(sorted(str(name) for k, name in enumerate(names) if holds_still(poses[codes == k])))
 
 
-def _holds_still(poses: np.ndarray) -> bool:
-    """Whether the rows ``x, y, z, qw, qx, qy, qz`` of one node stay near one pose."""
+def holds_still(poses: np.ndarray) -> bool:
+    """Whether the rows ``x, y, z, qw, qx, qy, qz`` of one node stay near one pose (module
+    constants): the rule :func:`fixed_nodes` reads a flight by, and ``simulate --plan`` a plan's
+    references (:func:`rplearn.plan.campaign.still_nodes`)."""
     if not np.all(np.isfinite(poses)):
         return False
     position, q = poses[:, :3], poses[:, 3:]

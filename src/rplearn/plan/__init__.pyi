@@ -7,6 +7,7 @@ from .campaign import group_campaign as group_campaign
 from .campaign import link_graph_identifies_gains as link_graph_identifies_gains
 from .campaign import pair_schedule as pair_schedule
 from .campaign import paper_campaign as paper_campaign
+from .campaign import still_nodes as still_nodes
 from .campaign import write_references as write_references
 from .check import CoverageMap as CoverageMap
 from .check import NominalAttitude as NominalAttitude

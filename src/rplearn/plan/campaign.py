@@ -19,6 +19,7 @@ from numpy.typing import NDArray
 
 from rplearn._argtypes import check_types
 from rplearn._atomic import atomic_path
+from rplearn.data.flight_layout import holds_still
 from rplearn.errors import InputError
 from rplearn.plan.trajectory import PlanLimits, TrajectoryUnit, UnitSummary, summarize_unit
 
@@ -76,6 +77,25 @@ class Campaign:
     def summarize(self, limits: PlanLimits | None = None) -> list[UnitSummary]:
         """:func:`summarize_unit` of every unit (raises :class:`~rplearn.errors.PlanError` on a violated limit)."""
         return [summarize_unit(u, limits) for u in self.units]
+
+
+@check_types
+def still_nodes(campaign: Campaign, rate_hz: float = 1.0) -> tuple[str, ...]:
+    """The nodes that a campaign's references hold still, sorted: over all the units a node flies,
+    its reference positions and headings sampled at ``rate_hz`` [Hz] stay within 5 m and 30 deg
+    of one pose, the rule by which a fit records a flight's station
+    (:func:`rplearn.data.flight_layout.holds_still`). The ``ground`` preset's station ``G``; a
+    written plan's station (``trajectory --optimize --station``, or planned for a flight whose
+    station held still); none of two drones."""
+    poses: dict[str, list[FloatArray]] = {}
+    for unit in campaign.units:
+        ref = unit.sample(rate_hz)
+        half = 0.5 * ref.yaw_rad
+        for j, node in enumerate(unit.nodes):
+            level = np.zeros((ref.t_s.size, 4))
+            level[:, 0], level[:, 3] = np.cos(half[:, j]), np.sin(half[:, j])  # a heading about the vertical
+            poses.setdefault(node, []).append(np.hstack([ref.position_enu_m[:, j, :], level]))
+    return tuple(sorted(node for node, rows in poses.items() if holds_still(np.concatenate(rows))))
 
 
 @check_types
@@ -221,5 +241,6 @@ __all__ = [
     "link_graph_identifies_gains",
     "pair_schedule",
     "paper_campaign",
+    "still_nodes",
     "write_references",
 ]

@@ -14,6 +14,7 @@ from .config import EstimatorConfig as EstimatorConfig
 from .config import FlightConfig as FlightConfig
 from .config import RadioConfig as RadioConfig
 from .config import SimulationConfig as SimulationConfig
+from .config import renamed_nodes as renamed_nodes
 from .flight import SimulationResult as SimulationResult
 from .flight import simulate as simulate
 from .flight import with_effects_off as with_effects_off

@@ -6,7 +6,7 @@ Every effect is sized by a field and switched off by setting it to zero (or ``No
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from rplearn._argtypes import check_types
 from rplearn.errors import InputError
@@ -222,3 +222,24 @@ class SimulationConfig:
             frequency_hz=self.radio.frequency_hz,
             metadata={"simulation": self.name, "seed": seed},
         )
+
+
+@check_types
+def renamed_nodes(config: SimulationConfig, names: dict[str, str], campaign: Campaign) -> SimulationConfig:
+    """``config`` flying ``campaign`` with its nodes renamed: ``names`` maps a node of ``config``
+    to its new name (``simulate --plan`` flies a plan's ``gcs``, ``sys1`` as the ``ground``
+    preset's ``G``, ``D``). Every per-node field follows: the antennas and the link offsets; the
+    nodes ``names`` leaves out are dropped (so that no old name meets a new one).
+
+    Raises
+    ------
+    InputError
+        ``names`` gives two nodes one name, or names a node ``config`` lacks.
+    """
+    unknown = sorted(set(names) - set(config.node_antennas))
+    if unknown or len(set(names.values())) != len(names):
+        raise InputError(f"names: expected distinct new names of nodes of {', '.join(sorted(config.node_antennas))}, "
+                         f"got {', '.join(f'{a}={b}' for a, b in names.items())}", param="names")
+    offsets = tuple(((names[tx], names[rx]), v) for (tx, rx), v in config.radio.link_offsets_db if tx in names and rx in names)
+    return replace(config, campaign=campaign, node_antennas={names[n]: a for n, a in config.node_antennas.items() if n in names},
+                   radio=replace(config.radio, link_offsets_db=offsets))

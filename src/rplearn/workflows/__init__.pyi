@@ -10,7 +10,6 @@ from .calibration_plan import OptimizedPlan as OptimizedPlan
 from .calibration_plan import OptimizeOptions as OptimizeOptions
 from .calibration_plan import optimize_plan as optimize_plan
 from .calibration_plan import options_from_model as options_from_model
-from .calibration_plan import plan_config as plan_config
 from .demo import DEMO_MODELS as DEMO_MODELS
 from .demo import DemoResult as DemoResult
 from .demo import run_demo as run_demo
@@ -43,6 +42,9 @@ from .logs import reader_notes as reader_notes
 from .logs import swarm_headings as swarm_headings
 from .logs import swarm_links as swarm_links
 from .logs import sync_logs as sync_logs
+from .plan_flight import PlanFlight as PlanFlight
+from .plan_flight import plan_config as plan_config
+from .plan_flight import plan_flight as plan_flight
 from .planning import CampaignOptions as CampaignOptions
 from .planning import CampaignPlan as CampaignPlan
 from .planning import draw_pattern_files as draw_pattern_files

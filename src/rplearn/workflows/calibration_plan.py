@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
-from typing import Any
 
 import numpy as np
 
@@ -42,7 +41,6 @@ from rplearn.models.patterns import PatternSet
 from rplearn.models.spec import ModelSpec
 from rplearn.plan.campaign import Campaign, write_references
 from rplearn.plan.manoeuvres import CandidateOptions
-from rplearn.plan.references import read_plan
 from rplearn.workflows.plan_layout import PlanLayout, plan_layout
 from rplearn.workflows.planning import MIN_REFERENCE_RATE_HZ, REFERENCE_ROW_BYTES, REFERENCE_ROW_DISK, REFERENCE_ROW_S
 
@@ -485,21 +483,4 @@ def _planning_model(model: str) -> PatternSet:
     return fitted
 
 
-@check_types
-def plan_config(preset: str, plan_dir: str) -> Any:
-    """A simulator preset flying a folder of reference files instead of its own campaign
-    (``rplearn simulate --plan``): its antennas, vehicles and radio; the plan's units
-    (:func:`rplearn.plan.references.read_plan`). Its electronics offsets and dropouts, drawn for
-    its own campaign, are kept."""
-    from rplearn.sim.presets import make_preset
-
-    config = make_preset(preset)
-    campaign = read_plan(plan_dir)
-    unknown = sorted(set(campaign.nodes) - set(config.node_antennas))
-    if unknown:
-        raise InputError(f"{plan_dir}: node(s) {', '.join(unknown)} have no antenna in preset {preset} "
-                         f"({', '.join(sorted(config.node_antennas))})", param="plan")
-    return replace(config, campaign=campaign)
-
-
-__all__ = ["DEFAULT_NOISE_STD_DB", "OptimizeOptions", "OptimizedPlan", "optimize_plan", "options_from_model", "plan_config"]
+__all__ = ["DEFAULT_NOISE_STD_DB", "OptimizeOptions", "OptimizedPlan", "optimize_plan", "options_from_model"]
