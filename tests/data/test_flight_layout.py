@@ -170,3 +170,13 @@ def test_the_sketches_of_parts_merge_in_their_order_as_one_pass():
     assert merged.fixed_nodes() == whole.fixed_nodes() == ("G",)
     assert merged.packet_rate_hz() == pytest.approx(whole.packet_rate_hz(), rel=1e-12)
     assert merged.packet_rate_hz() == pytest.approx(packet_rate_hz(rows), rel=0.005)
+
+
+@pytest.mark.parametrize("cuts", [[], list(range(997, 40_000, 997)), list(range(97, 40_000, 97))], ids=["whole", "997 rows", "97 rows"])
+def test_jittered_intervals_beyond_the_exact_count_give_the_rate_within_half_a_bin(cuts):
+    from rplearn.data.flight_layout import FINEST_BIN, INTERVAL_VALUES
+    rows = _jittered(40_000)  # 20,000 distinct intervals each way, above INTERVAL_VALUES
+    sketch = _sketch(rows, cuts)
+    widths = {v.width for v in sketch.links.values()}
+    assert all(v.values.size <= INTERVAL_VALUES for v in sketch.links.values()) and min(widths) >= FINEST_BIN
+    assert sketch.packet_rate_hz() == pytest.approx(packet_rate_hz(rows), rel=max(widths) / 2.0)

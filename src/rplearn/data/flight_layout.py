@@ -162,17 +162,15 @@ class Intervals:
     def counted(self) -> Intervals:
         """The same intervals, each value once with its count, in bins wide enough for at most
         :data:`INTERVAL_VALUES` of them."""
-        if np.all(self.counts == 1):  # a chunk's intervals, each seen once (faster than by the inverse)
-            values, counts = np.unique(self.values, return_counts=True)
-        else:
-            values, inverse = np.unique(self.values, return_inverse=True)
-            counts = np.bincount(inverse, weights=self.counts, minlength=values.size)
-        out = Intervals(values, counts.astype(np.int64), self.width, self.first, self.last)
-        while out.values.size > INTERVAL_VALUES:
-            width = FINEST_BIN if out.width == 0.0 else 2.0 * out.width
-            values, inverse = np.unique(out.binned(width), return_inverse=True)
-            out = Intervals(values, np.bincount(inverse, weights=out.counts).astype(np.int64), width, out.first, out.last)
-        return out
+        width = self.width
+        values, counts = _summed(self.values, self.counts, exact=width == 0.0)
+        if width == 0.0 and values.size > INTERVAL_VALUES:
+            width = FINEST_BIN
+            values, counts = _summed(np.floor(np.log(values) / width), counts, exact=False)
+        while values.size > INTERVAL_VALUES:
+            width *= 2.0
+            values, counts = _summed(np.floor(values / 2.0), counts, exact=False)
+        return Intervals(values, counts, width, self.first, self.last)
 
     def median_s(self) -> float | None:
         """The median interval [s] (the middle two's mean when they split an even count, as
@@ -187,6 +185,21 @@ class Intervals:
         if cum[i] == half and i + 1 < values.size:
             return float((values[i] + values[i + 1]) / 2.0)
         return float(values[i])
+
+
+def _summed(values: np.ndarray, counts: np.ndarray, exact: bool) -> tuple[np.ndarray, np.ndarray]:
+    """Each distinct value once with its counts summed, sorted; ``exact``: intervals, else bin
+    numbers (counted by :func:`numpy.bincount` over their range when it is short)."""
+    if not exact and values.size and values.max() - values.min() < 2 ** 22:
+        low = values.min()
+        total = np.bincount((values - low).astype(np.int64), weights=counts)
+        where = np.flatnonzero(total)
+        return where + low, total[where].astype(np.int64)
+    if np.all(counts == 1):  # a chunk's intervals, each seen once (faster than by the inverse)
+        values, summed = np.unique(values, return_counts=True)
+        return values, summed.astype(np.int64)
+    values, inverse = np.unique(values, return_inverse=True)
+    return values, np.bincount(inverse, weights=counts, minlength=values.size).astype(np.int64)
 
 
 def _row_keys(rows: pd.DataFrame, posed: bool) -> np.ndarray:
@@ -323,26 +336,18 @@ def _level(keys: np.ndarray, level: int) -> int:
 
 
 def _chunk_intervals(t: np.ndarray, tx: np.ndarray, rx: np.ndarray, names: list[str]) -> dict[tuple[str, str], Intervals]:
-    """Each link direction's intervals between consecutive distinct finite times of one chunk."""
+    """Each link direction's intervals between consecutive distinct finite times of one chunk
+    (a pass over the chunk per direction: a matched dataset's few directions, its rows in time order)."""
     ok = np.isfinite(t)
     t, link = t[ok], (tx * len(names) + rx)[ok]
-    if not t.size:
-        return {}
-    if t.size < 2 or np.all(t[1:] >= t[:-1]):  # in time order (a matched dataset is): a stable sort by link
-        order = np.argsort(link.astype(np.int16) if len(names) ** 2 < 2 ** 15 else link, kind="stable")
-    else:
-        order = np.lexsort((t, link))
-    t, link = t[order], link[order]
-    new = np.ones(t.size, bool)
-    new[1:] = (link[1:] != link[:-1]) | (t[1:] != t[:-1])
-    t, link = t[new], link[new]
-    starts = np.flatnonzero(np.r_[True, link[1:] != link[:-1]])
-    ends = np.r_[starts[1:], t.size]
-    step = np.diff(t)
     out = {}
-    for s, e in zip(starts.tolist(), ends.tolist()):
-        code = int(link[s])
-        ints = Intervals(step[s:e - 1], np.ones(e - 1 - s, np.int64), 0.0, float(t[s]), float(t[e - 1]))
+    for code in np.flatnonzero(np.bincount(link)) if t.size else ():
+        mine = t[link == code]
+        if not np.all(mine[1:] >= mine[:-1]):
+            mine = np.sort(mine)
+        mine = mine[np.r_[True, mine[1:] != mine[:-1]]]
+        step = np.diff(mine)
+        ints = Intervals(step, np.ones(step.size, np.int64), 0.0, float(mine[0]), float(mine[-1]))
         out[(names[code // len(names)], names[code % len(names)])] = ints.counted()
     return out
 
