@@ -38,7 +38,7 @@ RECORDED_RATE_HZ = (1e-3, 1e5)
 #: Distinct intervals between readings a :class:`LayoutSketch` keeps per link direction; beyond
 #: them the intervals are counted in bins of their logarithm, :data:`FINEST_BIN` wide at first,
 #: twice as wide each time more bins than this are filled (a median off by half a bin: 0.01 %
-#: at the finest, 0.2 % for jittered intervals from 1 ms to 1 s, 0.8 % for 1 ns to a day).
+#: at the finest, 0.1 % for intervals spread over 1 ms to 1 s, 0.8 % over 1 ns to a day).
 INTERVAL_VALUES = 4096
 #: The finest bin of the intervals' natural logarithm (a relative 0.024 %).
 FINEST_BIN = 2.0 ** -12
@@ -235,9 +235,9 @@ class LayoutSketch:
     rows before a chunk to its first (lost where a chunk's first reading is not later than the last
     one before it: rows out of time order).
 
-    Memory does not grow with the flight: at most :data:`LAYOUT_ROWS` rows of 128 bytes (the key,
-    both ends' node codes and 14 pose numbers: 12.8 MB) and, per link direction, at most
-    :data:`INTERVAL_VALUES` intervals of 16 bytes (16 kB).
+    Memory does not grow with the flight: at most :data:`LAYOUT_ROWS` rows of 136 bytes (the key,
+    both ends' node codes and 14 pose numbers: 13.6 MB) and, per link direction, at most
+    :data:`INTERVAL_VALUES` intervals of 16 bytes (64 kB).
 
     Attributes
     ----------
