@@ -190,3 +190,18 @@ def test_a_session_without_a_ranking_keeps_no_block_sums(matched):
     st = LiveStatistics(spec, ["A", "B"], FitOptions(), keep_blocks=False)
     st.add(matched, st.samples(matched))
     assert st.blocks is None and st.total().blocks is None and st.n_samples == len(matched)
+
+
+@pytest.mark.parametrize("auto", [False, True], ids=["sh-4", "auto"])
+def test_every_refit_records_the_flights_layout_of_the_rows_so_far(matched, offline, tmp_path, auto):
+    """``training.fixed_nodes`` and ``packet_rate_hz`` of a refit, in flight and the last, are
+    those of the rows learned read in memory (:mod:`rplearn.data.flight_layout`; two drones: none
+    held still) and of ``fit`` of them; before, a live refit recorded neither."""
+    from rplearn.data.flight_layout import fixed_nodes, packet_rate_hz
+    spec = ModelSpec.parse("sh") if auto else ModelSpec.parse("sh", order=4)
+    st = _learn(matched, spec, FitOptions(auto=auto), str(tmp_path) if auto else None)
+    for final in (False, True):
+        got = st.refit(final=final).model.training
+        assert got.fixed_nodes == fixed_nodes(matched) == offline.training.fixed_nodes == ()
+        assert got.packet_rate_hz == pytest.approx(packet_rate_hz(matched), rel=1e-12)
+        assert got.packet_rate_hz == pytest.approx(offline.training.packet_rate_hz, rel=1e-12)

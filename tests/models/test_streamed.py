@@ -234,3 +234,24 @@ def test_rows_that_differ_in_one_column_are_not_copies(dataset, monkeypatch, tmp
     fit = learning.fit_dataset(str(folder), ModelSpec("sh", 3))
     single = learning.fit_dataset(str(dataset / "m.parquet"), ModelSpec("sh", 3))
     assert fit.n_samples == 2 * single.n_samples
+
+
+def test_a_streamed_fit_records_the_flights_layout_as_a_fit_in_memory(dataset):
+    """``training.fixed_nodes`` and ``training.packet_rate_hz`` of :func:`fit_patterns_streamed`
+    (whatever the chunks) and of two parts' statistics merged in order, as the rows read in memory
+    give them (:mod:`rplearn.data.flight_layout`); before, a streamed fit recorded neither."""
+    from rplearn.data.flight_layout import fixed_nodes, packet_rate_hz
+    df = read_dataset(str(dataset / "m.parquet"))
+    nodes = sorted(set(df["tx"].astype(str)) | set(df["rx"].astype(str)))
+    spec = ModelSpec("sh", 3)
+    expected = (fixed_nodes(df), packet_rate_hz(df))
+    assert expected[0] == () and expected[1] == pytest.approx(19.6, rel=0.01)  # two drones at 20 packets/s
+    for rows in (len(df), 97):
+        fit = streamed_module.fit_patterns_streamed((df.iloc[i:i + rows] for i in range(0, len(df), rows)), spec, nodes)
+        got = fit.patterns.training
+        assert got.fixed_nodes == expected[0] and got.packet_rate_hz == pytest.approx(expected[1], rel=1e-12)  # exact intervals
+    half = len(df) // 2
+    a = streamed_module.accumulate([df.iloc[:half]], spec, nodes, None, "a", by_unit=False)
+    b = streamed_module.accumulate([df.iloc[half:]], spec, nodes, None, "b", by_unit=False)
+    merged = a.combined(b).layout
+    assert merged.rows == len(df) and merged.recorded() == {"fixed_nodes": (), "packet_rate_hz": pytest.approx(expected[1], rel=1e-12)}

@@ -15,6 +15,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+import rplearn.data.flight_layout as flight_layout
 import rplearn.models.live_drift as live_drift
 import rplearn.workflows.live as live_module
 from rplearn.core.geometry import quat_wxyz_from_euler_ned_frd_deg
@@ -110,6 +111,8 @@ def _replay(monkeypatch, tmp_path, options: LiveOptions) -> list[dict[str, int]]
     monkeypatch.setattr(live_module._Session, "__init__", init)
     monkeypatch.setattr(live_module, "BUDGET_WINDOW_ROWS", 100)
     monkeypatch.setattr(live_drift, "MAX_OPEN_BLOCKS", 4)  # the drift's open blocks (64, 320 s) full by the first mark too
+    monkeypatch.setattr(flight_layout, "LAYOUT_ROWS", 64)  # the layout's sample of rows (100,000) at its bound by the first mark
+    monkeypatch.setattr(flight_layout, "INTERVAL_VALUES", 8)  # and its intervals per link direction (4,096)
     marks: list[dict[str, int]] = []
     left = list(MARKS_S)
 
@@ -151,4 +154,9 @@ def test_what_a_session_keeps_does_not_grow_with_its_batches(monkeypatch, tmp_pa
     marks = _replay(monkeypatch, tmp_path, options)
     assert len(marks[-1]) > 20  # the walk reached the session's parts
     assert "session.preq._n" in marks[-1] and "session.matcher._seen.sorted" in marks[-1]
-    assert set(_growing(marks)) == {"session.history"}
+    # the layout's sample of rows is between half and all of its bound, filling again after each halving (it may
+    # grow from mark to mark by chance): its bound is checked instead
+    layout = "session.stats.layout."
+    assert 0 < marks[-1][layout + "keys"] <= 64 and marks[-1][layout + "poses"] == 14 * marks[-1][layout + "keys"]
+    assert max(m[layout + "links{}.values"] for m in marks) <= 8
+    assert {p for p in _growing(marks) if not p.startswith(layout)} == {"session.history"}

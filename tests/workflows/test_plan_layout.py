@@ -101,7 +101,7 @@ def test_a_station_flight_whose_names_cannot_name_a_reference_file_is_planned_as
 
 
 def test_a_model_that_does_not_record_its_layout_is_not_said_to_be_two_drones():
-    # a streamed, Dask or live fit, or an older file: nothing recorded is not "nobody held still"
+    # a model file written before fits recorded the layout: nothing recorded is not "nobody held still"
     layout = plan_layout(None, None, 10.0, 20.0, _Training(None, None), ("gcs", "sys1"))
     assert layout.nodes == ("A", "B") and layout.fixed == ()
     assert "the earlier flight's layout is not recorded" in layout.text and "as in the earlier flight" not in layout.text

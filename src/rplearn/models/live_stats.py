@@ -32,6 +32,11 @@ An automatic choice also keeps the sums per time block its drifting error is sta
 :class:`~rplearn.models.live_drift.DriftBlocks`, memory bounded, at SH-10): a refit during the
 flight reads every block whole; the last, exact refit counts a block that a stretch's cut falls
 in as the offline fit does, one block per stretch (its rows re-read from the spool).
+
+Every batch's matched rows also go into a :class:`~rplearn.data.flight_layout.LayoutSketch`
+(bounded: a sample of at most ``LAYOUT_ROWS`` rows' poses, a few thousand intervals per link
+direction), from which every refit records the nodes that held still and the radio's packet rate
+(``training.fixed_nodes``, ``training.packet_rate_hz``) as ``fit`` records them of the same rows.
 """
 
 from __future__ import annotations
@@ -53,6 +58,7 @@ from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.core.lsq.penalty import sub_statistics
 from rplearn.core.lsq.selection import at_smoothing_cap
 from rplearn.core.threads import blas_threads_for
+from rplearn.data.flight_layout import LayoutSketch
 from rplearn.data.tables import OUTAGE_COLUMN, LinkSamples, link_samples
 from rplearn.data.units import TIME_UNITS, Stretches, stretch_labels
 from rplearn.errors import InputError
@@ -147,6 +153,8 @@ class LiveStatistics:
         #: the automatic choice's drifting error: its time blocks' sums (None for a fixed order)
         self.drift = DriftBlocks(self.basis, len(self.nodes)) if self.auto else None
         self.learn_s = 0.0
+        #: the flight's layout (who held still, the packet rate), bounded, recorded by every refit as ``fit`` records it
+        self.layout = LayoutSketch()
         self._batches = 0
 
     @property
@@ -176,6 +184,7 @@ class LiveStatistics:
 
     def add(self, matched: pd.DataFrame, samples: LinkSamples) -> None:
         """Learn a batch: its matched rows (spooled) and their samples (:meth:`samples`)."""
+        self.layout.merge(LayoutSketch.of_rows(matched))  # outage rows too, as fit reads the layout from every row
         if not len(samples):
             return
         t0 = time.perf_counter()
@@ -286,7 +295,7 @@ class LiveStatistics:
         t0 = time.perf_counter()
         freq = weighted_median(self.freq)
         if not self.auto:
-            acc = Accumulated({"all": self.total()}, Counter(self.freq), self.non_unit, 0.0, self.grids, "live")
+            acc = Accumulated({"all": self.total()}, Counter(self.freq), self.non_unit, 0.0, self.grids, "live", layout=self.layout)
             with blas_threads_for(self.n_samples, self.basis.n_coef * len(self.nodes)):
                 fit = fit_patterns_accumulated(acc, self.spec, list(self.nodes), self.options)
             fit.patterns.provenance = {**dict(provenance or {}), "model": self.spec.label}
@@ -301,7 +310,7 @@ class LiveStatistics:
             fitted, _ = fit_from_statistics(folds, top, orders, list(self.nodes), self.options, freq, provenance)
         model = fitted.model
         assert isinstance(model, PatternSet)  # fit_from_statistics learns patterns
-        model.training = model.training.replace(coverage_deg=self.grids)
+        model.training = model.training.replace(coverage_deg=self.grids, **self.layout.recorded())
         drift = self.drift_std_db(folds, model.training, spooled)
         if drift is not None:
             model.training = model.training.replace(drift_std_db=drift)

@@ -28,6 +28,12 @@ coefficients the drift is read at (``NormalEquations.block_coefs``: SH-10's 100 
 largest order, 1.6 kB a vector, against 3.6 kB at SH-15; an hour of one link both ways, 1,440
 vectors, 2.3 MB).
 
+The flight's layout (the nodes that held still, the radio's packet rate: ``training.fixed_nodes``,
+``training.packet_rate_hz``, which the next flight's plan is made for) is summed up chunk by chunk
+too, in a bounded :class:`~rplearn.data.flight_layout.LayoutSketch` (at most
+:data:`~rplearn.data.flight_layout.LAYOUT_ROWS` rows of poses and a few thousand intervals per
+link direction) that merges in the parts' order, and read by the rules of a fit in memory.
+
 Only pattern models (SH, BG, P) stream; the baselines need every sample (the mean model could,
 k-NN stores them).
 """
@@ -39,7 +45,7 @@ import dataclasses
 import time
 from collections import Counter
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
@@ -49,6 +55,7 @@ from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.core.lsq.selection import penalty_scale, penalty_vector
 from rplearn.core.lsq.solver import FitReport, solve
 from rplearn.core.plausible import check_one_band
+from rplearn.data.flight_layout import LayoutSketch
 from rplearn.data.row_copies import RowCopies, SourceHashes
 from rplearn.data.tables import LinkSamples, link_samples, node_ids
 from rplearn.data.units import Stretches
@@ -157,6 +164,9 @@ class Accumulated:
     copies : RowCopies, optional
         Every row's hash and the rows repeating earlier ones (:mod:`rplearn.data.row_copies`),
         refused by :func:`checked`.
+    layout : LayoutSketch
+        The learning rows' layout (who held still, the packet rate), bounded
+        (:class:`~rplearn.data.flight_layout.LayoutSketch`).
     """
 
     stats: dict[str, NormalEquations]
@@ -166,6 +176,7 @@ class Accumulated:
     grids: dict[str, list[float]] | None = None
     source: str = "dataset"
     copies: RowCopies | None = None
+    layout: LayoutSketch = field(default_factory=LayoutSketch)
 
     @property
     def n_samples(self) -> int:
@@ -187,6 +198,7 @@ class Accumulated:
         self.source = self.source if self.source == later.source else f"{self.source}, ..."
         if later.copies is not None:
             self.copies = later.copies if self.copies is None else self.copies.then(later.copies)
+        self.layout.merge(later.layout)
         return self
 
     def combined(self, later: Accumulated) -> Accumulated:
@@ -227,6 +239,7 @@ def accumulate(
             chunk = chunk[chunk["unit"].astype(str).isin(wanted).to_numpy()]
         if chunk.empty:
             continue
+        out.layout.merge(LayoutSketch.of_rows(chunk))  # the rows a fit in memory reads its layout from
         t = chunk["t"].to_numpy(np.float64) if "t" in chunk.columns else np.zeros(0)  # link_samples names a missing t
         if stretches is not None and t.size:  # one unit: its contiguous stretches of time
             labels = stretches.label(t).astype(str)
@@ -368,6 +381,7 @@ def fit_patterns_accumulated(
     learn_s += time.perf_counter() - t0
     entries = {"coverage_deg": grids, **({} if f is None else {"frequency_hz": f})}
     patterns = pattern_set_of_solution(sol, spec, basis, list(nodes), options, counts, entries)
+    patterns.training = patterns.training.replace(**acc.layout.recorded())  # as a fit in memory records them
     return StreamedFit(patterns, sol.report, normal.n_samples, non_unit, learn_s)
 
 

@@ -71,12 +71,13 @@ class TrainingSummary(Mapping[str, Any]):
         priors of samples with times, in memory, streamed or on Dask alike.
     fixed_nodes : tuple of str
         The nodes that held still in every learning row (a ground station, a parked drone:
-        :func:`rplearn.data.flight_layout.fixed_nodes`), written by a fit of a dataset in memory:
-        the next flight's plan is made for the same layout.
+        :func:`rplearn.data.flight_layout.fixed_nodes`), written by every fit, in memory, streamed,
+        on Dask or live alike (the last three from a bounded
+        :class:`~rplearn.data.flight_layout.LayoutSketch`): the next flight's plan is made for the same layout.
     packet_rate_hz : float
         The rate a link direction reported at in the learning rows [Hz]
-        (:func:`rplearn.data.flight_layout.packet_rate_hz`): the next flight's plan counts the
-        radio's packets at it.
+        (:func:`rplearn.data.flight_layout.packet_rate_hz`; written as ``fixed_nodes``): the next
+        flight's plan counts the radio's packets at it.
     prior_std_db : dict of node to float
         Each node's predictive spread where the flight never looked [dB].
     prior_std_source : str

@@ -339,7 +339,7 @@ def _fit_streamed(
         fitted, selection = fit_from_statistics(acc.stats, spec, orders, nodes, options,
                                                 frequency_hz=weighted_median(acc.freq), provenance=prov)
         assert isinstance(fitted.model, PatternSet)  # fit_from_statistics learns patterns
-        fitted.model.training = fitted.model.training.replace(coverage_deg=acc.grids or {})
+        fitted.model.training = fitted.model.training.replace(coverage_deg=acc.grids or {}, **acc.layout.recorded())
         certify(fitted.model, None, fitted.own_posterior, fitted.learning_gram)  # the selection's X^T X: the samples were streamed
         fitted.learning_gram = None
         if output:

@@ -67,7 +67,7 @@ def plan_layout(station: bool | None, packet_rate_hz: float | None, distance_m: 
     model_nodes : tuple of str
         The earlier flight's nodes.
     """
-    recorded = getattr(training, "fixed_nodes", None)  # None: not recorded (a streamed, Dask or live fit, an older file)
+    recorded = getattr(training, "fixed_nodes", None)  # None: not recorded (a file written before fits recorded it)
     still = tuple(str(n) for n in (recorded or ()))
     names = tuple(str(n) for n in model_nodes)
     usable = len(names) == 2 and len(set(names)) == 2 and all(_SAFE_NAME.match(n) for n in names)
@@ -82,8 +82,8 @@ def plan_layout(station: bool | None, packet_rate_hz: float | None, distance_m: 
             said.append(f"a ground station G and a drone D, as the earlier flight's station {still[0]} held still (its "
                         "names cannot name a reference file; --two-drones plans for two drones)")
         elif recorded is None:
-            said.append("two drones A, B: the earlier flight's layout is not recorded (a streamed, Dask or live fit, or an "
-                        "older file; --station plans for a station)")
+            said.append("two drones A, B: the earlier flight's layout is not recorded (a model file written before fits "
+                        "recorded it, or of rows without poses; --station plans for a station)")
             usable = False
         elif usable:
             said.append(f"two drones {names[0]}, {names[1]}, as in the earlier flight (--station plans for a station)")
