@@ -104,3 +104,26 @@ def test_a_plan_from_a_streamed_model_is_for_its_station_and_drone(ground, tmp_p
     assert "not recorded" not in plan.prior and "two drones" not in plan.prior.split("(")[0]
     assert tuple(plan.start_spread_db) == ("D", "G")
     assert plan.steps and not any(" of G" in s.manoeuvre.name or "G turning" in s.manoeuvre.name for s in plan.steps)
+
+
+def test_every_fit_of_relative_power_records_it_as_the_fit_in_memory_does(ground, tmp_path):
+    """Rows of uncalibrated power (``sync --rssi-scale relative``) fitted streamed in chunks or in
+    two parts record ``training.rssi_scale`` = relative as the fit in memory does (they recorded
+    nothing: their levels would be printed as dBm)."""
+    path, _, _ = ground
+    rows = pd.read_parquet(path).assign(rssi_scale="relative")
+    whole = tmp_path / "relative.parquet"
+    rows.to_parquet(whole, index=False)
+    parts = tmp_path / "relative-parts"
+    parts.mkdir()
+    half = len(rows) // 2
+    rows.iloc[:half].to_parquet(parts / "part-0.parquet", index=False)
+    rows.iloc[half:].to_parquet(parts / "part-1.parquet", index=False)
+    spec = ModelSpec.parse("sh", order=4)
+    memory = fit_dataset(str(whole), spec).fitted.model
+    assert memory.training.get("rssi_scale") == "relative"
+    for how, model in (("streamed", _streamed(str(whole), spec, FitOptions()).fitted.model),
+                       ("two parts", fit_dataset(str(parts), spec).fitted.model)):
+        assert model.training.get("rssi_scale") == "relative", how
+    calibrated = _streamed(path, spec, FitOptions()).fitted.model
+    assert calibrated.training.get("rssi_scale") is None

@@ -253,6 +253,10 @@ class LayoutSketch:
     keys, codes, poses : ndarray
         The sampled rows' keys, ``(tx, rx)`` codes and poses (``tx_x`` ... ``rx_qz``).
     links : dict of (str, str) to Intervals
+    relative : bool
+        Whether any row is of relative received power (``rssi_scale`` = ``relative``, from
+        ``sync --rssi-scale relative``): a fit of them records ``training.rssi_scale`` as a fit in
+        memory does, so that nothing downstream prints their levels as dBm.
     """
 
     rows: int = 0
@@ -263,11 +267,12 @@ class LayoutSketch:
     codes: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), np.int64))
     poses: np.ndarray = field(default_factory=lambda: np.zeros((0, 2 * len(_POSE))))
     links: dict[tuple[str, str], Intervals] = field(default_factory=dict)
+    relative: bool = False
 
     @classmethod
     def of_rows(cls, rows: pd.DataFrame) -> LayoutSketch:
         """The summary of one chunk of matched rows (``t``, ``tx``, ``rx``, both ends' poses)."""
-        out = cls(rows=len(rows), posed=all(c in rows.columns for c in _POSE_COLUMNS))
+        out = cls(rows=len(rows), posed=all(c in rows.columns for c in _POSE_COLUMNS), relative=is_relative_rssi(rows))
         if not len(rows) or "tx" not in rows.columns or "rx" not in rows.columns:
             return out
         tx, tx_names = pd.factorize(rows["tx"], use_na_sentinel=False)
@@ -299,6 +304,7 @@ class LayoutSketch:
         self.poses = np.concatenate([self.poses[a], later.poses[b]])
         self.names, self.level = names, level
         self.posed = self.posed and later.posed
+        self.relative = self.relative or later.relative
         self.rows += later.rows
         for link, ints in later.links.items():
             self.links[link] = self.links[link].then(ints) if link in self.links else ints
@@ -319,8 +325,18 @@ class LayoutSketch:
         return recorded_rate_hz(medians)
 
     def recorded(self) -> dict[str, Any]:
-        """The training-summary entries a fit of these rows writes: ``fixed_nodes``, ``packet_rate_hz``."""
-        return {"fixed_nodes": self.fixed_nodes(), "packet_rate_hz": self.packet_rate_hz()}
+        """The training-summary entries a fit of these rows writes: ``fixed_nodes``, ``packet_rate_hz``
+        and, of relative received power, ``rssi_scale`` (``relative``)."""
+        out: dict[str, Any] = {"fixed_nodes": self.fixed_nodes(), "packet_rate_hz": self.packet_rate_hz()}
+        if self.relative:
+            out["rssi_scale"] = "relative"
+        return out
+
+
+def is_relative_rssi(rows: pd.DataFrame) -> bool:
+    """Whether any of the matched rows is of relative received power (``rssi_scale`` column
+    ``relative``, any case): the rule every fit records ``training.rssi_scale`` by."""
+    return "rssi_scale" in rows.columns and bool((rows["rssi_scale"].astype(str).str.lower() == "relative").any())
 
 
 def _below(keys: np.ndarray, level: int) -> np.ndarray:
@@ -355,4 +371,4 @@ def _chunk_intervals(t: np.ndarray, tx: np.ndarray, rx: np.ndarray, names: list[
 
 
 __all__ = ["FINEST_BIN", "INTERVAL_VALUES", "LAYOUT_ROWS", "RECORDED_RATE_HZ", "STILL_ANGLE_DEG", "STILL_RADIUS_M",
-           "STILL_SHARE", "Intervals", "LayoutSketch", "fixed_nodes", "holds_still", "packet_rate_hz", "recorded_rate_hz", "still_nodes"]
+           "STILL_SHARE", "Intervals", "LayoutSketch", "fixed_nodes", "holds_still", "is_relative_rssi", "packet_rate_hz", "recorded_rate_hz", "still_nodes"]

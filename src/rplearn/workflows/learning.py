@@ -288,8 +288,8 @@ def _record_rows(model: Any, rows: Any) -> None:
     (``sync --rssi-scale relative``): nothing downstream then prints their levels as dBm; and the
     flight's layout, the nodes that held still and the radio's packet rate
     (:mod:`rplearn.data.flight_layout`), which the next flight's plan is made for."""
-    from rplearn.data.flight_layout import fixed_nodes, packet_rate_hz
-    if "rssi_scale" in rows.columns and bool((rows["rssi_scale"].astype(str).str.lower() == "relative").any()):
+    from rplearn.data.flight_layout import fixed_nodes, is_relative_rssi, packet_rate_hz
+    if is_relative_rssi(rows):
         model.training = model.training.replace(rssi_scale="relative")
     model.training = model.training.replace(fixed_nodes=fixed_nodes(rows), packet_rate_hz=packet_rate_hz(rows))
 
