@@ -198,10 +198,10 @@ def test_folds_solved_on_the_workers_give_the_search_of_one_thread(monkeypatch):
     calls: list[int] = []
     original = runtime_module.StatisticsRuntime.in_order
 
-    def counted(self, work, starts):
+    def counted(self, work, starts, **kwargs):
         starts = list(starts)
         calls.append(len(starts))
-        return original(self, work, starts)
+        return original(self, work, starts, **kwargs)
 
     monkeypatch.setattr(runtime_module.StatisticsRuntime, "in_order", counted)
     parallel = select_order_and_smoothing(units, basis, range(2, 8), RIDGE)

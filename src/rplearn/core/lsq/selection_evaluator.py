@@ -193,7 +193,7 @@ class FoldEvaluator:
         if missing:
             n_folds = len(self.folds) if self.cv else 1
             jobs = [functools.partial(self._fold_block, o, k) for o in missing for k in range(n_folds)]
-            built = list(DEFAULT_RUNTIME.in_order(on_one_blas_thread, jobs))
+            built = list(DEFAULT_RUNTIME.in_order(on_one_blas_thread, jobs, ahead=len(jobs)))
             for i, o in enumerate(missing):
                 parts = built[i * n_folds:(i + 1) * n_folds]
                 self._cache[o] = (self._weights(self.make_basis(o)), [b for b, _, _ in parts], [t for _, t, _ in parts],
@@ -263,7 +263,7 @@ class FoldEvaluator:
             plan.append((s, orders, source, reuse))
             jobs += [functools.partial(lead.group, k, s, orders, source, kept[1][k] if kept is not None and reuse else None)
                      for k in range(folds)]
-        results = list(DEFAULT_RUNTIME.in_order(on_one_blas_thread, jobs))
+        results = list(DEFAULT_RUNTIME.in_order(on_one_blas_thread, jobs, ahead=len(jobs)))
         held = 0
         for i, (s, orders, source, reuse) in enumerate(plan):
             per_fold = results[i * folds:(i + 1) * folds]
@@ -337,7 +337,7 @@ class FoldEvaluator:
         jobs = list(extra) + [job for key in keys for job in self._spread_jobs(*key)]
         if not jobs:
             return []
-        results = list(DEFAULT_RUNTIME.in_order(on_one_blas_thread, jobs))
+        results = list(DEFAULT_RUNTIME.in_order(on_one_blas_thread, jobs, ahead=len(jobs)))
         folds = len(self.folds)
         spreads = results[len(extra):]
         for i, key in enumerate(keys):
