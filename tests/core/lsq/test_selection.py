@@ -432,3 +432,22 @@ def test_the_penalty_unit_is_the_same_at_every_sh_order():
     big = stats_of(units, SphericalHarmonics(9))["u0"]
     scales = [penalty_scale(sub_statistics(big, SphericalHarmonics(o)).gram) for o in range(1, 10)]
     np.testing.assert_allclose(scales, 2 * 900 / (2 * 4 * np.pi), rtol=1e-12)
+
+
+def test_a_smaller_order_is_solved_alone_when_the_larger_system_is_not_positive_definite():
+    """When the largest order's system at a smoothing has no Cholesky factor, a smaller order
+    asked with it is factorised alone (as a point asked by itself), not left to least squares;
+    solved again it reads the same factor: the same bits."""
+    from rplearn.core.lsq.selection_evaluator import FoldEvaluator
+
+    units = stats_of(synthetic_units(n_units=3, n_per_unit=300, truth_order=2, seed=2), SphericalHarmonics(6))
+    lead = FoldEvaluator(units, SphericalHarmonics, RIDGE, 2.0).lead()
+    lead.order(6), lead.order(3)
+    c, upper, source = lead.solve(0, 3, 1e-4, (6, None))  # as when the factor at SH-6 failed
+    assert source == 3 and upper is not None and upper.shape == (18, 18)
+    alone, _, _ = lead.solve(0, 3, 1e-4, (3, lead.factor(0, 3, 1e-4)))
+    np.testing.assert_array_equal(c, alone)
+    np.testing.assert_array_equal(lead.resolve(0, 3, 1e-4, source)[0], c)
+    shared, _, read = lead.solve(0, 3, 1e-4, (6, lead.factor(0, 6, 1e-4)))  # from SH-6's factor
+    assert read == 6
+    np.testing.assert_allclose(shared, c, rtol=1e-10, atol=1e-12)
