@@ -7,12 +7,16 @@ The `paper` preset (seed 0) is simulated and synchronised (the A->B link, three 
   stores its coverage grid, which auto fits store too);
 - **auto**: ``fit_auto`` (per-unit statistics at the largest candidate order, grouped
   cross-validation from them, the final solve from the same statistics);
-- **accumulation alone** at the largest candidate order (SH-15): the floor of any selection
-  that considers SH-15, since its statistics must be accumulated once.
+- **accumulation alone** at the largest candidate order (SH-15), as ``fit_auto`` accumulates it
+  (``unit_statistics``: the units, the largest halved, on the statistics' two workers, with
+  their time blocks): the floor of any selection that considers SH-15, since its statistics
+  must be accumulated once.
 
 Printed: the times and the ratios auto / SH-10 (target 3, by the wall clock: printed as met or
 NOT met, not judged on ``--tiny``) and floor / SH-10, by the wall clock and by process CPU time
-(steadier on a shared machine).
+(steadier on a shared machine), and the phases of auto's fastest run (``FittedModel.phases_s``:
+the accumulation, the selection with the final solve run beside its last step, the closing
+covariance, spreads, drift and own posteriors, and the wait for the coverage grids).
 
 Then the same two fits as the commands a user runs, ``rplearn fit m.parquet --order auto -o
 auto.json`` against ``--order 10 -o sh10.json`` (in this process, alternating, best of

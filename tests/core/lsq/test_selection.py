@@ -451,3 +451,18 @@ def test_a_smaller_order_is_solved_alone_when_the_larger_system_is_not_positive_
     shared, _, read = lead.solve(0, 3, 1e-4, (6, lead.factor(0, 6, 1e-4)))  # from SH-6's factor
     assert read == 6
     np.testing.assert_allclose(shared, c, rtol=1e-10, atol=1e-12)
+
+
+def test_the_lead_folds_are_the_natural_folds_reordered_to_the_bit():
+    """``LeadFolds``: each fold's learning block (all units' reordered, less its held-out unit's
+    reordered) is the natural fold's reordered, to the bit, and so is its held-out block."""
+    from rplearn.core.lsq.selection_evaluator import FoldEvaluator
+
+    units = stats_of(synthetic_units(n_units=3, n_per_unit=300, seed=2), SphericalHarmonics(6))
+    ev = FoldEvaluator(units, SphericalHarmonics, RIDGE, 2.0)
+    lead = ev.lead()
+    cols = np.ix_(lead.perm, lead.perm)
+    for mine, natural in zip(lead.folds, ev.folds):
+        np.testing.assert_array_equal(mine.gram, natural.gram[cols])
+        np.testing.assert_array_equal(mine.held_gram, natural.held_gram[cols])
+        np.testing.assert_array_equal(mine.rhs, natural.rhs[lead.perm])

@@ -210,7 +210,7 @@ class FoldEvaluator:
         """The folds in the lead layout (:mod:`rplearn.core.lsq.selection_lead`), made once."""
         if self._lead is None:
             scales = [penalty_scale(f.gram, f.gram.shape[0] - self.n_shared) for f in self.folds]
-            self._lead = LeadFolds(self.folds, self.sums, self.pins, (self.big.n_coef, self.n_nodes, self.n_shared),
+            self._lead = LeadFolds(self.folds, self.gram, self.sums, self.pins, (self.big.n_coef, self.n_nodes, self.n_shared),
                                    (self.ridge, self._weights(self.big), scales),
                                    (lambda o: self.make_basis(o).n_coef, self._lead_targets))
         return self._lead

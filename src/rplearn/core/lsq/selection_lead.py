@@ -47,7 +47,10 @@ class LeadFolds:
     Parameters
     ----------
     folds : sequence of Fold
-        The folds at the largest order, natural layout (node blocks, then shared columns).
+        The folds at the largest order, natural layout (node blocks, then shared columns): each
+        learning block is ``gram`` less the held-out block (:func:`~rplearn.core.lsq.selection_folds.unit_folds`).
+    gram : numpy.ndarray
+        ``X^T X`` of all units, natural layout.
     sums : sequence of (numpy.ndarray, float)
         Per unit: its column sums ``X_u^T 1`` at the largest order and ``sum y``.
     pins : sequence
@@ -62,17 +65,16 @@ class LeadFolds:
         target of that order's fit in the lead layout (its leading columns).
     """
 
-    def __init__(self, folds: Sequence[Fold], sums: Sequence[tuple[np.ndarray, float]], pins: Sequence[Any],
+    def __init__(self, folds: Sequence[Fold], gram: np.ndarray, sums: Sequence[tuple[np.ndarray, float]], pins: Sequence[Any],
                  layout: tuple[int, int, int], penalty: tuple[float, np.ndarray, Sequence[float]],
                  orders: tuple[Callable[[int], int], Callable[[int], list[np.ndarray]]]) -> None:
         n_coef, self.n_nodes, self.n_shared = layout
         self.perm = lead_columns(n_coef, self.n_nodes, self.n_shared)
         perm = self.perm
-        def lead_fold(f: Fold) -> Fold:
-            return Fold(permuted(f.gram, layout), f.rhs[perm], permuted(f.held_gram, layout), f.held_rhs[perm],
-                        f.held_yty, f.held_n)
-
-        self.folds = list(DEFAULT_RUNTIME.in_order(lead_fold, folds))  # copies: on the workers
+        # a fold's learning block is all units' less its held-out unit's: the units' blocks and
+        # their sum reordered (copies, on the workers), then subtracted (the same bits)
+        total, *held = DEFAULT_RUNTIME.in_order(lambda g: permuted(g, layout), [gram, *(f.held_gram for f in folds)])
+        self.folds = [Fold(total - h, f.rhs[perm], h, f.held_rhs[perm], f.held_yty, f.held_n) for f, h in zip(folds, held)]
         self.sums = [(a[perm], sum_y) for a, sum_y in sums]
         self.pins = list(pins)
         ridge, weights, scales = penalty
