@@ -21,6 +21,7 @@ from typing import Any, cast
 import numpy as np
 
 from rplearn.core.lsq.normal_equations import NormalEquations
+from rplearn.core.lsq.runtime import DEFAULT_RUNTIME
 from rplearn.core.lsq.solver_cholesky import factor_inverse_upper, symmetric_inner
 
 
@@ -55,11 +56,16 @@ def unit_folds(units: Mapping[str, NormalEquations]) -> tuple[list[Fold], np.nda
     n : int
         Their samples.
     """
-    gram = cast(np.ndarray, sum(u.gram for u in units.values()))
-    rhs = cast(np.ndarray, sum(u.rhs for u in units.values()))
-    yty = float(sum(u.yty for u in units.values()))
-    n = int(sum(u.n_samples for u in units.values()))
-    folds = [Fold(gram - u.gram, rhs - u.rhs, u.gram, u.rhs, u.yty, u.n_samples) for u in units.values()]
+    every = list(units.values())
+    gram = np.array(every[0].gram, np.float64)  # summed in place, in the units' order
+    for u in every[1:]:
+        gram += u.gram
+    rhs = cast(np.ndarray, sum(u.rhs for u in every))
+    yty = float(sum(u.yty for u in every))
+    n = int(sum(u.n_samples for u in every))
+    # the learning blocks (new memory, slow on first touch: on the workers)
+    learning = list(DEFAULT_RUNTIME.in_order(lambda held: gram - held, [u.gram for u in every], ahead=len(every)))
+    folds = [Fold(g, rhs - u.rhs, u.gram, u.rhs, u.yty, u.n_samples) for g, u in zip(learning, every)]
     return folds, gram, rhs, yty, n
 
 

@@ -73,8 +73,12 @@ class LeadFolds:
         perm = self.perm
         # a fold's learning block is all units' less its held-out unit's: the units' blocks and
         # their sum reordered (copies, on the workers), then subtracted (the same bits)
-        total, *held = DEFAULT_RUNTIME.in_order(lambda g: permuted(g, layout), [gram, *(f.held_gram for f in folds)])
-        self.folds = [Fold(total - h, f.rhs[perm], h, f.held_rhs[perm], f.held_yty, f.held_n) for f, h in zip(folds, held)]
+        # (new memory, slow on first touch: the subtractions on the workers too)
+        total, *held = DEFAULT_RUNTIME.in_order(lambda g: permuted(g, layout), [gram, *(f.held_gram for f in folds)],
+                                                ahead=len(folds) + 1)
+        learning = list(DEFAULT_RUNTIME.in_order(lambda h: total - h, held, ahead=len(held)))
+        self.folds = [Fold(g, f.rhs[perm], h, f.held_rhs[perm], f.held_yty, f.held_n)
+                      for f, g, h in zip(folds, learning, held)]
         self.sums = [(a[perm], sum_y) for a, sum_y in sums]
         self.pins = list(pins)
         ridge, weights, scales = penalty
