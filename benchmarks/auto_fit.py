@@ -23,11 +23,26 @@ auto.json`` against ``--order 10 -o sh10.json`` (in this process, alternating, b
 ``repeats``): reading the file, choosing the learning units, the fit, the budget checks and the
 decoupling certificate (an automatic fit's with its unsplit components), writing the model file.
 Their ratio is printed against the same target of 3. The library's ratio is the stricter
-figure (the fixed costs of reading and writing count for both commands alike). Measured (best
-of 5, load 11-14 on 2 cores): the library 3.63 by the wall clock, 3.64 by CPU (SH-10 159 ms CPU,
-auto 578 ms, the accumulation at SH-15 alone 256 ms); the commands 2.56 by the wall clock, 2.59
-by CPU (593 and 1533 ms CPU; before the certificate read the selection's ``X^T X`` and model
-files were checked from their written text, 3.0-3.2).
+figure (the fixed costs of reading and writing count for both commands alike).
+
+Measured (issue 30, best of 5, alternating, ``RPLEARN_THREADS=1``; the 2 cores shared with
+other work, load 4.5-7): before the points of one smoothing shared one Cholesky factor per fold
+(``core/lsq/selection_lead.py``), the selection's batches were queued whole and the drift was
+read beside the covariance, the library 3.74-3.83 by the wall clock, 3.65-3.86 by CPU (at load
+0.7, default threads: SH-10 96 ms wall, 177 ms CPU, auto 357 and 609 ms, 3.73 and 3.45; with
+``RPLEARN_THREADS=1`` 4.07 by the wall clock); after, 3.24-3.50 by the
+wall clock, 3.11-3.27 by CPU (SH-10 183-212 ms CPU, auto 599-659 ms; auto's phases, wall:
+accumulation 521-544 ms, selection 302-396, closing 37-53, coverage 18-22). The selection's own
+work, CPU summed over threads: the folds' solves 102-187 ms before, 79-86 after, their blocks
+19-31 ms before, none after (the lead layout's copies: about 10), the selecting thread 77-95 ms
+before, 43-49 after. What bounds the ratio: the accumulation at SH-15 alone, on the workers as
+``fit_auto`` does it, is 1.8-2.1 times one SH-10 fit (its product of 226 x 226 feature rows over
+56,005 samples, 5.7 GFlop, runs at one core's BLAS peak, about 48 GFlop/s: 52 ms per 19,000
+samples; the features 27 ms more), and after it the final solve's spectrum and inverse (37 ms
+CPU), the tied points' inflations (9 inverses, about 30 ms) and the posteriors continued to
+SH-15 (16 ms) are needed by the model file. The commands (earlier, load 11-14): 2.56 by the wall
+clock, 2.59 by CPU (593 and 1533 ms CPU; before the certificate read the selection's ``X^T X``
+and model files were checked from their written text, 3.0-3.2).
 
 Usage: ``python benchmarks/auto_fit.py [--repeats 5]``; ``--tiny``: the ``smoke`` preset, one
 repeat (the smoke test of tests/test_benchmarks.py).
