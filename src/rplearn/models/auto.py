@@ -12,6 +12,7 @@ import functools
 import time
 from collections import Counter
 from collections.abc import Callable, Mapping, Sequence
+from contextlib import ExitStack
 from typing import Any
 
 import numpy as np
@@ -189,6 +190,53 @@ def fit_auto(
     basis = big.basis()
     reserve_block_buffer(basis, max(len(s) for s in units.values()))
     warm_up_blas()
+    # The units' statistics on the runtime's workers (unit_statistics), and the coverage grids'
+    # jobs behind them, while this thread selects the order.
+    coverage = CoverageWork(list(units.values()))
+    with DEFAULT_RUNTIME.overlapping(coverage.jobs if coverage.parallel else []) as riding, \
+            blas_threads_for(n, basis.n_coef * len(nodes)):
+        t0 = time.perf_counter()
+        stats = unit_statistics(units, basis, options)
+        accumulated = time.perf_counter()
+        freq: Counter[float] = Counter()
+        for s in units.values():
+            frequency_counts(s, freq)
+        fitted, choice = fit_from_statistics(stats, big, orders, nodes, options, weighted_median(freq), provenance,
+                                             power)
+        fitted.ltd_s = time.perf_counter() - t0
+    waited = time.perf_counter()
+    model = fitted.model
+    assert isinstance(model, PatternSet)  # fit_from_statistics learns patterns
+    grids = coverage.grids(riding.results()) if coverage.parallel else coverage.run()
+    model.training = model.training.replace(ltd_s=fitted.ltd_s, coverage_deg=grids)
+    fitted.phases_s = {"accumulation": accumulated - t0, **(fitted.phases_s or {}),
+                       "coverage": time.perf_counter() - waited}
+    return fitted, choice
+
+
+def unit_statistics(units: Mapping[str, LinkSamples], basis: Any, options: FitOptions) -> dict[str, NormalEquations]:
+    """Every unit's statistics at ``basis``, as :func:`fit_auto` accumulates them.
+
+    The samples of each unit (or of half of one, :func:`unit_pieces`, so that the pieces keep
+    the runtime's workers busy to the end) on the workers, one piece each, the halves added up
+    in order, with each sample's time block (the sums per block of the drifting error, at the
+    planning order's coefficients, from the same pass).
+
+    Parameters
+    ----------
+    units : mapping of unit label to LinkSamples
+        Every unit's samples (none empty), with one node list.
+    basis : Basis
+        The largest candidate order's basis.
+    options : FitOptions
+        The environment term (:func:`rplearn.models.terms.regression_inputs`).
+
+    Returns
+    -------
+    dict of unit label to NormalEquations
+        In ``units``' order.
+    """
+    nodes = next(iter(units.values())).nodes
     inputs = {u: regression_inputs(s, options) for u, s in units.items()}
     block_coefs = planning_basis(basis).n_coef  # the blocks' sums: only what the drift reads
 
@@ -201,29 +249,12 @@ def fit_auto(
             Directions(*(np.asarray(d)[a:b] for d in s.directions)), np.asarray(s.tx_index)[a:b],
             np.asarray(s.rx_index)[a:b], y[a:b], None if env is None else env[a:b], time_block=blocks)
 
-    # The units' statistics on the runtime's workers, a unit (or half of one, so that the pieces
-    # keep both workers busy to the end) each, the halves added up in order, and the coverage
-    # grids' jobs behind them, while this thread selects the order.
-    coverage = CoverageWork(list(units.values()))
-    with DEFAULT_RUNTIME.overlapping(coverage.jobs if coverage.parallel else []) as riding, \
-            blas_threads_for(n, basis.n_coef * len(nodes)):
-        t0 = time.perf_counter()
-        pieces = unit_pieces({u: len(s) for u, s in units.items()}, DEFAULT_RUNTIME.workers)
-        stats: dict[str, NormalEquations] = {}
-        for (u, _, _), part in sorted(zip(pieces, list(DEFAULT_RUNTIME.in_order(piece_statistics, pieces)), strict=True),
-                                      key=lambda item: (list(units).index(item[0][0]), item[0][1])):
-            stats[u] = stats[u].merge(part) if u in stats else part
-        freq: Counter[float] = Counter()
-        for s in units.values():
-            frequency_counts(s, freq)
-        fitted, choice = fit_from_statistics(stats, big, orders, nodes, options, weighted_median(freq), provenance,
-                                             power)
-        fitted.ltd_s = time.perf_counter() - t0
-    model = fitted.model
-    assert isinstance(model, PatternSet)  # fit_from_statistics learns patterns
-    grids = coverage.grids(riding.results()) if coverage.parallel else coverage.run()
-    model.training = model.training.replace(ltd_s=fitted.ltd_s, coverage_deg=grids)
-    return fitted, choice
+    pieces = unit_pieces({u: len(s) for u, s in units.items()}, DEFAULT_RUNTIME.workers)
+    stats: dict[str, NormalEquations] = {}
+    for (u, _, _), part in sorted(zip(pieces, list(DEFAULT_RUNTIME.in_order(piece_statistics, pieces)), strict=True),
+                                  key=lambda item: (list(units).index(item[0][0]), item[0][1])):
+        stats[u] = stats[u].merge(part) if u in stats else part
+    return stats
 
 
 #: Fewest samples in half a unit :func:`unit_pieces` splits (shorter blocks cost more per sample).
@@ -258,6 +289,12 @@ def unit_pieces(sizes: Mapping[str, int], workers: int) -> list[tuple[str, int, 
             break
         pieces[largest: largest + 1] = [(u, a, (a + b) // 2), (u, (a + b) // 2, b)]
     return sorted(pieces, key=lambda piece: piece[1] - piece[2])
+
+
+def _one_thread(fn: Callable[..., Any], *args: Any) -> Any:
+    """``fn(*args)`` with one BLAS thread (small products: threads would only wait for each other)."""
+    with one_blas_thread():
+        return fn(*args)
 
 
 def _final_setup(total: NormalEquations, big: Any, kind: str, ridge: float, power: float, order: int, smoothing: float,
@@ -382,6 +419,7 @@ def fit_from_statistics(
                   if i not in same[:1])]
 
     searched_prior = keeps_prior(kind, target, first.basis, len(nodes))
+    selecting = time.perf_counter()
     results, choice = select_beside(stats, make_basis, orders, ridge, power, prior=SearchPrior(target, prior_level),
                                     beside=None if searched_prior else final_jobs)
     keep, compared = False, None
@@ -400,6 +438,7 @@ def fit_from_statistics(
         if keep:
             stats, total, shape, search_target, choice = (deviation.units, deviation.total, deviation.shape,
                                                          deviation.target, kept)
+    selected = time.perf_counter()
     final = ModelSpec(kind, orders[-1] if keep else choice.order, ridge=ridge, smoothing=choice.smoothing)
     chosen, normal, scale, penalty, sub_target = early["setup"] if early else _final_setup(
         total, first.basis, kind, ridge, power, choice.order, choice.smoothing, search_target)
@@ -408,7 +447,7 @@ def fit_from_statistics(
                                                                             choice.ties, make_basis)
     # else the own-pattern posteriors' inverses on the statistics' workers while this thread
     # solves (one BLAS thread each, this thread's too): they do not depend on the final solve
-    with DEFAULT_RUNTIME.beside(jobs) as continued:
+    with DEFAULT_RUNTIME.beside(jobs) as continued, ExitStack() as stack:
         sol = results[0] if early else solve(normal, list(nodes), ridge=ridge, gauge=gauge, penalty=penalty,
                                              penalty_target=sub_target, prior_level=prior_level)
         inflation = float(choice.variance_inflation)
@@ -425,9 +464,10 @@ def fit_from_statistics(
         # the next flight's plan: the drifting error from the time blocks kept in the same pass
         # (with a prior the penalty pulls toward it, which the moments do not model: none; at the
         # search's largest smoothing the flat pattern leaves every shape to the offsets: none)
-        with one_blas_thread():  # small products: threads would only wait for each other
-            drift = None if target is not None or at_smoothing_cap(choice.smoothing) else drift_std_db(
-                unit_stats, total, choice.smoothing * scale, ridge, power, float(np.sqrt(noise_var)))
+        # (on a worker while this thread reads the covariance below: one BLAS thread each)
+        drift_jobs = [] if target is not None or at_smoothing_cap(choice.smoothing) else [functools.partial(
+            _one_thread, drift_std_db, unit_stats, total, choice.smoothing * scale, ridge, power, float(np.sqrt(noise_var)))]
+        drifted = stack.enter_context(DEFAULT_RUNTIME.beside(drift_jobs))
         rescale = within_var / sol.residual_variance_db2 if sol.residual_variance_db2 > 0 else 1.0
         # the covariance's basis: the chosen one, or with the prior kept the largest (auto_prior)
         model_basis, cov_normal, cov_penalty = chosen, normal, penalty
@@ -484,6 +524,7 @@ def fit_from_statistics(
             covariance = covariance.copy()
             covariance[:pat, :pat] += misfit_covariance(model_basis, len(nodes), misfit_var / 2.0)  # two ends a sample
         parts = _early_parts(early, results, plain_total, names) if early else continued()
+        drift = drifted()[0] if drift_jobs else None
     with one_blas_thread():
         own = own_pattern_posterior(plain_total, chosen, names, own_prior, noise_var, uncapped,
                                     (lambda: parts[0]) if own_first else None)
@@ -517,9 +558,10 @@ def fit_from_statistics(
                        gauge=[g.to_dict() for g in sol.report.gauges], training=TrainingSummary.from_dict(training), **fields)
     model.provenance = {**dict(provenance or {}), "model": final.label}
     gram = LearningGram(plain_total.basis, len(nodes), plain_total.gram, int(plain_total.n_samples))
-    return FittedModel(final, model, ltd, own_posterior=own, learning_gram=gram), choice
+    phases = {"selection": selected - selecting, "closing": time.perf_counter() - selected}
+    return FittedModel(final, model, ltd, own_posterior=own, learning_gram=gram, phases_s=phases), choice
 
 
-__all__ = ["MIN_PIECE_SAMPLES", "held_out_misfit_var", "misfit_covariance", "unit_pieces",
+__all__ = ["MIN_PIECE_SAMPLES", "unit_statistics", "held_out_misfit_var", "misfit_covariance", "unit_pieces",
            "unseen_spread_cap_db", "within_unit_noise_var", "MAX_AUTO_ORDER", "PRIOR_PENALTY_POWER", "SAMPLES_PER_COEF", "auto_orders", "fit_auto",
            "fit_from_statistics", "prior_coefficients", "prior_misfit_var", "prior_std_db"]

@@ -77,6 +77,10 @@ class FittedModel:
     certificate reads; not saved with the model (the certificate it gives is).
     ``learning_gram`` (automatic fits): the learning design's ``X^T X`` (:class:`LearningGram`),
     for the certificate; not saved either.
+    ``phases_s`` (automatic fits in memory, :func:`rplearn.models.auto.fit_auto`): the wall time
+    [s] of its phases, ``accumulation`` (the units' statistics), ``selection`` (the search, with
+    the final solve run beside its last step), ``closing`` (the covariance, spreads, drift and own
+    posteriors after it) and ``coverage`` (waiting for the coverage grids); not saved.
     """
 
     spec: ModelSpec
@@ -84,6 +88,7 @@ class FittedModel:
     ltd_s: float
     own_posterior: Any = None
     learning_gram: LearningGram | None = None
+    phases_s: dict[str, float] | None = None
 
     @property
     def label(self) -> str:

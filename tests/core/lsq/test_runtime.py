@@ -186,3 +186,26 @@ def test_jobs_beside_a_busy_pool_run_in_the_caller_when_asked_and_once():
     assert list(outer) == [1, 2, 3]
     with runtime.beside([]) as results:  # no job: nothing to hold the pool for
         assert results() == []
+
+
+@pytest.mark.parametrize("ahead", [None, 6])
+def test_a_caller_that_keeps_every_result_queues_every_job_behind_a_long_one(ahead):
+    """``in_order(ahead=n)``: all ``n`` jobs queued at once, so that the other worker goes on past
+    a long first job (the order selection's final solve beside the inflations' folds); by
+    default only :attr:`StatisticsRuntime.ahead` are (the accumulation's bounded memory)."""
+    runtime = StatisticsRuntime(workers=2, ahead=3)
+    last_started = threading.Event()
+
+    def work(i: int) -> bool:
+        if i == 0:  # the long job: done when the last job has started, or after a while
+            return last_started.wait(timeout=1.0)
+        if i == 5:
+            last_started.set()
+        return True
+
+    try:
+        results = list(runtime.in_order(work, range(6), ahead=ahead))
+    finally:
+        runtime.forget_pool()
+    assert results[1:] == [True] * 5
+    assert results[0] is (ahead is not None)

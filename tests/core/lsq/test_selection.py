@@ -198,10 +198,10 @@ def test_folds_solved_on_the_workers_give_the_search_of_one_thread(monkeypatch):
     calls: list[int] = []
     original = runtime_module.StatisticsRuntime.in_order
 
-    def counted(self, work, starts):
+    def counted(self, work, starts, **kwargs):
         starts = list(starts)
         calls.append(len(starts))
-        return original(self, work, starts)
+        return original(self, work, starts, **kwargs)
 
     monkeypatch.setattr(runtime_module.StatisticsRuntime, "in_order", counted)
     parallel = select_order_and_smoothing(units, basis, range(2, 8), RIDGE)
@@ -238,31 +238,86 @@ def test_without_room_for_the_factors_the_inflation_solves_again(monkeypatch):
 
 def test_the_tied_points_inflations_reuse_the_kept_factors(monkeypatch):
     """The folds' factors of the best points are kept (``_KEPT_FACTOR_BYTES``): the inflations of
-    the chosen and tied points factorise nothing again (one solve per fold of each curve point);
-    without room for them (the best point's alone) the tied points solve again, to the same
-    inflations."""
+    the chosen and tied points solve nothing again; without room for them (the best point's
+    alone) the tied points solve again, from the factor of the order they were read from, to the
+    same inflations."""
     from rplearn.core.lsq import selection_evaluator as selection_module
+    from rplearn.core.lsq.selection_lead import LeadFolds
 
     monkeypatch.setenv("RPLEARN_THREADS", "1")
     units = stats_of(synthetic_units(n_units=3, n_per_unit=600, truth_order=3, seed=9), SphericalHarmonics(6))
     solves: list[int] = []
-    original = selection_module.FoldEvaluator._solve
+    original = LeadFolds.resolve
 
     def counted(self, *args, **kwargs):
         solves.append(1)
         return original(self, *args, **kwargs)
 
-    monkeypatch.setattr(selection_module.FoldEvaluator, "_solve", counted)
+    monkeypatch.setattr(LeadFolds, "resolve", counted)
     kept = select_order_and_smoothing(units, SphericalHarmonics, range(2, 7), RIDGE)
     assert len(kept.ties) >= 2  # else nothing to reuse: the test would not test
-    assert len(solves) == 3 * len(kept.curve)
-    solves.clear()
+    assert solves == []
     monkeypatch.setattr(selection_module, "_KEPT_FACTOR_BYTES", 0)
     again = select_order_and_smoothing(units, SphericalHarmonics, range(2, 7), RIDGE)
-    assert len(solves) > 3 * len(again.curve)
+    assert solves
     assert [t[:2] for t in again.ties] == [t[:2] for t in kept.ties]
     np.testing.assert_array_equal([t[2] for t in again.ties], [t[2] for t in kept.ties])
     assert again.variance_inflation == kept.variance_inflation
+
+
+def _count_factorisations(monkeypatch) -> list[int]:
+    """The size of every Cholesky factorisation the selection makes (its modules' ``spd_factor``)."""
+    import importlib
+
+    calls: list[int] = []
+    for name in ("selection_evaluator", "selection_lead"):
+        try:
+            module = importlib.import_module(f"rplearn.core.lsq.{name}")
+        except ImportError:
+            continue
+        original = module.spd_factor
+
+        def counted(matrix, *args, _original=original, **kwargs):
+            calls.append(matrix.shape[0])
+            return _original(matrix, *args, **kwargs)
+
+        monkeypatch.setattr(module, "spd_factor", counted)
+    return calls
+
+
+def test_one_factorisation_per_fold_and_smoothing_serves_the_smaller_orders(monkeypatch):
+    """The points of one smoothing are solved from one Cholesky factor per fold, at the largest
+    order asked there (a smaller order's system is a leading block in the lead layout): fewer
+    factorisations than points times folds (before: one per point and fold), and every point
+    validates as its order factorised alone does, to rounding."""
+    from rplearn.core.lsq.selection_evaluator import FoldEvaluator
+
+    monkeypatch.setenv("RPLEARN_THREADS", "1")
+    units = stats_of(synthetic_units(n_units=3, n_per_unit=700, truth_order=4, seed=5), SphericalHarmonics(8))
+    calls = _count_factorisations(monkeypatch)
+    sel = select_order_and_smoothing(units, SphericalHarmonics, range(2, 9), RIDGE)
+    searched = len(calls)
+    assert searched < 3 * len(sel.curve)
+    by_smoothing: dict[float, list[int]] = {}
+    for p in sel.curve:
+        by_smoothing.setdefault(p.smoothing, []).append(p.order)
+    assert any(len(v) > 1 for v in by_smoothing.values())  # else nothing to share: the test would not test
+    for p in sel.curve:  # each point alone: a new evaluator factorises its own order
+        alone = FoldEvaluator(units, SphericalHarmonics, RIDGE, 2.0).rmse(p.order, p.smoothing)
+        assert p.rmse_db == pytest.approx(alone, rel=1e-11)
+
+
+def test_the_lead_layout_puts_every_smaller_order_in_a_leading_block():
+    """``lead_columns``: shared columns first, then each coefficient of every node; an order's
+    problem is the leading block, its columns those of ``nested_columns`` (with the shared ones)."""
+    from rplearn.core.lsq.selection_folds import lead_columns, lead_size
+
+    perm = lead_columns(SphericalHarmonics(4).n_coef, 3, 2)
+    assert sorted(perm) == list(range(3 * 16 + 2)) and list(perm[:2]) == [48, 49]
+    for order in (1, 2, 3, 4):
+        m = lead_size(SphericalHarmonics(order).n_coef, 3, 2)
+        wanted = set(nested_columns(SphericalHarmonics(4), SphericalHarmonics(order), 3)) | {48, 49}
+        assert set(perm[:m]) == wanted
 
 
 @pytest.mark.parametrize("threads", [None, "2"])
@@ -272,7 +327,6 @@ def test_a_fold_solved_in_the_calling_thread_is_solved_with_one_blas_thread(monk
     from threadpoolctl import threadpool_limits
 
     from rplearn.core.lsq import runtime as runtime_module
-    from rplearn.core.lsq import selection_evaluator as selection_module
     from rplearn.core.threads import _controller
 
     if threads is None:
@@ -280,14 +334,16 @@ def test_a_fold_solved_in_the_calling_thread_is_solved_with_one_blas_thread(monk
     else:
         monkeypatch.setenv("RPLEARN_THREADS", threads)
     units = stats_of(synthetic_units(n_units=3, n_per_unit=500, truth_order=3, seed=11), SphericalHarmonics(6))
+    from rplearn.core.lsq import selection_lead
+
     seen: list[int] = []
-    factor = selection_module.spd_factor
+    factor = selection_lead.spd_factor
 
     def counted(*args, **kwargs):
         seen.append(max(lib.num_threads for lib in _controller().select(user_api="blas").lib_controllers))
         return factor(*args, **kwargs)
 
-    monkeypatch.setattr(selection_module, "spd_factor", counted)
+    monkeypatch.setattr(selection_lead, "spd_factor", counted)
     on_workers = select_order_and_smoothing(units, SphericalHarmonics, range(2, 7), RIDGE)
     lock = runtime_module.DEFAULT_RUNTIME._lock
     with threadpool_limits(2, user_api="blas"):
@@ -304,13 +360,14 @@ def test_a_fold_solved_in_the_calling_thread_is_solved_with_one_blas_thread(monk
 
 
 def test_fold_blocks_built_on_the_workers_and_kept_give_the_same_search(monkeypatch):
-    """The fold blocks of every order the search asks for are built on the workers at once and
-    kept within ``_CACHE_BYTES``; with room for only ``_CACHED_ORDERS`` orders (built again as
-    the search comes back) the search is the same to the last bit: the same copies."""
+    """The blocks of every order the search asks for (generalised cross-validation: one unit)
+    are built on the workers at once and kept within ``_CACHE_BYTES``; with room for only
+    ``_CACHED_ORDERS`` orders (built again as the search comes back) the search is the same to
+    the last bit: the same copies."""
     from rplearn.core.lsq import selection_evaluator as selection_module
 
     monkeypatch.setenv("RPLEARN_THREADS", "1")
-    units = stats_of(synthetic_units(n_units=3, n_per_unit=700, truth_order=4, seed=11), SphericalHarmonics(8))
+    units = stats_of(synthetic_units(n_units=1, n_per_unit=2100, truth_order=4, seed=11), SphericalHarmonics(8))
     built: list[tuple[int, int]] = []
     original = selection_module.FoldEvaluator._fold_block
 
@@ -320,7 +377,7 @@ def test_fold_blocks_built_on_the_workers_and_kept_give_the_same_search(monkeypa
 
     monkeypatch.setattr(selection_module.FoldEvaluator, "_fold_block", counted)
     kept = select_order_and_smoothing(units, SphericalHarmonics, range(2, 9), RIDGE)
-    assert len(built) == len(set(built))  # every (order, fold) built once
+    assert built and len(built) == len(set(built))  # every (order, fold) built once
     once = len(built)
     built.clear()
     monkeypatch.setattr(selection_module, "_CACHE_BYTES", 0)
@@ -354,3 +411,58 @@ def test_work_beside_the_last_step_gets_the_choice_and_changes_nothing():
     one_unit = {"u0": units["u0"]}  # GCV: no folds, the jobs run all the same
     results, gcv = select_beside(one_unit, SphericalHarmonics, range(2, 7), RIDGE, beside=jobs)
     assert gcv.method == "gcv" and results == [gcv.order * 10, 0]
+
+
+def test_permuted_is_the_lead_layouts_fancy_index():
+    """``permuted``: block by block, the same matrix as ``matrix[perm][:, perm]``."""
+    from rplearn.core.lsq.selection_folds import lead_columns, permuted
+
+    for layout in ((9, 2, 0), (4, 3, 2), (1, 2, 1)):
+        n = layout[0] * layout[1] + layout[2]
+        matrix = np.random.default_rng(n).normal(size=(n, n))
+        perm = lead_columns(*layout)
+        np.testing.assert_array_equal(permuted(matrix, layout), matrix[np.ix_(perm, perm)])
+
+
+def test_the_penalty_unit_is_the_same_at_every_sh_order():
+    """The folds' penalty unit is read at the largest order for every order (``selection_lead``):
+    the mean diagonal of ``X^T X`` over the pattern columns is ``samples / (4 pi)`` per node end
+    at every SH order (Unsöld's theorem), to rounding."""
+    units = synthetic_units(n_units=1, n_per_unit=900, seed=4)
+    big = stats_of(units, SphericalHarmonics(9))["u0"]
+    scales = [penalty_scale(sub_statistics(big, SphericalHarmonics(o)).gram) for o in range(1, 10)]
+    np.testing.assert_allclose(scales, 2 * 900 / (2 * 4 * np.pi), rtol=1e-12)
+
+
+def test_a_smaller_order_is_solved_alone_when_the_larger_system_is_not_positive_definite():
+    """When the largest order's system at a smoothing has no Cholesky factor, a smaller order
+    asked with it is factorised alone (as a point asked by itself), not left to least squares;
+    solved again it reads the same factor: the same bits."""
+    from rplearn.core.lsq.selection_evaluator import FoldEvaluator
+
+    units = stats_of(synthetic_units(n_units=3, n_per_unit=300, truth_order=2, seed=2), SphericalHarmonics(6))
+    lead = FoldEvaluator(units, SphericalHarmonics, RIDGE, 2.0).lead()
+    lead.order(6), lead.order(3)
+    c, upper, source = lead.solve(0, 3, 1e-4, (6, None))  # as when the factor at SH-6 failed
+    assert source == 3 and upper is not None and upper.shape == (18, 18)
+    alone, _, _ = lead.solve(0, 3, 1e-4, (3, lead.factor(0, 3, 1e-4)))
+    np.testing.assert_array_equal(c, alone)
+    np.testing.assert_array_equal(lead.resolve(0, 3, 1e-4, source)[0], c)
+    shared, _, read = lead.solve(0, 3, 1e-4, (6, lead.factor(0, 6, 1e-4)))  # from SH-6's factor
+    assert read == 6
+    np.testing.assert_allclose(shared, c, rtol=1e-10, atol=1e-12)
+
+
+def test_the_lead_folds_are_the_natural_folds_reordered_to_the_bit():
+    """``LeadFolds``: each fold's learning block (all units' reordered, less its held-out unit's
+    reordered) is the natural fold's reordered, to the bit, and so is its held-out block."""
+    from rplearn.core.lsq.selection_evaluator import FoldEvaluator
+
+    units = stats_of(synthetic_units(n_units=3, n_per_unit=300, seed=2), SphericalHarmonics(6))
+    ev = FoldEvaluator(units, SphericalHarmonics, RIDGE, 2.0)
+    lead = ev.lead()
+    cols = np.ix_(lead.perm, lead.perm)
+    for mine, natural in zip(lead.folds, ev.folds):
+        np.testing.assert_array_equal(mine.gram, natural.gram[cols])
+        np.testing.assert_array_equal(mine.held_gram, natural.held_gram[cols])
+        np.testing.assert_array_equal(mine.rhs, natural.rhs[lead.perm])

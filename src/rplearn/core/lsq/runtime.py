@@ -206,8 +206,10 @@ class StatisticsRuntime:
         finally:
             lock.release()
 
-    def in_order(self, work: Callable[[Any], T], starts: Iterable[Any]) -> Iterator[T]:
-        """``work(s)`` for every block start ``s``, yielded in order.
+    def in_order(self, work: Callable[[Any], T], starts: Iterable[Any], ahead: int | None = None) -> Iterator[T]:
+        """``work(s)`` for every block start ``s``, yielded in order; ``ahead``: the jobs queued
+        ahead of the one waited for (default :attr:`ahead`; a caller that keeps every result, as
+        the order selection does, queues them all, so that no worker waits behind a long job).
 
         With two or more blocks, the worker threads compute them (:attr:`ahead` at most ahead,
         so memory stays bounded), each with one BLAS thread: computing the features is plain
@@ -235,7 +237,7 @@ class StatisticsRuntime:
             with one_blas_thread():
                 for s in starts:
                     pending.append(pool.submit(work, s))
-                    if len(pending) >= self.ahead:
+                    if len(pending) >= (self.ahead if ahead is None else max(int(ahead), 1)):
                         yield pending.popleft().result()
                 self._start_riders(pool)  # behind the last block (overlapping)
                 while pending:

@@ -1,10 +1,13 @@
 """The validation errors behind :mod:`rplearn.core.lsq.selection`: grouped cross-validation (or
 GCV) of one order and smoothing from the per-unit statistics at the largest order.
 
-:class:`FoldEvaluator` keeps every point it has computed (the validation curve), the folds' blocks
-of the orders the search visits (within :data:`_CACHE_BYTES`), and the Cholesky factors of a
-batch of points solved at once, for the variance inflations of the chosen and tied points
-(:meth:`FoldEvaluator.spread`). The search itself is in :mod:`rplearn.core.lsq.selection`.
+:class:`FoldEvaluator` keeps every point it has computed (the validation curve), the Cholesky
+factors of a batch of points solved at once, for the variance inflations of the chosen and tied
+points (:meth:`FoldEvaluator.spread`), and the blocks of the orders the search visits for
+generalised cross-validation (within :data:`_CACHE_BYTES`). With held-out units the folds are
+solved in the lead layout of :mod:`rplearn.core.lsq.selection_lead`: the points of one smoothing
+from one factorisation per fold, whatever their orders. The search itself is in
+:mod:`rplearn.core.lsq.selection`.
 """
 
 
@@ -19,7 +22,8 @@ from rplearn.core.lsq.level import shrink_target
 from rplearn.core.lsq.normal_equations import EXPONENT_MIN_SPREAD_DB, NormalEquations, schur_spread_db
 from rplearn.core.lsq.penalty import nested_columns, penalty_scale, with_shared_columns
 from rplearn.core.lsq.runtime import DEFAULT_RUNTIME
-from rplearn.core.lsq.selection_folds import Fold, fold_spread_terms, on_one_blas_thread, sub_block, unit_folds
+from rplearn.core.lsq.selection_folds import fold_spread_terms, lead_size, on_one_blas_thread, sub_block, unit_folds
+from rplearn.core.lsq.selection_lead import LeadFolds
 from rplearn.core.lsq.selection_result import CurvePoint
 from rplearn.core.lsq.solver_cholesky import factor_solve, spd_factor
 from rplearn.errors import InputError
@@ -93,6 +97,9 @@ class FoldEvaluator:
         self._solved: dict[tuple[int, float], list[tuple[np.ndarray, np.ndarray | None]]] = {}
         self._solved_nbytes: dict[tuple[int, float], int] = {}
         self._pending: dict[tuple[int, float], list[tuple[np.ndarray, np.ndarray | None, float]]] = {}  # prefetch()
+        self._source: dict[tuple[int, float], list[int]] = {}  # per point and fold: the order its factor was read from
+        self._lead: LeadFolds | None = None
+        self._top_targets: list[np.ndarray] | None = None
 
     def _fold_pins(self, units: Mapping[str, NormalEquations]) -> list[tuple[np.ndarray, np.ndarray] | None]:
         """Per fold, the shared columns its learning units cannot identify, pinned to a
@@ -186,7 +193,7 @@ class FoldEvaluator:
         if missing:
             n_folds = len(self.folds) if self.cv else 1
             jobs = [functools.partial(self._fold_block, o, k) for o in missing for k in range(n_folds)]
-            built = list(DEFAULT_RUNTIME.in_order(on_one_blas_thread, jobs))
+            built = list(DEFAULT_RUNTIME.in_order(on_one_blas_thread, jobs, ahead=len(jobs)))
             for i, o in enumerate(missing):
                 parts = built[i * n_folds:(i + 1) * n_folds]
                 self._cache[o] = (self._weights(self.make_basis(o)), [b for b, _, _ in parts], [t for _, t, _ in parts],
@@ -199,44 +206,77 @@ class FoldEvaluator:
             del self._cache_nbytes[next(iter(self._cache))]
             self._cache.pop(next(iter(self._cache)))
 
-    def _fold_tasks(self, order: int, smoothing: float) -> list[Callable[[], tuple[np.ndarray, np.ndarray | None, float]]]:
-        """Per fold, the work of one point: its penalised solution, the factor of its system and
-        the held-out unit's squared error (independent of the other folds: any thread)."""
-        w, blocks, targets, scales = self._blocks(int(order))
-        tasks: list[Callable[[], tuple[np.ndarray, np.ndarray | None, float]]] = []
-        for (g, r, held_g, held_r), f, pin, target, scale in zip(blocks, self.folds, self.pins, targets, scales):
-            def task(g: np.ndarray = g, r: np.ndarray = r, held_g: np.ndarray = held_g, held_r: np.ndarray = held_r,
-                     f: Fold = f, pin: Any = pin, target: np.ndarray = target,
-                     weight: float = smoothing * scale) -> tuple[np.ndarray, np.ndarray | None, float]:
-                c, upper = self._solve(g, self._pulled(g, r, w, weight, target, pin), w, weight, pin)
-                return c, upper, max(f.held_yty - 2.0 * c @ held_r + c @ held_g @ c, 0.0)
-            tasks.append(task)
-        return tasks
+    def lead(self) -> LeadFolds:
+        """The folds in the lead layout (:mod:`rplearn.core.lsq.selection_lead`), made once."""
+        if self._lead is None:
+            scales = [penalty_scale(f.gram, f.gram.shape[0] - self.n_shared) for f in self.folds]
+            self._lead = LeadFolds(self.folds, self.gram, self.sums, self.pins, (self.big.n_coef, self.n_nodes, self.n_shared),
+                                   (self.ridge, self._weights(self.big), scales),
+                                   (lambda o: self.make_basis(o).n_coef, self._lead_targets))
+        return self._lead
+
+    def _lead_targets(self, order: int) -> list[np.ndarray]:
+        """Per fold, the target of an order's fit in the lead layout: without a prior, the largest
+        order's leading part (the constants' levels read off the constant and shared columns
+        alone: the same at every order); with one, each order's own, reordered."""
+        lead = self.lead()
+        m = lead_size(self.make_basis(order).n_coef, self.n_nodes, self.n_shared)
+        if self.target is None:
+            if self._top_targets is None:
+                self._top_targets = [self._target(f.gram, f.rhs, self.big, None)[lead.perm] for f in self.folds]
+            return [t[:m] for t in self._top_targets]
+        idx = with_shared_columns(nested_columns(self.big, self.make_basis(order), self.n_nodes), self.first)
+        jobs = [functools.partial(self._fold_block, int(order), k) for k in range(len(self.folds))]
+        out = []
+        for _, t, _ in DEFAULT_RUNTIME.in_order(on_one_blas_thread, jobs):  # read once: the blocks are not kept
+            full = np.zeros(self.gram.shape[0])
+            full[idx] = t
+            out.append(full[lead.perm][:m])
+        return out
 
     def prefetch(self, points: Sequence[tuple[int, float]]) -> None:
         """Solve every fold of the points not validated yet, on the statistics' workers at once
         (:meth:`~rplearn.core.lsq.runtime.StatisticsRuntime.in_order`: one core each, or here when
         the workers are busy); :meth:`rmse` then records them, in the order it is asked. Nothing
-        depends on which thread solved what. The factors are kept (for :meth:`spread` of the best
-        point) up to :data:`_PENDING_FACTOR_BYTES` a batch; past it only the solutions."""
+        depends on which thread solved what. The points of one smoothing are solved from one
+        factorisation per fold, at the largest of their orders or one kept from earlier
+        (:mod:`rplearn.core.lsq.selection_lead`). Their factors are kept (for :meth:`spread` of
+        the best point) up to :data:`_PENDING_FACTOR_BYTES` a batch; past it only the solutions."""
         if not self.cv:
             return
         keys = list(dict.fromkeys((int(o), float(s)) for o, s in points if (int(o), float(s)) not in self.seen))
         keys = [k for k in keys if k not in self._pending]
         if not keys:
             return
-        orders = list(dict.fromkeys(o for o, _ in keys))
-        if sum(self._order_bytes(o) for o in orders) <= _CACHE_BYTES:  # else one order at a time (_blocks)
-            self._ensure_blocks(orders)
-        tasks = [task for key in keys for task in self._fold_tasks(*key)]
-        results: list[tuple[np.ndarray, Any, float]] = []
-        held = 0
-        for c, upper, sse in DEFAULT_RUNTIME.in_order(on_one_blas_thread, tasks):
-            held += 0 if upper is None else upper.size * 8
-            results.append((c, upper if upper is None or held <= _PENDING_FACTOR_BYTES else _DROPPED, sse))
+        lead = self.lead()
+        groups: dict[float, list[int]] = {}
+        for o, s in keys:
+            lead.order(o)  # made here, read by the jobs
+            groups.setdefault(s, []).append(o)
         folds = len(self.folds)
-        for i, key in enumerate(keys):
-            self._pending[key] = results[i * folds:(i + 1) * folds]
+        plan: list[tuple[float, list[int], int, bool]] = []
+        jobs: list[Callable[[], Any]] = []
+        for s, orders in groups.items():
+            kept = lead.factors.get(s)
+            reuse = kept is not None and kept[0] >= max(orders)
+            source = kept[0] if kept is not None and reuse else max(orders)
+            plan.append((s, orders, source, reuse))
+            jobs += [functools.partial(lead.group, k, s, orders, source, kept[1][k] if kept is not None and reuse else None)
+                     for k in range(folds)]
+        results = list(DEFAULT_RUNTIME.in_order(on_one_blas_thread, jobs, ahead=len(jobs)))
+        held = 0
+        for i, (s, orders, source, reuse) in enumerate(plan):
+            per_fold = results[i * folds:(i + 1) * folds]
+            if not reuse:
+                lead.keep(s, source, [upper for upper, _ in per_fold])
+            for j, o in enumerate(orders):
+                entries: list[tuple[np.ndarray, Any, float]] = []
+                for _, points_of_fold in per_fold:
+                    c, upper, sse, _ = points_of_fold[j]
+                    held += 0 if upper is None else upper.size * 8
+                    entries.append((c, upper if upper is None or held <= _PENDING_FACTOR_BYTES else _DROPPED, sse))
+                self._pending[(o, s)] = entries
+                self._source[(o, s)] = [points_of_fold[j][3] for _, points_of_fold in per_fold]
 
     def rmse(self, order: int, smoothing: float) -> float:
         key = (int(order), float(smoothing))
@@ -297,7 +337,7 @@ class FoldEvaluator:
         jobs = list(extra) + [job for key in keys for job in self._spread_jobs(*key)]
         if not jobs:
             return []
-        results = list(DEFAULT_RUNTIME.in_order(on_one_blas_thread, jobs))
+        results = list(DEFAULT_RUNTIME.in_order(on_one_blas_thread, jobs, ahead=len(jobs)))
         folds = len(self.folds)
         spreads = results[len(extra):]
         for i, key in enumerate(keys):
@@ -306,23 +346,20 @@ class FoldEvaluator:
 
     def _spread_jobs(self, order: int, smoothing: float) -> list[Callable[[], Any]]:
         """Per fold, the work of :func:`~rplearn.core.lsq.selection_folds.fold_spread_terms` (None
-        when its system is not positive definite), solving again unless the point's factors
-        were kept (:meth:`_keep_solved`)."""
-        w, blocks, targets, scales = self._blocks(int(order))
-        idx = with_shared_columns(nested_columns(self.big, self.make_basis(int(order)), self.n_nodes), self.first)
-        sums = [(a[idx], sum_y) for a, sum_y in self.sums]
-        counts = np.array([f.held_n for f in self.folds], np.float64)
+        when its system is not positive definite), solving again, from the factor of the order the
+        point was read from (the same bits), unless the point's factors were kept (:meth:`_keep_solved`)."""
+        lead = self.lead()
         key = (int(order), float(smoothing))
+        sums = lead.column_sums(int(order))
+        counts = np.array([f.held_n for f in self.folds], np.float64)
         solved = self._solved.get(key)
+        sources = self._source.get(key, [int(order)] * len(self.folds))
         jobs: list[Callable[[], Any]] = []
-        for k, ((g, r, held_g, held_r), f, pin, target) in enumerate(zip(blocks, self.folds, self.pins, targets)):
-            fold = Fold(g, r, held_g, held_r, f.held_yty, f.held_n)
-
-            def job(fold: Fold = fold, k: int = k, pin: Any = pin, target: np.ndarray = target, weight: float = smoothing * scales[k],
-                    known: Any = None if solved is None else solved[k]) -> Any:
-                c, upper = known if known is not None else self._solve(
-                    fold.gram, self._pulled(fold.gram, fold.rhs, w, weight, target, pin), w, weight, pin)
-                return None if upper is None else fold_spread_terms(c, upper, fold, k, sums, counts, (self.n, self.yty))
+        for k in range(len(self.folds)):
+            def job(k: int = k, known: Any = None if solved is None else solved[k]) -> Any:
+                c, upper = known if known is not None else lead.resolve(k, key[0], key[1], sources[k])
+                return None if upper is None else fold_spread_terms(c, upper, lead.fold(k, key[0]), k, sums, counts,
+                                                                    (self.n, self.yty))
             jobs.append(job)
         return jobs
 
