@@ -14,24 +14,34 @@ from rplearn.errors import InputError
 from rplearn.io import ReaderOptions, read_logs
 from rplearn.io._common import Logs
 from rplearn.io.tlog import TlogDefects, write_tlog
+from rplearn.io.tlog_copies import N_BINS
 from rplearn.io.tlog_tail import DROPS, TlogTail, whole_records
 
 ORIGIN = (47.3977, 8.5456, 90.0)
 #: positions invalid for 15 s, a reboot at 200 s (10 s invalid after it), every reading twice
 DEFECTS = TlogDefects(invalid_until_s=15.0, reboot_at_s=200.0, reboot_silence_s=5.0, invalid_after_reboot_s=10.0,
                       radio_twice=True)
+#: The simulated flight keeps every THIN-th pose row and every THIN-th signal row of each direction (the same
+#: seconds, a quarter of the messages: 25 Hz poses, ~22 Hz readings each way): what these tests read does not
+#: depend on the messages' density, and pymavlink's pure-Python parsing of them was most of the file's time.
+#: Byte counts that stand for seconds of flight (the pieces appended between polls) are divided by it.
+THIN = 4
 
 
 @pytest.fixture(scope="module")
 def ground():
+    """The ``ground`` flight (416 s), thinned by :data:`THIN` (its station row kept)."""
     pose, signal = ground_flight(10.0)
-    return Logs(pose, signal[["t", "tx", "rx", "rssi_dbm", "tx_power_dbm", "frequency_hz"]])
+    pose = pose[(pose["node"] != "D") | (pose.groupby("node").cumcount() % THIN == 0)]
+    signal = signal[signal.groupby(["tx", "rx"]).cumcount() % THIN == 0]
+    return Logs(pose.reset_index(drop=True),
+                signal[["t", "tx", "rx", "rssi_dbm", "tx_power_dbm", "frequency_hz"]].reset_index(drop=True))
 
 
 @pytest.fixture(scope="module")
 def ground_260s(ground):
     """The first 260 s of ``ground`` (of 416 s): past :data:`DEFECTS`' reboot at 200 s and the
-    15 s after it, with some 65,000 messages to tail in a hundred pieces."""
+    15 s after it, with some 17,000 messages (:data:`THIN`) to tail in a hundred pieces."""
     end = float(ground.pose["t"].min()) + 260.0
     return Logs(ground.pose[ground.pose["t"] < end].reset_index(drop=True),
                 ground.signal[ground.signal["t"] < end].reset_index(drop=True))
@@ -88,7 +98,7 @@ def _grow(whole, grown, seed: int = 0):
     rng = np.random.default_rng(seed)
     poses, signals, pos, done = [], [], 0, 0
     while pos < len(data):
-        pos = min(len(data), pos + int(rng.integers(2_000, 60_000)))
+        pos = min(len(data), pos + int(rng.integers(2_000 // THIN, 60_000 // THIN)))
         with grown.open("ab") as fh:
             fh.write(data[grown.stat().st_size:pos])
         p, s = tail.poll()
@@ -166,11 +176,11 @@ def test_a_tail_without_transmit_power_names_it(tmp_path):
 #: Bytes appended between two polls where a test's point is what a late message changes about
 #: rows handed out earlier (the rows handed out before it over several polls), not the polls
 #: themselves: about 8 s of the ground flight, 31 polls over 260 s.
-LATE_PIECE_BYTES = 80_000
+LATE_PIECE_BYTES = 80_000 // THIN
 
 
-def _poll_in_pieces(whole, grown, piece_bytes: int = 40_000):
-    """Append ``whole`` to ``grown`` a piece at a time (40 kB: about 4 s of the ground flight),
+def _poll_in_pieces(whole, grown, piece_bytes: int = 40_000 // THIN):
+    """Append ``whole`` to ``grown`` a piece at a time (40 kB / :data:`THIN`: about 4 s of the ground flight),
     polling after each: the rows handed out, the tail, and its :meth:`TlogTail.sizes` after each
     poll with the share of the log's bytes read."""
     data = whole.read_bytes()
@@ -209,7 +219,10 @@ def test_the_state_kept_between_polls_does_not_grow_with_the_log(clean_260s, tmp
     assert set(middle) == set(last)
     for name, n in last.items():
         assert n <= 1.05 * middle[name] + 8, (name, middle[name], n)
-    assert max(last.values()) < 6_000  # about 10 s of window
+    # about 10 s of window: under 6,000 of the full flight's ~69,700 messages over 260 s (THIN); the copies'
+    # histogram of gaps has its fixed N_BINS + 1 bins whatever the density
+    assert last.pop("window.copies.bins") == N_BINS + 1
+    assert max(last.values()) < 6_000 / 69_700 * len(_records(clean_260s.read_bytes())), last
     assert tail.dropped == dict.fromkeys(tail.dropped, 0)  # nothing appeared or vanished behind
     _assert_offline_rows(poses, signals, ref)
 
@@ -234,7 +247,7 @@ def test_a_position_jump_that_never_returns_withdraws_the_rows_handed_out_before
     # the first row the offline reader keeps (the live time base may place it up to 2e-4 s earlier)
     cut = float(ref_vehicle["t"].min()) - 2e-4
     before = vehicle[vehicle["t"] < cut]
-    assert len(before) > 10_000  # handed out while they were valid
+    assert len(before) > 0.5 * int((~moved & (pose["node"] == "D")).sum())  # handed out while they were valid
     assert tail.dropped["withdrawn_pose_rows"] == len(before)
     assert tail.dropped["withdrawn_signal_rows"] == int((signals["t"] < cut).sum())
     after = vehicle[vehicle["t"] >= cut].reset_index(drop=True)
@@ -457,7 +470,7 @@ def test_glitches_that_return_leave_the_counts_balanced(ground_260s, tmp_path):
 
 
 @pytest.mark.xfail(strict=True, reason="review 37: the signal counts are 22 rows short of balance (handed out - "
-                   "withdrawn + late = 4755 against sync's 4733 over the first 260 s, 19766 against 19744 over the "
+                   "withdrawn + late = 4755 against sync's 4733 over the first 260 s at full density, 19766 against 19744 over the "
                    "whole 416 s; the pose rows balance); cause not traced (not from the pieces' counts by received "
                    "messages: none turned valid without rows handed out)")
 def test_glitches_then_a_jump_that_stays_leave_the_signal_counts_balanced(ground_260s, tmp_path):
