@@ -36,11 +36,20 @@ def _logs(d_rows: slice, station: bool = False) -> tuple[pd.DataFrame, pd.DataFr
     return pose, pd.concat(sig, ignore_index=True).sort_values("t", kind="stable")
 
 
+def _edges(batch_s: float) -> np.ndarray:
+    """Batch edges [s] of log time: ``batch_s`` apart in the first second and from 14 to 16 s (where a
+    node's log starts or ends, so that it has one pose row so far; and the station's first rows), a
+    second apart elsewhere (each batch re-matches what is waiting: fewer batches, a faster test)."""
+    fine = np.concatenate([np.arange(0.0, 1.0, batch_s), np.arange(14.0, 16.0, batch_s)])
+    return np.unique(np.round(np.concatenate([fine, np.arange(0.0, 32.0, 1.0)]), 6))
+
+
 def _live(pose: pd.DataFrame, sig: pd.DataFrame, batch_s: float) -> tuple[int, dict, list[int]]:
-    """Matched rows, drops and rows matched per batch, fed ``batch_s`` of log time at a time."""
-    m, per_batch = LiveMatcher(), []
-    kp, ks = np.floor(pose["t"].to_numpy() / batch_s + 1e-6), np.floor(sig["t"].to_numpy() / batch_s + 1e-6)
-    for k in range(int(31 / batch_s)):
+    """Matched rows, drops and rows matched per batch, fed by the batches of :func:`_edges`."""
+    m, per_batch, edges = LiveMatcher(), [], _edges(batch_s)
+    kp = np.searchsorted(edges, pose["t"].to_numpy() + 1e-6, side="right") - 1
+    ks = np.searchsorted(edges, sig["t"].to_numpy() + 1e-6, side="right") - 1
+    for k in range(edges.size - 1):
         m.add_poses(pose[kp == k])
         m.add_signals(sig[ks == k])
         per_batch.append(len(m.match().dataset))

@@ -165,7 +165,7 @@ def test_a_csv_being_appended_to_ends_with_the_offline_model(smoke, tmp_path):
     assert _max_difference_db(learned, offline, data) < 1e-6
     _same_planning_fields(learned, offline)
     # the next flight is planned from the live model file (refused before: "has no training.drift_std_db")
-    plan = optimize_plan(str(tmp_path / "plan"), OptimizeOptions(model="sh-5", target_spread_db=2.5, budget_s=120.0,
+    plan = optimize_plan(str(tmp_path / "plan"), OptimizeOptions(model="sh-5", target_spread_db=2.5, budget_s=15.0,
                                                                  from_model=str(tmp_path / "live.json")))
     assert plan.prior is not None and f"drift {learned.training.drift_std_db:.2f} dB per 5-s block" in plan.prior
     assert plan.paths
@@ -226,7 +226,9 @@ def test_the_prequential_error_of_the_last_fifth_predicts_a_later_flights_error(
     sig = r.signal_log
     first = sig[sig["unit"] == unit.label].drop(columns=["unit"])
     later = sig[sig["unit"] == "test_0"].drop(columns=["unit"])
-    outcome = replay_session(r.pose_log, first, str(tmp_path / "m.json"), LiveOptions(refit_s=5.0))
+    # batches as long as the refit period: each is predicted by the model of the rows before it, as
+    # with 1-s batches (a refit every 5 s either way), in a fifth of the batches
+    outcome = replay_session(r.pose_log, first, str(tmp_path / "m.json"), LiveOptions(refit_s=5.0), batch_s=5.0)
     model = outcome.fitted.model
     held = link_samples(synchronise(r.pose_log, later).dataset, "later flight", nodes=model.nodes)
     held_rmse = float(np.sqrt(np.mean((held.joint_gain_db - model.predict_gain(held)) ** 2)))

@@ -45,19 +45,29 @@ def _append(pose, signal, s: int, rng, g_links_from: float = 0.0, g_poses_from: 
                 fs.write(f"{t + 0.06 + 0.005 * j:.3f},{a},{b},{-60 - 0.1 * j - 0.01 * k:.2f},20,433000000\n")
 
 
+#: Seconds of log appended between two polls: two (a poll a second made 80 polls a test; the hold is in the
+#: table's time, :data:`HOLD_S`, so what runs out when is the same).
+POLL_S = 2
+
+
+def _flight(pose, signal, tail, session, seconds: int, rng, **kw) -> None:
+    """``seconds`` of :func:`_append`, polled, fed and learned every :data:`POLL_S` seconds; the last poll final."""
+    for s in range(0, seconds, POLL_S):
+        for k in range(s, min(s + POLL_S, seconds)):
+            _append(pose, signal, k, rng, **kw)
+        final = s + POLL_S >= seconds
+        polled = tail.poll(final=final)
+        session.feed(polled.poses, polled.signals, polled.held_nodes)
+        session.learn(final=final)
+
+
 @pytest.mark.parametrize("g_links_from", [0.0, 3.0])
 def test_a_held_node_is_in_the_sessions_node_list_and_its_rows_are_learned(tmp_path, g_links_from):
     """Also when the held node's links start later than the others' (a station's radio heard from t = 3 s: the
     rows of A and B learned first fixed the nodes as A, B, and G's rows ended the session when its hold ran out)."""
     rng = np.random.default_rng(7)
     pose, signal, tail, session = _tail_and_session(tmp_path)
-    seconds = int(HOLD_S) + 20
-    for s in range(seconds):  # a poll a second
-        _append(pose, signal, s, rng, g_links_from)
-        final = s == seconds - 1
-        polled = tail.poll(final=final)
-        session.feed(polled.poses, polled.signals, polled.held_nodes)
-        session.learn(final=final)
+    _flight(pose, signal, tail, session, int(HOLD_S) + 20, rng, g_links_from=g_links_from)
     assert session.stats is not None and session.stats.nodes == ("A", "B", "G")
     logs, _ = read_logs([str(pose), str(signal)], READER)
     whole = synchronise(logs.pose, logs.signal)
@@ -103,13 +113,7 @@ def test_clock_offsets_naming_a_held_node_lose_no_rows_while_it_is_held(tmp_path
     rng = np.random.default_rng(9)
     sync = SyncOptions(clock_offsets_s={"G": 0.0})
     pose, signal, tail, session = _tail_and_session(tmp_path, LiveOptions(reader=READER, sync=sync))
-    seconds = int(HOLD_S) + 20
-    for s in range(seconds):
-        _append(pose, signal, s, rng)
-        final = s == seconds - 1
-        polled = tail.poll(final=final)
-        session.feed(polled.poses, polled.signals, polled.held_nodes)
-        session.learn(final=final)
+    _flight(pose, signal, tail, session, int(HOLD_S) + 20, rng)
     logs, _ = read_logs([str(pose), str(signal)], READER)
     assert session.stats is not None and session.stats.n_samples == len(synchronise(logs.pose, logs.signal, sync).dataset)
     assert not any("clock offsets" in n for n in session.status.notes)
@@ -144,12 +148,7 @@ def test_a_node_first_logged_after_the_node_list_is_fixed_is_a_counted_drop_not_
     rng = np.random.default_rng(9)
     pose, signal, tail, session = _tail_and_session(tmp_path)
     seconds = int(HOLD_S) + 10
-    for s in range(seconds):
-        _append(pose, signal, s, rng, g_poses_from=2.0)
-        final = s == seconds - 1
-        polled = tail.poll(final=final)
-        session.feed(polled.poses, polled.signals, polled.held_nodes)
-        session.learn(final=final)
+    _flight(pose, signal, tail, session, seconds, rng, g_poses_from=2.0)
     assert session.stats is not None and session.stats.nodes == ("A", "B")
     assert session.status.dropped["late_node"] > 0
     assert any(n.startswith("late: node(s) G appeared after the session fixed its nodes (A, B)") and "--nodes" in n

@@ -145,7 +145,8 @@ def test_the_final_model_is_that_of_the_ranking_in_the_loop(smoke, tmp_path):
     for beside in (True, False):  # a refit every 15 s of the 75 s flight: five automatic-order refits and the last
         options = LiveOptions(refit_s=15.0, manoeuvres=ranker, rank_beside=beside)
         out = tmp_path / f"{beside}.json"
-        outcomes[beside] = (replay_session(pose, sig, str(out), options), out)
+        # 3-s batches: a refit every fifth batch (every fifteenth at 1 s), a third of the batches
+        outcomes[beside] = (replay_session(pose, sig, str(out), options, batch_s=3.0), out)
     (a, path_a), (b, path_b) = outcomes[True], outcomes[False]
     assert a.status.refits == b.status.refits and a.fitted.model.label == b.fitted.model.label
     # a ranking beside the loop holds the process-wide BLAS limit at one thread while it runs, so the
