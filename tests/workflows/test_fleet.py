@@ -301,3 +301,17 @@ def test_parts_holding_the_same_rows_are_refused_alike_here_and_on_dask(fleet, c
     with pytest.raises(InputError) as scored:
         predict_parts(dataset_parts(str(folder)), [load_model(model_path)], None, client)
     assert str(scored.value) == message
+
+
+def test_a_local_cluster_leaves_this_processs_environment_as_it_was(monkeypatch):
+    """distributed's nanny sets its pre-spawn variables (OMP_NUM_THREADS=1, OPENBLAS_NUM_THREADS=1,
+    MKL_NUM_THREADS=1, PYTHONHASHSEED) in the spawning process's own environment and never undoes
+    it: every process started after a Dask fit ran single-threaded BLAS (a test's subprocess found
+    numpy's and scipy's OpenBLAS at one thread). The environment is now as it was."""
+    need_dask()
+    for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "PYTHONHASHSEED"):
+        monkeypatch.delenv(name, raising=False)
+    before = dict(os.environ)
+    with dask_client("local:1") as c:
+        assert c.submit(lambda: os.environ.get("OPENBLAS_NUM_THREADS")).result() == "1"  # the worker's is set
+    assert dict(os.environ) == before

@@ -19,6 +19,8 @@ and see the files: object storage URLs, or a shared disk).
 
 from __future__ import annotations
 
+import os
+
 import signal
 import threading
 import urllib.parse
@@ -164,6 +166,19 @@ def _one_line(exc: BaseException) -> str:
 
 
 @contextmanager
+def _environment_kept() -> Iterator[None]:
+    """This process's environment as it was before the block, put back on exit (variables set
+    inside removed, changed ones restored)."""
+    saved = dict(os.environ)
+    try:
+        yield
+    finally:
+        for name in set(os.environ) - set(saved):
+            del os.environ[name]
+        os.environ.update(saved)
+
+
+@contextmanager
 def dask_client(address: str) -> Iterator[Any]:
     """A :class:`distributed.Client` for a ``--dask`` value, closed (and its local cluster
     stopped) on exit, quietly (also on Ctrl-C: the local workers ignore SIGINT, this process
@@ -179,7 +194,10 @@ def dask_client(address: str) -> Iterator[Any]:
 
     # Single-threaded BLAS in each worker: the workers are the parallelism.
     env = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
-    with dask.config.set({"distributed.nanny.pre-spawn-environ": env}):
+    # distributed's nanny sets these in this process's own environment before it spawns a worker
+    # (os.environ.update, never undone): every process this one starts afterwards would run
+    # single-threaded BLAS with a fixed PYTHONHASHSEED; this process's environment is put back
+    with _environment_kept(), dask.config.set({"distributed.nanny.pre-spawn-environ": env}):
         if kind == "local":
             try:
                 with _children_ignore_sigint():
