@@ -20,7 +20,6 @@ and see the files: object storage URLs, or a shared disk).
 from __future__ import annotations
 
 import os
-
 import signal
 import threading
 import urllib.parse
