@@ -219,6 +219,23 @@ def test_ar1_filter_is_lfilter_bit_for_bit(n: int, a: float, b: float, monkeypat
     assert np.array_equal(ar1_filter(drive, a, b, before), ref)
 
 
+def test_ar1_filter_uses_lfilter_once_scipy_signal_is_imported(monkeypatch) -> None:
+    """Once the process has imported ``scipy.signal``, even a short series is filtered by
+    ``lfilter`` (about 40 times faster than the loop; the same numbers)."""
+    import sys
+    import types
+
+    calls: list[int] = []
+
+    def lfilter(b, a, x, axis, zi):
+        calls.append(len(x))
+        return np.zeros_like(x), zi
+
+    monkeypatch.setitem(sys.modules, "scipy.signal", types.SimpleNamespace(lfilter=lfilter))
+    ar1_filter(np.ones((10, 1)), 0.5, 1.0, np.zeros(1))
+    assert calls == [10]
+
+
 def test_a_smoke_flight_imports_no_signal_processing_library() -> None:
     """``scipy.signal`` (which pulls in ``scipy.stats``) costs about 1 s of CPU to import: the
     smoke flight's short series are filtered without it."""
