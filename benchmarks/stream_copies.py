@@ -22,13 +22,13 @@ not enforced).
 
 from __future__ import annotations
 
-import argparse
 import os
 import sys
 import tempfile
 import time
 import tracemalloc
 
+import _stream_data
 import numpy as np
 import pandas as pd
 
@@ -36,10 +36,6 @@ from rplearn.data.row_copies import SourceHashes
 from rplearn.errors import InputError
 from rplearn.io.files import iter_table
 from rplearn.models import streamed
-from rplearn.models.spec import ModelSpec
-from rplearn.sim import simulate
-from rplearn.workflows import learning
-from rplearn.workflows.logs import sync_logs
 
 TARGET = 0.10
 
@@ -76,14 +72,7 @@ class NoCheck(SourceHashes):
 
 def make_dataset(folder: str, rows: int) -> tuple[str, str]:
     """One file of ``rows`` distinct rows and the same written twice."""
-    simulate("smoke", seed=4, out_dir=os.path.join(folder, "f"))
-    one = os.path.join(folder, "m.parquet")
-    sync_logs([os.path.join(folder, "f", "pose_log.parquet")], [os.path.join(folder, "f", "signal_log.parquet")], one)
-    df = pd.read_parquet(one)
-    span = float(df["t"].max() - df["t"].min()) + 1.0
-    copies = -(-rows // len(df))
-    big = pd.concat([df.assign(t=df["t"] + k * span, unit=df["unit"] + f"_{k % 4}") for k in range(copies)],
-                    ignore_index=True).iloc[:rows]
+    big = _stream_data.repeated_flight(folder, rows, "smoke", seed=4)
     path, twice = os.path.join(folder, "big.parquet"), os.path.join(folder, "twice.parquet")
     big.to_parquet(path, index=False)
     pd.concat([big, big], ignore_index=True).to_parquet(twice, index=False)
@@ -94,9 +83,8 @@ def fit(path: str, check: bool):
     TimedCheck.seconds = 0.0
     streamed.SourceHashes = TimedCheck if check else NoCheck  # type: ignore[misc]
     try:
-        t0 = time.perf_counter()
-        out = learning.fit_dataset(path, ModelSpec.parse("sh-10"))
-        return time.perf_counter() - t0, out
+        wall, _, out = _stream_data.timed_fit(path, "sh-10")
+        return wall, out
     finally:
         streamed.SourceHashes = SourceHashes  # type: ignore[misc]
 
@@ -121,26 +109,19 @@ def check_alone(path: str) -> tuple[float, int, int]:
 
 
 def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--rows", type=float, default=1e6)
-    parser.add_argument("--repeats", type=int, default=3)
-    parser.add_argument("--tiny", action="store_true", help="20,000 rows, once; targets not enforced")
-    args = parser.parse_args()
-    rows, repeats = (20_000, 1) if args.tiny else (int(args.rows), args.repeats)
-    learning.STREAM_FIT_ROWS = 0  # every file streamed, in chunks of PART_CHUNK_ROWS
-    learning.STREAM_FIT_BYTES = 0
-    print(f"load {open('/proc/loadavg').read().split()[:3]}")
+    opts = _stream_data.start(__doc__.splitlines()[0], "20,000 rows, once; targets not enforced")
+    rows = opts.rows
     ok = True
     with tempfile.TemporaryDirectory() as folder:
         path, twice = make_dataset(folder, rows)
-        with_s, without_s, inside_s = float("inf"), float("inf"), float("inf")
-        for k in range(repeats):  # alternately, each first in turn
-            for check in (True, False) if k % 2 == 0 else (False, True):
-                s, out = fit(path, check)
-                if check:
-                    with_s, inside_s, checked = min(with_s, s), min(inside_s, TimedCheck.seconds), out
-                else:
-                    without_s, plain = min(without_s, s), out
+
+        def timed(check: bool):  # noqa: ANN202
+            s, out = fit(path, check)
+            return (s, TimedCheck.seconds), out
+
+        best, last = _stream_data.best_alternating(timed, opts.repeats)
+        (with_s, inside_s), (without_s, _) = best[True], best[False]
+        checked, plain = last[True], last[False]
         a, b = checked.fitted.model, plain.fitted.model
         same = np.array_equal(a.coef, b.coef) and np.array_equal(a.covariance, b.covariance)
         ok &= same and checked.n_samples == plain.n_samples
@@ -162,7 +143,7 @@ def main() -> int:
             refused = str(exc).split(" (first")[0]
             ok &= f"{rows:,} row(s)" in refused
         print(f"the file written twice: {refused}")
-    if not args.tiny and share >= TARGET:
+    if not opts.tiny and share >= TARGET:
         ok = False
     return 0 if ok else 1
 

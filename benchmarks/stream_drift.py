@@ -22,23 +22,18 @@ Run: ``.venv/bin/python benchmarks/stream_drift.py`` (``--tiny``: 20,000 rows, o
 
 from __future__ import annotations
 
-import argparse
-import os
 import sys
 import tempfile
 import time
 
+import _stream_data
 import numpy as np
-import pandas as pd
 
 from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.io.files import iter_table
 from rplearn.models import auto, streamed
 from rplearn.models.options import FitOptions
 from rplearn.models.spec import ModelSpec
-from rplearn.sim import simulate
-from rplearn.workflows import learning
-from rplearn.workflows.logs import sync_logs
 
 
 class NoBlocks(NormalEquations):
@@ -62,55 +57,41 @@ def recording(fit_from_statistics):  # noqa: ANN001, ANN201
     return wrapped
 
 
-def make_dataset(folder: str, rows: int) -> str:
-    """One file of ``rows`` distinct rows (the smoke flight shifted in time, four unit labels)."""
-    simulate("smoke", seed=4, out_dir=os.path.join(folder, "f"))
-    one = os.path.join(folder, "m.parquet")
-    sync_logs([os.path.join(folder, "f", "pose_log.parquet")], [os.path.join(folder, "f", "signal_log.parquet")], one)
-    df = pd.read_parquet(one)
-    span = float(df["t"].max() - df["t"].min()) + 1.0
-    copies = -(-rows // len(df))
-    big = pd.concat([df.assign(t=df["t"] + k * span, unit=df["unit"] + f"_{k % 4}") for k in range(copies)],
-                    ignore_index=True).iloc[:rows]
-    path = os.path.join(folder, "big.parquet")
-    big.to_parquet(path, index=False)
-    return path
-
-
 def fit(path: str, blocks: bool):  # noqa: ANN201
     streamed.NormalEquations = NormalEquations if blocks else NoBlocks  # type: ignore[misc]
     KEPT.clear()
     try:
-        w0, c0 = time.perf_counter(), time.process_time()
-        out = learning.fit_dataset(path, ModelSpec.parse("sh"), options=FitOptions(auto=True))
-        return time.perf_counter() - w0, time.process_time() - c0, out
+        return _stream_data.timed_fit(path, "sh", FitOptions(auto=True))
+    finally:
+        streamed.NormalEquations = NormalEquations  # type: ignore[misc]
+
+
+def accumulate_cpu(chunks: list, nodes: list[str], path: str, blocks: bool) -> float:
+    """CPU seconds of the SH-15 statistics of every unit of ``chunks``, with the block sums or without."""
+    streamed.NormalEquations = NormalEquations if blocks else NoBlocks  # type: ignore[misc]
+    try:
+        c0 = time.process_time()
+        streamed.accumulate(chunks, ModelSpec("sh", 15), nodes, None, path, by_unit=True)
+        return time.process_time() - c0
     finally:
         streamed.NormalEquations = NormalEquations  # type: ignore[misc]
 
 
 def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--rows", type=float, default=1e6)
-    parser.add_argument("--repeats", type=int, default=3)
-    parser.add_argument("--tiny", action="store_true", help="20,000 rows, once")
-    args = parser.parse_args()
-    rows, repeats = (20_000, 1) if args.tiny else (int(args.rows), args.repeats)
-    learning.STREAM_FIT_ROWS = 0  # every file streamed, in chunks of PART_CHUNK_ROWS
-    learning.STREAM_FIT_BYTES = 0
+    opts = _stream_data.start(__doc__.splitlines()[0], "20,000 rows, once")
+    rows, repeats = opts.rows, opts.repeats
     auto.fit_from_statistics = recording(auto.fit_from_statistics)  # type: ignore[assignment]
-    print(f"load {open('/proc/loadavg').read().split()[:3]}")
     ok = True
     with tempfile.TemporaryDirectory() as folder:
-        path = make_dataset(folder, rows)
-        best = {True: [float("inf"), float("inf")], False: [float("inf"), float("inf")]}
-        outs, kept = {}, {}
+        path = _stream_data.dataset_file(folder, rows, "smoke", seed=4)
         fit(path, False)  # not timed: the first fit of a process pays imports and warm-up
-        for k in range(repeats):  # alternately, each first in turn
-            for blocks in (True, False) if k % 2 == 0 else (False, True):
-                wall, cpu, outs[blocks] = fit(path, blocks)
-                kept[blocks] = dict(KEPT)
-                best[blocks] = [min(best[blocks][0], wall), min(best[blocks][1], cpu)]
-        a, b = outs[True], outs[False]
+
+        def timed(blocks: bool):  # noqa: ANN202
+            wall, cpu, out = fit(path, blocks)
+            return (wall, cpu), (out, dict(KEPT))
+
+        best, last = _stream_data.best_alternating(timed, repeats)
+        (a, kept), (b, kept_without) = last[True], last[False]
         drift, none = a.fitted.model.training.drift_std_db, b.fitted.model.training.drift_std_db
         ca, cb = np.asarray(a.fitted.model.coef), np.asarray(b.fitted.model.coef)
         diff = float(np.max(np.abs(ca - cb)) / np.max(np.abs(cb)))
@@ -122,23 +103,14 @@ def main() -> int:
               f"ratio {best[True][0] / best[False][0]:.3f}x wall, {best[True][1] / best[False][1]:.3f}x CPU")
         print(f"drift_std_db: {drift if drift is None else f'{drift:.4f}'} dB with the sums, {none} without; "
               f"the same order and smoothing: {same}; coefficients differ by {diff:.1e} of the largest at most")
-        n_kept, size = kept[True].get("vectors", 0), kept[True].get("bytes", 0)
+        n_kept, size = kept.get("vectors", 0), kept.get("bytes", 0)
         print(f"block sums kept: {n_kept:,} vectors (unit x 5-s block x directed link), {size / 2**20:.2f} MiB, "
-              f"{size / max(rows, 1):.1f} bytes a row; without: {kept[False].get('vectors', 0)}")
+              f"{size / max(rows, 1):.1f} bytes a row; without: {kept_without.get('vectors', 0)}")
         chunks = list(iter_table(path, streamed.PART_CHUNK_ROWS))
         nodes = sorted(set(chunks[0]["tx"].astype(str)) | set(chunks[0]["rx"].astype(str)))
-        alone = {True: float("inf"), False: float("inf")}
-        for k in range(repeats):
-            for blocks in (True, False) if k % 2 == 0 else (False, True):
-                streamed.NormalEquations = NormalEquations if blocks else NoBlocks  # type: ignore[misc]
-                try:
-                    c0 = time.process_time()
-                    streamed.accumulate(chunks, ModelSpec("sh", 15), nodes, None, path, by_unit=True)
-                    alone[blocks] = min(alone[blocks], time.process_time() - c0)
-                finally:
-                    streamed.NormalEquations = NormalEquations  # type: ignore[misc]
-        print(f"the accumulation alone (SH-15, every unit): {alone[True]:.2f} s CPU with the sums, {alone[False]:.2f} s "
-              f"without: ratio {alone[True] / alone[False]:.3f}x")
+        alone, _ = _stream_data.best_alternating(lambda blocks: ((accumulate_cpu(chunks, nodes, path, blocks),), None), repeats)
+        print(f"the accumulation alone (SH-15, every unit): {alone[True][0]:.2f} s CPU with the sums, {alone[False][0]:.2f} s "
+              f"without: ratio {alone[True][0] / alone[False][0]:.3f}x")
     return 0 if ok else 1
 
 

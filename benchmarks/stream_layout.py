@@ -22,23 +22,18 @@ not enforced).
 
 from __future__ import annotations
 
-import argparse
-import os
 import pickle
 import sys
 import tempfile
 import time
 
+import _stream_data
 import numpy as np
 import pandas as pd
 
 from rplearn.data import flight_layout
 from rplearn.data.flight_layout import LayoutSketch
 from rplearn.data.units import select_units
-from rplearn.models.spec import ModelSpec
-from rplearn.sim import simulate
-from rplearn.workflows import learning
-from rplearn.workflows.logs import sync_logs
 
 TARGET = 1.05
 
@@ -78,58 +73,32 @@ def _no_merge(self: LayoutSketch, later: LayoutSketch) -> LayoutSketch:
     return self
 
 
-def make_dataset(folder: str, rows: int) -> str:
-    """One file of ``rows`` distinct rows of a station and a drone."""
-    simulate("ground", seed=0, out_dir=os.path.join(folder, "f"))
-    one = os.path.join(folder, "m.parquet")
-    sync_logs([os.path.join(folder, "f", "pose_log.parquet")], [os.path.join(folder, "f", "signal_log.parquet")], one)
-    df = pd.read_parquet(one)
-    span = float(df["t"].max() - df["t"].min()) + 1.0
-    copies = -(-rows // len(df))
-    big = pd.concat([df.assign(t=df["t"] + k * span, unit=df["unit"] + f"_{k % 4}") for k in range(copies)],
-                    ignore_index=True).iloc[:rows]
-    path = os.path.join(folder, "big.parquet")
-    big.to_parquet(path, index=False)
-    return path
-
-
 def fit(path: str, sketch: bool):
     """The streamed fit with the sketch timed, or with one that sums up nothing (the fit as before)."""
     Timer.seconds, Timer.last = 0.0, None
     LayoutSketch.of_rows = classmethod(_timed_of_rows if sketch else _no_of_rows)  # type: ignore[method-assign,assignment]
     LayoutSketch.merge = _timed_merge if sketch else _no_merge  # type: ignore[method-assign]
     try:
-        t0, c0 = time.perf_counter(), time.process_time()
-        out = learning.fit_dataset(path, ModelSpec.parse("sh-10"))
-        return time.perf_counter() - t0, time.process_time() - c0, out
+        return _stream_data.timed_fit(path, "sh-10")
     finally:
         LayoutSketch.of_rows = classmethod(_OF_ROWS)  # type: ignore[method-assign,assignment]
         LayoutSketch.merge = _MERGE  # type: ignore[method-assign]
 
 
 def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--rows", type=float, default=1e6)
-    parser.add_argument("--repeats", type=int, default=3)
-    parser.add_argument("--tiny", action="store_true", help="20,000 rows, once; targets not enforced")
-    args = parser.parse_args()
-    rows, repeats = (20_000, 1) if args.tiny else (int(args.rows), args.repeats)
-    learning.STREAM_FIT_ROWS = 0  # every file streamed, in chunks of PART_CHUNK_ROWS
-    learning.STREAM_FIT_BYTES = 0
-    print(f"load {open('/proc/loadavg').read().split()[:3]}")
+    opts = _stream_data.start(__doc__.splitlines()[0], "20,000 rows, once; targets not enforced")
+    rows = opts.rows
     ok = True
     with tempfile.TemporaryDirectory() as folder:
-        path = make_dataset(folder, rows)
-        with_s, without_s, inside_s = float("inf"), float("inf"), float("inf")
-        with_cpu, without_cpu = float("inf"), float("inf")
-        for k in range(repeats):  # alternately, each first in turn
-            for sketch in (True, False) if k % 2 == 0 else (False, True):
-                s, cpu, out = fit(path, sketch)
-                if sketch:
-                    with_s, inside_s, sketched, kept = min(with_s, s), min(inside_s, Timer.seconds), out, Timer.last
-                    with_cpu = min(with_cpu, cpu)
-                else:
-                    without_s, without_cpu, plain = min(without_s, s), min(without_cpu, cpu), out
+        path = _stream_data.dataset_file(folder, rows, "ground", seed=0)
+
+        def timed(sketch: bool):  # noqa: ANN202
+            s, cpu, out = fit(path, sketch)
+            return (s, cpu, Timer.seconds), (out, Timer.last)
+
+        best, last = _stream_data.best_alternating(timed, opts.repeats)
+        (with_s, with_cpu, inside_s), (without_s, without_cpu, _) = best[True], best[False]
+        (sketched, kept), (plain, _) = last[True], last[False]
         a, b = sketched.fitted.model, plain.fitted.model
         same = np.array_equal(a.coef, b.coef)
         ok &= same
@@ -150,7 +119,7 @@ def main() -> int:
         if kept is not None:
             print(f"the sketch after the fit: {len(pickle.dumps(kept)):,} bytes ({len(kept.keys):,} rows of "
                   f"{kept.rows:,} kept, at most {flight_layout.LAYOUT_ROWS:,})")
-    if not args.tiny and ratio >= TARGET:
+    if not opts.tiny and ratio >= TARGET:
         ok = False
     return 0 if ok else 1
 

@@ -23,6 +23,9 @@ from typing import Any
 RPLEARN = [sys.executable, "-m", "rplearn.cli"]
 #: The smoke flight's files, relative to the working folder.
 P, S, D, M = "flight/pose_log.parquet", "flight/signal_log.parquet", "data.parquet", "sh3.json"
+#: A real telemetry log: ArduPilot with a SiK radio at 915 MHz, a ground station ``gcs`` and a
+#: drone ``sys1``, one reading a second each way.
+REAL_TLOG = Path(__file__).resolve().parents[1] / "fixtures" / "ardupilot" / "mavlink-log_2013-10-13_16-58-51.tlog"
 
 
 def run(args: Sequence[str], cwd: Path | str, env: dict[str, str] | None = None,
@@ -75,6 +78,15 @@ def smoke_flight(d: Path, extra: Iterable[Sequence[str]] = (), seed: int = 2) ->
         _SMOKE_FLIGHTS[seed] = base
     shutil.copytree(base, d, dirs_exist_ok=True)
     _run_all(d, extra)
+    return d
+
+
+def real_log_fit(d: Path) -> Path:
+    """Sync :data:`REAL_TLOG` in ``d`` to ``m.parquet`` (every link, 20 dBm at 915 MHz) and fit it
+    with ``--order auto`` to ``earlier.json``, each command as :func:`run_here` runs it: ``d``."""
+    run_here(["sync", "--poses", REAL_TLOG, "--signals", REAL_TLOG, "--tx-power", "20", "--frequency", "915e6",
+              "--link", "all", "-o", "m.parquet"], d)
+    run_here(["fit", "m.parquet", "--order", "auto", "-o", "earlier.json"], d)
     return d
 
 

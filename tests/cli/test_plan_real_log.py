@@ -9,18 +9,12 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from cli_helpers import answer, assert_one_line_error, listing, run_here
-
-TLOG = Path(__file__).resolve().parents[1] / "fixtures" / "ardupilot" / "mavlink-log_2013-10-13_16-58-51.tlog"
+from cli_helpers import answer, assert_one_line_error, listing, real_log_fit, run_here
 
 
 @pytest.fixture(scope="module")
 def fitted(tmp_path_factory) -> Path:
-    d = tmp_path_factory.mktemp("real_plan")
-    run_here(["sync", "--poses", TLOG, "--signals", TLOG, "--tx-power", "20", "--frequency", "915e6", "--link", "all",
-              "-o", "m.parquet"], d)
-    run_here(["fit", "m.parquet", "--order", "auto", "-o", "earlier.json"], d)
-    return d
+    return real_log_fit(tmp_path_factory.mktemp("real_plan"))
 
 
 def test_the_plan_is_for_the_logs_station_and_drone_at_its_radios_rate(fitted):

@@ -13,18 +13,13 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from cli_helpers import answer, assert_one_line_error, listing, run_here
-
-TLOG = Path(__file__).resolve().parents[1] / "fixtures" / "ardupilot" / "mavlink-log_2013-10-13_16-58-51.tlog"
+from cli_helpers import answer, assert_one_line_error, listing, real_log_fit, run_here
 
 
 @pytest.fixture(scope="module")
 def planned(tmp_path_factory) -> Path:
     """The plan ``next/`` made from the real log's fit (a station gcs, a drone sys1)."""
-    d = tmp_path_factory.mktemp("sim_plan")
-    run_here(["sync", "--poses", TLOG, "--signals", TLOG, "--tx-power", "20", "--frequency", "915e6", "--link", "all",
-              "-o", "m.parquet"], d)
-    run_here(["fit", "m.parquet", "--order", "auto", "-o", "earlier.json"], d)
+    d = real_log_fit(tmp_path_factory.mktemp("sim_plan"))
     run_here(["trajectory", "--optimize", "--from-model", "earlier.json", "--budget-s", "30", "-o", "next"], d)
     return d
 

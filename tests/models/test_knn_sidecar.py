@@ -8,6 +8,7 @@ import time
 
 import numpy as np
 import pytest
+from model_file_checks import assert_sidecar_refused_altered_then_missing
 
 from rplearn.core.geometry import Directions
 from rplearn.data.tables import LinkSamples
@@ -55,15 +56,7 @@ def test_missing_tampered_or_foreign_sidecars_are_refused(tmp_path):
     model = KNNModel.fit(_samples(2000), 50)
     path = tmp_path / "nn.json"
     model.save(path)
-    side = named_sidecar(path)
-    data = bytearray(open(side, "rb").read())
-    data[-100] ^= 0xFF
-    open(side, "wb").write(bytes(data))
-    with pytest.raises(ModelFileError, match="checksum mismatch"):
-        load_model(path)
-    os.remove(side)
-    with pytest.raises(ModelFileError, match="sidecar is missing"):
-        load_model(path)
+    assert_sidecar_refused_altered_then_missing(path, flip=0xFF)
     # a re-signed model file whose sidecar entry points outside its folder
     doc = json.loads(path.read_text())
     payload = doc["model"]

@@ -9,11 +9,9 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 import pytest
+from model_file_checks import assert_predicts_as_stored, stored_samples
 
-from rplearn.data.tables import link_samples, validate_matched
-from rplearn.io.files import read_table
 from rplearn.models.base import Model, model_frequency_hz
 from rplearn.models.load import load_model
 
@@ -22,9 +20,7 @@ DATA = Path(__file__).resolve().parents[1] / "fixtures" / "models_v1"
 
 @pytest.fixture(scope="module")
 def samples():
-    path = str(DATA / "poses.csv")
-    df = validate_matched(read_table(path), path, require_rssi=False)
-    return link_samples(df, path, require_rssi=False)
+    return stored_samples(DATA)
 
 
 @pytest.mark.parametrize(
@@ -35,14 +31,7 @@ def test_v1_model_files_predict_as_before(samples, model_file, predictions, kind
     model = load_model(DATA / model_file)
     assert isinstance(model, Model)
     assert (model.kind, model.label, model.nodes) == (kind, label, ("A", "B"))
-    expected = pd.read_csv(DATA / predictions)
-    assert len(expected) == len(samples)
-    np.testing.assert_allclose(model.predict_gain(samples), expected["gain_pred_db"], rtol=0, atol=1e-9)
-    std = model.predict_gain_std(samples)
-    if "gain_pred_std_db" in expected.columns:
-        np.testing.assert_allclose(std, expected["gain_pred_std_db"], rtol=0, atol=1e-9)
-    else:
-        assert std is None
+    assert_predicts_as_stored(model, samples, DATA / predictions)
 
 
 def test_model_frequency():

@@ -13,12 +13,10 @@ import json
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 import pytest
+from model_file_checks import assert_predicts_as_stored, stored_samples
 
-from rplearn.data.tables import link_samples, validate_matched
 from rplearn.errors import InputError
-from rplearn.io.files import read_table
 from rplearn.models.load import load_model
 from rplearn.models.training import TrainingSummary
 
@@ -27,9 +25,7 @@ DATA = Path(__file__).resolve().parents[1] / "fixtures" / "models_main"
 
 @pytest.fixture(scope="module")
 def samples():
-    path = str(DATA / "poses.csv")
-    df = validate_matched(read_table(path), path, require_rssi=False)
-    return link_samples(df, path, require_rssi=False)
+    return stored_samples(DATA)
 
 
 def _stored_training(name: str) -> dict:
@@ -40,14 +36,7 @@ def _stored_training(name: str) -> dict:
 def test_model_files_of_main_load_typed_and_predict_identically(samples, model_file, predictions):
     model = load_model(DATA / model_file)
     assert isinstance(model.training, TrainingSummary)
-    expected = pd.read_csv(DATA / predictions)
-    assert len(expected) == len(samples)
-    np.testing.assert_allclose(model.predict_gain(samples), expected["gain_pred_db"], rtol=0, atol=1e-9)
-    std = model.predict_gain_std(samples)
-    if "gain_pred_std_db" in expected.columns:
-        np.testing.assert_allclose(std, expected["gain_pred_std_db"], rtol=0, atol=1e-9)
-    else:
-        assert std is None
+    assert_predicts_as_stored(model, samples, DATA / predictions)
     # every entry read into a typed field (none left over), and written back as it was
     stored = _stored_training(model_file)
     assert model.training.extra == {}
