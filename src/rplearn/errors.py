@@ -35,6 +35,13 @@ class InputError(RplearnError, ValueError):
     """Bad user input: a wrong shape, a NaN, an out-of-range value, an unknown name."""
 
 
+class BadValueError(InputError):
+    """A parameter's value is none of the words it takes or not of its form (``loss='xyz'``, a
+    link ``'A:B:C'``), found from the value alone: the command line reports it, when a flag gave
+    it and before any input was read, as a usage error (exit code 2). A value out of its range
+    or against another parameter is a plain :class:`InputError`."""
+
+
 class ArgumentTypeError(InputError, TypeError):
     """An argument of a public function is of the wrong type (see :mod:`rplearn._argtypes`)."""
 

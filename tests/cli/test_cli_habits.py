@@ -213,4 +213,4 @@ def test_order_is_the_model_size_and_degree_its_alias(flight):
     a, b = (json.loads((flight / n).read_text())["model"]["coefficients"] for n in ("o3.json", "d3.json"))
     assert a == b
     bad = run("fit", "d.parquet", "--order", "x", "-o", "x.json", cwd=flight)
-    assert bad.returncode == 1 and "--order" in bad.stderr
+    assert bad.returncode == 2 and "--order" in bad.stderr  # a usage error

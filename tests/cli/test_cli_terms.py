@@ -49,7 +49,7 @@ def test_fit_learns_and_stores_the_exponent_and_offsets_and_names_its_flags(work
     assert "electronics offsets" not in out.stdout
     # errors name the flag (one test: the flight is simulated once per worker)
     bad = answer(["fit", "ab.parquet", "--path-loss", "hata", "-o", "x.json"], d, process=True)
-    assert bad.returncode == 1 and "--path-loss" in bad.stderr and "log-distance" in bad.stderr
+    assert bad.returncode == 2 and "--path-loss" in bad.stderr and "log-distance" in bad.stderr  # a usage error
     bad = answer(["fit", "ab.parquet", "--path-loss", "two-ray", "--ground-level", "100", "-o", "x.json"], d)
     assert bad.returncode == 1 and "below the ground level" in bad.stderr and "--ground-level" in bad.stderr
     bad = answer(["fit", "ab.parquet", "--model", "m", "--path-loss", "log-distance", "-o", "x.json"], d)

@@ -6,11 +6,15 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from rplearn.core.bases import make_basis
+from rplearn.core.geometry import Directions
 from rplearn.core.lsq.block_sums import time_block_labels
+from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.data.sync import synchronise
 from rplearn.data.tables import link_samples
 from rplearn.data.units import Stretches
 from rplearn.io.files import write_table
+from rplearn.models.auto_spread import block_drift_std_db
 from rplearn.models.live_drift import DriftBlocks
 from rplearn.models.live_stats import LiveStatistics
 from rplearn.models.options import FitOptions
@@ -112,6 +116,27 @@ def test_a_row_for_a_block_already_folded_is_counted_late(matched):
     # the late rows are a block of their own, folded at once (the oldest of two open): block 0 counted twice
     assert st.drift.late_rows == len(first) and list(st.drift.open) == [label.min() + 2]
     assert st.drift.folded.n_blocks == 2 and st.drift.folded.sum_n == 2 * len(first)
+    assert st.drift.folded.link_blocks == 1  # one block label: one distinct block of the link
+
+
+@pytest.mark.parametrize("max_open", [None, 1])
+def test_the_drift_blocks_count_each_links_distinct_blocks(max_open):
+    """Three nodes seen for 10 s: 6 block vectors (3 links x 2 blocks) but 2 distinct blocks
+    per link, in the sums kept open or folded and at a smaller order (the fields copied): no
+    drift read from them (it was: 6 vectors passed for 6 blocks)."""
+    rng = np.random.default_rng(2)
+    n = 500
+    t = np.sort(rng.uniform(0.0, 10.0, n))
+    tx = rng.integers(0, 3, n)
+    rx = (tx + rng.integers(1, 3, n)) % 3
+    az, el = rng.uniform(-np.pi, np.pi, (2, n)), np.arcsin(rng.uniform(-1.0, 1.0, (2, n)))
+    drift = DriftBlocks(make_basis("sh", 4), 3, max_open)
+    drift.add(t, tx, rx, Directions(az[0], el[0], az[1], el[1]), rng.normal(0.0, 1.0, n))
+    sums = drift.closed()
+    small = drift.at(sums, make_basis("sh", 2))
+    assert sums.n_blocks == small.n_blocks == 6 and sums.link_blocks == small.link_blocks == drift.link_block_count() == 2
+    total = NormalEquations(make_basis("sh", 2), 3).add(Directions(az[0], el[0], az[1], el[1]), tx, rx, rng.normal(0.0, 1.0, n))
+    assert block_drift_std_db(small, total, 1.0, 1e-6, 2.0, 1.0) is None
 
 
 def test_a_few_seconds_session_states_no_drift_as_the_offline_fit(matched, tmp_path):

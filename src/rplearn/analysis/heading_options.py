@@ -16,7 +16,7 @@ import numpy as np
 
 from rplearn._argtypes import check_types, is_finite_real
 from rplearn.core.plausible import check_frequency_hz
-from rplearn.errors import InputError
+from rplearn.errors import BadValueError, InputError
 
 #: Default of :attr:`YawOptions.caution_z`: headings are ranked by the 10% lower bound of their
 #: gain (prediction minus 1.28 standard errors of each end).
@@ -169,4 +169,10 @@ class SwarmHeadingOptions:
                 raise InputError(f"{name}: expected an integer of at least {least}, got {value!r}", param=name)
 
 
-__all__ = ["CAUTION_Z", "SwarmHeadingOptions", "YawOptions"]
+def check_turn(turn: str) -> None:
+    """Refuse a ``turn`` of :func:`rplearn.analysis.headings.best_yaw` other than ``tx``, ``rx`` or ``both``."""
+    if turn not in ("tx", "rx", "both"):
+        raise BadValueError(f"turn: expected 'tx', 'rx' or 'both', got {turn!r}", param="turn")
+
+
+__all__ = ["CAUTION_Z", "SwarmHeadingOptions", "YawOptions", "check_turn"]

@@ -29,7 +29,7 @@ from numpy.typing import ArrayLike
 
 from rplearn._argtypes import check_types
 from rplearn._budget import Budget, Cost, budget, check_work
-from rplearn.analysis.heading_options import CAUTION_Z, SwarmHeadingOptions, YawOptions  # noqa: F401 (CAUTION_Z: documented here)
+from rplearn.analysis.heading_options import CAUTION_Z, SwarmHeadingOptions, YawOptions, check_turn  # noqa: F401 (CAUTION_Z: documented here)
 from rplearn.analysis.heading_search import EXHAUSTIVE_MAX_COMBINATIONS, search  # noqa: F401 (the constant is documented here)
 from rplearn.analysis.swarm import maximum_spanning_edges, resolve_patterns
 from rplearn.core.geometry import direction_in_body, distance_m, quat_wxyz_from_yaw
@@ -259,8 +259,7 @@ def best_yaw(
     require_patterns(model, "choosing a heading")
     if not (np.isfinite(caution_z) and caution_z >= 0):
         raise InputError(f"caution_z: expected a finite number >= 0, got {caution_z!r}", param="caution_z")
-    if turn not in ("tx", "rx", "both"):
-        raise InputError(f"turn: expected 'tx', 'rx' or 'both', got {turn!r}", param="turn")
+    check_turn(turn)
     grid = yaw_grid_deg(step_deg)
     if tx_power_dbm is not None:
         check_tx_power_dbm(tx_power_dbm, "transmit power")

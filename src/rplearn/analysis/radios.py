@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rplearn._argtypes import check_types
-from rplearn.errors import InputError
+from rplearn.errors import BadValueError, InputError
 
 
 @check_types
@@ -76,7 +76,7 @@ def sensitivity_dbm(value: str | float) -> float:
         try:
             number = float(key)
         except ValueError:
-            raise InputError(f"sensitivity: {value!r} is neither a level in dBm nor a radio preset; presets: "
+            raise BadValueError(f"sensitivity: {value!r} is neither a level in dBm nor a radio preset; presets: "
                              f"{', '.join(RADIO_PRESETS)}", param="sensitivity") from None
     else:
         number = float(value)

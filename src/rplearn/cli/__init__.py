@@ -11,8 +11,9 @@ flags, calling one library function and printing the result object it returns.
 Every user error (a subclass of :class:`rplearn.errors.RplearnError`, a missing file) prints one
 line ``error: ...`` on standard error, naming the flag to change where the library names the
 parameter at fault, and exits with code 1, without a traceback; a usage error (a bad number, an
-unknown flag, a missing argument) is one line too, naming the flag and the value, exit code 2
-(:mod:`rplearn.cli._usage`).
+unknown flag, a missing argument, a flag's value that is none of its words or not of its form) is
+one line too, naming the flag and the value, exit code 2 (:mod:`rplearn.cli._usage`,
+:func:`rplearn.cli._app.flag_values`); Ctrl-C exits with code 130.
 """
 
 from __future__ import annotations

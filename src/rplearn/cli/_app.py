@@ -7,6 +7,7 @@ flag that sets it. Nothing printed here interprets user data as Rich markup.
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import inspect
 import logging
@@ -14,7 +15,7 @@ import math
 import os
 import re
 import signal
-from collections.abc import Callable, Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from typing import Any
 
 import typer
@@ -25,7 +26,7 @@ from typer.core import TyperGroup
 
 from rplearn._version import __version__
 from rplearn.cli._usage import usage_message
-from rplearn.errors import InputError, RplearnError
+from rplearn.errors import BadValueError, InputError, RplearnError
 
 
 def _is_usage_error(exc: BaseException) -> bool:
@@ -113,10 +114,46 @@ def note(text: str, kind: str = "note") -> None:
     console.print(Text(f"{kind}: {text}"), soft_wrap=True)
 
 
-def fail(message: str) -> None:
-    """Print ``error: message`` on standard error and exit with code 1."""
+def fail(message: str, code: int = 1) -> None:
+    """Print ``error: message`` on standard error and exit with ``code`` (1: an error in the input
+    or the run; 2: a usage error)."""
     console.print(Text.assemble(("error:", "bold red"), " ", message), soft_wrap=True)
-    raise typer.Exit(1)
+    raise typer.Exit(code)
+
+
+class FlagError(Exception):
+    """A flag's value that is none of its words or not of its form, refused while a command's
+    options were built from its flags, before any input was read (:func:`flag_values`): a usage
+    error, one line with exit code 2 (:func:`user_errors`).
+
+    Parameters
+    ----------
+    error : BadValueError
+        The error, its message and parameter as the library raised them.
+    param : str, optional
+        The parameter the error is about when the library's is another command's flag (e.g.
+        ``paper_models`` for a model name of ``report --paper-models``, which the library checks
+        as a ``model``).
+    """
+
+    def __init__(self, error: BadValueError, param: str | None = None) -> None:
+        super().__init__(str(error))
+        self.error = error
+        self.param = param or error.param
+
+
+@contextlib.contextmanager
+def flag_values(param: str | None = None) -> Iterator[None]:
+    """Mark a flag's value refused inside as a usage error (:class:`FlagError`: exit 2): wrap the
+    parsing of flag values and the building of a command's options from its flags, before any
+    input file is read. A value that is none of the flag's words or not of its form
+    (:class:`rplearn.errors.BadValueError`) then exits 2, like click's own usage errors; any other
+    error (a value out of its range or against another flag, an error in the input or the run)
+    goes on to exit 1. ``param``: the parameter to name instead of the library's."""
+    try:
+        yield
+    except BadValueError as exc:
+        raise FlagError(exc, param) from exc
 
 
 def command_flag(command: Callable | None, param: str) -> str | None:
@@ -206,7 +243,9 @@ def with_flag(
 
 
 def user_errors(fn: Callable | None = None, *, flags: Mapping[str, str] | None = None) -> Callable:
-    """Turn user mistakes into one line on stderr and exit code 1.
+    """Turn user mistakes into one line on stderr: exit code 1 for an error in the input or the
+    run, 2 for a flag's value refused before any input was read (:func:`flag_values`), 130 for
+    Ctrl-C.
 
     ``flags`` maps the library parameters of this command whose flag has another name
     (e.g. ``{"n_loops": "--loops"}``).
@@ -217,6 +256,10 @@ def user_errors(fn: Callable | None = None, *, flags: Mapping[str, str] | None =
         def wrapper(*args: Any, **kwargs: Any) -> Any:
             try:
                 return func(*args, **kwargs)
+            except FlagError as flag:
+                exc = flag.error
+                first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+                fail(with_flag(first, flag.param, func, flags, exc.related), 2)
             except RplearnError as exc:
                 first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
                 fail(with_flag(first, exc.param, func, flags, exc.related))
@@ -287,10 +330,10 @@ def pairs(values: list[str] | None, flag: str) -> dict[str, str]:
     found: dict[str, str] = {}
     for v in values or []:
         if "=" not in v:
-            raise InputError(f"{flag}: expected KEY=VALUE, got {v!r}")
+            raise BadValueError(f"{flag}: expected KEY=VALUE, got {v!r}")
         k, val = (part.strip() for part in v.split("=", 1))
         if not k or not val:
-            raise InputError(f"{flag}: expected KEY=VALUE, got {v!r} (no {'key' if not k else 'value'})")
+            raise BadValueError(f"{flag}: expected KEY=VALUE, got {v!r} (no {'key' if not k else 'value'})")
         if k in found and found[k] != val:
             raise InputError(f"{flag}: {k} is given twice, as {found[k]} and as {val}")
         found[k] = val
@@ -303,7 +346,7 @@ def numbers(values: Mapping[str, str], flag: str, what: str) -> dict[str, float]
         return {k: float(v) for k, v in values.items()}
     except ValueError:
         given = ", ".join(f"{k}={v}" for k, v in values.items())
-        raise InputError(f"{flag}: expected {what} with a number, got {given}") from None
+        raise BadValueError(f"{flag}: expected {what} with a number, got {given}") from None
 
 
 def floats(values: list[str] | None, flag: str, what: str) -> list[float] | None:
@@ -314,7 +357,7 @@ def floats(values: list[str] | None, flag: str, what: str) -> list[float] | None
     try:
         return [float(v) for v in items]
     except ValueError:
-        raise InputError(f"{flag}: expected {what}, got {', '.join(items)}") from None
+        raise BadValueError(f"{flag}: expected {what}, got {', '.join(items)}") from None
 
 
 def xyz(text: str, flag: str) -> list[float]:
@@ -324,7 +367,7 @@ def xyz(text: str, flag: str) -> list[float]:
     except ValueError:
         v = []
     if len(v) != 3:
-        raise InputError(f"{flag}: expected x,y,z in metres, got {text!r}")
+        raise BadValueError(f"{flag}: expected x,y,z in metres, got {text!r}")
     if not all(math.isfinite(c) for c in v):  # nan/inf parse as floats: no place
         raise InputError(f"{flag}: expected three finite numbers x,y,z in metres, got {text!r}")
     return v
@@ -336,7 +379,7 @@ def link(text: str | None) -> tuple[str, str] | None:
         return None
     parts = text.split(":")
     if len(parts) != 2 or not all(parts):
-        raise InputError(f"--link: expected TX:RX (e.g. A:B) or 'all', got {text!r}")
+        raise BadValueError(f"--link: expected TX:RX (e.g. A:B) or 'all', got {text!r}")
     return parts[0], parts[1]
 
 
@@ -350,7 +393,7 @@ def orders(text: str) -> Sequence[int]:
         else:
             found = [int(v) for v in text.split(",")]
     except ValueError:
-        raise InputError(f"--orders: expected A..B or a comma list, got {text!r}") from None
+        raise BadValueError(f"--orders: expected A..B or a comma list, got {text!r}") from None
     if not found or (found[0] if isinstance(found, range) else min(found)) < 1:
         raise InputError(f"--orders: expected positive orders, A..B with A <= B, got {text!r}")
     return found
@@ -365,7 +408,7 @@ def geodetic_flag(text: str | None, flag: str) -> tuple[float, ...] | None:
     except ValueError:
         values = ()
     if len(values) != 3:
-        raise InputError(f"{flag}: expected LAT,LON,ALT (e.g. 41.185,-96.010,330), got {text!r}")
+        raise BadValueError(f"{flag}: expected LAT,LON,ALT (e.g. 41.185,-96.010,330), got {text!r}")
     return values
 
 
@@ -397,7 +440,7 @@ def reader_options(
         for topic, ends in pairs(rssi_topic, "--rssi-topic").items():
             parts = ends.split(":")
             if len(parts) != 2 or not all(p.strip() for p in parts):
-                raise InputError(f"--rssi-topic: expected TOPIC=TX:RX (e.g. /B/rssi=A:B), got {topic}={ends}")
+                raise BadValueError(f"--rssi-topic: expected TOPIC=TX:RX (e.g. /B/rssi=A:B), got {topic}={ends}")
             topics[topic] = (parts[0].strip(), parts[1].strip())
         opts["rssi_topics"] = topics
     if rssi_field:

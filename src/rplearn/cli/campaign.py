@@ -6,8 +6,8 @@ from __future__ import annotations
 import typer
 from rich.table import Table
 
-from rplearn.cli._app import app, floats, out, parts_step, progress_bar, say, user_errors
-from rplearn.errors import InputError
+from rplearn.cli._app import app, flag_values, floats, out, parts_step, progress_bar, say, user_errors
+from rplearn.errors import BadValueError, InputError
 
 #: The plan's library parameters whose flags have other names.
 TRAJECTORY_FLAGS = {
@@ -85,17 +85,18 @@ def trajectory(
     if given:  # they were ignored without a word: the paper's campaign has no prior, noise or station
         raise InputError(f"{given[0]}: it is an option of --optimize's plan, not of the paper's campaign; add --optimize")
     from rplearn.plan.trajectory import PlanLimits
-    from rplearn.workflows.planning import PAPER_LEARNING_PSI0_DEG, PAPER_TESTING_PSI0_DEG, CampaignOptions, plan_campaign
+    from rplearn.workflows.planning import PAPER_LEARNING_PSI0_DEG, PAPER_TESTING_PSI0_DEG, CampaignOptions, plan_campaign, plan_check_spec
 
-    campaign = CampaignOptions(
-        floats(psi0_deg, "--psi0", "headings in degrees") or PAPER_LEARNING_PSI0_DEG,
-        floats(test_psi0_deg, "--test-psi0", "headings in degrees") or PAPER_TESTING_PSI0_DEG,
-        distance_m, height_m, loops, speed_m_s,
-    )
-    plan = plan_campaign(
-        out_dir, campaign, PlanLimits(max_speed, max_accel, max_flight_time), rate_hz,
-        None if not check_model or check_model.lower() == "none" else check_model, wind_m_s,
-    )
+    with flag_values():
+        campaign = CampaignOptions(
+            floats(psi0_deg, "--psi0", "headings in degrees") or PAPER_LEARNING_PSI0_DEG,
+            floats(test_psi0_deg, "--test-psi0", "headings in degrees") or PAPER_TESTING_PSI0_DEG,
+            distance_m, height_m, loops, speed_m_s,
+        )
+        limits = PlanLimits(max_speed, max_accel, max_flight_time)
+        checked = None if not check_model or check_model.lower() == "none" else check_model
+        plan_check_spec(checked)
+    plan = plan_campaign(out_dir, campaign, limits, rate_hz, checked, wind_m_s)
     table = Table(title="calibration campaign")
     for col in ("unit", "duration/s", "path/m", "max speed/(m/s)", "max accel/(m/s^2)", "max yaw rate/(deg/s)"):
         table.add_column(col)
@@ -111,16 +112,19 @@ def trajectory(
 def _optimized(out_dir: str, model: str | None, figures: tuple[float | None, ...],
                priors: tuple[str | None, str | None], station: bool | None, geometry: tuple[float, float, float], rate_hz: float) -> None:
     """``trajectory --optimize``: the greedy plan, its expected spread over time, the references."""
+    from rplearn.models.spec import ModelSpec
     from rplearn.workflows.calibration_plan import OptimizeOptions, optimize_plan
 
     target_given, budget_given, noise, prior_std, drift, packet_rate = figures
     defaults = OptimizeOptions()
     target = defaults.target_spread_db if target_given is None else target_given
     budget = defaults.budget_s if budget_given is None else budget_given
-    options = OptimizeOptions(target_spread_db=target, budget_s=budget, model=model or "sh-10", noise_std_db=noise,
-                              packet_rate_hz=packet_rate, prior_std_db=prior_std, prior_pattern=priors[0], station=station,
-                              distance_m=geometry[0], height_m=geometry[1], speed_m_s=geometry[2], drift_std_db=drift,
-                              from_model=priors[1])
+    with flag_values():
+        ModelSpec.parse(model or "sh-10")
+        options = OptimizeOptions(target_spread_db=target, budget_s=budget, model=model or "sh-10", noise_std_db=noise,
+                                  packet_rate_hz=packet_rate, prior_std_db=prior_std, prior_pattern=priors[0], station=station,
+                                  distance_m=geometry[0], height_m=geometry[1], speed_m_s=geometry[2], drift_std_db=drift,
+                                  from_model=priors[1])
     plan = optimize_plan(out_dir, options, rate_hz)
     if plan.prior is not None:
         say(f"prior from {priors[1]}: {plan.prior}")
@@ -162,9 +166,13 @@ def simulate(
     Example: rplearn simulate --preset smoke --seed 1 -o flight
     """
     from rplearn.sim.flight import simulate as run
+    from rplearn.sim.presets import make_preset
 
-    if log_format not in ("parquet", "csv"):
-        raise InputError(f"--format: expected parquet or csv, got {log_format!r}")
+    with flag_values():
+        if log_format not in ("parquet", "csv"):
+            raise BadValueError(f"--format: expected parquet or csv, got {log_format!r}")
+        if preset != "fleet":
+            make_preset(preset)  # a name of no preset refused before the output folder is made
     mapping = _node_map(node_map) if node_map is not None else None
     if mapping is not None and plan is None:
         raise typer.BadParameter("needs --plan, the folder of reference files to fly", param_hint="--node-map")

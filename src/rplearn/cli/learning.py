@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import typer
 
-from rplearn.cli._app import app, note, pairs, parts_step, progress_bar, say, split_list, step, user_errors
+from rplearn.cli._app import app, flag_values, note, pairs, parts_step, progress_bar, say, split_list, step, user_errors
 from rplearn.cli._app import orders as parse_orders
-from rplearn.errors import InputError
+from rplearn.errors import BadValueError, InputError
 
 #: Help of ``--dask`` (fit, evaluate).
 DASK_HELP = ("Run on Dask, part by part (pattern models): local (2 worker processes), local:N, or a scheduler address "
@@ -65,16 +65,21 @@ def fit(
     from rplearn.models.spec import ModelSpec, check_fit_options
     from rplearn.workflows.learning import fit_dataset
 
-    two_ray_flags_note(path_loss_kind, ground_level, permittivity, polarization)
-    auto, order = degree_option(degree, model)
-    spec = ModelSpec.parse(model, order=order, ridge=ridge, sigma_rad2=sigma, grid=grid)
-    check_fit_options(spec, order=order, ridge=ridge, sigma_rad2=sigma, grid=grid, model=model)
-    options = FitOptions(
-        gauge=Gauge(gauge_node, gauge_dbi), path_loss=PathLoss(path_loss_kind, ground_level, permittivity, polarization),
-        link_offsets=learn_offsets, loss=loss, auto=auto, priors=pairs(prior, "--prior"), prior_std_db=prior_std,
-        prior_level=prior_level,
-    )
-    options.check(spec)
+    with flag_values():  # the flags' values, before the dataset is read: a bad one is a usage error
+        two_ray_flags_note(path_loss_kind, ground_level, permittivity, polarization)
+        auto, order = degree_option(degree, model)
+        spec = ModelSpec.parse(model, order=order, ridge=ridge, sigma_rad2=sigma, grid=grid)
+        check_fit_options(spec, order=order, ridge=ridge, sigma_rad2=sigma, grid=grid, model=model)
+        options = FitOptions(
+            gauge=Gauge(gauge_node, gauge_dbi), path_loss=PathLoss(path_loss_kind, ground_level, permittivity, polarization),
+            link_offsets=learn_offsets, loss=loss, auto=auto, priors=pairs(prior, "--prior"), prior_std_db=prior_std,
+            prior_level=prior_level,
+        )
+        options.check(spec)
+        if dask is not None:
+            from rplearn.workflows.fleet import parse_dask
+
+            parse_dask(dask)  # its form; its budget (local:N) an error of the run
     with progress_bar() as p:
         task = p.add_task("learning", total=None)
         outcome = fit_dataset(dataset, spec, split_list(units), options=options, output=output, dask=dask,
@@ -104,21 +109,26 @@ def reference(
     """
     from rplearn.workflows.planning import reference_model_file
 
-    files = pairs(patterns, "PATTERN")
-    mounts = {}
-    for node, text in pairs(mount, "--mount").items():
-        parts = text.split(",")
-        try:
-            mounts[node] = tuple(float(x) for x in parts)
-        except ValueError:
-            raise InputError(f"--mount: expected NODE=ROLL,PITCH,YAW in degrees, got {node}={text}") from None
-        if len(parts) != 3:
-            raise InputError(f"--mount: expected NODE=ROLL,PITCH,YAW in degrees, got {node}={text}")
+    with flag_values():
+        files = pairs(patterns, "PATTERN")
+        mounts = {node: _mount(node, text) for node, text in pairs(mount, "--mount").items()}
     model = reference_model_file(files, output, mounts)
     say(f"reference model of {', '.join(model.nodes)} ({model.label}) -> {output}")
     for node, info in (model.training.reference or {}).items():
         say(f"  {node}: {info['source']}, mount (roll, pitch, yaw) {tuple(info['mount_rpy_deg'])} deg, "
             f"expansion residual {info['expansion_rmse_db']:.3f} dB RMS")
+
+
+def _mount(node: str, text: str) -> tuple[float, ...]:
+    """``--mount NODE=ROLL,PITCH,YAW`` [deg] as three numbers."""
+    parts = text.split(",")
+    try:
+        angles = tuple(float(x) for x in parts)
+    except ValueError:
+        raise BadValueError(f"--mount: expected NODE=ROLL,PITCH,YAW in degrees, got {node}={text}") from None
+    if len(parts) != 3:
+        raise BadValueError(f"--mount: expected NODE=ROLL,PITCH,YAW in degrees, got {node}={text}")
+    return angles
 
 
 def two_ray_flags_note(kind: str, ground_level: float, permittivity: float, polarization: str) -> None:
@@ -142,9 +152,9 @@ def degree_option(degree: str | None, model: str) -> tuple[bool, int | None]:
     try:
         value = float(text)
     except ValueError:
-        raise InputError(f"--order: expected a whole number or 'auto', got {degree!r}") from None
+        raise BadValueError(f"--order: expected a whole number or 'auto', got {degree!r}") from None
     if not value.is_integer():
-        raise InputError(f"--order: expected a whole number or 'auto', got {degree!r}")
+        raise BadValueError(f"--order: expected a whole number or 'auto', got {degree!r}")
     return False, int(value)
 
 
@@ -171,6 +181,11 @@ def evaluate(
 
     if len(paths) < 2:
         raise InputError("evaluate: give at least one MODEL.json and a DATASET")
+    if dask is not None:
+        from rplearn.workflows.fleet import parse_dask
+
+        with flag_values():
+            parse_dask(dask)  # its form; its budget (local:N) an error of the run
     *model_paths, dataset = paths
     with progress_bar() as p:
         task = p.add_task("predicting", total=None)
@@ -207,7 +222,8 @@ def predict(
     from rplearn.analysis.radios import sensitivity_dbm
     from rplearn.workflows.learning import predict_file
 
-    level = None if sensitivity is None else sensitivity_dbm(sensitivity)
+    with flag_values():
+        level = None if sensitivity is None else sensitivity_dbm(sensitivity)
     prediction = predict_file(model_path, dataset, output, level)
     if prediction.mismatch is not None:
         note(prediction.mismatch.describe(dataset, model_path), "warning")
@@ -233,9 +249,12 @@ def sweep(
 
     Example: rplearn sweep data.parquet --model sh --orders 3..15 -o sweep.csv --plot sweep.png
     """
+    from rplearn.models.spec import ModelSpec
     from rplearn.workflows.learning import sweep_dataset
 
-    order_list = parse_orders(orders)
+    with flag_values():
+        order_list = parse_orders(orders)
+        ModelSpec.parse(model)  # a name of no model refused before the dataset is read
     with progress_bar() as p:
         task = p.add_task("sweeping", total=len(order_list))
         result = sweep_dataset(
@@ -278,17 +297,21 @@ def report(
     from rplearn.core.environment import PathLoss
     from rplearn.io.files import check_output_folder
     from rplearn.models.options import FitOptions
-    from rplearn.workflows.report import ReportOptions, learn_and_report
+    from rplearn.workflows.report import ReportOptions, learn_and_report, paper_model_names
 
+    with flag_values():
+        two_ray_flags_note(path_loss_kind, ground_level, permittivity, polarization)
+        options = FitOptions(path_loss=PathLoss(path_loss_kind, ground_level, permittivity, polarization),
+                             link_offsets=learn_offsets)
+        asked = ReportOptions(repeats, sensitivity_dbm)
+    with flag_values("paper_models"):  # its names are checked as models: not report's --model MODEL.json
+        paper_model_names((split_list([paper_models]) or []) if paper_models else [])
     check_output_folder(out_dir)
-    two_ray_flags_note(path_loss_kind, ground_level, permittivity, polarization)
-    options = FitOptions(path_loss=PathLoss(path_loss_kind, ground_level, permittivity, polarization),
-                         link_offsets=learn_offsets)
     with progress_bar() as p:
         task = p.add_task("learning", total=None)
         outcome = learn_and_report(dataset, out_dir, model, (split_list([paper_models]) or []) if paper_models else [],
                                    split_list(test_units), progress=step(p, task), options=options,
-                                   report=ReportOptions(repeats, sensitivity_dbm))
+                                   report=asked)
     for line in outcome.notes:
         note(line)
     say(outcome.summary())

@@ -8,8 +8,8 @@ from typing import Any
 
 import typer
 
-from rplearn.cli._app import app, geodetic_flag, reader_options, say, split_list, user_errors, with_flag
-from rplearn.errors import InputError, RplearnError
+from rplearn.cli._app import app, flag_values, geodetic_flag, reader_options, say, split_list, user_errors, with_flag
+from rplearn.errors import BadValueError, InputError, RplearnError
 
 #: What the reader's messages suggest that ``live`` has no flag for, and what to do from its command line instead.
 _LIBRARY_ONLY = (
@@ -30,7 +30,7 @@ def _node_ids(values: list[str] | None, flag: str) -> list[str] | None:
     (``--nodes ,``) is refused, naming the flag, not read as not given."""
     ids = split_list(values)
     if values and ids is None:
-        raise InputError(f"{flag}: no node id in {' '.join(repr(v) for v in values)}; name the nodes, e.g. {flag} D,G")
+        raise BadValueError(f"{flag}: no node id in {' '.join(repr(v) for v in values)}; name the nodes, e.g. {flag} D,G")
     return ids
 
 
@@ -141,29 +141,30 @@ def live(
     from rplearn.workflows.live_advice import live_advisor
     from rplearn.workflows.live_checks import check_live_outputs, check_live_source
 
-    auto, order = degree_option(degree, model)
-    spec = ModelSpec.parse(model, order=order)
-    csv_source = "," in source and all(p.lower().endswith(".csv") for p in source.split(","))
-    if receiver is not None and not csv_source:
-        raise InputError(f"--receiver: names the receiver of a signal CSV's rows; {source} is a MAVLink stream, "
-                         "whose radio reports name both ends")
-    receivers = [f"{source.split(',')[-1]}={receiver}"] if receiver is not None else None
-    reader = reader_options(receiver=receivers, tx_power_dbm=tx_power_dbm, frequency_hz=frequency_hz,
-                            nan_policy=nan_policy, station_geodetic=geodetic_flag(station_geodetic, "--station"))
-    named_fixed = tuple(_node_ids(fixed, "--fixed") or ())  # the user's: a note when no row names one (not the default station)
-    listed = _node_ids(nodes, "--nodes") or []
-    outside = [n for n in named_fixed if listed and n not in listed]
-    if outside:
-        raise InputError(f"--fixed: {', '.join(outside)} is not among --nodes ({', '.join(listed)}), the "
-                         "nodes learned: a node held still must be learned too")
-    still = named_fixed or (() if csv_source else (reader.station,))
-    if no_advice and from_model is not None:
-        raise InputError("--from-model: gives the ranking of the next-best manoeuvres its noise, smoothing and drift; "
-                         "drop --no-advice")
-    options = LiveOptions(spec=spec, fit=FitOptions(auto=auto), reader=reader, sync=SyncOptions(max_gap_s=max_gap_s),
-                          refit_s=refit_s, duration_s=duration_s, until_spread_db=until_spread_db, spread_over=spread_over,
-                          until_coverage_pct=until_coverage_pct, idle_s=idle_s, nodes=tuple(listed) or None,
-                          ranking_every_s=advice_s, fixed_nodes=named_fixed)  # its values checked before the advisor's
+    with flag_values():  # a flag's value that is none of its words or not of its form: a usage error (exit 2)
+        auto, order = degree_option(degree, model)
+        spec = ModelSpec.parse(model, order=order)
+        csv_source = "," in source and all(p.lower().endswith(".csv") for p in source.split(","))
+        if receiver is not None and not csv_source:
+            raise InputError(f"--receiver: names the receiver of a signal CSV's rows; {source} is a MAVLink stream, "
+                             "whose radio reports name both ends")
+        receivers = [f"{source.split(',')[-1]}={receiver}"] if receiver is not None else None
+        reader = reader_options(receiver=receivers, tx_power_dbm=tx_power_dbm, frequency_hz=frequency_hz,
+                                nan_policy=nan_policy, station_geodetic=geodetic_flag(station_geodetic, "--station"))
+        named_fixed = tuple(_node_ids(fixed, "--fixed") or ())  # the user's: a note when no row names one (not the default station)
+        listed = _node_ids(nodes, "--nodes") or []
+        outside = [n for n in named_fixed if listed and n not in listed]
+        if outside:
+            raise InputError(f"--fixed: {', '.join(outside)} is not among --nodes ({', '.join(listed)}), the "
+                             "nodes learned: a node held still must be learned too")
+        still = named_fixed or (() if csv_source else (reader.station,))
+        if no_advice and from_model is not None:
+            raise InputError("--from-model: gives the ranking of the next-best manoeuvres its noise, smoothing and drift; "
+                             "drop --no-advice")
+        options = LiveOptions(spec=spec, fit=FitOptions(auto=auto), reader=reader, sync=SyncOptions(max_gap_s=max_gap_s),
+                              refit_s=refit_s, duration_s=duration_s, until_spread_db=until_spread_db, spread_over=spread_over,
+                              until_coverage_pct=until_coverage_pct, idle_s=idle_s, nodes=tuple(listed) or None,
+                              ranking_every_s=advice_s, fixed_nodes=named_fixed)  # its values checked before the advisor's
     check_live_source(source)
     check_live_outputs(source, output, record, html, from_model)  # before --from-model is read and said
     advisor = None if no_advice else live_advisor(still, 0.0, until_spread_db, from_model, spec, listed or None,
@@ -199,6 +200,8 @@ def replay(
 
     Example: rplearn replay flight.tlog --to 127.0.0.1:14550 --speed 20
     """
-    from rplearn.io.live_sources import replay_tlog
+    from rplearn.io.live_sources import replay_tlog, udp_target
 
+    with flag_values():
+        udp_target(address)
     say(f"sent {replay_tlog(log, address, speed)} messages to {address}")

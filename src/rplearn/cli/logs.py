@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import typer
 
-from rplearn.cli._app import app, fail, geodetic_flag, link, note, numbers, pairs, reader_options, say, user_errors, with_flag
+from rplearn.cli._app import app, fail, flag_values, geodetic_flag, link, note, numbers, pairs, reader_options, say, user_errors, with_flag
 
 # The reader options inspect and sync declare alike (typer copies a declaration for each command).
 _NODE = typer.Option(None, "--node", help="FILE=NODE for ULogs and one-node tables.")
@@ -58,9 +58,11 @@ def inspect(
     """
     from rplearn.io.inspect import inspect_logs
 
-    options = reader_options(node, receiver, address, pose_topic, rssi_topic, rssi_field, msg_definition, require_valid=require_valid,
-                             station_geodetic=geodetic_flag(station_geodetic, "--station"), station=station,
-                             station_heading_deg=station_heading, frequency_hz=frequency_hz, ulog_radio=ulog_radio)
+    with flag_values():
+        options = reader_options(node, receiver, address, pose_topic, rssi_topic, rssi_field, msg_definition,
+                                 require_valid=require_valid, station_geodetic=geodetic_flag(station_geodetic, "--station"),
+                                 station=station, station_heading_deg=station_heading, frequency_hz=frequency_hz,
+                                 ulog_radio=ulog_radio)
     if markdown and as_json:
         fail("--markdown and --json: choose one")
     report = inspect_logs(logs, options)
@@ -148,15 +150,17 @@ def sync(
     from rplearn.data.sync import SyncOptions
     from rplearn.workflows.logs import sync_logs
 
-    readers = reader_options(
-        node, receiver, address, pose_topic, rssi_topic, rssi_field, msg_definition, tx_power_dbm=tx_power_dbm,
-        frequency_hz=frequency_hz, nan_policy=nan_policy, allow_unsorted=allow_unsorted, require_valid=require_valid,
-        station_geodetic=geodetic_flag(station_geodetic, "--station"), station=station,
-        station_heading_deg=station_heading, ulog_radio=ulog_radio)
-    offsets = numbers(pairs(offset, "--offset"), "--offset", "NODE=SECONDS")
-    options = SyncOptions(link=link(link_text), max_gap_s=max_gap_s, clock_offsets_s=offsets or None, on_unknown_node=on_unknown_node,
-                          rssi_scale=rssi_scale, from_s=from_s, to_s=to_s, window_clock="log" if log_time else "start",
-                          airborne=airborne, airborne_margin_m=airborne_margin_m, repeat_fraction=repeat_fraction)
+    with flag_values():
+        readers = reader_options(
+            node, receiver, address, pose_topic, rssi_topic, rssi_field, msg_definition, tx_power_dbm=tx_power_dbm,
+            frequency_hz=frequency_hz, nan_policy=nan_policy, allow_unsorted=allow_unsorted, require_valid=require_valid,
+            station_geodetic=geodetic_flag(station_geodetic, "--station"), station=station,
+            station_heading_deg=station_heading, ulog_radio=ulog_radio)
+        offsets = numbers(pairs(offset, "--offset"), "--offset", "NODE=SECONDS")
+        options = SyncOptions(link=link(link_text), max_gap_s=max_gap_s, clock_offsets_s=offsets or None,
+                              on_unknown_node=on_unknown_node, rssi_scale=rssi_scale, from_s=from_s, to_s=to_s,
+                              window_clock="log" if log_time else "start", airborne=airborne,
+                              airborne_margin_m=airborne_margin_m, repeat_fraction=repeat_fraction)
     outcome = sync_logs(poses, signals, output, readers, options, estimate_offset=estimate_offset,
                         offset_window_s=offset_window, apply_offset=apply_offset)
     if outcome.clock is not None:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import typer
 
-from rplearn.cli._app import app, progress_bar, say, step, user_errors
+from rplearn.cli._app import app, flag_values, progress_bar, say, step, user_errors
 
 
 @app.command()
@@ -21,8 +21,10 @@ def export(
 
     Example: rplearn export sh10.json --format msi -o patterns/
     """
-    from rplearn.workflows.planning import export_model_file
+    from rplearn.workflows.planning import check_export_format, export_model_file
 
+    with flag_values():
+        check_export_format(fmt)
     for path in export_model_file(model_path, fmt, output, step_deg, frequency_hz):
         say(f"wrote {path}")
 
@@ -60,8 +62,11 @@ def demo(
     Example: rplearn demo -o rplearn-demo
     """
     from rplearn.io.files import check_output_folder
+    from rplearn.sim.presets import make_preset
     from rplearn.workflows.demo import run_demo
 
+    with flag_values():
+        make_preset(preset)  # a name of no preset refused before anything is simulated
     check_output_folder(out_dir)
     with progress_bar() as p:
         task = p.add_task("starting", total=None)

@@ -7,7 +7,7 @@ from typing import Any
 
 import typer
 
-from rplearn.cli._app import app, floats, note, numbers, pairs, reader_options, say, split_list, user_errors, xyz
+from rplearn.cli._app import app, flag_values, floats, note, numbers, pairs, reader_options, say, split_list, user_errors, xyz
 
 # Options two or three of these commands declare alike (typer copies a declaration for each command).
 _FREQUENCY = typer.Option(None, "--frequency", help="Carrier frequency [Hz] (default: the one the model was learned at).")
@@ -55,9 +55,10 @@ def links(
     from rplearn.analysis.swarm import SwarmOptions
     from rplearn.workflows.logs import swarm_links
 
-    readers = reader_options(node, pose_topic=pose_topic, nan_policy=nan_policy, allow_unsorted=allow_unsorted)
-    times = floats(at, "--at", "times in seconds")
-    options = SwarmOptions(frequency_hz, pairs(pattern, "--as"), min_rssi_dbm, step_s, times, max_gap_s)
+    with flag_values():
+        readers = reader_options(node, pose_topic=pose_topic, nan_policy=nan_policy, allow_unsorted=allow_unsorted)
+        times = floats(at, "--at", "times in seconds")
+        options = SwarmOptions(frequency_hz, pairs(pattern, "--as"), min_rssi_dbm, step_s, times, max_gap_s)
     if sensitivity is not None:
         _links_availability(model_path, poses, tx_power_dbm, (output, connectivity_out, plot_out), options, readers,
                             (sensitivity, draws, path_pair or []))
@@ -89,7 +90,8 @@ def _links_availability(
         if not (sep and a and b):
             raise typer.BadParameter(f"expected A-B, got {text!r}", param_hint="--pair")
         named.append((a, b))
-    availability = AvailabilityOptions(sensitivity_dbm(sensitivity), n_draws=draws, pairs=named)
+    with flag_values():
+        availability = AvailabilityOptions(sensitivity_dbm(sensitivity), n_draws=draws, pairs=named)
     outcome = swarm_links_availability(model_path, poses, tx_power_dbm, LinkFiles(*files), availability, options, readers)
     for line in outcome.links.notes:
         say(line)
@@ -126,11 +128,12 @@ def headings(
     from rplearn.analysis.radios import sensitivity_dbm
     from rplearn.workflows.logs import swarm_headings
 
-    positions = {drone: xyz(text, f"--pos {drone}") for drone, text in pairs(pos, "--pos").items()}
-    start = numbers(pairs(yaw, "--yaw"), "--yaw", "DRONE=DEG")
-    level = None if sensitivity is None else sensitivity_dbm(sensitivity)
-    options = SwarmHeadingOptions(frequency_hz, pairs(pattern, "--as"), start, split_list(fixed) or (), step_deg,
-                                  sensitivity_dbm=level, min_availability=min_availability)
+    with flag_values():
+        positions = {drone: xyz(text, f"--pos {drone}") for drone, text in pairs(pos, "--pos").items()}
+        start = numbers(pairs(yaw, "--yaw"), "--yaw", "DRONE=DEG")
+        level = None if sensitivity is None else sensitivity_dbm(sensitivity)
+        options = SwarmHeadingOptions(frequency_hz, pairs(pattern, "--as"), start, split_list(fixed) or (), step_deg,
+                                      sensitivity_dbm=level, min_availability=min_availability)
     result = swarm_headings(model_path, positions, tx_power_dbm, output, options)
     say(result.summary())
     if output:
@@ -162,12 +165,15 @@ def orient(
 
     Example: rplearn orient sh10.json --tx A --rx B --tx-pos 0,0,20 --rx-pos 10,5,25 --turn both
     """
-    from rplearn.analysis.heading_options import YawOptions
+    from rplearn.analysis.heading_options import YawOptions, check_turn
     from rplearn.analysis.radios import sensitivity_dbm
     from rplearn.workflows.planning import orient_link
 
-    level = None if sensitivity is None else sensitivity_dbm(sensitivity)
-    options = YawOptions(tx_yaw_deg=tx_yaw, rx_yaw_deg=rx_yaw, tx_power_dbm=tx_power_dbm, frequency_hz=frequency_hz,
-                         caution_z=caution, sensitivity_dbm=level, min_availability=min_availability)
-    result = orient_link(model_path, tx, rx, xyz(tx_pos, "--tx-pos"), xyz(rx_pos, "--rx-pos"), turn, options)
+    with flag_values():
+        level = None if sensitivity is None else sensitivity_dbm(sensitivity)
+        options = YawOptions(tx_yaw_deg=tx_yaw, rx_yaw_deg=rx_yaw, tx_power_dbm=tx_power_dbm, frequency_hz=frequency_hz,
+                             caution_z=caution, sensitivity_dbm=level, min_availability=min_availability)
+        ends = xyz(tx_pos, "--tx-pos"), xyz(rx_pos, "--rx-pos")
+        check_turn(turn)
+    result = orient_link(model_path, tx, rx, *ends, turn, options)
     say(result.summary())

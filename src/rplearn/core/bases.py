@@ -36,10 +36,11 @@ import numpy as np
 from rplearn._argtypes import check_types
 from rplearn.core.basis_base import Basis, FloatArray
 from rplearn.core.sh import SphericalHarmonics
-from rplearn.errors import InputError, ModelFileError
+from rplearn.errors import BadValueError, InputError, ModelFileError
 
 __all__ = [
     "BASIS_KINDS",
+    "BG_GRIDS",
     "Basis",
     "BasisGrid",
     "Polynomial",
@@ -54,6 +55,9 @@ __all__ = [
 
 # -------------------------------------------------------------------------------------------
 # Basis grid (paper's "BG")
+
+#: The node grids of a BG basis: the paper's, or a Fibonacci lattice.
+BG_GRIDS = ("paper", "fibonacci")
 
 
 @check_types
@@ -103,8 +107,8 @@ class BasisGrid(Basis):
             raise InputError(f"BG order must be a positive integer, got {self.order!r}", param="order")
         if not (np.isfinite(self.sigma_rad2) and self.sigma_rad2 > 0):
             raise InputError(f"BG sigma_rad2 must be positive, got {self.sigma_rad2!r}", param="sigma_rad2")
-        if self.grid not in ("paper", "fibonacci"):
-            raise InputError(f"BG grid must be 'paper' or 'fibonacci', got {self.grid!r}", param="grid")
+        if self.grid not in BG_GRIDS:
+            raise BadValueError(f"BG grid must be 'paper' or 'fibonacci', got {self.grid!r}", param="grid")
 
     @property
     def n_coef(self) -> int:

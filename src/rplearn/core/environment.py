@@ -32,7 +32,7 @@ from numpy.typing import ArrayLike, NDArray
 from rplearn._argtypes import check_types
 from rplearn.core.link import wavelength_m
 from rplearn.core.plausible import check_plausible
-from rplearn.errors import InputError
+from rplearn.errors import BadValueError, InputError
 
 FloatArray = NDArray[np.float64]
 
@@ -70,7 +70,7 @@ def reflection_coefficient(sin_grazing: ArrayLike, relative_permittivity: float,
         return (eps * s - root) / (eps * s + root)
     if polarization == "horizontal":
         return (s - root) / (s + root)
-    raise InputError(f"polarization: expected {' or '.join(POLARIZATIONS)}, got {polarization!r}", param="polarization")
+    raise BadValueError(f"polarization: expected {' or '.join(POLARIZATIONS)}, got {polarization!r}", param="polarization")
 
 
 @check_types
@@ -149,7 +149,7 @@ class PathLoss:
 
     def __post_init__(self) -> None:
         if self.kind not in PATH_LOSS_KINDS:
-            raise InputError(f"path loss: expected {', '.join(PATH_LOSS_KINDS)}, got {self.kind!r}", param="path_loss")
+            raise BadValueError(f"path loss: expected {', '.join(PATH_LOSS_KINDS)}, got {self.kind!r}", param="path_loss")
         if not np.isfinite(self.ground_level_m):
             raise InputError(f"ground level: expected a finite height in metres, got {self.ground_level_m!r}",
                              param="ground_level_m")
@@ -158,7 +158,7 @@ class PathLoss:
             raise InputError(f"relative permittivity: expected a number >= 1, got {self.relative_permittivity!r}",
                              param="relative_permittivity")
         if self.polarization not in POLARIZATIONS:
-            raise InputError(f"polarization: expected {' or '.join(POLARIZATIONS)}, got {self.polarization!r}",
+            raise BadValueError(f"polarization: expected {' or '.join(POLARIZATIONS)}, got {self.polarization!r}",
                              param="polarization")
 
     @property

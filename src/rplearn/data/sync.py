@@ -96,7 +96,7 @@ from rplearn.data.readings import REPEAT_FRACTION, duplicate_rows, repeated_read
 from rplearn.data.sync_match import block_row, factorize_ends, float_block, interpolate_end, matched_frame, node_codes
 from rplearn.data.sync_notes import fixed_nodes, fixed_note, implausible_note
 from rplearn.data.tables import QUATERNION_NORM_TOLERANCE, SENTINEL_RSSI_DBM, SIGNAL_COLUMNS, check_tx_power_dbm, check_unit_labels, empty_ids, normalise_times
-from rplearn.errors import InputError
+from rplearn.errors import BadValueError, InputError
 
 #: RSSI values radios and drivers report when there is no measurement [dBm].
 DEFAULT_SENTINEL_RSSI_DBM: tuple[float, ...] = SENTINEL_RSSI_DBM
@@ -198,10 +198,10 @@ class SyncResult:
     summary: SyncSummary
 
 
-def _check(ok: bool, name: str, expected: str, value: Any) -> None:
-    """Raise :class:`InputError` naming option ``name`` (``param=name``) unless ``ok``."""
+def _check(ok: bool, name: str, expected: str, value: Any, error: type[InputError] = InputError) -> None:
+    """Raise :class:`InputError` (or ``error``) naming option ``name`` (``param=name``) unless ``ok``."""
     if not ok:
-        raise InputError(f"{name}: expected {expected}, got {value!r}", param=name)
+        raise error(f"{name}: expected {expected}, got {value!r}", param=name)
 
 
 def _seconds_by_node(value: Any, name: str) -> dict[str, float]:
@@ -305,8 +305,9 @@ class SyncOptions:
             sentinel = None
         _check(sentinel is not None, "sentinel_rssi_dbm", "a sequence of numbers [dBm]", self.sentinel_rssi_dbm)
         set_(self, "sentinel_rssi_dbm", sentinel)
-        _check(self.on_unknown_node in ("drop", "error"), "on_unknown_node", "'drop' or 'error'", self.on_unknown_node)
-        _check(self.rssi_scale in RSSI_SCALES, "rssi_scale", "'dbm' or 'relative'", self.rssi_scale)
+        _check(self.on_unknown_node in ("drop", "error"), "on_unknown_node", "'drop' or 'error'", self.on_unknown_node,
+               BadValueError)
+        _check(self.rssi_scale in RSSI_SCALES, "rssi_scale", "'dbm' or 'relative'", self.rssi_scale, BadValueError)
         _check(isinstance(self.min_samples, (int, np.integer)) and not isinstance(self.min_samples, bool)
                and self.min_samples >= 0, "min_samples", "a non-negative integer", self.min_samples)
         for name, value in (("from_s", self.from_s), ("to_s", self.to_s)):

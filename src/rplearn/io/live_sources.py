@@ -39,7 +39,7 @@ import pandas as pd
 from rplearn._argtypes import check_types
 from rplearn.data.live_sync import HOLD_ROWS, HOLD_S
 from rplearn.data.tables import CSV_DTYPES, normalise_times
-from rplearn.errors import InputError, LogFormatError
+from rplearn.errors import BadValueError, InputError, LogFormatError
 from rplearn.io._columns import EULER_ENU_FLU_COLUMNS, EULER_NED_FRD_COLUMNS, csv_missing_values
 from rplearn.io._csv_headers import REPEATED_HEADER, HeaderDrops, HeaderRule, file_line, in_file_lines, without_repeated_headers
 from rplearn.io._pose_checks import TrackEnds, top_speeds, track_pieces
@@ -508,14 +508,14 @@ def _scaled(msg: Any, speed: float, boot0_ms: int) -> Any:
 MAX_REPLAY_STEP_S = 60.0
 
 
-def _udp_target(address: str) -> tuple[int, tuple[Any, ...]]:
+def udp_target(address: str) -> tuple[int, tuple[Any, ...]]:
     """The socket family and address of ``HOST:PORT`` (``[IPv6]:PORT`` too), refused in one line naming it."""
     host, _, port = address.rpartition(":")
     host = host[1:-1] if host.startswith("[") and host.endswith("]") else host
     try:
         number = int(port)
     except ValueError:
-        raise InputError(f"address: expected HOST:PORT, got {address!r}", param="address") from None
+        raise BadValueError(f"address: expected HOST:PORT, got {address!r}", param="address") from None
     if not 0 < number < 65536:
         raise InputError(f"address: port {number} of {address!r} is not a UDP port (1 to 65535)", param="address")
     try:
@@ -557,7 +557,7 @@ def replay_tlog(path: str, address: str, speed: float = 1.0, start_delay_s: floa
 
     if not (math.isfinite(speed) and speed > 0):
         raise InputError(f"speed: expected a positive, finite factor, got {speed}", param="speed")
-    family, target = _udp_target(address)
+    family, target = udp_target(address)
     mavutil = mavutil_module()
     log = open_mavlink_log(str(path))  # a file, never a connection string
     enc = mavutil.mavlink.MAVLink(None)
@@ -597,4 +597,4 @@ def replay_tlog(path: str, address: str, speed: float = 1.0, start_delay_s: floa
     return sent
 
 
-__all__ = ["CsvTail", "MavlinkSource", "Poll", "replay_tlog"]
+__all__ = ["CsvTail", "MavlinkSource", "Poll", "replay_tlog", "udp_target"]

@@ -17,7 +17,7 @@ from typing import Any
 from rplearn._argtypes import check_types, is_finite_real
 from rplearn.core.plausible import PLAUSIBLE
 from rplearn.data.tables import check_frequency_hz, check_tx_power_dbm
-from rplearn.errors import InputError
+from rplearn.errors import BadValueError, InputError
 
 #: Values of :attr:`ReaderOptions.nan_policy`.
 NAN_POLICIES: tuple[str, ...] = ("error", "drop")
@@ -211,7 +211,7 @@ class ReaderOptions:
         if not isinstance(self.rssi_field, str) or not self.rssi_field:
             raise InputError(f"rssi_field: expected a field name, got {self.rssi_field!r}", param="rssi_field")
         if self.nan_policy not in NAN_POLICIES:
-            raise InputError(
+            raise BadValueError(
                 f"nan_policy: expected 'error' or 'drop', got {self.nan_policy!r}", param="nan_policy"
             )
         for name in ("allow_unsorted", "require_valid", "ulog_radio"):

@@ -93,8 +93,8 @@ def block_drift_std_db(blocks: BlockSums | None, total: NormalEquations, weight:
     :func:`planning_basis`): a live session's, kept as its batches came
     (:class:`rplearn.models.live_drift.DriftBlocks`, whose caller checks that one link's samples
     fall in :data:`~rplearn.core.lsq.block_sums.MIN_BLOCKS` distinct blocks). None without them
-    or with fewer than that many block vectors."""
-    if blocks is None or blocks.n_blocks < MIN_BLOCKS:
+    or when no link's samples fall in that many distinct blocks (:attr:`BlockSums.link_blocks`)."""
+    if blocks is None or blocks.link_blocks < MIN_BLOCKS:
         return None
     basis = planning_basis(total.basis)
     normal = sub_statistics(total, basis)

@@ -163,7 +163,7 @@ class DriftBlocks:
             for label in oldest:
                 for pair in _pairs(self.open[label]):
                     self.folded_per_link[pair] = self.folded_per_link.get(pair, 0) + 1
-            self._fold(self.folded, [self.open.pop(label) for label in oldest])
+            self._fold(self.folded, [(label, self.open.pop(label)) for label in oldest])
             self.folded_through = max(oldest[-1], self.folded_through if self.folded_through is not None else oldest[-1])
 
     def link_block_count(self) -> int:
@@ -176,16 +176,23 @@ class DriftBlocks:
                 counts[pair] = counts.get(pair, 0) + 1
         return max(counts.values(), default=0)
 
-    def _fold(self, into: BlockSums, blocks: list[LinkSums], sign: float = 1.0) -> None:
+    def _fold(self, into: BlockSums, blocks: list[tuple[int, LinkSums]], sign: float = 1.0) -> None:
+        """Fold each ``(label, its links' sums)`` of ``blocks`` into ``into`` (``sign=-1``: out again)."""
         q = self.basis.n_coef
-        rows = [pair_vectors(links, self.n_nodes, q) for links in blocks if links]
+        rows, pairs, labels = [], [], []
+        for label, links in blocks:
+            if links:
+                rows.append(pair_vectors(links, self.n_nodes, q))
+                keys = sorted({(min(t, r), max(t, r)) for t, r in links})  # pair_vectors' rows, in its order
+                pairs += keys
+                labels += [label] * len(keys)
         if rows:
-            into.add_vectors(np.concatenate(rows), sign)
+            into.add_vectors(np.concatenate(rows), sign, links=pairs, labels=labels)
 
     def closed(self) -> BlockSums:
         """The sums of every block so far, each whole (a copy: the open blocks folded in)."""
         out = copy.deepcopy(self.folded)
-        self._fold(out, list(self.open.values()))
+        self._fold(out, list(self.open.items()))
         return out
 
     def split(self, sums: BlockSums, parts: Mapping[int, Mapping[int, LinkSums]]) -> BlockSums:
@@ -198,8 +205,8 @@ class DriftBlocks:
             whole: dict[int, LinkSums] = {}
             for links in by_stretch:
                 add_links(whole, {label: links})
-            self._fold(sums, [whole[label]], -1.0)
-            self._fold(sums, by_stretch)
+            self._fold(sums, [(label, whole[label])], -1.0)
+            self._fold(sums, [(label, links) for links in by_stretch])
         return sums
 
     def at(self, sums: BlockSums, basis: Any) -> BlockSums:
@@ -211,6 +218,7 @@ class DriftBlocks:
         out.cross, out.cross_n = sums.cross[np.ix_(idx, idx)], sums.cross_n[np.ix_(idx, idx)]
         out.sum_yv = sums.sum_yv[idx]
         out.sum_yy, out.sum_n, out.sum_nn, out.n_blocks = sums.sum_yy, sums.sum_n, sums.sum_nn, sums.n_blocks
+        out.link_labels = copy.deepcopy(sums.link_labels)  # the blocks per link: what the drift's check reads
         return out
 
 

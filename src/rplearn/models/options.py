@@ -21,7 +21,7 @@ from rplearn._argtypes import check_types
 from rplearn.core.environment import PathLoss
 from rplearn.core.gauge import Gauge
 from rplearn.core.lsq.solver import PRIOR_LEVELS
-from rplearn.errors import InputError
+from rplearn.errors import BadValueError, InputError
 
 if TYPE_CHECKING:
     from rplearn.models.spec import ModelSpec
@@ -81,9 +81,9 @@ class FitOptions:
         # a copy (a plain dict: the options travel to Dask workers, and a read-only proxy does not pickle)
         object.__setattr__(self, "priors", {str(n): m for n, m in dict(self.priors or {}).items()})
         if self.loss not in LOSSES:
-            raise InputError(f"loss: expected {' or '.join(LOSSES)}, got {self.loss!r}", param="loss")
+            raise BadValueError(f"loss: expected {' or '.join(LOSSES)}, got {self.loss!r}", param="loss")
         if self.prior_level not in PRIOR_LEVELS:
-            raise InputError(f"prior level: expected {' or '.join(PRIOR_LEVELS)}, got {self.prior_level!r}",
+            raise BadValueError(f"prior level: expected {' or '.join(PRIOR_LEVELS)}, got {self.prior_level!r}",
                              param="prior_level")
         for node, prior in self.priors.items():
             if is_model_file(prior) and not os.fspath(prior).strip():

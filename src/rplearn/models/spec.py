@@ -10,9 +10,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from rplearn._argtypes import check_types
-from rplearn.core.bases import make_basis
+from rplearn.core.bases import BG_GRIDS, make_basis
 from rplearn.core.lsq.solver import DEFAULT_RIDGE
-from rplearn.errors import InputError
+from rplearn.errors import BadValueError, InputError
 
 if TYPE_CHECKING:
     from rplearn.core.basis_base import Basis
@@ -73,16 +73,18 @@ class ModelSpec:
             raise InputError(f"model {self.kind}: order must be a positive integer, got {self.order!r}", param="order")
         if not (np.isfinite(self.smoothing) and self.smoothing >= 0):
             raise InputError(f"smoothing must be a non-negative number, got {self.smoothing!r}", param="smoothing")
+        if self.kind == "bg" and self.grid not in BG_GRIDS:  # before any data is read (the basis checks it again)
+            raise BadValueError(f"BG grid must be 'paper' or 'fibonacci', got {self.grid!r}", param="grid")
 
     @classmethod
     def parse(cls, text: str, **options: Any) -> ModelSpec:
         """Parse ``"sh-10"``, ``"SH10"``, ``"bg-7"``, ``"p-12"``, ``"nn-400"``, ``"m"``, ``"knn"``..."""
         m = re.fullmatch(r"\s*([a-zA-Z]+)[-_ ]?(\d+)?\s*", str(text))
         if not m:
-            raise InputError(f"unknown model {text!r}; expected one of sh, bg, poly, mean, knn (e.g. sh-10, nn-400)", param="model")
+            raise BadValueError(f"unknown model {text!r}; expected one of sh, bg, poly, mean, knn (e.g. sh-10, nn-400)", param="model")
         kind = _ALIASES.get(m.group(1).lower(), m.group(1).lower())
         if kind not in MODEL_KINDS:
-            raise InputError(f"unknown model {text!r}; expected one of {', '.join(MODEL_KINDS)} (e.g. sh-10, nn-400)", param="model")
+            raise BadValueError(f"unknown model {text!r}; expected one of {', '.join(MODEL_KINDS)} (e.g. sh-10, nn-400)", param="model")
         order = int(m.group(2)) if m.group(2) else options.pop("order", None)
         options.pop("order", None)
         if kind != "mean" and order is None:

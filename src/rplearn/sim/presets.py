@@ -42,7 +42,7 @@ from dataclasses import replace
 from typing import Any
 
 from rplearn._argtypes import check_types
-from rplearn.errors import InputError
+from rplearn.errors import BadValueError
 from rplearn.plan.campaign import Campaign, group_campaign
 from rplearn.plan.trajectory import TrajectoryUnit
 from rplearn.sim.antennas import AirframeLobe, AntennaSpec, Mounting, NodeAntenna, antenna_from_name
@@ -316,4 +316,4 @@ def make_preset(name: str) -> SimulationConfig:
     try:
         return _PRESETS[name]()
     except KeyError:
-        raise InputError(f"preset: expected one of {', '.join(PRESET_NAMES)}, got {name!r}", param="preset") from None
+        raise BadValueError(f"preset: expected one of {', '.join(PRESET_NAMES)}, got {name!r}", param="preset") from None

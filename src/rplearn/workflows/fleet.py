@@ -34,7 +34,7 @@ from rplearn._budget import Cost, check_work
 from rplearn.data.row_copies import RowCopies, SourceHashes, refuse_copies
 from rplearn.data.tables import link_samples
 from rplearn.data.units import Stretches
-from rplearn.errors import InputError
+from rplearn.errors import BadValueError, InputError
 from rplearn.io.files import iter_parts
 from rplearn.io.partitions import Part
 from rplearn.models.base import Model
@@ -75,13 +75,13 @@ def _scheduler_address(address: str, text: str) -> str:
         if not ready:
             raise InputError(f"--dask {address}: {_SCHEMES[scheme]}; give tcp://host:port", param="dask")
     elif scheme not in ("tcp", "ws", "wss"):
-        raise InputError(f"--dask {address}: unknown scheme {scheme + '://'!r}; expected local, local:N or a scheduler "
+        raise BadValueError(f"--dask {address}: unknown scheme {scheme + '://'!r}; expected local, local:N or a scheduler "
                          "address tcp://host:port", param="dask")
     try:
         parts = urllib.parse.urlsplit(f"{scheme}://{rest}")
         host, _ = parts.hostname, parts.port  # .port raises on a port out of range
     except ValueError as exc:
-        raise InputError(f"--dask {address}: not a scheduler address ({exc}); expected tcp://host:port", param="dask") from None
+        raise BadValueError(f"--dask {address}: not a scheduler address ({exc}); expected tcp://host:port", param="dask") from None
     if not host or parts.path not in ("", "/") or parts.query or parts.fragment or parts.username or parts.password:
         raise InputError(f"--dask {address}: not a scheduler address; expected {scheme}://host:port", param="dask")
     return f"{scheme}://{parts.netloc}"
@@ -110,12 +110,12 @@ def parse_dask(address: str) -> tuple[str, int | str]:
     if text == "local" or text.startswith("local:"):
         count = text.partition(":")[2] or "2"
         if not count.isdigit() or not 1 <= int(count) <= 256:
-            raise InputError(f"--dask: expected local or local:N with N workers (1 to 256), got {address!r}", param="dask")
+            raise BadValueError(f"--dask: expected local or local:N with N workers (1 to 256), got {address!r}", param="dask")
         check_work("dask", int(count), local_workers_cost, "local workers", bounds=(1, 256))
         return "local", int(count)
     if "://" in text and text.partition("://")[2]:
         return "remote", _scheduler_address(address, text)
-    raise InputError(f"--dask: expected local, local:N or a scheduler address such as tcp://host:8786, got {address!r}",
+    raise BadValueError(f"--dask: expected local, local:N or a scheduler address such as tcp://host:8786, got {address!r}",
                      param="dask")
 
 

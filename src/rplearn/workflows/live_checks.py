@@ -11,7 +11,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from rplearn._argtypes import check_types
-from rplearn.errors import InputError
+from rplearn.errors import BadValueError, InputError
 from rplearn.io.files import check_output_kind
 from rplearn.io.partitions import file_identity
 from rplearn.io.resolve import check_outputs, distinct_inputs
@@ -47,7 +47,7 @@ def check_live_options(options: Any) -> None:
             raise InputError(f"{name}: expected a positive number of {'dB' if 'db' in name else 'seconds'}, got {v}",
                              param=name)
     if o.spread_over not in SPREAD_OVER:
-        raise InputError(f"spread_over: expected {' or '.join(SPREAD_OVER)}, got {o.spread_over!r}", param="spread_over")
+        raise BadValueError(f"spread_over: expected {' or '.join(SPREAD_OVER)}, got {o.spread_over!r}", param="spread_over")
     if o.spread_over == "covered" and o.until_spread_db is not None and o.until_coverage_pct is None:
         raise InputError("a spread target over the covered directions needs a coverage target too: that spread is small "
                          "from the first seconds, while they are a few percent of the sphere (or read it over the "

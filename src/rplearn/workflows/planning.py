@@ -15,7 +15,7 @@ from rplearn._budget import Cost, budget, check_work
 from rplearn.analysis.heading_options import YawOptions
 from rplearn.analysis.headings import OrientationResult, best_yaw
 from rplearn.data.phases import CALIBRATION_MIN_DISTANCE_M
-from rplearn.errors import InputError
+from rplearn.errors import BadValueError, InputError
 from rplearn.io.export import export_grid
 from rplearn.io.files import check_output_kind, check_output_path, provenance
 from rplearn.io.msi import export_msi_files
@@ -119,6 +119,23 @@ def campaign_cost(options: CampaignOptions, n_loops: float, rate_hz: float) -> C
                 disk_bytes=REFERENCE_ROW_DISK * rows)
 
 
+def plan_check_spec(check_model: str | None) -> ModelSpec | None:
+    """The model whose patterns :func:`plan_campaign`'s check reads (None: no check); a name that
+    is no model, or a baseline without per-node patterns, refused (``check_model``)."""
+    if not check_model:
+        return None
+    spec = ModelSpec.parse(check_model)
+    if not spec.decouples:
+        raise BadValueError(f"check_model: {spec.label} has no per-node pattern to check; use sh, bg or poly", param="check_model")
+    return spec
+
+
+def check_export_format(fmt: str) -> None:
+    """Refuse an export format other than ``grid``, ``msi`` or ``images`` (``fmt``)."""
+    if fmt not in ("grid", "msi", "images"):
+        raise BadValueError(f"fmt: expected grid, msi or images, got {fmt!r}", param="fmt")
+
+
 @check_types
 def plan_campaign(
     out_dir: str,
@@ -154,11 +171,7 @@ def plan_campaign(
     for loops in (min(n_loops, 5), n_loops):
         check_work("rate_hz", rate_hz, lambda r: campaign_cost(options, loops, r), "Hz",  # noqa: B023 (used at once)
                    integer=False, bounds=(1e-3, math.inf), limits=work)
-    spec = None
-    if check_model:  # refuse a bad model before writing files
-        spec = ModelSpec.parse(check_model)
-        if not spec.decouples:
-            raise InputError(f"check_model: {spec.label} has no per-node pattern to check; use sh, bg or poly", param="check_model")
+    spec = plan_check_spec(check_model)  # refuse a bad model before writing files
     planned = paper_campaign(
         learning_psi0_deg=list(options.learning_psi0_deg), testing_psi0_deg=list(options.testing_psi0_deg),
         distance_m=options.distance_m, height_m=options.height_m, n_loops=options.n_loops, speed_m_s=options.speed_m_s,
@@ -177,8 +190,7 @@ def export_model_file(
     """Export a learned model: ``grid`` (one CSV: node, az_deg, el_deg, gain_db), ``msi`` (one
     MSI Planet file per node) or ``images`` (one 3-D PNG per node). Returns the paths written.
     """
-    if fmt not in ("grid", "msi", "images"):
-        raise InputError(f"fmt: expected grid, msi or images, got {fmt!r}", param="fmt")
+    check_export_format(fmt)
     if fmt == "grid":
         check_output_path(output, [model_path])
         check_output_kind(output, "grid")

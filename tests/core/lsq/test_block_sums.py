@@ -206,3 +206,69 @@ def test_time_blocks_of_two_units_stay_apart_and_bad_labels_are_refused() -> Non
         NormalEquations(basis, 2).add(d, tx, rx, y, time_block=label[:5])
     with pytest.raises(InputError, match="n_coef"):
         time_block_sums(units, BLOCK_S, 99)
+
+
+def _three_links(seconds: float, seed: int) -> tuple[NormalEquations, BlockSums, list[NormalEquations]]:
+    """Three nodes (links 0-1, 0-2, 1-2) seen at 50 Hz for ``seconds``, white noise plus an
+    offset per link and 5-s block: their statistics, live block sums (1-s batches) and each
+    block's statistics kept in two pieces (a flight cut into stretches)."""
+    basis = make_basis("sh", 2)
+    rng = np.random.default_rng(seed)
+    t = np.arange(0.0, seconds, 1.0 / RATE_HZ)
+    d, tx, rx = _links(rng, 3, t.size, False)
+    coef = rng.normal(0.0, 2.0, 3 * basis.n_coef)
+    p = basis.n_coef
+    truth = np.array([basis.design(d.az_tx[i:i + 1], d.el_tx[i:i + 1])[0] @ coef[tx[i] * p:(tx[i] + 1) * p]
+                      + basis.design(d.az_rx[i:i + 1], d.el_rx[i:i + 1])[0] @ coef[rx[i] * p:(rx[i] + 1) * p]
+                      for i in range(t.size)])
+    label = np.floor(t / BLOCK_S).astype(np.int64)
+    link = np.minimum(tx, rx) + np.maximum(tx, rx)  # 1, 2, 3: one code per link
+    offsets = rng.normal(0.0, 3.0, (4, label.max() + 1))
+    y = truth + rng.normal(0.0, 1.0, t.size) + offsets[link, label]
+    normal, blocks = NormalEquations(basis, 3), BlockSums(3, p, BLOCK_S)
+    for s in range(int(seconds)):
+        m = (t >= s) & (t < s + 1)
+        batch = NormalEquations(basis, 3).add(Directions(*(a[m] for a in d)), tx[m], rx[m], y[m])
+        normal.merge(batch)
+        blocks.add_batch(batch, s + 0.5)
+    half = t.size // 2 + 7  # within a block: its samples in both pieces
+    pieces = [NormalEquations(basis, 3).add(Directions(*(a[part] for a in d)), tx[part], rx[part], y[part],
+                                            time_block=label[part]) for part in (slice(0, half), slice(half, t.size))]
+    return normal, blocks, pieces
+
+
+def test_three_links_in_two_blocks_estimate_no_drift() -> None:
+    """Three links in 2 time blocks are 6 block vectors but no link is seen in MIN_BLOCKS
+    distinct blocks: no drift (the 6 vectors passed for 6 blocks, and a drift was estimated
+    from two blocks)."""
+    normal, blocks, pieces = _three_links(10.0, 5)
+    closed = blocks.closed()
+    assert closed.n_blocks == 6 and closed.link_blocks == 2
+    assert correlated_ratio(normal, closed, _prior(normal)) == 0.0
+    summed = time_block_sums(pieces, BLOCK_S)
+    assert summed is not None and summed.n_blocks == 9 and summed.link_blocks == 2  # the cut block once per link
+    assert correlated_ratio(normal, summed, _prior(normal)) == 0.0
+
+
+def test_three_links_in_four_blocks_estimate_the_drift() -> None:
+    normal, blocks, pieces = _three_links(20.0, 5)
+    closed = blocks.closed()
+    assert closed.n_blocks == 12 and closed.link_blocks == 4 == MIN_BLOCKS
+    # offsets of 3 dB over a 1-dB white noise; the estimates of before (counting vectors)
+    assert correlated_ratio(normal, closed, _prior(normal)) == pytest.approx(13.824419254506136, rel=1e-9)
+    summed = time_block_sums(pieces, BLOCK_S)
+    assert summed is not None and summed.n_blocks == 15 and summed.link_blocks == 4
+    assert correlated_ratio(normal, summed, _prior(normal)) == pytest.approx(15.718238763156771, rel=1e-9)
+    summed.add_vectors(np.zeros((1, summed.cross.shape[0] + 2)) + 1.0, -1.0, links=[(2, 1)], labels=[0])
+    assert summed.link_blocks == 4  # link 1-2's block 0 still held by another vector
+    with pytest.raises(InputError, match="links"):
+        summed.add_vectors(np.ones((2, summed.cross.shape[0] + 2)), links=[(0, 1)], labels=[0, 1])
+
+
+@pytest.mark.parametrize(("seed", "want"), [(0, 0.09741237012759629), (1, 0.1145297827563708)])
+def test_two_nodes_estimate_the_same_drift_as_before(seed: int, want: float) -> None:
+    """One link: its blocks are the block vectors, the estimate unchanged to the bit."""
+    normal, blocks = _accumulate(600.0, 2.0, 0.6, seed)
+    closed = blocks.closed()
+    assert closed.link_blocks == closed.n_blocks == 120
+    assert correlated_ratio(normal, closed, _prior(normal)) == want

@@ -19,7 +19,10 @@ link's samples in the block, of variance ``s_c^2``. The penalised least-squares 
 :class:`BlockSums` keeps, with memory that does not grow with the flight's length, ``C``,
 ``C_n = sum_b n_b v_b v_b^T``, ``sum_b s_b v_b``, ``sum_b s_b^2``, ``sum_b n_b^2`` (``s_b =
 1^T y_b``, ``n_b`` the block's samples), from the cumulative statistics' per-link sums
-(:attr:`NormalEquations.directed`) at block boundaries: nothing is re-read.
+(:attr:`NormalEquations.directed`) at block boundaries: nothing is re-read. It also keeps which
+time blocks each link's samples fell in (one small count per link and block,
+:attr:`BlockSums.link_labels`): a drift is read only from a link seen in :data:`MIN_BLOCKS`
+distinct blocks (:attr:`BlockSums.link_blocks`), however many links or pieces share them.
 :func:`correlated_ratio` estimates ``kappa = s_c^2 / sigma^2`` from them by moments: the
 residual sum of squares and the sum of the blocks' squared residual sums of a penalised fit,
 against their expectations under the model (each a linear function of ``sigma^2`` and
@@ -46,9 +49,9 @@ FloatArray = NDArray[np.float64]
 
 #: Default length of a time block [s]: about the correlation time of a drone's heading error.
 DEFAULT_BLOCK_S = 5.0
-#: Fewest closed blocks from which :func:`correlated_ratio` estimates anything (else 0); for a
-#: model file's drift (:func:`rplearn.models.auto_spread.drift_std_db`), the fewest distinct
-#: time blocks one link's samples must fall in (:func:`link_block_count`).
+#: Fewest distinct time blocks one link's samples must fall in for :func:`correlated_ratio` to
+#: estimate anything (else 0; :attr:`BlockSums.link_blocks`), and for a model file's drift
+#: (:func:`rplearn.models.auto_spread.drift_std_db`, :func:`link_block_count`).
 MIN_BLOCKS = 4
 
 
@@ -76,6 +79,11 @@ class BlockSums:
     block ``k`` holds the batches whose time is in ``[k, k + 1) * block_s``, and closes when a
     batch of another block comes. :meth:`closed` is a copy with the open block closed (what the
     posterior reads).
+
+    :attr:`n_blocks` counts the vectors summed (one per closed block and link, and per piece
+    of a block summed in pieces); :attr:`link_labels` the vectors per link (both directions one)
+    and block label, whose most distinct labels of any one link, :attr:`link_blocks`, is what a
+    drift needs (:data:`MIN_BLOCKS`).
     """
 
     n_nodes: int
@@ -88,6 +96,7 @@ class BlockSums:
     sum_n: float = field(init=False, default=0.0)
     sum_nn: float = field(init=False, default=0.0)
     n_blocks: int = field(init=False, default=0)
+    link_labels: dict[tuple[int, int], dict[int, int]] = field(init=False, default_factory=dict, repr=False)
     _open: dict[tuple[int, int], FloatArray] = field(init=False, default_factory=dict, repr=False)
     _open_index: int | None = field(init=False, default=None, repr=False)
     _seen: dict[tuple[int, int], FloatArray] = field(init=False, default_factory=dict, repr=False)
@@ -151,11 +160,24 @@ class BlockSums:
         out[-1] = sums[2 * p + 1]  # count
         return out
 
+    @property
+    def link_blocks(self) -> int:
+        """The most distinct time blocks any one link's closed samples fall in (a block summed in
+        several vectors, e.g. the stretches a flight is cut into, once); 0 before any."""
+        return max((sum(1 for c in labels.values() if c > 0) for labels in self.link_labels.values()), default=0)
+
+    def _count(self, pair: tuple[int, int], label: int, sign: int) -> None:
+        labels = self.link_labels.setdefault(pair, {})
+        labels[label] = labels.get(label, 0) + sign
+        if labels[label] == 0:
+            del labels[label]
+
     def _close(self) -> None:
-        for vec in self._open.values():
+        for pair, vec in self._open.items():
             n = float(vec[-1])
             if n <= 0:
                 continue
+            self._count(pair, int(self._open_index if self._open_index is not None else 0), 1)
             v, s = vec[:-2], float(vec[-2])
             outer = np.outer(v, v)
             self.cross += outer
@@ -168,14 +190,23 @@ class BlockSums:
         self._open = {}
         self._open_index = None
 
-    def add_vectors(self, v: Any, sign: float = 1.0) -> BlockSums:
+    def add_vectors(self, v: Any, sign: float = 1.0, *, links: Any, labels: Any) -> BlockSums:
         """Fold closed blocks in: ``v`` one row per block and link, ``[features summed over all
-        pattern columns, sum y, count]``; ``sign=-1`` takes blocks counted before out again (a
-        block to be counted as parts instead). Rows of no samples are left out."""
+        pattern columns, sum y, count]``, ``links`` each row's link (two node indices, either
+        order) and ``labels`` its block's label (for :attr:`link_blocks`); ``sign=-1`` takes
+        blocks counted before out again (a block to be counted as parts instead). Rows of no
+        samples are left out."""
         if sign not in (1.0, -1.0):
             raise InputError(f"sign: expected 1 or -1, got {sign!r}", param="sign")
         v = np.asarray(v, np.float64)
-        v = v[v[:, -1] > 0]
+        ends = np.asarray(links, np.int64).reshape(-1, 2)
+        at = np.asarray(labels, np.int64).ravel()
+        if ends.shape[0] != v.shape[0] or at.size != v.shape[0]:
+            raise InputError(f"add_vectors: {v.shape[0]} rows, {ends.shape[0]} links and {at.size} labels", param="links")
+        keep = v[:, -1] > 0
+        v, ends, at = v[keep], ends[keep], at[keep]
+        for (a, b), label in zip(ends.tolist(), at.tolist()):
+            self._count((min(a, b), max(a, b)), label, int(sign))
         features, s, n = v[:, :-2], v[:, -2], v[:, -1]
         self.cross += sign * (features.T @ features)
         self.cross_n += sign * ((features * n[:, None]).T @ features)
@@ -234,13 +265,15 @@ def time_block_sums(statistics: Sequence[NormalEquations], block_s: float = DEFA
                 rows.append(sums)
     sums_all, at, code = np.array(rows, np.float64), np.array(where, np.intp), np.array([t * out.n_nodes + r for t, r in links])
     v = np.zeros((len(groups), out.n_nodes * p + 2))
+    pairs = np.array([pair for _, _, pair in groups], np.int64).reshape(len(groups), 2)  # each vector's link and block
+    labels = np.array([label for _, label, _ in groups], np.int64)
     for c in np.unique(code):  # each directed link's entries at once (a vector holds each at most once)
         t, r = divmod(int(c), out.n_nodes)
         m = code == c
         v[at[m], t * p:(t + 1) * p] += sums_all[m, :p]
         v[at[m], r * p:(r + 1) * p] += sums_all[m, big:big + p]
         v[at[m], -2:] += sums_all[m, 2 * big:2 * big + 2]  # sum y, count
-    return out.add_vectors(v)
+    return out.add_vectors(v, links=pairs, labels=labels)
 
 
 @check_types
@@ -267,8 +300,10 @@ def link_block_count(statistics: Sequence[NormalEquations]) -> int:
 @check_types
 def correlated_ratio(normal: NormalEquations, blocks: BlockSums, prior_diag: Any) -> float:
     """``kappa = s_c^2 / sigma^2``: the drifting error's block-offset variance over the white
-    noise's, estimated by moments (module docstring); 0 with fewer than :data:`MIN_BLOCKS`
-    blocks or when the blocks' residuals scatter no more than white noise allows.
+    noise's, estimated by moments (module docstring); 0 when no link's samples fall in
+    :data:`MIN_BLOCKS` distinct blocks (:attr:`BlockSums.link_blocks`: three links seen in 2
+    blocks are 6 vectors but show no drift to tell from the pattern) or when the blocks'
+    residuals scatter no more than white noise allows.
 
     Parameters
     ----------
@@ -286,7 +321,7 @@ def correlated_ratio(normal: NormalEquations, blocks: BlockSums, prior_diag: Any
     with distance over time is counted as drifting error (``kappa`` too large, revisits
     favoured more than they should be).
     """
-    if blocks.n_blocks < MIN_BLOCKS:
+    if blocks.link_blocks < MIN_BLOCKS:
         return 0.0
     pc = normal.n_pattern_columns
     if blocks.cross.shape[0] != pc:
