@@ -17,8 +17,8 @@ os.environ.setdefault("SCIPY_ARRAY_API", "1")
 #: never changed.
 FIRST = ("tests/test_benchmarks.py", "tests/test_readme_examples.py", "tests/test_typing.py", "tests/test_docs.py",
          "tests/test_field_guide.py", "tests/analysis/", "tests/cli/", "tests/io/", "tests/workflows/", "tests/models/",
-         "tests/viz/", "tests/integrations/", "tests/sim/", "tests/test_signatures.py")
-LAST = ("tests/test_architecture.py", "tests/data/", "tests/plan/", "tests/core/", "tests/test_atomic.py", "tests/test_repository.py",
+         "tests/viz/", "tests/integrations/", "tests/sim/", "tests/test_architecture.py", "tests/test_signatures.py")
+LAST = ("tests/data/", "tests/plan/", "tests/core/", "tests/test_atomic.py", "tests/test_repository.py",
         "tests/test_work_budget.py", "tests/test_public_api.py", "tests/test_argtypes.py")
 
 

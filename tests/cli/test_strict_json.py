@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import functools
 import json
 import math
 from pathlib import Path
@@ -48,38 +49,65 @@ def test_strict_json_writes_null_for_non_finite_numbers():
         strict_loads(json.dumps({"x": math.nan}))
 
 
-def test_every_command_that_writes_json_writes_strict_json(tmp_path):
-    """simulate (ground truth; a fleet's index), fit (fixed order, automatic, a baseline), reference,
-    evaluate --json, headings -o .json, report (its model, Table I) and demo (Table I, the
-    identifiability study, the models): every JSON file parses with a parser that refuses NaN."""
-    d = tmp_path
-    invoke(["simulate", "--preset", "smoke", "--seed", "1", "-o", d / "flight"])
-    invoke(["simulate", "--preset", "fleet", "--flights", "1", "--drones", "2", "--seed", "1", "-o", d / "fleet"])
+def _strict_files(folder: Path, expected: tuple[str, ...]) -> None:
+    """Every ``expected`` JSON file (relative to ``folder``) is written, and every JSON file under ``folder``
+    parses with a parser that refuses NaN (no NaN, no Infinity in its text)."""
+    written = sorted(folder.rglob("*.json"))
+    names = {p.relative_to(folder).as_posix() for p in written}
+    for name in expected:
+        assert name in names, (name, sorted(names))
+    for path in written:
+        text = path.read_text(encoding="utf-8")
+        assert "NaN" not in text.replace('"NaN"', "") and "Infinity" not in text, path
+        strict_loads(text)
+
+
+@pytest.fixture(scope="module")
+def matched(tmp_path_factory) -> Path:
+    """The tlog's matched dataset (``sync``), in a folder of its own: read-only."""
+    d = tmp_path_factory.mktemp("strict_json")
     invoke(["sync", "--poses", LOG, "--signals", LOG, "--tx-power", "20", "--frequency", "915e6", "--link", "all",
             "--max-gap", "1.0", "-o", d / "matched.parquet"])
-    data = d / "matched.parquet"
+    return d / "matched.parquet"
+
+
+def test_simulate_writes_strict_json(tmp_path, monkeypatch):
+    """simulate: the ground truth; a fleet's index (its flights the smoke campaign's, as the library offers for
+    tests: the command and its ``_fleet.json`` are the same, the paper's flights only take longer)."""
+    from rplearn.sim import fleet
+
+    monkeypatch.setattr(fleet, "simulate_fleet", functools.partial(fleet.simulate_fleet, preset="smoke"))
+    invoke(["simulate", "--preset", "smoke", "--seed", "1", "-o", tmp_path / "flight"])
+    invoke(["simulate", "--preset", "fleet", "--flights", "1", "--drones", "2", "--seed", "1", "-o", tmp_path / "fleet"])
+    _strict_files(tmp_path, ("flight/ground_truth.json", "fleet/_fleet.json"))
+
+
+def test_fit_evaluate_reference_and_headings_write_strict_json(matched, tmp_path):
+    """fit (fixed order, automatic, a baseline), evaluate --json, reference, headings -o .json."""
+    d = tmp_path
     units = "flight[1/5],flight[2/5],flight[3/5],flight[4/5]"
-    invoke(["fit", data, "--units", units, "-o", d / "auto.json"])
-    invoke(["fit", data, "--model", "sh", "--degree", "3", "--units", units, "-o", d / "sh3.json"])
-    invoke(["fit", data, "--model", "mean", "--units", units, "-o", d / "mean.json"])  # no condition number: NaN before
-    invoke(["evaluate", d / "sh3.json", d / "mean.json", data, "--json", d / "table.json"])
+    invoke(["fit", matched, "--units", units, "-o", d / "auto.json"])
+    invoke(["fit", matched, "--model", "sh", "--degree", "3", "--units", units, "-o", d / "sh3.json"])
+    invoke(["fit", matched, "--model", "mean", "--units", units, "-o", d / "mean.json"])  # no condition number: NaN before
+    invoke(["evaluate", d / "sh3.json", d / "mean.json", matched, "--json", d / "table.json"])
     (d / "ref.csv").write_text("az_deg,el_deg,gain_dbi\n" + "".join(
         f"{az},{el},{2.0 * math.cos(math.radians(el))}\n" for az in range(-180, 181, 30) for el in range(-90, 91, 30)))
     invoke(["reference", "gcs=" + str(d / "ref.csv"), "-o", d / "reference.json"])
     invoke(["headings", d / "sh3.json", "--pos", "gcs=0,0,2", "--pos", "sys1=50,20,30", "--tx-power", "20",
             "-o", d / "yaws.json"])
-    invoke(["report", data, "--paper-models", "m,sh-3", "--repeats", "1", "-o", d / "report"])
-    invoke(["demo", "--preset", "smoke", "--seed", "1", "-o", d / "demo"])
-    written = sorted(p for p in d.rglob("*.json"))
-    names = {p.relative_to(d).as_posix() for p in written}
-    for expected in ("flight/ground_truth.json", "fleet/_fleet.json", "auto.json", "sh3.json", "mean.json", "table.json",
-                     "reference.json", "yaws.json", "report/model.json", "report/table1.json", "demo/table1.json",
-                     "demo/identifiability.json", "demo/models/M.json"):
-        assert expected in names, (expected, sorted(names))
-    for path in written:
-        text = path.read_text(encoding="utf-8")
-        assert "NaN" not in text.replace('"NaN"', "") and "Infinity" not in text, path
-        strict_loads(text)
+    _strict_files(d, ("auto.json", "sh3.json", "mean.json", "table.json", "reference.json", "yaws.json"))
     # where a number is not defined it is null, not dropped: the mean model has no condition number
     rows = strict_loads((d / "table.json").read_text(encoding="utf-8"))["rows"]
     assert [r["model"] for r in rows] == ["SH-3", "M"] and rows[1]["condition_number"] is None
+
+
+def test_report_writes_strict_json(matched, tmp_path):
+    """report: its model and Table I."""
+    invoke(["report", matched, "--paper-models", "m,sh-3", "--repeats", "1", "-o", tmp_path / "report"])
+    _strict_files(tmp_path, ("report/model.json", "report/table1.json"))
+
+
+def test_demo_writes_strict_json(tmp_path):
+    """demo: Table I, the identifiability study, the models."""
+    invoke(["demo", "--preset", "smoke", "--seed", "1", "-o", tmp_path / "demo"])
+    _strict_files(tmp_path, ("demo/table1.json", "demo/identifiability.json", "demo/models/M.json"))

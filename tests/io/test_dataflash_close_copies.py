@@ -66,29 +66,50 @@ def _read(path):
     return read_mavlink(path, tx_power_dbm=20.0, frequency_hz=433e6)
 
 
+#: the records of the simulated flight kept (its first 13 s: 1,247 ATT and POS and 496 RAD of its 76 s' 7,026 ATT
+#: and POS and 2,658 RAD): every copy, buffer and repeat written below still occurs hundreds of times (the buffers
+#: of 400, seven), and the reads take a fifth of the whole flight's
+HEAD = 3000
+
+
 @pytest.fixture(scope="module")
 def once(tmp_path_factory) -> Path:
-    """A simulated flight written by rplearn.io.dataflash_writer (thousands of ATT, POS and RAD)."""
-    return simulated_dataflash(tmp_path_factory.mktemp("df_copies") / "once.bin")
+    """A simulated flight written by rplearn.io.dataflash_writer, its first ``HEAD`` records (thousands of ATT,
+    POS and RAD; the FMT, ORGN and ARM records come first)."""
+    folder = tmp_path_factory.mktemp("df_copies")
+    whole = simulated_dataflash(folder / "flight.bin").read_bytes()
+    path = folder / "once.bin"
+    path.write_bytes(b"".join(_records(whole)[:HEAD]))
+    return path
 
 
-def _read_twice(once, tmp_path, apart_us: int):
-    """The log ``once`` with every record written twice ``apart_us`` later, read; asserted to give the same
-    pose and signal tables as ``once``: its path, the copies written and both reads' metadata."""
+@pytest.fixture(scope="module")
+def once_read(once):
+    """``once`` read (the pose and signal tables and the metadata), once for the module: read-only."""
+    logs, meta = _read(once)
+    assert meta["close_copies"] == 0 and meta["repeated_messages"] == 0 and meta["reboots"] == 0
+    assert meta["messages"] == {"ATT": 1247, "POS": 1247, "ORGN": 2, "RAD": 496}
+    return logs, meta
+
+
+def _read_twice(once, tmp_path, apart_us: int, once_read=None):
+    """The log ``once`` (read: ``once_read``, else read here) with every record written twice ``apart_us`` later,
+    read; asserted to give the same pose and signal tables as ``once``: its path, the copies written and both
+    reads' metadata."""
     twice = tmp_path / "twice.bin"
     data, copied = _twice(once.read_bytes(), apart_us)
     twice.write_bytes(data)
-    (logs1, m1), (logs2, m2) = _read(once), _read(twice)
+    (logs1, m1), (logs2, m2) = once_read or _read(once), _read(twice)
     pd.testing.assert_frame_equal(logs1.pose, logs2.pose)
     pd.testing.assert_frame_equal(logs1.signal, logs2.signal)
     return twice, copied, (m1, m2)
 
 
 @pytest.mark.parametrize("apart_us", [0, 500, 1000])
-def test_every_record_twice_reads_as_the_log_once(once, tmp_path, apart_us):
+def test_every_record_twice_reads_as_the_log_once(once, once_read, tmp_path, apart_us):
     # was: the same TimeUS twice dropped the attitude copies as duplicate_time (7,026) and merged the
-    # radio copies in sync as duplicate_reading; 0.5 ms later every pose was read twice (14,053 rows)
-    twice, copied, (m1, m2) = _read_twice(once, tmp_path, apart_us)
+    # radio copies in sync as duplicate_reading; 0.5 ms later every pose was read twice (14,053 rows; the whole flight)
+    twice, copied, (m1, m2) = _read_twice(once, tmp_path, apart_us, once_read)
     assert m1["close_copies"] == 0 and m2["close_copies"] == copied
     assert m2["messages"] == m1["messages"] and m2["dropped"] == m1["dropped"] and m2["signal"] == m1["signal"]
     assert m2["repeated_messages"] == 0 and m2["reboots"] == 0
@@ -99,24 +120,24 @@ def test_every_record_twice_reads_as_the_log_once(once, tmp_path, apart_us):
 
 
 @pytest.mark.parametrize(("apart_us", "batch"), [(0, 3), (300, 5), (0, 50), (800, 400)])
-def test_every_buffer_of_records_written_twice_reads_as_the_log_once(once, tmp_path, apart_us, batch):
+def test_every_buffer_of_records_written_twice_reads_as_the_log_once(once, once_read, tmp_path, apart_us, batch):
     # a logger writing each buffer twice: the copies step back in time (was: with the copies 0.3 ms later every
-    # pose twice, 14,053 rows; at the same TimeUS, buffers of 2, some as duplicate_time and the RAD counts inflated)
+    # pose twice, 14,053 rows of the whole flight; at the same TimeUS, buffers of 2, some as duplicate_time and the RAD counts inflated)
     again = tmp_path / "again.bin"
     data, copied = _twice(once.read_bytes(), apart_us, batch)
     again.write_bytes(data)
-    (logs1, m1), (logs2, m2) = _read(once), _read(again)
+    (logs1, m1), (logs2, m2) = once_read, _read(again)
     pd.testing.assert_frame_equal(logs1.pose, logs2.pose)
     pd.testing.assert_frame_equal(logs1.signal, logs2.signal)
     assert m2["close_copies"] == copied and m2["repeated_messages"] == 0 and m2["messages"] == m1["messages"]
     assert m2["reboots"] == 0 and m2["dropped"] == m1["dropped"]
 
 
-def test_records_repeated_more_than_1_ms_later_are_no_copies(once, tmp_path):
+def test_records_repeated_more_than_1_ms_later_are_no_copies(once, once_read, tmp_path):
     # the same fields 1.5 ms later: a second reading that reads alike (a vehicle at rest), kept
     later = tmp_path / "later.bin"
     later.write_bytes(_twice(once.read_bytes(), 1500)[0])
-    (logs1, _), (logs2, m2) = _read(once), _read(later)
+    (logs1, _), (logs2, m2) = once_read, _read(later)
     assert m2["close_copies"] == 0
     assert (logs2.pose["node"] == "sys1").sum() == 2 * (logs1.pose["node"] == "sys1").sum()
 
@@ -138,12 +159,12 @@ def test_a_record_at_the_same_time_with_other_fields_is_no_copy(once, tmp_path):
     assert _read(path)[1]["close_copies"] == 0
 
 
-def test_a_log_in_the_file_twice_is_still_a_repeated_copy_not_close_copies(once, tmp_path):
+def test_a_log_in_the_file_twice_is_still_a_repeated_copy_not_close_copies(once, once_read, tmp_path):
     # the copy's records repeat the first log's at the same TimeUS, but after the time stepped back
     # by the whole log: merge_copied_boots's business (repeated_messages), none a close copy
     twice = tmp_path / "concatenated.bin"
     twice.write_bytes(once.read_bytes() * 2)
-    (_, m1), (_, m2) = _read(once), _read(twice)
+    (_, m1), (_, m2) = once_read, _read(twice)
     assert m2["close_copies"] == 0 and m2["repeated_messages"] == sum(m1["messages"].values()) + 1
 
 
