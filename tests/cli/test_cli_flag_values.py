@@ -28,6 +28,9 @@ BAD_VALUES = {
     "report --polarization": (["report", "m.parquet", "--path-loss", "two-ray", "--polarization", "xyz", "-o", "r"],
                               "--polarization: expected vertical or horizontal, got 'xyz'"),
     "sweep --orders": (["sweep", "m.parquet", "--orders", "xyz"], "--orders: expected A..B or a comma list, got 'xyz'"),
+    # a k-NN sweep ran (its "order" a k, its AIC counting every sample as a parameter), exit 0
+    "sweep --model knn": (["sweep", "m.parquet", "--model", "knn"],
+                          "--model: expected sh, bg or poly (a pattern model swept by its order), got 'knn'"),
     "predict --sensitivity": (["predict", "m.json", "d.parquet", "-o", "p.csv", "--sensitivity", "xyz"],
                               "--sensitivity: 'xyz' is neither a level in dBm nor a radio preset; presets: sik, rfd900, "
                               "esp32-11b, wifi-6mbps, wifi-54mbps, rx5808"),

@@ -16,7 +16,7 @@ from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.core.lsq.selection import Selection, select_order_and_smoothing, validation_rmse
 from rplearn.core.threads import blas_threads_for
 from rplearn.data.tables import LinkSamples
-from rplearn.errors import InputError
+from rplearn.errors import BadValueError, InputError
 from rplearn.models.fit import evaluate_models, fit_model
 from rplearn.models.spec import ModelSpec, check_model_size
 
@@ -156,6 +156,19 @@ def check_sweep(kind: str, orders: Sequence[int], n_samples: int, n_nodes: int) 
                bounds=(ordered[0], ordered[-1]))
 
 
+#: The models a sweep runs over their order: the pattern models, whose order is their size
+#: (the number of coefficients, which AIC counts). A k-NN model's "order" would be its k, and
+#: its AIC would count every training sample as a parameter.
+SWEPT_KINDS = ("sh", "bg", "poly")
+
+
+def check_sweep_kind(kind: str) -> None:
+    """Refuse a model a sweep does not run over its order (:data:`SWEPT_KINDS`)."""
+    if kind not in SWEPT_KINDS:
+        raise BadValueError(f"model: expected {', '.join(SWEPT_KINDS[:-1])} or {SWEPT_KINDS[-1]} (a pattern model swept by "
+                            f"its order), got {kind!r}", param="model")
+
+
 @check_types
 def order_sweep(
     learn: LinkSamples,
@@ -171,6 +184,7 @@ def order_sweep(
     consecutive orders, and then leaves out the orders the samples cannot identify (None: run
     every order, and refuse one the samples cannot identify).
     """
+    check_sweep_kind(kind)
     if not orders or order_bounds(orders)[0] < 1:
         raise InputError(f"orders: expected positive orders, got {list(orders)!r}", param="orders")
     if stop_after_rises is not None:  # a sweep that stops by itself ends where the samples end

@@ -249,12 +249,13 @@ def sweep(
 
     Example: rplearn sweep data.parquet --model sh --orders 3..15 -o sweep.csv --plot sweep.png
     """
+    from rplearn.analysis.sweep import check_sweep_kind
     from rplearn.models.spec import ModelSpec
     from rplearn.workflows.learning import sweep_dataset
 
     with flag_values():
         order_list = parse_orders(orders)
-        ModelSpec.parse(model)  # a name of no model refused before the dataset is read
+        check_sweep_kind(ModelSpec.parse(model).kind)  # a name of no model, or none swept, refused before the dataset is read
     with progress_bar() as p:
         task = p.add_task("sweeping", total=len(order_list))
         result = sweep_dataset(
