@@ -138,11 +138,13 @@ def test_manoeuvres_plans_with_an_earlier_flights_or_the_clis_hyper_parameters(t
     """``manoeuvres.py --hyper previous``: the planners learn their noise, prior and drift from an
     earlier flight's model file through ``trajectory --optimize --from-model``'s code
     (``options_from_model``), while the spreads are still read under the reference's; ``--hyper
-    cli`` gives them ``trajectory --optimize``'s defaults (the optimized plan alone flown)."""
+    cli`` gives them ``trajectory --optimize``'s defaults (the optimized plan alone flown). No more
+    draws (``--draws 0``: the single-draw check; the draws are test_benchmark_runs_tiny_and_prints_its_ratios')."""
     for hyper, said, planners in (("previous", r"from the earlier flight's model \(seed 7919, through options_from_model\): "
                                                r"noise \d+\.\d+ dB, penalty weight \S+, drift \d+\.\d+ dB", "both"),
                                   ("cli", r"the CLI's defaults \(--noise 4\.20 dB", "optimized")):
-        proc = _manoeuvres(tmp_path, monkeypatch, capsys, "--hyper", hyper, "--planners", planners, "--bound", "no")
+        proc = _manoeuvres(tmp_path, monkeypatch, capsys, "--hyper", hyper, "--planners", planners, "--bound", "no",
+                           "--draws", "0")
         assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
         assert re.search(said, proc.stdout) and re.search(r"optimized: time \[(ok|MISS)\]", proc.stdout), proc.stdout[-3000:]
         assert "from the reference flight" in proc.stdout  # the yardstick stays the reference's fit
@@ -155,9 +157,10 @@ def test_manoeuvres_ranks_as_live_from_model_does(tmp_path, monkeypatch, capsys)
     live --from-model`` ranks, the earlier flight's model file read by ``earlier_fit`` and used
     while the session has learned fewer samples than that fit. The suggested flight alone: the
     optimized plan under ``--hyper previous`` does not depend on the ranker (the same plan, flown
-    figure for figure, as test_manoeuvres_plans_with_an_earlier_flights_or_the_clis_hyper_parameters')."""
+    figure for figure, as test_manoeuvres_plans_with_an_earlier_flights_or_the_clis_hyper_parameters'), with no
+    more draws (``--draws 0``)."""
     proc = _manoeuvres(tmp_path, monkeypatch, capsys, "--ranker", "live", "--hyper", "previous", "--bound", "no",
-                       "--planners", "suggested")
+                       "--planners", "suggested", "--draws", "0")
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
     assert re.search(r"--ranker live --from-model: manoeuvres ranked with \S+previous\.json's noise \d+\.\d+ dB, smoothness "
                      r"penalty weight \S+ and drift \d+\.\d+ dB per 5-s block until the session has learned \d+ samples",
