@@ -21,7 +21,8 @@ from rplearn.workflows.live_advice import ManoeuvreAdvisor, live_advisor
 def session(tmp_path_factory):
     """A fixed-order SH-6 session on the smoke flight (75 s), with an advisor that ranks at every
     refit (every 40 s: two rankings of some 300 candidates each, at 40 s and after the last
-    refit, not one every 5 s; the tests read the last)."""
+    refit, not one every 5 s; the tests read the last). Replayed 5 s of log at a time (a batch a
+    second made 75 polls; what is learned and when it is refitted are the same)."""
     r = simulate("smoke", seed=0)
     calls = []
     advisor = ManoeuvreAdvisor(every_s=0.0)
@@ -33,7 +34,7 @@ def session(tmp_path_factory):
 
     options = LiveOptions(spec=ModelSpec.parse("sh", order=6), refit_s=40.0, manoeuvres=hook)
     path = str(tmp_path_factory.mktemp("live") / "m.json")
-    outcome = replay_session(r.pose_log, r.signal_log.drop(columns=["unit"]), path, options)
+    outcome = replay_session(r.pose_log, r.signal_log.drop(columns=["unit"]), path, options, batch_s=5.0)
     return outcome, calls
 
 
