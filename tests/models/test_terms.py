@@ -57,6 +57,10 @@ def test_log_distance_exponent_and_patterns_are_recovered(pathloss):
     errors = pattern_errors_db(model, sim.ground_truth, covered)
     free_config = make_preset("pathloss")
     free_config = replace(free_config, radio=replace(free_config.radio, path_loss_exponent=2.0))
+    # its learning units only: each unit draws from its own seed, so their rows are those of the
+    # whole campaign (A 0.947 / B 0.958 dB either way); the testing unit was never read
+    learning = tuple(u for u in free_config.campaign.units if u.role == "learning")
+    free_config = replace(free_config, campaign=replace(free_config.campaign, units=learning))
     fsim, flearn, _ = _campaign(free_config, link=("A", "B"))
     reference = pattern_errors_db(_auto(flearn, nodes), fsim.ground_truth, node_directions(link_samples(flearn, nodes=nodes)))
     for node in nodes:
