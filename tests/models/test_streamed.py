@@ -163,8 +163,11 @@ def _refusal(call) -> str:
 @pytest.mark.parametrize("name", ["twice.parquet", "twice.csv"])
 def test_a_dataset_written_twice_is_refused_streamed_as_in_memory(dataset, monkeypatch, tmp_path, name, chunk_rows):
     """The copies of a dataset written twice into one file are in different chunks: the check
-    runs over the whole file, and says what the in-memory check says (file, count, first row)."""
-    df = pd.read_parquet(dataset / "m.parquet")
+    runs over the whole file, and says what the in-memory check says (file, count, first row).
+    Every other row of the flight (1,321 rows, both units): still more than 1,000, so that each
+    chunk size keeps the two copies of every row in different chunks, or (500,000) in one."""
+    df = pd.read_parquet(dataset / "m.parquet").iloc[::2].reset_index(drop=True)
+    assert len(df) > 1000 and df["unit"].nunique() == 2
     path = str(tmp_path / name)
     twice = pd.concat([df, df], ignore_index=True)
     twice.to_parquet(path, index=False) if name.endswith(".parquet") else twice.to_csv(path, index=False)
@@ -197,8 +200,9 @@ def test_part_files_holding_the_same_rows_are_refused_naming_both(dataset, monke
 def test_part_files_holding_the_same_rows_are_not_scored_twice(dataset, monkeypatch, tmp_path):
     """``evaluate`` of a dataset in many files predicts part by part: rows repeated in another
     file (or later in the same file) are refused with the fit's message, not scored twice
-    (Table I's AIC doubled and every sample weighed double)."""
-    df = pd.read_parquet(dataset / "m.parquet")
+    (Table I's AIC doubled and every sample weighed double). Every other row of the flight
+    (1,321 rows, both units, still 14 chunks of 97): the copies are found whatever the size."""
+    df = pd.read_parquet(dataset / "m.parquet").iloc[::2].reset_index(drop=True)
     model = str(tmp_path / "m.json")
     learning.fit_dataset(str(dataset / "m.parquet"), ModelSpec("sh", 3), output=model)
     folder = tmp_path / "parts"
