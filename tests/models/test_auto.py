@@ -68,9 +68,11 @@ def test_fit_cli_defaults_to_auto_and_refuses_auto_for_baselines(smoke):
         proc = CliRunner().invoke(app, ["fit", "m.parquet", "-o", "a.json"], env={"COLUMNS": "400"})
     assert proc.exit_code == 0 and "chosen by grouped cross-validation over units learn_0[1/5]" in proc.stdout, proc.output
     assert "<- chosen" in proc.stdout
-    for args, needle in ((["--model", "knn", "--degree", "auto"], "not of NN-400"), (["--degree", "3.5"], "whole number or 'auto'")):
+    # a degree of no whole number is a usage error (exit 2); auto for a baseline, an error of the options (1)
+    for args, needle, code in ((["--model", "knn", "--degree", "auto"], "not of NN-400", 1),
+                               (["--degree", "3.5"], "whole number or 'auto'", 2)):
         proc = subprocess.run(RPLEARN + ["fit", "m.parquet", "-o", "x.json", *args], cwd=d, capture_output=True, text=True)
-        assert proc.returncode == 1 and needle in proc.stderr and len(proc.stderr.splitlines()) == 1, proc.stderr
+        assert proc.returncode == code and needle in proc.stderr and len(proc.stderr.splitlines()) == 1, proc.stderr
 
 
 def plain_test_rmse(learn, test, orders, top):

@@ -267,8 +267,10 @@ def test_three_links_in_four_blocks_estimate_the_drift() -> None:
 
 @pytest.mark.parametrize(("seed", "want"), [(0, 0.09741237012759629), (1, 0.1145297827563708)])
 def test_two_nodes_estimate_the_same_drift_as_before(seed: int, want: float) -> None:
-    """One link: its blocks are the block vectors, the estimate unchanged to the bit."""
+    """One link: its blocks are the block vectors, the estimate unchanged to the bit (the blocks
+    per link counted up to MIN_BLOCKS: all a drift needs, and no memory that grows with the flight)."""
     normal, blocks = _accumulate(600.0, 2.0, 0.6, seed)
     closed = blocks.closed()
-    assert closed.link_blocks == closed.n_blocks == 120
+    assert closed.n_blocks == 120 and closed.link_blocks == MIN_BLOCKS
+    assert sum(len(labels) for labels in closed.link_labels.values()) == MIN_BLOCKS
     assert correlated_ratio(normal, closed, _prior(normal)) == want

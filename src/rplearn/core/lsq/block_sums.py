@@ -20,9 +20,10 @@ link's samples in the block, of variance ``s_c^2``. The penalised least-squares 
 ``C_n = sum_b n_b v_b v_b^T``, ``sum_b s_b v_b``, ``sum_b s_b^2``, ``sum_b n_b^2`` (``s_b =
 1^T y_b``, ``n_b`` the block's samples), from the cumulative statistics' per-link sums
 (:attr:`NormalEquations.directed`) at block boundaries: nothing is re-read. It also keeps which
-time blocks each link's samples fell in (one small count per link and block,
-:attr:`BlockSums.link_labels`): a drift is read only from a link seen in :data:`MIN_BLOCKS`
-distinct blocks (:attr:`BlockSums.link_blocks`), however many links or pieces share them.
+time blocks each link's samples fell in, up to :data:`MIN_BLOCKS` of them a link (a small
+count per link and block, :attr:`BlockSums.link_labels`): a drift is read only from a link
+seen in :data:`MIN_BLOCKS` distinct blocks (:attr:`BlockSums.link_blocks`), however many links
+or pieces share them.
 :func:`correlated_ratio` estimates ``kappa = s_c^2 / sigma^2`` from them by moments: the
 residual sum of squares and the sum of the blocks' squared residual sums of a penalised fit,
 against their expectations under the model (each a linear function of ``sigma^2`` and
@@ -163,14 +164,22 @@ class BlockSums:
     @property
     def link_blocks(self) -> int:
         """The most distinct time blocks any one link's closed samples fall in (a block summed in
-        several vectors, e.g. the stretches a flight is cut into, once); 0 before any."""
-        return max((sum(1 for c in labels.values() if c > 0) for labels in self.link_labels.values()), default=0)
+        several vectors, e.g. the stretches a flight is cut into, once), counted up to
+        :data:`MIN_BLOCKS` (all a drift needs: the count does not grow with the flight); 0
+        before any."""
+        return max((len(labels) for labels in self.link_labels.values()), default=0)
 
     def _count(self, pair: tuple[int, int], label: int, sign: int) -> None:
+        """Count a vector of ``label`` in or (``sign=-1``) out for the link ``pair``: a link keeps
+        the counts of its first :data:`MIN_BLOCKS` distinct labels, and later labels only when
+        one of those was taken out (a block counted as parts instead is taken out, then in again)."""
         labels = self.link_labels.setdefault(pair, {})
-        labels[label] = labels.get(label, 0) + sign
-        if labels[label] == 0:
-            del labels[label]
+        if label in labels:
+            labels[label] += sign
+            if labels[label] <= 0:
+                del labels[label]
+        elif sign > 0 and len(labels) < MIN_BLOCKS:
+            labels[label] = sign
 
     def _close(self) -> None:
         for pair, vec in self._open.items():
