@@ -83,8 +83,8 @@ class BlockSums:
 
     :attr:`n_blocks` counts the vectors summed (one per closed block and link, and per piece
     of a block summed in pieces); :attr:`link_labels` the vectors per link (both directions one)
-    and block label, whose most distinct labels of any one link, :attr:`link_blocks`, is what a
-    drift needs (:data:`MIN_BLOCKS`).
+    and block label, for at most :data:`MIN_BLOCKS` labels a link, whose most distinct labels of
+    any one link, :attr:`link_blocks`, is what a drift needs.
     """
 
     n_nodes: int
