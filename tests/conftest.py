@@ -7,6 +7,11 @@ import os
 # module imports scipy, so that those checks run instead of being skipped.
 os.environ.setdefault("SCIPY_ARRAY_API", "1")
 
+# The simulator's coloured noise (rplearn.sim.noise.ar1_filter) runs scipy's lfilter, the same
+# bits as its plain loop, whenever scipy.signal is imported already (a process that only
+# simulates a smoke flight is spared the import): imported here once per test process, the
+# suite's many simulated flights skip the loop (about 60 s of the suite's CPU, py-spy).
+import scipy.signal  # noqa: E402,F401
 
 #: The order the suite's files run in (``make test``: ``pytest -n 2``, xdist's ``load`` scheduling,
 #: which hands the tests out in this order: large runs of consecutive tests at the start, a few
@@ -17,8 +22,8 @@ os.environ.setdefault("SCIPY_ARRAY_API", "1")
 #: never changed.
 FIRST = ("tests/test_benchmarks.py", "tests/test_readme_examples.py", "tests/test_typing.py", "tests/test_docs.py",
          "tests/test_field_guide.py", "tests/analysis/", "tests/cli/", "tests/io/", "tests/workflows/", "tests/models/",
-         "tests/viz/", "tests/integrations/", "tests/sim/", "tests/test_architecture.py", "tests/test_signatures.py")
-LAST = ("tests/data/", "tests/plan/", "tests/core/", "tests/test_atomic.py", "tests/test_repository.py",
+         "tests/viz/", "tests/integrations/", "tests/sim/", "tests/test_signatures.py")
+LAST = ("tests/test_architecture.py", "tests/data/", "tests/plan/", "tests/core/", "tests/test_atomic.py", "tests/test_repository.py",
         "tests/test_work_budget.py", "tests/test_public_api.py", "tests/test_argtypes.py")
 
 

@@ -1,14 +1,19 @@
 """The package's layers: imports point downwards only, and there is no import cycle.
 
 Parses every module of ``rplearn`` with :mod:`ast` (every import statement, including those
-inside functions and ``TYPE_CHECKING`` blocks) and checks the rules of ARCHITECTURE.md.
+inside functions and ``TYPE_CHECKING`` blocks) and checks the rules of ARCHITECTURE.md. Each
+distinct source text is parsed once per test session (:func:`parse_once`), so a planted-violation
+test, on a copy of the package with one file changed, parses only that file again.
 """
 
 from __future__ import annotations
 
 import ast
+import hashlib
+import shutil
 import sys
 from collections.abc import Iterable
+from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
@@ -96,25 +101,61 @@ def lazy_targets(path: Path, package: str) -> list[tuple[str, int]]:
     if not stub.exists():
         return []
     found = []
-    for node in ast.walk(ast.parse(stub.read_text(encoding="utf-8"), filename=str(stub))):
+    for node, _, _ in _import_nodes(stub.read_text(encoding="utf-8"), str(stub)):
         if isinstance(node, ast.ImportFrom):
             parts = package.split(".")
             base = parts[: len(parts) - (node.level - 1)] if node.level else []
             found.append((".".join(base + ([node.module] if node.module else [])), node.lineno))
-        elif isinstance(node, ast.Import):
+        else:
             found += [(a.name, node.lineno) for a in node.names]
     return found
 
 
-_IMPORT_NODES: dict[str, tuple[tuple[ast.Import | ast.ImportFrom, bool, bool], ...]] = {}
+ImportNode = tuple[ast.Import | ast.ImportFrom, bool, bool]
 
 
-def _import_nodes(source: str, filename: str) -> tuple[tuple[ast.Import | ast.ImportFrom, bool, bool], ...]:
-    """``(import node, at module level, at module level or inside a module-level if/try)`` for
-    every import statement of a source text (cached by text: the planted-violation tests check
-    copies of the package in which one file differs; ``filename`` names a file that fails to parse)."""
-    if source in _IMPORT_NODES:
-        return _IMPORT_NODES[source]
+@dataclass(frozen=True)
+class Parsed:
+    """What the checks read off one source text, found in one parse.
+
+    Attributes
+    ----------
+    imports : tuple of (ast.Import or ast.ImportFrom, bool, bool)
+        ``(import node, at module level, at module level or inside a module-level if/try)``
+        for every import statement, in :func:`ast.walk` order.
+    private_reads : tuple of (str, str, int)
+        ``(name, attribute, line)`` of every ``name._attribute`` with a private attribute
+        (``_x``, not ``__x``), in :func:`ast.walk` order.
+    """
+
+    imports: tuple[ImportNode, ...]
+    private_reads: tuple[tuple[str, str, int], ...]
+
+
+#: One parse per distinct source text for the whole test session, keyed by the text's SHA-256:
+#: the planted-violation tests check copies of the package in which one file differs, so each
+#: re-parses only that file. A text that fails to parse is never stored (it raises each time).
+_PARSED: dict[str, Parsed] = {}
+
+
+def parse_once(source: str, filename: str) -> Parsed:
+    """The imports and private attribute reads of a source text, parsed on its first sight.
+
+    Parameters
+    ----------
+    source : str
+        The text of a module or stub.
+    filename : str
+        The file it was read from, named by the ``SyntaxError`` of a text that does not parse.
+
+    Returns
+    -------
+    Parsed
+        The session's one parse of this text.
+    """
+    key = hashlib.sha256(source.encode("utf-8")).hexdigest()
+    if key in _PARSED:
+        return _PARSED[key]
     tree = ast.parse(source, filename=filename)
     top_level = {id(n) for n in tree.body}
     # imports inside `if TYPE_CHECKING:` or `try:` at module level count as module level for third parties
@@ -122,10 +163,22 @@ def _import_nodes(source: str, filename: str) -> tuple[tuple[ast.Import | ast.Im
     for n in tree.body:
         if isinstance(n, (ast.If, ast.Try)):
             loose |= {id(c) for c in ast.walk(n)}
-    found = tuple((node, id(node) in top_level, id(node) in loose) for node in ast.walk(tree)
-                  if isinstance(node, (ast.Import, ast.ImportFrom)))
-    _IMPORT_NODES[source] = found
-    return found
+    imports: list[ImportNode] = []
+    reads: list[tuple[str, str, int]] = []
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.Import, ast.ImportFrom)):
+            imports.append((node, id(node) in top_level, id(node) in loose))
+        elif isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name) and _private(node.attr):
+            reads.append((node.value.id, node.attr, node.lineno))
+    parsed = Parsed(tuple(imports), tuple(reads))
+    _PARSED[key] = parsed
+    return parsed
+
+
+def _import_nodes(source: str, filename: str) -> tuple[ImportNode, ...]:
+    """``(import node, at module level, at module level or inside a module-level if/try)`` for
+    every import statement of a source text (:func:`parse_once`)."""
+    return parse_once(source, filename).imports
 
 
 def imports_of(path: Path, module: str, known: set[str]) -> list[tuple[str, int, bool]]:
@@ -255,9 +308,8 @@ def _private_attributes(source: str, filename: str, modules: Iterable[str]) -> l
                             if f"{node.module}.{a.name}" in known})
         elif isinstance(node, ast.Import):
             aliases.update({a.asname: a.name for a in node.names if a.asname and a.name in known})
-    return [(n.attr, n.lineno, aliases[n.value.id]) for n in ast.walk(ast.parse(source, filename=filename))
-            if isinstance(n, ast.Attribute) and isinstance(n.value, ast.Name) and n.value.id in aliases
-            and _private(n.attr)]
+    return [(attr, line, aliases[name]) for name, attr, line in parse_once(source, filename).private_reads
+            if name in aliases]
 
 
 def _private_names_imported(package_dir: Path = PACKAGE_DIR) -> dict[str, list[tuple[str, int, str]]]:
@@ -282,6 +334,10 @@ def private_imports(package_dir: Path = PACKAGE_DIR) -> list[str]:
     another module needs has a public name (in a private module, ``io/_mavlink_records.py``, too)."""
     return [f"{module}:{line} imports the private {name} of {source}"
             for module, names in _private_names_imported(package_dir).items() for name, line, source in names]
+
+
+#: Each check by the kind of violation it catches.
+CHECKS = {"layer": layering_violations, "third": third_party_violations, "cycle": import_cycles, "private": private_imports}
 
 
 def test_no_module_imports_another_modules_private_names() -> None:
@@ -333,13 +389,41 @@ def test_no_module_is_longer_than_the_limit() -> None:
 )
 def test_the_checks_catch_a_planted_violation(tmp_path: Path, where: str, source: str, kind: str) -> None:
     """Each check fails on a copy of the package with one bad import added."""
-    import shutil
+    copy = _copy_of_the_package(tmp_path)
+    assert all(check(copy) == [] for check in CHECKS.values())
+    _plant(copy, where, source)
+    found = CHECKS[kind](copy)
+    assert found, f"planted {source.strip()!r} in {where} was not caught"
 
+
+def test_a_planted_copy_is_parsed_again_only_where_it_differs(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Every check reads the session's one parse of a text: on a copy of the package with one
+    file changed, the changed file is parsed once (for all the checks) and no other file is."""
+    copy = _copy_of_the_package(tmp_path)
+    assert all(check(copy) == [] for check in CHECKS.values())
+    # a text no other test plants, so that this session has not parsed it yet
+    target = _plant(copy, "viz/charts.py", "import rplearn.viz.plot as once\nONCE = once._hatch_uncovered\n")
+    parsed: list[str] = []
+    parse = ast.parse
+
+    def counted(source: str, filename: str = "<unknown>", *args: object, **kwargs: object) -> ast.AST:
+        parsed.append(str(filename))
+        return parse(source, filename, *args, **kwargs)  # type: ignore[call-overload]
+
+    monkeypatch.setattr(ast, "parse", counted)
+    found = {kind: check(copy) for kind, check in CHECKS.items()}
+    assert parsed == [str(target)]
+    assert found["private"] and found["layer"] == found["third"] == found["cycle"] == []
+
+
+def _copy_of_the_package(tmp_path: Path) -> Path:
     copy = tmp_path / "rplearn"
     shutil.copytree(PACKAGE_DIR, copy, ignore=shutil.ignore_patterns("__pycache__"))
-    checks = {"layer": layering_violations, "third": third_party_violations, "cycle": import_cycles, "private": private_imports}
-    assert all(check(copy) == [] for check in checks.values())
+    return copy
+
+
+def _plant(copy: Path, where: str, source: str) -> Path:
+    """Append ``source`` to the file ``where`` of a copy of the package; the file's path."""
     target = copy / where
     target.write_text(target.read_text(encoding="utf-8") + "\n" + source, encoding="utf-8")
-    found = checks[kind](copy)
-    assert found, f"planted {source.strip()!r} in {where} was not caught"
+    return target

@@ -13,6 +13,7 @@ import pandas as pd
 
 from rplearn.data.tables import non_unit_quaternion_rows
 from rplearn.io._csv_headers import REPEATED_HEADER_AT
+from rplearn.io._pose_checks import same_rows
 from rplearn.io.damage import signal_row_problems
 from rplearn.io.options import ReaderOptions
 
@@ -51,7 +52,7 @@ def _read_pose_table(path: str, options: ReaderOptions) -> tuple[pd.DataFrame, d
     values = df[cols].apply(pd.to_numeric, errors="coerce").to_numpy(np.float64)
     bad = ~np.isfinite(values).all(axis=1)
     nan_rows = {str(k): int(v) for k, v in node[bad].value_counts().items()}
-    copies = df.assign(node=node.to_numpy()).astype(str).duplicated().to_numpy()  # duplicate_pose: no step back
+    copies = same_rows(df.assign(node=node.to_numpy()))  # duplicate_pose: no step back
     file_order = pd.DataFrame({"t": values[~bad & ~copies, cols.index("t")], "node": node[~bad & ~copies].to_numpy()})
     return file_order, info, nan_rows, pose
 
