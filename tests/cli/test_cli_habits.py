@@ -17,10 +17,10 @@ import sys
 from pathlib import Path
 
 import pytest
-from cli_helpers import D, help_text, run_here, smoke_flight
+from cli_helpers import REAL_TLOG, D, help_text, run_here, smoke_flight
 
 ROOT = Path(__file__).resolve().parents[2]
-TLOG = ROOT / "tests" / "fixtures" / "ardupilot" / "mavlink-log_2013-10-13_16-58-51.tlog"
+TLOG = REAL_TLOG
 ENV = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT / "src"), os.environ.get("PYTHONPATH", "")])}
 
 

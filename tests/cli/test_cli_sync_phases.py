@@ -6,12 +6,11 @@ interpreter start-up and imports as a process of its own)."""
 from __future__ import annotations
 
 import re
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
-from cli_helpers import run_here
+from cli_helpers import REAL_TLOG, run_here
 
 T0 = 1_381_700_000.0
 
@@ -89,7 +88,7 @@ def test_sync_names_the_fixed_nodes_with_the_advice_of_their_source(logs, tmp_pa
            "every time (one pose row)" in table
     assert "B: its pose table (pose.csv) gives it one pose, or only identical ones: right for a station or a parked " \
            "drone; if B moved, its motion was not logged: log its poses" in table
-    real = Path(__file__).resolve().parents[1] / "fixtures" / "ardupilot" / "mavlink-log_2013-10-13_16-58-51.tlog"
+    real = REAL_TLOG
     out = run(["sync", "--poses", real, "--signals", real, "--tx-power", "20", "--frequency", "433e6", "--link", "all",
                "-o", "tlog.parquet"], tmp_path).stdout
     assert "gcs is the ground station, one pose row where" in out

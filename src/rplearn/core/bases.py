@@ -108,7 +108,7 @@ class BasisGrid(Basis):
         if not (np.isfinite(self.sigma_rad2) and self.sigma_rad2 > 0):
             raise InputError(f"BG sigma_rad2 must be positive, got {self.sigma_rad2!r}", param="sigma_rad2")
         if self.grid not in BG_GRIDS:
-            raise BadValueError(f"BG grid must be 'paper' or 'fibonacci', got {self.grid!r}", param="grid")
+            raise BadValueError(f"BG grid must be {' or '.join(map(repr, BG_GRIDS))}, got {self.grid!r}", param="grid")
 
     @property
     def n_coef(self) -> int:

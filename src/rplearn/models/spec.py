@@ -74,7 +74,7 @@ class ModelSpec:
         if not (np.isfinite(self.smoothing) and self.smoothing >= 0):
             raise InputError(f"smoothing must be a non-negative number, got {self.smoothing!r}", param="smoothing")
         if self.kind == "bg" and self.grid not in BG_GRIDS:  # before any data is read (the basis checks it again)
-            raise BadValueError(f"BG grid must be 'paper' or 'fibonacci', got {self.grid!r}", param="grid")
+            raise BadValueError(f"BG grid must be {' or '.join(map(repr, BG_GRIDS))}, got {self.grid!r}", param="grid")
 
     @classmethod
     def parse(cls, text: str, **options: Any) -> ModelSpec:
