@@ -70,3 +70,38 @@ def test_batched_ranking_equals_scoring_each_candidate_alone(prefixes):
     for (r, (rows, _)), (r0, (rows0, _)) in zip(got, ref, strict=True):
         assert (r.score_per_s, r.reduction_db_per_s, r.spread_after_db) == (r0.score_per_s, r0.reduction_db_per_s, r0.spread_after_db)
         assert np.array_equal(rows, rows0)
+
+
+def test_known_rows_are_reused_for_equal_units_and_replaced_each_call():
+    units = _units()
+    known: dict = {}
+    first = mr.known_rows_and_ends(units[:6], NODES, SPEC.basis(), 4.0, None, known)
+    assert list(known) == units[:6]
+    second = mr.known_rows_and_ends(units[3:9], NODES, SPEC.basis(), 4.0, None, known)
+    assert all(a is b for a, b in zip(first[3:6], second[:3]))  # the same arrays, not computed again
+    assert list(known) == units[3:9]  # only the last call's
+    for unit, (rows, _) in zip(units[3:9], second):
+        assert np.array_equal(rows, mr.rows_and_ends(unit, NODES, SPEC.basis(), 4.0)[0])
+
+
+def test_greedy_plan_with_the_last_step_s_rows_equals_computing_them_each_step(monkeypatch):
+    from rplearn.core.lsq.normal_equations import NormalEquations
+
+    opts, poses, hits = _options(), {"A": ((-5.0, 0.0, 20.0), 0.0), "B": ((5.0, 0.0, 20.0), 0.0)}, []
+    real = mr.known_rows_and_ends
+
+    def counted(units, nodes, basis, rate_hz, steady, known):
+        hits.append(sum(u in known for u in units))
+        return real(units, nodes, basis, rate_hz, steady, known)
+
+    monkeypatch.setattr(mv, "known_rows_and_ends", counted)
+    plan = mv.greedy_plan(NormalEquations(SPEC.basis(), 2), SPEC, NODES, poses, 300.0, 1.5, opts)
+    assert max(hits) > 0  # a step offered units of the step before
+
+    def fresh_each_step(units, nodes, basis, rate_hz, steady, known):
+        return list(mr.batch_rows_and_ends(units, nodes, basis, rate_hz, steady))
+
+    monkeypatch.setattr(mv, "known_rows_and_ends", fresh_each_step)
+    again = mv.greedy_plan(NormalEquations(SPEC.basis(), 2), SPEC, NODES, poses, 300.0, 1.5, opts)
+    assert len(plan) >= 3 and [s.manoeuvre.name for s in plan] == [s.manoeuvre.name for s in again]
+    assert [(s.end_s, s.spread_db, s.manoeuvre.score_per_s) for s in plan] == [(s.end_s, s.spread_db, s.manoeuvre.score_per_s) for s in again]

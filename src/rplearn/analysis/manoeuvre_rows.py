@@ -107,6 +107,29 @@ def batch_rows_and_ends(units: Sequence[Any], nodes: Sequence[str], basis: Basis
         yield from _batch(batch, basis, len(nodes))
 
 
+def known_rows_and_ends(units: Sequence[Any], nodes: Sequence[str], basis: Basis, rate_hz: float, steady: Steady,
+                        known: dict[Any, tuple[np.ndarray, LinkEnds]]) -> list[tuple[np.ndarray, LinkEnds]]:
+    """:func:`batch_rows_and_ends` of ``units``, those equal to a unit of the previous call taken
+    from ``known`` (the same unit, nodes, basis, rate and lean: the same rows), which is then
+    replaced by this call's (a greedy plan's next step from where a turn in place left the same
+    poses offers the same units). Units that cannot be hashed are always computed."""
+    keys = [_key(u) for u in units]
+    todo = [u for u, k in zip(units, keys) if k is None or k not in known]
+    fresh = iter(batch_rows_and_ends(todo, nodes, basis, rate_hz, steady))
+    out = [next(fresh) if k is None or k not in known else known[k] for k in keys]
+    known.clear()
+    known.update((k, g) for k, g in zip(keys, out) if k is not None)
+    return out
+
+
+def _key(unit: Any) -> Any:
+    try:
+        hash(unit)
+    except TypeError:
+        return None
+    return unit
+
+
 def _batch(batch: list[tuple[Any, tuple[int, int], list[np.ndarray]]], basis: Basis,
            n_nodes: int) -> Iterator[tuple[np.ndarray, LinkEnds]]:
     thrust0, thrust1, yaw0, yaw1, pos0, pos1 = (np.concatenate([b[2][i] for b in batch]) for i in range(6))
@@ -122,4 +145,4 @@ def _batch(batch: list[tuple[Any, tuple[int, int], list[np.ndarray]]], basis: Ba
         yield _assemble(f0, f1, (az_tx, el_tx, az_rx, el_rx), ks, n_nodes)
 
 
-__all__ = ["BATCH_SAMPLES", "LinkEnds", "Steady", "batch_rows_and_ends", "manoeuvre_rows", "rows_and_ends"]
+__all__ = ["BATCH_SAMPLES", "LinkEnds", "Steady", "batch_rows_and_ends", "known_rows_and_ends", "manoeuvre_rows", "rows_and_ends"]

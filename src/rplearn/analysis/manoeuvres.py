@@ -48,7 +48,7 @@ from rplearn.analysis.manoeuvre_design import design_order
 from rplearn.analysis.manoeuvre_lookahead import Scored, lookahead_order
 from rplearn.analysis.manoeuvre_posterior import ManoeuvrePosterior
 from rplearn.analysis.manoeuvre_prior import prior_penalty_weight
-from rplearn.analysis.manoeuvre_rows import Steady, batch_rows_and_ends, manoeuvre_rows, rows_and_ends
+from rplearn.analysis.manoeuvre_rows import Steady, batch_rows_and_ends, known_rows_and_ends, manoeuvre_rows, rows_and_ends
 from rplearn.analysis.manoeuvre_tilt import steady_tilt_accel
 from rplearn.core.basis_base import Basis
 from rplearn.core.geometry import yaw_from_quat_wxyz
@@ -468,14 +468,17 @@ def rank_manoeuvres(
 
 
 def scored_candidates(post: ManoeuvrePosterior, state: Mapping[str, Any], names: list[str], basis: Basis,
-                      opts: ManoeuvreOptions) -> list[Scored]:
-    """Every candidate flyable from ``state`` scored on ``post``, best rate first."""
+                      opts: ManoeuvreOptions, known: dict[Any, Any] | None = None) -> list[Scored]:
+    """Every candidate flyable from ``state`` scored on ``post``, best rate first (``known``: the
+    rows of the previous call's units, :func:`~rplearn.analysis.manoeuvre_rows.known_rows_and_ends`)."""
     cands = candidate_manoeuvres(state, opts.candidates)
     if opts.aimed:  # and those aimed at where each node's posterior is widest now
         aims = widest_directions(post, basis, names, _directions(names, opts), abs(int(opts.aimed)))
         cands += aimed_manoeuvres(state, aims, opts.candidates, rings=opts.aimed < 0)
     before = post.spreads()  # the same for every candidate; their rows computed in batches
-    geometry = batch_rows_and_ends([c.unit for c in cands], names, basis, opts.sample_rate_hz, _steady(opts))
+    units = [c.unit for c in cands]
+    geometry = batch_rows_and_ends(units, names, basis, opts.sample_rate_hz, _steady(opts)) if known is None else \
+        known_rows_and_ends(units, names, basis, opts.sample_rate_hz, _steady(opts), known)
     scored = [_score(post, c, names, basis, opts, g, before) for c, g in zip(cands, geometry)]
     return sorted(scored, key=lambda s: -s[0].score_per_s)
 
@@ -550,8 +553,9 @@ def _greedy(post: ManoeuvrePosterior, state: dict[str, Any], names: list[str], b
     budget_s, target_spread_db = limits
     steps: list[PlanStep] = []
     t = 0.0
+    known: dict[Any, Any] = {}  # the last step's units' rows: a turn in place leaves the same candidates
     while float(np.max(post.spreads())) > target_spread_db:
-        scored = [s for s in scored_candidates(post, state, names, basis, opts) if t + s[0].duration_s <= budget_s and s[0].reduction_db_per_s > 0]
+        scored = [s for s in scored_candidates(post, state, names, basis, opts, known) if t + s[0].duration_s <= budget_s and s[0].reduction_db_per_s > 0]
         if not scored:
             break
         best, (rows, ends) = _ordered(post, scored, state, names, basis, opts)[0]
