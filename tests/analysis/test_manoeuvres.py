@@ -203,7 +203,7 @@ def test_a_steady_tilt_shifts_the_peer_s_elevation_and_spares_a_fixed_node():
     spared = manoeuvre_rows(unit, NODES, SPEC.basis(), 4.0, (lean, ("A",)))
     p = SPEC.basis().n_coef
     assert not np.allclose(level[:, :p], tilted[:, :p]) and np.allclose(level[:, :p], spared[:, :p])  # A, the turning mover
-    from rplearn.analysis.manoeuvres import _rows_and_ends
+    from rplearn.analysis.manoeuvre_rows import rows_and_ends as _rows_and_ends
 
     el_a = np.degrees(_rows_and_ends(unit, NODES, SPEC.basis(), 4.0, (lean, ()))[1][1][2])  # A's end of the link
     assert np.abs(el_a) == pytest.approx(np.full(el_a.size, 12.0), abs=0.01)

@@ -48,9 +48,10 @@ from rplearn.analysis.manoeuvre_design import design_order
 from rplearn.analysis.manoeuvre_lookahead import Scored, lookahead_order
 from rplearn.analysis.manoeuvre_posterior import ManoeuvrePosterior
 from rplearn.analysis.manoeuvre_prior import prior_penalty_weight
+from rplearn.analysis.manoeuvre_rows import Steady, batch_rows_and_ends, known_rows_and_ends, manoeuvre_rows, rows_and_ends
 from rplearn.analysis.manoeuvre_tilt import steady_tilt_accel
 from rplearn.core.basis_base import Basis
-from rplearn.core.geometry import attitude_from_thrust, link_directions, yaw_from_quat_wxyz
+from rplearn.core.geometry import yaw_from_quat_wxyz
 from rplearn.core.lsq.block_sums import DEFAULT_BLOCK_S, BlockSums, correlated_ratio
 from rplearn.core.lsq.normal_equations import NormalEquations
 from rplearn.core.lsq.penalty import DEFAULT_PENALTY_POWER, penalty_scale
@@ -301,44 +302,6 @@ def _aggregate(spreads: np.ndarray, options: ManoeuvreOptions) -> float:
     return float(np.max(spreads)) if options.aggregate == "max" else float(np.sqrt(np.mean(spreads**2)))
 
 
-def manoeuvre_rows(unit: Any, nodes: Sequence[str], basis: Basis, rate_hz: float,
-                   steady: tuple[tuple[float, float, float], tuple[str, ...]] | None = None) -> np.ndarray:
-    """Feature rows (pattern columns of ``nodes``) of both link directions along a unit's references.
-
-    The drones tilt into their reference acceleration plus ``steady[0]`` (a wind's drag,
-    :attr:`ManoeuvreOptions.steady_accel_enu_m_s2`; never the nodes of ``steady[1]``, which
-    stand on the ground; None: no wind); each row is
-    ``phi(d_tx) on tx's block + phi(d_rx) on rx's block``.
-    """
-    return _rows_and_ends(unit, nodes, basis, rate_hz, steady)[0]
-
-
-def _rows_and_ends(unit: Any, nodes: Sequence[str], basis: Basis, rate_hz: float,
-                   steady: tuple[tuple[float, float, float], tuple[str, ...]] | None = None) -> tuple[np.ndarray, Any]:
-    """:func:`manoeuvre_rows` and, per link end, (node index per row, az, el) [rad]."""
-    ref = unit.sample(rate_hz)
-    n = ref.t_s.size
-    index = {node: k for k, node in enumerate(nodes)}
-    ends = [str(v) for v in unit.nodes]
-    missing = [e for e in ends if e not in index]
-    if missing:
-        raise InputError(f"manoeuvre {unit.label}: node(s) {', '.join(missing)} not in the statistics' nodes", param="nodes")
-    extra = [np.array([0.0, 0.0, G_M_S2]) for _ in ends]
-    if steady is not None:
-        extra = [e + (0.0 if node in steady[1] else np.asarray(steady[0], np.float64)) for e, node in zip(extra, ends)]
-    quats = [attitude_from_thrust(ref.accel_enu_m_s2[:, j, :] + extra[j], ref.yaw_rad[:, j]) for j in (0, 1)]
-    d = link_directions(ref.position_enu_m[:, 0, :], quats[0], ref.position_enu_m[:, 1, :], quats[1])
-    p = basis.n_coef
-    f0, f1 = basis.design(d.az_tx, d.el_tx), basis.design(d.az_rx, d.el_rx)
-    rows = np.zeros((n, len(nodes) * p))
-    k0, k1 = index[ends[0]], index[ends[1]]
-    rows[:, k0 * p:(k0 + 1) * p] += f0
-    rows[:, k1 * p:(k1 + 1) * p] += f1
-    # the other direction (1 -> 0) has the same two directions: the same row, so weight twice
-    link_ends = ((np.full(n, k0, np.intp), d.az_tx, d.el_tx), (np.full(n, k1, np.intp), d.az_rx, d.el_rx))
-    return rows, link_ends
-
-
 def latest_poses(poses: pd.DataFrame | Mapping[str, Any], nodes: Sequence[str]) -> dict[str, tuple[tuple[float, float, float], float]]:
     """Latest pose per node as ((x, y, z), yaw_deg) from a pose table or a mapping."""
     if isinstance(poses, pd.DataFrame):
@@ -402,12 +365,13 @@ def correlated_error_std_db(normal: NormalEquations, spec: ModelSpec, blocks: Bl
     return float(np.sqrt(kappa)) * opts.noise_std_db
 
 
-def _score(post: ManoeuvrePosterior, cand: Candidate, nodes: Sequence[str], basis: Basis,
-           options: ManoeuvreOptions) -> tuple[RankedManoeuvre, tuple[np.ndarray, Any]]:
+def _score(post: ManoeuvrePosterior, cand: Candidate, nodes: Sequence[str], basis: Basis, options: ManoeuvreOptions,
+           geometry: tuple[np.ndarray, Any] | None = None, before: np.ndarray | None = None) -> tuple[RankedManoeuvre, tuple[np.ndarray, Any]]:
     """The candidate's effect (or that of its best prefix, :attr:`ManoeuvreOptions.prefixes`), and
-    its feature rows (for :meth:`ManoeuvrePosterior.update` if chosen)."""
-    before = post.spreads()
-    rows, ends = _rows_and_ends(cand.unit, nodes, basis, options.sample_rate_hz, _steady(options))
+    its feature rows (for :meth:`ManoeuvrePosterior.update` if chosen); ``geometry``: those rows and
+    link ends already computed (:func:`batch_rows_and_ends`), ``before``: ``post``'s spreads."""
+    before = post.spreads() if before is None else before
+    rows, ends = rows_and_ends(cand.unit, nodes, basis, options.sample_rate_hz, _steady(options)) if geometry is None else geometry
     b = _aggregate(before, options)
     best: tuple[float, float, int, np.ndarray] | None = None
     for cut in prefix_cuts(rows.shape[0], options.sample_rate_hz, options.prefixes, options.correlation_s):
@@ -430,7 +394,7 @@ def _score(post: ManoeuvrePosterior, cand: Candidate, nodes: Sequence[str], basi
     return ranked, (rows, ends)
 
 
-def _steady(options: ManoeuvreOptions) -> tuple[tuple[float, float, float], tuple[str, ...]] | None:
+def _steady(options: ManoeuvreOptions) -> Steady:
     """The steady extra thrust and the nodes it spares, or None for a level hover."""
     accel = options.steady_accel_enu_m_s2
     return None if not any(accel) else (accel, tuple(options.candidates.fixed_nodes))
@@ -504,13 +468,18 @@ def rank_manoeuvres(
 
 
 def scored_candidates(post: ManoeuvrePosterior, state: Mapping[str, Any], names: list[str], basis: Basis,
-                      opts: ManoeuvreOptions) -> list[Scored]:
-    """Every candidate flyable from ``state`` scored on ``post``, best rate first."""
+                      opts: ManoeuvreOptions, known: dict[Any, Any] | None = None) -> list[Scored]:
+    """Every candidate flyable from ``state`` scored on ``post``, best rate first (``known``: the
+    rows of the previous call's units, :func:`~rplearn.analysis.manoeuvre_rows.known_rows_and_ends`)."""
     cands = candidate_manoeuvres(state, opts.candidates)
     if opts.aimed:  # and those aimed at where each node's posterior is widest now
         aims = widest_directions(post, basis, names, _directions(names, opts), abs(int(opts.aimed)))
         cands += aimed_manoeuvres(state, aims, opts.candidates, rings=opts.aimed < 0)
-    scored = [_score(post, c, names, basis, opts) for c in cands]
+    before = post.spreads()  # the same for every candidate; their rows computed in batches
+    units = [c.unit for c in cands]
+    geometry = batch_rows_and_ends(units, names, basis, opts.sample_rate_hz, _steady(opts)) if known is None else \
+        known_rows_and_ends(units, names, basis, opts.sample_rate_hz, _steady(opts), known)
+    scored = [_score(post, c, names, basis, opts, g, before) for c, g in zip(cands, geometry)]
     return sorted(scored, key=lambda s: -s[0].score_per_s)
 
 
@@ -584,8 +553,9 @@ def _greedy(post: ManoeuvrePosterior, state: dict[str, Any], names: list[str], b
     budget_s, target_spread_db = limits
     steps: list[PlanStep] = []
     t = 0.0
+    known: dict[Any, Any] = {}  # the last step's units' rows: a turn in place leaves the same candidates
     while float(np.max(post.spreads())) > target_spread_db:
-        scored = [s for s in scored_candidates(post, state, names, basis, opts) if t + s[0].duration_s <= budget_s and s[0].reduction_db_per_s > 0]
+        scored = [s for s in scored_candidates(post, state, names, basis, opts, known) if t + s[0].duration_s <= budget_s and s[0].reduction_db_per_s > 0]
         if not scored:
             break
         best, (rows, ends) = _ordered(post, scored, state, names, basis, opts)[0]
