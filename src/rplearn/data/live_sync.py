@@ -238,13 +238,15 @@ class LiveMatcher:
         young = t > self._pose_t - max(float(self.options.max_gap_s), ONE_ROW_S)
         return {str(n): float(v) for n, v in zip(single["node"][young], t[young]) if str(n) not in self._moving}
 
-    def settled_s(self) -> float:
+    def settled_s(self, one_row: Mapping[str, float] | None = None) -> float:
         """The latest time [s, common clock: after the clock offsets] every moving node's poses reach (-inf before
-        two poses of one); a node with one pose row whose next may still come counts as moving (its time)."""
+        two poses of one); a node with one pose row whose next may still come counts as moving (its time).
+        ``one_row``: :meth:`_one_row`, when known (it is the same after this call: the nodes this adds to the
+        moving ones are not among them)."""
         if self._poses.empty:
             return -math.inf
         last = []
-        one_row = self._one_row()
+        one_row = self._one_row() if one_row is None else one_row
         for node, group in self._poses.groupby("node", sort=False):
             t_last = float(group["t"].iloc[-1]) + self._offset_s(str(node))
             if str(node) in one_row:
@@ -268,7 +270,8 @@ class LiveMatcher:
             ``sync`` does.
         """
         pending = pd.concat(self._pending, ignore_index=True) if self._pending else pd.DataFrame()
-        horizon = math.inf if final else self.settled_s()
+        one_row = None if final else self._one_row()  # read by settled_s and _waiting, the same for both
+        horizon = math.inf if final else self.settled_s(one_row)
         self._waiting_from, self._n_waiting, self._waiting_nodes = math.inf, 0, frozenset()
         if pending.empty or self._poses.empty and not final:
             chunk, rest = pending.iloc[:0], pending
@@ -276,7 +279,7 @@ class LiveMatcher:
             t = _common_signal_t(pending, self.options)
             ready = ~(t > horizon)  # a time that is not a number is matched (and dropped) at once
             if not final:
-                ready &= ~self._waiting(pending, t)
+                ready &= ~self._waiting(pending, t, one_row or {})
             chunk, rest = pending[ready], pending[~ready]
         self._pending = [rest.reset_index(drop=True)] if len(rest) else []
         self.last_matched = pd.DataFrame(columns=list(MATCHED_COLUMNS))  # not the last call's, should this one raise
@@ -293,13 +296,13 @@ class LiveMatcher:
             check_receiver_offsets(self.options.signal_clock_offset_s, self._receivers, self.source)
         return result
 
-    def _waiting(self, pending: pd.DataFrame, t: np.ndarray) -> np.ndarray:
+    def _waiting(self, pending: pd.DataFrame, t: np.ndarray, one_row: Mapping[str, float]) -> np.ndarray:
         """Which pending rows wait for the poses of a node they name (module docstring; bounded by :data:`HOLD_S`
         and :data:`WAIT_ROWS`), and the earliest time among them kept (:meth:`_trim`)."""
         if not {"tx", "rx"} <= set(pending.columns):
             return np.zeros(len(pending), bool)
         # a node with one pose row whose next may still come: if it moves, rows before its first pose are out of span
-        known = (set(self._poses["node"].astype(str)) if len(self._poses) else set()) - set(self._one_row())
+        known = (set(self._poses["node"].astype(str)) if len(self._poses) else set()) - set(one_row)
         named = pending["tx"].astype(str).isin(known).to_numpy() & pending["rx"].astype(str).isin(known).to_numpy()
         wait = ~named & np.isfinite(t) & (t >= self._pose_t - HOLD_S - _offset_slack_s(self.options))
         if wait.sum() > WAIT_ROWS:  # the oldest go: matched as they stand
