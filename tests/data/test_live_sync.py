@@ -214,3 +214,20 @@ def test_rows_waiting_for_a_nodes_poses_are_bounded_in_number(logs, monkeypatch)
     m, _ = _rows_to_a_ghost(logs)
     assert m.waiting_rows == 20 and m.summary.dropped["unknown_node"] == 30
     assert m.waiting_nodes == frozenset({"Z"})
+
+
+def test_a_pose_time_repeated_in_a_later_batch_is_refused_as_sync_refuses_it():
+    """The kept pose rows and a new batch are merged without checking again what each passed;
+    a node's time given twice across batches is still refused, with ``sync``'s message."""
+    from rplearn.data.live_sync import LiveMatcher
+    from rplearn.data.tables import validate_pose_log
+
+    rows = pd.DataFrame({"t": [0.0, 1.0, 2.0], "node": ["A", "A", "B"], "x": 0.0, "y": 0.0, "z": 1.0,
+                         "qw": 1.0, "qx": 0.0, "qy": 0.0, "qz": 0.0})
+    m = LiveMatcher()
+    m.add_poses(rows.iloc[:2])
+    with pytest.raises(InputError) as got:
+        m.add_poses(rows.iloc[1:])
+    with pytest.raises(InputError) as expected:
+        validate_pose_log(pd.concat([rows.iloc[:2], rows.iloc[1:]]), "pose log")
+    assert str(got.value) == str(expected.value)

@@ -230,3 +230,18 @@ def test_every_refit_records_the_flights_layout_of_the_rows_so_far(matched, offl
         assert got.fixed_nodes == fixed_nodes(matched) == offline.training.fixed_nodes == ()
         assert got.packet_rate_hz == pytest.approx(packet_rate_hz(matched), rel=1e-12)
         assert got.packet_rate_hz == pytest.approx(offline.training.packet_rate_hz, rel=1e-12)
+
+
+def test_the_coverage_grids_made_at_a_refit_are_those_combined_batch_by_batch(matched):
+    """The grids come from the cells seen so far, made when a refit reads them: bit for bit the
+    grids of each batch combined by the minimum (as ``fit`` of chunked data combines them)."""
+    from rplearn.models.node_coverage import node_coverage_grids
+
+    st = _learn(matched, ModelSpec.parse("sh-4"), FitOptions(), None, batch_s=3.0)
+    t = matched["t"].to_numpy()
+    expected = None
+    for a in np.arange(t.min(), t.max() + 3.0, 3.0):
+        rows = matched[(t >= a) & (t < a + 3.0)]
+        if len(rows):
+            expected = node_coverage_grids(st.samples(rows), expected)
+    assert st.grids == expected and st.refit().model.training.coverage_deg == expected

@@ -67,7 +67,16 @@ from rplearn.data.phases import flight_phases
 from rplearn.data.poses import PoseTrack, TrackSet, tracks_of_checked_log
 from rplearn.data.streaming import row_hashes
 from rplearn.data.sync import SyncOptions, SyncResult, SyncSummary, check_receiver_offsets, finish_summary, match_chunk, sync_options_or_default
-from rplearn.data.tables import MATCHED_COLUMNS, POSE_COLUMNS, non_unit_quaternion_rows, validate_pose_log
+from rplearn.data.tables import (
+    MATCHED_COLUMNS,
+    NON_UNIT_QUATERNION_ATTR,
+    POSE_COLUMNS,
+    count_non_unit_quaternions,
+    node_id_codes,
+    non_unit_quaternion_rows,
+    quaternion_norms,
+    validate_pose_log,
+)
 from rplearn.errors import InputError
 
 
@@ -141,6 +150,28 @@ def _common_signal_t(rows: pd.DataFrame, options: SyncOptions) -> np.ndarray:
     return t + float(offset)
 
 
+def _merged_poses(both: pd.DataFrame) -> pd.DataFrame:
+    """:func:`validate_pose_log` of pose rows each already checked by it (the kept rows and a new batch), bit for
+    bit, without the checks of cells it already passed: sorted by (node, t), the quaternions normalised again and
+    counted (as it does); a duplicate time within a node goes to it, which refuses it with its message."""
+    codes, names = node_id_codes(both["node"], sort=True)
+    t = both["t"].to_numpy(np.float64)
+    step, dt = np.diff(codes), np.diff(t)
+    in_order = bool(np.all((step > 0) | ((step == 0) & (dt >= 0))))
+    take = slice(None) if in_order else np.lexsort((t, codes))
+    sorted_codes, ts = codes[take], t[take]
+    if np.any((sorted_codes[1:] == sorted_codes[:-1]) & (ts[1:] == ts[:-1])):
+        return validate_pose_log(both, "pose log")
+    q = both[["qw", "qx", "qy", "qz"]].to_numpy(np.float64)[take]
+    norm = quaternion_norms(q)
+    cols = {"t": ts, "node": pd.Series(names.astype(str)).array.take(sorted_codes)}
+    cols.update({c: both[c].to_numpy(np.float64)[take] for c in ("x", "y", "z")})
+    cols.update({c: q[:, j] / norm for j, c in enumerate(("qw", "qx", "qy", "qz"))})
+    out = pd.DataFrame(cols, columns=list(POSE_COLUMNS))
+    out.attrs[NON_UNIT_QUATERNION_ATTR] = count_non_unit_quaternions(norm) + int(both.attrs.get(NON_UNIT_QUATERNION_ATTR, 0))
+    return out
+
+
 def _still(group: pd.DataFrame) -> bool:
     """Whether a node's (sorted) pose rows are all one pose (as :mod:`rplearn.data.poses` decides)."""
     if len(group) < 2:
@@ -204,7 +235,8 @@ class LiveMatcher:
         self._pose_t = max(self._pose_t, float(self._common_pose_t(new).max()))
         self.summary.non_unit_quaternions += non_unit_quaternion_rows(new)
         both = pd.concat([self._poses, new], ignore_index=True) if len(self._poses) else new
-        self._poses = validate_pose_log(both.drop(columns=[c for c in both.columns if c not in new.columns]), "pose log")
+        both = both.drop(columns=[c for c in both.columns if c not in new.columns])
+        self._poses = _merged_poses(both) if list(both.columns) == list(POSE_COLUMNS) else validate_pose_log(both, "pose log")
 
     def add_signals(self, rows: pd.DataFrame) -> None:
         """Append signal rows (canonical columns); they wait until their time is settled."""
@@ -238,13 +270,15 @@ class LiveMatcher:
         young = t > self._pose_t - max(float(self.options.max_gap_s), ONE_ROW_S)
         return {str(n): float(v) for n, v in zip(single["node"][young], t[young]) if str(n) not in self._moving}
 
-    def settled_s(self) -> float:
+    def settled_s(self, one_row: Mapping[str, float] | None = None) -> float:
         """The latest time [s, common clock: after the clock offsets] every moving node's poses reach (-inf before
-        two poses of one); a node with one pose row whose next may still come counts as moving (its time)."""
+        two poses of one); a node with one pose row whose next may still come counts as moving (its time).
+        ``one_row``: :meth:`_one_row`, when known (it is the same after this call: the nodes this adds to the
+        moving ones are not among them)."""
         if self._poses.empty:
             return -math.inf
         last = []
-        one_row = self._one_row()
+        one_row = self._one_row() if one_row is None else one_row
         for node, group in self._poses.groupby("node", sort=False):
             t_last = float(group["t"].iloc[-1]) + self._offset_s(str(node))
             if str(node) in one_row:
@@ -268,7 +302,8 @@ class LiveMatcher:
             ``sync`` does.
         """
         pending = pd.concat(self._pending, ignore_index=True) if self._pending else pd.DataFrame()
-        horizon = math.inf if final else self.settled_s()
+        one_row = None if final else self._one_row()  # read by settled_s and _waiting, the same for both
+        horizon = math.inf if final else self.settled_s(one_row)
         self._waiting_from, self._n_waiting, self._waiting_nodes = math.inf, 0, frozenset()
         if pending.empty or self._poses.empty and not final:
             chunk, rest = pending.iloc[:0], pending
@@ -276,7 +311,7 @@ class LiveMatcher:
             t = _common_signal_t(pending, self.options)
             ready = ~(t > horizon)  # a time that is not a number is matched (and dropped) at once
             if not final:
-                ready &= ~self._waiting(pending, t)
+                ready &= ~self._waiting(pending, t, one_row or {})
             chunk, rest = pending[ready], pending[~ready]
         self._pending = [rest.reset_index(drop=True)] if len(rest) else []
         self.last_matched = pd.DataFrame(columns=list(MATCHED_COLUMNS))  # not the last call's, should this one raise
@@ -293,13 +328,13 @@ class LiveMatcher:
             check_receiver_offsets(self.options.signal_clock_offset_s, self._receivers, self.source)
         return result
 
-    def _waiting(self, pending: pd.DataFrame, t: np.ndarray) -> np.ndarray:
+    def _waiting(self, pending: pd.DataFrame, t: np.ndarray, one_row: Mapping[str, float]) -> np.ndarray:
         """Which pending rows wait for the poses of a node they name (module docstring; bounded by :data:`HOLD_S`
         and :data:`WAIT_ROWS`), and the earliest time among them kept (:meth:`_trim`)."""
         if not {"tx", "rx"} <= set(pending.columns):
             return np.zeros(len(pending), bool)
         # a node with one pose row whose next may still come: if it moves, rows before its first pose are out of span
-        known = (set(self._poses["node"].astype(str)) if len(self._poses) else set()) - set(self._one_row())
+        known = (set(self._poses["node"].astype(str)) if len(self._poses) else set()) - set(one_row)
         named = pending["tx"].astype(str).isin(known).to_numpy() & pending["rx"].astype(str).isin(known).to_numpy()
         wait = ~named & np.isfinite(t) & (t >= self._pose_t - HOLD_S - _offset_slack_s(self.options))
         if wait.sum() > WAIT_ROWS:  # the oldest go: matched as they stand

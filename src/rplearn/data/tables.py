@@ -71,18 +71,17 @@ def normalise_times(df: pd.DataFrame, source: str = "table") -> pd.DataFrame:
 def _require_columns(df: pd.DataFrame, columns: Sequence[str], source: str) -> None:
     missing = [c for c in columns if c not in df.columns]
     if missing:
-        raise InputError(
-            f"{source}: missing column(s) {', '.join(missing)}; expected {', '.join(columns)}"
-        )
+        raise InputError(f"{source}: missing column(s) {', '.join(missing)}; expected {', '.join(columns)}")
 
 
 def _require_finite(df: pd.DataFrame, columns: Sequence[str], source: str) -> None:
     for c in columns:
+        col = df[c]  # once: a column read from a frame is a new Series each time
         with np.errstate(over="ignore"):  # huge values: their sum overflows, and the full check runs
-            whole = df[c].dtype == np.float64 and np.isfinite(np.sum(df[c].to_numpy()))
+            whole = col.dtype == np.float64 and np.isfinite(np.sum(col.to_numpy()))
         if whole:
             continue  # a finite sum: no NaN and no infinity (an overflow only sends it to the full check)
-        values = pd.to_numeric(df[c], errors="coerce").to_numpy(np.float64)
+        values = pd.to_numeric(col, errors="coerce").to_numpy(np.float64)
         bad = ~np.isfinite(values)
         if np.any(bad):
             row = int(np.flatnonzero(bad)[0])

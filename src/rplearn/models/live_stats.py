@@ -64,8 +64,9 @@ from rplearn.data.units import TIME_UNITS, Stretches, stretch_labels
 from rplearn.errors import InputError
 from rplearn.models.auto import MAX_AUTO_ORDER, auto_orders, fit_from_statistics
 from rplearn.models.auto_spread import block_drift_std_db, planning_basis
-from rplearn.models.fit import FittedModel, node_coverage_grids
+from rplearn.models.fit import FittedModel
 from rplearn.models.live_drift import DriftBlocks, LinkSums, block_link_sums
+from rplearn.models.node_coverage import grids_of_occupied, occupied_masks
 from rplearn.models.options import FitOptions
 from rplearn.models.patterns import PatternSet
 from rplearn.models.spec import ModelSpec, default_ridge
@@ -146,7 +147,8 @@ class LiveStatistics:
         self.max_segments = max(int(max_segments), 1) if self.auto else 1
         self.segments: list[Segment] = []
         self.freq: Counter[float] = Counter()
-        self.grids: dict[str, list[float]] | None = None
+        self._occupied: list[np.ndarray] | None = None  # per node, the coverage grid's cells seen (grids)
+        self._grids: dict[str, list[float]] | None = None  # the grids of _occupied, made when read
         self.non_unit = 0
         self.blocks: BlockSums | None = None  # made with the first batch
         self.keep_blocks = bool(keep_blocks)
@@ -156,6 +158,14 @@ class LiveStatistics:
         #: the flight's layout (who held still, the packet rate), bounded, recorded by every refit as ``fit`` records it
         self.layout = LayoutSketch()
         self._batches = 0
+
+    @property
+    def grids(self) -> dict[str, list[float]] | None:
+        """Per node, the coverage grid of every sample so far (as ``fit``'s, rounded to 0.1 degree), None
+        before the first: made at a refit from the cells seen, not at every batch."""
+        if self._grids is None and self._occupied is not None:
+            self._grids = grids_of_occupied(self.nodes, self._occupied)
+        return self._grids
 
     @property
     def n_samples(self) -> int:
@@ -202,7 +212,9 @@ class LiveStatistics:
         self._batches += 1
         self.segments.append(seg)
         self._bound()
-        self.grids = node_coverage_grids(samples, self.grids)
+        masks = occupied_masks(samples)
+        self._occupied = masks if self._occupied is None else [a | b for a, b in zip(self._occupied, masks)]
+        self._grids = None
         frequency_counts(samples, self.freq)
         self.non_unit += samples.non_unit_quaternions
         self.learn_s += time.perf_counter() - t0

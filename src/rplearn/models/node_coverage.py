@@ -116,4 +116,21 @@ def node_coverage_grids(
     return CoverageWork(samples, previous).run()
 
 
-__all__ = ["COVERAGE_JOB_SAMPLES", "PARALLEL_COVERAGE_DIRECTIONS", "CoverageWork", "node_coverage_grids"]
+def occupied_masks(samples: LinkSamples) -> list[np.ndarray]:
+    """Per node (in ``samples.nodes``' order), the mask of the grid points its learning directions
+    occupy (:func:`rplearn.core.coverage.occupied_grid_points`): the union of a session's masks
+    gives, with :func:`grids_of_occupied`, the grids :func:`node_coverage_grids` combines batch by
+    batch, bit for bit (a grid point's nearest occupied point in a union is the nearest of the
+    parts', and rounding commutes with the minimum)."""
+    return [_occupied(samples, k, 0, len(samples)) for k in range(len(samples.nodes))]
+
+
+def grids_of_occupied(nodes: Sequence[str], occupied: Sequence[np.ndarray]) -> dict[str, list[float]]:
+    """Per node, its grid rounded to 0.1 degree from its occupied mask (:func:`occupied_masks`)."""
+    from rplearn.core.coverage import grid_distance_deg
+
+    return {str(node): np.round(grid_distance_deg(mask, None), 1).tolist() for node, mask in zip(nodes, occupied)}
+
+
+__all__ = ["COVERAGE_JOB_SAMPLES", "PARALLEL_COVERAGE_DIRECTIONS", "CoverageWork", "grids_of_occupied", "node_coverage_grids",
+           "occupied_masks"]

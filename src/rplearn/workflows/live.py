@@ -213,7 +213,7 @@ class _Session:
         self.held_nodes = held_nodes  # the source's: its nodes' first poses held back (Poll.held_nodes)
         if len(poses):
             self.matcher.add_poses(poses)
-            for node, group in poses.groupby("node", sort=False):
+            for node, group in poses.groupby("node", sort=False) if self.ranking is not None else ():  # a ranking's only
                 self.last_pose[str(node)] = group.sort_values("t").iloc[-1]
         self.matcher.add_signals(signals)
         self.status.received += len(signals)
