@@ -150,9 +150,17 @@ class _UnitTruth:
 
     def interpolate(self, t_s: FloatArray, which: int) -> tuple[FloatArray, FloatArray]:
         """True position and attitude of drone ``which`` at times ``t_s`` (linear / nlerp)."""
+        return self._at(*self._weights(t_s), which)
+
+    def _weights(self, t_s: FloatArray) -> tuple[NDArray[np.intp], FloatArray]:
+        """Each time's truth interval and its fraction through it, shape (n, 1)."""
         t = np.clip(t_s, self.t_s[0], self.t_s[-1])
         i = np.clip(np.searchsorted(self.t_s, t, side="right") - 1, 0, self.t_s.size - 2)
         w = ((t - self.t_s[i]) / (self.t_s[i + 1] - self.t_s[i]))[:, None]
+        return i, w
+
+    def _at(self, i: NDArray[np.intp], w: FloatArray, which: int) -> tuple[FloatArray, FloatArray]:
+        """Position and attitude of drone ``which`` at the fractions ``w`` of intervals ``i``."""
         p = self.position_enu_m[:, which, :]
         q = self.quat_wxyz[:, which, :]
         pos = p[i] * (1.0 - w) + p[i + 1] * w
@@ -342,8 +350,9 @@ def _link_packets(
     j_rx = 1 - j_tx
     tx, rx = truth.unit.nodes[j_tx], truth.unit.nodes[j_rx]
     t = _arrivals(truth, radio, dropouts, rng)
-    tx_pos, tx_q = truth.interpolate(t, j_tx)
-    rx_pos, rx_q = truth.interpolate(t, j_rx)
+    at = truth._weights(t)  # both ends' poses at the same times: the intervals found once
+    tx_pos, tx_q = truth._at(*at, j_tx)
+    rx_pos, rx_q = truth._at(*at, j_rx)
     dirs = link_directions(tx_pos, tx_q, rx_pos, rx_q)
     dist = distance_m(tx_pos, rx_pos)
     gain = truth_model.predict_joint_gain_db(tx, rx, *dirs)
