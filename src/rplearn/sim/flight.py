@@ -389,12 +389,12 @@ def _link_packets(
 
 def _with_true_poses(sig: pd.DataFrame, ends: tuple[tuple[str, FloatArray, FloatArray], ...]) -> pd.DataFrame:
     """Signal rows with the true positions [m] and quaternions of both ends (matched columns)."""
-    m = sig.copy()
+    columns: dict[str, FloatArray] = {}
     for end, p, q in ends:
-        m[f"{end}_x"], m[f"{end}_y"], m[f"{end}_z"] = p[:, 0], p[:, 1], p[:, 2]
+        columns[f"{end}_x"], columns[f"{end}_y"], columns[f"{end}_z"] = p[:, 0], p[:, 1], p[:, 2]
         for c, name in enumerate(("qw", "qx", "qy", "qz")):
-            m[f"{end}_{name}"] = q[:, c]
-    return m
+            columns[f"{end}_{name}"] = q[:, c]
+    return pd.concat([sig, pd.DataFrame(columns, index=sig.index)], axis=1)  # one block, not 14 inserts
 
 
 def _simulate_unit(
