@@ -159,15 +159,20 @@ class _UnitTruth:
         w = ((t - self.t_s[i]) / (self.t_s[i + 1] - self.t_s[i]))[:, None]
         return i, w
 
-    def _at(self, i: NDArray[np.intp], w: FloatArray, which: int) -> tuple[FloatArray, FloatArray]:
-        """Position and attitude of drone ``which`` at the fractions ``w`` of intervals ``i``."""
-        p = self.position_enu_m[:, which, :]
-        q = self.quat_wxyz[:, which, :]
-        pos = p[i] * (1.0 - w) + p[i + 1] * w
-        q0, q1 = q[i], q[i + 1]
-        sign = np.where(np.sum(q0 * q1, axis=1, keepdims=True) < 0, -1.0, 1.0)
-        qi = q0 * (1.0 - w) + sign * q1 * w
-        qi /= np.linalg.norm(qi, axis=1, keepdims=True)
+    def _at(self, i: NDArray[np.intp], w: FloatArray, which: int | None = None) -> tuple[FloatArray, FloatArray]:
+        """Position and attitude of drone ``which`` at the fractions ``w`` of intervals ``i``;
+        of both drones, shapes (n, 2, 3) and (n, 2, 4), when ``which`` is None (the same
+        operations on each element, gathered once)."""
+        p = self.position_enu_m if which is None else self.position_enu_m[:, which, :]
+        q = self.quat_wxyz if which is None else self.quat_wxyz[:, which, :]
+        if which is None:
+            w = w[:, :, None]
+        j, rest = i + 1, 1.0 - w
+        pos = p[i] * rest + p[j] * w
+        q0, q1 = q[i], q[j]
+        sign = np.where(np.sum(q0 * q1, axis=-1, keepdims=True) < 0, -1.0, 1.0)
+        qi = q0 * rest + sign * q1 * w
+        qi /= np.linalg.norm(qi, axis=-1, keepdims=True)
         return pos, qi
 
 
@@ -350,9 +355,9 @@ def _link_packets(
     j_rx = 1 - j_tx
     tx, rx = truth.unit.nodes[j_tx], truth.unit.nodes[j_rx]
     t = _arrivals(truth, radio, dropouts, rng)
-    at = truth._weights(t)  # both ends' poses at the same times: the intervals found once
-    tx_pos, tx_q = truth._at(*at, j_tx)
-    rx_pos, rx_q = truth._at(*at, j_rx)
+    pos, q = truth._at(*truth._weights(t))  # both ends at the same times, interpolated at once
+    tx_pos, tx_q = np.ascontiguousarray(pos[:, j_tx]), np.ascontiguousarray(q[:, j_tx])
+    rx_pos, rx_q = np.ascontiguousarray(pos[:, j_rx]), np.ascontiguousarray(q[:, j_rx])
     dirs = link_directions(tx_pos, tx_q, rx_pos, rx_q)
     dist = distance_m(tx_pos, rx_pos)
     gain = truth_model.predict_joint_gain_db(tx, rx, *dirs)
