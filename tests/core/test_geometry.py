@@ -157,3 +157,20 @@ def test_great_circle_angle_matches_dot_product():
     e1, e2 = np.arcsin(rng.uniform(-1, 1, (2, 100)))
     dot = np.einsum("ij,ij->i", g.unit_vector(a1, e1), g.unit_vector(a2, e2))
     np.testing.assert_allclose(g.great_circle_angle(a1, e1, a2, e2), np.arccos(np.clip(dot, -1, 1)), atol=1e-7)
+
+
+def test_attitude_from_thrust_equals_the_checked_matrix_conversion_to_the_bit():
+    # orthonormal-by-construction matrices skip scipy's checks; near the heading they are kept
+    rng = np.random.default_rng(5)
+    thrust = rng.normal(0.0, 30.0, (20000, 3))
+    thrust[:, 2] += 9.81
+    yaw = rng.uniform(-7.0, 7.0, 20000)
+    thrust[0] = [np.cos(yaw[0]), np.sin(yaw[0]), 1e-4]  # 0.006 deg from the heading
+    thrust[1] = [0.0, 0.0, 1.0]
+    zb = thrust / np.linalg.norm(thrust, axis=-1, keepdims=True)
+    xc = np.stack([np.cos(yaw), np.sin(yaw), np.zeros_like(yaw)], axis=-1)
+    yb = np.cross(zb, xc)
+    yb /= np.linalg.norm(yb, axis=-1, keepdims=True)
+    expected = g.matrix_to_quat_wxyz(np.stack([np.cross(yb, zb), yb, zb], axis=-1))
+    assert g.attitude_from_thrust(thrust[1:], yaw[1:]).tobytes() == expected[1:].tobytes()
+    assert g.attitude_from_thrust(thrust, yaw).tobytes() == expected.tobytes()

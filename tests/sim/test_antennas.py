@@ -283,3 +283,17 @@ def test_ground_truth_errors(tmp_path) -> None:
     other.write_text(json.dumps(spec))
     with pytest.raises(ModelFileError, match="malformed"):
         load_ground_truth(str(other))
+
+
+@pytest.mark.parametrize("n", [1, 7, 4096, 4097, 9000])
+def test_node_gain_equals_its_lobes_added_one_by_one_to_the_bit(n: int) -> None:
+    # gain_dbi adds the lobes in blocks into reused arrays: the same operations in the same order
+    lobes = tuple(AirframeLobe(az, el, w, d) for az, el, w, d in
+                  [(0.0, -90.0, 25.0, 6.0), (135.0, 10.0, 12.0, -1.5), (-60.0, 45.0, 40.0, 3.0)])
+    node = NodeAntenna(antenna_from_name("itu_omni"), Mounting.named("tilted"), lobes)
+    rng = np.random.default_rng(n)
+    az, el = rng.uniform(-np.pi, np.pi, n), rng.uniform(-np.pi / 2, np.pi / 2, n)
+    expected = node.antenna.gain_dbi(*node.mounting.body_to_antenna(az, el))
+    for lobe in lobes:
+        expected = expected + lobe.delta_db(az, el)
+    assert node.gain_dbi(az, el).tobytes() == expected.tobytes()

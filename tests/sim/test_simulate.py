@@ -342,3 +342,20 @@ def test_campaign_preset_gives_every_flight_its_own_level() -> None:
         assert abs(levels.mean()) < 1e-9 and np.sqrt(np.mean(levels**2)) == pytest.approx(CAMPAIGN_LEVEL_STD_DB)
     assert sim.realised_noise_std_db < 1.1 * sim.noise_std_db  # the levels are in the clean power, not the noise
     assert set(simulate("smoke", seed=0).unit_levels_db.values()) == {0.0}
+
+
+def test_both_drones_interpolated_at_once_equal_each_drone_alone_to_the_bit() -> None:
+    from rplearn.sim.flight import _UnitTruth
+
+    rng = np.random.default_rng(2)
+    for n in (3, 5000):
+        ts = np.cumsum(rng.uniform(0.001, 0.02, n))
+        quats = rng.normal(size=(n, 2, 4))
+        quats /= np.linalg.norm(quats, axis=-1, keepdims=True)
+        truth = _UnitTruth(None, ts, rng.normal(0.0, 50.0, (n, 2, 3)), quats)  # type: ignore[arg-type]
+        t = rng.uniform(ts[0] - 1.0, ts[-1] + 1.0, 3 * n)
+        pos, q = truth._at(*truth._weights(t))
+        for k in range(2):
+            pos_k, q_k = truth.interpolate(t, k)
+            assert np.ascontiguousarray(pos[:, k]).tobytes() == pos_k.tobytes()
+            assert np.ascontiguousarray(q[:, k]).tobytes() == q_k.tobytes()

@@ -192,8 +192,11 @@ def matrix_to_quat_wxyz(matrix: ArrayLike) -> FloatArray:
     from scipy.spatial.transform import Rotation
 
     m = np.asarray(matrix, np.float64)
-    flat = m.reshape(-1, 3, 3)
-    q_xyzw = Rotation.from_matrix(flat).as_quat()
+    return _quat_wxyz_of_matrix(m, Rotation.from_matrix(m.reshape(-1, 3, 3)).as_quat())
+
+
+def _quat_wxyz_of_matrix(m: FloatArray, q_xyzw: FloatArray) -> FloatArray:
+    """Scalar-first quaternions (qw >= 0) of the matrices ``m`` from scipy's ``(x, y, z, w)``."""
     q = np.concatenate([q_xyzw[:, 3:], q_xyzw[:, :3]], axis=1)
     q = np.where(q[:, :1] < 0, -q, q)
     return q.reshape(m.shape[:-2] + (4,))
@@ -385,7 +388,21 @@ def attitude_from_thrust(thrust_dir_enu: FloatArray, yaw_rad: FloatArray) -> Flo
     zb = thrust_dir_enu / np.linalg.norm(thrust_dir_enu, axis=-1, keepdims=True)
     xc = np.stack([np.cos(yaw_rad), np.sin(yaw_rad), np.zeros_like(yaw_rad)], axis=-1)
     yb = np.cross(zb, xc)
-    yb /= np.linalg.norm(yb, axis=-1, keepdims=True)
+    yb_norm = np.linalg.norm(yb, axis=-1, keepdims=True)
+    yb /= yb_norm
     xb = np.cross(yb, zb)
     m = np.stack([xb, yb, zb], axis=-1)  # columns are the body axes in the world
-    return matrix_to_quat_wxyz(m)
+    if not (np.all(yb_norm >= _SURELY_ORTHOGONAL) and np.all(np.isfinite(m))):
+        return matrix_to_quat_wxyz(m)
+    from scipy.spatial.transform import Rotation
+
+    # orthonormal columns, right-handed, to ~1e-14 (the thrust at least 0.6 degrees from the
+    # heading): scipy's checks (determinant, Gram matrix within 1e-12 of the identity) pass
+    # and change nothing, so they are skipped; the quaternions are the same to the bit
+    q_xyzw = Rotation.from_matrix(m.reshape(-1, 3, 3), assume_valid=True).as_quat()
+    return _quat_wxyz_of_matrix(m, q_xyzw)
+
+
+#: Least norm of ``thrust x heading`` (unit vectors) with which :func:`attitude_from_thrust`
+#: skips scipy's orthogonality checks: its matrices are then orthonormal to ~1e-14.
+_SURELY_ORTHOGONAL = 1e-2

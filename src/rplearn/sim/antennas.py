@@ -223,6 +223,59 @@ class AirframeLobe:
         return -self.depth_db * np.exp(-0.5 * (gamma / w) ** 2)
 
 
+#: Samples per block of :func:`_with_lobes_db` (its five work arrays stay in the cache).
+_LOBE_BLOCK = 4096
+
+
+def _with_lobes_db(lobes: tuple[AirframeLobe, ...], az_rad: FloatArray, el_rad: FloatArray,
+                   gain_db: FloatArray) -> FloatArray:
+    """``gain_db`` plus every lobe's :meth:`AirframeLobe.delta_db` at the body-frame
+    directions (1-D, one shape) [dB], added lobe by lobe in order as that method and
+    :func:`~rplearn.core.geometry.great_circle_angle` compute them, bit for bit: the same
+    operations in the same order, ``cos(el)`` computed once for all lobes, in blocks of
+    samples written into reused arrays instead of new ones per operation.
+    """
+    centres = []
+    for lobe in lobes:
+        az2 = np.asarray(np.radians(lobe.az_deg), np.float64)
+        el2 = np.asarray(np.radians(lobe.el_deg), np.float64)
+        centres.append((az2, el2, np.cos(el2), np.radians(lobe.width_deg), -lobe.depth_db))
+    out = np.empty(gain_db.shape)
+    n = az_rad.size
+    t1, t2, t3, cos_el = (np.empty(min(n, _LOBE_BLOCK)) for _ in range(4))
+    for a in range(0, n, _LOBE_BLOCK):
+        b = min(a + _LOBE_BLOCK, n)
+        az1, el1, g = az_rad[a:b], el_rad[a:b], out[a:b]
+        u, v, x, ce = t1[: b - a], t2[: b - a], t3[: b - a], cos_el[: b - a]
+        np.cos(el1, out=ce)
+        np.copyto(g, gain_db[a:b])
+        for az2, el2, cos_el2, width, scale in centres:
+            # s = sin((el2 - el1) / 2)^2 + cos(el1) cos(el2) sin((az2 - az1) / 2)^2
+            np.subtract(el2, el1, out=u)
+            np.divide(u, 2.0, out=u)
+            np.sin(u, out=u)
+            np.square(u, out=u)
+            np.multiply(ce, cos_el2, out=v)
+            np.subtract(az2, az1, out=x)
+            np.divide(x, 2.0, out=x)
+            np.sin(x, out=x)
+            np.square(x, out=x)
+            np.multiply(v, x, out=v)
+            np.add(u, v, out=u)
+            # gamma = 2 arcsin(sqrt(clip(s, 0, 1))); delta = -depth exp(-0.5 (gamma / w)^2)
+            np.clip(u, 0.0, 1.0, out=u)
+            np.sqrt(u, out=u)
+            np.arcsin(u, out=u)
+            np.multiply(2.0, u, out=u)
+            np.divide(u, width, out=u)
+            np.square(u, out=u)
+            np.multiply(-0.5, u, out=u)
+            np.exp(u, out=u)
+            np.multiply(scale, u, out=u)
+            np.add(g, u, out=g)
+    return out
+
+
 @check_types
 @dataclass(frozen=True)
 class NodeAntenna:
@@ -239,6 +292,8 @@ class NodeAntenna:
         el_b = np.asarray(el_rad, np.float64)
         az_a, el_a = self.mounting.body_to_antenna(az_b, el_b)
         g = self.antenna.gain_dbi(az_a, el_a)
+        if self.lobes and az_b.ndim == 1 and az_b.shape == el_b.shape == np.shape(g):
+            return _with_lobes_db(self.lobes, az_b, el_b, np.asarray(g, np.float64))
         for lobe in self.lobes:
             g = g + lobe.delta_db(az_b, el_b)
         return g
