@@ -174,3 +174,20 @@ def test_attitude_from_thrust_equals_the_checked_matrix_conversion_to_the_bit():
     expected = g.matrix_to_quat_wxyz(np.stack([np.cross(yb, zb), yb, zb], axis=-1))
     assert g.attitude_from_thrust(thrust[1:], yaw[1:]).tobytes() == expected[1:].tobytes()
     assert g.attitude_from_thrust(thrust, yaw).tobytes() == expected.tobytes()
+
+
+def test_attitude_from_thrust_runs_on_a_scipy_without_assume_valid(monkeypatch):
+    # pyproject allows scipy 1.15, whose Rotation.from_matrix takes no ``assume_valid``: the checked conversion then
+    from scipy.spatial.transform import Rotation
+
+    plain = Rotation.from_matrix
+
+    def old_from_matrix(matrix):
+        return plain(matrix)
+
+    rng = np.random.default_rng(6)
+    thrust = rng.normal(0.0, 30.0, (500, 3)) + [0.0, 0.0, 9.81]
+    yaw = rng.uniform(-3.0, 3.0, 500)
+    expected = g.attitude_from_thrust(thrust, yaw)
+    monkeypatch.setattr(Rotation, "from_matrix", staticmethod(old_from_matrix))
+    assert g.attitude_from_thrust(thrust, yaw).tobytes() == expected.tobytes()

@@ -399,7 +399,10 @@ def attitude_from_thrust(thrust_dir_enu: FloatArray, yaw_rad: FloatArray) -> Flo
     # orthonormal columns, right-handed, to ~1e-14 (the thrust at least 0.6 degrees from the
     # heading): scipy's checks (determinant, Gram matrix within 1e-12 of the identity) pass
     # and change nothing, so they are skipped; the quaternions are the same to the bit
-    q_xyzw = Rotation.from_matrix(m.reshape(-1, 3, 3), assume_valid=True).as_quat()
+    try:
+        q_xyzw = Rotation.from_matrix(m.reshape(-1, 3, 3), assume_valid=True).as_quat()
+    except TypeError:  # a scipy without ``assume_valid`` (pyproject allows 1.15): the checked conversion
+        return matrix_to_quat_wxyz(m)
     return _quat_wxyz_of_matrix(m, q_xyzw)
 
 
