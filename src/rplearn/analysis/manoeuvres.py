@@ -48,7 +48,7 @@ from rplearn.analysis.manoeuvre_design import design_order
 from rplearn.analysis.manoeuvre_lookahead import Scored, lookahead_order
 from rplearn.analysis.manoeuvre_posterior import ManoeuvrePosterior
 from rplearn.analysis.manoeuvre_prior import prior_penalty_weight
-from rplearn.analysis.manoeuvre_rows import Steady, batch_rows_and_ends, known_rows_and_ends, manoeuvre_rows, rows_and_ends
+from rplearn.analysis.manoeuvre_rows import Steady, known_rows_and_ends, manoeuvre_rows, rows_and_ends
 from rplearn.analysis.manoeuvre_tilt import steady_tilt_accel
 from rplearn.core.basis_base import Basis
 from rplearn.core.geometry import yaw_from_quat_wxyz
@@ -369,7 +369,7 @@ def _score(post: ManoeuvrePosterior, cand: Candidate, nodes: Sequence[str], basi
            geometry: tuple[np.ndarray, Any] | None = None, before: np.ndarray | None = None) -> tuple[RankedManoeuvre, tuple[np.ndarray, Any]]:
     """The candidate's effect (or that of its best prefix, :attr:`ManoeuvreOptions.prefixes`), and
     its feature rows (for :meth:`ManoeuvrePosterior.update` if chosen); ``geometry``: those rows and
-    link ends already computed (:func:`batch_rows_and_ends`), ``before``: ``post``'s spreads."""
+    link ends already computed (:func:`~rplearn.analysis.manoeuvre_rows.batch_rows_and_ends`), ``before``: ``post``'s spreads."""
     before = post.spreads() if before is None else before
     rows, ends = rows_and_ends(cand.unit, nodes, basis, options.sample_rate_hz, _steady(options)) if geometry is None else geometry
     b = _aggregate(before, options)
@@ -477,8 +477,7 @@ def scored_candidates(post: ManoeuvrePosterior, state: Mapping[str, Any], names:
         cands += aimed_manoeuvres(state, aims, opts.candidates, rings=opts.aimed < 0)
     before = post.spreads()  # the same for every candidate; their rows computed in batches
     units = [c.unit for c in cands]
-    geometry = batch_rows_and_ends(units, names, basis, opts.sample_rate_hz, _steady(opts)) if known is None else \
-        known_rows_and_ends(units, names, basis, opts.sample_rate_hz, _steady(opts), known)
+    geometry = known_rows_and_ends(units, names, basis, opts.sample_rate_hz, _steady(opts), {} if known is None else known)
     scored = [_score(post, c, names, basis, opts, g, before) for c, g in zip(cands, geometry)]
     return sorted(scored, key=lambda s: -s[0].score_per_s)
 

@@ -67,16 +67,7 @@ from rplearn.data.phases import flight_phases
 from rplearn.data.poses import PoseTrack, TrackSet, tracks_of_checked_log
 from rplearn.data.streaming import row_hashes
 from rplearn.data.sync import SyncOptions, SyncResult, SyncSummary, check_receiver_offsets, finish_summary, match_chunk, sync_options_or_default
-from rplearn.data.tables import (
-    MATCHED_COLUMNS,
-    NON_UNIT_QUATERNION_ATTR,
-    POSE_COLUMNS,
-    count_non_unit_quaternions,
-    node_id_codes,
-    non_unit_quaternion_rows,
-    quaternion_norms,
-    validate_pose_log,
-)
+from rplearn.data.tables import MATCHED_COLUMNS, POSE_COLUMNS, non_unit_quaternion_rows, validate_pose_log
 from rplearn.errors import InputError
 
 
@@ -150,28 +141,6 @@ def _common_signal_t(rows: pd.DataFrame, options: SyncOptions) -> np.ndarray:
     return t + float(offset)
 
 
-def _merged_poses(both: pd.DataFrame) -> pd.DataFrame:
-    """:func:`validate_pose_log` of pose rows each already checked by it (the kept rows and a new batch), bit for
-    bit, without the checks of cells it already passed: sorted by (node, t), the quaternions normalised again and
-    counted (as it does); a duplicate time within a node goes to it, which refuses it with its message."""
-    codes, names = node_id_codes(both["node"], sort=True)
-    t = both["t"].to_numpy(np.float64)
-    step, dt = np.diff(codes), np.diff(t)
-    in_order = bool(np.all((step > 0) | ((step == 0) & (dt >= 0))))
-    take = slice(None) if in_order else np.lexsort((t, codes))
-    sorted_codes, ts = codes[take], t[take]
-    if np.any((sorted_codes[1:] == sorted_codes[:-1]) & (ts[1:] == ts[:-1])):
-        return validate_pose_log(both, "pose log")
-    q = both[["qw", "qx", "qy", "qz"]].to_numpy(np.float64)[take]
-    norm = quaternion_norms(q)
-    cols = {"t": ts, "node": pd.Series(names.astype(str)).array.take(sorted_codes)}
-    cols.update({c: both[c].to_numpy(np.float64)[take] for c in ("x", "y", "z")})
-    cols.update({c: q[:, j] / norm for j, c in enumerate(("qw", "qx", "qy", "qz"))})
-    out = pd.DataFrame(cols, columns=list(POSE_COLUMNS))
-    out.attrs[NON_UNIT_QUATERNION_ATTR] = count_non_unit_quaternions(norm) + int(both.attrs.get(NON_UNIT_QUATERNION_ATTR, 0))
-    return out
-
-
 def _still(group: pd.DataFrame) -> bool:
     """Whether a node's (sorted) pose rows are all one pose (as :mod:`rplearn.data.poses` decides)."""
     if len(group) < 2:
@@ -235,8 +204,7 @@ class LiveMatcher:
         self._pose_t = max(self._pose_t, float(self._common_pose_t(new).max()))
         self.summary.non_unit_quaternions += non_unit_quaternion_rows(new)
         both = pd.concat([self._poses, new], ignore_index=True) if len(self._poses) else new
-        both = both.drop(columns=[c for c in both.columns if c not in new.columns])
-        self._poses = _merged_poses(both) if list(both.columns) == list(POSE_COLUMNS) else validate_pose_log(both, "pose log")
+        self._poses = validate_pose_log(both.drop(columns=[c for c in both.columns if c not in new.columns]), "pose log")
 
     def add_signals(self, rows: pd.DataFrame) -> None:
         """Append signal rows (canonical columns); they wait until their time is settled."""

@@ -95,10 +95,7 @@ class CoverageWork:
         return [job() for job in jobs]
 
     def _finish(self, k: int, occupied: np.ndarray) -> list[float]:
-        from rplearn.core.coverage import grid_distance_deg
-
-        prev = None if self.previous is None else self.previous.get(self.nodes[k])
-        return np.round(grid_distance_deg(occupied, prev), 1).tolist()
+        return _rounded_grid(occupied, None if self.previous is None else self.previous.get(self.nodes[k]))
 
     def run(self) -> dict[str, list[float]]:
         """The grids, the jobs run here (on the workers when :attr:`parallel`)."""
@@ -116,6 +113,13 @@ def node_coverage_grids(
     return CoverageWork(samples, previous).run()
 
 
+def _rounded_grid(occupied: np.ndarray, previous: Any = None) -> list[float]:
+    """A node's grid from its occupied mask (and its ``previous`` grid), rounded to 0.1 degree for the model file."""
+    from rplearn.core.coverage import grid_distance_deg
+
+    return np.round(grid_distance_deg(occupied, previous), 1).tolist()
+
+
 def occupied_masks(samples: LinkSamples) -> list[np.ndarray]:
     """Per node (in ``samples.nodes``' order), the mask of the grid points its learning directions
     occupy (:func:`rplearn.core.coverage.occupied_grid_points`): the union of a session's masks
@@ -127,9 +131,7 @@ def occupied_masks(samples: LinkSamples) -> list[np.ndarray]:
 
 def grids_of_occupied(nodes: Sequence[str], occupied: Sequence[np.ndarray]) -> dict[str, list[float]]:
     """Per node, its grid rounded to 0.1 degree from its occupied mask (:func:`occupied_masks`)."""
-    from rplearn.core.coverage import grid_distance_deg
-
-    return {str(node): np.round(grid_distance_deg(mask, None), 1).tolist() for node, mask in zip(nodes, occupied)}
+    return {str(node): _rounded_grid(mask) for node, mask in zip(nodes, occupied)}
 
 
 __all__ = ["COVERAGE_JOB_SAMPLES", "PARALLEL_COVERAGE_DIRECTIONS", "CoverageWork", "grids_of_occupied", "node_coverage_grids",

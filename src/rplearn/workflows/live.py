@@ -213,8 +213,8 @@ class _Session:
         self.held_nodes = held_nodes  # the source's: its nodes' first poses held back (Poll.held_nodes)
         if len(poses):
             self.matcher.add_poses(poses)
-            for node, group in poses.groupby("node", sort=False) if self.ranking is not None else ():  # a ranking's only
-                self.last_pose[str(node)] = group.sort_values("t").iloc[-1]
+            if self.ranking is not None:  # only a ranking reads the latest poses
+                self.last_pose.update((str(n), g.sort_values("t").iloc[-1]) for n, g in poses.groupby("node", sort=False))
         self.matcher.add_signals(signals)
         self.status.received += len(signals)
 
